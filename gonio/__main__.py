@@ -1,0 +1,4 @@
+"""``python -m gonio``."""
+from gonio.cli import main
+
+raise SystemExit(main())

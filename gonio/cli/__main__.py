@@ -1,0 +1,4 @@
+"""``python -m gonio.cli``."""
+from gonio.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,1 @@
+"""Certificate and figures (draft Annex B)."""

@@ -1,0 +1,1 @@
+"""The draft's procedures and example benches as data (TOML); see README."""

@@ -1,0 +1,1 @@
+"""Example virtual instruments and tables (TOML)."""
