@@ -1,0 +1,509 @@
+"""Readings files: read, validate and write (data-formats contract v1, section 1).
+
+Contents
+========
+=========================  ===================================================
+:data:`TEST_NAMES`         the ``test`` values a readings file may carry
+:data:`ORIENTATIONS`       the ``orientation`` values (table-axis direction)
+:data:`COLUMNS`            the written column order
+:class:`Readings`          a validated file: ``data``, ``metadata``, ``path``
+:func:`read_readings`      parse and validate a readings CSV
+:func:`parse_readings`     the same from text already in memory
+:func:`write_readings`     write the exact format, deterministic bytes, atomic
+=========================  ===================================================
+
+A readings file is CSV (UTF-8, with or without BOM, ``\\n`` or ``\\r\\n``):
+``# key: value`` metadata lines at the top, one header row, one row per
+triggered reading. Every error a file can cause is a
+:class:`gonio.errors.GonioError` naming file, line (1-based, counting the
+metadata lines) and column. Blank lines are skipped. The input file is only
+read, never modified.
+
+Normalised columns of :attr:`Readings.data`: ``test`` (str), ``series`` and
+``round`` (int64), ``rate_dps`` (float, 60 when absent or empty),
+``orientation`` (str, ``up`` when absent or empty), ``time_s`` (float),
+``table_deg`` (float, NaN only for ``zero_stability``), ``gyro_counts``
+(float64 holding integers, NaN when empty), ``gyro_deg`` (float, NaN when
+empty), ``line`` (int64: the row's line number in the file). Extra columns are
+kept as text (empty string when empty).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from gonio.atomic import write_text
+from gonio.errors import GonioError
+
+#: The ``test`` names of the draft's clause 7 (the first five) and of later features.
+TEST_NAMES: tuple[str, ...] = (
+    "scale_factor", "zero_stability", "angle_deviation", "rate_consistency",
+    "pointing_consistency", "equal_division", "tilt_estimate",
+)
+#: Table-axis directions of draft 7.7 (Fig. 3).
+ORIENTATIONS: tuple[str, ...] = ("up", "north", "south", "east", "west")
+#: Column order of a written readings file (extra columns follow).
+COLUMNS: tuple[str, ...] = (
+    "test", "series", "round", "rate_dps", "orientation", "time_s",
+    "table_deg", "gyro_counts", "gyro_deg",
+)
+#: Columns a file must have in its header.
+REQUIRED_COLUMNS: tuple[str, ...] = ("test", "series", "round", "time_s", "table_deg")
+#: Default table rate, °/s (data-formats 1; draft 7.1 and 7.4 run at 60 °/s).
+DEFAULT_RATE_DPS: float = 60.0
+#: Default table-axis direction.
+DEFAULT_ORIENTATION: str = "up"
+#: The key that identifies one reading.
+KEY_COLUMNS: tuple[str, ...] = ("test", "series", "round", "rate_dps", "orientation")
+
+#: Metadata keys the package understands (others are kept).
+KNOWN_METADATA: tuple[str, ...] = (
+    "instrument", "serial", "manufacturer", "nominal_scale_factor_counts_per_deg",
+    "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
+    "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised",
+)
+# numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
+_NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
+    "nominal_scale_factor_counts_per_deg": (0.0, False, math.inf, "a number > 0"),
+    "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
+    "temperature_c": (-math.inf, True, math.inf, "a finite number"),
+    "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
+    "table_mpe_arcsec": (0.0, True, math.inf, "a number >= 0"),
+    "tilt_bound_deg": (0.0, True, 90.0, "a number in [0, 90]"),
+}
+_TRUE = ("true", "yes", "1")
+_FALSE = ("false", "no", "0")
+_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+_NONFINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
+
+
+@dataclass
+class Readings:
+    """A validated readings file.
+
+    Attributes
+    ----------
+    data : pandas.DataFrame
+        One row per reading, normalised columns (see module docstring).
+    metadata : dict of str to str
+        The ``# key: value`` lines, in file order.
+    path : pathlib.Path or None
+        Where the readings came from (None when built in memory).
+    """
+
+    data: pd.DataFrame
+    metadata: dict[str, str] = field(default_factory=dict)
+    path: Path | None = None
+
+    def counts_quantised(self) -> bool:
+        """Whether ``gyro_counts`` must be integers (metadata ``counts_quantised``, default true)."""
+        return metadata_bool(self.metadata, "counts_quantised", True, file=self.path)
+
+
+def metadata_float(metadata: Mapping[str, str], key: str, *,
+                   file: str | Path | None = None) -> float | None:
+    """The numeric metadata value ``key``, validated, or None when absent.
+
+    >>> metadata_float({"latitude_deg": "39.9"}, "latitude_deg")
+    39.9
+    >>> metadata_float({}, "latitude_deg") is None
+    True
+    """
+    if key not in metadata:
+        return None
+    text = str(metadata[key]).strip()
+    lo, lo_incl, hi, expected = _NUMERIC_METADATA.get(
+        key, (-math.inf, True, math.inf, "a finite number"))
+    value = _parse_number(text)
+    if value is None or not math.isfinite(value):
+        raise GonioError(f"expected {expected}, got {text!r}", file=file, key=key)
+    if value < lo or (value == lo and not lo_incl) or value > hi:
+        raise GonioError(f"expected {expected}, got {text!r}", file=file, key=key)
+    return value
+
+
+def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,
+                  file: str | Path | None = None) -> bool:
+    """The boolean metadata value ``key`` (true/false, yes/no, 1/0), or ``default``.
+
+    >>> metadata_bool({"counts_quantised": "false"}, "counts_quantised", True)
+    False
+    """
+    if key not in metadata:
+        return default
+    text = str(metadata[key]).strip().lower()
+    if text in _TRUE:
+        return True
+    if text in _FALSE:
+        return False
+    raise GonioError(f"expected true or false, got {metadata[key]!r}", file=file, key=key)
+
+
+def _parse_number(text: str) -> float | None:
+    """float of a plain decimal number text, inf/nan for those words, else None."""
+    if _NONFINITE.match(text):
+        return float(text)
+    if not _NUMBER.match(text):
+        return None
+    return float(text)
+
+
+def read_readings(path: str | Path) -> Readings:
+    """Read and validate a readings file (data-formats contract, section 1).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file. UTF-8 with or without BOM; LF or CRLF line ends.
+
+    Returns
+    -------
+    Readings
+        Normalised data, metadata in file order, and the path.
+
+    Raises
+    ------
+    GonioError
+        Naming file, line and column, for any departure from the contract.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
+    >>> _ = p.write_text("# serial: 0042\\n"
+    ...     "test,series,round,time_s,table_deg,gyro_counts\\n"
+    ...     "scale_factor,1,1,3.0,60.0,216000\\n")
+    >>> r = read_readings(p)
+    >>> r.metadata
+    {'serial': '0042'}
+    >>> r.data[["test", "rate_dps", "orientation", "gyro_counts", "line"]].to_dict("records")
+    [{'test': 'scale_factor', 'rate_dps': 60.0, 'orientation': 'up', 'gyro_counts': 216000.0, 'line': 3}]
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise GonioError(f"cannot read readings file: {exc.strerror}", file=path) from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise GonioError("not UTF-8 text", file=path, line=line) from None
+    return parse_readings(text, path=path)
+
+
+def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
+    """Validate readings given as text (what :func:`read_readings` does after reading).
+
+    >>> r = parse_readings("test,series,round,time_s,table_deg,gyro_deg\\n"
+    ...                    "zero_stability,1,1,0,,0.0\\n", path="mem.csv")
+    >>> bool(r.data["table_deg"].isna().all())
+    True
+    """
+    fname = "<text>" if path is None else str(path)
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    metadata: dict[str, str] = {}
+    idx = 0
+    header: list[str] | None = None
+    header_line = 0
+    while idx < len(lines):
+        line = lines[idx]
+        idx += 1
+        if not line.strip():
+            continue
+        if line.lstrip().startswith("#"):
+            if header is not None:
+                raise GonioError("metadata line after the header; '#' lines belong at the top",
+                                 file=fname, line=idx)
+            body = line.lstrip()[1:]
+            key, sep, value = body.partition(":")
+            key = key.strip()
+            if not sep or not key:
+                raise GonioError(f"bad metadata line, expected '# key: value', got {line!r}",
+                                 file=fname, line=idx)
+            if key in metadata:
+                raise GonioError(f"metadata key {key!r} given twice", file=fname, line=idx,
+                                 key=key)
+            metadata[key] = value.strip()
+            continue
+        header = [h.strip() for h in next(csv.reader([line]))]
+        header_line = idx
+        break
+    if header is None:
+        raise GonioError("no readings: the file has no header row", file=fname,
+                         line=max(1, len(lines) - (lines[-1] == "")))
+    for key in metadata:
+        if key in _NUMERIC_METADATA:
+            metadata_float(metadata, key, file=fname)
+    quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
+
+    seen: set[str] = set()
+    for name in header:
+        if not name:
+            raise GonioError("empty column name in header", file=fname, line=header_line)
+        if name in seen:
+            raise GonioError("column given twice in header", file=fname, line=header_line,
+                             column=name)
+        seen.add(name)
+    for name in REQUIRED_COLUMNS:
+        if name not in seen:
+            raise GonioError("missing required column", file=fname, line=header_line,
+                             column=name)
+    if "gyro_counts" not in seen and "gyro_deg" not in seen:
+        raise GonioError("missing column: need gyro_counts or gyro_deg (or both)",
+                         file=fname, line=header_line, column="gyro_counts")
+
+    cols: dict[str, list] = {name: [] for name in COLUMNS}
+    extras = [h for h in header if h not in COLUMNS]
+    for name in extras:
+        cols[name] = []
+    cols["line"] = []
+    keys: dict[tuple, int] = {}
+    ncol = len(header)
+    while idx < len(lines):
+        raw_line = lines[idx]
+        idx += 1
+        if not raw_line.strip():
+            continue
+        where = dict(file=fname, line=idx)
+        if raw_line.lstrip().startswith("#"):
+            raise GonioError("metadata line after the header; '#' lines belong at the top",
+                             **where)
+        cells = next(csv.reader([raw_line]))
+        if len(cells) != ncol:
+            raise GonioError(f"expected {ncol} fields as in the header, got {len(cells)}",
+                             **where)
+        row = {h: c.strip() for h, c in zip(header, cells)}
+        rec = _parse_row(row, where, quantised)
+        key = tuple(rec[k] for k in KEY_COLUMNS)
+        if key in keys:
+            raise GonioError(
+                f"duplicated reading: test {key[0]}, series {key[1]}, round {key[2]}, "
+                f"rate {key[3]} deg/s, orientation {key[4]} already on line {keys[key]}",
+                column="round", **where)
+        keys[key] = idx
+        for name in COLUMNS:
+            cols[name].append(rec[name])
+        for name in extras:
+            cols[name].append(row[name])
+        cols["line"].append(idx)
+    if not cols["line"]:
+        raise GonioError("no readings: header only", file=fname, line=header_line)
+    data = _frame(cols, extras)
+    return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
+
+
+def _frame(cols: dict[str, list], extras: list[str]) -> pd.DataFrame:
+    data = pd.DataFrame({
+        "test": pd.Series(cols["test"], dtype=object),
+        "series": np.asarray(cols["series"], dtype=np.int64),
+        "round": np.asarray(cols["round"], dtype=np.int64),
+        "rate_dps": np.asarray(cols["rate_dps"], dtype=np.float64),
+        "orientation": pd.Series(cols["orientation"], dtype=object),
+        "time_s": np.asarray(cols["time_s"], dtype=np.float64),
+        "table_deg": np.asarray(cols["table_deg"], dtype=np.float64),
+        "gyro_counts": np.asarray(cols["gyro_counts"], dtype=np.float64),
+        "gyro_deg": np.asarray(cols["gyro_deg"], dtype=np.float64),
+    })
+    for name in extras:
+        data[name] = pd.Series(cols[name], dtype=object)
+    data["line"] = np.asarray(cols["line"], dtype=np.int64)
+    return data
+
+
+def _number(row: dict, name: str, where: dict, *, required: bool) -> float:
+    text = row.get(name, "")
+    if text == "":
+        if required:
+            raise GonioError("empty cell, expected a number", column=name, **where)
+        return math.nan
+    value = _parse_number(text)
+    if value is None:
+        raise GonioError(f"expected a number, got {text!r}", column=name, **where)
+    if not math.isfinite(value):
+        raise GonioError(f"expected a finite number, got {text!r}", column=name, **where)
+    return value
+
+
+def _positive_int(row: dict, name: str, where: dict) -> int:
+    text = row.get(name, "")
+    value = _number(row, name, where, required=True)
+    if value != int(value) or value < 1:
+        raise GonioError(f"expected an integer >= 1, got {text!r}", column=name, **where)
+    return int(value)
+
+
+def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
+    test = row["test"]
+    if test not in TEST_NAMES:
+        raise GonioError(f"unknown test {test!r}, expected one of {', '.join(TEST_NAMES)}",
+                         column="test", **where)
+    series = _positive_int(row, "series", where)
+    rnd = _positive_int(row, "round", where)
+    rate = _number(row, "rate_dps", where, required=False)
+    if math.isnan(rate):
+        rate = DEFAULT_RATE_DPS
+    elif rate <= 0:
+        raise GonioError(f"expected a rate > 0 deg/s, got {row['rate_dps']!r}",
+                         column="rate_dps", **where)
+    orientation = row.get("orientation", "") or DEFAULT_ORIENTATION
+    if orientation not in ORIENTATIONS:
+        raise GonioError(f"unknown orientation {orientation!r}, expected one of "
+                         f"{', '.join(ORIENTATIONS)}", column="orientation", **where)
+    time_s = _number(row, "time_s", where, required=True)
+    table_deg = _number(row, "table_deg", where, required=test != "zero_stability")
+    counts = _number(row, "gyro_counts", where, required=False)
+    gyro_deg = _number(row, "gyro_deg", where, required=False)
+    if math.isnan(counts) and math.isnan(gyro_deg):
+        raise GonioError("neither gyro_counts nor gyro_deg given; expected one of them",
+                         column="gyro_counts" if "gyro_counts" in row else "gyro_deg",
+                         **where)
+    if test == "scale_factor" and math.isnan(counts):
+        raise GonioError("scale_factor readings need gyro_counts (draft 7.1 counts pulses)",
+                         column="gyro_counts", **where)
+    if not math.isnan(counts):
+        text = row["gyro_counts"]
+        if re.match(r"^[+-]?\d+$", text):
+            counts = float(int(text))
+        elif quantised and counts != int(counts):
+            raise GonioError(f"expected an integer pulse count, got {text!r} (metadata "
+                             "counts_quantised: false allows fractions)",
+                             column="gyro_counts", **where)
+    return {"test": test, "series": series, "round": rnd, "rate_dps": rate,
+            "orientation": orientation, "time_s": time_s, "table_deg": table_deg,
+            "gyro_counts": counts, "gyro_deg": gyro_deg}
+
+
+def _fmt_float(x) -> str:
+    x = float(x)
+    if math.isnan(x):
+        return ""
+    if not math.isfinite(x):
+        raise GonioError(f"cannot write a non-finite value {x!r} to a readings file")
+    return repr(x)
+
+
+def _fmt_counts(x) -> str:
+    x = float(x)
+    if math.isnan(x):
+        return ""
+    if not math.isfinite(x):
+        raise GonioError(f"cannot write a non-finite count {x!r} to a readings file")
+    if x == int(x) and abs(x) < 2.0 ** 63:
+        return str(int(x))
+    return repr(x)
+
+
+def _fmt_text(x) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return ""
+    if isinstance(x, (float, np.floating)):
+        return repr(float(x))
+    return str(x)
+
+
+def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
+                   metadata: Mapping[str, str] | None = None) -> Path:
+    """Write a readings file in exactly the contract's format, atomically.
+
+    Column order ``test,series,round,rate_dps,orientation,time_s,table_deg,
+    gyro_counts,gyro_deg`` then extra columns (the ``line`` column is not
+    written). Floats are written with ``repr`` (they read back bit for bit),
+    integer counts without ``.0``, NaN as an empty cell, ``\\n`` line ends.
+    The same input always gives the same bytes.
+
+    Parameters
+    ----------
+    readings_or_df : Readings or pandas.DataFrame
+        The readings; a DataFrame needs the required columns (``rate_dps``
+        and ``orientation`` default to 60 and ``up``).
+    path : str or Path
+        Target file (written via :func:`gonio.atomic.write_text`).
+    metadata : mapping of str to str, optional
+        ``# key: value`` lines; defaults to the Readings' own metadata.
+        Fractional ``gyro_counts`` need ``counts_quantised: false``.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> df = pd.DataFrame({"test": ["scale_factor"], "series": [1], "round": [1],
+    ...                    "time_s": [3.0], "table_deg": [60.0],
+    ...                    "gyro_counts": [216000.0], "gyro_deg": [float("nan")]})
+    >>> p = write_readings(df, pathlib.Path(tempfile.mkdtemp()) / "r.csv", {"serial": "42"})
+    >>> print(p.read_text(), end="")
+    # serial: 42
+    test,series,round,rate_dps,orientation,time_s,table_deg,gyro_counts,gyro_deg
+    scale_factor,1,1,60.0,up,3.0,60.0,216000,
+    """
+    if isinstance(readings_or_df, Readings):
+        df = readings_or_df.data
+        if metadata is None:
+            metadata = readings_or_df.metadata
+    else:
+        df = readings_or_df
+    metadata = dict(metadata or {})
+    out = []
+    for key, value in metadata.items():
+        key, value = str(key), str(value)
+        if not key.strip() or ":" in key or "\n" in key or "\r" in key \
+                or "\n" in value or "\r" in value:
+            raise GonioError("metadata key must be non-empty without ':' or line breaks, "
+                             "value without line breaks", key=key)
+        out.append(f"# {key.strip()}: {value.strip()}")
+    quantised = metadata_bool(metadata, "counts_quantised", True)
+    for name in REQUIRED_COLUMNS:
+        if name not in df.columns:
+            raise GonioError("missing required column", column=name)
+    n = len(df)
+    if n == 0:
+        raise GonioError("no readings to write")
+    get = (lambda name, default: df[name] if name in df.columns
+           else pd.Series([default] * n, index=df.index))
+    counts = get("gyro_counts", math.nan).astype(float).to_numpy()
+    if quantised:
+        finite = counts[~np.isnan(counts)]
+        if np.any(finite != np.round(finite)):
+            raise GonioError("fractional gyro_counts need metadata 'counts_quantised: false'",
+                             column="gyro_counts")
+    rate = get("rate_dps", DEFAULT_RATE_DPS).astype(float).fillna(DEFAULT_RATE_DPS)
+    orient = get("orientation", DEFAULT_ORIENTATION).fillna(DEFAULT_ORIENTATION)
+    extras = [c for c in df.columns if c not in COLUMNS and c != "line"]
+    columns_text = [
+        [_fmt_text(x) for x in df["test"]],
+        [str(int(x)) for x in df["series"]],
+        [str(int(x)) for x in df["round"]],
+        [_fmt_float(x) for x in rate],
+        [_fmt_text(x) or DEFAULT_ORIENTATION for x in orient],
+        [_fmt_float(x) for x in df["time_s"]],
+        [_fmt_float(x) for x in df["table_deg"]],
+        [_fmt_counts(x) for x in counts],
+        [_fmt_float(x) for x in get("gyro_deg", math.nan)],
+    ] + [[_fmt_text(x) for x in df[c]] for c in extras]
+    names = list(COLUMNS) + [str(c) for c in extras]
+    out.append(_csv_line(names))
+    for row in zip(*columns_text):
+        out.append(_csv_line(row))
+    return write_text(path, "\n".join(out) + "\n")
+
+
+def _csv_line(cells) -> str:
+    parts = []
+    for c in cells:
+        if any(ch in c for ch in ',"\n\r'):
+            c = '"' + c.replace('"', '""') + '"'
+        parts.append(c)
+    return ",".join(parts)
