@@ -1,0 +1,174 @@
+"""Probability distributions for Type B input quantities, chosen by name.
+
+One mapping, :data:`DISTRIBUTIONS`, turns a name into a distribution class; each
+class knows its divisor (half-width / standard uncertainty, JCGM 100 4.3.7–4.3.9)
+and how to draw samples for a Monte Carlo run (JCGM 101 6.4).
+
+=============  =======================  ==========================================
+name           divisor (a / u)          source
+=============  =======================  ==========================================
+normal         k (given coverage factor) JCGM 100 4.3.4; JCGM 101 6.4.7
+rectangular    √3                        JCGM 100 4.3.7; JCGM 101 6.4.2
+triangular     √6                        JCGM 100 4.3.9; JCGM 101 6.4.5
+arcsine        √2                        JCGM 101 6.4.6 (U-shaped)
+trapezoidal    √(6 / (1 + β²))           JCGM 100 4.3.9; JCGM 101 6.4.4
+=============  =======================  ==========================================
+
+Aliases: ``uniform`` → rectangular, ``u-shaped`` / ``u_shaped`` → arcsine,
+``gaussian`` → normal.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Normal", "Rectangular", "Triangular", "Arcsine", "Trapezoidal",
+           "DISTRIBUTIONS", "distribution"]
+
+
+@dataclass(frozen=True)
+class Normal:
+    """Normal distribution given by a half-width (expanded uncertainty) and its k.
+
+    JCGM 100 4.3.4: u = a / k.
+
+    >>> Normal(k=2.0).divisor
+    2.0
+    """
+
+    k: float = 1.0
+    name = "normal"
+
+    @property
+    def divisor(self) -> float:
+        return float(self.k)
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples (JCGM 101 6.4.7)."""
+        return rng.standard_normal(size) * (half_width / self.k)
+
+
+@dataclass(frozen=True)
+class Rectangular:
+    """Rectangular (uniform) distribution on [−a, a]: u = a/√3 (JCGM 100 4.3.7).
+
+    >>> round(0.1 / Rectangular().divisor, 4)
+    0.0577
+    """
+
+    name = "rectangular"
+
+    @property
+    def divisor(self) -> float:
+        return math.sqrt(3.0)
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples (JCGM 101 6.4.2.4)."""
+        return rng.uniform(-half_width, half_width, size)
+
+
+@dataclass(frozen=True)
+class Triangular:
+    """Symmetric triangular distribution on [−a, a]: u = a/√6 (JCGM 100 4.3.9).
+
+    >>> round(Triangular().divisor, 6)
+    2.44949
+    """
+
+    name = "triangular"
+
+    @property
+    def divisor(self) -> float:
+        return math.sqrt(6.0)
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples (JCGM 101 6.4.5.4: sum of two rectangulars of half-width a/2)."""
+        h = 0.5 * half_width
+        return rng.uniform(-h, h, size) + rng.uniform(-h, h, size)
+
+
+@dataclass(frozen=True)
+class Arcsine:
+    """Arcsine (U-shaped) distribution on [−a, a]: u = a/√2 (JCGM 101 6.4.6).
+
+    >>> round(Arcsine().divisor, 6)
+    1.414214
+    """
+
+    name = "arcsine"
+
+    @property
+    def divisor(self) -> float:
+        return math.sqrt(2.0)
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples X = a·sin(2πU) (JCGM 101 6.4.6.4)."""
+        return half_width * np.sin(2.0 * np.pi * rng.random(size))
+
+
+@dataclass(frozen=True)
+class Trapezoidal:
+    """Symmetric trapezoid on [−a, a] with top half-width β·a: u² = a²(1 + β²)/6.
+
+    JCGM 100 4.3.9; β = 0 is triangular, β = 1 rectangular.
+
+    >>> round(Trapezoidal(beta=1.0).divisor, 6) == round(math.sqrt(3), 6)
+    True
+    """
+
+    beta: float = 0.5
+    name = "trapezoidal"
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.beta <= 1.0:
+            raise ValueError(f"trapezoidal beta must be in [0, 1], got {self.beta}")
+
+    @property
+    def divisor(self) -> float:
+        return math.sqrt(6.0 / (1.0 + self.beta ** 2))
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples: sum of rectangulars of half-widths a(1±β)/2 (JCGM 101 6.4.4.4)."""
+        h1 = 0.5 * half_width * (1.0 + self.beta)
+        h2 = 0.5 * half_width * (1.0 - self.beta)
+        return rng.uniform(-h1, h1, size) + rng.uniform(-h2, h2, size)
+
+
+#: The one mapping from a distribution's name to its class.
+DISTRIBUTIONS = {
+    "normal": Normal,
+    "gaussian": Normal,
+    "rectangular": Rectangular,
+    "uniform": Rectangular,
+    "triangular": Triangular,
+    "arcsine": Arcsine,
+    "u-shaped": Arcsine,
+    "u_shaped": Arcsine,
+    "trapezoidal": Trapezoidal,
+}
+
+
+def distribution(name: str, *, k: float | None = None, beta: float | None = None):
+    """The distribution called ``name`` (see :data:`DISTRIBUTIONS`).
+
+    ``k`` is the coverage factor of a normal half-width, ``beta`` the top/base
+    ratio of a trapezoid.
+
+    >>> distribution("uniform").name
+    'rectangular'
+    >>> distribution("normal", k=2).divisor
+    2.0
+    """
+    try:
+        cls = DISTRIBUTIONS[name.lower()]
+    except KeyError:
+        raise ValueError(f"unknown distribution {name!r}; expected one of "
+                         f"{', '.join(sorted(DISTRIBUTIONS))}") from None
+    if cls is Normal:
+        return Normal(k=1.0 if k is None else float(k))
+    if cls is Trapezoidal:
+        return Trapezoidal(beta=0.5 if beta is None else float(beta))
+    return cls()
