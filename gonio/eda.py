@@ -1,0 +1,915 @@
+"""Equal-division averaging: a rotary table and a goniometer calibrate each other.
+
+A goniometer has no fixed zero on the circle; a rotary table does. Measuring
+from ``n`` start positions of the table and stepping the table ``m`` equal steps
+of ``Δ = 360°/m`` from each, both zeroed at each start, the observed deviation
+(goniometer minus table) is
+
+    D[r, k, j] = g(jΔ) − [t(x_k + jΔ) − t(x_k)] + e[r, k, j]
+
+(``r`` repeat, ``k`` start, ``j = 1..m``, ``j = m`` the full turn), where
+``t(x)`` is the table's positioning error at its absolute position ``x``
+(indicated minus true) and ``g(φ)`` the goniometer's error after turning ``φ``
+from its zero. Averaging over the starts cancels every table harmonic whose
+order is not a multiple of ``n`` (IEC 62047-20:2014 Annex A.3, equal-division
+averaging); averaging over the steps then separates the table's error from the
+goniometer's. This module does the same thing as one least-squares fit, which
+also handles ``n ≠ m``, repeats, and gives standard uncertainties.
+
+Contents
+========
+:func:`equal_division_analysis`   the least-squares separation → :class:`EdaResult`
+:func:`harmonic_transfer`         per harmonic order: observable, aliased, unobservable
+:func:`compare_tables`            two tables, same goniometer as transfer standard
+:func:`simulate_eda_matrix`       a small synthetic generator (tests, examples)
+:func:`eda_matrix_from_readings`  a readings file's ``equal_division`` rows → D
+
+Conventions
+===========
+* ``D`` is in arcseconds; positions and angles in degrees.
+* Gauge: the model only sees differences of ``t``, so ``t`` is known up to a
+  constant, and -- when the starts do not cover every position -- up to every
+  table harmonic whose order is a multiple of ``n`` (these look exactly like a
+  goniometer error). We report the table error *orthogonal* to that
+  unobservable subspace: with ``gauge="closure"`` the table errors sum to zero
+  over the ``m`` positions (the circle closes), with ``gauge="zero"`` the error
+  at the first grid position (absolute 0°) is zero instead. The unobservable
+  table harmonics are attributed to the goniometer curve, which therefore
+  reads ``g(jΔ) − [τ(jΔ) − τ(0)]`` where ``τ`` is the table's part made of
+  orders that are multiples of ``n`` (zero when ``n = m``).
+* ``g`` is estimated at ``jΔ`` for ``j = 1..m``; ``g(360°)`` is the full-turn
+  error, which a goniometer with a correct scale factor has zero (its zero
+  closes). The table's part of the ``j = m`` column cancels identically, so the
+  ``j = m`` column checks closure (:class:`ClosureCheck`).
+* Restriction: every start position must lie on the step grid (a multiple of
+  ``Δ`` modulo 360°); then all visited table positions are the ``m`` grid
+  points and the step links every position to every other. Equally spaced
+  starts ``x_k = k·360°/n`` satisfy this exactly when ``n`` divides ``m``.
+  Other start sets raise :class:`~gonio.errors.GonioError`.
+* Noise: independent readings with one common standard deviation (estimated
+  from the residuals, pooled over repeats); a drift within a series or angle
+  random walk would make the readings correlated and the uncertainties low.
+
+References
+==========
+IEC 62047-20:2014 (JIS C 5630-20:2015) Annex A.3, equal-division averaging.
+JCGM 100:2008 (GUM) 4.2 and H.3 (Type A evaluation, least-squares fits).
+R. Probst et al., "The new PTB angle comparator", Meas. Sci. Technol. 9 (1998)
+1059 (cross-calibration of circle divisions; closure).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+import scipy.sparse as sp
+
+from gonio.errors import GonioError
+
+#: Tolerance for "a start lies on the step grid", in units of the step (–).
+GRID_TOL_STEPS = 1e-6
+#: Tolerance for a table reading to be taken as step j, degrees.
+STEP_TOL_DEG = 1e-3
+#: Relative eigenvalue threshold below which a normal-matrix direction is null (–).
+NULL_RTOL = 1e-9
+#: |z| above which the full-turn closure is reported as not consistent with zero (–).
+CLOSURE_Z_LIMIT = 3.0
+
+_ARCSEC_PER_DEG = 3600.0
+
+
+# --------------------------------------------------------------------------- results
+@dataclass(frozen=True)
+class ClosureCheck:
+    """Full-circle closure of an equal-division measurement.
+
+    Attributes
+    ----------
+    table_sum_arcsec : float
+        Sum of the reported table errors over the ``m`` positions (0 by
+        construction with ``gauge="closure"``; ``m`` times the mean otherwise).
+    full_turn_arcsec : float
+        Estimated goniometer error after one full turn, ``g(360°)``: the mean
+        of the ``j = m`` column, in which the table's part cancels exactly.
+    u_full_turn_arcsec : float
+        Its standard uncertainty.
+    z : float
+        ``full_turn_arcsec / u_full_turn_arcsec``.
+    per_start_full_turn_arcsec : numpy.ndarray
+        The ``j = m`` column averaged over repeats, one value per start.
+    consistent : bool
+        ``|z| <= CLOSURE_Z_LIMIT`` — the full turn closes within its noise.
+    """
+
+    table_sum_arcsec: float
+    full_turn_arcsec: float
+    u_full_turn_arcsec: float
+    z: float
+    per_start_full_turn_arcsec: np.ndarray
+    consistent: bool
+
+
+@dataclass(frozen=True)
+class EdaResult:
+    """Result of :func:`equal_division_analysis` (all errors in arcseconds).
+
+    Attributes
+    ----------
+    table_position_deg : numpy.ndarray, shape (m,)
+        Absolute table positions ``pΔ``, ``p = 0..m−1``.
+    table_error_arcsec, table_u_arcsec : numpy.ndarray, shape (m,)
+        Table positioning error (indicated − true) and standard uncertainty,
+        in the stated ``gauge``, unobservable harmonics removed.
+    table_cov_arcsec2 : numpy.ndarray, shape (m, m)
+        Covariance of ``table_error_arcsec``.
+    gonio_angle_deg : numpy.ndarray, shape (m,)
+        Angles turned since zeroing, ``jΔ``, ``j = 1..m``.
+    gonio_error_arcsec, gonio_u_arcsec : numpy.ndarray, shape (m,)
+        Goniometer error at those angles and standard uncertainty.
+    gonio_cov_arcsec2 : numpy.ndarray, shape (m, m)
+        Covariance of ``gonio_error_arcsec``.
+    residual_std_arcsec : float
+        Standard deviation of one reading from the residuals, ``sqrt(RSS/dof)``.
+    dof : int
+        Residual degrees of freedom, readings minus identifiable parameters.
+    residuals_arcsec : numpy.ndarray, shape (R, n, m)
+        Residuals of the fit.
+    start_deg : numpy.ndarray, shape (n,)
+        Table positions at zeroing.
+    step_deg : float
+        The step ``Δ``.
+    repeats : int
+        Number of repeated matrices ``R``.
+    gauge : str
+        ``"closure"`` or ``"zero"``.
+    unobservable_dim : int
+        Dimension of the table subspace the data cannot see beyond the constant
+        (``m/n − 1`` for equally spaced starts).
+    harmonics : pandas.DataFrame
+        :func:`harmonic_transfer` for orders ``1..max_order``.
+    closure : ClosureCheck
+        Full-circle closure check.
+    """
+
+    table_position_deg: np.ndarray
+    table_error_arcsec: np.ndarray
+    table_u_arcsec: np.ndarray
+    table_cov_arcsec2: np.ndarray
+    gonio_angle_deg: np.ndarray
+    gonio_error_arcsec: np.ndarray
+    gonio_u_arcsec: np.ndarray
+    gonio_cov_arcsec2: np.ndarray
+    residual_std_arcsec: float
+    dof: int
+    residuals_arcsec: np.ndarray
+    start_deg: np.ndarray
+    step_deg: float
+    repeats: int
+    gauge: str
+    unobservable_dim: int
+    harmonics: pd.DataFrame = field(repr=False)
+    closure: ClosureCheck = field(repr=False)
+
+    @property
+    def n_starts(self) -> int:
+        """Number of starts ``n``."""
+        return int(self.start_deg.size)
+
+    @property
+    def m_points(self) -> int:
+        """Points per revolution ``m``."""
+        return int(self.table_position_deg.size)
+
+    def table_frame(self) -> pd.DataFrame:
+        """The table error as a DataFrame (position, error, uncertainty)."""
+        return pd.DataFrame({"position_deg": self.table_position_deg,
+                             "error_arcsec": self.table_error_arcsec,
+                             "u_arcsec": self.table_u_arcsec})
+
+    def gonio_frame(self) -> pd.DataFrame:
+        """The goniometer error as a DataFrame (angle turned, error, uncertainty)."""
+        return pd.DataFrame({"angle_deg": self.gonio_angle_deg,
+                             "error_arcsec": self.gonio_error_arcsec,
+                             "u_arcsec": self.gonio_u_arcsec})
+
+    def to_dict(self) -> dict:
+        """Plain, JSON-ready summary (floats rounded to 1e-6 arcsec for determinism)."""
+        def r(a):
+            return [round(float(v), 6) for v in np.ravel(a)]
+        c = self.closure
+        return {
+            "n_starts": self.n_starts, "m_points": self.m_points, "repeats": self.repeats,
+            "step_deg": round(float(self.step_deg), 9), "start_deg": r(self.start_deg),
+            "gauge": self.gauge, "unobservable_dim": self.unobservable_dim,
+            "residual_std_arcsec": round(float(self.residual_std_arcsec), 6), "dof": self.dof,
+            "table": {"position_deg": r(self.table_position_deg),
+                      "error_arcsec": r(self.table_error_arcsec),
+                      "u_arcsec": r(self.table_u_arcsec)},
+            "goniometer": {"angle_deg": r(self.gonio_angle_deg),
+                           "error_arcsec": r(self.gonio_error_arcsec),
+                           "u_arcsec": r(self.gonio_u_arcsec)},
+            "closure": {"table_sum_arcsec": round(float(c.table_sum_arcsec), 6),
+                        "full_turn_arcsec": round(float(c.full_turn_arcsec), 6),
+                        "u_full_turn_arcsec": round(float(c.u_full_turn_arcsec), 6),
+                        "z": round(float(c.z), 6), "consistent": bool(c.consistent),
+                        "per_start_full_turn_arcsec": r(c.per_start_full_turn_arcsec)},
+            "harmonics": [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
+                          for row in self.harmonics.round(9).to_dict(orient="records")],
+        }
+
+
+@dataclass(frozen=True)
+class TableComparison:
+    """Result of :func:`compare_tables` (arcseconds).
+
+    Attributes
+    ----------
+    position_deg : numpy.ndarray
+        Table positions common to both calibrations.
+    difference_arcsec, u_difference_arcsec : numpy.ndarray
+        ``t_a − t_b`` at those positions, re-centred to zero mean over them
+        (the difference is defined only up to a constant), and its standard
+        uncertainty.
+    cov_arcsec2 : numpy.ndarray
+        Covariance of ``difference_arcsec``.
+    gonio_chi2 : float
+        ``Σ (g_a − g_b)² / (u_a² + u_b²)`` over the common goniometer angles:
+        the transfer standard should read the same in both runs.
+    gonio_points : int
+        Number of goniometer angles in ``gonio_chi2``.
+    """
+
+    position_deg: np.ndarray
+    difference_arcsec: np.ndarray
+    u_difference_arcsec: np.ndarray
+    cov_arcsec2: np.ndarray
+    gonio_chi2: float
+    gonio_points: int
+
+
+@dataclass(frozen=True)
+class EdaSimulation:
+    """Output of :func:`simulate_eda_matrix` (arcseconds, degrees).
+
+    Attributes
+    ----------
+    D_arcsec : numpy.ndarray, shape (R, n, m)
+        Simulated deviations, goniometer minus table.
+    start_deg : numpy.ndarray, shape (n,)
+        ``k·360°/n``.
+    step_deg : float
+        ``360°/m``.
+    table_true_arcsec : numpy.ndarray, shape (m,)
+        The true table error at positions ``pΔ``.
+    gonio_true_arcsec : numpy.ndarray, shape (m,)
+        The true goniometer error at ``jΔ``, ``j = 1..m``.
+    """
+
+    D_arcsec: np.ndarray
+    start_deg: np.ndarray
+    step_deg: float
+    table_true_arcsec: np.ndarray
+    gonio_true_arcsec: np.ndarray
+
+
+# --------------------------------------------------------------------------- helpers
+def _grid_indices(start_deg: np.ndarray, step_deg: float) -> np.ndarray:
+    """Start positions as indices on the step grid; GonioError if off the grid."""
+    m = int(round(360.0 / step_deg))
+    q = np.mod(start_deg, 360.0) / step_deg
+    idx = np.rint(q)
+    bad = np.abs(q - idx) > GRID_TOL_STEPS * max(1.0, m)
+    if np.any(bad):
+        k = int(np.flatnonzero(bad)[0])
+        raise GonioError(
+            f"start {k + 1} at {start_deg[k]:.9g}° is not a multiple of the step "
+            f"{step_deg:.9g}°: the table positions x_k + jΔ do not form one grid "
+            f"(equally spaced starts need n to divide m)", key="start_deg")
+    return idx.astype(int) % m
+
+
+def _design(p: np.ndarray, m: int) -> sp.csr_matrix:
+    """Design matrix of one D matrix (rows k-major, then j = 1..m).
+
+    Columns ``0..m−1`` are ``g(jΔ)``, ``j = 1..m``; columns ``m..2m−1`` are
+    ``t(pΔ)``, ``p = 0..m−1``. Row (k, j): ``+g_j − t_{(p_k+j) mod m} + t_{p_k}``.
+    """
+    n = p.size
+    k, j = np.meshgrid(np.arange(n), np.arange(1, m + 1), indexing="ij")
+    rows = np.arange(n * m)
+    kf, jf = k.ravel(), j.ravel()
+    end = (p[kf] + jf) % m
+    r = np.concatenate([rows, rows, rows])
+    c = np.concatenate([jf - 1, m + end, m + p[kf]])
+    v = np.concatenate([np.ones(n * m), -np.ones(n * m), np.ones(n * m)])
+    # for j = m the two table entries coincide and cancel (summed by coo→csr)
+    A = sp.coo_matrix((v, (r, c)), shape=(n * m, 2 * m)).tocsr()
+    A.eliminate_zeros()
+    return A
+
+
+def _table_null_basis(N: np.ndarray, m: int) -> np.ndarray:
+    """Orthonormal basis (m × d) of the table parts of the normal matrix's null space."""
+    w, V = np.linalg.eigh(N)
+    null = w <= NULL_RTOL * max(w.max(), 1.0)
+    T = V[m:, null]
+    if T.shape[1] == 0:  # pragma: no cover - the constant is always null
+        return np.zeros((m, 0))
+    U, s, _ = np.linalg.svd(T, full_matrices=False)
+    return U[:, s > 1e-8]
+
+
+def _orth_complement(B: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the complement of the column space of orthonormal ``B``."""
+    m, d = B.shape
+    U, _, _ = np.linalg.svd(B, full_matrices=True)
+    return U[:, d:]
+
+
+# --------------------------------------------------------------------------- harmonics
+def harmonic_transfer(start_deg, step_deg: float, max_order: int) -> pd.DataFrame:
+    """How each harmonic order of the table and goniometer errors reaches the result.
+
+    For every order ``h = 1..max_order``:
+
+    * ``eda_mean_transfer`` — the gain ``|(1/n) Σ_k exp(i h x_k)|`` of the plain
+      average over the starts (IEC 62047-20 Annex A.3: for equally spaced
+      starts it is 1 when ``n`` divides ``h`` and 0 otherwise; it is the part of
+      the table's harmonic that survives into the start-average and so
+      cannot be told apart from the goniometer).
+    * ``table_status`` — ``"observable"`` (recovered at the grid positions),
+      ``"aliased"`` (recovered at the grid positions, but indistinguishable
+      there from order ``table_alias_order`` because ``h > m/2``),
+      ``"unobservable"`` (lies in the null space of the fit: it is attributed
+      to the goniometer curve), ``"invisible"`` (constant on the grid:
+      ``m`` divides ``h``, part of the gauge constant) or ``"partial"``
+      (irregular starts: only ``table_observed_fraction`` is seen).
+    * ``table_observed_fraction`` — share of the harmonic's (zero-mean) energy
+      on the grid outside the null space, computed from the fit's own normal
+      matrix (1 observable, 0 unobservable).
+    * ``gonio_status`` — ``"observable"``, ``"aliased"`` (sampled only at
+      ``jΔ``) or ``"invisible"`` (zero at every ``jΔ``: ``m`` divides ``h``,
+      with ``g(0) = 0``); ``gonio_absorbs_table`` is true when the table's
+      harmonic of the same order is unobservable, so the goniometer curve at
+      that order carries both.
+
+    Parameters
+    ----------
+    start_deg : array_like, shape (n,)
+        Table positions at zeroing, degrees (on the step grid).
+    step_deg : float
+        Step ``Δ = 360°/m``, degrees.
+    max_order : int
+        Highest order reported.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per order, columns as above.
+
+    Examples
+    --------
+    >>> df = harmonic_transfer([0, 45, 90, 135, 180, 225, 270, 315], 15.0, 24)
+    >>> df.loc[df.order.isin([1, 8, 13, 24]), ["order", "table_status", "table_alias_order"]]
+        order  table_status  table_alias_order
+    0       1    observable                  1
+    7       8  unobservable                  8
+    12     13       aliased                 11
+    23     24     invisible                  0
+    """
+    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
+    m = _check_step(step_deg)
+    p = _grid_indices(start_deg, step_deg)
+    N = (_design(p, m).T @ _design(p, m)).toarray()
+    B = _table_null_basis(N, m)
+    return _harmonic_frame(start_deg, p, m, B, int(max_order))
+
+
+def _harmonic_frame(start_deg, p, m, B, max_order) -> pd.DataFrame:
+    h = np.arange(1, max_order + 1)
+    x = 2 * np.pi * np.arange(m) / m
+    V = np.exp(1j * np.outer(x, h))                      # (m, H) table harmonics on the grid
+    V = V - V.mean(axis=0)                               # the constant is the gauge
+    energy = np.sum(np.abs(V) ** 2, axis=0)
+    # the constant is in B; remove it so B_nc spans the non-constant null space
+    P_const = np.ones((m, 1)) / math.sqrt(m)
+    Bnc = B - P_const @ (P_const.T @ B)
+    U, s, _ = np.linalg.svd(Bnc, full_matrices=False)
+    Bnc = U[:, s > 1e-8]
+    null_energy = np.sum(np.abs(Bnc.T @ V) ** 2, axis=0)
+    invisible = (h % m) == 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        frac = np.where(invisible, 0.0, 1.0 - null_energy / np.where(invisible, 1.0, energy))
+    frac = np.clip(frac, 0.0, 1.0)
+    alias = h % m
+    alias = np.minimum(alias, m - alias)
+    xk = np.deg2rad(start_deg)
+    transfer = np.abs(np.exp(1j * np.outer(h, xk)).mean(axis=1))
+    table_status = np.where(
+        invisible, "invisible",
+        np.where(frac < 1e-9, "unobservable",
+                 np.where(frac < 1 - 1e-9, "partial",
+                          np.where(alias != h, "aliased", "observable"))))
+    gonio_status = np.where(invisible, "invisible",
+                            np.where(alias != h, "aliased", "observable"))
+    return pd.DataFrame({
+        "order": h,
+        "eda_mean_transfer": np.round(transfer, 12),
+        "table_status": table_status,
+        "table_observed_fraction": np.round(frac, 12),
+        "table_alias_order": alias,
+        "gonio_status": gonio_status,
+        "gonio_alias_order": alias,
+        "gonio_absorbs_table": (table_status == "unobservable") | (table_status == "partial"),
+    })
+
+
+def _check_step(step_deg: float) -> int:
+    if not np.isfinite(step_deg) or step_deg <= 0:
+        raise GonioError(f"step must be a positive angle, got {step_deg!r}", key="step_deg")
+    m = int(round(360.0 / step_deg))
+    if m < 2 or abs(m * step_deg - 360.0) > 1e-9 * 360.0 * m:
+        raise GonioError(f"step {step_deg:.9g}° does not divide the full turn into "
+                         f"an integer number m ≥ 2 of steps", key="step_deg")
+    return m
+
+
+# --------------------------------------------------------------------------- analysis
+def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int | None = None,
+                            gauge: str = "closure", max_order: int | None = None) -> EdaResult:
+    """Separate the table's and the goniometer's errors by equal-division averaging.
+
+    Least-squares fit of (IEC 62047-20 Annex A.3, generalised; GUM H.3)
+
+        D[r, k, j] = g_j − t_{(p_k + j) mod m} + t_{p_k} + e[r, k, j],   j = 1..m
+
+    with ``p_k = x_k / Δ`` the start's grid index, the gauge constraints of the
+    module docstring (table orthogonal to its unobservable subspace, plus
+    ``Σ t = 0`` or ``t_0 = 0``), and ``e`` independent with a common standard
+    deviation ``s = sqrt(RSS / dof)``, ``dof = R·n·m − rank``. The parameter
+    covariance is ``s² Z (Zᵀ AᵀA Z)⁻¹ Zᵀ`` with ``Z`` the basis of the gauge.
+    For ``n = m`` the fit reduces to the classical averages: ``g_j`` is the
+    mean of column ``j`` over the starts (Annex A.3: the table's differences
+    cancel), and with ``E = D − g`` the table error at position ``q`` is the
+    mean of the two closure sums ``(1/m) Σ_{j<m} E[q, j]`` (runs starting at
+    ``q``) and ``−(1/m) Σ_{j<m} E[q−j, j]`` (runs arriving at ``q``).
+
+    Parameters
+    ----------
+    D : array_like, shape (n, m) or (R, n, m) or a sequence of (n, m) arrays
+        Deviations goniometer − table in arcseconds; row ``k`` is start ``k``,
+        column ``j−1`` is step ``j`` (the last column the full turn).
+    start_deg : array_like, shape (n,)
+        Absolute table position at each start's zeroing, degrees; each must be
+        a multiple of ``step_deg`` (mod 360).
+    step_deg : float
+        The step ``Δ = 360°/m``, degrees.
+    repeats_axis : int, optional
+        Axis of ``D`` that holds repeats when ``D`` is 3-D (default 0).
+    gauge : {"closure", "zero"}
+        ``"closure"``: table errors sum to zero over the ``m`` positions;
+        ``"zero"``: the table error at position 0° is zero.
+    max_order : int, optional
+        Highest harmonic order in ``result.harmonics`` (default ``2m``).
+
+    Returns
+    -------
+    EdaResult
+
+    Raises
+    ------
+    GonioError
+        Wrong shapes, non-finite values, starts off the step grid, or no
+        residual degrees of freedom.
+
+    Examples
+    --------
+    Eight starts, eight steps of 45°, a table with a 2″ first harmonic and a
+    goniometer with 0.5″ of third harmonic, no noise:
+
+    >>> sim = simulate_eda_matrix({1: 2.0}, {3: 0.5}, 8, 8, 1, 0.0, 0)
+    >>> res = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)
+    >>> np.round(res.table_error_arcsec, 3) + 0.0   # 2 cos(x) at x = 0°, 45°, ...
+    array([ 2.   ,  1.414,  0.   , -1.414, -2.   , -1.414,  0.   ,  1.414])
+    >>> np.round(res.gonio_error_arcsec, 3) + 0.0   # 0.5 (cos 3φ − 1) at φ = 45°, ...
+    array([-0.854, -0.5  , -0.146, -1.   , -0.146, -0.5  , -0.854,  0.   ])
+    >>> res.dof, res.unobservable_dim
+    (49, 0)
+    """
+    if gauge not in ("closure", "zero"):
+        raise GonioError(f"gauge must be 'closure' or 'zero', got {gauge!r}", key="gauge")
+    try:
+        D = np.asarray(D, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise GonioError(f"D is not a numeric array: {exc}", key="D") from None
+    if D.ndim == 2:
+        D = D[None]
+    elif D.ndim == 3:
+        D = np.moveaxis(D, 0 if repeats_axis is None else repeats_axis, 0)
+    else:
+        raise GonioError(f"D must be 2-D (n, m) or 3-D (R, n, m), got shape {D.shape}", key="D")
+    if not np.all(np.isfinite(D)):
+        raise GonioError("D contains non-finite values (every reading is needed)", key="D")
+    R, n, m_cols = D.shape
+    m = _check_step(float(step_deg))
+    if m_cols != m:
+        raise GonioError(f"D has {m_cols} columns but the step {step_deg:.9g}° gives "
+                         f"m = {m} points per revolution (columns are j = 1..m)", key="D")
+    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
+    if start_deg.shape != (n,):
+        raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
+    p = _grid_indices(start_deg, float(step_deg))
+
+    A = _design(p, m)
+    N1 = (A.T @ A).toarray()
+    B = _table_null_basis(N1, m)
+    Bc = _orth_complement(B)
+    d = B.shape[1]
+    # Z maps the free parameters to (g, t) with t orthogonal to the null table space
+    Z = np.zeros((2 * m, m + m - d))
+    Z[:m, :m] = np.eye(m)
+    Z[m:, m:] = Bc
+    y_sum = D.sum(axis=0).ravel()
+    b = A.T @ y_sum
+    M = Z.T @ (R * N1) @ Z
+    Minv = np.linalg.inv(M)
+    theta = Z @ (Minv @ (Z.T @ b))
+    fitted = (A @ theta).reshape(n, m)
+    resid = D - fitted[None]
+    rank = M.shape[0]
+    dof = R * n * m - rank
+    if dof <= 0:
+        raise GonioError(f"no residual degrees of freedom ({R * n * m} readings, {rank} "
+                         f"parameters): add starts or repeats", key="D")
+    s2 = float(np.sum(resid ** 2)) / dof
+    cov = s2 * (Z @ Minv @ Z.T)
+
+    g, t = theta[:m], theta[m:]
+    cov_g, cov_t = cov[:m, :m], cov[m:, m:]
+    if gauge == "zero":
+        G = np.eye(m)
+        G[:, 0] -= 1.0
+        t = G @ t
+        cov_t = G @ cov_t @ G.T
+    # full-turn closure: column j = m involves g_m only
+    full = float(g[-1])
+    u_full = math.sqrt(max(cov_g[-1, -1], 0.0))
+    z = full / u_full if u_full > 0 else (0.0 if full == 0 else math.inf)
+    closure = ClosureCheck(
+        table_sum_arcsec=float(t.sum()), full_turn_arcsec=full, u_full_turn_arcsec=u_full,
+        z=float(z), per_start_full_turn_arcsec=D[:, :, -1].mean(axis=0),
+        consistent=bool(abs(z) <= CLOSURE_Z_LIMIT))
+    harm = _harmonic_frame(start_deg, p, m, B, int(max_order or 2 * m))
+    step = float(step_deg)
+    return EdaResult(
+        table_position_deg=np.arange(m) * step,
+        table_error_arcsec=t, table_u_arcsec=np.sqrt(np.clip(np.diag(cov_t), 0, None)),
+        table_cov_arcsec2=cov_t,
+        gonio_angle_deg=np.arange(1, m + 1) * step,
+        gonio_error_arcsec=g, gonio_u_arcsec=np.sqrt(np.clip(np.diag(cov_g), 0, None)),
+        gonio_cov_arcsec2=cov_g,
+        residual_std_arcsec=math.sqrt(s2), dof=int(dof), residuals_arcsec=resid,
+        start_deg=start_deg, step_deg=step, repeats=R, gauge=gauge,
+        unobservable_dim=int(d - 1), harmonics=harm, closure=closure)
+
+
+# --------------------------------------------------------------------------- comparison
+def compare_tables(result_a: EdaResult, result_b: EdaResult) -> TableComparison:
+    """Difference of two tables' error curves, one goniometer as transfer standard.
+
+    Both tables are calibrated by :func:`equal_division_analysis` with the same
+    goniometer; the goniometer's error cancels from each result, so the
+    difference ``t_a − t_b`` at the positions common to both grids is
+    independent of it (IEC 62047-20 Annex A.3; comparison by transfer
+    standard). The difference is re-centred to zero mean over the common
+    positions, ``d = H (S_a t_a − S_b t_b)``, ``H = I − 11ᵀ/c``, with covariance
+    ``H (S_a C_a S_aᵀ + S_b C_b S_bᵀ) Hᵀ`` (the two runs independent; GUM 5.1).
+    Table harmonics unobservable in either run (multiples of its ``n``) are
+    missing from that run's curve and hence from the difference.
+
+    The goniometer curves should agree: ``gonio_chi2`` sums the squared
+    normalised differences at the common angles (expect about ``gonio_points``
+    when both runs see the same table-harmonic content in their goniometer
+    curves, i.e. when ``n = m`` in both).
+
+    Parameters
+    ----------
+    result_a, result_b : EdaResult
+        Calibrations of tables A and B.
+
+    Returns
+    -------
+    TableComparison
+
+    Raises
+    ------
+    GonioError
+        Fewer than two common positions.
+
+    Examples
+    --------
+    >>> a = equal_division_analysis(**_sim_kw(simulate_eda_matrix({2: 1.0}, {1: 0.3}, 8, 8, 1, 0.0, 0)))
+    >>> b = equal_division_analysis(**_sim_kw(simulate_eda_matrix({2: 0.4}, {1: 0.3}, 8, 8, 1, 0.0, 0)))
+    >>> np.round(compare_tables(a, b).difference_arcsec, 3) + 0.0   # 0.6 cos 2x
+    array([ 0.6,  0. , -0.6,  0. ,  0.6,  0. , -0.6,  0. ])
+    """
+    pa = np.round(np.mod(result_a.table_position_deg, 360.0) * 1e6).astype(np.int64)
+    pb = np.round(np.mod(result_b.table_position_deg, 360.0) * 1e6).astype(np.int64)
+    common, ia, ib = np.intersect1d(pa, pb, return_indices=True)
+    c = common.size
+    if c < 2:
+        raise GonioError("the two calibrations share fewer than two table positions",
+                         key="table_position_deg")
+    H = np.eye(c) - 1.0 / c
+    diff = H @ (result_a.table_error_arcsec[ia] - result_b.table_error_arcsec[ib])
+    cov = H @ (result_a.table_cov_arcsec2[np.ix_(ia, ia)]
+               + result_b.table_cov_arcsec2[np.ix_(ib, ib)]) @ H.T
+    ga = np.round(result_a.gonio_angle_deg * 1e6).astype(np.int64)
+    gb = np.round(result_b.gonio_angle_deg * 1e6).astype(np.int64)
+    _, ja, jb = np.intersect1d(ga, gb, return_indices=True)
+    var = result_a.gonio_u_arcsec[ja] ** 2 + result_b.gonio_u_arcsec[jb] ** 2
+    dg = result_a.gonio_error_arcsec[ja] - result_b.gonio_error_arcsec[jb]
+    ok = var > 0
+    chi2 = float(np.sum(dg[ok] ** 2 / var[ok]))
+    return TableComparison(position_deg=common / 1e6, difference_arcsec=diff,
+                           u_difference_arcsec=np.sqrt(np.clip(np.diag(cov), 0, None)),
+                           cov_arcsec2=cov, gonio_chi2=chi2, gonio_points=int(ok.sum()))
+
+
+# --------------------------------------------------------------------------- simulation
+def _harmonic_table(spec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if spec is None:
+        return np.zeros(0, int), np.zeros(0), np.zeros(0)
+    if isinstance(spec, Mapping):
+        items = list(spec.items())
+    else:
+        items = [(row[0], tuple(row[1:])) for row in spec]
+    orders, amps, phases = [], [], []
+    for order, val in items:
+        if isinstance(val, (tuple, list, np.ndarray)):
+            a, ph = (float(val[0]), float(val[1]) if len(val) > 1 else 0.0)
+        else:
+            a, ph = float(val), 0.0
+        if int(order) != order or order < 1:
+            raise GonioError(f"harmonic order must be an integer ≥ 1, got {order!r}",
+                             key="harmonics")
+        orders.append(int(order)); amps.append(a); phases.append(ph)
+    return np.array(orders, int), np.array(amps), np.array(phases)
+
+
+def table_error_arcsec(x_deg, table_harmonics) -> np.ndarray:
+    """Table error ``t(x) = Σ_h A_h cos(h x + φ_h)`` in arcseconds.
+
+    ``table_harmonics`` maps order ``h`` to ``A_h`` (arcsec) or ``(A_h, φ_h)``
+    (φ in radians). A Fourier series of a periodic circle-division error
+    (IEC 62047-20 Annex A.3).
+
+    >>> np.round(table_error_arcsec([0, 45, 90], {1: 2.0, 2: (1.0, np.pi / 2)}), 6) + 0.0
+    array([2.      , 0.414214, 0.      ])
+    """
+    h, a, ph = _harmonic_table(table_harmonics)
+    x = np.deg2rad(np.asarray(x_deg, dtype=float))
+    return np.cos(np.multiply.outer(x, h) + ph) @ a
+
+
+def gonio_error_arcsec(phi_deg, gonio_harmonics) -> np.ndarray:
+    """Goniometer error ``g(φ) = Σ_h B_h [cos(h φ + ψ_h) − cos ψ_h]``, arcseconds.
+
+    The same Fourier series as :func:`table_error_arcsec`, less its value at
+    ``φ = 0``: the goniometer reads zero where it was zeroed, so ``g(0) = 0``
+    and, being periodic, ``g(360°) = 0``.
+
+    >>> np.round(gonio_error_arcsec([0, 90, 180, 360], {1: 1.0}), 6)
+    array([ 0., -1., -2.,  0.])
+    """
+    h, b, ps = _harmonic_table(gonio_harmonics)
+    phi = np.deg2rad(np.asarray(phi_deg, dtype=float))
+    return (np.cos(np.multiply.outer(phi, h) + ps) - np.cos(ps)) @ b
+
+
+def simulate_eda_matrix(table_harmonics, gonio_harmonics, n: int, m: int, repeats: int,
+                        noise_arcsec: float, rng) -> EdaSimulation:
+    """Synthetic equal-division measurement with known harmonic errors.
+
+    ``D[r, k, j] = g(jΔ) − [t(x_k + jΔ) − t(x_k)] + e``, ``x_k = k·360°/n``,
+    ``Δ = 360°/m``, ``e ~ N(0, noise_arcsec²)`` independent (the model of
+    IEC 62047-20 Annex A.3 with :func:`table_error_arcsec` and
+    :func:`gonio_error_arcsec`). Independent of the virtual bench.
+
+    Parameters
+    ----------
+    table_harmonics, gonio_harmonics : mapping or sequence or None
+        ``{order: amplitude_arcsec}`` or ``{order: (amplitude_arcsec, phase_rad)}``
+        or rows ``(order, amplitude_arcsec, phase_rad)``.
+    n, m : int
+        Starts and points per revolution.
+    repeats : int
+        Number of repeated matrices ``R``.
+    noise_arcsec : float
+        Reading noise standard deviation, arcseconds.
+    rng : numpy.random.Generator or int
+        Random generator or seed.
+
+    Returns
+    -------
+    EdaSimulation
+
+    Examples
+    --------
+    >>> sim = simulate_eda_matrix({1: 1.0}, None, 4, 4, 2, 0.0, 1)
+    >>> sim.D_arcsec.shape, sim.start_deg, sim.step_deg
+    ((2, 4, 4), array([  0.,  90., 180., 270.]), 90.0)
+    >>> sim.D_arcsec[0, 0]
+    array([1., 2., 1., 0.])
+    """
+    if int(n) < 1 or int(m) < 2 or int(repeats) < 1:
+        raise GonioError(f"need n ≥ 1, m ≥ 2, repeats ≥ 1 (got {n}, {m}, {repeats})")
+    n, m, repeats = int(n), int(m), int(repeats)
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    start = np.arange(n) * 360.0 / n
+    step = 360.0 / m
+    phi = np.arange(1, m + 1) * step
+    t0 = table_error_arcsec(start, table_harmonics)                         # (n,)
+    tj = table_error_arcsec(start[:, None] + phi[None, :], table_harmonics)  # (n, m)
+    g = gonio_error_arcsec(phi, gonio_harmonics)                             # (m,)
+    clean = g[None, :] - (tj - t0[:, None])
+    D = clean[None] + float(noise_arcsec) * rng.standard_normal((repeats, n, m))
+    return EdaSimulation(D_arcsec=D, start_deg=start, step_deg=step,
+                         table_true_arcsec=table_error_arcsec(np.arange(m) * step,
+                                                              table_harmonics),
+                         gonio_true_arcsec=g)
+
+
+def _sim_kw(sim: EdaSimulation) -> dict:
+    """Keyword arguments of :func:`equal_division_analysis` from a simulation."""
+    return {"D": sim.D_arcsec, "start_deg": sim.start_deg, "step_deg": sim.step_deg}
+
+
+# --------------------------------------------------------------------------- readings
+_EDA_COLUMNS = ("series", "round", "table_deg", "gyro_deg")
+
+
+def _where(df: pd.DataFrame, label) -> dict:
+    """``line=`` for GonioError: the DataFrame index label when it is an int (line number)."""
+    try:
+        return {"line": int(label)}
+    except (TypeError, ValueError):  # pragma: no cover
+        return {}
+
+
+def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
+                             file=None) -> tuple[np.ndarray, np.ndarray, float]:
+    """Build the deviation matrix D from a readings file's ``equal_division`` rows.
+
+    Readings-file extension (data-formats contract, version 1, plus): rows with
+    ``test = equal_division``; ``series`` = repeat index; ``round`` = start
+    index ``k+1``; ``start_deg`` = the table's absolute position at zeroing
+    (same for every row of a round, and for a round in every series);
+    ``table_deg`` = the table's indicated angle turned since the start,
+    ``jΔ``, ``j = 1..m`` (a row at ``table_deg = 0``, a reading at the zero, is
+    ignored); ``gyro_deg`` = the goniometer's indicated angle since zeroing.
+    ``D = (gyro_deg − table_deg)·3600`` in arcseconds. Other tests' rows are
+    ignored.
+
+    The DataFrame's index labels are quoted as line numbers in errors (the CLI
+    sets them to the file's line numbers).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Readings.
+    starts : int, optional
+        Number of starts ``n``. Without a ``start_deg`` column the starts are
+        taken as ``(round − 1)·360°/n`` and ``starts`` is required; with it,
+        the number of rounds must equal ``starts``.
+    file : str or Path, optional
+        File name quoted in errors.
+
+    Returns
+    -------
+    D_arcsec : numpy.ndarray, shape (R, n, m)
+    start_deg : numpy.ndarray, shape (n,)
+    step_deg : float
+
+    Raises
+    ------
+    GonioError
+        Missing columns, unparsable values, an incomplete or duplicated grid,
+        steps that are not ``j·360°/m``, inconsistent start positions.
+
+    Examples
+    --------
+    >>> df = pd.DataFrame({"test": "equal_division", "series": 1,
+    ...     "round": [1, 1, 2, 2], "start_deg": [0.0, 0.0, 180.0, 180.0],
+    ...     "table_deg": [180.0, 360.0] * 2,
+    ...     "gyro_deg": [180.0 + 1 / 3600, 360.0, 180.0 - 1 / 3600, 360.0]})
+    >>> D, start, step = eda_matrix_from_readings(df)
+    >>> np.round(D, 9), start, step
+    (array([[[ 1.,  0.],
+            [-1.,  0.]]]), array([  0., 180.]), 180.0)
+    """
+    if "test" not in df.columns:
+        raise GonioError("missing required column", file=file, column="test")
+    rows = df[df["test"].astype(str).str.strip() == "equal_division"]
+    if rows.empty:
+        raise GonioError("no rows with test = equal_division", file=file, column="test")
+    cols = list(_EDA_COLUMNS)
+    has_start = "start_deg" in rows.columns and rows["start_deg"].notna().any()
+    if has_start:
+        cols.append("start_deg")
+    for c in cols:
+        if c not in rows.columns:
+            raise GonioError("missing required column for equal_division", file=file, column=c)
+    num = {}
+    for c in cols:
+        v = pd.to_numeric(rows[c], errors="coerce")
+        bad = v.isna() | ~np.isfinite(v.astype(float))
+        if bad.any():
+            lab = bad.index[np.argmax(bad.to_numpy())]
+            raise GonioError(f"expected a number, got {rows.at[lab, c]!r}", file=file,
+                             column=c, **_where(df, lab))
+        num[c] = v.astype(float)
+    for c in ("series", "round"):
+        bad = (num[c] != np.round(num[c])) | (num[c] < 1)
+        if bad.any():
+            lab = bad.index[np.argmax(bad.to_numpy())]
+            raise GonioError("expected an integer ≥ 1", file=file, column=c, **_where(df, lab))
+    table = num["table_deg"]
+    keep = np.abs(table) > STEP_TOL_DEG                       # drop readings at the zero
+    series = num["series"][keep].astype(int)
+    rnd = num["round"][keep].astype(int)
+    table = table[keep]
+    dev = (num["gyro_deg"][keep] - table) * _ARCSEC_PER_DEG
+    if table.empty:
+        raise GonioError("equal_division rows have no reading away from the zero",
+                         file=file, column="table_deg")
+    # the step: points per revolution from the largest group
+    counts = pd.DataFrame({"s": series, "r": rnd}).value_counts()
+    m = int(counts.max())
+    if m < 2:
+        raise GonioError("each round needs at least two steps", file=file, column="table_deg")
+    step = 360.0 / m
+    j = np.rint(table / step)
+    bad = (np.abs(table - j * step) > STEP_TOL_DEG) | (j < 1) | (j > m)
+    if bad.any():
+        lab = bad.index[np.argmax(bad.to_numpy())]
+        raise GonioError(f"table_deg {table[lab]:.9g} is not a multiple j·{step:.9g}° "
+                         f"(j = 1..{m}) of the step implied by {m} readings per round",
+                         file=file, column="table_deg", **_where(df, lab))
+    j = j.astype(int)
+    key = pd.DataFrame({"s": series, "r": rnd, "j": j})
+    dup = key.duplicated()
+    if dup.any():
+        lab = dup.index[np.argmax(dup.to_numpy())]
+        raise GonioError(f"duplicate reading: series {series[lab]}, round {rnd[lab]}, "
+                         f"step {j[lab]}", file=file, **_where(df, lab))
+    s_vals = np.unique(series)
+    r_vals = np.unique(rnd)
+    R, n = s_vals.size, r_vals.size
+    if not np.array_equal(s_vals, np.arange(1, R + 1)):
+        raise GonioError(f"series must be numbered 1..{R}, found {s_vals.tolist()}",
+                         file=file, column="series")
+    if not np.array_equal(r_vals, np.arange(1, n + 1)):
+        raise GonioError(f"rounds must be numbered 1..{n}, found {r_vals.tolist()}",
+                         file=file, column="round")
+    if R * n * m != len(key):
+        full = pd.MultiIndex.from_product([s_vals, r_vals, np.arange(1, m + 1)])
+        have = pd.MultiIndex.from_frame(key)
+        missing = full.difference(have)[0]
+        raise GonioError(f"incomplete grid: no reading for series {missing[0]}, round "
+                         f"{missing[1]}, table_deg {missing[2] * step:.9g} ({len(full) - len(have)}"
+                         f" of {len(full)} readings missing)", file=file, column="table_deg")
+    D = np.empty((R, n, m))
+    D[series.to_numpy() - 1, rnd.to_numpy() - 1, j.to_numpy() - 1] = dev.to_numpy()
+    if has_start:
+        st = num["start_deg"][keep]
+        start = np.full(n, np.nan)
+        for idx_r in range(n):
+            sel = rnd.to_numpy() == idx_r + 1
+            vals = np.mod(st.to_numpy()[sel], 360.0)
+            ref = vals[0]
+            off = np.abs((vals - ref + 180.0) % 360.0 - 180.0) > STEP_TOL_DEG
+            if off.any():
+                lab = st.index[sel][np.argmax(off)]
+                raise GonioError(f"start_deg {st[lab]:.9g} differs from {ref:.9g} given "
+                                 f"elsewhere for round {idx_r + 1}", file=file,
+                                 column="start_deg", **_where(df, lab))
+            start[idx_r] = ref
+        if starts is not None and int(starts) != n:
+            raise GonioError(f"--starts {starts} but the file has {n} rounds (starts)",
+                             file=file, column="round")
+    else:
+        if starts is None:
+            raise GonioError("no start_deg column: give the number of starts n "
+                             "(starts are then (round − 1)·360°/n)", file=file,
+                             column="start_deg")
+        if int(starts) != n:
+            raise GonioError(f"--starts {starts} but the file has {n} rounds (starts)",
+                             file=file, column="round")
+        start = np.arange(n) * 360.0 / n
+    return D, start, step
