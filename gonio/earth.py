@@ -1,0 +1,184 @@
+"""Earth rate, the local frame, axis directions and Sagnac scale factors.
+
+Constants
+---------
+``OMEGA_E_RAD_S``          IERS nominal Earth rotation rate, rad/s.
+``SIDEREAL_DAY_S``         the stellar day used by IEC 62047-20 5.3.3.1, s.
+``OMEGA_E_STELLAR_RAD_S``  360°/stellar day, rad/s (IEC 62047-20 reading).
+
+Frames
+------
+Local ENU (east, north, up). An axis direction is a unit vector in ENU, given by
+name (``up``, ``north``, ``south``, ``east``, ``west``) or by azimuth (from
+north, towards east) and elevation, both in degrees.
+
+The Earth-rate vector in ENU at latitude φ is Ω_E (0, cos φ, sin φ): on an axis
+pointing up its component is Ω_E sin φ, north Ω_E cos φ, east 0.
+
+Note (IEC 62047-20 5.3.3.1 erratum): that text gives the vertical component as
+Ω cos λ and the horizontal as Ω sin λ cos φ; physically vertical is Ω sin λ and
+horizontal (azimuth φ from north) Ω cos λ cos φ, which is what this module uses.
+
+References
+----------
+IERS Conventions (2010), Table 1.1 (ω = 7.292115×10⁻⁵ rad/s).
+IEC 62047-20:2014 / JIS C 5630-20:2015, 5.3.3.1.
+Draft JJF "光学陀螺测角仪校准规范", clauses 4.5, 7, 7.7.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.errors import GonioError
+
+#: IERS nominal mean angular velocity of the Earth, rad/s.
+OMEGA_E_RAD_S = 7.292115e-5
+#: Stellar day (one turn relative to the fixed stars), s; IEC 62047-20 5.3.3.1.
+SIDEREAL_DAY_S = 86164.0989
+#: 2π per stellar day, rad/s (= 7.2921158×10⁻⁵; differs from the IERS value by
+#: 8.5×10⁻¹³ rad/s, i.e. 1.2×10⁻⁸ relative: 1.7×10⁻⁷ ″/s, negligible here).
+OMEGA_E_STELLAR_RAD_S = 2.0 * math.pi / SIDEREAL_DAY_S
+#: Earth rate in °/h (IERS value): 15.0411 °/h.
+OMEGA_E_DPH = math.degrees(OMEGA_E_RAD_S) * 3600.0
+#: Earth rate in ″/s (IERS value): 15.0411 ″/s.
+OMEGA_E_ARCSEC_S = math.degrees(OMEGA_E_RAD_S) * 3600.0
+#: Seconds of arc per degree.
+ARCSEC_PER_DEG = 3600.0
+
+#: Named axis directions as (azimuth_deg, elevation_deg).
+NAMED_AXES = {
+    "up": (0.0, 90.0),
+    "north": (0.0, 0.0),
+    "south": (180.0, 0.0),
+    "east": (90.0, 0.0),
+    "west": (270.0, 0.0),
+}
+
+
+def axis_enu(axis) -> np.ndarray:
+    """Unit vector in ENU of an axis given by name or as (azimuth_deg, elevation_deg).
+
+    >>> axis_enu("north").round(12).tolist()
+    [0.0, 1.0, 0.0]
+    >>> axis_enu((90.0, 0.0)).round(12).tolist()
+    [1.0, 0.0, 0.0]
+    """
+    if isinstance(axis, str):
+        key = axis.strip().lower()
+        if key in NAMED_AXES:
+            az, el = NAMED_AXES[key]
+        else:
+            try:
+                az, el = (float(v) for v in key.split(","))
+            except ValueError:
+                raise GonioError(f"unknown axis direction {axis!r}: expected one of "
+                                 f"{', '.join(NAMED_AXES)} or AZ,EL in degrees") from None
+    else:
+        az, el = (float(v) for v in axis)
+    if not (math.isfinite(az) and math.isfinite(el)) or abs(el) > 90.0:
+        raise GonioError(f"axis elevation must be within ±90°, got {el}")
+    a, e = math.radians(az), math.radians(el)
+    return np.array([math.cos(e) * math.sin(a), math.cos(e) * math.cos(a), math.sin(e)])
+
+
+def earth_rate_enu(latitude_deg: float, omega_rad_s: float = OMEGA_E_RAD_S) -> np.ndarray:
+    """Earth-rate vector in the local ENU frame, rad/s: Ω (0, cos φ, sin φ).
+
+    >>> (earth_rate_enu(90.0) / OMEGA_E_RAD_S).round(12).tolist()
+    [0.0, 0.0, 1.0]
+    """
+    if not math.isfinite(latitude_deg) or abs(latitude_deg) > 90.0:
+        raise GonioError(f"latitude must be within ±90°, got {latitude_deg}")
+    p = math.radians(latitude_deg)
+    return omega_rad_s * np.array([0.0, math.cos(p), math.sin(p)])
+
+
+def earth_rate_on_axis_dps(latitude_deg: float, axis="up",
+                           omega_rad_s: float = OMEGA_E_RAD_S) -> float:
+    """Earth-rate component on an axis, °/s (draft 4.5; IEC 62047-20 5.3.3.1, corrected).
+
+    Up: Ω sin φ; north: Ω cos φ; east/west: 0; south: −Ω cos φ.
+
+    >>> round(earth_rate_on_axis_dps(40.0, "up") * 3600, 3)   # ″/s at 40° N, axis up
+    9.668
+    >>> round(earth_rate_on_axis_dps(40.0, "north") * 3600, 3)
+    11.522
+    >>> abs(earth_rate_on_axis_dps(40.0, "east")) < 1e-18
+    True
+    """
+    return float(math.degrees(earth_rate_enu(latitude_deg, omega_rad_s) @ axis_enu(axis)))
+
+
+@dataclass(frozen=True)
+class EarthRateSplit:
+    """Earth rate relative to a table axis: parallel and perpendicular parts, °/s."""
+
+    parallel_dps: float
+    perpendicular_dps: float
+
+
+def earth_rate_split(latitude_deg: float, axis="up") -> EarthRateSplit:
+    """Split Ω_E into its components along and across a table axis, °/s.
+
+    The perpendicular part Ω_⊥ drives the tilt × Earth-rate coupling
+    (``ogam-draft.md``, "Physics the draft relies on").
+
+    >>> s = earth_rate_split(40.0, "up")
+    >>> round(s.perpendicular_dps * 3600, 2)    # ″/s
+    11.52
+    """
+    w = earth_rate_enu(latitude_deg)
+    a = axis_enu(axis)
+    par = float(w @ a)
+    perp = float(np.linalg.norm(w - par * a))
+    return EarthRateSplit(math.degrees(par), math.degrees(perp))
+
+
+# --- Sagnac scale factors ----------------------------------------------------
+
+SPEED_OF_LIGHT_M_S = 299_792_458.0
+
+
+def rlg_scale_factor_counts_per_rad(area_m2: float, perimeter_m: float,
+                                    wavelength_m: float = 632.8e-9) -> float:
+    """Ring-laser scale factor 4A/(λP), pulses (fringes) per radian (Sagnac).
+
+    The beat frequency is Δf = 4A/(λP)·Ω; each fringe is one pulse.
+
+    >>> k = rlg_scale_factor_counts_per_rad(0.15**2 * 3**0.5 / 4, 0.45)  # 15 cm triangle
+    >>> round(k), round(k * math.pi / 180, 2)        # per rad, per degree
+    (136856, 2388.59)
+    """
+    for name, v in (("area_m2", area_m2), ("perimeter_m", perimeter_m),
+                    ("wavelength_m", wavelength_m)):
+        if not (math.isfinite(v) and v > 0):
+            raise GonioError(f"{name} must be a positive number, got {v}")
+    return 4.0 * area_m2 / (wavelength_m * perimeter_m)
+
+
+def fog_phase_per_rate_s(length_m: float, diameter_m: float,
+                         wavelength_m: float = 1550e-9) -> float:
+    """Fibre-optic gyro Sagnac phase per unit rate, 2πLD/(λc), rad per (rad/s) = s.
+
+    >>> round(fog_phase_per_rate_s(1000.0, 0.1), 3)      # 1 km coil, 10 cm diameter
+    1.352
+    """
+    for name, v in (("length_m", length_m), ("diameter_m", diameter_m),
+                    ("wavelength_m", wavelength_m)):
+        if not (math.isfinite(v) and v > 0):
+            raise GonioError(f"{name} must be a positive number, got {v}")
+    return 2.0 * math.pi * length_m * diameter_m / (wavelength_m * SPEED_OF_LIGHT_M_S)
+
+
+def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: float,
+                             axis="up") -> float:
+    """Pulses per second that the Earth rate alone produces on an axis.
+
+    >>> round(earth_rate_pulse_rate_hz(3600.0, 40.0, "up"), 3)   # 1 count = 1″
+    9.668
+    """
+    return scale_factor_counts_per_deg * earth_rate_on_axis_dps(latitude_deg, axis)

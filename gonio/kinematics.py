@@ -1,0 +1,205 @@
+"""Table motion profiles and the tilted sensing axis on a turning table.
+
+A rotary-table session is a :class:`Timeline`: a sequence of segments, each a
+rest (dwell) or a trapezoidal move (constant acceleration, cruise at the set
+rate, constant deceleration; triangular when the move is too short to reach
+the rate). Angle and rate are closed-form in each segment, so the truth can be
+evaluated exactly at any instant, vectorised over many instants.
+
+The sensing axis of a goniometer mounted with a tilt ψ (its azimuth α in the
+table frame) cones around the table axis as the table turns (draft Annex A.1;
+``ogam-draft.md`` "Physics the draft relies on"):
+
+    n(θ) = cos ψ · a + sin ψ · (cos(θ+α) e₁ + sin(θ+α) e₂)
+
+so a rate gyro senses ω·n = θ̇ cos ψ + Ω·n(θ).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gonio.errors import GonioError
+
+
+def trapezoid_duration_s(distance_deg: float, rate_dps: float, accel_dps2: float) -> float:
+    """Time of a rest-to-rest trapezoidal move of ``distance_deg``, s.
+
+    Cruise at ``rate_dps`` if the move is long enough (|D| ≥ ω²/a), else a
+    triangular profile with peak rate sqrt(a|D|).
+
+    >>> trapezoid_duration_s(360.0, 60.0, 60.0)     # 6 s cruise-equivalent + ω/a
+    7.0
+    >>> round(trapezoid_duration_s(1.0, 60.0, 60.0), 6)   # triangular: 2·sqrt(D/a)
+    0.258199
+    """
+    d = abs(distance_deg)
+    if d == 0.0:
+        return 0.0
+    if d >= rate_dps * rate_dps / accel_dps2:
+        return d / rate_dps + rate_dps / accel_dps2
+    return 2.0 * math.sqrt(d / accel_dps2)
+
+
+@dataclass
+class Timeline:
+    """Piecewise closed-form motion of a table (angles in degrees, times in s).
+
+    Build with :meth:`dwell` and :meth:`move`; evaluate with :meth:`angle_deg`
+    and :meth:`rate_dps` on arrays of times.
+
+    >>> tl = Timeline(start_angle_deg=0.0)
+    >>> _ = tl.dwell(1.0); arrive = tl.move(90.0, rate_dps=30.0, accel_dps2=60.0)
+    >>> arrive                                   # 1 s rest + 3 s + 0.5 s
+    4.5
+    >>> tl.angle_deg(np.array([0.5, 4.5, 10.0])).tolist()
+    [0.0, 90.0, 90.0]
+    >>> float(tl.rate_dps(np.array([2.5]))[0])
+    30.0
+    """
+
+    start_angle_deg: float = 0.0
+    t0_s: float = 0.0
+    _t0: list = field(default_factory=list)
+    _theta0: list = field(default_factory=list)
+    _sign: list = field(default_factory=list)
+    _dist: list = field(default_factory=list)
+    _vpk: list = field(default_factory=list)
+    _acc: list = field(default_factory=list)
+    _tacc: list = field(default_factory=list)
+    _dur: list = field(default_factory=list)
+    _arrays: tuple | None = None
+
+    @property
+    def end_s(self) -> float:
+        """Time at the end of the last segment."""
+        return self.t0_s if not self._t0 else self._t0[-1] + self._dur[-1]
+
+    @property
+    def end_angle_deg(self) -> float:
+        """Angle at the end of the last segment."""
+        if not self._t0:
+            return self.start_angle_deg
+        return self._theta0[-1] + self._sign[-1] * self._dist[-1]
+
+    def _append(self, duration, dist, vpk, acc, tacc, sign):
+        t_start, theta_start = self.end_s, self.end_angle_deg
+        self._t0.append(t_start)
+        self._theta0.append(theta_start)
+        self._sign.append(sign)
+        self._dist.append(dist)
+        self._vpk.append(vpk)
+        self._acc.append(acc)
+        self._tacc.append(tacc)
+        self._dur.append(duration)
+        self._arrays = None
+
+    def dwell(self, duration_s: float) -> float:
+        """Rest for ``duration_s``; returns the time at its end."""
+        if duration_s < 0 or not math.isfinite(duration_s):
+            raise GonioError(f"dwell duration must be ≥ 0 s, got {duration_s}")
+        if duration_s > 0:
+            self._append(duration_s, 0.0, 0.0, 1.0, 0.0, 1.0)
+        return self.end_s
+
+    def move(self, to_deg: float, rate_dps: float, accel_dps2: float) -> float:
+        """Trapezoidal move to ``to_deg``; returns the arrival time."""
+        if not (rate_dps > 0 and accel_dps2 > 0):
+            raise GonioError(f"move needs rate > 0 and acceleration > 0, got {rate_dps}, {accel_dps2}")
+        d = to_deg - self.end_angle_deg
+        dist = abs(d)
+        if dist == 0.0:
+            return self.end_s
+        sign = 1.0 if d > 0 else -1.0
+        if dist >= rate_dps * rate_dps / accel_dps2:
+            vpk, tacc = rate_dps, rate_dps / accel_dps2
+        else:
+            tacc = math.sqrt(dist / accel_dps2)
+            vpk = accel_dps2 * tacc
+        self._append(trapezoid_duration_s(dist, rate_dps, accel_dps2), dist, vpk,
+                     accel_dps2, tacc, sign)
+        return self.end_s
+
+    def _arr(self):
+        if self._arrays is None:
+            self._arrays = tuple(np.asarray(v, dtype=float) for v in (
+                self._t0, self._theta0, self._sign, self._dist, self._vpk, self._acc,
+                self._tacc, self._dur))
+        return self._arrays
+
+    def _locate(self, t):
+        t0, th0, sg, dist, vpk, acc, tacc, dur = self._arr()
+        t = np.asarray(t, dtype=float)
+        if t0.size == 0:
+            z = np.zeros_like(t)
+            return t, None, z
+        i = np.clip(np.searchsorted(t0, t, side="right") - 1, 0, t0.size - 1)
+        tau = np.clip(t - t0[i], 0.0, dur[i])
+        return t, i, tau
+
+    def angle_deg(self, t) -> np.ndarray:
+        """Table angle at times ``t`` (s), degrees (closed form)."""
+        t, i, tau = self._locate(t)
+        if i is None:
+            return np.full_like(t, self.start_angle_deg)
+        _, th0, sg, dist, vpk, acc, tacc, dur = self._arr()
+        a, ta, T, v, D = acc[i], tacc[i], dur[i], vpk[i], dist[i]
+        up = 0.5 * a * tau * tau
+        cruise = 0.5 * a * ta * ta + v * (tau - ta)
+        down = D - 0.5 * a * (T - tau) ** 2
+        s = np.where(tau < ta, up, np.where(tau <= T - ta, cruise, down))
+        s = np.where(D == 0.0, 0.0, s)
+        before = t < self._arr()[0][0]
+        s = np.where(before, 0.0, s)
+        return th0[i] + sg[i] * s
+
+    def rate_dps(self, t) -> np.ndarray:
+        """Table rate at times ``t`` (s), °/s (closed form)."""
+        t, i, tau = self._locate(t)
+        if i is None:
+            return np.zeros_like(t)
+        _, th0, sg, dist, vpk, acc, tacc, dur = self._arr()
+        a, ta, T, v, D = acc[i], tacc[i], dur[i], vpk[i], dist[i]
+        r = np.where(tau < ta, a * tau, np.where(tau <= T - ta, v, a * (T - tau)))
+        r = np.where((D == 0.0) | (t < self._arr()[0][0]) | (t > self.end_s), 0.0, r)
+        return sg[i] * r
+
+
+def sensing_axis_basis(axis_enu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors e₁, e₂ completing the table axis ``a`` to a right-handed frame.
+
+    e₁ is the horizontal direction nearest east for a vertical axis; in general
+    e₁ ⟂ a is chosen deterministically, e₂ = a × e₁.
+
+    >>> e1, e2 = sensing_axis_basis(np.array([0.0, 0.0, 1.0]))
+    >>> e1.tolist(), e2.tolist()
+    ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    """
+    a = np.asarray(axis_enu, dtype=float)
+    a = a / np.linalg.norm(a)
+    ref = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    e1 = ref - (ref @ a) * a
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    return e1, e2
+
+
+def sensing_axis(theta_deg, axis_enu: np.ndarray, tilt_deg: float,
+                 tilt_azimuth_deg: float) -> np.ndarray:
+    """Sensing-axis unit vectors n(θ) in ENU, shape (len(θ), 3).
+
+    >>> n = sensing_axis(np.array([0.0, 90.0]), np.array([0.0, 0.0, 1.0]), 90.0, 0.0)
+    >>> n.round(12).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    """
+    a = np.asarray(axis_enu, dtype=float)
+    a = a / np.linalg.norm(a)
+    e1, e2 = sensing_axis_basis(a)
+    psi = math.radians(tilt_deg)
+    ang = np.radians(np.asarray(theta_deg, dtype=float) + tilt_azimuth_deg)
+    return (math.cos(psi) * a[None, :]
+            + math.sin(psi) * (np.cos(ang)[:, None] * e1[None, :]
+                               + np.sin(ang)[:, None] * e2[None, :]))

@@ -1,0 +1,310 @@
+"""The draft's procedures as data: loading and validating a protocol (TOML).
+
+``protocols/ogam-draft.toml`` restates clauses 6, 7.1–7.7 and Annex A of the
+draft as data; a laboratory writes its own protocol (say 24 points at 15°, or
+5 repeats) without touching code. :func:`load_protocol` validates every key:
+an unknown key, a wrong type or an impossible value is a
+:class:`~gonio.errors.GonioError` naming the file and the key.
+
+Sections: ``protocol``, ``conditions`` (Tables 1 and 2), ``session`` (warm-up,
+Earth-rate compensation), ``scale_factor`` (7.1, 7.2), ``zero_stability`` (7.3),
+``angle_deviation`` (7.4, 7.5), ``rate_consistency`` (7.6),
+``pointing_consistency`` (7.7), ``annex_a``. Every test section is optional: a
+protocol may hold only some of the draft's items. Other modules add sections
+with :func:`register_section` (e.g. the in-situ tilt estimate).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Callable
+
+from gonio.earth import NAMED_AXES
+from gonio.errors import GonioError
+from gonio.resources import resolve
+from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+
+ORIENTATIONS = tuple(NAMED_AXES)
+
+
+@dataclass(frozen=True)
+class Round:
+    """One round (测回): the table turns from ``start_deg`` to ``stop_deg``."""
+
+    start_deg: float
+    stop_deg: float
+    max_rotation_s: float | None = None
+
+
+@dataclass(frozen=True)
+class RotationItem:
+    """A test made of rounds at one rate and orientation (7.1, 7.4; each condition of 7.6/7.7)."""
+
+    test: str
+    clause: str
+    rate_dps: float
+    orientation: str
+    series: int
+    rest_s: float
+    read_delay_s: float
+    return_to_zero: bool
+    rezero: bool
+    rounds: tuple[Round, ...]
+    max_time_to_reading_s: float | None = None
+
+
+@dataclass(frozen=True)
+class ZeroStability:
+    """7.3: readings at rest, ``interval_s`` apart."""
+
+    clause: str
+    orientation: str
+    readings: int
+    interval_s: float
+
+
+@dataclass(frozen=True)
+class Session:
+    """Clause 7 preamble: warm-up, Earth-rate compensation, returns."""
+
+    warm_up_s: float
+    earth_compensation: str
+    static_s: float
+    return_rate_dps: float
+    settle_s: float
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """A validated protocol. Test items that the file does not hold are ``None``."""
+
+    name: str
+    title: str
+    specification: str
+    conditions: dict
+    session: Session
+    annex_a: dict
+    scale_factor: RotationItem | None = None
+    zero_stability: ZeroStability | None = None
+    angle_deviation: RotationItem | None = None
+    rate_consistency: tuple[RotationItem, ...] = ()
+    rate_reference_dps: float = 60.0
+    pointing_consistency: tuple[RotationItem, ...] = ()
+    pointing_reference: str = "up"
+    extra: dict = field(default_factory=dict)
+    path: str = ""
+
+    def items(self) -> list[RotationItem]:
+        """Every rotation item in the order the bench runs them."""
+        out = [x for x in (self.scale_factor, self.angle_deviation) if x is not None]
+        return out + list(self.rate_consistency) + list(self.pointing_consistency)
+
+
+_ORIENT = Field("str", choices=ORIENTATIONS)
+_ROUND = {
+    "start_deg": Field("float", 0.0),
+    "stop_deg": Field("float"),
+    "max_rotation_s": Field("float", None, positive, "> 0"),
+}
+_ROTATION_COMMON = {
+    "clause": Field("str"),
+    "orientation": Field("str", "up", choices=ORIENTATIONS),
+    "series": Field("int", 1, positive, "an integer ≥ 1"),
+    "rest_s": Field("float", 60.0, non_negative, "≥ 0"),
+    "read_delay_s": Field("float", 10.0, non_negative, "≥ 0"),
+    "return_to_zero": Field("bool", True),
+    "rezero": Field("bool", True),
+    "rounds": Field("table_list", None, schema=_ROUND),
+    "max_time_to_reading_s": Field("float", None, positive, "> 0"),
+}
+SCHEMA: dict[str, dict[str, Field]] = {
+    "protocol": {
+        "name": Field("str"),
+        "title": Field("str", ""),
+        "specification": Field("str", ""),
+    },
+    "conditions": {
+        "table_axis_wobble_max_arcsec": Field("float", 0.3, non_negative, "≥ 0"),
+        "table_positioning_mpe_arcsec": Field("float", 0.1, positive, "> 0"),
+        "table_angle_range_deg": Field("float", 360.0, positive, "> 0"),
+        "table_rate_max_dps": Field("float", 300.0, positive, "> 0"),
+        "table_rate_error_rel": Field("float", 1e-5, non_negative, "≥ 0"),
+        "table_orientations": Field("str_list", list(ORIENTATIONS), choices=ORIENTATIONS),
+        "temperature_c": Field("float", 20.0),
+        "temperature_tolerance_c": Field("float", 1.0, non_negative, "≥ 0"),
+        "soak_h": Field("float", 4.0, non_negative, "≥ 0"),
+        "humidity_min_pct": Field("float", 30.0, lambda x: 0 <= x <= 100, "0–100"),
+        "humidity_max_pct": Field("float", 75.0, lambda x: 0 <= x <= 100, "0–100"),
+    },
+    "session": {
+        "warm_up_s": Field("float", 3600.0, non_negative, "≥ 0"),
+        "earth_compensation": Field("str", "measured", choices=("measured", "computed", "none")),
+        "static_s": Field("float", 60.0, positive, "> 0"),
+        "return_rate_dps": Field("float", 60.0, positive, "> 0"),
+        "settle_s": Field("float", 2.0, non_negative, "≥ 0"),
+    },
+    "scale_factor": {**_ROTATION_COMMON, "clause": Field("str", "7.1"),
+                     "rate_dps": Field("float", 60.0, positive, "> 0"),
+                     "rounds": Field("table_list", schema=_ROUND)},
+    "zero_stability": {
+        "clause": Field("str", "7.3"),
+        "orientation": Field("str", "up", choices=ORIENTATIONS),
+        "readings": Field("int", 15, lambda n: n >= 2, "an integer ≥ 2"),
+        "interval_s": Field("float", 300.0, positive, "> 0"),
+    },
+    "angle_deviation": {**_ROTATION_COMMON, "clause": Field("str", "7.4"),
+                        "rate_dps": Field("float", 60.0, positive, "> 0"),
+                        "rounds": Field("table_list", schema=_ROUND)},
+    "rate_consistency": {**_ROTATION_COMMON, "clause": Field("str", "7.6"),
+                         "rates_dps": Field("float_list", check=positive, expect="rates > 0"),
+                         "reference_rate_dps": Field("float", 60.0, positive, "> 0"),
+                         "reuse_reference": Field("bool", True)},
+    "pointing_consistency": {**_ROTATION_COMMON, "clause": Field("str", "7.7"),
+                             "orientations": Field("str_list", choices=ORIENTATIONS),
+                             "reference_orientation": Field("str", "up", choices=ORIENTATIONS),
+                             "reuse_reference": Field("bool", True),
+                             "rate_dps": Field("float", 60.0, positive, "> 0")},
+    "annex_a": {
+        "table_mpe_arcsec": Field("float", 0.1, positive, "> 0"),
+        "tilt_bound_deg": Field("float", 0.1, lambda x: 0 <= x < 90, "0 ≤ tilt < 90"),
+        "zero_stability_dph": Field("float", 0.005, non_negative, "≥ 0"),
+        "duration_min": Field("float", 0.5, non_negative, "≥ 0"),
+        "repeatability_arcsec": Field("float", 0.096, non_negative, "≥ 0"),
+        "coverage_factor": Field("float", 2.0, positive, "> 0"),
+    },
+}
+_EXTRA: dict[str, tuple[dict[str, Field], Callable[[dict], Any] | None]] = {}
+
+
+def register_section(name: str, schema: dict[str, Field],
+                     factory: Callable[[dict], Any] | None = None) -> None:
+    """Let another module add an optional protocol section (validated like the others).
+
+    The parsed section (through ``factory`` if given) lands in ``Protocol.extra[name]``.
+    """
+    _EXTRA[name] = (schema, factory)
+
+
+def _rounds(raw: list[dict]) -> tuple[Round, ...]:
+    return tuple(Round(r["start_deg"], r["stop_deg"], r["max_rotation_s"]) for r in raw)
+
+
+def _item(test: str, sec: dict, rate: float, orientation: str,
+          rounds: tuple[Round, ...]) -> RotationItem:
+    return RotationItem(test=test, clause=sec["clause"], rate_dps=rate, orientation=orientation,
+                        series=sec["series"], rest_s=sec["rest_s"],
+                        read_delay_s=sec["read_delay_s"], return_to_zero=sec["return_to_zero"],
+                        rezero=sec["rezero"], rounds=rounds,
+                        max_time_to_reading_s=sec["max_time_to_reading_s"])
+
+
+def _check_rounds(item: RotationItem, key: str, file) -> None:
+    for i, r in enumerate(item.rounds):
+        if r.stop_deg == r.start_deg:
+            raise GonioError("a round must turn the table (stop_deg equals start_deg)",
+                             file=file, key=f"{key}.rounds[{i}]")
+
+
+def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
+    """Validate a parsed protocol table and build a :class:`Protocol`."""
+    if not isinstance(raw, dict):
+        raise GonioError("a protocol must be a TOML table", file=file)
+    known = set(SCHEMA) | set(_EXTRA)
+    for key in raw:
+        if key not in known:
+            raise GonioError(f"unknown section (known: {', '.join(sorted(known))})",
+                             file=file, key=key)
+    if "protocol" not in raw:
+        raise GonioError("required section is missing", file=file, key="protocol")
+    sec = {}
+    for name, schema in SCHEMA.items():
+        if name in raw:
+            if not isinstance(raw[name], dict):
+                raise GonioError("expected a table", file=file, key=name)
+            sec[name] = validate_table(raw[name], schema, name, file)
+        elif name in ("conditions", "session", "annex_a"):
+            sec[name] = validate_table({}, schema, name, file)
+    s = sec["session"]
+    kw: dict[str, Any] = {}
+    if "scale_factor" in sec:
+        x = sec["scale_factor"]
+        kw["scale_factor"] = _item("scale_factor", x, x["rate_dps"], x["orientation"],
+                                   _rounds(x["rounds"]))
+        _check_rounds(kw["scale_factor"], "scale_factor", file)
+    if "zero_stability" in sec:
+        z = sec["zero_stability"]
+        kw["zero_stability"] = ZeroStability(z["clause"], z["orientation"], z["readings"],
+                                             z["interval_s"])
+    ad_rounds: tuple[Round, ...] = ()
+    if "angle_deviation" in sec:
+        x = sec["angle_deviation"]
+        ad_rounds = _rounds(x["rounds"])
+        kw["angle_deviation"] = _item("angle_deviation", x, x["rate_dps"], x["orientation"],
+                                      ad_rounds)
+        _check_rounds(kw["angle_deviation"], "angle_deviation", file)
+    for name, what in (("rate_consistency", "rates_dps"), ("pointing_consistency", "orientations")):
+        if name not in sec:
+            continue
+        x = sec[name]
+        if x["rounds"] is not None:
+            rounds = _rounds(x["rounds"])
+        elif ad_rounds:
+            # 7.6/7.7 calibrate E as 7.4 does: its rounds, without the 60 °/s time limits.
+            rounds = tuple(replace(r, max_rotation_s=None) for r in ad_rounds)
+        else:
+            raise GonioError("needs its own rounds when the protocol has no angle_deviation",
+                             file=file, key=f"{name}.rounds")
+        items = []
+        have_ad = "angle_deviation" in kw
+        if name == "rate_consistency":
+            ref = x["reference_rate_dps"]
+            kw["rate_reference_dps"] = ref
+            if ref not in x["rates_dps"]:
+                raise GonioError(f"reference rate {ref} is not among rates_dps", file=file,
+                                 key=f"{name}.reference_rate_dps")
+            for v in x["rates_dps"]:
+                if v == ref and x["reuse_reference"] and have_ad:
+                    continue
+                items.append(_item(name, x, v, x["orientation"], rounds))
+        else:
+            ref = x["reference_orientation"]
+            kw["pointing_reference"] = ref
+            if ref not in x["orientations"]:
+                raise GonioError(f"reference orientation {ref} is not among orientations",
+                                 file=file, key=f"{name}.reference_orientation")
+            for o in x["orientations"]:
+                if o == ref and x["reuse_reference"] and have_ad:
+                    continue
+                items.append(_item(name, x, x["rate_dps"], o, rounds))
+        kw[name] = tuple(items)
+    extra = {}
+    for name, (schema, factory) in _EXTRA.items():
+        if name in raw:
+            if not isinstance(raw[name], dict):
+                raise GonioError("expected a table", file=file, key=name)
+            v = validate_table(raw[name], schema, name, file)
+            extra[name] = factory(v) if factory else v
+    p = sec["protocol"]
+    return Protocol(name=p["name"], title=p["title"], specification=p["specification"],
+                    conditions=sec["conditions"],
+                    session=Session(s["warm_up_s"], s["earth_compensation"], s["static_s"],
+                                    s["return_rate_dps"], s["settle_s"]),
+                    annex_a=sec["annex_a"], extra=extra, path=str(file or ""), **kw)
+
+
+def load_protocol(path: str | Path = "ogam-draft") -> Protocol:
+    """Load and validate a protocol file (a path, or a built-in name such as ``ogam-draft``).
+
+    >>> p = load_protocol()
+    >>> [r.stop_deg for r in p.scale_factor.rounds]
+    [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
+    >>> p.angle_deviation.series, len(p.angle_deviation.rounds)
+    (10, 12)
+    >>> [it.rate_dps for it in p.rate_consistency]     # 60 °/s reuses 7.4 (draft 7.6)
+    [1.0, 10.0, 100.0, 150.0, 200.0, 250.0, 300.0]
+    >>> [it.orientation for it in p.pointing_consistency]
+    ['north', 'east']
+    """
+    file = resolve(path, "protocol")
+    return parse_protocol(read_toml(file), file)

@@ -1,0 +1,40 @@
+"""Where the installed protocol and bench files are.
+
+The repository's top-level ``protocols/`` folder is installed as the package
+``gonio.protocols`` (see ``pyproject.toml``); in a source checkout it is found
+beside the ``gonio`` folder.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from gonio.errors import GonioError
+
+
+def protocols_dir() -> Path:
+    """The folder holding ``ogam-draft.toml`` and ``benches/``."""
+    here = Path(__file__).resolve().parent
+    for cand in (here / "protocols", here.parent / "protocols"):
+        if (cand / "ogam-draft.toml").is_file():
+            return cand
+    raise GonioError("the protocols folder (ogam-draft.toml) is not installed with gonio")
+
+
+def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
+    """A path as given if it exists, else a named protocol (``ogam-draft``) or bench (``rlg``).
+
+    >>> resolve("ogam-draft").name
+    'ogam-draft.toml'
+    >>> resolve("rlg", kind="bench").name
+    'rlg.toml'
+    """
+    p = Path(name_or_path)
+    if p.is_file():
+        return p
+    base = protocols_dir() if kind == "protocol" else protocols_dir() / "benches"
+    cand = base / (p.name if p.suffix == ".toml" else p.name + ".toml")
+    if cand.is_file() and p.parent == Path("."):
+        return cand
+    names = sorted(q.stem for q in base.glob("*.toml"))
+    raise GonioError(f"{kind} file not found: {name_or_path} (built-in {kind}s: {', '.join(names)})")

@@ -1,0 +1,135 @@
+"""A small validator for the project's TOML files (protocols, benches, certificate details).
+
+A schema is a mapping ``key -> Field``; :func:`validate_table` checks a parsed
+table against it and returns a plain dict with defaults filled in. An unknown
+key, a missing required key, a wrong type or an impossible value raises a
+:class:`~gonio.errors.GonioError` naming the file and the dotted key.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from gonio.errors import GonioError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Field:
+    """One key of a schema: its type, default, a check and what the check means."""
+
+    kind: str                         # float, int, bool, str, float_list, str_list, table_list, table
+    default: Any = REQUIRED
+    check: Callable[[Any], bool] | None = None
+    expect: str = ""                  # what a valid value is, for the error message
+    choices: tuple | None = None
+    schema: dict | None = None        # for table / table_list
+
+
+def positive(x) -> bool:
+    return x > 0
+
+
+def non_negative(x) -> bool:
+    return x >= 0
+
+
+def read_toml(path: str | Path) -> dict:
+    """Parse a TOML file; a syntax error is a GonioError naming the file and line."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise GonioError(f"cannot read: {exc.strerror}", file=path) from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise GonioError(f"TOML syntax: {exc}", file=path) from None
+
+
+def _coerce(value, f: Field, where: str, file):
+    def bad(msg):
+        raise GonioError(msg, file=file, key=where)
+
+    k = f.kind
+    if k == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            bad(f"expected a number, got {type(value).__name__} {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            bad(f"expected a finite number, got {value}")
+    elif k == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            bad(f"expected an integer, got {type(value).__name__} {value!r}")
+    elif k == "bool":
+        if not isinstance(value, bool):
+            bad(f"expected true or false, got {value!r}")
+    elif k == "str":
+        if not isinstance(value, str):
+            bad(f"expected text, got {type(value).__name__} {value!r}")
+    elif k in ("float_list", "str_list"):
+        if not isinstance(value, list) or not value:
+            bad(f"expected a non-empty list, got {value!r}")
+        inner = Field("float" if k == "float_list" else "str", choices=f.choices)
+        value = [_coerce(v, inner, f"{where}[{i}]", file) for i, v in enumerate(value)]
+        if f.check is not None and not all(f.check(v) for v in value):
+            bad(f"expected {f.expect}, got {value!r}")
+        return value
+    elif k == "table":
+        if not isinstance(value, dict):
+            bad(f"expected a table, got {value!r}")
+        return validate_table(value, f.schema or {}, where, file)
+    elif k == "table_list":
+        if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
+            bad("expected a non-empty list of tables")
+        return [validate_table(v, f.schema or {}, f"{where}[{i}]", file) for i, v in enumerate(value)]
+    else:  # pragma: no cover - programming error
+        raise AssertionError(k)
+    if f.choices is not None and value not in f.choices:
+        bad(f"expected one of {', '.join(map(str, f.choices))}, got {value!r}")
+    if f.check is not None and not f.check(value):
+        bad(f"expected {f.expect}, got {value!r}")
+    return value
+
+
+def validate_table(table: dict, schema: dict[str, Field], prefix: str = "",
+                   file: str | Path | None = None) -> dict:
+    """Check ``table`` against ``schema``; return a dict with defaults filled in.
+
+    >>> s = {"rate_dps": Field("float", check=positive, expect="> 0"),
+    ...      "series": Field("int", default=1)}
+    >>> validate_table({"rate_dps": 60}, s)
+    {'rate_dps': 60.0, 'series': 1}
+    >>> validate_table({"rate_dps": -1}, s, "scale_factor", "p.toml")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: p.toml: key scale_factor.rate_dps: expected > 0, got -1.0
+    """
+    out = {}
+    for key in table:
+        if key not in schema:
+            raise GonioError(f"unknown key (known: {', '.join(schema)})", file=file,
+                             key=f"{prefix}.{key}" if prefix else key)
+    for key, f in schema.items():
+        where = f"{prefix}.{key}" if prefix else key
+        if key in table:
+            out[key] = _coerce(table[key], f, where, file)
+        elif f.default is REQUIRED:
+            raise GonioError("required key is missing", file=file, key=where)
+        else:
+            out[key] = f.default
+    return out
