@@ -23,6 +23,7 @@ Contents
 :func:`compare_tables`            two tables, same goniometer as transfer standard
 :func:`simulate_eda_matrix`       a small synthetic generator (tests, examples)
 :func:`eda_matrix_from_readings`  a readings file's ``equal_division`` rows → D
+:func:`load_eda_protocol`         the ``[equal_division]`` protocol section (protocols/eda.toml)
 
 Conventions
 ===========
@@ -70,6 +71,8 @@ import pandas as pd
 import scipy.sparse as sp
 
 from gonio.errors import GonioError
+from gonio.protocol import ORIENTATIONS, load_protocol, register_section
+from gonio.tomlschema import Field, positive
 
 #: Tolerance for "a start lies on the step grid", in units of the step (–).
 GRID_TOL_STEPS = 1e-6
@@ -913,3 +916,85 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              file=file, column="round")
         start = np.arange(n) * 360.0 / n
     return D, start, step
+
+
+# --------------------------------------------------------------------------- protocol
+@dataclass(frozen=True)
+class EdaProtocol:
+    """The ``[equal_division]`` protocol section (IEC 62047-20 Annex A.3 procedure).
+
+    Attributes
+    ----------
+    starts, points, repeats : int
+        ``n`` starts ``360°/n`` apart, ``m`` points per revolution, repeats.
+    rate_dps, rest_s, read_delay_s : float
+        Table rate, rest at each stop, reading delay after arrival.
+    orientation : str
+        Table-axis direction.
+    """
+
+    starts: int
+    points: int
+    repeats: int
+    rate_dps: float
+    rest_s: float
+    read_delay_s: float
+    orientation: str
+
+    @property
+    def step_deg(self) -> float:
+        """The step ``Δ = 360°/m``."""
+        return 360.0 / self.points
+
+    @property
+    def start_deg(self) -> np.ndarray:
+        """Start positions ``k·360°/n``."""
+        return np.arange(self.starts) * 360.0 / self.starts
+
+
+def _is_int_ge(lo):
+    return lambda x: x >= lo
+
+
+EDA_PROTOCOL_SCHEMA: dict[str, Field] = {
+    "starts": Field("int", 12, _is_int_ge(1), "an integer ≥ 1"),
+    "points": Field("int", 12, _is_int_ge(2), "an integer ≥ 2"),
+    "repeats": Field("int", 1, _is_int_ge(1), "an integer ≥ 1"),
+    "rate_dps": Field("float", 60.0, positive, "> 0"),
+    "rest_s": Field("float", 10.0, lambda x: x >= 0, "≥ 0"),
+    "read_delay_s": Field("float", 5.0, lambda x: x >= 0, "≥ 0"),
+    "orientation": Field("str", "up", choices=ORIENTATIONS),
+}
+
+
+def _eda_factory(v: dict) -> EdaProtocol:
+    return EdaProtocol(**v)
+
+
+register_section("equal_division", EDA_PROTOCOL_SCHEMA, _eda_factory)
+
+
+def load_eda_protocol(path="eda") -> EdaProtocol:
+    """Load the ``[equal_division]`` section of a protocol (default ``protocols/eda.toml``).
+
+    Validated like every protocol section (unknown key, wrong type → GonioError
+    naming file and key); additionally the starts must divide the points (the
+    grid restriction of :func:`equal_division_analysis`) and the reading must
+    fall within the rest.
+
+    >>> p = load_eda_protocol()
+    >>> p.starts, p.points, p.step_deg, p.rate_dps
+    (12, 12, 30.0, 60.0)
+    """
+    proto = load_protocol(path)
+    if "equal_division" not in proto.extra:
+        raise GonioError("no [equal_division] section", file=proto.path, key="equal_division")
+    p = proto.extra["equal_division"]
+    if p.points % p.starts:
+        raise GonioError(f"starts ({p.starts}) must divide points ({p.points}): the starts "
+                         f"must lie on the step grid", file=proto.path,
+                         key="equal_division.starts")
+    if p.read_delay_s > p.rest_s:
+        raise GonioError("read_delay_s is longer than rest_s", file=proto.path,
+                         key="equal_division.read_delay_s")
+    return p
