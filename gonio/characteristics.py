@@ -510,7 +510,10 @@ def repeatability(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = 
     0.509116882
     """
     name = "repeatability"
-    rows, _ = _condition_rows(df, "angle_deviation", reference_rate_dps, reference_orientation)
+    rows, other = _condition_rows(df, "angle_deviation", reference_rate_dps,
+                                  reference_orientation)
+    if rows.empty and other.empty:
+        return _not_measured(name, "no angle_deviation rows in file")
     if rows.empty:
         return _not_measured(name, "no angle_deviation rows at the 7.4 condition "
                              f"({reference_rate_dps:g} deg/s, axis {reference_orientation})")
