@@ -833,44 +833,48 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
         v = pd.to_numeric(rows[c], errors="coerce")
         bad = v.isna() | ~np.isfinite(v.astype(float))
         if bad.any():
-            lab = bad.index[np.argmax(bad.to_numpy())]
-            raise GonioError(f"expected a number, got {rows.at[lab, c]!r}", file=file,
-                             column=c, **_where(df, lab))
+            i = int(np.argmax(bad.to_numpy()))
+            raise GonioError(f"expected a number, got {rows[c].iloc[i]!r}", file=file,
+                             column=c, **_where(df, rows.index[i]))
         num[c] = v.astype(float)
     for c in ("series", "round"):
         bad = (num[c] != np.round(num[c])) | (num[c] < 1)
         if bad.any():
-            lab = bad.index[np.argmax(bad.to_numpy())]
-            raise GonioError("expected an integer ≥ 1", file=file, column=c, **_where(df, lab))
-    table = num["table_deg"]
-    keep = np.abs(table) > STEP_TOL_DEG                       # drop readings at the zero
-    series = num["series"][keep].astype(int)
-    rnd = num["round"][keep].astype(int)
-    table = table[keep]
-    dev = (num["gyro_deg"][keep] - table) * _ARCSEC_PER_DEG
-    if table.empty:
+            i = int(np.argmax(bad.to_numpy()))
+            raise GonioError("expected an integer ≥ 1", file=file, column=c,
+                             **_where(df, rows.index[i]))
+    table_all = num["table_deg"].to_numpy()
+    keep = np.abs(table_all) > STEP_TOL_DEG                   # drop readings at the zero
+    labels = rows.index[keep]
+    series = num["series"].to_numpy()[keep].astype(int)
+    rnd = num["round"].to_numpy()[keep].astype(int)
+    table = table_all[keep]
+    dev = (num["gyro_deg"].to_numpy()[keep] - table) * _ARCSEC_PER_DEG
+    if table.size == 0:
         raise GonioError("equal_division rows have no reading away from the zero",
                          file=file, column="table_deg")
-    # the step: points per revolution from the largest group
-    counts = pd.DataFrame({"s": series, "r": rnd}).value_counts()
-    m = int(counts.max())
+    # points per revolution: the most common number of readings in a round
+    _, counts = np.unique(np.stack([series, rnd]), axis=1, return_counts=True)
+    vals, freq = np.unique(counts, return_counts=True)
+    m = int(vals[freq == freq.max()].max())
     if m < 2:
         raise GonioError("each round needs at least two steps", file=file, column="table_deg")
     step = 360.0 / m
     j = np.rint(table / step)
     bad = (np.abs(table - j * step) > STEP_TOL_DEG) | (j < 1) | (j > m)
     if bad.any():
-        lab = bad.index[np.argmax(bad.to_numpy())]
-        raise GonioError(f"table_deg {table[lab]:.9g} is not a multiple j·{step:.9g}° "
+        i = int(np.argmax(bad))
+        raise GonioError(f"table_deg {table[i]:.9g} is not a multiple j·{step:.9g}° "
                          f"(j = 1..{m}) of the step implied by {m} readings per round",
-                         file=file, column="table_deg", **_where(df, lab))
+                         file=file, column="table_deg", **_where(df, labels[i]))
     j = j.astype(int)
     key = pd.DataFrame({"s": series, "r": rnd, "j": j})
-    dup = key.duplicated()
+    dup = key.duplicated().to_numpy()
     if dup.any():
-        lab = dup.index[np.argmax(dup.to_numpy())]
-        raise GonioError(f"duplicate reading: series {series[lab]}, round {rnd[lab]}, "
-                         f"step {j[lab]}", file=file, **_where(df, lab))
+        i = int(np.argmax(dup))
+        raise GonioError(f"duplicate reading: series {series[i]}, round {rnd[i]}, "
+                         f"step {j[i]} (table_deg {table[i]:.9g})", file=file,
+                         **_where(df, labels[i]))
     s_vals = np.unique(series)
     r_vals = np.unique(rnd)
     R, n = s_vals.size, r_vals.size
@@ -888,20 +892,20 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                          f"{missing[1]}, table_deg {missing[2] * step:.9g} ({len(full) - len(have)}"
                          f" of {len(full)} readings missing)", file=file, column="table_deg")
     D = np.empty((R, n, m))
-    D[series.to_numpy() - 1, rnd.to_numpy() - 1, j.to_numpy() - 1] = dev.to_numpy()
+    D[series - 1, rnd - 1, j - 1] = dev
     if has_start:
-        st = num["start_deg"][keep]
+        st = num["start_deg"].to_numpy()[keep]
         start = np.full(n, np.nan)
         for idx_r in range(n):
-            sel = rnd.to_numpy() == idx_r + 1
-            vals = np.mod(st.to_numpy()[sel], 360.0)
+            sel = np.flatnonzero(rnd == idx_r + 1)
+            vals = np.mod(st[sel], 360.0)
             ref = vals[0]
             off = np.abs((vals - ref + 180.0) % 360.0 - 180.0) > STEP_TOL_DEG
             if off.any():
-                lab = st.index[sel][np.argmax(off)]
-                raise GonioError(f"start_deg {st[lab]:.9g} differs from {ref:.9g} given "
+                i = sel[int(np.argmax(off))]
+                raise GonioError(f"start_deg {st[i]:.9g} differs from {ref:.9g} given "
                                  f"elsewhere for round {idx_r + 1}", file=file,
-                                 column="start_deg", **_where(df, lab))
+                                 column="start_deg", **_where(df, labels[i]))
             start[idx_r] = ref
         if starts is not None and int(starts) != n:
             raise GonioError(f"--starts {starts} but the file has {n} rounds (starts)",
