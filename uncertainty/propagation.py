@@ -155,7 +155,7 @@ def welch_satterthwaite(u_c: float, contributions, dofs, correlation=None) -> fl
     inputs of infinite dof is allowed (they do not enter the sum).
 
     GUM H.1.6 (end gauge): u_c² = 1002 nm², components 25, 9.7, 2.9, 16.6 nm with
-    ν = 18, 25.6, 50, 2 → ν_eff = 16.7 (printed 16 after truncation).
+    ν = 18, 25.6, 50, 2 give ν_eff = 16.7, which H.1.6 truncates to 16.
 
     >>> round(welch_satterthwaite(math.sqrt(1002), [25, 9.7, 2.9, 16.6], [18, 25.6, 50, 2]), 1)
     16.7
