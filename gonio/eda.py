@@ -61,9 +61,8 @@ R. Probst et al., "The new PTB angle comparator", Meas. Sci. Technol. 9 (1998)
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np

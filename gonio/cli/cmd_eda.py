@@ -47,7 +47,15 @@ def read_eda_csv(path: str | Path) -> pd.DataFrame:
     """Read a readings CSV with pandas; ``#`` metadata lines at the top are skipped.
 
     The returned DataFrame's index is the file's 1-based line number of each
-    row, so errors name the line.
+    row, so errors name the line; empty cells are NaN, values stay text.
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
+    >>> _ = p.write_text("# serial: 7\\ntest,series,round,start_deg,table_deg,gyro_deg\\n"
+    ...                  "equal_division,1,1,0,180,180.0001\\n")
+    >>> df = read_eda_csv(p)
+    >>> df.index.tolist(), df.loc[3, "gyro_deg"]
+    ([3], '180.0001')
     """
     path = Path(path)
     try:
@@ -95,7 +103,18 @@ def _text(res: EdaResult) -> str:
 
 
 def plot_eda(res: EdaResult, path: str | Path) -> Path:
-    """Figure of the table and goniometer error curves with 1-σ bars, written atomically."""
+    """Figure of the table and goniometer error curves with 1-σ bars, written atomically.
+
+    The format follows the suffix (png, pdf, svg); matplotlib's Agg backend.
+
+    >>> import tempfile, pathlib
+    >>> from gonio.eda import simulate_eda_matrix
+    >>> sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
+    >>> res = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)
+    >>> out = plot_eda(res, pathlib.Path(tempfile.mkdtemp()) / "eda.svg")
+    >>> out.read_text()[:5]
+    '<?xml'
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
