@@ -1,0 +1,216 @@
+"""Bench, table and instrument parameters, loaded from TOML and validated.
+
+A bench file (``protocols/benches/rlg.toml``, ``fog.toml``) has sections
+``bench`` (name, table file, simulation rate), ``site`` (latitude) and
+``instrument``; it names a table file (``table-precision.toml``) holding the
+``table`` section. Every key is checked: unknown keys, wrong types and
+impossible values are a :class:`~gonio.errors.GonioError` naming file and key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+from gonio.errors import GonioError
+from gonio.resources import resolve
+from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+
+
+@dataclass(frozen=True)
+class Harmonic:
+    """One periodic term a·sin(order·x + phase), amplitude in arcsec."""
+
+    order: int
+    amplitude_arcsec: float
+    phase_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class TableConfig:
+    """A precision rotary table (draft Table 1)."""
+
+    name: str = "error-free table"
+    mpe_arcsec: float = 0.1
+    accel_dps2: float = 60.0
+    rate_error_rel: float = 0.0
+    wobble_arcsec: float = 0.0
+    wobble_phase_deg: float = 0.0
+    axis_setup_error_deg: float = 0.0
+    axis_setup_azimuth_deg: float = 0.0
+    positioning_random_arcsec: float = 0.0
+    positioning_harmonics: tuple[Harmonic, ...] = ()
+
+    def error_bound_arcsec(self) -> float:
+        """Σ|a_h| + 3σ: a bound on |indicated − true| for comparison with the MPE."""
+        return sum(abs(h.amplitude_arcsec) for h in self.positioning_harmonics) \
+            + 3.0 * self.positioning_random_arcsec
+
+
+@dataclass(frozen=True)
+class InstrumentConfig:
+    """An optical-gyro goniometer (RLG or FOG) with pulse output."""
+
+    type: str = "rlg"
+    name: str = "goniometer"
+    manufacturer: str = ""
+    serial: str = ""
+    nominal_scale_factor_counts_per_deg: float = 76434.87
+    scale_factor_error_ppm: float = 0.0
+    sf_rate_quadratic_ppm: float = 0.0
+    sf_lowrate_ppm: float = 0.0
+    sf_lowrate_scale_dps: float = 1.0
+    position_harmonics: tuple[Harmonic, ...] = ()
+    tilt_deg: float = 0.0
+    tilt_azimuth_deg: float = 0.0
+    bias_dph: float = 0.0
+    warmup_drift_dph: float = 0.0
+    warmup_tau_s: float = 1200.0
+    arw_dpsh: float = 0.0
+    bias_instability_dph: float = 0.0
+    bias_instability_tau_s: float = 300.0
+    rrw_dphsh: float = 0.0
+    quantisation: bool = True
+    counter_bits: int = 64
+    counter_signed: bool = True
+    integration: str = "exact"
+
+    @property
+    def true_scale_factor_counts_per_deg(self) -> float:
+        """The instrument's true scale factor at zero rate: nominal·(1 + error)."""
+        return self.nominal_scale_factor_counts_per_deg * (1.0 + 1e-6 * self.scale_factor_error_ppm)
+
+
+@dataclass(frozen=True)
+class Bench:
+    """A virtual bench: instrument on a table at a site, simulated at ``sample_rate_hz``."""
+
+    name: str
+    instrument: InstrumentConfig
+    table: TableConfig
+    latitude_deg: float = 40.2
+    longitude_deg: float = 116.2
+    sample_rate_hz: float = 1000.0
+    earth_rate: bool = True
+    path: str = ""
+    table_path: str = ""
+
+    def random_off(self) -> "Bench":
+        """The same bench with every random term off (for truth's systematic deviations).
+
+        Instrument noise (ARW, bias instability, rate random walk) and
+        quantisation are switched off; the table's random positioning scatter is
+        kept (its draws are the same), so the true angles are identical.
+        """
+        inst = replace(self.instrument, arw_dpsh=0.0, bias_instability_dph=0.0,
+                       rrw_dphsh=0.0, quantisation=False)
+        return replace(self, instrument=inst)
+
+    def to_dict(self) -> dict:
+        """Every parameter, for ``truth.json``."""
+        d = asdict(self)
+        return d
+
+
+_HARM = {"order": Field("int", check=positive, expect="an integer ≥ 1"),
+         "amplitude_arcsec": Field("float"),
+         "phase_deg": Field("float", 0.0)}
+TABLE_SCHEMA = {
+    "name": Field("str", "rotary table"),
+    "mpe_arcsec": Field("float", 0.1, positive, "> 0"),
+    "accel_dps2": Field("float", 60.0, positive, "> 0"),
+    "rate_error_rel": Field("float", 0.0, lambda x: abs(x) < 0.01, "|x| < 0.01"),
+    "wobble_arcsec": Field("float", 0.0, non_negative, "≥ 0"),
+    "wobble_phase_deg": Field("float", 0.0),
+    "axis_setup_error_deg": Field("float", 0.0, lambda x: 0 <= x < 5, "0 ≤ x < 5"),
+    "axis_setup_azimuth_deg": Field("float", 0.0),
+    "positioning_random_arcsec": Field("float", 0.0, non_negative, "≥ 0"),
+    "positioning_harmonics": Field("table_list", [], schema=_HARM),
+}
+INSTRUMENT_SCHEMA = {
+    "type": Field("str", "rlg", choices=("rlg", "fog")),
+    "name": Field("str", "goniometer"),
+    "manufacturer": Field("str", ""),
+    "serial": Field("str", ""),
+    "nominal_scale_factor_counts_per_deg": Field("float", check=positive, expect="> 0"),
+    "scale_factor_error_ppm": Field("float", 0.0),
+    "sf_rate_quadratic_ppm": Field("float", 0.0),
+    "sf_lowrate_ppm": Field("float", 0.0),
+    "sf_lowrate_scale_dps": Field("float", 1.0, positive, "> 0"),
+    "position_harmonics": Field("table_list", [], schema=_HARM),
+    "tilt_deg": Field("float", 0.0, lambda x: 0 <= x < 10, "0 ≤ tilt < 10"),
+    "tilt_azimuth_deg": Field("float", 0.0),
+    "bias_dph": Field("float", 0.0),
+    "warmup_drift_dph": Field("float", 0.0),
+    "warmup_tau_s": Field("float", 1200.0, positive, "> 0"),
+    "arw_dpsh": Field("float", 0.0, non_negative, "≥ 0"),
+    "bias_instability_dph": Field("float", 0.0, non_negative, "≥ 0"),
+    "bias_instability_tau_s": Field("float", 300.0, positive, "> 0"),
+    "rrw_dphsh": Field("float", 0.0, non_negative, "≥ 0"),
+    "quantisation": Field("bool", True),
+    "counter_bits": Field("int", 64, choices=(16, 24, 32, 64)),
+    "counter_signed": Field("bool", True),
+    "integration": Field("str", "exact", choices=("exact", "rectangle")),
+}
+BENCH_SCHEMA = {
+    "bench": Field("table", schema={
+        "name": Field("str"),
+        "table": Field("str", "table-precision"),
+        "sample_rate_hz": Field("float", 1000.0, lambda x: 1 <= x <= 100_000, "1–100000 Hz"),
+        "earth_rate": Field("bool", True),
+    }),
+    "site": Field("table", {}, schema={
+        "latitude_deg": Field("float", 40.2, lambda x: abs(x) <= 90, "within ±90"),
+        "longitude_deg": Field("float", 0.0, lambda x: abs(x) <= 180, "within ±180"),
+    }),
+    "instrument": Field("table", schema=INSTRUMENT_SCHEMA),
+    "table": Field("table", None, schema=TABLE_SCHEMA),
+}
+
+
+def _harmonics(rows) -> tuple[Harmonic, ...]:
+    return tuple(Harmonic(r["order"], r["amplitude_arcsec"], r["phase_deg"]) for r in rows)
+
+
+def table_from_dict(d: dict) -> TableConfig:
+    """Build a :class:`TableConfig` from a validated ``table`` section."""
+    d = dict(d)
+    d["positioning_harmonics"] = _harmonics(d["positioning_harmonics"])
+    return TableConfig(**d)
+
+
+def load_table(path: str | Path) -> tuple[TableConfig, Path]:
+    """Load a table file (a path or a built-in name such as ``table-precision``)."""
+    file = resolve(path, "bench")
+    raw = read_toml(file)
+    if set(raw) != {"table"}:
+        bad = sorted(set(raw) - {"table"}) or ["table"]
+        raise GonioError("a table file holds exactly one [table] section", file=file, key=bad[0])
+    return table_from_dict(validate_table(raw["table"], TABLE_SCHEMA, "table", file)), file
+
+
+def load_bench(path: str | Path = "rlg", table: str | Path | None = None) -> Bench:
+    """Load a bench file (path or built-in name ``rlg``/``fog``) and its table.
+
+    >>> b = load_bench("rlg")
+    >>> b.instrument.type, b.table.mpe_arcsec, round(b.table.error_bound_arcsec(), 3)
+    ('rlg', 0.1, 0.085)
+    """
+    file = resolve(path, "bench")
+    raw = validate_table(read_toml(file), BENCH_SCHEMA, "", file)
+    inst = dict(raw["instrument"])
+    inst["position_harmonics"] = _harmonics(inst["position_harmonics"])
+    instrument = InstrumentConfig(**inst)
+    if table is not None:
+        tab, tfile = load_table(table)
+    elif raw["table"] is not None:
+        tab, tfile = table_from_dict(raw["table"]), file
+    else:
+        tname = raw["bench"]["table"]
+        cand = file.parent / f"{tname}.toml"
+        tab, tfile = load_table(cand if cand.is_file() else tname)
+    return Bench(name=raw["bench"]["name"], instrument=instrument, table=tab,
+                 latitude_deg=raw["site"]["latitude_deg"],
+                 longitude_deg=raw["site"]["longitude_deg"],
+                 sample_rate_hz=raw["bench"]["sample_rate_hz"],
+                 earth_rate=raw["bench"]["earth_rate"], path=str(file), table_path=str(tfile))

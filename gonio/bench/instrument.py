@@ -1,0 +1,233 @@
+"""The simulated goniometer: what an RLG or FOG senses on a turning, tilted table.
+
+Sensed rate (draft clause 4 and Annex A; ``ogam-draft.md`` "Physics"):
+
+    ω_s(t) = θ̇(t) cos ψ + Ω_E · n(θ(t))
+
+with n the sensing axis tilted by ψ from the (wobbling) table axis, coning as
+the table turns (:mod:`gonio.kinematics`). The instrument's angle, in degrees,
+is the integral of ω_s·(1 + ε(|ω_s|)) plus its bias and noise:
+
+* scale factor K = K_nom (1 + e_K) counts/°; rate-dependent nonlinearity
+  ε(ω) = q (ω/300 °/s)² + L exp(−|ω|/s_L) (RLG lock-in residual);
+* angle-position-dependent error g(φ) = Σ a_h sin(h φ + p_h) of the angle φ
+  turned since zeroing (draft 4.2: "K differs between angle positions");
+* bias, warm-up transient b_w exp(−t/τ_w), Gauss–Markov bias instability,
+  angle random walk (white rate), rate random walk;
+* RLG: the counter is the exact integral (trapezoid on the grid for the
+  Earth-rate and nonlinearity terms, closed form for θ cos ψ); FOG: rate
+  samples integrated by the rectangle rule at the sample rate (draft 4.4: a
+  source of the rate dependence that 7.6 measures);
+* integer pulse counting (floor), optionally wrapping at ``counter_bits``.
+
+Everything is vectorised over samples; :class:`Integrator` carries the state
+from one chunk of samples to the next so long sessions run in bounded memory.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.bench.config import Bench, Harmonic, InstrumentConfig
+from gonio.earth import axis_enu, earth_rate_enu
+from gonio.kinematics import sensing_axis_basis
+
+
+def harmonic_sum_arcsec(x_deg, harmonics: tuple[Harmonic, ...]) -> np.ndarray:
+    """Σ a_h sin(h·x + p_h), arcsec, vectorised over ``x_deg``.
+
+    >>> float(harmonic_sum_arcsec(np.array([90.0]), (Harmonic(1, 0.5, 0.0),))[0])
+    0.5
+    """
+    x = np.radians(np.asarray(x_deg, dtype=float))
+    out = np.zeros_like(x)
+    for h in harmonics:
+        out += h.amplitude_arcsec * np.sin(h.order * x + math.radians(h.phase_deg))
+    return out
+
+
+def rate_nonlinearity(rate_dps, inst: InstrumentConfig) -> np.ndarray:
+    """Relative scale-factor change ε(|ω|) (dimensionless).
+
+    >>> i = InstrumentConfig(sf_rate_quadratic_ppm=1.0)
+    >>> float(rate_nonlinearity(np.array([300.0]), i)[0])
+    1e-06
+    """
+    w = np.abs(np.asarray(rate_dps, dtype=float))
+    eps = 1e-6 * inst.sf_rate_quadratic_ppm * (w / 300.0) ** 2
+    if inst.sf_lowrate_ppm:
+        eps = eps + 1e-6 * inst.sf_lowrate_ppm * np.exp(-w / inst.sf_lowrate_scale_dps)
+    return eps
+
+
+def actual_axis_enu(orientation: str, bench: Bench) -> np.ndarray:
+    """The table axis as set up: the named direction plus the table's setup error."""
+    a = axis_enu(orientation)
+    t = bench.table
+    if t.axis_setup_error_deg:
+        e1, e2 = sensing_axis_basis(a)
+        d, az = math.radians(t.axis_setup_error_deg), math.radians(t.axis_setup_azimuth_deg)
+        a = math.cos(d) * a + math.sin(d) * (math.cos(az) * e1 + math.sin(az) * e2)
+    return a / np.linalg.norm(a)
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Earth-rate projections for one table orientation, °/s (see :func:`geometry`)."""
+
+    omega_axis_dps: float     # Ω·a
+    omega_e1_dps: float       # Ω·e₁
+    omega_e2_dps: float       # Ω·e₂
+    cos_psi: float
+    sin_psi: float
+    alpha_rad: float          # tilt azimuth in the table frame
+    wobble_rad: float
+    wobble_phase_rad: float
+
+    def earth_dps(self, theta_deg: np.ndarray) -> np.ndarray:
+        """Ω_E · n(θ): the Earth rate on the coning sensing axis, °/s.
+
+        Ω·n = cos ψ [Ω·a + w Ω_⊥ cos(θ + β_w − β)] + sin ψ Ω_⊥ cos(θ + α − β),
+        with Ω_⊥ = |(Ω·e₁, Ω·e₂)| and β its direction in the table frame.
+        """
+        th = np.radians(theta_deg)
+        perp = math.hypot(self.omega_e1_dps, self.omega_e2_dps)
+        beta = math.atan2(self.omega_e2_dps, self.omega_e1_dps)
+        out = self.sin_psi * perp * np.cos(th + (self.alpha_rad - beta))
+        out += self.cos_psi * self.omega_axis_dps
+        if self.wobble_rad:
+            out += (self.cos_psi * self.wobble_rad * perp) * np.cos(th + (self.wobble_phase_rad - beta))
+        return out
+
+
+def geometry(bench: Bench, orientation: str) -> Geometry:
+    """Earth rate in the frame of the table set up in ``orientation``."""
+    a = actual_axis_enu(orientation, bench)
+    e1, e2 = sensing_axis_basis(a)
+    w = np.degrees(earth_rate_enu(bench.latitude_deg)) if bench.earth_rate else np.zeros(3)
+    inst, tab = bench.instrument, bench.table
+    psi = math.radians(inst.tilt_deg)
+    return Geometry(float(w @ a), float(w @ e1), float(w @ e2), math.cos(psi), math.sin(psi),
+                    math.radians(inst.tilt_azimuth_deg), math.radians(tab.wobble_arcsec / 3600.0),
+                    math.radians(tab.wobble_phase_deg))
+
+
+class Integrator:
+    """Stateful integration of the instrument's angle over consecutive chunks of samples.
+
+    ``advance`` takes the times (uniform grid, continuing the previous chunk),
+    the true table angle and rate, and returns the instrument's accumulated
+    angle in degrees (before quantisation) since the start of the session.
+    """
+
+    def __init__(self, inst: InstrumentConfig, sample_rate_hz: float, warm_up_s: float,
+                 rng: np.random.Generator | None):
+        self.inst = inst
+        self.dt = 1.0 / sample_rate_hz
+        self.warm_up_s = warm_up_s
+        self.rng = rng
+        self.angle = 0.0          # accumulated angle, deg
+        self.prev = None          # (t, theta, integrand) of the last sample
+        self.gm = 0.0             # Gauss–Markov bias state, °/s
+        self.rrw = 0.0            # rate-random-walk state, °/s
+        self.new_block = True
+        if rng is not None and inst.bias_instability_dph:
+            self.gm = rng.standard_normal() * inst.bias_instability_dph / 3600.0
+
+    def _noise_rate(self, n: int) -> np.ndarray:
+        """Random rate terms on the grid, °/s (ARW as white rate; GM; RRW)."""
+        inst, dt, rng = self.inst, self.dt, self.rng
+        out = np.zeros(n)
+        if rng is None:
+            return out
+        if inst.arw_dpsh:
+            # ARW N (°/√h) → white rate with σ = N/60 (°/√s) /√dt per sample.
+            out += rng.standard_normal(n) * (inst.arw_dpsh / 60.0) / math.sqrt(dt)
+        if inst.bias_instability_dph:
+            from scipy.signal import lfilter
+            phi = math.exp(-dt / inst.bias_instability_tau_s)
+            s = inst.bias_instability_dph / 3600.0 * math.sqrt(1.0 - phi * phi)
+            w = rng.standard_normal(n) * s
+            gm, _ = lfilter([1.0], [1.0, -phi], w, zi=[phi * self.gm])
+            self.gm = float(gm[-1])
+            out += gm
+        if inst.rrw_dphsh:
+            # K (°/h/√h) → rate increments σ = K/3600/60 (°/s/√s)·√dt.
+            steps = rng.standard_normal(n) * (inst.rrw_dphsh / 3600.0 / 60.0) * math.sqrt(dt)
+            r = self.rrw + np.cumsum(steps)
+            self.rrw = float(r[-1])
+            out += r
+        return out
+
+    def advance(self, t: np.ndarray, theta_deg: np.ndarray, rate_dps: np.ndarray,
+                geom: Geometry) -> np.ndarray:
+        """Instrument angle (deg, unquantised, uncompensated) at each time in ``t``."""
+        inst = self.inst
+        earth = geom.earth_dps(theta_deg)
+        sensed = rate_dps * geom.cos_psi + earth
+        eps = rate_nonlinearity(sensed, inst)
+        t_on = t + self.warm_up_s
+        bias = (inst.bias_dph + inst.warmup_drift_dph * np.exp(-t_on / inst.warmup_tau_s)) / 3600.0
+        noise = self._noise_rate(t.size)
+        if inst.integration == "rectangle":
+            # FOG: rate samples at the grid times, left rectangle rule:
+            # φ(t_k) = φ(t_{k−1}) + r(t_{k−1})·dt.
+            r = sensed * (1.0 + eps) + bias + noise
+            first = self.angle + (0.0 if self.prev is None else self.prev[2] * self.dt)
+            ang = first + np.concatenate(([0.0], np.cumsum(r[:-1] * self.dt)))
+            self.angle = float(ang[-1])
+            self.prev = (float(t[-1]), float(theta_deg[-1]), float(r[-1]))
+            self.new_block = False
+            return ang
+        # RLG: exact θ cos ψ, trapezoid for the smooth rest; white noise enters as
+        # angle increments (the exact integral of white rate over a sample).
+        smooth = earth + sensed * eps + bias
+        if self.prev is None:
+            sm_prev, th_prev = smooth[0], theta_deg[0]
+        else:
+            sm_prev = self.prev[2]
+            th_prev = theta_deg[0] if self.new_block else self.prev[1]
+        sm_all = np.concatenate(([sm_prev], smooth))
+        inc = 0.5 * (sm_all[1:] + sm_all[:-1]) * self.dt + noise * self.dt
+        if self.prev is None:
+            inc[0] = 0.0
+        ang = self.angle + geom.cos_psi * (theta_deg - th_prev) + np.cumsum(inc)
+        self.angle = float(ang[-1])
+        self.prev = (float(t[-1]), float(theta_deg[-1]), float(smooth[-1]))
+        self.new_block = False
+        return ang
+
+    def start_block(self) -> None:
+        """The table was re-pointed (a new block): the closed-form θ term restarts there."""
+        self.new_block = True
+
+
+def counts_from_angle(angle_deg: np.ndarray, inst: InstrumentConfig) -> np.ndarray:
+    """Pulse counter from the instrument angle: K·φ, floored when quantised (float64).
+
+    >>> counts_from_angle(np.array([1.0, -1e-9]), InstrumentConfig(nominal_scale_factor_counts_per_deg=10.0)).tolist()
+    [10.0, -1.0]
+    """
+    c = inst.true_scale_factor_counts_per_deg * np.asarray(angle_deg, dtype=float)
+    return np.floor(c) if inst.quantisation else c
+
+
+def wrap_counter(counts: np.ndarray, bits: int, signed: bool) -> np.ndarray:
+    """What a ``bits``-wide counter shows for the unwrapped integer ``counts``.
+
+    >>> wrap_counter(np.array([0, 32767, 32768, -32769]), 16, True).tolist()
+    [0, 32767, -32768, 32767]
+    >>> wrap_counter(np.array([65535, 65536, -1]), 16, False).tolist()
+    [65535, 0, 65535]
+    """
+    c = np.asarray(counts).astype(np.int64)
+    if bits >= 64:
+        return c
+    m = np.int64(1) << np.int64(bits)
+    w = np.mod(c, m)
+    if signed:
+        w = np.where(w >= m // 2, w - m, w)
+    return w

@@ -1,0 +1,364 @@
+"""Run a protocol on a virtual bench: readings file, truth, optional stream.
+
+:func:`plan_session` turns a :class:`~gonio.protocol.Protocol` into blocks of
+table motion (one block per series and condition; the zero-stability test is
+one block), with the zeroing and reading instants of each round. :func:`run_session`
+simulates the instrument through every block on a uniform grid
+(``bench.sample_rate_hz``), chunk by chunk, and takes the readings exactly as
+an operator's acquisition would: pulse counts since zeroing, Earth-rate
+compensated by the instrument (measured in a static phase before each series,
+draft clause 7 preamble, or computed from latitude and axis). It then reruns the
+same session with every random term off to give, for each reading, the
+instrument's noise-free systematic deviation (``truth.json``).
+
+Order of the items: 7.3 (right after the warm-up, as 7.3 asks), 7.1, 7.4/7.5,
+7.6, 7.7. The table is re-pointed between blocks instantly (no time passes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gonio import __version__
+from gonio.atomic import output_dir, write_text
+from gonio.bench.config import Bench
+from gonio.bench.instrument import (Integrator, counts_from_angle, geometry, harmonic_sum_arcsec,
+                                    rate_nonlinearity, wrap_counter)
+from gonio.earth import axis_enu, earth_rate_enu
+from gonio.errors import GonioError
+from gonio.kinematics import Timeline
+from gonio.protocol import Protocol, RotationItem
+
+CHUNK = 1 << 20
+
+
+@dataclass
+class PlannedReading:
+    """One reading the acquisition will take."""
+
+    test: str
+    series: int
+    round: int
+    rate_dps: float
+    orientation: str
+    k_read: int            # grid index of the reading
+    k_zero: int            # grid index of the zeroing it refers to
+    table_deg: float       # the standard's (indicated) angle since zeroing; NaN for 7.3
+
+
+@dataclass
+class Block:
+    """A stretch of the session in one table orientation, with its own zeroings."""
+
+    label: str
+    orientation: str
+    timeline: Timeline
+    k_start: int
+    k_end: int             # exclusive
+    k_static: tuple[int, int] | None
+    readings: list[PlannedReading] = field(default_factory=list)
+
+
+def _grid(t: float, dt: float) -> int:
+    """The first grid index at or after time t (robust to rounding)."""
+    return int(math.ceil(t / dt - 1e-9))
+
+
+class _Planner:
+    def __init__(self, protocol: Protocol, bench: Bench, rng: np.random.Generator | None):
+        self.p, self.b, self.rng = protocol, bench, rng
+        self.dt = 1.0 / bench.sample_rate_hz
+        self.k = 0
+        self.blocks: list[Block] = []
+
+    def true_position(self, x_deg: float) -> float:
+        """True angle of the table when it indicates ``x_deg`` (indicated − true = error)."""
+        tab = self.b.table
+        err = float(harmonic_sum_arcsec(np.array([x_deg]), tab.positioning_harmonics)[0])
+        if tab.positioning_random_arcsec and self.rng is not None:
+            err += tab.positioning_random_arcsec * float(self.rng.standard_normal())
+        return x_deg - err / 3600.0
+
+    def _dwell_to_grid(self, tl: Timeline) -> int:
+        k = _grid(tl.end_s, self.dt)
+        tl.dwell(k * self.dt - tl.end_s)
+        return k
+
+    def _new_block(self, label: str, orientation: str, start_x: float) -> tuple[Block, Timeline]:
+        tl = Timeline(start_angle_deg=self.true_position(start_x), t0_s=self.k * self.dt)
+        s = self.p.session
+        k_static = None
+        if s.earth_compensation == "measured":
+            tl.dwell(s.static_s)
+            k_static = (self.k, self._dwell_to_grid(tl))
+        blk = Block(label, orientation, tl, self.k, self.k, k_static)
+        return blk, tl
+
+    def _close(self, blk: Block, tl: Timeline) -> None:
+        blk.k_end = self._dwell_to_grid(tl) + 1
+        self.k = blk.k_end
+        self.blocks.append(blk)
+
+    def zero_stability(self) -> None:
+        z = self.p.zero_stability
+        blk, tl = self._new_block("zero_stability", z.orientation, 0.0)
+        k_zero = self._dwell_to_grid(tl)
+        for n in range(z.readings):
+            tl.dwell(z.interval_s if n else 0.0)
+            kr = self._dwell_to_grid(tl)
+            blk.readings.append(PlannedReading("zero_stability", 1, n + 1, 60.0, z.orientation,
+                                               kr, k_zero, math.nan))
+        self._close(blk, tl)
+
+    def rotation(self, item: RotationItem, series: int) -> None:
+        s, tab = self.p.session, self.b.table
+        rate = item.rate_dps * (1.0 + tab.rate_error_rel)
+        back = s.return_rate_dps * (1.0 + tab.rate_error_rel)
+        first = item.rounds[0].start_deg
+        blk, tl = self._new_block(f"{item.test} {item.orientation} {item.rate_dps:g} dps "
+                                  f"series {series}", item.orientation, first)
+        pos, k_zero, zero_x = first, None, first
+        for i, r in enumerate(item.rounds, 1):
+            if r.start_deg != pos:
+                tl.move(self.true_position(r.start_deg), back, tab.accel_dps2)
+                tl.dwell(s.settle_s)
+                pos = r.start_deg
+            if k_zero is None or item.rezero:
+                k_zero, zero_x = self._dwell_to_grid(tl), pos
+            depart = tl.end_s
+            arrive = tl.move(self.true_position(r.stop_deg), rate, tab.accel_dps2)
+            pos = r.stop_deg
+            if r.max_rotation_s is not None and arrive - depart > r.max_rotation_s + 1e-9:
+                raise GonioError(
+                    f"the bench table needs {arrive - depart:.2f} s for round {i} of {item.test} "
+                    f"(limit {r.max_rotation_s} s): raise its accel_dps2", key=f"{item.test}.rounds")
+            k_read = _grid(arrive + item.read_delay_s, self.dt)
+            limit = item.max_time_to_reading_s
+            if limit is not None and (k_read - k_zero) * self.dt > limit + 1e-9:
+                raise GonioError(f"round {i} of {item.test}: reading {(k_read - k_zero) * self.dt:.1f} s "
+                                 f"after zeroing exceeds {limit} s (Annex A.1)",
+                                 key=f"{item.test}.read_delay_s")
+            tl.dwell(max(item.rest_s, k_read * self.dt - arrive + self.dt))
+            blk.readings.append(PlannedReading(item.test, series, i, item.rate_dps,
+                                               item.orientation, k_read, k_zero,
+                                               r.stop_deg - zero_x))
+            if item.return_to_zero:
+                tl.move(self.true_position(r.start_deg), back, tab.accel_dps2)
+                tl.dwell(s.settle_s)
+                pos = r.start_deg
+        self._close(blk, tl)
+
+
+def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | None) -> list[Block]:
+    """Blocks of motion with zeroing and reading instants, in the order the items run."""
+    pl = _Planner(protocol, bench, rng)
+    if protocol.zero_stability is not None:
+        pl.zero_stability()
+    for item in protocol.items():
+        for series in range(1, item.series + 1):
+            pl.rotation(item, series)
+    return pl.blocks
+
+
+@dataclass
+class _Run:
+    counts: np.ndarray       # compensated counts since zeroing, per reading
+    true_deg: np.ndarray     # true table angle turned since zeroing, per reading
+    comp_counts_s: list      # per block
+
+
+def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
+              rng: np.random.Generator | None, stream=None) -> _Run:
+    inst = bench.instrument
+    dt = 1.0 / bench.sample_rate_hz
+    integ = Integrator(inst, bench.sample_rate_hz, protocol.session.warm_up_s, rng)
+    readings = [r for b in blocks for r in b.readings]
+    out_counts = np.empty(len(readings))
+    out_true = np.empty(len(readings))
+    comps = []
+    j = 0
+    for blk in blocks:
+        geom = geometry(bench, blk.orientation)
+        integ.start_block()
+        need = set()
+        if blk.k_static:
+            need.update(blk.k_static)
+        for r in blk.readings:
+            need.update((r.k_read, r.k_zero))
+        zeros = np.array(sorted({r.k_zero for r in blk.readings}), dtype=np.int64)
+        phi_at, theta_at = {}, {}
+        comp = 0.0
+        if protocol.session.earth_compensation == "computed":
+            w = np.degrees(earth_rate_enu(bench.latitude_deg)) @ axis_enu(blk.orientation)
+            comp = inst.nominal_scale_factor_counts_per_deg * float(w)
+        need_arr = np.array(sorted(need), dtype=np.int64)
+        measured = protocol.session.earth_compensation == "measured"
+
+        def counter(k, phi):
+            """Pulse counter at grid indices k: angle plus the angle-position error g of the
+            compensated angle since the last zeroing (draft 4.2), times K, floored."""
+            g = np.zeros(k.size)
+            if inst.position_harmonics and zeros.size:
+                iz = np.searchsorted(zeros, k, side="right") - 1
+                ok = iz >= 0
+                if ok.any():
+                    kz = zeros[iz[ok]]
+                    phz = np.array([phi_at.get(z, np.nan) for z in zeros.tolist()])[iz[ok]]
+                    since = (phi[ok] - phz
+                             - comp / inst.nominal_scale_factor_counts_per_deg * (k[ok] - kz) * dt)
+                    g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics)
+            return counts_from_angle(phi + g / 3600.0, inst)
+
+        for a in range(blk.k_start, blk.k_end, CHUNK):
+            b = min(a + CHUNK, blk.k_end)
+            k = np.arange(a, b)
+            t = k * dt
+            theta = blk.timeline.angle_deg(t)
+            phi = integ.advance(t, theta, blk.timeline.rate_dps(t), geom)
+            sel = need_arr[(need_arr >= a) & (need_arr < b)]
+            for kk, ph, th in zip(sel.tolist(), phi[sel - a].tolist(), theta[sel - a].tolist()):
+                phi_at[kk], theta_at[kk] = ph, th
+            if blk.k_static and a <= blk.k_static[1] < b and measured:
+                k0, k1 = blk.k_static
+                comp = (counter(np.array(blk.k_static), np.array([phi_at[k0], phi_at[k1]]))
+                        @ np.array([-1.0, 1.0])) / ((k1 - k0) * dt)
+            if stream is not None:
+                c = counter(k, phi)
+                stream(t, c, theta + harmonic_sum_arcsec(theta, bench.table.positioning_harmonics) / 3600.0)
+        comps.append(comp)
+        kk = np.array(sorted(need), dtype=np.int64)
+        cc = counter(kk, np.array([phi_at[x] for x in kk.tolist()]))
+        count_at = dict(zip(kk.tolist(), cc.tolist()))
+        for r in blk.readings:
+            raw = count_at[r.k_read] - count_at[r.k_zero] - comp * (r.k_read - r.k_zero) * dt
+            out_counts[j] = float(np.rint(raw)) if inst.quantisation else raw
+            out_true[j] = theta_at[r.k_read] - theta_at[r.k_zero]
+            j += 1
+    return _Run(out_counts, out_true, comps)
+
+
+def mount_scale_factor_counts_per_deg(bench: Bench, rate_dps: float) -> float:
+    """The true scale factor as seen through the mount at a table rate: K (1+ε(ω cos ψ)) cos ψ.
+
+    The scale-factor calibration (7.1) measures this product; the tilt's cos ψ is
+    absorbed by it (the rigid-body reading of Annex A.4.2).
+    """
+    inst = bench.instrument
+    c = math.cos(math.radians(inst.tilt_deg))
+    eps = float(rate_nonlinearity(np.array([rate_dps * c]), inst)[0])
+    return inst.true_scale_factor_counts_per_deg * (1.0 + eps) * c
+
+
+@dataclass
+class SessionResult:
+    """What a virtual session produced: the readings (as a laboratory records them) and the truth."""
+
+    readings: pd.DataFrame
+    metadata: dict
+    truth: dict
+
+
+def _metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
+    inst = bench.instrument
+    md = {
+        "instrument": inst.name,
+        "serial": inst.serial,
+        "manufacturer": inst.manufacturer,
+        "nominal_scale_factor_counts_per_deg": repr(inst.nominal_scale_factor_counts_per_deg),
+        "latitude_deg": repr(bench.latitude_deg),
+        "temperature_c": repr(protocol.conditions["temperature_c"]),
+        "table": bench.table.name,
+        "table_mpe_arcsec": repr(bench.table.mpe_arcsec),
+        "tilt_bound_deg": repr(protocol.annex_a["tilt_bound_deg"]),
+        "operator": "virtual bench",
+        "protocol": protocol.name,
+        "bench": bench.name,
+        "seed": str(seed),
+        "generator": f"gonio {__version__}",
+    }
+    if not inst.quantisation:
+        md["counts_quantised"] = "false"
+    return md
+
+
+def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) -> SessionResult:
+    """Execute ``protocol`` on ``bench``; same seed, same readings (bit for bit).
+
+    ``stream``, if given, is called per chunk as ``stream(time_s, counts, table_deg)``
+    with the unwrapped pulse counter (float64 holding integers) of the noisy run.
+    """
+    ss = np.random.SeedSequence(seed)
+    rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
+    blocks = plan_session(protocol, bench, rng_table)
+    run = _simulate(blocks, bench, protocol, rng_inst, stream)
+    nf = _simulate(blocks, bench.random_off(), protocol, None)
+    rows = [r for b in blocks for r in b.readings]
+    dt = 1.0 / bench.sample_rate_hz
+    df = pd.DataFrame({
+        "test": [r.test for r in rows],
+        "series": [r.series for r in rows],
+        "round": [r.round for r in rows],
+        "rate_dps": [r.rate_dps for r in rows],
+        "orientation": [r.orientation for r in rows],
+        "time_s": [round((r.k_read - r.k_zero) * dt, 9) for r in rows],
+        "table_deg": [r.table_deg for r in rows],
+        "gyro_counts": run.counts,
+        "gyro_deg": np.nan,
+    })
+    df.loc[df["test"] == "zero_stability", "rate_dps"] = np.nan
+    k_mount = mount_scale_factor_counts_per_deg(bench, protocol.scale_factor.rate_dps
+                                                if protocol.scale_factor else 60.0)
+    sf = df["test"].to_numpy() == "scale_factor"
+    k_cal_nf = float(np.mean(nf.counts[sf] / df["table_deg"].to_numpy()[sf])) if sf.any() else k_mount
+    sys_mount = (nf.counts / k_mount - run.true_deg) * 3600.0
+    sys_cal = (nf.counts / k_cal_nf - run.true_deg) * 3600.0
+    per = []
+    for i, r in enumerate(rows):
+        per.append({
+            "test": r.test, "series": r.series, "round": r.round,
+            "rate_dps": r.rate_dps, "orientation": r.orientation,
+            "time_s": df["time_s"].iat[i],
+            "table_deg": None if math.isnan(r.table_deg) else r.table_deg,
+            "true_table_deg": float(run.true_deg[i]),
+            "table_error_arcsec": None if math.isnan(r.table_deg)
+            else float((r.table_deg - run.true_deg[i]) * 3600.0),
+            "noise_free_counts": float(nf.counts[i]),
+            "systematic_deviation_arcsec": float(sys_mount[i]),
+            "systematic_deviation_calibrated_arcsec": float(sys_cal[i]),
+        })
+    truth = {
+        "generator": f"gonio {__version__}",
+        "seed": seed,
+        "protocol": protocol.name,
+        "bench": bench.to_dict(),
+        "scale_factor_through_mount_counts_per_deg": k_mount,
+        "scale_factor_noise_free_calibrated_counts_per_deg": k_cal_nf,
+        "definitions": {
+            "systematic_deviation_arcsec": "noise-free indicated angle (compensated counts of a rerun "
+            "with every random term off, divided by the scale factor through the mount) minus the "
+            "true table angle turned since zeroing",
+            "systematic_deviation_calibrated_arcsec": "the same with the scale factor the noise-free "
+            "rerun's own 7.1 rounds give (what the draft's procedure finds without noise)",
+        },
+        "earth_compensation_counts_per_s": [float(c) for c in run.comp_counts_s],
+        "readings": per,
+    }
+    return SessionResult(df, _metadata(protocol, bench, seed), truth)
+
+
+def write_session(result: SessionResult, out: str | Path) -> dict[str, Path]:
+    """Write ``readings.csv`` and ``truth.json`` into ``out`` atomically."""
+    from gonio.io import write_readings
+
+    out = Path(out)
+    with output_dir(out) as stage:
+        write_readings(result.readings, stage / "readings.csv", result.metadata)
+        write_text(stage / "truth.json", json.dumps(result.truth, indent=2, allow_nan=False) + "\n")
+    return {"readings": out / "readings.csv", "truth": out / "truth.json"}
