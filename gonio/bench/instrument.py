@@ -10,8 +10,8 @@ is the integral of ω_s·(1 + ε(|ω_s|)) plus its bias and noise:
 
 * scale factor K = K_nom (1 + e_K) counts/°; rate-dependent nonlinearity
   ε(ω) = q (ω/300 °/s)² + L exp(−|ω|/s_L) (RLG lock-in residual);
-* angle-position-dependent error g(φ) = Σ a_h sin(h φ + p_h) of the angle φ
-  turned since zeroing (draft 4.2: "K differs between angle positions");
+* angle-position-dependent error g(φ) − g(0), g(φ) = Σ a_h sin(h φ + p_h), of
+  the angle φ turned since zeroing (draft 4.2: "K differs between angle positions");
 * bias, warm-up transient b_w exp(−t/τ_w), Gauss–Markov bias instability,
   angle random walk (white rate), rate random walk;
 * RLG: the counter is the exact integral (trapezoid on the grid for the

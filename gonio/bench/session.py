@@ -88,7 +88,7 @@ class _Planner:
 
     def _dwell_to_grid(self, tl: Timeline) -> int:
         k = _grid(tl.end_s, self.dt)
-        tl.dwell(k * self.dt - tl.end_s)
+        tl.dwell(max(0.0, k * self.dt - tl.end_s))
         return k
 
     def _new_block(self, label: str, orientation: str, start_x: float) -> tuple[Block, Timeline]:
@@ -202,9 +202,11 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
         measured = protocol.session.earth_compensation == "measured"
 
         def counter(k, phi):
-            """Pulse counter at grid indices k: angle plus the angle-position error g of the
-            compensated angle since the last zeroing (draft 4.2), times K, floored."""
+            """Pulse counter at grid indices k: angle plus the angle-position error
+            g(φ) − g(0) of the compensated angle φ since the last zeroing (draft 4.2;
+            nil at the zeroing itself), times K, floored."""
             g = np.zeros(k.size)
+            g0 = float(harmonic_sum_arcsec(np.zeros(1), inst.position_harmonics)[0])
             if inst.position_harmonics and zeros.size:
                 iz = np.searchsorted(zeros, k, side="right") - 1
                 ok = iz >= 0
@@ -213,7 +215,7 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
                     phz = np.array([phi_at.get(z, np.nan) for z in zeros.tolist()])[iz[ok]]
                     since = (phi[ok] - phz
                              - comp / inst.nominal_scale_factor_counts_per_deg * (k[ok] - kz) * dt)
-                    g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics)
+                    g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics) - g0
             return counts_from_angle(phi + g / 3600.0, inst)
 
         for a in range(blk.k_start, blk.k_end, CHUNK):

@@ -1,0 +1,145 @@
+"""From a readings file to results: the seven characteristics and the Annex A budget.
+
+:func:`calibrate` is what ``gonio calibrate`` and ``gonio demo`` run; it returns
+a :class:`CalibrationReport` (usable from a notebook) and
+:func:`write_calibration` writes ``results.json``, ``summary.txt`` and the detail
+tables as CSV, atomically. The uncertainty of the angle-position deviation is the
+Annex A budget with u(r) taken from the calibration's own repeatability data
+(7.5) when present, else the protocol's Annex A value; the table MPE and tilt
+bound come from the file's metadata when given, else from the protocol.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from gonio import __version__
+from gonio.atomic import output_dir, write_text
+from gonio.budget import AnnexABudget, annex_a_budget
+from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
+from gonio.io import Readings, metadata_float, read_readings
+from gonio.protocol import Protocol, load_protocol
+
+#: The readings taken of the draft's ambiguities (shown in results and certificate).
+READINGS_TAKEN = (
+    "7.3: the protocol sets the count and spacing of the zero-stability readings (default 15 "
+    "readings 5 min apart); B_s = s(M)/T is the result, (max M − min M)/T (definition 3.3) is "
+    "reported beside it; T = time between first and last reading.",
+    "7.4: each round starts from 0° with both readings zeroed; the reading is taken a fixed delay "
+    "after arrival, within 0.5 min of the start (Annex A.1); E_i is the mean over the series "
+    "present and E = ± max|E_i| is reported with its sign.",
+    "7.6/7.7: the garbled denominator is read as the angle measured in the reference state "
+    "(60 °/s, axis up) on the full 360° round; the spread max E − min E in ″ is always given.",
+    "Annex A.4.4: u(r) is the largest Bessel standard deviation over the calibration points of "
+    "this calibration's own repeated series (7.5).",
+    "Annex A.4.2: the elliptic-projection tilt model of the draft is used for u(φ_e); the "
+    "rigid-body model (tilt is a cos ψ factor absorbed by the scale factor) is shown beside it.",
+)
+
+
+@dataclass
+class CalibrationReport:
+    """Everything one calibration produced."""
+
+    results: CalibrationResults
+    uncertainty: AnnexABudget
+    readings: Readings
+    protocol: Protocol
+    source_sha256: str
+    repeatability_source: str
+
+    def to_dict(self) -> dict:
+        """The ``results.json`` content (plain JSON types, deterministic)."""
+        d = self.results.to_dict()
+        unc = self.uncertainty.to_dict()
+        unc["repeatability_source"] = self.repeatability_source
+        out = {
+            "gonio_version": __version__,
+            "specification": self.protocol.specification,
+            "protocol": self.protocol.name,
+            "source": {"file": Path(self.readings.path).name if self.readings.path else None,
+                       "sha256": self.source_sha256,
+                       "rows": int(len(self.readings.data))},
+            "metadata": dict(self.readings.metadata),
+        }
+        out.update(d)
+        out["uncertainty"] = unc
+        out["readings_taken"] = list(READINGS_TAKEN)
+        return out
+
+    def summary(self) -> str:
+        """The seven items and U as a fixed-width text table."""
+        u = self.uncertainty
+        return (summary_table(self.results)
+                + f"\nUncertainty of the angle-position deviation (Annex A): "
+                  f"u_c = {u.stated_u_c_arcsec:g}″, U = {u.to_dict()['stated']['U_arcsec']:g}″ "
+                  f"(k = {u.k:g})\n")
+
+
+def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
+                monte_carlo_trials: int = 0, seed: int = 0) -> tuple[AnnexABudget, str]:
+    """The Annex A budget of this calibration (u(r) from its own 7.5 data when present)."""
+    a = protocol.annex_a
+    md, file = readings.metadata, readings.path
+    mpe = metadata_float(md, "table_mpe_arcsec", file=file)
+    tilt = metadata_float(md, "tilt_bound_deg", file=file)
+    rep = results.repeatability
+    if rep.measured and rep.value is not None and math.isfinite(rep.value):
+        u_r, src = float(rep.value), "7.5: largest Bessel standard deviation over the points"
+        n = rep.details.get("n_series") if isinstance(rep.details, dict) else None
+        dof = (int(n) - 1) if n else math.inf
+    else:
+        u_r, src, dof = a["repeatability_arcsec"], "protocol annex_a.repeatability_arcsec", math.inf
+    budget = annex_a_budget(table_mpe_arcsec=mpe if mpe is not None else a["table_mpe_arcsec"],
+                            tilt_deg=tilt if tilt is not None else a["tilt_bound_deg"],
+                            zero_stability_dph=a["zero_stability_dph"],
+                            duration_min=a["duration_min"], repeatability_arcsec=u_r,
+                            k=a["coverage_factor"], monte_carlo_trials=monte_carlo_trials,
+                            seed=seed, repeatability_dof=dof)
+    return budget, src
+
+
+def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol = "ogam-draft",
+              *, monte_carlo_trials: int = 0, seed: int = 0) -> CalibrationReport:
+    """Compute the seven characteristics and the Annex A budget from a readings file.
+
+    Items whose readings the file does not hold are reported as not measured.
+    """
+    proto = protocol if isinstance(protocol, Protocol) else load_protocol(protocol)
+    if isinstance(readings, Readings):
+        rd, sha = readings, ""
+        if rd.path:
+            sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
+    else:
+        rd = read_readings(readings)
+        sha = hashlib.sha256(Path(readings).read_bytes()).hexdigest()
+    ref_orient = proto.pointing_reference
+    res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,
+                                  reference_orientation=ref_orient)
+    budget, src = annex_a_for(res, rd, proto, monte_carlo_trials, seed)
+    return CalibrationReport(res, budget, rd, proto, sha, src)
+
+
+def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:
+    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically."""
+    out = Path(out)
+    names = {}
+    with output_dir(out) as stage:
+        d = report.to_dict()
+        write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
+                                                      allow_nan=False) + "\n")
+        write_text(stage / "summary.txt", report.summary())
+        tables = stage / "tables"
+        for item in report.results.items():
+            for tname, df in (getattr(item, "tables", None) or {}).items():
+                if df is not None and len(df):
+                    write_text(tables / f"{item.name}_{tname}.csv",
+                               df.to_csv(index=False, lineterminator="\n"))
+        write_text(tables / "uncertainty_budget.csv",
+                   report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
+        names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
+    return names

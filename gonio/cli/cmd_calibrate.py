@@ -1,0 +1,39 @@
+"""``gonio calibrate``: readings → results.json (seven characteristics, Annex A budget)."""
+
+from __future__ import annotations
+
+import json
+
+from gonio.calibrate import calibrate, write_calibration
+from gonio.errors import GonioError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("calibrate", help="compute the seven characteristics from a readings file",
+                       description="Compute the draft's seven characteristics and the Annex A "
+                                   "uncertainty from a readings file; write results.json, "
+                                   "summary.txt and tables/*.csv into --out.")
+    p.add_argument("readings", help="readings file (CSV, data-formats.md §1)")
+    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--json", action="store_true", help="print results.json on stdout")
+    p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
+                   help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
+    p.set_defaults(func=run)
+
+
+def emit(report, out, as_json: bool) -> None:
+    """Write the outputs and print the summary (or the JSON)."""
+    write_calibration(report, out)
+    if as_json:
+        print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
+    else:
+        print(report.summary(), end="")
+
+
+def run(args) -> int:
+    if args.monte_carlo < 0:
+        raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
+    report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo)
+    emit(report, args.out, args.json)
+    return 0
