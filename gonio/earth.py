@@ -15,6 +15,19 @@ north, towards east) and elevation, both in degrees.
 The Earth-rate vector in ENU at latitude φ is Ω_E (0, cos φ, sin φ): on an axis
 pointing up its component is Ω_E sin φ, north Ω_E cos φ, east 0.
 
+Ω_E: the IERS nominal value 7.292115×10⁻⁵ rad/s (Conventions 2010, Table 1.1) is
+used throughout; 2π per stellar day (86164.0989 s, the value IEC 62047-20 5.3.3.1
+implies) is 7.2921158×10⁻⁵ rad/s. They differ by 8.5×10⁻¹³ rad/s (1.2×10⁻⁸
+relative, 1.7×10⁻⁷ ″/s): over the 30 s of Annex A.1 that is 5×10⁻⁶ ″, far below
+anything the draft resolves, so the choice is a convention, not a correction.
+(The solar day's 2π/86400 s = 7.2722×10⁻⁵ rad/s is *wrong* here: 0.27 % low,
+0.04″/s on the Earth rate.)
+
+:func:`earth_rate` gives one axis's rate in °/h, ″/s and rad/s with its split
+into parts along and across the axis; :func:`sagnac_rlg`, :func:`sagnac_fog`
+the Sagnac scale factors with the Earth rate's signal (``gonio earth``,
+``gonio sagnac``).
+
 Note (IEC 62047-20 5.3.3.1 erratum): that text gives the vertical component as
 Ω cos λ and the horizontal as Ω sin λ cos φ; physically vertical is Ω sin λ and
 horizontal (azimuth φ from north) Ω cos λ cos φ, which is what this module uses.
@@ -182,3 +195,127 @@ def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: f
     9.668
     """
     return scale_factor_counts_per_deg * earth_rate_on_axis_dps(latitude_deg, axis)
+
+
+# --- reports for the CLI -------------------------------------------------------
+
+#: Seconds per hour.
+S_PER_H = 3600.0
+
+
+@dataclass(frozen=True)
+class EarthRate:
+    """Earth rate on one axis at one latitude (see :func:`earth_rate`)."""
+
+    latitude_deg: float
+    axis_azimuth_deg: float
+    axis_elevation_deg: float
+    axis_enu: tuple[float, float, float]
+    rate_dph: float
+    rate_arcsec_s: float
+    rate_rad_s: float
+    parallel_dph: float
+    perpendicular_dph: float
+    perpendicular_arcsec_s: float
+    omega_rad_s: float
+
+    def to_dict(self) -> dict:
+        """Plain dict (for ``--json``)."""
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+
+
+def axis_az_el_deg(axis) -> tuple[float, float]:
+    """(azimuth_deg, elevation_deg) of an axis given by name or AZ,EL.
+
+    >>> axis_az_el_deg("east"), axis_az_el_deg("30,10")
+    ((90.0, 0.0), (30.0, 10.0))
+    """
+    a = axis_enu(axis)
+    el = math.degrees(math.asin(max(-1.0, min(1.0, float(a[2])))))
+    if isinstance(axis, str) and axis.strip().lower() in NAMED_AXES:
+        return NAMED_AXES[axis.strip().lower()]
+    if isinstance(axis, str):
+        az = float(axis.split(",")[0])
+    else:
+        az = float(axis[0])
+    return az, el
+
+
+def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_S) -> EarthRate:
+    """The Earth rate on an axis (draft 4.5, 7.7; "Physics the draft relies on").
+
+    Ω·a with Ω = Ω_E (0, cos φ, sin φ) in ENU; for an axis at azimuth A (from
+    north towards east) and elevation E that is Ω_E (cos φ cos E cos A + sin φ sin E)
+    (IEC 62047-20 5.3.3.1 with its cos/sin erratum corrected). The part across
+    the axis, Ω_⊥ = Ω_E·sqrt(1 − (Ω̂·a)²), is what a tilted sensing axis picks up
+    as the table turns (the tilt × Earth-rate coupling, :mod:`gonio.coupling`).
+
+    Examples
+    --------
+    At 40° N, axis up: 15.0411 °/h × sin 40° = 9.6682 °/h = 9.6682 ″/s.
+
+    >>> r = earth_rate(40.0, "up")
+    >>> round(r.rate_dph, 4), round(r.rate_arcsec_s, 4), f"{r.rate_rad_s:.4e}"
+    (9.6682, 9.6682, '4.6873e-05')
+    >>> round(r.perpendicular_dph, 4)           # 15.0411 × cos 40°
+    11.5221
+    >>> round(earth_rate(40.0, "0,40").rate_dph, 4)   # pointing at the pole: all of Ω
+    15.0411
+    """
+    az, el = axis_az_el_deg(axis)
+    a = axis_enu((az, el))
+    w = earth_rate_enu(latitude_deg, omega_rad_s)
+    par = float(w @ a)
+    perp = float(np.linalg.norm(w - par * a))
+    dph = math.degrees(par) * S_PER_H
+    return EarthRate(float(latitude_deg), az, el, tuple(float(x) for x in a.round(15)),
+                     dph, dph, par, dph, math.degrees(perp) * S_PER_H,
+                     math.degrees(perp) * S_PER_H, omega_rad_s)
+
+
+@dataclass(frozen=True)
+class Sagnac:
+    """Sagnac scale factor of a gyro and the signal the Earth rate gives it."""
+
+    kind: str
+    wavelength_m: float
+    scale_factor_counts_per_rad: float | None       # RLG: pulses per radian, 4A/(λP)
+    scale_factor_counts_per_deg: float | None
+    resolution_arcsec: float | None                 # one pulse, ″
+    phase_per_rate_s: float | None                  # FOG: rad of phase per rad/s, 2πLD/(λc)
+    earth_rate_signal: float                        # RLG: Hz (pulses/s); FOG: rad of phase
+    earth_rate_signal_unit: str
+
+    def to_dict(self) -> dict:
+        """Plain dict (for ``--json``)."""
+        return dict(self.__dict__)
+
+
+def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9) -> Sagnac:
+    """Ring-laser Sagnac scale factor and the full Earth rate's beat frequency.
+
+    Δf = 4A/(λP)·Ω (ogam-draft.md "Physics"; Aronowitz 1971). One pulse is
+    1/K rad.
+
+    >>> s = sagnac_rlg(0.15**2 * 3**0.5 / 4, 0.45)          # 15 cm-side triangle, He-Ne
+    >>> round(s.scale_factor_counts_per_deg, 2), round(s.resolution_arcsec, 4)
+    (2388.59, 1.5072)
+    >>> round(s.earth_rate_signal, 3)                       # Hz for the whole Ω_E
+    9.98
+    """
+    k = rlg_scale_factor_counts_per_rad(area_m2, perimeter_m, wavelength_m)
+    return Sagnac("rlg", wavelength_m, k, k * math.pi / 180.0, 1.0 / k * 180.0 / math.pi * 3600.0,
+                  None, k * OMEGA_E_RAD_S, "Hz")
+
+
+def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9) -> Sagnac:
+    """Fibre-optic Sagnac phase per rate 2πLD/(λc) and the full Earth rate's phase.
+
+    Δφ = 2πLD/(λc)·Ω (ogam-draft.md "Physics"; Lefèvre, The Fiber-Optic Gyroscope, 2.1).
+
+    >>> s = sagnac_fog(1000.0, 0.1)                         # 1 km, 10 cm coil, 1550 nm
+    >>> round(s.phase_per_rate_s, 4), f"{s.earth_rate_signal:.3e}"
+    (1.3522, '9.860e-05')
+    """
+    f = fog_phase_per_rate_s(length_m, diameter_m, wavelength_m)
+    return Sagnac("fog", wavelength_m, None, None, None, f, f * OMEGA_E_RAD_S, "rad")

@@ -73,6 +73,11 @@ class Session:
     static_s: float
     return_rate_dps: float
     settle_s: float
+    #: Computed compensation only: the latitude the operator uses (None: the site's).
+    compensation_latitude_deg: float | None = None
+    #: Computed compensation only: error of the azimuth the operator assumes for the
+    #: table axis (compensation computed for azimuth + error), degrees.
+    compensation_azimuth_error_deg: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -143,6 +148,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "static_s": Field("float", 60.0, positive, "> 0"),
         "return_rate_dps": Field("float", 60.0, positive, "> 0"),
         "settle_s": Field("float", 2.0, non_negative, "≥ 0"),
+        "compensation_latitude_deg": Field("float", None, lambda x: abs(x) <= 90, "within ±90"),
+        "compensation_azimuth_error_deg": Field("float", 0.0, lambda x: abs(x) <= 180,
+                                                "within ±180"),
     },
     "scale_factor": {**_ROTATION_COMMON, "clause": Field("str", "7.1"),
                      "rate_dps": Field("float", 60.0, positive, "> 0"),
@@ -289,7 +297,9 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
     return Protocol(name=p["name"], title=p["title"], specification=p["specification"],
                     conditions=sec["conditions"],
                     session=Session(s["warm_up_s"], s["earth_compensation"], s["static_s"],
-                                    s["return_rate_dps"], s["settle_s"]),
+                                    s["return_rate_dps"], s["settle_s"],
+                                    s["compensation_latitude_deg"],
+                                    s["compensation_azimuth_error_deg"]),
                     annex_a=sec["annex_a"], extra=extra, path=str(file or ""), **kw)
 
 
@@ -308,3 +318,7 @@ def load_protocol(path: str | Path = "ogam-draft") -> Protocol:
     """
     file = resolve(path, "protocol")
     return parse_protocol(read_toml(file), file)
+
+
+# Optional sections defined elsewhere (registered on import; kept last: they import this module).
+import gonio.tiltest  # noqa: E402,F401  [tilt_estimate]

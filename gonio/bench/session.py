@@ -11,7 +11,8 @@ draft clause 7 preamble, or computed from latitude and axis). It then reruns the
 same session with every random term off to give, for each reading, the
 instrument's noise-free systematic deviation (``truth.json``).
 
-Order of the items: 7.3 (right after the warm-up, as 7.3 asks), 7.1, 7.4/7.5,
+Order of the items: 7.3 (right after the warm-up, as 7.3 asks), the optional
+in-situ tilt estimate (:mod:`gonio.tiltest`, uncompensated rests), 7.1, 7.4/7.5,
 7.6, 7.7. The table is re-pointed between blocks instantly (no time passes).
 """
 
@@ -31,7 +32,7 @@ from gonio.atomic import output_dir, write_text
 from gonio.bench.config import Bench
 from gonio.bench.instrument import (Integrator, counts_from_angle, geometry, harmonic_sum_arcsec,
                                     rate_nonlinearity, wrap_counter)
-from gonio.earth import axis_enu, earth_rate_enu
+from gonio.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.errors import GonioError
 from gonio.kinematics import Timeline
 from gonio.protocol import Protocol, RotationItem
@@ -64,6 +65,7 @@ class Block:
     k_end: int             # exclusive
     k_static: tuple[int, int] | None
     readings: list[PlannedReading] = field(default_factory=list)
+    compensate: bool = True    # False: readings are raw counts (the tilt estimate's rests)
 
 
 def _grid(t: float, dt: float) -> int:
@@ -117,6 +119,26 @@ class _Planner:
                                                kr, k_zero, math.nan))
         self._close(blk, tl)
 
+    def tilt_estimate(self, plan) -> None:
+        """Static multi-position block (:mod:`gonio.tiltest`): rest at N equally spaced
+        positions; each reading is the uncompensated count over one dwell."""
+        tab = self.b.table
+        tl = Timeline(start_angle_deg=self.true_position(0.0), t0_s=self.k * self.dt)
+        blk = Block(f"tilt_estimate {plan.orientation}", plan.orientation, tl, self.k, self.k,
+                    None, compensate=False)
+        rate = plan.rate_dps * (1.0 + tab.rate_error_rel)
+        for i in range(plan.positions):
+            x = 360.0 * i / plan.positions
+            if i:
+                tl.move(self.true_position(x), rate, tab.accel_dps2)
+            tl.dwell(plan.settle_s)
+            k0 = self._dwell_to_grid(tl)
+            tl.dwell(plan.dwell_s)
+            k1 = self._dwell_to_grid(tl)
+            blk.readings.append(PlannedReading("tilt_estimate", 1, i + 1, plan.rate_dps,
+                                               plan.orientation, k1, k0, x))
+        self._close(blk, tl)
+
     def rotation(self, item: RotationItem, series: int) -> None:
         s, tab = self.p.session, self.b.table
         rate = item.rate_dps * (1.0 + tab.rate_error_rel)
@@ -161,6 +183,8 @@ def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | No
     pl = _Planner(protocol, bench, rng)
     if protocol.zero_stability is not None:
         pl.zero_stability()
+    if protocol.extra.get("tilt_estimate") is not None:
+        pl.tilt_estimate(protocol.extra["tilt_estimate"])
     for item in protocol.items():
         for series in range(1, item.series + 1):
             pl.rotation(item, series)
@@ -195,8 +219,15 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
         zeros = np.array(sorted({r.k_zero for r in blk.readings}), dtype=np.int64)
         phi_at, theta_at = {}, {}
         comp = 0.0
-        if protocol.session.earth_compensation == "computed":
-            w = np.degrees(earth_rate_enu(bench.latitude_deg)) @ axis_enu(blk.orientation)
+        if protocol.session.earth_compensation == "computed" and blk.compensate:
+            # The operator's computed compensation, possibly with a wrong latitude or
+            # azimuth (protocol session.compensation_*; :mod:`gonio.compensation`).
+            ss = protocol.session
+            lat = (bench.latitude_deg if ss.compensation_latitude_deg is None
+                   else ss.compensation_latitude_deg)
+            az, el = NAMED_AXES[blk.orientation]
+            w = np.degrees(earth_rate_enu(lat)) @ axis_enu(
+                (az + ss.compensation_azimuth_error_deg, el))
             comp = inst.nominal_scale_factor_counts_per_deg * float(w)
         need_arr = np.array(sorted(need), dtype=np.int64)
         measured = protocol.session.earth_compensation == "measured"

@@ -1,0 +1,67 @@
+"""``gonio sagnac``: Sagnac scale factor of a ring-laser or fibre-optic gyro.
+
+RLG: K = 4A/(λP) pulses per radian; FOG: 2πLD/(λc) rad of phase per rad/s
+(ogam-draft.md "Physics the draft relies on"). A thin layer over
+:func:`gonio.earth.sagnac_rlg` and :func:`gonio.earth.sagnac_fog`.
+"""
+
+from __future__ import annotations
+
+import json
+
+from gonio.earth import sagnac_fog, sagnac_rlg
+from gonio.errors import GonioError
+
+
+def register(subparsers) -> None:
+    """Add the ``sagnac`` sub-command."""
+    p = subparsers.add_parser(
+        "sagnac", help="Sagnac scale factor of an RLG or FOG",
+        description="Sagnac scale factor: --rlg with --area-m2 and --perimeter-m, or --fog "
+                    "with --length-m and --diameter-m; also the signal of the full Earth rate.")
+    kind = p.add_mutually_exclusive_group(required=True)
+    kind.add_argument("--rlg", action="store_true", help="ring-laser gyro")
+    kind.add_argument("--fog", action="store_true", help="fibre-optic gyro")
+    p.add_argument("--area-m2", type=float, help="RLG: enclosed area, m²")
+    p.add_argument("--perimeter-m", type=float, help="RLG: perimeter, m")
+    p.add_argument("--length-m", type=float, help="FOG: fibre length, m")
+    p.add_argument("--diameter-m", type=float, help="FOG: coil diameter, m")
+    p.add_argument("--wavelength-nm", type=float, default=None,
+                   help="wavelength, nm (default 632.8 for --rlg, 1550 for --fog)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Compute and print the scale factor."""
+    if args.rlg:
+        for opt in ("area_m2", "perimeter_m"):
+            if getattr(args, opt) is None:
+                raise GonioError(f"--{opt.replace('_', '-')} is required with --rlg")
+        lam = (args.wavelength_nm or 632.8) * 1e-9
+        try:
+            s = sagnac_rlg(args.area_m2, args.perimeter_m, lam)
+        except GonioError as exc:
+            raise GonioError(f"--rlg: {exc.message}") from None
+    else:
+        for opt in ("length_m", "diameter_m"):
+            if getattr(args, opt) is None:
+                raise GonioError(f"--{opt.replace('_', '-')} is required with --fog")
+        lam = (args.wavelength_nm or 1550.0) * 1e-9
+        try:
+            s = sagnac_fog(args.length_m, args.diameter_m, lam)
+        except GonioError as exc:
+            raise GonioError(f"--fog: {exc.message}") from None
+    if args.json:
+        print(json.dumps(s.to_dict(), indent=2))
+        return 0
+    if s.kind == "rlg":
+        print(f"RLG at {s.wavelength_m * 1e9:g} nm: K = {s.scale_factor_counts_per_rad:.6g} "
+              f"pulses/rad = {s.scale_factor_counts_per_deg:.6g} pulses/° "
+              f"(one pulse = {s.resolution_arcsec:.6g}″)")
+        print(f"full Earth rate: {s.earth_rate_signal:.6g} Hz beat frequency")
+    else:
+        print(f"FOG at {s.wavelength_m * 1e9:g} nm: Sagnac phase {s.phase_per_rate_s:.6g} "
+              f"rad per rad/s")
+        print(f"full Earth rate: {s.earth_rate_signal:.6g} rad of phase")
+    return 0

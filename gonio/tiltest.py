@@ -1,0 +1,316 @@
+"""In-situ estimate of the sensing-axis tilt from a static multi-position test.
+
+Contents
+--------
+:class:`TiltEstimatePlan`          the ``[tilt_estimate]`` protocol section (registered here)
+:func:`fit_first_harmonic`         LS fit c0 + a cos θ + b sin θ with its residual-based covariance
+:func:`estimate_tilt`              ψ, α and their standard uncertainties from rates at positions
+:func:`tilt_estimate_from_readings` the same from ``tilt_estimate`` rows of a readings file
+
+Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.kinematics`).
+A rate gyro whose sensing axis n is tilted by ψ from the table axis a senses, with
+the table at rest at angle θ,
+
+    ω_s(θ) = b + cos ψ (Ω·a) + sin ψ · Ω_⊥ cos(θ + α − β)
+
+(b the bias, Ω_⊥ the Earth rate across the table axis, β its direction and α the
+tilt's azimuth in the table frame). Resting at N ≥ 4 equally spaced positions and
+averaging the rate at each shows that first harmonic: its amplitude is Ω_⊥ sin ψ,
+its phase α − β. A least-squares fit of c0 + a cos θ + b sin θ (design matrix
+``X = [1, cos θ, sin θ]``) with the residual-based covariance s²(XᵀX)⁻¹,
+s² = RSS/(N − 3) (JCGM 100 H.3; any LS textbook), gives
+
+    ψ = asin(hypot(a, b) / Ω_⊥),       α − β = atan2(−b, a)
+
+and their standard uncertainties by the law of propagation (JCGM 100 5.1.2), with
+ν = N − 3 degrees of freedom (use the Student-t factor ``k95`` for a 95 %
+interval). The laboratory can then replace the draft's assumed tilt bound of 0.1°
+(Annex A.1, A.4.2) with a measured ψ and u(ψ), and the coupling analysis of
+:mod:`gonio.coupling` with a measured α.
+
+Caveats: the estimate sees the tilt of the sensing axis relative to the axis about
+which the table actually turns; a table-axis wobble with the same period adds a
+first harmonic of the same form (amplitude w·Ω_⊥) and is included in the
+estimate. Near Ω_⊥ = 0 (table axis parallel to the Earth's axis) the test has no
+signal. Counts are converted with the scale factor given (7.1's or the nominal
+one); a 7.1 scale factor already holds cos ψ (rigid-body reading of A.4.2), which
+changes the amplitude by the factor 1/cos ψ (1.5×10⁻⁶ at 0.1°, ignored).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from gonio.earth import NAMED_AXES, axis_enu, earth_rate_enu, earth_rate_split
+from gonio.errors import GonioError
+from gonio.protocol import register_section
+from gonio.tomlschema import Field, non_negative, positive
+
+ARCSEC_PER_DEG = 3600.0
+
+
+@dataclass(frozen=True)
+class TiltEstimatePlan:
+    """The static multi-position test: N equally spaced rests of ``dwell_s`` each.
+
+    Readings (one per position, test ``tilt_estimate``): ``round`` = position index
+    (1…N), ``table_deg`` = position (360°·(i−1)/N), ``time_s`` = dwell time,
+    ``gyro_counts`` = pulses accumulated over the dwell, *not* Earth-rate
+    compensated (the Earth rate is the signal).
+    """
+
+    clause: str = "in-situ tilt estimate (gonio; supports Annex A.1/A.4.2)"
+    positions: int = 12
+    dwell_s: float = 60.0
+    settle_s: float = 5.0
+    orientation: str = "up"
+    rate_dps: float = 60.0
+
+
+SECTION_SCHEMA = {
+    "clause": Field("str", TiltEstimatePlan.clause),
+    "positions": Field("int", 12, lambda n: n >= 4, "an integer ≥ 4"),
+    "dwell_s": Field("float", 60.0, positive, "> 0"),
+    "settle_s": Field("float", 5.0, non_negative, "≥ 0"),
+    "orientation": Field("str", "up", choices=tuple(NAMED_AXES)),
+    "rate_dps": Field("float", 60.0, positive, "> 0"),
+}
+
+
+def _plan(d: dict) -> TiltEstimatePlan:
+    return TiltEstimatePlan(**d)
+
+
+register_section("tilt_estimate", SECTION_SCHEMA, _plan)
+
+
+@dataclass(frozen=True)
+class HarmonicFit:
+    """c0 + a cos θ + b sin θ: coefficients (input unit), covariance, residuals."""
+
+    coef: np.ndarray            # (c0, a, b)
+    cov: np.ndarray             # 3×3, s² (XᵀX)⁻¹
+    residual_sd: float          # s
+    dof: int                    # N − 3
+    fitted: np.ndarray
+    residuals: np.ndarray
+
+
+def fit_first_harmonic(theta_deg, y) -> HarmonicFit:
+    """Least-squares fit of y = c0 + a cos θ + b sin θ with covariance s²(XᵀX)⁻¹.
+
+    s² = RSS/(N − 3) (JCGM 100 H.3 for the straight-line analogue). Needs N ≥ 4
+    distinct positions (N = 3 leaves no degree of freedom for s).
+
+    Examples
+    --------
+    >>> th = np.arange(4) * 90.0
+    >>> f = fit_first_harmonic(th, [3.1, 2.0, 0.9, 2.0])   # 2 + 1.1 cos θ, plus nothing
+    >>> (f.coef.round(12) + 0.0).tolist(), f.dof, round(f.residual_sd, 12)
+    ([2.0, 1.1, 0.0], 1, 0.0)
+    """
+    th = np.radians(np.asarray(theta_deg, dtype=float))
+    y = np.asarray(y, dtype=float)
+    if th.shape != y.shape or th.ndim != 1:
+        raise GonioError("positions and rates must be 1-D arrays of the same length")
+    if th.size < 4:
+        raise GonioError(f"the tilt estimate needs at least 4 positions, got {th.size}")
+    if not (np.all(np.isfinite(th)) and np.all(np.isfinite(y))):
+        raise GonioError("positions and rates must be finite numbers")
+    x = np.column_stack([np.ones_like(th), np.cos(th), np.sin(th)])
+    xtx = x.T @ x
+    if np.linalg.cond(xtx) > 1e10:
+        raise GonioError("positions do not determine a first harmonic (spread them over 360°)")
+    coef = np.linalg.solve(xtx, x.T @ y)
+    fitted = x @ coef
+    res = y - fitted
+    dof = th.size - 3
+    s2 = float(res @ res) / dof
+    return HarmonicFit(coef, s2 * np.linalg.inv(xtx), math.sqrt(s2), dof, fitted, res)
+
+
+@dataclass
+class TiltEstimate:
+    """Result of the in-situ tilt estimate (see :func:`estimate_tilt`)."""
+
+    orientation: str
+    latitude_deg: float
+    n_positions: int
+    perpendicular_arcsec_s: float       # Ω_⊥
+    offset_arcsec_s: float              # c0 = bias + cos ψ Ω·a
+    amplitude_arcsec_s: float           # Ω_⊥ sin ψ
+    u_amplitude_arcsec_s: float
+    tilt_deg: float                     # ψ
+    u_tilt_deg: float
+    phase_deg: float                    # α − β: tilt azimuth relative to Ω_⊥, at table 0°
+    u_phase_deg: float
+    tilt_azimuth_table_deg: float       # α in the table frame e₁, e₂ of gonio.kinematics
+    dof: int
+    k95: float                          # Student-t factor for 95 % with ν = dof
+    residual_sd_arcsec_s: float
+    table: pd.DataFrame = field(repr=False, default_factory=pd.DataFrame)
+
+    def to_dict(self) -> dict:
+        """Plain dict (for ``--json``)."""
+        d = {k: v for k, v in self.__dict__.items() if k != "table"}
+        d["U95_tilt_deg"] = self.k95 * self.u_tilt_deg
+        d["positions"] = [{k: (float(v) if isinstance(v, (float, np.floating)) else int(v))
+                           for k, v in r.items()} for r in self.table.to_dict("records")]
+        return d
+
+
+def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: str = "up",
+                  u_latitude_deg: float = 0.0) -> TiltEstimate:
+    """ψ and α with standard uncertainties from mean rates at rest positions.
+
+    Parameters
+    ----------
+    theta_deg : array
+        Table positions, degrees (N ≥ 4, best equally spaced over 360°).
+    rate_arcsec_s : array
+        Mean sensed rate at each position, ″/s (uncompensated: the Earth rate is the signal).
+    latitude_deg, orientation : float, str
+        Site latitude and table-axis direction; they give Ω_⊥ and its direction β.
+    u_latitude_deg : float
+        Standard uncertainty of the latitude (enters through Ω_⊥).
+
+    Returns
+    -------
+    TiltEstimate
+        ψ = asin(A/Ω_⊥), A = hypot(a, b); α − β = atan2(−b, a) (module docstring);
+        u by the law of propagation on the fit covariance (JCGM 100 5.1.2).
+
+    Examples
+    --------
+    Axis up at 40° N: Ω_⊥ = 11.5221″/s. A tilt of 0.1° at α − β = 30° gives the
+    harmonic 0.020110 cos(θ + 30°) ″/s on top of the 9.668″/s offset:
+
+    >>> th = np.arange(8) * 45.0
+    >>> amp = 11.522126 * math.sin(math.radians(0.1))
+    >>> y = 9.668 + amp * np.cos(np.radians(th + 30.0))
+    >>> e = estimate_tilt(th, y, 40.0, "up")
+    >>> round(e.amplitude_arcsec_s, 6), round(e.tilt_deg, 6), round(e.phase_deg, 6)
+    (0.02011, 0.1, 30.0)
+    """
+    th = np.asarray(theta_deg, dtype=float)
+    fit = fit_first_harmonic(th, rate_arcsec_s)
+    perp = earth_rate_split(latitude_deg, orientation).perpendicular_dps * ARCSEC_PER_DEG
+    if perp < 1e-3:
+        raise GonioError(f"the table axis ({orientation}) is parallel to the Earth's axis at "
+                         f"latitude {latitude_deg}°: no Earth rate across it, no tilt signal")
+    c0, a, b = fit.coef
+    amp = math.hypot(a, b)
+    if amp >= perp:
+        raise GonioError(f"first-harmonic amplitude {amp:.4g}″/s exceeds Ω_⊥ = {perp:.4g}″/s: "
+                         "not a tilt (check scale factor, latitude and orientation)")
+    cab = fit.cov[1:, 1:]
+    if amp > 0:
+        j_amp = np.array([a, b]) / amp
+        j_ph = np.array([b, -a]) / amp ** 2
+        u_amp = math.sqrt(float(j_amp @ cab @ j_amp))
+        u_ph = math.sqrt(float(j_ph @ cab @ j_ph))
+    else:
+        u_amp, u_ph = math.sqrt(float(np.trace(cab)) / 2.0), math.pi
+    psi = math.asin(amp / perp)
+    # Ω_⊥ through the latitude: numerical derivative (central difference, 1e-4°).
+    h = 1e-4
+    lo, hi = max(-90.0, latitude_deg - h), min(90.0, latitude_deg + h)
+    dperp = ((earth_rate_split(hi, orientation).perpendicular_dps
+              - earth_rate_split(lo, orientation).perpendicular_dps) * ARCSEC_PER_DEG
+             / math.radians(hi - lo))
+    u_perp = abs(dperp) * math.radians(u_latitude_deg)
+    cpsi = math.cos(psi)
+    u_psi = math.hypot(u_amp / (perp * cpsi), amp / (perp ** 2 * cpsi) * u_perp)
+    gamma = math.atan2(-b, a)
+    beta = _perp_direction_rad(latitude_deg, orientation)
+    from scipy.stats import t as student_t
+
+    table = pd.DataFrame({"round": np.arange(1, th.size + 1), "table_deg": th,
+                          "rate_arcsec_s": np.asarray(rate_arcsec_s, dtype=float),
+                          "fitted_arcsec_s": fit.fitted, "residual_arcsec_s": fit.residuals})
+    return TiltEstimate(
+        orientation=orientation, latitude_deg=float(latitude_deg), n_positions=int(th.size),
+        perpendicular_arcsec_s=perp, offset_arcsec_s=float(c0), amplitude_arcsec_s=amp,
+        u_amplitude_arcsec_s=u_amp, tilt_deg=math.degrees(psi), u_tilt_deg=math.degrees(u_psi),
+        phase_deg=math.degrees(gamma), u_phase_deg=math.degrees(u_ph),
+        tilt_azimuth_table_deg=(math.degrees(gamma + beta) + 180.0) % 360.0 - 180.0,
+        dof=fit.dof, k95=float(student_t.ppf(0.975, fit.dof)),
+        residual_sd_arcsec_s=fit.residual_sd, table=table)
+
+
+def _perp_direction_rad(latitude_deg: float, orientation: str) -> float:
+    """β: direction of Ω_⊥ in the table frame (e₁, e₂ of :func:`gonio.kinematics.sensing_axis_basis`)."""
+    from gonio.kinematics import sensing_axis_basis
+
+    a = axis_enu(orientation)
+    e1, e2 = sensing_axis_basis(a)
+    w = earth_rate_enu(latitude_deg)
+    return math.atan2(float(w @ e2), float(w @ e1))
+
+
+def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | None = None,
+                                latitude_deg: float | None = None,
+                                u_latitude_deg: float = 0.0) -> TiltEstimate:
+    """The tilt estimate from the ``tilt_estimate`` rows of a readings file.
+
+    Rate at each position = gyro_counts / (K · time_s) (or gyro_deg / time_s), ″/s;
+    K from the argument, else the file's ``nominal_scale_factor_counts_per_deg``;
+    latitude from the argument, else the file's ``latitude_deg``. Rows must share
+    one orientation and one series.
+
+    Parameters
+    ----------
+    readings : gonio.io.Readings or pandas.DataFrame
+    scale_factor_counts_per_deg, latitude_deg, u_latitude_deg : float, optional
+
+    Examples
+    --------
+    >>> df = pd.DataFrame({"test": ["tilt_estimate"] * 4, "series": [1] * 4,
+    ...     "round": [1, 2, 3, 4], "orientation": ["up"] * 4, "time_s": [10.0] * 4,
+    ...     "table_deg": [0.0, 90.0, 180.0, 270.0],
+    ...     "gyro_counts": [1004.0, 1000.0, 996.0, 1000.0]})
+    >>> e = tilt_estimate_from_readings(df, 3600.0, 40.0)   # 1 count = 1″: 0.4″/s amplitude
+    >>> round(e.amplitude_arcsec_s, 9), round(e.tilt_deg, 4)
+    (0.4, 1.9895)
+    """
+    from gonio.io import Readings, metadata_float
+
+    if isinstance(readings, Readings):
+        df, md, file = readings.data, readings.metadata, readings.path
+    else:
+        df, md, file = readings, {}, None
+    rows = df[df["test"] == "tilt_estimate"]
+    if rows.empty:
+        raise GonioError("no tilt_estimate rows in the readings", file=file)
+    orients = rows["orientation"].unique() if "orientation" in rows else np.array(["up"])
+    if len(orients) != 1 or rows["series"].nunique() != 1:
+        raise GonioError("tilt_estimate rows must share one orientation and one series "
+                         f"(found orientations {sorted(map(str, orients))}, series "
+                         f"{sorted(rows['series'].unique().tolist())})", file=file)
+    if latitude_deg is None:
+        latitude_deg = metadata_float(md, "latitude_deg", file=file)
+        if latitude_deg is None:
+            raise GonioError("no latitude: give it or put latitude_deg in the file's metadata",
+                             file=file, key="latitude_deg")
+    t = rows["time_s"].to_numpy(dtype=float)
+    if np.any(~(t > 0)):
+        raise GonioError("tilt_estimate rows need time_s > 0 (the dwell time)", file=file,
+                         key="time_s")
+    gdeg = rows["gyro_deg"].to_numpy(dtype=float) if "gyro_deg" in rows else np.full(t.size, np.nan)
+    counts = rows["gyro_counts"].to_numpy(dtype=float) if "gyro_counts" in rows \
+        else np.full(t.size, np.nan)
+    if np.any(np.isnan(gdeg)):
+        k = scale_factor_counts_per_deg
+        if k is None:
+            k = metadata_float(md, "nominal_scale_factor_counts_per_deg", file=file)
+        if k is None:
+            raise GonioError("counts need a scale factor: give it or put "
+                             "nominal_scale_factor_counts_per_deg in the metadata", file=file)
+        gdeg = np.where(np.isnan(gdeg), counts / k, gdeg)
+    rate = gdeg / t * ARCSEC_PER_DEG
+    return estimate_tilt(rows["table_deg"].to_numpy(dtype=float), rate, float(latitude_deg),
+                         str(orients[0]), u_latitude_deg)
