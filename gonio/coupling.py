@@ -1,0 +1,365 @@
+"""Tilt × Earth-rate coupling: the angle error a tilted sensing axis picks up as the table turns.
+
+Contents
+--------
+:func:`trig_integrals`            ∫cos θ(t) dt, ∫sin θ(t) dt over a :class:`~gonio.kinematics.Timeline`
+:func:`coupling_terms`            the two α-independent terms of one reading's error
+:func:`coupling_error_arcsec`     the angle error of readings, for a tilt azimuth α
+:func:`coupling_worst_case_arcsec` its largest magnitude over α
+:func:`session_coupling`          per reading of a planned session (protocol + bench)
+:func:`coupling_budget_component` an optional Annex A component (arcsine, worst case)
+
+Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.kinematics`).
+A rate gyro senses ω·n; with the sensing axis n tilted by ψ from the table axis a,
+coning with the table angle θ,
+
+    Ω_E·n(θ) = cos ψ (Ω·a) + sin ψ Ω_⊥ cos(θ + α)
+
+with Ω_⊥ the Earth rate across the table axis and α the tilt's azimuth measured
+from Ω_⊥'s direction in the table frame (α = α_table − β). A compensation
+*measured* at rest at table angle θ_c (clause 7 preamble; usually the zero
+position, θ_c = 0) removes cos ψ (Ω·a) + sin ψ Ω_⊥ cos(θ_c + α); what is left is
+
+    r(t) = Ω_⊥ sin ψ [cos(θ(t) + α) − cos(θ_c + α)]
+
+(up to 2 Ω_⊥ sin ψ). A *computed* compensation removes Ω·a from latitude and the
+nominal axis, leaving r(t) = (cos ψ − 1) Ω·a + Ω_⊥ sin ψ cos(θ(t) + α). The angle
+error of a reading taken at t_r after zeroing at t_z, in the instrument's
+calibrated unit (the 7.1 scale factor holds cos ψ, so the counts are divided by
+K cos ψ — the "mount" scale factor of the bench), is
+
+    e = (1/cos ψ) ∫_{t_z}^{t_r} r(t) dt
+      = (Ω_⊥ tan ψ) [cos α · (C − cos θ_c Δt) − sin α · (S − sin θ_c Δt)]   (measured)
+
+with C = ∫cos θ dt, S = ∫sin θ dt, Δt = t_r − t_z. The error is a sinusoid in α,
+so its worst case over α is (Ω_⊥ tan ψ)·hypot(C − cos θ_c Δt, S − sin θ_c Δt); with
+α unknown and equally likely in [0, 2π) it is arcsine-distributed (JCGM 101 6.4.6).
+
+C and S are closed form during rests and constant-rate cruise; during the
+constant-acceleration phases of a trapezoidal move (θ quadratic in t; Fresnel
+integrals) they use Gauss–Legendre quadrature on pieces of at most 0.25 rad,
+exact to rounding (tested against adaptive quadrature to 1e-12).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.earth import axis_enu, earth_rate_enu
+from gonio.errors import GonioError
+from gonio.kinematics import Timeline, sensing_axis_basis
+
+ARCSEC_PER_DEG = 3600.0
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
+_MAX_PIECE_RAD = 0.25
+
+
+def _pieces(tl: Timeline, t_a: float, t_b: float):
+    """Pieces of [t_a, t_b] on which θ is constant, linear or quadratic in t.
+
+    Yields (t0, t1, kind) with kind 'const', 'linear' or 'quad'.
+    """
+    t0s, _, _, dist, _, _, tacc, dur = (np.asarray(v, dtype=float) for v in (
+        tl._t0, tl._theta0, tl._sign, tl._dist, tl._vpk, tl._acc, tl._tacc, tl._dur))
+    out = []
+    if t0s.size == 0:
+        return [(t_a, t_b, "const")]
+    # Before the first and after the last segment: at rest.
+    if t_a < t0s[0]:
+        out.append((t_a, min(t_b, t0s[0]), "const"))
+    end = tl.end_s
+    for i in range(t0s.size):
+        s0, s1 = t0s[i], t0s[i] + dur[i]
+        if s1 <= t_a or s0 >= t_b:
+            continue
+        if dist[i] == 0.0:
+            bounds, kinds = [s0, s1], ["const"]
+        else:
+            bounds = [s0, s0 + tacc[i], s1 - tacc[i], s1]
+            kinds = ["quad", "linear", "quad"]
+        for (u0, u1), kind in zip(zip(bounds[:-1], bounds[1:]), kinds):
+            lo, hi = max(u0, t_a), min(u1, t_b)
+            if hi > lo:
+                out.append((lo, hi, kind))
+    if t_b > end:
+        out.append((max(t_a, end), t_b, "const"))
+    return out
+
+
+def trig_integrals(timeline: Timeline, t_a: float, t_b: float) -> tuple[float, float]:
+    """(∫cos θ dt, ∫sin θ dt) over [t_a, t_b], θ = the timeline's angle in radians, s.
+
+    Closed form at rest (θ constant) and in cruise (θ linear: [sin θ]/θ̇,
+    [−cos θ]/θ̇); Gauss–Legendre (24 nodes, pieces ≤ 0.25 rad) while accelerating.
+
+    Examples
+    --------
+    A quarter turn at 90 °/s after a 1 s rest (acceleration so high that the
+    ramps last 10 µs): ∫cos θ = ∫sin θ over the turn = 1/(π/2 rad/s) = 0.6366 s.
+
+    >>> tl = Timeline(); _ = tl.dwell(1.0); _ = tl.move(90.0, 90.0, 9e6)
+    >>> c, s = trig_integrals(tl, 0.0, tl.end_s)
+    >>> round(c - 1.0, 4), round(s, 4)         # minus the 1 s at θ = 0
+    (0.6366, 0.6366)
+    """
+    if not (math.isfinite(t_a) and math.isfinite(t_b)) or t_b < t_a:
+        raise GonioError(f"need t_a ≤ t_b, got {t_a}, {t_b}")
+    c_sum = s_sum = 0.0
+    for lo, hi, kind in _pieces(timeline, t_a, t_b):
+        th = np.radians(timeline.angle_deg(np.array([lo, hi])))
+        if kind == "const":
+            c_sum += math.cos(th[0]) * (hi - lo)
+            s_sum += math.sin(th[0]) * (hi - lo)
+            continue
+        if kind == "linear":
+            w = (th[1] - th[0]) / (hi - lo)
+            if w != 0.0:
+                c_sum += (math.sin(th[1]) - math.sin(th[0])) / w
+                s_sum += (math.cos(th[0]) - math.cos(th[1])) / w
+            else:
+                c_sum += math.cos(th[0]) * (hi - lo)
+                s_sum += math.sin(th[0]) * (hi - lo)
+            continue
+        # quadratic θ: split so that each piece turns by at most _MAX_PIECE_RAD.
+        n = max(1, int(math.ceil(abs(th[1] - th[0]) / _MAX_PIECE_RAD)))
+        edges = np.linspace(lo, hi, n + 1)
+        half = 0.5 * np.diff(edges)
+        mid = 0.5 * (edges[1:] + edges[:-1])
+        t = (mid[:, None] + half[:, None] * _GL_X[None, :]).ravel()
+        w = (half[:, None] * _GL_W[None, :]).ravel()
+        tt = np.radians(timeline.angle_deg(t))
+        c_sum += float(w @ np.cos(tt))
+        s_sum += float(w @ np.sin(tt))
+    return float(c_sum), float(s_sum)
+
+
+@dataclass(frozen=True)
+class CouplingTerms:
+    """α-independent terms of one reading: e(α) = scale·(P cos α − Q sin α) + offset, ″."""
+
+    p_s: float                 # C − cos θ_c Δt (measured) or C (computed), s
+    q_s: float                 # S − sin θ_c Δt (measured) or S (computed), s
+    scale_arcsec_s: float      # Ω_⊥ tan ψ, ″/s
+    offset_arcsec: float       # computed compensation: (cos ψ − 1) Ω·a Δt / cos ψ, ″
+    duration_s: float
+
+    def error_arcsec(self, alpha_deg) -> np.ndarray:
+        """e(α), ″ (α relative to Ω_⊥'s direction, degrees)."""
+        a = np.radians(np.asarray(alpha_deg, dtype=float))
+        return self.scale_arcsec_s * (self.p_s * np.cos(a) - self.q_s * np.sin(a)) \
+            + self.offset_arcsec
+
+    def worst_case_arcsec(self) -> float:
+        """max over α of |e(α)| = |offset| + scale·hypot(P, Q)."""
+        return abs(self.offset_arcsec) + abs(self.scale_arcsec_s) * math.hypot(self.p_s, self.q_s)
+
+
+def coupling_terms(timeline: Timeline, t_zero_s: float, t_read_s: float, tilt_deg: float,
+                   perpendicular_dps: float, *, compensation: str = "measured",
+                   theta_comp_deg: float | None = None,
+                   parallel_dps: float = 0.0) -> CouplingTerms:
+    """Terms of the coupling error of a reading (module docstring formula).
+
+    Parameters
+    ----------
+    timeline : Timeline
+        The table's motion (θ in the table frame in which α is given).
+    t_zero_s, t_read_s : float
+        Zeroing and reading instants.
+    tilt_deg : float
+        ψ.
+    perpendicular_dps, parallel_dps : float
+        Ω_⊥ and Ω·a, °/s (:func:`gonio.earth.earth_rate_split`).
+    compensation : {"measured", "computed", "none"}
+        Measured at rest at ``theta_comp_deg`` (default: the angle at zeroing);
+        computed from Ω·a; none.
+    """
+    if compensation not in ("measured", "computed", "none"):
+        raise GonioError(f"compensation must be measured, computed or none, got {compensation!r}")
+    psi = math.radians(tilt_deg)
+    dt = t_read_s - t_zero_s
+    c, s = trig_integrals(timeline, t_zero_s, t_read_s)
+    scale = perpendicular_dps * ARCSEC_PER_DEG * math.tan(psi)
+    offset = 0.0
+    if compensation == "measured":
+        thc = float(timeline.angle_deg(np.array([t_zero_s]))[0]) if theta_comp_deg is None \
+            else theta_comp_deg
+        c -= math.cos(math.radians(thc)) * dt
+        s -= math.sin(math.radians(thc)) * dt
+    elif compensation == "computed":
+        offset = (math.cos(psi) - 1.0) / math.cos(psi) * parallel_dps * ARCSEC_PER_DEG * dt
+    else:
+        offset = parallel_dps * ARCSEC_PER_DEG * dt
+    return CouplingTerms(c, s, scale, offset, dt)
+
+
+def coupling_error_arcsec(timeline: Timeline, t_zero_s, t_read_s, tilt_deg: float,
+                          alpha_deg: float, perpendicular_dps: float, **kw) -> np.ndarray:
+    """Coupling angle error of readings (arrays of zeroing/reading times), ″.
+
+    ``alpha_deg`` is the tilt azimuth relative to Ω_⊥'s direction in the table
+    frame; other keywords as :func:`coupling_terms`.
+
+    Examples
+    --------
+    Axis up at 40° N (Ω_⊥ = 11.5221″/s), ψ = 0.1°, α = 0, measured compensation at
+    0°: a reading 10 s after arriving at 180° (instant move) has drifted by
+    Ω_⊥ tan ψ (cos 180° − cos 0°)·10 s = −0.4022″.
+
+    >>> tl = Timeline(); _ = tl.move(180.0, 1e6, 1e12); _ = tl.dwell(10.0)
+    >>> perp = 11.522126 / 3600
+    >>> round(float(coupling_error_arcsec(tl, 0.0, tl.end_s, 0.1, 0.0, perp)[0]), 4)
+    -0.4022
+    """
+    tz = np.atleast_1d(np.asarray(t_zero_s, dtype=float))
+    tr = np.atleast_1d(np.asarray(t_read_s, dtype=float))
+    tz, tr = np.broadcast_arrays(tz, tr)
+    return np.array([coupling_terms(timeline, a, b, tilt_deg, perpendicular_dps, **kw)
+                     .error_arcsec(alpha_deg) for a, b in zip(tz, tr)], dtype=float)
+
+
+def coupling_worst_case_arcsec(timeline: Timeline, t_zero_s, t_read_s, tilt_deg: float,
+                               perpendicular_dps: float, **kw) -> np.ndarray:
+    """max over α of |coupling error| for each reading, ″ (see :class:`CouplingTerms`).
+
+    >>> tl = Timeline(); _ = tl.move(180.0, 1e6, 1e12); _ = tl.dwell(10.0)
+    >>> round(float(coupling_worst_case_arcsec(tl, 0.0, tl.end_s, 0.1, 11.522126 / 3600)[0]), 4)
+    0.4022
+    """
+    tz = np.atleast_1d(np.asarray(t_zero_s, dtype=float))
+    tr = np.atleast_1d(np.asarray(t_read_s, dtype=float))
+    tz, tr = np.broadcast_arrays(tz, tr)
+    return np.array([coupling_terms(timeline, a, b, tilt_deg, perpendicular_dps, **kw)
+                     .worst_case_arcsec() for a, b in zip(tz, tr)], dtype=float)
+
+
+def table_frame(latitude_deg: float, orientation: str) -> tuple[float, float, float]:
+    """(Ω·a, Ω_⊥, β) for a table axis: °/s, °/s, degrees.
+
+    β is the direction of Ω_⊥ in the table frame (e₁, e₂) of
+    :func:`gonio.kinematics.sensing_axis_basis`; a tilt with azimuth α_table in
+    that frame has α = α_table − β relative to Ω_⊥.
+
+    >>> par, perp, beta = table_frame(40.0, "up")      # e₁ east, e₂ north: Ω_⊥ points north
+    >>> round(par * 3600, 4), round(perp * 3600, 4), round(beta, 6)
+    (9.6682, 11.5221, 90.0)
+    """
+    a = axis_enu(orientation)
+    e1, e2 = sensing_axis_basis(a)
+    w = np.degrees(earth_rate_enu(latitude_deg))
+    p1, p2 = float(w @ e1), float(w @ e2)
+    return float(w @ a), math.hypot(p1, p2), math.degrees(math.atan2(p2, p1))
+
+
+@dataclass
+class SessionCoupling:
+    """Coupling error per planned reading of a session (see :func:`session_coupling`)."""
+
+    test: list
+    orientation: list
+    round: list
+    table_deg: np.ndarray
+    time_s: np.ndarray
+    error_arcsec: np.ndarray          # at the given α (NaN if no α given)
+    worst_case_arcsec: np.ndarray     # over α
+
+
+def session_coupling(protocol, bench, tilt_deg: float | None = None,
+                     tilt_azimuth_table_deg: float | None = None) -> SessionCoupling:
+    """Coupling error of every reading the bench would take for ``protocol``.
+
+    The motion and the zeroing/reading instants come from
+    :func:`gonio.bench.session.plan_session` (no random table scatter); the
+    compensation is the protocol's (measured in the static phase at the start of
+    each block, or computed). ψ and α default to the bench instrument's.
+
+    Examples
+    --------
+    One round 0° → 180° at 60 °/s, 60 °/s² (1 s ramps, 2 s cruise), read 10 s after
+    arrival (Δt = 14 s); axis up at 40° N, ψ = 0.1°. By hand: P = ∫cos θ − Δt =
+    (0 over the symmetric move − 10 s at 180°) − 14 s = −24 s; Q = ∫sin θ =
+    (cos 30° − cos 150°)/(π/3 rad/s) + 2∫₀¹ sin(π t²/6) dt = 1.654 + 0.342 = 1.996 s;
+    worst case = Ω_⊥ tan ψ · hypot(P, Q) = 0.020110″/s × 24.083 s = 0.484″.
+
+    >>> from gonio.protocol import parse_protocol
+    >>> from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+    >>> p = parse_protocol({"protocol": {"name": "x"}, "angle_deviation": {
+    ...     "rest_s": 15.0, "rounds": [{"stop_deg": 180.0}]}})
+    >>> b = Bench("b", InstrumentConfig(tilt_deg=0.1), TableConfig(), latitude_deg=40.0,
+    ...           sample_rate_hz=100.0)
+    >>> round(float(session_coupling(p, b).worst_case_arcsec[0]), 3)
+    0.484
+    """
+    from gonio.bench.session import plan_session
+
+    psi = bench.instrument.tilt_deg if tilt_deg is None else tilt_deg
+    az = bench.instrument.tilt_azimuth_deg if tilt_azimuth_table_deg is None \
+        else tilt_azimuth_table_deg
+    blocks = plan_session(protocol, bench, None)
+    dt = 1.0 / bench.sample_rate_hz
+    comp = protocol.session.earth_compensation
+    lat = bench.latitude_deg if bench.earth_rate else None
+    out = {k: [] for k in ("test", "orientation", "round", "table_deg", "time_s", "e", "w")}
+    for blk in blocks:
+        if lat is None:
+            par = perp = beta = 0.0
+        else:
+            par, perp, beta = table_frame(lat, blk.orientation)
+        c = comp if blk.compensate else "none"
+        thc = None
+        if c == "measured" and blk.k_static:
+            thc = float(blk.timeline.angle_deg(np.array([blk.k_static[0] * dt]))[0])
+        for r in blk.readings:
+            terms = coupling_terms(blk.timeline, r.k_zero * dt, r.k_read * dt, psi, perp,
+                                   compensation=c, theta_comp_deg=thc, parallel_dps=par)
+            out["test"].append(r.test)
+            out["orientation"].append(r.orientation)
+            out["round"].append(r.round)
+            out["table_deg"].append(r.table_deg)
+            out["time_s"].append((r.k_read - r.k_zero) * dt)
+            out["e"].append(float(terms.error_arcsec(az - beta)))
+            out["w"].append(terms.worst_case_arcsec())
+    return SessionCoupling(out["test"], out["orientation"], out["round"],
+                           np.array(out["table_deg"]), np.array(out["time_s"]),
+                           np.array(out["e"]), np.array(out["w"]))
+
+
+def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
+                              accel_dps2: float = 60.0, symbol: str = "C_te",
+                              test: str = "angle_deviation"):
+    """An optional Annex A component for the tilt × Earth-rate coupling (off by default).
+
+    Half-width: the worst case over α and over the ``test`` readings of the
+    protocol (at the protocol's orientation, rates and timing); arcsine
+    distribution, because the error is a sinusoid of an unknown, uniformly
+    distributed tilt azimuth α (JCGM 101 6.4.6: u = a/√2). Pass the result to
+    :func:`gonio.budget.annex_a_budget` in ``extra_components``. The draft's
+    budget has no such line (``ogam-draft.md`` "Physics").
+
+    Examples
+    --------
+    The draft's 7.4 at 40° N with the 0.1° bound of Annex A.1 (largest at the
+    180° point, as in :func:`session_coupling`'s example; the draft's budget, 0.30″
+    expanded, has no line for it):
+
+    >>> from gonio.protocol import load_protocol
+    >>> c = coupling_budget_component(load_protocol(), 40.0, 0.1)
+    >>> c.symbol, c.distribution, round(c.half_width_arcsec, 2)
+    ('C_te', 'arcsine', 0.48)
+    """
+    from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+    from gonio.budget import ExtraComponent
+
+    bench = Bench("coupling", InstrumentConfig(tilt_deg=tilt_deg),
+                  TableConfig(accel_dps2=accel_dps2), latitude_deg=latitude_deg,
+                  sample_rate_hz=1000.0)
+    sc = session_coupling(protocol, bench)
+    sel = np.array([t == test for t in sc.test])
+    if not sel.any():
+        raise GonioError(f"the protocol has no {test} readings", key=test)
+    return ExtraComponent(symbol, f"tilt × Earth-rate coupling (ψ = {tilt_deg:g}°, "
+                          f"φ = {latitude_deg:g}°)", float(sc.worst_case_arcsec[sel].max()),
+                          "arcsine")
