@@ -1,0 +1,765 @@
+"""Stream → readings: find the table's rests and take the readings the protocol asks for.
+
+Contents
+========
+=========================  ===================================================
+:class:`Rest`              one dwell of the table (indices, level, edges)
+:class:`RestFinder`        rest detection fed chunk by chunk (bounded memory)
+:func:`find_rests`         rests of a whole stream, with sub-sample edges
+:class:`Reduction`         readings, what could not be matched and why, a log
+:func:`reduce_stream`      match rests to the protocol's rounds → readings
+:func:`read_override`      an operator's explicit (t_zero, t_read) per round
+=========================  ===================================================
+
+What an acquisition does on its external trigger (data-formats §2, draft clause 7
+preamble), reproduced from the continuous counter:
+
+1. **Rests.** With ``table_deg``: the encoder angle, despiked by a 3-sample
+   median (single-sample glitches vanish), is at rest where its rate over
+   ``window_s`` is below ``rate_threshold_dps``. Without it: the same on the
+   gyro angle ``counts / K`` (``K`` nominal scale factor) smoothed over a longer
+   window; the threshold sits above the Earth-rate level (≤ 0.0042 °/s).
+   Rests shorter than ``min_rest_s`` are dropped.
+2. **Edges.** Departure (zeroing) and arrival times are refined below one sample
+   from the first/last two moving samples: in the constant-acceleration part of
+   a move the angle off the rest level is ``a(t − t₀)²/2``, so ``√|Δθ|`` is linear
+   in ``t`` and its root is ``t₀``. The zeroing is the sample nearest the
+   departure; the reading is the first sample at or after arrival +
+   ``read_delay_s``.
+3. **Compensation.** ``measured``: the rate of the counter over the last
+   ``static_s`` of rest before a series' first departure (draft clause 7
+   preamble); ``computed``: K·Ω·axis from the metadata latitude; ``none``: 0.
+4. **Readings.** ``counts(read) − counts(zero) − comp·(t_read − t_zero)``, rounded
+   to whole counts when the counter is quantised (what the virtual bench and
+   an acquisition module write).
+
+Matching is by order and relative angle: each round needs a rest at its start
+level followed (extra rests allowed in between) by a rest whose level differs by
+``stop − start`` (``pos_tol_deg``). A round is skipped as missing when the next
+expected round's pair is found before its own; every skipped round and every
+rest no round used is reported with the reason. An operator can override the
+matching round by round (:func:`read_override`).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from gonio.errors import GonioError
+from gonio.protocol import Protocol, RotationItem
+from gonio.streams import Stream
+
+#: Default rest threshold on the table encoder rate, °/s.
+TABLE_RATE_THRESHOLD_DPS = 0.01
+#: Default rest threshold on the gyro rate, °/s (Earth rate ≤ 0.0042 °/s).
+GYRO_RATE_THRESHOLD_DPS = 0.05
+#: Default smoothing window of the gyro rate, s.
+GYRO_WINDOW_S = 0.5
+
+
+@dataclass
+class Rest:
+    """One rest of the table: samples ``i_start``…``i_end`` (inclusive)."""
+
+    i_start: int
+    i_end: int
+    t_start_s: float
+    t_end_s: float
+    level_deg: float
+    t_arrive_s: float = math.nan    # refined arrival (first rest: t_start_s)
+    t_depart_s: float = math.nan    # refined departure (last rest: t_end_s)
+
+    @property
+    def duration_s(self) -> float:
+        """Length of the rest, s."""
+        return self.t_end_s - self.t_start_s
+
+
+def _median3(x: np.ndarray) -> np.ndarray:
+    """Median of each sample and its two neighbours (interior samples only)."""
+    a, b, c = x[:-2], x[1:-1], x[2:]
+    return np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))
+
+
+class RestFinder:
+    """Rest detection fed chunk by chunk; the result does not depend on the chunking.
+
+    Per sample ``i`` (``w`` = window in samples) the rest test is
+    ``|y[i] − y[i−w]| < thr·(t[i] − t[i−w])`` on the despiked signal ``y``; a run
+    of passing samples ``a…b`` is the rest ``a−w…b``. Memory: a few samples of
+    carry plus the list of rests. Levels are run means (:func:`find_rests`
+    refines them).
+
+    >>> t = np.arange(0, 10, 0.1); x = np.where(t < 4, 0.0, np.minimum((t - 4) * 30, 90.0))
+    >>> f = RestFinder(rate_threshold_dps=0.01, window=1, despike=True, min_rest_s=1.0)
+    >>> f.feed(t[:37], x[:37]); f.feed(t[37:], x[37:])
+    >>> [(r.i_start, r.i_end, r.level_deg) for r in f.finish()]
+    [(0, 40, 0.0), (70, 99, 90.0)]
+    """
+
+    def __init__(self, *, rate_threshold_dps: float, window: int, despike: bool,
+                 min_rest_s: float):
+        self.thr, self.w, self.despike, self.min_rest_s = rate_threshold_dps, int(window), \
+            despike, min_rest_s
+        self._hold_t = np.empty(0)
+        self._hold_x = np.empty(0)
+        self._n_in = 0                 # raw samples received
+        self._n_out = 0                # despiked samples emitted
+        self._ct = np.empty(0)         # carry of the last w despiked samples
+        self._cy = np.empty(0)
+        self._open: dict | None = None   # the run in progress
+        self.rests: list[Rest] = []
+
+    def feed(self, time_s: np.ndarray, x: np.ndarray) -> None:
+        """Add consecutive samples."""
+        t = np.asarray(time_s, dtype=np.float64)
+        x = np.asarray(x, dtype=np.float64)
+        if t.size == 0:
+            return
+        if not self.despike:
+            self._n_in += t.size
+            self._stage2(t, x)
+            return
+        # hold = the last two raw samples; the last of them is not yet emitted
+        T = np.concatenate((self._hold_t, t))
+        X = np.concatenate((self._hold_x, x))
+        first = self._n_in == 0
+        self._n_in += t.size
+        if first:
+            self._stage2(T[:1], X[:1])
+        if T.size >= 3:
+            self._stage2(T[1:-1], _median3(X))
+        self._hold_t, self._hold_x = T[-2:].copy(), X[-2:].copy()
+
+    def _stage2(self, t: np.ndarray, y: np.ndarray) -> None:
+        if t.size == 0:
+            return
+        w = self.w
+        g0 = self._n_out - self._ct.size       # global index of Z[0]
+        T = np.concatenate((self._ct, t))
+        Z = np.concatenate((self._cy, y))
+        self._n_out += t.size
+        if Z.size > w:
+            ok = np.abs(Z[w:] - Z[:-w]) < self.thr * (T[w:] - T[:-w])
+            if self._open is not None and not ok[0]:
+                self._close()
+            edges = np.diff(np.concatenate(([0], ok.astype(np.int8), [0])))
+            starts = np.flatnonzero(edges == 1)
+            ends = np.flatnonzero(edges == -1) - 1
+            cs = np.concatenate(([0.0], np.cumsum(Z[w:])))
+            for s, e in zip(starts.tolist(), ends.tolist()):
+                if s == 0 and self._open is not None:
+                    self._open["sum"] += cs[e + 1] - cs[s]
+                    self._open["cnt"] += e - s + 1
+                else:
+                    self._open = {"a": g0 + s + w, "t0": float(T[s]),
+                                  "sum": cs[e + 1] - cs[s], "cnt": e - s + 1}
+                self._open["b"], self._open["tb"] = g0 + e + w, float(T[e + w])
+                if e < ok.size - 1:
+                    self._close()
+        self._ct, self._cy = T[-w:].copy(), Z[-w:].copy()
+
+    def _close(self) -> None:
+        o, self._open = self._open, None
+        if o is not None and o["tb"] - o["t0"] >= self.min_rest_s:
+            self.rests.append(Rest(o["a"] - self.w, o["b"], o["t0"], o["tb"],
+                                   float(o["sum"] / o["cnt"])))
+
+    def finish(self) -> list[Rest]:
+        """Flush the last samples and return the rests found."""
+        if self.despike and self._n_in >= 2:
+            self._stage2(self._hold_t[-1:], self._hold_x[-1:])
+        self._hold_t = self._hold_x = np.empty(0)
+        self._close()
+        return self.rests
+
+
+def _dt(time_s: np.ndarray) -> float:
+    d = np.diff(time_s[: min(time_s.size, 100_000)])
+    return float(np.median(d)) if d.size else 1.0
+
+
+def _signal(time_s, table_deg, counts, scale_factor_counts_per_deg):
+    if table_deg is not None:
+        return np.asarray(table_deg, dtype=np.float64), True
+    if counts is None:
+        raise GonioError("find_rests needs table_deg or gyro counts")
+    if not scale_factor_counts_per_deg or not math.isfinite(scale_factor_counts_per_deg) \
+            or scale_factor_counts_per_deg <= 0:
+        raise GonioError("a stream without table_deg needs the metadata "
+                         "nominal_scale_factor_counts_per_deg to find rests from the gyro rate",
+                         key="nominal_scale_factor_counts_per_deg")
+    c = np.asarray(counts)
+    return (c - c[0]).astype(np.float64) / scale_factor_counts_per_deg, False
+
+
+def find_rests(time_s: np.ndarray, table_deg: np.ndarray | None = None,
+               counts: np.ndarray | None = None, *,
+               scale_factor_counts_per_deg: float | None = None,
+               rate_threshold_dps: float | None = None, window_s: float | None = None,
+               min_rest_s: float = 0.5, refine: bool = True) -> list[Rest]:
+    """Rests (dwells) of the table, from ``table_deg`` or, without it, from the gyro rate.
+
+    Parameters
+    ----------
+    time_s : ndarray
+        Sample times.
+    table_deg : ndarray, optional
+        Table encoder angle; despiked by a 3-sample median.
+    counts : ndarray, optional
+        Unwrapped counter, used when ``table_deg`` is None (then
+        ``scale_factor_counts_per_deg`` is required).
+    rate_threshold_dps : float, optional
+        Rest when the rate is below this; default 0.01 °/s on the table, 0.05 °/s
+        on the gyro (above the Earth rate, 15.04 °/h ≈ 0.0042 °/s at most).
+    window_s : float, optional
+        Rate taken over this span; default one sample (table), 0.5 s (gyro).
+    min_rest_s : float
+        Shorter rests are dropped.
+    refine : bool
+        Median levels and sub-sample arrival/departure times (see module notes).
+
+    Returns
+    -------
+    list of Rest
+
+    Examples
+    --------
+    >>> t = np.arange(0, 20, 0.01)
+    >>> x = np.clip((t - 5.0) * 60.0, 0, 90.0)          # 5 s rest, move to 90°
+    >>> x[1200] += 3.0                                   # a one-sample encoder glitch
+    >>> r = find_rests(t, x)
+    >>> [(round(q.level_deg, 6), q.i_start, q.i_end) for q in r]
+    [(0.0, 0, 500), (90.0, 650, 1999)]
+    >>> round(r[0].t_depart_s, 9), round(r[1].t_arrive_s, 9)
+    (5.0, 6.5)
+    """
+    time_s = np.asarray(time_s, dtype=np.float64)
+    x, on_table = _signal(time_s, table_deg, counts, scale_factor_counts_per_deg)
+    dt = _dt(time_s)
+    thr = rate_threshold_dps if rate_threshold_dps is not None else (
+        TABLE_RATE_THRESHOLD_DPS if on_table else GYRO_RATE_THRESHOLD_DPS)
+    ws = window_s if window_s is not None else (0.0 if on_table else GYRO_WINDOW_S)
+    w = max(1, int(round(ws / dt)))
+    f = RestFinder(rate_threshold_dps=thr, window=w, despike=on_table, min_rest_s=min_rest_s)
+    f.feed(time_s, x)
+    rests = f.finish()
+    if refine:
+        y = x.copy()
+        if on_table and x.size >= 3:
+            y[1:-1] = _median3(x)
+        floor = 1e-9 if on_table else 1.5 / float(scale_factor_counts_per_deg)
+        _refine(time_s, y, rests, w, floor)
+    return rests
+
+
+def _root_sqrt(t1, d1, t2, d2) -> float:
+    """Time where √d reaches 0 on the line through (t1, √d1), (t2, √d2); NaN if none."""
+    s1, s2 = math.sqrt(d1), math.sqrt(d2)
+    if s1 == s2:
+        return math.nan
+    return t1 - s1 * (t2 - t1) / (s2 - s1)
+
+
+def _refine(t: np.ndarray, y: np.ndarray, rests: list[Rest], w: int, floor: float) -> None:
+    """Median levels, and sub-sample departure/arrival from the √-law of a start from rest."""
+    n = t.size
+    for r in rests:
+        s, e = r.i_start, r.i_end
+        seg = y[s:e + 1]
+        r.level_deg = float(np.median(seg))
+        mad = float(np.median(np.abs(seg - r.level_deg))) * 1.4826
+        tol = max(5.0 * mad, floor)
+        # departure
+        r.t_depart_s = float(t[e])
+        if e < n - 1:
+            lo = max(s, e - 2 * w)
+            lvl = float(np.median(y[lo:e + 1]))
+            j0, j1 = max(s + 1, e - w), min(n, e + w + 6)
+            off = np.abs(y[j0:j1] - lvl) > tol
+            if off.any():
+                j = j0 + int(np.argmax(off))
+                r.t_depart_s = float(t[j - 1])
+                if j + 1 < n:
+                    td = _root_sqrt(t[j], abs(y[j] - lvl), t[j + 1], abs(y[j + 1] - lvl))
+                    if math.isfinite(td):
+                        r.t_depart_s = float(min(max(td, t[j - 1]), t[j]))
+        # arrival
+        r.t_arrive_s = float(t[s])
+        if s > 0:
+            hi = min(e + 1, s + 2 * w + 1)
+            lvl = float(np.median(y[s:hi]))
+            j0, j1 = max(0, s - w - 6), min(e, s + w) + 1
+            off = np.abs(y[j0:j1] - lvl) > tol
+            if off.any():
+                j = j0 + int(np.flatnonzero(off)[-1])
+                r.t_arrive_s = float(t[j + 1]) if j + 1 < n else float(t[j])
+                if j >= 1 and j + 1 < n:
+                    ta = _root_sqrt(t[j], abs(y[j] - lvl), t[j - 1], abs(y[j - 1] - lvl))
+                    if math.isfinite(ta):
+                        r.t_arrive_s = float(min(max(ta, t[j]), t[j + 1]))
+
+
+# ----------------------------------------------------------------------------- matching
+
+
+@dataclass
+class Reduction:
+    """The result of :func:`reduce_stream`.
+
+    Attributes
+    ----------
+    readings : pandas.DataFrame
+        Readings-file columns (data-formats §1), plus ``t_zero_s`` and ``t_read_s``
+        (stream times of the zeroing and reading samples; not written by
+        :func:`gonio.io.write_readings` unless kept as extra columns).
+    unmatched : list of dict
+        Rounds that could not be read and rests no round used, each with ``reason``.
+    log : list of str
+    rests : list of Rest
+    compensation_counts_per_s : list of float
+        Per series, in protocol order.
+    metadata : dict
+        For the readings file (the stream's, without the counter keys).
+    """
+
+    readings: pd.DataFrame
+    unmatched: list[dict] = field(default_factory=list)
+    log: list[str] = field(default_factory=list)
+    rests: list[Rest] = field(default_factory=list)
+    compensation_counts_per_s: list[float] = field(default_factory=list)
+    metadata: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """Plain-JSON summary (``gonio reduce --json``)."""
+        return {"readings": int(len(self.readings)), "rests": len(self.rests),
+                "unmatched": self.unmatched, "log": self.log,
+                "compensation_counts_per_s": [float(c) for c in self.compensation_counts_per_s]}
+
+
+@dataclass
+class _Ctx:
+    st: Stream
+    proto: Protocol
+    rests: list[Rest]
+    pos_tol: float
+    quantised: bool
+    eps: float
+    used: set = field(default_factory=set)
+    rows: list = field(default_factory=list)
+    unmatched: list = field(default_factory=list)
+    log: list = field(default_factory=list)
+    comps: list = field(default_factory=list)
+    cursor: int = 0
+
+    def sample_at_or_after(self, t: float) -> int:
+        return int(np.searchsorted(self.st.time_s, t - self.eps, side="left"))
+
+    def nearest(self, t: float) -> int:
+        ts = self.st.time_s
+        i = int(np.searchsorted(ts, t))
+        if i >= ts.size:
+            return ts.size - 1
+        if i > 0 and (t - ts[i - 1]) <= (ts[i] - t):
+            return i - 1
+        return i
+
+    def rest_of(self, i: int) -> int | None:
+        for q in range(len(self.rests)):
+            if self.rests[q].i_start <= i <= self.rests[q].i_end:
+                return q
+        return None
+
+    def counts(self, kz: int, kr: int, comp: float) -> float:
+        c = self.st.gyro_counts
+        d = c[kr] - c[kz]
+        raw = float(d) - comp * float(self.st.time_s[kr] - self.st.time_s[kz])
+        return float(np.rint(raw)) if self.quantised else raw
+
+
+def _computed_comp(st: Stream, orientation: str) -> float:
+    from gonio.earth import axis_enu, earth_rate_enu
+    from gonio.io import metadata_float
+    k = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
+    lat = metadata_float(st.metadata, "latitude_deg", file=st.path)
+    if k is None or lat is None:
+        raise GonioError("earth_compensation = 'computed' needs the stream metadata "
+                         "nominal_scale_factor_counts_per_deg and latitude_deg", file=st.path,
+                         key="latitude_deg" if lat is None else
+                         "nominal_scale_factor_counts_per_deg")
+    w = np.degrees(earth_rate_enu(lat)) @ axis_enu(orientation)
+    return k * float(w)
+
+
+def _static_comp(ctx: _Ctx, rest_idx: int, kz: int) -> float | None:
+    """Counter rate over the last static_s before the zeroing sample ``kz`` (inside the rest)."""
+    s = ctx.proto.session
+    if s.earth_compensation == "none":
+        return 0.0
+    if s.earth_compensation == "computed":
+        return None  # filled by caller
+    t = ctx.st.time_s
+    k0 = ctx.nearest(float(t[kz]) - s.static_s)
+    if k0 < ctx.rests[rest_idx].i_start or k0 >= kz:
+        return math.nan
+    c = ctx.st.gyro_counts
+    return float(c[kz] - c[k0]) / float(t[kz] - t[k0])
+
+
+def _find_pair(ctx: _Ctx, start: int, zero_level: float | None, delta: float,
+               read_need_s: float, zero_fixed: int | None) -> tuple[int, int] | None:
+    """First (zero rest, read rest) from ``start``: read level − zero level ≈ delta."""
+    R = ctx.rests
+    tol = ctx.pos_tol
+    for r in range(start + 1 if zero_fixed is None else max(start, zero_fixed) + 1, len(R)):
+        if R[r].t_end_s + 1e-9 < R[r].t_arrive_s + read_need_s:
+            continue
+        if zero_fixed is not None:
+            if abs(R[r].level_deg - R[zero_fixed].level_deg - delta) < tol:
+                return zero_fixed, r
+            continue
+        for z in range(r - 1, start - 1, -1):
+            if zero_level is not None and abs(R[z].level_deg - zero_level) >= tol:
+                continue
+            if abs(R[r].level_deg - R[z].level_deg - delta) < tol:
+                return z, r
+            break   # the zero is the last rest at the start level before the move
+    return None
+
+
+def _series_rounds(item: RotationItem) -> list[tuple[int, float, float]]:
+    return [(i, r.start_deg, r.stop_deg) for i, r in enumerate(item.rounds, 1)]
+
+
+def _row(test, series, rnd, rate, orient, ctx: _Ctx, kz, kr, table_deg, comp):
+    t = ctx.st.time_s
+    return {"test": test, "series": series, "round": rnd, "rate_dps": rate,
+            "orientation": orient, "time_s": round(float(t[kr] - t[kz]), 9),
+            "table_deg": table_deg, "gyro_counts": ctx.counts(kz, kr, comp),
+            "gyro_deg": math.nan, "t_zero_s": float(t[kz]), "t_read_s": float(t[kr])}
+
+
+def _zero_stability(ctx: _Ctx) -> None:
+    z = ctx.proto.zero_stability
+    s = ctx.proto.session
+    static = s.static_s if s.earth_compensation == "measured" else 0.0
+    need = static + (z.readings - 1) * z.interval_s
+    for q in range(ctx.cursor, len(ctx.rests)):
+        r = ctx.rests[q]
+        if r.t_end_s + 1e-9 >= r.t_arrive_s + need:
+            break
+    else:
+        ctx.unmatched.append({"kind": "round", "test": "zero_stability", "series": 1,
+                              "round": None, "reason": f"no rest of {need:g} s (static phase + "
+                              f"{z.readings} readings {z.interval_s:g} s apart) in the stream"})
+        return
+    kz = ctx.sample_at_or_after(r.t_arrive_s + static)
+    if s.earth_compensation == "measured":
+        k0 = ctx.nearest(float(ctx.st.time_s[kz]) - static)
+        comp = float(ctx.st.gyro_counts[kz] - ctx.st.gyro_counts[k0]) / \
+            float(ctx.st.time_s[kz] - ctx.st.time_s[k0])
+    elif s.earth_compensation == "computed":
+        comp = _computed_comp(ctx.st, z.orientation)
+    else:
+        comp = 0.0
+    ctx.comps.append(comp)
+    t_zero = float(ctx.st.time_s[kz])
+    for n in range(z.readings):
+        kr = ctx.sample_at_or_after(t_zero + n * z.interval_s)
+        ctx.rows.append(_row("zero_stability", 1, n + 1, math.nan, z.orientation, ctx, kz, kr,
+                             math.nan, comp))
+    ctx.used.add(q)
+    ctx.cursor = q
+    ctx.log.append(f"zero_stability: rest {q} from {r.t_start_s:.3f} s, zero at {t_zero:.3f} s")
+
+
+def _rotation_series(ctx: _Ctx, item: RotationItem, series: int, nxt) -> None:
+    """Match one series; ``nxt`` = (item, first round) of the next series, for look-ahead."""
+    s = ctx.proto.session
+    rounds = _series_rounds(item)
+    z_rest = None          # rest of the current zero
+    kz = None
+    zero_x = None
+    ref_level = None       # level of the series' first zero rest (position start_1)
+    start1 = rounds[0][1]
+    comp = None
+    for idx, (i, start, stop) in enumerate(rounds):
+        rezero = z_rest is None or item.rezero
+        zl = None if ref_level is None else ref_level + (start - start1)
+        delta = (stop - start) if rezero else (stop - zero_x)
+        found = _find_pair(ctx, ctx.cursor, zl, delta, item.read_delay_s,
+                           None if rezero else z_rest)
+        # look-ahead: is the next expected round's pair found earlier?
+        if found is not None:
+            if idx + 1 < len(rounds):
+                _, s2, p2 = rounds[idx + 1]
+                nz = None if ref_level is None else ref_level + (s2 - start1)
+                d2 = (p2 - s2) if item.rezero else (p2 - (zero_x if zero_x is not None
+                                                         else start))
+                alt = _find_pair(ctx, ctx.cursor, nz, d2, item.read_delay_s,
+                                 None if item.rezero or z_rest is None else z_rest)
+            elif nxt is not None:
+                it2, (_, s2, p2) = nxt
+                alt = _find_pair(ctx, ctx.cursor, None, p2 - s2, it2.read_delay_s, None)
+            else:
+                alt = None
+            if alt is not None and alt[1] < found[1] and (delta != (alt and 0) or True) \
+                    and abs(ctx.rests[alt[1]].level_deg - ctx.rests[found[1]].level_deg) \
+                    >= ctx.pos_tol:
+                found = None
+        if found is None:
+            ctx.unmatched.append({"kind": "round", "test": item.test, "series": series,
+                                  "round": i, "rate_dps": item.rate_dps,
+                                  "orientation": item.orientation,
+                                  "reason": f"no rest at {stop:g}° (Δ {delta:g}°) after a rest "
+                                            f"at the start position with {item.read_delay_s:g} s"
+                                            " to the reading, before the next round's"})
+            continue
+        zq, rq = found
+        if rezero or kz is None:
+            r = ctx.rests[zq]
+            kz = ctx.nearest(r.t_depart_s)
+            z_rest, zero_x = zq, start
+            if ref_level is None:
+                ref_level = r.level_deg
+        if comp is None:
+            if s.earth_compensation == "computed":
+                comp = _computed_comp(ctx.st, item.orientation)
+            else:
+                comp = _static_comp(ctx, zq, kz)
+            if comp is None or not math.isfinite(comp):
+                ctx.unmatched.append({"kind": "round", "test": item.test, "series": series,
+                                      "round": i, "rate_dps": item.rate_dps,
+                                      "orientation": item.orientation,
+                                      "reason": f"the rest before the series is shorter than "
+                                                f"the static phase ({s.static_s:g} s): no "
+                                                "Earth-rate compensation"})
+                comp, z_rest, kz, ref_level = None, None, None, None
+                ctx.used.add(zq)
+                ctx.cursor = rq
+                continue
+            ctx.comps.append(comp)
+        rr = ctx.rests[rq]
+        kr = ctx.sample_at_or_after(rr.t_arrive_s + item.read_delay_s)
+        ctx.rows.append(_row(item.test, series, i, item.rate_dps, item.orientation, ctx, kz,
+                             kr, stop - zero_x, comp))
+        ctx.used.update((zq, rq))
+        ctx.cursor = rq
+
+
+def read_override(path: str | Path) -> list[dict]:
+    """Read an override CSV: ``test,series,round,t_zero_s,t_read_s`` (+ optional ``rate_dps``,
+    ``orientation``), stream times of the zeroing and reading of each listed round.
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "o.csv"
+    >>> _ = p.write_text("test,series,round,t_zero_s,t_read_s\\nscale_factor,1,2,70.0,85.5\\n")
+    >>> read_override(p)
+    [{'test': 'scale_factor', 'series': 1, 'round': 2, 't_zero_s': 70.0, 't_read_s': 85.5}]
+    """
+    from gonio.io import _parse_number
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except OSError as exc:
+        raise GonioError(f"cannot read override file: {exc.strerror}", file=path) from None
+    except UnicodeDecodeError:
+        raise GonioError("not UTF-8 text", file=path) from None
+    rows = list(csv.reader(text.splitlines()))
+    if not rows:
+        raise GonioError("empty override file", file=path, line=1)
+    head = [h.strip() for h in rows[0]]
+    for need in ("test", "series", "round", "t_zero_s", "t_read_s"):
+        if need not in head:
+            raise GonioError("missing required column", file=path, line=1, column=need)
+    out = []
+    for ln, cells in enumerate(rows[1:], 2):
+        if not any(c.strip() for c in cells):
+            continue
+        if len(cells) != len(head):
+            raise GonioError(f"expected {len(head)} fields, got {len(cells)}", file=path,
+                             line=ln)
+        d = dict(zip(head, (c.strip() for c in cells)))
+        rec: dict = {"test": d["test"]}
+        for col in ("series", "round"):
+            v = _parse_number(d[col])
+            if v is None or not math.isfinite(v) or v != int(v) or v < 1:
+                raise GonioError(f"expected an integer ≥ 1, got {d[col]!r}", file=path,
+                                 line=ln, column=col)
+            rec[col] = int(v)
+        for col in ("t_zero_s", "t_read_s") + tuple(c for c in ("rate_dps",) if c in d):
+            v = _parse_number(d[col])
+            if v is None or not math.isfinite(v):
+                raise GonioError(f"expected a finite number, got {d[col]!r}", file=path,
+                                 line=ln, column=col)
+            rec[col] = v
+        if "orientation" in d and d["orientation"]:
+            rec["orientation"] = d["orientation"]
+        if rec["t_read_s"] <= rec["t_zero_s"]:
+            raise GonioError("t_read_s must be after t_zero_s", file=path, line=ln,
+                             column="t_read_s")
+        out.append(rec)
+    return out
+
+
+def _apply_override(ctx: _Ctx, override: Sequence[dict], plan: dict) -> None:
+    st, s = ctx.st, ctx.proto.session
+    for o in override:
+        key = (o["test"], int(o["series"]), int(o["round"]))
+        cands = [k for k in plan if k[:3] == key and
+                 ("rate_dps" not in o or k[3] == float(o["rate_dps"])) and
+                 ("orientation" not in o or k[4] == o["orientation"])]
+        if len(cands) != 1:
+            raise GonioError(f"override {key} does not name exactly one round of the protocol "
+                             f"({len(cands)} match; give rate_dps/orientation)", key=str(key))
+        k = cands[0]
+        table_deg, orient = plan[k]
+        t0, t1 = float(o["t_zero_s"]), float(o["t_read_s"])
+        if not (st.time_s[0] <= t0 < t1 <= st.time_s[-1]):
+            raise GonioError(f"override {key}: times outside the stream "
+                             f"[{st.time_s[0]:g}, {st.time_s[-1]:g}] s", key=str(key))
+        kz, kr = ctx.nearest(t0), ctx.nearest(t1)
+        if s.earth_compensation == "computed":
+            comp = _computed_comp(st, orient)
+        elif s.earth_compensation == "none":
+            comp = 0.0
+        else:
+            k0 = ctx.nearest(t0 - s.static_s)
+            comp = float(st.gyro_counts[kz] - st.gyro_counts[k0]) / \
+                float(st.time_s[kz] - st.time_s[k0]) if kz > k0 else 0.0
+            prev = [r for r in ctx.rows if (r["test"], r["series"], r["rate_dps"],
+                                            r["orientation"]) == (k[0], k[1], k[3], k[4])]
+            if prev:   # the series' own static phase when the matching found it
+                c = st.gyro_counts
+                p = prev[0]
+                kz0, kr0 = ctx.nearest(p["t_zero_s"]), ctx.nearest(p["t_read_s"])
+                comp = (float(c[kr0] - c[kz0]) - p["gyro_counts"]) / \
+                    float(st.time_s[kr0] - st.time_s[kz0])
+        ctx.rows = [r for r in ctx.rows if (r["test"], r["series"], r["round"], r["rate_dps"],
+                                            r["orientation"]) != k]
+        ctx.unmatched = [u for u in ctx.unmatched
+                         if not (u.get("kind") == "round" and (u.get("test"), u.get("series"),
+                                 u.get("round")) == key)]
+        ctx.rows.append(_row(k[0], k[1], k[2], k[3], orient, ctx, kz, kr, table_deg, comp))
+        ctx.log.append(f"override {k[0]} series {k[1]} round {k[2]}: zero {st.time_s[kz]:.6f} s,"
+                       f" read {st.time_s[kr]:.6f} s")
+
+
+def _plan_keys(proto: Protocol) -> dict:
+    plan = {}
+    if proto.zero_stability is not None:
+        for n in range(proto.zero_stability.readings):
+            plan[("zero_stability", 1, n + 1, math.nan, proto.zero_stability.orientation)] = \
+                (math.nan, proto.zero_stability.orientation)
+    for item in proto.items():
+        for series in range(1, item.series + 1):
+            x0 = item.rounds[0].start_deg
+            for i, r in enumerate(item.rounds, 1):
+                zero_x = r.start_deg if item.rezero else x0
+                plan[(item.test, series, i, item.rate_dps, item.orientation)] = \
+                    (r.stop_deg - zero_x, item.orientation)
+    return plan
+
+
+def reduce_stream(stream: Stream, protocol: Protocol, *, override: Iterable[dict] | None = None,
+                  pos_tol_deg: float | None = None, min_rest_s: float = 0.5,
+                  rate_threshold_dps: float | None = None,
+                  window_s: float | None = None) -> Reduction:
+    """Reduce a stream to readings as the protocol's acquisition would take them.
+
+    Parameters
+    ----------
+    stream : Stream
+        From :func:`gonio.streams.read_stream` (or built in memory).
+    protocol : Protocol
+        The planned sequence: zero stability (one long rest), then per item and
+        series a static phase and rounds (see the module notes).
+    override : iterable of dict, optional
+        ``{test, series, round, t_zero_s, t_read_s}`` (+ ``rate_dps``,
+        ``orientation`` to disambiguate): the operator's own zeroing and reading
+        times for these rounds; they replace whatever the matching found.
+    pos_tol_deg : float, optional
+        Level tolerance of the matching; default 0.05° on the table encoder,
+        1° on the gyro angle (Earth rate drifts it between rests).
+    min_rest_s, rate_threshold_dps, window_s
+        Passed to :func:`find_rests`.
+
+    Returns
+    -------
+    Reduction
+
+    Examples
+    --------
+    A 30° round at 10 Hz: 5 s static, 1 s move, reading 2 s after arrival.
+
+    >>> from gonio.protocol import parse_protocol
+    >>> p = parse_protocol({"protocol": {"name": "x"}, "session": {"static_s": 5.0},
+    ...     "scale_factor": {"rest_s": 3.0, "read_delay_s": 2.0, "return_to_zero": False,
+    ...                      "rounds": [{"stop_deg": 30.0}]}})
+    >>> t = np.arange(0, 10, 0.1)
+    >>> table = np.clip((t - 5.0) * 30.0, 0.0, 30.0)
+    >>> counts = np.round(table * 3600 + 2.0 * t).astype(np.int64)   # 2 counts/s Earth rate
+    >>> red = reduce_stream(Stream(t, counts, table), p)
+    >>> red.readings[["test", "round", "time_s", "table_deg", "gyro_counts"]].to_dict("records")
+    [{'test': 'scale_factor', 'round': 1, 'time_s': 3.0, 'table_deg': 30.0, 'gyro_counts': 108000.0}]
+    """
+    st = stream
+    n = len(st.time_s)
+    if n < 3:
+        raise GonioError("the stream has fewer than 3 samples", file=st.path)
+    k_sf = None
+    if st.table_deg is None:
+        from gonio.io import metadata_float
+        k_sf = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
+    rests = find_rests(st.time_s, st.table_deg, st.gyro_counts, scale_factor_counts_per_deg=k_sf,
+                       rate_threshold_dps=rate_threshold_dps, window_s=window_s,
+                       min_rest_s=min_rest_s)
+    from gonio.io import metadata_bool
+    quantised = metadata_bool(st.metadata, "counts_quantised", True, file=st.path) and \
+        np.issubdtype(np.asarray(st.gyro_counts).dtype, np.integer)
+    tol = pos_tol_deg if pos_tol_deg is not None else (0.05 if st.table_deg is not None else 1.0)
+    ctx = _Ctx(st, protocol, rests, tol, quantised, eps=1e-6 * _dt(st.time_s))
+    ctx.log.append(f"{n} samples, {len(rests)} rests "
+                   f"({'table encoder' if st.table_deg is not None else 'gyro rate'})")
+    if protocol.zero_stability is not None:
+        _zero_stability(ctx)
+    series_list = [(item, s) for item in protocol.items() for s in range(1, item.series + 1)]
+    for j, (item, s) in enumerate(series_list):
+        nxt = None
+        if j + 1 < len(series_list):
+            it2 = series_list[j + 1][0]
+            r0 = it2.rounds[0]
+            nxt = (it2, (1, r0.start_deg, r0.stop_deg))
+        _rotation_series(ctx, item, s, nxt)
+    plan = _plan_keys(protocol)
+    if override:
+        _apply_override(ctx, list(override), plan)
+    for q, r in enumerate(rests):
+        if q not in ctx.used:
+            ctx.unmatched.append({"kind": "rest", "index": q, "t_start_s": r.t_start_s,
+                                  "t_end_s": r.t_end_s, "level_deg": r.level_deg,
+                                  "reason": "no round used this rest (a return/settle rest or "
+                                            "an extra stop)"})
+    order = {k[:3] + (None if isinstance(k[3], float) and math.isnan(k[3]) else k[3], k[4]): i
+             for i, k in enumerate(plan)}
+    cols = ["test", "series", "round", "rate_dps", "orientation", "time_s", "table_deg",
+            "gyro_counts", "gyro_deg", "t_zero_s", "t_read_s"]
+    df = pd.DataFrame(ctx.rows, columns=cols)
+    if len(df):
+        key = [order.get((r["test"], r["series"], r["round"],
+                          None if math.isnan(r["rate_dps"]) else r["rate_dps"],
+                          r["orientation"]), 10**9) for r in ctx.rows]
+        df = df.iloc[np.argsort(key, kind="stable")].reset_index(drop=True)
+        df["series"] = df["series"].astype(np.int64)
+        df["round"] = df["round"].astype(np.int64)
+    md = {k: v for k, v in st.metadata.items() if k not in ("counter_bits", "counter_signed")}
+    if st.path is not None:
+        md["source_stream"] = Path(st.path).name
+    return Reduction(df, ctx.unmatched, ctx.log, rests, ctx.comps, md)
