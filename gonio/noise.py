@@ -11,6 +11,7 @@ Contents
 :func:`fit_noise_model`        weighted non-negative LS fit -> :class:`NoiseFit`
 :func:`detect_sinusoid`        Allan signature of a sinusoidal disturbance
 :func:`analyse_static`         draft 7.3 static record: ADEV + fit + sinusoid
+:func:`analyse_record`         the same for any input type (used by the CLI)
 :func:`plot_fit`               ADEV, model and residuals (matplotlib, Agg)
 unit helpers                   °/√h, (°/h)/√Hz, ″/√s, rad/s/√Hz, °/h, rad/s
 =============================  ==============================================
@@ -55,7 +56,7 @@ __all__ = [
     "INPUT_TYPES", "AllanResult", "NoiseFit", "SinusoidDetection", "StaticNoiseResult",
     "angle_series", "averaging_factors", "allan_deviation", "edf_simple",
     "design_matrix", "fit_noise_model", "model_adev", "detect_sinusoid",
-    "sinusoid_adev", "analyse_static", "plot_fit",
+    "sinusoid_adev", "analyse_static", "analyse_record", "plot_fit",
     "dph_sqrt_hz_from_deg_sqrt_h", "deg_sqrt_h_from_dph_sqrt_hz",
     "arcsec_sqrt_s_from_deg_sqrt_h", "deg_sqrt_h_from_arcsec_sqrt_s",
     "rad_s_sqrt_hz_from_deg_sqrt_h", "deg_sqrt_h_from_rad_s_sqrt_hz",
@@ -874,7 +875,7 @@ def analyse_static(time_s, angle_deg, *, taus="octave", modified: bool = False,
     The angle record (degrees, uniformly sampled, instrument at rest) is analysed as
     an ``angle`` input: overlapping ADEV in °/h (IEEE 952 Annex C), the five-term
     fit (:func:`fit_noise_model`) and the sinusoid check (:func:`detect_sinusoid`).
-    The sample interval is the median time step; a record whose steps differ from it
+    The sample interval is the mean time step; a record whose steps differ from it
     by more than 1 % is rejected (the Allan estimators assume uniform sampling).
 
     Examples
@@ -898,17 +899,37 @@ def analyse_static(time_s, angle_deg, *, taus="octave", modified: bool = False,
     if not np.all(np.isfinite(dt)) or np.any(dt <= 0):
         bad = int(np.flatnonzero(~(dt > 0))[0]) + 1
         raise GonioError(f"time must be strictly increasing (sample {bad})", key="time_s")
-    tau0 = float(np.median(dt))
+    tau0 = float((t[-1] - t[0]) / (t.size - 1))
     if np.max(np.abs(dt - tau0)) > 0.01 * tau0:
         raise GonioError("sampling is not uniform (a step differs from the median by >1 %)",
                          key="time_s")
-    # degrees × 3600 -> (°/h)·s, so the ADEV comes out in °/h
-    allan = allan_deviation(a * 3600.0, tau0, "angle", taus, modified=modified,
-                            confidence=confidence, unit="deg/h")
+    # 1° = 3600 (°/h)·s, so with scale 1/3600 the ADEV comes out in °/h
+    return analyse_record(a, tau0, "angle", scale=1.0 / 3600.0, unit="deg/h", taus=taus,
+                          modified=modified, confidence=confidence, tau_max_s=tau_max_s,
+                          sinusoid_threshold=sinusoid_threshold)
+
+
+def analyse_record(data, tau0_s: float, input_type: str, *, scale: float = 1.0,
+                   unit: str = "", taus="octave", modified: bool = False,
+                   confidence: float = 0.683, tau_max_s: float | None = None,
+                   sinusoid_threshold: float = 3.0) -> StaticNoiseResult:
+    """ADEV (:func:`allan_deviation`), five-term fit (:func:`fit_noise_model`) and
+    sinusoid check (:func:`detect_sinusoid`) of a uniformly sampled record
+    (IEEE 952-1997 Annex C). The building block of :func:`analyse_static` and of
+    ``gonio noise``.
+
+    >>> rng = np.random.default_rng(2)
+    >>> r = analyse_record(0.3 * rng.standard_normal(50000), 1.0, "rate", unit="deg/h")
+    >>> bool(abs(r.fit.N - 0.3) < 0.03), r.sinusoid.detected
+    (True, False)
+    """
+    allan = allan_deviation(data, tau0_s, input_type, taus, scale=scale, modified=modified,
+                            confidence=confidence, unit=unit)
     fit = fit_noise_model(allan, tau_max_s=tau_max_s)
     sine = detect_sinusoid(allan, fit, threshold=sinusoid_threshold)
-    return StaticNoiseResult(allan=allan, fit=fit, sinusoid=sine, tau0_s=tau0,
-                             duration_s=float(t[-1] - t[0]))
+    n = allan.n_samples
+    return StaticNoiseResult(allan=allan, fit=fit, sinusoid=sine, tau0_s=float(tau0_s),
+                             duration_s=float(tau0_s) * (n - 1 if input_type == "angle" else n))
 
 
 def plot_fit(allan: AllanResult, fit: NoiseFit | None = None, path=None):
