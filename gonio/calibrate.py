@@ -103,6 +103,33 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
     return budget, src
 
 
+def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
+    """A readings file as is, or a stream reduced with the protocol (told apart by the header).
+
+    A header with a ``test`` column is a readings file (data-formats §1); one with
+    ``time_s`` and ``gyro_counts`` but no ``test`` is a stream (§2), reduced by
+    :func:`gonio.reduce.reduce_stream` before calibration.
+    """
+    from gonio.streams import read_stream, sniff_kind
+
+    if sniff_kind(path) == "readings":
+        return read_readings(path)
+    from gonio.errors import GonioError
+    from gonio.reduce import reduce_stream
+
+    red = reduce_stream(read_stream(path), protocol)
+    if not len(red.readings):
+        raise GonioError("no round of the protocol could be matched in the stream", file=path)
+    import tempfile
+
+    from gonio.io import write_readings
+    with tempfile.TemporaryDirectory() as tmp:   # through the file format: same validation
+        rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
+                                          Path(tmp) / "reduced.csv", red.metadata))
+    rd.path = Path(path)
+    return rd
+
+
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol = "ogam-draft",
               *, monte_carlo_trials: int = 0, seed: int = 0) -> CalibrationReport:
     """Compute the seven characteristics and the Annex A budget from a readings file.
@@ -115,7 +142,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
         if rd.path:
             sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
     else:
-        rd = read_readings(readings)
+        rd = load_readings_or_stream(readings, proto)
         sha = hashlib.sha256(Path(readings).read_bytes()).hexdigest()
     ref_orient = proto.pointing_reference
     res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,

@@ -286,10 +286,14 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         row = {h: c.strip() for h, c in zip(header, cells)}
         rec = _parse_row(row, where, quantised)
         key = tuple(rec[k] for k in KEY_COLUMNS)
+        if rec["test"] == "equal_division":
+            # one reading per step: the step's table angle is part of the key
+            key = key + (rec["table_deg"],)
         if key in keys:
+            step = f", table_deg {key[5]!r}" if len(key) > 5 else ""
             raise GonioError(
                 f"duplicated reading: test {key[0]}, series {key[1]}, round {key[2]}, "
-                f"rate {key[3]} deg/s, orientation {key[4]} already on line {keys[key]}",
+                f"rate {key[3]} deg/s, orientation {key[4]}{step} already on line {keys[key]}",
                 column="round", **where)
         keys[key] = idx
         for name in COLUMNS:

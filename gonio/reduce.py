@@ -256,7 +256,7 @@ def find_rests(time_s: np.ndarray, table_deg: np.ndarray | None = None,
         if on_table and x.size >= 3:
             y[1:-1] = _median3(x)
         floor = 1e-9 if on_table else 1.5 / float(scale_factor_counts_per_deg)
-        _refine(time_s, y, rests, w, floor)
+        _refine(time_s, y, rests, w, floor, trend=not on_table)
     return rests
 
 
@@ -268,41 +268,62 @@ def _root_sqrt(t1, d1, t2, d2) -> float:
     return t1 - s1 * (t2 - t1) / (s2 - s1)
 
 
-def _refine(t: np.ndarray, y: np.ndarray, rests: list[Rest], w: int, floor: float) -> None:
-    """Median levels, and sub-sample departure/arrival from the √-law of a start from rest."""
+def _edge_fit(t: np.ndarray, y: np.ndarray, lo: int, hi: int, t_ref: float, trend: bool):
+    """Level (and slope when ``trend``) of the rest over samples lo…hi−1, and its noise."""
+    tt, yy = t[lo:hi] - t_ref, y[lo:hi]
+    if trend and yy.size >= 3:
+        b, a = np.polyfit(tt, yy, 1)
+    else:
+        a, b = float(np.median(yy)), 0.0
+    res = yy - (a + b * tt)
+    return float(a), float(b), float(np.median(np.abs(res - np.median(res)))) * 1.4826
+
+
+def _refine(t: np.ndarray, y: np.ndarray, rests: list[Rest], w: int, floor: float,
+            trend: bool = False) -> None:
+    """Median levels, and sub-sample departure/arrival from the √-law of a start from rest.
+
+    On the gyro angle (``trend``) the rest is a line (the Earth rate), not a level.
+    """
     n = t.size
     for r in rests:
         s, e = r.i_start, r.i_end
-        seg = y[s:e + 1]
-        r.level_deg = float(np.median(seg))
-        mad = float(np.median(np.abs(seg - r.level_deg))) * 1.4826
-        tol = max(5.0 * mad, floor)
+        r.level_deg = float(np.median(y[s:e + 1]))
+        inner = max(1, w) if trend else 0     # samples near the edges the window may blur
         # departure
         r.t_depart_s = float(t[e])
         if e < n - 1:
-            lo = max(s, e - 2 * w)
-            lvl = float(np.median(y[lo:e + 1]))
-            j0, j1 = max(s + 1, e - w), min(n, e + w + 6)
-            off = np.abs(y[j0:j1] - lvl) > tol
+            hi = max(s + 2, e - inner + 1)
+            lo = max(s, hi - max(3 * w, 20))
+            a, b, noise = _edge_fit(t, y, lo, hi, float(t[e]), trend)
+            tol = max(5.0 * noise, floor)
+            j0, j1 = max(s + 1, hi - 1), min(n, e + w + 6)
+            d = np.abs(y[j0:j1] - (a + b * (t[j0:j1] - t[e])))
+            off = d > tol
             if off.any():
-                j = j0 + int(np.argmax(off))
+                k = int(np.argmax(off))
+                j = j0 + k
                 r.t_depart_s = float(t[j - 1])
-                if j + 1 < n:
-                    td = _root_sqrt(t[j], abs(y[j] - lvl), t[j + 1], abs(y[j + 1] - lvl))
+                if k + 1 < d.size:
+                    td = _root_sqrt(t[j], d[k], t[j + 1], d[k + 1])
                     if math.isfinite(td):
                         r.t_depart_s = float(min(max(td, t[j - 1]), t[j]))
         # arrival
         r.t_arrive_s = float(t[s])
         if s > 0:
-            hi = min(e + 1, s + 2 * w + 1)
-            lvl = float(np.median(y[s:hi]))
-            j0, j1 = max(0, s - w - 6), min(e, s + w) + 1
-            off = np.abs(y[j0:j1] - lvl) > tol
+            lo = min(e - 1, s + inner)
+            hi = min(e + 1, lo + max(3 * w, 20))
+            a, b, noise = _edge_fit(t, y, lo, hi, float(t[s]), trend)
+            tol = max(5.0 * noise, floor)
+            j0, j1 = max(0, s - w - 6), min(e, lo + 1)
+            d = np.abs(y[j0:j1] - (a + b * (t[j0:j1] - t[s])))
+            off = d > tol
             if off.any():
-                j = j0 + int(np.flatnonzero(off)[-1])
-                r.t_arrive_s = float(t[j + 1]) if j + 1 < n else float(t[j])
-                if j >= 1 and j + 1 < n:
-                    ta = _root_sqrt(t[j], abs(y[j] - lvl), t[j - 1], abs(y[j - 1] - lvl))
+                k = int(np.flatnonzero(off)[-1])
+                j = j0 + k
+                r.t_arrive_s = float(t[j + 1])
+                if k >= 1:
+                    ta = _root_sqrt(t[j], d[k], t[j - 1], d[k - 1])
                     if math.isfinite(ta):
                         r.t_arrive_s = float(min(max(ta, t[j]), t[j + 1]))
 

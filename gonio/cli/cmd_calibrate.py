@@ -13,7 +13,8 @@ def register(sub) -> None:
                        description="Compute the draft's seven characteristics and the Annex A "
                                    "uncertainty from a readings file; write results.json, "
                                    "summary.txt and tables/*.csv into --out.")
-    p.add_argument("readings", help="readings file (CSV, data-formats.md §1)")
+    p.add_argument("readings", help="readings file (CSV, data-formats.md §1) or a stream (§2, "
+                   "reduced with the protocol first; told apart by the header)")
     p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")

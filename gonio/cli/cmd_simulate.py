@@ -1,6 +1,9 @@
-"""``gonio simulate``: run a protocol on the virtual bench → readings.csv, truth.json."""
+"""``gonio simulate``: run a protocol on the virtual bench → readings.csv, truth.json
+(and, with ``--stream``, the continuous stream.csv the acquisition module would give)."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 from gonio.bench import load_bench, run_session, write_session
 from gonio.errors import GonioError
@@ -16,7 +19,21 @@ def register(sub) -> None:
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--stream", action="store_true",
+                   help="also write stream.csv (every sample: time, wrapped counter, table "
+                        "angle; data-formats.md §2), chunk by chunk")
     p.set_defaults(func=run)
+
+
+def stream_metadata(protocol, bench, seed: int) -> dict:
+    """The stream file's metadata: the readings' keys plus the counter's width and sign."""
+    from gonio.bench.session import _metadata
+
+    md = dict(_metadata(protocol, bench, seed))
+    md["counter_bits"] = str(bench.instrument.counter_bits)
+    md["counter_signed"] = "true" if bench.instrument.counter_signed else "false"
+    md["sample_rate_hz"] = repr(bench.sample_rate_hz)
+    return md
 
 
 def run(args) -> int:
@@ -24,7 +41,22 @@ def run(args) -> int:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
     proto = load_protocol(args.protocol)
     bench = load_bench(args.bench, table=args.table)
-    paths = write_session(run_session(proto, bench, seed=args.seed), args.out)
+    writer = None
+    if args.stream:
+        from gonio.streams import StreamWriter
+
+        writer = StreamWriter(Path(args.out) / "stream.csv", stream_metadata(proto, bench, args.seed),
+                              table=True)
+    try:
+        result = run_session(proto, bench, seed=args.seed,
+                             stream=None if writer is None else writer.write)
+    except BaseException:
+        if writer is not None:
+            writer.abort()
+        raise
+    paths = write_session(result, args.out)
+    if writer is not None:
+        paths["stream"] = writer.close()
     for p in paths.values():
         print(p)
     return 0

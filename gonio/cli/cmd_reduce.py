@@ -1,0 +1,52 @@
+"""``gonio reduce``: stream → readings file (find the table's rests, match the protocol's rounds)."""
+
+from __future__ import annotations
+
+import json
+
+from gonio.errors import GonioError
+from gonio.io import write_readings
+from gonio.protocol import load_protocol
+from gonio.reduce import read_override, reduce_stream
+from gonio.streams import read_stream
+
+
+def register(sub) -> None:
+    p = sub.add_parser("reduce", help="reduce a stream file to a readings file",
+                       description="Find the table's rests in a stream (data-formats.md §2), "
+                                   "match them to the protocol's rounds and write the readings "
+                                   "file (§1). Rounds that cannot be matched are listed with the "
+                                   "reason; --override gives their times explicitly.")
+    p.add_argument("stream", help="stream file (CSV)")
+    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
+    p.add_argument("--out", required=True, help="readings file to write")
+    p.add_argument("--override", default=None,
+                   help="CSV test,series,round,t_zero_s,t_read_s[,rate_dps,orientation]")
+    p.add_argument("--max-gap", type=float, default=None, metavar="S",
+                   help="largest allowed time step in the stream, s (default 10× median)")
+    p.add_argument("--json", action="store_true", help="print the reduction summary as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    if args.max_gap is not None and not args.max_gap > 0:
+        raise GonioError(f"--max-gap must be > 0, got {args.max_gap}")
+    proto = load_protocol(args.protocol)
+    override = read_override(args.override) if args.override else None
+    stream = read_stream(args.stream, max_gap_s=args.max_gap)
+    red = reduce_stream(stream, proto, override=override)
+    if not len(red.readings):
+        raise GonioError("no round of the protocol could be matched in the stream "
+                         f"({len(red.rests)} rests found)", file=args.stream)
+    write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]), args.out, red.metadata)
+    if args.json:
+        d = red.to_dict()
+        d["out"] = str(args.out)
+        print(json.dumps(d, indent=2, ensure_ascii=False, allow_nan=False))
+    else:
+        print(f"{args.out}: {len(red.readings)} readings from {len(red.rests)} rests")
+        for u in red.unmatched:
+            if u["kind"] == "round":
+                print(f"  unmatched {u['test']} series {u['series']} round {u['round']}: "
+                      f"{u['reason']}")
+    return 0
