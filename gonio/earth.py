@@ -16,10 +16,12 @@ The Earth-rate vector in ENU at latitude φ is Ω_E (0, cos φ, sin φ): on an a
 pointing up its component is Ω_E sin φ, north Ω_E cos φ, east 0.
 
 Ω_E: the IERS nominal value 7.292115×10⁻⁵ rad/s (Conventions 2010, Table 1.1) is
-used throughout; 2π per stellar day (86164.0989 s, the value IEC 62047-20 5.3.3.1
-implies) is 7.2921158×10⁻⁵ rad/s. They differ by 8.5×10⁻¹³ rad/s (1.2×10⁻⁸
-relative, 1.7×10⁻⁷ ″/s): over the 30 s of Annex A.1 that is 5×10⁻⁶ ″, far below
-anything the draft resolves, so the choice is a convention, not a correction.
+used throughout; 2π per stellar day (86164.0989 s, relative to the fixed stars,
+the day IEC 62047-20 5.3.3.1 names) is 7.2921151×10⁻⁵ rad/s: they differ by
+1.5×10⁻¹² rad/s (2×10⁻⁸ relative, 3×10⁻⁷ ″/s, 1×10⁻⁵ ″ over the 30 s of Annex A.1).
+The often-quoted 7.2921158×10⁻⁵ rad/s is 2π per *sidereal* day (86164.0905 s,
+relative to the precessing equinox), 1.2×10⁻⁷ relative above IERS (1.8×10⁻⁶ ″/s).
+All are far below anything the draft resolves: the choice is a convention.
 (The solar day's 2π/86400 s = 7.2722×10⁻⁵ rad/s is *wrong* here: 0.27 % low,
 0.04″/s on the Earth rate.)
 
@@ -52,8 +54,8 @@ from gonio.errors import GonioError
 OMEGA_E_RAD_S = 7.292115e-5
 #: Stellar day (one turn relative to the fixed stars), s; IEC 62047-20 5.3.3.1.
 SIDEREAL_DAY_S = 86164.0989
-#: 2π per stellar day, rad/s (= 7.2921158×10⁻⁵; differs from the IERS value by
-#: 8.5×10⁻¹³ rad/s, i.e. 1.2×10⁻⁸ relative: 1.7×10⁻⁷ ″/s, negligible here).
+#: 2π per stellar day, rad/s (= 7.2921151×10⁻⁵; differs from the IERS value by
+#: 1.5×10⁻¹² rad/s, i.e. 2×10⁻⁸ relative: 3×10⁻⁷ ″/s, negligible here).
 OMEGA_E_STELLAR_RAD_S = 2.0 * math.pi / SIDEREAL_DAY_S
 #: Earth rate in °/h (IERS value): 15.0411 °/h.
 OMEGA_E_DPH = math.degrees(OMEGA_E_RAD_S) * 3600.0
