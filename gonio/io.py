@@ -342,8 +342,9 @@ def _number(row: dict, name: str, where: dict, *, required: bool) -> float:
 def _positive_int(row: dict, name: str, where: dict) -> int:
     text = row.get(name, "")
     value = _number(row, name, where, required=True)
-    if value != int(value) or value < 1:
-        raise GonioError(f"expected an integer >= 1, got {text!r}", column=name, **where)
+    if value != int(value) or value < 1 or value > 1_000_000:
+        raise GonioError(f"expected an integer >= 1 (at most 1000000), got {text!r}",
+                         column=name, **where)
     return int(value)
 
 

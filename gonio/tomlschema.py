@@ -9,6 +9,7 @@ key, a missing required key, a wrong type or an impossible value raises a
 from __future__ import annotations
 
 import math
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -54,11 +55,16 @@ def read_toml(path: str | Path) -> dict:
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path) from None
+        raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
+                         line=raw[:exc.start].count(b"\n") + 1) from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise GonioError(f"TOML syntax: {exc}", file=path) from None
+        m = re.search(r"at line (\d+)", str(exc))
+        line = int(m.group(1)) if m else getattr(exc, "lineno", None)
+        if line is None and "end of document" in str(exc):
+            line = text.count("\n") + 1
+        raise GonioError(f"TOML syntax: {exc}", file=path, line=line) from None
 
 
 def _coerce(value, f: Field, where: str, file):
