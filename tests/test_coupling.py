@@ -80,6 +80,7 @@ def test_bench_computed_compensation_matches():
                                    atol=0.01 * np.max(np.abs(analytic)))
 
 
+@pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
 def test_quadrature_against_adaptive_quad():
     tl = Timeline()
     tl.dwell(2.0)

@@ -360,7 +360,9 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
             "time_s": df["time_s"].iat[i],
             "table_deg": None if math.isnan(r.table_deg) else r.table_deg,
             "true_table_deg": float(run.true_deg[i]),
-            "table_error_arcsec": None if math.isnan(r.table_deg)
+            # tilt_estimate rows: table_deg is the rest position, true_table_deg the angle
+            # turned during the dwell (0): no table error to report.
+            "table_error_arcsec": None if math.isnan(r.table_deg) or r.test == "tilt_estimate"
             else float((r.table_deg - run.true_deg[i]) * 3600.0),
             "noise_free_counts": float(nf.counts[i]),
             "systematic_deviation_arcsec": float(sys_mount[i]),
