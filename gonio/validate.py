@@ -62,7 +62,7 @@ from gonio.tomlschema import read_toml
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "coverage", "binomial_u", "validate",
-           "ValidationReport", "trial_seeds", "tilt_coupling_coefficients", "earth_rate_perpendicular_arcsec_s"]
+           "ValidationReport", "trial_seeds", "EXTRA_SYMBOLS", "tilt_coupling_coefficients", "earth_rate_perpendicular_arcsec_s"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -74,6 +74,9 @@ CASES = {
              "random scatter off",
     "ideal": "no noise, no tilt, no bias, no harmonics, error-free table (sanity check)",
 }
+
+#: Symbols of :func:`budget_extra_components`.
+EXTRA_SYMBOLS = ("K_P", "K_r", "tilt_E")
 
 #: Truth definitions (see the module docstring).
 TRUTHS = ("systematic", "calibrated", "intrinsic")
@@ -277,12 +280,13 @@ def _matrix(df: pd.DataFrame, col: str) -> np.ndarray:
 
 
 def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
-              truth: str = "systematic") -> TrialResult:
+              truth: str = "systematic", extras_used: Sequence[str] = EXTRA_SYMBOLS
+              ) -> TrialResult:
     """One virtual calibration on ``bench``: session, calibration, Annex A U, truth.
 
     U is the calibration's own Annex A U (k = 2, u(r) from its 7.5 data), times
     ``u_scale`` (1 except to test the validation's power); ``U_extended_arcsec``
-    adds :func:`budget_extra_components`.
+    adds the :func:`budget_extra_components` named in ``extras_used``.
     """
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
@@ -294,7 +298,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     tr = pd.DataFrame(res.truth["readings"])
     tr = tr[tr["test"] == "angle_deviation"]
     u_r = float(rep.uncertainty.parameters["repeatability_arcsec"])
-    extras = budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r, truth=truth)
+    extras = [e for e in budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r,
+                                                 truth=truth) if e.symbol in extras_used]
     par = rep.uncertainty.parameters
     ext = annex_a_budget(table_mpe_arcsec=par["table_mpe_arcsec"], tilt_deg=par["tilt_deg"],
                          zero_stability_dph=par["zero_stability_dph"],
@@ -478,7 +483,8 @@ class ValidationReport:
 
 def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              cases: Sequence[str] = ("default",), sample_rate_hz: float = 100.0,
-             protocol: str | Protocol = "ogam-draft", extra_components: bool = False,
+             protocol: str | Protocol = "ogam-draft",
+             extra_components: bool | Sequence[str] = False,
              truth: str = "systematic", u_scale: float = 1.0, workers: int = 2,
              show_progress: bool = True) -> ValidationReport:
     """Run ``trials`` independent virtual calibrations per case and measure coverage.
@@ -498,8 +504,9 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     protocol : str or Protocol
         A protocol name/path (restricted by :func:`validation_protocol`) or a Protocol
         used as given.
-    extra_components : bool
-        Also evaluate the budget with :func:`budget_extra_components`.
+    extra_components : bool or sequence of str
+        Also evaluate the budget with :func:`budget_extra_components` (True: all of
+        :data:`EXTRA_SYMBOLS`; or the symbols to add).
     truth : str
         The truth of the printed table (all of :data:`TRUTHS` are in the JSON).
     u_scale : float
@@ -537,6 +544,16 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     for c in cases:
         if c not in CASES:
             raise GonioError(f"unknown case {c!r} (known: {', '.join(CASES)})", key="cases")
+    if extra_components is True:
+        extras_used = EXTRA_SYMBOLS
+    elif not extra_components:
+        extras_used = ()
+    else:
+        extras_used = tuple(extra_components)
+        for e in extras_used:
+            if e not in EXTRA_SYMBOLS:
+                raise GonioError(f"unknown extra component {e!r} (known: "
+                                 f"{', '.join(EXTRA_SYMBOLS)})", key="extra_components")
     proto = protocol if isinstance(protocol, Protocol) else validation_protocol(protocol)
     if proto.scale_factor is None or proto.angle_deviation is None \
             or proto.angle_deviation.series < 2:
@@ -550,7 +567,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         intr = pd.DataFrame(intr)
         t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
         seeds = trial_seeds(seed, name, trials)
-        tasks = [(proto, b, s, u_scale, truth) for s in seeds]
+        tasks = [(proto, b, s, u_scale, truth, extras_used) for s in seeds]
         it_label = f"validate {name}"
         if workers > 1:
             with ProcessPoolExecutor(max_workers=workers) as ex:
@@ -561,14 +578,14 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
             gen = (run_trial(*t) for t in tasks)
             res = list(progress(gen, total=trials, label=it_label) if show_progress else gen)
         cr = CaseResult(name, CASES[name], res, t_int)
-        cr.summary = _summarise(cr, truth, extra_components)
+        cr.summary = _summarise(cr, truth, bool(extras_used))
         out.append(cr)
     settings = {"trials": trials, "seed": seed,
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),
                 "protocol": proto.name,
                 "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"],
-                "extra_components": bool(extra_components), "truth": truth,
+                "extra_components": list(extras_used), "truth": truth,
                 "u_scale": float(u_scale),
                 "seeding": "numpy SeedSequence(seed, spawn_key=(case index,)).spawn(trials)"}
     return ValidationReport(settings, out)

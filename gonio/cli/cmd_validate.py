@@ -7,7 +7,7 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
-from gonio.validate import CASES, TRUTHS, validate
+from gonio.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
 
 
 def register(sub) -> None:
@@ -24,8 +24,9 @@ def register(sub) -> None:
                    help=f"comma-separated cases, or 'all' ({', '.join(CASES)})")
     p.add_argument("--truth", default="systematic", choices=TRUTHS,
                    help="truth of the printed table (all are in the JSON)")
-    p.add_argument("--extra-components", action="store_true",
-                   help="also evaluate the budget with the extra components the annex lacks")
+    p.add_argument("--extra-components", nargs="?", const="all", default=None, metavar="NAMES",
+                   help="also evaluate the budget with the components the annex lacks: all, or "
+                        f"a comma-separated subset of {','.join(EXTRA_SYMBOLS)}")
     p.add_argument("--u-scale", type=float, default=1.0,
                    help="multiply U (default 1; < 1 deliberately breaks the budget)")
     p.add_argument("--sample-rate-hz", type=float, default=100.0,
@@ -43,9 +44,15 @@ def run(args) -> int:
         raise GonioError(f"--workers must be >= 1, got {args.workers}")
     cases = list(CASES) if args.cases.strip() == "all" else \
         [c.strip() for c in args.cases.split(",") if c.strip()]
+    if args.extra_components is None:
+        extras = False
+    elif args.extra_components.strip() == "all":
+        extras = True
+    else:
+        extras = [e.strip() for e in args.extra_components.split(",") if e.strip()]
     report = validate(args.trials, seed=args.seed, bench=args.bench, cases=cases,
                       sample_rate_hz=args.sample_rate_hz, protocol=args.protocol,
-                      extra_components=args.extra_components, truth=args.truth,
+                      extra_components=extras, truth=args.truth,
                       u_scale=args.u_scale, workers=args.workers)
     text = json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     if args.out:
