@@ -364,6 +364,21 @@ def angle_series(data, input_type: str, tau0_s: float, scale: float = 1.0) -> np
     return x
 
 
+def _unscaled_rate_phase(data) -> np.ndarray | None:
+    """[0, cumsum(y − ȳ)] for a float64 rate input (τ0 applied later), else None."""
+    arr = np.asarray(data)
+    if arr.dtype != np.float64 or arr.ndim != 1 or arr.size < 3:
+        return None
+    mean = float(np.mean(arr))
+    if not math.isfinite(mean):
+        return None  # let angle_series name the bad sample
+    x = np.empty(arr.size + 1, dtype=np.float64)
+    x[0] = 0.0
+    np.subtract(arr, mean, out=x[1:])
+    np.cumsum(x[1:], out=x[1:])
+    return x
+
+
 def averaging_factors(n_phase: int, taus="octave", *, modified: bool = False) -> np.ndarray:
     """Cluster sizes m (τ = m·τ0) for a phase series of ``n_phase`` points.
 
@@ -414,18 +429,40 @@ def averaging_factors(n_phase: int, taus="octave", *, modified: bool = False) ->
 
 # ----------------------------------------------------------------- core sums (O(N))
 def _sum_sq_second_diff(x: np.ndarray, m: int, buf: np.ndarray) -> float:
-    """Σ (x[n+2m] − 2x[n+m] + x[n])², n = 0 … N−2m−1, in chunks (SP 1065 eq. 11)."""
+    """Σ (x[n+2m] − 2x[n+m] + x[n])², n = 0 … N−2m−1, in chunks (SP 1065 eq. 11).
+
+    For m up to the chunk length the lag-m first differences D[n] = x[n+m] − x[n]
+    of a chunk (plus m) are formed once and the second difference is D[n+m] − D[n]
+    (two passes); for larger m the three terms are combined directly (three).
+    ``buf`` must hold at least 2·min(_BLOCK, N) values.
+    """
     n = x.size
     length = n - 2 * m
     total = 0.0
     for s in range(0, length, _BLOCK):
         e = min(length, s + _BLOCK)
-        v = buf[: e - s]
-        np.subtract(x[s + 2 * m: e + 2 * m], x[s + m: e + m], out=v)
-        np.subtract(v, x[s + m: e + m], out=v)
-        np.add(v, x[s:e], out=v)
+        k = e - s
+        if m <= _BLOCK:
+            d1 = buf[: k + m]
+            np.subtract(x[s + m: e + 2 * m], x[s: e + m], out=d1)
+            v = buf[k + m: 2 * k + m]
+            np.subtract(d1[m:], d1[:k], out=v)
+        else:
+            v = buf[:k]
+            np.subtract(x[s + 2 * m: e + 2 * m], x[s + m: e + m], out=v)
+            np.subtract(v, x[s + m: e + m], out=v)
+            np.add(v, x[s:e], out=v)
         total += float(np.dot(v, v))
     return total
+
+
+def _sums_direct(x: np.ndarray, ms) -> np.ndarray:
+    """:func:`_sum_sq_second_diff` for each m in ``ms`` (one shared chunk buffer).
+
+    (Threads over m were tried: with BLAS ``dot`` and small chunks they were slower.)
+    """
+    buf = np.empty(3 * min(_BLOCK, x.size))
+    return np.array([_sum_sq_second_diff(x, int(m), buf) for m in ms], dtype=np.float64)
 
 
 def _sum_sq_mod(x: np.ndarray, m: int) -> float:
@@ -463,14 +500,20 @@ def _triangular_corr(x: np.ndarray, m_max: int) -> np.ndarray:
     out = np.zeros(width)
     while w > 8:
         h = w // 2
+        nf = sfft.next_fast_len(3 * h, real=True)  # linear correlation, lags 0…h−1
         nb = width // w
-        a = np.arange(nb) * w
-        u = xp[a[:, None] + np.arange(h)[None, :]]
-        v = xp[(2 * a + h)[:, None] + np.arange(2 * h)[None, :]]
-        nf = 4 * h
-        c = sfft.irfft(np.conj(sfft.rfft(u, nf, axis=1)) * sfft.rfft(v, nf, axis=1),
-                       nf, axis=1)[:, :h]
-        out[(a + h)[:, None] + np.arange(h)[None, :]] += c
+        per = max(1, (width // 4) // nf)  # blocks per batch: temporaries ≲ width/4
+        for b0 in range(0, nb, per):
+            a = np.arange(b0, min(nb, b0 + per)) * w
+            u = xp[a[:, None] + np.arange(h)[None, :]]
+            spec = sfft.rfft(xp[(2 * a + h)[:, None] + np.arange(2 * h - 1)[None, :]],
+                             nf, axis=1)
+            spec *= np.conj(sfft.rfft(u, nf, axis=1))
+            del u
+            c = sfft.irfft(spec, nf, axis=1)
+            del spec
+            out[(a + h)[:, None] + np.arange(h)[None, :]] += c[:, :h]
+            del c
         w = h
     # base triangles of width 8: k < m inside each block
     nb = width // 8
@@ -496,27 +539,29 @@ def _sum_sq_all(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
     m_max = int(ms[-1])
     nfft = sfft.next_fast_len(2 * n, real=True)
     spec = sfft.rfft(x, nfft)
-    spec *= np.conj(spec)
-    acorr = sfft.irfft(spec, nfft)[:n]
+    power = np.square(spec.real)
+    power += np.square(spec.imag)
     del spec
+    full = sfft.irfft(power, nfft)
+    del power
+    m = ms
+    a_m, a_2m = full[m], full[2 * m]
+    del full
     q = np.empty(n + 1)
     q[0] = 0.0
-    np.cumsum(x * x, out=q[1:])
-    g = _triangular_corr(x, m_max)
-    grev = _triangular_corr(x[::-1].copy(), m_max)
-    m = ms
+    np.cumsum(np.square(x), out=q[1:])
     length = n - 2 * m
-    p0 = q[length]
-    p1 = q[m + length] - q[m]
-    p2 = q[n] - q[2 * m]
-    s = p2 + 4 * p1 + p0 - 4 * (acorr[m] - grev[m]) - 4 * (acorr[m] - g[m]) + 2 * acorr[2 * m]
+    s = q[length] + 4 * (q[m + length] - q[m]) + (q[n] - q[2 * m])
     err = 64.0 * np.finfo(float).eps * math.log2(nfft) * q[n]
+    del q
+    s += 2 * a_2m - 8 * a_m
+    s += 4 * _triangular_corr(x, m_max)[m]
+    s += 4 * _triangular_corr(x[::-1], m_max)[m]
     # doubtful: the small m (large Σx² relative to Σd²) and the m near N/2 (few
     # terms, so the direct sum is short): both are cheap to recompute directly
     redo = np.flatnonzero(~(s > err / rtol))
-    buf = np.empty(min(_BLOCK, n))
-    for i in redo:
-        s[i] = _sum_sq_second_diff(x, int(m[i]), buf)
+    if redo.size:
+        s[redo] = _sums_direct(x, m[redo])
     return s
 
 
@@ -633,7 +678,15 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
     """
     if not (0 < float(confidence) < 1):
         raise GonioError(f"confidence must be in (0, 1), not {confidence}", key="confidence")
-    x = angle_series(data, input_type, tau0_s, scale)
+    factor = 1.0
+    x = None
+    if input_type == "rate" and float(tau0_s) > 0:
+        # one pass less: the phase is τ0·x, applied to the deviation at the end
+        x = _unscaled_rate_phase(data)
+        factor = float(tau0_s)
+    if x is None:
+        x = angle_series(data, input_type, tau0_s, scale)
+        factor = 1.0
     n = x.size
     ms = averaging_factors(n, taus, modified=modified)
     all_requested = isinstance(taus, str) and taus.strip().lower() == "all"
@@ -644,15 +697,14 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
         sums = _sum_sq_all(x, ms, rtol_all)
         n_terms = n - 2 * ms
     else:
-        buf = np.empty(min(_BLOCK, n))
-        sums = np.array([_sum_sq_second_diff(x, int(m), buf) for m in ms])
+        sums = _sums_direct(x, ms)
         n_terms = n - 2 * ms
     tau = ms * float(tau0_s)
     if modified:
         var = sums / (2.0 * ms.astype(float) ** 2 * tau ** 2 * n_terms)
     else:
         var = sums / (2.0 * tau ** 2 * n_terms)
-    var = np.maximum(var, 0.0)
+    var = np.maximum(var, 0.0) * factor ** 2
     dev = np.sqrt(var)
     if alpha is None:
         alpha_arr = _alpha_from_slope(tau, dev)
