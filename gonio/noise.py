@@ -546,8 +546,10 @@ def _triangular_corr(x: np.ndarray, m_max: int) -> np.ndarray:
             u = xp[a[:, None] + np.arange(h)[None, :]]
             spec = sfft.rfft(xp[(2 * a + h)[:, None] + np.arange(2 * h - 1)[None, :]],
                              nf, axis=1)
-            spec *= np.conj(sfft.rfft(u, nf, axis=1))
+            uspec = sfft.rfft(u, nf, axis=1)
             del u
+            spec *= np.conj(uspec, out=uspec)
+            del uspec
             c = sfft.irfft(spec, nf, axis=1)
             del spec
             out[(a + h)[:, None] + np.arange(h)[None, :]] += c[:, :h]
@@ -555,10 +557,12 @@ def _triangular_corr(x: np.ndarray, m_max: int) -> np.ndarray:
         w = h
     # base triangles of width 8: k < m inside each block
     nb = width // 8
-    a = np.arange(nb) * 8
     kk, mm = np.triu_indices(8, 1)
-    prod = xp[a[:, None] + kk[None, :]] * xp[2 * a[:, None] + kk[None, :] + mm[None, :]]
-    np.add.at(out, (a[:, None] + mm[None, :]).ravel(), prod.ravel())
+    per = 1 << 12  # blocks per batch, bounded temporaries
+    for b0 in range(0, nb, per):
+        a = np.arange(b0, min(nb, b0 + per)) * 8
+        prod = xp[a[:, None] + kk[None, :]] * xp[2 * a[:, None] + kk[None, :] + mm[None, :]]
+        np.add.at(out, (a[:, None] + mm[None, :]).ravel(), prod.ravel())
     return out[: m_max + 1]
 
 
