@@ -569,9 +569,12 @@ def _triangular_corr(x: np.ndarray, m_max: int) -> np.ndarray:
 def _sum_sq_all(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
     """Σ of squared second differences for every m in ``ms`` (ascending, all m).
 
-    The sum is expanded into squares and lagged products of ``x``: prefix sums of x²,
-    the full autocorrelation A (one FFT) and the triangular partial correlations of
-    ``x`` and of ``x`` reversed (:func:`_triangular_corr`):
+    SP 1065 eq. 11 with the square expanded (our derivation, checked in the tests
+    against the direct sums and allantools): with L = N−2m, P₀ = Σ_{n<L} x[n]²,
+    P₁ = Σ_{m≤n<m+L} x[n]², P₂ = Σ_{2m≤n<N} x[n]² (prefix sums of x²), the full
+    autocorrelation A[k] = Σ x[n]x[n+k] (one FFT) and the triangular partial
+    correlations G[m] = Σ_{k<m} x[k]x[k+m] of ``x`` and of ``x`` reversed
+    (:func:`_triangular_corr`, for the ends the lag-m products miss):
     Σd² = P₂ + 4P₁ + P₀ − 4(A[m] − G_rev[m]) − 4(A[m] − G[m]) + 2A[2m].
     This cancels large terms, so each m whose estimated rounding error
     (≈ 64·ε·log₂N·Σx²) exceeds ``rtol``·Σd² is recomputed directly (O(N) each);
