@@ -22,6 +22,7 @@ from gonio.atomic import output_dir, write_text
 from gonio.budget import AnnexABudget, annex_a_budget
 from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
 from gonio.io import Readings, metadata_float, read_readings
+from gonio.bench.session import StaticRecord
 from gonio.protocol import Protocol, load_protocol
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate).
@@ -41,6 +42,30 @@ READINGS_TAKEN = (
 )
 
 
+def json_safe(x):
+    """Plain JSON types all the way down: numpy scalars to Python, NaN/inf to ``None``.
+
+    >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
+    {'a': None, 'b': [1.5, None]}
+    """
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return [json_safe(v) for v in x.tolist()]
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        v = float(x)
+        return v if math.isfinite(v) else None
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
 @dataclass
 class CalibrationReport:
     """Everything one calibration produced."""
@@ -51,6 +76,8 @@ class CalibrationReport:
     protocol: Protocol
     source_sha256: str
     repeatability_source: str
+    noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
+    noise_source: str = ""
 
     def to_dict(self) -> dict:
         """The ``results.json`` content (plain JSON types, deterministic)."""
@@ -67,9 +94,18 @@ class CalibrationReport:
             "metadata": dict(self.readings.metadata),
         }
         out.update(d)
+        if self.noise is not None:
+            zs = dict(out["zero_stability"])
+            zs["noise"] = {"source": self.noise_source, **self.noise.to_dict()}
+            out["zero_stability"] = zs
+        else:
+            out["zero_stability"] = {**out["zero_stability"], "noise": None,
+                                     "noise_reason": "the Allan analysis of 7.3 needs the "
+                                     "instrument's continuous record (a stream); a readings "
+                                     "file holds only the 15 readings"}
         out["uncertainty"] = unc
         out["readings_taken"] = list(READINGS_TAKEN)
-        return out
+        return json_safe(out)
 
     def summary(self) -> str:
         """The seven items and U as a fixed-width text table."""
@@ -110,14 +146,19 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
     ``time_s`` and ``gyro_counts`` but no ``test`` is a stream (§2), reduced by
     :func:`gonio.reduce.reduce_stream` before calibration.
     """
+    return _load(path, protocol)[0]
+
+
+def _load(path: str | Path, protocol: Protocol):
     from gonio.streams import read_stream, sniff_kind
 
     if sniff_kind(path) == "readings":
-        return read_readings(path)
+        return read_readings(path), None
     from gonio.errors import GonioError
     from gonio.reduce import reduce_stream
 
-    red = reduce_stream(read_stream(path), protocol)
+    stream = read_stream(path)
+    red = reduce_stream(stream, protocol)
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream", file=path)
     import tempfile
@@ -127,14 +168,48 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
         rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
                                           Path(tmp) / "reduced.csv", red.metadata))
     rd.path = Path(path)
-    return rd
+    return rd, static_record_from_stream(stream, red.readings)
+
+
+def static_record_from_stream(stream, reduced) -> StaticRecord | None:
+    """The instrument's continuous record over the 7.3 rest, cut from a stream.
+
+    From the zeroing of the first zero-stability reading to the last one (the
+    reduction's ``t_zero_s``/``t_read_s``); counts divided by the nominal scale
+    factor. ``None`` when the stream holds no 7.3 rest or no nominal K.
+    """
+    zs = reduced[reduced["test"] == "zero_stability"]
+    k = metadata_float(stream.metadata, "nominal_scale_factor_counts_per_deg")
+    if len(zs) < 2 or not k:
+        return None
+    t0, t1 = float(zs["t_zero_s"].min()), float(zs["t_read_s"].max())
+    m = (stream.time_s >= t0) & (stream.time_s <= t1)
+    return StaticRecord(stream.time_s[m] - t0, stream.gyro_counts[m] / k,
+                        source="stream, 7.3 rest")
+
+
+def analyse_zero_stability(record: StaticRecord | None):
+    """Allan analysis of the 7.3 static record (:func:`gonio.noise.analyse_static`), or why not."""
+    from gonio.errors import GonioError
+    from gonio.noise import analyse_static
+
+    if record is None:
+        return None, ""
+    try:
+        return analyse_static(record.time_s, record.angle_deg), record.source
+    except GonioError as exc:
+        return None, f"not analysed: {exc}"
 
 
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol = "ogam-draft",
-              *, monte_carlo_trials: int = 0, seed: int = 0) -> CalibrationReport:
-    """Compute the seven characteristics and the Annex A budget from a readings file.
+              *, monte_carlo_trials: int = 0, seed: int = 0,
+              static_record: StaticRecord | None = None) -> CalibrationReport:
+    """Compute the seven characteristics and the Annex A budget from a readings file or stream.
 
-    Items whose readings the file does not hold are reported as not measured.
+    Items whose readings the file does not hold are reported as not measured. The
+    zero-stability result (7.3) comes with the Allan analysis of the instrument's
+    record over the 7.3 rest when there is one: cut from the stream, or given as
+    ``static_record`` (the virtual bench's).
     """
     proto = protocol if isinstance(protocol, Protocol) else load_protocol(protocol)
     if isinstance(readings, Readings):
@@ -142,13 +217,15 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
         if rd.path:
             sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
     else:
-        rd = load_readings_or_stream(readings, proto)
+        rd, from_stream = _load(readings, proto)
+        static_record = static_record or from_stream
         sha = hashlib.sha256(Path(readings).read_bytes()).hexdigest()
     ref_orient = proto.pointing_reference
     res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=ref_orient)
     budget, src = annex_a_for(res, rd, proto, monte_carlo_trials, seed)
-    return CalibrationReport(res, budget, rd, proto, sha, src)
+    noise, noise_src = analyse_zero_stability(static_record)
+    return CalibrationReport(res, budget, rd, proto, sha, src, noise, noise_src)
 
 
 def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:

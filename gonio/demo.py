@@ -19,7 +19,7 @@ def demo(out: str | Path, seed: int = 0, bench: str = "rlg",
     proto = load_protocol(protocol)
     session = run_session(proto, load_bench(bench), seed=seed)
     written = list(write_session(session, out).values())
-    report = calibrate(out / "readings.csv", proto)
+    report = calibrate(out / "readings.csv", proto, static_record=session.static_record)
     written += list(write_calibration(report, out).values())
     try:
         from gonio.report.certificate import write_certificate

@@ -71,6 +71,7 @@ class InstrumentConfig:
     bias_instability_tau_s: float = 300.0
     rrw_dphsh: float = 0.0
     quantisation: bool = True
+    quantisation_dither: bool = False
     counter_bits: int = 64
     counter_signed: bool = True
     integration: str = "exact"
@@ -148,6 +149,7 @@ INSTRUMENT_SCHEMA = {
     "bias_instability_tau_s": Field("float", 300.0, positive, "> 0"),
     "rrw_dphsh": Field("float", 0.0, non_negative, "≥ 0"),
     "quantisation": Field("bool", True),
+    "quantisation_dither": Field("bool", False),
     "counter_bits": Field("int", 64, choices=(16, 24, 32, 64)),
     "counter_signed": Field("bool", True),
     "integration": Field("str", "exact", choices=("exact", "rectangle")),

@@ -205,14 +205,43 @@ class Integrator:
         self.new_block = True
 
 
-def counts_from_angle(angle_deg: np.ndarray, inst: InstrumentConfig) -> np.ndarray:
+def uniform_hash(k, key: int) -> np.ndarray:
+    """A uniform number in [0, 1) for each integer sample index ``k`` (SplitMix64 of k and key).
+
+    Counter-based: the value of sample k does not depend on which other samples
+    are drawn, so the readings and the stream see the same dither.
+
+    >>> u = uniform_hash(np.arange(100000), key=7)
+    >>> bool(0.0 <= u.min() and u.max() < 1.0), round(float(u.mean()), 2)
+    (True, 0.5)
+    """
+    offset = np.uint64((key * 0x9E3779B97F4A7C15 + 0x9E3779B97F4A7C15) % (1 << 64))
+    with np.errstate(over="ignore"):
+        z = np.asarray(k, dtype=np.int64).astype(np.uint64) + offset
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = z ^ (z >> np.uint64(31))
+    return (z >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
+
+
+def counts_from_angle(angle_deg: np.ndarray, inst: InstrumentConfig, k=None,
+                      dither_key: int = 0) -> np.ndarray:
     """Pulse counter from the instrument angle: K·φ, floored when quantised (float64).
+
+    With ``quantisation_dither`` the count is floor(K·φ + u), u uniform on [0, 1)
+    per sample (``k`` the sample indices): random dither of the readout (as an RLG's
+    noise-injected body dither does) makes the quantisation error white with zero
+    mean, where a bare floor of a near-constant rate gives a deterministic sawtooth.
 
     >>> counts_from_angle(np.array([1.0, -1e-9]), InstrumentConfig(nominal_scale_factor_counts_per_deg=10.0)).tolist()
     [10.0, -1.0]
     """
     c = inst.true_scale_factor_counts_per_deg * np.asarray(angle_deg, dtype=float)
-    return np.floor(c) if inst.quantisation else c
+    if not inst.quantisation:
+        return c
+    if inst.quantisation_dither and k is not None:
+        return np.floor(c + uniform_hash(k, dither_key))
+    return np.floor(c)
 
 
 def wrap_counter(counts: np.ndarray, bits: int, signed: bool) -> np.ndarray:

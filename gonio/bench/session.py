@@ -196,10 +196,12 @@ class _Run:
     counts: np.ndarray       # compensated counts since zeroing, per reading
     true_deg: np.ndarray     # true table angle turned since zeroing, per reading
     comp_counts_s: list      # per block
+    records: dict = field(default_factory=dict)   # label -> (time_s, counts) of captured blocks
 
 
 def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
-              rng: np.random.Generator | None, stream=None) -> _Run:
+              rng: np.random.Generator | None, stream=None,
+              capture: frozenset = frozenset(), dither_key: int = 0) -> _Run:
     inst = bench.instrument
     dt = 1.0 / bench.sample_rate_hz
     integ = Integrator(inst, bench.sample_rate_hz, protocol.session.warm_up_s, rng)
@@ -207,6 +209,7 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
     out_counts = np.empty(len(readings))
     out_true = np.empty(len(readings))
     comps = []
+    captured: dict = {}
     j = 0
     for blk in blocks:
         geom = geometry(bench, blk.orientation)
@@ -247,7 +250,7 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
                     since = (phi[ok] - phz
                              - comp / inst.nominal_scale_factor_counts_per_deg * (k[ok] - kz) * dt)
                     g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics) - g0
-            return counts_from_angle(phi + g / 3600.0, inst)
+            return counts_from_angle(phi + g / 3600.0, inst, k, dither_key)
 
         for a in range(blk.k_start, blk.k_end, CHUNK):
             b = min(a + CHUNK, blk.k_end)
@@ -262,9 +265,13 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
                 k0, k1 = blk.k_static
                 comp = (counter(np.array(blk.k_static), np.array([phi_at[k0], phi_at[k1]]))
                         @ np.array([-1.0, 1.0])) / ((k1 - k0) * dt)
-            if stream is not None:
+            if stream is not None or blk.label in capture:
                 c = counter(k, phi)
-                stream(t, c, theta + harmonic_sum_arcsec(theta, bench.table.positioning_harmonics) / 3600.0)
+                if blk.label in capture:
+                    captured.setdefault(blk.label, []).append((t, c))
+                if stream is not None:
+                    stream(t, c, theta + harmonic_sum_arcsec(
+                        theta, bench.table.positioning_harmonics) / 3600.0)
         comps.append(comp)
         kk = np.array(sorted(need), dtype=np.int64)
         cc = counter(kk, np.array([phi_at[x] for x in kk.tolist()]))
@@ -274,7 +281,9 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
             out_counts[j] = float(np.rint(raw)) if inst.quantisation else raw
             out_true[j] = theta_at[r.k_read] - theta_at[r.k_zero]
             j += 1
-    return _Run(out_counts, out_true, comps)
+    records = {lab: (np.concatenate([x[0] for x in v]), np.concatenate([x[1] for x in v]))
+               for lab, v in captured.items()}
+    return _Run(out_counts, out_true, comps, records)
 
 
 def mount_scale_factor_counts_per_deg(bench: Bench, rate_dps: float) -> float:
@@ -296,6 +305,20 @@ class SessionResult:
     readings: pd.DataFrame
     metadata: dict
     truth: dict
+    static_record: "StaticRecord | None" = None
+
+
+@dataclass
+class StaticRecord:
+    """The instrument's record over the 7.3 zero-stability phase (at rest), for noise analysis.
+
+    ``angle_deg`` is the pulse counter divided by the nominal scale factor (not
+    compensated: the Allan deviation ignores a constant rate).
+    """
+
+    time_s: np.ndarray
+    angle_deg: np.ndarray
+    source: str = "virtual bench, 7.3 block"
 
 
 def _metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
@@ -330,7 +353,8 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     ss = np.random.SeedSequence(seed)
     rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
     blocks = plan_session(protocol, bench, rng_table)
-    run = _simulate(blocks, bench, protocol, rng_inst, stream)
+    run = _simulate(blocks, bench, protocol, rng_inst, stream, capture=frozenset({"zero_stability"}),
+                    dither_key=int(ss.generate_state(1, np.uint64)[0]))
     nf = _simulate(blocks, bench.random_off(), protocol, None)
     rows = [r for b in blocks for r in b.readings]
     dt = 1.0 / bench.sample_rate_hz
@@ -385,7 +409,11 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
         "earth_compensation_counts_per_s": [float(c) for c in run.comp_counts_s],
         "readings": per,
     }
-    return SessionResult(df, _metadata(protocol, bench, seed), truth)
+    static = None
+    if "zero_stability" in run.records:
+        t, c = run.records["zero_stability"]
+        static = StaticRecord(t, c / bench.instrument.nominal_scale_factor_counts_per_deg)
+    return SessionResult(df, _metadata(protocol, bench, seed), truth, static)
 
 
 def write_session(result: SessionResult, out: str | Path) -> dict[str, Path]:
