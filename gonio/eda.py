@@ -140,7 +140,7 @@ class EdaResult:
     dof : int
         Residual degrees of freedom, readings minus identifiable parameters.
     residuals_arcsec : numpy.ndarray, shape (R, n, m)
-        Residuals of the fit.
+        Residuals of the fit, whitened (for ``random_walk``: of the step increments).
     start_deg : numpy.ndarray, shape (n,)
         Table positions at zeroing.
     step_deg : float
@@ -176,6 +176,7 @@ class EdaResult:
     unobservable_dim: int
     harmonics: pd.DataFrame = field(repr=False)
     closure: ClosureCheck = field(repr=False)
+    noise: str = "random_walk"
 
     @property
     def n_starts(self) -> int:
@@ -207,7 +208,7 @@ class EdaResult:
         return {
             "n_starts": self.n_starts, "m_points": self.m_points, "repeats": self.repeats,
             "step_deg": round(float(self.step_deg), 9), "start_deg": r(self.start_deg),
-            "gauge": self.gauge, "unobservable_dim": self.unobservable_dim,
+            "gauge": self.gauge, "noise": self.noise, "unobservable_dim": self.unobservable_dim,
             "residual_std_arcsec": round(float(self.residual_std_arcsec), 6), "dof": self.dof,
             "table": {"position_deg": r(self.table_position_deg),
                       "error_arcsec": r(self.table_error_arcsec),
@@ -442,8 +443,33 @@ def _check_step(step_deg: float) -> int:
 
 
 # --------------------------------------------------------------------------- analysis
+NOISE_MODELS = ("random_walk", "white")
+
+
+def noise_whitening(m: int, noise: str) -> np.ndarray:
+    """The m×m matrix W that whitens one start's reading errors (generalised least squares).
+
+    ``white``: readings independent, W = I (the classic IEC 62047-20 A.3 model).
+    ``random_walk``: a gyro's angle random walk (and any drift of the compensation)
+    accumulates from the zeroing, so the error of reading j is the sum of the
+    increments before it and W is the first difference (e_1, e_2 − e_1, …): the
+    increments between equally spaced steps are independent. Readings of one start
+    are then correlated, and the white model understates the uncertainty.
+
+    >>> noise_whitening(3, "random_walk").tolist()
+    [[1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]]
+    """
+    if noise == "white":
+        return np.eye(m)
+    if noise == "random_walk":
+        return np.eye(m) - np.eye(m, k=-1)
+    raise GonioError(f"unknown noise model {noise!r} (expected one of {', '.join(NOISE_MODELS)})",
+                     key="noise")
+
+
 def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int | None = None,
-                            gauge: str = "closure", max_order: int | None = None) -> EdaResult:
+                            gauge: str = "closure", max_order: int | None = None,
+                            noise: str = "random_walk") -> EdaResult:
     """Separate the table's and the goniometer's errors by equal-division averaging.
 
     Least-squares fit of (IEC 62047-20 Annex A.3, generalised; GUM H.3)
@@ -527,7 +553,10 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
     p = _grid_indices(start_deg, float(step_deg))
 
-    A = _design(p, m)
+    W = noise_whitening(m, noise)
+    A = sp.csr_matrix(sp.kron(sp.eye(n), sp.csr_matrix(W)) @ _design(p, m))
+    D_raw = D
+    D = D @ W.T          # whiten each start's row of readings (GLS)
     N1 = (A.T @ A).toarray()
     B = _table_null_basis(N1, m)
     Bc = _orth_complement(B)
@@ -542,7 +571,7 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     Minv = np.linalg.inv(M)
     theta = Z @ (Minv @ (Z.T @ b))
     fitted = (A @ theta).reshape(n, m)
-    resid = D - fitted[None]
+    resid = D - fitted[None]          # whitened residuals: independent under the model
     rank = M.shape[0]
     dof = R * n * m - rank
     if dof <= 0:
@@ -564,7 +593,7 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     z = full / u_full if u_full > 0 else (0.0 if full == 0 else math.inf)
     closure = ClosureCheck(
         table_sum_arcsec=float(t.sum()), full_turn_arcsec=full, u_full_turn_arcsec=u_full,
-        z=float(z), per_start_full_turn_arcsec=D[:, :, -1].mean(axis=0),
+        z=float(z), per_start_full_turn_arcsec=D_raw[:, :, -1].mean(axis=0),
         consistent=bool(abs(z) <= CLOSURE_Z_LIMIT))
     harm = _harmonic_frame(start_deg, p, m, B, int(max_order or 2 * m))
     step = float(step_deg)
@@ -577,7 +606,7 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         gonio_cov_arcsec2=cov_g,
         residual_std_arcsec=math.sqrt(s2), dof=int(dof), residuals_arcsec=resid,
         start_deg=start_deg, step_deg=step, repeats=R, gauge=gauge,
-        unobservable_dim=int(d - 1), harmonics=harm, closure=closure)
+        unobservable_dim=int(d - 1), harmonics=harm, closure=closure, noise=noise)
 
 
 # --------------------------------------------------------------------------- comparison

@@ -322,3 +322,4 @@ def load_protocol(path: str | Path = "ogam-draft") -> Protocol:
 
 # Optional sections defined elsewhere (registered on import; kept last: they import this module).
 import gonio.tiltest  # noqa: E402,F401  [tilt_estimate]
+import gonio.eda  # noqa: E402,F401  [equal_division]

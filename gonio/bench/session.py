@@ -52,6 +52,7 @@ class PlannedReading:
     k_read: int            # grid index of the reading
     k_zero: int            # grid index of the zeroing it refers to
     table_deg: float       # the standard's (indicated) angle since zeroing; NaN for 7.3
+    start_deg: float = math.nan   # absolute table position at zeroing (equal-division only)
 
 
 @dataclass
@@ -178,6 +179,27 @@ class _Planner:
         self._close(blk, tl)
 
 
+def _equal_division(pl: "_Planner", p, series: int) -> None:
+    """IEC 62047-20 Annex A.3: from each start x_k = k·360°/n, zero both, step m times by Δ.
+
+    Between starts the table is re-pointed instantly (like between blocks); each
+    start has its own static phase when the compensation is measured.
+    """
+    tab = pl.b.table
+    rate = p.rate_dps * (1.0 + tab.rate_error_rel)
+    for k, x0 in enumerate(p.start_deg.tolist()):
+        blk, tl = pl._new_block(f"equal_division start {x0:g} series {series}", p.orientation, x0)
+        k_zero = pl._dwell_to_grid(tl)
+        for j in range(1, p.points + 1):
+            arrive = tl.move(pl.true_position(x0 + j * p.step_deg), rate, tab.accel_dps2)
+            k_read = _grid(arrive + p.read_delay_s, pl.dt)
+            tl.dwell(max(p.rest_s, k_read * pl.dt - arrive + pl.dt))
+            blk.readings.append(PlannedReading("equal_division", series, k + 1, p.rate_dps,
+                                               p.orientation, k_read, k_zero, j * p.step_deg,
+                                               start_deg=x0))
+        pl._close(blk, tl)
+
+
 def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | None) -> list[Block]:
     """Blocks of motion with zeroing and reading instants, in the order the items run."""
     pl = _Planner(protocol, bench, rng)
@@ -188,6 +210,10 @@ def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | No
     for item in protocol.items():
         for series in range(1, item.series + 1):
             pl.rotation(item, series)
+    eda = protocol.extra.get("equal_division")
+    if eda is not None:
+        for series in range(1, eda.repeats + 1):
+            _equal_division(pl, eda, series)
     return pl.blocks
 
 
@@ -370,6 +396,13 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
         "gyro_deg": np.nan,
     })
     df.loc[df["test"] == "zero_stability", "rate_dps"] = np.nan
+    eda_rows = (df["test"] == "equal_division").to_numpy()
+    if eda_rows.any():
+        # Equal division: the instrument's own indicated angle (its nominal K), as the
+        # eda reader expects; the scale-factor error then shows in the goniometer curve.
+        df["start_deg"] = [r.start_deg for r in rows]
+        df.loc[eda_rows, "gyro_deg"] = run.counts[eda_rows] / bench.instrument.nominal_scale_factor_counts_per_deg
+        df.loc[eda_rows, "gyro_counts"] = np.nan
     k_mount = mount_scale_factor_counts_per_deg(bench, protocol.scale_factor.rate_dps
                                                 if protocol.scale_factor else 60.0)
     sf = df["test"].to_numpy() == "scale_factor"

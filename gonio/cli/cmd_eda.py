@@ -37,6 +37,9 @@ def register(subparsers) -> None:
                         "checked against the file otherwise)")
     p.add_argument("--gauge", choices=("closure", "zero"), default="closure",
                    help="table-error convention: sum zero over the circle, or zero at 0°")
+    p.add_argument("--noise", choices=("random_walk", "white"), default="random_walk",
+                   help="reading-error model: random_walk (a gyro's angle random walk from each "
+                        "zeroing, the default) or white (independent readings)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None,
                    help="write a figure (PNG/PDF/SVG by suffix) of both error curves")
@@ -146,7 +149,7 @@ def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
     df = read_eda_csv(args.readings)
     D, start, step = eda_matrix_from_readings(df, starts=args.starts, file=args.readings)
-    res = equal_division_analysis(D, start, step, gauge=args.gauge)
+    res = equal_division_analysis(D, start, step, gauge=args.gauge, noise=args.noise)
     if args.plot:
         plot_eda(res, args.plot)
     if args.json:
