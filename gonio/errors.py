@@ -44,3 +44,43 @@ class GonioError(ValueError):
         if self.key is not None:
             where += f"key {self.key}: "
         return (where + self.message).replace("\n", " ")
+
+
+def read_utf8(path: str | Path, what: str = "file") -> str:
+    """A text file's content (UTF-8, BOM allowed); unreadable or non-UTF-8 → GonioError.
+
+    The error names the file and, for a bad byte, its line.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise GonioError(f"cannot read {what}: {exc.strerror}", file=path) from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
+                         line=raw[:exc.start].count(b"\n") + 1) from None
+
+
+def check_header(columns, required, *, file, line) -> set:
+    """Column names of a CSV header: none empty, none twice, every required one present.
+
+    >>> sorted(check_header(["a", "b"], ["a"], file="f.csv", line=1))
+    ['a', 'b']
+    >>> check_header(["a", "a"], ["a"], file="f.csv", line=3)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: f.csv:3: column a: column given twice in header
+    """
+    seen: set[str] = set()
+    for name in columns:
+        if not name:
+            raise GonioError("empty column name in header", file=file, line=line)
+        if name in seen:
+            raise GonioError("column given twice in header", file=file, line=line, column=name)
+        seen.add(name)
+    for name in required:
+        if name not in seen:
+            raise GonioError("missing required column", file=file, line=line, column=name)
+    return seen

@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.atomic import write_text
-from gonio.errors import GonioError
+from gonio.errors import GonioError, check_header, read_utf8
 
 #: The ``test`` names of the draft's clause 7 (the first five) and of later features.
 TEST_NAMES: tuple[str, ...] = (
@@ -188,15 +188,7 @@ def read_readings(path: str | Path) -> Readings:
     [{'test': 'scale_factor', 'rate_dps': 60.0, 'orientation': 'up', 'gyro_counts': 216000.0, 'line': 3}]
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise GonioError(f"cannot read readings file: {exc.strerror}", file=path) from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise GonioError("not UTF-8 text", file=path, line=line) from None
+    text = read_utf8(path, "readings file")
     return parse_readings(text, path=path)
 
 
@@ -247,18 +239,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
             metadata_float(metadata, key, file=fname)
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
-    seen: set[str] = set()
-    for name in header:
-        if not name:
-            raise GonioError("empty column name in header", file=fname, line=header_line)
-        if name in seen:
-            raise GonioError("column given twice in header", file=fname, line=header_line,
-                             column=name)
-        seen.add(name)
-    for name in REQUIRED_COLUMNS:
-        if name not in seen:
-            raise GonioError("missing required column", file=fname, line=header_line,
-                             column=name)
+    seen = check_header(header, REQUIRED_COLUMNS, file=fname, line=header_line)
     if "gyro_counts" not in seen and "gyro_deg" not in seen:
         raise GonioError("missing column: need gyro_counts or gyro_deg (or both)",
                          file=fname, line=header_line, column="gyro_counts")

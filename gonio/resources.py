@@ -37,4 +37,5 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     if cand.is_file() and p.parent == Path("."):
         return cand
     names = sorted(q.stem for q in base.glob("*.toml"))
-    raise GonioError(f"{kind} file not found: {name_or_path} (built-in {kind}s: {', '.join(names)})")
+    plural = "benches" if kind == "bench" else f"{kind}s"
+    raise GonioError(f"{kind} file not found: {name_or_path} (built-in {plural}: {', '.join(names)})")

@@ -48,7 +48,7 @@ from typing import Iterator, Mapping
 import numpy as np
 import pandas as pd
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, check_header
 from gonio.io import _NUMERIC_METADATA, metadata_bool, metadata_float
 
 #: Column order of a written stream file.
@@ -154,17 +154,7 @@ def _parse_header(path: Path) -> _Header:
 
 
 def _header_from(fname, metadata, columns, lineno, offset) -> _Header:
-    seen: set[str] = set()
-    for name in columns:
-        if not name:
-            raise GonioError("empty column name in header", file=fname, line=lineno)
-        if name in seen:
-            raise GonioError("column given twice in header", file=fname, line=lineno,
-                             column=name)
-        seen.add(name)
-    for name in REQUIRED_STREAM_COLUMNS:
-        if name not in seen:
-            raise GonioError("missing required column", file=fname, line=lineno, column=name)
+    seen = check_header(columns, REQUIRED_STREAM_COLUMNS, file=fname, line=lineno)
     for key in metadata:
         if key in _NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)

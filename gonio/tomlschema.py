@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, read_utf8
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -48,15 +48,7 @@ def non_negative(x) -> bool:
 def read_toml(path: str | Path) -> dict:
     """Parse a TOML file; a syntax error is a GonioError naming the file and line."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise GonioError(f"cannot read: {exc.strerror}", file=path) from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
-                         line=raw[:exc.start].count(b"\n") + 1) from None
+    text = read_utf8(path)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

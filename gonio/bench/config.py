@@ -210,7 +210,12 @@ def load_bench(path: str | Path = "rlg", table: str | Path | None = None) -> Ben
     else:
         tname = raw["bench"]["table"]
         cand = file.parent / f"{tname}.toml"
-        tab, tfile = load_table(cand if cand.is_file() else tname)
+        try:
+            tab, tfile = load_table(cand if cand.is_file() else tname)
+        except GonioError as exc:
+            if exc.file is not None:        # the table file itself is bad: it names itself
+                raise
+            raise GonioError(exc.message, file=file, key="bench.table") from None
     return Bench(name=raw["bench"]["name"], instrument=instrument, table=tab,
                  latitude_deg=raw["site"]["latitude_deg"],
                  longitude_deg=raw["site"]["longitude_deg"],
