@@ -1,0 +1,278 @@
+"""The certificate's figures, drawn with matplotlib (Agg) from a calibration report.
+
+Contents
+========
+=====================  =================================================================
+:data:`FIGURES`        (key, caption label, draw function), in the certificate's order
+:func:`draw_deviation`    E_ij of every series against position, mean E_i (draft Fig. A.4)
+:func:`draw_repeatability`  Bessel s_i per position and R = max (draft Fig. A.5, 7.5)
+:func:`draw_tilt`      elliptic-projection error at the tilt bound (Annex A.4.2, Fig. A.3),
+                       rigid-body model beside it (:mod:`gonio.tilt`)
+:func:`draw_scale_factor`   K_i per round and K (7.1)
+:func:`draw_zero_stability` readings M_n against time and their least-squares drift (7.3)
+:func:`draw_rate`      E_i per position for each rate (7.6)
+:func:`draw_pointing`  E_i per position for each axis direction (7.7)
+:func:`draw_budget`    |c_i|·u_i of the Annex A components, u_c and U
+:func:`figure_svg`     one figure as deterministic SVG text
+:func:`mpl_style`      the rc settings (font, SVG salt, no dates) used for every figure
+=====================  =================================================================
+
+Each ``draw_*`` takes ``(fig, spec, report, L, truth)``: a matplotlib Figure, a
+SubplotSpec to draw in, the :class:`~gonio.calibrate.CalibrationReport`, the
+label mapping of :func:`gonio.report.i18n.labels`, and the virtual-bench truth
+(or None). The same function draws into the HTML's SVG and into a PDF page.
+An item that was not measured gives an empty panel saying so.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+from typing import Callable, Iterator
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from gonio.report.i18n import display_number, display_uncertainty  # noqa: E402
+from gonio.tilt import elliptic_error_arcsec, rigid_error_arcsec  # noqa: E402
+
+#: Salt of matplotlib's SVG ids: fixed, so the same report gives the same bytes.
+SVG_HASHSALT: str = "gonio-certificate"
+#: Figure size in the HTML (inches).
+HTML_FIGSIZE: tuple[float, float] = (7.0, 3.4)
+
+
+@contextlib.contextmanager
+def mpl_style(fonts: tuple[str, ...] = ("DejaVu Sans",)) -> Iterator[None]:
+    """rc settings of every certificate figure: deterministic SVG, the font families in
+    order (matplotlib falls back along the list glyph by glyph, e.g. a CJK font)."""
+    only_ttf = tuple(fonts) == ("DejaVu Sans",)
+    rc = {"svg.hashsalt": SVG_HASHSALT, "svg.fonttype": "path", "font.family": list(fonts),
+          "font.size": 8.5, "axes.titlesize": 9,
+          "axes.unicode_minus": False, "pdf.fonttype": 42 if only_ttf else 3,
+          "axes.grid": True, "grid.alpha": 0.3, "legend.fontsize": 7,
+          "path.simplify": False}
+    with plt.rc_context(rc):
+        yield
+
+
+def _empty(ax, L) -> None:
+    ax.text(0.5, 0.5, L["no_data"], ha="center", va="center", transform=ax.transAxes,
+            fontsize=11, color="0.4")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def _truth_by_position(truth: dict | None, test: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """Mean systematic deviation per position of the virtual bench's truth, if given."""
+    if not truth or not truth.get("readings"):
+        return None
+    pos, val = [], []
+    for r in truth["readings"]:
+        if r.get("test") == test and r.get("table_deg") is not None and \
+                r.get("systematic_deviation_calibrated_arcsec") is not None and \
+                (test != "angle_deviation" or
+                 (r.get("orientation", "up") == "up" and r.get("rate_dps") == 60.0)):
+            pos.append(float(r["table_deg"]))
+            val.append(float(r["systematic_deviation_calibrated_arcsec"]))
+    if not pos:
+        return None
+    pos, val = np.asarray(pos), np.asarray(val)
+    u = np.unique(pos)
+    return u, np.array([val[pos == p].mean() for p in u])
+
+
+def draw_deviation(fig, spec, report, L, truth=None) -> None:
+    """Deviation curves E_ij of every series against position (draft 7.4, Fig. A.4)."""
+    ax = fig.add_subplot(spec)
+    c = report.results.angle_deviation
+    if not c.measured:
+        return _empty(ax, L)
+    rd = c.tables["readings"]
+    for s, g in rd.groupby("series", sort=True):
+        g = g.sort_values("table_deg")
+        ax.plot(g["table_deg"], g["E_arcsec"], "-o", lw=0.8, ms=2.5, alpha=0.6,
+                label=f"{L['lg_series']} {s}" if rd["series"].nunique() <= 10 else None)
+    t = c.table.sort_values("position_deg")
+    ax.plot(t["position_deg"], t["E_arcsec"], "k-", lw=2.0, label=L["lg_mean"])
+    tr = _truth_by_position(truth, "angle_deviation")
+    if tr is not None:
+        ax.plot(tr[0], tr[1], "r--", lw=1.2, label=L["truth"])
+    ax.axhline(0, color="0.3", lw=0.6)
+    ax.set_xlabel(L["ax_position"])
+    ax.set_ylabel(L["ax_deviation"])
+    ax.legend(ncol=4, loc="best")
+
+
+def draw_repeatability(fig, spec, report, L, truth=None) -> None:
+    """Bessel standard deviation per position and R = max (draft 7.5, Fig. A.5)."""
+    ax = fig.add_subplot(spec)
+    c = report.results.repeatability
+    if not c.measured:
+        return _empty(ax, L)
+    t = c.table.sort_values("position_deg")
+    ax.plot(t["position_deg"], t["R_arcsec"], "o-", color="C0", lw=1.2, ms=4)
+    ax.axhline(c.value, color="C3", ls="--", lw=1,
+               label=f"{L['lg_R']} {display_number(c.value, 3)}″")
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel(L["ax_position"])
+    ax.set_ylabel(L["ax_std"])
+    ax.legend(loc="lower right")
+
+
+def draw_tilt(fig, spec, report, L, truth=None) -> None:
+    """Tilt error at the budget's tilt bound: elliptic model (Annex A.4.2) and rigid model."""
+    psi = float(report.uncertainty.parameters["tilt_deg"])
+    sub = spec.subgridspec(1, 2, wspace=0.35)
+    theta = np.linspace(0.0, 360.0, 721)
+    ax = fig.add_subplot(sub[0])
+    ax.plot(theta, elliptic_error_arcsec(theta, psi), "C0-", lw=1.5,
+            label=L["lg_elliptic"].format(psi=display_number(psi, 3)))
+    ax.plot(theta, rigid_error_arcsec(theta, psi), "C2--", lw=1.2, label=L["lg_rigid"])
+    ax.set_xlabel(L["ax_position"])
+    ax.set_ylabel(L["ax_tilt"])
+    ax.set_xticks(np.arange(0, 361, 90))
+    ax.legend(loc="lower left")
+    ax2 = fig.add_subplot(sub[1])
+    ax2.plot(theta, rigid_error_arcsec(theta, psi, calibrated=False), "C1-", lw=1.5,
+             label=L["lg_rigid_uncal"])
+    ax2.set_xlabel(L["ax_position"])
+    ax2.set_ylabel(L["ax_tilt"])
+    ax2.set_xticks(np.arange(0, 361, 90))
+    ax2.legend(loc="lower left")
+
+
+def draw_scale_factor(fig, spec, report, L, truth=None) -> None:
+    """K_i of each round against its angle, with K (draft 7.1)."""
+    ax = fig.add_subplot(spec)
+    c = report.results.scale_factor
+    if not c.measured:
+        return _empty(ax, L)
+    t = c.table
+    ax.plot(t["table_deg"], t["K_i_counts_per_deg"], "o", color="C0", ms=5)
+    ax.axhline(c.value, color="C3", ls="--", lw=1,
+               label=f"{L['lg_mean_K']} {display_number(c.value, 8)}")
+    ax.ticklabel_format(axis="y", useOffset=True, style="plain")
+    ax.set_xlabel(L["ax_round_angle"])
+    ax.set_ylabel(L["ax_K"])
+    ax.legend(loc="best")
+
+
+def zero_drift_deg_per_h(time_s, angle_deg) -> float:
+    """Least-squares slope of the zero-stability readings, °/h (shown beside 7.3's B_s).
+
+    >>> round(zero_drift_deg_per_h([0, 300, 600], [0.0, 0.0001, 0.0002]), 6)
+    0.0012
+    """
+    t = np.asarray(time_s, dtype=float)
+    a = np.asarray(angle_deg, dtype=float)
+    if len(t) < 2 or np.ptp(t) == 0:
+        return float("nan")
+    return float(np.polyfit(t, a, 1)[0] * 3600.0)
+
+
+def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
+    """Zero-stability readings M_n against time and their linear drift (draft 7.3)."""
+    ax = fig.add_subplot(spec)
+    c = report.results.zero_stability
+    if not c.measured or "readings" not in c.tables:
+        return _empty(ax, L)
+    rd = c.tables["readings"]
+    for i, (s, g) in enumerate(rd.groupby("series", sort=True)):
+        g = g.sort_values("time_s")
+        t_min = (g["time_s"] - g["time_s"].iloc[0]) / 60.0
+        m = g["angle_deg"].to_numpy() * 3600.0
+        ax.plot(t_min, m, "o", color=f"C{i}", ms=4, label=f"{L['lg_series']} {s}")
+        slope = zero_drift_deg_per_h(g["time_s"], g["angle_deg"])
+        if math.isfinite(slope):
+            p = np.polyfit(t_min.to_numpy(), m, 1)
+            ax.plot(t_min, np.polyval(p, t_min), "-", color=f"C{i}", lw=1,
+                    label=L["lg_drift"].format(v=display_number(slope, 3)))
+    ax.set_xlabel(L["ax_time_min"])
+    ax.set_ylabel(L["ax_angle_arcsec"])
+    ax.legend(loc="best")
+
+
+def _consistency(ax, c, col, L, fmt) -> None:
+    if not c.measured or "points" not in c.tables:
+        return _empty(ax, L)
+    pts = c.tables["points"]
+    ref = set(c.table.loc[c.table["reference"].astype(bool), col]) if "reference" in c.table else set()
+    for i, (v, g) in enumerate(pts.groupby(col, sort=True)):
+        g = g.sort_values("position_deg")
+        lab = fmt(v) + (" " + L["lg_reference"] if v in ref else "")
+        ax.plot(g["position_deg"], g["E_arcsec"], "-o", lw=1.6 if v in ref else 0.9,
+                ms=2.5, color=f"C{i % 10}", label=lab)
+    ax.axhline(0, color="0.3", lw=0.6)
+    ax.set_xlabel(L["ax_position"])
+    ax.set_ylabel(L["ax_deviation"])
+    ax.legend(ncol=3, loc="best")
+
+
+def draw_rate(fig, spec, report, L, truth=None) -> None:
+    """E_i per position at each table rate (draft 7.6)."""
+    _consistency(fig.add_subplot(spec), report.results.rate_consistency, "rate_dps", L,
+                 lambda v: f"{display_number(float(v), 3)} °/s")
+
+
+def draw_pointing(fig, spec, report, L, truth=None) -> None:
+    """E_i per position for each axis direction (draft 7.7)."""
+    _consistency(fig.add_subplot(spec), report.results.pointing_consistency, "orientation", L,
+                 lambda v: L.get(str(v), str(v)))
+
+
+def draw_budget(fig, spec, report, L, truth=None) -> None:
+    """Contributions |c_i|·u_i of the Annex A budget as bars, with u_c and U (Annex A.5–A.7)."""
+    ax = fig.add_subplot(spec)
+    d = report.uncertainty.to_dict()
+    comps = d["components"]
+    names = [f"u({c['symbol'].replace('phi_e', 'φ_e')})" for c in comps] + ["u_c", "U"]
+    vals = [abs(c["contribution_arcsec"]) for c in comps] + [d["u_c_arcsec"], d["U_arcsec"]]
+    colors = ["C0" if c["type"] == "B" else "C1" for c in comps] + ["C2", "C3"]
+    y = np.arange(len(vals))[::-1]
+    ax.barh(y, vals, color=colors, height=0.6)
+    for yi, v, n in zip(y, vals, names):
+        ax.text(v, yi, " " + display_uncertainty(v) + "″", va="center", fontsize=7.5)
+    ax.set_yticks(y)
+    ax.set_yticklabels(names)
+    ax.set_xlim(0, max(vals) * 1.25 if max(vals) > 0 else 1)
+    ax.set_xlabel(L["ax_contribution"])
+    ax.grid(axis="y", visible=False)
+
+
+#: The figures of the certificate in order: (key, caption label key, draw function).
+FIGURES: tuple[tuple[str, str, Callable], ...] = (
+    ("deviation", "fig_deviation", draw_deviation),
+    ("repeatability", "fig_repeat", draw_repeatability),
+    ("tilt", "fig_tilt", draw_tilt),
+    ("scale_factor", "fig_sf", draw_scale_factor),
+    ("zero_stability", "fig_zero", draw_zero_stability),
+    ("rate", "fig_rate", draw_rate),
+    ("pointing", "fig_pointing", draw_pointing),
+    ("budget", "fig_budget", draw_budget),
+)
+
+
+def figure_svg(draw: Callable, report, L: dict, truth=None,
+               fonts: tuple[str, ...] = ("DejaVu Sans",),
+               figsize: tuple[float, float] = HTML_FIGSIZE) -> str:
+    """One figure as SVG text, byte-stable for the same inputs (no date, fixed id salt).
+
+    The XML prolog and DOCTYPE are dropped so the text can be inlined in HTML.
+    """
+    with mpl_style(fonts):
+        fig = plt.figure(figsize=figsize)
+        try:
+            spec = fig.add_gridspec(1, 1)[0]
+            draw(fig, spec, report, L, truth)
+            fig.tight_layout()
+            buf = io.StringIO()
+            fig.savefig(buf, format="svg", metadata={"Date": None})
+        finally:
+            plt.close(fig)
+    svg = buf.getvalue()
+    return svg[svg.index("<svg"):]

@@ -1,0 +1,406 @@
+"""Certificate labels in English and Chinese, the CJK font, and the ONE number-display rule.
+
+Contents
+========
+=========================  ==========================================================
+:data:`LABELS`             label key → {"en": ..., "zh": ...}; the Chinese terms are the draft's
+:func:`labels`             the label mapping of one language
+:func:`cjk_font`           name of an installed CJK font for matplotlib (or GonioError)
+:func:`round_half_up`      a number to a given decimal place, half up, as text
+:func:`display_number`     a number to ``sig`` significant digits, half up, as text
+:func:`display_item`       how the certificate shows one of the seven items
+:func:`display_uncertainty`  U to 2 significant digits (JCGM 100 7.2.6)
+:func:`parse_display`      a displayed number back to a float (for checks)
+=========================  ==========================================================
+
+Every number the certificate shows (HTML, PDF and figure annotations) goes through
+:func:`round_half_up`; the other display functions only choose its decimal place.
+``results.json`` keeps full precision.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from decimal import ROUND_HALF_UP, Decimal
+
+from gonio.errors import GonioError
+
+#: Languages the certificate can be written in.
+LANGUAGES: tuple[str, ...] = ("en", "zh")
+
+#: Significant digits shown for each item without its own uncertainty.
+#: K is stable to ~1e-7 (its nonlinearity), so 8 digits carry information.
+ITEM_SIG_DIGITS: dict[str, int] = {
+    "scale_factor": 8, "scale_factor_nonlinearity": 3, "zero_stability": 3,
+    "angle_deviation": 3, "repeatability": 3, "rate_consistency": 3,
+    "pointing_consistency": 3,
+}
+#: Items shown to the decimal place of the expanded uncertainty U (JCGM 100 7.2.6).
+ITEMS_AT_U_PLACE: tuple[str, ...] = ("angle_deviation", "repeatability")
+
+LABELS: dict[str, dict[str, str]] = {
+    "title": {"en": "Calibration Certificate", "zh": "校准证书"},
+    "certificate_no": {"en": "Certificate No.", "zh": "证书编号"},
+    "page_of": {"en": "Page {x} of {y}", "zh": "第 {x} 页 共 {y} 页"},
+    "virtual": {"en": "VIRTUAL BENCH EXAMPLE — NOT A CALIBRATION CERTIFICATE",
+                "zh": "虚拟台架示例 — 非校准证书"},
+    "virtual_short": {"en": "VIRTUAL BENCH EXAMPLE", "zh": "虚拟台架示例"},
+    "laboratory": {"en": "Laboratory", "zh": "校准机构"},
+    "address": {"en": "Address", "zh": "地址"},
+    "accreditation": {"en": "Accreditation", "zh": "认可/授权"},
+    "contact": {"en": "Contact", "zh": "联系方式"},
+    "customer": {"en": "Customer", "zh": "委托方"},
+    "customer_address": {"en": "Customer address", "zh": "委托方地址"},
+    "instrument": {"en": "Instrument calibrated", "zh": "被校仪器"},
+    "description": {"en": "Description", "zh": "名称"},
+    "model": {"en": "Model", "zh": "型号"},
+    "serial": {"en": "Serial number", "zh": "出厂编号"},
+    "manufacturer": {"en": "Manufacturer", "zh": "制造厂"},
+    "date_receipt": {"en": "Date of receipt", "zh": "接收日期"},
+    "date_calibration": {"en": "Date of calibration", "zh": "校准日期"},
+    "date_issue": {"en": "Date of issue", "zh": "签发日期"},
+    "place": {"en": "Place of calibration", "zh": "校准地点"},
+    "specification": {"en": "Specification followed", "zh": "校准依据"},
+    "standards": {"en": "Standards used and their traceability", "zh": "校准所用计量标准及溯源性"},
+    "std_name": {"en": "Standard", "zh": "标准器"},
+    "std_id": {"en": "Identifier", "zh": "编号"},
+    "std_spec": {"en": "Accuracy", "zh": "准确度"},
+    "std_cert": {"en": "Certificate", "zh": "证书号"},
+    "std_trace": {"en": "Traceable to", "zh": "溯源至"},
+    "environment": {"en": "Environment during calibration", "zh": "校准环境条件"},
+    "temperature": {"en": "Temperature", "zh": "温度"},
+    "humidity": {"en": "Relative humidity", "zh": "相对湿度"},
+    "not_stated": {"en": "not stated", "zh": "未说明"},
+    "results": {"en": "Results of calibration (Annex B)", "zh": "校准结果（附录B）"},
+    "no": {"en": "No.", "zh": "序号"},
+    "item": {"en": "Item", "zh": "校准项目"},
+    "clause": {"en": "Clause", "zh": "条款"},
+    "result": {"en": "Result", "zh": "校准结果"},
+    "unit": {"en": "Unit", "zh": "单位"},
+    "not_measured": {"en": "not measured", "zh": "未测"},
+    "uncertainty": {"en": "Measurement uncertainty", "zh": "测量不确定度"},
+    "U_line": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}",
+               "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}"},
+    "u_c_line": {"en": "combined standard uncertainty u_c = {u}″ (Annex A.6)",
+                 "zh": "合成标准不确定度 u_c = {u}″（附录A.6）"},
+    "budget": {"en": "Uncertainty budget (Annex A)", "zh": "不确定度分量（附录A）"},
+    "component": {"en": "Component", "zh": "分量"},
+    "source": {"en": "Source", "zh": "来源"},
+    "type": {"en": "Type", "zh": "类别"},
+    "u_i": {"en": "u_i (″)", "zh": "u_i (″)"},
+    "readings_taken": {"en": "Readings taken of the draft's ambiguities",
+                       "zh": "对规范草案中不明确之处的理解"},
+    "details": {"en": "Details of the measurements", "zh": "测量详细数据"},
+    "figures": {"en": "Figures", "zh": "图"},
+    "signatory": {"en": "Signatures", "zh": "签字"},
+    "calibrated_by": {"en": "Calibrated by", "zh": "校准员"},
+    "checked_by": {"en": "Checked by", "zh": "核验员"},
+    "approved_by": {"en": "Approved by", "zh": "批准人"},
+    "statement_item": {"en": "The results relate only to the item calibrated.",
+                       "zh": "本证书的校准结果仅对所校准的仪器有效。"},
+    "statement_copy": {"en": "This certificate shall not be reproduced except in full without "
+                             "the written approval of the issuing laboratory.",
+                       "zh": "未经本机构书面批准，不得部分复制本证书。"},
+    "statement_recal": {"en": "Recalibration interval: decided by the user, usually not more "
+                              "than 12 months (draft clause 9).",
+                        "zh": "复校时间间隔由用户自行确定，一般不超过12个月（规范第9章）。"},
+    "virtual_note": {"en": "Produced by gonio from a virtual bench (simulated readings). It "
+                           "demonstrates the layout and the computations only; it certifies "
+                           "nothing about any instrument.",
+                     "zh": "本文件由 gonio 根据虚拟台架（模拟读数）生成，仅演示版式与计算，"
+                           "不证明任何仪器的计量特性。"},
+    "source_file": {"en": "Readings file", "zh": "读数文件"},
+    "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
+    # the seven items (Annex B order) — the draft's own Chinese terms
+    "scale_factor": {"en": "Scale factor K", "zh": "标度因数 K"},
+    "scale_factor_nonlinearity": {"en": "Scale-factor nonlinearity K_l",
+                                  "zh": "标度因数非线性度 K_l"},
+    "zero_stability": {"en": "Zero stability B_s", "zh": "零位稳定性 B_s"},
+    "angle_deviation": {"en": "Angle-position deviation E", "zh": "角位置偏差 E"},
+    "repeatability": {"en": "Angle-position repeatability R", "zh": "角位置重复性 R"},
+    "rate_consistency": {"en": "Rate consistency C_v", "zh": "速率一致性 C_v"},
+    "pointing_consistency": {"en": "Pointing consistency C_g", "zh": "指向一致性 C_g"},
+    # units as shown
+    "u_counts/deg": {"en": "counts/°", "zh": "脉冲数/(°)"},
+    "u_%": {"en": "%", "zh": "%"},
+    "u_deg/h": {"en": "°/h", "zh": "(°)/h"},
+    "u_arcsec": {"en": "″", "zh": "″"},
+    "u_ppm": {"en": "ppm", "zh": "ppm"},
+    # item notes
+    "note_zero_range": {"en": "range/T (definition 3.3): {v} °/h", "zh": "极差/T（定义3.3）：{v} (°)/h"},
+    "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
+    "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
+    # figures
+    "fig_deviation": {"en": "Fig. 1 Angle-position deviation of every series (cf. Annex Fig. A.4)",
+                      "zh": "图1 各组角位置偏差曲线（参见附录图A.4）"},
+    "fig_repeat": {"en": "Fig. 2 Repeatability per position (cf. Annex Fig. A.5)",
+                   "zh": "图2 各位置的角位置重复性（参见附录图A.5）"},
+    "fig_tilt": {"en": "Fig. 3 Tilt error at the tilt bound: elliptic model (Annex A.4.2, Fig. A.3) "
+                       "and rigid-body model",
+                 "zh": "图3 倾斜误差：椭圆投影模型（附录A.4.2，图A.3）与刚体模型"},
+    "fig_sf": {"en": "Fig. 4 Scale factor per round (7.1)", "zh": "图4 各测回标度因数（7.1）"},
+    "fig_zero": {"en": "Fig. 5 Zero-stability readings and drift (7.3)",
+                 "zh": "图5 零位稳定性读数及漂移（7.3）"},
+    "fig_rate": {"en": "Fig. 6 Deviation per rate (7.6)", "zh": "图6 不同速率下的角位置偏差（7.6）"},
+    "fig_pointing": {"en": "Fig. 7 Deviation per axis direction (7.7)",
+                     "zh": "图7 不同指向下的角位置偏差（7.7）"},
+    "fig_budget": {"en": "Fig. 8 Uncertainty budget: contributions |c_i|·u_i (Annex A)",
+                   "zh": "图8 不确定度分量 |c_i|·u_i（附录A）"},
+    "ax_position": {"en": "table position (°)", "zh": "转台位置 (°)"},
+    "ax_deviation": {"en": "deviation E (″)", "zh": "偏差 E (″)"},
+    "ax_std": {"en": "standard deviation s (″)", "zh": "标准偏差 s (″)"},
+    "ax_tilt": {"en": "error Δ (″)", "zh": "误差 Δ (″)"},
+    "ax_round_angle": {"en": "round angle θ_i (°)", "zh": "测回角度 θ_i (°)"},
+    "ax_K": {"en": "K_i (counts/°)", "zh": "K_i (脉冲数/(°))"},
+    "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间 (min)"},
+    "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M (″)"},
+    "ax_contribution": {"en": "contribution (″)", "zh": "分量 (″)"},
+    "lg_series": {"en": "series", "zh": "组"},
+    "lg_mean": {"en": "mean E_i", "zh": "平均 E_i"},
+    "lg_elliptic": {"en": "elliptic model, ψ = {psi}°", "zh": "椭圆模型, ψ = {psi}°"},
+    "lg_rigid": {"en": "rigid body, after 7.1 (≡ 0)", "zh": "刚体模型, 经7.1标定后 (≡ 0)"},
+    "lg_rigid_uncal": {"en": "rigid body, uncalibrated", "zh": "刚体模型, 未标定"},
+    "lg_mean_K": {"en": "K (mean)", "zh": "K（平均）"},
+    "lg_drift": {"en": "linear drift {v} °/h", "zh": "线性漂移 {v} (°)/h"},
+    "lg_U": {"en": "U", "zh": "U"},
+    "lg_R": {"en": "R = max", "zh": "R = 最大值"},
+    "lg_reference": {"en": "(reference)", "zh": "（参考）"},
+    "no_data": {"en": "not measured", "zh": "未测"},
+    "up": {"en": "up", "zh": "竖直向上"}, "north": {"en": "north", "zh": "正北"},
+    "south": {"en": "south", "zh": "正南"}, "east": {"en": "east", "zh": "正东"},
+    "west": {"en": "west", "zh": "正西"},
+}
+
+
+def labels(lang: str = "en") -> dict[str, str]:
+    """The labels of ``lang`` ("en" or "zh") as a flat mapping.
+
+    >>> labels("zh")["scale_factor_nonlinearity"]
+    '标度因数非线性度 K_l'
+    >>> labels("fr")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key lang: expected one of en, zh, got 'fr'
+    """
+    if lang not in LANGUAGES:
+        raise GonioError(f"expected one of {', '.join(LANGUAGES)}, got {lang!r}", key="lang")
+    return {k: v[lang] for k, v in LABELS.items()}
+
+
+#: Family names of CJK fonts looked for, best first.
+CJK_FAMILIES: tuple[str, ...] = ("Noto Sans CJK SC", "Noto Sans CJK JP", "Noto Serif CJK SC",
+                                 "Source Han Sans SC", "Source Han Sans CN", "WenQuanYi Zen Hei",
+                                 "WenQuanYi Micro Hei", "AR PL UMing CN", "AR PL UKai CN",
+                                 "Droid Sans Fallback", "Noto Sans SC", "SimHei",
+                                 "Microsoft YaHei")
+_CJK_FILE = re.compile(r"(cjk|wqy|wenquanyi|sourcehan|droidsansfallback|uming|ukai|simhei|msyh)",
+                       re.IGNORECASE)
+
+
+def cjk_font() -> str:
+    """Family name of an installed CJK font matplotlib can use.
+
+    Looks in matplotlib's font list, then scans the system font folders afresh
+    (fonts installed after matplotlib built its cache). Raises a GonioError naming
+    the package to install when there is none.
+    """
+    from matplotlib import font_manager as fm
+
+    def known() -> str | None:
+        names = {f.name for f in fm.fontManager.ttflist}
+        return next((n for n in CJK_FAMILIES if n in names), None)
+
+    name = known()
+    if name is None:
+        for path in fm.findSystemFonts():
+            if _CJK_FILE.search(path):
+                try:
+                    fm.fontManager.addfont(path)
+                except Exception:  # pragma: no cover - unreadable font file
+                    continue
+        name = known()
+    if name is None:
+        raise GonioError("--lang zh needs a CJK font and none is installed: install the "
+                         "'fonts-noto-cjk' package (Debian/Ubuntu: apt-get install fonts-noto-cjk, "
+                         "or run scripts/install-test-system-deps.sh)", key="lang")
+    return name
+
+
+# --------------------------------------------------------------------------- numbers
+
+def round_half_up(x: float, decimals: int) -> str:
+    """``x`` rounded half up to ``decimals`` places (negative: tens, hundreds...), as text.
+
+    The one rounding of the certificate (JCGM 100 7.2.6 rounds half up); works on
+    the shortest repr of the float, so 0.125 → "0.13" and 2.675 → "2.68".
+
+    >>> round_half_up(0.35896, 2), round_half_up(-0.11879, 2), round_half_up(76434.84259, 3)
+    ('0.36', '-0.12', '76434.843')
+    >>> round_half_up(0.125, 2), round_half_up(1234.5, -2), round_half_up(-0.0004, 2)
+    ('0.13', '1200', '0.00')
+    """
+    q = Decimal(1).scaleb(-decimals)
+    d = Decimal(repr(float(x))).quantize(q, rounding=ROUND_HALF_UP)
+    if d == 0:
+        d = abs(d)
+    return f"{d:f}" if decimals >= 0 else f"{d.quantize(Decimal(1)):f}"
+
+
+def decimals_for_sig(x: float, sig: int) -> int:
+    """Decimal place that leaves ``sig`` significant digits of ``x`` after half-up rounding.
+
+    >>> decimals_for_sig(0.35896, 2), decimals_for_sig(0.0996, 2), decimals_for_sig(76434.8, 8)
+    (2, 2, 3)
+    """
+    if x == 0 or not math.isfinite(x):
+        return sig - 1
+    d = Decimal(repr(abs(float(x))))
+    e = d.adjusted()                       # exponent of the leading digit
+    dec = sig - 1 - e
+    r = d.quantize(Decimal(1).scaleb(-dec), rounding=ROUND_HALF_UP)
+    if r.adjusted() > e:                   # 0.0996 → 0.100: one digit more to the left
+        dec -= 1
+    return dec
+
+
+_SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def display_number(x: float | None, sig: int = 3) -> str:
+    """``x`` to ``sig`` significant digits, half up; below 10⁻³ as ``m×10⁻ⁿ``.
+
+    >>> display_number(76434.8425925926, 8), display_number(2.0533102, 3)
+    ('76434.843', '2.05')
+    >>> display_number(2.1805064433995786e-05, 3), display_number(8.191e-05, 3)
+    ('2.18×10⁻⁵', '8.19×10⁻⁵')
+    >>> display_number(0.0, 3), display_number(None)
+    ('0', '—')
+    """
+    if x is None or not math.isfinite(x):
+        return "—"
+    if x == 0:
+        return "0"
+    if abs(x) < 1e-3:
+        e = Decimal(repr(abs(float(x)))).adjusted()
+        m = float(Decimal(repr(float(x))).scaleb(-e))
+        mant = round_half_up(m, decimals_for_sig(m, sig))
+        if mant.lstrip("-").startswith("10"):      # 9.996e-5 → 1.00×10⁻⁴
+            e += 1
+            m = float(Decimal(repr(float(x))).scaleb(-e))
+            mant = round_half_up(m, decimals_for_sig(m, sig))
+        return f"{mant}×10{str(e).translate(_SUP)}"
+    return round_half_up(x, max(decimals_for_sig(x, sig), 0))   # never round away integer digits
+
+
+def display_uncertainty(U: float) -> str:
+    """Expanded uncertainty to 2 significant digits, half up (JCGM 100 7.2.6).
+
+    >>> display_uncertainty(0.3589621064934065), display_uncertainty(0.297), display_uncertainty(0.0996)
+    ('0.36', '0.30', '0.10')
+    """
+    return round_half_up(U, decimals_for_sig(U, 2))
+
+
+def display_item(name: str, value: float | None, U: float | None = None) -> str:
+    """The certificate's text for item ``name``.
+
+    E and R are shown to the decimal place of U (JCGM 100 7.2.6) when U is given;
+    every other item (and E, R without U) to :data:`ITEM_SIG_DIGITS` significant
+    digits. E is shown with its sign, as "± max |E_i|" of 7.4 with the sign found.
+
+    >>> display_item("angle_deviation", -0.11879399, U=0.35896)
+    '-0.12'
+    >>> display_item("repeatability", 0.13901059, U=0.35896)
+    '0.14'
+    >>> display_item("scale_factor", 76434.8425925926)
+    '76434.843'
+    >>> display_item("angle_deviation", 0.873, U=0.46)
+    '+0.87'
+    """
+    if value is None or not math.isfinite(value):
+        return "—"
+    if name in ITEMS_AT_U_PLACE and U is not None and U > 0:
+        s = round_half_up(value, decimals_for_sig(U, 2))
+    else:
+        s = display_number(value, ITEM_SIG_DIGITS.get(name, 3))
+    if name == "angle_deviation" and not s.startswith("-") and float(value) != 0:
+        s = "+" + s
+    return s
+
+
+_NUM = re.compile(r"^([+-]?\d+(?:\.\d+)?)(?:×10([⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+))?$")
+_UNSUP = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+
+
+def parse_display(text: str) -> float:
+    """A displayed number back to a float (inverse of :func:`display_number`).
+
+    >>> parse_display("2.18×10⁻⁵"), parse_display("+0.87"), parse_display("76434.843")
+    (2.18e-05, 0.87, 76434.843)
+    """
+    m = _NUM.match(text.strip())
+    if not m:
+        raise ValueError(f"not a displayed number: {text!r}")
+    v = float(m.group(1))
+    if m.group(2):
+        v = float(Decimal(m.group(1)).scaleb(int(m.group(2).translate(_UNSUP))))
+    return v
+
+
+def last_digit_unit(text: str) -> float:
+    """The unit of the last shown digit of a displayed number (half of it bounds the rounding).
+
+    >>> last_digit_unit("0.36"), last_digit_unit("2.18×10⁻⁵"), last_digit_unit("1200")
+    (0.01, 1e-07, 1.0)
+    """
+    m = _NUM.match(text.strip())
+    if not m:
+        raise ValueError(f"not a displayed number: {text!r}")
+    mant = m.group(1)
+    dec = len(mant.split(".")[1]) if "." in mant else 0
+    e = int(m.group(2).translate(_UNSUP)) if m.group(2) else 0
+    return float(Decimal(1).scaleb(e - dec))
+
+
+def display_position(x: float) -> str:
+    """A table position or other setting: half up to 3 decimals, trailing zeros dropped.
+
+    >>> display_position(240.0), display_position(7.5), display_position(2.0)
+    ('240', '7.5', '2')
+    """
+    s = round_half_up(x, 3)
+    return s.rstrip("0").rstrip(".") if "." in s else s
+
+
+def display(rule: str, value: float | None, U: float | None = None) -> str:
+    """Every number of the certificate, by rule name — the single entry point.
+
+    Rules: ``"U"`` (2 significant digits, :func:`display_uncertainty`),
+    ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
+    ``"item:<name>"`` (:func:`display_item`), ``"pos"`` (:func:`display_position`),
+    ``"int"`` (nearest integer).
+
+    >>> display("U", 0.3589), display("atU", 0.0434, U=0.3589), display("sig3", 1296000.003)
+    ('0.36', '0.04', '1296000')
+    >>> display("item:angle_deviation", -0.1188, U=0.3589), display("int", 4586091.0)
+    ('-0.12', '4586091')
+    """
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"
+    value = float(value)
+    if rule == "U":
+        return display_uncertainty(value)
+    if rule == "atU":
+        if U is None or U <= 0:
+            return display_number(value, 3)
+        return round_half_up(value, decimals_for_sig(U, 2))
+    if rule.startswith("sig"):
+        return display_number(value, int(rule[3:]))
+    if rule.startswith("item:"):
+        return display_item(rule[5:], value, U)
+    if rule == "pos":
+        return display_position(value)
+    if rule == "int":
+        return round_half_up(value, 0)
+    raise ValueError(f"unknown display rule {rule!r}")
