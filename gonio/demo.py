@@ -9,22 +9,21 @@ from gonio.calibrate import CalibrationReport, calibrate, write_calibration
 from gonio.protocol import load_protocol
 
 
-def demo(out: str | Path, seed: int = 0, bench: str = "rlg",
-         protocol: str = "ogam-draft") -> tuple[CalibrationReport, list[Path]]:
-    """Simulate ``protocol`` on ``bench`` and calibrate the readings; write everything to ``out``.
+def demo(out: str | Path, seed: int = 0, bench: str = "rlg", protocol: str = "ogam-draft",
+         lab: str | Path | None = None, lang: str = "en") -> tuple[CalibrationReport, list[Path]]:
+    """Simulate ``protocol`` on ``bench``, calibrate the readings, write results and certificate.
 
     Returns the report and the paths written (readings.csv, truth.json, results.json, ...).
     """
+    from gonio.report.certificate import load_lab, write_certificate
+
     out = Path(out)
+    lab_d = load_lab(lab) if lab else None      # validate inputs before simulating
     proto = load_protocol(protocol)
     session = run_session(proto, load_bench(bench), seed=seed)
     written = list(write_session(session, out).values())
     report = calibrate(out / "readings.csv", proto, static_record=session.static_record)
     written += list(write_calibration(report, out).values())
-    try:
-        from gonio.report.certificate import write_certificate
-    except ImportError:  # the certificate module is optional until it lands
-        write_certificate = None
-    if write_certificate is not None:
-        written += list(write_certificate(report, out, truth=session.truth).values())
+    written += list(write_certificate(report, out, truth=session.truth, lab=lab_d,
+                                      lang=lang).values())
     return report, written

@@ -18,14 +18,29 @@ def register(sub) -> None:
     p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
+    add_certificate_options(p)
     p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
     p.set_defaults(func=run)
 
 
-def emit(report, out, as_json: bool) -> None:
-    """Write the outputs and print the summary (or the JSON)."""
+def add_certificate_options(p) -> None:
+    """``--lab FILE`` and ``--lang en|zh`` (shared by calibrate and demo)."""
+    p.add_argument("--lab", default=None, metavar="FILE",
+                   help="laboratory, customer and signatory details (TOML, see "
+                        "protocols/lab-example.toml); without it the certificate is marked as a "
+                        "virtual-bench example")
+    p.add_argument("--lang", choices=("en", "zh"), default="en",
+                   help="certificate language (zh needs a CJK font, e.g. fonts-noto-cjk)")
+
+
+def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) -> None:
+    """Write the outputs (results, tables, certificate) and print the summary (or the JSON)."""
+    from gonio.report.certificate import load_lab, write_certificate
+
+    lab_d = load_lab(lab) if lab else None      # validate before anything is written
     write_calibration(report, out)
+    write_certificate(report, out, truth=truth, lab=lab_d, lang=lang)
     if as_json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
     else:
@@ -36,5 +51,5 @@ def run(args) -> int:
     if args.monte_carlo < 0:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
     report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo)
-    emit(report, args.out, args.json)
+    emit(report, args.out, args.json, lab=args.lab, lang=args.lang)
     return 0

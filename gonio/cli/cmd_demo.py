@@ -17,6 +17,8 @@ def register(sub) -> None:
     p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
+    from gonio.cli.cmd_calibrate import add_certificate_options
+    add_certificate_options(p)
     p.set_defaults(func=run)
 
 
@@ -25,7 +27,7 @@ def run(args) -> int:
 
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    report, paths = demo(args.out, seed=args.seed, bench=args.bench)
+    report, paths = demo(args.out, seed=args.seed, bench=args.bench, lab=args.lab, lang=args.lang)
     if args.json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
     else:
