@@ -78,6 +78,7 @@ class CalibrationReport:
     repeatability_source: str
     noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
+    eda: object | None = None            # gonio.eda.EdaResult of the equal_division rows
 
     def to_dict(self) -> dict:
         """The ``results.json`` content (plain JSON types, deterministic)."""
@@ -103,6 +104,8 @@ class CalibrationReport:
                                      "noise_reason": "the Allan analysis of 7.3 needs the "
                                      "instrument's continuous record (a stream); a readings "
                                      "file holds only the 15 readings"}
+        if self.eda is not None:
+            out["equal_division"] = {"clause": "IEC 62047-20 Annex A.3", **self.eda.to_dict()}
         out["uncertainty"] = unc
         out["readings_taken"] = list(READINGS_TAKEN)
         return json_safe(out)
@@ -225,7 +228,28 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
                                   reference_orientation=ref_orient)
     budget, src = annex_a_for(res, rd, proto, monte_carlo_trials, seed)
     noise, noise_src = analyse_zero_stability(static_record)
-    return CalibrationReport(res, budget, rd, proto, sha, src, noise, noise_src)
+    eda = equal_division_for(res, rd)
+    return CalibrationReport(res, budget, rd, proto, sha, src, noise, noise_src, eda)
+
+
+def equal_division_for(results: CalibrationResults, readings: Readings):
+    """Analyse the file's ``equal_division`` rows (table calibration, IEC 62047-20 A.3), if any.
+
+    Those rows are then used: they leave the ``unused_readings`` list.
+    """
+    from gonio.eda import eda_matrix_from_readings, equal_division_analysis
+
+    df = readings.data
+    rows = df[df["test"] == "equal_division"]
+    if not len(rows):
+        return None
+    D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False),
+                                              file=readings.path)
+    out = equal_division_analysis(D, start, step)
+    un = results.unused_readings
+    if len(un):
+        results.unused_readings = un[~un["line"].isin(set(rows["line"]))].reset_index(drop=True)
+    return out
 
 
 def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:

@@ -109,3 +109,39 @@ def test_bench_eda_uncertainty_consistent_with_scatter():
     # gives honest uncertainties, the white model understates them.
     assert 0.6 < np.concatenate(z["random_walk"]).std() < 1.5
     assert np.concatenate(z["white"]).std() > 1.5
+
+
+def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
+    """gonio calibrate on equal-division readings: the rows are used (not listed unused),
+    results.json gets ``equal_division``, the certificate a table-calibration section whose
+    numbers equal results.json."""
+    import html
+    import json
+    import re
+
+    from gonio.bench import write_session
+    from gonio.calibrate import calibrate, write_calibration
+    from gonio.report.certificate import write_certificate
+    from gonio.report.i18n import display, labels
+
+    proto = eda_protocol(4, 8, repeats=2)
+    write_session(run_session(proto, bench_for(np.random.default_rng(0)), seed=1), tmp_path)
+    report = calibrate(tmp_path / "readings.csv", proto)
+    write_calibration(report, tmp_path)
+    res = json.loads((tmp_path / "results.json").read_text())
+    assert res["unused_readings"] == []
+    e = res["equal_division"]
+    assert (e["n_starts"], e["m_points"], e["repeats"], e["noise"]) == (4, 8, 2, "random_walk")
+    D, x, step = eda_matrix_from_readings(report.readings.data)
+    direct = equal_division_analysis(D, x, step)
+    assert np.allclose(e["table"]["error_arcsec"], direct.table_error_arcsec, atol=1e-6)
+    page = write_certificate(report, tmp_path)["certificate.html"].read_text()
+    assert html.escape(labels("en")["eda"]) in page
+    nums = re.findall(r'data-src="(equal_division[^"]+)" data-rule="([^"]+)"[^>]*>([^<]*)<', page)
+    assert len(nums) == 6 * 8 + 2
+    U = res["uncertainty"]["U_arcsec"]
+    for src, rule, text in nums:
+        v = res
+        for part in src.split("."):
+            v = v[int(part)] if isinstance(v, list) else v[part]
+        assert html.unescape(text) == display(rule, v, U), src

@@ -297,6 +297,10 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     add("h", L["details"])
     _detail_tables(res, L, U, add)
 
+    # table calibration by equal-division averaging, when the readings hold it
+    if res.get("equal_division"):
+        _eda_section(res, L, U, add)
+
     # figures
     add("h", L["figures"])
     for key, cap, draw in FIGURES:
@@ -304,6 +308,27 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     return {"id": certificate_id(report, lab), "virtual": virtual,
             "lab_name": (lab_["laboratory"]["name"] if lab else "gonio virtual bench"),
             "blocks": blocks, "results": res}
+
+
+def _eda_section(res: dict, L: dict, U: float, add) -> None:
+    """The table-calibration page: table and goniometer errors with their uncertainties."""
+    e = res["equal_division"]
+    add("h", L["eda"])
+    add("p", [L["eda_note"].format(n=e["n_starts"], m=e["m_points"], r=e["repeats"],
+                                   noise=e["noise"])])
+    rows = []
+    for i in range(e["m_points"]):
+        rows.append([_num(res, f"equal_division.table.position_deg.{i}", "pos", U),
+                     _num(res, f"equal_division.table.error_arcsec.{i}", "sig3", U),
+                     _num(res, f"equal_division.table.u_arcsec.{i}", "U", U),
+                     _num(res, f"equal_division.goniometer.angle_deg.{i}", "pos", U),
+                     _num(res, f"equal_division.goniometer.error_arcsec.{i}", "sig3", U),
+                     _num(res, f"equal_division.goniometer.u_arcsec.{i}", "U", U)])
+    add("table", ([L["eda_position"], L["eda_table"], "u (″)", L["eda_turned"], L["eda_gonio"],
+                   "u (″)"], rows), (0.18, 0.17, 0.15, 0.18, 0.17, 0.15))
+    add("p", _seg(L["eda_closure"],
+                  v=_num(res, "equal_division.closure.full_turn_arcsec", "sig3", U),
+                  u=_num(res, "equal_division.closure.u_full_turn_arcsec", "U", U)))
 
 
 def _seg(template: str, **nums) -> list:

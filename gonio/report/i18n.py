@@ -93,6 +93,21 @@ LABELS: dict[str, dict[str, str]] = {
                        "zh": "对规范草案中不明确之处的理解"},
     "details": {"en": "Details of the measurements", "zh": "测量详细数据"},
     "figures": {"en": "Figures", "zh": "图"},
+    "eda": {"en": "Rotary-table calibration by equal-division averaging (IEC 62047-20 Annex A.3)",
+            "zh": "等分平均法转台校准（IEC 62047-20 附录 A.3）"},
+    "eda_note": {"en": "{n} starts, {m} points per revolution, {r} repeat(s); table error "
+                       "indicated − true with Σt = 0; goniometer error as a function of the angle "
+                       "turned; standard uncertainties from the residuals ({noise} reading-error "
+                       "model). Table harmonics whose order is a multiple of n are unobservable.",
+                 "zh": "起始位置 {n} 个，每周 {m} 点，重复 {r} 次；转台误差为示值减真值，Σt = 0；"
+                       "测角仪误差为转角的函数；标准不确定度由残差求得（{noise} 读数误差模型）。"
+                       "阶次为 n 倍数的转台谐波不可观测。"},
+    "eda_position": {"en": "table position (°)", "zh": "转台位置 (°)"},
+    "eda_table": {"en": "table error (″)", "zh": "转台误差 (″)"},
+    "eda_turned": {"en": "angle turned (°)", "zh": "转角 (°)"},
+    "eda_gonio": {"en": "goniometer error (″)", "zh": "测角仪误差 (″)"},
+    "eda_closure": {"en": "Full-circle closure: goniometer error at 360° = {v}″ ± {u}″",
+                    "zh": "整周闭合：测角仪 360° 误差 = {v}″ ± {u}″"},
     "signatory": {"en": "Signatures", "zh": "签字"},
     "calibrated_by": {"en": "Calibrated by", "zh": "校准员"},
     "checked_by": {"en": "Checked by", "zh": "核验员"},
