@@ -231,3 +231,10 @@ def test_cli_calibrate_writes_certificate_with_lab(run, tmp_path, capsys):
                  "--lab", str(bad)]) == 2
     assert "laboratory.name" in capsys.readouterr().err
     assert not (tmp_path / "p" / "results.json").exists()
+
+
+def test_same_inputs_same_certificate_bytes(run, tmp_path):
+    a = cert.write_certificate(run["report"], tmp_path / "a")
+    b = cert.write_certificate(run["report"], tmp_path / "b")
+    for name in ("certificate.html", "certificate.pdf"):
+        assert a[name].read_bytes() == b[name].read_bytes(), name
