@@ -465,7 +465,9 @@ def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
         if np.any(finite != np.round(finite)):
             raise GonioError("fractional gyro_counts need metadata 'counts_quantised: false'",
                              column="gyro_counts")
-    rate = get("rate_dps", DEFAULT_RATE_DPS).astype(float).fillna(DEFAULT_RATE_DPS)
+    # A missing rate stays an empty cell (the reader's default, 60 °/s, applies), so
+    # zero-stability rows — the table at rest — carry no rate, as in data-formats §1.
+    rate = get("rate_dps", DEFAULT_RATE_DPS).astype(float)
     orient = get("orientation", DEFAULT_ORIENTATION).fillna(DEFAULT_ORIENTATION)
     extras = [c for c in df.columns if c not in COLUMNS and c != "line"]
     columns_text = [
