@@ -592,11 +592,11 @@ def _layout(content: dict, L: dict) -> list[list]:
             for w in widths[:-1]:
                 xs.append(xs[-1] + w * (_RIGHT - _LEFT))
 
-            def row_op(cells, bold=False, shade=False):
+            def row_op(cells, bold=False, shade=False, xs=tuple(xs), widths=tuple(widths)):
                 wrapped = [_wrap(_text(c), lay.cols(w) - 1) for c, w in zip(cells, widths)]
                 n = max(len(w) for w in wrapped)
 
-                def op(fig, y, wrapped=wrapped, n=n):
+                def op(fig, y, wrapped=wrapped, n=n, xs=xs):
                     if shade:
                         fig.add_artist(_rect(fig, y, ln * n + 2 * _PT))
                     for x, ls in zip(xs, wrapped):
