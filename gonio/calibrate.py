@@ -235,7 +235,9 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
 def equal_division_for(results: CalibrationResults, readings: Readings):
     """Analyse the file's ``equal_division`` rows (table calibration, IEC 62047-20 A.3), if any.
 
-    Those rows are then used: they leave the ``unused_readings`` list.
+    Those rows are then used: they leave the ``unused_readings`` list. When they do
+    not form a complete measurement the analysis is skipped and the rows stay
+    unused, with the reason.
     """
     from gonio.eda import eda_matrix_from_readings, equal_division_analysis
 
@@ -243,10 +245,20 @@ def equal_division_for(results: CalibrationResults, readings: Readings):
     rows = df[df["test"] == "equal_division"]
     if not len(rows):
         return None
-    D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False),
-                                              file=readings.path)
-    out = equal_division_analysis(D, start, step)
+    from gonio.errors import GonioError
+
     un = results.unused_readings
+    try:
+        D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False),
+                                                  file=readings.path)
+        out = equal_division_analysis(D, start, step)
+    except GonioError as exc:
+        # Not a complete equal-division measurement: the rest of the calibration goes
+        # on; the rows stay listed as unused, with the reason.
+        if len(un) and "reason" in un.columns:
+            mask = un["line"].isin(set(rows["line"]))
+            un.loc[mask, "reason"] = f"equal-division analysis not possible: {exc.message}"
+        return None
     if len(un):
         results.unused_readings = un[~un["line"].isin(set(rows["line"]))].reset_index(drop=True)
     return out

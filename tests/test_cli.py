@@ -116,3 +116,16 @@ def test_bad_readings_file_in_subprocess(tmp_path):
     assert r.stderr.count("\n") == 1 and "bad.csv:2" in r.stderr and "gyro_deg" in r.stderr
     assert "Traceback" not in r.stderr
     assert not (tmp_path / "o" / "results.json").exists()
+
+
+def test_incomplete_equal_division_rows_do_not_stop_the_calibration(tmp_path):
+    """A stray equal_division row (tests/data/full.csv has one) is reported, not fatal."""
+    from pathlib import Path
+
+    full = Path(__file__).parent / "data" / "full.csv"
+    assert main(["calibrate", str(full), "--out", str(tmp_path / "o")]) == 0
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    assert "equal_division" not in res
+    stray = [u for u in res["unused_readings"] if u["test"] == "equal_division"]
+    assert stray and all("equal-division analysis not possible" in u["reason"] for u in stray)
+    assert res["angle_deviation"]["measured"]
