@@ -217,8 +217,8 @@ def unwrap_counts(raw: np.ndarray, bits: int, previous: int | None = None) -> np
         return np.cumsum(d)
 
 
-def _line_of_row(path: Path, header: _Header, row: int) -> int:
-    """1-based file line of data row ``row`` (0-based, blank lines skipped); used on errors."""
+def _data_lines(path: Path, header: _Header):
+    """Yield (data row index, 1-based file line, raw bytes) of the non-blank data lines."""
     with open(path, "rb") as fh:
         fh.seek(header.data_offset)
         line = header.header_line
@@ -227,8 +227,15 @@ def _line_of_row(path: Path, header: _Header, row: int) -> int:
             line += 1
             if raw.strip():
                 n += 1
-                if n == row:
-                    return line
+                yield n, line, raw
+
+
+def _line_of_row(path: Path, header: _Header, row: int) -> int:
+    """1-based file line of data row ``row`` (0-based, blank lines skipped); used on errors."""
+    line = header.header_line
+    for n, line, _ in _data_lines(path, header):
+        if n == row:
+            break
     return line
 
 
@@ -260,37 +267,29 @@ def _locate_bad(path: Path, header: _Header, first_row: int, nrows: int, reason:
     """Re-read rows ``first_row``… cell by cell and raise for the first bad one."""
     fname = str(path)
     used = [c for c in header.columns if c in STREAM_COLUMNS]
-    with open(path, "rb") as fh:
-        fh.seek(header.data_offset)
-        line = header.header_line
-        n = -1
-        for raw in fh:
-            line += 1
-            if not raw.strip():
-                continue
-            n += 1
-            if n < first_row:
-                continue
-            if n >= first_row + nrows:
-                break
-            where = dict(file=fname, line=line)
-            try:
-                text = raw.decode("utf-8")
-            except UnicodeDecodeError:
-                raise GonioError("not UTF-8 text", **where) from None
-            if text.lstrip().startswith("#"):
-                raise GonioError("metadata line after the header; '#' lines belong at the top",
-                                 **where)
-            try:
-                cells = next(csv.reader([text.rstrip("\r\n")]))
-            except (csv.Error, StopIteration):
-                raise GonioError("unreadable CSV row", **where) from None
-            if len(cells) != len(header.columns):
-                raise GonioError(f"expected {len(header.columns)} fields as in the header, "
-                                 f"got {len(cells)}", **where)
-            row = dict(zip(header.columns, cells))
-            for col in used:
-                _check_cell(row[col], col, header, where)
+    for n, line, raw in _data_lines(path, header):
+        if n < first_row:
+            continue
+        if n >= first_row + nrows:
+            break
+        where = dict(file=fname, line=line)
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError:
+            raise GonioError("not UTF-8 text", **where) from None
+        if text.lstrip().startswith("#"):
+            raise GonioError("metadata line after the header; '#' lines belong at the top",
+                             **where)
+        try:
+            cells = next(csv.reader([text.rstrip("\r\n")]))
+        except (csv.Error, StopIteration):
+            raise GonioError("unreadable CSV row", **where) from None
+        if len(cells) != len(header.columns):
+            raise GonioError(f"expected {len(header.columns)} fields as in the header, "
+                             f"got {len(cells)}", **where)
+        row = dict(zip(header.columns, cells))
+        for col in used:
+            _check_cell(row[col], col, header, where)
     raise GonioError(f"rows {first_row + 1}–{first_row + nrows} of the data do not parse "
                      f"({reason})", file=fname, line=header.header_line + first_row + 1)
 
