@@ -1,0 +1,1 @@
+"""Analysis layer (rate-gyro arithmetic here; the layout moves more in)."""

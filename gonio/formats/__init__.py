@@ -1,0 +1,1 @@
+"""File formats (rate-gyro readings here; the layout moves more in)."""
