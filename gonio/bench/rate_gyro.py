@@ -7,8 +7,8 @@ Model (thesis 004's extended model with the terms of JJF 1535-2015 and IEC 62047
 
 * ω_dyn: the input rate about the input axis through the second-order dynamics
   H(s) = ω_n²/(s² + 2ζω_n s + ω_n²) (steady state; bandwidth and phase);
-* f(ω): dead band d (|ω| ≤ d gives 0, else ω − d·sign ω: the threshold is 2d by the
-  50 % rule), then asymmetry (K·(1 ± α/2) for ω ≷ 0), cubic nonlinearity c₃ω³ and
+* f(ω): threshold d (|ω| < d gives 0 — the sensing element does not respond — else ω;
+  the 50 % rule then finds d), then asymmetry (K·(1 ± α/2) for ω ≷ 0), cubic nonlinearity c₃ω³ and
   saturation at ±range;
 * K(T, V) = K₀(1 + k₁ΔT + k₂ΔT²)·(V/V₀)^r·(1 + ε_r (V − V₀)/V₀) with r = 1 for a
   ratiometric gyro (IEC 62047-20 5.1.3.5), 0 otherwise; ΔT = T − T_ref;
@@ -117,10 +117,11 @@ class RateGyroConfig:
                 + self.bias_supply_dps_per_v * (np.asarray(supply_v, float) - self.supply_nominal_v))
 
     def response(self, rate_dps) -> np.ndarray:
-        """f(ω): dead band, asymmetry, cubic nonlinearity, saturation (°/s equivalent)."""
+        """f(ω): threshold (no response below ``dead_band_dps``), asymmetry, cubic
+        nonlinearity, saturation (°/s equivalent)."""
         w = np.asarray(rate_dps, float)
         d = self.dead_band_dps
-        wd = np.sign(w) * np.maximum(np.abs(w) - d, 0.0) if d > 0 else w
+        wd = np.where(np.abs(w) < d, 0.0, w) if d > 0 else w
         out = wd * (1 + 0.5 * self.sf_asymmetry * np.sign(wd)) + self.sf_cubic_per_dps2 * wd ** 3
         return np.clip(out, -self.range_dps * 1.5, self.range_dps * 1.5) \
             if self.range_dps > 0 else out

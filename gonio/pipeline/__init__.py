@@ -1,0 +1,1 @@
+"""Pipelines (rate-gyro pipelines here; the layout moves calibrate, validate, demo in)."""

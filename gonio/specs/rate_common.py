@@ -1,0 +1,314 @@
+"""What the two rate-gyro specifications share: protocol reading, programme planning,
+segment means, the item/result records and the per-item uncertainty helpers.
+
+Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20`; the formulas
+themselves live in :mod:`gonio.analysis.rate_gyro`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from gonio.bench.rate_session import Segment
+from gonio.errors import GonioError
+from gonio.formats.rate_readings import RateReadings, read_rate_readings
+from gonio.resources import resolve
+from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from uncertainty import propagate
+
+# --------------------------------------------------------------------------- results
+
+
+@dataclass
+class Uncertainty:
+    """An item's uncertainty: components (symbol, source, u, c, |c|u, dof), u_c, U, k, ν_eff."""
+
+    components: list[dict]
+    u_c: float
+    U: float
+    k: float
+    nu_eff: float
+
+    def to_json(self) -> dict:
+        return {"components": self.components, "u_c": _f(self.u_c), "U": _f(self.U),
+                "k": _f(self.k), "nu_eff": _f(self.nu_eff)}
+
+
+def _f(x):
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+@dataclass
+class Item:
+    """One calibration item: value, unit, clause, measured, reason, uncertainty, details."""
+
+    key: str
+    title: str
+    clause: str
+    unit: str
+    value: float | None = None
+    measured: bool = True
+    reason: str = ""
+    uncertainty: Uncertainty | None = None
+    details: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        return {"value": _f(self.value), "unit": self.unit, "clause": self.clause,
+                "title": self.title, "measured": bool(self.measured), "reason": self.reason,
+                "uncertainty": None if self.uncertainty is None else self.uncertainty.to_json(),
+                "details": json_safe(self.details)}
+
+
+def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> Item:
+    """An item the readings do not allow, with the reason."""
+    return Item(key, title, clause, unit, None, False, reason)
+
+
+def json_safe(x):
+    """Plain JSON types; NaN/inf → None; numpy → Python."""
+    if isinstance(x, dict):
+        return {str(k): json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return [json_safe(v) for v in x.tolist()]
+    if isinstance(x, (np.floating, float)):
+        return _f(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (np.bool_,)):
+        return bool(x)
+    return x
+
+
+@dataclass
+class RateCalibrationResult:
+    """A rate-gyro calibration: items in the specification's order, metadata, source."""
+
+    spec_key: str
+    spec_title: str
+    items: dict[str, Item]
+    metadata: dict
+    source: dict
+    readings_taken: list[str]
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def source_sha256(self) -> str:
+        return self.source.get("sha256", "")
+
+    def to_json(self) -> dict:
+        """results.json: one entry per item {value, unit, clause, measured, reason,
+        uncertainty{components, u_c, U, k, nu_eff}} plus specification, source, metadata."""
+        out = {"specification": self.spec_title, "spec": self.spec_key,
+               "source": self.source, "metadata": self.metadata,
+               "items": {k: v.to_json() for k, v in self.items.items()},
+               "readings_taken": self.readings_taken}
+        out.update(json_safe(self.extra))
+        return out
+
+    def to_dict(self) -> dict:
+        return self.to_json()
+
+    def summary(self) -> str:
+        """One line per item."""
+        lines = [f"{self.spec_title}"]
+        for it in self.items.values():
+            if not it.measured:
+                lines.append(f"  {it.clause:10s} {it.title}: not measured ({it.reason})")
+                continue
+            u = ""
+            if it.uncertainty is not None and it.uncertainty.U is not None and math.isfinite(it.uncertainty.U):
+                u = f" ± {it.uncertainty.U:.3g} (k = {it.uncertainty.k:g})"
+            lines.append(f"  {it.clause:10s} {it.title}: {it.value:.6g}{u} {it.unit}")
+        return "\n".join(lines) + "\n"
+
+
+def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
+    """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
+    the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
+    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats;
+    ``p=None`` uses the fixed ``k``."""
+    r = propagate(value_fn, inputs, k=None if p is not None else k, p=p)
+    comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
+              "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
+             for c in r.contributions]
+    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof)
+
+
+# --------------------------------------------------------------------------- readings
+
+def source_info(rd: RateReadings) -> dict:
+    """File name, SHA-256 and row count of the readings."""
+    if rd.path is not None and Path(rd.path).is_file():
+        sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
+        name = Path(rd.path).name
+    else:
+        sha = hashlib.sha256(pd.util.hash_pandas_object(rd.data, index=False).values.tobytes()).hexdigest()
+        name = "<memory>"
+    return {"file": name, "sha256": sha, "rows": int(len(rd.data))}
+
+
+def load_readings(readings) -> RateReadings:
+    """A RateReadings from a path or as given."""
+    if isinstance(readings, RateReadings):
+        return readings
+    return read_rate_readings(readings)
+
+
+@dataclass(frozen=True)
+class SegmentMean:
+    """Mean and spread of one (test, run, step) segment."""
+
+    test: str
+    run: int
+    step: int
+    role: str
+    rate_dps: float
+    n: int
+    mean: float
+    std: float
+    time_s: float
+    temperature_c: float
+    supply_v: float
+    up_axis: str
+    north_axis: str
+    freq_hz: float
+
+
+def segment_means(df: pd.DataFrame, test: str) -> list[SegmentMean]:
+    """Per-segment means of ``test``, ordered by run then step."""
+    d = df[df["test"] == test]
+    out = []
+    for (run, step), g in d.groupby(["run", "step"], sort=True):
+        y = g["output"].to_numpy()
+        out.append(SegmentMean(test, int(run), int(step), str(g["role"].iloc[0]),
+                               float(g["rate_dps"].iloc[0]), int(y.size), float(y.mean()),
+                               float(y.std(ddof=1)) if y.size > 1 else math.nan,
+                               float(g["time_s"].iloc[0]), float(g["temperature_c"].iloc[0]),
+                               float(g["supply_v"].iloc[0]), str(g["up_axis"].iloc[0]),
+                               str(g["north_axis"].iloc[0]), float(g["freq_hz"].iloc[0])))
+    return out
+
+
+def segment_samples(df: pd.DataFrame, test: str, run: int, step: int) -> pd.DataFrame:
+    """The rows of one segment."""
+    return df[(df["test"] == test) & (df["run"] == run) & (df["step"] == step)]
+
+
+# --------------------------------------------------------------------------- protocol
+
+def bench_or_float(x, where: str, file) -> float | str:
+    """A protocol value that is a number or the word "bench" (taken from the bench)."""
+    if x == "bench":
+        return "bench"
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+        raise GonioError(f'expected a number or "bench", got {x!r}', file=file, key=where)
+    return float(x)
+
+
+def read_sections(path, schemas: dict[str, dict], spec_key: str,
+                  bench_keys: tuple[tuple[str, str], ...] = ()) -> tuple[dict, Path]:
+    """Read a rate protocol TOML: every section in ``schemas`` validated (unknown sections and
+    keys refused), ``protocol.spec`` must equal ``spec_key``. The (section, key) pairs in
+    ``bench_keys`` take a number or the word "bench" (default "bench")."""
+    p = resolve(path, kind="protocol")
+    raw = read_toml(p)
+    for sec in raw:
+        if sec not in schemas:
+            raise GonioError(f"unknown section (known: {', '.join(schemas)})", file=p, key=sec)
+    held = {}
+    for sec, key in bench_keys:
+        tab = raw.get(sec)
+        if isinstance(tab, dict) and key in tab:
+            tab = dict(tab)
+            held[(sec, key)] = bench_or_float(tab.pop(key), f"{sec}.{key}", p)
+            raw = {**raw, sec: tab}
+        else:
+            held[(sec, key)] = "bench"
+    out = {}
+    for sec, schema in schemas.items():
+        tab = raw.get(sec, {})
+        if not isinstance(tab, dict):
+            raise GonioError("expected a table", file=p, key=sec)
+        out[sec] = validate_table(tab, schema, sec, p)
+    if out["protocol"]["spec"] != spec_key:
+        raise GonioError(f"this protocol is for {out['protocol']['spec']!r}, not {spec_key!r}",
+                         file=p, key="protocol.spec")
+    for (sec, key), v in held.items():
+        out[sec][key] = v
+    return out, p
+
+
+PINT = Field("int", check=lambda x: x >= 1, expect="an integer ≥ 1")
+PFLOAT = Field("float", check=positive, expect="> 0")
+NNFLOAT = Field("float", default=0.0, check=non_negative, expect="≥ 0")
+
+
+def rate_series(rates, highest: float, lowest: float):
+    """One direction's rates: the explicit list, or R5 from lowest to highest."""
+    from gonio.analysis.rate_gyro import r5_rates
+    if rates:
+        return [float(r) for r in rates]
+    return r5_rates(lowest, highest)
+
+
+def sf_segments(test: str, run: int, rates_one_dir: list[float], *, dt: float, rest_samples: int,
+                n_low: int, n_high: int, settle_s: float, order: str, first_delay_s: float,
+                power_on: bool, off_time_s: float, temperature_c=None, ramp=1.0,
+                supply_v=None, include_zero: bool = False) -> list[Segment]:
+    """One scale-factor calibration (JJF 7.2.1.1 c)–d) or IEC 5.1.4.1): rest, the rates in
+    the given order (forward ascending then reverse ascending, or alternating ±Ω pairs),
+    rest. ``include_zero`` adds a rest point in the middle (IEC: a fit point)."""
+    if order == "ascending":
+        seq = [r for r in rates_one_dir] + [-r for r in rates_one_dir]
+    elif order == "alternating":
+        seq = [s * r for r in rates_one_dir for s in (1, -1)]
+    elif order == "iec":                      # x_1 = CCW max … rest … CW max
+        seq = [-r for r in sorted(rates_one_dir, reverse=True)] + [0.0] + sorted(rates_one_dir)
+    else:
+        raise GonioError(f"order must be ascending or alternating, got {order!r}", key="order")
+    segs = [Segment(test, run, 0, "rest", rest_samples, dt, 0.0, temperature_c=temperature_c,
+                    ramp_c_per_min=ramp, supply_v=supply_v, delay_s=first_delay_s,
+                    power_on=power_on, off_time_s=off_time_s)]
+    for j, r in enumerate(seq, 1):
+        n = n_low if abs(r) < 100 else n_high
+        segs.append(Segment(test, run, j, "rate" if r != 0 else "rest", n if r != 0 else rest_samples,
+                            dt, r, temperature_c=temperature_c, ramp_c_per_min=ramp,
+                            supply_v=supply_v, delay_s=settle_s))
+    segs.append(Segment(test, run, len(seq) + 1, "rest", rest_samples, dt, 0.0,
+                        temperature_c=temperature_c, ramp_c_per_min=ramp, supply_v=supply_v,
+                        delay_s=settle_s))
+    return segs
+
+
+def sf_calibration_means(means: list[SegmentMean], run: int):
+    """(rest before, rest after, rates, raw means, middle rest points) of one calibration."""
+    seg = [m for m in means if m.run == run]
+    if not seg:
+        raise GonioError(f"no segments for run {run}")
+    first, last = seg[0], seg[-1]
+    if first.role != "rest" or last.role != "rest":
+        raise GonioError(f"run {run}: a calibration starts and ends with a rest segment "
+                         f"(JJF 7.2.1.1 d)) — got {first.role!r} … {last.role!r}")
+    inner = seg[1:-1]
+    rates = np.array([m.rate_dps for m in inner if m.role == "rate"])
+    ys = np.array([m.mean for m in inner if m.role == "rate"])
+    zero = [m for m in inner if m.role == "rest"]
+    return first, last, rates, ys, zero
+
+
+def write_json(path, obj) -> None:
+    from gonio.atomic import write_text
+    write_text(path, json.dumps(json_safe(obj), indent=2, ensure_ascii=False, allow_nan=False) + "\n")
