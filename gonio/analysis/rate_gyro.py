@@ -432,10 +432,11 @@ def arw_from_coefficient(a_minus1: float, *, rate_unit: str, tau_unit: str) -> f
         raise GonioError(f"unsupported units {rate_unit}, τ in {tau_unit}") from None
 
 
-def arw_minus_half_line(tau_s, adev_dph, *, slope_tol: float = 0.1) -> tuple[float, np.ndarray]:
-    """IEC 62047-20 5.4.5.2 e), reading taken: a line of slope −½ through the part of the
-    Allan curve whose local slope is within −½ ± ``slope_tol``; its value at τ = 1 h in
-    °/h is the ARW in °/√h. Returns (ARW °/√h, mask of the τ used).
+def arw_minus_half_line(tau_s, adev_dph, *, slope_tol: float = 0.05) -> tuple[float, np.ndarray]:
+    """IEC 62047-20 5.4.5.2 e), reading taken: a line of slope −½ through the short-τ part of
+    the Allan curve — the τ from the shortest one up to the first whose local slope leaves
+    −½ ± ``slope_tol`` — its value at τ = 1 h in °/h is the ARW in °/√h. Returns
+    (ARW °/√h, mask of the τ used).
 
     >>> tau = np.array([1.0, 2, 4, 8, 16])
     >>> round(arw_minus_half_line(tau, 4.8 / np.sqrt(tau))[0], 6)
@@ -444,7 +445,11 @@ def arw_minus_half_line(tau_s, adev_dph, *, slope_tol: float = 0.1) -> tuple[flo
     t, s = _arr(tau_s, "tau_s"), _arr(adev_dph, "adev")
     lt, ls = np.log(t), np.log(s)
     slope = np.gradient(ls, lt)
-    mask = np.abs(slope + 0.5) <= slope_tol
+    ok = np.abs(slope + 0.5) <= slope_tol
+    first_bad = np.flatnonzero(~ok)
+    first_bad = first_bad[first_bad > int(np.argmax(ok))] if ok.any() else first_bad
+    end = int(first_bad[0]) if first_bad.size else ok.size
+    mask = ok & (np.arange(ok.size) < end)
     if not mask.any():
         raise GonioError("IEC 62047-20 5.4.5.2: no part of the Allan curve has slope −½")
     n_sqrt_s = math.exp(float(np.mean(ls[mask] + 0.5 * lt[mask])))   # (°/h)·√s

@@ -284,7 +284,8 @@ def sf_segments(test: str, run: int, rates_one_dir: list[float], *, dt: float, r
                     power_on=power_on, off_time_s=off_time_s)]
     for j, r in enumerate(seq, 1):
         n = n_low if abs(r) < 100 else n_high
-        segs.append(Segment(test, run, j, "rate" if r != 0 else "rest", n if r != 0 else rest_samples,
+        point = r != 0 or order == "iec"          # IEC 5.1.3.1: the rest is a fit point
+        segs.append(Segment(test, run, j, "rate" if point else "rest", n if point else rest_samples,
                             dt, r, temperature_c=temperature_c, ramp_c_per_min=ramp,
                             supply_v=supply_v, delay_s=settle_s))
     segs.append(Segment(test, run, len(seq) + 1, "rest", rest_samples, dt, 0.0,
