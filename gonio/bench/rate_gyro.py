@@ -174,8 +174,10 @@ class NoiseState:
             n = max(1, int(math.ceil(math.log(gyro.bias_instability_tau_max_s
                                               / gyro.bias_instability_tau_min_s) / math.log(ratio))) + 1)
             self.taus = gyro.bias_instability_tau_min_s * ratio ** np.arange(n)
-            # Σ GM(σ², T_i), T_i log-spaced by r: one-sided S(f) ≈ σ²/(2 f ln r) = B²/(π f)
-            self.sig = np.full(n, math.sqrt(2.0 * math.log(ratio) / math.pi) * b)
+            # GM(σ², T) has the one-sided PSD 4σ²T/(1 + (2πfT)²); summed over T_i log-spaced by
+            # r it is ≈ σ²/(f ln r) in the covered band; = B²/(π f) (IEEE 952) for
+            # σ² = B² ln r / π, whose Allan floor is √(2 ln 2/π)·B
+            self.sig = np.full(n, math.sqrt(math.log(ratio) / math.pi) * b)
         self.gm = self.sig * rng.standard_normal(self.taus.size) if self.taus.size else np.zeros(0)
         self.rw = 0.0
         self.t = 0.0

@@ -128,11 +128,14 @@ def truth(bench, proto: IECProtocol) -> dict:
                                 "nonlinearity of the fit)"}
     fb = mount_matrix("+z", "+x").T @ np.array([0.0, 0.0, 1.0])
     eb = mount_matrix("+z", "+x").T @ E
-    out["bias"] = {"value": float(g.bias_at(tb, vb)) + float(np.asarray(g.g_sensitivity_dps_per_g) @ fb)
-                   + g.cross_axis_x * eb[0] + g.cross_axis_y * eb[1], "how": "b(T_BASE) + g·f + k·ω_E"}
+    kr = k_tb / a             # measured rates are output / a_BASE, not output / K
+    b_in = float(g.bias_at(tb, vb)) + float(np.asarray(g.g_sensitivity_dps_per_g) @ fb) \
+        + g.cross_axis_x * eb[0] + g.cross_axis_y * eb[1]
+    out["bias"] = {"value": (b_in + float(g.response(np.array([ez]))[0])) * kr - ez,
+                   "how": "[b(T_BASE) + g·f + k·ω_E + f(Ω_E,z)]·K/a_BASE − Ω_E,z"}
     Ts = np.array(T)
     out["bias_temperature_coefficient"] = {
-        "value": rg.least_squares_line(Ts, np.array([float(g.bias_at(t, vb)) for t in Ts]))[0],
+        "value": rg.least_squares_line(Ts, np.array([float(g.bias_at(t, vb)) for t in Ts]))[0] * kr,
         "how": "least-squares slope of the model's b(T) over the grid (visits weight it "
                "differently when b is not linear)"}
     out["arw"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (tb - g.reference_temperature_c)),

@@ -501,6 +501,10 @@ def angle_random_walk(ctx: Context) -> Item:
     t = g["time_s"].to_numpy()
     dt = float((t[-1] - t[0]) / (t.size - 1))
     rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
+    if np.ptp(rate_dph) == 0:
+        return Item("angle_random_walk", title, clause, unit, 0.0,
+                    uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
+                    details={"note": "the static record does not vary: no noise to analyse"})
     allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
     fit = fit_noise_model(allan)
     ctx.cache["noise_fit"] = fit

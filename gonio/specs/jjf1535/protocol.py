@@ -5,9 +5,10 @@ Every key is checked (unknown keys and sections refused, units in the names). Th
 programme follows the clauses in the order a laboratory runs them: bias records with
 power cycles (7.2.8, 7.2.10, 7.2.11), warm-up records from power-on (7.2.9), the Q
 scale-factor calibrations (7.2.1–7.2.4), threshold (7.2.6) and resolution (7.2.7), the
-g-sensitivity positions (7.2.12), the static Allan record (7.2.13), the temperature
-points with a scale-factor calibration and a bias record at each (7.2.5, 7.2.14), and
-the vibration-table frequencies (7.2.15).
+g-sensitivity positions (7.2.12), the static Allan record (7.2.13), the vibration-table
+frequencies (7.2.15), and last the temperature points with a scale-factor calibration and
+a bias record at each (7.2.5, 7.2.14) — last, so that no room-temperature item runs while
+the chamber is still returning from the lower working temperature.
 """
 
 from __future__ import annotations
@@ -157,6 +158,12 @@ def plan(proto: JJFProtocol, bench) -> list[Segment]:
     a = P["arw"]                                                     # 7.2.13
     segs.append(Segment("static", 0, 0, "record", a["samples"], a["sample_interval_s"],
                         delay_s=warm, power_on=True, off_time_s=600.0))
+    bw = P["bandwidth"]                                              # 7.2.15
+    for j, f in enumerate(bandwidth_frequencies(proto, bench)):
+        fs = bw["samples_per_cycle"] * f
+        segs.append(Segment("vibration", 0, j, "vibration", bw["cycles"] * bw["samples_per_cycle"],
+                            1.0 / fs, freq_hz=f, vib_amplitude_dps=bw["rate_amplitude_dps"],
+                            delay_s=warm if j == 0 else 2.0, power_on=(j == 0), off_time_s=600.0))
     t = P["temperature"]                                             # 7.2.5, 7.2.14
     temps = [None] + list(t["points_c"])
     for i, tc in enumerate(temps):
@@ -171,12 +178,6 @@ def plan(proto: JJFProtocol, bench) -> list[Segment]:
         segs.append(Segment("bias_temperature", i, 0, "record", t["bias_samples"], dt,
                             temperature_c=tc, ramp_c_per_min=t["ramp_c_per_min"],
                             delay_s=sf["settle_s"]))
-    bw = P["bandwidth"]                                              # 7.2.15
-    for j, f in enumerate(bandwidth_frequencies(proto, bench)):
-        fs = bw["samples_per_cycle"] * f
-        segs.append(Segment("vibration", 0, j, "vibration", bw["cycles"] * bw["samples_per_cycle"],
-                            1.0 / fs, freq_hz=f, vib_amplitude_dps=bw["rate_amplitude_dps"],
-                            delay_s=warm if j == 0 else 2.0, power_on=(j == 0), off_time_s=600.0))
     return segs
 
 

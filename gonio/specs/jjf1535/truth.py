@@ -124,9 +124,13 @@ def truth(bench: RateBench, proto) -> dict:
     # bias at room temperature, input axis up, Earth rate removed: b + g·f + cross·ω_E
     gz = np.asarray(g.g_sensitivity_dps_per_g)
     f_b = mount_matrix("+z", "+x").T @ np.array([0.0, 0.0, 1.0])
+    kr = K0 / fit.K          # the measured rate unit is output / K_LS, not output / K₀
     b0 = float(g.bias_at(room, g.supply_nominal_v)) + float(gz @ f_b) \
         + g.cross_axis_x * float(eb[0]) + g.cross_axis_y * float(eb[1])
-    out["bias"] = {"value": b0 * S_PER_H, "how": "b(T_rt) + g·f + k·ω_E⊥ of the model (°/h)"}
+    f_ez = float(g.response(np.array([ez]))[0])
+    out["bias"] = {"value": ((b0 + f_ez) * kr - ez) * S_PER_H,
+                   "model_bias_dph": b0 * S_PER_H,
+                   "how": "[b(T_rt) + g·f + k·ω_E⊥ + f(Ω_E,z)]·K₀/K_LS − Ω_E,z (°/h)"}
     b = P["bias"]
     dt = P["protocol"]["sample_interval_s"]
     warm = P["protocol"]["warmup_s"]
@@ -158,14 +162,15 @@ def truth(bench: RateBench, proto) -> dict:
         for u in (up, dn):
             e = _earth_body(lat, u, north)
             fb = mount_matrix(u, north).T @ np.array([0.0, 0.0, 1.0])
-            vals.append(float(gz @ fb) + g.cross_axis_x * e[0] + g.cross_axis_y * e[1])
+            vals.append((float(gz @ fb) + g.cross_axis_x * e[0] + g.cross_axis_y * e[1]
+                         + float(g.response(np.array([e[2]]))[0])) * kr - e[2])
         per[ax] = (vals[0] - vals[1]) / 2.0 * S_PER_H
     ax = max(per, key=lambda a: abs(per[a]))
     out["g_sensitivity"] = {"value": abs(per[ax]), "per_axis_dph_per_g": per, "axis": ax,
                             "how": "g-sensitivity parameters (+ cross-axis × Earth rate)"}
     out["angle_random_walk"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (room - g.reference_temperature_c)),
                                 "how": "ARW parameter at room temperature"}
-    Bs = [float(g.bias_at(tc, g.supply_nominal_v)) * S_PER_H for tc in temps]
+    Bs = [float(g.bias_at(tc, g.supply_nominal_v)) * kr * S_PER_H for tc in temps]
     out["bias_temperature_sensitivity"] = {
         "value": rg.temperature_sensitivity(Bs, temps, 0, relative=False)[0],
         "how": "b(T) of the model at the set points"}
