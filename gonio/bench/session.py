@@ -18,7 +18,6 @@ in-situ tilt estimate (:mod:`gonio.analysis.tilt_estimate`, uncompensated rests)
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -32,7 +31,6 @@ from gonio.atomic import output_dir, write_text
 from gonio.bench.config import Bench
 from gonio.bench.instrument import (Integrator, counts_from_angle, geometry, harmonic_sum_arcsec,
                                     rate_nonlinearity)
-from gonio.formats.counters import wrap_counter
 from gonio.formats.records import StaticRecord
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.errors import GonioError
