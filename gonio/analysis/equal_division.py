@@ -70,6 +70,7 @@ import pandas as pd
 import scipy.sparse as sp
 
 from gonio.errors import GonioError
+from gonio.formats.readings import Readings
 from gonio.units import ARCSEC_PER_DEG
 from gonio.protocol import load_protocol
 from gonio.protocol.sections import EdaProtocol
@@ -977,3 +978,21 @@ def load_eda_protocol(path="eda") -> EdaProtocol:
         raise GonioError("read_delay_s is longer than rest_s", file=proto.path,
                          key="equal_division.read_delay_s")
     return p
+
+
+def equal_division_from_readings(readings: Readings, *, starts: int | None = None,
+                                 gauge: str = "closure", noise: str = "random_walk") -> EdaResult:
+    """Equal-division analysis of a readings file's ``equal_division`` rows.
+
+    The one path from a readings file to an :class:`EdaResult`, used by
+    ``gonio eda`` and by the calibration pipeline: the file is read by
+    :func:`gonio.formats.readings.read_readings` (its checks apply), the rows
+    indexed by their line numbers so that errors name the line.
+    """
+    df = readings.data
+    rows = df[df["test"] == "equal_division"]
+    if not len(rows):
+        raise GonioError("no equal_division rows", file=readings.path, column="test")
+    D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False) if "line" in rows
+                                              else rows, starts=starts, file=readings.path)
+    return equal_division_analysis(D, start, step, gauge=gauge, noise=noise)

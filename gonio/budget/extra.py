@@ -261,12 +261,12 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
     th_i = np.abs(ad["table_deg"].to_numpy(dtype=float))
     t_i = ad["time_s"].to_numpy(dtype=float)
     theta_max = float(np.max(th_i))
-    u_p = protocol.annex_a["table_mpe_arcsec"] / math.sqrt(3.0)
+    u_p = protocol.annex_a.table_mpe_arcsec / math.sqrt(3.0)
     amp = theta_max / n
     u_kp = amp * u_p * math.sqrt(np.sum(1.0 / th_k ** 2) + np.sum(1.0 / th_k) ** 2)
     u_kr = amp * repeatability_arcsec * math.sqrt(np.sum(1.0 / th_k ** 2))
     omega = dps_to_arcsec_s(earth_rate_split(latitude_deg, protocol.angle_deviation.orientation)
-                            .perpendicular_dps) * math.sin(math.radians(protocol.annex_a["tilt_bound_deg"]))
+                            .perpendicular_dps) * math.sin(math.radians(protocol.annex_a.tilt_bound_deg))
     sfi, adi = protocol.scale_factor, protocol.angle_deviation
     ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s, accel_dps2)
     ci, si = tilt_coupling_coefficients(th_i, t_i, adi.rate_dps, adi.read_delay_s, accel_dps2)

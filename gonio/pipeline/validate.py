@@ -139,7 +139,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         return bench
     if case == "tilt":
         return replace(bench, instrument=replace(bench.instrument,
-                                                 tilt_deg=protocol.annex_a["tilt_bound_deg"]))
+                                                 tilt_deg=protocol.annex_a.tilt_bound_deg))
     if case == "drift":
         return replace(bench, instrument=replace(bench.instrument,
                                                  bias_instability_dph=0.005 / math.sqrt(2.0),
