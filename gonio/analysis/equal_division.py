@@ -47,9 +47,13 @@ Conventions
   points and the step links every position to every other. Equally spaced
   starts ``x_k = k·360°/n`` satisfy this exactly when ``n`` divides ``m``.
   Other start sets raise :class:`~gonio.errors.GonioError`.
-* Noise: independent readings with one common standard deviation (estimated
-  from the residuals, pooled over repeats); a drift within a series or angle
-  random walk would make the readings correlated and the uncertainties low.
+* Noise (:func:`noise_whitening`): by default ``random_walk`` — a gyro's angle
+  random walk and any Earth-rate compensation residual accumulate from each
+  zeroing, so the readings of one start form a random walk; the fit whitens each
+  start by first differences (generalised least squares). ``white`` is the classic
+  A.3 model of independent readings, which on a gyro understates the
+  uncertainty (≈ 1.8× on the bench). Either way one common standard deviation is
+  estimated from the whitened residuals, pooled over repeats.
 
 References
 ==========

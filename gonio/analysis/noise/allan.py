@@ -66,7 +66,7 @@ INPUT_TYPES = ("rate", "increment", "angle")
 #: 2 ln 2 / π, the flicker (bias-instability) coefficient of AVAR (IEEE 952 C.3).
 FLICKER_COEFF = 2.0 * math.log(2.0) / math.pi
 #: sqrt(2 ln 2 / π) = 0.664: ADEV floor of flicker rate noise per unit B (IEC 62047-20 5.4).
-FLICKER_FLOOR = 0.664
+FLICKER_FLOOR = math.sqrt(FLICKER_COEFF)
 #: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7; thesis 004).
 SINE_TAU_PER_PERIOD = 0.371
 #: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7; thesis 004).
