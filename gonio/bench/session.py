@@ -181,26 +181,25 @@ class _Planner:
                 pos = r.start_deg
         self._close(blk, tl)
 
+    def equal_division(self, p, series: int) -> None:
+        """IEC 62047-20 Annex A.3: from each start x_k = k·360°/n, zero both, step m times by Δ.
 
-def _equal_division(pl: "_Planner", p, series: int) -> None:
-    """IEC 62047-20 Annex A.3: from each start x_k = k·360°/n, zero both, step m times by Δ.
-
-    Between starts the table is re-pointed instantly (like between blocks); each
-    start has its own static phase when the compensation is measured.
-    """
-    tab = pl.b.table
-    rate = p.rate_dps * (1.0 + tab.rate_error_rel)
-    for k, x0 in enumerate(p.start_deg.tolist()):
-        blk, tl = pl._new_block(f"equal_division start {x0:g} series {series}", p.orientation, x0)
-        k_zero = pl._dwell_to_grid(tl)
-        for j in range(1, p.points + 1):
-            arrive = tl.move(pl.true_position(x0 + j * p.step_deg), rate, tab.accel_dps2)
-            k_read = _grid(arrive + p.read_delay_s, pl.dt)
-            tl.dwell(max(p.rest_s, k_read * pl.dt - arrive + pl.dt))
-            blk.readings.append(PlannedReading("equal_division", series, k + 1, p.rate_dps,
-                                               p.orientation, k_read, k_zero, j * p.step_deg,
-                                               start_deg=x0))
-        pl._close(blk, tl)
+        Between starts the table is re-pointed instantly (like between blocks); each
+        start has its own static phase when the compensation is measured.
+        """
+        tab = self.b.table
+        rate = p.rate_dps * (1.0 + tab.rate_error_rel)
+        for k, x0 in enumerate(p.start_deg.tolist()):
+            blk, tl = self._new_block(f"equal_division start {x0:g} series {series}", p.orientation, x0)
+            k_zero = self._dwell_to_grid(tl)
+            for j in range(1, p.points + 1):
+                arrive = tl.move(self.true_position(x0 + j * p.step_deg), rate, tab.accel_dps2)
+                k_read = _grid(arrive + p.read_delay_s, self.dt)
+                tl.dwell(max(p.rest_s, k_read * self.dt - arrive + self.dt))
+                blk.readings.append(PlannedReading("equal_division", series, k + 1, p.rate_dps,
+                                                   p.orientation, k_read, k_zero, j * p.step_deg,
+                                                   start_deg=x0))
+            self._close(blk, tl)
 
 
 def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | None) -> list[Block]:
@@ -216,7 +215,7 @@ def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | No
     eda = protocol.extra.get("equal_division")
     if eda is not None:
         for series in range(1, eda.repeats + 1):
-            _equal_division(pl, eda, series)
+            pl.equal_division(eda, series)
     return pl.blocks
 
 

@@ -267,8 +267,6 @@ def pointing_consistency_prediction(latitude_deg: float, times_s,
     >>> {k: round(v, 3) for k, v in p.deviation_arcsec.items()}, round(p.spread_arcsec, 2)
     ({'up': -3.793, 'north': 3.239, 'east': 0.0}, 7.03)
     """
-    from gonio.specs.ogam_draft.items import signed_extreme
-
     t = np.asarray(times_s, dtype=float)
     res, dev, pts = {}, {}, {}
     for g in orientations:
@@ -277,6 +275,6 @@ def pointing_consistency_prediction(latitude_deg: float, times_s,
                                   elevation_error_deg=elevation_error_deg) * ARCSEC_PER_DEG + bias_dph
         res[g] = r
         pts[g] = r * t
-        dev[g] = signed_extreme(pts[g])
+        dev[g] = float(pts[g][np.argmax(np.abs(pts[g]))]) if pts[g].size else float("nan")
     e = np.array(list(dev.values()))
     return PointingPrediction(res, dev, pts, float(e.max() - e.min()))

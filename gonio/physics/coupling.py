@@ -62,8 +62,11 @@ def _pieces(tl: Timeline, t_a: float, t_b: float):
 
     Yields (t0, t1, kind) with kind 'const', 'linear' or 'quad'.
     """
-    t0s, _, _, dist, _, _, tacc, dur = (np.asarray(v, dtype=float) for v in (
-        tl._t0, tl._theta0, tl._sign, tl._dist, tl._vpk, tl._acc, tl._tacc, tl._dur))
+    segs = tl.segments()
+    t0s = np.array([g.t0_s for g in segs], dtype=float)
+    dist = np.array([g.distance_deg for g in segs], dtype=float)
+    tacc = np.array([g.accel_time_s for g in segs], dtype=float)
+    dur = np.array([g.duration_s for g in segs], dtype=float)
     out = []
     if t0s.size == 0:
         return [(t_a, t_b, "const")]
