@@ -17,7 +17,7 @@ from gonio.bench.rate_session import Segment, run_rate_session
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import (RateReadings, parse_rate_readings, read_rate_readings,
                                          write_rate_readings)
-from gonio.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.units import S_PER_H
 
 if sys.version_info >= (3, 11):

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.earth import OMEGA_E_RAD_S, earth_rate_enu
+from gonio.physics.earth import OMEGA_E_RAD_S, earth_rate_enu
 from gonio.errors import GonioError
 from gonio.units import S_PER_H
 
@@ -394,7 +394,7 @@ def allan_variance_overlapping(rate, k: int) -> float:
     """Reading taken for JJF 1535 7.2.13: the overlapping Allan variance (IEEE 952/1431),
     σ²(kτ0) = Σ_{p=1}^{n−2k+1} (Ω̄_{p+k} − Ω̄_p)² / (2(n − 2k + 1)).
 
-    (The package's general estimator is :func:`gonio.noise.allan_deviation`; this direct
+    (The package's general estimator is :func:`gonio.analysis.noise.allan_deviation`; this direct
     form documents the formula and is checked against it.)
 
     >>> allan_variance_overlapping([1.0, -1.0] * 8, 1)

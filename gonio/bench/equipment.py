@@ -23,7 +23,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 
 from gonio.errors import GonioError
-from gonio.tomlschema import Field, non_negative, validate_table
+from gonio.formats.toml import Field, non_negative, validate_table
 
 
 @dataclass(frozen=True)

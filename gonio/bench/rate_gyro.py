@@ -1,6 +1,7 @@
 """The virtual rate gyro: a MEMS (or optical) gyro seen as a rate sensor.
 
-Model (thesis 004's extended model with the terms of JJF 1535-2015 and IEC 62047-20):
+Model: the extended MEMS gyro model of [Vagner2015] (docs/references.md#vagner2015) with the
+terms of JJF 1535-2015 and IEC 62047-20:
 
     F = F_null(V) + K(T, V)·(1 + ε_K,run)·[ f(ω_dyn) + b(T, V) + b_run + b_warm(t)
         + g·a + k_x ω_x + k_y ω_y + n(t) ],     then quantised to ``output_lsb``
@@ -41,7 +42,7 @@ from scipy import signal
 from gonio.errors import GonioError
 from gonio.resources import resolve
 from gonio.units import S_PER_H
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 
 

@@ -24,7 +24,8 @@ import pandas as pd
 from scipy import signal
 
 from gonio.bench.rate_gyro import NoiseState, RateBench
-from gonio.earth import ARCSEC_PER_DEG, earth_rate_enu
+from gonio.physics.earth import earth_rate_enu
+from gonio.units import ARCSEC_PER_DEG
 from gonio.errors import GonioError
 
 #: Column order of the rate readings (see docs/formats-rate-gyro.md).

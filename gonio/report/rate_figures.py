@@ -115,7 +115,7 @@ def draw_temperature(fig, spec, result, L, truth=None) -> None:
 
 def draw_allan(fig, spec, result, L, truth=None) -> None:
     """Overlapping Allan deviation (°/h) with its χ² band and the fitted five-term model."""
-    from gonio.noise import model_adev
+    from gonio.analysis.noise import model_adev
 
     ax = fig.add_subplot(spec)
     it = _item(result, "angle_random_walk")

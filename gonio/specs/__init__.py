@@ -1,8 +1,16 @@
-"""Calibration specifications as plug-ins.
+"""Calibration specifications as plug-ins: one package per specification.
 
-Each specification is a package ``gonio/specs/<name>/`` exposing ``SPEC``, a
-:class:`Specification`; :func:`available` finds them by scanning this package, so
-adding a specification never edits the others. :func:`get` looks one up by key.
+Each subpackage ``gonio.specs.<name>`` exposes ``SPEC``, a
+:class:`Specification`: its key (the ``--spec`` value), titles, the document in
+``docs/`` that reads it clause by clause, its default protocol and bench, the
+function that computes its items from readings, and the function that
+reproduces its own uncertainty annex. :func:`available` finds them by scanning
+this package, so adding a specification never edits another one.
+
+>>> sorted(available())[:1]
+['ogam-draft']
+>>> get("ogam-draft").default_protocol
+'ogam-draft'
 """
 
 from __future__ import annotations
@@ -10,42 +18,60 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 from gonio.errors import GonioError
+
+__all__ = ["Specification", "available", "get"]
 
 
 @dataclass(frozen=True)
 class Specification:
-    key: str               # "ogam-draft", "jjf1535-2015", "iec62047-20"  (the --spec value)
+    """What gonio needs to know of one calibration specification.
+
+    Attributes
+    ----------
+    key : str
+        The ``--spec`` value and the ``# spec:`` metadata value (``ogam-draft``).
+    title_en, title_zh : str
+        The specification's title.
+    clause_doc : str
+        The repository document with the clause-by-clause reading taken.
+    default_protocol, default_bench : str
+        Names of ``protocols/<name>.toml`` and ``protocols/benches/<name>.toml``.
+    calibrate : callable
+        Readings (a :class:`~gonio.formats.readings.Readings` or DataFrame) → the
+        items' results dataclass (with ``to_json()`` or ``to_dict()``).
+    budget : callable or None
+        () → the specification's own uncertainty annex, reproduced.
+    """
+
+    key: str
     title_en: str
     title_zh: str
-    clause_doc: str        # docs/<file>.md with the clause-by-clause reading
-    default_protocol: str  # name of protocols/<name>.toml
-    default_bench: str     # name of protocols/benches/<name>.toml
-    calibrate: Callable    # (readings, protocol, **options) -> results with .to_json() -> dict
-    budget: Callable | None = None   # () -> the standard's own annex budget, reproduced
+    clause_doc: str
+    default_protocol: str
+    default_bench: str
+    calibrate: Callable[..., Any]
+    budget: Callable[..., Any] | None = None
 
 
 def available() -> dict[str, Specification]:
-    """Every specification package's ``SPEC``, by key (sorted)."""
-    import gonio.specs as pkg
-
-    found: dict[str, Specification] = {}
-    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if not info.ispkg:
+    """Every installed specification, by key (scans the subpackages of :mod:`gonio.specs`)."""
+    out: dict[str, Specification] = {}
+    for mod in pkgutil.iter_modules(__path__):
+        if not mod.ispkg:
             continue
-        mod = importlib.import_module(f"gonio.specs.{info.name}")
-        spec = getattr(mod, "SPEC", None)
+        spec = getattr(importlib.import_module(f"{__name__}.{mod.name}"), "SPEC", None)
         if isinstance(spec, Specification):
-            found[spec.key] = spec
-    return dict(sorted(found.items()))
+            out[spec.key] = spec
+    return dict(sorted(out.items()))
 
 
 def get(key: str) -> Specification:
-    """The specification with ``key``; GonioError listing the available keys otherwise."""
+    """The specification with this key; an unknown key is a GonioError listing the known ones."""
     specs = available()
     if key not in specs:
-        raise GonioError(f"unknown specification {key!r} (available: {', '.join(specs)})",
-                         key="--spec")
+        raise GonioError(f"unknown specification {key!r} (known: {', '.join(specs)})",
+                         key="spec")
     return specs[key]

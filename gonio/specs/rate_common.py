@@ -21,7 +21,7 @@ from gonio.bench.rate_session import Segment
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
 from gonio.resources import resolve
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 from uncertainty import propagate
 
 # --------------------------------------------------------------------------- results

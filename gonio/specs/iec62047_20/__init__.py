@@ -88,7 +88,7 @@ def truth(bench, proto: IECProtocol) -> dict:
     protocol's points where no closed form exists; labelled ``how``)."""
     from gonio.analysis import rate_gyro as rg
     from gonio.bench.rate_session import mount_matrix
-    from gonio.earth import earth_rate_enu
+    from gonio.physics.earth import earth_rate_enu
     from gonio.specs.iec62047_20.protocol import sf_rates, temperatures
     from gonio.units import S_PER_H
 

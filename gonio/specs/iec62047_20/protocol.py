@@ -18,7 +18,7 @@ from pathlib import Path
 from gonio.bench.rate_session import Segment
 from gonio.errors import GonioError
 from gonio.specs.rate_common import NNFLOAT, PFLOAT, PINT, read_sections, sf_segments
-from gonio.tomlschema import Field
+from gonio.formats.toml import Field
 
 KEY = "iec62047-20"
 

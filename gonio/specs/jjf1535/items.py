@@ -21,7 +21,7 @@ import pandas as pd
 
 from gonio.analysis import rate_gyro as rg
 from gonio.errors import GonioError
-from gonio.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.specs.rate_common import (Item, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
@@ -492,7 +492,7 @@ def angle_random_walk(ctx: Context) -> Item:
     eqs (22)–(24) is computed too, labelled, with its ratio to the AVAR (it falls as 2/k²).
 
     Uncertainty: the fit's standard uncertainty of N (covariance inflated for the correlation
-    of overlapping estimates, :func:`gonio.noise.fit_noise_model`) and the scale factor."""
+    of overlapping estimates, :func:`gonio.analysis.noise.fit_noise_model`) and the scale factor."""
     title, clause, unit = "angle random walk ARW", "7.2.13", "°/√h"
     miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
     if miss:

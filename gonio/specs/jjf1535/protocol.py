@@ -22,7 +22,7 @@ from gonio.bench.rate_session import Segment
 from gonio.errors import GonioError
 from gonio.specs.rate_common import (NNFLOAT, PFLOAT, PINT, rate_series, read_sections,
                                      sf_segments)
-from gonio.tomlschema import Field
+from gonio.formats.toml import Field
 
 KEY = "jjf1535-2015"
 

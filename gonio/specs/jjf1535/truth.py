@@ -18,7 +18,7 @@ import numpy as np
 from gonio.analysis import rate_gyro as rg
 from gonio.bench.rate_gyro import NoiseState, RateBench
 from gonio.bench.rate_session import mount_matrix
-from gonio.earth import earth_rate_enu
+from gonio.physics.earth import earth_rate_enu
 from gonio.units import S_PER_H
 
 
