@@ -54,6 +54,7 @@ import numpy as np
 
 from gonio.physics.earth import OMEGA_E_RAD_S, earth_rate_enu
 from gonio.errors import GonioError
+from gonio.protocol.rate import r5_rates  # noqa: F401  (JJF 7.2.1.1 c) series, re-exported)
 from gonio.units import S_PER_H
 
 #: Earth rate, °/s (IERS value; 4.178074×10⁻³ °/s).
@@ -94,32 +95,6 @@ def least_squares_line(x, y) -> tuple[float, float]:
         raise GonioError("a line needs at least two different input values")
     a = float(((x - xm) * (y - ym)).sum() / sxx)
     return a, float(ym - a * xm)
-
-
-def r5_rates(lowest_dps: float, highest_dps: float) -> list[float]:
-    """The R5 preferred-number rates of JJF 1535 7.2.1.1 c) (GB/T 321) from ``lowest`` up
-    to ``highest``, with ``highest`` itself appended when it is not an R5 value.
-
-    >>> r5_rates(1, 100)
-    [1.0, 1.6, 2.5, 4.0, 6.3, 10.0, 16.0, 25.0, 40.0, 63.0, 100.0]
-    >>> r5_rates(0.1, 75)[-3:]
-    [40.0, 63.0, 75.0]
-    """
-    if not (0 < lowest_dps < highest_dps):
-        raise GonioError(f"R5 rates need 0 < lowest < highest, got {lowest_dps}, {highest_dps}")
-    base = (1.0, 1.6, 2.5, 4.0, 6.3)
-    out: list[float] = []
-    e = math.floor(math.log10(lowest_dps)) - 1
-    while True:
-        for b in base:
-            v = float(f"{b * 10.0 ** e:.6g}")
-            if v > highest_dps * (1 + 1e-12):
-                if not out or abs(out[-1] - highest_dps) > 1e-9 * highest_dps:
-                    out.append(float(highest_dps))
-                return out
-            if v >= lowest_dps * (1 - 1e-12):
-                out.append(v)
-        e += 1
 
 
 # --------------------------------------------------------------------------- scale factor

@@ -280,3 +280,33 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
     truth = {"gyro": g.to_dict(), "equipment": eq.to_dict(), "latitude_deg": bench.latitude_deg,
              "seed": seed, "noise": noise, "power_cycles": runs, "segments": seg_truth}
     return RateSessionResult(df, md, truth)
+
+
+def calibration_segments(test: str, run: int, rates_one_dir: list[float], *, dt: float, rest_samples: int,
+                n_low: int, n_high: int, settle_s: float, order: str, first_delay_s: float,
+                power_on: bool, off_time_s: float, temperature_c=None, ramp=1.0,
+                supply_v=None, include_zero: bool = False) -> list[Segment]:
+    """One scale-factor calibration (JJF 7.2.1.1 c)–d) or IEC 5.1.4.1): rest, the rates in
+    the given order (forward ascending then reverse ascending, or alternating ±Ω pairs),
+    rest. ``include_zero`` adds a rest point in the middle (IEC: a fit point)."""
+    if order == "ascending":
+        seq = [r for r in rates_one_dir] + [-r for r in rates_one_dir]
+    elif order == "alternating":
+        seq = [s * r for r in rates_one_dir for s in (1, -1)]
+    elif order == "iec":                      # x_1 = CCW max … rest … CW max
+        seq = [-r for r in sorted(rates_one_dir, reverse=True)] + [0.0] + sorted(rates_one_dir)
+    else:
+        raise GonioError(f"order must be ascending or alternating, got {order!r}", key="order")
+    segs = [Segment(test, run, 0, "rest", rest_samples, dt, 0.0, temperature_c=temperature_c,
+                    ramp_c_per_min=ramp, supply_v=supply_v, delay_s=first_delay_s,
+                    power_on=power_on, off_time_s=off_time_s)]
+    for j, r in enumerate(seq, 1):
+        n = n_low if abs(r) < 100 else n_high
+        point = r != 0 or order == "iec"          # IEC 5.1.3.1: the rest is a fit point
+        segs.append(Segment(test, run, j, "rate" if point else "rest", n if point else rest_samples,
+                            dt, r, temperature_c=temperature_c, ramp_c_per_min=ramp,
+                            supply_v=supply_v, delay_s=settle_s))
+    segs.append(Segment(test, run, len(seq) + 1, "rest", rest_samples, dt, 0.0,
+                        temperature_c=temperature_c, ramp_c_per_min=ramp, supply_v=supply_v,
+                        delay_s=settle_s))
+    return segs

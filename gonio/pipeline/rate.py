@@ -14,7 +14,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError, read_utf8
 from gonio.specs import Specification, get
-from gonio.specs.rate_common import json_safe, load_readings
+from gonio.analysis.rate_records import json_safe, load_readings
 
 #: The specifications handled here (the optical draft keeps its own pipeline).
 RATE_SPECS = ("jjf1535-2015", "iec62047-20")

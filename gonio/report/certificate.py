@@ -727,9 +727,6 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
     dict of str to Path
         ``{"certificate.html": ..., "certificate.pdf": ...}``.
     """
-    if getattr(report, "spec_key", "ogam-draft") != "ogam-draft":   # rate-gyro specifications
-        from gonio.report.rate_certificate import write_rate_certificate
-        return write_rate_certificate(report, out, truth=truth, lab=lab, lang=lang)
     L = labels(lang)
     fonts = font_families(lang)
     font = fonts[0] if lang == "zh" else None

@@ -18,7 +18,7 @@ from gonio.errors import GonioError
 from gonio.specs import Specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.specs.rate_common import (RateCalibrationResult, load_readings, not_measured,
+from gonio.analysis.rate_records import (RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"

@@ -16,7 +16,7 @@ from gonio.specs import Specification
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
-from gonio.specs.rate_common import (Item, RateCalibrationResult, load_readings, not_measured,
+from gonio.analysis.rate_records import (Item, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"

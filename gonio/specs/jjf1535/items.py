@@ -2,7 +2,7 @@
 
 Each function takes a :class:`Context` (the readings and what the calibration already
 knows: K, null output, latitude, protocol values) and returns an
-:class:`~gonio.specs.rate_common.Item` with its value, unit, clause, and an uncertainty
+:class:`~gonio.analysis.rate_records.Item` with its value, unit, clause, and an uncertainty
 computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
 k = t₉₅(ν_eff). The formulas are in :mod:`gonio.analysis.rate_gyro`; the readings taken
 are documented in ``docs/jjf1535-readings.md``.
@@ -22,7 +22,7 @@ import pandas as pd
 from gonio.analysis import rate_gyro as rg
 from gonio.errors import GonioError
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.specs.rate_common import (Item, gum, not_measured, segment_means, segment_samples,
+from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b

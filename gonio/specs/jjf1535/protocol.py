@@ -20,8 +20,8 @@ from pathlib import Path
 from gonio.analysis.rate_gyro import bandwidth_grid
 from gonio.bench.rate_session import Segment
 from gonio.errors import GonioError
-from gonio.specs.rate_common import (NNFLOAT, PFLOAT, PINT, rate_series, read_sections,
-                                     sf_segments)
+from gonio.bench.rate_session import calibration_segments as sf_segments
+from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, rate_series, read_sections
 from gonio.formats.toml import Field
 
 KEY = "jjf1535-2015"

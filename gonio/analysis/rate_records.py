@@ -1,8 +1,9 @@
-"""What the two rate-gyro specifications share: protocol reading, programme planning,
-segment means, the item/result records and the per-item uncertainty helpers.
+"""Records and readings helpers shared by the rate-gyro specifications (JJF 1535-2015,
+IEC 62047-20): the item and result dataclasses (results.json shape), the per-item GUM
+wrapper, segment means of a rate readings file.
 
-Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20`; the formulas
-themselves live in :mod:`gonio.analysis.rate_gyro`.
+Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20` (one specification
+never imports another, so what they share lives here and in :mod:`gonio.analysis.rate_gyro`).
 """
 
 from __future__ import annotations
@@ -17,11 +18,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from gonio.bench.rate_session import Segment
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
-from gonio.resources import resolve
-from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 from uncertainty import propagate
 
 # --------------------------------------------------------------------------- results
@@ -205,93 +203,6 @@ def segment_means(df: pd.DataFrame, test: str) -> list[SegmentMean]:
 def segment_samples(df: pd.DataFrame, test: str, run: int, step: int) -> pd.DataFrame:
     """The rows of one segment."""
     return df[(df["test"] == test) & (df["run"] == run) & (df["step"] == step)]
-
-
-# --------------------------------------------------------------------------- protocol
-
-def bench_or_float(x, where: str, file) -> float | str:
-    """A protocol value that is a number or the word "bench" (taken from the bench)."""
-    if x == "bench":
-        return "bench"
-    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
-        raise GonioError(f'expected a number or "bench", got {x!r}', file=file, key=where)
-    return float(x)
-
-
-def read_sections(path, schemas: dict[str, dict], spec_key: str,
-                  bench_keys: tuple[tuple[str, str], ...] = ()) -> tuple[dict, Path]:
-    """Read a rate protocol TOML: every section in ``schemas`` validated (unknown sections and
-    keys refused), ``protocol.spec`` must equal ``spec_key``. The (section, key) pairs in
-    ``bench_keys`` take a number or the word "bench" (default "bench")."""
-    p = resolve(path, kind="protocol")
-    raw = read_toml(p)
-    for sec in raw:
-        if sec not in schemas:
-            raise GonioError(f"unknown section (known: {', '.join(schemas)})", file=p, key=sec)
-    held = {}
-    for sec, key in bench_keys:
-        tab = raw.get(sec)
-        if isinstance(tab, dict) and key in tab:
-            tab = dict(tab)
-            held[(sec, key)] = bench_or_float(tab.pop(key), f"{sec}.{key}", p)
-            raw = {**raw, sec: tab}
-        else:
-            held[(sec, key)] = "bench"
-    out = {}
-    for sec, schema in schemas.items():
-        tab = raw.get(sec, {})
-        if not isinstance(tab, dict):
-            raise GonioError("expected a table", file=p, key=sec)
-        out[sec] = validate_table(tab, schema, sec, p)
-    if out["protocol"]["spec"] != spec_key:
-        raise GonioError(f"this protocol is for {out['protocol']['spec']!r}, not {spec_key!r}",
-                         file=p, key="protocol.spec")
-    for (sec, key), v in held.items():
-        out[sec][key] = v
-    return out, p
-
-
-PINT = Field("int", check=lambda x: x >= 1, expect="an integer ≥ 1")
-PFLOAT = Field("float", check=positive, expect="> 0")
-NNFLOAT = Field("float", default=0.0, check=non_negative, expect="≥ 0")
-
-
-def rate_series(rates, highest: float, lowest: float):
-    """One direction's rates: the explicit list, or R5 from lowest to highest."""
-    from gonio.analysis.rate_gyro import r5_rates
-    if rates:
-        return [float(r) for r in rates]
-    return r5_rates(lowest, highest)
-
-
-def sf_segments(test: str, run: int, rates_one_dir: list[float], *, dt: float, rest_samples: int,
-                n_low: int, n_high: int, settle_s: float, order: str, first_delay_s: float,
-                power_on: bool, off_time_s: float, temperature_c=None, ramp=1.0,
-                supply_v=None, include_zero: bool = False) -> list[Segment]:
-    """One scale-factor calibration (JJF 7.2.1.1 c)–d) or IEC 5.1.4.1): rest, the rates in
-    the given order (forward ascending then reverse ascending, or alternating ±Ω pairs),
-    rest. ``include_zero`` adds a rest point in the middle (IEC: a fit point)."""
-    if order == "ascending":
-        seq = [r for r in rates_one_dir] + [-r for r in rates_one_dir]
-    elif order == "alternating":
-        seq = [s * r for r in rates_one_dir for s in (1, -1)]
-    elif order == "iec":                      # x_1 = CCW max … rest … CW max
-        seq = [-r for r in sorted(rates_one_dir, reverse=True)] + [0.0] + sorted(rates_one_dir)
-    else:
-        raise GonioError(f"order must be ascending or alternating, got {order!r}", key="order")
-    segs = [Segment(test, run, 0, "rest", rest_samples, dt, 0.0, temperature_c=temperature_c,
-                    ramp_c_per_min=ramp, supply_v=supply_v, delay_s=first_delay_s,
-                    power_on=power_on, off_time_s=off_time_s)]
-    for j, r in enumerate(seq, 1):
-        n = n_low if abs(r) < 100 else n_high
-        point = r != 0 or order == "iec"          # IEC 5.1.3.1: the rest is a fit point
-        segs.append(Segment(test, run, j, "rate" if point else "rest", n if point else rest_samples,
-                            dt, r, temperature_c=temperature_c, ramp_c_per_min=ramp,
-                            supply_v=supply_v, delay_s=settle_s))
-    segs.append(Segment(test, run, len(seq) + 1, "rest", rest_samples, dt, 0.0,
-                        temperature_c=temperature_c, ramp_c_per_min=ramp, supply_v=supply_v,
-                        delay_s=settle_s))
-    return segs
 
 
 def sf_calibration_means(means: list[SegmentMean], run: int):
