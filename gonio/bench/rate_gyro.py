@@ -33,7 +33,7 @@ instrument as a rate sensor with pulse-rate output (counts/s per °/s).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np

@@ -65,7 +65,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
               truth: dict | None = None):
     """Calibrate a rate readings file: ``results.json``, ``summary.txt`` and the certificate
     (HTML, PDF) in ``out``. The specification is ``spec_key`` or the file's ``# spec:``."""
-    from gonio.report.certificate import load_lab, write_certificate
+    from gonio.report.certificate import load_lab
+    from gonio.report.rate_certificate import write_rate_certificate
 
     key = spec_key or readings_spec(readings)
     if key is None:
@@ -81,7 +82,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
                                                       ensure_ascii=False, allow_nan=False) + "\n")
         write_text(stage / "summary.txt", result.summary())
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
-    paths.update(write_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
     return result, paths
 
 

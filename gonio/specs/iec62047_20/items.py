@@ -344,12 +344,21 @@ def _static(ctx: Context):
     return ctx.cache["allan"]
 
 
+def _quiet(ctx: Context, key: str, title: str, clause: str, unit: str) -> Item | None:
+    """A static record without any variation (noise-free bench): the noise terms are 0."""
+    y = segment_samples(ctx.df, "static", 0, 0)["output"].to_numpy()
+    if y.size and np.ptp(y) == 0:
+        return Item(key, title, clause, unit, 0.0, uncertainty=gum(lambda v: v, [from_u(key, 0.0, 0.0)]),
+                    details={"note": "the static record does not vary: no noise to analyse"})
+    return None
+
+
 def arw(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.2: the −½ line through the short-τ part of the Allan deviation read
     at τ = 1 h (°/√h); (29): 1 °/√h = 60 (°/h)/√Hz. Uncertainty from the χ² intervals of the
     points used."""
     t, cl, un = "angular random walk", "5.4.5.2", "°/√h"
-    m = _miss(ctx, "static", "arw", t, cl, un)
+    m = _miss(ctx, "static", "arw", t, cl, un) or _quiet(ctx, "arw", t, cl, un)
     if m:
         return m
     allan, _, _ = _static(ctx)
@@ -365,7 +374,7 @@ def bias_instability(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.3 c): Allan-deviation floor / 0.664 (°/h), over τ with ≥ 10
     independent clusters (reading taken); the five-term fit's B in the details."""
     t, cl, un = "bias instability", "5.4.5.3", "°/h"
-    m = _miss(ctx, "static", "bias_instability", t, cl, un)
+    m = _miss(ctx, "static", "bias_instability", t, cl, un) or _quiet(ctx, "bias_instability", t, cl, un)
     if m:
         return m
     allan, rate, dt = _static(ctx)
@@ -386,7 +395,7 @@ def inband_noise(ctx: Context) -> Item:
     the Welch one-sided density, and the amplitude density ((°/s)/√Hz) at stated frequencies
     in the details. The broadband "20 dB/dec" figure of c) is not implemented (see docs)."""
     t, cl, un = "in-band noise (rms)", "5.4.5.1 b)", "°/s"
-    m = _miss(ctx, "static", "inband_noise", t, cl, un)
+    m = _miss(ctx, "static", "inband_noise", t, cl, un) or _quiet(ctx, "inband_noise", t, cl, un)
     if m:
         return m
     _, rate_dph, dt = _static(ctx)
