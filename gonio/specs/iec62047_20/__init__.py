@@ -90,7 +90,6 @@ def truth(bench, proto: IECProtocol) -> dict:
     from gonio.bench.rate_session import mount_matrix
     from gonio.physics.earth import earth_rate_enu
     from gonio.specs.iec62047_20.protocol import sf_rates, temperatures
-    from gonio.units import S_PER_H
 
     g = bench.gyro
     tb, vb = t_base(proto), g.supply_nominal_v

@@ -16,10 +16,9 @@ import pandas as pd
 from scipy import signal
 
 from gonio.analysis import rate_gyro as rg
-from gonio.errors import GonioError
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
-                                     sf_calibration_means)
+from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means,
+                                         segment_samples)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 

@@ -108,7 +108,6 @@ def plan(proto: IECProtocol, bench) -> list[Segment]:
     dt = P["protocol"]["sample_interval_s"]
     warm = P["protocol"]["warmup_s"]
     tb = t_base(proto)
-    vb = bench.gyro.supply_nominal_v
     sf = P["scale_factor"]
     rates = sf_rates(proto)
     tp = P["temperature"]

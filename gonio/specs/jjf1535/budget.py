@@ -15,7 +15,6 @@ printed digits are reproduced by the same code that computes real budgets.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from uncertainty import from_u, propagate, round_uncertainty, type_b

@@ -13,7 +13,6 @@ the chamber is still returning from the lower working temperature.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
