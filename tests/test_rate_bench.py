@@ -165,16 +165,26 @@ COVERED = ("scale_factor", "nonlinearity", "asymmetry", "sf_temperature_sensitiv
            "bias_repeatability", "sf_repeatability")
 
 
+_PROTO: list = []
+_READINGS: dict = {}
+
+
+def _readings_of(seed: int):
+    return _READINGS[seed]
+
+
 @pytest.fixture(scope="module")
 def jjf_noise_on(tmp_path_factory):
     from gonio.specs.jjf1535 import calibrate, simulate
     tmp = tmp_path_factory.mktemp("jjf1")
     proto = small_protocol(tmp, arw={"samples": 36000})
+    _PROTO[:] = [proto]
     bench = exact_bench()
     out = []
     for seed in range(8):
         res = simulate(bench, str(proto), seed=seed, noise=True)
         rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+        _READINGS[seed] = rd
         out.append((calibrate(rd, str(proto)), res.truth["items"]))
     return out
 
@@ -311,3 +321,26 @@ def test_optical_bench_as_rate_sensor():
     b = load_rate_bench("rlg")
     assert b.gyro.output_unit == "counts/s" and b.gyro.scale_factor == pytest.approx(76434.87, rel=1e-6)
     assert b.gyro.arw_deg_sqrt_h == pytest.approx(0.0003)
+
+
+def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
+    """JCGM 101: with ``monte_carlo_trials`` every item's budget is also propagated by Monte
+    Carlo and the GUM interval checked against it (JCGM 101 8). Gaussian-dominated budgets
+    (ARW, bandwidth) validate; the threshold's budget is one rectangular component, whose 95 %
+    Monte Carlo interval is ±0.95·a (closed form), narrower than the GUM's ±1.96·a/√3 — so
+    it is reported as not validated."""
+    from gonio.specs.jjf1535 import calibrate
+    result, _ = jjf_noise_on[0]
+    assert all(it.uncertainty.monte_carlo is None for it in result.items.values() if it.measured)
+    r2 = calibrate(_readings_of(0), str(_PROTO[0]), monte_carlo_trials=200_000)
+    for key in ("angle_random_walk", "bandwidth"):
+        mc = r2.items[key].uncertainty.monte_carlo
+        assert mc["validated"], (key, mc)
+        # a t_50 input has standard deviation √(50/48) = 1.02 of its u
+        assert mc["u"] == pytest.approx(r2.items[key].uncertainty.u_c * math.sqrt(50 / 48), rel=0.02)
+    th = r2.items["threshold"]
+    a = th.uncertainty.components[1]["u"] * math.sqrt(3)
+    mc = th.uncertainty.monte_carlo
+    assert mc["high"] - th.value == pytest.approx(0.95 * a, rel=0.01)
+    assert not mc["validated"]
+    assert r2.to_json()["items"]["bias"]["uncertainty"]["monte_carlo"]["trials"] == 200_000

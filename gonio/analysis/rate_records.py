@@ -8,6 +8,8 @@ never imports another, so what they share lives here and in :mod:`gonio.analysis
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import hashlib
 import json
 import math
@@ -19,7 +21,7 @@ import pandas as pd
 
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
-from uncertainty import propagate
+from uncertainty import monte_carlo, propagate, validate_gum
 
 # --------------------------------------------------------------------------- results
 
@@ -33,10 +35,14 @@ class Uncertainty:
     U: float
     k: float
     nu_eff: float
+    monte_carlo: dict | None = None
 
     def to_json(self) -> dict:
-        return {"components": self.components, "u_c": _f(self.u_c), "U": _f(self.U),
-                "k": _f(self.k), "nu_eff": _f(self.nu_eff)}
+        out = {"components": self.components, "u_c": _f(self.u_c), "U": _f(self.U),
+               "k": _f(self.k), "nu_eff": _f(self.nu_eff)}
+        if self.monte_carlo is not None:
+            out["monte_carlo"] = json_safe(self.monte_carlo)
+        return out
 
 
 def _f(x):
@@ -132,6 +138,20 @@ class RateCalibrationResult:
         return "\n".join(lines) + "\n"
 
 
+_MC = contextvars.ContextVar("rate_gyro_monte_carlo", default=(0, 0))
+
+
+@contextlib.contextmanager
+def monte_carlo_validation(trials: int, seed: int = 0):
+    """Within this block every :func:`gum` budget is also propagated by JCGM 101 Monte Carlo
+    with ``trials`` draws and the GUM interval validated against it (JCGM 101 8)."""
+    token = _MC.set((int(trials), int(seed)))
+    try:
+        yield
+    finally:
+        _MC.reset(token)
+
+
 def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
     """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
     the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
@@ -141,7 +161,15 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
     comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
               "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
              for c in r.contributions]
-    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof)
+    mc = None
+    trials, seed = _MC.get()
+    if trials > 0 and r.u_c > 0:
+        m = monte_carlo(value_fn, inputs, trials, seed=seed, p=p or 0.95)
+        v = validate_gum(r, m)
+        mc = {"trials": trials, "u": m.u, "low": m.low, "high": m.high,
+              "gum_low": v.gum_interval[0], "gum_high": v.gum_interval[1],
+              "d_low": v.d_low, "d_high": v.d_high, "delta": v.delta, "validated": v.passed}
+    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc)
 
 
 # --------------------------------------------------------------------------- readings

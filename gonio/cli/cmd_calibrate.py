@@ -62,7 +62,8 @@ def run(args) -> int:
             from gonio.specs import get
             get(spec)                                  # GonioError listing the keys
         result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
-                                   protocol=args.protocol, lab=args.lab, lang=args.lang)
+                                   protocol=args.protocol, lab=args.lab, lang=args.lang,
+                                   monte_carlo_trials=args.monte_carlo)
         if args.json:
             print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
         else:

@@ -62,7 +62,7 @@ def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
 
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en",
-              truth: dict | None = None):
+              truth: dict | None = None, monte_carlo_trials: int = 0):
     """Calibrate a rate readings file: ``results.json``, ``summary.txt`` and the certificate
     (HTML, PDF) in ``out``. The specification is ``spec_key`` or the file's ``# spec:``."""
     from gonio.report.certificate import load_lab
@@ -75,7 +75,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     spec = get(key)
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     rd = load_readings(readings)
-    result = spec.calibrate(rd, protocol or spec.default_protocol)
+    result = spec.calibrate(rd, protocol or spec.default_protocol,
+                            monte_carlo_trials=monte_carlo_trials)
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,

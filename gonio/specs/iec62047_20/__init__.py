@@ -18,7 +18,7 @@ from gonio.errors import GonioError
 from gonio.specs import Specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.analysis.rate_records import (RateCalibrationResult, load_readings, not_measured,
+from gonio.analysis.rate_records import (monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
@@ -56,7 +56,7 @@ def _mf(md, key, fallback, path):
 
 
 def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
-              **options) -> RateCalibrationResult:
+              monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
     rd = load_readings(readings)
     spec = rd.metadata.get("spec", KEY)
@@ -76,7 +76,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     items = {}
     for key, title, clause, fn in _items.ITEMS:
         try:
-            items[key] = fn(ctx)
+            with monte_carlo_validation(monte_carlo_trials):
+                items[key] = fn(ctx)
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "", f"the data were refused: {exc.message}")
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),

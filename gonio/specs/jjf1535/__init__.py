@@ -16,7 +16,7 @@ from gonio.specs import Specification
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
-from gonio.analysis.rate_records import (Item, RateCalibrationResult, load_readings, not_measured,
+from gonio.analysis.rate_records import (monte_carlo_validation, Item, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
@@ -77,13 +77,14 @@ def make_context(rd, proto: JJFProtocol):
 
 
 def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
-              **options) -> RateCalibrationResult:
+              monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
     """Every JJF 1535 Table 3 item from a rate readings file (path or RateReadings).
 
     ``protocol``: file, built-in name or loaded protocol; default the readings' metadata
     ``protocol`` when it names a file that exists, else ``jjf1535-2015``. An item whose
     records are absent, or whose computation refuses the data, is reported not measured
-    with the reason; nothing is dropped silently.
+    with the reason; nothing is dropped silently. ``monte_carlo_trials`` > 0 also propagates
+    every item's budget by JCGM 101 Monte Carlo and validates the GUM interval against it.
     """
     rd = load_readings(readings)
     spec = rd.metadata.get("spec", KEY)
@@ -98,7 +99,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
                                                     r[0] != "angle_random_walk"))
     for key, title, clause, fn in order:
         try:
-            items[key] = fn(ctx)
+            with monte_carlo_validation(monte_carlo_trials):
+                items[key] = fn(ctx)
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "",
                                       f"the data were refused: {exc.message}")
