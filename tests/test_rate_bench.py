@@ -63,6 +63,7 @@ def small_protocol(tmp_path, name="jjf1535-2015", **changes) -> Path:
         small = {"protocol": {"warmup_s": 600.0},
                  "scale_factor": {"samples": 5}, "temperature": {"soak_s": 1800.0, "bias_samples": 60},
                  "stability": {"samples": 50}, "bias": {"samples": 300, "off_time_s": 60.0},
+                 "power_on": {"samples": 900, "off_time_s": 60.0},
                  "noise": {"samples": 3000}, "frequency": {"cycles": 8}}
     for sec, kv in {**small, **changes}.items():
         d[sec].update(kv)
@@ -237,11 +238,24 @@ def iec_noise_off(tmp_path_factory):
 
 @pytest.mark.parametrize("key", ("scale_factor", "initial_sf_variation", "linearity", "symmetry",
                                  "sf_temperature_coefficient", "ratiometric_error", "cross_axis",
-                                 "bias", "bias_temperature_coefficient", "frequency_band"))
+                                 "bias", "initial_bias_variation", "bias_temperature_coefficient",
+                                 "frequency_band"))
 def test_iec_noise_off_exact(iec_noise_off, key):
     result, truth = iec_noise_off[key == "cross_axis"]
     assert result.items[key].measured, result.items[key].reason
     assert result.items[key].value == pytest.approx(truth[key]["value"], rel=1e-7, abs=1e-12)
+
+
+def test_iec_power_on_items_noise_off(tmp_path):
+    """5.3.3.5 and 5.3.3.9 on a noise-free power-on transient against their closed forms."""
+    from gonio.specs.iec62047_20 import calibrate, simulate
+    proto = small_protocol(tmp_path, "iec62047-20")
+    res = simulate(exact_bench(warmup_bias_dps=0.12), str(proto), seed=1, noise=False)
+    r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))
+    t = res.truth["items"]
+    assert t["bias_drift_after_power_on"]["value"] > 0.05 and t["startup_time"]["value"] > 100
+    for key in ("bias_drift_after_power_on", "startup_time"):
+        assert r.items[key].value == pytest.approx(t[key]["value"], rel=1e-5, abs=1e-9), key
 
 
 def test_iec_bias_erratum_detail(iec_noise_off):

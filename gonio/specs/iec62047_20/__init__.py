@@ -138,6 +138,25 @@ def truth(bench, proto: IECProtocol) -> dict:
         "value": rg.least_squares_line(Ts, np.array([float(g.bias_at(t, vb)) for t in Ts]))[0] * kr,
         "how": "least-squares slope of the model's b(T) over the grid (visits weight it "
                "differently when b is not linear)"}
+    out["initial_bias_variation"] = {"value": out["bias"]["value"]
+                                     - proto["power_on"]["nominal_bias_dps"], "how": "bias − Out,typ"}
+    # power-on transient A·e^(−t/τ) (interval means), closed forms of the two readings taken
+    po, dt = proto["power_on"], proto["protocol"]["sample_interval_s"]
+    A, tau = g.warmup_bias_dps * kr, g.warmup_tau_s
+    P, n = po["smoothing_samples"], po["samples"]
+
+    def mean_over(t0, t1):                       # mean of A e^(−t/τ) over [t0, t1]
+        return A * tau / (t1 - t0) * (math.exp(-t0 / tau) - math.exp(-t1 / tau))
+
+    ref = mean_over(0.0, po["reference_samples"] * dt)
+    nb = n // P
+    blocks = [mean_over(j * P * dt, (j + 1) * P * dt) for j in range(nb)]
+    out["bias_drift_after_power_on"] = {"value": max(abs(b - ref) for b in blocks),
+                                        "how": "closed form on the transient"}
+    settled = mean_over((n - max(n // 5, 1)) * dt, n * dt)
+    outside = [j for j, b in enumerate(blocks) if abs(b - settled) > po["startup_band_dps"]]
+    out["startup_time"] = {"value": 0.0 if not outside else (outside[-1] + 1) * P * dt,
+                           "how": "closed form on the transient"}
     out["arw"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (tb - g.reference_temperature_c)),
                   "how": "ARW parameter at T_BASE"}
     out["bias_instability"] = {"value": g.bias_instability_dph, "how": "bias-instability parameter"}

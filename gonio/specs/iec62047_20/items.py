@@ -460,6 +460,84 @@ def frequency_band(ctx: Context) -> Item:
         "gain_peak_db": float(db[ip]), "gain_peak_hz": float(f[ip])})
 
 
+def _power_on_records(ctx: Context):
+    po = ctx.protocol["power_on"]
+    for s in segment_means(ctx.df, "warmup"):
+        g = segment_samples(ctx.df, "warmup", s.run, s.step)
+        y = (g["output"].to_numpy() - ctx.null_output) / ctx.a_base      # °/s (Earth included)
+        P = po["smoothing_samples"]
+        n = y.size // P
+        t = g["time_s"].to_numpy()[: n * P].reshape(n, P).mean(1)
+        ys = y[: n * P].reshape(n, P).mean(1)
+        yield s.run, t, ys, y
+
+
+def initial_bias_variation(ctx: Context) -> Item:
+    """IEC 62047-20 5.3.3.2 eq (25): bias (Earth rate removed, 5.3.3.1) minus the nominal bias
+    Out,typ, in °/s (reading taken: divided by a_BASE when the output is in V or bit)."""
+    t, cl, un = "initial bias variation", "5.3.3.2", "°/s"
+    m = _miss(ctx, "bias", "initial_bias_variation", t, cl, un)
+    if m:
+        return m
+    b = bias(ctx)
+    typ = ctx.protocol["power_on"]["nominal_bias_dps"]
+    u = gum(lambda x: x - typ, [from_u("N_bias", b.value, b.uncertainty.u_c,
+                                       dof=b.uncertainty.nu_eff, source="bias of 5.3.3.1")])
+    return Item("initial_bias_variation", t, cl, un, b.value - typ, uncertainty=u,
+                details={"nominal_bias_dps": typ})
+
+
+def bias_drift_after_power_on(ctx: Context) -> Item:
+    """IEC 62047-20 5.3.3.5 eq (27), reading taken: Out,ave = mean over the reference part just
+    after power-on; the drift is max_t |Out(t) − Out,ave| over the record, Out(t) averaged over
+    ``smoothing_samples`` (the literal max|Out| − Out,ave misbehaves for negative outputs);
+    the largest over the records, °/s."""
+    t, cl, un = "bias drift after power on", "5.3.3.5", "°/s"
+    m = _miss(ctx, "warmup", "bias_drift_after_power_on", t, cl, un)
+    if m:
+        return m
+    po = ctx.protocol["power_on"]
+    vals, noise = [], []
+    for run, tt, ys, y in _power_on_records(ctx):
+        ref = float(y[: po["reference_samples"]].mean())
+        vals.append(float(np.max(np.abs(ys - ref))))
+        noise.append(float(np.std(np.diff(ys)) / math.sqrt(2)))
+    i = int(np.argmax(vals))
+    u = gum(lambda v: v, [from_u("drift", vals[i], noise[i], dof=50,
+                                 source="noise of the smoothed output")])
+    return Item("bias_drift_after_power_on", t, cl, un, vals[i], uncertainty=u,
+                details={"per_record_dps": vals})
+
+
+def startup_time(ctx: Context) -> Item:
+    """IEC 62047-20 5.3.3.9, reading taken: the first time after power-on after which the
+    smoothed output stays within ± ``startup_band_dps`` of the reference output (the settled
+    bias: mean of the last fifth of the record); the mean over the records, s."""
+    t, cl, un = "start-up time", "5.3.3.9", "s"
+    m = _miss(ctx, "warmup", "startup_time", t, cl, un)
+    if m:
+        return m
+    band = ctx.protocol["power_on"]["startup_band_dps"]
+    times = []
+    for run, tt, ys, y in _power_on_records(ctx):
+        ref = float(y[-max(y.size // 5, 1):].mean())
+        out = np.abs(ys - ref) > band
+        last = np.flatnonzero(out)
+        times.append(0.0 if last.size == 0 else
+                     (float(tt[last[-1] + 1] - tt[0]) if last[-1] + 1 < tt.size else math.nan))
+    v = np.array(times)
+    if np.any(~np.isfinite(v)):
+        return not_measured("startup_time", t, cl, un, "the output never settled within the band")
+    step = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
+    u = gum(lambda a, b, c: a + b + c,
+            [from_u("t", float(v.mean()), 0.0),
+             from_u("s_t", 0.0, float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
+                    dof=max(v.size - 1, 1), source="spread over the power-ups"),
+             type_b("step", 0.0, step / 2, "rectangular", source="smoothing step")])
+    return Item("startup_time", t, cl, un, float(v.mean()), uncertainty=u,
+                details={"per_record_s": v, "band_dps": band})
+
+
 #: The characteristics in the order of Table 4: (key, title, clause, function).
 ITEMS = (
     ("scale_factor", "scale factor a_BASE", "5.1.3.1", scale_factor),
@@ -471,8 +549,11 @@ ITEMS = (
     ("symmetry", "scale-factor symmetry", "5.1.3.8", symmetry),
     ("cross_axis", "cross-axis sensitivity", "5.2", cross_axis),
     ("bias", "bias N_bias", "5.3.3.1", bias),
+    ("initial_bias_variation", "initial bias variation", "5.3.3.2", initial_bias_variation),
     ("bias_repeatability", "bias repeatability", "5.3.3.4", bias_repeatability),
+    ("bias_drift_after_power_on", "bias drift after power on", "5.3.3.5", bias_drift_after_power_on),
     ("bias_temperature_coefficient", "bias temperature coefficient", "5.3.3.6", bias_temperature),
+    ("startup_time", "start-up time", "5.3.3.9", startup_time),
     ("inband_noise", "in-band noise", "5.4.5.1 b)", inband_noise),
     ("arw", "angular random walk", "5.4.5.2", arw),
     ("bias_instability", "bias instability", "5.4.5.3", bias_instability),

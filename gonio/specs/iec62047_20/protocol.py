@@ -1,7 +1,8 @@
 """The IEC 62047-20 protocol (``protocols/iec62047-20.toml``): schema, loading, and the
 programme on the virtual bench (:func:`plan`).
 
-Order: bias records with power on/off cycles (5.3.3.1, 5.3.3.4), the scale factor at
+Order: bias records with power on/off cycles (5.3.3.1, 5.3.3.4), records from power-on
+(5.3.3.5, 5.3.3.9), the scale factor at
 T_BASE, V_BASE (5.1.3.1), its stability at constant rates (5.1.3.7), the supply points
 (5.1.3.5), cross-axis rotations about X and Y (5.2), the static noise record (5.4), the
 frequency band (5.5), then the temperature programme base → max → base → min → base
@@ -36,6 +37,9 @@ SCHEMAS = {
     "stability": {"rates_dps": Field("float_list"), "samples": PINT},
     "cross_axis": {"rate_dps": PFLOAT, "revolutions": PINT, "rest_samples": PINT},
     "bias": {"records": PINT, "samples": PINT, "off_time_s": NNFLOAT},
+    "power_on": {"records": PINT, "samples": PINT, "off_time_s": NNFLOAT,
+                 "reference_samples": PINT, "smoothing_samples": PINT,
+                 "startup_band_dps": PFLOAT, "nominal_bias_dps": Field("float", default=0.0)},
     "noise": {"sample_interval_s": PFLOAT, "samples": PINT, "band_hz": PFLOAT,
               "density_at_hz": Field("float_list", check=lambda x: x > 0, expect="> 0")},
     "frequency": {"frequencies_hz": Field("float_list", check=lambda x: x > 0, expect="> 0"),
@@ -119,6 +123,10 @@ def plan(proto: IECProtocol, bench) -> list[Segment]:
         segs.append(Segment("bias", k, 0, "record", b["samples"], dt, temperature_c=tb,
                             ramp_c_per_min=ramp, delay_s=warm + (soak_base if k == 0 else 0.0),
                             power_on=True, off_time_s=b["off_time_s"]))
+    po = P["power_on"]
+    for k in range(po["records"]):
+        segs.append(Segment("warmup", k, 0, "record", po["samples"], dt, temperature_c=tb,
+                            ramp_c_per_min=ramp, power_on=True, off_time_s=po["off_time_s"]))
     kw = dict(dt=dt, rest_samples=sf["samples"], n_low=sf["samples"], n_high=sf["samples"],
               settle_s=sf["settle_s"], order="iec", temperature_c=tb, ramp=ramp)
     segs += sf_segments("scale_factor", 0, rates, first_delay_s=warm, power_on=True,
