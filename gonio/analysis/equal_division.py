@@ -802,7 +802,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              file=None) -> tuple[np.ndarray, np.ndarray, float]:
     """Build the deviation matrix D from a readings file's ``equal_division`` rows.
 
-    Readings-file extension (data-formats contract, version 1, plus): rows with
+    Readings-file rows (``docs/formats.md#rows-of-each-test``): rows with
     ``test = equal_division``; ``series`` = repeat index; ``round`` = start
     index ``k+1``; ``start_deg`` = the table's absolute position at zeroing
     (same for every row of a round, and for a round in every series);
