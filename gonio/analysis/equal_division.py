@@ -971,9 +971,9 @@ def load_eda_protocol(path="eda") -> EdaProtocol:
     (12, 12, 30.0, 60.0)
     """
     proto = load_protocol(path)
-    if "equal_division" not in proto.extra:
+    p = proto.equal_division
+    if p is None:
         raise GonioError("no [equal_division] section", file=proto.path, key="equal_division")
-    p = proto.extra["equal_division"]
     if p.points % p.starts:
         raise GonioError(f"starts ({p.starts}) must divide points ({p.points}): the starts "
                          f"must lie on the step grid", file=proto.path,
