@@ -231,9 +231,6 @@ def test_cited_documents_and_anchors_exist():
     assert not problems, "\n" + "\n".join(problems)
 
 
-@pytest.mark.xfail(strict=False, reason="the code still cites the external digests; the "
-                   "lead repoints every citation to docs/ as part of the layout move "
-                   "(issue 11)")
 def test_no_citation_of_sources_outside_the_repository():
     """(b) nothing in the package, protocols, README or docs cites shared sources."""
     problems = forbidden_problems(ROOT)

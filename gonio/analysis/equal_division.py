@@ -802,7 +802,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              file=None) -> tuple[np.ndarray, np.ndarray, float]:
     """Build the deviation matrix D from a readings file's ``equal_division`` rows.
 
-    Readings-file extension (data-formats contract, version 1, plus): rows with
+    Readings-file rows (``docs/formats.md#rows-of-each-test``): rows with
     ``test = equal_division``; ``series`` = repeat index; ``round`` = start
     index ``k+1``; ``start_deg`` = the table's absolute position at zeroing
     (same for every row of a round, and for a round in every series);
@@ -971,9 +971,9 @@ def load_eda_protocol(path="eda") -> EdaProtocol:
     (12, 12, 30.0, 60.0)
     """
     proto = load_protocol(path)
-    if "equal_division" not in proto.extra:
+    p = proto.equal_division
+    if p is None:
         raise GonioError("no [equal_division] section", file=proto.path, key="equal_division")
-    p = proto.extra["equal_division"]
     if p.points % p.starts:
         raise GonioError(f"starts ({p.starts}) must divide points ({p.points}): the starts "
                          f"must lie on the step grid", file=proto.path,

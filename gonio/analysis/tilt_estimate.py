@@ -7,7 +7,7 @@ Contents
 :func:`estimate_tilt`              ψ, α and their standard uncertainties from rates at positions
 :func:`tilt_estimate_from_readings` the same from ``tilt_estimate`` rows of a readings file
 
-Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.physics.kinematics`).
+Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro whose sensing axis n is tilted by ψ from the table axis a senses, with
 the table at rest at angle θ,
 

@@ -1,6 +1,6 @@
 """The simulated goniometer: what an RLG or FOG senses on a turning, tilted table.
 
-Sensed rate (draft clause 4 and Annex A; ``ogam-draft.md`` "Physics"):
+Sensed rate (draft clause 4 and Annex A; ``docs/draft-readings.md#a-tilted-axis-on-a-rotating-table``):
 
     ω_s(t) = θ̇(t) cos ψ + Ω_E · n(θ(t))
 

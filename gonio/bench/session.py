@@ -205,12 +205,12 @@ def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | No
     pl = _Planner(protocol, bench, rng)
     if protocol.zero_stability is not None:
         pl.zero_stability()
-    if protocol.extra.get("tilt_estimate") is not None:
-        pl.tilt_estimate(protocol.extra["tilt_estimate"])
+    if protocol.tilt_estimate is not None:
+        pl.tilt_estimate(protocol.tilt_estimate)
     for item in protocol.items():
         for series in range(1, item.series + 1):
             pl.rotation(item, series)
-    eda = protocol.extra.get("equal_division")
+    eda = protocol.equal_division
     if eda is not None:
         for series in range(1, eda.repeats + 1):
             pl.equal_division(eda, series)

@@ -9,7 +9,7 @@ Contents
 
 Per reading of a planned session, and as a budget line: :mod:`gonio.budget.extra`.
 
-Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.physics.kinematics`).
+Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro senses ω·n; with the sensing axis n tilted by ψ from the table axis a,
 coning with the table angle θ,
 

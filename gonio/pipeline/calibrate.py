@@ -149,7 +149,7 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
 def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
     """A readings file as is, or a stream reduced with the protocol (told apart by the header).
 
-    A header with a ``test`` column is a readings file (data-formats §1); one with
+    A header with a ``test`` column is a readings file (docs/formats.md#readings-file); one with
     ``time_s`` and ``gyro_counts`` but no ``test`` is a stream (§2), reduced by
     :func:`gonio.reduce.reduce_stream` before calibration.
     """

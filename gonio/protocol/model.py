@@ -130,6 +130,16 @@ class Protocol:
     extra: dict = field(default_factory=dict)
     path: str = ""
 
+    @property
+    def equal_division(self):
+        """The ``[equal_division]`` section (:class:`~gonio.protocol.sections.EdaProtocol`) or None."""
+        return self.extra.get("equal_division")
+
+    @property
+    def tilt_estimate(self):
+        """The ``[tilt_estimate]`` section (:class:`~gonio.protocol.sections.TiltEstimatePlan`) or None."""
+        return self.extra.get("tilt_estimate")
+
     def items(self) -> list[RotationItem]:
         """Every rotation item in the order the bench runs them."""
         out = [x for x in (self.scale_factor, self.angle_deviation) if x is not None]

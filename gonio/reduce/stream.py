@@ -11,7 +11,7 @@ Contents
 :func:`read_override`      an operator's explicit (t_zero, t_read) per round
 =========================  ===================================================
 
-What an acquisition does on its external trigger (data-formats §2, draft clause 7
+What an acquisition does on its external trigger (docs/formats.md#from-a-stream-to-readings, draft clause 7
 preamble), reproduced from the continuous counter:
 
 1. **Rests.** With ``table_deg``: the encoder angle, despiked by a 3-sample
@@ -337,7 +337,7 @@ class Reduction:
     Attributes
     ----------
     readings : pandas.DataFrame
-        Readings-file columns (data-formats §1), plus ``t_zero_s`` and ``t_read_s``
+        Readings-file columns (docs/formats.md#columns), plus ``t_zero_s`` and ``t_read_s``
         (stream times of the zeroing and reading samples; not written by
         :func:`gonio.formats.readings.write_readings` unless kept as extra columns).
     unmatched : list of dict
