@@ -284,7 +284,9 @@ def test_readings_roundtrip_and_errors(tmp_path):
     with pytest.raises(GonioError, match=r"r\.csv:4: column role: expected one of"):
         parse_rate_readings(text, path=tmp_path / "r.csv")
     text = p.read_text().splitlines()
-    text[4] = text[4].rsplit(",", 1)[0] + ",abc"
+    cells = text[4].split(",")
+    cells[text[2].split(",").index("output")] = "abc"
+    text[4] = ",".join(cells)
     with pytest.raises(GonioError, match=r":5: column output: expected a finite number"):
         parse_rate_readings("\n".join(text), path="x.csv")
 

@@ -594,3 +594,122 @@ def voltage_corrected(y_raw, v_set: float, v_actual: float):
     """
     return np.asarray(y_raw, float) * (v_set / v_actual) if np.ndim(y_raw) else \
         float(y_raw) * v_set / v_actual
+
+
+# --------------------------------------------------------------------------- IEC additions
+def hysteresis_iec(temps_c, values) -> tuple[float, dict]:
+    """IEC 62047-20 5.3.3.7, reading taken: each visit of the programme base → max → base →
+    min → base (5.3.4.4 e)) is "up" when reached from a lower temperature and "down" when
+    reached from a higher one (the first visit has neither); the hysteresis is
+    max over temperatures of |B_up(T) − B_down(T)|. Returns (value, {T: B_up − B_down}).
+
+    >>> T = [25, 50, 85, 50, 25, 0, -40, 0, 25]
+    >>> B = [1.0, 2.0, 3.0, 2.5, 1.2, 0.5, 0.1, 0.4, 0.9]
+    >>> h, d = hysteresis_iec(T, B)
+    >>> round(h, 12), {k: round(v, 12) for k, v in d.items()}
+    (0.5, {0.0: -0.1, 25.0: -0.3, 50.0: -0.5})
+    """
+    t, b = _arr(temps_c, "temperature_c"), _arr(values, "bias")
+    if t.size != b.size:
+        raise GonioError("hysteresis: temperatures and biases must have equal length")
+    up: dict[float, float] = {}
+    down: dict[float, float] = {}
+    for i in range(1, t.size):
+        if t[i] > t[i - 1]:
+            up[float(t[i])] = float(b[i])
+        elif t[i] < t[i - 1]:
+            down[float(t[i])] = float(b[i])
+    both = sorted(set(up) & set(down))
+    if not both:
+        raise GonioError("IEC 62047-20 5.3.3.7: no temperature visited both rising and falling")
+    d = {T: up[T] - down[T] for T in both}
+    return float(max(abs(v) for v in d.values())), d
+
+
+def resolution_iec(steps_dps, response_dps, *, limit: float = 0.5) -> tuple[float | None, list[float]]:
+    """IEC 62047-20 5.6.3: the smallest input-rate change whose output change (as a rate,
+    output change / scale factor) is at least ``limit`` = 50 % of it, walking the steps in
+    the order given (decreasing) and stopping at the first that fails (one-sided: "at least
+    50 %"). Returns (resolution or None when the first step fails, ratios response/step).
+
+    Digest number 6: a 0.01 °/s step answered by 0.005 °/s is exactly 50 %.
+
+    >>> resolution_iec([0.02, 0.01, 0.005], [0.019, 0.005, 0.002])
+    (0.01, [0.95, 0.5, 0.4])
+    """
+    s, r = _arr(steps_dps, "step"), _arr(response_dps, "response")
+    if s.size != r.size or s.size == 0:
+        raise GonioError("5.6.3: steps and responses must have equal, non-zero length")
+    ratio = r / s
+    out = None
+    for i in range(s.size):
+        if ratio[i] >= limit - 1e-12:
+            out = float(abs(s[i]))
+        else:
+            break
+    return out, [round(float(v), 12) for v in ratio]
+
+
+def boxcar_noise_rms(freq_hz, psd_one_sided, averaging_s: float) -> float:
+    """IEC 62047-20 5.6.3 reading taken: Noise,RMS of a rate averaged over ``averaging_s``
+    (the filter of the resolution test) from a one-sided density S(f):
+    √∫ S(f)·sinc²(π f T) df (trapezoid over the given f). For white S = 2N² this is
+    N/√T, the standard deviation of a T-second mean.
+
+    >>> f = np.linspace(0, 500, 200001)
+    >>> round(boxcar_noise_rms(f, np.full(f.size, 2.0 * 0.03 ** 2), 5.0) / (0.03 / 5 ** 0.5), 3)
+    1.0
+    """
+    f, p = _arr(freq_hz, "freq_hz"), _arr(psd_one_sided, "psd")
+    if not averaging_s > 0:
+        raise GonioError(f"averaging time must be > 0, got {averaging_s}")
+    h2 = np.sinc(f * averaging_s) ** 2          # numpy sinc(x) = sin(πx)/(πx)
+    return math.sqrt(float(np.trapezoid(p * h2, f)))
+
+
+def broadband_noise_iec(freq_hz, psd_one_sided, f_low_hz: float, f_high_hz: float) -> dict:
+    """IEC 62047-20 5.4.5.1 c), reading taken: over the broadband region [f_low, f_high]
+    (above the in-band limit), (i) the rms noise √∫S df (°/s, Table 4's unit) and (ii) the
+    "20 dB/dec value": the coefficient c of an amplitude density c/f fitted with the slope
+    fixed at −1 (log c = mean of log(√S·f)), in °/s^1.5, with the free log–log slope beside it
+    so a reader sees whether the region really falls at 20 dB/dec.
+
+    >>> f = np.linspace(0.5, 50, 9901)                 # ∫₁⁵⁰ 0.04/f² df = 0.04·(1 − 1/50)
+    >>> d = broadband_noise_iec(f, (0.2 / f) ** 2, 1.0, 50.0)
+    >>> round(d["c_dps_1p5"], 9), round(d["slope_db_per_decade"], 6), round(d["rms_dps"] ** 2, 4)
+    (0.2, -20.0, 0.0392)
+    """
+    f, p = _arr(freq_hz, "freq_hz"), _arr(psd_one_sided, "psd")
+    if not 0 < f_low_hz < f_high_hz:
+        raise GonioError(f"broadband region needs 0 < f_low < f_high, got {f_low_hz}, {f_high_hz}")
+    sel = (f >= f_low_hz) & (f <= f_high_hz) & (p > 0)
+    if sel.sum() < 3:
+        raise GonioError("5.4.5.1 c): fewer than 3 spectral lines in the broadband region")
+    fs, ps = f[sel], p[sel]
+    la = 0.5 * np.log10(ps)
+    lf = np.log10(fs)
+    c = 10.0 ** float(np.mean(la + lf))
+    slope = least_squares_line(lf, la)[0]
+    return {"rms_dps": math.sqrt(float(np.trapezoid(ps, fs))), "c_dps_1p5": c,
+            "slope_db_per_decade": 20.0 * slope, "lines": int(sel.sum())}
+
+
+def g_slope_iec(accel_g, rate_dps, earth_dps=None, transverse_g=None) -> tuple[float, float]:
+    """IEC 62047-20 5.3.3.8, reading taken: the first-order fit of the gyro rate against the
+    applied acceleration a = g cos γ (γ = 0 with the input axis up), the Earth-rate
+    projection at each angle subtracted first; with ``transverse_g`` (the second transverse
+    component, g sin γ) both slopes are fitted jointly, ω = c + s₁a₁ + s₂a₂. Returns
+    (slope along ``accel_g``, slope along ``transverse_g`` or NaN), (°/s)/g.
+
+    >>> g = np.cos(np.radians(np.arange(0, 360, 45)))
+    >>> round(g_slope_iec(g, 0.1 + 0.02 * g + 0.003 * g, 0.003 * g)[0], 12)
+    0.02
+    """
+    a = _arr(accel_g, "acceleration")
+    w = _arr(rate_dps, "rate_dps") - (0.0 if earth_dps is None else _arr(earth_dps, "earth"))
+    cols = [np.ones_like(a), a] + ([] if transverse_g is None else [_arr(transverse_g, "accel")])
+    A = np.column_stack(cols)
+    if a.size < A.shape[1] + 1 or np.linalg.matrix_rank(A) < A.shape[1]:
+        raise GonioError("5.3.3.8: the stand angles do not determine the slope")
+    coef, *_ = np.linalg.lstsq(A, w, rcond=None)
+    return float(coef[1]), (float(coef[2]) if transverse_g is not None else math.nan)

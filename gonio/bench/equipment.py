@@ -72,6 +72,15 @@ class Acquisition:
 
 
 @dataclass(frozen=True)
+class Supply:
+    """The gyro's power supply: the actual terminal voltage differs from the set one by
+    ``error_v`` (IEC 62047-20 5.1.4.1 c): "if it cannot be set exactly, record the actual
+    value"); the readings record both, and eq (18) corrects a ratiometric gyro's output."""
+
+    error_v: float = 0.0
+
+
+@dataclass(frozen=True)
 class Equipment:
     """All the equipment of a rate-gyro bench."""
 
@@ -80,6 +89,7 @@ class Equipment:
     vibration_table: VibrationTable = VibrationTable()
     chamber: Chamber = Chamber()
     acquisition: Acquisition = Acquisition()
+    supply: Supply = Supply()
     rate_table_u_rel: float = 2.5e-4     # standard uncertainty of the table rate (its certificate)
     acquisition_u_rel: float = 3.0e-5    # standard uncertainty of the voltmeter gain
 
@@ -88,7 +98,7 @@ class Equipment:
         return replace(self, rate_table=RateTable(), position_table=PositionTable(),
                        vibration_table=VibrationTable(),
                        chamber=Chamber(max_ramp_c_per_min=self.chamber.max_ramp_c_per_min),
-                       acquisition=Acquisition())
+                       acquisition=Acquisition(), supply=Supply())
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -109,6 +119,7 @@ _SCHEMAS = {
                           "max_ramp_c_per_min": Field("float", default=5.0,
                                                       check=lambda x: x > 0, expect="> 0")}),
     "acquisition": (Acquisition, {"gain_error_rel": _F, "resolution": _NN}),
+    "supply": (Supply, {"error_v": _F}),
 }
 
 

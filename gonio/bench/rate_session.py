@@ -28,10 +28,11 @@ from gonio.physics.earth import earth_rate_enu
 from gonio.units import ARCSEC_PER_DEG
 from gonio.errors import GonioError
 
-#: Column order of the rate readings (see docs/formats-rate-gyro.md).
+#: Column order of the rate readings (see docs/formats.md#rate-gyro-readings-file).
 RATE_COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
                                  "temperature_c", "supply_v", "up_axis", "north_axis",
-                                 "reference_dps", "output")
+                                 "reference_dps", "output", "stand_deg", "stand_axis",
+                                 "supply_set_v")
 
 _AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
          "+z": (0, 0, 1), "-z": (0, 0, -1)}
@@ -65,6 +66,8 @@ class Segment:
     delay_s: float = 0.0
     power_on: bool = False
     off_time_s: float = 0.0
+    stand_deg: float = 0.0
+    stand_axis: str = "+x"
 
 
 def mount_matrix(up_axis: str, north_axis: str) -> np.ndarray:
@@ -86,6 +89,22 @@ def mount_matrix(up_axis: str, north_axis: str) -> np.ndarray:
     e = np.cross(n, u)                       # body vector that maps to east
     body = np.column_stack([e, n, u])        # body vectors mapping to E, N, U
     return body.T                            # orthonormal: R = body⁻¹ = bodyᵀ
+
+
+def body_rotation(axis: str, angle_deg: float) -> np.ndarray:
+    """Rotation of the gyro body by ``angle_deg`` about its own ``axis`` (±x, ±y, ±z): the
+    tilting stand of IEC 62047-20 5.3.3.8. The mounting becomes R = mount_matrix · this.
+
+    >>> np.round(body_rotation("+x", 90.0) @ np.array([0, 0, 1.0]), 12).tolist()
+    [0.0, -1.0, 0.0]
+    """
+    try:
+        a = np.array(_AXES[axis], float)
+    except KeyError:
+        raise GonioError(f"stand axis must be ±x, ±y, ±z, got {axis!r}", key="stand_axis") from None
+    t = math.radians(angle_deg)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(t) * k + (1 - math.cos(t)) * (k @ k)
 
 
 def _rz(theta_rad) -> np.ndarray:
@@ -189,7 +208,8 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
                                  zi=[a * st.temp])
         st.temp = float(temp[-1])
         temp_g = temp + (0.0 if seg.temperature_c is None else 0.5 * eq.chamber.uniformity_c)
-        v = g.supply_nominal_v if seg.supply_v is None else float(seg.supply_v)
+        v_set = g.supply_nominal_v if seg.supply_v is None else float(seg.supply_v)
+        v = v_set + eq.supply.error_v                       # actual terminal voltage
         K = g.scale_factor_at(temp_g, v) * st.k_run
         null = float(g.null_at(v))
         bias = g.bias_at(temp_g, v) + st.b_run
@@ -201,9 +221,12 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         else:
             warm = 0.0
         R0 = mount_matrix(seg.up_axis, seg.north_axis)
+        if seg.stand_deg:
+            R0 = R0 @ body_rotation(seg.stand_axis, seg.stand_deg)
         R0 = _small_rotation(rng, math.radians(eq.position_table.position_error_arcsec / ARCSEC_PER_DEG)
                              if noise and seg.rate_dps == 0 and seg.vib_amplitude_dps == 0
-                             and (seg.up_axis, seg.north_axis) != ("+z", "+x") else 0.0) @ R0
+                             and ((seg.up_axis, seg.north_axis) != ("+z", "+x") or seg.stand_deg)
+                             else 0.0) @ R0
         tilt = math.radians(eq.rate_table.tilt_deg)
         table_axis = np.array([math.sin(tilt), 0.0, math.cos(tilt)])
         ref = np.full(n, np.nan)
@@ -267,12 +290,15 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         cols["north_axis"] += [seg.north_axis] * n
         cols["reference_dps"] += list(ref)
         cols["output"] += list(out)
+        cols["stand_deg"] += [seg.stand_deg] * n
+        cols["stand_axis"] += [seg.stand_axis] * n
+        cols["supply_set_v"] += [v_set if eq.supply.error_v else math.nan] * n
         seg_truth.append({"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
                           "power_cycle": st.run,
                           "gyro_temperature_c": float(np.mean(temp_g)),
                           "scale_factor": float(np.mean(K)) * (1 + eq.acquisition.gain_error_rel),
                           "bias_dps": float(np.mean(bias)),
-                          "input_rate_dps": mean_in,
+                          "input_rate_dps": mean_in, "supply_v": v,
                           "earth_rate_on_input_dps": float(omega_enu @ (R0 @ np.array([0, 0, 1.0])))
                           if seg.rate_dps == 0 else None})
     df = pd.DataFrame(cols, columns=list(RATE_COLUMNS))

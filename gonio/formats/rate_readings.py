@@ -1,4 +1,4 @@
-"""Rate-gyro readings files: read, validate and write (docs/formats-rate-gyro.md).
+"""Rate-gyro readings files: read, validate and write (docs/formats.md#rate-gyro-readings-file).
 
 Same family as the optical-gyro readings file: UTF-8 text, ``# key: value`` metadata
 lines at the top, one CSV header row, then one row per *sample* (the rate-gyro
@@ -22,6 +22,11 @@ Columns (order of :data:`COLUMNS`; ``test``, ``run``, ``step``, ``role``, ``time
 ``north_axis``     body axis pointing north
 ``reference_dps``  reference rate sensor of the vibration table (empty otherwise)
 ``output``         gyro output in the unit of metadata ``output_unit``
+``stand_deg``      tilting-stand angle γ about ``stand_axis`` (IEC 5.3.3.8), ° (0)
+``stand_axis``     body axis the tilting stand turns about (``+x``)
+``supply_set_v``   set supply voltage; ``supply_v`` is then the actual one and the
+                   outputs of a ratiometric gyro are corrected by IEC eq (18) (empty:
+                   no correction)
 =================  ==========================================================
 
 Metadata the package reads: ``spec`` (the specification key), ``output_unit``,
@@ -46,14 +51,15 @@ from gonio.errors import GonioError, check_header, read_utf8
 
 COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
                             "temperature_c", "supply_v", "up_axis", "north_axis",
-                            "reference_dps", "output")
+                            "reference_dps", "output", "stand_deg", "stand_axis", "supply_set_v")
 REQUIRED: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "output")
 TESTS: tuple[str, ...] = ("scale_factor", "sf_temperature", "threshold", "resolution", "bias",
                           "warmup", "g_sensitivity", "static", "bias_temperature", "vibration",
                           "cross_axis", "ratiometric")
 ROLES: tuple[str, ...] = ("rest", "rate", "base", "increment", "record", "position", "vibration")
 DEFAULTS = {"rate_dps": 0.0, "freq_hz": 0.0, "temperature_c": math.nan, "supply_v": math.nan,
-            "up_axis": "+z", "north_axis": "+x", "reference_dps": math.nan}
+            "up_axis": "+z", "north_axis": "+x", "reference_dps": math.nan, "stand_deg": 0.0,
+            "stand_axis": "+x", "supply_set_v": math.nan}
 AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
 NUMERIC_METADATA = {"nominal_scale_factor": "a non-zero number", "null_output": "a number",
                     "latitude_deg": "a number in [-90, 90]", "room_temperature_c": "a number",
@@ -157,7 +163,7 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
     out = pd.DataFrame({"line": line_no})
     for col in COLUMNS:
         cells = df[col].str.strip() if col in df else None
-        if col in ("test", "role", "up_axis", "north_axis"):
+        if col in ("test", "role", "up_axis", "north_axis", "stand_axis"):
             if cells is None:
                 out[col] = DEFAULTS[col]
                 continue

@@ -17,6 +17,7 @@ from scipy import signal
 
 from gonio.analysis import rate_gyro as rg
 from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.errors import GonioError
 from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means,
                                          segment_samples)
 from gonio.units import S_PER_H
@@ -538,6 +539,249 @@ def startup_time(ctx: Context) -> Item:
                 details={"per_record_s": v, "band_dps": band})
 
 
+# --------------------------------------------------------------------------- added items
+def drift_u_dps(ctx: Context, separation_s: float) -> float:
+    """Standard uncertainty (°/s) of a bias difference between two records ``separation_s``
+    apart from the calibration's own static record (5.4): the five-term Allan fit's rate
+    random walk K√Δt and bias instability (√2·0.664·B); 0 without a varying static record."""
+    if not ctx.has("static") or ctx.a_base is None:
+        return 0.0
+    y = segment_samples(ctx.df, "static", 0, 0)["output"].to_numpy()
+    if y.size < 100 or np.ptp(y) == 0:
+        return 0.0
+    if "noise_fit" not in ctx.cache:
+        ctx.cache["noise_fit"] = fit_noise_model(_static(ctx)[0])
+    fit = ctx.cache["noise_fit"]
+    return math.sqrt(fit.K ** 2 * abs(separation_s)
+                     + 2 * (rg.FLICKER_FLOOR_EXACT * fit.B) ** 2) / S_PER_H
+
+
+def _bias_temperature_points(ctx: Context):
+    """(T, B °/s, u(B) °/s, ν, mid-time s) of every bias_temperature visit, in visit order."""
+    if "bt" in ctx.cache:
+        return ctx.cache["bt"]
+    kmap = {round(c["T"], 6): c["a"] for c in _sf_runs(ctx, "sf_temperature")} \
+        if ctx.has("sf_temperature") else {}
+    out = []
+    for s in segment_means(ctx.df, "bias_temperature"):
+        a = kmap.get(round(s.temperature_c, 6), ctx.a_base)
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(s.up_axis, s.north_axis))
+        y = segment_samples(ctx.df, "bias_temperature", s.run, s.step)["output"].to_numpy()
+        nb = y.size // 10
+        if nb >= 2:
+            um, nu = float(y[: nb * 10].reshape(nb, 10).mean(1).std(ddof=1) / math.sqrt(nb)), nb - 1
+        else:
+            um, nu = s.std / math.sqrt(s.n), max(s.n - 1, 1)
+        out.append((s.temperature_c, (s.mean - ctx.null_output) / a - earth, um / abs(a), nu,
+                    s.time_s + 0.5 * s.n))
+    ctx.cache["bt"] = out
+    return out
+
+
+def bias_hysteresis(ctx: Context) -> Item:
+    """IEC 62047-20 5.3.3.7: the largest difference between the biases at one temperature on
+    the rising and the falling pass (:func:`gonio.analysis.rate_gyro.hysteresis_iec`: a
+    visit is "up" when reached from below, "down" from above), °/s.
+
+    Uncertainty: the two record means (block type A) and the bias drift between the two
+    visits (RRW and bias instability from the static record's Allan fit)."""
+    t, cl, un = "bias hysteresis", "5.3.3.7", "°/s"
+    m = _miss(ctx, "bias_temperature", "bias_hysteresis", t, cl, un)
+    if m:
+        return m
+    pts = _bias_temperature_points(ctx)
+    T = [p[0] for p in pts]
+    B = [p[1] for p in pts]
+    val, diffs = rg.hysteresis_iec(T, B)
+    Tm = max(diffs, key=lambda k: abs(diffs[k]))
+    iu = max(i for i in range(1, len(T)) if T[i] == Tm and T[i] > T[i - 1])
+    idn = max(i for i in range(1, len(T)) if T[i] == Tm and T[i] < T[i - 1])
+    pu, pd_ = pts[iu], pts[idn]
+    inputs = [from_u("B_up", pu[1], pu[2], dof=pu[3], source=f"rising visit at {Tm:g} °C"),
+              from_u("B_down", pd_[1], pd_[2], dof=pd_[3], source=f"falling visit at {Tm:g} °C"),
+              from_u("drift", 0.0, drift_u_dps(ctx, pu[4] - pd_[4]), dof=50,
+                     source="bias drift between the visits (Allan fit: RRW, BI)")]
+    u = gum(lambda a, b, d: abs(a - b + d), inputs)
+    return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
+        "up_minus_down_dps": diffs, "temperature_c": Tm})
+
+
+def bias_ratiometric(ctx: Context) -> Item:
+    """IEC 62047-20 5.3.3.3 eq (26): with the rest outputs a_Vi (the bias in output units, null
+    included) of the supply runs of 5.1.3.5, R_Vi = [a_Vi − a_BASE·V_i/V_BASE]/a_BASE; the
+    largest |R_Vi| in %, and (reading taken: Table 4's unit V) the absolute departure
+    a_Vi − a_BASE·V_i/V_BASE in output units in the details. Analog ratiometric outputs only.
+
+    Uncertainty: the noise of the two rest means (block type A)."""
+    t, cl, un = "bias ratiometric error (max |R|)", "5.3.3.3", "%"
+    m = _miss(ctx, "ratiometric", "bias_ratiometric_error", t, cl, un)
+    if m:
+        return m
+    runs = _sf_runs(ctx, "ratiometric")
+    V = np.array([c["V"] for c in runs])
+    a, ua = [], []
+    for c in runs:
+        k = np.flatnonzero(c["x"] == 0)
+        if k.size != 1:
+            raise GonioError(f"ratiometric run {c['run']}: needs exactly one rest point (0 °/s)")
+        a.append(float(c["y"][k[0]]))
+        ua.append(float(c["u_y"][k[0]]))
+    a = np.array(a)
+    ib = int(np.argmin(np.abs(V - ctx.v_base)))
+    R = np.array([rg.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
+    i = int(np.argmax(np.abs(R)))
+    if i == ib:
+        i = int(np.argsort(np.abs(R))[-2]) if V.size > 1 else i
+    u = gum(lambda ai, ab: 100 * abs(rg.ratiometric_error_iec(ai, ab, V[i], V[ib])),
+            [from_u("a_Vi", a[i], ua[i], dof=50, source=f"rest output at {V[i]:g} V"),
+             from_u("a_Vb", a[ib], ua[ib], dof=50, source=f"rest output at {V[ib]:g} V")])
+    return Item("bias_ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
+                details={"V": V, "rest_output": a, "R_pct": 100 * R,
+                         "departure_output_units": a - a[ib] * V / V[ib]})
+
+
+def g_sensitivity(ctx: Context) -> Item:
+    """IEC 62047-20 5.3.3.8 on the tilting stand (5.3.4.5), readings taken: the acceleration
+    along the input axis is g cos γ (γ = 0 at input axis up; eq (28)'s sin γ holds only for γ
+    from the horizontal); the Earth-rate projection at each angle is removed first. Parallel
+    set-up (run 0): slope Out,gp of ω against g cos γ (the transverse g sin γ fitted jointly);
+    perpendicular set-up (run 1, input axis horizontal, the stand turning about it): Out,gv
+    = the larger of the slopes against the two transverse components g cos γ, g sin γ. The
+    characteristic is max(|Out,gp|, |Out,gv|), (°/s)/g.
+
+    Uncertainty: the slope's least-squares standard error (ν = points − 3) and the scale
+    factor (relative)."""
+    t, cl, un = "linear g sensitivity", "5.3.3.8", "(°/s)/g"
+    m = _miss(ctx, "g_sensitivity", "g_sensitivity", t, cl, un)
+    if m:
+        return m
+    from gonio.bench.rate_session import body_rotation, mount_matrix
+    res = {}
+    for run, name in ((0, "parallel"), (1, "perpendicular")):
+        seg = [s for s in segment_means(ctx.df, "g_sensitivity") if s.run == run]
+        if len(seg) < 4:
+            continue
+        w, e, a1, a2 = [], [], [], []
+        for s in seg:
+            g = segment_samples(ctx.df, "g_sensitivity", s.run, s.step)
+            gam, axis = float(g["stand_deg"].iloc[0]), str(g["stand_axis"].iloc[0])
+            R = mount_matrix(s.up_axis, s.north_axis) @ body_rotation(axis, gam)
+            fb = R.T @ np.array([0.0, 0.0, 1.0])              # specific force, body axes, g
+            w.append((s.mean - ctx.null_output) / ctx.a_base)
+            e.append(rg.earth_rate_projection_dps(ctx.latitude_deg, R @ np.array([0, 0, 1.0])))
+            a1.append(fb[2] if name == "parallel" else fb[0])   # along the input axis / body x
+            a2.append(fb[1])                                      # the other transverse one
+        w, e, a1, a2 = map(np.array, (w, e, a1, a2))
+        s1, s2 = rg.g_slope_iec(a1, w, e, a2)
+        A = np.column_stack([np.ones_like(a1), a1, a2])
+        r = (w - e) - A @ np.linalg.lstsq(A, w - e, rcond=None)[0]
+        dof = max(w.size - 3, 1)
+        cov = float(r @ r) / dof * np.linalg.inv(A.T @ A)
+        if name == "parallel":
+            res[name] = (s1, math.sqrt(cov[1, 1]), dof)
+        else:
+            k = 1 if abs(s1) >= abs(s2) else 2
+            res[name] = ((s1, s2)[k - 1], math.sqrt(cov[k, k]), dof)
+    if not res:
+        return not_measured("g_sensitivity", t, cl, un, "no tilting-stand set-up with ≥ 4 angles")
+    key = max(res, key=lambda k: abs(res[k][0]))
+    v, se, dof = res[key]
+    u = gum(lambda s, e: abs(s) * (1 + e), [from_u("slope", v, se, dof=dof,
+                                                  source=f"least-squares slope ({key})"),
+                                           from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B",
+                                                  source="scale factor, relative")])
+    return Item("g_sensitivity", t, cl, un, abs(v), uncertainty=u, details={
+        "out_gp_dps_per_g": res.get("parallel", (math.nan,))[0],
+        "out_gv_dps_per_g": res.get("perpendicular", (math.nan,))[0], "set_up": key})
+
+
+def broadband_noise(ctx: Context) -> Item:
+    """IEC 62047-20 5.4.5.1 c), reading taken (:func:`gonio.analysis.rate_gyro.broadband_noise_iec`):
+    the rms noise (°/s, Table 4) of the static record's one-sided Welch density over the
+    broadband region from the in-band limit ``band_hz`` to ``broadband_high_hz`` (0: the
+    Nyquist frequency); the "20 dB/dec value" c of an amplitude density c/f (°/s^1.5) and the
+    free slope in the details.
+
+    Uncertainty: the Welch estimate (ν ≈ 2 × segments × lines, Gaussian approximation)."""
+    t, cl, un = "broadband noise (rms)", "5.4.5.1 c)", "°/s"
+    m = _miss(ctx, "static", "broadband_noise", t, cl, un) or _quiet(ctx, "broadband_noise", t, cl, un)
+    if m:
+        return m
+    _, rate_dph, dt = _static(ctx)
+    x = rate_dph / S_PER_H
+    nper = min(4096, x.size)
+    f, p = signal.welch(x - x.mean(), fs=1.0 / dt, nperseg=nper)
+    nz = ctx.protocol["noise"]
+    hi = nz.get("broadband_high_hz", 0.0) or 0.5 / dt
+    d = rg.broadband_noise_iec(f, p, nz["band_hz"], min(hi, 0.5 / dt))
+    nseg = max(1, 2 * x.size // nper - 1)
+    u_rel = 1.0 / math.sqrt(nseg * d["lines"])
+    u = gum(lambda r: r, [from_u("rms", d["rms_dps"], d["rms_dps"] * u_rel, dof=50,
+                                 source="Welch estimate over the broadband lines")])
+    return Item("broadband_noise", t, cl, un, d["rms_dps"], uncertainty=u, details={
+        **d, "band_low_hz": nz["band_hz"], "band_high_hz": min(hi, 0.5 / dt)})
+
+
+def resolution(ctx: Context) -> Item:
+    """IEC 62047-20 5.6.3: Out,resolution by the 50 % rule on rate steps from rest
+    (:func:`gonio.analysis.rate_gyro.resolution_iec`; each step referred to the mean of the
+    rests before and after it, the larger of the two directions), and resolution =
+    max(Out,resolution, Noise,RMS). Reading taken: the "filter" is the mean over the step's
+    samples (T = samples × interval) and Noise,RMS the standard deviation of T-second means
+    of the static record (5.4), i.e. the in-band noise seen through that filter.
+
+    Uncertainty: the step to the next tested value (rectangular) when the 50 % rule
+    decides; the sampling of a standard deviation of the block means when the noise does."""
+    t, cl, un = "resolution", "5.6", "°/s"
+    m = _miss(ctx, "resolution", "resolution", t, cl, un)
+    if m:
+        return m
+    means = segment_means(ctx.df, "resolution")
+    cands, nexts, dets, T = [], {}, {}, None
+    for run in sorted({s.run for s in means}):
+        seg = [s for s in means if s.run == run]
+        steps, resp = [], []
+        for j, s in enumerate(seg):
+            if s.role != "increment":
+                continue
+            if j == 0 or j + 1 >= len(seg) or seg[j - 1].role != "rest" or seg[j + 1].role != "rest":
+                raise GonioError(f"resolution run {run} step {s.step}: a step needs a rest before "
+                                 "and after it")
+            rest = 0.5 * (seg[j - 1].mean + seg[j + 1].mean)
+            steps.append(abs(s.rate_dps))
+            resp.append(math.copysign(1.0, s.rate_dps) * (s.mean - rest) / ctx.a_base)
+            T = s.n * float(np.median(np.diff(segment_samples(ctx.df, "resolution", s.run,
+                                                              s.step)["time_s"])))
+        c, ratio = rg.resolution_iec(steps, resp)
+        cands.append(c)
+        for a, b in zip(steps, steps[1:] + [0.0]):
+            nexts[a] = b
+        dets[f"run{run}"] = {"steps_dps": steps, "ratio": ratio, "candidate_dps": c}
+    if any(c is None for c in cands):
+        return not_measured("resolution", t, cl, un, "the largest step already fails the 50 % rule")
+    out_res = max(cands)
+    noise, nb = math.nan, 0
+    if ctx.has("static") and T:
+        _, rate_dph, dt = _static(ctx)
+        P = int(round(T / dt))
+        nb = rate_dph.size // P
+        if nb >= 2:
+            noise = rg.block_mean_stability(rate_dph / S_PER_H, 1.0, P)
+    if math.isfinite(noise) and noise > out_res:
+        u = gum(lambda v: v, [from_u("Noise_RMS", noise, noise / math.sqrt(2 * (nb - 1)),
+                                     dof=nb - 1, source="sampling of the std of the T-means")])
+        value, by = noise, "Noise,RMS"
+    else:
+        step = out_res - nexts.get(out_res, 0.0)
+        u = gum(lambda a, b: a + b, [from_u("res", out_res, 0.0),
+                                     type_b("step", 0.0, step / 2, "rectangular",
+                                            source="between the result and the next step")])
+        value, by = out_res, "Out,resolution"
+    return Item("resolution", t, cl, un, value, uncertainty=u, details={
+        **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
+        "decided_by": by})
+
+
 #: The characteristics in the order of Table 4: (key, title, clause, function).
 ITEMS = (
     ("scale_factor", "scale factor a_BASE", "5.1.3.1", scale_factor),
@@ -553,9 +797,14 @@ ITEMS = (
     ("bias_repeatability", "bias repeatability", "5.3.3.4", bias_repeatability),
     ("bias_drift_after_power_on", "bias drift after power on", "5.3.3.5", bias_drift_after_power_on),
     ("bias_temperature_coefficient", "bias temperature coefficient", "5.3.3.6", bias_temperature),
+    ("bias_ratiometric_error", "bias ratiometric error", "5.3.3.3", bias_ratiometric),
+    ("bias_hysteresis", "bias hysteresis", "5.3.3.7", bias_hysteresis),
+    ("g_sensitivity", "linear g sensitivity", "5.3.3.8", g_sensitivity),
     ("startup_time", "start-up time", "5.3.3.9", startup_time),
     ("inband_noise", "in-band noise", "5.4.5.1 b)", inband_noise),
+    ("broadband_noise", "broadband noise", "5.4.5.1 c)", broadband_noise),
     ("arw", "angular random walk", "5.4.5.2", arw),
     ("bias_instability", "bias instability", "5.4.5.3", bias_instability),
     ("frequency_band", "frequency band", "5.5", frequency_band),
+    ("resolution", "resolution", "5.6", resolution),
 )

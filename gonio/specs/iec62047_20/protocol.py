@@ -41,7 +41,18 @@ SCHEMAS = {
                  "reference_samples": PINT, "smoothing_samples": PINT,
                  "startup_band_dps": PFLOAT, "nominal_bias_dps": Field("float", default=0.0)},
     "noise": {"sample_interval_s": PFLOAT, "samples": PINT, "band_hz": PFLOAT,
-              "density_at_hz": Field("float_list", check=lambda x: x > 0, expect="> 0")},
+              "density_at_hz": Field("float_list", check=lambda x: x > 0, expect="> 0"),
+              "broadband_high_hz": Field("float", default=0.0, check=lambda x: x >= 0,
+                                         expect="≥ 0 (0: the Nyquist frequency)")},
+    "g_sensitivity": {"step_deg": Field("float", default=45.0,
+                                        check=lambda x: 0 < x <= 120 and abs(360 / x - round(360 / x)) < 1e-9,
+                                        expect="a divisor of 360° in (0, 120]"),
+                      "samples": Field("int", default=60, check=lambda x: x >= 1, expect="≥ 1"),
+                      "settle_s": Field("float", default=10.0, check=lambda x: x >= 0, expect="≥ 0")},
+    "resolution": {"steps_dps": Field("float_list", default=[], check=lambda x: x > 0,
+                                      expect="steps > 0, decreasing"),
+                   "samples": Field("int", default=30, check=lambda x: x >= 1, expect="≥ 1"),
+                   "rest_samples": Field("int", default=30, check=lambda x: x >= 1, expect="≥ 1")},
     "frequency": {"frequencies_hz": Field("float_list", check=lambda x: x > 0, expect="> 0"),
                   "rate_amplitude_dps": PFLOAT, "cycles": Field("int", check=lambda x: x >= 4,
                                                                  expect="≥ 4 periods (5.5.4)"),
@@ -69,6 +80,9 @@ def load_protocol(path: str | Path = KEY) -> IECProtocol:
     if not pr["operating_min_c"] < pr["operating_max_c"]:
         raise GonioError("operating_min_c must be below operating_max_c", file=p,
                          key="protocol.operating_min_c")
+    st = secs["resolution"]["steps_dps"]
+    if any(b >= a for a, b in zip(st, st[1:])):
+        raise GonioError("expected a strictly decreasing list", file=p, key="resolution.steps_dps")
     f = secs["frequency"]["frequencies_hz"]
     if any(b <= a for a, b in zip(f, f[1:])):
         raise GonioError("expected strictly increasing frequencies", file=p,
@@ -104,6 +118,22 @@ def temperature_visits(proto: IECProtocol) -> list[float]:
     up = [t for t in T if t > tb + 1e-9]
     dn = [t for t in T if t < tb - 1e-9]
     return [tb] + up + up[-2::-1] + [tb] + dn[::-1] + dn[1:] + [tb]
+
+
+def g_stand_runs() -> tuple[tuple[str, str, str], ...]:
+    """The two tilting-stand set-ups of 5.3.4.5 (reading taken): (up axis, north axis, stand
+    axis) at γ = 0. Run 0, "parallel": input axis (body z) up, the stand turns about body x
+    (horizontal, north), so the acceleration along the input axis is g cos γ. Run 1,
+    "perpendicular": input axis horizontal (north), body x up, the stand turns about the
+    input axis, so the transverse components are g cos γ (body x) and −g sin γ (body y)."""
+    return (("+z", "+x", "+x"), ("+x", "+z", "+z"))
+
+
+def stand_angles(proto: IECProtocol) -> list[float]:
+    """γ = 0, step, 2·step … < 360° (a whole turn in equal steps, so cos γ, sin γ and the
+    constant are orthogonal and a transverse term cannot leak into the slope)."""
+    step = proto["g_sensitivity"]["step_deg"]
+    return [k * step for k in range(int(round(360.0 / step)))]
 
 
 def plan(proto: IECProtocol, bench) -> list[Segment]:
@@ -151,6 +181,25 @@ def plan(proto: IECProtocol, bench) -> list[Segment]:
                             temperature_c=tb, delay_s=sf["settle_s"]))
         segs.append(Segment("cross_axis", run, 3, "rest", ca["rest_samples"], dt, 0.0, up, north,
                             temperature_c=tb, delay_s=sf["settle_s"]))
+    gs = P["g_sensitivity"]                                           # 5.3.3.8 (tilting stand)
+    for run, (up, north, axis) in enumerate(g_stand_runs()):
+        for j, gam in enumerate(stand_angles(proto)):
+            segs.append(Segment("g_sensitivity", run, j, "position", gs["samples"], dt,
+                                up_axis=up, north_axis=north, stand_deg=gam, stand_axis=axis,
+                                temperature_c=tb, delay_s=warm if j == 0 else gs["settle_s"],
+                                power_on=(j == 0), off_time_s=600.0))
+    rs = P["resolution"]                                              # 5.6 (from rest)
+    for run, sign in ((0, 1.0), (1, -1.0)):
+        if not rs["steps_dps"]:
+            break
+        for j, r in enumerate(rs["steps_dps"]):
+            segs.append(Segment("resolution", run, 2 * j, "rest", rs["rest_samples"], dt,
+                                temperature_c=tb, delay_s=warm if (run, j) == (0, 0) else sf["settle_s"],
+                                power_on=(run, j) == (0, 0), off_time_s=600.0))
+            segs.append(Segment("resolution", run, 2 * j + 1, "increment", rs["samples"], dt,
+                                sign * r, temperature_c=tb, delay_s=sf["settle_s"]))
+        segs.append(Segment("resolution", run, 2 * len(rs["steps_dps"]), "rest",
+                            rs["rest_samples"], dt, temperature_c=tb, delay_s=sf["settle_s"]))
     nz = P["noise"]
     segs.append(Segment("static", 0, 0, "record", nz["samples"], nz["sample_interval_s"],
                         temperature_c=tb, delay_s=warm, power_on=True, off_time_s=600.0))
