@@ -713,3 +713,91 @@ def g_slope_iec(accel_g, rate_dps, earth_dps=None, transverse_g=None) -> tuple[f
         raise GonioError("5.3.3.8: the stand angles do not determine the slope")
     coef, *_ = np.linalg.lstsq(A, w, rcond=None)
     return float(coef[1]), (float(coef[2]) if transverse_g is not None else math.nan)
+
+
+# --------------------------------------------------------------------------- 50 % rule under noise
+def _phi(x):
+    from scipy.special import ndtr
+    return ndtr(np.asarray(x, float))
+
+
+def fifty_percent_pass_probability(mean, sigma, expected, *, limit: float = 0.5,
+                                   two_sided: bool = True) -> np.ndarray:
+    """Probability that a step passes the 50 % rule when its measured response is normal with
+    ``mean`` and standard deviation ``sigma``: two-sided (JJF 1535 eqs (13), (14) reading)
+    P(|X − e| ≤ limit·|e|), one-sided (IEC 62047-20 5.6.3) P(X/e ≥ limit). σ = 0 gives 0 or 1.
+
+    >>> [round(float(v), 6) for v in fifty_percent_pass_probability([1.0, 1.0], [0.0, 0.5], [1.0, 1.0])]
+    [1.0, 0.682689]
+    """
+    m, s, e = (np.asarray(v, float) for v in (mean, sigma, expected))
+    m, s, e = np.broadcast_arrays(m, s, e)
+    ae = np.abs(e)
+    sg = np.sign(e)
+    out = np.empty(m.shape)
+    z = s == 0
+    if two_sided:
+        out[z] = (np.abs(m[z] - e[z]) <= limit * ae[z] * (1 + 1e-12)).astype(float)
+        nz = ~z
+        out[nz] = _phi((e[nz] + limit * ae[nz] - m[nz]) / s[nz]) - _phi((e[nz] - limit * ae[nz] - m[nz]) / s[nz])
+    else:
+        out[z] = (sg[z] * m[z] >= limit * ae[z] * (1 - 1e-12)).astype(float)
+        nz = ~z
+        out[nz] = 1.0 - _phi((limit * ae[nz] - sg[nz] * m[nz]) / s[nz])
+    return out
+
+
+def fifty_percent_outcome_pmf(steps, pass_prob) -> dict:
+    """Distribution of the 50 % rule's outcome when the steps (in walking order) pass
+    independently with ``pass_prob``: the result is step k with probability
+    p_1···p_k·(1 − p_{k+1}) (the last step: p_1···p_n), and None ("the first step already
+    fails") with 1 − p_1.
+
+    >>> {k: round(v, 6) for k, v in fifty_percent_outcome_pmf([0.1, 0.05, 0.02], [1.0, 0.8, 0.5]).items()}
+    {None: 0.0, 0.1: 0.2, 0.05: 0.4, 0.02: 0.4}
+    """
+    s, p = list(map(float, steps)), [float(v) for v in pass_prob]
+    pmf = {None: 1.0 - p[0]}
+    run = 1.0
+    for i, (st, pi) in enumerate(zip(s, p)):
+        run *= pi
+        nxt = p[i + 1] if i + 1 < len(p) else 0.0
+        pmf[abs(st)] = pmf.get(abs(st), 0.0) + run * (1.0 - nxt)
+    return pmf
+
+
+def max_outcome_pmf(*pmfs) -> dict:
+    """Distribution of the larger of independent 50 % rule outcomes (the item takes the larger
+    direction); None (above the grid) ranks highest.
+
+    >>> max_outcome_pmf({0.1: 0.5, 0.05: 0.5}, {0.1: 0.5, 0.05: 0.5})
+    {0.05: 0.25, 0.1: 0.75}
+    """
+    keys = sorted({k for p in pmfs for k in p if k is not None}) + [None]
+
+    def cdf(p, k):
+        idx = keys.index(k)
+        return sum(v for kk, v in p.items() if keys.index(kk) <= idx)
+
+    out, prev = {}, 0.0
+    for k in keys:
+        c = float(np.prod([cdf(p, k) for p in pmfs]))
+        if c - prev > 0:
+            out[k] = c - prev
+        prev = c
+    return out
+
+
+def outcome_quantile(pmf: dict, q: float):
+    """The q-quantile of an outcome distribution (None ranks highest).
+
+    >>> outcome_quantile({0.05: 0.25, 0.1: 0.75}, 0.5)
+    0.1
+    """
+    keys = sorted(k for k in pmf if k is not None) + ([None] if None in pmf else [])
+    c = 0.0
+    for k in keys:
+        c += pmf[k]
+        if c >= q - 1e-12:
+            return k
+    return keys[-1]

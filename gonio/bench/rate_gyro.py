@@ -225,6 +225,48 @@ class NoiseState:
         return out
 
 
+def noise_psd_one_sided(g, freq_hz, dt: float, temp_c: float) -> np.ndarray:
+    """One-sided density ((°/s)²/Hz) of the bench's sampled rate noise at interval ``dt``: the
+    white term 2N² (interval means), each Gauss–Markov term of the bias-instability sum as a
+    sampled AR(1) process, the rate random walk as a sampled random walk, and the output
+    quantisation (LSB²/12 per sample) — the model's own closed forms, used for truths."""
+    f = np.asarray(freq_hz, float)
+    z = np.exp(-2j * math.pi * f * dt)
+    n_s = g.arw_deg_sqrt_h / math.sqrt(S_PER_H) * (1 + g.arw_tc1_per_c * (temp_c - g.reference_temperature_c))
+    psd = np.full(f.size, 2.0 * n_s ** 2)
+    ns = NoiseState(g, np.random.default_rng(0), enabled=True)
+    for tau, s in zip(ns.taus, ns.sig):
+        a = math.exp(-dt / tau)
+        psd = psd + 2 * dt * s ** 2 * (1 - a * a) / np.abs(1 - a * z) ** 2
+    q = g.rrw_dph_sqrt_h / S_PER_H / math.sqrt(S_PER_H)
+    with np.errstate(divide="ignore"):
+        if q > 0:
+            psd = psd + 2 * dt * q ** 2 * dt / np.abs(1 - z) ** 2
+    if g.output_lsb:
+        psd = psd + 2 * dt * (g.output_lsb / g.scale_factor) ** 2 / 12
+    return psd
+
+
+def difference_noise_sigma(gyro: RateGyroConfig, dt: float, n: int, n_ref: int,
+                           separation_s: float, *, both_sides: bool, temp_c: float) -> float:
+    """Standard deviation (°/s) of the noise of a step response measured as the mean of ``n``
+    samples minus a reference mean of ``n_ref`` samples whose centre is ``separation_s`` away
+    (``both_sides``: the average of two such references, before and after). From the model's
+    one-sided density (:func:`noise_psd_one_sided`) through the exact discrete filter
+    (Dirichlet kernels of the means): H = D_n − D_r cos ωΔ (both sides) or
+    |H|² = D_n² + D_r² − 2 D_n D_r cos ωΔ. The truth of the noise-limited 50 % rule items.
+    """
+    f = np.linspace(0.0, 0.5 / dt, 400001)[1:]
+
+    def dirichlet(m):
+        return np.sin(math.pi * f * m * dt) / (m * np.sin(math.pi * f * dt))
+
+    dn, dr = dirichlet(n), dirichlet(n_ref)
+    c = np.cos(2 * math.pi * f * separation_s)
+    h2 = (dn - dr * c) ** 2 if both_sides else dn ** 2 + dr ** 2 - 2 * dn * dr * c
+    return math.sqrt(float(np.trapezoid(noise_psd_one_sided(gyro, f, dt, temp_c) * h2, f)))
+
+
 # --------------------------------------------------------------------------- loading
 _GYRO_SCHEMA = {
     "name": Field("str", default="rate gyro"),

@@ -294,6 +294,7 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         cols["stand_axis"] += [seg.stand_axis] * n
         cols["supply_set_v"] += [v_set if eq.supply.error_v else math.nan] * n
         seg_truth.append({"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
+                          "temperature_c": target,
                           "power_cycle": st.run,
                           "gyro_temperature_c": float(np.mean(temp_g)),
                           "scale_factor": float(np.mean(K)) * (1 + eq.acquisition.gain_error_rel),

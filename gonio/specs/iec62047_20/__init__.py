@@ -14,7 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from gonio.analysis.rate_gyro import hysteresis_iec as rg_hysteresis
 from gonio.errors import GonioError
+from gonio.bench.rate_gyro import noise_psd_one_sided
 from gonio.specs import Specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
@@ -40,6 +42,18 @@ READINGS_TAKEN = (
     "5.4.5.2: slope −½ line fitted where the local slope is −½ ± 0.1, read at 1 h.",
     "5.4.5.3: floor over τ with ≥ 10 clusters, divided by √(2 ln 2/π).",
     "5.5: band = the lower of the −3 dB and the 90° lag frequencies, both reported.",
+    "5.1.4.1 e) eq (18): a ratiometric gyro's outputs are referred to each run's own set "
+    "voltage, y = y_RAW·V_set/V_actual, when the readings record the set voltage.",
+    "5.3.3.3: the bias of each supply run is its rest output (null included); R in %, the "
+    "departure in output units (Table 4's V) in the details.",
+    "5.3.3.7: a visit is 'up' when reached from below, 'down' from above; hysteresis = "
+    "max |B_up − B_down|.",
+    "5.3.3.8: a = g cos γ with γ = 0 at input axis up (eq (28)'s sin γ counts from the "
+    "horizontal); the Earth rate removed at each angle; a whole turn in equal steps.",
+    "5.4.5.1 c): broadband = rms over band_hz … broadband_high_hz of the one-sided density; the "
+    "20 dB/dec value c of c/f (°/s^1.5) in the details.",
+    "5.6: the filter is the mean over a step's samples; Noise,RMS = std of T-second means of "
+    "the static record; resolution = max(Out,resolution, Noise,RMS).",
 )
 
 
@@ -65,8 +79,10 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, IECProtocol) else load_protocol(protocol or KEY)
     md, P = rd.metadata, proto.sections
+    ratiometric = str(md.get("ratiometric", "")).strip().lower() in ("true", "yes", "1")
+    df, n_corr = _items.supply_correction(rd.data, ratiometric)
     ctx = _items.Context(
-        df=rd.data, output_unit=md.get("output_unit", "output"),
+        df=df, output_unit=md.get("output_unit", "output"),
         null_output=_mf(md, "null_output", P["protocol"]["null_output"], rd.path),
         latitude_deg=_mf(md, "latitude_deg", P["protocol"]["latitude_deg"], rd.path),
         a_typ=_mf(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
@@ -81,7 +97,9 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "", f"the data were refused: {exc.message}")
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
-                                 list(READINGS_TAKEN))
+                                 list(READINGS_TAKEN),
+                                 extra={"supply_correction_eq18": {
+                                     "ratiometric": ratiometric, "rows_corrected": n_corr}})
 
 
 def truth(bench, proto: IECProtocol) -> dict:
@@ -157,6 +175,75 @@ def truth(bench, proto: IECProtocol) -> dict:
     outside = [j for j, b in enumerate(blocks) if abs(b - settled) > po["startup_band_dps"]]
     out["startup_time"] = {"value": 0.0 if not outside else (outside[-1] + 1) * P * dt,
                            "how": "closed form on the transient"}
+    # 5.3.3.3: the rest output (bias in output units, null included) at each supply
+    def rest_out(Vv):
+        Kv = float(g.scale_factor_at(tb, Vv))
+        bv = float(g.bias_at(tb, Vv)) + float(np.asarray(g.g_sensitivity_dps_per_g) @ fb)
+        return float(g.null_at(Vv)) + Kv * (bv + float(g.response(np.array([ez]))[0]))
+
+    o = np.array([rest_out(v) for v in V])
+    Rb = [rg.ratiometric_error_iec(o[i], o[ib], V[i], V[ib]) for i in range(V.size) if i != ib]
+    out["bias_ratiometric_error"] = {"value": 100 * float(np.max(np.abs(Rb))) if Rb else math.nan,
+                                     "rest_output": o, "how": "model rest output at each supply"}
+    # 5.3.3.8: exact model rate at every stand angle, then the clause's fit
+    from gonio.bench.rate_session import body_rotation
+    from gonio.specs.iec62047_20.protocol import g_stand_runs, stand_angles
+    slopes = {}
+    for run, (up, north, axis) in enumerate(g_stand_runs()):
+        a1, a2, w, e = [], [], [], []
+        for gam in stand_angles(proto):
+            Rm = mount_matrix(up, north) @ body_rotation(axis, gam)
+            f_b = Rm.T @ np.array([0.0, 0.0, 1.0])
+            e_b = Rm.T @ E
+            w.append((float(np.asarray(g.g_sensitivity_dps_per_g) @ f_b) + g.cross_axis_x * e_b[0]
+                      + g.cross_axis_y * e_b[1] + float(g.response(np.array([e_b[2]]))[0])) * kr)
+            e.append(float(e_b[2]))
+            a1.append(f_b[2] if run == 0 else f_b[0])
+            a2.append(f_b[1])
+        s1, s2 = rg.g_slope_iec(a1, w, e, a2)
+        slopes["parallel" if run == 0 else "perpendicular"] = s1 if run == 0 else \
+            (s1 if abs(s1) >= abs(s2) else s2)
+    out["g_sensitivity"] = {"value": max(abs(v) for v in slopes.values()), "slopes": slopes,
+                            "g_parameter_dps_per_g": list(g.g_sensitivity_dps_per_g),
+                            "how": "exact model rate at each stand angle, fitted as 5.3.3.8"}
+    # 5.4.5.1 c) and 5.6: the model's one-sided noise density of the static record
+    nz = proto["noise"]
+    dts = nz["sample_interval_s"]
+    fgrid = np.linspace(0.0, 0.5 / dts, 200001)
+    psd = noise_psd_one_sided(g, fgrid, dts, tb)
+    hi = nz.get("broadband_high_hz", 0.0) or 0.5 / dts
+    selb = (fgrid >= nz["band_hz"]) & (fgrid <= min(hi, 0.5 / dts))
+    out["broadband_noise"] = {"value": math.sqrt(float(np.trapezoid(psd[selb], fgrid[selb]))),
+                              "how": "∫ of the model's one-sided density over the broadband region "
+                                     "(white, Gauss-Markov sum, random walk, quantisation)"}
+    rs = proto["resolution"]
+    if rs["steps_dps"]:
+        from gonio.bench.rate_gyro import difference_noise_sigma
+        sig = difference_noise_sigma(g, dt, rs["samples"], rs["rest_samples"],
+                                     0.5 * (rs["samples"] + rs["rest_samples"]) * dt
+                                     + proto["scale_factor"]["settle_s"], both_sides=True,
+                                     temp_c=tb) * k_tb / a
+        cands, pmfs = [], []
+        for sgn in (1.0, -1.0):
+            st = np.array(rs["steps_dps"])
+            resp = k_tb / a * (g.response(sgn * st + ez) - g.response(np.array([ez]))[0]) * sgn
+            cands.append(rg.resolution_iec(st, resp)[0])
+            pmfs.append(rg.fifty_percent_outcome_pmf(st, rg.fifty_percent_pass_probability(
+                resp, sig, st, two_sided=False)))
+        T_f = rs["samples"] * dt
+        L = nz["samples"] * dts
+        nb = int(L // T_f)
+        f1 = fgrid[1:]
+        hp = 1.0 - np.sinc(f1 * L) ** 2
+        noise_rms = math.sqrt(nb / (nb - 1) * float(np.trapezoid(
+            psd[1:] * np.sinc(f1 * T_f) ** 2 * hp, f1))) if nb >= 2 else 0.0
+        o_res = rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5)
+        out["resolution"] = {"value": None if o_res is None else max(o_res, noise_rms),
+                             "out_resolution_dps": o_res, "noise_rms_dps": noise_rms,
+                             "noise_free_out_resolution_dps": None if None in cands else max(cands),
+                             "how": "max(median outcome of the 50 % rule under the model's noise, "
+                                    "E of the std of T-means of the static record from the model's "
+                                    "density: ∫S·sinc²(πfT)·(1 − sinc²(πfL)) df · n/(n − 1))"}
     out["arw"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (tb - g.reference_temperature_c)),
                   "how": "ARW parameter at T_BASE"}
     out["bias_instability"] = {"value": g.bias_instability_dph, "how": "bias-instability parameter"}
@@ -188,10 +275,32 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
           "latitude_deg": repr(b.latitude_deg if P["latitude_deg"] == "bench" else P["latitude_deg"]),
           "room_temperature_c": repr(t_base(proto)), "supply_nominal_v": repr(g.supply_nominal_v),
           "rate_table_u_rel": repr(eq.rate_table_u_rel),
-          "acquisition_u_rel": repr(eq.acquisition_u_rel)}
+          "acquisition_u_rel": repr(eq.acquisition_u_rel),
+          "ratiometric": "true" if g.ratiometric else "false"}
     res = run_rate_session(plan(proto, b), b, seed, room_temperature_c=20.0, metadata=md,
                            noise=noise)
     res.truth["items"] = truth(b, proto)
+    # a single calibration measures K of its own power-up: the truth carries its scatter
+    sf_seg = next((t for t in res.truth["segments"] if t["test"] == "scale_factor"), None)
+    if sf_seg is not None and noise:
+        eps = res.truth["power_cycles"][sf_seg["power_cycle"]]["scale_factor_scatter_rel"]
+        items = res.truth["items"]
+        items["scale_factor"]["value"] *= 1 + eps
+        items["scale_factor"]["power_cycle_scatter_rel"] = eps
+        items["initial_sf_variation"]["value"] = 100 * (items["scale_factor"]["value"]
+                                                        - g.scale_factor) / g.scale_factor
+    # 5.3.3.7: the true bias of every temperature visit (thermal lag included) from the session
+    segs = [t for t in res.truth["segments"] if t["test"] == "bias_temperature"]
+    if segs:
+        kr = float(g.scale_factor_at(t_base(proto), g.supply_nominal_v)) / \
+            res.truth["items"]["scale_factor"]["value"]
+        try:
+            h, d = rg_hysteresis([t["temperature_c"] for t in segs],
+                                 [t["bias_dps"] * kr for t in segs])
+        except GonioError:
+            h, d = math.nan, {}
+        res.truth["items"]["bias_hysteresis"] = {"value": h, "up_minus_down_dps": d,
+                                                 "how": "5.3.3.7 on the session's true biases"}
     return res
 
 

@@ -37,11 +37,46 @@ class Context:
     rate_table_u_rel: float = 2.5e-4
     acquisition_u_rel: float = 3.0e-5
     chamber_deviation_c: float = 2.0
+    axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
     a_base: float | None = None
     cache: dict = field(default_factory=dict)
 
     def has(self, test: str) -> bool:
         return bool((self.df["test"] == test).any())
+
+
+def supply_correction(df: pd.DataFrame, ratiometric: bool) -> tuple[pd.DataFrame, int]:
+    """IEC 62047-20 5.1.4.1 e) eq (18) (and (19), (31) of 5.1.4.2 e), 5.6.4 e)): for a
+    ratiometric gyro every output recorded with a set voltage (``supply_set_v``) beside the
+    actual one (``supply_v``) becomes y = y_RAW·V_set/V_actual
+    (:func:`gonio.analysis.rate_gyro.voltage_corrected`), and ``supply_v`` then holds the set
+    voltage the corrected output refers to (reading taken: each run to its own set voltage,
+    never to V_BASE, which would cancel what 5.1.3.5 measures). Returns a corrected copy
+    (the input is not modified) and the number of rows corrected; a non-ratiometric gyro's
+    outputs are returned unchanged.
+
+    >>> d = pd.DataFrame({"output": [1000.0, 7.0], "supply_v": [4.9998, 5.0],
+    ...                   "supply_set_v": [5.0, float("nan")]})
+    >>> c, n = supply_correction(d, True)
+    >>> round(float(c["output"][0]), 2), float(c["supply_v"][0]), n, float(d["output"][0])
+    (1000.04, 5.0, 1, 1000.0)
+    """
+    if not ratiometric or "supply_set_v" not in df:
+        return df, 0
+    vs = df["supply_set_v"].to_numpy(dtype=float)
+    ok = np.isfinite(vs)
+    if not ok.any():
+        return df, 0
+    va = df["supply_v"].to_numpy(dtype=float)
+    if np.any(~(va[ok] > 0)):
+        raise GonioError("IEC 62047-20 eq (18): an actual supply voltage is missing or ≤ 0",
+                         column="supply_v")
+    out = df.copy()
+    y = out["output"].to_numpy(dtype=float).copy()
+    y[ok] = rg.voltage_corrected(y[ok], vs[ok], va[ok])
+    out["output"] = y
+    out.loc[ok, "supply_v"] = vs[ok]
+    return out, int(ok.sum())
 
 
 def _miss(ctx, test, key, title, clause, unit, need_a=True):
@@ -222,7 +257,10 @@ def ratiometric(ctx: Context) -> Item:
 def cross_axis(ctx: Context) -> Item:
     """IEC 62047-20 5.2.3 eqs (20)–(23), reading taken: ω_x = (Out,x − Out,rest)/SF over whole
     revolutions (the printed ×SF is dimensionally wrong), K = ω_x/ω; with +ω and −ω applied,
-    half their difference (bias-free refinement, flagged). Largest of X, Y in %."""
+    half their difference (bias-free refinement, flagged). Largest of X, Y in %. Budget: the
+    noise of the rotating means and the input-axis alignment (a tilt ε of the input axis
+    towards the rotation axis reads as a cross-axis sensitivity sin ε, rectangular within
+    ± ``axis_alignment_deg``)."""
     t, cl, un = "cross-axis sensitivity (max of X, Y)", "5.2", "%"
     m = _miss(ctx, "cross_axis", "cross_axis", t, cl, un)
     if m:
@@ -244,8 +282,13 @@ def cross_axis(ctx: Context) -> Item:
     if not per:
         return not_measured("cross_axis", t, cl, un, "no rotation about X or Y")
     ax = max(per, key=lambda k: abs(per[k]["plus_minus"]))
-    u = gum(lambda k: 100 * abs(k), [from_u("K_" + ax, per[ax]["plus_minus"], us[ax], dof=50,
-                                            source="noise of the rotating means")])
+    align = math.sin(math.radians(ctx.axis_alignment_deg))
+    u = gum(lambda k, al: 100 * abs(k + al),
+            [from_u("K_" + ax, per[ax]["plus_minus"], us[ax], dof=50,
+                    source="noise of the rotating means"),
+             type_b("align", 0.0, align, "rectangular",
+                    source="alignment of the input axis to the plane ⟂ the rotation axis "
+                           "(table axis and fixture): sin(half-width)")])
     return Item("cross_axis", t, cl, un, 100 * abs(per[ax]["plus_minus"]), uncertainty=u,
                 details={"per_axis": per, "axis": ax})
 
@@ -259,19 +302,25 @@ def bias(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.1 eq (24): N_bias = Out,ave − Earth-rate component (°/s), computed in
     output units then divided by a_BASE (reading taken). The Earth component uses the
     physics (axis up Ω_E sin λ, horizontal Ω_E cos λ cos φ); the printed sin/cos are swapped
-    (erratum). Mean over the records."""
+    (erratum). Mean over the records. Budget: the records' spread (type A) and the
+    acquisition's relative gain uncertainty on the whole output, null included."""
     t, cl, un = "bias N_bias", "5.3.3.1", "°/s"
     m = _miss(ctx, "bias", "bias", t, cl, un)
     if m:
         return m
-    vals, earth = [], None
+    vals, earth, raw = [], None, []
     for s in segment_means(ctx.df, "bias"):
         earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(s.up_axis, s.north_axis))
         vals.append((s.mean - ctx.null_output - ctx.a_base * earth) / ctx.a_base)
+        raw.append(s.mean)
     v = np.array(vals)
-    u = gum(lambda b: b, [from_u("N_bias", float(v.mean()),
-                                 float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
-                                 dof=max(v.size - 1, 1), source="spread of the records")])
+    u = gum(lambda b, en: b + en,
+            [from_u("N_bias", float(v.mean()),
+                    float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
+                    dof=max(v.size - 1, 1), source="spread of the records"),
+             from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(raw)))
+                    / abs(ctx.a_base), type="B",
+                    source="acquisition gain on the whole output (null included)")])
     return Item("bias", t, cl, un, float(v.mean()), uncertainty=u, details={
         "records_dps": v, "earth_component_dps": earth,
         "printed_formula_earth_dps": rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg)),
@@ -499,13 +548,25 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
         return m
     po = ctx.protocol["power_on"]
     vals, noise = [], []
+    from scipy.stats import norm
+    nbs, lens = [], []
     for run, tt, ys, y in _power_on_records(ctx):
-        ref = float(y[: po["reference_samples"]].mean())
+        nr = po["reference_samples"]
+        ref = float(y[:nr].mean())
         vals.append(float(np.max(np.abs(ys - ref))))
-        noise.append(float(np.std(np.diff(ys)) / math.sqrt(2)))
+        s_ref = float(y[:nr].std(ddof=1) / math.sqrt(nr)) if nr > 1 else 0.0
+        noise.append(math.hypot(float(np.std(np.diff(ys)) / math.sqrt(2)), s_ref))
+        nbs.append(ys.size)
+        lens.append(float(tt[-1] - tt[0]) if tt.size > 1 else 0.0)
     i = int(np.argmax(vals))
-    u = gum(lambda v: v, [from_u("drift", vals[i], noise[i], dof=50,
-                                 source="noise of the smoothed output")])
+    # the statistic is a maximum over n_b smoothed values: noise alone makes it ≈ σ·z_max
+    sd = math.hypot(noise[i], drift_u_dps(ctx, lens[i]))
+    zmax = float(norm.ppf(1 - 0.025 / max(nbs[i], 1)))
+    u = gum(lambda v, m: v + m,
+            [from_u("drift", vals[i], noise[i], dof=50, source="noise of the smoothed output"),
+             type_b("noise_max", 0.0, sd * zmax, "normal", k=2,
+                    source="95 % bound of the largest noise excursion over the record "
+                           "(σ of smoothed output − reference, with the drift, × z for n_b values)")])
     return Item("bias_drift_after_power_on", t, cl, un, vals[i], uncertainty=u,
                 details={"per_record_dps": vals})
 
@@ -552,8 +613,9 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
     if "noise_fit" not in ctx.cache:
         ctx.cache["noise_fit"] = fit_noise_model(_static(ctx)[0])
     fit = ctx.cache["noise_fit"]
-    return math.sqrt(fit.K ** 2 * abs(separation_s)
-                     + 2 * (rg.FLICKER_FLOOR_EXACT * fit.B) ** 2) / S_PER_H
+    k2 = fit.K ** 2 + (fit.u_K if math.isfinite(fit.u_K) else 0.0) ** 2
+    b2 = fit.B ** 2 + (fit.u_B if math.isfinite(fit.u_B) else 0.0) ** 2
+    return math.sqrt(k2 * abs(separation_s) + 2 * rg.FLICKER_FLOOR_EXACT ** 2 * b2) / S_PER_H
 
 
 def _bias_temperature_points(ctx: Context):
@@ -601,7 +663,18 @@ def bias_hysteresis(ctx: Context) -> Item:
               from_u("B_down", pd_[1], pd_[2], dof=pd_[3], source=f"falling visit at {Tm:g} °C"),
               from_u("drift", 0.0, drift_u_dps(ctx, pu[4] - pd_[4]), dof=50,
                      source="bias drift between the visits (Allan fit: RRW, BI)")]
-    u = gum(lambda a, b, d: abs(a - b + d), inputs)
+    # the value is a maximum over the temperatures visited twice: noise inflates it
+    from scipy.stats import norm
+    sds = []
+    for Tv in diffs:
+        ju = max(i for i in range(1, len(T)) if T[i] == Tv and T[i] > T[i - 1])
+        jd = max(i for i in range(1, len(T)) if T[i] == Tv and T[i] < T[i - 1])
+        sds.append(math.sqrt(pts[ju][2] ** 2 + pts[jd][2] ** 2
+                             + drift_u_dps(ctx, pts[ju][4] - pts[jd][4]) ** 2))
+    inputs.append(type_b("noise_max", 0.0, max(sds) * float(norm.ppf(1 - 0.025 / len(sds))),
+                         "normal", k=2, source="95 % bound of the largest noise difference "
+                                               "over the temperatures visited twice"))
+    u = gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
     return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
         "up_minus_down_dps": diffs, "temperature_c": Tm})
 
@@ -649,8 +722,9 @@ def g_sensitivity(ctx: Context) -> Item:
     = the larger of the slopes against the two transverse components g cos γ, g sin γ. The
     characteristic is max(|Out,gp|, |Out,gv|), (°/s)/g.
 
-    Uncertainty: the slope's least-squares standard error (ν = points − 3) and the scale
-    factor (relative)."""
+    Uncertainty: the slope's least-squares standard error (ν = points − 3), the bias drift
+    over the turn (correlated from angle to angle, so the residuals miss it) projected on
+    the regressor, and the scale factor (relative)."""
     t, cl, un = "linear g sensitivity", "5.3.3.8", "(°/s)/g"
     m = _miss(ctx, "g_sensitivity", "g_sensitivity", t, cl, un)
     if m:
@@ -677,19 +751,23 @@ def g_sensitivity(ctx: Context) -> Item:
         r = (w - e) - A @ np.linalg.lstsq(A, w - e, rcond=None)[0]
         dof = max(w.size - 3, 1)
         cov = float(r @ r) / dof * np.linalg.inv(A.T @ A)
+        dur = seg[-1].time_s - seg[0].time_s
+        u_dr = drift_u_dps(ctx, dur) * math.sqrt(2.0 / w.size)
         if name == "parallel":
-            res[name] = (s1, math.sqrt(cov[1, 1]), dof)
+            res[name] = (s1, math.sqrt(cov[1, 1]), dof, u_dr)
         else:
             k = 1 if abs(s1) >= abs(s2) else 2
-            res[name] = ((s1, s2)[k - 1], math.sqrt(cov[k, k]), dof)
+            res[name] = ((s1, s2)[k - 1], math.sqrt(cov[k, k]), dof, u_dr)
     if not res:
         return not_measured("g_sensitivity", t, cl, un, "no tilting-stand set-up with ≥ 4 angles")
     key = max(res, key=lambda k: abs(res[k][0]))
-    v, se, dof = res[key]
-    u = gum(lambda s, e: abs(s) * (1 + e), [from_u("slope", v, se, dof=dof,
-                                                  source=f"least-squares slope ({key})"),
-                                           from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B",
-                                                  source="scale factor, relative")])
+    v, se, dof, u_dr = res[key]
+    u = gum(lambda s, d, e: abs(s + d) * (1 + e),
+            [from_u("slope", v, se, dof=dof, source=f"least-squares slope ({key})"),
+             from_u("drift", 0.0, u_dr, dof=50,
+                    source="bias drift over the turn projected on the regressor, "
+                           "u_drift(duration)·√(2/n)"),
+             from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B", source="scale factor, relative")])
     return Item("g_sensitivity", t, cl, un, abs(v), uncertainty=u, details={
         "out_gp_dps_per_g": res.get("parallel", (math.nan,))[0],
         "out_gv_dps_per_g": res.get("perpendicular", (math.nan,))[0], "set_up": key})
@@ -730,17 +808,19 @@ def resolution(ctx: Context) -> Item:
     samples (T = samples × interval) and Noise,RMS the standard deviation of T-second means
     of the static record (5.4), i.e. the in-band noise seen through that filter.
 
-    Uncertainty: the step to the next tested value (rectangular) when the 50 % rule
-    decides; the sampling of a standard deviation of the block means when the noise does."""
+    Uncertainty: for Out,resolution the step to the next tested value (rectangular) and the
+    95 % range of the rule's outcome under the data's noise; for Noise,RMS the χ² upper
+    limit of a standard deviation of the block means; the larger of the two budgets is
+    reported (it covers the maximum of the two)."""
     t, cl, un = "resolution", "5.6", "°/s"
     m = _miss(ctx, "resolution", "resolution", t, cl, un)
     if m:
         return m
     means = segment_means(ctx.df, "resolution")
-    cands, nexts, dets, T = [], {}, {}, None
+    cands, nexts, dets, T, pmfs = [], {}, {}, None, []
     for run in sorted({s.run for s in means}):
         seg = [s for s in means if s.run == run]
-        steps, resp = [], []
+        steps, resp, sig = [], [], []
         for j, s in enumerate(seg):
             if s.role != "increment":
                 continue
@@ -748,12 +828,17 @@ def resolution(ctx: Context) -> Item:
                 raise GonioError(f"resolution run {run} step {s.step}: a step needs a rest before "
                                  "and after it")
             rest = 0.5 * (seg[j - 1].mean + seg[j + 1].mean)
+            sig.append(math.sqrt(s.std ** 2 / s.n + 0.25 * (seg[j - 1].std ** 2 / seg[j - 1].n
+                                                            + seg[j + 1].std ** 2 / seg[j + 1].n))
+                       / abs(ctx.a_base))
             steps.append(abs(s.rate_dps))
             resp.append(math.copysign(1.0, s.rate_dps) * (s.mean - rest) / ctx.a_base)
             T = s.n * float(np.median(np.diff(segment_samples(ctx.df, "resolution", s.run,
                                                               s.step)["time_s"])))
         c, ratio = rg.resolution_iec(steps, resp)
         cands.append(c)
+        pmfs.append(rg.fifty_percent_outcome_pmf(steps, rg.fifty_percent_pass_probability(
+            resp, sig, steps, two_sided=False)))
         for a, b in zip(steps, steps[1:] + [0.0]):
             nexts[a] = b
         dets[f"run{run}"] = {"steps_dps": steps, "ratio": ratio, "candidate_dps": c}
@@ -767,16 +852,34 @@ def resolution(ctx: Context) -> Item:
         nb = rate_dph.size // P
         if nb >= 2:
             noise = rg.block_mean_stability(rate_dph / S_PER_H, 1.0, P)
-    if math.isfinite(noise) and noise > out_res:
-        u = gum(lambda v: v, [from_u("Noise_RMS", noise, noise / math.sqrt(2 * (nb - 1)),
-                                     dof=nb - 1, source="sampling of the std of the T-means")])
+    step = out_res - nexts.get(out_res, 0.0)
+    half = 0.0
+    if pmfs:
+        pmf = rg.max_outcome_pmf(*pmfs)
+        top = max(k for p in pmfs for k in p if k is not None)
+        lo, hi = (rg.outcome_quantile(pmf, q) for q in (0.025, 0.975))
+        lo, hi = (top if lo is None else lo), (top if hi is None else hi)
+        half = max(abs(out_res - lo), abs(hi - out_res))
+    u_rule = gum(lambda a, b, c: a + b + c, [
+        from_u("res", out_res, 0.0),
+        type_b("step", 0.0, step / 2, "rectangular", source="between the result and the next step"),
+        type_b("rule_noise", 0.0, half, "normal", k=2,
+               source="95 % range of the 50 % rule's outcome under the data's noise")])
+    if math.isfinite(noise) and nb >= 2:
+        from scipy.stats import chi2
+        Un = noise * (math.sqrt((nb - 1) / chi2.ppf(0.025, nb - 1)) - 1.0)
+        u_noise = gum(lambda v, e: v + e, [from_u("Noise_RMS", noise, 0.0),
+                                           type_b("s(s)", 0.0, Un, "normal", k=2,
+                                                  source="χ² 95 % upper limit of the std of "
+                                                         f"{nb} T-means")])
+    else:
+        u_noise = None
+    if u_noise is not None and noise > out_res:
         value, by = noise, "Noise,RMS"
     else:
-        step = out_res - nexts.get(out_res, 0.0)
-        u = gum(lambda a, b: a + b, [from_u("res", out_res, 0.0),
-                                     type_b("step", 0.0, step / 2, "rectangular",
-                                            source="between the result and the next step")])
         value, by = out_res, "Out,resolution"
+    # |max(a, b) − max(a_t, b_t)| ≤ max(|a − a_t|, |b − b_t|): the larger U covers the max
+    u = u_rule if u_noise is None or u_rule.U >= u_noise.U else u_noise
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by})

@@ -4,7 +4,8 @@ programme on the virtual bench (:func:`plan`).
 Order: bias records with power on/off cycles (5.3.3.1, 5.3.3.4), records from power-on
 (5.3.3.5, 5.3.3.9), the scale factor at
 T_BASE, V_BASE (5.1.3.1), its stability at constant rates (5.1.3.7), the supply points
-(5.1.3.5), cross-axis rotations about X and Y (5.2), the static noise record (5.4), the
+(5.1.3.5; one power-up, the supply re-set between the runs as 5.1.4.1 c) allows, so the
+power-cycle scatter of K and b is common to the runs and cancels in eqs (7) and (26)), cross-axis rotations about X and Y (5.2), the static noise record (5.4), the
 frequency band (5.5), then the temperature programme base → max → base → min → base
 (5.3.4.4 e)) with a scale-factor calibration at each of the m + 1 temperatures on the way
 (5.1.3.3, 5.1.3.4) and a bias record, input axis horizontal east, at every visit (5.3.3.6,
@@ -167,9 +168,9 @@ def plan(proto: IECProtocol, bench) -> list[Segment]:
             continue
         segs.append(Segment("scale_factor", 1, j, "rate", st["samples"], dt, r, temperature_c=tb,
                             ramp_c_per_min=ramp, delay_s=sf["settle_s"]))
-    for i, v in enumerate(P["supply"]["voltages_v"]):
-        segs += sf_segments("ratiometric", i, rates, first_delay_s=warm, power_on=True,
-                            off_time_s=600.0, supply_v=v, **kw)
+    for i, v in enumerate(P["supply"]["voltages_v"]):       # one power-up, supply re-set
+        segs += sf_segments("ratiometric", i, rates, first_delay_s=warm if i == 0 else sf["settle_s"],
+                            power_on=(i == 0), off_time_s=600.0, supply_v=v, **kw)
     ca = P["cross_axis"]
     n_rev = int(round(ca["revolutions"] * 360.0 / ca["rate_dps"] / dt))
     for run, (up, north) in enumerate((("+x", "+y"), ("+y", "+z"))):

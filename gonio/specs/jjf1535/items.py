@@ -70,14 +70,31 @@ def _block_std_of_mean(y: np.ndarray, block: int = 10) -> tuple[float, float]:
     return float(m.std(ddof=1) / math.sqrt(n)), n - 1
 
 
+def std_upper_half_width(s: float, nu: int) -> float:
+    """Expanded uncertainty (95 %) of a standard deviation s with ν degrees of freedom: the
+    distance from s to the upper χ² limit s·√(ν/χ²_0.025,ν) (the lower limit is always
+    nearer). For ν = 2 this is 5.29·s; the symmetric s/√(2ν) with k = t₉₅(ν) would cover
+    the true σ only ≈ 90 % of the time.
+
+    >>> round(std_upper_half_width(1.0, 2), 3)
+    5.29
+    """
+    from scipy.stats import chi2
+    return float(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1.0))
+
+
 def drift_u_dph(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/h) of a bias difference between two records ``separation_s``
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
-    instability (√2·0.664·B as the flicker floor of a difference); 0 without a static record."""
+    instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
+    by the square of its fit uncertainty; 0 without a static record."""
     fit = ctx.cache.get("noise_fit")
     if fit is None:
         return 0.0
-    return math.sqrt(fit.K ** 2 * abs(separation_s) + 2 * (rg.FLICKER_FLOOR_EXACT * fit.B) ** 2)
+    # the fit's own uncertainties enter (a short static record cannot resolve the RRW)
+    k2 = fit.K ** 2 + (fit.u_K if math.isfinite(fit.u_K) else 0.0) ** 2
+    b2 = fit.B ** 2 + (fit.u_B if math.isfinite(fit.u_B) else 0.0) ** 2
+    return math.sqrt(k2 * abs(separation_s) + 2 * rg.FLICKER_FLOOR_EXACT ** 2 * b2)
 
 
 # --------------------------------------------------------------------------- 7.2.1 – 7.2.4
@@ -201,8 +218,9 @@ def sf_repeatability(ctx: Context) -> Item:
     _, _, kr = rg.relative_std([c["fit"].K for c in cals])
     Q = len(cals)
     u = gum(lambda a, b: a + b, [from_u("K_r", kr, 0.0),
-                                 from_u("s(s)", 0.0, kr / math.sqrt(2 * (Q - 1)), dof=Q - 1,
-                                        source="sampling of a standard deviation, Q values")])
+                                 type_b("s(s)", 0.0, std_upper_half_width(kr, Q - 1), "normal", k=2,
+                                        source=f"χ² 95 % upper limit of a standard deviation "
+                                               f"of Q = {Q} values")])
     return Item("sf_repeatability", title, clause, unit, kr, uncertainty=u, details={"Q": Q})
 
 
@@ -234,15 +252,33 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
 
 
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
-def _candidate_item(key, title, clause, cands, grid_next, details) -> Item:
+def rule_noise_half_width(pmfs: list[dict], value: float) -> tuple[float, dict]:
+    """Half-width of the 95 % range of the 50 % rule's outcome under the noise of the data
+    (:func:`gonio.analysis.rate_gyro.max_outcome_pmf` of the directions), measured from
+    ``value``: the distance to the farther of the 2.5 % and 97.5 % outcomes (None, "above
+    the grid", counts as the largest tested step)."""
+    pmf = rg.max_outcome_pmf(*pmfs)
+    top = max(k for p in pmfs for k in p if k is not None)
+    lo, hi = (rg.outcome_quantile(pmf, q) for q in (0.025, 0.975))
+    lo, hi = (top if lo is None else lo), (top if hi is None else hi)
+    return max(abs(value - lo), abs(hi - value)), pmf
+
+
+def _candidate_item(key, title, clause, cands, grid_next, details, pmfs=None) -> Item:
     if any(c is None for c in cands):
         return not_measured(key, title, clause, "°/s",
                             "the largest step already fails the 50 % criterion; start higher")
     value = max(cands)
     hw = max(value - grid_next.get(value, 0.0), 0.0)
-    u = gum(lambda a, b: a + b, [from_u(key, value, 0.0),
-                                 type_b("grid", 0.0, hw / 2.0, "rectangular",
-                                        source="step between the candidate and the next tested value")])
+    half, pmf = rule_noise_half_width(pmfs, value) if pmfs else (0.0, {})
+    u = gum(lambda a, b, c: a + b + c,
+            [from_u(key, value, 0.0),
+             type_b("grid", 0.0, hw / 2.0, "rectangular",
+                    source="step between the candidate and the next tested value"),
+             type_b("rule_noise", 0.0, half, "normal", k=2,
+                    source="95 % range of the 50 % rule's outcome under the data's noise")])
+    details = {**details, "outcome_pmf": {("none" if k is None else repr(k)): v
+                                          for k, v in pmf.items()}}
     return Item(key, title, clause, "°/s", value, uncertainty=u, details=details)
 
 
@@ -255,10 +291,10 @@ def threshold(ctx: Context) -> Item:
     if miss:
         return miss
     means = segment_means(ctx.df, "threshold")
-    cands, dets, nexts = [], {}, {}
+    cands, dets, nexts, pmfs = [], {}, {}, []
     for run in sorted({m.run for m in means}):
         seg = [m for m in means if m.run == run]
-        rates, meas, exp = [], [], []
+        rates, meas, exp, sig = [], [], [], []
         for j, m in enumerate(seg):
             if m.role != "rate":
                 continue
@@ -267,16 +303,21 @@ def threshold(ctx: Context) -> Item:
             if before is None:
                 raise GonioError(f"threshold run {run} step {m.step}: no rest before the point")
             f0 = before.mean if after is None else 0.5 * (before.mean + after.mean)
+            v0 = before.std ** 2 / before.n if after is None else \
+                0.25 * (before.std ** 2 / before.n + after.std ** 2 / after.n)
             rates.append(m.rate_dps)
             meas.append(m.mean - f0)
             exp.append(ctx.K * m.rate_dps)
+            sig.append(math.sqrt(m.std ** 2 / m.n + v0))
         c, dev = rg.fifty_percent_candidate(rates, meas, exp)
         cands.append(c)
+        pmfs.append(rg.fifty_percent_outcome_pmf(
+            rates, rg.fifty_percent_pass_probability(meas, sig, exp)))
         mags = [abs(r) for r in rates]
         for a, b in zip(mags, mags[1:] + [0.0]):
             nexts[a] = b
         dets[f"run{run}"] = {"rates_dps": rates, "deviation": dev, "candidate_dps": c}
-    return _candidate_item("threshold", title, clause, cands, nexts, dets)
+    return _candidate_item("threshold", title, clause, cands, nexts, dets, pmfs)
 
 
 def resolution(ctx: Context) -> Item:
@@ -288,10 +329,10 @@ def resolution(ctx: Context) -> Item:
     if miss:
         return miss
     means = segment_means(ctx.df, "resolution")
-    cands, dets, nexts = [], {}, {}
+    cands, dets, nexts, pmfs = [], {}, {}, []
     for run in sorted({m.run for m in means}):
         seg = [m for m in means if m.run == run]
-        steps, meas, exp = [], [], []
+        steps, meas, exp, sig = [], [], [], []
         for j, m in enumerate(seg):
             if m.role != "increment":
                 continue
@@ -302,13 +343,16 @@ def resolution(ctx: Context) -> Item:
             steps.append(d)
             meas.append(m.mean - base.mean)
             exp.append(ctx.K * d)
+            sig.append(math.sqrt(m.std ** 2 / m.n + base.std ** 2 / base.n))
         c, dev = rg.fifty_percent_candidate(steps, meas, exp)
         cands.append(c)
+        pmfs.append(rg.fifty_percent_outcome_pmf(
+            steps, rg.fifty_percent_pass_probability(meas, sig, exp)))
         mags = [abs(r) for r in steps]
         for a, b in zip(mags, mags[1:] + [0.0]):
             nexts[a] = b
         dets[f"run{run}"] = {"increments_dps": steps, "deviation": dev, "candidate_dps": c}
-    return _candidate_item("resolution", title, clause, cands, nexts, dets)
+    return _candidate_item("resolution", title, clause, cands, nexts, dets, pmfs)
 
 
 # --------------------------------------------------------------------------- bias family
@@ -344,7 +388,9 @@ def bias(ctx: Context) -> Item:
     Readings taken: F referred to the gyro's nominal null output; the Earth-rate projection on
     the input axis (Ω_E sin λ, axis up) removed. Budget: repeatability of the mean over the Q
     records (type A), scale factor (relative, from 7.2.1), input-axis alignment on the
-    horizontal Earth rate (rectangular)."""
+    horizontal Earth rate (rectangular), and the acquisition's relative gain uncertainty acting
+    on the whole output F̄ (the null output included: 3×10⁻⁵ of 2.5 V is 0.0125 °/s at
+    6 mV/(°/s))."""
     title, clause, unit = "bias B_0", "7.2.8", "°/h"
     miss = _need(ctx, "bias", "bias", title, clause, unit)
     if miss:
@@ -360,8 +406,11 @@ def bias(ctx: Context) -> Item:
                      source="mean of the Q records (type A)"),
               from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B", source="scale factor, relative"),
               type_b("E_align", 0.0, align, "rectangular",
-                     source="input-axis alignment × horizontal Earth rate")]
-    u = gum(lambda B, eK, ea: B * (1 + eK) + ea, inputs)
+                     source="input-axis alignment × horizontal Earth rate"),
+              from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(
+                  [r["F_mean"] for r in recs]))) / abs(ctx.K) * S_PER_H, type="B",
+                  source="acquisition gain on the whole output (null included)")]
+    u = gum(lambda B, eK, ea, en: B * (1 + eK) + ea + en, inputs)
     return Item("bias", title, clause, unit, float(b.mean()), uncertainty=u, details={
         "B0_m_dph": b, "uncorrected_m_dph": [r["uncorrected_dph"] for r in recs],
         "earth_rate_removed_dph": recs[0]["earth_dph"], "latitude_deg": ctx.latitude_deg,
@@ -407,7 +456,9 @@ def bias_repeatability(ctx: Context) -> Item:
     br = rg.sample_std(b)
     Q = len(b)
     u = gum(lambda a, c: a + c, [from_u("B_r", br, 0.0),
-                                 from_u("s(s)", 0.0, br / math.sqrt(2 * (Q - 1)), dof=Q - 1)])
+                                 type_b("s(s)", 0.0, std_upper_half_width(br, Q - 1), "normal", k=2,
+                                        source=f"χ² 95 % upper limit of a standard deviation "
+                                               f"of Q = {Q} values")])
     return Item("bias_repeatability", title, clause, unit, br, uncertainty=u, details={"Q": Q})
 
 

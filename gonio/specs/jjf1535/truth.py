@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from gonio.analysis import rate_gyro as rg
-from gonio.bench.rate_gyro import NoiseState, RateBench
+from gonio.bench.rate_gyro import NoiseState, RateBench, difference_noise_sigma
 from gonio.bench.rate_session import mount_matrix
 from gonio.physics.earth import earth_rate_enu
 from gonio.units import S_PER_H
@@ -104,23 +104,43 @@ def truth(bench: RateBench, proto) -> dict:
         "how": "K(T) of the model at the set points"}
     # threshold and resolution: the 50 % rule on exact outputs, K = the true K above
     th = P["threshold"]["rates_dps"]
-    cands = []
+    dt0 = P["protocol"]["sample_interval_s"]
+    settle = P["scale_factor"]["settle_s"]
+    tp = P["threshold"]
+    sig_th = K0 * difference_noise_sigma(g, dt0, tp["samples"], tp["rest_samples"],
+                                         0.5 * (tp["samples"] + tp["rest_samples"]) * dt0 + settle,
+                                         both_sides=True, temp_c=room)
+    cands, pmfs = [], []
     for s in (1.0, -1.0):
         r = s * np.array(th)
         meas = K0 * (g.response(r + ez) - g.response(np.array([ez]))[0])
         cands.append(rg.fifty_percent_candidate(r, meas, fit.K * r)[0])
-    out["threshold"] = {"value": None if None in cands else max(cands),
+        pmfs.append(rg.fifty_percent_outcome_pmf(
+            r, rg.fifty_percent_pass_probability(meas, sig_th, fit.K * r)))
+    out["threshold"] = {"value": rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5),
+                        "noise_free_dps": None if None in cands else max(cands),
+                        "noise_sigma_output": sig_th,
                         "continuous_dps": 2 * g.dead_band_dps,
-                        "how": "50 % rule on exact outputs at the protocol's rates"}
+                        "how": "median outcome of the 50 % rule at the protocol's rates: exact "
+                               "model responses, the model's noise of each rest-referred mean "
+                               "(equals the noise-free result when the noise is off)"}
     rs = P["resolution"]
-    cands = []
+    sig_rs = K0 * difference_noise_sigma(g, dt0, rs["samples"], rs["samples"],
+                                         rs["samples"] * dt0 + settle, both_sides=False,
+                                         temp_c=room)
+    cands, pmfs = [], []
     for s in (1.0, -1.0):
         b = s * rs["base_rate_dps"]
         inc = s * np.array(rs["increments_dps"])
         meas = K0 * (g.response(b + inc + ez) - g.response(np.array([b + ez]))[0])
         cands.append(rg.fifty_percent_candidate(inc, meas, fit.K * inc)[0])
-    out["resolution"] = {"value": None if None in cands else max(cands),
-                         "how": "50 % rule on exact outputs (noise and quantisation off)"}
+        pmfs.append(rg.fifty_percent_outcome_pmf(
+            inc, rg.fifty_percent_pass_probability(meas, sig_rs, fit.K * inc)))
+    out["resolution"] = {"value": rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5),
+                         "noise_free_dps": None if None in cands else max(cands),
+                         "noise_sigma_output": sig_rs,
+                         "how": "median outcome of the 50 % rule (exact responses, the model's "
+                                "noise of each base-referred mean)"}
     # bias at room temperature, input axis up, Earth rate removed: b + g·f + cross·ω_E
     gz = np.asarray(g.g_sensitivity_dps_per_g)
     f_b = mount_matrix("+z", "+x").T @ np.array([0.0, 0.0, 1.0])
