@@ -801,3 +801,25 @@ def outcome_quantile(pmf: dict, q: float):
         if c >= q - 1e-12:
             return k
     return keys[-1]
+
+
+def bias_drift_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,
+                 separation_s: float) -> float:
+    """Standard uncertainty of the difference of two bias records ``separation_s`` apart, from
+    the static record's noise analysis (same rate unit as ``adev_high``): rate random walk
+    K√Δt and bias instability √2·0.664·B, each coefficient's square increased by its fit
+    uncertainty. A rate random walk the record is too short to resolve (fit at K = 0) is
+    bounded by the upper confidence limit of the Allan deviation at the longest τ,
+    K ≤ σ_hi(τ_max)·√(3/τ_max), taken as rectangular on [0, bound] (K² ≥ bound²/3).
+
+    >>> round(bias_drift_u(0.0, 0.0, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)
+    20.0
+    """
+    t, s = _arr(tau_s, "tau_s"), _arr(adev_high, "adev")
+    def ok(x):
+        return x if math.isfinite(x) else 0.0
+    k2 = ok(K) ** 2 + ok(u_K) ** 2
+    i = int(np.argmax(t))
+    k2 = max(k2, (s[i] * math.sqrt(3.0 / t[i])) ** 2 / 3.0)
+    b2 = ok(B) ** 2 + ok(u_B) ** 2
+    return math.sqrt(k2 * abs(separation_s) + 2 * FLICKER_FLOOR_EXACT ** 2 * b2)

@@ -43,7 +43,7 @@ def readings_spec(path: str | Path) -> str | None:
 def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
              protocol: str | None = None, seed: int = 0, noise: bool = True) -> dict[str, Path]:
     """Run the specification's programme on a rate bench; write ``readings.csv`` (the
-    rate readings format, docs/formats-rate-gyro.md) and ``truth.json``."""
+    rate readings format, docs/formats.md#rate-gyro-readings-file) and ``truth.json``."""
     from gonio.bench.rate_gyro import load_rate_bench
     from gonio.formats.rate_readings import write_rate_readings
 

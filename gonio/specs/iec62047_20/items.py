@@ -111,6 +111,7 @@ def _sf_runs(ctx: Context, test: str) -> list[dict]:
             u_y.append(float(yy[: nb * 5].reshape(nb, 5).mean(1).std(ddof=1) / math.sqrt(nb))
                        if nb >= 2 else m.std / math.sqrt(m.n))
         out.append({"run": run, "x": x, "y": y, "a": a, "b": b, "se": se,
+                    "t": np.array([m.time_s for m in pts]),
                     "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": np.array(u_y)})
     ctx.cache[("sf", test)] = out
     return out
@@ -604,7 +605,9 @@ def startup_time(ctx: Context) -> Item:
 def drift_u_dps(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/s) of a bias difference between two records ``separation_s``
     apart from the calibration's own static record (5.4): the five-term Allan fit's rate
-    random walk K√Δt and bias instability (√2·0.664·B); 0 without a varying static record."""
+    random walk K√Δt and bias instability (√2·0.664·B), with the fit's uncertainties and an
+    unresolved RRW bounded by the longest τ (:func:`gonio.analysis.rate_gyro.bias_drift_u`);
+    0 without a varying static record."""
     if not ctx.has("static") or ctx.a_base is None:
         return 0.0
     y = segment_samples(ctx.df, "static", 0, 0)["output"].to_numpy()
@@ -613,9 +616,9 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
     if "noise_fit" not in ctx.cache:
         ctx.cache["noise_fit"] = fit_noise_model(_static(ctx)[0])
     fit = ctx.cache["noise_fit"]
-    k2 = fit.K ** 2 + (fit.u_K if math.isfinite(fit.u_K) else 0.0) ** 2
-    b2 = fit.B ** 2 + (fit.u_B if math.isfinite(fit.u_B) else 0.0) ** 2
-    return math.sqrt(k2 * abs(separation_s) + 2 * rg.FLICKER_FLOOR_EXACT ** 2 * b2) / S_PER_H
+    allan = _static(ctx)[0]
+    return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
+                           separation_s) / S_PER_H
 
 
 def _bias_temperature_points(ctx: Context):
@@ -685,7 +688,8 @@ def bias_ratiometric(ctx: Context) -> Item:
     largest |R_Vi| in %, and (reading taken: Table 4's unit V) the absolute departure
     a_Vi − a_BASE·V_i/V_BASE in output units in the details. Analog ratiometric outputs only.
 
-    Uncertainty: the noise of the two rest means (block type A)."""
+    Uncertainty: the noise of the two rest means (block type A) and the bias drift between
+    them (RRW, bias instability from the static record)."""
     t, cl, un = "bias ratiometric error (max |R|)", "5.3.3.3", "%"
     m = _miss(ctx, "ratiometric", "bias_ratiometric_error", t, cl, un)
     if m:
@@ -705,9 +709,13 @@ def bias_ratiometric(ctx: Context) -> Item:
     i = int(np.argmax(np.abs(R)))
     if i == ib:
         i = int(np.argsort(np.abs(R))[-2]) if V.size > 1 else i
-    u = gum(lambda ai, ab: 100 * abs(rg.ratiometric_error_iec(ai, ab, V[i], V[ib])),
+    t_rest = [float(c["t"][np.flatnonzero(c["x"] == 0)[0]]) for c in runs]
+    u_dr = drift_u_dps(ctx, t_rest[i] - t_rest[ib]) * abs(ctx.a_base)      # output units
+    u = gum(lambda ai, ab, d: 100 * abs(rg.ratiometric_error_iec(ai + d, ab, V[i], V[ib])),
             [from_u("a_Vi", a[i], ua[i], dof=50, source=f"rest output at {V[i]:g} V"),
-             from_u("a_Vb", a[ib], ua[ib], dof=50, source=f"rest output at {V[ib]:g} V")])
+             from_u("a_Vb", a[ib], ua[ib], dof=50, source=f"rest output at {V[ib]:g} V"),
+             from_u("drift", 0.0, u_dr, dof=50,
+                    source="bias drift between the two rest points (Allan fit: RRW, BI)")])
     return Item("bias_ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
                 details={"V": V, "rest_output": a, "R_pct": 100 * R,
                          "departure_output_units": a - a[ib] * V / V[ib]})

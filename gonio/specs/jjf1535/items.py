@@ -87,14 +87,14 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/h) of a bias difference between two records ``separation_s``
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
-    by the square of its fit uncertainty; 0 without a static record."""
+    by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
+    (:func:`gonio.analysis.rate_gyro.bias_drift_u`); 0 without a static record."""
     fit = ctx.cache.get("noise_fit")
     if fit is None:
         return 0.0
-    # the fit's own uncertainties enter (a short static record cannot resolve the RRW)
-    k2 = fit.K ** 2 + (fit.u_K if math.isfinite(fit.u_K) else 0.0) ** 2
-    b2 = fit.B ** 2 + (fit.u_B if math.isfinite(fit.u_B) else 0.0) ** 2
-    return math.sqrt(k2 * abs(separation_s) + 2 * rg.FLICKER_FLOOR_EXACT ** 2 * b2)
+    allan = ctx.cache["allan"]
+    return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
+                           separation_s)
 
 
 # --------------------------------------------------------------------------- 7.2.1 – 7.2.4
@@ -559,6 +559,7 @@ def angle_random_walk(ctx: Context) -> Item:
     allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
     fit = fit_noise_model(allan)
     ctx.cache["noise_fit"] = fit
+    ctx.cache["allan"] = allan
     arw = fit.N / math.sqrt(S_PER_H)
     u_arw = fit.u_N / math.sqrt(S_PER_H)
     printed = {}
