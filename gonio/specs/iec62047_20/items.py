@@ -422,7 +422,12 @@ def arw(ctx: Context) -> Item:
 
 def bias_instability(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.3 c): Allan-deviation floor / 0.664 (°/h), over τ with ≥ 10
-    independent clusters (reading taken); the five-term fit's B in the details."""
+    independent clusters (reading taken); the five-term fit's B in the details.
+
+    Uncertainty: the χ² interval at the floor, and the other noise terms present at the
+    floor τ (the reading assumes the floor is pure bias instability; when the record is
+    short, ARW and RRW still lift it): the five-term fit's model deviation there minus
+    0.664·B_fit, divided by 0.664, rectangular."""
     t, cl, un = "bias instability", "5.4.5.3", "°/h"
     m = _miss(ctx, "static", "bias_instability", t, cl, un) or _quiet(ctx, "bias_instability", t, cl, un)
     if m:
@@ -432,8 +437,18 @@ def bias_instability(ctx: Context) -> Item:
     val, i = rg.bias_instability_floor(allan.adev, n_clusters=n_cl)
     rel = math.log(allan.ci_high[i] / allan.adev[i])
     fit = fit_noise_model(allan)
-    u = gum(lambda b: b, [from_u("floor", val, val * rel, dof=float(allan.edf[i]),
-                                 source="χ² interval at the floor")])
+    # the floor also holds the other noise terms (ARW, RRW, quantisation) at that τ: from
+    # the five-term fit, the share of the floor that is not bias instability
+    tf = float(allan.tau_s[i])
+    tot2 = float(fit.adev(np.array([tf]))[0]) ** 2
+    bi2 = (rg.FLICKER_FLOOR_EXACT * fit.B) ** 2
+    excess = (math.sqrt(tot2) - math.sqrt(bi2)) / rg.FLICKER_FLOOR_EXACT if tot2 > bi2 else 0.0
+    u = gum(lambda b, o: b + o,
+            [from_u("floor", val, val * rel, dof=float(allan.edf[i]),
+                    source="χ² interval at the floor"),
+             type_b("other_terms", 0.0, excess, "rectangular",
+                    source="other noise terms at the floor τ (five-term fit): "
+                           "(σ_model − 0.664·B_fit)/0.664")])
     return Item("bias_instability", t, cl, un, val, uncertainty=u, details={
         "tau_floor_s": float(allan.tau_s[i]), "fit": fit.to_dict(),
         "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev, "ci_low": allan.ci_low,
