@@ -342,9 +342,10 @@ def test_optical_bench_as_rate_sensor():
 def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
     """JCGM 101: with ``monte_carlo_trials`` every item's budget is also propagated by Monte
     Carlo and the GUM interval checked against it (JCGM 101 8). Gaussian-dominated budgets
-    (ARW, bandwidth) validate; the threshold's budget is one rectangular component, whose 95 %
-    Monte Carlo interval is ±0.95·a (closed form), narrower than the GUM's ±1.96·a/√3 — so
-    it is reported as not validated."""
+    (ARW, bandwidth) validate; the threshold's budget (grid step, rectangular, and the 50 %
+    rule's outcome spread, normal) has the closed-form standard deviation √(u₁² + u₂²); a
+    lone rectangular component has the 95 % interval ±0.95·a, narrower than the GUM's
+    ±1.96·a/√3, and is then reported as not validated."""
     from gonio.specs.jjf1535 import calibrate
     result, _ = jjf_noise_on[0]
     assert all(it.uncertainty.monte_carlo is None for it in result.items.values() if it.measured)
@@ -355,8 +356,12 @@ def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
         # a t_50 input has standard deviation √(50/48) = 1.02 of its u
         assert mc["u"] == pytest.approx(r2.items[key].uncertainty.u_c * math.sqrt(50 / 48), rel=0.02)
     th = r2.items["threshold"]
-    a = th.uncertainty.components[1]["u"] * math.sqrt(3)
+    comps = {c["symbol"]: c["u"] for c in th.uncertainty.components}
     mc = th.uncertainty.monte_carlo
-    assert mc["high"] - th.value == pytest.approx(0.95 * a, rel=0.01)
-    assert not mc["validated"]
+    # a rectangular (grid step) plus a normal (outcome spread) component: the Monte Carlo
+    # standard deviation is √(u_grid² + u_noise²) (closed form of the sum's variance)
+    assert mc["u"] == pytest.approx(math.hypot(comps["grid"], comps["rule_noise"]), rel=0.01)
+    if comps["rule_noise"] == 0:      # a lone rectangular: 95 % interval ±0.95·a, not the GUM's
+        assert mc["high"] - th.value == pytest.approx(0.95 * comps["grid"] * math.sqrt(3), rel=0.01)
+        assert not mc["validated"]
     assert r2.to_json()["items"]["bias"]["uncertainty"]["monte_carlo"]["trials"] == 200_000

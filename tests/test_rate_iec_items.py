@@ -17,7 +17,17 @@ from gonio.bench.rate_session import body_rotation, mount_matrix
 from gonio.formats.rate_readings import RateReadings
 from gonio.physics.earth import earth_rate_enu
 
-from test_rate_bench import exact_bench, small_protocol
+from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
+
+
+def exact_bench(**gyro):
+    """The study bench (transient, thermal lag, cross-axis off) with ``gyro`` changes."""
+    b = study_bench()
+    return replace(b, gyro=replace(b.gyro, **gyro))
+
+
+def small_protocol(tmp, name, **changes):
+    return reduced_protocol(name, tmp / f"{name}-small.toml", changes)
 
 
 # ------------------------------------------------------------------ formulas by hand
