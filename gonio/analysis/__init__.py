@@ -1,0 +1,1 @@
+"""Analysis layer: estimators that turn readings into results (no plotting)."""
