@@ -47,7 +47,8 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
-from gonio.earth import S_PER_H, earth_rate_enu
+from gonio.physics.earth import earth_rate_enu
+from gonio.units import deg_sqrt_s_from_deg_sqrt_h
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.physics.alignment import AXES, mean_earth_rate_ref, signed_axis
@@ -93,7 +94,7 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
             if k + 2 < len(soak):
                 s = soak.iloc[k + 2]
                 if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"] and np.isfinite(s[f"sd_{AXES[c]}"]):
-                    arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) * math.sqrt(S_PER_H)
+                    arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
             pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
                         "u_v": a["supply_v"] - v_ref, "scale": kk, "bias_dps": bias,
                         "arw_deg_sqrt_h": arw, "time_s": a["time_s"], "line": int(a["line"])})

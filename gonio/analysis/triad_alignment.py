@@ -23,7 +23,7 @@ Estimators
 * robust: iteratively reweighted least squares with Tukey's bisquare (c = 4.685) on
   residuals scaled by the median absolute deviation / 0.6745; rows whose final weight is
   below 0.5 are reported as outliers (file line and channel), never silently dropped;
-* averaging time: from the Allan deviation (:func:`gonio.noise.allan_deviation`) of the
+* averaging time: from the Allan deviation (:func:`gonio.analysis.noise.allan_deviation`) of the
   static record, the shortest τ whose deviation is below the article's noise limit
   ω_TR sin ψ_T / 10 (eq. 30b, :func:`gonio.physics.alignment.alignment_noise_limit_dps`);
 * leakage after alignment: M̂⁻¹ M − I; on the bench (truth known) its actual value,
@@ -39,10 +39,11 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from gonio.earth import S_PER_H, earth_rate_enu
+from gonio.physics.earth import earth_rate_enu
+from gonio.units import dps_to_dph
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
-from gonio.noise import allan_deviation
+from gonio.analysis.noise import allan_deviation
 from gonio.physics.alignment import (alignment_noise_limit_dps, decompose_system_matrix,
                                      mean_earth_rate_ref, signed_axis)
 
@@ -267,8 +268,8 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
         need.append(float(res.tau_s[ok[0]]) if ok.size else math.nan)
         j = int(np.argmin(res.adev))
         tmin.append(float(res.tau_s[j]))
-        amin.append(float(res.adev[j] * S_PER_H))
-        adevs.append((res.adev * S_PER_H).tolist())
+        amin.append(float(dps_to_dph(res.adev[j])))
+        adevs.append(dps_to_dph(res.adev).tolist())
     sufficient = bool(np.all(np.isfinite(need)) and shortest_dwell_s >= max(need))
     return AveragingTime(limit, target_deg, test_rate_dps, need, tmin, amin,
                          float(shortest_dwell_s), sufficient, list(map(float, tau)), adevs)

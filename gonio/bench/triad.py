@@ -8,7 +8,7 @@ eq. 6.7, 6.14–6.20)::
     y_i = K_i(ϑ, U) [ (A + X) ω(t) ]_i + K_i(ϑ, U) ( b_i(ϑ, U) + n_i(t) )
 
 * ω(t): table rate about the vertical plus the Earth rate, in the fixture's reference
-  frame (:func:`gonio.physics.alignment.ref_to_enu`, :func:`gonio.earth.earth_rate_enu`);
+  frame (:func:`gonio.physics.alignment.ref_to_enu`, :func:`gonio.physics.earth.earth_rate_enu`);
 * A = N Rᵀ the sensing axes (non-orthogonality N, mounting rotation R; exact forms of
   :mod:`gonio.physics.alignment`), X the electrical cross-coupling (zero diagonal);
 * K_i(ϑ, U) = K0_i (1 + Σ_j κ_ϑj,i ϑ^j + Σ_j κ_Uj,i U^j),
@@ -49,13 +49,14 @@ import pandas as pd
 from scipy import signal
 
 from gonio.atomic import output_dir
-from gonio.earth import S_PER_H, earth_rate_enu
+from gonio.physics.earth import earth_rate_enu
 from gonio.errors import GonioError
 from gonio.formats.triad import COLUMNS, format_triad_readings
 from gonio.physics.alignment import (mean_earth_rate_ref, ref_to_enu, sensing_axis_matrix,
                                      system_matrix)
 from gonio.resources import resolve
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dph_to_dps
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 # ----------------------------------------------------------------------------- config
 _BENCH_SCHEMA = {
@@ -249,16 +250,15 @@ class TriadNoise:
     def __init__(self, bench: TriadBench, rng: np.random.Generator):
         self.rng = rng
         self.dt = 1.0 / bench.sample_rate_hz
-        root_h = math.sqrt(S_PER_H)
-        self.white = np.array(bench.arw_deg_sqrt_h) / root_h * math.sqrt(bench.sample_rate_hz)
-        b_dps = np.array(bench.bias_instability_dph) / S_PER_H
+        self.white = deg_sqrt_s_from_deg_sqrt_h(np.array(bench.arw_deg_sqrt_h)) * math.sqrt(bench.sample_rate_hz)
+        b_dps = dph_to_dps(np.array(bench.bias_instability_dph))
         ratio = math.sqrt(10.0)
         n_gm = max(1, int(round(math.log(bench.bi_tau_max_s / bench.bi_tau_min_s) / math.log(ratio))) + 1)
         self.taus = bench.bi_tau_min_s * ratio ** np.arange(n_gm)
         self.gm_sd = b_dps * math.sqrt(math.log(ratio) / math.pi)       # per process
         self.a = np.exp(-self.dt / self.taus)
         self.gm_state = self.gm_sd[:, None] * rng.standard_normal((3, n_gm))  # stationary start
-        self.rrw = np.array(bench.rate_random_walk_dph_sqrt_h) / S_PER_H / root_h  # (°/s)/√s
+        self.rrw = dph_to_dps(deg_sqrt_s_from_deg_sqrt_h(np.array(bench.rate_random_walk_dph_sqrt_h)))  # (°/s)/√s
         self.rw_state = np.zeros(3)
 
     def block(self, n: int, white_factor=None) -> np.ndarray:

@@ -1,1 +1,5 @@
-"""Physics layer: geometry, rotations and the Earth rate (no I/O, no bench)."""
+"""Physics: Earth rate, Sagnac scale factors, table kinematics, tilt, coupling, compensation.
+
+Pure functions on numbers and numpy arrays (numpy, scipy, sympy only); nothing
+here reads a file or knows a protocol, a bench or a certificate.
+"""

@@ -299,7 +299,7 @@ def alignment_noise_limit_dps(test_rate_dps: float, target_rad: float,
     (article eq. 30b): the leakage a ψ_T misalignment gives at the test rate,
     ω_TR sin ψ_T, times the allowed ``fraction`` (1/10 in the article).
 
-    >>> from gonio.earth import S_PER_H
+    >>> from gonio.units import S_PER_H
     >>> round(alignment_noise_limit_dps(100.0, math.radians(0.1)) * S_PER_H, 2)   # °/h
     62.83
     """
@@ -411,7 +411,7 @@ def mean_earth_rate_ref(earth_enu, up: str, north0: str, table_deg: float,
                         rate_dps: float, duration_s: float) -> np.ndarray:
     """Earth-rate vector in the reference frame averaged over a dwell (same unit as
     ``earth_enu``, the Earth-rate vector in ENU, e.g. from
-    :func:`gonio.earth.earth_rate_enu`).
+    :func:`gonio.physics.earth.earth_rate_enu`).
 
     The vertical part is fixed along ``up``; the horizontal part turns with the table
     and is averaged exactly over the swept angle (zero over whole revolutions; thesis
