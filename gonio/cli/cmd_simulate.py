@@ -14,8 +14,14 @@ def register(sub) -> None:
     p = sub.add_parser("simulate", help="run a protocol on the virtual bench",
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
-    p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
+    p.add_argument("--spec", default=None,
+                   help="specification (default ogam-draft; triad-alignment: a gyro triad, "
+                        "writes readings.csv, thermal.csv, truth.json)")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the specification's)")
+    p.add_argument("--bench", default=None,
+                   help="bench file or built-in name (default: the specification's; rlg, fog, "
+                        "mems-triad)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
@@ -39,8 +45,10 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 def run(args) -> int:
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    proto = load_protocol(args.protocol)
-    bench = load_bench(args.bench, table=args.table)
+    if args.spec is not None and args.spec != "ogam-draft":
+        return _run_spec(args)
+    proto = load_protocol(args.protocol or "ogam-draft")
+    bench = load_bench(args.bench or "rlg", table=args.table)
     writer = None
     if args.stream:
         from gonio.formats.streams import StreamWriter
@@ -57,6 +65,30 @@ def run(args) -> int:
     paths = write_session(result, args.out)
     if writer is not None:
         paths["stream"] = writer.close()
+    for p in paths.values():
+        print(p)
+    return 0
+
+
+#: Specifications with their own session simulator (module with ``simulate``).
+SPEC_SIMULATORS = {"triad-alignment": "gonio.specs.triad_alignment.session"}
+
+
+def _run_spec(args) -> int:
+    """``--spec`` other than the draft: that specification's own simulator."""
+    import importlib
+
+    from gonio.specs import get
+
+    spec = get(args.spec)
+    if spec.key not in SPEC_SIMULATORS:
+        raise GonioError(f"no simulator for specification {spec.key!r}", key="--spec")
+    if args.stream or args.table:
+        raise GonioError(f"--stream and --table apply to ogam-draft only, not {spec.key}",
+                         key="--spec")
+    sim = importlib.import_module(SPEC_SIMULATORS[spec.key]).simulate
+    paths = sim(args.protocol or spec.default_protocol, args.bench or spec.default_bench,
+                args.seed, args.out)
     for p in paths.values():
         print(p)
     return 0
