@@ -175,7 +175,7 @@ def _ols(x, y):
 
 
 def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int = 4,
-                   max_u: int = 2) -> PolyFit:
+                   max_u: int = 2, orders: tuple[int, int] | None = None) -> PolyFit:
     """Fit y = poly(ϑ) + poly(U) choosing the orders by ``criterion``:
 
     * ``bic``: n ln(RSS/n) + p ln n, the smallest wins (Schwarz 1978);
@@ -185,7 +185,8 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
       p < 0.05.
 
     Orders are capped by the number of distinct ϑ levels (rounded to 0.5 °C) and U levels
-    minus one, and by n − 2 parameters in all.
+    minus one, and by n − 2 parameters in all. ``orders`` = (n_t, n_u) fixes the orders
+    (criterion recorded as ``fixed``).
     """
     if criterion not in CRITERIA:
         raise GonioError(f"order criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
@@ -216,7 +217,13 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
             table.append({"order_temperature": nt, "order_supply": nu, "rss": rss,
                           "aic": n * math.log(rss / n) + 2 * p,
                           "bic": n * math.log(rss / n) + p * math.log(n)})
-    if criterion in ("aic", "bic"):
+    if orders is not None:
+        sel = (int(orders[0]), int(orders[1]))
+        if sel not in fits:
+            raise GonioError(f"{name}: orders {sel} not identifiable from {n} points "
+                             f"(max ϑ order {cap_t}, U order {cap_u})")
+        criterion = "fixed"
+    elif criterion in ("aic", "bic"):
         best = min(table, key=lambda r: (r[criterion], r["order_temperature"] + r["order_supply"]))
         sel = (best["order_temperature"], best["order_supply"])
     else:
@@ -404,22 +411,27 @@ class ThermalModelResult:
 
 def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
                            temperature: str = "sensor", max_order_t: int = 4,
-                           max_order_u: int = 2, max_order_arw: int = 2) -> ThermalModelResult:
+                           max_order_u: int = 2, max_order_arw: int = 2,
+                           fixed_orders: dict | None = None) -> ThermalModelResult:
     """Identify K(ϑ, U), b(ϑ, U), ARW(ϑ) for every gyro the thermal rows exercise
-    (module docstring, steps 1–4)."""
+    (module docstring, steps 1–4). ``fixed_orders`` ({"scale": (n_t, n_u), "bias": …,
+    "arw": (n_t, 0)}) bypasses the order selection for the parts it names."""
+    fo = fixed_orders or {}
     pts = soak_points(readings, temperature=temperature)
     out = {}
     for ch, grp in pts.groupby("channel", sort=True):
         kf = fit_polynomial(f"K_{ch}", grp["theta_c"], grp["u_v"], grp["scale"],
-                            criterion=criterion, max_t=max_order_t, max_u=max_order_u)
+                            criterion=criterion, max_t=max_order_t, max_u=max_order_u,
+                            orders=fo.get("scale"))
         bf = fit_polynomial(f"b_{ch}", grp["theta_c"], grp["u_v"], grp["bias_dps"],
-                            criterion=criterion, max_t=max_order_t, max_u=max_order_u)
+                            criterion=criterion, max_t=max_order_t, max_u=max_order_u,
+                            orders=fo.get("bias"))
         arw = grp.dropna(subset=["arw_deg_sqrt_h"])
         af = None
         if len(arw) >= 3:
             af = fit_polynomial(f"ARW_{ch}", arw["theta_c"], np.zeros(len(arw)),
                                 arw["arw_deg_sqrt_h"], criterion=criterion, max_t=max_order_arw,
-                                max_u=0)
+                                max_u=0, orders=fo.get("arw"))
         ra = ramp_analysis(readings, kf, bf, ch, temperature=temperature)
         out[ch] = ChannelModel(ch, kf, bf, af, ra, grp.reset_index(drop=True), temperature,
                                (float(grp["theta_c"].min()), float(grp["theta_c"].max())),

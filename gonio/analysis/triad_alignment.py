@@ -20,8 +20,11 @@ Estimators
   (JCGM 100 §5.1.2);
 * Monte Carlo (JCGM 101 §7, parametric): the fit repeated on outputs redrawn from the
   fitted model with the estimated noise, every quantity recomputed;
-* robust: iteratively reweighted least squares with Tukey's bisquare (c = 4.685) on
-  residuals scaled by the median absolute deviation / 0.6745; rows whose final weight is
+* robust: iteratively reweighted least squares, Huber weights (c = 1.345) to convergence,
+  then Tukey's bisquare (c = 4.685) from there, both on
+  leverage-adjusted residuals r_i/√(1 − h_ii) (h the hat matrix of the non-robust weighted
+  fit: a dwell that alone fixes a parameter has h ≈ 1 and a small raw residual), scaled by
+  the median absolute residual / 0.6745; rows whose final weight is
   below 0.5 are reported as outliers (file line and channel), never silently dropped;
 * averaging time: from the Allan deviation (:func:`gonio.analysis.noise.allan_deviation`) of the
   static record, the shortest τ whose deviation is below the article's noise limit
@@ -47,6 +50,8 @@ from gonio.analysis.noise import allan_deviation
 from gonio.physics.alignment import (alignment_noise_limit_dps, decompose_system_matrix,
                                      mean_earth_rate_ref, signed_axis)
 
+#: Huber tuning constant (95 % efficiency at the normal distribution).
+HUBER_C = 1.345
 #: Tukey bisquare tuning constant (95 % efficiency at the normal distribution).
 BISQUARE_C = 4.685
 #: MAD → σ for normal data.
@@ -79,21 +84,31 @@ def _fit_channel(x, y, w, robust: bool, max_iter: int = 100):
     rw = np.ones(n)
     theta = _wls(x, y, w)
     if robust:
-        for _ in range(max_iter):
-            r = (y - x @ theta) * np.sqrt(w)
-            scale = MAD_TO_SIGMA * np.median(np.abs(r - np.median(r)))
-            if scale <= 0:
-                break
-            u = r / (BISQUARE_C * scale)
-            new = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
-            if np.sum(new > 0) < p + 1:
-                raise GonioError("robust fit: too few readings keep a weight (more outliers "
-                                 "than the design can stand)")
-            theta_new = _wls(x, y, w * new)
-            done = np.allclose(theta_new, theta, rtol=0, atol=1e-12 * (1 + np.max(np.abs(theta))))
-            theta, rw = theta_new, new
-            if done:
-                break
+        # Huber first (convex: a unique solution whatever the start), then Tukey's bisquare
+        # from there (redescending: gross outliers get weight 0)
+        h = np.einsum("ij,jk,ik->i", x, np.linalg.inv(x.T @ (x * w[:, None])), x) * w
+        adj = np.sqrt(w) / np.sqrt(np.clip(1.0 - h, 1e-6, None))
+        for kind in ("huber", "bisquare"):
+            for _ in range(max_iter):
+                r = (y - x @ theta) * adj
+                scale = MAD_TO_SIGMA * np.median(np.abs(r))
+                if scale <= 0:
+                    break
+                if kind == "huber":
+                    a = np.abs(r) / (HUBER_C * scale)
+                    new = np.where(a <= 1.0, 1.0, 1.0 / np.maximum(a, 1e-300))
+                else:
+                    u = r / (BISQUARE_C * scale)
+                    new = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+                if np.linalg.matrix_rank(x[new > 0]) < p or np.sum(new > 0) < p + 1:
+                    raise GonioError("robust fit: the readings left after down-weighting the "
+                                     "outliers no longer determine M and b")
+                theta_new = _wls(x, y, w * new)
+                done = np.allclose(theta_new, theta, rtol=0,
+                                   atol=1e-12 * (1 + np.max(np.abs(theta))))
+                theta, rw = theta_new, new
+                if done:
+                    break
     wt = w * rw
     r = y - x @ theta
     dof = float(np.sum(rw) - p) if robust else float(n - p)

@@ -302,7 +302,7 @@ _PROTOCOL_SCHEMA = {
             "z": Field("str", default="+x")}),
     }),
     "static": Field("table", default={}, schema={
-        "duration_s": Field("float", default=600.0, check=non_negative, expect=">= 0"),
+        "duration_s": Field("float", default=300.0, check=non_negative, expect=">= 0"),
     }),
     "thermal": Field("table", default={}, schema={
         "enabled": Field("bool", default=False),
@@ -432,9 +432,17 @@ class _Runner:
         self.t += n / self.fs
         return blk
 
-    def idle(self, duration_s: float, **kw) -> None:
-        if duration_s > 0:
-            self.run(duration_s, **kw)
+    def idle(self, duration_s: float, supply_v=None, chamber_end=None, **kw) -> None:
+        """Let time pass unrecorded: temperatures and the noise processes advance."""
+        if duration_s <= 0:
+            return
+        n = max(1, int(round(duration_s * self.fs)))
+        self._temps(n, self.chamber_c if chamber_end is None else chamber_end)
+        if np.any(self.noise.gm_sd > 0) or np.any(self.noise.rrw > 0):
+            self.noise.block(n)
+        else:
+            self.rng.standard_normal((3, n))     # the same draws a recorded block would use
+        self.t += n / self.fs
 
     def record(self, test: str, blk: dict, *, up, north0, table_deg, rate_dps, phase="",
                thermal=False) -> None:
