@@ -75,11 +75,11 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
     v_ref = float(readings.metadata.get("reference_v", 5.0))
     w_enu = np.degrees(earth_rate_enu(readings.latitude_deg))
     fs = readings.sample_rate_hz
-    soak = th[th["phase"] == "soak"].reset_index(drop=True)
+    soak = th[th["phase"] == "soak"].to_dict("records")
     pts = []
     k = 0
     while k < len(soak) - 1:
-        a, b = soak.iloc[k], soak.iloc[k + 1]
+        a, b = soak[k], soak[k + 1]
         if a["rate_dps"] > 0 and b["rate_dps"] == -a["rate_dps"] and a["supply_v"] == b["supply_v"] \
                 and a["up"] == b["up"]:
             axis = signed_axis(a["up"])
@@ -92,7 +92,7 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
             bias = 0.5 * (a[ch] + b[ch]) / kk - e
             arw = math.nan
             if k + 2 < len(soak):
-                s = soak.iloc[k + 2]
+                s = soak[k + 2]
                 if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"] and np.isfinite(s[f"sd_{AXES[c]}"]):
                     arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
             pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
@@ -180,9 +180,10 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
 
     * ``bic``: n ln(RSS/n) + p ln n, the smallest wins (Schwarz 1978);
     * ``aic``: n ln(RSS/n) + 2p (Akaike 1974);
-    * ``ftest``: forward selection, first in ϑ then in U: the next order is kept while
-      the extra-sum-of-squares F = (RSS_small − RSS_big) / (RSS_big/(n − p_big)) has
-      p < 0.05.
+    * ``ftest``: forward selection from (0, 0): of the two next models (one more order
+      in ϑ or in U) the one whose extra-sum-of-squares
+      F = (RSS_small − RSS_big) / (RSS_big/(n − p_big)) has the smaller p is kept while
+      that p < 0.05.
 
     Orders are capped by the number of distinct ϑ levels (rounded to 0.5 °C) and U levels
     minus one, and by n − 2 parameters in all. ``orders`` = (n_t, n_u) fixes the orders
@@ -228,18 +229,19 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
         sel = (best["order_temperature"], best["order_supply"])
     else:
         sel = (0, 0)
-        for dim in (0, 1):
-            while True:
-                nxt = (sel[0] + 1, sel[1]) if dim == 0 else (sel[0], sel[1] + 1)
+        while True:
+            best = None
+            for nxt in ((sel[0] + 1, sel[1]), (sel[0], sel[1] + 1)):
                 if nxt not in fits:
-                    break
+                    continue
                 rss_s, rss_b = fits[sel][1], fits[nxt][1]
                 p_b = 1 + nxt[0] + nxt[1]
-                f = (rss_s - rss_b) / (rss_b / (n - p_b))
-                if stats.f.sf(f, 1, n - p_b) < F_TEST_ALPHA:
-                    sel = nxt
-                else:
-                    break
+                pval = stats.f.sf((rss_s - rss_b) / (rss_b / (n - p_b)), 1, n - p_b)
+                if best is None or pval < best[0]:
+                    best = (pval, nxt)
+            if best is None or best[0] >= F_TEST_ALPHA:
+                break
+            sel = best[1]
     coef, rss, x = fits[sel]
     dof = n - x.shape[1]
     s2 = rss / dof
@@ -412,10 +414,12 @@ class ThermalModelResult:
 def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
                            temperature: str = "sensor", max_order_t: int = 4,
                            max_order_u: int = 2, max_order_arw: int = 2,
-                           fixed_orders: dict | None = None) -> ThermalModelResult:
+                           fixed_orders: dict | None = None,
+                           ramps: bool = True) -> ThermalModelResult:
     """Identify K(ϑ, U), b(ϑ, U), ARW(ϑ) for every gyro the thermal rows exercise
     (module docstring, steps 1–4). ``fixed_orders`` ({"scale": (n_t, n_u), "bias": …,
-    "arw": (n_t, 0)}) bypasses the order selection for the parts it names."""
+    "arw": (n_t, 0)}) bypasses the order selection for the parts it names; ``ramps=False``
+    skips step 4."""
     fo = fixed_orders or {}
     pts = soak_points(readings, temperature=temperature)
     out = {}
@@ -432,7 +436,7 @@ def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
             af = fit_polynomial(f"ARW_{ch}", arw["theta_c"], np.zeros(len(arw)),
                                 arw["arw_deg_sqrt_h"], criterion=criterion, max_t=max_order_arw,
                                 max_u=0, orders=fo.get("arw"))
-        ra = ramp_analysis(readings, kf, bf, ch, temperature=temperature)
+        ra = ramp_analysis(readings, kf, bf, ch, temperature=temperature) if ramps else None
         out[ch] = ChannelModel(ch, kf, bf, af, ra, grp.reset_index(drop=True), temperature,
                                (float(grp["theta_c"].min()), float(grp["theta_c"].max())),
                                (float(grp["u_v"].min()), float(grp["u_v"].max())))
