@@ -24,7 +24,7 @@ from gonio.bench.triad import (ThermalModel, TriadBench, TriadNoise, TriadProtoc
                                _alternating, run_thermal_session)
 from gonio.cli import main
 from gonio.formats.triad import TriadReadings, format_triad_readings
-from gonio.units import dps_to_dph
+from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dps_to_dph
 
 K0, B0 = 49.7, 0.08
 BT = (1.0e-3, -4.0e-5, 5.0e-7)         # bias, °/s per °C^j
@@ -223,8 +223,9 @@ def test_thesis_adxrs610_noise_model():
     b = TriadBench("adxrs610", 49.2, 10.0, "i", "s", "lsb", (1.0,) * 3, np.zeros((3, 3)),
                    (0.0,) * 3, np.zeros((3, 3)), (0.0,) * 3, (arw,) * 3, (bi,) * 3, (rrw,) * 3)
     nz = TriadNoise(b, np.random.default_rng(2015))
-    y = np.concatenate([nz.block(36000) for _ in range(4)], axis=1)      # 4 h
-    n_dph_sqrt_s, k_dph_per_sqrt_s = arw * 60.0, rrw / 60.0
+    y = np.concatenate([nz.block(36_000) for _ in range(4)], axis=1)     # 4 × 1 h at 10 Hz
+    n_dph_sqrt_s = dps_to_dph(deg_sqrt_s_from_deg_sqrt_h(arw))            # (°/h)·√s
+    k_dph_per_sqrt_s = deg_sqrt_s_from_deg_sqrt_h(rrw)                      # (°/h)/√s
     for i in range(3):
         res = allan_deviation(dps_to_dph(y[i]), 0.1, "rate", taus="octave")
         sel = (res.tau_s >= 0.5) & (res.tau_s <= 60.0)
@@ -232,7 +233,7 @@ def test_thesis_adxrs610_noise_model():
                         + k_dph_per_sqrt_s ** 2 * res.tau_s / 3)
         assert np.all(np.abs(res.adev[sel] / model[sel] - 1) < 0.08)
         fit = fit_noise_model(res, terms=("N", "B", "K"))
-        assert fit.N / 60.0 == pytest.approx(arw, rel=0.03)
+        assert fit.N * deg_sqrt_s_from_deg_sqrt_h(1.0) == pytest.approx(arw, rel=0.03)
     tau_min = math.sqrt(3) * n_dph_sqrt_s / k_dph_per_sqrt_s
     assert tau_min == pytest.approx(305.8, abs=0.1)
     assert 250.0 <= tau_min <= 500.0          # between the thesis's tested 250 s and 500 s

@@ -30,6 +30,7 @@ from gonio.formats.triad import (TriadReadings, format_triad_readings, parse_tri
                                  read_triad_readings)
 from gonio.physics import alignment as al
 from gonio.physics.earth import earth_rate_enu, earth_rate_on_axis_dps
+from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dps_to_dph
 
 
 # ----------------------------------------------------------------- helpers
@@ -89,11 +90,11 @@ def test_article_platform_and_noise_examples():
     # the leaked angle at the limit is exactly 1° of a 30° heading change
     phi = al.allowed_cross_axis_angle_rad(1.0, 30.0)
     assert 30.0 * math.sin(phi) == pytest.approx(1.0, rel=1e-12)
-    lim_dph = al.alignment_noise_limit_dps(100.0, math.radians(0.1)) * 3600.0 / 1.0  # noqa
+    lim_dph = dps_to_dph(al.alignment_noise_limit_dps(100.0, math.radians(0.1)))
     assert math.floor(lim_dph) == 62
     # ARW 0.3 °/√h (white only): N/√τ ≤ limit from τ = (N/limit)² ≈ 0.082 s: the article's
     # 0.1 s with some margin
-    n_dph_sqrt_s = 0.3 * 60.0
+    n_dph_sqrt_s = dps_to_dph(deg_sqrt_s_from_deg_sqrt_h(0.3))      # (°/h)·√s
     tau_star = (n_dph_sqrt_s / lim_dph) ** 2
     assert 0.05 < tau_star < 0.1
 
@@ -290,7 +291,7 @@ def test_averaging_time_from_allan_deviation():
     avg = res.averaging
     lim = al.alignment_noise_limit_dps(50.0, math.radians(0.1))
     assert avg.noise_limit_dps == pytest.approx(lim)
-    n_dps = arw / 60.0
+    n_dps = deg_sqrt_s_from_deg_sqrt_h(arw)
     tau_star = (n_dps / lim) ** 2                    # ≈ 0.91 s
     taus = np.array(avg.tau_s)
     expected = taus[np.nonzero(taus >= tau_star)[0][0]]
