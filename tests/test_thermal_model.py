@@ -255,7 +255,10 @@ def test_cli_thermal_model(tmp_path, capsys):
     z = out["channels"]["z"]
     assert z["bias"]["criterion"] == "ftest" and out["compensation"]["z"]["rms_bias_after_dps"] < 0.01
     assert png.stat().st_size > 1000
-    assert main(["thermal-model", str(tmp_path / "a.csv")]) == 0
+    assert main(["thermal-model", str(tmp_path / "a.csv"), "--report", str(tmp_path / "t.html"),
+                 "--compensate", str(tmp_path / "b.csv")]) == 0
     assert "gyro z" in capsys.readouterr().out
+    page = (tmp_path / "t.html").read_text()
+    assert "Temperature and supply model" in page and "bias rms" in page and "<svg" in page
     assert main(["thermal-model", str(tmp_path / "a.csv"), "--plot", str(tmp_path / "x.bmp")]) == 2
     assert "--plot" in capsys.readouterr().err

@@ -362,6 +362,19 @@ def test_cli_simulate_align_and_errors(tmp_path, capsys):
     assert png.stat().st_size > 1000
     assert main(["align", str(out / "readings.csv"), "--robust", "--monte-carlo", "0"]) == 0
     assert "alignment matrix" in capsys.readouterr().out
+    pages = []
+    for name in ("a.html", "b.html"):
+        assert main(["align", str(out / "readings.csv"), "--monte-carlo", "100",
+                     "--report", str(tmp_path / name)]) == 0
+        pages.append((tmp_path / name).read_bytes())
+    page = pages[0]
+    assert pages[0] == pages[1] and b"<svg" in page
+    # the page shows M with U = k·u, U to 2 significant digits, value to U's decimal place
+    from gonio.report.triad_pages import value_with_u
+    kk = res["coverage_factor"][0]
+    cell = value_with_u(m[0][0], kk * u[0][0])
+    assert cell.encode() in page
+    assert value_with_u(49.99371, 0.0028) == "49.9937 ± 0.0028"
     bad = tmp_path / "bad.csv"
     bad.write_text((out / "readings.csv").read_text().replace("# format: gonio-triad-readings/1",
                                                               "# format: other"))

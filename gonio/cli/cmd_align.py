@@ -25,6 +25,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None,
                    help="write the cross-axis / Allan figure (png, pdf, svg)")
+    p.add_argument("--report", metavar="FILE", default=None,
+                   help="write the alignment-matrix page (self-contained HTML)")
     p.add_argument("--robust", action="store_true",
                    help="iteratively reweighted least squares (Tukey bisquare): outlying "
                         "dwells are down-weighted and listed")
@@ -51,10 +53,18 @@ def run(args) -> int:
     r = read_triad_readings(args.readings)
     res = estimate_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,
                              seed=args.seed, target_deg=args.target_deg)
-    if args.plot:
+    if args.plot or args.report:
         from gonio.report.triad_figures import alignment_figure, save_figure
 
-        save_figure(alignment_figure(res), args.plot)
+        fig = alignment_figure(res)
+        if args.plot:
+            save_figure(fig, args.plot)
+        if args.report:
+            from gonio.report.triad_pages import alignment_page, write_report
+
+            write_report(args.report, [alignment_page(res, fig)],
+                         f"Gyro-triad alignment — {r.metadata.get('instrument', '')} "
+                         f"{r.metadata.get('serial', '')}".strip())
     if args.json:
         print(json.dumps(res.to_json(), indent=2, sort_keys=True))
         return 0

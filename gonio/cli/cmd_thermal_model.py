@@ -19,6 +19,8 @@ def register(sub) -> None:
     p.add_argument("readings", metavar="READINGS", help="triad readings CSV with thermal rows")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None, help="write the figure (png, pdf, svg)")
+    p.add_argument("--report", metavar="FILE", default=None,
+                   help="write the temperature-model page (self-contained HTML)")
     p.add_argument("--criterion", choices=("bic", "aic", "ftest"), default="bic",
                    help="order-selection criterion (default bic)")
     p.add_argument("--temperature", choices=("sensor", "chamber"), default="sensor",
@@ -46,6 +48,14 @@ def run(args) -> int:
                              f"{len(res.channels)} ({', '.join(res.channels)})", key="--plot")
         ch, m = next(iter(res.channels.items()))
         save_figure(thermal_figure(m, comp.get(ch)), args.plot)
+    if args.report:
+        from gonio.report.triad_figures import thermal_figure
+        from gonio.report.triad_pages import thermal_page, write_report
+
+        figs = {ch: thermal_figure(m, comp.get(ch)) for ch, m in res.channels.items()}
+        write_report(args.report, [thermal_page(res, comp, figs)],
+                     f"Temperature model — {r.metadata.get('instrument', '')} "
+                     f"{r.metadata.get('serial', '')}".strip())
     if args.json:
         out = res.to_json()
         out["compensation"] = {k: v.to_json() for k, v in comp.items()} or None
