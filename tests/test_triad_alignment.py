@@ -4,7 +4,7 @@ within uncertainty with noise over many seeds, GUM against Monte Carlo, robust f
 outliers), the averaging time from the Allan deviation, IEC 62047-20 5.2, the readings
 format and the CLI.
 
-Independent references: the article's printed values (seed 003), closed forms (Rodrigues,
+Independent references: the article's printed values ([Looney-alignment]), closed forms (Rodrigues,
 the ± difference formula of the article eq. 30a, white-noise Allan deviation N/√τ),
 numerical quadrature, Student-t coverage probabilities, and a simulation of the fit.
 """
@@ -58,7 +58,7 @@ def readings_of(session):
 
 # ------------------------------------------------------- the article's numbers
 def test_article_worked_budget_and_where_it_differs():
-    """Seed 003, eq. 5a–5c: 0.3°, R_S 29.1 mm, 0.83°, 1.28°."""
+    """[Looney-alignment] eq. 5a–5c: 0.3°, R_S 29.1 mm, 0.83°, 1.28°."""
     tilt = math.degrees(al.ledge_tilt_rad(0.2, 44.0))
     assert round(tilt, 1) == 0.3                       # printed 0.3°: rounded
     assert tilt == pytest.approx(math.degrees(math.atan2(0.2, 44.0)), rel=1e-12)
@@ -84,7 +84,7 @@ def test_article_worked_budget_and_where_it_differs():
 
 
 def test_article_platform_and_noise_examples():
-    """Seed 003 eq. 13c (1.9°), 13d (14.8°), 30b (62 °/h, averaging 0.1 s)."""
+    """[Looney-alignment] eq. 13c (1.9°), 13d (14.8°), 30b (62 °/h, averaging 0.1 s)."""
     assert round(math.degrees(al.allowed_cross_axis_angle_rad(1.0, 30.0)), 1) == 1.9
     assert round(math.degrees(al.allowed_axis_angle_rad(1.0, 30.0)), 1) == 14.8
     # the leaked angle at the limit is exactly 1° of a 30° heading change

@@ -1,4 +1,4 @@
-"""Identification of the extended MEMS-gyro model K(ϑ, U), b(ϑ, U), ARW(ϑ) (thesis seed 004).
+"""Identification of the extended MEMS-gyro model K(ϑ, U), b(ϑ, U), ARW(ϑ) ([Vagner2015], docs/references.md).
 
 The thesis's model (eq. 6.14–6.20) for gyro i::
 

@@ -1,6 +1,6 @@
 """Electrical alignment of a gyro triad: M, bias, M⁻¹, uncertainties, leakage.
 
-Model (alignment article, seed 003, eq. 14–18): the mean outputs of a dwell are
+Model ([Looney-alignment] eq. 14–18, docs/references.md): the mean outputs of a dwell are
 G = M w + b, with w the mean rate vector in the fixture's reference frame — the table
 rate about the axis that was up plus the Earth rate in that orientation, averaged
 exactly over the dwell (:func:`gonio.physics.alignment.mean_earth_rate_ref`). The article

@@ -2,7 +2,7 @@
 
 The triad (:class:`TriadBench`, from ``protocols/benches/<name>.toml``)
 --------------------------------------------------------------------------
-Output of gyro i at sample time t (alignment article seed 003 eq. 14; thesis seed 004
+Output of gyro i at sample time t (alignment article [Looney-alignment] eq. 14; [Vagner2015]
 eq. 6.7, 6.14–6.20)::
 
     y_i = K_i(ϑ, U) [ (A + X) ω(t) ]_i + K_i(ϑ, U) ( b_i(ϑ, U) + n_i(t) )

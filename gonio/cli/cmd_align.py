@@ -54,7 +54,8 @@ def run(args) -> int:
     res = estimate_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,
                              seed=args.seed, target_deg=args.target_deg)
     if args.plot or args.report:
-        from gonio.report.triad_figures import alignment_figure, save_figure
+        from gonio.report.figure_files import save_figure
+        from gonio.report.triad_figures import alignment_figure
 
         fig = alignment_figure(res)
         if args.plot:

@@ -41,7 +41,8 @@ def run(args) -> int:
         r2 = read_triad_readings(args.compensate)
         comp = {ch: compensate_record(m, r2) for ch, m in res.channels.items()}
     if args.plot:
-        from gonio.report.triad_figures import save_figure, thermal_figure
+        from gonio.report.figure_files import save_figure
+        from gonio.report.triad_figures import thermal_figure
 
         if len(res.channels) != 1:
             raise GonioError("--plot draws one gyro; the file has "

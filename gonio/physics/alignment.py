@@ -3,7 +3,7 @@
 Conventions (used by :mod:`gonio.bench.triad` and :mod:`gonio.analysis.triad_alignment`)
 ---------------------------------------------------------------------------------------
 * The *reference frame* is the fixture's (rate table's) frame, axes x, y, z. A triad's
-  outputs obey G = M ω + b (alignment article, seed 003, eq. 14): ω the rate vector in
+  outputs obey G = M ω + b ([Looney-alignment] eq. 14, docs/references.md): ω the rate vector in
   the reference frame, M the 3×3 system matrix, b the bias vector.
 * A *sensing-axis matrix* A has as row i the unit vector of gyro i's sensing axis in
   the reference frame, so gyro i sees u_i·ω. With scale factors K_i and a dimensionless
@@ -415,7 +415,7 @@ def mean_earth_rate_ref(earth_enu, up: str, north0: str, table_deg: float,
 
     The vertical part is fixed along ``up``; the horizontal part turns with the table
     and is averaged exactly over the swept angle (zero over whole revolutions; thesis
-    seed 004 §5.3: averaging over whole turns cancels the horizontal Earth rate).
+    [Vagner2015] §5.3: averaging over whole turns cancels the horizontal Earth rate).
 
     >>> w = np.array([0.0, 1.0, 2.0])
     >>> (mean_earth_rate_ref(w, "+z", "+y", 0.0, 10.0, 36.0).round(12) + 0.0).tolist()

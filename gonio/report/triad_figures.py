@@ -6,25 +6,18 @@ leakage after (2u bars; the true leakage when the bench's truth is given), and t
 deviation of the static record with the article's noise limit and the chosen averaging
 time. :func:`thermal_figure` — bias, scale factor and ARW against temperature with the
 fitted polynomials and their 2u prediction bands, the ramp (hysteresis) record, and the
-before/after compensation residuals. :func:`save_figure` writes a figure atomically.
+before/after compensation residuals. Files are written with
+:func:`gonio.report.figure_files.save_figure` (deterministic bytes, atomic).
 """
 
 from __future__ import annotations
-
-import io
-from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from gonio.analysis.thermal_model import ChannelModel, Compensation
 from gonio.analysis.triad_alignment import OFFDIAG, AlignmentResult
-from gonio.atomic import write_bytes
-from gonio.errors import GonioError
 from gonio.units import dps_to_dph
-
-_FORMATS = ("png", "pdf", "svg")
-
 
 def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure:
     """Two panels: cross-axis sensitivity / leakage (ppm scale: ×10⁶) and the Allan
@@ -146,16 +139,3 @@ def thermal_figure(model: ChannelModel, compensation: Compensation | None = None
         ax.set_title(f"ARW(ϑ), order {model.arw.n_t}")
     fig.tight_layout()
     return fig
-
-
-def save_figure(fig: Figure, path) -> Path:
-    """Write a figure atomically; the format follows the suffix (png, pdf, svg)."""
-    path = Path(path)
-    fmt = path.suffix.lower().lstrip(".")
-    if fmt not in _FORMATS:
-        raise GonioError(f"--plot file must end in .png, .pdf or .svg, got {path.name!r}",
-                         key="--plot")
-    buf = io.BytesIO()
-    md = {"Software": None} if fmt == "png" else ({"Date": None} if fmt == "svg" else None)
-    fig.savefig(buf, format=fmt, metadata=md)
-    return write_bytes(path, buf.getvalue())

@@ -12,10 +12,8 @@ value to the same decimal place (JCGM 100 7.2.6, via :mod:`gonio.report.i18n`).
 from __future__ import annotations
 
 import html
-import io
 import math
 
-import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 from scipy import stats
@@ -23,6 +21,7 @@ from scipy import stats
 from gonio.analysis.thermal_model import Compensation, ThermalModelResult
 from gonio.analysis.triad_alignment import OFFDIAG, AlignmentResult, cross_axis_table
 from gonio.atomic import write_text
+from gonio.report.figure_files import figure_bytes
 from gonio.report.i18n import decimals_for_sig, display_uncertainty, round_half_up
 
 _CSS = ("body{font-family:'DejaVu Sans',sans-serif;font-size:10pt;margin:2em}"
@@ -46,10 +45,7 @@ def value_with_u(value: float, big_u: float) -> str:
 
 
 def _svg(fig: Figure) -> str:
-    buf = io.StringIO()
-    with matplotlib.rc_context({"svg.hashsalt": "gonio-triad"}):   # fixed ids: same bytes
-        fig.savefig(buf, format="svg", metadata={"Date": None})
-    text = buf.getvalue()
+    text = figure_bytes(fig, "svg").decode("utf-8")
     return text[text.find("<svg"):]
 
 

@@ -1,7 +1,7 @@
 """Gyro-triad electrical alignment and the extended MEMS-gyro model (issue 18).
 
-Not a standard: a calibration built on the alignment application article (seed 003:
-misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis (seed 004:
+Not a standard: a calibration built on the alignment application article ([Looney-alignment]:
+misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis ([Vagner2015]:
 K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.2.
 :mod:`~gonio.specs.triad_alignment.calibration` computes the results;
 :mod:`~gonio.specs.triad_alignment.session` simulates them on the virtual bench. The
