@@ -262,3 +262,15 @@ def test_cli_thermal_model(tmp_path, capsys):
     assert "Temperature and supply model" in page and "bias rms" in page and "<svg" in page
     assert main(["thermal-model", str(tmp_path / "a.csv"), "--plot", str(tmp_path / "x.bmp")]) == 2
     assert ".bmp" in capsys.readouterr().err
+
+
+def test_cli_plot_needs_a_gyro_choice_when_several(tmp_path, capsys):
+    p = tproto(setpoints=(0.0, 40.0), soak=10.0, ramp=20.0)
+    p.thermal["up"] = ["+z", "+x"]
+    s = run_thermal_session(p, tbench(), seed=1)
+    f = tmp_path / "two.csv"
+    f.write_text(format_triad_readings(s.readings, s.metadata))
+    assert main(["thermal-model", str(f), "--plot", str(tmp_path / "p.png")]) == 2
+    assert "--gyro" in capsys.readouterr().err
+    assert main(["thermal-model", str(f), "--plot", str(tmp_path / "p.png"), "--gyro", "x"]) == 0
+    assert (tmp_path / "p.png").stat().st_size > 1000

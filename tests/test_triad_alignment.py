@@ -383,3 +383,14 @@ def test_cli_simulate_align_and_errors(tmp_path, capsys):
     assert err.count("\n") == 1 and "format" in err
     assert main(["simulate", "--spec", "nope", "--out", str(tmp_path / "n")]) == 2
     assert "triad-alignment" in capsys.readouterr().err
+
+
+def test_uneven_static_record_is_an_error_naming_the_line():
+    s = run_alignment_session(protocol(static_s=5.0), bench(arw=0.3), seed=0)
+    df = s.readings.copy()
+    idx = df.index[df.test == "static"][10]
+    df.loc[idx, "time_s"] += 0.5
+    r = parse_triad_readings(format_triad_readings(df, s.metadata), "u.csv")
+    with pytest.raises(GonioError) as e:
+        estimate_alignment(r)
+    assert f"u.csv:{int(r.data.loc[idx, 'line'])}" in str(e.value) and "time_s" in str(e.value)

@@ -273,6 +273,12 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
         return None
     limit = alignment_noise_limit_dps(test_rate_dps, math.radians(target_deg), fraction)
     tau0 = 1.0 / readings.sample_rate_hz
+    steps = np.diff(st["time_s"].to_numpy(float))
+    bad = np.nonzero(np.abs(steps - tau0) > 0.01 * tau0)[0]
+    if bad.size:
+        raise GonioError(f"static record not sampled every 1/sample_rate_hz = {tau0:g} s "
+                         f"(step {steps[bad[0]]:g} s)", file=readings.path,
+                         line=int(st["line"].iloc[bad[0] + 1]), column="time_s")
     need, tmin, amin, adevs = [], [], [], []
     tau = None
     for i, c in enumerate(OUT):

@@ -25,6 +25,8 @@ def register(sub) -> None:
                    help="order-selection criterion (default bic)")
     p.add_argument("--temperature", choices=("sensor", "chamber"), default="sensor",
                    help="temperature the model uses (default: the gyro's internal sensor)")
+    p.add_argument("--gyro", choices=("x", "y", "z"), default=None,
+                   help="the gyro --plot draws when the file exercises several")
     p.add_argument("--compensate", metavar="READINGS2", default=None,
                    help="apply the model to this second thermal record: before/after residuals")
     p.set_defaults(func=run)
@@ -44,11 +46,16 @@ def run(args) -> int:
         from gonio.report.figure_files import save_figure
         from gonio.report.triad_figures import thermal_figure
 
-        if len(res.channels) != 1:
-            raise GonioError("--plot draws one gyro; the file has "
-                             f"{len(res.channels)} ({', '.join(res.channels)})", key="--plot")
-        ch, m = next(iter(res.channels.items()))
-        save_figure(thermal_figure(m, comp.get(ch)), args.plot)
+        ch = args.gyro
+        if ch is None:
+            if len(res.channels) != 1:
+                raise GonioError("--plot draws one gyro; the file has "
+                                 f"{', '.join(res.channels)}: choose with --gyro", key="--plot")
+            ch = next(iter(res.channels))
+        if ch not in res.channels:
+            raise GonioError(f"gyro {ch} is not in the file (it has {', '.join(res.channels)})",
+                             key="--gyro")
+        save_figure(thermal_figure(res.channels[ch], comp.get(ch)), args.plot)
     if args.report:
         from gonio.report.triad_figures import thermal_figure
         from gonio.report.triad_pages import thermal_page, write_report
