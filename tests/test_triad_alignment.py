@@ -394,3 +394,20 @@ def test_uneven_static_record_is_an_error_naming_the_line():
     with pytest.raises(GonioError) as e:
         estimate_alignment(r)
     assert f"u.csv:{int(r.data.loc[idx, 'line'])}" in str(e.value) and "time_s" in str(e.value)
+
+
+def test_specification_plug_in(tmp_path):
+    from gonio.specs import available, get
+
+    spec = get("triad-alignment")
+    assert "triad-alignment" in available() and spec.default_bench == "mems-triad"
+    b = bench(arw=0.3)
+    paths = write_triad_session(run_alignment_session(protocol(static_s=0.0), b, seed=9),
+                                tmp_path / "s")
+    cal = spec.calibrate(paths["readings"])
+    out = json.loads(json.dumps(cal.to_json(), allow_nan=False))
+    assert out["thermal_model"] is None and out["alignment"]["averaging_time"] is None
+    m = np.array(out["alignment"]["system_matrix"])
+    u = np.array(out["alignment"]["u_system_matrix"])
+    assert np.all(np.abs(m - b.system_matrix) <= 5 * u)
+    assert len(out["cross_axis"]) == 6

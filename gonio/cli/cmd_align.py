@@ -44,7 +44,7 @@ def _fmt_matrix(m, u, digits=6) -> list[str]:
 
 def run(args) -> int:
     from gonio.analysis.triad_alignment import cross_axis_table, estimate_alignment
-    from gonio.formats.triad import read_triad_readings
+    from gonio.formats.triad import json_safe, read_triad_readings
 
     if args.monte_carlo < 0:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
@@ -67,7 +67,8 @@ def run(args) -> int:
                          f"Gyro-triad alignment — {r.metadata.get('instrument', '')} "
                          f"{r.metadata.get('serial', '')}".strip())
     if args.json:
-        print(json.dumps(res.to_json(), indent=2, sort_keys=True))
+        print(json.dumps(json_safe(res.to_json()), indent=2, sort_keys=True, allow_nan=False,
+                         ensure_ascii=False))
         return 0
     unit = res.output_unit or "output"
     print(f"system matrix M ({unit} per °/s), standard uncertainties (GUM):")

@@ -34,7 +34,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from gonio.analysis.thermal_model import compensate_record, identify_thermal_model
-    from gonio.formats.triad import read_triad_readings
+    from gonio.formats.triad import json_safe, read_triad_readings
 
     r = read_triad_readings(args.readings)
     res = identify_thermal_model(r, criterion=args.criterion, temperature=args.temperature)
@@ -67,7 +67,8 @@ def run(args) -> int:
     if args.json:
         out = res.to_json()
         out["compensation"] = {k: v.to_json() for k, v in comp.items()} or None
-        print(json.dumps(out, indent=2, sort_keys=True))
+        print(json.dumps(json_safe(out), indent=2, sort_keys=True, allow_nan=False,
+                         ensure_ascii=False))
         return 0
     for ch, m in res.channels.items():
         print(f"gyro {ch} (temperature: {m.temperature}, ϑ {m.theta_range[0]:.1f} … "

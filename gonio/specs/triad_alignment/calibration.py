@@ -8,7 +8,7 @@ from pathlib import Path
 from gonio.analysis.thermal_model import ThermalModelResult, identify_thermal_model
 from gonio.analysis.triad_alignment import AlignmentResult, cross_axis_table, estimate_alignment
 from gonio.errors import GonioError
-from gonio.formats.triad import TriadReadings, read_triad_readings
+from gonio.formats.triad import TriadReadings, json_safe, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
 
 
@@ -27,7 +27,7 @@ class TriadCalibration:
                "thermal_model": None if self.thermal is None else self.thermal.to_json()}
         if self.alignment is not None:
             out["cross_axis"] = cross_axis_table(self.alignment).to_dict(orient="records")
-        return out
+        return json_safe(out)
 
 
 def _as_readings(readings) -> TriadReadings:
