@@ -60,7 +60,9 @@ F_TEST_ALPHA = 0.05
 # --------------------------------------------------------------------------- data
 def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.DataFrame:
     """One row per ± pair of soak dwells: channel, ϑ, U, K, b (°/s), ARW (°/√h) of the
-    static dwell that follows at the same supply (NaN if none), time (s).
+    static dwell that follows at the same supply (NaN if none), time (s) — step 1 of the
+    module docstring ([Vagner2015] §5.2.3–5.2.4: K from the ± difference, b from the mean
+    with the Earth rate removed; whole revolutions, §5.3).
 
     ``temperature`` is ``sensor`` (the gyro's internal sensor, the thesis's choice) or
     ``chamber``.
@@ -251,7 +253,9 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
 
 # --------------------------------------------------------------------------- ramps
 def _lagged(time_s, temp, tau_s):
-    """First-order lag of a (possibly unevenly sampled) temperature series."""
+    """First-order lag of a (possibly unevenly sampled) temperature series: the exact
+    discretisation T_f[k] = T_f[k−1] + (1 − e^{−Δt/τ})(T[k] − T_f[k−1]) of τ dT_f/dt = T − T_f
+    (the chamber-to-sample lag of [Vagner2015] Fig. 5.7)."""
     out = np.empty_like(temp)
     out[0] = temp[0]
     for k in range(1, temp.size):
@@ -284,7 +288,10 @@ class RampAnalysis:
 
 def ramp_analysis(readings: TriadReadings, scale: PolyFit, bias: PolyFit, channel: str, *,
                   temperature: str = "sensor") -> RampAnalysis | None:
-    """Apply the static-soak model to the ramp blocks of ``channel`` (see module step 4)."""
+    """Apply the static-soak model to the ramp blocks of ``channel`` (module step 4): its
+    rms error, the fitted γ of a γ·dϑ/dt term (linear least squares), the lag τ minimising
+    the residuals of the model fed with the lagged temperature (grid over 1 s … 10⁴ s, then
+    a bounded scalar search), and the up/down hysteresis at equal chamber temperature."""
     col = "sensor_c" if temperature == "sensor" else "chamber_c"
     th = readings.rows("thermal")
     c = AXES.index(channel)

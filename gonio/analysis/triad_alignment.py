@@ -62,7 +62,9 @@ COVERAGE = 0.9545
 
 def dwell_regressors(rows: pd.DataFrame, latitude_deg: float) -> np.ndarray:
     """(n, 3) mean rate vector of every dwell in the reference frame, °/s: the table rate
-    along the ``up`` axis plus the Earth rate averaged over the dwell."""
+    along the ``up`` axis plus the Earth rate averaged over the dwell — the ω of
+    [Looney-alignment] eq. 14 with the Earth rate of every orientation
+    (:func:`gonio.physics.alignment.mean_earth_rate_ref`)."""
     w_enu = np.degrees(earth_rate_enu(latitude_deg))
     out = np.empty((len(rows), 3))
     for k, r in enumerate(rows.itertuples(index=False)):
@@ -79,7 +81,9 @@ def _wls(x: np.ndarray, y: np.ndarray, w: np.ndarray):
 
 
 def _fit_channel(x, y, w, robust: bool, max_iter: int = 100):
-    """(θ, cov, s, robust weights) of one channel's (weighted, optionally robust) fit."""
+    """(θ, cov, s, robust weights, ν) of one channel's weighted least-squares fit
+    (JCGM 100 §4.2 Type A: cov = s²(XᵀWX)⁻¹, s² = Σ w r²/ν), optionally robust (IRLS,
+    Huber then Tukey bisquare; module docstring)."""
     n, p = x.shape
     rw = np.ones(n)
     theta = _wls(x, y, w)
