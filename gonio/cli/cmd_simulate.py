@@ -14,14 +14,13 @@ def register(sub) -> None:
     p = sub.add_parser("simulate", help="run a protocol on the virtual bench",
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
-    p.add_argument("--spec", default=None,
-                   help="specification (default ogam-draft; triad-alignment: a gyro triad, "
-                        "writes readings.csv, thermal.csv, truth.json)")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20, triad-alignment)")
     p.add_argument("--protocol", default=None,
                    help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--bench", default=None,
-                   help="bench file or built-in name (default: the specification's; rlg, fog, "
-                        "mems-triad)")
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610; "
+                        "triad-alignment: mems-triad)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
@@ -45,8 +44,17 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 def run(args) -> int:
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    if args.spec is not None and args.spec != "ogam-draft":
+    if args.spec in SPEC_SIMULATORS:
         return _run_spec(args)
+    if args.spec != "ogam-draft":
+        from gonio.pipeline.rate import simulate
+
+        if args.stream or args.table:
+            raise GonioError("--stream and --table apply to the ogam-draft specification only")
+        for p in simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
+                          seed=args.seed).values():
+            print(p)
+        return 0
     proto = load_protocol(args.protocol or "ogam-draft")
     bench = load_bench(args.bench or "rlg", table=args.table)
     writer = None
@@ -75,14 +83,13 @@ SPEC_SIMULATORS = {"triad-alignment": "gonio.specs.triad_alignment.session"}
 
 
 def _run_spec(args) -> int:
-    """``--spec`` other than the draft: that specification's own simulator."""
+    """A specification with its own simulator (the gyro triad: readings.csv, thermal.csv,
+    truth.json)."""
     import importlib
 
     from gonio.specs import get
 
     spec = get(args.spec)
-    if spec.key not in SPEC_SIMULATORS:
-        raise GonioError(f"no simulator for specification {spec.key!r}", key="--spec")
     if args.stream or args.table:
         raise GonioError(f"--stream and --table apply to ogam-draft only, not {spec.key}",
                          key="--spec")
