@@ -1,0 +1,1 @@
+"""Analyses on reduced readings (noise, tilt estimate, equal division, conformity)."""
