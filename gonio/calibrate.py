@@ -20,7 +20,7 @@ from pathlib import Path
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.budget import AnnexABudget, annex_a_budget
-from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
+from gonio.characteristics import CalibrationResults, compute_characteristics
 from gonio.io import Readings, metadata_float, read_readings
 from gonio.bench.session import StaticRecord
 from gonio.protocol import Protocol, load_protocol
@@ -110,13 +110,12 @@ class CalibrationReport:
         out["readings_taken"] = list(READINGS_TAKEN)
         return json_safe(out)
 
-    def summary(self) -> str:
-        """The seven items and U as a fixed-width text table."""
-        u = self.uncertainty
-        return (summary_table(self.results)
-                + f"\nUncertainty of the angle-position deviation (Annex A): "
-                  f"u_c = {u.stated_u_c_arcsec:g}″, U = {u.to_dict()['stated']['U_arcsec']:g}″ "
-                  f"(k = {u.k:g})\n")
+    def summary(self, lab: dict | None = None) -> str:
+        """The seven items, U (k, coverage probability) and any conformity statements as a
+        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`)."""
+        from gonio.report.stated import summary_text
+
+        return summary_text(self.to_dict(), "en", lab)
 
 
 def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
