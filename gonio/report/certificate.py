@@ -884,8 +884,10 @@ def font_families(lang: str) -> tuple[str, ...]:
 
 
 def write_certificate(report, out: str | Path, *, truth: dict | None = None,
-                      lab: str | Path | dict | None = None, lang: str = "en") -> dict[str, Path]:
-    """Write ``certificate.html`` and ``certificate.pdf`` for ``report`` into ``out``.
+                      lab: str | Path | dict | None = None, lang: str = "en",
+                      dcc: bool = False) -> dict[str, Path]:
+    """Write ``certificate.html`` and ``certificate.pdf`` (and with ``dcc`` the PTB DCC
+    3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.dcc`) for ``report`` into ``out``.
 
     Parameters
     ----------
@@ -904,10 +906,13 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
     lang : {"en", "zh"}
         Language of the labels; "zh" needs a CJK font (GonioError naming the package).
 
+    dcc : bool
+        Also write ``certificate.dcc.xml`` (always in English, the DCC's mandatory language).
+
     Returns
     -------
     dict of str to Path
-        ``{"certificate.html": ..., "certificate.pdf": ...}``.
+        ``{"certificate.html": ..., "certificate.pdf": ...}`` (and ``certificate.dcc.xml``).
     """
     L = labels(lang)
     fonts = font_families(lang)
@@ -921,4 +926,10 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
-    return {"certificate.html": out / "certificate.html", "certificate.pdf": out / "certificate.pdf"}
+        if dcc:
+            from gonio.report.dcc import dcc_bytes
+
+            write_bytes(stage / "certificate.dcc.xml",
+                        dcc_bytes(report, lab=lab_d, cert_id=content["id"]))
+    names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
+    return {n: out / n for n in names}
