@@ -292,7 +292,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
                      ")"]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
-        {"widths": (0.05, 0.24, 0.08, 0.35, 0.19, 0.09), "id": "results"})
+        {"widths": (0.045, 0.22, 0.075, 0.33, 0.24, 0.09), "id": "results"})
     st_e = stated_item(res, "angle_deviation")
     add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
                       k=_num(res, "uncertainty.k", "k", U),
@@ -472,7 +472,7 @@ footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
  @top-right{content:%(cid)s;font-family:%(font)s;font-size:9pt}
  @bottom-left{content:%(cid)s;font-family:%(font)s;font-size:8pt}
  @bottom-right{content:%(pageword)s;font-family:%(font)s;font-size:8pt}}
-@media print{header.page{display:none}body{max-width:none;padding:0;font-size:12px}
+@media print{header.page,footer{display:none}body{max-width:none;padding:0;font-size:12px}
  figure svg{width:92%%}}
 """
 
@@ -560,7 +560,7 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
 A4_IN: tuple[float, float] = (8.27, 11.69)
 _PT = 1.0 / 72.0 / A4_IN[1]          # one point as a fraction of the page height
 _LEFT, _RIGHT, _TOP, _BOTTOM = 0.08, 0.92, 0.90, 0.08
-_FIG_H = 0.30                        # a figure's height, fraction of the page
+_FIG_H = 0.33                        # a figure's height, fraction of the page
 
 
 def _width(s: str) -> int:
@@ -789,8 +789,9 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
         h = _FIG_H + ln * len(cap_lines) + 6 * _PT
 
         def op(fig, y, draw=draw, cap_lines=cap_lines):
+            # the legend sits above the axes (figures._legend): leave it room below y
             gs = fig.add_gridspec(1, 1, left=_LEFT + 0.06, right=_RIGHT - 0.01,
-                                  top=y - 0.01, bottom=y - _FIG_H + 0.035)
+                                  top=y - 0.05, bottom=y - _FIG_H + 0.035)
             draw(fig, gs[0], content["_report"], L, content["_truth"])
             for i, t in enumerate(cap_lines):
                 fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,

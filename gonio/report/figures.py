@@ -293,6 +293,7 @@ def figure_svg(draw: Callable, report, L: dict, truth=None,
         draw(fig, spec, report, L, truth)
         fig.tight_layout()
         buf = io.StringIO()
-        fig.savefig(buf, format="svg", metadata={"Date": None})
+        fig.savefig(buf, format="svg", metadata={"Date": None}, bbox_inches="tight",
+                    pad_inches=0.05)
     svg = buf.getvalue()
     return svg[svg.index("<svg"):]
