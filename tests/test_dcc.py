@@ -49,7 +49,7 @@ def schema():
     xmlschema = pytest.importorskip("xmlschema", reason="pip install '.[test]'")
     assert (SCHEMA_DIR / "dcc.xsd").is_file(), (
         f"DCC 3.3.0 schema set not found at {SCHEMA_DIR} (set GONIO_DCC_SCHEMA_DIR)")
-    return xmlschema.XMLSchema10(
+    return xmlschema.XMLSchema11(
         str(SCHEMA_DIR / "dcc.xsd"),
         uri_mapper={QUDT_URL: (SCHEMA_DIR / "si" / "qudt" / "quantitykind.xsd").as_uri()},
         allow="local")

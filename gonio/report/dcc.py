@@ -35,7 +35,7 @@ when the readings carry no date the performance dates are the placeholder
 :data:`PLACEHOLDER_DATE`, said so in that statement.
 
 The schema set is not needed at run time; ``tests/test_dcc.py`` validates the output
-against the DCC 3.3.0 XSD offline (xmlschema), with the D-SI unit strings checked by
+against the DCC 3.3.0 XSD offline (xmlschema, XSD 1.1), with the D-SI unit strings checked by
 a D-SI parser.
 """
 
