@@ -450,3 +450,13 @@ def test_demo_cli_help_and_wrote_list(run, tmp_path, monkeypatch, capsys):
     wrote = capsys.readouterr().out.splitlines()[-1]
     assert wrote == f"wrote results.json, tables/uncertainty_budget.csv in {out}"
     assert "lab-example" not in builtin_names()
+
+
+def test_eda_error_bars_say_they_are_u():
+    from gonio.eda import equal_division_analysis, simulate_eda_matrix
+
+    sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
+    fig = figs.eda_figure(equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg))
+    for ax in fig.axes:
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert any("standard uncertainty u (k = 1)" in t for t in texts), texts

@@ -108,7 +108,8 @@ def _text(res: EdaResult) -> str:
 def plot_eda(res: EdaResult, path: str | Path) -> Path:
     """Figure of the table and goniometer error curves with 1-σ bars, written atomically.
 
-    The format follows the suffix (png, pdf, svg); matplotlib's Agg backend.
+    The figure is :func:`gonio.report.figures.eda_figure`; the format follows the suffix
+    (png, pdf, svg).
 
     >>> import tempfile, pathlib
     >>> from gonio.eda import simulate_eda_matrix
@@ -118,30 +119,15 @@ def plot_eda(res: EdaResult, path: str | Path) -> Path:
     >>> out.read_text()[:5]
     '<?xml'
     """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from gonio.report.figures import eda_figure
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True)
-    a1.errorbar(res.table_position_deg, res.table_error_arcsec, yerr=res.table_u_arcsec,
-                fmt="o-", capsize=3)
-    a1.set(xlabel="table position / °", ylabel="table error / ″",
-           title=f"rotary table (gauge: {res.gauge})")
-    a2.errorbar(res.gonio_angle_deg, res.gonio_error_arcsec, yerr=res.gonio_u_arcsec,
-                fmt="s-", capsize=3, color="C1")
-    a2.set(xlabel="angle turned since zeroing / °", ylabel="goniometer error / ″",
-           title="goniometer")
-    for a in (a1, a2):
-        a.axhline(0, color="0.6", lw=0.8)
-        a.grid(alpha=0.3)
+    fig = eda_figure(res)
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
     buf = io.BytesIO()
     try:
         fig.savefig(buf, format=fmt, metadata={"Software": None} if fmt == "png" else None)
     except ValueError as exc:
         raise GonioError(f"cannot write a figure of this type: {exc}", file=path) from None
-    finally:
-        plt.close(fig)
     return write_bytes(path, buf.getvalue())
 
 
