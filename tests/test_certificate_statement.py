@@ -25,7 +25,7 @@ from matplotlib.figure import Figure
 from scipy.stats import norm
 
 from gonio.bench import load_bench, run_session, write_session
-from gonio.calibrate import calibrate, write_calibration
+from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
 from gonio.report import certificate as cert
@@ -426,7 +426,7 @@ def _small_toml(path: Path) -> Path:
 
 def test_stream_file_has_the_mode_of_every_other_output(tmp_path):
     from gonio.atomic import write_text
-    from gonio.streams import StreamWriter
+    from gonio.formats.streams import StreamWriter
 
     w = StreamWriter(tmp_path / "stream.csv", {"sample_rate_hz": "10"}, table=True)
     w.write(np.array([0.0, 0.1]), np.array([0, 1]), np.array([0.0, 0.0]))
@@ -453,7 +453,7 @@ def test_demo_cli_help_and_wrote_list(run, tmp_path, monkeypatch, capsys):
 
 
 def test_eda_error_bars_say_they_are_u():
-    from gonio.eda import equal_division_analysis, simulate_eda_matrix
+    from gonio.analysis.equal_division import equal_division_analysis, simulate_eda_matrix
 
     sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
     fig = figs.eda_figure(equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg))

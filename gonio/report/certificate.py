@@ -5,7 +5,7 @@ Contents
 =========================  ==============================================================
 :func:`write_certificate`  ``certificate.html`` and ``certificate.pdf`` into a folder, atomically
 :func:`load_lab`           laboratory / customer / signatory details from a TOML file
-:data:`LAB_SCHEMA`         what that file may hold (:mod:`gonio.tomlschema`)
+:data:`LAB_SCHEMA`         what that file may hold (:mod:`gonio.formats.toml`)
 :func:`certificate_blocks` the certificate's content as plain blocks (both renderers use them)
 :func:`render_html`        blocks + figures → one HTML page (figures inline as SVG)
 :func:`render_pdf`         blocks + figures → A4 PDF pages (matplotlib PdfPages)
@@ -46,7 +46,7 @@ from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, 
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
                                  stated_item, u_cell)
-from gonio.tomlschema import Field, non_negative, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
 
@@ -892,9 +892,9 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
     Parameters
     ----------
-    report : gonio.calibrate.CalibrationReport
-        What :func:`gonio.calibrate.calibrate` returned (``results.json`` is written
-        by :func:`gonio.calibrate.write_calibration`, not here).
+    report : gonio.pipeline.calibrate.CalibrationReport
+        What :func:`gonio.pipeline.calibrate.calibrate` returned (``results.json`` is written
+        by :func:`gonio.pipeline.calibrate.write_calibration`, not here).
     out : path
         Output folder; both files appear together or not at all (staged, then renamed).
     truth : dict, optional

@@ -95,7 +95,7 @@ def dsi_decimal(text: str) -> str:
     return t
 
 
-def _e(parent, tag: str, text: str | None = None, **attrib) -> etree._Element:
+def _e(parent, tag: str, text: str | None = None, **attrib) -> "etree.Element":
     ns, _, name = tag.partition(":")
     el = etree.SubElement(parent, f"{{{_NSMAP[ns]}}}{name}", **attrib)
     if text is not None:
@@ -103,7 +103,7 @@ def _e(parent, tag: str, text: str | None = None, **attrib) -> etree._Element:
     return el
 
 
-def _text(parent, tag: str, text: str, lang: str | None = None) -> etree._Element:
+def _text(parent, tag: str, text: str, lang: str | None = None) -> "etree.Element":
     """A dcc:textType / richContentType element with one dcc:content."""
     el = _e(parent, tag)
     c = _e(el, "dcc:content", text)
@@ -113,7 +113,7 @@ def _text(parent, tag: str, text: str, lang: str | None = None) -> etree._Elemen
 
 
 def _real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | None = None,
-          p: float | None = None, label: str | None = None) -> etree._Element:
+          p: float | None = None, label: str | None = None) -> "etree.Element":
     """si:real with the stated value, its D-SI unit and (when given) the expanded uncertainty.
 
     Each si:value / si:valueExpandedMU carries ``refId``-free text; the path in results.json
@@ -133,7 +133,7 @@ def _real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num |
     return r
 
 
-def _quantity(parent, name: str, value, unit: str, **kw) -> etree._Element:
+def _quantity(parent, name: str, value, unit: str, **kw) -> "etree.Element":
     q = _e(parent, "dcc:quantity")
     _text(q, "dcc:name", name)
     _real(q, value, unit, **kw)
@@ -163,7 +163,7 @@ def _contact(parent, tag: str, name: str, address: str | None, email: str | None
     return c
 
 
-def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> etree._Element:
+def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
     """The DCC 3.3.0 document of one calibration (see the module docstring for its content)."""
     from gonio import __version__
 

@@ -7,7 +7,7 @@ Contents
 :func:`draw_deviation`    E_ij of every series against position, mean E_i (draft Fig. A.4)
 :func:`draw_repeatability`  Bessel s_i per position and R = max (draft Fig. A.5, 7.5)
 :func:`draw_tilt`      elliptic-projection error at the tilt bound (Annex A.4.2, Fig. A.3),
-                       rigid-body model beside it (:mod:`gonio.tilt`)
+                       rigid-body model beside it (:mod:`gonio.physics.tilt`)
 :func:`draw_scale_factor`   K_i per round and K (7.1)
 :func:`draw_zero_stability` readings M_n against time and the drift results.json states (7.3)
 :func:`draw_rate`      E_i per position for each rate (7.6)
@@ -19,7 +19,7 @@ Contents
 =====================  =================================================================
 
 Each ``draw_*`` takes ``(fig, spec, report, L, truth)``: a matplotlib Figure, a
-SubplotSpec to draw in, the :class:`~gonio.calibrate.CalibrationReport`, the
+SubplotSpec to draw in, the :class:`~gonio.pipeline.calibrate.CalibrationReport`, the
 label mapping of :func:`gonio.report.i18n.labels`, and the virtual-bench truth
 (or None). The same function draws into the HTML's SVG and into a PDF page.
 An item that was not measured gives an empty panel saying so.
@@ -43,9 +43,9 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from gonio.characteristics import ARCSEC_PER_DEG, S_PER_H  # gonio.units once it is on main
+from gonio.physics.tilt import elliptic_error_arcsec, rigid_error_arcsec
 from gonio.report.i18n import display, display_number, display_uncertainty
-from gonio.tilt import elliptic_error_arcsec, rigid_error_arcsec
+from gonio.units import S_PER_MIN, deg_to_arcsec, s_to_h
 
 #: Salt of matplotlib's SVG ids: fixed, so the same report gives the same bytes.
 SVG_HASHSALT: str = "gonio-certificate"
@@ -204,13 +204,13 @@ def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
     for i, (s, g) in enumerate(rd.groupby("series", sort=True)):
         g = g.sort_values("time_s")
         t_s = (g["time_s"] - g["time_s"].iloc[0]).to_numpy(dtype=float)
-        m_arcsec = g["angle_deg"].to_numpy() * ARCSEC_PER_DEG
-        ax.plot(t_s * (60.0 / S_PER_H), m_arcsec, "o", color=f"C{i}", ms=4,
+        m_arcsec = deg_to_arcsec(g["angle_deg"].to_numpy())
+        ax.plot(t_s / S_PER_MIN, m_arcsec, "o", color=f"C{i}", ms=4,
                 label=f"{L['lg_series']} {s}")
         d = drift.get(int(s))
         if d is not None and math.isfinite(d["drift_deg_per_h"]):
-            line_deg = d["drift_intercept_deg"] + d["drift_deg_per_h"] * t_s / S_PER_H
-            ax.plot(t_s * (60.0 / S_PER_H), line_deg * ARCSEC_PER_DEG, "-", color=f"C{i}", lw=1,
+            line_deg = d["drift_intercept_deg"] + d["drift_deg_per_h"] * s_to_h(t_s)
+            ax.plot(t_s / S_PER_MIN, deg_to_arcsec(line_deg), "-", color=f"C{i}", lw=1,
                     label=L["lg_drift"].format(v=display_number(d["drift_deg_per_h"], 3)))
     ax.set_xlabel(L["ax_time_min"])
     ax.set_ylabel(L["ax_angle_arcsec"])
@@ -272,7 +272,7 @@ def eda_figure(res) -> Figure:
     """Table and goniometer errors of an equal-division analysis (IEC 62047-20 Annex A.3),
     with error bars of one standard uncertainty u (k = 1), said in the legend.
 
-    ``res`` is a :class:`gonio.eda.EdaResult`.
+    ``res`` is a :class:`gonio.analysis.equal_division.EdaResult`.
     """
     fig = Figure(figsize=(7, 6), layout="constrained")
     a1, a2 = fig.subplots(2, 1)

@@ -19,10 +19,10 @@ from pathlib import Path
 
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
-from gonio.budget import AnnexABudget, annex_a_budget
-from gonio.characteristics import CalibrationResults, compute_characteristics
-from gonio.io import Readings, metadata_float, read_readings
-from gonio.bench.session import StaticRecord
+from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
+from gonio.formats.readings import Readings, metadata_float, read_readings
+from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate).
@@ -76,9 +76,9 @@ class CalibrationReport:
     protocol: Protocol
     source_sha256: str
     repeatability_source: str
-    noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
+    noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
-    eda: object | None = None            # gonio.eda.EdaResult of the equal_division rows
+    eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
 
     def to_dict(self) -> dict:
         """The ``results.json`` content (plain JSON types, deterministic)."""
@@ -152,7 +152,7 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 
 def _load(path: str | Path, protocol: Protocol):
-    from gonio.streams import read_stream, sniff_kind
+    from gonio.formats.streams import read_stream, sniff_kind
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
@@ -165,7 +165,7 @@ def _load(path: str | Path, protocol: Protocol):
         raise GonioError("no round of the protocol could be matched in the stream", file=path)
     import tempfile
 
-    from gonio.io import write_readings
+    from gonio.formats.readings import write_readings
     with tempfile.TemporaryDirectory() as tmp:   # through the file format: same validation
         rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
                                           Path(tmp) / "reduced.csv", red.metadata))
@@ -191,9 +191,9 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
 
 def analyse_zero_stability(record: StaticRecord | None):
-    """Allan analysis of the 7.3 static record (:func:`gonio.noise.analyse_static`), or why not."""
+    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`), or why not."""
     from gonio.errors import GonioError
-    from gonio.noise import analyse_static
+    from gonio.analysis.noise import analyse_static
 
     if record is None:
         return None, ""
@@ -238,7 +238,7 @@ def equal_division_for(results: CalibrationResults, readings: Readings):
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.eda import eda_matrix_from_readings, equal_division_analysis
+    from gonio.analysis.equal_division import eda_matrix_from_readings, equal_division_analysis
 
     df = readings.data
     rows = df[df["test"] == "equal_division"]
