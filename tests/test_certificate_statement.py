@@ -448,3 +448,27 @@ def test_eda_error_bars_say_they_are_u():
     for ax in fig.axes:
         texts = [t.get_text() for t in ax.get_legend().get_texts()]
         assert any("standard uncertainty u (k = 1)" in t for t in texts), texts
+
+
+def test_budget_kind_beyond_draft_lines_and_no_E(run, monkeypatch):
+    cls = type(run["report"])
+    orig = cls.to_dict
+
+    def physical(self):
+        d = json.loads(json.dumps(orig(self)))
+        d["uncertainty"]["budget_kind"] = "physical"
+        d["uncertainty"]["components"][1]["beyond_draft"] = True
+        return d
+    monkeypatch.setattr(cls, "to_dict", physical)
+    blocks = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None)["blocks"]
+    text = " ".join("".join(str(x) for x in b.data) for b in blocks if b.kind == "p")
+    assert "lines marked \"beyond the draft\" are not in Annex A" in text
+    budget = [b.data for b in blocks if b.kind == "table" and b.data[0][0] == "Component"][0]
+    marked = [r[1] for r in budget[1] if "(beyond the draft)" in r[1]]
+    assert len(marked) == 1
+    res = physical(run["report"])
+    assert "(physical budget)" in summary_text(res)
+    res["uncertainty"].update({"U_arcsec": None, "u_c_arcsec": None})
+    res["angle_deviation"].update({"measured": False, "value": None, "reason": "no rows"})
+    s = summary_text(res)
+    assert "no uncertainty stated" in s and "±" not in s

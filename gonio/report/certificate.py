@@ -197,7 +197,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     res = report.to_dict()
     md = res.get("metadata", {})
     unc = res["uncertainty"]
-    U = float(unc["U_arcsec"])
+    U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
     virtual = lab is None
     lab_ = lab or {}
     blocks: list[Block] = []
@@ -294,10 +294,13 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.045, 0.22, 0.075, 0.33, 0.24, 0.09), "id": "results"})
     st_e = stated_item(res, "angle_deviation")
-    add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
-                      k=_num(res, "uncertainty.k", "k", U),
-                      p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
-    add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+    if U is not None:
+        add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
+                          k=_num(res, "uncertainty.k", "k", U),
+                          p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
+        add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+    else:
+        add("p", [L["no_E_U"]], "U")
     del st_e
 
     # decision rule and conformity: only when the laboratory file gives limits
@@ -331,7 +334,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     brows = []
     for j, c in enumerate(unc["components"]):
         brows.append([NoBreak(f"u({c['symbol'].replace('phi_e', 'φ_e')})"),
-                      budget_source(c["symbol"], c["source"], lang), c["type"],
+                      budget_source(c["symbol"], c["source"], lang)
+                      + (f" ({L['beyond_draft']})" if c.get("beyond_draft") else ""), c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])
     add("table", ([L["component"], L["source"], L["type"], L["u_i"], L["d_contrib"]], brows),

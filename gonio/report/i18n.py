@@ -196,8 +196,10 @@ LABELS: dict[str, dict[str, str]] = {
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "
                                    "\"beyond the draft\" are not in Annex A.",
-                             "zh": "按本次校准的物理模型评定；标“beyond the draft”的分量不在附录A中。"},
+                             "zh": "按本次校准的物理模型评定；标“超出草案”的分量不在附录A中。"},
     "beyond_draft": {"en": "beyond the draft", "zh": "超出草案"},
+    "no_E_U": {"en": "Angle-position deviation not measured: no uncertainty stated.",
+               "zh": "未测角位置偏差：不给出测量不确定度。"},
     # method
     "method": {"en": "Method", "zh": "校准方法"},
     "m_spec": {"en": "Specification and clauses followed", "zh": "校准依据及所用条款"},

@@ -302,13 +302,15 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     if notes:
         lines += ["", "not measured:"] + ["  " + n for n in notes]
     u = res["uncertainty"]
-    Un = num(res, "uncertainty.U_arcsec", "U")
-    lines += ["", f"Uncertainty of the angle-position deviation (Annex A): "
-                  f"u_c = {num(res, 'uncertainty.u_c_arcsec', 'U')}″, U = {Un}″ "
-                  f"(k = {num(res, 'uncertainty.k', 'k')}, coverage probability "
-                  f"{coverage_text(ANNEX_A_COVERAGE, lang)})"]
-    if u.get("budget_kind"):
-        lines.append(f"budget: {u['budget_kind']}")
+    if u.get("U_arcsec") is None:
+        lines += ["", L["no_E_U"]]
+    else:
+        kind = f"{u['budget_kind']} budget" if u.get("budget_kind") else "Annex A"
+        lines += ["", f"Uncertainty of the angle-position deviation ({kind}): "
+                      f"u_c = {num(res, 'uncertainty.u_c_arcsec', 'U')}″, "
+                      f"U = {num(res, 'uncertainty.U_arcsec', 'U')}″ "
+                      f"(k = {num(res, 'uncertainty.k', 'k')}, coverage probability "
+                      f"{coverage_text(ANNEX_A_COVERAGE, lang)})"]
     for e in conformity_for(res, lab):
         c = e["conformity"]
         if c is None:
