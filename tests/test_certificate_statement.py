@@ -444,10 +444,13 @@ def test_eda_error_bars_say_they_are_u():
     from gonio.analysis.equal_division import equal_division_analysis, simulate_eda_matrix
 
     sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
-    fig = figs.eda_figure(equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg))
+    from gonio.report.eda_figure import equal_division_figure
+
+    fig = equal_division_figure(equal_division_analysis(sim.D_arcsec, sim.start_deg,
+                                                        sim.step_deg))
     for ax in fig.axes:
         texts = [t.get_text() for t in ax.get_legend().get_texts()]
-        assert any("standard uncertainty u (k = 1)" in t for t in texts), texts
+        assert any("± u (k = 1)" in t for t in texts), texts
 
 
 def test_budget_kind_beyond_draft_lines_and_no_E(run, monkeypatch):

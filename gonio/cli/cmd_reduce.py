@@ -14,7 +14,7 @@ from gonio.formats.streams import read_stream
 
 def register(sub) -> None:
     p = sub.add_parser("reduce", help="reduce a stream file to a readings file",
-                       description="Find the table's rests in a stream (data-formats.md §2), "
+                       description="Find the table's rests in a stream (docs/formats.md#stream-file), "
                                    "match them to the protocol's rounds and write the readings "
                                    "file (§1). Rounds that cannot be matched are listed with the "
                                    "reason; --override gives their times explicitly.")

@@ -21,7 +21,7 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--stream", action="store_true",
                    help="also write stream.csv (every sample: time, wrapped counter, table "
-                        "angle; data-formats.md §2), chunk by chunk")
+                        "angle; docs/formats.md#stream-file), chunk by chunk")
     p.set_defaults(func=run)
 
 

@@ -1,4 +1,4 @@
-"""Stream files: the instrument sampled continuously (data-formats contract v1, section 2).
+"""Stream files: the instrument sampled continuously (``docs/formats.md#stream-file``).
 
 Contents
 ========
@@ -418,7 +418,7 @@ def iter_stream(path: str | Path, chunk_rows: int = 1_000_000, *,
 
 def read_stream(path: str | Path, *, chunk_rows: int = 1_000_000,
                 max_gap_s: float | None = None) -> Stream:
-    """Read, validate and unwrap a stream file (data-formats contract, section 2).
+    """Read, validate and unwrap a stream file (``docs/formats.md#stream-file``).
 
     Parameters
     ----------

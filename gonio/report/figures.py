@@ -13,7 +13,6 @@ Contents
 :func:`draw_rate`      E_i per position for each rate (7.6)
 :func:`draw_pointing`  E_i per position for each axis direction (7.7)
 :func:`draw_budget`    |c_i|·u_i of the Annex A components, u_c and U
-:func:`eda_figure`     equal-division table and goniometer errors, error bars = u (k = 1)
 :func:`figure_svg`     one figure as deterministic SVG text
 :func:`mpl_style`      the rc settings (font, SVG salt, no dates) used for every figure
 =====================  =================================================================
@@ -266,32 +265,6 @@ def draw_budget(fig, spec, report, L, truth=None) -> None:
     ax.set_xlim(0, max(vals) * 1.25 if max(vals) > 0 else 1)
     ax.set_xlabel(L["ax_contribution"])
     ax.grid(axis="y", visible=False)
-
-
-def eda_figure(res) -> Figure:
-    """Table and goniometer errors of an equal-division analysis (IEC 62047-20 Annex A.3),
-    with error bars of one standard uncertainty u (k = 1), said in the legend.
-
-    ``res`` is a :class:`gonio.analysis.equal_division.EdaResult`.
-    """
-    fig = Figure(figsize=(7, 6), layout="constrained")
-    a1, a2 = fig.subplots(2, 1)
-    a1.errorbar(res.table_position_deg, res.table_error_arcsec, yerr=res.table_u_arcsec,
-                fmt="o-", capsize=3, label="table error; error bars: standard uncertainty u "
-                                           "(k = 1)")
-    a1.set(xlabel="table position / °", ylabel="table error / ″",
-           title=f"rotary table (gauge: {res.gauge})")
-    a2.errorbar(res.gonio_angle_deg, res.gonio_error_arcsec, yerr=res.gonio_u_arcsec,
-                fmt="s-", capsize=3, color="C1",
-                label="goniometer error; error bars: standard uncertainty u (k = 1)")
-    a2.set(xlabel="angle turned since zeroing / °", ylabel="goniometer error / ″",
-           title="goniometer")
-    for a in (a1, a2):
-        a.axhline(0, color="0.6", lw=0.8)
-        a.grid(alpha=0.3)
-        a.legend(loc="best", fontsize=7)
-        _plain_axes(a)
-    return fig
 
 
 #: The figures of the certificate in order: (key, caption label key, draw function).

@@ -21,7 +21,7 @@ Each function takes the normalised readings DataFrame of :mod:`gonio.formats.rea
 returns a :class:`Characteristic` (value, unit, clause, measured, reason, detail
 tables, and which input lines it used). A characteristic whose readings are
 absent is *not measured* (value None, with the reason), never invented.
-Clause numbers refer to the draft as restated in ``spec/ogam-draft.md``; where
+Clause numbers refer to the draft as read in ``docs/draft-readings.md``; where
 the draft is ambiguous, the reading taken is a named function or is stated in
 the function's docstring, with the alternative.
 """
@@ -255,7 +255,7 @@ def scale_factor_nonlinearity(sf: Characteristic) -> Characteristic:
 
 def indicated_angle_deg(df: pd.DataFrame,
                         scale_factor_counts_per_deg: float | None) -> np.ndarray:
-    """The instrument's indicated angle M of each row, in degrees (data-formats 1 rules).
+    """The instrument's indicated angle M of each row, in degrees (docs/draft-readings.md#counts-to-angle).
 
     ``gyro_deg`` where the row has it; otherwise ``gyro_counts / K``. The
     caller chooses K: the value calibrated by 7.1 in the same file when there
