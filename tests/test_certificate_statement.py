@@ -475,3 +475,22 @@ def test_budget_kind_beyond_draft_lines_and_no_E(run, monkeypatch):
     res["angle_deviation"].update({"measured": False, "value": None, "reason": "no rows"})
     s = summary_text(res)
     assert "no uncertainty stated" in s and "±" not in s
+
+
+def test_equal_division_errors_rounded_to_their_own_u(run, monkeypatch):
+    cls = type(run["report"])
+    orig = cls.to_dict
+    eda = {"n_starts": 4, "m_points": 2, "repeats": 1, "noise": "white",
+           "table": {"position_deg": [0.0, 180.0], "error_arcsec": [0.00744, -0.31649],
+                     "u_arcsec": [0.022, 0.0049]},
+           "goniometer": {"angle_deg": [180.0, 360.0], "error_arcsec": [1.23456, 0.0],
+                          "u_arcsec": [0.13, 0.0]},
+           "closure": {"full_turn_arcsec": 0.01234, "u_full_turn_arcsec": 0.0456}}
+    monkeypatch.setattr(cls, "to_dict", lambda self: {**orig(self), "equal_division": eda})
+    blocks = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None)["blocks"]
+    i = [k for k, b in enumerate(blocks) if b.kind == "h" and "equal-division" in b.data][0]
+    rows = [b for b in blocks[i:] if b.kind == "table"][0].data[1]
+    assert [str(c) for c in rows[0]] == ["0", "0.007", "0.022", "180", "1.23", "0.13"]
+    assert [str(c) for c in rows[1]][1:3] == ["-0.3165", "0.0049"]
+    closure = [b for b in blocks[i:] if b.kind == "p"][-1].data
+    assert "".join(str(x) for x in closure).endswith("= 0.012″ ± 0.046″")

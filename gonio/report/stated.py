@@ -261,14 +261,16 @@ def method_rows(report, res: dict, L: dict, lab: dict | None, lang: str = "en",
     tilt = md.get("tilt_bound_deg") or (res.get("uncertainty", {}).get("parameters", {}) or {}
                                         ).get("tilt_deg")
     rows.append((L["m_tilt"], L["m_tilt_v"].format(t=tilt) if tilt not in (None, "") else ns))
-    cond = p.conditions or {}
+    cond = p.conditions
+    cget = (cond.get if isinstance(cond, dict)
+            else lambda key, default: getattr(cond, key, default))
     env = (lab or {}).get("environment") or {}
     t_meas = env.get("temperature_c")
     if t_meas is None and md.get("temperature_c"):
         t_meas = md["temperature_c"]
     rows.append((L["m_temp"], L["m_temp_v"].format(
-        t=display("pos", cond.get("temperature_c", 20.0)),
-        tol=display("pos", cond.get("temperature_tolerance_c", 1.0)),
+        t=display("pos", cget("temperature_c", 20.0)),
+        tol=display("pos", cget("temperature_tolerance_c", 1.0)),
         m=f"{t_meas} °C" if t_meas not in (None, "") else ns)))
     return rows
 
