@@ -78,8 +78,8 @@ def run(tmp_path_factory):
     session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=50.0), seed=4)
     write_session(session, d)
     report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
-    write_calibration(report, d)
     lab = cert.load_lab(LAB)
+    write_calibration(report, d, lab=lab)
     cert.write_certificate(report, d / "en", truth=session.truth, lab=lab, dcc=True)
     cert.write_certificate(report, d / "zh", truth=session.truth, lang="zh")
     printed = {lang: chromium_print(d / lang / "certificate.html", d / f"{lang}-print.pdf", d)
@@ -158,6 +158,9 @@ def test_coverage_probability_beside_every_U(run):
     for line in summary.splitlines():
         if re.search(r"\bU = |\d \(k = ", line):
             assert "95 %" in line, line
+    # the laboratory's conformity statements are in summary.txt as on the certificate
+    assert re.search(r"conformity angle_deviation: (pass|conditional pass|conditional fail|fail)"
+                     r" \(limits \[-0\.50, 0\.50\], rule non-binary", summary), summary
 
 
 def test_per_item_uncertainty_is_shown_when_results_carry_it(run):

@@ -62,7 +62,7 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
     from gonio.report.certificate import load_lab, write_certificate
 
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
-    write_calibration(report, out)
+    write_calibration(report, out, lab=lab_d)
     status("writing the certificate")
     write_certificate(report, out, truth=truth, lab=lab_d, lang=lang, dcc=dcc)
     status("")

@@ -263,15 +263,20 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings):
     return out, unused
 
 
-def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:
-    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically."""
+def write_calibration(report: CalibrationReport, out: str | Path,
+                      lab: dict | None = None) -> dict[str, Path]:
+    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
+
+    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
+    to ``summary.txt``, as the certificate and the CLI show them.
+    """
     out = Path(out)
     names = {}
     with output_dir(out) as stage:
         d = report.to_dict()
         write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
                                                       allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", report.summary())
+        write_text(stage / "summary.txt", report.summary(lab))
         tables = stage / "tables"
         for item in report.results.items():
             for tname, df in (getattr(item, "tables", None) or {}).items():

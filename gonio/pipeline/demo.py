@@ -30,7 +30,7 @@ def demo(out: str | Path, seed: int = 0, bench: str = "rlg", protocol: str = "og
     written = list(write_session(session, out).values())
     stage("demo: calibrating")
     report = calibrate(out / "readings.csv", proto, static_record=session.static_record)
-    written += list(write_calibration(report, out).values())
+    written += list(write_calibration(report, out, lab=lab_d).values())
     stage("demo: writing the certificate")
     written += list(write_certificate(report, out, truth=session.truth, lab=lab_d,
                                       lang=lang, dcc=dcc).values())
