@@ -497,3 +497,19 @@ def test_equal_division_errors_rounded_to_their_own_u(run, monkeypatch):
     assert [str(c) for c in rows[1]][1:3] == ["-0.3165", "0.0049"]
     closure = [b for b in blocks[i:] if b.kind == "p"][-1].data
     assert "".join(str(x) for x in closure).endswith("= 0.012″ ± 0.046″")
+
+
+def test_status_line_only_on_a_terminal():
+    import io
+
+    from gonio.progress import status
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+    tty, pipe = Tty(), io.StringIO()
+    status("demo: calibrating", tty)
+    status("demo: calibrating", pipe)
+    status("", tty)
+    assert "demo: calibrating" in tty.getvalue() and tty.getvalue().startswith("\r")
+    assert pipe.getvalue() == ""
