@@ -63,9 +63,18 @@ def run(args) -> int:
 
         writer = StreamWriter(Path(args.out) / "stream.csv", stream_metadata(proto, bench, args.seed),
                               table=True)
+    from gonio.progress import status
+
+    def write_chunk(time_s, *cols):
+        writer.write(time_s, *cols)
+        if len(time_s):
+            status(f"simulate: stream at t = {float(time_s[-1]):.0f} s, {writer.rows} samples")
+
+    status("simulate: running the session")
     try:
         result = run_session(proto, bench, seed=args.seed,
-                             stream=None if writer is None else writer.write)
+                             stream=None if writer is None else write_chunk)
+        status("")
     except BaseException:
         if writer is not None:
             writer.abort()
