@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, read_utf8
 
@@ -221,26 +222,3 @@ def format_triad_readings(data: pd.DataFrame, metadata: dict) -> str:
 def write_triad_readings(path: str | Path, data: pd.DataFrame, metadata: dict) -> Path:
     """Write a triad readings file atomically."""
     return write_text(path, format_triad_readings(data, metadata))
-
-
-def json_safe(obj):
-    """A copy of a JSON-ready structure with NaN/±inf replaced by ``None`` (JSON has no NaN)
-    and numpy scalars turned into Python numbers.
-
-    >>> json_safe({"a": [1.0, float("nan")], "b": np.float64(2.5), "c": np.int64(3)})
-    {'a': [1.0, None], 'b': 2.5, 'c': 3}
-    """
-    if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return json_safe(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        f = float(obj)
-        return f if math.isfinite(f) else None
-    return obj
