@@ -11,7 +11,7 @@ Contents (one module per piece of physics or procedure):
 ``gonio.characteristics``  the seven characteristics of draft clause 7
 ``gonio.tilt``             Annex A.4.2 elliptic projection; rigid-body tilt
 ``gonio.budget``           the Annex A uncertainty budget
-``gonio.noise``            Allan deviation and the gyro noise model
+``gonio.analysis.noise``   Allan deviation and the gyro noise model
 ``gonio.eda``              equal-division averaging, rotary-table comparison
 ``gonio.report``           certificate and figures
 ``gonio.cli``              the ``gonio`` command (thin layer over the above)

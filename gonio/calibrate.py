@@ -76,7 +76,7 @@ class CalibrationReport:
     protocol: Protocol
     source_sha256: str
     repeatability_source: str
-    noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
+    noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
     eda: object | None = None            # gonio.eda.EdaResult of the equal_division rows
 
@@ -192,9 +192,9 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
 
 def analyse_zero_stability(record: StaticRecord | None):
-    """Allan analysis of the 7.3 static record (:func:`gonio.noise.analyse_static`), or why not."""
+    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`), or why not."""
     from gonio.errors import GonioError
-    from gonio.noise import analyse_static
+    from gonio.analysis.noise import analyse_static
 
     if record is None:
         return None, ""

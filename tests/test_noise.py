@@ -1,4 +1,4 @@
-"""Tests of gonio.noise and `gonio noise`, each against something independent:
+"""Tests of gonio.analysis.noise and `gonio noise`, each against something independent:
 allantools (peer library, test-only), closed-form Allan variances of simulated
 noise, χ² coverage, and a second algorithm (direct sums vs the FFT expansion)."""
 
@@ -12,7 +12,7 @@ import allantools.ci
 import numpy as np
 import pytest
 
-from gonio import noise
+from gonio.analysis import noise
 from gonio.cli import main
 from gonio.errors import GonioError
 

@@ -1,6 +1,6 @@
 """``gonio noise``: Allan deviation and noise-model fit of a stream file.
 
-A thin layer over :func:`gonio.noise.analyse_record` (IEEE 952-1997 Annex C). The
+A thin layer over :func:`gonio.analysis.noise.analyse_record` (IEEE 952-1997 Annex C). The
 stream is read with :func:`gonio.streams.read_stream` (data-formats section 2); its
 ``gyro_counts`` column is interpreted according to ``--input``:
 
@@ -56,12 +56,12 @@ def register(subparsers) -> None:
 
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
                  scale_factor: float | None = None, confidence: float = 0.683):
-    """Noise analysis of a stream file; returns a :class:`gonio.noise.StaticNoiseResult`.
+    """Noise analysis of a stream file; returns a :class:`gonio.analysis.noise.StaticNoiseResult`.
 
     ``input_kind`` is ``angle``, ``counts`` or ``rate`` (see the module docstring);
     the Allan deviation is in °/h.
     """
-    from gonio.noise import analyse_record
+    from gonio.analysis.noise import analyse_record
     from gonio.streams import read_stream
 
     if input_kind not in _INPUTS:
@@ -130,7 +130,7 @@ def _table(result) -> str:
 
 def run(args) -> int:
     """Run ``gonio noise``; prints a table or JSON, optionally writes the plot."""
-    from gonio.noise import plot_fit
+    from gonio.analysis.noise import plot_fit
 
     result = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
                           scale_factor=args.scale_factor, confidence=args.confidence)

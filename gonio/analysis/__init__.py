@@ -1,0 +1,1 @@
+"""Analysis of reduced data: noise (Allan family), equal division, tilt estimation."""
