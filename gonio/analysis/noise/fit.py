@@ -253,6 +253,22 @@ def model_adev(tau_s, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------- the fit
+#: Assumed correlation of overlapping estimates one octave apart (covariance method).
+RHO_OCTAVE = 0.6
+
+
+def _correlation_inflation(tau: np.ndarray) -> float:
+    """Variance factor (1+ρ)/(1−ρ) for correlated neighbouring τ estimates (the quick
+    covariance method only): an AR(1) correlation along log₂τ with
+    ρ = RHO_OCTAVE^(Δlog₂τ) (Δ the median spacing; ρ ≈ 0.6 one octave apart — an
+    empirical reading, not a derivation; the bootstrap replaces it)."""
+    if tau.size < 2:
+        return 1.0
+    step = float(np.median(np.diff(np.log2(tau))))
+    rho = RHO_OCTAVE ** max(step, 1e-6)
+    return (1.0 + rho) / (1.0 - rho)
+
+
 def _dominant_alpha(a: np.ndarray, coef: np.ndarray) -> np.ndarray:
     """Noise type α of the largest model term at each τ."""
     return _TERM_ALPHA[np.argmax(a * coef[None, :], axis=1)]
@@ -300,9 +316,9 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
     analysed and refitted the same way; u is the standard deviation of the refitted
     coefficients (it carries the correlation of the estimates across τ and the
     non-negativity bound). Otherwise the weighted LS covariance (AᵀWA)⁻¹ of the
-    active terms scaled by max(1, χ²_red) — which treats the τ as independent and is
-    too small for overlapping estimates (kept as a quick indication;
-    ``uncertainty_method`` says which). Only the ``terms`` named are fitted.
+    active terms scaled by max(1, χ²_red) and by an empirical factor for the
+    correlation of neighbouring τ (:func:`_correlation_inflation`) — a quick
+    indication only (``uncertainty_method`` says which was used). Only the ``terms`` named are fitted.
 
     Examples
     --------
@@ -352,7 +368,8 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
     elif active:
         aw = a_full[:, active] / sd[:, None]
         try:
-            cov = np.linalg.inv(aw.T @ aw) * max(1.0, chi2_red)
+            cov = (np.linalg.inv(aw.T @ aw) * max(1.0, chi2_red)
+                   * _correlation_inflation(tau))
             u_coef = np.sqrt(np.clip(np.diag(cov), 0, None))
             u_vals[active] = u_coef / (2.0 * values[active])
         except np.linalg.LinAlgError:
