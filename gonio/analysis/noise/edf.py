@@ -433,7 +433,9 @@ def noise_id_b1(x: np.ndarray, m: int) -> int | None:
     candidate (1, 0, −1, −2 for α = −2, −1, 0, ≥ 1) whose expected B1
     (:func:`b1_expected`) is nearest in log; boundaries at the geometric means.
     For μ = −2, R(n) = MVAR/AVAR is compared with :func:`rn_expected` for α = 2 and 1
-    (boundary at the geometric mean). None when fewer than 8 averages.
+    (boundary at the geometric mean). None when fewer than 8 averages. The N-sample
+    variance spans the whole record, so with a mixture of noise types B1 leans to
+    the redder one: a disagreement with the lag-1 result flags a mixture at that τ.
 
     >>> rng = np.random.default_rng(1)
     >>> noise_id_b1(np.cumsum(rng.standard_normal(20000)), 8)   # white rate
