@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
@@ -282,12 +283,25 @@ def _wnnls(a: np.ndarray, var: np.ndarray, sd: np.ndarray) -> np.ndarray:
     return p / cs
 
 
+@lru_cache(maxsize=512)
+def _edf_cached(kind: str, n_phase: int, m: tuple, alpha: tuple) -> np.ndarray:
+    """:func:`edf_for`, memoised (the bootstrap refits at the same m many times)."""
+    out = edf_for(kind, n_phase, np.array(m), np.array(alpha))
+    out.setflags(write=False)
+    return out
+
+
+def _edf(kind, n_phase, m, alpha):
+    return _edf_cached(kind, int(n_phase), tuple(int(v) for v in m),
+                       tuple(int(v) for v in alpha))
+
+
 def _fit_core(kind, tau, var, m, n_phase, tau0, cols, iterations):
     """IRLS non-negative fit; returns (coef[5], model variance, edf)."""
     a_full = design_matrix(tau, kind, tau0)
     a = a_full[:, cols]
     model = var.copy()
-    edf = edf_for(kind, n_phase, m, np.zeros(m.size, dtype=np.int64))
+    edf = _edf(kind, n_phase, m, np.zeros(m.size, dtype=np.int64))
     coef = np.zeros(5)
     for _ in range(max(1, iterations)):
         sd = np.maximum(model, np.finfo(float).tiny) * np.sqrt(2.0 / edf)
@@ -295,7 +309,7 @@ def _fit_core(kind, tau, var, m, n_phase, tau0, cols, iterations):
         coef = np.zeros(5)
         coef[cols] = p
         model = np.maximum(a_full @ coef, np.finfo(float).tiny)
-        edf = edf_for(kind, n_phase, m, _dominant_alpha(a_full, coef))
+        edf = _edf(kind, n_phase, m, _dominant_alpha(a_full, coef))
     return coef, model, edf
 
 
