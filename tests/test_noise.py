@@ -220,13 +220,11 @@ def test_analyse_static_recovers_arw_in_customary_units():
 
 def test_unit_conversions_round_trip_and_first_principles():
     x = 0.0123
-    assert units.arw_dph_sqrt_hz_to_deg_sqrt_h(units.arw_deg_sqrt_h_to_dph_sqrt_hz(x)) == pytest.approx(x)
+    assert units.deg_sqrt_h_from_dph_sqrt_hz(units.dph_sqrt_hz_from_deg_sqrt_h(x)) == pytest.approx(x)
     # 1 °/√h expressed from first principles: (π/180 rad) / sqrt(3600 s)
-    assert units.arw_deg_sqrt_h_to_rad_s_sqrt_hz(1.0) == pytest.approx(math.radians(1) / 60.0)
-    assert units.arw_deg_sqrt_h_to_arcsec_sqrt_s(1.0) == pytest.approx(3600.0 / math.sqrt(3600.0))
-    assert units.rad_s_to_dph(units.dph_to_rad_s(x)) == pytest.approx(x)
-    assert units.arw_arcsec_sqrt_s_to_deg_sqrt_h(units.arw_deg_sqrt_h_to_arcsec_sqrt_s(x)) == pytest.approx(x)
-    assert units.arw_rad_s_sqrt_hz_to_deg_sqrt_h(units.arw_deg_sqrt_h_to_rad_s_sqrt_hz(x)) == pytest.approx(x)
+    assert units.rad_s_sqrt_hz_from_deg_sqrt_h(1.0) == pytest.approx(math.radians(1) / 60.0)
+    assert units.arcsec_sqrt_s_from_deg_sqrt_h(1.0) == pytest.approx(3600.0 / math.sqrt(3600.0))
+    assert units.dph_from_rad_s(units.rad_s_from_dph(x)) == pytest.approx(x)
 
 
 # ------------------------------------------------------------------ validation

@@ -1,8 +1,9 @@
 """``gonio noise``: Allan-family deviation and noise-model fit of a stream's static part.
 
 A thin layer over :func:`stream_noise` (IEEE 952-1997 Annex C; NIST SP 1065). The
-stream is read with :func:`gonio.streams.read_stream`; its metadata with the readers'
-public :func:`gonio.io.metadata_float`. The ``gyro_counts`` column is interpreted
+stream is read with :func:`gonio.formats.streams.read_stream`
+(``docs/formats.md#stream-file``); its metadata with the readers' public
+:func:`gonio.formats.metadata.metadata_float`. The ``gyro_counts`` column is interpreted
 according to ``--input``:
 
 * ``angle`` (default): the cumulative pulse counter (unwrapped), i.e. the integrated
@@ -83,8 +84,8 @@ def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bo
     without a usable scale factor, non-uniform sampling, or a window with motion.
     """
     from gonio.analysis.noise import analyse_record, static_windows
-    from gonio.io import metadata_float
-    from gonio.streams import read_stream, sniff_kind
+    from gonio.formats.metadata import metadata_float
+    from gonio.formats.streams import read_stream, sniff_kind
 
     if input_kind not in _INPUTS:
         raise GonioError(f"--input must be one of {', '.join(sorted(_INPUTS))}", key="input")

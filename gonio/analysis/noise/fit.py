@@ -55,7 +55,7 @@ from gonio.analysis.noise.allan import AllanResult, allan_deviation
 from gonio.analysis.noise.edf import edf_for
 from gonio.errors import GonioError
 from gonio.units import (
-    arw_dph_sqrt_hz_to_deg_sqrt_h, ramp_dph_per_s_to_dph_per_h, rrw_dph_sqrt_s_to_dph_sqrt_h,
+    S_PER_H, deg_sqrt_h_from_dph_sqrt_hz, dph_per_sqrt_h_from_dph_sqrt_hz_per_s,
 )
 
 __all__ = [
@@ -81,9 +81,9 @@ HVAR_FLICKER_COEFF = (24.0 * math.log(2.0) - 9.0 * math.log(3.0)) / (6.0 * math.
 MVAR_RRW_COEFF = 11.0 / 40.0
 #: HVAR of rate random walk per K²τ: 1/6 ((8/3)π·∫ sin⁶u/u⁴ du = π²/3, h = K²/2π²).
 HVAR_RRW_COEFF = 1.0 / 6.0
-#: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7).
+#: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7; [Vagner2015], docs/references.md#vagner2015).
 SINE_TAU_PER_PERIOD = 0.371
-#: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7).
+#: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7; [Vagner2015], docs/references.md#vagner2015).
 SINE_PEAK_PER_AMPLITUDE = 0.725
 
 #: Noise type of each term (for the edf of model-based weights).
@@ -154,14 +154,15 @@ class NoiseFit:
         if self.rate_unit == "deg/h":
             out.update({
                 "quantisation_arcsec": self.Q,  # 1 (°/h)·s = 1″
-                "arw_deg_sqrt_h": arw_dph_sqrt_hz_to_deg_sqrt_h(self.N),
-                "u_arw_deg_sqrt_h": arw_dph_sqrt_hz_to_deg_sqrt_h(self.u_N),
+                "arw_deg_sqrt_h": deg_sqrt_h_from_dph_sqrt_hz(self.N),
+                "u_arw_deg_sqrt_h": deg_sqrt_h_from_dph_sqrt_hz(self.u_N),
                 "bias_instability_dph": self.B, "u_bias_instability_dph": self.u_B,
                 "bias_instability_floor_dph": self.B_floor,
-                "rrw_dph_sqrt_h": rrw_dph_sqrt_s_to_dph_sqrt_h(self.K),
-                "u_rrw_dph_sqrt_h": rrw_dph_sqrt_s_to_dph_sqrt_h(self.u_K),
-                "rate_ramp_dph_per_h": ramp_dph_per_s_to_dph_per_h(self.R),
-                "u_rate_ramp_dph_per_h": ramp_dph_per_s_to_dph_per_h(self.u_R)})
+                "rrw_dph_sqrt_h": dph_per_sqrt_h_from_dph_sqrt_hz_per_s(self.K),
+                "u_rrw_dph_sqrt_h": dph_per_sqrt_h_from_dph_sqrt_hz_per_s(self.u_K),
+                # (°/h)/s × 3600 s/h = (°/h)/h
+                "rate_ramp_dph_per_h": self.R * S_PER_H,
+                "u_rate_ramp_dph_per_h": self.u_R * S_PER_H})
         return {k: (None if isinstance(v, (float, np.floating)) and not np.isfinite(v)
                     else float(v) if isinstance(v, (float, np.floating)) else v)
                 for k, v in out.items()}

@@ -136,7 +136,7 @@ def analyse_static(time_s, angle_deg, *, taus="octave", modified: bool = False,
     >>> rng = np.random.default_rng(1)
     >>> t = np.arange(20000) * 0.1
     >>> rate_dph = 0.05 * rng.standard_normal(t.size) / np.sqrt(0.1)  # N = 0.05 (°/h)√s
-    >>> angle = np.cumsum(rate_dph) * 0.1 / 3600.0
+    >>> angle = np.cumsum(rate_dph) * 0.1 / S_PER_H
     >>> r = analyse_static(t, angle)
     >>> r.allan.unit, bool(abs(r.fit.N - 0.05) < 0.005)
     ('deg/h', True)
