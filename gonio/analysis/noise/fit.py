@@ -500,7 +500,8 @@ def detect_sinusoid(allan: AllanResult, fit: NoiseFit | None = None, *,
     A sinusoidal rate disturbance of amplitude Ω and period T adds
     ``Ω² sin⁴(πτ/T)/(πτ/T)²`` to the Allan variance (peak σ ≈ 0.725 Ω at
     τ ≈ 0.371 T). Candidates are local maxima of σ_obs/σ_model whose excess variance
-    exceeds ``threshold`` standard deviations of σ̂² (sd from the edf). The candidate
+    exceeds ``threshold`` standard deviations of σ̂² (sd from the Greenhall edf at
+    the noise type of the model's dominant term: the null hypothesis). The candidate
     is refined: for trial periods around τ_peak/0.371, the model's columns plus the
     sinusoid's are fitted by weighted NNLS and the T with the smallest weighted
     residual is kept; Ω follows from its coefficient. Overlapping/total ADEV only
@@ -523,7 +524,13 @@ def detect_sinusoid(allan: AllanResult, fit: NoiseFit | None = None, *,
     sel = np.isfinite(allan.adev) & (allan.adev > 0)
     tau = np.asarray(allan.tau_s[sel], dtype=np.float64)
     dev = np.asarray(allan.adev[sel], dtype=np.float64)
-    edf = np.asarray(allan.edf[sel], dtype=np.float64)
+    # under the null hypothesis (the noise model alone) the edf is the model's: noise
+    # type of its dominant term at each τ (not the identification, which a sinusoid
+    # itself disturbs)
+    n_phase = allan.n_phase or (allan.n_samples + (0 if allan.input_type == "angle" else 1))
+    edf = _edf(allan.kind, n_phase, np.asarray(allan.m[sel]),
+               _dominant_alpha(design_matrix(tau, allan.kind, allan.tau0_s),
+                               fit.coefficients()))
     model = np.maximum(fit.adev(tau), np.finfo(float).tiny)
     sd = np.maximum(model, dev) ** 2 * np.sqrt(2.0 / edf)
     excess = (dev ** 2 - model ** 2) / sd
