@@ -56,9 +56,9 @@ def register(subparsers) -> None:
                    help="analyse this interval (s) only; refused if the table moves in it")
     p.add_argument("--each-window", action="store_true",
                    help="analyse every rest found, not only the longest")
-    p.add_argument("--bootstrap", type=int, default=40, metavar="B",
+    p.add_argument("--bootstrap", type=int, default=20, metavar="B",
                    help="parameter uncertainties by a parametric bootstrap of B records "
-                        "(default 40; 0: least-squares covariance, a quick indication)")
+                        "(default 20; 0: least-squares covariance, a quick indication)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap")
     p.add_argument("--scale-factor", type=float, default=None, metavar="K",
                    help="counts per degree (default: metadata "
@@ -74,7 +74,7 @@ def register(subparsers) -> None:
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
                  kind: str | None = None, scale_factor: float | None = None,
                  confidence: float = 0.683, window=None, each_window: bool = False,
-                 bootstrap: int = 40, seed: int = 0) -> list:
+                 bootstrap: int = 20, seed: int = 0) -> list:
     """Noise analysis of the static part of a stream file.
 
     Returns a list of :class:`gonio.analysis.noise.StaticNoiseResult` — one (the

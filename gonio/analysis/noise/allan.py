@@ -85,7 +85,7 @@ _COEF = {"adev": (1.0, -2.0, 1.0), "hdev": (-1.0, 3.0, -3.0, 1.0),
 _NORM = {"adev": 2.0, "mdev": 2.0, "hdev": 6.0, "totdev": 2.0}
 
 _BLOCK = 1 << 16  # samples per chunk of the direct O(N) sums (keeps temporaries small)
-_BLOCK_SHARED = 1 << 13  # chunk of the chunk-outside loop (:func:`_sums_direct_shared`)
+_BLOCK_SHARED = 1 << 16  # chunk of the chunk-outside loop (:func:`_sums_direct_shared`)
 #: Most decimated points the noise identification looks at (a central sub-record).
 ID_MAX_POINTS = 1 << 16
 

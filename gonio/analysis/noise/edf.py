@@ -442,11 +442,12 @@ def noise_id_b1(x: np.ndarray, m: int) -> int | None:
     0
     """
     x = np.asarray(x, dtype=np.float64)
-    y = np.diff(x)
-    nav = y.size // int(m)
+    m = int(m)
+    xd = x[::m]
+    nav = xd.size - 1
     if nav < 8:
         return None
-    ybar = y[: nav * m].reshape(nav, m).mean(axis=1)
+    ybar = np.diff(xd) / m  # the rate averaged over each cluster of m samples
     avar = 0.5 * float(np.mean(np.diff(ybar) ** 2))
     if avar <= 0:
         return None

@@ -84,7 +84,7 @@ def analyse_record(data, tau0_s: float, input_type: str, *, scale: float = 1.0,
                    unit: str = "", taus="octave", modified: bool = False,
                    kind: str | None = None, confidence: float = 0.683,
                    tau_max_s: float | None = None, sinusoid_threshold: float = 3.0,
-                   bootstrap: int = 40, seed: int = 0) -> StaticNoiseResult:
+                   bootstrap: int = 20, seed: int = 0) -> StaticNoiseResult:
     """Deviation (:func:`allan_deviation`, ``kind`` adev/mdev/hdev/totdev), the
     five-term fit with that variance's own model (:func:`fit_noise_model`, optional
     parametric ``bootstrap`` of the uncertainties) and the sinusoid check
@@ -122,7 +122,7 @@ def _uniform_tau0(t: np.ndarray, key: str = "time_s", file=None) -> float:
 def analyse_static(time_s, angle_deg, *, taus="octave", modified: bool = False,
                    kind: str | None = None, confidence: float = 0.683,
                    tau_max_s: float | None = None, sinusoid_threshold: float = 3.0,
-                   bootstrap: int = 40, seed: int = 0) -> StaticNoiseResult:
+                   bootstrap: int = 20, seed: int = 0) -> StaticNoiseResult:
     """Noise analysis of a static (zero-stability) record, draft 7.3.
 
     The angle record (degrees, uniformly sampled, instrument at rest) is analysed as
