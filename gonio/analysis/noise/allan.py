@@ -61,7 +61,7 @@ import pandas as pd
 from scipy import fft as sfft
 
 from gonio.analysis.noise.edf import (
-    chi2_interval, edf_for, noise_id_b1, noise_id_lag1,
+    chi2_interval, edf_for, noise_id_b1, noise_id_lag1, remove_quadratic,
 )
 from gonio.errors import GonioError
 
@@ -480,7 +480,7 @@ def _wedge_corr(z: np.ndarray, m_max: int, s: int, c: int) -> np.ndarray:
         width *= 2
     out = np.zeros(width)
     w = width
-    budget = max(1 << 14, z.size // 8)  # elements of temporaries per batch
+    budget = max(1 << 13, z.size // 32)  # elements of temporaries per batch
     while w > 8:
         h = w // 2
         nb = (m_max - h) // w + 1 if m_max >= h else 0  # blocks whose upper half matters
@@ -492,12 +492,18 @@ def _wedge_corr(z: np.ndarray, m_max: int, s: int, c: int) -> np.ndarray:
         per = max(1, budget // nf)
         for b0 in range(0, nb, per):
             m0 = np.arange(b0, min(nb, b0 + per)) * w
-            u = _gather(z, (s * m0)[:, None] + np.arange(lu)[None, :])
-            uspec = sfft.rfft(u, nf, axis=1)
-            del u
-            v = _gather(z, (s * m0 + c * (m0 + h))[:, None] + np.arange(lv)[None, :])
-            spec = sfft.rfft(v, nf, axis=1)
-            del v
+            if m0.size == 1:  # one large block: slices of z (views), no index arrays
+                a0 = int(s * m0[0])
+                uspec = sfft.rfft(z[a0: a0 + lu][None, :], nf, axis=1)
+                b0v = int(s * m0[0] + c * (m0[0] + h))
+                spec = sfft.rfft(z[b0v: b0v + lv][None, :], nf, axis=1)
+            else:
+                u = _gather(z, (s * m0)[:, None] + np.arange(lu)[None, :])
+                uspec = sfft.rfft(u, nf, axis=1)
+                del u
+                v = _gather(z, (s * m0 + c * (m0 + h))[:, None] + np.arange(lv)[None, :])
+                spec = sfft.rfft(v, nf, axis=1)
+                del v
             spec *= np.conj(uspec, out=uspec)
             del uspec
             corr = sfft.irfft(spec, nf, axis=1)
@@ -518,19 +524,18 @@ def _wedge_corr(z: np.ndarray, m_max: int, s: int, c: int) -> np.ndarray:
     return out[: m_max + 1]
 
 
-def _autocorr_lags(z: np.ndarray, lags_list) -> list[np.ndarray]:
-    """A[k] = Σ_n z[n] z[n+k] at each array of lags in ``lags_list``.
+def _autocorr_accumulate(z: np.ndarray, m: np.ndarray, weight: dict, out: np.ndarray) -> None:
+    """out += Σ_k weight[k]·A[k·m], with A[j] = Σ_n z[n] z[n+j] the autocorrelation.
 
-    Computed block-pair by block-pair (8 blocks: 36 FFTs of a quarter of the record)
-    so that no temporary exceeds a fraction of the input; only the lags asked for
-    are kept.
+    A is computed block-pair by block-pair (16 blocks: 136 FFTs of an eighth of the
+    record); each pair's lags are added straight into ``out`` at the m (ascending)
+    they serve, so neither A nor any temporary exceeds a fraction of the input.
     """
     n = z.size
-    kmax = max(int(l.max()) for l in lags_list)
-    nblk = 8 if n >= 1 << 12 else 1
+    kmax = max(weight) * int(m[-1])
+    nblk = 16 if n >= 1 << 14 else 1
     bsz = -(-n // nblk)
     nf = sfft.next_fast_len(2 * bsz, real=True)
-    full = np.zeros(kmax + 1)
     for p in range(nblk):
         u = z[p * bsz: (p + 1) * bsz]
         if u.size == 0:
@@ -539,22 +544,29 @@ def _autocorr_lags(z: np.ndarray, lags_list) -> list[np.ndarray]:
         np.conj(uspec, out=uspec)
         for q in range(p, nblk):
             v = z[q * bsz: (q + 1) * bsz]
-            if v.size == 0 or (q - p) * bsz - (bsz - 1) > kmax:
+            base = (q - p) * bsz
+            if v.size == 0 or base - (bsz - 1) > kmax:
                 continue
             spec = sfft.rfft(v, nf)
             spec *= uspec
             cc = sfft.irfft(spec, nf)  # cc[t mod nf] = Σ_i u_i v_{i+t}
             del spec
-            base = (q - p) * bsz
-            t = np.arange(-(u.size - 1), v.size)
-            k = base + t
-            keep = (k >= 0) & (k <= kmax)
-            if q == p:
-                keep &= t >= 0
-            full[k[keep]] += cc[t[keep] % nf]
+            lag0 = max(0, base - (u.size - 1)) if q > p else 0  # lags this pair covers
+            lag1 = min(base + v.size - 1, kmax)
+            for k, w in weight.items():
+                i0 = int(np.searchsorted(m, -(-lag0 // k)))
+                i1 = int(np.searchsorted(m, lag1 // k, side="right"))
+                if i1 > i0:
+                    out[i0:i1] += w * cc[(k * m[i0:i1] - base) % nf]
             del cc
         del uspec
-    return [full[l] for l in lags_list]
+
+
+def _subtract_at(s: np.ndarray, c: float, w: np.ndarray, m: np.ndarray) -> None:
+    """s −= c·w[m], in chunks."""
+    step = 1 << 16
+    for a in range(0, m.size, step):
+        s[a: a + step] -= c * w[m[a: a + step]]
 
 
 def _expanded_sums(kind: str, x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
@@ -581,38 +593,39 @@ def _expanded_sums(kind: str, x: np.ndarray, ms: np.ndarray, rtol: float) -> np.
         np.subtract(x, x.mean(), out=z[1:])
         np.cumsum(z[1:], out=z[1:])
         # the third difference cancels a quadratic of z: remove the least-squares one
-        t = np.linspace(-1.0, 1.0, z.size)
-        z -= np.polyval(np.polyfit(t, z, 2), t)
-        del t
+        remove_quadratic(z)
     else:
         z = x
     n = z.size
     m = ms
-    length = n - p_last * m
     q = np.empty(n + 1)
     q[0] = 0.0
-    np.cumsum(np.square(z), out=q[1:])
+    np.square(z, out=q[1:])
+    np.cumsum(q[1:], out=q[1:])
     s = np.zeros(m.size)
-    for p in range(p_last + 1):
-        s += coef[p] ** 2 * (q[p * m + length] - q[p * m])
+    step = 1 << 16
+    for a in range(0, m.size, step):
+        mm = m[a: a + step]
+        length = n - p_last * mm
+        for p in range(p_last + 1):
+            s[a: a + step] += coef[p] ** 2 * (q[p * mm + length] - q[p * mm])
     err = 8.0 * np.finfo(float).eps * math.log2(max(n, 2)) * q[n] * sum(map(abs, coef)) ** 2
     del q
     pairs = [(p, qq) for p in range(p_last + 1) for qq in range(p + 1, p_last + 1)]
-    lag_mult = sorted({qq - p for p, qq in pairs})
-    auto = dict(zip(lag_mult, _autocorr_lags(z, [k * m for k in lag_mult])))
+    weight: dict[int, float] = {}
     for p, qq in pairs:
-        s += 2 * coef[p] * coef[qq] * auto[qq - p]
-    del auto
+        weight[qq - p] = weight.get(qq - p, 0.0) + 2 * coef[p] * coef[qq]
+    _autocorr_accumulate(z, m, weight, s)
     m_max = int(m[-1])
     zr = z[::-1]
     for p, qq in pairs:
         k = qq - p
         cc = 2 * coef[p] * coef[qq]
         if p > 0:   # head: Σ_{n < p·m} z[n] z[n + k·m]
-            s -= cc * _wedge_corr(z, m_max, p, k)[m]
+            _subtract_at(s, cc, _wedge_corr(z, m_max, p, k), m)
         tail = p_last - qq
         if tail > 0:  # tail: the last tail·m values of n, = a head of z reversed
-            s -= cc * _wedge_corr(zr, m_max, tail, k)[m]
+            _subtract_at(s, cc, _wedge_corr(zr, m_max, tail, k), m)
     redo = np.flatnonzero(~(s > err / rtol))
     if redo.size:
         s[redo] = _direct_sums(kind, x, m[redo])
@@ -663,8 +676,15 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
             a_b1[i] = b
     if probe is ms:
         return a_lag, a_b1
-    pos = np.clip(np.rint(np.log2(ms)).astype(np.int64), 0, probe.size - 1)
-    return a_lag[pos].astype(np.int8), a_b1[pos].astype(np.float32)
+    out_a = np.empty(ms.size, dtype=np.int8)
+    out_b = np.empty(ms.size, dtype=np.float32)
+    step = 1 << 14
+    for c0 in range(0, ms.size, step):  # nearest octave in log τ, in chunks
+        pos = np.clip(np.rint(np.log2(ms[c0: c0 + step])).astype(np.int64), 0,
+                      probe.size - 1)
+        out_a[c0: c0 + step] = a_lag[pos]
+        out_b[c0: c0 + step] = a_b1[pos]
+    return out_a, out_b
 
 
 def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
@@ -774,37 +794,45 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
         if kind != "totdev":
             n_terms = n - p_last * ms + (1 if kind == "mdev" else 0)
         n_eff = None
-    tau = ms * tau0_s
-    mf = ms.astype(np.float64)
-    den = _NORM[kind] * tau ** 2 * n_terms
-    if kind == "mdev":
-        den *= mf ** 2
-    var = sums / den
-    del sums, den
-    np.maximum(var, 0.0, out=var)
-    var *= factor ** 2
     if alpha is None:
         alpha_arr, alpha_b1 = _identify(kind, x, bad, angle, ms, all_requested)
     else:
         alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=np.int64), ms.shape).copy()
         alpha_b1 = np.full(ms.size, np.nan)
     del x, bad
-    if n_eff is None:
-        edf = edf_for(kind, n, ms, alpha_arr)
-    else:
-        edf = np.array([edf_for(kind, int(ne), [mm], [a])[0]
-                        for ne, mm, a in zip(n_eff, ms, alpha_arr)])
-    lo, hi = chi2_interval(var, edf, float(confidence))
     compact = all_requested and ms.size > 64
-    dev = np.sqrt(var, out=var)
-    if compact:
+    n_terms = np.asarray(n_terms)
+    if compact:  # the per-τ arrays of a large result are stored compactly (see AllanResult)
         ms = ms.astype(np.int32)
-        n_terms = np.asarray(n_terms).astype(np.int32)
-        edf = edf.astype(np.float32)
-        lo = np.sqrt(lo, out=lo).astype(np.float32)
-        hi = np.sqrt(hi, out=hi).astype(np.float32)
-    else:
-        lo, hi = np.sqrt(lo), np.sqrt(hi)
+        n_terms = n_terms.astype(np.int32)
+    ftype = np.float32 if compact else np.float64
+    nt = ms.size
+    tau = ms * tau0_s
+    dev = sums  # overwritten chunk by chunk with the deviation
+    edf = np.empty(nt, dtype=ftype)
+    lo = np.empty(nt, dtype=ftype)
+    hi = np.empty(nt, dtype=ftype)
+    step = 1 << 14  # τ per chunk: bounded temporaries for "all"
+    for c0 in range(0, nt, step):
+        sl = slice(c0, c0 + step)
+        mf = ms[sl].astype(np.float64)
+        den = _NORM[kind] * tau[sl] ** 2 * n_terms[sl]
+        if kind == "mdev":
+            den *= mf ** 2
+        var = dev[sl] / den
+        np.maximum(var, 0.0, out=var)
+        var *= factor ** 2
+        if n_eff is None:
+            e = edf_for(kind, n, ms[sl], alpha_arr[sl])
+        else:
+            e = np.array([edf_for(kind, int(ne), [mm], [a])[0]
+                          for ne, mm, a in zip(n_eff[sl], ms[sl], alpha_arr[sl])])
+        lo_c, hi_c = chi2_interval(var, e, float(confidence))
+        edf[sl] = e
+        lo[sl] = np.sqrt(lo_c)
+        hi[sl] = np.sqrt(hi_c)
+        dev[sl] = np.sqrt(var)
+        del var, e, lo_c, hi_c, den, mf
     return AllanResult(tau_s=tau, adev=dev, m=ms, n_pairs=np.asarray(n_terms), edf=edf,
                        alpha=alpha_arr, ci_low=lo, ci_high=hi,
                        input_type=input_type, method=KIND_METHODS[kind],

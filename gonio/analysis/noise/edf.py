@@ -105,8 +105,21 @@ def _sz(t, f, alpha: int, d: int):
 
 def _basic_sum(j_lim, m_terms, s, f, alpha, d):
     """[GR2003] eq. (10), vectorised over the estimator arrays (all 1-D, same shape):
-    sz(0)² + (1 − J/M) sz(J/S)² + 2 Σ_{j=1}^{J−1} (1 − j/M) sz(j/S)²."""
-    j_lim = np.asarray(j_lim, dtype=np.float64)
+    sz(0)² + (1 − J/M) sz(J/S)² + 2 Σ_{j=1}^{J−1} (1 − j/M) sz(j/S)²; rows are
+    processed 128 at a time (bounded temporaries)."""
+    j_lim = np.atleast_1d(np.asarray(j_lim, dtype=np.float64))
+    rows = 128
+    if j_lim.size > rows:
+        m_terms = np.broadcast_to(np.asarray(m_terms, dtype=np.float64), j_lim.shape)
+        s = np.broadcast_to(np.asarray(s, dtype=np.float64), j_lim.shape)
+        fb = None if f is None else np.broadcast_to(np.asarray(f, dtype=np.float64),
+                                                      j_lim.shape)
+        out = np.empty(j_lim.size)
+        for a in range(0, j_lim.size, rows):
+            sl = slice(a, a + rows)
+            out[sl] = _basic_sum(j_lim[sl], m_terms[sl], s[sl],
+                                 None if fb is None else fb[sl], alpha, d)
+        return out
     m_terms = np.asarray(m_terms, dtype=np.float64)
     s = np.asarray(s, dtype=np.float64)
     fcol = None if f is None else np.asarray(f, dtype=np.float64)[:, None]
@@ -354,8 +367,34 @@ def _lag1(z: np.ndarray) -> float:
 
 
 def _detrend(z: np.ndarray, deg: int) -> np.ndarray:
-    t = np.linspace(-1.0, 1.0, z.size)
-    return z - np.polyval(np.polyfit(t, z, deg), t)
+    """z minus its least-squares quadratic (deg 2; the only degree used)."""
+    assert deg == 2
+    out = np.array(z, dtype=np.float64, copy=True)
+    remove_quadratic(out)
+    return out
+
+
+def remove_quadratic(z: np.ndarray) -> None:
+    """Subtract from z (in place) its least-squares quadratic in t ∈ [−1, 1], from the
+    moments Σ t^k z and Σ t^k (k ≤ 4) accumulated in chunks (no N×3 design matrix)."""
+    n = z.size
+    if n < 3:
+        return
+    step = 1 << 16
+    mom = np.zeros(3)
+    gram = np.zeros((3, 3))
+    for a in range(0, n, step):
+        t = np.linspace(-1.0, 1.0, n)[a: a + step] if n <= step else \
+            -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
+        tk = [np.ones_like(t), t, t * t]
+        for i in range(3):
+            mom[i] += float(np.einsum("i,i->", tk[i], z[a: a + step]))
+            for j in range(3):
+                gram[i, j] += float(np.einsum("i,i->", tk[i], tk[j]))
+    c = np.linalg.solve(gram, mom)
+    for a in range(0, n, step):
+        t = -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
+        z[a: a + step] -= c[0] + t * (c[1] + t * c[2])
 
 
 def noise_id_lag1(x: np.ndarray, m: int, *, d_max: int = 2) -> tuple[int, float] | None:
