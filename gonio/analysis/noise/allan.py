@@ -464,6 +464,30 @@ def _gather(z: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return out
 
 
+def _rect_tiled(z: np.ndarray, out: np.ndarray, n_lo: int, n_len: int, m_lo: int,
+                m_len: int, c: int) -> None:
+    """out[m] += Σ_{n ∈ [n_lo, n_lo + n_len)} z[n]·z[n + c·m] for m ∈ [m_lo, m_lo + m_len)
+    (terms beyond the end of z are 0), as cross-correlations of tiles of n and m of
+    at most max(2¹⁴, N/16) each."""
+    tile = max(1 << 14, z.size // 16)
+    for n_a in range(n_lo, min(n_lo + n_len, z.size), tile):
+        u = z[n_a: min(n_lo + n_len, n_a + tile)]
+        for m_a in range(m_lo, m_lo + m_len, tile):
+            mn = min(m_lo + m_len, m_a + tile) - m_a
+            v0 = n_a + c * m_a
+            if v0 >= z.size:
+                break
+            lv = u.size + c * (mn - 1)
+            v = z[v0: v0 + lv]
+            nf = sfft.next_fast_len(lv + 1, real=True)
+            spec = sfft.rfft(v, nf)
+            spec *= np.conj(sfft.rfft(u, nf))
+            corr = sfft.irfft(spec, nf)
+            del spec
+            out[m_a: m_a + mn] += corr[c * np.arange(mn)]
+            del corr
+
+
 def _wedge_corr(z: np.ndarray, m_max: int, s: int, c: int) -> np.ndarray:
     """W[m] = Σ_{n < s·m} z[n]·z[n + c·m] for m = 0 … m_max (terms beyond the end
     of z are 0), in O(M log² M).
@@ -492,11 +516,10 @@ def _wedge_corr(z: np.ndarray, m_max: int, s: int, c: int) -> np.ndarray:
         per = max(1, budget // nf)
         for b0 in range(0, nb, per):
             m0 = np.arange(b0, min(nb, b0 + per)) * w
-            if m0.size == 1:  # one large block: slices of z (views), no index arrays
-                a0 = int(s * m0[0])
-                uspec = sfft.rfft(z[a0: a0 + lu][None, :], nf, axis=1)
-                b0v = int(s * m0[0] + c * (m0[0] + h))
-                spec = sfft.rfft(z[b0v: b0v + lv][None, :], nf, axis=1)
+            if m0.size == 1:  # one large block: in tiles (bounded temporaries)
+                mb = int(m0[0])
+                _rect_tiled(z, out, s * mb, lu, mb + h, min(h, m_max + 1 - mb - h), c)
+                continue
             else:
                 u = _gather(z, (s * m0)[:, None] + np.arange(lu)[None, :])
                 uspec = sfft.rfft(u, nf, axis=1)
@@ -569,7 +592,7 @@ def _subtract_at(s: np.ndarray, c: float, w: np.ndarray, m: np.ndarray) -> None:
         s[a: a + step] -= c * w[m[a: a + step]]
 
 
-def _expanded_sums(kind: str, x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
+def _expanded_sums(kind: str, x, ms: np.ndarray, rtol: float) -> np.ndarray:
     """Σ of squared terms for every m in ``ms`` (ascending) by the correlation
     expansion, O(N log² N) in all (our derivation, checked in the tests against the
     direct sums and allantools).
@@ -583,14 +606,21 @@ def _expanded_sums(kind: str, x: np.ndarray, ms: np.ndarray, rtol: float) -> np.
     each m whose estimated rounding error (8·ε·log₂N·Σz²·(Σ|c|)², about 4× the error
     measured on white and random-walk records) exceeds
     ``rtol``·sum is recomputed directly (the small m and the few terms near the end).
+
+    ``x`` is the phase, or (mdev) a callable that rebuilds it: then x is dropped while
+    z is in use and rebuilt for the direct recomputations (memory: one of the two
+    at a time).
     """
     coef = _COEF[kind]
     p_last = len(coef) - 1
+    remake = x if callable(x) else None
     if kind == "mdev":
         # z = cumsum of x
-        z = np.empty(x.size + 1)
+        xx = remake() if remake is not None else x
+        z = np.empty(xx.size + 1)
         z[0] = 0.0
-        np.subtract(x, x.mean(), out=z[1:])
+        np.subtract(xx, xx.mean(), out=z[1:])
+        del xx
         np.cumsum(z[1:], out=z[1:])
         # the third difference cancels a quadratic of z: remove the least-squares one
         remove_quadratic(z)
@@ -626,9 +656,10 @@ def _expanded_sums(kind: str, x: np.ndarray, ms: np.ndarray, rtol: float) -> np.
         tail = p_last - qq
         if tail > 0:  # tail: the last tail·m values of n, = a head of z reversed
             _subtract_at(s, cc, _wedge_corr(zr, m_max, tail, k), m)
+    del z, zr
     redo = np.flatnonzero(~(s > err / rtol))
     if redo.size:
-        s[redo] = _direct_sums(kind, x, m[redo])
+        s[redo] = _direct_sums(kind, remake() if remake is not None else x, m[redo])
     return s
 
 
@@ -785,6 +816,15 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
                                  key="taus")
             sums = _totdev_sums(x, ms)
             n_terms = np.full(ms.size, n - 2, dtype=np.int64)
+        elif all_requested and ms.size > 64 and kind == "mdev":
+            # the phase is dropped while its cumulative sum is in use, then rebuilt
+            def remake():
+                return _phase(_as_array(data), "increment" if input_type == "rate"
+                              else input_type, tau0_s, 1.0 if input_type == "rate"
+                              else scale)[0]
+            del x
+            sums = _expanded_sums(kind, remake, ms, rtol_all)
+            x = remake()
         elif all_requested and ms.size > 64:
             sums = _expanded_sums(kind, x, ms, rtol_all)
         elif kind == "adev":
