@@ -20,11 +20,12 @@ walk), −3 flicker-walk rate, −4 random-run rate (NIST SP 1065 §5.2, Table 3
 References
 ----------
 .. [GR2003] C. A. Greenhall and W. J. Riley, "Uncertainty of stability variances
-   based on finite differences", Proc. 35th PTTI (2003): eqs. (7)–(13), Tables 1–3.
+   based on finite differences", Proc. 35th PTTI (2003): eqs. (7)–(13), Tables 1–3
+   (docs/references.md#gr2003).
 .. [RG2004] W. J. Riley and C. A. Greenhall, "Power law noise identification using
-   the lag 1 autocorrelation", Proc. 18th EFTF (2004).
+   the lag 1 autocorrelation", Proc. 18th EFTF (2004) (docs/references.md#rg2004).
 .. [SP1065] W. J. Riley, NIST SP 1065 (2008): §5.2.5 (R(n)), §5.3 (edf),
-   §5.6 (noise identification, B1), Table 5, Table 7.
+   §5.6 (noise identification, B1), Table 5, Table 7 (docs/references.md#sp1065).
 """
 
 from __future__ import annotations
