@@ -211,7 +211,7 @@ def design_matrix(tau_s, kind: str = "adev", tau0_s: float | None = None) -> np.
     array([[3.    , 1.    , 0.4413, 0.3333, 0.5   ],
            [0.75  , 0.5   , 0.4413, 0.6667, 2.    ]])
     >>> design_matrix([2.0], "mdev", tau0_s=1.0).round(4)
-    array([[0.1875, 0.3125, 0.2977, 0.55  , 2.    ]])
+    array([[0.375 , 0.3125, 0.2977, 0.55  , 2.    ]])
     """
     t = np.asarray(tau_s, dtype=np.float64)
     if kind in ("adev", "totdev"):
