@@ -23,7 +23,7 @@ import pandas as pd
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
-from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -114,13 +114,12 @@ class CalibrationReport:
         out["readings_taken"] = list(READINGS_TAKEN)
         return json_safe(out)
 
-    def summary(self) -> str:
-        """The seven items and U as a fixed-width text table."""
-        u = self.uncertainty
-        return (summary_table(self.results)
-                + f"\nUncertainty of the angle-position deviation (Annex A): "
-                  f"u_c = {u.stated_u_c_arcsec:g}″, U = {u.to_dict()['stated']['U_arcsec']:g}″ "
-                  f"(k = {u.k:g})\n")
+    def summary(self, lab: dict | None = None) -> str:
+        """The seven items, U (k, coverage probability) and any conformity statements as a
+        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`)."""
+        from gonio.report.stated import summary_text
+
+        return summary_text(self.to_dict(), "en", lab)
 
 
 def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
@@ -264,15 +263,20 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings):
     return out, unused
 
 
-def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:
-    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically."""
+def write_calibration(report: CalibrationReport, out: str | Path,
+                      lab: dict | None = None) -> dict[str, Path]:
+    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
+
+    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
+    to ``summary.txt``, as the certificate and the CLI show them.
+    """
     out = Path(out)
     names = {}
     with output_dir(out) as stage:
         d = report.to_dict()
         write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
                                                       allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", report.summary())
+        write_text(stage / "summary.txt", report.summary(lab))
         tables = stage / "tables"
         for item in report.results.items():
             for tname, df in (getattr(item, "tables", None) or {}).items():
