@@ -812,8 +812,8 @@ def bias_drift_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,
     bounded by the upper confidence limit of the Allan deviation at the longest τ,
     K ≤ σ_hi(τ_max)·√(3/τ_max), taken as rectangular on [0, bound] (K² ≥ bound²/3).
 
-    >>> round(bias_drift_u(0.0, 0.0, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)
-    20.0
+    >>> round(bias_drift_u(0.0, 0.0, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)   # √(1/3·3600)
+    34.641016
     """
     t, s = _arr(tau_s, "tau_s"), _arr(adev_high, "adev")
     def ok(x):

@@ -73,11 +73,11 @@ def _block_std_of_mean(y: np.ndarray, block: int = 10) -> tuple[float, float]:
 def std_upper_half_width(s: float, nu: int) -> float:
     """Expanded uncertainty (95 %) of a standard deviation s with ν degrees of freedom: the
     distance from s to the upper χ² limit s·√(ν/χ²_0.025,ν) (the lower limit is always
-    nearer). For ν = 2 this is 5.29·s; the symmetric s/√(2ν) with k = t₉₅(ν) would cover
+    nearer). For ν = 2 this is 5.285·s; the symmetric s/√(2ν) with k = t₉₅(ν) would cover
     the true σ only ≈ 90 % of the time.
 
     >>> round(std_upper_half_width(1.0, 2), 3)
-    5.29
+    5.285
     """
     from scipy.stats import chi2
     return float(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1.0))
