@@ -288,7 +288,7 @@ def cross_axis(ctx: Context) -> Item:
             [from_u("K_" + ax, per[ax]["plus_minus"], us[ax], dof=50,
                     source="noise of the rotating means"),
              type_b("align", 0.0, align, "rectangular",
-                    source="alignment of the input axis to the plane ⟂ the rotation axis "
+                    source="alignment of the input axis to the plane perpendicular to the rotation axis "
                            "(table axis and fixture): sin(half-width)")])
     return Item("cross_axis", t, cl, un, 100 * abs(per[ax]["plus_minus"]), uncertainty=u,
                 details={"per_axis": per, "axis": ax})
