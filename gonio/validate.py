@@ -282,9 +282,22 @@ class TrialResult:
     extras: list
 
 
-def _matrix(df: pd.DataFrame, col: str) -> np.ndarray:
-    return df.pivot(index="series", columns="round", values=col).sort_index().sort_index(
-        axis=1).to_numpy(dtype=float)
+def _matrix(df, col: str) -> np.ndarray:
+    """(series, round) matrix of ``col``, rows and columns in ascending order, NaN where a
+    (series, round) is absent (what ``DataFrame.pivot`` gives, without its cost).
+
+    >>> _matrix({"series": [2, 1, 1], "round": [1, 2, 1], "v": [5.0, 4.0, 3.0]}, "v").tolist()
+    [[3.0, 4.0], [5.0, nan]]
+    """
+    s_idx = np.asarray(df["series"])
+    r_idx = np.asarray(df["round"])
+    us, si = np.unique(s_idx, return_inverse=True)
+    ur, ri = np.unique(r_idx, return_inverse=True)
+    if np.unique(si * ur.size + ri).size != si.size:
+        raise ValueError("a (series, round) pair is given twice")
+    out = np.full((us.size, ur.size), np.nan)
+    out[si, ri] = np.asarray(df[col], dtype=float)
+    return out
 
 
 def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
@@ -303,8 +316,9 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
-    tr = pd.DataFrame(res.truth["readings"])
-    tr = tr[tr["test"] == "angle_deviation"]
+    rows = [r for r in res.truth["readings"] if r["test"] == "angle_deviation"]
+    tr = {k: [r[k] for r in rows] for k in ("series", "round", "systematic_deviation_arcsec",
+                                             "systematic_deviation_calibrated_arcsec")}
     u_r = float(rep.uncertainty.parameters["repeatability_arcsec"])
     extras = [e for e in budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r,
                                                  truth=truth) if e.symbol in extras_used]
