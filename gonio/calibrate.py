@@ -119,6 +119,15 @@ class CalibrationReport:
                   f"(k = {u.k:g})\n")
 
 
+def file_sha256(path: str | Path, block_bytes: int = 1 << 24) -> str:
+    """SHA-256 of a file, read in blocks (a stream of gigabytes is never held whole)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(block_bytes), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
                 monte_carlo_trials: int = 0, seed: int = 0) -> tuple[AnnexABudget, str]:
     """The Annex A budget of this calibration (u(r) from its own 7.5 data when present)."""
@@ -153,24 +162,21 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 
 def _load(path: str | Path, protocol: Protocol):
-    from gonio.streams import read_stream, sniff_kind
+    from gonio.streams import StreamFile, sniff_kind
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
     from gonio.errors import GonioError
+    from gonio.io import format_readings, parse_readings
     from gonio.reduce import reduce_stream
 
-    stream = read_stream(path)
+    stream = StreamFile(path)               # read in blocks: bounded memory
     red = reduce_stream(stream, protocol)
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream", file=path)
-    import tempfile
-
-    from gonio.io import write_readings
-    with tempfile.TemporaryDirectory() as tmp:   # through the file format: same validation
-        rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
-                                          Path(tmp) / "reduced.csv", red.metadata))
-    rd.path = Path(path)
+    # validated exactly as a readings file is, in memory (no temporary file)
+    rd = parse_readings(format_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
+                                        red.metadata), path=path)
     return rd, static_record_from_stream(stream, red.readings)
 
 
@@ -179,16 +185,23 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
     From the zeroing of the first zero-stability reading to the last one (the
     reduction's ``t_zero_s``/``t_read_s``); counts divided by the nominal scale
-    factor. ``None`` when the stream holds no 7.3 rest or no nominal K.
+    factor. ``None`` when the stream holds no 7.3 rest or no nominal K. ``stream``
+    is a :class:`gonio.streams.Stream` in memory or a :class:`gonio.streams.StreamFile`
+    (only the rest's samples are read).
     """
     zs = reduced[reduced["test"] == "zero_stability"]
     k = metadata_float(stream.metadata, "nominal_scale_factor_counts_per_deg")
     if len(zs) < 2 or not k:
         return None
     t0, t1 = float(zs["t_zero_s"].min()), float(zs["t_read_s"].max())
-    m = (stream.time_s >= t0) & (stream.time_s <= t1)
-    return StaticRecord(stream.time_s[m] - t0, stream.gyro_counts[m] / k,
-                        source="stream, 7.3 rest")
+    if hasattr(stream, "window"):
+        a, b = stream.search(t0, "left"), stream.search(t1, "right")
+        ch = stream.window(a, b)
+        t, c = ch.time_s, ch.gyro_counts
+    else:
+        m = (stream.time_s >= t0) & (stream.time_s <= t1)
+        t, c = stream.time_s[m], stream.gyro_counts[m]
+    return StaticRecord(t - t0, c / k, source="stream, 7.3 rest")
 
 
 def analyse_zero_stability(record: StaticRecord | None):
@@ -218,11 +231,11 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
     if isinstance(readings, Readings):
         rd, sha = readings, ""
         if rd.path:
-            sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
+            sha = file_sha256(rd.path)
     else:
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
-        sha = hashlib.sha256(Path(readings).read_bytes()).hexdigest()
+        sha = file_sha256(readings)
     ref_orient = proto.pointing_reference
     res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=ref_orient)

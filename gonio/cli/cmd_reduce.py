@@ -8,7 +8,7 @@ from gonio.errors import GonioError
 from gonio.io import write_readings
 from gonio.protocol import load_protocol
 from gonio.reduce import read_override, reduce_stream
-from gonio.streams import read_stream
+from gonio.streams import StreamFile
 
 
 def register(sub) -> None:
@@ -17,7 +17,8 @@ def register(sub) -> None:
                                    "match them to the protocol's rounds and write the readings "
                                    "file (§1). Rounds that cannot be matched are listed with the "
                                    "reason; --override gives their times explicitly.")
-    p.add_argument("stream", help="stream file (CSV)")
+    p.add_argument("stream", help="stream file (CSV, or Parquet: *.parquet); read in blocks, "
+                   "in bounded memory")
     p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
     p.add_argument("--out", required=True, help="readings file to write")
     p.add_argument("--override", default=None,
@@ -33,7 +34,7 @@ def run(args) -> int:
         raise GonioError(f"--max-gap must be > 0, got {args.max_gap}")
     proto = load_protocol(args.protocol)
     override = read_override(args.override) if args.override else None
-    stream = read_stream(args.stream, max_gap_s=args.max_gap)
+    stream = StreamFile(args.stream, max_gap_s=args.max_gap)
     red = reduce_stream(stream, proto, override=override)
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream "

@@ -1,5 +1,6 @@
 """``gonio simulate``: run a protocol on the virtual bench → readings.csv, truth.json
-(and, with ``--stream``, the continuous stream.csv the acquisition module would give)."""
+(and, with ``--stream``, the continuous stream the acquisition module would give:
+stream.parquet by default, stream.csv with ``--stream-format csv``)."""
 
 from __future__ import annotations
 
@@ -20,8 +21,11 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--stream", action="store_true",
-                   help="also write stream.csv (every sample: time, wrapped counter, table "
-                        "angle; data-formats.md §2), chunk by chunk")
+                   help="also write the stream (every sample: time, wrapped counter, table "
+                        "angle; data-formats.md §2), chunk by chunk, with progress on a terminal")
+    p.add_argument("--stream-format", choices=("parquet", "csv"), default="parquet",
+                   help="stream.parquet (default; pyarrow, the metadata as Parquet key-value "
+                        "metadata) or stream.csv")
     p.set_defaults(func=run)
 
 
@@ -41,19 +45,31 @@ def run(args) -> int:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
     proto = load_protocol(args.protocol)
     bench = load_bench(args.bench, table=args.table)
-    writer = None
+    writer = prog = None
+    sink = None
     if args.stream:
+        from gonio.bench.session import plan_session
+        from gonio.progress import Progress
         from gonio.streams import StreamWriter
 
-        writer = StreamWriter(Path(args.out) / "stream.csv", stream_metadata(proto, bench, args.seed),
-                              table=True)
+        name = "stream.parquet" if args.stream_format == "parquet" else "stream.csv"
+        writer = StreamWriter(Path(args.out) / name, stream_metadata(proto, bench, args.seed),
+                              table=True, fmt=args.stream_format)
+        total = sum(b.k_end - b.k_start for b in plan_session(proto, bench, None))
+        prog = Progress(total, label=f"simulate: {name}", unit="samples")
+
+        def sink(t, c, th):
+            writer.write(t, c, th)
+            prog.update(len(t))
     try:
-        result = run_session(proto, bench, seed=args.seed,
-                             stream=None if writer is None else writer.write)
+        result = run_session(proto, bench, seed=args.seed, stream=sink)
     except BaseException:
         if writer is not None:
             writer.abort()
         raise
+    finally:
+        if prog is not None:
+            prog.close()
     paths = write_session(result, args.out)
     if writer is not None:
         paths["stream"] = writer.close()
