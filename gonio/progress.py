@@ -36,12 +36,13 @@ def format_duration(seconds: float) -> str:
     """
     if not math.isfinite(seconds) or seconds < 0:
         return "?"
-    s = int(round(seconds))
-    if s < 60:
+    m, s = divmod(int(round(seconds)), 60)
+    h, m = divmod(m, 60)
+    if not (h or m):
         return f"{s} s"
-    if s < 3600:
-        return f"{s // 60} min {s % 60:02d} s"
-    return f"{s // 3600} h {(s % 3600) // 60:02d} min"
+    if not h:
+        return f"{m} min {s:02d} s"
+    return f"{h} h {m:02d} min"
 
 
 class Progress:

@@ -6,7 +6,7 @@ import pytest
 
 from gonio.errors import GonioError
 from gonio.protocol import load_protocol, parse_protocol
-from gonio.tomlschema import read_toml
+from gonio.formats.toml import read_toml
 
 
 def test_draft_protocol_holds_the_draft():

@@ -15,7 +15,7 @@ from gonio.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.protocol import load_protocol, parse_protocol
-from gonio.tiltest import (TiltEstimatePlan, estimate_tilt, fit_first_harmonic,
+from gonio.analysis.tilt_estimate import (TiltEstimatePlan, estimate_tilt, fit_first_harmonic,
                            tilt_estimate_from_readings)
 
 K_NOM = 76434.87

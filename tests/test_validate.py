@@ -1,4 +1,4 @@
-"""gonio.validate: determinism, the ideal bench, a broken budget, binomial u, the coupling
+"""gonio.pipeline.validate: determinism, the ideal bench, a broken budget, binomial u, the coupling
 closed form against numerical integration, and the CLI."""
 
 from __future__ import annotations
@@ -15,8 +15,14 @@ from gonio.bench import Bench, InstrumentConfig, TableConfig, run_session
 from gonio.bench.instrument import geometry
 from gonio.cli import main
 from gonio.protocol import parse_protocol
-from gonio.validate import (binomial_u, coverage, earth_rate_perpendicular_arcsec_s,
-                            tilt_coupling_coefficients, trial_seeds, validate)
+from gonio.budget.extra import tilt_coupling_coefficients
+from gonio.physics.earth import earth_rate_split
+from gonio.pipeline.validate import binomial_u, coverage, trial_seeds, validate
+from gonio.units import dps_to_arcsec_s
+
+
+def earth_rate_perpendicular_arcsec_s(latitude_deg, orientation="up"):
+    return dps_to_arcsec_s(earth_rate_split(latitude_deg, orientation).perpendicular_dps)
 
 K_NOM = 76434.87
 

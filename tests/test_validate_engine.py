@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-import gonio.validate as V
+import gonio.pipeline.validate as V
 from gonio.bench import Bench, InstrumentConfig, TableConfig
 from gonio.cli import main
 from gonio.progress import Progress

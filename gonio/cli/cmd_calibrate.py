@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from gonio.calibrate import calibrate, write_calibration
+from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.errors import GonioError
 
 

@@ -1,11 +1,11 @@
 """``gonio eda READINGS``: equal-division averaging of a readings file (IEC 62047-20 Annex A.3).
 
 Reads the ``equal_division`` rows of a readings file, separates the table's
-positioning error from the goniometer's error (:func:`gonio.eda.equal_division_analysis`)
+positioning error from the goniometer's error (:func:`gonio.analysis.equal_division.equal_division_analysis`)
 and prints both with their standard uncertainties, the residual standard
 deviation, the full-turn closure check and the harmonic transfer table.
 
-The file is read with pandas here, not with :func:`gonio.io.read_readings`:
+The file is read with pandas here, not with :func:`gonio.formats.readings.read_readings`:
 that reader treats (test, series, round, rate, orientation) as the key of one
 reading, whereas an ``equal_division`` round holds ``m`` readings, one per
 step (told apart by ``table_deg``).
@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.atomic import write_bytes
-from gonio.eda import EdaResult, eda_matrix_from_readings, equal_division_analysis
+from gonio.analysis.equal_division import EdaResult, eda_matrix_from_readings, equal_division_analysis
 from gonio.errors import GonioError
 
 
@@ -111,7 +111,7 @@ def plot_eda(res: EdaResult, path: str | Path) -> Path:
     The format follows the suffix (png, pdf, svg); matplotlib's Agg backend.
 
     >>> import tempfile, pathlib
-    >>> from gonio.eda import simulate_eda_matrix
+    >>> from gonio.analysis.equal_division import simulate_eda_matrix
     >>> sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
     >>> res = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)
     >>> out = plot_eda(res, pathlib.Path(tempfile.mkdtemp()) / "eda.svg")

@@ -5,10 +5,11 @@ from __future__ import annotations
 import json
 
 from gonio.errors import GonioError
-from gonio.io import write_readings
+from gonio.formats.readings import write_readings
 from gonio.protocol import load_protocol
-from gonio.reduce import read_override, reduce_stream
-from gonio.streams import StreamFile
+from gonio.formats.override import read_override
+from gonio.formats.streams import StreamFile
+from gonio.reduce import reduce_stream
 
 
 def register(sub) -> None:

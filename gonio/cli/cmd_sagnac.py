@@ -2,14 +2,14 @@
 
 RLG: K = 4A/(λP) pulses per radian; FOG: 2πLD/(λc) rad of phase per rad/s
 (ogam-draft.md "Physics the draft relies on"). A thin layer over
-:func:`gonio.earth.sagnac_rlg` and :func:`gonio.earth.sagnac_fog`.
+:func:`gonio.physics.sagnac.sagnac_rlg` and :func:`gonio.physics.sagnac.sagnac_fog`.
 """
 
 from __future__ import annotations
 
 import json
 
-from gonio.earth import sagnac_fog, sagnac_rlg
+from gonio.physics.sagnac import sagnac_fog, sagnac_rlg
 from gonio.errors import GonioError
 
 

@@ -31,9 +31,9 @@ def register(sub) -> None:
 
 def stream_metadata(protocol, bench, seed: int) -> dict:
     """The stream file's metadata: the readings' keys plus the counter's width and sign."""
-    from gonio.bench.session import _metadata
+    from gonio.bench.session import session_metadata
 
-    md = dict(_metadata(protocol, bench, seed))
+    md = dict(session_metadata(protocol, bench, seed))
     md["counter_bits"] = str(bench.instrument.counter_bits)
     md["counter_signed"] = "true" if bench.instrument.counter_signed else "false"
     md["sample_rate_hz"] = repr(bench.sample_rate_hz)
@@ -49,8 +49,8 @@ def run(args) -> int:
     sink = None
     if args.stream:
         from gonio.bench.session import plan_session
+        from gonio.formats.streams import StreamWriter
         from gonio.progress import Progress
-        from gonio.streams import StreamWriter
 
         name = "stream.parquet" if args.stream_format == "parquet" else "stream.csv"
         writer = StreamWriter(Path(args.out) / name, stream_metadata(proto, bench, args.seed),

@@ -54,7 +54,7 @@ import pandas as pd
 
 from gonio.errors import GonioError
 from gonio.protocol import Protocol, RotationItem
-from gonio.streams import Stream, StreamChunk, StreamFile
+from gonio.formats.streams import Stream, StreamChunk, StreamFile
 
 #: Default rest threshold on the table encoder rate, °/s.
 TABLE_RATE_THRESHOLD_DPS = 0.01
@@ -195,7 +195,7 @@ def _dt(time_s: np.ndarray) -> float:
 
 class _MemorySamples:
     """A :class:`Stream` held in memory, seen through the sample-access interface that
-    :class:`gonio.streams.StreamFile` offers for a file (one code path for both)."""
+    :class:`gonio.formats.streams.StreamFile` offers for a file (one code path for both)."""
 
     def __init__(self, stream: Stream):
         self.st = stream
@@ -336,7 +336,7 @@ def find_rests(time_s: np.ndarray, table_deg: np.ndarray | None = None,
 def rests_of(src, *, on_table: bool, scale_factor_counts_per_deg: float | None = None,
              rate_threshold_dps: float | None = None, window_s: float | None = None,
              min_rest_s: float = 0.5, refine: bool = True) -> tuple[list[Rest], float]:
-    """:func:`find_rests` on a sample source (a :class:`gonio.streams.StreamFile` or a stream
+    """:func:`find_rests` on a sample source (a :class:`gonio.formats.streams.StreamFile` or a stream
     in memory), reading it once chunk by chunk; returns the rests and the median sample
     interval of the first 100 000 samples.
 
@@ -491,7 +491,7 @@ class Reduction:
     readings : pandas.DataFrame
         Readings-file columns (data-formats §1), plus ``t_zero_s`` and ``t_read_s``
         (stream times of the zeroing and reading samples; not written by
-        :func:`gonio.io.write_readings` unless kept as extra columns).
+        :func:`gonio.formats.readings.write_readings` unless kept as extra columns).
     unmatched : list of dict
         Rounds that could not be read and rests no round used, each with ``reason``.
     log : list of str
@@ -563,8 +563,8 @@ class _Ctx:
 
 
 def _computed_comp(st: Stream, orientation: str) -> float:
-    from gonio.earth import axis_enu, earth_rate_enu
-    from gonio.io import metadata_float
+    from gonio.physics.earth import axis_enu, earth_rate_enu
+    from gonio.formats.readings import metadata_float
     k = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
     lat = metadata_float(st.metadata, "latitude_deg", file=st.path)
     if k is None or lat is None:
@@ -729,61 +729,6 @@ def _rotation_series(ctx: _Ctx, item: RotationItem, series: int, nxt) -> None:
         ctx.cursor = rq
 
 
-def read_override(path: str | Path) -> list[dict]:
-    """Read an override CSV: ``test,series,round,t_zero_s,t_read_s`` (+ optional ``rate_dps``,
-    ``orientation``), stream times of the zeroing and reading of each listed round.
-
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "o.csv"
-    >>> _ = p.write_text("test,series,round,t_zero_s,t_read_s\\nscale_factor,1,2,70.0,85.5\\n")
-    >>> read_override(p)
-    [{'test': 'scale_factor', 'series': 1, 'round': 2, 't_zero_s': 70.0, 't_read_s': 85.5}]
-    """
-    from gonio.io import _parse_number
-    path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except OSError as exc:
-        raise GonioError(f"cannot read override file: {exc.strerror}", file=path) from None
-    except UnicodeDecodeError:
-        raise GonioError("not UTF-8 text", file=path) from None
-    rows = list(csv.reader(text.splitlines()))
-    if not rows:
-        raise GonioError("empty override file", file=path, line=1)
-    head = [h.strip() for h in rows[0]]
-    for need in ("test", "series", "round", "t_zero_s", "t_read_s"):
-        if need not in head:
-            raise GonioError("missing required column", file=path, line=1, column=need)
-    out = []
-    for ln, cells in enumerate(rows[1:], 2):
-        if not any(c.strip() for c in cells):
-            continue
-        if len(cells) != len(head):
-            raise GonioError(f"expected {len(head)} fields, got {len(cells)}", file=path,
-                             line=ln)
-        d = dict(zip(head, (c.strip() for c in cells)))
-        rec: dict = {"test": d["test"]}
-        for col in ("series", "round"):
-            v = _parse_number(d[col])
-            if v is None or not math.isfinite(v) or v != int(v) or v < 1:
-                raise GonioError(f"expected an integer ≥ 1, got {d[col]!r}", file=path,
-                                 line=ln, column=col)
-            rec[col] = int(v)
-        for col in ("t_zero_s", "t_read_s") + tuple(c for c in ("rate_dps",) if c in d):
-            v = _parse_number(d[col])
-            if v is None or not math.isfinite(v):
-                raise GonioError(f"expected a finite number, got {d[col]!r}", file=path,
-                                 line=ln, column=col)
-            rec[col] = v
-        if "orientation" in d and d["orientation"]:
-            rec["orientation"] = d["orientation"]
-        if rec["t_read_s"] <= rec["t_zero_s"]:
-            raise GonioError("t_read_s must be after t_zero_s", file=path, line=ln,
-                             column="t_read_s")
-        out.append(rec)
-    return out
-
-
 def _apply_override(ctx: _Ctx, override: Sequence[dict], plan: dict) -> None:
     st, s = ctx.st, ctx.proto.session
     for o in override:
@@ -851,7 +796,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
     Parameters
     ----------
     stream : Stream, StreamFile or path
-        A stream in memory (:func:`gonio.streams.read_stream`, or built), or a
+        A stream in memory (:func:`gonio.formats.streams.read_stream`, or built), or a
         stream file (CSV or Parquet) read in bounded memory: one pass to find the
         rests (validating and indexing the file), then only the blocks around the
         rests' edges and the readings are read again.
@@ -901,7 +846,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
         int_counts = st.header.quantised
     k_sf = None
     if not has_table:
-        from gonio.io import metadata_float
+        from gonio.formats.readings import metadata_float
         k_sf = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
         _check_k(k_sf)
     rests, dt = rests_of(st, on_table=has_table, scale_factor_counts_per_deg=k_sf,
@@ -910,7 +855,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
     n = len(st)
     if n < 3:
         raise GonioError("the stream has fewer than 3 samples", file=st.path)
-    from gonio.io import metadata_bool
+    from gonio.formats.readings import metadata_bool
     quantised = metadata_bool(st.metadata, "counts_quantised", True, file=st.path) and int_counts
     tol = pos_tol_deg if pos_tol_deg is not None else (0.05 if has_table else 1.0)
     ctx = _Ctx(st, protocol, rests, tol, quantised, eps=1e-6 * dt)

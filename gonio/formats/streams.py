@@ -53,7 +53,7 @@ from typing import Iterator, Mapping
 import numpy as np
 
 from gonio.errors import GonioError, check_header
-from gonio.io import _NUMERIC_METADATA, metadata_bool, metadata_float
+from gonio.formats.metadata import NUMERIC_METADATA, metadata_bool, metadata_float
 
 #: Column order of a written stream file.
 STREAM_COLUMNS: tuple[str, ...] = ("time_s", "gyro_counts", "table_deg", "temperature_c")
@@ -160,7 +160,7 @@ def _parse_header(path: Path) -> _Header:
 def _header_from(fname, metadata, columns, lineno, offset) -> _Header:
     seen = check_header(columns, REQUIRED_STREAM_COLUMNS, file=fname, line=lineno)
     for key in metadata:
-        if key in _NUMERIC_METADATA:
+        if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
     bits_text = metadata.get("counter_bits", "64").strip()
     if bits_text not in {str(b) for b in COUNTER_BITS}:
@@ -921,7 +921,7 @@ class StreamWriter:
             cf = np.asarray(c, dtype=np.float64)
             if not np.all(np.isfinite(cf)) or np.any(cf != np.round(cf)):
                 raise GonioError("counts must be integers (or metadata counts_quantised: false)")
-            from gonio.bench.instrument import wrap_counter
+            from gonio.formats.counters import wrap_counter
             cw = wrap_counter(c, h.bits, h.signed)
             if h.bits == 64 and not h.signed:
                 cw = cw.view(np.uint64)

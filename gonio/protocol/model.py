@@ -20,10 +20,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
-from gonio.earth import NAMED_AXES
+from gonio.physics.earth import NAMED_AXES
 from gonio.errors import GonioError
+from gonio.units import h_to_s
 from gonio.resources import resolve
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 ORIENTATIONS = tuple(NAMED_AXES)
 
@@ -143,7 +144,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "humidity_max_pct": Field("float", 75.0, lambda x: 0 <= x <= 100, "0–100"),
     },
     "session": {
-        "warm_up_s": Field("float", 3600.0, non_negative, "≥ 0"),
+        "warm_up_s": Field("float", h_to_s(1.0), non_negative, "≥ 0"),
         "earth_compensation": Field("str", "measured", choices=("measured", "computed", "none")),
         "static_s": Field("float", 60.0, positive, "> 0"),
         "return_rate_dps": Field("float", 60.0, positive, "> 0"),
@@ -319,7 +320,3 @@ def load_protocol(path: str | Path = "ogam-draft") -> Protocol:
     file = resolve(path, "protocol")
     return parse_protocol(read_toml(file), file)
 
-
-# Optional sections defined elsewhere (registered on import; kept last: they import this module).
-import gonio.tiltest  # noqa: E402,F401  [tilt_estimate]
-import gonio.eda  # noqa: E402,F401  [equal_division]

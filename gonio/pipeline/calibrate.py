@@ -19,10 +19,10 @@ from pathlib import Path
 
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
-from gonio.budget import AnnexABudget, annex_a_budget
-from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
-from gonio.io import Readings, metadata_float, read_readings
-from gonio.bench.session import StaticRecord
+from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
+from gonio.formats.readings import Readings, metadata_float, read_readings
+from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate).
@@ -76,9 +76,9 @@ class CalibrationReport:
     protocol: Protocol
     source_sha256: str
     repeatability_source: str
-    noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
+    noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
-    eda: object | None = None            # gonio.eda.EdaResult of the equal_division rows
+    eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
 
     def to_dict(self) -> dict:
         """The ``results.json`` content (plain JSON types, deterministic)."""
@@ -162,12 +162,12 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 
 def _load(path: str | Path, protocol: Protocol):
-    from gonio.streams import StreamFile, sniff_kind
+    from gonio.formats.streams import StreamFile, sniff_kind
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
     from gonio.errors import GonioError
-    from gonio.io import format_readings, parse_readings
+    from gonio.formats.readings import format_readings, parse_readings
     from gonio.reduce import reduce_stream
 
     stream = StreamFile(path)               # read in blocks: bounded memory
@@ -186,7 +186,8 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
     From the zeroing of the first zero-stability reading to the last one (the
     reduction's ``t_zero_s``/``t_read_s``); counts divided by the nominal scale
     factor. ``None`` when the stream holds no 7.3 rest or no nominal K. ``stream``
-    is a :class:`gonio.streams.Stream` in memory or a :class:`gonio.streams.StreamFile`
+    is a :class:`gonio.formats.streams.Stream` in memory or a
+    :class:`gonio.formats.streams.StreamFile`
     (only the rest's samples are read).
     """
     zs = reduced[reduced["test"] == "zero_stability"]
@@ -205,9 +206,9 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
 
 def analyse_zero_stability(record: StaticRecord | None):
-    """Allan analysis of the 7.3 static record (:func:`gonio.noise.analyse_static`), or why not."""
+    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`), or why not."""
     from gonio.errors import GonioError
-    from gonio.noise import analyse_static
+    from gonio.analysis.noise import analyse_static
 
     if record is None:
         return None, ""
@@ -252,7 +253,7 @@ def equal_division_for(results: CalibrationResults, readings: Readings):
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.eda import eda_matrix_from_readings, equal_division_analysis
+    from gonio.analysis.equal_division import eda_matrix_from_readings, equal_division_analysis
 
     df = readings.data
     rows = df[df["test"] == "equal_division"]

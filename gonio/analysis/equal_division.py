@@ -70,8 +70,9 @@ import pandas as pd
 import scipy.sparse as sp
 
 from gonio.errors import GonioError
-from gonio.protocol import ORIENTATIONS, load_protocol, register_section
-from gonio.tomlschema import Field, positive
+from gonio.units import ARCSEC_PER_DEG
+from gonio.protocol import load_protocol
+from gonio.protocol.sections import EdaProtocol
 
 #: Tolerance for "a start lies on the step grid", in units of the step (–).
 GRID_TOL_STEPS = 1e-6
@@ -82,7 +83,6 @@ NULL_RTOL = 1e-9
 #: |z| above which the full-turn closure is reported as not consistent with zero (–).
 CLOSURE_Z_LIMIT = 3.0
 
-_ARCSEC_PER_DEG = 3600.0
 
 
 # --------------------------------------------------------------------------- results
@@ -877,7 +877,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
     series = num["series"].to_numpy()[keep].astype(int)
     rnd = num["round"].to_numpy()[keep].astype(int)
     table = table_all[keep]
-    dev = (num["gyro_deg"].to_numpy()[keep] - table) * _ARCSEC_PER_DEG
+    dev = (num["gyro_deg"].to_numpy()[keep] - table) * ARCSEC_PER_DEG
     if table.size == 0:
         raise GonioError("equal_division rows have no reading away from the zero",
                          file=file, column="table_deg")
@@ -951,59 +951,6 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
 
 
 # --------------------------------------------------------------------------- protocol
-@dataclass(frozen=True)
-class EdaProtocol:
-    """The ``[equal_division]`` protocol section (IEC 62047-20 Annex A.3 procedure).
-
-    Attributes
-    ----------
-    starts, points, repeats : int
-        ``n`` starts ``360°/n`` apart, ``m`` points per revolution, repeats.
-    rate_dps, rest_s, read_delay_s : float
-        Table rate, rest at each stop, reading delay after arrival.
-    orientation : str
-        Table-axis direction.
-    """
-
-    starts: int
-    points: int
-    repeats: int
-    rate_dps: float
-    rest_s: float
-    read_delay_s: float
-    orientation: str
-
-    @property
-    def step_deg(self) -> float:
-        """The step ``Δ = 360°/m``."""
-        return 360.0 / self.points
-
-    @property
-    def start_deg(self) -> np.ndarray:
-        """Start positions ``k·360°/n``."""
-        return np.arange(self.starts) * 360.0 / self.starts
-
-
-def _is_int_ge(lo):
-    return lambda x: x >= lo
-
-
-EDA_PROTOCOL_SCHEMA: dict[str, Field] = {
-    "starts": Field("int", 12, _is_int_ge(1), "an integer ≥ 1"),
-    "points": Field("int", 12, _is_int_ge(2), "an integer ≥ 2"),
-    "repeats": Field("int", 1, _is_int_ge(1), "an integer ≥ 1"),
-    "rate_dps": Field("float", 60.0, positive, "> 0"),
-    "rest_s": Field("float", 10.0, lambda x: x >= 0, "≥ 0"),
-    "read_delay_s": Field("float", 5.0, lambda x: x >= 0, "≥ 0"),
-    "orientation": Field("str", "up", choices=ORIENTATIONS),
-}
-
-
-def _eda_factory(v: dict) -> EdaProtocol:
-    return EdaProtocol(**v)
-
-
-register_section("equal_division", EDA_PROTOCOL_SCHEMA, _eda_factory)
 
 
 def load_eda_protocol(path="eda") -> EdaProtocol:

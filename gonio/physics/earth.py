@@ -1,4 +1,4 @@
-"""Earth rate, the local frame, axis directions and Sagnac scale factors.
+"""Earth rate, the local frame and axis directions.
 
 Constants
 ---------
@@ -26,9 +26,8 @@ All are far below anything the draft resolves: the choice is a convention.
 0.04″/s on the Earth rate.)
 
 :func:`earth_rate` gives one axis's rate in °/h, ″/s and rad/s with its split
-into parts along and across the axis; :func:`sagnac_rlg`, :func:`sagnac_fog`
-the Sagnac scale factors with the Earth rate's signal (``gonio earth``,
-``gonio sagnac``).
+into parts along and across the axis (``gonio earth``). The Sagnac scale factors
+are in :mod:`gonio.physics.sagnac`.
 
 Note (IEC 62047-20 5.3.3.1 erratum): that text gives the vertical component as
 Ω cos λ and the horizontal as Ω sin λ cos φ; physically vertical is Ω sin λ and
@@ -49,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG, S_PER_H, dph_from_rad_s, rad_to_arcsec  # noqa: F401
 
 #: IERS nominal mean angular velocity of the Earth, rad/s.
 OMEGA_E_RAD_S = 7.292115e-5
@@ -58,11 +58,9 @@ SIDEREAL_DAY_S = 86164.0989
 #: 1.5×10⁻¹² rad/s, i.e. 2×10⁻⁸ relative: 3×10⁻⁷ ″/s, negligible here).
 OMEGA_E_STELLAR_RAD_S = 2.0 * math.pi / SIDEREAL_DAY_S
 #: Earth rate in °/h (IERS value): 15.0411 °/h.
-OMEGA_E_DPH = math.degrees(OMEGA_E_RAD_S) * 3600.0
+OMEGA_E_DPH = dph_from_rad_s(OMEGA_E_RAD_S)
 #: Earth rate in ″/s (IERS value): 15.0411 ″/s.
-OMEGA_E_ARCSEC_S = math.degrees(OMEGA_E_RAD_S) * 3600.0
-#: Seconds of arc per degree.
-ARCSEC_PER_DEG = 3600.0
+OMEGA_E_ARCSEC_S = rad_to_arcsec(OMEGA_E_RAD_S)
 
 #: Named axis directions as (azimuth_deg, elevation_deg).
 NAMED_AXES = {
@@ -153,56 +151,8 @@ def earth_rate_split(latitude_deg: float, axis="up") -> EarthRateSplit:
     return EarthRateSplit(math.degrees(par), math.degrees(perp))
 
 
-# --- Sagnac scale factors ----------------------------------------------------
-
-SPEED_OF_LIGHT_M_S = 299_792_458.0
-
-
-def rlg_scale_factor_counts_per_rad(area_m2: float, perimeter_m: float,
-                                    wavelength_m: float = 632.8e-9) -> float:
-    """Ring-laser scale factor 4A/(λP), pulses (fringes) per radian (Sagnac).
-
-    The beat frequency is Δf = 4A/(λP)·Ω; each fringe is one pulse.
-
-    >>> k = rlg_scale_factor_counts_per_rad(0.15**2 * 3**0.5 / 4, 0.45)  # 15 cm triangle
-    >>> round(k), round(k * math.pi / 180, 2)        # per rad, per degree
-    (136856, 2388.59)
-    """
-    for name, v in (("area_m2", area_m2), ("perimeter_m", perimeter_m),
-                    ("wavelength_m", wavelength_m)):
-        if not (math.isfinite(v) and v > 0):
-            raise GonioError(f"{name} must be a positive number, got {v}")
-    return 4.0 * area_m2 / (wavelength_m * perimeter_m)
-
-
-def fog_phase_per_rate_s(length_m: float, diameter_m: float,
-                         wavelength_m: float = 1550e-9) -> float:
-    """Fibre-optic gyro Sagnac phase per unit rate, 2πLD/(λc), rad per (rad/s) = s.
-
-    >>> round(fog_phase_per_rate_s(1000.0, 0.1), 3)      # 1 km coil, 10 cm diameter
-    1.352
-    """
-    for name, v in (("length_m", length_m), ("diameter_m", diameter_m),
-                    ("wavelength_m", wavelength_m)):
-        if not (math.isfinite(v) and v > 0):
-            raise GonioError(f"{name} must be a positive number, got {v}")
-    return 2.0 * math.pi * length_m * diameter_m / (wavelength_m * SPEED_OF_LIGHT_M_S)
-
-
-def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: float,
-                             axis="up") -> float:
-    """Pulses per second that the Earth rate alone produces on an axis.
-
-    >>> round(earth_rate_pulse_rate_hz(3600.0, 40.0, "up"), 3)   # 1 count = 1″
-    9.668
-    """
-    return scale_factor_counts_per_deg * earth_rate_on_axis_dps(latitude_deg, axis)
-
-
 # --- reports for the CLI -------------------------------------------------------
 
-#: Seconds per hour.
-S_PER_H = 3600.0
 
 
 @dataclass(frozen=True)
@@ -250,7 +200,7 @@ def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_
     north towards east) and elevation E that is Ω_E (cos φ cos E cos A + sin φ sin E)
     (IEC 62047-20 5.3.3.1 with its cos/sin erratum corrected). The part across
     the axis, Ω_⊥ = Ω_E·sqrt(1 − (Ω̂·a)²), is what a tilted sensing axis picks up
-    as the table turns (the tilt × Earth-rate coupling, :mod:`gonio.coupling`).
+    as the table turns (the tilt × Earth-rate coupling, :mod:`gonio.physics.coupling`).
 
     Examples
     --------
@@ -273,51 +223,3 @@ def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_
     return EarthRate(float(latitude_deg), az, el, tuple(float(x) for x in a.round(15)),
                      dph, dph, par, dph, math.degrees(perp) * S_PER_H,
                      math.degrees(perp) * S_PER_H, omega_rad_s)
-
-
-@dataclass(frozen=True)
-class Sagnac:
-    """Sagnac scale factor of a gyro and the signal the Earth rate gives it."""
-
-    kind: str
-    wavelength_m: float
-    scale_factor_counts_per_rad: float | None       # RLG: pulses per radian, 4A/(λP)
-    scale_factor_counts_per_deg: float | None
-    resolution_arcsec: float | None                 # one pulse, ″
-    phase_per_rate_s: float | None                  # FOG: rad of phase per rad/s, 2πLD/(λc)
-    earth_rate_signal: float                        # RLG: Hz (pulses/s); FOG: rad of phase
-    earth_rate_signal_unit: str
-
-    def to_dict(self) -> dict:
-        """Plain dict (for ``--json``)."""
-        return dict(self.__dict__)
-
-
-def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9) -> Sagnac:
-    """Ring-laser Sagnac scale factor and the full Earth rate's beat frequency.
-
-    Δf = 4A/(λP)·Ω (ogam-draft.md "Physics"; Aronowitz 1971). One pulse is
-    1/K rad.
-
-    >>> s = sagnac_rlg(0.15**2 * 3**0.5 / 4, 0.45)          # 15 cm-side triangle, He-Ne
-    >>> round(s.scale_factor_counts_per_deg, 2), round(s.resolution_arcsec, 4)
-    (2388.59, 1.5072)
-    >>> round(s.earth_rate_signal, 3)                       # Hz for the whole Ω_E
-    9.98
-    """
-    k = rlg_scale_factor_counts_per_rad(area_m2, perimeter_m, wavelength_m)
-    return Sagnac("rlg", wavelength_m, k, k * math.pi / 180.0, 1.0 / k * 180.0 / math.pi * 3600.0,
-                  None, k * OMEGA_E_RAD_S, "Hz")
-
-
-def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9) -> Sagnac:
-    """Fibre-optic Sagnac phase per rate 2πLD/(λc) and the full Earth rate's phase.
-
-    Δφ = 2πLD/(λc)·Ω (ogam-draft.md "Physics"; Lefèvre, The Fiber-Optic Gyroscope, 2.1).
-
-    >>> s = sagnac_fog(1000.0, 0.1)                         # 1 km, 10 cm coil, 1550 nm
-    >>> round(s.phase_per_rate_s, 4), f"{s.earth_rate_signal:.3e}"
-    (1.3522, '9.860e-05')
-    """
-    f = fog_phase_per_rate_s(length_m, diameter_m, wavelength_m)
-    return Sagnac("fog", wavelength_m, None, None, None, f, f * OMEGA_E_RAD_S, "rad")

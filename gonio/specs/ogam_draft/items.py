@@ -17,7 +17,7 @@ Contents
 :func:`summary_table`                fixed-width text table (Annex B order)
 ===================================  =============================================
 
-Each function takes the normalised readings DataFrame of :mod:`gonio.io` and
+Each function takes the normalised readings DataFrame of :mod:`gonio.formats.readings` and
 returns a :class:`Characteristic` (value, unit, clause, measured, reason, detail
 tables, and which input lines it used). A characteristic whose readings are
 absent is *not measured* (value None, with the reason), never invented.
@@ -36,12 +36,9 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError
-from gonio.io import Readings, metadata_float
+from gonio.units import ARCSEC_PER_DEG, S_PER_H  # noqa: F401
+from gonio.formats.readings import Readings, metadata_float
 
-#: Arc seconds per degree.
-ARCSEC_PER_DEG: float = 3600.0
-#: Seconds per hour.
-S_PER_H: float = 3600.0
 #: Positions of different conditions (7.6, 7.7) are matched on table_deg rounded to this many decimals.
 POSITION_DECIMALS: int = 2
 
@@ -175,7 +172,7 @@ def scale_factor(df: pd.DataFrame) -> Characteristic:
     Parameters
     ----------
     df : pandas.DataFrame
-        Normalised readings (:mod:`gonio.io`); rows of other tests are ignored.
+        Normalised readings (:mod:`gonio.formats.readings`); rows of other tests are ignored.
 
     Returns
     -------
@@ -757,9 +754,9 @@ class CalibrationResults:
 
 def _unused_reason_default(test: str) -> str:
     if test == "equal_division":
-        return "equal_division is not one of the seven clause-7 items (see gonio.eda)"
+        return "equal_division is not one of the seven clause-7 items (see gonio.analysis.equal_division)"
     if test == "tilt_estimate":
-        return "tilt_estimate is not one of the seven clause-7 items (see gonio.tilt)"
+        return "tilt_estimate is not one of the seven clause-7 items (see gonio.physics.tilt)"
     return "not used by any characteristic"
 
 
