@@ -114,6 +114,34 @@ class _Header:
     quantised: bool
 
 
+def _lines_with_ends(fh, piece: int = 1 << 16):
+    """Lines of a binary file with their ends (LF, CRLF or a lone CR), read piece by piece."""
+    buf = b""
+    eof = False
+    while True:
+        i = 0
+        while True:
+            j = min((k for k in (buf.find(b"\n", i), buf.find(b"\r", i)) if k >= 0), default=-1)
+            if j < 0:
+                break
+            if buf[j] == 13:
+                if j + 1 >= len(buf) and not eof:
+                    break                       # CR at the end of what was read: CRLF?
+                if j + 1 < len(buf) and buf[j + 1] == 10:
+                    j += 1
+            yield buf[i:j + 1]
+            i = j + 1
+        buf = buf[i:]
+        if eof:
+            if buf:
+                yield buf
+            return
+        more = fh.read(piece)
+        if not more:
+            eof = True
+        buf += more
+
+
 def _parse_header(path: Path) -> _Header:
     """Metadata lines and header row, read line by line (never the whole file)."""
     fname = str(path)
@@ -124,9 +152,10 @@ def _parse_header(path: Path) -> _Header:
         raise GonioError(f"cannot read stream file: {exc.strerror}", file=path) from None
     with fh:
         lineno, offset = 0, 0
+        lines = _lines_with_ends(fh)
         while True:
-            raw = fh.readline(1 << 20)
-            if not raw:
+            raw = next(lines, None)
+            if raw is None:
                 raise GonioError("no data: the file has no header row", file=fname,
                                  line=max(1, lineno))
             lineno += 1
