@@ -153,14 +153,15 @@ class RestFinder:
             edges = np.diff(np.concatenate(([0], ok.astype(np.int8), [0])))
             starts = np.flatnonzero(edges == 1)
             ends = np.flatnonzero(edges == -1) - 1
-            cs = np.concatenate(([0.0], np.cumsum(Z[w:])))
+            Zw = Z[w:]
             for s, e in zip(starts.tolist(), ends.tolist()):
+                part = float(Zw[s:e + 1].sum())
                 if s == 0 and self._open is not None:
-                    self._open["sum"] += cs[e + 1] - cs[s]
+                    self._open["sum"] += part
                     self._open["cnt"] += e - s + 1
                 else:
                     self._open = {"a": g0 + s + w, "t0": float(T[s]),
-                                  "sum": cs[e + 1] - cs[s], "cnt": e - s + 1}
+                                  "sum": part, "cnt": e - s + 1}
                 self._open["b"], self._open["tb"] = g0 + e + w, float(T[e + w])
                 if e < ok.size - 1:
                     self._close()
