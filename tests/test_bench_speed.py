@@ -13,7 +13,7 @@ from gonio.pipeline.validate import validation_protocol
 
 def test_motion_on_runs_equals_the_timeline_sample_by_sample():
     p = validation_protocol()
-    b = replace(load_bench("fog"), sample_rate_hz=50.0)
+    b = replace(load_bench("fog"), sample_rate_hz=20.0)
     blocks = plan_session(p, b, np.random.default_rng(3))
     dt = 1.0 / b.sample_rate_hz
     compressed = 0
