@@ -9,7 +9,7 @@
    Rows per second for each; targets: b ≥ 3× a, c ≥ 10× a.
 2. Peak memory (max RSS of the process) of ``gonio calibrate STREAM`` on a full draft session
    at 1 kHz (2×10⁷ rows, written by ``gonio simulate --stream``, Parquet) and on a 5× longer
-   session (10⁸ rows: 7.4/7.5 with 50 series instead of 10). Target < 400 MB for both.
+   session (≈10⁸ rows: 7.4/7.5 with 95 series instead of 10). Target < 400 MB for both.
 
 Usage: python benchmarks/bench_stream.py [--rows 1e8] [--skip-calibrate] [--keep]
 The machine's load is printed: figures on a shared machine are noisy.
@@ -116,11 +116,11 @@ def start_worktree(tmp: Path) -> Path:
 
 
 def long_protocol(tmp: Path) -> Path:
-    """The draft's protocol with 50 series of 7.4/7.5 (≈ 5× the session length)."""
+    """The draft's protocol with 95 series of 7.4/7.5 (≈ 10⁸ samples at 1 kHz)."""
     text = (ROOT / "protocols" / "ogam-draft.toml").read_text(encoding="utf-8")
     text = text.replace('name = "ogam-draft"', 'name = "ogam-draft-long"', 1)
     text = text.replace("series = 10                             # 7.5: repeat 7.4 ten times",
-                        "series = 50")
+                        "series = 95")
     p = tmp / "ogam-draft-long.toml"
     p.write_text(text, encoding="utf-8")
     return p

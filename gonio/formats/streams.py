@@ -304,7 +304,7 @@ def _clip(text: str, n: int = 40) -> str:
 
 
 #: Bytes of CSV parsed at a time (a block ends at a line end).
-CSV_BLOCK_BYTES = 1 << 25
+CSV_BLOCK_BYTES = 1 << 23
 #: Default plausible rate bound, °/s, for the unwrapped counter (metadata ``max_rate_dps``
 #: overrides it): well above the draft's Table 1 table rates (0–300 °/s).
 PLAUSIBLE_RATE_DPS = 1000.0
@@ -385,7 +385,6 @@ class StreamFile:
                 yield g, g + 1, 0, self._parquet_group(g)
             return
         h = self.header
-        line = h.header_line + 1
         with open(self.path, "rb") as fh:
             fh.seek(h.data_offset)
             offset = h.data_offset
@@ -406,10 +405,9 @@ class StreamFile:
                     block, carry = buf[:cut + 1], buf[cut + 1:]
                 else:
                     block, carry = buf, b""
-                arrays = self._parse_csv(block, line)
-                yield offset, offset + len(block), line, arrays
+                arrays = self._parse_csv(block, offset)
+                yield offset, offset + len(block), 0, arrays
                 offset += len(block)
-                line += count_lines(block)
                 if not data:
                     break
 
@@ -419,7 +417,26 @@ class StreamFile:
         with open(self.path, "rb") as fh:
             fh.seek(blk.start)
             data = fh.read(blk.stop - blk.start)
-        return self._parse_csv(data, blk.first_line)
+        return self._parse_csv(data, blk.start)
+
+    def _line_at(self, offset: int) -> int:
+        """1-based line number of the line starting at byte ``offset`` of a CSV stream
+        (counted when an error is reported, so the fast path never counts lines)."""
+        h = self.header
+        line = h.header_line + 1
+        with open(self.path, "rb") as fh:
+            fh.seek(h.data_offset)
+            pos, prev_cr = h.data_offset, False
+            while pos < offset:
+                piece = fh.read(min(1 << 24, offset - pos))
+                if not piece:
+                    break
+                line += count_lines(piece)
+                if prev_cr and piece.startswith(b"\n"):
+                    line -= 1               # a CRLF split between two pieces
+                prev_cr = piece.endswith(b"\r")
+                pos += len(piece)
+        return line
 
     def _csv_types(self) -> dict:
         import pyarrow as pa
@@ -434,17 +451,14 @@ class StreamFile:
             types["gyro_counts"] = pa.int64()
         return {c: t for c, t in types.items() if c in self.columns}
 
-    def _parse_csv(self, data: bytes, first_line: int) -> dict:
+    def _parse_csv(self, data: bytes, offset: int) -> dict:
         import pyarrow as pa
         import pyarrow.csv as pcsv
         h = self.header
-        if data.startswith(b"#") or b"\n#" in data or b"\r#" in data:
-            self._locate_bad(data, first_line, "a '#' line")
         def parse(types):
             return pcsv.read_csv(
                 pa.BufferReader(data),
-                read_options=pcsv.ReadOptions(column_names=h.columns,
-                                              block_size=max(1 << 20, len(data) + 1)),
+                read_options=pcsv.ReadOptions(column_names=h.columns, block_size=1 << 22),
                 parse_options=pcsv.ParseOptions(newlines_in_values=False,
                                                 ignore_empty_lines=True),
                 convert_options=pcsv.ConvertOptions(column_types=types,
@@ -473,13 +487,15 @@ class StreamFile:
                 except errors:
                     tab = None
             if tab is None:
-                self._locate_bad(data, first_line, reason)
+                self._locate_bad(data, self._line_at(offset), reason)
         return _columns(tab, self.columns)
 
     def _parquet_group(self, g: int) -> dict:
         import pyarrow as pa
         try:
-            tab = self._pq.read_row_group(g, columns=self.columns)
+            # one thread: decoding a row group in parallel gains little on a few cores
+            # and keeps a buffer per thread (tens of MB of resident memory)
+            tab = self._pq.read_row_group(g, columns=self.columns, use_threads=False)
         except (OSError, pa.ArrowException) as exc:
             raise GonioError(f"cannot read Parquet row group {g}: {_clip(str(exc), 80)}",
                              file=self.fname) from None
@@ -526,7 +542,7 @@ class StreamFile:
         with open(self.path, "rb") as fh:
             fh.seek(blk_data_start)
             data = fh.read(self.block_bytes + (1 << 20))
-        line = blk_first_line
+        line = self._line_at(blk_data_start)
         k = -1
         for _, raw in split_lines(data):
             if raw.strip():
@@ -742,18 +758,22 @@ class StreamFile:
         if b <= a:
             e = np.empty(0)
             return StreamChunk(e, e.astype(np.int64), None, None, a)
-        parts = []
+        out = None
         j = self._block_of_row(a)
         while j < len(self.blocks) and self.blocks[j].first_row < b:
             ch = self._block(j)
-            lo = max(a, ch.first_row) - ch.first_row
-            hi = min(b, ch.first_row + ch.time_s.size) - ch.first_row
-            parts.append((ch, lo, hi))
+            lo = max(a, ch.first_row)
+            hi = min(b, ch.first_row + ch.time_s.size)
+            if out is None:          # the result is allocated once and filled block by block
+                out = {name: None if getattr(ch, name) is None else
+                       np.empty(b - a, dtype=getattr(ch, name).dtype)
+                       for name in ("time_s", "gyro_counts", "table_deg", "temperature_c")}
+            for name, arr in out.items():
+                if arr is not None:
+                    arr[lo - a:hi - a] = getattr(ch, name)[lo - ch.first_row:hi - ch.first_row]
             j += 1
-        cat = (lambda name: None if getattr(parts[0][0], name) is None else
-               np.concatenate([getattr(c, name)[lo:hi] for c, lo, hi in parts]))
-        return StreamChunk(cat("time_s"), cat("gyro_counts"), cat("table_deg"),
-                           cat("temperature_c"), a)
+        return StreamChunk(out["time_s"], out["gyro_counts"], out["table_deg"],
+                           out["temperature_c"], a)
 
     def time_at(self, i: int) -> float:
         """Time of row ``i``."""
@@ -804,7 +824,7 @@ def _open_parquet(path: Path):
     except ImportError:  # pragma: no cover - pyarrow is a dependency
         raise GonioError("reading Parquet needs pyarrow (not installed)", file=path) from None
     try:
-        pf = pq.ParquetFile(path)
+        pf = pq.ParquetFile(path, buffer_size=1 << 20)
     except (OSError, pa.ArrowException) as exc:
         raise GonioError(f"cannot read Parquet: {_clip(str(exc), 80)}", file=path) from None
     schema = pf.schema_arrow
@@ -891,7 +911,7 @@ def _fmt_metadata(metadata: Mapping[str, str]) -> str:
 #: Stream file formats the writer knows (by suffix: ``.parquet`` → Parquet, else CSV).
 STREAM_FORMATS = ("parquet", "csv")
 #: Rows per Parquet row group (one block of :class:`StreamFile`).
-PARQUET_ROW_GROUP = 1 << 20
+PARQUET_ROW_GROUP = 1 << 18
 
 
 def stream_format(path: str | Path) -> str:
@@ -946,6 +966,9 @@ class StreamWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp",
                                          dir=self.path.parent)
+        mask = os.umask(0)
+        os.umask(mask)
+        os.fchmod(fd, 0o666 & ~mask)           # as any file the user writes (not 0600)
         self._fh = os.fdopen(fd, "wb")
         self._buffer: list = []
         self._buffered = 0

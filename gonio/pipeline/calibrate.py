@@ -199,10 +199,14 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
         a, b = stream.search(t0, "left"), stream.search(t1, "right")
         ch = stream.window(a, b)
         t, c = ch.time_s, ch.gyro_counts
+        del ch
     else:
         m = (stream.time_s >= t0) & (stream.time_s <= t1)
         t, c = stream.time_s[m], stream.gyro_counts[m]
-    return StaticRecord(t - t0, c / k, source="stream, 7.3 rest")
+    t = t - t0
+    angle = c / k
+    del c
+    return StaticRecord(t, angle, source="stream, 7.3 rest")
 
 
 def analyse_zero_stability(record: StaticRecord | None):

@@ -184,9 +184,9 @@ class RestFinder:
 
 #: A rest's level is the median over at most this many of its samples (evenly strided
 #: beyond it), so a rest of any length is levelled in bounded memory.
-LEVEL_MAX_SAMPLES = 1 << 23
+LEVEL_MAX_SAMPLES = 1 << 21
 #: Samples fetched at a time when levelling a long rest.
-_LEVEL_PIECE = 1 << 21
+_LEVEL_PIECE = 1 << 18
 
 
 def _dt(time_s: np.ndarray) -> float:
@@ -420,6 +420,8 @@ def _level(sig: _Signal, s: int, e: int) -> float:
     if n <= _LEVEL_PIECE:
         return float(np.median(sig.get(s, e + 1)[1]))
     stride = -(-n // LEVEL_MAX_SAMPLES)
+    if stride > _LEVEL_PIECE:         # pragma: no cover - a rest of > 5×10¹¹ samples
+        stride = _LEVEL_PIECE
     piece = _LEVEL_PIECE - _LEVEL_PIECE % stride      # a multiple of the stride
     parts = []
     for a in range(s, e + 1, piece):
