@@ -45,8 +45,7 @@ def run(args) -> int:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
     proto = load_protocol(args.protocol)
     bench = load_bench(args.bench, table=args.table)
-    writer = prog = None
-    sink = None
+    writer = prog = sink = None
     if args.stream:
         from gonio.bench.session import plan_session
         from gonio.formats.streams import StreamWriter
@@ -58,9 +57,10 @@ def run(args) -> int:
         total = sum(b.k_end - b.k_start for b in plan_session(proto, bench, None))
         prog = Progress(total, label=f"simulate: {name}", unit="samples")
 
-        def sink(t, c, th):
+        def write_chunk(t, c, th):
             writer.write(t, c, th)
             prog.update(len(t))
+        sink = write_chunk
     try:
         result = run_session(proto, bench, seed=args.seed, stream=sink)
     except BaseException:

@@ -750,8 +750,9 @@ class StreamFile:
         firsts = [b.first_row for b in self.blocks]
         return int(np.searchsorted(firsts, i, side="right")) - 1
 
-    def window(self, a: int, b: int) -> StreamChunk:
-        """Rows ``a`` … ``b − 1`` (clipped to the stream)."""
+    def window(self, a: int, b: int, columns=None) -> StreamChunk:
+        """Rows ``a`` … ``b − 1`` (clipped to the stream); ``columns``: only these of
+        ``time_s, gyro_counts, table_deg, temperature_c`` (the others are None)."""
         self.index()
         n = len(self)
         a, b = max(0, int(a)), min(n, int(b))
@@ -765,7 +766,8 @@ class StreamFile:
             lo = max(a, ch.first_row)
             hi = min(b, ch.first_row + ch.time_s.size)
             if out is None:          # the result is allocated once and filled block by block
-                out = {name: None if getattr(ch, name) is None else
+                out = {name: None if getattr(ch, name) is None or
+                       (columns is not None and name not in columns) else
                        np.empty(b - a, dtype=getattr(ch, name).dtype)
                        for name in ("time_s", "gyro_counts", "table_deg", "temperature_c")}
             for name, arr in out.items():

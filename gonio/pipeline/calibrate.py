@@ -197,7 +197,7 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
     t0, t1 = float(zs["t_zero_s"].min()), float(zs["t_read_s"].max())
     if hasattr(stream, "window"):
         a, b = stream.search(t0, "left"), stream.search(t1, "right")
-        ch = stream.window(a, b)
+        ch = stream.window(a, b, columns=("time_s", "gyro_counts"))
         t, c = ch.time_s, ch.gyro_counts
         del ch
     else:
