@@ -7,7 +7,7 @@ Contents (one module per piece of physics or procedure):
 ``gonio.physics.kinematics``       table motion profiles; tilted sensing axis
 ``gonio.protocol``         the draft's procedures as data (TOML), validated
 ``gonio.bench``            the virtual bench: table, instrument, session
-``gonio.formats.readings``               readings and stream files (data-formats contract)
+``gonio.formats.readings``               readings and stream files (docs/formats.md)
 ``gonio.specs.ogam_draft.items``  the seven characteristics of draft clause 7
 ``gonio.physics.tilt``             Annex A.4.2 elliptic projection; rigid-body tilt
 ``gonio.specs.ogam_draft.budget``           the Annex A uncertainty budget

@@ -2,12 +2,12 @@
 
 Contents
 --------
-:class:`TiltEstimatePlan`          the ``[tilt_estimate]`` protocol section (registered here)
+:class:`~gonio.protocol.sections.TiltEstimatePlan` the ``[tilt_estimate]`` protocol section (defined in the protocol layer)
 :func:`fit_first_harmonic`         LS fit c0 + a cos θ + b sin θ with its residual-based covariance
 :func:`estimate_tilt`              ψ, α and their standard uncertainties from rates at positions
 :func:`tilt_estimate_from_readings` the same from ``tilt_estimate`` rows of a readings file
 
-Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.physics.kinematics`).
+Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro whose sensing axis n is tilted by ψ from the table axis a senses, with
 the table at rest at angle θ,
 
@@ -45,10 +45,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu, earth_rate_split
+from gonio.physics.earth import earth_rate_split
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG
-from gonio.protocol.sections import TiltEstimatePlan
 
 
 
@@ -210,12 +209,7 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
 
 def _perp_direction_rad(latitude_deg: float, orientation: str) -> float:
     """β: direction of Ω_⊥ in the table frame (e₁, e₂ of :func:`gonio.physics.kinematics.sensing_axis_basis`)."""
-    from gonio.physics.kinematics import sensing_axis_basis
-
-    a = axis_enu(orientation)
-    e1, e2 = sensing_axis_basis(a)
-    w = earth_rate_enu(latitude_deg)
-    return math.atan2(float(w @ e2), float(w @ e1))
+    return math.radians(earth_rate_split(latitude_deg, orientation).perpendicular_direction_deg)
 
 
 def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | None = None,

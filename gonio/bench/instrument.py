@@ -1,6 +1,6 @@
 """The simulated goniometer: what an RLG or FOG senses on a turning, tilted table.
 
-Sensed rate (draft clause 4 and Annex A; ``ogam-draft.md`` "Physics"):
+Sensed rate (draft clause 4 and Annex A; ``docs/draft-readings.md#a-tilted-axis-on-a-rotating-table``):
 
     ω_s(t) = θ̇(t) cos ψ + Ω_E · n(θ(t))
 
@@ -33,7 +33,7 @@ import numpy as np
 
 from gonio.units import S_PER_H, arcsec_to_deg, deg_sqrt_s_from_deg_sqrt_h, dph_to_dps
 from gonio.bench.config import Bench, Harmonic, InstrumentConfig
-from gonio.physics.earth import axis_enu, earth_rate_enu
+from gonio.physics.earth import axis_enu, earth_rate_table_frame_dps
 from gonio.physics.kinematics import sensing_axis_basis
 
 
@@ -107,11 +107,11 @@ class Geometry:
 def geometry(bench: Bench, orientation: str) -> Geometry:
     """Earth rate in the frame of the table set up in ``orientation``."""
     a = actual_axis_enu(orientation, bench)
-    e1, e2 = sensing_axis_basis(a)
-    w = np.degrees(earth_rate_enu(bench.latitude_deg)) if bench.earth_rate else np.zeros(3)
+    par, w1, w2 = earth_rate_table_frame_dps(bench.latitude_deg, a) if bench.earth_rate \
+        else (0.0, 0.0, 0.0)
     inst, tab = bench.instrument, bench.table
     psi = math.radians(inst.tilt_deg)
-    return Geometry(float(w @ a), float(w @ e1), float(w @ e2), math.cos(psi), math.sin(psi),
+    return Geometry(par, w1, w2, math.cos(psi), math.sin(psi),
                     math.radians(inst.tilt_azimuth_deg), math.radians(arcsec_to_deg(tab.wobble_arcsec)),
                     math.radians(tab.wobble_phase_deg))
 

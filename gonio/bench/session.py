@@ -18,7 +18,6 @@ in-situ tilt estimate (:mod:`gonio.analysis.tilt_estimate`, uncompensated rests)
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -32,7 +31,6 @@ from gonio.atomic import output_dir, write_text
 from gonio.bench.config import Bench
 from gonio.bench.instrument import (Integrator, counts_from_angle, deterministic_signature,
                                     geometry, harmonic_sum_arcsec, rate_nonlinearity)
-from gonio.formats.counters import wrap_counter
 from gonio.formats.records import StaticRecord
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.errors import GonioError
@@ -222,12 +220,12 @@ def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | No
     pl = _Planner(protocol, bench, rng)
     if protocol.zero_stability is not None:
         pl.zero_stability()
-    if protocol.extra.get("tilt_estimate") is not None:
-        pl.tilt_estimate(protocol.extra["tilt_estimate"])
+    if protocol.tilt_estimate is not None:
+        pl.tilt_estimate(protocol.tilt_estimate)
     for item in protocol.items():
         for series in range(1, item.series + 1):
             pl.rotation(item, series)
-    eda = protocol.extra.get("equal_division")
+    eda = protocol.equal_division
     if eda is not None:
         for series in range(1, eda.repeats + 1):
             pl.equal_division(eda, series)
@@ -443,10 +441,10 @@ def session_metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
         "manufacturer": inst.manufacturer,
         "nominal_scale_factor_counts_per_deg": repr(inst.nominal_scale_factor_counts_per_deg),
         "latitude_deg": repr(bench.latitude_deg),
-        "temperature_c": repr(protocol.conditions["temperature_c"]),
+        "temperature_c": repr(protocol.conditions.temperature_c),
         "table": bench.table.name,
         "table_mpe_arcsec": repr(bench.table.mpe_arcsec),
-        "tilt_bound_deg": repr(protocol.annex_a["tilt_bound_deg"]),
+        "tilt_bound_deg": repr(protocol.annex_a.tilt_bound_deg),
         "operator": "virtual bench",
         "protocol": protocol.name,
         "bench": bench.name,

@@ -29,8 +29,9 @@ from gonio.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.bench.session import plan_session
 from gonio.errors import GonioError
 from gonio.physics.compensation import CompensationResidual
-from gonio.physics.coupling import coupling_terms, table_frame
+from gonio.physics.coupling import coupling_terms
 from gonio.physics.earth import earth_rate_split
+from gonio.physics.kinematics import Timeline
 from gonio.protocol import Protocol
 from gonio.units import dps_to_arcsec_s
 
@@ -119,7 +120,8 @@ def session_coupling(protocol, bench, tilt_deg: float | None = None,
         if lat is None:
             par = perp = beta = 0.0
         else:
-            par, perp, beta = table_frame(lat, blk.orientation)
+            sp = earth_rate_split(lat, blk.orientation)
+            par, perp, beta = sp.parallel_dps, sp.perpendicular_dps, sp.perpendicular_direction_deg
         c = comp if blk.compensate else "none"
         thc = None
         if c == "measured" and blk.k_static:
@@ -149,7 +151,7 @@ def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
     distribution, because the error is a sinusoid of an unknown, uniformly
     distributed tilt azimuth α (JCGM 101 6.4.6: u = a/√2). Pass the result to
     :func:`gonio.specs.ogam_draft.budget.annex_a_budget` (or another specification's budget) in ``extra_components``. The draft's
-    budget has no such line (``ogam-draft.md`` "Physics").
+    budget has no such line (``docs/draft-readings.md#tilt-and-earth-rate-coupling``).
 
     Examples
     --------
@@ -174,32 +176,45 @@ def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
                           "arcsine")
 
 
-def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s: float):
-    """(C, S) with ∫₀ᵗ [cos(θ(t′)+α) − cos α] dt′ = C cos α − S sin α, seconds.
+def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s: float,
+                               accel_dps2: float = 60.0):
+    """(C, S) with ∫₀ᵗ [cos(θ(t′)+α) − cos α] dt′ = C cos α − S sin α, seconds, per reading.
 
-    The residual rate of the tilt × Earth-rate coupling after the compensation at the
-    start is Ω_⊥ sin ψ [cos(θ+α) − cos α] (ogam-draft.md "Physics"); integrated from
-    the zeroing to the reading it is Ω_⊥ sin ψ (C cos α − S sin α). The table turns at
-    ``rate_dps`` for T_r = t − read_delay and rests at θ until the reading:
-    C = sin θ/ω − T_r + (cos θ − 1)(t − T_r), S = (1 − cos θ)/ω + sin θ (t − T_r).
+    The residual rate of the tilt × Earth-rate coupling after the compensation
+    measured at the zero position is Ω_⊥ sin ψ [cos(θ+α) − cos α]
+    (:mod:`gonio.physics.coupling`); integrated from the zeroing to the reading it
+    is Ω_⊥ sin ψ (C cos α − S sin α). Each reading is modelled as a trapezoidal
+    move from 0 to θ at ``rate_dps`` and ``accel_dps2`` followed by a rest until
+    ``time_s`` after zeroing (``read_delay_s`` is kept for the call signature of
+    the readings model: the rest is whatever the time to reading leaves). The
+    integrals are :func:`gonio.physics.coupling.coupling_terms`' (one implementation).
 
-    >>> c, s = tilt_coupling_coefficients([180.0], [13.0], 60.0, 10.0)
+    A half turn at 60 °/s with a near-instant start, read 13 s after zeroing:
+    C = sin θ/ω − T_r + (cos θ − 1)(t − T_r) = −23 s, S = (1 − cos θ)/ω + sin θ (t − T_r) = 1.91 s.
+
+    >>> c, s = tilt_coupling_coefficients([180.0], [13.0], 60.0, 10.0, accel_dps2=1e9)
     >>> round(float(c[0]), 3), round(float(s[0]), 3)
     (-23.0, 1.91)
     """
-    th = np.radians(np.asarray(theta_deg, dtype=float))
-    t = np.asarray(time_s, dtype=float)
-    w = math.radians(rate_dps)
-    t_rot = np.clip(t - read_delay_s, 0.0, None)
-    rest = t - t_rot
-    c = np.sin(th) / w - t_rot + (np.cos(th) - 1.0) * rest
-    s = (1.0 - np.cos(th)) / w + np.sin(th) * rest
+    th = np.atleast_1d(np.asarray(theta_deg, dtype=float))
+    t = np.atleast_1d(np.asarray(time_s, dtype=float))
+    th, t = np.broadcast_arrays(th, t)
+    c = np.empty(th.shape)
+    s = np.empty(th.shape)
+    for i, (theta, t_read) in enumerate(zip(th.tolist(), t.tolist())):
+        tl = Timeline()
+        arrive = tl.move(theta, rate_dps, accel_dps2)
+        tl.dwell(max(t_read - arrive, 0.0))
+        terms = coupling_terms(tl, 0.0, t_read, 0.0, 0.0, compensation="measured",
+                               theta_comp_deg=0.0)
+        c[i], s[i] = terms.p_s, terms.q_s
     return c, s
 
 
 def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,
                             repeatability_arcsec: float, *,
-                            truth: str = "systematic") -> list[ExtraComponent]:
+                            truth: str = "systematic",
+                            accel_dps2: float = 60.0) -> list[ExtraComponent]:
     """Budget lines the Annex A budget lacks, from the calibration's data and the annex's bounds.
 
     E_i uses the K of 7.1; an error δK of that K gives −θ·δK/K at point θ, the same in
@@ -227,10 +242,16 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
     >>> p = load_protocol()
     >>> df = pd.DataFrame({"test": ["scale_factor"] * 6 + ["angle_deviation"] * 2,
     ...     "table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0, 180.0, 360.0],
-    ...     "time_s": [8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 17.0]})
+    ...     "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0, 13.0, 16.0]})
     >>> [(c.symbol, round(c.half_width_arcsec, 4))
     ...  for c in budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic")]
-    [('K_P', 0.158), ('K_r', 0.1221), ('tilt_E', 0.3313)]
+    [('K_P', 0.158), ('K_r', 0.1221), ('tilt_E', 0.4915)]
+
+    With instant starts and stops (the constant-rate model) tilt_E is 5 % larger:
+
+    >>> round(budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic",
+    ...                               accel_dps2=1e9)[2].half_width_arcsec, 4)
+    0.5169
     """
     sf = readings[readings["test"] == "scale_factor"]
     ad = readings[readings["test"] == "angle_deviation"]
@@ -240,15 +261,15 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
     th_i = np.abs(ad["table_deg"].to_numpy(dtype=float))
     t_i = ad["time_s"].to_numpy(dtype=float)
     theta_max = float(np.max(th_i))
-    u_p = protocol.annex_a["table_mpe_arcsec"] / math.sqrt(3.0)
+    u_p = protocol.annex_a.table_mpe_arcsec / math.sqrt(3.0)
     amp = theta_max / n
     u_kp = amp * u_p * math.sqrt(np.sum(1.0 / th_k ** 2) + np.sum(1.0 / th_k) ** 2)
     u_kr = amp * repeatability_arcsec * math.sqrt(np.sum(1.0 / th_k ** 2))
     omega = dps_to_arcsec_s(earth_rate_split(latitude_deg, protocol.angle_deviation.orientation)
-                            .perpendicular_dps) * math.sin(math.radians(protocol.annex_a["tilt_bound_deg"]))
+                            .perpendicular_dps) * math.sin(math.radians(protocol.annex_a.tilt_bound_deg))
     sfi, adi = protocol.scale_factor, protocol.angle_deviation
-    ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s)
-    ci, si = tilt_coupling_coefficients(th_i, t_i, adi.rate_dps, adi.read_delay_s)
+    ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s, accel_dps2)
+    ci, si = tilt_coupling_coefficients(th_i, t_i, adi.rate_dps, adi.read_delay_s, accel_dps2)
     mc, ms = float(np.mean(ck / th_k)), float(np.mean(sk / th_k))
     keep = 0.0 if truth == "systematic" else 1.0
     a_tilt = omega * float(np.max(np.hypot(keep * ci - th_i * mc, keep * si - th_i * ms)))

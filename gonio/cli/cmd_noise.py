@@ -1,7 +1,7 @@
 """``gonio noise``: Allan deviation and noise-model fit of a stream file.
 
 A thin layer over :func:`gonio.analysis.noise.analyse_record` (IEEE 952-1997 Annex C). The
-stream is read with :func:`gonio.formats.streams.read_stream` (data-formats section 2); its
+stream is read with :func:`gonio.formats.streams.read_stream` (``docs/formats.md#stream-file``); its
 ``gyro_counts`` column is interpreted according to ``--input``:
 
 * ``angle`` (default): the cumulative pulse counter (unwrapped), i.e. the integrated

@@ -1,7 +1,7 @@
 """``gonio sagnac``: Sagnac scale factor of a ring-laser or fibre-optic gyro.
 
 RLG: K = 4A/(λP) pulses per radian; FOG: 2πLD/(λc) rad of phase per rad/s
-(ogam-draft.md "Physics the draft relies on"). A thin layer over
+(docs/draft-readings.md#sagnac-effect). A thin layer over
 :func:`gonio.physics.sagnac.sagnac_rlg` and :func:`gonio.physics.sagnac.sagnac_fog`.
 """
 

@@ -15,14 +15,19 @@ def register(sub) -> None:
     p = sub.add_parser("simulate", help="run a protocol on the virtual bench",
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
-    p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the specification's)")
+    p.add_argument("--bench", default=None,
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--stream", action="store_true",
                    help="also write the stream (every sample: time, wrapped counter, table "
-                        "angle; data-formats.md §2), chunk by chunk, with progress on a terminal")
+                        "angle; docs/formats.md#stream-file), chunk by chunk, with progress on a "
+                        "terminal")
     p.add_argument("--stream-format", choices=("parquet", "csv"), default="parquet",
                    help="stream.parquet (default; pyarrow, the metadata as Parquet key-value "
                         "metadata) or stream.csv")
@@ -43,8 +48,17 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 def run(args) -> int:
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    proto = load_protocol(args.protocol)
-    bench = load_bench(args.bench, table=args.table)
+    if args.spec != "ogam-draft":
+        from gonio.pipeline.rate import simulate
+
+        if args.stream or args.table:
+            raise GonioError("--stream and --table apply to the ogam-draft specification only")
+        for p in simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
+                          seed=args.seed).values():
+            print(p)
+        return 0
+    proto = load_protocol(args.protocol or "ogam-draft")
+    bench = load_bench(args.bench or "rlg", table=args.table)
     writer = prog = sink = None
     if args.stream:
         from gonio.bench.session import plan_session
@@ -61,8 +75,13 @@ def run(args) -> int:
             writer.write(t, c, th)
             prog.update(len(t))
         sink = write_chunk
+    from gonio.progress import status
+
+    if sink is None:
+        status("simulate: running the session")
     try:
         result = run_session(proto, bench, seed=args.seed, stream=sink)
+        status("")
     except BaseException:
         if writer is not None:
             writer.abort()

@@ -1,4 +1,4 @@
-"""Readings files: read, validate and write (data-formats contract v1, section 1).
+"""Readings files: read, validate and write (``docs/formats.md#readings-file``).
 
 Contents
 ========
@@ -59,7 +59,7 @@ COLUMNS: tuple[str, ...] = (
 )
 #: Columns a file must have in its header.
 REQUIRED_COLUMNS: tuple[str, ...] = ("test", "series", "round", "time_s", "table_deg")
-#: Default table rate, °/s (data-formats 1; draft 7.1 and 7.4 run at 60 °/s).
+#: Default table rate, °/s (docs/formats.md#columns; draft 7.1 and 7.4 run at 60 °/s).
 DEFAULT_RATE_DPS: float = 60.0
 #: Default table-axis direction.
 DEFAULT_ORIENTATION: str = "up"
@@ -93,7 +93,7 @@ class Readings:
 
 
 def read_readings(path: str | Path) -> Readings:
-    """Read and validate a readings file (data-formats contract, section 1).
+    """Read and validate a readings file (``docs/formats.md#readings-file``).
 
     Parameters
     ----------
@@ -419,7 +419,7 @@ def format_readings(readings_or_df: Readings | pd.DataFrame,
             raise GonioError("fractional gyro_counts need metadata 'counts_quantised: false'",
                              column="gyro_counts")
     # A missing rate stays an empty cell (the reader's default, 60 °/s, applies), so
-    # zero-stability rows — the table at rest — carry no rate, as in data-formats §1.
+    # zero-stability rows — the table at rest — carry no rate, as in docs/formats.md#which-cells-may-be-empty.
     rate = get("rate_dps", DEFAULT_RATE_DPS).astype(float)
     orient = get("orientation", DEFAULT_ORIENTATION).fillna(DEFAULT_ORIENTATION)
     extras = [c for c in df.columns if c not in COLUMNS and c != "line"]

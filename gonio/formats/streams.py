@@ -1,4 +1,4 @@
-"""Stream files: the instrument sampled continuously (data-formats contract v1, section 2).
+"""Stream files: the instrument sampled continuously (``docs/formats.md#stream-file``).
 
 Contents
 ========
@@ -871,7 +871,8 @@ def iter_stream(path: str | Path, chunk_rows: int = 1_000_000, *,
 
 def read_stream(path: str | Path, *, chunk_rows: int = 1_000_000,
                 max_gap_s: float | None = None) -> Stream:
-    """Read, validate and unwrap a whole stream file (CSV or Parquet) into memory.
+    """Read, validate and unwrap a whole stream file (CSV or Parquet) into memory
+    (``docs/formats.md#stream-file``).
 
     For long records use :class:`StreamFile` (bounded memory) instead.
 
@@ -968,9 +969,9 @@ class StreamWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp",
                                          dir=self.path.parent)
-        mask = os.umask(0)
-        os.umask(mask)
-        os.fchmod(fd, 0o666 & ~mask)           # as any file the user writes (not 0600)
+        umask = os.umask(0)             # mkstemp makes 0600; every output is 0666 & ~umask
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)
         self._fh = os.fdopen(fd, "wb")
         self._buffer: list = []
         self._buffered = 0

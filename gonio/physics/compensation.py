@@ -53,7 +53,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gonio.physics.earth import OMEGA_E_ARCSEC_S, axis_az_el_deg, axis_enu, earth_rate_enu
+from gonio.physics.earth import (OMEGA_E_ARCSEC_S, axis_az_el_deg, axis_enu, earth_rate_enu,
+                                 earth_rate_on_axis_dps)
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, S_PER_H, arcsec_sqrt_s_from_deg_sqrt_h
 
@@ -92,8 +93,7 @@ class CompensationResidual:
 
 
 def _rate_arcsec_s(latitude_deg: float, az_deg: float, el_deg: float) -> float:
-    return float(np.degrees(earth_rate_enu(latitude_deg)) @ axis_enu((az_deg, el_deg))) \
-        * ARCSEC_PER_DEG
+    return earth_rate_on_axis_dps(latitude_deg, (az_deg, el_deg)) * ARCSEC_PER_DEG
 
 
 def computed_residual_dps(latitude_deg: float, axis="up", *,

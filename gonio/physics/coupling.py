@@ -9,7 +9,7 @@ Contents
 
 Per reading of a planned session, and as a budget line: :mod:`gonio.budget.extra`.
 
-Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.physics.kinematics`).
+Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro senses ω·n; with the sensing axis n tilted by ψ from the table axis a,
 coning with the table angle θ,
 
@@ -48,10 +48,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.physics.earth import axis_enu, earth_rate_enu
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG
-from gonio.physics.kinematics import Timeline, sensing_axis_basis
+from gonio.physics.kinematics import Timeline
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
 _MAX_PIECE_RAD = 0.25
@@ -238,22 +237,5 @@ def coupling_worst_case_arcsec(timeline: Timeline, t_zero_s, t_read_s, tilt_deg:
     return np.array([coupling_terms(timeline, a, b, tilt_deg, perpendicular_dps, **kw)
                      .worst_case_arcsec() for a, b in zip(tz, tr)], dtype=float)
 
-
-def table_frame(latitude_deg: float, orientation: str) -> tuple[float, float, float]:
-    """(Ω·a, Ω_⊥, β) for a table axis: °/s, °/s, degrees.
-
-    β is the direction of Ω_⊥ in the table frame (e₁, e₂) of
-    :func:`gonio.physics.kinematics.sensing_axis_basis`; a tilt with azimuth α_table in
-    that frame has α = α_table − β relative to Ω_⊥.
-
-    >>> par, perp, beta = table_frame(40.0, "up")      # e₁ east, e₂ north: Ω_⊥ points north
-    >>> round(par * 3600, 4), round(perp * 3600, 4), round(beta, 6)
-    (9.6682, 11.5221, 90.0)
-    """
-    a = axis_enu(orientation)
-    e1, e2 = sensing_axis_basis(a)
-    w = np.degrees(earth_rate_enu(latitude_deg))
-    p1, p2 = float(w @ e1), float(w @ e2)
-    return float(w @ a), math.hypot(p1, p2), math.degrees(math.atan2(p2, p1))
 
 

@@ -48,7 +48,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.units import ARCSEC_PER_DEG, S_PER_H, dph_from_rad_s, rad_to_arcsec  # noqa: F401
+from gonio.physics.kinematics import sensing_axis_basis
+from gonio.units import S_PER_H, dph_from_rad_s, dps_to_dph, rad_to_arcsec
+from gonio.units import dps_to_arcsec_s  # noqa: F401  (doctests)
 
 #: IERS nominal mean angular velocity of the Earth, rad/s.
 OMEGA_E_RAD_S = 7.292115e-5
@@ -126,29 +128,47 @@ def earth_rate_on_axis_dps(latitude_deg: float, axis="up",
     return float(math.degrees(earth_rate_enu(latitude_deg, omega_rad_s) @ axis_enu(axis)))
 
 
+def earth_rate_table_frame_dps(latitude_deg: float, axis) -> tuple[float, float, float]:
+    """The Earth rate in the frame (a, e₁, e₂) of a table axis a, °/s: (Ω·a, Ω·e₁, Ω·e₂).
+
+    The one place where the Earth rate is resolved along and across a table axis
+    (the bench, the coupling budget, the reports and the tilt estimate all use it).
+    ``axis`` is a name, (azimuth, elevation) in degrees, or an ENU unit vector;
+    e₁, e₂ complete a to a right-handed frame
+    (:func:`gonio.physics.kinematics.sensing_axis_basis`).
+
+    >>> [round(x * 3600, 4) for x in earth_rate_table_frame_dps(40.0, "up")]   # ″/s
+    [9.6682, 0.0, 11.5221]
+    """
+    a = np.asarray(axis, dtype=float) if isinstance(axis, np.ndarray) else axis_enu(axis)
+    e1, e2 = sensing_axis_basis(a)
+    w = np.degrees(earth_rate_enu(latitude_deg))
+    return float(w @ a), float(w @ e1), float(w @ e2)
+
+
 @dataclass(frozen=True)
 class EarthRateSplit:
-    """Earth rate relative to a table axis: parallel and perpendicular parts, °/s."""
+    """Earth rate relative to a table axis: parallel and perpendicular parts, °/s, and the
+    direction β of the perpendicular part in the table frame (e₁, e₂), degrees."""
 
     parallel_dps: float
     perpendicular_dps: float
+    perpendicular_direction_deg: float = 0.0
 
 
 def earth_rate_split(latitude_deg: float, axis="up") -> EarthRateSplit:
     """Split Ω_E into its components along and across a table axis, °/s.
 
     The perpendicular part Ω_⊥ drives the tilt × Earth-rate coupling
-    (``ogam-draft.md``, "Physics the draft relies on").
+    (``docs/draft-readings.md#what-the-draft-leaves-out``); a tilt with azimuth
+    α_table in the table frame has α = α_table − β relative to Ω_⊥.
 
-    >>> s = earth_rate_split(40.0, "up")
-    >>> round(s.perpendicular_dps * 3600, 2)    # ″/s
-    11.52
+    >>> s = earth_rate_split(40.0, "up")       # e₁ east, e₂ north: Ω_⊥ points north
+    >>> round(dps_to_arcsec_s(s.perpendicular_dps), 2), round(s.perpendicular_direction_deg, 6)
+    (11.52, 90.0)
     """
-    w = earth_rate_enu(latitude_deg)
-    a = axis_enu(axis)
-    par = float(w @ a)
-    perp = float(np.linalg.norm(w - par * a))
-    return EarthRateSplit(math.degrees(par), math.degrees(perp))
+    par, p1, p2 = earth_rate_table_frame_dps(latitude_deg, axis)
+    return EarthRateSplit(par, math.hypot(p1, p2), math.degrees(math.atan2(p2, p1)))
 
 
 # --- reports for the CLI -------------------------------------------------------
@@ -216,10 +236,9 @@ def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_
     """
     az, el = axis_az_el_deg(axis)
     a = axis_enu((az, el))
-    w = earth_rate_enu(latitude_deg, omega_rad_s)
-    par = float(w @ a)
-    perp = float(np.linalg.norm(w - par * a))
-    dph = math.degrees(par) * S_PER_H
+    split = earth_rate_split(latitude_deg, (az, el))
+    scale = omega_rad_s / OMEGA_E_RAD_S
+    dph = dps_to_dph(split.parallel_dps) * scale
+    perp_dph = dps_to_dph(split.perpendicular_dps) * scale
     return EarthRate(float(latitude_deg), az, el, tuple(float(x) for x in a.round(15)),
-                     dph, dph, par, dph, math.degrees(perp) * S_PER_H,
-                     math.degrees(perp) * S_PER_H, omega_rad_s)
+                     dph, dph, math.radians(dph / S_PER_H), dph, perp_dph, perp_dph, omega_rad_s)

@@ -8,7 +8,7 @@ evaluated exactly at any instant, vectorised over many instants.
 
 The sensing axis of a goniometer mounted with a tilt ψ (its azimuth α in the
 table frame) cones around the table axis as the table turns (draft Annex A.1;
-``ogam-draft.md`` "Physics the draft relies on"):
+``docs/draft-readings.md#a-tilted-axis-on-a-rotating-table``):
 
     n(θ) = cos ψ · a + sin ψ · (cos(θ+α) e₁ + sin(θ+α) e₂)
 

@@ -82,7 +82,7 @@ class Sagnac:
 def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9) -> Sagnac:
     """Ring-laser Sagnac scale factor and the full Earth rate's beat frequency.
 
-    Δf = 4A/(λP)·Ω (ogam-draft.md "Physics"; Aronowitz 1971). One pulse is
+    Δf = 4A/(λP)·Ω (docs/draft-readings.md#sagnac-effect; [Aronowitz1971]). One pulse is
     1/K rad.
 
     >>> s = sagnac_rlg(0.15**2 * 3**0.5 / 4, 0.45)          # 15 cm-side triangle, He-Ne
@@ -99,7 +99,7 @@ def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-
 def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9) -> Sagnac:
     """Fibre-optic Sagnac phase per rate 2πLD/(λc) and the full Earth rate's phase.
 
-    Δφ = 2πLD/(λc)·Ω (ogam-draft.md "Physics"; Lefèvre, The Fiber-Optic Gyroscope, 2.1).
+    Δφ = 2πLD/(λc)·Ω (docs/draft-readings.md#sagnac-effect; [Lefevre], 2.1).
 
     >>> s = sagnac_fog(1000.0, 0.1)                         # 1 km, 10 cm coil, 1550 nm
     >>> round(s.phase_per_rate_s, 4), f"{s.earth_rate_signal:.3e}"

@@ -147,7 +147,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         return bench
     if case == "tilt":
         return replace(bench, instrument=replace(bench.instrument,
-                                                 tilt_deg=protocol.annex_a["tilt_bound_deg"]))
+                                                 tilt_deg=protocol.annex_a.tilt_bound_deg))
     if case == "drift":
         return replace(bench, instrument=replace(bench.instrument,
                                                  bias_instability_dph=0.005 / math.sqrt(2.0),
@@ -222,7 +222,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
                                              "systematic_deviation_calibrated_arcsec")}
     u_r = float(rep.uncertainty.parameters["repeatability_arcsec"])
     extras = [e for e in budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r,
-                                                 truth=truth) if e.symbol in extras_used]
+                                                 truth=truth, accel_dps2=bench.table.accel_dps2)
+              if e.symbol in extras_used]
     par = rep.uncertainty.parameters
     ext = annex_a_budget(table_mpe_arcsec=par["table_mpe_arcsec"], tilt_deg=par["tilt_deg"],
                          zero_stability_dph=par["zero_stability_dph"],

@@ -6,10 +6,10 @@ estimate), registered on import. This layer sits below the bench and the
 reduction, which both read a protocol; it imports only physics and formats.
 """
 
-from gonio.protocol.model import (ORIENTATIONS, Protocol, RotationItem, Round,
+from gonio.protocol.model import (ORIENTATIONS, AnnexA, Conditions, Protocol, RotationItem, Round,
                                   Session, ZeroStability, load_protocol, parse_protocol,
                                   register_section)
 from gonio.protocol import sections  # noqa: F401  (registers the optional sections)
 
-__all__ = ["ORIENTATIONS", "Protocol", "RotationItem", "Round", "Session", "ZeroStability",
+__all__ = ["ORIENTATIONS", "AnnexA", "Conditions", "Protocol", "RotationItem", "Round", "Session", "ZeroStability",
            "load_protocol", "parse_protocol", "register_section", "sections"]

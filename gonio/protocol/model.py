@@ -82,15 +82,44 @@ class Session:
 
 
 @dataclass(frozen=True)
+class Conditions:
+    """Draft clause 5 (Tables 1 and 2): what the table and the room must meet."""
+
+    table_axis_wobble_max_arcsec: float = 0.3
+    table_positioning_mpe_arcsec: float = 0.1
+    table_angle_range_deg: float = 360.0
+    table_rate_max_dps: float = 300.0
+    table_rate_error_rel: float = 1e-5
+    table_orientations: tuple[str, ...] = ORIENTATIONS
+    temperature_c: float = 20.0
+    temperature_tolerance_c: float = 1.0
+    soak_h: float = 4.0
+    humidity_min_pct: float = 30.0
+    humidity_max_pct: float = 75.0
+
+
+@dataclass(frozen=True)
+class AnnexA:
+    """Draft Annex A settings: the budget's inputs (A.4.1–A.4.4) and coverage factor (A.7)."""
+
+    table_mpe_arcsec: float = 0.1
+    tilt_bound_deg: float = 0.1
+    zero_stability_dph: float = 0.005
+    duration_min: float = 0.5
+    repeatability_arcsec: float = 0.096
+    coverage_factor: float = 2.0
+
+
+@dataclass(frozen=True)
 class Protocol:
     """A validated protocol. Test items that the file does not hold are ``None``."""
 
     name: str
     title: str
     specification: str
-    conditions: dict
+    conditions: Conditions
     session: Session
-    annex_a: dict
+    annex_a: AnnexA
     scale_factor: RotationItem | None = None
     zero_stability: ZeroStability | None = None
     angle_deviation: RotationItem | None = None
@@ -100,6 +129,16 @@ class Protocol:
     pointing_reference: str = "up"
     extra: dict = field(default_factory=dict)
     path: str = ""
+
+    @property
+    def equal_division(self):
+        """The ``[equal_division]`` section (:class:`~gonio.protocol.sections.EdaProtocol`) or None."""
+        return self.extra.get("equal_division")
+
+    @property
+    def tilt_estimate(self):
+        """The ``[tilt_estimate]`` section (:class:`~gonio.protocol.sections.TiltEstimatePlan`) or None."""
+        return self.extra.get("tilt_estimate")
 
     def items(self) -> list[RotationItem]:
         """Every rotation item in the order the bench runs them."""
@@ -296,12 +335,13 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
             extra[name] = factory(v) if factory else v
     p = sec["protocol"]
     return Protocol(name=p["name"], title=p["title"], specification=p["specification"],
-                    conditions=sec["conditions"],
+                    conditions=Conditions(**{**sec["conditions"], "table_orientations":
+                                             tuple(sec["conditions"]["table_orientations"])}),
                     session=Session(s["warm_up_s"], s["earth_compensation"], s["static_s"],
                                     s["return_rate_dps"], s["settle_s"],
                                     s["compensation_latitude_deg"],
                                     s["compensation_azimuth_error_deg"]),
-                    annex_a=sec["annex_a"], extra=extra, path=str(file or ""), **kw)
+                    annex_a=AnnexA(**sec["annex_a"]), extra=extra, path=str(file or ""), **kw)
 
 
 def load_protocol(path: str | Path = "ogam-draft") -> Protocol:

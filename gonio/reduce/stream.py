@@ -11,7 +11,7 @@ Contents
 :func:`read_override`      an operator's explicit (t_zero, t_read) per round
 =========================  ===================================================
 
-What an acquisition does on its external trigger (data-formats §2, draft clause 7
+What an acquisition does on its external trigger (docs/formats.md#from-a-stream-to-readings, draft clause 7
 preamble), reproduced from the continuous counter:
 
 1. **Rests.** With ``table_deg``: the encoder angle, despiked by a 3-sample
@@ -43,7 +43,6 @@ matching round by round (:func:`read_override`).
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -492,7 +491,7 @@ class Reduction:
     Attributes
     ----------
     readings : pandas.DataFrame
-        Readings-file columns (data-formats §1), plus ``t_zero_s`` and ``t_read_s``
+        Readings-file columns (docs/formats.md#columns), plus ``t_zero_s`` and ``t_read_s``
         (stream times of the zeroing and reading samples; not written by
         :func:`gonio.formats.readings.write_readings` unless kept as extra columns).
     unmatched : list of dict
@@ -566,7 +565,7 @@ class _Ctx:
 
 
 def _computed_comp(st: Stream, orientation: str) -> float:
-    from gonio.physics.earth import axis_enu, earth_rate_enu
+    from gonio.physics.earth import earth_rate_on_axis_dps
     from gonio.formats.readings import metadata_float
     k = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
     lat = metadata_float(st.metadata, "latitude_deg", file=st.path)
@@ -575,8 +574,7 @@ def _computed_comp(st: Stream, orientation: str) -> float:
                          "nominal_scale_factor_counts_per_deg and latitude_deg", file=st.path,
                          key="latitude_deg" if lat is None else
                          "nominal_scale_factor_counts_per_deg")
-    w = np.degrees(earth_rate_enu(lat)) @ axis_enu(orientation)
-    return k * float(w)
+    return k * earth_rate_on_axis_dps(lat, orientation)
 
 
 def _static_comp(ctx: _Ctx, rest_idx: int, kz: int) -> float | None:

@@ -66,10 +66,10 @@ INPUT_TYPES = ("rate", "increment", "angle")
 #: 2 ln 2 / π, the flicker (bias-instability) coefficient of AVAR (IEEE 952 C.3).
 FLICKER_COEFF = 2.0 * math.log(2.0) / math.pi
 #: sqrt(2 ln 2 / π) = 0.664: ADEV floor of flicker rate noise per unit B (IEC 62047-20 5.4).
-FLICKER_FLOOR = 0.664
-#: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7; thesis 004).
+FLICKER_FLOOR = math.sqrt(FLICKER_COEFF)
+#: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7; [Vagner2015], docs/references.md#vagner2015).
 SINE_TAU_PER_PERIOD = 0.371
-#: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7; thesis 004).
+#: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7; [Vagner2015], docs/references.md#vagner2015).
 SINE_PEAK_PER_AMPLITUDE = 0.725
 
 _BLOCK = 1 << 16  # samples per chunk of the direct O(N) sums (keeps temporaries small)
@@ -857,7 +857,7 @@ def detect_sinusoid(allan: AllanResult, fit: NoiseFit | None = None, *,
 
     A sinusoidal rate disturbance of amplitude Ω and period T adds
     ``Ω² sin⁴(πτ/T)/(πτ/T)²`` to the Allan variance (peak σ ≈ 0.725 Ω at
-    τ ≈ 0.371 T, thesis 004). Candidates are local maxima of σ_obs/σ_model whose
+    τ ≈ 0.371 T, [Vagner2015]). Candidates are local maxima of σ_obs/σ_model whose
     excess variance exceeds ``threshold`` standard deviations of σ̂² (sd from the
     edf). The candidate is then refined: for trial periods around
     τ_peak/0.371, the model's five columns plus the sinusoid's column are fitted by
