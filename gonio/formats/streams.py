@@ -339,7 +339,7 @@ class StreamFile:
     metadata is the file's key-value metadata, one row group is a block, and an
     error names the data row (1-based) and column.
 
-    Checks, beyond each value's type and range (data-formats §2): time strictly
+    Checks, beyond each value's type and range (docs/formats.md#stream-file): time strictly
     increasing, no gap above ``max_gap_s``; with the metadata
     ``nominal_scale_factor_counts_per_deg`` (K), the unwrapped counter must move
     at a plausible rate (|Δcount|/(K Δt) ≤ ``max_rate_dps``, metadata or
@@ -372,6 +372,10 @@ class StreamFile:
             "nominal_scale_factor_counts_per_deg" in h.metadata else None
         self.rate_bound_dps = metadata_float(h.metadata, "max_rate_dps", file=self.fname) \
             if "max_rate_dps" in h.metadata else PLAUSIBLE_RATE_DPS
+        if not (self.rate_bound_dps is not None and math.isfinite(self.rate_bound_dps)
+                and self.rate_bound_dps > 0):
+            raise GonioError(f"expected a number > 0, got {h.metadata.get('max_rate_dps')!r}",
+                             file=self.fname, key="max_rate_dps")
         self.blocks: list[_Block] | None = None
         self._cache: dict[int, StreamChunk] = {}
         self._cache_order: list[int] = []
