@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
@@ -44,30 +45,6 @@ READINGS_TAKEN = (
     "Annex A.4.2: the elliptic-projection tilt model of the draft is used for u(φ_e); the "
     "rigid-body model (tilt is a cos ψ factor absorbed by the scale factor) is shown beside it.",
 )
-
-
-def json_safe(x):
-    """Plain JSON types all the way down: numpy scalars to Python, NaN/inf to ``None``.
-
-    >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
-    {'a': None, 'b': [1.5, None]}
-    """
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [json_safe(v) for v in x.tolist()]
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 @dataclass
