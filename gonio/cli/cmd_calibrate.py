@@ -15,7 +15,15 @@ def register(sub) -> None:
                                    "summary.txt and tables/*.csv into --out.")
     p.add_argument("readings", help="readings file (CSV, data-formats.md §1) or a stream (§2, "
                    "reduced with the protocol first; told apart by the header)")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the readings file's "
+                        "'# protocol:', else ogam-draft; a different one is reported)")
+    p.add_argument("--budget", choices=("physical", "draft"), default="physical",
+                   help="E's budget: physical (default: Annex A plus the lines beyond the draft "
+                        "the validation showed to matter) or draft (the annex's four lines)")
+    p.add_argument("--tilt", default=None, metavar="FILE",
+                   help="a 'gonio tilt-estimate --json' result: bounds the tilt by psi + U95 "
+                        "instead of the protocol's tilt bound")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     add_certificate_options(p)
@@ -38,7 +46,11 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) 
     """Write the outputs (results, tables, certificate) and print the summary (or the JSON)."""
     from gonio.report.certificate import load_lab, write_certificate
 
+    import sys
+
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
+    for w in report.warnings():
+        print(w, file=sys.stderr)
     write_calibration(report, out)
     write_certificate(report, out, truth=truth, lab=lab_d, lang=lang)
     if as_json:
@@ -50,6 +62,7 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) 
 def run(args) -> int:
     if args.monte_carlo < 0:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
-    report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo)
+    report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo,
+                       budget=args.budget, tilt=args.tilt)
     emit(report, args.out, args.json, lab=args.lab, lang=args.lang)
     return 0

@@ -173,7 +173,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     res = report.to_dict()
     md = res.get("metadata", {})
     unc = res["uncertainty"]
-    U = float(unc["U_arcsec"])
+    has_U = unc.get("U_arcsec") is not None      # no item, no uncertainty (issue 12, defect 2)
+    U = float(unc["U_arcsec"]) if has_U else None
     virtual = lab is None
     lab_ = lab or {}
     blocks: list[Block] = []
@@ -261,19 +262,26 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
         rrows.append([str(i), L[name], item["clause"], cell, unit])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["unit"]], rrows),
         {"widths": (0.06, 0.33, 0.10, 0.41, 0.10), "id": "results"})
-    add("p", _seg(L["U_line"], U=_num(res, "uncertainty.U_arcsec", "U", U),
-                  k=_num(res, "uncertainty.k", "pos", U)), "U")
-    add("p", _seg(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+    if has_U:
+        add("p", _seg(L["U_line"], U=_num(res, "uncertainty.U_arcsec", "U", U),
+                      k=_num(res, "uncertainty.k", "pos", U))
+            + [f" (k: {unc.get('k_source') or '—'}; {unc.get('budget_kind') or '—'} budget)"],
+            "U")
+        add("p", _seg(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+    else:
+        add("p", [unc.get("reason") or "no uncertainty stated"], "U")
 
     # budget
-    add("h", L["budget"])
+    if has_U:
+        add("h", L["budget"])
     brows = []
-    for j, c in enumerate(unc["components"]):
+    for j, c in enumerate(unc["components"] if has_U else []):
         brows.append([f"u({c['symbol'].replace('phi_e', 'φ_e')})", c["source"], c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])
-    add("table", ([L["component"], L["source"], L["type"], L["u_i"], "|c_i|·u_i (″)"], brows),
-        (0.14, 0.50, 0.08, 0.14, 0.14))
+    if has_U:
+        add("table", ([L["component"], L["source"], L["type"], L["u_i"], "|c_i|·u_i (″)"],
+                      brows), (0.14, 0.50, 0.08, 0.14, 0.14))
 
     # readings taken
     add("h", L["readings_taken"])
@@ -304,6 +312,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     # figures
     add("h", L["figures"])
     for key, cap, draw in FIGURES:
+        if key == "budget" and not has_U:
+            continue
         add("fig", (key, L[cap], draw))
     return {"id": certificate_id(report, lab), "virtual": virtual,
             "lab_name": (lab_["laboratory"]["name"] if lab else "gonio virtual bench"),

@@ -376,7 +376,8 @@ def angle_deviation_budget(annex, value_arcsec: float, *,
             name, clause = _ANNEX_NAMES[c.symbol]
             beyond = False
         else:
-            name, clause, beyond = c.source, EXTRA_CLAUSES.get(c.symbol, "beyond the draft"), True
+            name = c.source.split(" [beyond the draft")[0]
+            clause, beyond = EXTRA_CLAUSES.get(c.symbol, "beyond the draft"), True
         comps.append(Component(name=name, symbol=c.symbol, u=float(c.contribution),
                                unit="arcsec", type=c.type, distribution=c.distribution,
                                dof=float(c.dof), source=c.source, beyond_draft=beyond,
