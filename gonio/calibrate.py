@@ -228,8 +228,9 @@ ITEM_NAMES = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "an
 
 # --------------------------------------------------------------------------- settings
 
-def file_protocol_name(path: str | Path) -> str | None:
-    """The ``# protocol: NAME`` metadata of a readings file or stream, read from its head."""
+def file_metadata(path: str | Path) -> dict:
+    """The ``# key: value`` metadata lines at the head of a readings file or stream."""
+    out: dict = {}
     try:
         with open(path, encoding="utf-8-sig") as fh:
             for line in fh:
@@ -237,13 +238,18 @@ def file_protocol_name(path: str | Path) -> str | None:
                 if not t:
                     continue
                 if not t.startswith("#"):
-                    return None
+                    break
                 key, sep, value = t[1:].partition(":")
-                if sep and key.strip() == "protocol":
-                    return value.strip() or None
+                if sep:
+                    out.setdefault(key.strip(), value.strip())
     except (OSError, UnicodeDecodeError):
-        return None
-    return None
+        return {}
+    return out
+
+
+def file_protocol_name(path: str | Path) -> str | None:
+    """The ``# protocol: NAME`` metadata of a readings file or stream, read from its head."""
+    return file_metadata(path).get("protocol") or None
 
 
 def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None,
@@ -740,20 +746,21 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
     items = item_uncertainties(res, e_budget, proto, settings, kept)
     noise, noise_src = analyse_zero_stability(static_record)
-    eda = equal_division_for(res, kept)
+    eda = equal_division_for(res, kept, proto)
     return CalibrationReport(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                              item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                              budget_notes=notes, excluded=excluded)
 
 
-def equal_division_for(results: CalibrationResults, readings: Readings):
+def equal_division_for(results: CalibrationResults, readings: Readings,
+                       protocol: Protocol | None = None):
     """Analyse the file's ``equal_division`` rows (table calibration, IEC 62047-20 A.3), if any.
 
     Those rows are then used: they leave the ``unused_readings`` list. When they do
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.eda import eda_matrix_from_readings, equal_division_analysis
+    from gonio.eda import analyse_eda_readings
 
     df = readings.data
     rows = df[df["test"] == "equal_division"]
@@ -763,9 +770,12 @@ def equal_division_for(results: CalibrationResults, readings: Readings):
 
     un = results.unused_readings
     try:
-        D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False),
-                                                  file=readings.path)
-        out = equal_division_analysis(D, start, step)
+        out = analyse_eda_readings(
+            rows.set_index("line", drop=False), protocol.extra.get("equal_division") if protocol else None,
+            file=readings.path,
+            latitude_deg=metadata_float(readings.metadata, "latitude_deg", file=readings.path),
+            tilt_bound_deg=metadata_float(readings.metadata, "tilt_bound_deg",
+                                          file=readings.path))
     except GonioError as exc:
         # Not a complete equal-division measurement: the rest of the calibration goes
         # on; the rows stay listed as unused, with the reason.
