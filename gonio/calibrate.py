@@ -772,7 +772,9 @@ def equal_division_for(results: CalibrationResults, readings: Readings,
     try:
         out = analyse_eda_readings(
             rows.set_index("line", drop=False), protocol.extra.get("equal_division") if protocol else None,
-            file=readings.path,
+            file=readings.path, compensation_time_s=(
+                protocol.session.static_s if protocol is not None
+                and protocol.session.earth_compensation == "measured" else None),
             latitude_deg=metadata_float(readings.metadata, "latitude_deg", file=readings.path),
             tilt_bound_deg=metadata_float(readings.metadata, "tilt_bound_deg",
                                           file=readings.path))

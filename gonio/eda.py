@@ -549,7 +549,8 @@ def _check_step(step_deg: float) -> int:
 NOISE_MODELS = ("random_walk", "white")
 
 
-def noise_whitening(m: int, noise: str) -> np.ndarray:
+def noise_whitening(m: int, noise: str, time_s=None,
+                    compensation_time_s: float | None = None) -> np.ndarray:
     """The m×m matrix W that whitens one start's reading errors (generalised least squares).
 
     ``white``: readings independent, W = I (the classic IEC 62047-20 A.3 model).
@@ -559,11 +560,26 @@ def noise_whitening(m: int, noise: str) -> np.ndarray:
     increments between equally spaced steps are independent. Readings of one start
     are then correlated, and the white model understates the uncertainty.
 
+    With the readings' times t_j since zeroing (``time_s``, shape (m,)) the random
+    walk's covariance is min(t_i, t_j) (unequal steps); with ``compensation_time_s`` T
+    the Earth-rate/bias compensation measured at rest for T before the start adds its
+    own error, a rate common to the start's readings whose variance is the random
+    walk's over T divided by T²: covariance min(t_i, t_j) + t_i t_j / T. W = L⁻¹ with
+    V = L Lᵀ (Cholesky).
+
     >>> noise_whitening(3, "random_walk").tolist()
     [[1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]]
+    >>> np.round(noise_whitening(2, "random_walk", [1.0, 2.0]), 9).tolist()
+    [[1.0, 0.0], [-1.0, 1.0]]
     """
     if noise == "white":
         return np.eye(m)
+    if noise == "random_walk" and time_s is not None:
+        t = np.asarray(time_s, dtype=float)
+        V = np.minimum.outer(t, t)
+        if compensation_time_s:
+            V = V + np.outer(t, t) / float(compensation_time_s)
+        return np.linalg.inv(np.linalg.cholesky(V))
     if noise == "random_walk":
         return np.eye(m) - np.eye(m, k=-1)
     raise GonioError(f"unknown noise model {noise!r} (expected one of {', '.join(NOISE_MODELS)})",
@@ -573,7 +589,9 @@ def noise_whitening(m: int, noise: str) -> np.ndarray:
 def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int | None = None,
                             gauge: str = "closure", max_order: int | None = None,
                             noise: str = "random_walk", coupling=None,
-                            coupling_bound_arcsec_s: float | None = None) -> EdaResult:
+                            coupling_bound_arcsec_s: float | None = None,
+                            noise_time_s=None,
+                            compensation_time_s: float | None = None) -> EdaResult:
     """Separate the table's and the goniometer's errors by equal-division averaging.
 
     Least-squares fit of (IEC 62047-20 Annex A.3, generalised; GUM H.3)
@@ -664,7 +682,11 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
     p = _grid_indices(start_deg, float(step_deg))
 
-    W = noise_whitening(m, noise)
+    tw = None
+    if noise_time_s is not None:
+        tw = np.asarray(noise_time_s, dtype=float)
+        tw = tw.reshape(-1, m).mean(axis=0)            # the schedule: mean over starts
+    W = noise_whitening(m, noise, tw, compensation_time_s)
     Wn = sp.kron(sp.eye(n), sp.csr_matrix(W))
     A = sp.csr_matrix(Wn @ _design(p, m))
     D_raw = D
@@ -684,12 +706,14 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         if C.shape != (n, m, 2) or not np.all(np.isfinite(C)):
             raise GonioError(f"coupling design must be finite with shape {(n, m, 2)}, got "
                              f"{C.shape}", key="coupling")
-        Cw = np.asarray(Wn @ C.reshape(n * m, 2))
+        cols = C.reshape(n * m, 2)
+        q = cols.shape[1]
+        Cw = np.asarray(Wn @ cols)
         A_ext = sp.hstack([A, sp.csr_matrix(Cw)]).tocsr()
         N_ext = (A_ext.T @ A_ext).toarray()
-        Z_ext = np.zeros((2 * m + 2, Z.shape[1] + 2))
+        Z_ext = np.zeros((2 * m + q, Z.shape[1] + q))
         Z_ext[:2 * m, :Z.shape[1]] = Z
-        Z_ext[2 * m:, Z.shape[1]:] = np.eye(2)
+        Z_ext[2 * m:, Z.shape[1]:] = np.eye(q)
         M_ext = Z_ext.T @ (R * N_ext) @ Z_ext
         scale = np.sqrt(np.clip(np.diag(M_ext), 1e-300, None))
         cond = np.linalg.cond(M_ext / np.outer(scale, scale))
@@ -724,7 +748,7 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     g, t = theta[:m], theta[m:2 * m]
     cov_g, cov_t = cov[:m, :m], cov[m:2 * m, m:2 * m]
     if cfit == "fit":
-        ab, cab = theta[2 * m:], cov[2 * m:, 2 * m:]
+        ab, cab = theta[2 * m:2 * m + 2], cov[2 * m:2 * m + 2, 2 * m:2 * m + 2]
         amp = float(np.hypot(*ab))
         grad = ab / amp if amp > 0 else np.array([1.0, 0.0])
         eff = np.asarray(coupling, dtype=float) @ ab
@@ -1134,7 +1158,8 @@ def analyse_eda_readings(df: pd.DataFrame, protocol: "EdaProtocol | None" = None
                          starts: int | None = None, file=None, gauge: str = "closure",
                          noise: str = "random_walk", coupling: bool = True,
                          latitude_deg: float | None = None,
-                         tilt_bound_deg: float | None = None) -> EdaResult:
+                         tilt_bound_deg: float | None = None,
+                         compensation_time_s: float | None = None) -> EdaResult:
     """A readings file's ``equal_division`` rows analysed, the coupling as a nuisance.
 
     With ``coupling`` (default) and the rows' ``time_s``, the tilt × Earth-rate coupling
@@ -1142,6 +1167,9 @@ def analyse_eda_readings(df: pd.DataFrame, protocol: "EdaProtocol | None" = None
     ``read_delay_s``; the built-in ``eda`` protocol when none is given). Without times
     it cannot be: the result then carries a :class:`CouplingFit` with
     ``separable=False`` and its size at the tilt bound (latitude and tilt bound known).
+    ``compensation_time_s``: the static phase of a measured Earth-rate compensation
+    before each start (the protocol's ``session.static_s``); its error, a rate common
+    to the start's readings, enters the noise model (:func:`noise_whitening`).
     """
     D, start, step, T = eda_matrix_from_readings(df, starts=starts, file=file,
                                                  return_times=True)
@@ -1163,7 +1191,8 @@ def analyse_eda_readings(df: pd.DataFrame, protocol: "EdaProtocol | None" = None
     p = protocol or load_eda_protocol()
     C = coupling_design(T, start, step, p.read_delay_s, p.rate_dps)
     return equal_division_analysis(D, start, step, gauge=gauge, noise=noise, coupling=C,
-                                   coupling_bound_arcsec_s=bound)
+                                   coupling_bound_arcsec_s=bound, noise_time_s=T,
+                                   compensation_time_s=compensation_time_s)
 
 
 # --------------------------------------------------------------------------- protocol

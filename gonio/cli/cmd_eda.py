@@ -168,8 +168,12 @@ def run(args) -> int:
 
     df = read_eda_csv(args.readings)
     md = file_metadata(args.readings)
+    from gonio.protocol import load_protocol
+
+    sess = load_protocol(args.protocol).session
     res = analyse_eda_readings(
         df, load_eda_protocol(args.protocol), starts=args.starts, file=args.readings,
+        compensation_time_s=sess.static_s if sess.earth_compensation == "measured" else None,
         gauge=args.gauge, noise=args.noise, coupling=not args.no_coupling,
         latitude_deg=metadata_float(md, "latitude_deg", file=args.readings),
         tilt_bound_deg=metadata_float(md, "tilt_bound_deg", file=args.readings))

@@ -339,6 +339,13 @@ def _eda_section(res: dict, L: dict, U: float, add) -> None:
     add("p", _seg(L["eda_closure"],
                   v=_num(res, "equal_division.closure.full_turn_arcsec", "sig3", U),
                   u=_num(res, "equal_division.closure.u_full_turn_arcsec", "U", U)))
+    cp = e.get("coupling")                   # tilt × Earth-rate coupling (issue 12, defect 6)
+    if cp:
+        txt = cp["note"]
+        if cp.get("separable"):
+            txt += (f" (Ω⊥ tan ψ = {cp['amplitude_arcsec_s']:.2g}″/s, largest effect on a "
+                    f"reading {cp['max_effect_arcsec']:.2g}″)")
+        add("p", [txt])
 
 
 def _seg(template: str, **nums) -> list:
