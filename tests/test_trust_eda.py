@@ -66,8 +66,8 @@ def test_coupling_design_against_quadrature():
     pos = 60.0 + 30.0 * np.searchsorted(tau, grid, side="right")
     for j in range(3):
         sel = grid <= t[0, j]
-        p_num = np.trapz(np.cos(np.radians(pos[sel])) - np.cos(np.radians(60.0)), grid[sel])
-        q_num = np.trapz(np.sin(np.radians(pos[sel])) - np.sin(np.radians(60.0)), grid[sel])
+        p_num = np.trapezoid(np.cos(np.radians(pos[sel])) - np.cos(np.radians(60.0)), grid[sel])
+        q_num = np.trapezoid(np.sin(np.radians(pos[sel])) - np.sin(np.radians(60.0)), grid[sel])
         assert C[0, j, 0] == pytest.approx(p_num, abs=2e-4)
         assert C[0, j, 1] == pytest.approx(q_num, abs=2e-4)
 
