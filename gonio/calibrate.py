@@ -607,8 +607,13 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed)
     zs = results.zero_stability
     if zs.measured:
-        out["zero_stability"] = iu.zero_stability_budget(float(zs.value),
-                                                         int(zs.details["n_readings"]), k=k_fixed)
+        rd = zs.tables["readings"]
+        t_zs = rd.loc[rd["series"] == zs.details["series"], "time_s"].to_numpy(dtype=float)
+        comp = protocol.session.static_s if protocol.session.earth_compensation == "measured" \
+            else None
+        out["zero_stability"] = iu.zero_stability_budget(
+            float(zs.value), int(zs.details["n_readings"]), time_s=t_zs,
+            compensation_time_s=comp, k=k_fixed)
     e = results.angle_deviation
     if e.measured:
         out["angle_deviation"] = iu.angle_deviation_budget(

@@ -11,6 +11,9 @@
   deviations (each with ν) as an estimate of the largest σ_i: the quantiles are
   those of the maximum of m independent χ² variables (Šidák: probability
   p^(1/m) per member), since picking the largest s biases it upwards.
+- :func:`random_walk_stdev_dof` — the effective degrees of freedom of the sample
+  variance of n equally spaced samples of a random walk (correlated samples carry
+  far less information than n independent ones).
 - :func:`expected_range_factor` — d₂(n) = E[range of n standard normal values]
   (Tippett 1925), by numerical integration: the mean by which noise of standard
   deviation σ alone spreads n values, d₂(n)·σ.
@@ -25,7 +28,8 @@ import math
 import numpy as np
 from scipy import integrate, stats
 
-__all__ = ["stdev_interval", "stdev_u", "max_stdev_interval", "expected_range_factor"]
+__all__ = ["stdev_interval", "stdev_u", "max_stdev_interval", "expected_range_factor",
+           "random_walk_stdev_dof", "correlated_stdev_dof"]
 
 
 def _check(s: float, dof: float) -> None:
@@ -110,3 +114,44 @@ def expected_range_factor(n: int) -> float:
     f = lambda x: 1.0 - (1.0 - stats.norm.cdf(x)) ** n - stats.norm.cdf(x) ** n  # noqa: E731
     val, _ = integrate.quad(f, -np.inf, np.inf)
     return float(val)
+
+
+def random_walk_stdev_dof(n: int) -> float:
+    """Effective ν of s² from n equally spaced samples of a random walk (Satterthwaite).
+
+    s² = xᵀAx is a quadratic form in the walk's independent increments x; matching
+    the mean and variance of a scaled χ², ν_eff = 2E[s²]²/Var(s²) = (tr A)²/tr(A²)
+    (Satterthwaite 1946). Independent samples would give n − 1.
+
+    >>> round(random_walk_stdev_dof(15), 3), round(random_walk_stdev_dof(4), 3)
+    (2.451, 1.923)
+    """
+    if int(n) != n or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n}")
+    c = np.tril(np.ones((n - 1, n - 1)))
+    c = np.vstack([np.zeros((1, n - 1)), c])           # first sample is the walk's origin
+    p = (np.eye(n) - 1.0 / n) / (n - 1)
+    a = c.T @ p @ c
+    return float(np.trace(a) ** 2 / np.trace(a @ a))
+
+
+def correlated_stdev_dof(cov) -> float:
+    """Effective ν of the sample variance of n normal samples with covariance ``cov``.
+
+    s² = yᵀPy/(n − 1), P the centring matrix; with y ~ N(μ, V), E[s²] ∝ tr(PV) and
+    Var(s²) ∝ 2 tr((PV)²), so ν_eff = (tr PV)²/tr((PV)²) (Satterthwaite 1946).
+    V = I gives n − 1; a random walk's min(t_i, t_j) gives
+    :func:`random_walk_stdev_dof`.
+
+    >>> round(correlated_stdev_dof(np.eye(5)), 9)
+    4.0
+    >>> t = np.arange(15.0)
+    >>> round(correlated_stdev_dof(np.minimum.outer(t, t)), 3)
+    2.451
+    """
+    v = np.asarray(cov, dtype=float)
+    n = v.shape[0]
+    if v.shape != (n, n) or n < 2:
+        raise ValueError(f"cov must be a square matrix of size >= 2, got {v.shape}")
+    pv = (np.eye(n) - 1.0 / n) @ v
+    return float(np.trace(pv) ** 2 / np.trace(pv @ pv))

@@ -37,7 +37,8 @@ import sympy
 
 from uncertainty import (GumResult, coverage_factor, from_u, monte_carlo, propagate, type_b,
                          validate_gum)
-from uncertainty.stdev import (expected_range_factor, max_stdev_interval, stdev_interval,
+from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
+                               max_stdev_interval, random_walk_stdev_dof, stdev_interval,
                                stdev_u)
 
 __all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
@@ -288,28 +289,56 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
 # --------------------------------------------------------------------------- 7.3, 7.5
 
 def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
+                          readings: str = "random_walk", time_s=None,
+                          compensation_time_s: float | None = None,
                           k: float | None = None) -> ItemUncertainty:
     """u(B_s) of B_s = s(M)/T (draft 7.3), °/h: a standard deviation of n readings.
 
-    Type A, u = B_s/√(2ν), ν = n − 1 (JCGM 100 E.4.3); the interval is the χ² one
-    (:func:`uncertainty.stdev.stdev_interval`), stated because s is skewed. The χ²
-    model takes the readings as independent; readings of an integrating gyro that is
-    not re-zeroed are correlated, and the interval is then too narrow (stated in
-    ``source``).
+    Type A, u = B_s/√(2ν) (JCGM 100 E.4.3), interval from χ²(ν) (stated, because s is
+    skewed: :func:`uncertainty.stdev.stdev_interval`). ν depends on how the readings
+    relate. The 7.3 readings are angles of an integrating gyro taken without
+    re-zeroing, so they are a random walk, not independent samples: the default
+    ``readings="random_walk"`` takes ν = ν_eff of the sample variance of a random walk
+    (:func:`uncertainty.stdev.random_walk_stdev_dof`: 2.45 for 15 readings), the
+    worst case for what the readings tell; ``"independent"`` takes ν = n − 1. With the
+    readings' times (``time_s``) and the static phase of a measured Earth-rate
+    compensation (``compensation_time_s`` T), whose error is a rate common to all the
+    readings, the covariance is min(t_i, t_j) + t_i t_j / T and ν follows from it
+    (:func:`uncertainty.stdev.correlated_stdev_dof`; ≈ 1 when the trend dominates).
 
     Examples
     --------
-    15 readings (the draft's 7.3), B_s = 0.002 °/h: u = 0.002/√28 = 3.78e-4 °/h,
-    k = t_95(14) = 2.145; interval 0.002·[√(14/26.119), √(14/5.629)] = [0.00146, 0.00315].
+    15 readings (the draft's 7.3), B_s = 0.002 °/h, independent: u = 0.002/√28 =
+    3.78e-4 °/h, k = t_95(14) = 2.145; interval 0.002·[√(14/26.119), √(14/5.629)] =
+    [0.00146, 0.00315]. As a random walk, ν = 2.451: u = 0.002/√4.902 = 9.03e-4 °/h.
 
-    >>> b = zero_stability_budget(0.002, 15)
+    >>> b = zero_stability_budget(0.002, 15, readings="independent")
     >>> round(b.u_c * 1e4, 2), round(b.k, 3), [round(x, 5) for x in b.interval]
     (3.78, 2.145, [0.00146, 0.00315])
+    >>> round(zero_stability_budget(0.002, 15).u_c * 1e4, 2)
+    9.03
     """
-    nu = int(n_readings) - 1
+    if readings == "random_walk" and time_s is not None:
+        t = np.asarray(time_s, dtype=float)
+        t = t - t.min()
+        V = np.minimum.outer(t, t)
+        if compensation_time_s:
+            V = V + np.outer(t, t) / float(compensation_time_s)
+        nu = correlated_stdev_dof(V)
+        how = (f"readings of a random walk" + (f" with the compensation's rate error "
+               f"(T = {compensation_time_s:g} s)" if compensation_time_s else "")
+               + f", nu_eff = {nu:.3g}")
+    elif readings == "random_walk":
+        nu = random_walk_stdev_dof(int(n_readings))
+        how = f"readings of a random walk, nu_eff = {nu:.3g}"
+    elif readings == "independent":
+        nu = int(n_readings) - 1
+        how = f"independent readings, nu = {nu}"
+    else:
+        raise ValueError(f"readings must be random_walk or independent, got {readings!r}")
     lines = [_Line(from_u("s_B", 0.0, stdev_u(b_s_deg_per_h, nu), dof=nu, type="A",
                           source=f"standard deviation of {n_readings} readings, chi-square "
-                                 f"with nu = {nu} (readings taken as independent)"),
+                                 f"({how})"),
                    "sampling of s(M)", True, "7.3")]
     return _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=k,
                    interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
@@ -322,25 +351,28 @@ def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
     Type A, u = R/√(2ν), ν = n − 1; the interval is that of the largest of m
     standard deviations (:func:`uncertainty.stdev.max_stdev_interval`), which
     accounts for picking the largest (R over-estimates max σ_i when the σ_i are alike).
+    Its lower end is that of the largest of m (valid whatever the σ_i, since every σ_i ≤
+    max σ_i); its upper end is the single-χ² one (R ≥ the s of the point with the largest
+    σ_i), so the interval holds for unequal σ_i too.
 
     Examples
     --------
     The draft's 10 series and 12 points, R = 0.096″ (A.4.4): u = 0.096/√18 = 0.0226″;
-    interval 0.096·[0.589, 0.898] = [0.0566, 0.0862]″ (see
+    interval 0.096·[0.589, 1.826] = [0.0566, 0.1753]″ (see
     :func:`uncertainty.stdev.max_stdev_interval`).
 
     >>> b = repeatability_budget(0.096, 10, 12)
     >>> round(b.u_c, 4), [round(x, 4) for x in b.interval]
-    (0.0226, [0.0566, 0.0862])
+    (0.0226, [0.0566, 0.1753])
     """
     nu = int(n_series) - 1
     lines = [_Line(from_u("s_R", 0.0, stdev_u(r_arcsec, nu), dof=nu, type="A",
                           source=f"largest of {n_points} standard deviations of {n_series} "
                                  f"series, chi-square with nu = {nu}"),
                    "sampling of s_i", True, "7.5")]
-    return _budget("repeatability", "arcsec", r_arcsec, lines, k=k,
-                   interval=max_stdev_interval(r_arcsec, nu, int(n_points),
-                                               COVERAGE_PROBABILITY))
+    lo = max_stdev_interval(r_arcsec, nu, int(n_points), COVERAGE_PROBABILITY)[0]
+    hi = stdev_interval(r_arcsec, nu, COVERAGE_PROBABILITY)[1]
+    return _budget("repeatability", "arcsec", r_arcsec, lines, k=k, interval=(lo, hi))
 
 
 # --------------------------------------------------------------------------- 7.4
