@@ -58,6 +58,7 @@ from gonio.io import Readings
 from gonio.progress import progress
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
+from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
 from gonio.tomlschema import read_toml
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
@@ -91,11 +92,13 @@ _TRUTH_DOC = {
 }
 
 
-def validation_protocol(protocol: str = "ogam-draft") -> Protocol:
+def validation_protocol(protocol: str = "ogam-draft", all_items: bool = False) -> Protocol:
     """The protocol restricted to what E and U need: 7.1 and 7.4 (10 series, 7.5).
 
-    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget);
-    timings, rests and the Earth-rate compensation of the draft are kept.
+    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget) unless
+    ``all_items`` (then every item's coverage is measured); timings, rests and the
+    Earth-rate compensation of the draft are kept. k is the draft's A.7 k = 2 when the
+    protocol does not fix it (the criterion of the study).
 
     >>> p = validation_protocol()
     >>> p.zero_stability is None, p.rate_consistency, p.angle_deviation.series
@@ -103,7 +106,9 @@ def validation_protocol(protocol: str = "ogam-draft") -> Protocol:
     """
     raw = read_toml(resolve(protocol, "protocol"))
     for key in ("zero_stability", "rate_consistency", "pointing_consistency"):
-        raw.pop(key, None)
+        if not all_items:
+            raw.pop(key, None)
+    raw.setdefault("annex_a", {}).setdefault("coverage_factor", 2.0)
     if "angle_deviation" not in raw or "scale_factor" not in raw:
         raise GonioError("validation needs scale_factor (7.1) and angle_deviation (7.4) sections",
                          file=str(protocol), key="angle_deviation")
@@ -272,6 +277,7 @@ class TrialResult:
     k_cal: float
     k_mount: float
     extras: list
+    items: dict = field(default_factory=dict)     # item_coverage.trial_items of this trial
 
 
 def _matrix(df: pd.DataFrame, col: str) -> np.ndarray:
@@ -291,7 +297,7 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft")
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
@@ -312,7 +318,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
                        U_extended_arcsec=float(ext.U_arcsec) * u_scale, u_r_arcsec=u_r,
                        k_cal=float(rep.results.scale_factor.value),
                        k_mount=float(res.truth["scale_factor_through_mount_counts_per_deg"]),
-                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras])
+                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras],
+                       items=trial_items(rep, res.truth))
 
 
 def _run_trial_args(args):
@@ -427,6 +434,7 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         "mean_U_arcsec": float(U.mean()), "min_U_arcsec": float(U.min()),
         "mean_u_r_arcsec": float(np.mean([t.u_r_arcsec for t in tr])),
         "annex_a": block(U),
+        "items": item_coverage([t.items for t in tr]),
         "diagnosis": diag,
         "primary": {"truth": truth},
     }
@@ -440,6 +448,21 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         s["extended"] = block(Ux)
         s["extended_for_truth"] = truth
     return s
+
+
+def item_coverage_lines(cases) -> list[str]:
+    """Per case, the coverage of every measured item (|result − truth| ≤ U; interval)."""
+    out = ["", "coverage per item (|result - truth| <= U as stated; for B_s and R also the "
+               "95 % interval holding the truth)"]
+    for c in cases:
+        for name, it in c.summary.get("items", {}).items():
+            w = it["within_U"]
+            txt = (f"{c.name:<10}{name:<28}{it['trials']:>5} trials  within U "
+                   f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
+            if "interval_holds_truth" in it:
+                txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+            out.append(txt)
+    return out
 
 
 @dataclass
@@ -478,6 +501,7 @@ class ValidationReport:
                     f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += item_coverage_lines(self.cases)
         return "\n".join(lines) + "\n"
 
 
@@ -486,7 +510,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              protocol: str | Protocol = "ogam-draft",
              extra_components: bool | Sequence[str] = False,
              truth: str = "systematic", u_scale: float = 1.0, workers: int = 2,
-             show_progress: bool = True) -> ValidationReport:
+             show_progress: bool = True, all_items: bool = False) -> ValidationReport:
     """Run ``trials`` independent virtual calibrations per case and measure coverage.
 
     Parameters
@@ -513,6 +537,9 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         Multiplies U (1; < 1 deliberately breaks the budget, to test the study).
     workers : int
         Processes (1: in this process). Results do not depend on it.
+    all_items : bool
+        Keep 7.3, 7.6 and 7.7 in the protocol, so that every item's coverage is measured
+        (summary ``items``, :func:`gonio.specs.ogam_draft.item_coverage.item_coverage`).
 
     Examples
     --------
@@ -554,7 +581,8 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
             if e not in EXTRA_SYMBOLS:
                 raise GonioError(f"unknown extra component {e!r} (known: "
                                  f"{', '.join(EXTRA_SYMBOLS)})", key="extra_components")
-    proto = protocol if isinstance(protocol, Protocol) else validation_protocol(protocol)
+    proto = protocol if isinstance(protocol, Protocol) else \
+        validation_protocol(protocol, all_items=all_items)
     if proto.scale_factor is None or proto.angle_deviation is None \
             or proto.angle_deviation.series < 2:
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")

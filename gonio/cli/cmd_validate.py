@@ -32,6 +32,8 @@ def register(sub) -> None:
     p.add_argument("--sample-rate-hz", type=float, default=100.0,
                    help="simulation rate (default 100 Hz; the RLG counter is exact at any rate)")
     p.add_argument("--workers", type=int, default=2, help="processes (results do not depend on it)")
+    p.add_argument("--all-items", action="store_true",
+                   help="keep 7.3, 7.6 and 7.7 so that every item's coverage is measured")
     p.add_argument("--out", default=None, help="folder for validation.json")
     p.add_argument("--json", action="store_true", help="print validation.json on stdout")
     p.set_defaults(func=run)
@@ -53,7 +55,7 @@ def run(args) -> int:
     report = validate(args.trials, seed=args.seed, bench=args.bench, cases=cases,
                       sample_rate_hz=args.sample_rate_hz, protocol=args.protocol,
                       extra_components=extras, truth=args.truth,
-                      u_scale=args.u_scale, workers=args.workers)
+                      u_scale=args.u_scale, workers=args.workers, all_items=args.all_items)
     text = json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     if args.out:
         with output_dir(Path(args.out)) as stage:

@@ -27,13 +27,14 @@ import math
 import numpy as np
 import pandas as pd
 
-__all__ = ["item_record", "item_coverage", "ITEM_TRUTHS"]
+__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS"]
 
 ITEM_TRUTHS = {
     "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
     "scale_factor_nonlinearity": "(max - min)/mean of the noise-free K_i, %",
     "zero_stability": "ensemble: sqrt(mean over trials of B_s^2)",
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
+    "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
     "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
     "rate_consistency": "spread of the noise-free E_v over the reference angle, ppm",
     "pointing_consistency": "spread of the noise-free E_g over the reference angle, %",
@@ -101,6 +102,29 @@ def item_record(report, truth: dict) -> dict:
     return out
 
 
+def trial_items(report, truth: dict) -> dict:
+    """:func:`item_record` with E's U from the physical budget (what ``gonio calibrate``
+    certifies by default), and the draft budget's as ``angle_deviation_draft``.
+
+    ``report`` may have been made with either budget kind; the other is evaluated here
+    from the same results (:func:`gonio.calibrate.deviation_budget`).
+    """
+    from gonio.calibrate import deviation_budget, session_settings
+
+    rec = item_record(report, truth)
+    if "angle_deviation" not in rec:
+        return rec
+    settings, _ = session_settings(report.readings, report.protocol)
+    other = "physical" if report.budget_kind == "draft" else "draft"
+    b, _, _ = deviation_budget(report.results, report.readings, report.protocol, settings,
+                               kind=other)
+    mine = dict(rec["angle_deviation"])
+    alt = {**mine, "U": float(b.U_arcsec)}
+    rec["angle_deviation"], rec["angle_deviation_draft"] = (alt, mine) if other == "physical" \
+        else (mine, alt)
+    return rec
+
+
 def _cov(hits) -> dict:
     h = np.asarray(hits, dtype=bool)
     p = float(h.mean()) if h.size else math.nan
@@ -119,15 +143,16 @@ def item_coverage(records: list[dict]) -> dict:
     (0.75, 4)
     """
     names = [n for n in ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                         "angle_deviation", "repeatability", "rate_consistency",
-                         "pointing_consistency") if any(n in r for r in records)]
+                         "angle_deviation", "angle_deviation_draft", "repeatability",
+                         "rate_consistency", "pointing_consistency")
+             if any(n in r for r in records)]
     out = {}
     for name in names:
         rs = [r[name] for r in records if name in r]
         vals = np.array([r["value"] for r in rs])
         U = np.array([r["U"] for r in rs])
         item = {"trials": len(rs), "truth": ITEM_TRUTHS[name], "mean_U": float(U.mean())}
-        if name == "angle_deviation":
+        if name.startswith("angle_deviation"):
             d = np.array([np.subtract(r["points"], r["truth_points"]) for r in rs])
             item["within_U"] = _cov(np.abs(d) <= U[:, None])
         elif name in ("zero_stability", "repeatability"):
