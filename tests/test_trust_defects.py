@@ -18,6 +18,7 @@ from scipy import stats
 
 from gonio.calibrate import calibrate
 from gonio.cli import main
+from gonio.errors import GonioError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -53,7 +54,7 @@ def write_case(tmp: Path, *, series=5, policy="exclude", annex="", meta=None, na
     lines = [f"# {k}: {v}\n" for k, v in meta.items()] + [HEADER]
     if scale_factor:
         for i, th in enumerate((120.0, 240.0, 360.0), 1):
-            lines.append(f"scale_factor,1,{i},60,up,{5 + i},{th},{int(th * 3600)},\n")
+            lines.append(f"scale_factor,1,{i},60,up,{5 + i},{th},{int(th * 36000)},\n")
     for j in range(series):
         for i, th in enumerate(POS):
             if rows is not None:
@@ -62,7 +63,7 @@ def write_case(tmp: Path, *, series=5, policy="exclude", annex="", meta=None, na
                 th_file, t = th, 10.0 + i
             if counts:
                 lines.append(f"angle_deviation,{j + 1},{i + 1},60,up,{t},{th_file},"
-                             f"{int(round((th + E[j, i] / 3600) * 3600 * 10))},\n")
+                             f"{int(round((th + E[j, i] / 3600) * 36000))},\n")
             else:
                 lines.append(f"angle_deviation,{j + 1},{i + 1},60,up,{t},{th_file},,"
                              f"{float(th + E[j, i] / 3600)!r}\n")
@@ -79,6 +80,12 @@ def line_of(lines, series, rnd):
     raise KeyError((series, rnd))
 
 
+def api(f, p=None, **kw):
+    """The Python API: results.json content and the stderr warnings, without writing."""
+    rep = calibrate(f, p, **kw)
+    return rep.to_dict(), "\n".join(rep.warnings())
+
+
 def cli_json(argv, capsys):
     capsys.readouterr()
     code = main(argv + ["--json"])
@@ -90,9 +97,7 @@ def cli_json(argv, capsys):
 
 def test_defect1_inconsistent_round_is_excluded_and_said(tmp_path, capsys):
     f, p, lines = write_case(tmp_path, rows={(2, 1): (91.0, 10.0)})
-    code, res, err = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                               str(tmp_path / "o")], capsys)
-    assert code == 0
+    res, err = api(f, p)
     ad = res["angle_deviation"]
     pts = {round(r["position_deg"], 6): r for r in ad["table"]}
     assert sorted(pts) == POS                       # no "position 90.5°"
@@ -108,9 +113,7 @@ def test_defect1_inconsistent_round_is_excluded_and_said(tmp_path, capsys):
 
 def test_defect1_swapped_positions_are_not_two_points(tmp_path, capsys):
     f, p, lines = write_case(tmp_path, rows={(2, 2): (270.0, 11.0), (2, 3): (180.0, 12.0)})
-    code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                             str(tmp_path / "o")], capsys)
-    assert code == 0
+    res, _ = api(f, p)
     assert [r["position_deg"] for r in res["angle_deviation"]["table"]] == POS
     lines_bad = {line_of(lines, 2, 2), line_of(lines, 2, 3)}
     assert lines_bad <= {u["line"] for u in res["unused_readings"]}
@@ -130,9 +133,9 @@ def test_defect1_error_policy_names_the_line(tmp_path):
 def test_defect1_a_round_with_no_reading_left_is_an_error(tmp_path, capsys):
     f, p, lines = write_case(tmp_path, series=2, rows={(1, 4): (330.0, 13.0),
                                                        (2, 4): (330.0, 13.0)})
-    code, _, err = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                             str(tmp_path / "o")], capsys)
-    assert code == 2 and "cannot stand" in err and err.count("\n") == 1
+    with pytest.raises(GonioError, match="cannot stand") as exc:
+        calibrate(f, p)
+    assert exc.value.line == line_of(lines, 1, 4)
 
 
 # --------------------------------------------------------------------------- defect 2
@@ -155,12 +158,12 @@ def test_defect2_no_E_no_U(tmp_path, capsys):
 
 def test_defect2_counts_without_scale_factor(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, scale_factor=False, counts=True)
-    code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                             str(tmp_path / "o")], capsys)
-    assert code == 0 and not res["angle_deviation"]["measured"]
+    rep = calibrate(f, p)
+    res = rep.to_dict()
+    assert not res["angle_deviation"]["measured"]
     assert res["uncertainty"]["U_arcsec"] is None
     assert all(res[k]["uncertainty"] is None for k in ("angle_deviation", "repeatability"))
-    assert "U = " not in (tmp_path / "o" / "summary.txt").read_text()
+    assert "U = " not in rep.summary() and "no uncertainty stated" in rep.summary()
 
 
 # --------------------------------------------------------------------------- defect 3
@@ -182,9 +185,7 @@ def test_defect3_one_series_u_r_from_protocol_said_so(tmp_path, capsys):
 
 def test_defect3_five_series_k_from_welch_satterthwaite(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, series=5)
-    code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                             str(tmp_path / "o"), "--budget", "draft"], capsys)
-    assert code == 0
+    res, _ = api(f, p, budget="draft")
     u = res["uncertainty"]
     R = max(np.std(E, axis=0, ddof=1))
     comp = {c["symbol"]: c["u_arcsec"] for c in u["components"]}
@@ -211,9 +212,7 @@ def test_defect3_laboratory_fixes_k(tmp_path, capsys):
 
 def test_defect4_late_reading_excluded_and_u_BE_from_actual_time(tmp_path, capsys):
     f, p, lines = write_case(tmp_path, rows={(3, 2): (180.0, 3600.0), (1, 4): (360.0, 24.0)})
-    code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                             str(tmp_path / "o"), "--budget", "draft"], capsys)
-    assert code == 0
+    res, _ = api(f, p, budget="draft")
     late = line_of(lines, 3, 2)
     un = {u["line"]: u["reason"] for u in res["unused_readings"]}
     assert "max_time_to_reading_s = 30" in un[late]
@@ -233,9 +232,7 @@ def test_defect4_late_reading_error_policy(tmp_path, capsys):
 
 def test_defect5_metadata_table_mpe_conflict_reported(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, meta={"table_mpe_arcsec": "0.2"})
-    code, res, err = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                               str(tmp_path / "o"), "--budget", "draft"], capsys)
-    assert code == 0
+    res, err = api(f, p, budget="draft")
     assert res["conflicts"] == [{"setting": "table_mpe_arcsec", "file_value": 0.2,
                                  "protocol_value": 0.1, "used": 0.2,
                                  "rule": "readings-file metadata over protocol annex_a"}]
@@ -249,12 +246,11 @@ def test_defect5_protocol_named_in_file_is_used_or_refused(tmp_path, capsys):
     assert code == 2 and "lab-24x15" in err and "--protocol" in err
     # the same name as a file next to the readings: used, and recorded
     (tmp_path / "lab-24x15.toml").write_text(p.read_text().replace('"hand"', '"lab-24x15"'))
-    code, res, _ = cli_json(["calibrate", str(f), "--out", str(tmp_path / "o2")], capsys)
-    assert code == 0 and res["protocol"] == "lab-24x15" and res["conflicts"] == []
+    res, _ = api(f)
+    assert res["protocol"] == "lab-24x15" and res["conflicts"] == []
     # --protocol overrides: the conflict is reported
-    code, res, err = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
-                               str(tmp_path / "o3")], capsys)
-    assert code == 0 and res["protocol"] == "hand"
+    res, err = api(f, p)
+    assert res["protocol"] == "hand"
     assert res["conflicts"][0]["setting"] == "protocol" and res["conflicts"][0]["used"] == "hand"
     assert "warning: protocol" in err
 
@@ -270,3 +266,59 @@ def test_python_api_same_as_cli(tmp_path):
     assert rep.results.angle_deviation.details["excluded_readings"] == 1
     assert set(rep.item_uncertainty) == {"scale_factor", "scale_factor_nonlinearity",
                                          "angle_deviation", "repeatability"}
+
+
+# --------------------------------------------------------------------------- budgets
+
+def test_draft_budget_has_the_annex_four_lines_physical_more(tmp_path):
+    f, p, _ = write_case(tmp_path)
+    draft, _ = api(f, p, budget="draft")
+    phys, _ = api(f, p)
+    assert [c["symbol"] for c in draft["uncertainty"]["components"]] == ["P", "phi_e", "B_E", "r"]
+    assert draft["uncertainty"]["budget_kind"] == "draft"
+    extra = [c for c in phys["uncertainty"]["components"] if c["beyond_draft"]]
+    assert {c["symbol"] for c in extra} == {"tilt_E"}    # angles in degrees: no K in E
+    (tmp_path / "c").mkdir()
+    fc, pc, _ = write_case(tmp_path / "c", counts=True)   # angles from counts through K
+    physc, _ = api(fc, pc)
+    assert physc["angle_deviation"]["value"] == pytest.approx(0.5, abs=1e-9)
+    extra = [c for c in physc["uncertainty"]["components"] if c["beyond_draft"]]
+    assert {c["symbol"] for c in extra} == {"K_P", "K_r", "tilt_E"}
+    assert all(c["clause"] for c in extra)
+    assert phys["uncertainty"]["U_arcsec"] > draft["uncertainty"]["U_arcsec"]
+
+
+def test_measured_tilt_scales_the_coupling_line(tmp_path):
+    """--tilt FILE: the coupling line uses ψ + U95 of the estimate instead of the 0.1°
+    bound; the line is proportional to sin ψ (closed form), so it shrinks by
+    sin 0.015°/sin 0.1° = 0.15."""
+    f, p, _ = write_case(tmp_path)
+    t = tmp_path / "tilt.json"
+    t.write_text(json.dumps({"tilt_deg": 0.01, "U95_tilt_deg": 0.005}))
+    a, _ = api(f, p)
+    b, _ = api(f, p, tilt=t)
+    ua = {c["symbol"]: c["u_arcsec"] for c in a["uncertainty"]["components"]}
+    ub = {c["symbol"]: c["u_arcsec"] for c in b["uncertainty"]["components"]}
+    ratio = math.sin(math.radians(0.015)) / math.sin(math.radians(0.1))
+    assert ub["tilt_E"] / ua["tilt_E"] == pytest.approx(ratio, rel=1e-6)
+    assert any("measured tilt" in n for n in b["uncertainty"]["notes"])
+    t.write_text("{}")
+    with pytest.raises(GonioError, match="tilt_deg"):
+        calibrate(f, p, tilt=t)
+
+
+def test_every_measured_item_has_the_results_json_shape(tmp_path):
+    f, p, _ = write_case(tmp_path)
+    res, _ = api(f, p)
+    keys = {"components", "u_c", "U", "k", "nu_eff", "coverage_probability", "unit", "k_source"}
+    ckeys = {"name", "symbol", "u", "unit", "type", "distribution", "dof", "source",
+             "beyond_draft", "clause"}
+    for item in ("scale_factor", "scale_factor_nonlinearity", "angle_deviation",
+                 "repeatability"):
+        u = res[item]["uncertainty"]
+        assert keys <= set(u) and u["coverage_probability"] == 0.95, item
+        assert all(ckeys == set(c) for c in u["components"]), item
+        assert u["U"] == pytest.approx(u["k"] * u["u_c"])
+    assert res["repeatability"]["uncertainty"]["interval"][0] < res["repeatability"]["value"]
+    for item in ("zero_stability", "rate_consistency", "pointing_consistency"):
+        assert res[item]["uncertainty"] is None
