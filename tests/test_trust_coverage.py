@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from gonio.bench import load_bench, run_session
-from gonio.calibrate import calibrate
-from gonio.io import Readings
-from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
-from gonio.validate import validation_protocol
+from gonio.pipeline.calibrate import calibrate
+from gonio.formats.readings import Readings
+from gonio.pipeline.item_coverage import item_coverage, trial_items
+from gonio.pipeline.validate import validation_protocol
 
 SEEDS = 24
 

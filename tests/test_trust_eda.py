@@ -16,7 +16,8 @@ from scipy import stats
 
 from gonio.bench import load_bench, run_session
 from gonio.bench.instrument import harmonic_sum_arcsec
-from gonio.eda import analyse_eda_readings, coupling_design, load_eda_protocol
+from gonio.analysis.equal_division import (analyse_eda_readings, coupling_design,
+                                           load_eda_protocol)
 from gonio.protocol import load_protocol
 
 
@@ -72,18 +73,19 @@ def test_coupling_design_against_quadrature():
         assert C[0, j, 1] == pytest.approx(q_num, abs=2e-4)
 
 
-def test_cli_says_when_coupling_cannot_be_estimated(tmp_path, capsys):
-    """Without time_s the coupling cannot be estimated: the CLI says so, with its size."""
-    from gonio.cli import main
+def test_says_when_coupling_cannot_be_estimated():
+    """Without time_s the coupling cannot be estimated: the result and the CLI text say
+    so, with its size at the tilt bound."""
+    import pandas as pd
 
-    lines = ["# latitude_deg: 40.0\n", "# tilt_bound_deg: 0.1\n",
-             "test,series,round,table_deg,gyro_deg,start_deg\n"]
-    for k in range(4):
-        for j in range(1, 5):
-            lines.append(f"equal_division,1,{k + 1},{90.0 * j},{90.0 * j + 1e-5 * (j % 3)},"
-                         f"{90.0 * k}\n")
-    f = tmp_path / "r.csv"
-    f.write_text("".join(lines))
-    assert main(["eda", str(f)]) == 0
-    out = capsys.readouterr().out
+    from gonio.cli.cmd_eda import _text
+
+    rows = [{"test": "equal_division", "series": 1, "round": k + 1, "table_deg": 90.0 * j,
+             "gyro_deg": 90.0 * j + 1e-5 * (j % 3), "start_deg": 90.0 * k}
+            for k in range(4) for j in range(1, 5)]
+    res = analyse_eda_readings(pd.DataFrame(rows), load_eda_protocol(), latitude_deg=40.0,
+                               tilt_bound_deg=0.1)
+    assert not res.coupling.separable and res.coupling.max_effect_arcsec > 0
+    assert res.to_dict()["coupling"]["separable"] is False
+    out = _text(res)
     assert "WARNING: the coupling cannot be estimated" in out and "″ at the tilt bound" in out

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.resources import resolve
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 
 @dataclass(frozen=True)

@@ -2,14 +2,14 @@
 
 Prints the budget table with the exact component values beside the annex's A.5
 rounded ones, u_c, U = k·u_c and the stated (two-digit) values; optionally a
-JCGM 101 Monte Carlo check. A thin layer over :func:`gonio.budget.annex_a_budget`.
+JCGM 101 Monte Carlo check. A thin layer over :func:`gonio.specs.ogam_draft.budget.annex_a_budget`.
 """
 
 from __future__ import annotations
 
 import json
 
-from gonio.budget import annex_a_budget
+from gonio.specs.ogam_draft.budget import annex_a_budget
 from gonio.errors import GonioError
 
 _OPTIONS = {"table_mpe_arcsec": "--table-mpe-arcsec", "tilt_deg": "--tilt-deg",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from gonio.calibrate import calibrate, write_calibration
+from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.errors import GonioError
 
 
@@ -13,7 +13,7 @@ def register(sub) -> None:
                        description="Compute the draft's seven characteristics and the Annex A "
                                    "uncertainty from a readings file; write results.json, "
                                    "summary.txt and tables/*.csv into --out.")
-    p.add_argument("readings", help="readings file (CSV, data-formats.md §1) or a stream (§2, "
+    p.add_argument("readings", help="readings file (CSV, docs/formats.md#readings-file) or a stream (docs/formats.md#stream-file, "
                    "reduced with the protocol first; told apart by the header)")
     p.add_argument("--protocol", default=None,
                    help="protocol file or built-in name (default: the readings file's "

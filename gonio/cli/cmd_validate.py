@@ -7,7 +7,7 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
-from gonio.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
+from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
 
 
 def register(sub) -> None:

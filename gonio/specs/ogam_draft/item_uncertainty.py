@@ -392,10 +392,10 @@ def angle_deviation_budget(annex, value_arcsec: float, *,
                            k_source: str = "welch-satterthwaite") -> ItemUncertainty:
     """E's budget (draft Annex A, or the physical one with extra lines) as an item budget.
 
-    ``annex`` is a :class:`gonio.budget.AnnexABudget`; its four annex lines keep their
+    ``annex`` is a :class:`gonio.specs.ogam_draft.budget.AnnexABudget`; its four annex lines keep their
     clauses (A.4.1–A.4.4), the others are ``beyond_draft`` with their clause of origin.
 
-    >>> from gonio.budget import annex_a_budget
+    >>> from gonio.specs.ogam_draft.budget import annex_a_budget
     >>> b = angle_deviation_budget(annex_a_budget(), 0.2, k_source="fixed by laboratory")
     >>> [(c.symbol, c.clause, round(c.u, 4)) for c in b.components]
     [('P', 'A.4.1', 0.0577), ('phi_e', 'A.4.2', 0.0453), ('B_E', 'A.4.3', 0.0866), ('r', 'A.4.4', 0.096)]

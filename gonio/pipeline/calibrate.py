@@ -11,6 +11,7 @@ bound come from the file's metadata when given, else from the protocol.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -18,13 +19,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
-from gonio.budget import AnnexABudget, annex_a_budget
-from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
-from gonio.io import Readings, metadata_float, read_readings
-from gonio.bench.session import StaticRecord
+from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
+from gonio.formats.readings import Readings, metadata_float, read_readings
+from gonio.errors import GonioError
+from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
@@ -121,9 +124,9 @@ class CalibrationReport:
     protocol: Protocol
     source_sha256: str
     repeatability_source: str
-    noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
+    noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
-    eda: object | None = None            # gonio.eda.EdaResult of the equal_division rows
+    eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
     item_uncertainty: dict = field(default_factory=dict)
     budget_kind: str = "physical"
     conflicts: list = field(default_factory=list)
@@ -294,7 +297,7 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
     the equipment actually used and wins over the protocol's ``annex_a`` values; a
     difference is a :class:`Conflict`, never silent.
 
-    >>> from gonio.io import Readings
+    >>> from gonio.formats.readings import Readings
     >>> import pandas as pd
     >>> s, c = session_settings(Readings(pd.DataFrame(), {"table_mpe_arcsec": "0.2"}),
     ...                         load_protocol())
@@ -307,11 +310,11 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
     for key in ("table_mpe_arcsec", "tilt_bound_deg"):
         v = metadata_float(md, key, file=file)
         if v is None:
-            out[key] = a[key]
+            out[key] = getattr(a, key)
             continue
         out[key] = v
-        if v != a[key]:
-            conflicts.append(Conflict(key, v, a[key], v,
+        if v != getattr(a, key):
+            conflicts.append(Conflict(key, v, getattr(a, key), v,
                                       "readings-file metadata over protocol annex_a"))
     return out, conflicts
 
@@ -505,12 +508,12 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
         src = (f"the largest Bessel standard deviation over the points of this calibration's "
                f"own {n} series (7.5; Type A, ν = {n - 1})")
     else:
-        u_r, dof, typ = a["repeatability_arcsec"], math.inf, "B"
+        u_r, dof, typ = a.repeatability_arcsec, math.inf, "B"
         src = (f"the protocol's annex_a.repeatability_arcsec = {u_r:g}″ (Type B: this "
                "calibration has no repeated series of its own; "
                f"{rep.reason or 'repeatability not measured'})")
     t_read = _time_to_reading_s(results, readings)
-    dur_min = t_read / 60.0 if t_read is not None else a["duration_min"]
+    dur_min = t_read / 60.0 if t_read is not None else a.duration_min
     if t_read is not None:
         notes.append(f"u(B_E) over the longest time to reading, {t_read:g} s (A.4.3)")
     tilt_deg = settings["tilt_bound_deg"]
@@ -521,8 +524,8 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     if kind == "physical" and results.angle_deviation.measured:
         extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes)
     budget = annex_a_budget(table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
-                            zero_stability_dph=a["zero_stability_dph"], duration_min=dur_min,
-                            repeatability_arcsec=u_r, k=a["coverage_factor"],
+                            zero_stability_dph=a.zero_stability_dph, duration_min=dur_min,
+                            repeatability_arcsec=u_r, k=a.coverage_factor,
                             extra_components=extras, monte_carlo_trials=monte_carlo_trials,
                             seed=seed, repeatability_dof=dof, repeatability_type=typ,
                             repeatability_source=f"repeatability (A.4.4): {src}")
@@ -533,9 +536,10 @@ def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
 
-    from gonio.budget import ExtraComponent
-    from gonio.validate import (budget_extra_components, earth_rate_perpendicular_arcsec_s,
-                                tilt_coupling_coefficients)
+    from gonio.budget.extra import (ExtraComponent, budget_extra_components,
+                                    tilt_coupling_coefficients)
+    from gonio.physics.earth import earth_rate_split
+    from gonio.units import dps_to_arcsec_s
 
     df = readings.data
     lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
@@ -552,15 +556,15 @@ def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes
     if adi is None:
         notes.append("the protocol has no angle_deviation item: no coupling line")
         return []
-    proto = replace(protocol, annex_a={**protocol.annex_a, "tilt_bound_deg": tilt_deg,
-                                       "table_mpe_arcsec": settings["table_mpe_arcsec"]})
+    proto = replace(protocol, annex_a=replace(protocol.annex_a, tilt_bound_deg=tilt_deg,
+                                              table_mpe_arcsec=settings["table_mpe_arcsec"]))
     if from_counts and len(sf) and protocol.scale_factor is not None:
         extras = budget_extra_components(pd_concat(sf, ad), proto, lat, u_r, truth="intrinsic")
     else:
         th = np.abs(ad["table_deg"].to_numpy(dtype=float))
         ci, si = tilt_coupling_coefficients(th, ad["time_s"].to_numpy(dtype=float),
                                             adi.rate_dps, adi.read_delay_s)
-        omega = earth_rate_perpendicular_arcsec_s(lat, adi.orientation) * \
+        omega = dps_to_arcsec_s(earth_rate_split(lat, adi.orientation).perpendicular_dps) * \
             math.sin(math.radians(tilt_deg))
         extras = [ExtraComponent("tilt_E", "tilt x Earth-rate coupling to the reading",
                                  float(omega * np.max(np.hypot(ci, si))), "arcsine")]
@@ -594,7 +598,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
-    k_fixed = protocol.annex_a["coverage_factor"]
+    k_fixed = protocol.annex_a.coverage_factor
     mpe = settings["table_mpe_arcsec"]
     out = {}
     sf = results.scale_factor
@@ -643,7 +647,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                                else f"axis {v}", float(row.E_arcsec),
                                                float(at), u_r, int(row.n_series)))
         t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
-        t_min = float(np.nanmax(t)) / 60.0 if t.size else protocol.annex_a["duration_min"]
+        t_min = float(np.nanmax(t)) / 60.0 if t.size else protocol.annex_a.duration_min
         out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
                                           scale, table_mpe_arcsec=mpe,
                                           drift_half_width_arcsec=drift * t_min, k=k_fixed)
@@ -653,7 +657,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
 def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
     """A readings file as is, or a stream reduced with the protocol (told apart by the header).
 
-    A header with a ``test`` column is a readings file (data-formats §1); one with
+    A header with a ``test`` column is a readings file (docs/formats.md#readings-file); one with
     ``time_s`` and ``gyro_counts`` but no ``test`` is a stream (§2), reduced by
     :func:`gonio.reduce.reduce_stream` before calibration.
     """
@@ -661,11 +665,10 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 
 def _load(path: str | Path, protocol: Protocol):
-    from gonio.streams import read_stream, sniff_kind
+    from gonio.formats.streams import read_stream, sniff_kind
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
-    from gonio.errors import GonioError
     from gonio.reduce import reduce_stream
 
     stream = read_stream(path)
@@ -674,7 +677,7 @@ def _load(path: str | Path, protocol: Protocol):
         raise GonioError("no round of the protocol could be matched in the stream", file=path)
     import tempfile
 
-    from gonio.io import write_readings
+    from gonio.formats.readings import write_readings
     with tempfile.TemporaryDirectory() as tmp:   # through the file format: same validation
         rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
                                           Path(tmp) / "reduced.csv", red.metadata))
@@ -700,9 +703,8 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
 
 def analyse_zero_stability(record: StaticRecord | None):
-    """Allan analysis of the 7.3 static record (:func:`gonio.noise.analyse_static`), or why not."""
-    from gonio.errors import GonioError
-    from gonio.noise import analyse_static
+    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`), or why not."""
+    from gonio.analysis.noise import analyse_static
 
     if record is None:
         return None, ""
@@ -751,48 +753,45 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
     items = item_uncertainties(res, e_budget, proto, settings, kept)
     noise, noise_src = analyse_zero_stability(static_record)
-    eda = equal_division_for(res, kept, proto)
+    eda, unused = equal_division_for(res.unused_readings, kept, proto)
+    res = dataclasses.replace(res, unused_readings=unused)
     return CalibrationReport(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                              item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                              budget_notes=notes, excluded=excluded)
 
 
-def equal_division_for(results: CalibrationResults, readings: Readings,
+def equal_division_for(unused: pd.DataFrame, readings: Readings,
                        protocol: Protocol | None = None):
     """Analyse the file's ``equal_division`` rows (table calibration, IEC 62047-20 A.3), if any.
 
-    Those rows are then used: they leave the ``unused_readings`` list. When they do
+    Returns ``(result or None, unused readings)``: a new ``unused_readings`` table
+    (the input is not modified) without the rows the analysis used; when they do
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.eda import analyse_eda_readings
+    from gonio.analysis.equal_division import equal_division_from_readings
 
-    df = readings.data
-    rows = df[df["test"] == "equal_division"]
+    rows = readings.data[readings.data["test"] == "equal_division"]
     if not len(rows):
-        return None
-    from gonio.errors import GonioError
-
-    un = results.unused_readings
+        return None, unused
+    lines = set(rows["line"])
     try:
-        out = analyse_eda_readings(
-            rows.set_index("line", drop=False), protocol.extra.get("equal_division") if protocol else None,
-            file=readings.path, compensation_time_s=(
-                protocol.session.static_s if protocol is not None
-                and protocol.session.earth_compensation == "measured" else None),
-            latitude_deg=metadata_float(readings.metadata, "latitude_deg", file=readings.path),
-            tilt_bound_deg=metadata_float(readings.metadata, "tilt_bound_deg",
-                                          file=readings.path))
+        out = equal_division_from_readings(
+            readings, protocol=protocol.equal_division if protocol is not None else None,
+            compensation_time_s=(protocol.session.static_s if protocol is not None
+                                 and protocol.session.earth_compensation == "measured"
+                                 else None))
     except GonioError as exc:
         # Not a complete equal-division measurement: the rest of the calibration goes
         # on; the rows stay listed as unused, with the reason.
+        un = unused.copy()
         if len(un) and "reason" in un.columns:
-            mask = un["line"].isin(set(rows["line"]))
-            un.loc[mask, "reason"] = f"equal-division analysis not possible: {exc.message}"
-        return None
-    if len(un):
-        results.unused_readings = un[~un["line"].isin(set(rows["line"]))].reset_index(drop=True)
-    return out
+            un.loc[un["line"].isin(lines), "reason"] = \
+                f"equal-division analysis not possible: {exc.message}"
+        return None, un
+    if len(unused):
+        unused = unused[~unused["line"].isin(lines)].reset_index(drop=True)
+    return out, unused
 
 
 def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:

@@ -109,7 +109,7 @@ def trial_items(report, truth: dict) -> dict:
     ``report`` may have been made with either budget kind; the other is evaluated here
     from the same results (:func:`gonio.calibrate.deviation_budget`).
     """
-    from gonio.calibrate import deviation_budget, session_settings
+    from gonio.pipeline.calibrate import deviation_budget, session_settings
 
     rec = item_record(report, truth)
     if "angle_deviation" not in rec:
