@@ -1153,9 +1153,9 @@ def coupling_bound_arcsec_s(latitude_deg: float | None, tilt_bound_deg: float | 
     """
     if latitude_deg is None or tilt_bound_deg is None:
         return None
-    from gonio.physics.coupling import table_frame
+    from gonio.physics.earth import earth_rate_split
 
-    perp_dps = table_frame(float(latitude_deg), orientation)[1]
+    perp_dps = earth_rate_split(float(latitude_deg), orientation).perpendicular_dps
     return perp_dps * ARCSEC_PER_DEG * math.tan(math.radians(float(tilt_bound_deg)))
 
 

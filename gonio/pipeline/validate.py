@@ -485,6 +485,8 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
                                  f"{', '.join(EXTRA_SYMBOLS)})", key="extra_components")
     proto = protocol if isinstance(protocol, Protocol) else \
         validation_protocol(protocol, all_items=all_items)
+    if proto.annex_a.coverage_factor is None:        # the study's criterion: the draft's k = 2
+        proto = replace(proto, annex_a=replace(proto.annex_a, coverage_factor=2.0))
     if proto.scale_factor is None or proto.angle_deviation is None \
             or proto.angle_deviation.series < 2:
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
