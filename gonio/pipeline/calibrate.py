@@ -23,7 +23,8 @@ import pandas as pd
 
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
-from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
+from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
+from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
@@ -513,7 +514,7 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
                "calibration has no repeated series of its own; "
                f"{rep.reason or 'repeatability not measured'})")
     t_read = _time_to_reading_s(results, readings)
-    dur_min = t_read / 60.0 if t_read is not None else a.duration_min
+    dur_min = t_read / S_PER_MIN if t_read is not None else a.duration_min
     if t_read is not None:
         notes.append(f"u(B_E) over the longest time to reading, {t_read:g} s (A.4.3)")
     tilt_deg = settings["tilt_bound_deg"]
@@ -630,7 +631,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                                        int(rp.details["n_series"]), n_pts,
                                                        k=k_fixed)
     u_r = float(budget.parameters["repeatability_arcsec"])
-    drift = float(budget.parameters["zero_stability_dph"]) * 60.0   # ″/min per °/h (A.4.3)
+    drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
     df = readings.data
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
@@ -647,7 +648,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                                else f"axis {v}", float(row.E_arcsec),
                                                float(at), u_r, int(row.n_series)))
         t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
-        t_min = float(np.nanmax(t)) / 60.0 if t.size else protocol.annex_a.duration_min
+        t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
         out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
                                           scale, table_mpe_arcsec=mpe,
                                           drift_half_width_arcsec=drift * t_min, k=k_fixed)

@@ -35,6 +35,7 @@ from typing import Sequence
 import numpy as np
 import sympy
 
+from gonio.units import ARCSEC_PER_DEG
 from uncertainty import (GumResult, coverage_factor, from_u, monte_carlo, propagate, type_b,
                          validate_gum)
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
@@ -51,8 +52,6 @@ COVERAGE_PROBABILITY = 0.95
 #: u of a pulse count C = floor(N(t_r)) − floor(N(t_z)): two floored readings, triangular
 #: of half-width 1 count (JCGM 100 4.3.9), u = 1/√6 counts.
 COUNT_QUANTUM_U = 1.0 / math.sqrt(6.0)
-#: Arc seconds per degree (the one literal of this module; gonio.units once on main).
-_ARCSEC_PER_DEG = 3600.0
 
 
 @dataclass(frozen=True)
@@ -175,7 +174,7 @@ def monte_carlo_check(b: ItemUncertainty, trials: int = 200_000, seed: int = 0):
 
 def _single_round_u(k_i: np.ndarray, theta_deg: np.ndarray, table_mpe_arcsec: float):
     """u(K_i) of one round from the table (rectangular MPE) and the count quantum, counts/°."""
-    th_arcsec = np.abs(theta_deg) * _ARCSEC_PER_DEG
+    th_arcsec = np.abs(theta_deg) * ARCSEC_PER_DEG
     u_tab = np.abs(k_i) * (table_mpe_arcsec / math.sqrt(3.0)) / th_arcsec
     u_q = COUNT_QUANTUM_U / np.abs(theta_deg)
     return u_tab, u_q
