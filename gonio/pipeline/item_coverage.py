@@ -132,9 +132,13 @@ def _cov(hits) -> dict:
             "u_binomial": math.sqrt(p * (1 - p) / h.size) if h.size else math.nan}
 
 
-def item_coverage(records: list[dict]) -> dict:
+def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
     """Per item, over the trials: coverage of |result − truth| ≤ U (k as stated), and for
     B_s and R of the truth by the 95 % interval.
+
+    ``intrinsic_points``: E's truth per point on an ideal set-up (no tilt, Earth rate,
+    bias or table error: what a certificate is about); E's items then also get
+    ``within_U_intrinsic``.
 
     >>> recs = [{"scale_factor": {"value": v, "U": 0.2, "interval": None, "truth": 0.0}}
     ...         for v in (0.1, -0.1, 0.3, 0.0)]
@@ -155,6 +159,9 @@ def item_coverage(records: list[dict]) -> dict:
         if name.startswith("angle_deviation"):
             d = np.array([np.subtract(r["points"], r["truth_points"]) for r in rs])
             item["within_U"] = _cov(np.abs(d) <= U[:, None])
+            if intrinsic_points is not None:
+                di = np.array([np.subtract(r["points"], intrinsic_points) for r in rs])
+                item["within_U_intrinsic"] = _cov(np.abs(di) <= U[:, None])
         elif name in ("zero_stability", "repeatability"):
             if name == "repeatability":
                 s2 = np.array([r["s_points"] for r in rs]) ** 2

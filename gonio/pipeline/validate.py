@@ -336,7 +336,8 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         "mean_U_arcsec": float(U.mean()), "min_U_arcsec": float(U.min()),
         "mean_u_r_arcsec": float(np.mean([t.u_r_arcsec for t in tr])),
         "annex_a": block(U),
-        "items": item_coverage([t.items for t in tr]),
+        "items": item_coverage([t.items for t in tr],
+                               np.asarray(case.truth_intrinsic).mean(axis=0)),
         "diagnosis": diag,
         "primary": {"truth": truth},
     }
@@ -363,6 +364,9 @@ def item_coverage_lines(cases) -> list[str]:
                    f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
             if "interval_holds_truth" in it:
                 txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+            if "within_U_intrinsic" in it:
+                txt += (f"   vs intrinsic truth "
+                        f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
             out.append(txt)
     return out
 
