@@ -324,3 +324,20 @@ def test_every_measured_item_has_the_results_json_shape(tmp_path):
     assert res["repeatability"]["uncertainty"]["interval"][0] < res["repeatability"]["value"]
     for item in ("zero_stability", "rate_consistency", "pointing_consistency"):
         assert res[item]["uncertainty"] is None
+
+
+def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
+    f, p, _ = write_case(tmp_path)
+    t = tmp_path / "tilt.json"
+    t.write_text(json.dumps({"tilt_deg": 0.02, "U95_tilt_deg": 0.01}))
+    code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
+                             str(tmp_path / "o"), "--budget", "draft", "--tilt", str(t)],
+                            capsys)
+    assert code == 0 and res["uncertainty"]["budget_kind"] == "draft"
+    assert len(res["uncertainty"]["components"]) == 4
+    # the measured tilt bounds φ_e too: elliptic extreme at 0.03° instead of 0.1° (A.4.2)
+    from gonio.physics.tilt import elliptic_extreme
+    phi = res["uncertainty"]["components"][1]
+    assert phi["half_width_arcsec"] == pytest.approx(elliptic_extreme(0.03).extreme_arcsec)
+    page = (tmp_path / "o" / "certificate.html").read_text()
+    assert "draft budget" in page

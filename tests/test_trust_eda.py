@@ -89,3 +89,28 @@ def test_says_when_coupling_cannot_be_estimated():
     assert res.to_dict()["coupling"]["separable"] is False
     out = _text(res)
     assert "WARNING: the coupling cannot be estimated" in out and "″ at the tilt bound" in out
+
+
+def test_gonio_eda_on_the_default_example(tmp_path, capsys):
+    """`gonio simulate --protocol eda` then `gonio eda`, from the outside: the coupling is
+    estimated and the table error agrees with the bench's truth within U."""
+    import json
+
+    from gonio.bench import write_session
+    from gonio.cli import main
+
+    proto = load_protocol("eda")
+    bench = replace(load_bench("rlg"), sample_rate_hz=50.0)
+    write_session(run_session(proto, bench, seed=7), tmp_path)
+    capsys.readouterr()
+    assert main(["eda", str(tmp_path / "readings.csv"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["coupling"]["separable"] is True and out["coupling"]["max_effect_arcsec"] > 0.5
+    x = np.array(out["table"]["position_deg"])
+    obs = tuple(h for h in bench.table.positioning_harmonics if h.order % out["n_starts"])
+    t = harmonic_sum_arcsec(x, obs)
+    err = np.array(out["table"]["error_arcsec"]) - (t - t.mean())
+    U = stats.t.ppf(0.975, out["dof"]) * np.array(out["table"]["u_arcsec"])
+    assert np.mean(np.abs(err) <= U) >= 10 / 12
+    assert main(["eda", str(tmp_path / "readings.csv")]) == 0
+    assert "coupling (estimated, removed)" in capsys.readouterr().out
