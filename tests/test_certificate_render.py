@@ -149,7 +149,7 @@ def test_html_in_chromium_items_u_and_figures_visible(run, tmp_path):
     for item in ITEMS:
         assert L[item] in text, item
     U = display("U", run["results"]["uncertainty"]["U_arcsec"])
-    k = display("pos", run["results"]["uncertainty"]["k"])
+    k = display("k", run["results"]["uncertainty"]["k"])
     assert re.search(rf"U = {re.escape(U)} ?″, k = {re.escape(k)}", text), "U with its k is not shown"
     assert L["virtual"] in text
     shot = tmp_path / "certificate.png"

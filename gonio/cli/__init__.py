@@ -6,7 +6,9 @@ function ``run(args) -> int``. Modules are discovered in name order, so adding
 a command never edits a shared list.
 
 A :class:`gonio.errors.GonioError` (a user error) is printed on one line to
-stderr as ``gonio: error: ...`` and the exit code is 2, with no traceback.
+stderr as ``gonio: error: ...`` and the exit code is 2, with no traceback. A reader
+that closes the pipe early (``gonio calibrate ... --json | head``) ends the command
+quietly (exit 0: every output file was already written).
 """
 
 from __future__ import annotations
@@ -50,10 +52,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        rc = int(args.func(args) or 0)
+        sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit
+        return rc
     except GonioError as exc:
         sys.stderr.write(f"gonio: error: {exc}\n")
         return 2
+    except BrokenPipeError:
+        # the reader went away: stop writing, and keep Python from complaining at exit
+        import os
+
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):  # pragma: no cover - stdout without a descriptor
+            pass
+        return 0
     except KeyboardInterrupt:  # pragma: no cover
         sys.stderr.write("gonio: interrupted\n")
         return 130

@@ -38,6 +38,9 @@ def register(subparsers) -> None:
     p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
                    help="JCGM 101 Monte Carlo trials (0: none)")
     p.add_argument("--seed", type=int, default=0, help="seed of the Monte Carlo generator")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification whose annex budget to reproduce (ogam-draft, "
+                        "jjf1535-2015)")
     fmt = p.add_mutually_exclusive_group()
     fmt.add_argument("--json", action="store_true", help="print the result as JSON")
     fmt.add_argument("--format", choices=("text", "markdown", "html"), default="text",
@@ -47,6 +50,13 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Compute and print the Annex A budget."""
+    if args.spec != "ogam-draft":
+        from gonio.pipeline.rate import budget
+
+        b = budget(args.spec)
+        print(json.dumps(b.to_dict(), indent=2, ensure_ascii=False) if args.json else b.to_text(),
+              end="\n" if args.json else "")
+        return 0
     try:
         b = annex_a_budget(table_mpe_arcsec=args.table_mpe_arcsec, tilt_deg=args.tilt_deg,
                            zero_stability_dph=args.zero_stability_dph,

@@ -15,9 +15,11 @@ def register(sub) -> None:
                                    "summary.txt and tables/*.csv into --out.")
     p.add_argument("readings", help="readings file (CSV, docs/formats.md#readings-file) or a stream (docs/formats.md#stream-file, "
                    "reduced with the protocol first; told apart by the header)")
+    p.add_argument("--spec", default=None,
+                   help="specification (default: the readings' '# spec:' metadata, else "
+                        "ogam-draft)")
     p.add_argument("--protocol", default=None,
-                   help="protocol file or built-in name (default: the readings file's "
-                        "'# protocol:', else ogam-draft; a different one is reported)")
+                   help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--budget", choices=("physical", "draft"), default="physical",
                    help="E's budget: physical (default: Annex A plus the lines beyond the draft "
                         "the validation showed to matter) or draft (the annex's four lines)")
@@ -27,6 +29,9 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     add_certificate_options(p)
+    p.add_argument("--dcc", action="store_true",
+                   help="also write certificate.dcc.xml, the PTB Digital Calibration "
+                        "Certificate (DCC 3.3.0 XML)")
     p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
     p.set_defaults(func=run)
@@ -42,8 +47,28 @@ def add_certificate_options(p) -> None:
                    help="certificate language (zh needs a CJK font, e.g. fonts-noto-cjk)")
 
 
-def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) -> None:
-    """Write the outputs (results, tables, certificate) and print the summary (or the JSON)."""
+def print_outputs(report, as_json: bool, lab_d: dict | None, lang: str) -> None:
+    """Print results.json (``--json``) or the summary, and the one-line CJK font note."""
+    import sys
+
+    from gonio.report.certificate import cjk_notice
+
+    note = cjk_notice(lang)
+    if note:
+        sys.stderr.write(f"gonio: note: {note}\n")
+    if as_json:
+        sys.stdout.write(json.dumps(report.to_dict(), indent=2, ensure_ascii=False,
+                                    allow_nan=False) + "\n")
+    else:
+        sys.stdout.write(report.summary(lab_d))
+    sys.stdout.flush()
+
+
+def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
+         dcc: bool = False) -> None:
+    """Write the outputs (results, tables, certificate, optional DCC) and print the summary
+    (or the JSON)."""
+    from gonio.progress import status
     from gonio.report.certificate import load_lab, write_certificate
 
     import sys
@@ -51,18 +76,34 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) 
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
     for w in report.warnings():
         print(w, file=sys.stderr)
-    write_calibration(report, out)
-    write_certificate(report, out, truth=truth, lab=lab_d, lang=lang)
-    if as_json:
-        print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
-    else:
-        print(report.summary(), end="")
+    write_calibration(report, out, lab=lab_d)
+    status("writing the certificate")
+    write_certificate(report, out, truth=truth, lab=lab_d, lang=lang, dcc=dcc)
+    status("")
+    print_outputs(report, as_json, lab_d, lang)
 
 
 def run(args) -> int:
     if args.monte_carlo < 0:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
+    from gonio.pipeline.rate import RATE_SPECS, calibrate as calibrate_rate, readings_spec
+    from gonio.progress import status
+
+    spec = args.spec or readings_spec(args.readings) or "ogam-draft"
+    if spec != "ogam-draft":
+        if spec not in RATE_SPECS:
+            from gonio.specs import get
+            get(spec)                                  # GonioError listing the keys
+        result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
+                                   protocol=args.protocol, lab=args.lab, lang=args.lang,
+                                   monte_carlo_trials=args.monte_carlo)
+        if args.json:
+            print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
+        else:
+            print(result.summary(), end="")
+        return 0
+    status("calibrating")
     report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo,
                        budget=args.budget, tilt=args.tilt)
-    emit(report, args.out, args.json, lab=args.lab, lang=args.lang)
+    emit(report, args.out, args.json, lab=args.lab, lang=args.lang, dcc=args.dcc)
     return 0

@@ -12,9 +12,16 @@ def register(sub) -> None:
     p = sub.add_parser("demo", help="a complete virtual calibration (simulate + calibrate)",
                        description="Simulate the draft's whole calibration on the default "
                                    "virtual bench (RLG on a precision table) and calibrate it: "
-                                   "readings.csv, truth.json, results.json and the certificate.")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
+                                   "readings.csv, truth.json, results.json, the certificate "
+                                   "(HTML, PDF) and its DCC XML.")
+    p.add_argument("--seed", type=int, default=0,
+                   help="random seed of the virtual bench (≥ 0; same seed → byte-identical "
+                        "outputs)")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+    p.add_argument("--bench", default=None,
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610; "
+                        "rlg and fog work as rate sensors too)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     from gonio.cli.cmd_calibrate import add_certificate_options
@@ -23,14 +30,33 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    import json
-
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    report, paths = demo(args.out, seed=args.seed, bench=args.bench, lab=args.lab, lang=args.lang)
-    if args.json:
-        print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
-    else:
-        print(report.summary(), end="")
-        print(f"wrote {', '.join(sorted(p.name for p in paths))} in {Path(args.out)}")
+    if args.spec != "ogam-draft":
+        import json
+
+        from gonio.pipeline.rate import demo as rate_demo
+
+        result, paths = rate_demo(args.spec, args.out, bench=args.bench, seed=args.seed,
+                                  lab=args.lab, lang=args.lang)
+        if args.json:
+            print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
+        else:
+            print(result.summary(), end="")
+            print(f"wrote {', '.join(sorted(Path(p).name for p in paths.values()))} in "
+                  f"{Path(args.out)}")
+        return 0
+    from gonio.cli.cmd_calibrate import print_outputs
+    from gonio.progress import status
+    from gonio.report.certificate import load_lab
+
+    lab_d = load_lab(args.lab) if args.lab else None
+    report, paths = demo(args.out, seed=args.seed, bench=args.bench or "rlg", lab=args.lab,
+                         lang=args.lang, on_stage=status)
+    status("")
+    print_outputs(report, args.json, lab_d, args.lang)
+    if not args.json:
+        out = Path(args.out)
+        rel = sorted(p.relative_to(out).as_posix() for p in paths)
+        print(f"wrote {', '.join(rel)} in {out}")
     return 0

@@ -32,10 +32,15 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.max_gap is not None and not args.max_gap > 0:
         raise GonioError(f"--max-gap must be > 0, got {args.max_gap}")
+    from gonio.progress import status
+
     proto = load_protocol(args.protocol)
     override = read_override(args.override) if args.override else None
+    status(f"reduce: reading {args.stream}")
     stream = read_stream(args.stream, max_gap_s=args.max_gap)
+    status("reduce: finding rests and matching rounds")
     red = reduce_stream(stream, proto, override=override)
+    status("")
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream "
                          f"({len(red.rests)} rests found)", file=args.stream)

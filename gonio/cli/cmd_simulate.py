@@ -14,8 +14,12 @@ def register(sub) -> None:
     p = sub.add_parser("simulate", help="run a protocol on the virtual bench",
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
-    p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the specification's)")
+    p.add_argument("--bench", default=None,
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
@@ -39,17 +43,35 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 def run(args) -> int:
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    proto = load_protocol(args.protocol)
-    bench = load_bench(args.bench, table=args.table)
+    if args.spec != "ogam-draft":
+        from gonio.pipeline.rate import simulate
+
+        if args.stream or args.table:
+            raise GonioError("--stream and --table apply to the ogam-draft specification only")
+        for p in simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
+                          seed=args.seed).values():
+            print(p)
+        return 0
+    proto = load_protocol(args.protocol or "ogam-draft")
+    bench = load_bench(args.bench or "rlg", table=args.table)
     writer = None
     if args.stream:
         from gonio.formats.streams import StreamWriter
 
         writer = StreamWriter(Path(args.out) / "stream.csv", stream_metadata(proto, bench, args.seed),
                               table=True)
+    from gonio.progress import status
+
+    def write_chunk(time_s, *cols):
+        writer.write(time_s, *cols)
+        if len(time_s):
+            status(f"simulate: stream at t = {float(time_s[-1]):.0f} s, {writer.rows} samples")
+
+    status("simulate: running the session")
     try:
         result = run_session(proto, bench, seed=args.seed,
-                             stream=None if writer is None else writer.write)
+                             stream=None if writer is None else write_chunk)
+        status("")
     except BaseException:
         if writer is not None:
             writer.abort()

@@ -25,7 +25,7 @@ from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
-from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -58,9 +58,18 @@ BUDGET_KINDS = ("physical", "draft")
 
 
 def readings_taken(repeatability_source: str) -> list[str]:
-    """The readings-taken notes of this calibration, with the u(r) sentence that is true for it."""
-    return list(READINGS_TAKEN[:3]) + [f"Annex A.4.4: u(r) is {repeatability_source}."] + \
-        list(READINGS_TAKEN[3:])
+    """The readings-taken notes of this calibration, with the u(r) sentence that is true for it.
+
+    u(r) from this calibration's own series: "Annex A.4.4: u(r) is …" (the certificate has
+    its translation); from the protocol: "Annex A.4.4 (not applied): …", a different
+    sentence that no translation of the first can stand for.
+    """
+    if "this calibration's own" in repeatability_source:
+        note = f"Annex A.4.4: u(r) is {repeatability_source}."
+    else:
+        note = (f"Annex A.4.4 (not applied): this calibration has no repeated series; u(r) is "
+                f"{repeatability_source}.")
+    return list(READINGS_TAKEN[:3]) + [note] + list(READINGS_TAKEN[3:])
 
 
 def json_safe(x):
@@ -204,25 +213,20 @@ class CalibrationReport:
                            f"{', …' if len(g) > 5 else ''}): {g['reason'].iloc[0]}")
         return out
 
-    def summary(self) -> str:
-        """The seven items with their U, as a fixed-width text table."""
-        lines = [summary_table(self.results)]
+    def summary(self, lab: dict | None = None) -> str:
+        """The seven items, U (k, coverage probability) and any conformity statements as a
+        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
+        then the 95 % intervals of the standard-deviation items and the budget's notes."""
+        from gonio.report.stated import summary_text
+
+        lines = [summary_text(self.to_dict(), "en", lab).rstrip("\n")]
         for name in ITEM_NAMES:
             iu = self.item_uncertainty.get(name)
-            if iu is None:
-                continue
-            txt = f"  {name}: U = {iu.U:.3g} {iu.unit} (k = {iu.k:.3g}, {iu.k_source}"
-            if iu.interval is not None:
-                txt += f"; 95 % interval [{iu.interval[0]:.3g}, {iu.interval[1]:.3g}]"
-            lines.append(txt + ")")
+            if iu is not None and iu.interval is not None:
+                lines.append(f"{name}: 95 % interval [{iu.interval[0]:.3g}, "
+                             f"{iu.interval[1]:.3g}] {iu.unit} (chi-square)")
         if self.e_measured:
-            u = self.uncertainty
-            lines.append(f"Uncertainty of the angle-position deviation ({self.budget_kind} "
-                         f"budget): u_c = {u.stated_u_c_arcsec:g}″, "
-                         f"U = {u.to_dict()['stated']['U_arcsec']:g}″ (k = {u.k:.3g})")
-            lines += [f"  note: {n}" for n in self.budget_notes]
-        else:
-            lines.append("Angle-position deviation not measured: no uncertainty stated.")
+            lines += [f"note: {n}" for n in self.budget_notes]
         return "\n".join(lines) + "\n"
 
 
@@ -795,15 +799,20 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings,
     return out, unused
 
 
-def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:
-    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically."""
+def write_calibration(report: CalibrationReport, out: str | Path,
+                      lab: dict | None = None) -> dict[str, Path]:
+    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
+
+    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
+    to ``summary.txt``, as the certificate and the CLI show them.
+    """
     out = Path(out)
     names = {}
     with output_dir(out) as stage:
         d = report.to_dict()
         write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
                                                       allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", report.summary())
+        write_text(stage / "summary.txt", report.summary(lab))
         tables = stage / "tables"
         for item in report.results.items():
             for tname, df in (getattr(item, "tables", None) or {}).items():
