@@ -50,7 +50,8 @@ SMALL = {
 
 def tool(name: str) -> str:
     path = shutil.which(name) or (f"/usr/bin/{name}" if Path(f"/usr/bin/{name}").exists() else None)
-    assert path, f"{name} is missing: {HINT}"
+    if not path:
+        pytest.skip(f"{name} is missing: {HINT}")
     return path
 
 

@@ -15,11 +15,12 @@ def register(sub) -> None:
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
     p.add_argument("--spec", default="ogam-draft",
-                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20, triad-alignment)")
     p.add_argument("--protocol", default=None,
                    help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--bench", default=None,
-                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610)")
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610; "
+                        "triad-alignment: mems-triad)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
@@ -43,6 +44,8 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 def run(args) -> int:
     if args.seed < 0:
         raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
+    if args.spec in SPEC_SIMULATORS:
+        return _run_spec(args)
     if args.spec != "ogam-draft":
         from gonio.pipeline.rate import simulate
 
@@ -79,6 +82,29 @@ def run(args) -> int:
     paths = write_session(result, args.out)
     if writer is not None:
         paths["stream"] = writer.close()
+    for p in paths.values():
+        print(p)
+    return 0
+
+
+#: Specifications with their own session simulator (module with ``simulate``).
+SPEC_SIMULATORS = {"triad-alignment": "gonio.specs.triad_alignment.session"}
+
+
+def _run_spec(args) -> int:
+    """A specification with its own simulator (the gyro triad: readings.csv, thermal.csv,
+    truth.json)."""
+    import importlib
+
+    from gonio.specs import get
+
+    spec = get(args.spec)
+    if args.stream or args.table:
+        raise GonioError(f"--stream and --table apply to ogam-draft only, not {spec.key}",
+                         key="--spec")
+    sim = importlib.import_module(SPEC_SIMULATORS[spec.key]).simulate
+    paths = sim(args.protocol or spec.default_protocol, args.bench or spec.default_bench,
+                args.seed, args.out)
     for p in paths.values():
         print(p)
     return 0

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
@@ -70,30 +71,6 @@ def readings_taken(repeatability_source: str) -> list[str]:
         note = (f"Annex A.4.4 (not applied): this calibration has no repeated series; u(r) is "
                 f"{repeatability_source}.")
     return list(READINGS_TAKEN[:3]) + [note] + list(READINGS_TAKEN[3:])
-
-
-def json_safe(x):
-    """Plain JSON types all the way down: numpy scalars to Python, NaN/inf to ``None``.
-
-    >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
-    {'a': None, 'b': [1.5, None]}
-    """
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [json_safe(v) for v in x.tolist()]
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 @dataclass(frozen=True)

@@ -524,8 +524,8 @@ def display_item(name: str, value: float | None, U: float | None = None) -> str:
         s = round_half_up(value, decimals_for_sig(U, 2))
     else:
         s = display_number(value, ITEM_SIG_DIGITS.get(name, 3))
-    if name == "angle_deviation" and not s.startswith("-") and float(value) != 0:
-        s = "+" + s
+    if name == "angle_deviation" and not s.startswith("-") and parse_display(s) != 0:
+        s = "+" + s            # a sign only where the rounded value has one (−0.004 → 0.00)
     return s
 
 
