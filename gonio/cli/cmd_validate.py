@@ -48,6 +48,8 @@ def register(sub) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue the interrupted study in --out (same settings): run only the "
                         "trials it has not finished")
+    p.add_argument("--all-items", action="store_true",
+                   help="keep 7.3, 7.6 and 7.7 so that every item's coverage is measured")
     p.add_argument("--json", action="store_true", help="print validation.json on stdout")
     p.set_defaults(func=run)
 
@@ -73,7 +75,8 @@ def run(args) -> int:
                           sample_rate_hz=args.sample_rate_hz, protocol=args.protocol,
                           extra_components=extras, truth=args.truth,
                           u_scale=args.u_scale, workers=args.workers, scheduler=args.scheduler,
-                          batch_size=args.batch, partial_dir=partial, resume=args.resume)
+                          batch_size=args.batch, partial_dir=partial, resume=args.resume,
+                          all_items=args.all_items)
     except KeyboardInterrupt:
         if partial is not None and partial.exists():
             sys.stderr.write(f"gonio: interrupted: the finished trials are kept in {partial}; "

@@ -67,6 +67,7 @@ from gonio.progress import Progress
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
 from gonio.formats.toml import read_toml
+from gonio.pipeline.item_coverage import item_coverage, trial_items
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "coverage", "binomial_u", "validate",
@@ -98,11 +99,13 @@ _TRUTH_DOC = {
 }
 
 
-def validation_protocol(protocol: str = "ogam-draft") -> Protocol:
+def validation_protocol(protocol: str = "ogam-draft", all_items: bool = False) -> Protocol:
     """The protocol restricted to what E and U need: 7.1 and 7.4 (10 series, 7.5).
 
-    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget);
-    timings, rests and the Earth-rate compensation of the draft are kept.
+    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget) unless
+    ``all_items`` (then every item's coverage is measured); timings, rests and the
+    Earth-rate compensation of the draft are kept. k is the draft's A.7 k = 2 when the
+    protocol does not fix it (the criterion of the study).
 
     >>> p = validation_protocol()
     >>> p.zero_stability is None, p.rate_consistency, p.angle_deviation.series
@@ -110,7 +113,9 @@ def validation_protocol(protocol: str = "ogam-draft") -> Protocol:
     """
     raw = read_toml(resolve(protocol, "protocol"))
     for key in ("zero_stability", "rate_consistency", "pointing_consistency"):
-        raw.pop(key, None)
+        if not all_items:
+            raw.pop(key, None)
+    raw.setdefault("annex_a", {}).setdefault("coverage_factor", 2.0)
     if "angle_deviation" not in raw or "scale_factor" not in raw:
         raise GonioError("validation needs scale_factor (7.1) and angle_deviation (7.4) sections",
                          file=str(protocol), key="angle_deviation")
@@ -181,6 +186,7 @@ class TrialResult:
     k_cal: float
     k_mount: float
     extras: list
+    items: dict = field(default_factory=dict)     # item_coverage.trial_items of this trial
 
 
 def _matrix(df, col: str) -> np.ndarray:
@@ -213,7 +219,7 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft")
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
@@ -236,7 +242,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
                        U_extended_arcsec=float(ext.U_arcsec) * u_scale, u_r_arcsec=u_r,
                        k_cal=float(rep.results.scale_factor.value),
                        k_mount=float(res.truth["scale_factor_through_mount_counts_per_deg"]),
-                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras])
+                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras],
+                       items=trial_items(rep, res.truth))
 
 
 def trial_seed(seed: int, case: str, index: int) -> int:
@@ -576,6 +583,8 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         "mean_U_arcsec": float(U.mean()), "min_U_arcsec": float(U.min()),
         "mean_u_r_arcsec": float(np.mean([t.u_r_arcsec for t in tr])),
         "annex_a": block(U),
+        "items": item_coverage([t.items for t in tr],
+                               np.asarray(case.truth_intrinsic).mean(axis=0)),
         "diagnosis": diag,
         "primary": {"truth": truth},
     }
@@ -589,6 +598,24 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         s["extended"] = block(Ux)
         s["extended_for_truth"] = truth
     return s
+
+
+def item_coverage_lines(cases) -> list[str]:
+    """Per case, the coverage of every measured item (|result − truth| ≤ U; interval)."""
+    out = ["", "coverage per item (|result - truth| <= U as stated; for B_s and R also the "
+               "95 % interval holding the truth)"]
+    for c in cases:
+        for name, it in c.summary.get("items", {}).items():
+            w = it["within_U"]
+            txt = (f"{c.name:<10}{name:<28}{it['trials']:>5} trials  within U "
+                   f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
+            if "interval_holds_truth" in it:
+                txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+            if "within_U_intrinsic" in it:
+                txt += (f"   vs intrinsic truth "
+                        f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
+            out.append(txt)
+    return out
 
 
 @dataclass
@@ -627,6 +654,7 @@ class ValidationReport:
                     f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += item_coverage_lines(self.cases)
         return "\n".join(lines) + "\n"
 
 
@@ -637,7 +665,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              truth: str = "systematic", u_scale: float = 1.0, workers: int | None = None,
              scheduler: str | None = None, batch_size: int | None = None,
              partial_dir: str | Path | None = None, resume: bool = False,
-             show_progress: bool = True) -> ValidationReport:
+             show_progress: bool = True, all_items: bool = False) -> ValidationReport:
     """Run ``trials`` independent virtual calibrations per case and measure coverage.
 
     Parameters
@@ -680,6 +708,9 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     resume : bool
         Load the finished trials from ``partial_dir`` (same settings required) and
         run only the missing ones.
+    all_items : bool
+        Keep 7.3, 7.6 and 7.7 in the protocol, so that every item's coverage is measured
+        (summary ``items``, :func:`gonio.pipeline.item_coverage.item_coverage`).
 
     Examples
     --------
@@ -721,7 +752,10 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
             if e not in EXTRA_SYMBOLS:
                 raise GonioError(f"unknown extra component {e!r} (known: "
                                  f"{', '.join(EXTRA_SYMBOLS)})", key="extra_components")
-    proto = protocol if isinstance(protocol, Protocol) else validation_protocol(protocol)
+    proto = protocol if isinstance(protocol, Protocol) else \
+        validation_protocol(protocol, all_items=all_items)
+    if proto.annex_a.coverage_factor is None:        # the study's criterion: the draft's k = 2
+        proto = replace(proto, annex_a=replace(proto.annex_a, coverage_factor=2.0))
     if proto.scale_factor is None or proto.angle_deviation is None \
             or proto.angle_deviation.series < 2:
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
@@ -746,7 +780,8 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),
                 "protocol": proto.name,
-                "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"],
+                "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"]
+                + (["7.3", "7.6", "7.7"] if all_items else []),
                 "extra_components": list(extras_used), "truth": truth,
                 "u_scale": float(u_scale),
                 "seeding": "numpy SeedSequence(seed, spawn_key=(case index, trial index))"}
