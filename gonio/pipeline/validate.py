@@ -331,6 +331,8 @@ def pack_trials(case: str, indices: Sequence[int], trials: Sequence[TrialResult]
         "extras_distribution": np.array([e[2] for e in ex], dtype=str),
         "extras_half_width": np.array([[e[1] for e in t.extras] for t in trials],
                                       dtype=np.float64).reshape(len(trials), len(ex)),
+        # per-item records (nested dicts of floats): JSON text, lossless (repr of each float)
+        "items_json": np.array([json.dumps(t.items, sort_keys=True) for t in trials], dtype=str),
     }
 
 
@@ -349,7 +351,8 @@ def unpack_trials(packed: Mapping) -> dict[int, TrialResult]:
             u_r_arcsec=float(packed["u_r_arcsec"][j]), k_cal=float(packed["k_cal"][j]),
             k_mount=float(packed["k_mount"][j]),
             extras=[(s, float(packed["extras_half_width"][j, m]), d)
-                    for m, (s, d) in enumerate(zip(sym, dist))])
+                    for m, (s, d) in enumerate(zip(sym, dist))],
+            items=json.loads(str(packed["items_json"][j])) if "items_json" in packed else {})
     return out
 
 
