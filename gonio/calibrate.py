@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gonio import __version__
-from gonio.atomic import output_dir, write_text
+from gonio.atomic import output_dir, output_set, sha256_file, write_text
 from gonio.budget import AnnexABudget, annex_a_budget
 from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
 from gonio.io import Readings, metadata_float, read_readings
@@ -153,7 +153,10 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 
 def _load(path: str | Path, protocol: Protocol):
+    from gonio.errors import check_input_file
     from gonio.streams import read_stream, sniff_kind
+
+    check_input_file(path, "readings or stream file")
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
@@ -218,11 +221,11 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
     if isinstance(readings, Readings):
         rd, sha = readings, ""
         if rd.path:
-            sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
+            sha = sha256_file(rd.path)
     else:
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
-        sha = hashlib.sha256(Path(readings).read_bytes()).hexdigest()
+        sha = sha256_file(readings)
     ref_orient = proto.pointing_reference
     res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=ref_orient)
@@ -264,8 +267,36 @@ def equal_division_for(results: CalibrationResults, readings: Readings):
     return out
 
 
+def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | None = None,
+                  lab=None, lang: str = "en", session=None, inputs=(),
+                  force: bool = False) -> dict[str, Path]:
+    """One run's whole output set into ``out``: results, summary, tables, certificate (and
+    readings + truth of a simulated ``session``), swapped in together.
+
+    Through :func:`gonio.atomic.output_set`: every part is written into a staging
+    folder and the folder replaces ``out`` only when all are written, with
+    ``gonio-manifest.json`` carrying the source's SHA-256; a failed run leaves the
+    previous set untouched; ``out`` holding one of ``inputs`` is refused.
+    """
+    from gonio.report.certificate import write_certificate
+
+    out = Path(out) if str(out).strip() else out
+    with output_set(out, inputs=inputs, force=force, source_sha256=report.source_sha256) as st:
+        if session is not None:
+            from gonio.bench import write_session
+            write_session(session, out)
+        write_calibration(report, out)
+        write_certificate(report, out, truth=truth, lab=lab, lang=lang)
+        names = sorted(p.relative_to(st).as_posix() for p in st.rglob("*") if p.is_file())
+    return {n: Path(out) / n for n in names}
+
+
 def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:
-    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically."""
+    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
+
+    Inside an open :func:`gonio.atomic.output_set` for ``out`` (what
+    :func:`write_outputs` does) they join that run's staged set.
+    """
     out = Path(out)
     names = {}
     with output_dir(out) as stage:

@@ -10,20 +10,29 @@ from gonio.protocol import load_protocol
 
 
 def demo(out: str | Path, seed: int = 0, bench: str = "rlg", protocol: str = "ogam-draft",
-         lab: str | Path | None = None, lang: str = "en") -> tuple[CalibrationReport, list[Path]]:
+         lab: str | Path | None = None, lang: str = "en",
+         force: bool = False) -> tuple[CalibrationReport, list[Path]]:
     """Simulate ``protocol`` on ``bench``, calibrate the readings, write results and certificate.
 
-    Returns the report and the paths written (readings.csv, truth.json, results.json, ...).
+    The whole set (readings.csv, truth.json, results, tables, certificate, manifest)
+    is staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`); an
+    existing readings.csv there is replaced only with ``force``. Returns the report
+    and the paths written.
     """
+    from gonio.atomic import output_set
     from gonio.report.certificate import load_lab, write_certificate
 
-    out = Path(out)
+    out = Path(out) if str(out).strip() else out
     lab_d = load_lab(lab) if lab else None      # validate inputs before simulating
     proto = load_protocol(protocol)
-    session = run_session(proto, load_bench(bench), seed=seed)
-    written = list(write_session(session, out).values())
-    report = calibrate(out / "readings.csv", proto, static_record=session.static_record)
-    written += list(write_calibration(report, out).values())
-    written += list(write_certificate(report, out, truth=session.truth, lab=lab_d,
-                                      lang=lang).values())
-    return report, written
+    bench_cfg = load_bench(bench)
+    inputs = [x for x in (lab, bench, protocol) if isinstance(x, (str, Path)) and Path(x).exists()]
+    with output_set(out, inputs=inputs, force=force) as stage:
+        session = run_session(proto, bench_cfg, seed=seed)
+        write_session(session, out)
+        report = calibrate(stage / "readings.csv", proto, static_record=session.static_record)
+        report.readings.path = Path(out) / "readings.csv"
+        write_calibration(report, out)
+        write_certificate(report, out, truth=session.truth, lab=lab_d, lang=lang)
+        names = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())
+    return report, [Path(out) / n for n in names]

@@ -72,16 +72,27 @@ KNOWN_METADATA: tuple[str, ...] = (
 )
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
 _NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
-    "nominal_scale_factor_counts_per_deg": (0.0, False, math.inf, "a number > 0"),
+    "nominal_scale_factor_counts_per_deg": (1e-6, True, 1e12, "a number in [1e-6, 1e12]"),
     "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
-    "temperature_c": (-math.inf, True, math.inf, "a finite number"),
+    "temperature_c": (-100.0, True, 200.0, "a number in [-100, 200]"),
     "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
-    "table_mpe_arcsec": (0.0, True, math.inf, "a number >= 0"),
-    "tilt_bound_deg": (0.0, True, 90.0, "a number in [0, 90]"),
+    "table_mpe_arcsec": (0.0, True, 3600.0, "a number in [0, 3600]"),
+    "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
 }
+#: Plausible ranges of the numeric columns (docs/formats.md, "Plausible ranges"):
+#: column -> (lowest, highest) magnitude; values outside are refused with the line.
+COLUMN_RANGES: dict[str, tuple[float, float]] = {
+    "time_s": (-1e10, 1e10),
+    "table_deg": (-1e4, 1e4),
+    "gyro_counts": (-2.0 ** 63, 2.0 ** 63 - 1024),
+    "gyro_deg": (-1e6, 1e6),
+    "rate_dps": (1e-6, 1e4),
+}
+#: Longest cell and metadata value accepted, characters.
+MAX_CELL_CHARS: int = 4096
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")
-_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+_NUMBER = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$")   # ASCII digits only
 _NONFINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
 
 
@@ -124,10 +135,16 @@ def metadata_float(metadata: Mapping[str, str], key: str, *,
         key, (-math.inf, True, math.inf, "a finite number"))
     value = _parse_number(text)
     if value is None or not math.isfinite(value):
-        raise GonioError(f"expected {expected}, got {text!r}", file=file, key=key)
+        raise GonioError(f"expected {expected}, got {_show(text)}", file=file, key=key)
     if value < lo or (value == lo and not lo_incl) or value > hi:
-        raise GonioError(f"expected {expected}, got {text!r}", file=file, key=key)
+        raise GonioError(f"expected {expected}, got {_show(text)}", file=file, key=key)
     return value
+
+
+def _show(text: str) -> str:
+    """A value for an error message: quoted, at most 40 characters."""
+    text = str(text)
+    return repr(text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)")
 
 
 def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,
@@ -144,7 +161,7 @@ def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,
         return True
     if text in _FALSE:
         return False
-    raise GonioError(f"expected true or false, got {metadata[key]!r}", file=file, key=key)
+    raise GonioError(f"expected true or false, got {_show(metadata[key])}", file=file, key=key)
 
 
 def _parse_number(text: str) -> float | None:
@@ -226,9 +243,12 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
             if key in metadata:
                 raise GonioError(f"metadata key {key!r} given twice", file=fname, line=idx,
                                  key=key)
+            if len(value) > MAX_CELL_CHARS or len(key) > 200:
+                raise GonioError(f"metadata value of {len(value)} characters, over the limit "
+                                 f"of {MAX_CELL_CHARS}", file=fname, line=idx, key=key[:40])
             metadata[key] = value.strip()
             continue
-        header = [h.strip() for h in next(csv.reader([line]))]
+        header = [h.strip() for h in _cells(line, fname, idx)]
         header_line = idx
         break
     if header is None:
@@ -240,6 +260,9 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
     seen = check_header(header, REQUIRED_COLUMNS, file=fname, line=header_line)
+    if "line" in seen:
+        raise GonioError("column name 'line' is reserved (it holds each row's line number)",
+                         file=fname, line=header_line, column="line")
     if "gyro_counts" not in seen and "gyro_deg" not in seen:
         raise GonioError("missing column: need gyro_counts or gyro_deg (or both)",
                          file=fname, line=header_line, column="gyro_counts")
@@ -260,7 +283,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         if raw_line.lstrip().startswith("#"):
             raise GonioError("metadata line after the header; '#' lines belong at the top",
                              **where)
-        cells = next(csv.reader([raw_line]))
+        cells = _cells(raw_line, fname, idx)
         if len(cells) != ncol:
             raise GonioError(f"expected {ncol} fields as in the header, got {len(cells)}",
                              **where)
@@ -286,6 +309,19 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         raise GonioError("no readings: header only", file=fname, line=header_line)
     data = _frame(cols, extras)
     return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
+
+
+def _cells(line: str, fname: str, idx: int) -> list[str]:
+    """The CSV cells of one line; a cell over :data:`MAX_CELL_CHARS` or bad quoting → GonioError."""
+    if len(line) > MAX_CELL_CHARS:
+        longest = max((len(c) for c in line.split(",")), default=0)
+        if longest > MAX_CELL_CHARS:
+            raise GonioError(f"a cell of {longest} characters, over the limit of "
+                             f"{MAX_CELL_CHARS}", file=fname, line=idx)
+    try:
+        return next(csv.reader([line], strict=True))
+    except csv.Error as exc:
+        raise GonioError(f"bad CSV: {exc}", file=fname, line=idx) from None
 
 
 def _frame(cols: dict[str, list], extras: list[str]) -> pd.DataFrame:
@@ -314,9 +350,13 @@ def _number(row: dict, name: str, where: dict, *, required: bool) -> float:
         return math.nan
     value = _parse_number(text)
     if value is None:
-        raise GonioError(f"expected a number, got {text!r}", column=name, **where)
+        raise GonioError(f"expected a number, got {_show(text)}", column=name, **where)
     if not math.isfinite(value):
-        raise GonioError(f"expected a finite number, got {text!r}", column=name, **where)
+        raise GonioError(f"expected a finite number, got {_show(text)}", column=name, **where)
+    lo, hi = COLUMN_RANGES.get(name, (-math.inf, math.inf))
+    if not lo <= value <= hi and not (name == "rate_dps" and value <= 0):
+        raise GonioError(f"{_show(text)} is outside the plausible range [{lo:g}, {hi:g}] "
+                         "(docs/formats.md)", column=name, **where)
     return value
 
 
@@ -324,7 +364,7 @@ def _positive_int(row: dict, name: str, where: dict) -> int:
     text = row.get(name, "")
     value = _number(row, name, where, required=True)
     if value != int(value) or value < 1 or value > 1_000_000:
-        raise GonioError(f"expected an integer >= 1 (at most 1000000), got {text!r}",
+        raise GonioError(f"expected an integer >= 1 (at most 1000000), got {_show(text)}",
                          column=name, **where)
     return int(value)
 
@@ -332,7 +372,7 @@ def _positive_int(row: dict, name: str, where: dict) -> int:
 def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
     test = row["test"]
     if test not in TEST_NAMES:
-        raise GonioError(f"unknown test {test!r}, expected one of {', '.join(TEST_NAMES)}",
+        raise GonioError(f"unknown test {_show(test)}, expected one of {', '.join(TEST_NAMES)}",
                          column="test", **where)
     series = _positive_int(row, "series", where)
     rnd = _positive_int(row, "round", where)
@@ -340,11 +380,11 @@ def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
     if math.isnan(rate):
         rate = DEFAULT_RATE_DPS
     elif rate <= 0:
-        raise GonioError(f"expected a rate > 0 deg/s, got {row['rate_dps']!r}",
+        raise GonioError(f"expected a rate > 0 deg/s, got {_show(row['rate_dps'])}",
                          column="rate_dps", **where)
     orientation = row.get("orientation", "") or DEFAULT_ORIENTATION
     if orientation not in ORIENTATIONS:
-        raise GonioError(f"unknown orientation {orientation!r}, expected one of "
+        raise GonioError(f"unknown orientation {_show(orientation)}, expected one of "
                          f"{', '.join(ORIENTATIONS)}", column="orientation", **where)
     time_s = _number(row, "time_s", where, required=True)
     table_deg = _number(row, "table_deg", where, required=test != "zero_stability")
@@ -359,10 +399,10 @@ def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
                          column="gyro_counts", **where)
     if not math.isnan(counts):
         text = row["gyro_counts"]
-        if re.match(r"^[+-]?\d+$", text):
+        if re.match(r"^[+-]?[0-9]+$", text):
             counts = float(int(text))
         elif quantised and counts != int(counts):
-            raise GonioError(f"expected an integer pulse count, got {text!r} (metadata "
+            raise GonioError(f"expected an integer pulse count, got {_show(text)} (metadata "
                              "counts_quantised: false allows fractions)",
                              column="gyro_counts", **where)
     return {"test": test, "series": series, "round": rnd, "rate_dps": rate,
@@ -456,7 +496,8 @@ def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
             raise GonioError("missing required column", column=name)
     n = len(df)
     if n == 0:
-        raise GonioError("no readings to write")
+        raise GonioError("no readings to write (the protocol or the reduction produced none)",
+                         file=path)
     get = (lambda name, default: df[name] if name in df.columns
            else pd.Series([default] * n, index=df.index))
     counts = get("gyro_counts", math.nan).astype(float).to_numpy()

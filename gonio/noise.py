@@ -1092,11 +1092,6 @@ def plot_fit(allan: AllanResult, fit: NoiseFit | None = None, path=None):
     axr.set_ylabel("residual [%]")
     fig.tight_layout()
     if path is not None:
-        import io
-
-        from gonio.atomic import write_bytes
-        buf = io.BytesIO()
-        fmt = Path(path).suffix.lstrip(".") or "png"
-        fig.savefig(buf, format=fmt)
-        write_bytes(path, buf.getvalue())
+        from gonio.atomic import save_figure
+        save_figure(fig, path)
     return fig

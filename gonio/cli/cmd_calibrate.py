@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 
-from gonio.calibrate import calibrate, write_calibration
+from gonio.calibrate import calibrate, write_outputs
+from gonio.cli.checks import int_range
 from gonio.errors import GonioError
 
 
@@ -19,7 +20,7 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     add_certificate_options(p)
-    p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
+    p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
     p.set_defaults(func=run)
 
@@ -30,17 +31,20 @@ def add_certificate_options(p) -> None:
                    help="laboratory, customer and signatory details (TOML, see "
                         "protocols/lab-example.toml); without it the certificate is marked as a "
                         "virtual-bench example")
+    p.add_argument("--force", action="store_true",
+                   help="replace an --out folder whose files were changed since gonio wrote "
+                        "them, or that holds a readings/stream file")
     p.add_argument("--lang", choices=("en", "zh"), default="en",
                    help="certificate language (zh needs a CJK font, e.g. fonts-noto-cjk)")
 
 
-def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) -> None:
-    """Write the outputs (results, tables, certificate) and print the summary (or the JSON)."""
-    from gonio.report.certificate import load_lab, write_certificate
+def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
+         inputs=(), force: bool = False) -> None:
+    """Write the whole output set (results, tables, certificate) and print the summary."""
+    from gonio.report.certificate import load_lab
 
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
-    write_calibration(report, out)
-    write_certificate(report, out, truth=truth, lab=lab_d, lang=lang)
+    write_outputs(report, out, truth=truth, lab=lab_d, lang=lang, inputs=inputs, force=force)
     if as_json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
     else:
@@ -48,8 +52,13 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None) 
 
 
 def run(args) -> int:
-    if args.monte_carlo < 0:
-        raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
+    from gonio.atomic import check_output_dir
+    from gonio.limits import check
+
+    check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
+    inputs = [args.readings, args.protocol, args.lab]
+    check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
     report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo)
-    emit(report, args.out, args.json, lab=args.lab, lang=args.lang)
+    emit(report, args.out, args.json, lab=args.lab, lang=args.lang, inputs=inputs,
+         force=args.force)
     return 0

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.demo import demo
+from gonio.cli.checks import seed
 
 
 def register(sub) -> None:
@@ -13,7 +14,7 @@ def register(sub) -> None:
                        description="Simulate the draft's whole calibration on the default "
                                    "virtual bench (RLG on a precision table) and calibrate it: "
                                    "readings.csv, truth.json, results.json and the certificate.")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed, default=0)
     p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
@@ -25,9 +26,10 @@ def register(sub) -> None:
 def run(args) -> int:
     import json
 
-    if args.seed < 0:
-        raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
-    report, paths = demo(args.out, seed=args.seed, bench=args.bench, lab=args.lab, lang=args.lang)
+    from gonio.atomic import check_output_dir
+    check_output_dir(args.out, inputs=[args.lab, args.bench], force=args.force)
+    report, paths = demo(args.out, seed=args.seed, bench=args.bench, lab=args.lab, lang=args.lang,
+                         force=args.force)
     if args.json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
     else:

@@ -25,6 +25,9 @@ from gonio.eda import EdaResult, eda_matrix_from_readings, equal_division_analys
 from gonio.errors import GonioError
 
 
+from gonio.cli.checks import int_range, json_safe
+
+
 def register(subparsers) -> None:
     """Add the ``eda`` sub-command."""
     p = subparsers.add_parser(
@@ -32,7 +35,7 @@ def register(subparsers) -> None:
         description="Separate a rotary table's positioning error from the goniometer's own "
                     "error with equal-division averaging (IEC 62047-20 Annex A.3).")
     p.add_argument("readings", metavar="READINGS", help="readings CSV with equal_division rows")
-    p.add_argument("--starts", type=int, default=None, metavar="N",
+    p.add_argument("--starts", type=int_range(1, 10000), default=None, metavar="N",
                    help="number of starts n (required when the file has no start_deg column; "
                         "checked against the file otherwise)")
     p.add_argument("--gauge", choices=("closure", "zero"), default="closure",
@@ -118,11 +121,12 @@ def plot_eda(res: EdaResult, path: str | Path) -> Path:
     >>> out.read_text()[:5]
     '<?xml'
     """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True)
+    from gonio.atomic import save_figure
+
+    fig = Figure(figsize=(7, 6), constrained_layout=True)
+    a1, a2 = fig.subplots(2, 1)
     a1.errorbar(res.table_position_deg, res.table_error_arcsec, yerr=res.table_u_arcsec,
                 fmt="o-", capsize=3)
     a1.set(xlabel="table position / °", ylabel="table error / ″",
@@ -134,26 +138,23 @@ def plot_eda(res: EdaResult, path: str | Path) -> Path:
     for a in (a1, a2):
         a.axhline(0, color="0.6", lw=0.8)
         a.grid(alpha=0.3)
-    fmt = Path(path).suffix.lstrip(".").lower() or "png"
-    buf = io.BytesIO()
-    try:
-        fig.savefig(buf, format=fmt, metadata={"Software": None} if fmt == "png" else None)
-    except ValueError as exc:
-        raise GonioError(f"cannot write a figure of this type: {exc}", file=path) from None
-    finally:
-        plt.close(fig)
-    return write_bytes(path, buf.getvalue())
+    return save_figure(fig, path)
 
 
 def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
+    from gonio.atomic import check_output_file
+    if args.plot is not None:
+        check_output_file(args.plot, what="--plot", inputs=[args.readings])
+    from gonio.errors import check_input_file
+    check_input_file(args.readings, "readings file")
     df = read_eda_csv(args.readings)
     D, start, step = eda_matrix_from_readings(df, starts=args.starts, file=args.readings)
     res = equal_division_analysis(D, start, step, gauge=args.gauge, noise=args.noise)
     if args.plot:
         plot_eda(res, args.plot)
     if args.json:
-        print(json.dumps(res.to_dict(), indent=2))
+        print(json.dumps(json_safe(res.to_dict()), indent=2, allow_nan=False))
     else:
         print(_text(res))
     return 0

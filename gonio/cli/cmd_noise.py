@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from gonio.errors import GonioError
+from gonio.cli.checks import float_range, json_safe
 
 _INPUTS = {"angle": "angle", "counts": "increment", "rate": "rate"}
 
@@ -40,18 +41,37 @@ def register(subparsers) -> None:
     p.add_argument("--input", choices=sorted(_INPUTS), default="angle",
                    help="meaning of gyro_counts: angle = cumulative counter (default), "
                         "counts = counts per sample, rate = counts per second")
-    p.add_argument("--taus", default="octave", metavar="SET",
+    p.add_argument("--taus", default="octave", metavar="SET", type=tau_set,
                    help="tau set: octave (default), decade:N or all")
     p.add_argument("--modified", action="store_true", help="modified Allan deviation")
-    p.add_argument("--scale-factor", type=float, default=None, metavar="K",
+    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
                    help="counts per degree (default: metadata "
                         "nominal_scale_factor_counts_per_deg)")
-    p.add_argument("--confidence", type=float, default=0.683,
+    p.add_argument("--confidence", type=float_range(0, 1, lo_open=True, hi_open=True), default=0.683,
                    help="level of the chi-squared intervals (default 0.683)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None,
                    help="write ADEV, model and residual plot to FILE (png, pdf, svg)")
     p.set_defaults(func=run)
+
+
+def tau_set(text: str) -> str:
+    """``octave``, ``all`` or ``decade:N`` with an integer N in [1, 100]."""
+    import argparse
+    import re
+
+    t = text.strip().lower()
+    if t in ("octave", "all"):
+        return t
+    m = re.fullmatch(r"decade:([0-9]{1,3})", t)
+    if m and 1 <= int(m.group(1)) <= 100:
+        return t
+    raise argparse.ArgumentTypeError(f"expected octave, all or decade:N with N in [1, 100], "
+                                     f"got {text[:40]!r}")
+
+
+#: Longest record the modified Allan deviation is computed for at every τ ("all", O(N²)).
+MAX_ALL_MODIFIED_SAMPLES = 100_000
 
 
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
@@ -90,6 +110,11 @@ def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bo
         raise GonioError("sampling is not uniform: time step differs from the mean "
                          f"{tau0:g} s by more than 1 % (sample {int(off[0]) + 2})",
                          file=path, column="time_s")
+    if modified and isinstance(taus, str) and taus.strip().lower() == "all" \
+            and t.size > MAX_ALL_MODIFIED_SAMPLES:
+        raise GonioError(f"--taus all with --modified on {t.size} samples is O(N²) work (over "
+                         f"{MAX_ALL_MODIFIED_SAMPLES} samples): use octave or decade:N",
+                         file=path)
     counts = np.asarray(stream.gyro_counts, dtype=np.float64)
     kind = _INPUTS[input_kind]
     if kind == "rate":
@@ -130,6 +155,12 @@ def _table(result) -> str:
 
 def run(args) -> int:
     """Run ``gonio noise``; prints a table or JSON, optionally writes the plot."""
+    from gonio.atomic import check_output_file
+    from gonio.errors import check_input_file
+
+    check_input_file(args.stream, "stream file")
+    if args.plot is not None:
+        check_output_file(args.plot, what="--plot", inputs=[args.stream])
     from gonio.noise import plot_fit
 
     result = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
@@ -138,7 +169,7 @@ def run(args) -> int:
         plot_fit(result.allan, result.fit, args.plot)
     if args.json:
         out = {"stream": str(args.stream), "input": args.input, **result.to_dict()}
-        print(json.dumps(out, indent=2))
+        print(json.dumps(json_safe(out), indent=2, allow_nan=False))
     else:
         print(_table(result))
     return 0

@@ -8,6 +8,7 @@ from pathlib import Path
 from gonio.bench import load_bench, run_session, write_session
 from gonio.errors import GonioError
 from gonio.protocol import load_protocol
+from gonio.cli.checks import seed
 
 
 def register(sub) -> None:
@@ -17,8 +18,10 @@ def register(sub) -> None:
     p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
     p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
-    p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
+    p.add_argument("--seed", type=seed, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--force", action="store_true",
+                   help="replace an --out folder that holds readings.csv or stream.csv")
     p.add_argument("--stream", action="store_true",
                    help="also write stream.csv (every sample: time, wrapped counter, table "
                         "angle; data-formats.md §2), chunk by chunk")
@@ -37,26 +40,30 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 
 
 def run(args) -> int:
-    if args.seed < 0:
-        raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
+    from gonio.atomic import check_output_dir, output_set
+
+    inputs = [args.protocol, args.bench, args.table]
+    check_output_dir(args.out, inputs=inputs, force=args.force)
     proto = load_protocol(args.protocol)
     bench = load_bench(args.bench, table=args.table)
-    writer = None
-    if args.stream:
-        from gonio.streams import StreamWriter
+    with output_set(args.out, inputs=inputs, force=args.force) as stage:
+        writer = None
+        if args.stream:
+            from gonio.streams import StreamWriter
 
-        writer = StreamWriter(Path(args.out) / "stream.csv", stream_metadata(proto, bench, args.seed),
-                              table=True)
-    try:
-        result = run_session(proto, bench, seed=args.seed,
-                             stream=None if writer is None else writer.write)
-    except BaseException:
+            writer = StreamWriter(stage / "stream.csv", stream_metadata(proto, bench, args.seed),
+                                  table=True)
+        try:
+            result = run_session(proto, bench, seed=args.seed,
+                                 stream=None if writer is None else writer.write)
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        paths = write_session(result, args.out)
         if writer is not None:
-            writer.abort()
-        raise
-    paths = write_session(result, args.out)
-    if writer is not None:
-        paths["stream"] = writer.close()
+            writer.close()
+            paths["stream"] = Path(args.out) / "stream.csv"
     for p in paths.values():
         print(p)
     return 0

@@ -5,8 +5,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from gonio.atomic import output_dir, write_text
+from gonio.atomic import output_set, write_text
 from gonio.errors import GonioError
+from gonio.cli.checks import float_range, int_range, seed
 from gonio.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
 
 
@@ -15,8 +16,8 @@ def register(sub) -> None:
                        description="Run N virtual calibrations per case (7.1 + 7.4 with 10 series) "
                                    "and report how often |E - truth| <= U, U the calibration's own "
                                    "Annex A expanded uncertainty (k = 2).")
-    p.add_argument("--trials", type=int, required=True, help="calibrations per case (>= 2)")
-    p.add_argument("--seed", type=int, default=0, help="master seed (same seed -> same JSON)")
+    p.add_argument("--trials", type=int_range(2), required=True, help="calibrations per case (>= 2)")
+    p.add_argument("--seed", type=seed, default=0, help="master seed (same seed -> same JSON)")
     p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
     p.add_argument("--protocol", default="ogam-draft",
                    help="protocol (restricted to 7.1 and 7.4/7.5)")
@@ -27,11 +28,13 @@ def register(sub) -> None:
     p.add_argument("--extra-components", nargs="?", const="all", default=None, metavar="NAMES",
                    help="also evaluate the budget with the components the annex lacks: all, or "
                         f"a comma-separated subset of {','.join(EXTRA_SYMBOLS)}")
-    p.add_argument("--u-scale", type=float, default=1.0,
+    p.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=1.0,
                    help="multiply U (default 1; < 1 deliberately breaks the budget)")
-    p.add_argument("--sample-rate-hz", type=float, default=100.0,
+    p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=100.0,
                    help="simulation rate (default 100 Hz; the RLG counter is exact at any rate)")
-    p.add_argument("--workers", type=int, default=2, help="processes (results do not depend on it)")
+    p.add_argument("--workers", type=int_range(1), default=2,
+                   help="processes (results do not depend on it); at most the machine's cores "
+                        "unless GONIO_MAX_WORKERS (a scheduler's allocation) says more")
     p.add_argument("--out", default=None, help="folder for validation.json")
     p.add_argument("--json", action="store_true", help="print validation.json on stdout")
     p.set_defaults(func=run)
@@ -40,8 +43,13 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.trials < 2:
         raise GonioError(f"--trials must be an integer >= 2, got {args.trials}")
-    if args.workers < 1:
-        raise GonioError(f"--workers must be >= 1, got {args.workers}")
+    from gonio.limits import check
+
+    check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
+    check("GONIO_MAX_WORKERS", args.workers, "--workers", unit="processes")
+    if args.out:
+        from gonio.atomic import check_output_dir
+        check_output_dir(args.out, inputs=[args.bench, args.protocol])
     cases = list(CASES) if args.cases.strip() == "all" else \
         [c.strip() for c in args.cases.split(",") if c.strip()]
     if args.extra_components is None:
@@ -56,7 +64,7 @@ def run(args) -> int:
                       u_scale=args.u_scale, workers=args.workers)
     text = json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     if args.out:
-        with output_dir(Path(args.out)) as stage:
+        with output_set(args.out, inputs=[args.bench, args.protocol]) as stage:
             write_text(stage / "validation.json", text)
     if args.json:
         print(text, end="")
