@@ -207,6 +207,44 @@ def analyse_zero_stability(record: StaticRecord | None):
         return None, f"not analysed: {exc}"
 
 
+#: A row giving both gyro_deg and gyro_counts must agree through K within this
+#: relative tolerance of the angle, or :data:`COUNTS_AGREE_ABS_DEG`, whichever is larger.
+COUNTS_AGREE_REL: float = 1e-4
+COUNTS_AGREE_ABS_DEG: float = 1e-3
+
+
+def check_counts_agree(readings: Readings, results: CalibrationResults) -> None:
+    """Refuse a row whose ``gyro_deg`` contradicts its ``gyro_counts`` through K.
+
+    K is the scale factor calibrated by 7.1 in the same file, else the metadata's
+    nominal one; without K nothing can be compared. Tolerance: the larger of
+    :data:`COUNTS_AGREE_REL` × |angle| and :data:`COUNTS_AGREE_ABS_DEG`.
+    """
+    import numpy as np
+
+    from gonio.errors import GonioError
+
+    sf = results.scale_factor
+    k = sf.value if sf.measured and sf.value else metadata_float(
+        readings.metadata, "nominal_scale_factor_counts_per_deg", file=readings.path)
+    if not k:
+        return
+    df = readings.data
+    deg = df["gyro_deg"].to_numpy(dtype=float)
+    cnt = df["gyro_counts"].to_numpy(dtype=float)
+    both = ~np.isnan(deg) & ~np.isnan(cnt)
+    if not both.any():
+        return
+    diff = np.abs(deg - cnt / k)
+    tol = np.maximum(COUNTS_AGREE_REL * np.abs(deg), COUNTS_AGREE_ABS_DEG)
+    bad = both & (diff > tol)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise GonioError(f"gyro_deg {deg[i]:.9g} contradicts gyro_counts {cnt[i]:.0f} / K "
+                         f"{k:.9g} = {cnt[i] / k:.9g} by {diff[i]:.3g}°", file=readings.path,
+                         line=int(df["line"].iat[i]), column="gyro_deg")
+
+
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol = "ogam-draft",
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None) -> CalibrationReport:
@@ -229,6 +267,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
     ref_orient = proto.pointing_reference
     res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=ref_orient)
+    check_counts_agree(rd, res)
     budget, src = annex_a_for(res, rd, proto, monte_carlo_trials, seed)
     noise, noise_src = analyse_zero_stability(static_record)
     eda = equal_division_for(res, rd)
