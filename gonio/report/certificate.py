@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from gonio.atomic import output_dir, write_bytes, write_text
+from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
 from gonio.report.figures import FIGURES, figure_svg, mpl_style
 from gonio.report.i18n import cjk_font, display, labels
@@ -170,7 +171,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
 
     Returns a dict with ``id``, ``virtual`` (bool), ``lab_name`` and ``blocks``.
     """
-    res = report.to_dict()
+    res = clean_tree(report.to_dict())          # user text shown literally (report/text.py)
+    lab = clean_tree(lab) if lab else lab
     md = res.get("metadata", {})
     unc = res["uncertainty"]
     U = float(unc["U_arcsec"])
@@ -669,7 +671,10 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
 def _page_frame(fig, content, L, p, n) -> None:
     page = L["page_of"].format(x=p, y=n)
     cid = f"{L['certificate_no']}: {content['id']}"
-    fig.text(_LEFT, 0.955, content["lab_name"], fontsize=9, va="baseline")
+    # the lab name never runs into the certificate number (9 pt: ~0.56 em a character)
+    cols = int((_RIGHT - _LEFT) * A4_IN[0] * 72.0 / (9 * 0.6))
+    fig.text(_LEFT, 0.955, fit_header(content["lab_name"], cid, cols), fontsize=9,
+             va="baseline")
     fig.text(_RIGHT, 0.955, cid, fontsize=9, va="baseline", ha="right")
     fig.text(_RIGHT, 0.94, page, fontsize=9, va="baseline", ha="right")
     fig.add_artist(_hline(fig, 0.932, 1.0))
