@@ -221,6 +221,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     if text.startswith("\ufeff"):
         text = text[1:]
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    _check_rows(len(lines), fname)
     metadata: dict[str, str] = {}
     idx = 0
     header: list[str] | None = None
@@ -309,6 +310,28 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         raise GonioError("no readings: header only", file=fname, line=header_line)
     data = _frame(cols, extras)
     return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
+
+
+#: Rows above which a note says how long the run will take (the reader, the per-reading
+#: tables of 7.4/7.5 and the certificate are per-row work, ~0.1 ms a row together).
+NOTE_ROWS: int = 20_000
+
+
+def _check_rows(n_lines: int, fname: str) -> None:
+    """Refuse a file over ``GONIO_MAX_READING_ROWS`` lines; say how long a large one takes."""
+    import sys
+
+    from gonio.limits import limit
+
+    lim = limit("GONIO_MAX_READING_ROWS")
+    if n_lines > lim + 200:          # metadata and blank lines allowed beyond the rows
+        raise GonioError(f"{n_lines} lines, over the limit of {lim:.0f} readings "
+                         "(GONIO_MAX_READING_ROWS; a calibration has hundreds): refused before "
+                         "parsing — every row is validated and tabulated, ~0.5 ms a row",
+                         file=fname)
+    if n_lines > NOTE_ROWS:
+        sys.stderr.write(f"gonio: note: {fname}: {n_lines} lines; expect about "
+                         f"{n_lines * 5e-4:.0f} s (each row is validated and tabulated)\n")
 
 
 def _cells(line: str, fname: str, idx: int) -> list[str]:

@@ -166,6 +166,22 @@ def _meta(md: dict, key: str, L) -> str:
     return str(v) if v not in (None, "") else L["not_stated"]
 
 
+#: Longest table printed on the certificate; the rest is in tables/*.csv and results.json.
+MAX_TABLE_ROWS: int = 200
+
+
+def _summarised(kind: str, data):
+    """A table block cut to :data:`MAX_TABLE_ROWS` rows plus a row saying how many follow."""
+    if kind != "table":
+        return data
+    head, rows = data
+    rows = list(rows)
+    if len(rows) <= MAX_TABLE_ROWS:
+        return data
+    note = [f"… {len(rows) - MAX_TABLE_ROWS} more rows in tables/*.csv"] + [""] * (len(head) - 1)
+    return head, rows[:MAX_TABLE_ROWS] + [note]
+
+
 def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None) -> dict:
     """The certificate's content: header fields and the list of blocks, in order.
 
@@ -179,7 +195,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     virtual = lab is None
     lab_ = lab or {}
     blocks: list[Block] = []
-    add = lambda kind, data, extra=None: blocks.append(Block(kind, data, extra))  # noqa: E731
+    add = lambda kind, data, extra=None: blocks.append(  # noqa: E731
+        Block(kind, _summarised(kind, data), extra))
 
     # a, b, c: title, laboratory, place; d: identifier (header of every page)
     if virtual:
