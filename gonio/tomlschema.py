@@ -96,7 +96,8 @@ def _check_nesting(text: str, path) -> None:
                                  line=line)
         elif ch in "]}":
             depth = max(0, depth - 1)
-        elif ch == ".":
+        elif ch == "." and not (i > 0 and text[i - 1].isdigit()
+                                and i + 1 < n and text[i + 1].isdigit()):   # not a float's point
             dots += 1
             if dots > MAX_TOML_KEY_PARTS * 4:
                 raise GonioError(f"a line with more than {MAX_TOML_KEY_PARTS * 4} dots (dotted "

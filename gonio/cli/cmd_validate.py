@@ -47,7 +47,7 @@ def run(args) -> int:
 
     check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
     check("GONIO_MAX_WORKERS", args.workers, "--workers", unit="processes")
-    if args.out:
+    if args.out is not None:
         from gonio.atomic import check_output_dir
         check_output_dir(args.out, inputs=[args.bench, args.protocol])
     cases = list(CASES) if args.cases.strip() == "all" else \
@@ -63,7 +63,7 @@ def run(args) -> int:
                       extra_components=extras, truth=args.truth,
                       u_scale=args.u_scale, workers=args.workers)
     text = json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    if args.out:
+    if args.out is not None:
         with output_set(args.out, inputs=[args.bench, args.protocol]) as stage:
             write_text(stage / "validation.json", text)
     if args.json:
