@@ -756,6 +756,14 @@ def test_protocol_sizes_beyond_limits(tmp_path, name):
     count(f"size:protocol:{name}")
 
 
+def test_empty_protocol_names_the_protocol(tmp_path, capsys):
+    p = tmp_path / "empty.toml"
+    p.write_text('[protocol]\nname = "empty"\n')
+    err = cli(["simulate", "--protocol", p, "--out", tmp_path / "o"], capsys)
+    assert "empty.toml" in err and "no reading" in err and not (tmp_path / "o").exists()
+    count("message:empty-protocol")
+
+
 def test_bench_sizes_beyond_limits(tmp_path):
     from gonio.bench import run_session
 

@@ -398,6 +398,9 @@ def estimate_session(blocks: list[Block], bench: Bench, protocol: Protocol) -> S
     """
     from gonio.limits import check
 
+    if not any(b.readings for b in blocks):
+        raise GonioError("the protocol plans no reading (no test section): nothing to simulate",
+                         file=protocol.path or None, key="protocol")
     n = int(sum(b.k_end - b.k_start for b in blocks))
     dur = n / bench.sample_rate_hz
     for it in protocol.items():
