@@ -19,7 +19,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout
 
-from gonio.budget import annex_a_budget, annex_a_model  # noqa: E402
+from gonio.specs.ogam_draft.budget import annex_a_budget, annex_a_model  # noqa: E402
 from uncertainty import from_u, monte_carlo, type_b  # noqa: E402
 
 

@@ -1,4 +1,4 @@
-"""Speed and memory of gonio.noise.allan_deviation against allantools (same run).
+"""Speed and memory of gonio.analysis.noise.allan_deviation against allantools (same run).
 
 Prints: 1e7-sample 'octave' OADEV time, ours vs allantools.oadev, and the ratio
 (best of a few repeats each, same data); 'all'-τ time for 1e6 samples (white rate
@@ -17,7 +17,7 @@ import tracemalloc
 
 import numpy as np
 
-from gonio.noise import allan_deviation
+from gonio.analysis.noise import allan_deviation
 
 
 def best_of(fn, repeats):

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio.reduce import RestFinder
-from gonio.streams import iter_stream
+from gonio.formats.streams import iter_stream
 
 RATE_HZ = 1000
 CHUNK = 2_000_000

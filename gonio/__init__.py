@@ -3,16 +3,16 @@
 Contents (one module per piece of physics or procedure):
 
 =========================  ===================================================
-``gonio.earth``            Earth rate, local frame, axis directions, Sagnac
-``gonio.kinematics``       table motion profiles; tilted sensing axis
+``gonio.physics.earth``            Earth rate, local frame, axis directions, Sagnac
+``gonio.physics.kinematics``       table motion profiles; tilted sensing axis
 ``gonio.protocol``         the draft's procedures as data (TOML), validated
 ``gonio.bench``            the virtual bench: table, instrument, session
-``gonio.io``               readings and stream files (data-formats contract)
-``gonio.characteristics``  the seven characteristics of draft clause 7
-``gonio.tilt``             Annex A.4.2 elliptic projection; rigid-body tilt
-``gonio.budget``           the Annex A uncertainty budget
-``gonio.noise``            Allan deviation and the gyro noise model
-``gonio.eda``              equal-division averaging, rotary-table comparison
+``gonio.formats.readings``               readings and stream files (docs/formats.md)
+``gonio.specs.ogam_draft.items``  the seven characteristics of draft clause 7
+``gonio.physics.tilt``             Annex A.4.2 elliptic projection; rigid-body tilt
+``gonio.specs.ogam_draft.budget``           the Annex A uncertainty budget
+``gonio.analysis.noise``            Allan deviation and the gyro noise model
+``gonio.analysis.equal_division``              equal-division averaging, rotary-table comparison
 ``gonio.report``           certificate and figures
 ``gonio.cli``              the ``gonio`` command (thin layer over the above)
 =========================  ===================================================

@@ -493,6 +493,8 @@ def output_dir(out: str | Path) -> Iterator[Path]:
 
 #: Formats a figure may be written in (by the file suffix).
 FIGURE_FORMATS: tuple[str, ...] = ("png", "svg", "pdf")
+#: Salt of matplotlib's SVG element ids: fixed, so that the same figure gives the same bytes.
+SVG_HASHSALT: str = "gonio"
 
 
 def figure_bytes(fig, fmt: str, path=None) -> bytes:
@@ -513,15 +515,18 @@ def figure_bytes(fig, fmt: str, path=None) -> bytes:
             "pdf": {"CreationDate": None, "ModDate": None, "Creator": None,
                     "Producer": None}}[fmt]
     buf = io.BytesIO()
-    with matplotlib.rc_context({"svg.hashsalt": "gonio", "text.usetex": False}):
+    with matplotlib.rc_context({"svg.hashsalt": SVG_HASHSALT, "text.usetex": False}):
         fig.savefig(buf, format=fmt, metadata=meta)
     return buf.getvalue()
 
 
 def save_figure(fig, path, *, inputs: Iterable = ()) -> Path:
     """Write a figure to ``path`` (format by suffix), deterministically and atomically."""
-    path = check_output_file(path, what="--plot", inputs=inputs)
-    fmt = Path(path).suffix.lstrip(".") or "png"
+    path = check_output_file(path, what="figure file", inputs=inputs)
+    fmt = Path(path).suffix.lstrip(".").lower()
+    if fmt not in FIGURE_FORMATS:
+        raise GonioError(f"cannot write a figure of type {Path(path).suffix or '(none)'!r}: use "
+                         f"{', '.join('.' + f for f in FIGURE_FORMATS)}", file=path)
     return write_bytes(path, figure_bytes(fig, fmt, path))
 
 

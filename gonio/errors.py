@@ -47,6 +47,25 @@ class GonioError(ValueError):
         return text if len(text) <= 600 else text[:600] + f"… ({len(text)} characters)"
 
 
+#: Default largest input file, bytes (``GONIO_MAX_INPUT_BYTES`` overrides; see gonio.limits).
+MAX_INPUT_BYTES: int = 2 * 1024 ** 3
+
+
+def max_input_bytes() -> float:
+    """The input size limit: ``GONIO_MAX_INPUT_BYTES`` if set (a number > 0), else 2 GiB."""
+    import os
+
+    text = os.environ.get("GONIO_MAX_INPUT_BYTES", "").strip()
+    try:
+        v = float(text) if text else float(MAX_INPUT_BYTES)
+    except ValueError:
+        raise GonioError(f"environment variable GONIO_MAX_INPUT_BYTES must be a number, got "
+                         f"{text[:40]!r}") from None
+    if not v > 0:
+        raise GonioError("environment variable GONIO_MAX_INPUT_BYTES must be > 0")
+    return v
+
+
 def read_input(path: str | Path, what: str = "file", limit_bytes: float | None = None) -> bytes:
     """The bytes of an input file, refusing what is not a regular file or is too large.
 
@@ -72,8 +91,7 @@ def check_input_file(path: str | Path, what: str = "file",
         raise GonioError(f"{what}: empty file name")
     path = Path(path)
     if limit_bytes is None:
-        from gonio.limits import limit
-        limit_bytes = limit("GONIO_MAX_INPUT_BYTES")
+        limit_bytes = max_input_bytes()
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except OSError as exc:

@@ -24,10 +24,10 @@ from __future__ import annotations
 
 import os
 
-from gonio.errors import GonioError
+from gonio.errors import MAX_INPUT_BYTES, GonioError
 
 _DEFAULTS: dict[str, float] = {
-    "GONIO_MAX_INPUT_BYTES": 2 * 1024 ** 3,
+    "GONIO_MAX_INPUT_BYTES": MAX_INPUT_BYTES,
     "GONIO_MAX_TOML_BYTES": 1024 ** 2,
     "GONIO_MAX_SAMPLES": 4e8,
     "GONIO_MAX_SESSION_S": 172_800.0,

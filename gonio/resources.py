@@ -33,7 +33,7 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     p = Path(name_or_path)
     if p.is_file():
         return p
-    if os.path.lexists(p) or p.parent != Path("."):
+    if os.path.lexists(p):
         from gonio.errors import check_input_file
         check_input_file(p, f"{kind} file")      # names a FIFO, device or folder precisely
     base = protocols_dir() if kind == "protocol" else protocols_dir() / "benches"

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Install the system packages the certificate tests need (tests/test_certificate.py):
+# Install the system packages the certificate tests need (tests/test_certificate_render.py;
+# without them those tests skip with the reason, so run this script first):
 #   chromium        headless rendering of certificate.html (screenshot, --dump-dom)
 #   poppler-utils   pdftoppm / pdftotext for the PDF checks
 #   fonts-noto-cjk  CJK glyphs for `--lang zh`

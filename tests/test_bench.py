@@ -13,9 +13,9 @@ import pytest
 from gonio.bench import load_bench, run_session
 from gonio.bench.config import Bench, Harmonic, InstrumentConfig, TableConfig
 from gonio.bench.session import mount_scale_factor_counts_per_deg
-from gonio.characteristics import compute_characteristics
+from gonio.specs.ogam_draft.items import compute_characteristics
 from gonio.errors import GonioError
-from gonio.io import parse_readings, write_readings
+from gonio.formats.readings import parse_readings, write_readings
 from gonio.protocol import load_protocol, parse_protocol
 
 K_NOM = 76434.87

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from gonio.bench import load_bench, run_session, write_session
-from gonio.calibrate import calibrate, write_calibration
+from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
 from gonio.report import certificate as cert

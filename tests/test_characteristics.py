@@ -15,13 +15,13 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from gonio.characteristics import (
+from gonio.specs.ogam_draft.items import (
     angle_deviation, compute_characteristics, indicated_angle_deg, pointing_consistency,
     rate_consistency, repeatability, scale_factor, scale_factor_nonlinearity, signed_extreme,
     summary_table, zero_stability,
 )
 from gonio.errors import GonioError
-from gonio.io import parse_readings, read_readings
+from gonio.formats.readings import parse_readings, read_readings
 
 DATA = Path(__file__).parent / "data"
 AS = 3600.0  # arcsec per degree

@@ -8,12 +8,13 @@ import math
 import numpy as np
 import pytest
 
+from gonio.budget.extra import compensation_component
 from gonio.bench import run_session
 from gonio.bench.config import Bench, InstrumentConfig, TableConfig
-from gonio.budget import annex_a_budget
-from gonio.compensation import (computed_compensation, computed_residual_dps,
+from gonio.specs.ogam_draft.budget import annex_a_budget
+from gonio.physics.compensation import (computed_compensation, computed_residual_dps,
                                 measured_compensation)
-from gonio.earth import OMEGA_E_ARCSEC_S
+from gonio.physics.earth import OMEGA_E_ARCSEC_S
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
 
@@ -97,7 +98,7 @@ def test_measured_compensation_scatter_on_the_bench():
 def test_budget_component_is_optional_and_adds_in_quadrature():
     base = annex_a_budget()
     r = measured_compensation(60.0, arw_dpsh=0.0005, measuring_time_s=30.0)
-    with_c = annex_a_budget(extra_components=[r.budget_component()])
+    with_c = annex_a_budget(extra_components=[compensation_component(r)])
     assert with_c.gum.u_c == pytest.approx(math.hypot(base.gum.u_c, r.u_angle_arcsec), rel=1e-9)
     assert len(base.gum.contributions) == 4
 

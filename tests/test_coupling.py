@@ -1,4 +1,4 @@
-"""Tilt × Earth-rate coupling: the analytic error (gonio.coupling) against the virtual bench,
+"""Tilt × Earth-rate coupling: the analytic error (gonio.physics.coupling) against the virtual bench,
 the quadrature against adaptive quadrature, the worst case against a brute-force search."""
 
 from __future__ import annotations
@@ -13,12 +13,13 @@ from scipy.integrate import quad
 from gonio.bench import run_session
 from gonio.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.bench.session import plan_session
-from gonio.budget import annex_a_budget
-from gonio.coupling import (coupling_budget_component, coupling_error_arcsec, coupling_terms,
-                            coupling_worst_case_arcsec, session_coupling, table_frame,
+from gonio.specs.ogam_draft.budget import annex_a_budget
+from gonio.budget.extra import coupling_budget_component, session_coupling
+from gonio.physics.coupling import (coupling_error_arcsec, coupling_terms,
+                            coupling_worst_case_arcsec,
                             trig_integrals)
-from gonio.earth import OMEGA_E_ARCSEC_S, earth_rate_split
-from gonio.kinematics import Timeline
+from gonio.physics.earth import OMEGA_E_ARCSEC_S, earth_rate_split
+from gonio.physics.kinematics import Timeline
 from gonio.protocol import load_protocol, parse_protocol
 
 K_NOM = 76434.87
@@ -118,6 +119,11 @@ def test_dwell_closed_form_and_worst_case():
     brute = np.max(np.abs(terms.error_arcsec(grid)))
     assert coupling_worst_case_arcsec(tl, 0.0, t_arr + 15.0, psi, perp)[0] == \
         pytest.approx(brute, rel=1e-9)
+
+
+def table_frame(lat, orientation):
+    sp = earth_rate_split(lat, orientation)
+    return sp.parallel_dps, sp.perpendicular_dps, sp.perpendicular_direction_deg
 
 
 def test_table_frame_directions():

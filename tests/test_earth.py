@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from gonio.cli import main
-from gonio.earth import (OMEGA_E_ARCSEC_S, OMEGA_E_DPH, OMEGA_E_RAD_S, OMEGA_E_STELLAR_RAD_S,
-                         axis_enu, earth_rate, earth_rate_on_axis_dps, earth_rate_split,
-                         sagnac_fog, sagnac_rlg)
+from gonio.physics.earth import (OMEGA_E_ARCSEC_S, OMEGA_E_DPH, OMEGA_E_RAD_S, OMEGA_E_STELLAR_RAD_S,
+                         axis_enu, earth_rate, earth_rate_on_axis_dps, earth_rate_split)
+from gonio.physics.sagnac import sagnac_fog, sagnac_rlg
 from gonio.errors import GonioError
 
 C = 299_792_458.0

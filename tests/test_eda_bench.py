@@ -13,7 +13,7 @@ import pytest
 from gonio.bench import load_bench, run_session
 from gonio.bench.config import Harmonic, TableConfig
 from gonio.bench.instrument import harmonic_sum_arcsec
-from gonio.eda import eda_matrix_from_readings, equal_division_analysis
+from gonio.analysis.equal_division import eda_matrix_from_readings, equal_division_analysis
 from gonio.protocol import parse_protocol
 
 
@@ -120,7 +120,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     import re
 
     from gonio.bench import write_session
-    from gonio.calibrate import calibrate, write_calibration
+    from gonio.pipeline.calibrate import calibrate, write_calibration
     from gonio.report.certificate import write_certificate
     from gonio.report.i18n import display, labels
 

@@ -16,13 +16,13 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from gonio.bench import load_bench
-from gonio.characteristics import compute_characteristics
+from gonio.specs.ogam_draft.items import compute_characteristics
 from gonio.errors import GonioError
-from gonio.io import read_readings
-from gonio.kinematics import Timeline
+from gonio.formats.readings import read_readings
+from gonio.physics.kinematics import Timeline
 from gonio.protocol import load_protocol, parse_protocol
 from gonio.reduce import reduce_stream
-from gonio.streams import read_stream, write_stream
+from gonio.formats.streams import read_stream, write_stream
 
 ROOT = Path(__file__).resolve().parents[1]
 WORK = Path(tempfile.mkdtemp(prefix="gonio-fuzz-"))

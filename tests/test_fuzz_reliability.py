@@ -34,10 +34,10 @@ from gonio.atomic import MANIFEST, output_set, read_manifest, sha256_file, write
 from gonio.bench import load_bench
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.io import read_readings
+from gonio.formats.readings import read_readings
 from gonio.protocol import load_protocol
 from gonio.report.i18n import display_number, round_half_up
-from gonio.tomlschema import read_toml
+from gonio.formats.toml import read_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 FULL = ROOT / "tests/data/full.csv"
@@ -165,7 +165,7 @@ READERS = {
     "protocol": load_protocol,
     "bench": load_bench,
     "lab": lambda p: __import__("gonio.report.certificate", fromlist=["load_lab"]).load_lab(p),
-    "calibrate": lambda p: __import__("gonio.calibrate", fromlist=["calibrate"]).calibrate(p),
+    "calibrate": lambda p: __import__("gonio.pipeline.calibrate", fromlist=["calibrate"]).calibrate(p),
     "toml": read_toml,
 }
 
@@ -270,7 +270,7 @@ NUMERIC_METADATA = ["nominal_scale_factor_counts_per_deg", "latitude_deg", "temp
 
 def _read_then_calibrate(p: Path) -> None:
     """Only GonioError, located; if the file is accepted, calibration and display hold."""
-    from gonio.calibrate import calibrate
+    from gonio.pipeline.calibrate import calibrate
 
     h = sha256_file(p)
     with deadline(60):
@@ -463,7 +463,7 @@ def test_read_only_folder(tmp_path):
                       capture_output=True).returncode != 0:
         pytest.skip("cannot mount a read-only tmpfs here (needs root and mount rights)")
     try:
-        from gonio.calibrate import calibrate, write_outputs
+        from gonio.pipeline.calibrate import calibrate, write_outputs
         rep = calibrate(FULL)
         e = api_error(write_outputs, rep, ro / "out")
         assert "Read-only" in str(e) or "read-only" in str(e).lower(), str(e)
@@ -479,7 +479,7 @@ def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
                       capture_output=True).returncode != 0:
         pytest.skip("cannot mount a 300 KB tmpfs here (needs root and mount rights)")
     try:
-        from gonio.calibrate import calibrate, write_outputs
+        from gonio.pipeline.calibrate import calibrate, write_outputs
         rep = calibrate(FULL)
         out = mnt / "out"
         prev = _previous_set(out)
@@ -506,7 +506,7 @@ def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
 
 
 def test_failed_rerun_leaves_previous_set(tmp_path, monkeypatch):
-    from gonio.calibrate import calibrate, write_outputs
+    from gonio.pipeline.calibrate import calibrate, write_outputs
     import gonio.report.certificate as cert
 
     rep = calibrate(FULL)
@@ -659,7 +659,7 @@ def test_signals_at_random_instants(tmp_path):
 
 def test_stray_reading_is_set_aside_alone():
     """One rate_consistency reading at an unplanned rate leaves the comparison unchanged."""
-    from gonio.characteristics import compute_characteristics
+    from gonio.specs.ogam_draft.items import compute_characteristics
 
     r = read_readings(FULL)
     base = compute_characteristics(r)
@@ -682,7 +682,7 @@ def test_stray_reading_is_set_aside_alone():
 # ----------------------------------------------------------------------------- contradictions
 
 def test_contradictions_refused(tmp_path, capsys):
-    from gonio.calibrate import calibrate
+    from gonio.pipeline.calibrate import calibrate
 
     lines, head = _rows()
     cols = lines[head].split(",")
@@ -828,7 +828,7 @@ def test_cli_process_level_one_line(tmp_path):
 # ----------------------------------------------------------------------------- certificate text
 
 def test_user_text_rendered_literally(tmp_path):
-    from gonio.calibrate import calibrate, write_outputs
+    from gonio.pipeline.calibrate import calibrate, write_outputs
 
     hostile = [("$\\foo$ \u202eevil\u202c <script>alert(1)</script>", "a\x00b\x1bc $x^2$ \\textbf{b}"),
                ("x" * 20_000, "名" * 300)]
@@ -858,8 +858,12 @@ def test_user_text_rendered_literally(tmp_path):
 
 def test_plots_and_truth_are_byte_stable(tmp_path):
     from gonio.bench import run_session, write_session
-    from gonio.cli.cmd_eda import plot_eda
-    from gonio.eda import equal_division_analysis, simulate_eda_matrix
+    from gonio.report.eda_figure import equal_division_figure
+    from gonio.report.figure_files import save_figure
+
+    def plot_eda(res, path):
+        return save_figure(equal_division_figure(res), path)
+    from gonio.analysis.equal_division import equal_division_analysis, simulate_eda_matrix
 
     sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
     res = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)

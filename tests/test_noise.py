@@ -1,4 +1,4 @@
-"""Tests of gonio.noise and `gonio noise`, each against something independent:
+"""Tests of gonio.analysis.noise and `gonio noise`, each against something independent:
 allantools (peer library, test-only), closed-form Allan variances of simulated
 noise, χ² coverage, and a second algorithm (direct sums vs the FFT expansion)."""
 
@@ -12,7 +12,8 @@ import allantools.ci
 import numpy as np
 import pytest
 
-from gonio import noise
+from gonio import units
+from gonio.analysis import noise
 from gonio.cli import main
 from gonio.errors import GonioError
 
@@ -219,11 +220,11 @@ def test_analyse_static_recovers_arw_in_customary_units():
 
 def test_unit_conversions_round_trip_and_first_principles():
     x = 0.0123
-    assert noise.deg_sqrt_h_from_dph_sqrt_hz(noise.dph_sqrt_hz_from_deg_sqrt_h(x)) == pytest.approx(x)
+    assert units.deg_sqrt_h_from_dph_sqrt_hz(units.dph_sqrt_hz_from_deg_sqrt_h(x)) == pytest.approx(x)
     # 1 °/√h expressed from first principles: (π/180 rad) / sqrt(3600 s)
-    assert noise.rad_s_sqrt_hz_from_deg_sqrt_h(1.0) == pytest.approx(math.radians(1) / 60.0)
-    assert noise.arcsec_sqrt_s_from_deg_sqrt_h(1.0) == pytest.approx(3600.0 / math.sqrt(3600.0))
-    assert noise.dph_from_rad_s(noise.rad_s_from_dph(x)) == pytest.approx(x)
+    assert units.rad_s_sqrt_hz_from_deg_sqrt_h(1.0) == pytest.approx(math.radians(1) / 60.0)
+    assert units.arcsec_sqrt_s_from_deg_sqrt_h(1.0) == pytest.approx(3600.0 / math.sqrt(3600.0))
+    assert units.dph_from_rad_s(units.rad_s_from_dph(x)) == pytest.approx(x)
 
 
 # ------------------------------------------------------------------ validation

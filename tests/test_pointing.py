@@ -1,6 +1,6 @@
 """Pointing consistency (draft 7.7) on the virtual bench: zero within noise with a correct
 compensation; with a wrong latitude or azimuth in the computed compensation, the spread that
-the closed-form residual (gonio.compensation) predicts."""
+the closed-form residual (gonio.physics.compensation) predicts."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import pytest
 
 from gonio.bench import run_session
 from gonio.bench.config import Bench, InstrumentConfig, TableConfig
-from gonio.characteristics import compute_characteristics
-from gonio.compensation import measured_compensation, pointing_consistency_prediction
-from gonio.io import parse_readings, write_readings
+from gonio.specs.ogam_draft.items import compute_characteristics
+from gonio.physics.compensation import measured_compensation, pointing_consistency_prediction
+from gonio.formats.readings import parse_readings, write_readings
 from gonio.protocol import parse_protocol
 
 K_NOM = 76434.87

@@ -14,8 +14,9 @@ import pytest
 from gonio.bench import load_bench, run_session
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
-from gonio.reduce import RestFinder, find_rests, read_override, reduce_stream
-from gonio.streams import Stream
+from gonio.formats.override import read_override
+from gonio.reduce import RestFinder, find_rests, reduce_stream
+from gonio.formats.streams import Stream
 
 PROTO = parse_protocol({
     "protocol": {"name": "mini"},
@@ -196,7 +197,7 @@ def test_rest_finder_chunk_independent():
 
 def test_subsample_edges_closed_form():
     """Departure at 3.0 s, arrival at 3 + 2·√(30/60) s (triangular move): refined to < 1e-6 s."""
-    from gonio.kinematics import Timeline
+    from gonio.physics.kinematics import Timeline
     tl = Timeline(0.0)
     tl.dwell(3.0)
     arrive = tl.move(30.0, 60.0, 60.0)

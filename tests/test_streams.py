@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.bench.instrument import wrap_counter
+from gonio.formats.counters import wrap_counter
 from gonio.errors import GonioError
-from gonio.streams import (StreamWriter, iter_stream, read_stream, sniff_kind, unwrap_counts,
+from gonio.formats.streams import (StreamWriter, iter_stream, read_stream, sniff_kind, unwrap_counts,
                            write_stream)
 
 ROOT = Path(__file__).resolve().parents[1]

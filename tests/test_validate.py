@@ -1,4 +1,4 @@
-"""gonio.validate: determinism, the ideal bench, a broken budget, binomial u, the coupling
+"""gonio.pipeline.validate: determinism, the ideal bench, a broken budget, binomial u, the coupling
 closed form against numerical integration, and the CLI."""
 
 from __future__ import annotations
@@ -15,8 +15,14 @@ from gonio.bench import Bench, InstrumentConfig, TableConfig, run_session
 from gonio.bench.instrument import geometry
 from gonio.cli import main
 from gonio.protocol import parse_protocol
-from gonio.validate import (binomial_u, coverage, earth_rate_perpendicular_arcsec_s,
-                            tilt_coupling_coefficients, trial_seeds, validate)
+from gonio.budget.extra import tilt_coupling_coefficients
+from gonio.physics.earth import earth_rate_split
+from gonio.pipeline.validate import binomial_u, coverage, trial_seeds, validate
+from gonio.units import dps_to_arcsec_s
+
+
+def earth_rate_perpendicular_arcsec_s(latitude_deg, orientation="up"):
+    return dps_to_arcsec_s(earth_rate_split(latitude_deg, orientation).perpendicular_dps)
 
 K_NOM = 76434.87
 
@@ -118,7 +124,7 @@ def test_tilt_coupling_closed_form_against_quadrature():
     # ∫₀ᵗ [cos(θ(t′)+α) − cos α] dt′ for a turn at constant rate then rest, by quad.
     rate, delay = 60.0, 10.0
     for theta, t in [(30.0, 10.5), (180.0, 13.0), (270.0, 14.5), (360.0, 16.0)]:
-        c, s = tilt_coupling_coefficients([theta], [t], rate, delay)
+        c, s = tilt_coupling_coefficients([theta], [t], rate, delay, accel_dps2=1e12)
         t_rot = t - delay
         for alpha in (0.3, 2.0, 4.5):
             def f(x):
@@ -145,7 +151,7 @@ def test_tilt_coupling_predicts_the_bench_truth():
     t1 = [r for r in run_session(p, tilted).truth["readings"] if r["test"] == "angle_deviation"]
     th = np.array([r["table_deg"] for r in t1])
     ts = np.array([r["time_s"] for r in t1])
-    c, s = tilt_coupling_coefficients(th, ts, 60.0, 10.0)
+    c, s = tilt_coupling_coefficients(th, ts, 60.0, 10.0, accel_dps2=1e6)
     w = earth_rate_perpendicular_arcsec_s(40.0) * math.sin(math.radians(psi))
     diff = np.array([a["systematic_deviation_arcsec"] - b["systematic_deviation_arcsec"]
                      for a, b in zip(t1, t0)])

@@ -13,8 +13,9 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG
 from gonio.resources import resolve
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 
 @dataclass(frozen=True)
@@ -133,6 +134,10 @@ def _file_id(path: str) -> str:
     return f"{Path(path).name} sha256:{digest}"
 
 
+#: Largest table/instrument error term accepted: one degree, in arc-seconds.
+_ONE_DEG_ARCSEC: float = ARCSEC_PER_DEG
+
+
 def _within(lo: float, hi: float):
     return lambda x: lo <= x <= hi
 
@@ -158,20 +163,20 @@ def check_counter(bench: "Bench", file=None) -> None:
 
 
 _HARM = {"order": Field("int", check=_within(1, 1000), expect="an integer in [1, 1000]"),
-         "amplitude_arcsec": Field("float", check=_within(-3600.0, 3600.0),
+         "amplitude_arcsec": Field("float", check=_within(-_ONE_DEG_ARCSEC, _ONE_DEG_ARCSEC),
                                    expect="within ±3600″"),
          "phase_deg": Field("float", 0.0)}
 TABLE_SCHEMA = {
     "name": Field("str", "rotary table"),
-    "mpe_arcsec": Field("float", 0.1, _within(1e-6, 3600.0), "in [1e-6, 3600]"),
+    "mpe_arcsec": Field("float", 0.1, _within(1e-6, _ONE_DEG_ARCSEC), "in [1e-6, 3600]"),
     "accel_dps2": Field("float", 60.0, _within(1e-3, 1e5), "in [1e-3, 1e5] °/s²"),
     "max_rate_dps": Field("float", 300.0, _within(1e-3, 1e4), "in [1e-3, 1e4] °/s"),
     "rate_error_rel": Field("float", 0.0, lambda x: abs(x) < 0.01, "|x| < 0.01"),
-    "wobble_arcsec": Field("float", 0.0, _within(0.0, 3600.0), "in [0, 3600]"),
+    "wobble_arcsec": Field("float", 0.0, _within(0.0, _ONE_DEG_ARCSEC), "in [0, 3600]"),
     "wobble_phase_deg": Field("float", 0.0),
     "axis_setup_error_deg": Field("float", 0.0, lambda x: 0 <= x < 5, "0 ≤ x < 5"),
     "axis_setup_azimuth_deg": Field("float", 0.0),
-    "positioning_random_arcsec": Field("float", 0.0, _within(0.0, 3600.0), "in [0, 3600]"),
+    "positioning_random_arcsec": Field("float", 0.0, _within(0.0, _ONE_DEG_ARCSEC), "in [0, 3600]"),
     "positioning_harmonics": Field("table_list", [], schema=_HARM),
 }
 INSTRUMENT_SCHEMA = {

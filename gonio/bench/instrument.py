@@ -1,11 +1,11 @@
 """The simulated goniometer: what an RLG or FOG senses on a turning, tilted table.
 
-Sensed rate (draft clause 4 and Annex A; ``ogam-draft.md`` "Physics"):
+Sensed rate (draft clause 4 and Annex A; ``docs/draft-readings.md#a-tilted-axis-on-a-rotating-table``):
 
     ω_s(t) = θ̇(t) cos ψ + Ω_E · n(θ(t))
 
 with n the sensing axis tilted by ψ from the (wobbling) table axis, coning as
-the table turns (:mod:`gonio.kinematics`). The instrument's angle, in degrees,
+the table turns (:mod:`gonio.physics.kinematics`). The instrument's angle, in degrees,
 is the integral of ω_s·(1 + ε(|ω_s|)) plus its bias and noise:
 
 * scale factor K = K_nom (1 + e_K) counts/°; rate-dependent nonlinearity
@@ -31,9 +31,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gonio.units import S_PER_H, arcsec_to_deg, deg_sqrt_s_from_deg_sqrt_h, dph_to_dps
 from gonio.bench.config import Bench, Harmonic, InstrumentConfig
-from gonio.earth import axis_enu, earth_rate_enu
-from gonio.kinematics import sensing_axis_basis
+from gonio.physics.earth import axis_enu, earth_rate_table_frame_dps
+from gonio.physics.kinematics import sensing_axis_basis
 
 
 def harmonic_sum_arcsec(x_deg, harmonics: tuple[Harmonic, ...]) -> np.ndarray:
@@ -106,12 +107,12 @@ class Geometry:
 def geometry(bench: Bench, orientation: str) -> Geometry:
     """Earth rate in the frame of the table set up in ``orientation``."""
     a = actual_axis_enu(orientation, bench)
-    e1, e2 = sensing_axis_basis(a)
-    w = np.degrees(earth_rate_enu(bench.latitude_deg)) if bench.earth_rate else np.zeros(3)
+    par, w1, w2 = earth_rate_table_frame_dps(bench.latitude_deg, a) if bench.earth_rate \
+        else (0.0, 0.0, 0.0)
     inst, tab = bench.instrument, bench.table
     psi = math.radians(inst.tilt_deg)
-    return Geometry(float(w @ a), float(w @ e1), float(w @ e2), math.cos(psi), math.sin(psi),
-                    math.radians(inst.tilt_azimuth_deg), math.radians(tab.wobble_arcsec / 3600.0),
+    return Geometry(par, w1, w2, math.cos(psi), math.sin(psi),
+                    math.radians(inst.tilt_azimuth_deg), math.radians(arcsec_to_deg(tab.wobble_arcsec)),
                     math.radians(tab.wobble_phase_deg))
 
 
@@ -135,7 +136,7 @@ class Integrator:
         self.rrw = 0.0            # rate-random-walk state, °/s
         self.new_block = True
         if rng is not None and inst.bias_instability_dph:
-            self.gm = rng.standard_normal() * inst.bias_instability_dph / 3600.0
+            self.gm = rng.standard_normal() * dph_to_dps(inst.bias_instability_dph)
 
     def _noise_rate(self, n: int) -> np.ndarray:
         """Random rate terms on the grid, °/s (ARW as white rate; GM; RRW)."""
@@ -145,18 +146,18 @@ class Integrator:
             return out
         if inst.arw_dpsh:
             # ARW N (°/√h) → white rate with σ = N/60 (°/√s) /√dt per sample.
-            out += rng.standard_normal(n) * (inst.arw_dpsh / 60.0) / math.sqrt(dt)
+            out += rng.standard_normal(n) * deg_sqrt_s_from_deg_sqrt_h(inst.arw_dpsh) / math.sqrt(dt)
         if inst.bias_instability_dph:
             from scipy.signal import lfilter
             phi = math.exp(-dt / inst.bias_instability_tau_s)
-            s = inst.bias_instability_dph / 3600.0 * math.sqrt(1.0 - phi * phi)
+            s = dph_to_dps(inst.bias_instability_dph) * math.sqrt(1.0 - phi * phi)
             w = rng.standard_normal(n) * s
             gm, _ = lfilter([1.0], [1.0, -phi], w, zi=[phi * self.gm])
             self.gm = float(gm[-1])
             out += gm
         if inst.rrw_dphsh:
             # K (°/h/√h) → rate increments σ = K/3600/60 (°/s/√s)·√dt.
-            steps = rng.standard_normal(n) * (inst.rrw_dphsh / 3600.0 / 60.0) * math.sqrt(dt)
+            steps = rng.standard_normal(n) * (dph_to_dps(inst.rrw_dphsh) / math.sqrt(S_PER_H)) * math.sqrt(dt)
             r = self.rrw + np.cumsum(steps)
             self.rrw = float(r[-1])
             out += r
@@ -170,7 +171,7 @@ class Integrator:
         sensed = rate_dps * geom.cos_psi + earth
         eps = rate_nonlinearity(sensed, inst)
         t_on = t + self.warm_up_s
-        bias = (inst.bias_dph + inst.warmup_drift_dph * np.exp(-t_on / inst.warmup_tau_s)) / 3600.0
+        bias = dph_to_dps(inst.bias_dph + inst.warmup_drift_dph * np.exp(-t_on / inst.warmup_tau_s))
         noise = self._noise_rate(t.size)
         if inst.integration == "rectangle":
             # FOG: rate samples at the grid times, left rectangle rule:
@@ -242,21 +243,3 @@ def counts_from_angle(angle_deg: np.ndarray, inst: InstrumentConfig, k=None,
     if inst.quantisation_dither and k is not None:
         return np.floor(c + uniform_hash(k, dither_key))
     return np.floor(c)
-
-
-def wrap_counter(counts: np.ndarray, bits: int, signed: bool) -> np.ndarray:
-    """What a ``bits``-wide counter shows for the unwrapped integer ``counts``.
-
-    >>> wrap_counter(np.array([0, 32767, 32768, -32769]), 16, True).tolist()
-    [0, 32767, -32768, 32767]
-    >>> wrap_counter(np.array([65535, 65536, -1]), 16, False).tolist()
-    [65535, 0, 65535]
-    """
-    c = np.asarray(counts).astype(np.int64)
-    if bits >= 64:
-        return c
-    m = np.int64(1) << np.int64(bits)
-    w = np.mod(c, m)
-    if signed:
-        w = np.where(w >= m // 2, w - m, w)
-    return w

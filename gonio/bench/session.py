@@ -12,13 +12,12 @@ same session with every random term off to give, for each reading, the
 instrument's noise-free systematic deviation (``truth.json``).
 
 Order of the items: 7.3 (right after the warm-up, as 7.3 asks), the optional
-in-situ tilt estimate (:mod:`gonio.tiltest`, uncompensated rests), 7.1, 7.4/7.5,
+in-situ tilt estimate (:mod:`gonio.analysis.tilt_estimate`, uncompensated rests), 7.1, 7.4/7.5,
 7.6, 7.7. The table is re-pointed between blocks instantly (no time passes).
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -31,11 +30,13 @@ from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.bench.config import Bench
 from gonio.bench.instrument import (Integrator, counts_from_angle, geometry, harmonic_sum_arcsec,
-                                    rate_nonlinearity, wrap_counter)
-from gonio.earth import NAMED_AXES, axis_enu, earth_rate_enu
+                                    rate_nonlinearity)
+from gonio.formats.records import StaticRecord
+from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.bench.config import check_counter
 from gonio.errors import GonioError
-from gonio.kinematics import Timeline
+from gonio.units import arcsec_to_deg, deg_to_arcsec
+from gonio.physics.kinematics import Timeline
 from gonio.protocol import Protocol, RotationItem
 
 CHUNK = 1 << 20
@@ -93,7 +94,7 @@ class _Planner:
         err = float(harmonic_sum_arcsec(np.array([x_deg]), tab.positioning_harmonics)[0])
         if tab.positioning_random_arcsec and self.rng is not None:
             err += tab.positioning_random_arcsec * float(self.rng.standard_normal())
-        return x_deg - err / 3600.0
+        return x_deg - arcsec_to_deg(err)
 
     def _dwell_to_grid(self, tl: Timeline) -> int:
         k = _grid(tl.end_s, self.dt)
@@ -127,7 +128,7 @@ class _Planner:
         self._close(blk, tl)
 
     def tilt_estimate(self, plan) -> None:
-        """Static multi-position block (:mod:`gonio.tiltest`): rest at N equally spaced
+        """Static multi-position block (:mod:`gonio.analysis.tilt_estimate`): rest at N equally spaced
         positions; each reading is the uncompensated count over one dwell."""
         tab = self.b.table
         tl = Timeline(start_angle_deg=self.true_position(0.0), t0_s=self.k * self.dt)
@@ -184,26 +185,25 @@ class _Planner:
                 pos = r.start_deg
         self._close(blk, tl)
 
+    def equal_division(self, p, series: int) -> None:
+        """IEC 62047-20 Annex A.3: from each start x_k = k·360°/n, zero both, step m times by Δ.
 
-def _equal_division(pl: "_Planner", p, series: int) -> None:
-    """IEC 62047-20 Annex A.3: from each start x_k = k·360°/n, zero both, step m times by Δ.
-
-    Between starts the table is re-pointed instantly (like between blocks); each
-    start has its own static phase when the compensation is measured.
-    """
-    tab = pl.b.table
-    rate = p.rate_dps * (1.0 + tab.rate_error_rel)
-    for k, x0 in enumerate(p.start_deg.tolist()):
-        blk, tl = pl._new_block(f"equal_division start {x0:g} series {series}", p.orientation, x0)
-        k_zero = pl._dwell_to_grid(tl)
-        for j in range(1, p.points + 1):
-            arrive = tl.move(pl.true_position(x0 + j * p.step_deg), rate, tab.accel_dps2)
-            k_read = _grid(arrive + p.read_delay_s, pl.dt)
-            tl.dwell(max(p.rest_s, k_read * pl.dt - arrive + pl.dt))
-            blk.readings.append(PlannedReading("equal_division", series, k + 1, p.rate_dps,
-                                               p.orientation, k_read, k_zero, j * p.step_deg,
-                                               start_deg=x0))
-        pl._close(blk, tl)
+        Between starts the table is re-pointed instantly (like between blocks); each
+        start has its own static phase when the compensation is measured.
+        """
+        tab = self.b.table
+        rate = p.rate_dps * (1.0 + tab.rate_error_rel)
+        for k, x0 in enumerate(p.start_deg.tolist()):
+            blk, tl = self._new_block(f"equal_division start {x0:g} series {series}", p.orientation, x0)
+            k_zero = self._dwell_to_grid(tl)
+            for j in range(1, p.points + 1):
+                arrive = tl.move(self.true_position(x0 + j * p.step_deg), rate, tab.accel_dps2)
+                k_read = _grid(arrive + p.read_delay_s, self.dt)
+                tl.dwell(max(p.rest_s, k_read * self.dt - arrive + self.dt))
+                blk.readings.append(PlannedReading("equal_division", series, k + 1, p.rate_dps,
+                                                   p.orientation, k_read, k_zero, j * p.step_deg,
+                                                   start_deg=x0))
+            self._close(blk, tl)
 
 
 def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | None) -> list[Block]:
@@ -211,15 +211,15 @@ def plan_session(protocol: Protocol, bench: Bench, rng: np.random.Generator | No
     pl = _Planner(protocol, bench, rng)
     if protocol.zero_stability is not None:
         pl.zero_stability()
-    if protocol.extra.get("tilt_estimate") is not None:
-        pl.tilt_estimate(protocol.extra["tilt_estimate"])
+    if protocol.tilt_estimate is not None:
+        pl.tilt_estimate(protocol.tilt_estimate)
     for item in protocol.items():
         for series in range(1, item.series + 1):
             pl.rotation(item, series)
-    eda = protocol.extra.get("equal_division")
+    eda = protocol.equal_division
     if eda is not None:
         for series in range(1, eda.repeats + 1):
-            _equal_division(pl, eda, series)
+            pl.equal_division(eda, series)
     return pl.blocks
 
 
@@ -256,7 +256,7 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
         comp = 0.0
         if protocol.session.earth_compensation == "computed" and blk.compensate:
             # The operator's computed compensation, possibly with a wrong latitude or
-            # azimuth (protocol session.compensation_*; :mod:`gonio.compensation`).
+            # azimuth (protocol session.compensation_*; :mod:`gonio.physics.compensation`).
             ss = protocol.session
             lat = (bench.latitude_deg if ss.compensation_latitude_deg is None
                    else ss.compensation_latitude_deg)
@@ -282,7 +282,7 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
                     since = (phi[ok] - phz
                              - comp / inst.nominal_scale_factor_counts_per_deg * (k[ok] - kz) * dt)
                     g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics) - g0
-            return counts_from_angle(phi + g / 3600.0, inst, k, dither_key)
+            return counts_from_angle(phi + arcsec_to_deg(g), inst, k, dither_key)
 
         for a in range(blk.k_start, blk.k_end, CHUNK):
             b = min(a + CHUNK, blk.k_end)
@@ -304,8 +304,8 @@ def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
                     keep = ((k - blk.k_start) % dec) == 0
                     captured.setdefault(blk.label, []).append((t[keep], c[keep]))
                 if stream is not None:
-                    stream(t, c, theta + harmonic_sum_arcsec(
-                        theta, bench.table.positioning_harmonics) / 3600.0)
+                    stream(t, c, theta + arcsec_to_deg(harmonic_sum_arcsec(
+                        theta, bench.table.positioning_harmonics)))
         comps.append(comp)
         kk = np.array(sorted(need), dtype=np.int64)
         cc = counter(kk, np.array([phi_at[x] for x in kk.tolist()]))
@@ -342,20 +342,8 @@ class SessionResult:
     static_record: "StaticRecord | None" = None
 
 
-@dataclass
-class StaticRecord:
-    """The instrument's record over the 7.3 zero-stability phase (at rest), for noise analysis.
-
-    ``angle_deg`` is the pulse counter divided by the nominal scale factor (not
-    compensated: the Allan deviation ignores a constant rate).
-    """
-
-    time_s: np.ndarray
-    angle_deg: np.ndarray
-    source: str = "virtual bench, 7.3 block"
-
-
-def _metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
+def session_metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
+    """The metadata lines a bench run writes (instrument, site, protocol, seed; docs/formats.md#metadata)."""
     inst = bench.instrument
     md = {
         "instrument": inst.name,
@@ -363,10 +351,10 @@ def _metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
         "manufacturer": inst.manufacturer,
         "nominal_scale_factor_counts_per_deg": repr(inst.nominal_scale_factor_counts_per_deg),
         "latitude_deg": repr(bench.latitude_deg),
-        "temperature_c": repr(protocol.conditions["temperature_c"]),
+        "temperature_c": repr(protocol.conditions.temperature_c),
         "table": bench.table.name,
         "table_mpe_arcsec": repr(bench.table.mpe_arcsec),
-        "tilt_bound_deg": repr(protocol.annex_a["tilt_bound_deg"]),
+        "tilt_bound_deg": repr(protocol.annex_a.tilt_bound_deg),
         "operator": "virtual bench",
         "protocol": protocol.name,
         "bench": bench.name,
@@ -455,8 +443,8 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
                                                 if protocol.scale_factor else 60.0)
     sf = df["test"].to_numpy() == "scale_factor"
     k_cal_nf = float(np.mean(nf.counts[sf] / df["table_deg"].to_numpy()[sf])) if sf.any() else k_mount
-    sys_mount = (nf.counts / k_mount - run.true_deg) * 3600.0
-    sys_cal = (nf.counts / k_cal_nf - run.true_deg) * 3600.0
+    sys_mount = deg_to_arcsec(nf.counts / k_mount - run.true_deg)
+    sys_cal = deg_to_arcsec(nf.counts / k_cal_nf - run.true_deg)
     per = []
     for i, r in enumerate(rows):
         per.append({
@@ -468,7 +456,7 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
             # tilt_estimate rows: table_deg is the rest position, true_table_deg the angle
             # turned during the dwell (0): no table error to report.
             "table_error_arcsec": None if math.isnan(r.table_deg) or r.test == "tilt_estimate"
-            else float((r.table_deg - run.true_deg[i]) * 3600.0),
+            else float(deg_to_arcsec(r.table_deg - run.true_deg[i])),
             "noise_free_counts": float(nf.counts[i]),
             "systematic_deviation_arcsec": float(sys_mount[i]),
             "systematic_deviation_calibrated_arcsec": float(sys_cal[i]),
@@ -494,7 +482,7 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     if "zero_stability" in run.records:
         t, c = run.records["zero_stability"]
         static = StaticRecord(t, c / bench.instrument.nominal_scale_factor_counts_per_deg)
-    return SessionResult(df, _metadata(protocol, bench, seed), truth, static)
+    return SessionResult(df, session_metadata(protocol, bench, seed), truth, static)
 
 
 def json_plain(x):
@@ -510,7 +498,7 @@ def json_plain(x):
 
 def write_session(result: SessionResult, out: str | Path) -> dict[str, Path]:
     """Write ``readings.csv`` and ``truth.json`` into ``out`` atomically."""
-    from gonio.io import write_readings
+    from gonio.formats.readings import write_readings
 
     out = Path(out)
     with output_dir(out) as stage:

@@ -2,15 +2,16 @@
 
 Prints the budget table with the exact component values beside the annex's A.5
 rounded ones, u_c, U = k·u_c and the stated (two-digit) values; optionally a
-JCGM 101 Monte Carlo check. A thin layer over :func:`gonio.budget.annex_a_budget`.
+JCGM 101 Monte Carlo check. A thin layer over :func:`gonio.specs.ogam_draft.budget.annex_a_budget`.
 """
 
 from __future__ import annotations
 
 import json
 
-from gonio.budget import annex_a_budget
+from gonio.specs.ogam_draft.budget import annex_a_budget
 from gonio.cli.checks import json_safe
+from gonio.units import ARCSEC_PER_DEG
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
 
@@ -26,7 +27,7 @@ def register(subparsers) -> None:
         "budget", help="Annex A uncertainty budget of the angle-position deviation",
         description="The draft's Annex A budget: u(P), u(phi_e), u(B_E), u(r), u_c and U = k u_c; "
                     "exact values beside the annex's rounded ones; optional JCGM 101 Monte Carlo.")
-    p.add_argument("--table-mpe-arcsec", type=float_range(0, 3600), default=0.1, metavar="A",
+    p.add_argument("--table-mpe-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.1, metavar="A",
                    help="standard table MPE in arc-seconds (A.4.1; default 0.1)")
     p.add_argument("--tilt-deg", type=float_range(0, 45), default=0.1, metavar="PSI",
                    help="sensing-plane tilt in degrees (A.4.2; default 0.1)")
@@ -34,7 +35,7 @@ def register(subparsers) -> None:
                    help="zero stability in °/h (A.4.3; default 0.005)")
     p.add_argument("--duration-min", type=float_range(0, 1e4), default=0.5, metavar="T",
                    help="time from start to reading in minutes (A.4.3; default 0.5)")
-    p.add_argument("--repeatability-arcsec", type=float_range(0, 3600), default=0.096, metavar="S",
+    p.add_argument("--repeatability-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.096, metavar="S",
                    help="repeatability u(r) in arc-seconds (A.4.4; default 0.096)")
     p.add_argument("--k", type=float_range(0, 10, lo_open=True), default=2.0, help="coverage factor (A.7; default 2)")
     p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",

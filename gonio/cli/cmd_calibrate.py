@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from gonio.calibrate import calibrate, write_outputs
+from gonio.pipeline.calibrate import calibrate, write_outputs
 from gonio.cli.checks import int_range
 from gonio.errors import GonioError
 
@@ -14,7 +14,7 @@ def register(sub) -> None:
                        description="Compute the draft's seven characteristics and the Annex A "
                                    "uncertainty from a readings file; write results.json, "
                                    "summary.txt and tables/*.csv into --out.")
-    p.add_argument("readings", help="readings file (CSV, data-formats.md §1) or a stream (§2, "
+    p.add_argument("readings", help="readings file (CSV, docs/formats.md#readings-file) or a stream (docs/formats.md#stream-file, "
                    "reduced with the protocol first; told apart by the header)")
     p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
     p.add_argument("--out", required=True, help="output folder")

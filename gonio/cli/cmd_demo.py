@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
-from gonio.demo import demo
+from gonio.pipeline.demo import demo
 from gonio.cli.checks import seed
 
 

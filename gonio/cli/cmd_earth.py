@@ -1,6 +1,6 @@
 """``gonio earth``: the Earth rate on a table axis at a latitude (draft 4.5, 7.7).
 
-A thin layer over :func:`gonio.earth.earth_rate`.
+A thin layer over :func:`gonio.physics.earth.earth_rate`.
 """
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import math
 
-from gonio.earth import earth_rate
+from gonio.physics.earth import earth_rate
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range
 

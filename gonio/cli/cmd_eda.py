@@ -1,28 +1,18 @@
 """``gonio eda READINGS``: equal-division averaging of a readings file (IEC 62047-20 Annex A.3).
 
-Reads the ``equal_division`` rows of a readings file, separates the table's
-positioning error from the goniometer's error (:func:`gonio.eda.equal_division_analysis`)
-and prints both with their standard uncertainties, the residual standard
-deviation, the full-turn closure check and the harmonic transfer table.
-
-The file is read with pandas here, not with :func:`gonio.io.read_readings`:
-that reader treats (test, series, round, rate, orientation) as the key of one
-reading, whereas an ``equal_division`` round holds ``m`` readings, one per
-step (told apart by ``table_deg``).
+Reads the ``equal_division`` rows of a readings file (with the readings reader
+and its checks), separates the table's positioning error from the goniometer's
+error (:func:`gonio.analysis.equal_division.equal_division_from_readings`) and
+prints both with their standard uncertainties, the residual standard deviation,
+the full-turn closure check and the harmonic transfer table.
 """
 
 from __future__ import annotations
 
-import io
 import json
-from pathlib import Path
 
-import numpy as np
-import pandas as pd
-
-from gonio.atomic import write_bytes
-from gonio.eda import EdaResult, eda_matrix_from_readings, equal_division_analysis
-from gonio.errors import GonioError
+from gonio.analysis.equal_division import EdaResult, equal_division_from_readings
+from gonio.formats.readings import read_readings
 
 
 from gonio.cli.checks import int_range, json_safe
@@ -49,44 +39,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def read_eda_csv(path: str | Path) -> pd.DataFrame:
-    """Read a readings CSV with pandas; ``#`` metadata lines at the top are skipped.
-
-    The returned DataFrame's index is the file's 1-based line number of each
-    row, so errors name the line; empty cells are NaN, values stay text.
-
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
-    >>> _ = p.write_text("# serial: 7\\ntest,series,round,start_deg,table_deg,gyro_deg\\n"
-    ...                  "equal_division,1,1,0,180,180.0001\\n")
-    >>> df = read_eda_csv(p)
-    >>> df.index.tolist(), df.loc[3, "gyro_deg"]
-    ([3], '180.0001')
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise GonioError(f"cannot read readings file: {exc.strerror}", file=path) from None
-    except UnicodeDecodeError:
-        raise GonioError("not UTF-8 text", file=path) from None
-    lines = text.splitlines()
-    skip = 0
-    while skip < len(lines) and (not lines[skip].strip() or lines[skip].lstrip().startswith("#")):
-        skip += 1
-    if skip >= len(lines):
-        raise GonioError("no header row", file=path)
-    try:
-        df = pd.read_csv(io.StringIO("\n".join(lines[skip:])), dtype=str,
-                         skip_blank_lines=False, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise GonioError(f"not a CSV table: {exc}".splitlines()[0], file=path) from None
-    df.columns = [c.strip() for c in df.columns]
-    df.index = np.arange(len(df)) + skip + 2          # header is line skip+1
-    df = df[~(df == "").all(axis=1)]                  # blank lines
-    return df.replace("", np.nan)
-
-
 def _text(res: EdaResult) -> str:
     out = [f"equal-division averaging (IEC 62047-20 Annex A.3): n = {res.n_starts} starts, "
            f"m = {res.m_points} points ({res.step_deg:g}° step), {res.repeats} repeat(s)",
@@ -108,51 +60,17 @@ def _text(res: EdaResult) -> str:
     return "\n".join(out)
 
 
-def plot_eda(res: EdaResult, path: str | Path) -> Path:
-    """Figure of the table and goniometer error curves with 1-σ bars, written atomically.
-
-    The format follows the suffix (png, pdf, svg); matplotlib's Agg backend.
-
-    >>> import tempfile, pathlib
-    >>> from gonio.eda import simulate_eda_matrix
-    >>> sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
-    >>> res = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)
-    >>> out = plot_eda(res, pathlib.Path(tempfile.mkdtemp()) / "eda.svg")
-    >>> out.read_text()[:5]
-    '<?xml'
-    """
-    from matplotlib.figure import Figure
-
-    from gonio.atomic import save_figure
-
-    fig = Figure(figsize=(7, 6), constrained_layout=True)
-    a1, a2 = fig.subplots(2, 1)
-    a1.errorbar(res.table_position_deg, res.table_error_arcsec, yerr=res.table_u_arcsec,
-                fmt="o-", capsize=3)
-    a1.set(xlabel="table position / °", ylabel="table error / ″",
-           title=f"rotary table (gauge: {res.gauge})")
-    a2.errorbar(res.gonio_angle_deg, res.gonio_error_arcsec, yerr=res.gonio_u_arcsec,
-                fmt="s-", capsize=3, color="C1")
-    a2.set(xlabel="angle turned since zeroing / °", ylabel="goniometer error / ″",
-           title="goniometer")
-    for a in (a1, a2):
-        a.axhline(0, color="0.6", lw=0.8)
-        a.grid(alpha=0.3)
-    return save_figure(fig, path)
-
-
 def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
     from gonio.atomic import check_output_file
     if args.plot is not None:
         check_output_file(args.plot, what="--plot", inputs=[args.readings])
-    from gonio.errors import check_input_file
-    check_input_file(args.readings, "readings file")
-    df = read_eda_csv(args.readings)
-    D, start, step = eda_matrix_from_readings(df, starts=args.starts, file=args.readings)
-    res = equal_division_analysis(D, start, step, gauge=args.gauge, noise=args.noise)
+    res = equal_division_from_readings(read_readings(args.readings), starts=args.starts,
+                                       gauge=args.gauge, noise=args.noise)
     if args.plot:
-        plot_eda(res, args.plot)
+        from gonio.report.eda_figure import equal_division_figure
+        from gonio.report.figure_files import save_figure
+        save_figure(equal_division_figure(res), args.plot)
     if args.json:
         print(json.dumps(json_safe(res.to_dict()), indent=2, allow_nan=False))
     else:

@@ -1,7 +1,7 @@
 """``gonio noise``: Allan deviation and noise-model fit of a stream file.
 
-A thin layer over :func:`gonio.noise.analyse_record` (IEEE 952-1997 Annex C). The
-stream is read with :func:`gonio.streams.read_stream` (data-formats section 2); its
+A thin layer over :func:`gonio.analysis.noise.analyse_record` (IEEE 952-1997 Annex C). The
+stream is read with :func:`gonio.formats.streams.read_stream` (``docs/formats.md#stream-file``); its
 ``gyro_counts`` column is interpreted according to ``--input``:
 
 * ``angle`` (default): the cumulative pulse counter (unwrapped), i.e. the integrated
@@ -26,6 +26,7 @@ import numpy as np
 
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, json_safe
+from gonio.units import dph_to_dps, dps_to_dph
 
 _INPUTS = {"angle": "angle", "counts": "increment", "rate": "rate"}
 
@@ -76,13 +77,13 @@ MAX_ALL_MODIFIED_SAMPLES = 100_000
 
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
                  scale_factor: float | None = None, confidence: float = 0.683):
-    """Noise analysis of a stream file; returns a :class:`gonio.noise.StaticNoiseResult`.
+    """Noise analysis of a stream file; returns a :class:`gonio.analysis.noise.StaticNoiseResult`.
 
     ``input_kind`` is ``angle``, ``counts`` or ``rate`` (see the module docstring);
     the Allan deviation is in °/h.
     """
-    from gonio.noise import analyse_record
-    from gonio.streams import read_stream
+    from gonio.analysis.noise import analyse_record
+    from gonio.formats.streams import read_stream
 
     if input_kind not in _INPUTS:
         raise GonioError(f"--input must be one of {', '.join(sorted(_INPUTS))}", key="input")
@@ -119,10 +120,10 @@ def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bo
     kind = _INPUTS[input_kind]
     if kind == "rate":
         # counts/s / (counts/°) · 3600 s/h -> °/h
-        return analyse_record(counts * (3600.0 / scale_factor), tau0, "rate", unit="deg/h",
+        return analyse_record(dps_to_dph(counts / scale_factor), tau0, "rate", unit="deg/h",
                               taus=taus, modified=modified, confidence=confidence)
     # counts / (counts/°) = °, and 1° = 3600 (°/h)·s: scale = counts per (°/h)·s
-    return analyse_record(counts, tau0, kind, scale=scale_factor / 3600.0, unit="deg/h",
+    return analyse_record(counts, tau0, kind, scale=dph_to_dps(scale_factor), unit="deg/h",
                           taus=taus, modified=modified, confidence=confidence)
 
 
@@ -161,7 +162,7 @@ def run(args) -> int:
     check_input_file(args.stream, "stream file")
     if args.plot is not None:
         check_output_file(args.plot, what="--plot", inputs=[args.stream])
-    from gonio.noise import plot_fit
+    from gonio.analysis.noise import plot_fit
 
     result = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
                           scale_factor=args.scale_factor, confidence=args.confidence)

@@ -7,15 +7,16 @@ import json
 from gonio.errors import GonioError, check_input_file
 from gonio.atomic import check_output_file
 from gonio.cli.checks import float_range
-from gonio.io import write_readings
+from gonio.formats.readings import write_readings
 from gonio.protocol import load_protocol
-from gonio.reduce import read_override, reduce_stream
-from gonio.streams import read_stream
+from gonio.formats.override import read_override
+from gonio.reduce import reduce_stream
+from gonio.formats.streams import read_stream
 
 
 def register(sub) -> None:
     p = sub.add_parser("reduce", help="reduce a stream file to a readings file",
-                       description="Find the table's rests in a stream (data-formats.md §2), "
+                       description="Find the table's rests in a stream (docs/formats.md#stream-file), "
                                    "match them to the protocol's rounds and write the readings "
                                    "file (§1). Rounds that cannot be matched are listed with the "
                                    "reason; --override gives their times explicitly.")

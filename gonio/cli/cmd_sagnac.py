@@ -1,15 +1,15 @@
 """``gonio sagnac``: Sagnac scale factor of a ring-laser or fibre-optic gyro.
 
 RLG: K = 4A/(λP) pulses per radian; FOG: 2πLD/(λc) rad of phase per rad/s
-(ogam-draft.md "Physics the draft relies on"). A thin layer over
-:func:`gonio.earth.sagnac_rlg` and :func:`gonio.earth.sagnac_fog`.
+(docs/draft-readings.md#sagnac-effect). A thin layer over
+:func:`gonio.physics.sagnac.sagnac_rlg` and :func:`gonio.physics.sagnac.sagnac_fog`.
 """
 
 from __future__ import annotations
 
 import json
 
-from gonio.earth import sagnac_fog, sagnac_rlg
+from gonio.physics.sagnac import sagnac_fog, sagnac_rlg
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, json_safe
 

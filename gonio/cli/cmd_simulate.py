@@ -24,15 +24,15 @@ def register(sub) -> None:
                    help="replace an --out folder that holds readings.csv or stream.csv")
     p.add_argument("--stream", action="store_true",
                    help="also write stream.csv (every sample: time, wrapped counter, table "
-                        "angle; data-formats.md §2), chunk by chunk")
+                        "angle; docs/formats.md#stream-file), chunk by chunk")
     p.set_defaults(func=run)
 
 
 def stream_metadata(protocol, bench, seed: int) -> dict:
     """The stream file's metadata: the readings' keys plus the counter's width and sign."""
-    from gonio.bench.session import _metadata
+    from gonio.bench.session import session_metadata
 
-    md = dict(_metadata(protocol, bench, seed))
+    md = dict(session_metadata(protocol, bench, seed))
     md["counter_bits"] = str(bench.instrument.counter_bits)
     md["counter_signed"] = "true" if bench.instrument.counter_signed else "false"
     md["sample_rate_hz"] = repr(bench.sample_rate_hz)
@@ -49,7 +49,7 @@ def run(args) -> int:
     with output_set(args.out, inputs=inputs, force=args.force) as stage:
         writer = None
         if args.stream:
-            from gonio.streams import StreamWriter
+            from gonio.formats.streams import StreamWriter
 
             writer = StreamWriter(stage / "stream.csv", stream_metadata(proto, bench, args.seed),
                                   table=True)

@@ -2,7 +2,7 @@
 
 ``--model elliptic`` is the draft's elliptic-projection model; ``--model rigid`` the
 rigid-body rate-gyro model (zero after scale-factor calibration, or θ(cos ψ − 1)
-with ``--uncalibrated``). A thin layer over :mod:`gonio.tilt`.
+with ``--uncalibrated``). A thin layer over :mod:`gonio.physics.tilt`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import json
 import math
 
 from gonio.errors import GonioError
-from gonio.tilt import elliptic_extreme, rigid_extreme
+from gonio.physics.tilt import elliptic_extreme, rigid_extreme
 
 
 from gonio.cli.checks import float_range

@@ -1,6 +1,6 @@
 """``gonio tilt-estimate``: ψ and α from the static multi-position rows of a readings file.
 
-A thin layer over :func:`gonio.tiltest.tilt_estimate_from_readings` (protocol
+A thin layer over :func:`gonio.analysis.tilt_estimate.tilt_estimate_from_readings` (protocol
 ``protocols/tilt-estimate.toml``; the bench writes such files with ``gonio simulate``).
 """
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 
-from gonio.tiltest import tilt_estimate_from_readings
+from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
 
 
 from gonio.cli.checks import float_range
@@ -34,7 +34,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Read the file, estimate, print."""
-    from gonio.io import read_readings
+    from gonio.formats.readings import read_readings
 
     r = read_readings(args.file)
     e = tilt_estimate_from_readings(r, args.scale_factor, args.latitude_deg, args.u_latitude_deg)

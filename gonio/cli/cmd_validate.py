@@ -8,7 +8,7 @@ from pathlib import Path
 from gonio.atomic import output_set, write_text
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
-from gonio.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
+from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
 
 
 def register(sub) -> None:

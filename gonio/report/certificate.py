@@ -5,7 +5,7 @@ Contents
 =========================  ==============================================================
 :func:`write_certificate`  ``certificate.html`` and ``certificate.pdf`` into a folder, atomically
 :func:`load_lab`           laboratory / customer / signatory details from a TOML file
-:data:`LAB_SCHEMA`         what that file may hold (:mod:`gonio.tomlschema`)
+:data:`LAB_SCHEMA`         what that file may hold (:mod:`gonio.formats.toml`)
 :func:`certificate_blocks` the certificate's content as plain blocks (both renderers use them)
 :func:`render_html`        blocks + figures → one HTML page (figures inline as SVG)
 :func:`render_pdf`         blocks + figures → A4 PDF pages (matplotlib PdfPages)
@@ -42,7 +42,7 @@ from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
 from gonio.report.figures import FIGURES, figure_svg, mpl_style
 from gonio.report.i18n import cjk_font, display, labels
-from gonio.tomlschema import Field, read_toml, validate_table
+from gonio.formats.toml import Field, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
 
@@ -729,9 +729,9 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
     Parameters
     ----------
-    report : gonio.calibrate.CalibrationReport
-        What :func:`gonio.calibrate.calibrate` returned (``results.json`` is written
-        by :func:`gonio.calibrate.write_calibration`, not here).
+    report : gonio.pipeline.calibrate.CalibrationReport
+        What :func:`gonio.pipeline.calibrate.calibrate` returned (``results.json`` is written
+        by :func:`gonio.pipeline.calibrate.write_calibration`, not here).
     out : path
         Output folder; both files appear together or not at all (staged, then renamed).
     truth : dict, optional

@@ -7,7 +7,7 @@ Contents
 :func:`draw_deviation`    E_ij of every series against position, mean E_i (draft Fig. A.4)
 :func:`draw_repeatability`  Bessel s_i per position and R = max (draft Fig. A.5, 7.5)
 :func:`draw_tilt`      elliptic-projection error at the tilt bound (Annex A.4.2, Fig. A.3),
-                       rigid-body model beside it (:mod:`gonio.tilt`)
+                       rigid-body model beside it (:mod:`gonio.physics.tilt`)
 :func:`draw_scale_factor`   K_i per round and K (7.1)
 :func:`draw_zero_stability` readings M_n against time and their least-squares drift (7.3)
 :func:`draw_rate`      E_i per position for each rate (7.6)
@@ -18,7 +18,7 @@ Contents
 =====================  =================================================================
 
 Each ``draw_*`` takes ``(fig, spec, report, L, truth)``: a matplotlib Figure, a
-SubplotSpec to draw in, the :class:`~gonio.calibrate.CalibrationReport`, the
+SubplotSpec to draw in, the :class:`~gonio.pipeline.calibrate.CalibrationReport`, the
 label mapping of :func:`gonio.report.i18n.labels`, and the virtual-bench truth
 (or None). The same function draws into the HTML's SVG and into a PDF page.
 An item that was not measured gives an empty panel saying so.
@@ -38,7 +38,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gonio.report.i18n import display_number, display_uncertainty  # noqa: E402
-from gonio.tilt import elliptic_error_arcsec, rigid_error_arcsec  # noqa: E402
+from gonio.physics.tilt import elliptic_error_arcsec, rigid_error_arcsec  # noqa: E402
+from gonio.units import S_PER_MIN, deg_to_arcsec, dps_to_dph  # noqa: E402
 
 #: Salt of matplotlib's SVG ids: fixed, so the same report gives the same bytes.
 SVG_HASHSALT: str = "gonio-certificate"
@@ -173,7 +174,7 @@ def zero_drift_deg_per_h(time_s, angle_deg) -> float:
     a = np.asarray(angle_deg, dtype=float)
     if len(t) < 2 or np.ptp(t) == 0:
         return float("nan")
-    return float(np.polyfit(t, a, 1)[0] * 3600.0)
+    return float(dps_to_dph(np.polyfit(t, a, 1)[0]))
 
 
 def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
@@ -185,8 +186,8 @@ def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
     rd = c.tables["readings"]
     for i, (s, g) in enumerate(rd.groupby("series", sort=True)):
         g = g.sort_values("time_s")
-        t_min = (g["time_s"] - g["time_s"].iloc[0]) / 60.0
-        m = g["angle_deg"].to_numpy() * 3600.0
+        t_min = (g["time_s"] - g["time_s"].iloc[0]) / S_PER_MIN
+        m = deg_to_arcsec(g["angle_deg"].to_numpy())
         ax.plot(t_min, m, "o", color=f"C{i}", ms=4, label=f"{L['lg_series']} {s}")
         slope = zero_drift_deg_per_h(g["time_s"], g["angle_deg"])
         if math.isfinite(slope):

@@ -74,7 +74,7 @@ def fit_header(left: str, right: str, columns: int) -> str:
     Widths count East-Asian wide characters as two columns.
 
     >>> fit_header("A very long laboratory name indeed", "Certificate No.: X-1", 40)
-    'A very long laborat…'
+    'A very long lab…'
     >>> fit_header("Short lab", "No.: 1", 40)
     'Short lab'
     """

@@ -47,9 +47,13 @@ Conventions
   points and the step links every position to every other. Equally spaced
   starts ``x_k = k·360°/n`` satisfy this exactly when ``n`` divides ``m``.
   Other start sets raise :class:`~gonio.errors.GonioError`.
-* Noise: independent readings with one common standard deviation (estimated
-  from the residuals, pooled over repeats); a drift within a series or angle
-  random walk would make the readings correlated and the uncertainties low.
+* Noise (:func:`noise_whitening`): by default ``random_walk`` — a gyro's angle
+  random walk and any Earth-rate compensation residual accumulate from each
+  zeroing, so the readings of one start form a random walk; the fit whitens each
+  start by first differences (generalised least squares). ``white`` is the classic
+  A.3 model of independent readings, which on a gyro understates the
+  uncertainty (≈ 1.8× on the bench). Either way one common standard deviation is
+  estimated from the whitened residuals, pooled over repeats.
 
 References
 ==========
@@ -70,8 +74,10 @@ import pandas as pd
 import scipy.sparse as sp
 
 from gonio.errors import GonioError
-from gonio.protocol import ORIENTATIONS, load_protocol, register_section
-from gonio.tomlschema import Field, positive
+from gonio.formats.readings import Readings
+from gonio.units import ARCSEC_PER_DEG
+from gonio.protocol import load_protocol
+from gonio.protocol.sections import EdaProtocol
 
 #: Tolerance for "a start lies on the step grid", in units of the step (–).
 GRID_TOL_STEPS = 1e-6
@@ -82,7 +88,6 @@ NULL_RTOL = 1e-9
 #: |z| above which the full-turn closure is reported as not consistent with zero (–).
 CLOSURE_Z_LIMIT = 3.0
 
-_ARCSEC_PER_DEG = 3600.0
 
 
 # --------------------------------------------------------------------------- results
@@ -797,7 +802,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              file=None) -> tuple[np.ndarray, np.ndarray, float]:
     """Build the deviation matrix D from a readings file's ``equal_division`` rows.
 
-    Readings-file extension (data-formats contract, version 1, plus): rows with
+    Readings-file rows (``docs/formats.md#rows-of-each-test``): rows with
     ``test = equal_division``; ``series`` = repeat index; ``round`` = start
     index ``k+1``; ``start_deg`` = the table's absolute position at zeroing
     (same for every row of a round, and for a round in every series);
@@ -877,7 +882,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
     series = num["series"].to_numpy()[keep].astype(int)
     rnd = num["round"].to_numpy()[keep].astype(int)
     table = table_all[keep]
-    dev = (num["gyro_deg"].to_numpy()[keep] - table) * _ARCSEC_PER_DEG
+    dev = (num["gyro_deg"].to_numpy()[keep] - table) * ARCSEC_PER_DEG
     if table.size == 0:
         raise GonioError("equal_division rows have no reading away from the zero",
                          file=file, column="table_deg")
@@ -956,59 +961,6 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
 
 
 # --------------------------------------------------------------------------- protocol
-@dataclass(frozen=True)
-class EdaProtocol:
-    """The ``[equal_division]`` protocol section (IEC 62047-20 Annex A.3 procedure).
-
-    Attributes
-    ----------
-    starts, points, repeats : int
-        ``n`` starts ``360°/n`` apart, ``m`` points per revolution, repeats.
-    rate_dps, rest_s, read_delay_s : float
-        Table rate, rest at each stop, reading delay after arrival.
-    orientation : str
-        Table-axis direction.
-    """
-
-    starts: int
-    points: int
-    repeats: int
-    rate_dps: float
-    rest_s: float
-    read_delay_s: float
-    orientation: str
-
-    @property
-    def step_deg(self) -> float:
-        """The step ``Δ = 360°/m``."""
-        return 360.0 / self.points
-
-    @property
-    def start_deg(self) -> np.ndarray:
-        """Start positions ``k·360°/n``."""
-        return np.arange(self.starts) * 360.0 / self.starts
-
-
-def _is_int_ge(lo):
-    return lambda x: x >= lo
-
-
-EDA_PROTOCOL_SCHEMA: dict[str, Field] = {
-    "starts": Field("int", 12, _is_int_ge(1), "an integer ≥ 1"),
-    "points": Field("int", 12, _is_int_ge(2), "an integer ≥ 2"),
-    "repeats": Field("int", 1, _is_int_ge(1), "an integer ≥ 1"),
-    "rate_dps": Field("float", 60.0, positive, "> 0"),
-    "rest_s": Field("float", 10.0, lambda x: x >= 0, "≥ 0"),
-    "read_delay_s": Field("float", 5.0, lambda x: x >= 0, "≥ 0"),
-    "orientation": Field("str", "up", choices=ORIENTATIONS),
-}
-
-
-def _eda_factory(v: dict) -> EdaProtocol:
-    return EdaProtocol(**v)
-
-
-register_section("equal_division", EDA_PROTOCOL_SCHEMA, _eda_factory)
 
 
 def load_eda_protocol(path="eda") -> EdaProtocol:
@@ -1024,9 +976,9 @@ def load_eda_protocol(path="eda") -> EdaProtocol:
     (12, 12, 30.0, 60.0)
     """
     proto = load_protocol(path)
-    if "equal_division" not in proto.extra:
+    p = proto.equal_division
+    if p is None:
         raise GonioError("no [equal_division] section", file=proto.path, key="equal_division")
-    p = proto.extra["equal_division"]
     if p.points % p.starts:
         raise GonioError(f"starts ({p.starts}) must divide points ({p.points}): the starts "
                          f"must lie on the step grid", file=proto.path,
@@ -1035,3 +987,21 @@ def load_eda_protocol(path="eda") -> EdaProtocol:
         raise GonioError("read_delay_s is longer than rest_s", file=proto.path,
                          key="equal_division.read_delay_s")
     return p
+
+
+def equal_division_from_readings(readings: Readings, *, starts: int | None = None,
+                                 gauge: str = "closure", noise: str = "random_walk") -> EdaResult:
+    """Equal-division analysis of a readings file's ``equal_division`` rows.
+
+    The one path from a readings file to an :class:`EdaResult`, used by
+    ``gonio eda`` and by the calibration pipeline: the file is read by
+    :func:`gonio.formats.readings.read_readings` (its checks apply), the rows
+    indexed by their line numbers so that errors name the line.
+    """
+    df = readings.data
+    rows = df[df["test"] == "equal_division"]
+    if not len(rows):
+        raise GonioError("no equal_division rows", file=readings.path, column="test")
+    D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False) if "line" in rows
+                                              else rows, starts=starts, file=readings.path)
+    return equal_division_analysis(D, start, step, gauge=gauge, noise=noise)

@@ -11,18 +11,22 @@ bound come from the file's metadata when given, else from the protocol.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import pandas as pd
+
 from gonio import __version__
 from gonio.atomic import output_dir, output_set, sha256_file, write_text
-from gonio.budget import AnnexABudget, annex_a_budget
-from gonio.characteristics import CalibrationResults, compute_characteristics, summary_table
-from gonio.io import Readings, metadata_float, read_readings
-from gonio.bench.session import StaticRecord
+from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
+from gonio.formats.readings import Readings, metadata_float, read_readings
+from gonio.errors import GonioError
+from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate).
@@ -76,9 +80,9 @@ class CalibrationReport:
     protocol: Protocol
     source_sha256: str
     repeatability_source: str
-    noise: object | None = None          # gonio.noise.StaticNoiseResult of the 7.3 record
+    noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
-    eda: object | None = None            # gonio.eda.EdaResult of the equal_division rows
+    eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
 
     def to_dict(self) -> dict:
         """The ``results.json`` content (plain JSON types, deterministic)."""
@@ -132,12 +136,12 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
         n = rep.details.get("n_series") if isinstance(rep.details, dict) else None
         dof = (int(n) - 1) if n else math.inf
     else:
-        u_r, src, dof = a["repeatability_arcsec"], "protocol annex_a.repeatability_arcsec", math.inf
-    budget = annex_a_budget(table_mpe_arcsec=mpe if mpe is not None else a["table_mpe_arcsec"],
-                            tilt_deg=tilt if tilt is not None else a["tilt_bound_deg"],
-                            zero_stability_dph=a["zero_stability_dph"],
-                            duration_min=a["duration_min"], repeatability_arcsec=u_r,
-                            k=a["coverage_factor"], monte_carlo_trials=monte_carlo_trials,
+        u_r, src, dof = a.repeatability_arcsec, "protocol annex_a.repeatability_arcsec", math.inf
+    budget = annex_a_budget(table_mpe_arcsec=mpe if mpe is not None else a.table_mpe_arcsec,
+                            tilt_deg=tilt if tilt is not None else a.tilt_bound_deg,
+                            zero_stability_dph=a.zero_stability_dph,
+                            duration_min=a.duration_min, repeatability_arcsec=u_r,
+                            k=a.coverage_factor, monte_carlo_trials=monte_carlo_trials,
                             seed=seed, repeatability_dof=dof)
     return budget, src
 
@@ -145,7 +149,7 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
 def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
     """A readings file as is, or a stream reduced with the protocol (told apart by the header).
 
-    A header with a ``test`` column is a readings file (data-formats §1); one with
+    A header with a ``test`` column is a readings file (docs/formats.md#readings-file); one with
     ``time_s`` and ``gyro_counts`` but no ``test`` is a stream (§2), reduced by
     :func:`gonio.reduce.reduce_stream` before calibration.
     """
@@ -154,13 +158,12 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 def _load(path: str | Path, protocol: Protocol):
     from gonio.errors import check_input_file
-    from gonio.streams import read_stream, sniff_kind
+    from gonio.formats.streams import read_stream, sniff_kind
 
     check_input_file(path, "readings or stream file")
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
-    from gonio.errors import GonioError
     from gonio.reduce import reduce_stream
 
     stream = read_stream(path)
@@ -169,7 +172,7 @@ def _load(path: str | Path, protocol: Protocol):
         raise GonioError("no round of the protocol could be matched in the stream", file=path)
     import tempfile
 
-    from gonio.io import write_readings
+    from gonio.formats.readings import write_readings
     with tempfile.TemporaryDirectory() as tmp:   # through the file format: same validation
         rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
                                           Path(tmp) / "reduced.csv", red.metadata))
@@ -195,9 +198,8 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
 
 def analyse_zero_stability(record: StaticRecord | None):
-    """Allan analysis of the 7.3 static record (:func:`gonio.noise.analyse_static`), or why not."""
-    from gonio.errors import GonioError
-    from gonio.noise import analyse_static
+    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`), or why not."""
+    from gonio.analysis.noise import analyse_static
 
     if record is None:
         return None, ""
@@ -270,40 +272,38 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol =
     check_counts_agree(rd, res)
     budget, src = annex_a_for(res, rd, proto, monte_carlo_trials, seed)
     noise, noise_src = analyse_zero_stability(static_record)
-    eda = equal_division_for(res, rd)
+    eda, unused = equal_division_for(res.unused_readings, rd)
+    res = dataclasses.replace(res, unused_readings=unused)
     return CalibrationReport(res, budget, rd, proto, sha, src, noise, noise_src, eda)
 
 
-def equal_division_for(results: CalibrationResults, readings: Readings):
+def equal_division_for(unused: pd.DataFrame, readings: Readings):
     """Analyse the file's ``equal_division`` rows (table calibration, IEC 62047-20 A.3), if any.
 
-    Those rows are then used: they leave the ``unused_readings`` list. When they do
+    Returns ``(result or None, unused readings)``: a new ``unused_readings`` table
+    (the input is not modified) without the rows the analysis used; when they do
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.eda import eda_matrix_from_readings, equal_division_analysis
+    from gonio.analysis.equal_division import equal_division_from_readings
 
-    df = readings.data
-    rows = df[df["test"] == "equal_division"]
+    rows = readings.data[readings.data["test"] == "equal_division"]
     if not len(rows):
-        return None
-    from gonio.errors import GonioError
-
-    un = results.unused_readings
+        return None, unused
+    lines = set(rows["line"])
     try:
-        D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False),
-                                                  file=readings.path)
-        out = equal_division_analysis(D, start, step)
+        out = equal_division_from_readings(readings)
     except GonioError as exc:
         # Not a complete equal-division measurement: the rest of the calibration goes
         # on; the rows stay listed as unused, with the reason.
+        un = unused.copy()
         if len(un) and "reason" in un.columns:
-            mask = un["line"].isin(set(rows["line"]))
-            un.loc[mask, "reason"] = f"equal-division analysis not possible: {exc.message}"
-        return None
-    if len(un):
-        results.unused_readings = un[~un["line"].isin(set(rows["line"]))].reset_index(drop=True)
-    return out
+            un.loc[un["line"].isin(lines), "reason"] = \
+                f"equal-division analysis not possible: {exc.message}"
+        return None, un
+    if len(unused):
+        unused = unused[~unused["line"].isin(lines)].reset_index(drop=True)
+    return out, unused
 
 
 def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | None = None,

@@ -51,16 +51,13 @@ from scipy import fft as sfft
 from scipy import optimize, stats
 
 from gonio.errors import GonioError
+from gonio.units import deg_sqrt_h_from_dph_sqrt_hz, dph_per_sqrt_h_from_dph_sqrt_hz_per_s, dph_to_dps, h_to_s
 
 __all__ = [
     "INPUT_TYPES", "AllanResult", "NoiseFit", "SinusoidDetection", "StaticNoiseResult",
     "angle_series", "averaging_factors", "allan_deviation", "edf_simple",
     "design_matrix", "fit_noise_model", "model_adev", "detect_sinusoid",
     "sinusoid_adev", "analyse_static", "analyse_record", "plot_fit",
-    "dph_sqrt_hz_from_deg_sqrt_h", "deg_sqrt_h_from_dph_sqrt_hz",
-    "arcsec_sqrt_s_from_deg_sqrt_h", "deg_sqrt_h_from_arcsec_sqrt_s",
-    "rad_s_sqrt_hz_from_deg_sqrt_h", "deg_sqrt_h_from_rad_s_sqrt_hz",
-    "rad_s_from_dph", "dph_from_rad_s",
 ]
 
 #: The accepted input types (see module docstring).
@@ -69,89 +66,14 @@ INPUT_TYPES = ("rate", "increment", "angle")
 #: 2 ln 2 / π, the flicker (bias-instability) coefficient of AVAR (IEEE 952 C.3).
 FLICKER_COEFF = 2.0 * math.log(2.0) / math.pi
 #: sqrt(2 ln 2 / π) = 0.664: ADEV floor of flicker rate noise per unit B (IEC 62047-20 5.4).
-FLICKER_FLOOR = 0.664
-#: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7; thesis 004).
+FLICKER_FLOOR = math.sqrt(FLICKER_COEFF)
+#: τ of the ADEV peak of a sinusoid, per period T (IEEE 952 C.7; [Vagner2015], docs/references.md#vagner2015).
 SINE_TAU_PER_PERIOD = 0.371
-#: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7; thesis 004).
+#: ADEV peak of a sinusoid, per amplitude Ω (IEEE 952 C.7; [Vagner2015], docs/references.md#vagner2015).
 SINE_PEAK_PER_AMPLITUDE = 0.725
 
 _BLOCK = 1 << 16  # samples per chunk of the direct O(N) sums (keeps temporaries small)
 _BLOCK_SHARED = 1 << 13  # chunk of the chunk-outside loop (:func:`_sums_direct_shared`)
-
-
-# --------------------------------------------------------------------------- units
-def dph_sqrt_hz_from_deg_sqrt_h(arw_deg_sqrt_h):
-    """Angle random walk °/√h -> (°/h)/√Hz (factor 60, IEEE 952 C.2).
-
-    1 °/√h = 1 (°/h)·√h = 60 (°/h)·√s = 60 (°/h)/√Hz.
-
-    >>> dph_sqrt_hz_from_deg_sqrt_h(0.01)
-    0.6
-    """
-    return arw_deg_sqrt_h * 60.0
-
-
-def deg_sqrt_h_from_dph_sqrt_hz(arw_dph_sqrt_hz):
-    """Angle random walk (°/h)/√Hz -> °/√h (divide by 60, IEEE 952 C.2).
-
-    >>> deg_sqrt_h_from_dph_sqrt_hz(0.6)
-    0.01
-    """
-    return arw_dph_sqrt_hz / 60.0
-
-
-def arcsec_sqrt_s_from_deg_sqrt_h(arw_deg_sqrt_h):
-    """Angle random walk °/√h -> ″/√s: 3600″ / 60 √s = 60 ″/√s per °/√h.
-
-    >>> arcsec_sqrt_s_from_deg_sqrt_h(0.002)
-    0.12
-    """
-    return arw_deg_sqrt_h * 60.0
-
-
-def deg_sqrt_h_from_arcsec_sqrt_s(arw_arcsec_sqrt_s):
-    """Angle random walk ″/√s -> °/√h (divide by 60).
-
-    >>> deg_sqrt_h_from_arcsec_sqrt_s(0.12)
-    0.002
-    """
-    return arw_arcsec_sqrt_s / 60.0
-
-
-def rad_s_sqrt_hz_from_deg_sqrt_h(arw_deg_sqrt_h):
-    """Angle random walk °/√h -> rad/s/√Hz = rad/√s: (π/180)/60.
-
-    >>> round(rad_s_sqrt_hz_from_deg_sqrt_h(1.0), 10)
-    0.0002908882
-    """
-    return arw_deg_sqrt_h * (math.pi / 180.0) / 60.0
-
-
-def deg_sqrt_h_from_rad_s_sqrt_hz(arw_rad_s_sqrt_hz):
-    """Angle random walk rad/s/√Hz -> °/√h: 60·180/π.
-
-    >>> round(deg_sqrt_h_from_rad_s_sqrt_hz(2.908882086657216e-4), 9)
-    1.0
-    """
-    return arw_rad_s_sqrt_hz * 60.0 * 180.0 / math.pi
-
-
-def rad_s_from_dph(rate_dph):
-    """Rate °/h -> rad/s (π/180/3600).
-
-    >>> f"{rad_s_from_dph(15.041067):.5e}"  # Earth rate
-    '7.29212e-05'
-    """
-    return rate_dph * math.pi / 180.0 / 3600.0
-
-
-def dph_from_rad_s(rate_rad_s):
-    """Rate rad/s -> °/h (180·3600/π).
-
-    >>> round(dph_from_rad_s(7.2921150e-5), 4)  # Earth rate
-    15.0411
-    """
-    return rate_rad_s * 180.0 * 3600.0 / math.pi
 
 
 # --------------------------------------------------------------------- dataclasses
@@ -254,12 +176,14 @@ class NoiseFit:
         if self.rate_unit == "deg/h":
             out.update({
                 "quantisation_arcsec": self.Q,  # 1 (°/h)·s = 1″
-                "arw_deg_sqrt_h": self.N / 60.0, "u_arw_deg_sqrt_h": self.u_N / 60.0,
+                "arw_deg_sqrt_h": deg_sqrt_h_from_dph_sqrt_hz(self.N),
+                "u_arw_deg_sqrt_h": deg_sqrt_h_from_dph_sqrt_hz(self.u_N),
                 "bias_instability_dph": self.B, "u_bias_instability_dph": self.u_B,
                 "bias_instability_floor_dph": self.B_floor,
-                "rrw_dph_sqrt_h": self.K * 60.0, "u_rrw_dph_sqrt_h": self.u_K * 60.0,
-                "rate_ramp_dph_per_h": self.R * 3600.0,
-                "u_rate_ramp_dph_per_h": self.u_R * 3600.0})
+                "rrw_dph_sqrt_h": dph_per_sqrt_h_from_dph_sqrt_hz_per_s(self.K),
+                "u_rrw_dph_sqrt_h": dph_per_sqrt_h_from_dph_sqrt_hz_per_s(self.u_K),
+                "rate_ramp_dph_per_h": h_to_s(self.R),
+                "u_rate_ramp_dph_per_h": h_to_s(self.u_R)})
         return {k: (float(v) if isinstance(v, (float, np.floating)) else v)
                 for k, v in out.items()}
 
@@ -933,7 +857,7 @@ def detect_sinusoid(allan: AllanResult, fit: NoiseFit | None = None, *,
 
     A sinusoidal rate disturbance of amplitude Ω and period T adds
     ``Ω² sin⁴(πτ/T)/(πτ/T)²`` to the Allan variance (peak σ ≈ 0.725 Ω at
-    τ ≈ 0.371 T, thesis 004). Candidates are local maxima of σ_obs/σ_model whose
+    τ ≈ 0.371 T, [Vagner2015]). Candidates are local maxima of σ_obs/σ_model whose
     excess variance exceeds ``threshold`` standard deviations of σ̂² (sd from the
     edf). The candidate is then refined: for trial periods around
     τ_peak/0.371, the model's five columns plus the sinusoid's column are fitted by
@@ -1024,7 +948,7 @@ def analyse_static(time_s, angle_deg, *, taus="octave", modified: bool = False,
         raise GonioError("sampling is not uniform (a step differs from the mean by >1 %)",
                          key="time_s")
     # 1° = 3600 (°/h)·s, so with scale 1/3600 the ADEV comes out in °/h
-    return analyse_record(a, tau0, "angle", scale=1.0 / 3600.0, unit="deg/h", taus=taus,
+    return analyse_record(a, tau0, "angle", scale=dph_to_dps(1.0), unit="deg/h", taus=taus,
                           modified=modified, confidence=confidence, tau_max_s=tau_max_s,
                           sinusoid_threshold=sinusoid_threshold)
 

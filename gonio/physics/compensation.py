@@ -13,7 +13,7 @@ Earth-rate compensation" (clause 7) and removes the Earth-rotation angle from th
 Annex A.2 model on that ground; it says neither how nor how well. Two ways:
 
 *computed*: subtract Ω_E·a, with a the table axis in ENU from the site latitude φ
-and the axis's azimuth A and elevation E (:mod:`gonio.earth`). Its residual is
+and the axis's azimuth A and elevation E (:mod:`gonio.physics.earth`). Its residual is
 Ω·a(φ, A, E) − Ω·a(φ_c, A_c, E_c) plus the instrument's bias b, which this way
 leaves in. Standard uncertainty by the law of propagation (JCGM 100 5.1.2):
 
@@ -39,11 +39,11 @@ standard uncertainty of the bias change between the static phase and the
 reading, q = 1/K the counter's quantum (two counter readings, each floored).
 
 Either residual rate r becomes an angle error r·t at a reading taken t after
-zeroing (Annex A.1: t ≤ 0.5 min). :meth:`CompensationResidual.budget_component`
-turns its standard uncertainty into an :class:`~gonio.budget.ExtraComponent`
-(normal, half-width = u) for :func:`gonio.budget.annex_a_budget` — off by
+zeroing (Annex A.1: t ≤ 0.5 min). :func:`gonio.budget.extra.compensation_component`
+turns its standard uncertainty into an :class:`~gonio.budget.extra.ExtraComponent`
+(normal, half-width = u) for :func:`gonio.specs.ogam_draft.budget.annex_a_budget` — off by
 default, so the draft's budget stays reproducible. A tilted sensing axis adds a
-further, position-dependent residual (:mod:`gonio.coupling`).
+further, position-dependent residual (:mod:`gonio.physics.coupling`).
 """
 
 from __future__ import annotations
@@ -53,11 +53,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gonio.earth import ARCSEC_PER_DEG, OMEGA_E_ARCSEC_S, axis_az_el_deg, axis_enu, earth_rate_enu
+from gonio.physics.earth import (OMEGA_E_ARCSEC_S, axis_az_el_deg, axis_enu, earth_rate_enu,
+                                 earth_rate_on_axis_dps)
 from gonio.errors import GonioError
-
-#: Seconds per hour.
-S_PER_H = 3600.0
+from gonio.units import ARCSEC_PER_DEG, S_PER_H, arcsec_sqrt_s_from_deg_sqrt_h
 
 
 @dataclass(frozen=True)
@@ -84,18 +83,6 @@ class CompensationResidual:
         """r·t for readings taken ``time_s`` after zeroing, ″."""
         return self.rate_arcsec_s * np.asarray(time_s, dtype=float)
 
-    def budget_component(self, symbol: str = "E_c"):
-        """An additive Annex A component: normal, half-width = u(angle) (so u = u(angle)).
-
-        >>> c = measured_compensation(60.0, arw_dpsh=0.001).budget_component()
-        >>> c.symbol, c.distribution, round(c.half_width_arcsec, 4)
-        ('E_c', 'normal', 0.2324)
-        """
-        from gonio.budget import ExtraComponent
-
-        return ExtraComponent(symbol, f"Earth-rate compensation residual ({self.method}, "
-                              f"t = {self.measuring_time_s:g} s)", self.u_angle_arcsec, "normal")
-
     def to_dict(self) -> dict:
         """Plain dict."""
         return {"method": self.method, "rate_arcsec_s": self.rate_arcsec_s,
@@ -106,8 +93,7 @@ class CompensationResidual:
 
 
 def _rate_arcsec_s(latitude_deg: float, az_deg: float, el_deg: float) -> float:
-    return float(np.degrees(earth_rate_enu(latitude_deg)) @ axis_enu((az_deg, el_deg))) \
-        * ARCSEC_PER_DEG
+    return earth_rate_on_axis_dps(latitude_deg, (az_deg, el_deg)) * ARCSEC_PER_DEG
 
 
 def computed_residual_dps(latitude_deg: float, axis="up", *,
@@ -118,7 +104,7 @@ def computed_residual_dps(latitude_deg: float, axis="up", *,
 
     True Earth rate on the axis minus the one computed for latitude
     ``compensation_latitude_deg`` and the axis at azimuth A + δA, elevation E + δE
-    (draft 7 preamble; Earth rate per :func:`gonio.earth.earth_rate_on_axis_dps`).
+    (draft 7 preamble; Earth rate per :func:`gonio.physics.earth.earth_rate_on_axis_dps`).
 
     Examples
     --------
@@ -238,7 +224,7 @@ def measured_compensation(averaging_time_s: float, *, arw_dpsh: float = 0.0,
     for name, v in (("arw_dpsh", arw_dpsh), ("bias_instability_dph", bias_instability_dph)):
         if not (math.isfinite(v) and v >= 0):
             raise GonioError(f"{name} must be ≥ 0, got {v}")
-    comps = {"angle_random_walk": arw_dpsh / 60.0 / math.sqrt(averaging_time_s) * ARCSEC_PER_DEG,
+    comps = {"angle_random_walk": arcsec_sqrt_s_from_deg_sqrt_h(arw_dpsh) / math.sqrt(averaging_time_s),
              "bias_instability": bias_instability_dph / S_PER_H * ARCSEC_PER_DEG}
     if scale_factor_counts_per_deg:
         comps["quantisation"] = (1.0 / scale_factor_counts_per_deg) / math.sqrt(6.0) \
@@ -268,7 +254,7 @@ def pointing_consistency_prediction(latitude_deg: float, times_s,
     With a constant residual r_g in orientation g (:func:`computed_residual_dps`
     plus an uncompensated bias), the reading at point i taken t_i after zeroing
     is off by r_g·t_i; E_g is the signed extreme over the points (draft 7.4
-    "E = ± max |E_i|", :func:`gonio.characteristics.signed_extreme`), and
+    "E = ± max |E_i|", :func:`gonio.specs.ogam_draft.items.signed_extreme`), and
     C_g's spread is max E_g − min E_g (draft 7.7).
 
     Examples
@@ -281,8 +267,6 @@ def pointing_consistency_prediction(latitude_deg: float, times_s,
     >>> {k: round(v, 3) for k, v in p.deviation_arcsec.items()}, round(p.spread_arcsec, 2)
     ({'up': -3.793, 'north': 3.239, 'east': 0.0}, 7.03)
     """
-    from gonio.characteristics import signed_extreme
-
     t = np.asarray(times_s, dtype=float)
     res, dev, pts = {}, {}, {}
     for g in orientations:
@@ -291,6 +275,6 @@ def pointing_consistency_prediction(latitude_deg: float, times_s,
                                   elevation_error_deg=elevation_error_deg) * ARCSEC_PER_DEG + bias_dph
         res[g] = r
         pts[g] = r * t
-        dev[g] = signed_extreme(pts[g])
+        dev[g] = float(pts[g][np.argmax(np.abs(pts[g]))]) if pts[g].size else float("nan")
     e = np.array(list(dev.values()))
     return PointingPrediction(res, dev, pts, float(e.max() - e.min()))

@@ -5,13 +5,13 @@ Contents
 :func:`validation_protocol`   the draft's protocol restricted to what E and U need (7.1, 7.4/7.5)
 :data:`CASES`, :func:`case_bench`   the default bench and the named stress cases
 :func:`run_trial`             one virtual calibration: E_ij, E_i, truth, U (Annex A)
-:func:`budget_extra_components`     extra budget lines the annex lacks (off by default)
+:func:`gonio.budget.extra.budget_extra_components` (used here) extra budget lines the annex lacks (off by default)
 :func:`coverage`, :func:`binomial_u`    coverage fraction and its uncertainty
 :func:`validate`              N trials per case → :class:`ValidationReport` (``to_dict`` → JSON)
 
 The question asked (issue 3): a calibration on the virtual bench states, at each
 calibration point i, E_i (mean over the 10 series of 7.4/7.5, as
-:mod:`gonio.characteristics` computes it) with the expanded uncertainty U of Annex A
+:mod:`gonio.specs.ogam_draft.items` computes it) with the expanded uncertainty U of Annex A
 (k = 2, u(r) from the calibration's own 7.5 data). How often is |E_i − truth_i| ≤ U?
 Also for each single series E_ij, which is what the Annex A budget (u(r) of a single
 reading) actually describes. A budget that holds covers ≈ 95 % or more.
@@ -50,19 +50,20 @@ import pandas as pd
 from gonio import __version__
 from gonio.bench import Bench, TableConfig, load_bench, run_session
 from gonio.bench.config import Harmonic
-from gonio.budget import ExtraComponent, annex_a_budget
-from gonio.calibrate import calibrate
-from gonio.earth import axis_enu, earth_rate_enu
+from gonio.budget.extra import EXTRA_SYMBOLS, budget_extra_components
+from gonio.specs.ogam_draft.budget import annex_a_budget
+from gonio.pipeline.calibrate import calibrate
 from gonio.errors import GonioError
-from gonio.io import Readings
+from gonio.units import PPM, deg_to_arcsec
+from gonio.formats.readings import Readings
 from gonio.progress import progress
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
-from gonio.tomlschema import read_toml
+from gonio.formats.toml import read_toml
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "coverage", "binomial_u", "validate",
-           "ValidationReport", "trial_seeds", "EXTRA_SYMBOLS", "tilt_coupling_coefficients", "earth_rate_perpendicular_arcsec_s"]
+           "ValidationReport", "trial_seeds", "EXTRA_SYMBOLS"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -75,8 +76,6 @@ CASES = {
     "ideal": "no noise, no tilt, no bias, no harmonics, error-free table (sanity check)",
 }
 
-#: Symbols of :func:`budget_extra_components`.
-EXTRA_SYMBOLS = ("K_P", "K_r", "tilt_E")
 
 #: Truth definitions (see the module docstring).
 TRUTHS = ("systematic", "calibrated", "intrinsic")
@@ -140,7 +139,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         return bench
     if case == "tilt":
         return replace(bench, instrument=replace(bench.instrument,
-                                                 tilt_deg=protocol.annex_a["tilt_bound_deg"]))
+                                                 tilt_deg=protocol.annex_a.tilt_bound_deg))
     if case == "drift":
         return replace(bench, instrument=replace(bench.instrument,
                                                  bias_instability_dph=0.005 / math.sqrt(2.0),
@@ -157,104 +156,6 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
     raise GonioError(f"unknown case {case!r} (known: {', '.join(CASES)})", key="cases")
-
-
-def earth_rate_perpendicular_arcsec_s(latitude_deg: float, orientation: str = "up") -> float:
-    """Ω_⊥: the Earth rate perpendicular to the table axis, ″/s (ogam-draft.md "Physics").
-
-    >>> round(earth_rate_perpendicular_arcsec_s(40.0), 2)     # Ω_E cos φ, axis up
-    11.52
-    """
-    w = np.degrees(earth_rate_enu(latitude_deg)) * 3600.0
-    a = axis_enu(orientation)
-    return float(np.linalg.norm(w - (w @ a) * a))
-
-
-def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s: float):
-    """(C, S) with ∫₀ᵗ [cos(θ(t′)+α) − cos α] dt′ = C cos α − S sin α, seconds.
-
-    The residual rate of the tilt × Earth-rate coupling after the compensation at the
-    start is Ω_⊥ sin ψ [cos(θ+α) − cos α] (ogam-draft.md "Physics"); integrated from
-    the zeroing to the reading it is Ω_⊥ sin ψ (C cos α − S sin α). The table turns at
-    ``rate_dps`` for T_r = t − read_delay and rests at θ until the reading:
-    C = sin θ/ω − T_r + (cos θ − 1)(t − T_r), S = (1 − cos θ)/ω + sin θ (t − T_r).
-
-    >>> c, s = tilt_coupling_coefficients([180.0], [13.0], 60.0, 10.0)
-    >>> round(float(c[0]), 3), round(float(s[0]), 3)
-    (-23.0, 1.91)
-    """
-    th = np.radians(np.asarray(theta_deg, dtype=float))
-    t = np.asarray(time_s, dtype=float)
-    w = math.radians(rate_dps)
-    t_rot = np.clip(t - read_delay_s, 0.0, None)
-    rest = t - t_rot
-    c = np.sin(th) / w - t_rot + (np.cos(th) - 1.0) * rest
-    s = (1.0 - np.cos(th)) / w + np.sin(th) * rest
-    return c, s
-
-
-def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,
-                            repeatability_arcsec: float, *,
-                            truth: str = "systematic") -> list[ExtraComponent]:
-    """Budget lines the Annex A budget lacks, from the calibration's data and the annex's bounds.
-
-    E_i uses the K of 7.1; an error δK of that K gives −θ·δK/K at point θ, the same in
-    every series (so u(r) does not see it). With 7.1 rounds θ_k (n of them) and the
-    7.4 points up to θ_max, an error e_k of round k moves E at θ by
-    −θ/n · e_k/θ_k (draft 7.1: K = mean C_k/θ_k). Three terms, at θ_max:
-
-    ``K_P`` (normal, u)
-        the table error at the 7.1 stops and at the common zero, independent,
-        u(P) = MPE/√3 (A.4.1): u = θ_max/n · u(P) · √(Σ 1/θ_k² + (Σ 1/θ_k)²).
-    ``K_r`` (normal, u)
-        the scatter of each single 7.1 reading, taken as u(r) (A.4.4):
-        u = θ_max/n · u(r) · √(Σ 1/θ_k²).
-    ``tilt_E`` (arcsine, amplitude A)
-        the tilt × Earth-rate coupling, ψ = the A.1 tilt bound, azimuth α unknown
-        (uniform, so the error, a sinusoid in α, is arcsine distributed):
-        e_i(α) = Ω_⊥ sin ψ (C_i cos α − S_i sin α) (:func:`tilt_coupling_coefficients`),
-        through K: −θ_i mean_k(e_k/θ_k). With ``truth="systematic"`` (deviation as
-        mounted, e_i is in the truth) only the K part counts; with ``"intrinsic"``
-        both. A = max_i of the amplitude over α.
-
-    Examples
-    --------
-    >>> p = validation_protocol()
-    >>> df = pd.DataFrame({"test": ["scale_factor"] * 6 + ["angle_deviation"] * 2,
-    ...     "table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0, 180.0, 360.0],
-    ...     "time_s": [8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 17.0]})
-    >>> [(c.symbol, round(c.half_width_arcsec, 4))
-    ...  for c in budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic")]
-    [('K_P', 0.158), ('K_r', 0.1221), ('tilt_E', 0.3313)]
-    """
-    sf = readings[readings["test"] == "scale_factor"]
-    ad = readings[readings["test"] == "angle_deviation"]
-    th_k = np.abs(sf["table_deg"].to_numpy(dtype=float))
-    t_k = sf["time_s"].to_numpy(dtype=float)
-    n = th_k.size
-    th_i = np.abs(ad["table_deg"].to_numpy(dtype=float))
-    t_i = ad["time_s"].to_numpy(dtype=float)
-    theta_max = float(np.max(th_i))
-    u_p = protocol.annex_a["table_mpe_arcsec"] / math.sqrt(3.0)
-    amp = theta_max / n
-    u_kp = amp * u_p * math.sqrt(np.sum(1.0 / th_k ** 2) + np.sum(1.0 / th_k) ** 2)
-    u_kr = amp * repeatability_arcsec * math.sqrt(np.sum(1.0 / th_k ** 2))
-    omega = earth_rate_perpendicular_arcsec_s(latitude_deg, protocol.angle_deviation.orientation) \
-        * math.sin(math.radians(protocol.annex_a["tilt_bound_deg"]))
-    sfi, adi = protocol.scale_factor, protocol.angle_deviation
-    ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s)
-    ci, si = tilt_coupling_coefficients(th_i, t_i, adi.rate_dps, adi.read_delay_s)
-    mc, ms = float(np.mean(ck / th_k)), float(np.mean(sk / th_k))
-    keep = 0.0 if truth == "systematic" else 1.0
-    a_tilt = omega * float(np.max(np.hypot(keep * ci - th_i * mc, keep * si - th_i * ms)))
-    return [
-        ExtraComponent("K_P", "table error at the 7.1 stops -> dK*theta (validation)",
-                       float(u_kp), "normal"),
-        ExtraComponent("K_r", "scatter of the 7.1 readings -> dK*theta (validation)",
-                       float(u_kr), "normal"),
-        ExtraComponent("tilt_E", "tilt x Earth-rate coupling to the reading (validation)",
-                       float(a_tilt), "arcsine"),
-    ]
 
 
 @dataclass
@@ -299,7 +200,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     tr = tr[tr["test"] == "angle_deviation"]
     u_r = float(rep.uncertainty.parameters["repeatability_arcsec"])
     extras = [e for e in budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r,
-                                                 truth=truth) if e.symbol in extras_used]
+                                                 truth=truth, accel_dps2=bench.table.accel_dps2)
+              if e.symbol in extras_used]
     par = rep.uncertainty.parameters
     ext = annex_a_budget(table_mpe_arcsec=par["table_mpe_arcsec"], tilt_deg=par["tilt_deg"],
                          zero_stability_dph=par["zero_stability_dph"],
@@ -407,12 +309,12 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
             }
         return out
 
-    k_term = np.array([(t.k_mount / t.k_cal - 1.0) for t in tr])[:, None] * pos[None, :] * 3600.0
+    k_term = deg_to_arcsec(np.array([(t.k_mount / t.k_cal - 1.0) for t in tr])[:, None] * pos[None, :])
     diag = {
         "scale_factor_term_rms_per_point_arcsec": [float(x) for x in
                                                    np.sqrt((k_term ** 2).mean(axis=0))],
         "scale_factor_rel_error_rms_ppm": float(np.sqrt(np.mean(
-            [(t.k_cal / t.k_mount - 1.0) ** 2 for t in tr])) * 1e6),
+            [(t.k_cal / t.k_mount - 1.0) ** 2 for t in tr])) / PPM),
         "setup_minus_intrinsic_per_point_arcsec": [float(x) for x in
                                                    (truths["systematic"].mean(axis=(0, 1))
                                                     - case.truth_intrinsic.mean(axis=0))],
@@ -453,7 +355,7 @@ class ValidationReport:
         """Plain dict for ``validation.json`` (deterministic)."""
         return {"gonio_version": __version__, "settings": self.settings,
                 "truth_definitions": dict(_TRUTH_DOC),
-                "estimators": {"E_i": "mean over the series at point i (gonio.characteristics)",
+                "estimators": {"E_i": "mean over the series at point i (gonio.specs.ogam_draft.items)",
                                "E_ij": "single series j at point i (what u(r) describes)"},
                 "criterion": "|E - truth| <= U, U = the calibration's own Annex A U (k = 2)",
                 "cases": [c.summary for c in self.cases]}

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.bench import load_bench, run_session, write_session
-from gonio.calibrate import CalibrationReport, calibrate, write_calibration
+from gonio.pipeline.calibrate import CalibrationReport, calibrate, write_calibration
 from gonio.protocol import load_protocol
 
 

@@ -2,14 +2,14 @@
 
 Contents
 --------
-:func:`trig_integrals`            ∫cos θ(t) dt, ∫sin θ(t) dt over a :class:`~gonio.kinematics.Timeline`
+:func:`trig_integrals`            ∫cos θ(t) dt, ∫sin θ(t) dt over a :class:`~gonio.physics.kinematics.Timeline`
 :func:`coupling_terms`            the two α-independent terms of one reading's error
 :func:`coupling_error_arcsec`     the angle error of readings, for a tilt azimuth α
 :func:`coupling_worst_case_arcsec` its largest magnitude over α
-:func:`session_coupling`          per reading of a planned session (protocol + bench)
-:func:`coupling_budget_component` an optional Annex A component (arcsine, worst case)
 
-Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.kinematics`).
+Per reading of a planned session, and as a budget line: :mod:`gonio.budget.extra`.
+
+Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro senses ω·n; with the sensing axis n tilted by ψ from the table axis a,
 coning with the table angle θ,
 
@@ -48,11 +48,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.earth import axis_enu, earth_rate_enu
 from gonio.errors import GonioError
-from gonio.kinematics import Timeline, sensing_axis_basis
+from gonio.units import ARCSEC_PER_DEG
+from gonio.physics.kinematics import Timeline
 
-ARCSEC_PER_DEG = 3600.0
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
 _MAX_PIECE_RAD = 0.25
 
@@ -62,8 +61,11 @@ def _pieces(tl: Timeline, t_a: float, t_b: float):
 
     Yields (t0, t1, kind) with kind 'const', 'linear' or 'quad'.
     """
-    t0s, _, _, dist, _, _, tacc, dur = (np.asarray(v, dtype=float) for v in (
-        tl._t0, tl._theta0, tl._sign, tl._dist, tl._vpk, tl._acc, tl._tacc, tl._dur))
+    segs = tl.segments()
+    t0s = np.array([g.t0_s for g in segs], dtype=float)
+    dist = np.array([g.distance_deg for g in segs], dtype=float)
+    tacc = np.array([g.accel_time_s for g in segs], dtype=float)
+    dur = np.array([g.duration_s for g in segs], dtype=float)
     out = []
     if t0s.size == 0:
         return [(t_a, t_b, "const")]
@@ -172,7 +174,7 @@ def coupling_terms(timeline: Timeline, t_zero_s: float, t_read_s: float, tilt_de
     tilt_deg : float
         ψ.
     perpendicular_dps, parallel_dps : float
-        Ω_⊥ and Ω·a, °/s (:func:`gonio.earth.earth_rate_split`).
+        Ω_⊥ and Ω·a, °/s (:func:`gonio.physics.earth.earth_rate_split`).
     compensation : {"measured", "computed", "none"}
         Measured at rest at ``theta_comp_deg`` (default: the angle at zeroing);
         computed from Ω·a; none.
@@ -236,130 +238,4 @@ def coupling_worst_case_arcsec(timeline: Timeline, t_zero_s, t_read_s, tilt_deg:
                      .worst_case_arcsec() for a, b in zip(tz, tr)], dtype=float)
 
 
-def table_frame(latitude_deg: float, orientation: str) -> tuple[float, float, float]:
-    """(Ω·a, Ω_⊥, β) for a table axis: °/s, °/s, degrees.
 
-    β is the direction of Ω_⊥ in the table frame (e₁, e₂) of
-    :func:`gonio.kinematics.sensing_axis_basis`; a tilt with azimuth α_table in
-    that frame has α = α_table − β relative to Ω_⊥.
-
-    >>> par, perp, beta = table_frame(40.0, "up")      # e₁ east, e₂ north: Ω_⊥ points north
-    >>> round(par * 3600, 4), round(perp * 3600, 4), round(beta, 6)
-    (9.6682, 11.5221, 90.0)
-    """
-    a = axis_enu(orientation)
-    e1, e2 = sensing_axis_basis(a)
-    w = np.degrees(earth_rate_enu(latitude_deg))
-    p1, p2 = float(w @ e1), float(w @ e2)
-    return float(w @ a), math.hypot(p1, p2), math.degrees(math.atan2(p2, p1))
-
-
-@dataclass
-class SessionCoupling:
-    """Coupling error per planned reading of a session (see :func:`session_coupling`)."""
-
-    test: list
-    orientation: list
-    round: list
-    table_deg: np.ndarray
-    time_s: np.ndarray
-    error_arcsec: np.ndarray          # at the given α (NaN if no α given)
-    worst_case_arcsec: np.ndarray     # over α
-
-
-def session_coupling(protocol, bench, tilt_deg: float | None = None,
-                     tilt_azimuth_table_deg: float | None = None) -> SessionCoupling:
-    """Coupling error of every reading the bench would take for ``protocol``.
-
-    The motion and the zeroing/reading instants come from
-    :func:`gonio.bench.session.plan_session` (no random table scatter); the
-    compensation is the protocol's (measured in the static phase at the start of
-    each block, or computed). ψ and α default to the bench instrument's.
-
-    Examples
-    --------
-    One round 0° → 180° at 60 °/s, 60 °/s² (1 s ramps, 2 s cruise), read 10 s after
-    arrival (Δt = 14 s); axis up at 40° N, ψ = 0.1°. By hand: P = ∫cos θ − Δt =
-    (0 over the symmetric move − 10 s at 180°) − 14 s = −24 s; Q = ∫sin θ =
-    (cos 30° − cos 150°)/(π/3 rad/s) + 2∫₀¹ sin(π t²/6) dt = 1.654 + 0.342 = 1.996 s;
-    worst case = Ω_⊥ tan ψ · hypot(P, Q) = 0.020110″/s × 24.083 s = 0.484″.
-
-    >>> from gonio.protocol import parse_protocol
-    >>> from gonio.bench.config import Bench, InstrumentConfig, TableConfig
-    >>> p = parse_protocol({"protocol": {"name": "x"}, "angle_deviation": {
-    ...     "rest_s": 15.0, "rounds": [{"stop_deg": 180.0}]}})
-    >>> b = Bench("b", InstrumentConfig(tilt_deg=0.1), TableConfig(), latitude_deg=40.0,
-    ...           sample_rate_hz=100.0)
-    >>> round(float(session_coupling(p, b).worst_case_arcsec[0]), 3)
-    0.484
-    """
-    from gonio.bench.session import plan_session
-
-    psi = bench.instrument.tilt_deg if tilt_deg is None else tilt_deg
-    az = bench.instrument.tilt_azimuth_deg if tilt_azimuth_table_deg is None \
-        else tilt_azimuth_table_deg
-    blocks = plan_session(protocol, bench, None)
-    dt = 1.0 / bench.sample_rate_hz
-    comp = protocol.session.earth_compensation
-    lat = bench.latitude_deg if bench.earth_rate else None
-    out = {k: [] for k in ("test", "orientation", "round", "table_deg", "time_s", "e", "w")}
-    for blk in blocks:
-        if lat is None:
-            par = perp = beta = 0.0
-        else:
-            par, perp, beta = table_frame(lat, blk.orientation)
-        c = comp if blk.compensate else "none"
-        thc = None
-        if c == "measured" and blk.k_static:
-            thc = float(blk.timeline.angle_deg(np.array([blk.k_static[0] * dt]))[0])
-        for r in blk.readings:
-            terms = coupling_terms(blk.timeline, r.k_zero * dt, r.k_read * dt, psi, perp,
-                                   compensation=c, theta_comp_deg=thc, parallel_dps=par)
-            out["test"].append(r.test)
-            out["orientation"].append(r.orientation)
-            out["round"].append(r.round)
-            out["table_deg"].append(r.table_deg)
-            out["time_s"].append((r.k_read - r.k_zero) * dt)
-            out["e"].append(float(terms.error_arcsec(az - beta)))
-            out["w"].append(terms.worst_case_arcsec())
-    return SessionCoupling(out["test"], out["orientation"], out["round"],
-                           np.array(out["table_deg"]), np.array(out["time_s"]),
-                           np.array(out["e"]), np.array(out["w"]))
-
-
-def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
-                              accel_dps2: float = 60.0, symbol: str = "C_te",
-                              test: str = "angle_deviation"):
-    """An optional Annex A component for the tilt × Earth-rate coupling (off by default).
-
-    Half-width: the worst case over α and over the ``test`` readings of the
-    protocol (at the protocol's orientation, rates and timing); arcsine
-    distribution, because the error is a sinusoid of an unknown, uniformly
-    distributed tilt azimuth α (JCGM 101 6.4.6: u = a/√2). Pass the result to
-    :func:`gonio.budget.annex_a_budget` in ``extra_components``. The draft's
-    budget has no such line (``ogam-draft.md`` "Physics").
-
-    Examples
-    --------
-    The draft's 7.4 at 40° N with the 0.1° bound of Annex A.1 (largest at the
-    180° point, as in :func:`session_coupling`'s example; the draft's budget, 0.30″
-    expanded, has no line for it):
-
-    >>> from gonio.protocol import load_protocol
-    >>> c = coupling_budget_component(load_protocol(), 40.0, 0.1)
-    >>> c.symbol, c.distribution, round(c.half_width_arcsec, 2)
-    ('C_te', 'arcsine', 0.48)
-    """
-    from gonio.bench.config import Bench, InstrumentConfig, TableConfig
-    from gonio.budget import ExtraComponent
-
-    bench = Bench("coupling", InstrumentConfig(tilt_deg=tilt_deg),
-                  TableConfig(accel_dps2=accel_dps2), latitude_deg=latitude_deg,
-                  sample_rate_hz=1000.0)
-    sc = session_coupling(protocol, bench)
-    sel = np.array([t == test for t in sc.test])
-    if not sel.any():
-        raise GonioError(f"the protocol has no {test} readings", key=test)
-    return ExtraComponent(symbol, f"tilt × Earth-rate coupling (ψ = {tilt_deg:g}°, "
-                          f"φ = {latitude_deg:g}°)", float(sc.worst_case_arcsec[sel].max()),
-                          "arcsine")

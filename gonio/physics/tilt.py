@@ -30,11 +30,11 @@ import numpy as np
 import sympy
 from scipy import integrate, special
 
+from gonio.units import ARCSEC_PER_DEG, ARCSEC_PER_RAD
+
 __all__ = ["TiltExtreme", "ARCSEC_PER_RAD", "elliptic_error_arcsec", "elliptic_series",
            "elliptic_extreme", "rigid_error_arcsec", "rigid_extreme"]
 
-#: Arc-seconds in one radian (″/rad).
-ARCSEC_PER_RAD = 180.0 * 3600.0 / math.pi
 
 
 @dataclass(frozen=True)
@@ -210,7 +210,7 @@ def rigid_error_arcsec(theta_deg, tilt_deg: float, calibrated: bool = True):
     if calibrated:
         d = np.zeros_like(theta)
     else:
-        d = theta * 3600.0 * (-2.0 * math.sin(psi / 2.0) ** 2)  # cos ψ − 1 without cancellation
+        d = theta * ARCSEC_PER_DEG * (-2.0 * math.sin(psi / 2.0) ** 2)  # cos ψ − 1 without cancellation
     return float(d) if d.ndim == 0 else d
 
 

@@ -20,10 +20,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
-from gonio.earth import NAMED_AXES
+from gonio.physics.earth import NAMED_AXES
 from gonio.errors import GonioError
+from gonio.units import h_to_s
 from gonio.resources import resolve
-from gonio.tomlschema import Field, non_negative, positive, read_toml, validate_table
+from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 ORIENTATIONS = tuple(NAMED_AXES)
 
@@ -81,15 +82,44 @@ class Session:
 
 
 @dataclass(frozen=True)
+class Conditions:
+    """Draft clause 5 (Tables 1 and 2): what the table and the room must meet."""
+
+    table_axis_wobble_max_arcsec: float = 0.3
+    table_positioning_mpe_arcsec: float = 0.1
+    table_angle_range_deg: float = 360.0
+    table_rate_max_dps: float = 300.0
+    table_rate_error_rel: float = 1e-5
+    table_orientations: tuple[str, ...] = ORIENTATIONS
+    temperature_c: float = 20.0
+    temperature_tolerance_c: float = 1.0
+    soak_h: float = 4.0
+    humidity_min_pct: float = 30.0
+    humidity_max_pct: float = 75.0
+
+
+@dataclass(frozen=True)
+class AnnexA:
+    """Draft Annex A settings: the budget's inputs (A.4.1–A.4.4) and coverage factor (A.7)."""
+
+    table_mpe_arcsec: float = 0.1
+    tilt_bound_deg: float = 0.1
+    zero_stability_dph: float = 0.005
+    duration_min: float = 0.5
+    repeatability_arcsec: float = 0.096
+    coverage_factor: float = 2.0
+
+
+@dataclass(frozen=True)
 class Protocol:
     """A validated protocol. Test items that the file does not hold are ``None``."""
 
     name: str
     title: str
     specification: str
-    conditions: dict
+    conditions: Conditions
     session: Session
-    annex_a: dict
+    annex_a: AnnexA
     scale_factor: RotationItem | None = None
     zero_stability: ZeroStability | None = None
     angle_deviation: RotationItem | None = None
@@ -99,6 +129,16 @@ class Protocol:
     pointing_reference: str = "up"
     extra: dict = field(default_factory=dict)
     path: str = ""
+
+    @property
+    def equal_division(self):
+        """The ``[equal_division]`` section (:class:`~gonio.protocol.sections.EdaProtocol`) or None."""
+        return self.extra.get("equal_division")
+
+    @property
+    def tilt_estimate(self):
+        """The ``[tilt_estimate]`` section (:class:`~gonio.protocol.sections.TiltEstimatePlan`) or None."""
+        return self.extra.get("tilt_estimate")
 
     def items(self) -> list[RotationItem]:
         """Every rotation item in the order the bench runs them."""
@@ -143,7 +183,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "humidity_max_pct": Field("float", 75.0, lambda x: 0 <= x <= 100, "0–100"),
     },
     "session": {
-        "warm_up_s": Field("float", 3600.0, non_negative, "≥ 0"),
+        "warm_up_s": Field("float", h_to_s(1.0), non_negative, "≥ 0"),
         "earth_compensation": Field("str", "measured", choices=("measured", "computed", "none")),
         "static_s": Field("float", 60.0, positive, "> 0"),
         "return_rate_dps": Field("float", 60.0, positive, "> 0"),
@@ -296,19 +336,20 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
     p = sec["protocol"]
     check_protocol_ranges(sec, raw, file)
     return Protocol(name=p["name"], title=p["title"], specification=p["specification"],
-                    conditions=sec["conditions"],
+                    conditions=Conditions(**{**sec["conditions"], "table_orientations":
+                                             tuple(sec["conditions"]["table_orientations"])}),
                     session=Session(s["warm_up_s"], s["earth_compensation"], s["static_s"],
                                     s["return_rate_dps"], s["settle_s"],
                                     s["compensation_latitude_deg"],
                                     s["compensation_azimuth_error_deg"]),
-                    annex_a=sec["annex_a"], extra=extra, path=str(file or ""), **kw)
+                    annex_a=AnnexA(**sec["annex_a"]), extra=extra, path=str(file or ""), **kw)
 
 
 #: Plausible ranges of protocol values (docs/formats.md, "Plausible ranges"):
 #: durations in s, rates in °/s, angles in °, counts of series, rounds, readings.
 MAX_DURATION_S: float = 172_800.0       # any one rest, static, warm-up or interval: 2 days
 RATE_RANGE_DPS: tuple[float, float] = (1e-3, 1e4)
-MAX_ANGLE_DEG: float = 3600.0           # a round's start or stop: ten turns
+MAX_ANGLE_DEG: float = 10 * 360.0       # a round's start or stop: ten turns
 MAX_SERIES: int = 1000
 MAX_ROUNDS: int = 1000
 MAX_LIST: int = 100                      # rates_dps, orientations
@@ -391,7 +432,3 @@ def load_protocol(path: str | Path = "ogam-draft") -> Protocol:
     file = resolve(path, "protocol")
     return parse_protocol(read_toml(file), file)
 
-
-# Optional sections defined elsewhere (registered on import; kept last: they import this module).
-import gonio.tiltest  # noqa: E402,F401  [tilt_estimate]
-import gonio.eda  # noqa: E402,F401  [equal_division]

@@ -1,4 +1,4 @@
-"""Stream files: the instrument sampled continuously (data-formats contract v1, section 2).
+"""Stream files: the instrument sampled continuously (``docs/formats.md#stream-file``).
 
 Contents
 ========
@@ -49,7 +49,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError, check_header
-from gonio.io import _NUMERIC_METADATA, metadata_bool, metadata_float
+from gonio.formats.metadata import NUMERIC_METADATA, metadata_bool, metadata_float
 
 #: Column order of a written stream file.
 STREAM_COLUMNS: tuple[str, ...] = ("time_s", "gyro_counts", "table_deg", "temperature_c")
@@ -156,7 +156,7 @@ def _parse_header(path: Path) -> _Header:
 def _header_from(fname, metadata, columns, lineno, offset) -> _Header:
     seen = check_header(columns, REQUIRED_STREAM_COLUMNS, file=fname, line=lineno)
     for key in metadata:
-        if key in _NUMERIC_METADATA:
+        if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
     bits_text = metadata.get("counter_bits", "64").strip()
     if bits_text not in {str(b) for b in COUNTER_BITS}:
@@ -418,7 +418,7 @@ def iter_stream(path: str | Path, chunk_rows: int = 1_000_000, *,
 
 def read_stream(path: str | Path, *, chunk_rows: int = 1_000_000,
                 max_gap_s: float | None = None) -> Stream:
-    """Read, validate and unwrap a stream file (data-formats contract, section 2).
+    """Read, validate and unwrap a stream file (``docs/formats.md#stream-file``).
 
     Parameters
     ----------
@@ -542,7 +542,7 @@ class StreamWriter:
             cf = np.asarray(c, dtype=np.float64)
             if not np.all(np.isfinite(cf)) or np.any(cf != np.round(cf)):
                 raise GonioError("counts must be integers (or metadata counts_quantised: false)")
-            from gonio.bench.instrument import wrap_counter
+            from gonio.formats.counters import wrap_counter
             ctext = wrap_counter(c, h.bits, h.signed).astype(str)
         else:
             ctext = np.array([repr(float(x)) for x in c], dtype=object)

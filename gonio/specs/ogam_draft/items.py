@@ -17,11 +17,11 @@ Contents
 :func:`summary_table`                fixed-width text table (Annex B order)
 ===================================  =============================================
 
-Each function takes the normalised readings DataFrame of :mod:`gonio.io` and
+Each function takes the normalised readings DataFrame of :mod:`gonio.formats.readings` and
 returns a :class:`Characteristic` (value, unit, clause, measured, reason, detail
 tables, and which input lines it used). A characteristic whose readings are
 absent is *not measured* (value None, with the reason), never invented.
-Clause numbers refer to the draft as restated in ``spec/ogam-draft.md``; where
+Clause numbers refer to the draft as read in ``docs/draft-readings.md``; where
 the draft is ambiguous, the reading taken is a named function or is stated in
 the function's docstring, with the alternative.
 """
@@ -36,12 +36,9 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError
-from gonio.io import Readings, metadata_float
+from gonio.units import ARCSEC_PER_DEG, S_PER_H  # noqa: F401
+from gonio.formats.readings import Readings, metadata_float
 
-#: Arc seconds per degree.
-ARCSEC_PER_DEG: float = 3600.0
-#: Seconds per hour.
-S_PER_H: float = 3600.0
 #: Positions of different conditions (7.6, 7.7) are matched on table_deg rounded to this many decimals.
 POSITION_DECIMALS: int = 2
 
@@ -175,7 +172,7 @@ def scale_factor(df: pd.DataFrame) -> Characteristic:
     Parameters
     ----------
     df : pandas.DataFrame
-        Normalised readings (:mod:`gonio.io`); rows of other tests are ignored.
+        Normalised readings (:mod:`gonio.formats.readings`); rows of other tests are ignored.
 
     Returns
     -------
@@ -258,7 +255,7 @@ def scale_factor_nonlinearity(sf: Characteristic) -> Characteristic:
 
 def indicated_angle_deg(df: pd.DataFrame,
                         scale_factor_counts_per_deg: float | None) -> np.ndarray:
-    """The instrument's indicated angle M of each row, in degrees (data-formats 1 rules).
+    """The instrument's indicated angle M of each row, in degrees (docs/draft-readings.md#counts-to-angle).
 
     ``gyro_deg`` where the row has it; otherwise ``gyro_counts / K``. The
     caller chooses K: the value calibrated by 7.1 in the same file when there
@@ -794,9 +791,9 @@ class CalibrationResults:
 
 def _unused_reason_default(test: str) -> str:
     if test == "equal_division":
-        return "equal_division is not one of the seven clause-7 items (see gonio.eda)"
+        return "equal_division is not one of the seven clause-7 items (see gonio.analysis.equal_division)"
     if test == "tilt_estimate":
-        return "tilt_estimate is not one of the seven clause-7 items (see gonio.tilt)"
+        return "tilt_estimate is not one of the seven clause-7 items (see gonio.physics.tilt)"
     return "not used by any characteristic"
 
 

@@ -1,4 +1,4 @@
-"""Readings files: read, validate and write (data-formats contract v1, section 1).
+"""Readings files: read, validate and write (``docs/formats.md#readings-file``).
 
 Contents
 ========
@@ -42,6 +42,9 @@ import pandas as pd
 
 from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, read_utf8
+from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
+                                    metadata_float, parse_number)
+from gonio.formats.metadata import show_value as _show
 
 #: The ``test`` names of the draft's clause 7 (the first five) and of later features.
 TEST_NAMES: tuple[str, ...] = (
@@ -57,30 +60,15 @@ COLUMNS: tuple[str, ...] = (
 )
 #: Columns a file must have in its header.
 REQUIRED_COLUMNS: tuple[str, ...] = ("test", "series", "round", "time_s", "table_deg")
-#: Default table rate, °/s (data-formats 1; draft 7.1 and 7.4 run at 60 °/s).
+#: Default table rate, °/s (docs/formats.md#columns; draft 7.1 and 7.4 run at 60 °/s).
 DEFAULT_RATE_DPS: float = 60.0
 #: Default table-axis direction.
 DEFAULT_ORIENTATION: str = "up"
 #: The key that identifies one reading.
 KEY_COLUMNS: tuple[str, ...] = ("test", "series", "round", "rate_dps", "orientation")
 
-#: Metadata keys the package understands (others are kept).
-KNOWN_METADATA: tuple[str, ...] = (
-    "instrument", "serial", "manufacturer", "nominal_scale_factor_counts_per_deg",
-    "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
-    "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised",
-)
-# numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
-_NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
-    "nominal_scale_factor_counts_per_deg": (1e-6, True, 1e12, "a number in [1e-6, 1e12]"),
-    "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
-    "temperature_c": (-100.0, True, 200.0, "a number in [-100, 200]"),
-    "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
-    "table_mpe_arcsec": (0.0, True, 3600.0, "a number in [0, 3600]"),
-    "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
-}
 #: Plausible ranges of the numeric columns (docs/formats.md, "Plausible ranges"):
-#: column -> (lowest, highest) magnitude; values outside are refused with the line.
+#: column -> (lowest, highest); values outside are refused with the line.
 COLUMN_RANGES: dict[str, tuple[float, float]] = {
     "time_s": (-1e10, 1e10),
     "table_deg": (-1e4, 1e4),
@@ -90,10 +78,6 @@ COLUMN_RANGES: dict[str, tuple[float, float]] = {
 }
 #: Longest cell and metadata value accepted, characters.
 MAX_CELL_CHARS: int = 4096
-_TRUE = ("true", "yes", "1")
-_FALSE = ("false", "no", "0")
-_NUMBER = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$")   # ASCII digits only
-_NONFINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
 
 
 @dataclass
@@ -119,62 +103,9 @@ class Readings:
         return metadata_bool(self.metadata, "counts_quantised", True, file=self.path)
 
 
-def metadata_float(metadata: Mapping[str, str], key: str, *,
-                   file: str | Path | None = None) -> float | None:
-    """The numeric metadata value ``key``, validated, or None when absent.
-
-    >>> metadata_float({"latitude_deg": "39.9"}, "latitude_deg")
-    39.9
-    >>> metadata_float({}, "latitude_deg") is None
-    True
-    """
-    if key not in metadata:
-        return None
-    text = str(metadata[key]).strip()
-    lo, lo_incl, hi, expected = _NUMERIC_METADATA.get(
-        key, (-math.inf, True, math.inf, "a finite number"))
-    value = _parse_number(text)
-    if value is None or not math.isfinite(value):
-        raise GonioError(f"expected {expected}, got {_show(text)}", file=file, key=key)
-    if value < lo or (value == lo and not lo_incl) or value > hi:
-        raise GonioError(f"expected {expected}, got {_show(text)}", file=file, key=key)
-    return value
-
-
-def _show(text: str) -> str:
-    """A value for an error message: quoted, at most 40 characters."""
-    text = str(text)
-    return repr(text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)")
-
-
-def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,
-                  file: str | Path | None = None) -> bool:
-    """The boolean metadata value ``key`` (true/false, yes/no, 1/0), or ``default``.
-
-    >>> metadata_bool({"counts_quantised": "false"}, "counts_quantised", True)
-    False
-    """
-    if key not in metadata:
-        return default
-    text = str(metadata[key]).strip().lower()
-    if text in _TRUE:
-        return True
-    if text in _FALSE:
-        return False
-    raise GonioError(f"expected true or false, got {_show(metadata[key])}", file=file, key=key)
-
-
-def _parse_number(text: str) -> float | None:
-    """float of a plain decimal number text, inf/nan for those words, else None."""
-    if _NONFINITE.match(text):
-        return float(text)
-    if not _NUMBER.match(text):
-        return None
-    return float(text)
-
 
 def read_readings(path: str | Path) -> Readings:
-    """Read and validate a readings file (data-formats contract, section 1).
+    """Read and validate a readings file (``docs/formats.md#readings-file``).
 
     Parameters
     ----------
@@ -256,7 +187,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         raise GonioError("no readings: the file has no header row", file=fname,
                          line=max(1, len(lines) - (lines[-1] == "")))
     for key in metadata:
-        if key in _NUMERIC_METADATA:
+        if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
@@ -371,7 +302,7 @@ def _number(row: dict, name: str, where: dict, *, required: bool) -> float:
         if required:
             raise GonioError("empty cell, expected a number", column=name, **where)
         return math.nan
-    value = _parse_number(text)
+    value = parse_number(text)
     if value is None:
         raise GonioError(f"expected a number, got {_show(text)}", column=name, **where)
     if not math.isfinite(value):
@@ -530,7 +461,7 @@ def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
             raise GonioError("fractional gyro_counts need metadata 'counts_quantised: false'",
                              column="gyro_counts")
     # A missing rate stays an empty cell (the reader's default, 60 °/s, applies), so
-    # zero-stability rows — the table at rest — carry no rate, as in data-formats §1.
+    # zero-stability rows — the table at rest — carry no rate, as in docs/formats.md#which-cells-may-be-empty.
     rate = get("rate_dps", DEFAULT_RATE_DPS).astype(float)
     orient = get("orientation", DEFAULT_ORIENTATION).fillna(DEFAULT_ORIENTATION)
     extras = [c for c in df.columns if c not in COLUMNS and c != "line"]

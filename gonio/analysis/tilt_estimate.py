@@ -2,12 +2,12 @@
 
 Contents
 --------
-:class:`TiltEstimatePlan`          the ``[tilt_estimate]`` protocol section (registered here)
+:class:`~gonio.protocol.sections.TiltEstimatePlan` the ``[tilt_estimate]`` protocol section (defined in the protocol layer)
 :func:`fit_first_harmonic`         LS fit c0 + a cos θ + b sin θ with its residual-based covariance
 :func:`estimate_tilt`              ψ, α and their standard uncertainties from rates at positions
 :func:`tilt_estimate_from_readings` the same from ``tilt_estimate`` rows of a readings file
 
-Physics (``ogam-draft.md`` "Physics the draft relies on"; :mod:`gonio.kinematics`).
+Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro whose sensing axis n is tilted by ψ from the table axis a senses, with
 the table at rest at angle θ,
 
@@ -26,7 +26,7 @@ and their standard uncertainties by the law of propagation (JCGM 100 5.1.2), wit
 ν = N − 3 degrees of freedom (use the Student-t factor ``k95`` for a 95 %
 interval). The laboratory can then replace the draft's assumed tilt bound of 0.1°
 (Annex A.1, A.4.2) with a measured ψ and u(ψ), and the coupling analysis of
-:mod:`gonio.coupling` with a measured α.
+:mod:`gonio.physics.coupling` with a measured α.
 
 Caveats: the estimate sees the tilt of the sensing axis relative to the axis about
 which the table actually turns; a table-axis wobble with the same period adds a
@@ -45,47 +45,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from gonio.earth import NAMED_AXES, axis_enu, earth_rate_enu, earth_rate_split
+from gonio.physics.earth import earth_rate_split
 from gonio.errors import GonioError
-from gonio.protocol import register_section
-from gonio.tomlschema import Field, non_negative, positive
-
-ARCSEC_PER_DEG = 3600.0
+from gonio.units import ARCSEC_PER_DEG
 
 
-@dataclass(frozen=True)
-class TiltEstimatePlan:
-    """The static multi-position test: N equally spaced rests of ``dwell_s`` each.
 
-    Readings (one per position, test ``tilt_estimate``): ``round`` = position index
-    (1…N), ``table_deg`` = position (360°·(i−1)/N), ``time_s`` = dwell time,
-    ``gyro_counts`` = pulses accumulated over the dwell, *not* Earth-rate
-    compensated (the Earth rate is the signal).
-    """
-
-    clause: str = "in-situ tilt estimate (gonio; supports Annex A.1/A.4.2)"
-    positions: int = 12
-    dwell_s: float = 60.0
-    settle_s: float = 5.0
-    orientation: str = "up"
-    rate_dps: float = 60.0
-
-
-SECTION_SCHEMA = {
-    "clause": Field("str", TiltEstimatePlan.clause),
-    "positions": Field("int", 12, lambda n: n >= 4, "an integer ≥ 4"),
-    "dwell_s": Field("float", 60.0, positive, "> 0"),
-    "settle_s": Field("float", 5.0, non_negative, "≥ 0"),
-    "orientation": Field("str", "up", choices=tuple(NAMED_AXES)),
-    "rate_dps": Field("float", 60.0, positive, "> 0"),
-}
-
-
-def _plan(d: dict) -> TiltEstimatePlan:
-    return TiltEstimatePlan(**d)
-
-
-register_section("tilt_estimate", SECTION_SCHEMA, _plan)
 
 
 @dataclass(frozen=True)
@@ -148,7 +113,7 @@ class TiltEstimate:
     u_tilt_deg: float
     phase_deg: float                    # α − β: tilt azimuth relative to Ω_⊥, at table 0°
     u_phase_deg: float
-    tilt_azimuth_table_deg: float       # α in the table frame e₁, e₂ of gonio.kinematics
+    tilt_azimuth_table_deg: float       # α in the table frame e₁, e₂ of gonio.physics.kinematics
     dof: int
     k95: float                          # Student-t factor for 95 % with ν = dof
     residual_sd_arcsec_s: float
@@ -243,13 +208,8 @@ def estimate_tilt(theta_deg, rate_arcsec_s, latitude_deg: float, orientation: st
 
 
 def _perp_direction_rad(latitude_deg: float, orientation: str) -> float:
-    """β: direction of Ω_⊥ in the table frame (e₁, e₂ of :func:`gonio.kinematics.sensing_axis_basis`)."""
-    from gonio.kinematics import sensing_axis_basis
-
-    a = axis_enu(orientation)
-    e1, e2 = sensing_axis_basis(a)
-    w = earth_rate_enu(latitude_deg)
-    return math.atan2(float(w @ e2), float(w @ e1))
+    """β: direction of Ω_⊥ in the table frame (e₁, e₂ of :func:`gonio.physics.kinematics.sensing_axis_basis`)."""
+    return math.radians(earth_rate_split(latitude_deg, orientation).perpendicular_direction_deg)
 
 
 def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | None = None,
@@ -264,7 +224,7 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
 
     Parameters
     ----------
-    readings : gonio.io.Readings or pandas.DataFrame
+    readings : gonio.formats.readings.Readings or pandas.DataFrame
     scale_factor_counts_per_deg, latitude_deg, u_latitude_deg : float, optional
 
     Examples
@@ -277,7 +237,7 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
     >>> round(e.amplitude_arcsec_s, 9), round(e.tilt_deg, 4)
     (0.4, 1.9895)
     """
-    from gonio.io import Readings, metadata_float
+    from gonio.formats.readings import Readings, metadata_float
 
     if isinstance(readings, Readings):
         df, md, file = readings.data, readings.metadata, readings.path

@@ -11,7 +11,7 @@ Contents
 :func:`read_override`      an operator's explicit (t_zero, t_read) per round
 =========================  ===================================================
 
-What an acquisition does on its external trigger (data-formats §2, draft clause 7
+What an acquisition does on its external trigger (docs/formats.md#from-a-stream-to-readings, draft clause 7
 preamble), reproduced from the continuous counter:
 
 1. **Rests.** With ``table_deg``: the encoder angle, despiked by a 3-sample
@@ -43,7 +43,6 @@ matching round by round (:func:`read_override`).
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -54,7 +53,7 @@ import pandas as pd
 
 from gonio.errors import GonioError
 from gonio.protocol import Protocol, RotationItem
-from gonio.streams import Stream
+from gonio.formats.streams import Stream
 
 #: Default rest threshold on the table encoder rate, °/s.
 TABLE_RATE_THRESHOLD_DPS = 0.01
@@ -338,9 +337,9 @@ class Reduction:
     Attributes
     ----------
     readings : pandas.DataFrame
-        Readings-file columns (data-formats §1), plus ``t_zero_s`` and ``t_read_s``
+        Readings-file columns (docs/formats.md#columns), plus ``t_zero_s`` and ``t_read_s``
         (stream times of the zeroing and reading samples; not written by
-        :func:`gonio.io.write_readings` unless kept as extra columns).
+        :func:`gonio.formats.readings.write_readings` unless kept as extra columns).
     unmatched : list of dict
         Rounds that could not be read and rests no round used, each with ``reason``.
     log : list of str
@@ -406,8 +405,8 @@ class _Ctx:
 
 
 def _computed_comp(st: Stream, orientation: str) -> float:
-    from gonio.earth import axis_enu, earth_rate_enu
-    from gonio.io import metadata_float
+    from gonio.physics.earth import earth_rate_on_axis_dps
+    from gonio.formats.readings import metadata_float
     k = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
     lat = metadata_float(st.metadata, "latitude_deg", file=st.path)
     if k is None or lat is None:
@@ -415,8 +414,7 @@ def _computed_comp(st: Stream, orientation: str) -> float:
                          "nominal_scale_factor_counts_per_deg and latitude_deg", file=st.path,
                          key="latitude_deg" if lat is None else
                          "nominal_scale_factor_counts_per_deg")
-    w = np.degrees(earth_rate_enu(lat)) @ axis_enu(orientation)
-    return k * float(w)
+    return k * earth_rate_on_axis_dps(lat, orientation)
 
 
 def _static_comp(ctx: _Ctx, rest_idx: int, kz: int) -> float | None:
@@ -575,61 +573,6 @@ def _rotation_series(ctx: _Ctx, item: RotationItem, series: int, nxt) -> None:
         ctx.cursor = rq
 
 
-def read_override(path: str | Path) -> list[dict]:
-    """Read an override CSV: ``test,series,round,t_zero_s,t_read_s`` (+ optional ``rate_dps``,
-    ``orientation``), stream times of the zeroing and reading of each listed round.
-
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "o.csv"
-    >>> _ = p.write_text("test,series,round,t_zero_s,t_read_s\\nscale_factor,1,2,70.0,85.5\\n")
-    >>> read_override(p)
-    [{'test': 'scale_factor', 'series': 1, 'round': 2, 't_zero_s': 70.0, 't_read_s': 85.5}]
-    """
-    from gonio.io import _parse_number
-    path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except OSError as exc:
-        raise GonioError(f"cannot read override file: {exc.strerror}", file=path) from None
-    except UnicodeDecodeError:
-        raise GonioError("not UTF-8 text", file=path) from None
-    rows = list(csv.reader(text.splitlines()))
-    if not rows:
-        raise GonioError("empty override file", file=path, line=1)
-    head = [h.strip() for h in rows[0]]
-    for need in ("test", "series", "round", "t_zero_s", "t_read_s"):
-        if need not in head:
-            raise GonioError("missing required column", file=path, line=1, column=need)
-    out = []
-    for ln, cells in enumerate(rows[1:], 2):
-        if not any(c.strip() for c in cells):
-            continue
-        if len(cells) != len(head):
-            raise GonioError(f"expected {len(head)} fields, got {len(cells)}", file=path,
-                             line=ln)
-        d = dict(zip(head, (c.strip() for c in cells)))
-        rec: dict = {"test": d["test"]}
-        for col in ("series", "round"):
-            v = _parse_number(d[col])
-            if v is None or not math.isfinite(v) or v != int(v) or v < 1:
-                raise GonioError(f"expected an integer ≥ 1, got {d[col]!r}", file=path,
-                                 line=ln, column=col)
-            rec[col] = int(v)
-        for col in ("t_zero_s", "t_read_s") + tuple(c for c in ("rate_dps",) if c in d):
-            v = _parse_number(d[col])
-            if v is None or not math.isfinite(v):
-                raise GonioError(f"expected a finite number, got {d[col]!r}", file=path,
-                                 line=ln, column=col)
-            rec[col] = v
-        if "orientation" in d and d["orientation"]:
-            rec["orientation"] = d["orientation"]
-        if rec["t_read_s"] <= rec["t_zero_s"]:
-            raise GonioError("t_read_s must be after t_zero_s", file=path, line=ln,
-                             column="t_read_s")
-        out.append(rec)
-    return out
-
-
 def _apply_override(ctx: _Ctx, override: Sequence[dict], plan: dict) -> None:
     st, s = ctx.st, ctx.proto.session
     for o in override:
@@ -698,7 +641,7 @@ def reduce_stream(stream: Stream, protocol: Protocol, *, override: Iterable[dict
     Parameters
     ----------
     stream : Stream
-        From :func:`gonio.streams.read_stream` (or built in memory).
+        From :func:`gonio.formats.streams.read_stream` (or built in memory).
     protocol : Protocol
         The planned sequence: zero stability (one long rest), then per item and
         series a static phase and rounds (see the module notes).
@@ -737,12 +680,12 @@ def reduce_stream(stream: Stream, protocol: Protocol, *, override: Iterable[dict
         raise GonioError("the stream has fewer than 3 samples", file=st.path)
     k_sf = None
     if st.table_deg is None:
-        from gonio.io import metadata_float
+        from gonio.formats.readings import metadata_float
         k_sf = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
     rests = find_rests(st.time_s, st.table_deg, st.gyro_counts, scale_factor_counts_per_deg=k_sf,
                        rate_threshold_dps=rate_threshold_dps, window_s=window_s,
                        min_rest_s=min_rest_s)
-    from gonio.io import metadata_bool
+    from gonio.formats.readings import metadata_bool
     quantised = metadata_bool(st.metadata, "counts_quantised", True, file=st.path) and \
         np.issubdtype(np.asarray(st.gyro_counts).dtype, np.integer)
     tol = pos_tol_deg if pos_tol_deg is not None else (0.05 if st.table_deg is not None else 1.0)

@@ -33,31 +33,19 @@ import numpy as np
 import pandas as pd
 import sympy
 
+from gonio.budget.extra import ExtraComponent
 from gonio.errors import GonioError
-from gonio.tilt import elliptic_extreme
+from gonio.units import ARCSEC_PER_DEG, MIN_PER_H
+from gonio.physics.tilt import elliptic_extreme
 from uncertainty import (GumResult, MonteCarloResult, ValidationResult, budget_table,
                          from_u, monte_carlo, propagate, render_html, render_markdown,
                          render_text, round_uncertainty, type_b, validate_gum)
 
-__all__ = ["AnnexABudget", "ExtraComponent", "annex_a_budget", "annex_a5_rounding",
+__all__ = ["AnnexABudget", "annex_a_budget", "annex_a5_rounding",
            "repeatability_from_deviations", "annex_a_model"]
 
 #: Arc-seconds per minute of a drift given in °/h: 1 °/h = 3600″/60 min = 60 ″/min.
-ARCSEC_PER_MIN_PER_DPH = 60.0
-
-
-@dataclass(frozen=True)
-class ExtraComponent:
-    """An additional additive Type B component of the Annex A model (c = +1).
-
-    >>> ExtraComponent("E_r", "Earth-rate residual", 0.02).distribution
-    'rectangular'
-    """
-
-    symbol: str
-    source: str
-    half_width_arcsec: float
-    distribution: str = "rectangular"
+ARCSEC_PER_MIN_PER_DPH = ARCSEC_PER_DEG / MIN_PER_H
 
 
 def _err(option: str, msg: str) -> GonioError:

@@ -8,7 +8,7 @@ evaluated exactly at any instant, vectorised over many instants.
 
 The sensing axis of a goniometer mounted with a tilt ψ (its azimuth α in the
 table frame) cones around the table axis as the table turns (draft Annex A.1;
-``ogam-draft.md`` "Physics the draft relies on"):
+``docs/draft-readings.md#a-tilted-axis-on-a-rotating-table``):
 
     n(θ) = cos ψ · a + sin ψ · (cos(θ+α) e₁ + sin(θ+α) e₂)
 
@@ -42,6 +42,25 @@ def trapezoid_duration_s(distance_deg: float, rate_dps: float, accel_dps2: float
     if d >= rate_dps * rate_dps / accel_dps2:
         return d / rate_dps + rate_dps / accel_dps2
     return 2.0 * math.sqrt(d / accel_dps2)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of a :class:`Timeline`: a dwell, or a trapezoidal (or triangular) move.
+
+    The move starts at ``t0_s`` from ``theta0_deg`` and turns ``sign·distance_deg``
+    with peak rate ``peak_rate_dps``, accelerating at ``accel_dps2`` for
+    ``accel_time_s`` at each end, in ``duration_s``.
+    """
+
+    t0_s: float
+    theta0_deg: float
+    sign: float
+    distance_deg: float
+    peak_rate_dps: float
+    accel_dps2: float
+    accel_time_s: float
+    duration_s: float
 
 
 @dataclass
@@ -84,6 +103,16 @@ class Timeline:
         if not self._t0:
             return self.start_angle_deg
         return self._theta0[-1] + self._sign[-1] * self._dist[-1]
+
+    def segments(self) -> list["Segment"]:
+        """The motion as segments (a dwell has distance 0), for exact integrals over it.
+
+        >>> tl = Timeline(); _ = tl.dwell(1.0); _ = tl.move(90.0, 30.0, 60.0)
+        >>> [(s.t0_s, s.duration_s, s.distance_deg, s.accel_time_s) for s in tl.segments()]
+        [(0.0, 1.0, 0.0, 0.0), (1.0, 3.5, 90.0, 0.5)]
+        """
+        return [Segment(*v) for v in zip(self._t0, self._theta0, self._sign, self._dist,
+                                         self._vpk, self._acc, self._tacc, self._dur)]
 
     def _append(self, duration, dist, vpk, acc, tacc, sign):
         t_start, theta_start = self.end_s, self.end_angle_deg

@@ -1,4 +1,4 @@
-"""Earth rate, the local frame, axis directions and Sagnac scale factors.
+"""Earth rate, the local frame and axis directions.
 
 Constants
 ---------
@@ -26,9 +26,8 @@ All are far below anything the draft resolves: the choice is a convention.
 0.04″/s on the Earth rate.)
 
 :func:`earth_rate` gives one axis's rate in °/h, ″/s and rad/s with its split
-into parts along and across the axis; :func:`sagnac_rlg`, :func:`sagnac_fog`
-the Sagnac scale factors with the Earth rate's signal (``gonio earth``,
-``gonio sagnac``).
+into parts along and across the axis (``gonio earth``). The Sagnac scale factors
+are in :mod:`gonio.physics.sagnac`.
 
 Note (IEC 62047-20 5.3.3.1 erratum): that text gives the vertical component as
 Ω cos λ and the horizontal as Ω sin λ cos φ; physically vertical is Ω sin λ and
@@ -49,6 +48,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.errors import GonioError
+from gonio.physics.kinematics import sensing_axis_basis
+from gonio.units import S_PER_H, dph_from_rad_s, dps_to_dph, rad_to_arcsec
+from gonio.units import dps_to_arcsec_s  # noqa: F401  (doctests)
 
 #: IERS nominal mean angular velocity of the Earth, rad/s.
 OMEGA_E_RAD_S = 7.292115e-5
@@ -58,11 +60,9 @@ SIDEREAL_DAY_S = 86164.0989
 #: 1.5×10⁻¹² rad/s, i.e. 2×10⁻⁸ relative: 3×10⁻⁷ ″/s, negligible here).
 OMEGA_E_STELLAR_RAD_S = 2.0 * math.pi / SIDEREAL_DAY_S
 #: Earth rate in °/h (IERS value): 15.0411 °/h.
-OMEGA_E_DPH = math.degrees(OMEGA_E_RAD_S) * 3600.0
+OMEGA_E_DPH = dph_from_rad_s(OMEGA_E_RAD_S)
 #: Earth rate in ″/s (IERS value): 15.0411 ″/s.
-OMEGA_E_ARCSEC_S = math.degrees(OMEGA_E_RAD_S) * 3600.0
-#: Seconds of arc per degree.
-ARCSEC_PER_DEG = 3600.0
+OMEGA_E_ARCSEC_S = rad_to_arcsec(OMEGA_E_RAD_S)
 
 #: Named axis directions as (azimuth_deg, elevation_deg).
 NAMED_AXES = {
@@ -128,81 +128,51 @@ def earth_rate_on_axis_dps(latitude_deg: float, axis="up",
     return float(math.degrees(earth_rate_enu(latitude_deg, omega_rad_s) @ axis_enu(axis)))
 
 
+def earth_rate_table_frame_dps(latitude_deg: float, axis) -> tuple[float, float, float]:
+    """The Earth rate in the frame (a, e₁, e₂) of a table axis a, °/s: (Ω·a, Ω·e₁, Ω·e₂).
+
+    The one place where the Earth rate is resolved along and across a table axis
+    (the bench, the coupling budget, the reports and the tilt estimate all use it).
+    ``axis`` is a name, (azimuth, elevation) in degrees, or an ENU unit vector;
+    e₁, e₂ complete a to a right-handed frame
+    (:func:`gonio.physics.kinematics.sensing_axis_basis`).
+
+    >>> [round(x * 3600, 4) for x in earth_rate_table_frame_dps(40.0, "up")]   # ″/s
+    [9.6682, 0.0, 11.5221]
+    """
+    a = np.asarray(axis, dtype=float) if isinstance(axis, np.ndarray) else axis_enu(axis)
+    e1, e2 = sensing_axis_basis(a)
+    w = np.degrees(earth_rate_enu(latitude_deg))
+    return float(w @ a), float(w @ e1), float(w @ e2)
+
+
 @dataclass(frozen=True)
 class EarthRateSplit:
-    """Earth rate relative to a table axis: parallel and perpendicular parts, °/s."""
+    """Earth rate relative to a table axis: parallel and perpendicular parts, °/s, and the
+    direction β of the perpendicular part in the table frame (e₁, e₂), degrees."""
 
     parallel_dps: float
     perpendicular_dps: float
+    perpendicular_direction_deg: float = 0.0
 
 
 def earth_rate_split(latitude_deg: float, axis="up") -> EarthRateSplit:
     """Split Ω_E into its components along and across a table axis, °/s.
 
     The perpendicular part Ω_⊥ drives the tilt × Earth-rate coupling
-    (``ogam-draft.md``, "Physics the draft relies on").
+    (``docs/draft-readings.md#what-the-draft-leaves-out``); a tilt with azimuth
+    α_table in the table frame has α = α_table − β relative to Ω_⊥.
 
-    >>> s = earth_rate_split(40.0, "up")
-    >>> round(s.perpendicular_dps * 3600, 2)    # ″/s
-    11.52
+    >>> s = earth_rate_split(40.0, "up")       # e₁ east, e₂ north: Ω_⊥ points north
+    >>> round(dps_to_arcsec_s(s.perpendicular_dps), 2), round(s.perpendicular_direction_deg, 6)
+    (11.52, 90.0)
     """
-    w = earth_rate_enu(latitude_deg)
-    a = axis_enu(axis)
-    par = float(w @ a)
-    perp = float(np.linalg.norm(w - par * a))
-    return EarthRateSplit(math.degrees(par), math.degrees(perp))
-
-
-# --- Sagnac scale factors ----------------------------------------------------
-
-SPEED_OF_LIGHT_M_S = 299_792_458.0
-
-
-def rlg_scale_factor_counts_per_rad(area_m2: float, perimeter_m: float,
-                                    wavelength_m: float = 632.8e-9) -> float:
-    """Ring-laser scale factor 4A/(λP), pulses (fringes) per radian (Sagnac).
-
-    The beat frequency is Δf = 4A/(λP)·Ω; each fringe is one pulse.
-
-    >>> k = rlg_scale_factor_counts_per_rad(0.15**2 * 3**0.5 / 4, 0.45)  # 15 cm triangle
-    >>> round(k), round(k * math.pi / 180, 2)        # per rad, per degree
-    (136856, 2388.59)
-    """
-    for name, v in (("area_m2", area_m2), ("perimeter_m", perimeter_m),
-                    ("wavelength_m", wavelength_m)):
-        if not (math.isfinite(v) and v > 0):
-            raise GonioError(f"{name} must be a positive number, got {v}")
-    return 4.0 * area_m2 / (wavelength_m * perimeter_m)
-
-
-def fog_phase_per_rate_s(length_m: float, diameter_m: float,
-                         wavelength_m: float = 1550e-9) -> float:
-    """Fibre-optic gyro Sagnac phase per unit rate, 2πLD/(λc), rad per (rad/s) = s.
-
-    >>> round(fog_phase_per_rate_s(1000.0, 0.1), 3)      # 1 km coil, 10 cm diameter
-    1.352
-    """
-    for name, v in (("length_m", length_m), ("diameter_m", diameter_m),
-                    ("wavelength_m", wavelength_m)):
-        if not (math.isfinite(v) and v > 0):
-            raise GonioError(f"{name} must be a positive number, got {v}")
-    return 2.0 * math.pi * length_m * diameter_m / (wavelength_m * SPEED_OF_LIGHT_M_S)
-
-
-def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: float,
-                             axis="up") -> float:
-    """Pulses per second that the Earth rate alone produces on an axis.
-
-    >>> round(earth_rate_pulse_rate_hz(3600.0, 40.0, "up"), 3)   # 1 count = 1″
-    9.668
-    """
-    return scale_factor_counts_per_deg * earth_rate_on_axis_dps(latitude_deg, axis)
+    par, p1, p2 = earth_rate_table_frame_dps(latitude_deg, axis)
+    return EarthRateSplit(par, math.hypot(p1, p2), math.degrees(math.atan2(p2, p1)))
 
 
 # --- reports for the CLI -------------------------------------------------------
 
-#: Seconds per hour.
-S_PER_H = 3600.0
 
 
 @dataclass(frozen=True)
@@ -250,7 +220,7 @@ def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_
     north towards east) and elevation E that is Ω_E (cos φ cos E cos A + sin φ sin E)
     (IEC 62047-20 5.3.3.1 with its cos/sin erratum corrected). The part across
     the axis, Ω_⊥ = Ω_E·sqrt(1 − (Ω̂·a)²), is what a tilted sensing axis picks up
-    as the table turns (the tilt × Earth-rate coupling, :mod:`gonio.coupling`).
+    as the table turns (the tilt × Earth-rate coupling, :mod:`gonio.physics.coupling`).
 
     Examples
     --------
@@ -266,58 +236,9 @@ def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_
     """
     az, el = axis_az_el_deg(axis)
     a = axis_enu((az, el))
-    w = earth_rate_enu(latitude_deg, omega_rad_s)
-    par = float(w @ a)
-    perp = float(np.linalg.norm(w - par * a))
-    dph = math.degrees(par) * S_PER_H
+    split = earth_rate_split(latitude_deg, (az, el))
+    scale = omega_rad_s / OMEGA_E_RAD_S
+    dph = dps_to_dph(split.parallel_dps) * scale
+    perp_dph = dps_to_dph(split.perpendicular_dps) * scale
     return EarthRate(float(latitude_deg), az, el, tuple(float(x) for x in a.round(15)),
-                     dph, dph, par, dph, math.degrees(perp) * S_PER_H,
-                     math.degrees(perp) * S_PER_H, omega_rad_s)
-
-
-@dataclass(frozen=True)
-class Sagnac:
-    """Sagnac scale factor of a gyro and the signal the Earth rate gives it."""
-
-    kind: str
-    wavelength_m: float
-    scale_factor_counts_per_rad: float | None       # RLG: pulses per radian, 4A/(λP)
-    scale_factor_counts_per_deg: float | None
-    resolution_arcsec: float | None                 # one pulse, ″
-    phase_per_rate_s: float | None                  # FOG: rad of phase per rad/s, 2πLD/(λc)
-    earth_rate_signal: float                        # RLG: Hz (pulses/s); FOG: rad of phase
-    earth_rate_signal_unit: str
-
-    def to_dict(self) -> dict:
-        """Plain dict (for ``--json``)."""
-        return dict(self.__dict__)
-
-
-def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9) -> Sagnac:
-    """Ring-laser Sagnac scale factor and the full Earth rate's beat frequency.
-
-    Δf = 4A/(λP)·Ω (ogam-draft.md "Physics"; Aronowitz 1971). One pulse is
-    1/K rad.
-
-    >>> s = sagnac_rlg(0.15**2 * 3**0.5 / 4, 0.45)          # 15 cm-side triangle, He-Ne
-    >>> round(s.scale_factor_counts_per_deg, 2), round(s.resolution_arcsec, 4)
-    (2388.59, 1.5072)
-    >>> round(s.earth_rate_signal, 3)                       # Hz for the whole Ω_E
-    9.98
-    """
-    k = rlg_scale_factor_counts_per_rad(area_m2, perimeter_m, wavelength_m)
-    return Sagnac("rlg", wavelength_m, k, k * math.pi / 180.0, 1.0 / k * 180.0 / math.pi * 3600.0,
-                  None, k * OMEGA_E_RAD_S, "Hz")
-
-
-def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9) -> Sagnac:
-    """Fibre-optic Sagnac phase per rate 2πLD/(λc) and the full Earth rate's phase.
-
-    Δφ = 2πLD/(λc)·Ω (ogam-draft.md "Physics"; Lefèvre, The Fiber-Optic Gyroscope, 2.1).
-
-    >>> s = sagnac_fog(1000.0, 0.1)                         # 1 km, 10 cm coil, 1550 nm
-    >>> round(s.phase_per_rate_s, 4), f"{s.earth_rate_signal:.3e}"
-    (1.3522, '9.860e-05')
-    """
-    f = fog_phase_per_rate_s(length_m, diameter_m, wavelength_m)
-    return Sagnac("fog", wavelength_m, None, None, None, f, f * OMEGA_E_RAD_S, "rad")
+                     dph, dph, math.radians(dph / S_PER_H), dph, perp_dph, perp_dph, omega_rad_s)

@@ -1,0 +1,283 @@
+"""Budget components beyond a specification's own lines: one implementation each.
+
+The draft's Annex A budget has four lines (table, tilt projection, zero drift,
+repeatability). The validation on the virtual bench (``gonio validate``) showed
+three effects it lacks; each is built here once, and both the calibration
+pipeline and the validation use these functions:
+
+:class:`ExtraComponent`            an additive Type B line (symbol, source, half-width, distribution)
+:func:`compensation_component`     the residual of the clause-7 Earth-rate compensation
+:func:`session_coupling`           tilt × Earth-rate coupling of every planned reading
+:func:`coupling_budget_component`  its worst case as an arcsine line (``C_te``)
+:func:`tilt_coupling_coefficients` the coupling integrals of a reading at constant rate
+:func:`budget_extra_components`    ``K_P``, ``K_r`` (scale-factor error carried from 7.1
+                                   into E) and ``tilt_E`` from a calibration's own readings
+
+The physics is in :mod:`gonio.physics.coupling` and
+:mod:`gonio.physics.compensation`; see ``docs/draft-readings.md#what-the-draft-leaves-out``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+from gonio.bench.session import plan_session
+from gonio.errors import GonioError
+from gonio.physics.compensation import CompensationResidual
+from gonio.physics.coupling import coupling_terms
+from gonio.physics.earth import earth_rate_split
+from gonio.physics.kinematics import Timeline
+from gonio.protocol import Protocol
+from gonio.units import dps_to_arcsec_s
+
+__all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "session_coupling",
+           "coupling_budget_component", "tilt_coupling_coefficients", "budget_extra_components",
+           "EXTRA_SYMBOLS"]
+
+#: Symbols of :func:`budget_extra_components`.
+EXTRA_SYMBOLS: tuple[str, ...] = ("K_P", "K_r", "tilt_E")
+
+
+@dataclass(frozen=True)
+class ExtraComponent:
+    """An additional additive Type B component of the Annex A model (c = +1).
+
+    >>> ExtraComponent("E_r", "Earth-rate residual", 0.02).distribution
+    'rectangular'
+    """
+
+    symbol: str
+    source: str
+    half_width_arcsec: float
+    distribution: str = "rectangular"
+
+
+def compensation_component(residual: CompensationResidual, symbol: str = "E_c") -> ExtraComponent:
+    """An additive component for an Earth-rate compensation residual: normal, half-width = u(angle).
+
+    >>> from gonio.physics.compensation import measured_compensation
+    >>> c = compensation_component(measured_compensation(60.0, arw_dpsh=0.001))
+    >>> c.symbol, c.distribution, round(c.half_width_arcsec, 4)
+    ('E_c', 'normal', 0.2324)
+    """
+    return ExtraComponent(symbol, f"Earth-rate compensation residual ({residual.method}, "
+                          f"t = {residual.measuring_time_s:g} s)", residual.u_angle_arcsec, "normal")
+
+
+@dataclass
+class SessionCoupling:
+    """Coupling error per planned reading of a session (see :func:`session_coupling`)."""
+
+    test: list
+    orientation: list
+    round: list
+    table_deg: np.ndarray
+    time_s: np.ndarray
+    error_arcsec: np.ndarray          # at the given α (NaN if no α given)
+    worst_case_arcsec: np.ndarray     # over α
+
+
+def session_coupling(protocol, bench, tilt_deg: float | None = None,
+                     tilt_azimuth_table_deg: float | None = None) -> SessionCoupling:
+    """Coupling error of every reading the bench would take for ``protocol``.
+
+    The motion and the zeroing/reading instants come from
+    :func:`gonio.bench.session.plan_session` (no random table scatter); the
+    compensation is the protocol's (measured in the static phase at the start of
+    each block, or computed). ψ and α default to the bench instrument's.
+
+    Examples
+    --------
+    One round 0° → 180° at 60 °/s, 60 °/s² (1 s ramps, 2 s cruise), read 10 s after
+    arrival (Δt = 14 s); axis up at 40° N, ψ = 0.1°. By hand: P = ∫cos θ − Δt =
+    (0 over the symmetric move − 10 s at 180°) − 14 s = −24 s; Q = ∫sin θ =
+    (cos 30° − cos 150°)/(π/3 rad/s) + 2∫₀¹ sin(π t²/6) dt = 1.654 + 0.342 = 1.996 s;
+    worst case = Ω_⊥ tan ψ · hypot(P, Q) = 0.020110″/s × 24.083 s = 0.484″.
+
+    >>> from gonio.protocol import parse_protocol
+    >>> from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+    >>> p = parse_protocol({"protocol": {"name": "x"}, "angle_deviation": {
+    ...     "rest_s": 15.0, "rounds": [{"stop_deg": 180.0}]}})
+    >>> b = Bench("b", InstrumentConfig(tilt_deg=0.1), TableConfig(), latitude_deg=40.0,
+    ...           sample_rate_hz=100.0)
+    >>> round(float(session_coupling(p, b).worst_case_arcsec[0]), 3)
+    0.484
+    """
+    psi = bench.instrument.tilt_deg if tilt_deg is None else tilt_deg
+    az = bench.instrument.tilt_azimuth_deg if tilt_azimuth_table_deg is None \
+        else tilt_azimuth_table_deg
+    blocks = plan_session(protocol, bench, None)
+    dt = 1.0 / bench.sample_rate_hz
+    comp = protocol.session.earth_compensation
+    lat = bench.latitude_deg if bench.earth_rate else None
+    out = {k: [] for k in ("test", "orientation", "round", "table_deg", "time_s", "e", "w")}
+    for blk in blocks:
+        if lat is None:
+            par = perp = beta = 0.0
+        else:
+            sp = earth_rate_split(lat, blk.orientation)
+            par, perp, beta = sp.parallel_dps, sp.perpendicular_dps, sp.perpendicular_direction_deg
+        c = comp if blk.compensate else "none"
+        thc = None
+        if c == "measured" and blk.k_static:
+            thc = float(blk.timeline.angle_deg(np.array([blk.k_static[0] * dt]))[0])
+        for r in blk.readings:
+            terms = coupling_terms(blk.timeline, r.k_zero * dt, r.k_read * dt, psi, perp,
+                                   compensation=c, theta_comp_deg=thc, parallel_dps=par)
+            out["test"].append(r.test)
+            out["orientation"].append(r.orientation)
+            out["round"].append(r.round)
+            out["table_deg"].append(r.table_deg)
+            out["time_s"].append((r.k_read - r.k_zero) * dt)
+            out["e"].append(float(terms.error_arcsec(az - beta)))
+            out["w"].append(terms.worst_case_arcsec())
+    return SessionCoupling(out["test"], out["orientation"], out["round"],
+                           np.array(out["table_deg"]), np.array(out["time_s"]),
+                           np.array(out["e"]), np.array(out["w"]))
+
+
+def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
+                              accel_dps2: float = 60.0, symbol: str = "C_te",
+                              test: str = "angle_deviation"):
+    """An optional Annex A component for the tilt × Earth-rate coupling (off by default).
+
+    Half-width: the worst case over α and over the ``test`` readings of the
+    protocol (at the protocol's orientation, rates and timing); arcsine
+    distribution, because the error is a sinusoid of an unknown, uniformly
+    distributed tilt azimuth α (JCGM 101 6.4.6: u = a/√2). Pass the result to
+    :func:`gonio.specs.ogam_draft.budget.annex_a_budget` (or another specification's budget) in ``extra_components``. The draft's
+    budget has no such line (``docs/draft-readings.md#tilt-and-earth-rate-coupling``).
+
+    Examples
+    --------
+    The draft's 7.4 at 40° N with the 0.1° bound of Annex A.1 (largest at the
+    180° point, as in :func:`session_coupling`'s example; the draft's budget, 0.30″
+    expanded, has no line for it):
+
+    >>> from gonio.protocol import load_protocol
+    >>> c = coupling_budget_component(load_protocol(), 40.0, 0.1)
+    >>> c.symbol, c.distribution, round(c.half_width_arcsec, 2)
+    ('C_te', 'arcsine', 0.48)
+    """
+    bench = Bench("coupling", InstrumentConfig(tilt_deg=tilt_deg),
+                  TableConfig(accel_dps2=accel_dps2), latitude_deg=latitude_deg,
+                  sample_rate_hz=1000.0)
+    sc = session_coupling(protocol, bench)
+    sel = np.array([t == test for t in sc.test])
+    if not sel.any():
+        raise GonioError(f"the protocol has no {test} readings", key=test)
+    return ExtraComponent(symbol, f"tilt × Earth-rate coupling (ψ = {tilt_deg:g}°, "
+                          f"φ = {latitude_deg:g}°)", float(sc.worst_case_arcsec[sel].max()),
+                          "arcsine")
+
+
+def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s: float,
+                               accel_dps2: float = 60.0):
+    """(C, S) with ∫₀ᵗ [cos(θ(t′)+α) − cos α] dt′ = C cos α − S sin α, seconds, per reading.
+
+    The residual rate of the tilt × Earth-rate coupling after the compensation
+    measured at the zero position is Ω_⊥ sin ψ [cos(θ+α) − cos α]
+    (:mod:`gonio.physics.coupling`); integrated from the zeroing to the reading it
+    is Ω_⊥ sin ψ (C cos α − S sin α). Each reading is modelled as a trapezoidal
+    move from 0 to θ at ``rate_dps`` and ``accel_dps2`` followed by a rest until
+    ``time_s`` after zeroing (``read_delay_s`` is kept for the call signature of
+    the readings model: the rest is whatever the time to reading leaves). The
+    integrals are :func:`gonio.physics.coupling.coupling_terms`' (one implementation).
+
+    A half turn at 60 °/s with a near-instant start, read 13 s after zeroing:
+    C = sin θ/ω − T_r + (cos θ − 1)(t − T_r) = −23 s, S = (1 − cos θ)/ω + sin θ (t − T_r) = 1.91 s.
+
+    >>> c, s = tilt_coupling_coefficients([180.0], [13.0], 60.0, 10.0, accel_dps2=1e9)
+    >>> round(float(c[0]), 3), round(float(s[0]), 3)
+    (-23.0, 1.91)
+    """
+    th = np.atleast_1d(np.asarray(theta_deg, dtype=float))
+    t = np.atleast_1d(np.asarray(time_s, dtype=float))
+    th, t = np.broadcast_arrays(th, t)
+    c = np.empty(th.shape)
+    s = np.empty(th.shape)
+    for i, (theta, t_read) in enumerate(zip(th.tolist(), t.tolist())):
+        tl = Timeline()
+        arrive = tl.move(theta, rate_dps, accel_dps2)
+        tl.dwell(max(t_read - arrive, 0.0))
+        terms = coupling_terms(tl, 0.0, t_read, 0.0, 0.0, compensation="measured",
+                               theta_comp_deg=0.0)
+        c[i], s[i] = terms.p_s, terms.q_s
+    return c, s
+
+
+def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,
+                            repeatability_arcsec: float, *,
+                            truth: str = "systematic",
+                            accel_dps2: float = 60.0) -> list[ExtraComponent]:
+    """Budget lines the Annex A budget lacks, from the calibration's data and the annex's bounds.
+
+    E_i uses the K of 7.1; an error δK of that K gives −θ·δK/K at point θ, the same in
+    every series (so u(r) does not see it). With 7.1 rounds θ_k (n of them) and the
+    7.4 points up to θ_max, an error e_k of round k moves E at θ by
+    −θ/n · e_k/θ_k (draft 7.1: K = mean C_k/θ_k). Three terms, at θ_max:
+
+    ``K_P`` (normal, u)
+        the table error at the 7.1 stops and at the common zero, independent,
+        u(P) = MPE/√3 (A.4.1): u = θ_max/n · u(P) · √(Σ 1/θ_k² + (Σ 1/θ_k)²).
+    ``K_r`` (normal, u)
+        the scatter of each single 7.1 reading, taken as u(r) (A.4.4):
+        u = θ_max/n · u(r) · √(Σ 1/θ_k²).
+    ``tilt_E`` (arcsine, amplitude A)
+        the tilt × Earth-rate coupling, ψ = the A.1 tilt bound, azimuth α unknown
+        (uniform, so the error, a sinusoid in α, is arcsine distributed):
+        e_i(α) = Ω_⊥ sin ψ (C_i cos α − S_i sin α) (:func:`tilt_coupling_coefficients`),
+        through K: −θ_i mean_k(e_k/θ_k). With ``truth="systematic"`` (deviation as
+        mounted, e_i is in the truth) only the K part counts; with ``"intrinsic"``
+        both. A = max_i of the amplitude over α.
+
+    Examples
+    --------
+    >>> from gonio.protocol import load_protocol
+    >>> p = load_protocol()
+    >>> df = pd.DataFrame({"test": ["scale_factor"] * 6 + ["angle_deviation"] * 2,
+    ...     "table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0, 180.0, 360.0],
+    ...     "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0, 13.0, 16.0]})
+    >>> [(c.symbol, round(c.half_width_arcsec, 4))
+    ...  for c in budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic")]
+    [('K_P', 0.158), ('K_r', 0.1221), ('tilt_E', 0.4915)]
+
+    With instant starts and stops (the constant-rate model) tilt_E is 5 % larger:
+
+    >>> round(budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic",
+    ...                               accel_dps2=1e9)[2].half_width_arcsec, 4)
+    0.5169
+    """
+    sf = readings[readings["test"] == "scale_factor"]
+    ad = readings[readings["test"] == "angle_deviation"]
+    th_k = np.abs(sf["table_deg"].to_numpy(dtype=float))
+    t_k = sf["time_s"].to_numpy(dtype=float)
+    n = th_k.size
+    th_i = np.abs(ad["table_deg"].to_numpy(dtype=float))
+    t_i = ad["time_s"].to_numpy(dtype=float)
+    theta_max = float(np.max(th_i))
+    u_p = protocol.annex_a.table_mpe_arcsec / math.sqrt(3.0)
+    amp = theta_max / n
+    u_kp = amp * u_p * math.sqrt(np.sum(1.0 / th_k ** 2) + np.sum(1.0 / th_k) ** 2)
+    u_kr = amp * repeatability_arcsec * math.sqrt(np.sum(1.0 / th_k ** 2))
+    omega = dps_to_arcsec_s(earth_rate_split(latitude_deg, protocol.angle_deviation.orientation)
+                            .perpendicular_dps) * math.sin(math.radians(protocol.annex_a.tilt_bound_deg))
+    sfi, adi = protocol.scale_factor, protocol.angle_deviation
+    ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s, accel_dps2)
+    ci, si = tilt_coupling_coefficients(th_i, t_i, adi.rate_dps, adi.read_delay_s, accel_dps2)
+    mc, ms = float(np.mean(ck / th_k)), float(np.mean(sk / th_k))
+    keep = 0.0 if truth == "systematic" else 1.0
+    a_tilt = omega * float(np.max(np.hypot(keep * ci - th_i * mc, keep * si - th_i * ms)))
+    return [
+        ExtraComponent("K_P", "table error at the 7.1 stops -> dK*theta (validation)",
+                       float(u_kp), "normal"),
+        ExtraComponent("K_r", "scatter of the 7.1 readings -> dK*theta (validation)",
+                       float(u_kr), "normal"),
+        ExtraComponent("tilt_E", "tilt x Earth-rate coupling to the reading (validation)",
+                       float(a_tilt), "arcsine"),
+    ]

@@ -1,0 +1,101 @@
+"""The ``# key: value`` metadata lines shared by readings files and streams.
+
+One place for the keys gonio understands, their plausible ranges, and the
+number syntax every reader accepts (see ``docs/formats.md#metadata``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG
+
+#: Metadata keys the package understands (others are kept).
+KNOWN_METADATA: tuple[str, ...] = (
+    "instrument", "serial", "manufacturer", "nominal_scale_factor_counts_per_deg",
+    "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
+    "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised",
+)
+# numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
+NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
+    "nominal_scale_factor_counts_per_deg": (1e-6, True, 1e12, "a number in [1e-6, 1e12]"),
+    "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
+    "temperature_c": (-100.0, True, 200.0, "a number in [-100, 200]"),
+    "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
+    "table_mpe_arcsec": (0.0, True, ARCSEC_PER_DEG, "a number in [0, 3600]"),
+    "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
+}
+_TRUE = ("true", "yes", "1")
+_FALSE = ("false", "no", "0")
+_NUMBER = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$")
+_NONFINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
+
+
+def metadata_float(metadata: Mapping[str, str], key: str, *,
+                   file: str | Path | None = None) -> float | None:
+    """The numeric metadata value ``key``, validated, or None when absent.
+
+    >>> metadata_float({"latitude_deg": "39.9"}, "latitude_deg")
+    39.9
+    >>> metadata_float({}, "latitude_deg") is None
+    True
+    """
+    if key not in metadata:
+        return None
+    text = str(metadata[key]).strip()
+    lo, lo_incl, hi, expected = NUMERIC_METADATA.get(
+        key, (-math.inf, True, math.inf, "a finite number"))
+    value = parse_number(text)
+    if value is None or not math.isfinite(value):
+        raise GonioError(f"expected {expected}, got {show_value(text)}", file=file, key=key)
+    if value < lo or (value == lo and not lo_incl) or value > hi:
+        raise GonioError(f"expected {expected}, got {show_value(text)}", file=file, key=key)
+    return value
+
+
+def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,
+                  file: str | Path | None = None) -> bool:
+    """The boolean metadata value ``key`` (true/false, yes/no, 1/0), or ``default``.
+
+    >>> metadata_bool({"counts_quantised": "false"}, "counts_quantised", True)
+    False
+    """
+    if key not in metadata:
+        return default
+    text = str(metadata[key]).strip().lower()
+    if text in _TRUE:
+        return True
+    if text in _FALSE:
+        return False
+    raise GonioError(f"expected true or false, got {show_value(metadata[key])}", file=file,
+                     key=key)
+
+
+def show_value(text) -> str:
+    """A value for an error message: quoted, at most 40 characters (a 5000-digit value is
+    not echoed whole).
+
+    >>> show_value("9" * 50)
+    "'9999999999999999999999999999999999999999…(50 chars)'"
+    """
+    text = str(text)
+    return repr(text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)")
+
+
+def parse_number(text: str) -> float | None:
+    """float of a plain decimal number text, inf/nan for those words, else None.
+
+    Only ASCII digits count (``str.isdigit`` would also accept other scripts' digits).
+
+    >>> parse_number("-1.5e3"), parse_number("inf"), parse_number("1,5")
+    (-1500.0, inf, None)
+    """
+    if _NONFINITE.match(text):
+        return float(text)
+    if not _NUMBER.match(text):
+        return None
+    return float(text)

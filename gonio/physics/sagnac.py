@@ -1,0 +1,109 @@
+"""Sagnac scale factors of ring-laser and fibre-optic gyros, and the Earth rate's signal.
+
+RLG: a ring of area A and perimeter P at wavelength λ gives 4A/(λP) pulses per
+radian turned (Aronowitz 1971). FOG: a coil of length L and diameter D gives a
+phase 2πLD/(λc) per rad/s (Lefèvre, *The Fiber-Optic Gyroscope*, 2.1). See
+``docs/references.md`` for the full citations (``gonio sagnac``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from gonio.errors import GonioError
+from gonio.physics.earth import OMEGA_E_RAD_S, earth_rate_on_axis_dps
+from gonio.units import rad_to_arcsec
+
+# --- Sagnac scale factors ----------------------------------------------------
+
+SPEED_OF_LIGHT_M_S = 299_792_458.0
+
+
+def rlg_scale_factor_counts_per_rad(area_m2: float, perimeter_m: float,
+                                    wavelength_m: float = 632.8e-9) -> float:
+    """Ring-laser scale factor 4A/(λP), pulses (fringes) per radian (Sagnac).
+
+    The beat frequency is Δf = 4A/(λP)·Ω; each fringe is one pulse.
+
+    >>> k = rlg_scale_factor_counts_per_rad(0.15**2 * 3**0.5 / 4, 0.45)  # 15 cm triangle
+    >>> round(k), round(k * math.pi / 180, 2)        # per rad, per degree
+    (136856, 2388.59)
+    """
+    for name, v in (("area_m2", area_m2), ("perimeter_m", perimeter_m),
+                    ("wavelength_m", wavelength_m)):
+        if not (math.isfinite(v) and v > 0):
+            raise GonioError(f"{name} must be a positive number, got {v}")
+    return 4.0 * area_m2 / (wavelength_m * perimeter_m)
+
+
+def fog_phase_per_rate_s(length_m: float, diameter_m: float,
+                         wavelength_m: float = 1550e-9) -> float:
+    """Fibre-optic gyro Sagnac phase per unit rate, 2πLD/(λc), rad per (rad/s) = s.
+
+    >>> round(fog_phase_per_rate_s(1000.0, 0.1), 3)      # 1 km coil, 10 cm diameter
+    1.352
+    """
+    for name, v in (("length_m", length_m), ("diameter_m", diameter_m),
+                    ("wavelength_m", wavelength_m)):
+        if not (math.isfinite(v) and v > 0):
+            raise GonioError(f"{name} must be a positive number, got {v}")
+    return 2.0 * math.pi * length_m * diameter_m / (wavelength_m * SPEED_OF_LIGHT_M_S)
+
+
+def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: float,
+                             axis="up") -> float:
+    """Pulses per second that the Earth rate alone produces on an axis.
+
+    >>> round(earth_rate_pulse_rate_hz(3600.0, 40.0, "up"), 3)   # 1 count = 1″
+    9.668
+    """
+    return scale_factor_counts_per_deg * earth_rate_on_axis_dps(latitude_deg, axis)
+
+
+@dataclass(frozen=True)
+class Sagnac:
+    """Sagnac scale factor of a gyro and the signal the Earth rate gives it."""
+
+    kind: str
+    wavelength_m: float
+    scale_factor_counts_per_rad: float | None       # RLG: pulses per radian, 4A/(λP)
+    scale_factor_counts_per_deg: float | None
+    resolution_arcsec: float | None                 # one pulse, ″
+    phase_per_rate_s: float | None                  # FOG: rad of phase per rad/s, 2πLD/(λc)
+    earth_rate_signal: float                        # RLG: Hz (pulses/s); FOG: rad of phase
+    earth_rate_signal_unit: str
+
+    def to_dict(self) -> dict:
+        """Plain dict (for ``--json``)."""
+        return dict(self.__dict__)
+
+
+def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9) -> Sagnac:
+    """Ring-laser Sagnac scale factor and the full Earth rate's beat frequency.
+
+    Δf = 4A/(λP)·Ω (docs/draft-readings.md#sagnac-effect; [Aronowitz1971]). One pulse is
+    1/K rad.
+
+    >>> s = sagnac_rlg(0.15**2 * 3**0.5 / 4, 0.45)          # 15 cm-side triangle, He-Ne
+    >>> round(s.scale_factor_counts_per_deg, 2), round(s.resolution_arcsec, 4)
+    (2388.59, 1.5072)
+    >>> round(s.earth_rate_signal, 3)                       # Hz for the whole Ω_E
+    9.98
+    """
+    k = rlg_scale_factor_counts_per_rad(area_m2, perimeter_m, wavelength_m)
+    return Sagnac("rlg", wavelength_m, k, k * math.pi / 180.0, rad_to_arcsec(1.0 / k),
+                  None, k * OMEGA_E_RAD_S, "Hz")
+
+
+def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9) -> Sagnac:
+    """Fibre-optic Sagnac phase per rate 2πLD/(λc) and the full Earth rate's phase.
+
+    Δφ = 2πLD/(λc)·Ω (docs/draft-readings.md#sagnac-effect; [Lefevre], 2.1).
+
+    >>> s = sagnac_fog(1000.0, 0.1)                         # 1 km, 10 cm coil, 1550 nm
+    >>> round(s.phase_per_rate_s, 4), f"{s.earth_rate_signal:.3e}"
+    (1.3522, '9.860e-05')
+    """
+    f = fog_phase_per_rate_s(length_m, diameter_m, wavelength_m)
+    return Sagnac("fog", wavelength_m, None, None, None, f, f * OMEGA_E_RAD_S, "rad")

@@ -1,0 +1,262 @@
+"""The house rules of docs/architecture.md, checked on the source text (AST and tokens).
+
+- imports run one way, down the layers; no import cycles between modules;
+- ``uncertainty`` never imports ``gonio``; one specification never imports another;
+- no module imports another module's ``_private`` name or reads a ``_private``
+  attribute of an object it did not define;
+- unit constants (3600, 206264.8…) are written only in ``gonio/units.py``;
+- every package folder is installed (listed in ``pyproject.toml``).
+
+Each rule is also checked to fire on a small bad example, so that the test can fail.
+"""
+
+from __future__ import annotations
+
+import ast
+import io
+import re
+import tokenize
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Layer of each top-level group, low to high; a module may import only its own group or a
+#: lower layer (docs/architecture.md#layers). Groups on one layer may not import each other.
+LAYERS: dict[str, int] = {
+    "gonio": 0, "gonio.units": 0, "gonio.errors": 0, "gonio.atomic": 0, "gonio.progress": 0,
+    "gonio.resources": 0,
+    "gonio.physics": 1, "gonio.formats": 1,
+    "gonio.protocol": 2,
+    "gonio.bench": 3, "gonio.reduce": 3,
+    "gonio.analysis": 4,
+    "gonio.budget": 5,
+    "gonio.specs": 6,
+    "gonio.report": 7,
+    "gonio.pipeline": 8,
+    "gonio.cli": 9, "gonio.__main__": 10,
+}
+
+
+def module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def group(mod: str) -> str | None:
+    best = None
+    for g in LAYERS:
+        if (mod == g or mod.startswith(g + ".")) and (best is None or len(g) > len(best)):
+            best = g
+    return best
+
+
+def imports_of(tree: ast.AST, mod: str, is_pkg: bool) -> list[tuple[str, list[str], int]]:
+    """(imported module, names, line) for every import in a module, relative ones resolved."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                out.append((a.name, [], node.lineno))
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                pkg = mod.split(".") if is_pkg else mod.split(".")[:-1]
+                pkg = pkg[:len(pkg) - node.level + 1]
+                base = ".".join(pkg + ([base] if base else []))
+            out.append((base, [a.name for a in node.names], node.lineno))
+    return out
+
+
+def python_files(*tops: str) -> list[Path]:
+    files = []
+    for top in tops:
+        files += [p for p in (ROOT / top).rglob("*.py") if "__pycache__" not in p.parts]
+    return sorted(files)
+
+
+def layer_violations(files: list[Path]) -> list[str]:
+    bad = []
+    for path in files:
+        mod = module_name(path)
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        g = group(mod)
+        for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
+            if mod.startswith("uncertainty") and target.split(".")[0] == "gonio":
+                bad.append(f"{path.name}:{line}: uncertainty imports gonio")
+                continue
+            if g is None or not target.startswith("gonio"):
+                continue
+            candidates = [target] + [f"{target}.{n}" for n in names]
+            tg = group(candidates[0])
+            if tg is None:
+                continue
+            if LAYERS[tg] > LAYERS[g] or (LAYERS[tg] == LAYERS[g] and tg != g and LAYERS[g] > 0):
+                bad.append(f"{mod}:{line}: imports {target} (layer {tg} above or beside {g})")
+            if tg == "gonio.specs" and g == "gonio.specs":
+                a = mod.split(".")[:3]
+                b = target.split(".")[:3]
+                if len(a) == 3 and len(b) == 3 and a != b:
+                    bad.append(f"{mod}:{line}: one specification imports another ({target})")
+    return bad
+
+
+def import_graph(files: list[Path]) -> dict[str, set[str]]:
+    mods = {module_name(p): p for p in files}
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for m, p in mods.items():
+        tree = ast.parse(p.read_text(encoding="utf-8"))
+        for target, names, _ in imports_of(tree, m, p.name == "__init__.py"):
+            for cand in [f"{target}.{n}" for n in names] + [target]:
+                if cand in mods and cand != m:
+                    graph[m].add(cand)
+                    break
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan)."""
+    index, low, on, stack, out = {}, {}, set(), [], []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def private_violations(files: list[Path]) -> list[str]:
+    bad = []
+    for path in files:
+        mod = module_name(path)
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defined = {n.name for n in ast.walk(tree)
+                   if isinstance(n, (ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))}
+        for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
+            for n in names:
+                if n.startswith("_") and not n.startswith("__"):
+                    bad.append(f"{mod}:{line}: imports private {target}.{n}")
+        classes_here = {n.name for n in ast.walk(tree) if isinstance(n, ast.ClassDef)}
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Attribute) and node.attr.startswith("_")
+                    and not node.attr.startswith("__")):
+                base = node.value
+                if isinstance(base, ast.Name) and base.id in ("self", "cls", "np", "sys", "os"):
+                    continue
+                if isinstance(base, ast.Name) and base.id in classes_here | defined:
+                    continue
+                # attributes set in this module (self._x = ... in its classes) may be read here
+                own = {t.attr for t in ast.walk(tree) if isinstance(t, ast.Attribute)
+                       and isinstance(t.ctx, ast.Store)}
+                if node.attr in own:
+                    continue
+                bad.append(f"{mod}:{node.lineno}: reads private attribute .{node.attr}")
+    return bad
+
+
+#: Literals that are unit conversions and belong in gonio/units.py.
+UNIT_LITERALS = {3600.0, 206264.8, 206264.806, 206264.80624709636, 86400.0}
+
+
+def unit_literal_violations(files: list[Path]) -> list[str]:
+    bad = []
+    for path in files:
+        if path == ROOT / "gonio" / "units.py":
+            continue
+        toks = tokenize.generate_tokens(io.StringIO(path.read_text(encoding="utf-8")).readline)
+        for tok in toks:
+            if tok.type == tokenize.NUMBER:
+                try:
+                    v = float(tok.string.replace("_", ""))
+                except ValueError:
+                    continue
+                if v in UNIT_LITERALS:
+                    bad.append(f"{path.relative_to(ROOT)}:{tok.start[0]}: bare unit literal "
+                               f"{tok.string} (use gonio.units)")
+    return bad
+
+
+GONIO = python_files("gonio")
+ALL = python_files("gonio", "uncertainty")
+
+
+def test_imports_run_down_the_layers():
+    assert layer_violations(ALL) == []
+
+
+def test_no_import_cycles():
+    assert cycles(import_graph(ALL)) == []
+
+
+def test_no_private_names_across_modules():
+    assert private_violations(ALL) == []
+
+
+def test_unit_literals_only_in_units_module():
+    assert unit_literal_violations(GONIO) == []
+
+
+def test_every_package_is_installed():
+    text = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    listed = set(re.findall(r'"([a-z_.]+)"', text.split("packages = [", 1)[1].split("]", 1)[0]))
+    pkgs = {module_name(p.parent / "__init__.py") for p in ROOT.glob("gonio/**/__init__.py")}
+    pkgs |= {"uncertainty"}
+    assert sorted(pkgs - listed) == []
+
+
+# ----------------------------------------------------------- the rules can fail
+def _write(tmp: Path, rel: str, text: str) -> Path:
+    p = tmp / rel
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+@pytest.fixture()
+def fake_root(tmp_path, monkeypatch):
+    monkeypatch.setitem(globals(), "ROOT", tmp_path)
+    return tmp_path
+
+
+def test_rules_fire_on_bad_examples(fake_root):
+    physics = _write(fake_root, "gonio/physics/x.py", "from gonio.bench.session import run\n")
+    unc = _write(fake_root, "uncertainty/y.py", "import gonio.units\n")
+    spec = _write(fake_root, "gonio/specs/a/items.py", "from gonio.specs.b.items import f\n")
+    beside = _write(fake_root, "gonio/reduce/z.py", "from gonio.bench import load_bench\n")
+    ok = _write(fake_root, "gonio/pipeline/ok.py", "from gonio.bench import load_bench\n")
+    bad = layer_violations([physics, unc, spec, beside, ok])
+    assert len(bad) == 4 and not any("pipeline.ok" in b for b in bad)
+    a = _write(fake_root, "gonio/p/a.py", "from gonio.p.b import g\n")
+    b = _write(fake_root, "gonio/p/b.py", "from gonio.p.a import f\n")
+    assert cycles(import_graph([a, b])) == [["gonio.p.a", "gonio.p.b"]]
+    priv = _write(fake_root, "gonio/q.py",
+                  "from gonio.r import _hidden\n\ndef f(t):\n    return t._t0\n")
+    assert len(private_violations([priv])) == 2
+    lit = _write(fake_root, "gonio/s.py", "x = 1.0 / 3600.0\ny = '3600'  # 3600\n")
+    assert len(unit_literal_violations([lit])) == 1
