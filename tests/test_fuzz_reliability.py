@@ -174,7 +174,7 @@ READERS = {
 def test_special_files_refused_before_reading(tmp_path, reader):
     for kind, path in _specials(tmp_path).items():
         e = api_error(READERS[reader], path)
-        assert e.file is not None and Path(e.file).name == path.name, str(e)
+        assert path.name in str(e), str(e)
         count(f"special:{reader}:{kind}")
 
 
