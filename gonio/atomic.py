@@ -239,6 +239,14 @@ def clean_stale(out: Path) -> list[Path]:
 
 def _check_dir_place(out, what: str) -> Path:
     out = _nonempty(out, what)
+    absolute = Path(os.path.abspath(out))
+    if not absolute.name:
+        raise GonioError(f"{what} is a filesystem root; give a folder inside it", file=out)
+    cwd = os.path.abspath(os.getcwd())
+    if cwd == str(absolute) or cwd.startswith(str(absolute) + os.sep):
+        raise GonioError(f"{what} is the current folder or holds it; a run replaces its whole "
+                         "output folder, so give a folder below", file=out)
+    out = absolute
     _check_parent(out, what)
     st = _lstat(out)
     if st is not None and not stat.S_ISDIR(st.st_mode):
