@@ -383,6 +383,15 @@ class ValidationReport:
         return "\n".join(lines) + "\n"
 
 
+def _quiet_worker() -> None:
+    """A worker leaves SIGINT to the parent (which stops the pool and prints one line) and
+    dies quietly on SIGTERM: no traceback from a worker on an interrupt."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              cases: Sequence[str] = ("default",), sample_rate_hz: float = 100.0,
              protocol: str | Protocol = "ogam-draft",
@@ -472,10 +481,15 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         tasks = [(proto, b, s, u_scale, truth, extras_used) for s in seeds]
         it_label = f"validate {name}"
         if workers > 1:
-            with ProcessPoolExecutor(max_workers=workers) as ex:
+            ex = ProcessPoolExecutor(max_workers=workers, initializer=_quiet_worker)
+            try:
                 res = list(progress(ex.map(_run_trial_args, tasks, chunksize=4), total=trials,
                                     label=it_label) if show_progress else
                            ex.map(_run_trial_args, tasks, chunksize=4))
+            except BaseException:          # an interrupt: drop the queued trials, stop soon
+                ex.shutdown(wait=True, cancel_futures=True)
+                raise
+            ex.shutdown(wait=True)
         else:
             gen = (run_trial(*t) for t in tasks)
             res = list(progress(gen, total=trials, label=it_label) if show_progress else gen)
