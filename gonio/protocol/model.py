@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 from gonio.physics.earth import NAMED_AXES
 from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG
 from gonio.units import h_to_s
 from gonio.resources import resolve
 from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
@@ -353,6 +354,8 @@ MAX_ANGLE_DEG: float = 10 * 360.0       # a round's start or stop: ten turns
 MAX_SERIES: int = 1000
 MAX_ROUNDS: int = 1000
 MAX_LIST: int = 100                      # rates_dps, orientations
+MAX_ARCSEC: float = ARCSEC_PER_DEG       # any *_arcsec value (MPE, wobble, repeatability)
+COVERAGE_RANGE: tuple[float, float] = (0.5, 10.0)
 
 
 def check_protocol_ranges(sec: dict, raw: dict, file) -> None:
@@ -378,6 +381,15 @@ def check_protocol_ranges(sec: dict, raw: dict, file) -> None:
                 continue
             if key.endswith("_s") and isinstance(v, (int, float)) and v > MAX_DURATION_S:
                 bad(where, f"{v:g} s is over the plausible {MAX_DURATION_S:g} s")
+            if key.endswith("_arcsec") and isinstance(v, (int, float)) and abs(v) > MAX_ARCSEC:
+                bad(where, f"{v:g}″ is over the plausible {MAX_ARCSEC:g}″ (one degree)")
+            if key == "coverage_factor" and not COVERAGE_RANGE[0] <= v <= COVERAGE_RANGE[1]:
+                bad(where, f"{v:g} is outside the plausible range [{COVERAGE_RANGE[0]:g}, "
+                    f"{COVERAGE_RANGE[1]:g}]")
+            if key.endswith("_dph") and isinstance(v, (int, float)) and abs(v) > 1e4:
+                bad(where, f"{v:g} °/h is over the plausible 1e4 °/h")
+            if key == "duration_min" and v > MAX_DURATION_S / 60.0:
+                bad(where, f"{v:g} min is over the plausible {MAX_DURATION_S / 60.0:g} min")
             if key.endswith("_dps") and isinstance(v, (int, float)) and \
                     not RATE_RANGE_DPS[0] <= v <= RATE_RANGE_DPS[1]:
                 bad(where, f"{v:g} °/s is outside the plausible range "
