@@ -224,7 +224,7 @@ def test_unit_literals_only_in_units_module():
 
 def test_every_package_is_installed():
     text = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
-    listed = set(re.findall(r'"([a-z_.]+)"', text.split("packages = [", 1)[1].split("]", 1)[0]))
+    listed = set(re.findall(r'"([a-z0-9_.]+)"', text.split("packages = [", 1)[1].split("]", 1)[0]))
     pkgs = {module_name(p.parent / "__init__.py") for p in ROOT.glob("gonio/**/__init__.py")}
     pkgs |= {"uncertainty"}
     assert sorted(pkgs - listed) == []

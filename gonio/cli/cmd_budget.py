@@ -35,12 +35,17 @@ def register(subparsers) -> None:
                    help="zero stability in °/h (A.4.3; default 0.005)")
     p.add_argument("--duration-min", type=float_range(0, 1e4), default=0.5, metavar="T",
                    help="time from start to reading in minutes (A.4.3; default 0.5)")
-    p.add_argument("--repeatability-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.096, metavar="S",
+    p.add_argument("--repeatability-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.096,
+                   metavar="S",
                    help="repeatability u(r) in arc-seconds (A.4.4; default 0.096)")
-    p.add_argument("--k", type=float_range(0, 10, lo_open=True), default=2.0, help="coverage factor (A.7; default 2)")
+    p.add_argument("--k", type=float_range(0, 10, lo_open=True), default=2.0,
+                   help="coverage factor (A.7; default 2)")
     p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="JCGM 101 Monte Carlo trials (0: none)")
     p.add_argument("--seed", type=seed, default=0, help="seed of the Monte Carlo generator")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification whose annex budget to reproduce (ogam-draft, "
+                        "jjf1535-2015)")
     fmt = p.add_mutually_exclusive_group()
     fmt.add_argument("--json", action="store_true", help="print the result as JSON")
     fmt.add_argument("--format", choices=("text", "markdown", "html"), default="text",
@@ -52,6 +57,14 @@ def run(args) -> int:
     """Compute and print the Annex A budget."""
     from gonio.limits import check
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
+    if args.spec != "ogam-draft":
+        from gonio.pipeline.rate import budget
+
+        b = budget(args.spec)
+        print(json.dumps(json_safe(b.to_dict()), indent=2, ensure_ascii=False, allow_nan=False)
+              if args.json else b.to_text(),
+              end="\n" if args.json else "")
+        return 0
     try:
         b = annex_a_budget(table_mpe_arcsec=args.table_mpe_arcsec, tilt_deg=args.tilt_deg,
                            zero_stability_dph=args.zero_stability_dph,

@@ -16,7 +16,11 @@ def register(sub) -> None:
                                    "summary.txt and tables/*.csv into --out.")
     p.add_argument("readings", help="readings file (CSV, docs/formats.md#readings-file) or a stream (docs/formats.md#stream-file, "
                    "reduced with the protocol first; told apart by the header)")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
+    p.add_argument("--spec", default=None,
+                   help="specification (default: the readings' '# spec:' metadata, else "
+                        "ogam-draft)")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     add_certificate_options(p)
@@ -52,13 +56,30 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
 
 
 def run(args) -> int:
-    from gonio.atomic import check_output_dir
+    from gonio.atomic import check_output_dir, output_set
     from gonio.limits import check
 
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
     inputs = [args.readings, args.protocol, args.lab]
     check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
-    report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo)
+    from gonio.pipeline.rate import RATE_SPECS, calibrate as calibrate_rate, readings_spec
+
+    spec = args.spec or readings_spec(args.readings) or "ogam-draft"
+    if spec != "ogam-draft":
+        if spec not in RATE_SPECS:
+            from gonio.specs import get
+            get(spec)                                  # GonioError listing the keys
+        with output_set(args.out, inputs=inputs, force=args.force):    # one whole set
+            result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
+                                       protocol=args.protocol, lab=args.lab, lang=args.lang,
+                                       monte_carlo_trials=args.monte_carlo)
+        if args.json:
+            print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
+        else:
+            print(result.summary(), end="")
+        return 0
+    report = calibrate(args.readings, args.protocol or "ogam-draft",
+                       monte_carlo_trials=args.monte_carlo)
     emit(report, args.out, args.json, lab=args.lab, lang=args.lang, inputs=inputs,
          force=args.force)
     return 0

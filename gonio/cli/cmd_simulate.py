@@ -15,8 +15,12 @@ def register(sub) -> None:
     p = sub.add_parser("simulate", help="run a protocol on the virtual bench",
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
-    p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
+    p.add_argument("--spec", default="ogam-draft",
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the specification's)")
+    p.add_argument("--bench", default=None,
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=seed, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
@@ -44,8 +48,19 @@ def run(args) -> int:
 
     inputs = [args.protocol, args.bench, args.table]
     check_output_dir(args.out, inputs=inputs, force=args.force)
-    proto = load_protocol(args.protocol)
-    bench = load_bench(args.bench, table=args.table)
+    if args.spec != "ogam-draft":
+        from gonio.pipeline.rate import simulate
+
+        if args.stream or args.table:
+            raise GonioError("--stream and --table apply to the ogam-draft specification only")
+        with output_set(args.out, inputs=inputs, force=args.force):
+            paths = simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
+                             seed=args.seed)
+        for p in paths.values():
+            print(p)
+        return 0
+    proto = load_protocol(args.protocol or "ogam-draft")
+    bench = load_bench(args.bench or "rlg", table=args.table)
     with output_set(args.out, inputs=inputs, force=args.force) as stage:
         writer = None
         if args.stream:

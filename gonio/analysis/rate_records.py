@@ -1,0 +1,253 @@
+"""Records and readings helpers shared by the rate-gyro specifications (JJF 1535-2015,
+IEC 62047-20): the item and result dataclasses (results.json shape), the per-item GUM
+wrapper, segment means of a rate readings file.
+
+Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20` (one specification
+never imports another, so what they share lives here and in :mod:`gonio.analysis.rate_gyro`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gonio.errors import GonioError
+from gonio.formats.rate_readings import RateReadings, read_rate_readings
+from uncertainty import monte_carlo, propagate, validate_gum
+
+# --------------------------------------------------------------------------- results
+
+
+@dataclass
+class Uncertainty:
+    """An item's uncertainty: components (symbol, source, u, c, |c|u, dof), u_c, U, k, ν_eff."""
+
+    components: list[dict]
+    u_c: float
+    U: float
+    k: float
+    nu_eff: float
+    monte_carlo: dict | None = None
+
+    def to_json(self) -> dict:
+        out = {"components": self.components, "u_c": _f(self.u_c), "U": _f(self.U),
+               "k": _f(self.k), "nu_eff": _f(self.nu_eff)}
+        if self.monte_carlo is not None:
+            out["monte_carlo"] = json_safe(self.monte_carlo)
+        return out
+
+
+def _f(x):
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+@dataclass
+class Item:
+    """One calibration item: value, unit, clause, measured, reason, uncertainty, details."""
+
+    key: str
+    title: str
+    clause: str
+    unit: str
+    value: float | None = None
+    measured: bool = True
+    reason: str = ""
+    uncertainty: Uncertainty | None = None
+    details: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        return {"value": _f(self.value), "unit": self.unit, "clause": self.clause,
+                "title": self.title, "measured": bool(self.measured), "reason": self.reason,
+                "uncertainty": None if self.uncertainty is None else self.uncertainty.to_json(),
+                "details": json_safe(self.details)}
+
+
+def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> Item:
+    """An item the readings do not allow, with the reason."""
+    return Item(key, title, clause, unit, None, False, reason)
+
+
+def json_safe(x):
+    """Plain JSON types; NaN/inf → None; numpy → Python."""
+    if isinstance(x, dict):
+        return {str(k): json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return [json_safe(v) for v in x.tolist()]
+    if isinstance(x, (np.floating, float)):
+        return _f(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (np.bool_,)):
+        return bool(x)
+    return x
+
+
+@dataclass
+class RateCalibrationResult:
+    """A rate-gyro calibration: items in the specification's order, metadata, source."""
+
+    spec_key: str
+    spec_title: str
+    items: dict[str, Item]
+    metadata: dict
+    source: dict
+    readings_taken: list[str]
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def source_sha256(self) -> str:
+        return self.source.get("sha256", "")
+
+    def to_json(self) -> dict:
+        """results.json: one entry per item {value, unit, clause, measured, reason,
+        uncertainty{components, u_c, U, k, nu_eff}} plus specification, source, metadata."""
+        out = {"specification": self.spec_title, "spec": self.spec_key,
+               "source": self.source, "metadata": self.metadata,
+               "items": {k: v.to_json() for k, v in self.items.items()},
+               "readings_taken": self.readings_taken}
+        out.update(json_safe(self.extra))
+        return out
+
+    def to_dict(self) -> dict:
+        return self.to_json()
+
+    def summary(self) -> str:
+        """One line per item."""
+        lines = [f"{self.spec_title}"]
+        for it in self.items.values():
+            if not it.measured:
+                lines.append(f"  {it.clause:10s} {it.title}: not measured ({it.reason})")
+                continue
+            u = ""
+            if it.uncertainty is not None and it.uncertainty.U is not None and math.isfinite(it.uncertainty.U):
+                u = f" ± {it.uncertainty.U:.3g} (k = {it.uncertainty.k:g})"
+            lines.append(f"  {it.clause:10s} {it.title}: {it.value:.6g}{u} {it.unit}")
+        return "\n".join(lines) + "\n"
+
+
+_MC = contextvars.ContextVar("rate_gyro_monte_carlo", default=(0, 0))
+
+
+@contextlib.contextmanager
+def monte_carlo_validation(trials: int, seed: int = 0):
+    """Within this block every :func:`gum` budget is also propagated by JCGM 101 Monte Carlo
+    with ``trials`` draws and the GUM interval validated against it (JCGM 101 8)."""
+    token = _MC.set((int(trials), int(seed)))
+    try:
+        yield
+    finally:
+        _MC.reset(token)
+
+
+def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
+    """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
+    the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
+    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats;
+    ``p=None`` uses the fixed ``k``."""
+    r = propagate(value_fn, inputs, k=None if p is not None else k, p=p)
+    comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
+              "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
+             for c in r.contributions]
+    mc = None
+    trials, seed = _MC.get()
+    if trials > 0 and r.u_c > 0:
+        m = monte_carlo(value_fn, inputs, trials, seed=seed, p=p or 0.95)
+        v = validate_gum(r, m)
+        mc = {"trials": trials, "u": m.u, "low": m.low, "high": m.high,
+              "gum_low": v.gum_interval[0], "gum_high": v.gum_interval[1],
+              "d_low": v.d_low, "d_high": v.d_high, "delta": v.delta, "validated": v.passed}
+    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc)
+
+
+# --------------------------------------------------------------------------- readings
+
+def source_info(rd: RateReadings) -> dict:
+    """File name, SHA-256 and row count of the readings."""
+    if rd.path is not None and Path(rd.path).is_file():
+        sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
+        name = Path(rd.path).name
+    else:
+        sha = hashlib.sha256(pd.util.hash_pandas_object(rd.data, index=False).values.tobytes()).hexdigest()
+        name = "<memory>"
+    return {"file": name, "sha256": sha, "rows": int(len(rd.data))}
+
+
+def load_readings(readings) -> RateReadings:
+    """A RateReadings from a path or as given."""
+    if isinstance(readings, RateReadings):
+        return readings
+    return read_rate_readings(readings)
+
+
+@dataclass(frozen=True)
+class SegmentMean:
+    """Mean and spread of one (test, run, step) segment."""
+
+    test: str
+    run: int
+    step: int
+    role: str
+    rate_dps: float
+    n: int
+    mean: float
+    std: float
+    time_s: float
+    temperature_c: float
+    supply_v: float
+    up_axis: str
+    north_axis: str
+    freq_hz: float
+
+
+def segment_means(df: pd.DataFrame, test: str) -> list[SegmentMean]:
+    """Per-segment means of ``test``, ordered by run then step."""
+    d = df[df["test"] == test]
+    out = []
+    for (run, step), g in d.groupby(["run", "step"], sort=True):
+        y = g["output"].to_numpy()
+        out.append(SegmentMean(test, int(run), int(step), str(g["role"].iloc[0]),
+                               float(g["rate_dps"].iloc[0]), int(y.size), float(y.mean()),
+                               float(y.std(ddof=1)) if y.size > 1 else math.nan,
+                               float(g["time_s"].iloc[0]), float(g["temperature_c"].iloc[0]),
+                               float(g["supply_v"].iloc[0]), str(g["up_axis"].iloc[0]),
+                               str(g["north_axis"].iloc[0]), float(g["freq_hz"].iloc[0])))
+    return out
+
+
+def segment_samples(df: pd.DataFrame, test: str, run: int, step: int) -> pd.DataFrame:
+    """The rows of one segment."""
+    return df[(df["test"] == test) & (df["run"] == run) & (df["step"] == step)]
+
+
+def sf_calibration_means(means: list[SegmentMean], run: int):
+    """(rest before, rest after, rates, raw means, middle rest points) of one calibration."""
+    seg = [m for m in means if m.run == run]
+    if not seg:
+        raise GonioError(f"no segments for run {run}")
+    first, last = seg[0], seg[-1]
+    if first.role != "rest" or last.role != "rest":
+        raise GonioError(f"run {run}: a calibration starts and ends with a rest segment "
+                         f"(JJF 7.2.1.1 d)) — got {first.role!r} … {last.role!r}")
+    inner = seg[1:-1]
+    rates = np.array([m.rate_dps for m in inner if m.role == "rate"])
+    ys = np.array([m.mean for m in inner if m.role == "rate"])
+    zero = [m for m in inner if m.role == "rest"]
+    return first, last, rates, ys, zero
+
+
+def write_json(path, obj) -> None:
+    from gonio.atomic import write_text
+    write_text(path, json.dumps(json_safe(obj), indent=2, ensure_ascii=False, allow_nan=False) + "\n")

@@ -1,0 +1,312 @@
+"""Run a rate-gyro programme on the virtual bench: readings (one row per sample) + truth.
+
+A programme is a list of :class:`Segment` (one contiguous record under fixed conditions:
+table rate, mounting, chamber set point, supply, vibration), produced from a protocol by
+a specification package (e.g. :func:`gonio.specs.jjf1535.protocol.plan`). The runner
+keeps the physical state between segments: time since power-on, the noise processes,
+the gyro temperature lagging behind the chamber (ramps and soaks in the unrecorded
+``delay_s``), the table angle, and the power-cycle draws of K and b.
+
+Geometry: ENU frame at the site. A mounting names the body axis pointing up and the one
+pointing north (``up_axis="+z"``, ``north_axis="+x"``); the gyro's input axis is body +z.
+The rate table turns about the local vertical (positive: right-hand rule about up); the
+Earth rate Ω_E(0, cos λ, sin λ) is projected on the input axis (and the cross axes) in
+every orientation and at every table angle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy import signal
+
+from gonio.bench.rate_gyro import NoiseState, RateBench
+from gonio.physics.earth import earth_rate_enu
+from gonio.units import ARCSEC_PER_DEG
+from gonio.errors import GonioError
+
+#: Column order of the rate readings (see docs/formats-rate-gyro.md).
+RATE_COLUMNS: tuple[str, ...] = ("test", "run", "step", "role", "time_s", "rate_dps", "freq_hz",
+                                 "temperature_c", "supply_v", "up_axis", "north_axis",
+                                 "reference_dps", "output")
+
+_AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
+         "+z": (0, 0, 1), "-z": (0, 0, -1)}
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One recorded segment of a programme.
+
+    ``delay_s`` passes unrecorded before it (settling, warm-up, soak); ``power_on`` starts
+    a new power cycle first (after ``off_time_s`` switched off). ``temperature_c`` is the
+    chamber set point (None: chamber off, room temperature); ``supply_v`` None: nominal.
+    ``vib_amplitude_dps`` > 0 makes it a vibration segment at ``freq_hz`` (instantaneous
+    samples); otherwise each sample is the mean output over ``interval_s``.
+    """
+
+    test: str
+    run: int
+    step: int
+    role: str
+    samples: int
+    interval_s: float
+    rate_dps: float = 0.0
+    up_axis: str = "+z"
+    north_axis: str = "+x"
+    temperature_c: float | None = None
+    ramp_c_per_min: float = 1.0
+    supply_v: float | None = None
+    freq_hz: float = 0.0
+    vib_amplitude_dps: float = 0.0
+    delay_s: float = 0.0
+    power_on: bool = False
+    off_time_s: float = 0.0
+
+
+def mount_matrix(up_axis: str, north_axis: str) -> np.ndarray:
+    """Rotation body → ENU for a mounting (columns: ENU images of body x, y, z).
+
+    >>> mount_matrix("+z", "+x") @ np.array([0, 0, 1.0])
+    array([0., 0., 1.])
+    >>> (mount_matrix("+z", "+x") @ np.array([1.0, 0, 0])).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    try:
+        u, n = np.array(_AXES[up_axis], float), np.array(_AXES[north_axis], float)
+    except KeyError:
+        raise GonioError(f"mounting axes must be ±x, ±y, ±z, got {up_axis!r}, {north_axis!r}",
+                         key="up_axis") from None
+    if abs(u @ n) > 0:
+        raise GonioError(f"up axis {up_axis} and north axis {north_axis} must be perpendicular",
+                         key="north_axis")
+    e = np.cross(n, u)                       # body vector that maps to east
+    body = np.column_stack([e, n, u])        # body vectors mapping to E, N, U
+    return body.T                            # orthonormal: R = body⁻¹ = bodyᵀ
+
+
+def _rz(theta_rad) -> np.ndarray:
+    c, s = np.cos(theta_rad), np.sin(theta_rad)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+
+
+def _small_rotation(rng, sigma_rad) -> np.ndarray:
+    if sigma_rad <= 0:
+        return np.eye(3)
+    a = sigma_rad * rng.standard_normal(3)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + k + 0.5 * k @ k
+
+
+@dataclass
+class RateSessionResult:
+    """Readings (one row per sample, :data:`RATE_COLUMNS`), metadata and truth."""
+
+    data: pd.DataFrame
+    metadata: dict
+    truth: dict
+
+
+class _State:
+    def __init__(self, bench: RateBench, rng: np.random.Generator, room_c: float):
+        self.bench, self.rng = bench, rng
+        self.t = 0.0
+        self.noise: NoiseState | None = None
+        self.k_run = 1.0
+        self.b_run = 0.0
+        self.temp = room_c
+        self.room = room_c
+        self.chamber_set = room_c
+        self.theta = 0.0
+        self.run = -1
+
+
+def _chamber_track(st: _State, target: float, ramp_c_per_min: float, duration_s: float,
+                   eq) -> None:
+    """Advance the gyro temperature over ``duration_s`` while the chamber ramps to ``target``
+    (rate = min(protocol, chamber limit)) and holds (first-order lag, 1 s steps)."""
+    if duration_s <= 0:
+        return
+    rate = min(ramp_c_per_min, eq.chamber.max_ramp_c_per_min) / 60.0
+    n = int(math.ceil(duration_s))
+    t = np.arange(1, n + 1, dtype=float) * (duration_s / n)
+    start = st.chamber_set
+    ramp_t = abs(target - start) / rate if rate > 0 else 0.0
+    ch = np.where(t < ramp_t, start + np.sign(target - start) * rate * t, target)
+    off = 0.0 if target == st.room else eq.chamber.deviation_c
+    ch = ch + np.where(t < ramp_t, 0.0, off)
+    a = math.exp(-(duration_s / n) / st.bench.gyro.thermal_tau_s)
+    y, _ = signal.lfilter([1 - a], [1, -a], ch, zi=[a * st.temp])
+    st.temp = float(y[-1])
+    st.chamber_set = target
+
+
+def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *,
+                     room_temperature_c: float = 20.0, metadata: dict | None = None,
+                     noise: bool = True) -> RateSessionResult:
+    """Execute ``segments`` in order on ``bench``; same seed → same numbers."""
+    if not segments:
+        raise GonioError("the programme has no segments")
+    rng = np.random.default_rng(seed)
+    g, eq = bench.gyro, bench.equipment
+    st = _State(bench, rng, room_temperature_c)
+    omega_enu = np.degrees(earth_rate_enu(bench.latitude_deg))         # °/s in ENU
+    cols: dict[str, list] = {c: [] for c in RATE_COLUMNS}
+    seg_truth = []
+    runs = {}
+    for seg in segments:
+        if seg.samples < 1 or not seg.interval_s > 0:
+            raise GonioError(f"segment {seg.test}/{seg.run}/{seg.step}: needs ≥ 1 sample and "
+                             f"interval > 0")
+        if seg.power_on or st.noise is None:
+            if st.noise is not None:
+                _chamber_track(st, st.chamber_set, seg.ramp_c_per_min, seg.off_time_s, eq)
+            st.noise = NoiseState(g, rng, enabled=noise)
+            st.k_run = 1.0 + (g.sf_scatter_rel * float(rng.standard_normal()) if noise else 0.0)
+            st.b_run = g.bias_scatter_dps * float(rng.standard_normal()) if noise else 0.0
+            st.t = 0.0
+            st.run += 1
+            runs[st.run] = {"scale_factor_scatter_rel": st.k_run - 1.0, "bias_scatter_dps": st.b_run,
+                            "first_segment": f"{seg.test}/{seg.run}/{seg.step}"}
+        target = st.room if seg.temperature_c is None else float(seg.temperature_c)
+        _chamber_track(st, target, seg.ramp_c_per_min, seg.delay_s, eq)
+        st.noise.skip(seg.delay_s)
+        if seg.rate_dps:
+            st.theta += math.radians(seg.rate_dps) * seg.delay_s
+        st.t += seg.delay_s
+        n, dt = int(seg.samples), float(seg.interval_s)
+        t = st.t + dt * np.arange(n)
+        # gyro temperature along the record (chamber holding, with fluctuation)
+        ch = target + (0.0 if seg.temperature_c is None else
+                       eq.chamber.deviation_c + eq.chamber.fluctuation_c
+                       * np.sin(2 * math.pi * t / eq.chamber.fluctuation_period_s))
+        a = math.exp(-dt / g.thermal_tau_s)
+        temp, _ = signal.lfilter([1 - a], [1, -a], np.broadcast_to(ch, (n,)).astype(float),
+                                 zi=[a * st.temp])
+        st.temp = float(temp[-1])
+        temp_g = temp + (0.0 if seg.temperature_c is None else 0.5 * eq.chamber.uniformity_c)
+        v = g.supply_nominal_v if seg.supply_v is None else float(seg.supply_v)
+        K = g.scale_factor_at(temp_g, v) * st.k_run
+        null = float(g.null_at(v))
+        bias = g.bias_at(temp_g, v) + st.b_run
+        # warm-up transient, mean over each interval (exact)
+        if g.warmup_bias_dps:
+            tau = g.warmup_tau_s
+            warm = g.warmup_bias_dps * tau / dt * (np.exp(-t / tau) - np.exp(-(t + dt) / tau)) \
+                if seg.vib_amplitude_dps == 0 else g.warmup_bias_dps * np.exp(-t / tau)
+        else:
+            warm = 0.0
+        R0 = mount_matrix(seg.up_axis, seg.north_axis)
+        R0 = _small_rotation(rng, math.radians(eq.position_table.position_error_arcsec / ARCSEC_PER_DEG)
+                             if noise and seg.rate_dps == 0 and seg.vib_amplitude_dps == 0
+                             and (seg.up_axis, seg.north_axis) != ("+z", "+x") else 0.0) @ R0
+        tilt = math.radians(eq.rate_table.tilt_deg)
+        table_axis = np.array([math.sin(tilt), 0.0, math.cos(tilt)])
+        ref = np.full(n, np.nan)
+        if seg.vib_amplitude_dps > 0:
+            f = float(seg.freq_hz)
+            vt = eq.vibration_table
+            amp = seg.vib_amplitude_dps * (1 + vt.amplitude_error_rel)
+            ph = 2 * math.pi * f * t
+            h1, h2 = g.dynamics(f), g.dynamics(2 * f)
+            true_in = amp * (np.sin(ph) + vt.distortion_rel * np.sin(2 * ph))
+            dyn = amp * (abs(h1) * np.sin(ph + np.angle(h1))
+                         + vt.distortion_rel * abs(h2) * np.sin(2 * ph + np.angle(h2)))
+            zb = R0 @ np.array([0, 0, 1.0])
+            w_in = dyn * float(table_axis @ zb) + float(omega_enu @ zb)
+            det = g.response(w_in)
+            xb, yb = R0 @ np.array([1.0, 0, 0]), R0 @ np.array([0, 1.0, 0])
+            det = det + g.cross_axis_x * float(omega_enu @ xb) + g.cross_axis_y * float(omega_enu @ yb)
+            fb = R0.T @ np.array([0, 0, 1.0])
+            det = det + float(np.dot(g.g_sensitivity_dps_per_g, fb))
+            ref = true_in + (vt.reference_noise_dps * rng.standard_normal(n) if noise else 0.0)
+            mean_in = float(np.mean(true_in)) + float(omega_enu @ zb)
+        else:
+            w_set = float(seg.rate_dps)
+            w_act = w_set * (1 + eq.rate_table.rate_error_rel)
+            nsub = 16 if w_set != 0 else 1
+            frac = (np.arange(nsub) + 0.5) / nsub
+            ts = (t[:, None] + dt * frac[None, :]) - st.t                     # time in segment
+            theta = st.theta + math.radians(w_act) * ts
+            R = _rz(theta) @ R0                                                # (n, nsub, 3, 3)
+            zb, xb, yb = R[..., :, 2], R[..., :, 0], R[..., :, 1]
+            ripple = eq.rate_table.ripple_rel * abs(w_set) * np.sin(
+                theta + math.radians(eq.rate_table.ripple_phase_deg))
+            table_rate = (w_act + ripple)[..., None] * table_axis
+            w_vec = table_rate + omega_enu                                      # ENU, °/s
+            w_in = np.einsum("...i,...i", w_vec, zb)
+            det = g.response(w_in) + g.cross_axis_x * np.einsum("...i,...i", w_vec, xb) \
+                + g.cross_axis_y * np.einsum("...i,...i", w_vec, yb)
+            fb = np.einsum("...ij,j->...i", np.swapaxes(R, -1, -2), np.array([0, 0, 1.0]))
+            det = det + fb @ np.asarray(g.g_sensitivity_dps_per_g, float)
+            det = det.mean(axis=1)
+            mean_in = float(w_in.mean())
+            st.theta = float(theta[-1, -1] + math.radians(w_act) * dt * 0.5 / nsub)
+        err = st.noise.samples(n, dt, temp_g)
+        out = null + K * (det + bias + warm + err)
+        out = out * (1 + eq.acquisition.gain_error_rel)
+        lsb = max(g.output_lsb, eq.acquisition.resolution)
+        if lsb > 0:
+            out = np.round(out / lsb) * lsb
+        st.t += n * dt
+        cols["test"] += [seg.test] * n
+        cols["run"] += [seg.run] * n
+        cols["step"] += [seg.step] * n
+        cols["role"] += [seg.role] * n
+        cols["time_s"] += list(t)
+        cols["rate_dps"] += [seg.vib_amplitude_dps if seg.vib_amplitude_dps > 0 else seg.rate_dps] * n
+        cols["freq_hz"] += [seg.freq_hz] * n
+        cols["temperature_c"] += [room_temperature_c if seg.temperature_c is None
+                                  else seg.temperature_c] * n
+        cols["supply_v"] += [v] * n
+        cols["up_axis"] += [seg.up_axis] * n
+        cols["north_axis"] += [seg.north_axis] * n
+        cols["reference_dps"] += list(ref)
+        cols["output"] += list(out)
+        seg_truth.append({"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
+                          "power_cycle": st.run,
+                          "gyro_temperature_c": float(np.mean(temp_g)),
+                          "scale_factor": float(np.mean(K)) * (1 + eq.acquisition.gain_error_rel),
+                          "bias_dps": float(np.mean(bias)),
+                          "input_rate_dps": mean_in,
+                          "earth_rate_on_input_dps": float(omega_enu @ (R0 @ np.array([0, 0, 1.0])))
+                          if seg.rate_dps == 0 else None})
+    df = pd.DataFrame(cols, columns=list(RATE_COLUMNS))
+    md = dict(metadata or {})
+    truth = {"gyro": g.to_dict(), "equipment": eq.to_dict(), "latitude_deg": bench.latitude_deg,
+             "seed": seed, "noise": noise, "power_cycles": runs, "segments": seg_truth}
+    return RateSessionResult(df, md, truth)
+
+
+def calibration_segments(test: str, run: int, rates_one_dir: list[float], *, dt: float, rest_samples: int,
+                n_low: int, n_high: int, settle_s: float, order: str, first_delay_s: float,
+                power_on: bool, off_time_s: float, temperature_c=None, ramp=1.0,
+                supply_v=None, include_zero: bool = False) -> list[Segment]:
+    """One scale-factor calibration (JJF 7.2.1.1 c)–d) or IEC 5.1.4.1): rest, the rates in
+    the given order (forward ascending then reverse ascending, or alternating ±Ω pairs),
+    rest. ``include_zero`` adds a rest point in the middle (IEC: a fit point)."""
+    if order == "ascending":
+        seq = [r for r in rates_one_dir] + [-r for r in rates_one_dir]
+    elif order == "alternating":
+        seq = [s * r for r in rates_one_dir for s in (1, -1)]
+    elif order == "iec":                      # x_1 = CCW max … rest … CW max
+        seq = [-r for r in sorted(rates_one_dir, reverse=True)] + [0.0] + sorted(rates_one_dir)
+    else:
+        raise GonioError(f"order must be ascending or alternating, got {order!r}", key="order")
+    segs = [Segment(test, run, 0, "rest", rest_samples, dt, 0.0, temperature_c=temperature_c,
+                    ramp_c_per_min=ramp, supply_v=supply_v, delay_s=first_delay_s,
+                    power_on=power_on, off_time_s=off_time_s)]
+    for j, r in enumerate(seq, 1):
+        n = n_low if abs(r) < 100 else n_high
+        point = r != 0 or order == "iec"          # IEC 5.1.3.1: the rest is a fit point
+        segs.append(Segment(test, run, j, "rate" if point else "rest", n if point else rest_samples,
+                            dt, r, temperature_c=temperature_c, ramp_c_per_min=ramp,
+                            supply_v=supply_v, delay_s=settle_s))
+    segs.append(Segment(test, run, len(seq) + 1, "rest", rest_samples, dt, 0.0,
+                        temperature_c=temperature_c, ramp_c_per_min=ramp, supply_v=supply_v,
+                        delay_s=settle_s))
+    return segs

@@ -1,0 +1,105 @@
+"""Rate-gyro pipelines: simulate, calibrate, demo and budget for the rate-gyro
+specifications (``jjf1535-2015``, ``iec62047-20``), looked up through :mod:`gonio.specs`.
+
+Every function returns data (paths, results); the CLI (``gonio simulate/calibrate/demo/
+budget --spec …``) is a thin layer over them.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+from pathlib import Path
+
+from gonio.atomic import output_dir, write_text
+from gonio.errors import GonioError, read_utf8
+from gonio.specs import Specification, get
+from gonio.analysis.rate_records import json_safe, load_readings
+
+#: The specifications handled here (the optical draft keeps its own pipeline).
+RATE_SPECS = ("jjf1535-2015", "iec62047-20")
+
+
+def spec_module(spec: Specification):
+    """The package of a specification (it holds ``simulate``, ``calibrate``, ``SPEC``)."""
+    return importlib.import_module(spec.calibrate.__module__)
+
+
+def readings_spec(path: str | Path) -> str | None:
+    """The ``# spec: …`` metadata of a readings file (None when absent)."""
+    text = read_utf8(path, "readings file")
+    for line in text.lstrip("\ufeff").splitlines():
+        s = line.strip()
+        if not s:
+            continue
+        if not s.startswith("#"):
+            return None
+        key, _, value = s[1:].partition(":")
+        if key.strip() == "spec":
+            return value.strip()
+    return None
+
+
+def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
+             protocol: str | None = None, seed: int = 0, noise: bool = True) -> dict[str, Path]:
+    """Run the specification's programme on a rate bench; write ``readings.csv`` (the
+    rate readings format, docs/formats-rate-gyro.md) and ``truth.json``."""
+    from gonio.bench.rate_gyro import load_rate_bench
+    from gonio.formats.rate_readings import write_rate_readings
+
+    spec = get(spec_key)
+    if spec.key not in RATE_SPECS:
+        raise GonioError(f"{spec.key} is not a rate-gyro specification", key="--spec")
+    b = load_rate_bench(bench or spec.default_bench)
+    res = spec_module(spec).simulate(b, protocol or spec.default_protocol, seed, noise=noise)
+    out = Path(out)
+    with output_dir(out) as stage:
+        write_rate_readings(res.data, res.metadata, stage / "readings.csv")
+        write_text(stage / "truth.json", json.dumps(json_safe(res.truth), indent=2,
+                                                    ensure_ascii=False, allow_nan=False) + "\n")
+    return {"readings": out / "readings.csv", "truth": out / "truth.json"}
+
+
+def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
+              protocol: str | None = None, lab=None, lang: str = "en",
+              truth: dict | None = None, monte_carlo_trials: int = 0):
+    """Calibrate a rate readings file: ``results.json``, ``summary.txt`` and the certificate
+    (HTML, PDF) in ``out``. The specification is ``spec_key`` or the file's ``# spec:``."""
+    from gonio.report.certificate import load_lab
+    from gonio.report.rate_certificate import write_rate_certificate
+
+    key = spec_key or readings_spec(readings)
+    if key is None:
+        raise GonioError("the readings name no specification (metadata '# spec: …'); "
+                         "give --spec", file=readings)
+    spec = get(key)
+    lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
+    rd = load_readings(readings)
+    result = spec.calibrate(rd, protocol or spec.default_protocol,
+                            monte_carlo_trials=monte_carlo_trials)
+    out = Path(out)
+    with output_dir(out) as stage:
+        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
+                                                      ensure_ascii=False, allow_nan=False) + "\n")
+        write_text(stage / "summary.txt", result.summary())
+    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    return result, paths
+
+
+def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int = 0,
+         lab=None, lang: str = "en"):
+    """Simulate the whole programme and calibrate it: readings, truth, results, certificate."""
+    p = simulate(spec_key, out, bench=bench, seed=seed)
+    truth = json.loads(Path(p["truth"]).read_text(encoding="utf-8"))
+    result, paths = calibrate(p["readings"], out, spec_key=spec_key, lab=lab, lang=lang,
+                              truth=truth)
+    return result, {**p, **paths}
+
+
+def budget(spec_key: str):
+    """The specification's own annex budget, reproduced (``SPEC.budget()``)."""
+    spec = get(spec_key)
+    if spec.budget is None:
+        raise GonioError(f"{spec.key} has no annex budget", key="--spec")
+    return spec.budget()

@@ -1,0 +1,183 @@
+"""Figures a rate-gyro laboratory expects, drawn on matplotlib Figure objects.
+
+=========================  ===========================================================
+:func:`draw_io_line`       input–output line of the scale-factor calibration, residuals below
+:func:`draw_cw_ccw`        forward (CW) and reverse (CCW) fits: departure from the mean line
+:func:`draw_temperature`   bias and scale factor against temperature
+:func:`draw_allan`         Allan deviation with its confidence band and the five-term fit
+:func:`draw_frequency`     amplitude (dB) and phase response with the −3 dB and 90° points
+=========================  ===========================================================
+
+Each ``draw_*`` takes ``(fig, spec, result, L, truth)`` like the optical certificate's
+figures (a Figure, a SubplotSpec, a :class:`~gonio.analysis.rate_records.RateCalibrationResult`,
+labels, the bench truth or None); an item not measured gives a panel saying so.
+:data:`FIGURES` lists them for the certificate.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _item(result, *keys):
+    for k in keys:
+        it = result.items.get(k)
+        if it is not None and it.measured:
+            return it
+    return None
+
+
+def _empty(ax, text: str) -> None:
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, color="0.4")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def draw_io_line(fig, spec, result, L, truth=None) -> None:
+    """Rest-removed mean output against input rate (first calibration), the fitted line, and
+    the residuals v_j in a panel below."""
+    gs = spec.subgridspec(2, 1, height_ratios=(2, 1), hspace=0.08)
+    ax, ax2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
+    it = _item(result, "scale_factor")
+    if it is None or "means_m" not in it.details:
+        _empty(ax, "scale factor not measured")
+        ax2.set_visible(False)
+        return
+    d = it.details
+    r = np.asarray(d["rates_dps"], float)
+    y = np.asarray(d["means_m"][0], float)
+    K, F0 = float(d["K_m"][0]), float(d["F0_m"][0])
+    o = np.argsort(r)
+    ax.plot(r[o], y[o], "o", ms=3, label="F̄_j − F_r")
+    ax.plot(r[o], K * r[o] + F0, "-", lw=0.8, label=f"K = {K:.6g}")
+    ax.set_ylabel(f"output ({result.metadata.get('output_unit', '')})")
+    ax.legend(loc="upper left")
+    ax.tick_params(labelbottom=False)
+    for m, res in enumerate(d["residuals_m"]):
+        ax2.plot(r[o], np.asarray(res, float)[o], "o-", ms=2, lw=0.6, label=f"m = {m + 1}")
+    ax2.axhline(0, color="0.5", lw=0.6)
+    ax2.set_xlabel("input rate Ω (°/s)")
+    ax2.set_ylabel("residual v_j")
+    ax2.legend(loc="best", ncol=3)
+
+
+def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
+    """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line."""
+    ax = fig.add_subplot(spec)
+    it = _item(result, "scale_factor")
+    a = _item(result, "asymmetry")
+    if it is None or a is None:
+        _empty(ax, "asymmetry not measured")
+        return
+    r = np.asarray(it.details["rates_dps"], float)
+    y = np.asarray(it.details["means_m"][0], float)
+    K = float(it.details["K_m"][0])
+    for sel, name, kk in ((r > 0, "forward (CW)", a.details["K_pos_m"][0]),
+                          (r < 0, "reverse (CCW)", a.details["K_neg_m"][0])):
+        rr, yy = r[sel], y[sel]
+        o = np.argsort(rr)
+        p = np.polyfit(rr, yy, 1)
+        ax.plot(rr[o], yy[o] - K * rr[o], "o", ms=3, label=f"{name}: K = {kk:.6g}")
+        ax.plot(rr[o], np.polyval(p, rr[o]) - K * rr[o], "-", lw=0.8)
+    ax.axhline(0, color="0.5", lw=0.6)
+    ax.set_xlabel("input rate Ω (°/s)")
+    ax.set_ylabel("F̄_j − K̄·Ω_j")
+    ax.legend(loc="best")
+    ax.set_title(f"asymmetry K_a = {a.value:.3g}")
+
+
+def draw_temperature(fig, spec, result, L, truth=None) -> None:
+    """Bias (°/h) against temperature, and the scale factor on a second axis."""
+    ax = fig.add_subplot(spec)
+    b = _item(result, "bias_temperature_sensitivity", "bias_temperature_coefficient")
+    k = _item(result, "sf_temperature_sensitivity", "sf_temperature_coefficient")
+    if b is None and k is None:
+        _empty(ax, "temperature items not measured")
+        return
+    if b is not None:
+        T = np.asarray(b.details["temperatures_c"], float)
+        B = np.asarray(b.details["bias_dph"], float)
+        o = np.argsort(T)
+        ax.plot(T[o], B[o], "o-", ms=4, color="C0", label="bias (°/h)")
+        ax.set_ylabel("bias (°/h)", color="C0")
+    if k is not None:
+        ax2 = ax.twinx()
+        T = np.asarray(k.details["temperatures_c"], float)
+        K = np.asarray(k.details["K_i"], float)
+        o = np.argsort(T)
+        ax2.plot(T[o], K[o], "s--", ms=4, color="C1", label="K")
+        ax2.set_ylabel(f"K ({result.metadata.get('output_unit', '')}/(°/s))", color="C1")
+        ax2.grid(False)
+    ax.set_xlabel("temperature (°C)")
+
+
+def draw_allan(fig, spec, result, L, truth=None) -> None:
+    """Overlapping Allan deviation (°/h) with its χ² band and the fitted five-term model."""
+    from gonio.analysis.noise import model_adev
+
+    ax = fig.add_subplot(spec)
+    it = _item(result, "angle_random_walk")
+    if it is None:
+        _empty(ax, "angle random walk not measured")
+        return
+    a = it.details["allan"]
+    tau = np.asarray(a["tau_s"], float)
+    adev = np.asarray(a["adev_dph"], float)
+    ax.fill_between(tau, np.asarray(a["ci_low"], float), np.asarray(a["ci_high"], float),
+                    color="C0", alpha=0.2, lw=0)
+    ax.loglog(tau, adev, "o", ms=2.5, color="C0", label="overlapping ADEV")
+    f = it.details["fit"]
+    ax.loglog(tau, model_adev(tau, f["Q"], f["N"], f["B"], f["K"], f["R"]), "-", color="C3",
+              lw=1, label=f"fit: ARW {it.value:.3g} °/√h, B {f['B']:.3g} °/h")
+    ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
+    pr = it.details.get("printed_eq22_24_statistic") or {}
+    if pr:
+        ks = np.array([int(k) for k in pr], float)
+        dt = tau[0] / np.asarray(a.get("m", [1]), float)[0] if "m" in a else tau[0]
+        pv = np.array([pr[k]["printed_eq24_dph2"] for k in pr], float)
+        ax.loglog(ks * dt, np.sqrt(pv), "x", color="C2", ms=4,
+                  label="JJF eq (24) as printed (not AVAR)")
+    ax.set_xlabel("τ (s)")
+    ax.set_ylabel("σ(τ) (°/h)")
+    ax.legend(loc="best")
+
+
+def draw_frequency(fig, spec, result, L, truth=None) -> None:
+    """Gain (dB, 0 dB at the lowest frequency) and phase against frequency; −3 dB point."""
+    gs = spec.subgridspec(2, 1, hspace=0.08)
+    ax, ax2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
+    it = _item(result, "bandwidth", "frequency_band")
+    if it is None:
+        _empty(ax, "bandwidth not measured")
+        ax2.set_visible(False)
+        return
+    f = np.asarray(it.details["freq_hz"], float)
+    ax.semilogx(f, np.asarray(it.details["gain_db"], float), "o-", ms=3)
+    ax.axhline(-3.0, color="C3", lw=0.7, ls="--")
+    ax.axvline(it.value, color="C3", lw=0.7)
+    ax.set_ylabel("gain (dB)")
+    ax.set_title(f"−3 dB at {it.value:.4g} Hz")
+    ax.tick_params(labelbottom=False)
+    ax2.semilogx(f, np.asarray(it.details["phase_deg"], float), "s-", ms=3, color="C1")
+    ax2.axhline(-90.0, color="C3", lw=0.7, ls="--")
+    p90 = it.details.get("phase90_hz_iec")
+    if p90 is not None and math.isfinite(p90):
+        ax2.axvline(p90, color="C1", lw=0.7)
+    ax2.set_ylabel("phase (°)")
+    ax2.set_xlabel("frequency (Hz)")
+
+
+#: (key, caption en, caption zh, draw function) in the certificate's order.
+FIGURES = (
+    ("io_line", "Input–output line of the scale-factor calibration, residuals below",
+     "标度因数输入输出直线及残差", draw_io_line),
+    ("cw_ccw", "Forward (CW) and reverse (CCW) fits", "正反转分别拟合", draw_cw_ccw),
+    ("temperature", "Bias and scale factor against temperature", "零偏与标度因数随温度变化",
+     draw_temperature),
+    ("allan", "Allan deviation of the static record with the five-term fit",
+     "静态数据的Allan偏差及五项拟合", draw_allan),
+    ("frequency", "Amplitude and phase response; −3 dB point", "幅频与相频特性及−3 dB点",
+     draw_frequency),
+)

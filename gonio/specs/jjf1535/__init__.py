@@ -1,0 +1,142 @@
+"""JJF 1535-2015, calibration specification for MEMS gyroscopes (微机电(MEMS)陀螺仪校准规范).
+
+:func:`calibrate` computes the fifteen items of Table 3 (:mod:`.items`) from a rate
+readings file; :func:`gonio.specs.jjf1535.budget.annex_a` reproduces Annex A;
+:mod:`.protocol` reads ``protocols/jjf1535-2015.toml`` and plans the programme for the
+virtual bench; :mod:`.truth` gives the bench's true value of every item;
+:mod:`.certificate` holds the Annex B content (items grouped).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from gonio.errors import GonioError
+from gonio.specs import Specification
+from gonio.specs.jjf1535 import items as _items_mod
+from gonio.specs.jjf1535.budget import annex_a
+from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
+from gonio.analysis.rate_records import (monte_carlo_validation, Item, RateCalibrationResult, load_readings, not_measured,
+                                     source_info)
+
+TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
+TITLE_ZH = "JJF 1535-2015 微机电(MEMS)陀螺仪校准规范"
+
+#: The readings taken that every results.json lists (docs/jjf1535-readings.md has them all).
+READINGS_TAKEN = (
+    "7.2.1: K is the mean of the Q least-squares K_m; the mean of the rests before and after "
+    "each calibration is subtracted; rests are not fit points.",
+    "7.2.2: the denominator of eq (6) is the fitted span K(Ω_max+ − Ω_max−) with Ω_max− signed.",
+    "7.2.3: K̄_m = (K+ + K−)/2, magnitude reported.",
+    "7.2.6/7.2.7: the relation sign of eqs (13)/(14) is read two-sided, |…|/|F*| ≤ 50 %.",
+    "7.2.8/7.2.12: the Earth-rate projection on the input axis is removed (the specification "
+    "does not; at 40° N a true 5 (°/h)/g would read 14.7 (°/h)/g).",
+    "7.2.9: warm-up time = earliest time after which every window meets the nominal stability.",
+    "7.2.13: eqs (22)-(24) as printed difference means one sample apart and fall as 2/k²; the "
+    "ARW is taken from the overlapping Allan variance (IEEE 952), the printed statistic is "
+    "reported alongside, labelled.",
+    "7.2.14: each B_i uses the scale factor calibrated at the same temperature.",
+    "7.2.15: 0 dB = the lowest test frequency; −3 dB = ratio 10^(−3/20); log-f interpolation.",
+    "Uncertainties are computed from the calibration's own data (GUM, k = t95(ν_eff)); Annex A "
+    "is reproduced separately (gonio budget --spec jjf1535-2015).",
+)
+
+
+def _meta_float(md: dict, key: str, default: float | None, path) -> float:
+    v = md.get(key, "")
+    if v in ("", None):
+        if default is None:
+            raise GonioError("required metadata key is missing", file=path, key=key)
+        return float(default)
+    try:
+        return float(v)
+    except ValueError:
+        raise GonioError(f"expected a number, got {v!r}", file=path, key=key) from None
+
+
+def make_context(rd, proto: JJFProtocol):
+    """The :class:`~.items.Context` of a readings file: null, latitude, units from the metadata
+    (the protocol's values when the metadata lacks them)."""
+    md = rd.metadata
+    p = proto.sections
+    null = _meta_float(md, "null_output",
+                       None if p["protocol"]["null_output"] == "bench" else p["protocol"]["null_output"],
+                       rd.path)
+    lat = _meta_float(md, "latitude_deg",
+                      None if p["bias"]["latitude_deg"] == "bench" else p["bias"]["latitude_deg"],
+                      rd.path)
+    return _items_mod.Context(
+        df=rd.data, output_unit=md.get("output_unit", "output"), null_output=null,
+        latitude_deg=lat,
+        room_temperature_c=_meta_float(md, "room_temperature_c",
+                                       p["protocol"]["room_temperature_c"], rd.path),
+        protocol=p,
+        rate_table_u_rel=_meta_float(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        acquisition_u_rel=_meta_float(md, "acquisition_u_rel", 3.0e-5, rd.path),
+        chamber_deviation_c=_meta_float(md, "chamber_deviation_bound_c", 2.0, rd.path))
+
+
+def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
+              monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
+    """Every JJF 1535 Table 3 item from a rate readings file (path or RateReadings).
+
+    ``protocol``: file, built-in name or loaded protocol; default the readings' metadata
+    ``protocol`` when it names a file that exists, else ``jjf1535-2015``. An item whose
+    records are absent, or whose computation refuses the data, is reported not measured
+    with the reason; nothing is dropped silently. ``monte_carlo_trials`` > 0 also propagates
+    every item's budget by JCGM 101 Monte Carlo and validates the GUM interval against it.
+    """
+    rd = load_readings(readings)
+    spec = rd.metadata.get("spec", KEY)
+    if spec != KEY:
+        raise GonioError(f"the readings are for specification {spec!r}, not {KEY!r}",
+                         file=rd.path, key="spec")
+    proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or KEY)
+    ctx = make_context(rd, proto)
+    items: dict[str, Item] = {}
+    # the Allan fit (7.2.13) is computed early: later items use it for the bias drift
+    order = sorted(_items_mod.ITEMS, key=lambda r: (r[0] != "scale_factor",
+                                                    r[0] != "angle_random_walk"))
+    for key, title, clause, fn in order:
+        try:
+            with monte_carlo_validation(monte_carlo_trials):
+                items[key] = fn(ctx)
+        except GonioError as exc:
+            items[key] = not_measured(key, title, clause, "",
+                                      f"the data were refused: {exc.message}")
+    items = {r[0]: items[r[0]] for r in _items_mod.ITEMS}
+    return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
+                                 list(READINGS_TAKEN),
+                                 extra={"annex_a": annex_a().to_dict()})
+
+
+SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
+                     clause_doc="docs/jjf1535-readings.md", default_protocol=KEY,
+                     default_bench="mems-adxrs610", calibrate=calibrate, budget=annex_a)
+
+
+def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
+    """Run the protocol's programme on a rate bench: (RateSessionResult with metadata, truth)."""
+    from gonio.bench.rate_session import run_rate_session
+    from gonio.specs.jjf1535.protocol import null_output, plan
+    from gonio.specs.jjf1535.truth import truth as _truth
+
+    proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or KEY)
+    b = bench if noise else bench.without_noise()
+    g, eq = b.gyro, b.equipment
+    md = {"spec": KEY, "protocol": proto.path.stem if proto.path else KEY, "bench": b.name,
+          "seed": seed, "noise": "on" if noise else "off", "instrument": g.name, "model": g.model,
+          "serial": g.serial, "manufacturer": g.manufacturer, "output_unit": g.output_unit,
+          "nominal_scale_factor": repr(g.scale_factor),
+          "null_output": repr(null_output(proto, b)), "latitude_deg": repr(b.latitude_deg),
+          "room_temperature_c": repr(proto["protocol"]["room_temperature_c"]),
+          "supply_nominal_v": repr(g.supply_nominal_v),
+          "rate_table_u_rel": repr(eq.rate_table_u_rel),
+          "acquisition_u_rel": repr(eq.acquisition_u_rel), "chamber_deviation_bound_c": "2.0",
+          "table": "rate table, two-axis position table, angular vibration table, chamber "
+                   "(virtual)"}
+    res = run_rate_session(plan(proto, b), b, seed,
+                           room_temperature_c=proto["protocol"]["room_temperature_c"],
+                           metadata=md, noise=noise)
+    res.truth["items"] = _truth(b, proto)
+    return res

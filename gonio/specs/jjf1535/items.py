@@ -1,0 +1,661 @@
+"""JJF 1535-2015 Table 3: the fifteen calibration items, one function each.
+
+Each function takes a :class:`Context` (the readings and what the calibration already
+knows: K, null output, latitude, protocol values) and returns an
+:class:`~gonio.analysis.rate_records.Item` with its value, unit, clause, and an uncertainty
+computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
+k = t₉₅(ν_eff). The formulas are in :mod:`gonio.analysis.rate_gyro`; the readings taken
+are documented in ``docs/jjf1535-readings.md``.
+
+Rates are reported in °/h (bias family) or °/s (threshold, resolution) as JJF Table 1
+allows; the scale factor in the gyro's output unit per °/s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from gonio.analysis import rate_gyro as rg
+from gonio.errors import GonioError
+from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
+                                     sf_calibration_means)
+from gonio.units import S_PER_H
+from uncertainty import from_u, type_b
+
+
+@dataclass
+class Context:
+    """What the item functions need besides the formulas."""
+
+    df: pd.DataFrame
+    output_unit: str
+    null_output: float
+    latitude_deg: float
+    room_temperature_c: float
+    protocol: dict
+    rate_table_u_rel: float = 2.5e-4
+    acquisition_u_rel: float = 3.0e-5
+    chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
+    axis_alignment_deg: float = 0.05          # mounting of the input axis (fixture), half-width
+    cross_axis_bound: float = 0.03            # assumed |cross-axis sensitivity| bound (7.2.12)
+    K: float | None = None                    # K̄ of 7.2.1 once computed
+    u_K_rel: float | None = None
+    cache: dict = field(default_factory=dict)
+
+    def has(self, test: str) -> bool:
+        return bool((self.df["test"] == test).any())
+
+
+def _need(ctx: Context, test: str, key: str, title: str, clause: str, unit: str):
+    if not ctx.has(test):
+        return not_measured(key, title, clause, unit, f"no '{test}' records in the readings")
+    if ctx.K is None and key not in ("scale_factor",):
+        return not_measured(key, title, clause, unit, "needs the scale factor of 7.2.1")
+    return None
+
+
+def _block_std_of_mean(y: np.ndarray, block: int = 10) -> tuple[float, float]:
+    """Standard uncertainty of a record mean from its block means (robust to correlated
+    noise at lags < block): s(block means)/√n_blocks, ν = n_blocks − 1."""
+    n = y.size // block
+    if n < 2:
+        return (float(np.std(y, ddof=1) / math.sqrt(y.size)) if y.size > 1 else math.nan,
+                max(y.size - 1, 1))
+    m = y[: n * block].reshape(n, block).mean(axis=1)
+    return float(m.std(ddof=1) / math.sqrt(n)), n - 1
+
+
+def drift_u_dph(ctx: Context, separation_s: float) -> float:
+    """Standard uncertainty (°/h) of a bias difference between two records ``separation_s``
+    apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
+    instability (√2·0.664·B as the flicker floor of a difference); 0 without a static record."""
+    fit = ctx.cache.get("noise_fit")
+    if fit is None:
+        return 0.0
+    return math.sqrt(fit.K ** 2 * abs(separation_s) + 2 * (rg.FLICKER_FLOOR_EXACT * fit.B) ** 2)
+
+
+# --------------------------------------------------------------------------- 7.2.1 – 7.2.4
+def calibrations(ctx: Context, test: str = "scale_factor") -> list[dict]:
+    """Each calibration m of 7.2.1.2: F_r, fit (K_m, F_0,m, residuals), K±, standard error."""
+    if ("cal", test) in ctx.cache:
+        return ctx.cache[("cal", test)]
+    means = segment_means(ctx.df, test)
+    out = []
+    for run in sorted({m.run for m in means}):
+        first, last, rates, ys, _ = sf_calibration_means(means, run)
+        fr = rg.rest_level(first.mean, last.mean)
+        fit = rg.fit_scale_factor(rates, ys, rest=fr)
+        asym = rg.asymmetry_jjf(rates, fit.means)
+        n = rates.size
+        se = math.sqrt(float((fit.residuals ** 2).sum()) / (n - 2)
+                       / float(((rates - rates.mean()) ** 2).sum())) if n > 2 else math.nan
+        seg = [m for m in means if m.run == run]
+        u_mean = np.array([m.std / math.sqrt(m.n) for m in seg[1:-1] if m.role == "rate"])
+        out.append({"run": run, "rest": fr, "fit": fit, "asym": asym, "se_K": se,
+                    "u_means": u_mean, "temperature_c": first.temperature_c,
+                    "supply_v": first.supply_v, "rates": rates})
+    if not out:
+        raise GonioError(f"no calibrations in '{test}'")
+    ctx.cache[("cal", test)] = out
+    return out
+
+
+def scale_factor(ctx: Context) -> Item:
+    """JJF 1535 7.2.1: K̄ = mean of the Q least-squares scale factors K_m (eqs (4), (5)),
+    rests before and after removed, rest points not fit points (readings taken).
+
+    Budget (Annex A.1 structure, from the calibration's own data): u₁ rate table
+    (relative, its certificate), u₂ acquisition (relative), u₃ repeatability of the mean
+    s(K_m)/√Q (type A, ν = Q − 1).
+    """
+    title, clause, unit = "scale factor K", "7.2.1", f"{ctx.output_unit}/(°/s)"
+    miss = _need(ctx, "scale_factor", "scale_factor", title, clause, unit)
+    if miss:
+        return miss
+    cals = calibrations(ctx)
+    Ks = np.array([c["fit"].K for c in cals])
+    Q = Ks.size
+    Kbar = float(Ks.mean())
+    if Q >= 2:
+        u3 = from_u("s_K", 0.0, float(Ks.std(ddof=1)) / math.sqrt(Q), dof=Q - 1,
+                    source="repeatability of the mean of Q calibrations, s(K_m)/√Q")
+    else:
+        u3 = from_u("s_K", 0.0, cals[0]["se_K"], dof=len(cals[0]["rates"]) - 2,
+                    source="least-squares standard error of K (one calibration)")
+    inputs = [from_u("K_m", Kbar, 0.0, type="A", source="mean of K_m"),
+              from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B",
+                     source="rate table, relative (u1)"),
+              from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B",
+                     source="data acquisition, relative (u2)"),
+              u3]
+    u = gum(lambda k, et, ea, s: (k + s) * (1 + ea) / (1 + et), inputs)
+    ctx.K, ctx.u_K_rel = Kbar, u.u_c / abs(Kbar)
+    return Item("scale_factor", title, clause, unit, Kbar, uncertainty=u, details={
+        "K_m": Ks, "F0_m": [c["fit"].F0 for c in cals], "rest_m": [c["rest"] for c in cals],
+        "se_K_m": [c["se_K"] for c in cals], "Q": Q,
+        "rates_dps": cals[0]["rates"], "means_m": [c["fit"].means for c in cals],
+        "residuals_m": [c["fit"].residuals for c in cals]})
+
+
+def nonlinearity(ctx: Context) -> Item:
+    """JJF 1535 7.2.2 eqs (6), (7): K_n = mean over m of max|v_j| / [K_m(Ω_max+ − Ω_max−)].
+
+    Uncertainty: the spread of K_n,m (type A) and the noise of the rate-point means entering
+    the largest residual, u(F̄_j)/[K(Ω+ − Ω−)]."""
+    title, clause, unit = "scale-factor nonlinearity K_n", "7.2.2", "1"
+    miss = _need(ctx, "scale_factor", "nonlinearity", title, clause, unit)
+    if miss:
+        return miss
+    cals = calibrations(ctx)
+    kn = np.array([rg.nonlinearity_jjf(c["fit"]) for c in cals])
+    span = np.array([abs(c["fit"].K * (c["rates"].max() - c["rates"].min())) for c in cals])
+    u_noise = float(np.sqrt(np.mean([np.mean(c["u_means"] ** 2) for c in cals])) / span.mean()
+                    / math.sqrt(len(cals)))
+    inputs = [from_u("K_n", float(kn.mean()), 0.0, source="mean of K_n,m"),
+              from_u("s_Kn", 0.0, float(kn.std(ddof=1) / math.sqrt(kn.size)) if kn.size > 1 else 0.0,
+                     dof=max(kn.size - 1, 1), source="spread of K_n,m"),
+              from_u("noise", 0.0, u_noise, dof=math.inf, source="noise of the rate-point means")]
+    u = gum(lambda a, b, c: a + b + c, inputs)
+    return Item("nonlinearity", title, clause, unit, float(kn.mean()), uncertainty=u,
+                details={"K_n_m": kn, "span_m": span})
+
+
+def asymmetry(ctx: Context) -> Item:
+    """JJF 1535 7.2.3 eqs (8), (9): K_a = mean of |K+,m − K−,m| / ((K+,m + K−,m)/2)."""
+    title, clause, unit = "scale-factor asymmetry K_a", "7.2.3", "1"
+    miss = _need(ctx, "scale_factor", "asymmetry", title, clause, unit)
+    if miss:
+        return miss
+    cals = calibrations(ctx)
+    ka = np.array([c["asym"].value for c in cals])
+    # slope standard errors of each direction's fit (√2·se of the two-direction fit, roughly)
+    se = float(np.mean([c["se_K"] for c in cals])) * 2.0 / abs(ctx.K) / math.sqrt(len(cals))
+    inputs = [from_u("K_a", float(ka.mean()), 0.0),
+              from_u("s_Ka", 0.0, float(ka.std(ddof=1) / math.sqrt(ka.size)) if ka.size > 1 else 0.0,
+                     dof=max(ka.size - 1, 1), source="spread of K_a,m"),
+              from_u("fit", 0.0, se, source="standard errors of K+ and K−")]
+    u = gum(lambda a, b, c: a + b + c, inputs)
+    return Item("asymmetry", title, clause, unit, float(ka.mean()), uncertainty=u, details={
+        "K_a_m": ka, "signed_m": [c["asym"].signed for c in cals],
+        "K_pos_m": [c["asym"].K_pos for c in cals], "K_neg_m": [c["asym"].K_neg for c in cals]})
+
+
+def sf_repeatability(ctx: Context) -> Item:
+    """JJF 1535 7.2.4 eq (10): K_r = s(K_m)/K̄ over Q calibrations with power off between.
+
+    Uncertainty of a standard deviation from Q values: K_r/√(2(Q − 1)), ν = Q − 1."""
+    title, clause, unit = "scale-factor repeatability K_r", "7.2.4", "1"
+    miss = _need(ctx, "scale_factor", "sf_repeatability", title, clause, unit)
+    if miss:
+        return miss
+    cals = calibrations(ctx)
+    if len(cals) < 2:
+        return not_measured("sf_repeatability", title, clause, unit,
+                            f"needs Q ≥ 2 calibrations, the readings hold {len(cals)}")
+    _, _, kr = rg.relative_std([c["fit"].K for c in cals])
+    Q = len(cals)
+    u = gum(lambda a, b: a + b, [from_u("K_r", kr, 0.0),
+                                 from_u("s(s)", 0.0, kr / math.sqrt(2 * (Q - 1)), dof=Q - 1,
+                                        source="sampling of a standard deviation, Q values")])
+    return Item("sf_repeatability", title, clause, unit, kr, uncertainty=u, details={"Q": Q})
+
+
+def sf_temperature_sensitivity(ctx: Context) -> Item:
+    """JJF 1535 7.2.5 eq (11): K_t = max_i |(K_i − K_rt)/(K_rt (T_i − T_rt))|.
+
+    Uncertainty: the least-squares standard errors of K_i and K_rt (type A) and the chamber's
+    temperature deviation (Table 2, ±2 °C, rectangular) on T_i."""
+    title, clause, unit = "scale-factor temperature sensitivity K_t", "7.2.5", "1/°C"
+    miss = _need(ctx, "sf_temperature", "sf_temperature_sensitivity", title, clause, unit)
+    if miss:
+        return miss
+    cals = calibrations(ctx, "sf_temperature")
+    Ks = [c["fit"].K for c in cals]
+    Ts = [c["temperature_c"] for c in cals]
+    rt = int(np.argmin(np.abs(np.array(Ts) - ctx.room_temperature_c)))
+    value, slopes = rg.temperature_sensitivity(Ks, Ts, rt, relative=True)
+    i = int(np.nanargmax(np.abs(slopes)))
+    c_i, c_rt = cals[i], cals[rt]
+    inputs = [from_u("K_i", c_i["fit"].K, c_i["se_K"], dof=len(c_i["rates"]) - 2,
+                     source=f"K at {Ts[i]:g} °C (fit standard error)"),
+              from_u("K_rt", c_rt["fit"].K, c_rt["se_K"], dof=len(c_rt["rates"]) - 2,
+                     source=f"K at room temperature {Ts[rt]:g} °C"),
+              type_b("dT", Ts[i] - Ts[rt], ctx.chamber_deviation_c, "rectangular",
+                     source="chamber temperature deviation (Table 2)")]
+    u = gum(lambda a, b, d: abs((a - b) / (b * d)), inputs)
+    return Item("sf_temperature_sensitivity", title, clause, unit, value, uncertainty=u, details={
+        "temperatures_c": Ts, "K_i": Ks, "slopes_per_c": slopes, "room_index": rt})
+
+
+# --------------------------------------------------------------------------- 7.2.6, 7.2.7
+def _candidate_item(key, title, clause, cands, grid_next, details) -> Item:
+    if any(c is None for c in cands):
+        return not_measured(key, title, clause, "°/s",
+                            "the largest step already fails the 50 % criterion; start higher")
+    value = max(cands)
+    hw = max(value - grid_next.get(value, 0.0), 0.0)
+    u = gum(lambda a, b: a + b, [from_u(key, value, 0.0),
+                                 type_b("grid", 0.0, hw / 2.0, "rectangular",
+                                        source="step between the candidate and the next tested value")])
+    return Item(key, title, clause, "°/s", value, uncertainty=u, details=details)
+
+
+def threshold(ctx: Context) -> Item:
+    """JJF 1535 7.2.6 eqs (12), (13): forward and reverse candidates by the two-sided 50 % rule
+    on the rest-referred output (F̄_0,j: mean of the rests just before and after the point);
+    the threshold is the larger candidate."""
+    title, clause = "threshold", "7.2.6"
+    miss = _need(ctx, "threshold", "threshold", title, clause, "°/s")
+    if miss:
+        return miss
+    means = segment_means(ctx.df, "threshold")
+    cands, dets, nexts = [], {}, {}
+    for run in sorted({m.run for m in means}):
+        seg = [m for m in means if m.run == run]
+        rates, meas, exp = [], [], []
+        for j, m in enumerate(seg):
+            if m.role != "rate":
+                continue
+            before = next((s for s in reversed(seg[:j]) if s.role == "rest"), None)
+            after = next((s for s in seg[j + 1:] if s.role == "rest"), None)
+            if before is None:
+                raise GonioError(f"threshold run {run} step {m.step}: no rest before the point")
+            f0 = before.mean if after is None else 0.5 * (before.mean + after.mean)
+            rates.append(m.rate_dps)
+            meas.append(m.mean - f0)
+            exp.append(ctx.K * m.rate_dps)
+        c, dev = rg.fifty_percent_candidate(rates, meas, exp)
+        cands.append(c)
+        mags = [abs(r) for r in rates]
+        for a, b in zip(mags, mags[1:] + [0.0]):
+            nexts[a] = b
+        dets[f"run{run}"] = {"rates_dps": rates, "deviation": dev, "candidate_dps": c}
+    return _candidate_item("threshold", title, clause, cands, nexts, dets)
+
+
+def resolution(ctx: Context) -> Item:
+    """JJF 1535 7.2.7 eq (14): base rate Ω_b, increments ΔΩ_j; ΔF_j = F̄(Ω_b + ΔΩ_j) −
+    F̄(Ω_b) with the base re-measured before each increment; two-sided 50 % rule against
+    ΔF*_j = K ΔΩ_j; the larger of the forward and reverse candidates."""
+    title, clause = "resolution", "7.2.7"
+    miss = _need(ctx, "resolution", "resolution", title, clause, "°/s")
+    if miss:
+        return miss
+    means = segment_means(ctx.df, "resolution")
+    cands, dets, nexts = [], {}, {}
+    for run in sorted({m.run for m in means}):
+        seg = [m for m in means if m.run == run]
+        steps, meas, exp = [], [], []
+        for j, m in enumerate(seg):
+            if m.role != "increment":
+                continue
+            base = next((s for s in reversed(seg[:j]) if s.role == "base"), None)
+            if base is None:
+                raise GonioError(f"resolution run {run} step {m.step}: no base rate before it")
+            d = m.rate_dps - base.rate_dps
+            steps.append(d)
+            meas.append(m.mean - base.mean)
+            exp.append(ctx.K * d)
+        c, dev = rg.fifty_percent_candidate(steps, meas, exp)
+        cands.append(c)
+        mags = [abs(r) for r in steps]
+        for a, b in zip(mags, mags[1:] + [0.0]):
+            nexts[a] = b
+        dets[f"run{run}"] = {"increments_dps": steps, "deviation": dev, "candidate_dps": c}
+    return _candidate_item("resolution", title, clause, cands, nexts, dets)
+
+
+# --------------------------------------------------------------------------- bias family
+def _axis_enu(up: str, north: str) -> np.ndarray:
+    from gonio.bench.rate_session import mount_matrix
+    return mount_matrix(up, north) @ np.array([0.0, 0.0, 1.0])
+
+
+def bias_records(ctx: Context) -> list[dict]:
+    """B_0,m of each bias record (eqs (15), (16)) in °/h with the Earth rate removed, and the
+    uncorrected F̄/K beside it."""
+    if "bias" in ctx.cache:
+        return ctx.cache["bias"]
+    out = []
+    remove = ctx.protocol.get("bias", {}).get("remove_earth_rate", True)
+    for m in segment_means(ctx.df, "bias"):
+        y = segment_samples(ctx.df, "bias", m.run, m.step)["output"].to_numpy()
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        raw = (m.mean - ctx.null_output) / ctx.K
+        u_mean, nu = _block_std_of_mean(y, int(ctx.protocol.get("bias", {}).get(
+            "stability_block_samples", 10)))
+        out.append({"run": m.run, "F_mean": m.mean, "uncorrected_dph": raw * S_PER_H,
+                    "earth_dph": earth * S_PER_H,
+                    "B0_dph": (raw - (earth if remove else 0.0)) * S_PER_H,
+                    "u_mean_dph": u_mean / abs(ctx.K) * S_PER_H, "nu": nu, "samples": y})
+    ctx.cache["bias"] = out
+    return out
+
+
+def bias(ctx: Context) -> Item:
+    """JJF 1535 7.2.8 eqs (15)–(17): B_0 = mean over m of (F̄ − F_null)/K − Ω_E,proj, in °/h.
+
+    Readings taken: F referred to the gyro's nominal null output; the Earth-rate projection on
+    the input axis (Ω_E sin λ, axis up) removed. Budget: repeatability of the mean over the Q
+    records (type A), scale factor (relative, from 7.2.1), input-axis alignment on the
+    horizontal Earth rate (rectangular)."""
+    title, clause, unit = "bias B_0", "7.2.8", "°/h"
+    miss = _need(ctx, "bias", "bias", title, clause, unit)
+    if miss:
+        return miss
+    recs = bias_records(ctx)
+    b = np.array([r["B0_dph"] for r in recs])
+    Q = b.size
+    s_mean = float(b.std(ddof=1) / math.sqrt(Q)) if Q > 1 else recs[0]["u_mean_dph"]
+    nu = Q - 1 if Q > 1 else recs[0]["nu"]
+    align = rg.OMEGA_E_DPS * S_PER_H * math.cos(math.radians(ctx.latitude_deg)) \
+        * math.sin(math.radians(ctx.axis_alignment_deg))
+    inputs = [from_u("B", float(b.mean()), s_mean, dof=nu,
+                     source="mean of the Q records (type A)"),
+              from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B", source="scale factor, relative"),
+              type_b("E_align", 0.0, align, "rectangular",
+                     source="input-axis alignment × horizontal Earth rate")]
+    u = gum(lambda B, eK, ea: B * (1 + eK) + ea, inputs)
+    return Item("bias", title, clause, unit, float(b.mean()), uncertainty=u, details={
+        "B0_m_dph": b, "uncorrected_m_dph": [r["uncorrected_dph"] for r in recs],
+        "earth_rate_removed_dph": recs[0]["earth_dph"], "latitude_deg": ctx.latitude_deg,
+        "null_output": ctx.null_output})
+
+
+def bias_stability(ctx: Context) -> Item:
+    """JJF 1535 7.2.10 eqs (18), (19): B_s = mean over m of s(P-sample block means)/K, °/h.
+
+    Uncertainty: the spread of B_s,m over the records (type A, ν = Q − 1) and, for one
+    record, the sampling of a standard deviation of N/P blocks."""
+    title, clause, unit = "bias stability B_s", "7.2.10", "°/h"
+    miss = _need(ctx, "bias", "bias_stability", title, clause, unit)
+    if miss:
+        return miss
+    P = int(ctx.protocol.get("bias", {}).get("stability_block_samples", 10))
+    recs = bias_records(ctx)
+    bs = np.array([rg.block_mean_stability(r["samples"], ctx.K, P) * S_PER_H for r in recs])
+    nblk = recs[0]["samples"].size // P
+    if bs.size > 1:
+        u_a = from_u("s_Bs", 0.0, float(bs.std(ddof=1) / math.sqrt(bs.size)), dof=bs.size - 1,
+                     source="spread of B_s,m over the records")
+    else:
+        u_a = from_u("s_Bs", 0.0, float(bs[0] / math.sqrt(2 * (nblk - 1))), dof=nblk - 1,
+                     source="sampling of a standard deviation of N/P blocks")
+    u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", float(bs.mean()), 0.0), u_a,
+                                                from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
+    return Item("bias_stability", title, clause, unit, float(bs.mean()), uncertainty=u,
+                details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk})
+
+
+def bias_repeatability(ctx: Context) -> Item:
+    """JJF 1535 7.2.11 eq (20): B_r = s(B_0,m) over Q power-ups, °/h; the Earth rate cancels.
+    Uncertainty of a standard deviation of Q values: B_r/√(2(Q − 1))."""
+    title, clause, unit = "bias repeatability B_r", "7.2.11", "°/h"
+    miss = _need(ctx, "bias", "bias_repeatability", title, clause, unit)
+    if miss:
+        return miss
+    b = [r["B0_dph"] for r in bias_records(ctx)]
+    if len(b) < 2:
+        return not_measured("bias_repeatability", title, clause, unit,
+                            f"needs ≥ 2 bias records, the readings hold {len(b)}")
+    br = rg.sample_std(b)
+    Q = len(b)
+    u = gum(lambda a, c: a + c, [from_u("B_r", br, 0.0),
+                                 from_u("s(s)", 0.0, br / math.sqrt(2 * (Q - 1)), dof=Q - 1)])
+    return Item("bias_repeatability", title, clause, unit, br, uncertainty=u, details={"Q": Q})
+
+
+def warmup_time(ctx: Context) -> Item:
+    """JJF 1535 7.2.9, reading taken: per record (from power-on) the earliest time after which
+    every window of W samples has a block-mean stability ≤ the nominal value; the mean over
+    the N records. Uncertainty: spread over the records (type A) and the window step."""
+    title, clause, unit = "warm-up time", "7.2.9", "s"
+    miss = _need(ctx, "warmup", "warmup_time", title, clause, unit)
+    if miss:
+        return miss
+    w = ctx.protocol["warmup"]
+    nominal = w["nominal_stability_dph"] / S_PER_H
+    times = []
+    for m in segment_means(ctx.df, "warmup"):
+        g = segment_samples(ctx.df, "warmup", m.run, m.step)
+        times.append(rg.warmup_time_s(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
+                                      window=w["window_samples"], block=w["block_samples"],
+                                      nominal=nominal))
+    t = np.array(times)
+    if np.any(~np.isfinite(t)):
+        return not_measured("warmup_time", title, clause, unit,
+                            "the stability never met the nominal value within a record")
+    dt = float(np.median(np.diff(segment_samples(ctx.df, "warmup", 0, 0)["time_s"])))
+    step = w["block_samples"] * dt
+    inputs = [from_u("t_w", float(t.mean()), 0.0),
+              from_u("s_t", 0.0, float(t.std(ddof=1) / math.sqrt(t.size)) if t.size > 1 else 0.0,
+                     dof=max(t.size - 1, 1), source="spread over the power-ups"),
+              type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0")]
+    u = gum(lambda a, b, c: a + b + c, inputs)
+    return Item("warmup_time", title, clause, unit, float(t.mean()), uncertainty=u,
+                details={"t_n_s": t, "nominal_stability_dph": w["nominal_stability_dph"]})
+
+
+def g_sensitivity(ctx: Context) -> Item:
+    """JJF 1535 7.2.12.2: B_g,axis = [ω̄(+axis up) − ω̄(−axis up)]/2 per g for X, Y, Z with the
+    Earth-rate projection on the input axis removed in each position (reading taken);
+    B_g = max |B_g,axis|, (°/h)/g. The literal value (Earth rate left in) is kept."""
+    title, clause, unit = "bias acceleration sensitivity B_g", "7.2.12", "(°/h)/g"
+    miss = _need(ctx, "g_sensitivity", "g_sensitivity", title, clause, unit)
+    if miss:
+        return miss
+    pos = {}
+    for m in segment_means(ctx.df, "g_sensitivity"):
+        y = segment_samples(ctx.df, "g_sensitivity", m.run, m.step)["output"].to_numpy()
+        um, nu = _block_std_of_mean(y)
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        pos[m.up_axis] = {"w": (m.mean - ctx.null_output) / ctx.K, "earth": earth,
+                          "u": um / abs(ctx.K), "nu": nu, "t": m.time_s + 0.5 * m.n}
+    res, lit, us = {}, {}, {}
+    for ax in "xyz":
+        p, n = pos.get("+" + ax), pos.get("-" + ax)
+        if p is None or n is None:
+            continue
+        res[ax] = rg.g_sensitivity_axis(p["w"], n["w"], p["earth"], n["earth"]) * S_PER_H
+        lit[ax] = rg.g_sensitivity_axis(p["w"], n["w"]) * S_PER_H
+        us[ax] = (p, n)
+    if not res:
+        return not_measured("g_sensitivity", title, clause, unit,
+                            "no pair of opposite positions (+axis up, −axis up)")
+    ax = max(res, key=lambda a: abs(res[a]))
+    p, n = us[ax]
+    xbound = ctx.cross_axis_bound * rg.OMEGA_E_DPS * S_PER_H
+    inputs = [from_u("w_p", p["w"] * S_PER_H, p["u"] * S_PER_H, dof=p["nu"], source="+axis up mean"),
+              from_u("w_n", n["w"] * S_PER_H, n["u"] * S_PER_H, dof=n["nu"], source="−axis up mean"),
+              from_u("E_p", p["earth"] * S_PER_H, 0.0, type="B"),
+              from_u("E_n", n["earth"] * S_PER_H, 0.0, type="B"),
+              type_b("x_E", 0.0, xbound, "rectangular",
+                     source="cross-axis coupling of the Earth rate (bound)"),
+              from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B", source="scale factor, relative"),
+              from_u("drift", 0.0, drift_u_dph(ctx, p["t"] - n["t"]), dof=50,
+                     source="bias drift between the two positions (Allan fit: RRW, BI)")]
+    u = gum(lambda a, b, c, d, x, e, dr: abs(((a - c) - (b - d) + dr) / 2.0 + x) * (1 + e),
+            inputs)
+    return Item("g_sensitivity", title, clause, unit, abs(res[ax]), uncertainty=u, details={
+        "per_axis_dph_per_g": res, "literal_per_axis_dph_per_g": lit, "axis": ax})
+
+
+def angle_random_walk(ctx: Context) -> Item:
+    """JJF 1535 7.2.13: ARW from the five-term fit (25), (26) of the **overlapping** Allan
+    variance of the static record (reading taken), in °/√h; the printed statistic of
+    eqs (22)–(24) is computed too, labelled, with its ratio to the AVAR (it falls as 2/k²).
+
+    Uncertainty: the fit's standard uncertainty of N (covariance inflated for the correlation
+    of overlapping estimates, :func:`gonio.analysis.noise.fit_noise_model`) and the scale factor."""
+    title, clause, unit = "angle random walk ARW", "7.2.13", "°/√h"
+    miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
+    if miss:
+        return miss
+    g = segment_samples(ctx.df, "static", 0, 0)
+    t = g["time_s"].to_numpy()
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
+    if np.ptp(rate_dph) == 0:
+        return Item("angle_random_walk", title, clause, unit, 0.0,
+                    uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
+                    details={"note": "the static record does not vary: no noise to analyse"})
+    allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
+    fit = fit_noise_model(allan)
+    ctx.cache["noise_fit"] = fit
+    arw = fit.N / math.sqrt(S_PER_H)
+    u_arw = fit.u_N / math.sqrt(S_PER_H)
+    printed = {}
+    if ctx.protocol.get("arw", {}).get("print_standard_statistic", True):
+        for k in (1, 2, 4, 8, 16):
+            if rate_dph.size >= 2 * k + 3:
+                pv = rg.allan_variance_printed_jjf(rate_dph, k)
+                av = rg.allan_variance_overlapping(rate_dph, k)
+                printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
+                                   "ratio": pv / av if av > 0 else None}
+    u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
+                                              source="five-term AVAR fit, u(N)"),
+                                       from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
+    return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
+        "fit": fit.to_dict(), "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev,
+                                        "ci_low": allan.ci_low, "ci_high": allan.ci_high},
+        "bias_instability_dph": fit.B, "rate_random_walk_dph_sqrt_h": fit.K * math.sqrt(S_PER_H),
+        "quantisation": fit.Q, "rate_ramp_dph_per_h": fit.R * S_PER_H,
+        "printed_eq22_24_statistic": printed,
+        "printed_statistic_note": "JJF 1535 eqs (22)-(24) as printed: means one sample apart; "
+                                  "for white noise 3 at k = 1 and 2/k^2 of the sample variance "
+                                  "for k >= 2 - not an Allan variance; not used for the ARW"})
+
+
+def bias_temperature_sensitivity(ctx: Context) -> Item:
+    """JJF 1535 7.2.14 eq (27): B_t = max_i |(B_i − B_rt)/(T_i − T_rt)|, (°/h)/°C, each B_i =
+    (F̄_i − F_null)/K_i with K_i from the scale-factor calibration at the same temperature
+    (reading taken; K̄ of 7.2.1 when absent). Earth rate and g cancel (same mounting).
+
+    Uncertainty: the record means (block type A), the chamber deviation on T_i (Table 2)."""
+    title, clause, unit = "bias temperature sensitivity B_t", "7.2.14", "(°/h)/°C"
+    miss = _need(ctx, "bias_temperature", "bias_temperature_sensitivity", title, clause, unit)
+    if miss:
+        return miss
+    kmap = {}
+    if ctx.has("sf_temperature"):
+        kmap = {c["run"]: c["fit"].K for c in calibrations(ctx, "sf_temperature")}
+    B, T, U, tm = [], [], [], []
+    for m in segment_means(ctx.df, "bias_temperature"):
+        tm.append(m.time_s)
+        y = segment_samples(ctx.df, "bias_temperature", m.run, m.step)["output"].to_numpy()
+        K = kmap.get(m.run, ctx.K)
+        um, nu = _block_std_of_mean(y)
+        B.append((m.mean - ctx.null_output) / K * S_PER_H)
+        T.append(m.temperature_c)
+        U.append((um / abs(K) * S_PER_H, nu))
+    rt = int(np.argmin(np.abs(np.array(T) - ctx.room_temperature_c)))
+    value, slopes = rg.temperature_sensitivity(B, T, rt, relative=False)
+    i = int(np.nanargmax(np.abs(slopes)))
+    inputs = [from_u("B_i", B[i], U[i][0], dof=U[i][1], source=f"bias at {T[i]:g} °C"),
+              from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),
+              type_b("dT", T[i] - T[rt], ctx.chamber_deviation_c, "rectangular",
+                     source="chamber temperature deviation (Table 2)"),
+              from_u("drift", 0.0, drift_u_dph(ctx, tm[i] - tm[rt]), dof=50,
+                     source="bias drift between the two records (Allan fit: RRW, BI)")]
+    u = gum(lambda a, b, d, dr: abs((a - b + dr) / d), inputs)
+    return Item("bias_temperature_sensitivity", title, clause, unit, value, uncertainty=u,
+                details={"temperatures_c": T, "bias_dph": B, "slopes": slopes, "room_index": rt})
+
+
+# --------------------------------------------------------------------------- 7.2.15
+def frequency_response(ctx: Context) -> dict:
+    """Gain and phase at each vibration frequency: sine fits (known f) of the gyro output and
+    of the reference rate; gain K(f) = A_out/A_ref, phase φ_out − φ_ref."""
+    if "freq" in ctx.cache:
+        return ctx.cache["freq"]
+    f, K, ph, u_rel = [], [], [], []
+    for m in segment_means(ctx.df, "vibration"):
+        g = segment_samples(ctx.df, "vibration", m.run, m.step)
+        t = g["time_s"].to_numpy()
+        ao, po, _ = rg.sine_fit(t, g["output"].to_numpy(), m.freq_hz)
+        ar, pr, _ = rg.sine_fit(t, g["reference_dps"].to_numpy(), m.freq_hz)
+        # noise on the amplitude: residual rms · √(2/n) relative
+        fit_o = g["output"].to_numpy()
+        resid = fit_o - fit_o.mean() - ao * np.sin(2 * math.pi * m.freq_hz * t + math.radians(po))
+        u_rel.append(float(np.std(resid) * math.sqrt(2.0 / t.size) / ao))
+        f.append(m.freq_hz)
+        K.append(ao / ar)
+        ph.append(((po - pr + 180.0) % 360.0) - 180.0)
+    ph = np.unwrap(np.radians(ph))
+    if ph.size and ph[0] > math.pi / 2:
+        ph -= 2 * math.pi
+    out = {"freq_hz": np.array(f), "K_f": np.array(K), "phase_deg": np.degrees(ph),
+           "u_rel": np.array(u_rel)}
+    ctx.cache["freq"] = out
+    return out
+
+
+def bandwidth(ctx: Context) -> Item:
+    """JJF 1535 7.2.15.2: the frequency where K(f), normalised to the lowest test frequency,
+    falls by 3 dB (ratio 10^(−3/20)), by linear interpolation of dB against log f (readings
+    taken). The 90° phase-lag frequency (IEC 62047-20 5.5.3) is reported beside it.
+
+    Uncertainty: the noise of the bracketing gains through the local slope, and the
+    interpolation (difference to a quadratic through three points, rectangular)."""
+    title, clause, unit = "bandwidth B_w", "7.2.15", "Hz"
+    if not ctx.has("vibration"):
+        return not_measured("bandwidth", title, clause, unit, "no 'vibration' records in the readings")
+    fr = frequency_response(ctx)
+    f, K = fr["freq_hz"], fr["K_f"]
+    fb = rg.minus3db_frequency(f, K)
+    f90 = rg.phase90_frequency(f, fr["phase_deg"])
+    if not math.isfinite(fb):
+        return not_measured("bandwidth", title, clause, unit,
+                            f"the gain did not fall by 3 dB up to {f.max():g} Hz; raise the "
+                            "estimated bandwidth")
+    db = 20 * np.log10(K / K[0])
+    i = int(np.searchsorted(-db, 3.0))            # first point at or below −3 dB
+    i = min(max(i, 1), f.size - 1)
+    slope = (db[i] - db[i - 1]) / (math.log(f[i]) - math.log(f[i - 1]))   # dB per ln f
+    u_db = 20 / math.log(10) * math.sqrt(fr["u_rel"][i] ** 2 + fr["u_rel"][i - 1] ** 2
+                                         + fr["u_rel"][0] ** 2)
+    u_f_noise = fb * u_db / abs(slope)
+    j = [k for k in (i - 2, i - 1, i, i + 1) if 0 <= k < f.size][-3:]
+    if len(j) == 3:
+        c = np.polyfit(np.log(f[j]), db[j], 2)
+        roots = np.roots(c - np.array([0, 0, -3.0]))
+        roots = [math.exp(r.real) for r in roots if abs(r.imag) < 1e-12
+                 and f[j[0]] * 0.5 < math.exp(r.real) < f[j[-1]] * 2]
+        interp = min((abs(r - fb) for r in roots), default=0.0)
+    else:
+        interp = 0.0
+    inputs = [from_u("f_-3dB", fb, u_f_noise, dof=50, source="noise of the bracketing gains"),
+              type_b("interp", 0.0, interp, "rectangular",
+                     source="interpolation (linear vs quadratic in log f)")]
+    u = gum(lambda a, b: a + b, inputs)
+    return Item("bandwidth", title, clause, unit, fb, uncertainty=u, details={
+        "freq_hz": f, "gain_ratio": K / K[0], "gain_db": db, "phase_deg": fr["phase_deg"],
+        "phase90_hz_iec": f90, "reference": "lowest test frequency (0 dB)"})
+
+
+#: Table 3 in order: (key, title, clause, function).
+ITEMS = (
+    ("scale_factor", "scale factor K", "7.2.1", scale_factor),
+    ("nonlinearity", "scale-factor nonlinearity K_n", "7.2.2", nonlinearity),
+    ("asymmetry", "scale-factor asymmetry K_a", "7.2.3", asymmetry),
+    ("sf_repeatability", "scale-factor repeatability K_r", "7.2.4", sf_repeatability),
+    ("sf_temperature_sensitivity", "scale-factor temperature sensitivity K_t", "7.2.5",
+     sf_temperature_sensitivity),
+    ("threshold", "threshold", "7.2.6", threshold),
+    ("resolution", "resolution", "7.2.7", resolution),
+    ("bias", "bias B_0", "7.2.8", bias),
+    ("warmup_time", "warm-up time", "7.2.9", warmup_time),
+    ("bias_stability", "bias stability B_s", "7.2.10", bias_stability),
+    ("bias_repeatability", "bias repeatability B_r", "7.2.11", bias_repeatability),
+    ("g_sensitivity", "bias acceleration sensitivity B_g", "7.2.12", g_sensitivity),
+    ("angle_random_walk", "angle random walk ARW", "7.2.13", angle_random_walk),
+    ("bias_temperature_sensitivity", "bias temperature sensitivity B_t", "7.2.14",
+     bias_temperature_sensitivity),
+    ("bandwidth", "bandwidth B_w", "7.2.15", bandwidth),
+)

@@ -1,0 +1,360 @@
+"""Rate-gyro bench → readings → items: truth recovery (noise off exact; noise on within U over
+seeds), the thesis noise model from a static record, formats, CLI and certificate."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gonio.bench.rate_gyro import load_rate_bench
+from gonio.bench.rate_session import Segment, run_rate_session
+from gonio.errors import GonioError
+from gonio.formats.rate_readings import (RateReadings, parse_rate_readings, read_rate_readings,
+                                         write_rate_readings)
+from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.units import S_PER_H
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _toml(d: dict) -> str:
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        return repr(v)
+    out = []
+    for sec, tab in d.items():
+        out.append(f"[{sec}]")
+        out += [f"{k} = {val(v)}" for k, v in tab.items()]
+    return "\n".join(out) + "\n"
+
+
+def small_protocol(tmp_path, name="jjf1535-2015", **changes) -> Path:
+    """The built-in protocol with small sample counts (and ``changes`` {section: {key: v}})."""
+    d = tomllib.loads((ROOT / "protocols" / f"{name}.toml").read_text(encoding="utf-8"))
+    if name == "jjf1535-2015":
+        small = {"protocol": {"warmup_s": 600.0},
+                 "scale_factor": {"samples_below_100_dps": 5, "samples_from_100_dps": 5,
+                                  "rest_samples": 5, "interval_s": 60.0},
+                 "temperature": {"soak_s": 1800.0, "bias_samples": 100},
+                 "threshold": {"samples": 5, "rest_samples": 5},
+                 "resolution": {"samples": 5},
+                 "bias": {"samples": 600, "off_time_s": 60.0},
+                 "warmup": {"samples": 600, "window_samples": 100, "off_time_s": 60.0},
+                 "g_sensitivity": {"samples": 60, "settle_s": 5.0},
+                 "arw": {"samples": 3000},
+                 "bandwidth": {"cycles": 8}}
+    else:
+        small = {"protocol": {"warmup_s": 600.0},
+                 "scale_factor": {"samples": 5}, "temperature": {"soak_s": 1800.0, "bias_samples": 60},
+                 "stability": {"samples": 50}, "bias": {"samples": 300, "off_time_s": 60.0},
+                 "power_on": {"samples": 900, "off_time_s": 60.0},
+                 "noise": {"samples": 3000}, "frequency": {"cycles": 8}}
+    for sec, kv in {**small, **changes}.items():
+        d[sec].update(kv)
+    p = tmp_path / f"{name}-small.toml"
+    p.write_text(_toml(d), encoding="utf-8")
+    return p
+
+
+def exact_bench(cross=False, **gyro):
+    """The ADXRS610 bench with the deterministic effects that truth formulas leave out switched
+    off: warm-up transient (unless asked), thermal lag (τ = 1 s) and, unless asked, the
+    cross-axis sensitivity (on a turning table it modulates the horizontal Earth rate with
+    the table angle, a real but history-dependent effect)."""
+    b = load_rate_bench("mems-adxrs610")
+    base = {"warmup_bias_dps": 0.0, "thermal_tau_s": 1.0}
+    if not cross:
+        base.update(cross_axis_x=0.0, cross_axis_y=0.0)
+    g = replace(b.gyro, **{**base, **gyro})
+    return replace(b, gyro=g)
+
+
+# ------------------------------------------------------------------ JJF 1535, noise off
+@pytest.fixture(scope="module")
+def jjf_noise_off(tmp_path_factory):
+    from gonio.specs.jjf1535 import calibrate, simulate
+    tmp = tmp_path_factory.mktemp("jjf0")
+    proto = small_protocol(tmp)
+    res = simulate(exact_bench(), str(proto), seed=3, noise=False)
+    rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+    return calibrate(rd, str(proto)), res.truth["items"]
+
+
+EXACT = ("scale_factor", "nonlinearity", "asymmetry", "sf_temperature_sensitivity",
+         "threshold", "resolution", "bias", "g_sensitivity", "bias_temperature_sensitivity")
+
+
+@pytest.mark.parametrize("key", EXACT)
+def test_jjf_noise_off_exact(jjf_noise_off, key):
+    result, truth = jjf_noise_off
+    assert result.items[key].measured, result.items[key].reason
+    assert result.items[key].value == pytest.approx(truth[key]["value"], rel=1e-9, abs=1e-12)
+
+
+def test_jjf_noise_off_zero_items_and_bandwidth(jjf_noise_off):
+    result, truth = jjf_noise_off
+    for key in ("sf_repeatability", "bias_stability", "bias_repeatability"):
+        assert truth[key]["value"] == 0.0
+        assert abs(result.items[key].value) < 1e-9
+    assert abs(result.items["angle_random_walk"].value) < 1e-6
+    bw = result.items["bandwidth"]
+    # threshold and cubic term distort the sinusoid slightly: within U of the model's band
+    assert abs(bw.value - truth["bandwidth"]["value"]) <= bw.uncertainty.U
+    assert result.items["warmup_time"].value == 0.0       # no transient in this bench
+
+
+def test_jjf_bandwidth_noise_off_exact(tmp_path):
+    """A linear gyro (no threshold, no cubic term): K(f) ∝ |H(f)| exactly, so the −3 dB
+    crossing equals the log-f interpolation of the model's |H| on the same grid."""
+    from gonio.specs.jjf1535 import calibrate, simulate
+    proto = small_protocol(tmp_path)
+    res = simulate(exact_bench(dead_band_dps=0.0, sf_cubic_per_dps2=0.0), str(proto), seed=1,
+                   noise=False)
+    r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))
+    t = res.truth["items"]["bandwidth"]
+    # (1e-7: the Earth-rate offset through the asymmetry adds ~1e-6 of a fundamental)
+    assert r.items["bandwidth"].value == pytest.approx(t["grid_interpolated_hz"], rel=1e-6)
+    assert r.items["bandwidth"].details["phase90_hz_iec"] == pytest.approx(55.0, rel=2e-3)
+
+
+def test_jjf_warmup_noise_off(tmp_path):
+    from gonio.specs.jjf1535 import calibrate, simulate
+    proto = small_protocol(tmp_path, warmup={"nominal_stability_dph": 20.0})
+    res = simulate(exact_bench(warmup_bias_dps=0.12), str(proto), seed=1, noise=False)
+    r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))
+    t = res.truth["items"]["warmup_time"]["value"]
+    assert t > 0 and r.items["warmup_time"].value == pytest.approx(t)
+
+
+def test_jjf_results_json_shape(jjf_noise_off):
+    result, _ = jjf_noise_off
+    js = result.to_json()
+    assert list(js["items"]) == [k for k, *_ in __import__("gonio.specs.jjf1535.items",
+                                                           fromlist=["ITEMS"]).ITEMS]
+    assert len(js["items"]) == 15
+    for key, it in js["items"].items():
+        assert set(it) >= {"value", "unit", "clause", "measured", "reason", "uncertainty"}
+        assert it["clause"].startswith("7.2.")
+        if it["measured"]:
+            assert set(it["uncertainty"]) == {"components", "u_c", "U", "k", "nu_eff"}
+    json.dumps(js, allow_nan=False)
+    lit = js["items"]["g_sensitivity"]["details"]["literal_per_axis_dph_per_g"]["z"]
+    cor = js["items"]["g_sensitivity"]["details"]["per_axis_dph_per_g"]["z"]
+    e = 2 * 4.178074e-3 * math.sin(math.radians(40.0)) * S_PER_H / 2
+    assert lit - cor == pytest.approx(e, rel=1e-5)     # the Earth rate the literal reading keeps
+
+
+# ------------------------------------------------------------------ JJF 1535, noise on
+COVERED = ("scale_factor", "nonlinearity", "asymmetry", "sf_temperature_sensitivity", "bias",
+           "bias_stability", "g_sensitivity", "bias_temperature_sensitivity", "bandwidth",
+           "bias_repeatability", "sf_repeatability")
+
+
+_PROTO: list = []
+_READINGS: dict = {}
+
+
+def _readings_of(seed: int):
+    return _READINGS[seed]
+
+
+@pytest.fixture(scope="module")
+def jjf_noise_on(tmp_path_factory):
+    from gonio.specs.jjf1535 import calibrate, simulate
+    tmp = tmp_path_factory.mktemp("jjf1")
+    proto = small_protocol(tmp, arw={"samples": 36000})
+    _PROTO[:] = [proto]
+    bench = exact_bench()
+    out = []
+    for seed in range(8):
+        res = simulate(bench, str(proto), seed=seed, noise=True)
+        rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+        _READINGS[seed] = rd
+        out.append((calibrate(rd, str(proto)), res.truth["items"]))
+    return out
+
+
+@pytest.mark.parametrize("key", COVERED)
+def test_jjf_noise_on_within_uncertainty(jjf_noise_on, key):
+    hits = 0
+    for result, truth in jjf_noise_on:
+        it = result.items[key]
+        assert it.measured, it.reason
+        hits += abs(it.value - truth[key]["value"]) <= it.uncertainty.U
+    assert hits >= 6, f"{key}: truth within U in only {hits} of 8 seeds"
+
+
+def test_jjf_noise_on_arw(jjf_noise_on):
+    hits = sum(abs(r.items["angle_random_walk"].value - t["angle_random_walk"]["value"])
+               <= r.items["angle_random_walk"].uncertainty.U for r, t in jjf_noise_on)
+    assert hits >= 6
+
+
+def test_thesis_noise_model_recovered():
+    """The ADXRS610 model of the thesis (ARW 1.8 °/√h, BI 22.3 °/h, RRW 36.7 °/h/√h) from a
+    simulated 2-hour static record at 10 Hz, within the fit's uncertainty."""
+    b = load_rate_bench("mems-adxrs610")
+    g = replace(b.gyro, warmup_bias_dps=0.0, output_lsb=0.0)
+    res = run_rate_session([Segment("static", 0, 0, "record", 72000, 0.2, delay_s=1800.0)],
+                           replace(b, gyro=g), seed=11)
+    rate = (res.data["output"].to_numpy() - g.null_output) / g.scale_factor * S_PER_H
+    fit = fit_noise_model(allan_deviation(rate, 0.2, "rate", "decade:10", unit="deg/h"))
+    d = fit.to_dict()
+    assert abs(d["arw_deg_sqrt_h"] - 1.8) <= 3 * d["u_arw_deg_sqrt_h"]
+    assert abs(d["arw_deg_sqrt_h"] - 1.8) < 0.05 * 1.8
+    assert abs(d["rrw_dph_sqrt_h"] - 36.7) <= 3 * d["u_rrw_dph_sqrt_h"]
+    assert abs(d["bias_instability_dph"] - 22.3) <= max(3 * d["u_bias_instability_dph"], 0.3 * 22.3)
+
+
+# ------------------------------------------------------------------ IEC 62047-20
+@pytest.fixture(scope="module")
+def iec_noise_off(tmp_path_factory):
+    from gonio.specs.iec62047_20 import calibrate, simulate
+    tmp = tmp_path_factory.mktemp("iec0")
+    proto = small_protocol(tmp, "iec62047-20")
+    out = {}
+    for cross in (False, True):
+        res = simulate(exact_bench(cross=cross), str(proto), seed=3, noise=False)
+        rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+        out[cross] = (calibrate(rd, str(proto)), res.truth["items"])
+    return out
+
+
+@pytest.mark.parametrize("key", ("scale_factor", "initial_sf_variation", "linearity", "symmetry",
+                                 "sf_temperature_coefficient", "ratiometric_error", "cross_axis",
+                                 "bias", "initial_bias_variation", "bias_temperature_coefficient",
+                                 "frequency_band"))
+def test_iec_noise_off_exact(iec_noise_off, key):
+    result, truth = iec_noise_off[key == "cross_axis"]
+    assert result.items[key].measured, result.items[key].reason
+    assert result.items[key].value == pytest.approx(truth[key]["value"], rel=1e-7, abs=1e-12)
+
+
+def test_iec_power_on_items_noise_off(tmp_path):
+    """5.3.3.5 and 5.3.3.9 on a noise-free power-on transient against their closed forms."""
+    from gonio.specs.iec62047_20 import calibrate, simulate
+    proto = small_protocol(tmp_path, "iec62047-20")
+    res = simulate(exact_bench(warmup_bias_dps=0.12), str(proto), seed=1, noise=False)
+    r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))
+    t = res.truth["items"]
+    assert t["bias_drift_after_power_on"]["value"] > 0.05 and t["startup_time"]["value"] > 100
+    for key in ("bias_drift_after_power_on", "startup_time"):
+        assert r.items[key].value == pytest.approx(t[key]["value"], rel=1e-5, abs=1e-9), key
+
+
+def test_iec_bias_erratum_detail(iec_noise_off):
+    result, _ = iec_noise_off[False]
+    d = result.items["bias"].details
+    assert d["earth_component_dps"] == pytest.approx(4.178074e-3 * math.sin(math.radians(40)),
+                                                     rel=1e-6)
+    assert d["printed_formula_earth_dps"] == pytest.approx(4.178074e-3 * math.cos(math.radians(40)),
+                                                           rel=1e-6)
+    assert result.items["frequency_band"].details["criterion"] == "90 deg lag"
+
+
+# ------------------------------------------------------------------ formats, determinism, CLI
+def test_readings_roundtrip_and_errors(tmp_path):
+    b = exact_bench()
+    res = run_rate_session([Segment("bias", 0, 0, "record", 20, 1.0),
+                            Segment("vibration", 0, 1, "vibration", 40, 0.001, freq_hz=25.0,
+                                    vib_amplitude_dps=5.0)], b, seed=2)
+    p = write_rate_readings(res.data, {"spec": "jjf1535-2015", "output_unit": "mV"},
+                            tmp_path / "r.csv")
+    rd = read_rate_readings(p)
+    assert rd.metadata["spec"] == "jjf1535-2015"
+    assert np.allclose(rd.data["output"], res.data["output"], rtol=1e-11)
+    assert rd.data["reference_dps"].isna().sum() == 20
+    text = p.read_text().replace(",record,", ",recrd,", 1)
+    with pytest.raises(GonioError, match=r"r\.csv:4: column role: expected one of"):
+        parse_rate_readings(text, path=tmp_path / "r.csv")
+    text = p.read_text().splitlines()
+    text[4] = text[4].rsplit(",", 1)[0] + ",abc"
+    with pytest.raises(GonioError, match=r":5: column output: expected a finite number"):
+        parse_rate_readings("\n".join(text), path="x.csv")
+
+
+def test_simulate_deterministic_and_cli(tmp_path, capsys):
+    from gonio.cli import main
+    proto = small_protocol(tmp_path, scale_factor={"calibrations": 2}, temperature={"points_c": [70.0]},
+                           bias={"records": 2, "samples": 200},
+                           warmup={"records": 2, "samples": 300}, arw={"samples": 1000},
+                           g_sensitivity={"samples": 20})
+    for d in ("a", "b"):
+        assert main(["simulate", "--spec", "jjf1535-2015", "--protocol", str(proto),
+                     "--seed", "4", "--out", str(tmp_path / d)]) == 0
+    assert (tmp_path / "a" / "readings.csv").read_bytes() == (tmp_path / "b" / "readings.csv").read_bytes()
+    assert main(["calibrate", str(tmp_path / "a" / "readings.csv"), "--protocol", str(proto),
+                 "--out", str(tmp_path / "a")]) == 0
+    res = json.loads((tmp_path / "a" / "results.json").read_text())
+    assert res["spec"] == "jjf1535-2015" and len(res["items"]) == 15
+    html = (tmp_path / "a" / "certificate.html").read_text()
+    # every number shown carries its path in results.json
+    import re
+    srcs = re.findall(r'data-src="items\.([a-z_]+)\.value" data-rule="sig4">([^<]+)<', html)
+    assert len(srcs) >= 8
+    for key, text in srcs:
+        v = res["items"][key]["value"]
+        assert float(text.replace("×10", "e").translate(str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789"))) \
+            == pytest.approx(v, rel=1e-3)
+    assert (tmp_path / "a" / "certificate.pdf").read_bytes()[:4] == b"%PDF"
+    capsys.readouterr()
+    assert main(["budget", "--spec", "jjf1535-2015"]) == 0
+    out = capsys.readouterr().out
+    assert "2.500e-04" in out and "5.2880e-04" in out and "(stated 0.0011)" in out
+    assert main(["budget", "--spec", "nope"]) == 2
+    assert "unknown specification 'nope'" in capsys.readouterr().err
+
+
+def test_protocol_errors(tmp_path):
+    from gonio.specs.jjf1535.protocol import load_protocol
+    p = small_protocol(tmp_path, threshold={"rates_dps": [0.1, 0.2]})
+    with pytest.raises(GonioError, match="threshold.rates_dps: expected a strictly decreasing"):
+        load_protocol(str(p))
+    p = small_protocol(tmp_path, bias={"oops": 1})
+    with pytest.raises(GonioError, match="key bias.oops: unknown key"):
+        load_protocol(str(p))
+
+
+def test_optical_bench_as_rate_sensor():
+    b = load_rate_bench("rlg")
+    assert b.gyro.output_unit == "counts/s" and b.gyro.scale_factor == pytest.approx(76434.87, rel=1e-6)
+    assert b.gyro.arw_deg_sqrt_h == pytest.approx(0.0003)
+
+
+def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
+    """JCGM 101: with ``monte_carlo_trials`` every item's budget is also propagated by Monte
+    Carlo and the GUM interval checked against it (JCGM 101 8). Gaussian-dominated budgets
+    (ARW, bandwidth) validate; the threshold's budget is one rectangular component, whose 95 %
+    Monte Carlo interval is ±0.95·a (closed form), narrower than the GUM's ±1.96·a/√3 — so
+    it is reported as not validated."""
+    from gonio.specs.jjf1535 import calibrate
+    result, _ = jjf_noise_on[0]
+    assert all(it.uncertainty.monte_carlo is None for it in result.items.values() if it.measured)
+    r2 = calibrate(_readings_of(0), str(_PROTO[0]), monte_carlo_trials=200_000)
+    for key in ("angle_random_walk", "bandwidth"):
+        mc = r2.items[key].uncertainty.monte_carlo
+        assert mc["validated"], (key, mc)
+        # a t_50 input has standard deviation √(50/48) = 1.02 of its u
+        assert mc["u"] == pytest.approx(r2.items[key].uncertainty.u_c * math.sqrt(50 / 48), rel=0.02)
+    th = r2.items["threshold"]
+    a = th.uncertainty.components[1]["u"] * math.sqrt(3)
+    mc = th.uncertainty.monte_carlo
+    assert mc["high"] - th.value == pytest.approx(0.95 * a, rel=0.01)
+    assert not mc["validated"]
+    assert r2.to_json()["items"]["bias"]["uncertainty"]["monte_carlo"]["trials"] == 200_000
