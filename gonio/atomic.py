@@ -337,15 +337,31 @@ def read_manifest(out: str | Path) -> dict | None:
     return d if isinstance(d, dict) and isinstance(d.get("files"), dict) else None
 
 
-def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
+def carried_inputs(out: Path, inputs: Iterable) -> dict[str, Path]:
+    """Inputs that lie inside ``out``: relative path -> path (kept across the swap).
+
+    A run into the folder that holds its input (``calibrate lab/readings.csv --out lab``)
+    keeps that input: it is linked into the new set, never replaced. A folder or a
+    symlink given as input inside ``out`` is refused.
+    """
     real_out = os.path.realpath(out)
+    out_rel: dict[str, Path] = {}
     for inp in inputs:
-        if inp is None:
+        if inp is None or not str(inp).strip():
             continue
         ri = os.path.realpath(inp)
-        if ri == real_out or ri.startswith(real_out + os.sep):
-            raise GonioError(f"{what} holds the input {inp}; a run replaces the whole folder, "
-                             "so choose another folder", file=out)
+        if ri == real_out:
+            raise GonioError(f"the output folder is also an input ({inp})", file=out)
+        if ri.startswith(real_out + os.sep):
+            if not os.path.isfile(ri):
+                raise GonioError(f"the output folder holds the input {inp}, which is not a "
+                                 "regular file", file=out)
+            out_rel[Path(os.path.relpath(ri, real_out)).as_posix()] = Path(ri)
+    return out_rel
+
+
+def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
+    carried = carried_inputs(out, inputs)
     try:
         names = sorted(n for n in os.listdir(out))
     except OSError as exc:
@@ -353,29 +369,33 @@ def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> N
     if not names:
         return
     man = read_manifest(out)
-    if man is None:
-        raise GonioError(f"{what} is a folder gonio did not write (it holds {names[0]!r}"
-                         f"{' and more' if len(names) > 1 else ''}); choose a new or empty "
-                         "folder", file=out)
-    listed = man["files"]
+    files = []
     for n in names:
         p = out / n
         if n == MANIFEST:
             continue
         if p.is_dir() and not p.is_symlink():
-            sub = [f.relative_to(out).as_posix() for f in p.rglob("*") if not f.is_dir()]
+            files += [f.relative_to(out).as_posix() for f in p.rglob("*") if not f.is_dir()]
         else:
-            sub = [n]
-        for rel in sub:
-            q = out / rel
-            if rel not in listed or not q.is_file() or q.is_symlink() \
-                    or sha256_file(q) != listed[rel]:
-                if not force:
-                    raise GonioError(f"{what} holds {rel!r}, changed or added since gonio "
-                                     "wrote the folder; give --force to replace the folder",
-                                     file=out)
-            elif Path(rel).name in PROTECTED_NAMES and not force:
-                raise GonioError(f"{what} holds {rel!r}; give --force to replace it", file=out)
+            files.append(n)
+    files = [f for f in files if f not in carried]       # inputs kept, never replaced
+    if man is None:
+        if files:
+            raise GonioError(f"{what} is a folder gonio did not write (it holds {files[0]!r}"
+                             f"{' and more' if len(files) > 1 else ''}); choose a new or empty "
+                             "folder", file=out)
+        return
+    listed = man["files"]
+    for rel in files:
+        q = out / rel
+        if rel not in listed or not q.is_file() or q.is_symlink() \
+                or sha256_file(q) != listed[rel]:
+            if not force:
+                raise GonioError(f"{what} holds {rel!r}, changed or added since gonio "
+                                 "wrote the folder; give --force to replace the folder",
+                                 file=out)
+        elif Path(rel).name in PROTECTED_NAMES and not force:
+            raise GonioError(f"{what} holds {rel!r}; give --force to replace it", file=out)
 
 
 def active_stage(out: str | Path) -> Path | None:
@@ -412,8 +432,23 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
         _check_replaceable(out, inputs, force, what)
         stage = _stage(out)
         _ACTIVE[key] = stage
+        carried = carried_inputs(out, inputs)
         yield stage
-        _manifest(stage, source_sha256, extra)
+        for rel, src in carried.items():              # the inputs stay, unchanged
+            dst = stage / rel
+            if os.path.lexists(dst):
+                raise GonioError(f"the run would replace its input {rel}; choose another "
+                                 f"{what}", file=out)
+            try:
+                dst.parent.mkdir(parents=True, exist_ok=True)
+                try:
+                    os.link(src, dst)
+                except OSError:
+                    shutil.copy2(src, dst)
+            except OSError as exc:
+                raise _oserror(exc, dst, "keep the input in the new set") from None
+        _manifest(stage, source_sha256, {**(extra or {}),
+                                         "inputs_kept": sorted(carried)} if carried else extra)
         sigs = {signal.SIGINT, signal.SIGTERM}
         old = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
         try:
@@ -544,10 +579,4 @@ def check_output_dir(out, *, inputs: Iterable = (), force: bool = False,
     out = _check_dir_place(out, what)
     if _lstat(out) is not None:
         _check_replaceable(out, inputs, force, what)
-    else:
-        real_out = os.path.realpath(out)
-        for inp in inputs:
-            if inp is not None and os.path.realpath(inp).startswith(real_out + os.sep):
-                raise GonioError(f"{what} holds the input {inp}; choose another folder",
-                                 file=out)
     return out

@@ -548,6 +548,16 @@ def test_outputs_never_replace_inputs(tmp_path, capsys):
                  ["demo", "--out", lab], ["calibrate", lab / "readings.csv", "--out", lab]):
         (tmp_path / "m.toml").write_text(MINI_PROTO)
         cli(argv, capsys)
+    lab2 = tmp_path / "lab2"                      # an input inside --out is kept, unchanged
+    lab2.mkdir()
+    shutil.copy(FULL, lab2 / "readings.csv")
+    for _ in range(2):
+        cli(["calibrate", lab2 / "readings.csv", "--out", lab2], capsys, expect=0)
+        capsys.readouterr()
+        assert (lab2 / "readings.csv").read_bytes() == FULL.read_bytes()
+        set_is_complete(lab2)
+        assert (lab2 / "certificate.html").exists()
+    count("integrity:input-inside-out-kept")
     out_csv = tmp_path / "red.csv"
     out_csv.write_text("existing readings\n")
     cli(["reduce", raw, "--out", out_csv], capsys)
