@@ -1,10 +1,15 @@
-"""Speed and memory of gonio.analysis.noise.allan_deviation against allantools (same run).
+"""Speed and memory of gonio.analysis.noise against allantools (same run).
 
-Prints: 1e7-sample 'octave' OADEV time, ours vs allantools.oadev, and the ratio
-(best of a few repeats each, same data); 'all'-τ time for 1e6 samples (white rate
-noise, and white + rate random walk, which needs more direct recomputation), with
-allantools' 'all' measured at a smaller N and extrapolated as O(N²); and the peak
-memory allocated during our call (tracemalloc) relative to the input array.
+Prints:
+* 10⁷ samples, octave τ: overlapping ADEV (with Greenhall edf and noise
+  identification) against allantools.oadev (which computes no edf), best of 3,
+  interleaved; and tracemalloc's peak over the input's size;
+* every τ ("all") for 10⁶ samples of white rate noise and of white + rate random
+  walk: ADEV, MDEV and HDEV by the correlation expansion — time, the number of τ
+  recomputed directly for rounding, and tracemalloc's peak / input size (the result
+  itself included);
+* MDEV "all" at 10⁵ and 10⁶ samples (white): the growth with N (O(N log² N));
+* allantools' "all"-τ oadev/mdev at 2·10⁴ samples, extrapolated as O(N²).
 
 Run: ``python benchmarks/bench_noise.py``
 """
@@ -17,11 +22,13 @@ import tracemalloc
 
 import numpy as np
 
+import gonio.analysis.noise.allan as allan_mod
 from gonio.analysis.noise import allan_deviation
 
 
 def best_of(fn, repeats):
     times = []
+    out = None
     for _ in range(repeats):
         t0 = time.perf_counter()
         out = fn()
@@ -32,10 +39,28 @@ def best_of(fn, repeats):
 def peak_ratio(fn, nbytes):
     tracemalloc.start()
     tracemalloc.reset_peak()
-    fn()
+    out = fn()
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    return peak / nbytes
+    return peak / nbytes, out
+
+
+def count_redo(fn):
+    """Run fn, counting the τ the expansion recomputed directly."""
+    orig = allan_mod._direct_sums
+    count = [0]
+
+    def wrap(kind, x, ms):
+        count[0] += len(ms)
+        return orig(kind, x, ms)
+
+    allan_mod._direct_sums = wrap
+    try:
+        t0 = time.perf_counter()
+        out = fn()
+        return time.perf_counter() - t0, count[0], out
+    finally:
+        allan_mod._direct_sums = orig
 
 
 def main() -> None:
@@ -44,39 +69,53 @@ def main() -> None:
     rng = np.random.default_rng(2024)
     tau0 = 0.001
     y = 3.0 + rng.standard_normal(10_000_000)
-    # interleaved repeats, best of each: the machine may be shared
     t_ours, t_at = math.inf, math.inf
-    for _ in range(3):
+    for _ in range(3):  # interleaved: the machine may be shared
         t, r = best_of(lambda: allan_deviation(y, tau0, "rate", "octave"), 1)
         t_ours = min(t_ours, t)
         t, (_, dev, _, _) = best_of(
             lambda: allantools.oadev(y, rate=1 / tau0, data_type="freq", taus=r.tau_s), 1)
         t_at = min(t_at, t)
-    print(f"octave, 1e7 samples: ours {t_ours:.3f} s, allantools.oadev {t_at:.3f} s, "
-          f"ratio {t_at / t_ours:.2f}x (max rel diff {np.max(np.abs(dev / r.adev - 1)):.1e})")
-    print(f"  peak memory (tracemalloc) / input array: "
-          f"{peak_ratio(lambda: allan_deviation(y, tau0, 'rate', 'octave'), y.nbytes):.2f}")
+    print(f"octave ADEV, 1e7 samples: ours {t_ours:.3f} s (with Greenhall edf and noise id), "
+          f"allantools.oadev {t_at:.3f} s, ratio {t_at / t_ours:.2f}x "
+          f"(max rel diff {np.max(np.abs(dev / r.adev - 1)):.1e})")
+    ratio, _ = peak_ratio(lambda: allan_deviation(y, tau0, "rate", "octave"), y.nbytes)
+    print(f"  peak memory (tracemalloc) / input: {ratio:.2f}")
     del y
 
-    y6 = rng.standard_normal(1_000_000)
-    t_all, r_all = best_of(lambda: allan_deviation(y6, tau0, "rate", "all"), 1)
-    print(f"all tau, 1e6 samples, white rate noise: {t_all:.2f} s for {r_all.m.size} tau")
-    y6r = y6 + 0.01 * np.cumsum(rng.standard_normal(y6.size))
-    t_allr, _ = best_of(lambda: allan_deviation(y6r, tau0, "rate", "all"), 1)
-    print(f"all tau, 1e6 samples, white + rate random walk: {t_allr:.2f} s")
-    result_bytes = sum(v.nbytes for v in vars(r_all).values() if isinstance(v, np.ndarray))
-    print(f"  peak memory / input array ('all', white): "
-          f"{peak_ratio(lambda: allan_deviation(y6, tau0, 'rate', 'all'), y6.nbytes):.2f} "
-          f"(of which the result's own arrays: {result_bytes / y6.nbytes:.2f})")
+    n = 1_000_000
+    white = rng.standard_normal(n)
+    mixed = white + 0.01 * np.cumsum(rng.standard_normal(n))
+    for name, data in (("white", white), ("white + RRW", mixed)):
+        for kind in ("adev", "mdev", "hdev"):
+            t, redo, res = count_redo(
+                lambda: allan_deviation(data, tau0, "rate", "all", kind=kind))
+            print(f"all tau, 1e6 samples, {name:11s} {kind}: {t:6.2f} s for {res.m.size} tau, "
+                  f"{redo} recomputed directly")
+    for kind in ("adev", "mdev", "hdev"):
+        ratio, res = peak_ratio(lambda: allan_deviation(white, tau0, "rate", "all", kind=kind),
+                                white.nbytes)
+        own = sum(v.nbytes for v in vars(res).values() if isinstance(v, np.ndarray))
+        print(f"  peak memory / input ('all', {kind}, white): {ratio:.2f} "
+              f"(of which the result's own arrays: {own / white.nbytes:.2f})")
+
+    t5, _ = best_of(lambda: allan_deviation(white[:100_000], tau0, "rate", "all",
+                                            kind="mdev"), 1)
+    t6, _ = best_of(lambda: allan_deviation(white, tau0, "rate", "all", kind="mdev"), 1)
+    print(f"MDEV all tau, white: 1e5 samples {t5:.2f} s, 1e6 samples {t6:.2f} s "
+          f"(x{t6 / t5:.1f} for 10x N; O(N^2) would be x100)")
 
     n_small = 20_000
-    ys = y6[:n_small]
-    t_at_small, _ = best_of(
-        lambda: allantools.oadev(ys, rate=1 / tau0, data_type="freq", taus="all"), 1)
-    t_ours_small, _ = best_of(lambda: allan_deviation(ys, tau0, "rate", "all"), 3)
-    extrap = t_at_small * (1_000_000 / n_small) ** 2
-    print(f"all tau, {n_small} samples: ours {t_ours_small:.3f} s, allantools {t_at_small:.2f} s; "
-          f"allantools at 1e6 extrapolated (O(N^2)): ~{extrap / 3600:.1f} h")
+    ys = white[:n_small]
+    for kind, fn in (("adev", allantools.oadev), ("mdev", allantools.mdev)):
+        t_at_small, _ = best_of(
+            lambda: fn(ys, rate=1 / tau0, data_type="freq", taus="all"), 1)
+        t_ours_small, _ = best_of(lambda: allan_deviation(ys, tau0, "rate", "all",
+                                                          kind=kind), 1)
+        extrap = t_at_small * (1_000_000 / n_small) ** 2
+        print(f"all tau {kind}, {n_small} samples: ours {t_ours_small:.3f} s, allantools "
+              f"{t_at_small:.2f} s; allantools at 1e6 extrapolated (O(N^2)): "
+              f"~{extrap / 3600:.1f} h")
 
 
 if __name__ == "__main__":

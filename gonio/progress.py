@@ -42,3 +42,20 @@ def progress(items: Iterable[T], total: int | None = None, label: str = "",
     if show and k:
         stream.write("\n")
         stream.flush()
+
+
+def status(message: str, stream=None) -> None:
+    """Show ``message`` as a self-overwriting status line on a terminal; nothing otherwise.
+
+    An empty message ends the line (clears it).
+
+    >>> status("simulating")          # not a terminal under doctest: prints nothing
+    """
+    stream = sys.stderr if stream is None else stream
+    if not is_terminal(stream):
+        return
+    if message:
+        stream.write("\r\033[K" + message)
+    else:
+        stream.write("\r\033[K")
+    stream.flush()

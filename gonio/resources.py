@@ -22,6 +22,24 @@ def protocols_dir() -> Path:
     raise GonioError("the protocols folder (ogam-draft.toml) is not installed with gonio")
 
 
+def builtin_names(kind: str = "protocol") -> list[str]:
+    """Names of the built-in protocols (files with a ``[protocol]`` table; the laboratory
+    example ``lab-example.toml`` is not one) or benches.
+
+    >>> "lab-example" in builtin_names(), "ogam-draft" in builtin_names()
+    (False, True)
+    """
+    base = protocols_dir() if kind == "protocol" else protocols_dir() / "benches"
+    names = []
+    for q in sorted(base.glob("*.toml")):
+        if kind == "protocol":
+            text = q.read_text(encoding="utf-8")
+            if not any(line.strip() == "[protocol]" for line in text.splitlines()):
+                continue
+        names.append(q.stem)
+    return names
+
+
 def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     """A path as given if it exists, else a named protocol (``ogam-draft``) or bench (``rlg``).
 
@@ -40,6 +58,6 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     cand = base / (p.name if p.suffix == ".toml" else p.name + ".toml")
     if cand.is_file() and p.parent == Path("."):
         return cand
-    names = sorted(q.stem for q in base.glob("*.toml"))
+    names = builtin_names(kind)
     plural = "benches" if kind == "bench" else f"{kind}s"
     raise GonioError(f"{kind} file not found: {name_or_path} (built-in {plural}: {', '.join(names)})")

@@ -5,7 +5,9 @@
 - no module imports another module's ``_private`` name or reads a ``_private``
   attribute of an object it did not define;
 - unit constants (3600, 206264.8…) are written only in ``gonio/units.py``;
-- every package folder is installed (listed in ``pyproject.toml``).
+- every package folder is installed (listed in ``pyproject.toml``);
+- plotting lives in ``gonio/report`` on Figure objects: nothing imports pyplot or calls
+  ``matplotlib.use`` (a notebook user's backend is never switched).
 
 Each rule is also checked to fire on a small bad example, so that the test can fail.
 """
@@ -230,6 +232,29 @@ def test_every_package_is_installed():
     assert sorted(pkgs - listed) == []
 
 
+def plotting_violations(files: list[Path]) -> list[str]:
+    bad = []
+    for path in files:
+        mod = module_name(path)
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
+            full = [target] + [f"{target}.{n}" for n in names]
+            if any(f.startswith("matplotlib.pyplot") for f in full):
+                bad.append(f"{mod}:{line}: imports matplotlib.pyplot")
+            elif target.startswith("matplotlib") and not mod.startswith("gonio.report"):
+                bad.append(f"{mod}:{line}: imports matplotlib outside gonio.report")
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and node.func.attr == "use" and isinstance(node.func.value, ast.Name)
+                    and node.func.value.id == "matplotlib"):
+                bad.append(f"{mod}:{node.lineno}: switches the matplotlib backend")
+    return bad
+
+
+def test_plotting_only_in_report_without_pyplot():
+    assert plotting_violations(ALL) == []
+
+
 # ----------------------------------------------------------- the rules can fail
 def _write(tmp: Path, rel: str, text: str) -> Path:
     p = tmp / rel
@@ -260,3 +285,7 @@ def test_rules_fire_on_bad_examples(fake_root):
     assert len(private_violations([priv])) == 2
     lit = _write(fake_root, "gonio/s.py", "x = 1.0 / 3600.0\ny = '3600'  # 3600\n")
     assert len(unit_literal_violations([lit])) == 1
+    plot = _write(fake_root, "gonio/analysis/p.py",
+                  "import matplotlib\nmatplotlib.use('Agg')\nimport matplotlib.pyplot as plt\n")
+    ok_plot = _write(fake_root, "gonio/report/f.py", "from matplotlib.figure import Figure\n")
+    assert len(plotting_violations([plot, ok_plot])) == 3

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
 from uncertainty import monte_carlo, propagate, validate_gum
@@ -77,22 +78,6 @@ def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> I
     """An item the readings do not allow, with the reason."""
     return Item(key, title, clause, unit, None, False, reason)
 
-
-def json_safe(x):
-    """Plain JSON types; NaN/inf → None; numpy → Python."""
-    if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [json_safe(v) for v in x.tolist()]
-    if isinstance(x, (np.floating, float)):
-        return _f(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
-    return x
 
 
 @dataclass

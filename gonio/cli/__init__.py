@@ -17,6 +17,9 @@ Every way a run can end is one line on stderr, never a traceback:
 
 Warnings raised during a failed run are dropped (the error line is the answer);
 after a successful run each distinct one is printed once as ``gonio: warning: ...``.
+
+A reader that closes the pipe early (``gonio calibrate ... --json | head``) ends the
+command quietly (exit 0: every output file was already written).
 """
 
 from __future__ import annotations
@@ -89,6 +92,7 @@ def main(argv: list[str] | None = None) -> int:
             parser = build_parser()
             args = parser.parse_args(argv)
             rc = int(args.func(args) or 0)
+            sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit
         seen = set()
         for w in caught:
             if issubclass(w.category, RuntimeWarning):
@@ -100,6 +104,14 @@ def main(argv: list[str] | None = None) -> int:
         return rc
     except GonioError as exc:
         return _error(str(exc))
+    except BrokenPipeError:
+        # the reader went away: stop writing, and keep Python from complaining at exit
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):  # pragma: no cover - stdout without a descriptor
+            pass
+        return 0
     except OSError as exc:
         where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
         return _error(f"{where}{exc.strerror or exc}")

@@ -24,6 +24,9 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     add_certificate_options(p)
+    p.add_argument("--dcc", action="store_true",
+                   help="also write certificate.dcc.xml, the PTB Digital Calibration "
+                        "Certificate (DCC 3.3.0 XML)")
     p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
     p.set_defaults(func=run)
@@ -42,17 +45,36 @@ def add_certificate_options(p) -> None:
                    help="certificate language (zh needs a CJK font, e.g. fonts-noto-cjk)")
 
 
+def print_outputs(report, as_json: bool, lab_d: dict | None, lang: str) -> None:
+    """Print results.json (``--json``) or the summary, and the one-line CJK font note."""
+    import sys
+
+    from gonio.report.certificate import cjk_notice
+
+    note = cjk_notice(lang)
+    if note:
+        sys.stderr.write(f"gonio: note: {note}\n")
+    if as_json:
+        sys.stdout.write(json.dumps(report.to_dict(), indent=2, ensure_ascii=False,
+                                    allow_nan=False) + "\n")
+    else:
+        sys.stdout.write(report.summary(lab_d))
+    sys.stdout.flush()
+
+
 def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
-         inputs=(), force: bool = False) -> None:
-    """Write the whole output set (results, tables, certificate) and print the summary."""
+         dcc: bool = False, inputs=(), force: bool = False) -> None:
+    """Write the whole output set (results, tables, certificate, optional DCC) as one staged
+    set (:func:`gonio.pipeline.calibrate.write_outputs`) and print the summary (or JSON)."""
+    from gonio.progress import status
     from gonio.report.certificate import load_lab
 
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
-    write_outputs(report, out, truth=truth, lab=lab_d, lang=lang, inputs=inputs, force=force)
-    if as_json:
-        print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
-    else:
-        print(report.summary(), end="")
+    status("writing the results and the certificate")
+    write_outputs(report, out, truth=truth, lab=lab_d, lang=lang, dcc=dcc, inputs=inputs,
+                  force=force)
+    status("")
+    print_outputs(report, as_json, lab_d, lang)
 
 
 def run(args) -> int:
@@ -63,6 +85,7 @@ def run(args) -> int:
     inputs = [args.readings, args.protocol, args.lab]
     check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
     from gonio.pipeline.rate import RATE_SPECS, calibrate as calibrate_rate, readings_spec
+    from gonio.progress import status
 
     spec = args.spec or readings_spec(args.readings) or "ogam-draft"
     if spec != "ogam-draft":
@@ -78,8 +101,9 @@ def run(args) -> int:
         else:
             print(result.summary(), end="")
         return 0
+    status("calibrating")
     report = calibrate(args.readings, args.protocol or "ogam-draft",
                        monte_carlo_trials=args.monte_carlo)
-    emit(report, args.out, args.json, lab=args.lab, lang=args.lang, inputs=inputs,
-         force=args.force)
+    emit(report, args.out, args.json, lab=args.lab, lang=args.lang, dcc=args.dcc,
+         inputs=inputs, force=args.force)
     return 0

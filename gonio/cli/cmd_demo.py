@@ -13,8 +13,11 @@ def register(sub) -> None:
     p = sub.add_parser("demo", help="a complete virtual calibration (simulate + calibrate)",
                        description="Simulate the draft's whole calibration on the default "
                                    "virtual bench (RLG on a precision table) and calibrate it: "
-                                   "readings.csv, truth.json, results.json and the certificate.")
-    p.add_argument("--seed", type=seed, default=0)
+                                   "readings.csv, truth.json, results.json, the certificate "
+                                   "(HTML, PDF) and its DCC XML.")
+    p.add_argument("--seed", type=seed, default=0,
+                   help="random seed of the virtual bench (≥ 0; same seed → byte-identical "
+                        "outputs)")
     p.add_argument("--spec", default="ogam-draft",
                    help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
     p.add_argument("--bench", default=None,
@@ -33,6 +36,8 @@ def run(args) -> int:
     from gonio.atomic import check_output_dir
     check_output_dir(args.out, inputs=[args.lab, args.bench], force=args.force)
     if args.spec != "ogam-draft":
+        import json
+
         from gonio.pipeline.rate import demo as rate_demo
 
         result, paths = rate_demo(args.spec, args.out, bench=args.bench, seed=args.seed,
@@ -44,11 +49,17 @@ def run(args) -> int:
             print(f"wrote {', '.join(sorted(Path(p).name for p in paths.values()))} in "
                   f"{Path(args.out)}")
         return 0
+    from gonio.cli.cmd_calibrate import print_outputs
+    from gonio.progress import status
+    from gonio.report.certificate import load_lab
+
+    lab_d = load_lab(args.lab) if args.lab else None
     report, paths = demo(args.out, seed=args.seed, bench=args.bench or "rlg", lab=args.lab,
-                         lang=args.lang, force=args.force)
-    if args.json:
-        print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False))
-    else:
-        print(report.summary(), end="")
-        print(f"wrote {', '.join(sorted(p.name for p in paths))} in {Path(args.out)}")
+                         lang=args.lang, on_stage=status, force=args.force)
+    status("")
+    print_outputs(report, args.json, lab_d, args.lang)
+    if not args.json:
+        out = Path(args.out)
+        rel = sorted(p.relative_to(out).as_posix() for p in paths)
+        print(f"wrote {', '.join(rel)} in {out}")
     return 0

@@ -1,8 +1,10 @@
-"""``gonio noise``: Allan deviation and noise-model fit of a stream file.
+"""``gonio noise``: Allan-family deviation and noise-model fit of a stream's static part.
 
-A thin layer over :func:`gonio.analysis.noise.analyse_record` (IEEE 952-1997 Annex C). The
-stream is read with :func:`gonio.formats.streams.read_stream` (``docs/formats.md#stream-file``); its
-``gyro_counts`` column is interpreted according to ``--input``:
+A thin layer over :func:`stream_noise` (IEEE 952-1997 Annex C; NIST SP 1065). The
+stream is read with :func:`gonio.formats.streams.read_stream`
+(``docs/formats.md#stream-file``); its metadata with the readers' public
+:func:`gonio.formats.metadata.metadata_float`. The ``gyro_counts`` column is interpreted
+according to ``--input``:
 
 * ``angle`` (default): the cumulative pulse counter (unwrapped), i.e. the integrated
   angle; angle = counts / scale factor;
@@ -11,10 +13,12 @@ stream is read with :func:`gonio.formats.streams.read_stream` (``docs/formats.md
 * ``rate``: the mean count rate over each sample interval, counts/s (a frequency
   output); rate = counts/s / scale factor.
 
-The scale factor is ``--scale-factor`` or the metadata key
-``nominal_scale_factor_counts_per_deg``. The sample interval is the mean time step;
-non-uniform sampling (a step off by > 1 %) is rejected. Results are in °/h (ADEV)
-and the customary units of the noise terms (°/√h, °/h, (°/h)/√h, ″).
+Only a static record is analysed: the table's rests (the reducer's rest finder, on
+``table_deg`` or, without it, on the gyro rate) — the longest by default, or each
+with ``--each-window`` — or the interval given with ``--window START:END`` (s),
+which is refused when the table moves inside it. A readings file is refused (the
+noise analysis needs the sampled stream). Results are in °/h and the customary
+units of the noise terms (°/√h, °/h, (°/h)/√h, ″).
 """
 
 from __future__ import annotations
@@ -25,39 +29,16 @@ import math
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.cli.checks import float_range, json_safe
-from gonio.units import dph_to_dps, dps_to_dph
+from gonio.units import S_PER_H
+from gonio.cli.checks import float_range, int_range, json_safe, seed as seed_type
 
 _INPUTS = {"angle": "angle", "counts": "increment", "rate": "rate"}
-
-
-def register(subparsers) -> None:
-    """Add the ``noise`` sub-command."""
-    p = subparsers.add_parser(
-        "noise", help="Allan deviation and five-term noise fit of a stream file",
-        description="Overlapping (or modified) Allan deviation with chi-squared intervals, "
-                    "weighted non-negative fit of Q, N, B, K, R (IEEE 952 Annex C) and a "
-                    "check for a sinusoidal disturbance.")
-    p.add_argument("stream", metavar="STREAM", help="stream CSV (time_s,gyro_counts,...)")
-    p.add_argument("--input", choices=sorted(_INPUTS), default="angle",
-                   help="meaning of gyro_counts: angle = cumulative counter (default), "
-                        "counts = counts per sample, rate = counts per second")
-    p.add_argument("--taus", default="octave", metavar="SET", type=tau_set,
-                   help="tau set: octave (default), decade:N or all")
-    p.add_argument("--modified", action="store_true", help="modified Allan deviation")
-    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
-                   help="counts per degree (default: metadata "
-                        "nominal_scale_factor_counts_per_deg)")
-    p.add_argument("--confidence", type=float_range(0, 1, lo_open=True, hi_open=True), default=0.683,
-                   help="level of the chi-squared intervals (default 0.683)")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--plot", metavar="FILE", default=None,
-                   help="write ADEV, model and residual plot to FILE (png, pdf, svg)")
-    p.set_defaults(func=run)
+_KINDS = ("adev", "mdev", "hdev", "totdev")
 
 
 def tau_set(text: str) -> str:
-    """``octave``, ``all`` or ``decade:N`` with an integer N in [1, 100]."""
+    """``octave``, ``all`` or ``decade:N`` with an integer N in [1, 100] (a bigger N would
+    ask for more τ values than any record has)."""
     import argparse
     import re
 
@@ -71,81 +52,152 @@ def tau_set(text: str) -> str:
                                      f"got {text[:40]!r}")
 
 
-#: Longest record the modified Allan deviation is computed for at every τ ("all", O(N²)).
-MAX_ALL_MODIFIED_SAMPLES = 100_000
+def register(subparsers) -> None:
+    """Add the ``noise`` sub-command."""
+    p = subparsers.add_parser(
+        "noise", help="Allan deviation and five-term noise fit of a stream's static part",
+        description="Overlapping/modified Allan, Hadamard or total deviation of the "
+                    "table's longest rest (or --window), chi-squared intervals with "
+                    "Greenhall's edf, the five-term fit (Q, N, B, K, R; IEEE 952 Annex C) "
+                    "with that variance's own model, and a sinusoid check.")
+    p.add_argument("stream", metavar="STREAM", help="stream CSV (time_s,gyro_counts,...)")
+    p.add_argument("--input", choices=sorted(_INPUTS), default="angle",
+                   help="meaning of gyro_counts: angle = cumulative counter (default), "
+                        "counts = counts per sample, rate = counts per second")
+    p.add_argument("--taus", default="octave", metavar="SET", type=tau_set,
+                   help="tau set: octave (default), decade:N or all")
+    p.add_argument("--kind", choices=_KINDS, default=None,
+                   help="estimator: adev (overlapping Allan, default), mdev, hdev, totdev")
+    p.add_argument("--modified", action="store_true", help="same as --kind mdev")
+    p.add_argument("--window", default=None, metavar="START:END",
+                   help="analyse this interval (s) only; refused if the table moves in it")
+    p.add_argument("--each-window", action="store_true",
+                   help="analyse every rest found, not only the longest")
+    p.add_argument("--bootstrap", type=int_range(0, 10_000), default=20, metavar="B",
+                   help="parameter uncertainties by a parametric bootstrap of B records "
+                        "(default 20; 0: least-squares covariance, a quick indication)")
+    p.add_argument("--seed", type=seed_type, default=0, help="seed of the bootstrap")
+    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
+                   help="counts per degree (default: metadata "
+                        "nominal_scale_factor_counts_per_deg)")
+    p.add_argument("--confidence", type=float_range(0, 1, lo_open=True, hi_open=True), default=0.683,
+                   help="level of the chi-squared intervals (default 0.683)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--plot", metavar="FILE", default=None,
+                   help="write deviation, model and residual plot to FILE (png, pdf, svg)")
+    p.set_defaults(func=run)
 
 
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
-                 scale_factor: float | None = None, confidence: float = 0.683):
-    """Noise analysis of a stream file; returns a :class:`gonio.analysis.noise.StaticNoiseResult`.
+                 kind: str | None = None, scale_factor: float | None = None,
+                 confidence: float = 0.683, window=None, each_window: bool = False,
+                 bootstrap: int = 20, seed: int = 0) -> list:
+    """Noise analysis of the static part of a stream file.
 
-    ``input_kind`` is ``angle``, ``counts`` or ``rate`` (see the module docstring);
-    the Allan deviation is in °/h.
+    Returns a list of :class:`gonio.analysis.noise.StaticNoiseResult` — one (the
+    longest rest, or ``window``) unless ``each_window``; each carries the window it
+    used. ``input_kind`` is ``angle``, ``counts`` or ``rate`` (module docstring); the
+    deviation is in °/h. Raises GonioError (one line) for a readings file, a stream
+    without a usable scale factor, non-uniform sampling, or a window with motion.
     """
-    from gonio.analysis.noise import analyse_record
-    from gonio.formats.streams import read_stream
+    from gonio.analysis.noise import analyse_record, static_windows
+    from gonio.formats.metadata import metadata_float
+    from gonio.formats.streams import read_stream, sniff_kind
 
     if input_kind not in _INPUTS:
         raise GonioError(f"--input must be one of {', '.join(sorted(_INPUTS))}", key="input")
+    if sniff_kind(path) != "stream":
+        raise GonioError("this is a readings file; the noise analysis needs the sampled "
+                         "stream (time_s,gyro_counts,...)", file=path)
     stream = read_stream(path)
     if scale_factor is None:
-        text = stream.metadata.get("nominal_scale_factor_counts_per_deg")
-        if text is None:
+        scale_factor = metadata_float(stream.metadata, "nominal_scale_factor_counts_per_deg",
+                                      file=path)
+        if scale_factor is None:
             raise GonioError("no scale factor: give --scale-factor or the metadata key",
                              file=path, key="nominal_scale_factor_counts_per_deg")
-        try:
-            scale_factor = float(text)
-        except ValueError:
-            raise GonioError(f"expected a number, got {text!r}", file=path,
-                             key="nominal_scale_factor_counts_per_deg") from None
     if not (math.isfinite(scale_factor) and scale_factor > 0):
         raise GonioError(f"scale factor must be > 0, got {scale_factor}", file=path,
                          key="nominal_scale_factor_counts_per_deg")
     t = np.asarray(stream.time_s, dtype=np.float64)
     if t.size < 8:
         raise GonioError(f"need at least 8 samples, got {t.size}", file=path)
-    dt = np.diff(t)
-    tau0 = float((t[-1] - t[0]) / (t.size - 1))
-    off = np.flatnonzero(np.abs(dt - tau0) > 0.01 * tau0)
-    if off.size:
-        raise GonioError("sampling is not uniform: time step differs from the mean "
-                         f"{tau0:g} s by more than 1 % (sample {int(off[0]) + 2})",
-                         file=path, column="time_s")
-    if modified and isinstance(taus, str) and taus.strip().lower() == "all" \
-            and t.size > MAX_ALL_MODIFIED_SAMPLES:
-        raise GonioError(f"--taus all with --modified on {t.size} samples is O(N²) work (over "
-                         f"{MAX_ALL_MODIFIED_SAMPLES} samples): use octave or decade:N",
-                         file=path)
-    counts = np.asarray(stream.gyro_counts, dtype=np.float64)
-    kind = _INPUTS[input_kind]
-    if kind == "rate":
-        # counts/s / (counts/°) · 3600 s/h -> °/h
-        return analyse_record(dps_to_dph(counts / scale_factor), tau0, "rate", unit="deg/h",
-                              taus=taus, modified=modified, confidence=confidence)
-    # counts / (counts/°) = °, and 1° = 3600 (°/h)·s: scale = counts per (°/h)·s
-    return analyse_record(counts, tau0, kind, scale=dph_to_dps(scale_factor), unit="deg/h",
-                          taus=taus, modified=modified, confidence=confidence)
+    try:
+        wins = static_windows(t, stream.table_deg, stream.gyro_counts,
+                              scale_factor_counts_per_deg=scale_factor, window=window)
+    except GonioError as exc:
+        raise GonioError(exc.message, file=path, key="window") from None
+    if not wins:
+        raise GonioError("the table never rests long enough for a noise analysis "
+                         "(give --window START:END)", file=path, key="window")
+    wins = sorted(wins, key=lambda w: (-w.duration_s, w.i_start))
+    chosen = wins if each_window else wins[:1]
+    counts_all = np.asarray(stream.gyro_counts, dtype=np.float64)
+    kind_in = _INPUTS[input_kind]
+    out = []
+    for w in chosen:
+        tw = t[w.i_start: w.i_end + 1]
+        dt = np.diff(tw)
+        tau0 = float((tw[-1] - tw[0]) / (tw.size - 1))
+        off = np.flatnonzero(np.abs(dt - tau0) > 0.01 * tau0)
+        if off.size:
+            raise GonioError("sampling is not uniform: time step differs from the mean "
+                             f"{tau0:g} s by more than 1 % (sample {w.i_start + int(off[0]) + 2})",
+                             file=path, column="time_s")
+        counts = counts_all[w.i_start: w.i_end + 1]
+        if kind_in == "rate":
+            # counts/s / (counts/°) · 3600 s/h -> °/h
+            res = analyse_record(counts * (S_PER_H / scale_factor), tau0, "rate",
+                                 unit="deg/h", taus=taus, modified=modified, kind=kind,
+                                 confidence=confidence, bootstrap=bootstrap, seed=seed)
+        else:
+            # counts / (counts/°) = °, and 1° = 3600 (°/h)·s: scale = counts per (°/h)·s
+            res = analyse_record(counts, tau0, kind_in, scale=scale_factor / S_PER_H,
+                                 unit="deg/h", taus=taus, modified=modified, kind=kind,
+                                 confidence=confidence, bootstrap=bootstrap, seed=seed)
+        res.window = w
+        res.windows_found = len(wins)
+        out.append(res)
+    return out
+
+
+def _fmt(v, spec):
+    return "n/a" if v is None else format(v, spec)
 
 
 def _table(result) -> str:
-    a, f, s = result.allan, result.fit, result.sinusoid
-    lines = [f"{a.method} Allan deviation, input {a.input_type}, tau0 {a.tau0_s:g} s, "
-             f"{a.n_samples} samples, {a.confidence:.3g} chi-squared intervals",
-             f"{'tau_s':>12} {'adev_dph':>12} {'ci_low':>12} {'ci_high':>12} {'edf':>10}"]
-    for row in zip(a.tau_s, a.adev, a.ci_low, a.ci_high, a.edf):
-        lines.append(" ".join(f"{v:12.6g}" if i < 4 else f"{v:10.4g}"
-                              for i, v in enumerate(row)))
+    a, f, s, w = result.allan, result.fit, result.sinusoid, result.window
+    lines = []
+    if w is not None:
+        lines.append(f"window {w.t_start_s:g} to {w.t_end_s:g} s ({w.duration_s:g} s, "
+                     f"{'the longest of ' + str(result.windows_found) + ' rests' if w.source == 'rest' else 'from --window'})")
+    lines += [f"{a.method} deviation, input {a.input_type}, tau0 {a.tau0_s:g} s, "
+              f"{a.n_samples} samples, {a.confidence:.3g} chi-squared intervals "
+              "(Greenhall edf)",
+              f"{'tau_s':>12} {'dev_dph':>12} {'ci_low':>12} {'ci_high':>12} {'edf':>10} "
+              f"{'alpha':>5} {'terms':>9}"]
+    for row in zip(a.tau_s, a.adev, a.ci_low, a.ci_high, a.edf, a.alpha, a.n_pairs):
+        lines.append(" ".join(f"{v:12.6g}" for v in row[:4])
+                     + f" {row[4]:10.4g} {int(row[5]):5d} {int(row[6]):9d}")
     d = f.to_dict()
-    lines += ["noise model (weighted non-negative LS, IEEE 952 Annex C):",
-              f"  quantisation Q      {d['quantisation_arcsec']:.4g} arcsec",
-              f"  angle random walk N {d['arw_deg_sqrt_h']:.4g} ± {d['u_arw_deg_sqrt_h']:.2g} deg/sqrt(h)",
-              f"  bias instability B  {d['bias_instability_dph']:.4g} ± "
-              f"{d['u_bias_instability_dph']:.2g} deg/h "
-              f"(floor/0.664: {d['bias_instability_floor_dph']:.4g} deg/h at {f.tau_floor_s:g} s)",
-              f"  rate random walk K  {d['rrw_dph_sqrt_h']:.4g} ± {d['u_rrw_dph_sqrt_h']:.2g} deg/h/sqrt(h)",
-              f"  rate ramp R         {d['rate_ramp_dph_per_h']:.4g} ± "
-              f"{d['u_rate_ramp_dph_per_h']:.2g} deg/h/h",
+    u_note = (f"bootstrap of {f.n_bootstrap}" if f.uncertainty_method == "bootstrap"
+              else "LS covariance, tau taken as independent")
+    lines += [f"noise model fitted to the {a.method} variance (IEEE 952 Annex C; "
+              f"u: {u_note}):",
+              f"  quantisation Q      {_fmt(d['quantisation_arcsec'], '.4g')} arcsec",
+              f"  angle random walk N {_fmt(d['arw_deg_sqrt_h'], '.4g')} ± "
+              f"{_fmt(d['u_arw_deg_sqrt_h'], '.2g')} deg/sqrt(h)",
+              f"  bias instability B  {_fmt(d['bias_instability_dph'], '.4g')} ± "
+              f"{_fmt(d['u_bias_instability_dph'], '.2g')} deg/h",
+              f"  rate random walk K  {_fmt(d['rrw_dph_sqrt_h'], '.4g')} ± "
+              f"{_fmt(d['u_rrw_dph_sqrt_h'], '.2g')} deg/h/sqrt(h)",
+              f"  rate ramp R         {_fmt(d['rate_ramp_dph_per_h'], '.4g')} ± "
+              f"{_fmt(d['u_rate_ramp_dph_per_h'], '.2g')} deg/h/h"
+              + ("  (not seen by the Hadamard variance)" if a.method == "hadamard" else ""),
               f"  reduced chi2        {f.chi2_red:.3g}"]
+    if a.method == "overlapping":
+        lines.append(f"  ADEV floor/0.6643   {d['bias_instability_floor_dph']:.4g} deg/h "
+                     f"at {f.tau_floor_s:g} s")
     if s.detected:
         lines.append(f"sinusoid: period {s.period_s:.4g} s, amplitude {s.amplitude:.4g} deg/h "
                      f"(ADEV peak at {s.tau_peak_s:.4g} s)")
@@ -158,19 +210,24 @@ def run(args) -> int:
     """Run ``gonio noise``; prints a table or JSON, optionally writes the plot."""
     from gonio.atomic import check_output_file
     from gonio.errors import check_input_file
+    from gonio.report.noise_figures import write_noise_figure
 
     check_input_file(args.stream, "stream file")
     if args.plot is not None:
         check_output_file(args.plot, what="--plot", inputs=[args.stream])
-    from gonio.analysis.noise import plot_fit
 
-    result = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
-                          scale_factor=args.scale_factor, confidence=args.confidence)
+    results = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
+                           kind=args.kind, scale_factor=args.scale_factor,
+                           confidence=args.confidence, window=args.window,
+                           each_window=args.each_window, bootstrap=args.bootstrap,
+                           seed=args.seed)
     if args.plot:
-        plot_fit(result.allan, result.fit, args.plot)
+        write_noise_figure(args.plot, results[0].allan, results[0].fit)
     if args.json:
-        out = {"stream": str(args.stream), "input": args.input, **result.to_dict()}
+        body = [r.to_dict() for r in results]
+        out = {"stream": str(args.stream), "input": args.input,
+               **(body[0] if len(body) == 1 else {"windows": body})}
         print(json.dumps(json_safe(out), indent=2, allow_nan=False))
     else:
-        print(_table(result))
+        print("\n\n".join(_table(r) for r in results))
     return 0

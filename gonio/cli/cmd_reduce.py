@@ -39,10 +39,15 @@ def run(args) -> int:
     check_input_file(args.stream, "stream file")
     check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
                       force=args.force, protected=True)
+    from gonio.progress import status
+
     proto = load_protocol(args.protocol)
     override = read_override(args.override) if args.override else None
+    status(f"reduce: reading {args.stream}")
     stream = read_stream(args.stream, max_gap_s=args.max_gap)
+    status("reduce: finding rests and matching rounds")
     red = reduce_stream(stream, proto, override=override)
+    status("")
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream "
                          f"({len(red.rests)} rests found)", file=args.stream)

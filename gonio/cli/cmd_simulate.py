@@ -16,11 +16,12 @@ def register(sub) -> None:
                        description="Execute a protocol on a virtual bench and write the readings "
                                    "file a laboratory would record (readings.csv) and truth.json.")
     p.add_argument("--spec", default="ogam-draft",
-                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20, triad-alignment)")
     p.add_argument("--protocol", default=None,
                    help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--bench", default=None,
-                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610)")
+                   help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610; "
+                        "triad-alignment: mems-triad)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
     p.add_argument("--seed", type=seed, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
@@ -48,6 +49,9 @@ def run(args) -> int:
 
     inputs = [args.protocol, args.bench, args.table]
     check_output_dir(args.out, inputs=inputs, force=args.force)
+    if args.spec in SPEC_SIMULATORS:
+        with output_set(args.out, inputs=inputs, force=args.force):
+            return _run_spec(args)
     if args.spec != "ogam-draft":
         from gonio.pipeline.rate import simulate
 
@@ -61,6 +65,8 @@ def run(args) -> int:
         return 0
     proto = load_protocol(args.protocol or "ogam-draft")
     bench = load_bench(args.bench or "rlg", table=args.table)
+    from gonio.progress import status
+
     with output_set(args.out, inputs=inputs, force=args.force) as stage:
         writer = None
         if args.stream:
@@ -68,9 +74,18 @@ def run(args) -> int:
 
             writer = StreamWriter(stage / "stream.csv", stream_metadata(proto, bench, args.seed),
                                   table=True)
+
+        def write_chunk(time_s, *cols):
+            writer.write(time_s, *cols)
+            if len(time_s):
+                status(f"simulate: stream at t = {float(time_s[-1]):.0f} s, "
+                       f"{writer.rows} samples")
+
+        status("simulate: running the session")
         try:
             result = run_session(proto, bench, seed=args.seed,
-                                 stream=None if writer is None else writer.write)
+                                 stream=None if writer is None else write_chunk)
+            status("")
         except BaseException:
             if writer is not None:
                 writer.abort()
@@ -79,6 +94,29 @@ def run(args) -> int:
         if writer is not None:
             writer.close()
             paths["stream"] = Path(args.out) / "stream.csv"
+    for p in paths.values():
+        print(p)
+    return 0
+
+
+#: Specifications with their own session simulator (module with ``simulate``).
+SPEC_SIMULATORS = {"triad-alignment": "gonio.specs.triad_alignment.session"}
+
+
+def _run_spec(args) -> int:
+    """A specification with its own simulator (the gyro triad: readings.csv, thermal.csv,
+    truth.json)."""
+    import importlib
+
+    from gonio.specs import get
+
+    spec = get(args.spec)
+    if args.stream or args.table:
+        raise GonioError(f"--stream and --table apply to ogam-draft only, not {spec.key}",
+                         key="--spec")
+    sim = importlib.import_module(SPEC_SIMULATORS[spec.key]).simulate
+    paths = sim(args.protocol or spec.default_protocol, args.bench or spec.default_bench,
+                args.seed, args.out)
     for p in paths.values():
         print(p)
     return 0

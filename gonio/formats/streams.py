@@ -521,6 +521,9 @@ class StreamWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp",
                                          dir=self.path.parent)
+        umask = os.umask(0)             # mkstemp makes 0600; every output is 0666 & ~umask
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)
         self._fh = os.fdopen(fd, "wb")
         cols = ["time_s", "gyro_counts"] + (["table_deg"] if table else []) \
             + (["temperature_c"] if temperature else [])

@@ -20,10 +20,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
 from gonio.atomic import output_dir, output_set, sha256_file, write_text
 from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
-from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics, summary_table
+from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -44,30 +45,6 @@ READINGS_TAKEN = (
     "Annex A.4.2: the elliptic-projection tilt model of the draft is used for u(φ_e); the "
     "rigid-body model (tilt is a cos ψ factor absorbed by the scale factor) is shown beside it.",
 )
-
-
-def json_safe(x):
-    """Plain JSON types all the way down: numpy scalars to Python, NaN/inf to ``None``.
-
-    >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
-    {'a': None, 'b': [1.5, None]}
-    """
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [json_safe(v) for v in x.tolist()]
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 @dataclass
@@ -114,13 +91,12 @@ class CalibrationReport:
         out["readings_taken"] = list(READINGS_TAKEN)
         return json_safe(out)
 
-    def summary(self) -> str:
-        """The seven items and U as a fixed-width text table."""
-        u = self.uncertainty
-        return (summary_table(self.results)
-                + f"\nUncertainty of the angle-position deviation (Annex A): "
-                  f"u_c = {u.stated_u_c_arcsec:g}″, U = {u.to_dict()['stated']['U_arcsec']:g}″ "
-                  f"(k = {u.k:g})\n")
+    def summary(self, lab: dict | None = None) -> str:
+        """The seven items, U (k, coverage probability) and any conformity statements as a
+        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`)."""
+        from gonio.report.stated import summary_text
+
+        return summary_text(self.to_dict(), "en", lab)
 
 
 def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
@@ -308,7 +284,7 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings):
 
 def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | None = None,
                   lab=None, lang: str = "en", session=None, inputs=(),
-                  force: bool = False) -> dict[str, Path]:
+                  force: bool = False, dcc: bool = False) -> dict[str, Path]:
     """One run's whole output set into ``out``: results, summary, tables, certificate (and
     readings + truth of a simulated ``session``), swapped in together.
 
@@ -324,17 +300,18 @@ def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | N
         if session is not None:
             from gonio.bench import write_session
             write_session(session, out)
-        write_calibration(report, out)
-        write_certificate(report, out, truth=truth, lab=lab, lang=lang)
+        write_calibration(report, out, lab=lab)
+        write_certificate(report, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
         names = sorted(p.relative_to(st).as_posix() for p in st.rglob("*") if p.is_file())
     return {n: Path(out) / n for n in names}
 
 
-def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, Path]:
+def write_calibration(report: CalibrationReport, out: str | Path,
+                      lab: dict | None = None) -> dict[str, Path]:
     """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
 
-    Inside an open :func:`gonio.atomic.output_set` for ``out`` (what
-    :func:`write_outputs` does) they join that run's staged set.
+    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
+    to ``summary.txt``, as the certificate and the CLI show them.
     """
     out = Path(out)
     names = {}
@@ -342,7 +319,7 @@ def write_calibration(report: CalibrationReport, out: str | Path) -> dict[str, P
         d = report.to_dict()
         write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
                                                       allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", report.summary())
+        write_text(stage / "summary.txt", report.summary(lab))
         tables = stage / "tables"
         for item in report.results.items():
             for tname, df in (getattr(item, "tables", None) or {}).items():

@@ -40,9 +40,14 @@ from typing import Any, Callable
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
+from gonio.analysis.conformity import RULES
 from gonio.report.figures import FIGURES, figure_svg, mpl_style
-from gonio.report.i18n import cjk_font, display, labels
-from gonio.formats.toml import Field, read_toml, validate_table
+from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
+                               reading_note, rule_at_U, specification_text)
+from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
+                                 conformity_texts, limits_of, method_rows, num, segments,
+                                 stated_item, u_cell)
+from gonio.formats.toml import Field, non_negative, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
 
@@ -79,6 +84,17 @@ LAB_SCHEMA: dict[str, Field] = {
     "signatory": Field("table", schema={
         "calibrated_by": _S, "checked_by": _S, "approved_by": Field("str"),
         "approved_title": _S}),
+    # ISO/IEC 17025 7.1.3 / 7.8.6: the decision rule agreed with the customer, and the
+    # specification limits of the items a statement of conformity is asked for
+    "decision_rule": Field("table", default=None, schema={
+        "rule": Field("str", choices=RULES),
+        "guard_band_factor": Field("float", default=1.0, check=non_negative, expect="≥ 0"),
+        "agreed": _S}),
+    "specification_limits": Field("table_list", default=None, schema={
+        "item": Field("str", choices=ITEMS),
+        "lower": Field("float", default=None), "upper": Field("float", default=None),
+        "mpe": Field("float", default=None, check=lambda x: x > 0, expect="> 0"),
+        "source": _S}),
 }
 
 
@@ -116,6 +132,19 @@ def load_lab(path: str | Path) -> dict:
             lab[key] = validate_table({}, LAB_SCHEMA[key].schema, key, path)
     if lab["standards"] is None:
         lab["standards"] = []
+    limits = lab["specification_limits"] or []
+    for i, lim in enumerate(limits):
+        key = f"specification_limits[{i}]"
+        if lim["mpe"] is not None and (lim["lower"] is not None or lim["upper"] is not None):
+            raise GonioError("give mpe or lower/upper, not both", file=path, key=key)
+        try:
+            limits_of(lim)
+        except GonioError as exc:
+            raise GonioError(exc.message, file=path, key=key) from None
+    if limits and lab["decision_rule"] is None:
+        raise GonioError("specification limits need the decision rule agreed "
+                         "([decision_rule] rule = simple | guarded | non-binary)", file=path,
+                         key="decision_rule")
     return lab
 
 
@@ -134,18 +163,15 @@ def certificate_id(report, lab: dict | None = None) -> str:
 
 # --------------------------------------------------------------------------- content blocks
 
-@dataclass(frozen=True)
-class Num:
-    """A number shown on the certificate: its text, its path in results.json, its rule."""
-
-    text: str
-    src: str
-    rule: str
+class NoBreak(str):
+    """Text that is never broken across lines (identifiers, units): HTML ``nowrap``,
+    one token in the PDF's wrapping."""
 
 
 @dataclass
 class Block:
-    """One piece of content: kind is h, p, kv, table, fig, notice."""
+    """One piece of content: kind is h (heading), sub (sub-heading), p, kv, table, fig,
+    notice. Headings and sub-headings are kept on the page of what follows them."""
 
     kind: str
     data: Any
@@ -153,12 +179,7 @@ class Block:
 
 
 def _num(results: dict, src: str, rule: str, U: float | None) -> Num | str:
-    v: Any = results
-    for part in src.split("."):
-        v = v[int(part)] if isinstance(v, list) else v[part]
-    if v is None:
-        return "—"
-    return Num(display(rule, v, U), src, rule)
+    return num(results, src, rule, U)
 
 
 def _meta(md: dict, key: str, L) -> str:
@@ -182,16 +203,19 @@ def _summarised(kind: str, data):
     return head, rows[:MAX_TABLE_ROWS] + [note]
 
 
-def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None) -> dict:
+def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
+                       lang: str = "en", cjk: bool = True) -> dict:
     """The certificate's content: header fields and the list of blocks, in order.
 
-    Returns a dict with ``id``, ``virtual`` (bool), ``lab_name`` and ``blocks``.
+    Returns a dict with ``id``, ``virtual`` (bool), ``lab_name``, ``blocks`` and
+    ``results``. ``cjk`` False (no CJK font installed) writes the specification's
+    Chinese title in English so that nothing prints as boxes.
     """
     res = clean_tree(report.to_dict())          # user text shown literally (report/text.py)
     lab = clean_tree(lab) if lab else lab
     md = res.get("metadata", {})
     unc = res["uncertainty"]
-    U = float(unc["U_arcsec"])
+    U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
     virtual = lab is None
     lab_ = lab or {}
     blocks: list[Block] = []
@@ -201,14 +225,14 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     # a, b, c: title, laboratory, place; d: identifier (header of every page)
     if virtual:
         add("notice", L["virtual_note"])
-        lab_rows = [(L["laboratory"], "gonio virtual bench"), (L["address"], "—")]
+        lab_rows = [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")]
     else:
         la = lab_["laboratory"]
         lab_rows = [(L["laboratory"], la["name"]), (L["address"], la["address"])]
         if la["accreditation"]:
             lab_rows.append((L["accreditation"], la["accreditation"]))
         if la["contact"]:
-            lab_rows.append((L["contact"], la["contact"]))
+            lab_rows.append((L["contact"], NoBreak(la["contact"])))
     add("kv", lab_rows)
     cert = lab_.get("certificate", {})
     cust = lab_.get("customer", {"name": L["not_stated"], "address": ""})
@@ -219,16 +243,16 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
         rows.append((L["customer_address"], cust["address"]))
     rows += [
         (L["description"], inst.get("description") or _meta(md, "instrument", L)),
-        (L["model"], inst.get("model") or _meta(md, "model", L)),
-        (L["serial"], inst.get("serial") or _meta(md, "serial", L)),
+        (L["model"], NoBreak(inst.get("model") or _meta(md, "model", L))),
+        (L["serial"], NoBreak(inst.get("serial") or _meta(md, "serial", L))),
         (L["manufacturer"], inst.get("manufacturer") or _meta(md, "manufacturer", L)),
         (L["date_receipt"], cert.get("date_of_receipt") or ns),
         (L["date_calibration"], cert.get("date_of_calibration") or _meta(md, "date", L)),
         (L["date_issue"], cert.get("date_of_issue") or ns),
-        (L["place"], cert.get("place") or ("virtual bench" if virtual else ns)),
-        (L["specification"], res.get("specification") or ns),
+        (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
+        (L["specification"], specification_text(res.get("specification") or ns, lang, cjk)),
         (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
-                           f"{res['source']['rows']} rows)"),
+                           + L["rows_word"].format(n=res['source']['rows']) + ")"),
     ]
     add("kv", rows)
 
@@ -236,13 +260,13 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     add("h", L["standards"])
     std_rows = []
     for s in lab_.get("standards") or []:
-        std_rows.append([s["name"], s["identifier"] or "—", s["accuracy"] or "—",
-                         s["certificate"] or "—", s["traceability"] or "—"])
+        std_rows.append([s["name"], NoBreak(s["identifier"] or "—"), s["accuracy"] or "—",
+                         NoBreak(s["certificate"] or "—"), s["traceability"] or "—"])
     if not std_rows:
         mpe = md.get("table_mpe_arcsec")
         std_rows.append([_meta(md, "table", L), "—",
                          f"MPE ±{mpe}″" if mpe else ns, "—",
-                         "none (virtual bench)" if virtual else ns])
+                         L["virtual_trace"] if virtual else ns])
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
 
@@ -257,47 +281,89 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     add("h", L["environment"])
     add("kv", [(L["temperature"], t_txt), (L["humidity"], h_txt)])
 
-    # results: Annex B
+    # method
+    add("h", L["method"])
+    add("kv", method_rows(report, res, L, lab, lang, cjk))
+    add("p", [L["m_readings"]])
+
+    # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
     rrows = []
-    for i, name in enumerate(("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                              "angle_deviation", "repeatability", "rate_consistency",
-                              "pointing_consistency"), 1):
+    for i, name in enumerate(ITEMS, 1):
         item = res[name]
-        unit = L.get("u_" + item["unit"], item["unit"])
-        if not item["measured"]:
+        unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
+        st = stated_item(res, name)
+        if not st["measured"]:
             rrows.append([str(i), L[name], item["clause"], f"{L['not_measured']}: {item['reason']}",
-                          ""])
+                          "—", ""])
             continue
-        cell: list = [_num(res, f"{name}.value", f"item:{name}", U)]
-        if name == "zero_stability" and item.get("range_deg_per_h") is not None:
-            cell += ["; ", _seg(L["note_zero_range"], v=_num(res, f"{name}.range_deg_per_h",
-                                                             "sig3", U))]
-        elif name in ("angle_deviation", "repeatability") and item.get("position_deg") is not None:
-            cell += [" (", _seg(L["note_at"], p=_num(res, f"{name}.position_deg", "pos", U)), ")"]
+        cell: list = [st["value"]]
+        if st["signed"] is not None:
+            cell += ["; ", *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
+        elif name == "zero_stability" and item.get("range_deg_per_h") is not None:
+            cell += ["; ", *segments(L["note_zero_range"],
+                                     v=_num(res, f"{name}.range_deg_per_h", "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
-            cell += ["; ", _seg(L["note_spread"], v=_num(res, f"{name}.spread_arcsec", "atU", U))]
-        rrows.append([str(i), L[name], item["clause"], cell, unit])
-    add("table", ([L["no"], L["item"], L["clause"], L["result"], L["unit"]], rrows),
-        {"widths": (0.06, 0.33, 0.10, 0.41, 0.10), "id": "results"})
-    add("p", _seg(L["U_line"], U=_num(res, "uncertainty.U_arcsec", "U", U),
-                  k=_num(res, "uncertainty.k", "pos", U)), "U")
-    add("p", _seg(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+            cell += ["; ", *segments(L["note_spread"],
+                                     v=_num(res, f"{name}.spread_arcsec", "atU", U))]
+        elif name == "repeatability" and item.get("position_deg") is not None:
+            cell += [" (", *segments(L["note_at"], p=_num(res, f"{name}.position_deg", "pos", U)),
+                     ")"]
+        rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
+    add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
+        {"widths": (0.045, 0.22, 0.075, 0.33, 0.24, 0.09), "id": "results"})
+    st_e = stated_item(res, "angle_deviation")
+    if U is not None:
+        add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
+                          k=_num(res, "uncertainty.k", "k", U),
+                          p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
+        add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+    else:
+        add("p", [L["no_E_U"]], "U")
+    del st_e
+
+    # decision rule and conformity: only when the laboratory file gives limits
+    conf = conformity_for(res, lab)
+    if conf:
+        add("h", L["conformity"])
+        rule = conf[0]["rule"]
+        add("p", [L[f"rule_{rule.kind}"].format(r=display("k", rule.guard_factor))])
+        agreed = (lab_.get("decision_rule") or {}).get("agreed")
+        if agreed:
+            add("p", [L["rule_agreed"].format(a=agreed)])
+        crow = []
+        for e in conf:
+            unit = L.get("u_" + res[e["item"]]["unit"], res[e["item"]]["unit"])
+            c = e["conformity"]
+            if c is None:
+                crow.append([L[e["item"]], "—", "—", L[e["reason"]], "—"])
+                continue
+            t = conformity_texts(c, res, L)
+            out_txt = t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else "")
+            crow.append([L[e["item"]], NoBreak(f"{t['limits']} {unit}"),
+                         NoBreak(f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
+        add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
+                      crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
 
     # budget
     add("h", L["budget"])
+    kind = unc.get("budget_kind")
+    if kind in ("draft", "physical"):
+        add("p", [L[f"budget_kind_{kind}"]])
     brows = []
     for j, c in enumerate(unc["components"]):
-        brows.append([f"u({c['symbol'].replace('phi_e', 'φ_e')})", c["source"], c["type"],
+        brows.append([NoBreak(f"u({c['symbol'].replace('phi_e', 'φ_e')})"),
+                      budget_source(c["symbol"], c["source"], lang)
+                      + (f" ({L['beyond_draft']})" if c.get("beyond_draft") else ""), c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])
-    add("table", ([L["component"], L["source"], L["type"], L["u_i"], "|c_i|·u_i (″)"], brows),
+    add("table", ([L["component"], L["source"], L["type"], L["u_i"], L["d_contrib"]], brows),
         (0.14, 0.50, 0.08, 0.14, 0.14))
 
     # readings taken
     add("h", L["readings_taken"])
     for note in res.get("readings_taken", []):
-        add("p", ["• " + note])
+        add("p", ["• " + reading_note(note, lang)])
 
     # statements and signatures
     add("h", L["signatory"])
@@ -325,44 +391,34 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None)
     for key, cap, draw in FIGURES:
         add("fig", (key, L[cap], draw))
     return {"id": certificate_id(report, lab), "virtual": virtual,
-            "lab_name": (lab_["laboratory"]["name"] if lab else "gonio virtual bench"),
+            "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
             "blocks": blocks, "results": res}
 
 
 def _eda_section(res: dict, L: dict, U: float, add) -> None:
-    """The table-calibration page: table and goniometer errors with their uncertainties."""
+    """The table-calibration page: table and goniometer errors with their uncertainties;
+    each error to the decimal place of its own u (JCGM 100 7.2.6)."""
     e = res["equal_division"]
     add("h", L["eda"])
     add("p", [L["eda_note"].format(n=e["n_starts"], m=e["m_points"], r=e["repeats"],
                                    noise=e["noise"])])
     rows = []
     for i in range(e["m_points"]):
+        ut = e["table"]["u_arcsec"][i]
+        ug = e["goniometer"]["u_arcsec"][i]
         rows.append([_num(res, f"equal_division.table.position_deg.{i}", "pos", U),
-                     _num(res, f"equal_division.table.error_arcsec.{i}", "sig3", U),
+                     _num(res, f"equal_division.table.error_arcsec.{i}", rule_at_U(ut), U),
                      _num(res, f"equal_division.table.u_arcsec.{i}", "U", U),
                      _num(res, f"equal_division.goniometer.angle_deg.{i}", "pos", U),
-                     _num(res, f"equal_division.goniometer.error_arcsec.{i}", "sig3", U),
+                     _num(res, f"equal_division.goniometer.error_arcsec.{i}", rule_at_U(ug), U),
                      _num(res, f"equal_division.goniometer.u_arcsec.{i}", "U", U)])
     add("table", ([L["eda_position"], L["eda_table"], "u (″)", L["eda_turned"], L["eda_gonio"],
                    "u (″)"], rows), (0.18, 0.17, 0.15, 0.18, 0.17, 0.15))
-    add("p", _seg(L["eda_closure"],
-                  v=_num(res, "equal_division.closure.full_turn_arcsec", "sig3", U),
-                  u=_num(res, "equal_division.closure.u_full_turn_arcsec", "U", U)))
-
-
-def _seg(template: str, **nums) -> list:
-    """Split a label template "... {x} ..." into text and Num segments."""
-    out: list = []
-    rest = template
-    while "{" in rest:
-        pre, _, tail = rest.partition("{")
-        key, _, rest = tail.partition("}")
-        if pre:
-            out.append(pre)
-        out.append(nums[key])
-    if rest:
-        out.append(rest)
-    return out
+    cl = e["closure"]
+    add("p", segments(L["eda_closure"],
+                      v=_num(res, "equal_division.closure.full_turn_arcsec",
+                             rule_at_U(cl.get("u_full_turn_arcsec")), U),
+                      u=_num(res, "equal_division.closure.u_full_turn_arcsec", "U", U)))
 
 
 def _detail_tables(res: dict, L: dict, U: float, add) -> None:
@@ -373,8 +429,8 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
                  _num(res, f"scale_factor.table.{i}.gyro_counts", "int", U),
                  _num(res, f"scale_factor.table.{i}.K_i_counts_per_deg", "sig8", U)]
                 for i in range(len(sf["table"]))]
-        add("p", [L["scale_factor"] + " (7.1)"])
-        add("table", (["round", "θ_i (°)", "C_i", "K_i (counts/°)"], rows),
+        add("sub", L["scale_factor"] + " (7.1)")
+        add("table", ([L["d_round"], L["d_theta"], L["d_counts"], L["d_K"]], rows),
             (0.15, 0.25, 0.30, 0.30))
     ad, rp = res["angle_deviation"], res["repeatability"]
     if ad["measured"]:
@@ -387,24 +443,28 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
                          _num(res, f"repeatability.table.{j}.R_arcsec", "atU", U)
                          if j is not None else "—",
                          _num(res, f"angle_deviation.table.{i}.n_series", "int", U)])
-        add("p", [L["angle_deviation"] + " / " + L["repeatability"] + " (7.4, 7.5)"])
-        add("table", (["position (°)", "E_i (″)", "R_i (″)", "n"], rows),
+        add("sub", L["angle_deviation"] + " / " + L["repeatability"] + " (7.4, 7.5)")
+        add("table", ([L["d_position"], L["d_E"], L["d_R"], L["d_n"]], rows),
             (0.25, 0.25, 0.25, 0.25))
     for name, col, fmt in (("rate_consistency", "rate_dps", "pos"),
                            ("pointing_consistency", "orientation", None)):
         c = res[name]
         if not c["measured"]:
             continue
+        order = sorted(range(len(c["table"])), key=lambda i: (not c["table"][i].get("reference"),
+                                                              i))
         rows = []
-        for i, r in enumerate(c["table"]):
+        for i in order:
+            r = c["table"][i]
             cond = (_num(res, f"{name}.table.{i}.{col}", fmt, U) if fmt
                     else L.get(str(r[col]), str(r[col])))
-            rows.append([cond, L["lg_reference"] if r.get("reference") else "",
+            rows.append([cond, L["d_reference"] if r.get("reference") else L["d_compared"],
                          _num(res, f"{name}.table.{i}.E_arcsec", "atU", U),
                          _num(res, f"{name}.table.{i}.max_abs_arcsec", "atU", U)])
-        add("p", [L[name] + f" ({c['clause']})"])
-        head = "rate (°/s)" if col == "rate_dps" else "axis"
-        add("table", ([head, "", "E (″)", "max |E_i| (″)"], rows), (0.25, 0.25, 0.25, 0.25))
+        add("sub", L[name] + f" ({c['clause']})")
+        head = L["d_rate"] if col == "rate_dps" else L["d_axis"]
+        add("table", ([head, L["d_role"], L["d_Ev"], L["d_maxabs"]], rows),
+            {"widths": (0.25, 0.25, 0.25, 0.25), "id": f"table-{name}"})
 
 
 # --------------------------------------------------------------------------- HTML
@@ -414,37 +474,67 @@ body{font-family:%(font)s;max-width:1040px;margin:0 auto;padding:16px 24px;color
 header.page{display:flex;justify-content:space-between;border-bottom:2px solid #333;padding:4px 0;margin-bottom:8px}
 h1{text-align:center;font-size:24px;margin:10px 0 4px}
 h2{font-size:16px;border-bottom:1px solid #999;margin:18px 0 6px;padding-bottom:2px}
+h3{font-size:14px;margin:12px 0 4px}
+h2,h3{break-after:avoid;page-break-after:avoid}
 table{border-collapse:collapse;width:100%%;margin:4px 0 8px}
+tr{break-inside:avoid}
 td,th{border:1px solid #888;padding:3px 6px;text-align:left;vertical-align:top}
 th{background:#eee}
+.nb{white-space:nowrap}
 table.kv td:first-child{width:32%%;background:#f6f6f6}
 .banner{background:#b00020;color:#fff;font-weight:bold;text-align:center;padding:8px;font-size:18px;letter-spacing:1px;margin:6px 0}
 .watermark{position:fixed;top:45%%;left:0;width:100%%;text-align:center;transform:rotate(-30deg);font-size:64px;font-weight:bold;color:rgba(176,0,32,0.10);pointer-events:none;z-index:10}
 .notice{border:2px solid #b00020;padding:6px;color:#b00020}
-figure{margin:10px 0;page-break-inside:avoid}
+figure{margin:10px 0;break-inside:avoid;page-break-inside:avoid}
 figure svg{width:100%%;height:auto}
 figcaption{font-size:13px;color:#333;text-align:center}
 .u{font-weight:bold;font-size:15px}
 footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
-@page{size:A4;margin:18mm 14mm;@bottom-right{content:"%(pageword)s"}}
+@page{size:A4;margin:20mm 14mm 18mm 14mm;
+ @top-left{content:%(lab)s;font-family:%(font)s;font-size:9pt}
+ @top-right{content:%(cid)s;font-family:%(font)s;font-size:9pt}
+ @bottom-left{content:%(cid)s;font-family:%(font)s;font-size:8pt}
+ @bottom-right{content:%(pageword)s;font-family:%(font)s;font-size:8pt}}
+@media print{header.page,footer{display:none}body{max-width:none;padding:0;font-size:12px}
+ figure svg{width:92%%}}
 """
+
+
+def css_string(text: str) -> str:
+    """``text`` as a quoted CSS string (backslash and quote escaped).
+
+    >>> print(css_string('say "hi"'))
+    "say \\"hi\\""
+    """
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ") + '"'
 
 
 def _h(x) -> str:
     if isinstance(x, Num):
         return (f'<span class="num" data-src="{html.escape(x.src)}" '
                 f'data-rule="{html.escape(x.rule)}">{html.escape(x.text)}</span>')
+    if isinstance(x, NoBreak):
+        return f'<span class="nb">{html.escape(str(x))}</span>'
     if isinstance(x, list):
         return "".join(_h(s) for s in x)
     return html.escape(str(x))
 
 
 def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: str | None) -> str:
-    """The certificate as one self-contained HTML page (no external resources)."""
+    """The certificate as one self-contained HTML page (no external resources).
+
+    On screen the page has a header with the laboratory and the identifier (a web page
+    has no page numbers). Printed (print CSS, ``@page`` margin boxes) every page carries
+    the laboratory, the identifier and "Page x of y".
+    """
     cid = content["id"]
-    ff = (f"'{font}', " if font else "") + "'DejaVu Sans', Arial, sans-serif"
-    pageword = L["page_of"].replace("{x}", '" counter(page) "').replace("{y}", '" counter(pages) "')
-    css = _CSS % {"font": ff, "pageword": pageword}
+    ff = (f"'{font}', " if font else "") + "'DejaVu Sans', 'Noto Sans CJK SC', Arial, sans-serif"
+    pageword = " ".join(
+        css_string(part) if i % 2 == 0 else part for i, part in enumerate(
+            L["page_of"].replace("{x}", "\0counter(page)\0").replace(
+                "{y}", "\0counter(pages)\0").split("\0")) if part)
+    css = _CSS % {"font": ff, "pageword": pageword, "lab": css_string(content["lab_name"]),
+                  "cid": css_string(f"{L['certificate_no']}: {cid}")}
     out = ["<!DOCTYPE html>", f'<html lang="{"zh-CN" if lang == "zh" else "en"}">', "<head>",
            '<meta charset="utf-8">', f"<title>{html.escape(L['title'])} {html.escape(cid)}</title>",
            f"<style>{css}</style>", "</head>", "<body>"]
@@ -452,12 +542,14 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         out.append(f'<div class="watermark" aria-hidden="true">{html.escape(L["virtual_short"])}</div>')
         out.append(f'<div class="banner" id="virtual-banner">{html.escape(L["virtual"])}</div>')
     out.append(f'<header class="page"><span>{html.escape(content["lab_name"])}</span>'
-               f'<span id="cert-id">{html.escape(L["certificate_no"])}: {html.escape(cid)}</span>'
-               f'<span id="page-of">{html.escape(L["page_of"].format(x=1, y=1))}</span></header>')
+               f'<span id="cert-id" class="nb">{html.escape(L["certificate_no"])}: '
+               f'{html.escape(cid)}</span></header>')
     out.append(f"<h1>{html.escape(L['title'])}</h1>")
     for b in content["blocks"]:
         if b.kind == "h":
             out.append(f"<h2>{html.escape(b.data)}</h2>")
+        elif b.kind == "sub":
+            out.append(f"<h3>{html.escape(b.data)}</h3>")
         elif b.kind == "notice":
             out.append(f'<p class="notice">{html.escape(b.data)}</p>')
         elif b.kind == "p":
@@ -469,9 +561,10 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         elif b.kind == "table":
             head, rows = b.data
             tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
-            out.append(f"<table{tid}><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head) + "</tr>"
+            out.append(f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
+                       + "</tr></thead><tbody>"
                        + "".join("<tr>" + "".join(f"<td>{_h(c)}</td>" for c in r) + "</tr>"
-                                 for r in rows) + "</table>")
+                                 for r in rows) + "</tbody></table>")
         elif b.kind == "fig":
             key, cap, _ = b.data
             out.append(f'<figure id="fig-{key}">{svgs[key]}<figcaption>{html.escape(cap)}'
@@ -490,7 +583,7 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
 A4_IN: tuple[float, float] = (8.27, 11.69)
 _PT = 1.0 / 72.0 / A4_IN[1]          # one point as a fraction of the page height
 _LEFT, _RIGHT, _TOP, _BOTTOM = 0.08, 0.92, 0.90, 0.08
-_FIG_H = 0.30                        # a figure's height, fraction of the page
+_FIG_H = 0.33                        # a figure's height, fraction of the page
 
 
 def _width(s: str) -> int:
@@ -540,8 +633,48 @@ def _text(x) -> str:
     return str(x)
 
 
+def _cell_lines(c, cols: int) -> list[str]:
+    """A table cell's lines: a NoBreak cell (identifier, unit) is never split."""
+    if isinstance(c, NoBreak):
+        return [str(c)]
+    return _wrap(_text(c), cols)
+
+
+def _longest_token(c) -> int:
+    """Width (columns) of the longest unbreakable piece of a cell."""
+    if isinstance(c, NoBreak):
+        return _width(str(c))
+    toks = _text(c).replace("\n", " ").split(" ")
+    return max((_width(t) if not any(unicodedata.east_asian_width(ch) in "WF" for ch in t)
+                else 2 for t in toks), default=0)
+
+
+def fit_widths(widths, head, rows, cols_per_frac: float) -> tuple[float, ...]:
+    """Column widths (fractions summing to 1) widened so that no identifier, unit or word
+    is broken: each column gets at least its longest token, taken from columns with slack.
+
+    >>> fit_widths((0.5, 0.5), ["a", "b"], [["x" * 30, "y"]], 40.0)
+    (0.7875, 0.2125)
+    """
+    need = [0.0] * len(widths)
+    for r in [head, *rows]:
+        for j, c in enumerate(r):
+            need[j] = max(need[j], (_longest_token(c) + 1.5) / cols_per_frac)
+    w = [max(a, b) for a, b in zip(widths, need)]
+    excess = sum(w) - 1.0
+    if excess > 1e-12:
+        slack = [max(0.0, wi - ni) for wi, ni in zip(w, need)]
+        total = sum(slack)
+        if total > 0:
+            w = [wi - excess * si / total if total >= excess else wi - si
+                 for wi, si in zip(w, slack)]
+        ssum = sum(w)
+        w = [wi / ssum for wi in w]
+    return tuple(round(x, 6) for x in w)
+
+
 class _Layout:
-    """Places blocks on A4 pages; each page is a list of (y_top, height, op)."""
+    """Places blocks on A4 pages; each page is a list of (y_top, op)."""
 
     def __init__(self, fontsize: float):
         self.fs = fontsize
@@ -549,8 +682,11 @@ class _Layout:
         self.pages: list[list] = [[]]
         self.y = _TOP
 
+    def fits(self, h: float) -> bool:
+        return self.y - h >= _BOTTOM or not self.pages[-1]
+
     def need(self, h: float) -> None:
-        if self.y - h < _BOTTOM and self.pages[-1]:
+        if not self.fits(h):
             self.pages.append([])
             self.y = _TOP
 
@@ -565,7 +701,14 @@ class _Layout:
         return max(4, int(width_pt / (self.fs * 0.56)))
 
 
+_H_H = 22 * _PT          # a heading's height
+_SUB_H = 16 * _PT        # a sub-heading's height
+
+
 def _layout(content: dict, L: dict) -> list[list]:
+    """Lay the blocks out on pages. A heading (h, sub) is kept on the page of the first
+    unit of the block after it (a table's head and first row, a figure, a paragraph's
+    first lines), so no page ends with a heading."""
     lay = _Layout(8.5)
     fs, ln = lay.fs, lay.line
     title_h = 30 * _PT
@@ -574,80 +717,110 @@ def _layout(content: dict, L: dict) -> list[list]:
         fig.text(0.5, y - 20 * _PT, L["title"], ha="center", va="baseline", fontsize=18,
                  weight="bold")
     lay.put(title_h, title)
-    for b in content["blocks"]:
-        if b.kind == "h":
-            def op(fig, y, t=b.data):
-                fig.text(_LEFT, y - 13 * _PT, t, fontsize=10.5, weight="bold", va="baseline")
-                fig.add_artist(_hline(fig, y - 16 * _PT, 0.6))
-            lay.need(22 * _PT + 3 * ln)            # keep a heading with what follows
-            lay.put(22 * _PT, op)
-        elif b.kind in ("p", "notice"):
-            txt = _text(b.data)
-            big = b.extra == "U"
-            lines = _wrap(txt, lay.cols(1.0) - (8 if big else 0))
-            size = 10 if big else fs
-            color = "#b00020" if b.kind == "notice" else "black"
-            for i, line in enumerate(lines):
-                def op(fig, y, t=line, s=size, c=color, w="bold" if big else "normal"):
-                    fig.text(_LEFT, y - ln * 0.8, t, fontsize=s, va="baseline", color=c, weight=w)
-                lay.put(ln * (1.15 if big else 1.0), op)
-            lay.y -= 3 * _PT
-        elif b.kind == "kv":
-            for k, v in b.data:
-                vl = _wrap(_text(v), lay.cols(0.66))
-                h = ln * len(vl)
-
-                def op(fig, y, k=_text(k), vl=vl):
-                    fig.text(_LEFT, y - ln * 0.8, k, fontsize=fs, va="baseline", color="0.25")
-                    for i, t in enumerate(vl):
-                        fig.text(_LEFT + 0.32 * (_RIGHT - _LEFT), y - ln * (0.8 + i), t,
-                                 fontsize=fs, va="baseline")
-                lay.put(h, op)
-            lay.y -= 4 * _PT
-        elif b.kind == "table":
-            head, rows = b.data
-            widths = b.extra["widths"] if isinstance(b.extra, dict) else b.extra
-            xs = [_LEFT]
-            for w in widths[:-1]:
-                xs.append(xs[-1] + w * (_RIGHT - _LEFT))
-
-            def row_op(cells, bold=False, shade=False, xs=tuple(xs), widths=tuple(widths)):
-                wrapped = [_wrap(_text(c), lay.cols(w) - 1) for c, w in zip(cells, widths)]
-                n = max(len(w) for w in wrapped)
-
-                def op(fig, y, wrapped=wrapped, n=n, xs=xs):
-                    if shade:
-                        fig.add_artist(_rect(fig, y, ln * n + 2 * _PT))
-                    for x, ls in zip(xs, wrapped):
-                        for i, t in enumerate(ls):
-                            fig.text(x + 0.004, y - ln * (0.8 + i), t, fontsize=fs - 0.5,
-                                     va="baseline", weight="bold" if bold else "normal")
-                    fig.add_artist(_hline(fig, y - ln * n - 2 * _PT, 0.3))
-                return ln * n + 2 * _PT, op
-            h, op = row_op(head, bold=True, shade=True)
-            lay.need(h + ln * 2)
-            lay.put(h, op)
-            for r in rows:
-                h2, op2 = row_op(r)
-                if lay.y - h2 < _BOTTOM:           # repeat the head on the next page
-                    lay.need(h2 + h)
-                    lay.put(h, row_op(head, bold=True, shade=True)[1])
-                lay.put(h2, op2)
-            lay.y -= 6 * _PT
-        elif b.kind == "fig":
-            key, cap, draw = b.data
-            cap_lines = _wrap(cap, lay.cols(1.0))
-            h = _FIG_H + ln * len(cap_lines) + 6 * _PT
-
-            def op(fig, y, draw=draw, cap_lines=cap_lines):
-                gs = fig.add_gridspec(1, 1, left=_LEFT + 0.06, right=_RIGHT - 0.01,
-                                      top=y - 0.01, bottom=y - _FIG_H + 0.035)
-                draw(fig, gs[0], content["_report"], L, content["_truth"])
-                for i, t in enumerate(cap_lines):
-                    fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,
-                             va="baseline")
+    blocks = content["blocks"]
+    units = [_units(b, lay, content, L) for b in blocks]
+    for i, b in enumerate(blocks):
+        if b.kind in ("h", "sub"):
+            # keep with the next block's first unit (and every following heading's)
+            keep = 0.0
+            j = i + 1
+            while j < len(blocks) and blocks[j].kind in ("h", "sub"):
+                keep += units[j][0][0]
+                j += 1
+            if j < len(blocks) and units[j]:
+                keep += units[j][0][0] + (units[j][1][0] if len(units[j]) > 1
+                                          and blocks[j].kind == "table" else 0.0)
+            lay.need(units[i][0][0] + keep)
+        for k, (h, op, kind) in enumerate(units[i]):
+            if kind == "row" and not lay.fits(h):          # repeat the table head
+                head_h, head_op, _ = units[i][0]
+                lay.need(h + head_h)
+                lay.put(head_h, head_op)
+            elif kind == "head":
+                lay.need(h + (units[i][1][0] if len(units[i]) > 1 else 0.0))
+            if kind == "gap":
+                lay.y -= h
+                continue
             lay.put(h, op)
     return lay.pages
+
+
+def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, Callable, str]]:
+    """A block as (height, draw op, kind) units that are never split across pages."""
+    fs, ln = lay.fs, lay.line
+    out: list[tuple[float, Callable, str]] = []
+    if b.kind in ("h", "sub"):
+        big = b.kind == "h"
+
+        def op(fig, y, t=b.data, big=big):
+            fig.text(_LEFT, y - (13 if big else 11) * _PT, t, fontsize=10.5 if big else 9.2,
+                     weight="bold", va="baseline")
+            if big:
+                fig.add_artist(_hline(fig, y - 16 * _PT, 0.6))
+        out.append((_H_H if big else _SUB_H, op, "h"))
+    elif b.kind in ("p", "notice"):
+        big = b.extra == "U"
+        lines = _wrap(_text(b.data), lay.cols(1.0) - (8 if big else 0))
+        size = 10 if big else fs
+        color = "#b00020" if b.kind == "notice" else "black"
+        for line in lines:
+            def op(fig, y, t=line, s=size, c=color, w="bold" if big else "normal"):
+                fig.text(_LEFT, y - ln * 0.8, t, fontsize=s, va="baseline", color=c, weight=w)
+            out.append((ln * (1.15 if big else 1.0), op, "line"))
+        out.append((3 * _PT, None, "gap"))
+    elif b.kind == "kv":
+        for k, v in b.data:
+            vl = _cell_lines(v, lay.cols(0.66))
+
+            def op(fig, y, k=_text(k), vl=vl):
+                fig.text(_LEFT, y - ln * 0.8, k, fontsize=fs, va="baseline", color="0.25")
+                for i, t in enumerate(vl):
+                    fig.text(_LEFT + 0.32 * (_RIGHT - _LEFT), y - ln * (0.8 + i), t,
+                             fontsize=fs, va="baseline")
+            out.append((ln * len(vl), op, "line"))
+        out.append((4 * _PT, None, "gap"))
+    elif b.kind == "table":
+        head, rows = b.data
+        widths = b.extra["widths"] if isinstance(b.extra, dict) else b.extra
+        widths = fit_widths(widths, head, rows, lay.cols(1.0) * 1.0)
+        xs = [_LEFT]
+        for w in widths[:-1]:
+            xs.append(xs[-1] + w * (_RIGHT - _LEFT))
+
+        def row_unit(cells, bold=False, shade=False):
+            wrapped = [_cell_lines(c, lay.cols(w) - 1) for c, w in zip(cells, widths)]
+            n = max(len(w) for w in wrapped)
+
+            def op(fig, y, wrapped=wrapped, n=n, xs=tuple(xs)):
+                if shade:
+                    fig.add_artist(_rect(fig, y, ln * n + 2 * _PT))
+                for x, ls in zip(xs, wrapped):
+                    for i, t in enumerate(ls):
+                        fig.text(x + 0.004, y - ln * (0.8 + i), t, fontsize=fs - 0.5,
+                                 va="baseline", weight="bold" if bold else "normal")
+                fig.add_artist(_hline(fig, y - ln * n - 2 * _PT, 0.3))
+            return ln * n + 2 * _PT, op
+        h, op = row_unit(head, bold=True, shade=True)
+        out.append((h, op, "head"))
+        for r in rows:
+            h2, op2 = row_unit(r)
+            out.append((h2, op2, "row"))
+        out.append((6 * _PT, None, "gap"))
+    elif b.kind == "fig":
+        key, cap, draw = b.data
+        cap_lines = _wrap(cap, lay.cols(1.0))
+        h = _FIG_H + ln * len(cap_lines) + 6 * _PT
+
+        def op(fig, y, draw=draw, cap_lines=cap_lines):
+            # the legend sits above the axes (figures._legend): leave it room below y
+            gs = fig.add_gridspec(1, 1, left=_LEFT + 0.06, right=_RIGHT - 0.01,
+                                  top=y - 0.05, bottom=y - _FIG_H + 0.035)
+            draw(fig, gs[0], content["_report"], L, content["_truth"])
+            for i, t in enumerate(cap_lines):
+                fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,
+                         va="baseline")
+        out.append((h, op, "fig"))
+    return out
 
 
 def _hline(fig, y, lw):
@@ -663,8 +836,8 @@ def _rect(fig, y, h):
 
 def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)) -> bytes:
     """The certificate as A4 PDF pages; each page has the identifier and "page x of y"."""
-    import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
+    from matplotlib.figure import Figure
 
     buf = io.BytesIO()
     with mpl_style(fonts):
@@ -674,14 +847,11 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
                                      "Creator": "gonio", "Title": f"{L['title']} {content['id']}"}
                       ) as pdf:
             for p, ops in enumerate(pages, 1):
-                fig = plt.figure(figsize=A4_IN)
-                try:
-                    _page_frame(fig, content, L, p, n)
-                    for y, op in ops:
-                        op(fig, y)
-                    pdf.savefig(fig)
-                finally:
-                    plt.close(fig)
+                fig = Figure(figsize=A4_IN)
+                _page_frame(fig, content, L, p, n)
+                for y, op in ops:
+                    op(fig, y)
+                pdf.savefig(fig)
     return buf.getvalue()
 
 
@@ -708,6 +878,23 @@ def _page_frame(fig, content, L, p, n) -> None:
 
 # --------------------------------------------------------------------------- entry point
 
+def has_cjk_font() -> bool:
+    """True when a CJK font is installed (see :func:`gonio.report.i18n.cjk_font`)."""
+    try:
+        cjk_font()
+    except GonioError:
+        return False
+    return True
+
+
+def cjk_notice(lang: str) -> str | None:
+    """The one line a command prints when the English certificate falls back to the English
+    title because no CJK font is installed (None when there is one, or for zh)."""
+    if lang != "en" or has_cjk_font():
+        return None
+    return labels("en")["cjk_missing"]
+
+
 def font_families(lang: str) -> tuple[str, ...]:
     """Font families of the figures and the PDF, in fallback order.
 
@@ -724,8 +911,10 @@ def font_families(lang: str) -> tuple[str, ...]:
 
 
 def write_certificate(report, out: str | Path, *, truth: dict | None = None,
-                      lab: str | Path | dict | None = None, lang: str = "en") -> dict[str, Path]:
-    """Write ``certificate.html`` and ``certificate.pdf`` for ``report`` into ``out``.
+                      lab: str | Path | dict | None = None, lang: str = "en",
+                      dcc: bool = False) -> dict[str, Path]:
+    """Write ``certificate.html`` and ``certificate.pdf`` (and with ``dcc`` the PTB DCC
+    3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.dcc`) for ``report`` into ``out``.
 
     Parameters
     ----------
@@ -744,20 +933,30 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
     lang : {"en", "zh"}
         Language of the labels; "zh" needs a CJK font (GonioError naming the package).
 
+    dcc : bool
+        Also write ``certificate.dcc.xml`` (always in English, the DCC's mandatory language).
+
     Returns
     -------
     dict of str to Path
-        ``{"certificate.html": ..., "certificate.pdf": ...}``.
+        ``{"certificate.html": ..., "certificate.pdf": ...}`` (and ``certificate.dcc.xml``).
     """
     L = labels(lang)
     fonts = font_families(lang)
     font = fonts[0] if lang == "zh" else None
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
-    content = certificate_blocks(report, L, lab=lab_d, truth=truth)
+    cjk = len(fonts) > 1 or lang == "zh"
+    content = certificate_blocks(report, L, lab=lab_d, truth=truth, lang=lang, cjk=cjk)
     content["_report"], content["_truth"] = report, truth
     svgs = {key: figure_svg(draw, report, L, truth, fonts) for key, _, draw in FIGURES}
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
-    return {"certificate.html": out / "certificate.html", "certificate.pdf": out / "certificate.pdf"}
+        if dcc:
+            from gonio.report.dcc import dcc_bytes
+
+            write_bytes(stage / "certificate.dcc.xml",
+                        dcc_bytes(report, lab=lab_d, cert_id=content["id"]))
+    names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
+    return {n: out / n for n in names}

@@ -1,4 +1,4 @@
-"""The certificate's figures, drawn with matplotlib (Agg) from a calibration report.
+"""The certificate's figures, drawn on matplotlib Figure objects from a calibration report.
 
 Contents
 ========
@@ -9,7 +9,7 @@ Contents
 :func:`draw_tilt`      elliptic-projection error at the tilt bound (Annex A.4.2, Fig. A.3),
                        rigid-body model beside it (:mod:`gonio.physics.tilt`)
 :func:`draw_scale_factor`   K_i per round and K (7.1)
-:func:`draw_zero_stability` readings M_n against time and their least-squares drift (7.3)
+:func:`draw_zero_stability` readings M_n against time and the drift results.json states (7.3)
 :func:`draw_rate`      E_i per position for each rate (7.6)
 :func:`draw_pointing`  E_i per position for each axis direction (7.7)
 :func:`draw_budget`    |c_i|·u_i of the Annex A components, u_c and U
@@ -22,6 +22,13 @@ SubplotSpec to draw in, the :class:`~gonio.pipeline.calibrate.CalibrationReport`
 label mapping of :func:`gonio.report.i18n.labels`, and the virtual-bench truth
 (or None). The same function draws into the HTML's SVG and into a PDF page.
 An item that was not measured gives an empty panel saying so.
+
+Rules every figure keeps (issue 13): no pyplot and no backend switch (a
+``matplotlib.figure.Figure`` is drawn and saved directly, so importing this module
+changes nothing global); no offset or scientific axis labels; legends outside the
+axes, above them, so they never hide data; every number in a legend rounded by the
+certificate's rule (:mod:`gonio.report.stated`); nothing computed here that
+``results.json`` does not hold (the 7.3 drift is the calibration's).
 """
 
 from __future__ import annotations
@@ -32,14 +39,12 @@ import math
 from typing import Callable, Iterator
 
 import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from gonio.report.i18n import display_number, display_uncertainty  # noqa: E402
-from gonio.physics.tilt import elliptic_error_arcsec, rigid_error_arcsec  # noqa: E402
-from gonio.units import S_PER_MIN, deg_to_arcsec, dps_to_dph  # noqa: E402
+from gonio.physics.tilt import elliptic_error_arcsec, rigid_error_arcsec
+from gonio.report.i18n import display, display_number, display_uncertainty
+from gonio.units import S_PER_MIN, deg_to_arcsec, s_to_h
 
 #: Salt of matplotlib's SVG ids: fixed, so the same report gives the same bytes.
 SVG_HASHSALT: str = "gonio-certificate"
@@ -58,8 +63,24 @@ def mpl_style(fonts: tuple[str, ...] = ("DejaVu Sans",)) -> Iterator[None]:
           "axes.grid": True, "grid.alpha": 0.3, "legend.fontsize": 7,
           "path.simplify": False,
           "text.parse_math": False, "text.usetex": False}   # user text literally (no TeX)
-    with plt.rc_context(rc):
+    with matplotlib.rc_context(rc):
         yield
+
+
+def _legend(ax, ncol: int = 3) -> None:
+    """The legend above the axes, outside the data area (it never hides a curve)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01, 1.0, 0.2), mode="expand",
+                  ncol=ncol, borderaxespad=0.0, frameon=False)
+
+
+def _plain_axes(ax) -> None:
+    """No offset ("+7.64348e4") and no scientific notation on either axis."""
+    for axis in ("x", "y"):
+        try:
+            ax.ticklabel_format(axis=axis, useOffset=False, style="plain")
+        except AttributeError:       # a categorical or log axis has no such formatter
+            pass
 
 
 def _empty(ax, L) -> None:
@@ -107,7 +128,8 @@ def draw_deviation(fig, spec, report, L, truth=None) -> None:
     ax.axhline(0, color="0.3", lw=0.6)
     ax.set_xlabel(L["ax_position"])
     ax.set_ylabel(L["ax_deviation"])
-    ax.legend(ncol=4, loc="best")
+    _plain_axes(ax)
+    _legend(ax, ncol=6)
 
 
 def draw_repeatability(fig, spec, report, L, truth=None) -> None:
@@ -116,14 +138,18 @@ def draw_repeatability(fig, spec, report, L, truth=None) -> None:
     c = report.results.repeatability
     if not c.measured:
         return _empty(ax, L)
+    from gonio.report.stated import stated_item
+
     t = c.table.sort_values("position_deg")
-    ax.plot(t["position_deg"], t["R_arcsec"], "o-", color="C0", lw=1.2, ms=4)
-    ax.axhline(c.value, color="C3", ls="--", lw=1,
-               label=f"{L['lg_R']} {display_number(c.value, 3)}″")
+    ax.plot(t["position_deg"], t["R_arcsec"], "o-", color="C0", lw=1.2, ms=4,
+            label=L["ax_std"])
+    shown = str(stated_item(report.to_dict(), "repeatability")["value"])
+    ax.axhline(c.value, color="C3", ls="--", lw=1, label=f"{L['lg_R']} {shown}″")
     ax.set_ylim(bottom=0)
     ax.set_xlabel(L["ax_position"])
     ax.set_ylabel(L["ax_std"])
-    ax.legend(loc="lower right")
+    _plain_axes(ax)
+    _legend(ax, ncol=2)
 
 
 def draw_tilt(fig, spec, report, L, truth=None) -> None:
@@ -138,14 +164,14 @@ def draw_tilt(fig, spec, report, L, truth=None) -> None:
     ax.set_xlabel(L["ax_position"])
     ax.set_ylabel(L["ax_tilt"])
     ax.set_xticks(np.arange(0, 361, 90))
-    ax.legend(loc="lower left")
+    _legend(ax, ncol=1)
     ax2 = fig.add_subplot(sub[1])
     ax2.plot(theta, rigid_error_arcsec(theta, psi, calibrated=False), "C1-", lw=1.5,
              label=L["lg_rigid_uncal"])
     ax2.set_xlabel(L["ax_position"])
     ax2.set_ylabel(L["ax_tilt"])
     ax2.set_xticks(np.arange(0, 361, 90))
-    ax2.legend(loc="lower left")
+    _legend(ax2, ncol=1)
 
 
 def draw_scale_factor(fig, spec, report, L, truth=None) -> None:
@@ -154,27 +180,16 @@ def draw_scale_factor(fig, spec, report, L, truth=None) -> None:
     c = report.results.scale_factor
     if not c.measured:
         return _empty(ax, L)
+    from gonio.report.stated import stated_item
+
     t = c.table
-    ax.plot(t["table_deg"], t["K_i_counts_per_deg"], "o", color="C0", ms=5)
-    ax.axhline(c.value, color="C3", ls="--", lw=1,
-               label=f"{L['lg_mean_K']} {display_number(c.value, 8)}")
-    ax.ticklabel_format(axis="y", useOffset=True, style="plain")
+    ax.plot(t["table_deg"], t["K_i_counts_per_deg"], "o", color="C0", ms=5, label="K_i")
+    shown = str(stated_item(report.to_dict(), "scale_factor")["value"])
+    ax.axhline(c.value, color="C3", ls="--", lw=1, label=f"{L['lg_mean_K']} {shown}")
     ax.set_xlabel(L["ax_round_angle"])
     ax.set_ylabel(L["ax_K"])
-    ax.legend(loc="best")
-
-
-def zero_drift_deg_per_h(time_s, angle_deg) -> float:
-    """Least-squares slope of the zero-stability readings, °/h (shown beside 7.3's B_s).
-
-    >>> round(zero_drift_deg_per_h([0, 300, 600], [0.0, 0.0001, 0.0002]), 6)
-    0.0012
-    """
-    t = np.asarray(time_s, dtype=float)
-    a = np.asarray(angle_deg, dtype=float)
-    if len(t) < 2 or np.ptp(t) == 0:
-        return float("nan")
-    return float(dps_to_dph(np.polyfit(t, a, 1)[0]))
+    _plain_axes(ax)
+    _legend(ax, ncol=2)
 
 
 def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
@@ -184,19 +199,23 @@ def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
     if not c.measured or "readings" not in c.tables:
         return _empty(ax, L)
     rd = c.tables["readings"]
+    drift = {int(r["series"]): r for _, r in c.table.iterrows()} \
+        if "drift_deg_per_h" in c.table else {}
     for i, (s, g) in enumerate(rd.groupby("series", sort=True)):
         g = g.sort_values("time_s")
-        t_min = (g["time_s"] - g["time_s"].iloc[0]) / S_PER_MIN
-        m = deg_to_arcsec(g["angle_deg"].to_numpy())
-        ax.plot(t_min, m, "o", color=f"C{i}", ms=4, label=f"{L['lg_series']} {s}")
-        slope = zero_drift_deg_per_h(g["time_s"], g["angle_deg"])
-        if math.isfinite(slope):
-            p = np.polyfit(t_min.to_numpy(), m, 1)
-            ax.plot(t_min, np.polyval(p, t_min), "-", color=f"C{i}", lw=1,
-                    label=L["lg_drift"].format(v=display_number(slope, 3)))
+        t_s = (g["time_s"] - g["time_s"].iloc[0]).to_numpy(dtype=float)
+        m_arcsec = deg_to_arcsec(g["angle_deg"].to_numpy())
+        ax.plot(t_s / S_PER_MIN, m_arcsec, "o", color=f"C{i}", ms=4,
+                label=f"{L['lg_series']} {s}")
+        d = drift.get(int(s))
+        if d is not None and math.isfinite(d["drift_deg_per_h"]):
+            line_deg = d["drift_intercept_deg"] + d["drift_deg_per_h"] * s_to_h(t_s)
+            ax.plot(t_s / S_PER_MIN, deg_to_arcsec(line_deg), "-", color=f"C{i}", lw=1,
+                    label=L["lg_drift"].format(v=display_number(d["drift_deg_per_h"], 3)))
     ax.set_xlabel(L["ax_time_min"])
     ax.set_ylabel(L["ax_angle_arcsec"])
-    ax.legend(loc="best")
+    _plain_axes(ax)
+    _legend(ax, ncol=2)
 
 
 def _consistency(ax, c, col, L, fmt) -> None:
@@ -204,7 +223,8 @@ def _consistency(ax, c, col, L, fmt) -> None:
         return _empty(ax, L)
     pts = c.tables["points"]
     ref = set(c.table.loc[c.table["reference"].astype(bool), col]) if "reference" in c.table else set()
-    for i, (v, g) in enumerate(pts.groupby(col, sort=True)):
+    groups = sorted(pts.groupby(col, sort=True), key=lambda vg: vg[0] not in ref)
+    for i, (v, g) in enumerate(groups):
         g = g.sort_values("position_deg")
         lab = fmt(v) + (" " + L["lg_reference"] if v in ref else "")
         ax.plot(g["position_deg"], g["E_arcsec"], "-o", lw=1.6 if v in ref else 0.9,
@@ -212,13 +232,14 @@ def _consistency(ax, c, col, L, fmt) -> None:
     ax.axhline(0, color="0.3", lw=0.6)
     ax.set_xlabel(L["ax_position"])
     ax.set_ylabel(L["ax_deviation"])
-    ax.legend(ncol=3, loc="best")
+    _plain_axes(ax)
+    _legend(ax, ncol=4)
 
 
 def draw_rate(fig, spec, report, L, truth=None) -> None:
     """E_i per position at each table rate (draft 7.6)."""
     _consistency(fig.add_subplot(spec), report.results.rate_consistency, "rate_dps", L,
-                 lambda v: f"{display_number(float(v), 3)} °/s")
+                 lambda v: f"{display('pos', float(v))} °/s")
 
 
 def draw_pointing(fig, spec, report, L, truth=None) -> None:
@@ -239,6 +260,7 @@ def draw_budget(fig, spec, report, L, truth=None) -> None:
     ax.barh(y, vals, color=colors, height=0.6)
     for yi, v, n in zip(y, vals, names):
         ax.text(v, yi, " " + display_uncertainty(v) + "″", va="center", fontsize=7.5)
+    ax.ticklabel_format(axis="x", useOffset=False, style="plain")
     ax.set_yticks(y)
     ax.set_yticklabels(names)
     ax.set_xlim(0, max(vals) * 1.25 if max(vals) > 0 else 1)
@@ -267,14 +289,12 @@ def figure_svg(draw: Callable, report, L: dict, truth=None,
     The XML prolog and DOCTYPE are dropped so the text can be inlined in HTML.
     """
     with mpl_style(fonts):
-        fig = plt.figure(figsize=figsize)
-        try:
-            spec = fig.add_gridspec(1, 1)[0]
-            draw(fig, spec, report, L, truth)
-            fig.tight_layout()
-            buf = io.StringIO()
-            fig.savefig(buf, format="svg", metadata={"Date": None})
-        finally:
-            plt.close(fig)
+        fig = Figure(figsize=figsize)
+        spec = fig.add_gridspec(1, 1)[0]
+        draw(fig, spec, report, L, truth)
+        fig.tight_layout()
+        buf = io.StringIO()
+        fig.savefig(buf, format="svg", metadata={"Date": None}, bbox_inches="tight",
+                    pad_inches=0.05)
     svg = buf.getvalue()
     return svg[svg.index("<svg"):]

@@ -185,7 +185,185 @@ LABELS: dict[str, dict[str, str]] = {
     "up": {"en": "up", "zh": "竖直向上"}, "north": {"en": "north", "zh": "正北"},
     "south": {"en": "south", "zh": "正南"}, "east": {"en": "east", "zh": "正东"},
     "west": {"en": "west", "zh": "正西"},
+    # results table, uncertainty and the ± form (7.4)
+    "U_col": {"en": "Expanded uncertainty U", "zh": "扩展不确定度 U"},
+    "U_cell": {"en": "{U} (k = {k}, p ≈ {p} %)", "zh": "{U}（k = {k}，p ≈ {p} %）"},
+    "E_note": {"en": "signed extreme {s}″ at {p}°", "zh": "带符号极值 {s}″，位于 {p}°"},
+    "U_line_p": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}, "
+                       "coverage probability {p}",
+                 "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}，包含概率{p}"},
+    "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
+                          "zh": "按规范草案附录A的不确定度评定。"},
+    "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "
+                                   "\"beyond the draft\" are not in Annex A.",
+                             "zh": "按本次校准的物理模型评定；标“超出草案”的分量不在附录A中。"},
+    "beyond_draft": {"en": "beyond the draft", "zh": "超出草案"},
+    "no_E_U": {"en": "Angle-position deviation not measured: no uncertainty stated.",
+               "zh": "未测角位置偏差：不给出测量不确定度。"},
+    # method
+    "method": {"en": "Method", "zh": "校准方法"},
+    "m_spec": {"en": "Specification and clauses followed", "zh": "校准依据及所用条款"},
+    "m_clauses": {"en": "clauses {c} (items measured)", "zh": "第 {c} 条（已测项目）"},
+    "m_rates": {"en": "Table rates", "zh": "转台速率"},
+    "m_rounds": {"en": "Rounds and series", "zh": "测回与组数"},
+    "m_rounds_v": {"en": "7.1: {sf} rounds; 7.4: {ad} rounds × {s} series (7.5 from the same "
+                         "series); 7.3: {zn} readings {zi} s apart",
+                   "zh": "7.1：{sf} 个测回；7.4：{ad} 个测回 × {s} 组（7.5 用同一数据）；"
+                         "7.3：{zn} 个读数，间隔 {zi} s"},
+    "m_delay": {"en": "Reading", "zh": "读数"},
+    "m_delay_v": {"en": "read {d} s after arrival; time from start to reading ≤ {t} s "
+                        "(Annex A.1)",
+                  "zh": "到位后 {d} s 读数；自起动至读数 ≤ {t} s（附录A.1）"},
+    "m_earth": {"en": "Earth-rate compensation", "zh": "地速补偿"},
+    "m_earth_measured": {"en": "measured: static phase of {s} s before each series",
+                         "zh": "实测：每组前静态测量 {s} s"},
+    "m_earth_computed": {"en": "computed from the latitude and the axis direction",
+                         "zh": "由纬度和轴向计算"},
+    "m_earth_none": {"en": "none", "zh": "无"},
+    "m_latitude": {"en": "Site latitude", "zh": "测量地点纬度"},
+    "m_axes": {"en": "Axis orientations", "zh": "轴向"},
+    "m_tilt": {"en": "Tilt of the sensing plane", "zh": "敏感平面倾斜"},
+    "m_tilt_v": {"en": "bound ψ ≤ {t}° (Annex A.4.2)", "zh": "上限 ψ ≤ {t}°（附录A.4.2）"},
+    "m_temp": {"en": "Temperature", "zh": "温度"},
+    "m_temp_v": {"en": "required ({t} ± {tol}) °C (Table 2); during calibration {m}",
+                 "zh": "要求 ({t} ± {tol}) °C（表2）；校准时 {m}"},
+    "m_readings": {"en": "Readings taken of the draft's ambiguities: see the section below.",
+                   "zh": "对草案不明确之处的理解：见下节。"},
+    # conformity
+    "conformity": {"en": "Statement of conformity (ISO/IEC 17025 7.8.6)",
+                   "zh": "符合性声明（ISO/IEC 17025 7.8.6）"},
+    "rule_simple": {"en": "Decision rule: simple acceptance (ILAC-G8:09/2019 4.2.1, guard band "
+                          "w = 0); the specific false-accept probability is stated under a "
+                          "normal measurement model (JCGM 106).",
+                    "zh": "判定规则：简单接受（ILAC-G8:09/2019 4.2.1，保护带 w = 0）；按正态测量模型"
+                          "（JCGM 106）给出特定误接受概率。"},
+    "rule_guarded": {"en": "Decision rule: binary statement with guarded acceptance, guard band "
+                           "w = {r}·U (ILAC-G8:09/2019 4.2.2); the specific false-accept "
+                           "probability is stated under a normal measurement model (JCGM 106).",
+                     "zh": "判定规则：带保护带的二元判定，保护带 w = {r}·U（ILAC-G8:09/2019 4.2.2）；"
+                           "按正态测量模型（JCGM 106）给出特定误接受概率。"},
+    "rule_non-binary": {"en": "Decision rule: non-binary statement with guard band w = {r}·U "
+                              "(ILAC-G8:09/2019 4.2.3): pass, conditional pass, conditional fail, "
+                              "fail; the specific false-accept probability is stated under a "
+                              "normal measurement model (JCGM 106).",
+                        "zh": "判定规则：带保护带 w = {r}·U 的非二元判定（ILAC-G8:09/2019 4.2.3）："
+                              "合格、有条件合格、有条件不合格、不合格；按正态测量模型（JCGM 106）"
+                              "给出特定误接受概率。"},
+    "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
+    "c_limits": {"en": "Specification limits", "zh": "规定限"},
+    "c_accept": {"en": "Acceptance interval", "zh": "接受区间"},
+    "c_outcome": {"en": "Outcome", "zh": "判定结果"},
+    "c_pfa": {"en": "Specific false-accept probability", "zh": "特定误接受概率"},
+    "c_pfr": {"en": "false-reject probability {v} %", "zh": "误拒绝概率 {v} %"},
+    "c_no_U": {"en": "no statement: the item has no stated uncertainty",
+               "zh": "不作声明：该项目无测量不确定度"},
+    "c_not_measured": {"en": "no statement: not measured", "zh": "不作声明：未测"},
+    "pass": {"en": "pass", "zh": "合格"},
+    "fail": {"en": "fail", "zh": "不合格"},
+    "conditional pass": {"en": "conditional pass", "zh": "有条件合格"},
+    "conditional fail": {"en": "conditional fail", "zh": "有条件不合格"},
+    # detail tables
+    "d_round": {"en": "round", "zh": "测回"},
+    "d_theta": {"en": "θ_i (°)", "zh": "θ_i (°)"},
+    "d_counts": {"en": "C_i (counts)", "zh": "C_i（脉冲数）"},
+    "d_K": {"en": "K_i (counts/°)", "zh": "K_i（脉冲数/(°)）"},
+    "d_position": {"en": "position (°)", "zh": "位置 (°)"},
+    "d_E": {"en": "E_i (″)", "zh": "E_i (″)"},
+    "d_R": {"en": "R_i (″)", "zh": "R_i (″)"},
+    "d_n": {"en": "series n", "zh": "组数 n"},
+    "d_rate": {"en": "rate (°/s)", "zh": "速率 ((°)/s)"},
+    "d_axis": {"en": "axis direction", "zh": "轴向"},
+    "d_role": {"en": "role", "zh": "作用"},
+    "d_reference": {"en": "reference condition", "zh": "参考条件"},
+    "d_compared": {"en": "compared", "zh": "比较条件"},
+    "d_Ev": {"en": "E (″)", "zh": "E (″)"},
+    "d_maxabs": {"en": "max |E_i| (″)", "zh": "max |E_i| (″)"},
+    "d_contrib": {"en": "|c_i|·u_i (″)", "zh": "|c_i|·u_i (″)"},
+    "rows_word": {"en": "{n} rows", "zh": "{n} 行"},
+    "virtual_lab": {"en": "gonio virtual bench", "zh": "gonio 虚拟台架"},
+    "virtual_place": {"en": "virtual bench", "zh": "虚拟台架"},
+    "virtual_trace": {"en": "none (virtual bench)", "zh": "无（虚拟台架）"},
+    "draft_for_comment": {"en": "(draft for comment)", "zh": "（征求意见稿）"},
+    "cjk_missing": {"en": "no CJK font installed: the specification's Chinese title is written in "
+                          "English; install fonts-noto-cjk for the Chinese form",
+                    "zh": "未安装中文字体"},
+    "lg_u_bar": {"en": "error bars: standard uncertainty u", "zh": "误差棒：标准不确定度 u"},
 }
+
+#: Chinese form of each "reading taken" note (by its clause prefix) and of the budget's sources
+#: (by symbol). A note or source without an entry is a test failure (tests/test_certificate.py).
+READING_NOTES_ZH: dict[str, str] = {
+    "7.3:": "7.3：零位稳定性读数的个数和间隔由校准方案规定（默认 15 个，间隔 5 min）；结果为 "
+            "B_s = s(M)/T，并同时给出 (max M − min M)/T（定义3.3）；T 为首末读数的时间间隔。",
+    "7.4:": "7.4：每个测回自 0° 起，两读数同时清零；到位后固定延时读数，自起动起 0.5 min 内完成"
+            "（附录A.1）；E_i 为各组的平均值，E = ± max|E_i| 并给出其符号。",
+    "7.6/7.7:": "7.6/7.7：公式中不清楚的分母理解为参考状态（60 (°)/s，轴向朝上）整周 360° 测回的"
+                "测得角度；总是同时给出以 ″ 表示的极差 max E − min E。",
+    "Annex A.4.4:": "附录A.4.4：u(r) 取本次校准自身重复测量（7.5）各校准点贝塞尔标准偏差的最大值。",
+    "Annex A.4.2:": "附录A.4.2：u(φ_e) 采用草案的椭圆投影倾斜模型；同时给出刚体模型（倾斜为 cos ψ "
+                    "因子，被标度因数吸收）。",
+}
+BUDGET_SOURCES_ZH: dict[str, str] = {
+    "P": "标准转台定位误差（A.4.1）",
+    "phi_e": "敏感平面与台面不平行（A.4.2）",
+    "B_E": "零位漂移（A.4.3）",
+    "r": "重复性（A.4.4）",
+}
+#: English form of Chinese titles, used when no CJK font is installed (the en certificate).
+TITLES_EN: dict[str, str] = {
+    "光学陀螺测角仪校准规范": "Calibration Specification for Optical Gyroscope Angle "
+                              "Measuring Instrument",
+}
+
+
+def reading_note(note: str, lang: str) -> str:
+    """A "reading taken" note in ``lang`` (the English text is the one in results.json).
+
+    >>> reading_note("7.3: x", "en"), reading_note("7.3: x", "zh")[:4]
+    ('7.3: x', '7.3：')
+    """
+    if lang != "zh":
+        return note
+    for prefix, zh in READING_NOTES_ZH.items():
+        if note.startswith(prefix):
+            return zh
+    return note
+
+
+def budget_source(symbol: str, source: str, lang: str) -> str:
+    """The budget's source column in ``lang`` (English from results.json when no zh form)."""
+    if lang == "zh" and symbol in BUDGET_SOURCES_ZH:
+        return BUDGET_SOURCES_ZH[symbol]
+    return source
+
+
+def has_cjk(text: str) -> bool:
+    """True when ``text`` holds a CJK character.
+
+    >>> has_cjk("JJF xxxx 光学"), has_cjk("JJF")
+    (True, False)
+    """
+    import unicodedata as _u
+    return any(_u.east_asian_width(ch) in "WF" and ch.isalpha() for ch in text)
+
+
+def specification_text(spec: str, lang: str, cjk: bool = True) -> str:
+    """The specification's name as shown: "(draft for comment)" in ``lang``; without a CJK
+    font (``cjk`` False) a known Chinese title is replaced by its English form so nothing
+    prints as boxes.
+
+    >>> specification_text("JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)", "zh")
+    'JJF xxxx 光学陀螺测角仪校准规范（征求意见稿）'
+    >>> specification_text("JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)", "en", cjk=False)
+    'JJF xxxx Calibration Specification for Optical Gyroscope Angle Measuring Instrument (draft for comment)'
+    """
+    out = spec
+    if lang == "zh":
+        out = out.replace(" (draft for comment)", LABELS["draft_for_comment"]["zh"])
+    if not cjk:
+        for zh, en in TITLES_EN.items():
+            out = out.replace(zh, en)
+    return out
 
 
 def labels(lang: str = "en") -> dict[str, str]:
@@ -359,8 +537,8 @@ def display_item(name: str, value: float | None, U: float | None = None) -> str:
         s = round_half_up(value, decimals_for_sig(U, 2))
     else:
         s = display_number(value, ITEM_SIG_DIGITS.get(name, 3))
-    if name == "angle_deviation" and not s.startswith("-") and float(value) != 0:
-        s = "+" + s
+    if name == "angle_deviation" and not s.startswith("-") and parse_display(s) != 0:
+        s = "+" + s            # a sign only where the rounded value has one (−0.004 → 0.00)
     return s
 
 
@@ -412,6 +590,9 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     """Every number of the certificate, by rule name — the single entry point.
 
     Rules: ``"U"`` (2 significant digits, :func:`display_uncertainty`),
+    ``"dec<N>"`` (N decimal places; see :func:`rule_at_U`), ``"pmdec<N>"`` (± and the
+    magnitude at N decimals: the draft's E = ± max|E_i|), ``"sdec<N>"`` (with its sign),
+    ``"k"`` (a coverage factor: 3 significant digits, trailing zeros dropped),
     ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
     ``"item:<name>"`` (:func:`display_item`), ``"pos"`` (:func:`display_position`),
     ``"int"`` (nearest integer).
@@ -438,4 +619,45 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
         return display_position(value)
     if rule == "int":
         return round_half_up(value, 0)
+    if rule == "k":
+        return display_position(float(display_number(value, 3)))
+    for prefix, fmt in (("pmdec", "±{a}"), ("sdec", "{s}"), ("dec", "{v}")):
+        if rule.startswith(prefix):
+            dec = int(rule[len(prefix):])
+            a = round_half_up(abs(value), dec)
+            v = round_half_up(value, dec)
+            s = v if v.startswith("-") or float(v) == 0 else "+" + v
+            return fmt.format(a=a, s=s, v=v)
     raise ValueError(f"unknown display rule {rule!r}")
+
+
+def rule_at_U(U: float | None, fallback_sig: int = 3, value: float | None = None,
+              prefix: str = "dec") -> str:
+    """The display rule of a value stated with its expanded uncertainty U (JCGM 100 7.2.6).
+
+    U is given to two significant digits, the value to the same decimal place
+    (rule ``dec<N>``); without U the value keeps ``fallback_sig`` significant digits
+    (rule ``sig<N>``; the ± and signed forms then use the decimal place of those digits).
+
+    >>> rule_at_U(0.3364), rule_at_U(0.0996), rule_at_U(12.4), rule_at_U(None)
+    ('dec2', 'dec2', 'dec0', 'sig3')
+    >>> rule_at_U(None, 3, -0.15228, "pmdec"), display("pmdec2", -0.15228), display("sdec2", 0.152)
+    ('pmdec3', '±0.15', '+0.15')
+    """
+    if U is not None and math.isfinite(U) and U > 0:
+        return f"{prefix}{decimals_for_sig(U, 2)}"
+    if prefix != "dec" and value is not None and math.isfinite(value) and value != 0:
+        return f"{prefix}{max(decimals_for_sig(value, fallback_sig), 0)}"
+    return f"sig{fallback_sig}"
+
+
+def coverage_text(p: float | None, lang: str = "en") -> str:
+    """"approximately 95 %" for a coverage probability 0.95 (JCGM 100 6.2.2).
+
+    >>> coverage_text(0.95), coverage_text(0.9545, "zh"), coverage_text(None)
+    ('approximately 95 %', '约 95 %', '—')
+    """
+    if p is None:
+        return "—"
+    pct = display_position(float(display_number(100.0 * p, 2)))
+    return ("约 " if lang == "zh" else "approximately ") + pct + " %"

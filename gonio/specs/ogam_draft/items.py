@@ -304,6 +304,9 @@ def zero_stability(df: pd.DataFrame,
     - 7.3 (the result, ``value``): B_s = s(M) / T, s the Bessel standard
       deviation (n − 1).
     - 3.3 (``range_deg_per_h``): B_s = (max M − min M) / T.
+    - beside them, per series in the table, ``drift_deg_per_h``: the least-squares
+      slope of M against time (a linear drift, which the certificate's 7.3 figure
+      draws; not a result of the draft).
 
     *Ambiguity* (draft 7.3): "every 5 min for 1 h, giving 15 results" — 1 h at
     5 min gives 13 readings, 15 span 70 min — and 3.3 defines a range, 7.3 a
@@ -350,9 +353,12 @@ def zero_stability(df: pd.DataFrame,
         t_h = duration_s / S_PER_H
         std = float(np.std(m, ddof=1))
         rng = float(m.max() - m.min())
+        slope_deg_per_s, intercept_deg = np.polyfit(t - t.min(), m, 1)
         per_series.append({"series": int(series), "n_readings": int(len(g)),
                            "duration_s": duration_s, "std_deg": std, "range_deg": rng,
-                           "B_s_deg_per_h": std / t_h, "B_s_range_deg_per_h": rng / t_h})
+                           "B_s_deg_per_h": std / t_h, "B_s_range_deg_per_h": rng / t_h,
+                           "drift_deg_per_h": float(slope_deg_per_s) * S_PER_H,
+                           "drift_intercept_deg": float(intercept_deg)})
         used.extend(int(l) for l in g["line"])
     if not per_series:
         return Characteristic(name=name, reason="zero_stability needs at least 2 readings "

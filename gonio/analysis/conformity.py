@@ -1,0 +1,214 @@
+"""Decision rules and statements of conformity (ISO/IEC 17025 7.8.6, ILAC-G8:09/2019, JCGM 106).
+
+Contents
+========
+===============================  ===========================================================
+:data:`RULES`                    the decision rules a laboratory file may name
+:class:`DecisionRule`            a rule and its guard-band factor r (w = r·U)
+:class:`Limits`                  the tolerance interval [T_L, T_U] of one item (either end open)
+:class:`Conformity`              the outcome for one item, with its probabilities
+:func:`normal_cdf`               Φ(z), the standard normal distribution function
+:func:`conformance_probability`  p_c = Φ((T_U − y)/u) − Φ((T_L − y)/u)   (JCGM 106 7.3)
+:func:`acceptance_interval`      [T_L + w, T_U − w] of a guarded rule     (JCGM 106 8.3, ILAC-G8 4.2.2)
+:func:`decide`                   the statement for one item under one rule
+===============================  ===========================================================
+
+The measurement model is the normal one of JCGM 106 7.3: given the measured value
+y and its standard uncertainty u = U / k, the measurand η is N(y, u²). The
+conformance probability p_c is the probability that η lies in the tolerance
+interval. For an item that is *accepted* (pass or conditional pass), 1 − p_c is the
+**specific false-accept probability** (JCGM 106 9.3.2, "specific consumer's risk");
+for an item that is *rejected*, p_c is the specific false-reject probability.
+
+Rules (ILAC-G8:09/2019 clause 4):
+
+``simple``
+    simple acceptance (ILAC-G8 4.2.1, w = 0): pass when y is inside [T_L, T_U],
+    fail otherwise. The statement must give the specific false-accept probability,
+    which may be up to 50 % at a limit.
+``guarded``
+    binary guarded acceptance (ILAC-G8 4.2.2), w = r·U: pass when y is inside the
+    acceptance interval [T_L + w, T_U − w], fail otherwise. With r = 1, k = 2 and a
+    normal model the specific false-accept probability of a passed item is at most
+    Φ(−2) ≈ 2.3 % (one limit).
+``non-binary``
+    non-binary statement with guard band w = r·U (ILAC-G8 4.2.3, its figure 5):
+    pass inside [T_L + w, T_U − w]; conditional pass inside the tolerance but within
+    w of a limit; conditional fail outside the tolerance by at most w; fail
+    beyond that.
+
+Without limits there is no statement (:func:`decide` is not called: the
+certificate shows no conformity section).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+from gonio.errors import GonioError
+
+#: Decision rules a laboratory file may name (``[decision_rule] rule = ...``).
+RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
+#: Outcomes, in the words of ILAC-G8:09/2019 4.2.3.
+OUTCOMES: tuple[str, ...] = ("pass", "conditional pass", "conditional fail", "fail")
+
+
+@dataclass(frozen=True)
+class DecisionRule:
+    """A decision rule: ``kind`` in :data:`RULES`, guard band w = ``guard_factor`` · U.
+
+    ``guard_factor`` is ignored by ``simple`` (w = 0).
+    """
+
+    kind: str = "simple"
+    guard_factor: float = 1.0
+
+    def __post_init__(self):
+        if self.kind not in RULES:
+            raise GonioError(f"expected one of {', '.join(RULES)}, got {self.kind!r}",
+                             key="decision_rule.rule")
+        if not (math.isfinite(self.guard_factor) and self.guard_factor >= 0):
+            raise GonioError(f"expected a finite number ≥ 0, got {self.guard_factor!r}",
+                             key="decision_rule.guard_band_factor")
+
+    def guard_band(self, U: float) -> float:
+        """w: 0 for simple acceptance, r·U otherwise (ILAC-G8 4.2.2)."""
+        return 0.0 if self.kind == "simple" else self.guard_factor * U
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Tolerance interval of one item in the item's unit; ``None`` = open on that side."""
+
+    lower: float | None
+    upper: float | None
+    source: str = ""
+
+    def __post_init__(self):
+        if self.lower is None and self.upper is None:
+            raise GonioError("a specification limit needs lower, upper or mpe")
+        if self.lower is not None and self.upper is not None and not self.lower < self.upper:
+            raise GonioError(f"lower limit {self.lower} is not below upper limit {self.upper}")
+
+
+@dataclass(frozen=True)
+class Conformity:
+    """The conformity statement for one item (all values in the item's unit)."""
+
+    item: str
+    value: float
+    U: float
+    k: float
+    lower: float | None
+    upper: float | None
+    rule: str
+    guard_band: float
+    acceptance_lower: float | None
+    acceptance_upper: float | None
+    outcome: str
+    accepted: bool
+    conformance_probability: float
+    false_accept_probability: float | None
+    false_reject_probability: float | None
+    source: str = ""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def normal_cdf(z: float) -> float:
+    """Φ(z) of the standard normal distribution, via the complementary error function.
+
+    >>> round(normal_cdf(0.0), 12), round(normal_cdf(-2.0), 6)
+    (0.5, 0.02275)
+    """
+    if z == math.inf:
+        return 1.0
+    if z == -math.inf:
+        return 0.0
+    return 0.5 * math.erfc(-z / math.sqrt(2.0))
+
+
+def conformance_probability(y: float, u: float, lower: float | None,
+                            upper: float | None) -> float:
+    """p_c = Φ((T_U − y)/u) − Φ((T_L − y)/u) for η ~ N(y, u²) (JCGM 106 7.3, eq. (9)).
+
+    An open end contributes Φ(+∞) = 1 or Φ(−∞) = 0. ``u`` must be > 0.
+
+    >>> conformance_probability(1.0, 0.5, None, 1.0)
+    0.5
+    """
+    if not (u > 0 and math.isfinite(u)):
+        raise ValueError(f"standard uncertainty must be finite and > 0, got {u!r}")
+    hi = normal_cdf((upper - y) / u) if upper is not None else 1.0
+    lo = normal_cdf((lower - y) / u) if lower is not None else 0.0
+    return max(0.0, hi - lo)
+
+
+def acceptance_interval(limits: Limits, w: float) -> tuple[float | None, float | None]:
+    """[T_L + w, T_U − w]: the acceptance interval of a guard band w (JCGM 106 8.3.2).
+
+    An open tolerance end stays open. A guard band that closes the interval
+    (T_U − T_L ≤ 2w) leaves an empty acceptance interval: nothing can pass.
+
+    >>> acceptance_interval(Limits(-0.5, 0.5), 0.2)
+    (-0.3, 0.3)
+    """
+    lo = None if limits.lower is None else limits.lower + w
+    hi = None if limits.upper is None else limits.upper - w
+    return lo, hi
+
+
+def _inside(y: float, lo: float | None, hi: float | None) -> bool:
+    return (lo is None or y >= lo) and (hi is None or y <= hi) and \
+        (lo is None or hi is None or lo <= hi)
+
+
+def decide(item: str, y: float, U: float, k: float, limits: Limits,
+           rule: DecisionRule) -> Conformity:
+    """The statement of conformity for one item (ILAC-G8:09/2019 4.2; JCGM 106 8–9).
+
+    Parameters
+    ----------
+    item : name of the item (as in ``results.json``).
+    y : measured value; for the draft's E (7.4) the signed extreme, compared with
+        [−MPE, +MPE]: |E_i| ≤ MPE at every position is the same as the signed
+        extreme lying inside that interval.
+    U, k : expanded uncertainty and its coverage factor (u = U/k, normal model).
+    limits, rule : the tolerance interval and the decision rule agreed.
+
+    A value exactly on a limit of the acceptance interval is accepted (the limits
+    are part of the interval, JCGM 106 3.3.9).
+
+    >>> d = decide("E", 0.45, 0.10, 2.0, Limits(-0.5, 0.5), DecisionRule("non-binary"))
+    >>> d.outcome, round(d.false_accept_probability, 4)
+    ('conditional pass', 0.1587)
+    """
+    if not (U > 0 and math.isfinite(U) and k > 0 and math.isfinite(k)):
+        raise ValueError(f"{item}: U and k must be finite and > 0 (U={U!r}, k={k!r})")
+    u = U / k
+    p_c = conformance_probability(y, u, limits.lower, limits.upper)
+    w = rule.guard_band(U)
+    a_lo, a_hi = acceptance_interval(limits, w)
+    in_tol = _inside(y, limits.lower, limits.upper)
+    in_acc = _inside(y, a_lo, a_hi)
+    if rule.kind == "non-binary":
+        if in_acc:
+            outcome = "pass"
+        elif in_tol:
+            outcome = "conditional pass"
+        else:
+            beyond = max((limits.lower - y) if limits.lower is not None else -math.inf,
+                         (y - limits.upper) if limits.upper is not None else -math.inf)
+            outcome = "conditional fail" if beyond <= w else "fail"
+    else:
+        outcome = "pass" if in_acc else "fail"
+    accepted = outcome in ("pass", "conditional pass")
+    return Conformity(item=item, value=float(y), U=float(U), k=float(k), lower=limits.lower,
+                      upper=limits.upper, rule=rule.kind, guard_band=float(w),
+                      acceptance_lower=a_lo, acceptance_upper=a_hi, outcome=outcome,
+                      accepted=accepted, conformance_probability=p_c,
+                      false_accept_probability=(1.0 - p_c) if accepted else None,
+                      false_reject_probability=p_c if not accepted else None,
+                      source=limits.source)

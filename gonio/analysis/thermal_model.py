@@ -1,0 +1,508 @@
+"""Identification of the extended MEMS-gyro model K(ϑ, U), b(ϑ, U), ARW(ϑ) ([Vagner2015], docs/references.md).
+
+The thesis's model (eq. 6.14–6.20) for gyro i::
+
+    y = K(ϑ, U) (ω + b(ϑ, U))         K = k0 + Σ_j κ_ϑj ϑ^j + Σ_j κ_Uj U^j
+                                      b = b0 + Σ_j β_ϑj ϑ^j + Σ_j β_Uj U^j
+                                      white noise density ARW(ϑ) = Σ_j B_ϑj ϑ^j
+
+with ϑ the temperature relative to the reference (the thesis ties the model to the
+gyro's own temperature-sensor output, whose offset and nonlinearity the polynomials
+absorb, §6.1) and U = V − V_ref the supply deviation. Polynomials have no cross terms and
+no constant beyond k0, b0 (eq. 6.17–6.18).
+
+Identification steps (as the thesis runs them, §5.2.3–5.2.4, §6.2, §6.4)
+-------------------------------------------------------------------------
+1. At each soak (temperature settled, chamber stability ~±0.5 °C) and each supply voltage
+   (voltages stepped in alternating order around the nominal, Fig. 5.8), a +ω / −ω pair
+   of whole-revolution dwells about the gyro's input axis gives
+   K = (y₊ − y₋)/(2ω) and b = (y₊ + y₋)/(2K) − Ω_E,in (the Earth rate along the input axis
+   cancels in the difference and is removed from the mean); a static dwell gives the
+   white-noise density ARW = σ_sample/K · √τ0 (white noise dominates at the sample
+   interval; the thesis uses 6 h Allan records per temperature for the same number).
+2. Polynomials in ϑ and U fitted by least squares, the orders chosen by a stated
+   criterion (:data:`CRITERIA`: BIC by default, AIC, or a forward sequential F-test at
+   α = 0.05) instead of fixed — the thesis compares orders 1–4 by their maximum error
+   (Table 6.6) and settles on 2–3 for K and b, 2 for ARW(ϑ), linear in U (Table 6.7).
+3. Parameter covariance s² (XᵀX)⁻¹ (GUM Type A), prediction uncertainty
+   u(ŷ(ϑ, U)) = sqrt(xᵀ C x) across the operating range.
+4. Ramps: the static-soak model applied to static blocks recorded during the ramps; its
+   error there (thermal lag between the temperature used and the sensing element:
+   hysteresis on up/down ramps) is reported, and two remedies offered: a
+   rate-of-temperature-change term γ dϑ/dt fitted to the ramp residuals, and a
+   first-order lag of time constant τ applied to the temperature (τ fitted). The thesis
+   does neither: it feeds the model with the gyro's internal temperature sensor, found
+   no measurable sensor-to-element dynamics up to 4 °C/min for its ADXRS parts (§6.3),
+   and advises limiting the ramp gradient (§6.2.2).
+5. Compensation of new records: ω̂ = y / K̂(ϑ, U) − b̂(ϑ, U) (− γ dϑ/dt); residual bias and
+   scale-factor errors before (constant reference-condition k0, b0) and after.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy import optimize, stats
+
+from gonio.physics.earth import earth_rate_enu
+from gonio.units import deg_sqrt_s_from_deg_sqrt_h
+from gonio.errors import GonioError
+from gonio.formats.triad import OUT, TriadReadings
+from gonio.physics.alignment import AXES, mean_earth_rate_ref, signed_axis
+
+CRITERIA = ("bic", "aic", "ftest")
+F_TEST_ALPHA = 0.05
+
+
+# --------------------------------------------------------------------------- data
+def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.DataFrame:
+    """One row per ± pair of soak dwells: channel, ϑ, U, K, b (°/s), ARW (°/√h) of the
+    static dwell that follows at the same supply (NaN if none), time (s) — step 1 of the
+    module docstring ([Vagner2015] §5.2.3–5.2.4: K from the ± difference, b from the mean
+    with the Earth rate removed; whole revolutions, §5.3).
+
+    ``temperature`` is ``sensor`` (the gyro's internal sensor, the thesis's choice) or
+    ``chamber``.
+    """
+    if temperature not in ("sensor", "chamber"):
+        raise GonioError(f"temperature source must be sensor or chamber, got {temperature!r}")
+    col = "sensor_c" if temperature == "sensor" else "chamber_c"
+    th = readings.rows("thermal")
+    if th.empty:
+        raise GonioError(f"{readings.path}: no thermal rows")
+    t_ref = float(readings.metadata.get("reference_c", 25.0))
+    v_ref = float(readings.metadata.get("reference_v", 5.0))
+    w_enu = np.degrees(earth_rate_enu(readings.latitude_deg))
+    fs = readings.sample_rate_hz
+    soak = th[th["phase"] == "soak"].to_dict("records")
+    pts = []
+    k = 0
+    while k < len(soak) - 1:
+        a, b = soak[k], soak[k + 1]
+        if a["rate_dps"] > 0 and b["rate_dps"] == -a["rate_dps"] and a["supply_v"] == b["supply_v"] \
+                and a["up"] == b["up"]:
+            axis = signed_axis(a["up"])
+            c = int(np.argmax(np.abs(axis)))
+            sgn = float(axis[c])
+            ch = OUT[c]
+            kk = (a[ch] - b[ch]) / (2.0 * a["rate_dps"] * sgn)
+            e = mean_earth_rate_ref(w_enu, a["up"], a["north0"], a["table_deg"], a["rate_dps"],
+                                    a["duration_s"])[c]
+            bias = 0.5 * (a[ch] + b[ch]) / kk - e
+            arw = math.nan
+            if k + 2 < len(soak):
+                s = soak[k + 2]
+                if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"] and np.isfinite(s[f"sd_{AXES[c]}"]):
+                    arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
+            pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
+                        "u_v": a["supply_v"] - v_ref, "scale": kk, "bias_dps": bias,
+                        "arw_deg_sqrt_h": arw, "time_s": a["time_s"], "line": int(a["line"])})
+            k += 2
+        else:
+            k += 1
+    if not pts:
+        raise GonioError(f"{readings.path}: no ± soak pairs found in the thermal rows")
+    return pd.DataFrame(pts)
+
+
+# ----------------------------------------------------------------- polynomial fits
+def design(theta, u, n_t: int, n_u: int) -> np.ndarray:
+    """Columns 1, ϑ … ϑ^n_t, U … U^n_u (thesis eq. 6.17–6.18)."""
+    theta = np.asarray(theta, float)
+    u = np.asarray(u, float)
+    cols = [np.ones_like(theta)] + [theta ** j for j in range(1, n_t + 1)] \
+        + [u ** j for j in range(1, n_u + 1)]
+    return np.column_stack(cols)
+
+
+@dataclass
+class PolyFit:
+    """A polynomial in ϑ and U with its covariance and the order-selection record."""
+
+    name: str
+    n_t: int
+    n_u: int
+    coef: np.ndarray
+    cov: np.ndarray
+    s: float
+    dof: int
+    criterion: str
+    table: list                  # every candidate: n_t, n_u, rss, aic, bic
+    scale_t: float = 1.0         # ϑ and U are divided by these inside the fit (conditioning)
+    scale_u: float = 1.0
+
+    def _x(self, theta, u):
+        return design(np.asarray(theta, float) / self.scale_t, np.asarray(u, float) / self.scale_u,
+                      self.n_t, self.n_u)
+
+    def predict(self, theta, u=0.0) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(theta, float))
+        uu = np.broadcast_to(np.asarray(u, float), t.shape)
+        return self._x(t, uu) @ self.coef
+
+    def u_predict(self, theta, u=0.0) -> np.ndarray:
+        """Standard uncertainty of the fitted value (parameter uncertainty only)."""
+        t = np.atleast_1d(np.asarray(theta, float))
+        uu = np.broadcast_to(np.asarray(u, float), t.shape)
+        x = self._x(t, uu)
+        return np.sqrt(np.einsum("ij,jk,ik->i", x, self.cov, x))
+
+    def coefficients(self) -> dict:
+        """Coefficients in physical units: c0, ϑ^j and U^j terms, with standard uncertainties."""
+        out = {"c0": float(self.coef[0]), "u_c0": float(math.sqrt(self.cov[0, 0]))}
+        for j in range(1, self.n_t + 1):
+            f = self.scale_t ** j
+            out[f"theta{j}"] = float(self.coef[j] / f)
+            out[f"u_theta{j}"] = float(math.sqrt(self.cov[j, j]) / f)
+        for j in range(1, self.n_u + 1):
+            idx = self.n_t + j
+            f = self.scale_u ** j
+            out[f"u{j}"] = float(self.coef[idx] / f)
+            out[f"u_u{j}"] = float(math.sqrt(self.cov[idx, idx]) / f)
+        return out
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "order_temperature": self.n_t, "order_supply": self.n_u,
+                "criterion": self.criterion, "s": self.s, "dof": self.dof,
+                "coefficients": self.coefficients(), "candidates": self.table}
+
+
+def _ols(x, y):
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    r = y - x @ coef
+    return coef, float(r @ r)
+
+
+def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int = 4,
+                   max_u: int = 2, orders: tuple[int, int] | None = None) -> PolyFit:
+    """Fit y = poly(ϑ) + poly(U) choosing the orders by ``criterion``:
+
+    * ``bic``: n ln(RSS/n) + p ln n, the smallest wins (Schwarz 1978);
+    * ``aic``: n ln(RSS/n) + 2p (Akaike 1974);
+    * ``ftest``: forward selection from (0, 0): of the two next models (one more order
+      in ϑ or in U) the one whose extra-sum-of-squares
+      F = (RSS_small − RSS_big) / (RSS_big/(n − p_big)) has the smaller p is kept while
+      that p < 0.05.
+
+    Orders are capped by the number of distinct ϑ levels (rounded to 0.5 °C) and U levels
+    minus one, and by n − 2 parameters in all. ``orders`` = (n_t, n_u) fixes the orders
+    (criterion recorded as ``fixed``).
+    """
+    if criterion not in CRITERIA:
+        raise GonioError(f"order criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
+    theta = np.asarray(theta, float)
+    u = np.asarray(u, float)
+    y = np.asarray(y, float)
+    ok = np.isfinite(theta) & np.isfinite(u) & np.isfinite(y)
+    theta, u, y = theta[ok], u[ok], y[ok]
+    n = y.size
+    if n < 3:
+        raise GonioError(f"{name}: need at least 3 points to fit a temperature model, got {n}")
+    st = max(float(np.max(np.abs(theta))), 1e-9)
+    su = max(float(np.max(np.abs(u))), 1e-9)
+    lt, lu = theta / st, u / su
+    cap_t = min(max_t, len(np.unique(np.round(theta * 2))) - 1)
+    cap_u = min(max_u, len(np.unique(np.round(u, 6))) - 1)
+    table = []
+    fits = {}
+    for nt in range(0, cap_t + 1):
+        for nu in range(0, cap_u + 1):
+            p = 1 + nt + nu
+            if p > n - 2:
+                continue
+            x = design(lt, lu, nt, nu)
+            coef, rss = _ols(x, y)
+            rss = max(rss, 1e-300)
+            fits[(nt, nu)] = (coef, rss, x)
+            table.append({"order_temperature": nt, "order_supply": nu, "rss": rss,
+                          "aic": n * math.log(rss / n) + 2 * p,
+                          "bic": n * math.log(rss / n) + p * math.log(n)})
+    if orders is not None:
+        sel = (int(orders[0]), int(orders[1]))
+        if sel not in fits:
+            raise GonioError(f"{name}: orders {sel} not identifiable from {n} points "
+                             f"(max ϑ order {cap_t}, U order {cap_u})")
+        criterion = "fixed"
+    elif criterion in ("aic", "bic"):
+        best = min(table, key=lambda r: (r[criterion], r["order_temperature"] + r["order_supply"]))
+        sel = (best["order_temperature"], best["order_supply"])
+    else:
+        sel = (0, 0)
+        while True:
+            best = None
+            for nxt in ((sel[0] + 1, sel[1]), (sel[0], sel[1] + 1)):
+                if nxt not in fits:
+                    continue
+                rss_s, rss_b = fits[sel][1], fits[nxt][1]
+                p_b = 1 + nxt[0] + nxt[1]
+                pval = stats.f.sf((rss_s - rss_b) / (rss_b / (n - p_b)), 1, n - p_b)
+                if best is None or pval < best[0]:
+                    best = (pval, nxt)
+            if best is None or best[0] >= F_TEST_ALPHA:
+                break
+            sel = best[1]
+    coef, rss, x = fits[sel]
+    dof = n - x.shape[1]
+    s2 = rss / dof
+    cov = s2 * np.linalg.inv(x.T @ x)
+    return PolyFit(name, sel[0], sel[1], coef, cov, math.sqrt(s2), dof, criterion, table, st, su)
+
+
+# --------------------------------------------------------------------------- ramps
+def _lagged(time_s, temp, tau_s):
+    """First-order lag of a (possibly unevenly sampled) temperature series: the exact
+    discretisation T_f[k] = T_f[k−1] + (1 − e^{−Δt/τ})(T[k] − T_f[k−1]) of τ dT_f/dt = T − T_f
+    (the chamber-to-sample lag of [Vagner2015] Fig. 5.7)."""
+    out = np.empty_like(temp)
+    out[0] = temp[0]
+    for k in range(1, temp.size):
+        a = 1.0 - math.exp(-(time_s[k] - time_s[k - 1]) / tau_s) if tau_s > 0 else 1.0
+        out[k] = out[k - 1] + a * (temp[k] - out[k - 1])
+    return out
+
+
+@dataclass
+class RampAnalysis:
+    """Error of the static-soak model on the ramps, and the two remedies."""
+
+    channel: str
+    rms_static_model_dps: float          # ramp residual with the static-soak model
+    gamma_dps_per_c_per_s: float         # rate-of-temperature-change term
+    u_gamma: float
+    rms_with_ramp_term_dps: float
+    tau_s: float                         # fitted lag of the temperature
+    rms_with_lag_dps: float
+    hysteresis_dps: float                # max |up-ramp − down-ramp| bias at equal temperature
+    time_s: list = field(default_factory=list)
+    theta_c: list = field(default_factory=list)
+    dtheta_dt: list = field(default_factory=list)
+    bias_dps: list = field(default_factory=list)
+    residual_dps: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return dict(self.__dict__)
+
+
+def ramp_analysis(readings: TriadReadings, scale: PolyFit, bias: PolyFit, channel: str, *,
+                  temperature: str = "sensor") -> RampAnalysis | None:
+    """Apply the static-soak model to the ramp blocks of ``channel`` (module step 4): its
+    rms error, the fitted γ of a γ·dϑ/dt term (linear least squares), the lag τ minimising
+    the residuals of the model fed with the lagged temperature (grid over 1 s … 10⁴ s, then
+    a bounded scalar search), and the up/down hysteresis at equal chamber temperature."""
+    col = "sensor_c" if temperature == "sensor" else "chamber_c"
+    th = readings.rows("thermal")
+    c = AXES.index(channel)
+    sel = th[[int(np.argmax(np.abs(signed_axis(u)))) == c for u in th["up"]]] if len(th) else th
+    ramp = sel[(sel["phase"] == "ramp") & (sel["rate_dps"] == 0)]
+    if len(ramp) < 5:
+        return None
+    t_ref = float(readings.metadata.get("reference_c", 25.0))
+    v_ref = float(readings.metadata.get("reference_v", 5.0))
+    w_enu = np.degrees(earth_rate_enu(readings.latitude_deg))
+    all_t = (sel["time_s"] + 0.5 * sel["duration_s"]).to_numpy()
+    all_T = sel[col].to_numpy() - t_ref
+    is_ramp = ((sel["phase"] == "ramp") & (sel["rate_dps"] == 0)).to_numpy()
+    u = (ramp["supply_v"].to_numpy() - v_ref)
+    theta = all_T[is_ramp]
+    kk = scale.predict(theta, u)
+    e = np.array([mean_earth_rate_ref(w_enu, r.up, r.north0, r.table_deg, 0.0, r.duration_s)[c]
+                  for r in ramp.itertuples(index=False)])
+    b_obs = ramp[OUT[c]].to_numpy() / kk - e
+    resid = b_obs - bias.predict(theta, u)
+    rms0 = float(np.sqrt(np.mean(resid ** 2)))
+    dtdt = np.gradient(all_T, all_t)[is_ramp]
+    x = dtdt[:, None]
+    g, *_ = np.linalg.lstsq(x, resid, rcond=None)
+    r1 = resid - x @ g
+    s2 = float(r1 @ r1) / max(1, r1.size - 1)
+    u_g = math.sqrt(s2 / float(x[:, 0] @ x[:, 0])) if np.any(x) else math.nan
+
+    def cost(log_tau):
+        lag = _lagged(all_t, all_T, math.exp(log_tau))[is_ramp]
+        kl = scale.predict(lag, u)
+        r = ramp[OUT[c]].to_numpy() / kl - e - bias.predict(lag, u)
+        return float(r @ r)
+    grid = np.linspace(math.log(1.0), math.log(1e4), 41)
+    vals = [cost(v) for v in grid]
+    j = int(np.argmin(vals))
+    lo, hi = grid[max(0, j - 1)], grid[min(len(grid) - 1, j + 1)]
+    opt = optimize.minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                                   options={"xatol": 1e-4})
+    tau = math.exp(opt.x)
+    if cost(math.log(1e-6 + 1.0)) <= opt.fun and j == 0:
+        tau = 0.0
+    rms_lag = math.sqrt(min(opt.fun, vals[j]) / resid.size)
+    # hysteresis: bias on rising vs falling ramps at the same temperature (uses chamber
+    # temperature as the abscissa, the quantity an operator sets)
+    ch = ramp["chamber_c"].to_numpy()
+    rising = dtdt > 0
+    hyst = 0.0
+    if rising.any() and (~rising).any():
+        grid_t = np.linspace(max(ch[rising].min(), ch[~rising].min()),
+                             min(ch[rising].max(), ch[~rising].max()), 50)
+        if grid_t[-1] > grid_t[0]:
+            o1, o2 = np.argsort(ch[rising]), np.argsort(ch[~rising])
+            up_b = np.interp(grid_t, ch[rising][o1], b_obs[rising][o1])
+            dn_b = np.interp(grid_t, ch[~rising][o2], b_obs[~rising][o2])
+            hyst = float(np.max(np.abs(up_b - dn_b)))
+    return RampAnalysis(channel, rms0, float(g[0]), u_g, float(np.sqrt(np.mean(r1 ** 2))), tau,
+                        rms_lag, hyst, ramp["time_s"].tolist(), theta.tolist(), dtdt.tolist(),
+                        b_obs.tolist(), resid.tolist())
+
+
+# --------------------------------------------------------------------------- model
+@dataclass
+class ChannelModel:
+    """The identified model of one gyro."""
+
+    channel: str
+    scale: PolyFit
+    bias: PolyFit
+    arw: PolyFit | None
+    ramp: RampAnalysis | None
+    points: pd.DataFrame
+    temperature: str
+    theta_range: tuple
+    u_range: tuple
+
+    def prediction_grid(self, n: int = 26) -> pd.DataFrame:
+        """Predicted K, b, ARW and their standard uncertainties across the operating range
+        (ϑ over the identified range, at U = min, 0, max)."""
+        th = np.linspace(self.theta_range[0], self.theta_range[1], n)
+        rows = []
+        for u in sorted({self.u_range[0], 0.0, self.u_range[1]}):
+            for t, k, uk, b, ub in zip(th, self.scale.predict(th, u), self.scale.u_predict(th, u),
+                                       self.bias.predict(th, u), self.bias.u_predict(th, u)):
+                rows.append({"theta_c": float(t), "u_v": float(u), "scale": float(k),
+                             "u_scale": float(uk), "bias_dps": float(b), "u_bias_dps": float(ub)})
+        df = pd.DataFrame(rows)
+        if self.arw is not None:
+            df["arw_deg_sqrt_h"] = self.arw.predict(df["theta_c"].to_numpy())
+            df["u_arw_deg_sqrt_h"] = self.arw.u_predict(df["theta_c"].to_numpy())
+        return df
+
+    def compensate(self, outputs, theta_c, u_v=0.0, dtheta_dt=None) -> np.ndarray:
+        """ω̂ = y/K̂(ϑ, U) − b̂(ϑ, U) (− γ dϑ/dt when given and a ramp term was fitted), °/s."""
+        y = np.asarray(outputs, float)
+        w = y / self.scale.predict(theta_c, u_v) - self.bias.predict(theta_c, u_v)
+        if dtheta_dt is not None and self.ramp is not None:
+            w = w - self.ramp.gamma_dps_per_c_per_s * np.asarray(dtheta_dt, float)
+        return w
+
+    def to_json(self) -> dict:
+        return {"channel": self.channel, "temperature_source": self.temperature,
+                "theta_range_c": list(self.theta_range), "supply_range_v": list(self.u_range),
+                "scale": self.scale.to_json(), "bias": self.bias.to_json(),
+                "arw": None if self.arw is None else self.arw.to_json(),
+                "ramp": None if self.ramp is None else self.ramp.to_json(),
+                "prediction": self.prediction_grid(9).to_dict(orient="list")}
+
+
+@dataclass
+class ThermalModelResult:
+    """Identified models, one per gyro whose input axis was on the table axis."""
+
+    channels: dict
+    reference_c: float
+    reference_v: float
+    criterion: str
+    output_unit: str = ""
+
+    def to_json(self) -> dict:
+        return {"kind": "thermal-model", "reference_c": self.reference_c,
+                "reference_v": self.reference_v, "criterion": self.criterion,
+                "output_unit": self.output_unit,
+                "channels": {k: v.to_json() for k, v in self.channels.items()}}
+
+
+def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
+                           temperature: str = "sensor", max_order_t: int = 4,
+                           max_order_u: int = 2, max_order_arw: int = 2,
+                           fixed_orders: dict | None = None,
+                           ramps: bool = True) -> ThermalModelResult:
+    """Identify K(ϑ, U), b(ϑ, U), ARW(ϑ) for every gyro the thermal rows exercise
+    (module docstring, steps 1–4). ``fixed_orders`` ({"scale": (n_t, n_u), "bias": …,
+    "arw": (n_t, 0)}) bypasses the order selection for the parts it names; ``ramps=False``
+    skips step 4."""
+    fo = fixed_orders or {}
+    pts = soak_points(readings, temperature=temperature)
+    out = {}
+    for ch, grp in pts.groupby("channel", sort=True):
+        kf = fit_polynomial(f"K_{ch}", grp["theta_c"], grp["u_v"], grp["scale"],
+                            criterion=criterion, max_t=max_order_t, max_u=max_order_u,
+                            orders=fo.get("scale"))
+        bf = fit_polynomial(f"b_{ch}", grp["theta_c"], grp["u_v"], grp["bias_dps"],
+                            criterion=criterion, max_t=max_order_t, max_u=max_order_u,
+                            orders=fo.get("bias"))
+        arw = grp.dropna(subset=["arw_deg_sqrt_h"])
+        af = None
+        if len(arw) >= 3:
+            af = fit_polynomial(f"ARW_{ch}", arw["theta_c"], np.zeros(len(arw)),
+                                arw["arw_deg_sqrt_h"], criterion=criterion, max_t=max_order_arw,
+                                max_u=0, orders=fo.get("arw"))
+        ra = ramp_analysis(readings, kf, bf, ch, temperature=temperature) if ramps else None
+        out[ch] = ChannelModel(ch, kf, bf, af, ra, grp.reset_index(drop=True), temperature,
+                               (float(grp["theta_c"].min()), float(grp["theta_c"].max())),
+                               (float(grp["u_v"].min()), float(grp["u_v"].max())))
+    return ThermalModelResult(out, float(readings.metadata.get("reference_c", 25.0)),
+                              float(readings.metadata.get("reference_v", 5.0)), criterion,
+                              readings.metadata.get("output_unit", ""))
+
+
+@dataclass
+class Compensation:
+    """Residual bias and scale-factor errors of a new record, before and after."""
+
+    channel: str
+    points: pd.DataFrame          # theta_c, u_v, bias/scale errors before and after
+    rms_bias_before_dps: float
+    rms_bias_after_dps: float
+    rms_scale_before_rel: float
+    rms_scale_after_rel: float
+    rms_ramp_before_dps: float
+    rms_ramp_after_dps: float
+
+    def to_json(self) -> dict:
+        d = {k: v for k, v in self.__dict__.items() if k != "points"}
+        d["points"] = self.points.to_dict(orient="list")
+        return d
+
+
+def compensate_record(model: ChannelModel, readings: TriadReadings) -> Compensation:
+    """Apply an identified model to a new thermal record (module step 5).
+
+    "Before" uses the constant reference-condition values k0 = K̂(0, 0), b0 = b̂(0, 0);
+    "after" the full model at each point's ϑ and U. Ramp blocks (static) are compared the
+    same way for the bias (with the ramp term when the model has one).
+    """
+    pts = soak_points(readings, temperature=model.temperature)
+    pts = pts[pts["channel"] == model.channel]
+    if pts.empty:
+        raise GonioError(f"{readings.path}: no soak pairs for gyro {model.channel}")
+    k0 = float(model.scale.predict(0.0, 0.0)[0])
+    b0 = float(model.bias.predict(0.0, 0.0)[0])
+    kh = model.scale.predict(pts["theta_c"], pts["u_v"])
+    bh = model.bias.predict(pts["theta_c"], pts["u_v"])
+    df = pd.DataFrame({"theta_c": pts["theta_c"], "u_v": pts["u_v"],
+                       "bias_before_dps": pts["bias_dps"] - b0,
+                       "bias_after_dps": pts["bias_dps"] - bh,
+                       "scale_before_rel": pts["scale"] / k0 - 1.0,
+                       "scale_after_rel": pts["scale"] / kh - 1.0}).reset_index(drop=True)
+    rb = ra = math.nan
+    ramp = ramp_analysis(readings, model.scale, model.bias, model.channel,
+                         temperature=model.temperature)
+    if ramp is not None:
+        bo = np.asarray(ramp.bias_dps)
+        rb = float(np.sqrt(np.mean((bo - b0) ** 2)))
+        res = np.asarray(ramp.residual_dps)
+        if model.ramp is not None:
+            res = res - model.ramp.gamma_dps_per_c_per_s * np.asarray(ramp.dtheta_dt)
+        ra = float(np.sqrt(np.mean(res ** 2)))
+
+    def rms(a):
+        return float(np.sqrt(np.mean(np.asarray(a) ** 2)))
+    return Compensation(model.channel, df, rms(df["bias_before_dps"]), rms(df["bias_after_dps"]),
+                        rms(df["scale_before_rel"]), rms(df["scale_after_rel"]), rb, ra)

@@ -1,0 +1,224 @@
+"""Gyro-triad readings files: read, validate, write (docs/formats-triad.md).
+
+A triad readings file is CSV (UTF-8, BOM allowed, ``\\n`` or ``\\r\\n``): ``# key: value``
+metadata lines, one header row, one row per record. Every error a file can cause is a
+:class:`gonio.errors.GonioError` naming file, line (1-based, counting metadata lines)
+and column. The input file is only read.
+
+Row kinds (column ``test``):
+
+* ``alignment`` — one dwell on the rate table: the fixture's reference axis ``up`` on the
+  (vertical) table axis, ``north0`` the reference axis pointing north at table angle 0,
+  ``table_deg`` the table angle at the start, ``rate_dps`` the table rate (right-handed
+  about up; 0 for a static position), ``duration_s``; ``out_x/y/z`` the mean outputs over
+  the dwell, ``sd_x/y/z`` their sample standard deviations over ``n_samples`` samples.
+* ``static`` — one sample of a record at rest (``n_samples`` = 1, ``sd_*`` empty), for the
+  Allan deviation that sets the averaging time.
+* ``thermal`` — one dwell of a temperature-chamber / supply programme, as ``alignment``
+  plus the chamber temperature, the gyro's internal temperature-sensor reading and the
+  supply voltage; ``phase`` is ``soak`` (temperature settled) or ``ramp``.
+
+Normalised columns of :attr:`TriadReadings.data`: the :data:`COLUMNS`, numbers as float
+(NaN when empty), ``step`` and ``n_samples`` int64, text columns str, plus ``line``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
+from gonio.atomic import write_text
+from gonio.errors import GonioError, check_header, read_utf8
+
+FORMAT = "gonio-triad-readings/1"
+TESTS = ("alignment", "static", "thermal")
+SIGNED = ("+x", "-x", "+y", "-y", "+z", "-z")
+OUT = ("out_x", "out_y", "out_z")
+SD = ("sd_x", "sd_y", "sd_z")
+PHASES = ("", "soak", "ramp")
+COLUMNS = ("test", "step", "phase", "up", "north0", "table_deg", "rate_dps", "time_s",
+           "duration_s", "n_samples", "chamber_c", "sensor_c", "supply_v") + OUT + SD
+REQUIRED = ("test", "step", "up", "north0", "table_deg", "rate_dps", "time_s", "duration_s",
+            "n_samples") + OUT
+_FLOATS = ("table_deg", "rate_dps", "time_s", "duration_s", "chamber_c", "sensor_c",
+           "supply_v") + OUT + SD
+_OPTIONAL_FLOATS = ("chamber_c", "sensor_c", "supply_v") + SD
+#: metadata keys that must be numbers, with their check
+NUMERIC_METADATA = {"latitude_deg": (lambda v: -90 <= v <= 90, "a number in [-90, 90]"),
+                    "sample_rate_hz": (lambda v: v > 0, "a number > 0")}
+REQUIRED_METADATA = ("format", "latitude_deg", "sample_rate_hz", "output_unit")
+
+
+@dataclass
+class TriadReadings:
+    """A validated triad readings file."""
+
+    data: pd.DataFrame
+    metadata: dict = field(default_factory=dict)
+    path: str | None = None
+
+    def rows(self, test: str) -> pd.DataFrame:
+        """The rows of one kind (``alignment``, ``static``, ``thermal``), in file order."""
+        return self.data[self.data["test"] == test].reset_index(drop=True)
+
+    @property
+    def latitude_deg(self) -> float:
+        return float(self.metadata["latitude_deg"])
+
+    @property
+    def sample_rate_hz(self) -> float:
+        return float(self.metadata["sample_rate_hz"])
+
+
+def _num(text: str, *, file, line, column, allow_empty: bool) -> float:
+    t = text.strip()
+    if t == "":
+        if allow_empty:
+            return math.nan
+        raise GonioError("empty cell where a number is required", file=file, line=line, column=column)
+    try:
+        v = float(t)
+    except ValueError:
+        raise GonioError(f"expected a number, got {t!r}", file=file, line=line, column=column) from None
+    if not math.isfinite(v):
+        raise GonioError(f"expected a finite number, got {t!r}", file=file, line=line, column=column)
+    return v
+
+
+def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReadings:
+    """Parse and validate the text of a triad readings file (see the module docstring)."""
+    file = str(path)
+    meta: dict[str, str] = {}
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
+        ln = lines[i]
+        if ln.startswith("#"):
+            body = ln[1:].strip()
+            if body:
+                if ":" not in body:
+                    raise GonioError("metadata line must be '# key: value'", file=file, line=i + 1)
+                k, v = body.split(":", 1)
+                k = k.strip()
+                if k in meta:
+                    raise GonioError(f"metadata key {k!r} given twice", file=file, line=i + 1)
+                meta[k] = v.strip()
+        i += 1
+    if i >= len(lines):
+        raise GonioError("no header row", file=file, line=i + 1)
+    for k in REQUIRED_METADATA:
+        if k not in meta:
+            raise GonioError(f"missing metadata '# {k}: ...'", file=file, key=k)
+    if meta["format"] != FORMAT:
+        raise GonioError(f"format must be {FORMAT!r}, got {meta['format']!r}", file=file, key="format")
+    for k, (ok, expect) in NUMERIC_METADATA.items():
+        try:
+            v = float(meta[k])
+        except ValueError:
+            raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k) from None
+        if not (math.isfinite(v) and ok(v)):
+            raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k)
+    header_line = i + 1
+    reader = csv.reader(lines[i:])
+    header = [h.strip() for h in next(reader)]
+    check_header(header, REQUIRED, file=file, line=header_line)
+    unknown = [h for h in header if h not in COLUMNS]
+    if unknown:
+        raise GonioError(f"unknown column (known: {', '.join(COLUMNS)})", file=file,
+                         line=header_line, column=unknown[0])
+    cols: dict[str, list] = {c: [] for c in COLUMNS}
+    cols["line"] = []
+    for j, row in enumerate(reader):
+        ln = header_line + 1 + j
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            raise GonioError(f"expected {len(header)} cells, got {len(row)}", file=file, line=ln)
+        rec = dict(zip(header, row))
+        test = rec["test"].strip()
+        if test not in TESTS:
+            raise GonioError(f"test must be one of {', '.join(TESTS)}, got {test!r}",
+                             file=file, line=ln, column="test")
+        for c in ("up", "north0"):
+            v = rec[c].strip().lower()
+            if v not in SIGNED:
+                raise GonioError(f"expected one of {', '.join(SIGNED)}, got {rec[c]!r}",
+                                 file=file, line=ln, column=c)
+            rec[c] = v
+        if rec["up"][1] == rec["north0"][1]:
+            raise GonioError("north0 must be a different axis from up", file=file, line=ln,
+                             column="north0")
+        for c in ("step", "n_samples"):
+            t = rec[c].strip()
+            if not t.isdigit():
+                raise GonioError(f"expected a whole number ≥ 0, got {t!r}", file=file, line=ln, column=c)
+            rec[c] = int(t)
+        if rec["n_samples"] < 1:
+            raise GonioError("n_samples must be ≥ 1", file=file, line=ln, column="n_samples")
+        for c in _FLOATS:
+            if c in rec:
+                rec[c] = _num(rec[c], file=file, line=ln, column=c, allow_empty=c in _OPTIONAL_FLOATS)
+            else:
+                rec[c] = math.nan
+        if rec["duration_s"] <= 0:
+            raise GonioError("duration_s must be > 0", file=file, line=ln, column="duration_s")
+        if test == "thermal":
+            for c in ("sensor_c", "supply_v"):
+                if math.isnan(rec[c]):
+                    raise GonioError("a thermal row needs this value", file=file, line=ln, column=c)
+        rec["test"] = test
+        rec["phase"] = rec.get("phase", "").strip()
+        if rec["phase"] not in PHASES:
+            raise GonioError(f"phase must be empty, soak or ramp, got {rec['phase']!r}",
+                             file=file, line=ln, column="phase")
+        for c in COLUMNS:
+            cols[c].append(rec[c])
+        cols["line"].append(ln)
+    df = pd.DataFrame(cols)
+    if df.empty:
+        raise GonioError("no data rows", file=file, line=header_line + 1)
+    for c in ("step", "n_samples", "line"):
+        df[c] = df[c].astype(np.int64)
+    for c in _FLOATS:
+        df[c] = df[c].astype(float)
+    return TriadReadings(df, meta, file)
+
+
+def read_triad_readings(path: str | Path) -> TriadReadings:
+    """Read and validate a triad readings file."""
+    return parse_triad_readings(read_utf8(path, "triad readings file"), path)
+
+
+def _cell(v) -> str:
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    f = float(v)
+    return "" if math.isnan(f) else repr(f)
+
+
+def format_triad_readings(data: pd.DataFrame, metadata: dict) -> str:
+    """The exact text of a triad readings file (deterministic: shortest round-trip floats)."""
+    meta = {"format": FORMAT, **{k: v for k, v in metadata.items() if k != "format"}}
+    out = io.StringIO()
+    for k, v in meta.items():
+        out.write(f"# {k}: {v}\n")
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(COLUMNS)
+    cols = [data[c].tolist() if c in data else [math.nan] * len(data) for c in COLUMNS]
+    for row in zip(*cols):
+        w.writerow([_cell(v) for v in row])
+    return out.getvalue()
+
+
+def write_triad_readings(path: str | Path, data: pd.DataFrame, metadata: dict) -> Path:
+    """Write a triad readings file atomically."""
+    return write_text(path, format_triad_readings(data, metadata))

@@ -1,0 +1,171 @@
+"""Report pages of the triad calibration: the alignment-matrix table and the
+temperature-model page, as one self-contained HTML file (figures inline as SVG).
+
+These are the pages the certificate would carry for the ``triad-alignment``
+specification; the certificate renderer of :mod:`gonio.report.certificate` is built around
+the draft's items, so the pages are written as their own document (``--report FILE`` of
+``gonio align`` and ``gonio thermal-model``). Every value is shown with its expanded
+uncertainty U (coverage probability 95.45 %, k stated), U to two significant digits and the
+value to the same decimal place (JCGM 100 7.2.6, via :mod:`gonio.report.i18n`).
+"""
+
+from __future__ import annotations
+
+import html
+import math
+
+import numpy as np
+from matplotlib.figure import Figure
+from scipy import stats
+
+from gonio.analysis.thermal_model import Compensation, ThermalModelResult
+from gonio.analysis.triad_alignment import OFFDIAG, AlignmentResult, cross_axis_table
+from gonio.atomic import write_text
+from gonio.report.figure_files import figure_bytes
+from gonio.report.i18n import decimals_for_sig, display_uncertainty, round_half_up
+
+_CSS = ("body{font-family:'DejaVu Sans',sans-serif;font-size:10pt;margin:2em}"
+        "table{border-collapse:collapse;margin:0.5em 0 1em}"
+        "td,th{border:1px solid #999;padding:2px 6px;text-align:right}"
+        "th{background:#eee}h1{font-size:14pt}h2{font-size:12pt;margin-top:1.5em}"
+        ".note{color:#555;font-size:9pt}")
+
+
+def value_with_u(value: float, big_u: float) -> str:
+    """'value ± U' with U to 2 significant digits and the value to U's decimal place.
+
+    >>> value_with_u(49.99371, 0.0028)
+    '49.9937 ± 0.0028'
+    """
+    if not (math.isfinite(big_u) and big_u > 0):
+        return round_half_up(value, decimals_for_sig(value, 6)) if math.isfinite(value) else "—"
+    u_txt = display_uncertainty(big_u)
+    dec = len(u_txt.split(".")[1]) if "." in u_txt else 0
+    return f"{round_half_up(value, dec)} ± {u_txt}"
+
+
+def _svg(fig: Figure) -> str:
+    text = figure_bytes(fig, "svg").decode("utf-8")
+    return text[text.find("<svg"):]
+
+
+def _table(header, rows) -> str:
+    h = "".join(f"<th>{html.escape(str(c))}</th>" for c in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>"
+                   for r in rows)
+    return f"<table><tr>{h}</tr>{body}</table>"
+
+
+def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
+    """HTML section: M, b, M⁻¹, scale factors, misalignment angles, cross-axis
+    sensitivities (IEC 62047-20 5.2), residual leakage and averaging time."""
+    k = res.coverage_factor
+    unit = res.output_unit or "output"
+    m, um = res.system_matrix, res.u_system_matrix
+    out = [f"<h2>Alignment matrix (k = {k[0]:.2f} for ν = {res.dof[0]:.0f}, p = 95.45 %)</h2>",
+           f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
+           f"G = M ω + b, from {res.n_dwells} dwells"
+           f"{' (robust fit)' if res.robust else ''}.</p>"]
+    rows = [[f"gyro {a}"] + [value_with_u(m[i, j], k[i] * um[i, j]) for j in range(3)]
+            + [value_with_u(res.bias_output[i], k[i] * res.u_bias_output[i])]
+            for i, a in enumerate("xyz")]
+    out.append(_table(["", "ω_x", "ω_y", "ω_z", "b"], rows))
+    a = res.alignment_matrix
+    ua = np.asarray(res.u_derived["alignment_matrix"]).reshape(3, 3)
+    kk = float(np.max(k))
+    out.append("<p>Alignment matrix M⁻¹ (°/s per unit output): ω̂ = M⁻¹ (G − b).</p>")
+    out.append(_table(["", "G_x", "G_y", "G_z"],
+                      [[f"ω_{r}"] + [value_with_u(a[i, j], kk * ua[i, j]) for j in range(3)]
+                       for i, r in enumerate("xyz")]))
+    sc, us = res.derived["scale"], res.u_derived["scale"]
+    ps, ups = res.derived["psi_rad"], res.u_derived["psi_rad"]
+    bd, ubd = res.derived["bias_dps"], res.u_derived["bias_dps"]
+    out.append(_table(["gyro", f"scale factor ({unit}/(°/s))", "misalignment ψ (mrad)",
+                       "bias (°/s)"],
+                      [[a_, value_with_u(sc[i], kk * us[i]),
+                        value_with_u(ps[i] * 1e3, kk * ups[i] * 1e3),
+                        value_with_u(bd[i], kk * ubd[i])] for i, a_ in enumerate("xyz")]))
+    tab = cross_axis_table(res)
+    out.append("<p>Cross-axis sensitivity S_ij = M_ij/M_ii (IEC 62047-20 5.2), in ‰; "
+               "residual leakage after M⁻¹: expanded uncertainty in ‰.</p>")
+    rows = []
+    for n, r in enumerate(tab.itertuples(index=False)):
+        i, j = "xyz".index(r.gyro), "xyz".index(r.about)
+        rows.append([f"gyro {r.gyro} ← ω_{r.about}", value_with_u(r.sensitivity * 1e3, kk * r.u_gum * 1e3),
+                     "—" if not math.isfinite(r.u_mc) else display_uncertainty(kk * r.u_mc * 1e3),
+                     display_uncertainty(kk * res.leakage_u[i, j] * 1e3)])
+    out.append(_table(["", "S (GUM)", "U (Monte Carlo)", "leakage after, U"], rows))
+    if res.averaging is not None:
+        av = res.averaging
+        out.append(f"<p>Averaging time (Allan deviation): limit {av.noise_limit_dps:.4g} °/s "
+                   f"(ω = {av.test_rate_dps:g} °/s, ψ_T = {av.target_deg:g}°, 1/10); τ ≥ "
+                   f"{max(av.tau_needed_s):g} s; shortest dwell {av.shortest_dwell_s:g} s — "
+                   f"{'sufficient' if av.sufficient else 'NOT sufficient'}.</p>")
+    if res.outliers:
+        out.append("<p>Down-weighted readings: " + ", ".join(
+            f"line {o['line']} ({o['channel']}, weight {o['weight']:.2f})" for o in res.outliers)
+            + "</p>")
+    if figure is not None:
+        out.append(_svg(figure))
+    return "\n".join(out)
+
+
+def thermal_page(res: ThermalModelResult, compensation: dict | None = None,
+                 figures: dict | None = None) -> str:
+    """HTML section: per gyro the chosen orders, coefficients with U, predictions with U at
+    a few temperatures, the ramp analysis and the compensation summary."""
+    out = [f"<h2>Temperature and supply model (reference {res.reference_c:g} °C, "
+           f"{res.reference_v:g} V; order criterion {html.escape(res.criterion)})</h2>"]
+    for ch, m in res.channels.items():
+        out.append(f"<h3>gyro {ch} — temperature: {html.escape(m.temperature)}, ϑ "
+                   f"{m.theta_range[0]:.1f} … {m.theta_range[1]:.1f} °C</h3>")
+        rows = []
+        for name, f in (("K", m.scale), ("b (°/s)", m.bias), ("ARW (°/√h)", m.arw)):
+            if f is None:
+                continue
+            kf = stats.t.ppf(0.5 + 0.9545 / 2, f.dof)
+            c = f.coefficients()
+            for key in c:
+                if key.startswith("u_"):
+                    continue
+                rows.append([name, f"{f.n_t}/{f.n_u}", key, value_with_u(c[key], kf * c['u_' + key])])
+        out.append(_table(["model", "order ϑ/U", "term", "coefficient ± U"], rows))
+        g = m.prediction_grid(6)
+        kb = stats.t.ppf(0.5 + 0.9545 / 2, m.bias.dof)
+        ks = stats.t.ppf(0.5 + 0.9545 / 2, m.scale.dof)
+        out.append(_table(["ϑ (°C)", "U (V)", "K ± U", "b (°/s) ± U"],
+                          [[f"{r.theta_c:.1f}", f"{r.u_v:+.2f}", value_with_u(r.scale, ks * r.u_scale),
+                            value_with_u(r.bias_dps, kb * r.u_bias_dps)]
+                           for r in g.itertuples(index=False)]))
+        if m.ramp is not None:
+            ra = m.ramp
+            out.append(f"<p>Ramps: static-soak model rms error {ra.rms_static_model_dps:.3g} °/s; "
+                       f"with γ·dϑ/dt {ra.rms_with_ramp_term_dps:.3g} °/s (γ = "
+                       f"{ra.gamma_dps_per_c_per_s:.3g} (°/s)/(°C/s)); with a lag τ = "
+                       f"{ra.tau_s:.0f} s {ra.rms_with_lag_dps:.3g} °/s; hysteresis "
+                       f"{ra.hysteresis_dps:.3g} °/s.</p>")
+        c: Compensation | None = (compensation or {}).get(ch)
+        if c is not None:
+            out.append(_table(["residual", "before", "after"], [
+                ["bias rms (°/s)", f"{c.rms_bias_before_dps:.3g}", f"{c.rms_bias_after_dps:.3g}"],
+                ["scale-factor rms (ppm)", f"{c.rms_scale_before_rel * 1e6:.3g}",
+                 f"{c.rms_scale_after_rel * 1e6:.3g}"],
+                ["bias on ramps rms (°/s)", f"{c.rms_ramp_before_dps:.3g}",
+                 f"{c.rms_ramp_after_dps:.3g}"]]))
+        if figures and ch in figures:
+            out.append(_svg(figures[ch]))
+    return "\n".join(out)
+
+
+def write_report(path, sections: list[str], title: str) -> None:
+    """One self-contained HTML file with the given sections, written atomically."""
+    doc = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+           f"<style>{_CSS}</style></head><body><h1>{html.escape(title)}</h1>"
+           + "\n".join(sections)
+           + "<p class='note'>Uncertainties: GUM Type A from the fit residuals (JCGM 100), "
+             "Monte Carlo check (JCGM 101); see docs/alignment.md and docs/thermal-model.md."
+             "</p></body></html>\n")
+    write_text(path, doc)
+
+
+__all__ = ["alignment_page", "thermal_page", "write_report", "value_with_u", "OFFDIAG"]

@@ -1,0 +1,24 @@
+"""Gyro-triad electrical alignment and the extended MEMS-gyro model (issue 18).
+
+Not a standard: a calibration built on the alignment application article ([Looney-alignment]:
+misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis ([Vagner2015]:
+K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.2.
+:mod:`~gonio.specs.triad_alignment.calibration` computes the results;
+:mod:`~gonio.specs.triad_alignment.session` simulates them on the virtual bench. The
+reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
+"""
+
+from gonio.specs import Specification
+from gonio.specs.triad_alignment.calibration import article_budget, calibrate
+
+SPEC = Specification(
+    key="triad-alignment",
+    title_en="Gyro triad: mechanical misalignment budget, electrical alignment and extended "
+             "temperature / supply model",
+    title_zh="三轴陀螺组件:安装失准预算、电气对准与温度/电压扩展模型",
+    clause_doc="docs/alignment.md",
+    default_protocol="triad-alignment",
+    default_bench="mems-triad",
+    calibrate=calibrate,
+    budget=article_budget,
+)

@@ -1,0 +1,113 @@
+"""Decision rules and conformity (ILAC-G8:09/2019, JCGM 106) against closed forms.
+
+The independent reference is scipy.stats.norm (a different Φ implementation) and the
+closed-form values of the normal model: at a limit p_c = 1/2; at w = U = 2u inside one
+limit the specific false-accept probability is Φ(−2); two-sided intervals give
+Φ(a) − Φ(−b).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.stats import norm
+
+from gonio.analysis.conformity import (DecisionRule, Limits, acceptance_interval,
+                                       conformance_probability, decide, normal_cdf)
+from gonio.errors import GonioError
+
+LIM = Limits(-0.5, 0.5, "MPE")
+
+
+def test_normal_cdf_matches_scipy():
+    for z in (-6.0, -2.0, -1.0, -0.3, 0.0, 0.7, 1.96, 3.5):
+        assert normal_cdf(z) == pytest.approx(norm.cdf(z), rel=1e-12, abs=1e-15)
+
+
+def test_value_on_the_limit_conforms_with_probability_one_half():
+    # JCGM 106 7.3: y = T_U and a one-sided interval → p_c = 1/2 exactly
+    assert conformance_probability(0.5, 0.1, None, 0.5) == pytest.approx(0.5, abs=1e-15)
+    d = decide("E", 0.5, 0.2, 2.0, Limits(None, 0.5), DecisionRule("simple"))
+    assert d.outcome == "pass" and d.false_accept_probability == pytest.approx(0.5, abs=1e-12)
+
+
+def test_guard_band_w_equals_U_bounds_false_accept_by_phi_minus_2():
+    # y at the acceptance limit T_U − U, k = 2: (T_U − y)/u = 2 → 1 − p_c = Φ(−2) = 0.02275
+    U = 0.1
+    y = 0.5 - U
+    d = decide("E", y, U, 2.0, LIM, DecisionRule("guarded", 1.0))
+    assert d.outcome == "pass"
+    assert d.acceptance_upper == pytest.approx(0.4) and d.guard_band == pytest.approx(0.1)
+    assert d.false_accept_probability == pytest.approx(norm.cdf(-2.0), rel=1e-9)
+    assert d.false_accept_probability == pytest.approx(0.0227501319, rel=1e-8)
+
+
+def test_two_sided_closed_form():
+    y, u = 0.1, 0.25
+    expect = norm.cdf((0.5 - y) / u) - norm.cdf((-0.5 - y) / u)
+    assert conformance_probability(y, u, -0.5, 0.5) == pytest.approx(expect, rel=1e-12)
+    d = decide("E", y, 2 * u, 2.0, LIM, DecisionRule("simple"))
+    assert d.false_accept_probability == pytest.approx(1 - expect, rel=1e-10)
+
+
+@settings(max_examples=200, deadline=None)
+@given(y=st.floats(-2, 2), u=st.floats(0.01, 1), lo=st.floats(-1.5, 0), width=st.floats(0.01, 2))
+def test_conformance_probability_is_normal_mass(y, u, lo, width):
+    hi = lo + width
+    expect = norm.cdf(hi, loc=y, scale=u) - norm.cdf(lo, loc=y, scale=u)
+    assert conformance_probability(y, u, lo, hi) == pytest.approx(expect, abs=1e-12)
+
+
+def test_simple_acceptance_is_binary_on_the_tolerance():
+    r = DecisionRule("simple")
+    assert decide("E", 0.49, 0.3, 2.0, LIM, r).outcome == "pass"
+    assert decide("E", -0.51, 0.3, 2.0, LIM, r).outcome == "fail"
+    assert decide("E", 0.49, 0.3, 2.0, LIM, r).guard_band == 0.0
+    f = decide("E", 0.6, 0.2, 2.0, LIM, r)
+    # rejected: the specific false-reject probability is p_c = Φ((0.5 − 0.6)/0.1) = Φ(−1)
+    assert f.false_accept_probability is None
+    assert f.false_reject_probability == pytest.approx(norm.cdf(-1.0), rel=1e-10)
+
+
+def test_non_binary_four_zones():
+    # ILAC-G8 4.2.3, fig. 5, w = U = 0.1: pass ≤ 0.4 < conditional pass ≤ 0.5
+    # < conditional fail ≤ 0.6 < fail
+    r = DecisionRule("non-binary", 1.0)
+    out = {y: decide("E", y, 0.1, 2.0, LIM, r).outcome for y in
+           (0.0, 0.39, 0.45, 0.5, 0.55, 0.6, 0.61, -0.45, -0.55, -0.7)}
+    assert out == {0.0: "pass", 0.39: "pass", 0.45: "conditional pass", 0.5: "conditional pass",
+                   0.55: "conditional fail", 0.6: "conditional fail", 0.61: "fail",
+                   -0.45: "conditional pass", -0.55: "conditional fail", -0.7: "fail"}
+
+
+def test_guard_factor_r_scales_w():
+    r = DecisionRule("guarded", 0.5)
+    d = decide("R", 0.22, 0.1, 2.0, Limits(None, 0.3), r)
+    assert d.guard_band == pytest.approx(0.05) and d.acceptance_upper == pytest.approx(0.25)
+    assert d.outcome == "pass"
+    assert decide("R", 0.26, 0.1, 2.0, Limits(None, 0.3), r).outcome == "fail"
+    # (0.3 − 0.22)/0.05 = 1.6
+    assert d.false_accept_probability == pytest.approx(norm.cdf(-1.6), rel=1e-9)
+
+
+def test_guard_band_closing_the_interval_passes_nothing():
+    d = decide("E", 0.0, 0.6, 2.0, LIM, DecisionRule("guarded"))
+    assert acceptance_interval(LIM, 0.6) == (pytest.approx(0.1), pytest.approx(-0.1))
+    assert d.outcome == "fail"
+
+
+def test_bad_rules_and_limits_name_the_key():
+    with pytest.raises(GonioError, match="decision_rule.rule"):
+        DecisionRule("lenient")
+    with pytest.raises(GonioError, match="guard_band_factor"):
+        DecisionRule("guarded", -1.0)
+    with pytest.raises(GonioError, match="lower, upper or mpe"):
+        Limits(None, None)
+    with pytest.raises(GonioError, match="not below"):
+        Limits(1.0, 0.5)
+    with pytest.raises(ValueError):
+        decide("E", 0.0, 0.0, 2.0, LIM, DecisionRule())
+    assert not math.isnan(normal_cdf(math.inf))

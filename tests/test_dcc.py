@@ -1,0 +1,204 @@
+"""The Digital Calibration Certificate (PTB DCC 3.3.0): schema-valid, numbers equal to
+results.json through the certificate's rounding rule, D-SI units parsed by a D-SI parser,
+conformity equal to the closed form.
+
+The schema set is the offline copy in ``../shared/schemas/dcc-3.3.0`` beside the repository
+(or ``$GONIO_DCC_SCHEMA_DIR``), loaded with xmlschema with remote access refused. D-SI unit
+strings are parsed with the ``dsiunits`` package (PTB's D-SI parser; test-only dependency).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from lxml import etree
+from scipy.stats import norm
+
+from gonio.bench import load_bench, run_session, write_session
+from gonio.pipeline.calibrate import calibrate, write_calibration
+from gonio.protocol import parse_protocol
+from gonio.report.certificate import certificate_id, load_lab
+from gonio.report.dcc import DCC_NS, SI_NS, dcc_bytes
+from gonio.report.i18n import display, last_digit_unit, parse_display
+from gonio.resources import protocols_dir
+
+NS = {"dcc": DCC_NS, "si": SI_NS}
+REPO = Path(__file__).resolve().parents[1]
+SCHEMA_DIR = Path(os.environ.get("GONIO_DCC_SCHEMA_DIR",
+                                 REPO.parent / "shared" / "schemas" / "dcc-3.3.0")).resolve()
+QUDT_URL = "https://www.ptb.de/si/v2.2.1/qudt/quantitykind.xsd"
+SMALL = {
+    "protocol": {"name": "small", "specification": "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"},
+    "session": {"static_s": 30.0},
+    "scale_factor": {"rest_s": 15.0, "rounds": [{"stop_deg": 180.0}, {"stop_deg": 360.0}]},
+    "zero_stability": {"readings": 4, "interval_s": 20.0},
+    "angle_deviation": {"series": 2, "rest_s": 15.0,
+                        "rounds": [{"stop_deg": 120.0 * i} for i in range(1, 4)]},
+    "rate_consistency": {"rates_dps": [30.0, 60.0], "rest_s": 15.0},
+    "pointing_consistency": {"orientations": ["up", "north"], "rest_s": 15.0},
+}
+
+
+@pytest.fixture(scope="module")
+def schema():
+    xmlschema = pytest.importorskip("xmlschema", reason="pip install '.[test]'")
+    assert (SCHEMA_DIR / "dcc.xsd").is_file(), (
+        f"DCC 3.3.0 schema set not found at {SCHEMA_DIR} (set GONIO_DCC_SCHEMA_DIR)")
+    return xmlschema.XMLSchema11(
+        str(SCHEMA_DIR / "dcc.xsd"),
+        uri_mapper={QUDT_URL: (SCHEMA_DIR / "si" / "qudt" / "quantitykind.xsd").as_uri()},
+        allow="local")
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("dcc")
+    proto = parse_protocol(SMALL)
+    session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=20.0), seed=7)
+    write_session(session, d)
+    report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
+    write_calibration(report, d)
+    lab = load_lab(protocols_dir() / "lab-example.toml")
+    docs = {"lab": dcc_bytes(report, lab=lab, cert_id=certificate_id(report, lab)),
+            "virtual": dcc_bytes(report, lab=None, cert_id=certificate_id(report, None))}
+    return {"report": report, "lab": lab, "docs": docs,
+            "results": json.loads((d / "results.json").read_text())}
+
+
+def lookup(res, src):
+    x = res
+    for part in src.split("."):
+        x = x[int(part)] if isinstance(x, list) else x[part]
+    return x
+
+
+def test_valid_against_dcc_330_schema(run, schema):
+    for name, doc in run["docs"].items():
+        errors = list(schema.iter_errors(doc.decode("utf-8")))
+        assert not errors, (name, str(errors[0])[:500])
+
+
+def test_broken_instances_are_rejected(run, schema):
+    root = etree.fromstring(run["docs"]["lab"])
+    uid = root.find(".//dcc:coreData/dcc:uniqueIdentifier", NS)
+    uid.getparent().remove(uid)
+    assert not schema.is_valid(etree.tostring(root).decode())
+    root = etree.fromstring(run["docs"]["lab"])
+    root.find(".//dcc:statement/dcc:conformity", NS).text = "probably"
+    assert not schema.is_valid(etree.tostring(root).decode())
+    root = etree.fromstring(run["docs"]["lab"])
+    root.find(".//si:real/si:value", NS).text = "0,15"
+    assert not schema.is_valid(etree.tostring(root).decode())
+    root = etree.fromstring(run["docs"]["lab"])
+    root.set("schemaVersion", "3.2.1")
+    assert not schema.is_valid(etree.tostring(root).decode())
+
+
+def _numbers(doc: bytes):
+    """(src, rule, xml text) of every si:value and list entry, by the comment before it."""
+    root = etree.fromstring(doc)
+    out = []
+    for c in root.iter(etree.Comment):
+        m = re.match(r" src=(\S+) rule=(\S+) ", c.text)
+        if m:
+            real = c.getnext()
+            out.append((m.group(1), m.group(2), real.find("si:value", NS).text))
+            continue
+        m = re.match(r" src-list=(.+) rule=(\S*) ", c.text)
+        if m:
+            values = c.getnext().find("si:valueXMLList", NS).text.split()
+            srcs = m.group(1).split()
+            assert len(values) == len(srcs)
+            out += [(s, m.group(2), v) for s, v in zip(srcs, values) if s != "-"]
+    return out
+
+
+def _as_display(text: str) -> str:
+    m = re.fullmatch(r"(-?[\d.]+)e(-?\d+)", text)
+    if m:
+        sup = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+        return f"{m.group(1)}×10{m.group(2).translate(sup)}"
+    return text
+
+
+def test_every_number_equals_results_json(run):
+    res = run["results"]
+    U = res["uncertainty"]["U_arcsec"]
+    nums = _numbers(run["docs"]["lab"])
+    assert len(nums) > 25
+    srcs = {s for s, _, _ in nums}
+    for must in ("angle_deviation.max_abs_arcsec", "angle_deviation.value", "scale_factor.value",
+                 "zero_stability.value", "repeatability.value", "rate_consistency.value",
+                 "pointing_consistency.value", "angle_deviation.table.0.E_arcsec"):
+        assert must in srcs, must
+    for src, rule, text in nums:
+        v = lookup(res, src)
+        shown = display(rule, v, U).lstrip("±+")
+        assert _as_display(text) == shown, (src, rule, text, shown)
+        x = parse_display(_as_display(text))
+        vv = abs(v) if rule.startswith("pmdec") else v
+        assert abs(x - vv) <= 0.5 * last_digit_unit(_as_display(text)) + 1e-9 * abs(vv), src
+    # the expanded uncertainty of E with k and p
+    root = etree.fromstring(run["docs"]["lab"])
+    mu = root.find(".//dcc:result[@id='result-angle_deviation']//si:expandedMU", NS)
+    assert float(mu.find("si:valueExpandedMU", NS).text) == pytest.approx(U, abs=0.005 * 1.0001)
+    assert float(mu.find("si:coverageFactor", NS).text) == res["uncertainty"]["k"]
+    assert float(mu.find("si:coverageProbability", NS).text) == 0.95
+
+
+def test_dsi_units_parse(run):
+    dsi = pytest.importorskip("dsi_unit", reason="pip install dsiunits (test-only)")
+    root = etree.fromstring(run["docs"]["lab"])
+    units = {u.text for u in root.iter(f"{{{SI_NS}}}unit", f"{{{SI_NS}}}unitXMLList")}
+    assert {r"\arcsecond", r"\degree", r"\degree\hour\tothe{-1}", r"\one\degree\tothe{-1}",
+            r"\percent", r"\ppm", r"\degreecelsius"} <= units
+    for u in units:
+        for one in u.split():
+            assert dsi.DsiUnit(one).valid, one
+    assert not dsi.DsiUnit(r"\arcsec").valid          # the parser can fail
+
+
+def test_administrative_data_and_conformity(run):
+    res = run["results"]
+    lab = run["lab"]
+    root = etree.fromstring(run["docs"]["lab"])
+    t = lambda path: root.find(path, NS).text  # noqa: E731
+    assert t(".//dcc:coreData/dcc:uniqueIdentifier") == lab["certificate"]["number"]
+    assert t(".//dcc:coreData/dcc:beginPerformanceDate") == lab["certificate"]["date_of_calibration"]
+    assert t(".//dcc:items/dcc:item/dcc:model") == lab["instrument"]["model"]
+    assert t(".//dcc:item//dcc:identification/dcc:value") == lab["instrument"]["serial"]
+    assert t(".//dcc:calibrationLaboratory//dcc:name/dcc:content") == lab["laboratory"]["name"]
+    signers = [p.find("dcc:person/dcc:name/dcc:content", NS).text
+               for p in root.iterfind(".//dcc:respPerson", NS)
+               if p.find("dcc:mainSigner", NS).text == "true"]
+    assert signers == [lab["signatory"]["approved_by"]]
+    assert "光学陀螺测角仪校准规范" in t(".//dcc:statement[@id='specification']/dcc:norm")
+    # conformity: E against ±0.5″, non-binary, w = U, outcome and p from the closed form
+    y, U = res["angle_deviation"]["value"], res["uncertainty"]["U_arcsec"]
+    st = root.find(".//dcc:statement[@id='conformity-angle_deviation']", NS)
+    expect = ("pass" if abs(y) <= 0.5 - U else "conditionalPass" if abs(y) <= 0.5
+              else "conditionalFail" if abs(y) <= 0.5 + U else "fail")
+    assert st.find("dcc:conformity", NS).text == expect
+    p_c = norm.cdf((0.5 - y) / (U / 2)) - norm.cdf((-0.5 - y) / (U / 2))
+    q = {q.find("dcc:name/dcc:content", NS).text: float(q.find("si:real/si:value", NS).text)
+         for q in st.iterfind("dcc:data/dcc:quantity", NS)}
+    key = "specific false-accept probability" if expect in ("pass", "conditionalPass") \
+        else "specific false-reject probability"
+    want = 1 - p_c if key.endswith("accept probability") else p_c
+    assert q[key] == pytest.approx(want, rel=0.05, abs=1e-15)   # shown to 2 significant digits
+    assert q["lower specification limit"] == -0.5 and q["upper specification limit"] == 0.5
+    # no limits, no statement
+    virtual = etree.fromstring(run["docs"]["virtual"])
+    assert virtual.find(".//dcc:statement/dcc:conformity", NS) is None
+    assert virtual.find(".//dcc:statement[@id='virtual-bench']", NS) is not None
+
+
+def test_same_inputs_same_bytes(run):
+    r = run["report"]
+    assert dcc_bytes(r, lab=run["lab"], cert_id="X-1") == dcc_bytes(r, lab=run["lab"],
+                                                                  cert_id="X-1")
