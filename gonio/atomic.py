@@ -532,47 +532,6 @@ def output_dir(out: str | Path) -> Iterator[Path]:
         os.close(fd)
 
 
-# ----------------------------------------------------------------- figures
-
-#: Formats a figure may be written in (by the file suffix).
-FIGURE_FORMATS: tuple[str, ...] = ("png", "svg", "pdf")
-#: Salt of matplotlib's SVG element ids: fixed, so that the same figure gives the same bytes.
-SVG_HASHSALT: str = "gonio"
-
-
-def figure_bytes(fig, fmt: str, path=None) -> bytes:
-    """A matplotlib figure as bytes, the same bytes for the same figure.
-
-    SVG: fixed ``svg.hashsalt`` (ids) and no date; PDF: no creation/modification
-    date; PNG: no software tag. An unknown format is a GonioError naming the file.
-    """
-    import io
-
-    import matplotlib
-
-    fmt = fmt.lower()
-    if fmt not in FIGURE_FORMATS:
-        raise GonioError(f"figure format {fmt!r} not supported; use one of "
-                         f"{', '.join(FIGURE_FORMATS)} (by the file suffix)", file=path)
-    meta = {"png": {"Software": None}, "svg": {"Date": None, "Creator": None},
-            "pdf": {"CreationDate": None, "ModDate": None, "Creator": None,
-                    "Producer": None}}[fmt]
-    buf = io.BytesIO()
-    with matplotlib.rc_context({"svg.hashsalt": SVG_HASHSALT, "text.usetex": False}):
-        fig.savefig(buf, format=fmt, metadata=meta)
-    return buf.getvalue()
-
-
-def save_figure(fig, path, *, inputs: Iterable = ()) -> Path:
-    """Write a figure to ``path`` (format by suffix), deterministically and atomically."""
-    path = check_output_file(path, what="figure file", inputs=inputs)
-    fmt = Path(path).suffix.lstrip(".").lower()
-    if fmt not in FIGURE_FORMATS:
-        raise GonioError(f"cannot write a figure of type {Path(path).suffix or '(none)'!r}: use "
-                         f"{', '.join('.' + f for f in FIGURE_FORMATS)}", file=path)
-    return write_bytes(path, figure_bytes(fig, fmt, path))
-
-
 def check_output_dir(out, *, inputs: Iterable = (), force: bool = False,
                      what: str = "--out") -> Path:
     """The checks :func:`output_set` makes, run before any work (no lock, nothing created)."""

@@ -501,12 +501,18 @@ footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
 
 
 def css_string(text: str) -> str:
-    """``text`` as a quoted CSS string (backslash and quote escaped).
+    """``text`` as a quoted CSS string inside ``<style>``: backslash and quote escaped, and
+    ``<``, ``>``, ``&`` as CSS hex escapes, so user text can never close the style element.
 
     >>> print(css_string('say "hi"'))
     "say \\"hi\\""
+    >>> print(css_string("</style><script>"))
+    "\\3c /style\\3e \\3c script\\3e "
     """
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ") + '"'
+    text = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ")
+    for ch, esc in (("<", "\\3c "), (">", "\\3e "), ("&", "\\26 ")):
+        text = text.replace(ch, esc)
+    return '"' + text + '"'
 
 
 def _h(x) -> str:
