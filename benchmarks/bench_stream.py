@@ -1,15 +1,26 @@
-"""Stream reading at scale: write an N-row stream CSV (default 10⁸, chunked, to /tmp), then
-read + unwrap + find rests chunk by chunk; print wall time and peak memory; delete the file.
+"""Streams at scale, before and after, in one run.
 
-Usage: python benchmarks/bench_stream.py [ROWS] [--keep]
-Targets (issue 5): < 1.5 GB peak RSS and < 2 min for 10⁸ rows (read + unwrap + rests).
+1. Read speed on a 10⁸-row stream (fixed-width CSV, 16-bit wrapped counter, table moving 90°
+   every 30 s; written with numpy to /tmp): read + unwrap + find rests chunk by chunk with
+     a. the code of the start commit (pandas' C reader), run from a git worktree of that
+        commit in a subprocess: "CSV via pandas (before)";
+     b. this tree, CSV through pyarrow (gonio.formats.streams.StreamFile);
+     c. this tree, the same stream as Parquet (converted once; conversion time printed).
+   Rows per second for each; targets: b ≥ 3× a, c ≥ 10× a.
+2. Peak memory (max RSS of the process) of ``gonio calibrate STREAM`` on a full draft session
+   at 1 kHz (2×10⁷ rows, written by ``gonio simulate --stream``, Parquet) and on a 5× longer
+   session (≈10⁸ rows: 7.4/7.5 with 95 series instead of 10). Target < 400 MB for both.
+
+Usage: python benchmarks/bench_stream.py [--rows 1e8] [--skip-calibrate] [--keep]
+The machine's load is printed: figures on a shared machine are noisy.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
-import resource
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -17,11 +28,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.reduce import RestFinder
-from gonio.formats.streams import iter_stream
-
+ROOT = Path(__file__).resolve().parents[1]
+START_COMMIT = "477f910"       # main before issue 16 (the "before" of every comparison)
 RATE_HZ = 1000
 CHUNK = 2_000_000
+K_BENCH = 1e6 / 278            # counts per degree of the synthetic stream
 
 
 def _digits(v: np.ndarray, width: int) -> np.ndarray:
@@ -34,25 +45,27 @@ def _digits(v: np.ndarray, width: int) -> np.ndarray:
     return out
 
 
-def write_bench_stream(path: Path, rows: int) -> None:
-    """Fixed-width rows 'SSSSSS.mmm,±CCCCCC,AAAAAA.AAAAAA' (16-bit wrapped counter, table
-    moving 90° every 20 s and resting 10 s), written chunk by chunk."""
+def write_bench_stream(path: Path, rows: int) -> int:
+    """Fixed-width rows 'SSSSSS.mmm,-CCCCCC,AAAAAA.AAAAAA' (a space where the count is not
+    negative; pyarrow's integer parser takes a leading space but not a '+', which sends a
+    block down a slower text path); returns the last unwrapped count."""
     with open(path, "wb") as fh:
-        fh.write(b"# counter_bits: 16\n# counter_signed: true\ntime_s,gyro_counts,table_deg\n")
+        fh.write(b"# counter_bits: 16\n# counter_signed: true\n"
+                 + f"# nominal_scale_factor_counts_per_deg: {K_BENCH!r}\n".encode()
+                 + b"time_s,gyro_counts,table_deg\n")
         for a in range(0, rows, CHUNK):
             k = np.arange(a, min(rows, a + CHUNK), dtype=np.int64)
             cyc = (k // (30 * RATE_HZ))
             ph = k % (30 * RATE_HZ)
             ang_u = cyc * 90_000_000 + np.clip((ph - 10 * RATE_HZ) * 4500, 0, 90_000_000)
-            counts = (k * 7) // 3 + ang_u // 278             # ~3600 counts/°, Earth-rate drift
+            counts = (k * 7) // 3 + ang_u // 278
             wrapped = ((counts + 32768) % 65536) - 32768
-            n = k.size
-            line = np.empty((n, 33), dtype=np.uint8)
+            line = np.empty((k.size, 33), dtype=np.uint8)
             line[:, 0:6] = _digits(k // RATE_HZ, 6)
             line[:, 6] = ord(".")
             line[:, 7:10] = _digits(k % RATE_HZ, 3)
             line[:, 10] = ord(",")
-            line[:, 11] = np.where(wrapped < 0, ord("-"), ord("+"))
+            line[:, 11] = np.where(wrapped < 0, ord("-"), ord(" "))
             line[:, 12:18] = _digits(np.abs(wrapped), 6)
             line[:, 18] = ord(",")
             line[:, 19:25] = _digits(ang_u // 1_000_000, 6)
@@ -60,56 +73,151 @@ def write_bench_stream(path: Path, rows: int) -> None:
             line[:, 26:32] = _digits(ang_u % 1_000_000, 6)
             line[:, 32] = ord("\n")
             fh.write(line.tobytes())
+    return int(counts[-1])
 
 
-def main() -> None:
-    rows = int(float(sys.argv[1])) if len(sys.argv) > 1 and not sys.argv[1].startswith("-") \
-        else 100_000_000
-    keep = "--keep" in sys.argv
-    tmp = Path(tempfile.mkdtemp(prefix="gonio-bench-", dir="/tmp"))
-    path = tmp / "stream.csv"
-    need = rows * 33 * 1.1
-    free = shutil.disk_usage(tmp).free
-    if free < need:
-        print(f"disk space short: {free / 1e9:.1f} GB free, {need / 1e9:.1f} GB needed")
-        return
+READ_SCRIPT = r"""
+import resource, sys, time
+from gonio.{reduce_mod} import RestFinder
+from gonio.{streams_mod} import iter_stream
+t0 = time.perf_counter()
+f = RestFinder(rate_threshold_dps=0.01, window=1, despike=True, min_rest_s=1.0)
+n = 0
+last = None
+for ch in iter_stream(sys.argv[1], {chunk}):
+    f.feed(ch.time_s, ch.table_deg)
+    n += ch.time_s.size
+    last = int(ch.gyro_counts[-1])
+rests = f.finish()
+print(n, len(rests), last, time.perf_counter() - t0,
+      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+"""
+
+
+def timed_read(pythonpath: Path, path: Path, old: bool) -> tuple:
+    script = READ_SCRIPT.format(reduce_mod="reduce" if old else "reduce",
+                                streams_mod="streams" if old else "formats.streams",
+                                chunk=CHUNK if old else "None")
+    env = dict(os.environ, PYTHONPATH=str(pythonpath))
+    out = subprocess.run([sys.executable, "-c", script, str(path)], env=env, cwd="/tmp",
+                         capture_output=True, text=True)
+    if out.returncode:
+        raise SystemExit(out.stderr)
+    n, nr, last, secs, rss = out.stdout.split()
+    return int(n), int(nr), int(last), float(secs), float(rss)
+
+
+def start_worktree(tmp: Path) -> Path:
+    wt = tmp / "before"
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt), START_COMMIT],
+                   check=True, capture_output=True)
+    return wt
+
+
+def long_protocol(tmp: Path) -> Path:
+    """The draft's protocol with 95 series of 7.4/7.5 (≈ 10⁸ samples at 1 kHz)."""
+    text = (ROOT / "protocols" / "ogam-draft.toml").read_text(encoding="utf-8")
+    text = text.replace('name = "ogam-draft"', 'name = "ogam-draft-long"', 1)
+    text = text.replace("series = 10                             # 7.5: repeat 7.4 ten times",
+                        "series = 95")
+    p = tmp / "ogam-draft-long.toml"
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def calibrate_peak(tmp: Path, protocol: str, label: str) -> None:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = tmp / f"sim-{label}"
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "gonio", "simulate", "--protocol", protocol,
+                        "--out", str(out), "--stream"], env=env, cwd=tmp,
+                       capture_output=True, text=True)
+    if r.returncode:
+        raise SystemExit(r.stderr)
+    t_sim = time.perf_counter() - t0
+    stream = out / "stream.parquet"
+    import pyarrow.parquet as pq
+    rows = pq.ParquetFile(stream).metadata.num_rows
+    code = ("import resource, sys, time\n"
+            "from gonio.cli import main\n"
+            "t0 = time.perf_counter()\n"
+            "rc = main(['calibrate', sys.argv[1], '--protocol', sys.argv[2], '--out', sys.argv[3]])\n"
+            "print(rc, time.perf_counter() - t0, "
+            "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, file=sys.stderr)\n")
+    r = subprocess.run([sys.executable, "-c", code, str(stream), protocol, str(tmp / f"cal-{label}")],
+                       env=env, cwd=tmp, capture_output=True, text=True)
+    rc, secs, rss = r.stderr.strip().splitlines()[-1].split()
+    if rc != "0":
+        raise SystemExit(r.stderr + r.stdout)
+    print(f"gonio calibrate STREAM, {rows:.3g} rows ({stream.stat().st_size / 1e6:.0f} MB "
+          f"Parquet; simulated in {t_sim:.0f} s): {float(secs):.0f} s, peak RSS "
+          f"{float(rss):.0f} MB (target < 400 MB): {'OK' if float(rss) < 400 else 'OVER'}",
+          flush=True)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rows", type=float, default=1e8)
+    ap.add_argument("--skip-calibrate", action="store_true")
+    ap.add_argument("--skip-read", action="store_true")
+    ap.add_argument("--keep", action="store_true")
+    a = ap.parse_args()
+    rows = int(a.rows)
+    sys.path.insert(0, str(ROOT))
+    tmp = Path(tempfile.mkdtemp(prefix="gonio-bench-stream-", dir="/tmp"))
+    print(f"load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores", flush=True)
     try:
-        t0 = time.perf_counter()
-        write_bench_stream(path, rows)
-        t_write = time.perf_counter() - t0
-        size = path.stat().st_size
-        rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        t0 = time.perf_counter()
-        finder = RestFinder(rate_threshold_dps=0.01, window=1, despike=True, min_rest_s=1.0)
-        n = 0
-        last = None
-        for ch in iter_stream(path, CHUNK):
-            finder.feed(ch.time_s, ch.table_deg)
-            n += ch.time_s.size
-            last = int(ch.gyro_counts[-1])
-        rests = finder.finish()
-        t_read = time.perf_counter() - t0
-        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        expect_rests = -(-rows // (30 * RATE_HZ))
-        k = rows - 1
-        cyc, ph = k // (30 * RATE_HZ), k % (30 * RATE_HZ)
-        ang = cyc * 90_000_000 + min(max((ph - 10 * RATE_HZ) * 4500, 0), 90_000_000)
-        expect_last = (k * 7) // 3 + ang // 278
-        print(f"rows: {n:,} ({size / 1e9:.2f} GB CSV), chunk {CHUNK:,} rows")
-        print(f"write (fixed-width, numpy): {t_write:.1f} s")
-        print(f"read + unwrap + find rests: {t_read:.1f} s "
-              f"({n / t_read / 1e6:.2f} M rows/s)")
-        print(f"peak RSS: {rss:.0f} MB (before reading: {rss0:.0f} MB)")
-        print(f"rests found: {len(rests)} (expected {expect_rests}); "
-              f"last unwrapped count {last} (expected {expect_last}, first sample 0): "
-              f"{'OK' if last == expect_last else 'MISMATCH'}")
-        if rows < 100_000_000:
-            f = 100_000_000 / rows
-            print(f"extrapolated to 10^8 rows: read {t_read * f:.0f} s")
+        if not a.skip_read:
+            need = rows * 33 * 1.6
+            if shutil.disk_usage(tmp).free < need:
+                print(f"disk space short: {need / 1e9:.1f} GB needed")
+                return 1
+            csv = tmp / "stream.csv"
+            t0 = time.perf_counter()
+            expect_last = write_bench_stream(csv, rows)
+            print(f"{rows:,} rows, {csv.stat().st_size / 1e9:.2f} GB CSV written in "
+                  f"{time.perf_counter() - t0:.0f} s", flush=True)
+            wt = start_worktree(tmp)
+            res = {}
+            res["CSV via pandas (before, start commit)"] = timed_read(wt, csv, old=True)
+            res["CSV via pyarrow (this tree)"] = timed_read(ROOT, csv, old=False)
+            from gonio.formats.streams import StreamFile, StreamWriter
+            pqp = tmp / "stream.parquet"
+            t0 = time.perf_counter()
+            sf = StreamFile(csv)
+            with StreamWriter(pqp, sf.metadata, table=True) as w:
+                for ch in sf.chunks():
+                    w.write(ch.time_s, ch.gyro_counts, ch.table_deg)
+            print(f"converted to Parquet ({pqp.stat().st_size / 1e9:.2f} GB) in "
+                  f"{time.perf_counter() - t0:.0f} s", flush=True)
+            res["Parquet (this tree)"] = timed_read(ROOT, pqp, old=False)
+            base = None
+            for name, (n, nr, last, secs, rss) in res.items():
+                base = base or secs
+                ok = "OK" if last == expect_last and n == rows else "MISMATCH"
+                print(f"{name:<40} {secs:7.1f} s  {n / secs / 1e6:6.2f} M rows/s  "
+                      f"{base / secs:5.1f}x  peak RSS {rss:5.0f} MB  rests {nr}  last count "
+                      f"{ok}", flush=True)
+            t_old = res["CSV via pandas (before, start commit)"][3]
+            print(f"targets: CSV via pyarrow >= 3x before: "
+                  f"{'OK' if t_old / res['CSV via pyarrow (this tree)'][3] >= 3 else 'MISSED'}; "
+                  f"Parquet >= 10x before: "
+                  f"{'OK' if t_old / res['Parquet (this tree)'][3] >= 10 else 'MISSED'}",
+                  flush=True)
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(wt)],
+                           capture_output=True)
+            csv.unlink()
+            pqp.unlink()
+        if not a.skip_calibrate:
+            calibrate_peak(tmp, "ogam-draft", "2e7")
+            calibrate_peak(tmp, str(long_protocol(tmp)), "1e8")
     finally:
-        if not keep:
+        if not a.keep:
             shutil.rmtree(tmp, ignore_errors=True)
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "prune"], capture_output=True)
+    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import html
 import json
+import tomllib
 import re
 import shutil
 import subprocess
@@ -30,6 +31,27 @@ HINT = "run scripts/install-test-system-deps.sh (chromium, poppler-utils, fonts-
 ITEMS = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
          "repeatability", "rate_consistency", "pointing_consistency")
 
+SMALL_TOML = """[protocol]
+name = "small"
+[session]
+static_s = 30.0
+[scale_factor]
+rest_s = 15.0
+rounds = [{stop_deg = 120.0}, {stop_deg = 240.0}, {stop_deg = 360.0}]
+[zero_stability]
+readings = 4
+interval_s = 20.0
+[angle_deviation]
+series = 3
+rest_s = 15.0
+rounds = [{stop_deg = 90.0}, {stop_deg = 180.0}, {stop_deg = 270.0}, {stop_deg = 360.0}]
+[rate_consistency]
+rates_dps = [30.0, 60.0]
+rest_s = 15.0
+[pointing_consistency]
+orientations = ["up", "north"]
+rest_s = 15.0
+"""
 SMALL = {
     "protocol": {"name": "small"}, "session": {"static_s": 30.0},
     "scale_factor": {"rest_s": 15.0, "rounds": [{"stop_deg": 120.0}, {"stop_deg": 240.0},
@@ -128,7 +150,8 @@ def test_html_in_chromium_items_u_and_figures_visible(run, tmp_path):
     for item in ITEMS:
         assert L[item] in text, item
     U = display("U", run["results"]["uncertainty"]["U_arcsec"])
-    assert re.search(rf"U = {re.escape(U)} ?″, k = 2", text), "U with its k is not shown"
+    k = display("k", run["results"]["uncertainty"]["k"])
+    assert re.search(rf"U = {re.escape(U)} ?″, k = {re.escape(k)}", text), "U with its k is not shown"
     assert L["virtual"] in text
     shot = tmp_path / "certificate.png"
     chromium(run["paths"]["certificate.html"], tmp_path, f"--screenshot={shot}")
@@ -223,14 +246,16 @@ def test_cli_calibrate_writes_certificate_with_lab(run, tmp_path, capsys):
     from gonio.cli import main
 
     lab = protocols_dir() / "lab-example.toml"
+    (tmp_path / "small.toml").write_text(SMALL_TOML)
+    assert parse_protocol(SMALL) == parse_protocol(tomllib.loads(SMALL_TOML))
     assert main(["calibrate", str(run["dir"] / "readings.csv"), "--out", str(tmp_path / "o"),
-                 "--lab", str(lab)]) == 0
+                 "--protocol", str(tmp_path / "small.toml"), "--lab", str(lab)]) == 0
     assert (tmp_path / "o" / "certificate.html").is_file()
     assert (tmp_path / "o" / "certificate.pdf").is_file()
     bad = tmp_path / "bad.toml"
     bad.write_text("[laboratory]\nname = 1\n")
     assert main(["calibrate", str(run["dir"] / "readings.csv"), "--out", str(tmp_path / "p"),
-                 "--lab", str(bad)]) == 2
+                 "--protocol", str(tmp_path / "small.toml"), "--lab", str(bad)]) == 2
     assert "laboratory.name" in capsys.readouterr().err
     assert not (tmp_path / "p" / "results.json").exists()
 

@@ -66,7 +66,10 @@ def test_simulate_then_calibrate(small_run, capsys):
         assert isinstance(written[key]["value"], float)
     u = written["uncertainty"]
     assert {"components", "u_c_arcsec", "U_arcsec", "k"} <= set(u)
-    assert [c["symbol"] for c in u["components"]] == ["P", "phi_e", "B_E", "r"]
+    # the physical budget (default): the annex's four lines, then those beyond the draft
+    assert [c["symbol"] for c in u["components"]][:4] == ["P", "phi_e", "B_E", "r"]
+    assert u["budget_kind"] == "physical"
+    assert [c["beyond_draft"] for c in u["components"]] == [False] * 4 + [True] * 3
     assert u["U_arcsec"] == pytest.approx(u["k"] * u["u_c_arcsec"])
     # u(r) is this calibration's own repeatability (7.5).
     assert u["components"][3]["u_arcsec"] == pytest.approx(written["repeatability"]["value"])
@@ -78,7 +81,8 @@ def test_partial_file_reports_not_measured(small_run, tmp_path, capsys):
             or ln.startswith("angle_deviation,")]
     f = tmp_path / "partial.csv"
     f.write_text("".join(keep))
-    assert main(["calibrate", str(f), "--out", str(tmp_path / "o")]) == 0
+    assert main(["calibrate", str(f), "--protocol", str(small_run / "small.toml"),
+                 "--out", str(tmp_path / "o")]) == 0
     res = json.loads((tmp_path / "o" / "results.json").read_text())
     assert res["angle_deviation"]["measured"] and res["repeatability"]["measured"]
     for key in ("scale_factor", "zero_stability", "rate_consistency", "pointing_consistency"):
@@ -88,8 +92,9 @@ def test_partial_file_reports_not_measured(small_run, tmp_path, capsys):
 def test_input_file_unchanged_and_outputs_deterministic(small_run, tmp_path):
     f = small_run / "out" / "readings.csv"
     before = f.read_bytes()
-    main(["calibrate", str(f), "--out", str(tmp_path / "a")])
-    main(["calibrate", str(f), "--out", str(tmp_path / "b")])
+    p = str(small_run / "small.toml")
+    assert main(["calibrate", str(f), "--protocol", p, "--out", str(tmp_path / "a")]) == 0
+    assert main(["calibrate", str(f), "--protocol", p, "--out", str(tmp_path / "b")]) == 0
     assert f.read_bytes() == before
     assert (tmp_path / "a" / "results.json").read_bytes() == (tmp_path / "b" / "results.json").read_bytes()
 
@@ -123,7 +128,8 @@ def test_incomplete_equal_division_rows_do_not_stop_the_calibration(tmp_path):
     from pathlib import Path
 
     full = Path(__file__).parent / "data" / "full.csv"
-    assert main(["calibrate", str(full), "--out", str(tmp_path / "o")]) == 0
+    assert main(["calibrate", str(full), "--protocol", str(full.with_suffix(".toml")),
+                 "--out", str(tmp_path / "o")]) == 0
     res = json.loads((tmp_path / "o" / "results.json").read_text())
     assert "equal_division" not in res
     stray = [u for u in res["unused_readings"] if u["test"] == "equal_division"]

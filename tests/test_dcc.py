@@ -147,7 +147,7 @@ def test_every_number_equals_results_json(run):
     root = etree.fromstring(run["docs"]["lab"])
     mu = root.find(".//dcc:result[@id='result-angle_deviation']//si:expandedMU", NS)
     assert float(mu.find("si:valueExpandedMU", NS).text) == pytest.approx(U, abs=0.005 * 1.0001)
-    assert float(mu.find("si:coverageFactor", NS).text) == res["uncertainty"]["k"]
+    assert mu.find("si:coverageFactor", NS).text == display("k", res["uncertainty"]["k"])
     assert float(mu.find("si:coverageProbability", NS).text) == 0.95
 
 

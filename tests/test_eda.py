@@ -365,7 +365,8 @@ def test_cli_json_plot_and_errors(tmp_path, capsys):
     df = _readings_frame(sim.D_arcsec, sim.start_deg, sim.step_deg)
     f = _write_csv(tmp_path / "r.csv", df)
     fig = tmp_path / "out" / "eda.png"
-    assert main(["eda", str(f), "--noise", "white", "--json", "--plot", str(fig)]) == 0
+    assert main(["eda", str(f), "--noise", "white", "--json", "--plot", str(fig),
+                 "--no-coupling"]) == 0
     out = json.loads(capsys.readouterr().out)
     ref = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)
     np.testing.assert_allclose(out["table"]["error_arcsec"], ref.table_error_arcsec, atol=1e-5)

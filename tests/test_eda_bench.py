@@ -132,8 +132,12 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     assert res["unused_readings"] == []
     e = res["equal_division"]
     assert (e["n_starts"], e["m_points"], e["repeats"], e["noise"]) == (4, 8, 2, "random_walk")
-    D, x, step = eda_matrix_from_readings(report.readings.data)
-    direct = equal_division_analysis(D, x, step)
+    from gonio.analysis.equal_division import analyse_eda_readings
+
+    direct = analyse_eda_readings(report.readings.data, proto.extra["equal_division"],
+                                  compensation_time_s=proto.session.static_s,
+                                  latitude_deg=90.0, tilt_bound_deg=0.1)
+    assert e["coupling"]["note"] == direct.coupling.note
     assert np.allclose(e["table"]["error_arcsec"], direct.table_error_arcsec, atol=1e-6)
     page = write_certificate(report, tmp_path)["certificate.html"].read_text()
     assert html.escape(labels("en")["eda"]) in page

@@ -165,16 +165,16 @@ rounds = [{stop_deg = 30.0}, {stop_deg = 180.0}]
     r = run("simulate", "--protocol", str(proto), "--bench", str(bench), "--out", "out",
             "--stream")
     assert r.returncode == 0, r.stderr
-    s = read_stream(tmp_path / "out/stream.csv")
+    s = read_stream(tmp_path / "out/stream.parquet")          # Parquet by default
     assert s.metadata["counter_bits"] == "24"
     assert np.ptp(s.gyro_counts) > 2**24                    # really wrapped and unwrapped
-    digest = hashlib.sha256((tmp_path / "out/stream.csv").read_bytes()).hexdigest()
-    r = run("reduce", "out/stream.csv", "--protocol", str(proto), "--out", "red.csv", "--json")
+    digest = hashlib.sha256((tmp_path / "out/stream.parquet").read_bytes()).hexdigest()
+    r = run("reduce", "out/stream.parquet", "--protocol", str(proto), "--out", "red.csv", "--json")
     assert r.returncode == 0, r.stderr
-    assert hashlib.sha256((tmp_path / "out/stream.csv").read_bytes()).hexdigest() == digest
+    assert hashlib.sha256((tmp_path / "out/stream.parquet").read_bytes()).hexdigest() == digest
     body = lambda p: [ln for ln in p.read_text().splitlines() if not ln.startswith("#")]
     assert body(tmp_path / "red.csv") == body(tmp_path / "out/readings.csv")
-    r = run("calibrate", "out/stream.csv", "--protocol", str(proto), "--out", "cal", "--json")
+    r = run("calibrate", "out/stream.parquet", "--protocol", str(proto), "--out", "cal", "--json")
     assert r.returncode == 0, r.stderr
     r2 = run("calibrate", "out/readings.csv", "--protocol", str(proto), "--out", "cal2", "--json")
     import json

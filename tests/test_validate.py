@@ -73,8 +73,12 @@ def test_ideal_noise_free_bench_every_error_vanishes():
         assert s[truth]["mean_abs_error_E_ij_arcsec"] < 1e-6
         assert s[truth]["coverage_E_i"]["fraction"] == 1.0
         assert s[truth]["coverage_E_ij"]["fraction"] == 1.0
-    # U is then the annex's Type B part alone: 2·√(0.1²/3 + 0.0785²/3 + 0.15²/3) (A.4.1–A.4.3).
-    expected = 2 * math.sqrt((0.1 ** 2 + 0.078539 ** 2 + 0.15 ** 2) / 3)
+    # U is then the annex's Type B part alone: 2·√(0.1²/3 + 0.0785²/3 + b²/3) (A.4.1–A.4.3),
+    # b = 0.005 °/h × 60 ″/min × the longest time to reading actually used (issue 12, defect 4).
+    from gonio.bench import run_session
+    ses = run_session(tiny_protocol(), b, seed=0)
+    t_max = ses.readings.loc[ses.readings["test"] == "angle_deviation", "time_s"].max()
+    expected = 2 * math.sqrt((0.1 ** 2 + 0.078539 ** 2 + (0.005 * t_max) ** 2) / 3)
     assert r.cases[0].summary["mean_U_arcsec"] == pytest.approx(expected, rel=1e-3)
 
 

@@ -182,6 +182,7 @@ class EdaResult:
     harmonics: pd.DataFrame = field(repr=False)
     closure: ClosureCheck = field(repr=False)
     noise: str = "random_walk"
+    coupling: "CouplingFit | None" = None
 
     @property
     def n_starts(self) -> int:
@@ -226,9 +227,111 @@ class EdaResult:
                         "u_full_turn_arcsec": round(float(c.u_full_turn_arcsec), 6),
                         "z": round(float(c.z), 6), "consistent": bool(c.consistent),
                         "per_start_full_turn_arcsec": r(c.per_start_full_turn_arcsec)},
+            "coupling": None if self.coupling is None else self.coupling.to_dict(),
             "harmonics": [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
                           for row in self.harmonics.round(9).to_dict(orient="records")],
         }
+
+
+@dataclass(frozen=True)
+class CouplingFit:
+    """The tilt × Earth-rate coupling estimated as a nuisance parameter (issue 12).
+
+    Model: a sensing axis tilted by ψ on a table whose axis is not along the Earth's
+    axis picks up Ω_⊥ sin ψ cos(θ + α) as the table turns (gonio.coupling); after
+    the compensation measured at rest at the start x_k, the reading (k, j) taken t
+    after zeroing is off by a·P_kj + b·Q_kj with P = ∫(cos θ − cos x_k) dt,
+    Q = ∫(sin θ − sin x_k) dt over the time since zeroing, θ the absolute table angle
+    (:func:`coupling_design`): a first harmonic of the absolute position growing with
+    the time since zeroing. (a, b) = Ω_⊥ tan ψ (cos α, −sin α), in ″/s.
+
+    Attributes
+    ----------
+    separable : bool
+        Whether (a, b) could be estimated jointly with the table and goniometer
+        errors (the design is well conditioned). If not, the table and goniometer
+        errors are those of the plain fit and ``max_effect_arcsec`` is the size of
+        the coupling at the stated ``bound_amplitude_arcsec_s`` (when known), which
+        the result does *not* include.
+    a_arcsec_s, b_arcsec_s, u_a_arcsec_s, u_b_arcsec_s : float
+        Estimates and standard uncertainties (NaN when not separable).
+    amplitude_arcsec_s, u_amplitude_arcsec_s : float
+        hypot(a, b) = Ω_⊥ tan ψ and its uncertainty.
+    max_effect_arcsec : float
+        Largest |a P + b Q| over the readings (fitted), or at the bound.
+    note : str
+        What was done, in words.
+    """
+
+    separable: bool
+    a_arcsec_s: float
+    b_arcsec_s: float
+    u_a_arcsec_s: float
+    u_b_arcsec_s: float
+    amplitude_arcsec_s: float
+    u_amplitude_arcsec_s: float
+    max_effect_arcsec: float
+    note: str
+
+    def to_dict(self) -> dict:
+        def f(x):
+            x = float(x)
+            return round(x, 9) if math.isfinite(x) else None
+        return {"separable": bool(self.separable), "a_arcsec_s": f(self.a_arcsec_s),
+                "b_arcsec_s": f(self.b_arcsec_s), "u_a_arcsec_s": f(self.u_a_arcsec_s),
+                "u_b_arcsec_s": f(self.u_b_arcsec_s),
+                "amplitude_arcsec_s": f(self.amplitude_arcsec_s),
+                "u_amplitude_arcsec_s": f(self.u_amplitude_arcsec_s),
+                "max_effect_arcsec": f(self.max_effect_arcsec), "note": self.note}
+
+
+#: Condition number of the joint normal matrix above which the coupling is reported
+#: as not separable from the table and goniometer errors (–).
+COUPLING_COND_LIMIT = 1e8
+
+
+def coupling_design(time_s, start_deg, step_deg: float, read_delay_s: float,
+                    rate_dps: float) -> np.ndarray:
+    """The coupling's design columns P, Q (seconds) of every reading, shape (n, m, 2).
+
+    ``time_s``: time from zeroing to reading, shape (n, m) (or (R, n, m): the mean
+    over repeats is used). The table is taken at rest at x_k + (i−1)Δ until the middle
+    of move i, which ends ``read_delay_s`` before reading i and lasts Δ/rate, then at
+    x_k + iΔ (a move replaced by a jump at its middle: for a 30° step the error of
+    ∫cos θ dt is below 0.3 % of a step's rest). P_kj = Σ_i cos(p_i) τ_i − cos(x_k) t_j,
+    Q likewise with sin (compensation measured at rest at the start, as the procedure
+    of protocols/eda.toml and the virtual bench do; a constant residual rate is the
+    same for every start and is absorbed by the goniometer curve).
+
+    Examples
+    --------
+    One start at 0°, steps of 90° read at 10 s and 20 s, 2 s read delay, 90 °/s: the
+    table sits at 0° until 7.5 s, at 90° until 17.5 s, then at 180°:
+    P_1 = 7.5 + 0·2.5 − 10 = −2.5, Q_1 = 2.5; P_2 = 7.5 + 0 − 2.5 − 20 = −15, Q_2 = 10.
+
+    >>> coupling_design([[10.0, 20.0]], [0.0], 90.0, 2.0, 90.0)[0].round(9).tolist()
+    [[-2.5, 2.5], [-15.0, 10.0]]
+    """
+    t = np.asarray(time_s, dtype=float)
+    if t.ndim == 3:
+        t = t.mean(axis=0)
+    n, m = t.shape
+    x0 = np.radians(np.asarray(start_deg, dtype=float))
+    d = step_deg / rate_dps
+    tau = t - read_delay_s - d / 2.0                       # middle of move j, (n, m)
+    out = np.zeros((n, m, 2))
+    for k in range(n):
+        edges = np.concatenate([[0.0], tau[k]])            # position i from edges[i]
+        pos = x0[k] + np.radians(step_deg) * np.arange(m + 1)
+        for j in range(m):
+            tj = t[k, j]
+            lo = edges[: j + 2]
+            hi = np.minimum(np.concatenate([edges[1: j + 2], [tj]]), tj)
+            dur = np.clip(hi - lo, 0.0, None)
+            p = pos[: j + 2]
+            out[k, j, 0] = float(np.cos(p) @ dur) - math.cos(x0[k]) * tj
+            out[k, j, 1] = float(np.sin(p) @ dur) - math.sin(x0[k]) * tj
+    return out
 
 
 @dataclass(frozen=True)
@@ -451,7 +554,8 @@ def _check_step(step_deg: float) -> int:
 NOISE_MODELS = ("random_walk", "white")
 
 
-def noise_whitening(m: int, noise: str) -> np.ndarray:
+def noise_whitening(m: int, noise: str, time_s=None,
+                    compensation_time_s: float | None = None) -> np.ndarray:
     """The m×m matrix W that whitens one start's reading errors (generalised least squares).
 
     ``white``: readings independent, W = I (the classic IEC 62047-20 A.3 model).
@@ -461,11 +565,26 @@ def noise_whitening(m: int, noise: str) -> np.ndarray:
     increments between equally spaced steps are independent. Readings of one start
     are then correlated, and the white model understates the uncertainty.
 
+    With the readings' times t_j since zeroing (``time_s``, shape (m,)) the random
+    walk's covariance is min(t_i, t_j) (unequal steps); with ``compensation_time_s`` T
+    the Earth-rate/bias compensation measured at rest for T before the start adds its
+    own error, a rate common to the start's readings whose variance is the random
+    walk's over T divided by T²: covariance min(t_i, t_j) + t_i t_j / T. W = L⁻¹ with
+    V = L Lᵀ (Cholesky).
+
     >>> noise_whitening(3, "random_walk").tolist()
     [[1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]]
+    >>> np.round(noise_whitening(2, "random_walk", [1.0, 2.0]), 9).tolist()
+    [[1.0, 0.0], [-1.0, 1.0]]
     """
     if noise == "white":
         return np.eye(m)
+    if noise == "random_walk" and time_s is not None:
+        t = np.asarray(time_s, dtype=float)
+        V = np.minimum.outer(t, t)
+        if compensation_time_s:
+            V = V + np.outer(t, t) / float(compensation_time_s)
+        return np.linalg.inv(np.linalg.cholesky(V))
     if noise == "random_walk":
         return np.eye(m) - np.eye(m, k=-1)
     raise GonioError(f"unknown noise model {noise!r} (expected one of {', '.join(NOISE_MODELS)})",
@@ -474,7 +593,10 @@ def noise_whitening(m: int, noise: str) -> np.ndarray:
 
 def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int | None = None,
                             gauge: str = "closure", max_order: int | None = None,
-                            noise: str = "random_walk") -> EdaResult:
+                            noise: str = "random_walk", coupling=None,
+                            coupling_bound_arcsec_s: float | None = None,
+                            noise_time_s=None,
+                            compensation_time_s: float | None = None) -> EdaResult:
     """Separate the table's and the goniometer's errors by equal-division averaging.
 
     Least-squares fit of (IEC 62047-20 Annex A.3, generalised; GUM H.3)
@@ -509,6 +631,13 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         ``"zero"``: the table error at position 0° is zero.
     max_order : int, optional
         Highest harmonic order in ``result.harmonics`` (default ``2m``).
+    coupling : array_like, shape (n, m, 2), optional
+        The tilt × Earth-rate coupling's design columns (:func:`coupling_design`): its
+        two coefficients are then estimated jointly with the table and goniometer
+        errors (a nuisance; :class:`CouplingFit`), and the uncertainties include it.
+        When the design cannot separate them, the plain fit is returned and the
+        result says so (``result.coupling.separable`` False) with the coupling's size
+        at ``coupling_bound_arcsec_s`` (Ω_⊥ tan ψ at the tilt bound) when given.
 
     Returns
     -------
@@ -558,8 +687,13 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
     p = _grid_indices(start_deg, float(step_deg))
 
-    W = noise_whitening(m, noise)
-    A = sp.csr_matrix(sp.kron(sp.eye(n), sp.csr_matrix(W)) @ _design(p, m))
+    tw = None
+    if noise_time_s is not None:
+        tw = np.asarray(noise_time_s, dtype=float)
+        tw = tw.reshape(-1, m).mean(axis=0)            # the schedule: mean over starts
+    W = noise_whitening(m, noise, tw, compensation_time_s)
+    Wn = sp.kron(sp.eye(n), sp.csr_matrix(W))
+    A = sp.csr_matrix(Wn @ _design(p, m))
     D_raw = D
     D = D @ W.T          # whiten each start's row of readings (GLS)
     N1 = (A.T @ A).toarray()
@@ -571,6 +705,37 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     Z[:m, :m] = np.eye(m)
     Z[m:, m:] = Bc
     y_sum = D.sum(axis=0).ravel()
+    cfit = None
+    if coupling is not None:
+        C = np.asarray(coupling, dtype=float)
+        if C.shape != (n, m, 2) or not np.all(np.isfinite(C)):
+            raise GonioError(f"coupling design must be finite with shape {(n, m, 2)}, got "
+                             f"{C.shape}", key="coupling")
+        cols = C.reshape(n * m, 2)
+        q = cols.shape[1]
+        Cw = np.asarray(Wn @ cols)
+        A_ext = sp.hstack([A, sp.csr_matrix(Cw)]).tocsr()
+        N_ext = (A_ext.T @ A_ext).toarray()
+        Z_ext = np.zeros((2 * m + q, Z.shape[1] + q))
+        Z_ext[:2 * m, :Z.shape[1]] = Z
+        Z_ext[2 * m:, Z.shape[1]:] = np.eye(q)
+        M_ext = Z_ext.T @ (R * N_ext) @ Z_ext
+        scale = np.sqrt(np.clip(np.diag(M_ext), 1e-300, None))
+        cond = np.linalg.cond(M_ext / np.outer(scale, scale))
+        if cond < COUPLING_COND_LIMIT:
+            A, Z, N1 = A_ext, Z_ext, N_ext / 1.0
+            cfit = "fit"
+        else:
+            size = math.nan
+            if coupling_bound_arcsec_s is not None:
+                size = float(coupling_bound_arcsec_s) * float(np.max(np.hypot(C[..., 0],
+                                                                               C[..., 1])))
+            cfit = CouplingFit(False, math.nan, math.nan, math.nan, math.nan, math.nan,
+                               math.nan, size,
+                               "the coupling cannot be separated from the table and "
+                               f"goniometer errors (condition number {cond:.2g}); it is not "
+                               "in the result" + (f": up to {size:.3g}″ at the tilt bound"
+                                                  if math.isfinite(size) else ""))
     b = A.T @ y_sum
     M = Z.T @ (R * N1) @ Z
     Minv = np.linalg.inv(M)
@@ -585,8 +750,20 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     s2 = float(np.sum(resid ** 2)) / dof
     cov = s2 * (Z @ Minv @ Z.T)
 
-    g, t = theta[:m], theta[m:]
-    cov_g, cov_t = cov[:m, :m], cov[m:, m:]
+    g, t = theta[:m], theta[m:2 * m]
+    cov_g, cov_t = cov[:m, :m], cov[m:2 * m, m:2 * m]
+    if cfit == "fit":
+        ab, cab = theta[2 * m:2 * m + 2], cov[2 * m:2 * m + 2, 2 * m:2 * m + 2]
+        amp = float(np.hypot(*ab))
+        grad = ab / amp if amp > 0 else np.array([1.0, 0.0])
+        eff = np.asarray(coupling, dtype=float) @ ab
+        cfit = CouplingFit(True, float(ab[0]), float(ab[1]), math.sqrt(max(cab[0, 0], 0.0)),
+                           math.sqrt(max(cab[1, 1], 0.0)), amp,
+                           math.sqrt(max(float(grad @ cab @ grad), 0.0)),
+                           float(np.max(np.abs(eff))),
+                           "tilt × Earth-rate coupling estimated jointly with the table and "
+                           "goniometer errors (nuisance, first harmonic of the absolute "
+                           "position growing with the time since zeroing) and removed")
     if gauge == "zero":
         G = np.eye(m)
         G[:, 0] -= 1.0
@@ -611,7 +788,8 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         gonio_cov_arcsec2=cov_g,
         residual_std_arcsec=math.sqrt(s2), dof=int(dof), residuals_arcsec=resid,
         start_deg=start_deg, step_deg=step, repeats=R, gauge=gauge,
-        unobservable_dim=int(d - 1), harmonics=harm, closure=closure, noise=noise)
+        unobservable_dim=int(d - 1), harmonics=harm, closure=closure, noise=noise,
+        coupling=cfit)
 
 
 # --------------------------------------------------------------------------- comparison
@@ -799,7 +977,7 @@ def _where(df: pd.DataFrame, label) -> dict:
 
 
 def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
-                             file=None) -> tuple[np.ndarray, np.ndarray, float]:
+                             file=None, return_times: bool = False):
     """Build the deviation matrix D from a readings file's ``equal_division`` rows.
 
     Readings-file rows (``docs/formats.md#rows-of-each-test``): rows with
@@ -831,6 +1009,9 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
     D_arcsec : numpy.ndarray, shape (R, n, m)
     start_deg : numpy.ndarray, shape (n,)
     step_deg : float
+    time_s : numpy.ndarray, shape (R, n, m)
+        Only with ``return_times``: each reading's ``time_s`` (time from zeroing to
+        reading; None when the file has no such column), for :func:`coupling_design`.
 
     Raises
     ------
@@ -957,7 +1138,71 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              "A.3 needs n to divide m, or a start_deg column)", file=file,
                              column="round")
         start = np.arange(n) * 360.0 / n
-    return D, start, step
+    if not return_times:
+        return D, start, step
+    T = None
+    if "time_s" in rows.columns:
+        tv = pd.to_numeric(rows["time_s"], errors="coerce").to_numpy(dtype=float)[keep]
+        if np.all(np.isfinite(tv)):
+            T = np.empty((R, n, m))
+            T[series - 1, rnd - 1, j - 1] = tv
+    return D, start, step, T
+
+
+def coupling_bound_arcsec_s(latitude_deg: float | None, tilt_bound_deg: float | None,
+                            orientation: str = "up") -> float | None:
+    """Ω_⊥ tan ψ at the tilt bound, ″/s (the coupling's size when it cannot be fitted).
+
+    >>> round(coupling_bound_arcsec_s(40.0, 0.1), 5)        # 11.5221″/s × tan 0.1°
+    0.02011
+    """
+    if latitude_deg is None or tilt_bound_deg is None:
+        return None
+    from gonio.physics.earth import earth_rate_split
+
+    perp_dps = earth_rate_split(float(latitude_deg), orientation).perpendicular_dps
+    return perp_dps * ARCSEC_PER_DEG * math.tan(math.radians(float(tilt_bound_deg)))
+
+
+def analyse_eda_readings(df: pd.DataFrame, protocol: "EdaProtocol | None" = None, *,
+                         starts: int | None = None, file=None, gauge: str = "closure",
+                         noise: str = "random_walk", coupling: bool = True,
+                         latitude_deg: float | None = None,
+                         tilt_bound_deg: float | None = None,
+                         compensation_time_s: float | None = None) -> EdaResult:
+    """A readings file's ``equal_division`` rows analysed, the coupling as a nuisance.
+
+    With ``coupling`` (default) and the rows' ``time_s``, the tilt × Earth-rate coupling
+    is estimated jointly (:func:`coupling_design` with the protocol's ``rate_dps`` and
+    ``read_delay_s``; the built-in ``eda`` protocol when none is given). Without times
+    it cannot be: the result then carries a :class:`CouplingFit` with
+    ``separable=False`` and its size at the tilt bound (latitude and tilt bound known).
+    ``compensation_time_s``: the static phase of a measured Earth-rate compensation
+    before each start (the protocol's ``session.static_s``); its error, a rate common
+    to the start's readings, enters the noise model (:func:`noise_whitening`).
+    """
+    D, start, step, T = eda_matrix_from_readings(df, starts=starts, file=file,
+                                                 return_times=True)
+    bound = coupling_bound_arcsec_s(latitude_deg, tilt_bound_deg,
+                                    protocol.orientation if protocol else "up")
+    if not coupling:
+        return equal_division_analysis(D, start, step, gauge=gauge, noise=noise)
+    if T is None:
+        res = equal_division_analysis(D, start, step, gauge=gauge, noise=noise)
+        size = math.nan
+        if bound is not None:
+            # without times, bound the effect by the longest plausible time: m rests
+            size = bound * 2.0 * res.m_points * (protocol.rest_s if protocol else 10.0)
+        note = ("the coupling cannot be estimated: the equal_division rows have no time_s; "
+                "it is not in the result" + (f" (up to about {size:.3g}″ at the tilt bound)"
+                                             if math.isfinite(size) else ""))
+        from dataclasses import replace as _replace
+        return _replace(res, coupling=CouplingFit(False, *([math.nan] * 6), size, note))
+    p = protocol or load_eda_protocol()
+    C = coupling_design(T, start, step, p.read_delay_s, p.rate_dps)
+    return equal_division_analysis(D, start, step, gauge=gauge, noise=noise, coupling=C,
+                                   coupling_bound_arcsec_s=bound, noise_time_s=T,
+                                   compensation_time_s=compensation_time_s)
 
 
 # --------------------------------------------------------------------------- protocol
@@ -990,18 +1235,28 @@ def load_eda_protocol(path="eda") -> EdaProtocol:
 
 
 def equal_division_from_readings(readings: Readings, *, starts: int | None = None,
-                                 gauge: str = "closure", noise: str = "random_walk") -> EdaResult:
+                                 gauge: str = "closure", noise: str = "random_walk",
+                                 protocol: "EdaProtocol | None" = None, coupling: bool = True,
+                                 compensation_time_s: float | None = None) -> EdaResult:
     """Equal-division analysis of a readings file's ``equal_division`` rows.
 
     The one path from a readings file to an :class:`EdaResult`, used by
     ``gonio eda`` and by the calibration pipeline: the file is read by
     :func:`gonio.formats.readings.read_readings` (its checks apply), the rows
-    indexed by their line numbers so that errors name the line.
+    indexed by their line numbers so that errors name the line. The tilt × Earth-rate
+    coupling is estimated as a nuisance (:func:`analyse_eda_readings`; the file's
+    ``latitude_deg`` and ``tilt_bound_deg`` size it when it cannot be).
     """
     df = readings.data
     rows = df[df["test"] == "equal_division"]
     if not len(rows):
         raise GonioError("no equal_division rows", file=readings.path, column="test")
-    D, start, step = eda_matrix_from_readings(rows.set_index("line", drop=False) if "line" in rows
-                                              else rows, starts=starts, file=readings.path)
-    return equal_division_analysis(D, start, step, gauge=gauge, noise=noise)
+    from gonio.formats.metadata import metadata_float
+
+    md, file = readings.metadata, readings.path
+    return analyse_eda_readings(
+        rows.set_index("line", drop=False) if "line" in rows else rows, protocol,
+        starts=starts, file=file, gauge=gauge, noise=noise, coupling=coupling,
+        latitude_deg=metadata_float(md, "latitude_deg", file=file),
+        tilt_bound_deg=metadata_float(md, "tilt_bound_deg", file=file),
+        compensation_time_s=compensation_time_s)

@@ -116,6 +116,27 @@ def geometry(bench: Bench, orientation: str) -> Geometry:
                     math.radians(tab.wobble_phase_deg))
 
 
+def deterministic_signature(inst: InstrumentConfig) -> tuple:
+    """The parameters the deterministic rate terms depend on (not the random ones)."""
+    return (inst.integration, inst.bias_dph, inst.warmup_drift_dph, inst.warmup_tau_s,
+            inst.sf_rate_quadratic_ppm, inst.sf_lowrate_ppm, inst.sf_lowrate_scale_dps)
+
+
+@dataclass
+class DeterministicRates:
+    """Deterministic rate terms on a chunk of samples (:meth:`Integrator.rates`), °/s.
+
+    ``values``: RLG, Earth rate + nonlinearity + bias (the trapezoid's integrand);
+    FOG, the sensed rate with its nonlinearity plus bias (the rectangle rule's).
+    """
+
+    integration: str
+    values: np.ndarray
+    signature: tuple
+    cos_psi: float
+    trapezoid: tuple | None = None    # (previous sample's value, dt), trapezoid increments
+
+
 class Integrator:
     """Stateful integration of the instrument's angle over consecutive chunks of samples.
 
@@ -138,66 +159,112 @@ class Integrator:
         if rng is not None and inst.bias_instability_dph:
             self.gm = rng.standard_normal() * dph_to_dps(inst.bias_instability_dph)
 
-    def _noise_rate(self, n: int) -> np.ndarray:
-        """Random rate terms on the grid, °/s (ARW as white rate; GM; RRW)."""
+    def _noise_rate(self, n: int) -> np.ndarray | None:
+        """Random rate terms on the grid, °/s (ARW as white rate; GM; RRW); None if none.
+
+        The terms are summed in the order ARW, GM, RRW (onto zero), so the values
+        do not depend on which terms are on.
+        """
         inst, dt, rng = self.inst, self.dt, self.rng
-        out = np.zeros(n)
-        if rng is None:
-            return out
+        if rng is None or not (inst.arw_dpsh or inst.bias_instability_dph or inst.rrw_dphsh):
+            return None
+        out = None
         if inst.arw_dpsh:
             # ARW N (°/√h) → white rate with σ = N/60 (°/√s) /√dt per sample.
-            out += rng.standard_normal(n) * deg_sqrt_s_from_deg_sqrt_h(inst.arw_dpsh) / math.sqrt(dt)
+            out = rng.standard_normal(n)
+            out *= deg_sqrt_s_from_deg_sqrt_h(inst.arw_dpsh)
+            out /= math.sqrt(dt)
         if inst.bias_instability_dph:
             from scipy.signal import lfilter
             phi = math.exp(-dt / inst.bias_instability_tau_s)
             s = dph_to_dps(inst.bias_instability_dph) * math.sqrt(1.0 - phi * phi)
-            w = rng.standard_normal(n) * s
+            w = rng.standard_normal(n)
+            w *= s
             gm, _ = lfilter([1.0], [1.0, -phi], w, zi=[phi * self.gm])
             self.gm = float(gm[-1])
-            out += gm
+            if out is None:
+                out = gm + 0.0
+            else:
+                out += gm
         if inst.rrw_dphsh:
             # K (°/h/√h) → rate increments σ = K/3600/60 (°/s/√s)·√dt.
-            steps = rng.standard_normal(n) * (dph_to_dps(inst.rrw_dphsh) / math.sqrt(S_PER_H)) * math.sqrt(dt)
-            r = self.rrw + np.cumsum(steps)
+            steps = rng.standard_normal(n)
+            steps *= dph_to_dps(inst.rrw_dphsh) / math.sqrt(S_PER_H)
+            steps *= math.sqrt(dt)
+            r = np.cumsum(steps)
+            r += self.rrw
             self.rrw = float(r[-1])
-            out += r
+            if out is None:
+                out = r + 0.0
+            else:
+                out += r
         return out
 
     def advance(self, t: np.ndarray, theta_deg: np.ndarray, rate_dps: np.ndarray,
                 geom: Geometry) -> np.ndarray:
         """Instrument angle (deg, unquantised, uncompensated) at each time in ``t``."""
+        rep = np.ones(t.size, dtype=np.int64)
+        return self.integrate(self.rates(t, theta_deg, rate_dps, rep, geom), theta_deg)
+
+    def rates(self, t: np.ndarray, theta_u: np.ndarray, rate_u: np.ndarray, rep: np.ndarray,
+              geom: Geometry) -> "DeterministicRates":
+        """The deterministic rate terms on the grid ``t``, °/s.
+
+        ``theta_u``, ``rate_u`` are the table angle and rate on runs of samples:
+        value j holds for ``rep[j]`` consecutive samples (a rest is one run, a move
+        one run per sample), so the Earth-rate and nonlinearity terms, constant
+        over a rest, are evaluated once per run and repeated. The values are those
+        of a per-sample evaluation, bit for bit. Instruments that differ only in
+        their random terms share the result (:meth:`integrate` adds the noise).
+        """
         inst = self.inst
-        earth = geom.earth_dps(theta_deg)
-        sensed = rate_dps * geom.cos_psi + earth
+        earth = geom.earth_dps(theta_u)
+        sensed = rate_u * geom.cos_psi + earth
         eps = rate_nonlinearity(sensed, inst)
         t_on = t + self.warm_up_s
         bias = dph_to_dps(inst.bias_dph + inst.warmup_drift_dph * np.exp(-t_on / inst.warmup_tau_s))
-        noise = self._noise_rate(t.size)
         if inst.integration == "rectangle":
+            det = np.repeat(sensed * (1.0 + eps), rep) + bias
+        else:
+            det = np.repeat(earth + sensed * eps, rep) + bias
+        return DeterministicRates(inst.integration, det, deterministic_signature(inst), geom.cos_psi)
+
+    def integrate(self, det: "DeterministicRates", theta_deg: np.ndarray) -> np.ndarray:
+        """Instrument angle from :meth:`rates` (same instrument but for its random terms)
+        and the table angle on every sample; adds this instrument's noise."""
+        if det.signature != deterministic_signature(self.inst):
+            raise ValueError("rates() of another instrument")
+        n = theta_deg.size
+        noise = self._noise_rate(n)
+        if det.integration == "rectangle":
             # FOG: rate samples at the grid times, left rectangle rule:
             # φ(t_k) = φ(t_{k−1}) + r(t_{k−1})·dt.
-            r = sensed * (1.0 + eps) + bias + noise
+            r = det.values if noise is None else det.values + noise
             first = self.angle + (0.0 if self.prev is None else self.prev[2] * self.dt)
             ang = first + np.concatenate(([0.0], np.cumsum(r[:-1] * self.dt)))
             self.angle = float(ang[-1])
-            self.prev = (float(t[-1]), float(theta_deg[-1]), float(r[-1]))
+            self.prev = (0.0, float(theta_deg[-1]), float(r[-1]))
             self.new_block = False
             return ang
         # RLG: exact θ cos ψ, trapezoid for the smooth rest; white noise enters as
         # angle increments (the exact integral of white rate over a sample).
-        smooth = earth + sensed * eps + bias
+        smooth = det.values
         if self.prev is None:
             sm_prev, th_prev = smooth[0], theta_deg[0]
         else:
             sm_prev = self.prev[2]
             th_prev = theta_deg[0] if self.new_block else self.prev[1]
-        sm_all = np.concatenate(([sm_prev], smooth))
-        inc = 0.5 * (sm_all[1:] + sm_all[:-1]) * self.dt + noise * self.dt
+        key = (float(sm_prev), self.dt)
+        if det.trapezoid is None or det.trapezoid[0] != key:
+            sm_all = np.concatenate(([sm_prev], smooth))
+            trap = 0.5 * (sm_all[1:] + sm_all[:-1]) * self.dt
+            det.trapezoid = (key, trap)      # shared with instruments that differ in noise only
+        inc = det.trapezoid[1].copy() if noise is None else det.trapezoid[1] + noise * self.dt
         if self.prev is None:
             inc[0] = 0.0
-        ang = self.angle + geom.cos_psi * (theta_deg - th_prev) + np.cumsum(inc)
+        ang = self.angle + det.cos_psi * (theta_deg - th_prev) + np.cumsum(inc)
         self.angle = float(ang[-1])
-        self.prev = (float(t[-1]), float(theta_deg[-1]), float(smooth[-1]))
+        self.prev = (0.0, float(theta_deg[-1]), float(smooth[-1]))
         self.new_block = False
         return ang
 

@@ -29,8 +29,8 @@ import pandas as pd
 from gonio import __version__
 from gonio.atomic import output_dir, write_text
 from gonio.bench.config import Bench
-from gonio.bench.instrument import (Integrator, counts_from_angle, geometry, harmonic_sum_arcsec,
-                                    rate_nonlinearity)
+from gonio.bench.instrument import (Integrator, counts_from_angle, deterministic_signature,
+                                    geometry, harmonic_sum_arcsec, rate_nonlinearity)
 from gonio.formats.records import StaticRecord
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.bench.config import check_counter
@@ -74,6 +74,7 @@ class Block:
     k_static: tuple[int, int] | None
     readings: list[PlannedReading] = field(default_factory=list)
     compensate: bool = True    # False: readings are raw counts (the tilt estimate's rests)
+    moves: list = field(default_factory=list)   # (t_start, t_end) of every move, s
 
 
 def _grid(t: float, dt: float) -> int:
@@ -87,14 +88,27 @@ class _Planner:
         self.dt = 1.0 / bench.sample_rate_hz
         self.k = 0
         self.blocks: list[Block] = []
+        self._periodic: dict[float, float] = {}
 
     def true_position(self, x_deg: float) -> float:
         """True angle of the table when it indicates ``x_deg`` (indicated − true = error)."""
         tab = self.b.table
-        err = float(harmonic_sum_arcsec(np.array([x_deg]), tab.positioning_harmonics)[0])
+        err = self._periodic.get(x_deg)
+        if err is None:     # the periodic error of each stop is computed once per session
+            err = self._periodic[x_deg] = float(
+                harmonic_sum_arcsec(np.array([x_deg]), tab.positioning_harmonics)[0])
         if tab.positioning_random_arcsec and self.rng is not None:
             err += tab.positioning_random_arcsec * float(self.rng.standard_normal())
         return x_deg - arcsec_to_deg(err)
+
+    @staticmethod
+    def _move(blk: Block, tl: Timeline, to_deg: float, rate_dps: float, accel_dps2: float) -> float:
+        """``tl.move``, recording the move's time span in the block (for :func:`_motion`)."""
+        t_a = tl.end_s
+        arrive = tl.move(to_deg, rate_dps, accel_dps2)
+        if arrive > t_a:
+            blk.moves.append((t_a, arrive))
+        return arrive
 
     def _dwell_to_grid(self, tl: Timeline) -> int:
         k = _grid(tl.end_s, self.dt)
@@ -138,7 +152,7 @@ class _Planner:
         for i in range(plan.positions):
             x = 360.0 * i / plan.positions
             if i:
-                tl.move(self.true_position(x), rate, tab.accel_dps2)
+                self._move(blk, tl, self.true_position(x), rate, tab.accel_dps2)
             tl.dwell(plan.settle_s)
             k0 = self._dwell_to_grid(tl)
             tl.dwell(plan.dwell_s)
@@ -157,13 +171,13 @@ class _Planner:
         pos, k_zero, zero_x = first, None, first
         for i, r in enumerate(item.rounds, 1):
             if r.start_deg != pos:
-                tl.move(self.true_position(r.start_deg), back, tab.accel_dps2)
+                self._move(blk, tl, self.true_position(r.start_deg), back, tab.accel_dps2)
                 tl.dwell(s.settle_s)
                 pos = r.start_deg
             if k_zero is None or item.rezero:
                 k_zero, zero_x = self._dwell_to_grid(tl), pos
             depart = tl.end_s
-            arrive = tl.move(self.true_position(r.stop_deg), rate, tab.accel_dps2)
+            arrive = self._move(blk, tl, self.true_position(r.stop_deg), rate, tab.accel_dps2)
             pos = r.stop_deg
             if r.max_rotation_s is not None and arrive - depart > r.max_rotation_s + 1e-9:
                 raise GonioError(
@@ -180,7 +194,7 @@ class _Planner:
                                                item.orientation, k_read, k_zero,
                                                r.stop_deg - zero_x))
             if item.return_to_zero:
-                tl.move(self.true_position(r.start_deg), back, tab.accel_dps2)
+                self._move(blk, tl, self.true_position(r.start_deg), back, tab.accel_dps2)
                 tl.dwell(s.settle_s)
                 pos = r.start_deg
         self._close(blk, tl)
@@ -197,7 +211,8 @@ class _Planner:
             blk, tl = self._new_block(f"equal_division start {x0:g} series {series}", p.orientation, x0)
             k_zero = self._dwell_to_grid(tl)
             for j in range(1, p.points + 1):
-                arrive = tl.move(self.true_position(x0 + j * p.step_deg), rate, tab.accel_dps2)
+                arrive = self._move(blk, tl, self.true_position(x0 + j * p.step_deg), rate,
+                                    tab.accel_dps2)
                 k_read = _grid(arrive + p.read_delay_s, self.dt)
                 tl.dwell(max(p.rest_s, k_read * self.dt - arrive + self.dt))
                 blk.readings.append(PlannedReading("equal_division", series, k + 1, p.rate_dps,
@@ -231,93 +246,176 @@ class _Run:
     records: dict = field(default_factory=dict)   # label -> (time_s, counts) of captured blocks
 
 
+def _motion(blk: Block, t: np.ndarray):
+    """Table angle and rate at the grid times ``t`` of ``blk``, on runs of samples.
+
+    Returns ``(theta_u, rate_u, rep)``: value j holds for ``rep[j]`` consecutive
+    samples. A sample inside a move (the planner's recorded spans, ends
+    included) is its own run; the samples between two moves are one run, since
+    the table rests there at one angle (every rest segment starts at the angle
+    the previous segment ended at, and its angle is that start plus 0·sign).
+    The closed-form timeline is evaluated at one time per run, so the values are
+    those of a per-sample evaluation, bit for bit, at a fraction of the cost.
+    """
+    n = t.size
+    moving = np.zeros(n, dtype=bool)
+    if blk.moves:
+        span = np.asarray(blk.moves, dtype=np.float64)
+        i0 = np.searchsorted(t, span[:, 0], side="left")
+        i1 = np.searchsorted(t, span[:, 1], side="right")
+        for a, b in zip(i0.tolist(), i1.tolist()):
+            if b > a:
+                moving[a:b] = True
+    start = np.ones(n, dtype=bool)
+    start[1:] = moving[1:] | moving[:-1]
+    idx = np.flatnonzero(start)
+    rep = np.diff(np.append(idx, n))
+    te = t[idx]
+    return blk.timeline.angle_deg(te), blk.timeline.rate_dps(te), rep
+
+
+@dataclass
+class _Variant:
+    """One instrument run through the session (the noisy one, the noise-free rerun)."""
+
+    bench: Bench
+    rng: np.random.Generator | None
+    stream: object = None
+    capture: frozenset = frozenset()
+    dither_key: int = 0
+
+
+def _counter(k, phi, inst, zeros, phi_at, comp, dt, dither_key):
+    """Pulse counter at grid indices k: angle plus the angle-position error
+    g(φ) − g(0) of the compensated angle φ since the last zeroing (draft 4.2;
+    nil at the zeroing itself), times K, floored."""
+    g = np.zeros(k.size)
+    g0 = float(harmonic_sum_arcsec(np.zeros(1), inst.position_harmonics)[0])
+    if inst.position_harmonics and zeros.size:
+        iz = np.searchsorted(zeros, k, side="right") - 1
+        ok = iz >= 0
+        if ok.any():
+            kz = zeros[iz[ok]]
+            phz = np.array([phi_at.get(z, np.nan) for z in zeros.tolist()])[iz[ok]]
+            since = (phi[ok] - phz
+                     - comp / inst.nominal_scale_factor_counts_per_deg * (k[ok] - kz) * dt)
+            g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics) - g0
+    return counts_from_angle(phi + arcsec_to_deg(g), inst, k, dither_key)
+
+
 def _simulate(blocks: list[Block], bench: Bench, protocol: Protocol,
               rng: np.random.Generator | None, stream=None,
               capture: frozenset = frozenset(), dither_key: int = 0) -> _Run:
-    inst = bench.instrument
-    dt = 1.0 / bench.sample_rate_hz
-    integ = Integrator(inst, bench.sample_rate_hz, protocol.session.warm_up_s, rng)
+    return _simulate_many(blocks, protocol, [_Variant(bench, rng, stream, capture,
+                                                      dither_key)])[0]
+
+
+def _simulate_many(blocks: list[Block], protocol: Protocol, variants: list[_Variant]) -> list[_Run]:
+    """Run the instruments of ``variants`` through the session in one pass.
+
+    The variants share the bench set-up (table, site, geometry) and differ at most
+    in the instrument's random terms (``Bench.random_off``): the table motion and
+    the deterministic rate terms are computed once per chunk and shared; each
+    variant integrates them with its own noise, counter and compensation.
+    """
+    bench0 = variants[0].bench
+    dt = 1.0 / bench0.sample_rate_hz
+    integs = [Integrator(v.bench.instrument, v.bench.sample_rate_hz, protocol.session.warm_up_s,
+                         v.rng) for v in variants]
     readings = [r for b in blocks for r in b.readings]
-    out_counts = np.empty(len(readings))
+    nv = len(variants)
+    out_counts = [np.empty(len(readings)) for _ in range(nv)]
     out_true = np.empty(len(readings))
-    comps = []
-    captured: dict = {}
+    comps: list[list] = [[] for _ in range(nv)]
+    captured: list[dict] = [{} for _ in range(nv)]
+    measured = protocol.session.earth_compensation == "measured"
     j = 0
+    geoms: dict = {}
     for blk in blocks:
-        geom = geometry(bench, blk.orientation)
-        integ.start_block()
+        if blk.orientation not in geoms:
+            geoms[blk.orientation] = geometry(bench0, blk.orientation)
+            for v in variants[1:]:
+                if geometry(v.bench, blk.orientation) != geoms[blk.orientation]:
+                    raise ValueError("variants of a session must share the set-up")
+        geom = geoms[blk.orientation]
+        for integ in integs:
+            integ.start_block()
         need = set()
         if blk.k_static:
             need.update(blk.k_static)
         for r in blk.readings:
             need.update((r.k_read, r.k_zero))
         zeros = np.array(sorted({r.k_zero for r in blk.readings}), dtype=np.int64)
-        phi_at, theta_at = {}, {}
-        comp = 0.0
+        theta_at: dict = {}
+        phi_at: list[dict] = [{} for _ in range(nv)]
+        comp = [0.0] * nv
         if protocol.session.earth_compensation == "computed" and blk.compensate:
             # The operator's computed compensation, possibly with a wrong latitude or
             # azimuth (protocol session.compensation_*; :mod:`gonio.physics.compensation`).
             ss = protocol.session
-            lat = (bench.latitude_deg if ss.compensation_latitude_deg is None
+            lat = (bench0.latitude_deg if ss.compensation_latitude_deg is None
                    else ss.compensation_latitude_deg)
             az, el = NAMED_AXES[blk.orientation]
             w = np.degrees(earth_rate_enu(lat)) @ axis_enu(
                 (az + ss.compensation_azimuth_error_deg, el))
-            comp = inst.nominal_scale_factor_counts_per_deg * float(w)
+            comp = [v.bench.instrument.nominal_scale_factor_counts_per_deg * float(w)
+                    for v in variants]
         need_arr = np.array(sorted(need), dtype=np.int64)
-        measured = protocol.session.earth_compensation == "measured"
-
-        def counter(k, phi):
-            """Pulse counter at grid indices k: angle plus the angle-position error
-            g(φ) − g(0) of the compensated angle φ since the last zeroing (draft 4.2;
-            nil at the zeroing itself), times K, floored."""
-            g = np.zeros(k.size)
-            g0 = float(harmonic_sum_arcsec(np.zeros(1), inst.position_harmonics)[0])
-            if inst.position_harmonics and zeros.size:
-                iz = np.searchsorted(zeros, k, side="right") - 1
-                ok = iz >= 0
-                if ok.any():
-                    kz = zeros[iz[ok]]
-                    phz = np.array([phi_at.get(z, np.nan) for z in zeros.tolist()])[iz[ok]]
-                    since = (phi[ok] - phz
-                             - comp / inst.nominal_scale_factor_counts_per_deg * (k[ok] - kz) * dt)
-                    g[ok] = harmonic_sum_arcsec(since, inst.position_harmonics) - g0
-            return counts_from_angle(phi + arcsec_to_deg(g), inst, k, dither_key)
-
         for a in range(blk.k_start, blk.k_end, CHUNK):
             b = min(a + CHUNK, blk.k_end)
             k = np.arange(a, b)
             t = k * dt
-            theta = blk.timeline.angle_deg(t)
-            phi = integ.advance(t, theta, blk.timeline.rate_dps(t), geom)
+            theta_u, rate_u, rep = _motion(blk, t)
+            theta = np.repeat(theta_u, rep)
+            dets: dict = {}
             sel = need_arr[(need_arr >= a) & (need_arr < b)]
-            for kk, ph, th in zip(sel.tolist(), phi[sel - a].tolist(), theta[sel - a].tolist()):
-                phi_at[kk], theta_at[kk] = ph, th
-            if blk.k_static and a <= blk.k_static[1] < b and measured:
-                k0, k1 = blk.k_static
-                comp = (counter(np.array(blk.k_static), np.array([phi_at[k0], phi_at[k1]]))
-                        @ np.array([-1.0, 1.0])) / ((k1 - k0) * dt)
-            if stream is not None or blk.label in capture:
-                c = counter(k, phi)
-                if blk.label in capture:
-                    dec = -(-(blk.k_end - blk.k_start) // MAX_RECORD_SAMPLES)
-                    keep = ((k - blk.k_start) % dec) == 0
-                    captured.setdefault(blk.label, []).append((t[keep], c[keep]))
-                if stream is not None:
-                    stream(t, c, theta + arcsec_to_deg(harmonic_sum_arcsec(
-                        theta, bench.table.positioning_harmonics)))
-        comps.append(comp)
+            for kk, th in zip(sel.tolist(), theta[sel - a].tolist()):
+                theta_at[kk] = th
+            table_out = None
+            for m, (v, integ) in enumerate(zip(variants, integs)):
+                sig = deterministic_signature(v.bench.instrument)
+                if sig not in dets:
+                    dets[sig] = integ.rates(t, theta_u, rate_u, rep, geom)
+                phi = integ.integrate(dets[sig], theta)
+                inst = v.bench.instrument
+                for kk, ph in zip(sel.tolist(), phi[sel - a].tolist()):
+                    phi_at[m][kk] = ph
+                if blk.k_static and a <= blk.k_static[1] < b and measured:
+                    k0, k1 = blk.k_static
+                    comp[m] = (_counter(np.array(blk.k_static),
+                                        np.array([phi_at[m][k0], phi_at[m][k1]]), inst, zeros,
+                                        phi_at[m], comp[m], dt, v.dither_key)
+                               @ np.array([-1.0, 1.0])) / ((k1 - k0) * dt)
+                if v.stream is not None or blk.label in v.capture:
+                    c = _counter(k, phi, inst, zeros, phi_at[m], comp[m], dt, v.dither_key)
+                    if blk.label in v.capture:
+                        dec = -(-(blk.k_end - blk.k_start) // MAX_RECORD_SAMPLES)
+                        keep = ((k - blk.k_start) % dec) == 0
+                        captured[m].setdefault(blk.label, []).append((t[keep], c[keep]))
+                    if v.stream is not None:
+                        if table_out is None:
+                            table_out = np.repeat(theta_u + arcsec_to_deg(harmonic_sum_arcsec(
+                                theta_u, bench0.table.positioning_harmonics)), rep)
+                        v.stream(t, c, table_out)
         kk = np.array(sorted(need), dtype=np.int64)
-        cc = counter(kk, np.array([phi_at[x] for x in kk.tolist()]))
-        count_at = dict(zip(kk.tolist(), cc.tolist()))
-        for r in blk.readings:
-            raw = count_at[r.k_read] - count_at[r.k_zero] - comp * (r.k_read - r.k_zero) * dt
-            out_counts[j] = float(np.rint(raw)) if inst.quantisation else raw
-            out_true[j] = theta_at[r.k_read] - theta_at[r.k_zero]
-            j += 1
-    records = {lab: (np.concatenate([x[0] for x in v]), np.concatenate([x[1] for x in v]))
-               for lab, v in captured.items()}
-    return _Run(out_counts, out_true, comps, records)
+        for m, v in enumerate(variants):
+            inst = v.bench.instrument
+            comps[m].append(comp[m])
+            cc = _counter(kk, np.array([phi_at[m][x] for x in kk.tolist()]), inst, zeros,
+                          phi_at[m], comp[m], dt, v.dither_key)
+            count_at = dict(zip(kk.tolist(), cc.tolist()))
+            for i, r in enumerate(blk.readings):
+                raw = count_at[r.k_read] - count_at[r.k_zero] - comp[m] * (r.k_read - r.k_zero) * dt
+                out_counts[m][j + i] = float(np.rint(raw)) if inst.quantisation else raw
+        for i, r in enumerate(blk.readings):
+            out_true[j + i] = theta_at[r.k_read] - theta_at[r.k_zero]
+        j += len(blk.readings)
+    runs = []
+    for m in range(nv):
+        records = {lab: (np.concatenate([x[0] for x in v]), np.concatenate([x[1] for x in v]))
+                   for lab, v in captured[m].items()}
+        runs.append(_Run(out_counts[m], out_true, comps[m], records))
+    return runs
 
 
 def mount_scale_factor_counts_per_deg(bench: Bench, rate_dps: float) -> float:
@@ -414,10 +512,11 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
     check_counter(bench)
     blocks = plan_session(protocol, bench, rng_table)
-    estimate_session(blocks, bench, protocol)
-    run = _simulate(blocks, bench, protocol, rng_inst, stream, capture=frozenset({"zero_stability"}),
-                    dither_key=int(ss.generate_state(1, np.uint64)[0]))
-    nf = _simulate(blocks, bench.random_off(), protocol, None)
+    # The noisy run and its noise-free rerun (truth) in one pass over the session.
+    run, nf = _simulate_many(blocks, protocol, [
+        _Variant(bench, rng_inst, stream, frozenset({"zero_stability"}),
+                 int(ss.generate_state(1, np.uint64)[0])),
+        _Variant(bench.random_off(), None)])
     rows = [r for b in blocks for r in b.readings]
     dt = 1.0 / bench.sample_rate_hz
     df = pd.DataFrame({

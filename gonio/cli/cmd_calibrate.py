@@ -21,6 +21,12 @@ def register(sub) -> None:
                         "ogam-draft)")
     p.add_argument("--protocol", default=None,
                    help="protocol file or built-in name (default: the specification's)")
+    p.add_argument("--budget", choices=("physical", "draft"), default="physical",
+                   help="E's budget: physical (default: Annex A plus the lines beyond the draft "
+                        "the validation showed to matter) or draft (the annex's four lines)")
+    p.add_argument("--tilt", default=None, metavar="FILE",
+                   help="a 'gonio tilt-estimate --json' result: bounds the tilt by psi + U95 "
+                        "instead of the protocol's tilt bound")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     add_certificate_options(p)
@@ -69,7 +75,11 @@ def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
     from gonio.progress import status
     from gonio.report.certificate import load_lab
 
+    import sys
+
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
+    for w in report.warnings():
+        print(w, file=sys.stderr)
     status("writing the results and the certificate")
     write_outputs(report, out, truth=truth, lab=lab_d, lang=lang, dcc=dcc, inputs=inputs,
                   force=force)
@@ -102,8 +112,8 @@ def run(args) -> int:
             print(result.summary(), end="")
         return 0
     status("calibrating")
-    report = calibrate(args.readings, args.protocol or "ogam-draft",
-                       monte_carlo_trials=args.monte_carlo)
+    report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo,
+                       budget=args.budget, tilt=args.tilt)
     emit(report, args.out, args.json, lab=args.lab, lang=args.lang, dcc=args.dcc,
          inputs=inputs, force=args.force)
     return 0

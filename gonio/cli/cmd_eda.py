@@ -33,6 +33,12 @@ def register(subparsers) -> None:
     p.add_argument("--noise", choices=("random_walk", "white"), default="random_walk",
                    help="reading-error model: random_walk (a gyro's angle random walk from each "
                         "zeroing, the default) or white (independent readings)")
+    p.add_argument("--protocol", default="eda", metavar="PROTOCOL",
+                   help="protocol with the [equal_division] section (rate and reading delay "
+                        "for the coupling's timing; default: the built-in eda)")
+    p.add_argument("--no-coupling", action="store_true",
+                   help="do not estimate the tilt × Earth-rate coupling (plain IEC 62047-20 "
+                        "A.3 fit)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None,
                    help="write a figure (PNG/PDF/SVG by suffix) of both error curves")
@@ -53,6 +59,15 @@ def _text(res: EdaResult) -> str:
     out += ["", f"closure: sum of table errors {c.table_sum_arcsec:.4f}″; full-turn goniometer "
                 f"error {c.full_turn_arcsec:.4f}″ ± {c.u_full_turn_arcsec:.4f}″ (z = {c.z:.2f}, "
                 f"{'consistent with 0' if c.consistent else 'NOT consistent with 0'})"]
+    cp = res.coupling
+    if cp is not None and cp.separable:
+        out.append(f"tilt × Earth-rate coupling (estimated, removed): Ω⊥ tan ψ = "
+                   f"{cp.amplitude_arcsec_s:.5f} ± {cp.u_amplitude_arcsec_s:.5f}″/s, largest "
+                   f"effect on a reading {cp.max_effect_arcsec:.3f}″")
+    elif cp is not None:
+        out.append(f"WARNING: {cp.note}")
+    else:
+        out.append("tilt × Earth-rate coupling not estimated (--no-coupling)")
     bad = res.harmonics[res.harmonics.table_status == "unobservable"].order.tolist()
     if bad:
         out.append("table harmonics not separable from the goniometer (multiples of n): "
@@ -63,10 +78,16 @@ def _text(res: EdaResult) -> str:
 def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
     from gonio.atomic import check_output_file
+    from gonio.protocol import load_protocol
+
     if args.plot is not None:
         check_output_file(args.plot, what="--plot", inputs=[args.readings])
-    res = equal_division_from_readings(read_readings(args.readings), starts=args.starts,
-                                       gauge=args.gauge, noise=args.noise)
+    proto = load_protocol(args.protocol)
+    sess = proto.session
+    res = equal_division_from_readings(
+        read_readings(args.readings), starts=args.starts, gauge=args.gauge, noise=args.noise,
+        protocol=proto.equal_division, coupling=not args.no_coupling,
+        compensation_time_s=sess.static_s if sess.earth_compensation == "measured" else None)
     if args.plot:
         from gonio.report.eda_figure import equal_division_figure
         from gonio.report.figure_files import save_figure

@@ -10,8 +10,8 @@ from gonio.cli.checks import float_range
 from gonio.formats.readings import write_readings
 from gonio.protocol import load_protocol
 from gonio.formats.override import read_override
+from gonio.formats.streams import StreamFile
 from gonio.reduce import reduce_stream
-from gonio.formats.streams import read_stream
 
 
 def register(sub) -> None:
@@ -20,7 +20,8 @@ def register(sub) -> None:
                                    "match them to the protocol's rounds and write the readings "
                                    "file (§1). Rounds that cannot be matched are listed with the "
                                    "reason; --override gives their times explicitly.")
-    p.add_argument("stream", help="stream file (CSV)")
+    p.add_argument("stream", help="stream file (CSV, or Parquet: *.parquet); read in blocks, "
+                   "in bounded memory")
     p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
     p.add_argument("--out", required=True, help="readings file to write")
     p.add_argument("--override", default=None,
@@ -44,7 +45,7 @@ def run(args) -> int:
     proto = load_protocol(args.protocol)
     override = read_override(args.override) if args.override else None
     status(f"reduce: reading {args.stream}")
-    stream = read_stream(args.stream, max_gap_s=args.max_gap)
+    stream = StreamFile(args.stream, max_gap_s=args.max_gap)
     status("reduce: finding rests and matching rounds")
     red = reduce_stream(stream, proto, override=override)
     status("")

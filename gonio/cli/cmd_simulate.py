@@ -1,5 +1,6 @@
 """``gonio simulate``: run a protocol on the virtual bench → readings.csv, truth.json
-(and, with ``--stream``, the continuous stream.csv the acquisition module would give)."""
+(and, with ``--stream``, the continuous stream the acquisition module would give:
+stream.parquet by default, stream.csv with ``--stream-format csv``)."""
 
 from __future__ import annotations
 
@@ -28,8 +29,12 @@ def register(sub) -> None:
     p.add_argument("--force", action="store_true",
                    help="replace an --out folder that holds readings.csv or stream.csv")
     p.add_argument("--stream", action="store_true",
-                   help="also write stream.csv (every sample: time, wrapped counter, table "
-                        "angle; docs/formats.md#stream-file), chunk by chunk")
+                   help="also write the stream (every sample: time, wrapped counter, table "
+                        "angle; docs/formats.md#stream-file), chunk by chunk, with progress on a "
+                        "terminal")
+    p.add_argument("--stream-format", choices=("parquet", "csv"), default="parquet",
+                   help="stream.parquet (default; pyarrow, the metadata as Parquet key-value "
+                        "metadata) or stream.csv")
     p.set_defaults(func=run)
 
 
@@ -65,35 +70,41 @@ def run(args) -> int:
         return 0
     proto = load_protocol(args.protocol or "ogam-draft")
     bench = load_bench(args.bench or "rlg", table=args.table)
-    from gonio.progress import status
-
     with output_set(args.out, inputs=inputs, force=args.force) as stage:
-        writer = None
+        writer = prog = sink = None
         if args.stream:
+            from gonio.bench.session import plan_session
             from gonio.formats.streams import StreamWriter
+            from gonio.progress import Progress
 
-            writer = StreamWriter(stage / "stream.csv", stream_metadata(proto, bench, args.seed),
-                                  table=True)
+            name = "stream.parquet" if args.stream_format == "parquet" else "stream.csv"
+            writer = StreamWriter(stage / name, stream_metadata(proto, bench, args.seed),
+                                  table=True, fmt=args.stream_format)
+            total = sum(b.k_end - b.k_start for b in plan_session(proto, bench, None))
+            prog = Progress(total, label=f"simulate: {name}", unit="samples")
 
-        def write_chunk(time_s, *cols):
-            writer.write(time_s, *cols)
-            if len(time_s):
-                status(f"simulate: stream at t = {float(time_s[-1]):.0f} s, "
-                       f"{writer.rows} samples")
+            def write_chunk(t, c, th):
+                writer.write(t, c, th)
+                prog.update(len(t))
+            sink = write_chunk
+        from gonio.progress import status
 
-        status("simulate: running the session")
+        if sink is None:
+            status("simulate: running the session")
         try:
-            result = run_session(proto, bench, seed=args.seed,
-                                 stream=None if writer is None else write_chunk)
+            result = run_session(proto, bench, seed=args.seed, stream=sink)
             status("")
         except BaseException:
             if writer is not None:
                 writer.abort()
             raise
+        finally:
+            if prog is not None:
+                prog.close()
         paths = write_session(result, args.out)
         if writer is not None:
             writer.close()
-            paths["stream"] = Path(args.out) / "stream.csv"
+            paths["stream"] = Path(args.out) / name
     for p in paths.values():
         print(p)
     return 0

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import shutil
+import sys
 from pathlib import Path
 
-from gonio.atomic import output_set, write_text
+from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
-from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, TRUTHS, validate
+from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, PARTIAL_DIR, TRUTHS, validate
 
 
 def register(sub) -> None:
@@ -32,10 +34,23 @@ def register(sub) -> None:
                    help="multiply U (default 1; < 1 deliberately breaks the budget)")
     p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=100.0,
                    help="simulation rate (default 100 Hz; the RLG counter is exact at any rate)")
-    p.add_argument("--workers", type=int_range(1), default=2,
-                   help="processes (results do not depend on it); at most the machine's cores "
-                        "unless GONIO_MAX_WORKERS (a scheduler's allocation) says more")
-    p.add_argument("--out", default=None, help="folder for validation.json")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local processes (default min(2, cores), at most the machine's cores; "
+                        "results do not depend on it)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a Dask cluster: tcp://host:8786, or local:N to start a "
+                        "LocalCluster of N processes (needs pip install 'gonio[dask]'; results "
+                        "do not depend on it)")
+    p.add_argument("--batch", type=int, default=None, metavar="N",
+                   help="trials per task (default up to 250; results do not depend on it)")
+    p.add_argument("--out", default=None,
+                   help="folder for validation.json; finished batches are kept in "
+                        "OUT/.validate-partial until the study completes")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the interrupted study in --out (same settings): run only the "
+                        "trials it has not finished")
+    p.add_argument("--all-items", action="store_true",
+                   help="keep 7.3, 7.6 and 7.7 so that every item's coverage is measured")
     p.add_argument("--json", action="store_true", help="print validation.json on stdout")
     p.set_defaults(func=run)
 
@@ -46,10 +61,10 @@ def run(args) -> int:
     from gonio.limits import check
 
     check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
-    check("GONIO_MAX_WORKERS", args.workers, "--workers", unit="processes")
-    if args.out is not None:
-        from gonio.atomic import check_output_dir
-        check_output_dir(args.out, inputs=[args.bench, args.protocol])
+    if args.workers is not None and args.workers < 1:
+        raise GonioError(f"--workers must be >= 1, got {args.workers}")
+    if args.resume and not args.out:
+        raise GonioError("--resume needs --out (the folder of the interrupted study)")
     cases = list(CASES) if args.cases.strip() == "all" else \
         [c.strip() for c in args.cases.split(",") if c.strip()]
     if args.extra_components is None:
@@ -58,14 +73,27 @@ def run(args) -> int:
         extras = True
     else:
         extras = [e.strip() for e in args.extra_components.split(",") if e.strip()]
-    report = validate(args.trials, seed=args.seed, bench=args.bench, cases=cases,
-                      sample_rate_hz=args.sample_rate_hz, protocol=args.protocol,
-                      extra_components=extras, truth=args.truth,
-                      u_scale=args.u_scale, workers=args.workers)
+    partial = Path(args.out) / PARTIAL_DIR if args.out else None
+    try:
+        report = validate(args.trials, seed=args.seed, bench=args.bench, cases=cases,
+                          sample_rate_hz=args.sample_rate_hz, protocol=args.protocol,
+                          extra_components=extras, truth=args.truth,
+                          u_scale=args.u_scale, workers=args.workers, scheduler=args.scheduler,
+                          batch_size=args.batch, partial_dir=partial, resume=args.resume,
+                          all_items=args.all_items)
+    except KeyboardInterrupt:
+        if partial is not None and partial.exists():
+            sys.stderr.write(f"gonio: interrupted: the finished trials are kept in {partial}; "
+                             "rerun the same command with --resume to continue\n")
+        else:
+            sys.stderr.write("gonio: interrupted (nothing kept: give --out to keep partial "
+                             "results)\n")
+        return 130
     text = json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     if args.out is not None:
-        with output_set(args.out, inputs=[args.bench, args.protocol]) as stage:
+        with output_dir(Path(args.out)) as stage:     # the partial batches live in --out
             write_text(stage / "validation.json", text)
+        shutil.rmtree(partial, ignore_errors=True)
     if args.json:
         print(text, end="")
     else:

@@ -396,6 +396,8 @@ def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
                    metadata: Mapping[str, str] | None = None) -> Path:
     """Write a readings file in exactly the contract's format, atomically.
 
+    The text is :func:`format_readings`'s.
+
     Column order ``test,series,round,rate_dps,orientation,time_s,table_deg,
     gyro_counts,gyro_deg`` then extra columns (the ``line`` column is not
     written). Floats are written with ``repr`` (they read back bit for bit),
@@ -428,6 +430,21 @@ def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
     # serial: 42
     test,series,round,rate_dps,orientation,time_s,table_deg,gyro_counts,gyro_deg
     scale_factor,1,1,60.0,up,3.0,60.0,216000,
+    """
+    return write_text(path, format_readings(readings_or_df, metadata))
+
+
+def format_readings(readings_or_df: Readings | pd.DataFrame,
+                    metadata: Mapping[str, str] | None = None) -> str:
+    """The text of a readings file (what :func:`write_readings` writes), in memory.
+
+    ``parse_readings(format_readings(df, md))`` validates readings built in memory
+    (a reduced stream) exactly as the file reader would, without a file.
+
+    >>> df = pd.DataFrame({"test": ["scale_factor"], "series": [1], "round": [1],
+    ...                    "time_s": [3.0], "table_deg": [60.0], "gyro_counts": [216000.0]})
+    >>> parse_readings(format_readings(df)).data["gyro_counts"].tolist()
+    [216000.0]
     """
     if isinstance(readings_or_df, Readings):
         df = readings_or_df.data
@@ -480,7 +497,7 @@ def write_readings(readings_or_df: Readings | pd.DataFrame, path: str | Path,
     out.append(_csv_line(names))
     for row in zip(*columns_text):
         out.append(_csv_line(row))
-    return write_text(path, "\n".join(out) + "\n")
+    return "\n".join(out) + "\n"
 
 
 def _csv_line(cells) -> str:

@@ -6,16 +6,19 @@ Contents
 :data:`STREAM_COLUMNS`     the written column order
 :class:`Stream`            a validated stream held in memory
 :class:`StreamChunk`       one chunk of :func:`iter_stream`
-:func:`read_stream`        read, validate and unwrap a whole stream
+:class:`StreamFile`        a stream file (CSV or Parquet) read in blocks, indexed
+:func:`read_stream`        read, validate and unwrap a whole stream into memory
 :func:`iter_stream`        the same chunk by chunk, in bounded memory
 :func:`unwrap_counts`      undo counter wrap-around (16, 24, 32, 64 bit)
 :func:`write_stream`       write a stream file (atomic)
-:class:`StreamWriter`      chunked writer (``gonio simulate --stream``)
+:class:`StreamWriter`      chunked writer, CSV or Parquet (``gonio simulate --stream``)
 :func:`sniff_kind`         ``"readings"`` or ``"stream"``, from the header row
 =========================  ===================================================
 
-A stream is CSV (UTF-8, BOM and CRLF tolerated): ``# key: value`` metadata lines,
-one header row, then ``time_s,gyro_counts[,table_deg][,temperature_c]``. Metadata
+A stream is CSV (UTF-8, BOM tolerated, lines ending in LF, CRLF or a lone CR):
+``# key: value`` metadata lines, one header row, then
+``time_s,gyro_counts[,table_deg][,temperature_c]``; or Parquet with the same
+columns and the metadata as the file's key-value metadata. Metadata
 ``counter_bits`` (16, 24, 32, 64; default 64) and ``counter_signed`` (default true)
 describe the pulse counter; ``counts_quantised: false`` allows fractional counts
 (a virtual instrument with quantisation off; no wrap-around then).
@@ -25,17 +28,19 @@ moves by less than half its range, ``|Δcount| < 2^(bits−1)``. Each difference
 then taken modulo ``2^bits`` into ``[−2^(bits−1), 2^(bits−1))`` and summed; the
 unwrapped counter starts at the first value read.
 
-Parsing is pandas' C reader (fast path); when a chunk fails to parse, the same
-rows are re-read cell by cell to name the file, line and column of the first bad
-value. Time must increase strictly; a step longer than ``max_gap_s`` (default
-10× the median sample interval of the first chunk) is an error naming the line.
+Parsing is pyarrow's (CSV and Parquet), block by block; when a CSV block fails
+to parse, its lines are re-read cell by cell to name the file, line and column
+of the first bad value (Parquet: the data row). Time must increase strictly; a
+step longer than ``max_gap_s`` (default 10× the median sample interval of the
+first block) is an error naming the line; the unwrapped counter is checked
+against a plausible rate and against ``table_deg`` (:class:`StreamFile`), so a
+counter that overflowed between samples is caught, not unwrapped silently wrong.
 The input file is only read, never modified.
 """
 
 from __future__ import annotations
 
 import csv
-import io as _io
 import math
 import os
 import re
@@ -46,7 +51,6 @@ from pathlib import Path
 from typing import Iterator, Mapping
 
 import numpy as np
-import pandas as pd
 
 from gonio.errors import GonioError, check_header
 from gonio.formats.metadata import NUMERIC_METADATA, metadata_bool, metadata_float
@@ -103,11 +107,39 @@ class StreamChunk:
 class _Header:
     metadata: dict[str, str]
     columns: list[str]
-    header_line: int      # 1-based line of the header row
+    header_line: int | None   # 1-based line of the header row (None: Parquet)
     data_offset: int      # byte offset of the first data line
     bits: int
     signed: bool
     quantised: bool
+
+
+def _lines_with_ends(fh, piece: int = 1 << 16):
+    """Lines of a binary file with their ends (LF, CRLF or a lone CR), read piece by piece."""
+    buf = b""
+    eof = False
+    while True:
+        i = 0
+        while True:
+            j = min((k for k in (buf.find(b"\n", i), buf.find(b"\r", i)) if k >= 0), default=-1)
+            if j < 0:
+                break
+            if buf[j] == 13:
+                if j + 1 >= len(buf) and not eof:
+                    break                       # CR at the end of what was read: CRLF?
+                if j + 1 < len(buf) and buf[j + 1] == 10:
+                    j += 1
+            yield buf[i:j + 1]
+            i = j + 1
+        buf = buf[i:]
+        if eof:
+            if buf:
+                yield buf
+            return
+        more = fh.read(piece)
+        if not more:
+            eof = True
+        buf += more
 
 
 def _parse_header(path: Path) -> _Header:
@@ -120,9 +152,10 @@ def _parse_header(path: Path) -> _Header:
         raise GonioError(f"cannot read stream file: {exc.strerror}", file=path) from None
     with fh:
         lineno, offset = 0, 0
+        lines = _lines_with_ends(fh)
         while True:
-            raw = fh.readline(1 << 20)
-            if not raw:
+            raw = next(lines, None)
+            if raw is None:
                 raise GonioError("no data: the file has no header row", file=fname,
                                  line=max(1, lineno))
             lineno += 1
@@ -217,26 +250,31 @@ def unwrap_counts(raw: np.ndarray, bits: int, previous: int | None = None) -> np
         return np.cumsum(d)
 
 
-def _data_lines(path: Path, header: _Header):
-    """Yield (data row index, 1-based file line, raw bytes) of the non-blank data lines."""
-    with open(path, "rb") as fh:
-        fh.seek(header.data_offset)
-        line = header.header_line
-        n = -1
-        for raw in fh:
-            line += 1
-            if raw.strip():
-                n += 1
-                yield n, line, raw
+def split_lines(data: bytes):
+    """Yield ``(line_offset, text_bytes)`` for each line of ``data``; a line ends at LF,
+    CRLF or a lone CR (the reader accepts all three), the end is not part of the text.
+
+    >>> [x for _, x in split_lines(b"a\\r\\nb\\rc\\n\\nd")]
+    [b'a', b'b', b'c', b'', b'd']
+    """
+    i, n = 0, len(data)
+    while i < n:
+        j = i
+        while j < n and data[j] not in (10, 13):
+            j += 1
+        yield i, data[i:j]
+        if j < n and data[j] == 13 and j + 1 < n and data[j + 1] == 10:
+            j += 1
+        i = j + 1
 
 
-def _line_of_row(path: Path, header: _Header, row: int) -> int:
-    """1-based file line of data row ``row`` (0-based, blank lines skipped); used on errors."""
-    line = header.header_line
-    for n, line, _ in _data_lines(path, header):
-        if n == row:
-            break
-    return line
+def count_lines(data: bytes) -> int:
+    """Line ends in ``data`` (LF, CRLF and lone CR each count once).
+
+    >>> count_lines(b"a\\r\\nb\\rc\\n")
+    3
+    """
+    return data.count(b"\n") + data.count(b"\r") - data.count(b"\r\n")
 
 
 def _check_cell(text: str, col: str, header: _Header, where: dict):
@@ -245,86 +283,583 @@ def _check_cell(text: str, col: str, header: _Header, where: dict):
     if col == "gyro_counts":
         if header.quantised:
             if not _INT.match(t):
-                raise GonioError(f"expected an integer pulse count, got {text!r}",
+                raise GonioError(f"expected an integer pulse count, got {_clip(text)!r}",
                                  column=col, **where)
             lo, hi = counter_range(header.bits, header.signed)
-            if header.bits == 64:
-                lo, hi = -(1 << 63), (1 << 64) - 1 if not header.signed else (1 << 63) - 1
             if not lo <= int(t) <= hi:
-                raise GonioError(f"count {t} outside the {header.bits}-bit "
+                raise GonioError(f"count {_clip(t)} outside the {header.bits}-bit "
                                  f"{'signed' if header.signed else 'unsigned'} counter range",
                                  column=col, **where)
             return
     if col == "temperature_c" and t == "":
         return
     if not _FLOAT.match(t):
-        raise GonioError(f"expected a finite number, got {text!r}", column=col, **where)
+        raise GonioError(f"expected a finite number, got {_clip(text)!r}", column=col, **where)
     if not math.isfinite(float(t)):
-        raise GonioError(f"expected a finite number, got {text!r}", column=col, **where)
+        raise GonioError(f"expected a finite number, got {_clip(text)!r}", column=col, **where)
 
 
-def _locate_bad(path: Path, header: _Header, first_row: int, nrows: int, reason: str):
-    """Re-read rows ``first_row``… cell by cell and raise for the first bad one."""
-    fname = str(path)
-    used = [c for c in header.columns if c in STREAM_COLUMNS]
-    for n, line, raw in _data_lines(path, header):
-        if n < first_row:
+def _clip(text: str, n: int = 40) -> str:
+    return text if len(text) <= n else text[:n] + "…"
+
+
+#: Bytes of CSV parsed at a time (a block ends at a line end).
+CSV_BLOCK_BYTES = 1 << 23
+#: Default plausible rate bound, °/s, for the unwrapped counter (metadata ``max_rate_dps``
+#: overrides it): well above the draft's Table 1 table rates (0–300 °/s).
+PLAUSIBLE_RATE_DPS = 1000.0
+
+
+@dataclass
+class _Block:
+    """One block of a stream file as stored (CSV bytes range or a Parquet row group)."""
+
+    first_row: int
+    n_rows: int
+    first_line: int          # CSV: 1-based line of the block's first line; Parquet: 0
+    start: int               # CSV: byte offset; Parquet: row-group index
+    stop: int                # CSV: byte offset after the block
+    t_first: float
+    t_last: float
+    prev_raw: int | None     # raw counter value before the block (unwrap carry)
+    prev_unwrapped: int
+
+
+class StreamFile:
+    """A stream file (CSV or Parquet) read in blocks: validated, unwrapped, in bounded memory.
+
+    :meth:`chunks` reads the file once from start to end (validating every value,
+    unwrapping the counter across blocks); after that pass the file is indexed and
+    :meth:`window`, :meth:`search`, :meth:`time_at` and :meth:`counts_at` give any
+    samples by re-reading only the blocks that hold them (a few are cached).
+    Memory is a few blocks, whatever the file's length.
+
+    CSV is parsed with pyarrow; a block that fails to parse is re-read cell by cell
+    to name the line and column of the first bad value. Parquet: the stream's
+    metadata is the file's key-value metadata, one row group is a block, and an
+    error names the data row (1-based) and column.
+
+    Checks, beyond each value's type and range (docs/formats.md#stream-file): time strictly
+    increasing, no gap above ``max_gap_s``; with the metadata
+    ``nominal_scale_factor_counts_per_deg`` (K), the unwrapped counter must move
+    at a plausible rate (|Δcount|/(K Δt) ≤ ``max_rate_dps``, metadata or
+    :data:`PLAUSIBLE_RATE_DPS`), and, with ``table_deg`` and a counter narrower
+    than 64 bits, agree with the table: the step of ``count/K − table_deg``
+    (median of three, so one-sample encoder glitches pass) must stay below a
+    quarter of the counter's range in degrees, 2^bits/(4K). A counter that
+    overflowed between two samples (moved by more than half its range) is
+    unwrapped by a whole range too little or too much, and that step shows it.
+    """
+
+    def __init__(self, path: str | Path, *, max_gap_s: float | None = None,
+                 block_bytes: int = CSV_BLOCK_BYTES, cache_blocks: int = 3):
+        self.path = Path(path)
+        self.fname = str(self.path)
+        self.kind = "parquet" if self.path.suffix.lower() == ".parquet" else "csv"
+        self.max_gap_s = max_gap_s
+        self.block_bytes = int(block_bytes)
+        self._pq = None
+        if self.kind == "parquet":
+            self._pq, md, cols = _open_parquet(self.path)
+            self.header = _header_from(self.fname, md, cols, None, 0)
+        else:
+            self.header = _parse_header(self.path)
+        h = self.header
+        self.metadata = dict(h.metadata)
+        self.columns = [c for c in h.columns if c in STREAM_COLUMNS]
+        self.k_nominal = metadata_float(h.metadata, "nominal_scale_factor_counts_per_deg",
+                                        file=self.fname) if \
+            "nominal_scale_factor_counts_per_deg" in h.metadata else None
+        self.rate_bound_dps = metadata_float(h.metadata, "max_rate_dps", file=self.fname) \
+            if "max_rate_dps" in h.metadata else PLAUSIBLE_RATE_DPS
+        if not (self.rate_bound_dps is not None and math.isfinite(self.rate_bound_dps)
+                and self.rate_bound_dps > 0):
+            raise GonioError(f"expected a number > 0, got {h.metadata.get('max_rate_dps')!r}",
+                             file=self.fname, key="max_rate_dps")
+        self.blocks: list[_Block] | None = None
+        self._cache: dict[int, StreamChunk] = {}
+        self._cache_order: list[int] = []
+        self._cache_max = max(1, cache_blocks)
+
+    # ------------------------------------------------------------------ raw blocks
+    def _raw_blocks(self):
+        """Yield (start, stop, first_line, arrays dict) of the stored blocks, in order."""
+        if self.kind == "parquet":
+            for g in range(self._pq.num_row_groups):
+                yield g, g + 1, 0, self._parquet_group(g)
+            return
+        h = self.header
+        with open(self.path, "rb") as fh:
+            fh.seek(h.data_offset)
+            offset = h.data_offset
+            carry = b""
+            while True:
+                data = fh.read(self.block_bytes)
+                buf = carry + data
+                if not buf:
+                    break
+                if data:
+                    cut = max(buf.rfind(b"\n"), buf.rfind(b"\r"))
+                    if cut == len(buf) - 1 and buf[cut] == 13:
+                        # a CR at the very end may be half of a CRLF: cut before it
+                        cut = max(buf.rfind(b"\n", 0, cut), buf.rfind(b"\r", 0, cut))
+                    if cut < 0:
+                        carry = buf
+                        continue
+                    block, carry = buf[:cut + 1], buf[cut + 1:]
+                else:
+                    block, carry = buf, b""
+                arrays = self._parse_csv(block, offset)
+                yield offset, offset + len(block), 0, arrays
+                offset += len(block)
+                if not data:
+                    break
+
+    def _read_block(self, blk: _Block) -> dict:
+        if self.kind == "parquet":
+            return self._parquet_group(blk.start)
+        with open(self.path, "rb") as fh:
+            fh.seek(blk.start)
+            data = fh.read(blk.stop - blk.start)
+        return self._parse_csv(data, blk.start)
+
+    def _line_at(self, offset: int) -> int:
+        """1-based line number of the line starting at byte ``offset`` of a CSV stream
+        (counted when an error is reported, so the fast path never counts lines)."""
+        h = self.header
+        line = h.header_line + 1
+        with open(self.path, "rb") as fh:
+            fh.seek(h.data_offset)
+            pos, prev_cr = h.data_offset, False
+            while pos < offset:
+                piece = fh.read(min(1 << 24, offset - pos))
+                if not piece:
+                    break
+                line += count_lines(piece)
+                if prev_cr and piece.startswith(b"\n"):
+                    line -= 1               # a CRLF split between two pieces
+                prev_cr = piece.endswith(b"\r")
+                pos += len(piece)
+        return line
+
+    def _csv_types(self) -> dict:
+        import pyarrow as pa
+        h = self.header
+        types = {"time_s": pa.float64(), "table_deg": pa.float64(),
+                 "temperature_c": pa.float64()}
+        if not h.quantised:
+            types["gyro_counts"] = pa.float64()
+        elif h.bits == 64 and not h.signed:
+            types["gyro_counts"] = pa.uint64()
+        else:
+            types["gyro_counts"] = pa.int64()
+        return {c: t for c, t in types.items() if c in self.columns}
+
+    def _parse_csv(self, data: bytes, offset: int) -> dict:
+        import pyarrow as pa
+        import pyarrow.csv as pcsv
+        h = self.header
+        def parse(types):
+            return pcsv.read_csv(
+                pa.BufferReader(data),
+                read_options=pcsv.ReadOptions(column_names=h.columns, block_size=1 << 22),
+                parse_options=pcsv.ParseOptions(newlines_in_values=False,
+                                                ignore_empty_lines=True),
+                convert_options=pcsv.ConvertOptions(column_types=types,
+                                                    include_columns=self.columns,
+                                                    null_values=[""],
+                                                    strings_can_be_null=False,
+                                                    quoted_strings_can_be_null=False))
+        errors = (pa.ArrowInvalid, pa.ArrowNotImplementedError, pa.ArrowCapacityError,
+                  UnicodeDecodeError)
+        types = self._csv_types()
+        try:
+            tab = parse(types)
+        except errors as exc:
+            tab = None
+            reason = str(exc).splitlines()[0][:80]
+            if h.quantised and "gyro_counts" in types:
+                # pyarrow's integer parser refuses a leading '+' ("+000123", which the
+                # contract allows): read the counts as text, drop the sign, convert.
+                import pyarrow.compute as pc
+                try:
+                    tab = parse(dict(types, gyro_counts=pa.string()))
+                    txt = pc.replace_substring_regex(pc.utf8_trim_whitespace(
+                        tab.column("gyro_counts")), pattern=r"^\+", replacement="")
+                    tab = tab.set_column(tab.schema.get_field_index("gyro_counts"),
+                                         "gyro_counts", pc.cast(txt, types["gyro_counts"]))
+                except errors:
+                    tab = None
+            if tab is None:
+                self._locate_bad(data, self._line_at(offset), reason)
+        return _columns(tab, self.columns)
+
+    def _parquet_group(self, g: int) -> dict:
+        import pyarrow as pa
+        try:
+            # one thread: decoding a row group in parallel gains little on a few cores
+            # and keeps a buffer per thread (tens of MB of resident memory)
+            tab = self._pq.read_row_group(g, columns=self.columns, use_threads=False)
+        except (OSError, pa.ArrowException) as exc:
+            raise GonioError(f"cannot read Parquet row group {g}: {_clip(str(exc), 80)}",
+                             file=self.fname) from None
+        return _columns(tab, self.columns)
+
+    # ------------------------------------------------------------------ locating errors
+    def _locate_bad(self, data: bytes, first_line: int, reason: str):
+        """Re-read a CSV block cell by cell and raise for the first bad one."""
+        h = self.header
+        line = first_line
+        try:
+            for _, raw in split_lines(data):
+                where = dict(file=self.fname, line=line)
+                line += 1
+                if not raw:
+                    continue
+                try:
+                    text = raw.decode("utf-8")
+                except UnicodeDecodeError:
+                    raise GonioError("not UTF-8 text", **where) from None
+                if text.lstrip().startswith("#"):
+                    raise GonioError("metadata line after the header; '#' lines belong at the "
+                                     "top", **where)
+                try:
+                    cells = next(csv.reader([text]))
+                except (csv.Error, StopIteration):
+                    raise GonioError("unreadable CSV row", **where) from None
+                if len(cells) != len(h.columns):
+                    raise GonioError(f"expected {len(h.columns)} fields as in the header, "
+                                     f"got {len(cells)}", **where)
+                row = dict(zip(h.columns, cells))
+                for col in self.columns:
+                    _check_cell(row[col], col, h, where)
+        except GonioError:
+            raise
+        raise GonioError(f"lines {first_line}–{line - 1} do not parse ({_clip(reason, 80)})",
+                         file=self.fname, line=first_line)
+
+    def _where(self, blk_first_line: int, blk_data_start: int, row_in_block: int,
+               first_row: int) -> dict:
+        """File location of a data row: CSV line (re-counted in its block) or Parquet row."""
+        if self.kind == "parquet":
+            return dict(file=self.fname, line=None, row=first_row + row_in_block + 1)
+        with open(self.path, "rb") as fh:
+            fh.seek(blk_data_start)
+            data = fh.read(self.block_bytes + (1 << 20))
+        line = self._line_at(blk_data_start)
+        k = -1
+        for _, raw in split_lines(data):
+            if raw.strip():
+                k += 1
+                if k == row_in_block:
+                    return dict(file=self.fname, line=line, row=None)
+            line += 1
+        return dict(file=self.fname, line=line, row=None)
+
+    def _fail(self, message: str, column: str, loc: dict):
+        if loc["row"] is not None:
+            message = f"data row {loc['row']}: {message}"
+        raise GonioError(message, file=loc["file"], line=loc["line"], column=column)
+
+    # ------------------------------------------------------------------ the pass
+    def chunks(self, chunk_rows: int | None = None) -> Iterator[StreamChunk]:
+        """Validated, unwrapped chunks from the start (``chunk_rows`` rows each; default:
+        one per stored block). Indexes the file on the way."""
+        if chunk_rows is not None and chunk_rows < 2:
+            raise GonioError(f"chunk_rows must be ≥ 2, got {chunk_rows}")
+        h = self.header
+        lo, hi = counter_range(h.bits, h.signed)
+        prev_raw: int | None = None
+        prev_unwrapped = 0
+        prev_t: float | None = None
+        prev_c: int | None = None
+        gap = self.max_gap_s
+        row0 = 0
+        blocks: list[_Block] = []
+        k = self.k_nominal
+        check_table = k is not None and "table_deg" in self.columns and h.bits < 64 \
+            and h.quantised
+        carry_state: dict = {"resid": np.empty(0), "med": None}
+        for start, stop, first_line, arr in self._raw_blocks():
+            n = arr["time_s"].size
+            if n == 0:
+                continue
+
+            def loc(i, _fl=first_line, _st=start, _r0=row0):
+                return self._where(_fl, _st, i, _r0)
+
+            t = arr["time_s"]
+            for col in self.columns:
+                a = arr[col]
+                nulls = arr.get(col + "#null")
+                if nulls is not None and col != "temperature_c":
+                    i = int(np.argmax(nulls))
+                    self._fail("expected a finite number, got an empty cell", col, loc(i))
+                if a.dtype.kind == "f":
+                    bad = ~np.isfinite(a)
+                    if nulls is not None:         # empty temperature cells are allowed
+                        bad &= ~nulls
+                    if bad.any():
+                        i = int(np.argmax(bad))
+                        self._fail(f"expected a finite number, got {a[i]!r}", col, loc(i))
+            raw = arr["gyro_counts"]
+            if h.quantised and raw.dtype.kind == "f":
+                self._fail("expected integer pulse counts (or metadata counts_quantised: "
+                           "false)", "gyro_counts", loc(0))
+            if h.quantised and h.bits < 64:
+                bad = (raw < lo) | (raw > hi)
+                if bad.any():
+                    i = int(np.argmax(bad))
+                    self._fail(f"count {int(raw[i])} outside the {h.bits}-bit "
+                               f"{'signed' if h.signed else 'unsigned'} counter range",
+                               "gyro_counts", loc(i))
+            elif h.quantised and raw.dtype == np.int64 and not h.signed:
+                bad = raw < 0
+                if bad.any():
+                    i = int(np.argmax(bad))
+                    self._fail(f"count {int(raw[i])} outside the 64-bit unsigned counter range",
+                               "gyro_counts", loc(i))
+            # time strictly increasing, gaps bounded
+            dtt = np.diff(t) if prev_t is None else np.diff(np.concatenate(([prev_t], t)))
+            off = 1 if prev_t is None else 0
+            if dtt.size and not np.all(dtt > 0):
+                i = int(np.argmax(~(dtt > 0))) + off
+                self._fail("time_s must increase strictly", "time_s", loc(i))
+            if gap is None and dtt.size:
+                gap = 10.0 * float(np.median(dtt))
+            if gap is not None and dtt.size and np.any(dtt > gap):
+                j = int(np.argmax(dtt > gap))
+                self._fail(f"gap of {float(dtt[j]):.6g} s in time_s exceeds max_gap_s = "
+                           f"{gap:.6g} s", "time_s", loc(j + off))
+            if not h.quantised:
+                counts = raw.astype(np.float64)
+            else:
+                if raw.dtype == np.uint64:
+                    raw = raw.view(np.int64)
+                counts = unwrap_counts(raw, h.bits, prev_raw)
+                if prev_raw is not None:
+                    with np.errstate(over="ignore"):
+                        counts = counts + np.int64(prev_unwrapped)
+            # plausibility of the unwrapped counter: |Δcount| ≤ bound·K·Δt
+            if k is not None and k > 0 and dtt.size:
+                dc = np.diff(counts) if prev_c is None else \
+                    np.diff(np.concatenate(([prev_c], counts)))
+                fast = np.abs(dc.astype(np.float64)) > (self.rate_bound_dps * k) * dtt
+                if fast.any():
+                    j = int(np.argmax(fast))
+                    rate = abs(float(dc[j])) / (k * float(dtt[j]))
+                    self._fail(f"the counter moves at {rate:.4g} °/s here, above the "
+                               f"plausible bound {self.rate_bound_dps:g} °/s (metadata "
+                               "max_rate_dps)", "gyro_counts", loc(j + off))
+            if check_table:
+                self._check_table(counts, arr["table_deg"], row0, carry_state, loc)
+            blocks.append(_Block(row0, n, first_line, start, stop, float(t[0]), float(t[-1]),
+                                 prev_raw, prev_unwrapped))
+            if h.quantised:
+                prev_raw = int(raw[-1])
+                prev_unwrapped = int(counts[-1])
+            prev_t = float(t[-1])
+            prev_c = counts[-1]
+            tab = arr.get("table_deg")
+            tmp = arr.get("temperature_c")
+            step_rows = n if chunk_rows is None else chunk_rows
+            for a in range(0, n, step_rows):
+                b = min(n, a + step_rows)
+                yield StreamChunk(t[a:b], counts[a:b], None if tab is None else tab[a:b],
+                                  None if tmp is None else tmp[a:b], row0 + a)
+            row0 += n
+        if row0 == 0:
+            raise GonioError("no data: header only", file=self.fname,
+                             line=self.header.header_line)
+        self.blocks = blocks
+
+    def _check_table(self, counts, table, row0: int, state: dict, loc) -> None:
+        """Step of the median-of-three residual count/K − table_deg (see the class notes)."""
+        k, bits = self.k_nominal, self.header.bits
+        resid = counts.astype(np.float64) / k - table
+        carry = state["resid"]
+        r_all = np.concatenate((carry, resid))
+        tol = float(1 << bits) / (4.0 * k)
+        # a step of the median of three needs a step of the raw residual: look closer
+        # only where there is one (clean data never has one)
+        if r_all.size >= 3 and (state["med"] is None or
+                                bool(np.any(np.abs(np.diff(r_all)) > tol))):
+            a3, b3, c3 = r_all[:-2], r_all[1:-1], r_all[2:]
+            med = np.maximum(np.minimum(a3, b3), np.minimum(np.maximum(a3, b3), c3))
+            # med[i] is centred on global row row0 − len(carry) + i + 1
+            had_prev = state["med"] is not None
+            m_all = np.concatenate(([state["med"]], med)) if had_prev else med
+            step = np.abs(np.diff(m_all))
+            if step.size and np.any(step > tol):
+                j = int(np.argmax(step > tol))
+                centre = row0 - carry.size + j + 1 + (0 if had_prev else 1)
+                self._fail(
+                    f"the unwrapped counter disagrees with table_deg by {step[j]:.4g}° from "
+                    f"one sample to the next (more than 2^{bits}/(4K) = {tol:.4g}°): the "
+                    f"{bits}-bit counter overflowed between samples (moved by more than half "
+                    "its range); record faster or with a wider counter", "gyro_counts",
+                    loc(max(0, centre - row0)))
+            state["med"] = float(med[-1])
+        elif r_all.size >= 3:
+            a3, b3, c3 = r_all[-3], r_all[-2], r_all[-1]
+            state["med"] = float(max(min(a3, b3), min(max(a3, b3), c3)))
+        state["resid"] = r_all[-2:]
+
+    # ------------------------------------------------------------------ random access
+    def index(self) -> "StreamFile":
+        """Read the file once (validating it) if it has not been; returns self."""
+        if self.blocks is None:
+            for _ in self.chunks():
+                pass
+        return self
+
+    def __len__(self) -> int:
+        self.index()
+        b = self.blocks[-1]
+        return b.first_row + b.n_rows
+
+    @property
+    def t_first(self) -> float:
+        return self.index().blocks[0].t_first
+
+    @property
+    def t_last(self) -> float:
+        return self.index().blocks[-1].t_last
+
+    def _block(self, j: int) -> StreamChunk:
+        if j in self._cache:
+            return self._cache[j]
+        blk = self.blocks[j]
+        arr = self._read_block(blk)
+        h = self.header
+        raw = arr["gyro_counts"]
+        if not h.quantised:
+            counts = raw.astype(np.float64)
+        else:
+            if raw.dtype == np.uint64:
+                raw = raw.view(np.int64)
+            counts = unwrap_counts(raw, h.bits, blk.prev_raw)
+            if blk.prev_raw is not None:
+                with np.errstate(over="ignore"):
+                    counts = counts + np.int64(blk.prev_unwrapped)
+        ch = StreamChunk(arr["time_s"], counts, arr.get("table_deg"), arr.get("temperature_c"),
+                         blk.first_row)
+        self._cache[j] = ch
+        self._cache_order.append(j)
+        if len(self._cache_order) > self._cache_max:
+            self._cache.pop(self._cache_order.pop(0), None)
+        return ch
+
+    def _block_of_row(self, i: int) -> int:
+        firsts = [b.first_row for b in self.blocks]
+        return int(np.searchsorted(firsts, i, side="right")) - 1
+
+    def window(self, a: int, b: int, columns=None) -> StreamChunk:
+        """Rows ``a`` … ``b − 1`` (clipped to the stream); ``columns``: only these of
+        ``time_s, gyro_counts, table_deg, temperature_c`` (the others are None)."""
+        self.index()
+        n = len(self)
+        a, b = max(0, int(a)), min(n, int(b))
+        if b <= a:
+            e = np.empty(0)
+            return StreamChunk(e, e.astype(np.int64), None, None, a)
+        out = None
+        j = self._block_of_row(a)
+        while j < len(self.blocks) and self.blocks[j].first_row < b:
+            ch = self._block(j)
+            lo = max(a, ch.first_row)
+            hi = min(b, ch.first_row + ch.time_s.size)
+            if out is None:          # the result is allocated once and filled block by block
+                out = {name: None if getattr(ch, name) is None or
+                       (columns is not None and name not in columns) else
+                       np.empty(b - a, dtype=getattr(ch, name).dtype)
+                       for name in ("time_s", "gyro_counts", "table_deg", "temperature_c")}
+            for name, arr in out.items():
+                if arr is not None:
+                    arr[lo - a:hi - a] = getattr(ch, name)[lo - ch.first_row:hi - ch.first_row]
+            j += 1
+        return StreamChunk(out["time_s"], out["gyro_counts"], out["table_deg"],
+                           out["temperature_c"], a)
+
+    def time_at(self, i: int) -> float:
+        """Time of row ``i``."""
+        ch = self._block(self._block_of_row(int(i)))
+        return float(ch.time_s[int(i) - ch.first_row])
+
+    def counts_at(self, i: int):
+        """Unwrapped counter at row ``i``."""
+        ch = self._block(self._block_of_row(int(i)))
+        return ch.gyro_counts[int(i) - ch.first_row]
+
+    def search(self, t: float, side: str = "left") -> int:
+        """``numpy.searchsorted`` of ``t`` in the whole time column."""
+        self.index()
+        lasts = np.array([b.t_last for b in self.blocks])
+        j = int(np.searchsorted(lasts, t, side=side))
+        if j >= len(self.blocks):
+            return len(self)
+        ch = self._block(j)
+        return ch.first_row + int(np.searchsorted(ch.time_s, t, side=side))
+
+
+def _columns(tab, columns) -> dict:
+    """pyarrow table → dict of numpy arrays (``col#null`` masks where a column has nulls)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    out = {}
+    for c in columns:
+        col = tab.column(c)
+        if col.null_count:
+            out[c + "#null"] = col.is_null().to_numpy(zero_copy_only=False)
+            if pa.types.is_floating(col.type):
+                col = pc.fill_null(col, float("nan"))
+            else:
+                col = pc.fill_null(col, 0)
+        a = col.to_numpy()
+        if pa.types.is_floating(col.type):
+            a = a.astype(np.float64, copy=False)
+        out[c] = a
+    return out
+
+
+def _open_parquet(path: Path):
+    """(ParquetFile, metadata, columns) with the checks a CSV header gets."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:  # pragma: no cover - pyarrow is a dependency
+        raise GonioError("reading Parquet needs pyarrow (not installed)", file=path) from None
+    try:
+        pf = pq.ParquetFile(path, buffer_size=1 << 20)
+    except (OSError, pa.ArrowException) as exc:
+        raise GonioError(f"cannot read Parquet: {_clip(str(exc), 80)}", file=path) from None
+    schema = pf.schema_arrow
+    md = {}
+    for k, v in (schema.metadata or {}).items():
+        if k.startswith(b"pandas") or k.startswith(b"ARROW:"):
             continue
-        if n >= first_row + nrows:
-            break
-        where = dict(file=fname, line=line)
         try:
-            text = raw.decode("utf-8")
+            md[k.decode("utf-8")] = v.decode("utf-8")
         except UnicodeDecodeError:
-            raise GonioError("not UTF-8 text", **where) from None
-        if text.lstrip().startswith("#"):
-            raise GonioError("metadata line after the header; '#' lines belong at the top",
-                             **where)
-        try:
-            cells = next(csv.reader([text.rstrip("\r\n")]))
-        except (csv.Error, StopIteration):
-            raise GonioError("unreadable CSV row", **where) from None
-        if len(cells) != len(header.columns):
-            raise GonioError(f"expected {len(header.columns)} fields as in the header, "
-                             f"got {len(cells)}", **where)
-        row = dict(zip(header.columns, cells))
-        for col in used:
-            _check_cell(row[col], col, header, where)
-    raise GonioError(f"rows {first_row + 1}–{first_row + nrows} of the data do not parse "
-                     f"({reason})", file=fname, line=header.header_line + first_row + 1)
-
-
-def _dtypes(header: _Header) -> dict:
-    dt: dict = {c: str for c in header.columns if c not in STREAM_COLUMNS}
-    dt.update({"time_s": np.float64, "table_deg": np.float64, "temperature_c": np.float64})
-    if not header.quantised:
-        dt["gyro_counts"] = np.float64
-    elif header.bits == 64 and not header.signed:
-        dt["gyro_counts"] = np.uint64
-    else:
-        dt["gyro_counts"] = np.int64
-    return {c: v for c, v in dt.items() if c in header.columns}
+            raise GonioError("metadata not UTF-8 text", file=path) from None
+    cols = list(schema.names)
+    for c in cols:
+        if c in STREAM_COLUMNS:
+            t = schema.field(c).type
+            ok = pa.types.is_integer(t) if c == "gyro_counts" and \
+                md.get("counts_quantised", "true").strip().lower() not in ("false", "0", "no") \
+                else (pa.types.is_floating(t) or pa.types.is_integer(t))
+            if not ok:
+                raise GonioError(f"column type {t} is not numeric (integer for quantised "
+                                 "counts)", file=path, column=c)
+    return pf, md, cols
 
 
 def iter_stream(path: str | Path, chunk_rows: int = 1_000_000, *,
-                max_gap_s: float | None = None,
-                _header: _Header | None = None) -> Iterator[StreamChunk]:
-    """Read a stream chunk by chunk; unwrapping and time checks carry across chunks.
-
-    Memory is bounded by ``chunk_rows`` whatever the file's length.
-
-    Parameters
-    ----------
-    path : str or Path
-    chunk_rows : int
-        Rows per chunk (≥ 2).
-    max_gap_s : float, optional
-        Largest allowed step between samples; default 10× the median step of
-        the first chunk.
-
-    Yields
-    ------
-    StreamChunk
+                max_gap_s: float | None = None) -> Iterator[StreamChunk]:
+    """Read a stream (CSV or Parquet) chunk by chunk; unwrapping and checks carry across
+    chunks. Memory is bounded by the block size whatever the file's length
+    (:class:`StreamFile`).
 
     Examples
     --------
@@ -335,108 +870,21 @@ def iter_stream(path: str | Path, chunk_rows: int = 1_000_000, *,
     >>> [c.gyro_counts.tolist() for c in iter_stream(p, chunk_rows=2)]
     [[32766, 32768], [32770]]
     """
-    path = Path(path)
-    header = _header or _parse_header(path)
-    if chunk_rows < 2:
-        raise GonioError(f"chunk_rows must be ≥ 2, got {chunk_rows}")
-    fname = str(path)
-    dtypes = _dtypes(header)
-    lo, hi = counter_range(header.bits, header.signed)
-    prev_raw: int | None = None
-    prev_unwrapped = 0
-    prev_t: float | None = None
-    row0 = 0
-    gap = max_gap_s
-    fh = open(path, "rb")
-    try:
-        fh.seek(header.data_offset)
-        reader = pd.read_csv(fh, header=None, names=header.columns, dtype=dtypes,
-                             chunksize=chunk_rows, engine="c", skip_blank_lines=True,
-                             keep_default_na=False, na_values=[""], comment=None,
-                             encoding="utf-8", on_bad_lines="error", index_col=False)
-        while True:
-            try:
-                df = next(reader)
-            except StopIteration:
-                break
-            except (ValueError, OverflowError, TypeError, UnicodeDecodeError,
-                    pd.errors.ParserError) as exc:
-                _locate_bad(path, header, row0, chunk_rows, str(exc).splitlines()[0][:80])
-            n = len(df)
-            if n == 0:
-                continue
-            t = df["time_s"].to_numpy(np.float64)
-            cols = {"table_deg": None, "temperature_c": None}
-            bad = ~np.isfinite(t)
-            if "table_deg" in df:
-                cols["table_deg"] = df["table_deg"].to_numpy(np.float64)
-                bad |= ~np.isfinite(cols["table_deg"])
-            if "temperature_c" in df:
-                cols["temperature_c"] = df["temperature_c"].to_numpy(np.float64)
-                bad |= np.isinf(cols["temperature_c"])
-            raw = df["gyro_counts"].to_numpy()
-            if not header.quantised:
-                raw = raw.astype(np.float64)
-                bad |= ~np.isfinite(raw)
-            elif header.bits < 64:
-                bad |= (raw < lo) | (raw > hi)
-            if bad.any():
-                i = int(np.argmax(bad))
-                _locate_bad(path, header, row0 + i, 1, "non-finite or out-of-range value")
-            # time strictly increasing, gaps bounded
-            dtt = np.diff(t) if prev_t is None else np.diff(np.concatenate(([prev_t], t)))
-            if dtt.size and not np.all(dtt > 0):
-                i = int(np.argmax(~(dtt > 0))) + (1 if prev_t is None else 0)
-                raise GonioError("time_s must increase strictly", file=fname,
-                                 line=_line_of_row(path, header, row0 + i), column="time_s")
-            if gap is None and dtt.size:
-                gap = 10.0 * float(np.median(dtt))
-            if gap is not None and dtt.size and np.any(dtt > gap):
-                i = int(np.argmax(dtt > gap)) + (1 if prev_t is None else 0)
-                raise GonioError(f"gap of {float(dtt[np.argmax(dtt > gap)]):.6g} s in time_s "
-                                 f"exceeds max_gap_s = {gap:.6g} s", file=fname,
-                                 line=_line_of_row(path, header, row0 + i), column="time_s")
-            if not header.quantised:
-                counts = raw
-            else:
-                if raw.dtype == np.uint64:
-                    raw = raw.view(np.int64)
-                counts = unwrap_counts(raw, header.bits, prev_raw)
-                if prev_raw is not None:
-                    with np.errstate(over="ignore"):
-                        counts = counts + np.int64(prev_unwrapped)
-                prev_raw = int(raw[-1])
-                prev_unwrapped = int(counts[-1])
-            prev_t = float(t[-1])
-            yield StreamChunk(t, counts, cols["table_deg"], cols["temperature_c"], row0)
-            row0 += n
-    finally:
-        fh.close()
-    if row0 == 0:
-        raise GonioError("no data: header only", file=fname, line=header.header_line)
+    return StreamFile(path, max_gap_s=max_gap_s).chunks(chunk_rows)
 
 
 def read_stream(path: str | Path, *, chunk_rows: int = 1_000_000,
                 max_gap_s: float | None = None) -> Stream:
-    """Read, validate and unwrap a stream file (``docs/formats.md#stream-file``).
+    """Read, validate and unwrap a whole stream file (CSV or Parquet) into memory
+    (``docs/formats.md#stream-file``).
 
-    Parameters
-    ----------
-    path : str or Path
-        CSV stream (or ``.parquet`` when pyarrow is installed).
-    chunk_rows : int
-        Rows parsed at a time.
-    max_gap_s : float, optional
-        Largest allowed time step (default 10× the median step).
-
-    Returns
-    -------
-    Stream
+    For long records use :class:`StreamFile` (bounded memory) instead.
 
     Raises
     ------
     GonioError
-        Naming file, line and column (or key) for any departure from the contract.
+        Naming file, line (CSV) or data row (Parquet) and column (or key) for any
+        departure from the contract.
 
     Examples
     --------
@@ -448,39 +896,12 @@ def read_stream(path: str | Path, *, chunk_rows: int = 1_000_000,
     >>> s.gyro_counts.tolist(), s.metadata["counter_bits"]
     ([65534, 65537], '16')
     """
-    path = Path(path)
-    if path.suffix.lower() == ".parquet":
-        return _read_parquet(path, max_gap_s)
-    header = _parse_header(path)
-    parts = list(iter_stream(path, chunk_rows, max_gap_s=max_gap_s, _header=header))
+    sf = StreamFile(path, max_gap_s=max_gap_s)
+    parts = list(sf.chunks(chunk_rows))
     cat = (lambda name: np.concatenate([getattr(p, name) for p in parts])
            if getattr(parts[0], name) is not None else None)
     return Stream(cat("time_s"), cat("gyro_counts"), cat("table_deg"), cat("temperature_c"),
-                  dict(header.metadata), path)
-
-
-def _read_parquet(path: Path, max_gap_s: float | None) -> Stream:  # pragma: no cover - optional
-    try:
-        import pyarrow.parquet as pq
-    except ImportError:
-        raise GonioError("reading Parquet needs pyarrow (not installed)", file=path) from None
-    try:
-        tab = pq.read_table(path)
-    except Exception as exc:  # noqa: BLE001 - any pyarrow failure is a bad file
-        raise GonioError(f"cannot read Parquet: {exc}", file=path) from None
-    md = {k.decode(): v.decode() for k, v in (tab.schema.metadata or {}).items()
-          if not k.startswith(b"pandas")}
-    header = _header_from(str(path), md, list(tab.column_names), 1, 0)
-    df = tab.to_pandas()
-    t = df["time_s"].to_numpy(np.float64)
-    if not np.all(np.isfinite(t)) or not np.all(np.diff(t) > 0):
-        raise GonioError("time_s must be finite and increase strictly", file=path,
-                         column="time_s")
-    raw = df["gyro_counts"].to_numpy()
-    counts = raw.astype(np.float64) if not header.quantised else unwrap_counts(
-        raw.astype(np.int64), header.bits)
-    get = (lambda c: df[c].to_numpy(np.float64) if c in df else None)
-    return Stream(t, counts, get("table_deg"), get("temperature_c"), md, path)
+                  dict(sf.metadata), Path(path))
 
 
 def _fmt_metadata(metadata: Mapping[str, str]) -> str:
@@ -494,12 +915,30 @@ def _fmt_metadata(metadata: Mapping[str, str]) -> str:
     return "".join(out)
 
 
+#: Stream file formats the writer knows (by suffix: ``.parquet`` → Parquet, else CSV).
+STREAM_FORMATS = ("parquet", "csv")
+#: Rows per Parquet row group (one block of :class:`StreamFile`).
+PARQUET_ROW_GROUP = 1 << 18
+
+
+def stream_format(path: str | Path) -> str:
+    """``"parquet"`` for a ``.parquet`` file, else ``"csv"``."""
+    return "parquet" if Path(path).suffix.lower() == ".parquet" else "csv"
+
+
 class StreamWriter:
-    """Write a stream chunk by chunk; the file appears (atomically) only at :meth:`close`.
+    """Write a stream chunk by chunk, as CSV or Parquet; the file appears (atomically) only
+    at :meth:`close`.
 
     Counts are given unwrapped and written wrapped to the counter width in
-    ``metadata`` (``counter_bits``, ``counter_signed``). Use as a context manager:
-    an exception inside the ``with`` leaves no file behind.
+    ``metadata`` (``counter_bits``, ``counter_signed``): the file holds what the
+    counter shows. CSV: ``# key: value`` lines, the header, then rows (floats in
+    their shortest form that reads back bit for bit). Parquet: the same metadata as
+    the file's key-value metadata, columns ``time_s`` (double), ``gyro_counts``
+    (int64; uint64 for an unsigned 64-bit counter; double when
+    ``counts_quantised: false``), ``table_deg``, ``temperature_c`` (double), row
+    groups of :data:`PARQUET_ROW_GROUP` rows. Use as a context manager: an
+    exception inside the ``with`` leaves no file behind.
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "s.csv"
@@ -508,16 +947,29 @@ class StreamWriter:
     >>> print(p.read_text(), end="")
     # counter_bits: 16
     time_s,gyro_counts,table_deg
-    0.0,32767,0.0
+    0,32767,0
     0.5,-32768,1.5
     """
 
     def __init__(self, path: str | Path, metadata: Mapping[str, str] | None = None, *,
-                 table: bool = True, temperature: bool = False):
+                 table: bool = True, temperature: bool = False, fmt: str | None = None):
+        import pyarrow as pa
         self.path = Path(path)
+        self.fmt = fmt or stream_format(self.path)
+        if self.fmt not in STREAM_FORMATS:
+            raise GonioError(f"unknown stream format {self.fmt!r} (known: "
+                             f"{', '.join(STREAM_FORMATS)})", key="stream_format")
         md = {str(k): str(v) for k, v in (metadata or {}).items()}
+        text_md = _fmt_metadata(md)
         self._header = _header_from(str(self.path), md, ["time_s", "gyro_counts"], 1, 0)
+        h = self._header
         self.table, self.temperature = table, temperature
+        cols = ["time_s", "gyro_counts"] + (["table_deg"] if table else []) \
+            + (["temperature_c"] if temperature else [])
+        ctype = pa.float64() if not h.quantised else (
+            pa.uint64() if h.bits == 64 and not h.signed else pa.int64())
+        self._schema = pa.schema([pa.field(c, ctype if c == "gyro_counts" else pa.float64(),
+                                           nullable=False) for c in cols])
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp",
                                          dir=self.path.parent)
@@ -525,15 +977,24 @@ class StreamWriter:
         os.umask(umask)
         os.fchmod(fd, 0o666 & ~umask)
         self._fh = os.fdopen(fd, "wb")
-        cols = ["time_s", "gyro_counts"] + (["table_deg"] if table else []) \
-            + (["temperature_c"] if temperature else [])
-        self._ncol = len(cols)
-        self._fh.write((_fmt_metadata(md) + ",".join(cols) + "\n").encode())
+        self._buffer: list = []
+        self._buffered = 0
+        if self.fmt == "parquet":
+            import pyarrow.parquet as pq
+            self._schema = self._schema.with_metadata({k.strip(): v.strip()
+                                                       for k, v in md.items()})
+            self._pq = pq.ParquetWriter(self._fh, self._schema, compression="snappy")
+        else:
+            import pyarrow.csv as pcsv
+            self._fh.write((text_md + ",".join(cols) + "\n").encode())
+            self._csv = pcsv.CSVWriter(self._fh, self._schema, write_options=pcsv.WriteOptions(
+                include_header=False, quoting_style="none"))
         self._last_t = -math.inf
         self.rows = 0
 
     def write(self, time_s, counts, table_deg=None, temperature_c=None) -> None:
         """Append rows; ``counts`` unwrapped (integers unless ``counts_quantised: false``)."""
+        import pyarrow as pa
         t = np.asarray(time_s, dtype=np.float64)
         if t.size == 0:
             return
@@ -546,28 +1007,48 @@ class StreamWriter:
             if not np.all(np.isfinite(cf)) or np.any(cf != np.round(cf)):
                 raise GonioError("counts must be integers (or metadata counts_quantised: false)")
             from gonio.formats.counters import wrap_counter
-            ctext = wrap_counter(c, h.bits, h.signed).astype(str)
+            cw = wrap_counter(c, h.bits, h.signed)
+            if h.bits == 64 and not h.signed:
+                cw = cw.view(np.uint64)
         else:
-            ctext = np.array([repr(float(x)) for x in c], dtype=object)
-        cols = [np.array([repr(float(x)) for x in t], dtype=object), ctext]
+            cw = np.asarray(c, dtype=np.float64)
+            if not np.all(np.isfinite(cw)):
+                raise GonioError("counts must be finite")
+        arrays = [t, cw]
         for flag, arr, name in ((self.table, table_deg, "table_deg"),
                                 (self.temperature, temperature_c, "temperature_c")):
             if flag:
                 a = np.asarray(arr, dtype=np.float64)
                 if a.shape != t.shape or not np.all(np.isfinite(a)):
                     raise GonioError(f"{name} must be finite, one value per sample")
-                cols.append(np.array([repr(float(x)) for x in a], dtype=object))
-        lines = cols[0].astype(object)
-        for col in cols[1:]:
-            lines = lines + "," + col.astype(object)
-        self._fh.write(("\n".join(lines.tolist()) + "\n").encode())
+                arrays.append(a)
+        tab = pa.Table.from_arrays([pa.array(a) for a in arrays], schema=self._schema)
+        if self.fmt == "parquet":
+            self._buffer.append(tab)
+            self._buffered += tab.num_rows
+            if self._buffered >= PARQUET_ROW_GROUP:
+                self._flush()
+        else:
+            self._csv.write_table(tab)
         self._last_t = float(t[-1])
         self.rows += int(t.size)
+
+    def _flush(self) -> None:
+        if self._buffer:
+            import pyarrow as pa
+            tab = pa.concat_tables(self._buffer)
+            self._pq.write_table(tab, row_group_size=PARQUET_ROW_GROUP)
+            self._buffer, self._buffered = [], 0
 
     def close(self) -> Path:
         """Flush, fsync and move the file into place."""
         if self._fh.closed:
             return self.path
+        if self.fmt == "parquet":
+            self._flush()
+            self._pq.close()
+        else:
+            self._csv.close()
         self._fh.flush()
         os.fsync(self._fh.fileno())
         self._fh.close()
@@ -593,8 +1074,10 @@ class StreamWriter:
 
 
 def write_stream(path: str | Path, time_s, counts, table_deg=None,
-                 metadata: Mapping[str, str] | None = None, temperature_c=None) -> Path:
-    """Write a whole stream file atomically (counts given unwrapped, written wrapped).
+                 metadata: Mapping[str, str] | None = None, temperature_c=None,
+                 fmt: str | None = None) -> Path:
+    """Write a whole stream file atomically (counts given unwrapped, written wrapped);
+    Parquet for a ``.parquet`` path (or ``fmt="parquet"``), else CSV.
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "s.csv"
@@ -604,7 +1087,7 @@ def write_stream(path: str | Path, time_s, counts, table_deg=None,
     [65535, 65536]
     """
     with StreamWriter(path, metadata, table=table_deg is not None,
-                      temperature=temperature_c is not None) as w:
+                      temperature=temperature_c is not None, fmt=fmt) as w:
         w.write(time_s, counts, table_deg, temperature_c)
     return Path(path)
 

@@ -15,22 +15,26 @@ import dataclasses
 import hashlib
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
 from gonio.atomic import output_dir, output_set, sha256_file, write_text
-from gonio.specs.ogam_draft.budget import AnnexABudget, annex_a_budget
+from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
+from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
+from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
-#: The readings taken of the draft's ambiguities (shown in results and certificate).
+#: The readings taken of the draft's ambiguities (shown in results and certificate). The
+#: u(r) sentence is not here: it follows the source actually used (:func:`readings_taken`).
 READINGS_TAKEN = (
     "7.3: the protocol sets the count and spacing of the zero-stability readings (default 15 "
     "readings 5 min apart); B_s = s(M)/T is the result, (max M − min M)/T (definition 3.3) is "
@@ -40,16 +44,66 @@ READINGS_TAKEN = (
     "present and E = ± max|E_i| is reported with its sign.",
     "7.6/7.7: the garbled denominator is read as the angle measured in the reference state "
     "(60 °/s, axis up) on the full 360° round; the spread max E − min E in ″ is always given.",
-    "Annex A.4.4: u(r) is the largest Bessel standard deviation over the calibration points of "
-    "this calibration's own repeated series (7.5).",
     "Annex A.4.2: the elliptic-projection tilt model of the draft is used for u(φ_e); the "
     "rigid-body model (tilt is a cos ψ factor absorbed by the scale factor) is shown beside it.",
+    "Annex A.4.3: u(B_E) uses the longest time from zeroing to reading of the 7.4 readings "
+    "actually used (not the 0.5 min bound).",
 )
+
+#: The one precedence rule for settings given in more than one place (docs/formats.md).
+PRECEDENCE_RULE = ("command line over readings-file metadata over protocol over built-in "
+                   "default; every disagreement is reported")
+
+#: Budget kinds of the angle-position deviation E.
+BUDGET_KINDS = ("physical", "draft")
+
+
+def readings_taken(repeatability_source: str) -> list[str]:
+    """The readings-taken notes of this calibration, with the u(r) sentence that is true for it.
+
+    u(r) from this calibration's own series: "Annex A.4.4: u(r) is …" (the certificate has
+    its translation); from the protocol: "Annex A.4.4 (not applied): …", a different
+    sentence that no translation of the first can stand for.
+    """
+    if "this calibration's own" in repeatability_source:
+        note = f"Annex A.4.4: u(r) is {repeatability_source}."
+    else:
+        note = (f"Annex A.4.4 (not applied): this calibration has no repeated series; u(r) is "
+                f"{repeatability_source}.")
+    return list(READINGS_TAKEN[:3]) + [note] + list(READINGS_TAKEN[3:])
+
+
+@dataclass(frozen=True)
+class Conflict:
+    """A setting given differently in two places, and which value was used (defect 5)."""
+
+    setting: str
+    file_value: object
+    protocol_value: object
+    used: object
+    rule: str
+
+    def to_dict(self) -> dict:
+        return {"setting": self.setting, "file_value": self.file_value,
+                "protocol_value": self.protocol_value, "used": self.used, "rule": self.rule}
+
+    def warning(self) -> str:
+        """The one-line warning the CLI prints on stderr."""
+        return (f"gonio: warning: {self.setting}: readings file says {self.file_value!r}, "
+                f"protocol/command line says {self.protocol_value!r}; using {self.used!r} "
+                f"({self.rule})")
 
 
 @dataclass
 class CalibrationReport:
-    """Everything one calibration produced."""
+    """Everything one calibration produced.
+
+    ``uncertainty`` is E's budget (:class:`~gonio.budget.AnnexABudget`; the draft's four
+    lines, or the physical budget with the lines beyond the draft); when E is not
+    measured it is kept for reference but nothing of it is reported (no item, no U).
+    ``item_uncertainty`` maps each measured item to its
+    :class:`~gonio.specs.ogam_draft.item_uncertainty.ItemUncertainty`.
+    """
 
     results: CalibrationResults
     uncertainty: AnnexABudget
@@ -60,12 +114,40 @@ class CalibrationReport:
     noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
     eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
+    item_uncertainty: dict = field(default_factory=dict)
+    budget_kind: str = "physical"
+    conflicts: list = field(default_factory=list)
+    budget_notes: list = field(default_factory=list)
+    excluded: object = None              # DataFrame of readings excluded by the checks
+
+    @property
+    def e_measured(self) -> bool:
+        e = self.results.angle_deviation
+        return bool(e.measured and e.value is not None)
+
+    def uncertainty_dict(self) -> dict:
+        """``results.json``'s ``uncertainty``: E's budget, or no U when E is not measured."""
+        if not self.e_measured:
+            return {"budget_kind": self.budget_kind, "measured": False,
+                    "reason": "the angle-position deviation E (7.4) was not measured: "
+                              "no item, no uncertainty",
+                    "components": [], "u_c_arcsec": None, "U_arcsec": None, "k": None,
+                    "nu_eff": None, "k_source": None, "stated": None, "annex_rounded": None,
+                    "monte_carlo": None, "repeatability_source": None, "notes": []}
+        unc = self.uncertainty.to_dict()
+        ia = self.item_uncertainty.get("angle_deviation")
+        unc.update({"budget_kind": self.budget_kind, "measured": True,
+                    "repeatability_source": self.repeatability_source,
+                    "nu_eff": ia.to_dict()["nu_eff"] if ia else None,
+                    "k_source": ia.k_source if ia else None,
+                    "notes": list(self.budget_notes)})
+        for c, ic in zip(unc["components"], ia.components if ia else ()):
+            c["beyond_draft"], c["clause"] = ic.beyond_draft, ic.clause
+        return unc
 
     def to_dict(self) -> dict:
         """The ``results.json`` content (plain JSON types, deterministic)."""
         d = self.results.to_dict()
-        unc = self.uncertainty.to_dict()
-        unc["repeatability_source"] = self.repeatability_source
         out = {
             "gonio_version": __version__,
             "specification": self.protocol.specification,
@@ -76,6 +158,9 @@ class CalibrationReport:
             "metadata": dict(self.readings.metadata),
         }
         out.update(d)
+        for name in ITEM_NAMES:
+            iu = self.item_uncertainty.get(name)
+            out[name]["uncertainty"] = iu.to_dict() if iu is not None else None
         if self.noise is not None:
             zs = dict(out["zero_stability"])
             zs["noise"] = {"source": self.noise_source, **self.noise.to_dict()}
@@ -87,39 +172,477 @@ class CalibrationReport:
                                      "file holds only the 15 readings"}
         if self.eda is not None:
             out["equal_division"] = {"clause": "IEC 62047-20 Annex A.3", **self.eda.to_dict()}
-        out["uncertainty"] = unc
-        out["readings_taken"] = list(READINGS_TAKEN)
+        out["uncertainty"] = self.uncertainty_dict()
+        out["conflicts"] = [c.to_dict() for c in self.conflicts]
+        out["precedence_rule"] = PRECEDENCE_RULE
+        out["readings_taken"] = readings_taken(self.repeatability_source) if self.e_measured \
+            else list(READINGS_TAKEN)
         return json_safe(out)
+
+    def warnings(self) -> list[str]:
+        """One line per conflict and per excluded reading group (for stderr)."""
+        out = [c.warning() for c in self.conflicts]
+        ex = self.excluded
+        if ex is not None and len(ex):
+            for test, g in ex.groupby("test", sort=True):
+                out.append(f"gonio: warning: {len(g)} {test} reading(s) excluded (lines "
+                           f"{', '.join(str(int(x)) for x in g['line'][:5])}"
+                           f"{', …' if len(g) > 5 else ''}): {g['reason'].iloc[0]}")
+        return out
 
     def summary(self, lab: dict | None = None) -> str:
         """The seven items, U (k, coverage probability) and any conformity statements as a
-        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`)."""
+        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
+        then the 95 % intervals of the standard-deviation items and the budget's notes."""
         from gonio.report.stated import summary_text
 
-        return summary_text(self.to_dict(), "en", lab)
+        lines = [summary_text(self.to_dict(), "en", lab).rstrip("\n")]
+        for name in ITEM_NAMES:
+            iu = self.item_uncertainty.get(name)
+            if iu is not None and iu.interval is not None:
+                lines.append(f"{name}: 95 % interval [{iu.interval[0]:.3g}, "
+                             f"{iu.interval[1]:.3g}] {iu.unit} (chi-square)")
+        if self.e_measured:
+            lines += [f"note: {n}" for n in self.budget_notes]
+        return "\n".join(lines) + "\n"
+
+
+ITEM_NAMES = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
+              "repeatability", "rate_consistency", "pointing_consistency")
+
+
+# --------------------------------------------------------------------------- settings
+
+def file_metadata(path: str | Path) -> dict:
+    """The ``# key: value`` metadata lines at the head of a readings file or stream."""
+    out: dict = {}
+    try:
+        with open(path, encoding="utf-8-sig") as fh:
+            for line in fh:
+                t = line.strip()
+                if not t:
+                    continue
+                if not t.startswith("#"):
+                    break
+                key, sep, value = t[1:].partition(":")
+                if sep:
+                    out.setdefault(key.strip(), value.strip())
+    except (OSError, UnicodeDecodeError):
+        return {}
+    return out
+
+
+def file_protocol_name(path: str | Path) -> str | None:
+    """The ``# protocol: NAME`` metadata of a readings file or stream, read from its head."""
+    return file_metadata(path).get("protocol") or None
+
+
+def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None,
+                     protocol: str | Path | Protocol | None) -> tuple[Protocol, list[Conflict]]:
+    """The protocol to use, by :data:`PRECEDENCE_RULE` (defect 5 of issue 12).
+
+    An explicit ``protocol`` (the command line's ``--protocol``) wins; a different
+    ``# protocol:`` in the readings file is reported as a conflict. Without one, the
+    file's protocol is loaded (a built-in name, a path, or a file of that name next to
+    the readings file); a named protocol that cannot be found is an error, never
+    silently replaced by the default. Neither: ``ogam-draft``.
+    """
+    conflicts: list[Conflict] = []
+    if protocol is not None:
+        proto = protocol if isinstance(protocol, Protocol) else load_protocol(protocol)
+        if metadata_name and metadata_name != proto.name:
+            conflicts.append(Conflict("protocol", metadata_name, proto.name, proto.name,
+                                      "command line over readings-file metadata"))
+        return proto, conflicts
+    if not metadata_name:
+        return load_protocol("ogam-draft"), conflicts
+    from gonio.errors import GonioError
+    cands = [metadata_name]
+    if readings_path is not None:
+        base = Path(readings_path).parent
+        cands += [base / metadata_name, base / f"{metadata_name}.toml"]
+    for c in cands:
+        try:
+            return load_protocol(c), conflicts
+        except GonioError as exc:
+            if "not found" not in exc.message:
+                raise
+    raise GonioError(f"the readings file names protocol {metadata_name!r}, which is neither a "
+                     "built-in protocol nor a file next to it: give --protocol FILE",
+                     file=readings_path, key="protocol")
+
+
+def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list[Conflict]]:
+    """Table MPE and tilt bound of this session, by :data:`PRECEDENCE_RULE`.
+
+    The readings file's metadata (``table_mpe_arcsec``, ``tilt_bound_deg``) describes
+    the equipment actually used and wins over the protocol's ``annex_a`` values; a
+    difference is a :class:`Conflict`, never silent.
+
+    >>> from gonio.formats.readings import Readings
+    >>> import pandas as pd
+    >>> s, c = session_settings(Readings(pd.DataFrame(), {"table_mpe_arcsec": "0.2"}),
+    ...                         load_protocol())
+    >>> s["table_mpe_arcsec"], c[0].to_dict()["protocol_value"], c[0].used
+    (0.2, 0.1, 0.2)
+    """
+    a = protocol.annex_a
+    md, file = readings.metadata, readings.path
+    out, conflicts = {}, []
+    for key in ("table_mpe_arcsec", "tilt_bound_deg"):
+        v = metadata_float(md, key, file=file)
+        if v is None:
+            out[key] = getattr(a, key)
+            continue
+        out[key] = v
+        if v != getattr(a, key):
+            conflicts.append(Conflict(key, v, getattr(a, key), v,
+                                      "readings-file metadata over protocol annex_a"))
+    return out, conflicts
+
+
+# --------------------------------------------------------------------------- checks
+
+_ROTATION_TESTS = ("scale_factor", "angle_deviation", "rate_consistency", "pointing_consistency")
+
+
+def _item_for(protocol: Protocol, test: str, rate: float, orientation: str):
+    if test == "scale_factor":
+        cands = [protocol.scale_factor]
+    elif test == "angle_deviation":
+        cands = [protocol.angle_deviation]
+    elif test == "rate_consistency":
+        cands = list(protocol.rate_consistency) + [protocol.angle_deviation]
+    else:
+        cands = list(protocol.pointing_consistency) + [protocol.angle_deviation]
+    for it in cands:
+        if it is not None and math.isclose(it.rate_dps, rate, rel_tol=1e-9) \
+                and it.orientation == orientation:
+            return it
+    return None
+
+
+def screen_readings(readings: Readings, protocol: Protocol) -> tuple[Readings, "pd.DataFrame"]:
+    """Check every clause-7 rotation reading against the protocol (defects 1 and 4).
+
+    A reading fits when its round exists in the protocol item of its test, rate and
+    orientation, its ``table_deg`` equals that round's stop − start within the item's
+    ``position_tolerance_deg`` (so the series of a round agree on the position), and
+    its ``time_s`` (time from zeroing to reading) is within ``max_time_to_reading_s``
+    (Annex A.1) when the protocol sets one. A reading that does not fit is an error
+    naming its line when the item says ``on_bad_reading = "error"``; otherwise it is
+    excluded and listed with the reason — unless a round is left with no reading,
+    which is an error (the item would not stand without it). Rows the protocol has no
+    item for are left to the characteristics (reported unused there).
+
+    Returns the readings kept and a DataFrame of the excluded rows
+    (line, test, series, round, rate_dps, orientation, reason).
+    """
+    import pandas as pd
+
+    from gonio.errors import GonioError
+
+    df = readings.data
+    bad: dict[int, str] = {}
+    for test in _ROTATION_TESTS:
+        rows = df[df["test"] == test]
+        if not len(rows):
+            continue
+        for (rate, orient), g in rows.groupby(["rate_dps", "orientation"], sort=False):
+            it = _item_for(protocol, test, float(rate), str(orient))
+            if it is None:
+                continue
+            n_rounds = len(it.rounds)
+            bad_here = []
+            for line, rnd, tab, t in zip(g["line"], g["round"], g["table_deg"], g["time_s"]):
+                line, rnd = int(line), int(rnd)
+                why, col = None, None
+                if not 1 <= rnd <= n_rounds:
+                    why, col = (f"{test} round {rnd} is not one of the protocol's {n_rounds} "
+                                f"rounds ({protocol.name})", "round")
+                else:
+                    r = it.rounds[rnd - 1]
+                    want = r.stop_deg - r.start_deg
+                    if not (abs(float(tab) - want) <= it.position_tolerance_deg):
+                        why, col = (f"{test} round {rnd}: table_deg {float(tab):g} differs from "
+                                    f"the protocol's {want:g}° (tolerance "
+                                    f"{it.position_tolerance_deg:g}°)", "table_deg")
+                    elif it.max_time_to_reading_s is not None and \
+                            float(t) > it.max_time_to_reading_s + 1e-9:
+                        why, col = (f"{test} round {rnd}: read {float(t):g} s after zeroing, "
+                                    f"beyond the protocol's max_time_to_reading_s = "
+                                    f"{it.max_time_to_reading_s:g} s (Annex A.1)", "time_s")
+                if why is None:
+                    continue
+                if it.on_bad_reading == "error":
+                    raise GonioError(why, file=readings.path, line=line, column=col)
+                bad_here.append((line, rnd, why))
+            if not bad_here:
+                continue
+            for line, _, why in bad_here:
+                bad[line] = why
+            left = g[~g["line"].isin([b[0] for b in bad_here])]
+            for line, rnd, why in bad_here:
+                if 1 <= rnd <= n_rounds and not (left["round"] == rnd).any():
+                    raise GonioError(f"{why}; no reading of this round is left, the item "
+                                     "cannot stand without it", file=readings.path, line=line)
+    cols = ["line", "test", "series", "round", "rate_dps", "orientation"]
+    if not bad:
+        return readings, pd.DataFrame(columns=cols + ["reason"])
+    mask = df["line"].isin(list(bad))
+    ex = df.loc[mask, cols].copy()
+    ex["reason"] = [bad[int(l)] for l in ex["line"]]
+    kept = Readings(df[~mask].reset_index(drop=True), dict(readings.metadata), readings.path)
+    return kept, ex.sort_values("line").reset_index(drop=True)
+
+
+_ITEM_TESTS = {"scale_factor": ("scale_factor",), "scale_factor_nonlinearity": ("scale_factor",),
+               "angle_deviation": ("angle_deviation",), "repeatability": ("angle_deviation",),
+               "rate_consistency": ("rate_consistency", "angle_deviation"),
+               "pointing_consistency": ("pointing_consistency", "angle_deviation")}
+
+
+def _note_exclusions(results: CalibrationResults, excluded) -> None:
+    """Excluded readings join ``unused_readings``; each item they belonged to says so."""
+    import pandas as pd
+
+    if excluded is None or not len(excluded):
+        return
+    un = results.unused_readings
+    results.unused_readings = pd.concat([un, excluded[un.columns]], ignore_index=True) \
+        .sort_values("line", kind="stable").reset_index(drop=True) if len(un) else \
+        excluded.reset_index(drop=True)
+    for name, tests in _ITEM_TESTS.items():
+        item = getattr(results, name)
+        n = int(excluded["test"].isin(tests[:1]).sum())
+        if item.measured and n:
+            item.details["excluded_readings"] = n
+            item.details["excluded_note"] = (f"based on fewer readings: {n} {tests[0]} "
+                                             "reading(s) excluded by the protocol checks "
+                                             "(see unused_readings)")
+
+
+# --------------------------------------------------------------------------- E's budget
+
+def _time_to_reading_s(results: CalibrationResults, readings: Readings) -> float | None:
+    used = results.angle_deviation.used_lines
+    df = readings.data
+    t = df.loc[df["line"].isin(list(used)), "time_s"].to_numpy(dtype=float)
+    t = t[np.isfinite(t)]
+    return float(t.max()) if t.size else None
+
+
+def _load_tilt(tilt) -> tuple[float, str]:
+    """ψ bound from a ``gonio tilt-estimate --json`` result: ψ + U95(ψ)."""
+    from gonio.errors import GonioError
+
+    if isinstance(tilt, (str, Path)):
+        try:
+            d = json.loads(Path(tilt).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise GonioError(f"cannot read tilt file: {exc.strerror}", file=tilt) from None
+        except json.JSONDecodeError as exc:
+            raise GonioError(f"not JSON: {exc.msg}", file=tilt, line=exc.lineno) from None
+        src = Path(tilt).name
+    else:
+        d, src = dict(tilt), "tilt estimate"
+    for key in ("tilt_deg", "U95_tilt_deg"):
+        v = d.get(key) if isinstance(d, dict) else None
+        if not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+            raise GonioError("expected a gonio tilt-estimate --json result with a number "
+                             f"≥ 0 here, got {v!r}", file=tilt if src != "tilt estimate"
+                             else None, key=key)
+    return float(d["tilt_deg"]) + float(d["U95_tilt_deg"]), (
+        f"measured tilt ψ = {d['tilt_deg']:.4g}° (U95 {d['U95_tilt_deg']:.2g}°, {src})")
+
+
+def deviation_budget(results: CalibrationResults, readings: Readings, protocol: Protocol,
+                     settings: dict, *, kind: str = "physical", tilt=None,
+                     monte_carlo_trials: int = 0, seed: int = 0
+                     ) -> tuple[AnnexABudget, str, list[str]]:
+    """E's budget: the draft's four Annex A lines, plus, for ``kind="physical"``, the lines
+    the validation showed to matter (issue 12):
+
+    - ``tilt_E``: the tilt × Earth-rate coupling at the site's latitude (metadata
+      ``latitude_deg``; the equator's, the worst case, when not stated) with the tilt
+      bound, or ψ + U95 of a measured tilt (``tilt``: a ``gonio tilt-estimate --json``
+      file or dict), arcsine (clause 7 preamble, A.1);
+    - ``K_P``, ``K_r``: the error of the 7.1 scale factor carried into E (7.1), when E's
+      angles come from counts through that K.
+
+    u(r): this calibration's own 7.5 result (Type A, ν = n − 1) when measured, else the
+    protocol's ``annex_a.repeatability_arcsec`` (Type B: not this calibration's data).
+    u(B_E): the longest actual time from zeroing to reading. k: the protocol's
+    ``annex_a.coverage_factor`` when set (fixed by the laboratory), else t_95(ν_eff).
+    Returns the budget, the u(r) source sentence and notes.
+    """
+    from gonio.errors import GonioError
+
+    if kind not in BUDGET_KINDS:
+        raise GonioError(f"budget must be one of {', '.join(BUDGET_KINDS)}, got {kind!r}",
+                         key="budget")
+    a = protocol.annex_a
+    notes: list[str] = []
+    rep = results.repeatability
+    if rep.measured and rep.value is not None and math.isfinite(rep.value):
+        n = int(rep.details.get("n_series"))
+        u_r, dof, typ = float(rep.value), n - 1, "A"
+        src = (f"the largest Bessel standard deviation over the points of this calibration's "
+               f"own {n} series (7.5; Type A, ν = {n - 1})")
+    else:
+        u_r, dof, typ = a.repeatability_arcsec, math.inf, "B"
+        src = (f"the protocol's annex_a.repeatability_arcsec = {u_r:g}″ (Type B: this "
+               "calibration has no repeated series of its own; "
+               f"{rep.reason or 'repeatability not measured'})")
+    t_read = _time_to_reading_s(results, readings)
+    dur_min = t_read / S_PER_MIN if t_read is not None else a.duration_min
+    if t_read is not None:
+        notes.append(f"u(B_E) over the longest time to reading, {t_read:g} s (A.4.3)")
+    tilt_deg = settings["tilt_bound_deg"]
+    if tilt is not None:
+        tilt_deg, txt = _load_tilt(tilt)
+        notes.append(f"{txt}: ψ + U95 = {tilt_deg:.4g}° bounds the tilt")
+    extras = []
+    if kind == "physical" and results.angle_deviation.measured:
+        extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes)
+    budget = annex_a_budget(table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
+                            zero_stability_dph=a.zero_stability_dph, duration_min=dur_min,
+                            repeatability_arcsec=u_r, k=a.coverage_factor,
+                            extra_components=extras, monte_carlo_trials=monte_carlo_trials,
+                            seed=seed, repeatability_dof=dof, repeatability_type=typ,
+                            repeatability_source=f"repeatability (A.4.4): {src}")
+    return budget, src, notes
+
+
+def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
+    """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
+    from dataclasses import replace
+
+    from gonio.budget.extra import (ExtraComponent, budget_extra_components,
+                                    tilt_coupling_coefficients)
+    from gonio.physics.earth import earth_rate_split
+    from gonio.units import dps_to_arcsec_s
+
+    df = readings.data
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    if lat is None:
+        lat = 0.0
+        notes.append("latitude not stated in the readings file: the coupling line uses the "
+                     "equator's Earth rate (the worst case for a vertical axis)")
+    used = results.angle_deviation.used_lines
+    ad = df[df["line"].isin(list(used))]
+    sf = df[df["line"].isin(list(results.scale_factor.used_lines))]
+    from_counts = results.scale_factor_for_angles_source == "7.1" and \
+        results.angle_deviation.details.get("scale_factor_for_angles_counts_per_deg") is not None
+    adi = protocol.angle_deviation
+    if adi is None:
+        notes.append("the protocol has no angle_deviation item: no coupling line")
+        return []
+    proto = replace(protocol, annex_a=replace(protocol.annex_a, tilt_bound_deg=tilt_deg,
+                                              table_mpe_arcsec=settings["table_mpe_arcsec"]))
+    if from_counts and len(sf) and protocol.scale_factor is not None:
+        extras = budget_extra_components(pd_concat(sf, ad), proto, lat, u_r, truth="intrinsic")
+    else:
+        th = np.abs(ad["table_deg"].to_numpy(dtype=float))
+        ci, si = tilt_coupling_coefficients(th, ad["time_s"].to_numpy(dtype=float),
+                                            adi.rate_dps, adi.read_delay_s)
+        omega = dps_to_arcsec_s(earth_rate_split(lat, adi.orientation).perpendicular_dps) * \
+            math.sin(math.radians(tilt_deg))
+        extras = [ExtraComponent("tilt_E", "tilt x Earth-rate coupling to the reading",
+                                 float(omega * np.max(np.hypot(ci, si))), "arcsine")]
+        if results.scale_factor_for_angles_source == "metadata":
+            notes.append("E's angles use the nominal scale factor of the metadata, whose "
+                         "error is not known to this calibration and is not in the budget")
+    return [ExtraComponent(e.symbol, e.source.replace(" (validation)", "") +
+                           f" [beyond the draft: {EXTRA_CLAUSES.get(e.symbol, '')}]",
+                           e.half_width_arcsec, e.distribution) for e in extras]
+
+
+def pd_concat(*frames):
+    import pandas as pd
+    return pd.concat(frames, ignore_index=True)
+
+
+def file_sha256(path: str | Path, block_bytes: int = 1 << 24) -> str:
+    """SHA-256 of a file, read in blocks (a stream of gigabytes is never held whole)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(block_bytes), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
                 monte_carlo_trials: int = 0, seed: int = 0) -> tuple[AnnexABudget, str]:
-    """The Annex A budget of this calibration (u(r) from its own 7.5 data when present)."""
-    a = protocol.annex_a
-    md, file = readings.metadata, readings.path
-    mpe = metadata_float(md, "table_mpe_arcsec", file=file)
-    tilt = metadata_float(md, "tilt_bound_deg", file=file)
-    rep = results.repeatability
-    if rep.measured and rep.value is not None and math.isfinite(rep.value):
-        u_r, src = float(rep.value), "7.5: largest Bessel standard deviation over the points"
-        n = rep.details.get("n_series") if isinstance(rep.details, dict) else None
-        dof = (int(n) - 1) if n else math.inf
-    else:
-        u_r, src, dof = a.repeatability_arcsec, "protocol annex_a.repeatability_arcsec", math.inf
-    budget = annex_a_budget(table_mpe_arcsec=mpe if mpe is not None else a.table_mpe_arcsec,
-                            tilt_deg=tilt if tilt is not None else a.tilt_bound_deg,
-                            zero_stability_dph=a.zero_stability_dph,
-                            duration_min=a.duration_min, repeatability_arcsec=u_r,
-                            k=a.coverage_factor, monte_carlo_trials=monte_carlo_trials,
-                            seed=seed, repeatability_dof=dof)
-    return budget, src
+    """The draft's Annex A budget of this calibration (kept for callers of the old API)."""
+    settings, _ = session_settings(readings, protocol)
+    b, src, _ = deviation_budget(results, readings, protocol, settings, kind="draft",
+                                 monte_carlo_trials=monte_carlo_trials, seed=seed)
+    return b, src
+
+
+# --------------------------------------------------------------------------- items
+
+def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protocol: Protocol,
+                       settings: dict, readings: Readings) -> dict:
+    """The uncertainty of every measured item (clause 8), by
+    :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    k_fixed = protocol.annex_a.coverage_factor
+    mpe = settings["table_mpe_arcsec"]
+    out = {}
+    sf = results.scale_factor
+    if sf.measured:
+        t = sf.table
+        out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
+                                                     mpe, k=k_fixed)
+        if results.scale_factor_nonlinearity.measured:
+            out["scale_factor_nonlinearity"] = iu.nonlinearity_budget(
+                t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed)
+    zs = results.zero_stability
+    if zs.measured:
+        rd = zs.tables["readings"]
+        t_zs = rd.loc[rd["series"] == zs.details["series"], "time_s"].to_numpy(dtype=float)
+        comp = protocol.session.static_s if protocol.session.earth_compensation == "measured" \
+            else None
+        out["zero_stability"] = iu.zero_stability_budget(
+            float(zs.value), int(zs.details["n_readings"]), time_s=t_zs,
+            compensation_time_s=comp, k=k_fixed)
+    e = results.angle_deviation
+    if e.measured:
+        out["angle_deviation"] = iu.angle_deviation_budget(
+            budget, float(e.value),
+            k_source="fixed by laboratory" if k_fixed is not None else "welch-satterthwaite")
+    rp = results.repeatability
+    if rp.measured:
+        n_pts = int((rp.table["n_series"] >= 2).sum())
+        out["repeatability"] = iu.repeatability_budget(float(rp.value),
+                                                       int(rp.details["n_series"]), n_pts,
+                                                       k=k_fixed)
+    u_r = float(budget.parameters["repeatability_arcsec"])
+    drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
+    df = readings.data
+    for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
+        c = getattr(results, name)
+        if not c.measured:
+            continue
+        col = "rate_dps" if name == "rate_consistency" else "orientation"
+        pts = c.tables["points"]
+        conds = []
+        for row in c.table.itertuples(index=False):
+            v = getattr(row, col)
+            p = pts[pts[col] == v]
+            at = p.loc[(p["E_arcsec"] - row.E_arcsec).abs().idxmin(), "position_deg"]
+            conds.append(iu.ConditionDeviation(f"{v:g} deg/s" if col == "rate_dps"
+                                               else f"axis {v}", float(row.E_arcsec),
+                                               float(at), u_r, int(row.n_series)))
+        t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
+        t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
+        out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
+                                          scale, table_mpe_arcsec=mpe,
+                                          drift_half_width_arcsec=drift * t_min, k=k_fixed)
+    return out
 
 
 def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
@@ -134,25 +657,22 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 def _load(path: str | Path, protocol: Protocol):
     from gonio.errors import check_input_file
-    from gonio.formats.streams import read_stream, sniff_kind
+    from gonio.formats.streams import StreamFile, sniff_kind
 
     check_input_file(path, "readings or stream file")
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
+    from gonio.formats.readings import format_readings, parse_readings
     from gonio.reduce import reduce_stream
 
-    stream = read_stream(path)
+    stream = StreamFile(path)               # read in blocks: bounded memory
     red = reduce_stream(stream, protocol)
     if not len(red.readings):
         raise GonioError("no round of the protocol could be matched in the stream", file=path)
-    import tempfile
-
-    from gonio.formats.readings import write_readings
-    with tempfile.TemporaryDirectory() as tmp:   # through the file format: same validation
-        rd = read_readings(write_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
-                                          Path(tmp) / "reduced.csv", red.metadata))
-    rd.path = Path(path)
+    # validated exactly as a readings file is, in memory (no temporary file)
+    rd = parse_readings(format_readings(red.readings.drop(columns=["t_zero_s", "t_read_s"]),
+                                        red.metadata), path=path)
     return rd, static_record_from_stream(stream, red.readings)
 
 
@@ -161,16 +681,28 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
 
     From the zeroing of the first zero-stability reading to the last one (the
     reduction's ``t_zero_s``/``t_read_s``); counts divided by the nominal scale
-    factor. ``None`` when the stream holds no 7.3 rest or no nominal K.
+    factor. ``None`` when the stream holds no 7.3 rest or no nominal K. ``stream``
+    is a :class:`gonio.formats.streams.Stream` in memory or a
+    :class:`gonio.formats.streams.StreamFile`
+    (only the rest's samples are read).
     """
     zs = reduced[reduced["test"] == "zero_stability"]
     k = metadata_float(stream.metadata, "nominal_scale_factor_counts_per_deg")
     if len(zs) < 2 or not k:
         return None
     t0, t1 = float(zs["t_zero_s"].min()), float(zs["t_read_s"].max())
-    m = (stream.time_s >= t0) & (stream.time_s <= t1)
-    return StaticRecord(stream.time_s[m] - t0, stream.gyro_counts[m] / k,
-                        source="stream, 7.3 rest")
+    if hasattr(stream, "window"):
+        a, b = stream.search(t0, "left"), stream.search(t1, "right")
+        ch = stream.window(a, b, columns=("time_s", "gyro_counts"))
+        t, c = ch.time_s, ch.gyro_counts
+        del ch
+    else:
+        m = (stream.time_s >= t0) & (stream.time_s <= t1)
+        t, c = stream.time_s[m], stream.gyro_counts[m]
+    t = t - t0
+    angle = c / k
+    del c
+    return StaticRecord(t, angle, source="stream, 7.3 rest")
 
 
 def analyse_zero_stability(record: StaticRecord | None):
@@ -223,37 +755,55 @@ def check_counts_agree(readings: Readings, results: CalibrationResults) -> None:
                          line=int(df["line"].iat[i]), column="gyro_deg")
 
 
-def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol = "ogam-draft",
+def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
               *, monte_carlo_trials: int = 0, seed: int = 0,
-              static_record: StaticRecord | None = None) -> CalibrationReport:
-    """Compute the seven characteristics and the Annex A budget from a readings file or stream.
+              static_record: StaticRecord | None = None, budget: str = "physical",
+              tilt=None) -> CalibrationReport:
+    """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
-    Items whose readings the file does not hold are reported as not measured. The
-    zero-stability result (7.3) comes with the Allan analysis of the instrument's
+    ``protocol``: explicit (the command line's ``--protocol``), else the file's
+    ``# protocol:``, else ``ogam-draft`` (:func:`resolve_protocol`; conflicts are
+    reported in ``report.conflicts``). The readings are checked against the protocol
+    (:func:`screen_readings`). Items whose readings the file does not hold are
+    reported as not measured, without uncertainty. ``budget``: ``"physical"`` (the
+    default: the draft's Annex A lines plus those beyond it, :func:`deviation_budget`)
+    or ``"draft"`` (the annex's four lines only). ``tilt``: a ``gonio tilt-estimate
+    --json`` result (path or dict) bounding the tilt instead of the protocol's bound.
+    The zero-stability result (7.3) comes with the Allan analysis of the instrument's
     record over the 7.3 rest when there is one: cut from the stream, or given as
     ``static_record`` (the virtual bench's).
     """
-    proto = protocol if isinstance(protocol, Protocol) else load_protocol(protocol)
     if isinstance(readings, Readings):
+        proto, conflicts = resolve_protocol(readings.path, readings.metadata.get("protocol"),
+                                            protocol)
         rd, sha = readings, ""
         if rd.path:
-            sha = sha256_file(rd.path)
+            sha = file_sha256(rd.path)
     else:
+        proto, conflicts = resolve_protocol(readings, file_protocol_name(readings), protocol)
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
-        sha = sha256_file(readings)
-    ref_orient = proto.pointing_reference
-    res = compute_characteristics(rd, reference_rate_dps=proto.rate_reference_dps,
-                                  reference_orientation=ref_orient)
-    check_counts_agree(rd, res)
-    budget, src = annex_a_for(res, rd, proto, monte_carlo_trials, seed)
+        sha = file_sha256(readings)
+    settings, more = session_settings(rd, proto)
+    conflicts += more
+    kept, excluded = screen_readings(rd, proto)
+    res = compute_characteristics(kept, reference_rate_dps=proto.rate_reference_dps,
+                                  reference_orientation=proto.pointing_reference)
+    _note_exclusions(res, excluded)
+    check_counts_agree(kept, res)
+    e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
+                                            monte_carlo_trials=monte_carlo_trials, seed=seed)
+    items = item_uncertainties(res, e_budget, proto, settings, kept)
     noise, noise_src = analyse_zero_stability(static_record)
-    eda, unused = equal_division_for(res.unused_readings, rd)
+    eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
-    return CalibrationReport(res, budget, rd, proto, sha, src, noise, noise_src, eda)
+    return CalibrationReport(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
+                             item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
+                             budget_notes=notes, excluded=excluded)
 
 
-def equal_division_for(unused: pd.DataFrame, readings: Readings):
+def equal_division_for(unused: pd.DataFrame, readings: Readings,
+                       protocol: Protocol | None = None):
     """Analyse the file's ``equal_division`` rows (table calibration, IEC 62047-20 A.3), if any.
 
     Returns ``(result or None, unused readings)``: a new ``unused_readings`` table
@@ -268,7 +818,11 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings):
         return None, unused
     lines = set(rows["line"])
     try:
-        out = equal_division_from_readings(readings)
+        out = equal_division_from_readings(
+            readings, protocol=protocol.equal_division if protocol is not None else None,
+            compensation_time_s=(protocol.session.static_s if protocol is not None
+                                 and protocol.session.earth_compensation == "measured"
+                                 else None))
     except GonioError as exc:
         # Not a complete equal-division measurement: the rest of the calibration goes
         # on; the rows stay listed as unused, with the reason.

@@ -26,18 +26,44 @@ def spec_module(spec: Specification):
 
 
 def readings_spec(path: str | Path) -> str | None:
-    """The ``# spec: …`` metadata of a readings file (None when absent)."""
-    text = read_utf8(path, "readings file")
-    for line in text.lstrip("\ufeff").splitlines():
-        s = line.strip()
-        if not s:
-            continue
-        if not s.startswith("#"):
-            return None
-        key, _, value = s[1:].partition(":")
-        if key.strip() == "spec":
-            return value.strip()
-    return None
+    """The ``# spec: …`` metadata of a readings file (None when absent).
+
+    Only the metadata lines at the top are read (a stream of gigabytes is never read
+    whole); a Parquet stream's key-value metadata is looked up instead.
+    """
+    if Path(path).suffix.lower() == ".parquet":
+        from gonio.formats.streams import StreamFile
+        return StreamFile(path).metadata.get("spec")
+    try:
+        fh = open(path, "rb")
+    except OSError:
+        read_utf8(path, "readings file")       # the one-line error naming the file
+        raise
+    with fh:
+        head = b""
+        while True:
+            piece = fh.read(1 << 16)
+            head += piece
+            try:
+                text = head.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                if exc.start < len(head) - 4 or not piece:
+                    raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
+                                     line=head[:exc.start].count(b"\n") + 1) from None
+                continue                           # a character cut at the piece's end
+            lines = text.lstrip("\ufeff").splitlines()
+            complete = lines if not piece else lines[:-1]
+            for line in complete:
+                s = line.strip()
+                if not s:
+                    continue
+                if not s.startswith("#"):
+                    return None
+                key, _, value = s[1:].partition(":")
+                if key.strip() == "spec":
+                    return value.strip()
+            if not piece:
+                return None
 
 
 def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,

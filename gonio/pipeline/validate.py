@@ -39,15 +39,22 @@ rate (the noise is drawn per sample with the right variance at any rate); 100 Hz
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import io
+import json
 import math
-from concurrent.futures import ProcessPoolExecutor
+import os
+import shutil
 from dataclasses import dataclass, field, replace
-from typing import Sequence
+from pathlib import Path
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 from gonio import __version__
+from gonio.atomic import write_bytes, write_text
 from gonio.bench import Bench, TableConfig, load_bench, run_session
 from gonio.bench.config import Harmonic
 from gonio.budget.extra import EXTRA_SYMBOLS, budget_extra_components
@@ -56,14 +63,16 @@ from gonio.pipeline.calibrate import calibrate
 from gonio.errors import GonioError
 from gonio.units import PPM, deg_to_arcsec
 from gonio.formats.readings import Readings
-from gonio.progress import progress
+from gonio.progress import Progress
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
 from gonio.formats.toml import read_toml
+from gonio.pipeline.item_coverage import item_coverage, trial_items
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "coverage", "binomial_u", "validate",
-           "ValidationReport", "trial_seeds", "EXTRA_SYMBOLS"]
+           "ValidationReport", "trial_seeds", "trial_seed", "run_batch", "TrialJob",
+           "pack_trials", "unpack_trials", "execution_backend", "PartialStore", "EXTRA_SYMBOLS"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -90,11 +99,13 @@ _TRUTH_DOC = {
 }
 
 
-def validation_protocol(protocol: str = "ogam-draft") -> Protocol:
+def validation_protocol(protocol: str = "ogam-draft", all_items: bool = False) -> Protocol:
     """The protocol restricted to what E and U need: 7.1 and 7.4 (10 series, 7.5).
 
-    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget);
-    timings, rests and the Earth-rate compensation of the draft are kept.
+    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget) unless
+    ``all_items`` (then every item's coverage is measured); timings, rests and the
+    Earth-rate compensation of the draft are kept. k is the draft's A.7 k = 2 when the
+    protocol does not fix it (the criterion of the study).
 
     >>> p = validation_protocol()
     >>> p.zero_stability is None, p.rate_consistency, p.angle_deviation.series
@@ -102,7 +113,9 @@ def validation_protocol(protocol: str = "ogam-draft") -> Protocol:
     """
     raw = read_toml(resolve(protocol, "protocol"))
     for key in ("zero_stability", "rate_consistency", "pointing_consistency"):
-        raw.pop(key, None)
+        if not all_items:
+            raw.pop(key, None)
+    raw.setdefault("annex_a", {}).setdefault("coverage_factor", 2.0)
     if "angle_deviation" not in raw or "scale_factor" not in raw:
         raise GonioError("validation needs scale_factor (7.1) and angle_deviation (7.4) sections",
                          file=str(protocol), key="angle_deviation")
@@ -173,11 +186,25 @@ class TrialResult:
     k_cal: float
     k_mount: float
     extras: list
+    items: dict = field(default_factory=dict)     # item_coverage.trial_items of this trial
 
 
-def _matrix(df: pd.DataFrame, col: str) -> np.ndarray:
-    return df.pivot(index="series", columns="round", values=col).sort_index().sort_index(
-        axis=1).to_numpy(dtype=float)
+def _matrix(df, col: str) -> np.ndarray:
+    """(series, round) matrix of ``col``, rows and columns in ascending order, NaN where a
+    (series, round) is absent (what ``DataFrame.pivot`` gives, without its cost).
+
+    >>> _matrix({"series": [2, 1, 1], "round": [1, 2, 1], "v": [5.0, 4.0, 3.0]}, "v").tolist()
+    [[3.0, 4.0], [5.0, nan]]
+    """
+    s_idx = np.asarray(df["series"])
+    r_idx = np.asarray(df["round"])
+    us, si = np.unique(s_idx, return_inverse=True)
+    ur, ri = np.unique(r_idx, return_inverse=True)
+    if np.unique(si * ur.size + ri).size != si.size:
+        raise ValueError("a (series, round) pair is given twice")
+    out = np.full((us.size, ur.size), np.nan)
+    out[si, ri] = np.asarray(df[col], dtype=float)
+    return out
 
 
 def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
@@ -192,12 +219,13 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft")
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
-    tr = pd.DataFrame(res.truth["readings"])
-    tr = tr[tr["test"] == "angle_deviation"]
+    rows = [r for r in res.truth["readings"] if r["test"] == "angle_deviation"]
+    tr = {k: [r[k] for r in rows] for k in ("series", "round", "systematic_deviation_arcsec",
+                                             "systematic_deviation_calibrated_arcsec")}
     u_r = float(rep.uncertainty.parameters["repeatability_arcsec"])
     extras = [e for e in budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r,
                                                  truth=truth, accel_dps2=bench.table.accel_dps2)
@@ -214,15 +242,28 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
                        U_extended_arcsec=float(ext.U_arcsec) * u_scale, u_r_arcsec=u_r,
                        k_cal=float(rep.results.scale_factor.value),
                        k_mount=float(res.truth["scale_factor_through_mount_counts_per_deg"]),
-                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras])
+                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras],
+                       items=trial_items(rep, res.truth))
 
 
-def _run_trial_args(args):
-    return run_trial(*args)
+def trial_seed(seed: int, case: str, index: int) -> int:
+    """Seed of trial ``index`` of ``case``: numpy SeedSequence(seed, spawn_key=(case, index)).
+
+    The same number as the ``index``-th child of ``SeedSequence(seed,
+    spawn_key=(case,)).spawn(...)``, computed from the index alone: a trial's
+    random stream does not depend on which other trials run, in which batch, on
+    which worker, or in which order.
+
+    >>> trial_seed(0, "default", 4) == trial_seeds(0, "default", 5)[4]
+    True
+    """
+    key = list(CASES).index(case)
+    ss = np.random.SeedSequence(seed, spawn_key=(key, int(index)))
+    return int(ss.generate_state(1, np.uint32)[0])
 
 
 def trial_seeds(seed: int, case: str, trials: int) -> list[int]:
-    """Seeds of the trials of one case: numpy SeedSequence(seed, spawn_key=(case index,)).
+    """Seeds of the first ``trials`` trials of one case (:func:`trial_seed` by index).
 
     A case's seeds do not depend on which other cases run, and the first n seeds
     do not depend on the number of trials.
@@ -230,9 +271,222 @@ def trial_seeds(seed: int, case: str, trials: int) -> list[int]:
     >>> trial_seeds(0, "default", 3) == trial_seeds(0, "default", 5)[:3]
     True
     """
-    key = list(CASES).index(case)
-    ss = np.random.SeedSequence(seed, spawn_key=(key,))
-    return [int(c.generate_state(1, np.uint32)[0]) for c in ss.spawn(trials)]
+    return [trial_seed(seed, case, i) for i in range(trials)]
+
+
+# ----------------------------------------------------------------------------- execution
+#
+# Trials run in batches (:func:`run_batch`, hundreds of trials per task) through
+# joblib: its local process pool by default, or its Dask backend on a
+# distributed cluster. Every batch returns its trials packed as arrays
+# (:func:`pack_trials`); the parent stores each finished batch atomically in the
+# output folder (``.validate-partial/``), so an interrupted study keeps what it
+# finished and ``resume`` runs only the trials still missing. Results are put
+# back in trial order before anything is summarised: the JSON does not depend on
+# the number of workers, the backend, the batching or the order of completion.
+
+#: Largest batch (trials per task).
+MAX_BATCH = 250
+#: Folder (inside ``--out``) holding the finished batches of a study in progress.
+PARTIAL_DIR = ".validate-partial"
+
+
+@dataclass(frozen=True)
+class TrialJob:
+    """What a worker needs to run trials of one case (picklable)."""
+
+    protocol: Protocol
+    bench: Bench
+    case: str
+    seed: int
+    u_scale: float
+    truth: str
+    extras_used: tuple
+
+
+def run_batch(job: TrialJob, start: int, stop: int) -> dict:
+    """Run trials ``start`` … ``stop − 1`` of ``job.case``; returned packed (:func:`pack_trials`)."""
+    idx = range(start, stop)
+    res = [run_trial(job.protocol, job.bench, trial_seed(job.seed, job.case, i), job.u_scale,
+                     job.truth, job.extras_used) for i in idx]
+    return pack_trials(job.case, list(idx), res)
+
+
+def pack_trials(case: str, indices: Sequence[int], trials: Sequence[TrialResult]) -> dict:
+    """Trials as a dict of numpy arrays (lossless: float64 bits are kept)."""
+    ex = trials[0].extras
+    return {
+        "case": np.array(case), "index": np.asarray(indices, dtype=np.int64),
+        "seed": np.array([t.seed for t in trials], dtype=np.int64),
+        "position_deg": np.stack([t.position_deg for t in trials]),
+        "E_ij": np.stack([t.E_ij for t in trials]),
+        "truth_systematic": np.stack([t.truth_systematic for t in trials]),
+        "truth_calibrated": np.stack([t.truth_calibrated for t in trials]),
+        "U_arcsec": np.array([t.U_arcsec for t in trials]),
+        "U_extended_arcsec": np.array([t.U_extended_arcsec for t in trials]),
+        "u_r_arcsec": np.array([t.u_r_arcsec for t in trials]),
+        "k_cal": np.array([t.k_cal for t in trials]),
+        "k_mount": np.array([t.k_mount for t in trials]),
+        "extras_symbol": np.array([e[0] for e in ex], dtype=str),
+        "extras_distribution": np.array([e[2] for e in ex], dtype=str),
+        "extras_half_width": np.array([[e[1] for e in t.extras] for t in trials],
+                                      dtype=np.float64).reshape(len(trials), len(ex)),
+    }
+
+
+def unpack_trials(packed: Mapping) -> dict[int, TrialResult]:
+    """Trial index → :class:`TrialResult` from :func:`pack_trials`."""
+    sym = [str(x) for x in packed["extras_symbol"]]
+    dist = [str(x) for x in packed["extras_distribution"]]
+    out = {}
+    for j, i in enumerate(packed["index"].tolist()):
+        out[int(i)] = TrialResult(
+            seed=int(packed["seed"][j]), position_deg=packed["position_deg"][j],
+            E_ij=packed["E_ij"][j], truth_systematic=packed["truth_systematic"][j],
+            truth_calibrated=packed["truth_calibrated"][j],
+            U_arcsec=float(packed["U_arcsec"][j]),
+            U_extended_arcsec=float(packed["U_extended_arcsec"][j]),
+            u_r_arcsec=float(packed["u_r_arcsec"][j]), k_cal=float(packed["k_cal"][j]),
+            k_mount=float(packed["k_mount"][j]),
+            extras=[(s, float(packed["extras_half_width"][j, m]), d)
+                    for m, (s, d) in enumerate(zip(sym, dist))])
+    return out
+
+
+def batches(indices: Sequence[int], size: int) -> list[tuple[int, int]]:
+    """Contiguous runs of the sorted ``indices`` cut into (start, stop) pieces of ≤ ``size``.
+
+    >>> batches([0, 1, 2, 3, 4, 7, 8, 9], 3)
+    [(0, 3), (3, 5), (7, 10)]
+    """
+    idx = sorted(int(i) for i in indices)
+    out: list[tuple[int, int]] = []
+    j = 0
+    while j < len(idx):
+        k = j
+        while k + 1 < len(idx) and idx[k + 1] == idx[k] + 1 and k + 1 - j < size:
+            k += 1
+        out.append((idx[j], idx[k] + 1))
+        j = k + 1
+    return out
+
+
+def available_cores() -> int:
+    """CPU cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+@contextlib.contextmanager
+def execution_backend(workers: int, scheduler: str | None):
+    """joblib's configuration for the study: yields the ``n_jobs`` to give ``Parallel``.
+
+    ``scheduler=None``: joblib's local process pool with ``workers`` processes
+    (1: in this process). ``"local:N"``: a ``distributed.LocalCluster`` of N
+    single-threaded worker processes started here; ``"tcp://host:port"`` (or any
+    address ``distributed.Client`` accepts): an existing Dask cluster. Both use
+    joblib's Dask backend, so the trials run through the same code either way.
+    """
+    if scheduler is None:
+        yield workers
+        return
+    try:
+        from distributed import Client, LocalCluster
+        from joblib import parallel_config
+    except ImportError:
+        raise GonioError("a Dask scheduler needs the optional extra: pip install 'gonio[dask]'",
+                         key="scheduler") from None
+    import logging
+
+    cluster = None
+    if scheduler.startswith("local:"):
+        n = scheduler[len("local:"):]
+        if not n.isdigit() or int(n) < 1:
+            raise GonioError(f"--scheduler local:N needs N >= 1 workers, got {scheduler!r}",
+                             key="scheduler")
+        cluster = LocalCluster(n_workers=int(n), threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        address = cluster
+    else:
+        address = scheduler
+    try:
+        try:
+            client = Client(address, timeout="20s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise GonioError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}",
+                             key="scheduler") from None
+        try:
+            with parallel_config(backend="dask"):
+                yield -1
+        finally:
+            client.close()
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def _fingerprint(job_settings: dict) -> str:
+    return hashlib.sha256(repr(sorted(job_settings.items())).encode()).hexdigest()
+
+
+class PartialStore:
+    """Finished batches of a study, one ``.npz`` file each, written atomically.
+
+    ``study.json`` records the settings' fingerprint; a store made for other
+    settings is refused.
+    """
+
+    def __init__(self, folder: Path, fingerprint: str, describe: dict):
+        self.folder = Path(folder)
+        self.fingerprint = fingerprint
+        self.describe = describe
+
+    def exists(self) -> bool:
+        return (self.folder / "study.json").exists()
+
+    def open(self, resume: bool) -> dict[str, dict[int, TrialResult]]:
+        """Create the store, or (``resume``) load what it holds: case → {index: trial}."""
+        head = self.folder / "study.json"
+        done: dict[str, dict[int, TrialResult]] = {}
+        if head.exists():
+            if not resume:
+                raise GonioError(f"{self.folder.parent} holds an unfinished study; give --resume "
+                                 f"to continue it, or remove {self.folder}", key="resume")
+            try:
+                info = json.loads(head.read_text(encoding="utf-8"))
+            except (OSError, ValueError) as exc:
+                raise GonioError(f"unreadable partial study: {exc}", file=head) from None
+            if info.get("fingerprint") != self.fingerprint:
+                raise GonioError("the unfinished study here was started with other settings "
+                                 f"({info.get('settings')}); resume it with those, or remove "
+                                 f"{self.folder}", file=head, key="resume")
+            for f in sorted(self.folder.glob("*.npz")):
+                try:
+                    with np.load(f, allow_pickle=False) as z:
+                        packed = {k: z[k] for k in z.files}
+                except (OSError, ValueError) as exc:
+                    raise GonioError(f"unreadable partial batch: {exc}", file=f) from None
+                case = str(packed["case"])
+                for i, tr in unpack_trials(packed).items():
+                    done.setdefault(case, {}).setdefault(i, tr)
+            return done
+        write_text(head, json.dumps({"fingerprint": self.fingerprint,
+                                     "settings": self.describe}, indent=2) + "\n")
+        return done
+
+    def save(self, packed: dict) -> None:
+        """Store one finished batch (atomic: the file is complete or absent)."""
+        idx = packed["index"]
+        name = f"{packed['case']}_{int(idx[0]):010d}_{int(idx[-1]) + 1:010d}.npz"
+        buf = io.BytesIO()
+        np.savez(buf, **packed)
+        write_bytes(self.folder / name, buf.getvalue())
+
+    def remove(self) -> None:
+        """Drop the store (the study is complete)."""
+        shutil.rmtree(self.folder, ignore_errors=True)
 
 
 def binomial_u(p: float, n: int) -> float:
@@ -329,6 +583,8 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         "mean_U_arcsec": float(U.mean()), "min_U_arcsec": float(U.min()),
         "mean_u_r_arcsec": float(np.mean([t.u_r_arcsec for t in tr])),
         "annex_a": block(U),
+        "items": item_coverage([t.items for t in tr],
+                               np.asarray(case.truth_intrinsic).mean(axis=0)),
         "diagnosis": diag,
         "primary": {"truth": truth},
     }
@@ -342,6 +598,24 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         s["extended"] = block(Ux)
         s["extended_for_truth"] = truth
     return s
+
+
+def item_coverage_lines(cases) -> list[str]:
+    """Per case, the coverage of every measured item (|result − truth| ≤ U; interval)."""
+    out = ["", "coverage per item (|result - truth| <= U as stated; for B_s and R also the "
+               "95 % interval holding the truth)"]
+    for c in cases:
+        for name, it in c.summary.get("items", {}).items():
+            w = it["within_U"]
+            txt = (f"{c.name:<10}{name:<28}{it['trials']:>5} trials  within U "
+                   f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
+            if "interval_holds_truth" in it:
+                txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+            if "within_U_intrinsic" in it:
+                txt += (f"   vs intrinsic truth "
+                        f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
+            out.append(txt)
+    return out
 
 
 @dataclass
@@ -380,6 +654,7 @@ class ValidationReport:
                     f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += item_coverage_lines(self.cases)
         return "\n".join(lines) + "\n"
 
 
@@ -396,8 +671,10 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              cases: Sequence[str] = ("default",), sample_rate_hz: float = 100.0,
              protocol: str | Protocol = "ogam-draft",
              extra_components: bool | Sequence[str] = False,
-             truth: str = "systematic", u_scale: float = 1.0, workers: int = 2,
-             show_progress: bool = True) -> ValidationReport:
+             truth: str = "systematic", u_scale: float = 1.0, workers: int | None = None,
+             scheduler: str | None = None, batch_size: int | None = None,
+             partial_dir: str | Path | None = None, resume: bool = False,
+             show_progress: bool = True, all_items: bool = False) -> ValidationReport:
     """Run ``trials`` independent virtual calibrations per case and measure coverage.
 
     Parameters
@@ -422,8 +699,27 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         The truth of the printed table (all of :data:`TRUTHS` are in the JSON).
     u_scale : float
         Multiplies U (1; < 1 deliberately breaks the budget, to test the study).
-    workers : int
-        Processes (1: in this process). Results do not depend on it.
+    workers : int, optional
+        Local processes (1: in this process; default min(2, cores); at most the
+        machine's cores). Ignored with ``scheduler``. Results do not depend on it.
+    scheduler : str, optional
+        Run on a Dask cluster: ``"tcp://host:8786"`` (an existing scheduler; gonio
+        must be installed on its workers) or ``"local:N"`` (start a
+        ``distributed.LocalCluster`` of N processes). Needs ``gonio[dask]``.
+        Results do not depend on it.
+    batch_size : int, optional
+        Trials per task (default: up to :data:`MAX_BATCH`, at least 4 tasks per
+        worker). Results do not depend on it.
+    partial_dir : path, optional
+        Folder where every finished batch is stored atomically as it completes
+        (the CLI uses ``OUT/.validate-partial``); removed once the study is
+        complete. An interrupted study keeps what it finished there.
+    resume : bool
+        Load the finished trials from ``partial_dir`` (same settings required) and
+        run only the missing ones.
+    all_items : bool
+        Keep 7.3, 7.6 and 7.7 in the protocol, so that every item's coverage is measured
+        (summary ``items``, :func:`gonio.pipeline.item_coverage.item_coverage`).
 
     Examples
     --------
@@ -465,43 +761,91 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
             if e not in EXTRA_SYMBOLS:
                 raise GonioError(f"unknown extra component {e!r} (known: "
                                  f"{', '.join(EXTRA_SYMBOLS)})", key="extra_components")
-    proto = protocol if isinstance(protocol, Protocol) else validation_protocol(protocol)
+    proto = protocol if isinstance(protocol, Protocol) else \
+        validation_protocol(protocol, all_items=all_items)
+    if proto.annex_a.coverage_factor is None:        # the study's criterion: the draft's k = 2
+        proto = replace(proto, annex_a=replace(proto.annex_a, coverage_factor=2.0))
     if proto.scale_factor is None or proto.angle_deviation is None \
             or proto.angle_deviation.series < 2:
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
     base = bench if isinstance(bench, Bench) else load_bench(bench)
     base = replace(base, sample_rate_hz=float(sample_rate_hz))
-    out = []
-    for name in cases:
-        b = case_bench(name, base, proto)
-        intr = run_session(proto, ideal_bench(b), seed=0).truth["readings"]
-        intr = pd.DataFrame(intr)
-        t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
-        seeds = trial_seeds(seed, name, trials)
-        tasks = [(proto, b, s, u_scale, truth, extras_used) for s in seeds]
-        it_label = f"validate {name}"
-        if workers > 1:
-            ex = ProcessPoolExecutor(max_workers=workers, initializer=_quiet_worker)
-            try:
-                res = list(progress(ex.map(_run_trial_args, tasks, chunksize=4), total=trials,
-                                    label=it_label) if show_progress else
-                           ex.map(_run_trial_args, tasks, chunksize=4))
-            except BaseException:          # an interrupt: drop the queued trials, stop soon
-                ex.shutdown(wait=True, cancel_futures=True)
-                raise
-            ex.shutdown(wait=True)
-        else:
-            gen = (run_trial(*t) for t in tasks)
-            res = list(progress(gen, total=trials, label=it_label) if show_progress else gen)
-        cr = CaseResult(name, CASES[name], res, t_int)
-        cr.summary = _summarise(cr, truth, bool(extras_used))
-        out.append(cr)
+    if scheduler is None:
+        cores = available_cores()
+        if workers is None:
+            workers = min(2, cores)
+        if not isinstance(workers, int) or workers < 1:
+            raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
+        if workers > cores:
+            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
+                             "--scheduler to run on a cluster", key="workers")
+    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
+    if batch_size is None:
+        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
+    if not isinstance(batch_size, int) or batch_size < 1:
+        raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
+                         key="batch_size")
     settings = {"trials": trials, "seed": seed,
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),
                 "protocol": proto.name,
-                "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"],
+                "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"]
+                + (["7.3", "7.6", "7.7"] if all_items else []),
                 "extra_components": list(extras_used), "truth": truth,
                 "u_scale": float(u_scale),
-                "seeding": "numpy SeedSequence(seed, spawn_key=(case index,)).spawn(trials)"}
+                "seeding": "numpy SeedSequence(seed, spawn_key=(case index, trial index))"}
+    jobs = {name: TrialJob(proto, case_bench(name, base, proto), name, seed, float(u_scale),
+                           truth, tuple(extras_used)) for name in cases}
+    done: dict[str, dict[int, TrialResult]] = {name: {} for name in cases}
+    store = None
+    if partial_dir is not None:
+        ident = {k: v for k, v in settings.items() if k != "trials"}
+        ident.update(gonio=__version__, jobs=[repr(j) for j in jobs.values()])
+        store = PartialStore(Path(partial_dir), _fingerprint(ident),
+                             {k: v for k, v in settings.items() if k != "trials"})
+        for name, got in store.open(resume).items():
+            if name in done:
+                done[name].update({i: t for i, t in got.items() if i < trials})
+    elif resume:
+        raise GonioError("--resume needs --out (the folder of the interrupted study)",
+                         key="resume")
+    tasks = [(jobs[name], a, b) for name in cases
+             for a, b in batches([i for i in range(trials) if i not in done[name]], batch_size)]
+    total = trials * len(cases)
+    already = sum(len(d) for d in done.values())
+    prog = Progress(total, label="validate: trials", done=already,
+                    force=False) if show_progress else None
+    try:
+        if tasks:
+            from joblib import Parallel, delayed
+
+            with execution_backend(workers, scheduler) as n_jobs:
+                run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+                for packed in run(delayed(run_batch)(*t) for t in tasks):
+                    if store is not None:
+                        store.save(packed)
+                    got = unpack_trials(packed)
+                    done[str(packed["case"])].update(got)
+                    if prog is not None:
+                        prog.update(len(got))
+    finally:
+        if prog is not None:
+            prog.close()
+    out = []
+    for name in cases:
+        b = jobs[name].bench
+        intr = run_session(proto, ideal_bench(b), seed=0).truth["readings"]
+        intr = pd.DataFrame(intr)
+        t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
+        res = [done[name][i] for i in range(trials)]
+        cr = CaseResult(name, CASES[name], res, t_int)
+        cr.summary = _summarise(cr, truth, bool(extras_used))
+        out.append(cr)
     return ValidationReport(settings, out)
+
+
+def _scheduler_workers(scheduler: str) -> int:
+    """Workers a scheduler string promises (for the default batch size; 2 if unknown)."""
+    if scheduler.startswith("local:") and scheduler[6:].isdigit():
+        return max(1, int(scheduler[6:]))
+    return 2

@@ -54,6 +54,11 @@ class RotationItem:
     rezero: bool
     rounds: tuple[Round, ...]
     max_time_to_reading_s: float | None = None
+    #: A reading's table_deg must equal its round's stop − start within this (degrees).
+    position_tolerance_deg: float = 0.001
+    #: What a reading that breaks the position or time-to-reading check becomes:
+    #: "exclude" (listed in unused_readings with the reason) or "error".
+    on_bad_reading: str = "exclude"
 
 
 @dataclass(frozen=True)
@@ -108,7 +113,8 @@ class AnnexA:
     zero_stability_dph: float = 0.005
     duration_min: float = 0.5
     repeatability_arcsec: float = 0.096
-    coverage_factor: float = 2.0
+    #: None: k = t_95(ν_eff) (Welch–Satterthwaite); a number: k fixed by the laboratory.
+    coverage_factor: float | None = None
 
 
 @dataclass(frozen=True)
@@ -163,6 +169,8 @@ _ROTATION_COMMON = {
     "rezero": Field("bool", True),
     "rounds": Field("table_list", None, schema=_ROUND),
     "max_time_to_reading_s": Field("float", None, positive, "> 0"),
+    "position_tolerance_deg": Field("float", 0.001, positive, "> 0"),
+    "on_bad_reading": Field("str", "exclude", choices=("exclude", "error")),
 }
 SCHEMA: dict[str, dict[str, Field]] = {
     "protocol": {
@@ -220,7 +228,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "zero_stability_dph": Field("float", 0.005, non_negative, "≥ 0"),
         "duration_min": Field("float", 0.5, non_negative, "≥ 0"),
         "repeatability_arcsec": Field("float", 0.096, non_negative, "≥ 0"),
-        "coverage_factor": Field("float", 2.0, positive, "> 0"),
+        # absent: k = t_95(ν_eff) (Welch–Satterthwaite); set: k fixed by the laboratory
+        "coverage_factor": Field("float", None, positive, "> 0"),
     },
 }
 _EXTRA: dict[str, tuple[dict[str, Field], Callable[[dict], Any] | None]] = {}
@@ -245,7 +254,9 @@ def _item(test: str, sec: dict, rate: float, orientation: str,
                         series=sec["series"], rest_s=sec["rest_s"],
                         read_delay_s=sec["read_delay_s"], return_to_zero=sec["return_to_zero"],
                         rezero=sec["rezero"], rounds=rounds,
-                        max_time_to_reading_s=sec["max_time_to_reading_s"])
+                        max_time_to_reading_s=sec["max_time_to_reading_s"],
+                        position_tolerance_deg=sec["position_tolerance_deg"],
+                        on_bad_reading=sec["on_bad_reading"])
 
 
 def _check_rounds(item: RotationItem, key: str, file) -> None:

@@ -53,7 +53,7 @@ import pandas as pd
 
 from gonio.errors import GonioError
 from gonio.protocol import Protocol, RotationItem
-from gonio.formats.streams import Stream
+from gonio.formats.streams import Stream, StreamChunk, StreamFile
 
 #: Default rest threshold on the table encoder rate, °/s.
 TABLE_RATE_THRESHOLD_DPS = 0.01
@@ -152,14 +152,15 @@ class RestFinder:
             edges = np.diff(np.concatenate(([0], ok.astype(np.int8), [0])))
             starts = np.flatnonzero(edges == 1)
             ends = np.flatnonzero(edges == -1) - 1
-            cs = np.concatenate(([0.0], np.cumsum(Z[w:])))
+            Zw = Z[w:]
             for s, e in zip(starts.tolist(), ends.tolist()):
+                part = float(Zw[s:e + 1].sum())
                 if s == 0 and self._open is not None:
-                    self._open["sum"] += cs[e + 1] - cs[s]
+                    self._open["sum"] += part
                     self._open["cnt"] += e - s + 1
                 else:
                     self._open = {"a": g0 + s + w, "t0": float(T[s]),
-                                  "sum": cs[e + 1] - cs[s], "cnt": e - s + 1}
+                                  "sum": part, "cnt": e - s + 1}
                 self._open["b"], self._open["tb"] = g0 + e + w, float(T[e + w])
                 if e < ok.size - 1:
                     self._close()
@@ -180,23 +181,104 @@ class RestFinder:
         return self.rests
 
 
+#: A rest's level is the median over at most this many of its samples (evenly strided
+#: beyond it), so a rest of any length is levelled in bounded memory.
+LEVEL_MAX_SAMPLES = 1 << 21
+#: Samples fetched at a time when levelling a long rest.
+_LEVEL_PIECE = 1 << 18
+
+
 def _dt(time_s: np.ndarray) -> float:
     d = np.diff(time_s[: min(time_s.size, 100_000)])
     return float(np.median(d)) if d.size else 1.0
 
 
+class _MemorySamples:
+    """A :class:`Stream` held in memory, seen through the sample-access interface that
+    :class:`gonio.formats.streams.StreamFile` offers for a file (one code path for both)."""
+
+    def __init__(self, stream: Stream):
+        self.st = stream
+        self.metadata = stream.metadata
+        self.path = stream.path
+        self.has_table = stream.table_deg is not None
+
+    def __len__(self) -> int:
+        return int(self.st.time_s.size)
+
+    def chunks(self):
+        st = self.st
+        yield StreamChunk(st.time_s, st.gyro_counts, st.table_deg, st.temperature_c, 0)
+
+    @property
+    def t_first(self) -> float:
+        return float(self.st.time_s[0])
+
+    @property
+    def t_last(self) -> float:
+        return float(self.st.time_s[-1])
+
+    def time_at(self, i: int) -> float:
+        return float(self.st.time_s[int(i)])
+
+    def counts_at(self, i: int):
+        return self.st.gyro_counts[int(i)]
+
+    def search(self, t: float, side: str = "left") -> int:
+        return int(np.searchsorted(self.st.time_s, t, side=side))
+
+    def window(self, a: int, b: int) -> StreamChunk:
+        n = len(self)
+        a, b = max(0, int(a)), min(n, int(b))
+        st = self.st
+        tab = None if st.table_deg is None else st.table_deg[a:b]
+        return StreamChunk(st.time_s[a:b], st.gyro_counts[a:b], tab, None, a)
+
+
+class _Signal:
+    """The signal rests are found on: the table angle (despiked by a median of three) or,
+    without a table column, the gyro angle (counts − first count)/K; fetched by index."""
+
+    def __init__(self, src, on_table: bool, k_sf: float | None):
+        self.src, self.on_table, self.k = src, on_table, k_sf
+        self.n = len(src)
+        self.c0 = None if on_table else src.counts_at(0)
+
+    def raw(self, ch: StreamChunk) -> np.ndarray:
+        if self.on_table:
+            return np.asarray(ch.table_deg, dtype=np.float64)
+        return (ch.gyro_counts - self.c0).astype(np.float64) / self.k
+
+    def get(self, a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
+        """(t, y) of samples a … b − 1 (clipped), y despiked on the table."""
+        a, b = max(0, a), min(self.n, b)
+        if not self.on_table:
+            ch = self.src.window(a, b)
+            return ch.time_s, self.raw(ch)
+        lo, hi = max(0, a - 1), min(self.n, b + 1)
+        ch = self.src.window(lo, hi)
+        x = self.raw(ch)
+        y = x.copy()
+        if x.size >= 3:
+            y[1:-1] = _median3(x)
+        # the first/last fetched samples are despiked only at the stream's own ends
+        return ch.time_s[a - lo: a - lo + (b - a)], y[a - lo: a - lo + (b - a)]
+
+
 def _signal(time_s, table_deg, counts, scale_factor_counts_per_deg):
     if table_deg is not None:
-        return np.asarray(table_deg, dtype=np.float64), True
+        return True
     if counts is None:
         raise GonioError("find_rests needs table_deg or gyro counts")
-    if not scale_factor_counts_per_deg or not math.isfinite(scale_factor_counts_per_deg) \
-            or scale_factor_counts_per_deg <= 0:
+    _check_k(scale_factor_counts_per_deg)
+    return False
+
+
+def _check_k(k):
+    if not k or not math.isfinite(k) or k <= 0:
         raise GonioError("a stream without table_deg needs the metadata "
                          "nominal_scale_factor_counts_per_deg to find rests from the gyro rate",
                          key="nominal_scale_factor_counts_per_deg")
-    c = np.asarray(counts)
-    return (c - c[0]).astype(np.float64) / scale_factor_counts_per_deg, False
 
 
 def find_rests(time_s: np.ndarray, table_deg: np.ndarray | None = None,
@@ -241,22 +323,75 @@ def find_rests(time_s: np.ndarray, table_deg: np.ndarray | None = None,
     (5.0, 6.5)
     """
     time_s = np.asarray(time_s, dtype=np.float64)
-    x, on_table = _signal(time_s, table_deg, counts, scale_factor_counts_per_deg)
-    dt = _dt(time_s)
+    on_table = _signal(time_s, table_deg, counts, scale_factor_counts_per_deg)
+    st = Stream(time_s, np.zeros(time_s.size, dtype=np.int64) if counts is None else
+                np.asarray(counts), None if table_deg is None else
+                np.asarray(table_deg, dtype=np.float64))
+    return rests_of(_MemorySamples(st), on_table=on_table,
+                    scale_factor_counts_per_deg=scale_factor_counts_per_deg,
+                    rate_threshold_dps=rate_threshold_dps, window_s=window_s,
+                    min_rest_s=min_rest_s, refine=refine)[0]
+
+
+def rests_of(src, *, on_table: bool, scale_factor_counts_per_deg: float | None = None,
+             rate_threshold_dps: float | None = None, window_s: float | None = None,
+             min_rest_s: float = 0.5, refine: bool = True) -> tuple[list[Rest], float]:
+    """:func:`find_rests` on a sample source (a :class:`gonio.formats.streams.StreamFile` or a stream
+    in memory), reading it once chunk by chunk; returns the rests and the median sample
+    interval of the first 100 000 samples.
+
+    Memory: the rest finder's carry, the list of rests, and for the refinement a
+    window around each edge and at most :data:`LEVEL_MAX_SAMPLES` samples of a rest.
+    """
+    k = scale_factor_counts_per_deg
+    if not on_table:
+        _check_k(k)
+    finder = None
+    head_t: list[np.ndarray] = []
+    head_x: list[np.ndarray] = []
+    n_head = 0
+    dt = 1.0
+    sig = None
+    c0 = None
+    for ch in src.chunks():
+        if not on_table and c0 is None:
+            c0 = ch.gyro_counts[0]
+        x = np.asarray(ch.table_deg, dtype=np.float64) if on_table else \
+            (ch.gyro_counts - c0).astype(np.float64) / k
+        if finder is None:
+            head_t.append(ch.time_s)
+            head_x.append(x)
+            n_head += ch.time_s.size
+            if n_head < 100_000:
+                continue
+            finder, dt = _start_finder(head_t, head_x, on_table, rate_threshold_dps, window_s,
+                                       min_rest_s)
+            continue
+        finder.feed(ch.time_s, x)
+    if finder is None:
+        if not head_t:
+            return [], dt
+        finder, dt = _start_finder(head_t, head_x, on_table, rate_threshold_dps, window_s,
+                                   min_rest_s)
+    rests = finder.finish()
+    if refine and rests:
+        sig = _Signal(src, on_table, k)
+        floor = 1e-9 if on_table else 1.5 / float(k)
+        _refine(sig, rests, finder.w, floor, trend=not on_table)
+    return rests, dt
+
+
+def _start_finder(head_t, head_x, on_table, rate_threshold_dps, window_s, min_rest_s):
+    t = np.concatenate(head_t)
+    x = np.concatenate(head_x)
+    dt = _dt(t)
     thr = rate_threshold_dps if rate_threshold_dps is not None else (
         TABLE_RATE_THRESHOLD_DPS if on_table else GYRO_RATE_THRESHOLD_DPS)
     ws = window_s if window_s is not None else (0.0 if on_table else GYRO_WINDOW_S)
     w = max(1, int(round(ws / dt)))
     f = RestFinder(rate_threshold_dps=thr, window=w, despike=on_table, min_rest_s=min_rest_s)
-    f.feed(time_s, x)
-    rests = f.finish()
-    if refine:
-        y = x.copy()
-        if on_table and x.size >= 3:
-            y[1:-1] = _median3(x)
-        floor = 1e-9 if on_table else 1.5 / float(scale_factor_counts_per_deg)
-        _refine(time_s, y, rests, w, floor, trend=not on_table)
-    return rests
+    f.feed(t, x)
+    return f, dt
 
 
 def _root_sqrt(t1, d1, t2, d2) -> float:
@@ -278,53 +413,72 @@ def _edge_fit(t: np.ndarray, y: np.ndarray, lo: int, hi: int, t_ref: float, tren
     return float(a), float(b), float(np.median(np.abs(res - np.median(res)))) * 1.4826
 
 
-def _refine(t: np.ndarray, y: np.ndarray, rests: list[Rest], w: int, floor: float,
-            trend: bool = False) -> None:
+def _level(sig: _Signal, s: int, e: int) -> float:
+    """Median of the signal over the rest s … e (evenly strided beyond LEVEL_MAX_SAMPLES)."""
+    n = e + 1 - s
+    if n <= _LEVEL_PIECE:
+        return float(np.median(sig.get(s, e + 1)[1]))
+    stride = -(-n // LEVEL_MAX_SAMPLES)
+    if stride > _LEVEL_PIECE:         # pragma: no cover - a rest of > 5×10¹¹ samples
+        stride = _LEVEL_PIECE
+    piece = _LEVEL_PIECE - _LEVEL_PIECE % stride      # a multiple of the stride
+    parts = []
+    for a in range(s, e + 1, piece):
+        parts.append(sig.get(a, min(e + 1, a + piece))[1][::stride])
+    return float(np.median(np.concatenate(parts)))
+
+
+def _refine(sig: _Signal, rests: list[Rest], w: int, floor: float, trend: bool = False) -> None:
     """Median levels, and sub-sample departure/arrival from the √-law of a start from rest.
 
     On the gyro angle (``trend``) the rest is a line (the Earth rate), not a level.
+    Each edge is refined on a window of samples around it (fetched from the source).
     """
-    n = t.size
+    n = sig.n
     for r in rests:
         s, e = r.i_start, r.i_end
-        r.level_deg = float(np.median(y[s:e + 1]))
+        r.level_deg = _level(sig, s, e)
         inner = max(1, w) if trend else 0     # samples near the edges the window may blur
         # departure
-        r.t_depart_s = float(t[e])
+        r.t_depart_s = sig.src.time_at(e)
         if e < n - 1:
             hi = max(s + 2, e - inner + 1)
             lo = max(s, hi - max(3 * w, 20))
-            a, b, noise = _edge_fit(t, y, lo, hi, float(t[e]), trend)
-            tol = max(5.0 * noise, floor)
             j0, j1 = max(s + 1, hi - 1), min(n, e + w + 6)
-            d = np.abs(y[j0:j1] - (a + b * (t[j0:j1] - t[e])))
+            A = lo
+            t, y = sig.get(A, j1)
+            a, b, noise = _edge_fit(t, y, lo - A, hi - A, float(t[e - A]), trend)
+            tol = max(5.0 * noise, floor)
+            d = np.abs(y[j0 - A:j1 - A] - (a + b * (t[j0 - A:j1 - A] - t[e - A])))
             off = d > tol
             if off.any():
                 k = int(np.argmax(off))
                 j = j0 + k
-                r.t_depart_s = float(t[j - 1])
+                r.t_depart_s = float(t[j - 1 - A])
                 if k + 1 < d.size:
-                    td = _root_sqrt(t[j], d[k], t[j + 1], d[k + 1])
+                    td = _root_sqrt(t[j - A], d[k], t[j + 1 - A], d[k + 1])
                     if math.isfinite(td):
-                        r.t_depart_s = float(min(max(td, t[j - 1]), t[j]))
+                        r.t_depart_s = float(min(max(td, t[j - 1 - A]), t[j - A]))
         # arrival
-        r.t_arrive_s = float(t[s])
+        r.t_arrive_s = sig.src.time_at(s)
         if s > 0:
             lo = min(e - 1, s + inner)
             hi = min(e + 1, lo + max(3 * w, 20))
-            a, b, noise = _edge_fit(t, y, lo, hi, float(t[s]), trend)
-            tol = max(5.0 * noise, floor)
             j0, j1 = max(0, s - w - 6), min(e, lo + 1)
-            d = np.abs(y[j0:j1] - (a + b * (t[j0:j1] - t[s])))
+            A = j0
+            t, y = sig.get(A, max(hi, j1) + 1)
+            a, b, noise = _edge_fit(t, y, lo - A, hi - A, float(t[s - A]), trend)
+            tol = max(5.0 * noise, floor)
+            d = np.abs(y[j0 - A:j1 - A] - (a + b * (t[j0 - A:j1 - A] - t[s - A])))
             off = d > tol
             if off.any():
                 k = int(np.flatnonzero(off)[-1])
                 j = j0 + k
-                r.t_arrive_s = float(t[j + 1])
+                r.t_arrive_s = float(t[j + 1 - A])
                 if k >= 1:
-                    ta = _root_sqrt(t[j], d[k], t[j - 1], d[k - 1])
+                    ta = _root_sqrt(t[j - A], d[k], t[j - 1 - A], d[k - 1])
                     if math.isfinite(ta):
-                        r.t_arrive_s = float(min(max(ta, t[j]), t[j + 1]))
+                        r.t_arrive_s = float(min(max(ta, t[j - A]), t[j + 1 - A]))
 
 
 # ----------------------------------------------------------------------------- matching
@@ -366,7 +520,7 @@ class Reduction:
 
 @dataclass
 class _Ctx:
-    st: Stream
+    st: object               # the sample source (_MemorySamples or StreamFile)
     proto: Protocol
     rests: list[Rest]
     pos_tol: float
@@ -380,16 +534,23 @@ class _Ctx:
     cursor: int = 0
 
     def sample_at_or_after(self, t: float) -> int:
-        return int(np.searchsorted(self.st.time_s, t - self.eps, side="left"))
+        return self.st.search(t - self.eps, side="left")
 
     def nearest(self, t: float) -> int:
-        ts = self.st.time_s
-        i = int(np.searchsorted(ts, t))
-        if i >= ts.size:
-            return ts.size - 1
-        if i > 0 and (t - ts[i - 1]) <= (ts[i] - t):
+        st = self.st
+        i = st.search(t)
+        n = len(st)
+        if i >= n:
+            return n - 1
+        if i > 0 and (t - st.time_at(i - 1)) <= (st.time_at(i) - t):
             return i - 1
         return i
+
+    def t(self, i: int) -> float:
+        return self.st.time_at(i)
+
+    def c(self, i: int):
+        return self.st.counts_at(i)
 
     def rest_of(self, i: int) -> int | None:
         for q in range(len(self.rests)):
@@ -398,9 +559,8 @@ class _Ctx:
         return None
 
     def counts(self, kz: int, kr: int, comp: float) -> float:
-        c = self.st.gyro_counts
-        d = c[kr] - c[kz]
-        raw = float(d) - comp * float(self.st.time_s[kr] - self.st.time_s[kz])
+        d = self.c(kr) - self.c(kz)
+        raw = float(d) - comp * float(self.t(kr) - self.t(kz))
         return float(np.rint(raw)) if self.quantised else raw
 
 
@@ -424,12 +584,10 @@ def _static_comp(ctx: _Ctx, rest_idx: int, kz: int) -> float | None:
         return 0.0
     if s.earth_compensation == "computed":
         return None  # filled by caller
-    t = ctx.st.time_s
-    k0 = ctx.nearest(float(t[kz]) - s.static_s)
+    k0 = ctx.nearest(ctx.t(kz) - s.static_s)
     if k0 < ctx.rests[rest_idx].i_start or k0 >= kz:
         return math.nan
-    c = ctx.st.gyro_counts
-    return float(c[kz] - c[k0]) / float(t[kz] - t[k0])
+    return float(ctx.c(kz) - ctx.c(k0)) / float(ctx.t(kz) - ctx.t(k0))
 
 
 def _find_pair(ctx: _Ctx, start: int, zero_level: float | None, delta: float,
@@ -458,11 +616,11 @@ def _series_rounds(item: RotationItem) -> list[tuple[int, float, float]]:
 
 
 def _row(test, series, rnd, rate, orient, ctx: _Ctx, kz, kr, table_deg, comp):
-    t = ctx.st.time_s
+    tz, tr = ctx.t(kz), ctx.t(kr)
     return {"test": test, "series": series, "round": rnd, "rate_dps": rate,
-            "orientation": orient, "time_s": round(float(t[kr] - t[kz]), 9),
+            "orientation": orient, "time_s": round(float(tr - tz), 9),
             "table_deg": table_deg, "gyro_counts": ctx.counts(kz, kr, comp),
-            "gyro_deg": math.nan, "t_zero_s": float(t[kz]), "t_read_s": float(t[kr])}
+            "gyro_deg": math.nan, "t_zero_s": float(tz), "t_read_s": float(tr)}
 
 
 def _zero_stability(ctx: _Ctx) -> None:
@@ -481,15 +639,14 @@ def _zero_stability(ctx: _Ctx) -> None:
         return
     kz = ctx.sample_at_or_after(r.t_arrive_s + static)
     if s.earth_compensation == "measured":
-        k0 = ctx.nearest(float(ctx.st.time_s[kz]) - static)
-        comp = float(ctx.st.gyro_counts[kz] - ctx.st.gyro_counts[k0]) / \
-            float(ctx.st.time_s[kz] - ctx.st.time_s[k0])
+        k0 = ctx.nearest(ctx.t(kz) - static)
+        comp = float(ctx.c(kz) - ctx.c(k0)) / float(ctx.t(kz) - ctx.t(k0))
     elif s.earth_compensation == "computed":
         comp = _computed_comp(ctx.st, z.orientation)
     else:
         comp = 0.0
     ctx.comps.append(comp)
-    t_zero = float(ctx.st.time_s[kz])
+    t_zero = ctx.t(kz)
     for n in range(z.readings):
         kr = ctx.sample_at_or_after(t_zero + n * z.interval_s)
         ctx.rows.append(_row("zero_stability", 1, n + 1, math.nan, z.orientation, ctx, kz, kr,
@@ -586,9 +743,9 @@ def _apply_override(ctx: _Ctx, override: Sequence[dict], plan: dict) -> None:
         k = cands[0]
         table_deg, orient = plan[k]
         t0, t1 = float(o["t_zero_s"]), float(o["t_read_s"])
-        if not (st.time_s[0] <= t0 < t1 <= st.time_s[-1]):
+        if not (st.t_first <= t0 < t1 <= st.t_last):
             raise GonioError(f"override {key}: times outside the stream "
-                             f"[{st.time_s[0]:g}, {st.time_s[-1]:g}] s", key=str(key))
+                             f"[{st.t_first:g}, {st.t_last:g}] s", key=str(key))
         kz, kr = ctx.nearest(t0), ctx.nearest(t1)
         if s.earth_compensation == "computed":
             comp = _computed_comp(st, orient)
@@ -596,24 +753,23 @@ def _apply_override(ctx: _Ctx, override: Sequence[dict], plan: dict) -> None:
             comp = 0.0
         else:
             k0 = ctx.nearest(t0 - s.static_s)
-            comp = float(st.gyro_counts[kz] - st.gyro_counts[k0]) / \
-                float(st.time_s[kz] - st.time_s[k0]) if kz > k0 else 0.0
+            comp = float(ctx.c(kz) - ctx.c(k0)) / \
+                float(ctx.t(kz) - ctx.t(k0)) if kz > k0 else 0.0
             prev = [r for r in ctx.rows if (r["test"], r["series"], r["rate_dps"],
                                             r["orientation"]) == (k[0], k[1], k[3], k[4])]
             if prev:   # the series' own static phase when the matching found it
-                c = st.gyro_counts
                 p = prev[0]
                 kz0, kr0 = ctx.nearest(p["t_zero_s"]), ctx.nearest(p["t_read_s"])
-                comp = (float(c[kr0] - c[kz0]) - p["gyro_counts"]) / \
-                    float(st.time_s[kr0] - st.time_s[kz0])
+                comp = (float(ctx.c(kr0) - ctx.c(kz0)) - p["gyro_counts"]) / \
+                    float(ctx.t(kr0) - ctx.t(kz0))
         ctx.rows = [r for r in ctx.rows if (r["test"], r["series"], r["round"], r["rate_dps"],
                                             r["orientation"]) != k]
         ctx.unmatched = [u for u in ctx.unmatched
                          if not (u.get("kind") == "round" and (u.get("test"), u.get("series"),
                                  u.get("round")) == key)]
         ctx.rows.append(_row(k[0], k[1], k[2], k[3], orient, ctx, kz, kr, table_deg, comp))
-        ctx.log.append(f"override {k[0]} series {k[1]} round {k[2]}: zero {st.time_s[kz]:.6f} s,"
-                       f" read {st.time_s[kr]:.6f} s")
+        ctx.log.append(f"override {k[0]} series {k[1]} round {k[2]}: zero {ctx.t(kz):.6f} s,"
+                       f" read {ctx.t(kr):.6f} s")
 
 
 def _plan_keys(proto: Protocol) -> dict:
@@ -632,7 +788,7 @@ def _plan_keys(proto: Protocol) -> dict:
     return plan
 
 
-def reduce_stream(stream: Stream, protocol: Protocol, *, override: Iterable[dict] | None = None,
+def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol, *, override: Iterable[dict] | None = None,
                   pos_tol_deg: float | None = None, min_rest_s: float = 0.5,
                   rate_threshold_dps: float | None = None,
                   window_s: float | None = None) -> Reduction:
@@ -640,8 +796,11 @@ def reduce_stream(stream: Stream, protocol: Protocol, *, override: Iterable[dict
 
     Parameters
     ----------
-    stream : Stream
-        From :func:`gonio.formats.streams.read_stream` (or built in memory).
+    stream : Stream, StreamFile or path
+        A stream in memory (:func:`gonio.formats.streams.read_stream`, or built), or a
+        stream file (CSV or Parquet) read in bounded memory: one pass to find the
+        rests (validating and indexing the file), then only the blocks around the
+        rests' edges and the readings are read again.
     protocol : Protocol
         The planned sequence: zero stability (one long rest), then per item and
         series a static phase and rounds (see the module notes).
@@ -674,24 +833,35 @@ def reduce_stream(stream: Stream, protocol: Protocol, *, override: Iterable[dict
     >>> red.readings[["test", "round", "time_s", "table_deg", "gyro_counts"]].to_dict("records")
     [{'test': 'scale_factor', 'round': 1, 'time_s': 3.0, 'table_deg': 30.0, 'gyro_counts': 108000.0}]
     """
-    st = stream
-    n = len(st.time_s)
-    if n < 3:
-        raise GonioError("the stream has fewer than 3 samples", file=st.path)
+    if isinstance(stream, (str, Path)):
+        stream = StreamFile(stream)
+    if isinstance(stream, Stream):
+        st = _MemorySamples(stream)
+        has_table = stream.table_deg is not None
+        if len(st) < 3:
+            raise GonioError("the stream has fewer than 3 samples", file=st.path)
+        int_counts = np.issubdtype(np.asarray(stream.gyro_counts).dtype, np.integer)
+    else:
+        st = stream
+        has_table = "table_deg" in st.columns
+        int_counts = st.header.quantised
     k_sf = None
-    if st.table_deg is None:
+    if not has_table:
         from gonio.formats.readings import metadata_float
         k_sf = metadata_float(st.metadata, "nominal_scale_factor_counts_per_deg", file=st.path)
-    rests = find_rests(st.time_s, st.table_deg, st.gyro_counts, scale_factor_counts_per_deg=k_sf,
-                       rate_threshold_dps=rate_threshold_dps, window_s=window_s,
-                       min_rest_s=min_rest_s)
+        _check_k(k_sf)
+    rests, dt = rests_of(st, on_table=has_table, scale_factor_counts_per_deg=k_sf,
+                         rate_threshold_dps=rate_threshold_dps, window_s=window_s,
+                         min_rest_s=min_rest_s)
+    n = len(st)
+    if n < 3:
+        raise GonioError("the stream has fewer than 3 samples", file=st.path)
     from gonio.formats.readings import metadata_bool
-    quantised = metadata_bool(st.metadata, "counts_quantised", True, file=st.path) and \
-        np.issubdtype(np.asarray(st.gyro_counts).dtype, np.integer)
-    tol = pos_tol_deg if pos_tol_deg is not None else (0.05 if st.table_deg is not None else 1.0)
-    ctx = _Ctx(st, protocol, rests, tol, quantised, eps=1e-6 * _dt(st.time_s))
+    quantised = metadata_bool(st.metadata, "counts_quantised", True, file=st.path) and int_counts
+    tol = pos_tol_deg if pos_tol_deg is not None else (0.05 if has_table else 1.0)
+    ctx = _Ctx(st, protocol, rests, tol, quantised, eps=1e-6 * dt)
     ctx.log.append(f"{n} samples, {len(rests)} rests "
-                   f"({'table encoder' if st.table_deg is not None else 'gyro rate'})")
+                   f"({'table encoder' if has_table else 'gyro rate'})")
     if protocol.zero_stability is not None:
         _zero_stability(ctx)
     series_list = [(item, s) for item in protocol.items() for s in range(1, item.series + 1)]

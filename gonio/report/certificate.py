@@ -318,6 +318,11 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
                           k=_num(res, "uncertainty.k", "k", U),
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
         add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+        ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
+        if ks:
+            add("p", ["k: " + ("fixed by laboratory" if ks == "fixed by laboratory" else
+                               "t-factor of the effective degrees of freedom "
+                               "(welch-satterthwaite)")])
     else:
         add("p", [L["no_E_U"]], "U")
     del st_e
@@ -419,6 +424,13 @@ def _eda_section(res: dict, L: dict, U: float, add) -> None:
                       v=_num(res, "equal_division.closure.full_turn_arcsec",
                              rule_at_U(cl.get("u_full_turn_arcsec")), U),
                       u=_num(res, "equal_division.closure.u_full_turn_arcsec", "U", U)))
+    cp = e.get("coupling")                   # tilt × Earth-rate coupling (issue 12, defect 6)
+    if cp:
+        txt = cp["note"]
+        if cp.get("separable"):
+            txt += (f" (Ω⊥ tan ψ = {cp['amplitude_arcsec_s']:.2g}″/s, largest effect on a "
+                    f"reading {cp['max_effect_arcsec']:.2g}″)")
+        add("p", [txt])
 
 
 def _detail_tables(res: dict, L: dict, U: float, add) -> None:

@@ -302,12 +302,19 @@ READING_NOTES_ZH: dict[str, str] = {
     "Annex A.4.4:": "附录A.4.4：u(r) 取本次校准自身重复测量（7.5）各校准点贝塞尔标准偏差的最大值。",
     "Annex A.4.2:": "附录A.4.2：u(φ_e) 采用草案的椭圆投影倾斜模型；同时给出刚体模型（倾斜为 cos ψ "
                     "因子，被标度因数吸收）。",
+    "Annex A.4.4 (not applied):": "附录A.4.4（未采用）：本次校准没有自身的重复测量系列；u(r) 取"
+                                  "校准方案 annex_a.repeatability_arcsec 的给定值（B类）。",
+    "Annex A.4.3:": "附录A.4.3：u(B_E) 按本次实际采用的 7.4 读数中自清零至读数的最长时间计算"
+                    "（而非 0.5 min 的上限）。",
 }
 BUDGET_SOURCES_ZH: dict[str, str] = {
     "P": "标准转台定位误差（A.4.1）",
     "phi_e": "敏感平面与台面不平行（A.4.2）",
     "B_E": "零位漂移（A.4.3）",
     "r": "重复性（A.4.4）",
+    "K_P": "7.1 各停位转台误差经标度因数传入 E（超出草案）",
+    "K_r": "7.1 读数分散性经标度因数传入 E（超出草案）",
+    "tilt_E": "倾斜与地速耦合（超出草案，第7章前言地速补偿与A.1倾斜限）",
 }
 #: English form of Chinese titles, used when no CJK font is installed (the en certificate).
 TITLES_EN: dict[str, str] = {

@@ -198,9 +198,11 @@ def _extra(e) -> ExtraComponent:
 
 def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                    zero_stability_dph: float = 0.005, duration_min: float = 0.5,
-                   repeatability_arcsec: float = 0.096, k: float = 2.0,
+                   repeatability_arcsec: float = 0.096, k: float | None = 2.0,
                    extra_components: Sequence = (), monte_carlo_trials: int = 0,
-                   seed: int = 0, repeatability_dof: float = math.inf) -> AnnexABudget:
+                   seed: int = 0, repeatability_dof: float = math.inf,
+                   repeatability_type: str = "A",
+                   repeatability_source: str = "repeatability (A.4.4)") -> AnnexABudget:
     """The draft's Annex A budget (A.2–A.7), optionally checked by JCGM 101 Monte Carlo.
 
     Parameters
@@ -213,8 +215,9 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
         u(B_E) = stability × time / √3, 0.005 °/h = 0.3″/min (A.4.3).
     repeatability_arcsec : float
         u(r), Type A (A.4.4); see :func:`repeatability_from_deviations`.
-    k : float
-        Coverage factor (A.7).
+    k : float or None
+        Coverage factor (A.7: 2). None: k = t_95(ν_eff), ν_eff by Welch–Satterthwaite
+        (JCGM 100 G.4), e.g. u(r) from n series carries ν = n − 1.
     extra_components : sequence of ExtraComponent, dict or tuple
         Further additive Type B terms (symbol, source, half_width_arcsec, distribution).
     monte_carlo_trials, seed : int
@@ -222,6 +225,9 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     repeatability_dof : float
         ν of u(r); the draft gives none, so infinite (normal in MC). With a finite ν
         the MC draws a scaled t (JCGM 101 6.4.9).
+    repeatability_type, repeatability_source : str
+        "A" when u(r) comes from the calibration's own series, "B" when it is a stated
+        value (e.g. the protocol's); the source sentence shown in the budget.
 
     Examples
     --------
@@ -232,6 +238,13 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     (0.1487, 0.297, 0.15, 0.3)
     >>> round(b.annex_rounded["u_c_arcsec"], 3)
     0.149
+
+    u(r) from 5 series (ν = 4), k by Welch–Satterthwaite: ν_eff = 0.1487⁴/(0.096⁴/4) = 23.0,
+    k = t_95(23) = 2.069:
+
+    >>> w = annex_a_budget(repeatability_dof=4, k=None)
+    >>> round(w.gum.dof, 1), round(w.k, 3), round(w.U_arcsec, 3)
+    (23.0, 2.069, 0.308)
     """
     checks = [("table_mpe_arcsec", table_mpe_arcsec, "must be >= 0"),
               ("zero_stability_dph", zero_stability_dph, "must be >= 0"),
@@ -242,7 +255,7 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
             raise _err(name, f"{msg}, got {v}")
     if not (math.isfinite(tilt_deg) and 0 <= tilt_deg < 90):
         raise _err("tilt_deg", f"must satisfy 0 <= tilt < 90 degrees, got {tilt_deg}")
-    if not (math.isfinite(k) and k > 0):
+    if k is not None and not (math.isfinite(k) and k > 0):
         raise _err("k", f"coverage factor must be > 0, got {k}")
     if int(monte_carlo_trials) != monte_carlo_trials or monte_carlo_trials < 0 \
             or monte_carlo_trials == 1:
@@ -266,8 +279,8 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
         type_b("phi_e", 0.0, phi_half, "rectangular",
                source="sensing plane not parallel to table plane (A.4.2)"),
         type_b("B_E", 0.0, drift_arcsec, "rectangular", source="zero drift (A.4.3)"),
-        from_u("r", 0.0, repeatability_arcsec, dof=repeatability_dof, type="A",
-               source="repeatability (A.4.4)"),
+        from_u("r", 0.0, repeatability_arcsec, dof=repeatability_dof, type=repeatability_type,
+               source=repeatability_source),
     ]
     for e in extras:
         try:
@@ -276,7 +289,9 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
         except ValueError as exc:
             raise _err("extra_components", str(exc)) from None
     model = annex_a_model(tuple(e.symbol for e in extras))
-    gum = propagate(model, inputs, k=k)
+    gum = propagate(model, inputs, k=k) if k is not None else \
+        propagate(model, inputs, k=None, p=0.95)
+    k = gum.k
 
     rounded = tuple(annex_a5_rounding(c.u_xi, c.type) for c in gum.contributions)
     u_c_r = math.sqrt(sum(u * u for u in rounded))

@@ -1,0 +1,179 @@
+"""Coverage of every item's uncertainty on the virtual bench (issue 12, clause 8).
+
+:func:`item_record` takes one virtual calibration (its report and the bench's truth)
+and keeps, per item, the result, its U (and interval) and what the truth is;
+:func:`item_coverage` pools the records of many seeds into, per item, the fraction of
+trials whose result lies within U of the truth (and, for the two standard-deviation
+items, whose 95 % interval holds the truth). ``gonio validate`` calls both.
+
+Truths (from the bench's noise-free rerun, ``truth.json``):
+
+========================  ===============================================================
+K                         mean over the 7.1 rounds of noise-free counts / true angle
+K_l                       (max − min)/mean of those noise-free K_i, %
+B_s                       ensemble value: √(mean over the trials of B_s²) (a property of
+                          the noise, not of one record)
+E                         per point: mean over the series of the noise-free deviation
+                          (``systematic_deviation_arcsec``); every point counts
+R                         ensemble value: max over points of √(mean over trials of s_i²)
+C_v, C_g                  the same formula as the result, on the noise-free deviations
+========================  ===============================================================
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS"]
+
+ITEM_TRUTHS = {
+    "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
+    "scale_factor_nonlinearity": "(max - min)/mean of the noise-free K_i, %",
+    "zero_stability": "ensemble: sqrt(mean over trials of B_s^2)",
+    "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
+    "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
+    "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
+    "rate_consistency": "spread of the noise-free E_v over the reference angle, ppm",
+    "pointing_consistency": "spread of the noise-free E_g over the reference angle, %",
+}
+
+
+def _signed_extreme(v) -> float:
+    v = np.asarray(v, dtype=float)
+    return float(v[int(np.argmax(np.abs(v)))]) if v.size else math.nan
+
+
+def _consistency_truth(tr: pd.DataFrame, c, col: str, scale: float) -> float:
+    """Spread of the noise-free per-condition extremes, at the result's points."""
+    pts = c.tables["points"]
+    e = []
+    for row in c.table.itertuples(index=False):
+        v, src = getattr(row, col), row.source_test
+        keep = pts.loc[pts[col] == v, "round"]
+        rows = tr[(tr["test"] == src) & tr["round"].isin(keep)]
+        if col == "rate_dps":
+            rows = rows[np.isclose(rows["rate_dps"].to_numpy(dtype=float), float(v))]
+        else:
+            rows = rows[rows["orientation"] == v]
+        if src == "angle_deviation":     # the reference condition taken from 7.4
+            rows = rows[np.isclose(rows["rate_dps"].to_numpy(dtype=float), 60.0)]
+        e.append(_signed_extreme(rows.groupby("round")["systematic_deviation_arcsec"].mean()))
+    e = np.array(e)
+    return float((e.max() - e.min()) / float(c.details["reference_angle_arcsec"]) * scale)
+
+
+def item_record(report, truth: dict) -> dict:
+    """Per measured item: value, U, interval, truth (None for ensemble truths) and the
+    per-trial data the ensemble truths need.
+
+    ``report`` is a :class:`gonio.calibrate.CalibrationReport`, ``truth`` the session's
+    truth dict (``run_session(...).truth``).
+    """
+    tr = pd.DataFrame(truth["readings"])
+    res = report.results
+    out: dict = {}
+    for name, iu in report.item_uncertainty.items():
+        out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U),
+                     "interval": list(iu.interval) if iu.interval is not None else None,
+                     "truth": None}
+    if "scale_factor" in out:
+        sf = tr[tr["test"] == "scale_factor"]
+        k_i = sf["noise_free_counts"].to_numpy(dtype=float) / sf["true_table_deg"].to_numpy(float)
+        out["scale_factor"]["truth"] = float(k_i.mean())
+        if "scale_factor_nonlinearity" in out:
+            out["scale_factor_nonlinearity"]["truth"] = float((k_i.max() - k_i.min())
+                                                              / k_i.mean() * 100.0)
+    if "angle_deviation" in out:
+        e = res.angle_deviation.table
+        ad = tr[(tr["test"] == "angle_deviation")
+                & np.isclose(tr["rate_dps"].to_numpy(dtype=float), 60.0)]
+        t_i = ad.groupby("round")["systematic_deviation_arcsec"].mean()
+        out["angle_deviation"]["points"] = [float(x) for x in e["E_arcsec"]]
+        out["angle_deviation"]["truth_points"] = [float(t_i[r]) for r in e["round"]]
+    if "repeatability" in out:
+        out["repeatability"]["s_points"] = [float(x) for x in res.repeatability.table["R_arcsec"]]
+    for name, col, scale in (("rate_consistency", "rate_dps", 1e6),
+                             ("pointing_consistency", "orientation", 100.0)):
+        if name in out:
+            out[name]["truth"] = _consistency_truth(tr, getattr(res, name), col, scale)
+    return out
+
+
+def trial_items(report, truth: dict) -> dict:
+    """:func:`item_record` with E's U from the physical budget (what ``gonio calibrate``
+    certifies by default), and the draft budget's as ``angle_deviation_draft``.
+
+    ``report`` may have been made with either budget kind; the other is evaluated here
+    from the same results (:func:`gonio.calibrate.deviation_budget`).
+    """
+    from gonio.pipeline.calibrate import deviation_budget, session_settings
+
+    rec = item_record(report, truth)
+    if "angle_deviation" not in rec:
+        return rec
+    settings, _ = session_settings(report.readings, report.protocol)
+    other = "physical" if report.budget_kind == "draft" else "draft"
+    b, _, _ = deviation_budget(report.results, report.readings, report.protocol, settings,
+                               kind=other)
+    mine = dict(rec["angle_deviation"])
+    alt = {**mine, "U": float(b.U_arcsec)}
+    rec["angle_deviation"], rec["angle_deviation_draft"] = (alt, mine) if other == "physical" \
+        else (mine, alt)
+    return rec
+
+
+def _cov(hits) -> dict:
+    h = np.asarray(hits, dtype=bool)
+    p = float(h.mean()) if h.size else math.nan
+    return {"fraction": p, "n": int(h.size),
+            "u_binomial": math.sqrt(p * (1 - p) / h.size) if h.size else math.nan}
+
+
+def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
+    """Per item, over the trials: coverage of |result − truth| ≤ U (k as stated), and for
+    B_s and R of the truth by the 95 % interval.
+
+    ``intrinsic_points``: E's truth per point on an ideal set-up (no tilt, Earth rate,
+    bias or table error: what a certificate is about); E's items then also get
+    ``within_U_intrinsic``.
+
+    >>> recs = [{"scale_factor": {"value": v, "U": 0.2, "interval": None, "truth": 0.0}}
+    ...         for v in (0.1, -0.1, 0.3, 0.0)]
+    >>> c = item_coverage(recs)["scale_factor"]
+    >>> c["within_U"]["fraction"], c["within_U"]["n"]
+    (0.75, 4)
+    """
+    names = [n for n in ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+                         "angle_deviation", "angle_deviation_draft", "repeatability",
+                         "rate_consistency", "pointing_consistency")
+             if any(n in r for r in records)]
+    out = {}
+    for name in names:
+        rs = [r[name] for r in records if name in r]
+        vals = np.array([r["value"] for r in rs])
+        U = np.array([r["U"] for r in rs])
+        item = {"trials": len(rs), "truth": ITEM_TRUTHS[name], "mean_U": float(U.mean())}
+        if name.startswith("angle_deviation"):
+            d = np.array([np.subtract(r["points"], r["truth_points"]) for r in rs])
+            item["within_U"] = _cov(np.abs(d) <= U[:, None])
+            if intrinsic_points is not None:
+                di = np.array([np.subtract(r["points"], intrinsic_points) for r in rs])
+                item["within_U_intrinsic"] = _cov(np.abs(di) <= U[:, None])
+        elif name in ("zero_stability", "repeatability"):
+            if name == "repeatability":
+                s2 = np.array([r["s_points"] for r in rs]) ** 2
+                truth = float(np.sqrt(s2.mean(axis=0)).max())
+            else:
+                truth = float(np.sqrt(np.mean(vals ** 2)))
+            item["ensemble_truth"] = truth
+            item["within_U"] = _cov(np.abs(vals - truth) <= U)
+            iv = np.array([r["interval"] for r in rs])
+            item["interval_holds_truth"] = _cov((iv[:, 0] <= truth) & (truth <= iv[:, 1]))
+        else:
+            t = np.array([r["truth"] for r in rs])
+            item["within_U"] = _cov(np.abs(vals - t) <= U)
+        out[name] = item
+    return out

@@ -1,0 +1,514 @@
+"""An uncertainty for every calibrated item (draft clause 8), built on :mod:`uncertainty`.
+
+Clause 8 asks the certificate to give "each item, its result and the corresponding
+measurement uncertainty"; the draft's Annex A budgets only E. This module gives a
+budget to each of the seven items, one documented function each:
+
+==============================  ======  ===================================================
+:func:`scale_factor_budget`     K       Type A scatter of K_i, table angle error at the stops,
+                                        count quantisation (7.1)
+:func:`nonlinearity_budget`     K_l     u of the largest and smallest K_i, and the spread noise
+                                        alone gives n values (7.2)
+:func:`zero_stability_budget`   B_s     χ² with ν = n − 1 (7.3): interval stated
+:func:`angle_deviation_budget`  E       the Annex A budget (draft, or physical) as an item budget
+:func:`repeatability_budget`    R       χ² of the largest of m standard deviations (7.5)
+:func:`consistency_budget`      C_v/C_g the two extreme conditions' deviations with their
+                                        correlations (7.6, 7.7)
+==============================  ======  ===================================================
+
+Every budget is a GUM evaluation (JCGM 100 5, :func:`uncertainty.propagate`) of an
+additive or linear model; the coverage factor is t_95 of the Welch–Satterthwaite ν_eff
+(JCGM 100 G.4) unless the laboratory fixes k (``k=``). :meth:`ItemUncertainty.to_dict`
+is the ``results.json`` form ``<item>.uncertainty``. The JCGM 101 Monte Carlo check is
+:func:`monte_carlo_check`.
+
+Components the draft does not have are flagged ``beyond_draft`` with the clause they
+come from.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+import sympy
+
+from gonio.units import ARCSEC_PER_DEG
+from uncertainty import (GumResult, coverage_factor, from_u, monte_carlo, propagate, type_b,
+                         validate_gum)
+from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
+                               max_stdev_interval, random_walk_stdev_dof, stdev_interval,
+                               stdev_u)
+
+__all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
+           "zero_stability_budget", "angle_deviation_budget", "repeatability_budget",
+           "consistency_budget", "monte_carlo_check", "COVERAGE_PROBABILITY",
+           "COUNT_QUANTUM_U"]
+
+#: Coverage probability of every stated U (JCGM 100 6.2.2, 95 %).
+COVERAGE_PROBABILITY = 0.95
+#: u of a pulse count C = floor(N(t_r)) − floor(N(t_z)): two floored readings, triangular
+#: of half-width 1 count (JCGM 100 4.3.9), u = 1/√6 counts.
+COUNT_QUANTUM_U = 1.0 / math.sqrt(6.0)
+
+
+@dataclass(frozen=True)
+class Component:
+    """One line of an item's budget (``results.json``: ``<item>.uncertainty.components``)."""
+
+    name: str
+    symbol: str
+    u: float                 # standard uncertainty of the item due to this input, item's unit
+    unit: str
+    type: str                # "A" or "B"
+    distribution: str
+    dof: float
+    source: str
+    beyond_draft: bool = False
+    clause: str = ""
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "symbol": self.symbol, "u": float(self.u),
+                "unit": self.unit, "type": self.type, "distribution": self.distribution,
+                "dof": None if math.isinf(self.dof) else float(self.dof),
+                "source": self.source, "beyond_draft": bool(self.beyond_draft),
+                "clause": self.clause}
+
+
+@dataclass(frozen=True)
+class ItemUncertainty:
+    """The uncertainty of one item: components, u_c, ν_eff, k, U (and an interval for σ's)."""
+
+    item: str
+    unit: str
+    value: float
+    components: tuple[Component, ...]
+    u_c: float
+    nu_eff: float
+    k: float
+    k_source: str
+    interval: tuple[float, float] | None = None
+    gum: GumResult | None = field(default=None, repr=False, compare=False)
+    model: object = field(default=None, repr=False, compare=False)
+    inputs: tuple = field(default=(), repr=False, compare=False)
+    correlation: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def U(self) -> float:
+        return self.k * self.u_c
+
+    def to_dict(self) -> dict:
+        """The ``results.json`` form (see the module docstring)."""
+        d = {"components": [c.to_dict() for c in self.components],
+             "u_c": float(self.u_c), "U": float(self.U), "k": float(self.k),
+             "nu_eff": None if not math.isfinite(self.nu_eff) else float(self.nu_eff),
+             "coverage_probability": COVERAGE_PROBABILITY, "unit": self.unit,
+             "k_source": self.k_source}
+        if self.interval is not None:
+            d["interval"] = [float(self.interval[0]), float(self.interval[1])]
+        return d
+
+
+@dataclass(frozen=True)
+class _Line:
+    """An input of an additive model: its quantity and the reporting fields."""
+
+    q: object               # uncertainty.InputQuantity, in the item's unit
+    name: str
+    beyond_draft: bool = False
+    clause: str = ""
+
+
+def _k(nu_eff: float, k: float | None) -> tuple[float, str]:
+    if k is not None:
+        return float(k), "fixed by laboratory"
+    if not math.isfinite(nu_eff) and not math.isinf(nu_eff):   # NaN: WS not valid
+        return coverage_factor(math.inf, COVERAGE_PROBABILITY), "welch-satterthwaite"
+    return coverage_factor(nu_eff, COVERAGE_PROBABILITY), "welch-satterthwaite"
+
+
+def _budget(item: str, unit: str, value: float, lines: Sequence[_Line], *,
+            k: float | None = None, correlation=None, coeffs: Sequence[float] | None = None,
+            interval=None) -> ItemUncertainty:
+    """y = value + Σ c_i X_i (X_i estimates 0), by the law of propagation (JCGM 100 5)."""
+    syms = [sympy.Symbol(ln.q.symbol, real=True) for ln in lines]
+    cs = [1.0] * len(lines) if coeffs is None else list(coeffs)
+    model = sympy.Float(value) + sum((sympy.Float(c) * s for c, s in zip(cs, syms)),
+                                     sympy.Integer(0))
+    gum = propagate(model, [ln.q for ln in lines], correlation=correlation, k=2.0)
+    kk, src = _k(gum.dof, k)
+    comps = tuple(Component(name=ln.name, symbol=ln.q.symbol, u=float(c.contribution),
+                            unit=unit, type=ln.q.type, distribution=ln.q.distribution,
+                            dof=float(ln.q.dof), source=ln.q.source,
+                            beyond_draft=ln.beyond_draft, clause=ln.clause)
+                  for ln, c in zip(lines, gum.contributions))
+    return ItemUncertainty(item=item, unit=unit, value=float(value), components=comps,
+                           u_c=float(gum.u_c), nu_eff=float(gum.dof), k=kk, k_source=src,
+                           interval=interval, gum=gum, model=model,
+                           inputs=tuple(ln.q for ln in lines), correlation=correlation)
+
+
+def monte_carlo_check(b: ItemUncertainty, trials: int = 200_000, seed: int = 0):
+    """JCGM 101 propagation of the same inputs and its GUM validation (JCGM 101 8).
+
+    Returns ``(MonteCarloResult, ValidationResult)``.
+
+    With a Type A scatter of ν = 5 dominating, the Monte Carlo draws a scaled t₅, whose
+    standard deviation is √(5/3) = 1.29 times u (JCGM 101 6.4.9.7), while both 95 %
+    intervals are ≈ ±t_95(5)·u = ±2.57 u:
+
+    >>> b = scale_factor_budget([3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3],
+    ...                         [60, 120, 180, 240, 300, 360], 0.1)
+    >>> mc, v = monte_carlo_check(b, 200_000)
+    >>> round(mc.u / b.u_c, 1), round((mc.high - mc.value) / b.u_c, 1), round(b.k, 2)
+    (1.3, 2.6, 2.57)
+    """
+    mc = monte_carlo(b.model, list(b.inputs), int(trials), seed=seed,
+                     correlation=b.correlation)
+    return mc, validate_gum(b.gum, mc, ndig=1)
+
+
+# --------------------------------------------------------------------------- 7.1, 7.2
+
+def _single_round_u(k_i: np.ndarray, theta_deg: np.ndarray, table_mpe_arcsec: float):
+    """u(K_i) of one round from the table (rectangular MPE) and the count quantum, counts/°."""
+    th_arcsec = np.abs(theta_deg) * ARCSEC_PER_DEG
+    u_tab = np.abs(k_i) * (table_mpe_arcsec / math.sqrt(3.0)) / th_arcsec
+    u_q = COUNT_QUANTUM_U / np.abs(theta_deg)
+    return u_tab, u_q
+
+
+def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
+                        k: float | None = None) -> ItemUncertainty:
+    """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
+
+    Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
+    table's angle error at each stop, rectangular with the table MPE (A.4.1),
+    independent between stops: u = (1/n)√Σ(K_i u(θ)/θ_i)²; the count quantisation,
+    triangular ±1 count (two floored counter readings): u = (1/n)√Σ(u_C/θ_i)². The
+    Type A scatter also holds the random part of the other two (conservative).
+
+    Examples
+    --------
+    The draft's six rounds 60°…360° with K_i = 3600.1, 3600.3, 3600.2, 3600.2, 3600.1,
+    3600.3 counts/°, table MPE 0.1″ (A.4.1): s(K_i) = 0.0894, s/√6 = 0.0365;
+    table: 3600.2·(0.1/√3)/1296000 · √(Σ(360/θ_i)²)/6 = 1.604e-4·√53.69/6 = 1.96e-4;
+    quantisation (1/√6)/6·√Σ1/θ_i² = 0.0680·0.02034 = 0.00138 counts/°.
+
+    >>> b = scale_factor_budget([3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3],
+    ...                         [60, 120, 180, 240, 300, 360], 0.1)
+    >>> [round(c.u, 5) for c in b.components]
+    [0.03651, 0.0002, 0.00138]
+    >>> round(b.u_c, 4), b.nu_eff > 4, b.k_source
+    (0.0365, True, 'welch-satterthwaite')
+    """
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    n = k_i.size
+    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    lines = []
+    if n >= 2:
+        s = float(np.std(k_i, ddof=1))
+        lines.append(_Line(from_u("s_K", 0.0, s / math.sqrt(n), dof=n - 1, type="A",
+                                  source=f"scatter of the {n} rounds' K_i, s/√n"),
+                           "scatter of K_i", False, "7.1"))
+    lines.append(_Line(from_u("P_K", 0.0, float(np.sqrt(np.sum(u_tab ** 2))) / n, type="B",
+                              source=f"table angle error at the stops, MPE ±{table_mpe_arcsec:g}″ "
+                                     "rectangular, independent stops"),
+                       "table angle", True, "A.4.1 applied to 7.1"))
+    lines.append(_Line(from_u("q_K", 0.0, float(np.sqrt(np.sum(u_q ** 2))) / n, type="B",
+                              source="count quantisation, ±1 count triangular per C_i"),
+                       "count quantisation", True, "7.1 (pulse count)"))
+    # from_u marks distribution "normal"; the table and quantisation lines are not normal
+    lines[-2] = _Line(_as_dist(lines[-2].q, "rectangular"), *_rest(lines[-2]))
+    lines[-1] = _Line(_as_dist(lines[-1].q, "triangular"), *_rest(lines[-1]))
+    return _budget("scale_factor", "counts/deg", float(np.mean(k_i)), lines, k=k)
+
+
+def _rest(ln: _Line):
+    return ln.name, ln.beyond_draft, ln.clause
+
+
+def _as_dist(q, name: str):
+    """The same u as a rectangular/triangular quantity (half-width = u·divisor)."""
+    div = {"rectangular": math.sqrt(3.0), "triangular": math.sqrt(6.0)}[name]
+    return type_b(q.symbol, q.value, q.u * div, name, source=q.source)
+
+
+def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
+                        k: float | None = None) -> ItemUncertainty:
+    """u(K_l) of K_l = (max K_i − min K_i)/K · 100 % (draft 7.2), in %.
+
+    Components: u(K_max) and u(K_min) of single rounds (table angle at the stop,
+    rectangular MPE, and count quantisation, triangular), independent; and the spread
+    that noise alone gives n values, d₂(n)·ū(K_i) (Tippett; :func:`uncertainty.stdev.
+    expected_range_factor`), taken as a rectangular half-width: a range is biased
+    upwards by noise, so the true K_l lies below the measured one by up to about that.
+
+    Examples
+    --------
+    Two rounds at 100° and 200°, K_i = 3600.00 and 3600.18 (the doctest of
+    :func:`gonio.characteristics.scale_factor_nonlinearity`), MPE 0.1″: u(K at 100°) =
+    √((3600·0.0577/360000)² + (0.408/100)²) = 0.00412; at 200° 0.00206; in % (/3600.09·100):
+    1.145e-4 (K_min) and 0.573e-4 (K_max); range term d₂(2) = 1.128 × mean u 0.00309 / √3
+    → 0.56e-4 %.
+
+    >>> b = nonlinearity_budget([3600.0, 3600.18], [100.0, 200.0], 0.1)
+    >>> [round(c.u * 1e4, 3) for c in b.components]
+    [0.573, 1.145, 0.56]
+    """
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    n = k_i.size
+    if n < 2:
+        raise ValueError("K_l needs at least two rounds")
+    kbar = float(np.mean(k_i))
+    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    u_i = np.sqrt(u_tab ** 2 + u_q ** 2)
+    i_max, i_min = int(np.argmax(k_i)), int(np.argmin(k_i))
+    to_pct = 100.0 / kbar
+    half = expected_range_factor(n) * float(np.mean(u_i)) * to_pct
+    lines = [
+        _Line(from_u("K_max", 0.0, float(u_i[i_max]) * to_pct, type="B",
+                     source=f"K_i at {th[i_max]:g}°: table angle and count quantisation"),
+              "largest K_i", True, "7.2 (A.4.1 applied to 7.1)"),
+        _Line(from_u("K_min", 0.0, float(u_i[i_min]) * to_pct, type="B",
+                     source=f"K_i at {th[i_min]:g}°: table angle and count quantisation"),
+              "smallest K_i", True, "7.2 (A.4.1 applied to 7.1)"),
+        _Line(type_b("K_rng", 0.0, half, "rectangular",
+                     source=f"spread noise alone gives {n} values, d2({n})·mean u(K_i)"),
+              "range inflation by noise", True, "7.2"),
+    ]
+    value = float((k_i.max() - k_i.min()) / kbar * 100.0)
+    return _budget("scale_factor_nonlinearity", "%", value, lines, k=k)
+
+
+# --------------------------------------------------------------------------- 7.3, 7.5
+
+def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
+                          readings: str = "random_walk", time_s=None,
+                          compensation_time_s: float | None = None,
+                          k: float | None = None) -> ItemUncertainty:
+    """u(B_s) of B_s = s(M)/T (draft 7.3), °/h: a standard deviation of n readings.
+
+    Type A, u = B_s/√(2ν) (JCGM 100 E.4.3), interval from χ²(ν) (stated, because s is
+    skewed: :func:`uncertainty.stdev.stdev_interval`). ν depends on how the readings
+    relate. The 7.3 readings are angles of an integrating gyro taken without
+    re-zeroing, so they are a random walk, not independent samples: the default
+    ``readings="random_walk"`` takes ν = ν_eff of the sample variance of a random walk
+    (:func:`uncertainty.stdev.random_walk_stdev_dof`: 2.45 for 15 readings), the
+    worst case for what the readings tell; ``"independent"`` takes ν = n − 1. With the
+    readings' times (``time_s``) and the static phase of a measured Earth-rate
+    compensation (``compensation_time_s`` T), whose error is a rate common to all the
+    readings, the covariance is min(t_i, t_j) + t_i t_j / T and ν follows from it
+    (:func:`uncertainty.stdev.correlated_stdev_dof`; ≈ 1 when the trend dominates).
+
+    Examples
+    --------
+    15 readings (the draft's 7.3), B_s = 0.002 °/h, independent: u = 0.002/√28 =
+    3.78e-4 °/h, k = t_95(14) = 2.145; interval 0.002·[√(14/26.119), √(14/5.629)] =
+    [0.00146, 0.00315]. As a random walk, ν = 2.451: u = 0.002/√4.902 = 9.03e-4 °/h.
+
+    >>> b = zero_stability_budget(0.002, 15, readings="independent")
+    >>> round(b.u_c * 1e4, 2), round(b.k, 3), [round(x, 5) for x in b.interval]
+    (3.78, 2.145, [0.00146, 0.00315])
+    >>> round(zero_stability_budget(0.002, 15).u_c * 1e4, 2)
+    9.03
+    """
+    if readings == "random_walk" and time_s is not None:
+        t = np.asarray(time_s, dtype=float)
+        t = t - t.min()
+        V = np.minimum.outer(t, t)
+        if compensation_time_s:
+            V = V + np.outer(t, t) / float(compensation_time_s)
+        nu = correlated_stdev_dof(V)
+        how = (f"readings of a random walk" + (f" with the compensation's rate error "
+               f"(T = {compensation_time_s:g} s)" if compensation_time_s else "")
+               + f", nu_eff = {nu:.3g}")
+    elif readings == "random_walk":
+        nu = random_walk_stdev_dof(int(n_readings))
+        how = f"readings of a random walk, nu_eff = {nu:.3g}"
+    elif readings == "independent":
+        nu = int(n_readings) - 1
+        how = f"independent readings, nu = {nu}"
+    else:
+        raise ValueError(f"readings must be random_walk or independent, got {readings!r}")
+    lines = [_Line(from_u("s_B", 0.0, stdev_u(b_s_deg_per_h, nu), dof=nu, type="A",
+                          source=f"standard deviation of {n_readings} readings, chi-square "
+                                 f"({how})"),
+                   "sampling of s(M)", True, "7.3")]
+    return _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=k,
+                   interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
+
+
+def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
+                         k: float | None = None) -> ItemUncertainty:
+    """u(R) of R = max_i s_i over m points, s_i from n series (draft 7.5), ″.
+
+    Type A, u = R/√(2ν), ν = n − 1; the interval is that of the largest of m
+    standard deviations (:func:`uncertainty.stdev.max_stdev_interval`), which
+    accounts for picking the largest (R over-estimates max σ_i when the σ_i are alike).
+    Its lower end is that of the largest of m (valid whatever the σ_i, since every σ_i ≤
+    max σ_i); its upper end is the single-χ² one (R ≥ the s of the point with the largest
+    σ_i), so the interval holds for unequal σ_i too.
+
+    Examples
+    --------
+    The draft's 10 series and 12 points, R = 0.096″ (A.4.4): u = 0.096/√18 = 0.0226″;
+    interval 0.096·[0.589, 1.826] = [0.0566, 0.1753]″ (see
+    :func:`uncertainty.stdev.max_stdev_interval`).
+
+    >>> b = repeatability_budget(0.096, 10, 12)
+    >>> round(b.u_c, 4), [round(x, 4) for x in b.interval]
+    (0.0226, [0.0566, 0.1753])
+    """
+    nu = int(n_series) - 1
+    lines = [_Line(from_u("s_R", 0.0, stdev_u(r_arcsec, nu), dof=nu, type="A",
+                          source=f"largest of {n_points} standard deviations of {n_series} "
+                                 f"series, chi-square with nu = {nu}"),
+                   "sampling of s_i", True, "7.5")]
+    lo = max_stdev_interval(r_arcsec, nu, int(n_points), COVERAGE_PROBABILITY)[0]
+    hi = stdev_interval(r_arcsec, nu, COVERAGE_PROBABILITY)[1]
+    return _budget("repeatability", "arcsec", r_arcsec, lines, k=k, interval=(lo, hi))
+
+
+# --------------------------------------------------------------------------- 7.4
+
+#: Clause of origin of the physical budget's extra lines (validate.budget_extra_components).
+EXTRA_CLAUSES = {
+    "K_P": "7.1 (table error at the 7.1 stops carried into E through K)",
+    "K_r": "7.1 (scatter of the 7.1 readings carried into E through K)",
+    "tilt_E": "clause 7 preamble (Earth-rate compensation) with the A.1 tilt bound",
+    "C_te": "clause 7 preamble (Earth-rate compensation) with the A.1 tilt bound",
+}
+_ANNEX_NAMES = {"P": ("table positioning", "A.4.1"), "phi_e": ("sensing-plane tilt", "A.4.2"),
+                "B_E": ("zero drift", "A.4.3"), "r": ("repeatability", "A.4.4")}
+
+
+def angle_deviation_budget(annex, value_arcsec: float, *,
+                           k_source: str = "welch-satterthwaite") -> ItemUncertainty:
+    """E's budget (draft Annex A, or the physical one with extra lines) as an item budget.
+
+    ``annex`` is a :class:`gonio.specs.ogam_draft.budget.AnnexABudget`; its four annex lines keep their
+    clauses (A.4.1–A.4.4), the others are ``beyond_draft`` with their clause of origin.
+
+    >>> from gonio.specs.ogam_draft.budget import annex_a_budget
+    >>> b = angle_deviation_budget(annex_a_budget(), 0.2, k_source="fixed by laboratory")
+    >>> [(c.symbol, c.clause, round(c.u, 4)) for c in b.components]
+    [('P', 'A.4.1', 0.0577), ('phi_e', 'A.4.2', 0.0453), ('B_E', 'A.4.3', 0.0866), ('r', 'A.4.4', 0.096)]
+    >>> round(b.U, 3), b.k
+    (0.297, 2.0)
+    """
+    comps = []
+    for c in annex.gum.contributions:
+        if c.symbol in _ANNEX_NAMES:
+            name, clause = _ANNEX_NAMES[c.symbol]
+            beyond = False
+        else:
+            name = c.source.split(" [beyond the draft")[0]
+            clause, beyond = EXTRA_CLAUSES.get(c.symbol, "beyond the draft"), True
+        comps.append(Component(name=name, symbol=c.symbol, u=float(c.contribution),
+                               unit="arcsec", type=c.type, distribution=c.distribution,
+                               dof=float(c.dof), source=c.source, beyond_draft=beyond,
+                               clause=clause))
+    return ItemUncertainty(item="angle_deviation", unit="arcsec", value=float(value_arcsec),
+                           components=tuple(comps), u_c=float(annex.u_c_arcsec),
+                           nu_eff=float(annex.gum.dof), k=float(annex.k), k_source=k_source,
+                           gum=annex.gum)
+
+
+# --------------------------------------------------------------------------- 7.6, 7.7
+
+@dataclass(frozen=True)
+class ConditionDeviation:
+    """E of one condition of 7.6/7.7 for :func:`consistency_budget`."""
+
+    label: str
+    e_arcsec: float          # E_v (signed extreme of the per-point means)
+    position_deg: float      # where it was found
+    u_single_arcsec: float   # standard deviation of one series' reading there
+    n_series: int
+
+
+def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
+                       reference_angle_arcsec: float, scale: float, *,
+                       table_mpe_arcsec: float, drift_half_width_arcsec: float,
+                       k: float | None = None) -> ItemUncertainty:
+    """u(C) of C = (max E_v − min E_v)/reference · scale (draft 7.6: ppm, 7.7: %).
+
+    Inputs, for the conditions a (max E_v) and b (min E_v): their Type A means
+    u_single/√n_series (ν = n_series − 1, or ∞ with one series when u_single comes
+    from 7.5); the table positioning error at their positions, rectangular with the
+    MPE (A.4.1), *correlated* ρ = 1 when both extremes are at the same table position
+    (the same table error enters both and cancels), 0 otherwise; the zero drift of
+    each, rectangular (A.4.3), independent; and the spread noise alone gives the n
+    conditions, d₂(n)·ū(E_v), rectangular (a range is biased upwards by noise).
+
+    Examples
+    --------
+    7.6 with two rates, E = +0.36″ and −0.36″ at 360°, one series each with u = 0.096″,
+    reference 1296000″: the correlated table terms cancel; u² = 2·0.096² + 2·(0.15/√3)² +
+    (1.128·0.096/√3)² = 0.03735″² → u = 0.1933″ = 0.1491 ppm; without the correlation the two
+    table lines would add 2·(0.1/√3)²: 0.04402″² → 0.1619 ppm.
+
+    >>> cs = [ConditionDeviation("60", 0.36, 360.0, 0.096, 1),
+    ...       ConditionDeviation("10", -0.36, 330.0, 0.096, 1)]
+    >>> round(consistency_budget("rate_consistency", cs, 1296000.0, 1e6, table_mpe_arcsec=0.1,
+    ...                          drift_half_width_arcsec=0.15).u_c, 4)
+    0.1619
+
+    >>> cs = [ConditionDeviation("60", 0.36, 360.0, 0.096, 1),
+    ...       ConditionDeviation("10", -0.36, 360.0, 0.096, 1)]
+    >>> b = consistency_budget("rate_consistency", cs, 1296000.0, 1e6, table_mpe_arcsec=0.1,
+    ...                        drift_half_width_arcsec=0.15)
+    >>> round(b.u_c, 4), round(b.value, 4)
+    (0.1491, 0.5556)
+    """
+    cs = list(conditions)
+    if len(cs) < 2:
+        raise ValueError("a consistency needs at least two conditions")
+    e = np.array([c.e_arcsec for c in cs])
+    a, b = cs[int(np.argmax(e))], cs[int(np.argmin(e))]
+    f = scale / reference_angle_arcsec
+    unit = "ppm" if item == "rate_consistency" else "%"
+    clause = "7.6" if item == "rate_consistency" else "7.7"
+
+    def mean_u(c):
+        return c.u_single_arcsec / math.sqrt(max(c.n_series, 1))
+
+    def dof(c):
+        return c.n_series - 1 if c.n_series >= 2 else math.inf
+
+    lines = [
+        _Line(from_u("r_a", 0.0, mean_u(a) * f, dof=dof(a), type="A",
+                     source=f"mean of {a.n_series} series at {a.label}"),
+              f"repeatability, {a.label}", True, clause + " (A.4.4)"),
+        _Line(from_u("r_b", 0.0, mean_u(b) * f, dof=dof(b), type="A",
+                     source=f"mean of {b.n_series} series at {b.label}"),
+              f"repeatability, {b.label}", True, clause + " (A.4.4)"),
+        _Line(type_b("P_a", 0.0, table_mpe_arcsec * f, "rectangular",
+                     source=f"table at {a.position_deg:g}° ({a.label})"),
+              f"table positioning, {a.label}", True, clause + " (A.4.1)"),
+        _Line(type_b("P_b", 0.0, table_mpe_arcsec * f, "rectangular",
+                     source=f"table at {b.position_deg:g}° ({b.label})"),
+              f"table positioning, {b.label}", True, clause + " (A.4.1)"),
+        _Line(type_b("B_a", 0.0, drift_half_width_arcsec * f, "rectangular",
+                     source=f"zero drift ({a.label})"),
+              f"zero drift, {a.label}", True, clause + " (A.4.3)"),
+        _Line(type_b("B_b", 0.0, drift_half_width_arcsec * f, "rectangular",
+                     source=f"zero drift ({b.label})"),
+              f"zero drift, {b.label}", True, clause + " (A.4.3)"),
+        _Line(type_b("C_rng", 0.0, expected_range_factor(len(cs))
+                     * float(np.mean([mean_u(c) for c in cs])) * f, "rectangular",
+                     source=f"spread noise alone gives {len(cs)} conditions"),
+              "range inflation by noise", True, clause),
+    ]
+    same = abs(a.position_deg - b.position_deg) < 1e-6
+    corr = np.eye(len(lines))
+    if same:
+        corr[2, 3] = corr[3, 2] = 1.0
+    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0]
+    value = (a.e_arcsec - b.e_arcsec) * f
+    return _budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs)

@@ -1,0 +1,51 @@
+"""Every item budget of a whole virtual calibration, validated by JCGM 101 Monte Carlo
+(the GUM interval y ± U against the Monte Carlo 95 % interval of the same inputs)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gonio.bench import load_bench, run_session
+from gonio.formats.readings import Readings
+from gonio.pipeline.calibrate import calibrate
+from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.item_uncertainty import monte_carlo_check
+
+
+@pytest.fixture(scope="module")
+def report():
+    proto = load_protocol("ogam-draft")
+    res = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=5.0), seed=11)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    return calibrate(Readings(df, dict(res.metadata)), proto)
+
+
+def test_every_item_has_a_budget_and_monte_carlo_agrees(report):
+    iu = report.item_uncertainty
+    assert set(iu) == {"scale_factor", "scale_factor_nonlinearity", "zero_stability",
+                       "angle_deviation", "repeatability", "rate_consistency",
+                       "pointing_consistency"}
+    for name, b in iu.items():
+        if b.model is None:           # E: the Annex A budget's own JCGM 101 check (--monte-carlo)
+            continue
+        mc, _ = monte_carlo_check(b, 200_000, seed=1)
+        half = (mc.high - mc.low) / 2
+        assert half / b.U == pytest.approx(1.0, abs=0.12), (name, half, b.U)
+        assert mc.value == pytest.approx(b.value, abs=0.05 * b.U)
+
+
+def test_E_budget_monte_carlo_through_the_api(tmp_path):
+    """--monte-carlo N propagates E's budget (physical, with its arcsine coupling line)
+    by JCGM 101 and compares it with the GUM interval."""
+    proto = load_protocol("ogam-draft")
+    res = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=5.0), seed=12)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    rep = calibrate(Readings(df, dict(res.metadata)), proto, monte_carlo_trials=100_000)
+    mc = rep.to_dict()["uncertainty"]["monte_carlo"]
+    half = (mc["interval_arcsec"][1] - mc["interval_arcsec"][0]) / 2
+    assert half / rep.uncertainty.U_arcsec == pytest.approx(1.0, abs=0.1)

@@ -1,0 +1,157 @@
+"""Uncertainty of a standard deviation and of a range (domain-free).
+
+- :func:`stdev_interval` — the χ² confidence interval of a population standard
+  deviation σ from a sample standard deviation s with ν = n − 1 degrees of
+  freedom (normal population): ν s²/σ² ~ χ²(ν). The distribution of s is skewed,
+  so the interval is stated, not only a standard uncertainty.
+- :func:`stdev_u` — the standard uncertainty of s as an estimate of σ,
+  u(s) ≈ s/√(2ν) (JCGM 100 E.4.3, Table E.1: relative uncertainty of an
+  experimental standard deviation).
+- :func:`max_stdev_interval` — the same for the largest of m sample standard
+  deviations (each with ν) as an estimate of the largest σ_i: the quantiles are
+  those of the maximum of m independent χ² variables (Šidák: probability
+  p^(1/m) per member), since picking the largest s biases it upwards.
+- :func:`random_walk_stdev_dof` — the effective degrees of freedom of the sample
+  variance of n equally spaced samples of a random walk (correlated samples carry
+  far less information than n independent ones).
+- :func:`expected_range_factor` — d₂(n) = E[range of n standard normal values]
+  (Tippett 1925), by numerical integration: the mean by which noise of standard
+  deviation σ alone spreads n values, d₂(n)·σ.
+
+This module never imports ``gonio``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import integrate, stats
+
+__all__ = ["stdev_interval", "stdev_u", "max_stdev_interval", "expected_range_factor",
+           "random_walk_stdev_dof", "correlated_stdev_dof"]
+
+
+def _check(s: float, dof: float) -> None:
+    if not (math.isfinite(s) and s >= 0):
+        raise ValueError(f"standard deviation must be finite and >= 0, got {s}")
+    if not (dof >= 1):
+        raise ValueError(f"degrees of freedom must be >= 1, got {dof}")
+
+
+def stdev_interval(s: float, dof: float, p: float = 0.95) -> tuple[float, float]:
+    """Two-sided χ² interval for σ from s with ν degrees of freedom (normal population).
+
+    [s·√(ν/χ²_{(1+p)/2}(ν)), s·√(ν/χ²_{(1−p)/2}(ν))].
+
+    Examples
+    --------
+    s = 1 from n = 10 readings (ν = 9), 95 %: χ²_{0.975}(9) = 19.023, χ²_{0.025}(9) = 2.700,
+    so [√(9/19.023), √(9/2.700)] = [0.688, 1.826] (the textbook values).
+
+    >>> lo, hi = stdev_interval(1.0, 9)
+    >>> round(lo, 3), round(hi, 3)
+    (0.688, 1.826)
+    """
+    _check(s, dof)
+    a = (1.0 - p) / 2.0
+    return (s * math.sqrt(dof / stats.chi2.ppf(1.0 - a, dof)),
+            s * math.sqrt(dof / stats.chi2.ppf(a, dof)))
+
+
+def stdev_u(s: float, dof: float) -> float:
+    """u(s) = s/√(2ν) (JCGM 100 E.4.3: σ[s]/σ ≈ 1/√(2ν)).
+
+    >>> round(stdev_u(0.3, 9), 4)       # 0.3/√18
+    0.0707
+    """
+    _check(s, dof)
+    return s / math.sqrt(2.0 * dof)
+
+
+def max_stdev_interval(s_max: float, dof: float, m: int, p: float = 0.95) -> tuple[float, float]:
+    """Interval for max σ_i from the largest of m sample standard deviations, each with ν.
+
+    When every σ_i equals σ, P(max s_i ≤ x) = F(x)^m with F the distribution of one
+    s; the interval is the set of σ for which s_max lies between the (1−p)/2 and
+    (1+p)/2 quantiles of that maximum. With unequal σ_i the largest dominates and
+    the interval is conservative. m = 1 gives :func:`stdev_interval`.
+
+    >>> lo, hi = max_stdev_interval(1.0, 9, 1)
+    >>> round(lo, 3), round(hi, 3)
+    (0.688, 1.826)
+
+    Twelve points, ν = 9: quantiles 0.975^(1/12) = 0.99789 and 0.025^(1/12) = 0.73550 of
+    χ²(9) are 25.92 and 11.16, so [√(9/25.92), √(9/11.16)] = [0.589, 0.898]:
+
+    >>> lo, hi = max_stdev_interval(1.0, 9, 12)
+    >>> round(lo, 3), round(hi, 3)
+    (0.589, 0.898)
+    """
+    _check(s_max, dof)
+    if int(m) != m or m < 1:
+        raise ValueError(f"m must be an integer >= 1, got {m}")
+    a = (1.0 - p) / 2.0
+    q_hi = (1.0 - a) ** (1.0 / m)        # P(max ≤ x) = F(x)^m = 1 − a
+    q_lo = a ** (1.0 / m)                # F(x)^m = a
+    return (s_max * math.sqrt(dof / stats.chi2.ppf(q_hi, dof)),
+            s_max * math.sqrt(dof / stats.chi2.ppf(q_lo, dof)))
+
+
+def expected_range_factor(n: int) -> float:
+    """d₂(n): the expected range of n independent standard normal values.
+
+    d₂(n) = ∫ [1 − (1 − Φ(x))ⁿ − Φ(x)ⁿ] dx over the real line.
+    Tabulated values: d₂(2) = 1.128, d₂(6) = 2.534, d₂(10) = 3.078.
+
+    >>> [round(expected_range_factor(n), 3) for n in (2, 6, 10)]
+    [1.128, 2.534, 3.078]
+    """
+    if int(n) != n or n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n}")
+    if n == 1:
+        return 0.0
+    f = lambda x: 1.0 - (1.0 - stats.norm.cdf(x)) ** n - stats.norm.cdf(x) ** n  # noqa: E731
+    val, _ = integrate.quad(f, -np.inf, np.inf)
+    return float(val)
+
+
+def random_walk_stdev_dof(n: int) -> float:
+    """Effective ν of s² from n equally spaced samples of a random walk (Satterthwaite).
+
+    s² = xᵀAx is a quadratic form in the walk's independent increments x; matching
+    the mean and variance of a scaled χ², ν_eff = 2E[s²]²/Var(s²) = (tr A)²/tr(A²)
+    (Satterthwaite 1946). Independent samples would give n − 1.
+
+    >>> round(random_walk_stdev_dof(15), 3), round(random_walk_stdev_dof(4), 3)
+    (2.451, 1.923)
+    """
+    if int(n) != n or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n}")
+    c = np.tril(np.ones((n - 1, n - 1)))
+    c = np.vstack([np.zeros((1, n - 1)), c])           # first sample is the walk's origin
+    p = (np.eye(n) - 1.0 / n) / (n - 1)
+    a = c.T @ p @ c
+    return float(np.trace(a) ** 2 / np.trace(a @ a))
+
+
+def correlated_stdev_dof(cov) -> float:
+    """Effective ν of the sample variance of n normal samples with covariance ``cov``.
+
+    s² = yᵀPy/(n − 1), P the centring matrix; with y ~ N(μ, V), E[s²] ∝ tr(PV) and
+    Var(s²) ∝ 2 tr((PV)²), so ν_eff = (tr PV)²/tr((PV)²) (Satterthwaite 1946).
+    V = I gives n − 1; a random walk's min(t_i, t_j) gives
+    :func:`random_walk_stdev_dof`.
+
+    >>> round(correlated_stdev_dof(np.eye(5)), 9)
+    4.0
+    >>> t = np.arange(15.0)
+    >>> round(correlated_stdev_dof(np.minimum.outer(t, t)), 3)
+    2.451
+    """
+    v = np.asarray(cov, dtype=float)
+    n = v.shape[0]
+    if v.shape != (n, n) or n < 2:
+        raise ValueError(f"cov must be a square matrix of size >= 2, got {v.shape}")
+    pv = (np.eye(n) - 1.0 / n) @ v
+    return float(np.trace(pv) ** 2 / np.trace(pv @ pv))
