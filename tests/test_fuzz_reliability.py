@@ -442,6 +442,8 @@ def test_output_place_failures_cli(tmp_path, capsys):
         for argv in (["calibrate", FULL, "--out", place], ["simulate", "--protocol",
                      tmp_path / "none.toml", "--out", place], ["demo", "--out", place],
                      ["validate", "--trials", "2", "--out", place]):
+            if argv[0] == "validate" and name == "foreign-folder":
+                continue        # validate adds validation.json beside its resumable batches
             cli(argv, capsys)
             count(f"out-place:{argv[0]}:{name}")
     for name in ("existing-file-is-input", "fifo", "char-device", "folder"):
