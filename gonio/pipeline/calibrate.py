@@ -780,6 +780,8 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
         if rd.path:
             sha = file_sha256(rd.path)
     else:
+        from gonio.errors import check_input_file
+        check_input_file(readings, "readings or stream file")   # before any byte is read
         proto, conflicts = resolve_protocol(readings, file_protocol_name(readings), protocol)
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
