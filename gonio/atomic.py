@@ -1,18 +1,54 @@
-"""Atomic output: write to a temporary file beside the target, then rename.
+"""Safe output: checked places, atomic files, and whole output sets.
 
-A run that fails leaves either the old file or nothing, never half a file.
-:func:`output_dir` stages a whole set of outputs in a temporary folder and
-moves each file into place only when every one has been written.
+Three layers, all raising :class:`gonio.errors.GonioError` (one line naming the
+place) for anything a user can cause — a full disk, a read-only folder, a name
+too long, a FIFO, a device or a symlink where a file is to go:
+
+* :func:`write_bytes` / :func:`write_text` — one file, via a temporary file
+  beside it and ``os.replace``; the old file or the new one, never half a file.
+  A target that exists and is not a regular file (a symlink, FIFO, device,
+  folder) is refused, never replaced.
+* :func:`check_output_file` — the checks a command runs on a single output file
+  (``gonio reduce --out``, ``--plot``) before any work: not empty, not an input,
+  not a special file, and an existing readings/stream file only with ``force``.
+* :func:`output_set` — a whole run's outputs (results, summary, tables,
+  certificate, DCC, truth, readings) staged in a hidden folder beside ``out`` and
+  swapped in with one atomic ``renameat2(RENAME_EXCHANGE)`` only after every
+  part is written, with ``gonio-manifest.json`` (every file's SHA-256 and the
+  source's). The folder is locked (``flock``) for the run, so two runs into the
+  same ``--out`` cannot mix: the second is refused. A failed or interrupted run
+  leaves the previous set untouched; a staging folder left by a killed run is
+  removed (and reported) by the next run into the same place.
+
+:func:`output_dir` is the API's per-part form: inside an active
+:func:`output_set` it hands out that set's staging folder; alone, it stages its
+own files and moves them into ``out`` together (other files in ``out`` stay).
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import errno
+import hashlib
+import json
 import os
 import shutil
+import signal
+import stat
+import sys
 import tempfile
 from pathlib import Path
-from typing import Iterator
+from typing import Iterable, Iterator
+
+from gonio.errors import GonioError
+
+#: The manifest written into every output set.
+MANIFEST = "gonio-manifest.json"
+#: File names that hold a laboratory's data: never replaced without ``force``.
+PROTECTED_NAMES: tuple[str, ...] = ("readings.csv", "stream.csv")
+
+_ACTIVE: dict[str, Path] = {}          # resolved out folder -> staging folder of the open set
 
 
 def _umask() -> int:
@@ -21,21 +57,121 @@ def _umask() -> int:
     return mask
 
 
-def write_bytes(path: str | Path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` atomically (temporary file + ``os.replace``)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+def _kind(st_mode: int) -> str:
+    for test, name in ((stat.S_ISLNK, "a symbolic link"), (stat.S_ISFIFO, "a FIFO"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a folder"),
+                       (stat.S_ISREG, "a file")):
+        if test(st_mode):
+            return name
+    return "a special file"
+
+
+def _oserror(exc: OSError, path, doing: str) -> GonioError:
+    reason = exc.strerror or str(exc)
+    return GonioError(f"cannot {doing}: {reason}", file=path)
+
+
+def _lstat(path: Path):
     try:
+        return os.lstat(path)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise _oserror(exc, path, "inspect the output place") from None
+
+
+def _check_parent(path: Path, what: str) -> None:
+    """Every existing ancestor of ``path`` must be a folder (a file or loop is named)."""
+    for anc in reversed(path.parents):
+        st = _lstat(anc)
+        if st is None:
+            return
+        if stat.S_ISLNK(st.st_mode):
+            try:
+                st = os.stat(anc)
+            except OSError as exc:
+                raise _oserror(exc, anc, f"use {what} here") from None
+        if not stat.S_ISDIR(st.st_mode):
+            raise GonioError(f"{what}: {anc} is {_kind(st.st_mode)}, not a folder", file=path)
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.abspath(a) == os.path.abspath(b)
+
+
+def _nonempty(path, what: str) -> Path:
+    if path is None or str(path).strip() == "":
+        raise GonioError(f"{what} is empty; give a file or folder name")
+    return Path(path)
+
+
+def check_output_file(path, *, what: str = "--out", inputs: Iterable = (),
+                      force: bool = False, protected: bool = False) -> Path:
+    """Refuse an output file place before any work is done.
+
+    Refused: an empty name; a place that exists and is not a regular file
+    (symlink, FIFO, device, folder); a file that is one of ``inputs``; an existing
+    file when ``protected`` (a readings or stream file) unless ``force``.
+
+    >>> check_output_file("")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: --out is empty; give a file or folder name
+    """
+    path = _nonempty(path, what)
+    _check_parent(path, what)
+    st = _lstat(path)
+    for inp in inputs:
+        if inp is not None and (_same(path, Path(inp)) if st is not None
+                                else os.path.abspath(path) == os.path.abspath(inp)):
+            raise GonioError(f"{what} would replace the input {inp}; choose another name",
+                             file=path)
+    if st is None:
+        return path
+    if not stat.S_ISREG(st.st_mode):
+        raise GonioError(f"{what} is {_kind(st.st_mode)}; only a regular file is replaced",
+                         file=path)
+    if protected and not force:
+        raise GonioError(f"{what} exists and holds data; give --force to replace it", file=path)
+    return path
+
+
+def write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically (temporary file + ``os.replace``).
+
+    An existing non-regular target (symlink, FIFO, device, folder) is refused; any
+    failure (full disk, permissions, name too long) is a GonioError naming the file
+    and leaves no temporary file behind.
+    """
+    path = Path(path)
+    _check_parent(path, "output")
+    st = _lstat(path)
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise GonioError(f"output place is {_kind(st.st_mode)}; only a regular file is replaced",
+                         file=path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _oserror(exc, path.parent, "create the output folder") from None
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".gonio-", suffix=".tmp", dir=path.parent)
         os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+    except BaseException as exc:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _oserror(exc, path, "write") from None
         raise
     return path
 
@@ -45,9 +181,303 @@ def write_text(path: str | Path, text: str) -> Path:
     return write_bytes(path, text.encode("utf-8"))
 
 
+def sha256_file(path: str | Path) -> str:
+    """The SHA-256 of a file's bytes, read in 1 MiB blocks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+# ----------------------------------------------------------------- output folders
+
+def _tag(out: Path) -> str:
+    return ".gonio-" + hashlib.sha256(out.name.encode("utf-8", "surrogatepass")).hexdigest()[:10]
+
+
+def _note(msg: str) -> None:
+    sys.stderr.write(f"gonio: note: {msg}\n")
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+def clean_stale(out: Path) -> list[Path]:
+    """Remove staging folders a killed run left beside ``out``; returns what was removed."""
+    removed = []
+    tag = _tag(out)
+    try:
+        names = os.listdir(out.parent)
+    except OSError:
+        return removed
+    for name in names:
+        if not name.startswith(tag + "-"):
+            continue
+        try:
+            pid = int(name[len(tag) + 1:].split("-")[1])
+        except (IndexError, ValueError):
+            pid = -1
+        if pid > 0 and _alive(pid):
+            continue
+        p = out.parent / name
+        shutil.rmtree(p, ignore_errors=True)
+        if not p.exists():
+            removed.append(p)
+            _note(f"removed {p}, a staging folder left by an interrupted run into {out}")
+    return removed
+
+
+def _check_dir_place(out, what: str) -> Path:
+    out = _nonempty(out, what)
+    absolute = Path(os.path.abspath(out))
+    if not absolute.name:
+        raise GonioError(f"{what} is a filesystem root; give a folder inside it", file=out)
+    cwd = os.path.abspath(os.getcwd())
+    if cwd == str(absolute) or cwd.startswith(str(absolute) + os.sep):
+        raise GonioError(f"{what} is the current folder or holds it; a run replaces its whole "
+                         "output folder, so give a folder below", file=out)
+    out = absolute
+    _check_parent(out, what)
+    st = _lstat(out)
+    if st is not None and not stat.S_ISDIR(st.st_mode):
+        raise GonioError(f"{what} is {_kind(st.st_mode)}, not a folder", file=out)
+    return out
+
+
+def _lock(out: Path, what: str):
+    """Create ``out`` if needed and take an exclusive lock on it; returns (fd, created)."""
+    created = False
+    for _ in range(5):
+        if not out.exists():
+            try:
+                out.mkdir(parents=True)
+                created = True
+            except FileExistsError:
+                pass
+            except OSError as exc:
+                raise _oserror(exc, out, f"create the {what} folder") from None
+        try:
+            fd = os.open(out, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except OSError as exc:
+            raise _oserror(exc, out, f"open the {what} folder") from None
+        import fcntl
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise GonioError(f"another gonio run is writing into this {what} folder; "
+                             "wait for it or choose another folder", file=out) from None
+        try:
+            same = os.fstat(fd).st_ino == os.stat(out).st_ino
+        except OSError:
+            same = False
+        if same:
+            return fd, created
+        os.close(fd)                  # swapped under us by a finishing run: lock the new one
+    raise GonioError(f"the {what} folder keeps changing; another program is writing into it",
+                     file=out)
+
+
+def _stage(out: Path) -> Path:
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=f"{_tag(out)}-stage-{os.getpid()}-",
+                                      dir=out.parent))
+        os.chmod(stage, 0o777 & ~_umask())
+    except OSError as exc:
+        raise _oserror(exc, out.parent, "create a staging folder") from None
+    return stage
+
+
+def _exchange(a: Path, b: Path) -> None:
+    """Swap two folders atomically (Linux renameat2 RENAME_EXCHANGE), else by two renames."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    fn = getattr(libc, "renameat2", None)
+    if fn is not None:
+        at_fdcwd, rename_exchange = -100, 2
+        if fn(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
+            return
+        err = ctypes.get_errno()
+        if err not in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
+            raise OSError(err, os.strerror(err), str(b))
+    tmp = a.with_name(a.name + "-old")
+    os.rename(b, tmp)
+    os.rename(a, b)
+    os.rename(tmp, a)
+
+
+def _manifest(stage: Path, source_sha256, extra: dict | None) -> None:
+    from gonio import __version__
+
+    files = {}
+    for p in sorted(stage.rglob("*")):
+        if p.is_file() and p.name != MANIFEST:
+            files[p.relative_to(stage).as_posix()] = sha256_file(p)
+    d = {"gonio_version": __version__, "source_sha256": source_sha256, **(extra or {}),
+         "files": files}
+    write_text(stage / MANIFEST, json.dumps(d, indent=2, ensure_ascii=False, sort_keys=True)
+               + "\n")
+
+
+def read_manifest(out: str | Path) -> dict | None:
+    """The manifest of an output set, or None when ``out`` holds none (or a damaged one)."""
+    try:
+        d = json.loads((Path(out) / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return d if isinstance(d, dict) and isinstance(d.get("files"), dict) else None
+
+
+def carried_inputs(out: Path, inputs: Iterable) -> dict[str, Path]:
+    """Inputs that lie inside ``out``: relative path -> path (kept across the swap).
+
+    A run into the folder that holds its input (``calibrate lab/readings.csv --out lab``)
+    keeps that input: it is linked into the new set, never replaced. A folder or a
+    symlink given as input inside ``out`` is refused.
+    """
+    real_out = os.path.realpath(out)
+    out_rel: dict[str, Path] = {}
+    for inp in inputs:
+        if inp is None or not str(inp).strip():
+            continue
+        ri = os.path.realpath(inp)
+        if ri == real_out:
+            raise GonioError(f"the output folder is also an input ({inp})", file=out)
+        if ri.startswith(real_out + os.sep):
+            if not os.path.isfile(ri):
+                raise GonioError(f"the output folder holds the input {inp}, which is not a "
+                                 "regular file", file=out)
+            out_rel[Path(os.path.relpath(ri, real_out)).as_posix()] = Path(ri)
+    return out_rel
+
+
+def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
+    carried = carried_inputs(out, inputs)
+    try:
+        names = sorted(n for n in os.listdir(out))
+    except OSError as exc:
+        raise _oserror(exc, out, f"list the {what} folder") from None
+    if not names:
+        return
+    man = read_manifest(out)
+    files = []
+    for n in names:
+        p = out / n
+        if n == MANIFEST:
+            continue
+        if p.is_dir() and not p.is_symlink():
+            files += [f.relative_to(out).as_posix() for f in p.rglob("*") if not f.is_dir()]
+        else:
+            files.append(n)
+    files = [f for f in files if f not in carried]       # inputs kept, never replaced
+    if man is None:
+        if files:
+            raise GonioError(f"{what} is a folder gonio did not write (it holds {files[0]!r}"
+                             f"{' and more' if len(files) > 1 else ''}); choose a new or empty "
+                             "folder", file=out)
+        return
+    listed = man["files"]
+    for rel in files:
+        q = out / rel
+        if rel not in listed or not q.is_file() or q.is_symlink() \
+                or sha256_file(q) != listed[rel]:
+            if not force:
+                raise GonioError(f"{what} holds {rel!r}, changed or added since gonio "
+                                 "wrote the folder; give --force to replace the folder",
+                                 file=out)
+        elif Path(rel).name in PROTECTED_NAMES and not force:
+            raise GonioError(f"{what} holds {rel!r}; give --force to replace it", file=out)
+
+
+def active_stage(out: str | Path) -> Path | None:
+    """The staging folder of the :func:`output_set` open for ``out``, if any."""
+    if not str(out):
+        return None
+    return _ACTIVE.get(os.path.realpath(out))
+
+
+@contextlib.contextmanager
+def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
+               source_sha256: str | None = None, what: str = "--out",
+               extra: dict | None = None) -> Iterator[Path]:
+    """Stage one run's whole output set and swap it into ``out`` when all parts are written.
+
+    Refused before any work: an empty name, a place that is not a folder, a folder
+    holding one of ``inputs``, a non-empty folder without a gonio manifest, files
+    changed or added since gonio wrote it, and an existing readings/stream file —
+    the last two unless ``force``. Another run into the same folder is refused while
+    this one holds the lock. On any exception (or SIGINT/SIGTERM raised as one) the
+    staging folder is removed and ``out`` is as before.
+    """
+    out = _check_dir_place(out, what)
+    parent = out.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _oserror(exc, parent, f"create the folder of {what}") from None
+    fd, created = _lock(out, what)
+    key = os.path.realpath(out)
+    stage = None
+    try:
+        clean_stale(out)
+        _check_replaceable(out, inputs, force, what)
+        stage = _stage(out)
+        _ACTIVE[key] = stage
+        carried = carried_inputs(out, inputs)
+        yield stage
+        for rel, src in carried.items():              # the inputs stay, unchanged
+            dst = stage / rel
+            if os.path.lexists(dst):
+                raise GonioError(f"the run would replace its input {rel}; choose another "
+                                 f"{what}", file=out)
+            try:
+                dst.parent.mkdir(parents=True, exist_ok=True)
+                try:
+                    os.link(src, dst)
+                except OSError:
+                    shutil.copy2(src, dst)
+            except OSError as exc:
+                raise _oserror(exc, dst, "keep the input in the new set") from None
+        _manifest(stage, source_sha256, {**(extra or {}),
+                                         "inputs_kept": sorted(carried)} if carried else extra)
+        sigs = {signal.SIGINT, signal.SIGTERM}
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
+        try:
+            try:
+                _exchange(stage, out)
+            except OSError as exc:
+                raise _oserror(exc, out, f"move the finished set into {what}") from None
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    except BaseException:
+        if created:
+            with contextlib.suppress(OSError):
+                os.rmdir(out)
+        raise
+    finally:
+        _ACTIVE.pop(key, None)
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)     # the old set after a swap
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def output_dir(out: str | Path) -> Iterator[Path]:
-    """Stage outputs in a temporary folder; move them into ``out`` on success.
+    """Stage outputs and move them into ``out`` together (the API's per-part writer).
+
+    Inside an open :func:`output_set` for ``out`` this yields that set's staging
+    folder (the set is swapped in as a whole later). Alone, it locks ``out``, stages
+    the files beside it and moves each into place only when all are written; other
+    files already in ``out`` stay (an existing manifest is updated).
 
     >>> import tempfile, pathlib
     >>> d = pathlib.Path(tempfile.mkdtemp()) / "run"
@@ -60,15 +490,52 @@ def output_dir(out: str | Path) -> Iterator[Path]:
     >>> (d / "a.txt").exists()
     False
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".gonio-stage-", dir=out))
+    st = active_stage(out)
+    if st is not None:
+        yield st
+        return
+    out = _check_dir_place(out, "output folder")
+    fd, created = _lock(out, "output")
+    stage = None
     try:
+        clean_stale(out)
+        stage = _stage(out)
         yield stage
-        for item in sorted(stage.rglob("*")):
-            if item.is_file():
+        items = [p for p in sorted(stage.rglob("*")) if p.is_file()]
+        for item in items:                       # refuse special targets before moving any
+            target = out / item.relative_to(stage)
+            s = _lstat(target)
+            if s is not None and not stat.S_ISREG(s.st_mode):
+                raise GonioError(f"output place is {_kind(s.st_mode)}; only a regular file is "
+                                 "replaced", file=target)
+        man = read_manifest(out)
+        try:
+            for item in items:
                 target = out / item.relative_to(stage)
                 target.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(item, target)
+                if man is not None:
+                    man["files"][target.relative_to(out).as_posix()] = sha256_file(target)
+        except OSError as exc:
+            raise _oserror(exc, out, "move the outputs into place") from None
+        if man is not None:
+            write_text(out / MANIFEST, json.dumps(man, indent=2, ensure_ascii=False,
+                                                  sort_keys=True) + "\n")
+    except BaseException:
+        if created:
+            with contextlib.suppress(OSError):
+                os.rmdir(out)
+        raise
     finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
+        os.close(fd)
+
+
+def check_output_dir(out, *, inputs: Iterable = (), force: bool = False,
+                     what: str = "--out") -> Path:
+    """The checks :func:`output_set` makes, run before any work (no lock, nothing created)."""
+    out = _check_dir_place(out, what)
+    if _lstat(out) is not None:
+        _check_replaceable(out, inputs, force, what)
+    return out

@@ -43,19 +43,82 @@ class GonioError(ValueError):
             where += f"column {self.column}: "
         if self.key is not None:
             where += f"key {self.key}: "
-        return (where + self.message).replace("\n", " ")
+        text = " ".join((where + self.message).split())
+        return text if len(text) <= 600 else text[:600] + f"… ({len(text)} characters)"
 
 
-def read_utf8(path: str | Path, what: str = "file") -> str:
-    """A text file's content (UTF-8, BOM allowed); unreadable or non-UTF-8 → GonioError.
+#: Default largest input file, bytes (``GONIO_MAX_INPUT_BYTES`` overrides; see gonio.limits).
+MAX_INPUT_BYTES: int = 2 * 1024 ** 3
 
-    The error names the file and, for a bad byte, its line.
+
+def max_input_bytes() -> float:
+    """The input size limit: ``GONIO_MAX_INPUT_BYTES`` if set (a number > 0), else 2 GiB."""
+    import os
+
+    text = os.environ.get("GONIO_MAX_INPUT_BYTES", "").strip()
+    try:
+        v = float(text) if text else float(MAX_INPUT_BYTES)
+    except ValueError:
+        raise GonioError(f"environment variable GONIO_MAX_INPUT_BYTES must be a number, got "
+                         f"{text[:40]!r}") from None
+    if not v > 0:
+        raise GonioError("environment variable GONIO_MAX_INPUT_BYTES must be > 0")
+    return v
+
+
+def read_input(path: str | Path, what: str = "file", limit_bytes: float | None = None) -> bytes:
+    """The bytes of an input file, refusing what is not a regular file or is too large.
+
+    A FIFO, a device (``/dev/zero``), a socket or a folder is refused before any
+    byte is read (opened non-blocking, so a FIFO never hangs); so is a file over
+    ``limit_bytes`` (default: :func:`gonio.limits.limit` ``GONIO_MAX_INPUT_BYTES``).
     """
+    check_input_file(path, what, limit_bytes)
     path = Path(path)
     try:
-        raw = path.read_bytes()
+        return path.read_bytes()
     except OSError as exc:
         raise GonioError(f"cannot read {what}: {exc.strerror}", file=path) from None
+
+
+def check_input_file(path: str | Path, what: str = "file",
+                     limit_bytes: float | None = None) -> Path:
+    """GonioError unless ``path`` is a regular file of at most ``limit_bytes`` bytes."""
+    import os
+    import stat
+
+    if path is None or str(path).strip() == "":
+        raise GonioError(f"{what}: empty file name")
+    path = Path(path)
+    if limit_bytes is None:
+        limit_bytes = max_input_bytes()
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError as exc:
+        raise GonioError(f"cannot read {what}: {exc.strerror}", file=path) from None
+    try:
+        st = os.fstat(fd)
+    finally:
+        os.close(fd)
+    if not stat.S_ISREG(st.st_mode):
+        kind = ("a folder" if stat.S_ISDIR(st.st_mode) else "a FIFO" if stat.S_ISFIFO(st.st_mode)
+                else "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode)
+                else "a special file")
+        raise GonioError(f"{what} is {kind}, not a regular file", file=path)
+    if st.st_size > limit_bytes:
+        raise GonioError(f"{what} is {st.st_size} bytes, over the limit of {int(limit_bytes)} "
+                         "(GONIO_MAX_INPUT_BYTES)", file=path)
+    return path
+
+
+def read_utf8(path: str | Path, what: str = "file", limit_bytes: float | None = None) -> str:
+    """A text file's content (UTF-8, BOM allowed); unreadable or non-UTF-8 → GonioError.
+
+    The error names the file and, for a bad byte, its line. Special files and files
+    over the size limit are refused before reading (:func:`read_input`).
+    """
+    path = Path(path)
+    raw = read_input(path, what, limit_bytes)
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

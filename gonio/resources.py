@@ -7,6 +7,7 @@ beside the ``gonio`` folder.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from gonio.errors import GonioError
@@ -50,6 +51,9 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     p = Path(name_or_path)
     if p.is_file():
         return p
+    if os.path.lexists(p):
+        from gonio.errors import check_input_file
+        check_input_file(p, f"{kind} file")      # names a FIFO, device or folder precisely
     base = protocols_dir() if kind == "protocol" else protocols_dir() / "benches"
     cand = base / (p.name if p.suffix == ".toml" else p.name + ".toml")
     if cand.is_file() and p.parent == Path("."):

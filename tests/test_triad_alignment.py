@@ -346,8 +346,11 @@ def test_cli_simulate_align_and_errors(tmp_path, capsys):
     assert main(["simulate", "--spec", "triad-alignment", "--protocol", str(proto),
                  "--out", str(out), "--seed", "2"]) == 0
     first = (out / "readings.csv").read_bytes()
+    # an existing readings file is replaced only with --force (issue 14)
     assert main(["simulate", "--spec", "triad-alignment", "--protocol", str(proto),
-                 "--out", str(out), "--seed", "2"]) == 0
+                 "--out", str(out), "--seed", "2"]) == 2
+    assert main(["simulate", "--spec", "triad-alignment", "--protocol", str(proto),
+                 "--out", str(out), "--seed", "2", "--force"]) == 0
     assert (out / "readings.csv").read_bytes() == first
     assert not (out / "thermal.csv").exists()
     capsys.readouterr()

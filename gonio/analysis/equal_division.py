@@ -1132,6 +1132,11 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
         if int(starts) != n:
             raise GonioError(f"--starts {starts} but the file has {n} rounds (starts)",
                              file=file, column="round")
+        if m % n:
+            raise GonioError(f"{n} starts do not divide the {m} points per revolution: starts "
+                             f"(round − 1)·360°/{n} fall between the table's steps (IEC 62047-20 "
+                             "A.3 needs n to divide m, or a start_deg column)", file=file,
+                             column="round")
         start = np.arange(n) * 360.0 / n
     if not return_times:
         return D, start, step

@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG
 from gonio.resources import resolve
 from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
@@ -40,6 +41,7 @@ class TableConfig:
     axis_setup_azimuth_deg: float = 0.0
     positioning_random_arcsec: float = 0.0
     positioning_harmonics: tuple[Harmonic, ...] = ()
+    max_rate_dps: float = 300.0
 
     def error_bound_arcsec(self) -> float:
         """Σ|a_h| + 3σ: a bound on |indicated − true| for comparison with the MPE."""
@@ -108,24 +110,73 @@ class Bench:
         return replace(self, instrument=inst)
 
     def to_dict(self) -> dict:
-        """Every parameter, for ``truth.json``."""
+        """Every parameter, for ``truth.json``.
+
+        The bench and table files are given by name and SHA-256 of their bytes, never
+        by the path as typed (same inputs, same bytes, from any working directory).
+        """
         d = asdict(self)
+        for key in ("path", "table_path"):
+            d[key] = _file_id(d[key])
         return d
 
 
-_HARM = {"order": Field("int", check=positive, expect="an integer ≥ 1"),
-         "amplitude_arcsec": Field("float"),
+def _file_id(path: str) -> str:
+    """``name sha256:<hex>`` of a file (empty when there is none)."""
+    if not path:
+        return ""
+    import hashlib
+
+    try:
+        digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return Path(path).name
+    return f"{Path(path).name} sha256:{digest}"
+
+
+#: Largest table/instrument error term accepted: one degree, in arc-seconds.
+_ONE_DEG_ARCSEC: float = ARCSEC_PER_DEG
+
+
+def _within(lo: float, hi: float):
+    return lambda x: lo <= x <= hi
+
+
+def check_counter(bench: "Bench", file=None) -> None:
+    """Refuse a bench whose pulse counter could wrap more than half its range between samples.
+
+    At the table's highest rate (``table.max_rate_dps``) the counter moves
+    K·ω/f_s counts per sample (K the nominal scale factor with 1 % margin, f_s the
+    sample rate); unwrapping a ``counter_bits`` counter is unambiguous only below
+    2^(bits−1) counts per sample.
+    """
+    inst = bench.instrument
+    per_sample = 1.01 * inst.nominal_scale_factor_counts_per_deg * bench.table.max_rate_dps \
+        / bench.sample_rate_hz
+    half = 2.0 ** (inst.counter_bits - 1)
+    if per_sample >= half:
+        raise GonioError(f"a {inst.counter_bits}-bit counter moves {per_sample:.0f} counts per "
+                         f"sample at {bench.table.max_rate_dps:g} °/s and "
+                         f"{bench.sample_rate_hz:g} Hz, more than half its range ({half:.0f}): "
+                         "it would wrap undetectably; raise sample_rate_hz or counter_bits",
+                         file=file, key="instrument.counter_bits")
+
+
+_HARM = {"order": Field("int", check=_within(1, 1000), expect="an integer in [1, 1000]"),
+         "amplitude_arcsec": Field("float", check=_within(-_ONE_DEG_ARCSEC, _ONE_DEG_ARCSEC),
+                                   expect="within ±3600″"),
          "phase_deg": Field("float", 0.0)}
 TABLE_SCHEMA = {
     "name": Field("str", "rotary table"),
-    "mpe_arcsec": Field("float", 0.1, positive, "> 0"),
-    "accel_dps2": Field("float", 60.0, positive, "> 0"),
+    "mpe_arcsec": Field("float", 0.1, _within(1e-6, _ONE_DEG_ARCSEC), "in [1e-6, 3600]"),
+    "accel_dps2": Field("float", 60.0, _within(1e-3, 1e5), "in [1e-3, 1e5] °/s²"),
+    "max_rate_dps": Field("float", 300.0, _within(1e-3, 1e4), "in [1e-3, 1e4] °/s"),
     "rate_error_rel": Field("float", 0.0, lambda x: abs(x) < 0.01, "|x| < 0.01"),
-    "wobble_arcsec": Field("float", 0.0, non_negative, "≥ 0"),
+    "wobble_arcsec": Field("float", 0.0, _within(0.0, _ONE_DEG_ARCSEC), "in [0, 3600]"),
     "wobble_phase_deg": Field("float", 0.0),
     "axis_setup_error_deg": Field("float", 0.0, lambda x: 0 <= x < 5, "0 ≤ x < 5"),
     "axis_setup_azimuth_deg": Field("float", 0.0),
-    "positioning_random_arcsec": Field("float", 0.0, non_negative, "≥ 0"),
+    "positioning_random_arcsec": Field("float", 0.0, _within(0.0, _ONE_DEG_ARCSEC), "in [0, 3600]"),
     "positioning_harmonics": Field("table_list", [], schema=_HARM),
 }
 INSTRUMENT_SCHEMA = {
@@ -133,21 +184,22 @@ INSTRUMENT_SCHEMA = {
     "name": Field("str", "goniometer"),
     "manufacturer": Field("str", ""),
     "serial": Field("str", ""),
-    "nominal_scale_factor_counts_per_deg": Field("float", check=positive, expect="> 0"),
-    "scale_factor_error_ppm": Field("float", 0.0),
-    "sf_rate_quadratic_ppm": Field("float", 0.0),
-    "sf_lowrate_ppm": Field("float", 0.0),
-    "sf_lowrate_scale_dps": Field("float", 1.0, positive, "> 0"),
+    "nominal_scale_factor_counts_per_deg": Field("float", check=_within(1e-3, 1e9),
+                                                 expect="in [1e-3, 1e9]"),
+    "scale_factor_error_ppm": Field("float", 0.0, _within(-1e5, 1e5), "within ±1e5 ppm"),
+    "sf_rate_quadratic_ppm": Field("float", 0.0, _within(-1e5, 1e5), "within ±1e5 ppm"),
+    "sf_lowrate_ppm": Field("float", 0.0, _within(-1e5, 1e5), "within ±1e5 ppm"),
+    "sf_lowrate_scale_dps": Field("float", 1.0, _within(1e-6, 1e4), "in [1e-6, 1e4] °/s"),
     "position_harmonics": Field("table_list", [], schema=_HARM),
     "tilt_deg": Field("float", 0.0, lambda x: 0 <= x < 10, "0 ≤ tilt < 10"),
     "tilt_azimuth_deg": Field("float", 0.0),
-    "bias_dph": Field("float", 0.0),
-    "warmup_drift_dph": Field("float", 0.0),
-    "warmup_tau_s": Field("float", 1200.0, positive, "> 0"),
-    "arw_dpsh": Field("float", 0.0, non_negative, "≥ 0"),
-    "bias_instability_dph": Field("float", 0.0, non_negative, "≥ 0"),
-    "bias_instability_tau_s": Field("float", 300.0, positive, "> 0"),
-    "rrw_dphsh": Field("float", 0.0, non_negative, "≥ 0"),
+    "bias_dph": Field("float", 0.0, _within(-1e4, 1e4), "within ±1e4 °/h"),
+    "warmup_drift_dph": Field("float", 0.0, _within(-1e4, 1e4), "within ±1e4 °/h"),
+    "warmup_tau_s": Field("float", 1200.0, _within(1e-3, 1e6), "in [1e-3, 1e6] s"),
+    "arw_dpsh": Field("float", 0.0, _within(0.0, 100.0), "in [0, 100] °/√h"),
+    "bias_instability_dph": Field("float", 0.0, _within(0.0, 1e4), "in [0, 1e4] °/h"),
+    "bias_instability_tau_s": Field("float", 300.0, _within(1e-3, 1e6), "in [1e-3, 1e6] s"),
+    "rrw_dphsh": Field("float", 0.0, _within(0.0, 1e4), "in [0, 1e4] °/h/√h"),
     "quantisation": Field("bool", True),
     "quantisation_dither": Field("bool", False),
     "counter_bits": Field("int", 64, choices=(16, 24, 32, 64)),
@@ -216,8 +268,10 @@ def load_bench(path: str | Path = "rlg", table: str | Path | None = None) -> Ben
             if exc.file is not None:        # the table file itself is bad: it names itself
                 raise
             raise GonioError(exc.message, file=file, key="bench.table") from None
-    return Bench(name=raw["bench"]["name"], instrument=instrument, table=tab,
-                 latitude_deg=raw["site"]["latitude_deg"],
-                 longitude_deg=raw["site"]["longitude_deg"],
-                 sample_rate_hz=raw["bench"]["sample_rate_hz"],
-                 earth_rate=raw["bench"]["earth_rate"], path=str(file), table_path=str(tfile))
+    bench = Bench(name=raw["bench"]["name"], instrument=instrument, table=tab,
+                  latitude_deg=raw["site"]["latitude_deg"],
+                  longitude_deg=raw["site"]["longitude_deg"],
+                  sample_rate_hz=raw["bench"]["sample_rate_hz"],
+                  earth_rate=raw["bench"]["earth_rate"], path=str(file), table_path=str(tfile))
+    check_counter(bench, file)
+    return bench

@@ -33,12 +33,18 @@ from gonio.bench.instrument import (Integrator, counts_from_angle, deterministic
                                     geometry, harmonic_sum_arcsec, rate_nonlinearity)
 from gonio.formats.records import StaticRecord
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
+from gonio.bench.config import check_counter
 from gonio.errors import GonioError
 from gonio.units import arcsec_to_deg, deg_to_arcsec
 from gonio.physics.kinematics import Timeline
 from gonio.protocol import Protocol, RotationItem
 
 CHUNK = 1 << 20
+#: Most samples kept of a captured record (the 7.3 rest for the Allan analysis): longer
+#: records are decimated — the counter is cumulative, so every d-th sample is an exact
+#: angle record at f_s/d (Allan deviation from τ = d/f_s up) — bounding memory for any
+#: session length (16 bytes a sample: 64 MiB).
+MAX_RECORD_SAMPLES = 1 << 22
 
 
 @dataclass
@@ -383,7 +389,9 @@ def _simulate_many(blocks: list[Block], protocol: Protocol, variants: list[_Vari
                 if v.stream is not None or blk.label in v.capture:
                     c = _counter(k, phi, inst, zeros, phi_at[m], comp[m], dt, v.dither_key)
                     if blk.label in v.capture:
-                        captured[m].setdefault(blk.label, []).append((t, c))
+                        dec = -(-(blk.k_end - blk.k_start) // MAX_RECORD_SAMPLES)
+                        keep = ((k - blk.k_start) % dec) == 0
+                        captured[m].setdefault(blk.label, []).append((t[keep], c[keep]))
                     if v.stream is not None:
                         if table_out is None:
                             table_out = np.repeat(theta_u + arcsec_to_deg(harmonic_sum_arcsec(
@@ -456,6 +464,44 @@ def session_metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
     return md
 
 
+@dataclass(frozen=True)
+class SessionEstimate:
+    """What a session will cost before it is simulated."""
+
+    samples: int            # samples of one pass (the noise-free rerun doubles the work)
+    duration_s: float
+    memory_bytes: float     # peak, roughly: the chunk buffers plus the captured record
+    seconds: float          # rough run time at ~10 million samples a second
+
+
+def estimate_session(blocks: list[Block], bench: Bench, protocol: Protocol) -> SessionEstimate:
+    """Estimate a planned session's size and refuse it beyond the stated limits.
+
+    Limits (:mod:`gonio.limits`): ``GONIO_MAX_SAMPLES`` samples per pass,
+    ``GONIO_MAX_SESSION_S`` seconds of session; protocol rates above the table's
+    ``max_rate_dps`` are refused too. Memory does not grow with the session (chunks of
+    :data:`CHUNK` samples, captured records decimated to :data:`MAX_RECORD_SAMPLES`).
+    """
+    from gonio.limits import check
+
+    if not any(b.readings for b in blocks):
+        raise GonioError("the protocol plans no reading (no test section): nothing to simulate",
+                         file=protocol.path or None, key="protocol")
+    n = int(sum(b.k_end - b.k_start for b in blocks))
+    dur = n / bench.sample_rate_hz
+    for it in protocol.items():
+        if it.rate_dps > bench.table.max_rate_dps:
+            raise GonioError(f"{it.test} at {it.rate_dps:g} °/s is faster than the table's "
+                             f"max_rate_dps {bench.table.max_rate_dps:g} °/s",
+                             file=protocol.path or None, key=f"{it.test}.rate_dps")
+    est = SessionEstimate(n, dur, CHUNK * 8.0 * 24 + MAX_RECORD_SAMPLES * 16.0, 2 * n / 1e7)
+    where = f"protocol {protocol.name} on bench {bench.name}"
+    check("GONIO_MAX_SESSION_S", dur, f"{where}: the session lasts", unit="s")
+    check("GONIO_MAX_SAMPLES", n, f"{where} at {bench.sample_rate_hz:g} Hz: the session needs",
+          unit="samples")
+    return est
+
+
 def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) -> SessionResult:
     """Execute ``protocol`` on ``bench``; same seed, same readings (bit for bit).
 
@@ -464,6 +510,7 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     """
     ss = np.random.SeedSequence(seed)
     rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
+    check_counter(bench)
     blocks = plan_session(protocol, bench, rng_table)
     # The noisy run and its noise-free rerun (truth) in one pass over the session.
     run, nf = _simulate_many(blocks, protocol, [
@@ -537,6 +584,17 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     return SessionResult(df, session_metadata(protocol, bench, seed), truth, static)
 
 
+def json_plain(x):
+    """JSON-safe copy: non-finite floats become None (truth values are finite in practice)."""
+    if isinstance(x, dict):
+        return {k: json_plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_plain(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
 def write_session(result: SessionResult, out: str | Path) -> dict[str, Path]:
     """Write ``readings.csv`` and ``truth.json`` into ``out`` atomically."""
     from gonio.formats.readings import write_readings
@@ -544,5 +602,6 @@ def write_session(result: SessionResult, out: str | Path) -> dict[str, Path]:
     out = Path(out)
     with output_dir(out) as stage:
         write_readings(result.readings, stage / "readings.csv", result.metadata)
-        write_text(stage / "truth.json", json.dumps(result.truth, indent=2, allow_nan=False) + "\n")
+        write_text(stage / "truth.json", json.dumps(json_plain(result.truth), indent=2,
+                                                    allow_nan=False) + "\n")
     return {"readings": out / "readings.csv", "truth": out / "truth.json"}

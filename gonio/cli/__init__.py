@@ -5,18 +5,32 @@ defines ``register(subparsers)``; the parser it adds sets ``func`` to a
 function ``run(args) -> int``. Modules are discovered in name order, so adding
 a command never edits a shared list.
 
-A :class:`gonio.errors.GonioError` (a user error) is printed on one line to
-stderr as ``gonio: error: ...`` and the exit code is 2, with no traceback. A reader
-that closes the pipe early (``gonio calibrate ... --json | head``) ends the command
-quietly (exit 0: every output file was already written).
+Every way a run can end is one line on stderr, never a traceback:
+
+* a :class:`gonio.errors.GonioError` (a user error), an ``OSError`` (a file or
+  output place), ``MemoryError`` or ``RecursionError``: ``gonio: error: ...``,
+  exit code 2;
+* SIGINT or SIGTERM: ``gonio: interrupted`` (exit 130 / 143) after the staging
+  folders are removed — the previous output set stays as it was;
+* anything else is a bug: ``gonio: internal error: ...``, exit 1 (the traceback
+  with ``GONIO_DEBUG=1``).
+
+Warnings raised during a failed run are dropped (the error line is the answer);
+after a successful run each distinct one is printed once as ``gonio: warning: ...``.
+
+A reader that closes the pipe early (``gonio calibrate ... --json | head``) ends the
+command quietly (exit 0: every output file was already written).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
+import signal
 import sys
+import warnings
 
 from gonio.errors import GonioError
 
@@ -25,8 +39,21 @@ class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line and exit code 2."""
 
     def error(self, message: str) -> None:  # pragma: no cover - exercised via CLI tests
-        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        sys.stderr.write(f"{self.prog}: error: {_short(message)}\n")
         raise SystemExit(2)
+
+
+class Terminated(BaseException):
+    """Raised by the SIGTERM handler so that every ``finally`` (staging clean-up) runs."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _short(text: str, limit: int = 400) -> str:
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[:limit] + f"… ({len(text)} characters)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,30 +74,65 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _error(msg: str) -> int:
+    sys.stderr.write(f"gonio: error: {_short(msg)}\n")
+    return 2
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``gonio`` console script; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
     try:
-        rc = int(args.func(args) or 0)
-        sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit
+        if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
+            signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:        # not the main thread (called from a test runner's thread)
+        pass
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            rc = int(args.func(args) or 0)
+            sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit
+        seen = set()
+        for w in caught:
+            if issubclass(w.category, RuntimeWarning):
+                continue
+            msg = _short(str(w.message), 200)
+            if msg not in seen:
+                seen.add(msg)
+                sys.stderr.write(f"gonio: warning: {msg}\n")
         return rc
     except GonioError as exc:
-        sys.stderr.write(f"gonio: error: {exc}\n")
-        return 2
+        return _error(str(exc))
     except BrokenPipeError:
         # the reader went away: stop writing, and keep Python from complaining at exit
-        import os
-
         try:
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, sys.stdout.fileno())
         except (OSError, ValueError):  # pragma: no cover - stdout without a descriptor
             pass
         return 0
-    except KeyboardInterrupt:  # pragma: no cover
+    except OSError as exc:
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        return _error(f"{where}{exc.strerror or exc}")
+    except MemoryError:
+        return _error("out of memory; the input or the requested work is too large")
+    except RecursionError:
+        return _error("input nested too deeply")
+    except KeyboardInterrupt:
         sys.stderr.write("gonio: interrupted\n")
         return 130
+    except Terminated:
+        sys.stderr.write("gonio: terminated\n")
+        return 143
+    except SystemExit as exc:      # argparse: --help, --version, a usage error
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    except Exception as exc:  # a bug: still one line unless asked for the traceback
+        if os.environ.get("GONIO_DEBUG"):
+            raise
+        sys.stderr.write(f"gonio: internal error: {type(exc).__name__}: {_short(exc, 300)} "
+                         "(GONIO_DEBUG=1 shows the traceback)\n")
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

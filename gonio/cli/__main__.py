@@ -1,4 +1,10 @@
 """``python -m gonio.cli``."""
-from gonio.cli import main
+import sys
 
-raise SystemExit(main())
+try:
+    from gonio.cli import main
+    _rc = main()
+except KeyboardInterrupt:          # before main() took over (while importing)
+    sys.stderr.write("gonio: interrupted\n")
+    _rc = 130
+raise SystemExit(_rc)

@@ -10,7 +10,10 @@ from __future__ import annotations
 import json
 
 from gonio.specs.ogam_draft.budget import annex_a_budget
+from gonio.cli.checks import json_safe
+from gonio.units import ARCSEC_PER_DEG
 from gonio.errors import GonioError
+from gonio.cli.checks import float_range, int_range, seed
 
 _OPTIONS = {"table_mpe_arcsec": "--table-mpe-arcsec", "tilt_deg": "--tilt-deg",
             "zero_stability_dph": "--zero-stability-dph", "duration_min": "--duration-min",
@@ -24,20 +27,22 @@ def register(subparsers) -> None:
         "budget", help="Annex A uncertainty budget of the angle-position deviation",
         description="The draft's Annex A budget: u(P), u(phi_e), u(B_E), u(r), u_c and U = k u_c; "
                     "exact values beside the annex's rounded ones; optional JCGM 101 Monte Carlo.")
-    p.add_argument("--table-mpe-arcsec", type=float, default=0.1, metavar="A",
+    p.add_argument("--table-mpe-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.1, metavar="A",
                    help="standard table MPE in arc-seconds (A.4.1; default 0.1)")
-    p.add_argument("--tilt-deg", type=float, default=0.1, metavar="PSI",
+    p.add_argument("--tilt-deg", type=float_range(0, 45), default=0.1, metavar="PSI",
                    help="sensing-plane tilt in degrees (A.4.2; default 0.1)")
-    p.add_argument("--zero-stability-dph", type=float, default=0.005, metavar="B",
+    p.add_argument("--zero-stability-dph", type=float_range(0, 1e4), default=0.005, metavar="B",
                    help="zero stability in °/h (A.4.3; default 0.005)")
-    p.add_argument("--duration-min", type=float, default=0.5, metavar="T",
+    p.add_argument("--duration-min", type=float_range(0, 1e4), default=0.5, metavar="T",
                    help="time from start to reading in minutes (A.4.3; default 0.5)")
-    p.add_argument("--repeatability-arcsec", type=float, default=0.096, metavar="S",
+    p.add_argument("--repeatability-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.096,
+                   metavar="S",
                    help="repeatability u(r) in arc-seconds (A.4.4; default 0.096)")
-    p.add_argument("--k", type=float, default=2.0, help="coverage factor (A.7; default 2)")
-    p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
+    p.add_argument("--k", type=float_range(0, 10, lo_open=True), default=2.0,
+                   help="coverage factor (A.7; default 2)")
+    p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="JCGM 101 Monte Carlo trials (0: none)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the Monte Carlo generator")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the Monte Carlo generator")
     p.add_argument("--spec", default="ogam-draft",
                    help="specification whose annex budget to reproduce (ogam-draft, "
                         "jjf1535-2015)")
@@ -50,11 +55,14 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Compute and print the Annex A budget."""
+    from gonio.limits import check
+    check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
     if args.spec != "ogam-draft":
         from gonio.pipeline.rate import budget
 
         b = budget(args.spec)
-        print(json.dumps(b.to_dict(), indent=2, ensure_ascii=False) if args.json else b.to_text(),
+        print(json.dumps(json_safe(b.to_dict()), indent=2, ensure_ascii=False, allow_nan=False)
+              if args.json else b.to_text(),
               end="\n" if args.json else "")
         return 0
     try:
@@ -69,7 +77,7 @@ def run(args) -> int:
             raise
         raise GonioError(f"{opt}: {exc.message}") from None
     if args.json:
-        print(json.dumps(b.to_dict(), indent=2))
+        print(json.dumps(json_safe(b.to_dict()), indent=2, allow_nan=False))
     elif args.format == "markdown":
         print(b.to_markdown())
     elif args.format == "html":

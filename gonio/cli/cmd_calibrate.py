@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 
-from gonio.pipeline.calibrate import calibrate, write_calibration
+from gonio.pipeline.calibrate import calibrate, write_outputs
+from gonio.cli.checks import int_range
 from gonio.errors import GonioError
 
 
@@ -32,7 +33,7 @@ def register(sub) -> None:
     p.add_argument("--dcc", action="store_true",
                    help="also write certificate.dcc.xml, the PTB Digital Calibration "
                         "Certificate (DCC 3.3.0 XML)")
-    p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
+    p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
     p.set_defaults(func=run)
 
@@ -43,6 +44,9 @@ def add_certificate_options(p) -> None:
                    help="laboratory, customer and signatory details (TOML, see "
                         "protocols/lab-example.toml); without it the certificate is marked as a "
                         "virtual-bench example")
+    p.add_argument("--force", action="store_true",
+                   help="replace an --out folder whose files were changed since gonio wrote "
+                        "them, or that holds a readings/stream file")
     p.add_argument("--lang", choices=("en", "zh"), default="en",
                    help="certificate language (zh needs a CJK font, e.g. fonts-noto-cjk)")
 
@@ -65,27 +69,31 @@ def print_outputs(report, as_json: bool, lab_d: dict | None, lang: str) -> None:
 
 
 def emit(report, out, as_json: bool, *, lab=None, lang: str = "en", truth=None,
-         dcc: bool = False) -> None:
-    """Write the outputs (results, tables, certificate, optional DCC) and print the summary
-    (or the JSON)."""
+         dcc: bool = False, inputs=(), force: bool = False) -> None:
+    """Write the whole output set (results, tables, certificate, optional DCC) as one staged
+    set (:func:`gonio.pipeline.calibrate.write_outputs`) and print the summary (or JSON)."""
     from gonio.progress import status
-    from gonio.report.certificate import load_lab, write_certificate
+    from gonio.report.certificate import load_lab
 
     import sys
 
     lab_d = load_lab(lab) if lab else None      # validate before anything is written
     for w in report.warnings():
         print(w, file=sys.stderr)
-    write_calibration(report, out, lab=lab_d)
-    status("writing the certificate")
-    write_certificate(report, out, truth=truth, lab=lab_d, lang=lang, dcc=dcc)
+    status("writing the results and the certificate")
+    write_outputs(report, out, truth=truth, lab=lab_d, lang=lang, dcc=dcc, inputs=inputs,
+                  force=force)
     status("")
     print_outputs(report, as_json, lab_d, lang)
 
 
 def run(args) -> int:
-    if args.monte_carlo < 0:
-        raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
+    from gonio.atomic import check_output_dir, output_set
+    from gonio.limits import check
+
+    check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
+    inputs = [args.readings, args.protocol, args.lab]
+    check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
     from gonio.pipeline.rate import RATE_SPECS, calibrate as calibrate_rate, readings_spec
     from gonio.progress import status
 
@@ -94,9 +102,10 @@ def run(args) -> int:
         if spec not in RATE_SPECS:
             from gonio.specs import get
             get(spec)                                  # GonioError listing the keys
-        result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
-                                   protocol=args.protocol, lab=args.lab, lang=args.lang,
-                                   monte_carlo_trials=args.monte_carlo)
+        with output_set(args.out, inputs=inputs, force=args.force):    # one whole set
+            result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
+                                       protocol=args.protocol, lab=args.lab, lang=args.lang,
+                                       monte_carlo_trials=args.monte_carlo)
         if args.json:
             print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
         else:
@@ -105,5 +114,6 @@ def run(args) -> int:
     status("calibrating")
     report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo,
                        budget=args.budget, tilt=args.tilt)
-    emit(report, args.out, args.json, lab=args.lab, lang=args.lang, dcc=args.dcc)
+    emit(report, args.out, args.json, lab=args.lab, lang=args.lang, dcc=args.dcc,
+         inputs=inputs, force=args.force)
     return 0

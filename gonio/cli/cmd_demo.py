@@ -6,6 +6,7 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.pipeline.demo import demo
+from gonio.cli.checks import seed
 
 
 def register(sub) -> None:
@@ -14,7 +15,7 @@ def register(sub) -> None:
                                    "virtual bench (RLG on a precision table) and calibrate it: "
                                    "readings.csv, truth.json, results.json, the certificate "
                                    "(HTML, PDF) and its DCC XML.")
-    p.add_argument("--seed", type=int, default=0,
+    p.add_argument("--seed", type=seed, default=0,
                    help="random seed of the virtual bench (≥ 0; same seed → byte-identical "
                         "outputs)")
     p.add_argument("--spec", default="ogam-draft",
@@ -30,8 +31,10 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    if args.seed < 0:
-        raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
+    import json
+
+    from gonio.atomic import check_output_dir
+    check_output_dir(args.out, inputs=[args.lab, args.bench], force=args.force)
     if args.spec != "ogam-draft":
         import json
 
@@ -52,7 +55,7 @@ def run(args) -> int:
 
     lab_d = load_lab(args.lab) if args.lab else None
     report, paths = demo(args.out, seed=args.seed, bench=args.bench or "rlg", lab=args.lab,
-                         lang=args.lang, on_stage=status)
+                         lang=args.lang, on_stage=status, force=args.force)
     status("")
     print_outputs(report, args.json, lab_d, args.lang)
     if not args.json:

@@ -10,6 +10,7 @@ import math
 
 from gonio.physics.earth import earth_rate
 from gonio.errors import GonioError
+from gonio.cli.checks import float_range
 
 
 def register(subparsers) -> None:
@@ -19,7 +20,7 @@ def register(subparsers) -> None:
         description="Earth rate on an axis (up, north, south, east, west or AZ,EL in degrees) "
                     "at a latitude, in deg/h, arcsec/s and rad/s, with its parts along and "
                     "across the axis.")
-    p.add_argument("--latitude-deg", type=float, required=True, metavar="PHI",
+    p.add_argument("--latitude-deg", type=float_range(-90, 90), required=True, metavar="PHI",
                    help="latitude in degrees, north positive (within ±90)")
     p.add_argument("--axis", default="up", metavar="AXIS",
                    help="up, north, south, east, west, or AZ,EL in degrees (default up)")

@@ -15,6 +15,9 @@ from gonio.analysis.equal_division import EdaResult, equal_division_from_reading
 from gonio.formats.readings import read_readings
 
 
+from gonio.cli.checks import int_range, json_safe
+
+
 def register(subparsers) -> None:
     """Add the ``eda`` sub-command."""
     p = subparsers.add_parser(
@@ -22,7 +25,7 @@ def register(subparsers) -> None:
         description="Separate a rotary table's positioning error from the goniometer's own "
                     "error with equal-division averaging (IEC 62047-20 Annex A.3).")
     p.add_argument("readings", metavar="READINGS", help="readings CSV with equal_division rows")
-    p.add_argument("--starts", type=int, default=None, metavar="N",
+    p.add_argument("--starts", type=int_range(1, 10000), default=None, metavar="N",
                    help="number of starts n (required when the file has no start_deg column; "
                         "checked against the file otherwise)")
     p.add_argument("--gauge", choices=("closure", "zero"), default="closure",
@@ -74,8 +77,11 @@ def _text(res: EdaResult) -> str:
 
 def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
+    from gonio.atomic import check_output_file
     from gonio.protocol import load_protocol
 
+    if args.plot is not None:
+        check_output_file(args.plot, what="--plot", inputs=[args.readings])
     proto = load_protocol(args.protocol)
     sess = proto.session
     res = equal_division_from_readings(
@@ -87,7 +93,7 @@ def run(args) -> int:
         from gonio.report.figure_files import save_figure
         save_figure(equal_division_figure(res), args.plot)
     if args.json:
-        print(json.dumps(res.to_dict(), indent=2))
+        print(json.dumps(json_safe(res.to_dict()), indent=2, allow_nan=False))
     else:
         print(_text(res))
     return 0

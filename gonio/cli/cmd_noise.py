@@ -30,9 +30,26 @@ import numpy as np
 
 from gonio.errors import GonioError
 from gonio.units import S_PER_H
+from gonio.cli.checks import float_range, int_range, json_safe, seed as seed_type
 
 _INPUTS = {"angle": "angle", "counts": "increment", "rate": "rate"}
 _KINDS = ("adev", "mdev", "hdev", "totdev")
+
+
+def tau_set(text: str) -> str:
+    """``octave``, ``all`` or ``decade:N`` with an integer N in [1, 100] (a bigger N would
+    ask for more τ values than any record has)."""
+    import argparse
+    import re
+
+    t = text.strip().lower()
+    if t in ("octave", "all"):
+        return t
+    m = re.fullmatch(r"decade:([0-9]{1,3})", t)
+    if m and 1 <= int(m.group(1)) <= 100:
+        return t
+    raise argparse.ArgumentTypeError(f"expected octave, all or decade:N with N in [1, 100], "
+                                     f"got {text[:40]!r}")
 
 
 def register(subparsers) -> None:
@@ -47,7 +64,7 @@ def register(subparsers) -> None:
     p.add_argument("--input", choices=sorted(_INPUTS), default="angle",
                    help="meaning of gyro_counts: angle = cumulative counter (default), "
                         "counts = counts per sample, rate = counts per second")
-    p.add_argument("--taus", default="octave", metavar="SET",
+    p.add_argument("--taus", default="octave", metavar="SET", type=tau_set,
                    help="tau set: octave (default), decade:N or all")
     p.add_argument("--kind", choices=_KINDS, default=None,
                    help="estimator: adev (overlapping Allan, default), mdev, hdev, totdev")
@@ -56,14 +73,14 @@ def register(subparsers) -> None:
                    help="analyse this interval (s) only; refused if the table moves in it")
     p.add_argument("--each-window", action="store_true",
                    help="analyse every rest found, not only the longest")
-    p.add_argument("--bootstrap", type=int, default=20, metavar="B",
+    p.add_argument("--bootstrap", type=int_range(0, 10_000), default=20, metavar="B",
                    help="parameter uncertainties by a parametric bootstrap of B records "
                         "(default 20; 0: least-squares covariance, a quick indication)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap")
-    p.add_argument("--scale-factor", type=float, default=None, metavar="K",
+    p.add_argument("--seed", type=seed_type, default=0, help="seed of the bootstrap")
+    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
                    help="counts per degree (default: metadata "
                         "nominal_scale_factor_counts_per_deg)")
-    p.add_argument("--confidence", type=float, default=0.683,
+    p.add_argument("--confidence", type=float_range(0, 1, lo_open=True, hi_open=True), default=0.683,
                    help="level of the chi-squared intervals (default 0.683)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None,
@@ -191,7 +208,13 @@ def _table(result) -> str:
 
 def run(args) -> int:
     """Run ``gonio noise``; prints a table or JSON, optionally writes the plot."""
+    from gonio.atomic import check_output_file
+    from gonio.errors import check_input_file
     from gonio.report.noise_figures import write_noise_figure
+
+    check_input_file(args.stream, "stream file")
+    if args.plot is not None:
+        check_output_file(args.plot, what="--plot", inputs=[args.stream])
 
     results = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
                            kind=args.kind, scale_factor=args.scale_factor,
@@ -204,7 +227,7 @@ def run(args) -> int:
         body = [r.to_dict() for r in results]
         out = {"stream": str(args.stream), "input": args.input,
                **(body[0] if len(body) == 1 else {"windows": body})}
-        print(json.dumps(out, indent=2))
+        print(json.dumps(json_safe(out), indent=2, allow_nan=False))
     else:
         print("\n\n".join(_table(r) for r in results))
     return 0

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, check_input_file
+from gonio.atomic import check_output_file
+from gonio.cli.checks import float_range
 from gonio.formats.readings import write_readings
 from gonio.protocol import load_protocol
 from gonio.formats.override import read_override
@@ -24,7 +26,9 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="readings file to write")
     p.add_argument("--override", default=None,
                    help="CSV test,series,round,t_zero_s,t_read_s[,rate_dps,orientation]")
-    p.add_argument("--max-gap", type=float, default=None, metavar="S",
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing readings file at --out")
+    p.add_argument("--max-gap", type=float_range(0, 1e6, lo_open=True), default=None, metavar="S",
                    help="largest allowed time step in the stream, s (default 10× median)")
     p.add_argument("--json", action="store_true", help="print the reduction summary as JSON")
     p.set_defaults(func=run)
@@ -33,6 +37,9 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.max_gap is not None and not args.max_gap > 0:
         raise GonioError(f"--max-gap must be > 0, got {args.max_gap}")
+    check_input_file(args.stream, "stream file")
+    check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
+                      force=args.force, protected=True)
     from gonio.progress import status
 
     proto = load_protocol(args.protocol)

@@ -11,6 +11,7 @@ import json
 
 from gonio.physics.sagnac import sagnac_fog, sagnac_rlg
 from gonio.errors import GonioError
+from gonio.cli.checks import float_range, json_safe
 
 
 def register(subparsers) -> None:
@@ -22,11 +23,11 @@ def register(subparsers) -> None:
     kind = p.add_mutually_exclusive_group(required=True)
     kind.add_argument("--rlg", action="store_true", help="ring-laser gyro")
     kind.add_argument("--fog", action="store_true", help="fibre-optic gyro")
-    p.add_argument("--area-m2", type=float, help="RLG: enclosed area, m²")
-    p.add_argument("--perimeter-m", type=float, help="RLG: perimeter, m")
-    p.add_argument("--length-m", type=float, help="FOG: fibre length, m")
-    p.add_argument("--diameter-m", type=float, help="FOG: coil diameter, m")
-    p.add_argument("--wavelength-nm", type=float, default=None,
+    p.add_argument("--area-m2", type=float_range(1e-6, 100), help="RLG: enclosed area, m²")
+    p.add_argument("--perimeter-m", type=float_range(1e-3, 100), help="RLG: perimeter, m")
+    p.add_argument("--length-m", type=float_range(1e-2, 1e5), help="FOG: fibre length, m")
+    p.add_argument("--diameter-m", type=float_range(1e-3, 10), help="FOG: coil diameter, m")
+    p.add_argument("--wavelength-nm", type=float_range(100, 20000), default=None,
                    help="wavelength, nm (default 632.8 for --rlg, 1550 for --fog)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.set_defaults(func=run)
@@ -53,7 +54,7 @@ def run(args) -> int:
         except GonioError as exc:
             raise GonioError(f"--fog: {exc.message}") from None
     if args.json:
-        print(json.dumps(s.to_dict(), indent=2))
+        print(json.dumps(json_safe(s.to_dict()), indent=2, allow_nan=False))
         return 0
     if s.kind == "rlg":
         print(f"RLG at {s.wavelength_m * 1e9:g} nm: K = {s.scale_factor_counts_per_rad:.6g} "

@@ -9,6 +9,7 @@ from pathlib import Path
 from gonio.bench import load_bench, run_session, write_session
 from gonio.errors import GonioError
 from gonio.protocol import load_protocol
+from gonio.cli.checks import seed
 
 
 def register(sub) -> None:
@@ -23,8 +24,10 @@ def register(sub) -> None:
                    help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610; "
                         "triad-alignment: mems-triad)")
     p.add_argument("--table", default=None, help="table file overriding the bench's")
-    p.add_argument("--seed", type=int, default=0, help="random seed (same seed → same bytes)")
+    p.add_argument("--seed", type=seed, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--force", action="store_true",
+                   help="replace an --out folder that holds readings.csv or stream.csv")
     p.add_argument("--stream", action="store_true",
                    help="also write the stream (every sample: time, wrapped counter, table "
                         "angle; docs/formats.md#stream-file), chunk by chunk, with progress on a "
@@ -47,54 +50,61 @@ def stream_metadata(protocol, bench, seed: int) -> dict:
 
 
 def run(args) -> int:
-    if args.seed < 0:
-        raise GonioError(f"--seed must be ≥ 0, got {args.seed}")
+    from gonio.atomic import check_output_dir, output_set
+
+    inputs = [args.protocol, args.bench, args.table]
+    check_output_dir(args.out, inputs=inputs, force=args.force)
     if args.spec in SPEC_SIMULATORS:
-        return _run_spec(args)
+        with output_set(args.out, inputs=inputs, force=args.force):
+            return _run_spec(args)
     if args.spec != "ogam-draft":
         from gonio.pipeline.rate import simulate
 
         if args.stream or args.table:
             raise GonioError("--stream and --table apply to the ogam-draft specification only")
-        for p in simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
-                          seed=args.seed).values():
+        with output_set(args.out, inputs=inputs, force=args.force):
+            paths = simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
+                             seed=args.seed)
+        for p in paths.values():
             print(p)
         return 0
     proto = load_protocol(args.protocol or "ogam-draft")
     bench = load_bench(args.bench or "rlg", table=args.table)
-    writer = prog = sink = None
-    if args.stream:
-        from gonio.bench.session import plan_session
-        from gonio.formats.streams import StreamWriter
-        from gonio.progress import Progress
+    with output_set(args.out, inputs=inputs, force=args.force) as stage:
+        writer = prog = sink = None
+        if args.stream:
+            from gonio.bench.session import plan_session
+            from gonio.formats.streams import StreamWriter
+            from gonio.progress import Progress
 
-        name = "stream.parquet" if args.stream_format == "parquet" else "stream.csv"
-        writer = StreamWriter(Path(args.out) / name, stream_metadata(proto, bench, args.seed),
-                              table=True, fmt=args.stream_format)
-        total = sum(b.k_end - b.k_start for b in plan_session(proto, bench, None))
-        prog = Progress(total, label=f"simulate: {name}", unit="samples")
+            name = "stream.parquet" if args.stream_format == "parquet" else "stream.csv"
+            writer = StreamWriter(stage / name, stream_metadata(proto, bench, args.seed),
+                                  table=True, fmt=args.stream_format)
+            total = sum(b.k_end - b.k_start for b in plan_session(proto, bench, None))
+            prog = Progress(total, label=f"simulate: {name}", unit="samples")
 
-        def write_chunk(t, c, th):
-            writer.write(t, c, th)
-            prog.update(len(t))
-        sink = write_chunk
-    from gonio.progress import status
+            def write_chunk(t, c, th):
+                writer.write(t, c, th)
+                prog.update(len(t))
+            sink = write_chunk
+        from gonio.progress import status
 
-    if sink is None:
-        status("simulate: running the session")
-    try:
-        result = run_session(proto, bench, seed=args.seed, stream=sink)
-        status("")
-    except BaseException:
+        if sink is None:
+            status("simulate: running the session")
+        try:
+            result = run_session(proto, bench, seed=args.seed, stream=sink)
+            status("")
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        finally:
+            if prog is not None:
+                prog.close()
+        paths = write_session(result, args.out)
         if writer is not None:
-            writer.abort()
-        raise
-    finally:
-        if prog is not None:
-            prog.close()
-    paths = write_session(result, args.out)
-    if writer is not None:
-        paths["stream"] = writer.close()
+            writer.close()
+            paths["stream"] = Path(args.out) / name
     for p in paths.values():
         print(p)
     return 0

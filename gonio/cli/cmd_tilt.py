@@ -14,13 +14,16 @@ from gonio.errors import GonioError
 from gonio.physics.tilt import elliptic_extreme, rigid_extreme
 
 
+from gonio.cli.checks import float_range
+
+
 def register(subparsers) -> None:
     """Add the ``tilt`` sub-command."""
     p = subparsers.add_parser(
         "tilt", help="extreme error from a sensing-plane tilt (Annex A.4.2)",
         description="Largest error over 0-360° caused by a tilt between the gyro's sensing "
                     "plane and the table plane, and the table angles where it occurs.")
-    p.add_argument("--tilt-deg", type=float, default=0.1, metavar="PSI",
+    p.add_argument("--tilt-deg", type=float_range(0, 45), default=0.1, metavar="PSI",
                    help="tilt in degrees, 0 <= PSI < 90 (default 0.1)")
     p.add_argument("--model", choices=("elliptic", "rigid"), default="elliptic",
                    help="elliptic projection (the draft's) or rigid-body rate gyro")

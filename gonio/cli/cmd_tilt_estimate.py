@@ -11,6 +11,9 @@ import json
 from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
 
 
+from gonio.cli.checks import float_range
+
+
 def register(subparsers) -> None:
     """Add the ``tilt-estimate`` sub-command."""
     p = subparsers.add_parser(
@@ -19,11 +22,11 @@ def register(subparsers) -> None:
                     "and report ψ = asin(hypot(a, b)/Ω_⊥) and the tilt azimuth α with their "
                     "standard uncertainties (residual-based covariance).")
     p.add_argument("file", metavar="FILE", help="readings CSV with tilt_estimate rows")
-    p.add_argument("--scale-factor", type=float, default=None, metavar="K",
+    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
                    help="counts/° (default: the file's nominal_scale_factor_counts_per_deg)")
-    p.add_argument("--latitude-deg", type=float, default=None, metavar="PHI",
+    p.add_argument("--latitude-deg", type=float_range(-90, 90), default=None, metavar="PHI",
                    help="site latitude (default: the file's latitude_deg)")
-    p.add_argument("--u-latitude-deg", type=float, default=0.0, metavar="U",
+    p.add_argument("--u-latitude-deg", type=float_range(0, 90), default=0.0, metavar="U",
                    help="standard uncertainty of the latitude, degrees (default 0)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.set_defaults(func=run)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
+from gonio.cli.checks import float_range, int_range, seed
 from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, PARTIAL_DIR, TRUTHS, validate
 
 
@@ -17,8 +18,8 @@ def register(sub) -> None:
                        description="Run N virtual calibrations per case (7.1 + 7.4 with 10 series) "
                                    "and report how often |E - truth| <= U, U the calibration's own "
                                    "Annex A expanded uncertainty (k = 2).")
-    p.add_argument("--trials", type=int, required=True, help="calibrations per case (>= 2)")
-    p.add_argument("--seed", type=int, default=0, help="master seed (same seed -> same JSON)")
+    p.add_argument("--trials", type=int_range(2), required=True, help="calibrations per case (>= 2)")
+    p.add_argument("--seed", type=seed, default=0, help="master seed (same seed -> same JSON)")
     p.add_argument("--bench", default="rlg", help="bench file or built-in name (rlg, fog)")
     p.add_argument("--protocol", default="ogam-draft",
                    help="protocol (restricted to 7.1 and 7.4/7.5)")
@@ -29,9 +30,9 @@ def register(sub) -> None:
     p.add_argument("--extra-components", nargs="?", const="all", default=None, metavar="NAMES",
                    help="also evaluate the budget with the components the annex lacks: all, or "
                         f"a comma-separated subset of {','.join(EXTRA_SYMBOLS)}")
-    p.add_argument("--u-scale", type=float, default=1.0,
+    p.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=1.0,
                    help="multiply U (default 1; < 1 deliberately breaks the budget)")
-    p.add_argument("--sample-rate-hz", type=float, default=100.0,
+    p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=100.0,
                    help="simulation rate (default 100 Hz; the RLG counter is exact at any rate)")
     p.add_argument("--workers", type=int, default=None,
                    help="local processes (default min(2, cores), at most the machine's cores; "
@@ -57,6 +58,9 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.trials < 2:
         raise GonioError(f"--trials must be an integer >= 2, got {args.trials}")
+    from gonio.limits import check
+
+    check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
     if args.workers is not None and args.workers < 1:
         raise GonioError(f"--workers must be >= 1, got {args.workers}")
     if args.resume and not args.out:
@@ -86,8 +90,8 @@ def run(args) -> int:
                              "results)\n")
         return 130
     text = json.dumps(report.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    if args.out:
-        with output_dir(Path(args.out)) as stage:
+    if args.out is not None:
+        with output_dir(Path(args.out)) as stage:     # the partial batches live in --out
             write_text(stage / "validation.json", text)
         shutil.rmtree(partial, ignore_errors=True)
     if args.json:

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG
 
 #: Metadata keys the package understands (others are kept).
 KNOWN_METADATA: tuple[str, ...] = (
@@ -21,12 +22,12 @@ KNOWN_METADATA: tuple[str, ...] = (
 )
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
 NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
-    "nominal_scale_factor_counts_per_deg": (0.0, False, math.inf, "a number > 0"),
+    "nominal_scale_factor_counts_per_deg": (1e-6, True, 1e12, "a number in [1e-6, 1e12]"),
     "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
-    "temperature_c": (-math.inf, True, math.inf, "a finite number"),
+    "temperature_c": (-100.0, True, 200.0, "a number in [-100, 200]"),
     "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
-    "table_mpe_arcsec": (0.0, True, math.inf, "a number >= 0"),
-    "tilt_bound_deg": (0.0, True, 90.0, "a number in [0, 90]"),
+    "table_mpe_arcsec": (0.0, True, ARCSEC_PER_DEG, "a number in [0, 3600]"),
+    "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
 }
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")
@@ -50,9 +51,9 @@ def metadata_float(metadata: Mapping[str, str], key: str, *,
         key, (-math.inf, True, math.inf, "a finite number"))
     value = parse_number(text)
     if value is None or not math.isfinite(value):
-        raise GonioError(f"expected {expected}, got {text!r}", file=file, key=key)
+        raise GonioError(f"expected {expected}, got {show_value(text)}", file=file, key=key)
     if value < lo or (value == lo and not lo_incl) or value > hi:
-        raise GonioError(f"expected {expected}, got {text!r}", file=file, key=key)
+        raise GonioError(f"expected {expected}, got {show_value(text)}", file=file, key=key)
     return value
 
 
@@ -70,7 +71,19 @@ def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,
         return True
     if text in _FALSE:
         return False
-    raise GonioError(f"expected true or false, got {metadata[key]!r}", file=file, key=key)
+    raise GonioError(f"expected true or false, got {show_value(metadata[key])}", file=file,
+                     key=key)
+
+
+def show_value(text) -> str:
+    """A value for an error message: quoted, at most 40 characters (a 5000-digit value is
+    not echoed whole).
+
+    >>> show_value("9" * 50)
+    "'9999999999999999999999999999999999999999…(50 chars)'"
+    """
+    text = str(text)
+    return repr(text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)")
 
 
 def parse_number(text: str) -> float | None:

@@ -44,6 +44,7 @@ from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, read_utf8
 from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
                                     metadata_float, parse_number)
+from gonio.formats.metadata import show_value as _show
 
 #: The ``test`` names of the draft's clause 7 (the first five) and of later features.
 TEST_NAMES: tuple[str, ...] = (
@@ -66,6 +67,17 @@ DEFAULT_ORIENTATION: str = "up"
 #: The key that identifies one reading.
 KEY_COLUMNS: tuple[str, ...] = ("test", "series", "round", "rate_dps", "orientation")
 
+#: Plausible ranges of the numeric columns (docs/formats.md, "Plausible ranges"):
+#: column -> (lowest, highest); values outside are refused with the line.
+COLUMN_RANGES: dict[str, tuple[float, float]] = {
+    "time_s": (-1e10, 1e10),
+    "table_deg": (-1e4, 1e4),
+    "gyro_counts": (-2.0 ** 63, 2.0 ** 63 - 1024),
+    "gyro_deg": (-1e6, 1e6),
+    "rate_dps": (1e-6, 1e4),
+}
+#: Longest cell and metadata value accepted, characters.
+MAX_CELL_CHARS: int = 4096
 
 
 @dataclass
@@ -140,6 +152,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     if text.startswith("\ufeff"):
         text = text[1:]
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    _check_rows(len(lines), fname)
     metadata: dict[str, str] = {}
     idx = 0
     header: list[str] | None = None
@@ -162,9 +175,12 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
             if key in metadata:
                 raise GonioError(f"metadata key {key!r} given twice", file=fname, line=idx,
                                  key=key)
+            if len(value) > MAX_CELL_CHARS or len(key) > 200:
+                raise GonioError(f"metadata value of {len(value)} characters, over the limit "
+                                 f"of {MAX_CELL_CHARS}", file=fname, line=idx, key=key[:40])
             metadata[key] = value.strip()
             continue
-        header = [h.strip() for h in next(csv.reader([line]))]
+        header = [h.strip() for h in _cells(line, fname, idx)]
         header_line = idx
         break
     if header is None:
@@ -176,6 +192,9 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
     seen = check_header(header, REQUIRED_COLUMNS, file=fname, line=header_line)
+    if "line" in seen:
+        raise GonioError("column name 'line' is reserved (it holds each row's line number)",
+                         file=fname, line=header_line, column="line")
     if "gyro_counts" not in seen and "gyro_deg" not in seen:
         raise GonioError("missing column: need gyro_counts or gyro_deg (or both)",
                          file=fname, line=header_line, column="gyro_counts")
@@ -196,7 +215,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         if raw_line.lstrip().startswith("#"):
             raise GonioError("metadata line after the header; '#' lines belong at the top",
                              **where)
-        cells = next(csv.reader([raw_line]))
+        cells = _cells(raw_line, fname, idx)
         if len(cells) != ncol:
             raise GonioError(f"expected {ncol} fields as in the header, got {len(cells)}",
                              **where)
@@ -222,6 +241,41 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         raise GonioError("no readings: header only", file=fname, line=header_line)
     data = _frame(cols, extras)
     return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
+
+
+#: Rows above which a note says how long the run will take (the reader, the per-reading
+#: tables of 7.4/7.5 and the certificate are per-row work, ~0.1 ms a row together).
+NOTE_ROWS: int = 20_000
+
+
+def _check_rows(n_lines: int, fname: str) -> None:
+    """Refuse a file over ``GONIO_MAX_READING_ROWS`` lines; say how long a large one takes."""
+    import sys
+
+    from gonio.limits import limit
+
+    lim = limit("GONIO_MAX_READING_ROWS")
+    if n_lines > lim + 200:          # metadata and blank lines allowed beyond the rows
+        raise GonioError(f"{n_lines} lines, over the limit of {lim:.0f} readings "
+                         "(GONIO_MAX_READING_ROWS; a calibration has hundreds): refused before "
+                         "parsing — every row is validated and tabulated, ~0.5 ms a row",
+                         file=fname)
+    if n_lines > NOTE_ROWS:
+        sys.stderr.write(f"gonio: note: {fname}: {n_lines} lines; expect about "
+                         f"{n_lines * 5e-4:.0f} s (each row is validated and tabulated)\n")
+
+
+def _cells(line: str, fname: str, idx: int) -> list[str]:
+    """The CSV cells of one line; a cell over :data:`MAX_CELL_CHARS` or bad quoting → GonioError."""
+    if len(line) > MAX_CELL_CHARS:
+        longest = max((len(c) for c in line.split(",")), default=0)
+        if longest > MAX_CELL_CHARS:
+            raise GonioError(f"a cell of {longest} characters, over the limit of "
+                             f"{MAX_CELL_CHARS}", file=fname, line=idx)
+    try:
+        return next(csv.reader([line], strict=True))
+    except csv.Error as exc:
+        raise GonioError(f"bad CSV: {exc}", file=fname, line=idx) from None
 
 
 def _frame(cols: dict[str, list], extras: list[str]) -> pd.DataFrame:
@@ -250,9 +304,13 @@ def _number(row: dict, name: str, where: dict, *, required: bool) -> float:
         return math.nan
     value = parse_number(text)
     if value is None:
-        raise GonioError(f"expected a number, got {text!r}", column=name, **where)
+        raise GonioError(f"expected a number, got {_show(text)}", column=name, **where)
     if not math.isfinite(value):
-        raise GonioError(f"expected a finite number, got {text!r}", column=name, **where)
+        raise GonioError(f"expected a finite number, got {_show(text)}", column=name, **where)
+    lo, hi = COLUMN_RANGES.get(name, (-math.inf, math.inf))
+    if not lo <= value <= hi and not (name == "rate_dps" and value <= 0):
+        raise GonioError(f"{_show(text)} is outside the plausible range [{lo:g}, {hi:g}] "
+                         "(docs/formats.md)", column=name, **where)
     return value
 
 
@@ -260,7 +318,7 @@ def _positive_int(row: dict, name: str, where: dict) -> int:
     text = row.get(name, "")
     value = _number(row, name, where, required=True)
     if value != int(value) or value < 1 or value > 1_000_000:
-        raise GonioError(f"expected an integer >= 1 (at most 1000000), got {text!r}",
+        raise GonioError(f"expected an integer >= 1 (at most 1000000), got {_show(text)}",
                          column=name, **where)
     return int(value)
 
@@ -268,7 +326,7 @@ def _positive_int(row: dict, name: str, where: dict) -> int:
 def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
     test = row["test"]
     if test not in TEST_NAMES:
-        raise GonioError(f"unknown test {test!r}, expected one of {', '.join(TEST_NAMES)}",
+        raise GonioError(f"unknown test {_show(test)}, expected one of {', '.join(TEST_NAMES)}",
                          column="test", **where)
     series = _positive_int(row, "series", where)
     rnd = _positive_int(row, "round", where)
@@ -276,11 +334,11 @@ def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
     if math.isnan(rate):
         rate = DEFAULT_RATE_DPS
     elif rate <= 0:
-        raise GonioError(f"expected a rate > 0 deg/s, got {row['rate_dps']!r}",
+        raise GonioError(f"expected a rate > 0 deg/s, got {_show(row['rate_dps'])}",
                          column="rate_dps", **where)
     orientation = row.get("orientation", "") or DEFAULT_ORIENTATION
     if orientation not in ORIENTATIONS:
-        raise GonioError(f"unknown orientation {orientation!r}, expected one of "
+        raise GonioError(f"unknown orientation {_show(orientation)}, expected one of "
                          f"{', '.join(ORIENTATIONS)}", column="orientation", **where)
     time_s = _number(row, "time_s", where, required=True)
     table_deg = _number(row, "table_deg", where, required=test != "zero_stability")
@@ -295,10 +353,10 @@ def _parse_row(row: dict, where: dict, quantised: bool) -> dict:
                          column="gyro_counts", **where)
     if not math.isnan(counts):
         text = row["gyro_counts"]
-        if re.match(r"^[+-]?\d+$", text):
+        if re.match(r"^[+-]?[0-9]+$", text):
             counts = float(int(text))
         elif quantised and counts != int(counts):
-            raise GonioError(f"expected an integer pulse count, got {text!r} (metadata "
+            raise GonioError(f"expected an integer pulse count, got {_show(text)} (metadata "
                              "counts_quantised: false allows fractions)",
                              column="gyro_counts", **where)
     return {"test": test, "series": series, "round": rnd, "rate_dps": rate,
@@ -409,7 +467,8 @@ def format_readings(readings_or_df: Readings | pd.DataFrame,
             raise GonioError("missing required column", column=name)
     n = len(df)
     if n == 0:
-        raise GonioError("no readings to write")
+        raise GonioError("no readings to write (the protocol or the reduction produced none)",
+                         file=path)
     get = (lambda name, default: df[name] if name in df.columns
            else pd.Series([default] * n, index=df.index))
     counts = get("gyro_counts", math.nan).astype(float).to_numpy()

@@ -45,18 +45,93 @@ def non_negative(x) -> bool:
     return x >= 0
 
 
-def read_toml(path: str | Path) -> dict:
-    """Parse a TOML file; a syntax error is a GonioError naming the file and line."""
+#: Deepest nesting of brackets/braces and longest dotted key accepted in a TOML file.
+MAX_TOML_DEPTH: int = 32
+MAX_TOML_KEY_PARTS: int = 32
+#: Largest magnitude of any number in a TOML file (docs/formats.md, "Plausible ranges");
+#: non-zero magnitudes below ``MIN_TOML_MAGNITUDE`` (subnormal-like) are refused too.
+MAX_TOML_MAGNITUDE: float = 1e12
+MIN_TOML_MAGNITUDE: float = 1e-15
+MAX_TOML_INT: int = 10 ** 9
+
+
+def _check_nesting(text: str, path) -> None:
+    """Refuse brackets nested deeper than MAX_TOML_DEPTH and long dotted keys, before parsing.
+
+    A coarse scan outside strings and comments (the parser recurses per level); the
+    line of the first offence is named.
+    """
+    depth = 0
+    line = 1
+    quote = None
+    dots = 0
+    i, n = 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch == "\n":
+            line += 1
+            dots = 0
+            if quote in ('"', "'"):
+                quote = None
+        elif quote is not None:
+            if ch == "\\" and quote in ('"', '"""'):
+                i += 2
+                continue
+            if text.startswith(quote, i):
+                i += len(quote)
+                quote = None
+                continue
+        elif ch == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        elif ch in "\"'":
+            quote = ch * 3 if text.startswith(ch * 3, i) else ch
+            i += len(quote)
+            continue
+        elif ch in "[{":
+            depth += 1
+            if depth > MAX_TOML_DEPTH:
+                raise GonioError(f"nested deeper than {MAX_TOML_DEPTH} levels", file=path,
+                                 line=line)
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+        elif ch == "." and not (i > 0 and text[i - 1].isdigit()
+                                and i + 1 < n and text[i + 1].isdigit()):   # not a float's point
+            dots += 1
+            if dots > MAX_TOML_KEY_PARTS * 4:
+                raise GonioError(f"a line with more than {MAX_TOML_KEY_PARTS * 4} dots (dotted "
+                                 "key too long)", file=path, line=line)
+        i += 1
+
+
+def read_toml(path: str | Path, limit_bytes: float | None = None) -> dict:
+    """Parse a TOML file; a syntax error is a GonioError naming the file and line.
+
+    Refused before parsing: a special file, a file over ``GONIO_MAX_TOML_BYTES``
+    (1 MiB), nesting deeper than :data:`MAX_TOML_DEPTH`, over-long dotted keys.
+    """
+    from gonio.limits import limit
+
     path = Path(path)
-    text = read_utf8(path)
+    text = read_utf8(path, "TOML file", limit("GONIO_MAX_TOML_BYTES")
+                     if limit_bytes is None else limit_bytes)
+    _check_nesting(text, path)
     try:
         return tomllib.loads(text)
+    except RecursionError:
+        raise GonioError("nested too deeply", file=path) from None
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"at line (\d+)", str(exc))
         line = int(m.group(1)) if m else getattr(exc, "lineno", None)
         if line is None and "end of document" in str(exc):
             line = text.count("\n") + 1
         raise GonioError(f"TOML syntax: {exc}", file=path, line=line) from None
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)"
 
 
 def _coerce(value, f: Field, where: str, file):
@@ -66,30 +141,35 @@ def _coerce(value, f: Field, where: str, file):
     k = f.kind
     if k == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            bad(f"expected a number, got {type(value).__name__} {value!r}")
+            bad(f"expected a number, got {type(value).__name__} {_short(value)}")
         value = float(value)
         if not math.isfinite(value):
             bad(f"expected a finite number, got {value}")
+        if abs(value) > MAX_TOML_MAGNITUDE or 0 < abs(value) < MIN_TOML_MAGNITUDE:
+            bad(f"{value:g} is outside the plausible magnitudes [{MIN_TOML_MAGNITUDE:g}, "
+                f"{MAX_TOML_MAGNITUDE:g}] (docs/formats.md)")
     elif k == "int":
         if isinstance(value, bool) or not isinstance(value, int):
-            bad(f"expected an integer, got {type(value).__name__} {value!r}")
+            bad(f"expected an integer, got {type(value).__name__} {_short(value)}")
+        if abs(value) > MAX_TOML_INT:
+            bad(f"{_short(value)} is outside the plausible range ±{MAX_TOML_INT:g}")
     elif k == "bool":
         if not isinstance(value, bool):
-            bad(f"expected true or false, got {value!r}")
+            bad(f"expected true or false, got {_short(value)}")
     elif k == "str":
         if not isinstance(value, str):
-            bad(f"expected text, got {type(value).__name__} {value!r}")
+            bad(f"expected text, got {type(value).__name__} {_short(value)}")
     elif k in ("float_list", "str_list"):
         if not isinstance(value, list) or not value:
-            bad(f"expected a non-empty list, got {value!r}")
+            bad(f"expected a non-empty list, got {_short(value)}")
         inner = Field("float" if k == "float_list" else "str", choices=f.choices)
         value = [_coerce(v, inner, f"{where}[{i}]", file) for i, v in enumerate(value)]
         if f.check is not None and not all(f.check(v) for v in value):
-            bad(f"expected {f.expect}, got {value!r}")
+            bad(f"expected {f.expect}, got {_short(value)}")
         return value
     elif k == "table":
         if not isinstance(value, dict):
-            bad(f"expected a table, got {value!r}")
+            bad(f"expected a table, got {_short(value)}")
         return validate_table(value, f.schema or {}, where, file)
     elif k == "table_list":
         if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
@@ -98,9 +178,9 @@ def _coerce(value, f: Field, where: str, file):
     else:  # pragma: no cover - programming error
         raise AssertionError(k)
     if f.choices is not None and value not in f.choices:
-        bad(f"expected one of {', '.join(map(str, f.choices))}, got {value!r}")
+        bad(f"expected one of {', '.join(map(str, f.choices))}, got {_short(value)}")
     if f.check is not None and not f.check(value):
-        bad(f"expected {f.expect}, got {value!r}")
+        bad(f"expected {f.expect}, got {_short(value)}")
     return value
 
 

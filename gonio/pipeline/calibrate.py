@@ -23,7 +23,7 @@ import pandas as pd
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
-from gonio.atomic import output_dir, write_text
+from gonio.atomic import output_dir, output_set, sha256_file, write_text
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
@@ -656,7 +656,10 @@ def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
 
 
 def _load(path: str | Path, protocol: Protocol):
+    from gonio.errors import check_input_file
     from gonio.formats.streams import StreamFile, sniff_kind
+
+    check_input_file(path, "readings or stream file")
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
@@ -714,6 +717,44 @@ def analyse_zero_stability(record: StaticRecord | None):
         return None, f"not analysed: {exc}"
 
 
+#: A row giving both gyro_deg and gyro_counts must agree through K within this
+#: relative tolerance of the angle, or :data:`COUNTS_AGREE_ABS_DEG`, whichever is larger.
+COUNTS_AGREE_REL: float = 1e-4
+COUNTS_AGREE_ABS_DEG: float = 1e-3
+
+
+def check_counts_agree(readings: Readings, results: CalibrationResults) -> None:
+    """Refuse a row whose ``gyro_deg`` contradicts its ``gyro_counts`` through K.
+
+    K is the scale factor calibrated by 7.1 in the same file, else the metadata's
+    nominal one; without K nothing can be compared. Tolerance: the larger of
+    :data:`COUNTS_AGREE_REL` × |angle| and :data:`COUNTS_AGREE_ABS_DEG`.
+    """
+    import numpy as np
+
+    from gonio.errors import GonioError
+
+    sf = results.scale_factor
+    k = sf.value if sf.measured and sf.value else metadata_float(
+        readings.metadata, "nominal_scale_factor_counts_per_deg", file=readings.path)
+    if not k:
+        return
+    df = readings.data
+    deg = df["gyro_deg"].to_numpy(dtype=float)
+    cnt = df["gyro_counts"].to_numpy(dtype=float)
+    both = ~np.isnan(deg) & ~np.isnan(cnt)
+    if not both.any():
+        return
+    diff = np.abs(deg - cnt / k)
+    tol = np.maximum(COUNTS_AGREE_REL * np.abs(deg), COUNTS_AGREE_ABS_DEG)
+    bad = both & (diff > tol)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise GonioError(f"gyro_deg {deg[i]:.9g} contradicts gyro_counts {cnt[i]:.0f} / K "
+                         f"{k:.9g} = {cnt[i] / k:.9g} by {diff[i]:.3g}°", file=readings.path,
+                         line=int(df["line"].iat[i]), column="gyro_deg")
+
+
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
@@ -739,6 +780,8 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
         if rd.path:
             sha = file_sha256(rd.path)
     else:
+        from gonio.errors import check_input_file
+        check_input_file(readings, "readings or stream file")   # before any byte is read
         proto, conflicts = resolve_protocol(readings, file_protocol_name(readings), protocol)
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
@@ -749,6 +792,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     res = compute_characteristics(kept, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=proto.pointing_reference)
     _note_exclusions(res, excluded)
+    check_counts_agree(kept, res)
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
     items = item_uncertainties(res, e_budget, proto, settings, kept)
@@ -792,6 +836,30 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings,
     if len(unused):
         unused = unused[~unused["line"].isin(lines)].reset_index(drop=True)
     return out, unused
+
+
+def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | None = None,
+                  lab=None, lang: str = "en", session=None, inputs=(),
+                  force: bool = False, dcc: bool = False) -> dict[str, Path]:
+    """One run's whole output set into ``out``: results, summary, tables, certificate (and
+    readings + truth of a simulated ``session``), swapped in together.
+
+    Through :func:`gonio.atomic.output_set`: every part is written into a staging
+    folder and the folder replaces ``out`` only when all are written, with
+    ``gonio-manifest.json`` carrying the source's SHA-256; a failed run leaves the
+    previous set untouched; ``out`` holding one of ``inputs`` is refused.
+    """
+    from gonio.report.certificate import write_certificate
+
+    out = Path(out) if str(out).strip() else out
+    with output_set(out, inputs=inputs, force=force, source_sha256=report.source_sha256) as st:
+        if session is not None:
+            from gonio.bench import write_session
+            write_session(session, out)
+        write_calibration(report, out, lab=lab)
+        write_certificate(report, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
+        names = sorted(p.relative_to(st).as_posix() for p in st.rglob("*") if p.is_file())
+    return {n: Path(out) / n for n in names}
 
 
 def write_calibration(report: CalibrationReport, out: str | Path,

@@ -11,27 +11,35 @@ from gonio.protocol import load_protocol
 
 def demo(out: str | Path, seed: int = 0, bench: str = "rlg", protocol: str = "ogam-draft",
          lab: str | Path | None = None, lang: str = "en", dcc: bool = True,
-         on_stage=None) -> tuple[CalibrationReport, list[Path]]:
+         on_stage=None, force: bool = False) -> tuple[CalibrationReport, list[Path]]:
     """Simulate ``protocol`` on ``bench``, calibrate the readings, write results, certificate
     and (``dcc``) the DCC XML.
 
-    ``on_stage(message)``, if given, is told each stage as it starts (the CLI shows it on a
-    terminal). Returns the report and the paths written (readings.csv, truth.json,
-    results.json, tables/..., certificate.*).
+    The whole set (readings.csv, truth.json, results, tables, certificate, DCC, manifest)
+    is staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`); an
+    existing readings.csv there is replaced only with ``force``. ``on_stage(message)``,
+    if given, is told each stage as it starts (the CLI shows it on a terminal). Returns
+    the report and the paths written.
     """
-    stage = on_stage or (lambda message: None)
+    from gonio.atomic import output_set
+
+    say = on_stage or (lambda message: None)
     from gonio.report.certificate import load_lab, write_certificate
 
-    out = Path(out)
+    out = Path(out) if str(out).strip() else out
     lab_d = load_lab(lab) if lab else None      # validate inputs before simulating
     proto = load_protocol(protocol)
-    stage("demo: simulating the session on the virtual bench")
-    session = run_session(proto, load_bench(bench), seed=seed)
-    written = list(write_session(session, out).values())
-    stage("demo: calibrating")
-    report = calibrate(out / "readings.csv", proto, static_record=session.static_record)
-    written += list(write_calibration(report, out, lab=lab_d).values())
-    stage("demo: writing the certificate")
-    written += list(write_certificate(report, out, truth=session.truth, lab=lab_d,
-                                      lang=lang, dcc=dcc).values())
-    return report, written
+    bench_cfg = load_bench(bench)
+    inputs = [x for x in (lab, bench, protocol) if isinstance(x, (str, Path)) and Path(x).exists()]
+    with output_set(out, inputs=inputs, force=force) as stage:
+        say("demo: simulating the session on the virtual bench")
+        session = run_session(proto, bench_cfg, seed=seed)
+        write_session(session, out)
+        say("demo: calibrating")
+        report = calibrate(stage / "readings.csv", proto, static_record=session.static_record)
+        report.readings.path = Path(out) / "readings.csv"
+        write_calibration(report, out, lab=lab_d)
+        say("demo: writing the certificate")
+        write_certificate(report, out, truth=session.truth, lab=lab_d, lang=lang, dcc=dcc)
+        names = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())
+    return report, [Path(out) / n for n in names]

@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 from gonio.physics.earth import NAMED_AXES
 from gonio.errors import GonioError
+from gonio.units import ARCSEC_PER_DEG
 from gonio.units import h_to_s
 from gonio.resources import resolve
 from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
@@ -345,6 +346,7 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
             v = validate_table(raw[name], schema, name, file)
             extra[name] = factory(v) if factory else v
     p = sec["protocol"]
+    check_protocol_ranges(sec, raw, file)
     return Protocol(name=p["name"], title=p["title"], specification=p["specification"],
                     conditions=Conditions(**{**sec["conditions"], "table_orientations":
                                              tuple(sec["conditions"]["table_orientations"])}),
@@ -353,6 +355,88 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
                                     s["compensation_latitude_deg"],
                                     s["compensation_azimuth_error_deg"]),
                     annex_a=AnnexA(**sec["annex_a"]), extra=extra, path=str(file or ""), **kw)
+
+
+#: Plausible ranges of protocol values (docs/formats.md, "Plausible ranges"):
+#: durations in s, rates in °/s, angles in °, counts of series, rounds, readings.
+MAX_DURATION_S: float = 172_800.0       # any one rest, static, warm-up or interval: 2 days
+RATE_RANGE_DPS: tuple[float, float] = (1e-3, 1e4)
+MAX_ANGLE_DEG: float = 10 * 360.0       # a round's start or stop: ten turns
+MAX_SERIES: int = 1000
+MAX_ROUNDS: int = 1000
+MAX_LIST: int = 100                      # rates_dps, orientations
+MAX_ARCSEC: float = ARCSEC_PER_DEG       # any *_arcsec value (MPE, wobble, repeatability)
+COVERAGE_RANGE: tuple[float, float] = (0.5, 10.0)
+
+
+def check_protocol_ranges(sec: dict, raw: dict, file) -> None:
+    """Refuse protocol values outside their plausible ranges, naming the key.
+
+    Durations at most :data:`MAX_DURATION_S`; rates within :data:`RATE_RANGE_DPS`;
+    round angles within ±:data:`MAX_ANGLE_DEG`; at most :data:`MAX_SERIES` series,
+    :data:`MAX_ROUNDS` rounds, :data:`MAX_LIST` rates or orientations; the total
+    number of readings at most ``GONIO_MAX_READINGS`` (:mod:`gonio.limits`).
+    """
+    from gonio.limits import limit
+
+    def bad(key, msg):
+        raise GonioError(msg, file=file, key=key)
+
+    total = 0
+    for name, x in sec.items():
+        if not isinstance(x, dict):
+            continue
+        for key, v in x.items():
+            where = f"{name}.{key}"
+            if isinstance(v, bool) or v is None:
+                continue
+            if key.endswith("_s") and isinstance(v, (int, float)) and v > MAX_DURATION_S:
+                bad(where, f"{v:g} s is over the plausible {MAX_DURATION_S:g} s")
+            if key.endswith("_arcsec") and isinstance(v, (int, float)) and abs(v) > MAX_ARCSEC:
+                bad(where, f"{v:g}″ is over the plausible {MAX_ARCSEC:g}″ (one degree)")
+            if key == "coverage_factor" and not COVERAGE_RANGE[0] <= v <= COVERAGE_RANGE[1]:
+                bad(where, f"{v:g} is outside the plausible range [{COVERAGE_RANGE[0]:g}, "
+                    f"{COVERAGE_RANGE[1]:g}]")
+            if key.endswith("_dph") and isinstance(v, (int, float)) and abs(v) > 1e4:
+                bad(where, f"{v:g} °/h is over the plausible 1e4 °/h")
+            if key == "duration_min" and v > MAX_DURATION_S / 60.0:
+                bad(where, f"{v:g} min is over the plausible {MAX_DURATION_S / 60.0:g} min")
+            if key.endswith("_dps") and isinstance(v, (int, float)) and \
+                    not RATE_RANGE_DPS[0] <= v <= RATE_RANGE_DPS[1]:
+                bad(where, f"{v:g} °/s is outside the plausible range "
+                    f"[{RATE_RANGE_DPS[0]:g}, {RATE_RANGE_DPS[1]:g}] °/s")
+            if key == "rates_dps" or key == "orientations":
+                if len(v) > MAX_LIST:
+                    bad(where, f"{len(v)} entries, over the limit of {MAX_LIST}")
+                if len(set(v)) != len(v):
+                    bad(where, "an entry is given twice")
+                if key == "rates_dps":
+                    for i, r in enumerate(v):
+                        if not RATE_RANGE_DPS[0] <= r <= RATE_RANGE_DPS[1]:
+                            bad(f"{where}[{i}]", f"{r:g} °/s is outside the plausible range "
+                                f"[{RATE_RANGE_DPS[0]:g}, {RATE_RANGE_DPS[1]:g}] °/s")
+            if key == "series" and isinstance(v, int) and v > MAX_SERIES:
+                bad(where, f"{v} series, over the limit of {MAX_SERIES}")
+            if key == "readings" and isinstance(v, int):
+                total += v
+            if key == "rounds" and isinstance(v, list):
+                if len(v) > MAX_ROUNDS:
+                    bad(where, f"{len(v)} rounds, over the limit of {MAX_ROUNDS}")
+                for i, r in enumerate(v):
+                    for a in ("start_deg", "stop_deg"):
+                        if isinstance(r, dict) and abs(r.get(a) or 0.0) > MAX_ANGLE_DEG:
+                            bad(f"{where}[{i}].{a}", f"{r[a]:g}° is outside the plausible "
+                                f"±{MAX_ANGLE_DEG:g}°")
+                n_cond = len(x.get("rates_dps") or x.get("orientations") or [1])
+                total += len(v) * int(x.get("series") or 1) * n_cond
+        if name in ("rate_consistency", "pointing_consistency") and x.get("rounds") is None:
+            ad = sec.get("angle_deviation") or {}
+            total += (len(ad.get("rounds") or []) * int(x.get("series") or 1)
+                      * len(x.get("rates_dps") or x.get("orientations") or [1]))
+    lim = limit("GONIO_MAX_READINGS")
+    if total > lim:
+        bad("protocol", f"{total} readings planned, over the limit of {lim:.0f} "
+            "(set GONIO_MAX_READINGS to raise it)")
 
 
 def load_protocol(path: str | Path = "ogam-draft") -> Protocol:

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from gonio.atomic import output_dir, write_bytes, write_text
+from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
 from gonio.analysis.conformity import RULES
 from gonio.report.figures import FIGURES, figure_svg, mpl_style
@@ -186,6 +187,22 @@ def _meta(md: dict, key: str, L) -> str:
     return str(v) if v not in (None, "") else L["not_stated"]
 
 
+#: Longest table printed on the certificate; the rest is in tables/*.csv and results.json.
+MAX_TABLE_ROWS: int = 200
+
+
+def _summarised(kind: str, data):
+    """A table block cut to :data:`MAX_TABLE_ROWS` rows plus a row saying how many follow."""
+    if kind != "table":
+        return data
+    head, rows = data
+    rows = list(rows)
+    if len(rows) <= MAX_TABLE_ROWS:
+        return data
+    note = [f"… {len(rows) - MAX_TABLE_ROWS} more rows in tables/*.csv"] + [""] * (len(head) - 1)
+    return head, rows[:MAX_TABLE_ROWS] + [note]
+
+
 def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
                        lang: str = "en", cjk: bool = True) -> dict:
     """The certificate's content: header fields and the list of blocks, in order.
@@ -194,14 +211,16 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     ``results``. ``cjk`` False (no CJK font installed) writes the specification's
     Chinese title in English so that nothing prints as boxes.
     """
-    res = report.to_dict()
+    res = clean_tree(report.to_dict())          # user text shown literally (report/text.py)
+    lab = clean_tree(lab) if lab else lab
     md = res.get("metadata", {})
     unc = res["uncertainty"]
     U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
     virtual = lab is None
     lab_ = lab or {}
     blocks: list[Block] = []
-    add = lambda kind, data, extra=None: blocks.append(Block(kind, data, extra))  # noqa: E731
+    add = lambda kind, data, extra=None: blocks.append(  # noqa: E731
+        Block(kind, _summarised(kind, data), extra))
 
     # a, b, c: title, laboratory, place; d: identifier (header of every page)
     if virtual:
@@ -494,12 +513,18 @@ footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
 
 
 def css_string(text: str) -> str:
-    """``text`` as a quoted CSS string (backslash and quote escaped).
+    """``text`` as a quoted CSS string inside ``<style>``: backslash and quote escaped, and
+    ``<``, ``>``, ``&`` as CSS hex escapes, so user text can never close the style element.
 
     >>> print(css_string('say "hi"'))
     "say \\"hi\\""
+    >>> print(css_string("</style><script>"))
+    "\\3c /style\\3e \\3c script\\3e "
     """
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ") + '"'
+    text = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ")
+    for ch, esc in (("<", "\\3c "), (">", "\\3e "), ("&", "\\26 ")):
+        text = text.replace(ch, esc)
+    return '"' + text + '"'
 
 
 def _h(x) -> str:
@@ -851,7 +876,10 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
 def _page_frame(fig, content, L, p, n) -> None:
     page = L["page_of"].format(x=p, y=n)
     cid = f"{L['certificate_no']}: {content['id']}"
-    fig.text(_LEFT, 0.955, content["lab_name"], fontsize=9, va="baseline")
+    # the lab name never runs into the certificate number (9 pt: ~0.56 em a character)
+    cols = int((_RIGHT - _LEFT) * A4_IN[0] * 72.0 / (9 * 0.6))
+    fig.text(_LEFT, 0.955, fit_header(content["lab_name"], cid, cols), fontsize=9,
+             va="baseline")
     fig.text(_RIGHT, 0.955, cid, fontsize=9, va="baseline", ha="right")
     fig.text(_RIGHT, 0.94, page, fontsize=9, va="baseline", ha="right")
     fig.add_artist(_hline(fig, 0.932, 1.0))

@@ -14,7 +14,7 @@ from pathlib import Path
 import matplotlib
 from matplotlib.figure import Figure
 
-from gonio.atomic import write_bytes
+from gonio.atomic import check_output_file, write_bytes
 from gonio.errors import GonioError
 
 #: Salt of matplotlib's SVG element ids: fixed, so that the same figure gives the same bytes.
@@ -37,7 +37,7 @@ def figure_bytes(fig: Figure, fmt: str) -> bytes:
     if fmt not in FIGURE_FORMATS:
         raise GonioError(f"unknown figure format {fmt!r} (known: {', '.join(FIGURE_FORMATS)})")
     buf = io.BytesIO()
-    with matplotlib.rc_context({"svg.hashsalt": SVG_HASHSALT}):
+    with matplotlib.rc_context({"svg.hashsalt": SVG_HASHSALT, "text.usetex": False}):
         fig.savefig(buf, format=fmt, metadata=_METADATA[fmt])
     return buf.getvalue()
 
@@ -45,9 +45,10 @@ def figure_bytes(fig: Figure, fmt: str) -> bytes:
 def save_figure(fig: Figure, path: str | Path) -> Path:
     """Write ``fig`` to ``path`` atomically, in the format its suffix names.
 
-    A suffix that is not png, svg or pdf is a GonioError naming the file.
+    A suffix that is not png, svg or pdf is a GonioError naming the file; so is a place
+    that is not a regular file (folder, FIFO, device, symlink) — refused, never replaced.
     """
-    path = Path(path)
+    path = check_output_file(path, what="figure file")   # no folder, FIFO, device, link
     fmt = path.suffix.lstrip(".").lower()
     if fmt not in FIGURE_FORMATS:
         raise GonioError(f"cannot write a figure of type {path.suffix or '(none)'!r}: use "

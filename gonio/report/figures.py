@@ -61,7 +61,8 @@ def mpl_style(fonts: tuple[str, ...] = ("DejaVu Sans",)) -> Iterator[None]:
           "font.size": 8.5, "axes.titlesize": 9,
           "axes.unicode_minus": False, "pdf.fonttype": 42 if only_ttf else 3,
           "axes.grid": True, "grid.alpha": 0.3, "legend.fontsize": 7,
-          "path.simplify": False}
+          "path.simplify": False,
+          "text.parse_math": False, "text.usetex": False}   # user text literally (no TeX)
     with matplotlib.rc_context(rc):
         yield
 

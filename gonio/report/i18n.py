@@ -440,11 +440,22 @@ def round_half_up(x: float, decimals: int) -> str:
     >>> round_half_up(0.125, 2), round_half_up(1234.5, -2), round_half_up(-0.0004, 2)
     ('0.13', '1200', '0.00')
     """
-    q = Decimal(1).scaleb(-decimals)
-    d = Decimal(repr(float(x))).quantize(q, rounding=ROUND_HALF_UP)
-    if d == 0:
-        d = abs(d)
-    return f"{d:f}" if decimals >= 0 else f"{d.quantize(Decimal(1)):f}"
+    x = float(x)
+    if not math.isfinite(x):
+        return "—"
+    with _wide():              # total: any finite float and any place (no InvalidOperation)
+        q = Decimal(1).scaleb(-decimals)
+        d = Decimal(repr(x)).quantize(q, rounding=ROUND_HALF_UP)
+        if d == 0:
+            d = abs(d)
+        return f"{d:f}" if decimals >= 0 else f"{d.quantize(Decimal(1)):f}"
+
+
+def _wide():
+    """A decimal context wide enough for every float at every decimal place (±1e308, 1e-324)."""
+    from decimal import localcontext
+
+    return localcontext(prec=1400, Emax=999_999, Emin=-999_999)
 
 
 def decimals_for_sig(x: float, sig: int) -> int:
@@ -455,6 +466,11 @@ def decimals_for_sig(x: float, sig: int) -> int:
     """
     if x == 0 or not math.isfinite(x):
         return sig - 1
+    with _wide():
+        return _decimals_for_sig(x, sig)
+
+
+def _decimals_for_sig(x: float, sig: int) -> int:
     d = Decimal(repr(abs(float(x))))
     e = d.adjusted()                       # exponent of the leading digit
     dec = sig - 1 - e
@@ -477,11 +493,15 @@ def display_number(x: float | None, sig: int = 3) -> str:
     >>> display_number(0.0, 3), display_number(None)
     ('0', '—')
     """
+    try:
+        x = None if x is None else float(x)
+    except (TypeError, ValueError):
+        return str(x)
     if x is None or not math.isfinite(x):
         return "—"
     if x == 0:
         return "0"
-    if abs(x) < 1e-3:
+    if abs(x) < 1e-3 or abs(x) >= 1e15:
         e = Decimal(repr(abs(float(x)))).adjusted()
         m = float(Decimal(repr(float(x))).scaleb(-e))
         mant = round_half_up(m, decimals_for_sig(m, sig))

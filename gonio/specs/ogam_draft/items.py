@@ -574,6 +574,34 @@ def consistency_reference_angle(points: pd.DataFrame) -> tuple[float, float]:
             float(points["position_deg"].iloc[i]))
 
 
+def _set_aside_incomplete(per_cond: list, fmt) -> tuple[list, list]:
+    """Conditions of 7.6/7.7 compared, and those set aside (with their rows' reason).
+
+    A condition that lacks a calibration position the typical conditions share is
+    set aside whole — never used to shrink the others' comparison. The target
+    positions are those common to every condition with at least the median number
+    of positions, within the reference condition's; a condition (never the
+    reference) missing any of them is set aside with the reason. So one stray
+    reading at an unplanned rate is set aside alone and does not decide which good
+    readings are compared.
+    """
+    sizes = [len(set(p["key"])) for *_, p, _ in per_cond]
+    med = float(np.median(sizes))
+    typical = [set(p["key"]) for (*_, p, ref), n in zip(per_cond, sizes) if n >= med or ref]
+    target = set.intersection(*typical)
+    kept, aside = [], []
+    for item in per_cond:
+        v, src, g, long, points, ref = item
+        have = set(points["key"])
+        if ref or target <= have:
+            kept.append(item)
+        else:
+            aside.append((list(g["line"]), f"{src} at {fmt(v)} measured {len(have & target)} of "
+                          f"the {len(target)} positions the other conditions share; condition "
+                          "set aside (not compared)"))
+    return kept, aside
+
+
 def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_value,
                  fmt, scale):
     """E per condition (7.6 rates, 7.7 orientations), spread and ratio."""
@@ -619,7 +647,16 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
         long, points = _deviation_tables(g, k)
         points["key"] = points["position_deg"].round(POSITION_DECIMALS)
         per_cond.append((v, src, g, long, points, ref))
+    per_cond, set_aside = _set_aside_incomplete(per_cond, fmt)
+    for lines, reason in set_aside:
+        for l in lines:
+            unused.setdefault(int(l), reason)
     common = set.intersection(*(set(p["key"]) for *_, p, _ in per_cond))
+    if len(per_cond) < 2:
+        reason = f"{_CLAUSES[name]} needs at least 2 complete conditions"
+        for l in rows["line"]:
+            unused.setdefault(int(l), reason)
+        return Characteristic(name=name, reason=reason, unused=unused)
     if not common:
         reason = "no calibration position common to every condition"
         for l in rows["line"]:

@@ -1,0 +1,77 @@
+"""Argument types for the CLI: every number checked where it is typed.
+
+Each function returns an ``argparse`` type callable; a bad value becomes the
+parser's one-line usage error (exit 2) naming the option. Limits on work
+(``--monte-carlo``, ``--trials``, ``--workers``) are stated in docs/formats.md
+("Plausible ranges"); they can be raised with the environment variables named
+in :mod:`gonio.limits`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+
+_INT = re.compile(r"^[+-]?[0-9]{1,30}$")
+_FLOAT = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]{1,4})?$")
+
+
+def _show(text: str) -> str:
+    text = str(text)
+    return repr(text if len(text) <= 40 else text[:40] + "…")
+
+
+def int_range(lo: int, hi: int | None = None, *, what: str = "an integer"):
+    """An ASCII integer in ``[lo, hi]`` (``hi`` None: no upper bound)."""
+    def conv(text: str) -> int:
+        if not _INT.match(text.strip()):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {_show(text)}")
+        v = int(text)
+        if v < lo or (hi is not None and v > hi):
+            rng = f"≥ {lo}" if hi is None else f"in [{lo}, {hi}]"
+            raise argparse.ArgumentTypeError(f"expected {what} {rng}, got {_show(text)}")
+        return v
+    return conv
+
+
+def float_range(lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = False,
+                hi_open: bool = False, what: str = "a number"):
+    """A finite ASCII decimal number in the range (open ends when asked)."""
+    def conv(text: str) -> float:
+        if not _FLOAT.match(text.strip()):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {_show(text)}")
+        v = float(text)
+        if not math.isfinite(v) or v < lo or v > hi or (lo_open and v == lo) \
+                or (hi_open and v == hi):
+            left = "(" if lo_open else "["
+            right = ")" if hi_open else "]"
+            raise argparse.ArgumentTypeError(
+                f"expected {what} in {left}{lo:g}, {hi:g}{right}, got {_show(text)}")
+        return v
+    return conv
+
+
+def seed(text: str) -> int:
+    """A random seed: an integer in [0, 2**63 - 1]."""
+    return int_range(0, 2**63 - 1, what="a seed")(text)
+
+
+def json_safe(x):
+    """Plain JSON: numpy scalars to Python, non-finite floats to None (never ``Infinity``)."""
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return [json_safe(v) for v in x.tolist()]
+    if isinstance(x, np.bool_):
+        return bool(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        v = float(x)
+        return v if math.isfinite(v) else None
+    return x

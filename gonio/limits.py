@@ -1,0 +1,70 @@
+"""Stated limits on inputs and work, each configurable by an environment variable.
+
+A run that would exceed a limit is refused before the work starts, with a
+GonioError naming the key or option, the estimate and the variable that raises
+the limit. The values and the physically plausible ranges of every numeric
+input are listed in docs/formats.md ("Plausible ranges").
+
+=========================  ==========================  =====================
+limit                      environment variable        default
+=========================  ==========================  =====================
+readings / stream file     GONIO_MAX_INPUT_BYTES       2 GiB
+TOML file (protocol...)    GONIO_MAX_TOML_BYTES        1 MiB
+simulated samples/session  GONIO_MAX_SAMPLES           4e8
+simulated session time     GONIO_MAX_SESSION_S         2 days (172 800 s)
+items (rounds x series..)  GONIO_MAX_READINGS          1e6 readings
+rows of a readings file    GONIO_MAX_READING_ROWS      1e5 rows
+Monte Carlo trials         GONIO_MAX_MONTE_CARLO       1e7
+validate trials per case   GONIO_MAX_TRIALS            1e5
+worker processes           GONIO_MAX_WORKERS           the machine's cores
+=========================  ==========================  =====================
+"""
+
+from __future__ import annotations
+
+import os
+
+from gonio.errors import MAX_INPUT_BYTES, GonioError
+
+_DEFAULTS: dict[str, float] = {
+    "GONIO_MAX_INPUT_BYTES": MAX_INPUT_BYTES,
+    "GONIO_MAX_TOML_BYTES": 1024 ** 2,
+    "GONIO_MAX_SAMPLES": 4e8,
+    "GONIO_MAX_SESSION_S": 172_800.0,
+    "GONIO_MAX_READINGS": 1e6,
+    "GONIO_MAX_READING_ROWS": 1e5,
+    "GONIO_MAX_MONTE_CARLO": 1e7,
+    "GONIO_MAX_TRIALS": 1e5,
+}
+
+
+def limit(name: str) -> float:
+    """The limit ``name`` (an environment variable overrides the default).
+
+    >>> limit("GONIO_MAX_MONTE_CARLO")
+    10000000.0
+    """
+    if name == "GONIO_MAX_WORKERS":
+        default = float(os.cpu_count() or 1)
+    else:
+        default = _DEFAULTS[name]
+    text = os.environ.get(name, "").strip()
+    if not text:
+        return float(default)
+    try:
+        v = float(text)
+    except ValueError:
+        raise GonioError(f"environment variable {name} must be a number, got {text[:40]!r}") \
+            from None
+    if not v > 0:
+        raise GonioError(f"environment variable {name} must be > 0, got {text[:40]!r}")
+    return v
+
+
+def check(name: str, value: float, what: str, *, unit: str = "") -> None:
+    """GonioError when ``value`` exceeds the limit ``name``; names ``what`` and the variable."""
+    lim = limit(name)
+    if value > lim:
+        u = f" {unit}" if unit else ""
+        raise GonioError(f"{what}: {value:.4g}{u} exceeds the limit of {lim:.4g}{u} "
+                         f"(set {name} to raise it)")
