@@ -532,6 +532,13 @@ def output_dir(out: str | Path) -> Iterator[Path]:
         os.close(fd)
 
 
+def check_output_folder_place(out, what: str = "--out") -> Path:
+    """The place checks alone (not empty, not a root or the current folder, a real folder
+    or nothing yet, its parent a folder) for a command that adds to its folder instead of
+    replacing it (``gonio validate`` keeps resumable batches there)."""
+    return _check_dir_place(out, what)
+
+
 def check_output_dir(out, *, inputs: Iterable = (), force: bool = False,
                      what: str = "--out") -> Path:
     """The checks :func:`output_set` makes, run before any work (no lock, nothing created)."""

@@ -41,6 +41,7 @@ from gonio.formats.toml import read_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 FULL = ROOT / "tests/data/full.csv"
+FULL_PROTOCOL = ROOT / "tests/data/full.toml"     # the protocol the file was taken with
 FULL_TEXT = FULL.read_text()
 PROTO_TEXT = (ROOT / "protocols/ogam-draft.toml").read_text()
 BENCH_TEXT = (ROOT / "protocols/benches/rlg.toml").read_text()
@@ -466,7 +467,7 @@ def test_read_only_folder(tmp_path):
         pytest.skip("cannot mount a read-only tmpfs here (needs root and mount rights)")
     try:
         from gonio.pipeline.calibrate import calibrate, write_outputs
-        rep = calibrate(FULL)
+        rep = calibrate(FULL, FULL_PROTOCOL)
         e = api_error(write_outputs, rep, ro / "out")
         assert "Read-only" in str(e) or "read-only" in str(e).lower(), str(e)
         count("out-place:read-only")
@@ -482,7 +483,7 @@ def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
         pytest.skip("cannot mount a 300 KB tmpfs here (needs root and mount rights)")
     try:
         from gonio.pipeline.calibrate import calibrate, write_outputs
-        rep = calibrate(FULL)
+        rep = calibrate(FULL, FULL_PROTOCOL)
         out = mnt / "out"
         prev = _previous_set(out)
         for fill_kb in (0, 100, 200, 400):
@@ -511,7 +512,7 @@ def test_failed_rerun_leaves_previous_set(tmp_path, monkeypatch):
     from gonio.pipeline.calibrate import calibrate, write_outputs
     import gonio.report.certificate as cert
 
-    rep = calibrate(FULL)
+    rep = calibrate(FULL, FULL_PROTOCOL)
     out = tmp_path / "D"
     write_outputs(rep, out)
     set_is_complete(out)
@@ -538,7 +539,7 @@ def test_outputs_never_replace_inputs(tmp_path, capsys):
     h = sha256_file(raw)
     cli(["reduce", raw, "--out", raw], capsys)
     D = tmp_path / "D"
-    cli(["calibrate", FULL, "--out", D], capsys, expect=0)
+    cli(["calibrate", FULL, "--protocol", FULL_PROTOCOL, "--out", D], capsys, expect=0)
     capsys.readouterr()
     prev = tree_hash(D)
     cli(["calibrate", D / "results.json", "--out", D], capsys)
@@ -554,7 +555,7 @@ def test_outputs_never_replace_inputs(tmp_path, capsys):
     lab2.mkdir()
     shutil.copy(FULL, lab2 / "readings.csv")
     for _ in range(2):
-        cli(["calibrate", lab2 / "readings.csv", "--out", lab2], capsys, expect=0)
+        cli(["calibrate", lab2 / "readings.csv", "--protocol", FULL_PROTOCOL, "--out", lab2], capsys, expect=0)
         capsys.readouterr()
         assert (lab2 / "readings.csv").read_bytes() == FULL.read_bytes()
         set_is_complete(lab2)
@@ -706,7 +707,7 @@ def test_contradictions_refused(tmp_path, capsys):
     ls[i] = ",".join(cells)
     p = tmp_path / "c.csv"
     p.write_text("\n".join(ls) + "\n")
-    e = api_error(calibrate, p)
+    e = api_error(calibrate, p, FULL_PROTOCOL)
     assert e.line == i + 1 and e.column == "gyro_deg", str(e)
     count("contradiction:gyro_deg-vs-counts")
     # Unicode digits
@@ -844,7 +845,7 @@ def test_user_text_rendered_literally(tmp_path):
 
     hostile = [("$\\foo$ \u202eevil\u202c <script>alert(1)</script>", "a\x00b\x1bc $x^2$ \\textbf{b}"),
                ("x" * 20_000, "名" * 300)]
-    rep = calibrate(FULL)
+    rep = calibrate(FULL, FULL_PROTOCOL)
     for i, (name, serial) in enumerate(hostile):
         text = name
         lab = LAB_TEXT

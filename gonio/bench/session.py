@@ -512,6 +512,7 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
     check_counter(bench)
     blocks = plan_session(protocol, bench, rng_table)
+    estimate_session(blocks, bench, protocol)      # refuse what exceeds the stated limits
     # The noisy run and its noise-free rerun (truth) in one pass over the session.
     run, nf = _simulate_many(blocks, protocol, [
         _Variant(bench, rng_inst, stream, frozenset({"zero_stability"}),

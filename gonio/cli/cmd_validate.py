@@ -73,7 +73,10 @@ def run(args) -> int:
         extras = True
     else:
         extras = [e.strip() for e in args.extra_components.split(",") if e.strip()]
-    partial = Path(args.out) / PARTIAL_DIR if args.out else None
+    if args.out is not None:
+        from gonio.atomic import check_output_folder_place
+        check_output_folder_place(args.out)          # before any batch is written there
+    partial = Path(args.out) / PARTIAL_DIR if args.out is not None else None
     try:
         report = validate(args.trials, seed=args.seed, bench=args.bench, cases=cases,
                           sample_rate_hz=args.sample_rate_hz, protocol=args.protocol,

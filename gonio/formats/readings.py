@@ -467,8 +467,7 @@ def format_readings(readings_or_df: Readings | pd.DataFrame,
             raise GonioError("missing required column", column=name)
     n = len(df)
     if n == 0:
-        raise GonioError("no readings to write (the protocol or the reduction produced none)",
-                         file=path)
+        raise GonioError("no readings to write (the protocol or the reduction produced none)")
     get = (lambda name, default: df[name] if name in df.columns
            else pd.Series([default] * n, index=df.index))
     counts = get("gyro_counts", math.nan).astype(float).to_numpy()

@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
-from gonio.errors import GonioError, read_utf8
+from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.specs import Specification, get
 from gonio.analysis.rate_records import json_safe, load_readings
 
@@ -31,6 +31,7 @@ def readings_spec(path: str | Path) -> str | None:
     Only the metadata lines at the top are read (a stream of gigabytes is never read
     whole); a Parquet stream's key-value metadata is looked up instead.
     """
+    check_input_file(path, "readings file")     # a FIFO or /dev/zero is refused before reading
     if Path(path).suffix.lower() == ".parquet":
         from gonio.formats.streams import StreamFile
         return StreamFile(path).metadata.get("spec")
