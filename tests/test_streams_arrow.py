@@ -156,11 +156,16 @@ def _bench_stream(tmp_path, name, bits, fmt, rate_hz=100.0):
     return path, res, np.concatenate(parts), b
 
 
-def test_counter_overflow_between_samples_is_caught_at_its_line(tmp_path):
+def test_counter_overflow_between_samples_is_caught_at_its_line(tmp_path, monkeypatch):
     # The case: the RLG bench with a 16-bit counter at 100 Hz moves ~45 860 counts per
     # sample at 60 °/s (> 2^15): unwrapping cannot be right; the first sample where the true
-    # step exceeds half the range is the line named.
+    # step exceeds half the range is the line named. The bench itself refuses such a counter
+    # (gonio.bench.config.check_counter); a laboratory's acquisition may not, so the bench's
+    # check is lifted here to produce the faulty stream the reader must catch.
+    import gonio.bench.session as session
+    monkeypatch.setattr(session, "check_counter", lambda bench: None)
     path, _, true, b = _bench_stream(tmp_path, "s16", 16, "csv")
+    monkeypatch.undo()
     first = int(np.argmax(np.abs(np.diff(true)) >= 2 ** 15)) + 1     # independent of the reader
     md_lines = sum(1 for ln in path.read_text().splitlines()[:40] if ln.startswith("#"))
     with pytest.raises(GonioError) as e:
