@@ -120,9 +120,11 @@ def main(argv: list[str] | None = None) -> int:
     except RecursionError:
         return _error("input nested too deeply")
     except KeyboardInterrupt:
+        _quiet_shutdown()
         sys.stderr.write("gonio: interrupted\n")
         return 130
     except Terminated:
+        _quiet_shutdown()
         sys.stderr.write("gonio: terminated\n")
         return 143
     except SystemExit as exc:      # argparse: --help, --version, a usage error
@@ -133,6 +135,12 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write(f"gonio: internal error: {type(exc).__name__}: {_short(exc, 300)} "
                          "(GONIO_DEBUG=1 shows the traceback)\n")
         return 1
+
+
+def _quiet_shutdown() -> None:
+    """After an interrupt the one line is all that is printed: objects a library
+    finalises at exit (a half-written Arrow writer, say) may not print tracebacks."""
+    sys.unraisablehook = lambda unraisable: None
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1056,7 +1056,14 @@ class StreamWriter:
         return self.path
 
     def abort(self) -> None:
-        """Drop the partial file."""
+        """Drop the partial file (the Arrow writer is closed first, so that it has nothing
+        left to flush into a closed file when it is collected at exit)."""
+        for name in ("_pq", "_csv"):
+            w = getattr(self, name, None)
+            if w is not None:
+                with contextlib.suppress(Exception):
+                    w.close()
+                setattr(self, name, None)
         if not self._fh.closed:
             self._fh.close()
         with contextlib.suppress(FileNotFoundError):
