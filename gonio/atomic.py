@@ -315,12 +315,13 @@ def _exchange(a: Path, b: Path) -> None:
     os.rename(tmp, a)
 
 
-def _manifest(stage: Path, source_sha256, extra: dict | None) -> None:
+def _manifest(stage: Path, source_sha256, extra: dict | None, exclude=()) -> None:
     from gonio import __version__
 
     files = {}
+    skip = set(exclude)                     # files kept for the user: not gonio's to list
     for p in sorted(stage.rglob("*")):
-        if p.is_file() and p.name != MANIFEST:
+        if p.is_file() and p.name != MANIFEST and p.relative_to(stage).as_posix() not in skip:
             files[p.relative_to(stage).as_posix()] = sha256_file(p)
     d = {"gonio_version": __version__, "source_sha256": source_sha256, **(extra or {}),
          "files": files}
@@ -360,40 +361,51 @@ def carried_inputs(out: Path, inputs: Iterable) -> dict[str, Path]:
     return out_rel
 
 
-def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
-    carried = carried_inputs(out, inputs)
+def _folder_files(out: Path, what: str) -> list[str]:
+    """Relative paths of every file (and symlink) in ``out``, the manifest excepted."""
     try:
-        names = sorted(n for n in os.listdir(out))
+        names = sorted(os.listdir(out))
     except OSError as exc:
         raise _oserror(exc, out, f"list the {what} folder") from None
-    if not names:
-        return
-    man = read_manifest(out)
     files = []
     for n in names:
         p = out / n
         if n == MANIFEST:
             continue
         if p.is_dir() and not p.is_symlink():
-            files += [f.relative_to(out).as_posix() for f in p.rglob("*") if not f.is_dir()]
+            files += sorted(f.relative_to(out).as_posix() for f in p.rglob("*")
+                            if not f.is_dir() or f.is_symlink())
         else:
             files.append(n)
-    files = [f for f in files if f not in carried]       # inputs kept, never replaced
+    return files
+
+
+def foreign_files(out: Path, inputs: Iterable = (), what: str = "--out") -> list[str]:
+    """Files in ``out`` that gonio did not write (not in its manifest) and that are not
+    the run's inputs: they are kept, unchanged, in the new set (a log the user
+    redirected there, notes); a run that would write one of their names is refused."""
+    if _lstat(out) is None:
+        return []
+    carried = carried_inputs(out, inputs)
+    man = read_manifest(out)
+    listed = man["files"] if man is not None else {}
+    return [f for f in _folder_files(out, what) if f not in carried and f not in listed]
+
+
+def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
+    man = read_manifest(out)
     if man is None:
-        if files:
-            raise GonioError(f"{what} is a folder gonio did not write (it holds {files[0]!r}"
-                             f"{' and more' if len(files) > 1 else ''}); choose a new or empty "
-                             "folder", file=out)
-        return
+        return                            # nothing gonio wrote; foreign files are kept
+    carried = carried_inputs(out, inputs)
     listed = man["files"]
-    for rel in files:
+    for rel in _folder_files(out, what):
+        if rel in carried or rel not in listed:
+            continue                      # inputs and foreign files are kept, never replaced
         q = out / rel
-        if rel not in listed or not q.is_file() or q.is_symlink() \
-                or sha256_file(q) != listed[rel]:
+        if not q.is_file() or q.is_symlink() or sha256_file(q) != listed[rel]:
             if not force:
-                raise GonioError(f"{what} holds {rel!r}, changed or added since gonio "
-                                 "wrote the folder; give --force to replace the folder",
-                                 file=out)
+                raise GonioError(f"{what} holds {rel!r}, changed since gonio wrote the "
+                                 "folder; give --force to replace the folder", file=out)
         elif Path(rel).name in PROTECTED_NAMES and not force:
             raise GonioError(f"{what} holds {rel!r}; give --force to replace it", file=out)
 
@@ -412,9 +424,10 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
     """Stage one run's whole output set and swap it into ``out`` when all parts are written.
 
     Refused before any work: an empty name, a place that is not a folder, a folder
-    holding one of ``inputs``, a non-empty folder without a gonio manifest, files
-    changed or added since gonio wrote it, and an existing readings/stream file —
-    the last two unless ``force``. Another run into the same folder is refused while
+    holding one of ``inputs``, gonio's files changed since gonio wrote them, and an
+    existing readings/stream file — the last two unless ``force``. Files gonio did
+    not write (and inputs inside ``out``) are kept in the new set, linked unchanged;
+    a run that would write one of their names is refused at the swap. Another run into the same folder is refused while
     this one holds the lock. On any exception (or SIGINT/SIGTERM raised as one) the
     staging folder is removed and ``out`` is as before.
     """
@@ -433,22 +446,29 @@ def output_set(out: str | Path, *, inputs: Iterable = (), force: bool = False,
         stage = _stage(out)
         _ACTIVE[key] = stage
         carried = carried_inputs(out, inputs)
+        foreign = foreign_files(out, inputs, what)
         yield stage
-        for rel, src in carried.items():              # the inputs stay, unchanged
+        kept = [(rel, src, "its input") for rel, src in carried.items()] + \
+            [(rel, out / rel, "a file gonio did not write") for rel in foreign]
+        for rel, src, kind in kept:                   # inputs and the user's files stay
             dst = stage / rel
             if os.path.lexists(dst):
-                raise GonioError(f"the run would replace its input {rel}; choose another "
-                                 f"{what}", file=out)
+                raise GonioError(f"the run would replace {kind}, {rel}; move it or choose "
+                                 f"another {what}", file=out)
             try:
                 dst.parent.mkdir(parents=True, exist_ok=True)
-                try:
-                    os.link(src, dst)
+                try:                                  # same inode: an open log keeps writing
+                    os.link(src, dst, follow_symlinks=False)
                 except OSError:
-                    shutil.copy2(src, dst)
+                    shutil.copy2(src, dst, follow_symlinks=False)
             except OSError as exc:
-                raise _oserror(exc, dst, "keep the input in the new set") from None
-        _manifest(stage, source_sha256, {**(extra or {}),
-                                         "inputs_kept": sorted(carried)} if carried else extra)
+                raise _oserror(exc, dst, "keep the file in the new set") from None
+        info = dict(extra or {})
+        if carried:
+            info["inputs_kept"] = sorted(carried)
+        if foreign:
+            info["foreign_files_kept"] = sorted(foreign)
+        _manifest(stage, source_sha256, info or extra, exclude=foreign)
         sigs = {signal.SIGINT, signal.SIGTERM}
         old = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
         try:

@@ -425,6 +425,31 @@ def _previous_set(d: Path) -> dict:
     return tree_hash(d)
 
 
+def test_files_gonio_did_not_write_are_kept_and_never_replaced(tmp_path, capsys):
+    """A folder holding the user's files (a log redirected there, notes): the run's set is
+    swapped in around them, byte for byte unchanged; a run that would write one of their
+    names is refused and the folder left as it was."""
+    d = tmp_path / "mine"
+    d.mkdir()
+    (d / ".log").write_text("started\n")
+    (d / "notes").mkdir()
+    (d / "notes" / "mine.txt").write_text("mine")
+    cli(["calibrate", FULL, "--protocol", FULL_PROTOCOL, "--out", d], capsys, expect=0)
+    assert (d / ".log").read_text() == "started\n"
+    assert (d / "notes" / "mine.txt").read_text() == "mine"
+    assert (d / "results.json").is_file()
+    man = json.loads((d / "gonio-manifest.json").read_text())
+    assert ".log" not in man["files"] and man["foreign_files_kept"] == [".log", "notes/mine.txt"]
+    clash = tmp_path / "clash"
+    clash.mkdir()
+    (clash / "summary.txt").write_text("my own summary")
+    before = tree_hash(clash)
+    err = cli(["calibrate", FULL, "--protocol", FULL_PROTOCOL, "--out", clash], capsys)
+    assert "summary.txt" in err and tree_hash(clash) == before
+    no_debris(tmp_path)
+    count("out-place:foreign-files-kept")
+
+
 def test_output_place_failures_cli(tmp_path, capsys):
     (tmp_path / "afile").write_text("keep")
     os.mkfifo(tmp_path / "fifo")
@@ -436,15 +461,13 @@ def test_output_place_failures_cli(tmp_path, capsys):
         "existing-file": tmp_path / "afile", "parent-is-file": tmp_path / "afile" / "x",
         "fifo": tmp_path / "fifo", "char-device": "/dev/null", "symlink-loop": tmp_path / "loop",
         "symlink-to-folder": tmp_path / "dirlink", "name-too-long": tmp_path / ("n" * 300),
-        "empty": "", "blank": "   ", "foreign-folder": tmp_path / "notgonio",
+        "empty": "", "blank": "   ",
     }
     before = tree_hash(tmp_path)
     for name, place in places.items():
         for argv in (["calibrate", FULL, "--out", place], ["simulate", "--protocol",
                      tmp_path / "none.toml", "--out", place], ["demo", "--out", place],
                      ["validate", "--trials", "2", "--out", place]):
-            if argv[0] == "validate" and name == "foreign-folder":
-                continue        # validate adds validation.json beside its resumable batches
             cli(argv, capsys)
             count(f"out-place:{argv[0]}:{name}")
     for name in ("existing-file-is-input", "fifo", "char-device", "folder"):
