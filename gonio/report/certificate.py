@@ -320,9 +320,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
         ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
         if ks:
-            add("p", ["k: " + ("fixed by laboratory" if ks == "fixed by laboratory" else
-                               "t-factor of the effective degrees of freedom "
-                               "(welch-satterthwaite)")])
+            add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
     del st_e
@@ -490,6 +488,8 @@ h3{font-size:14px;margin:12px 0 4px}
 h2,h3{break-after:avoid;page-break-after:avoid}
 table{border-collapse:collapse;width:100%%;margin:4px 0 8px}
 tr{break-inside:avoid}
+table.short{break-inside:avoid}
+thead{display:table-header-group}
 td,th{border:1px solid #888;padding:3px 6px;text-align:left;vertical-align:top}
 th{background:#eee}
 .nb{white-space:nowrap}
@@ -579,6 +579,8 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         elif b.kind == "table":
             head, rows = b.data
             tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
+            if len(rows) <= KEEP_WHOLE_ROWS:           # kept whole on a printed page
+                tid += ' class="short"'
             out.append(f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
                        + "</tr></thead><tbody>"
                        + "".join("<tr>" + "".join(f"<td>{_h(c)}</td>" for c in r) + "</tr>"
@@ -723,10 +725,27 @@ _H_H = 22 * _PT          # a heading's height
 _SUB_H = 16 * _PT        # a sub-heading's height
 
 
-def _layout(content: dict, L: dict) -> list[list]:
+#: A table of at most this many rows is kept on one page (when it fits on one).
+KEEP_WHOLE_ROWS: int = 8
+#: A longer table starts on a page with its head and at least this many rows; its head is
+#: repeated on every continuation page.
+KEEP_FIRST_ROWS: int = 3
+
+
+def table_start(units: list) -> float:
+    """Height a table needs where it starts: its head with its first rows — all of them for a
+    table of at most :data:`KEEP_WHOLE_ROWS` rows, else :data:`KEEP_FIRST_ROWS` — so a head
+    never ends a page with its rows on the next one."""
+    rows = [u for u in units if u[2] == "row"]
+    n = len(rows) if len(rows) <= KEEP_WHOLE_ROWS else KEEP_FIRST_ROWS
+    h = units[0][0] + sum(u[0] for u in rows[:n])
+    return h if h <= _TOP - _BOTTOM - 40 * _PT else units[0][0] + sum(u[0] for u in rows[:1])
+
+
+def layout_pages(content: dict, L: dict) -> list[list]:
     """Lay the blocks out on pages. A heading (h, sub) is kept on the page of the first
-    unit of the block after it (a table's head and first row, a figure, a paragraph's
-    first lines), so no page ends with a heading."""
+    unit of the block after it (a table's head and first rows, :func:`table_start`; a
+    figure; a paragraph's first lines), so no page ends with a heading."""
     lay = _Layout(8.5)
     fs, ln = lay.fs, lay.line
     title_h = 30 * _PT
@@ -746,8 +765,8 @@ def _layout(content: dict, L: dict) -> list[list]:
                 keep += units[j][0][0]
                 j += 1
             if j < len(blocks) and units[j]:
-                keep += units[j][0][0] + (units[j][1][0] if len(units[j]) > 1
-                                          and blocks[j].kind == "table" else 0.0)
+                keep += (table_start(units[j]) if blocks[j].kind == "table"
+                         else units[j][0][0])
             lay.need(units[i][0][0] + keep)
         for k, (h, op, kind) in enumerate(units[i]):
             if kind == "row" and not lay.fits(h):          # repeat the table head
@@ -755,7 +774,7 @@ def _layout(content: dict, L: dict) -> list[list]:
                 lay.need(h + head_h)
                 lay.put(head_h, head_op)
             elif kind == "head":
-                lay.need(h + (units[i][1][0] if len(units[i]) > 1 else 0.0))
+                lay.need(table_start(units[i]))
             if kind == "gap":
                 lay.y -= h
                 continue
@@ -859,7 +878,7 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
 
     buf = io.BytesIO()
     with mpl_style(fonts):
-        pages = _layout(content, L)
+        pages = layout_pages(content, L)
         n = len(pages)
         with PdfPages(buf, metadata={"CreationDate": None, "ModDate": None,
                                      "Creator": "gonio", "Title": f"{L['title']} {content['id']}"}

@@ -192,6 +192,14 @@ LABELS: dict[str, dict[str, str]] = {
     "U_line_p": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}, "
                        "coverage probability {p}",
                  "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}，包含概率{p}"},
+    # where the coverage factor k comes from (issue 12, defect 3; zh gap of issue 13)
+    "k_fixed": {"en": "k: fixed by the laboratory", "zh": "k：由实验室规定"},
+    "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
+                "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
+    "k_each_item": {"en": "U: expanded uncertainty, k = t95(ν_eff) of each item's effective "
+                          "degrees of freedom (shown per item in the budgets below); {clause}.",
+                    "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
+                          "不确定度分量）；{clause}。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "
