@@ -15,6 +15,7 @@ from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.specs import Specification, get
 from gonio.analysis.rate_records import json_safe, load_readings
+from gonio.formats.triad import FORMAT as TRIAD_FORMAT
 
 #: The specifications handled here (the optical draft keeps its own pipeline).
 RATE_SPECS = ("jjf1535-2015", "iec62047-20")
@@ -63,6 +64,9 @@ def readings_spec(path: str | Path) -> str | None:
                 key, _, value = s[1:].partition(":")
                 if key.strip() == "spec":
                     return value.strip()
+                if key.strip() == "format" and value.strip() == TRIAD_FORMAT:
+                    return "triad-alignment"        # a triad file without '# spec:'
+
             if not piece:
                 return None
 

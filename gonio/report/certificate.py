@@ -41,7 +41,7 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
 from gonio.analysis.conformity import RULES
-from gonio.report.figures import FIGURES, figure_svg, mpl_style
+from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
 from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
                                reading_note, rule_at_U, specification_text)
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
@@ -853,6 +853,7 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
             gs = fig.add_gridspec(1, 1, left=_LEFT + 0.06, right=_RIGHT - 0.01,
                                   top=y - 0.05, bottom=y - _FIG_H + 0.035)
             draw(fig, gs[0], content["_report"], L, content["_truth"])
+            plain_log_ticks(fig)
             for i, t in enumerate(cap_lines):
                 fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,
                          va="baseline")
