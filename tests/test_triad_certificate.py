@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from gonio.cli import main
+from gonio.errors import GonioError
 from gonio.report.certificate import Block, KEEP_FIRST_ROWS, layout_pages
 from gonio.report.i18n import labels
 
@@ -202,3 +203,39 @@ def test_table_head_kept_with_its_first_rows():
             assert where(pages, "THE TABLE") == head
             hits += head > 0
     assert hits > 0                   # some placements did push the table to page 2
+
+
+def test_robust_fit_takes_the_swapped_dwell_and_names_it(run, tmp_path):
+    """With --robust the dwell with the swapped sign is down-weighted and listed by its line,
+    and M is recovered within its uncertainty of the bench's truth."""
+    src = run["dir"] / "sim" / "readings.csv"
+    lines = src.read_text(encoding="utf-8").splitlines(keepends=True)
+    head = next(i for i, s in enumerate(lines) if s.startswith("test,"))
+    cells = lines[head + 3].split(",")
+    cells[6] = str(-float(cells[6]))
+    lines[head + 3] = ",".join(cells)
+    (tmp_path / "r.csv").write_text("".join(lines), encoding="utf-8")
+    from gonio.specs import get
+    with pytest.raises(GonioError, match="thermal_readings.*not there"):
+        get("triad-alignment").calibrate(tmp_path / "r.csv", robust=True)   # named, missing
+    (tmp_path / "thermal.csv").write_text((run["dir"] / "sim" / "thermal.csv").read_text())
+    r = get("triad-alignment").calibrate(tmp_path / "r.csv", robust=True)
+    flagged = {(o["line"], o["channel"]): o["weight"] for o in r.alignment.outliers}
+    assert all(flagged.get((head + 4, c)) == 0.0 for c in ("out_x", "out_y", "out_z"))
+    assert len({line for line, _ in flagged}) <= 3       # the bad dwell, at most a clean pair
+    m_true = np.array(run["truth"]["system_matrix"])
+    for i, a in enumerate(AX):
+        it = r.items[f"M_{a}{a}"]
+        assert it.measured and abs(it.value - m_true[i, i]) < 3 * it.uncertainty.U
+
+
+def test_results_are_deterministic_and_zh_notes_complete(run):
+    from gonio.specs import get
+    from gonio.specs.triad_alignment.calibration import READINGS_TAKEN
+    from gonio.specs.triad_alignment.certificate import READINGS_TAKEN_ZH, TEXT
+    src = run["dir"] / "sim" / "readings.csv"
+    a = get("triad-alignment").calibrate(src, monte_carlo_trials=50, seed=3).to_json()
+    b = get("triad-alignment").calibrate(src, monte_carlo_trials=50, seed=3).to_json()
+    assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+    assert len(READINGS_TAKEN_ZH) == len(READINGS_TAKEN)
+    assert all(len(v) == 2 and v[1] for v in TEXT.values())

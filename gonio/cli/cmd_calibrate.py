@@ -116,6 +116,13 @@ def run(args) -> int:
     if spec == "triad-alignment":
         from gonio.pipeline.triad import calibrate as calibrate_triad
 
+        for flag, given in (("--dcc", args.dcc), ("--tilt", args.tilt),
+                            ("--budget", args.budget != "physical")):
+            if given:
+                raise GonioError(f"{flag} does not apply to the triad-alignment "
+                                 "specification (no DCC, tilt file or draft budget for a "
+                                 "triad)", key=flag)
+
         inputs.append(args.thermal)
         check_output_dir(args.out, inputs=inputs, force=args.force)
         with output_set(args.out, inputs=inputs, force=args.force):

@@ -29,13 +29,41 @@ def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=
     result = get(KEY).calibrate(readings, monte_carlo_trials=monte_carlo_trials, robust=robust,
                                 thermal=thermal)
     out = Path(out)
+    tables = result_tables(result)
     with output_dir(out) as stage:
         write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
                                                       ensure_ascii=False, allow_nan=False) + "\n")
         write_text(stage / "summary.txt", result.summary())
+        for name, df in tables.items():
+            write_text(stage / "tables" / name, df.to_csv(index=False,
+                                                          lineterminator="\n"))
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths.update({f"tables/{n}": out / "tables" / n for n in tables})
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
     return result, paths
+
+
+def result_tables(result) -> dict:
+    """The result's tables as DataFrames, by file name (``tables/*.csv`` beside results.json):
+    ``items.csv`` (every measured item: key, value, unit, u, U, k, ν) and, per
+    modelled gyro, ``thermal_prediction_<gyro>.csv`` (the prediction band)."""
+    import pandas as pd
+
+    rows = []
+    for key, it in result.items.items():
+        if not it.measured:
+            continue
+        u = it.uncertainty
+        rows.append({"item": key, "clause": it.clause, "value": it.value, "unit": it.unit,
+                     "u": None if u is None else u.u_c, "U": None if u is None else u.U,
+                     "k": None if u is None else u.k, "nu": None if u is None else u.nu_eff})
+    out = {"items.csv": pd.DataFrame(rows, columns=["item", "clause", "value", "unit", "u", "U",
+                                                    "k", "nu"])}
+    tm = result.extra.get("thermal_model") or {}
+    for ch, pr in (tm.get("prediction_U") or {}).items():
+        out[f"thermal_prediction_{ch}.csv"] = pd.DataFrame(
+            {k: v for k, v in pr.items() if isinstance(v, list)})
+    return out
 
 
 #: Monte Carlo trials of the demo's uncertainties (JCGM 101 beside the GUM).

@@ -107,12 +107,14 @@ def budget_rows(res: dict, L: dict, keys=None) -> list[list]:
     return brows
 
 
-def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None
-                   ) -> list[Block]:
-    """The readings taken, the signatures and the statements (clause 8 l–n)."""
+def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
+                   notes: list | tuple | None = None) -> list[Block]:
+    """The readings taken (``notes``, default results.json's), the signatures and the
+    statements (clause 8 l–n)."""
     lab_ = lab or {}
     blocks = [Block("h", reading_title or L["readings_taken"])]
-    blocks += [Block("p", ["• " + note]) for note in res.get("readings_taken", [])]
+    blocks += [Block("p", ["• " + note])
+               for note in (notes if notes is not None else res.get("readings_taken", []))]
     blocks.append(Block("h", L["signatory"]))
     sig = lab_.get("signatory", {})
     blocks.append(Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),

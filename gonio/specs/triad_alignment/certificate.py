@@ -97,3 +97,15 @@ TEXT = {
     "fig_check": ("gyro {ch}: ramp blocks against the static-soak model; residuals before and "
                   "after compensation", "陀螺 {ch}：斜坡段与静态保温模型；补偿前后残差"),
 }
+
+#: The readings taken (results.json's English notes, in order) in Chinese.
+READINGS_TAKEN_ZH = (
+    "对准：对全部测量段（绕各轴的 ± 角速率及静态位置）一次拟合 G = M ω + b，各方位的地球自转角速度"
+    "按转台扫过的角度精确平均；只有一对 ± 测量时退化为文章的差分公式。",
+    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 95.45 %；运行了试验时旁列蒙特卡洛法"
+    "（JCGM 101）标准不确定度。",
+    "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
+    "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",
+    "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
+    "（论文 §6.1）。",
+)
