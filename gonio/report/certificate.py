@@ -488,7 +488,7 @@ h3{font-size:14px;margin:12px 0 4px}
 h2,h3{break-after:avoid;page-break-after:avoid}
 table{border-collapse:collapse;width:100%%;margin:4px 0 8px}
 tr{break-inside:avoid}
-table.short{break-inside:avoid}
+div.keep{break-inside:avoid;page-break-inside:avoid}
 thead{display:table-header-group}
 td,th{border:1px solid #888;padding:3px 6px;text-align:left;vertical-align:top}
 th{background:#eee}
@@ -579,12 +579,12 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         elif b.kind == "table":
             head, rows = b.data
             tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
-            if len(rows) <= KEEP_WHOLE_ROWS:           # kept whole on a printed page
-                tid += ' class="short"'
-            out.append(f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
+            keep = len(rows) <= KEEP_WHOLE_ROWS         # kept whole on a printed page
+            out.append(('<div class="keep">' if keep else "")
+                       + f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
                        + "</tr></thead><tbody>"
                        + "".join("<tr>" + "".join(f"<td>{_h(c)}</td>" for c in r) + "</tr>"
-                                 for r in rows) + "</tbody></table>")
+                                 for r in rows) + "</tbody></table>" + ("</div>" if keep else ""))
         elif b.kind == "fig":
             key, cap, _ = b.data
             out.append(f'<figure id="fig-{key}">{svgs[key]}<figcaption>{html.escape(cap)}'
