@@ -117,11 +117,13 @@ def run(args) -> int:
         from gonio.pipeline.triad import calibrate as calibrate_triad
 
         for flag, given in (("--dcc", args.dcc), ("--tilt", args.tilt),
-                            ("--budget", args.budget != "physical")):
+                            ("--budget", args.budget != "physical"),
+                            ("--protocol", args.protocol)):
             if given:
                 raise GonioError(f"{flag} does not apply to the triad-alignment "
-                                 "specification (no DCC, tilt file or draft budget for a "
-                                 "triad)", key=flag)
+                                 "specification (no DCC, tilt file, draft budget or protocol "
+                                 "for a triad calibration: the readings carry what it needs)",
+                                 key=flag)
 
         inputs.append(args.thermal)
         check_output_dir(args.out, inputs=inputs, force=args.force)
