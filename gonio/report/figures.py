@@ -285,13 +285,15 @@ def plain_log_ticks(fig) -> None:
     """Label every log-scaled axis of ``fig`` in plain numbers ("0.1", "100", "1e-05"):
     matplotlib's log labels are mathtext, which :func:`mpl_style` turns off (user text is
     shown literally), so they would print as ``$\\mathdefault{10^{2}}$``."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter
+    from matplotlib.ticker import FuncFormatter, LogFormatter
 
     for ax in fig.axes:
         for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
             if scale == "log":
                 axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
-                axis.set_minor_formatter(NullFormatter())
+                # minor ticks labelled (plain text) only on an axis of about a decade or less
+                axis.set_minor_formatter(LogFormatter(labelOnlyBase=False,
+                                                      minor_thresholds=(1, 0.4)))
 
 
 def figure_svg(draw: Callable, report, L: dict, truth=None,
