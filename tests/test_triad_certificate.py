@@ -242,3 +242,16 @@ def test_results_are_deterministic_and_zh_notes_complete(run):
     assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
     assert len(READINGS_TAKEN_ZH) == len(READINGS_TAKEN)
     assert all(len(v) == 2 and v[1] for v in TEXT.values())
+
+
+def test_short_paragraph_never_split():
+    L = labels("en")
+    para = "word " * 60                     # wraps to a few lines
+    for n_lines in range(40, 75):
+        blocks = [Block("p", [f"filler line {i}"]) for i in range(n_lines)]
+        blocks += [Block("sub", "HEADING"), Block("p", ["PARA " + para])]
+        pages = layout_pages({"blocks": blocks, "id": "X", "virtual": False, "lab_name": "L"}, L)
+        where = [p for p, ops in enumerate(pages) for _, op in ops
+                 if any("PARA" in repr(d) or "word word" in repr(d)
+                        for d in (op.__defaults__ or ()))]
+        assert len(set(where)) == 1 and len(where) >= 2, (n_lines, where)

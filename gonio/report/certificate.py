@@ -742,10 +742,28 @@ def table_start(units: list) -> float:
     return h if h <= _TOP - _BOTTOM - 40 * _PT else units[0][0] + sum(u[0] for u in rows[:1])
 
 
+#: A paragraph of at most this many lines is not split across pages.
+KEEP_PARAGRAPH_LINES: int = 4
+
+
+def block_start(block: Block, units: list) -> float:
+    """Height a block needs on the page where it starts: a table's :func:`table_start`, a
+    short paragraph whole (at most :data:`KEEP_PARAGRAPH_LINES` lines), else its first unit."""
+    if not units:
+        return 0.0
+    if block.kind == "table":
+        return table_start(units)
+    lines = [u[0] for u in units if u[2] == "line"]
+    if block.kind in ("p", "notice") and len(lines) <= KEEP_PARAGRAPH_LINES:
+        return sum(lines)
+    return units[0][0]
+
+
 def layout_pages(content: dict, L: dict) -> list[list]:
     """Lay the blocks out on pages. A heading (h, sub) is kept on the page of the first
-    unit of the block after it (a table's head and first rows, :func:`table_start`; a
-    figure; a paragraph's first lines), so no page ends with a heading."""
+    unit of the block after it (:func:`block_start`: a table's head and first rows, a short
+    paragraph whole, a figure, a long paragraph's first line), so no page ends with a
+    heading."""
     lay = _Layout(8.5)
     fs, ln = lay.fs, lay.line
     title_h = 30 * _PT
@@ -764,10 +782,11 @@ def layout_pages(content: dict, L: dict) -> list[list]:
             while j < len(blocks) and blocks[j].kind in ("h", "sub"):
                 keep += units[j][0][0]
                 j += 1
-            if j < len(blocks) and units[j]:
-                keep += (table_start(units[j]) if blocks[j].kind == "table"
-                         else units[j][0][0])
+            if j < len(blocks):
+                keep += block_start(blocks[j], units[j])
             lay.need(units[i][0][0] + keep)
+        elif b.kind in ("p", "notice"):
+            lay.need(block_start(b, units[i]))
         for k, (h, op, kind) in enumerate(units[i]):
             if kind == "row" and not lay.fits(h):          # repeat the table head
                 head_h, head_op, _ = units[i][0]
