@@ -108,9 +108,9 @@ def budget_rows(res: dict, L: dict, keys=None) -> list[list]:
 
 
 def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
-                   notes: list | tuple | None = None) -> list[Block]:
+                   notes: list | tuple | None = None, recal: str | None = None) -> list[Block]:
     """The readings taken (``notes``, default results.json's), the signatures and the
-    statements (clause 8 l–n)."""
+    statements (clause 8 l–n; ``recal`` replaces the recalibration statement)."""
     lab_ = lab or {}
     blocks = [Block("h", reading_title or L["readings_taken"])]
     blocks += [Block("p", ["• " + note])
@@ -120,7 +120,8 @@ def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | No
     blocks.append(Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
                                (L["checked_by"], sig.get("checked_by") or "—"),
                                (L["approved_by"], sig.get("approved_by") or "—")]))
-    blocks += [Block("p", [L[k]]) for k in ("statement_item", "statement_copy", "statement_recal")]
+    blocks += [Block("p", [L[k]]) for k in ("statement_item", "statement_copy")]
+    blocks.append(Block("p", [recal or L["statement_recal"]]))
     return blocks
 
 

@@ -82,6 +82,8 @@ TEXT = {
     "comp_note": ("The model applied to the calibration record itself: at the soak points the "
                   "residuals are the fit's; the ramp blocks were not used by the polynomial fit.",
                   "模型用于本次温度试验数据本身：保温点的残差即拟合残差；斜坡段未参与多项式拟合。"),
+    "recal": ("Recalibration interval: decided by the user (no specification sets one for a "
+              "triad).", "复校时间间隔由用户自行确定（三轴陀螺组件无规范规定）。"),
     "readings_taken": ("Readings taken of the sources", "对参考文献的理解"),
     "residual": ("residual (rms)", "残差（均方根）"),
     "before": ("before (constant k0, b0)", "补偿前（常数 k0、b0）"),
