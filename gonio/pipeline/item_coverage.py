@@ -11,8 +11,10 @@ Truths (from the bench's noise-free rerun, ``truth.json``):
 ========================  ===============================================================
 K                         mean over the 7.1 rounds of noise-free counts / true angle
 K_l                       (max − min)/mean of those noise-free K_i, %
-B_s                       ensemble value: √(mean over the trials of B_s²) (a property of
-                          the noise, not of one record)
+B_s                       population value √E[s²(M)]/T of the draft's statistic for this
+                          instrument's noise (:func:`zero_stability_truth`: the bench's own
+                          ARW, Gauss–Markov bias, RRW and quantisation through the readings'
+                          covariance, plus the noise-free readings' own spread)
 E                         per point: mean over the series of the noise-free deviation
                           (``systematic_deviation_arcsec``); every point counts
 R                         ensemble value: max over points of √(mean over trials of s_i²)
@@ -27,12 +29,15 @@ import math
 import numpy as np
 import pandas as pd
 
-__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS"]
+__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS",
+           "zero_stability_truth"]
 
 ITEM_TRUTHS = {
     "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
     "scale_factor_nonlinearity": "(max - min)/mean of the noise-free K_i, %",
-    "zero_stability": "ensemble: sqrt(mean over trials of B_s^2)",
+    "zero_stability": "population: sqrt(E[s(M)^2])/T from the bench's noise parameters "
+                      "(gonio.analysis.noise.readings) and the noise-free readings",
+    "zero_stability_draft": "as zero_stability; the draft's s(M)/T from the 15 readings",
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
     "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
     "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
@@ -63,6 +68,37 @@ def _consistency_truth(tr: pd.DataFrame, c, col: str, scale: float) -> float:
         e.append(_signed_extreme(rows.groupby("round")["systematic_deviation_arcsec"].mean()))
     e = np.array(e)
     return float((e.max() - e.min()) / float(c.details["reference_angle_arcsec"]) * scale)
+
+
+def zero_stability_truth(truth: dict, compensation_time_s: float | None) -> float | None:
+    """B_s,pop = √E[s²(M)]/T (°/h) of the session's 7.3 readings on the bench it ran on.
+
+    E[s²] (:func:`gonio.analysis.noise.readings.expected_sample_variance`) from the
+    bench's true noise parameters in ``truth["bench"]`` — angle random walk, the
+    Gauss–Markov bias instability (σ, τ_c), rate random walk and the counter's dithered
+    quantisation (1/12 count² per counter sample) — at the readings' times with the
+    measured compensation's static phase, plus the spread of the noise-free readings
+    (warm-up drift and whatever else the noise-free rerun holds). ``None`` without 7.3.
+    """
+    from gonio.analysis.noise.readings import expected_sample_variance
+    from gonio.units import S_PER_H, deg_sqrt_h_from_dph_sqrt_hz, \
+        dph_per_sqrt_h_from_dph_sqrt_hz_per_s
+
+    rows = [r for r in truth["readings"] if r["test"] == "zero_stability"]
+    if len(rows) < 2:
+        return None
+    inst = truth["bench"]["instrument"]
+    k = float(inst["nominal_scale_factor_counts_per_deg"])
+    t = np.array([float(r["time_s"]) for r in rows])
+    det = np.array([float(r["noise_free_counts"]) for r in rows]) / k * S_PER_H  # (°/h)·s
+    q = S_PER_H / k / math.sqrt(12.0) if inst.get("quantisation") else 0.0
+    S = expected_sample_variance(
+        t, compensation_time_s, deterministic=det, Q=q,
+        N=float(inst["arw_dpsh"]) / deg_sqrt_h_from_dph_sqrt_hz(1.0),
+        K=float(inst["rrw_dphsh"]) / dph_per_sqrt_h_from_dph_sqrt_hz_per_s(1.0),
+        gm_sigma=float(inst["bias_instability_dph"]),
+        gm_tau_s=float(inst["bias_instability_tau_s"]))
+    return math.sqrt(S) / float(t.max() - t.min())
 
 
 def item_record(report, truth: dict) -> dict:
