@@ -38,6 +38,7 @@ ITEM_TRUTHS = {
     "zero_stability": "population: sqrt(E[s(M)^2])/T from the bench's noise parameters "
                       "(gonio.analysis.noise.readings) and the noise-free readings",
     "zero_stability_draft": "as zero_stability; the draft's s(M)/T from the 15 readings",
+    "zero_stability_model": "as zero_stability; the noise model's expected B_s (not stated)",
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
     "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
     "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
@@ -112,9 +113,24 @@ def item_record(report, truth: dict) -> dict:
     res = report.results
     out: dict = {}
     for name, iu in report.item_uncertainty.items():
-        out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U),
+        out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U), "k": float(iu.k),
                      "interval": list(iu.interval) if iu.interval is not None else None,
                      "truth": None}
+    zr = getattr(report, "zero_stability_readings", None) or {}
+    if "zero_stability" in out:
+        comp = report.protocol.session.static_s \
+            if report.protocol.session.earth_compensation == "measured" else None
+        t_bs = zero_stability_truth(truth, comp)
+        out["zero_stability"]["value"] = float(report.item_uncertainty["zero_stability"].value)
+        out["zero_stability"]["truth"] = t_bs
+        out["zero_stability"]["stated"] = zr.get("stated", "draft")
+        other = "draft" if zr.get("stated") == "model" else "model"
+        d = zr.get(other)
+        if d is not None:
+            out[f"zero_stability_{other}"] = {
+                "value": float(d.value), "U": float(d.U), "k": float(d.k),
+                "interval": list(d.interval) if d.interval is not None else None,
+                "truth": t_bs, "stated": other}
     if "scale_factor" in out:
         sf = tr[tr["test"] == "scale_factor"]
         k_i = sf["noise_free_counts"].to_numpy(dtype=float) / sf["true_table_deg"].to_numpy(float)
@@ -183,7 +199,7 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
     (0.75, 4)
     """
     names = [n for n in ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                         "angle_deviation", "angle_deviation_draft", "repeatability",
+                         "zero_stability_draft", "zero_stability_model", "angle_deviation", "angle_deviation_draft", "repeatability",
                          "rate_consistency", "pointing_consistency")
              if any(n in r for r in records)]
     out = {}
@@ -198,12 +214,9 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
             if intrinsic_points is not None:
                 di = np.array([np.subtract(r["points"], intrinsic_points) for r in rs])
                 item["within_U_intrinsic"] = _cov(np.abs(di) <= U[:, None])
-        elif name in ("zero_stability", "repeatability"):
-            if name == "repeatability":
-                s2 = np.array([r["s_points"] for r in rs]) ** 2
-                truth = float(np.sqrt(s2.mean(axis=0)).max())
-            else:
-                truth = float(np.sqrt(np.mean(vals ** 2)))
+        elif name == "repeatability":
+            s2 = np.array([r["s_points"] for r in rs]) ** 2
+            truth = float(np.sqrt(s2.mean(axis=0)).max())
             item["ensemble_truth"] = truth
             item["within_U"] = _cov(np.abs(vals - truth) <= U)
             iv = np.array([r["interval"] for r in rs])
@@ -211,5 +224,14 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
         else:
             t = np.array([r["truth"] for r in rs])
             item["within_U"] = _cov(np.abs(vals - t) <= U)
+            if name.startswith("zero_stability"):
+                item["population_truth"] = float(np.mean(t))
+                item["k_mean"] = float(np.mean([r.get("k", math.nan) for r in rs]))
+                if all(r.get("interval") is not None for r in rs):
+                    iv = np.array([r["interval"] for r in rs])
+                    item["interval_holds_truth"] = _cov((iv[:, 0] <= t) & (t <= iv[:, 1]))
+                st = sorted({r.get("stated", "draft") for r in rs})
+                if st:
+                    item["stated"] = st
         out[name] = item
     return out

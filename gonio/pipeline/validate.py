@@ -219,7 +219,9 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft")
+    # the continuous record of the 7.3 rest, as a stream calibration has it (B_s's model)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft",
+                    static_record=res.static_record)
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)

@@ -52,8 +52,9 @@ def reading_weights(time_s, compensation_time_s: float | None):
     without: s = (0, t_1 … t_n), M_i = θ(t_i) − θ(0).
 
     >>> s, A = reading_weights([0.0, 300.0], 60.0)
-    >>> s.tolist(), A.tolist()
-    [[-60.0, 0.0, 0.0, 300.0], [[0.0, -1.0, 1.0, 0.0], [5.0, -6.0, 0.0, 1.0]]]
+    >>> s.tolist(); A.tolist()
+    [-60.0, 0.0, 0.0, 300.0]
+    [[0.0, -1.0, 1.0, 0.0], [5.0, -6.0, 0.0, 1.0]]
     """
     t = np.asarray(time_s, dtype=float)
     n = t.size
@@ -144,8 +145,11 @@ def expected_zero_stability(fit, time_s, compensation_time_s: float | None
     independent (the fitted N, B, K are usually negatively correlated, so this is the
     larger of the two readings), and u(B_s,pop) = u(E[s²])/(2 E[s²]^{1/2} T) (JCGM 100
     5.1.2). ν from Welch–Satterthwaite with ν_j = n_bootstrap − 1 per term (∞ for the
-    covariance method). What the five-term model cannot represent (a Gauss–Markov bias
-    of a correlation time inside the record) is not in it: see docs/draft-readings.md.
+    covariance method). Limits: a term the fit holds at zero has u = 0 (the bootstrap
+    refits zero), and the five-term model has no Gauss–Markov term; a Gauss–Markov
+    bias whose correlation time lies inside the record is then missed and this u is
+    too small (docs/draft-readings.md, 7.3: why this estimate is given beside the
+    draft's and not stated by default).
     """
     t = np.asarray(time_s, dtype=float)
     T = float(t.max() - t.min())
@@ -155,9 +159,9 @@ def expected_zero_stability(fit, time_s, compensation_time_s: float | None
     for k in coef:
         c[k] = expected_sample_variance(t, compensation_time_s, **{k: 1.0})
     S = sum(c[k] * coef[k] ** 2 for k in coef)
+    terms = {k: c[k] * 2.0 * coef[k] * us[k] for k in coef}
     if S <= 0:
         return ExpectedZeroStability(0.0, 0.0, math.inf, {}, "five-term fit: no noise")
-    terms = {k: c[k] * 2.0 * coef[k] * us[k] for k in coef}
     uS = math.sqrt(sum(v * v for v in terms.values()))
     value = math.sqrt(S) / T
     u = uS / (2.0 * math.sqrt(S) * T)

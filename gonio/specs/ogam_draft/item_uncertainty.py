@@ -9,7 +9,10 @@ budget to each of the seven items, one documented function each:
                                         count quantisation (7.1)
 :func:`nonlinearity_budget`     K_l     u of the largest and smallest K_i, and the spread noise
                                         alone gives n values (7.2)
-:func:`zero_stability_budget`   B_s     χ² with ν = n − 1 (7.3): interval stated
+:func:`zero_stability_budget`   B_s     the draft's s(M)/T (7.3): χ² interval with the readings'
+                                        ν_eff, k = t_95(ν_eff)
+:func:`zero_stability_model_budget`  B_s  the expected B_s of the fitted noise model of the 7.3
+                                        record (the physically founded estimate)
 :func:`angle_deviation_budget`  E       the Annex A budget (draft, or physical) as an item budget
 :func:`repeatability_budget`    R       χ² of the largest of m standard deviations (7.5)
 :func:`consistency_budget`      C_v/C_g the two extreme conditions' deviations with their
@@ -29,7 +32,7 @@ come from.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -43,7 +46,7 @@ from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                stdev_u)
 
 __all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
-           "zero_stability_budget", "angle_deviation_budget", "repeatability_budget",
+           "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
            "consistency_budget", "monte_carlo_check", "COVERAGE_PROBABILITY",
            "COUNT_QUANTUM_U"]
 
@@ -339,8 +342,51 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
                           source=f"standard deviation of {n_readings} readings, chi-square "
                                  f"({how})"),
                    "sampling of s(M)", True, "7.3")]
-    return _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=k,
-                   interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
+    b = _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=None,
+                interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
+    if k is not None and abs(float(k) - b.k) > 1e-9:
+        # A fixed k presumes many degrees of freedom; with ν_eff ≈ 1–2.5 a k = 2 covers
+        # about 75 % (gonio validate --all-items): the t-factor is kept and this says so.
+        b = replace(b, k_source=f"welch-satterthwaite (the laboratory's fixed k = {float(k):g} "
+                                f"is not applied to B_s: nu_eff = {b.nu_eff:.3g} is too few "
+                                "degrees of freedom for it to give 95 %)")
+    return b
+
+
+def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUncertainty:
+    """u(B_s,pop) of the expected zero stability from the fitted noise model, °/h.
+
+    ``expected`` is a :class:`gonio.analysis.noise.readings.ExpectedZeroStability`:
+    B_s,pop = √E[s²(M)]/T of the draft's 7.3 readings computed from the five-term fit
+    of the instrument's continuous record over the 7.3 rest (the readings' covariance at
+    their own times, with the measured compensation's static phase). One Type A line,
+    u from the fit's bootstrap uncertainties, ν from Welch–Satterthwaite over the
+    terms; k the laboratory's when fixed, else t_95(ν_eff).
+
+    Examples
+    --------
+    Pure angle random walk N = 0.018 (°/h)√s (0.0003 °/√h), 15 readings 300 s apart
+    after a 60 s compensation, u(N) = 0.0002 from 20 bootstrap records:
+    V = N²(min(t_i, t_j) + t_i t_j/T_c) (the walk and the compensation's rate error), with
+    tr(P·min) = Σt − ΣΣmin/n = 31500 − 20300 = 11200 s and tr(P·ttᵀ)/T_c = (Σt² −
+    (Σt)²/n)/60 = 420000 s: E[s²] = 0.018²·431200/14 = 9.979 ((°/h)·s)², B_s,pop =
+    √9.979/4200 = 7.52e-4 °/h; u = B_s,pop·u(N)/N = 8.4e-6 °/h, ν = 20 − 1 = 19:
+
+    >>> from types import SimpleNamespace as NS
+    >>> from gonio.analysis.noise.readings import expected_zero_stability
+    >>> fit = NS(Q=0.0, N=0.018, B=0.0, K=0.0, R=0.0, u_Q=0.0, u_N=0.0002, u_B=0.0,
+    ...          u_K=0.0, u_R=0.0, n_bootstrap=20, kind="adev",
+    ...          uncertainty_method="bootstrap")
+    >>> ez = expected_zero_stability(fit, np.arange(15) * 300.0, 60.0)
+    >>> b = zero_stability_model_budget(ez)
+    >>> round(b.value * 1e4, 2), round(b.u_c * 1e6, 1), round(b.nu_eff), round(b.k, 2)
+    (7.52, 8.4, 19, 2.09)
+    """
+    lines = [_Line(from_u("m_B", 0.0, float(expected.u), dof=float(expected.dof), type="A",
+                          source=f"expected B_s of the readings from the noise model: "
+                                 f"{expected.source}"),
+                   "noise model of the 7.3 record", True, "7.3 (physical model)")]
+    return _budget("zero_stability", "deg/h", float(expected.value), lines, k=k)
 
 
 def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
