@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 __all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS",
-           "zero_stability_truth"]
+           "zero_stability_truth", "item_monte_carlo"]
 
 ITEM_TRUTHS = {
     "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
@@ -235,3 +235,47 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
                     item["stated"] = st
         out[name] = item
     return out
+
+
+def item_monte_carlo(report, trials: int, seed: int = 0) -> dict:
+    """JCGM 101 Monte Carlo of every item budget of one calibration, each compared with its
+    GUM result by the numerical tolerance test (JCGM 101 8.2; d_low, d_high, δ, passed).
+
+    K, K_l, R, C_v, C_g: :func:`gonio.specs.ogam_draft.item_uncertainty.monte_carlo_item`
+    on the additive budget; B_s: through its own model (both readings, the stated one as
+    ``zero_stability``); E: the Annex A budget of both kinds (``angle_deviation`` the
+    physical one, ``angle_deviation_draft`` the annex's four lines), drawn by
+    :func:`gonio.pipeline.calibrate.deviation_budget` with ``monte_carlo_trials``.
+    """
+    from gonio.pipeline.calibrate import deviation_budget, session_settings
+    from gonio.specs.ogam_draft.item_uncertainty import monte_carlo_item
+
+    out: dict = {}
+    for name, b in report.item_uncertainty.items():
+        if name == "angle_deviation":
+            continue
+        out[name] = monte_carlo_item(b, trials, seed).to_dict()
+    zr = getattr(report, "zero_stability_readings", None) or {}
+    other = "draft" if zr.get("stated") == "model" else "model"
+    if zr.get(other) is not None:
+        out[f"zero_stability_{other}"] = monte_carlo_item(zr[other], trials, seed).to_dict()
+    if "angle_deviation" in report.item_uncertainty:
+        settings, _ = session_settings(report.readings, report.protocol)
+        for kind, key in (("physical", "angle_deviation"), ("draft", "angle_deviation_draft")):
+            b, _, _ = deviation_budget(report.results, report.readings, report.protocol,
+                                       settings, kind=kind, monte_carlo_trials=trials,
+                                       seed=seed)
+            mc, v = b.monte_carlo, b.validation
+            out[key] = {"item": "angle_deviation", "model": "linear", "trials": int(trials),
+                        "mc_value": float(mc.value), "mc_u": float(mc.u),
+                        "mc_interval": [float(mc.low), float(mc.high)],
+                        "gum_interval": [float(x) for x in v.gum_interval],
+                        "d_low": float(v.d_low), "d_high": float(v.d_high),
+                        "delta": float(v.delta), "ndig": 2, "passed": bool(v.passed),
+                        "gum_contains_mc": bool(v.gum_interval[0] <= mc.low
+                                                and mc.high <= v.gum_interval[1])}
+    order = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+             "zero_stability_draft", "zero_stability_model", "angle_deviation",
+             "angle_deviation_draft", "repeatability", "rate_consistency",
+             "pointing_consistency")
+    return {k: out[k] for k in order if k in out}

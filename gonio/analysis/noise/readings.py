@@ -125,8 +125,23 @@ def expected_sample_variance(time_s, compensation_time_s: float | None, *,
 class ExpectedZeroStability:
     """B_s,pop from a fitted five-term model (value, u, ν) — see :func:`expected_zero_stability`."""
 
-    def __init__(self, value: float, u: float, dof: float, parts: dict, source: str):
+    def __init__(self, value: float, u: float, dof: float, parts: dict, source: str,
+                 coefficients: dict | None = None, u_coefficients: dict | None = None,
+                 responses: dict | None = None, duration_s: float = 1.0):
         self.value, self.u, self.dof, self.parts, self.source = value, u, dof, parts, source
+        self.coefficients = coefficients or {}
+        self.u_coefficients = u_coefficients or {}
+        self.responses = responses or {}
+        self.duration_s = duration_s
+
+    def sample(self, rng: np.random.Generator, m: int) -> np.ndarray:
+        """JCGM 101 draws of B_s,pop: each fitted coefficient normal with its u (JCGM 101
+        6.4.7), then √(Σ c_j x_j²)/T — the model itself, not its linearisation."""
+        S = np.zeros(int(m))
+        for k, x in self.coefficients.items():
+            draw = x + self.u_coefficients.get(k, 0.0) * rng.standard_normal(int(m))
+            S += self.responses[k] * draw * draw
+        return np.sqrt(S) / self.duration_s
 
     def to_dict(self) -> dict:
         return {"value": float(self.value), "u": float(self.u),
@@ -172,4 +187,4 @@ def expected_zero_stability(fit, time_s, compensation_time_s: float | None
     parts = {k: c[k] * coef[k] ** 2 / S for k in coef}
     return ExpectedZeroStability(value, u, dof, parts,
                                  f"five-term Allan fit of the 7.3 record ({fit.kind}), "
-                                 f"u by {fit.uncertainty_method}")
+                                 f"u by {fit.uncertainty_method}", coef, us, c, T)
