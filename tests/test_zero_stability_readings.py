@@ -193,7 +193,7 @@ def test_cli_readings_file_states_the_chi_square_interval_and_t_factor(tmp_path)
     assert "not applied" in u["k_source"]
     assert u["interval"][1] == pytest.approx(b_s * math.sqrt(nu / stats.chi2.ppf(0.025, nu)),
                                              rel=1e-9)
-    assert zs["readings"]["model"] is None and "no continuous record" in zs["stated_note"]
+    assert zs["estimates"]["model"] is None and "no continuous record" in zs["stated_note"]
     html = (tmp_path / "o" / "certificate.html").read_text(encoding="utf-8")
     assert "95 % interval (χ², ν_eff" in html
 

@@ -57,7 +57,7 @@ PRECEDENCE_RULE = ("command line over readings-file metadata over protocol over 
 #: Budget kinds of the angle-position deviation E.
 BUDGET_KINDS = ("physical", "draft")
 
-#: Labels of the two readings of B_s (results.json ``zero_stability.readings``).
+#: Labels of the two readings of B_s (results.json ``zero_stability.estimates``).
 ZERO_STABILITY_READINGS = {
     "draft": "the draft's reading (7.3): B_s = s(M)/T of the 15 readings, 95 % chi-square "
              "interval with the readings' effective degrees of freedom, k = t_95(nu_eff)",
@@ -181,7 +181,7 @@ class CalibrationReport:
             zs["value"] = float(self.item_uncertainty["zero_stability"].value)
             zs["stated"] = zr["stated"]
             zs["stated_note"] = zr["note"]
-            zs["readings"] = {
+            zs["estimates"] = {
                 "draft": {"label": ZERO_STABILITY_READINGS["draft"], "value": draft_value,
                           "uncertainty": zr["draft"].to_dict()},
                 "model": None if zr["model"] is None else
@@ -240,7 +240,8 @@ class CalibrationReport:
             elif zr["model"] is not None:
                 m = zr["model"]
                 lines.append(f"zero_stability (noise model, not stated): {m.value:.3g} deg/h, "
-                             f"U = {m.U:.2g} deg/h (k = {m.k:.3g})")
+                             f"U = {m.U:.2g} deg/h (k = {m.k:.3g}, coverage probability "
+                             "approximately 95 %)")
             lines.append(f"note: {zr['note']}")
         if self.e_measured:
             lines += [f"note: {n}" for n in self.budget_notes]

@@ -310,9 +310,9 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
                                          lo=_num(res, f"{name}.uncertainty.interval.0", "sig3", U),
                                          hi=_num(res, f"{name}.uncertainty.interval.1", "sig3",
                                                  U))]
-            if item.get("stated") == "draft" and (item.get("readings") or {}).get("model"):
+            if item.get("stated") == "draft" and (item.get("estimates") or {}).get("model"):
                 cell += ["; ", *segments(L["note_zero_model"],
-                                         v=_num(res, f"{name}.readings.model.value", "sig3", U))]
+                                         v=_num(res, f"{name}.estimates.model.value", "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += ["; ", *segments(L["note_spread"],
                                      v=_num(res, f"{name}.spread_arcsec", "atU", U))]
