@@ -51,6 +51,10 @@ def register(sub) -> None:
                         "trials it has not finished")
     p.add_argument("--all-items", action="store_true",
                    help="keep 7.3, 7.6 and 7.7 so that every item's coverage is measured")
+    p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
+                   help="also run the JCGM 101 Monte Carlo (N trials) of every item budget of "
+                        "each case's first calibration and validate its GUM result (JCGM 101 "
+                        "8.2: pass/fail, d_low, d_high); 0 (default) off")
     p.add_argument("--json", action="store_true", help="print validation.json on stdout")
     p.set_defaults(func=run)
 
@@ -61,6 +65,7 @@ def run(args) -> int:
     from gonio.limits import check
 
     check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
+    check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
     if args.workers is not None and args.workers < 1:
         raise GonioError(f"--workers must be >= 1, got {args.workers}")
     if args.resume and not args.out:
@@ -83,7 +88,7 @@ def run(args) -> int:
                           extra_components=extras, truth=args.truth,
                           u_scale=args.u_scale, workers=args.workers, scheduler=args.scheduler,
                           batch_size=args.batch, partial_dir=partial, resume=args.resume,
-                          all_items=args.all_items)
+                          all_items=args.all_items, monte_carlo=args.monte_carlo)
     except KeyboardInterrupt:
         if partial is not None and partial.exists():
             sys.stderr.write(f"gonio: interrupted: the finished trials are kept in {partial}; "

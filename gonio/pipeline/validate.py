@@ -219,7 +219,9 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft")
+    # the continuous record of the 7.3 rest, as a stream calibration has it (B_s's model)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft",
+                    static_record=res.static_record)
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
@@ -658,6 +660,7 @@ class ValidationReport:
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
         lines += item_coverage_lines(self.cases)
+        lines += monte_carlo_lines(self.cases)
         return "\n".join(lines) + "\n"
 
 
@@ -677,7 +680,8 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              truth: str = "systematic", u_scale: float = 1.0, workers: int | None = None,
              scheduler: str | None = None, batch_size: int | None = None,
              partial_dir: str | Path | None = None, resume: bool = False,
-             show_progress: bool = True, all_items: bool = False) -> ValidationReport:
+             show_progress: bool = True, all_items: bool = False,
+             monte_carlo: int = 0) -> ValidationReport:
     """Run ``trials`` independent virtual calibrations per case and measure coverage.
 
     Parameters
@@ -723,6 +727,10 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     all_items : bool
         Keep 7.3, 7.6 and 7.7 in the protocol, so that every item's coverage is measured
         (summary ``items``, :func:`gonio.pipeline.item_coverage.item_coverage`).
+    monte_carlo : int
+        When > 0, the JCGM 101 Monte Carlo (this many trials, fixed M) of every item
+        budget of each case's first calibration, compared with its GUM result (JCGM 101
+        8.2; summary ``monte_carlo``, :func:`gonio.pipeline.item_coverage.item_monte_carlo`).
 
     Examples
     --------
@@ -748,6 +756,9 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     if not (1.0 <= sample_rate_hz <= 100_000.0):
         raise GonioError(f"--sample-rate-hz must be within 1–100000, got {sample_rate_hz}",
                          key="sample_rate_hz")
+    if int(monte_carlo) != monte_carlo or monte_carlo < 0 or monte_carlo == 1:
+        raise GonioError(f"--monte-carlo must be 0 or an integer >= 2, got {monte_carlo}",
+                         key="monte_carlo")
     cases = list(cases)
     if not cases:
         raise GonioError("no cases given", key="cases")
@@ -795,7 +806,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
                 "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"]
                 + (["7.3", "7.6", "7.7"] if all_items else []),
                 "extra_components": list(extras_used), "truth": truth,
-                "u_scale": float(u_scale),
+                "u_scale": float(u_scale), "monte_carlo_trials": int(monte_carlo),
                 "seeding": "numpy SeedSequence(seed, spawn_key=(case index, trial index))"}
     jobs = {name: TrialJob(proto, case_bench(name, base, proto), name, seed, float(u_scale),
                            truth, tuple(extras_used)) for name in cases}
@@ -843,8 +854,44 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         res = [done[name][i] for i in range(trials)]
         cr = CaseResult(name, CASES[name], res, t_int)
         cr.summary = _summarise(cr, truth, bool(extras_used))
+        if monte_carlo:
+            cr.summary["monte_carlo"] = _monte_carlo_case(proto, b, trial_seed(seed, name, 0),
+                                                          int(monte_carlo), seed)
         out.append(cr)
     return ValidationReport(settings, out)
+
+
+def _monte_carlo_case(proto: Protocol, bench: Bench, trial_seed_: int, trials: int,
+                      seed: int) -> dict:
+    """JCGM 101 check of every item budget of the case's first calibration (trial 0)."""
+    from gonio.pipeline.item_coverage import item_monte_carlo
+
+    res = run_session(proto, bench, seed=trial_seed_)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    rep = calibrate(Readings(df, dict(res.metadata)), proto, budget="draft",
+                    static_record=res.static_record)
+    return {"trials": trials, "trial": 0, "seed": trial_seed_,
+            "criterion": "JCGM 101 8.2: d_low, d_high <= delta (u_c to 2 significant digits)",
+            "items": item_monte_carlo(rep, trials, seed)}
+
+
+def monte_carlo_lines(cases) -> list[str]:
+    """Per case and item: the JCGM 101 validation of the GUM result (pass/fail, d_low, d_high)."""
+    out = []
+    for c in cases:
+        mc = c.summary.get("monte_carlo")
+        if not mc:
+            continue
+        out += ["", f"JCGM 101 Monte Carlo per item (M = {mc['trials']}, trial 0; GUM interval "
+                    "validated when d_low, d_high <= delta)"]
+        for name, r in mc["items"].items():
+            out.append(f"{c.name:<10}{name:<28}{r['model']:<10}"
+                       f"{'pass' if r['passed'] else 'FAIL':<6}d_low {r['d_low']:.3g}  "
+                       f"d_high {r['d_high']:.3g}  delta {r['delta']:.2g}"
+                       + ("" if r["passed"] else "  (GUM interval contains MC's)"
+                          if r["gum_contains_mc"] else "  (GUM interval too short)"))
+    return out
 
 
 def _scheduler_workers(scheduler: str) -> int:

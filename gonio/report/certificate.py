@@ -303,6 +303,16 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         elif name == "zero_stability" and item.get("range_deg_per_h") is not None:
             cell += ["; ", *segments(L["note_zero_range"],
                                      v=_num(res, f"{name}.range_deg_per_h", "sig3", U))]
+            iu = item.get("uncertainty") or {}
+            if iu.get("interval") and iu.get("nu_eff"):
+                cell += ["; ", *segments(L["note_zero_interval"],
+                                         n=_num(res, f"{name}.uncertainty.nu_eff", "k", U),
+                                         lo=_num(res, f"{name}.uncertainty.interval.0", "sig3", U),
+                                         hi=_num(res, f"{name}.uncertainty.interval.1", "sig3",
+                                                 U))]
+            if item.get("stated") == "draft" and (item.get("estimates") or {}).get("model"):
+                cell += ["; ", *segments(L["note_zero_model"],
+                                         v=_num(res, f"{name}.estimates.model.value", "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += ["; ", *segments(L["note_spread"],
                                      v=_num(res, f"{name}.spread_arcsec", "atU", U))]

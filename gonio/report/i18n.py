@@ -144,6 +144,12 @@ LABELS: dict[str, dict[str, str]] = {
     "u_ppm": {"en": "ppm", "zh": "ppm"},
     # item notes
     "note_zero_range": {"en": "range/T (definition 3.3): {v} °/h", "zh": "极差/T（定义3.3）：{v} (°)/h"},
+    "note_zero_interval": {"en": "95 % interval (χ², ν_eff = {n}): [{lo}, {hi}] °/h; U at k = "
+                                 "t₉₅(ν_eff)",
+                           "zh": "95 % 区间（χ²，ν_eff = {n}）：[{lo}, {hi}] (°)/h；U 取 k = "
+                                 "t₉₅(ν_eff)"},
+    "note_zero_model": {"en": "noise model of the 7.3 record (beside, not stated): {v} °/h",
+                        "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
