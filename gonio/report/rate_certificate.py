@@ -36,6 +36,16 @@ def _num(value, src: str, rule: str, U=None):
     return Num(display(rule, value, U), src, rule)
 
 
+def rate_standards(md: dict, lab: dict | None, not_stated: str = "not stated") -> list[dict]:
+    """The standards used: the lab file's ``[[standards]]``, else the readings' equipment
+    (``table`` metadata, the rate table's U_rel at k = 2) — the certificate's and the DCC's."""
+    if lab and lab.get("standards"):
+        return list(lab["standards"])
+    return [{"name": md.get("table", not_stated), "identifier": "",
+             "accuracy": f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
+             "certificate": "", "traceability": "none (virtual bench)" if lab is None else not_stated}]
+
+
 def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
     """The certificate's content: identifier, banner flag, lab name and blocks."""
     res = result.to_json()
@@ -70,11 +80,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     ])
     add("h", L["standards"])
     std_rows = [[s["name"], s["identifier"] or "—", s["accuracy"] or "—", s["certificate"] or "—",
-                 s["traceability"] or "—"] for s in (lab_.get("standards") or [])]
-    if not std_rows:
-        std_rows = [[md.get("table", ns), "—",
-                     f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
-                     "—", "none (virtual bench)" if virtual else ns]]
+                 s["traceability"] or "—"] for s in rate_standards(md, lab, ns)]
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
     add("h", L["environment"])
@@ -142,8 +148,11 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
             "blocks": blocks, "results": res}
 
 
-def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en") -> dict:
-    """``certificate.html`` and ``certificate.pdf`` of a rate-gyro calibration, atomically."""
+def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",
+                           dcc: bool = False) -> dict:
+    """``certificate.html`` and ``certificate.pdf`` of a rate-gyro calibration (and with
+    ``dcc`` the PTB DCC 3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.rate_dcc`,
+    always in English), written together atomically."""
     L = labels(lang)
     fonts = font_families(lang)
     font = fonts[0] if lang == "zh" else None
@@ -155,4 +164,10 @@ def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
-    return {"certificate.html": out / "certificate.html", "certificate.pdf": out / "certificate.pdf"}
+        if dcc:
+            from gonio.report.rate_dcc import rate_dcc_bytes
+
+            write_bytes(stage / "certificate.dcc.xml",
+                        rate_dcc_bytes(result, lab=lab_d, cert_id=content["id"]))
+    names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
+    return {n: out / n for n in names}
