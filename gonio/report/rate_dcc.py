@@ -99,7 +99,7 @@ SETTINGS = (
 )
 
 
-def dsi_unit(unit: str, output_unit: str) -> tuple[str, float]:
+def dsi_unit(unit: str, output_unit: str, file=None) -> tuple[str, float]:
     """(D-SI unit, factor) of a rate item's results.json ``unit``; the scale factor's
     ``<output>/(°/s)`` through :data:`OUTPUT_DSI`. An unknown unit is a GonioError naming it.
 
@@ -111,10 +111,11 @@ def dsi_unit(unit: str, output_unit: str) -> tuple[str, float]:
     if unit == f"{output_unit}/(°/s)":
         if output_unit not in OUTPUT_DSI:
             raise GonioError(f"output unit {output_unit!r} has no D-SI form for the DCC "
-                             f"(known: {', '.join(OUTPUT_DSI)})", key="output_unit")
+                             f"(known: {', '.join(OUTPUT_DSI)}); calibrate without --dcc",
+                             file=file, key="output_unit")
         return OUTPUT_DSI[output_unit], 1.0
     if unit not in RATE_DSI:
-        raise GonioError(f"unit {unit!r} has no D-SI form for the DCC", key="unit")
+        raise GonioError(f"unit {unit!r} has no D-SI form for the DCC", file=file, key="unit")
     return RATE_DSI[unit]
 
 
@@ -200,7 +201,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             if not it["measured"] or value is None or not math.isfinite(value):
                 not_measured_quantity(data, name, it["reason"] or "no finite value")
                 continue
-            dsi, factor = dsi_unit(it["unit"], out_unit)
+            dsi, factor = dsi_unit(it["unit"], out_unit, src["file"])
             unc = it.get("uncertainty") or {}
             kw = {}
             if unc.get("U") is not None and unc.get("k") is not None and unc.get("p"):
