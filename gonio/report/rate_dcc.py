@@ -138,7 +138,9 @@ def _conditions(res: dict, lab: dict | None) -> list[tuple]:
     md = res.get("metadata", {})
     env = (lab or {}).get("environment") or {}
     out: list[tuple] = []
-    t = env.get("temperature_c", md.get("room_temperature_c"))
+    t = env.get("temperature_c")
+    if t is None:
+        t = md.get("room_temperature_c")
     if t not in (None, ""):
         out.append(("room temperature", display("sig4", float(t)), "degC"))
     if env.get("humidity_pct") is not None:
