@@ -11,7 +11,6 @@ and the figures of :mod:`gonio.report.rate_figures`.
 
 from __future__ import annotations
 
-import importlib
 import math
 from pathlib import Path
 
@@ -20,30 +19,15 @@ from gonio.report.certificate import (Block, Num, certificate_id, font_families,
                                       render_html, render_pdf)
 from gonio.report.figures import figure_svg
 from gonio.report.i18n import display, labels
+from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
 from gonio.specs import get
-
-
-def spec_content(spec_key: str):
-    """The specification's certificate data module (GROUPS, TITLES_ZH, HEADING)."""
-    spec = get(spec_key)
-    return importlib.import_module(spec.calibrate.__module__ + ".certificate")
 
 
 def _num(value, src: str, rule: str, U=None):
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "—"
     return Num(display(rule, value, U), src, rule)
-
-
-def rate_standards(md: dict, lab: dict | None, not_stated: str = "not stated") -> list[dict]:
-    """The standards used: the lab file's ``[[standards]]``, else the readings' equipment
-    (``table`` metadata, the rate table's U_rel at k = 2) — the certificate's and the DCC's."""
-    if lab and lab.get("standards"):
-        return list(lab["standards"])
-    return [{"name": md.get("table", not_stated), "identifier": "",
-             "accuracy": f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
-             "certificate": "", "traceability": "none (virtual bench)" if lab is None else not_stated}]
 
 
 def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:

@@ -47,10 +47,10 @@ from lxml import etree
 from gonio.errors import GonioError
 from gonio.report.certificate import Num
 from gonio.report.dcc import (administrative_data, element, influence_conditions,
-                              list_quantity, measurement_result, new_document,
+                              measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
 from gonio.report.i18n import display
-from gonio.report.rate_certificate import rate_standards, spec_content
+from gonio.report.rate_content import rate_standards, spec_content
 from gonio.specs import get
 from gonio.units import STANDARD_GRAVITY_M_S2
 
