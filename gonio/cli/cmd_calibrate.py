@@ -144,7 +144,7 @@ def run(args) -> int:
         with output_set(args.out, inputs=inputs, force=args.force):    # one whole set
             result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
                                        protocol=args.protocol, lab=args.lab, lang=args.lang,
-                                       monte_carlo_trials=args.monte_carlo)
+                                       monte_carlo_trials=args.monte_carlo, dcc=args.dcc)
         print_result(result, args.json)
         return 0
     status("calibrating")

@@ -93,9 +93,10 @@ def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
 
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en",
-              truth: dict | None = None, monte_carlo_trials: int = 0):
+              truth: dict | None = None, monte_carlo_trials: int = 0, dcc: bool = False):
     """Calibrate a rate readings file: ``results.json``, ``summary.txt`` and the certificate
-    (HTML, PDF) in ``out``. The specification is ``spec_key`` or the file's ``# spec:``."""
+    (HTML, PDF; with ``dcc`` also the DCC XML ``certificate.dcc.xml``) in ``out``. The
+    specification is ``spec_key`` or the file's ``# spec:``."""
     from gonio.report.certificate import load_lab
     from gonio.report.rate_certificate import write_rate_certificate
 
@@ -114,17 +115,24 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
                                                       ensure_ascii=False, allow_nan=False) + "\n")
         write_text(stage / "summary.txt", result.summary())
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
-    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
+                                        dcc=dcc))
     return result, paths
 
 
 def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int = 0,
-         lab=None, lang: str = "en"):
-    """Simulate the whole programme and calibrate it: readings, truth, results, certificate."""
-    p = simulate(spec_key, out, bench=bench, seed=seed)
-    truth = json.loads(Path(p["truth"]).read_text(encoding="utf-8"))
-    result, paths = calibrate(p["readings"], out, spec_key=spec_key, lab=lab, lang=lang,
-                              truth=truth)
+         lab=None, lang: str = "en", dcc: bool = True, force: bool = False):
+    """Simulate the whole programme and calibrate it: readings, truth, results, certificate
+    and (``dcc``) its DCC XML, staged and swapped into ``out`` as one set
+    (:func:`gonio.atomic.output_set`, with ``gonio-manifest.json``)."""
+    from gonio.atomic import output_set
+
+    inputs = [x for x in (lab, bench) if isinstance(x, (str, Path)) and Path(x).exists()]
+    with output_set(out, inputs=inputs, force=force) as stage:
+        p = simulate(spec_key, out, bench=bench, seed=seed)
+        truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
+        result, paths = calibrate(stage / "readings.csv", out, spec_key=spec_key, lab=lab,
+                                  lang=lang, truth=truth, dcc=dcc)
     return result, {**p, **paths}
 
 

@@ -71,7 +71,8 @@ from gonio.pipeline.item_coverage import item_coverage, trial_items
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "coverage", "binomial_u", "validate",
-           "ValidationReport", "trial_seeds", "trial_seed", "run_batch", "TrialJob",
+           "ValidationReport", "trial_seeds", "trial_seed", "spawn_seed", "run_batch", "TrialJob",
+           "study_workers", "run_parallel",
            "pack_trials", "unpack_trials", "execution_backend", "PartialStore", "EXTRA_SYMBOLS"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
@@ -259,8 +260,17 @@ def trial_seed(seed: int, case: str, index: int) -> int:
     >>> trial_seed(0, "default", 4) == trial_seeds(0, "default", 5)[4]
     True
     """
-    key = list(CASES).index(case)
-    ss = np.random.SeedSequence(seed, spawn_key=(key, int(index)))
+    return spawn_seed(seed, list(CASES).index(case), index)
+
+
+def spawn_seed(seed: int, key: int, index: int) -> int:
+    """numpy SeedSequence(seed, spawn_key=(key, index)) as one 32-bit seed: the seed of
+    trial ``index`` of study part ``key``, independent of every other trial.
+
+    >>> spawn_seed(0, 0, 4) == trial_seed(0, list(CASES)[0], 4)
+    True
+    """
+    ss = np.random.SeedSequence(seed, spawn_key=(int(key), int(index)))
     return int(ss.generate_state(1, np.uint32)[0])
 
 
@@ -430,6 +440,41 @@ def execution_backend(workers: int, scheduler: str | None):
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def study_workers(trials: int, workers: int | None, scheduler: str | None,
+                  batch_size: int | None) -> tuple[int | None, int]:
+    """(workers, batch size) of a study: ``workers`` default min(2, cores), at most the
+    machine's cores (ignored with a ``scheduler``); the batch size default up to
+    :data:`MAX_BATCH`, at least 4 tasks per worker. Bad values are GonioErrors."""
+    if scheduler is None:
+        cores = available_cores()
+        if workers is None:
+            workers = min(2, cores)
+        if not isinstance(workers, int) or workers < 1:
+            raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
+        if workers > cores:
+            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
+                             "--scheduler to run on a cluster", key="workers")
+    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
+    if batch_size is None:
+        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
+    if not isinstance(batch_size, int) or batch_size < 1:
+        raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
+                         key="batch_size")
+    return workers, batch_size
+
+
+def run_parallel(fn, tasks: list[tuple], workers: int | None, scheduler: str | None):
+    """``fn(*task)`` for every task through joblib (:func:`execution_backend`), yielded as
+    they finish (unordered: the caller puts them back in trial order)."""
+    if not tasks:
+        return
+    from joblib import Parallel, delayed
+
+    with execution_backend(workers, scheduler) as n_jobs:
+        run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+        yield from run(delayed(fn)(*t) for t in tasks)
 
 
 def _fingerprint(job_settings: dict) -> str:
@@ -784,21 +829,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
     base = bench if isinstance(bench, Bench) else load_bench(bench)
     base = replace(base, sample_rate_hz=float(sample_rate_hz))
-    if scheduler is None:
-        cores = available_cores()
-        if workers is None:
-            workers = min(2, cores)
-        if not isinstance(workers, int) or workers < 1:
-            raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
-        if workers > cores:
-            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
-                             "--scheduler to run on a cluster", key="workers")
-    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
-    if batch_size is None:
-        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
-    if not isinstance(batch_size, int) or batch_size < 1:
-        raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
-                         key="batch_size")
+    workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
     settings = {"trials": trials, "seed": seed,
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),
@@ -830,18 +861,13 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     prog = Progress(total, label="validate: trials", done=already,
                     force=False) if show_progress else None
     try:
-        if tasks:
-            from joblib import Parallel, delayed
-
-            with execution_backend(workers, scheduler) as n_jobs:
-                run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
-                for packed in run(delayed(run_batch)(*t) for t in tasks):
-                    if store is not None:
-                        store.save(packed)
-                    got = unpack_trials(packed)
-                    done[str(packed["case"])].update(got)
-                    if prog is not None:
-                        prog.update(len(got))
+        for packed in run_parallel(run_batch, tasks, workers, scheduler):
+            if store is not None:
+                store.save(packed)
+            got = unpack_trials(packed)
+            done[str(packed["case"])].update(got)
+            if prog is not None:
+                prog.update(len(got))
     finally:
         if prog is not None:
             prog.close()

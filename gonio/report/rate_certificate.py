@@ -11,7 +11,6 @@ and the figures of :mod:`gonio.report.rate_figures`.
 
 from __future__ import annotations
 
-import importlib
 import math
 from pathlib import Path
 
@@ -20,16 +19,9 @@ from gonio.report.certificate import (Block, Num, certificate_id, font_families,
                                       render_html, render_pdf)
 from gonio.report.figures import figure_svg
 from gonio.report.i18n import display, labels
+from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
 from gonio.specs import get
-
-
-def spec_content(spec_key: str):
-    """The specification's certificate data module (GROUPS, TITLES_ZH, HEADING)."""
-    spec = get(spec_key)
-    mod = importlib.import_module(spec.calibrate.__module__)
-    pkg = mod.__name__ if hasattr(mod, "__path__") else mod.__name__.rpartition(".")[0]
-    return importlib.import_module(pkg + ".certificate")
 
 
 def _num(value, src: str, rule: str, U=None):
@@ -138,9 +130,8 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     md = res.get("metadata", {})
     data = spec_content(result.spec_key)
     spec = get(result.spec_key)
-    blocks = header_blocks(res, spec, L, lang, lab, [
-        md.get("table", L["not_stated"]), "—",
-        f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)", "—"])
+    std = rate_standards(md, None, L["not_stated"])[0]        # the same row as the DCC's
+    blocks = header_blocks(res, spec, L, lang, lab, [std["name"], "—", std["accuracy"], "—"])
     add = lambda kind, d, extra=None: blocks.append(Block(kind, d, extra))  # noqa: E731
     # results, grouped (Annex B)
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
@@ -174,10 +165,11 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
 
 
 def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=None,
-                           lang: str = "en") -> dict:
+                           lang: str = "en", dcc_fn=None) -> dict:
     """``certificate.html`` and ``certificate.pdf`` of a per-item specification's result,
     atomically: ``content_fn(result, L, lang, lab=…)`` gives the blocks, ``figures`` the
-    (key, caption en, caption zh, draw) the blocks refer to."""
+    (key, caption en, caption zh, draw) the blocks refer to; with ``dcc_fn(result, lab=…,
+    cert_id=…) -> bytes`` also ``certificate.dcc.xml``, in the same staged set."""
     L = labels(lang)
     fonts = font_families(lang)
     font = fonts[0] if lang == "zh" else None
@@ -189,10 +181,21 @@ def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
-    return {"certificate.html": out / "certificate.html", "certificate.pdf": out / "certificate.pdf"}
+        if dcc_fn is not None:
+            write_bytes(stage / "certificate.dcc.xml",
+                        dcc_fn(result, lab=lab_d, cert_id=content["id"]))
+    names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc_fn else [])
+    return {n: out / n for n in names}
 
 
-def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en") -> dict:
-    """``certificate.html`` and ``certificate.pdf`` of a rate-gyro calibration, atomically."""
+def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",
+                           dcc: bool = False) -> dict:
+    """``certificate.html`` and ``certificate.pdf`` of a rate-gyro calibration (and with
+    ``dcc`` the PTB DCC 3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.rate_dcc`,
+    always in English), written together atomically."""
+    dcc_fn = None
+    if dcc:
+        from gonio.report.rate_dcc import rate_dcc_bytes
+        dcc_fn = rate_dcc_bytes
     return write_spec_certificate(result, out, rate_certificate_blocks, FIGURES, truth=truth,
-                                  lab=lab, lang=lang)
+                                  lab=lab, lang=lang, dcc_fn=dcc_fn)
