@@ -316,6 +316,8 @@ def test_simulate_deterministic_and_cli(tmp_path, capsys):
         assert float(text.replace("×10", "e").translate(str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789"))) \
             == pytest.approx(v, rel=1e-3)
     assert (tmp_path / "a" / "certificate.pdf").read_bytes()[:4] == b"%PDF"
+    # the recalibration statement is JJF 1535's clause 9, not the optical draft's
+    assert "JJF 1535-2015 clause 9" in html and "draft clause 9" not in html
     capsys.readouterr()
     assert main(["budget", "--spec", "jjf1535-2015"]) == 0
     out = capsys.readouterr().out

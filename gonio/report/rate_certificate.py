@@ -157,7 +157,8 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", L["budget"])
     add("table", ([L["clause"], L["component"], L["source"], L["u_i"], "|c_i|·u_i"],
                   budget_rows(res, L)), (0.09, 0.12, 0.49, 0.15, 0.15))
-    blocks += closing_blocks(res, L, lab)
+    recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
+    blocks += closing_blocks(res, L, lab, recal=recal and recal[1 if lang == "zh" else 0])
     blocks += figure_blocks(FIGURES, L, lang)
     return {"id": certificate_id(result, lab), "virtual": lab is None,
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],

@@ -15,7 +15,6 @@ whose ``data-src`` is its path in ``results.json``. The text is data in
 
 from __future__ import annotations
 
-import math
 
 from gonio.report.certificate import Block, certificate_id
 from gonio.report.i18n import display, display_uncertainty, rule_at_U
