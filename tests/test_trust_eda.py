@@ -38,7 +38,8 @@ def test_default_eda_example_table_within_U_over_20_seeds():
     for seed in range(20):
         run = run_session(proto, bench, seed=seed)
         kw = dict(latitude_deg=bench.latitude_deg, tilt_bound_deg=0.1,
-                  compensation_time_s=proto.session.static_s)
+                  compensation_time_s=proto.session.static_s,
+                  table_accel_dps2=bench.table.accel_dps2)
         res = analyse_eda_readings(run.readings, ep, **kw)
         assert res.coupling.separable
         U = stats.t.ppf(0.975, res.dof) * res.table_u_arcsec
@@ -57,20 +58,45 @@ def test_default_eda_example_table_within_U_over_20_seeds():
     assert float(np.mean(inside_plain)) < 0.5
 
 
-def test_coupling_design_against_quadrature():
-    """P, Q of coupling_design equal ∫(cos θ − cos x_k) dt of a table that jumps at each
-    move's middle, integrated numerically on a fine grid."""
+def test_coupling_design_against_quadrature_of_the_tables_motion():
+    """P, Q of coupling_design equal ∫(cos θ − cos x_k) dt of the table's real rest-to-rest
+    motion (30° at 60 °/s² is a triangular profile of 2·sqrt(0.5) = 1.41 s), integrated
+    on a fine grid; the constant-rate design (0.5 s moves) is measurably off."""
+    a, step, delay, x0 = 60.0, 30.0, 5.0, 60.0
     t = np.array([[11.0, 23.0, 35.5]])
-    C = coupling_design(t, [60.0], 30.0, 5.0, 60.0)
-    tau = t[0] - 5.0 - 0.25                         # move middles
+    dur = 2.0 * np.sqrt(step / a)
+    ends = t[0] - delay
     grid = np.linspace(0.0, t[0, -1], 2_000_001)
-    pos = 60.0 + 30.0 * np.searchsorted(tau, grid, side="right")
+    pos = np.full_like(grid, x0)
+    for i, e in enumerate(ends):
+        s0 = e - dur
+        base = x0 + step * i
+        s = np.clip(grid - s0, 0.0, dur)
+        moved = np.where(s < dur / 2, 0.5 * a * s ** 2, step - 0.5 * a * (dur - s) ** 2)
+        pos = np.where(grid >= s0, base + moved, pos)
+    C_acc = coupling_design(t, [x0], step, delay, 60.0, a)
+    C_const = coupling_design(t, [x0], step, delay, 60.0)
+    worst_const = 0.0
     for j in range(3):
         sel = grid <= t[0, j]
-        p_num = np.trapezoid(np.cos(np.radians(pos[sel])) - np.cos(np.radians(60.0)), grid[sel])
-        q_num = np.trapezoid(np.sin(np.radians(pos[sel])) - np.sin(np.radians(60.0)), grid[sel])
-        assert C[0, j, 0] == pytest.approx(p_num, abs=2e-4)
-        assert C[0, j, 1] == pytest.approx(q_num, abs=2e-4)
+        p_num = np.trapezoid(np.cos(np.radians(pos[sel])) - np.cos(np.radians(x0)), grid[sel])
+        q_num = np.trapezoid(np.sin(np.radians(pos[sel])) - np.sin(np.radians(x0)), grid[sel])
+        assert C_acc[0, j, 0] == pytest.approx(p_num, abs=1e-4)
+        assert C_acc[0, j, 1] == pytest.approx(q_num, abs=1e-4)
+        worst_const = max(worst_const, abs(C_const[0, j, 0] - p_num), abs(C_const[0, j, 1] - q_num))
+    assert worst_const > 0.05
+    # at constant rate (a linear ramp of 0.5 s per step), likewise
+    ramp = np.full_like(grid, x0)
+    for i, e in enumerate(ends):
+        s0 = e - step / 60.0
+        ramp = np.where(grid >= s0, x0 + step * i + np.clip(grid - s0, 0.0, step / 60.0) * 60.0,
+                        ramp)
+    for j in range(3):
+        sel = grid <= t[0, j]
+        p_num = np.trapezoid(np.cos(np.radians(ramp[sel])) - np.cos(np.radians(x0)), grid[sel])
+        q_num = np.trapezoid(np.sin(np.radians(ramp[sel])) - np.sin(np.radians(x0)), grid[sel])
+        assert C_const[0, j, 0] == pytest.approx(p_num, abs=1e-4)
+        assert C_const[0, j, 1] == pytest.approx(q_num, abs=1e-4)
 
 
 def test_says_when_coupling_cannot_be_estimated():

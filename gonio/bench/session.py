@@ -452,6 +452,7 @@ def session_metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
         "temperature_c": repr(protocol.conditions.temperature_c),
         "table": bench.table.name,
         "table_mpe_arcsec": repr(bench.table.mpe_arcsec),
+        "table_accel_dps2": repr(bench.table.accel_dps2),
         "tilt_bound_deg": repr(protocol.annex_a.tilt_bound_deg),
         "operator": "virtual bench",
         "protocol": protocol.name,

@@ -18,7 +18,7 @@ from gonio.units import ARCSEC_PER_DEG
 KNOWN_METADATA: tuple[str, ...] = (
     "instrument", "serial", "manufacturer", "nominal_scale_factor_counts_per_deg",
     "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
-    "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised",
+    "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised", "table_accel_dps2",
 )
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
 NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
@@ -28,6 +28,7 @@ NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
     "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
     "table_mpe_arcsec": (0.0, True, ARCSEC_PER_DEG, "a number in [0, 3600]"),
     "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
+    "table_accel_dps2": (1e-3, True, 1e5, "a number in [1e-3, 1e5]"),
 }
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")
