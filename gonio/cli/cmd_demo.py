@@ -41,7 +41,7 @@ def run(args) -> int:
         from gonio.pipeline.rate import demo as rate_demo
 
         result, paths = rate_demo(args.spec, args.out, bench=args.bench, seed=args.seed,
-                                  lab=args.lab, lang=args.lang)
+                                  lab=args.lab, lang=args.lang, force=args.force)
         if args.json:
             print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
         else:
