@@ -26,7 +26,7 @@ from gonio import __version__
 from gonio.atomic import output_dir, output_set, sha256_file, write_text
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
-from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
+from gonio.specs.ogam_draft.items import LISTED_ROWS, CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -882,6 +882,12 @@ def write_calibration(report: CalibrationReport, out: str | Path,
                 if df is not None and len(df):
                     write_text(tables / f"{item.name}_{tname}.csv",
                                df.to_csv(index=False, lineterminator="\n"))
+            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
+                write_text(tables / f"{item.name}_table.csv",
+                           item.table.to_csv(index=False, lineterminator="\n"))
+        if len(report.results.unused_readings) > LISTED_ROWS:
+            write_text(tables / "unused_readings.csv",
+                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
         write_text(tables / "uncertainty_budget.csv",
                    report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
         names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
