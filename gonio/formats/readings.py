@@ -137,8 +137,7 @@ def read_readings(path: str | Path) -> Readings:
     [{'test': 'scale_factor', 'rate_dps': 60.0, 'orientation': 'up', 'gyro_counts': 216000.0, 'line': 3}]
     """
     path = Path(path)
-    text = read_utf8(path, "readings file")
-    return parse_readings(text, path=path)
+    return parse_readings(read_utf8(path, "readings file"), path=path)
 
 
 def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
@@ -152,14 +151,20 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     fname = "<text>" if path is None else str(path)
     if text.startswith("\ufeff"):
         text = text[1:]
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    _check_rows(len(lines), fname)
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    n_lines = text.count("\n") + 1
+    _check_rows(n_lines, fname)
     metadata: dict[str, str] = {}
     idx = 0
+    pos = 0                       # offset of the next line (the file is not split whole)
     header: list[str] | None = None
     header_line = 0
-    while idx < len(lines):
-        line = lines[idx]
+    while pos <= len(text):
+        end = text.find("\n", pos)
+        end = len(text) if end < 0 else end
+        line = text[pos:end]
+        pos = end + 1
         idx += 1
         if not line.strip():
             continue
@@ -186,7 +191,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         break
     if header is None:
         raise GonioError("no readings: the file has no header row", file=fname,
-                         line=max(1, len(lines) - (lines[-1] == "")))
+                         line=max(1, n_lines - text.endswith("\n")))
     for key in metadata:
         if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
@@ -201,50 +206,48 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
                          file=fname, line=header_line, column="gyro_counts")
 
     extras = [h for h in header if h not in COLUMNS]
-    cols = _parse_body(lines, idx, header, extras, fname, quantised)
-    if not cols["line"]:
+    cols = _parse_body(text[pos:], idx, header, extras, fname, quantised)
+    del text
+    if not len(cols["line"]):
         raise GonioError("no readings: header only", file=fname, line=header_line)
     data = _frame(cols, extras)
     return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
 
 
-def _split_fast(lines: list[str], idx: int, header: list[str]):
+def _split_fast(body: str, first: int, header: list[str]):
     """The data rows as Arrow string columns, read by Arrow's CSV reader, and their line
     numbers — or None when the body needs the line-by-line reading (a blank line, a
-    quote, a ``#``, a long line, a wrong field count: whatever it must report exactly)."""
+    quote, a ``#``, a long line, a wrong field count: whatever it must report exactly).
+    ``body`` is the text after the header, whose line number is ``first``."""
     import io
 
     import pyarrow as pa
     import pyarrow.csv as pcsv
 
-    end = len(lines)
-    while end > idx and not lines[end - 1]:
-        end -= 1                                   # the final line end(s)
-    body = lines[idx:end]
-    if not body or max(map(len, body)) > MAX_CELL_CHARS:
+    body = body.rstrip("\n")                              # the final line end(s)
+    if not body or body[0] == "\n" or '"' in body or "#" in body or "\n\n" in body or \
+            re.search(f"[^\\n]{{{MAX_CELL_CHARS + 1}}}", body):
         return None
-    joined = "\n".join(body)
-    if '"' in joined or "#" in joined or "\n\n" in joined or not body[0]:
-        return None
+    n = body.count("\n") + 1
+    names = [f"c{i}" for i in range(len(header))]
     try:
         tab = pcsv.read_csv(
-            io.BytesIO(joined.encode("utf-8")),
-            read_options=pcsv.ReadOptions(column_names=[f"c{i}" for i in range(len(header))],
-                                          block_size=1 << 24),
+            io.BytesIO(body.encode("utf-8")),
+            read_options=pcsv.ReadOptions(column_names=names, block_size=1 << 24),
             parse_options=pcsv.ParseOptions(quote_char=False, double_quote=False,
                                             newlines_in_values=False, ignore_empty_lines=False),
             convert_options=pcsv.ConvertOptions(
-                column_types={f"c{i}": pa.string() for i in range(len(header))},
+                column_types={c: pa.string() for c in names},
                 strings_can_be_null=False, quoted_strings_can_be_null=False))
     except (pa.ArrowInvalid, ValueError):
         return None
-    if tab.num_rows != len(body):
+    if tab.num_rows != n:
         return None
     cols = {h: tab.column(i).combine_chunks() for i, h in enumerate(header)}
-    return cols, list(range(idx + 1, idx + 1 + len(body))), None
+    return cols, np.arange(first + 1, first + 1 + n), None
 
 
-def _split_lines(lines: list[str], idx: int, header: list[str], fname: str):
+def _split_lines(body: str, first: int, header: list[str], fname: str):
     """The data rows read line by line (the general reading): Arrow string columns, their
     line numbers and the first structural error (which ends the reading), if any."""
     import pyarrow as pa
@@ -253,11 +256,10 @@ def _split_lines(lines: list[str], idx: int, header: list[str], fname: str):
     rows: list[list[str]] = []
     line_no: list[int] = []
     structural: GonioError | None = None
-    for off in range(idx, len(lines)):
-        raw = lines[off]
+    for off, raw in enumerate(body.split("\n")):
         if not raw or raw.isspace():
             continue
-        ln = off + 1
+        ln = first + off + 1
         if raw.lstrip().startswith("#"):
             structural = GonioError("metadata line after the header; '#' lines belong at the "
                                     "top", file=fname, line=ln)
@@ -281,7 +283,7 @@ def _split_lines(lines: list[str], idx: int, header: list[str], fname: str):
     return cols, line_no, structural
 
 
-def _parse_body(lines: list[str], idx: int, header: list[str], extras: list[str], fname: str,
+def _parse_body(body: str, idx: int, header: list[str], extras: list[str], fname: str,
                 quantised: bool) -> dict[str, list | np.ndarray]:
     """The data rows after the header, validated: columns of :data:`COLUMNS`, the
     extras and ``line``.
@@ -298,9 +300,10 @@ def _parse_body(lines: list[str], idx: int, header: list[str], extras: list[str]
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    got = _split_fast(lines, idx, header)
-    text, line_no, structural = got if got is not None else _split_lines(lines, idx, header,
+    got = _split_fast(body, idx, header)
+    text, line_no, structural = got if got is not None else _split_lines(body, idx, header,
                                                                           fname)
+    del body
     n = len(line_no)
     blank = pa.array([""] * n, type=pa.string()) if any(
         c not in text for c in COLUMNS) else None
@@ -350,9 +353,9 @@ def _parse_body(lines: list[str], idx: int, header: list[str], extras: list[str]
         i = int(i)
         row = {h: text[h][i].as_py().strip() for h in header}
         try:
-            rec = _parse_row(row, dict(file=fname, line=line_no[i]), quantised)
+            rec = _parse_row(row, dict(file=fname, line=int(line_no[i])), quantised)
         except GonioError as exc:
-            first_error = (line_no[i], exc)
+            first_error = (int(line_no[i]), exc)
             break
         for name in COLUMNS:
             out[name][i] = rec[name]
@@ -416,10 +419,10 @@ def _first_duplicate(out: dict, upto: int, line_no: list[int],
     j = int(np.flatnonzero(same)[0])
     t, se, r, rate, o = (key.iat[i, c] for c in range(5))
     step = f", table_deg {float(key.iat[i, 5])!r}" if eda[i] else ""
-    return line_no[i], GonioError(
+    return int(line_no[i]), GonioError(
         f"duplicated reading: test {t}, series {int(se)}, round {int(r)}, "
-        f"rate {float(rate)} deg/s, orientation {o}{step} already on line {line_no[j]}",
-        column="round", file=fname, line=line_no[i])
+        f"rate {float(rate)} deg/s, orientation {o}{step} already on line {int(line_no[j])}",
+        column="round", file=fname, line=int(line_no[i]))
 
 
 #: Rows above which a note says how long the run will take (the reader, the per-reading

@@ -354,7 +354,19 @@ def screen_readings(readings: Readings, protocol: Protocol) -> tuple[Readings, "
                 continue
             n_rounds = len(it.rounds)
             bad_here = []
-            for line, rnd, tab, t in zip(g["line"], g["round"], g["table_deg"], g["time_s"]):
+            # vectorised pre-check: only rows that may not fit are looked at one by one
+            rn = g["round"].to_numpy()
+            inside = (rn >= 1) & (rn <= n_rounds)
+            want_deg = np.array([r.stop_deg - r.start_deg for r in it.rounds] or [0.0])
+            want_deg = want_deg[np.clip(rn - 1, 0, max(n_rounds - 1, 0))]
+            with np.errstate(invalid="ignore"):
+                fits = inside & (np.abs(g["table_deg"].to_numpy(float) - want_deg)
+                                 <= it.position_tolerance_deg)
+                if it.max_time_to_reading_s is not None:
+                    fits &= ~(g["time_s"].to_numpy(float) > it.max_time_to_reading_s + 1e-9)
+            g_check = g[~fits]
+            for line, rnd, tab, t in zip(g_check["line"], g_check["round"],
+                                         g_check["table_deg"], g_check["time_s"]):
                 line, rnd = int(line), int(rnd)
                 why, col = None, None
                 if not 1 <= rnd <= n_rounds:

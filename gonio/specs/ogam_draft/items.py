@@ -187,7 +187,10 @@ def listing(df: pd.DataFrame, *, cap: int = LISTED_ROWS) -> tuple[list[dict], di
             v = df[col].to_numpy(dtype=float)
             med = float(np.nanmedian(v)) if np.isfinite(v).any() else math.nan
             far = np.nan_to_num(np.abs(v - med), nan=-1.0)
-            keep = np.sort(np.argsort(-far, kind="stable")[:cap])
+            thr = np.partition(far, len(far) - cap)[len(far) - cap]     # O(n), not a sort
+            above = np.flatnonzero(far > thr)
+            keep = np.sort(np.concatenate([above,
+                                           np.flatnonzero(far == thr)[:cap - above.size]]))
             fin = v[np.isfinite(v)]
             summary.update({"listed_are": f"the {cap} rows farthest from the median of {col}",
                             "column": col, "median": _plain(med),
@@ -587,8 +590,9 @@ def repeatability(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = 
     table["R_arcsec"] = points["s_arcsec"].to_numpy()
     ok = table.loc[table["n_series"] >= 2, "round"]
     used = long[long["round"].isin(ok)]
+    alone = ~long["round"].isin(ok).to_numpy()
     unused = {int(l): f"angle_deviation round {r} has one series only, no repeatability"
-              for l, r in zip(long["line"], long["round"]) if r not in set(ok)}
+              for l, r in zip(long["line"][alone], long["round"][alone])}
     r = table["R_arcsec"].to_numpy(dtype=float)
     at = int(np.nanargmax(r))
     details = {"position_deg": float(table["position_deg"][at]), "n_series": n_series}
@@ -725,14 +729,13 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
     for v, src, g, long, points, ref in per_cond:
         keep = points["key"].isin(common)
         kept = points[keep]
-        keep_rounds = set(kept["round"])
-        for l, r, pos in zip(long["line"], long["round"], long["round"].map(
+        in_common = long["round"].isin(set(kept["round"])).to_numpy()
+        used.update(long["line"][in_common].astype(int).tolist())
+        alone = long[~in_common]
+        for l, r, pos in zip(alone["line"], alone["round"], alone["round"].map(
                 points.set_index("round")["position_deg"])):
-            if r in keep_rounds:
-                used.add(int(l))
-            else:
-                unused.setdefault(int(l), f"{src} round {r} at {pos:g} deg ({fmt(v)}) has no "
-                                  "counterpart in every other condition")
+            unused.setdefault(int(l), f"{src} round {r} at {pos:g} deg ({fmt(v)}) has no "
+                              "counterpart in every other condition")
         e_v = signed_extreme(kept["E_arcsec"])
         cond_table.append({cond_col: v, "source_test": src, "reference": bool(ref),
                            "n_points": int(len(kept)), "n_series": int(g["series"].nunique()),
