@@ -425,13 +425,19 @@ def _first_duplicate(out: dict, upto: int, line_no: list[int],
         column="round", file=fname, line=int(line_no[i]))
 
 
-#: Rows above which a note says how long the run will take (the reader, the per-reading
-#: tables of 7.4/7.5 and the certificate are per-row work, ~0.1 ms a row together).
-NOTE_ROWS: int = 20_000
+#: Rows above which a note says how long the run will take.
+NOTE_ROWS: int = 200_000
+#: CPU seconds per row of ``gonio calibrate`` on a large file (measured with
+#: benchmarks/bench_large_readings.py: about 17 s for 10⁶ rows, certificate included).
+SECONDS_PER_ROW: float = 1.7e-5
 
 
 def _check_rows(n_lines: int, fname: str) -> None:
-    """Refuse a file over ``GONIO_MAX_READING_ROWS`` lines; say how long a large one takes."""
+    """Refuse a file over ``GONIO_MAX_READING_ROWS`` lines; say how long a large one takes.
+
+    The limit bounds memory, not time: a calibration holds the readings and their
+    per-reading tables in memory, about 0.9 GB at 10⁶ rows (docs/formats.md,
+    "Limits on work")."""
     import sys
 
     from gonio.limits import limit
@@ -439,12 +445,12 @@ def _check_rows(n_lines: int, fname: str) -> None:
     lim = limit("GONIO_MAX_READING_ROWS")
     if n_lines > lim + 200:          # metadata and blank lines allowed beyond the rows
         raise GonioError(f"{n_lines} lines, over the limit of {lim:.0f} readings "
-                         "(GONIO_MAX_READING_ROWS; a calibration has hundreds): refused before "
-                         "parsing — every row is validated and tabulated, ~0.5 ms a row",
-                         file=fname)
+                         "(GONIO_MAX_READING_ROWS): refused before parsing — a calibration "
+                         "holds every reading and its tables in memory, about 0.9 GB a "
+                         "million rows", file=fname)
     if n_lines > NOTE_ROWS:
         sys.stderr.write(f"gonio: note: {fname}: {n_lines} lines; expect about "
-                         f"{n_lines * 5e-4:.0f} s (each row is validated and tabulated)\n")
+                         f"{max(1.0, n_lines * SECONDS_PER_ROW):.0f} s of computing\n")
 
 
 def _cells(line: str, fname: str, idx: int) -> list[str]:
