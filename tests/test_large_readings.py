@@ -145,3 +145,58 @@ def test_numbers_read_as_python_reads_them():
     want = np.array([float(t) for t in texts])
     assert r.data["note"].tolist() == texts
     assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+
+
+# ----------------------------------------------------------------------------- session time
+
+def test_session_time_estimate_is_enforced(tmp_path, monkeypatch, capsys):
+    """GONIO_MAX_RUN_S refuses a session whose estimated computing time exceeds it, before
+    any sample is simulated, naming the section that drives it and the bench key; from the
+    CLI: exit 2, one line, no output folder."""
+    import gonio.bench.session as S
+    from gonio.bench import load_bench
+    from gonio.protocol import load_protocol
+
+    long = (Path(load_protocol("ogam-draft").path).read_text(encoding="utf-8")
+            .replace("readings = 15", "readings = 500"))        # a 42 h 7.3 record
+    p = tmp_path / "long.toml"
+    p.write_text(long, encoding="utf-8")
+    called = []
+    monkeypatch.setattr(S, "_simulate_many", lambda *a, **k: called.append(1))
+    monkeypatch.setenv("GONIO_MAX_RUN_S", "10")
+    with pytest.raises(GonioError) as ei:
+        S.run_session(load_protocol(p), load_bench("rlg"), seed=0)
+    msg = str(ei.value)
+    assert "GONIO_MAX_RUN_S" in msg and "[zero_stability]" in msg and "sample_rate_hz" in msg
+    assert ei.value.key == "zero_stability" and not called
+    # the same session passes with the limit raised (then the next step runs)
+    monkeypatch.setenv("GONIO_MAX_RUN_S", "1e4")
+    with pytest.raises(TypeError):          # the stub returns None: simulation was reached
+        S.run_session(load_protocol(p), load_bench("rlg"), seed=0)
+    assert called
+    monkeypatch.setenv("GONIO_MAX_RUN_S", "10")
+    out = tmp_path / "o"
+    capsys.readouterr()
+    assert main(["simulate", "--protocol", str(p), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "GONIO_MAX_RUN_S" in err[0] and "Traceback" not in err[0], err
+    assert not out.exists()
+
+
+def test_session_time_estimate_is_calibrated():
+    """The estimate against the CPU time of a real (short) simulation: within a factor 2."""
+    import time
+
+    from gonio.bench import load_bench
+    from gonio.bench.session import estimate_session, plan_session, run_session
+    from gonio.protocol import load_protocol
+
+    text = Path(load_protocol("ogam-draft").path).read_text(encoding="utf-8")
+    proto = load_protocol("ogam-draft")
+    bench = load_bench("fog")
+    est = estimate_session(plan_session(proto, bench, np.random.default_rng(0)), bench, proto)
+    t0 = time.process_time()
+    run_session(proto, bench, seed=0)
+    cpu = time.process_time() - t0
+    assert est.seconds / 2 <= cpu <= est.seconds * 2, (est.seconds, cpu)
+    assert "readings = 15" in text
