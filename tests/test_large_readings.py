@@ -200,3 +200,81 @@ def test_session_time_estimate_is_calibrated():
     cpu = time.process_time() - t0
     assert est.seconds / 2 <= cpu <= est.seconds * 2, (est.seconds, cpu)
     assert "readings = 15" in text
+
+
+# ----------------------------------------------------------------------------- large files
+
+def _bench_module():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(
+        "bench_large_readings", Path(__file__).parents[1] / "benchmarks" /
+        "bench_large_readings.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def large(tmp_path_factory):
+    """A 12 000-row hand-made file (the benchmark's generator) plus 300 7.7 readings at
+    30 °/s (not the fixed 60 °/s: unused, with their reason), calibrated from the CLI."""
+    d = tmp_path_factory.mktemp("large")
+    p = d / "big.csv"
+    _bench_module().make_readings(p, 12_000)
+    extra = "".join(f"pointing_consistency,{s},{r},30.0,north,11.0,{30.0 * r},"
+                    f"{round(76434.87 * 30.0 * r)},\n"
+                    for s in range(1, 51) for r in range(1, 7))
+    with open(p, "a", encoding="utf-8") as fh:
+        fh.write(extra)
+    before = p.read_bytes()
+    out = d / "out"
+    assert main(["calibrate", str(p), "--out", str(out)]) == 0
+    assert p.read_bytes() == before
+    return p, out
+
+
+def test_large_file_is_summarised_not_copied(large):
+    p, out = large
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    assert (out / "results.json").stat().st_size < 600_000
+    assert (out / "certificate.html").stat().st_size < 1_500_000
+    # the 7.1 table: 200 rows listed, the summary's count and extremes from the file itself
+    raw = pd.read_csv(p, comment="#")
+    sf = raw[raw["test"] == "scale_factor"]
+    k_i = (sf["gyro_counts"] / sf["table_deg"]).to_numpy()
+    t = res["scale_factor"]
+    assert len(t["table"]) == 200
+    sm = t["table_summary"]
+    assert sm["rows"] == len(sf) > 200 and sm["column"] == "K_i_counts_per_deg"
+    assert sm["max"] == pytest.approx(k_i.max(), rel=1e-12)
+    assert sm["min"] == pytest.approx(k_i.min(), rel=1e-12)
+    assert sm["median"] == pytest.approx(np.median(k_i), rel=1e-12)
+    listed = np.array([r["K_i_counts_per_deg"] for r in t["table"]])
+    far = np.abs(k_i - np.median(k_i))
+    assert np.min(np.abs(listed - np.median(k_i))) >= np.sort(far)[-200] * (1 - 1e-12)
+    full = pd.read_csv(out / "tables" / "scale_factor_table.csv")
+    assert len(full) == len(sf)
+    # unused readings: summarised by reason with the total, every one in the CSV
+    us = res["unused_readings_summary"]
+    assert us["total"] >= 300 and len(res["unused_readings"]) == 200
+    assert sum(us["by_reason"].values()) == us["total"]
+    assert any("not at 60 deg/s" in k and v == 300 for k, v in us["by_reason"].items()), us
+    assert len(pd.read_csv(out / "tables" / "unused_readings.csv")) == us["total"]
+    # the 7.4 matrix: at most 50 series columns in results.json
+    mx = res["angle_deviation"]["matrix"]
+    assert len([c for c in mx[0] if c.startswith("series_")]) == 50
+    html = (out / "certificate.html").read_text(encoding="utf-8")
+    assert f"200 of {len(sf)} rows listed" in html
+
+
+def test_row_limit_is_stated_and_named(large, tmp_path, monkeypatch, capsys):
+    p, _ = large
+    before = p.read_bytes()
+    monkeypatch.setenv("GONIO_MAX_READING_ROWS", "5000")
+    out = tmp_path / "o"
+    capsys.readouterr()
+    assert main(["calibrate", str(p), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "GONIO_MAX_READING_ROWS" in err[0] and str(p) in err[0], err
+    assert "Traceback" not in err[0]
+    assert not out.exists() and p.read_bytes() == before
