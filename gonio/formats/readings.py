@@ -206,7 +206,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
                          file=fname, line=header_line, column="gyro_counts")
 
     extras = [h for h in header if h not in COLUMNS]
-    cols = _parse_body(text[pos:], idx, header, extras, fname, quantised)
+    cols = _parse_body(text, pos, idx, header, extras, fname, quantised)
     del text
     if not len(cols["line"]):
         raise GonioError("no readings: header only", file=fname, line=header_line)
@@ -214,25 +214,29 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
 
 
-def _split_fast(body: str, first: int, header: list[str]):
+def _split_fast(text: str, pos: int, first: int, header: list[str]):
     """The data rows as Arrow string columns, read by Arrow's CSV reader, and their line
     numbers — or None when the body needs the line-by-line reading (a blank line, a
     quote, a ``#``, a long line, a wrong field count: whatever it must report exactly).
-    ``body`` is the text after the header, whose line number is ``first``."""
-    import io
-
+    The body is ``text`` from offset ``pos`` on, its first line is line ``first`` + 1;
+    it is encoded once and read in place (no copies of a large file's text)."""
     import pyarrow as pa
     import pyarrow.csv as pcsv
 
-    body = body.rstrip("\n")                              # the final line end(s)
-    if not body or body[0] == "\n" or '"' in body or "#" in body or "\n\n" in body or \
-            re.search(f"[^\\n]{{{MAX_CELL_CHARS + 1}}}", body):
+    raw = text.encode("utf-8")
+    start = len(text[:pos].encode("utf-8")) if not text[:pos].isascii() else pos
+    end = len(raw)
+    while end > start and raw[end - 1] == 10:           # the final line end(s)
+        end -= 1
+    if end <= start or raw[start] == 10 or raw.find(b'"', start, end) >= 0 or \
+            raw.find(b"#", start, end) >= 0 or raw.find(b"\n\n", start, end) >= 0 or \
+            _LONG_LINE.search(raw, start, end):
         return None
-    n = body.count("\n") + 1
+    n = raw.count(b"\n", start, end) + 1
     names = [f"c{i}" for i in range(len(header))]
     try:
         tab = pcsv.read_csv(
-            io.BytesIO(body.encode("utf-8")),
+            pa.BufferReader(pa.py_buffer(raw).slice(start, end - start)),
             read_options=pcsv.ReadOptions(column_names=names, block_size=1 << 24),
             parse_options=pcsv.ParseOptions(quote_char=False, double_quote=False,
                                             newlines_in_values=False, ignore_empty_lines=False),
@@ -241,10 +245,15 @@ def _split_fast(body: str, first: int, header: list[str]):
                 strings_can_be_null=False, quoted_strings_can_be_null=False))
     except (pa.ArrowInvalid, ValueError):
         return None
+    del raw
     if tab.num_rows != n:
         return None
     cols = {h: tab.column(i).combine_chunks() for i, h in enumerate(header)}
     return cols, np.arange(first + 1, first + 1 + n), None
+
+
+#: A line longer than the longest cell allowed (it goes to the line-by-line reading).
+_LONG_LINE = re.compile(rb"[^\n]{%d}" % (MAX_CELL_CHARS + 1))
 
 
 def _split_lines(body: str, first: int, header: list[str], fname: str):
@@ -283,8 +292,8 @@ def _split_lines(body: str, first: int, header: list[str], fname: str):
     return cols, line_no, structural
 
 
-def _parse_body(body: str, idx: int, header: list[str], extras: list[str], fname: str,
-                quantised: bool) -> dict[str, list | np.ndarray]:
+def _parse_body(text: str, pos: int, idx: int, header: list[str], extras: list[str],
+                fname: str, quantised: bool) -> dict[str, list | np.ndarray]:
     """The data rows after the header, validated: columns of :data:`COLUMNS`, the
     extras and ``line``.
 
@@ -300,10 +309,11 @@ def _parse_body(body: str, idx: int, header: list[str], extras: list[str], fname
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    got = _split_fast(body, idx, header)
-    text, line_no, structural = got if got is not None else _split_lines(body, idx, header,
-                                                                          fname)
-    del body
+    got = _split_fast(text, pos, idx, header)
+    if got is None:
+        got = _split_lines(text[pos:], idx, header, fname)
+    del text
+    text, line_no, structural = got
     n = len(line_no)
     blank = pa.array([""] * n, type=pa.string()) if any(
         c not in text for c in COLUMNS) else None
