@@ -12,8 +12,9 @@ readings / stream file     GONIO_MAX_INPUT_BYTES       2 GiB
 TOML file (protocol...)    GONIO_MAX_TOML_BYTES        1 MiB
 simulated samples/session  GONIO_MAX_SAMPLES           4e8
 simulated session time     GONIO_MAX_SESSION_S         2 days (172 800 s)
+estimated simulation time  GONIO_MAX_RUN_S             300 s of computing
 items (rounds x series..)  GONIO_MAX_READINGS          1e6 readings
-rows of a readings file    GONIO_MAX_READING_ROWS      1e5 rows
+rows of a readings file    GONIO_MAX_READING_ROWS      1e6 rows (memory: ~0.9 GB)
 Monte Carlo trials         GONIO_MAX_MONTE_CARLO       1e7
 validate trials per case   GONIO_MAX_TRIALS            1e5
 worker processes           GONIO_MAX_WORKERS           the machine's cores
@@ -31,8 +32,9 @@ _DEFAULTS: dict[str, float] = {
     "GONIO_MAX_TOML_BYTES": 1024 ** 2,
     "GONIO_MAX_SAMPLES": 4e8,
     "GONIO_MAX_SESSION_S": 172_800.0,
+    "GONIO_MAX_RUN_S": 300.0,
     "GONIO_MAX_READINGS": 1e6,
-    "GONIO_MAX_READING_ROWS": 1e5,
+    "GONIO_MAX_READING_ROWS": 1e6,
     "GONIO_MAX_MONTE_CARLO": 1e7,
     "GONIO_MAX_TRIALS": 1e5,
 }

@@ -822,6 +822,54 @@ def test_bench_sizes_beyond_limits(tmp_path):
     count("size:protocol-rate-over-table")
 
 
+def test_session_time_and_reading_rows_beyond_limits(tmp_path, monkeypatch, capsys):
+    """The estimated simulation time (GONIO_MAX_RUN_S) and the readings row limit
+    (GONIO_MAX_READING_ROWS), each set low: exit 2 naming the variable, nothing written."""
+    from gonio.bench import run_session
+
+    (tmp_path / "m.toml").write_text(MINI_PROTO)
+    for lim in ("0.01", "0.2"):
+        monkeypatch.setenv("GONIO_MAX_RUN_S", lim)
+        e = api_error(run_session, load_protocol(tmp_path / "m.toml"), load_bench("rlg"))
+        assert "GONIO_MAX_RUN_S" in str(e) and "sample_rate_hz" in str(e) and e.key, str(e)
+        err = cli(["simulate", "--protocol", tmp_path / "m.toml", "--out", tmp_path / "o"],
+                  capsys)
+        assert "GONIO_MAX_RUN_S" in err and not (tmp_path / "o").exists()
+        count(f"size:run-time:{lim}")
+    monkeypatch.delenv("GONIO_MAX_RUN_S")
+    big = tmp_path / "big.csv"
+    big.write_text(FULL.read_text() + "".join(f"zero_stability,3,{i},,up,{300.0 * i},,,0.0\n"
+                                              for i in range(1, 400)))
+    before = big.read_bytes()
+    for lim in ("5", "150"):
+        monkeypatch.setenv("GONIO_MAX_READING_ROWS", lim)
+        err = cli(["calibrate", big, "--out", tmp_path / "c"], capsys)
+        assert "GONIO_MAX_READING_ROWS" in err and not (tmp_path / "c").exists()
+        assert big.read_bytes() == before
+        count(f"size:reading-rows:{lim}")
+
+
+def test_signals_during_rate_demo(tmp_path):
+    """SIGINT/SIGTERM at random instants of `gonio demo --spec jjf1535-2015` (a staged set):
+    no output folder or a complete one, no staging debris, at most three lines."""
+    rng = random.Random(1535)
+    for i, sig in enumerate((signal.SIGINT, signal.SIGTERM)):
+        out = tmp_path / f"D{i}"
+        p = subprocess.Popen([sys.executable, "-m", "gonio", "demo", "--spec", "jjf1535-2015",
+                              "--out", str(out)], cwd=ROOT, env=ENV,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(rng.uniform(0.5, 4.0))
+        p.send_signal(sig)
+        rc = p.wait(timeout=120)
+        err = p.stderr.read()
+        assert "Traceback" not in err and len(err.strip().splitlines()) <= 3, err
+        assert rc in (0, 130, 143, -sig), (rc, err)
+        if out.exists():
+            set_is_complete(out)
+        no_debris(tmp_path)
+        count(f"signal:rate-demo:{sig.name}")
+
+
 CLI_VALUES = [
     ["simulate", "--seed", "-1", "--out", "{t}/o"], ["demo", "--seed", "-5", "--out", "{t}/o"],
     ["validate", "--trials", "2", "--seed", "1e3"],

@@ -475,15 +475,28 @@ class SessionEstimate:
     seconds: float          # rough run time at ~10 million samples a second
 
 
+#: Samples simulated a second of CPU time (the noisy run and its noise-free rerun
+#: together), one core of the 2-core development machine: the draft's protocol took
+#: 3.7 s (RLG) and 2.1 s (FOG) for 2.4·10⁷ samples, a 6 h zero-stability variant 5.4 s
+#: and 3.9 s for 4.2·10⁷ (benchmarks/bench_long_session.py measures more).
+SIMULATED_SAMPLES_PER_S: float = 8e6
+#: Fixed cost of a simulation (planning, tables), s.
+SIMULATE_OVERHEAD_S: float = 0.5
+
+
 def estimate_session(blocks: list[Block], bench: Bench, protocol: Protocol) -> SessionEstimate:
     """Estimate a planned session's size and refuse it beyond the stated limits.
 
     Limits (:mod:`gonio.limits`): ``GONIO_MAX_SAMPLES`` samples per pass,
-    ``GONIO_MAX_SESSION_S`` seconds of session; protocol rates above the table's
+    ``GONIO_MAX_SESSION_S`` seconds of session, ``GONIO_MAX_RUN_S`` seconds of
+    estimated computing (``samples / SIMULATED_SAMPLES_PER_S`` plus a fixed
+    overhead, CPU time of one core; within a factor 2 of the measured time, see
+    :data:`SIMULATED_SAMPLES_PER_S`; the message names the protocol section that
+    contributes most samples and the bench's ``sample_rate_hz``); protocol rates above the table's
     ``max_rate_dps`` are refused too. Memory does not grow with the session (chunks of
     :data:`CHUNK` samples, captured records decimated to :data:`MAX_RECORD_SAMPLES`).
     """
-    from gonio.limits import check
+    from gonio.limits import check, limit
 
     if not any(b.readings for b in blocks):
         raise GonioError("the protocol plans no reading (no test section): nothing to simulate",
@@ -495,11 +508,24 @@ def estimate_session(blocks: list[Block], bench: Bench, protocol: Protocol) -> S
             raise GonioError(f"{it.test} at {it.rate_dps:g} °/s is faster than the table's "
                              f"max_rate_dps {bench.table.max_rate_dps:g} °/s",
                              file=protocol.path or None, key=f"{it.test}.rate_dps")
-    est = SessionEstimate(n, dur, CHUNK * 8.0 * 24 + MAX_RECORD_SAMPLES * 16.0, 2 * n / 1e7)
+    est = SessionEstimate(n, dur, CHUNK * 8.0 * 24 + MAX_RECORD_SAMPLES * 16.0,
+                          SIMULATE_OVERHEAD_S + n / SIMULATED_SAMPLES_PER_S)
     where = f"protocol {protocol.name} on bench {bench.name}"
     check("GONIO_MAX_SESSION_S", dur, f"{where}: the session lasts", unit="s")
     check("GONIO_MAX_SAMPLES", n, f"{where} at {bench.sample_rate_hz:g} Hz: the session needs",
           unit="samples")
+    lim = limit("GONIO_MAX_RUN_S")
+    if est.seconds > lim:
+        per: dict[str, int] = {}
+        for b in blocks:
+            section = b.label.split()[0] if b.label else "session"
+            per[section] = per.get(section, 0) + int(b.k_end - b.k_start)
+        top = max(per, key=per.get)
+        raise GonioError(
+            f"{where}: simulating {n:.4g} samples takes about {est.seconds:.4g} s, over the "
+            f"limit of {lim:.4g} s (set GONIO_MAX_RUN_S to raise it); most samples come from "
+            f"[{top}] ({per[top] / n:.0%}) at the bench's sample_rate_hz "
+            f"{bench.sample_rate_hz:g}", file=protocol.path or None, key=top)
     return est
 
 

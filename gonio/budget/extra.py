@@ -199,16 +199,20 @@ def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s:
     th = np.atleast_1d(np.asarray(theta_deg, dtype=float))
     t = np.atleast_1d(np.asarray(time_s, dtype=float))
     th, t = np.broadcast_arrays(th, t)
-    c = np.empty(th.shape)
-    s = np.empty(th.shape)
-    for i, (theta, t_read) in enumerate(zip(th.tolist(), t.tolist())):
+    # one integration per distinct (θ, t) pair: a large file repeats the same few moves
+    pairs, inverse = np.unique(np.stack([th.ravel(), t.ravel()], axis=1), axis=0,
+                               return_inverse=True)
+    c = np.empty(len(pairs))
+    s = np.empty(len(pairs))
+    for i, (theta, t_read) in enumerate(pairs.tolist()):
         tl = Timeline()
         arrive = tl.move(theta, rate_dps, accel_dps2)
         tl.dwell(max(t_read - arrive, 0.0))
         terms = coupling_terms(tl, 0.0, t_read, 0.0, 0.0, compensation="measured",
                                theta_comp_deg=0.0)
         c[i], s[i] = terms.p_s, terms.q_s
-    return c, s
+    inverse = inverse.reshape(-1)
+    return c[inverse].reshape(th.shape), s[inverse].reshape(th.shape)
 
 
 def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,

@@ -33,6 +33,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+from bisect import bisect_left
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
@@ -136,8 +137,7 @@ def read_readings(path: str | Path) -> Readings:
     [{'test': 'scale_factor', 'rate_dps': 60.0, 'orientation': 'up', 'gyro_counts': 216000.0, 'line': 3}]
     """
     path = Path(path)
-    text = read_utf8(path, "readings file")
-    return parse_readings(text, path=path)
+    return parse_readings(read_utf8(path, "readings file"), path=path)
 
 
 def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
@@ -151,14 +151,20 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     fname = "<text>" if path is None else str(path)
     if text.startswith("\ufeff"):
         text = text[1:]
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    _check_rows(len(lines), fname)
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    n_lines = text.count("\n") + 1
+    _check_rows(n_lines, fname)
     metadata: dict[str, str] = {}
     idx = 0
+    pos = 0                       # offset of the next line (the file is not split whole)
     header: list[str] | None = None
     header_line = 0
-    while idx < len(lines):
-        line = lines[idx]
+    while pos <= len(text):
+        end = text.find("\n", pos)
+        end = len(text) if end < 0 else end
+        line = text[pos:end]
+        pos = end + 1
         idx += 1
         if not line.strip():
             continue
@@ -185,7 +191,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         break
     if header is None:
         raise GonioError("no readings: the file has no header row", file=fname,
-                         line=max(1, len(lines) - (lines[-1] == "")))
+                         line=max(1, n_lines - text.endswith("\n")))
     for key in metadata:
         if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
@@ -199,57 +205,249 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         raise GonioError("missing column: need gyro_counts or gyro_deg (or both)",
                          file=fname, line=header_line, column="gyro_counts")
 
-    cols: dict[str, list] = {name: [] for name in COLUMNS}
     extras = [h for h in header if h not in COLUMNS]
-    for name in extras:
-        cols[name] = []
-    cols["line"] = []
-    keys: dict[tuple, int] = {}
-    ncol = len(header)
-    while idx < len(lines):
-        raw_line = lines[idx]
-        idx += 1
-        if not raw_line.strip():
-            continue
-        where = dict(file=fname, line=idx)
-        if raw_line.lstrip().startswith("#"):
-            raise GonioError("metadata line after the header; '#' lines belong at the top",
-                             **where)
-        cells = _cells(raw_line, fname, idx)
-        if len(cells) != ncol:
-            raise GonioError(f"expected {ncol} fields as in the header, got {len(cells)}",
-                             **where)
-        row = {h: c.strip() for h, c in zip(header, cells)}
-        rec = _parse_row(row, where, quantised)
-        key = tuple(rec[k] for k in KEY_COLUMNS)
-        if rec["test"] == "equal_division":
-            # one reading per step: the step's table angle is part of the key
-            key = key + (rec["table_deg"],)
-        if key in keys:
-            step = f", table_deg {key[5]!r}" if len(key) > 5 else ""
-            raise GonioError(
-                f"duplicated reading: test {key[0]}, series {key[1]}, round {key[2]}, "
-                f"rate {key[3]} deg/s, orientation {key[4]}{step} already on line {keys[key]}",
-                column="round", **where)
-        keys[key] = idx
-        for name in COLUMNS:
-            cols[name].append(rec[name])
-        for name in extras:
-            cols[name].append(row[name])
-        cols["line"].append(idx)
-    if not cols["line"]:
+    cols = _parse_body(text, pos, idx, header, extras, fname, quantised)
+    del text
+    if not len(cols["line"]):
         raise GonioError("no readings: header only", file=fname, line=header_line)
     data = _frame(cols, extras)
     return Readings(data=data, metadata=metadata, path=None if path is None else Path(path))
 
 
-#: Rows above which a note says how long the run will take (the reader, the per-reading
-#: tables of 7.4/7.5 and the certificate are per-row work, ~0.1 ms a row together).
-NOTE_ROWS: int = 20_000
+def _split_fast(text: str, pos: int, first: int, header: list[str]):
+    """The data rows as Arrow string columns, read by Arrow's CSV reader, and their line
+    numbers — or None when the body needs the line-by-line reading (a blank line, a
+    quote, a ``#``, a long line, a wrong field count: whatever it must report exactly).
+    The body is ``text`` from offset ``pos`` on, its first line is line ``first`` + 1;
+    it is encoded once and read in place (no copies of a large file's text)."""
+    import pyarrow as pa
+    import pyarrow.csv as pcsv
+
+    raw = text.encode("utf-8")
+    start = len(text[:pos].encode("utf-8")) if not text[:pos].isascii() else pos
+    end = len(raw)
+    while end > start and raw[end - 1] == 10:           # the final line end(s)
+        end -= 1
+    if end <= start or raw[start] == 10 or raw.find(b'"', start, end) >= 0 or \
+            raw.find(b"#", start, end) >= 0 or raw.find(b"\n\n", start, end) >= 0 or \
+            _LONG_LINE.search(raw, start, end):
+        return None
+    n = raw.count(b"\n", start, end) + 1
+    names = [f"c{i}" for i in range(len(header))]
+    try:
+        tab = pcsv.read_csv(
+            pa.BufferReader(pa.py_buffer(raw).slice(start, end - start)),
+            read_options=pcsv.ReadOptions(column_names=names, block_size=1 << 24),
+            parse_options=pcsv.ParseOptions(quote_char=False, double_quote=False,
+                                            newlines_in_values=False, ignore_empty_lines=False),
+            convert_options=pcsv.ConvertOptions(
+                column_types={c: pa.string() for c in names},
+                strings_can_be_null=False, quoted_strings_can_be_null=False))
+    except (pa.ArrowInvalid, ValueError):
+        return None
+    del raw
+    if tab.num_rows != n:
+        return None
+    cols = {h: tab.column(i).combine_chunks() for i, h in enumerate(header)}
+    return cols, np.arange(first + 1, first + 1 + n), None
+
+
+#: A line longer than the longest cell allowed (it goes to the line-by-line reading).
+_LONG_LINE = re.compile(rb"[^\n]{%d}" % (MAX_CELL_CHARS + 1))
+
+
+def _split_lines(body: str, first: int, header: list[str], fname: str):
+    """The data rows read line by line (the general reading): Arrow string columns, their
+    line numbers and the first structural error (which ends the reading), if any."""
+    import pyarrow as pa
+
+    ncol = len(header)
+    rows: list[list[str]] = []
+    line_no: list[int] = []
+    structural: GonioError | None = None
+    for off, raw in enumerate(body.split("\n")):
+        if not raw or raw.isspace():
+            continue
+        ln = first + off + 1
+        if raw.lstrip().startswith("#"):
+            structural = GonioError("metadata line after the header; '#' lines belong at the "
+                                    "top", file=fname, line=ln)
+            break
+        if '"' in raw or len(raw) > MAX_CELL_CHARS:
+            try:
+                cells = _cells(raw, fname, ln)
+            except GonioError as exc:
+                structural = exc
+                break
+        else:
+            cells = raw.split(",")
+        if len(cells) != ncol:
+            structural = GonioError(f"expected {ncol} fields as in the header, got "
+                                    f"{len(cells)}", file=fname, line=ln)
+            break
+        rows.append(cells)
+        line_no.append(ln)
+    columns = list(zip(*rows)) if rows else [()] * ncol
+    cols = {h: pa.array(list(c), type=pa.string()) for h, c in zip(header, columns)}
+    return cols, line_no, structural
+
+
+def _parse_body(text: str, pos: int, idx: int, header: list[str], extras: list[str],
+                fname: str, quantised: bool) -> dict[str, list | np.ndarray]:
+    """The data rows after the header, validated: columns of :data:`COLUMNS`, the
+    extras and ``line``.
+
+    Vectorised: the rows are split by Arrow's CSV reader when the body is plain
+    (:func:`_split_fast`, else line by line), and the cells of every column are checked
+    and converted at once (:func:`_fast_numbers`); a row that any fast check does not
+    accept outright (a blank to strip, a value out of range, a missing cell...) is
+    parsed alone by :func:`_parse_row`, the one rule book, which accepts it or raises
+    the error. The error raised is the one of the first bad line, as a row-by-row
+    reading raises it: a structural error (a ``#`` line, bad CSV, a wrong field
+    count), a value error or a duplicated reading, whichever comes first.
+    """
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    got = _split_fast(text, pos, idx, header)
+    if got is None:
+        got = _split_lines(text[pos:], idx, header, fname)
+    del text
+    text, line_no, structural = got
+    n = len(line_no)
+    blank = pa.array([""] * n, type=pa.string()) if any(
+        c not in text for c in COLUMNS) else None
+
+    def col(name):
+        return text[name] if name in text else blank
+
+    def words(name, allowed, default=None):
+        a = col(name)
+        if default is not None:
+            a = pc.if_else(pc.equal(a, ""), default, a)
+        enc = a.dictionary_encode()
+        values = np.asarray(enc.dictionary.to_pylist() or [""], dtype=object)
+        ok = np.isin(values, list(allowed))
+        idx_ = enc.indices.to_numpy(zero_copy_only=False)
+        return values[idx_], ok[idx_]
+
+    test, ok = words("test", TEST_NAMES)
+    num: dict[str, np.ndarray] = {}
+    for name in ("series", "round", "rate_dps", "time_s", "table_deg", "gyro_counts",
+                 "gyro_deg"):
+        v, good = _fast_numbers(col(name))
+        num[name] = v
+        ok &= good
+    with np.errstate(invalid="ignore"):
+        for name in ("series", "round"):
+            v = num[name]
+            ok &= (v >= 1) & (v <= 1_000_000) & (v == np.floor(v))
+        for name, (lo, hi) in COLUMN_RANGES.items():
+            v = num[name]
+            ok &= np.isnan(v) | ((v >= lo) & (v <= hi))
+        rate = np.where(np.isnan(num["rate_dps"]), DEFAULT_RATE_DPS, num["rate_dps"])
+        orient, good = words("orientation", ORIENTATIONS, DEFAULT_ORIENTATION)
+        ok &= good
+        ok &= ~np.isnan(num["time_s"])
+        ok &= (test == "zero_stability") | ~np.isnan(num["table_deg"])
+        counts, gdeg = num["gyro_counts"], num["gyro_deg"]
+        ok &= ~(np.isnan(counts) & np.isnan(gdeg))
+        ok &= ~((test == "scale_factor") & np.isnan(counts))
+        if quantised:
+            ok &= np.isnan(counts) | (counts == np.round(counts))
+    first_error: tuple[int, GonioError] | None = None
+    out = {"test": test, "series": num["series"], "round": num["round"], "rate_dps": rate,
+           "orientation": orient, "time_s": num["time_s"], "table_deg": num["table_deg"],
+           "gyro_counts": counts, "gyro_deg": gdeg}
+    for i in np.flatnonzero(~ok):       # the rule book, row by row, for the rest
+        i = int(i)
+        row = {h: text[h][i].as_py().strip() for h in header}
+        try:
+            rec = _parse_row(row, dict(file=fname, line=int(line_no[i])), quantised)
+        except GonioError as exc:
+            first_error = (int(line_no[i]), exc)
+            break
+        for name in COLUMNS:
+            out[name][i] = rec[name]
+    upto = n if first_error is None else bisect_left(line_no, first_error[0])
+    dup = _first_duplicate(out, upto, line_no, fname)
+    events = [e for e in (first_error, dup,
+                          None if structural is None else (structural.line, structural))
+              if e is not None]
+    if events:
+        raise min(events, key=lambda e: e[0])[1]
+    cols: dict[str, list | np.ndarray] = dict(out)
+    for name in ("series", "round"):
+        cols[name] = out[name].astype(np.int64)
+    for name in extras:
+        cols[name] = np.asarray(pc.utf8_trim_whitespace(text[name]).to_pylist(), dtype=object)
+    cols["line"] = line_no
+    return cols
+
+
+#: A plain decimal number (gonio.formats.metadata.parse_number's grammar), for Arrow.
+_NUMBER_RE2 = r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$"
+
+
+def _fast_numbers(cells) -> tuple[np.ndarray, np.ndarray]:
+    """float64 values of an Arrow string column (NaN for an empty cell) and where the
+    fast path accepted them (a plain ASCII decimal number as
+    :func:`gonio.formats.metadata.parse_number` reads it, or empty); the rest is left
+    to :func:`_parse_row`."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    n = len(cells)
+    if not n:
+        return np.empty(0), np.ones(0, dtype=bool)
+    empty = pc.equal(cells, "")
+    plain = pc.match_substring_regex(cells, _NUMBER_RE2)
+    good = pc.or_(empty, plain).to_numpy(zero_copy_only=False)
+    take = pc.if_else(plain, cells, "0")
+    try:
+        v = pc.cast(take, pa.float64()).to_numpy(zero_copy_only=False).copy()
+    except (pa.ArrowInvalid, ValueError):          # e.g. out of double range: Python's float
+        v = np.array([float(x) for x in take.to_pylist()])
+    v[~plain.to_numpy(zero_copy_only=False)] = np.nan
+    return v, good
+
+
+def _first_duplicate(out: dict, upto: int, line_no: list[int],
+                     fname: str) -> tuple[int, GonioError] | None:
+    """The first duplicated reading among the first ``upto`` rows (key of
+    :data:`KEY_COLUMNS`; an equal_division step adds its table angle), as the error."""
+    if upto < 2:
+        return None
+    key = pd.DataFrame({k: out[k][:upto] for k in KEY_COLUMNS})
+    eda = key["test"].to_numpy() == "equal_division"
+    key["step"] = np.where(eda, out["table_deg"][:upto], 0.0)
+    dups = np.flatnonzero(key.duplicated(keep="first").to_numpy())
+    if not dups.size:
+        return None
+    i = int(dups[0])
+    same = (key.iloc[:i] == key.iloc[i]).all(axis=1).to_numpy()
+    j = int(np.flatnonzero(same)[0])
+    t, se, r, rate, o = (key.iat[i, c] for c in range(5))
+    step = f", table_deg {float(key.iat[i, 5])!r}" if eda[i] else ""
+    return int(line_no[i]), GonioError(
+        f"duplicated reading: test {t}, series {int(se)}, round {int(r)}, "
+        f"rate {float(rate)} deg/s, orientation {o}{step} already on line {int(line_no[j])}",
+        column="round", file=fname, line=int(line_no[i]))
+
+
+#: Rows above which a note says how long the run will take.
+NOTE_ROWS: int = 200_000
+#: CPU seconds per row of ``gonio calibrate`` on a large file (measured with
+#: benchmarks/bench_large_readings.py: about 17 s for 10⁶ rows, certificate included).
+SECONDS_PER_ROW: float = 1.7e-5
 
 
 def _check_rows(n_lines: int, fname: str) -> None:
-    """Refuse a file over ``GONIO_MAX_READING_ROWS`` lines; say how long a large one takes."""
+    """Refuse a file over ``GONIO_MAX_READING_ROWS`` lines; say how long a large one takes.
+
+    The limit bounds memory, not time: a calibration holds the readings and their
+    per-reading tables in memory, about 0.9 GB at 10⁶ rows (docs/formats.md,
+    "Limits on work")."""
     import sys
 
     from gonio.limits import limit
@@ -257,12 +455,12 @@ def _check_rows(n_lines: int, fname: str) -> None:
     lim = limit("GONIO_MAX_READING_ROWS")
     if n_lines > lim + 200:          # metadata and blank lines allowed beyond the rows
         raise GonioError(f"{n_lines} lines, over the limit of {lim:.0f} readings "
-                         "(GONIO_MAX_READING_ROWS; a calibration has hundreds): refused before "
-                         "parsing — every row is validated and tabulated, ~0.5 ms a row",
-                         file=fname)
+                         "(GONIO_MAX_READING_ROWS): refused before parsing — a calibration "
+                         "holds every reading and its tables in memory, about 0.9 GB a "
+                         "million rows", file=fname)
     if n_lines > NOTE_ROWS:
         sys.stderr.write(f"gonio: note: {fname}: {n_lines} lines; expect about "
-                         f"{n_lines * 5e-4:.0f} s (each row is validated and tabulated)\n")
+                         f"{max(1.0, n_lines * SECONDS_PER_ROW):.0f} s of computing\n")
 
 
 def _cells(line: str, fname: str, idx: int) -> list[str]:

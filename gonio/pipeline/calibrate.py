@@ -26,7 +26,7 @@ from gonio import __version__
 from gonio.atomic import output_dir, output_set, sha256_file, write_text
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
-from gonio.specs.ogam_draft.items import CalibrationResults, compute_characteristics
+from gonio.specs.ogam_draft.items import LISTED_ROWS, CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -395,7 +395,19 @@ def screen_readings(readings: Readings, protocol: Protocol) -> tuple[Readings, "
                 continue
             n_rounds = len(it.rounds)
             bad_here = []
-            for line, rnd, tab, t in zip(g["line"], g["round"], g["table_deg"], g["time_s"]):
+            # vectorised pre-check: only rows that may not fit are looked at one by one
+            rn = g["round"].to_numpy()
+            inside = (rn >= 1) & (rn <= n_rounds)
+            want_deg = np.array([r.stop_deg - r.start_deg for r in it.rounds] or [0.0])
+            want_deg = want_deg[np.clip(rn - 1, 0, max(n_rounds - 1, 0))]
+            with np.errstate(invalid="ignore"):
+                fits = inside & (np.abs(g["table_deg"].to_numpy(float) - want_deg)
+                                 <= it.position_tolerance_deg)
+                if it.max_time_to_reading_s is not None:
+                    fits &= ~(g["time_s"].to_numpy(float) > it.max_time_to_reading_s + 1e-9)
+            g_check = g[~fits]
+            for line, rnd, tab, t in zip(g_check["line"], g_check["round"],
+                                         g_check["table_deg"], g_check["time_s"]):
                 line, rnd = int(line), int(rnd)
                 why, col = None, None
                 if not 1 <= rnd <= n_rounds:
@@ -986,6 +998,12 @@ def write_calibration(report: CalibrationReport, out: str | Path,
                 if df is not None and len(df):
                     write_text(tables / f"{item.name}_{tname}.csv",
                                df.to_csv(index=False, lineterminator="\n"))
+            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
+                write_text(tables / f"{item.name}_table.csv",
+                           item.table.to_csv(index=False, lineterminator="\n"))
+        if len(report.results.unused_readings) > LISTED_ROWS:
+            write_text(tables / "unused_readings.csv",
+                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
         write_text(tables / "uncertainty_budget.csv",
                    report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
         names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}

@@ -121,19 +121,32 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
 
 
 def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int = 0,
-         lab=None, lang: str = "en", dcc: bool = True, force: bool = False):
+         lab=None, lang: str = "en", dcc: bool = True, force: bool = False, inputs=()):
     """Simulate the whole programme and calibrate it: readings, truth, results, certificate
-    and (``dcc``) its DCC XML, staged and swapped into ``out`` as one set
-    (:func:`gonio.atomic.output_set`, with ``gonio-manifest.json``)."""
+    and (``dcc``) its DCC XML.
+
+    Like the optical demo (:func:`gonio.pipeline.demo.demo`), the whole set (readings.csv,
+    truth.json, results, summary, certificate, DCC, manifest) is staged and swapped into ``out``
+    together (:func:`gonio.atomic.output_set`): a run that fails at any point leaves the
+    previous set as it was, and an existing readings.csv there is replaced only with
+    ``force``. ``inputs`` (the lab and bench files) are never replaced.
+    """
     from gonio.atomic import output_set
 
-    inputs = [x for x in (lab, bench) if isinstance(x, (str, Path)) and Path(x).exists()]
-    with output_set(out, inputs=inputs, force=force) as stage:
-        p = simulate(spec_key, out, bench=bench, seed=seed)
+    lab_d = None
+    if isinstance(lab, (str, Path)):
+        from gonio.report.certificate import load_lab
+        lab_d = load_lab(lab)                  # validate inputs before simulating
+    else:
+        lab_d = lab
+    ins = [x for x in (*inputs, lab, bench) if isinstance(x, (str, Path)) and str(x)]
+    with output_set(out, inputs=ins, force=force) as stage:
+        simulate(spec_key, out, bench=bench, seed=seed)      # into the staging folder
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
-        result, paths = calibrate(stage / "readings.csv", out, spec_key=spec_key, lab=lab,
+        result, paths = calibrate(stage / "readings.csv", out, spec_key=spec_key, lab=lab_d,
                                   lang=lang, truth=truth, dcc=dcc)
-    return result, {**p, **paths}
+    out = Path(out)
+    return result, {"readings": out / "readings.csv", "truth": out / "truth.json", **paths}
 
 
 def budget(spec_key: str):

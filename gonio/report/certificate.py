@@ -452,6 +452,11 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
         add("sub", L["scale_factor"] + " (7.1)")
         add("table", ([L["d_round"], L["d_theta"], L["d_counts"], L["d_K"]], rows),
             (0.15, 0.25, 0.30, 0.30))
+        sm = sf.get("table_summary")
+        if sm:
+            add("p", [L["d_listed"].format(name="scale_factor", **{
+                k: (f"{sm[k]:.9g}" if isinstance(sm.get(k), float) else sm.get(k))
+                for k in ("rows", "listed", "column", "min", "max")})])
     ad, rp = res["angle_deviation"], res["repeatability"]
     if ad["measured"]:
         rmap = {r["position_deg"]: j for j, r in enumerate(rp["table"])} if rp["measured"] else {}

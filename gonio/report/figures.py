@@ -40,6 +40,7 @@ from typing import Callable, Iterator
 
 import matplotlib
 import numpy as np
+import pandas as pd
 from matplotlib.figure import Figure
 
 from gonio.physics.tilt import elliptic_error_arcsec, rigid_error_arcsec
@@ -109,6 +110,22 @@ def _truth_by_position(truth: dict | None, test: str) -> tuple[np.ndarray, np.nd
     return u, np.array([val[pos == p].mean() for p in u])
 
 
+#: Series drawn one by one in a figure; more are drawn as their range and mean.
+FIGURE_SERIES: int = 20
+#: Points drawn one by one (7.1 rounds); more are drawn as their range and mean per angle.
+FIGURE_POINTS: int = 400
+
+
+def _range_band(ax, df, x: str, y: str, label: str, label_mean: str | None = None) -> None:
+    """The range (min … max) and the mean of ``y`` at each ``x`` (rounded to 1e-9), for a
+    large file whose every series or round would not be readable (nor small) one by one."""
+    g = df.assign(_x=np.round(df[x].to_numpy(float), 9)).groupby("_x", sort=True)[y]
+    st = g.agg(["min", "max", "mean"])
+    xs = st.index.to_numpy(float)
+    ax.vlines(xs, st["min"], st["max"], color="C0", lw=3, alpha=0.35, label=label)
+    ax.plot(xs, st["mean"], "o", color="C0", ms=3, label=label_mean)
+
+
 def draw_deviation(fig, spec, report, L, truth=None) -> None:
     """Deviation curves E_ij of every series against position (draft 7.4, Fig. A.4)."""
     ax = fig.add_subplot(spec)
@@ -116,10 +133,14 @@ def draw_deviation(fig, spec, report, L, truth=None) -> None:
     if not c.measured:
         return _empty(ax, L)
     rd = c.tables["readings"]
-    for s, g in rd.groupby("series", sort=True):
-        g = g.sort_values("table_deg")
-        ax.plot(g["table_deg"], g["E_arcsec"], "-o", lw=0.8, ms=2.5, alpha=0.6,
-                label=f"{L['lg_series']} {s}" if rd["series"].nunique() <= 10 else None)
+    if rd["series"].nunique() > FIGURE_SERIES:      # a large file: the range of all series
+        _range_band(ax, rd, "table_deg", "E_arcsec",
+                    L["lg_all_series"].format(n=rd["series"].nunique()))
+    else:
+        for s, g in rd.groupby("series", sort=True):
+            g = g.sort_values("table_deg")
+            ax.plot(g["table_deg"], g["E_arcsec"], "-o", lw=0.8, ms=2.5, alpha=0.6,
+                    label=f"{L['lg_series']} {s}" if rd["series"].nunique() <= 10 else None)
     t = c.table.sort_values("position_deg")
     ax.plot(t["position_deg"], t["E_arcsec"], "k-", lw=2.0, label=L["lg_mean"])
     tr = _truth_by_position(truth, "angle_deviation")
@@ -183,7 +204,11 @@ def draw_scale_factor(fig, spec, report, L, truth=None) -> None:
     from gonio.report.stated import stated_item
 
     t = c.table
-    ax.plot(t["table_deg"], t["K_i_counts_per_deg"], "o", color="C0", ms=5, label="K_i")
+    if len(t) > FIGURE_POINTS:                      # a large file: range and mean per angle
+        _range_band(ax, t, "table_deg", "K_i_counts_per_deg",
+                    L["lg_all_rounds"].format(n=len(t)), label_mean="K_i")
+    else:
+        ax.plot(t["table_deg"], t["K_i_counts_per_deg"], "o", color="C0", ms=5, label="K_i")
     shown = str(stated_item(report.to_dict(), "scale_factor")["value"])
     ax.axhline(c.value, color="C3", ls="--", lw=1, label=f"{L['lg_mean_K']} {shown}")
     ax.set_xlabel(L["ax_round_angle"])
@@ -199,6 +224,17 @@ def draw_zero_stability(fig, spec, report, L, truth=None) -> None:
     if not c.measured or "readings" not in c.tables:
         return _empty(ax, L)
     rd = c.tables["readings"]
+    if rd["series"].nunique() > FIGURE_SERIES:      # a large file: range over the series
+        t0 = rd.groupby("series")["time_s"].transform("min")
+        band = pd.DataFrame({"t_min": (rd["time_s"] - t0).to_numpy(float) / S_PER_MIN,
+                             "m_arcsec": deg_to_arcsec(rd["angle_deg"].to_numpy(float))})
+        _range_band(ax, band, "t_min", "m_arcsec",
+                    L["lg_all_series"].format(n=rd["series"].nunique()))
+        ax.set_xlabel(L["ax_time_min"])
+        ax.set_ylabel(L["ax_angle_arcsec"])
+        _plain_axes(ax)
+        _legend(ax, ncol=2)
+        return
     drift = {int(r["series"]): r for _, r in c.table.iterrows()} \
         if "drift_deg_per_h" in c.table else {}
     for i, (s, g) in enumerate(rd.groupby("series", sort=True)):

@@ -281,6 +281,12 @@ LABELS: dict[str, dict[str, str]] = {
     "d_theta": {"en": "θ_i (°)", "zh": "θ_i (°)"},
     "d_counts": {"en": "C_i (counts)", "zh": "C_i（脉冲数）"},
     "d_K": {"en": "K_i (counts/°)", "zh": "K_i（脉冲数/(°)）"},
+    "lg_all_series": {"en": "range of all {n} series", "zh": "全部 {n} 组的范围"},
+    "lg_all_rounds": {"en": "range of all {n} rounds", "zh": "全部 {n} 次的范围"},
+    "d_listed": {"en": "{listed} of {rows} rows listed: those farthest from the median of "
+                       "{column} (range {min} … {max}); every row is in tables/{name}_table.csv.",
+                 "zh": "共 {rows} 行，列出 {listed} 行：{column} 偏离中位数最远者（范围 {min} … "
+                       "{max}）；全部数据见 tables/{name}_table.csv。"},
     "d_position": {"en": "position (°)", "zh": "位置 (°)"},
     "d_E": {"en": "E_i (″)", "zh": "E_i (″)"},
     "d_R": {"en": "R_i (″)", "zh": "R_i (″)"},

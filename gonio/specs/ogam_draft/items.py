@@ -118,9 +118,10 @@ class Characteristic:
                                "measured": self.measured, "reason": self.reason}
         for k, v in self.details.items():
             out[k] = _plain(v)
-        out["table"] = _records(self.table)
-        for k, t in self.tables.items():
-            out[k] = _records(t)
+        for k, t in [("table", self.table), *self.tables.items()]:
+            out[k], summary = listing(t)
+            if summary is not None:
+                out[f"{k}_summary"] = summary
         return out
 
 
@@ -139,6 +140,66 @@ def _plain(x):
     if x is None or isinstance(x, str):
         return x
     return str(x)
+
+
+#: Rows of a detail table listed in results.json (and on the certificate). A longer table
+#: (a large readings file) is summarised: its row count, statistics of the column that
+#: matters and the rows farthest from its median; the whole table is in tables/*.csv.
+LISTED_ROWS: int = 200
+#: Series columns of the 7.4 matrix listed in results.json (the worst ones beyond this).
+LISTED_SERIES: int = 50
+#: The column a long table is ranked by (the first present), farthest from the median first.
+RANK_COLUMNS: tuple[str, ...] = ("E_arcsec", "deviation_pct", "K_i_counts_per_deg",
+                                 "B_s_deg_per_h", "angle_deg", "R_arcsec")
+
+
+def listing(df: pd.DataFrame, *, cap: int = LISTED_ROWS) -> tuple[list[dict], dict | None]:
+    """The rows of ``df`` to list in results.json and a summary of the rest (None when the
+    whole table is listed).
+
+    A table of more than ``cap`` rows lists the ``cap`` rows farthest from the median of
+    its rank column (:data:`RANK_COLUMNS`; the first rows when it has none), in table
+    order; the summary gives the row count and that column's statistics. A table with
+    more than :data:`LISTED_SERIES` ``series_*`` columns (the 7.4 matrix) keeps the
+    series of largest ``|E_ij|``.
+
+    >>> df = pd.DataFrame({"round": range(1, 6), "E_arcsec": [0.1, -0.2, 3.0, 0.0, 0.2]})
+    >>> rows, summary = listing(df, cap=2)
+    >>> [r["round"] for r in rows], summary["rows"], summary["max"]
+    ([2, 3], 5, 3.0)
+    """
+    summary: dict[str, Any] = {}
+    series = [c for c in df.columns if str(c).startswith("series_")]
+    if len(series) > LISTED_SERIES:
+        worst = df[series].abs().max(axis=0).to_numpy(dtype=float)
+        keep = sorted(np.argsort(-np.nan_to_num(worst, nan=-1.0), kind="stable")[:LISTED_SERIES])
+        summary.update({"series": len(series), "series_listed": LISTED_SERIES,
+                        "series_listed_are": f"the {LISTED_SERIES} series of largest |E_ij|"})
+        named = set(series)
+        df = df[[c for c in df.columns if c not in named] + [series[i] for i in keep]]
+    if len(df) > cap:
+        col = next((c for c in RANK_COLUMNS if c in df.columns), None)
+        summary.update({"rows": int(len(df)), "listed": cap})
+        if col is None:
+            df = df.iloc[:cap]
+            summary["listed_are"] = f"the first {cap} rows"
+        else:
+            v = df[col].to_numpy(dtype=float)
+            med = float(np.nanmedian(v)) if np.isfinite(v).any() else math.nan
+            far = np.nan_to_num(np.abs(v - med), nan=-1.0)
+            thr = np.partition(far, len(far) - cap)[len(far) - cap]     # O(n), not a sort
+            above = np.flatnonzero(far > thr)
+            keep = np.sort(np.concatenate([above,
+                                           np.flatnonzero(far == thr)[:cap - above.size]]))
+            fin = v[np.isfinite(v)]
+            summary.update({"listed_are": f"the {cap} rows farthest from the median of {col}",
+                            "column": col, "median": _plain(med),
+                            "mean": _plain(fin.mean() if fin.size else math.nan),
+                            "std": _plain(fin.std(ddof=1) if fin.size > 1 else math.nan),
+                            "min": _plain(fin.min() if fin.size else math.nan),
+                            "max": _plain(fin.max() if fin.size else math.nan)})
+            df = df.iloc[keep]
+    return _records(df), (summary or None)
 
 
 def _records(df: pd.DataFrame) -> list[dict]:
@@ -529,8 +590,9 @@ def repeatability(df: pd.DataFrame, scale_factor_counts_per_deg: float | None = 
     table["R_arcsec"] = points["s_arcsec"].to_numpy()
     ok = table.loc[table["n_series"] >= 2, "round"]
     used = long[long["round"].isin(ok)]
+    alone = ~long["round"].isin(ok).to_numpy()
     unused = {int(l): f"angle_deviation round {r} has one series only, no repeatability"
-              for l, r in zip(long["line"], long["round"]) if r not in set(ok)}
+              for l, r in zip(long["line"][alone], long["round"][alone])}
     r = table["R_arcsec"].to_numpy(dtype=float)
     at = int(np.nanargmax(r))
     details = {"position_deg": float(table["position_deg"][at]), "n_series": n_series}
@@ -667,14 +729,13 @@ def _consistency(df, k, *, name, test, cond_col, ref_value, fixed_col, fixed_val
     for v, src, g, long, points, ref in per_cond:
         keep = points["key"].isin(common)
         kept = points[keep]
-        keep_rounds = set(kept["round"])
-        for l, r, pos in zip(long["line"], long["round"], long["round"].map(
+        in_common = long["round"].isin(set(kept["round"])).to_numpy()
+        used.update(long["line"][in_common].astype(int).tolist())
+        alone = long[~in_common]
+        for l, r, pos in zip(alone["line"], alone["round"], alone["round"].map(
                 points.set_index("round")["position_deg"])):
-            if r in keep_rounds:
-                used.add(int(l))
-            else:
-                unused.setdefault(int(l), f"{src} round {r} at {pos:g} deg ({fmt(v)}) has no "
-                                  "counterpart in every other condition")
+            unused.setdefault(int(l), f"{src} round {r} at {pos:g} deg ({fmt(v)}) has no "
+                              "counterpart in every other condition")
         e_v = signed_extreme(kept["E_arcsec"])
         cond_table.append({cond_col: v, "source_test": src, "reference": bool(ref),
                            "n_points": int(len(kept)), "n_series": int(g["series"].nunique()),
@@ -791,7 +852,14 @@ class CalibrationResults:
     def to_dict(self) -> dict:
         """JSON-able dict: the seven keys plus ``unused_readings`` (list of row dicts)."""
         out = {c.name: c.to_dict() for c in self.items()}
-        out["unused_readings"] = _records(self.unused_readings)
+        un = self.unused_readings
+        out["unused_readings"] = _records(un.iloc[:LISTED_ROWS])
+        if len(un) > LISTED_ROWS:
+            out["unused_readings_summary"] = {
+                "total": int(len(un)), "listed": LISTED_ROWS,
+                "listed_are": f"the first {LISTED_ROWS} by line",
+                "by_reason": {str(k): int(v) for k, v in
+                              un["reason"].value_counts(sort=False).sort_index().items()}}
         return out
 
 
