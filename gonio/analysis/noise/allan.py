@@ -467,10 +467,10 @@ def _gather(z: np.ndarray, idx: np.ndarray) -> np.ndarray:
 
 
 def _rect_tiled(z: np.ndarray, out: np.ndarray, n_lo: int, n_len: int, m_lo: int,
-                m_len: int, c: int) -> None:
-    """out[m] += Σ_{n ∈ [n_lo, n_lo + n_len)} z[n]·z[n + c·m] for m ∈ [m_lo, m_lo + m_len)
-    (terms beyond the end of z are 0), as cross-correlations of tiles of n and m of
-    at most max(2¹⁴, N/16) each."""
+                m_len: int, c: int, base: int = 0) -> None:
+    """out[m − base] += Σ_{n ∈ [n_lo, n_lo + n_len)} z[n]·z[n + c·m] for
+    m ∈ [m_lo, m_lo + m_len) (terms beyond the end of z are 0), as cross-correlations
+    of tiles of n and m of at most max(2¹⁴, N/16) each."""
     tile = max(1 << 14, z.size // 16)
     for n_a in range(n_lo, min(n_lo + n_len, z.size), tile):
         u = z[n_a: min(n_lo + n_len, n_a + tile)]
@@ -486,7 +486,7 @@ def _rect_tiled(z: np.ndarray, out: np.ndarray, n_lo: int, n_len: int, m_lo: int
             spec *= np.conj(sfft.rfft(u, nf))
             corr = sfft.irfft(spec, nf)
             del spec
-            out[m_a: m_a + mn] += corr[c * np.arange(mn)]
+            out[m_a - base: m_a - base + mn] += corr[c * np.arange(mn)]
             del corr
 
 
@@ -687,9 +687,7 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
     out = np.zeros((rows, count))
     def rect(n_lo, n_len, a, n_t):  # out[:, a − m_lo + t] += Σ_{n_lo ≤ i < n_lo+n_len} z·z
         if rows == 1:  # tiles: bounded temporaries (one long segment)
-            buf = np.zeros(a + n_t)
-            _rect_tiled(z[0, :last], buf, n_lo, n_len, a, n_t, c)
-            out[0, a - m_lo: a - m_lo + n_t] += buf[a:]
+            _rect_tiled(z[0, :last], out[0], n_lo, n_len, a, n_t, c, base=m_lo)
         else:
             out[:, a - m_lo: a - m_lo + n_t] += _xcorr_rows(
                 z[:, n_lo: n_lo + n_len],
@@ -708,7 +706,7 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
             lu, lv = s * h, s * h + c * (h - 1)
             nf = sfft.next_fast_len(lv + 1, real=True)
             a0 = m_lo + np.arange(nb) * w  # block starts (absolute m)
-            per = max(1, _SEG_BUDGET // (nf * rows))
+            per = max(1, _SEG_BUDGET // (4 * nf * rows))
             if nb <= 8:  # few large blocks: slices (a gather would copy them)
                 for a in a0.tolist():
                     n_t = min(h, m_lo + count - a - h)
@@ -734,7 +732,7 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
     kk, jj = np.nonzero(np.arange(8 * s)[:, None] < s * np.arange(8)[None, :])
     pick = (jj[:, None] == np.arange(8)[None, :]).astype(np.float64)  # term -> m
     a_all = m_lo + np.arange(-(-count // 8)) * 8
-    per = max(1, _SEG_BUDGET // max(1, kk.size * rows))
+    per = max(1, _SEG_BUDGET // max(1, 4 * kk.size * rows))
     for b0 in range(0, a_all.size, per):
         a = a_all[b0: b0 + per]
         prod = z[:, np.minimum((s * a)[:, None] + kk[None, :], last)]
@@ -748,6 +746,39 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
     return out
 
 
+def _sq_prefix_at(v: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """Σ_{i<t} v[i]² at each t of ``pos`` (monotone, 0 ≤ t ≤ len(v)), accumulated in
+    chunks (no array of all the prefix sums)."""
+    if pos.size > 1 and pos[0] > pos[-1]:
+        return _sq_prefix_at(v, pos[::-1])[::-1]
+    sp = pos
+    out = np.empty(pos.size)
+    run, k, step = 0.0, 0, 1 << 16
+    for a in range(0, v.size + 1, step):
+        b = min(v.size, a + step)
+        c = np.zeros(b - a + 1)
+        np.square(v[a:b], out=c[1:])
+        np.cumsum(c, out=c)
+        c += run
+        hi = int(np.searchsorted(sp, b, side="right"))
+        out[k:hi] = c[sp[k:hi] - a]
+        k = hi
+        run = float(c[-1])
+    return out
+
+
+def _reverse_rows(z: np.ndarray) -> None:
+    """Reverse each row of z in place, in chunks (no copy of the whole array)."""
+    n = z.shape[1]
+    half = n // 2
+    step = 1 << 16
+    for a in range(0, half, step):
+        b = min(half, a + step)
+        left = z[:, a:b].copy()
+        z[:, a:b] = z[:, n - b: n - a][:, ::-1]
+        z[:, n - b: n - a] = left[:, ::-1]
+
+
 def _quadratic_basis(lz: int) -> np.ndarray:
     """Orthonormal basis (lz × 3) of the polynomials of degree ≤ 2 on lz points."""
     t = np.linspace(-1.0, 1.0, lz)
@@ -755,9 +786,12 @@ def _quadratic_basis(lz: int) -> np.ndarray:
     return basis
 
 
-def _mdev_rows(x: np.ndarray, starts: np.ndarray, length: int, ms: np.ndarray):
+def _mdev_rows(x: np.ndarray, starts: np.ndarray, length: int, ms: np.ndarray,
+               step: int | None = None):
     """(Σ over the rows of the mdev sums of each segment x[s : s + length] at each m,
-    Σ over the rows of their rounding-error bounds).
+    Σ over the rows of their rounding-error bounds). With ``step``, only the terms
+    that start in the first ``step`` points of each segment (j < step; every such
+    term must end inside the segment).
 
     Each segment is treated as a record of its own (the expansion of
     :func:`_expanded_sums` on z = cumsum of the segment's phase less its
@@ -781,7 +815,7 @@ def _mdev_rows(x: np.ndarray, starts: np.ndarray, length: int, ms: np.ndarray):
     batched = per >= 2
     basis = _quadratic_basis(lz) if batched else None
     mm = np.arange(m_lo, m_lo + count)
-    jn = lz - 3 * mm  # terms per segment at each m
+    jn = lz - 3 * mm if step is None else np.full(count, step)  # terms at each m
     for r0 in range(0, starts.size, max(1, per)):
         st = starts[r0: r0 + max(1, per)]
         rows = st.size
@@ -799,13 +833,45 @@ def _mdev_rows(x: np.ndarray, starts: np.ndarray, length: int, ms: np.ndarray):
             np.cumsum(z[0, 1:lz], out=z[0, 1:lz])
             zz = z[:, :lz]
             remove_quadratic(zz[0])
-        q = np.zeros((rows, lz + 1))
-        np.cumsum(zz * zz, axis=1, out=q[:, 1:])
-        err += float(q[:, -1].sum())
         acc = np.zeros((rows, count))
-        for p in range(4):
-            acc += coef[p] ** 2 * (q[:, p * mm + jn] - q[:, p * mm])
-        del q
+        if batched:
+            q = np.zeros((rows, lz + 1))
+            np.square(zz, out=q[:, 1:])
+            np.cumsum(q[:, 1:], axis=1, out=q[:, 1:])
+            err += float(q[:, -1].sum())
+            for p in range(4):
+                acc += coef[p] ** 2 * (q[:, p * mm + jn] - q[:, p * mm])
+            del q
+        else:  # one long row: the prefix sums of z² only where they are needed
+            err += _ssq(zz[0])
+            for p in range(4):
+                acc[0] += coef[p] ** 2 * (_sq_prefix_at(zz[0], p * mm + jn)
+                                          - _sq_prefix_at(zz[0], p * mm))
+        if step is not None:
+            # Σ_{j<step} z[j+pm]·z[j+qm] = R(km) + W_p,k(z[step:]) − W_p,k(z), with
+            # R(d) = Σ_{i<step} z[i]·z[i+d] and W the head wedges
+            if batched:
+                spec = sfft.rfft(zz, nf, axis=1)
+                spec *= np.conj(sfft.rfft(zz[:, :step], nf, axis=1))
+                ac = sfft.irfft(spec, nf, axis=1)
+                del spec
+                for k, wk in weight.items():
+                    acc += wk * ac[:, k * mm]
+                del ac
+            else:
+                for k, wk in weight.items():
+                    buf = np.zeros(count)
+                    _rect_tiled(zz[0], buf, 0, step, m_lo, count, k, base=m_lo)
+                    acc[0] += wk * buf
+                    del buf
+            for p, qq in pairs:
+                if p > 0:
+                    cc = 2 * coef[p] * coef[qq]
+                    acc += cc * _wedge_rows(z[:, step:], m_lo, count, p, qq - p)
+                    acc -= cc * _wedge_rows(z, m_lo, count, p, qq - p)
+            del z, zz
+            total += acc.sum(axis=0)
+            continue
         if batched:
             spec = sfft.rfft(zz, nf, axis=1)
             ac = sfft.irfft(spec.real ** 2 + spec.imag ** 2, nf, axis=1)
@@ -817,7 +883,7 @@ def _mdev_rows(x: np.ndarray, starts: np.ndarray, length: int, ms: np.ndarray):
             _autocorr_accumulate(zz[0], mm, weight, acc[0])
         for rev in (False, True):  # heads on z, then tails as heads of z reversed
             if rev:
-                zz[:] = zz[:, ::-1]
+                _reverse_rows(zz)
             for p, qq in pairs:
                 s = 3 - qq if rev else p
                 if s > 0:
@@ -871,12 +937,11 @@ def _mdev_local_sums(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
             step = length - v
             n_full = (n - length - 1) // step + 1  # full segments k·step + length < n
             starts = np.arange(n_full) * step
-            s_full, e_full = _mdev_rows(x, starts, length, mo)
-            s_ov, e_ov = _mdev_rows(x, starts + step, v, mo)
+            s_full, e_full = _mdev_rows(x, starts, length, mo, step)
             last = n_full * step
             s_last, e_last = _mdev_rows(x, np.array([last]), n - last, mo)
-            out[i0:i1] = s_full - s_ov + s_last
-            err[i0:i1] = e_full + e_ov + e_last
+            out[i0:i1] = s_full + s_last
+            err[i0:i1] = e_full + e_last
         i0 = i1
     redo = np.flatnonzero(~(out > err / rtol))
     redo = redo[ms[redo] >= _MDEV_DIRECT_BELOW]
