@@ -371,18 +371,25 @@ def _sum_sq_mod(x: np.ndarray, m: int) -> float:
     """Σ_j (Σ_{i=j}^{j+m−1} x[i+2m] − 2x[i+m] + x[i])², j = 0 … N−3m (SP 1065 eq. 14).
 
     The second differences are formed first (small numbers), then their moving sum
-    of length m by a cumulative sum, so nothing large is ever subtracted.
+    of length m by a cumulative sum, so nothing large is ever subtracted; in chunks
+    of j (the cumulative sum restarts with each, temporaries stay small).
     """
     n = x.size
-    e = x[2 * m:] - x[m: n - m]
-    e -= x[m: n - m]
-    e += x[: n - 2 * m]
-    c = np.empty(e.size + 1)
-    c[0] = 0.0
-    np.cumsum(e, out=c[1:])
-    del e
-    w = c[m:] - c[:-m]
-    return _ssq(w)
+    n_terms = n - 3 * m + 1
+    chunk = max(_BLOCK, m)
+    e = np.empty(chunk + m)
+    total = 0.0
+    for a in range(0, n_terms, chunk):
+        b = min(n_terms, a + chunk)
+        k = b - a + m - 1  # second differences i = a … b + m − 2
+        ee = e[1: k + 1]
+        np.subtract(x[a + 2 * m: a + 2 * m + k], x[a + m: a + m + k], out=ee)
+        ee -= x[a + m: a + m + k]
+        ee += x[a: a + k]
+        e[0] = 0.0
+        np.cumsum(e[: k + 1], out=e[: k + 1])
+        total += _ssq(e[m: k + 1] - e[: k + 1 - m])
+    return total
 
 
 def _direct_sums(kind: str, x: np.ndarray, ms) -> np.ndarray:
@@ -919,7 +926,14 @@ def _mdev_local_sums(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
     """
     n = x.size
     out = np.empty(ms.size)
-    err = np.zeros(ms.size)
+    err = np.zeros(ms.size, dtype=np.float32)
+    cap = max(1 << 16, n // 16)  # m per call: bounds the per-m temporaries
+
+    def rows(starts, length, mo, step=None):
+        parts = [_mdev_rows(x, starts, length, mo[a: a + cap], step)
+                 for a in range(0, mo.size, cap)]
+        return np.concatenate([p[0] for p in parts]), max(p[1] for p in parts)
+
     i0 = int(np.searchsorted(ms, _MDEV_DIRECT_BELOW))
     if i0:
         out[:i0] = _direct_sums("mdev", x, ms[:i0])
@@ -927,7 +941,7 @@ def _mdev_local_sums(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
         m_a = int(ms[i0])
         m_top = (n - 1) // 6  # largest m with room for two segments of 2V
         if m_a > m_top:  # the rest on the whole record, as one segment
-            out[i0:], err[i0:] = _mdev_rows(x, np.array([0]), n, ms[i0:])
+            out[i0:], err[i0:] = rows(np.array([0]), n, ms[i0:])
             break
         i1 = int(np.searchsorted(ms, min(2 * m_a, m_top + 1)))
         mo = ms[i0:i1]
@@ -937,9 +951,9 @@ def _mdev_local_sums(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
             step = length - v
             n_full = (n - length - 1) // step + 1  # full segments k·step + length < n
             starts = np.arange(n_full) * step
-            s_full, e_full = _mdev_rows(x, starts, length, mo, step)
+            s_full, e_full = rows(starts, length, mo, step)
             last = n_full * step
-            s_last, e_last = _mdev_rows(x, np.array([last]), n - last, mo)
+            s_last, e_last = rows(np.array([last]), n - last, mo)
             out[i0:i1] = s_full + s_last
             err[i0:i1] = e_full + e_last
         i0 = i1
