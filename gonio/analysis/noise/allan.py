@@ -667,6 +667,8 @@ _SEG_RATIO = 3
 _MDEV_DIRECT_BELOW = 16
 #: Elements of the per-batch temporaries of the segment sums (bounded memory).
 _SEG_BUDGET = 1 << 18
+#: Blocks of m summed directly at the bottom of :func:`_wedge_rows`.
+_WEDGE_BASE = 8
 
 
 def _xcorr_rows(u: np.ndarray, v: np.ndarray, c: int, count: int) -> np.ndarray:
@@ -687,7 +689,7 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
     The rectangle i < s·m_lo is one cross-correlation per row; the rest, the wedge
     s·m_lo ≤ i < s·m, is divided and conquered over m as in :func:`_wedge_corr`
     (the upper half of a block of m holds a full rectangle, one FFT per block,
-    batched over blocks and rows; blocks of 8 summed directly). Our construction,
+    batched over blocks and rows; blocks of _WEDGE_BASE summed directly). Our construction,
     checked in the tests against the definition.
     """
     rows, last = z.shape[0], z.shape[1] - 1
@@ -702,11 +704,11 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
 
     if s * m_lo > 0:
         rect(0, s * m_lo, m_lo, count)
-    width = 8
+    width = _WEDGE_BASE
     while width < count:
         width *= 2
     w = width
-    while w > 8:
+    while w > _WEDGE_BASE:
         h = w // 2
         nb = (count - h + w - 1) // w if count > h else 0  # blocks with an upper half
         if nb > 0:
@@ -735,10 +737,11 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
                 out[:, tgt[ok]] += vals[:, ok]
                 del corr, vals
         w = h
-    # base blocks of 8: m ∈ [a, a+8), i ∈ [s·a, s·m)
-    kk, jj = np.nonzero(np.arange(8 * s)[:, None] < s * np.arange(8)[None, :])
-    pick = (jj[:, None] == np.arange(8)[None, :]).astype(np.float64)  # term -> m
-    a_all = m_lo + np.arange(-(-count // 8)) * 8
+    # base blocks of _WEDGE_BASE: m ∈ [a, a+8), i ∈ [s·a, s·m)
+    kk, jj = np.nonzero(np.arange(_WEDGE_BASE * s)[:, None]
+                        < s * np.arange(_WEDGE_BASE)[None, :])
+    pick = (jj[:, None] == np.arange(_WEDGE_BASE)[None, :]).astype(np.float64)  # term -> m
+    a_all = m_lo + np.arange(-(-count // _WEDGE_BASE)) * _WEDGE_BASE
     per = max(1, _SEG_BUDGET // max(1, 4 * kk.size * rows))
     for b0 in range(0, a_all.size, per):
         a = a_all[b0: b0 + per]
@@ -746,7 +749,7 @@ def _wedge_rows(z: np.ndarray, m_lo: int, count: int, s: int, c: int) -> np.ndar
         prod *= z[:, np.minimum((s * a)[:, None] + (kk + c * (a[:, None] + jj[None, :])),
                                 last)]
         blk = np.einsum("rbk,kj->rbj", prod, pick).reshape(rows, -1)
-        tgt = (a - m_lo)[:, None] + np.arange(8)[None, :]
+        tgt = (a - m_lo)[:, None] + np.arange(_WEDGE_BASE)[None, :]
         ok = (tgt < count).ravel()
         out[:, tgt.ravel()[ok]] += blk[:, ok]
         del prod, blk
