@@ -660,8 +660,8 @@ def _expanded_sums(kind: str, x, ms: np.ndarray, rtol: float) -> np.ndarray:
 
 
 # ------------------------------------ mdev, all τ: local segments, octave by octave
-#: Segment length over overlap (``_mdev_local_sums``): a term's cancellation grows
-#: as (segment/m)⁵ for rate random walk, so the segments stay a few spans long.
+#: Segment length over the longest term's span (``_mdev_local_sums``): the
+#: cancellation grows as (segment/m)⁵ for rate random walk, so segments stay short.
 _SEG_RATIO = 3
 #: Below this m, ``mdev`` "all" sums are formed directly (O(N) each, cheap there).
 _MDEV_DIRECT_BELOW = 16
@@ -906,24 +906,27 @@ def _mdev_rows(x: np.ndarray, starts: np.ndarray, length: int, ms: np.ndarray,
 
 def _mdev_local_sums(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
     """Σ of squared mdev terms (SP 1065 eq. 14) at every m of ``ms`` (ascending) for
-    the phase x, exact to about ``rtol`` (relative), by inclusion–exclusion over
-    overlapping local segments, one octave of m at a time (our construction; checked
-    in the tests against the direct sums, exact integer sums and allantools).
+    the phase x, exact to about ``rtol`` (relative), by the correlation expansion on
+    short local segments, one octave of m at a time (our construction; checked in the
+    tests against exact integer sums, the direct sums and allantools; see
+    docs/noise-all-tau.md).
 
-    A term at m spans 3m phase points. For the m of one octave, m ≤ m₁, the record
-    is cut into segments of L = 4V points overlapping by V = 3m₁: every term lies in
-    at least one segment, a term in two consecutive segments lies in their overlap,
-    and none lies in three. So Σ over the record = Σ over the segments − Σ over the
-    overlaps, each a short record of its own whose cumulative sum is re-centred
-    locally (:func:`_mdev_rows`). That is what keeps the expansion exact: on the whole
-    record the cumulative sum of the phase of rate random walk grows as N^2.5 and the
-    expansion's rounding error relative to the sum grows as (N/m)⁵ — at 10⁶ samples
-    beyond 1e-9 for every m below about 10⁴ — while within a segment it is bounded
-    by (L/m)⁵ ≤ 24⁵ times the rounding unit (measured: ~1e-11).
+    A term at m spans 3m phase points. For the m of one octave, m ≤ m₁, let
+    V = 3m₁ and cut the record into segments of L = 3V points starting every L − V
+    points. Segment k contributes the terms that start in its first L − V points
+    (these j-blocks partition the record, and each such term ends inside the
+    segment); the last segment contributes all its terms. Each segment is a short
+    record of its own whose cumulative sum is re-centred locally
+    (:func:`_mdev_rows`). That is what keeps the expansion exact: on the whole record
+    the cumulative sum of the phase of rate random walk grows as N^2.5 and the
+    expansion's rounding error relative to the sum as (N/m)⁵ — at 10⁶ samples beyond
+    1e-9 for every m below about 10⁴ — while within a segment it is bounded by about
+    (L/m)⁵ ≤ 18⁵ times the rounding unit (measured: ≤ 1e-10). m above (n − 1)/6, where
+    two segments do not fit, use the whole record (N/m ≤ 6).
 
-    Cost: per octave the segments' autocorrelations, O(N log m), and their edge
-    wedges, O(N log² m); O(N log³ N) in all (O(N log² N) would need the wedges of the
-    whole record, which are what lose the precision). m < :data:`_MDEV_DIRECT_BELOW`
+    Cost: per octave the segments' rectangles, O(N log m), and their head wedges,
+    O(N log² m); O(N log³ N) in all (O(N log² N) would need the wedges of the whole
+    record, which are what lose the precision). m < :data:`_MDEV_DIRECT_BELOW`
     directly (O(N) each). Every m whose summed error bound exceeds ``rtol``·sum is
     recomputed directly.
     """
