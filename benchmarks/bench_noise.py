@@ -5,10 +5,10 @@ Prints:
   identification) against allantools.oadev (which computes no edf), best of 3,
   interleaved; and tracemalloc's peak over the input's size;
 * every τ ("all") for 10⁶ samples of white rate noise and of white + rate random
-  walk: ADEV, MDEV and HDEV by the correlation expansion — time, the number of τ
-  recomputed directly for rounding, and tracemalloc's peak / input size (the result
-  itself included);
-* MDEV "all" at 10⁵ and 10⁶ samples (white): the growth with N (O(N log² N));
+  walk: ADEV and HDEV by the correlation expansion, MDEV by the expansion on local
+  segments — wall and CPU time, the number of τ recomputed directly for rounding,
+  and tracemalloc's peak / input size (the result itself included);
+* MDEV "all" at 10⁵ and 10⁶ samples (white): the growth with N (O(N log³ N));
 * allantools' "all"-τ oadev/mdev at 2·10⁴ samples, extrapolated as O(N²).
 
 Run: ``python benchmarks/bench_noise.py``
@@ -88,22 +88,27 @@ def main() -> None:
     mixed = white + 0.01 * np.cumsum(rng.standard_normal(n))
     for name, data in (("white", white), ("white + RRW", mixed)):
         for kind in ("adev", "mdev", "hdev"):
+            c0 = time.process_time()
             t, redo, res = count_redo(
                 lambda: allan_deviation(data, tau0, "rate", "all", kind=kind))
-            print(f"all tau, 1e6 samples, {name:11s} {kind}: {t:6.2f} s for {res.m.size} tau, "
-                  f"{redo} recomputed directly")
-    for kind in ("adev", "mdev", "hdev"):
-        ratio, res = peak_ratio(lambda: allan_deviation(white, tau0, "rate", "all", kind=kind),
-                                white.nbytes)
-        own = sum(v.nbytes for v in vars(res).values() if isinstance(v, np.ndarray))
-        print(f"  peak memory / input ('all', {kind}, white): {ratio:.2f} "
-              f"(of which the result's own arrays: {own / white.nbytes:.2f})")
+            cpu = time.process_time() - c0
+            print(f"all tau, 1e6 samples, {name:11s} {kind}: {t:6.2f} s (CPU {cpu:5.2f} s) "
+                  f"for {res.m.size} tau, {redo} recomputed directly")
+    for name, data in (("white", white), ("white + RRW", mixed)):
+        for kind in ("adev", "mdev", "hdev"):
+            ratio, res = peak_ratio(
+                lambda: allan_deviation(data, tau0, "rate", "all", kind=kind), data.nbytes)
+            own = sum(v.nbytes for v in vars(res).values() if isinstance(v, np.ndarray))
+            print(f"  peak memory / input ('all', {kind}, {name}): {ratio:.2f} "
+                  f"(of which the result's own arrays: {own / data.nbytes:.2f})")
 
     t5, _ = best_of(lambda: allan_deviation(white[:100_000], tau0, "rate", "all",
                                             kind="mdev"), 1)
     t6, _ = best_of(lambda: allan_deviation(white, tau0, "rate", "all", kind="mdev"), 1)
     print(f"MDEV all tau, white: 1e5 samples {t5:.2f} s, 1e6 samples {t6:.2f} s "
           f"(x{t6 / t5:.1f} for 10x N; O(N^2) would be x100)")
+    print("  (CPU time is the better figure on a shared machine: wall time includes "
+          "waiting for a core)")
 
     n_small = 20_000
     ys = white[:n_small]
