@@ -672,6 +672,14 @@ class StreamFile:
             raise GonioError("no data: header only", file=self.fname,
                              line=self.header.header_line)
         self.blocks = blocks
+        release_arrow_memory()
+
+    def release(self) -> None:
+        """Drop the cached blocks and hand the memory Arrow keeps for reuse back to the
+        system (call when done with random access; the index is kept)."""
+        self._cache.clear()
+        self._cache_order.clear()
+        release_arrow_memory()
 
     def _check_table(self, counts, table, row0: int, state: dict, loc) -> None:
         """Step of the median-of-three residual count/K − table_deg (see the class notes)."""
@@ -800,6 +808,13 @@ class StreamFile:
             return len(self)
         ch = self._block(j)
         return ch.first_row + int(np.searchsorted(ch.time_s, t, side=side))
+
+
+def release_arrow_memory() -> None:
+    """Hand the memory Arrow's pool keeps for reuse (tens of MB after a pass over a
+    stream) back to the system, so that later stages do not carry it."""
+    import pyarrow as pa
+    pa.default_memory_pool().release_unused()
 
 
 def _columns(tab, columns) -> dict:
