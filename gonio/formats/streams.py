@@ -981,8 +981,8 @@ STREAM_FORMATS = ("parquet", "csv")
 #: Rows per Parquet row group (one block of :class:`StreamFile`).
 PARQUET_ROW_GROUP = 1 << 18
 #: How streams are encoded in Parquet: plain values (a dictionary of 2¹⁸ distinct doubles
-#: is only overhead) compressed with LZ4 (the Parquet format's LZ4_RAW), which decodes
-#: about three times faster than the dictionary + snappy default at the same size.
+#: is only overhead) compressed with LZ4, which decodes about three times faster than the
+#: dictionary + snappy default at about the same size.
 PARQUET_OPTIONS = {"compression": "lz4", "use_dictionary": False}
 
 
