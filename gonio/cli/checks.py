@@ -13,6 +13,8 @@ import argparse
 import math
 import re
 
+from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported for the sub-commands)
+
 _INT = re.compile(r"^[+-]?[0-9]{1,30}$")
 _FLOAT = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]{1,4})?$")
 
@@ -55,23 +57,3 @@ def float_range(lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = 
 def seed(text: str) -> int:
     """A random seed: an integer in [0, 2**63 - 1]."""
     return int_range(0, 2**63 - 1, what="a seed")(text)
-
-
-def json_safe(x):
-    """Plain JSON: numpy scalars to Python, non-finite floats to None (never ``Infinity``)."""
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [json_safe(v) for v in x.tolist()]
-    if isinstance(x, np.bool_):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    return x
