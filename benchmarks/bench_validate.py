@@ -64,6 +64,32 @@ def cost(pythonpath: Path, n: int) -> tuple[float, float]:
     return float(cpu), float(wall)
 
 
+def tree_cpu_s() -> float:
+    """CPU seconds (user + system) used so far by this process and every live process
+    descended from it (the joblib pool, the Dask cluster's nannies and workers): a study's
+    CPU cost, whatever else the machine runs at the time."""
+    tick = os.sysconf("SC_CLK_TCK")
+    parent, cpu = {}, {}
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as fh:
+                f = fh.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parent[int(d)] = int(f[1])
+        cpu[int(d)] = (int(f[11]) + int(f[12])) / tick
+    me, total = os.getpid(), 0.0
+    for pid in cpu:
+        p = pid
+        while p > 1 and p != me:
+            p = parent.get(p, 0)
+        if p == me:
+            total += cpu[pid]
+    return total
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials-per-cost", type=int, default=8)
@@ -103,20 +129,24 @@ def main() -> int:
     from gonio.pipeline.validate import validate, worker_threads
     kw = dict(seed=0, bench="rlg", sample_rate_hz=100.0, show_progress=False,
               batch_size=a.batch)
-    texts, rates = {}, {}
+    texts, rates, cpus = {}, {}, {}
 
     def study(label, **extra):
         load0 = os.getloadavg()[0]
+        c0 = tree_cpu_s()
         t0 = time.perf_counter()
         rep = validate(a.trials, **kw, **extra)
         wall = time.perf_counter() - t0
+        cpu = tree_cpu_s() - c0
+        cpus.setdefault(label, []).append(cpu / a.trials)
         text = json.dumps(rep.to_dict(), indent=2, ensure_ascii=False, allow_nan=False)
         if texts.setdefault(label, text) != text:
             texts[label + " (repeat)"] = text
         rate = a.trials / wall
         rates.setdefault(label, []).append((rate, load0, os.getloadavg()[0]))
-        print(f"{label:<28} {a.trials} trials in {wall:6.1f} s: {rate:.2f} trials/s "
-              f"(load {load0:.1f} -> {os.getloadavg()[0]:.1f})", flush=True)
+        print(f"{label:<28} {a.trials} trials in {wall:6.1f} s: {rate:.2f} trials/s, "
+              f"{cpu / a.trials:.3f} CPU s/trial (load {load0:.1f} -> "
+              f"{os.getloadavg()[0]:.1f})", flush=True)
 
     def warm(**extra):
         # every worker imports gonio and runs a trial before anything is timed: four
@@ -156,6 +186,13 @@ def main() -> int:
           "second worker shares its core with other processes)")
     eff_d = best["Dask LocalCluster, 2 workers"][0] / best["joblib, 1 worker"][0] / 2
     print(f"scaling efficiency 1 -> 2 workers (Dask): {100 * eff_d:.0f} %")
+    # the engine's own cost, which load does not hide: CPU seconds per trial (all processes
+    # of the study), lowest of the rounds. With no other load the 1 -> 2 worker efficiency
+    # can be no better than this ratio (the extra CPU is the parallel overhead).
+    c1 = min(cpus["joblib, 1 worker"])
+    for k, v in cpus.items():
+        print(f"CPU per trial, {k:<28} {min(v):.3f} s (1-worker cost / this: {c1 / min(v):.0%};"
+              " the bound on scaling efficiency without other load)")
     same = len(set(texts.values())) == 1
     print(f"validation.json identical for 1 worker, 2 workers and the Dask cluster: "
           f"{'yes' if same else 'NO'}")
