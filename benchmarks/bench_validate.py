@@ -145,8 +145,8 @@ def main() -> int:
         rate = a.trials / wall
         rates.setdefault(label, []).append((rate, load0, os.getloadavg()[0]))
         print(f"{label:<28} {a.trials} trials in {wall:6.1f} s: {rate:.2f} trials/s, "
-              f"{cpu / a.trials:.3f} CPU s/trial (load {load0:.1f} -> "
-              f"{os.getloadavg()[0]:.1f})", flush=True)
+              f"{cpu / a.trials:.3f} CPU s/trial, {cpu / wall:.2f} cores obtained "
+              f"(load {load0:.1f} -> {os.getloadavg()[0]:.1f})", flush=True)
 
     def warm(**extra):
         # every worker imports gonio and runs a trial before anything is timed: four
