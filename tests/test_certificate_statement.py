@@ -518,3 +518,13 @@ def test_status_line_only_on_a_terminal():
     status("", tty)
     assert "demo: calibrating" in tty.getvalue() and tty.getvalue().startswith("\r")
     assert pipe.getvalue() == ""
+
+
+def test_zh_says_where_k_comes_from_in_chinese(run):
+    """Issue 13's zh gap: the line on the origin of k went through i18n."""
+    ks = run["results"]["uncertainty"].get("k_source")
+    page = visible_text((run["dir"] / "zh" / "certificate.html").read_text(encoding="utf-8"))
+    assert "t-factor" not in page and "welch-satterthwaite" not in page
+    if ks:
+        zh = labels("zh")
+        assert (zh["k_fixed"] if ks == "fixed by laboratory" else zh["k_welch"]) in page

@@ -28,10 +28,6 @@ from gonio.report.i18n import display, last_digit_unit, parse_display
 from gonio.resources import protocols_dir
 
 NS = {"dcc": DCC_NS, "si": SI_NS}
-REPO = Path(__file__).resolve().parents[1]
-SCHEMA_DIR = Path(os.environ.get("GONIO_DCC_SCHEMA_DIR",
-                                 REPO.parent / "shared" / "schemas" / "dcc-3.3.0")).resolve()
-QUDT_URL = "https://www.ptb.de/si/v2.2.1/qudt/quantitykind.xsd"
 SMALL = {
     "protocol": {"name": "small", "specification": "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"},
     "session": {"static_s": 30.0},
@@ -45,14 +41,8 @@ SMALL = {
 
 
 @pytest.fixture(scope="module")
-def schema():
-    xmlschema = pytest.importorskip("xmlschema", reason="pip install '.[test]'")
-    assert (SCHEMA_DIR / "dcc.xsd").is_file(), (
-        f"DCC 3.3.0 schema set not found at {SCHEMA_DIR} (set GONIO_DCC_SCHEMA_DIR)")
-    return xmlschema.XMLSchema11(
-        str(SCHEMA_DIR / "dcc.xsd"),
-        uri_mapper={QUDT_URL: (SCHEMA_DIR / "si" / "qudt" / "quantitykind.xsd").as_uri()},
-        allow="local")
+def schema(dcc_schema):
+    return dcc_schema
 
 
 @pytest.fixture(scope="module")

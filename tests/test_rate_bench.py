@@ -152,7 +152,8 @@ def test_jjf_results_json_shape(jjf_noise_off):
         assert set(it) >= {"value", "unit", "clause", "measured", "reason", "uncertainty"}
         assert it["clause"].startswith("7.2.")
         if it["measured"]:
-            assert set(it["uncertainty"]) == {"components", "u_c", "U", "k", "nu_eff"}
+            assert set(it["uncertainty"]) == {"components", "u_c", "U", "k", "nu_eff", "p"}
+            assert it["uncertainty"]["p"] == 0.95
     json.dumps(js, allow_nan=False)
     lit = js["items"]["g_sensitivity"]["details"]["literal_per_axis_dph_per_g"]["z"]
     cor = js["items"]["g_sensitivity"]["details"]["per_axis_dph_per_g"]["z"]
@@ -315,6 +316,8 @@ def test_simulate_deterministic_and_cli(tmp_path, capsys):
         assert float(text.replace("×10", "e").translate(str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789"))) \
             == pytest.approx(v, rel=1e-3)
     assert (tmp_path / "a" / "certificate.pdf").read_bytes()[:4] == b"%PDF"
+    # the recalibration statement is JJF 1535's clause 9, not the optical draft's
+    assert "JJF 1535-2015 clause 9" in html and "draft clause 9" not in html
     capsys.readouterr()
     assert main(["budget", "--spec", "jjf1535-2015"]) == 0
     out = capsys.readouterr().out

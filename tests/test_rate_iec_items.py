@@ -141,7 +141,8 @@ def iec_new_noise_off(tmp_path_factory):
 
 
 @pytest.mark.parametrize("key", ("bias_ratiometric_error", "g_sensitivity", "resolution",
-                                 "broadband_noise", "bias_hysteresis"))
+                                 "broadband_noise", "bias_hysteresis", "inband_noise",
+                                 "sf_stability"))
 def test_iec_new_items_noise_off_exact(iec_new_noise_off, key):
     result, truth = iec_new_noise_off["exact"]
     it = result.items[key]

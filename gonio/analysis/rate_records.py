@@ -29,7 +29,8 @@ from uncertainty import monte_carlo, propagate, validate_gum
 
 @dataclass
 class Uncertainty:
-    """An item's uncertainty: components (symbol, source, u, c, |c|u, dof), u_c, U, k, ν_eff."""
+    """An item's uncertainty: components (symbol, source, u, c, |c|u, dof), u_c, U, k, ν_eff,
+    the coverage probability p of U (None: a fixed k was asked for)."""
 
     components: list[dict]
     u_c: float
@@ -37,10 +38,11 @@ class Uncertainty:
     k: float
     nu_eff: float
     monte_carlo: dict | None = None
+    p: float | None = None
 
     def to_json(self) -> dict:
         out = {"components": self.components, "u_c": _f(self.u_c), "U": _f(self.U),
-               "k": _f(self.k), "nu_eff": _f(self.nu_eff)}
+               "k": _f(self.k), "nu_eff": _f(self.nu_eff), "p": _f(self.p)}
         if self.monte_carlo is not None:
             out["monte_carlo"] = json_safe(self.monte_carlo)
         return out
@@ -154,7 +156,7 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
         mc = {"trials": trials, "u": m.u, "low": m.low, "high": m.high,
               "gum_low": v.gum_interval[0], "gum_high": v.gum_interval[1],
               "d_low": v.d_low, "d_high": v.d_high, "delta": v.delta, "validated": v.passed}
-    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc)
+    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc, p)
 
 
 # --------------------------------------------------------------------------- readings

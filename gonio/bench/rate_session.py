@@ -38,6 +38,10 @@ _AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
          "+z": (0, 0, 1), "-z": (0, 0, -1)}
 
 
+#: Sub-samples per output interval on a turning table (the interval mean is their mean).
+RATE_SUBSAMPLES = 16
+
+
 @dataclass(frozen=True)
 class Segment:
     """One recorded segment of a programme.
@@ -251,7 +255,7 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         else:
             w_set = float(seg.rate_dps)
             w_act = w_set * (1 + eq.rate_table.rate_error_rel)
-            nsub = 16 if w_set != 0 else 1
+            nsub = RATE_SUBSAMPLES if w_set != 0 else 1
             frac = (np.arange(nsub) + 0.5) / nsub
             ts = (t[:, None] + dt * frac[None, :]) - st.t                     # time in segment
             theta = st.theta + math.radians(w_act) * ts
@@ -307,6 +311,65 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
     truth = {"gyro": g.to_dict(), "equipment": eq.to_dict(), "latitude_deg": bench.latitude_deg,
              "seed": seed, "noise": noise, "power_cycles": runs, "segments": seg_truth}
     return RateSessionResult(df, md, truth)
+
+
+def constant_rate_spread_dps(bench: RateBench, rate_dps: float, interval_s: float,
+                             samples: int, temp_c: float) -> dict:
+    """Expected spread of ``samples`` output samples (interval means at ``interval_s``) on
+    the rate table turning at a constant ``rate_dps``, gyro mounted input axis up
+    (``+z``/``+x``), in °/s of input rate: the truth of IEC 62047-20 5.1.3.7.
+
+    The population variance of the record (divisor ``samples``) has the expectation
+
+    - noise: ∫ S(f)·(1 − D_s(f)²) df over [0, 1/(2·interval)], S the model's one-sided
+      density (:func:`gonio.bench.rate_gyro.noise_psd_one_sided`), D_s the Dirichlet
+      kernel of the mean of ``samples`` samples (variance of a sample minus variance of
+      the record's mean);
+    - the once-per-revolution terms of the turning table: the rate ripple (scaled by the
+      slope of the response f′(ω)) and the cross-axis sensitivity times the horizontal
+      rate (Earth rate north, table-axis tilt east), summed as phasors to an amplitude A,
+      attenuated by the mean over :data:`RATE_SUBSAMPLES` sub-samples of each interval,
+      D_16 = |sin(Δ/2)/(16 sin(Δ/32))|, Δ the table's turn per interval; its population
+      variance averaged over the (history-dependent) start angle is A²/2·(1 − D_s(Δ)²),
+      exact for any start angle when the record spans whole revolutions.
+
+    Left out: the chamber's slow temperature fluctuation (history-dependent phase).
+    Returns {"std_dps", "noise_dps", "periodic_amplitude_dps"} (std = √E[variance]).
+    """
+    from gonio.bench.rate_gyro import noise_psd_one_sided
+
+    g, eq = bench.gyro, bench.equipment
+    dt, n = float(interval_s), int(samples)
+    if n < 2 or not dt > 0:
+        raise GonioError("a spread needs ≥ 2 samples and an interval > 0", key="samples")
+    f = np.linspace(0.0, 0.5 / dt, 200001)[1:]
+    d_s = np.sin(math.pi * f * n * dt) / (n * np.sin(math.pi * f * dt))
+    var_noise = float(np.trapezoid(noise_psd_one_sided(g, f, dt, temp_c) * (1 - d_s ** 2), f))
+    tilt = math.radians(eq.rate_table.tilt_deg)
+    w_act = float(rate_dps) * (1 + eq.rate_table.rate_error_rel)
+    omega = np.degrees(earth_rate_enu(bench.latitude_deg))
+    w_in = w_act * math.cos(tilt) + float(omega[2])
+    h = 1e-6 * max(1.0, abs(w_in))
+    slope = float((g.response(np.array([w_in + h])) - g.response(np.array([w_in - h])))[0]) / (2 * h)
+    r = eq.rate_table.ripple_rel * abs(float(rate_dps)) * math.cos(tilt) * slope
+    phi = math.radians(eq.rate_table.ripple_phase_deg)
+    h_e, h_n = w_act * math.sin(tilt), float(omega[1])
+    cx, cy = g.cross_axis_x, g.cross_axis_y
+    # a·cos θ + b·sin θ (θ the table angle; body x = Rz(θ)·north, body y = Rz(θ)·west)
+    a = r * math.sin(phi) + cx * h_n - cy * h_e
+    b = r * math.cos(phi) - cx * h_e - cy * h_n
+    amp = math.hypot(a, b)
+    delta = math.radians(w_act) * dt
+    m = RATE_SUBSAMPLES
+    if amp and delta:
+        amp *= abs(math.sin(delta / 2) / (m * math.sin(delta / (2 * m))))
+        den = n * math.sin(delta / 2)
+        d_rev = 1.0 if abs(den) < 1e-12 else math.sin(n * delta / 2) / den   # Δ = 2πk: constant
+        var_per = 0.5 * amp ** 2 * (1 - d_rev ** 2)
+    else:
+        var_per = 0.0
+    return {"std_dps": math.sqrt(var_noise + var_per), "noise_dps": math.sqrt(var_noise),
+            "periodic_amplitude_dps": amp}
 
 
 def calibration_segments(test: str, run: int, rates_one_dir: list[float], *, dt: float, rest_samples: int,

@@ -466,7 +466,8 @@ def _frame(rows) -> pd.DataFrame:
 
 
 def _metadata(bench: TriadBench, protocol: TriadProtocol, seed: int, kind: str) -> dict:
-    return {"format": "gonio-triad-readings/1", "kind": kind, "instrument": bench.instrument,
+    return {"format": "gonio-triad-readings/1", "spec": protocol.spec, "kind": kind,
+            "instrument": bench.instrument,
             "serial": bench.serial, "output_unit": bench.output_unit,
             "latitude_deg": repr(float(bench.latitude_deg)),
             "sample_rate_hz": repr(float(bench.sample_rate_hz)),

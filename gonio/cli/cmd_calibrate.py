@@ -35,6 +35,13 @@ def register(sub) -> None:
                         "Certificate (DCC 3.3.0 XML)")
     p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
+    p.add_argument("--thermal", default=None, metavar="FILE",
+                   help="triad-alignment: the thermal-programme readings (default: the file "
+                        "the readings' '# thermal_readings:' metadata names, or their own "
+                        "thermal rows)")
+    p.add_argument("--robust", action="store_true",
+                   help="triad-alignment: robust alignment fit (IRLS), outlying dwells "
+                        "down-weighted and listed")
     p.set_defaults(func=run)
 
 
@@ -49,6 +56,14 @@ def add_certificate_options(p) -> None:
                         "them, or that holds a readings/stream file")
     p.add_argument("--lang", choices=("en", "zh"), default="en",
                    help="certificate language (zh needs a CJK font, e.g. fonts-noto-cjk)")
+
+
+def print_result(result, as_json: bool) -> None:
+    """Print a per-item specification's results.json (``--json``) or its summary."""
+    if as_json:
+        print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
+    else:
+        print(result.summary(), end="")
 
 
 def print_outputs(report, as_json: bool, lab_d: dict | None, lang: str) -> None:
@@ -98,6 +113,30 @@ def run(args) -> int:
     from gonio.progress import status
 
     spec = args.spec or readings_spec(args.readings) or "ogam-draft"
+    if spec == "triad-alignment":
+        from gonio.pipeline.triad import calibrate as calibrate_triad
+
+        for flag, given in (("--dcc", args.dcc), ("--tilt", args.tilt),
+                            ("--budget", args.budget != "physical"),
+                            ("--protocol", args.protocol)):
+            if given:
+                raise GonioError(f"{flag} does not apply to the triad-alignment "
+                                 "specification (no DCC, tilt file, draft budget or protocol "
+                                 "for a triad calibration: the readings carry what it needs)",
+                                 key=flag)
+
+        inputs.append(args.thermal)
+        check_output_dir(args.out, inputs=inputs, force=args.force)
+        with output_set(args.out, inputs=inputs, force=args.force):
+            result, _ = calibrate_triad(args.readings, args.out, thermal=args.thermal,
+                                        lab=args.lab, lang=args.lang,
+                                        monte_carlo_trials=args.monte_carlo,
+                                        robust=args.robust)
+        print_result(result, args.json)
+        return 0
+    if args.thermal or args.robust:
+        raise GonioError("--thermal and --robust apply to the triad-alignment specification "
+                         f"only, not {spec}", key="--thermal" if args.thermal else "--robust")
     if spec != "ogam-draft":
         if spec not in RATE_SPECS:
             from gonio.specs import get
@@ -105,11 +144,8 @@ def run(args) -> int:
         with output_set(args.out, inputs=inputs, force=args.force):    # one whole set
             result, _ = calibrate_rate(args.readings, args.out, spec_key=spec,
                                        protocol=args.protocol, lab=args.lab, lang=args.lang,
-                                       monte_carlo_trials=args.monte_carlo)
-        if args.json:
-            print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
-        else:
-            print(result.summary(), end="")
+                                       monte_carlo_trials=args.monte_carlo, dcc=args.dcc)
+        print_result(result, args.json)
         return 0
     status("calibrating")
     report = calibrate(args.readings, args.protocol, monte_carlo_trials=args.monte_carlo,

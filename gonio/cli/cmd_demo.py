@@ -19,10 +19,10 @@ def register(sub) -> None:
                    help="random seed of the virtual bench (≥ 0; same seed → byte-identical "
                         "outputs)")
     p.add_argument("--spec", default="ogam-draft",
-                   help="specification (ogam-draft, jjf1535-2015, iec62047-20)")
+                   help="specification (ogam-draft, jjf1535-2015, iec62047-20, triad-alignment)")
     p.add_argument("--bench", default=None,
                    help="bench file or built-in name (default: rlg; rate specs: mems-adxrs610; "
-                        "rlg and fog work as rate sensors too)")
+                        "rlg and fog work as rate sensors too; triad-alignment: mems-triad)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--json", action="store_true", help="print results.json on stdout")
     from gonio.cli.cmd_calibrate import add_certificate_options
@@ -35,13 +35,24 @@ def run(args) -> int:
 
     from gonio.atomic import check_output_dir
     check_output_dir(args.out, inputs=[args.lab, args.bench], force=args.force)
+    if args.spec == "triad-alignment":
+        from gonio.cli.cmd_calibrate import print_result
+        from gonio.pipeline.triad import demo as triad_demo
+
+        result, paths = triad_demo(args.out, bench=args.bench, seed=args.seed, lab=args.lab,
+                                   lang=args.lang, force=args.force)
+        print_result(result, args.json)
+        if not args.json:
+            print(f"wrote {', '.join(sorted(Path(p).name for p in paths.values()))} in "
+                  f"{Path(args.out)}")
+        return 0
     if args.spec != "ogam-draft":
         import json
 
         from gonio.pipeline.rate import demo as rate_demo
 
         result, paths = rate_demo(args.spec, args.out, bench=args.bench, seed=args.seed,
-                                  lab=args.lab, lang=args.lang)
+                                  lab=args.lab, lang=args.lang, force=args.force)
         if args.json:
             print(json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False))
         else:

@@ -57,6 +57,18 @@ PRECEDENCE_RULE = ("command line over readings-file metadata over protocol over 
 #: Budget kinds of the angle-position deviation E.
 BUDGET_KINDS = ("physical", "draft")
 
+#: Labels of the two readings of B_s (results.json ``zero_stability.estimates``).
+ZERO_STABILITY_READINGS = {
+    "draft": "the draft's reading (7.3): B_s = s(M)/T of the 15 readings, 95 % chi-square "
+             "interval with the readings' effective degrees of freedom, k = t_95(nu_eff)",
+    "model": "physical model: the expected B_s of these readings (sqrt(E[s(M)^2])/T) from the "
+             "five-term noise fit of the instrument's continuous record over the 7.3 rest",
+}
+
+
+#: Which reading of B_s is stated unless the caller asks otherwise (docs/draft-readings.md).
+ZERO_STABILITY_STATED = "draft"
+
 
 def readings_taken(repeatability_source: str) -> list[str]:
     """The readings-taken notes of this calibration, with the u(r) sentence that is true for it.
@@ -119,6 +131,7 @@ class CalibrationReport:
     conflicts: list = field(default_factory=list)
     budget_notes: list = field(default_factory=list)
     excluded: object = None              # DataFrame of readings excluded by the checks
+    zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
 
     @property
     def e_measured(self) -> bool:
@@ -161,6 +174,21 @@ class CalibrationReport:
         for name in ITEM_NAMES:
             iu = self.item_uncertainty.get(name)
             out[name]["uncertainty"] = iu.to_dict() if iu is not None else None
+        zr = self.zero_stability_readings
+        if zr:
+            zs = dict(out["zero_stability"])
+            draft_value = zs["value"]
+            zs["value"] = float(self.item_uncertainty["zero_stability"].value)
+            zs["stated"] = zr["stated"]
+            zs["stated_note"] = zr["note"]
+            zs["estimates"] = {
+                "draft": {"label": ZERO_STABILITY_READINGS["draft"], "value": draft_value,
+                          "uncertainty": zr["draft"].to_dict()},
+                "model": None if zr["model"] is None else
+                {"label": ZERO_STABILITY_READINGS["model"], "value": float(zr["model"].value),
+                 "uncertainty": zr["model"].to_dict(),
+                 "variance_shares": zr["expected"].to_dict()["variance_shares"]}}
+            out["zero_stability"] = zs
         if self.noise is not None:
             zs = dict(out["zero_stability"])
             zs["noise"] = {"source": self.noise_source, **self.noise.to_dict()}
@@ -202,6 +230,19 @@ class CalibrationReport:
             if iu is not None and iu.interval is not None:
                 lines.append(f"{name}: 95 % interval [{iu.interval[0]:.3g}, "
                              f"{iu.interval[1]:.3g}] {iu.unit} (chi-square)")
+        zr = self.zero_stability_readings
+        if zr:
+            if zr["stated"] == "model":
+                d = zr["draft"]
+                lines.append(f"zero_stability: the draft's s(M)/T = {d.value:.3g} deg/h, 95 % "
+                             f"interval [{d.interval[0]:.3g}, {d.interval[1]:.3g}] deg/h "
+                             "(chi-square)")
+            elif zr["model"] is not None:
+                m = zr["model"]
+                lines.append(f"zero_stability (noise model, not stated): {m.value:.3g} deg/h, "
+                             f"U = {m.U:.2g} deg/h (k = {m.k:.3g}, coverage probability "
+                             "approximately 95 %)")
+            lines.append(f"note: {zr['note']}")
         if self.e_measured:
             lines += [f"note: {n}" for n in self.budget_notes]
         return "\n".join(lines) + "\n"
@@ -759,7 +800,7 @@ def check_counts_agree(readings: Readings, results: CalibrationResults) -> None:
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
-              tilt=None) -> CalibrationReport:
+              tilt=None, zero_stability: str = ZERO_STABILITY_STATED) -> CalibrationReport:
     """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
     ``protocol``: explicit (the command line's ``--protocol``), else the file's
@@ -772,7 +813,8 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     --json`` result (path or dict) bounding the tilt instead of the protocol's bound.
     The zero-stability result (7.3) comes with the Allan analysis of the instrument's
     record over the 7.3 rest when there is one: cut from the stream, or given as
-    ``static_record`` (the virtual bench's).
+    ``static_record`` (the virtual bench's). ``zero_stability``: which reading of B_s is
+    stated, ``"draft"`` (default) or ``"model"`` (:func:`zero_stability_readings`).
     """
     if isinstance(readings, Readings):
         proto, conflicts = resolve_protocol(readings.path, readings.metadata.get("protocol"),
@@ -796,13 +838,75 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     check_counts_agree(kept, res)
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
-    items = item_uncertainties(res, e_budget, proto, settings, kept)
     noise, noise_src = analyse_zero_stability(static_record)
+    items = item_uncertainties(res, e_budget, proto, settings, kept)
+    zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
     return CalibrationReport(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                              item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
-                             budget_notes=notes, excluded=excluded)
+                             budget_notes=notes, excluded=excluded,
+                             zero_stability_readings=zs_readings)
+
+
+def zero_stability_readings(results: CalibrationResults, items: dict, noise,
+                            protocol: Protocol, stated: str = ZERO_STABILITY_STATED) -> dict:
+    """Both readings of B_s and which one is stated (docs/draft-readings.md, 7.3).
+
+    The draft's s(M)/T with its χ² interval and k = t_95(ν_eff) is always evaluated and
+    is stated by default: on the virtual bench it covers the population value (the χ²
+    interval in ≈ 97 % of trials, U at the t-factor in ≈ 93 %). With the continuous
+    record of the 7.3 rest analysed (``noise``) and a measured Earth-rate compensation,
+    the expected B_s of the same readings from the fitted noise model
+    (:func:`gonio.analysis.noise.readings.expected_zero_stability`) is given beside it,
+    labelled; ``stated="model"`` states it instead (``items["zero_stability"]`` then
+    becomes its budget). It is not the default because the five-term model cannot
+    represent a Gauss–Markov bias whose correlation time lies inside the record, and on
+    the bench its U then misses the population value too often (``gonio validate
+    --all-items``, item ``zero_stability_model``). Returns ``{"stated", "note", "draft",
+    "model"}`` (budgets; ``model`` None when not possible), or ``{}`` when B_s was not
+    measured.
+    """
+    if stated not in ZERO_STABILITY_READINGS:
+        raise GonioError(f"zero-stability reading must be one of "
+                         f"{', '.join(ZERO_STABILITY_READINGS)}, got {stated!r}",
+                         key="zero_stability")
+    from gonio.analysis.noise.readings import expected_zero_stability
+    from gonio.specs.ogam_draft.item_uncertainty import zero_stability_model_budget
+
+    zs = results.zero_stability
+    draft = items.get("zero_stability")
+    if draft is None or not zs.measured:
+        return {}
+    out = {"stated": "draft", "draft": draft, "model": None}
+    if noise is None:
+        out["note"] = ("B_s is the draft's s(M)/T of the readings; its 95 % chi-square interval "
+                       "and k = t_95(nu_eff) cover the population value (no continuous record "
+                       "of the 7.3 rest: no noise model)")
+        return out
+    if protocol.session.earth_compensation != "measured":
+        out["note"] = ("B_s is the draft's s(M)/T: the noise model's expected B_s needs the "
+                       "measured compensation's static phase (session.earth_compensation = "
+                       f"{protocol.session.earth_compensation!r})")
+        return out
+    rd = zs.tables["readings"]
+    t = rd.loc[rd["series"] == zs.details["series"], "time_s"].to_numpy(dtype=float)
+    ez = expected_zero_stability(noise.fit, t, protocol.session.static_s)
+    model = zero_stability_model_budget(ez, k=protocol.annex_a.coverage_factor)
+    out.update(model=model, expected=ez)
+    if stated == "model":
+        items["zero_stability"] = model
+        out.update(stated="model",
+                   note=("B_s is the expected value of the draft's statistic from the noise "
+                         "model of the 7.3 record (physical model, stated on request); the "
+                         "draft's s(M)/T of the 15 readings is given beside it with its "
+                         "chi-square interval"))
+    else:
+        out["note"] = ("B_s is the draft's s(M)/T of the readings with its 95 % chi-square "
+                       "interval and k = t_95(nu_eff); the noise model's expected B_s is given "
+                       "beside it (not stated: the five-term model cannot represent a "
+                       "Gauss-Markov bias, see docs/draft-readings.md)")
+    return out
 
 
 def equal_division_for(unused: pd.DataFrame, readings: Readings,

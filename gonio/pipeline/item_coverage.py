@@ -11,8 +11,10 @@ Truths (from the bench's noise-free rerun, ``truth.json``):
 ========================  ===============================================================
 K                         mean over the 7.1 rounds of noise-free counts / true angle
 K_l                       (max − min)/mean of those noise-free K_i, %
-B_s                       ensemble value: √(mean over the trials of B_s²) (a property of
-                          the noise, not of one record)
+B_s                       population value √E[s²(M)]/T of the draft's statistic for this
+                          instrument's noise (:func:`zero_stability_truth`: the bench's own
+                          ARW, Gauss–Markov bias, RRW and quantisation through the readings'
+                          covariance, plus the noise-free readings' own spread)
 E                         per point: mean over the series of the noise-free deviation
                           (``systematic_deviation_arcsec``); every point counts
 R                         ensemble value: max over points of √(mean over trials of s_i²)
@@ -27,12 +29,16 @@ import math
 import numpy as np
 import pandas as pd
 
-__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS"]
+__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS",
+           "zero_stability_truth", "item_monte_carlo"]
 
 ITEM_TRUTHS = {
     "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
     "scale_factor_nonlinearity": "(max - min)/mean of the noise-free K_i, %",
-    "zero_stability": "ensemble: sqrt(mean over trials of B_s^2)",
+    "zero_stability": "population: sqrt(E[s(M)^2])/T from the bench's noise parameters "
+                      "(gonio.analysis.noise.readings) and the noise-free readings",
+    "zero_stability_draft": "as zero_stability; the draft's s(M)/T from the 15 readings",
+    "zero_stability_model": "as zero_stability; the noise model's expected B_s (not stated)",
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
     "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
     "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
@@ -65,6 +71,37 @@ def _consistency_truth(tr: pd.DataFrame, c, col: str, scale: float) -> float:
     return float((e.max() - e.min()) / float(c.details["reference_angle_arcsec"]) * scale)
 
 
+def zero_stability_truth(truth: dict, compensation_time_s: float | None) -> float | None:
+    """B_s,pop = √E[s²(M)]/T (°/h) of the session's 7.3 readings on the bench it ran on.
+
+    E[s²] (:func:`gonio.analysis.noise.readings.expected_sample_variance`) from the
+    bench's true noise parameters in ``truth["bench"]`` — angle random walk, the
+    Gauss–Markov bias instability (σ, τ_c), rate random walk and the counter's dithered
+    quantisation (1/12 count² per counter sample) — at the readings' times with the
+    measured compensation's static phase, plus the spread of the noise-free readings
+    (warm-up drift and whatever else the noise-free rerun holds). ``None`` without 7.3.
+    """
+    from gonio.analysis.noise.readings import expected_sample_variance
+    from gonio.units import S_PER_H, deg_sqrt_h_from_dph_sqrt_hz, \
+        dph_per_sqrt_h_from_dph_sqrt_hz_per_s
+
+    rows = [r for r in truth["readings"] if r["test"] == "zero_stability"]
+    if len(rows) < 2:
+        return None
+    inst = truth["bench"]["instrument"]
+    k = float(inst["nominal_scale_factor_counts_per_deg"])
+    t = np.array([float(r["time_s"]) for r in rows])
+    det = np.array([float(r["noise_free_counts"]) for r in rows]) / k * S_PER_H  # (°/h)·s
+    q = S_PER_H / k / math.sqrt(12.0) if inst.get("quantisation") else 0.0
+    S = expected_sample_variance(
+        t, compensation_time_s, deterministic=det, Q=q,
+        N=float(inst["arw_dpsh"]) / deg_sqrt_h_from_dph_sqrt_hz(1.0),
+        K=float(inst["rrw_dphsh"]) / dph_per_sqrt_h_from_dph_sqrt_hz_per_s(1.0),
+        gm_sigma=float(inst["bias_instability_dph"]),
+        gm_tau_s=float(inst["bias_instability_tau_s"]))
+    return math.sqrt(S) / float(t.max() - t.min())
+
+
 def item_record(report, truth: dict) -> dict:
     """Per measured item: value, U, interval, truth (None for ensemble truths) and the
     per-trial data the ensemble truths need.
@@ -76,9 +113,24 @@ def item_record(report, truth: dict) -> dict:
     res = report.results
     out: dict = {}
     for name, iu in report.item_uncertainty.items():
-        out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U),
+        out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U), "k": float(iu.k),
                      "interval": list(iu.interval) if iu.interval is not None else None,
                      "truth": None}
+    zr = getattr(report, "zero_stability_readings", None) or {}
+    if "zero_stability" in out:
+        comp = report.protocol.session.static_s \
+            if report.protocol.session.earth_compensation == "measured" else None
+        t_bs = zero_stability_truth(truth, comp)
+        out["zero_stability"]["value"] = float(report.item_uncertainty["zero_stability"].value)
+        out["zero_stability"]["truth"] = t_bs
+        out["zero_stability"]["stated"] = zr.get("stated", "draft")
+        other = "draft" if zr.get("stated") == "model" else "model"
+        d = zr.get(other)
+        if d is not None:
+            out[f"zero_stability_{other}"] = {
+                "value": float(d.value), "U": float(d.U), "k": float(d.k),
+                "interval": list(d.interval) if d.interval is not None else None,
+                "truth": t_bs, "stated": other}
     if "scale_factor" in out:
         sf = tr[tr["test"] == "scale_factor"]
         k_i = sf["noise_free_counts"].to_numpy(dtype=float) / sf["true_table_deg"].to_numpy(float)
@@ -147,7 +199,7 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
     (0.75, 4)
     """
     names = [n for n in ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                         "angle_deviation", "angle_deviation_draft", "repeatability",
+                         "zero_stability_draft", "zero_stability_model", "angle_deviation", "angle_deviation_draft", "repeatability",
                          "rate_consistency", "pointing_consistency")
              if any(n in r for r in records)]
     out = {}
@@ -162,12 +214,9 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
             if intrinsic_points is not None:
                 di = np.array([np.subtract(r["points"], intrinsic_points) for r in rs])
                 item["within_U_intrinsic"] = _cov(np.abs(di) <= U[:, None])
-        elif name in ("zero_stability", "repeatability"):
-            if name == "repeatability":
-                s2 = np.array([r["s_points"] for r in rs]) ** 2
-                truth = float(np.sqrt(s2.mean(axis=0)).max())
-            else:
-                truth = float(np.sqrt(np.mean(vals ** 2)))
+        elif name == "repeatability":
+            s2 = np.array([r["s_points"] for r in rs]) ** 2
+            truth = float(np.sqrt(s2.mean(axis=0)).max())
             item["ensemble_truth"] = truth
             item["within_U"] = _cov(np.abs(vals - truth) <= U)
             iv = np.array([r["interval"] for r in rs])
@@ -175,5 +224,58 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
         else:
             t = np.array([r["truth"] for r in rs])
             item["within_U"] = _cov(np.abs(vals - t) <= U)
+            if name.startswith("zero_stability"):
+                item["population_truth"] = float(np.mean(t))
+                item["k_mean"] = float(np.mean([r.get("k", math.nan) for r in rs]))
+                if all(r.get("interval") is not None for r in rs):
+                    iv = np.array([r["interval"] for r in rs])
+                    item["interval_holds_truth"] = _cov((iv[:, 0] <= t) & (t <= iv[:, 1]))
+                st = sorted({r.get("stated", "draft") for r in rs})
+                if st:
+                    item["stated"] = st
         out[name] = item
     return out
+
+
+def item_monte_carlo(report, trials: int, seed: int = 0) -> dict:
+    """JCGM 101 Monte Carlo of every item budget of one calibration, each compared with its
+    GUM result by the numerical tolerance test (JCGM 101 8.2; d_low, d_high, δ, passed).
+
+    K, K_l, R, C_v, C_g: :func:`gonio.specs.ogam_draft.item_uncertainty.monte_carlo_item`
+    on the additive budget; B_s: through its own model (both readings, the stated one as
+    ``zero_stability``); E: the Annex A budget of both kinds (``angle_deviation`` the
+    physical one, ``angle_deviation_draft`` the annex's four lines), drawn by
+    :func:`gonio.pipeline.calibrate.deviation_budget` with ``monte_carlo_trials``.
+    """
+    from gonio.pipeline.calibrate import deviation_budget, session_settings
+    from gonio.specs.ogam_draft.item_uncertainty import monte_carlo_item
+
+    out: dict = {}
+    for name, b in report.item_uncertainty.items():
+        if name == "angle_deviation":
+            continue
+        out[name] = monte_carlo_item(b, trials, seed).to_dict()
+    zr = getattr(report, "zero_stability_readings", None) or {}
+    other = "draft" if zr.get("stated") == "model" else "model"
+    if zr.get(other) is not None:
+        out[f"zero_stability_{other}"] = monte_carlo_item(zr[other], trials, seed).to_dict()
+    if "angle_deviation" in report.item_uncertainty:
+        settings, _ = session_settings(report.readings, report.protocol)
+        for kind, key in (("physical", "angle_deviation"), ("draft", "angle_deviation_draft")):
+            b, _, _ = deviation_budget(report.results, report.readings, report.protocol,
+                                       settings, kind=kind, monte_carlo_trials=trials,
+                                       seed=seed)
+            mc, v = b.monte_carlo, b.validation
+            out[key] = {"item": "angle_deviation", "model": "linear", "trials": int(trials),
+                        "mc_value": float(mc.value), "mc_u": float(mc.u),
+                        "mc_interval": [float(mc.low), float(mc.high)],
+                        "gum_interval": [float(x) for x in v.gum_interval],
+                        "d_low": float(v.d_low), "d_high": float(v.d_high),
+                        "delta": float(v.delta), "ndig": 2, "passed": bool(v.passed),
+                        "gum_contains_mc": bool(v.gum_interval[0] <= mc.low
+                                                and mc.high <= v.gum_interval[1])}
+    order = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+             "zero_stability_draft", "zero_stability_model", "angle_deviation",
+             "angle_deviation_draft", "repeatability", "rate_consistency",
+             "pointing_consistency")
+    return {k: out[k] for k in order if k in out}

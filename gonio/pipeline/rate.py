@@ -15,6 +15,7 @@ from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.specs import Specification, get
 from gonio.analysis.rate_records import json_safe, load_readings
+from gonio.formats.triad import FORMAT as TRIAD_FORMAT
 
 #: The specifications handled here (the optical draft keeps its own pipeline).
 RATE_SPECS = ("jjf1535-2015", "iec62047-20")
@@ -63,6 +64,9 @@ def readings_spec(path: str | Path) -> str | None:
                 key, _, value = s[1:].partition(":")
                 if key.strip() == "spec":
                     return value.strip()
+                if key.strip() == "format" and value.strip() == TRIAD_FORMAT:
+                    return "triad-alignment"        # a triad file without '# spec:'
+
             if not piece:
                 return None
 
@@ -89,9 +93,10 @@ def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
 
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en",
-              truth: dict | None = None, monte_carlo_trials: int = 0):
+              truth: dict | None = None, monte_carlo_trials: int = 0, dcc: bool = False):
     """Calibrate a rate readings file: ``results.json``, ``summary.txt`` and the certificate
-    (HTML, PDF) in ``out``. The specification is ``spec_key`` or the file's ``# spec:``."""
+    (HTML, PDF; with ``dcc`` also the DCC XML ``certificate.dcc.xml``) in ``out``. The
+    specification is ``spec_key`` or the file's ``# spec:``."""
     from gonio.report.certificate import load_lab
     from gonio.report.rate_certificate import write_rate_certificate
 
@@ -110,17 +115,24 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
                                                       ensure_ascii=False, allow_nan=False) + "\n")
         write_text(stage / "summary.txt", result.summary())
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
-    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
+                                        dcc=dcc))
     return result, paths
 
 
 def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int = 0,
-         lab=None, lang: str = "en"):
-    """Simulate the whole programme and calibrate it: readings, truth, results, certificate."""
-    p = simulate(spec_key, out, bench=bench, seed=seed)
-    truth = json.loads(Path(p["truth"]).read_text(encoding="utf-8"))
-    result, paths = calibrate(p["readings"], out, spec_key=spec_key, lab=lab, lang=lang,
-                              truth=truth)
+         lab=None, lang: str = "en", dcc: bool = True, force: bool = False):
+    """Simulate the whole programme and calibrate it: readings, truth, results, certificate
+    and (``dcc``) its DCC XML, staged and swapped into ``out`` as one set
+    (:func:`gonio.atomic.output_set`, with ``gonio-manifest.json``)."""
+    from gonio.atomic import output_set
+
+    inputs = [x for x in (lab, bench) if isinstance(x, (str, Path)) and Path(x).exists()]
+    with output_set(out, inputs=inputs, force=force) as stage:
+        p = simulate(spec_key, out, bench=bench, seed=seed)
+        truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
+        result, paths = calibrate(stage / "readings.csv", out, spec_key=spec_key, lab=lab,
+                                  lang=lang, truth=truth, dcc=dcc)
     return result, {**p, **paths}
 
 

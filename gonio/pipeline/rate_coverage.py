@@ -151,34 +151,177 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1])
 
 
+def _rate_spec(spec_key: str):
+    spec = get(spec_key)
+    if spec.key not in RATE_SPECS:
+        raise GonioError(f"{spec.key} is not a rate-gyro specification", key="--spec")
+    return spec
+
+
+def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
+    """One virtual calibration (noise on): per item {clause, value, truth, U, u_c}; value
+    etc. None when the item was not measured or has no truth in this trial."""
+    spec = _rate_spec(spec_key)
+    res = spec_module(spec).simulate(bench, protocol, int(seed), noise=True)
+    rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+    result = spec.calibrate(rd, protocol)
+    truth = res.truth["items"]
+    out = {}
+    for key, it in result.items.items():
+        t = truth.get(key, {}).get("value")
+        ok = (it.measured and it.uncertainty is not None and t is not None
+              and math.isfinite(t) and it.uncertainty.U is not None)
+        out[key] = {"clause": it.clause,
+                    **({"value": float(it.value), "truth": float(t),
+                        "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}
+                       if ok else {"value": None, "truth": None, "U": None, "u_c": None})}
+    return out
+
+
+def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None) -> pd.DataFrame:
+    """Per item over the trials (in order): :class:`ItemCoverage` rows."""
+    recs: dict[str, list] = {}
+    clauses: dict[str, str] = {}
+    for tr in trials:
+        for key, r in tr.items():
+            if items is not None and key not in items:
+                continue
+            clauses[key] = r["clause"]
+            if r["value"] is not None:
+                recs.setdefault(key, []).append((r["value"], r["truth"], r["U"], r["u_c"]))
+    rows = [item_coverage(v, k, clauses[k]).__dict__ for k, v in recs.items()]
+    return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
+
+
 def coverage_study(spec_key: str, seeds, *, bench=None, protocol=None,
                    items: tuple[str, ...] | None = None) -> pd.DataFrame:
     """Simulate (noise on) and calibrate ``spec_key`` for every seed; one row per item with
     n, hits, coverage, u_coverage (binomial), the Wilson 95 % interval and the median and
     largest |value − truth|/u_c. Items without a truth value or not measured in a seed do
     not count for that seed (``n`` says how many did)."""
-    spec = get(spec_key)
-    if spec.key not in RATE_SPECS:
-        raise GonioError(f"{spec.key} is not a rate-gyro specification", key="--spec")
-    mod = spec_module(spec)
+    spec = _rate_spec(spec_key)
     b = bench if bench is not None else study_bench(spec.default_bench)
     proto = protocol or spec.default_protocol
-    recs: dict[str, list] = {}
-    clauses: dict[str, str] = {}
-    for seed in seeds:
-        res = mod.simulate(b, proto, int(seed), noise=True)
-        rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
-        result = spec.calibrate(rd, proto)
-        truth = res.truth["items"]
-        for key, it in result.items.items():
-            if items is not None and key not in items:
-                continue
-            clauses[key] = it.clause
-            t = truth.get(key, {}).get("value")
-            if (not it.measured or it.uncertainty is None or t is None
-                    or not math.isfinite(t) or it.uncertainty.U is None):
-                continue
-            recs.setdefault(key, []).append((float(it.value), float(t),
-                                             float(it.uncertainty.U), float(it.uncertainty.u_c)))
-    rows = [item_coverage(v, k, clauses[k]).__dict__ for k, v in recs.items()]
-    return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
+    return coverage_table_from([trial_records(spec.key, b, proto, s) for s in seeds], items)
+
+
+def format_coverage(df: pd.DataFrame, title: str) -> str:
+    """The per-item coverage table as printed by ``gonio validate --spec`` and the benchmark."""
+    lines = [title, f"{'item':32s} {'clause':10s} {'n':>4s} {'cover':>6s} {'u':>6s} "
+             f"{'Wilson 95 %':>14s} {'med|e|/u':>8s} {'max|e|/u':>8s}"]
+    for r in df.itertuples():
+        flag = "" if r.coverage >= 0.9 else "  < 90 %"
+        lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} {r.u_coverage:6.3f} "
+                     f"[{r.wilson_low:.3f}, {r.wilson_high:.3f}] {r.median_norm_error:8.2f} "
+                     f"{r.max_norm_error:8.2f}{flag}")
+    lines.append("cover: fraction of trials with |value - truth| <= U; u: binomial standard "
+                 "uncertainty; |e|/u: |value - truth|/u_c")
+    return "\n".join(lines) + "\n"
+
+
+# ----------------------------------------------------------------------------- the study
+# ``gonio validate --spec``: the trials of :func:`trial_records` run in batches through
+# the engine of :mod:`gonio.pipeline.validate` (joblib locally or on Dask, batches of
+# trials, trial i seeded by SeedSequence(seed, spawn_key=(spec index, i))); the records
+# are put back in trial order, so the report does not depend on workers or batching.
+
+
+@dataclass(frozen=True)
+class RateTrialJob:
+    """What a worker needs to run trials of one rate specification (picklable)."""
+
+    spec_key: str
+    bench: object
+    protocol: object
+    seed: int
+
+
+def run_rate_batch(job: RateTrialJob, start: int, stop: int) -> list[tuple[int, int, str]]:
+    """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless)."""
+    from gonio.pipeline.validate import spawn_seed
+
+    key = RATE_SPECS.index(job.spec_key)
+    out = []
+    for i in range(start, stop):
+        sd = spawn_seed(job.seed, key, i)
+        out.append((i, sd, json.dumps(trial_records(job.spec_key, job.bench, job.protocol, sd),
+                                      sort_keys=True)))
+    return out
+
+
+@dataclass
+class RateValidationReport:
+    """A rate specification's coverage study: settings and the per-item table."""
+
+    settings: dict
+    coverage: pd.DataFrame
+
+    def to_dict(self) -> dict:
+        """Plain dict for ``validation.json`` (deterministic)."""
+        from gonio import __version__
+        return {"gonio_version": __version__, "settings": self.settings,
+                "criterion": "|value - truth| <= U, U the item's own expanded uncertainty "
+                             "(k = t95(nu_eff)); per item coverage >= 0.90 required",
+                "items": json.loads(self.coverage.to_json(orient="records", double_precision=15))}
+
+    def table(self) -> str:
+        s = self.settings
+        return format_coverage(self.coverage, f"{s['spec']}: {s['trials']} trials, seed "
+                                              f"{s['seed']}, protocol {s['protocol']}, bench "
+                                              f"{s['bench']} (study settings)")
+
+
+def rate_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str | None = None,
+                  protocol: str | None = None, workers: int | None = None,
+                  scheduler: str | None = None, batch_size: int | None = None,
+                  show_progress: bool = True) -> RateValidationReport:
+    """Coverage of every item of a rate specification over ``trials`` virtual calibrations.
+
+    ``bench``: a rate bench name or file (default the specification's), made a study bench
+    (:func:`study_bench`); ``protocol``: a protocol file or name (default: the built-in
+    protocol reduced to :data:`REDUCED`). Runs through joblib (``workers`` local processes
+    or a Dask ``scheduler``, ``batch_size`` trials per task); trial i is seeded by
+    SeedSequence(``seed``, spawn_key=(spec index, i)), so the report is the same on any
+    number of workers and any batching.
+    """
+    import tempfile
+
+    from gonio.limits import check
+    from gonio.pipeline.validate import run_parallel, study_workers
+    from gonio.progress import Progress
+
+    spec = _rate_spec(spec_key)
+    if not isinstance(trials, int) or trials < 2:
+        raise GonioError(f"--trials must be an integer >= 2, got {trials}", key="trials")
+    check("GONIO_MAX_TRIALS", trials, "--trials", unit="calibrations")
+    if seed < 0:
+        raise GonioError(f"--seed must be >= 0, got {seed}", key="seed")
+    workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
+    mod = spec_module(spec)
+    b = study_bench(bench or spec.default_bench)
+    if protocol is None:
+        with tempfile.TemporaryDirectory() as d:
+            proto = mod.load_protocol(str(reduced_protocol(spec.key, Path(d) / "reduced.toml")))
+        proto_name = f"{spec.key} reduced (gonio.pipeline.rate_coverage.REDUCED)"
+    else:
+        proto = mod.load_protocol(protocol)
+        proto_name = str(protocol)
+    job = RateTrialJob(spec.key, b, proto, int(seed))
+    tasks = [(job, a, min(a + batch_size, trials)) for a in range(0, trials, batch_size)]
+    done: dict[int, dict] = {}
+    prog = Progress(trials, label="validate: trials", force=False) if show_progress else None
+    try:
+        for batch in run_parallel(run_rate_batch, tasks, workers, scheduler):
+            for i, _, text in batch:
+                done[i] = json.loads(text)
+            if prog is not None:
+                prog.update(len(batch))
+    finally:
+        if prog is not None:
+            prog.close()
+    settings = {"spec": spec.key, "trials": trials, "seed": int(seed), "bench": b.name,
+                "study_bench": "power-on transient, thermal lag and cross-axis switched off "
+                               "(gonio.pipeline.rate_coverage.study_bench)",
+                "protocol": proto_name,
+                "seeding": "numpy SeedSequence(seed, spawn_key=(spec index, trial index))"}
+    return RateValidationReport(settings, coverage_table_from([done[i] for i in range(trials)]))

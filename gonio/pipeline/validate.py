@@ -71,7 +71,8 @@ from gonio.pipeline.item_coverage import item_coverage, trial_items
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "coverage", "binomial_u", "validate",
-           "ValidationReport", "trial_seeds", "trial_seed", "run_batch", "TrialJob",
+           "ValidationReport", "trial_seeds", "trial_seed", "spawn_seed", "run_batch", "TrialJob",
+           "study_workers", "run_parallel",
            "pack_trials", "unpack_trials", "execution_backend", "PartialStore", "EXTRA_SYMBOLS"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
@@ -219,7 +220,9 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft")
+    # the continuous record of the 7.3 rest, as a stream calibration has it (B_s's model)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft",
+                    static_record=res.static_record)
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
@@ -257,8 +260,17 @@ def trial_seed(seed: int, case: str, index: int) -> int:
     >>> trial_seed(0, "default", 4) == trial_seeds(0, "default", 5)[4]
     True
     """
-    key = list(CASES).index(case)
-    ss = np.random.SeedSequence(seed, spawn_key=(key, int(index)))
+    return spawn_seed(seed, list(CASES).index(case), index)
+
+
+def spawn_seed(seed: int, key: int, index: int) -> int:
+    """numpy SeedSequence(seed, spawn_key=(key, index)) as one 32-bit seed: the seed of
+    trial ``index`` of study part ``key``, independent of every other trial.
+
+    >>> spawn_seed(0, 0, 4) == trial_seed(0, list(CASES)[0], 4)
+    True
+    """
+    ss = np.random.SeedSequence(seed, spawn_key=(int(key), int(index)))
     return int(ss.generate_state(1, np.uint32)[0])
 
 
@@ -450,6 +462,41 @@ def execution_backend(workers: int, scheduler: str | None):
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def study_workers(trials: int, workers: int | None, scheduler: str | None,
+                  batch_size: int | None) -> tuple[int | None, int]:
+    """(workers, batch size) of a study: ``workers`` default min(2, cores), at most the
+    machine's cores (ignored with a ``scheduler``); the batch size default up to
+    :data:`MAX_BATCH`, at least 4 tasks per worker. Bad values are GonioErrors."""
+    if scheduler is None:
+        cores = available_cores()
+        if workers is None:
+            workers = min(2, cores)
+        if not isinstance(workers, int) or workers < 1:
+            raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
+        if workers > cores:
+            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
+                             "--scheduler to run on a cluster", key="workers")
+    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
+    if batch_size is None:
+        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
+    if not isinstance(batch_size, int) or batch_size < 1:
+        raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
+                         key="batch_size")
+    return workers, batch_size
+
+
+def run_parallel(fn, tasks: list[tuple], workers: int | None, scheduler: str | None):
+    """``fn(*task)`` for every task through joblib (:func:`execution_backend`), yielded as
+    they finish (unordered: the caller puts them back in trial order)."""
+    if not tasks:
+        return
+    from joblib import Parallel, delayed
+
+    with execution_backend(workers, scheduler) as n_jobs:
+        run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+        yield from run(delayed(fn)(*t) for t in tasks)
 
 
 def _fingerprint(job_settings: dict) -> str:
@@ -680,6 +727,7 @@ class ValidationReport:
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
         lines += item_coverage_lines(self.cases)
+        lines += monte_carlo_lines(self.cases)
         return "\n".join(lines) + "\n"
 
 
@@ -699,7 +747,8 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              truth: str = "systematic", u_scale: float = 1.0, workers: int | None = None,
              scheduler: str | None = None, batch_size: int | None = None,
              partial_dir: str | Path | None = None, resume: bool = False,
-             show_progress: bool = True, all_items: bool = False) -> ValidationReport:
+             show_progress: bool = True, all_items: bool = False,
+             monte_carlo: int = 0) -> ValidationReport:
     """Run ``trials`` independent virtual calibrations per case and measure coverage.
 
     Parameters
@@ -745,6 +794,10 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     all_items : bool
         Keep 7.3, 7.6 and 7.7 in the protocol, so that every item's coverage is measured
         (summary ``items``, :func:`gonio.pipeline.item_coverage.item_coverage`).
+    monte_carlo : int
+        When > 0, the JCGM 101 Monte Carlo (this many trials, fixed M) of every item
+        budget of each case's first calibration, compared with its GUM result (JCGM 101
+        8.2; summary ``monte_carlo``, :func:`gonio.pipeline.item_coverage.item_monte_carlo`).
 
     Examples
     --------
@@ -770,6 +823,9 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     if not (1.0 <= sample_rate_hz <= 100_000.0):
         raise GonioError(f"--sample-rate-hz must be within 1–100000, got {sample_rate_hz}",
                          key="sample_rate_hz")
+    if int(monte_carlo) != monte_carlo or monte_carlo < 0 or monte_carlo == 1:
+        raise GonioError(f"--monte-carlo must be 0 or an integer >= 2, got {monte_carlo}",
+                         key="monte_carlo")
     cases = list(cases)
     if not cases:
         raise GonioError("no cases given", key="cases")
@@ -795,21 +851,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
     base = bench if isinstance(bench, Bench) else load_bench(bench)
     base = replace(base, sample_rate_hz=float(sample_rate_hz))
-    if scheduler is None:
-        cores = available_cores()
-        if workers is None:
-            workers = min(2, cores)
-        if not isinstance(workers, int) or workers < 1:
-            raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
-        if workers > cores:
-            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
-                             "--scheduler to run on a cluster", key="workers")
-    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
-    if batch_size is None:
-        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
-    if not isinstance(batch_size, int) or batch_size < 1:
-        raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
-                         key="batch_size")
+    workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
     settings = {"trials": trials, "seed": seed,
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),
@@ -817,7 +859,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
                 "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"]
                 + (["7.3", "7.6", "7.7"] if all_items else []),
                 "extra_components": list(extras_used), "truth": truth,
-                "u_scale": float(u_scale),
+                "u_scale": float(u_scale), "monte_carlo_trials": int(monte_carlo),
                 "seeding": "numpy SeedSequence(seed, spawn_key=(case index, trial index))"}
     jobs = {name: TrialJob(proto, case_bench(name, base, proto), name, seed, float(u_scale),
                            truth, tuple(extras_used)) for name in cases}
@@ -841,18 +883,13 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     prog = Progress(total, label="validate: trials", done=already,
                     force=False) if show_progress else None
     try:
-        if tasks:
-            from joblib import Parallel, delayed
-
-            with execution_backend(workers, scheduler) as n_jobs:
-                run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
-                for packed in run(delayed(run_batch)(*t) for t in tasks):
-                    if store is not None:
-                        store.save(packed)
-                    got = unpack_trials(packed)
-                    done[str(packed["case"])].update(got)
-                    if prog is not None:
-                        prog.update(len(got))
+        for packed in run_parallel(run_batch, tasks, workers, scheduler):
+            if store is not None:
+                store.save(packed)
+            got = unpack_trials(packed)
+            done[str(packed["case"])].update(got)
+            if prog is not None:
+                prog.update(len(got))
     finally:
         if prog is not None:
             prog.close()
@@ -865,8 +902,44 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         res = [done[name][i] for i in range(trials)]
         cr = CaseResult(name, CASES[name], res, t_int)
         cr.summary = _summarise(cr, truth, bool(extras_used))
+        if monte_carlo:
+            cr.summary["monte_carlo"] = _monte_carlo_case(proto, b, trial_seed(seed, name, 0),
+                                                          int(monte_carlo), seed)
         out.append(cr)
     return ValidationReport(settings, out)
+
+
+def _monte_carlo_case(proto: Protocol, bench: Bench, trial_seed_: int, trials: int,
+                      seed: int) -> dict:
+    """JCGM 101 check of every item budget of the case's first calibration (trial 0)."""
+    from gonio.pipeline.item_coverage import item_monte_carlo
+
+    res = run_session(proto, bench, seed=trial_seed_)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    rep = calibrate(Readings(df, dict(res.metadata)), proto, budget="draft",
+                    static_record=res.static_record)
+    return {"trials": trials, "trial": 0, "seed": trial_seed_,
+            "criterion": "JCGM 101 8.2: d_low, d_high <= delta (u_c to 2 significant digits)",
+            "items": item_monte_carlo(rep, trials, seed)}
+
+
+def monte_carlo_lines(cases) -> list[str]:
+    """Per case and item: the JCGM 101 validation of the GUM result (pass/fail, d_low, d_high)."""
+    out = []
+    for c in cases:
+        mc = c.summary.get("monte_carlo")
+        if not mc:
+            continue
+        out += ["", f"JCGM 101 Monte Carlo per item (M = {mc['trials']}, trial 0; GUM interval "
+                    "validated when d_low, d_high <= delta)"]
+        for name, r in mc["items"].items():
+            out.append(f"{c.name:<10}{name:<28}{r['model']:<10}"
+                       f"{'pass' if r['passed'] else 'FAIL':<6}d_low {r['d_low']:.3g}  "
+                       f"d_high {r['d_high']:.3g}  delta {r['delta']:.2g}"
+                       + ("" if r["passed"] else "  (GUM interval contains MC's)"
+                          if r["gum_contains_mc"] else "  (GUM interval too short)"))
+    return out
 
 
 def _scheduler_workers(scheduler: str) -> int:

@@ -41,7 +41,7 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
 from gonio.analysis.conformity import RULES
-from gonio.report.figures import FIGURES, figure_svg, mpl_style
+from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
 from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
                                reading_note, rule_at_U, specification_text)
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
@@ -303,6 +303,16 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         elif name == "zero_stability" and item.get("range_deg_per_h") is not None:
             cell += ["; ", *segments(L["note_zero_range"],
                                      v=_num(res, f"{name}.range_deg_per_h", "sig3", U))]
+            iu = item.get("uncertainty") or {}
+            if iu.get("interval") and iu.get("nu_eff"):
+                cell += ["; ", *segments(L["note_zero_interval"],
+                                         n=_num(res, f"{name}.uncertainty.nu_eff", "k", U),
+                                         lo=_num(res, f"{name}.uncertainty.interval.0", "sig3", U),
+                                         hi=_num(res, f"{name}.uncertainty.interval.1", "sig3",
+                                                 U))]
+            if item.get("stated") == "draft" and (item.get("estimates") or {}).get("model"):
+                cell += ["; ", *segments(L["note_zero_model"],
+                                         v=_num(res, f"{name}.estimates.model.value", "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += ["; ", *segments(L["note_spread"],
                                      v=_num(res, f"{name}.spread_arcsec", "atU", U))]
@@ -320,9 +330,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
         ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
         if ks:
-            add("p", ["k: " + ("fixed by laboratory" if ks == "fixed by laboratory" else
-                               "t-factor of the effective degrees of freedom "
-                               "(welch-satterthwaite)")])
+            add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
     del st_e
@@ -490,6 +498,8 @@ h3{font-size:14px;margin:12px 0 4px}
 h2,h3{break-after:avoid;page-break-after:avoid}
 table{border-collapse:collapse;width:100%%;margin:4px 0 8px}
 tr{break-inside:avoid}
+div.keep{break-inside:avoid;page-break-inside:avoid}
+thead{display:table-header-group}
 td,th{border:1px solid #888;padding:3px 6px;text-align:left;vertical-align:top}
 th{background:#eee}
 .nb{white-space:nowrap}
@@ -579,10 +589,12 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         elif b.kind == "table":
             head, rows = b.data
             tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
-            out.append(f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
+            keep = len(rows) <= KEEP_WHOLE_ROWS         # kept whole on a printed page
+            out.append(('<div class="keep">' if keep else "")
+                       + f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
                        + "</tr></thead><tbody>"
                        + "".join("<tr>" + "".join(f"<td>{_h(c)}</td>" for c in r) + "</tr>"
-                                 for r in rows) + "</tbody></table>")
+                                 for r in rows) + "</tbody></table>" + ("</div>" if keep else ""))
         elif b.kind == "fig":
             key, cap, _ = b.data
             out.append(f'<figure id="fig-{key}">{svgs[key]}<figcaption>{html.escape(cap)}'
@@ -723,10 +735,45 @@ _H_H = 22 * _PT          # a heading's height
 _SUB_H = 16 * _PT        # a sub-heading's height
 
 
-def _layout(content: dict, L: dict) -> list[list]:
+#: A table of at most this many rows is kept on one page (when it fits on one).
+KEEP_WHOLE_ROWS: int = 8
+#: A longer table starts on a page with its head and at least this many rows; its head is
+#: repeated on every continuation page.
+KEEP_FIRST_ROWS: int = 3
+
+
+def table_start(units: list) -> float:
+    """Height a table needs where it starts: its head with its first rows — all of them for a
+    table of at most :data:`KEEP_WHOLE_ROWS` rows, else :data:`KEEP_FIRST_ROWS` — so a head
+    never ends a page with its rows on the next one."""
+    rows = [u for u in units if u[2] == "row"]
+    n = len(rows) if len(rows) <= KEEP_WHOLE_ROWS else KEEP_FIRST_ROWS
+    h = units[0][0] + sum(u[0] for u in rows[:n])
+    return h if h <= _TOP - _BOTTOM - 40 * _PT else units[0][0] + sum(u[0] for u in rows[:1])
+
+
+#: A paragraph of at most this many lines is not split across pages.
+KEEP_PARAGRAPH_LINES: int = 4
+
+
+def block_start(block: Block, units: list) -> float:
+    """Height a block needs on the page where it starts: a table's :func:`table_start`, a
+    short paragraph whole (at most :data:`KEEP_PARAGRAPH_LINES` lines), else its first unit."""
+    if not units:
+        return 0.0
+    if block.kind == "table":
+        return table_start(units)
+    lines = [u[0] for u in units if u[2] == "line"]
+    if block.kind in ("p", "notice") and len(lines) <= KEEP_PARAGRAPH_LINES:
+        return sum(lines)
+    return units[0][0]
+
+
+def layout_pages(content: dict, L: dict) -> list[list]:
     """Lay the blocks out on pages. A heading (h, sub) is kept on the page of the first
-    unit of the block after it (a table's head and first row, a figure, a paragraph's
-    first lines), so no page ends with a heading."""
+    unit of the block after it (:func:`block_start`: a table's head and first rows, a short
+    paragraph whole, a figure, a long paragraph's first line), so no page ends with a
+    heading."""
     lay = _Layout(8.5)
     fs, ln = lay.fs, lay.line
     title_h = 30 * _PT
@@ -745,17 +792,18 @@ def _layout(content: dict, L: dict) -> list[list]:
             while j < len(blocks) and blocks[j].kind in ("h", "sub"):
                 keep += units[j][0][0]
                 j += 1
-            if j < len(blocks) and units[j]:
-                keep += units[j][0][0] + (units[j][1][0] if len(units[j]) > 1
-                                          and blocks[j].kind == "table" else 0.0)
+            if j < len(blocks):
+                keep += block_start(blocks[j], units[j])
             lay.need(units[i][0][0] + keep)
+        elif b.kind in ("p", "notice"):
+            lay.need(block_start(b, units[i]))
         for k, (h, op, kind) in enumerate(units[i]):
             if kind == "row" and not lay.fits(h):          # repeat the table head
                 head_h, head_op, _ = units[i][0]
                 lay.need(h + head_h)
                 lay.put(head_h, head_op)
             elif kind == "head":
-                lay.need(h + (units[i][1][0] if len(units[i]) > 1 else 0.0))
+                lay.need(table_start(units[i]))
             if kind == "gap":
                 lay.y -= h
                 continue
@@ -834,6 +882,7 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
             gs = fig.add_gridspec(1, 1, left=_LEFT + 0.06, right=_RIGHT - 0.01,
                                   top=y - 0.05, bottom=y - _FIG_H + 0.035)
             draw(fig, gs[0], content["_report"], L, content["_truth"])
+            plain_log_ticks(fig)
             for i, t in enumerate(cap_lines):
                 fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,
                          va="baseline")
@@ -859,7 +908,7 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
 
     buf = io.BytesIO()
     with mpl_style(fonts):
-        pages = _layout(content, L)
+        pages = layout_pages(content, L)
         n = len(pages)
         with PdfPages(buf, metadata={"CreationDate": None, "ModDate": None,
                                      "Creator": "gonio", "Title": f"{L['title']} {content['id']}"}

@@ -6,6 +6,10 @@ Contents
 :data:`DCC_NS`, :data:`SI_NS`  the DCC and D-SI namespaces
 :data:`DSI_UNITS`          results.json unit → D-SI unit string (D-SI 2.2 syntax)
 :func:`dsi_decimal`        a displayed number ("4.36×10⁻⁵", "±0.15") → an si:decimal ("4.36e-5")
+:func:`element`, :func:`text_element`, :func:`real`, :func:`quantity`, :func:`list_quantity`,
+:func:`not_measured_quantity`  the shared builders (also used by :mod:`gonio.report.rate_dcc`)
+:func:`new_document`, :func:`administrative_data`, :func:`measurement_result`,
+:func:`influence_conditions`, :func:`tree_bytes`  the shared document parts
 :func:`dcc_tree`           the DCC document as an lxml element tree
 :func:`dcc_bytes`          the same as UTF-8 bytes (deterministic)
 :func:`write_dcc`          ``certificate.dcc.xml`` into a folder, atomically
@@ -95,7 +99,8 @@ def dsi_decimal(text: str) -> str:
     return t
 
 
-def _e(parent, tag: str, text: str | None = None, **attrib) -> "etree.Element":
+def element(parent, tag: str, text: str | None = None, **attrib) -> "etree.Element":
+    """A ``dcc:`` or ``si:`` child element (``tag`` with its prefix) with optional text."""
     ns, _, name = tag.partition(":")
     el = etree.SubElement(parent, f"{{{_NSMAP[ns]}}}{name}", **attrib)
     if text is not None:
@@ -103,119 +108,150 @@ def _e(parent, tag: str, text: str | None = None, **attrib) -> "etree.Element":
     return el
 
 
-def _text(parent, tag: str, text: str, lang: str | None = None) -> "etree.Element":
+def text_element(parent, tag: str, text: str, lang: str | None = None) -> "etree.Element":
     """A dcc:textType / richContentType element with one dcc:content."""
-    el = _e(parent, tag)
-    c = _e(el, "dcc:content", text)
+    el = element(parent, tag)
+    c = element(el, "dcc:content", text)
     if lang:
         c.set("lang", lang)
     return el
 
 
-def _real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | None = None,
-          p: float | None = None, label: str | None = None) -> "etree.Element":
+
+
+def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | None = None,
+         p: float | None = None, label: str | None = None,
+         dsi: str | None = None, note: str = "") -> "etree.Element":
     """si:real with the stated value, its D-SI unit and (when given) the expanded uncertainty.
 
-    Each si:value / si:valueExpandedMU carries ``refId``-free text; the path in results.json
-    is recorded in an XML comment before the si:real (for the number checks)."""
+    ``unit`` is a results.json unit of :data:`DSI_UNITS`, or ``dsi`` gives the D-SI string
+    itself. Each si:value / si:valueExpandedMU carries ``refId``-free text; the path in
+    results.json is recorded in an XML comment before the si:real (for the number checks),
+    with ``note`` (e.g. ``factor=…`` of a unit conversion) appended."""
     if isinstance(value, Num):
-        parent.append(etree.Comment(f" src={value.src} rule={value.rule} "))
-    r = _e(parent, "si:real")
+        parent.append(etree.Comment(f" src={value.src} rule={value.rule}{note} "))
+    r = element(parent, "si:real")
     if label:
-        _e(r, "si:label", label)
-    _e(r, "si:value", dsi_decimal(str(value)))
-    _e(r, "si:unit", DSI_UNITS[unit])
+        element(r, "si:label", label)
+    element(r, "si:value", dsi_decimal(str(value)))
+    element(r, "si:unit", dsi or DSI_UNITS[unit])
     if U is not None and k is not None and p is not None:
-        mu = _e(_e(r, "si:measurementUncertaintyUnivariate"), "si:expandedMU")
-        _e(mu, "si:valueExpandedMU", dsi_decimal(str(U)))
-        _e(mu, "si:coverageFactor", dsi_decimal(str(k)))
-        _e(mu, "si:coverageProbability", repr(float(p)))
+        mu = element(element(r, "si:measurementUncertaintyUnivariate"), "si:expandedMU")
+        element(mu, "si:valueExpandedMU", dsi_decimal(str(U)))
+        element(mu, "si:coverageFactor", dsi_decimal(str(k)))
+        element(mu, "si:coverageProbability", repr(float(p)))
     return r
 
 
-def _quantity(parent, name: str, value, unit: str, **kw) -> "etree.Element":
-    q = _e(parent, "dcc:quantity")
-    _text(q, "dcc:name", name)
-    _real(q, value, unit, **kw)
+def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None,
+             description: str | None = None, **kw) -> "etree.Element":
+    """dcc:quantity with a dcc:name (a ``refType``, a dcc:description) and one si:real
+    (keywords of :func:`real`)."""
+    q = element(parent, "dcc:quantity", **({"refType": ref_type} if ref_type else {}))
+    text_element(q, "dcc:name", name)
+    if description:
+        text_element(q, "dcc:description", description)
+    real(q, value, unit, **kw)
     return q
 
 
-def _list_quantity(parent, name: str, values: list, unit: str) -> None:
-    """A column of a per-point table as si:realListXMLList (values as displayed)."""
-    q = _e(parent, "dcc:quantity")
-    _text(q, "dcc:name", name)
-    srcs = " ".join(v.src if isinstance(v, Num) else "-" for v in values)
-    rule = next((v.rule for v in values if isinstance(v, Num)), "")
-    q.append(etree.Comment(f" src-list={srcs} rule={rule} "))
-    rl = _e(q, "si:realListXMLList")
-    _e(rl, "si:valueXMLList", " ".join(dsi_decimal(str(v)) if isinstance(v, Num) else "NaN"
-                                        for v in values))
-    _e(rl, "si:unitXMLList", DSI_UNITS[unit])
+
+
+def _decimal_or_nan(v) -> str:
+    """A shown number (Num or plain decimal text) as an si:decimal; "—" or None as NaN."""
+    try:
+        return dsi_decimal(str(v)) if v is not None else "NaN"
+    except ValueError:
+        return "NaN"
+
+
+def list_quantity(parent, name: str, values: list, unit: str, dsi: str | None = None) -> None:
+    """A column of a per-point table as si:realListXMLList (values as displayed, Num or
+    plain decimal text; a missing one is NaN; ``dsi`` gives the D-SI unit instead of
+    :data:`DSI_UNITS` [``unit``])."""
+    q = element(parent, "dcc:quantity")
+    text_element(q, "dcc:name", name)
+    if any(isinstance(v, Num) for v in values):
+        srcs = " ".join(v.src if isinstance(v, Num) else "-" for v in values)
+        rule = next(v.rule for v in values if isinstance(v, Num))
+        q.append(etree.Comment(f" src-list={srcs} rule={rule} "))
+    rl = element(q, "si:realListXMLList")
+    element(rl, "si:valueXMLList", " ".join(_decimal_or_nan(v) for v in values))
+    element(rl, "si:unitXMLList", dsi or DSI_UNITS[unit])
 
 
 def _contact(parent, tag: str, name: str, address: str | None, email: str | None = None):
-    c = _e(parent, tag)
-    _text(c, "dcc:name", name)
+    c = element(parent, tag)
+    text_element(c, "dcc:name", name)
     if email:
-        _e(c, "dcc:eMail", email)
-    loc = _e(c, "dcc:location")
-    _text(loc, "dcc:further", address or "not stated")
+        element(c, "dcc:eMail", email)
+    loc = element(c, "dcc:location")
+    text_element(loc, "dcc:further", address or "not stated")
     return c
 
 
-def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
-    """The DCC 3.3.0 document of one calibration (see the module docstring for its content)."""
+def new_document() -> "etree.Element":
+    """The empty dcc:digitalCalibrationCertificate root (schema version 3.3.0)."""
+    return etree.Element(f"{{{DCC_NS}}}digitalCalibrationCertificate", nsmap=_NSMAP,
+                         schemaVersion=SCHEMA_VERSION)
+
+
+def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm: str,
+                        clauses: list[str], readings_taken: list[str],
+                        readings_name: str | None = None) -> "etree.Element":
+    """dcc:administrativeData shared by every specification's DCC: the software, core data
+    (identifier, dates, place), the item, laboratory, responsible persons, customer and the
+    statements: the specification followed (``norm``, the ``clauses`` calibrated), the
+    virtual-bench notice and one statement per reading taken (already in English; named
+    ``readings_name``, default the optical certificate's heading).
+    Returns the dcc:statements element (a specification adds its own statements)."""
     from gonio import __version__
 
     L = labels("en")
-    res = report.to_dict()
-    md = res.get("metadata", {})
     virtual = lab is None
     lab_ = lab or {}
-    root = etree.Element(f"{{{DCC_NS}}}digitalCalibrationCertificate", nsmap=_NSMAP,
-                         schemaVersion=SCHEMA_VERSION)
-    adm = _e(root, "dcc:administrativeData")
-    sw = _e(_e(adm, "dcc:dccSoftware"), "dcc:software")
-    _text(sw, "dcc:name", "gonio")
-    _e(sw, "dcc:release", __version__)
-    _e(sw, "dcc:type", "application")
+    adm = element(root, "dcc:administrativeData")
+    sw = element(element(adm, "dcc:dccSoftware"), "dcc:software")
+    text_element(sw, "dcc:name", "gonio")
+    element(sw, "dcc:release", __version__)
+    element(sw, "dcc:type", "application")
 
     cert = lab_.get("certificate", {})
-    core = _e(adm, "dcc:coreData")
-    _e(core, "dcc:countryCodeISO3166_1", "CN")
-    _e(core, "dcc:usedLangCodeISO639_1", "en")
-    _e(core, "dcc:mandatoryLangCodeISO639_1", "en")
-    _e(core, "dcc:uniqueIdentifier", cert_id)
+    core = element(adm, "dcc:coreData")
+    element(core, "dcc:countryCodeISO3166_1", "CN")
+    element(core, "dcc:usedLangCodeISO639_1", "en")
+    element(core, "dcc:mandatoryLangCodeISO639_1", "en")
+    element(core, "dcc:uniqueIdentifier", cert_id)
     if cert.get("date_of_receipt"):
-        _e(core, "dcc:receiptDate", cert["date_of_receipt"])
+        element(core, "dcc:receiptDate", cert["date_of_receipt"])
     date = cert.get("date_of_calibration") or str(md.get("date") or "")[:10] or PLACEHOLDER_DATE
-    _e(core, "dcc:beginPerformanceDate", date)
-    _e(core, "dcc:endPerformanceDate", date)
-    _e(core, "dcc:performanceLocation", "other" if virtual else "laboratory")
+    element(core, "dcc:beginPerformanceDate", date)
+    element(core, "dcc:endPerformanceDate", date)
+    element(core, "dcc:performanceLocation", "other" if virtual else "laboratory")
     if cert.get("date_of_issue"):
-        _e(core, "dcc:issueDate", cert["date_of_issue"])
+        element(core, "dcc:issueDate", cert["date_of_issue"])
 
     inst = lab_.get("instrument") or {}
-    items = _e(adm, "dcc:items")
-    it = _e(items, "dcc:item")
-    _text(it, "dcc:name", inst.get("description") or str(md.get("instrument") or "instrument"))
+    items = element(adm, "dcc:items")
+    it = element(items, "dcc:item")
+    text_element(it, "dcc:name", inst.get("description") or str(md.get("instrument") or "instrument"))
     man = inst.get("manufacturer") or md.get("manufacturer")
     if man:
-        _text(_e(it, "dcc:manufacturer"), "dcc:name", str(man))
+        text_element(element(it, "dcc:manufacturer"), "dcc:name", str(man))
     if inst.get("model") or md.get("model"):
-        _e(it, "dcc:model", str(inst.get("model") or md.get("model")))
-    ids = _e(it, "dcc:identifications")
-    ident = _e(ids, "dcc:identification")
-    _e(ident, "dcc:issuer", "manufacturer")
-    _e(ident, "dcc:value", str(inst.get("serial") or md.get("serial") or "not stated"))
-    _text(ident, "dcc:name", "serial number")
+        element(it, "dcc:model", str(inst.get("model") or md.get("model")))
+    ids = element(it, "dcc:identifications")
+    ident = element(ids, "dcc:identification")
+    element(ident, "dcc:issuer", "manufacturer")
+    element(ident, "dcc:value", str(inst.get("serial") or md.get("serial") or "not stated"))
+    text_element(ident, "dcc:name", "serial number")
 
     la = lab_.get("laboratory") or {"name": "gonio virtual bench", "address": None,
                                      "contact": ""}
-    _contact(_e(adm, "dcc:calibrationLaboratory"), "dcc:contact", la["name"], la["address"],
+    _contact(element(adm, "dcc:calibrationLaboratory"), "dcc:contact", la["name"], la["address"],
              la.get("contact") if "@" in (la.get("contact") or "") else None)
     sig = lab_.get("signatory") or {}
-    persons = _e(adm, "dcc:respPersons")
+    persons = element(adm, "dcc:respPersons")
     people = [(sig.get("calibrated_by"), "calibrated by", False),
               (sig.get("checked_by"), "checked by", False),
               (sig.get("approved_by"), "approved by" + (f", {sig['approved_title']}"
@@ -227,94 +263,145 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
     for who, role, main in people:
         if not who:
             continue
-        rp = _e(persons, "dcc:respPerson")
-        _text(_e(rp, "dcc:person"), "dcc:name", who)
-        _e(rp, "dcc:role", role)
-        _e(rp, "dcc:mainSigner", "true" if main else "false")
+        rp = element(persons, "dcc:respPerson")
+        text_element(element(rp, "dcc:person"), "dcc:name", who)
+        element(rp, "dcc:role", role)
+        element(rp, "dcc:mainSigner", "true" if main else "false")
     cust = lab_.get("customer") or {"name": "not stated", "address": None}
     _contact(adm, "dcc:customer", cust["name"], cust.get("address"))
 
-    sts = _e(adm, "dcc:statements")
-    st = _e(sts, "dcc:statement", id="specification")
-    _text(st, "dcc:name", L["specification"])
-    _e(st, "dcc:norm", specification_text(res.get("specification") or "not stated", "en"))
-    _text(st, "dcc:declaration", "The calibration follows the specification's clauses "
-          + ", ".join(res[n]["clause"] for n in ITEMS if res[n]["measured"]) + ".")
+    sts = element(adm, "dcc:statements")
+    st = element(sts, "dcc:statement", id="specification")
+    text_element(st, "dcc:name", L["specification"])
+    element(st, "dcc:norm", norm)
+    text_element(st, "dcc:declaration", "The calibration follows the specification's clauses "
+          + ", ".join(clauses) + ".")
     if virtual:
-        st = _e(sts, "dcc:statement", id="virtual-bench")
-        _text(st, "dcc:name", L["virtual"])
-        _text(st, "dcc:declaration", L["virtual_note"] + (
+        st = element(sts, "dcc:statement", id="virtual-bench")
+        text_element(st, "dcc:name", L["virtual"])
+        text_element(st, "dcc:declaration", L["virtual_note"] + (
             f" Performance dates are the placeholder {PLACEHOLDER_DATE}."
             if date == PLACEHOLDER_DATE else ""))
-    for i, note in enumerate(res.get("readings_taken", []), 1):
-        st = _e(sts, "dcc:statement", id=f"reading-taken-{i}")
-        _text(st, "dcc:name", L["readings_taken"])
-        _text(st, "dcc:declaration", reading_note(note, "en"))
-    conf = conformity_for(res, lab)
-    if conf:
-        rule = conf[0]["rule"]
-        st = _e(sts, "dcc:statement", id="decision-rule")
-        _text(st, "dcc:name", "Decision rule")
-        _e(st, "dcc:norm", "ILAC-G8:09/2019")
-        _e(st, "dcc:norm", "JCGM 106:2012")
-        agreed = (lab_.get("decision_rule") or {}).get("agreed")
-        _text(st, "dcc:declaration", L[f"rule_{rule.kind}"].format(
-            r=display("k", rule.guard_factor)) + (f" Agreed: {agreed}." if agreed else ""))
-        for e in conf:
-            c = e["conformity"]
-            st = _e(sts, "dcc:statement", id=f"conformity-{e['item']}",
-                    refId=f"result-{e['item']}")
-            _text(st, "dcc:name", f"Statement of conformity: {L[e['item']]}")
-            if c is None:
-                _text(st, "dcc:declaration", L[e["reason"]])
-                continue
-            t = conformity_texts(c, res, L)
-            _text(st, "dcc:declaration",
-                  f"{t['outcome']}; limits {t['limits']}; acceptance interval {t['acceptance']}; "
-                  f"specific false-accept probability {t['pfa']}"
-                  + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}")
-            _e(st, "dcc:conformity", DCC_CONFORMITY[c.outcome])
-            data = _e(st, "dcc:data")
-            unit = res[e["item"]]["unit"]
-            for nm, v in (("lower specification limit", c.lower),
-                          ("upper specification limit", c.upper)):
-                if v is not None:
-                    _quantity(data, nm, display(_limit_rule(c), v), unit)
-            if c.false_accept_probability is not None:
-                _quantity(data, "specific false-accept probability",
-                          display("sig2", c.false_accept_probability), "one")
-            else:
-                _quantity(data, "specific false-reject probability",
-                          display("sig2", c.false_reject_probability), "one")
+    for i, note in enumerate(readings_taken, 1):
+        st = element(sts, "dcc:statement", id=f"reading-taken-{i}")
+        text_element(st, "dcc:name", readings_name or L["readings_taken"])
+        text_element(st, "dcc:declaration", note)
+    return sts
 
-    mrs = _e(root, "dcc:measurementResults")
-    mr = _e(mrs, "dcc:measurementResult")
-    _text(mr, "dcc:name", "Calibration of an optical-gyroscope angle measuring instrument")
-    um = _e(_e(mr, "dcc:usedMethods"), "dcc:usedMethod", id="method")
-    _text(um, "dcc:name", L["method"])
-    _text(um, "dcc:description", "; ".join(f"{k}: {v}" for k, v in
-                                           method_rows(report, res, L, lab, "en")))
-    _e(um, "dcc:norm", specification_text(res.get("specification") or "not stated", "en"))
-    eqs = _e(mr, "dcc:measuringEquipments")
-    stds = lab_.get("standards") or [{"name": str(md.get("table") or "rotary table"),
-                                      "identifier": "", "accuracy": (
-                                          f"MPE ±{md['table_mpe_arcsec']}″"
-                                          if md.get("table_mpe_arcsec") else ""),
-                                      "certificate": "", "traceability": ""}]
-    for s in stds:
-        eq = _e(eqs, "dcc:measuringEquipment")
-        _text(eq, "dcc:name", s["name"])
+
+def measurement_result(root, name: str, *, method: str, norm: str,
+                       standards: list[dict]) -> "etree.Element":
+    """dcc:measurementResults with one dcc:measurementResult: its ``name``, the method
+    (``method`` a one-line description, ``norm`` the specification) and the standards used
+    (lab-file ``[[standards]]`` rows). Returns the dcc:measurementResult element."""
+    L = labels("en")
+    mrs = element(root, "dcc:measurementResults")
+    mr = element(mrs, "dcc:measurementResult")
+    text_element(mr, "dcc:name", name)
+    um = element(element(mr, "dcc:usedMethods"), "dcc:usedMethod", id="method")
+    text_element(um, "dcc:name", L["method"])
+    text_element(um, "dcc:description", method)
+    element(um, "dcc:norm", norm)
+    eqs = element(mr, "dcc:measuringEquipments")
+    for s in standards:
+        eq = element(eqs, "dcc:measuringEquipment")
+        text_element(eq, "dcc:name", s["name"])
         desc = "; ".join(x for x in (s.get("accuracy"), s.get("certificate") and
                                      f"certificate {s['certificate']}",
                                      s.get("traceability") and
                                      f"traceable to {s['traceability']}") if x)
         if desc:
-            _text(eq, "dcc:description", desc)
+            text_element(eq, "dcc:description", desc)
         if s.get("identifier"):
-            ids = _e(eq, "dcc:identifications")
-            ident = _e(ids, "dcc:identification")
-            _e(ident, "dcc:issuer", "calibrationLaboratory")
-            _e(ident, "dcc:value", s["identifier"])
+            ids = element(eq, "dcc:identifications")
+            ident = element(ids, "dcc:identification")
+            element(ident, "dcc:issuer", "calibrationLaboratory")
+            element(ident, "dcc:value", s["identifier"])
+    return mr
+
+
+def influence_conditions(mr, conds: list[tuple]) -> None:
+    """dcc:influenceConditions: one per (name, value, unit[, D-SI unit]); a list value is
+    written as si:realListXMLList (none: nothing)."""
+    if not conds:
+        return
+    ics = element(mr, "dcc:influenceConditions")
+    for nm, v, u, *dsi in conds:
+        ic = element(ics, "dcc:influenceCondition")
+        text_element(ic, "dcc:name", nm)
+        data = element(ic, "dcc:data")
+        if isinstance(v, list):
+            list_quantity(data, nm, v, u, dsi=dsi[0] if dsi else None)
+        else:
+            quantity(data, nm, v, u, dsi=dsi[0] if dsi else None)
+
+
+def not_measured_quantity(data, name: str, reason: str) -> "etree.Element":
+    """dcc:quantity of an item not measured: its name and dcc:noQuantity with the reason."""
+    q = element(data, "dcc:quantity")
+    text_element(q, "dcc:name", name)
+    text_element(q, "dcc:noQuantity", f"not measured: {reason}")
+    return q
+
+
+def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
+    """The DCC 3.3.0 document of one calibration (see the module docstring for its content)."""
+    L = labels("en")
+    res = report.to_dict()
+    md = res.get("metadata", {})
+    lab_ = lab or {}
+    root = new_document()
+    norm = specification_text(res.get("specification") or "not stated", "en")
+    sts = administrative_data(
+        root, md, lab, cert_id=cert_id, norm=norm,
+        clauses=[res[n]["clause"] for n in ITEMS if res[n]["measured"]],
+        readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
+    conf = conformity_for(res, lab)
+    if conf:
+        rule = conf[0]["rule"]
+        st = element(sts, "dcc:statement", id="decision-rule")
+        text_element(st, "dcc:name", "Decision rule")
+        element(st, "dcc:norm", "ILAC-G8:09/2019")
+        element(st, "dcc:norm", "JCGM 106:2012")
+        agreed = (lab_.get("decision_rule") or {}).get("agreed")
+        text_element(st, "dcc:declaration", L[f"rule_{rule.kind}"].format(
+            r=display("k", rule.guard_factor)) + (f" Agreed: {agreed}." if agreed else ""))
+        for e in conf:
+            c = e["conformity"]
+            st = element(sts, "dcc:statement", id=f"conformity-{e['item']}",
+                    refId=f"result-{e['item']}")
+            text_element(st, "dcc:name", f"Statement of conformity: {L[e['item']]}")
+            if c is None:
+                text_element(st, "dcc:declaration", L[e["reason"]])
+                continue
+            t = conformity_texts(c, res, L)
+            text_element(st, "dcc:declaration",
+                  f"{t['outcome']}; limits {t['limits']}; acceptance interval {t['acceptance']}; "
+                  f"specific false-accept probability {t['pfa']}"
+                  + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}")
+            element(st, "dcc:conformity", DCC_CONFORMITY[c.outcome])
+            data = element(st, "dcc:data")
+            unit = res[e["item"]]["unit"]
+            for nm, v in (("lower specification limit", c.lower),
+                          ("upper specification limit", c.upper)):
+                if v is not None:
+                    quantity(data, nm, display(_limit_rule(c), v), unit)
+            if c.false_accept_probability is not None:
+                quantity(data, "specific false-accept probability",
+                          display("sig2", c.false_accept_probability), "one")
+            else:
+                quantity(data, "specific false-reject probability",
+                          display("sig2", c.false_reject_probability), "one")
+
+    stds = lab_.get("standards") or [{"name": str(md.get("table") or "rotary table"),
+                                      "identifier": "", "accuracy": (
+                                          f"MPE ±{md['table_mpe_arcsec']}″"
+                                          if md.get("table_mpe_arcsec") else ""),
+                                      "certificate": "", "traceability": ""}]
+    mr = measurement_result(
+        root, "Calibration of an optical-gyroscope angle measuring instrument",
+        method="; ".join(f"{k}: {v}" for k, v in method_rows(report, res, L, lab, "en")),
+        norm=norm, standards=stds)
     env = lab_.get("environment") or {}
     conds = []
     if env.get("temperature_c") is not None:
@@ -323,36 +410,29 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
         conds.append(("temperature", display("sig4", float(md["temperature_c"])), "degC"))
     if env.get("humidity_pct") is not None:
         conds.append(("relative humidity", display("sig3", env["humidity_pct"]), "%"))
-    if conds:
-        ics = _e(mr, "dcc:influenceConditions")
-        for nm, v, u in conds:
-            ic = _e(ics, "dcc:influenceCondition")
-            _text(ic, "dcc:name", nm)
-            _quantity(_e(ic, "dcc:data"), nm, v, u)
+    influence_conditions(mr, conds)
 
-    results = _e(mr, "dcc:results")
+    results = element(mr, "dcc:results")
     for name in ITEMS:
         item = res[name]
-        r = _e(results, "dcc:result", id=f"result-{name}")
-        _text(r, "dcc:name", f"{L[name]} ({item['clause']})")
-        data = _e(r, "dcc:data")
+        r = element(results, "dcc:result", id=f"result-{name}")
+        text_element(r, "dcc:name", f"{L[name]} ({item['clause']})")
+        data = element(r, "dcc:data")
         s = stated_item(res, name)
         if not s["measured"]:
-            q = _e(data, "dcc:quantity")
-            _text(q, "dcc:name", L[name])
-            _text(q, "dcc:noQuantity", f"not measured: {item['reason']}")
+            not_measured_quantity(data, L[name], item["reason"])
             continue
         unc = item_uncertainty(res, name)
         kw = {}
         if unc and s["U"] is not None and s["k"] is not None and unc["p"] is not None:
             kw = {"U": s["U"], "k": s["k"], "p": float(unc["p"])}
         if name == "angle_deviation" and s["signed"] is not None:
-            _quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"], **kw)
-            _quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
+            quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"], **kw)
+            quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
-                _quantity(data, "position of the extreme", s["position"], "deg")
+                quantity(data, "position of the extreme", s["position"], "deg")
         else:
-            _quantity(data, L[name], s["value"], item["unit"], **kw)
+            quantity(data, L[name], s["value"], item["unit"], **kw)
         _detail_lists(data, res, name)
     return root
 
@@ -388,23 +468,27 @@ def _detail_lists(data, res: dict, name: str) -> None:
                 ("linear drift per series", "drift_deg_per_h", "sig3", "deg/h")]
     if not cols:
         return
-    lst = _e(data, "dcc:list")
-    _text(lst, "dcc:name", "per-point table")
+    lst = element(data, "dcc:list")
+    text_element(lst, "dcc:name", "per-point table")
     if name == "pointing_consistency":
-        lq = _e(lst, "dcc:quantity")
-        _text(lq, "dcc:name", "axis direction")
-        _e(lq, "dcc:charsXMLList", " ".join(str(r["orientation"]) for r in tab))
+        lq = element(lst, "dcc:quantity")
+        text_element(lq, "dcc:name", "axis direction")
+        element(lq, "dcc:charsXMLList", " ".join(str(r["orientation"]) for r in tab))
     for label, key, rule, unit in cols:
         if key not in tab[0]:
             continue
-        _list_quantity(lst, label, [num(res, f"{name}.table.{i}.{key}", rule, U)
+        list_quantity(lst, label, [num(res, f"{name}.table.{i}.{key}", rule, U)
                                     for i in range(len(tab))], unit)
+
+
+def tree_bytes(root) -> bytes:
+    """A DCC element tree as UTF-8 XML bytes, with declaration, pretty-printed."""
+    return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
 
 def dcc_bytes(report, *, lab: dict | None = None, cert_id: str) -> bytes:
     """The DCC as UTF-8 XML bytes, with declaration, pretty-printed, deterministic."""
-    return etree.tostring(dcc_tree(report, lab=lab, cert_id=cert_id), xml_declaration=True,
-                          encoding="UTF-8", pretty_print=True)
+    return tree_bytes(dcc_tree(report, lab=lab, cert_id=cert_id))
 
 
 def write_dcc(report, out: str | Path, *, lab: dict | None = None,

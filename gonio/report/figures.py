@@ -281,6 +281,21 @@ FIGURES: tuple[tuple[str, str, Callable], ...] = (
 )
 
 
+def plain_log_ticks(fig) -> None:
+    """Label every log-scaled axis of ``fig`` in plain numbers ("0.1", "100", "1e-05"):
+    matplotlib's log labels are mathtext, which :func:`mpl_style` turns off (user text is
+    shown literally), so they would print as ``$\\mathdefault{10^{2}}$``."""
+    from matplotlib.ticker import FuncFormatter, LogFormatter
+
+    for ax in fig.axes:
+        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
+            if scale == "log":
+                axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+                # minor ticks labelled (plain text) only on an axis of about a decade or less
+                axis.set_minor_formatter(LogFormatter(labelOnlyBase=False,
+                                                      minor_thresholds=(1, 0.4)))
+
+
 def figure_svg(draw: Callable, report, L: dict, truth=None,
                fonts: tuple[str, ...] = ("DejaVu Sans",),
                figsize: tuple[float, float] = HTML_FIGSIZE) -> str:
@@ -292,6 +307,7 @@ def figure_svg(draw: Callable, report, L: dict, truth=None,
         fig = Figure(figsize=figsize)
         spec = fig.add_gridspec(1, 1)[0]
         draw(fig, spec, report, L, truth)
+        plain_log_ticks(fig)
         fig.tight_layout()
         buf = io.StringIO()
         fig.savefig(buf, format="svg", metadata={"Date": None}, bbox_inches="tight",

@@ -144,6 +144,12 @@ LABELS: dict[str, dict[str, str]] = {
     "u_ppm": {"en": "ppm", "zh": "ppm"},
     # item notes
     "note_zero_range": {"en": "range/T (definition 3.3): {v} °/h", "zh": "极差/T（定义3.3）：{v} (°)/h"},
+    "note_zero_interval": {"en": "95 % interval (χ², ν_eff = {n}): [{lo}, {hi}] °/h; U at k = "
+                                 "t₉₅(ν_eff)",
+                           "zh": "95 % 区间（χ²，ν_eff = {n}）：[{lo}, {hi}] (°)/h；U 取 k = "
+                                 "t₉₅(ν_eff)"},
+    "note_zero_model": {"en": "noise model of the 7.3 record (beside, not stated): {v} °/h",
+                        "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
@@ -192,6 +198,14 @@ LABELS: dict[str, dict[str, str]] = {
     "U_line_p": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}, "
                        "coverage probability {p}",
                  "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}，包含概率{p}"},
+    # where the coverage factor k comes from (issue 12, defect 3; zh gap of issue 13)
+    "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
+    "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
+                "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
+    "k_each_item": {"en": "U: expanded uncertainty, k = t95(ν_eff) of each item's effective "
+                          "degrees of freedom (shown per item in the budgets below); {clause}.",
+                    "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
+                          "不确定度分量）；{clause}。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "

@@ -11,7 +11,6 @@ and the figures of :mod:`gonio.report.rate_figures`.
 
 from __future__ import annotations
 
-import importlib
 import math
 from pathlib import Path
 
@@ -20,14 +19,9 @@ from gonio.report.certificate import (Block, Num, certificate_id, font_families,
                                       render_html, render_pdf)
 from gonio.report.figures import figure_svg
 from gonio.report.i18n import display, labels
+from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
 from gonio.specs import get
-
-
-def spec_content(spec_key: str):
-    """The specification's certificate data module (GROUPS, TITLES_ZH, HEADING)."""
-    spec = get(spec_key)
-    return importlib.import_module(spec.calibrate.__module__ + ".certificate")
 
 
 def _num(value, src: str, rule: str, U=None):
@@ -36,12 +30,13 @@ def _num(value, src: str, rule: str, U=None):
     return Num(display(rule, value, U), src, rule)
 
 
-def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
-    """The certificate's content: identifier, banner flag, lab name and blocks."""
-    res = result.to_json()
+def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
+                  standard_row: list) -> list[Block]:
+    """The certificate's opening blocks (JJF 1535 clause 8 a–j) for a specification whose
+    results have the per-item shape: the virtual-bench notice, laboratory, customer and
+    instrument, the standards used (``standard_row`` when the lab file names none) and the
+    environment."""
     md = res.get("metadata", {})
-    data = spec_content(result.spec_key)
-    spec = get(result.spec_key)
     virtual = lab is None
     lab_ = lab or {}
     blocks: list[Block] = []
@@ -49,7 +44,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     ns = L["not_stated"]
     if virtual:
         add("notice", L["virtual_note"])
-        add("kv", [(L["laboratory"], "gonio virtual bench"), (L["address"], "—")])
+        add("kv", [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")])
     else:
         la = lab_["laboratory"]
         add("kv", [(L["laboratory"], la["name"]), (L["address"], la["address"])])
@@ -63,18 +58,16 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
         (L["serial"], inst.get("serial") or md.get("serial") or ns),
         (L["manufacturer"], inst.get("manufacturer") or md.get("manufacturer") or ns),
         (L["date_calibration"], cert.get("date_of_calibration") or md.get("date") or ns),
-        (L["place"], cert.get("place") or ("virtual bench" if virtual else ns)),
+        (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
         (L["specification"], spec.title_zh if lang == "zh" else spec.title_en),
         (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
-                           f"{res['source']['rows']} rows)"),
+                           + L["rows_word"].format(n=res['source']['rows']) + ")"),
     ])
     add("h", L["standards"])
     std_rows = [[s["name"], s["identifier"] or "—", s["accuracy"] or "—", s["certificate"] or "—",
                  s["traceability"] or "—"] for s in (lab_.get("standards") or [])]
     if not std_rows:
-        std_rows = [[md.get("table", ns), "—",
-                     f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
-                     "—", "none (virtual bench)" if virtual else ns]]
+        std_rows = [standard_row + [L["virtual_trace"] if virtual else ns]]
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
     add("h", L["environment"])
@@ -82,6 +75,64 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     t = env.get("temperature_c")
     add("kv", [(L["temperature"], f"{t:g} °C" if t is not None else
                 f"{md.get('room_temperature_c', ns)} °C")])
+    return blocks
+
+
+def budget_rows(res: dict, L: dict, keys=None) -> list[list]:
+    """One row per uncertainty component of every measured item (or of ``keys``), then its
+    u_c and k (JJF 1535 clause 8 k; JCGM 100 8)."""
+    brows = []
+    for key, it in res["items"].items():
+        unc = it.get("uncertainty")
+        if (keys is not None and key not in keys) or not it["measured"] or not unc:
+            continue
+        for j, c in enumerate(unc["components"]):
+            if not c.get("u"):
+                continue
+            brows.append([it["clause"], c["symbol"], c["source"] or "—",
+                          _num(c["u"], f"items.{key}.uncertainty.components.{j}.u", "sig3"),
+                          _num(c["contribution"],
+                               f"items.{key}.uncertainty.components.{j}.contribution", "sig3")])
+        brows.append([it["clause"], "u_c / k", "", _num(unc["u_c"], f"items.{key}.uncertainty.u_c",
+                                                        "sig3"),
+                      _num(unc["k"], f"items.{key}.uncertainty.k", "sig3")])
+    return brows
+
+
+def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
+                   notes: list | tuple | None = None, recal: str | None = None) -> list[Block]:
+    """The readings taken (``notes``, default results.json's), the signatures and the
+    statements (clause 8 l–n; ``recal`` replaces the recalibration statement)."""
+    lab_ = lab or {}
+    blocks = [Block("h", reading_title or L["readings_taken"])]
+    blocks += [Block("p", ["• " + note])
+               for note in (notes if notes is not None else res.get("readings_taken", []))]
+    blocks.append(Block("h", L["signatory"]))
+    sig = lab_.get("signatory", {})
+    blocks.append(Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
+                               (L["checked_by"], sig.get("checked_by") or "—"),
+                               (L["approved_by"], sig.get("approved_by") or "—")]))
+    blocks += [Block("p", [L[k]]) for k in ("statement_item", "statement_copy")]
+    blocks.append(Block("p", [recal or L["statement_recal"]]))
+    return blocks
+
+
+def figure_blocks(figures, L: dict, lang: str) -> list[Block]:
+    """The figures heading and one block per (key, caption en, caption zh, draw)."""
+    return [Block("h", L["figures"])] + [
+        Block("fig", (key, cap_zh if lang == "zh" else cap_en, draw))
+        for key, cap_en, cap_zh, draw in figures]
+
+
+def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
+    """The certificate's content: identifier, banner flag, lab name and blocks."""
+    res = result.to_json()
+    md = res.get("metadata", {})
+    data = spec_content(result.spec_key)
+    spec = get(result.spec_key)
+    std = rate_standards(md, None, L["not_stated"])[0]        # the same row as the DCC's
+    blocks = header_blocks(res, spec, L, lang, lab, [std["name"], "—", std["accuracy"], "—"])
+    add = lambda kind, d, extra=None: blocks.append(Block(kind, d, extra))  # noqa: E731
     # results, grouped (Annex B)
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     rows = []
@@ -102,57 +153,50 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
                          it["unit"]])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], "U (k)", L["unit"]], rows),
         {"widths": (0.06, 0.34, 0.09, 0.22, 0.14, 0.15), "id": "results"})
-    add("p", ["U: expanded uncertainty, k = t95(ν_eff) (shown per item in the budgets below); "
-              "JJF 1535 clause 8 k)."])
-    # budgets
+    add("p", [L["k_each_item"].format(clause="JJF 1535 clause 8 k)")])
     add("h", L["budget"])
-    brows = []
-    for key, it in res["items"].items():
-        unc = it.get("uncertainty")
-        if not it["measured"] or not unc:
-            continue
-        for j, c in enumerate(unc["components"]):
-            if not c.get("u"):
-                continue
-            brows.append([it["clause"], c["symbol"], c["source"] or "—",
-                          _num(c["u"], f"items.{key}.uncertainty.components.{j}.u", "sig3"),
-                          _num(c["contribution"],
-                               f"items.{key}.uncertainty.components.{j}.contribution", "sig3")])
-        brows.append([it["clause"], "u_c / k", "", _num(unc["u_c"], f"items.{key}.uncertainty.u_c",
-                                                        "sig3"),
-                      _num(unc["k"], f"items.{key}.uncertainty.k", "sig3")])
-    add("table", ([L["clause"], L["component"], L["source"], L["u_i"], "|c_i|·u_i"], brows),
-        (0.09, 0.12, 0.49, 0.15, 0.15))
-    add("h", L["readings_taken"])
-    for note in res.get("readings_taken", []):
-        add("p", ["• " + note])
-    add("h", L["signatory"])
-    sig = lab_.get("signatory", {})
-    add("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
-               (L["checked_by"], sig.get("checked_by") or "—"),
-               (L["approved_by"], sig.get("approved_by") or "—")])
-    add("p", [L["statement_item"]])
-    add("p", [L["statement_copy"]])
-    add("p", [L["statement_recal"]])
-    add("h", L["figures"])
-    for key, cap_en, cap_zh, draw in FIGURES:
-        add("fig", (key, cap_zh if lang == "zh" else cap_en, draw))
-    return {"id": certificate_id(result, lab), "virtual": virtual,
-            "lab_name": lab_["laboratory"]["name"] if lab else "gonio virtual bench",
+    add("table", ([L["clause"], L["component"], L["source"], L["u_i"], "|c_i|·u_i"],
+                  budget_rows(res, L)), (0.09, 0.12, 0.49, 0.15, 0.15))
+    recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
+    blocks += closing_blocks(res, L, lab, recal=recal and recal[1 if lang == "zh" else 0])
+    blocks += figure_blocks(FIGURES, L, lang)
+    return {"id": certificate_id(result, lab), "virtual": lab is None,
+            "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 
 
-def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en") -> dict:
-    """``certificate.html`` and ``certificate.pdf`` of a rate-gyro calibration, atomically."""
+def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=None,
+                           lang: str = "en", dcc_fn=None) -> dict:
+    """``certificate.html`` and ``certificate.pdf`` of a per-item specification's result,
+    atomically: ``content_fn(result, L, lang, lab=…)`` gives the blocks, ``figures`` the
+    (key, caption en, caption zh, draw) the blocks refer to; with ``dcc_fn(result, lab=…,
+    cert_id=…) -> bytes`` also ``certificate.dcc.xml``, in the same staged set."""
     L = labels(lang)
     fonts = font_families(lang)
     font = fonts[0] if lang == "zh" else None
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
-    content = rate_certificate_blocks(result, L, lang, lab=lab_d)
+    content = content_fn(result, L, lang, lab=lab_d)
     content["_report"], content["_truth"] = result, truth
-    svgs = {key: figure_svg(draw, result, L, truth, fonts) for key, _, _, draw in FIGURES}
+    svgs = {key: figure_svg(draw, result, L, truth, fonts) for key, _, _, draw in figures}
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
-    return {"certificate.html": out / "certificate.html", "certificate.pdf": out / "certificate.pdf"}
+        if dcc_fn is not None:
+            write_bytes(stage / "certificate.dcc.xml",
+                        dcc_fn(result, lab=lab_d, cert_id=content["id"]))
+    names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc_fn else [])
+    return {n: out / n for n in names}
+
+
+def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",
+                           dcc: bool = False) -> dict:
+    """``certificate.html`` and ``certificate.pdf`` of a rate-gyro calibration (and with
+    ``dcc`` the PTB DCC 3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.rate_dcc`,
+    always in English), written together atomically."""
+    dcc_fn = None
+    if dcc:
+        from gonio.report.rate_dcc import rate_dcc_bytes
+        dcc_fn = rate_dcc_bytes
+    return write_spec_certificate(result, out, rate_certificate_blocks, FIGURES, truth=truth,
+                                  lab=lab, lang=lang, dcc_fn=dcc_fn)

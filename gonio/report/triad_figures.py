@@ -20,10 +20,19 @@ from gonio.analysis.triad_alignment import OFFDIAG, AlignmentResult
 from gonio.units import dps_to_dph
 
 def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure:
-    """Two panels: cross-axis sensitivity / leakage (ppm scale: ×10⁶) and the Allan
-    deviation with the averaging-time choice."""
+    """Two panels: cross-axis sensitivity / leakage (‰) and the Allan deviation with the
+    averaging-time choice (:func:`alignment_panels` on a new Figure)."""
     fig = Figure(figsize=(9.0, 3.6))
-    ax1, ax2 = fig.subplots(1, 2)
+    alignment_panels(fig, fig.add_gridspec(1, 1)[0], result, true_system_matrix)
+    fig.tight_layout()
+    return fig
+
+
+def alignment_panels(fig, spec, result: AlignmentResult, true_system_matrix=None) -> None:
+    """The two panels of :func:`alignment_figure` drawn into ``spec`` (a SubplotSpec) of
+    ``fig`` — the form the certificate uses."""
+    gs = spec.subgridspec(1, 2, wspace=0.3)
+    ax1, ax2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
     x = np.arange(6)
     s = np.asarray(result.derived["cross_axis"]) * 1e3
     u = np.asarray(result.u_derived["cross_axis"]) * 1e3
@@ -59,15 +68,24 @@ def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure
         ax2.set_ylabel("Allan deviation (°/h)")
         ax2.set_title("Averaging time from the Allan deviation")
         ax2.legend(fontsize=7)
-    fig.tight_layout()
-    return fig
 
 
 def thermal_figure(model: ChannelModel, compensation: Compensation | None = None) -> Figure:
     """Four panels for one gyro: bias(ϑ), scale factor(ϑ), ARW(ϑ) with fits and 2u bands
     at the reference supply; ramp blocks and residuals; compensation before/after."""
     fig = Figure(figsize=(10.0, 6.4))
-    axs = fig.subplots(2, 2)
+    gs = fig.add_gridspec(2, 1)
+    thermal_model_panels(fig, gs[0], model)
+    thermal_check_panels(fig, gs[1], model, compensation)
+    fig.tight_layout()
+    return fig
+
+
+def thermal_model_panels(fig, spec, model: ChannelModel) -> None:
+    """The top row of :func:`thermal_figure` in ``spec``: b(ϑ, U) and K(ϑ, U) with the fitted
+    polynomials and their 2u prediction bands."""
+    g = spec.subgridspec(1, 2, wspace=0.3)
+    axs = np.array([[fig.add_subplot(g[0]), fig.add_subplot(g[1])], [None, None]])
     pts = model.points
     grid = np.linspace(model.theta_range[0], model.theta_range[1], 100)
     ax = axs[0, 0]
@@ -97,6 +115,16 @@ def thermal_figure(model: ChannelModel, compensation: Compensation | None = None
     ax.set_xlabel("ϑ (°C)")
     ax.set_ylabel("K/k0 − 1 (ppm)")
     ax.set_title(f"K(ϑ, U), order {model.scale.n_t}/{model.scale.n_u}")
+
+
+def thermal_check_panels(fig, spec, model: ChannelModel,
+                         compensation: Compensation | None = None) -> None:
+    """The bottom row of :func:`thermal_figure` in ``spec``: the ramp blocks against the
+    static-soak model, and the before/after compensation residuals (or ARW(ϑ))."""
+    g = spec.subgridspec(1, 2, wspace=0.45)
+    axs = np.array([[None, None], [fig.add_subplot(g[0]), fig.add_subplot(g[1])]])
+    pts = model.points
+    grid = np.linspace(model.theta_range[0], model.theta_range[1], 100)
     ax = axs[1, 0]
     if model.ramp is not None:
         r = model.ramp
@@ -123,7 +151,7 @@ def thermal_figure(model: ChannelModel, compensation: Compensation | None = None
                  label="K error after (ppm)")
         ax2.set_ylabel("scale-factor error (ppm)")
         ax2.legend(fontsize=6, loc="lower right")
-        ax.set_title("compensation of a new record")
+        ax.set_title("before / after compensation")
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel("residual bias (°/s)")
         ax.legend(fontsize=6, loc="upper left")
@@ -137,5 +165,3 @@ def thermal_figure(model: ChannelModel, compensation: Compensation | None = None
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel("ARW (°/√h)")
         ax.set_title(f"ARW(ϑ), order {model.arw.n_t}")
-    fig.tight_layout()
-    return fig

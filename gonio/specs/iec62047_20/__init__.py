@@ -216,6 +216,24 @@ def truth(bench, proto: IECProtocol) -> dict:
     out["broadband_noise"] = {"value": math.sqrt(float(np.trapezoid(psd[selb], fgrid[selb]))),
                               "how": "∫ of the model's one-sided density over the broadband region "
                                      "(white, Gauss-Markov sum, random walk, quantisation)"}
+    # 5.4.5.1 b): the model's density over the Welch lines the item integrates (first line
+    # 1/(segment length) … band_hz; the per-segment mean is removed by the estimator)
+    nper = min(4096, int(nz["samples"]))
+    seli = (fgrid >= 1.0 / (nper * dts)) & (fgrid <= nz["band_hz"])
+    out["inband_noise"] = {"value": math.sqrt(float(np.trapezoid(psd[seli], fgrid[seli]))),
+                           "how": "∫ of the model's one-sided density from the first Welch line "
+                                  "(1/(4096·Δt)) to band_hz"}
+    # 5.1.3.7: expected population spread at each constant rate / the noise-free FullScale
+    from gonio.bench.rate_session import constant_rate_spread_dps
+    st = proto["stability"]
+    fs_dps = abs(float(np.ptp(g.response(np.array([x.min(), x.max()]) + ez))))
+    by_rate = {str(float(w)): constant_rate_spread_dps(bench, w, dt, st["samples"], tb)["std_dps"]
+               / fs_dps for w in st["rates_dps"] if w != 0}
+    out["sf_stability"] = {"value": max(by_rate.values()) if by_rate else None,
+                           "by_rate": by_rate,
+                           "how": "√E[population variance] of the samples at each constant rate "
+                                  "(model density, rate ripple, cross-axis × horizontal rate) / "
+                                  "the noise-free FullScale; the largest"}
     rs = proto["resolution"]
     if rs["steps_dps"]:
         from gonio.bench.rate_gyro import difference_noise_sigma

@@ -30,3 +30,7 @@ TITLES_ZH = {
 }
 
 HEADING = ("MEMS gyroscope test results (IEC 62047-20)", "MEMS陀螺仪测试结果 (IEC 62047-20)")
+
+#: The recalibration statement: IEC 62047-20 is a test method and sets no interval.
+RECAL = ("Recalibration interval: decided by the user (IEC 62047-20 is a test method and sets "
+         "none).", "复校时间间隔由用户自行确定（IEC 62047-20 为试验方法标准，未作规定）。")

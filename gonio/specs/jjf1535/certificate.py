@@ -31,3 +31,9 @@ TITLES_ZH = {
 
 #: Page title.
 HEADING = ("MEMS gyroscope calibration results", "微机电(MEMS)陀螺仪校准结果")
+
+#: The recalibration statement (JJF 1535-2015 clause 9: one year recommended; the owner may
+#: decide from the instrument's use).
+RECAL = ("Recalibration interval: one year recommended; the owner may decide from the "
+         "instrument's use (JJF 1535-2015 clause 9).",
+         "复校时间间隔建议为1年；使用者可根据实际使用情况自主决定（JJF 1535-2015 第9章）。")

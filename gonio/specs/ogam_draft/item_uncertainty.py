@@ -9,7 +9,10 @@ budget to each of the seven items, one documented function each:
                                         count quantisation (7.1)
 :func:`nonlinearity_budget`     K_l     u of the largest and smallest K_i, and the spread noise
                                         alone gives n values (7.2)
-:func:`zero_stability_budget`   B_s     χ² with ν = n − 1 (7.3): interval stated
+:func:`zero_stability_budget`   B_s     the draft's s(M)/T (7.3): χ² interval with the readings'
+                                        ν_eff, k = t_95(ν_eff)
+:func:`zero_stability_model_budget`  B_s  the expected B_s of the fitted noise model of the 7.3
+                                        record (the physically founded estimate)
 :func:`angle_deviation_budget`  E       the Annex A budget (draft, or physical) as an item budget
 :func:`repeatability_budget`    R       χ² of the largest of m standard deviations (7.5)
 :func:`consistency_budget`      C_v/C_g the two extreme conditions' deviations with their
@@ -29,22 +32,22 @@ come from.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
 import sympy
 
 from gonio.units import ARCSEC_PER_DEG
-from uncertainty import (GumResult, coverage_factor, from_u, monte_carlo, propagate, type_b,
-                         validate_gum)
+from uncertainty import (GumResult, MonteCarloResult, coverage_factor, from_u, monte_carlo,
+                         propagate, type_b, validate_gum)
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                max_stdev_interval, random_walk_stdev_dof, stdev_interval,
                                stdev_u)
 
 __all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
-           "zero_stability_budget", "angle_deviation_budget", "repeatability_budget",
-           "consistency_budget", "monte_carlo_check", "COVERAGE_PROBABILITY",
+           "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
+           "consistency_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
            "COUNT_QUANTUM_U"]
 
 #: Coverage probability of every stated U (JCGM 100 6.2.2, 95 %).
@@ -94,6 +97,10 @@ class ItemUncertainty:
     model: object = field(default=None, repr=False, compare=False)
     inputs: tuple = field(default=(), repr=False, compare=False)
     correlation: object = field(default=None, repr=False, compare=False)
+    #: JCGM 101 draws of the measurand when its model is not the additive one of
+    #: ``model`` (B_s: the χ² relation, the noise model's square root): f(rng, M) → array.
+    sampler: object = field(default=None, repr=False, compare=False)
+    model_kind: str = "linear"
 
     @property
     def U(self) -> float:
@@ -168,6 +175,86 @@ def monte_carlo_check(b: ItemUncertainty, trials: int = 200_000, seed: int = 0):
     mc = monte_carlo(b.model, list(b.inputs), int(trials), seed=seed,
                      correlation=b.correlation)
     return mc, validate_gum(b.gum, mc, ndig=1)
+
+
+@dataclass(frozen=True)
+class ItemMonteCarlo:
+    """JCGM 101 propagation of one item's model and the GUM's validation against it (8.2)."""
+
+    item: str
+    model_kind: str          # "linear" (the additive budget) or "nonlinear"
+    trials: int
+    mc_value: float
+    mc_u: float
+    mc_interval: tuple[float, float]
+    gum_interval: tuple[float, float]
+    d_low: float
+    d_high: float
+    delta: float
+    ndig: int
+    passed: bool
+
+    def to_dict(self) -> dict:
+        return {"item": self.item, "model": self.model_kind, "trials": int(self.trials),
+                "mc_value": float(self.mc_value), "mc_u": float(self.mc_u),
+                "mc_interval": [float(x) for x in self.mc_interval],
+                "gum_interval": [float(x) for x in self.gum_interval],
+                "d_low": float(self.d_low), "d_high": float(self.d_high),
+                "delta": float(self.delta), "ndig": int(self.ndig), "passed": bool(self.passed),
+                "gum_contains_mc": bool(self.gum_interval[0] <= self.mc_interval[0]
+                                        and self.mc_interval[1] <= self.gum_interval[1])}
+
+
+def monte_carlo_item(b: ItemUncertainty, trials: int = 200_000, seed: int = 0,
+                     ndig: int = 2) -> ItemMonteCarlo:
+    """JCGM 101 Monte Carlo of item budget ``b`` (fixed M = ``trials``, 7.2) and the
+    numerical tolerance test of its GUM interval against it (JCGM 101 8.2, 8.1.3: δ is half
+    a unit of the ``ndig``-th significant digit of u_c).
+
+    The additive budgets draw their own inputs (Type A lines as scaled-and-shifted t
+    with their ν, JCGM 101 6.4.9; rectangular and triangular Type B lines as stated;
+    correlated lines jointly, 6.4.8). B_s draws its measurand through its own model
+    (``b.sampler``): for the draft's s(M)/T the χ² relation σ = s·√(ν/χ²_ν), whose
+    95 % interval is the χ² interval; for the noise model's estimate the square root of
+    the readings' expected variance with normal fitted coefficients.
+
+    Examples
+    --------
+    A linear model with one dominant normal line: the MC u equals the GUM u_c (the
+    closed form √Σc²u²) and the test passes:
+
+    >>> b = repeatability_budget(0.096, 10, 12)
+    >>> r = monte_carlo_item(b, 200_000)
+    >>> r.passed, round(r.mc_u / b.u_c / math.sqrt(9 / 7), 2)
+    (True, 1.0)
+
+    The draft's B_s from a random walk's readings (ν = 2.45): the GUM's symmetric
+    s ± t_95(ν)·u is not the skewed χ² distribution of σ, and the test fails — which is why
+    the χ² interval is stated:
+
+    >>> r = monte_carlo_item(zero_stability_budget(0.002, 15), 200_000)
+    >>> r.passed, r.model_kind
+    (False, 'nonlinear')
+    """
+    if b.gum is None:
+        raise ValueError(f"{b.item}: no GUM result to validate")
+    rng = np.random.default_rng(seed)
+    if b.sampler is not None:
+        y = np.asarray(b.sampler(rng, int(trials)), dtype=float)
+        lo, hi = np.quantile(y, [(1 - COVERAGE_PROBABILITY) / 2, (1 + COVERAGE_PROBABILITY) / 2])
+        mv, mu, mlo, mhi = float(np.mean(y)), float(np.std(y, ddof=1)), float(lo), float(hi)
+        mc = MonteCarloResult(value=mv, u=mu, low=mlo, high=mhi, p=COVERAGE_PROBABILITY,
+                              trials=int(trials), shortest=False)
+    else:
+        mc = monte_carlo(b.model, list(b.inputs), int(trials), rng=rng,
+                         correlation=b.correlation)
+    v = validate_gum(b.gum, mc, ndig=ndig)
+    return ItemMonteCarlo(item=b.item, model_kind=b.model_kind, trials=int(trials),
+                          mc_value=float(mc.value), mc_u=float(mc.u),
+                          mc_interval=(float(mc.low), float(mc.high)),
+                          gum_interval=tuple(float(x) for x in v.gum_interval),
+                          d_low=float(v.d_low), d_high=float(v.d_high), delta=float(v.delta),
+                          ndig=int(ndig), passed=bool(v.passed))
 
 
 # --------------------------------------------------------------------------- 7.1, 7.2
@@ -339,8 +426,55 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
                           source=f"standard deviation of {n_readings} readings, chi-square "
                                  f"({how})"),
                    "sampling of s(M)", True, "7.3")]
-    return _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=k,
-                   interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
+    b = _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=None,
+                interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
+    s_obs = float(b_s_deg_per_h)
+    b = replace(b, model_kind="nonlinear",
+                sampler=lambda rng, m: s_obs * np.sqrt(nu / rng.chisquare(nu, m)))
+    if k is not None and abs(float(k) - b.k) > 1e-9:
+        # A fixed k presumes many degrees of freedom; with ν_eff ≈ 1–2.5 a k = 2 covers
+        # about 75 % (gonio validate --all-items): the t-factor is kept and this says so.
+        b = replace(b, k_source=f"welch-satterthwaite (the laboratory's fixed k = {float(k):g} "
+                                f"is not applied to B_s: nu_eff = {b.nu_eff:.3g} is too few "
+                                "degrees of freedom for it to give 95 %)")
+    return b
+
+
+def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUncertainty:
+    """u(B_s,pop) of the expected zero stability from the fitted noise model, °/h.
+
+    ``expected`` is a :class:`gonio.analysis.noise.readings.ExpectedZeroStability`:
+    B_s,pop = √E[s²(M)]/T of the draft's 7.3 readings computed from the five-term fit
+    of the instrument's continuous record over the 7.3 rest (the readings' covariance at
+    their own times, with the measured compensation's static phase). One Type A line,
+    u from the fit's bootstrap uncertainties, ν from Welch–Satterthwaite over the
+    terms; k the laboratory's when fixed, else t_95(ν_eff).
+
+    Examples
+    --------
+    Pure angle random walk N = 0.018 (°/h)√s (0.0003 °/√h), 15 readings 300 s apart
+    after a 60 s compensation, u(N) = 0.0002 from 20 bootstrap records:
+    V = N²(min(t_i, t_j) + t_i t_j/T_c) (the walk and the compensation's rate error), with
+    tr(P·min) = Σt − ΣΣmin/n = 31500 − 20300 = 11200 s and tr(P·ttᵀ)/T_c = (Σt² −
+    (Σt)²/n)/60 = 420000 s: E[s²] = 0.018²·431200/14 = 9.979 ((°/h)·s)², B_s,pop =
+    √9.979/4200 = 7.52e-4 °/h; u = B_s,pop·u(N)/N = 8.4e-6 °/h, ν = 20 − 1 = 19:
+
+    >>> from types import SimpleNamespace as NS
+    >>> from gonio.analysis.noise.readings import expected_zero_stability
+    >>> fit = NS(Q=0.0, N=0.018, B=0.0, K=0.0, R=0.0, u_Q=0.0, u_N=0.0002, u_B=0.0,
+    ...          u_K=0.0, u_R=0.0, n_bootstrap=20, kind="adev",
+    ...          uncertainty_method="bootstrap")
+    >>> ez = expected_zero_stability(fit, np.arange(15) * 300.0, 60.0)
+    >>> b = zero_stability_model_budget(ez)
+    >>> round(b.value * 1e4, 2), round(b.u_c * 1e6, 1), round(b.nu_eff), round(b.k, 2)
+    (7.52, 8.4, 19, 2.09)
+    """
+    lines = [_Line(from_u("m_B", 0.0, float(expected.u), dof=float(expected.dof), type="A",
+                          source=f"expected B_s of the readings from the noise model: "
+                                 f"{expected.source}"),
+                   "noise model of the 7.3 record", True, "7.3 (physical model)")]
+    b = _budget("zero_stability", "deg/h", float(expected.value), lines, k=k)
+    return replace(b, model_kind="nonlinear", sampler=expected.sample)
 
 
 def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,

@@ -1,33 +1,75 @@
-"""The triad-alignment calibration: readings → alignment and (optionally) thermal model."""
+"""The triad-alignment calibration: readings → items (results.json shape) with the alignment
+and, when the readings include a thermal programme, the extended temperature / supply model.
+
+The items have the shape of every other specification's (value, unit, clause, measured,
+reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.analysis.rate_records.Item`):
+
+* ``M_ij`` — the nine elements of the system matrix M (output per °/s), alignment §4;
+* ``b_i`` — the bias vector (output units), the ± rates cancelling it (article eq. 28–30a);
+* ``S_ij`` — cross-axis sensitivities M_ij/M_ii (IEC 62047-20 5.2);
+* ``L_ij`` — residual cross-axis leakage after alignment, M̂⁻¹M − I: 0 by construction, with
+  its uncertainty (what the alignment leaves);
+* ``averaging_time`` — the averaging time chosen from the Allan deviation (article eq. 30b);
+* ``K_<gyro>_<term>``, ``b_<gyro>_<term>``, ``ARW_<gyro>_<term>`` — the coefficients of the
+  identified K(ϑ, U), b(ϑ, U), ARW(ϑ) polynomials (thesis eq. 6.17–6.20), orders chosen by
+  the stated criterion.
+
+Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: s²(XᵀWX)⁻¹, ν = n − p,
+k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
+is given beside it. A readings file without alignment (or thermal) rows, or one whose dwells
+do not determine M and b, gives those items not measured with the reason.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from gonio.analysis.thermal_model import ThermalModelResult, identify_thermal_model
-from gonio.analysis.triad_alignment import AlignmentResult, cross_axis_table, estimate_alignment
+import numpy as np
+from scipy import stats
+
+from gonio.analysis.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
+                                         not_measured, source_info)
+from gonio.analysis.thermal_model import (Compensation, ThermalModelResult, compensate_record,
+                                          identify_thermal_model)
+from gonio.analysis.triad_alignment import (COVERAGE, OFFDIAG, AlignmentResult,
+                                            cross_axis_table, estimate_alignment)
 from gonio.errors import GonioError
-from gonio.formats.triad import TriadReadings, json_safe, read_triad_readings
+from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
+
+KEY = "triad-alignment"
+TITLE_EN = ("Gyro triad: mechanical misalignment budget, electrical alignment and extended "
+            "temperature / supply model")
+AXES = "xyz"
+#: Largest ratio of the alignment fit's residual noise to the noise the dwells' own sample
+#: deviations imply before the dwells are called inconsistent (a wrong orientation or sign).
+CONSISTENCY_RATIO = 20.0
+
+#: The readings taken that every results.json lists.
+READINGS_TAKEN = (
+    "Alignment: one least-squares fit of G = M ω + b over every dwell (± rates about each "
+    "axis and the static positions), the Earth rate of every orientation averaged over the "
+    "swept table angle; for one ± pair it reduces to the article's difference formula.",
+    "Uncertainties: Type A from the fit residuals, k = t(ν) for 95.45 %; the Monte Carlo "
+    "(JCGM 101) standard uncertainty is given beside it when trials were run.",
+    "Residual leakage after alignment: M̂⁻¹M − I is zero for the estimate itself; its "
+    "uncertainty is what the alignment leaves.",
+    "Averaging time: the shortest octave τ at which every gyro's Allan deviation of the "
+    "static record is below ω sin ψ_T / 10 (article eq. 30b).",
+    "Temperature model: polynomial orders chosen by the stated criterion, not fixed; the "
+    "model is fed with the gyro's internal temperature sensor (thesis §6.1).",
+)
 
 
 @dataclass
-class TriadCalibration:
-    """Alignment result (when the readings have alignment rows) and thermal model (when
-    they have thermal rows)."""
+class TriadCalibration(RateCalibrationResult):
+    """The items and the analysis objects they came from (for the certificate's pages)."""
 
-    alignment: AlignmentResult | None
-    thermal: ThermalModelResult | None
-    source: str = ""
-
-    def to_json(self) -> dict:
-        out = {"spec": "triad-alignment", "source": self.source,
-               "alignment": None if self.alignment is None else self.alignment.to_json(),
-               "thermal_model": None if self.thermal is None else self.thermal.to_json()}
-        if self.alignment is not None:
-            out["cross_axis"] = cross_axis_table(self.alignment).to_dict(orient="records")
-        return json_safe(out)
+    alignment: AlignmentResult | None = None
+    thermal: ThermalModelResult | None = None
+    compensation: dict = field(default_factory=dict)
 
 
 def _as_readings(readings) -> TriadReadings:
@@ -39,25 +81,241 @@ def _as_readings(readings) -> TriadReadings:
                      f"{type(readings).__name__}")
 
 
-def calibrate(readings, protocol=None, *, robust: bool = False, monte_carlo: int = 0,
+def _type_a(symbol: str, source: str, u: float, nu: float, u_mc: float | None = None,
+            trials: int = 0) -> Uncertainty:
+    """A one-component Type A uncertainty with k = t_0.9545(ν) (JCGM 100 4.2, G.3)."""
+    k = float(stats.t.ppf(0.5 + COVERAGE / 2, nu)) if nu > 0 else math.nan
+    comp = [{"symbol": symbol, "source": source, "type": "A", "u": float(u), "c": 1.0,
+             "contribution": float(u), "dof": float(nu)}]
+    mc = None if u_mc is None or not math.isfinite(u_mc) else {"trials": trials, "u": float(u_mc)}
+    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc)
+
+
+def alignment_items(al: AlignmentResult, trials: int) -> dict[str, Item]:
+    """The alignment items (module docstring) from an :class:`AlignmentResult`."""
+    unit = al.output_unit or "output"
+    items: dict[str, Item] = {}
+    um = al.u_system_matrix
+    ub = al.u_bias_output
+    mc_m = None if al.u_mc_theta is None else al.u_mc_theta.reshape(3, 4)
+    fit = "weighted least-squares fit of all dwells, s²(XᵀWX)⁻¹"
+    for i in range(3):
+        for j in range(3):
+            key = f"M_{AXES[i]}{AXES[j]}"
+            items[key] = Item(key, f"system matrix {key}", "§4 eq. 14", f"{unit}/(°/s)",
+                              float(al.system_matrix[i, j]), uncertainty=_type_a(
+                                  key, fit, um[i, j], al.dof[i],
+                                  None if mc_m is None else mc_m[i, j], trials))
+    for i in range(3):
+        key = f"b_{AXES[i]}"
+        items[key] = Item(key, f"bias {key}", "§4 eq. 28–30a", unit, float(al.bias_output[i]),
+                          uncertainty=_type_a(key, fit, ub[i], al.dof[i],
+                                              None if mc_m is None else mc_m[i, 3], trials),
+                          details={"bias_dps": float(al.derived["bias_dps"][i]),
+                                   "u_bias_dps": float(al.u_derived["bias_dps"][i])})
+    tab = cross_axis_table(al)
+    nu_min = float(np.min(al.dof))
+    for n, r in enumerate(tab.itertuples(index=False)):
+        i, j = AXES.index(r.gyro), AXES.index(r.about)
+        key = f"S_{r.gyro}{r.about}"
+        items[key] = Item(key, f"cross-axis sensitivity {key} = M_{r.gyro}{r.about}/M_{r.gyro}"
+                          f"{r.gyro}", "IEC 62047-20 5.2", "1", float(r.sensitivity),
+                          uncertainty=_type_a(key, "first-order propagation of the fit (JCGM 100 "
+                                              "5.1.2)", r.u_gum, al.dof[i], r.u_mc, trials))
+    for name in OFFDIAG:
+        i, j = AXES.index(name[0]), AXES.index(name[1])
+        key = f"L_{name}"
+        items[key] = Item(key, f"residual leakage after alignment {key} (M̂⁻¹M − I)",
+                          "§4 M̂⁻¹M − I", "1", 0.0, uncertainty=_type_a(
+                              key, "δL = −M̂⁻¹ δM, first order", al.leakage_u[i, j], nu_min))
+    av = al.averaging
+    if av is None:
+        items["averaging_time"] = not_measured(
+            "averaging_time", "averaging time from the Allan deviation", "§4 eq. 30b", "s",
+            "the readings have no static record (rows test = static)")
+    else:
+        need = [t for t in av.tau_needed_s if math.isfinite(t)]
+        if len(need) < 3:
+            items["averaging_time"] = not_measured(
+                "averaging_time", "averaging time from the Allan deviation", "§4 eq. 30b", "s",
+                f"the Allan deviation of the static record never falls below the limit "
+                f"{av.noise_limit_dps:.3g} °/s")
+        else:
+            items["averaging_time"] = Item(
+                "averaging_time", "averaging time from the Allan deviation", "§4 eq. 30b", "s",
+                float(max(need)), details={
+                    "noise_limit_dps": av.noise_limit_dps, "target_deg": av.target_deg,
+                    "test_rate_dps": av.test_rate_dps, "tau_needed_s": av.tau_needed_s,
+                    "shortest_dwell_s": av.shortest_dwell_s, "sufficient": av.sufficient})
+    return items
+
+
+ALIGNMENT_KEYS = ([f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in AXES]
+                  + [f"S_{n}" for n in OFFDIAG] + [f"L_{n}" for n in OFFDIAG]
+                  + ["averaging_time"])
+
+
+def _alignment_not_measured(reason: str, unit: str) -> dict[str, Item]:
+    out = {}
+    for key in ALIGNMENT_KEYS:
+        u = {"M": f"{unit}/(°/s)", "b": unit, "S": "1", "L": "1", "a": "s"}[key[0]]
+        clause = {"M": "§4 eq. 14", "b": "§4 eq. 28–30a", "S": "IEC 62047-20 5.2",
+                  "L": "§4 M̂⁻¹M − I", "a": "§4 eq. 30b"}[key[0]]
+        out[key] = not_measured(key, key.replace("_", " "), clause, u, reason)
+    return out
+
+
+def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
+    """GonioError when the fit's residual noise is more than :data:`CONSISTENCY_RATIO` times
+    what the dwells' own sample deviations give (sd/√n): one M and b cannot explain the
+    dwells — an orientation (``up``, ``north0``) or a rate sign is wrong. Names the line of
+    the largest residual."""
+    rows = readings.rows("alignment")
+    n = rows["n_samples"].to_numpy(float)
+    for c, ch in enumerate(OUT):
+        sd = rows[f"sd_{AXES[c]}"].to_numpy(float)
+        ok = np.isfinite(sd) & (sd > 0)
+        if not ok.any() or al.residuals is None:
+            continue
+        expect = np.median(sd[ok] / np.sqrt(n[ok]))
+        r = np.abs(al.residuals[:, c]) / (sd / np.sqrt(n))
+        r = np.where(ok, r, 0.0)
+        rms = float(np.sqrt(np.mean((al.residuals[:, c] / expect) ** 2)))
+        if rms > CONSISTENCY_RATIO:
+            k = int(np.argmax(r))
+            raise GonioError(
+                f"the dwells are inconsistent with one M and b: gyro {AXES[c]}'s fit residuals "
+                f"are {rms:.0f}× the dwell noise, largest at line {int(rows['line'].iloc[k])} "
+                f"({r[k]:.0f}×) — a wrong orientation (up, north0) or rate sign?",
+                file=readings.path, line=int(rows["line"].iloc[k]))
+
+
+def thermal_items(th: ThermalModelResult, unit: str) -> dict[str, Item]:
+    """One item per coefficient of every identified polynomial, in physical units."""
+    items: dict[str, Item] = {}
+    for ch, m in th.channels.items():
+        for name, fit, yunit in (("K", m.scale, f"{unit}/(°/s)"), ("b", m.bias, "°/s"),
+                                 ("ARW", m.arw, "°/√h")):
+            if fit is None:
+                continue
+            c = fit.coefficients()
+            for term in [t for t in c if not t.startswith("u_")]:
+                if term == "c0":
+                    tu, title = yunit, f"{name}_{ch} at the reference (ϑ = 0, U = 0)"
+                elif term.startswith("theta"):
+                    p = int(term[5:])
+                    tu = f"{yunit}/°C" + (f"^{p}" if p > 1 else "")
+                    title = f"{name}_{ch}: ϑ^{p} coefficient"
+                else:
+                    p = int(term[1:])
+                    tu = f"{yunit}/V" + (f"^{p}" if p > 1 else "")
+                    title = f"{name}_{ch}: U^{p} coefficient"
+                key = f"{name}_{ch}_{term}"
+                clause = {"K": "thesis eq. 6.17", "b": "thesis eq. 6.18",
+                          "ARW": "thesis eq. 6.20"}[name]
+                items[key] = Item(key, title, clause, tu, c[term], uncertainty=_type_a(
+                    key, f"least-squares fit of the soak points, order ϑ {fit.n_t} / U "
+                    f"{fit.n_u} by {fit.criterion}", c["u_" + term], fit.dof),
+                    details={"order_temperature": fit.n_t, "order_supply": fit.n_u,
+                             "criterion": fit.criterion})
+    return items
+
+
+def prediction_table(th: ThermalModelResult, n: int = 7) -> dict:
+    """Per gyro: predicted K and b with expanded uncertainties U = k u (k = t_0.9545(ν) of each
+    fit) at ``n`` temperatures across the identified range, at the lowest, nominal and
+    highest supply — the model's prediction band (parameter uncertainty only)."""
+    out = {}
+    for ch, m in th.channels.items():
+        g = m.prediction_grid(n)
+        ks = float(stats.t.ppf(0.5 + COVERAGE / 2, m.scale.dof))
+        kb = float(stats.t.ppf(0.5 + COVERAGE / 2, m.bias.dof))
+        out[ch] = {"theta_c": g["theta_c"].tolist(), "u_v": g["u_v"].tolist(),
+                   "scale": g["scale"].tolist(), "U_scale": (ks * g["u_scale"]).tolist(),
+                   "bias_dps": g["bias_dps"].tolist(), "U_bias_dps": (kb * g["u_bias_dps"]).tolist(),
+                   "k_scale": ks, "k_bias": kb}
+    return out
+
+
+def _thermal_readings(r: TriadReadings, thermal) -> TriadReadings | None:
+    """The thermal programme: ``thermal`` (path or readings) if given, else the file the
+    readings' ``# thermal_readings:`` metadata names (relative to the readings' folder), else
+    the readings themselves when they hold thermal rows, else None."""
+    if thermal is not None:
+        return _as_readings(thermal)
+    name = r.metadata.get("thermal_readings", "").strip()
+    if name:
+        p = Path(name)
+        if not p.is_absolute() and r.path:
+            p = Path(r.path).parent / p
+        if not p.is_file():
+            raise GonioError(f"the thermal readings {name!r} it names are not there ({p})",
+                             file=r.path, key="thermal_readings")
+        return read_triad_readings(p)
+    return r if (r.data["test"] == "thermal").any() else None
+
+
+def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: bool = False,
               seed: int = 0, target_deg: float = 0.1, criterion: str = "bic",
-              temperature: str = "sensor") -> TriadCalibration:
-    """Alignment (:func:`gonio.analysis.triad_alignment.estimate_alignment`) from the
-    ``alignment`` rows and the extended model
-    (:func:`gonio.analysis.thermal_model.identify_thermal_model`) from the ``thermal``
-    rows of a triad readings file. ``protocol`` is accepted for the plug-in interface and
-    not needed: everything the analysis uses is in the file."""
+              temperature: str = "sensor", thermal=None, **_options) -> TriadCalibration:
+    """Every item of the module docstring from a triad readings file (path or TriadReadings).
+
+    Alignment from the ``alignment`` (and ``static``) rows
+    (:func:`gonio.analysis.triad_alignment.estimate_alignment`), Monte Carlo with
+    ``monte_carlo_trials`` draws; the extended model from the thermal programme
+    (:func:`_thermal_readings`; :func:`gonio.analysis.thermal_model.identify_thermal_model`),
+    applied back to the same record for the before/after comparison. ``protocol`` is
+    accepted for the plug-in interface: everything the analysis uses is in the file.
+    """
+
     r = _as_readings(readings)
-    tests = set(r.data["test"])
-    al = th = None
-    if "alignment" in tests:
-        al = estimate_alignment(r, robust=robust, monte_carlo=monte_carlo, seed=seed,
-                                target_deg=target_deg)
-    if "thermal" in tests:
-        th = identify_thermal_model(r, criterion=criterion, temperature=temperature)
-    if al is None and th is None:
-        raise GonioError(f"{r.path}: no alignment or thermal rows")
-    return TriadCalibration(al, th, str(r.path or ""))
+    unit = r.metadata.get("output_unit", "output")
+    items: dict[str, Item] = {}
+    al = None
+    if (r.data["test"] == "alignment").any():
+        try:
+            al = estimate_alignment(r, robust=robust, monte_carlo=monte_carlo_trials, seed=seed,
+                                    target_deg=target_deg)
+            if not robust:
+                consistency_check(al, r)
+        except GonioError as exc:
+            al = None
+            items.update(_alignment_not_measured(f"the data were refused: {exc.message}", unit))
+        else:
+            items.update(alignment_items(al, monte_carlo_trials))
+    else:
+        items.update(_alignment_not_measured("the readings have no alignment rows", unit))
+    tr = _thermal_readings(r, thermal)
+    th = None
+    comp: dict[str, Compensation] = {}
+    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None}
+    if tr is None:
+        items["thermal_model"] = not_measured(
+            "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)", "thesis eq. 6.14",
+            "", "the readings include no thermal programme (no thermal rows, no "
+                "'# thermal_readings:' file)")
+    else:
+        try:
+            th = identify_thermal_model(tr, criterion=criterion, temperature=temperature)
+            comp = {ch: compensate_record(m, tr) for ch, m in th.channels.items()}
+        except GonioError as exc:
+            th = None
+            items["thermal_model"] = not_measured(
+                "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)",
+                "thesis eq. 6.14", "", f"the data were refused: {exc.message}")
+        else:
+            items.update(thermal_items(th, unit))
+            tj = th.to_json()
+            for ch, c in comp.items():
+                tj["channels"][ch]["compensation"] = c.to_json()
+            tj["source"] = source_info(tr)
+            tj["prediction_U"] = prediction_table(th)
+            extra["thermal_model"] = tj
+    if al is not None:
+        extra["cross_axis"] = cross_axis_table(al).to_dict(orient="records")
+    src = source_info(r)
+    return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),
+                            extra=json_safe(extra), alignment=al, thermal=th, compensation=comp)
 
 
 def article_budget() -> MisalignmentBudget:
@@ -70,4 +328,5 @@ def article_budget() -> MisalignmentBudget:
                                psi_imu_deg=1.0)
 
 
-__all__ = ["TriadCalibration", "calibrate", "article_budget", "ARTICLE_WORKED_EXAMPLE"]
+__all__ = ["TriadCalibration", "calibrate", "article_budget", "ARTICLE_WORKED_EXAMPLE",
+           "ALIGNMENT_KEYS", "KEY"]

@@ -1,0 +1,88 @@
+"""The gyro-triad pipeline (``triad-alignment``): calibrate a triad readings file into
+``results.json``, ``summary.txt`` and the certificate, and the demo (simulate + calibrate as
+one staged output set, like the optical demo).
+
+Every function returns data (the result, the paths); ``gonio calibrate`` and ``gonio demo
+--spec triad-alignment`` are thin layers over them.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from gonio.atomic import output_dir, output_set, write_text
+from gonio.report.certificate import load_lab
+from gonio.report.triad_certificate import write_triad_certificate
+from gonio.specs import get
+
+KEY = "triad-alignment"
+
+
+def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=None,
+              monte_carlo_trials: int = 0, robust: bool = False):
+    """Calibrate a triad readings file (:func:`gonio.specs.triad_alignment.calibration.calibrate`;
+    the thermal programme from ``thermal`` or the readings' ``# thermal_readings:``) and write
+    ``results.json``, ``summary.txt``, ``certificate.html`` and ``certificate.pdf`` into
+    ``out`` (each atomically). Returns (result, paths)."""
+    lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
+    result = get(KEY).calibrate(readings, monte_carlo_trials=monte_carlo_trials, robust=robust,
+                                thermal=thermal)
+    out = Path(out)
+    tables = result_tables(result)
+    with output_dir(out) as stage:
+        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
+                                                      ensure_ascii=False, allow_nan=False) + "\n")
+        write_text(stage / "summary.txt", result.summary())
+        for name, df in tables.items():
+            write_text(stage / "tables" / name, df.to_csv(index=False,
+                                                          lineterminator="\n"))
+    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths.update({f"tables/{n}": out / "tables" / n for n in tables})
+    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    return result, paths
+
+
+def result_tables(result) -> dict:
+    """The result's tables as DataFrames, by file name (``tables/*.csv`` beside results.json):
+    ``items.csv`` (every measured item: key, value, unit, u, U, k, ν) and, per
+    modelled gyro, ``thermal_prediction_<gyro>.csv`` (the prediction band)."""
+    import pandas as pd
+
+    rows = []
+    for key, it in result.items.items():
+        if not it.measured:
+            continue
+        u = it.uncertainty
+        rows.append({"item": key, "clause": it.clause, "value": it.value, "unit": it.unit,
+                     "u": None if u is None else u.u_c, "U": None if u is None else u.U,
+                     "k": None if u is None else u.k, "nu": None if u is None else u.nu_eff})
+    out = {"items.csv": pd.DataFrame(rows, columns=["item", "clause", "value", "unit", "u", "U",
+                                                    "k", "nu"])}
+    tm = result.extra.get("thermal_model") or {}
+    for ch, pr in (tm.get("prediction_U") or {}).items():
+        out[f"thermal_prediction_{ch}.csv"] = pd.DataFrame(
+            {k: v for k, v in pr.items() if isinstance(v, list)})
+    return out
+
+
+#: Monte Carlo trials of the demo's uncertainties (JCGM 101 beside the GUM).
+DEMO_MONTE_CARLO = 2000
+
+
+def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = "en",
+         force: bool = False, monte_carlo_trials: int = DEMO_MONTE_CARLO):
+    """Simulate the triad protocol on the bench (readings.csv with the alignment session,
+    thermal.csv with the chamber programme, truth.json) and calibrate it, the whole set
+    staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`)."""
+    from gonio.specs.triad_alignment.session import simulate
+
+    spec = get(KEY)
+    lab_d = load_lab(lab) if lab else None          # validate inputs before simulating
+    inputs = [x for x in (lab, bench) if isinstance(x, (str, Path)) and Path(x).exists()]
+    with output_set(out, inputs=inputs, force=force) as stage:
+        sim = simulate(spec.default_protocol, bench or spec.default_bench, seed, out)
+        truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
+        result, paths = calibrate(stage / "readings.csv", out, lab=lab_d, lang=lang,
+                                  truth=truth, monte_carlo_trials=monte_carlo_trials)
+    return result, {**sim, **paths}

@@ -1,0 +1,26 @@
+"""What the rate-gyro certificate and its DCC both take from a calibration: the
+specification's certificate content (its groups and titles) and the standards used."""
+
+from __future__ import annotations
+
+import importlib
+
+from gonio.specs import get
+
+
+def spec_content(spec_key: str):
+    """The specification's certificate data module (GROUPS, TITLES_ZH, HEADING)."""
+    spec = get(spec_key)
+    mod = importlib.import_module(spec.calibrate.__module__)     # a package or a submodule
+    pkg = mod.__name__ if hasattr(mod, "__path__") else mod.__name__.rpartition(".")[0]
+    return importlib.import_module(pkg + ".certificate")
+
+
+def rate_standards(md: dict, lab: dict | None, not_stated: str = "not stated") -> list[dict]:
+    """The standards used: the lab file's ``[[standards]]``, else the readings' equipment
+    (``table`` metadata, the rate table's U_rel at k = 2) — the certificate's and the DCC's."""
+    if lab and lab.get("standards"):
+        return list(lab["standards"])
+    return [{"name": md.get("table", not_stated), "identifier": "",
+             "accuracy": f"rate U_rel = {2 * float(md.get('rate_table_u_rel', 'nan')):.2g} (k = 2)",
+             "certificate": "", "traceability": "none (virtual bench)" if lab is None else not_stated}]

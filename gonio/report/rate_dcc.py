@@ -1,0 +1,225 @@
+"""The Digital Calibration Certificate (PTB DCC 3.3.0) of a rate-gyro calibration
+(JJF 1535-2015, IEC 62047-20), built on the shared builders of :mod:`gonio.report.dcc`.
+
+Contents
+========
+=========================  ==============================================================
+:data:`RATE_DSI`           results.json unit of a rate item → (D-SI unit, factor)
+:data:`OUTPUT_DSI`         the readings' ``output_unit`` → D-SI of the scale factor
+:func:`dsi_unit`           the (D-SI unit, factor) of an item's unit
+:func:`clause_ref_type`    the refType naming an item's clause
+:func:`rate_dcc_tree`      the DCC document as an lxml element tree
+:func:`rate_dcc_bytes`     the same as UTF-8 bytes (deterministic)
+=========================  ==============================================================
+
+What the rate DCC holds:
+
+administrativeData
+    as the optical-gyro DCC (:func:`gonio.report.dcc.administrative_data`): software,
+    core data, item, laboratory, persons, customer; statements: the specification and
+    the clauses calibrated, the virtual-bench notice, every reading taken, and how U is
+    stated (k = t₉₅(ν_eff), p = 95 %).
+measurementResults
+    the method (specification, protocol, readings file and its SHA-256), the standards,
+    the influence conditions (room temperature, nominal supply voltage, site latitude,
+    and the settings the items were measured at: scale-factor rates, chamber temperature
+    points, supply voltages, vibration frequencies — each a list with its D-SI unit), and
+    one dcc:result per item in the certificate's groups (JJF 1535 Annex B; IEC 62047-20
+    clause 5): a dcc:quantity whose name carries the clause and whose ``refType`` names it
+    (:func:`clause_ref_type`), with the value, the D-SI unit and the expanded uncertainty
+    (U, k, p); an item not measured is a dcc:noQuantity with its reason.
+
+Numbers are the ones the certificate prints (value 4 significant digits, U 2, k 3;
+:func:`gonio.report.i18n.display`); an XML comment before each si:real records its path
+in results.json, its display rule and, for the per-g items, the factor applied: D-SI has
+no unit for the standard acceleration of gravity, so (°/h)/g and (°/s)/g are written per
+m s⁻² (value and U divided by g_n = 9.80665 m s⁻²). Temperature coefficients are per
+kelvin (a difference of 1 °C is 1 K).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from lxml import etree
+
+from gonio.errors import GonioError
+from gonio.report.certificate import Num
+from gonio.report.dcc import (administrative_data, element, influence_conditions,
+                              measurement_result, new_document,
+                              not_measured_quantity, quantity, text_element, tree_bytes)
+from gonio.report.i18n import display
+from gonio.report.rate_content import rate_standards, spec_content
+from gonio.specs import get
+from gonio.units import STANDARD_GRAVITY_M_S2
+
+_PER_G = 1.0 / STANDARD_GRAVITY_M_S2
+
+#: results.json units of the rate items → (D-SI 2.2 unit, factor on value and U).
+RATE_DSI: dict[str, tuple[str, float]] = {
+    "°/s": (r"\degree\second\tothe{-1}", 1.0),
+    "°/h": (r"\degree\hour\tothe{-1}", 1.0),
+    "°/√h": (r"\degree\hour\tothe{-0.5}", 1.0),
+    "(°/h)/°C": (r"\degree\hour\tothe{-1}\kelvin\tothe{-1}", 1.0),
+    "(°/s)/°C": (r"\degree\second\tothe{-1}\kelvin\tothe{-1}", 1.0),
+    "1/°C": (r"\kelvin\tothe{-1}", 1.0),
+    "%/°C": (r"\percent\kelvin\tothe{-1}", 1.0),
+    "(°/h)/g": (r"\degree\hour\tothe{-1}\metre\tothe{-1}\second\tothe{2}", _PER_G),
+    "(°/s)/g": (r"\degree\metre\tothe{-1}\second", _PER_G),
+    "Hz": (r"\hertz", 1.0),
+    "s": (r"\second", 1.0),
+    "%": (r"\percent", 1.0),
+    "1": (r"\one", 1.0),
+}
+
+#: The readings' ``output_unit`` → the D-SI unit of the scale factor (output per °/s).
+OUTPUT_DSI: dict[str, str] = {
+    "mV": r"\milli\volt\degree\tothe{-1}\second",
+    "V": r"\volt\degree\tothe{-1}\second",
+    "µV": r"\micro\volt\degree\tothe{-1}\second",
+    "counts/s": r"\one\degree\tothe{-1}",
+    "counts": r"\one\degree\tothe{-1}\second",
+    "lsb": r"\one\degree\tothe{-1}\second",
+    "LSB": r"\one\degree\tothe{-1}\second",
+    "°/s": r"\one",
+}
+
+#: Settings the items were measured at (influence conditions): (item, details key, name, D-SI).
+SETTINGS = (
+    ("scale_factor", "rates_dps", "scale-factor input rates", r"\degree\second\tothe{-1}"),
+    ("scale_factor", "x_dps", "scale-factor input rates", r"\degree\second\tothe{-1}"),
+    ("sf_temperature_sensitivity", "temperatures_c", "chamber temperature points",
+     r"\degreecelsius"),
+    ("sf_temperature_coefficient", "temperatures_c", "chamber temperature points",
+     r"\degreecelsius"),
+    ("ratiometric_error", "V", "supply voltages", r"\volt"),
+    ("bandwidth", "freq_hz", "angular vibration frequencies", r"\hertz"),
+    ("frequency_band", "freq_hz", "angular vibration frequencies", r"\hertz"),
+)
+
+
+def dsi_unit(unit: str, output_unit: str, file=None) -> tuple[str, float]:
+    """(D-SI unit, factor) of a rate item's results.json ``unit``; the scale factor's
+    ``<output>/(°/s)`` through :data:`OUTPUT_DSI`. An unknown unit is a GonioError naming it.
+
+    >>> dsi_unit("mV/(°/s)", "mV")
+    ('\\\\milli\\\\volt\\\\degree\\\\tothe{-1}\\\\second', 1.0)
+    >>> dsi_unit("(°/s)/g", "mV")[1] * 9.80665
+    1.0
+    """
+    if unit == f"{output_unit}/(°/s)":
+        if output_unit not in OUTPUT_DSI:
+            raise GonioError(f"output unit {output_unit!r} has no D-SI form for the DCC "
+                             f"(known: {', '.join(OUTPUT_DSI)}); calibrate without --dcc",
+                             file=file, key="output_unit")
+        return OUTPUT_DSI[output_unit], 1.0
+    if unit not in RATE_DSI:
+        raise GonioError(f"unit {unit!r} has no D-SI form for the DCC", file=file, key="unit")
+    return RATE_DSI[unit]
+
+
+def clause_ref_type(spec_key: str, clause: str) -> str:
+    """The refType of an item's quantity: ``gonio_<spec>_clause_<clause>`` (no spaces).
+
+    >>> clause_ref_type("iec62047-20", "5.4.5.1 b)")
+    'gonio_iec62047-20_clause_5.4.5.1b'
+    """
+    c = "".join(ch for ch in clause if ch.isalnum() or ch == ".")
+    return f"gonio_{spec_key}_clause_{c}"
+
+
+def _plain(v: float) -> str:
+    """A setting as a plain si:decimal (no exponent)."""
+    return np.format_float_positional(float(v), trim="-")
+
+
+def _conditions(res: dict, lab: dict | None) -> list[tuple]:
+    md = res.get("metadata", {})
+    env = (lab or {}).get("environment") or {}
+    out: list[tuple] = []
+    t = env.get("temperature_c")
+    if t is None:
+        t = md.get("room_temperature_c")
+    if t not in (None, ""):
+        out.append(("room temperature", display("sig4", float(t)), "degC"))
+    if env.get("humidity_pct") is not None:
+        out.append(("relative humidity", display("sig3", env["humidity_pct"]), "%"))
+    if md.get("supply_nominal_v") not in (None, ""):
+        out.append(("nominal supply voltage", _plain(md["supply_nominal_v"]), "",
+                    r"\volt"))
+    if md.get("latitude_deg") not in (None, ""):
+        out.append(("latitude of the site (Earth-rate components)", _plain(md["latitude_deg"]),
+                    "deg"))
+    seen = set()
+    for key, det, name, dsi in SETTINGS:
+        it = res["items"].get(key)
+        vals = (it or {}).get("details", {}).get(det) if it and it["measured"] else None
+        if name in seen or not isinstance(vals, list) or not vals:
+            continue
+        seen.add(name)
+        out.append((name, [_plain(v) for v in vals], "", dsi))
+    return out
+
+
+def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
+    """The DCC 3.3.0 document of a rate-gyro calibration (module docstring)."""
+    res = result.to_json()
+    md = res.get("metadata", {})
+    spec = get(result.spec_key)
+    content = spec_content(result.spec_key)
+    items = res["items"]
+    root = new_document()
+    sts = administrative_data(
+        root, md, lab, cert_id=cert_id, norm=spec.title_en,
+        clauses=[it["clause"] for it in items.values() if it["measured"]],
+        readings_taken=list(res.get("readings_taken", [])),
+        readings_name="Reading taken of the specification's text")
+    st = element(sts, "dcc:statement", id="uncertainty")
+    text_element(st, "dcc:name", "Uncertainty of measurement")
+    text_element(st, "dcc:declaration",
+                 "Each item's expanded uncertainty U = k·u_c is computed from the calibration's "
+                 "own data (JCGM 100), with k = t95(ν_eff) (Welch–Satterthwaite), coverage "
+                 "probability 95 %; the components are in results.json.")
+    src = res["source"]
+    mr = measurement_result(
+        root, content.HEADING[0],
+        method=f"{spec.title_en}; protocol {md.get('protocol', 'not stated')}; readings "
+               f"{src['file']} (SHA-256 {src['sha256']}, {src['rows']} rows)",
+        norm=spec.title_en, standards=rate_standards(md, lab))
+    influence_conditions(mr, _conditions(res, lab))
+    results = element(mr, "dcc:results")
+    out_unit = str(md.get("output_unit", "output"))
+    for _, group_en, _, keys in content.GROUPS:
+        for key in keys:
+            it = items.get(key)
+            if it is None:
+                continue
+            r = element(results, "dcc:result", id=f"result-{key}")
+            text_element(r, "dcc:name", f"{group_en}: {it['title']} ({it['clause']})")
+            data = element(r, "dcc:data")
+            name = f"{it['title']} ({spec.key} {it['clause']})"
+            value = it["value"]
+            if not it["measured"] or value is None or not math.isfinite(value):
+                not_measured_quantity(data, name, it["reason"] or "no finite value")
+                continue
+            dsi, factor = dsi_unit(it["unit"], out_unit, src["file"])
+            unc = it.get("uncertainty") or {}
+            kw = {}
+            if unc.get("U") is not None and unc.get("k") is not None and unc.get("p"):
+                kw = {"U": Num(display("U", unc["U"] * factor), f"items.{key}.uncertainty.U", "U"),
+                      "k": Num(display("k", unc["k"]), f"items.{key}.uncertainty.k", "k"),
+                      "p": float(unc["p"])}
+            conv = factor != 1.0
+            quantity(data, name, Num(display("sig4", value * factor), f"items.{key}.value",
+                                     "sig4"), "", dsi=dsi, note=f" factor={factor!r}" if conv else "",
+                     ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
+                     description=(f"{display('sig4', value)} {it['unit']} in results.json, "
+                                  f"written per m s⁻² (g_n = {STANDARD_GRAVITY_M_S2} m s⁻²)")
+                     if conv else None, **kw)
+    return root
+
+
+def rate_dcc_bytes(result, *, lab: dict | None = None, cert_id: str) -> bytes:
+    """The rate DCC as UTF-8 XML bytes, with declaration, pretty-printed, deterministic."""
+    return tree_bytes(rate_dcc_tree(result, lab=lab, cert_id=cert_id))

@@ -1,0 +1,254 @@
+"""The certificate of a gyro-triad calibration (``triad-alignment``), rendered by the shared
+certificate machinery (:mod:`gonio.report.certificate` blocks and renderers, the per-item
+parts of :mod:`gonio.report.rate_certificate`: header, closing statements, figures, writer).
+
+Its own pages: the **alignment-matrix table** (M and b with each element's U and k, M⁻¹, the
+cross-axis sensitivities before and the residual leakage after alignment, the averaging time
+chosen from the Allan deviation), the uncertainty of M and b (GUM and Monte Carlo), and — when
+the readings include a thermal programme — the **temperature-model page** (the identified
+K(ϑ, U), b(ϑ, U), ARW(ϑ) polynomials with the order-selection criterion, parameter
+uncertainties, the prediction band across the operating range, the ramp analysis and the
+before/after compensation). Every number of an item is a :class:`~gonio.report.stated.Num`
+whose ``data-src`` is its path in ``results.json``. The text is data in
+:mod:`gonio.specs.triad_alignment.certificate`.
+"""
+
+from __future__ import annotations
+
+
+from gonio.report.certificate import Block, certificate_id
+from gonio.report.i18n import display, display_uncertainty, rule_at_U
+from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
+                                           spec_content, write_spec_certificate)
+from gonio.report.stated import num
+from gonio.report.triad_figures import alignment_panels, thermal_check_panels, thermal_model_panels
+from gonio.specs import get
+
+AXES = "xyz"
+OFFDIAG = ("xy", "xz", "yx", "yz", "zx", "zy")
+
+
+def _t(lang: str):
+    text = spec_content("triad-alignment").TEXT
+    return lambda key, **kw: text[key][1 if lang == "zh" else 0].format(**kw)
+
+
+def _pm(res: dict, key: str) -> list | str:
+    """Cell "value ± U" of an item, each number at U's decimal place (JCGM 100 7.2.6)."""
+    it = res["items"][key]
+    if not it["measured"]:
+        return "—"
+    U = (it.get("uncertainty") or {}).get("U")
+    return [num(res, f"items.{key}.value", rule_at_U(U, 6), U), " ± ",
+            num(res, f"items.{key}.uncertainty.U", "U", U)]
+
+
+def _pm_scaled(v: float, U: float, f: float = 1.0) -> str:
+    """A derived number (not an item) and its U, scaled by ``f``, at U's decimal place."""
+    if v is None or U is None:
+        return "—"
+    return f"{display(rule_at_U(U * f, 6), v * f)} ± {display_uncertainty(U * f)}"
+
+
+def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
+    """The alignment-matrix page (module docstring)."""
+    out: list[Block] = [Block("h", T("h_alignment"))]
+    items = res["items"]
+    if not items["M_xx"]["measured"]:
+        out.append(Block("p", [f"{L['not_measured']}: {items['M_xx']['reason']}"]))
+        return out
+    al = res["alignment"]
+    unit = al["output_unit"] or "output"
+    out.append(Block("p", [T("alignment_note", unit=unit, n=al["n_dwells"],
+                             robust=T("robust") if al["robust"] else "")]))
+    rows = []
+    for i, a in enumerate(AXES):
+        rows.append([f"{T('gyro')} {a}"] + [_pm(res, f"M_{a}{b}") for b in AXES]
+                    + [_pm(res, f"b_{a}"),
+                       [num(res, f"items.M_{a}x.uncertainty.k", "k"), " (",
+                        num(res, f"items.M_{a}x.uncertainty.nu_eff", "int"), ")"]])
+    out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})", T("k_nu")], rows),
+                     {"widths": (0.09, 0.19, 0.19, 0.19, 0.2, 0.14), "id": "alignment-matrix"}))
+    minv, uminv = al["derived"]["alignment_matrix"], al["u_derived"]["alignment_matrix"]
+    kk = max(al["coverage_factor"])
+    out.append(Block("sub", T("sub_inverse", unit=unit)))
+    out.append(Block("table", (["", "G_x", "G_y", "G_z"], [
+        [f"ω_{a}"] + [_pm_scaled(minv[3 * i + j], kk * uminv[3 * i + j]) for j in range(3)]
+        for i, a in enumerate(AXES)]), {"widths": (0.1, 0.3, 0.3, 0.3), "id": "alignment-inverse"}))
+    out.append(Block("sub", T("sub_cross")))
+    out.append(Block("p", [T("cross_note")]))
+    mc = al.get("u_monte_carlo")
+    crow = []
+    for n, p in enumerate(OFFDIAG):
+        s, lk = items[f"S_{p}"], items[f"L_{p}"]
+        k = s["uncertainty"]["k"]
+        crow.append([f"{p[0]} ← ω_{p[1]}",
+                     _pm_scaled(s["value"], s["uncertainty"]["U"], 1e3),
+                     display_uncertainty(k * mc["cross_axis"][n] * 1e3) if mc else "—",
+                     _pm_scaled(lk["value"], lk["uncertainty"]["U"], 1e3)])
+    out.append(Block("table", ([T("pair"), T("S_col"), T("mc_col"), T("L_col")], crow),
+                     {"widths": (0.2, 0.28, 0.22, 0.3), "id": "cross-axis"}))
+    av = items["averaging_time"]
+    if av["measured"]:
+        d = av["details"]
+        out.append(Block("p", [T("averaging", tau=num(res, "items.averaging_time.value", "sig3"),
+                                 lim=display("sig3", d["noise_limit_dps"]),
+                                 w=display("sig3", d["test_rate_dps"]),
+                                 psi=display("sig3", d["target_deg"]),
+                                 dwell=display("sig3", d["shortest_dwell_s"]),
+                                 ok=T("sufficient") if d["sufficient"] else T("insufficient"))]))
+    else:
+        out.append(Block("p", [f"{av['title']}: {L['not_measured']}: {av['reason']}"]))
+    if al["outliers"]:
+        out.append(Block("p", [T("outliers", list=", ".join(
+            f"line {o['line']} ({o['channel']}, w = {o['weight']:.2f})" for o in al["outliers"]))]))
+    # uncertainty of M and b: GUM and Monte Carlo
+    out.append(Block("sub", T("h_unc")))
+    trials = (items["M_xx"]["uncertainty"].get("monte_carlo") or {}).get("trials")
+    out.append(Block("p", [T("unc_note", mc=T("mc_trials", n=trials) if trials else T("mc_none"))]))
+    urows = []
+    for key in [f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in AXES]:
+        unc = items[key]["uncertainty"]
+        m = unc.get("monte_carlo")
+        urows.append([key, num(res, f"items.{key}.uncertainty.u_c", "sig2"),
+                      num(res, f"items.{key}.uncertainty.monte_carlo.u", "sig2") if m else "—",
+                      num(res, f"items.{key}.uncertainty.nu_eff", "int"),
+                      num(res, f"items.{key}.uncertainty.k", "k"),
+                      num(res, f"items.{key}.uncertainty.U", "U"), items[key]["unit"]])
+    out.append(Block("table", (["", T("u_gum"), T("u_mc"), T("nu"), "k", "U", L["unit"]], urows),
+                     {"widths": (0.1, 0.14, 0.16, 0.08, 0.1, 0.14, 0.28), "id": "uncertainty"}))
+    return out
+
+
+def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
+    """The temperature-model page (module docstring); not measured → the reason."""
+    out: list[Block] = [Block("h", T("h_thermal"))]
+    tm = res.get("thermal_model")
+    if tm is None:
+        it = res["items"].get("thermal_model", {})
+        out.append(Block("p", [f"{L['not_measured']}: {it.get('reason', '')}"]))
+        return out
+    crit = T("crit_" + tm["criterion"])
+    first = next(iter(tm["channels"].values()))
+    out.append(Block("p", [T("thermal_note", tref=display("sig3", tm["reference_c"]),
+                             vref=display("sig3", tm["reference_v"]), crit=crit,
+                             tsrc=T(first["temperature_source"]),
+                             src=tm["source"]["file"] + f" (SHA-256 {tm['source']['sha256'][:16]}…)")]))
+    for ch, c in tm["channels"].items():
+        th, uv = c["theta_range_c"], c["supply_range_v"]
+        out.append(Block("sub", T("sub_channel", ch=ch, lo=f"{th[0]:.1f}", hi=f"{th[1]:.1f}",
+                                  ulo=f"{uv[0]:+.2f}", uhi=f"{uv[1]:+.2f}")))
+        rows = []
+        for name, part in (("K", "scale"), ("b", "bias"), ("ARW", "arw")):
+            f = c.get(part)
+            if f is None:
+                continue
+            cand = sorted(f["candidates"], key=lambda r: r.get(f["criterion"], 0.0)) \
+                if f["criterion"] in ("bic", "aic") else []
+            if len(cand) > 1:
+                out_line = T("orders_line", name=name, nt=f["order_temperature"],
+                             nu=f["order_supply"], crit=f["criterion"].upper(),
+                             nt2=cand[1]["order_temperature"], nu2=cand[1]["order_supply"],
+                             d=display("sig3", cand[1][f["criterion"]] - cand[0][f["criterion"]]))
+                out.append(Block("p", [out_line]))
+            for term in [t for t in f["coefficients"] if not t.startswith("u_")]:
+                key = f"{name}_{ch}_{term}"
+                it = res["items"][key]
+                rows.append([name, f"{f['order_temperature']} / {f['order_supply']}",
+                             {"c0": "1"}.get(term, term.replace("theta", "ϑ^").replace("u", "U^")),
+                             _pm(res, key), it["unit"],
+                             num(res, f"items.{key}.uncertainty.k", "k")])
+        out.append(Block("table", ([T("model"), T("order"), T("term"), T("coef"), L["unit"], "k"],
+                                   rows), {"widths": (0.08, 0.12, 0.08, 0.32, 0.28, 0.12),
+                                           "id": f"thermal-{ch}"}))
+        pr = tm["prediction_U"][ch]
+        out.append(Block("sub", T("sub_pred")))
+        prow = []
+        for n in range(len(pr["theta_c"])):
+            prow.append([f"{pr['theta_c'][n]:.1f}", f"{pr['u_v'][n]:+.2f}",
+                         _pm_scaled(pr["scale"][n], pr["U_scale"][n]),
+                         _pm_scaled(pr["bias_dps"][n], pr["U_bias_dps"][n])])
+        out.append(Block("table", (["ϑ (°C)", "U (V)", "K ± U", "b (°/s) ± U"], prow),
+                         {"widths": (0.15, 0.15, 0.35, 0.35), "id": f"prediction-{ch}"}))
+        out.append(Block("p", [T("pred_note", ks=display("k", pr["k_scale"]),
+                                 kb=display("k", pr["k_bias"]))]))
+        ra = c.get("ramp")
+        if ra:
+            out.append(Block("p", [T("ramp", rms=display("sig3", ra["rms_static_model_dps"]),
+                                     g=display("sig3", ra["gamma_dps_per_c_per_s"]),
+                                     rmsg=display("sig3", ra["rms_with_ramp_term_dps"]),
+                                     tau=display("int", ra["tau_s"]),
+                                     rmsl=display("sig3", ra["rms_with_lag_dps"]),
+                                     hys=display("sig3", ra["hysteresis_dps"]))]))
+        cp = c.get("compensation")
+        if cp:
+            out.append(Block("sub", T("sub_comp")))
+            out.append(Block("p", [T("comp_note")]))
+            out.append(Block("table", ([T("residual"), T("before"), T("after")], [
+                [T("r_bias"), display("sig3", cp["rms_bias_before_dps"]),
+                 display("sig3", cp["rms_bias_after_dps"])],
+                [T("r_scale"), display("sig3", cp["rms_scale_before_rel"] * 1e6),
+                 display("sig3", cp["rms_scale_after_rel"] * 1e6)],
+                [T("r_ramp"), display("sig3", cp["rms_ramp_before_dps"]),
+                 display("sig3", cp["rms_ramp_after_dps"])]]),
+                {"widths": (0.46, 0.27, 0.27), "id": f"compensation-{ch}"}))
+    return out
+
+
+def _draw_alignment(fig, spec, result, L, truth=None) -> None:
+    if result.alignment is None:
+        ax = fig.add_subplot(spec)
+        ax.text(0.5, 0.5, "alignment not measured", ha="center", va="center",
+                transform=ax.transAxes)
+        return
+    alignment_panels(fig, spec, result.alignment, (truth or {}).get("system_matrix"))
+
+
+def triad_figures(result) -> list[tuple]:
+    """(key, caption en, caption zh, draw) of the certificate's figures: the alignment figure,
+    and per modelled gyro its model and its ramp / compensation figure."""
+    text = spec_content("triad-alignment").TEXT
+    figs = [("alignment", text["fig_alignment"][0], text["fig_alignment"][1], _draw_alignment)]
+    for ch, m in (result.thermal.channels.items() if result.thermal else ()):
+        comp = result.compensation.get(ch)
+
+        def model(fig, spec, r, L, truth=None, m=m):
+            thermal_model_panels(fig, spec, m)
+
+        def check(fig, spec, r, L, truth=None, m=m, comp=comp):
+            thermal_check_panels(fig, spec, m, comp)
+        figs.append((f"thermal-model-{ch}", text["fig_model"][0].format(ch=ch),
+                     text["fig_model"][1].format(ch=ch), model))
+        figs.append((f"thermal-check-{ch}", text["fig_check"][0].format(ch=ch),
+                     text["fig_check"][1].format(ch=ch), check))
+    return figs
+
+
+def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
+    """The certificate's content: header, alignment-matrix page, temperature-model page,
+    readings taken, signatures, statements, figures."""
+    res = result.to_json()
+    T = _t(lang)
+    blocks = header_blocks(res, get(result.spec_key), L, lang, lab,
+                           [T("std_table"), "—", "—", "—"])
+    blocks += alignment_blocks(res, T, L)
+    blocks += thermal_blocks(res, T, L, lang)
+    zh = spec_content(result.spec_key).READINGS_TAKEN_ZH
+    notes = res.get("readings_taken", [])
+    if lang == "zh" and len(zh) == len(notes):
+        notes = list(zh)
+    blocks += closing_blocks(res, L, lab, T("readings_taken"), notes, T("recal"))
+    blocks += figure_blocks(triad_figures(result), L, lang)
+    return {"id": certificate_id(result, lab), "virtual": lab is None,
+            "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
+            "blocks": blocks, "results": res}
+
+
+def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "en") -> dict:
+    """``certificate.html`` and ``certificate.pdf`` of a triad calibration, atomically."""
+    return write_spec_certificate(result, out, triad_certificate_blocks, triad_figures(result),
+                                  truth=truth, lab=lab, lang=lang)
+
+
+__all__ = ["write_triad_certificate", "triad_certificate_blocks", "triad_figures",
+           "alignment_blocks", "thermal_blocks"]

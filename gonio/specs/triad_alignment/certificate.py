@@ -1,0 +1,113 @@
+"""The triad-alignment certificate's own text, as data (English, Chinese); the rendering is
+:mod:`gonio.report.triad_certificate` on the shared certificate machinery."""
+
+#: label key → (English, Chinese)
+TEXT = {
+    "std_table": ("rate table with temperature chamber", "速率转台及温度试验箱"),
+    "h_alignment": ("Alignment matrix", "对准矩阵"),
+    "alignment_note": ("System matrix M ({unit} per °/s) and bias vector b ({unit}) of G = M ω + b, "
+                       "from {n} dwells{robust}; each cell value ± U, U = k·u for a coverage "
+                       "probability of 95.45 %, k = t(ν) of the gyro's fit (last column).",
+                       "系统矩阵 M（{unit}/(°/s)）与零偏向量 b（{unit}），模型 G = M ω + b，"
+                       "由 {n} 个测量段{robust}求得；各格为 值 ± U，U = k·u，包含概率 95.45 %，"
+                       "k 按该陀螺拟合的自由度 ν 取 t 分布因子（末列）。"),
+    "robust": (" (robust fit, IRLS)", "（稳健拟合，IRLS）"),
+    "gyro": ("gyro", "陀螺"),
+    "k_nu": ("k (ν)", "k（ν）"),
+    "sub_inverse": ("Alignment matrix M⁻¹ (°/s per {unit}): ω̂ = M⁻¹ (G − b)",
+                    "对准矩阵 M⁻¹（°/s 每 {unit}）：ω̂ = M⁻¹ (G − b)"),
+    "sub_cross": ("Cross-axis sensitivity (IEC 62047-20 5.2) and residual leakage after alignment",
+                  "交叉轴灵敏度（IEC 62047-20 5.2）及对准后残余交叉耦合"),
+    "cross_note": ("S_ij = M_ij/M_ii before alignment; after applying M⁻¹ the leakage "
+                   "M̂⁻¹M − I is zero for the estimate, with the expanded uncertainty shown "
+                   "(what the alignment leaves). Values in ‰.",
+                   "对准前 S_ij = M_ij/M_ii；施加 M⁻¹ 后残余耦合 M̂⁻¹M − I 对估计值为零，表中给出其"
+                   "扩展不确定度（对准后残留的量）。单位 ‰。"),
+    "pair": ("gyro ← rate about", "陀螺 ← 输入角速度轴"),
+    "S_col": ("S before (‰) ± U", "对准前 S（‰）± U"),
+    "mc_col": ("U Monte Carlo (‰)", "U 蒙特卡洛（‰）"),
+    "L_col": ("leakage after (‰) ± U", "对准后残余（‰）± U"),
+    "averaging": ("Averaging time from the Allan deviation: τ = {tau} s (noise limit "
+                  "ω sin ψ_T / 10 = {lim} °/s at ω = {w} °/s, ψ_T = {psi}°); shortest dwell "
+                  "{dwell} s — {ok}.",
+                  "由 Allan 偏差确定的平均时间：τ = {tau} s（噪声限 ω sin ψ_T / 10 = {lim} °/s，"
+                  "ω = {w} °/s，ψ_T = {psi}°）；最短测量段 {dwell} s — {ok}。"),
+    "sufficient": ("sufficient", "满足"),
+    "insufficient": ("NOT sufficient", "不满足"),
+    "outliers": ("Down-weighted readings (robust fit): {list}", "稳健拟合降权的读数：{list}"),
+    "h_unc": ("Uncertainty of M and b", "M 与 b 的不确定度"),
+    "unc_note": ("Type A from the weighted least-squares residuals, cov = s²(XᵀWX)⁻¹ "
+                 "(JCGM 100 4.2); Monte Carlo (JCGM 101) standard uncertainty beside it{mc}.",
+                 "A 类评定，由加权最小二乘残差求得，cov = s²(XᵀWX)⁻¹（JCGM 100 4.2）；"
+                 "旁列蒙特卡洛法（JCGM 101）标准不确定度{mc}。"),
+    "mc_trials": (" ({n} trials)", "（{n} 次试验）"),
+    "mc_none": (" (not run: --monte-carlo N)", "（未运行：--monte-carlo N）"),
+    "u_gum": ("u (GUM)", "u（GUM）"),
+    "u_mc": ("u (Monte Carlo)", "u（蒙特卡洛）"),
+    "nu": ("ν", "ν"),
+    "h_thermal": ("Temperature and supply model", "温度与电源电压模型"),
+    "thermal_note": ("K(ϑ, U) and b(ϑ, U) as polynomials in ϑ = T − {tref} °C and U = V − {vref} V, "
+                     "ARW(ϑ) in ϑ; orders chosen by {crit}; temperature: the gyro's {tsrc}; "
+                     "thermal programme: {src}.",
+                     "K(ϑ, U) 与 b(ϑ, U) 为 ϑ = T − {tref} °C 与 U = V − {vref} V 的多项式，ARW(ϑ) "
+                     "为 ϑ 的多项式；阶次按 {crit} 选取；温度取自陀螺的 {tsrc}；温度试验数据：{src}。"),
+    "sensor": ("internal temperature sensor", "内部温度传感器"),
+    "chamber": ("chamber temperature", "温度箱温度"),
+    "crit_bic": ("the Bayesian information criterion (BIC, smallest wins)",
+                 "贝叶斯信息准则（BIC，取最小）"),
+    "crit_aic": ("the Akaike information criterion (AIC, smallest wins)",
+                 "赤池信息准则（AIC，取最小）"),
+    "crit_ftest": ("a forward F-test at α = 0.05", "前向 F 检验（α = 0.05）"),
+    "crit_fixed": ("the user (fixed)", "用户指定（固定）"),
+    "sub_channel": ("gyro {ch}: ϑ {lo} … {hi} °C, U {ulo} … {uhi} V",
+                    "陀螺 {ch}：ϑ {lo} … {hi} °C，U {ulo} … {uhi} V"),
+    "model": ("model", "模型"),
+    "order": ("order ϑ / U", "阶次 ϑ / U"),
+    "term": ("term", "项"),
+    "coef": ("coefficient ± U", "系数 ± U"),
+    "orders_line": ("{name}: order ϑ {nt}, U {nu} chosen by {crit}; runner-up ϑ {nt2}, U {nu2} "
+                    "({crit} {d} larger).",
+                    "{name}：按 {crit} 选定阶次 ϑ {nt}、U {nu}；次优 ϑ {nt2}、U {nu2}（{crit} 大 {d}）。"),
+    "sub_pred": ("Prediction across the operating range (band ± U, parameter uncertainty)",
+                 "工作范围内的预测值（± U 带，参数不确定度）"),
+    "pred_note": ("k = {ks} for K, {kb} for b.", "K 的 k = {ks}，b 的 k = {kb}。"),
+    "ramp": ("Ramps: the static-soak model leaves {rms} °/s rms on the ramp blocks; with a "
+             "rate-of-temperature-change term γ·dϑ/dt (γ = {g} (°/s)/(°C/s)) {rmsg} °/s; with a "
+             "first-order lag of the temperature (τ = {tau} s) {rmsl} °/s; up/down hysteresis "
+             "{hys} °/s.",
+             "温度斜坡：静态保温模型在斜坡段的残差均方根为 {rms} °/s；加入温度变化率项 γ·dϑ/dt"
+             "（γ = {g} (°/s)/(°C/s)）后为 {rmsg} °/s；对温度施加一阶滞后（τ = {tau} s）后为 "
+             "{rmsl} °/s；升降温滞回 {hys} °/s。"),
+    "sub_comp": ("Compensation: residuals before and after", "补偿前后的残差"),
+    "comp_note": ("The model applied to the calibration record itself: at the soak points the "
+                  "residuals are the fit's; the ramp blocks were not used by the polynomial fit.",
+                  "模型用于本次温度试验数据本身：保温点的残差即拟合残差；斜坡段未参与多项式拟合。"),
+    "recal": ("Recalibration interval: decided by the user (no specification sets one for a "
+              "triad).", "复校时间间隔由用户自行确定（三轴陀螺组件无规范规定）。"),
+    "readings_taken": ("Readings taken of the sources", "对参考文献的理解"),
+    "residual": ("residual (rms)", "残差（均方根）"),
+    "before": ("before (constant k0, b0)", "补偿前（常数 k0、b0）"),
+    "after": ("after (model)", "补偿后（模型）"),
+    "r_bias": ("bias at the soak points (°/s)", "保温点零偏（°/s）"),
+    "r_scale": ("scale factor at the soak points (ppm)", "保温点标度因数（ppm）"),
+    "r_ramp": ("bias on the ramp blocks (°/s)", "斜坡段零偏（°/s）"),
+    "fig_alignment": ("Cross-axis sensitivity before and residual leakage after alignment; Allan "
+                      "deviation of the static record and the averaging time",
+                      "对准前交叉轴灵敏度与对准后残余耦合；静态数据的 Allan 偏差及平均时间"),
+    "fig_model": ("gyro {ch}: b(ϑ, U) and K(ϑ, U) with the fitted polynomials and 2u bands",
+                  "陀螺 {ch}：b(ϑ, U) 与 K(ϑ, U) 及拟合多项式和 2u 带"),
+    "fig_check": ("gyro {ch}: ramp blocks against the static-soak model; residuals before and "
+                  "after compensation", "陀螺 {ch}：斜坡段与静态保温模型；补偿前后残差"),
+}
+
+#: The readings taken (results.json's English notes, in order) in Chinese.
+READINGS_TAKEN_ZH = (
+    "对准：对全部测量段（绕各轴的 ± 角速率及静态位置）一次拟合 G = M ω + b，各方位的地球自转角速度"
+    "按转台扫过的角度精确平均；只有一对 ± 测量时退化为文章的差分公式。",
+    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 95.45 %；运行了试验时旁列蒙特卡洛法"
+    "（JCGM 101）标准不确定度。",
+    "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
+    "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",
+    "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
+    "（论文 §6.1）。",
+)

@@ -1,0 +1,211 @@
+"""The DCC of the rate-gyro certificates (JJF 1535-2015, IEC 62047-20): valid against the
+DCC 3.3.0 schema set, every number equal to results.json's through the certificate's
+display rule, every D-SI unit accepted by PTB's D-SI parser (``dsiunits``, test-only), the
+not-measured items present with their reason, the settings as influence conditions, and
+written by ``gonio calibrate --dcc`` in the staged output set.
+
+The schema set and its offline loading are those of tests/test_dcc.py.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import pytest
+from lxml import etree
+
+from gonio.formats.rate_readings import RateReadings, read_rate_readings, write_rate_readings
+from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
+from gonio.report.certificate import certificate_id, load_lab
+from gonio.report.dcc import DCC_NS, SI_NS
+from gonio.report.i18n import display, last_digit_unit, parse_display
+from gonio.report.stated import lookup
+from gonio.report.rate_dcc import rate_dcc_bytes
+from gonio.resources import protocols_dir
+from gonio.specs import get
+
+
+NS = {"dcc": DCC_NS, "si": SI_NS}
+G_N = 9.80665                      # m/s², standard gravity (CGPM 1901), independent of gonio
+
+
+@pytest.fixture(scope="module")
+def schema(dcc_schema):
+    return dcc_schema
+
+
+def _simulate(spec_key, tmp, seed):
+    mod = __import__(get(spec_key).calibrate.__module__, fromlist=["simulate"])
+    proto = reduced_protocol(spec_key, tmp / f"{spec_key}.toml",
+                             {"g_sensitivity": {"samples": 20}}
+                             if spec_key == "iec62047-20" else {})
+    res = mod.simulate(study_bench(), str(proto), seed=seed, noise=True)
+    path = write_rate_readings(res.data, res.metadata, tmp / f"{spec_key}.csv")
+    return mod, proto, path, res
+
+
+@pytest.fixture(scope="module", params=("jjf1535-2015", "iec62047-20"))
+def run(request, tmp_path_factory):
+    spec_key = request.param
+    tmp = tmp_path_factory.mktemp(spec_key)
+    mod, proto, path, _ = _simulate(spec_key, tmp, 21)
+    result = mod.calibrate(path, str(proto))
+    lab = load_lab(protocols_dir() / "lab-example.toml")
+    return {"spec": spec_key, "result": result, "lab": lab,
+            "results": json.loads(json.dumps(result.to_json())),
+            "docs": {"lab": rate_dcc_bytes(result, lab=lab, cert_id=certificate_id(result, lab)),
+                     "virtual": rate_dcc_bytes(result, cert_id=certificate_id(result, None))},
+            "tmp": tmp, "proto": proto, "readings": path}
+
+
+def test_valid_against_dcc_330_schema(run, schema):
+    for name, doc in run["docs"].items():
+        errors = list(schema.iter_errors(doc.decode("utf-8")))
+        assert not errors, (run["spec"], name, str(errors[0])[:500])
+    root = etree.fromstring(run["docs"]["lab"])          # the schema can fail
+    root.find(".//dcc:result//si:real/si:value", NS).text = "0,15"
+    assert not schema.is_valid(etree.tostring(root).decode())
+    root = etree.fromstring(run["docs"]["lab"])
+    root.find(".//dcc:result//si:coverageProbability", NS).text = "1.5"
+    assert not schema.is_valid(etree.tostring(root).decode())
+
+
+def _as_display(text: str) -> str:
+    """An si:decimal "4.36e-5" back in the certificate's form "4.36×10⁻⁵"."""
+    m = re.fullmatch(r"(-?[\d.]+)e(-?\d+)", text)
+    if m:
+        return f"{m.group(1)}×10{m.group(2).translate(str.maketrans('-0123456789', '⁻⁰¹²³⁴⁵⁶⁷⁸⁹'))}"
+    return text
+
+
+def _shown(doc: bytes):
+    """(src, rule, factor, si:real element) of every stated item value."""
+    root = etree.fromstring(doc)
+    out = []
+    for c in root.iter(etree.Comment):
+        m = re.match(r" src=(items\.\S+) rule=(\S+)(?: factor=(\S+))? ", c.text)
+        if m:
+            out.append((m.group(1), m.group(2), float(m.group(3) or 1.0), c.getnext()))
+    return out
+
+
+def test_every_item_value_and_uncertainty_equal_results_json(run):
+    res = run["results"]
+    shown = _shown(run["docs"]["lab"])
+    measured = [k for k, it in res["items"].items() if it["measured"]]
+    assert sorted(s.split(".")[1] for s, _, _, _ in shown) == sorted(measured)
+    assert len(measured) >= (15 if run["spec"] == "jjf1535-2015" else 20)
+    for src, rule, factor, real in shown:
+        key = src.split(".")[1]
+        v = lookup(res, src) * factor
+        text = real.find("si:value", NS).text
+        assert _as_display(text) == display(rule, v), (src, text)
+        x = parse_display(_as_display(text))
+        assert abs(x - v) <= 0.5 * last_digit_unit(_as_display(text)) + 1e-12 * abs(v), src
+        unc = res["items"][key]["uncertainty"]
+        mu = real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS)
+        U = float(mu.find("si:valueExpandedMU", NS).text)
+        assert U == pytest.approx(unc["U"] * factor, rel=0.05)     # 2 significant digits
+        assert _as_display(mu.find("si:valueExpandedMU", NS).text) == display("U", unc["U"] * factor)
+        assert mu.find("si:coverageFactor", NS).text == display("k", unc["k"])
+        assert float(mu.find("si:coverageProbability", NS).text) == unc["p"] == 0.95
+    # per-g items are per m s⁻²: the value times g_n is the results.json value
+    per_g = [(s, f, r) for s, _, f, r in shown if f != 1.0]
+    assert per_g and all(res["items"][s.split(".")[1]]["unit"].endswith("/g") for s, _, _ in per_g)
+    for src, f, real in per_g:
+        assert float(real.find("si:value", NS).text) * G_N == pytest.approx(lookup(res, src),
+                                                                             rel=1e-3)
+        assert f == pytest.approx(1 / G_N, rel=1e-15)
+
+
+def test_clause_names_and_ref_types(run):
+    res = run["results"]
+    root = etree.fromstring(run["docs"]["lab"])
+    for key, it in res["items"].items():
+        r = root.find(f".//dcc:result[@id='result-{key}']", NS)
+        assert r is not None, key
+        q = r.find("dcc:data/dcc:quantity", NS)
+        assert f"{run['spec']} {it['clause']}" in q.find("dcc:name/dcc:content", NS).text
+        if it["measured"]:
+            tok = "gonio_{}_clause_{}".format(run["spec"], it["clause"].replace(" ", "")
+                                              .replace(")", ""))
+            assert tok in q.get("refType").split(), (key, q.get("refType"))
+
+
+def test_dsi_units_parse(run):
+    dsi = pytest.importorskip("dsi_unit", reason="pip install dsiunits (test-only)")
+    root = etree.fromstring(run["docs"]["lab"])
+    units = {u.text for u in root.iter(f"{{{SI_NS}}}unit", f"{{{SI_NS}}}unitXMLList")}
+    want = {r"\milli\volt\degree\tothe{-1}\second", r"\degree\second\tothe{-1}", r"\hertz",
+            r"\second", r"\degreecelsius", r"\volt", r"\degree\hour\tothe{-1}",
+            r"\degree\hour\tothe{-0.5}"}
+    assert want <= units, want - units
+    for u in units:
+        parsed = dsi.DsiUnit(u)
+        assert parsed.valid and not parsed.warnings, u
+    assert not dsi.DsiUnit(r"\degree\hour\tothe{-1}\gravity").valid      # the parser can fail
+
+
+def test_conditions_and_statements(run):
+    res = run["results"]
+    root = etree.fromstring(run["docs"]["virtual"])
+    conds = {ic.find("dcc:name/dcc:content", NS).text: ic
+             for ic in root.iterfind(".//dcc:influenceCondition", NS)}
+    assert {"room temperature", "nominal supply voltage", "scale-factor input rates",
+            "chamber temperature points", "angular vibration frequencies"} <= set(conds)
+    temps = next(it["details"]["temperatures_c"] for k, it in res["items"].items()
+                 if k.startswith("sf_temperature"))
+    got = conds["chamber temperature points"].find(".//si:valueXMLList", NS).text.split()
+    assert [float(x) for x in got] == [float(t) for t in temps]
+    sf = res["items"]["scale_factor"]["details"]
+    rates = sf.get("rates_dps", sf.get("x_dps"))
+    got = conds["scale-factor input rates"].find(".//si:valueXMLList", NS).text.split()
+    assert [float(x) for x in got] == [float(r) for r in rates]
+    ids = [s.get("id") for s in root.iterfind(".//dcc:statement", NS)]
+    assert "virtual-bench" in ids and "uncertainty" in ids
+    assert sum(i.startswith("reading-taken-") for i in ids) == len(res["readings_taken"])
+    assert rate_dcc_bytes(run["result"], cert_id="X") == rate_dcc_bytes(run["result"], cert_id="X")
+
+
+def test_not_measured_items_carry_their_reason(run, schema):
+    """Readings without the angular-vibration records: the band item (JJF 7.2.15, IEC 5.5)
+    is in the DCC as dcc:noQuantity with the reason results.json gives."""
+    mod = __import__(get(run["spec"]).calibrate.__module__, fromlist=["calibrate"])
+    rd = read_rate_readings(run["readings"])
+    test = "vibration"
+    assert (rd.data["test"] == test).any()
+    cut = RateReadings(rd.data[rd.data["test"] != test].reset_index(drop=True), rd.metadata)
+    result = mod.calibrate(cut, str(run["proto"]))
+    key = "bandwidth" if run["spec"] == "jjf1535-2015" else "frequency_band"
+    it = result.items[key]
+    assert not it.measured and it.reason
+    doc = rate_dcc_bytes(result, cert_id="X-2")
+    assert not list(schema.iter_errors(doc.decode()))
+    q = etree.fromstring(doc).find(f".//dcc:result[@id='result-{key}']/dcc:data/dcc:quantity", NS)
+    assert q.find("si:real", NS) is None
+    assert q.find("dcc:noQuantity/dcc:content", NS).text == f"not measured: {it.reason}"
+
+
+def test_calibrate_cli_writes_the_dcc_in_the_set(run, schema, capsys):
+    from gonio.cli import main
+    out = run["tmp"] / "cal"
+    lab = protocols_dir() / "lab-example.toml"
+    assert main(["calibrate", str(run["readings"]), "--protocol", str(run["proto"]), "--dcc",
+                 "--lab", str(lab), "--out", str(out)]) == 0
+    capsys.readouterr()
+    man = json.loads((out / "gonio-manifest.json").read_text())
+    assert {"certificate.dcc.xml", "certificate.html", "certificate.pdf",
+            "results.json"} <= set(man["files"])
+    doc = (out / "certificate.dcc.xml").read_bytes()
+    assert not list(schema.iter_errors(doc.decode()))
+    root = etree.fromstring(doc)
+    assert root.find(".//dcc:coreData/dcc:uniqueIdentifier", NS).text == \
+        load_lab(lab)["certificate"]["number"]
+    # the file equals the DCC of results.json's calibration
+    res = json.loads((out / "results.json").read_text())
+    val = {s: float(r.find("si:value", NS).text) / f for s, _, f, r in _shown(doc)}
+    for src, v in val.items():
+        assert v == pytest.approx(lookup(res, src), rel=5e-4 + 1e-12), src
+    assert not math.isnan(sum(val.values()))
