@@ -6,7 +6,8 @@
         commit in a subprocess: "CSV via pandas (before)";
      b. this tree, CSV through pyarrow (gonio.formats.streams.StreamFile);
      c. this tree, the same stream as Parquet (converted once; conversion time printed).
-   Rows per second for each; targets: b ≥ 3× a, c ≥ 10× a.
+   Rows per second and CPU seconds for each; targets: b ≥ 3× a, c ≥ 10× a. Then the
+   floor: pyarrow alone reading the same files' three columns into numpy, nothing else.
 2. Peak memory (max RSS of the process) of ``gonio calibrate STREAM`` on a full draft session
    at 1 kHz (2×10⁷ rows, written by ``gonio simulate --stream``, Parquet) and on a 5× longer
    session (≈10⁸ rows: 7.4/7.5 with 95 series instead of 10). Target < 400 MB for both.
@@ -89,9 +90,54 @@ for ch in iter_stream(sys.argv[1], {chunk}):
     n += ch.time_s.size
     last = int(ch.gyro_counts[-1])
 rests = f.finish()
-print(n, len(rests), last, time.perf_counter() - t0,
-      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+ru = resource.getrusage(resource.RUSAGE_SELF)
+hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM")][0].split()[1]
+print(n, len(rests), last, time.perf_counter() - t0, int(hwm) / 1024,
+      ru.ru_utime + ru.ru_stime)
 """
+
+#: The floor: pyarrow alone reading the same file's three columns into numpy, nothing else
+#: (all its threads; CSV through its streaming reader, Parquet row group by row group).
+FLOOR_SCRIPT = r"""
+import resource, sys, time
+import pyarrow as pa, pyarrow.csv as pcsv, pyarrow.parquet as pq
+path = sys.argv[1]
+cols = ["time_s", "gyro_counts", "table_deg"]
+t0 = time.perf_counter()
+n = 0
+if path.endswith(".parquet"):
+    pf = pq.ParquetFile(path)
+    for g in range(pf.num_row_groups):
+        tab = pf.read_row_group(g, columns=cols)
+        arrays = [c.to_numpy() for c in tab.columns]
+        n += tab.num_rows
+else:
+    r = pcsv.open_csv(path, read_options=pcsv.ReadOptions(skip_rows=4, column_names=cols,
+                                                         block_size=1 << 24),
+                      convert_options=pcsv.ConvertOptions(column_types={
+                          "time_s": pa.float64(), "gyro_counts": pa.int64(),
+                          "table_deg": pa.float64()}))
+    for b in r:
+        arrays = [c.to_numpy() for c in b.columns]
+        n += b.num_rows
+ru = resource.getrusage(resource.RUSAGE_SELF)
+print(n, time.perf_counter() - t0, ru.ru_utime + ru.ru_stime)
+"""
+
+
+def floor_read(path: Path) -> tuple:
+    out = subprocess.run([sys.executable, "-c", FLOOR_SCRIPT, str(path)], cwd="/tmp",
+                         capture_output=True, text=True)
+    if out.returncode:
+        raise SystemExit(out.stderr)
+    n, secs, cpu = out.stdout.split()
+    return int(n), float(secs), float(cpu)
+
+
+#: The peak resident memory of this process, MB: VmHWM, which starts afresh at exec
+#: (ru_maxrss does not: it keeps the forking parent's resident size, here the benchmark's).
+PEAK_RSS_MB = ('int([l for l in open("/proc/self/status") if l.startswith("VmHWM")][0]'
+               '.split()[1]) / 1024')
 
 
 def timed_read(pythonpath: Path, path: Path, old: bool) -> tuple:
@@ -103,8 +149,8 @@ def timed_read(pythonpath: Path, path: Path, old: bool) -> tuple:
                          capture_output=True, text=True)
     if out.returncode:
         raise SystemExit(out.stderr)
-    n, nr, last, secs, rss = out.stdout.split()
-    return int(n), int(nr), int(last), float(secs), float(rss)
+    n, nr, last, secs, rss, cpu = out.stdout.split()
+    return int(n), int(nr), int(last), float(secs), float(rss), float(cpu)
 
 
 def start_worktree(tmp: Path) -> Path:
@@ -142,14 +188,13 @@ def calibrate_peak(tmp: Path, protocol: str, label: str) -> None:
             "from gonio.cli import main\n"
             "t0 = time.perf_counter()\n"
             "rc = main(['calibrate', sys.argv[1], '--protocol', sys.argv[2], '--out', sys.argv[3]])\n"
-            "print(rc, time.perf_counter() - t0, "
-            "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, file=sys.stderr)\n")
+            f"print(rc, time.perf_counter() - t0, {PEAK_RSS_MB}, file=sys.stderr)\n")
     r = subprocess.run([sys.executable, "-c", code, str(stream), protocol, str(tmp / f"cal-{label}")],
                        env=env, cwd=tmp, capture_output=True, text=True)
     rc, secs, rss = r.stderr.strip().splitlines()[-1].split()
     if rc != "0":
         raise SystemExit(r.stderr + r.stdout)
-    print(f"gonio calibrate STREAM, {rows:.3g} rows ({stream.stat().st_size / 1e6:.0f} MB "
+    print(f"load {os.getloadavg()[0]:.1f}: gonio calibrate STREAM, {rows:.3g} rows ({stream.stat().st_size / 1e6:.0f} MB "
           f"Parquet; simulated in {t_sim:.0f} s): {float(secs):.0f} s, peak RSS "
           f"{float(rss):.0f} MB (target < 400 MB): {'OK' if float(rss) < 400 else 'OVER'}",
           flush=True)
@@ -191,13 +236,21 @@ def main() -> int:
             print(f"converted to Parquet ({pqp.stat().st_size / 1e9:.2f} GB) in "
                   f"{time.perf_counter() - t0:.0f} s", flush=True)
             res["Parquet (this tree)"] = timed_read(ROOT, pqp, old=False)
+            floors = {"CSV": floor_read(csv), "Parquet": floor_read(pqp)}
             base = None
-            for name, (n, nr, last, secs, rss) in res.items():
+            for name, (n, nr, last, secs, rss, cpu) in res.items():
                 base = base or secs
                 ok = "OK" if last == expect_last and n == rows else "MISMATCH"
                 print(f"{name:<40} {secs:7.1f} s  {n / secs / 1e6:6.2f} M rows/s  "
-                      f"{base / secs:5.1f}x  peak RSS {rss:5.0f} MB  rests {nr}  last count "
-                      f"{ok}", flush=True)
+                      f"{base / secs:5.1f}x  CPU {cpu:5.1f} s  peak RSS {rss:5.0f} MB  "
+                      f"rests {nr}  last count {ok}", flush=True)
+            for name, (n, secs, cpu) in floors.items():
+                print(f"{'floor: pyarrow alone, ' + name:<40} {secs:7.1f} s  "
+                      f"{n / secs / 1e6:6.2f} M rows/s  {base / secs:5.1f}x  CPU {cpu:5.1f} s "
+                      "(reading the three columns into numpy, nothing else)", flush=True)
+            print(f"load average after the reads: {os.getloadavg()[0]:.1f} on "
+                  f"{os.cpu_count()} cores (wall figures above ~{os.cpu_count()} are "
+                  "shared with other processes; CPU seconds are not)", flush=True)
             t_old = res["CSV via pandas (before, start commit)"][3]
             print(f"targets: CSV via pyarrow >= 3x before: "
                   f"{'OK' if t_old / res['CSV via pyarrow (this tree)'][3] >= 3 else 'MISSED'}; "
@@ -209,6 +262,12 @@ def main() -> int:
             csv.unlink()
             pqp.unlink()
         if not a.skip_calibrate:
+            code = ("from gonio.cli import build_parser; build_parser(); "
+                    f"print({PEAK_RSS_MB})")
+            r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                               env=dict(os.environ, PYTHONPATH=str(ROOT)), cwd=tmp)
+            print(f"of which the command line's module imports alone: {float(r.stdout):.0f} MB "
+                  "peak RSS", flush=True)
             calibrate_peak(tmp, "ogam-draft", "2e7")
             calibrate_peak(tmp, str(long_protocol(tmp)), "1e8")
     finally:

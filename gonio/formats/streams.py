@@ -394,8 +394,13 @@ class StreamFile:
             offset = h.data_offset
             carry = b""
             while True:
-                data = fh.read(self.block_bytes)
-                buf = carry + data
+                # the block is read straight after the carried partial line (no copy
+                # of the block to join them, none to cut it: a view is parsed)
+                buf = bytearray(len(carry) + self.block_bytes)
+                buf[:len(carry)] = carry
+                got = fh.readinto(memoryview(buf)[len(carry):])
+                data = got > 0
+                del buf[len(carry) + got:]
                 if not buf:
                     break
                 if data:
@@ -404,11 +409,11 @@ class StreamFile:
                         # a CR at the very end may be half of a CRLF: cut before it
                         cut = max(buf.rfind(b"\n", 0, cut), buf.rfind(b"\r", 0, cut))
                     if cut < 0:
-                        carry = buf
+                        carry = bytes(buf)
                         continue
-                    block, carry = buf[:cut + 1], buf[cut + 1:]
+                    block, carry = memoryview(buf)[:cut + 1], bytes(buf[cut + 1:])
                 else:
-                    block, carry = buf, b""
+                    block, carry = memoryview(buf), b""
                 arrays = self._parse_csv(block, offset)
                 yield offset, offset + len(block), 0, arrays
                 offset += len(block)
@@ -477,6 +482,7 @@ class StreamFile:
             tab = parse(types)
         except errors as exc:
             tab = None
+            data = bytes(data)
             reason = str(exc).splitlines()[0][:80]
             if h.quantised and "gyro_counts" in types:
                 # pyarrow's integer parser refuses a leading '+' ("+000123", which the
@@ -595,7 +601,9 @@ class StreamFile:
                 if nulls is not None and col != "temperature_c":
                     i = int(np.argmax(nulls))
                     self._fail("expected a finite number, got an empty cell", col, loc(i))
-                if a.dtype.kind == "f":
+                # the sum is finite when every value is (one pass, nothing allocated);
+                # only a block whose sum is not is looked at value by value
+                if a.dtype.kind == "f" and (nulls is not None or not _finite_sum(a)):
                     bad = ~np.isfinite(a)
                     if nulls is not None:         # empty temperature cells are allowed
                         bad &= ~nulls
@@ -606,7 +614,7 @@ class StreamFile:
             if h.quantised and raw.dtype.kind == "f":
                 self._fail("expected integer pulse counts (or metadata counts_quantised: "
                            "false)", "gyro_counts", loc(0))
-            if h.quantised and h.bits < 64:
+            if h.quantised and h.bits < 64 and not lo <= int(raw.min()) <= int(raw.max()) <= hi:
                 bad = (raw < lo) | (raw > hi)
                 if bad.any():
                     i = int(np.argmax(bad))
@@ -620,14 +628,14 @@ class StreamFile:
                     self._fail(f"count {int(raw[i])} outside the 64-bit unsigned counter range",
                                "gyro_counts", loc(i))
             # time strictly increasing, gaps bounded
-            dtt = np.diff(t) if prev_t is None else np.diff(np.concatenate(([prev_t], t)))
+            dtt = _diff_after(prev_t, t)
             off = 1 if prev_t is None else 0
-            if dtt.size and not np.all(dtt > 0):
+            if dtt.size and not dtt.min() > 0:
                 i = int(np.argmax(~(dtt > 0))) + off
                 self._fail("time_s must increase strictly", "time_s", loc(i))
             if gap is None and dtt.size:
                 gap = 10.0 * float(np.median(dtt))
-            if gap is not None and dtt.size and np.any(dtt > gap):
+            if gap is not None and dtt.size and dtt.max() > gap:
                 j = int(np.argmax(dtt > gap))
                 self._fail(f"gap of {float(dtt[j]):.6g} s in time_s exceeds max_gap_s = "
                            f"{gap:.6g} s", "time_s", loc(j + off))
@@ -642,10 +650,15 @@ class StreamFile:
                         counts = counts + np.int64(prev_unwrapped)
             # plausibility of the unwrapped counter: |Δcount| ≤ bound·K·Δt
             if k is not None and k > 0 and dtt.size:
-                dc = np.diff(counts) if prev_c is None else \
-                    np.diff(np.concatenate(([prev_c], counts)))
-                fast = np.abs(dc.astype(np.float64)) > (self.rate_bound_dps * k) * dtt
-                if fast.any():
+                dc = _diff_after(prev_c, counts)
+                bound = self.rate_bound_dps * k
+                # no step is too fast when the largest step is within the bound at the
+                # shortest interval (monotone, so exact); else look step by step
+                top = float(max(dc.max(), -dc.min())) if dc.dtype.kind == "f" else \
+                    float(max(int(dc.max()), -int(dc.min())))
+                fast = None if top <= bound * float(dtt.min()) else \
+                    np.abs(dc.astype(np.float64)) > bound * dtt
+                if fast is not None and fast.any():
                     j = int(np.argmax(fast))
                     rate = abs(float(dc[j])) / (k * float(dtt[j]))
                     self._fail(f"the counter moves at {rate:.4g} °/s here, above the "
@@ -672,18 +685,35 @@ class StreamFile:
             raise GonioError("no data: header only", file=self.fname,
                              line=self.header.header_line)
         self.blocks = blocks
+        release_arrow_memory()
+
+    def release(self) -> None:
+        """Drop the cached blocks and hand the memory Arrow keeps for reuse back to the
+        system (call when done with random access; the index is kept)."""
+        self._cache.clear()
+        self._cache_order.clear()
+        release_arrow_memory()
 
     def _check_table(self, counts, table, row0: int, state: dict, loc) -> None:
         """Step of the median-of-three residual count/K − table_deg (see the class notes)."""
         k, bits = self.k_nominal, self.header.bits
-        resid = counts.astype(np.float64) / k - table
+        resid = counts.astype(np.float64)
+        resid /= k
+        resid -= table
         carry = state["resid"]
-        r_all = np.concatenate((carry, resid))
         tol = float(1 << bits) / (4.0 * k)
         # a step of the median of three needs a step of the raw residual: look closer
         # only where there is one (clean data never has one)
-        if r_all.size >= 3 and (state["med"] is None or
-                                bool(np.any(np.abs(np.diff(r_all)) > tol))):
+        step_seen = False
+        if state["med"] is not None:
+            d = np.diff(resid)
+            head = np.diff(np.concatenate((carry, resid[:1])))
+            step_seen = bool((d.size and max(d.max(), -d.min()) > tol)
+                             or (head.size and np.abs(head).max() > tol))
+            del d
+        r_all = np.concatenate((carry, resid)) if step_seen or state["med"] is None \
+            else None
+        if r_all is not None and r_all.size >= 3 and (state["med"] is None or step_seen):
             a3, b3, c3 = r_all[:-2], r_all[1:-1], r_all[2:]
             med = np.maximum(np.minimum(a3, b3), np.minimum(np.maximum(a3, b3), c3))
             # med[i] is centred on global row row0 − len(carry) + i + 1
@@ -700,10 +730,13 @@ class StreamFile:
                     "its range); record faster or with a wider counter", "gyro_counts",
                     loc(max(0, centre - row0)))
             state["med"] = float(med[-1])
-        elif r_all.size >= 3:
-            a3, b3, c3 = r_all[-3], r_all[-2], r_all[-1]
-            state["med"] = float(max(min(a3, b3), min(max(a3, b3), c3)))
-        state["resid"] = r_all[-2:]
+        else:
+            tail = r_all if r_all is not None else np.concatenate((carry, resid[-3:]))[-3:]
+            if tail.size >= 3:
+                a3, b3, c3 = tail[-3], tail[-2], tail[-1]
+                state["med"] = float(max(min(a3, b3), min(max(a3, b3), c3)))
+        state["resid"] = (r_all if r_all is not None
+                          else np.concatenate((carry, resid[-2:])))[-2:].copy()
 
     # ------------------------------------------------------------------ random access
     def index(self) -> "StreamFile":
@@ -800,6 +833,34 @@ class StreamFile:
             return len(self)
         ch = self._block(j)
         return ch.first_row + int(np.searchsorted(ch.time_s, t, side=side))
+
+
+def _finite_sum(a: np.ndarray) -> bool:
+    """True when the sum of ``a`` is finite: then every value is (a NaN or an infinity
+    makes the sum non-finite; a finite sum that overflows only sends the caller to the
+    value-by-value check)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return bool(np.isfinite(np.sum(a)))
+
+
+def _diff_after(prev, a: np.ndarray) -> np.ndarray:
+    """``numpy.diff`` of ``a`` preceded by ``prev`` (None: of ``a`` alone), built without
+    copying ``a`` first."""
+    if prev is None:
+        return np.diff(a)
+    d = np.empty(a.size, dtype=np.result_type(a.dtype, np.asarray(prev).dtype))
+    if a.size:
+        with np.errstate(over="ignore"):      # int64 wraps, as numpy.diff does
+            d[0] = a[0] - prev
+        np.subtract(a[1:], a[:-1], out=d[1:])
+    return d
+
+
+def release_arrow_memory() -> None:
+    """Hand the memory Arrow's pool keeps for reuse (tens of MB after a pass over a
+    stream) back to the system, so that later stages do not carry it."""
+    import pyarrow as pa
+    pa.default_memory_pool().release_unused()
 
 
 def _columns(tab, columns) -> dict:
@@ -919,6 +980,10 @@ def _fmt_metadata(metadata: Mapping[str, str]) -> str:
 STREAM_FORMATS = ("parquet", "csv")
 #: Rows per Parquet row group (one block of :class:`StreamFile`).
 PARQUET_ROW_GROUP = 1 << 18
+#: How streams are encoded in Parquet: plain values (a dictionary of 2¹⁸ distinct doubles
+#: is only overhead) compressed with LZ4, which decodes about three times faster than the
+#: dictionary + snappy default at about the same size.
+PARQUET_OPTIONS = {"compression": "lz4", "use_dictionary": False}
 
 
 def stream_format(path: str | Path) -> str:
@@ -983,7 +1048,7 @@ class StreamWriter:
             import pyarrow.parquet as pq
             self._schema = self._schema.with_metadata({k.strip(): v.strip()
                                                        for k, v in md.items()})
-            self._pq = pq.ParquetWriter(self._fh, self._schema, compression="snappy")
+            self._pq = pq.ParquetWriter(self._fh, self._schema, **PARQUET_OPTIONS)
         else:
             import pyarrow.csv as pcsv
             self._fh.write((text_md + ",".join(cols) + "\n").encode())

@@ -749,6 +749,7 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
         ch = stream.window(a, b, columns=("time_s", "gyro_counts"))
         t, c = ch.time_s, ch.gyro_counts
         del ch
+        stream.release()
     else:
         m = (stream.time_s >= t0) & (stream.time_s <= t1)
         t, c = stream.time_s[m], stream.gyro_counts[m]

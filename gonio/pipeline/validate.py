@@ -316,12 +316,34 @@ class TrialJob:
     extras_used: tuple
 
 
+#: Threads each worker's numerical libraries (OpenBLAS, OpenMP) may use while it runs a
+#: batch: one, so that N workers use N cores (a trial is single-threaded Python and numpy;
+#: a library pool of its own would only compete with the other workers).
+WORKER_THREADS = 1
+
+
 def run_batch(job: TrialJob, start: int, stop: int) -> dict:
-    """Run trials ``start`` … ``stop − 1`` of ``job.case``; returned packed (:func:`pack_trials`)."""
+    """Run trials ``start`` … ``stop − 1`` of ``job.case``; returned packed (:func:`pack_trials`).
+
+    The numerical libraries' thread pools are held to :data:`WORKER_THREADS` while the
+    batch runs (``threadpoolctl``), in this process as in a pool or Dask worker.
+    """
+    from threadpoolctl import threadpool_limits
+
     idx = range(start, stop)
-    res = [run_trial(job.protocol, job.bench, trial_seed(job.seed, job.case, i), job.u_scale,
-                     job.truth, job.extras_used) for i in idx]
+    with threadpool_limits(limits=WORKER_THREADS):
+        res = [run_trial(job.protocol, job.bench, trial_seed(job.seed, job.case, i),
+                         job.u_scale, job.truth, job.extras_used) for i in idx]
     return pack_trials(job.case, list(idx), res)
+
+
+def worker_threads() -> str:
+    """The thread pools a batch runs with, as ``library: threads`` (for benchmarks and logs)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    with threadpool_limits(limits=WORKER_THREADS):
+        pools = [f"{p['internal_api']}: {p['num_threads']}" for p in threadpool_info()]
+    return ", ".join(pools) or "no BLAS/OpenMP thread pool loaded"
 
 
 def pack_trials(case: str, indices: Sequence[int], trials: Sequence[TrialResult]) -> dict:

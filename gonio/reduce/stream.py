@@ -84,7 +84,10 @@ class Rest:
 def _median3(x: np.ndarray) -> np.ndarray:
     """Median of each sample and its two neighbours (interior samples only)."""
     a, b, c = x[:-2], x[1:-1], x[2:]
-    return np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))
+    lo = np.minimum(a, b)                 # max(min(a, b), min(max(a, b), c)), two arrays
+    hi = np.maximum(a, b)
+    np.minimum(hi, c, out=hi)
+    return np.maximum(lo, hi, out=lo)
 
 
 class RestFinder:
@@ -146,7 +149,12 @@ class RestFinder:
         Z = np.concatenate((self._cy, y))
         self._n_out += t.size
         if Z.size > w:
-            ok = np.abs(Z[w:] - Z[:-w]) < self.thr * (T[w:] - T[:-w])
+            dz = np.subtract(Z[w:], Z[:-w])      # |ΔZ| < thr·ΔT, formed in place
+            np.abs(dz, out=dz)
+            lim = np.subtract(T[w:], T[:-w])
+            np.multiply(self.thr, lim, out=lim)
+            ok = np.less(dz, lim)
+            del dz, lim
             if self._open is not None and not ok[0]:
                 self._close()
             edges = np.diff(np.concatenate(([0], ok.astype(np.int8), [0])))

@@ -501,11 +501,36 @@ def noise_id_b1(x: np.ndarray, m: int) -> int | None:
     n = x.size
     if n - 3 * m + 1 < 1:
         return 2
-    sd = x[2 * m:] - 2 * x[m:n - m] + x[: n - 2 * m]
-    avar_o = float(np.mean(sd ** 2))
-    c = np.concatenate(([0.0], np.cumsum(sd)))
-    w = (c[m:] - c[:-m]) / m
-    mvar = float(np.mean(w ** 2))
+    # One record-sized array at a time (the values and summation order of
+    # sd = x[2m:] − 2x[m:n−m] + x[:n−2m]; avar = mean(sd²); c = [0, cumsum(sd)];
+    # w = (c[m:] − c[:−m])/m; mvar = mean(w²)): sd whole for its mean, then c built
+    # from sd recomputed piece by piece, and w written over c's head.
+    sd = 2 * x[m:n - m]
+    np.subtract(x[2 * m:], sd, out=sd)
+    sd += x[: n - 2 * m]
+    np.square(sd, out=sd)
+    avar_o = float(np.mean(sd))
+    size = sd.size
+    del sd
+    c = np.empty(size + 1)
+    c[0] = 0.0
+    step = 1 << 18
+    for a in range(0, size, step):
+        e = min(size, a + step)
+        p = 2 * x[m + a: m + e]
+        np.subtract(x[2 * m + a: 2 * m + e], p, out=p)
+        p += x[a:e]
+        p[0] += c[a]                     # the running sum continues across pieces
+        np.cumsum(p, out=c[a + 1: e + 1])
+    nw = c.size - m
+    for a in range(0, nw, step):          # w[i] = c[i+m] − c[i], written over c[i]
+        e = min(nw, a + step)
+        c[a:e] = c[a + m: e + m] - c[a:e]
+    w = c[:nw]
+    w /= m
+    np.square(w, out=w)
+    mvar = float(np.mean(w))
+    del w, c
     if avar_o <= 0:
         return 2
     rn = mvar / avar_o

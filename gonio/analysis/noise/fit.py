@@ -412,13 +412,34 @@ def _flicker_rate(rng, n: int, tau0_s: float, b: float) -> np.ndarray:
     if b == 0:
         return np.zeros(n)
     ntot = 4 * n
-    f = np.fft.rfftfreq(ntot, tau0_s)
-    spec = rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)
+    nf = ntot // 2 + 1
+    # Built piece by piece in place (the spectrum is 4× the record: whole-array
+    # temporaries would dominate a long record's memory). The same draws in the same
+    # order and the same operations per element as the whole-array form
+    # ``(x + 1j·y)·√(h/f·ntot/(4τ0))·sinc(fτ0)``, f = numpy.fft.rfftfreq(ntot, τ0).
+    spec = np.empty(nf, dtype=np.complex128)
+    piece = np.empty(min(nf, _SYNTH_PIECE))
+    for part in (spec.real, spec.imag):
+        for a in range(0, nf, _SYNTH_PIECE):
+            e = min(nf, a + _SYNTH_PIECE)
+            rng.standard_normal(out=piece[: e - a])
+            part[a:e] = piece[: e - a]
+    del piece
     spec[0] = 0.0
     h = b * b / math.pi
-    sinc = np.sinc(f[1:] * tau0_s)
-    spec[1:] *= np.sqrt(h / f[1:] * ntot / (4.0 * tau0_s)) * sinc
-    return np.fft.irfft(spec, ntot)[:n]
+    val = 1.0 / (ntot * tau0_s)               # rfftfreq's spacing
+    for a in range(1, nf, _SYNTH_PIECE):
+        e = min(nf, a + _SYNTH_PIECE)
+        f = np.arange(a, e) * val
+        spec[a:e] *= np.sqrt(h / f * ntot / (4.0 * tau0_s)) * np.sinc(f * tau0_s)
+    x = np.fft.irfft(spec, ntot)
+    del spec
+    out = x[:n].copy()                        # not a view keeping the 4× record alive
+    return out
+
+
+#: Spectrum bins handled at a time by :func:`_flicker_rate`.
+_SYNTH_PIECE = 1 << 18
 
 
 def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
@@ -433,23 +454,58 @@ def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
     952-1997 Annex C).
     """
     rng = np.random.default_rng(rng)
+    # Each term is added piece by piece (a long record's memory is the record, not one
+    # record per operation); the same draws in the same order and the same operations
+    # per element as y = N/√τ0·z1 + flicker + K√τ0·cumsum(z2) + Rτ0·(k + ½) + diff(Q·z3)/τ0.
     y = np.zeros(n)
+    step = _SYNTH_PIECE
+    buf = np.empty(min(n, step) + 1)
     if N:
-        y += N / math.sqrt(tau0_s) * rng.standard_normal(n)
+        c = N / math.sqrt(tau0_s)
+        for a in range(0, n, step):
+            z = buf[: min(n, a + step) - a]
+            rng.standard_normal(out=z)
+            z *= c
+            y[a: a + z.size] += z
     if B:
         y += _flicker_rate(rng, n, tau0_s, B)
     if K:
-        y += K * math.sqrt(tau0_s) * np.cumsum(rng.standard_normal(n))
+        c, carry = K * math.sqrt(tau0_s), 0.0
+        for a in range(0, n, step):
+            z = buf[: min(n, a + step) - a]
+            rng.standard_normal(out=z)
+            if a:
+                z[0] += carry                 # the running sum continues across pieces
+            np.cumsum(z, out=z)
+            carry = float(z[-1])
+            z *= c
+            y[a: a + z.size] += z
     if R:
-        y += R * tau0_s * (np.arange(n) + 0.5)
+        c = R * tau0_s
+        for a in range(0, n, step):
+            z = np.arange(a, min(n, a + step), dtype=np.float64)
+            z += 0.5
+            z *= c
+            y[a: a + z.size] += z
     if Q:
-        q = Q * rng.standard_normal(n + 1)
-        y += np.diff(q) / tau0_s
+        rng.standard_normal(out=buf[:1])
+        buf[0] *= Q
+        for a in range(0, n, step):
+            k = min(n, a + step) - a
+            q = buf[: k + 1]
+            rng.standard_normal(out=q[1:])
+            q[1:] *= Q
+            d = np.subtract(q[1:], q[:-1])
+            d /= tau0_s
+            y[a: a + k] += d
+            buf[0] = q[k]
+    del buf
     if input_type == "rate":
         return y
     x = np.empty(n + 1)
     x[0] = 0.0
-    np.cumsum(y * tau0_s, out=x[1:])
+    y *= tau0_s
+    np.cumsum(y, out=x[1:])
     return x
 
 
@@ -468,9 +524,11 @@ def bootstrap_uncertainty(allan: AllanResult, values, *, terms: Sequence[str] = 
     tau0 = float(allan.tau0_s)
     out = np.empty((n_boot, 5))
     for b in range(n_boot):
+        y = None                            # the last record is freed before the next
         y = simulate_noise(n, tau0, *values, rng=rng)
         r = allan_deviation(y, tau0, "rate", allan.m.astype(np.int64), kind=allan.kind,
                             alpha=0, unit=allan.unit)
+        del y
         r.alpha = allan.alpha
         f = fit_noise_model(r, terms=terms, tau_max_s=tau_max_s, iterations=iterations)
         out[b] = np.nan_to_num([f.Q, f.N, f.B, f.K, f.R])

@@ -104,18 +104,25 @@ def analyse_record(data, tau0_s: float, input_type: str, *, scale: float = 1.0,
                              duration_s=float(tau0_s) * (n - 1 if input_type == "angle" else n))
 
 
+#: Samples checked at a time by :func:`_uniform_tau0` (bounded temporaries).
+_CHECK_PIECE = 1 << 18
+
+
 def _uniform_tau0(t: np.ndarray, key: str = "time_s", file=None) -> float:
-    dt = np.diff(t)
-    if not np.all(np.isfinite(dt)) or np.any(dt <= 0):
-        bad = int(np.flatnonzero(~(dt > 0))[0]) + 1
-        raise GonioError(f"time must be strictly increasing (sample {bad})", key=key,
-                         file=file)
     tau0 = float((t[-1] - t[0]) / (t.size - 1))
-    off = np.flatnonzero(np.abs(dt - tau0) > 0.01 * tau0)
-    if off.size:
-        raise GonioError("sampling is not uniform: a step differs from the mean "
-                         f"{tau0:g} s by more than 1 % (sample {int(off[0]) + 1})",
-                         key=key, file=file)
+    for a in range(0, t.size - 1, _CHECK_PIECE):
+        dt = np.diff(t[a: a + _CHECK_PIECE + 1])
+        if not np.all(np.isfinite(dt)) or np.any(dt <= 0):
+            bad = a + int(np.flatnonzero(~(dt > 0))[0]) + 1
+            raise GonioError(f"time must be strictly increasing (sample {bad})", key=key,
+                             file=file)
+    for a in range(0, t.size - 1, _CHECK_PIECE):
+        dt = np.diff(t[a: a + _CHECK_PIECE + 1])
+        off = np.flatnonzero(np.abs(dt - tau0) > 0.01 * tau0)
+        if off.size:
+            raise GonioError("sampling is not uniform: a step differs from the mean "
+                             f"{tau0:g} s by more than 1 % (sample {a + int(off[0]) + 1})",
+                             key=key, file=file)
     return tau0
 
 
