@@ -368,3 +368,22 @@ def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
         assert mc["high"] - th.value == pytest.approx(0.95 * comps["grid"] * math.sqrt(3), rel=0.01)
         assert not mc["validated"]
     assert r2.to_json()["items"]["bias"]["uncertainty"]["monte_carlo"]["trials"] == 200_000
+
+
+@pytest.mark.parametrize("name,section", [("jjf1535-2015", "arw"), ("iec62047-20", "noise")])
+def test_programme_beyond_the_row_limit_is_refused_before_simulating(tmp_path, capsys, name,
+                                                                     section):
+    """Issue 14: a rate programme of 10⁹ samples (a typo in a sample count) is refused at
+    once, in one line naming the limit, before anything is simulated or written."""
+    import time
+
+    from gonio.cli import main
+
+    proto = small_protocol(tmp_path, name, **{section: {"samples": 10**9}})
+    t0 = time.perf_counter()
+    rc = main(["simulate", "--spec", name, "--protocol", str(proto), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "GONIO_MAX_READING_ROWS" in err[0] and "1e+09" in err[0]
+    assert not (tmp_path / "o").exists()
+    assert time.perf_counter() - t0 < 30

@@ -168,12 +168,49 @@ def _chamber_track(st: _State, target: float, ramp_c_per_min: float, duration_s:
     st.chamber_set = target
 
 
+def check_rate_session_size(segments: list[Segment], *, where: str = "the programme") -> int:
+    """Refuse a rate-gyro programme beyond the stated limits before simulating it.
+
+    Every sample becomes a row of readings.csv and is held in memory until written, so
+    the rows are checked against ``GONIO_MAX_READING_ROWS`` (the limit the readings
+    reader applies to the same file) and the programme's duration against
+    ``GONIO_MAX_SESSION_S`` (:mod:`gonio.limits`). The message names the protocol
+    section (through the readings' ``test`` of the segments) contributing most rows. Returns the rows.
+
+    >>> check_rate_session_size([Segment("arw", 1, 0, "rest", 1000, 0.1)])
+    1000
+    >>> check_rate_session_size([Segment("arw", 1, 0, "rest", 10**9, 0.1)])
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key arw: the programme: 1e+09 samples (rows of readings.csv) exceed the limit of 1e+06 (set GONIO_MAX_READING_ROWS to raise it); most come from the test 'arw' (100%) — its protocol section's sample counts
+    """
+    from gonio.limits import check, limit
+
+    per: dict[str, int] = {}
+    dur = 0.0
+    for seg in segments:
+        per[seg.test] = per.get(seg.test, 0) + max(int(seg.samples), 0)
+        dur += (float(seg.delay_s) + float(seg.off_time_s)
+                + max(int(seg.samples), 0) * max(float(seg.interval_s), 0.0))
+    n = sum(per.values())
+    top = max(per, key=per.get) if per else "protocol"
+    lim = limit("GONIO_MAX_READING_ROWS")
+    if n > lim:
+        raise GonioError(f"{where}: {n:.4g} samples (rows of readings.csv) exceed the limit of "
+                         f"{lim:.4g} (set GONIO_MAX_READING_ROWS to raise it); most come from "
+                         f"the test {top!r} ({per[top] / n:.0%}) — its protocol section's sample counts",
+                         key=top)
+    check("GONIO_MAX_SESSION_S", dur, f"{where}: the programme lasts", unit="s")
+    return n
+
+
 def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *,
                      room_temperature_c: float = 20.0, metadata: dict | None = None,
                      noise: bool = True) -> RateSessionResult:
     """Execute ``segments`` in order on ``bench``; same seed → same numbers."""
     if not segments:
         raise GonioError("the programme has no segments")
+    check_rate_session_size(segments, where=f"the programme on bench {bench.name}")
     rng = np.random.default_rng(seed)
     g, eq = bench.gyro, bench.equipment
     st = _State(bench, rng, room_temperature_c)
