@@ -255,3 +255,28 @@ def test_short_paragraph_never_split():
                  if any("PARA" in repr(d) or "word word" in repr(d)
                         for d in (op.__defaults__ or ()))]
         assert len(set(where)) == 1 and len(where) >= 2, (n_lines, where)
+
+
+@pytest.mark.parametrize("old,new,key,var", [
+    ("duration_s = 300.0", "duration_s = 1e9", "static.duration_s", "GONIO_MAX_READING_ROWS"),
+    ("soak_s = 1800.0", "soak_s = 1e12", "thermal.soak_s", "GONIO_MAX_SAMPLES"),
+])
+def test_triad_programme_beyond_the_limits_is_refused_naming_the_key(tmp_path, capsys, old, new,
+                                                                     key, var):
+    """Issue 14 for the triad bench: a typo of 10⁹ s or 10¹² s in a protocol is refused in
+    one line naming the protocol key and the limit, before any large allocation, nothing
+    written (it ran out of memory before)."""
+    from pathlib import Path
+
+    from gonio.cli import main
+
+    text = (Path(__file__).parents[1] / "protocols" / "triad-alignment.toml").read_text()
+    assert old in text
+    p = tmp_path / "p.toml"
+    p.write_text(text.replace(old, new, 1))
+    rc = main(["simulate", "--spec", "triad-alignment", "--protocol", str(p),
+               "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert key in err[0] and var in err[0]
+    assert not (tmp_path / "o").exists()

@@ -371,6 +371,11 @@ class TriadSession:
     truth: dict
 
 
+#: Largest piece of unrecorded time simulated at once (samples): bounds :meth:`_Runner.idle`'s
+#: memory; the default programmes' soaks (18 000 samples) are one piece.
+IDLE_PIECE = 1_000_000
+
+
 class _Runner:
     """Advances time sample by sample-block: table motion, temperatures, outputs."""
 
@@ -387,6 +392,26 @@ class _Runner:
         self.mix = bench.axes + bench.cross_coupling
         self.rows: list[dict] = []
         self.step = 0
+        self.samples = 0
+
+    def _size(self, duration_s: float, key: str, *, recorded: bool) -> int:
+        """Samples of a block, checked against the stated limits before any allocation
+        (:mod:`gonio.limits`): a recorded block at most ``GONIO_MAX_READING_ROWS`` samples
+        (it is held whole), the session at most ``GONIO_MAX_SAMPLES`` samples and
+        ``GONIO_MAX_SESSION_S`` seconds; the message names the protocol key."""
+        from gonio.limits import check, limit
+
+        n = max(1, int(round(duration_s * self.fs)))
+        where = f"triad bench {self.bench.name} at {self.fs:g} Hz, protocol key {key}"
+        if recorded and n > limit("GONIO_MAX_READING_ROWS"):
+            raise GonioError(f"{where}: one recorded block of {n:.4g} samples exceeds the limit "
+                             f"of {limit('GONIO_MAX_READING_ROWS'):.4g} (set "
+                             "GONIO_MAX_READING_ROWS to raise it)", key=key)
+        self.samples += n
+        check("GONIO_MAX_SAMPLES", self.samples, f"{where}: the session needs", unit="samples")
+        check("GONIO_MAX_SESSION_S", self.t + n / self.fs, f"{where}: the session lasts",
+              unit="s")
+        return n
 
     def _temps(self, n: int, chamber_end: float) -> tuple[np.ndarray, np.ndarray]:
         """Chamber (linear from current to ``chamber_end``) and die temperature samples."""
@@ -401,11 +426,11 @@ class _Runner:
         return ch, die
 
     def run(self, duration_s: float, *, up="+z", north0="+x", table_deg=0.0, rate_dps=0.0,
-            supply_v=None, chamber_end=None) -> dict:
+            supply_v=None, chamber_end=None, key: str = "protocol") -> dict:
         """Simulate one block; return its sample arrays (outputs (3, n), temps...)."""
         b = self.bench
         th = b.thermal
-        n = max(1, int(round(duration_s * self.fs)))
+        n = self._size(duration_s, key, recorded=True)
         v = th.reference_v if supply_v is None else supply_v
         ch, die = self._temps(n, self.chamber_c if chamber_end is None else chamber_end)
         tk = np.arange(n) / self.fs
@@ -432,16 +457,23 @@ class _Runner:
         self.t += n / self.fs
         return blk
 
-    def idle(self, duration_s: float, supply_v=None, chamber_end=None, **kw) -> None:
-        """Let time pass unrecorded: temperatures and the noise processes advance."""
+    def idle(self, duration_s: float, supply_v=None, chamber_end=None, key: str = "protocol",
+             **kw) -> None:
+        """Let time pass unrecorded: temperatures and the noise processes advance (in
+        pieces of at most ``IDLE_PIECE`` samples, so memory stays bounded)."""
         if duration_s <= 0:
             return
-        n = max(1, int(round(duration_s * self.fs)))
-        self._temps(n, self.chamber_c if chamber_end is None else chamber_end)
-        if np.any(self.noise.gm_sd > 0) or np.any(self.noise.rrw > 0):
-            self.noise.block(n)
-        else:
-            self.rng.standard_normal((3, n))     # the same draws a recorded block would use
+        n = self._size(duration_s, key, recorded=False)
+        end = self.chamber_c if chamber_end is None else chamber_end
+        start, done = self.chamber_c, 0
+        while done < n:
+            m = min(IDLE_PIECE, n - done)
+            done += m
+            self._temps(m, end if done == n else start + (end - start) * done / n)
+            if np.any(self.noise.gm_sd > 0) or np.any(self.noise.rrw > 0):
+                self.noise.block(m)
+            else:
+                self.rng.standard_normal((3, m))  # the same draws a recorded block would use
         self.t += n / self.fs
 
     def record(self, test: str, blk: dict, *, up, north0, table_deg, rate_dps, phase="",
@@ -508,21 +540,23 @@ def run_alignment_session(protocol: TriadProtocol, bench: TriadBench, seed: int 
         up, north0 = f"+{ax}", protocol.north0[ax]
         for rate in protocol.rates_dps:
             for sgn in (1.0, -1.0):
-                r.idle(protocol.settle_s, up=up, north0=north0)
+                r.idle(protocol.settle_s, up=up, north0=north0, key="alignment.settle_s")
                 dur = protocol.revolutions * 360.0 / rate
-                blk = r.run(dur, up=up, north0=north0, table_deg=table, rate_dps=sgn * rate)
+                blk = r.run(dur, up=up, north0=north0, table_deg=table, rate_dps=sgn * rate,
+                            key="alignment.revolutions")
                 r.record("alignment", blk, up=up, north0=north0, table_deg=table,
                          rate_dps=sgn * rate)
     if protocol.static_positions:
         for ax in "xyz":
             for s in "+-":
                 up, north0 = f"{s}{ax}", protocol.north0[ax]
-                r.idle(protocol.settle_s, up=up, north0=north0)
-                blk = r.run(protocol.static_dwell_s, up=up, north0=north0)
+                r.idle(protocol.settle_s, up=up, north0=north0, key="alignment.settle_s")
+                blk = r.run(protocol.static_dwell_s, up=up, north0=north0,
+                            key="alignment.static_dwell_s")
                 r.record("alignment", blk, up=up, north0=north0, table_deg=0.0, rate_dps=0.0)
     if protocol.static_duration_s > 0:
         up, north0 = "+z", protocol.north0["z"]
-        blk = r.run(protocol.static_duration_s, up=up, north0=north0)
+        blk = r.run(protocol.static_duration_s, up=up, north0=north0, key="static.duration_s")
         rows = {"test": "static", "phase": "", "up": up, "north0": north0, "table_deg": 0.0,
                 "rate_dps": 0.0, "duration_s": 1.0 / r.fs, "n_samples": 1,
                 "chamber_c": math.nan, "sensor_c": math.nan, "supply_v": math.nan}
@@ -565,17 +599,20 @@ def run_thermal_session(protocol: TriadProtocol, bench: TriadBench, seed: int = 
             start = r.chamber_c
             for k in range(nblk):
                 end = start + (sp - start) * (k + 1) / nblk
-                blk = r.run(ramp_s / nblk, up=up, north0=north0, chamber_end=end)
+                blk = r.run(ramp_s / nblk, up=up, north0=north0, chamber_end=end,
+                            key="thermal.ramp_block_s")
                 r.record("thermal", blk, up=up, north0=north0, table_deg=0.0, rate_dps=0.0,
                          phase="ramp", thermal=True)
-            r.idle(th["soak_s"], up=up, north0=north0)
+            r.idle(th["soak_s"], up=up, north0=north0, key="thermal.soak_s")
             for v in volts:
                 for sgn in (1.0, -1.0):
                     dur = max(1, round(th["dwell_s"] * rate / 360.0)) * 360.0 / rate
-                    blk = r.run(dur, up=up, north0=north0, rate_dps=sgn * rate, supply_v=v)
+                    blk = r.run(dur, up=up, north0=north0, rate_dps=sgn * rate, supply_v=v,
+                                key="thermal.dwell_s")
                     r.record("thermal", blk, up=up, north0=north0, table_deg=0.0,
                              rate_dps=sgn * rate, phase="soak", thermal=True)
-                blk = r.run(th["static_dwell_s"], up=up, north0=north0, supply_v=v)
+                blk = r.run(th["static_dwell_s"], up=up, north0=north0, supply_v=v,
+                            key="thermal.static_dwell_s")
                 r.record("thermal", blk, up=up, north0=north0, table_deg=0.0, rate_dps=0.0,
                          phase="soak", thermal=True)
     md = _metadata(bench, protocol, seed, "thermal")
