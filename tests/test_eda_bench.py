@@ -136,7 +136,9 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
 
     direct = analyse_eda_readings(report.readings.data, proto.extra["equal_division"],
                                   compensation_time_s=proto.session.static_s,
-                                  latitude_deg=90.0, tilt_bound_deg=0.1)
+                                  latitude_deg=90.0, tilt_bound_deg=0.1,
+                                  table_accel_dps2=float(
+                                      report.readings.metadata["table_accel_dps2"]))
     assert e["coupling"]["note"] == direct.coupling.note
     assert np.allclose(e["table"]["error_arcsec"], direct.table_error_arcsec, atol=1e-6)
     page = write_certificate(report, tmp_path)["certificate.html"].read_text()
