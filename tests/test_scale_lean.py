@@ -29,7 +29,9 @@ def _whole_array(n, tau0, Q, N, B, K, R, seed, input_type):
     if N:
         y += N / math.sqrt(tau0) * rng.standard_normal(n)
     if B:
-        ntot = 4 * n
+        from scipy.fft import next_fast_len
+
+        ntot = next_fast_len(4 * n, real=True)
         f = np.fft.rfftfreq(ntot, tau0)
         spec = rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)
         spec[0] = 0.0

@@ -50,6 +50,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 from scipy import optimize
+from scipy.fft import next_fast_len
 
 from gonio.analysis.noise.allan import AllanResult, allan_deviation
 from gonio.analysis.noise.edf import edf_for
@@ -406,12 +407,14 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
 def _flicker_rate(rng, n: int, tau0_s: float, b: float) -> np.ndarray:
     """Rate samples (means over τ0) of flicker rate noise with AVAR (2 ln2/π)B²:
     one-sided PSD h/f, h = B²/π (IEEE 952 C.3), synthesised in the frequency domain
-    on a record 4× longer than asked (the 1/f shape holds well below the record
-    length) and cut; each sample is the mean of the continuous process over τ0
-    (the sinc² of the averaging is applied)."""
+    on a record at least 4× longer than asked (the 1/f shape holds well below the
+    record length; the length is the next 5-smooth one, ``scipy.fft.next_fast_len``:
+    an FFT of a length with a large prime factor is 20× slower) and cut; each sample
+    is the mean of the continuous process over τ0 (the sinc² of the averaging is
+    applied)."""
     if b == 0:
         return np.zeros(n)
-    ntot = 4 * n
+    ntot = next_fast_len(4 * n, real=True)
     nf = ntot // 2 + 1
     # Built piece by piece in place (the spectrum is 4× the record: whole-array
     # temporaries would dominate a long record's memory). The same draws in the same
