@@ -31,37 +31,9 @@ HINT = "run scripts/install-test-system-deps.sh (chromium, poppler-utils, fonts-
 ITEMS = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
          "repeatability", "rate_consistency", "pointing_consistency")
 
-SMALL_TOML = """[protocol]
-name = "small"
-[session]
-static_s = 30.0
-[scale_factor]
-rest_s = 15.0
-rounds = [{stop_deg = 120.0}, {stop_deg = 240.0}, {stop_deg = 360.0}]
-[zero_stability]
-readings = 4
-interval_s = 20.0
-[angle_deviation]
-series = 3
-rest_s = 15.0
-rounds = [{stop_deg = 90.0}, {stop_deg = 180.0}, {stop_deg = 270.0}, {stop_deg = 360.0}]
-[rate_consistency]
-rates_dps = [30.0, 60.0]
-rest_s = 15.0
-[pointing_consistency]
-orientations = ["up", "north"]
-rest_s = 15.0
-"""
-SMALL = {
-    "protocol": {"name": "small"}, "session": {"static_s": 30.0},
-    "scale_factor": {"rest_s": 15.0, "rounds": [{"stop_deg": 120.0}, {"stop_deg": 240.0},
-                                                 {"stop_deg": 360.0}]},
-    "zero_stability": {"readings": 4, "interval_s": 20.0},
-    "angle_deviation": {"series": 3, "rest_s": 15.0,
-                        "rounds": [{"stop_deg": 90.0 * i} for i in range(1, 5)]},
-    "rate_consistency": {"rates_dps": [30.0, 60.0], "rest_s": 15.0},
-    "pointing_consistency": {"orientations": ["up", "north"], "rest_s": 15.0},
-}
+# the small protocol shared with other tests (tests/data/small-protocol.toml)
+SMALL_TOML = (Path(__file__).parent / "data" / "small-protocol.toml").read_text(encoding="utf-8")
+SMALL = tomllib.loads(SMALL_TOML)
 
 
 def tool(name: str) -> str:

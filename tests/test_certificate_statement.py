@@ -15,6 +15,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tomllib
 from dataclasses import replace
 from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
@@ -36,16 +37,10 @@ from gonio.resources import builtin_names, protocols_dir
 
 HINT = "run scripts/install-test-system-deps.sh (chromium, poppler-utils, fonts-noto-cjk)"
 LAB = protocols_dir() / "lab-example.toml"
-SMALL = {
-    "protocol": {"name": "small"}, "session": {"static_s": 30.0},
-    "scale_factor": {"rest_s": 15.0, "rounds": [{"stop_deg": 120.0}, {"stop_deg": 240.0},
-                                                 {"stop_deg": 360.0}]},
-    "zero_stability": {"readings": 4, "interval_s": 20.0},
-    "angle_deviation": {"series": 3, "rest_s": 15.0,
-                        "rounds": [{"stop_deg": 90.0 * i} for i in range(1, 5)]},
-    "rate_consistency": {"rates_dps": [30.0, 60.0, 1.0], "rest_s": 15.0},
-    "pointing_consistency": {"orientations": ["up", "north"], "rest_s": 15.0},
-}
+# the shared small protocol with a third, slow rate in 7.6
+SMALL = {**tomllib.loads((Path(__file__).parent / "data" / "small-protocol.toml")
+                          .read_text(encoding="utf-8")),
+         "rate_consistency": {"rates_dps": [30.0, 60.0, 1.0], "rest_s": 15.0}}
 
 
 def tool(name: str) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import subprocess
 import sys
 
@@ -14,28 +15,7 @@ UNITS = {"scale_factor": "counts/deg", "scale_factor_nonlinearity": "%", "zero_s
          "angle_deviation": "arcsec", "repeatability": "arcsec", "rate_consistency": "ppm",
          "pointing_consistency": "%"}
 
-SMALL = """
-[protocol]
-name = "small"
-[session]
-static_s = 30.0
-[scale_factor]
-rest_s = 15.0
-rounds = [{ stop_deg = 120.0 }, { stop_deg = 240.0 }, { stop_deg = 360.0 }]
-[zero_stability]
-readings = 4
-interval_s = 20.0
-[angle_deviation]
-series = 3
-rest_s = 15.0
-rounds = [{ stop_deg = 90.0 }, { stop_deg = 180.0 }, { stop_deg = 270.0 }, { stop_deg = 360.0 }]
-[rate_consistency]
-rates_dps = [30.0, 60.0]
-rest_s = 15.0
-[pointing_consistency]
-orientations = ["up", "north"]
-rest_s = 15.0
-"""
+SMALL = (Path(__file__).parent / "data" / "small-protocol.toml").read_text(encoding="utf-8")
 
 
 @pytest.fixture(scope="module")

@@ -47,24 +47,11 @@ def _toml(d: dict) -> str:
 def small_protocol(tmp_path, name="jjf1535-2015", **changes) -> Path:
     """The built-in protocol with small sample counts (and ``changes`` {section: {key: v}})."""
     d = tomllib.loads((ROOT / "protocols" / f"{name}.toml").read_text(encoding="utf-8"))
-    if name == "jjf1535-2015":
-        small = {"protocol": {"warmup_s": 600.0},
-                 "scale_factor": {"samples_below_100_dps": 5, "samples_from_100_dps": 5,
-                                  "rest_samples": 5, "interval_s": 60.0},
-                 "temperature": {"soak_s": 1800.0, "bias_samples": 100},
-                 "threshold": {"samples": 5, "rest_samples": 5},
-                 "resolution": {"samples": 5},
-                 "bias": {"samples": 600, "off_time_s": 60.0},
-                 "warmup": {"samples": 600, "window_samples": 100, "off_time_s": 60.0},
-                 "g_sensitivity": {"samples": 60, "settle_s": 5.0},
-                 "arw": {"samples": 3000},
-                 "bandwidth": {"cycles": 8}}
-    else:
-        small = {"protocol": {"warmup_s": 600.0},
-                 "scale_factor": {"samples": 5}, "temperature": {"soak_s": 1800.0, "bias_samples": 60},
-                 "stability": {"samples": 50}, "bias": {"samples": 300, "off_time_s": 60.0},
-                 "power_on": {"samples": 900, "off_time_s": 60.0},
-                 "noise": {"samples": 3000}, "frequency": {"cycles": 8}}
+    # the coverage study's reduced programme, with shorter noise records for speed
+    from gonio.pipeline.rate_coverage import REDUCED
+
+    noise_sec = "arw" if name == "jjf1535-2015" else "noise"
+    small = {**REDUCED[name], noise_sec: {"samples": 3000}}
     for sec, kv in {**small, **changes}.items():
         d[sec].update(kv)
     p = tmp_path / f"{name}-small.toml"

@@ -237,15 +237,20 @@ class RateTrialJob:
 
 
 def run_rate_batch(job: RateTrialJob, start: int, stop: int) -> list[tuple[int, int, str]]:
-    """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless)."""
-    from gonio.pipeline.validate import spawn_seed
+    """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless),
+    with the numerical libraries' thread pools held to
+    :data:`gonio.pipeline.validate.WORKER_THREADS`, as the optical study's batches are."""
+    from threadpoolctl import threadpool_limits
+
+    from gonio.pipeline.validate import WORKER_THREADS, spawn_seed
 
     key = RATE_SPECS.index(job.spec_key)
     out = []
-    for i in range(start, stop):
-        sd = spawn_seed(job.seed, key, i)
-        out.append((i, sd, json.dumps(trial_records(job.spec_key, job.bench, job.protocol, sd),
-                                      sort_keys=True)))
+    with threadpool_limits(limits=WORKER_THREADS):
+        for i in range(start, stop):
+            sd = spawn_seed(job.seed, key, i)
+            out.append((i, sd, json.dumps(trial_records(job.spec_key, job.bench, job.protocol,
+                                                        sd), sort_keys=True)))
     return out
 
 
