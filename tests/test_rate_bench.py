@@ -374,3 +374,36 @@ def test_programme_beyond_the_row_limit_is_refused_before_simulating(tmp_path, c
     assert "GONIO_MAX_READING_ROWS" in err[0] and "1e+09" in err[0]
     assert not (tmp_path / "o").exists()
     assert time.perf_counter() - t0 < 30
+
+
+def test_iec_certificate_figures_draw_the_measured_items(iec_noise_off):
+    """The rate certificate's figures read IEC 62047-20's items too (they drew 'not
+    measured' panels for a measured scale factor, symmetry and Allan fit): the plotted
+    input-output line has the fit's slope and its residuals are y − (K·Ω + b_BASE) of the
+    result, checked against the noise-free bench's own numbers."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from gonio.report.rate_figures import draw_allan, draw_cw_ccw, draw_io_line
+
+    result, _ = iec_noise_off[False]
+    d = result.items["scale_factor"].details
+    allan = result.items["bias_instability"]
+    for draw, shown in ((draw_io_line, True), (draw_cw_ccw, True),
+                        (draw_allan, allan.measured and "allan" in allan.details)):
+        fig = Figure()
+        draw(fig, fig.add_gridspec(1, 1)[0], result, {})
+        texts = [t.get_text() for ax in fig.axes for t in ax.texts]
+        assert any("not measured" in t for t in texts) is not shown, (draw.__name__, texts)
+        if shown:
+            assert any(len(line.get_xdata()) >= 2 for ax in fig.axes for line in ax.lines)
+    fig = Figure()
+    draw_io_line(fig, fig.add_gridspec(1, 1)[0], result, {})
+    fit_line = fig.axes[0].lines[1]
+    x, y = np.asarray(fit_line.get_xdata()), np.asarray(fit_line.get_ydata())
+    assert np.polyfit(x, y, 1)[0] == pytest.approx(result.items["scale_factor"].value, rel=1e-9)
+    resid = np.asarray(fig.axes[1].lines[0].get_ydata())
+    xs, ys = np.asarray(d["x_dps"]), np.asarray(d["y"])
+    o = np.argsort(xs)
+    expect = ys[o] - (result.items["scale_factor"].value * xs[o] + d["b_BASE"])
+    assert np.allclose(resid, expect, atol=1e-9 * np.abs(ys).max())

@@ -35,27 +35,43 @@ def _empty(ax, text: str) -> None:
     ax.set_yticks([])
 
 
+def _io_points(it):
+    """(rates, mean outputs, K, intercept, residual rows, label) of a scale-factor item, from
+    JJF 1535's per-calibration fit (7.2.1: rest-removed means of the first calibration) or
+    IEC 62047-20's single fit (5.1.3.1: outputs with the intercept b_BASE); None without."""
+    if it is None:
+        return None
+    d = it.details
+    if "means_m" in d:
+        r = np.asarray(d["rates_dps"], float)
+        return (r, np.asarray(d["means_m"][0], float), float(d["K_m"][0]), float(d["F0_m"][0]),
+                d["residuals_m"], "F̄_j − F_r")
+    if "x_dps" in d and "y" in d:
+        r, y = np.asarray(d["x_dps"], float), np.asarray(d["y"], float)
+        K, b = float(it.value), float(d["b_BASE"])
+        return r, y, K, b, [y - (K * r + b)], "output y_j"
+    return None
+
+
 def draw_io_line(fig, spec, result, L, truth=None) -> None:
     """Rest-removed mean output against input rate (first calibration), the fitted line, and
     the residuals v_j in a panel below."""
     gs = spec.subgridspec(2, 1, height_ratios=(2, 1), hspace=0.08)
     ax, ax2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
     it = _item(result, "scale_factor")
-    if it is None or "means_m" not in it.details:
+    line = _io_points(it)
+    if line is None:
         _empty(ax, "scale factor not measured")
         ax2.set_visible(False)
         return
-    d = it.details
-    r = np.asarray(d["rates_dps"], float)
-    y = np.asarray(d["means_m"][0], float)
-    K, F0 = float(d["K_m"][0]), float(d["F0_m"][0])
+    r, y, K, F0, residuals, label = line
     o = np.argsort(r)
-    ax.plot(r[o], y[o], "o", ms=3, label="F̄_j − F_r")
+    ax.plot(r[o], y[o], "o", ms=3, label=label)
     ax.plot(r[o], K * r[o] + F0, "-", lw=0.8, label=f"K = {K:.6g}")
     ax.set_ylabel(f"output ({result.metadata.get('output_unit', '')})")
     ax.legend(loc="upper left")
     ax.tick_params(labelbottom=False)
-    for m, res in enumerate(d["residuals_m"]):
+    for m, res in enumerate(residuals):
         ax2.plot(r[o], np.asarray(res, float)[o], "o-", ms=2, lw=0.6, label=f"m = {m + 1}")
     ax2.axhline(0, color="0.5", lw=0.6)
     ax2.set_xlabel("input rate Ω (°/s)")
@@ -66,26 +82,28 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
 def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
     """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line."""
     ax = fig.add_subplot(spec)
-    it = _item(result, "scale_factor")
-    a = _item(result, "asymmetry")
-    if it is None or a is None:
+    line = _io_points(_item(result, "scale_factor"))
+    a = _item(result, "asymmetry", "symmetry")
+    if line is None or a is None:
         _empty(ax, "asymmetry not measured")
         return
-    r = np.asarray(it.details["rates_dps"], float)
-    y = np.asarray(it.details["means_m"][0], float)
-    K = float(it.details["K_m"][0])
-    for sel, name, kk in ((r > 0, "forward (CW)", a.details["K_pos_m"][0]),
-                          (r < 0, "reverse (CCW)", a.details["K_neg_m"][0])):
+    r, y, K, F0, _, _ = line
+    d = a.details
+    jjf = "K_pos_m" in d
+    off = 0.0 if jjf else F0      # IEC outputs carry the null output b_BASE: take it off
+    for sel, name, kk in ((r > 0, "forward (CW)", d["K_pos_m"][0] if jjf else d["a_CW"]),
+                          (r < 0, "reverse (CCW)", d["K_neg_m"][0] if jjf else d["a_CCW"])):
         rr, yy = r[sel], y[sel]
         o = np.argsort(rr)
         p = np.polyfit(rr, yy, 1)
-        ax.plot(rr[o], yy[o] - K * rr[o], "o", ms=3, label=f"{name}: K = {kk:.6g}")
-        ax.plot(rr[o], np.polyval(p, rr[o]) - K * rr[o], "-", lw=0.8)
+        ax.plot(rr[o], yy[o] - K * rr[o] - off, "o", ms=3, label=f"{name}: K = {kk:.6g}")
+        ax.plot(rr[o], np.polyval(p, rr[o]) - K * rr[o] - off, "-", lw=0.8)
     ax.axhline(0, color="0.5", lw=0.6)
     ax.set_xlabel("input rate Ω (°/s)")
-    ax.set_ylabel("F̄_j − K̄·Ω_j")
+    ax.set_ylabel("F̄_j − K̄·Ω_j" if jjf else "y_j − (K·Ω_j + b_BASE)")
     ax.legend(loc="best")
-    ax.set_title(f"asymmetry K_a = {a.value:.3g}")
+    ax.set_title(f"asymmetry K_a = {a.value:.3g}" if jjf else
+                 f"symmetry (IEC 5.1.3.8) = {a.value:.3g} {a.unit}")
 
 
 def draw_temperature(fig, spec, result, L, truth=None) -> None:
@@ -118,8 +136,8 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
     from gonio.analysis.noise import model_adev
 
     ax = fig.add_subplot(spec)
-    it = _item(result, "angle_random_walk")
-    if it is None:
+    it = _item(result, "angle_random_walk", "bias_instability")   # JJF 7.2.13, IEC 5.4.5.3
+    if it is None or "allan" not in it.details:
         _empty(ax, "angle random walk not measured")
         return
     a = it.details["allan"]
@@ -130,7 +148,7 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
     ax.loglog(tau, adev, "o", ms=2.5, color="C0", label="overlapping ADEV")
     f = it.details["fit"]
     ax.loglog(tau, model_adev(tau, f["Q"], f["N"], f["B"], f["K"], f["R"]), "-", color="C3",
-              lw=1, label=f"fit: ARW {it.value:.3g} °/√h, B {f['B']:.3g} °/h")
+              lw=1, label=f"fit: ARW {f['arw_deg_sqrt_h']:.3g} °/√h, B {f['B']:.3g} °/h")
     ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
     pr = it.details.get("printed_eq22_24_statistic") or {}
     if pr:
