@@ -407,3 +407,20 @@ def test_iec_certificate_figures_draw_the_measured_items(iec_noise_off):
     o = np.argsort(xs)
     expect = ys[o] - (result.items["scale_factor"].value * xs[o] + d["b_BASE"])
     assert np.allclose(resid, expect, atol=1e-9 * np.abs(ys).max())
+
+
+def test_rate_certificates_cite_their_own_specifications_clauses(iec_noise_off, jjf_noise_off):
+    """The IEC 62047-20 certificate does not attribute its U statement or recalibration
+    interval to JJF 1535 as if they were IEC's; the JJF certificate cites JJF 1535."""
+    from gonio.report.i18n import labels
+    from gonio.report.rate_certificate import rate_certificate_blocks
+
+    def text(result):
+        blocks = rate_certificate_blocks(result, labels("en"), "en", lab=None)["blocks"]
+        return " ".join(str(b.data) for b in blocks)
+
+    iec = text(iec_noise_off[False][0])
+    assert "IEC 62047-20 sets no rule for it; stated as JJF 1535 clause 8 k) asks" in iec
+    assert "IEC 62047-20 is a test method and sets none" in iec and "draft clause 9" not in iec
+    jjf = text(jjf_noise_off[0])
+    assert "JJF 1535 clause 8 k)" in jjf and "JJF 1535-2015 clause 9" in jjf

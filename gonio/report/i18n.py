@@ -89,6 +89,10 @@ LABELS: dict[str, dict[str, str]] = {
     "source": {"en": "Source", "zh": "来源"},
     "type": {"en": "Type", "zh": "类别"},
     "u_i": {"en": "u_i (″)", "zh": "u_i (″)"},
+    # per-item budgets of the rate certificates: u_i in its input's unit, |c_i|·u_i in the item's
+    "budget_items": {"en": "Uncertainty budget of each item (from this calibration's data)",
+                     "zh": "各校准项目的不确定度分量（依据本次校准数据）"},
+    "u_i_item": {"en": "u_i (input's unit)", "zh": "u_i（输入量单位）"},
     "readings_taken": {"en": "Readings taken of the draft's ambiguities",
                        "zh": "对规范草案中不明确之处的理解"},
     "details": {"en": "Details of the measurements", "zh": "测量详细数据"},

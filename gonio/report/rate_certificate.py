@@ -153,9 +153,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
                          it["unit"]])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], "U (k)", L["unit"]], rows),
         {"widths": (0.06, 0.34, 0.09, 0.22, 0.14, 0.15), "id": "results"})
-    add("p", [L["k_each_item"].format(clause="JJF 1535 clause 8 k)")])
-    add("h", L["budget"])
-    add("table", ([L["clause"], L["component"], L["source"], L["u_i"], "|c_i|·u_i"],
+    u_clause = getattr(data, "U_CLAUSE", ("JJF 1535 clause 8 k)",) * 2)   # the spec's own rule
+    add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
+    add("h", L["budget_items"])
+    add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
                   budget_rows(res, L)), (0.09, 0.12, 0.49, 0.15, 0.15))
     recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
     blocks += closing_blocks(res, L, lab, recal=recal and recal[1 if lang == "zh" else 0])

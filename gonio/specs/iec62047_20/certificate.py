@@ -34,3 +34,8 @@ HEADING = ("MEMS gyroscope test results (IEC 62047-20)", "MEMS陀螺仪测试结
 #: The recalibration statement: IEC 62047-20 is a test method and sets no interval.
 RECAL = ("Recalibration interval: decided by the user (IEC 62047-20 is a test method and sets "
          "none).", "复校时间间隔由用户自行确定（IEC 62047-20 为试验方法标准，未作规定）。")
+
+#: Where the rule to state U with each result comes from: IEC 62047-20 is a test method and
+#: has none; the certificate follows JJF 1535 clause 8 k) and says so.
+U_CLAUSE = ("IEC 62047-20 sets no rule for it; stated as JJF 1535 clause 8 k) asks",
+            "IEC 62047-20 未作规定，按 JJF 1535 第8章 k) 给出")
