@@ -33,7 +33,9 @@ def _py_wrap(values, bits, signed):
 
 @pytest.mark.parametrize("bits", [16, 24, 32, 64])
 @pytest.mark.parametrize("signed", [True, False])
-def test_unwrap_recovers_counter_through_file(tmp_path, bits, signed):
+def test_unwrap_recovers_counter_through_file(tmp_path, bits, signed, monkeypatch):
+    import gonio.formats.streams as S
+    monkeypatch.setattr(S, "CHECK_PIECE_ROWS", 64)     # unwrapped across 47 pieces too
     rng = np.random.default_rng(bits + signed)
     limit = min(2 ** (bits - 1) - 1, 2 ** 40)
     steps = rng.integers(-limit // 2, limit // 2, size=3000)
@@ -186,3 +188,32 @@ rounds = [{stop_deg = 30.0}, {stop_deg = 180.0}]
         return [strip(v) for v in d] if isinstance(d, list) else d
     assert strip(a) == strip(b)
     assert a["scale_factor"]["value"] == b["scale_factor"]["value"]
+
+
+def test_residual_step_bound_is_an_upper_bound_rounding_included():
+    # The counter-against-table check forms count/K − table only where this bound exceeds
+    # the tolerance; it must bound the float64 steps of that residual as numpy forms them,
+    # also in the worst case for rounding: the table still (or moving with the counter)
+    # while huge counts step by their largest amount.
+    import gonio.formats.streams as S
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    for case in range(3000):
+        n = int(rng.integers(2, 60))
+        k = float(rng.choice([1.0 / 3.0, 3597.1223021582737, 72000.0, 1e6 / 7.0]))
+        base = int(rng.integers(-2**52, 2**52)) if case % 2 else int(rng.integers(-10**6, 10**6))
+        counts = base + np.cumsum(rng.integers(-2**20, 2**20, n))
+        if case % 3 == 0:
+            table = np.full(n, float(rng.uniform(-1e5, 1e5)))
+        elif case % 3 == 1:
+            table = counts / k + rng.normal(0, 1e-3, n)
+        else:
+            table = rng.uniform(-360, 360, n)
+        top = float(np.abs(np.diff(counts)).max())
+        resid = np.divide(counts, k)
+        resid -= table
+        actual = float(np.abs(np.diff(resid)).max())
+        bound = S._residual_step_bound(counts, table, top, k)
+        assert bound >= actual, (case, bound, actual)
+        worst = max(worst, actual / bound)
+    assert worst > 0.999           # and not loose where the residual's step is the count's

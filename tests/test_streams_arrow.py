@@ -72,8 +72,13 @@ def _bad_parquet(path, t, c, table, md=MD):
     return path
 
 
+@pytest.mark.parametrize("piece", [None, 7])
 @pytest.mark.parametrize("fmt", ["csv", "parquet"])
-def test_errors_name_file_row_or_line_and_column(tmp_path, fmt):
+def test_errors_name_file_row_or_line_and_column(tmp_path, fmt, piece, monkeypatch):
+    # piece 7: the checks run 7 rows at a time, so every bad row below is deep in a later
+    # piece of its block and the carry across pieces must locate it
+    if piece:
+        monkeypatch.setattr(S, "CHECK_PIECE_ROWS", piece)
     t, true, table = _data(3000)
     c = np.array(_py_wrap(true.tolist(), 16, True), dtype=np.int64)
 
@@ -192,6 +197,69 @@ def test_reduction_from_a_file_in_blocks_equals_the_reduction_in_memory(tmp_path
             [dataclasses.astuple(r) for r in mem.rests]
         # and the reduction finds the bench's own readings (independent reference)
         assert got.readings["gyro_counts"].tolist() == res.readings["gyro_counts"].tolist()
+
+
+def test_check_pieces_and_feed_pieces_change_nothing(tmp_path, monkeypatch):
+    # The reader checks CHECK_PIECE_ROWS rows at a time and the rest finder works FEED_PIECE
+    # samples at a time (for the cache): tiny pieces must give the bench's own readings and
+    # the same rests, levels and unwrapped counts as the defaults.
+    import gonio.reduce.stream as R
+    monkeypatch.setattr(S, "PARQUET_ROW_GROUP", 4000)
+    for fmt in ("csv", "parquet"):
+        path, res, true, _ = _bench_stream(tmp_path, "s", 32, fmt)
+        ref = reduce_stream(StreamFile(path), PROTO)
+        ref_counts = read_stream(path).gyro_counts
+        with monkeypatch.context() as m:
+            m.setattr(S, "CHECK_PIECE_ROWS", 5)
+            m.setattr(R, "FEED_PIECE", 3)
+            got = reduce_stream(StreamFile(path, block_bytes=60_000), PROTO)
+            counts = read_stream(path).gyro_counts
+        assert got.readings.equals(ref.readings)
+        assert [dataclasses.astuple(r) for r in got.rests] == \
+            [dataclasses.astuple(r) for r in ref.rests]
+        assert counts.tolist() == ref_counts.tolist()
+        assert (counts - counts[0]).tolist() == (true - true[0]).tolist()    # the bench's
+        assert got.readings["gyro_counts"].tolist() == res.readings["gyro_counts"].tolist()
+
+
+@pytest.mark.parametrize("piece", [None, 1000])
+def test_counter_against_table_is_decided_exactly_at_the_tolerance(tmp_path, monkeypatch, piece):
+    # The table check skips forming the residual count/K − table where a bound on its steps
+    # is within 2^bits/(4K); the decision must still be the exact one: a lasting step of the
+    # residual just above the tolerance is an error at its row, just below it is not.
+    if piece:
+        monkeypatch.setattr(S, "CHECK_PIECE_ROWS", piece)
+    t, true, _ = _data(6000)
+    c = np.array(_py_wrap(true.tolist(), 16, True), dtype=np.int64)
+    table = true / float(MD["nominal_scale_factor_counts_per_deg"])   # no noise: exact
+    tol = 2.0 ** 16 / (4 * float(MD["nominal_scale_factor_counts_per_deg"]))
+    for factor, caught in ((1 + 1e-9, True), (1 - 1e-9, False)):
+        tb = table.copy()
+        tb[4321:] += tol * factor                 # a step the median of three keeps
+        path = _bad_parquet(tmp_path / "step.parquet", t, c, tb)
+        if caught:
+            with pytest.raises(GonioError, match="data row 4322: .*overflowed between samples"):
+                read_stream(path)
+        else:
+            assert read_stream(path).gyro_counts.size == 6000
+
+
+def test_read_ahead_keeps_file_order_and_stops_its_thread(tmp_path):
+    import threading
+    t, true, table = _data(6000)
+    c = np.array(_py_wrap(true.tolist(), 16, True), dtype=np.int64)
+    tt = t.copy()
+    tt[5500] = tt[5499]                                # an error in the last block
+    p = _bad_parquet(tmp_path / "late.parquet", tt, c, table)       # row groups of 1000
+    seen = []
+    with pytest.raises(GonioError, match="data row 5501"):
+        for ch in StreamFile(p).chunks():
+            seen.append(ch.first_row)
+    assert seen == [0, 1000, 2000, 3000, 4000]         # every block before it, in order
+    it = StreamFile(p).chunks()
+    next(it)
+    it.close()                                         # a caller that stops early
+    assert not [th for th in threading.enumerate() if th.name == "gonio-read-ahead"]
 
 
 def test_long_rest_level_is_a_strided_median(monkeypatch):
