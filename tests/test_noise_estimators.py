@@ -322,3 +322,23 @@ def test_gaps_in_modified_and_hadamard():
 def test_infinite_values_rejected_with_index():
     with pytest.raises(GonioError, match="index 3"):
         noise.allan_deviation([1.0, 2.0, 3.0, np.inf, 1.0], 1.0, "rate")
+
+
+@pytest.mark.parametrize("kind", ["adev", "mdev", "hdev"])
+def test_overwrite_data_detrends_in_place_with_the_same_result(kind):
+    # overwrite_data=True reuses an angle record's memory (the bootstrap's records); the
+    # deviation must be the one of the copying path, bit for bit, and only then is the
+    # caller's array changed. Checked against allantools too (independent).
+    rng = np.random.default_rng(4)
+    x = np.cumsum(rng.standard_normal(200_001)) * 0.01 + np.arange(200_001) * 3e-4
+    ref_in = x.copy()
+    a = noise.allan_deviation(x, 0.01, "angle", kind=kind, alpha=0)
+    assert np.array_equal(x, ref_in)                            # not overwritten
+    y = x.copy()
+    b = noise.allan_deviation(y, 0.01, "angle", kind=kind, alpha=0, overwrite_data=True)
+    assert np.array_equal(a.adev, b.adev)
+    assert not np.array_equal(y, ref_in)                        # detrended in place
+    peer = {"adev": allantools.oadev, "mdev": allantools.mdev, "hdev": allantools.ohdev}[kind]
+    _, dev, _, _ = peer(x - np.linspace(x[0], x[-1], x.size), rate=100.0, data_type="phase",
+                        taus=a.tau_s)
+    np.testing.assert_allclose(b.adev, dev, rtol=1e-9)

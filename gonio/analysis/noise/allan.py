@@ -211,27 +211,40 @@ def angle_series(data, input_type: str, tau0_s: float, scale: float = 1.0) -> np
     return x
 
 
-def _phase(arr: np.ndarray, input_type: str, tau0_s: float, scale: float):
+#: Points detrended at a time (the line is formed piece by piece, not as a whole array).
+_RAMP_PIECE = 1 << 16
+
+
+def _phase(arr: np.ndarray, input_type: str, tau0_s: float, scale: float,
+           overwrite: bool = False):
     """(x, bad) with x the detrended phase and ``bad`` None (no gaps) or the gap
     description: for rate/increment the prefix count of NaN samples (length N+1,
-    x zero-filled across gaps), for angle the boolean mask of NaN points."""
+    x zero-filled across gaps), for angle the boolean mask of NaN points.
+    ``overwrite``: an angle record (float64) is detrended in its own memory."""
     finite = np.isfinite(arr)
     gaps = not finite.all()
     if gaps and np.isinf(arr).any():
         bad = int(np.flatnonzero(np.isinf(arr))[0])
         raise GonioError(f"data contains an infinite value at index {bad}", key="data")
     if input_type == "angle":
-        a = arr / scale if scale != 1.0 else arr.copy()
+        if overwrite and arr.dtype == np.float64 and arr.flags.writeable:
+            a = arr
+            if scale != 1.0:
+                a /= scale
+        else:
+            a = arr / scale if scale != 1.0 else arr.copy()
         idx = np.flatnonzero(finite) if gaps else None
         i0, i1 = (0, a.size - 1) if not gaps else (int(idx[0]), int(idx[-1]))
         if i1 <= i0:
             raise GonioError("fewer than two valid angle samples", key="data")
         a0, a1 = a[i0], a[i1]
-        ramp = np.arange(a.size, dtype=np.float64)
-        ramp -= i0
-        ramp *= (a1 - a0) / (i1 - i0)
-        ramp += a0
-        a -= ramp
+        slope = (a1 - a0) / (i1 - i0)
+        for s in range(0, a.size, _RAMP_PIECE):       # a −= a0 + (k − i0)·slope
+            ramp = np.arange(s, min(a.size, s + _RAMP_PIECE), dtype=np.float64)
+            ramp -= i0
+            ramp *= slope
+            ramp += a0
+            a[s: s + ramp.size] -= ramp
         return a, (~finite if gaps else None)
     y = arr / scale if (input_type == "increment" and scale != 1.0) else arr
     if gaps:
@@ -1028,7 +1041,8 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
 def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
                     scale: float = 1.0, modified: bool = False, kind: str | None = None,
                     confidence: float = 0.683, alpha=None, unit: str = "",
-                    rtol_all: float | None = None) -> AllanResult:
+                    rtol_all: float | None = None,
+                    overwrite_data: bool = False) -> AllanResult:
     """An Allan-family deviation with Greenhall-edf χ² confidence intervals.
 
     ``kind``: ``"adev"`` overlapping Allan (default; SP 1065 eq. 11, IEEE 952
@@ -1070,6 +1084,12 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
         Noise type for the edf; identified when omitted.
     unit : str
         Label of the deviation's unit, e.g. ``"deg/h"``.
+    rtol_all : float, optional
+        See ``taus="all"`` above.
+    overwrite_data : bool
+        For a float64 ``angle`` array: detrend it in its own memory instead of a copy
+        (the caller's array is changed; for long records that will not be used again,
+        as in the bootstrap of :func:`gonio.analysis.noise.fit.bootstrap_uncertainty`).
 
     Examples
     --------
@@ -1098,7 +1118,7 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
         x, bad = _phase(arr, "increment", tau0_s, 1.0)
         factor = tau0_s
     else:
-        x, bad = _phase(arr, input_type, tau0_s, scale)
+        x, bad = _phase(arr, input_type, tau0_s, scale, overwrite_data)
     del arr
     angle = input_type == "angle"
     n = x.size

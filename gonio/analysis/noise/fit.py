@@ -460,7 +460,9 @@ def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
     # Each term is added piece by piece (a long record's memory is the record, not one
     # record per operation); the same draws in the same order and the same operations
     # per element as y = N/√τ0·z1 + flicker + K√τ0·cumsum(z2) + Rτ0·(k + ½) + diff(Q·z3)/τ0.
-    y = np.zeros(n)
+    # For an angle record the rates are built in place of the angles x[1:] (one array).
+    x = np.zeros(n + 1) if input_type != "rate" else None
+    y = np.zeros(n) if x is None else x[1:]
     step = _SYNTH_PIECE
     buf = np.empty(min(n, step) + 1)
     if N:
@@ -505,10 +507,8 @@ def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
     del buf
     if input_type == "rate":
         return y
-    x = np.empty(n + 1)
-    x[0] = 0.0
     y *= tau0_s
-    np.cumsum(y, out=x[1:])
+    np.cumsum(y, out=y)
     return x
 
 
@@ -527,11 +527,14 @@ def bootstrap_uncertainty(allan: AllanResult, values, *, terms: Sequence[str] = 
     tau0 = float(allan.tau0_s)
     out = np.empty((n_boot, 5))
     for b in range(n_boot):
-        y = None                            # the last record is freed before the next
-        y = simulate_noise(n, tau0, *values, rng=rng)
-        r = allan_deviation(y, tau0, "rate", allan.m.astype(np.int64), kind=allan.kind,
-                            alpha=0, unit=allan.unit)
-        del y
+        # the record as angles (its rates integrated in place) analysed in place: one
+        # record-length array in memory, not two (the mean rate removed by the rate path
+        # and the end-to-end line removed here are the same detrending)
+        x = None                            # the last record is freed before the next
+        x = simulate_noise(n, tau0, *values, rng=rng, input_type="angle")
+        r = allan_deviation(x, tau0, "angle", allan.m.astype(np.int64), kind=allan.kind,
+                            alpha=0, unit=allan.unit, overwrite_data=True)
+        del x
         r.alpha = allan.alpha
         f = fit_noise_model(r, terms=terms, tau_max_s=tau_max_s, iterations=iterations)
         out[b] = np.nan_to_num([f.Q, f.N, f.B, f.K, f.R])
