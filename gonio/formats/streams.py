@@ -652,15 +652,21 @@ class StreamFile:
         if chunk_rows is not None and chunk_rows < 2:
             raise GonioError(f"chunk_rows must be ≥ 2, got {chunk_rows}")
         blocks: list[_Block] = []
-        for blk, arr, counts in self._checked_blocks(_read_ahead(self._raw_blocks())):
-            blocks.append(blk)
-            n, row0 = blk.n_rows, blk.first_row
-            t, tab, tmp = arr["time_s"], arr.get("table_deg"), arr.get("temperature_c")
-            step_rows = n if chunk_rows is None else chunk_rows
-            for a in range(0, n, step_rows):
-                b = min(n, a + step_rows)
-                yield StreamChunk(t[a:b], counts[a:b], None if tab is None else tab[a:b],
-                                  None if tmp is None else tmp[a:b], row0 + a)
+        ahead = _read_ahead(self._raw_blocks())
+        try:
+            for blk, arr, counts in self._checked_blocks(ahead):
+                blocks.append(blk)
+                n, row0 = blk.n_rows, blk.first_row
+                t, tab, tmp = arr["time_s"], arr.get("table_deg"), arr.get("temperature_c")
+                step_rows = n if chunk_rows is None else chunk_rows
+                for a in range(0, n, step_rows):
+                    b = min(n, a + step_rows)
+                    yield StreamChunk(t[a:b], counts[a:b], None if tab is None else tab[a:b],
+                                      None if tmp is None else tmp[a:b], row0 + a)
+        finally:
+            # stop the worker now, also when a check raised: the exception's traceback
+            # keeps these frames (and so the reader) alive until it is collected
+            ahead.close()
         if not blocks:
             raise GonioError("no data: header only", file=self.fname,
                              line=self.header.header_line)
