@@ -338,7 +338,7 @@ class _PassState:
     prev_unwrapped: int = 0             # … and its unwrapped value
     prev_t: float | None = None
     prev_c: object = None               # last unwrapped count (rate check)
-    check_table: bool | None = None
+    check_table: bool = False           # the counter is checked against table_deg
     table: dict = field(default_factory=lambda: {"resid": np.empty(0), "med": None})
 
 
@@ -677,7 +677,8 @@ class StreamFile:
         """Yield (block, arrays, unwrapped counts) of every non-empty block of ``raw_blocks``
         (:meth:`_raw_blocks`), checked."""
         h = self.header
-        st = _PassState(gap=self.max_gap_s)
+        st = _PassState(gap=self.max_gap_s, check_table=self.k_nominal is not None
+                        and "table_deg" in self.columns and h.bits < 64 and h.quantised)
         row0 = 0
         for start, stop, first_line, arr in raw_blocks:
             n = arr["time_s"].size
@@ -799,9 +800,6 @@ class StreamFile:
                 self._fail(f"the counter moves at {rate:.4g} °/s here, above the "
                            f"plausible bound {self.rate_bound_dps:g} °/s (metadata "
                            "max_rate_dps)", "gyro_counts", loc(j + off))
-        if st.check_table is None:
-            st.check_table = k is not None and "table_deg" in self.columns and \
-                h.bits < 64 and h.quantised
         if st.check_table:
             table = arr["table_deg"][p:q]
             self._check_table(out, table, first_row, st.table, loc,
