@@ -110,6 +110,8 @@ def test_certificate_shows_the_matrix_values_of_results_json(run):
     text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
     assert "Averaging time from the Allan deviation" in text
     assert "Bayesian information criterion" in text
+    # the bench's readings state no room temperature: "not stated", with no unit after it
+    assert "not stated" in text and not re.search(r"not stated\s*°C", text)
 
 
 def _damaged(src: Path, dst: Path, edit) -> int:

@@ -73,8 +73,9 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
     add("h", L["environment"])
     env = lab_.get("environment") or {}
     t = env.get("temperature_c")
+    room = md.get("room_temperature_c")
     add("kv", [(L["temperature"], f"{t:g} °C" if t is not None else
-                f"{md.get('room_temperature_c', ns)} °C")])
+                f"{room} °C" if room else ns)])     # "not stated", not "not stated °C"
     return blocks
 
 
