@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from gonio.bench.rate_gyro import load_rate_bench
-from gonio.bench.rate_session import Segment, run_rate_session
+from gonio.bench.rate_session import run_rate_session
+from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import (RateReadings, parse_rate_readings, read_rate_readings,
                                          write_rate_readings)

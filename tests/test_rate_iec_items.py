@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.analysis import rate_gyro as rg
-from gonio.bench.rate_session import body_rotation, mount_matrix
+from gonio.specs._rate_family import formulas as rg
+from gonio.physics.alignment import body_rotation, mount_matrix
 from gonio.formats.rate_readings import RateReadings
 from gonio.physics.earth import earth_rate_enu
 

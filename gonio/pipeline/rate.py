@@ -14,7 +14,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.specs import Specification, get
-from gonio.analysis.rate_records import json_safe, load_readings
+from gonio.specs._rate_family.rate_records import json_safe, load_readings
 from gonio.formats.triad import FORMAT as TRIAD_FORMAT
 
 #: The specifications handled here (the optical draft keeps its own pipeline).

@@ -3,7 +3,7 @@ IEC 62047-20): the item and result dataclasses (results.json shape), the per-ite
 wrapper, segment means of a rate readings file.
 
 Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20` (one specification
-never imports another, so what they share lives here and in :mod:`gonio.analysis.rate_gyro`).
+never imports another, so what they share lives here and in :mod:`gonio.specs._rate_family.formulas`).
 """
 
 from __future__ import annotations

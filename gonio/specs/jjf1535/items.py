@@ -2,9 +2,9 @@
 
 Each function takes a :class:`Context` (the readings and what the calibration already
 knows: K, null output, latitude, protocol values) and returns an
-:class:`~gonio.analysis.rate_records.Item` with its value, unit, clause, and an uncertainty
+:class:`~gonio.specs._rate_family.rate_records.Item` with its value, unit, clause, and an uncertainty
 computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
-k = t₉₅(ν_eff). The formulas are in :mod:`gonio.analysis.rate_gyro`; the readings taken
+k = t₉₅(ν_eff). The formulas are in :mod:`gonio.specs._rate_family.formulas`; the readings taken
 are documented in ``docs/jjf1535-readings.md``.
 
 Rates are reported in °/h (bias family) or °/s (threshold, resolution) as JJF Table 1
@@ -19,10 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.errors import GonioError
+from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
+from gonio.specs._rate_family.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
@@ -88,7 +89,7 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.analysis.rate_gyro.bias_drift_u`); 0 without a static record."""
+    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`); 0 without a static record."""
     fit = ctx.cache.get("noise_fit")
     if fit is None:
         return 0.0
@@ -254,7 +255,7 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
 def rule_noise_half_width(pmfs: list[dict], value: float) -> tuple[float, dict]:
     """Half-width of the 95 % range of the 50 % rule's outcome under the noise of the data
-    (:func:`gonio.analysis.rate_gyro.max_outcome_pmf` of the directions), measured from
+    (:func:`gonio.specs._rate_family.formulas.max_outcome_pmf` of the directions), measured from
     ``value``: the distance to the farther of the 2.5 % and 97.5 % outcomes (None, "above
     the grid", counts as the largest tested step)."""
     pmf = rg.max_outcome_pmf(*pmfs)
@@ -356,11 +357,6 @@ def resolution(ctx: Context) -> Item:
 
 
 # --------------------------------------------------------------------------- bias family
-def _axis_enu(up: str, north: str) -> np.ndarray:
-    from gonio.bench.rate_session import mount_matrix
-    return mount_matrix(up, north) @ np.array([0.0, 0.0, 1.0])
-
-
 def bias_records(ctx: Context) -> list[dict]:
     """B_0,m of each bias record (eqs (15), (16)) in °/h with the Earth rate removed, and the
     uncorrected F̄/K beside it."""
@@ -370,7 +366,7 @@ def bias_records(ctx: Context) -> list[dict]:
     remove = ctx.protocol.get("bias", {}).get("remove_earth_rate", True)
     for m in segment_means(ctx.df, "bias"):
         y = segment_samples(ctx.df, "bias", m.run, m.step)["output"].to_numpy()
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         raw = (m.mean - ctx.null_output) / ctx.K
         u_mean, nu = _block_std_of_mean(y, int(ctx.protocol.get("bias", {}).get(
             "stability_block_samples", 10)))
@@ -505,7 +501,7 @@ def g_sensitivity(ctx: Context) -> Item:
     for m in segment_means(ctx.df, "g_sensitivity"):
         y = segment_samples(ctx.df, "g_sensitivity", m.run, m.step)["output"].to_numpy()
         um, nu = _block_std_of_mean(y)
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         pos[m.up_axis] = {"w": (m.mean - ctx.null_output) / ctx.K, "earth": earth,
                           "u": um / abs(ctx.K), "nu": nu, "t": m.time_s + 0.5 * m.n}
     res, lit, us = {}, {}, {}

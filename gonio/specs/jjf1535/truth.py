@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.bench.rate_gyro import NoiseState, RateBench, difference_noise_sigma
-from gonio.bench.rate_session import mount_matrix
+from gonio.physics.alignment import mount_matrix
 from gonio.physics.earth import earth_rate_enu
 from gonio.units import S_PER_H
 
