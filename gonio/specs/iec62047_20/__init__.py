@@ -97,13 +97,6 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                                      "ratiometric": ratiometric, "rows_corrected": n_corr}})
 
 
-def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
-    """Run the IEC programme on a rate bench (:func:`.simulate.simulate`; the simulator is
-    imported only here, never on the calibration path)."""
-    from gonio.specs.iec62047_20.simulate import simulate as run
-    return run(bench, protocol, seed, noise=noise)
-
-
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
                      clause_doc="docs/iec62047-20-readings.md", default_protocol=KEY,
                      default_bench="mems-adxrs610", calibrate=calibrate, budget=None)

@@ -113,10 +113,3 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
                      clause_doc="docs/jjf1535-readings.md", default_protocol=KEY,
                      default_bench="mems-adxrs610", calibrate=calibrate, budget=annex_a)
-
-
-def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
-    """Run the protocol's programme on a rate bench (:func:`.simulate.simulate`; the
-    simulator is imported only here, never on the calibration path)."""
-    from gonio.specs.jjf1535.simulate import simulate as run
-    return run(bench, protocol, seed, noise=noise)
