@@ -15,7 +15,7 @@ from gonio.errors import GonioError
 from gonio.specs import Specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.specs._rate_family.rate_records import (monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
+from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
@@ -52,18 +52,6 @@ READINGS_TAKEN = (
 )
 
 
-def _mf(md, key, fallback, path):
-    v = md.get(key, "")
-    if v in ("", None):
-        if fallback in (None, "bench"):
-            raise GonioError("required metadata key is missing", file=path, key=key)
-        return float(fallback)
-    try:
-        return float(v)
-    except ValueError:
-        raise GonioError(f"expected a number, got {v!r}", file=path, key=key) from None
-
-
 def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
               monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
@@ -78,12 +66,12 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     df, n_corr = _items.supply_correction(rd.data, ratiometric)
     ctx = _items.Context(
         df=df, output_unit=md.get("output_unit", "output"),
-        null_output=_mf(md, "null_output", P["protocol"]["null_output"], rd.path),
-        latitude_deg=_mf(md, "latitude_deg", P["protocol"]["latitude_deg"], rd.path),
-        a_typ=_mf(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
-        t_base_c=t_base(proto), v_base=_mf(md, "supply_nominal_v", 5.0, rd.path), protocol=P,
-        rate_table_u_rel=_mf(md, "rate_table_u_rel", 2.5e-4, rd.path),
-        acquisition_u_rel=_mf(md, "acquisition_u_rel", 3.0e-5, rd.path))
+        null_output=metadata_number(md, "null_output", P["protocol"]["null_output"], rd.path),
+        latitude_deg=metadata_number(md, "latitude_deg", P["protocol"]["latitude_deg"], rd.path),
+        a_typ=metadata_number(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
+        t_base_c=t_base(proto), v_base=metadata_number(md, "supply_nominal_v", 5.0, rd.path), protocol=P,
+        rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path))
     items = {}
     for key, title, clause, fn in _items.ITEMS:
         try:

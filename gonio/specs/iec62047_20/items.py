@@ -9,7 +9,7 @@ calibration's own data (GUM, k = t₉₅(ν_eff)).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -19,31 +19,21 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.specs._rate_family.rate_records import (Item, gum, not_measured, segment_means,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means,
                                          segment_samples)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
 
-@dataclass
-class Context:
-    df: pd.DataFrame
-    output_unit: str
-    null_output: float
-    latitude_deg: float
+@dataclass(kw_only=True)
+class Context(RateContext):
+    """The shared rate context with IEC 62047-20's typical scale factor, base temperature and
+    supply, and a_BASE once computed."""
+
     a_typ: float
     t_base_c: float
     v_base: float
-    protocol: dict
-    rate_table_u_rel: float = 2.5e-4
-    acquisition_u_rel: float = 3.0e-5
-    chamber_deviation_c: float = 2.0
-    axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
     a_base: float | None = None
-    cache: dict = field(default_factory=dict)
-
-    def has(self, test: str) -> bool:
-        return bool((self.df["test"] == test).any())
 
 
 def supply_correction(df: pd.DataFrame, ratiometric: bool) -> tuple[pd.DataFrame, int]:

@@ -14,42 +14,29 @@ allows; the scale factor in the gyro's output unit per °/s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from gonio.specs._rate_family import formulas as rg
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.specs._rate_family.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
 
-@dataclass
-class Context:
-    """What the item functions need besides the formulas."""
+@dataclass(kw_only=True)
+class Context(RateContext):
+    """The shared rate context with JJF 1535's room temperature, cross-axis bound, and K̄
+    of 7.2.1 once computed."""
 
-    df: pd.DataFrame
-    output_unit: str
-    null_output: float
-    latitude_deg: float
     room_temperature_c: float
-    protocol: dict
-    rate_table_u_rel: float = 2.5e-4
-    acquisition_u_rel: float = 3.0e-5
-    chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
-    axis_alignment_deg: float = 0.05          # mounting of the input axis (fixture), half-width
     cross_axis_bound: float = 0.03            # assumed |cross-axis sensitivity| bound (7.2.12)
     K: float | None = None                    # K̄ of 7.2.1 once computed
     u_K_rel: float | None = None
-    cache: dict = field(default_factory=dict)
-
-    def has(self, test: str) -> bool:
-        return bool((self.df["test"] == test).any())
 
 
 def _need(ctx: Context, test: str, key: str, title: str, clause: str, unit: str):
