@@ -6,13 +6,9 @@ laboratory's file never imports this module.
 
 from __future__ import annotations
 
-import math
-
 from gonio.bench.rate_session import run_rate_session
-from gonio.errors import GonioError
-from gonio.specs._rate_family.formulas import hysteresis_iec as rg_hysteresis
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, plan, t_base
-from gonio.specs.iec62047_20.truth import truth
+from gonio.specs.iec62047_20.truth import hysteresis_truth, truth
 
 
 def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
@@ -49,11 +45,8 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
     if segs:
         kr = float(g.scale_factor_at(t_base(proto), g.supply_nominal_v)) / \
             res.truth["items"]["scale_factor"]["value"]
-        try:
-            h, d = rg_hysteresis([t["temperature_c"] for t in segs],
-                                 [t["bias_dps"] * kr for t in segs])
-        except GonioError:
-            h, d = math.nan, {}
+        h, d = hysteresis_truth([t["temperature_c"] for t in segs],
+                                [t["bias_dps"] * kr for t in segs])
         res.truth["items"]["bias_hysteresis"] = {"value": h, "up_minus_down_dps": d,
                                                  "how": "5.3.3.7 on the session's true biases"}
     return res
