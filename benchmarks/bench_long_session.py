@@ -18,7 +18,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from gonio.bench import load_bench, run_session
-from gonio.pipeline.calibrate import analyse_zero_stability
+from gonio.specs.ogam_draft.calibration import analyse_zero_stability
 from gonio.protocol import load_protocol
 
 PROTOCOL = """

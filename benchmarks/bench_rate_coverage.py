@@ -4,7 +4,7 @@ bench's true value lies within the reported U, with the binomial uncertainty.
     PYTHONPATH=$PWD python benchmarks/bench_rate_coverage.py [--spec iec62047-20] [--seeds 200]
 
 The programme is the built-in protocol reduced to the sizes of
-gonio.pipeline.rate_coverage.REDUCED (stated there); the bench is study_bench(). The seeds
+SPEC.coverage.reduced (stated there); the bench is SPEC.coverage.study_bench(). The seeds
 are first … first + seeds − 1 (serial, in this process). The same study in parallel, with
 SeedSequence seeds, is ``gonio validate --spec <spec> --trials 200`` (docs/jjf1535-readings.md).
 """
@@ -24,7 +24,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=200)
     ap.add_argument("--first", type=int, default=1000)
     a = ap.parse_args(argv)
-    from gonio.pipeline.rate_coverage import coverage_study, format_coverage, reduced_protocol
+    from gonio.pipeline.coverage import coverage_study, format_coverage, reduced_protocol
 
     with tempfile.TemporaryDirectory() as d:
         proto = reduced_protocol(a.spec, Path(d) / "reduced.toml")

@@ -20,7 +20,7 @@ def main(argv=None) -> int:
     ap.add_argument("--bench", default=None)
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args(argv)
-    from gonio.pipeline.rate import demo
+    from gonio.pipeline.dispatch import demo
 
     with tempfile.TemporaryDirectory() as d:
         t0 = time.perf_counter()

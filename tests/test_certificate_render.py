@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from gonio.bench import load_bench, run_session, write_session
-from gonio.pipeline.calibrate import calibrate, write_calibration
+from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
 from gonio.report import certificate as cert

@@ -20,7 +20,8 @@ from lxml import etree
 from scipy.stats import norm
 
 from gonio.bench import load_bench, run_session, write_session
-from gonio.pipeline.calibrate import calibrate, write_calibration
+from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.protocol import parse_protocol
 from gonio.report.certificate import certificate_id, load_lab
 from gonio.report.dcc import DCC_NS, SI_NS, dcc_bytes

@@ -120,7 +120,8 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     import re
 
     from gonio.bench import write_session
-    from gonio.pipeline.calibrate import calibrate, write_calibration
+    from gonio.specs.ogam_draft.calibration import calibrate
+    from gonio.specs.ogam_draft.outputs import write_calibration
     from gonio.report.certificate import write_certificate
     from gonio.report.i18n import display, labels
 

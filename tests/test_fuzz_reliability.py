@@ -166,7 +166,7 @@ READERS = {
     "protocol": load_protocol,
     "bench": load_bench,
     "lab": lambda p: __import__("gonio.report.certificate", fromlist=["load_lab"]).load_lab(p),
-    "calibrate": lambda p: __import__("gonio.pipeline.calibrate", fromlist=["calibrate"]).calibrate(p),
+    "calibrate": lambda p: __import__("gonio.specs.ogam_draft.calibration", fromlist=["calibrate"]).calibrate(p),
     "toml": read_toml,
 }
 
@@ -271,7 +271,7 @@ NUMERIC_METADATA = ["nominal_scale_factor_counts_per_deg", "latitude_deg", "temp
 
 def _read_then_calibrate(p: Path) -> None:
     """Only GonioError, located; if the file is accepted, calibration and display hold."""
-    from gonio.pipeline.calibrate import calibrate
+    from gonio.specs.ogam_draft.calibration import calibrate
 
     h = sha256_file(p)
     with deadline(60):
@@ -492,7 +492,8 @@ def test_read_only_folder(tmp_path):
                       capture_output=True).returncode != 0:
         pytest.skip("cannot mount a read-only tmpfs here (needs root and mount rights)")
     try:
-        from gonio.pipeline.calibrate import calibrate, write_outputs
+        from gonio.specs.ogam_draft.calibration import calibrate
+        from gonio.specs.ogam_draft.outputs import write_outputs
         rep = calibrate(FULL, FULL_PROTOCOL)
         e = api_error(write_outputs, rep, ro / "out")
         assert "Read-only" in str(e) or "read-only" in str(e).lower(), str(e)
@@ -508,7 +509,8 @@ def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
                       capture_output=True).returncode != 0:
         pytest.skip("cannot mount a 300 KB tmpfs here (needs root and mount rights)")
     try:
-        from gonio.pipeline.calibrate import calibrate, write_outputs
+        from gonio.specs.ogam_draft.calibration import calibrate
+        from gonio.specs.ogam_draft.outputs import write_outputs
         rep = calibrate(FULL, FULL_PROTOCOL)
         out = mnt / "out"
         prev = _previous_set(out)
@@ -535,7 +537,8 @@ def test_full_disk_leaves_previous_set_and_no_debris(tmp_path):
 
 
 def test_failed_rerun_leaves_previous_set(tmp_path, monkeypatch):
-    from gonio.pipeline.calibrate import calibrate, write_outputs
+    from gonio.specs.ogam_draft.calibration import calibrate
+    from gonio.specs.ogam_draft.outputs import write_outputs
     import gonio.report.certificate as cert
 
     rep = calibrate(FULL, FULL_PROTOCOL)
@@ -721,7 +724,7 @@ def test_stray_reading_is_set_aside_alone():
 # ----------------------------------------------------------------------------- contradictions
 
 def test_contradictions_refused(tmp_path, capsys):
-    from gonio.pipeline.calibrate import calibrate
+    from gonio.specs.ogam_draft.calibration import calibrate
 
     lines, head = _rows()
     cols = lines[head].split(",")
@@ -915,7 +918,8 @@ def test_cli_process_level_one_line(tmp_path):
 # ----------------------------------------------------------------------------- certificate text
 
 def test_user_text_rendered_literally(tmp_path):
-    from gonio.pipeline.calibrate import calibrate, write_outputs
+    from gonio.specs.ogam_draft.calibration import calibrate
+    from gonio.specs.ogam_draft.outputs import write_outputs
 
     hostile = [("$\\foo$ \u202eevil\u202c <script>alert(1)</script>", "a\x00b\x1bc $x^2$ \\textbf{b}"),
                ("x" * 20_000, "名" * 300)]

@@ -81,12 +81,31 @@ def python_files(*tops: str) -> list[Path]:
     return sorted(files)
 
 
+#: A specification's rendering module (``SPEC.outputs``): it sits between the report and the
+#: pipeline (it renders the specification's results with the report; the pipeline loads it
+#: through the registry, never by name).
+RENDERING_MODULES = ("outputs",)
+RENDERING_LAYER = LAYERS["gonio.report"] + 0.5
+
+
+def is_rendering(mod: str) -> bool:
+    parts = mod.split(".")
+    return parts[:2] == ["gonio", "specs"] and len(parts) == 4 and parts[3] in RENDERING_MODULES
+
+
 def layer_violations(files: list[Path]) -> list[str]:
     bad = []
     for path in files:
         mod = module_name(path)
         tree = ast.parse(path.read_text(encoding="utf-8"))
         g = group(mod)
+        if is_rendering(mod):
+            for target, _, line in imports_of(tree, mod, False):
+                tg = group(target) if target.startswith("gonio") else None
+                if tg is not None and LAYERS[tg] > RENDERING_LAYER:
+                    bad.append(f"{mod}:{line}: imports {target} (a specification's rendering "
+                               "module sits below the pipeline)")
+            continue
         for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
             if mod.startswith("uncertainty") and target.split(".")[0] == "gonio":
                 bad.append(f"{path.name}:{line}: uncertainty imports gonio")
@@ -111,7 +130,7 @@ def layer_violations(files: list[Path]) -> list[str]:
 #: What a specification may import (docs/architecture.md#specifications), besides itself, a
 #: family package (``gonio.specs._rate_family``), the registry and the layer-0 modules.
 SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.result",
-                   "gonio.analysis", "gonio.budget", "uncertainty")
+                   "gonio.reduce", "gonio.analysis", "gonio.budget", "uncertainty")
 #: A specification's modules that run the virtual bench: the only ones that may import it.
 SIMULATION_MODULES = ("simulate", "plan", "truth")
 
@@ -119,13 +138,16 @@ SIMULATION_MODULES = ("simulate", "plan", "truth")
 def spec_import_violations(files: list[Path]) -> list[str]:
     """A specification imports only what calibrating needs; the simulator (gonio.bench)
     only from its ``simulate``/``plan``/``truth`` modules, so that calibrating a
-    laboratory's file never imports the virtual bench."""
+    laboratory's file never imports the virtual bench; its rendering module (``outputs``)
+    may also import the report (:func:`layer_violations`)."""
     bad = []
     for path in files:
         mod = module_name(path)
         parts = mod.split(".")
         if parts[:2] != ["gonio", "specs"]:
             continue
+        if is_rendering(mod):
+            continue                     # checked by layer_violations (report, bench allowed)
         sim = len(parts) > 3 and parts[3] in SIMULATION_MODULES
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
@@ -319,10 +341,14 @@ def test_rules_fire_on_bad_examples(fake_root):
     bad = layer_violations([physics, unc, spec, beside, ok])
     assert len(bad) == 4 and not any("pipeline.ok" in b for b in bad)
     items = _write(fake_root, "gonio/specs/a/items.py", "from gonio.bench.rate_gyro import x\n"
-                   "from gonio.reduce import y\nfrom gonio.physics.alignment import z\n"
+                   "from gonio.report.i18n import y\nfrom gonio.reduce import r\nfrom gonio.physics.alignment import z\n"
                    "import uncertainty\nfrom gonio.units import S_PER_H\n")
     sim = _write(fake_root, "gonio/specs/a/simulate.py", "from gonio.bench.rate_gyro import x\n")
-    assert len(spec_import_violations([items, sim])) == 2
+    assert len(spec_import_violations([items, sim])) == 2     # the bench and the report
+    render = _write(fake_root, "gonio/specs/a/outputs.py", "from gonio.report.x import y\n"
+                    "from gonio.bench import z\nfrom gonio.pipeline.dispatch import w\n")
+    report_in_items = _write(fake_root, "gonio/specs/a/certificate.py", "from gonio.report import y\n")
+    assert len(layer_violations([render, report_in_items])) == 2
     a = _write(fake_root, "gonio/p/a.py", "from gonio.p.b import g\n")
     b = _write(fake_root, "gonio/p/b.py", "from gonio.p.a import f\n")
     assert cycles(import_graph([a, b])) == [["gonio.p.a", "gonio.p.b"]]

@@ -49,10 +49,10 @@ def small_protocol(tmp_path, name="jjf1535-2015", **changes) -> Path:
     """The built-in protocol with small sample counts (and ``changes`` {section: {key: v}})."""
     d = tomllib.loads((ROOT / "protocols" / f"{name}.toml").read_text(encoding="utf-8"))
     # the coverage study's reduced programme, with shorter noise records for speed
-    from gonio.pipeline.rate_coverage import REDUCED
+    from gonio.specs import get
 
     noise_sec = "arw" if name == "jjf1535-2015" else "noise"
-    small = {**REDUCED[name], noise_sec: {"samples": 3000}}
+    small = {**get(name).coverage.reduced, noise_sec: {"samples": 3000}}
     for sec, kv in {**small, **changes}.items():
         d[sec].update(kv)
     p = tmp_path / f"{name}-small.toml"

@@ -2,7 +2,7 @@
 "≥ 90 % per item over many seeds").
 
 The default run uses GONIO_COVERAGE_SEEDS (default 10) seeds per specification on the
-reduced programme of gonio.pipeline.rate_coverage.REDUCED and requires, per item, that the
+reduced programme of gonio.pipeline.coverage.REDUCED and requires, per item, that the
 coverage is not significantly below 90 %: the upper Wilson 95 % limit reaches 0.90. The
 benchmark benchmarks/bench_rate_coverage.py runs 100–200 seeds (figures in
 docs/jjf1535-readings.md#coverage-of-the-budgets); set GONIO_COVERAGE_SEEDS=100 to run
@@ -15,7 +15,7 @@ import os
 
 import pytest
 
-from gonio.pipeline.rate_coverage import (coverage_study, item_coverage, reduced_protocol,
+from gonio.pipeline.coverage import (coverage_study, item_coverage, reduced_protocol,
                                           wilson_interval)
 
 SEEDS = int(os.environ.get("GONIO_COVERAGE_SEEDS", "10"))

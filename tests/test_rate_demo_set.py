@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-import gonio.pipeline.rate as rate
+import gonio.pipeline.dispatch as rate
 from gonio.atomic import MANIFEST, read_manifest, sha256_file
 from gonio.cli import main
 from gonio.errors import GonioError

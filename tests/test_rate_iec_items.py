@@ -17,7 +17,9 @@ from gonio.physics.alignment import body_rotation, mount_matrix
 from gonio.formats.rate_readings import RateReadings
 from gonio.physics.earth import earth_rate_enu
 
-from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
+from gonio.pipeline.coverage import reduced_protocol
+
+from gonio.specs._rate_family.simulate import study_bench
 
 
 def exact_bench(**gyro):

@@ -12,7 +12,8 @@ import pytest
 
 from gonio.bench.rate_session import constant_rate_spread_dps
 from gonio.formats.rate_readings import RateReadings
-from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
+from gonio.pipeline.coverage import reduced_protocol
+from gonio.specs._rate_family.simulate import study_bench
 from gonio.specs.iec62047_20 import calibrate
 from gonio.specs.iec62047_20.simulate import simulate
 from gonio.specs.iec62047_20.truth import truth

@@ -1,7 +1,7 @@
 """``gonio validate --spec jjf1535-2015|iec62047-20``: the rate items' coverage study on the
 validate engine — the same JSON on any number of workers and any batching, trial i seeded
-by SeedSequence(seed, spawn_key=(spec index, i)), the per-item table printed, the optical
-draft's options refused with a rate specification."""
+by SeedSequence(seed, spawn_key=(SPEC.coverage.stream, i)), the per-item table printed, the
+bench-case study's options refused with a specification whose study is per item."""
 
 from __future__ import annotations
 
@@ -10,15 +10,16 @@ import json
 import numpy as np
 import pytest
 
-from gonio.pipeline.rate import RATE_SPECS
-from gonio.pipeline.rate_coverage import (RateTrialJob, rate_validate, run_rate_batch,
-                                          study_bench, trial_records)
+from gonio.pipeline.coverage import TrialJob, coverage_validate, run_batch, trial_records
+from gonio.specs import get
+from gonio.specs._rate_family.simulate import study_bench
 
 
 def test_trial_seeds_are_seedsequence_children():
     from gonio.specs.iec62047_20.protocol import load_protocol
-    job = RateTrialJob("iec62047-20", study_bench(), load_protocol("iec62047-20"), 5)
-    key = RATE_SPECS.index("iec62047-20")
+    job = TrialJob("iec62047-20", study_bench(), load_protocol("iec62047-20"), 5)
+    key = get("iec62047-20").coverage.stream
+    assert key == 1                        # fixed: a published study reproduces
     want = [int(np.random.SeedSequence(5, spawn_key=(key, i)).generate_state(1, np.uint32)[0])
             for i in (0, 1, 2)]
     # the seeds alone (no trial run): the batch function's seeding, from the index only
@@ -29,8 +30,8 @@ def test_trial_seeds_are_seedsequence_children():
 
 def test_same_report_on_any_workers_and_batching(capsys):
     from gonio.cli import main
-    a = rate_validate("iec62047-20", 2, seed=3, workers=1, show_progress=False)
-    b = rate_validate("iec62047-20", 2, seed=3, workers=2, batch_size=1, show_progress=False)
+    a = coverage_validate("iec62047-20", 2, seed=3, workers=1, show_progress=False)
+    b = coverage_validate("iec62047-20", 2, seed=3, workers=2, batch_size=1, show_progress=False)
     ja = json.dumps(a.to_dict(), indent=2, ensure_ascii=False, allow_nan=False)
     assert ja == json.dumps(b.to_dict(), indent=2, ensure_ascii=False, allow_nan=False)
     d = a.to_dict()
@@ -38,21 +39,21 @@ def test_same_report_on_any_workers_and_batching(capsys):
     assert all(r["n"] == 2 for r in d["items"])
     # the coverage counts |value − truth| ≤ U of the trials themselves: rerun trial 0 alone
     from gonio.pipeline.validate import spawn_seed
-    job = RateTrialJob("iec62047-20", study_bench(), None, 3)
+    job = TrialJob("iec62047-20", study_bench(), None, 3)
     import tempfile
     from pathlib import Path
 
-    from gonio.pipeline.rate_coverage import reduced_protocol
+    from gonio.pipeline.coverage import reduced_protocol
     from gonio.specs.iec62047_20.protocol import load_protocol
     with tempfile.TemporaryDirectory() as t:
         proto = load_protocol(str(reduced_protocol("iec62047-20", Path(t) / "r.toml")))
     recs = [trial_records("iec62047-20", job.bench, proto,
-                          spawn_seed(3, RATE_SPECS.index("iec62047-20"), i)) for i in (0, 1)]
+                          spawn_seed(3, get("iec62047-20").coverage.stream, i)) for i in (0, 1)]
     for row in d["items"]:
         hits = sum(abs(r[row["key"]]["value"] - r[row["key"]]["truth"]) <= r[row["key"]]["U"]
                    for r in recs)
         assert row["hits"] == hits, row["key"]
-    assert run_rate_batch(RateTrialJob("iec62047-20", job.bench, proto, 3), 1, 2)[0][2] == \
+    assert run_batch(TrialJob("iec62047-20", job.bench, proto, 3), 1, 2)[0][2] == \
         json.dumps(recs[1], sort_keys=True)
     # the CLI prints the per-item table; the optical draft's options are refused
     capsys.readouterr()
@@ -61,13 +62,14 @@ def test_same_report_on_any_workers_and_batching(capsys):
     assert capsys.readouterr().out == ja + "\n"
     assert main(["validate", "--spec", "jjf1535-2015", "--trials", "2", "--truth",
                  "calibrated"]) == 2
-    assert "--truth apply to the optical draft only" in capsys.readouterr().err
+    assert "--truth does not apply to 'gonio validate --spec jjf1535-2015'" in \
+        capsys.readouterr().err
     assert main(["validate", "--spec", "nope", "--trials", "2"]) == 2
     assert "unknown specification 'nope'" in capsys.readouterr().err
 
 
 def test_table_prints_every_item():
-    from gonio.pipeline.rate_coverage import RateValidationReport, format_coverage, item_coverage
+    from gonio.pipeline.coverage import CoverageReport, format_coverage, item_coverage
     import pandas as pd
     rows = [item_coverage([(1.0, 1.05, 0.1, 0.05)] * 9 + [(1.0, 1.5, 0.1, 0.05)], "bias",
                           "7.2.8").__dict__]
@@ -75,8 +77,8 @@ def test_table_prints_every_item():
     assert "bias" in txt and "0.900" in txt and "< 90 %" not in txt
     rows[0].update(coverage=0.8)
     assert "< 90 %" in format_coverage(pd.DataFrame(rows), "t")
-    rep = RateValidationReport({"spec": "x", "trials": 10, "seed": 0, "protocol": "p",
+    rep = CoverageReport({"spec": "x", "trials": 10, "seed": 0, "protocol": "p",
                                 "bench": "b"}, pd.DataFrame(rows))
     assert rep.table().startswith("x: 10 trials")
     with pytest.raises(Exception, match="trials"):
-        rate_validate("iec62047-20", 1)
+        coverage_validate("iec62047-20", 1)

@@ -147,7 +147,7 @@ PROTO = parse_protocol({
 
 
 def _bench_stream(tmp_path, name, bits, fmt, rate_hz=100.0):
-    from gonio.cli.cmd_simulate import stream_metadata
+    from gonio.specs.ogam_draft.simulate import stream_metadata
     b = load_bench("rlg")
     b = dataclasses.replace(b, sample_rate_hz=rate_hz,
                             instrument=dataclasses.replace(b.instrument, counter_bits=bits))
@@ -282,7 +282,7 @@ def test_long_rest_level_is_a_strided_median(monkeypatch):
 
 def test_calibrate_stream_writes_no_temporary_readings_file(tmp_path, monkeypatch):
     import gonio.formats.readings as RD
-    from gonio.pipeline.calibrate import calibrate
+    from gonio.specs.ogam_draft.calibration import calibrate
     path, res, _, _ = _bench_stream(tmp_path, "c", 32, "parquet")
 
     def refuse(*a, **k):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from gonio.bench import load_bench, run_session
-from gonio.pipeline.calibrate import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.formats.readings import Readings
 from gonio.pipeline.item_coverage import item_coverage, trial_items
 from gonio.pipeline.validate import validation_protocol

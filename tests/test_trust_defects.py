@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.pipeline.calibrate import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.cli import main
 from gonio.errors import GonioError
 

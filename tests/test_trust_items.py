@@ -10,7 +10,7 @@ import pytest
 
 from gonio.bench import load_bench, run_session
 from gonio.formats.readings import Readings
-from gonio.pipeline.calibrate import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.protocol import load_protocol
 from gonio.specs.ogam_draft.item_uncertainty import monte_carlo_check
 

@@ -10,7 +10,7 @@ import pytest
 
 from gonio.bench import load_bench, run_session
 from gonio.bench.instrument import uniform_hash
-from gonio.pipeline.calibrate import analyse_zero_stability, calibrate
+from gonio.specs.ogam_draft.calibration import analyse_zero_stability, calibrate
 from gonio.protocol import parse_protocol
 
 ZS = parse_protocol({"protocol": {"name": "zs"},

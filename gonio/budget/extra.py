@@ -25,8 +25,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gonio.bench.config import Bench, InstrumentConfig, TableConfig
-from gonio.bench.session import plan_session
 from gonio.errors import GonioError
 from gonio.physics.compensation import CompensationResidual
 from gonio.physics.coupling import coupling_terms
@@ -111,6 +109,8 @@ def session_coupling(protocol, bench, tilt_deg: float | None = None,
     psi = bench.instrument.tilt_deg if tilt_deg is None else tilt_deg
     az = bench.instrument.tilt_azimuth_deg if tilt_azimuth_table_deg is None \
         else tilt_azimuth_table_deg
+    from gonio.bench.session import plan_session      # only for this optional component
+
     blocks = plan_session(protocol, bench, None)
     dt = 1.0 / bench.sample_rate_hz
     comp = protocol.session.earth_compensation
@@ -164,6 +164,8 @@ def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
     >>> c.symbol, c.distribution, round(c.half_width_arcsec, 2)
     ('C_te', 'arcsine', 0.48)
     """
+    from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+
     bench = Bench("coupling", InstrumentConfig(tilt_deg=tilt_deg),
                   TableConfig(accel_dps2=accel_dps2), latitude_deg=latitude_deg,
                   sample_rate_hz=1000.0)

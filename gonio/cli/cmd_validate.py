@@ -1,4 +1,6 @@
-"""``gonio validate``: coverage of the Annex A budget over many virtual calibrations."""
+"""``gonio validate``: the coverage of a specification's uncertainties over many virtual
+calibrations (``SPEC.coverage``: the generic item study of :mod:`gonio.pipeline.coverage`, or
+the Annex A study over bench cases of :mod:`gonio.pipeline.validate`)."""
 
 from __future__ import annotations
 
@@ -11,35 +13,38 @@ from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
 from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, PARTIAL_DIR, TRUTHS, validate
+from gonio.specs import DEFAULT_KEY
 
 
 def register(sub) -> None:
-    p = sub.add_parser("validate", help="test the Annex A budget against virtual calibrations",
-                       description="Run N virtual calibrations per case (7.1 + 7.4 with 10 series) "
-                                   "and report how often |E - truth| <= U, U the calibration's own "
-                                   "Annex A expanded uncertainty (k = 2).")
+    p = sub.add_parser("validate", help="test a specification's uncertainties against virtual "
+                                        "calibrations",
+                       description="Run N virtual calibrations and report how often |value - "
+                                   "truth| <= U, U the calibration's own expanded uncertainty: "
+                                   "per item, or (the default specification) per bench case for "
+                                   "the Annex A budget of E (7.1 + 7.4 with 10 series).")
     p.add_argument("--trials", type=int_range(2), required=True, help="calibrations per case (>= 2)")
     p.add_argument("--seed", type=seed, default=0, help="master seed (same seed -> same JSON)")
-    p.add_argument("--spec", default="ogam-draft",
-                   help="specification: ogam-draft (default; the Annex A budget of E) or a "
-                        "rate-gyro specification, jjf1535-2015 or iec62047-20 (the coverage "
-                        "of every item's U, printed per item)")
+    p.add_argument("--spec", default=DEFAULT_KEY,
+                   help=f"specification key (default {DEFAULT_KEY}: the Annex A budget of E "
+                        "over bench cases; a specification with an item study: the coverage of "
+                        "every item's U, printed per item)")
     p.add_argument("--bench", default=None,
-                   help="bench file or built-in name (default rlg; rlg, fog; rate specs: "
-                        "mems-adxrs610, as a study bench)")
+                   help="bench file or built-in name (default: the specification's, as a study "
+                        "bench)")
     p.add_argument("--protocol", default=None,
-                   help="protocol (default ogam-draft, restricted to 7.1 and 7.4/7.5; rate "
-                        "specs: the built-in programme reduced to the study's sizes)")
-    p.add_argument("--cases", default="default",
+                   help="protocol (default: the specification's, restricted or reduced to the "
+                        "study's programme)")
+    p.add_argument("--cases", default=None,
                    help=f"comma-separated cases, or 'all' ({', '.join(CASES)})")
-    p.add_argument("--truth", default="systematic", choices=TRUTHS,
+    p.add_argument("--truth", default=None, choices=TRUTHS,
                    help="truth of the printed table (all are in the JSON)")
     p.add_argument("--extra-components", nargs="?", const="all", default=None, metavar="NAMES",
                    help="also evaluate the budget with the components the annex lacks: all, or "
                         f"a comma-separated subset of {','.join(EXTRA_SYMBOLS)}")
-    p.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=1.0,
+    p.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=None,
                    help="multiply U (default 1; < 1 deliberately breaks the budget)")
-    p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=100.0,
+    p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=None,
                    help="simulation rate (default 100 Hz; the RLG counter is exact at any rate)")
     p.add_argument("--workers", type=int, default=None,
                    help="local processes (default min(2, cores), at most the machine's cores; "
@@ -66,10 +71,18 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: Options of the bench-case study, with the values they have when not given.
+CASE_OPTIONS = {"cases": "default", "truth": "systematic", "extra_components": None,
+                "u_scale": 1.0, "sample_rate_hz": 100.0, "all_items": False, "resume": False,
+                "monte_carlo": 0}
+
+
 def run(args) -> int:
     if args.trials < 2:
         raise GonioError(f"--trials must be an integer >= 2, got {args.trials}")
     from gonio.limits import check
+    from gonio.pipeline.dispatch import refuse_options
+    from gonio.specs import get
 
     check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
@@ -77,28 +90,40 @@ def run(args) -> int:
         raise GonioError(f"--workers must be >= 1, got {args.workers}")
     if args.resume and not args.out:
         raise GonioError("--resume needs --out (the folder of the interrupted study)")
-    cases = list(CASES) if args.cases.strip() == "all" else \
-        [c.strip() for c in args.cases.split(",") if c.strip()]
-    if args.extra_components is None:
-        extras = False
-    elif args.extra_components.strip() == "all":
-        extras = True
-    else:
-        extras = [e.strip() for e in args.extra_components.split(",") if e.strip()]
+    spec = get(args.spec)
+    if spec.coverage is None:
+        raise GonioError(f"{spec.key} has no coverage study (SPEC.coverage is None)",
+                         key="--spec")
+    given = refuse_options(spec, {k: getattr(args, k) for k in CASE_OPTIONS},
+                           spec.coverage.options, "validate")
     if args.out is not None:
         from gonio.atomic import check_output_folder_place
         check_output_folder_place(args.out)          # before any batch is written there
-    if args.spec != "ogam-draft":
-        return run_rate(args, extras)
+    if spec.coverage.engine == "items":
+        return run_items(spec, args)
+    return run_cases(spec, args, {**CASE_OPTIONS, **given})
+
+
+def run_cases(spec, args, opts: dict) -> int:
+    """The Annex A study over bench cases (:func:`gonio.pipeline.validate.validate`)."""
+    cases = list(CASES) if opts["cases"].strip() == "all" else \
+        [c.strip() for c in opts["cases"].split(",") if c.strip()]
+    ec = opts["extra_components"]
+    if ec is None:
+        extras = False
+    elif ec.strip() == "all":
+        extras = True
+    else:
+        extras = [e.strip() for e in ec.split(",") if e.strip()]
     partial = Path(args.out) / PARTIAL_DIR if args.out is not None else None
     try:
-        report = validate(args.trials, seed=args.seed, bench=args.bench or "rlg", cases=cases,
-                          sample_rate_hz=args.sample_rate_hz,
-                          protocol=args.protocol or "ogam-draft",
-                          extra_components=extras, truth=args.truth,
-                          u_scale=args.u_scale, workers=args.workers, scheduler=args.scheduler,
-                          batch_size=args.batch, partial_dir=partial, resume=args.resume,
-                          all_items=args.all_items, monte_carlo=args.monte_carlo)
+        report = validate(args.trials, seed=args.seed, bench=args.bench or spec.default_bench,
+                          cases=cases, sample_rate_hz=opts["sample_rate_hz"],
+                          protocol=args.protocol or spec.default_protocol,
+                          extra_components=extras, truth=opts["truth"],
+                          u_scale=opts["u_scale"], workers=args.workers, scheduler=args.scheduler,
+                          batch_size=args.batch, partial_dir=partial, resume=opts["resume"],
+                          all_items=opts["all_items"], monte_carlo=opts["monte_carlo"])
     except KeyboardInterrupt:
         if partial is not None and partial.exists():
             sys.stderr.write(f"gonio: interrupted: the finished trials are kept in {partial}; "
@@ -125,33 +150,16 @@ def emit(report, args) -> None:
         print(report.table(), end="")
 
 
-#: Options of the optical draft's study, with their defaults (refused with a rate --spec).
-OPTICAL_ONLY = {"cases": "default", "truth": "systematic", "u_scale": 1.0,
-                "sample_rate_hz": 100.0, "all_items": False, "resume": False}
+def run_items(spec, args) -> int:
+    """The item coverage study (:func:`gonio.pipeline.coverage.coverage_validate`)."""
+    from gonio.pipeline.coverage import coverage_validate
 
-
-def run_rate(args, extras) -> int:
-    """``gonio validate --spec jjf1535-2015|iec62047-20``: the coverage of every item
-    (:func:`gonio.pipeline.rate_coverage.rate_validate`)."""
-    from gonio.pipeline.rate import RATE_SPECS
-    from gonio.pipeline.rate_coverage import rate_validate
-
-    if args.spec not in RATE_SPECS:
-        from gonio.specs import get
-        get(args.spec)                                   # GonioError listing the keys
-        raise GonioError(f"{args.spec} has no coverage study", key="--spec")
-    given = [k for k, v in OPTICAL_ONLY.items() if getattr(args, k) != v]
-    if extras:
-        given.append("extra_components")
-    if given:
-        raise GonioError("--" + ", --".join(g.replace("_", "-") for g in given)
-                         + f" apply to the optical draft only, not to --spec {args.spec}")
     try:
-        report = rate_validate(args.spec, args.trials, seed=args.seed, bench=args.bench,
-                               protocol=args.protocol, workers=args.workers,
-                               scheduler=args.scheduler, batch_size=args.batch)
+        report = coverage_validate(spec.key, args.trials, seed=args.seed, bench=args.bench,
+                                   protocol=args.protocol, workers=args.workers,
+                                   scheduler=args.scheduler, batch_size=args.batch)
     except KeyboardInterrupt:
-        sys.stderr.write("gonio: interrupted (a rate study keeps no partial results)\n")
+        sys.stderr.write("gonio: interrupted (an item study keeps no partial results)\n")
         return 130
     emit(report, args)
     return 0

@@ -1,26 +1,26 @@
-"""Coverage of the rate-gyro uncertainty budgets on the virtual bench (issue 17: "coverage
-checked on the bench, ≥ 90 % per item over many seeds").
+"""The item coverage study of any specification (``gonio validate --spec KEY`` where
+``SPEC.coverage.engine == "items"``; issue 17: "coverage checked on the bench, ≥ 90 % per
+item over many seeds").
 
-:func:`coverage_study` runs a specification's programme on a rate bench for many seeds
-(noise on), calibrates each readings set, and counts per item how often the bench's true
-value lies within the reported expanded uncertainty, |value − truth| ≤ U. The coverage
-c = hits/n is reported with its binomial standard uncertainty √(c(1 − c)/n) and the Wilson
-95 % interval, and the normalised errors |value − truth|/u_c are summarised.
+:func:`coverage_study` runs a specification's programme on its study bench for many seeds
+(noise on; ``SPEC.run_trial``), calibrates each readings set (``SPEC.calibrate``), and
+counts per item how often the bench's true value (``truth["items"][key]["value"]``, from the
+bench's physical parameters) lies within the reported expanded uncertainty,
+|value − truth| ≤ U. The coverage c = hits/n is reported with its binomial standard
+uncertainty √(c(1 − c)/n) and the Wilson 95 % interval, and the normalised errors
+|value − truth|/u_c are summarised.
 
-The bench of the study (:func:`study_bench`) is the named bench with the three
-deterministic, history-dependent effects that the truth formulas of
-:mod:`gonio.specs.jjf1535.truth` and :func:`gonio.specs.iec62047_20.truth.truth` leave out
-switched off (power-on transient, thermal lag, cross-axis coupling of a turning Earth
-rate); every random term (noise, power-cycle scatter, quantisation, equipment errors)
-stays on. docs/jjf1535-readings.md#coverage-of-the-budgets states the truths used for the
-noise-limited items.
+The study's bench is ``SPEC.coverage.study_bench(name)`` (a specification switches off there
+what its truth leaves out) and its programme the built-in protocol changed by
+``SPEC.coverage.reduced``. docs/jjf1535-readings.md#coverage-of-the-budgets states the
+rate specifications' truths for the noise-limited items.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from pathlib import Path
 
@@ -29,9 +29,7 @@ import pandas as pd
 from gonio.atomic import write_text
 
 from gonio.errors import GonioError
-from gonio.formats.rate_readings import RateReadings
-from gonio.pipeline.rate import RATE_SPECS, spec_module, spec_simulator
-from gonio.specs import get
+from gonio.specs import Specification, get
 
 #: Wilson-interval coverage factor (95 %).
 _Z95 = 1.959963984540054
@@ -53,38 +51,11 @@ class ItemCoverage:
     max_norm_error: float
 
 
-def study_bench(name: str = "mems-adxrs610"):
-    """The rate bench of the coverage study: ``name`` with the power-on transient, the thermal
-    lag (τ = 1 s) and the cross-axis sensitivity switched off (see module docstring)."""
-    from gonio.bench.rate_gyro import load_rate_bench
-
-    b = load_rate_bench(name)
-    g = replace(b.gyro, warmup_bias_dps=0.0, thermal_tau_s=1.0, cross_axis_x=0.0,
-                cross_axis_y=0.0)
-    return replace(b, gyro=g)
-
-
-#: The reduced programme of the study ({section: {key: value}} over the built-in protocol):
-#: small sample counts and short waits, every item still measured.
-REDUCED = {
-    "jjf1535-2015": {"protocol": {"warmup_s": 600.0},
-                     "scale_factor": {"samples_below_100_dps": 5, "samples_from_100_dps": 5,
-                                      "rest_samples": 5, "interval_s": 60.0},
-                     "temperature": {"soak_s": 1800.0, "bias_samples": 100},
-                     "threshold": {"samples": 5, "rest_samples": 5},
-                     "resolution": {"samples": 5},
-                     "bias": {"samples": 600, "off_time_s": 60.0},
-                     "warmup": {"samples": 600, "window_samples": 100, "off_time_s": 60.0},
-                     "g_sensitivity": {"samples": 60, "settle_s": 5.0},
-                     "arw": {"samples": 6000},
-                     "bandwidth": {"cycles": 8}},
-    "iec62047-20": {"protocol": {"warmup_s": 600.0},
-                    "scale_factor": {"samples": 5},
-                    "temperature": {"soak_s": 1800.0, "bias_samples": 60},
-                    "stability": {"samples": 50}, "bias": {"samples": 300, "off_time_s": 60.0},
-                    "power_on": {"samples": 900, "off_time_s": 60.0},
-                    "noise": {"samples": 6000}, "frequency": {"cycles": 8}},
-}
+def study_bench(spec: Specification, name=None):
+    """The bench of ``spec``'s coverage study: ``name`` (default the specification's bench)
+    through ``SPEC.coverage.study_bench``."""
+    name = name or spec.default_bench
+    return spec.coverage.study_bench(name) if spec.coverage.study_bench else name
 
 
 def _toml_value(v) -> str:
@@ -98,15 +69,15 @@ def _toml_value(v) -> str:
 
 
 def reduced_protocol(spec_key: str, path, changes: dict | None = None) -> Path:
-    """Write the built-in protocol of ``spec_key`` with the study's reduced sizes
-    (:data:`REDUCED`) and ``changes`` ({section: {key: value}}) to ``path``; returns it."""
+    """Write the built-in protocol of ``spec_key`` with the study's programme
+    (``SPEC.coverage.reduced``) and ``changes`` ({section: {key: value}}) to ``path``;
+    returns it."""
     from gonio.formats.toml import read_toml
     from gonio.resources import resolve
 
-    if spec_key not in REDUCED:
-        raise GonioError(f"no reduced protocol for {spec_key!r}", key="--spec")
-    d = read_toml(resolve(spec_key, kind="protocol"))
-    for sec, kv in {**REDUCED[spec_key], **(changes or {})}.items():
+    spec = _studied(spec_key)
+    d = read_toml(resolve(spec.default_protocol, kind="protocol"))
+    for sec, kv in {**spec.coverage.reduced, **(changes or {})}.items():
         d.setdefault(sec, {}).update(kv)
     lines = []
     for sec, tab in d.items():
@@ -151,21 +122,22 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1])
 
 
-def _rate_spec(spec_key: str):
+def _studied(spec_key: str) -> Specification:
+    """The specification, refused when it has no item coverage study."""
     spec = get(spec_key)
-    if spec.key not in RATE_SPECS:
-        raise GonioError(f"{spec.key} is not a rate-gyro specification", key="--spec")
+    if spec.coverage is None or spec.coverage.engine != "items" or spec.run_trial is None:
+        raise GonioError(f"{spec.key} has no item coverage study (SPEC.coverage, "
+                         "SPEC.run_trial)", key="--spec")
     return spec
 
 
 def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
     """One virtual calibration (noise on): per item {clause, value, truth, U, u_c}; value
     etc. None when the item was not measured or has no truth in this trial."""
-    spec = _rate_spec(spec_key)
-    res = spec_simulator(spec)(bench, protocol, int(seed), noise=True)
-    rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
-    result = spec.calibrate(rd, protocol)
-    truth = res.truth["items"]
+    spec = _studied(spec_key)
+    readings, truth_d = spec.run_trial(bench, protocol, int(seed))
+    result = spec.calibrate(readings, protocol)
+    truth = truth_d["items"]
     out = {}
     for key, it in result.items.items():
         t = truth.get(key, {}).get("value")
@@ -199,8 +171,8 @@ def coverage_study(spec_key: str, seeds, *, bench=None, protocol=None,
     n, hits, coverage, u_coverage (binomial), the Wilson 95 % interval and the median and
     largest |value − truth|/u_c. Items without a truth value or not measured in a seed do
     not count for that seed (``n`` says how many did)."""
-    spec = _rate_spec(spec_key)
-    b = bench if bench is not None else study_bench(spec.default_bench)
+    spec = _studied(spec_key)
+    b = bench if bench is not None else study_bench(spec)
     proto = protocol or spec.default_protocol
     return coverage_table_from([trial_records(spec.key, b, proto, s) for s in seeds], items)
 
@@ -227,8 +199,8 @@ def format_coverage(df: pd.DataFrame, title: str) -> str:
 
 
 @dataclass(frozen=True)
-class RateTrialJob:
-    """What a worker needs to run trials of one rate specification (picklable)."""
+class TrialJob:
+    """What a worker needs to run trials of one specification (picklable)."""
 
     spec_key: str
     bench: object
@@ -236,7 +208,7 @@ class RateTrialJob:
     seed: int
 
 
-def run_rate_batch(job: RateTrialJob, start: int, stop: int) -> list[tuple[int, int, str]]:
+def run_batch(job: "TrialJob", start: int, stop: int) -> list[tuple[int, int, str]]:
     """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless),
     with the numerical libraries' thread pools held to
     :data:`gonio.pipeline.validate.WORKER_THREADS`, as the optical study's batches are."""
@@ -244,7 +216,7 @@ def run_rate_batch(job: RateTrialJob, start: int, stop: int) -> list[tuple[int, 
 
     from gonio.pipeline.validate import WORKER_THREADS, spawn_seed
 
-    key = RATE_SPECS.index(job.spec_key)
+    key = get(job.spec_key).coverage.stream
     out = []
     with threadpool_limits(limits=WORKER_THREADS):
         for i in range(start, stop):
@@ -255,8 +227,8 @@ def run_rate_batch(job: RateTrialJob, start: int, stop: int) -> list[tuple[int, 
 
 
 @dataclass
-class RateValidationReport:
-    """A rate specification's coverage study: settings and the per-item table."""
+class CoverageReport:
+    """A specification's item coverage study: settings and the per-item table."""
 
     settings: dict
     coverage: pd.DataFrame
@@ -276,17 +248,17 @@ class RateValidationReport:
                                               f"{s['bench']} (study settings)")
 
 
-def rate_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str | None = None,
+def coverage_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str | None = None,
                   protocol: str | None = None, workers: int | None = None,
                   scheduler: str | None = None, batch_size: int | None = None,
-                  show_progress: bool = True) -> RateValidationReport:
-    """Coverage of every item of a rate specification over ``trials`` virtual calibrations.
+                  show_progress: bool = True) -> CoverageReport:
+    """Coverage of every item of a specification over ``trials`` virtual calibrations.
 
-    ``bench``: a rate bench name or file (default the specification's), made a study bench
+    ``bench``: a bench name or file (default the specification's), made a study bench
     (:func:`study_bench`); ``protocol``: a protocol file or name (default: the built-in
-    protocol reduced to :data:`REDUCED`). Runs through joblib (``workers`` local processes
+    protocol with the study's programme, ``SPEC.coverage.reduced``). Runs through joblib (``workers`` local processes
     or a Dask ``scheduler``, ``batch_size`` trials per task); trial i is seeded by
-    SeedSequence(``seed``, spawn_key=(spec index, i)), so the report is the same on any
+    SeedSequence(``seed``, spawn_key=(``SPEC.coverage.stream``, i)), so the report is the same on any
     number of workers and any batching.
     """
     import tempfile
@@ -295,28 +267,31 @@ def rate_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str | Non
     from gonio.pipeline.validate import run_parallel, study_workers
     from gonio.progress import Progress
 
-    spec = _rate_spec(spec_key)
+    spec = _studied(spec_key)
     if not isinstance(trials, int) or trials < 2:
         raise GonioError(f"--trials must be an integer >= 2, got {trials}", key="trials")
     check("GONIO_MAX_TRIALS", trials, "--trials", unit="calibrations")
     if seed < 0:
         raise GonioError(f"--seed must be >= 0, got {seed}", key="seed")
     workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
-    mod = spec_module(spec)
-    b = study_bench(bench or spec.default_bench)
-    if protocol is None:
+    load = spec.load_protocol or (lambda p: p)
+    b = study_bench(spec, bench)
+    if protocol is None and not spec.coverage.reduced:
+        proto = load(spec.default_protocol)
+        proto_name = spec.default_protocol
+    elif protocol is None:
         with tempfile.TemporaryDirectory() as d:
-            proto = mod.load_protocol(str(reduced_protocol(spec.key, Path(d) / "reduced.toml")))
-        proto_name = f"{spec.key} reduced (gonio.pipeline.rate_coverage.REDUCED)"
+            proto = load(str(reduced_protocol(spec.key, Path(d) / "reduced.toml")))
+        proto_name = f"{spec.key} reduced (SPEC.coverage.reduced)"
     else:
-        proto = mod.load_protocol(protocol)
+        proto = load(protocol)
         proto_name = str(protocol)
-    job = RateTrialJob(spec.key, b, proto, int(seed))
+    job = TrialJob(spec.key, b, proto, int(seed))
     tasks = [(job, a, min(a + batch_size, trials)) for a in range(0, trials, batch_size)]
     done: dict[int, dict] = {}
     prog = Progress(trials, label="validate: trials", force=False) if show_progress else None
     try:
-        for batch in run_parallel(run_rate_batch, tasks, workers, scheduler):
+        for batch in run_parallel(run_batch, tasks, workers, scheduler):
             for i, _, text in batch:
                 done[i] = json.loads(text)
             if prog is not None:
@@ -324,9 +299,11 @@ def rate_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str | Non
     finally:
         if prog is not None:
             prog.close()
-    settings = {"spec": spec.key, "trials": trials, "seed": int(seed), "bench": b.name,
-                "study_bench": "power-on transient, thermal lag and cross-axis switched off "
-                               "(gonio.pipeline.rate_coverage.study_bench)",
+    settings = {"spec": spec.key, "trials": trials, "seed": int(seed),
+                "bench": getattr(b, "name", str(b)),
+                "study_bench": f"SPEC.coverage.study_bench = {spec.coverage.study_bench!r}"
+                if spec.coverage.study_bench else "the bench as loaded",
                 "protocol": proto_name,
-                "seeding": "numpy SeedSequence(seed, spawn_key=(spec index, trial index))"}
-    return RateValidationReport(settings, coverage_table_from([done[i] for i in range(trials)]))
+                "seeding": f"numpy SeedSequence(seed, spawn_key=({spec.coverage.stream}, "
+                           "trial index))"}
+    return CoverageReport(settings, coverage_table_from([done[i] for i in range(trials)]))

@@ -1,52 +1,50 @@
-"""Rate-gyro pipelines: simulate, calibrate, demo and budget for the rate-gyro
-specifications (``jjf1535-2015``, ``iec62047-20``), looked up through :mod:`gonio.specs`.
+"""The one pipeline of every specification: simulate, calibrate, demo, budget and validate,
+found through the registry (:func:`gonio.specs.get`) and run through the specification's
+hooks (:class:`gonio.specs.Specification`). Nothing here names a specification.
 
-Every function returns data (paths, results); the CLI (``gonio simulate/calibrate/demo/
-budget --spec …``) is a thin layer over them.
+Every function returns data (paths, results); the command line (``gonio simulate|calibrate|
+demo|budget|validate --spec KEY``) is a thin layer over them.
 """
 
 from __future__ import annotations
 
-import importlib
 import json
 from pathlib import Path
 
-from gonio.atomic import output_dir, write_text
+from gonio.atomic import output_set
 from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.specs import Specification, get
-from gonio.specs._rate_family.rate_records import json_safe, load_readings
-from gonio.formats.triad import FORMAT as TRIAD_FORMAT
 
-#: The specifications handled here (the optical draft keeps its own pipeline).
-RATE_SPECS = ("jjf1535-2015", "iec62047-20")
+#: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
+COMMON_CALIBRATE = frozenset({"monte_carlo_trials"})
 
 
-def spec_module(spec: Specification):
-    """The package of a specification (it holds ``calibrate``, ``SPEC``)."""
-    return importlib.import_module(spec.calibrate.__module__)
+def spec_of(spec_key: str | None, readings=None) -> Specification:
+    """The specification named by ``spec_key``, else by the readings' ``# spec:`` metadata
+    (or the format line a specification claims); a file naming none is an error."""
+    key = spec_key or (readings_spec(readings) if readings is not None else None)
+    if key is None:
+        raise GonioError("the readings name no specification (metadata '# spec: …' or a "
+                         "specification's '# format:'); give --spec", file=readings)
+    return get(key)
 
 
-def spec_simulator(spec: Specification):
-    """The specification's ``simulate`` function (its ``simulate`` module, the only one that
-    imports the virtual bench)."""
-    return importlib.import_module(f"{spec_module(spec).__name__}.simulate").simulate
+def refuse_options(spec: Specification, given: dict, accepted: frozenset, command: str) -> dict:
+    """``given`` ({option: value}, None or False meaning not given) less the options not
+    given; an option the specification's hook does not take is a GonioError naming it."""
+    out = {k: v for k, v in given.items() if v not in (None, False)}
+    bad = sorted(k for k in out if k not in accepted)
+    if bad:
+        flags = ", ".join("--" + k.replace("_", "-") for k in bad)
+        raise GonioError(f"{flags} {'does' if len(bad) == 1 else 'do'} not apply to "
+                         f"'gonio {command} --spec {spec.key}'", key="--" + bad[0].replace("_", "-"))
+    return out
 
 
-def readings_spec(path: str | Path) -> str | None:
-    """The ``# spec: …`` metadata of a readings file (None when absent).
-
-    Only the metadata lines at the top are read (a stream of gigabytes is never read
-    whole); a Parquet stream's key-value metadata is looked up instead.
-    """
-    check_input_file(path, "readings file")     # a FIFO or /dev/zero is refused before reading
-    if Path(path).suffix.lower() == ".parquet":
-        from gonio.formats.streams import StreamFile
-        return StreamFile(path).metadata.get("spec")
-    try:
-        fh = open(path, "rb")
-    except OSError:
-        read_utf8(path, "readings file")       # the one-line error naming the file
-        raise
+def _header_lines(path):
+    """The leading ``# key: value`` lines of a text file (a stream of gigabytes is never
+    read whole), as (key, value) pairs."""
+    fh = open(path, "rb")
     with fh:
         head = b""
         while True:
@@ -66,98 +64,122 @@ def readings_spec(path: str | Path) -> str | None:
                 if not s:
                     continue
                 if not s.startswith("#"):
-                    return None
+                    return
                 key, _, value = s[1:].partition(":")
-                if key.strip() == "spec":
-                    return value.strip()
-                if key.strip() == "format" and value.strip() == TRIAD_FORMAT:
-                    return "triad-alignment"        # a triad file without '# spec:'
-
+                yield key.strip(), value.strip()
             if not piece:
-                return None
+                return
+
+
+def readings_spec(path: str | Path) -> str | None:
+    """The ``# spec: …`` metadata of a readings file (None when absent), or the key of the
+    specification whose ``readings_format`` the file's ``# format:`` line names.
+
+    Only the metadata lines at the top are read; a Parquet stream's key-value metadata is
+    looked up instead.
+    """
+    check_input_file(path, "readings file")     # a FIFO or /dev/zero is refused before reading
+    if Path(path).suffix.lower() == ".parquet":
+        from gonio.formats.streams import StreamFile
+        return StreamFile(path).metadata.get("spec")
+    try:
+        open(path, "rb").close()
+    except OSError:
+        read_utf8(path, "readings file")       # the one-line error naming the file
+        raise
+    for key, value in _header_lines(path):
+        if key == "spec":
+            return value
+        if key == "format":
+            from gonio.specs import available
+            for spec in available().values():
+                if spec.readings_format and spec.readings_format == value:
+                    return spec.key
+    return None
 
 
 def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
-             protocol: str | None = None, seed: int = 0, noise: bool = True) -> dict[str, Path]:
-    """Run the specification's programme on a rate bench; write ``readings.csv`` (the
-    rate readings format, docs/formats.md#rate-gyro-readings-file) and ``truth.json``."""
-    from gonio.bench.rate_gyro import load_rate_bench
-    from gonio.formats.rate_readings import write_rate_readings
-
+             protocol: str | None = None, seed: int = 0, inputs=(), force: bool = False,
+             **options) -> dict[str, Path]:
+    """Run the specification's programme on its virtual bench; the files a laboratory would
+    record and ``truth.json`` are written into ``out`` as one set (staged, swapped in)."""
     spec = get(spec_key)
-    if spec.key not in RATE_SPECS:
-        raise GonioError(f"{spec.key} is not a rate-gyro specification", key="--spec")
-    b = load_rate_bench(bench or spec.default_bench)
-    res = spec_simulator(spec)(b, protocol or spec.default_protocol, seed, noise=noise)
-    out = Path(out)
-    with output_dir(out) as stage:
-        write_rate_readings(res.data, res.metadata, stage / "readings.csv")
-        write_text(stage / "truth.json", json.dumps(json_safe(res.truth), indent=2,
-                                                    ensure_ascii=False, allow_nan=False) + "\n")
-    return {"readings": out / "readings.csv", "truth": out / "truth.json"}
+    if spec.simulate is None:
+        raise GonioError(f"{spec.key} has no virtual bench (its SPEC.simulate is None)",
+                         key="--spec")
+    opts = refuse_options(spec, options, spec.simulate_options, "simulate")
+    with output_set(out, inputs=inputs, force=force):
+        return spec.simulate(Path(out), protocol=protocol or spec.default_protocol,
+                             bench=bench or spec.default_bench, seed=seed, **opts)
+
+
+def load_lab_file(lab):
+    """The laboratory file as a dict (validated before any work), or the dict given."""
+    if isinstance(lab, (str, Path)):
+        from gonio.report.certificate import load_lab
+        return load_lab(lab)
+    return lab
 
 
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
-              protocol: str | None = None, lab=None, lang: str = "en",
-              truth: dict | None = None, monte_carlo_trials: int = 0, dcc: bool = False):
-    """Calibrate a rate readings file: ``results.json``, ``summary.txt`` and the certificate
-    (HTML, PDF; with ``dcc`` also the DCC XML ``certificate.dcc.xml``) in ``out``. The
-    specification is ``spec_key`` or the file's ``# spec:``."""
-    from gonio.report.certificate import load_lab
-    from gonio.report.rate_certificate import write_rate_certificate
-
-    key = spec_key or readings_spec(readings)
-    if key is None:
-        raise GonioError("the readings name no specification (metadata '# spec: …'); "
-                         "give --spec", file=readings)
-    spec = get(key)
-    lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
-    rd = load_readings(readings)
-    result = spec.calibrate(rd, protocol or spec.default_protocol,
-                            monte_carlo_trials=monte_carlo_trials)
-    out = Path(out)
-    with output_dir(out) as stage:
-        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
-                                                      ensure_ascii=False, allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", result.summary())
-    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
-    paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
-                                        dcc=dcc))
+              protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
+              dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
+              **options):
+    """Calibrate a readings file with its specification (``spec_key`` or the file's
+    ``# spec:``): results.json, summary.txt, tables and the certificate (HTML, PDF; with
+    ``dcc`` the DCC XML) in ``out``, written as one set. Returns (result, paths)."""
+    spec = spec_of(spec_key, readings)
+    opts = refuse_options(spec, {"protocol": protocol, "dcc": dcc, **options},
+                          spec.calibrate_options, "calibrate")
+    lab_d = load_lab_file(lab)
+    renderer = spec.renderer()
+    dcc = opts.pop("dcc", False)
+    proto = opts.pop("protocol", None)
+    if spec.load_protocol is not None and "protocol" in spec.calibrate_options:
+        proto = proto or spec.default_protocol
+    result = spec.calibrate(readings, proto, monte_carlo_trials=monte_carlo_trials, **opts)
+    with output_set(out, inputs=inputs, force=force,
+                    source_sha256=getattr(result, "source_sha256", None)):
+        paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
     return result, paths
 
 
 def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int = 0,
-         lab=None, lang: str = "en", dcc: bool = True, force: bool = False, inputs=()):
+         lab=None, lang: str = "en", dcc: bool = True, force: bool = False, inputs=(),
+         on_stage=None):
     """Simulate the whole programme and calibrate it: readings, truth, results, certificate
-    and (``dcc``) its DCC XML.
-
-    Like the optical demo (:func:`gonio.pipeline.demo.demo`), the whole set (readings.csv,
-    truth.json, results, summary, certificate, DCC, manifest) is staged and swapped into ``out``
-    together (:func:`gonio.atomic.output_set`): a run that fails at any point leaves the
-    previous set as it was, and an existing readings.csv there is replaced only with
-    ``force``. ``inputs`` (the lab and bench files) are never replaced.
-    """
-    from gonio.atomic import output_set
-
-    lab_d = None
-    if isinstance(lab, (str, Path)):
-        from gonio.report.certificate import load_lab
-        lab_d = load_lab(lab)                  # validate inputs before simulating
-    else:
-        lab_d = lab
+    and (``dcc``) its DCC XML, the whole set staged and swapped into ``out`` together (a
+    run that fails at any point leaves the previous set as it was). A specification's
+    renderer may supply its own ``demo`` (same arguments); else simulate → calibrate →
+    write. Returns (result, {name: path})."""
+    spec = get(spec_key)
+    renderer = spec.renderer()
+    lab_d = load_lab_file(lab)                  # validate inputs before simulating
     ins = [x for x in (*inputs, lab, bench) if isinstance(x, (str, Path)) and str(x)]
+    if hasattr(renderer, "demo"):
+        return renderer.demo(out, bench=bench or spec.default_bench, seed=seed, lab=lab_d,
+                             lang=lang, dcc=dcc, force=force, inputs=ins, on_stage=on_stage)
+    if spec.simulate is None:
+        raise GonioError(f"{spec.key} has no virtual bench (its SPEC.simulate is None)",
+                         key="--spec")
+    say = on_stage or (lambda message: None)
     with output_set(out, inputs=ins, force=force) as stage:
-        simulate(spec_key, out, bench=bench, seed=seed)      # into the staging folder
-        truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
-        result, paths = calibrate(stage / "readings.csv", out, spec_key=spec_key, lab=lab_d,
-                                  lang=lang, truth=truth, dcc=dcc)
-    out = Path(out)
-    return result, {"readings": out / "readings.csv", "truth": out / "truth.json", **paths}
+        say("demo: simulating on the virtual bench")
+        sim = spec.simulate(Path(out), protocol=spec.default_protocol,
+                            bench=bench or spec.default_bench, seed=seed)
+        truth = json.loads((stage / sim["truth"].name).read_text(encoding="utf-8"))
+        say("demo: calibrating")
+        proto = spec.default_protocol if "protocol" in spec.calibrate_options else None
+        result = spec.calibrate(stage / sim["readings"].name, proto)
+        say("demo: writing the results and the certificate")
+        paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
+                               dcc=dcc and "dcc" in spec.calibrate_options)
+    return result, {**sim, **paths}
 
 
-def budget(spec_key: str):
-    """The specification's own annex budget, reproduced (``SPEC.budget()``)."""
+def budget(spec_key: str, **options):
+    """The specification's own annex budget, reproduced (``SPEC.budget(**options)``)."""
     spec = get(spec_key)
     if spec.budget is None:
         raise GonioError(f"{spec.key} has no annex budget", key="--spec")
-    return spec.budget()
+    return spec.budget(**refuse_options(spec, options, spec.budget_options, "budget"))

@@ -170,7 +170,7 @@ def trial_items(report, truth: dict) -> dict:
     ``report`` may have been made with either budget kind; the other is evaluated here
     from the same results (:func:`gonio.calibrate.deviation_budget`).
     """
-    from gonio.pipeline.calibrate import deviation_budget, session_settings
+    from gonio.specs.ogam_draft.calibration import deviation_budget, session_settings
 
     rec = item_record(report, truth)
     if "angle_deviation" not in rec:
@@ -251,9 +251,9 @@ def item_monte_carlo(report, trials: int, seed: int = 0) -> dict:
     on the additive budget; B_s: through its own model (both readings, the stated one as
     ``zero_stability``); E: the Annex A budget of both kinds (``angle_deviation`` the
     physical one, ``angle_deviation_draft`` the annex's four lines), drawn by
-    :func:`gonio.pipeline.calibrate.deviation_budget` with ``monte_carlo_trials``.
+    :func:`gonio.specs.ogam_draft.calibration.deviation_budget` with ``monte_carlo_trials``.
     """
-    from gonio.pipeline.calibrate import deviation_budget, session_settings
+    from gonio.specs.ogam_draft.calibration import deviation_budget, session_settings
     from gonio.specs.ogam_draft.item_uncertainty import monte_carlo_item
 
     out: dict = {}

@@ -59,7 +59,7 @@ from gonio.bench import Bench, TableConfig, load_bench, run_session
 from gonio.bench.config import Harmonic
 from gonio.budget.extra import EXTRA_SYMBOLS, budget_extra_components
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.pipeline.calibrate import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.errors import GonioError
 from gonio.units import PPM, deg_to_arcsec
 from gonio.formats.readings import Readings

@@ -990,9 +990,9 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
     Parameters
     ----------
-    report : gonio.pipeline.calibrate.CalibrationReport
-        What :func:`gonio.pipeline.calibrate.calibrate` returned (``results.json`` is written
-        by :func:`gonio.pipeline.calibrate.write_calibration`, not here).
+    report : gonio.specs.ogam_draft.calibration.CalibrationReport
+        What :func:`gonio.specs.ogam_draft.calibration.calibrate` returned (``results.json`` is written
+        by :func:`gonio.specs.ogam_draft.outputs.write_calibration`, not here).
     out : path
         Output folder; both files appear together or not at all (staged, then renamed).
     truth : dict, optional

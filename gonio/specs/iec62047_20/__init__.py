@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
-from gonio.specs import Specification
+from gonio.specs import Coverage, Specification, item_order, lazy
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
 from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
@@ -73,18 +73,40 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
         acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path))
     items = {}
-    for key, title, clause, fn in _items.ITEMS:
+    rows = {r[0]: r for r in _items.ITEMS}
+    for key in item_order(rows, _items.NEEDS):            # each after the items it needs
+        _, title, clause, fn = rows[key]
         try:
             with monte_carlo_validation(monte_carlo_trials):
-                items[key] = fn(ctx)
+                items[key] = fn(_items.with_needs(ctx, items))
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "", f"the data were refused: {exc.message}")
+    items = {k: items[k] for k in rows}
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
                                      "ratiometric": ratiometric, "rows_corrected": n_corr}})
 
 
-SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
-                     clause_doc="docs/iec62047-20-readings.md", default_protocol=KEY,
-                     default_bench="mems-adxrs610", calibrate=calibrate, budget=None)
+#: The coverage study's programme over the built-in protocol (gonio validate --spec): small
+#: sample counts and short waits, every item still measured.
+STUDY_PROGRAMME = {
+    "protocol": {"warmup_s": 600.0},
+    "scale_factor": {"samples": 5},
+    "temperature": {"soak_s": 1800.0, "bias_samples": 60},
+    "stability": {"samples": 50}, "bias": {"samples": 300, "off_time_s": 60.0},
+    "power_on": {"samples": 900, "off_time_s": 60.0},
+    "noise": {"samples": 6000}, "frequency": {"cycles": 8}}
+
+_RUN = lazy("gonio.specs.iec62047_20.simulate:simulate")
+
+SPEC = Specification(
+    key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH, clause_doc="docs/iec62047-20-readings.md",
+    clauses=tuple(r[2] for r in _items.ITEMS), default_protocol=KEY,
+    default_bench="mems-adxrs610", load_protocol=load_protocol, calibrate=calibrate,
+    simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", _RUN),
+    run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", _RUN),
+    truth=lazy("gonio.specs.iec62047_20.truth:truth"), budget=None,
+    coverage=Coverage(engine="items", stream=1, reduced=STUDY_PROGRAMME,
+                      study_bench=lazy("gonio.specs._rate_family.simulate:study_bench")),
+    outputs="gonio.specs._rate_family.outputs", calibrate_options=frozenset({"protocol", "dcc"}))

@@ -9,7 +9,7 @@ calibration's own data (GUM, k = t₉₅(ν_eff)).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -122,7 +122,6 @@ def scale_factor(ctx: Context) -> Item:
     if m:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
-    ctx.a_base = c["a"]
     u = gum(lambda a, et, ea: a * (1 + ea) / (1 + et), _u_rel_sf(ctx, c))
     return Item("scale_factor", t, cl, un, c["a"], uncertainty=u,
                 details={"b_BASE": c["b"], "x_dps": c["x"], "y": c["y"]})
@@ -895,6 +894,15 @@ def resolution(ctx: Context) -> Item:
 
 
 #: The characteristics in the order of Table 4: (key, title, clause, function).
+def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
+    """The context of an item: the calibration's, with a_BASE from the scale-factor item
+    (5.1.3.1) when it was measured (items read it; none writes it)."""
+    sf = done.get("scale_factor")
+    if sf is None or not sf.measured:
+        return ctx
+    return replace(ctx, a_base=sf.value)
+
+
 ITEMS = (
     ("scale_factor", "scale factor a_BASE", "5.1.3.1", scale_factor),
     ("initial_sf_variation", "initial scale-factor variation", "5.1.3.2", initial_sf_variation),
@@ -920,3 +928,7 @@ ITEMS = (
     ("frequency_band", "frequency band", "5.5", frequency_band),
     ("resolution", "resolution", "5.6", resolution),
 )
+
+#: What each item needs computed before it (gonio.specs.item_order orders them): every
+#: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1).
+NEEDS = {row[0]: ("scale_factor",) for row in ITEMS if row[0] != "scale_factor"}

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
-from gonio.specs import Specification
+from gonio.specs import Coverage, Specification, item_order, lazy
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
@@ -82,22 +82,45 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or KEY)
     ctx = make_context(rd, proto)
     items: dict[str, Item] = {}
-    # the Allan fit (7.2.13) is computed early: later items use it for the bias drift
-    order = sorted(_items_mod.ITEMS, key=lambda r: (r[0] != "scale_factor",
-                                                    r[0] != "angle_random_walk"))
-    for key, title, clause, fn in order:
+    rows = {r[0]: r for r in _items_mod.ITEMS}
+    for key in item_order(rows, _items_mod.NEEDS):        # each after the items it needs
+        _, title, clause, fn = rows[key]
         try:
             with monte_carlo_validation(monte_carlo_trials):
-                items[key] = fn(ctx)
+                items[key] = fn(_items_mod.with_needs(ctx, items))
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "",
                                       f"the data were refused: {exc.message}")
-    items = {r[0]: items[r[0]] for r in _items_mod.ITEMS}
+    items = {k: items[k] for k in rows}
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"annex_a": annex_a().to_dict()})
 
 
-SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
-                     clause_doc="docs/jjf1535-readings.md", default_protocol=KEY,
-                     default_bench="mems-adxrs610", calibrate=calibrate, budget=annex_a)
+#: The coverage study's programme over the built-in protocol (gonio validate --spec): small
+#: sample counts and short waits, every item still measured.
+STUDY_PROGRAMME = {
+    "protocol": {"warmup_s": 600.0},
+    "scale_factor": {"samples_below_100_dps": 5, "samples_from_100_dps": 5, "rest_samples": 5,
+                     "interval_s": 60.0},
+    "temperature": {"soak_s": 1800.0, "bias_samples": 100},
+    "threshold": {"samples": 5, "rest_samples": 5},
+    "resolution": {"samples": 5},
+    "bias": {"samples": 600, "off_time_s": 60.0},
+    "warmup": {"samples": 600, "window_samples": 100, "off_time_s": 60.0},
+    "g_sensitivity": {"samples": 60, "settle_s": 5.0},
+    "arw": {"samples": 6000},
+    "bandwidth": {"cycles": 8}}
+
+_RUN = lazy("gonio.specs.jjf1535.simulate:simulate")
+
+SPEC = Specification(
+    key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH, clause_doc="docs/jjf1535-readings.md",
+    clauses=tuple(r[2] for r in _items_mod.ITEMS), default_protocol=KEY,
+    default_bench="mems-adxrs610", load_protocol=load_protocol, calibrate=calibrate,
+    simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", _RUN),
+    run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", _RUN),
+    truth=lazy("gonio.specs.jjf1535.truth:truth"), budget=annex_a,
+    coverage=Coverage(engine="items", stream=0, reduced=STUDY_PROGRAMME,
+                      study_bench=lazy("gonio.specs._rate_family.simulate:study_bench")),
+    outputs="gonio.specs._rate_family.outputs", calibrate_options=frozenset({"protocol", "dcc"}))

@@ -14,7 +14,7 @@ allows; the scale factor in the gyro's output unit per °/s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -77,12 +77,35 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
     (:func:`gonio.specs._rate_family.formulas.bias_drift_u`); 0 without a static record."""
-    fit = ctx.cache.get("noise_fit")
-    if fit is None:
+    if not ctx.has("static") or ctx.K is None:
         return 0.0
-    allan = ctx.cache["allan"]
+    try:
+        noise = static_noise(ctx)
+    except GonioError:                  # the ARW item reports why
+        return 0.0
+    if noise is None:
+        return 0.0
+    allan, fit = noise["allan"], noise["fit"]
     return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
                            separation_s)
+
+
+def static_noise(ctx: Context) -> dict | None:
+    """The static record (7.2.13) in °/h with its overlapping Allan deviation and five-term
+    fit, computed once per calibration (a pure function of the readings and K, kept in
+    ``ctx.cache``); None when the record does not vary."""
+    if "static_noise" in ctx.cache:
+        return ctx.cache["static_noise"]
+    g = segment_samples(ctx.df, "static", 0, 0)
+    t = g["time_s"].to_numpy()
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
+    out = None
+    if np.ptp(rate_dph) != 0:
+        allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
+        out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan)}
+    ctx.cache["static_noise"] = out
+    return out
 
 
 # --------------------------------------------------------------------------- 7.2.1 – 7.2.4
@@ -140,7 +163,6 @@ def scale_factor(ctx: Context) -> Item:
                      source="data acquisition, relative (u2)"),
               u3]
     u = gum(lambda k, et, ea, s: (k + s) * (1 + ea) / (1 + et), inputs)
-    ctx.K, ctx.u_K_rel = Kbar, u.u_c / abs(Kbar)
     return Item("scale_factor", title, clause, unit, Kbar, uncertainty=u, details={
         "K_m": Ks, "F0_m": [c["fit"].F0 for c in cals], "rest_m": [c["rest"] for c in cals],
         "se_K_m": [c["se_K"] for c in cals], "Q": Q,
@@ -531,18 +553,12 @@ def angle_random_walk(ctx: Context) -> Item:
     miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
     if miss:
         return miss
-    g = segment_samples(ctx.df, "static", 0, 0)
-    t = g["time_s"].to_numpy()
-    dt = float((t[-1] - t[0]) / (t.size - 1))
-    rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
-    if np.ptp(rate_dph) == 0:
+    noise = static_noise(ctx)
+    if noise is None:
         return Item("angle_random_walk", title, clause, unit, 0.0,
                     uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
-    allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
-    fit = fit_noise_model(allan)
-    ctx.cache["noise_fit"] = fit
-    ctx.cache["allan"] = allan
+    rate_dph, allan, fit = noise["rate_dph"], noise["allan"], noise["fit"]
     arw = fit.N / math.sqrt(S_PER_H)
     u_arw = fit.u_N / math.sqrt(S_PER_H)
     printed = {}
@@ -672,6 +688,24 @@ def bandwidth(ctx: Context) -> Item:
     return Item("bandwidth", title, clause, unit, fb, uncertainty=u, details={
         "freq_hz": f, "gain_ratio": K / K[0], "gain_db": db, "phase_deg": fr["phase_deg"],
         "phase90_hz_iec": f90, "reference": "lowest test frequency (0 dB)"})
+
+
+#: What each item needs computed before it (gonio.specs.item_order orders them): every item
+#: that divides by K (7.2.1) needs the scale factor; the others need nothing.
+NEEDS = {key: ("scale_factor",) for key in (
+    "nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold",
+    "resolution", "bias", "warmup_time", "bias_stability", "bias_repeatability",
+    "g_sensitivity", "angle_random_walk", "bias_temperature_sensitivity", "bandwidth")}
+
+
+def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
+    """The context of an item: the calibration's, with K̄ and its relative standard
+    uncertainty from the scale-factor item when it was measured (items read them; none
+    writes them)."""
+    sf = done.get("scale_factor")
+    if sf is None or not sf.measured or sf.uncertainty is None:
+        return ctx
+    return replace(ctx, K=sf.value, u_K_rel=sf.uncertainty.u_c / abs(sf.value))
 
 
 #: Table 3 in order: (key, title, clause, function).

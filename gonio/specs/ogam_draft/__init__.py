@@ -1,13 +1,17 @@
 """The optical-gyro angle-measuring instrument draft (JJF xxxx 光学陀螺测角仪校准规范, draft for comment).
 
 :mod:`~gonio.specs.ogam_draft.items` the seven characteristics of clause 7;
-:mod:`~gonio.specs.ogam_draft.budget` the Annex A budget. The clause-by-clause
+:mod:`~gonio.specs.ogam_draft.calibration` the whole calibration path (``SPEC.calibrate``:
+readings or stream → items, Annex A budget, item uncertainties);
+:mod:`~gonio.specs.ogam_draft.budget` the Annex A budget; :mod:`.simulate` the virtual bench;
+:mod:`.outputs` the rendering (results, tables, certificate, DCC, demo). The clause-by-clause
 reading is ``docs/draft-readings.md``.
 """
 
-from gonio.specs import Specification
+from gonio.protocol import load_protocol
+from gonio.specs import Coverage, Specification, lazy
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.specs.ogam_draft.items import compute_characteristics
+from gonio.specs.ogam_draft.calibration import calibrate
 
 SPEC = Specification(
     key="ogam-draft",
@@ -15,8 +19,20 @@ SPEC = Specification(
              "(draft for comment)",
     title_zh="光学陀螺测角仪校准规范(征求意见稿)",
     clause_doc="docs/draft-readings.md",
+    clauses=("7.1", "7.2", "7.3", "7.4", "7.5", "7.6", "7.7"),
     default_protocol="ogam-draft",
     default_bench="rlg",
-    calibrate=compute_characteristics,
+    load_protocol=load_protocol,
+    calibrate=calibrate,
+    simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     budget=annex_a_budget,
+    coverage=Coverage(engine="cases", stream=0, options=frozenset({
+        "cases", "truth", "extra_components", "u_scale", "sample_rate_hz", "all_items",
+        "resume", "monte_carlo"})),
+    outputs="gonio.specs.ogam_draft.outputs",
+    simulate_options=frozenset({"table", "stream", "stream_format"}),
+    calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt"}),
+    budget_options=frozenset({"table_mpe_arcsec", "tilt_deg", "zero_stability_dph",
+                              "duration_min", "repeatability_arcsec", "k",
+                              "monte_carlo_trials", "seed"}),
 )

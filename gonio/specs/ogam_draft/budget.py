@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from decimal import ROUND_DOWN, ROUND_HALF_UP, Decimal
-from typing import Any, Sequence
+from typing import Any, ClassVar, Sequence
 
 import numpy as np
 import pandas as pd
@@ -102,6 +102,10 @@ def annex_a_model(extra_symbols: Sequence[str] = ()) -> sympy.Expr:
 @dataclass(frozen=True)
 class AnnexABudget:
     """Result of :func:`annex_a_budget`; computing and reporting are separate."""
+
+    #: The line ``gonio budget`` prints above the text table.
+    heading: ClassVar[str] = ("Annex A uncertainty budget (arc-seconds); u_annex_A5 = the "
+                              "annex's rounded value")
 
     gum: GumResult
     stated_u_c_arcsec: float

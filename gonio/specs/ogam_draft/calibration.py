@@ -1,9 +1,9 @@
 """From a readings file to results: the seven characteristics and the Annex A budget.
 
-:func:`calibrate` is what ``gonio calibrate`` and ``gonio demo`` run; it returns
-a :class:`CalibrationReport` (usable from a notebook) and
-:func:`write_calibration` writes ``results.json``, ``summary.txt`` and the detail
-tables as CSV, atomically. The uncertainty of the angle-position deviation is the
+:func:`calibrate` is the specification's ``SPEC.calibrate`` (what ``gonio calibrate`` and
+``gonio demo`` run); it returns a :class:`CalibrationReport` (usable from a notebook), and
+:func:`gonio.specs.ogam_draft.outputs.write_calibration` writes ``results.json``,
+``summary.txt`` and the detail tables as CSV, atomically. The uncertainty of the angle-position deviation is the
 Annex A budget with u(r) taken from the calibration's own repeatability data
 (7.5) when present, else the protocol's Annex A value; the table MPE and tilt
 bound come from the file's metadata when given, else from the protocol.
@@ -22,11 +22,10 @@ import pandas as pd
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
-from gonio.atomic import output_dir, output_set, sha256_file, write_text
+from gonio.atomic import sha256_file
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
-from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
-                                          compute_characteristics)
+from gonio.specs.ogam_draft.items import ITEM_KEYS, CalibrationResults, compute_characteristics
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -217,35 +216,6 @@ class CalibrationReport:
                            f"{', '.join(str(int(x)) for x in g['line'][:5])}"
                            f"{', …' if len(g) > 5 else ''}): {g['reason'].iloc[0]}")
         return out
-
-    def summary(self, lab: dict | None = None) -> str:
-        """The seven items, U (k, coverage probability) and any conformity statements as a
-        fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
-        then the 95 % intervals of the standard-deviation items and the budget's notes."""
-        from gonio.report.stated import summary_text
-
-        lines = [summary_text(self.to_dict(), "en", lab).rstrip("\n")]
-        for name in ITEM_NAMES:
-            iu = self.item_uncertainty.get(name)
-            if iu is not None and iu.interval is not None:
-                lines.append(f"{name}: 95 % interval [{iu.interval[0]:.3g}, "
-                             f"{iu.interval[1]:.3g}] {iu.unit} (chi-square)")
-        zr = self.zero_stability_readings
-        if zr:
-            if zr["stated"] == "model":
-                d = zr["draft"]
-                lines.append(f"zero_stability: the draft's s(M)/T = {d.value:.3g} deg/h, 95 % "
-                             f"interval [{d.interval[0]:.3g}, {d.interval[1]:.3g}] deg/h "
-                             "(chi-square)")
-            elif zr["model"] is not None:
-                m = zr["model"]
-                lines.append(f"zero_stability (noise model, not stated): {m.value:.3g} deg/h, "
-                             f"U = {m.U:.2g} deg/h (k = {m.k:.3g}, coverage probability "
-                             "approximately 95 %)")
-            lines.append(f"note: {zr['note']}")
-        if self.e_measured:
-            lines += [f"note: {n}" for n in self.budget_notes]
-        return "\n".join(lines) + "\n"
 
 
 ITEM_NAMES = ITEM_KEYS
@@ -933,59 +903,3 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings,
     if len(unused):
         unused = unused[~unused["line"].isin(lines)].reset_index(drop=True)
     return out, unused
-
-
-def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | None = None,
-                  lab=None, lang: str = "en", session=None, inputs=(),
-                  force: bool = False, dcc: bool = False) -> dict[str, Path]:
-    """One run's whole output set into ``out``: results, summary, tables, certificate (and
-    readings + truth of a simulated ``session``), swapped in together.
-
-    Through :func:`gonio.atomic.output_set`: every part is written into a staging
-    folder and the folder replaces ``out`` only when all are written, with
-    ``gonio-manifest.json`` carrying the source's SHA-256; a failed run leaves the
-    previous set untouched; ``out`` holding one of ``inputs`` is refused.
-    """
-    from gonio.report.certificate import write_certificate
-
-    out = Path(out) if str(out).strip() else out
-    with output_set(out, inputs=inputs, force=force, source_sha256=report.source_sha256) as st:
-        if session is not None:
-            from gonio.bench import write_session
-            write_session(session, out)
-        write_calibration(report, out, lab=lab)
-        write_certificate(report, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
-        names = sorted(p.relative_to(st).as_posix() for p in st.rglob("*") if p.is_file())
-    return {n: Path(out) / n for n in names}
-
-
-def write_calibration(report: CalibrationReport, out: str | Path,
-                      lab: dict | None = None) -> dict[str, Path]:
-    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
-
-    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
-    to ``summary.txt``, as the certificate and the CLI show them.
-    """
-    out = Path(out)
-    names = {}
-    with output_dir(out) as stage:
-        d = report.to_dict()
-        write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
-                                                      allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", report.summary(lab))
-        tables = stage / "tables"
-        for item in report.results.items():
-            for tname, df in (getattr(item, "tables", None) or {}).items():
-                if df is not None and len(df):
-                    write_text(tables / f"{item.name}_{tname}.csv",
-                               df.to_csv(index=False, lineterminator="\n"))
-            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
-                write_text(tables / f"{item.name}_table.csv",
-                           item.table.to_csv(index=False, lineterminator="\n"))
-        if len(report.results.unused_readings) > LISTED_ROWS:
-            write_text(tables / "unused_readings.csv",
-                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
-        write_text(tables / "uncertainty_budget.csv",
-                   report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
-        names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
-    return names

@@ -1,36 +1,149 @@
-"""The demo: the draft's whole calibration on the default virtual bench, end to end."""
+"""The optical draft's rendering side: results.json, summary.txt, the detail tables, the
+certificate and its DCC from a :class:`~gonio.specs.ogam_draft.calibration.CalibrationReport`,
+and the demo (simulate + calibrate + write, end to end).
+
+This module is ``SPEC.outputs``: the pipeline imports it through the registry (it may import
+the report and the bench; the calibration path never imports it).
+"""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
+from gonio.atomic import output_dir, output_set, write_text
 from gonio.bench import load_bench, run_session, write_session
-from gonio.pipeline.calibrate import CalibrationReport, calibrate, write_calibration
 from gonio.protocol import load_protocol
+from gonio.report.certificate import write_certificate
+from gonio.report.stated import summary_text
+from gonio.specs.ogam_draft.calibration import CalibrationReport, calibrate
+from gonio.specs.ogam_draft.items import ITEM_KEYS, LISTED_ROWS
+
+ITEM_NAMES = ITEM_KEYS
 
 
-def demo(out: str | Path, seed: int = 0, bench: str = "rlg", protocol: str = "ogam-draft",
-         lab: str | Path | None = None, lang: str = "en", dcc: bool = True,
-         on_stage=None, force: bool = False) -> tuple[CalibrationReport, list[Path]]:
-    """Simulate ``protocol`` on ``bench``, calibrate the readings, write results, certificate
-    and (``dcc``) the DCC XML.
+def results_json(report: CalibrationReport) -> dict:
+    """The ``results.json`` content."""
+    return report.to_dict()
+
+
+def warnings(report: CalibrationReport) -> list[str]:
+    """One line per conflict and per excluded reading group (for stderr)."""
+    return report.warnings()
+
+
+def write(report: CalibrationReport, out, *, truth: dict | None = None, lab=None,
+          lang: str = "en", dcc: bool = False) -> dict[str, Path]:
+    """results.json, summary.txt, tables/*.csv and the certificate (``dcc``: its DCC XML)
+    into ``out`` (the caller stages the set)."""
+    paths = dict(write_calibration(report, out, lab=lab))
+    paths.update(write_certificate(report, out, truth=truth, lab=lab, lang=lang, dcc=dcc))
+    return paths
+
+
+def summary(report: CalibrationReport, lab: dict | None = None) -> str:
+    """The seven items, U (k, coverage probability) and any conformity statements as a
+    fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
+    then the 95 % intervals of the standard-deviation items and the budget's notes."""
+    lines = [summary_text(report.to_dict(), "en", lab).rstrip("\n")]
+    for name in ITEM_NAMES:
+        iu = report.item_uncertainty.get(name)
+        if iu is not None and iu.interval is not None:
+            lines.append(f"{name}: 95 % interval [{iu.interval[0]:.3g}, "
+                         f"{iu.interval[1]:.3g}] {iu.unit} (chi-square)")
+    zr = report.zero_stability_readings
+    if zr:
+        if zr["stated"] == "model":
+            d = zr["draft"]
+            lines.append(f"zero_stability: the draft's s(M)/T = {d.value:.3g} deg/h, 95 % "
+                         f"interval [{d.interval[0]:.3g}, {d.interval[1]:.3g}] deg/h "
+                         "(chi-square)")
+        elif zr["model"] is not None:
+            m = zr["model"]
+            lines.append(f"zero_stability (noise model, not stated): {m.value:.3g} deg/h, "
+                         f"U = {m.U:.2g} deg/h (k = {m.k:.3g}, coverage probability "
+                         "approximately 95 %)")
+        lines.append(f"note: {zr['note']}")
+    if report.e_measured:
+        lines += [f"note: {n}" for n in report.budget_notes]
+    return "\n".join(lines) + "\n"
+
+
+def write_outputs(report: CalibrationReport, out: str | Path, *, truth: dict | None = None,
+                  lab=None, lang: str = "en", session=None, inputs=(),
+                  force: bool = False, dcc: bool = False) -> dict[str, Path]:
+    """One run's whole output set into ``out``: results, summary, tables, certificate (and
+    readings + truth of a simulated ``session``), swapped in together.
+
+    Through :func:`gonio.atomic.output_set`: every part is written into a staging
+    folder and the folder replaces ``out`` only when all are written, with
+    ``gonio-manifest.json`` carrying the source's SHA-256; a failed run leaves the
+    previous set untouched; ``out`` holding one of ``inputs`` is refused.
+    """
+    out = Path(out) if str(out).strip() else out
+    with output_set(out, inputs=inputs, force=force, source_sha256=report.source_sha256) as st:
+        if session is not None:
+            write_session(session, out)
+        write_calibration(report, out, lab=lab)
+        write_certificate(report, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
+        names = sorted(p.relative_to(st).as_posix() for p in st.rglob("*") if p.is_file())
+    return {n: Path(out) / n for n in names}
+
+
+def write_calibration(report: CalibrationReport, out: str | Path,
+                      lab: dict | None = None) -> dict[str, Path]:
+    """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
+
+    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
+    to ``summary.txt``, as the certificate and the CLI show them.
+    """
+    out = Path(out)
+    names = {}
+    with output_dir(out) as stage:
+        d = report.to_dict()
+        write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
+                                                      allow_nan=False) + "\n")
+        write_text(stage / "summary.txt", summary(report, lab))
+        tables = stage / "tables"
+        for item in report.results.items():
+            for tname, df in (getattr(item, "tables", None) or {}).items():
+                if df is not None and len(df):
+                    write_text(tables / f"{item.name}_{tname}.csv",
+                               df.to_csv(index=False, lineterminator="\n"))
+            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
+                write_text(tables / f"{item.name}_table.csv",
+                           item.table.to_csv(index=False, lineterminator="\n"))
+        if len(report.results.unused_readings) > LISTED_ROWS:
+            write_text(tables / "unused_readings.csv",
+                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
+        write_text(tables / "uncertainty_budget.csv",
+                   report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
+        names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
+    return names
+
+
+def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: str = "en",
+         dcc: bool = True, force: bool = False, inputs=(), on_stage=None,
+         protocol: str = "ogam-draft") -> tuple[CalibrationReport, dict[str, Path]]:
+    """Simulate ``protocol`` on ``bench``, calibrate the readings (with the session's static
+    record for the Allan analysis of 7.3), write results, certificate and (``dcc``) the DCC
+    XML. ``lab``: a loaded laboratory dict (or a file).
 
     The whole set (readings.csv, truth.json, results, tables, certificate, DCC, manifest)
     is staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`); an
     existing readings.csv there is replaced only with ``force``. ``on_stage(message)``,
     if given, is told each stage as it starts (the CLI shows it on a terminal). Returns
-    the report and the paths written.
+    the report and the paths written, by their names relative to ``out``.
     """
-    from gonio.atomic import output_set
-
     say = on_stage or (lambda message: None)
-    from gonio.report.certificate import load_lab, write_certificate
-
+    if isinstance(lab, (str, Path)):
+        from gonio.report.certificate import load_lab
+        lab = load_lab(lab)                     # validate inputs before simulating
     out = Path(out) if str(out).strip() else out
-    lab_d = load_lab(lab) if lab else None      # validate inputs before simulating
     proto = load_protocol(protocol)
     bench_cfg = load_bench(bench)
-    inputs = [x for x in (lab, bench, protocol) if isinstance(x, (str, Path)) and Path(x).exists()]
+    inputs = [x for x in (*inputs, bench, protocol)
+              if isinstance(x, (str, Path)) and Path(x).exists()]
     with output_set(out, inputs=inputs, force=force) as stage:
         say("demo: simulating the session on the virtual bench")
         session = run_session(proto, bench_cfg, seed=seed)
@@ -38,8 +151,8 @@ def demo(out: str | Path, seed: int = 0, bench: str = "rlg", protocol: str = "og
         say("demo: calibrating")
         report = calibrate(stage / "readings.csv", proto, static_record=session.static_record)
         report.readings.path = Path(out) / "readings.csv"
-        write_calibration(report, out, lab=lab_d)
+        write_calibration(report, out, lab=lab)
         say("demo: writing the certificate")
-        write_certificate(report, out, truth=session.truth, lab=lab_d, lang=lang, dcc=dcc)
+        write_certificate(report, out, truth=session.truth, lab=lab, lang=lang, dcc=dcc)
         names = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file())
-    return report, [Path(out) / n for n in names]
+    return report, {n: Path(out) / n for n in names}

@@ -8,8 +8,20 @@ K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.
 reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
 """
 
+from gonio.formats.triad import FORMAT
 from gonio.specs import Specification
 from gonio.specs.triad_alignment.calibration import article_budget, calibrate
+
+
+def _simulate(out, *, protocol="triad-alignment", bench="mems-triad", seed: int = 0):
+    """``SPEC.simulate``: readings.csv (alignment session), thermal.csv (chamber programme)
+    and truth.json into ``out``, by their roles."""
+    from gonio.specs.triad_alignment.simulate import simulate
+
+    paths = simulate(protocol, bench, seed, out)
+    roles = {"readings.csv": "readings", "thermal.csv": "thermal", "truth.json": "truth"}
+    return {roles.get(name, name): p for name, p in paths.items()}
+
 
 SPEC = Specification(
     key="triad-alignment",
@@ -20,5 +32,9 @@ SPEC = Specification(
     default_protocol="triad-alignment",
     default_bench="mems-triad",
     calibrate=calibrate,
+    simulate=_simulate,
     budget=article_budget,
+    outputs="gonio.specs.triad_alignment.outputs",
+    calibrate_options=frozenset({"thermal", "robust"}),
+    readings_format=FORMAT,
 )

@@ -1,9 +1,9 @@
-"""The gyro-triad pipeline (``triad-alignment``): calibrate a triad readings file into
-``results.json``, ``summary.txt`` and the certificate, and the demo (simulate + calibrate as
-one staged output set, like the optical demo).
+"""The gyro triad's rendering side (``SPEC.outputs``): ``results.json``, ``summary.txt``,
+``tables/*.csv`` and the certificate of a triad result, and the demo (simulate + calibrate as
+one staged output set).
 
-Every function returns data (the result, the paths); ``gonio calibrate`` and ``gonio demo
---spec triad-alignment`` are thin layers over them.
+Imported by the pipeline through the registry (it may import the report and the bench);
+the calibration path never imports it.
 """
 
 from __future__ import annotations
@@ -12,35 +12,37 @@ import json
 from pathlib import Path
 
 from gonio.atomic import output_dir, output_set, write_text
-from gonio.report.certificate import load_lab
 from gonio.report.triad_certificate import write_triad_certificate
-from gonio.specs import get
-
-KEY = "triad-alignment"
 
 
-def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=None,
-              monte_carlo_trials: int = 0, robust: bool = False):
-    """Calibrate a triad readings file (:func:`gonio.specs.triad_alignment.calibration.calibrate`;
-    the thermal programme from ``thermal`` or the readings' ``# thermal_readings:``) and write
-    ``results.json``, ``summary.txt``, ``certificate.html`` and ``certificate.pdf`` into
-    ``out`` (each atomically). Returns (result, paths)."""
-    lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
-    result = get(KEY).calibrate(readings, monte_carlo_trials=monte_carlo_trials, robust=robust,
-                                thermal=thermal)
+def results_json(result) -> dict:
+    """The ``results.json`` content."""
+    return result.to_json()
+
+
+def summary(result, lab: dict | None = None) -> str:
+    """The summary printed and written to ``summary.txt``."""
+    return result.summary()
+
+
+def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
+          dcc: bool = False) -> dict[str, Path]:
+    """``results.json``, ``summary.txt``, ``tables/*.csv``, ``certificate.html`` and
+    ``certificate.pdf`` into ``out`` (each atomically; the caller stages the set). Returns
+    the paths."""
     out = Path(out)
     tables = result_tables(result)
     with output_dir(out) as stage:
-        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
+        write_text(stage / "results.json", json.dumps(results_json(result), indent=2,
                                                       ensure_ascii=False, allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", result.summary())
+        write_text(stage / "summary.txt", summary(result))
         for name, df in tables.items():
             write_text(stage / "tables" / name, df.to_csv(index=False,
                                                           lineterminator="\n"))
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
     paths.update({f"tables/{n}": out / "tables" / n for n in tables})
-    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
-    return result, paths
+    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang))
+    return paths
 
 
 def result_tables(result) -> dict:
@@ -71,18 +73,19 @@ DEMO_MONTE_CARLO = 2000
 
 
 def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = "en",
-         force: bool = False, monte_carlo_trials: int = DEMO_MONTE_CARLO):
+         dcc: bool = False, force: bool = False, inputs=(), on_stage=None,
+         monte_carlo_trials: int = DEMO_MONTE_CARLO):
     """Simulate the triad protocol on the bench (readings.csv with the alignment session,
-    thermal.csv with the chamber programme, truth.json) and calibrate it, the whole set
-    staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`)."""
+    thermal.csv with the chamber programme, truth.json) and calibrate it with
+    ``monte_carlo_trials`` Monte Carlo draws, the whole set staged and swapped into ``out``
+    together (:func:`gonio.atomic.output_set`). ``lab``: a loaded laboratory dict."""
+    from gonio.specs.triad_alignment import SPEC
     from gonio.specs.triad_alignment.simulate import simulate
 
-    spec = get(KEY)
-    lab_d = load_lab(lab) if lab else None          # validate inputs before simulating
-    inputs = [x for x in (lab, bench) if isinstance(x, (str, Path)) and Path(x).exists()]
+    inputs = [x for x in inputs if Path(x).exists()]
     with output_set(out, inputs=inputs, force=force) as stage:
-        sim = simulate(spec.default_protocol, bench or spec.default_bench, seed, out)
+        sim = simulate(SPEC.default_protocol, bench or SPEC.default_bench, seed, out)
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
-        result, paths = calibrate(stage / "readings.csv", out, lab=lab_d, lang=lang,
-                                  truth=truth, monte_carlo_trials=monte_carlo_trials)
+        result = SPEC.calibrate(stage / "readings.csv", monte_carlo_trials=monte_carlo_trials)
+        paths = write(result, out, truth=truth, lab=lab, lang=lang)
     return result, {**sim, **paths}

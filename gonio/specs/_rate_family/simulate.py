@@ -1,0 +1,50 @@
+"""The rate specifications on the virtual bench: the hooks ``SPEC.simulate``,
+``SPEC.run_trial`` and ``Coverage.study_bench`` both rate specifications share.
+
+The simulation side (it imports :mod:`gonio.bench`); calibrating a laboratory's file never
+imports this module. Each specification passes its own programme runner (its
+``simulate`` module's ``simulate(bench, protocol, seed, noise=…)``).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from gonio.atomic import output_dir, write_text
+from gonio.bench.rate_gyro import load_rate_bench
+from gonio.formats.jsonsafe import json_safe
+from gonio.formats.rate_readings import RateReadings, write_rate_readings
+
+
+def write_simulation(run, out: Path, *, protocol, bench, seed: int = 0,
+                     noise: bool = True) -> dict[str, Path]:
+    """Run ``run`` (a specification's programme runner) on the rate bench ``bench`` (name or
+    file); write ``readings.csv`` (docs/formats.md#rate-gyro-readings-file) and
+    ``truth.json`` into ``out``."""
+    b = load_rate_bench(bench)
+    res = run(b, protocol, seed, noise=noise)
+    out = Path(out)
+    with output_dir(out) as stage:
+        write_rate_readings(res.data, res.metadata, stage / "readings.csv")
+        write_text(stage / "truth.json", json.dumps(json_safe(res.truth), indent=2,
+                                                    ensure_ascii=False, allow_nan=False) + "\n")
+    return {"readings": out / "readings.csv", "truth": out / "truth.json"}
+
+
+def run_trial(run, bench, protocol, seed: int):
+    """One simulated calibration in memory (noise on): (RateReadings, truth dict)."""
+    res = run(bench, protocol, int(seed), noise=True)
+    return RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), res.truth
+
+
+def study_bench(name: str = "mems-adxrs610"):
+    """The rate bench of the coverage study: ``name`` with the power-on transient, the thermal
+    lag (τ = 1 s) and the cross-axis sensitivity switched off, the three deterministic,
+    history-dependent effects the truth formulas leave out; every random term (noise,
+    power-cycle scatter, quantisation, equipment errors) stays on."""
+    b = load_rate_bench(name)
+    g = replace(b.gyro, warmup_bias_dps=0.0, thermal_tau_s=1.0, cross_axis_x=0.0,
+                cross_axis_y=0.0)
+    return replace(b, gyro=g)

@@ -1,0 +1,36 @@
+"""ACME RC-1, "Rate-table check of a rate gyro": a laboratory's in-house procedure written as
+a gonio specification plug-in (docs/writing-a-specification.md is its walk-through).
+
+The procedure: the gyro, input axis vertical, is turned at a few table rates Ω_j in both
+directions (clause 4.1); the mean output at each rate is recorded. Items: the scale factor K
+(4.2, the least-squares slope of output on rate) and the bias B (4.3, the intercept divided
+by K, in °/s, the Earth rate not removed). Uncertainties by the GUM from the calibration's
+own data (clause 5).
+"""
+
+from gonio.specs import Coverage, Specification, lazy
+
+from acme_rate_check.items import ITEMS, calibrate, load_protocol, screen
+
+KEY = "acme-rate-check"
+
+SPEC = Specification(
+    key=KEY,
+    title_en="ACME RC-1 Rate-table check of a rate gyro (in-house procedure)",
+    title_zh="ACME RC-1 速率陀螺速率转台检查（内部规程）",
+    clause_doc="tests/plugins/acme_rate_check/README.md",
+    clauses=tuple(item.clause for item in ITEMS),
+    default_protocol=KEY,
+    default_bench="acme-bench",
+    load_protocol=load_protocol,
+    calibrate=calibrate,
+    screen=screen,
+    # the simulation side is loaded on first use: calibrating a file never imports it
+    simulate=lazy("acme_rate_check.simulate:simulate"),
+    truth=lazy("acme_rate_check.simulate:truth"),
+    run_trial=lazy("acme_rate_check.simulate:run_trial"),
+    coverage=Coverage(engine="items", stream=101),
+    # gonio's renderer of a per-item result: results.json, summary, certificate, DCC
+    outputs="gonio.specs._rate_family.outputs",
+    calibrate_options=frozenset({"protocol", "dcc"}),
+)

@@ -1,0 +1,10 @@
+"""The certificate's content of ACME RC-1 (rendered by gonio's per-item certificate)."""
+
+#: (group number, English heading, Chinese heading, item keys in order)
+GROUPS = ((1, "Scale factor and bias", "标度因数与零偏", ("scale_factor", "bias")),)
+#: Item names in Chinese.
+TITLES_ZH = {"scale_factor": "标度因数", "bias": "零偏"}
+#: Page title.
+HEADING = ("Rate gyro rate-table check results", "速率陀螺速率转台检查结果")
+#: The clause that says how U is stated.
+U_CLAUSE = ("ACME RC-1 clause 5", "ACME RC-1 第5条")

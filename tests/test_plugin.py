@@ -1,0 +1,139 @@
+"""A specification plug-in from outside gonio (tests/plugins/acme_rate_check, its own
+pyproject.toml) is found through its ``gonio.specs`` entry point and runs through simulate,
+calibrate, demo, validate, the certificate and the DCC — the same commands, no gonio module
+edited. Also: the registry loads every built-in the same way, refuses a broken entry point,
+and loading a specification never imports the virtual bench."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from gonio.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+PLUGIN = ROOT / "tests" / "plugins" / "acme_rate_check"
+
+
+def install_entry_points(site: Path, project: Path) -> None:
+    """What ``pip install project`` leaves for importlib.metadata: a dist-info with the
+    entry points the project's pyproject.toml declares (the package itself on sys.path)."""
+    meta = tomllib.loads((project / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    di = site / f"{meta['name'].replace('-', '_')}-{meta['version']}.dist-info"
+    di.mkdir(parents=True)
+    (di / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {meta['name']}\n"
+                                 f"Version: {meta['version']}\n", encoding="utf-8")
+    lines = []
+    for group, eps in meta["entry-points"].items():
+        lines.append(f"[{group}]")
+        lines += [f"{name} = {ref}" for name, ref in eps.items()]
+    (di / "entry_points.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+@pytest.fixture(scope="module")
+def plugin(tmp_path_factory):
+    site = tmp_path_factory.mktemp("site")
+    install_entry_points(site, PLUGIN)
+    sys.path[:0] = [str(site), str(PLUGIN)]
+    importlib.invalidate_caches()
+    yield site
+    for p in (str(site), str(PLUGIN)):
+        sys.path.remove(p)
+    for m in [m for m in sys.modules if m.split(".")[0] == "acme_rate_check"]:
+        del sys.modules[m]
+    importlib.invalidate_caches()
+
+
+def test_plugin_lives_outside_gonio_and_gonio_never_names_it():
+    assert not PLUGIN.is_relative_to(ROOT / "gonio")
+    hits = [p for p in (ROOT / "gonio").rglob("*.py") if "acme" in p.read_text(encoding="utf-8")]
+    assert hits == []
+
+
+def test_registry_finds_the_plugin_beside_the_built_ins(plugin):
+    from gonio.specs import BUILT_IN, available, get
+
+    specs = available()
+    assert set(BUILT_IN) | {"acme-rate-check"} <= set(specs)
+    assert get("acme-rate-check").title_en.startswith("ACME RC-1")
+    assert "acme-rate-check" not in BUILT_IN
+
+
+def test_simulate_calibrate_certificate(plugin, tmp_path, capsys):
+    sim, cal = tmp_path / "sim", tmp_path / "cal"
+    assert main(["simulate", "--spec", "acme-rate-check", "--seed", "3", "--out", str(sim)]) == 0
+    assert sorted(p.name for p in sim.iterdir() if p.name != "gonio-manifest.json") == \
+        ["readings.csv", "truth.json"]
+    # the readings name their specification ('# spec:'): no --spec needed to calibrate
+    assert main(["calibrate", str(sim / "readings.csv"), "--out", str(cal), "--dcc"]) == 0
+    out = capsys.readouterr().out
+    assert "ACME RC-1" in out and "scale factor K" in out
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    truth = json.loads((sim / "truth.json").read_text(encoding="utf-8"))["items"]
+    for key in ("scale_factor", "bias"):
+        it = res["items"][key]
+        assert it["measured"] and abs(it["value"] - truth[key]["value"]) <= it["uncertainty"]["U"]
+    assert res["spec"] == "acme-rate-check"
+    html = (cal / "certificate.html").read_text(encoding="utf-8")
+    assert "Rate gyro rate-table check results" in html and "ACME RC-1 clause 5" in html
+    assert (cal / "certificate.pdf").read_bytes()[:5] == b"%PDF-"
+    assert b"acme-rate-check" in (cal / "certificate.dcc.xml").read_bytes() or \
+        b"ACME RC-1" in (cal / "certificate.dcc.xml").read_bytes()
+    # an option the plug-in does not take is refused, naming it and the specification
+    assert main(["calibrate", str(sim / "readings.csv"), "--out", str(tmp_path / "x"),
+                 "--robust"]) == 2
+    assert "--robust does not apply to 'gonio calibrate --spec acme-rate-check'" in \
+        capsys.readouterr().err
+
+
+def test_demo_writes_a_valid_dcc(plugin, tmp_path, dcc_schema, capsys):
+    d = tmp_path / "demo"
+    assert main(["demo", "--spec", "acme-rate-check", "--out", str(d)]) == 0
+    assert "wrote certificate.dcc.xml, certificate.html, certificate.pdf, readings.csv, " \
+           "results.json, summary.txt, truth.json in" in capsys.readouterr().out
+    dcc_schema.validate(str(d / "certificate.dcc.xml"))
+
+
+def test_validate_counts_coverage_against_the_bench_truth(plugin, tmp_path, capsys):
+    assert main(["validate", "--spec", "acme-rate-check", "--trials", "40", "--seed", "1",
+                 "--workers", "1", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["settings"]["spec"] == "acme-rate-check"
+    cov = {r["key"]: r for r in rep["items"]}
+    assert set(cov) == {"scale_factor", "bias"}
+    for r in cov.values():             # U at ~95 %: neither far too narrow nor far too wide
+        assert r["n"] == 40 and 0.8 <= r["coverage"] <= 1.0
+        assert 0.3 <= r["median_norm_error"] <= 1.3
+    # the bench-case options of the default specification's study are refused
+    assert main(["validate", "--spec", "acme-rate-check", "--trials", "2", "--cases",
+                 "all"]) == 2
+    assert "--cases does not apply" in capsys.readouterr().err
+
+
+def test_a_broken_entry_point_is_one_clear_error(tmp_path):
+    from gonio.errors import GonioError
+    from gonio.specs import _load
+
+    with pytest.raises(GonioError, match="cannot be loaded"):
+        _load("nope", "no_such_module:SPEC")
+    with pytest.raises(GonioError, match="is not a gonio.specs.Specification"):
+        _load("nope", "math:pi")
+    with pytest.raises(GonioError, match="must be the key"):
+        _load("other-key", "gonio.specs.ogam_draft:SPEC")
+
+
+def test_loading_every_specification_never_imports_the_simulator():
+    """Calibrating needs SPEC and its calibrate: neither imports gonio.bench (only the
+    simulate/plan/truth modules do, loaded lazily; tests/test_layers.py checks the source)."""
+    code = ("import sys\nfrom gonio.specs import available\n"
+            "for s in available().values():\n    s.calibrate\n"
+            "bad = sorted(m for m in sys.modules if m.startswith(('gonio.bench', 'gonio.report')))\n"
+            "print(bad)\nsys.exit(1 if bad else 0)\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 0, r.stdout + r.stderr
