@@ -23,6 +23,7 @@ from gonio.atomic import sha256_file
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
+from gonio.units import S_PER_H
 from uncertainty import monte_carlo, propagate, validate_gum
 
 # --------------------------------------------------------------------------- results
@@ -253,6 +254,15 @@ def segment_means(df: pd.DataFrame, test: str) -> list[SegmentMean]:
 def segment_samples(df: pd.DataFrame, test: str, run: int, step: int) -> pd.DataFrame:
     """The rows of one segment."""
     return df[(df["test"] == test) & (df["run"] == run) & (df["step"] == step)]
+
+
+def static_rate_dph(df: pd.DataFrame, null_output: float, scale_factor: float):
+    """The static record (test ``static``) as a rate in °/h, (output − null)/K, and its
+    sampling interval in s (from the first and last time stamps)."""
+    g = segment_samples(df, "static", 0, 0)
+    t = g["time_s"].to_numpy()
+    dt = float((t[-1] - t[0]) / (t.size - 1))
+    return (g["output"].to_numpy() - null_output) / scale_factor * S_PER_H, dt
 
 
 def sf_calibration_means(means: list[SegmentMean], run: int):

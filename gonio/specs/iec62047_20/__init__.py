@@ -12,7 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
-from gonio.specs import Coverage, Specification, item_order, lazy
+from gonio.specs import item_order
+from gonio.specs._rate_family import rate_specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
 from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
@@ -98,15 +99,8 @@ STUDY_PROGRAMME = {
     "power_on": {"samples": 900, "off_time_s": 60.0},
     "noise": {"samples": 6000}, "frequency": {"cycles": 8}}
 
-_RUN = lazy("gonio.specs.iec62047_20.simulate:simulate")
-
-SPEC = Specification(
-    key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH, clause_doc="docs/iec62047-20-readings.md",
-    clauses=tuple(r[2] for r in _items.ITEMS), default_protocol=KEY,
-    default_bench="mems-adxrs610", load_protocol=load_protocol, calibrate=calibrate,
-    simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", _RUN),
-    run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", _RUN),
-    truth=lazy("gonio.specs.iec62047_20.truth:truth"), budget=None,
-    coverage=Coverage(engine="items", stream=1, reduced=STUDY_PROGRAMME,
-                      study_bench=lazy("gonio.specs._rate_family.simulate:study_bench")),
-    outputs="gonio.specs._rate_family.outputs", calibrate_options=frozenset({"protocol", "dcc"}))
+SPEC = rate_specification(
+    "gonio.specs.iec62047_20", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
+    clause_doc="docs/iec62047-20-readings.md", clauses=tuple(r[2] for r in _items.ITEMS),
+    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, budget=None,
+    stream=1, reduced=STUDY_PROGRAMME)

@@ -19,7 +19,7 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means,
                                          segment_samples)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
@@ -370,10 +370,7 @@ def bias_temperature(ctx: Context) -> Item:
 def _static(ctx: Context):
     if "allan" in ctx.cache:
         return ctx.cache["allan"]
-    g = segment_samples(ctx.df, "static", 0, 0)
-    t = g["time_s"].to_numpy()
-    dt = float((t[-1] - t[0]) / (t.size - 1))
-    rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.a_base * S_PER_H
+    rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.a_base)
     allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
     ctx.cache["allan"] = (allan, rate_dph, dt)
     return ctx.cache["allan"]

@@ -12,7 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
-from gonio.specs import Coverage, Specification, item_order, lazy
+from gonio.specs import item_order
+from gonio.specs._rate_family import rate_specification
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
@@ -112,15 +113,8 @@ STUDY_PROGRAMME = {
     "arw": {"samples": 6000},
     "bandwidth": {"cycles": 8}}
 
-_RUN = lazy("gonio.specs.jjf1535.simulate:simulate")
-
-SPEC = Specification(
-    key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH, clause_doc="docs/jjf1535-readings.md",
-    clauses=tuple(r[2] for r in _items_mod.ITEMS), default_protocol=KEY,
-    default_bench="mems-adxrs610", load_protocol=load_protocol, calibrate=calibrate,
-    simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", _RUN),
-    run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", _RUN),
-    truth=lazy("gonio.specs.jjf1535.truth:truth"), budget=annex_a,
-    coverage=Coverage(engine="items", stream=0, reduced=STUDY_PROGRAMME,
-                      study_bench=lazy("gonio.specs._rate_family.simulate:study_bench")),
-    outputs="gonio.specs._rate_family.outputs", calibrate_options=frozenset({"protocol", "dcc"}))
+SPEC = rate_specification(
+    "gonio.specs.jjf1535", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
+    clause_doc="docs/jjf1535-readings.md", clauses=tuple(r[2] for r in _items_mod.ITEMS),
+    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, budget=annex_a,
+    stream=0, reduced=STUDY_PROGRAMME)

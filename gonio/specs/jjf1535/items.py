@@ -22,7 +22,7 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means, segment_samples,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
@@ -96,10 +96,7 @@ def static_noise(ctx: Context) -> dict | None:
     ``ctx.cache``); None when the record does not vary."""
     if "static_noise" in ctx.cache:
         return ctx.cache["static_noise"]
-    g = segment_samples(ctx.df, "static", 0, 0)
-    t = g["time_s"].to_numpy()
-    dt = float((t[-1] - t[0]) / (t.size - 1))
-    rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
+    rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.K)
     out = None
     if np.ptp(rate_dph) != 0:
         allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")

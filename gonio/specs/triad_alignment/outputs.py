@@ -13,16 +13,7 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, output_set, write_text
 from gonio.report.triad_certificate import write_triad_certificate
-
-
-def results_json(result) -> dict:
-    """The ``results.json`` content."""
-    return result.to_json()
-
-
-def summary(result, lab: dict | None = None) -> str:
-    """The summary printed and written to ``summary.txt``."""
-    return result.summary()
+from gonio.specs._rate_family.outputs import results_json, summary  # noqa: F401  (per-item result)
 
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
