@@ -22,7 +22,8 @@ def register(sub) -> None:
                                    "reason; --override gives their times explicitly.")
     p.add_argument("stream", help="stream file (CSV, or Parquet: *.parquet); read in blocks, "
                    "in bounded memory")
-    p.add_argument("--protocol", default="ogam-draft", help="protocol file or built-in name")
+    p.add_argument("--protocol", default=None,
+                   help="protocol file or built-in name (default: the default specification's)")
     p.add_argument("--out", required=True, help="readings file to write")
     p.add_argument("--override", default=None,
                    help="CSV test,series,round,t_zero_s,t_read_s[,rate_dps,orientation]")
@@ -42,7 +43,8 @@ def run(args) -> int:
                       force=args.force, protected=True)
     from gonio.progress import status
 
-    proto = load_protocol(args.protocol)
+    from gonio.specs import DEFAULT_KEY, get
+    proto = load_protocol(args.protocol or get(DEFAULT_KEY).default_protocol)
     override = read_override(args.override) if args.override else None
     status(f"reduce: reading {args.stream}")
     stream = StreamFile(args.stream, max_gap_s=args.max_gap)

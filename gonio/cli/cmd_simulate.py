@@ -4,6 +4,7 @@ laboratory would record and truth.json (:func:`gonio.pipeline.dispatch.simulate`
 from __future__ import annotations
 
 from gonio.cli.checks import seed
+from gonio.specs import DEFAULT_KEY
 
 
 def register(sub) -> None:
@@ -11,8 +12,8 @@ def register(sub) -> None:
                        description="Execute a specification's protocol on its virtual bench "
                                    "and write the readings file a laboratory would record "
                                    "(readings.csv) and truth.json.")
-    p.add_argument("--spec", default="ogam-draft",
-                   help="specification key (gonio.specs.available(); default ogam-draft)")
+    p.add_argument("--spec", default=DEFAULT_KEY,
+                   help=f"specification key (gonio.specs.available(); default {DEFAULT_KEY})")
     p.add_argument("--protocol", default=None,
                    help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--bench", default=None,

@@ -12,8 +12,8 @@ uncertainty √(c(1 − c)/n) and the Wilson 95 % interval, and the normalised e
 
 The study's bench is ``SPEC.coverage.study_bench(name)`` (a specification switches off there
 what its truth leaves out) and its programme the built-in protocol changed by
-``SPEC.coverage.reduced``. docs/jjf1535-readings.md#coverage-of-the-budgets states the
-rate specifications' truths for the noise-limited items.
+``SPEC.coverage.reduced``. A specification's clause document states the truths it uses for
+its noise-limited items.
 """
 
 from __future__ import annotations
