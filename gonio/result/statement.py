@@ -7,6 +7,7 @@ Contents
 :func:`decimals_for_sig`   the decimal place that leaves ``sig`` significant digits
 :func:`decimals_at_U`      the decimal place of U stated to two significant digits
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
+:func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
 :func:`k_text`             a coverage factor as stated (3 significant digits)
@@ -333,3 +334,40 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
             else None
     return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
                      decimals=dec)
+
+
+def _get(obj, key: str, default=None):
+    """``obj[key]`` of a results.json dict or ``obj.key`` of a model object."""
+    if obj is None:
+        return default
+    if isinstance(obj, dict):
+        return obj.get(key, default)
+    return getattr(obj, key, default)
+
+
+def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> Statement:
+    """The statement of one item, from a results.json item (dict) or a model ``Item``: its
+    ``value``, ``unit`` and ``uncertainty`` (``U``, ``k``, ``nu_eff``, ``coverage_probability``
+    or ``p``). Every output states an item through this one call, so the certificate,
+    ``summary.txt``, the CLI and the DCC cannot differ. ``nonnegative`` (default: the item's
+    own ``nonnegative`` key, else False) asks for the upper bound of the module docstring.
+
+    >>> item_statement({"value": 786.485, "unit": "°/h", "measured": True,
+    ...                 "uncertainty": {"U": 159.4, "k": 2.38068, "nu_eff": 6.2, "p": 0.95}}).text()
+    '790 ± 160 °/h (k = 2.38, ν_eff = 6, p ≈ 95 %)'
+    >>> item_statement({"value": None, "unit": "s", "measured": False}).value
+    '—'
+    """
+    unc = _get(item, "uncertainty")
+    U = _get(unc, "U")
+    ok = U is not None and math.isfinite(float(U)) and float(U) > 0
+    p = _get(unc, "coverage_probability")
+    if p is None:
+        p = _get(unc, "p")
+    if nonnegative is None:
+        nonnegative = bool(_get(item, "nonnegative", False))
+    measured = _get(item, "measured", True)
+    return state(_get(item, "value") if measured else None, U if ok else None,
+                 k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,
+                 p=p if ok else None, unit=_get(item, "unit", ""), sig=sig,
+                 nonnegative=nonnegative)
