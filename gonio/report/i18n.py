@@ -586,7 +586,7 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     ``"dec<N>"`` (N decimal places; see :func:`rule_at_U`), ``"pmdec<N>"`` (± and the
     magnitude at N decimals: the draft's E = ± max|E_i|), ``"sdec<N>"`` (with its sign),
     ``"k"`` (a coverage factor: 3 significant digits, trailing zeros dropped), ``"nu"``
-    (ν_eff: its integer part, GUM G.6.4), ``"sci<E>"`` (one decimal of the mantissa at
+    (ν_eff: its integer part, GUM G.6.4), ``"sci<E>.<N>"`` (the mantissa at N decimals ×
     10^E: a statement's common power of ten),
     ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
     ``"item:<name>"`` (:func:`display_item`), ``"pos"`` (:func:`display_position`),
@@ -618,10 +618,11 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
         return display_position(float(display_number(value, 3)))
     if rule == "nu":
         return nu_text(value) or "—"
-    if rule.startswith("sci"):                  # mantissa at 1 decimal × 10^E (the statement's
-        e = int(rule[3:])                       # common power of ten of value and U)
+    if rule.startswith("sci"):                  # "sci<E>.<N>": the mantissa at N decimals
+        e, _, n = rule[3:].partition(".")       # × 10^E (a statement's common power of ten)
+        e = int(e)
         m = float(Decimal(repr(value)).scaleb(-e))
-        return f"{round_half_up(m, 1)}×10{str(e).translate(_SUP)}"
+        return f"{round_half_up(m, int(n or 1))}×10{str(e).translate(_SUP)}"
     for prefix, fmt in (("pmdec", "±{a}"), ("sdec", "{s}"), ("dec", "{v}")):
         if rule.startswith(prefix):
             dec = int(rule[len(prefix):])

@@ -207,16 +207,16 @@ def given_text(v: float) -> str:
     """A specification limit as the laboratory gave it (no rounding: it is not measured).
 
     >>> given_text(0.3), given_text(-0.5), given_text(1e-05)
-    ('0.3', '−0.5', '1e−05')
+    ('0.3', '-0.5', '1e-05')
     """
-    return f"{float(v):g}".replace("-", "−")
+    return f"{float(v):g}"
 
 
 def interval_text(lo, hi, f) -> str:
     """[lo, hi] with ``f`` formatting each end; one open end reads "≤ hi" or "≥ lo".
 
     >>> interval_text(None, 0.3, given_text), interval_text(-0.5, 0.5, given_text)
-    ('≤ 0.3', '[−0.5, 0.5]')
+    ('≤ 0.3', '[-0.5, 0.5]')
     """
     if lo is None and hi is None:
         return "—"
@@ -235,7 +235,7 @@ def conformity_texts(c, res: dict | None, L: dict) -> dict:
     g = (lambda k: c.get(k)) if isinstance(c, dict) else (lambda k: getattr(c, k, None))  # noqa: E731
     U = g("U")
     dec = decimals_for_sig(float(U), 2) if U else None
-    f = (lambda v: round_half_up(v, dec).replace("-", "−")) if dec is not None \
+    f = (lambda v: round_half_up(v, dec)) if dec is not None \
         else given_text  # noqa: E731
     al, au = g("acceptance_lower"), g("acceptance_upper")
     if al is not None and au is not None and al > au:
@@ -423,7 +423,7 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     if st.value == "—":
         return out
     if st.exponent:
-        rule = U_rule = f"sci{st.exponent}"
+        rule = U_rule = f"sci{st.exponent}.{st.decimals + st.exponent}"
     else:
         rule = f"dec{st.decimals}" if st.decimals is not None else f"sig{sig}"
         U_rule = "U"
