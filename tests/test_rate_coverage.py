@@ -2,7 +2,7 @@
 "≥ 90 % per item over many seeds").
 
 The default run uses GONIO_COVERAGE_SEEDS (default 10) seeds per specification on the
-reduced programme of gonio.pipeline.coverage.REDUCED and requires, per item, that the
+reduced programme of SPEC.coverage.reduced and requires, per item, that the
 coverage is not significantly below 90 %: the upper Wilson 95 % limit reaches 0.90. The
 benchmark benchmarks/bench_rate_coverage.py runs 100–200 seeds (figures in
 docs/jjf1535-readings.md#coverage-of-the-budgets); set GONIO_COVERAGE_SEEDS=100 to run

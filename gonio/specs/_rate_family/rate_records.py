@@ -120,10 +120,9 @@ class RateCalibrationResult:
             if not it.measured:
                 lines.append(f"  {it.clause:10s} {it.title}: not measured ({it.reason})")
                 continue
-            u = ""
-            if it.uncertainty is not None and it.uncertainty.U is not None and math.isfinite(it.uncertainty.U):
-                u = f" ± {it.uncertainty.U:.3g} (k = {it.uncertainty.k:g})"
-            lines.append(f"  {it.clause:10s} {it.title}: {it.value:.6g}{u} {it.unit}")
+            from gonio.result.statement import item_statement   # the one statement rule
+
+            lines.append(f"  {it.clause:10s} {it.title}: {item_statement(it.to_json()).text()}")
         return "\n".join(lines) + "\n"
 
 

@@ -35,6 +35,6 @@ SPEC = Specification(
     simulate=_simulate,
     budget=article_budget,
     outputs="gonio.specs.triad_alignment.outputs",
-    calibrate_options=frozenset({"thermal", "robust"}),
+    calibrate_options=frozenset({"thermal", "robust", "dcc"}),
     readings_format=FORMAT,
 )

@@ -32,7 +32,8 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
                                                           lineterminator="\n"))
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
     paths.update({f"tables/{n}": out / "tables" / n for n in tables})
-    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang))
+    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang,
+                                         dcc=dcc))
     return paths
 
 
