@@ -11,7 +11,7 @@ reading is ``docs/draft-readings.md``.
 from gonio.protocol import load_protocol
 from gonio.specs import Coverage, Specification, lazy
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate, screen
 
 SPEC = Specification(
     key="ogam-draft",
@@ -24,6 +24,7 @@ SPEC = Specification(
     default_bench="rlg",
     load_protocol=load_protocol,
     calibrate=calibrate,
+    screen=screen,
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     budget=annex_a_budget,
     coverage=Coverage(engine="cases", stream=0, options=frozenset({

@@ -29,6 +29,7 @@ from gonio.specs.ogam_draft.items import ITEM_KEYS, CalibrationResults, compute_
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
+from gonio.result import Finding
 from gonio.protocol import Protocol, load_protocol
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
@@ -422,6 +423,24 @@ _ITEM_TESTS = {"scale_factor": ("scale_factor",), "scale_factor_nonlinearity": (
                "angle_deviation": ("angle_deviation",), "repeatability": ("angle_deviation",),
                "rate_consistency": ("rate_consistency", "angle_deviation"),
                "pointing_consistency": ("pointing_consistency", "angle_deviation")}
+
+
+def screen(readings, protocol: str | Path | Protocol | None = None) -> list[Finding]:
+    """``SPEC.screen``: the readings the protocol checks set aside (:func:`screen_readings`:
+    a round or position the protocol does not have, a reading taken too late), one
+    :class:`gonio.result.Finding` each with its line and reason; a file refused whole raises
+    the GonioError naming where."""
+    if isinstance(readings, Readings):
+        proto, _ = resolve_protocol(readings.path, readings.metadata.get("protocol"), protocol)
+        rd = readings
+    else:
+        proto, _ = resolve_protocol(readings, file_protocol_name(readings), protocol)
+        rd, _ = _load(readings, proto)
+    _, excluded = screen_readings(rd, proto)
+    return [Finding(code="protocol_check", message=str(r.reason), action="set_aside",
+                    file=str(rd.path) if rd.path else None, line=int(r.line), test=str(r.test),
+                    rule="the protocol's rounds, positions and time to reading")
+            for r in excluded.itertuples(index=False)]
 
 
 def _note_exclusions(results: CalibrationResults, excluded) -> None:
