@@ -49,7 +49,7 @@ ROOT = Path(__file__).resolve().parents[1]
 TARGETS: dict[str, list[tuple[str, list[str]]]] = {
     "jjf1535-2015": [("gonio.specs.jjf1535.items", ["*"]),
                      ("gonio.specs.jjf1535.budget", ["*"]),
-                     ("gonio.analysis.rate_gyro", [
+                     ("gonio.specs._rate_family.formulas", [
                          "least_squares_line", "rest_level", "fit_scale_factor",
                          "nonlinearity_jjf", "asymmetry_jjf", "relative_std", "sample_std",
                          "temperature_sensitivity", "fifty_percent_candidate",
@@ -58,7 +58,7 @@ TARGETS: dict[str, list[tuple[str, list[str]]]] = {
                          "_log_crossing", "bias_drift_u"]),
                      ("gonio.analysis.conformity", ["*"])],
     "iec62047-20": [("gonio.specs.iec62047_20.items", ["*"]),
-                    ("gonio.analysis.rate_gyro", [
+                    ("gonio.specs._rate_family.formulas", [
                         "least_squares_line", "linearity_errors_iec", "symmetry_iec",
                         "ratiometric_error_iec", "cross_axis_iec", "voltage_corrected",
                         "hysteresis_iec", "resolution_iec", "boxcar_noise_rms",
@@ -68,7 +68,7 @@ TARGETS: dict[str, list[tuple[str, list[str]]]] = {
                    ("gonio.specs.ogam_draft.budget", ["*"]),
                    ("gonio.specs.ogam_draft.item_uncertainty", ["*"])],
     "triad-alignment": [("gonio.specs.triad_alignment.calibration", ["*"]),
-                        ("gonio.analysis.triad_alignment", ["*"])],
+                        ("gonio.specs.triad_alignment.analysis", ["*"])],
 }
 
 #: Per specification: the fast tests that should notice (pytest arguments).

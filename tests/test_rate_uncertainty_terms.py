@@ -22,7 +22,8 @@ def _comp(item, symbol):
 
 @pytest.fixture(scope="module")
 def jjf(tmp_path_factory):
-    from gonio.specs.jjf1535 import calibrate, simulate
+    from gonio.specs.jjf1535 import calibrate
+    from gonio.specs.jjf1535.simulate import simulate
     p = reduced_protocol("jjf1535-2015", tmp_path_factory.mktemp("u3") / "p.toml",
                          {"arw": {"samples": 3000}, "bias": {"samples": 300}})
     res = simulate(study_bench(), str(p), seed=4242, noise=True)
@@ -132,7 +133,8 @@ def test_iec_symmetry_sign_follows_the_gyro():
     (no cubic term: K± = K(1 ± α/2) exactly)."""
     from dataclasses import replace
 
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     from gonio.specs.iec62047_20.protocol import load_protocol
     proto = load_protocol("iec62047-20")
     for alpha in (3e-3, -3e-3):

@@ -609,7 +609,7 @@ def startup_time(ctx: Context) -> Item:
     excursions (a one-sided, late bias). With σ the noise of a smoothed value minus the
     reference and z the two-sided 95 % point for the record's n_b smoothed values, an
     excursion beyond band + zσ is not noise alone: the last one is an earliest bound of the
-    noise-free crossing (:func:`gonio.analysis.rate_gyro.last_exceedance_time`). The
+    noise-free crossing (:func:`gonio.specs._rate_family.formulas.last_exceedance_time`). The
     distance from the record's time down to it is the record's 95 % half-width,
     independent between records (u = rms(half-width/2)/√N)."""
     from scipy.stats import norm

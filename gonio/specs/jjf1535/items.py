@@ -455,7 +455,7 @@ def warmup_time(ctx: Context) -> Item:
     (n_b blocks per window), so the crossing of the nominal value can lie anywhere between
     the last exceedance of nominal·(1 + z·r) and of nominal·(1 − z·r), z = 1.96
     (95 % for one window near the crossing)
-    (:func:`gonio.analysis.rate_gyro.detection_interval`); the larger distance from the
+    (:func:`gonio.specs._rate_family.formulas.detection_interval`); the larger distance from the
     record's time to that interval's ends is that record's 95 % half-width, and the records'
     detections are independent (u = rms(half-width/2)/√N)."""
     from scipy.stats import norm
