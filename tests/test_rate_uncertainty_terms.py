@@ -13,7 +13,8 @@ import pytest
 
 from gonio.analysis.conformity import DecisionRule, Limits, decide
 from gonio.formats.rate_readings import RateReadings
-from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
+from gonio.pipeline.coverage import reduced_protocol
+from gonio.specs._rate_family.simulate import study_bench
 
 
 def _comp(item, symbol):
