@@ -134,9 +134,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     lab_d = load_lab_file(lab)
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
-    proto = opts.pop("protocol", None)
-    if spec.load_protocol is not None and "protocol" in spec.calibrate_options:
-        proto = proto or spec.default_protocol
+    proto = opts.pop("protocol", None)         # None: the file's, else the specification's
     result = spec.calibrate(readings, proto, monte_carlo_trials=monte_carlo_trials, **opts)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):
@@ -169,8 +167,7 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
                             bench=bench or spec.default_bench, seed=seed)
         truth = json.loads((stage / sim["truth"].name).read_text(encoding="utf-8"))
         say("demo: calibrating")
-        proto = spec.default_protocol if "protocol" in spec.calibrate_options else None
-        result = spec.calibrate(stage / sim["readings"].name, proto)
+        result = spec.calibrate(stage / sim["readings"].name, None)
         say("demo: writing the results and the certificate")
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
                                dcc=dcc and "dcc" in spec.calibrate_options)
