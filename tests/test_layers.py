@@ -127,7 +127,7 @@ def layer_violations(files: list[Path]) -> list[str]:
     return bad
 
 
-#: What a specification may import (docs/architecture.md#specifications), besides itself, a
+#: What a specification may import (docs/architecture.md#layers), besides itself, a
 #: family package (``gonio.specs._rate_family``), the registry and the layer-0 modules.
 SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.result",
                    "gonio.reduce", "gonio.analysis", "gonio.budget", "uncertainty")
