@@ -61,7 +61,7 @@ def test_rerun_without_force_is_refused_like_the_optical_demo(first_set, capsys)
 
 def test_failure_after_results_leaves_previous_set(first_set, tmp_path, monkeypatch, capsys):
     prev = tree(first_set)
-    import gonio.report.rate_certificate as rc
+    import gonio.specs._rate_family.outputs as rc        # the rate specifications' renderer
     seen = {}
 
     def broken(result, out, **kw):
