@@ -16,7 +16,7 @@ from gonio.errors import GonioError
 from gonio.formats.readings import Readings, read_readings
 from gonio.pipeline.calibrate import calibrate
 from gonio.protocol import load_protocol
-from gonio.specs.ogam_draft.screen import ANGLE_FLOOR_ARCSEC, screen
+from gonio.specs.ogam_draft.screen import ANGLE_FLOOR_ARCSEC, apply_findings, screen
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "small-protocol.toml"
@@ -207,10 +207,14 @@ def test_rate_not_in_programme_is_set_aside(bench_file, tmp_path):
     f = damage(bench_file, tmp_path / "in",
                lambda ls: [set_col(ln, 3, lambda r: "300.0") if n in idx else ln
                            for n, ln in enumerate(ls)])
-    found = screen(read_readings(f), load_protocol(SMALL))
-    codes = {x.code for x in found}
-    assert codes == {"condition-not-in-programme", "incomplete-programme"}
-    assert {x.line for x in found if x.line} == {i + 1 for i in idx}
+    rd = read_readings(f)
+    found = screen(rd, load_protocol(SMALL))
+    assert sorted(x.code for x in found) == ["condition-not-in-programme",
+                                             "incomplete-programme"]
+    assert [x.line for x in found if x.line] == [idx[0] + 1]
+    assert f"{len(idx)} readings" in found[0].message
+    _, aside = apply_findings(rd, found)
+    assert list(aside["line"]) == [i + 1 for i in idx]
 
 
 def test_7_3_typo_is_set_aside_identical_readings_are_not(bench_file, tmp_path):

@@ -173,6 +173,10 @@ class CalibrationReport:
             "metadata": dict(self.readings.metadata),
         }
         out.update(d)
+        if out["scale_factor"].get("measured"):
+            out["scale_factor"].update(scale_factor_as_mounted(
+                float(self.results.scale_factor.value),
+                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
         for name in ITEM_NAMES:
             iu = self.item_uncertainty.get(name)
             out[name]["uncertainty"] = iu.to_dict() if iu is not None else None
@@ -250,6 +254,27 @@ class CalibrationReport:
         if self.e_measured:
             lines += [f"note: {n}" for n in self.budget_notes]
         return "\n".join(lines) + "\n"
+
+
+def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float) -> dict:
+    """What K of 7.1 is (docs/draft-readings.md, 7.1): the scale factor *as mounted*.
+
+    Tilted by ψ the instrument senses θ̇ cos ψ, so 7.1 measures K_own cos ψ; the draft
+    bounds ψ (A.1) and lets the calibration on the mount fix k (A.4.2), so K is stated as
+    mounted and the instrument's own K as the one-sided bound K ≤ K_own ≤ K / cos ψ_max.
+
+    >>> d = scale_factor_as_mounted(76434.84, 0.1)
+    >>> round((d["instrument_own_upper_counts_per_deg"] / 76434.84 - 1) * 1e6, 2)
+    1.52
+    """
+    c = math.cos(math.radians(tilt_bound_deg))
+    return {"measurand": (f"K as mounted: the instrument on the table with its sensing plane "
+                          f"within {tilt_bound_deg:g}° of the table plane (Annex A.1); the "
+                          "instrument's own K (sensing axis along the rotation axis) lies "
+                          f"between K and K/cos ψ, up to {(1 / c - 1) * 1e6:.2g} ppm above K, "
+                          "not included in U"),
+            "tilt_bound_deg": float(tilt_bound_deg),
+            "instrument_own_upper_counts_per_deg": float(k_counts_per_deg / c)}
 
 
 ITEM_NAMES = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
@@ -575,9 +600,15 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         t_zs = rd.loc[rd["series"] == zs.details["series"], "time_s"].to_numpy(dtype=float)
         comp = protocol.session.static_s if protocol.session.earth_compensation == "measured" \
             else None
+        zlines = rd.loc[rd["series"] == zs.details["series"], "line"]
+        zrows = readings.data[readings.data["line"].isin(list(zlines))]
+        res_deg = iu.reading_resolution_deg(
+            zrows["gyro_deg"].to_numpy(dtype=float),
+            None if zrows["gyro_deg"].notna().all() else results.scale_factor_for_angles_counts_per_deg
+            or metadata_float(readings.metadata, "nominal_scale_factor_counts_per_deg"))
         out["zero_stability"] = iu.zero_stability_budget(
             float(zs.value), int(zs.details["n_readings"]), time_s=t_zs,
-            compensation_time_s=comp, k=k_fixed)
+            compensation_time_s=comp, k=k_fixed, resolution_deg=res_deg)
     e = results.angle_deviation
     if e.measured:
         out["angle_deviation"] = iu.angle_deviation_budget(

@@ -353,6 +353,11 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         add("p", [L["no_E_U"]], "U")
     del st_e
     screening_notes(res, L, add)
+    if res["scale_factor"].get("measurand"):
+        sf = res["scale_factor"]
+        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
+        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
+                                           ppm=f"{ppm:.2g}")])
 
     # decision rule and conformity: only when the laboratory file gives limits
     conf = conformity_for(res, lab)

@@ -83,6 +83,13 @@ LABELS: dict[str, dict[str, str]] = {
     "uncertainty": {"en": "Measurement uncertainty", "zh": "测量不确定度"},
     "U_line": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}",
                "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}"},
+    "K_as_mounted": {"en": "The scale factor K is stated as mounted: sensing plane within {psi}° "
+                           "of the table plane (Annex A.1). The instrument's own K (sensing axis "
+                           "along the rotation axis) is larger by up to {ppm} ppm (1/cos ψ − 1); "
+                           "this is not included in U.",
+                     "zh": "标度因数 K 为安装状态下的值：敏感平面与转台台面的夹角不超过 {psi}°"
+                           "（附录A.1）。仪器自身的 K（敏感轴沿转轴）最多大 {ppm} ppm"
+                           "（1/cos ψ − 1），未计入 U。"},
     "screening_note": {"en": "Screening of the readings: {n} reading(s) set aside (not used; "
                              "listed in results.json with line and reason) and {m} finding(s) "
                              "on the completeness of the programme; the results above rest "

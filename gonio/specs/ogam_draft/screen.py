@@ -53,6 +53,9 @@ ROBUST_Z: float = 5.0
 #: counts/°) and far below a one-degree typo (3 600″).
 ANGLE_FLOOR_ARCSEC: float = 5.0
 
+#: Rounds read in at least this many series are screened round by round.
+PER_ROUND_MIN: int = 5
+
 CLAUSES = {"scale_factor": "7.1", "zero_stability": "7.3", "angle_deviation": "7.4",
            "rate_consistency": "7.6", "pointing_consistency": "7.7"}
 ROTATION_TESTS = ("scale_factor", "angle_deviation", "rate_consistency", "pointing_consistency")
@@ -99,8 +102,11 @@ def _action(item) -> str:
     return "refused" if item is not None and item.on_bad_reading == "error" else "set_aside"
 
 
-def _protocol_rules(df: pd.DataFrame, protocol, file) -> list[Finding]:
-    """Round, condition, angle and time of every rotation reading against the protocol."""
+def _protocol_rules(df: pd.DataFrame, protocol, file, aside_lines: set) -> list[Finding]:
+    """Round, condition, angle and time of every rotation reading against the protocol.
+
+    A condition outside the programme is one finding (its first line, the count and the
+    line range); its other lines go into ``aside_lines``."""
     out = []
     for test in ROTATION_TESTS:
         rows = df[df["test"] == test]
@@ -110,13 +116,16 @@ def _protocol_rules(df: pd.DataFrame, protocol, file) -> list[Finding]:
         for (rate, orient), g in rows.groupby(["rate_dps", "orientation"], sort=False):
             it = item_for(protocol, test, float(rate), str(orient))
             if it is None:
-                for line in g["line"]:
-                    out.append(Finding(
-                        "condition-not-in-programme",
-                        f"{test} at {float(rate):g} °/s, axis {orient}: not a condition of the "
-                        f"protocol's programme ({protocol.name})", "set_aside", file=file,
-                        line=int(line), column="rate_dps", test=test, clause=clause,
-                        rule="rate and orientation must be a programme condition"))
+                lines = sorted(int(x) for x in g["line"])
+                more = (f"; {len(lines)} readings, lines {lines[0]}–{lines[-1]}, all set aside"
+                        if len(lines) > 1 else "")
+                out.append(Finding(
+                    "condition-not-in-programme",
+                    f"{test} at {float(rate):g} °/s, axis {orient}: not a condition of the "
+                    f"protocol's programme ({protocol.name}){more}", "set_aside", file=file,
+                    line=lines[0], column="rate_dps", test=test, clause=clause,
+                    rule="rate and orientation must be a programme condition"))
+                aside_lines.update(lines[1:])
                 continue
             n = len(it.rounds)
             want = np.array([r.stop_deg - r.start_deg for r in it.rounds])
@@ -177,8 +186,15 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
     out = []
     keys = ["test", "rate_dps", "orientation"]
     for key, g in work[work["test"].isin(ROTATION_TESTS)].groupby(keys, sort=False):
-        out += _group_outliers(g, key[0], f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}",
-                               file, k_ref)
+        what = f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}"
+        per_round = g.groupby("round", sort=False)
+        if per_round.size().min() >= PER_ROUND_MIN:
+            # many series: each reading against the other series of its round (an error
+            # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
+            for _, gr in per_round:
+                out += _group_outliers(gr, key[0], what, file, k_ref)
+        else:
+            out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
         out += _group_outliers(g, "zero_stability", f"zero_stability series {int(se)}",
                                file, k_ref)
@@ -247,11 +263,12 @@ def screen(readings: Readings, protocol) -> list[Finding]:
     """
     df, file = readings.data, readings.path
     name = None if file is None else str(file)
-    found = _protocol_rules(df, protocol, name)
-    out_lines = {f.line for f in found}
+    aside_lines: set = set()
+    found = _protocol_rules(df, protocol, name, aside_lines)
+    out_lines = {f.line for f in found} | aside_lines
     k_ref = reference_scale_factor(df[~df["line"].isin(out_lines)], readings.metadata, file)
     found += _indicated_rule(df, protocol, name, k_ref, out_lines)
-    gone = {f.line for f in found}
+    gone = {f.line for f in found} | aside_lines
     found += _incomplete(df[~df["line"].isin(gone)], protocol, name, set(df["test"]))
     return found
 
@@ -269,6 +286,12 @@ def apply_findings(readings: Readings, findings: list[Finding], protocol=None
     for f in findings:
         if f.action == "set_aside" and f.line is not None:
             aside.setdefault(f.line, f)
+            if f.code == "condition-not-in-programme":      # one finding per condition
+                row = df[df["line"] == f.line].iloc[0]
+                same = df[(df["test"] == row["test"]) & (df["rate_dps"] == row["rate_dps"])
+                          & (df["orientation"] == row["orientation"])]
+                for line in same["line"]:
+                    aside.setdefault(int(line), f)
     cols = ["line", "test", "series", "round", "rate_dps", "orientation"]
     if not aside:
         return readings, pd.DataFrame(columns=cols + ["reason"])
