@@ -74,15 +74,20 @@ def test_readings_name_their_specification(tmp_path):
 
 
 def test_screen_of_the_optical_draft(tmp_path):
+    """SPEC.screen gives the findings without calibrating: a reading at the wrong table angle
+    is set aside, naming its line, column and clause, beside the file's other findings."""
     spec = get("ogam-draft")
     proto = ROOT / "tests" / "data" / "full.toml"
-    assert spec.screen(ROOT / "tests" / "data" / "full.csv", proto) == []
+    clean = spec.screen(ROOT / "tests" / "data" / "full.csv", proto)
     bad = tmp_path / "bad.csv"
     bad.write_text((ROOT / "tests" / "data" / "full.csv").read_text(encoding="utf-8").replace(
         "scale_factor,1,2,60,up,65.0,120.0,432000,", "scale_factor,1,2,60,up,65.0,150.0,432000,"),
         encoding="utf-8")
-    with pytest.raises(GonioError, match=r"bad.csv:8: scale_factor round 2: table_deg 150"):
-        spec.screen(bad, proto)
+    found = spec.screen(bad, proto)
+    new = [f for f in found if f.line == 8]
+    assert len(new) == 1 and new[0].action == "set_aside" and new[0].column == "table_deg"
+    assert new[0].clause == "7.1" and "150" in new[0].message
+    assert {(f.code, f.line) for f in clean} <= {(f.code, f.line) for f in found}
 
 
 def test_lazy_hooks_import_on_call():

@@ -367,21 +367,18 @@ _ITEM_TESTS = {"scale_factor": ("scale_factor",), "scale_factor_nonlinearity": (
 
 
 def screen(readings, protocol: str | Path | Protocol | None = None) -> list[Finding]:
-    """``SPEC.screen``: the readings the protocol checks set aside (:func:`screen_readings`:
-    a round or position the protocol does not have, a reading taken too late), one
-    :class:`gonio.result.Finding` each with its line and reason; a file refused whole raises
-    the GonioError naming where."""
+    """``SPEC.screen``: every finding on a readings file or stream (refused, set aside,
+    flagged; :func:`gonio.specs.ogam_draft.screen.screen`) under the protocol the file names
+    (or ``protocol``), without calibrating."""
+    from gonio.specs.ogam_draft.screen import screen as findings_of
+
     if isinstance(readings, Readings):
         proto, _ = resolve_protocol(readings.path, readings.metadata.get("protocol"), protocol)
         rd = readings
     else:
         proto, _ = resolve_protocol(readings, file_protocol_name(readings), protocol)
         rd, _ = _load(readings, proto)
-    _, excluded = screen_readings(rd, proto)
-    return [Finding(code="protocol_check", message=str(r.reason), action="set_aside",
-                    file=str(rd.path) if rd.path else None, line=int(r.line), test=str(r.test),
-                    rule="the protocol's rounds, positions and time to reading")
-            for r in excluded.itertuples(index=False)]
+    return findings_of(rd, proto)
 
 
 def _note_exclusions(results: CalibrationResults, excluded) -> None:
