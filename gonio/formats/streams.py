@@ -52,7 +52,7 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
-from gonio.errors import GonioError, check_header
+from gonio.errors import GonioError, check_header, check_not_binary
 from gonio.formats.metadata import NUMERIC_METADATA, metadata_bool, metadata_float
 
 #: Column order of a written stream file.
@@ -162,6 +162,8 @@ def _parse_header(path: Path) -> _Header:
             offset += len(raw)
             if lineno == 1 and raw.startswith(b"\xef\xbb\xbf"):
                 raw = raw[3:]
+            if lineno == 1:
+                check_not_binary(raw, fname)          # a Parquet file renamed .csv says so
             try:
                 line = raw.decode("utf-8").rstrip("\r\n")
             except UnicodeDecodeError:

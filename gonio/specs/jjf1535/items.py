@@ -88,10 +88,12 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.analysis.rate_gyro.bias_drift_u`); 0 without a static record."""
+    (:func:`gonio.analysis.rate_gyro.bias_drift_u`). Without a static record the term is
+    not known, never 0: a GonioError, so the item is "not measured" with the reason."""
     fit = ctx.cache.get("noise_fit")
     if fit is None:
-        return 0.0
+        raise GonioError("the budget's bias-drift term needs the static Allan record "
+                         "(7.2.13), which the readings lack or which could not be analysed")
     allan = ctx.cache["allan"]
     return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
                            separation_s)
