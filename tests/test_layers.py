@@ -30,7 +30,7 @@ LAYERS: dict[str, int] = {
     "gonio": 0, "gonio.units": 0, "gonio.errors": 0, "gonio.atomic": 0, "gonio.progress": 0,
     "gonio.resources": 0,
     "gonio.physics": 1, "gonio.formats": 1,
-    "gonio.protocol": 2,
+    "gonio.protocol": 2, "gonio.result": 2,
     "gonio.bench": 3, "gonio.reduce": 3,
     "gonio.analysis": 4,
     "gonio.budget": 5,

@@ -191,3 +191,17 @@ def test_iec_supply_correction_recovers_truth(tmp_path):
     assert r.items["ratiometric_error"].value == pytest.approx(0.0, abs=1e-9)
     raw = calibrate(RateReadings(ses.data.assign(supply_set_v=np.nan), md), str(proto))
     assert raw.items["scale_factor"].value / t - 1 == pytest.approx(-0.0002 / 5.0, rel=1e-6)
+
+
+def test_builtin_frequency_amplitude_follows_clause_5_5_4():
+    """issue 26: the protocol said '1/2 … 1/10 of the range (5.5.4)' but applied 10 °/s to a
+    ±300 °/s gyro (1/30). The built-in programme's rate amplitude lies in [FS/10, FS/2]."""
+    import tomllib
+    from pathlib import Path
+
+    p = Path(__file__).resolve().parents[1] / "protocols" / "iec62047-20.toml"
+    d = tomllib.loads(p.read_text(encoding="utf-8"))
+    fs = next(v["full_scale_dps"] for v in d.values()
+              if isinstance(v, dict) and "full_scale_dps" in v)
+    amp = d["frequency"]["rate_amplitude_dps"]
+    assert fs / 10 <= amp <= fs / 2, (amp, fs)
