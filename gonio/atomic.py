@@ -174,9 +174,12 @@ def holds_data(path) -> bool:
     return head.startswith((b"#", b"\xef\xbb\xbf#", b"PAR1"))
 
 
-def check_output_files(places: dict, *, inputs: Iterable = ()) -> dict:
+def check_output_files(places: dict, *, inputs: Iterable = (),
+                       formats: dict | None = None) -> dict:
     """:func:`check_output_file` for each named output (``{"--report": path, ...}``, None
-    skipped) against every input, before any work; two outputs at one place are refused.
+    skipped) against every input, before any work; two outputs at one place are refused,
+    so is a suffix not in ``formats[what]`` (e.g. a figure named ``out.parquet``) and an
+    existing data file (:func:`holds_data`).
 
     >>> check_output_files({"--plot": "a.png", "--report": "a.png"})
     Traceback (most recent call last):
@@ -189,6 +192,11 @@ def check_output_files(places: dict, *, inputs: Iterable = ()) -> dict:
         if path is None:
             continue
         check_output_file(path, what=what, inputs=inputs)
+        allowed = (formats or {}).get(what)
+        if allowed and Path(path).suffix.lstrip(".").lower() not in allowed:
+            raise GonioError(f"{what}: cannot write a file of type "
+                             f"{Path(path).suffix or '(none)'!r}; use "
+                             f"{', '.join('.' + f for f in allowed)}", file=path)
         if holds_data(path):
             raise GonioError(f"{what} would replace {path}, a data file (readings, stream, "
                              "protocol, results); a figure or page never replaces one",

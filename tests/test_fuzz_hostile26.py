@@ -425,6 +425,75 @@ def test_study_and_calibration_never_share_a_folder(tmp_path, triad_calibrated, 
     count("mixing:calibrate-into-study")
 
 
+# ------------------------------------------------------------ lab files, budgets, figures
+
+LAB = Path(__file__).resolve().parents[1] / "protocols" / "lab-example.toml"
+
+
+@pytest.mark.parametrize("value,frag", [
+    ("A\\u0001B", "U+0001"), ("A\\u0000B", "U+0000"), ("A\\uFFFFB", "U+FFFF"),
+    ("A\\u007fB", "U+007F"), ("X" * 1_000_000, "over the limit"),
+])
+def test_lab_text_fields(tmp_path, value, frag):
+    """Control characters and a megabyte of name in a lab file: refused naming the key at
+    once (before: the DCC writer raised, the HTML carried the characters, and a 10^6
+    character name took 389 s to lay out)."""
+    import time
+
+    from gonio.report.certificate import load_lab
+
+    p = tmp_path / "lab.toml"
+    p.write_text(LAB.read_text(encoding="utf-8").replace(
+        'name = "Example Angle Metrology Laboratory"', f'name = "{value}"', 1), encoding="utf-8")
+    t0 = time.perf_counter()
+    with pytest.raises(GonioError) as ei:
+        load_lab(p)
+    assert time.perf_counter() - t0 < 10
+    msg = str(ei.value)
+    assert "key laboratory.name" in msg and frag in msg and len(msg) < 300, msg
+    count(f"lab:{frag}")
+
+
+def test_budget_of_every_spec(capsys):
+    """gonio budget for every registered specification: exit 0 (before: triad-alignment
+    raised AttributeError, exit 1)."""
+    from gonio.specs import available
+
+    for key in sorted(available()):
+        rc = main(["budget", "--spec", key])
+        out = capsys.readouterr()
+        assert rc in (0, 2) and "internal error" not in out.err, (key, out.err)
+        count(f"budget:{key}")
+
+
+def test_figure_with_a_data_suffix_is_refused_before_the_work(tmp_path, sims, capsys):
+    """--plot out.parquet: refused at once naming the formats (before: an internal error
+    after the whole analysis)."""
+    r = sims["TRI"] / "readings.csv"
+    for argv in (["align", r, "--plot", tmp_path / "out.parquet"],
+                 ["thermal-model", sims["TRI"] / "thermal.csv", "--plot", tmp_path / "f.csv"]):
+        assert ".png" in cli(argv, capsys)
+        count(f"figure-suffix:{argv[0]}")
+
+
+def test_parquet_stream_with_a_column_named_twice(tmp_path, capsys):
+    """A Parquet stream whose schema names a column twice: exit 2 naming the column in
+    calibrate, reduce and noise (before: KeyError, exit 1)."""
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    t = pa.table({"time_s": np.arange(10) * 0.1, "gyro_counts": np.arange(10),
+                  "table_deg": np.zeros(10)})
+    t = pa.Table.from_arrays(t.columns + [t.column(1)], names=t.schema.names + ["gyro_counts"])
+    p = tmp_path / "s.parquet"
+    pq.write_table(t.replace_schema_metadata({"nominal_scale_factor_counts_per_deg": "1000"}), p)
+    for argv in (["calibrate", p, "--out", tmp_path / "o"],
+                 ["reduce", p, "--out", tmp_path / "r.csv"], ["noise", p]):
+        msg = cli(argv, capsys)
+        assert "gyro_counts" in msg and "twice" in msg, msg
+        count(f"parquet-dup-column:{argv[0]}")
+
+
 # ------------------------------------------------------------------ --resume verification
 
 def _engine():

@@ -57,7 +57,10 @@ def run(args) -> int:
     from gonio.specs.triad_alignment.calibration import consistency_check
 
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
+    from gonio.report.figure_files import FIGURE_FORMATS
+
     check_output_files({"--plot": args.plot, "--report": args.report},
+                       formats={"--plot": FIGURE_FORMATS},
                        inputs=[args.readings, *named_inputs(args.readings)])
     r = read_triad_readings(args.readings)
     res = estimate_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,

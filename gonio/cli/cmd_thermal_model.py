@@ -38,7 +38,10 @@ def run(args) -> int:
     from gonio.formats.triad import json_safe, named_inputs, read_triad_readings
 
     inputs = [args.readings, args.compensate]
+    from gonio.report.figure_files import FIGURE_FORMATS
+
     check_output_files({"--plot": args.plot, "--report": args.report},
+                       formats={"--plot": FIGURE_FORMATS},
                        inputs=inputs + [q for i in inputs if i for q in named_inputs(i)])
 
     r = read_triad_readings(args.readings)

@@ -1063,6 +1063,7 @@ def _open_parquet(path: Path):
         except UnicodeDecodeError:
             raise GonioError("metadata not UTF-8 text", file=path) from None
     cols = list(schema.names)
+    check_header(cols, (), file=path, line=None)      # a column named twice: refused by name
     for c in cols:
         if c in STREAM_COLUMNS:
             t = schema.field(c).type

@@ -91,6 +91,8 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     (:func:`gonio.analysis.rate_gyro.bias_drift_u`). Without a static record the term is
     not known, never 0: a GonioError, so the item is "not measured" with the reason."""
     fit = ctx.cache.get("noise_fit")
+    if fit is None and ctx.cache.get("static_noise_free"):
+        return 0.0                                   # a noise-free bench: no drift
     if fit is None:
         raise GonioError("the budget's bias-drift term needs the static Allan record "
                          "(7.2.13), which the readings lack or which could not be analysed")
@@ -555,6 +557,7 @@ def angle_random_walk(ctx: Context) -> Item:
     dt = float((t[-1] - t[0]) / (t.size - 1))
     rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
     if np.ptp(rate_dph) == 0:
+        ctx.cache["static_noise_free"] = True      # noise: off (the reader refuses it else)
         return Item("angle_random_walk", title, clause, unit, 0.0,
                     uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
