@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.analysis import rate_gyro as rg
-from gonio.bench.rate_session import body_rotation, mount_matrix
+from gonio.specs._rate_family import formulas as rg
+from gonio.physics.alignment import body_rotation, mount_matrix
 from gonio.formats.rate_readings import RateReadings
 from gonio.physics.earth import earth_rate_enu
 
@@ -128,7 +128,8 @@ def test_fifty_percent_outcome_distribution():
 # ------------------------------------------------------------------ bench, noise off
 @pytest.fixture(scope="module")
 def iec_new_noise_off(tmp_path_factory):
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     tmp = tmp_path_factory.mktemp("iecnew")
     proto = small_protocol(tmp, "iec62047-20", g_sensitivity={"samples": 20},
                            resolution={"samples": 10, "rest_samples": 10})
@@ -169,7 +170,8 @@ def test_iec_supply_correction_recovers_truth(tmp_path):
     """A perfectly ratiometric gyro on a supply 0.2 mV low: corrected by eq (18) the scale
     factor is the truth at the set voltage; uncorrected it is off by the supply ratio."""
     from gonio.bench.equipment import Supply
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     proto = small_protocol(tmp_path, "iec62047-20")
     b = exact_bench(ratiometric_error_rel=0.0, bias_supply_dps_per_v=0.0)
     b = replace(b, equipment=replace(b.equipment, supply=Supply(error_v=-0.0002)))
