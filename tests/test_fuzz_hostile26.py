@@ -494,6 +494,79 @@ def test_parquet_stream_with_a_column_named_twice(tmp_path, capsys):
         count(f"parquet-dup-column:{argv[0]}")
 
 
+# ----------------------------------------------------------- sizes checked before the work
+
+PROTOCOLS = Path(__file__).resolve().parents[1] / "protocols"
+
+
+def _protocol(tmp_path, name: str, old: str, new: str) -> Path:
+    text = (PROTOCOLS / f"{name}.toml").read_text(encoding="utf-8")
+    assert old in text, old
+    p = tmp_path / f"{name}.toml"
+    p.write_text(text.replace(old, new, 1), encoding="utf-8")
+    return p
+
+
+SIZE_CASES = {
+    # name: (protocol, old text, new text, loader, key named)
+    "iec-divisions-1e9": ("iec62047-20", "divisions = 5", "divisions = 1000000000",
+                          "gonio.specs.iec62047_20.protocol", "scale_factor.divisions"),
+    "iec-step-1e-9": ("iec62047-20", "step_deg = 45.0", "step_deg = 1e-9",
+                      "gonio.specs.iec62047_20.protocol", "g_sensitivity.step_deg"),
+    "jjf-rates-10-10": ("jjf1535-2015", "# rates_dps = [1, 2, 5, 10, 20, 50, 100]",
+                        "rates_dps = [10, 10]", "gonio.specs.jjf1535.protocol",
+                        "scale_factor.rates_dps"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SIZE_CASES))
+def test_protocol_sizes_refused_naming_the_key(tmp_path, name):
+    """IEC divisions = 1e9, a g-sensitivity step of 1e-9°, JJF rates [10, 10]: refused when
+    the protocol is read, naming file and key (before: 3 GB and 'out of memory', or an
+    error naming neither file nor key)."""
+    import importlib
+
+    proto, old, new, module, key = SIZE_CASES[name]
+    p = _protocol(tmp_path, proto, old, new)
+    with pytest.raises(GonioError) as ei:
+        importlib.import_module(module).load_protocol(p)
+    msg = str(ei.value)
+    assert msg.startswith(str(p)) and f"key {key}" in msg, msg
+    count(f"size:{name}")
+
+
+def test_triad_ramp_block_sized_before_simulating(tmp_path, capsys):
+    """thermal.ramp_block_s = 0.01: refused before the first block, naming the key (before:
+    the session grew 3.7 MB/s without end)."""
+    import time
+
+    p = _protocol(tmp_path, "triad-alignment", "ramp_block_s = 60.0", "ramp_block_s = 0.01")
+    t0 = time.perf_counter()
+    msg = cli(["simulate", "--spec", "triad-alignment", "--protocol", p, "--out", tmp_path / "o"],
+              capsys)
+    assert "thermal.ramp_block_s" in msg and "GONIO_MAX_READING_ROWS" in msg, msg
+    assert time.perf_counter() - t0 < 120
+    count("size:triad-ramp-block")
+
+
+def test_monte_carlo_in_chunks_equals_the_whole(monkeypatch, sims):
+    """align's Monte Carlo combines chunks of trials (bounded memory for 1e7 trials): with a
+    chunk of 7 the uncertainties equal those of all 20 trials held at once (before: every
+    trial was kept, and 1e7 ran out of memory)."""
+    import gonio.specs.triad_alignment.analysis as A
+    from gonio.formats.triad import read_triad_readings
+
+    r = read_triad_readings(sims["TRI"] / "readings.csv")
+    whole = A.estimate_alignment(r, monte_carlo=20, seed=2)
+    monkeypatch.setattr(A, "MC_CHUNK", 7)
+    monkeypatch.setattr(A.chunked_std, "__defaults__", (7,))
+    parts = A.estimate_alignment(r, monte_carlo=20, seed=2)
+    np.testing.assert_allclose(parts.u_mc_theta, whole.u_mc_theta, rtol=1e-9)
+    for k in whole.u_mc:
+        np.testing.assert_allclose(parts.u_mc[k], whole.u_mc[k], rtol=1e-9)
+    count("size:monte-carlo-chunks")
+
+
 # ------------------------------------------------------------------ --resume verification
 
 def _engine():
