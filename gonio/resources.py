@@ -63,7 +63,7 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     raise GonioError(f"{kind} file not found: {name_or_path} (built-in {plural}: {', '.join(names)})")
 
 
-def readings_protocol(metadata_name: str | None, readings_path, default: str):
+def readings_protocol(metadata_name: str | None, readings_path, default: str | None):
     """The protocol a readings file's ``# protocol:`` metadata names: ``default`` when it
     names none (or the default itself), else a built-in name, a path, or a file of that
     name next to the readings (``NAME`` or ``NAME.toml``). A name that cannot be found is a
@@ -84,6 +84,6 @@ def readings_protocol(metadata_name: str | None, readings_path, default: str):
         except GonioError as exc:
             if "not found" not in exc.message:
                 raise
-    raise GonioError(f"the readings name protocol {name!r}, which is neither a built-in "
-                     "protocol nor a file next to them: give --protocol FILE",
+    raise GonioError(f"the readings file names protocol {name!r}, which is neither a "
+                     "built-in protocol nor a file next to it: give --protocol FILE",
                      file=readings_path, key="protocol")
