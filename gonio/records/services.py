@@ -191,15 +191,8 @@ def create_user(store, actor: User | None, username: str, password: str, roles,
         raise GonioError("letters, digits, '.', '_' and '-' only", key="username")
     user = User(username=username, full_name=text(full_name, "full_name"),
                 password_hash=hash_password(password), roles=check_roles(roles))
-    with store.writing() as s:
-        if s.scalar(select(User).where(User.username == username)):
-            raise GonioError("a user with this name exists", key="username")
-        s.add(user)
-        s.flush()
-        audit(s, actor, "create", "user", user.id, None, state(user))
-        s.commit()
-        s.expunge(user)
-    return user
+    return _create(store, actor, user, "user", User.username == username,
+                   "a user with this name exists", "username")
 
 
 def user(store, username: str) -> User | None:
@@ -219,14 +212,20 @@ def add_customer(store, actor: User, name: str, address: str = "") -> Customer:
     require(actor, "technician")
     c = Customer(name=text(name, "customer name", required=True),
                  address=text(address, "customer address", max_len=MAX_TEXT, multiline=True))
+    return _create(store, actor, c, "customer", Customer.name == c.name,
+                   "a customer with this name exists", "customer name")
+
+
+def _create(store, actor: User | None, obj, entity: str, same, message: str, key: str):
+    """Insert ``obj`` with its audit event, unless a row matching ``same`` exists."""
     with store.writing() as s:
-        if s.scalar(select(Customer).where(Customer.name == c.name)):
-            raise GonioError("a customer with this name exists", key="customer name")
-        s.add(c)
+        if s.scalar(select(type(obj)).where(same)):
+            raise GonioError(message, key=key)
+        s.add(obj)
         s.flush()
-        audit(s, actor, "create", "customer", c.id, None, state(c))
+        audit(s, actor, "create", entity, obj.id, None, state(obj))
         s.commit()
-    return c
+    return obj
 
 
 def check_limits(limits) -> list[dict]:
@@ -299,14 +298,8 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   traceability=text(traceability, "traceability"),
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
-    with store.writing() as s:
-        if s.scalar(select(Standard).where(Standard.identifier == st.identifier)):
-            raise GonioError("a standard with this identifier exists", key="identifier")
-        s.add(st)
-        s.flush()
-        audit(s, actor, "create", "standard", st.id, None, state(st))
-        s.commit()
-    return st
+    return _create(store, actor, st, "standard", Standard.identifier == st.identifier,
+                   "a standard with this identifier exists", "identifier")
 
 
 # --------------------------------------------------------------------------- files

@@ -1,5 +1,5 @@
 """``gonio serve``: the laboratory's records in a browser (FastAPI, server-rendered Jinja2
-templates, no JavaScript build; docs/records.md#web).
+templates, no JavaScript build; docs/records.md).
 
 The web layer is thin: every page reads through and every form calls a documented function
 of :mod:`gonio.records.services`, which checks roles and inputs. This module adds what only

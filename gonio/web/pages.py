@@ -93,7 +93,7 @@ def dashboard(request: Request):
 
 
 @router.get("/customers")
-def customers_page(request: Request, error: str = ""):
+def customers_page(request: Request):
     user, csrf = current(request)
     return render(request, "customers.html", user, csrf,
                   customers=queries.customers(_store(request)))
@@ -426,9 +426,15 @@ def users_page(request: Request):
 async def users_add(request: Request):
     user, csrf = current(request)
     data = await form(request, csrf)
+    return _users_form(request, user, csrf, lambda: services.create_user(
+        _store(request), user, data.get("username"), data.get("password"),
+        data.getlist("roles"), data.get("full_name")))
+
+
+def _users_form(request, user, csrf, do):
+    """Run ``do`` and go back to the users page, or show it again with the error."""
     try:
-        services.create_user(_store(request), user, data.get("username"), data.get("password"),
-                             data.getlist("roles"), data.get("full_name"))
+        do()
     except GonioError as exc:
         return render(request, "users.html", user, csrf, status_code=400, error=str(exc),
                       users=queries.users(_store(request)),
@@ -440,12 +446,7 @@ async def users_add(request: Request):
 async def settings_save(request: Request):
     user, csrf = current(request)
     data = await form(request, csrf)
-    try:
-        services.set_settings(_store(request), user, **{
-            k: data.get(k) for k in services.SETTINGS if data.get(k) is not None})
-    except GonioError as exc:
-        return render(request, "users.html", user, csrf, status_code=400, error=str(exc),
-                      users=queries.users(_store(request)),
-                      settings=services.settings(_store(request)))
-    return _back("/users")
+    return _users_form(request, user, csrf, lambda: services.set_settings(
+        _store(request), user, **{k: data.get(k) for k in services.SETTINGS
+                                  if data.get(k) is not None}))
 

@@ -155,12 +155,50 @@ def computed_folder(bench_readings, tmp_path_factory):
     return out
 
 
-def wait_for(predicate, timeout_s: float = 120, step_s: float = 0.2):
-    """Poll until ``predicate()`` is truthy (returned) or fail after ``timeout_s``."""
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        got = predicate()
-        if got:
-            return got
-        time.sleep(step_s)
-    raise AssertionError(f"timed out after {timeout_s} s")
+class Server:
+    """Start and stop ``gonio serve`` processes (each in its own process group, so that a
+    test can kill the server together with its worker processes)."""
+
+    def __init__(self):
+        self.procs = []
+
+    def start(self, data: Path, workers: int = 2):
+        import sys
+        import urllib.request
+
+        port = free_port()
+        proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data", str(data),
+                                 "--port", str(port), "--workers", str(workers)],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                start_new_session=True)
+        self.procs.append(proc)
+        end = time.monotonic() + 240
+        while time.monotonic() < end:
+            if proc.poll() is not None:
+                raise AssertionError(f"gonio serve ended: {proc.stderr.read().decode()}")
+            try:
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/login", timeout=2)
+                return proc, f"http://127.0.0.1:{port}"
+            except OSError:
+                time.sleep(0.5)
+        raise AssertionError("gonio serve did not answer within 240 s")
+
+    def stop(self, proc, sig=None) -> None:
+        import signal
+
+        if proc.poll() is None:
+            os.killpg(proc.pid, sig or signal.SIGTERM)
+            try:
+                proc.wait(30)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+
+
+@pytest.fixture
+def serve():
+    """A :class:`Server`; every server it started is stopped after the test."""
+    srv = Server()
+    yield srv
+    for p in srv.procs:
+        srv.stop(p)
