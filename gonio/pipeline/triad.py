@@ -20,7 +20,7 @@ KEY = "triad-alignment"
 
 
 def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=None,
-              monte_carlo_trials: int = 0, robust: bool = False):
+              monte_carlo_trials: int = 0, robust: bool = False, dcc: bool = False):
     """Calibrate a triad readings file (:func:`gonio.specs.triad_alignment.calibration.calibrate`;
     the thermal programme from ``thermal`` or the readings' ``# thermal_readings:``) and write
     ``results.json``, ``summary.txt``, ``certificate.html`` and ``certificate.pdf`` into
@@ -39,7 +39,8 @@ def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=
                                                           lineterminator="\n"))
     paths = {"results": out / "results.json", "summary": out / "summary.txt"}
     paths.update({f"tables/{n}": out / "tables" / n for n in tables})
-    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
+                                         dcc=dcc))
     return result, paths
 
 
@@ -75,7 +76,7 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
     """Simulate the triad protocol on the bench (readings.csv with the alignment session,
     thermal.csv with the chamber programme, truth.json) and calibrate it, the whole set
     staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`)."""
-    from gonio.specs.triad_alignment.session import simulate
+    from gonio.specs.triad_alignment.simulate import simulate
 
     spec = get(KEY)
     lab_d = load_lab(lab) if lab else None          # validate inputs before simulating

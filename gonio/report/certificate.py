@@ -44,6 +44,7 @@ from gonio.analysis.conformity import RULES
 from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
 from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
                                reading_note, rule_at_U, specification_text)
+from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class)
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
                                  stated_item, u_cell)
@@ -163,11 +164,6 @@ def certificate_id(report, lab: dict | None = None) -> str:
 
 # --------------------------------------------------------------------------- content blocks
 
-class NoBreak(str):
-    """Text that is never broken across lines (identifiers, units): HTML ``nowrap``,
-    one token in the PDF's wrapping."""
-
-
 @dataclass
 class Block:
     """One piece of content: kind is h (heading), sub (sub-heading), p, kv, table, fig,
@@ -189,6 +185,8 @@ def _meta(md: dict, key: str, L) -> str:
 
 #: Longest table printed on the certificate; the rest is in tables/*.csv and results.json.
 MAX_TABLE_ROWS: int = 200
+#: Findings listed one per line on the certificate (the rest in results.json).
+MAX_FINDING_LINES: int = 20
 
 
 def _summarised(kind: str, data):
@@ -201,6 +199,22 @@ def _summarised(kind: str, data):
         return data
     note = [f"… {len(rows) - MAX_TABLE_ROWS} more rows in tables/*.csv"] + [""] * (len(head) - 1)
     return head, rows[:MAX_TABLE_ROWS] + [note]
+
+
+def screening_notes(res: dict, L: dict, add) -> None:
+    """A notice when the screening set data aside or found the programme incomplete
+    (results.json ``findings``; issue 24): the count, then one line per finding."""
+    found = [f for f in res.get("findings") or () if f["action"] != "refused"]
+    if not found:
+        return
+    aside = sum(f["action"] == "set_aside" for f in found)
+    flagged = len(found) - aside
+    add("notice", L["screening_note"].format(n=aside, m=flagged))
+    for f in found[:MAX_FINDING_LINES]:
+        where = f"line {f['line']}: " if f.get("line") is not None else ""
+        add("p", [f"{where}{f['message']}"])
+    if len(found) > MAX_FINDING_LINES:
+        add("p", [f"… {len(found) - MAX_FINDING_LINES} more in results.json (findings)"])
 
 
 def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
@@ -334,6 +348,12 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     else:
         add("p", [L["no_E_U"]], "U")
     del st_e
+    screening_notes(res, L, add)
+    if res["scale_factor"].get("measurand"):
+        sf = res["scale_factor"]
+        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
+        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
+                                           ppm=f"{ppm:.2g}")])
 
     # decision rule and conformity: only when the laboratory file gives limits
     conf = conformity_for(res, lab)
@@ -354,7 +374,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
             t = conformity_texts(c, res, L)
             out_txt = t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else "")
             crow.append([L[e["item"]], NoBreak(f"{t['limits']} {unit}"),
-                         NoBreak(f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
+                         NoBreak(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
+                                 else f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
         add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
                       crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
 
@@ -366,7 +387,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     brows = []
     for j, c in enumerate(unc["components"]):
         brows.append([NoBreak(f"u({c['symbol'].replace('phi_e', 'φ_e')})"),
-                      budget_source(c["symbol"], c["source"], lang)
+                      budget_source(c["symbol"], c["source"].partition(" [beyond the draft")[0],
+                                    lang)
                       + (f" ({L['beyond_draft']})" if c.get("beyond_draft") else ""), c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])

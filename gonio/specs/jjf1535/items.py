@@ -2,9 +2,9 @@
 
 Each function takes a :class:`Context` (the readings and what the calibration already
 knows: K, null output, latitude, protocol values) and returns an
-:class:`~gonio.analysis.rate_records.Item` with its value, unit, clause, and an uncertainty
+:class:`~gonio.specs._rate_family.rate_records.Item` with its value, unit, clause, and an uncertainty
 computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
-k = t₉₅(ν_eff). The formulas are in :mod:`gonio.analysis.rate_gyro`; the readings taken
+k = t₉₅(ν_eff). The formulas are in :mod:`gonio.specs._rate_family.formulas`; the readings taken
 are documented in ``docs/jjf1535-readings.md``.
 
 Rates are reported in °/h (bias family) or °/s (threshold, resolution) as JJF Table 1
@@ -14,41 +14,29 @@ allows; the scale factor in the gyro's output unit per °/s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.errors import GonioError
+from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
 
-@dataclass
-class Context:
-    """What the item functions need besides the formulas."""
+@dataclass(kw_only=True)
+class Context(RateContext):
+    """The shared rate context with JJF 1535's room temperature, cross-axis bound, and K̄
+    of 7.2.1 once computed."""
 
-    df: pd.DataFrame
-    output_unit: str
-    null_output: float
-    latitude_deg: float
     room_temperature_c: float
-    protocol: dict
-    rate_table_u_rel: float = 2.5e-4
-    acquisition_u_rel: float = 3.0e-5
-    chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
-    axis_alignment_deg: float = 0.05          # mounting of the input axis (fixture), half-width
     cross_axis_bound: float = 0.03            # assumed |cross-axis sensitivity| bound (7.2.12)
     K: float | None = None                    # K̄ of 7.2.1 once computed
     u_K_rel: float | None = None
-    cache: dict = field(default_factory=dict)
-
-    def has(self, test: str) -> bool:
-        return bool((self.df["test"] == test).any())
 
 
 def _need(ctx: Context, test: str, key: str, title: str, clause: str, unit: str):
@@ -88,7 +76,7 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.analysis.rate_gyro.bias_drift_u`); 0 without a static record."""
+    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`); 0 without a static record."""
     fit = ctx.cache.get("noise_fit")
     if fit is None:
         return 0.0
@@ -254,7 +242,7 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
 def rule_noise_half_width(pmfs: list[dict], value: float) -> tuple[float, dict]:
     """Half-width of the 95 % range of the 50 % rule's outcome under the noise of the data
-    (:func:`gonio.analysis.rate_gyro.max_outcome_pmf` of the directions), measured from
+    (:func:`gonio.specs._rate_family.formulas.max_outcome_pmf` of the directions), measured from
     ``value``: the distance to the farther of the 2.5 % and 97.5 % outcomes (None, "above
     the grid", counts as the largest tested step)."""
     pmf = rg.max_outcome_pmf(*pmfs)
@@ -356,11 +344,6 @@ def resolution(ctx: Context) -> Item:
 
 
 # --------------------------------------------------------------------------- bias family
-def _axis_enu(up: str, north: str) -> np.ndarray:
-    from gonio.bench.rate_session import mount_matrix
-    return mount_matrix(up, north) @ np.array([0.0, 0.0, 1.0])
-
-
 def bias_records(ctx: Context) -> list[dict]:
     """B_0,m of each bias record (eqs (15), (16)) in °/h with the Earth rate removed, and the
     uncorrected F̄/K beside it."""
@@ -370,7 +353,7 @@ def bias_records(ctx: Context) -> list[dict]:
     remove = ctx.protocol.get("bias", {}).get("remove_earth_rate", True)
     for m in segment_means(ctx.df, "bias"):
         y = segment_samples(ctx.df, "bias", m.run, m.step)["output"].to_numpy()
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         raw = (m.mean - ctx.null_output) / ctx.K
         u_mean, nu = _block_std_of_mean(y, int(ctx.protocol.get("bias", {}).get(
             "stability_block_samples", 10)))
@@ -465,19 +448,35 @@ def bias_repeatability(ctx: Context) -> Item:
 def warmup_time(ctx: Context) -> Item:
     """JJF 1535 7.2.9, reading taken: per record (from power-on) the earliest time after which
     every window of W samples has a block-mean stability ≤ the nominal value; the mean over
-    the N records. Uncertainty: spread over the records (type A) and the window step."""
+    the N records.
+
+    Uncertainty: spread over the records (type A), the window step, and the detection: a
+    window's stability s is an estimate with relative standard deviation r = 1/√(2(n_b − 1))
+    (n_b blocks per window), so the crossing of the nominal value can lie anywhere between
+    the last exceedance of nominal·(1 + z·r) and of nominal·(1 − z·r), z = 1.96
+    (95 % for one window near the crossing)
+    (:func:`gonio.specs._rate_family.formulas.detection_interval`); the larger distance from the
+    record's time to that interval's ends is that record's 95 % half-width, and the records'
+    detections are independent (u = rms(half-width/2)/√N)."""
+    from scipy.stats import norm
     title, clause, unit = "warm-up time", "7.2.9", "s"
     miss = _need(ctx, "warmup", "warmup_time", title, clause, unit)
     if miss:
         return miss
     w = ctx.protocol["warmup"]
     nominal = w["nominal_stability_dph"] / S_PER_H
-    times = []
+    nb = w["window_samples"] // w["block_samples"]
+    r = 1.0 / math.sqrt(2 * (nb - 1))
+    times, halves = [], []
     for m in segment_means(ctx.df, "warmup"):
         g = segment_samples(ctx.df, "warmup", m.run, m.step)
-        times.append(rg.warmup_time_s(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
-                                      window=w["window_samples"], block=w["block_samples"],
-                                      nominal=nominal))
+        ts, st = rg.window_stabilities(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
+                                       window=w["window_samples"], block=w["block_samples"])
+        t_n = rg.last_exceedance_time(ts, st, nominal)
+        z = float(norm.ppf(0.975))
+        lo, hi = rg.detection_interval(ts, st, nominal, nominal * r, z)
+        times.append(t_n)
+        halves.append(max(t_n - lo, (hi if math.isfinite(hi) else float(ts[-1] - ts[0])) - t_n))
     t = np.array(times)
     if np.any(~np.isfinite(t)):
         return not_measured("warmup_time", title, clause, unit,
@@ -487,10 +486,15 @@ def warmup_time(ctx: Context) -> Item:
     inputs = [from_u("t_w", float(t.mean()), 0.0),
               from_u("s_t", 0.0, float(t.std(ddof=1) / math.sqrt(t.size)) if t.size > 1 else 0.0,
                      dof=max(t.size - 1, 1), source="spread over the power-ups"),
-              type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0")]
-    u = gum(lambda a, b, c: a + b + c, inputs)
+              type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0"),
+              type_b("detect", 0.0, float(np.sqrt(np.mean(np.square(halves)) / t.size)),
+                     "normal", k=2,
+                     source="detection: where the stability crosses nominal·(1 ± z·r), "
+                            "r the relative sampling deviation of a window's stability")]
+    u = gum(lambda a, b, c, d: a + b + c + d, inputs)
     return Item("warmup_time", title, clause, unit, float(t.mean()), uncertainty=u,
-                details={"t_n_s": t, "nominal_stability_dph": w["nominal_stability_dph"]})
+                details={"t_n_s": t, "detection_half_width_s": halves,
+                         "nominal_stability_dph": w["nominal_stability_dph"]})
 
 
 def g_sensitivity(ctx: Context) -> Item:
@@ -505,7 +509,7 @@ def g_sensitivity(ctx: Context) -> Item:
     for m in segment_means(ctx.df, "g_sensitivity"):
         y = segment_samples(ctx.df, "g_sensitivity", m.run, m.step)["output"].to_numpy()
         um, nu = _block_std_of_mean(y)
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         pos[m.up_axis] = {"w": (m.mean - ctx.null_output) / ctx.K, "earth": earth,
                           "u": um / abs(ctx.K), "nu": nu, "t": m.time_s + 0.5 * m.n}
     res, lit, us = {}, {}, {}

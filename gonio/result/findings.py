@@ -1,0 +1,60 @@
+"""Screening findings: what a specification's ``screen(readings)`` says of each reading.
+
+A finding names the reading (file, line, column, test), the rule that fired with its
+threshold, and what was done: the reading was **refused** (the whole calibration stops with a
+GonioError), **set aside** (the calibration goes on without it and the certificate says so)
+or **flagged** (kept and used, with a warning on the certificate and in ``results.json``).
+
+>>> f = Finding("count-outlier", "counts depart from K·angle by 3600 counts (> 5 MAD)",
+...             "set_aside", file="readings.csv", line=42, column="gyro_counts",
+...             test="scale_factor", clause="7.1", rule="|r − median| > 5·1.4826·MAD")
+>>> f.to_json()["action"], f.location()
+('set_aside', 'readings.csv line 42, column gyro_counts')
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from gonio.errors import GonioError
+
+#: What was done with a reading a rule fired on.
+ACTIONS: tuple[str, ...] = ("refused", "set_aside", "flagged")
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One screening finding (see the module docstring)."""
+
+    code: str
+    message: str
+    action: str
+    file: str | None = None
+    line: int | None = None
+    column: str | None = None
+    test: str | None = None
+    clause: str | None = None
+    rule: str | None = None
+
+    def __post_init__(self):
+        if self.action not in ACTIONS:
+            raise GonioError(f"finding action must be one of {', '.join(ACTIONS)}, "
+                             f"got {self.action!r}")
+
+    def location(self) -> str:
+        """``file line N, column C`` (the parts that are known)."""
+        parts = [p for p in (self.file, None if self.line is None else f"line {self.line}")
+                 if p]
+        where = " ".join(parts)
+        if self.column:
+            where = f"{where}, column {self.column}" if where else f"column {self.column}"
+        return where
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+
+def findings_to_json(findings) -> list[dict]:
+    """``results.json``'s ``findings``: in file order (line, then code)."""
+    return [f.to_json() for f in sorted(findings, key=lambda f: (f.line is None, f.line or 0,
+                                                                   f.code))]
