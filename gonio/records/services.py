@@ -737,7 +737,7 @@ def default_interval(spec_key: str) -> tuple[int, str]:
     months = getattr(get(spec_key), "recalibration_interval_months", None)
     if months:
         return int(months), "the specification's clause 9"
-    return DEFAULT_MONTHS, "clause 9 default (normally ≤ 12 months)"
+    return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"
 
 
 def propose_interval(store, instrument_id: int):
