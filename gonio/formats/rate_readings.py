@@ -86,7 +86,7 @@ COLUMN_RANGES: dict[str, tuple[float, float, str]] = {
     "supply_set_v": (1e-3, 1e3, "a voltage in [0.001, 1000] V"),
     "reference_dps": (-1e5, 1e5, "a rate in [-1e5, 1e5] °/s"),
     "output": (-1e12, 1e12, "a number in [-1e12, 1e12]"),
-    "stand_deg": (-3600.0, 3600.0, "an angle in [-3600, 3600]°"),
+    "stand_deg": (-1e4, 1e4, "an angle in [-1e4, 1e4]°"),
 }
 #: Tests whose rows are records (one segment sampled in time): a constant output there is
 #: a stuck gyro or a filled column, never a measurement of zero noise.
