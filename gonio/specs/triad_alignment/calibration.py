@@ -268,7 +268,11 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     accepted for the plug-in interface: everything the analysis uses is in the file.
     """
 
+    from gonio.result.findings import findings_to_json
+    from gonio.specs.triad_alignment.screen import check
+
     r = _as_readings(readings)
+    findings = check(r)                      # refused readings stop here, naming the line
     unit = r.metadata.get("output_unit", "output")
     items: dict[str, Item] = {}
     al = None
@@ -286,9 +290,12 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)
+    if tr is not None and tr is not r:
+        findings += check(tr)
     th = None
     comp: dict[str, Compensation] = {}
-    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None}
+    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None,
+             "findings": findings_to_json(findings)}
     if tr is None:
         items["thermal_model"] = not_measured(
             "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)", "thesis eq. 6.14",
