@@ -71,11 +71,11 @@ def test_sign_flipped_dwell_is_refused_with_its_line(triad_files, tmp_path):
         return ls[:i] + [",".join(p)] + ls[i + 1:]
     f = copy_with(triad_files, tmp_path / "s", flip)
     found = screen(read_triad_readings(f))
-    assert [(x.code, x.line, x.column) for x in found] == [("rate-sign", box["line"],
-                                                            "rate_dps")]
-    with pytest.raises(GonioError, match="opposite sign") as exc:
-        get("triad-alignment").calibrate(f)
-    assert exc.value.line == box["line"]
+    assert [(x.code, x.line, x.column, x.action) for x in found] == [
+        ("rate-sign", box["line"], "rate_dps", "flagged")]
+    r = get("triad-alignment").calibrate(f)
+    assert not r.items["b_x"].measured and f"line {box['line']}" in r.items["b_x"].reason
+    assert r.to_json()["findings"][0]["line"] == box["line"]
 
 
 def test_thermal_programme_at_one_temperature_is_refused(triad_files, tmp_path):

@@ -87,7 +87,7 @@ def _rate_signs(df: pd.DataFrame, metadata: dict, file) -> list[Finding]:
             out.append(Finding(
                 "rate-sign", f"alignment dwell about {up} at {float(row['rate_dps']):g} °/s: "
                 f"gyro {up[1]}'s output moved {dev:+.4g} from the static median, the opposite "
-                "sign of the rate (a sign-flipped rate_dps or up?)", "refused", file=file,
+                "sign of the rate (a sign-flipped rate_dps or up?)", "flagged", file=file,
                 line=int(row["line"]), column="rate_dps", test="alignment",
                 clause="triad screening",
                 rule=f"sign(out − static median) = sign(rate·up·K) when |out − median| > "
