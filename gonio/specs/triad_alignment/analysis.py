@@ -43,7 +43,7 @@ import pandas as pd
 from scipy import stats
 
 from gonio.physics.earth import earth_rate_enu
-from gonio.units import dps_to_dph
+from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
@@ -256,7 +256,7 @@ class AlignmentResult:
 
 #: How long the stated bias is meant to hold (s): one day of operation. The long-term term of
 #: b integrates the bias instability's flicker spectrum from the shortest dwell to this.
-BIAS_HORIZON_S: float = 86_400.0
+BIAS_HORIZON_S: float = S_PER_DAY
 #: Allan floor of flicker bias noise: σ_A = √(2 ln 2 / π) · B (IEEE 952 Annex C).
 FLICKER_FLOOR: float = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
@@ -284,7 +284,7 @@ def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
     """
     if averaging is None or not static_s:
         return np.zeros(3), np.full(3, math.inf)
-    b = np.asarray(averaging.min_adev_dph, dtype=float) / FLICKER_FLOOR / 3600.0
+    b = dph_to_dps(np.asarray(averaging.min_adev_dph, dtype=float)) / FLICKER_FLOOR
     tau_d = averaging.shortest_dwell_s if math.isfinite(averaging.shortest_dwell_s) else 1.0
     u = b * math.sqrt(max(math.log(horizon_s / tau_d), 0.0) / math.pi)
     nu = np.maximum(static_s / np.asarray(averaging.tau_min_adev_s, dtype=float) - 1.0, 1.0)
