@@ -14,7 +14,7 @@ import pytest
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.readings import Readings, read_readings
-from gonio.pipeline.calibrate import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.protocol import load_protocol
 from gonio.specs.ogam_draft.screen import ANGLE_FLOOR_ARCSEC, apply_findings, screen
 

@@ -15,7 +15,7 @@ import pytest
 from scipy import stats
 
 from gonio.bench import load_bench, run_session
-from gonio.pipeline.calibrate import calibrate
+from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.protocol import parse_protocol
 from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget
 from gonio.specs.ogam_draft.items import scale_factor

@@ -91,6 +91,9 @@ def run(args) -> int:
     inputs = [args.readings, args.protocol, args.lab, args.thermal]
     check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
     spec = get(args.spec or readings_spec(args.readings) or DEFAULT_KEY)
+    if spec.named_inputs is not None:                # never replaced or removed
+        inputs += list(spec.named_inputs(args.readings))
+        check_output_dir(args.out, inputs=inputs, force=args.force)
     lab_d = load_lab_file(args.lab)                               # validated before the work
     status("calibrating")
     result, _ = calibrate(args.readings, args.out, spec_key=spec.key, protocol=args.protocol,

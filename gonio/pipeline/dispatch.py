@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 
 from gonio.atomic import output_set
-from gonio.errors import GonioError, check_input_file, read_utf8
+from gonio.errors import GonioError, check_input_file, check_not_binary, read_utf8
 from gonio.specs import Specification, get
 
 #: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
@@ -49,6 +49,8 @@ def _header_lines(path):
         head = b""
         while True:
             piece = fh.read(1 << 16)
+            if not head:
+                check_not_binary(piece, path)      # a Parquet file renamed .csv says so
             head += piece
             try:
                 text = head.decode("utf-8")

@@ -136,6 +136,9 @@ class Specification:
     readings_format : str
         The ``# format:`` line its readings files carry, when that alone names it (a file
         without ``# spec:``); empty: none.
+    named_inputs : callable or None
+        (readings path) → the other files the readings name as part of their data (inputs
+        no output may replace).
     """
 
     key: str
@@ -158,6 +161,7 @@ class Specification:
     calibrate_options: frozenset = frozenset()
     budget_options: frozenset = frozenset()
     readings_format: str = ""
+    named_inputs: Callable[..., list] | None = None
 
     def renderer(self):
         """The module named by ``outputs`` (imported on first use)."""

@@ -208,6 +208,16 @@ def metadata_number(md: dict, key: str, default, path) -> float:
     return value
 
 
+def protocol_named(rd: RateReadings, protocol, default: str):
+    """The protocol to use: ``protocol`` when given, else the one the readings'
+    ``# protocol:`` names (:func:`gonio.resources.readings_protocol`: never ignored, an
+    unknown name refused), else ``default``."""
+    if protocol is not None:
+        return protocol
+    from gonio.resources import readings_protocol
+    return readings_protocol(rd.metadata.get("protocol"), rd.path, default)
+
+
 def load_readings(readings) -> RateReadings:
     """A RateReadings from a path or as given."""
     if isinstance(readings, RateReadings):

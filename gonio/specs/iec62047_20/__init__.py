@@ -16,7 +16,8 @@ from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
+from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation,
+                                                   protocol_named, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
@@ -61,7 +62,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     if spec != KEY:
         raise GonioError(f"the readings are for specification {spec!r}, not {KEY!r}",
                          file=rd.path, key="spec")
-    proto = protocol if isinstance(protocol, IECProtocol) else load_protocol(protocol or KEY)
+    proto = protocol if isinstance(protocol, IECProtocol) else \
+        load_protocol(protocol_named(rd, protocol, KEY))
     md, P = rd.metadata, proto.sections
     ratiometric = str(md.get("ratiometric", "")).strip().lower() in ("true", "yes", "1")
     df, n_corr = _items.supply_correction(rd.data, ratiometric)

@@ -17,7 +17,8 @@ from gonio.specs._rate_family import rate_specification
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
-from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, Item, RateCalibrationResult, load_readings, not_measured,
+from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation,
+                                                   protocol_named, Item, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
@@ -80,7 +81,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     if spec != KEY:
         raise GonioError(f"the readings are for specification {spec!r}, not {KEY!r}",
                          file=rd.path, key="spec")
-    proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or KEY)
+    proto = protocol if isinstance(protocol, JJFProtocol) else \
+        load_protocol(protocol_named(rd, protocol, KEY))
     ctx = make_context(rd, proto)
     items: dict[str, Item] = {}
     rows = {r[0]: r for r in _items_mod.ITEMS}

@@ -76,15 +76,20 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`); 0 without a static record."""
-    if not ctx.has("static") or ctx.K is None:
-        return 0.0
-    try:
-        noise = static_noise(ctx)
-    except GonioError:                  # the ARW item reports why
-        return 0.0
+    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`). Without a static record the term is
+    not known, never 0: a GonioError, so the item is "not measured" with the reason; 0 for a
+    static record that does not vary (a noise-free bench)."""
+    noise, found = None, False
+    if ctx.has("static") and ctx.K is not None:
+        try:
+            noise, found = static_noise(ctx), True
+        except GonioError:                  # the ARW item reports why
+            pass
+    if found and noise is None:
+        return 0.0                                   # a noise-free bench: no drift
     if noise is None:
-        return 0.0
+        raise GonioError("the budget's bias-drift term needs the static Allan record "
+                         "(7.2.13), which the readings lack or which could not be analysed")
     allan, fit = noise["allan"], noise["fit"]
     return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
                            separation_s)

@@ -8,7 +8,7 @@ K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.
 reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
 """
 
-from gonio.formats.triad import FORMAT
+from gonio.formats.triad import FORMAT, named_inputs
 from gonio.specs import Specification
 from gonio.specs.triad_alignment.calibration import article_budget, calibrate
 
@@ -37,4 +37,5 @@ SPEC = Specification(
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
     readings_format=FORMAT,
+    named_inputs=named_inputs,
 )
