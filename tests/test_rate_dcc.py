@@ -110,7 +110,7 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
         assert U == pytest.approx(unc["U"] * factor, rel=0.05)     # 2 significant digits
         assert _as_display(mu.find("si:valueExpandedMU", NS).text) == display("U", unc["U"] * factor)
         assert mu.find("si:coverageFactor", NS).text == display("k", unc["k"])
-        assert float(mu.find("si:coverageProbability", NS).text) == unc["p"] == 0.95
+        assert float(mu.find("si:coverageProbability", NS).text) == unc["coverage_probability"] == 0.95
     # per-g items are per m s⁻²: the value times g_n is the results.json value
     per_g = [(s, f, r) for s, _, f, r in shown if f != 1.0]
     assert per_g and all(res["items"][s.split(".")[1]]["unit"].endswith("/g") for s, _, _ in per_g)

@@ -206,10 +206,11 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             dsi, factor = dsi_unit(it["unit"], out_unit, src["file"])
             unc = it.get("uncertainty") or {}
             kw = {}
-            if unc.get("U") is not None and unc.get("k") is not None and unc.get("p"):
+            if (unc.get("U") is not None and unc.get("k") is not None
+                    and unc.get("coverage_probability")):
                 kw = {"U": Num(display("U", unc["U"] * factor), f"items.{key}.uncertainty.U", "U"),
                       "k": Num(display("k", unc["k"]), f"items.{key}.uncertainty.k", "k"),
-                      "p": float(unc["p"])}
+                      "p": float(unc["coverage_probability"])}
             conv = factor != 1.0
             quantity(data, name, Num(display("sig4", value * factor), f"items.{key}.value",
                                      "sig4"), "", dsi=dsi, note=f" factor={factor!r}" if conv else "",

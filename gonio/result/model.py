@@ -71,13 +71,16 @@ def budget_row(symbol: str, source: str, u, c=1.0, contribution=None, dof=None, 
 
 
 def normalise_row(row: dict) -> dict:
-    """A budget row from any of the earlier shapes (``u_arcsec``, ``beyond_draft``…) with
+    """A budget row from the earlier shapes (``beyond_draft``; no ``c``: a row that gives
+    u_i(y), the item's standard uncertainty due to this input, has c_i = 1) with
     :data:`ROW_KEYS` present."""
     r = dict(row)
     beyond = r.pop("beyond_standard", r.pop("beyond_draft", False))
     u = r.pop("u", None)
     c = r.pop("c", None)
     contribution = r.pop("contribution", None)
+    if c is None and contribution is None and u is not None:
+        c = 1.0          # a row given as u_i(y): its input already in the item's unit
     return budget_row(r.pop("symbol", ""), r.pop("source", ""), u, c, contribution,
                       r.pop("dof", None), type=r.pop("type", "") or "",
                       clause=r.pop("clause", "") or "", beyond_standard=bool(beyond), **r)
@@ -327,3 +330,31 @@ class Result:
         from gonio.result.text import summary_lines
 
         return "\n".join(summary_lines(self)) + "\n"
+
+
+def flat_view(d: dict) -> dict:
+    """A results.json (version 1) as the flat dict the optical draft's results.json was before
+    the one result model: each item at the top level as ``{item: title, value, unit, clause,
+    measured, reason, <details>, uncertainty}`` and each ``extra`` section at the top level;
+    ``gonio_version``, ``source``, ``metadata``, ``unused_readings``, ``readings_taken``
+    kept. For readers written against that shape (a Num path such as
+    ``angle_deviation.max_abs_arcsec`` or ``uncertainty.U_arcsec`` resolves in it).
+
+    >>> flat_view({"version": 1, "items": {"K": {"title": "K", "value": 2.0, "unit": "1",
+    ...   "details": {"n": 3}, "uncertainty": None}}, "extra": {"notes": []}})["K"]["n"]
+    3
+    """
+    out = {k: d[k] for k in ("gonio_version", "specification", "source", "metadata") if k in d}
+    out["protocol"] = (d.get("settings") or {}).get("protocol")
+    for key, it in d["items"].items():
+        flat = {"item": it.get("title", ""), "value": it.get("value"), "unit": it.get("unit"),
+                "clause": it.get("clause"), "measured": it.get("measured", True),
+                "reason": it.get("reason", "")}
+        flat.update(it.get("details") or {})
+        flat["uncertainty"] = it.get("uncertainty")
+        flat["conformity"] = it.get("conformity")
+        out[key] = flat
+    out["unused_readings"] = d.get("unused_readings", [])
+    out.update(d.get("extra") or {})
+    out["readings_taken"] = d.get("readings_taken", [])
+    return out

@@ -1,4 +1,4 @@
-"""The one table writer: ``tables/*.csv`` beside ``results.json``.
+"""The one writer of a result: ``results.json``, ``summary.txt`` and ``tables/*.csv``.
 
 ``items.csv`` lists every item (key, clause, value, unit, u, U, k, ν_eff, p, measured,
 conformity outcome); a result's own tables (``Result.tables``: name → DataFrame, e.g. the
@@ -8,11 +8,12 @@ names. Written in a fixed order with ``\\n`` line ends (byte-identical on every 
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pandas as pd
 
-from gonio.atomic import write_text
+from gonio.atomic import output_dir, write_text
 
 ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "measured",
                 "conformity"]
@@ -52,4 +53,23 @@ def write_tables(result, folder: str | Path) -> dict[str, Path]:
     for name, df in result_tables(result).items():
         write_text(folder / name, df.to_csv(index=False, lineterminator="\n"))
         paths[f"tables/{name}"] = folder / name
+    return paths
+
+
+def results_json_text(result) -> str:
+    """``results.json`` as written: indented, UTF-8, no NaN (strict JSON), ``\\n`` ends."""
+    return json.dumps(result.to_json(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+
+def write_results(result, out: str | Path) -> dict[str, Path]:
+    """``results.json``, ``summary.txt`` and ``tables/*.csv`` of ``result`` into ``out``,
+    swapped in together (:func:`gonio.atomic.output_dir`). Paths by name (``results``,
+    ``summary``, ``tables/<name>``)."""
+    out = Path(out)
+    with output_dir(out) as stage:
+        write_text(stage / "results.json", results_json_text(result))
+        write_text(stage / "summary.txt", result.summary())
+        tables = write_tables(result, stage)
+    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths.update({n: out / n for n in tables})
     return paths

@@ -67,14 +67,19 @@ def gonio(*args: str, cwd: Path) -> None:
         raise RuntimeError(f"gonio {' '.join(args)} failed ({r.returncode}):\n{r.stderr}")
 
 
-def run(spec: str, protocol: str | None, seed: int, work: Path) -> dict[str, dict]:
-    """One simulate + calibrate of ``spec``: its :func:`item_numbers`."""
+def results(spec: str, protocol: str | None, seed: int, work: Path) -> dict:
+    """One simulate + calibrate of ``spec``: its results.json."""
     proto = [] if protocol is None else ["--protocol", str(HERE / protocol)]
     sim, cal = work / f"{spec}-sim", work / f"{spec}-cal"
     gonio("simulate", "--spec", spec, *proto, "--seed", str(seed), "--out", str(sim), cwd=work)
     gonio("calibrate", str(sim / "readings.csv"), "--spec", spec, *proto, "--out", str(cal),
           cwd=work)
-    return item_numbers(json.loads((cal / "results.json").read_text(encoding="utf-8")))
+    return json.loads((cal / "results.json").read_text(encoding="utf-8"))
+
+
+def run(spec: str, protocol: str | None, seed: int, work: Path) -> dict[str, dict]:
+    """One simulate + calibrate of ``spec``: its :func:`item_numbers`."""
+    return item_numbers(results(spec, protocol, seed, work))
 
 
 def compute() -> dict:
