@@ -191,10 +191,24 @@ def test_not_measured_items_carry_their_reason(run, schema):
 def test_calibrate_cli_writes_the_dcc_in_the_set(run, schema, capsys):
     from gonio.cli import main
     out = run["tmp"] / "cal"
-    lab = protocols_dir() / "lab-example.toml"
+    example = protocols_dir() / "lab-example.toml"
+    # the example's limits name the optical draft's items: refused, naming this spec's items
+    assert main(["calibrate", str(run["readings"]), "--protocol", str(run["proto"]),
+                 "--lab", str(example), "--out", str(run["tmp"] / "refused")]) == 2
+    err = capsys.readouterr().err
+    assert f"{run['spec']} has no item 'angle_deviation' (its items: " in err and "bias" in err
+    assert not (run["tmp"] / "refused" / "results.json").exists()
+    text = example.read_text(encoding="utf-8").split("[[specification_limits]]")[0]
+    lab = run["tmp"] / "lab-rate.toml"
+    lab.write_text(text + '[[specification_limits]]\nitem = "bias"\nmpe = 1.0e6\n'
+                   'source = "test limit"\n', encoding="utf-8")
     assert main(["calibrate", str(run["readings"]), "--protocol", str(run["proto"]), "--dcc",
                  "--lab", str(lab), "--out", str(out)]) == 0
     capsys.readouterr()
+    # conformity decided in the pipeline, written to results.json (non-binary, the lab's rule)
+    conf = json.loads((out / "results.json").read_text())["items"]["bias"]["conformity"]
+    assert (conf["rule"], conf["outcome"], conf["limits_from"]) == ("non-binary", "pass",
+                                                                    "lab file")
     man = json.loads((out / "gonio-manifest.json").read_text())
     assert {"certificate.dcc.xml", "certificate.html", "certificate.pdf",
             "results.json"} <= set(man["files"])
