@@ -15,6 +15,12 @@ import re
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported for the sub-commands)
 
+#: Upper bound of physical magnitudes typed on the command line (scale factors, lengths, times,
+#: accelerations): beyond any quantity of these kinds in SI units (the observable universe is
+#: ~1e27 m), yet low enough that products and squares of such numbers stay finite doubles.
+#: Lower bounds come from physics (> 0, ≥ 0, absolute zero), or 1/LARGE where a number divides.
+LARGE = 1e50
+
 _INT = re.compile(r"^[+-]?[0-9]{1,30}$")
 _FLOAT = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]{1,4})?$")
 
@@ -52,6 +58,11 @@ def float_range(lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = 
                 f"expected {what} in {left}{lo:g}, {hi:g}{right}, got {_show(text)}")
         return v
     return conv
+
+
+def positive_magnitude(text: str) -> float:
+    """A physical magnitude that divides or scales data: in [1/LARGE, LARGE] (representable)."""
+    return float_range(1.0 / LARGE, LARGE, what="a positive number")(text)
 
 
 def seed(text: str) -> int:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.cli.checks import json_safe
+from gonio.cli.checks import LARGE, json_safe
 from gonio.units import ARCSEC_PER_DEG
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
@@ -31,9 +31,9 @@ def register(subparsers) -> None:
                    help="standard table MPE in arc-seconds (A.4.1; default 0.1)")
     p.add_argument("--tilt-deg", type=float_range(0, 45), default=0.1, metavar="PSI",
                    help="sensing-plane tilt in degrees (A.4.2; default 0.1)")
-    p.add_argument("--zero-stability-dph", type=float_range(0, 1e4), default=0.005, metavar="B",
+    p.add_argument("--zero-stability-dph", type=float_range(0, LARGE), default=0.005, metavar="B",
                    help="zero stability in °/h (A.4.3; default 0.005)")
-    p.add_argument("--duration-min", type=float_range(0, 1e4), default=0.5, metavar="T",
+    p.add_argument("--duration-min", type=float_range(0, LARGE), default=0.5, metavar="T",
                    help="time from start to reading in minutes (A.4.3; default 0.5)")
     p.add_argument("--repeatability-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=0.096,
                    metavar="S",

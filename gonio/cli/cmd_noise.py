@@ -30,7 +30,8 @@ import numpy as np
 
 from gonio.errors import GonioError
 from gonio.units import S_PER_H
-from gonio.cli.checks import float_range, int_range, json_safe, seed as seed_type
+from gonio.cli.checks import (float_range, int_range, json_safe, positive_magnitude,
+                               seed as seed_type)
 
 _INPUTS = {"angle": "angle", "counts": "increment", "rate": "rate"}
 _KINDS = ("adev", "mdev", "hdev", "totdev")
@@ -77,7 +78,7 @@ def register(subparsers) -> None:
                    help="parameter uncertainties by a parametric bootstrap of B records "
                         "(default 20; 0: least-squares covariance, a quick indication)")
     p.add_argument("--seed", type=seed_type, default=0, help="seed of the bootstrap")
-    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
+    p.add_argument("--scale-factor", type=positive_magnitude, default=None, metavar="K",
                    help="counts per degree (default: metadata "
                         "nominal_scale_factor_counts_per_deg)")
     p.add_argument("--confidence", type=float_range(0, 1, lo_open=True, hi_open=True), default=0.683,

@@ -6,7 +6,7 @@ import json
 
 from gonio.errors import GonioError, check_input_file
 from gonio.atomic import check_output_file
-from gonio.cli.checks import float_range
+from gonio.cli.checks import LARGE, float_range
 from gonio.formats.readings import write_readings
 from gonio.protocol import load_protocol
 from gonio.formats.override import read_override
@@ -28,7 +28,7 @@ def register(sub) -> None:
                    help="CSV test,series,round,t_zero_s,t_read_s[,rate_dps,orientation]")
     p.add_argument("--force", action="store_true",
                    help="replace an existing readings file at --out")
-    p.add_argument("--max-gap", type=float_range(0, 1e6, lo_open=True), default=None, metavar="S",
+    p.add_argument("--max-gap", type=float_range(0, LARGE, lo_open=True), default=None, metavar="S",
                    help="largest allowed time step in the stream, s (default 10× median)")
     p.add_argument("--json", action="store_true", help="print the reduction summary as JSON")
     p.set_defaults(func=run)

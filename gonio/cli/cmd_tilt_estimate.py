@@ -11,7 +11,7 @@ import json
 from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
 
 
-from gonio.cli.checks import float_range
+from gonio.cli.checks import float_range, positive_magnitude
 
 
 def register(subparsers) -> None:
@@ -22,7 +22,7 @@ def register(subparsers) -> None:
                     "and report ψ = asin(hypot(a, b)/Ω_⊥) and the tilt azimuth α with their "
                     "standard uncertainties (residual-based covariance).")
     p.add_argument("file", metavar="FILE", help="readings CSV with tilt_estimate rows")
-    p.add_argument("--scale-factor", type=float_range(1e-6, 1e12), default=None, metavar="K",
+    p.add_argument("--scale-factor", type=positive_magnitude, default=None, metavar="K",
                    help="counts/° (default: the file's nominal_scale_factor_counts_per_deg)")
     p.add_argument("--latitude-deg", type=float_range(-90, 90), default=None, metavar="PHI",
                    help="site latitude (default: the file's latitude_deg)")

@@ -20,15 +20,18 @@ KNOWN_METADATA: tuple[str, ...] = (
     "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
     "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised", "table_accel_dps2",
 )
-# numeric metadata: key -> (lower bound, lower inclusive, upper bound, description)
+# numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
+# from physics (absolute zero, a percentage, a latitude, half a turn) and representability
+# (1e-50 .. 1e50 where a number divides or scales data), not from the instruments one has in
+# mind (issue 26: UG-2's 834 m² ring was refused by such a bound).
 NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
-    "nominal_scale_factor_counts_per_deg": (1e-6, True, 1e12, "a number in [1e-6, 1e12]"),
+    "nominal_scale_factor_counts_per_deg": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
     "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
-    "temperature_c": (-100.0, True, 200.0, "a number in [-100, 200]"),
+    "temperature_c": (-273.15, False, 1000.0, "a number in (-273.15, 1000]"),
     "humidity_pct": (0.0, True, 100.0, "a number in [0, 100]"),
-    "table_mpe_arcsec": (0.0, True, ARCSEC_PER_DEG, "a number in [0, 3600]"),
+    "table_mpe_arcsec": (0.0, True, 180 * ARCSEC_PER_DEG, "a number in [0, 648000]"),
     "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
-    "table_accel_dps2": (1e-3, True, 1e5, "a number in [1e-3, 1e5]"),
+    "table_accel_dps2": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
 }
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")

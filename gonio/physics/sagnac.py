@@ -30,11 +30,32 @@ def rlg_scale_factor_counts_per_rad(area_m2: float, perimeter_m: float,
     >>> round(k), round(k * math.pi / 180, 2)        # per rad, per degree
     (136856, 2388.59)
     """
-    for name, v in (("area_m2", area_m2), ("perimeter_m", perimeter_m),
-                    ("wavelength_m", wavelength_m)):
+    _check_positive(area_m2=area_m2, perimeter_m=perimeter_m, wavelength_m=wavelength_m)
+    # isoperimetric inequality: no closed path of perimeter P encloses more than P²/(4π)
+    # (as A/P > P/4π, which cannot overflow)
+    if area_m2 / perimeter_m > perimeter_m / (4.0 * math.pi) * (1.0 + 1e-12):
+        raise GonioError(f"area_m2 = {area_m2:g} exceeds what a ring of perimeter_m = "
+                         f"{perimeter_m:g} can enclose (P²/4π, a circle)")
+    return _representable("scale factor 4A/(λP)", 4.0 * area_m2 / (wavelength_m * perimeter_m))
+
+
+def _check_positive(**values: float) -> None:
+    """Physical bounds of the Sagnac inputs: lengths, areas, wavelengths are finite and > 0.
+
+    No upper bound from the instruments one has in mind (UG-2 encloses 834 m², fibre coils
+    run to tens of km); what cannot be represented is refused by :func:`_representable`.
+    """
+    for name, v in values.items():
         if not (math.isfinite(v) and v > 0):
-            raise GonioError(f"{name} must be a positive number, got {v}")
-    return 4.0 * area_m2 / (wavelength_m * perimeter_m)
+            raise GonioError(f"{name} must be a positive finite number, got {v}")
+
+
+def _representable(what: str, value: float) -> float:
+    """``value`` itself, refused when it over- or underflows a double (no inf, no 0)."""
+    if not (math.isfinite(value) and value >= 2.2250738585072014e-308):
+        raise GonioError(f"the {what} is not representable as a number ({value}): "
+                         "the inputs are too far apart in scale")
+    return value
 
 
 def fog_phase_per_rate_s(length_m: float, diameter_m: float,
@@ -44,11 +65,10 @@ def fog_phase_per_rate_s(length_m: float, diameter_m: float,
     >>> round(fog_phase_per_rate_s(1000.0, 0.1), 3)      # 1 km coil, 10 cm diameter
     1.352
     """
-    for name, v in (("length_m", length_m), ("diameter_m", diameter_m),
-                    ("wavelength_m", wavelength_m)):
-        if not (math.isfinite(v) and v > 0):
-            raise GonioError(f"{name} must be a positive number, got {v}")
-    return 2.0 * math.pi * length_m * diameter_m / (wavelength_m * SPEED_OF_LIGHT_M_S)
+    _check_positive(length_m=length_m, diameter_m=diameter_m, wavelength_m=wavelength_m)
+    return _representable("Sagnac phase per rate 2πLD/(λc)",
+                          2.0 * math.pi * length_m * diameter_m
+                          / (wavelength_m * SPEED_OF_LIGHT_M_S))
 
 
 def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: float,
@@ -73,17 +93,22 @@ class Sagnac:
     phase_per_rate_s: float | None                  # FOG: rad of phase per rad/s, 2πLD/(λc)
     earth_rate_signal: float                        # RLG: Hz (pulses/s); FOG: rad of phase
     earth_rate_signal_unit: str
+    latitude_deg: float | None = None               # where the axis points up (if given)
+    earth_rate_up_signal: float | None = None       # the signal of Ω sin φ, same unit
 
     def to_dict(self) -> dict:
         """Plain dict (for ``--json``)."""
         return dict(self.__dict__)
 
 
-def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9) -> Sagnac:
+def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-9,
+               latitude_deg: float | None = None) -> Sagnac:
     """Ring-laser Sagnac scale factor and the full Earth rate's beat frequency.
 
     Δf = 4A/(λP)·Ω (docs/draft-readings.md#sagnac-effect; [Aronowitz1971]). One pulse is
-    1/K rad.
+    1/K rad. With ``latitude_deg``, also the beat of a horizontal ring (normal up), whose
+    Sagnac frequency is 4A/(λP)·Ω_E·|sin φ| (the magnitude: the sign only says which beam
+    is the faster).
 
     >>> s = sagnac_rlg(0.15**2 * 3**0.5 / 4, 0.45)          # 15 cm-side triangle, He-Ne
     >>> round(s.scale_factor_counts_per_deg, 2), round(s.resolution_arcsec, 4)
@@ -93,10 +118,18 @@ def sagnac_rlg(area_m2: float, perimeter_m: float, wavelength_m: float = 632.8e-
     """
     k = rlg_scale_factor_counts_per_rad(area_m2, perimeter_m, wavelength_m)
     return Sagnac("rlg", wavelength_m, k, k * math.pi / 180.0, rad_to_arcsec(1.0 / k),
-                  None, k * OMEGA_E_RAD_S, "Hz")
+                  None, k * OMEGA_E_RAD_S, "Hz", latitude_deg, _up_signal(k, latitude_deg))
 
 
-def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9) -> Sagnac:
+def _up_signal(per_rate: float, latitude_deg: float | None) -> float | None:
+    """|signal| of the Earth rate's vertical component Ω sin φ (None without a latitude)."""
+    if latitude_deg is None:
+        return None
+    return abs(per_rate * math.radians(earth_rate_on_axis_dps(latitude_deg, "up")))
+
+
+def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9,
+               latitude_deg: float | None = None) -> Sagnac:
     """Fibre-optic Sagnac phase per rate 2πLD/(λc) and the full Earth rate's phase.
 
     Δφ = 2πLD/(λc)·Ω (docs/draft-readings.md#sagnac-effect; [Lefevre], 2.1).
@@ -106,4 +139,5 @@ def sagnac_fog(length_m: float, diameter_m: float, wavelength_m: float = 1550e-9
     (1.3522, '9.860e-05')
     """
     f = fog_phase_per_rate_s(length_m, diameter_m, wavelength_m)
-    return Sagnac("fog", wavelength_m, None, None, None, f, f * OMEGA_E_RAD_S, "rad")
+    return Sagnac("fog", wavelength_m, None, None, None, f, f * OMEGA_E_RAD_S, "rad",
+                  latitude_deg, _up_signal(f, latitude_deg))

@@ -22,9 +22,10 @@ from __future__ import annotations
 
 import math
 import re
-from decimal import ROUND_HALF_UP, Decimal
+from decimal import Decimal
 
 from gonio.errors import GonioError
+from gonio.result.statement import decimals_for_sig, round_half_up  # noqa: F401  (the one rule)
 
 #: Languages the certificate can be written in.
 LANGUAGES: tuple[str, ...] = ("en", "zh")
@@ -452,57 +453,6 @@ def cjk_font() -> str:
 
 
 # --------------------------------------------------------------------------- numbers
-
-def round_half_up(x: float, decimals: int) -> str:
-    """``x`` rounded half up to ``decimals`` places (negative: tens, hundreds...), as text.
-
-    The one rounding of the certificate (JCGM 100 7.2.6 rounds half up); works on
-    the shortest repr of the float, so 0.125 → "0.13" and 2.675 → "2.68".
-
-    >>> round_half_up(0.35896, 2), round_half_up(-0.11879, 2), round_half_up(76434.84259, 3)
-    ('0.36', '-0.12', '76434.843')
-    >>> round_half_up(0.125, 2), round_half_up(1234.5, -2), round_half_up(-0.0004, 2)
-    ('0.13', '1200', '0.00')
-    """
-    x = float(x)
-    if not math.isfinite(x):
-        return "—"
-    with _wide():              # total: any finite float and any place (no InvalidOperation)
-        q = Decimal(1).scaleb(-decimals)
-        d = Decimal(repr(x)).quantize(q, rounding=ROUND_HALF_UP)
-        if d == 0:
-            d = abs(d)
-        return f"{d:f}" if decimals >= 0 else f"{d.quantize(Decimal(1)):f}"
-
-
-def _wide():
-    """A decimal context wide enough for every float at every decimal place (±1e308, 1e-324)."""
-    from decimal import localcontext
-
-    return localcontext(prec=1400, Emax=999_999, Emin=-999_999)
-
-
-def decimals_for_sig(x: float, sig: int) -> int:
-    """Decimal place that leaves ``sig`` significant digits of ``x`` after half-up rounding.
-
-    >>> decimals_for_sig(0.35896, 2), decimals_for_sig(0.0996, 2), decimals_for_sig(76434.8, 8)
-    (2, 2, 3)
-    """
-    if x == 0 or not math.isfinite(x):
-        return sig - 1
-    with _wide():
-        return _decimals_for_sig(x, sig)
-
-
-def _decimals_for_sig(x: float, sig: int) -> int:
-    d = Decimal(repr(abs(float(x))))
-    e = d.adjusted()                       # exponent of the leading digit
-    dec = sig - 1 - e
-    r = d.quantize(Decimal(1).scaleb(-dec), rounding=ROUND_HALF_UP)
-    if r.adjusted() > e:                   # 0.0996 → 0.100: one digit more to the left
-        dec -= 1
-    return dec
-
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 

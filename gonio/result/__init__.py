@@ -1,7 +1,8 @@
 """The one result model every specification returns (issue 23).
 
 This package is being built up: :mod:`gonio.result.findings` holds the screening
-findings that every specification's ``screen(readings)`` returns; the item and result
+findings that every specification's ``screen(readings)`` returns; :mod:`gonio.result.statement`
+the one rule by which every output states a value with its uncertainty (GUM 7.2.6); the item and result
 classes (``Item``, ``Result``, budget rows, conformity) join it in ``gonio.result.model``.
 It sits low in the layers (beside ``gonio.protocol``): specifications, analyses, the
 report and the pipeline import it; it imports only the ground floor and ``gonio.formats``.

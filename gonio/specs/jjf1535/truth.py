@@ -1,12 +1,14 @@
 """The virtual bench's true value of every JJF 1535 item (truth.json, recovery tests).
 
 Each value comes from the gyro model's parameters (:class:`gonio.bench.rate_gyro.RateGyroConfig`)
-and the protocol, by closed forms where they exist (g-sensitivity, ARW, temperature
-sensitivities, bandwidth) and otherwise by applying the clause's formula to the model's
-*exact, noise-free* outputs at the protocol's points (scale factor with its nonlinearity and
-asymmetry, threshold, resolution, warm-up time) — labelled ``"how"`` in the result. The
-noise statistics (bias stability, bias repeatability) use the exact covariance of the
-noise model (white, Gauss–Markov sum, random walk), independent of the generator.
+and the protocol, by closed forms (:mod:`gonio.bench.rate_truth`: scale factor, asymmetry,
+temperature sensitivities, bias, g-sensitivity, ARW, warm-up time, bandwidth) and otherwise by
+the clause's definition written out here on the model's *exact, noise-free* outputs
+(nonlinearity's residuals, the 50 % rules' walk) — labelled ``"how"`` in the result. None of
+it calls the estimators of :mod:`gonio.analysis.rate_gyro`, so a formula mutated there
+changes the estimate and not the truth (tests/test_rate_truth_independent.py). The noise
+statistics (bias stability, bias repeatability) use the exact covariance of the noise model
+(white, Gauss–Markov sum, random walk), independent of the generator.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import math
 import numpy as np
 
 from gonio.analysis import rate_gyro as rg
+from gonio.bench import rate_truth as rt
 from gonio.bench.rate_gyro import NoiseState, RateBench, difference_noise_sigma
 from gonio.bench.rate_session import mount_matrix
 from gonio.physics.earth import earth_rate_enu
@@ -76,8 +79,86 @@ def record_mean_variance(bench: RateBench, dt: float, n_samples: int, t_start_s:
     return float(C.sum()) / (n_samples // P) ** 2
 
 
+def _scale_factor_truths(g, K0: float, rates: np.ndarray, ez: float) -> dict:
+    """7.2.1–7.2.3 from the model's closed forms (:mod:`gonio.bench.rate_truth`): K, the
+    residuals of eq (5) written out, K± of each direction."""
+    k, how = rt.slope_both_directions(g, rates, ez)
+    K = K0 * k
+    om = np.concatenate([rates, -rates])
+    F = K0 * (rt.response_at(g, om + ez) - rt.response_at(g, np.array([ez]))[0])
+    v = F - K * om - (F.mean() - K * om.mean())          # eq (5) residuals, F_0 = F̄ − KΩ̄
+    kp, kn, how_d = rt.slopes_per_direction(g, rates, ez)
+    return {"scale_factor": {"value": K, "how": f"K₀·LS slope of f(Ω + Ω_E,z), {how}"},
+            "nonlinearity": {"value": float(np.abs(v).max() / abs(K * (om.max() - om.min()))),
+                             "how": "eq (6) on the model's exact outputs, residuals from the "
+                                    "closed-form K"},
+            "asymmetry": {"value": abs(kp - kn) / (0.5 * (kp + kn)),
+                          "how": f"|K+ − K−|/((K+ + K−)/2), {how_d}"}}
+
+
+def _rule_truth(g, K0: float, K: float, steps, base: float, ez: float, sigma: float,
+                two_sided: bool, field: str) -> dict:
+    """The 50 % rule of 7.2.6 / 7.2.7 on the model's exact responses to ``steps`` (above a
+    ``base`` rate), both directions: the noise-free outcome by the rule's walk
+    (:func:`gonio.bench.rate_truth.rule_walk`), and the median outcome under the model's noise
+    of each referred mean (σ in output units) — the two agree when the noise is off."""
+    cands, pmfs = [], []
+    for s in (1.0, -1.0):
+        b = s * base
+        inc = s * np.asarray(steps, float)
+        meas = K0 * (rt.response_at(g, b + inc + ez) - rt.response_at(g, np.array([b + ez]))[0])
+        exp = K * inc
+        ok = np.abs(meas - exp) <= 0.5 * np.abs(exp) * (1 + 1e-12)
+        cands.append(rt.rule_walk(inc, ok))
+        pmfs.append(rg.fifty_percent_outcome_pmf(
+            inc, rg.fifty_percent_pass_probability(meas, sigma, exp)))
+    free = None if None in cands else max(cands)
+    value = free if sigma == 0 else rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5)
+    return {"value": value, "noise_free_dps": free, "noise_sigma_output": sigma,
+            "how": f"the {field} rule's walk on exact model responses (noise off); the median "
+                   "outcome under the model's noise of each referred mean (noise on)"}
+
+
+def _warmup_truth(g, w: dict, dt: float, nominal: float, kr: float) -> float:
+    """7.2.9 on the exact transient A·e^(−t/τ) (interval means): the block-mean standard
+    deviation of a window starting at t is e^(−t/τ) times that of the first window, so the
+    earliest compliant start is the first block boundary ≥ τ·ln(s₀/nominal)."""
+    W, P = w["window_samples"], w["block_samples"]
+    tau, A = g.warmup_tau_s, g.warmup_bias_dps * kr
+    blocks = [rt.exponential_interval_mean(A, tau, j * P * dt, (j + 1) * P * dt)
+              for j in range(W // P)]
+    s0 = float(np.std(blocks, ddof=1))
+    if s0 <= nominal:
+        return 0.0
+    t_min = tau * math.log(s0 / nominal)
+    t = math.ceil(t_min / (P * dt) * (1 - 1e-12)) * P * dt
+    return t if t <= (w["samples"] - W) * dt else math.nan
+
+
+def _bandwidth_truth(g, f: np.ndarray) -> dict:
+    """7.2.15: the model's −3 dB frequency relative to its gain at the lowest test frequency,
+    by bisection of |H(f)| (and its log-f interpolation on the test grid, the noise-off
+    value the item reads)."""
+    target = 10.0 ** (-3.0 / 20.0) * abs(g.dynamics(f[0]))
+    lo, hi = f[0], f[-1] * 10
+    if abs(g.dynamics(hi)) < target:
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if abs(g.dynamics(mid)) > target else (lo, mid)
+        bw = 0.5 * (lo + hi)
+    else:
+        bw = math.nan
+    return {"value": bw, "grid_interpolated_hz": rt.log_grid_crossing(
+        f, np.abs(g.dynamics(f)), 10.0 ** (-3.0 / 20.0)),
+        "phase90_hz": g.natural_frequency_hz,
+        "how": "|H(f)|/|H(f_lowest)| = 10^(-3/20) of the second-order model"}
+
+
 def truth(bench: RateBench, proto) -> dict:
-    """True values of the fifteen items (keys as in :data:`gonio.specs.jjf1535.items.ITEMS`)."""
+    """True values of the fifteen items (keys as in :data:`gonio.specs.jjf1535.items.ITEMS`),
+    from the model's parameters: closed forms (:mod:`gonio.bench.rate_truth`) and the
+    clauses' definitions written out here, never the estimators' functions (only the
+    outcome distribution of the noisy 50 % rule comes from :mod:`gonio.analysis.rate_gyro`)."""
     from gonio.specs.jjf1535.protocol import bandwidth_frequencies, sf_rates
 
     g = bench.gyro
@@ -87,67 +168,36 @@ def truth(bench: RateBench, proto) -> dict:
     eb = _earth_body(lat, "+z", "+x")
     ez = float(eb[2])
     K0 = float(g.scale_factor_at(room, g.supply_nominal_v))
-    rates = np.array(sf_rates(proto))
-    om = np.concatenate([rates, -rates])
-    F = K0 * (g.response(om + ez) - g.response(np.array([ez]))[0])
-    fit = rg.fit_scale_factor(om, F)
-    asym = rg.asymmetry_jjf(om, fit.means)
-    out = {}
-    out["scale_factor"] = {"value": fit.K, "how": "least squares on the exact model outputs"}
-    out["nonlinearity"] = {"value": rg.nonlinearity_jjf(fit), "how": "eq (6) on exact outputs"}
-    out["asymmetry"] = {"value": asym.value, "how": "eq (8) on exact outputs"}
+    rates = np.array(sf_rates(proto), float)
+    out = _scale_factor_truths(g, K0, rates, ez)
+    K = out["scale_factor"]["value"]
     out["sf_repeatability"] = {"value": g.sf_scatter_rel, "how": "power-cycle scatter σ of K"}
     temps = [room] + list(P["temperature"]["points_c"])
-    Ks = [float(g.scale_factor_at(t, g.supply_nominal_v)) for t in temps]
+    dT = np.array([g.delta_t(t) for t in temps], float)
+    poly = 1 + g.sf_tc1_per_c * dT + g.sf_tc2_per_c2 * dT ** 2      # K(T)/K(T_ref)
     out["sf_temperature_sensitivity"] = {
-        "value": rg.temperature_sensitivity(Ks, temps, 0, relative=True)[0],
-        "how": "K(T) of the model at the set points"}
-    # threshold and resolution: the 50 % rule on exact outputs, K = the true K above
-    th = P["threshold"]["rates_dps"]
+        "value": float(np.max(np.abs((poly[1:] / poly[0] - 1) / (dT[1:] - dT[0])))),
+        "how": "eq (11) on K(T) = K₀(1 + k₁ΔT + k₂ΔT²) of the model (the response factor cancels)"}
     dt0 = P["protocol"]["sample_interval_s"]
     settle = P["scale_factor"]["settle_s"]
-    tp = P["threshold"]
+    tp, rs = P["threshold"], P["resolution"]
     sig_th = K0 * difference_noise_sigma(g, dt0, tp["samples"], tp["rest_samples"],
                                          0.5 * (tp["samples"] + tp["rest_samples"]) * dt0 + settle,
                                          both_sides=True, temp_c=room)
-    cands, pmfs = [], []
-    for s in (1.0, -1.0):
-        r = s * np.array(th)
-        meas = K0 * (g.response(r + ez) - g.response(np.array([ez]))[0])
-        cands.append(rg.fifty_percent_candidate(r, meas, fit.K * r)[0])
-        pmfs.append(rg.fifty_percent_outcome_pmf(
-            r, rg.fifty_percent_pass_probability(meas, sig_th, fit.K * r)))
-    out["threshold"] = {"value": rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5),
-                        "noise_free_dps": None if None in cands else max(cands),
-                        "noise_sigma_output": sig_th,
-                        "continuous_dps": 2 * g.dead_band_dps,
-                        "how": "median outcome of the 50 % rule at the protocol's rates: exact "
-                               "model responses, the model's noise of each rest-referred mean "
-                               "(equals the noise-free result when the noise is off)"}
-    rs = P["resolution"]
+    out["threshold"] = {**_rule_truth(g, K0, K, tp["rates_dps"], 0.0, ez, sig_th, True,
+                                      "threshold"), "continuous_dps": 2 * g.dead_band_dps}
     sig_rs = K0 * difference_noise_sigma(g, dt0, rs["samples"], rs["samples"],
                                          rs["samples"] * dt0 + settle, both_sides=False,
                                          temp_c=room)
-    cands, pmfs = [], []
-    for s in (1.0, -1.0):
-        b = s * rs["base_rate_dps"]
-        inc = s * np.array(rs["increments_dps"])
-        meas = K0 * (g.response(b + inc + ez) - g.response(np.array([b + ez]))[0])
-        cands.append(rg.fifty_percent_candidate(inc, meas, fit.K * inc)[0])
-        pmfs.append(rg.fifty_percent_outcome_pmf(
-            inc, rg.fifty_percent_pass_probability(meas, sig_rs, fit.K * inc)))
-    out["resolution"] = {"value": rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5),
-                         "noise_free_dps": None if None in cands else max(cands),
-                         "noise_sigma_output": sig_rs,
-                         "how": "median outcome of the 50 % rule (exact responses, the model's "
-                                "noise of each base-referred mean)"}
+    out["resolution"] = _rule_truth(g, K0, K, rs["increments_dps"], rs["base_rate_dps"], ez,
+                                    sig_rs, True, "resolution")
     # bias at room temperature, input axis up, Earth rate removed: b + g·f + cross·ω_E
     gz = np.asarray(g.g_sensitivity_dps_per_g)
     f_b = mount_matrix("+z", "+x").T @ np.array([0.0, 0.0, 1.0])
-    kr = K0 / fit.K          # the measured rate unit is output / K_LS, not output / K₀
+    kr = K0 / K          # the measured rate unit is output / K_LS, not output / K₀
     b0 = float(g.bias_at(room, g.supply_nominal_v)) + float(gz @ f_b) \
         + g.cross_axis_x * float(eb[0]) + g.cross_axis_y * float(eb[1])
-    f_ez = float(g.response(np.array([ez]))[0])
+    f_ez = float(rt.response_at(g, np.array([ez]))[0])
     out["bias"] = {"value": ((b0 + f_ez) * kr - ez) * S_PER_H,
                    "model_bias_dph": b0 * S_PER_H,
                    "how": "[b(T_rt) + g·f + k·ω_E⊥ + f(Ω_E,z)]·K₀/K_LS − Ω_E,z (°/h)"}
@@ -159,22 +209,31 @@ def truth(bench: RateBench, proto) -> dict:
     vm = record_mean_variance(bench, dt, b["samples"], warm)
     out["bias_repeatability"] = {"value": math.sqrt(g.bias_scatter_dps ** 2 + vm) * S_PER_H,
                                  "how": "√(σ_b,run² + var(record mean)) from the noise model"}
-    # warm-up time on the exact transient
     w = P["warmup"]
-    t = np.arange(w["samples"]) * dt
-    tau = g.warmup_tau_s
-    x = g.warmup_bias_dps * tau / dt * (np.exp(-t / tau) - np.exp(-(t + dt) / tau))
-    out["warmup_time"] = {"value": rg.warmup_time_s(t, x, window=w["window_samples"],
-                                                    block=w["block_samples"],
-                                                    nominal=w["nominal_stability_dph"] / S_PER_H),
-                          "how": "7.2.9 reading on the noise-free transient"}
-    s_noise = expected_block_std(bench, dt, w["window_samples"], w["block_samples"], 0.0)
     nom = w["nominal_stability_dph"] / S_PER_H
-    out["warmup_time"]["value_with_noise"] = (
-        rg.warmup_time_s(t, x, window=w["window_samples"], block=w["block_samples"],
-                         nominal=math.sqrt(nom ** 2 - s_noise ** 2)) if nom > s_noise else math.nan)
-    out["warmup_time"]["noise_block_std_dph"] = s_noise * S_PER_H
-    # g-sensitivity per axis: g_axis + cross-axis coupling of the Earth rate, Earth removed
+    s_noise = expected_block_std(bench, dt, w["window_samples"], w["block_samples"], 0.0)
+    out["warmup_time"] = {
+        "value": _warmup_truth(g, w, dt, nom, kr),
+        "value_with_noise": _warmup_truth(g, w, dt, math.sqrt(nom ** 2 - s_noise ** 2), kr)
+        if nom > s_noise else math.nan,
+        "noise_block_std_dph": s_noise * S_PER_H,
+        "how": "7.2.9 on the exact transient: first block boundary ≥ τ·ln(s₀/nominal)"}
+    out["g_sensitivity"] = _g_truth(g, lat, kr)
+    out["angle_random_walk"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (room - g.reference_temperature_c)),
+                                "how": "ARW parameter at room temperature"}
+    slopes = kr * (g.bias_tc1_dps_per_c + g.bias_tc2_dps_per_c2 * (dT[1:] + dT[0])) * S_PER_H
+    out["bias_temperature_sensitivity"] = {
+        "value": float(np.max(np.abs(slopes))),
+        "how": "eq (27) on b(T) = b₀ + b₁ΔT + b₂ΔT²: (B_i − B_rt)/(T_i − T_rt) = "
+               "[b₁ + b₂(ΔT_i + ΔT_rt)]·K₀/K_LS"}
+    out["bandwidth"] = _bandwidth_truth(g, np.array(bandwidth_frequencies(proto, bench)))
+    return out
+
+
+def _g_truth(g, lat: float, kr: float) -> dict:
+    """7.2.12: per axis half the difference of the ±axis-up rates (g-sensitivity parameters
+    plus the cross-axis coupling of the Earth rate, Earth projection removed)."""
+    gz = np.asarray(g.g_sensitivity_dps_per_g)
     per = {}
     for ax, (up, dn, north) in {"x": ("+x", "-x", "+y"), "y": ("+y", "-y", "+z"),
                                "z": ("+z", "-z", "+x")}.items():
@@ -183,29 +242,8 @@ def truth(bench: RateBench, proto) -> dict:
             e = _earth_body(lat, u, north)
             fb = mount_matrix(u, north).T @ np.array([0.0, 0.0, 1.0])
             vals.append((float(gz @ fb) + g.cross_axis_x * e[0] + g.cross_axis_y * e[1]
-                         + float(g.response(np.array([e[2]]))[0])) * kr - e[2])
+                         + float(rt.response_at(g, np.array([e[2]]))[0])) * kr - e[2])
         per[ax] = (vals[0] - vals[1]) / 2.0 * S_PER_H
     ax = max(per, key=lambda a: abs(per[a]))
-    out["g_sensitivity"] = {"value": abs(per[ax]), "per_axis_dph_per_g": per, "axis": ax,
-                            "how": "g-sensitivity parameters (+ cross-axis × Earth rate)"}
-    out["angle_random_walk"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (room - g.reference_temperature_c)),
-                                "how": "ARW parameter at room temperature"}
-    Bs = [float(g.bias_at(tc, g.supply_nominal_v)) * kr * S_PER_H for tc in temps]
-    out["bias_temperature_sensitivity"] = {
-        "value": rg.temperature_sensitivity(Bs, temps, 0, relative=False)[0],
-        "how": "b(T) of the model at the set points"}
-    f = np.array(bandwidth_frequencies(proto, bench))
-    h = np.abs(g.dynamics(f))
-    target = rg.MINUS_3DB_RATIO * abs(g.dynamics(f[0]))
-    lo, hi = f[0], f[-1] * 10
-    if abs(g.dynamics(hi)) < target:
-        for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if abs(g.dynamics(mid)) > target else (lo, mid)
-        bw = 0.5 * (lo + hi)
-    else:
-        bw = math.nan
-    out["bandwidth"] = {"value": bw, "grid_interpolated_hz": rg.minus3db_frequency(f, h),
-                        "phase90_hz": g.natural_frequency_hz,
-                        "how": "|H(f)|/|H(f_lowest)| = 10^(-3/20) of the second-order model"}
-    return out
+    return {"value": abs(per[ax]), "per_axis_dph_per_g": per, "axis": ax,
+            "how": "g-sensitivity parameters (+ cross-axis × Earth rate)"}

@@ -1,0 +1,335 @@
+"""The one statement rule: how every output states a measured value with its uncertainty.
+
+Contents
+========
+=========================  ================================================================
+:func:`round_half_up`      a number to a given decimal place, half up, as text
+:func:`decimals_for_sig`   the decimal place that leaves ``sig`` significant digits
+:func:`decimals_at_U`      the decimal place of U stated to two significant digits
+:func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
+:class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
+                           CLI, DCC, figure labels)
+:func:`k_text`             a coverage factor as stated (3 significant digits)
+:func:`nu_text`            effective degrees of freedom as stated (integer part, or ∞)
+:func:`p_text`             a coverage probability in per cent as stated
+:func:`unit_text`          a results.json unit in its SI (accepted-unit) printed form
+:func:`dsi_unit`           a results.json unit in D-SI form (with the factor applied)
+=========================  ================================================================
+
+The rule (JCGM 100:2008 (GUM) 7.2.6, 7.2.2; JCGM 101 and EA-4/02 the same):
+
+* the expanded uncertainty U is stated to **two significant digits**, rounded half up
+  (0.00316 → 0.0032, 160 → 160, 0.0996 → 0.10);
+* the value is stated to **the same decimal place** as U, half up (5.99906 → 5.9991 beside
+  0.0032, 786.5 → 790 beside 160: digits left of the point are rounded away when U is that
+  large);
+* beside U: the coverage factor k (3 significant digits, trailing zeros dropped: 1.97414 →
+  1.97, 2.000 → 2), the effective degrees of freedom ν_eff (the integer part, GUM G.6.4:
+  "truncate to the next lower integer"; ∞ where the budget has infinite degrees of
+  freedom) and the coverage probability p in per cent (2 significant digits: 0.9545 → 95);
+* a quantity without an uncertainty keeps the specification's number of significant
+  digits (``sig``, 3 unless the specification says otherwise);
+* U stated to more than six decimal places (or a value of 10¹⁵ or more) is written with a
+  power of ten common to value and U, the mantissa of U keeping its two digits ("2.2×10⁻⁵ ± 1.3×10⁻⁶" is never written:
+  both share U's exponent, "21.8×10⁻⁶ ± 1.3×10⁻⁶");
+* units are printed in the SI form of :func:`unit_text` (degree, hour and second of arc are
+  units accepted for use with the SI, SI Brochure table 8) and written to a DCC in the
+  D-SI form of :func:`dsi_unit`.
+
+**A non-negative quantity whose U exceeds its value** (a noise level, a threshold, a
+start-up time, a bias instability: the interval value ± U reaches below zero, which the
+quantity cannot take). Following GUM 4.3.9 / JCGM 101 (a coverage interval contains only
+possible values) and the ISO 80000-1 way of stating a bound, the statement keeps
+"value ± U" (the numbers every output compares) and adds the coverage interval truncated
+at zero, stated as an **upper bound**: ``upper`` = value + U rounded *up* at U's decimal
+place (so the bound is never understated) and printed "≤ upper". Its coverage probability
+is at least the stated p (the part cut away holds no possible value). Wording used by
+every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098])", zh "上限：≤ 0.098
+°/s（区间 [0, 0.098]）". The issue-24 coverage studies check such items one-sidedly: the
+truth must lie below ``upper``. A quantity that may be negative (a bias, an offset, a
+signed deviation) is declared ``nonnegative=False`` and is never given a bound.
+
+>>> s = state(5.99906, 0.00316, k=1.97414, nu_eff=58.7, p=0.95, unit="mV/(°/s)")
+>>> s.value, s.U, s.k, s.nu_eff, s.p, s.text()
+('5.9991', '0.0032', '1.97', '58', '95', '5.9991 ± 0.0032 mV/(°/s) (k = 1.97, ν_eff = 58, p ≈ 95 %)')
+>>> state(786.5, 160.0, k=2.0, unit="°/h").text()
+'790 ± 160 °/h (k = 2)'
+>>> t = state(0.01, 0.088, k=2.0, p=0.95, unit="°/s", nonnegative=True)
+>>> t.value, t.U, t.upper, t.text()
+('0.010', '0.088', '0.098', '0.010 ± 0.088 °/s (k = 2, p ≈ 95 %); upper bound: ≤ 0.098 °/s (interval [0, 0.098])')
+>>> state(2.1805064e-05, 1.3e-06, k=2).text()
+'21.8×10⁻⁶ ± 1.3×10⁻⁶ (k = 2)'
+>>> state(76434.8425925926, None, sig=8, unit="1").text()
+'76434.843'
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal, localcontext
+
+_SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _wide():
+    """A decimal context wide enough for every float at every decimal place (±1e308, 1e-324)."""
+    return localcontext(prec=1400, Emax=999_999, Emin=-999_999)
+
+
+def round_half_up(x: float, decimals: int, rounding: str = ROUND_HALF_UP) -> str:
+    """``x`` rounded half up to ``decimals`` places (negative: tens, hundreds...), as text.
+
+    Works on the shortest repr of the float, so 0.125 → "0.13" and 2.675 → "2.68"; a
+    result that rounds to zero has no sign.
+
+    >>> round_half_up(0.35896, 2), round_half_up(-0.11879, 2), round_half_up(76434.84259, 3)
+    ('0.36', '-0.12', '76434.843')
+    >>> round_half_up(0.125, 2), round_half_up(1234.5, -2), round_half_up(-0.0004, 2)
+    ('0.13', '1200', '0.00')
+    """
+    x = float(x)
+    if not math.isfinite(x):
+        return "—"
+    with _wide():              # total: any finite float and any place (no InvalidOperation)
+        q = Decimal(1).scaleb(-decimals)
+        d = Decimal(repr(x)).quantize(q, rounding=rounding)
+        if d == 0:
+            d = abs(d)
+        return f"{d:f}" if decimals >= 0 else f"{d.quantize(Decimal(1)):f}"
+
+
+def decimals_for_sig(x: float, sig: int) -> int:
+    """Decimal place that leaves ``sig`` significant digits of ``x`` after half-up rounding.
+
+    >>> decimals_for_sig(0.35896, 2), decimals_for_sig(0.0996, 2), decimals_for_sig(76434.8, 8)
+    (2, 2, 3)
+    >>> decimals_for_sig(160.0, 2), decimals_for_sig(1234.0, 2)
+    (-1, -2)
+    """
+    if x == 0 or not math.isfinite(x):
+        return sig - 1
+    with _wide():
+        d = Decimal(repr(abs(float(x))))
+        e = d.adjusted()                       # exponent of the leading digit
+        dec = sig - 1 - e
+        r = d.quantize(Decimal(1).scaleb(-dec), rounding=ROUND_HALF_UP)
+        if r.adjusted() > e:                   # 0.0996 → 0.100: one digit more to the left
+            dec -= 1
+        return dec
+
+
+def decimals_at_U(U: float) -> int:
+    """The decimal place of U stated to two significant digits (GUM 7.2.6).
+
+    >>> decimals_at_U(0.00316), decimals_at_U(160.0), decimals_at_U(0.0996)
+    (4, -1, 2)
+    """
+    return decimals_for_sig(U, 2)
+
+
+def k_text(k: float | None) -> str | None:
+    """A coverage factor as stated: 3 significant digits, trailing zeros dropped.
+
+    >>> k_text(1.97414), k_text(2.0), k_text(2.0452), k_text(None)
+    ('1.97', '2', '2.05', None)
+    """
+    if k is None or not math.isfinite(float(k)):
+        return None
+    s = round_half_up(float(k), max(decimals_for_sig(float(k), 3), 0))
+    return s.rstrip("0").rstrip(".") if "." in s else s
+
+
+def nu_text(nu: float | None) -> str | None:
+    """Effective degrees of freedom as stated: the integer part (GUM G.6.4), ∞ if infinite.
+
+    >>> nu_text(58.7), nu_text(math.inf), nu_text(3.0), nu_text(None)
+    ('58', '∞', '3', None)
+    """
+    if nu is None or (isinstance(nu, float) and math.isnan(nu)):
+        return None
+    nu = float(nu)
+    return "∞" if math.isinf(nu) or nu >= 1e15 else str(int(math.floor(nu)))
+
+
+def p_text(p: float | None) -> str | None:
+    """A coverage probability (a fraction) in per cent, 2 significant digits.
+
+    >>> p_text(0.95), p_text(0.9545), p_text(0.99), p_text(None)
+    ('95', '95', '99', None)
+    """
+    if p is None or not math.isfinite(float(p)):
+        return None
+    v = 100.0 * float(p)
+    s = round_half_up(v, max(decimals_for_sig(v, 2), 0))
+    return s.rstrip("0").rstrip(".") if "." in s else s
+
+
+#: results.json unit → its printed SI form (degree, hour, second of arc: accepted for use with
+#: the SI, SI Brochure 9th ed. table 8). Units not listed print as written.
+UNIT_TEXT: dict[str, str] = {
+    "arcsec": "″", "deg": "°", "deg/h": "°/h", "deg/s": "°/s", "degC": "°C",
+    "counts/deg": "1/°", "one": "", "1": "", "1/°C": "°C⁻¹", "%/°C": "%/°C",
+}
+
+#: results.json unit → (D-SI 2.2 unit, factor applied to value and U). D-SI has no unit for
+#: the standard acceleration of gravity, so per-g units are written per m s⁻² (÷ g_n).
+_PER_G = 1.0 / 9.80665
+DSI_UNITS: dict[str, tuple[str, float]] = {
+    "arcsec": (r"\arcsecond", 1.0), "″": (r"\arcsecond", 1.0),
+    "deg": (r"\degree", 1.0), "°": (r"\degree", 1.0),
+    "deg/h": (r"\degree\hour\tothe{-1}", 1.0), "°/h": (r"\degree\hour\tothe{-1}", 1.0),
+    "deg/s": (r"\degree\second\tothe{-1}", 1.0), "°/s": (r"\degree\second\tothe{-1}", 1.0),
+    "°/√h": (r"\degree\hour\tothe{-0.5}", 1.0),
+    "counts/deg": (r"\one\degree\tothe{-1}", 1.0),
+    "(°/h)/°C": (r"\degree\hour\tothe{-1}\kelvin\tothe{-1}", 1.0),
+    "(°/s)/°C": (r"\degree\second\tothe{-1}\kelvin\tothe{-1}", 1.0),
+    "1/°C": (r"\kelvin\tothe{-1}", 1.0), "%/°C": (r"\percent\kelvin\tothe{-1}", 1.0),
+    "(°/h)/g": (r"\degree\hour\tothe{-1}\metre\tothe{-1}\second\tothe{2}", _PER_G),
+    "(°/s)/g": (r"\degree\metre\tothe{-1}\second", _PER_G),
+    "%": (r"\percent", 1.0), "ppm": (r"\ppm", 1.0),
+    "degC": (r"\degreecelsius", 1.0), "°C": (r"\degreecelsius", 1.0),
+    "Hz": (r"\hertz", 1.0), "s": (r"\second", 1.0), "h": (r"\hour", 1.0),
+    "one": (r"\one", 1.0), "1": (r"\one", 1.0), "": (r"\one", 1.0),
+    "rad": (r"\radian", 1.0), "mrad": (r"\milli\radian", 1.0),
+}
+
+
+def unit_text(unit: str | None) -> str:
+    """A results.json unit as printed.
+
+    >>> unit_text("deg/s"), unit_text("(°/h)/g"), unit_text("one"), unit_text(None)
+    ('°/s', '(°/h)/g', '', '')
+    """
+    if not unit:
+        return ""
+    return UNIT_TEXT.get(unit, unit)
+
+
+def dsi_unit(unit: str | None) -> tuple[str, float] | None:
+    """(D-SI unit, factor on value and U) of a results.json unit, or None if it has none.
+
+    >>> dsi_unit("°/h"), dsi_unit("furlong")
+    (('\\\\degree\\\\hour\\\\tothe{-1}', 1.0), None)
+    """
+    return DSI_UNITS.get(unit or "")
+
+
+@dataclass(frozen=True)
+class Statement:
+    """One value as every output states it (all fields are texts, already rounded).
+
+    ``value`` and ``U`` share a decimal place (or, with ``exponent``, a power of ten);
+    ``k``, ``nu_eff``, ``p`` (per cent) are None where unknown; ``upper`` is the upper
+    bound of a non-negative quantity whose U exceeds its value (else None); ``decimals``
+    is the decimal place the value was rounded at (None without U: ``sig`` digits).
+    """
+
+    value: str
+    U: str | None = None
+    k: str | None = None
+    nu_eff: str | None = None
+    p: str | None = None
+    unit: str = ""
+    upper: str | None = None
+    exponent: int = 0
+    decimals: int | None = None
+
+    def _x(self, s: str) -> str:
+        return f"{s}×10{str(self.exponent).translate(_SUP)}" if self.exponent else s
+
+    @property
+    def value_text(self) -> str:
+        """The value as printed (with the common power of ten)."""
+        return self._x(self.value) if self.value != "—" else "—"
+
+    @property
+    def U_text(self) -> str | None:
+        """U as printed (with the common power of ten), or None."""
+        return self._x(self.U) if self.U is not None else None
+
+    def factors(self) -> str:
+        """"k = 1.97, ν_eff = 58, p ≈ 95 %" (the parts known), or ""."""
+        parts = []
+        if self.k is not None:
+            parts.append(f"k = {self.k}")
+        if self.nu_eff is not None:
+            parts.append(f"ν_eff = {self.nu_eff}")
+        if self.p is not None:
+            parts.append(f"p ≈ {self.p} %")
+        return ", ".join(parts)
+
+    def bound_text(self, lang: str = "en") -> str:
+        """The upper-bound wording of a non-negative quantity (see module docstring), or ""."""
+        if self.upper is None:
+            return ""
+        u = f" {self.unit}" if self.unit else ""
+        b = self._x(self.upper)
+        if lang == "zh":
+            return f"上限：≤ {b}{u}（区间 [0, {b}]）"
+        return f"upper bound: ≤ {b}{u} (interval [0, {b}])"
+
+    def text(self, lang: str = "en") -> str:
+        """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)"."""
+        u = f" {self.unit}" if self.unit else ""
+        if self.U is None:
+            return f"{self.value_text}{u}"
+        s = f"{self.value_text} ± {self.U_text}{u}"
+        if self.factors():
+            s += f" ({self.factors()})"
+        if self.upper is not None:
+            s += ("；" if lang == "zh" else "; ") + self.bound_text(lang)
+        return s
+
+    def to_json(self) -> dict:
+        """The fields as a JSON object (all texts; for summary files and checks)."""
+        return asdict(self)
+
+
+def state(value: float | None, U: float | None = None, *, k: float | None = None,
+          nu_eff: float | None = None, p: float | None = None, unit: str | None = "",
+          sig: int = 3, nonnegative: bool = False) -> Statement:
+    """A value with its expanded uncertainty as stated by the rule of this module.
+
+    ``value`` None or not finite gives "—". ``U`` None, zero or not finite: the value to
+    ``sig`` significant digits. ``nonnegative`` declares a quantity that cannot be negative
+    (see the module docstring for the bound it may get).
+
+    >>> state(5.99906, 0.00316).value, state(-0.00004, 0.0031).value, state(None).value
+    ('5.9991', '0.0000', '—')
+    >>> state(0.01, 0.088, nonnegative=False).upper is None
+    True
+    >>> state(175.0, 1200.0, k=2, nonnegative=True, unit="s").text()
+    '200 ± 1200 s (k = 2); upper bound: ≤ 1400 s (interval [0, 1400])'
+    """
+    unit_s = unit_text(unit)
+    kt, nt, pt = k_text(k), nu_text(nu_eff), p_text(p)
+    if value is None or not math.isfinite(float(value)):
+        return Statement("—", None, kt, nt, pt, unit_s)
+    value = float(value)
+    if U is None or not math.isfinite(float(U)) or float(U) <= 0:
+        if value != 0 and (abs(value) < 1e-3 or abs(value) >= 1e15):
+            e = int(math.floor(math.log10(abs(value))))
+            with _wide():
+                m = float(Decimal(repr(value)).scaleb(-e))
+            return Statement(round_half_up(m, max(decimals_for_sig(m, sig), 0)), None,
+                             kt, nt, pt, unit_s, exponent=e)
+        v = round_half_up(value, max(decimals_for_sig(value, sig), 0)) if value else "0"
+        return Statement(v, None, kt, nt, pt, unit_s)
+    U = float(U)
+    dec = decimals_at_U(U)
+    exponent = 0
+    if dec > 6 or abs(value) >= 1e15:
+        exponent = -(dec - 1)                  # U's mantissa keeps its two digits: d.d
+        with _wide():
+            value_m = float(Decimal(repr(value)).scaleb(-exponent))
+            U_m = float(Decimal(repr(U)).scaleb(-exponent))
+        vt, Ut = round_half_up(value_m, 1), round_half_up(U_m, 1)
+        upper = (round_half_up(value_m + U_m, 1, ROUND_CEILING)
+                 if nonnegative and U > value else None)
+    else:
+        vt, Ut = round_half_up(value, dec), round_half_up(U, dec)
+        upper = round_half_up(value + U, dec, ROUND_CEILING) if nonnegative and U > value \
+            else None
+    return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
+                     decimals=dec)

@@ -1,0 +1,69 @@
+"""`.ci/run` (issue 26): it runs the README's test command, fails on any non-zero pytest exit
+(5 = no tests collected included) and fails when the tests leave the working tree unclean
+(untracked files included). Exercised on a throw-away git repository holding a copy of the
+script, with `pip`/`python` replaced by stubs on PATH, so nothing of the real suite runs."""
+import os
+import re
+import shutil
+import stat
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+CI = ROOT / ".ci" / "run"
+
+pytestmark = pytest.mark.skipif(shutil.which("git") is None, reason="git not installed")
+
+
+def test_ci_run_holds_the_readme_test_command():
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    cmd = re.search(r"^bash scripts/install-test-system-deps\.sh && .*$", readme, re.M).group(0)
+    assert cmd in CI.read_text(encoding="utf-8")
+
+
+def _stub(path: Path, body: str) -> None:
+    path.write_text("#!/usr/bin/env bash\n" + body + "\n", encoding="utf-8")
+    path.chmod(path.stat().st_mode | stat.S_IEXEC)
+
+
+def _run_ci(tmp_path: Path, python_body: str) -> subprocess.CompletedProcess:
+    repo = tmp_path / "repo"
+    (repo / ".ci").mkdir(parents=True)
+    (repo / "scripts").mkdir()
+    shutil.copy(CI, repo / ".ci" / "run")
+    _stub(repo / "scripts" / "install-test-system-deps.sh", "exit 0")
+    env = {**os.environ, "GIT_AUTHOR_NAME": "t", "GIT_AUTHOR_EMAIL": "t@t",
+           "GIT_COMMITTER_NAME": "t", "GIT_COMMITTER_EMAIL": "t@t"}
+    for args in (["init", "-q"], ["add", "-A"], ["commit", "-q", "-m", "x"]):
+        subprocess.run(["git", *args], cwd=repo, check=True, env=env)
+    stubs = tmp_path / "bin"
+    stubs.mkdir()
+    _stub(stubs / "pip", "exit 0")
+    _stub(stubs / "python", python_body)
+    env["PATH"] = f"{stubs}{os.pathsep}{env['PATH']}"
+    return subprocess.run(["bash", str(repo / ".ci" / "run")], cwd=repo, env=env,
+                          capture_output=True, text=True, timeout=60)
+
+
+def test_ci_run_passes_when_tests_pass_and_tree_is_clean(tmp_path):
+    r = _run_ci(tmp_path, "exit 0")
+    assert r.returncode == 0, r.stderr
+
+
+def test_ci_run_fails_on_untracked_output(tmp_path):
+    # a test that writes into the working tree, as the folder named three spaces once was
+    r = _run_ci(tmp_path, "mkdir -p '   /.validate-partial' && touch '   /.validate-partial/b0.npz'")
+    assert r.returncode != 0
+    assert "not clean" in r.stderr and "validate-partial" in r.stderr
+
+
+def test_ci_run_fails_on_modified_tracked_file(tmp_path):
+    r = _run_ci(tmp_path, "echo changed >> scripts/install-test-system-deps.sh")
+    assert r.returncode != 0 and "not clean" in r.stderr
+
+
+def test_ci_run_fails_when_no_tests_were_collected(tmp_path):
+    r = _run_ci(tmp_path, "exit 5")
+    assert r.returncode == 5 and "no tests collected" in r.stderr
