@@ -1,5 +1,5 @@
 """The one result model every specification returns (issue 23): a :class:`Result` of
-:class:`Item` s, written as one ``results.json`` shape (``docs/formats.md#results-json``,
+:class:`Item` s, written as one ``results.json`` shape (``docs/formats.md#results-file``,
 JSON Schema ``docs/results.schema.json``).
 
 An :class:`Item` is one calibrated characteristic: key, clause, title, value and unit, whether
@@ -34,7 +34,7 @@ from gonio.errors import GonioError
 from gonio.formats.jsonsafe import json_safe
 from gonio.result.findings import Finding, findings_to_json
 
-#: The version of the results.json shape (docs/formats.md#results-json). Raise it when a
+#: The version of the results.json shape (docs/formats.md#results-file). Raise it when a
 #: key is renamed or removed; adding an optional key keeps it.
 RESULTS_VERSION = 1
 #: The coverage probability gonio's expanded uncertainties are stated for (GUM 6.2.2).
