@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a check
 import numpy as np  # noqa: E402
 
 from gonio.analysis.thermal_model import compensate_record, identify_thermal_model  # noqa: E402
-from gonio.analysis.triad_alignment import estimate_alignment  # noqa: E402
+from gonio.specs.triad_alignment.analysis import estimate_alignment  # noqa: E402
 from gonio.bench.triad import (load_triad_bench, load_triad_protocol,  # noqa: E402
                                run_alignment_session, run_thermal_session)
 from gonio.formats.triad import TriadReadings  # noqa: E402

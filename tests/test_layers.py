@@ -102,8 +102,44 @@ def layer_violations(files: list[Path]) -> list[str]:
             if tg == "gonio.specs" and g == "gonio.specs":
                 a = mod.split(".")[:3]
                 b = target.split(".")[:3]
-                if len(a) == 3 and len(b) == 3 and a != b:
+                # a family package (specs/_rate_family/) is the shared ground of several
+                if len(a) == 3 and len(b) == 3 and a != b and not b[2].startswith("_"):
                     bad.append(f"{mod}:{line}: one specification imports another ({target})")
+    return bad
+
+
+#: What a specification may import (docs/architecture.md#specifications), besides itself, a
+#: family package (``gonio.specs._rate_family``), the registry and the layer-0 modules.
+SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.result",
+                   "gonio.analysis", "gonio.budget", "uncertainty")
+#: A specification's modules that run the virtual bench: the only ones that may import it.
+SIMULATION_MODULES = ("simulate", "plan", "truth")
+
+
+def spec_import_violations(files: list[Path]) -> list[str]:
+    """A specification imports only what calibrating needs; the simulator (gonio.bench)
+    only from its ``simulate``/``plan``/``truth`` modules, so that calibrating a
+    laboratory's file never imports the virtual bench."""
+    bad = []
+    for path in files:
+        mod = module_name(path)
+        parts = mod.split(".")
+        if parts[:2] != ["gonio", "specs"]:
+            continue
+        sim = len(parts) > 3 and parts[3] in SIMULATION_MODULES
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
+            top = target.split(".")[0]
+            if top not in ("gonio", "uncertainty"):
+                continue
+            tg = group(target) if top == "gonio" else "uncertainty"
+            if tg == "gonio.bench" and sim:
+                continue
+            if tg == "gonio.specs" or LAYERS.get(tg, -1) == 0 or tg in SPEC_MAY_IMPORT:
+                continue
+            bad.append(f"{mod}:{line}: a specification imports {target}"
+                       + (" (only its simulate/plan/truth modules may)" if tg == "gonio.bench"
+                          else ""))
     return bad
 
 
@@ -212,6 +248,10 @@ def test_imports_run_down_the_layers():
     assert layer_violations(ALL) == []
 
 
+def test_specifications_import_no_simulator_outside_simulation():
+    assert spec_import_violations(GONIO) == []
+
+
 def test_no_import_cycles():
     assert cycles(import_graph(ALL)) == []
 
@@ -272,11 +312,17 @@ def fake_root(tmp_path, monkeypatch):
 def test_rules_fire_on_bad_examples(fake_root):
     physics = _write(fake_root, "gonio/physics/x.py", "from gonio.bench.session import run\n")
     unc = _write(fake_root, "uncertainty/y.py", "import gonio.units\n")
-    spec = _write(fake_root, "gonio/specs/a/items.py", "from gonio.specs.b.items import f\n")
+    spec = _write(fake_root, "gonio/specs/a/items.py", "from gonio.specs.b.items import f\n"
+                  "from gonio.specs._family.formulas import g\n")
     beside = _write(fake_root, "gonio/reduce/z.py", "from gonio.bench import load_bench\n")
     ok = _write(fake_root, "gonio/pipeline/ok.py", "from gonio.bench import load_bench\n")
     bad = layer_violations([physics, unc, spec, beside, ok])
     assert len(bad) == 4 and not any("pipeline.ok" in b for b in bad)
+    items = _write(fake_root, "gonio/specs/a/items.py", "from gonio.bench.rate_gyro import x\n"
+                   "from gonio.reduce import y\nfrom gonio.physics.alignment import z\n"
+                   "import uncertainty\nfrom gonio.units import S_PER_H\n")
+    sim = _write(fake_root, "gonio/specs/a/simulate.py", "from gonio.bench.rate_gyro import x\n")
+    assert len(spec_import_violations([items, sim])) == 2
     a = _write(fake_root, "gonio/p/a.py", "from gonio.p.b import g\n")
     b = _write(fake_root, "gonio/p/b.py", "from gonio.p.a import f\n")
     assert cycles(import_graph([a, b])) == [["gonio.p.a", "gonio.p.b"]]

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from gonio.bench.rate_gyro import load_rate_bench
-from gonio.bench.rate_session import Segment, run_rate_session
+from gonio.bench.rate_session import run_rate_session
+from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import (RateReadings, parse_rate_readings, read_rate_readings,
                                          write_rate_readings)
@@ -75,7 +76,8 @@ def exact_bench(cross=False, **gyro):
 # ------------------------------------------------------------------ JJF 1535, noise off
 @pytest.fixture(scope="module")
 def jjf_noise_off(tmp_path_factory):
-    from gonio.specs.jjf1535 import calibrate, simulate
+    from gonio.specs.jjf1535 import calibrate
+    from gonio.specs.jjf1535.simulate import simulate
     tmp = tmp_path_factory.mktemp("jjf0")
     proto = small_protocol(tmp)
     res = simulate(exact_bench(), str(proto), seed=3, noise=False)
@@ -109,7 +111,8 @@ def test_jjf_noise_off_zero_items_and_bandwidth(jjf_noise_off):
 def test_jjf_bandwidth_noise_off_exact(tmp_path):
     """A linear gyro (no threshold, no cubic term): K(f) ∝ |H(f)| exactly, so the −3 dB
     crossing equals the log-f interpolation of the model's |H| on the same grid."""
-    from gonio.specs.jjf1535 import calibrate, simulate
+    from gonio.specs.jjf1535 import calibrate
+    from gonio.specs.jjf1535.simulate import simulate
     proto = small_protocol(tmp_path)
     res = simulate(exact_bench(dead_band_dps=0.0, sf_cubic_per_dps2=0.0), str(proto), seed=1,
                    noise=False)
@@ -121,7 +124,8 @@ def test_jjf_bandwidth_noise_off_exact(tmp_path):
 
 
 def test_jjf_warmup_noise_off(tmp_path):
-    from gonio.specs.jjf1535 import calibrate, simulate
+    from gonio.specs.jjf1535 import calibrate
+    from gonio.specs.jjf1535.simulate import simulate
     proto = small_protocol(tmp_path, warmup={"nominal_stability_dph": 20.0})
     res = simulate(exact_bench(warmup_bias_dps=0.12), str(proto), seed=1, noise=False)
     r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))
@@ -165,7 +169,8 @@ def _readings_of(seed: int):
 
 @pytest.fixture(scope="module")
 def jjf_noise_on(tmp_path_factory):
-    from gonio.specs.jjf1535 import calibrate, simulate
+    from gonio.specs.jjf1535 import calibrate
+    from gonio.specs.jjf1535.simulate import simulate
     tmp = tmp_path_factory.mktemp("jjf1")
     proto = small_protocol(tmp, arw={"samples": 36000})
     _PROTO[:] = [proto]
@@ -214,7 +219,8 @@ def test_thesis_noise_model_recovered():
 # ------------------------------------------------------------------ IEC 62047-20
 @pytest.fixture(scope="module")
 def iec_noise_off(tmp_path_factory):
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     tmp = tmp_path_factory.mktemp("iec0")
     proto = small_protocol(tmp, "iec62047-20")
     out = {}
@@ -237,7 +243,8 @@ def test_iec_noise_off_exact(iec_noise_off, key):
 
 def test_iec_power_on_items_noise_off(tmp_path):
     """5.3.3.5 and 5.3.3.9 on a noise-free power-on transient against their closed forms."""
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     proto = small_protocol(tmp_path, "iec62047-20")
     res = simulate(exact_bench(warmup_bias_dps=0.12), str(proto), seed=1, noise=False)
     r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))

@@ -37,11 +37,12 @@ def schema(dcc_schema):
 
 
 def _simulate(spec_key, tmp, seed):
-    mod = __import__(get(spec_key).calibrate.__module__, fromlist=["simulate"])
+    mod = __import__(get(spec_key).calibrate.__module__, fromlist=["calibrate"])
+    sim = __import__(mod.__name__ + ".simulate", fromlist=["simulate"])
     proto = reduced_protocol(spec_key, tmp / f"{spec_key}.toml",
                              {"g_sensitivity": {"samples": 20}}
                              if spec_key == "iec62047-20" else {})
-    res = mod.simulate(study_bench(), str(proto), seed=seed, noise=True)
+    res = sim.simulate(study_bench(), str(proto), seed=seed, noise=True)
     path = write_rate_readings(res.data, res.metadata, tmp / f"{spec_key}.csv")
     return mod, proto, path, res
 

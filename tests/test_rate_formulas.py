@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.errors import GonioError
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.units import S_PER_H

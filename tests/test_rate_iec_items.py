@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.analysis import rate_gyro as rg
-from gonio.bench.rate_session import body_rotation, mount_matrix
+from gonio.specs._rate_family import formulas as rg
+from gonio.physics.alignment import body_rotation, mount_matrix
 from gonio.formats.rate_readings import RateReadings
 from gonio.physics.earth import earth_rate_enu
 
@@ -128,7 +128,8 @@ def test_fifty_percent_outcome_distribution():
 # ------------------------------------------------------------------ bench, noise off
 @pytest.fixture(scope="module")
 def iec_new_noise_off(tmp_path_factory):
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     tmp = tmp_path_factory.mktemp("iecnew")
     proto = small_protocol(tmp, "iec62047-20", g_sensitivity={"samples": 20},
                            resolution={"samples": 10, "rest_samples": 10})
@@ -169,7 +170,8 @@ def test_iec_supply_correction_recovers_truth(tmp_path):
     """A perfectly ratiometric gyro on a supply 0.2 mV low: corrected by eq (18) the scale
     factor is the truth at the set voltage; uncorrected it is off by the supply ratio."""
     from gonio.bench.equipment import Supply
-    from gonio.specs.iec62047_20 import calibrate, simulate
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
     proto = small_protocol(tmp_path, "iec62047-20")
     b = exact_bench(ratiometric_error_rel=0.0, bias_supply_dps_per_v=0.0)
     b = replace(b, equipment=replace(b.equipment, supply=Supply(error_v=-0.0002)))
@@ -191,3 +193,17 @@ def test_iec_supply_correction_recovers_truth(tmp_path):
     assert r.items["ratiometric_error"].value == pytest.approx(0.0, abs=1e-9)
     raw = calibrate(RateReadings(ses.data.assign(supply_set_v=np.nan), md), str(proto))
     assert raw.items["scale_factor"].value / t - 1 == pytest.approx(-0.0002 / 5.0, rel=1e-6)
+
+
+def test_builtin_frequency_amplitude_follows_clause_5_5_4():
+    """issue 26: the protocol said '1/2 … 1/10 of the range (5.5.4)' but applied 10 °/s to a
+    ±300 °/s gyro (1/30). The built-in programme's rate amplitude lies in [FS/10, FS/2]."""
+    import tomllib
+    from pathlib import Path
+
+    p = Path(__file__).resolve().parents[1] / "protocols" / "iec62047-20.toml"
+    d = tomllib.loads(p.read_text(encoding="utf-8"))
+    fs = next(v["full_scale_dps"] for v in d.values()
+              if isinstance(v, dict) and "full_scale_dps" in v)
+    amp = d["frequency"]["rate_amplitude_dps"]
+    assert fs / 10 <= amp <= fs / 2, (amp, fs)

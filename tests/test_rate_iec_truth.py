@@ -13,7 +13,9 @@ import pytest
 from gonio.bench.rate_session import constant_rate_spread_dps
 from gonio.formats.rate_readings import RateReadings
 from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
-from gonio.specs.iec62047_20 import calibrate, simulate, truth
+from gonio.specs.iec62047_20 import calibrate
+from gonio.specs.iec62047_20.simulate import simulate
+from gonio.specs.iec62047_20.truth import truth
 from gonio.specs.iec62047_20.protocol import load_protocol
 
 OMEGA_E_DPS = math.degrees(7.292115e-5)       # IERS, independent of gonio.physics

@@ -4,7 +4,7 @@ the estimators under test (issue 24).
 1. The closed forms of :mod:`gonio.bench.rate_truth` against a brute-force least-squares fit
    (numpy.polyfit) of the bench's own response function ``RateGyroConfig.response`` — the
    physics the session simulates — and against hand algebra for a linear gyro.
-2. Every estimator formula of :mod:`gonio.analysis.rate_gyro` replaced by a wrong one: the
+2. Every estimator formula of :mod:`gonio.specs._rate_family.formulas` replaced by a wrong one: the
    truths of JJF 1535 and IEC 62047-20 do not move (so the noise-off tests of
    tests/test_rate_bench.py, which compare the estimates with these truths, see a mutated
    formula; scripts/mutation.py shows that they do).
@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.bench import rate_truth as rt
 from gonio.bench.rate_gyro import load_rate_bench
 

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.analysis.triad_alignment import (COVERAGE, cross_axis_sensitivity_iec,
+from gonio.specs.triad_alignment.analysis import (COVERAGE, cross_axis_sensitivity_iec,
                                             cross_axis_sensitivity_pm, cross_axis_table,
                                             estimate_alignment, gum_propagate)
 from gonio.bench.triad import (TriadBench, TriadProtocol, ThermalModel, load_triad_bench,

@@ -125,10 +125,10 @@ def _file_id(path: str) -> str:
     """``name sha256:<hex>`` of a file (empty when there is none)."""
     if not path:
         return ""
-    import hashlib
+    from gonio.atomic import sha256_file
 
     try:
-        digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        digest = sha256_file(path)
     except OSError:
         return Path(path).name
     return f"{Path(path).name} sha256:{digest}"

@@ -1,6 +1,6 @@
 """``gonio align``: electrical alignment of a gyro triad from a triad readings file.
 
-A thin layer over :func:`gonio.analysis.triad_alignment.estimate_alignment` (format:
+A thin layer over :func:`gonio.specs.triad_alignment.analysis.estimate_alignment` (format:
 docs/formats-triad.md; method: docs/alignment.md).
 """
 
@@ -43,7 +43,7 @@ def _fmt_matrix(m, u, digits=6) -> list[str]:
 
 
 def run(args) -> int:
-    from gonio.analysis.triad_alignment import cross_axis_table, estimate_alignment
+    from gonio.specs.triad_alignment.analysis import cross_axis_table, estimate_alignment
     from gonio.formats.triad import json_safe, read_triad_readings
 
     if args.monte_carlo < 0:

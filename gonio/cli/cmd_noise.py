@@ -89,73 +89,112 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+class _Counted:
+    """A sample source whose block-by-block pass advances a progress counter."""
+
+    def __init__(self, src, prog):
+        self._src, self._prog = src, prog
+
+    def __getattr__(self, name):
+        return getattr(self._src, name)
+
+    def __len__(self) -> int:
+        return len(self._src)
+
+    def chunks(self, *args, **kwargs):
+        for ch in self._src.chunks(*args, **kwargs):
+            if self._prog is not None:
+                self._prog.update(ch.time_s.size)
+            yield ch
+
+
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
                  kind: str | None = None, scale_factor: float | None = None,
                  confidence: float = 0.683, window=None, each_window: bool = False,
-                 bootstrap: int = 20, seed: int = 0) -> list:
-    """Noise analysis of the static part of a stream file.
+                 bootstrap: int = 20, seed: int = 0, show_progress: bool = True) -> list:
+    """Noise analysis of the static part of a stream file, in bounded memory.
 
     Returns a list of :class:`gonio.analysis.noise.StaticNoiseResult` — one (the
     longest rest, or ``window``) unless ``each_window``; each carries the window it
     used. ``input_kind`` is ``angle``, ``counts`` or ``rate`` (module docstring); the
     deviation is in °/h. Raises GonioError (one line) for a readings file, a stream
     without a usable scale factor, non-uniform sampling, or a window with motion.
+
+    Memory (issue 26): the file is read once in blocks to find the rests, then only the
+    analysed window's counts, piece by piece, into one array (memory-mapped beyond
+    :data:`gonio.analysis.noise.record.MEMMAP_SAMPLES` samples) analysed in place; the
+    numbers are those of the whole stream read into memory (tests/test_noise_memory.py).
+    Progress on a terminal (``show_progress``), quiet otherwise.
     """
-    from gonio.analysis.noise import analyse_record, static_windows
-    from gonio.formats.metadata import metadata_float
-    from gonio.formats.streams import read_stream, sniff_kind
+    import tempfile
+
+    from gonio.analysis.noise import analyse_record
+    from gonio.analysis.noise.record import source_windows, window_record
+    from gonio.formats.streams import StreamFile, sniff_kind
+    from gonio.progress import Progress, status
 
     if input_kind not in _INPUTS:
         raise GonioError(f"--input must be one of {', '.join(sorted(_INPUTS))}", key="input")
     if sniff_kind(path) != "stream":
         raise GonioError("this is a readings file; the noise analysis needs the sampled "
                          "stream (time_s,gyro_counts,...)", file=path)
-    stream = read_stream(path)
+    src = StreamFile(path)
     if scale_factor is None:
-        scale_factor = metadata_float(stream.metadata, "nominal_scale_factor_counts_per_deg",
-                                      file=path)
+        scale_factor = src.k_nominal
         if scale_factor is None:
             raise GonioError("no scale factor: give --scale-factor or the metadata key",
                              file=path, key="nominal_scale_factor_counts_per_deg")
     if not (math.isfinite(scale_factor) and scale_factor > 0):
         raise GonioError(f"scale factor must be > 0, got {scale_factor}", file=path,
                          key="nominal_scale_factor_counts_per_deg")
-    t = np.asarray(stream.time_s, dtype=np.float64)
-    if t.size < 8:
-        raise GonioError(f"need at least 8 samples, got {t.size}", file=path)
+    show = (lambda m: status(m)) if show_progress else (lambda m: None)
+    prog = Progress(None, label="noise: reading the stream, finding rests", unit="samples",
+                    force=False) if show_progress else None
     try:
-        wins = static_windows(t, stream.table_deg, stream.gyro_counts,
-                              scale_factor_counts_per_deg=scale_factor, window=window)
+        wins = source_windows(_Counted(src, prog), scale_factor_counts_per_deg=scale_factor,
+                              window=window)
     except GonioError as exc:
+        if exc.file is not None:        # the stream reader's own (line, column) errors
+            raise
         raise GonioError(exc.message, file=path, key="window") from None
+    finally:
+        if prog is not None:
+            prog.close()
+    if len(src) < 8:
+        raise GonioError(f"need at least 8 samples, got {len(src)}", file=path)
     if not wins:
         raise GonioError("the table never rests long enough for a noise analysis "
                          "(give --window START:END)", file=path, key="window")
     wins = sorted(wins, key=lambda w: (-w.duration_s, w.i_start))
     chosen = wins if each_window else wins[:1]
-    counts_all = np.asarray(stream.gyro_counts, dtype=np.float64)
     kind_in = _INPUTS[input_kind]
     out = []
     for w in chosen:
-        tw = t[w.i_start: w.i_end + 1]
-        dt = np.diff(tw)
-        tau0 = float((tw[-1] - tw[0]) / (tw.size - 1))
-        off = np.flatnonzero(np.abs(dt - tau0) > 0.01 * tau0)
-        if off.size:
-            raise GonioError("sampling is not uniform: time step differs from the mean "
-                             f"{tau0:g} s by more than 1 % (sample {w.i_start + int(off[0]) + 2})",
-                             file=path, column="time_s")
-        counts = counts_all[w.i_start: w.i_end + 1]
-        if kind_in == "rate":
-            # counts/s / (counts/°) · 3600 s/h -> °/h
-            res = analyse_record(counts * (S_PER_H / scale_factor), tau0, "rate",
-                                 unit="deg/h", taus=taus, modified=modified, kind=kind,
-                                 confidence=confidence, bootstrap=bootstrap, seed=seed)
-        else:
-            # counts / (counts/°) = °, and 1° = 3600 (°/h)·s: scale = counts per (°/h)·s
-            res = analyse_record(counts, tau0, kind_in, scale=scale_factor / S_PER_H,
-                                 unit="deg/h", taus=taus, modified=modified, kind=kind,
-                                 confidence=confidence, bootstrap=bootstrap, seed=seed)
+        with tempfile.TemporaryDirectory(prefix="gonio-noise-") as tmp:
+            prog = Progress(w.i_end - w.i_start + 1, label="noise: reading the window",
+                            unit="samples", force=False) if show_progress else None
+            try:
+                if kind_in == "rate":
+                    # counts/s / (counts/°) · 3600 s/h -> °/h
+                    data, tau0 = window_record(src, w, scale=S_PER_H / scale_factor,
+                                               tmpdir=tmp, progress=prog)
+                    scale = 1.0
+                else:
+                    # counts / (counts/°) = °, and 1° = 3600 (°/h)·s
+                    data, tau0 = window_record(src, w, tmpdir=tmp, progress=prog)
+                    scale = scale_factor / S_PER_H
+            except GonioError as exc:
+                raise GonioError(exc.message, file=path, column=exc.column) from None
+            finally:
+                if prog is not None:
+                    prog.close()
+            show(f"noise: {kind or ('mdev' if modified else 'adev')} and fit of "
+                 f"{data.size} samples" + (f", bootstrap of {bootstrap}" if bootstrap else ""))
+            res = analyse_record(data, tau0, kind_in, scale=scale, unit="deg/h", taus=taus,
+                                 modified=modified, kind=kind, confidence=confidence,
+                                 bootstrap=bootstrap, seed=seed, overwrite_data=True)
+            del data
+            show("")
         res.window = w
         res.windows_found = len(wins)
         out.append(res)

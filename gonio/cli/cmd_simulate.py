@@ -111,7 +111,7 @@ def run(args) -> int:
 
 
 #: Specifications with their own session simulator (module with ``simulate``).
-SPEC_SIMULATORS = {"triad-alignment": "gonio.specs.triad_alignment.session"}
+SPEC_SIMULATORS = {"triad-alignment": "gonio.specs.triad_alignment.simulate"}
 
 
 def _run_spec(args) -> int:

@@ -1,6 +1,6 @@
 """Rotations, misalignment matrices and the mechanical misalignment budget of a gyro triad.
 
-Conventions (used by :mod:`gonio.bench.triad` and :mod:`gonio.analysis.triad_alignment`)
+Conventions (used by :mod:`gonio.bench.triad` and :mod:`gonio.specs.triad_alignment.analysis`)
 ---------------------------------------------------------------------------------------
 * The *reference frame* is the fixture's (rate table's) frame, axes x, y, z. A triad's
   outputs obey G = M ω + b ([Looney-alignment] eq. 14, docs/references.md): ω the rate vector in
@@ -402,9 +402,58 @@ def ref_to_enu(up: str, north0: str, table_deg: float = 0.0) -> np.ndarray:
     u, n = signed_axis(up), signed_axis(north0)
     if abs(float(u @ n)) > 0.5:
         raise GonioError(f"north0 axis {north0} must be perpendicular to the up axis {up}")
-    e = np.cross(n, u)
-    c0 = np.column_stack([e, n, u]).T       # rows: east, north, up in reference coordinates
-    return rotation_about_axis([0, 0, 1], math.radians(table_deg)) @ c0
+    return rotation_about_axis([0, 0, 1], math.radians(table_deg)) @ _to_enu(u, n)
+
+
+def _to_enu(u: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Rows east, north, up in body (reference) coordinates, for the body vectors ``u``
+    pointing up and ``n`` pointing north: the rotation body → ENU (orthonormal)."""
+    e = np.cross(n, u)                       # body vector that maps to east
+    return np.column_stack([e, n, u]).T
+
+
+def mount_matrix(up_axis: str, north_axis: str) -> np.ndarray:
+    """Rotation body → ENU for a rate gyro's mounting (columns: ENU images of body x, y, z);
+    the same frame as :func:`ref_to_enu` at table angle 0, with the rate readings' keys in
+    its messages.
+
+    >>> mount_matrix("+z", "+x") @ np.array([0, 0, 1.0])
+    array([0., 0., 1.])
+    >>> (mount_matrix("+z", "+x") @ np.array([1.0, 0, 0])).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    if up_axis not in SIGNED_AXES or north_axis not in SIGNED_AXES:
+        raise GonioError(f"mounting axes must be ±x, ±y, ±z, got {up_axis!r}, {north_axis!r}",
+                         key="up_axis")
+    u, n = signed_axis(up_axis), signed_axis(north_axis)
+    if abs(u @ n) > 0:
+        raise GonioError(f"up axis {up_axis} and north axis {north_axis} must be perpendicular",
+                         key="north_axis")
+    return _to_enu(u, n)
+
+
+def body_rotation(axis: str, angle_deg: float) -> np.ndarray:
+    """Rotation of the gyro body by ``angle_deg`` about its own ``axis`` (±x, ±y, ±z): the
+    tilting stand of IEC 62047-20 5.3.3.8. The mounting becomes R = mount_matrix · this.
+
+    >>> np.round(body_rotation("+x", 90.0) @ np.array([0, 0, 1.0]), 12).tolist()
+    [0.0, -1.0, 0.0]
+    """
+    if axis not in SIGNED_AXES:
+        raise GonioError(f"stand axis must be ±x, ±y, ±z, got {axis!r}", key="stand_axis")
+    a = signed_axis(axis)
+    t = math.radians(angle_deg)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(t) * k + (1 - math.cos(t)) * (k @ k)
+
+
+def input_axis_enu(up_axis: str, north_axis: str) -> np.ndarray:
+    """The gyro's input axis (body +z) in ENU for a mounting.
+
+    >>> input_axis_enu("+x", "+y").tolist()
+    [-1.0, 0.0, 0.0]
+    """
+    return mount_matrix(up_axis, north_axis) @ np.array([0.0, 0.0, 1.0])
 
 
 def mean_earth_rate_ref(earth_enu, up: str, north0: str, table_deg: float,

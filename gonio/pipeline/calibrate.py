@@ -12,7 +12,6 @@ bound come from the file's metadata when given, else from the protocol.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -26,7 +25,8 @@ from gonio import __version__
 from gonio.atomic import output_dir, output_set, sha256_file, write_text
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
-from gonio.specs.ogam_draft.items import LISTED_ROWS, CalibrationResults, compute_characteristics
+from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
+                                          compute_characteristics)
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
@@ -302,8 +302,7 @@ class CalibrationReport:
         return "\n".join(lines) + "\n"
 
 
-ITEM_NAMES = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
-              "repeatability", "rate_consistency", "pointing_consistency")
+ITEM_NAMES = ITEM_KEYS
 #: The keys of an optical item's dict that the one result model's Item holds itself (the
 #: rest go under the item's ``details``).
 LEGACY_ITEM_KEYS = ("item", "value", "unit", "clause", "measured", "reason", "uncertainty")
@@ -681,15 +680,6 @@ def pd_concat(*frames):
     return pd.concat(frames, ignore_index=True)
 
 
-def file_sha256(path: str | Path, block_bytes: int = 1 << 24) -> str:
-    """SHA-256 of a file, read in blocks (a stream of gigabytes is never held whole)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(block_bytes), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Protocol,
                 monte_carlo_trials: int = 0, seed: int = 0) -> tuple[AnnexABudget, str]:
     """The draft's Annex A budget of this calibration (kept for callers of the old API)."""
@@ -761,16 +751,6 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                           scale, table_mpe_arcsec=mpe,
                                           drift_half_width_arcsec=drift * t_min, k=k_fixed)
     return out
-
-
-def load_readings_or_stream(path: str | Path, protocol: Protocol) -> Readings:
-    """A readings file as is, or a stream reduced with the protocol (told apart by the header).
-
-    A header with a ``test`` column is a readings file (docs/formats.md#readings-file); one with
-    ``time_s`` and ``gyro_counts`` but no ``test`` is a stream (§2), reduced by
-    :func:`gonio.reduce.reduce_stream` before calibration.
-    """
-    return _load(path, protocol)[0]
 
 
 def _load(path: str | Path, protocol: Protocol):
@@ -898,14 +878,14 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
                                             protocol)
         rd, sha = readings, ""
         if rd.path:
-            sha = file_sha256(rd.path)
+            sha = sha256_file(rd.path)
     else:
         from gonio.errors import check_input_file
         check_input_file(readings, "readings or stream file")   # before any byte is read
         proto, conflicts = resolve_protocol(readings, file_protocol_name(readings), protocol)
         rd, from_stream = _load(readings, proto)
         static_record = static_record or from_stream
-        sha = file_sha256(readings)
+        sha = sha256_file(readings)
     settings, more = session_settings(rd, proto)
     conflicts += more
     kept, excluded = screen_readings(rd, proto)

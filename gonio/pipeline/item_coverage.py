@@ -29,6 +29,8 @@ import math
 import numpy as np
 import pandas as pd
 
+from gonio.specs.ogam_draft.items import RECORD_KEYS
+
 __all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS",
            "zero_stability_truth", "item_monte_carlo", "clopper_pearson", "two_sided",
            "coverage_flags", "MIN_COVERAGE", "MIN_SD_Z"]
@@ -123,7 +125,14 @@ ITEM_TRUTHS = {
 
 
 def _signed_extreme(v) -> float:
+    """The value of largest magnitude, sign kept; NaN (a round with no reading) is left out
+    (np.argmax would pick it), NaN only when nothing is left.
+
+    >>> _signed_extreme([1.0, float("nan"), -3.0]), _signed_extreme([float("nan")])
+    (-3.0, nan)
+    """
     v = np.asarray(v, dtype=float)
+    v = v[~np.isnan(v)]
     return float(v[int(np.argmax(np.abs(v)))]) if v.size else math.nan
 
 
@@ -275,10 +284,7 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
     >>> c["within_U"]["fraction"], c["within_U"]["n"]
     (0.75, 4)
     """
-    names = [n for n in ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                         "zero_stability_draft", "zero_stability_model", "angle_deviation", "angle_deviation_draft", "repeatability",
-                         "rate_consistency", "pointing_consistency")
-             if any(n in r for r in records)]
+    names = [n for n in RECORD_KEYS if any(n in r for r in records)]
     out = {}
     for name in names:
         rs = [r[name] for r in records if name in r]
@@ -356,8 +362,4 @@ def item_monte_carlo(report, trials: int, seed: int = 0) -> dict:
                         "delta": float(v.delta), "ndig": 2, "passed": bool(v.passed),
                         "gum_contains_mc": bool(v.gum_interval[0] <= mc.low
                                                 and mc.high <= v.gum_interval[1])}
-    order = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-             "zero_stability_draft", "zero_stability_model", "angle_deviation",
-             "angle_deviation_draft", "repeatability", "rate_consistency",
-             "pointing_consistency")
-    return {k: out[k] for k in order if k in out}
+    return {k: out[k] for k in RECORD_KEYS if k in out}

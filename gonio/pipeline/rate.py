@@ -16,7 +16,7 @@ from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.analysis.conformity import decide_result
 from gonio.result.tables import write_results
 from gonio.specs import Specification, get
-from gonio.analysis.rate_records import json_safe, load_readings
+from gonio.specs._rate_family.rate_records import json_safe, load_readings
 from gonio.formats.triad import FORMAT as TRIAD_FORMAT
 
 #: The specifications handled here (the optical draft keeps its own pipeline).
@@ -24,8 +24,14 @@ RATE_SPECS = ("jjf1535-2015", "iec62047-20")
 
 
 def spec_module(spec: Specification):
-    """The package of a specification (it holds ``simulate``, ``calibrate``, ``SPEC``)."""
+    """The package of a specification (it holds ``calibrate``, ``SPEC``)."""
     return importlib.import_module(spec.calibrate.__module__)
+
+
+def spec_simulator(spec: Specification):
+    """The specification's ``simulate`` function (its ``simulate`` module, the only one that
+    imports the virtual bench)."""
+    return importlib.import_module(f"{spec_module(spec).__name__}.simulate").simulate
 
 
 def readings_spec(path: str | Path) -> str | None:
@@ -84,7 +90,7 @@ def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
     if spec.key not in RATE_SPECS:
         raise GonioError(f"{spec.key} is not a rate-gyro specification", key="--spec")
     b = load_rate_bench(bench or spec.default_bench)
-    res = spec_module(spec).simulate(b, protocol or spec.default_protocol, seed, noise=noise)
+    res = spec_simulator(spec)(b, protocol or spec.default_protocol, seed, noise=noise)
     out = Path(out)
     with output_dir(out) as stage:
         write_rate_readings(res.data, res.metadata, stage / "readings.csv")

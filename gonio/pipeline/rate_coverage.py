@@ -9,7 +9,7 @@ c = hits/n is reported with its binomial standard uncertainty √(c(1 − c)/n) 
 
 The bench of the study (:func:`study_bench`) is the named bench with the three
 deterministic, history-dependent effects that the truth formulas of
-:mod:`gonio.specs.jjf1535.truth` and :func:`gonio.specs.iec62047_20.truth` leave out
+:mod:`gonio.specs.jjf1535.truth` and :func:`gonio.specs.iec62047_20.truth.truth` leave out
 switched off (power-on transient, thermal lag, cross-axis coupling of a turning Earth
 rate); every random term (noise, power-cycle scatter, quantisation, equipment errors)
 stays on. docs/jjf1535-readings.md#coverage-of-the-budgets states the truths used for the
@@ -31,7 +31,7 @@ from gonio.atomic import write_text
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings
 from gonio.pipeline.item_coverage import two_sided
-from gonio.pipeline.rate import RATE_SPECS, spec_module
+from gonio.pipeline.rate import RATE_SPECS, spec_module, spec_simulator
 from gonio.specs import get
 
 #: Wilson-interval coverage factor (95 %).
@@ -172,7 +172,7 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
     """One virtual calibration (noise on): per item {clause, value, truth, U, u_c}; value
     etc. None when the item was not measured or has no truth in this trial."""
     spec = _rate_spec(spec_key)
-    res = spec_module(spec).simulate(bench, protocol, int(seed), noise=True)
+    res = spec_simulator(spec)(bench, protocol, int(seed), noise=True)
     rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
     result = spec.calibrate(rd, protocol)
     truth = res.truth["items"]

@@ -46,7 +46,7 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
     """Simulate the triad protocol on the bench (readings.csv with the alignment session,
     thermal.csv with the chamber programme, truth.json) and calibrate it, the whole set
     staged and swapped into ``out`` together (:func:`gonio.atomic.output_set`)."""
-    from gonio.specs.triad_alignment.session import simulate
+    from gonio.specs.triad_alignment.simulate import simulate
 
     spec = get(KEY)
     lab_d = load_lab(lab) if lab else None          # validate inputs before simulating

@@ -741,15 +741,6 @@ class ValidationReport:
         return "\n".join(lines) + "\n"
 
 
-def _quiet_worker() -> None:
-    """A worker leaves SIGINT to the parent (which stops the pool and prints one line) and
-    dies quietly on SIGTERM: no traceback from a worker on an interrupt."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-
 def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
              cases: Sequence[str] = ("default",), sample_rate_hz: float = 100.0,
              protocol: str | Protocol = "ogam-draft",

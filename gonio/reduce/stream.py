@@ -39,6 +39,10 @@ level followed (extra rests allowed in between) by a rest whose level differs by
 expected round's pair is found before its own; every skipped round and every
 rest no round used is reported with the reason. An operator can override the
 matching round by round (:func:`read_override`).
+
+The static multi-position test (``[tilt_estimate]``, after zero stability as the bench runs
+it) is matched by position: N rests 360°/N apart, each at least ``settle_s + dwell_s`` long;
+zeroing ``settle_s`` after arrival, reading ``dwell_s`` later, no compensation.
 """
 
 from __future__ import annotations
@@ -686,6 +690,54 @@ def _zero_stability(ctx: _Ctx) -> None:
     ctx.log.append(f"zero_stability: rest {q} from {r.t_start_s:.3f} s, zero at {t_zero:.3f} s")
 
 
+def _wrap_deg(x: float) -> float:
+    """``x`` folded into [−180, 180)."""
+    return (x + 180.0) % 360.0 - 180.0
+
+
+def _tilt_estimate(ctx: _Ctx) -> None:
+    """The static multi-position test (``[tilt_estimate]``): N rests 360°/N apart.
+
+    As the bench takes it (gonio.bench.session ``tilt_estimate``): at each position the
+    zeroing sample ``settle_s`` after arrival, the reading ``dwell_s`` later; the counts are
+    not Earth-rate compensated (the Earth rate is the signal); ``table_deg`` is the nominal
+    position 360°·(i−1)/N. The first position is the first rest long enough from the cursor;
+    the others are looked for at its level + 360°·(i−1)/N (modulo a turn), in order.
+    """
+    plan = ctx.proto.tilt_estimate
+    need = plan.settle_s + plan.dwell_s
+    ref = None
+    q = ctx.cursor
+    found = 0
+    for i in range(plan.positions):
+        x = 360.0 * i / plan.positions
+        while q < len(ctx.rests):
+            r = ctx.rests[q]
+            long_enough = r.t_end_s + 1e-9 >= r.t_arrive_s + need
+            if long_enough and (ref is None or
+                                abs(_wrap_deg(r.level_deg - ref - x)) < ctx.pos_tol):
+                break
+            q += 1
+        else:
+            ctx.unmatched.append({"kind": "round", "test": "tilt_estimate", "series": 1,
+                                  "round": i + 1, "rate_dps": plan.rate_dps,
+                                  "orientation": plan.orientation,
+                                  "reason": f"no rest of {need:g} s (settle + dwell) at "
+                                            f"position {x:g}° in the stream"})
+            continue
+        if ref is None:
+            ref = r.level_deg
+        kz = ctx.sample_at_or_after(r.t_arrive_s + plan.settle_s)
+        kr = ctx.sample_at_or_after(ctx.t(kz) + plan.dwell_s)
+        ctx.rows.append(_row("tilt_estimate", 1, i + 1, plan.rate_dps, plan.orientation, ctx,
+                             kz, kr, x, 0.0))
+        ctx.used.add(q)
+        ctx.cursor = q
+        found += 1
+        q += 1
+    ctx.log.append(f"tilt_estimate: {found} of {plan.positions} positions")
+
+
 def _rotation_series(ctx: _Ctx, item: RotationItem, series: int, nxt) -> None:
     """Match one series; ``nxt`` = (item, first round) of the next series, for look-ahead."""
     s = ctx.proto.session
@@ -808,6 +860,11 @@ def _plan_keys(proto: Protocol) -> dict:
         for n in range(proto.zero_stability.readings):
             plan[("zero_stability", 1, n + 1, math.nan, proto.zero_stability.orientation)] = \
                 (math.nan, proto.zero_stability.orientation)
+    te = proto.tilt_estimate
+    if te is not None:
+        for i in range(te.positions):
+            plan[("tilt_estimate", 1, i + 1, te.rate_dps, te.orientation)] = \
+                (360.0 * i / te.positions, te.orientation)
     for item in proto.items():
         for series in range(1, item.series + 1):
             x0 = item.rounds[0].start_deg
@@ -894,6 +951,8 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
                    f"({'table encoder' if has_table else 'gyro rate'})")
     if protocol.zero_stability is not None:
         _zero_stability(ctx)
+    if protocol.tilt_estimate is not None:      # the bench's order: after zero stability
+        _tilt_estimate(ctx)
     series_list = [(item, s) for item in protocol.items() for s in range(1, item.series + 1)]
     for j, (item, s) in enumerate(series_list):
         nxt = None

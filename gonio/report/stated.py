@@ -34,11 +34,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from gonio.analysis.conformity import Conformity, DecisionRule, Limits, decide, limits_of  # noqa: F401
+from gonio.specs.ogam_draft.items import ITEM_KEYS
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
 
-ITEMS: tuple[str, ...] = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                          "angle_deviation", "repeatability", "rate_consistency",
-                          "pointing_consistency")
+ITEMS: tuple[str, ...] = ITEM_KEYS
 #: Coverage probability of the Annex A budget's U (k = 2, normal; Annex A.7).
 ANNEX_A_COVERAGE: float = 0.95
 

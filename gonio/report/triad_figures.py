@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gonio.analysis.thermal_model import ChannelModel, Compensation
-from gonio.analysis.triad_alignment import OFFDIAG, AlignmentResult
+from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult
 from gonio.units import dps_to_dph
 
 def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure:

@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from gonio.analysis.thermal_model import Compensation, ThermalModelResult
-from gonio.analysis.triad_alignment import OFFDIAG, AlignmentResult, cross_axis_table
+from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult, cross_axis_table
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
 from gonio.report.i18n import decimals_for_sig, display_uncertainty, round_half_up

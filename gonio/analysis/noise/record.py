@@ -10,7 +10,15 @@ Contents
 :class:`StaticWindow`          one interval of a stream where the table rests
 :func:`static_windows`         the rests of a stream, or the operator's window
 :func:`select_window`          the window to analyse (longest by default)
+:func:`source_windows`         :func:`static_windows` of a stream file, read in pieces
+:func:`window_record`          one window's counts, in memory or memory-mapped
 =============================  ==============================================
+
+Memory (issue 26): ``gonio noise`` never holds a whole stream. The file is read once in
+blocks to find the rests (:func:`source_windows`, the reducer's own rest finder on the
+same samples), then only the chosen window's counts are read, piece by piece, into one
+float64 array — in memory up to :data:`MEMMAP_SAMPLES` samples, beyond that in a
+memory-mapped temporary file — and analysed in place (the estimators work in blocks).
 """
 
 from __future__ import annotations
@@ -28,7 +36,8 @@ from gonio.errors import GonioError
 from gonio.units import S_PER_H
 
 __all__ = ["StaticNoiseResult", "StaticWindow", "analyse_record", "analyse_static",
-           "static_windows", "select_window", "MOTION_THRESHOLD_DPS"]
+           "static_windows", "select_window", "MOTION_THRESHOLD_DPS", "source_windows",
+           "window_record", "MEMMAP_SAMPLES"]
 
 #: Table rate above which a sample counts as motion, °/s (the reducer's default rest
 #: threshold on the encoder, gonio.reduce.TABLE_RATE_THRESHOLD_DPS).
@@ -84,7 +93,8 @@ def analyse_record(data, tau0_s: float, input_type: str, *, scale: float = 1.0,
                    unit: str = "", taus="octave", modified: bool = False,
                    kind: str | None = None, confidence: float = 0.683,
                    tau_max_s: float | None = None, sinusoid_threshold: float = 3.0,
-                   bootstrap: int = 20, seed: int = 0) -> StaticNoiseResult:
+                   bootstrap: int = 20, seed: int = 0,
+                   overwrite_data: bool = False) -> StaticNoiseResult:
     """Deviation (:func:`allan_deviation`, ``kind`` adev/mdev/hdev/totdev), the
     five-term fit with that variance's own model (:func:`fit_noise_model`, optional
     parametric ``bootstrap`` of the uncertainties) and the sinusoid check
@@ -94,9 +104,13 @@ def analyse_record(data, tau0_s: float, input_type: str, *, scale: float = 1.0,
     >>> r = analyse_record(0.3 * rng.standard_normal(50000), 1.0, "rate", unit="deg/h")
     >>> bool(abs(r.fit.N - 0.3) < 0.03), r.sinusoid.detected
     (True, False)
+
+    ``overwrite_data``: the record (float64, writeable, the caller's own) may be detrended
+    in its own memory (:func:`allan_deviation`); the numbers are the same.
     """
     allan = allan_deviation(data, tau0_s, input_type, taus, scale=scale, modified=modified,
-                            kind=kind, confidence=confidence, unit=unit)
+                            kind=kind, confidence=confidence, unit=unit,
+                            overwrite_data=overwrite_data)
     fit = fit_noise_model(allan, tau_max_s=tau_max_s, bootstrap=bootstrap, seed=seed)
     sine = detect_sinusoid(allan, fit, threshold=sinusoid_threshold)
     n = allan.n_samples
@@ -238,3 +252,102 @@ def select_window(windows: list[StaticWindow], n_samples: int) -> StaticWindow |
                          "a noise analysis (give --window START:END)", key="window")
     best = max(windows, key=lambda w: (w.duration_s, -w.i_start))
     return best
+
+
+#: Windows longer than this are read into a memory-mapped temporary file, not RAM.
+MEMMAP_SAMPLES = 1 << 24
+
+#: Samples read from a stream file at a time when a window is copied or checked.
+_READ_PIECE = 1 << 20
+
+
+def _window_by_option(src, window) -> StaticWindow:
+    """The operator's ``START:END`` on a sample source, checked as :func:`static_windows`."""
+    lo, hi = _parse_window(window)
+    t_first, t_last = src.t_first, src.t_last
+    if lo < t_first - 1e-9 or hi > t_last + 1e-9:
+        raise GonioError(f"window {lo:g}:{hi:g} s is outside the record "
+                         f"({t_first:g} to {t_last:g} s)", key="window")
+    i0 = src.search(lo, side="left")
+    i1 = src.search(hi, side="right") - 1
+    if i1 - i0 < 8:
+        raise GonioError(f"window {lo:g}:{hi:g} s holds fewer than 8 samples", key="window")
+    if "table_deg" in src.columns:
+        for a in range(i0, i1, _READ_PIECE):       # pieces overlap by one sample
+            ch = src.window(a, min(i1 + 1, a + _READ_PIECE + 1),
+                            columns=("time_s", "table_deg"))
+            rate = np.abs(np.diff(ch.table_deg)) / np.diff(ch.time_s)
+            moving = np.flatnonzero(rate > MOTION_THRESHOLD_DPS)
+            if moving.size:
+                raise GonioError(f"the table moves inside window {lo:g}:{hi:g} s "
+                                 f"(at t = {ch.time_s[moving[0]]:g} s); choose a rest",
+                                 key="window")
+    return StaticWindow(i0, i1, src.time_at(i0), src.time_at(i1), "option")
+
+
+def source_windows(src, *, scale_factor_counts_per_deg: float | None = None,
+                   min_duration_s: float = 1.0, window=None) -> list[StaticWindow]:
+    """:func:`static_windows` of a sample source (:class:`gonio.formats.streams.StreamFile`)
+    in bounded memory: the same rests (the reducer's :func:`gonio.reduce.stream.rests_of`
+    on the same samples, read once in blocks) and the same edge clipping, so the same
+    windows as :func:`static_windows` on the whole arrays."""
+    from gonio.reduce.stream import rests_of
+
+    if window is not None:
+        return [_window_by_option(src, window)]
+    on_table = "table_deg" in src.columns
+    if not on_table and scale_factor_counts_per_deg is None:
+        raise GonioError("without table_deg the rests are found from the gyro rate: give "
+                         "nominal_scale_factor_counts_per_deg",
+                         key="nominal_scale_factor_counts_per_deg")
+    rests, _ = rests_of(src, on_table=on_table,
+                        scale_factor_counts_per_deg=None if on_table
+                        else scale_factor_counts_per_deg, min_rest_s=min_duration_s)
+    out = []
+    for r in rests:
+        i0, i1 = int(r.i_start), int(r.i_end)
+        if math.isfinite(r.t_arrive_s):
+            i0 = max(i0, src.search(r.t_arrive_s, side="left"))
+        if math.isfinite(r.t_depart_s):
+            i1 = min(i1, src.search(r.t_depart_s, side="right") - 1)
+        if i1 - i0 >= 8:
+            t0, t1 = src.time_at(i0), src.time_at(i1)
+            if t1 - t0 >= min_duration_s:
+                out.append(StaticWindow(i0, i1, t0, t1, "rest"))
+    return out
+
+
+def window_record(src, w: StaticWindow, *, scale: float = 1.0, tmpdir=None,
+                  progress=None) -> tuple[np.ndarray, float]:
+    """(counts × ``scale`` as float64, τ0) of window ``w`` of a sample source, read in
+    pieces; the sampling checked uniform (each step within 1 % of the mean, as
+    :func:`analyse_static`). More than :data:`MEMMAP_SAMPLES` samples go into a
+    memory-mapped ``.npy`` in ``tmpdir`` (which the caller removes). ``progress``:
+    a :class:`gonio.progress.Progress` advanced by the samples read."""
+    n = w.i_end - w.i_start + 1
+    tau0 = float((w.t_end_s - w.t_start_s) / (n - 1))
+    if n > MEMMAP_SAMPLES and tmpdir is not None:
+        from pathlib import Path
+        out = np.lib.format.open_memmap(Path(tmpdir) / "window.npy", mode="w+",
+                                        dtype=np.float64, shape=(n,))
+    else:
+        out = np.empty(n, dtype=np.float64)
+    for a in range(0, n, _READ_PIECE):
+        b = min(n, a + _READ_PIECE)
+        # one sample before the piece (when there is one) for the step across the seam
+        lo = w.i_start + a - (1 if a else 0)
+        ch = src.window(lo, w.i_start + b, columns=("time_s", "gyro_counts"))
+        dt = np.diff(ch.time_s)
+        off = np.flatnonzero(np.abs(dt - tau0) > 0.01 * tau0)
+        if off.size:
+            raise GonioError("sampling is not uniform: time step differs from the mean "
+                             f"{tau0:g} s by more than 1 % (sample {lo + int(off[0]) + 2})",
+                             column="time_s")
+        counts = ch.gyro_counts[1:] if a else ch.gyro_counts
+        if scale != 1.0:     # as float64(counts) * scale, element by element
+            np.multiply(counts.astype(np.float64, copy=False), scale, out=out[a:b])
+        else:
+            out[a:b] = counts
+        if progress is not None:
+            progress.update(b - a)
+    return out, tau0

@@ -15,8 +15,7 @@ from gonio.errors import GonioError
 from gonio.specs import Specification
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.specs.iec62047_20.truth import hysteresis_truth, truth
-from gonio.analysis.rate_records import (monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
+from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
@@ -53,18 +52,6 @@ READINGS_TAKEN = (
 )
 
 
-def _mf(md, key, fallback, path):
-    v = md.get(key, "")
-    if v in ("", None):
-        if fallback in (None, "bench"):
-            raise GonioError("required metadata key is missing", file=path, key=key)
-        return float(fallback)
-    try:
-        return float(v)
-    except ValueError:
-        raise GonioError(f"expected a number, got {v!r}", file=path, key=key) from None
-
-
 def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
               monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
@@ -79,12 +66,12 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     df, n_corr = _items.supply_correction(rd.data, ratiometric)
     ctx = _items.Context(
         df=df, output_unit=md.get("output_unit", "output"),
-        null_output=_mf(md, "null_output", P["protocol"]["null_output"], rd.path),
-        latitude_deg=_mf(md, "latitude_deg", P["protocol"]["latitude_deg"], rd.path),
-        a_typ=_mf(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
-        t_base_c=t_base(proto), v_base=_mf(md, "supply_nominal_v", 5.0, rd.path), protocol=P,
-        rate_table_u_rel=_mf(md, "rate_table_u_rel", 2.5e-4, rd.path),
-        acquisition_u_rel=_mf(md, "acquisition_u_rel", 3.0e-5, rd.path))
+        null_output=metadata_number(md, "null_output", P["protocol"]["null_output"], rd.path),
+        latitude_deg=metadata_number(md, "latitude_deg", P["protocol"]["latitude_deg"], rd.path),
+        a_typ=metadata_number(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
+        t_base_c=t_base(proto), v_base=metadata_number(md, "supply_nominal_v", 5.0, rd.path), protocol=P,
+        rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path))
     items = {}
     for key, title, clause, fn in _items.ITEMS:
         try:
@@ -96,50 +83,6 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
                                      "ratiometric": ratiometric, "rows_corrected": n_corr}})
-
-
-def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
-    """Run the IEC programme on a rate bench: RateSessionResult with metadata and truth."""
-    from gonio.bench.rate_session import run_rate_session
-    from gonio.specs.iec62047_20.protocol import plan
-
-    proto = protocol if isinstance(protocol, IECProtocol) else load_protocol(protocol or KEY)
-    b = bench if noise else bench.without_noise()
-    g, eq = b.gyro, b.equipment
-    P = proto["protocol"]
-    md = {"spec": KEY, "protocol": proto.path.stem if proto.path else KEY, "bench": b.name,
-          "seed": seed, "noise": "on" if noise else "off", "instrument": g.name, "model": g.model,
-          "serial": g.serial, "manufacturer": g.manufacturer, "output_unit": g.output_unit,
-          "nominal_scale_factor": repr(g.scale_factor if P["nominal_scale_factor"] == "bench"
-                                       else P["nominal_scale_factor"]),
-          "null_output": repr(g.null_output if P["null_output"] == "bench" else P["null_output"]),
-          "latitude_deg": repr(b.latitude_deg if P["latitude_deg"] == "bench" else P["latitude_deg"]),
-          "room_temperature_c": repr(t_base(proto)), "supply_nominal_v": repr(g.supply_nominal_v),
-          "rate_table_u_rel": repr(eq.rate_table_u_rel),
-          "acquisition_u_rel": repr(eq.acquisition_u_rel),
-          "ratiometric": "true" if g.ratiometric else "false"}
-    res = run_rate_session(plan(proto, b), b, seed, room_temperature_c=20.0, metadata=md,
-                           noise=noise)
-    res.truth["items"] = truth(b, proto)
-    # a single calibration measures K of its own power-up: the truth carries its scatter
-    sf_seg = next((t for t in res.truth["segments"] if t["test"] == "scale_factor"), None)
-    if sf_seg is not None and noise:
-        eps = res.truth["power_cycles"][sf_seg["power_cycle"]]["scale_factor_scatter_rel"]
-        items = res.truth["items"]
-        items["scale_factor"]["value"] *= 1 + eps
-        items["scale_factor"]["power_cycle_scatter_rel"] = eps
-        items["initial_sf_variation"]["value"] = 100 * (items["scale_factor"]["value"]
-                                                        - g.scale_factor) / g.scale_factor
-    # 5.3.3.7: the true bias of every temperature visit (thermal lag included) from the session
-    segs = [t for t in res.truth["segments"] if t["test"] == "bias_temperature"]
-    if segs:
-        kr = float(g.scale_factor_at(t_base(proto), g.supply_nominal_v)) / \
-            res.truth["items"]["scale_factor"]["value"]
-        h, d = hysteresis_truth([t["temperature_c"] for t in segs],
-                                [t["bias_dps"] * kr for t in segs])
-        res.truth["items"]["bias_hysteresis"] = {"value": h, "up_minus_down_dps": d,
-                                                 "how": "5.3.3.7 on the session's true biases"}
-    return res
 
 
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,

@@ -1,6 +1,6 @@
 """IEC 62047-20:2014 measured characteristics, one function each (clause in the docstring).
 
-Shared formulas are in :mod:`gonio.analysis.rate_gyro` (the least-squares line, the
+Shared formulas are in :mod:`gonio.specs._rate_family.formulas` (the least-squares line, the
 Earth-rate projection, sine fits and crossings are the same as for JJF 1535); the
 readings taken are in ``docs/iec62047-20-readings.md``. Uncertainties come from the
 calibration's own data (GUM, k = t₉₅(ν_eff)).
@@ -9,47 +9,38 @@ calibration's own data (GUM, k = t₉₅(ν_eff)).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 from scipy import signal
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.errors import GonioError
-from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means,
+from gonio.physics.alignment import input_axis_enu
+from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means,
                                          segment_samples)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
 
-@dataclass
-class Context:
-    df: pd.DataFrame
-    output_unit: str
-    null_output: float
-    latitude_deg: float
+@dataclass(kw_only=True)
+class Context(RateContext):
+    """The shared rate context with IEC 62047-20's typical scale factor, base temperature and
+    supply, and a_BASE once computed."""
+
     a_typ: float
     t_base_c: float
     v_base: float
-    protocol: dict
-    rate_table_u_rel: float = 2.5e-4
-    acquisition_u_rel: float = 3.0e-5
-    chamber_deviation_c: float = 2.0
-    axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
     a_base: float | None = None
-    cache: dict = field(default_factory=dict)
-
-    def has(self, test: str) -> bool:
-        return bool((self.df["test"] == test).any())
 
 
 def supply_correction(df: pd.DataFrame, ratiometric: bool) -> tuple[pd.DataFrame, int]:
     """IEC 62047-20 5.1.4.1 e) eq (18) (and (19), (31) of 5.1.4.2 e), 5.6.4 e)): for a
     ratiometric gyro every output recorded with a set voltage (``supply_set_v``) beside the
     actual one (``supply_v``) becomes y = y_RAW·V_set/V_actual
-    (:func:`gonio.analysis.rate_gyro.voltage_corrected`), and ``supply_v`` then holds the set
+    (:func:`gonio.specs._rate_family.formulas.voltage_corrected`), and ``supply_v`` then holds the set
     voltage the corrected output refers to (reading taken: each run to its own set voltage,
     never to V_BASE, which would cancel what 5.1.3.5 measures). Returns a corrected copy
     (the input is not modified) and the number of rows corrected; a non-ratiometric gyro's
@@ -294,11 +285,6 @@ def cross_axis(ctx: Context) -> Item:
                 details={"per_axis": per, "axis": ax})
 
 
-def _axis_enu(up, north):
-    from gonio.bench.rate_session import mount_matrix
-    return mount_matrix(up, north) @ np.array([0.0, 0.0, 1.0])
-
-
 def bias(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.1 eq (24): N_bias = Out,ave − Earth-rate component (°/s), computed in
     output units then divided by a_BASE (reading taken). The Earth component uses the
@@ -311,7 +297,7 @@ def bias(ctx: Context) -> Item:
         return m
     vals, earth, raw = [], None, []
     for s in segment_means(ctx.df, "bias"):
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(s.up_axis, s.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(s.up_axis, s.north_axis))
         vals.append((s.mean - ctx.null_output - ctx.a_base * earth) / ctx.a_base)
         raw.append(s.mean)
     v = np.array(vals)
@@ -359,7 +345,7 @@ def bias_temperature(ctx: Context) -> Item:
     T, B, us = [], [], []
     for s in segment_means(ctx.df, "bias_temperature"):
         a = kmap.get(round(s.temperature_c, 6), ctx.a_base)
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(s.up_axis, s.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(s.up_axis, s.north_axis))
         T.append(s.temperature_c)
         B.append((s.mean - ctx.null_output) / a - earth)
         us.append(s.std / math.sqrt(s.n) / abs(a))
@@ -621,7 +607,7 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/s) of a bias difference between two records ``separation_s``
     apart from the calibration's own static record (5.4): the five-term Allan fit's rate
     random walk K√Δt and bias instability (√2·0.664·B), with the fit's uncertainties and an
-    unresolved RRW bounded by the longest τ (:func:`gonio.analysis.rate_gyro.bias_drift_u`);
+    unresolved RRW bounded by the longest τ (:func:`gonio.specs._rate_family.formulas.bias_drift_u`);
     0 without a varying static record."""
     if not ctx.has("static") or ctx.a_base is None:
         return 0.0
@@ -645,7 +631,7 @@ def _bias_temperature_points(ctx: Context):
     out = []
     for s in segment_means(ctx.df, "bias_temperature"):
         a = kmap.get(round(s.temperature_c, 6), ctx.a_base)
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(s.up_axis, s.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(s.up_axis, s.north_axis))
         y = segment_samples(ctx.df, "bias_temperature", s.run, s.step)["output"].to_numpy()
         nb = y.size // 10
         if nb >= 2:
@@ -660,7 +646,7 @@ def _bias_temperature_points(ctx: Context):
 
 def bias_hysteresis(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.7: the largest difference between the biases at one temperature on
-    the rising and the falling pass (:func:`gonio.analysis.rate_gyro.hysteresis_iec`: a
+    the rising and the falling pass (:func:`gonio.specs._rate_family.formulas.hysteresis_iec`: a
     visit is "up" when reached from below, "down" from above), °/s.
 
     Uncertainty: the two record means (block type A) and the bias drift between the two
@@ -752,7 +738,7 @@ def g_sensitivity(ctx: Context) -> Item:
     m = _miss(ctx, "g_sensitivity", "g_sensitivity", t, cl, un)
     if m:
         return m
-    from gonio.bench.rate_session import body_rotation, mount_matrix
+    from gonio.physics.alignment import body_rotation, mount_matrix
     res = {}
     for run, name in ((0, "parallel"), (1, "perpendicular")):
         seg = [s for s in segment_means(ctx.df, "g_sensitivity") if s.run == run]
@@ -797,7 +783,7 @@ def g_sensitivity(ctx: Context) -> Item:
 
 
 def broadband_noise(ctx: Context) -> Item:
-    """IEC 62047-20 5.4.5.1 c), reading taken (:func:`gonio.analysis.rate_gyro.broadband_noise_iec`):
+    """IEC 62047-20 5.4.5.1 c), reading taken (:func:`gonio.specs._rate_family.formulas.broadband_noise_iec`):
     the rms noise (°/s, Table 4) of the static record's one-sided Welch density over the
     broadband region from the in-band limit ``band_hz`` to ``broadband_high_hz`` (0: the
     Nyquist frequency); the "20 dB/dec value" c of an amplitude density c/f (°/s^1.5) and the
@@ -825,7 +811,7 @@ def broadband_noise(ctx: Context) -> Item:
 
 def resolution(ctx: Context) -> Item:
     """IEC 62047-20 5.6.3: Out,resolution by the 50 % rule on rate steps from rest
-    (:func:`gonio.analysis.rate_gyro.resolution_iec`; each step referred to the mean of the
+    (:func:`gonio.specs._rate_family.formulas.resolution_iec`; each step referred to the mean of the
     rests before and after it, the larger of the two directions), and resolution =
     max(Out,resolution, Noise,RMS). Reading taken: the "filter" is the mean over the step's
     samples (T = samples × interval) and Noise,RMS the standard deviation of T-second means

@@ -17,9 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gonio.bench.rate_session import Segment
+from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
-from gonio.bench.rate_session import calibration_segments as sf_segments
+from gonio.protocol.programme import calibration_segments as sf_segments
 from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, read_sections
 from gonio.formats.toml import Field
 

@@ -4,7 +4,7 @@ closed forms (:mod:`gonio.bench.rate_truth`: scale factor and symmetry, temperat
 supply coefficients, bias, power-on transient, g-sensitivity by the orthogonality of a
 whole turn, noise densities) and the clauses' definitions written out here on the model's
 exact outputs (linearity's residuals, the 50 % rule's walk). None of it calls an estimator
-of :mod:`gonio.analysis.rate_gyro` (only the outcome distribution of the noisy 50 % rule),
+of :mod:`gonio.specs._rate_family.formulas` (only the outcome distribution of the noisy 50 % rule),
 so a formula mutated there changes the estimate and not the truth
 (tests/test_rate_truth_independent.py). Each entry says ``how``.
 """
@@ -17,7 +17,8 @@ import numpy as np
 
 from gonio.bench import rate_truth as rt
 from gonio.bench.rate_gyro import difference_noise_sigma, noise_psd_one_sided
-from gonio.bench.rate_session import body_rotation, constant_rate_spread_dps, mount_matrix
+from gonio.bench.rate_session import constant_rate_spread_dps
+from gonio.physics.alignment import body_rotation, mount_matrix
 from gonio.physics.earth import earth_rate_enu
 from gonio.specs.iec62047_20.protocol import (IECProtocol, g_stand_runs, sf_rates, stand_angles,
                                               t_base, temperatures)
@@ -144,7 +145,7 @@ def _resolution_truth(bench, proto: IECProtocol, tb: float, ez: float, kr: float
                                  0.5 * (rs["samples"] + rs["rest_samples"]) * dt
                                  + proto["scale_factor"]["settle_s"], both_sides=True,
                                  temp_c=tb) * kr
-    from gonio.analysis import rate_gyro as rg        # outcome distribution only
+    from gonio.specs._rate_family import formulas as rg        # outcome distribution only
     st = np.array(rs["steps_dps"], float)
     cands, pmfs = [], []
     for sgn in (1.0, -1.0):

@@ -16,7 +16,7 @@ from gonio.specs import Specification
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
-from gonio.analysis.rate_records import (monte_carlo_validation, Item, RateCalibrationResult, load_readings, not_measured,
+from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, Item, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
@@ -42,38 +42,26 @@ READINGS_TAKEN = (
 )
 
 
-def _meta_float(md: dict, key: str, default: float | None, path) -> float:
-    v = md.get(key, "")
-    if v in ("", None):
-        if default is None:
-            raise GonioError("required metadata key is missing", file=path, key=key)
-        return float(default)
-    try:
-        return float(v)
-    except ValueError:
-        raise GonioError(f"expected a number, got {v!r}", file=path, key=key) from None
-
-
 def make_context(rd, proto: JJFProtocol):
     """The :class:`~.items.Context` of a readings file: null, latitude, units from the metadata
     (the protocol's values when the metadata lacks them)."""
     md = rd.metadata
     p = proto.sections
-    null = _meta_float(md, "null_output",
+    null = metadata_number(md, "null_output",
                        None if p["protocol"]["null_output"] == "bench" else p["protocol"]["null_output"],
                        rd.path)
-    lat = _meta_float(md, "latitude_deg",
+    lat = metadata_number(md, "latitude_deg",
                       None if p["bias"]["latitude_deg"] == "bench" else p["bias"]["latitude_deg"],
                       rd.path)
     return _items_mod.Context(
         df=rd.data, output_unit=md.get("output_unit", "output"), null_output=null,
         latitude_deg=lat,
-        room_temperature_c=_meta_float(md, "room_temperature_c",
+        room_temperature_c=metadata_number(md, "room_temperature_c",
                                        p["protocol"]["room_temperature_c"], rd.path),
         protocol=p,
-        rate_table_u_rel=_meta_float(md, "rate_table_u_rel", 2.5e-4, rd.path),
-        acquisition_u_rel=_meta_float(md, "acquisition_u_rel", 3.0e-5, rd.path),
-        chamber_deviation_c=_meta_float(md, "chamber_deviation_bound_c", 2.0, rd.path))
+        rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
+        chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path))
 
 
 def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
@@ -113,30 +101,3 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
                      clause_doc="docs/jjf1535-readings.md", default_protocol=KEY,
                      default_bench="mems-adxrs610", calibrate=calibrate, budget=annex_a)
-
-
-def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
-    """Run the protocol's programme on a rate bench: (RateSessionResult with metadata, truth)."""
-    from gonio.bench.rate_session import run_rate_session
-    from gonio.specs.jjf1535.protocol import null_output, plan
-    from gonio.specs.jjf1535.truth import truth as _truth
-
-    proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or KEY)
-    b = bench if noise else bench.without_noise()
-    g, eq = b.gyro, b.equipment
-    md = {"spec": KEY, "protocol": proto.path.stem if proto.path else KEY, "bench": b.name,
-          "seed": seed, "noise": "on" if noise else "off", "instrument": g.name, "model": g.model,
-          "serial": g.serial, "manufacturer": g.manufacturer, "output_unit": g.output_unit,
-          "nominal_scale_factor": repr(g.scale_factor),
-          "null_output": repr(null_output(proto, b)), "latitude_deg": repr(b.latitude_deg),
-          "room_temperature_c": repr(proto["protocol"]["room_temperature_c"]),
-          "supply_nominal_v": repr(g.supply_nominal_v),
-          "rate_table_u_rel": repr(eq.rate_table_u_rel),
-          "acquisition_u_rel": repr(eq.acquisition_u_rel), "chamber_deviation_bound_c": "2.0",
-          "table": "rate table, two-axis position table, angular vibration table, chamber "
-                   "(virtual)"}
-    res = run_rate_session(plan(proto, b), b, seed,
-                           room_temperature_c=proto["protocol"]["room_temperature_c"],
-                           metadata=md, noise=noise)
-    res.truth["items"] = _truth(b, proto)
-    return res

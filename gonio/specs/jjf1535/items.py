@@ -2,9 +2,9 @@
 
 Each function takes a :class:`Context` (the readings and what the calibration already
 knows: K, null output, latitude, protocol values) and returns an
-:class:`~gonio.analysis.rate_records.Item` with its value, unit, clause, and an uncertainty
+:class:`~gonio.specs._rate_family.rate_records.Item` with its value, unit, clause, and an uncertainty
 computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
-k = t₉₅(ν_eff). The formulas are in :mod:`gonio.analysis.rate_gyro`; the readings taken
+k = t₉₅(ν_eff). The formulas are in :mod:`gonio.specs._rate_family.formulas`; the readings taken
 are documented in ``docs/jjf1535-readings.md``.
 
 Rates are reported in °/h (bias family) or °/s (threshold, resolution) as JJF Table 1
@@ -14,41 +14,29 @@ allows; the scale factor in the gyro's output unit per °/s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
-from gonio.analysis import rate_gyro as rg
+from gonio.specs._rate_family import formulas as rg
 from gonio.errors import GonioError
+from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.analysis.rate_records import (Item, gum, not_measured, segment_means, segment_samples,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
 
-@dataclass
-class Context:
-    """What the item functions need besides the formulas."""
+@dataclass(kw_only=True)
+class Context(RateContext):
+    """The shared rate context with JJF 1535's room temperature, cross-axis bound, and K̄
+    of 7.2.1 once computed."""
 
-    df: pd.DataFrame
-    output_unit: str
-    null_output: float
-    latitude_deg: float
     room_temperature_c: float
-    protocol: dict
-    rate_table_u_rel: float = 2.5e-4
-    acquisition_u_rel: float = 3.0e-5
-    chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
-    axis_alignment_deg: float = 0.05          # mounting of the input axis (fixture), half-width
     cross_axis_bound: float = 0.03            # assumed |cross-axis sensitivity| bound (7.2.12)
     K: float | None = None                    # K̄ of 7.2.1 once computed
     u_K_rel: float | None = None
-    cache: dict = field(default_factory=dict)
-
-    def has(self, test: str) -> bool:
-        return bool((self.df["test"] == test).any())
 
 
 def _need(ctx: Context, test: str, key: str, title: str, clause: str, unit: str):
@@ -88,7 +76,7 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.analysis.rate_gyro.bias_drift_u`); 0 without a static record."""
+    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`); 0 without a static record."""
     fit = ctx.cache.get("noise_fit")
     if fit is None:
         return 0.0
@@ -254,7 +242,7 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
 def rule_noise_half_width(pmfs: list[dict], value: float) -> tuple[float, dict]:
     """Half-width of the 95 % range of the 50 % rule's outcome under the noise of the data
-    (:func:`gonio.analysis.rate_gyro.max_outcome_pmf` of the directions), measured from
+    (:func:`gonio.specs._rate_family.formulas.max_outcome_pmf` of the directions), measured from
     ``value``: the distance to the farther of the 2.5 % and 97.5 % outcomes (None, "above
     the grid", counts as the largest tested step)."""
     pmf = rg.max_outcome_pmf(*pmfs)
@@ -356,11 +344,6 @@ def resolution(ctx: Context) -> Item:
 
 
 # --------------------------------------------------------------------------- bias family
-def _axis_enu(up: str, north: str) -> np.ndarray:
-    from gonio.bench.rate_session import mount_matrix
-    return mount_matrix(up, north) @ np.array([0.0, 0.0, 1.0])
-
-
 def bias_records(ctx: Context) -> list[dict]:
     """B_0,m of each bias record (eqs (15), (16)) in °/h with the Earth rate removed, and the
     uncorrected F̄/K beside it."""
@@ -370,7 +353,7 @@ def bias_records(ctx: Context) -> list[dict]:
     remove = ctx.protocol.get("bias", {}).get("remove_earth_rate", True)
     for m in segment_means(ctx.df, "bias"):
         y = segment_samples(ctx.df, "bias", m.run, m.step)["output"].to_numpy()
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         raw = (m.mean - ctx.null_output) / ctx.K
         u_mean, nu = _block_std_of_mean(y, int(ctx.protocol.get("bias", {}).get(
             "stability_block_samples", 10)))
@@ -505,7 +488,7 @@ def g_sensitivity(ctx: Context) -> Item:
     for m in segment_means(ctx.df, "g_sensitivity"):
         y = segment_samples(ctx.df, "g_sensitivity", m.run, m.step)["output"].to_numpy()
         um, nu = _block_std_of_mean(y)
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, _axis_enu(m.up_axis, m.north_axis))
+        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         pos[m.up_axis] = {"w": (m.mean - ctx.null_output) / ctx.K, "earth": earth,
                           "u": um / abs(ctx.K), "nu": nu, "t": m.time_s + 0.5 * m.n}
     res, lit, us = {}, {}, {}

@@ -16,10 +16,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gonio.analysis.rate_gyro import bandwidth_grid
-from gonio.bench.rate_session import Segment
+from gonio.specs._rate_family.formulas import bandwidth_grid
+from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
-from gonio.bench.rate_session import calibration_segments as sf_segments
+from gonio.protocol.programme import calibration_segments as sf_segments
 from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, rate_series, read_sections
 from gonio.formats.toml import Field
 

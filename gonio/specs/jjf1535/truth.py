@@ -5,7 +5,7 @@ and the protocol, by closed forms (:mod:`gonio.bench.rate_truth`: scale factor, 
 temperature sensitivities, bias, g-sensitivity, ARW, warm-up time, bandwidth) and otherwise by
 the clause's definition written out here on the model's *exact, noise-free* outputs
 (nonlinearity's residuals, the 50 % rules' walk) — labelled ``"how"`` in the result. None of
-it calls the estimators of :mod:`gonio.analysis.rate_gyro`, so a formula mutated there
+it calls the estimators of :mod:`gonio.specs._rate_family.formulas`, so a formula mutated there
 changes the estimate and not the truth (tests/test_rate_truth_independent.py). The noise
 statistics (bias stability, bias repeatability) use the exact covariance of the noise model
 (white, Gauss–Markov sum, random walk), independent of the generator.
@@ -17,10 +17,10 @@ import math
 
 import numpy as np
 
-from gonio.analysis import rate_gyro as rg
 from gonio.bench import rate_truth as rt
+from gonio.specs._rate_family import formulas as rg
 from gonio.bench.rate_gyro import NoiseState, RateBench, difference_noise_sigma
-from gonio.bench.rate_session import mount_matrix
+from gonio.physics.alignment import mount_matrix
 from gonio.physics.earth import earth_rate_enu
 from gonio.units import S_PER_H
 
@@ -158,7 +158,7 @@ def truth(bench: RateBench, proto) -> dict:
     """True values of the fifteen items (keys as in :data:`gonio.specs.jjf1535.items.ITEMS`),
     from the model's parameters: closed forms (:mod:`gonio.bench.rate_truth`) and the
     clauses' definitions written out here, never the estimators' functions (only the
-    outcome distribution of the noisy 50 % rule comes from :mod:`gonio.analysis.rate_gyro`)."""
+    outcome distribution of the noisy 50 % rule comes from :mod:`gonio.specs._rate_family.formulas`)."""
     from gonio.specs.jjf1535.protocol import bandwidth_frequencies, sf_rates
 
     g = bench.gyro

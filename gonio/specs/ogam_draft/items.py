@@ -42,8 +42,16 @@ from gonio.formats.readings import Readings, metadata_float
 #: Positions of different conditions (7.6, 7.7) are matched on table_deg rounded to this many decimals.
 POSITION_DECIMALS: int = 2
 
-_ORDER = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
-          "repeatability", "rate_consistency", "pointing_consistency")
+#: The seven characteristics of clause 7, in Annex B order (the one copy of this list).
+ITEM_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+                              "angle_deviation", "repeatability", "rate_consistency",
+                              "pointing_consistency")
+#: The keys of the validation records: the seven, with the draft's and the model's readings
+#: of the zero stability and the angle deviation beside them.
+RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+                                "zero_stability_draft", "zero_stability_model", "angle_deviation",
+                                "angle_deviation_draft", "repeatability", "rate_consistency",
+                                "pointing_consistency")
 _TITLES = {
     "scale_factor": "scale factor K",
     "scale_factor_nonlinearity": "scale-factor nonlinearity K_l",
@@ -847,7 +855,7 @@ class CalibrationResults:
 
     def items(self) -> list[Characteristic]:
         """The seven results in Annex B order."""
-        return [getattr(self, n) for n in _ORDER]
+        return [getattr(self, n) for n in ITEM_KEYS]
 
     def to_dict(self) -> dict:
         """JSON-able dict: the seven keys plus ``unused_readings`` (list of row dicts)."""

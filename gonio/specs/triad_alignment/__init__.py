@@ -4,7 +4,7 @@ Not a standard: a calibration built on the alignment application article ([Loone
 misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis ([Vagner2015]:
 K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.2.
 :mod:`~gonio.specs.triad_alignment.calibration` computes the results;
-:mod:`~gonio.specs.triad_alignment.session` simulates them on the virtual bench. The
+:mod:`~gonio.specs.triad_alignment.simulate` simulates them on the virtual bench. The
 reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
 """
 

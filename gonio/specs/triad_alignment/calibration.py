@@ -2,7 +2,7 @@
 and, when the readings include a thermal programme, the extended temperature / supply model.
 
 The items have the shape of every other specification's (value, unit, clause, measured,
-reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.analysis.rate_records.Item`):
+reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.specs._rate_family.rate_records.Item`):
 
 * ``M_ij`` — the nine elements of the system matrix M (output per °/s), alignment §4;
 * ``b_i`` — the bias vector (output units), the ± rates cancelling it (article eq. 28–30a);
@@ -29,11 +29,11 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from gonio.analysis.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
+from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
                                          not_measured, source_info)
 from gonio.analysis.thermal_model import (Compensation, ThermalModelResult, compensate_record,
                                           identify_thermal_model)
-from gonio.analysis.triad_alignment import (COVERAGE, OFFDIAG, AlignmentResult,
+from gonio.specs.triad_alignment.analysis import (COVERAGE, OFFDIAG, AlignmentResult,
                                             cross_axis_table, estimate_alignment)
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
@@ -262,7 +262,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     """Every item of the module docstring from a triad readings file (path or TriadReadings).
 
     Alignment from the ``alignment`` (and ``static``) rows
-    (:func:`gonio.analysis.triad_alignment.estimate_alignment`), Monte Carlo with
+    (:func:`gonio.specs.triad_alignment.analysis.estimate_alignment`), Monte Carlo with
     ``monte_carlo_trials`` draws; the extended model from the thermal programme
     (:func:`_thermal_readings`; :func:`gonio.analysis.thermal_model.identify_thermal_model`),
     applied back to the same record for the before/after comparison. ``protocol`` is

@@ -3,7 +3,7 @@ IEC 62047-20): the item and result dataclasses (results.json shape), the per-ite
 wrapper, segment means of a rate readings file.
 
 Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20` (one specification
-never imports another, so what they share lives here and in :mod:`gonio.analysis.rate_gyro`).
+never imports another, so what they share lives here and in :mod:`gonio.specs._rate_family.formulas`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import hashlib
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +19,9 @@ import numpy as np
 import pandas as pd
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
+from gonio.atomic import sha256_file
 from gonio.errors import GonioError
+from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
 from gonio.result.model import Item, Result, Uncertainty, not_measured  # noqa: F401
 from uncertainty import monte_carlo, propagate, validate_gum
@@ -82,12 +83,47 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
 def source_info(rd: RateReadings) -> dict:
     """File name, SHA-256 and row count of the readings."""
     if rd.path is not None and Path(rd.path).is_file():
-        sha = hashlib.sha256(Path(rd.path).read_bytes()).hexdigest()
+        sha = sha256_file(rd.path)
         name = Path(rd.path).name
     else:
         sha = hashlib.sha256(pd.util.hash_pandas_object(rd.data, index=False).values.tobytes()).hexdigest()
         name = "<memory>"
     return {"file": name, "sha256": sha, "rows": int(len(rd.data))}
+
+
+@dataclass(kw_only=True)
+class RateContext:
+    """What a rate specification's item functions need besides the formulas: the readings,
+    the values the metadata (or protocol) state, the protocol's sections, the equipment's
+    relative uncertainties. Each specification extends it with its own fields."""
+
+    df: pd.DataFrame
+    output_unit: str
+    null_output: float
+    latitude_deg: float
+    protocol: dict
+    rate_table_u_rel: float = 2.5e-4
+    acquisition_u_rel: float = 3.0e-5
+    chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
+    axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
+    cache: dict = field(default_factory=dict)
+
+    def has(self, test: str) -> bool:
+        """Whether the readings hold records of ``test``."""
+        return bool((self.df["test"] == test).any())
+
+
+def metadata_number(md: dict, key: str, default, path) -> float:
+    """A numeric metadata value of a rate readings file (validated by
+    :func:`gonio.formats.metadata.metadata_float`), or ``default`` when the key is absent or
+    empty; with no default (None, or ``"bench"``: the protocol defers to the bench) an
+    absent key is an error naming it."""
+    value = metadata_float(md, key, file=path) if str(md.get(key, "") or "").strip() else None
+    if value is None:
+        if default is None or default == "bench":
+            raise GonioError("required metadata key is missing", file=path, key=key)
+        return float(default)
+    return value
 
 
 def load_readings(readings) -> RateReadings:
@@ -151,8 +187,3 @@ def sf_calibration_means(means: list[SegmentMean], run: int):
     ys = np.array([m.mean for m in inner if m.role == "rate"])
     zero = [m for m in inner if m.role == "rest"]
     return first, last, rates, ys, zero
-
-
-def write_json(path, obj) -> None:
-    from gonio.atomic import write_text
-    write_text(path, json.dumps(json_safe(obj), indent=2, ensure_ascii=False, allow_nan=False) + "\n")
