@@ -12,7 +12,7 @@ import contextlib
 import contextvars
 import hashlib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
