@@ -157,7 +157,7 @@ def test_coverage_probability_beside_every_U(run):
             assert "95 %" in line, line
     # the laboratory's conformity statements are in summary.txt as on the certificate
     assert re.search(r"conformity angle_deviation: (pass|conditional pass|conditional fail|fail)"
-                     r" \(limits \[-0\.50, 0\.50\], rule non-binary", summary), summary
+                     r" \(limits \[-0\.5, 0\.5\], rule non-binary", summary), summary
 
 
 def test_per_item_uncertainty_is_shown_when_results_carry_it(run):
@@ -208,7 +208,7 @@ def test_conformity_only_with_limits_and_outcome_from_closed_form(run, tmp_path)
     table = table[:table.index("</table>")]
     cells = [visible_text(c).strip() for c in re.findall(r"<td>(.*?)</td>", table)]
     row = cells[cells.index("Angle-position deviation E"):][:5]
-    assert row[1] == "[-0.50, 0.50] ″", row
+    assert row[1] == "[-0.5, 0.5] ″", row      # the limits as the laboratory gave them
     assert row[3].startswith(outcome), (row, outcome)
     if outcome in ("pass", "conditional pass"):
         assert float(row[4].rstrip(" %")) == pytest.approx(100 * (1 - p_c), rel=0.05, abs=0.051)

@@ -304,12 +304,11 @@ def test_simulate_deterministic_and_cli(tmp_path, capsys):
     html = (tmp_path / "a" / "certificate.html").read_text()
     # every number shown carries its path in results.json
     import re
-    srcs = re.findall(r'data-src="items\.([a-z_]+)\.value" data-rule="sig4">([^<]+)<', html)
+    from gonio.report.i18n import display
+    srcs = re.findall(r'data-src="items\.([a-z_]+)\.value" data-rule="([a-z0-9-]+)">([^<]+)<', html)
     assert len(srcs) >= 8
-    for key, text in srcs:
-        v = res["items"][key]["value"]
-        assert float(text.replace("×10", "e").translate(str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789"))) \
-            == pytest.approx(v, rel=1e-3)
+    for key, rule, text in srcs:             # the value at U's decimal place (GUM 7.2.6)
+        assert text == display(rule, res["items"][key]["value"]), key
     assert (tmp_path / "a" / "certificate.pdf").read_bytes()[:4] == b"%PDF"
     # the recalibration statement is JJF 1535's clause 9, not the optical draft's
     assert "JJF 1535-2015 clause 9" in html and "draft clause 9" not in html

@@ -104,20 +104,26 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
         text = real.find("si:value", NS).text
         assert _as_display(text) == display(rule, v), (src, text)
         x = parse_display(_as_display(text))
-        assert abs(x - v) <= 0.5 * last_digit_unit(_as_display(text)) + 1e-12 * abs(v), src
+        step = 10.0 ** -int(rule[3:]) if rule.startswith("dec") else \
+            last_digit_unit(_as_display(text))       # dec-1: rounded to tens
+        assert abs(x - v) <= 0.5 * step + 1e-12 * abs(v), src
         unc = res["items"][key]["uncertainty"]
         mu = real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS)
         U = float(mu.find("si:valueExpandedMU", NS).text)
         assert U == pytest.approx(unc["U"] * factor, rel=0.05)     # 2 significant digits
-        assert _as_display(mu.find("si:valueExpandedMU", NS).text) == display("U", unc["U"] * factor)
+        U_rule = rule if rule.startswith("sci") else "U"
+        assert _as_display(mu.find("si:valueExpandedMU", NS).text) == display(U_rule,
+                                                                              unc["U"] * factor)
         assert mu.find("si:coverageFactor", NS).text == display("k", unc["k"])
         assert float(mu.find("si:coverageProbability", NS).text) == unc["coverage_probability"] == 0.95
     # per-g items are per m s⁻²: the value times g_n is the results.json value
-    per_g = [(s, f, r) for s, _, f, r in shown if f != 1.0]
-    assert per_g and all(res["items"][s.split(".")[1]]["unit"].endswith("/g") for s, _, _ in per_g)
-    for src, f, real in per_g:
-        assert float(real.find("si:value", NS).text) * G_N == pytest.approx(lookup(res, src),
-                                                                             rel=1e-3)
+    per_g = [(s, f, r, ru) for s, ru, f, r in shown if f != 1.0]
+    assert per_g and all(res["items"][s.split(".")[1]]["unit"].endswith("/g")
+                         for s, _, _, _ in per_g)
+    for src, f, real, rule in per_g:       # stated at U's decimal place (per m s⁻²)
+        step = 10.0 ** -int(rule[3:]) if rule.startswith("dec") else 1e-3 * lookup(res, src)
+        assert float(real.find("si:value", NS).text) * G_N == pytest.approx(
+            lookup(res, src), abs=0.5 * step * G_N * 1.000001)
         assert f == pytest.approx(1 / G_N, rel=1e-15)
 
 
@@ -220,7 +226,10 @@ def test_calibrate_cli_writes_the_dcc_in_the_set(run, schema, capsys):
         load_lab(lab)["certificate"]["number"]
     # the file equals the DCC of results.json's calibration
     res = json.loads((out / "results.json").read_text())
-    val = {s: float(r.find("si:value", NS).text) / f for s, _, f, r in _shown(doc)}
-    for src, v in val.items():
-        assert v == pytest.approx(lookup(res, src), rel=5e-4 + 1e-12), src
+    val = {s: (float(r.find("si:value", NS).text), ru, f) for s, ru, f, r in _shown(doc)}
+    for src, (v, rule, f) in val.items():       # the stated value: results.json's, rounded
+        assert _as_display(repr(v) if "e" in repr(v) else str(v)) and \
+            display(rule, lookup(res, src) * f) == _as_display(
+                [r for s, _, _, r in _shown(doc) if s == src][0].find("si:value", NS).text), src
+    val = {s: v for s, (v, _, _) in val.items()}
     assert not math.isnan(sum(val.values()))

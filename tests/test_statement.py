@@ -53,7 +53,9 @@ def test_upper_bound_of_non_negative_quantity():
 
 def test_small_numbers_share_U_exponent():
     s = state(2.1805064e-05, 1.3e-06, k=2)
-    assert (s.value_text, s.U_text) == ("21.8×10⁻⁶", "1.3×10⁻⁶")
+    assert (s.value_text, s.U_text) == ("2.18×10⁻⁵", "0.13×10⁻⁵")
+    s = state(0.0061124, 5.6e-06)
+    assert (s.value_text, s.U_text) == ("6.1124×10⁻³", "0.0056×10⁻³")
 
 
 def test_no_uncertainty_keeps_significant_digits():

@@ -158,9 +158,9 @@ def test_damaged_readings_give_items_not_measured_with_the_reason(run, tmp_path,
         return lines, head + 2
     line = _damaged(src, tmp_path / "noup.csv", no_up)
     capsys.readouterr()
-    assert main(["calibrate", str(src), "--out", str(tmp_path / "o3"), "--dcc"]) == 2
-    assert "--dcc does not apply to the triad-alignment" in capsys.readouterr().err
-    assert not (tmp_path / "o3").exists()
+    # the triad has a DCC now (issue 25): --dcc writes it beside the certificate
+    assert main(["calibrate", str(src), "--out", str(tmp_path / "o3"), "--dcc"]) == 0
+    assert (tmp_path / "o3" / "certificate.dcc.xml").read_bytes().startswith(b"<?xml")
     assert main(["calibrate", str(tmp_path / "noup.csv"), "--out", str(tmp_path / "o2")]) == 2
     err = capsys.readouterr().err
     assert f"noup.csv:{line}" in err and "up" in err and len(err.strip().splitlines()) == 1

@@ -116,12 +116,12 @@ def run(args) -> int:
     if spec == "triad-alignment":
         from gonio.pipeline.triad import calibrate as calibrate_triad
 
-        for flag, given in (("--dcc", args.dcc), ("--tilt", args.tilt),
+        for flag, given in (("--tilt", args.tilt),
                             ("--budget", args.budget != "physical"),
                             ("--protocol", args.protocol)):
             if given:
                 raise GonioError(f"{flag} does not apply to the triad-alignment "
-                                 "specification (no DCC, tilt file, draft budget or protocol "
+                                 "specification (no tilt file, draft budget or protocol "
                                  "for a triad calibration: the readings carry what it needs)",
                                  key=flag)
 
@@ -131,7 +131,7 @@ def run(args) -> int:
             result, _ = calibrate_triad(args.readings, args.out, thermal=args.thermal,
                                         lab=args.lab, lang=args.lang,
                                         monte_carlo_trials=args.monte_carlo,
-                                        robust=args.robust)
+                                        robust=args.robust, dcc=args.dcc)
         print_result(result, args.json)
         return 0
     if args.thermal or args.robust:

@@ -22,7 +22,7 @@ KEY = "triad-alignment"
 
 
 def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=None,
-              monte_carlo_trials: int = 0, robust: bool = False):
+              monte_carlo_trials: int = 0, robust: bool = False, dcc: bool = False):
     """Calibrate a triad readings file (:func:`gonio.specs.triad_alignment.calibration.calibrate`;
     the thermal programme from ``thermal`` or the readings' ``# thermal_readings:``) and write
     ``results.json``, ``summary.txt``, ``certificate.html`` and ``certificate.pdf`` into
@@ -33,7 +33,8 @@ def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=
     decide_result(result, lab_d)
     out = Path(out)
     paths = write_results(result, out)
-    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang))
+    paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
+                                         dcc=dcc))
     return result, paths
 
 

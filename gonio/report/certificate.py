@@ -44,6 +44,7 @@ from gonio.analysis.conformity import RULES
 from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
 from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
                                reading_note, rule_at_U, specification_text)
+from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class)
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
                                  stated_item, u_cell)
@@ -162,11 +163,6 @@ def certificate_id(report, lab: dict | None = None) -> str:
 
 
 # --------------------------------------------------------------------------- content blocks
-
-class NoBreak(str):
-    """Text that is never broken across lines (identifiers, units): HTML ``nowrap``,
-    one token in the PDF's wrapping."""
-
 
 @dataclass
 class Block:
@@ -354,7 +350,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
             t = conformity_texts(c, res, L)
             out_txt = t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else "")
             crow.append([L[e["item"]], NoBreak(f"{t['limits']} {unit}"),
-                         NoBreak(f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
+                         NoBreak(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
+                                 else f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
         add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
                       crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
 
@@ -366,7 +363,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     brows = []
     for j, c in enumerate(unc["components"]):
         brows.append([NoBreak(f"u({c['symbol'].replace('phi_e', 'φ_e')})"),
-                      budget_source(c["symbol"], c["source"], lang)
+                      budget_source(c["symbol"], c["source"].partition(" [beyond the draft")[0],
+                                    lang)
                       + (f" ({L['beyond_draft']})" if c.get("beyond_draft") else ""), c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])

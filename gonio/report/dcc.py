@@ -157,6 +157,47 @@ def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None
 
 
 
+def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
+    """The decision rule(s) and one dcc:statement per item the pipeline decided (results.json
+    ``items.<key>.conformity``), each with the rule, the outcome (dcc:conformity), the limits,
+    the probability of conformance and the specific false-accept probability as dcc:data;
+    ``refId`` names the item's dcc:result. ``name_of(key)`` names an item, ``dsi_of(key)``
+    gives its (D-SI unit, factor)."""
+    decided = [(k, it["conformity"]) for k, it in items.items() if it.get("conformity")]
+    for rule in dict.fromkeys((c.get("rule") or "simple") for _, c in decided):
+        r = next(c for _, c in decided if (c.get("rule") or "simple") == rule)
+        st = element(sts, "dcc:statement", id=f"decision-rule-{rule}")
+        text_element(st, "dcc:name", "Decision rule")
+        element(st, "dcc:norm", "ILAC-G8:09/2019")
+        element(st, "dcc:norm", "JCGM 106:2012")
+        text_element(st, "dcc:declaration", L.get(f"rule_{rule}", rule).format(
+            r=display("k", r.get("guard_factor") or 0.0)))
+    for key, c in decided:
+        st = element(sts, "dcc:statement", id=f"conformity-{key}", refId=f"result-{key}")
+        text_element(st, "dcc:name", f"Statement of conformity: {name_of(key)}")
+        if not c.get("outcome"):
+            text_element(st, "dcc:declaration", f"no statement: {c.get('reason') or '—'}")
+            continue
+        t = conformity_texts(c, None, L)
+        text_element(st, "dcc:declaration",
+                     f"{t['outcome']}; rule {c.get('rule')}; limits {t['limits']}; acceptance "
+                     f"interval {t['acceptance']}; specific false-accept probability {t['pfa']}"
+                     + (f"; {t['pfr']}" if t["pfr"] else "")
+                     + f"; limits from: {c.get('source') or c.get('limits_from') or '—'}")
+        element(st, "dcc:conformity", DCC_CONFORMITY[c["outcome"]])
+        data = element(st, "dcc:data")
+        dsi, factor = dsi_of(key)
+        for nm, v in (("lower specification limit", c.get("lower")),
+                      ("upper specification limit", c.get("upper"))):
+            if v is not None:
+                quantity(data, nm, repr(float(v) * factor), "", dsi=dsi)
+        for nm, v in (("probability of conformance", c.get("conformance_probability")),
+                      ("specific false-accept probability", c.get("false_accept_probability")),
+                      ("specific false-reject probability", c.get("false_reject_probability"))):
+            if v is not None:
+                quantity(data, nm, display("sig3", v), "one")
+
+
 def _decimal_or_nan(v) -> str:
     """A shown number (Num or plain decimal text) as an si:decimal; "—" or None as NaN."""
     try:

@@ -25,7 +25,8 @@ import re
 from decimal import Decimal
 
 from gonio.errors import GonioError
-from gonio.result.statement import decimals_for_sig, round_half_up  # noqa: F401  (the one rule)
+from gonio.result.statement import decimals_for_sig, nu_text, round_half_up  # noqa: F401
+# (the one rule: gonio.result.statement)
 
 #: Languages the certificate can be written in.
 LANGUAGES: tuple[str, ...] = ("en", "zh")
@@ -72,6 +73,8 @@ LABELS: dict[str, dict[str, str]] = {
     "environment": {"en": "Environment during calibration", "zh": "校准环境条件"},
     "temperature": {"en": "Temperature", "zh": "温度"},
     "humidity": {"en": "Relative humidity", "zh": "相对湿度"},
+    "chamber_profile": {"en": "Temperature chamber points", "zh": "温度试验箱温度点"},
+    "chamber_bound": {"en": " (deviation within ±{b} °C)", "zh": "（偏差不超过 ±{b} °C）"},
     "not_stated": {"en": "not stated", "zh": "未说明"},
     "results": {"en": "Results of calibration (Annex B)", "zh": "校准结果（附录B）"},
     "no": {"en": "No.", "zh": "序号"},
@@ -217,6 +220,11 @@ LABELS: dict[str, dict[str, str]] = {
                                    "\"beyond the draft\" are not in Annex A.",
                              "zh": "按本次校准的物理模型评定；标“超出草案”的分量不在附录A中。"},
     "beyond_draft": {"en": "beyond the draft", "zh": "超出草案"},
+    "u_c_word": {"en": "combined standard uncertainty", "zh": "合成标准不确定度"},
+    "src_own_A": {"en": "scatter of the item's own readings (Type A)",
+                  "zh": "本项目读数的分散性（A类）"},
+    "src_own_B": {"en": "bound from the specification's procedure (Type B)",
+                  "zh": "按规范程序给出的界限（B类）"},
     "no_E_U": {"en": "Angle-position deviation not measured: no uncertainty stated.",
                "zh": "未测角位置偏差：不给出测量不确定度。"},
     # method
@@ -274,6 +282,10 @@ LABELS: dict[str, dict[str, str]] = {
     "c_outcome": {"en": "Outcome", "zh": "判定结果"},
     "c_pfa": {"en": "Specific false-accept probability", "zh": "特定误接受概率"},
     "c_pfr": {"en": "false-reject probability {v} %", "zh": "误拒绝概率 {v} %"},
+    "c_pc": {"en": "Probability of conformance", "zh": "符合概率"},
+    "c_acc_empty": {"en": "none (guard bands wider than the tolerance)",
+                    "zh": "无（保护带宽于允差区间）"},
+    "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
     "c_no_U": {"en": "no statement: the item has no stated uncertainty",
                "zh": "不作声明：该项目无测量不确定度"},
     "c_not_measured": {"en": "no statement: not measured", "zh": "不作声明：未测"},
@@ -410,7 +422,7 @@ def labels(lang: str = "en") -> dict[str, str]:
     """
     if lang not in LANGUAGES:
         raise GonioError(f"expected one of {', '.join(LANGUAGES)}, got {lang!r}", key="lang")
-    return {k: v[lang] for k, v in LABELS.items()}
+    return {k: v[lang] for k, v in LABELS.items()} | {"_lang": lang}
 
 
 #: Family names of CJK fonts looked for, best first.
@@ -573,7 +585,9 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     Rules: ``"U"`` (2 significant digits, :func:`display_uncertainty`),
     ``"dec<N>"`` (N decimal places; see :func:`rule_at_U`), ``"pmdec<N>"`` (± and the
     magnitude at N decimals: the draft's E = ± max|E_i|), ``"sdec<N>"`` (with its sign),
-    ``"k"`` (a coverage factor: 3 significant digits, trailing zeros dropped),
+    ``"k"`` (a coverage factor: 3 significant digits, trailing zeros dropped), ``"nu"``
+    (ν_eff: its integer part, GUM G.6.4), ``"sci<E>.<N>"`` (the mantissa at N decimals ×
+    10^E: a statement's common power of ten),
     ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
     ``"item:<name>"`` (:func:`display_item`), ``"pos"`` (:func:`display_position`),
     ``"int"`` (nearest integer).
@@ -602,6 +616,13 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
         return round_half_up(value, 0)
     if rule == "k":
         return display_position(float(display_number(value, 3)))
+    if rule == "nu":
+        return nu_text(value) or "—"
+    if rule.startswith("sci"):                  # "sci<E>.<N>": the mantissa at N decimals
+        e, _, n = rule[3:].partition(".")       # × 10^E (a statement's common power of ten)
+        e = int(e)
+        m = float(Decimal(repr(value)).scaleb(-e))
+        return f"{round_half_up(m, int(n or 1))}×10{str(e).translate(_SUP)}"
     for prefix, fmt in (("pmdec", "±{a}"), ("sdec", "{s}"), ("dec", "{v}")):
         if rule.startswith(prefix):
             dec = int(rule[len(prefix):])
@@ -642,3 +663,39 @@ def coverage_text(p: float | None, lang: str = "en") -> str:
         return "—"
     pct = display_position(float(display_number(100.0 * p, 2)))
     return ("约 " if lang == "zh" else "approximately ") + pct + " %"
+
+
+def phrase_zh(text: str, table=()) -> str | None:
+    """The Chinese of an English phrase by a specification's table of (regular expression,
+    Chinese template with the groups as {1}, {2}…), tried in order; None if none matches.
+
+    >>> phrase_zh("K at 70 °C", [(r"K at (\\S+) °C", "{1} °C 时的 K")])
+    '70 °C 时的 K'
+    """
+    for pat, zh in table:
+        m = re.fullmatch(pat, text.strip())
+        if m:
+            return zh.format(None, *m.groups())
+    return None
+
+
+def source_text(src: str, L: dict, table=()) -> str:
+    """A budget component's source in the certificate's language (by the specification's
+    phrase ``table``, see :func:`phrase_zh`); the optical budget's "[beyond the draft: …]"
+    note is shown once, as the label ``beyond_draft``.
+
+    >>> source_text("zero drift (A.4.3)", labels("en"))
+    'zero drift (A.4.3)'
+    >>> source_text("x -> dK [beyond the draft: 7.1 (y)]", labels("en"))
+    'x -> dK (beyond the draft)'
+    """
+    base, _, note = src.partition(" [beyond the draft")
+    out = (phrase_zh(base, table) or base) if L.get("_lang") == "zh" else base
+    return out + (f" ({L['beyond_draft']})" if note else "")
+
+
+def reason_text(reason: str, L: dict, table=()) -> str:
+    """Why an item was not measured, in the certificate's language."""
+    if L.get("_lang") == "zh":
+        return phrase_zh(reason, table) or reason
+    return reason

@@ -18,7 +18,9 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.certificate import (Block, Num, certificate_id, font_families, load_lab,
                                       render_html, render_pdf)
 from gonio.report.figures import figure_svg
-from gonio.report.i18n import display, labels
+from gonio.report.i18n import display, labels, reason_text, source_text
+from gonio.report.stated import conformity_blocks, item_nums
+from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
 from gonio.specs import get
@@ -57,7 +59,9 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
         (L["model"], inst.get("model") or md.get("model") or ns),
         (L["serial"], inst.get("serial") or md.get("serial") or ns),
         (L["manufacturer"], inst.get("manufacturer") or md.get("manufacturer") or ns),
+        (L["date_receipt"], cert.get("date_of_receipt") or ns),
         (L["date_calibration"], cert.get("date_of_calibration") or md.get("date") or ns),
+        (L["date_issue"], cert.get("date_of_issue") or ns),
         (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
         (L["specification"], spec.title_zh if lang == "zh" else spec.title_en),
         (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
@@ -74,14 +78,35 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
     env = lab_.get("environment") or {}
     t = env.get("temperature_c")
     room = md.get("room_temperature_c")
-    add("kv", [(L["temperature"], f"{t:g} °C" if t is not None else
-                f"{room} °C" if room else ns)])     # "not stated", not "not stated °C"
+    h = env.get("humidity_pct")
+    rows = [(L["temperature"], f"{t:g} °C" if t is not None else
+             f"{room} °C" if room else ns),     # "not stated", not "not stated °C"
+            (L["humidity"], f"{h:g} %" if h is not None else ns)]
+    temps = chamber_points(res)
+    if temps:
+        bound = md.get("chamber_deviation_bound_c")
+        rows.append((L["chamber_profile"], ", ".join(f"{x:g}" for x in temps) + " °C"
+                     + (L["chamber_bound"].format(b=bound) if bound not in (None, "") else "")))
+    add("kv", rows)
     return blocks
 
 
-def budget_rows(res: dict, L: dict, keys=None) -> list[list]:
+def chamber_points(res: dict) -> list[float]:
+    """The chamber temperature points the items were measured at (every item's
+    ``details.temperatures_c``, in order of first appearance)."""
+    seen: dict[float, None] = {}
+    for it in res.get("items", {}).values():
+        for x in (it.get("details") or {}).get("temperatures_c") or []:
+            if isinstance(x, (int, float)) and math.isfinite(x):
+                seen.setdefault(float(x), None)
+    return list(seen)
+
+
+def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
     """One row per uncertainty component of every measured item (or of ``keys``), then its
-    u_c and k (JJF 1535 clause 8 k; JCGM 100 8)."""
+    u_c, and U with k, ν_eff and p as the results table states them (JJF 1535 clause 8 k;
+    JCGM 100 8). A component whose source the analysis left blank is named by its type
+    (:func:`component_source`)."""
     brows = []
     for key, it in res["items"].items():
         unc = it.get("uncertainty")
@@ -90,14 +115,39 @@ def budget_rows(res: dict, L: dict, keys=None) -> list[list]:
         for j, c in enumerate(unc["components"]):
             if not c.get("u"):
                 continue
-            brows.append([it["clause"], c["symbol"], c["source"] or "—",
+            brows.append([it["clause"], c["symbol"], component_source(c, L, phrases),
                           _num(c["u"], f"items.{key}.uncertainty.components.{j}.u", "sig3"),
                           _num(c["contribution"],
                                f"items.{key}.uncertainty.components.{j}.contribution", "sig3")])
-        brows.append([it["clause"], "u_c / k", "", _num(unc["u_c"], f"items.{key}.uncertainty.u_c",
-                                                        "sig3"),
-                      _num(unc["k"], f"items.{key}.uncertainty.k", "sig3")])
+        n = item_nums(it, f"items.{key}")
+        brows.append([it["clause"], "u_c", L["u_c_word"], "",
+                      _num(unc["u_c"], f"items.{key}.uncertainty.u_c", "sig3")])
+        if n["U"] is not None:
+            brows.append([it["clause"], "U", factors_cell(n, L), "", n["U"]])
     return brows
+
+
+def component_source(c: dict, L: dict, phrases=()) -> str:
+    """A budget component's source as the certificate names it: the analysis's own words
+    (in Chinese through :func:`gonio.report.i18n.source_text`), or, where it left them
+    blank, what a component of its type is (the scatter of the item's own readings for a
+    Type A one)."""
+    src = (c.get("source") or "").strip()
+    if src:
+        return source_text(src, L, phrases)
+    return L["src_own_A"] if c.get("type") == "A" else L["src_own_B"]
+
+
+def factors_cell(n: dict, L: dict) -> list:
+    """"k = 1.97, ν_eff = 168, p ≈ 95 %" of one item as text and Num segments."""
+    seg: list = []
+    if n["k"] is not None:
+        seg += ["k = ", n["k"]]
+    if n["nu"] is not None:
+        seg += [", " if seg else "", "ν_eff = ", n["nu"]]
+    if n["p"] is not None:
+        seg += [", " if seg else "", f"p ≈ {n['p']} %"]
+    return seg or ["—"]
 
 
 def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
@@ -125,6 +175,29 @@ def figure_blocks(figures, L: dict, lang: str) -> list[Block]:
         for key, cap_en, cap_zh, draw in figures]
 
 
+def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
+    """The grouped results (JJF 1535 Annex B; IEC 62047-20 clause 5): value and U stated by
+    the one rule (:func:`gonio.report.stated.item_nums`), k and ν_eff beside U."""
+    rows = []
+    phrases = getattr(data, "PHRASES_ZH", ())
+    for num, en, zh, keys in data.GROUPS:
+        rows.append([str(num), zh if lang == "zh" else en, "", "", "", "", "", ""])
+        for key in keys:
+            it = res["items"].get(key)
+            if it is None:
+                continue
+            name = data.TITLES_ZH.get(key, it["title"]) if lang == "zh" else it["title"]
+            if not it["measured"]:
+                rows.append(["", name, it["clause"], L["not_measured"], "", "", "",
+                             reason_text(it["reason"], L, phrases)])
+                continue
+            n = item_nums(it, f"items.{key}")
+            rows.append(["", name, it["clause"], n["value"] or "—", n["U"] or "—",
+                         n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
+    head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
+    return head, rows
+
+
 def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
     """The certificate's content: identifier, banner flag, lab name and blocks."""
     res = result.to_json()
@@ -136,29 +209,18 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add = lambda kind, d, extra=None: blocks.append(Block(kind, d, extra))  # noqa: E731
     # results, grouped (Annex B)
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
-    rows = []
-    for num, en, zh, keys in data.GROUPS:
-        rows.append([str(num), zh if lang == "zh" else en, "", "", "", ""])
-        for key in keys:
-            it = res["items"].get(key)
-            if it is None:
-                continue
-            name = data.TITLES_ZH.get(key, it["title"]) if lang == "zh" else it["title"]
-            if not it["measured"]:
-                rows.append(["", name, it["clause"], f"{L['not_measured']}: {it['reason']}", "", ""])
-                continue
-            unc = it.get("uncertainty") or {}
-            U = unc.get("U")
-            rows.append(["", name, it["clause"], _num(it["value"], f"items.{key}.value", "sig4"),
-                         _num(U, f"items.{key}.uncertainty.U", "U") if U else "—",
-                         it["unit"]])
-    add("table", ([L["no"], L["item"], L["clause"], L["result"], "U (k)", L["unit"]], rows),
-        {"widths": (0.06, 0.34, 0.09, 0.22, 0.14, 0.15), "id": "results"})
+    add("table", results_table(res, data, L, lang), {
+        "widths": (0.07, 0.27, 0.09, 0.15, 0.10, 0.07, 0.08, 0.17), "id": "results"})
     u_clause = getattr(data, "U_CLAUSE", ("JJF 1535 clause 8 k)",) * 2)   # the spec's own rule
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
+    blocks += conformity_blocks(
+        res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
+                                    if lang == "zh" else res["items"][k]["title"]),
+        lambda k: unit_text(res["items"][k]["unit"]), Block)
     add("h", L["budget_items"])
     add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
-                  budget_rows(res, L)), (0.09, 0.12, 0.49, 0.15, 0.15))
+                  budget_rows(res, L, phrases=getattr(data, "PHRASES_ZH", ()))),
+        (0.09, 0.10, 0.51, 0.15, 0.15))
     recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
     blocks += closing_blocks(res, L, lab, recal=recal and recal[1 if lang == "zh" else 0])
     blocks += figure_blocks(FIGURES, L, lang)

@@ -46,11 +46,12 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.certificate import Num
-from gonio.report.dcc import (administrative_data, element, influence_conditions,
+from gonio.report.dcc import (administrative_data, conformity_statements, element, influence_conditions,
                               measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
-from gonio.report.i18n import display
+from gonio.report.i18n import display, labels
 from gonio.report.rate_content import rate_standards, spec_content
+from gonio.report.stated import item_nums
 from gonio.specs import get
 from gonio.units import STANDARD_GRAVITY_M_S2
 
@@ -204,21 +205,28 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                 not_measured_quantity(data, name, it["reason"] or "no finite value")
                 continue
             dsi, factor = dsi_unit(it["unit"], out_unit, src["file"])
-            unc = it.get("uncertainty") or {}
+            n = item_nums(it, f"items.{key}", factor=factor)     # the certificate's rule
             kw = {}
-            if (unc.get("U") is not None and unc.get("k") is not None
-                    and unc.get("coverage_probability")):
-                kw = {"U": Num(display("U", unc["U"] * factor), f"items.{key}.uncertainty.U", "U"),
-                      "k": Num(display("k", unc["k"]), f"items.{key}.uncertainty.k", "k"),
-                      "p": float(unc["coverage_probability"])}
+            if n["U"] is not None and n["k"] is not None and n["p"] is not None:
+                kw = {"U": n["U"], "k": n["k"], "p": float(item_p(it))}
             conv = factor != 1.0
-            quantity(data, name, Num(display("sig4", value * factor), f"items.{key}.value",
-                                     "sig4"), "", dsi=dsi, note=f" factor={factor!r}" if conv else "",
+            quantity(data, name, n["value"], "", dsi=dsi,
+                     note=f" factor={factor!r}" if conv else "",
                      ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
-                     description=(f"{display('sig4', value)} {it['unit']} in results.json, "
-                                  f"written per m s⁻² (g_n = {STANDARD_GRAVITY_M_S2} m s⁻²)")
-                     if conv else None, **kw)
+                     description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
+                                  f"results.json, written per m s⁻² (g_n = "
+                                  f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv else None, **kw)
+    conformity_statements(sts, items, lambda k: items[k]["title"],
+                          lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"]),
+                          labels("en"))
     return root
+
+
+def item_p(it: dict) -> float | None:
+    """The coverage probability of an item's U (``coverage_probability``, or ``p``)."""
+    unc = it.get("uncertainty") or {}
+    p = unc.get("coverage_probability")
+    return unc.get("p") if p is None else p
 
 
 def rate_dcc_bytes(result, *, lab: dict | None = None, cert_id: str) -> bytes:

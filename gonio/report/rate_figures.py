@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 
+from gonio.report.i18n import display
+
 
 def _item(result, *keys):
     for k in keys:
@@ -164,8 +166,9 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
 
 def draw_frequency(fig, spec, result, L, truth=None) -> None:
     """Gain (dB, 0 dB at the lowest frequency) and phase against frequency; −3 dB point."""
-    gs = spec.subgridspec(2, 1, hspace=0.08)
-    ax, ax2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
+    gs = spec.subgridspec(2, 1, hspace=0.18)
+    ax = fig.add_subplot(gs[0])
+    ax2 = fig.add_subplot(gs[1], sharex=ax)
     it = _item(result, "bandwidth", "frequency_band")
     if it is None:
         _empty(ax, "bandwidth not measured")
@@ -174,13 +177,17 @@ def draw_frequency(fig, spec, result, L, truth=None) -> None:
     f = np.asarray(it.details["freq_hz"], float)
     ax.semilogx(f, np.asarray(it.details["gain_db"], float), "o-", ms=3)
     ax.axhline(-3.0, color="C3", lw=0.7, ls="--")
-    ax.axvline(it.value, color="C3", lw=0.7)
+    f3 = it.details.get("minus3db_hz", it.value)     # the −3 dB point, not the band's value
+    p90 = it.details.get("phase90_hz", it.details.get("phase90_hz_iec"))
+    ax.axvline(f3, color="C3", lw=0.7)
     ax.set_ylabel("gain (dB)")
-    ax.set_title(f"−3 dB at {it.value:.4g} Hz")
+    title = f"−3 dB at {display('sig4', f3)} Hz"
+    if p90 is not None and math.isfinite(p90):
+        title += f"; 90° lag at {display('sig4', p90)} Hz"
+    ax.set_title(title)
     ax.tick_params(labelbottom=False)
     ax2.semilogx(f, np.asarray(it.details["phase_deg"], float), "s-", ms=3, color="C1")
     ax2.axhline(-90.0, color="C3", lw=0.7, ls="--")
-    p90 = it.details.get("phase90_hz_iec")
     if p90 is not None and math.isfinite(p90):
         ax2.axvline(p90, color="C1", lw=0.7)
     ax2.set_ylabel("phase (°)")

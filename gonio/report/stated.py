@@ -36,6 +36,13 @@ from typing import Any
 from gonio.analysis.conformity import Conformity, DecisionRule, Limits, decide, limits_of  # noqa: F401
 from gonio.specs.ogam_draft.items import ITEM_KEYS
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
+from gonio.result.statement import decimals_for_sig, round_half_up
+
+
+class NoBreakText(str):
+    """Text that is never broken across lines (identifiers, units, intervals): HTML
+    ``nowrap``, one token in the PDF's wrapping (``gonio.report.certificate.NoBreak``)."""
+
 
 ITEMS: tuple[str, ...] = ITEM_KEYS
 #: Coverage probability of the Annex A budget's U (k = 2, normal; Annex A.7).
@@ -188,22 +195,84 @@ def conformity_for(res: dict, lab: dict | None) -> list[dict]:
     return out
 
 
-def conformity_texts(c: Conformity, res: dict, L: dict) -> dict:
-    """Limits, acceptance interval, outcome and probability of one statement as text,
-    rounded with the item's rule (the limits to the decimal place of U)."""
-    rule = rule_at_U(c.U, 3)
-    f = lambda v: display(rule, v)  # noqa: E731
-    lo_hi = lambda lo, hi: (f"[{f(lo) if lo is not None else '−∞'}, "  # noqa: E731
-                            f"{f(hi) if hi is not None else '+∞'}]")
-    acc = (lo_hi(c.acceptance_lower, c.acceptance_upper)
-           if c.acceptance_lower is None or c.acceptance_upper is None
-           or c.acceptance_lower <= c.acceptance_upper else "∅")
-    pfa = (display("sig2", 100.0 * c.false_accept_probability) + " %"
-           if c.false_accept_probability is not None else "—")
-    pfr = (L["c_pfr"].format(v=display("sig2", 100.0 * c.false_reject_probability))
-           if c.false_reject_probability is not None else "")
-    return {"limits": lo_hi(c.lower, c.upper), "acceptance": acc, "outcome": L[c.outcome],
-            "pfa": pfa, "pfr": pfr}
+def given_text(v: float) -> str:
+    """A specification limit as the laboratory gave it (no rounding: it is not measured).
+
+    >>> given_text(0.3), given_text(-0.5), given_text(1e-05)
+    ('0.3', '-0.5', '1e-05')
+    """
+    return f"{float(v):g}"
+
+
+def interval_text(lo, hi, f) -> str:
+    """[lo, hi] with ``f`` formatting each end; one open end reads "≤ hi" or "≥ lo".
+
+    >>> interval_text(None, 0.3, given_text), interval_text(-0.5, 0.5, given_text)
+    ('≤ 0.3', '[-0.5, 0.5]')
+    """
+    if lo is None and hi is None:
+        return "—"
+    if lo is None:
+        return f"≤ {f(hi)}"
+    if hi is None:
+        return f"≥ {f(lo)}"
+    return f"[{f(lo)}, {f(hi)}]"
+
+
+def conformity_texts(c, res: dict | None, L: dict) -> dict:
+    """Limits (as given), acceptance interval (at U's decimal place), outcome and
+    probabilities of one statement as text. ``c`` is a
+    :class:`~gonio.analysis.conformity.Conformity` or its results.json dict. An empty
+    acceptance interval (guard bands wider than the tolerance) is said in words."""
+    g = (lambda k: c.get(k)) if isinstance(c, dict) else (lambda k: getattr(c, k, None))  # noqa: E731
+    U = g("U")
+    dec = decimals_for_sig(float(U), 2) if U else None
+    f = (lambda v: round_half_up(v, dec)) if dec is not None \
+        else given_text  # noqa: E731
+    al, au = g("acceptance_lower"), g("acceptance_upper")
+    if al is not None and au is not None and al > au:
+        acc = L["c_acc_empty"]
+    else:
+        acc = interval_text(al, au, f)
+    pfa, pfr = g("false_accept_probability"), g("false_reject_probability")
+    return {"limits": interval_text(g("lower"), g("upper"), given_text),
+            "acceptance": acc, "outcome": L[g("outcome")] if g("outcome") else "—",
+            "pfa": display("sig2", 100.0 * pfa) + " %" if pfa is not None else "—",
+            "pfr": L["c_pfr"].format(v=display("sig2", 100.0 * pfr)) if pfr is not None else ""}
+
+
+def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
+    """The statement-of-conformity section of every item the pipeline decided (results.json
+    ``items.<key>.conformity``; none: no section): the decision rule, one row per item
+    (limits, acceptance interval, outcome, probability of conformance, specific
+    false-accept probability). ``block(kind, data, extra)`` makes a block."""
+    decided = [(k, it["conformity"]) for k, it in items.items() if it.get("conformity")]
+    if not decided:
+        return []
+    out = [block("h", L["conformity"], None)]
+    for rule in dict.fromkeys((c.get("rule") or "simple") for _, c in decided):
+        r = next(c for _, c in decided if (c.get("rule") or "simple") == rule)
+        out.append(block("p", [L.get(f"rule_{rule}", rule).format(
+            r=display("k", r.get("guard_factor") or 0.0))], None))
+    rows = []
+    for key, c in decided:
+        if not c.get("outcome"):
+            rows.append([name_of(key), NoBreakText(interval_text(c.get("lower"), c.get("upper"),
+                                                                 given_text)), "—",
+                         L["c_no_statement"].format(r=c.get("reason") or "—"), "—", "—"])
+            continue
+        t = conformity_texts(c, None, L)
+        pc = c.get("conformance_probability")
+        u = unit_of(key)
+        rows.append([name_of(key), NoBreakText(f"{t['limits']} {u}".strip()),
+                     NoBreakText(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
+                                 else f"{t['acceptance']} {u}".strip()),
+                     t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else ""),
+                     display("sig3", 100.0 * pc) + " %" if pc is not None else "—", t["pfa"]])
+    out.append(block("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"],
+                                L["c_pc"], L["c_pfa"]], rows),
+                     {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"}))
+    return out
 
 
 # --------------------------------------------------------------------------- method
@@ -315,3 +384,46 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
                      f"rule {c.rule}, acceptance {t['acceptance']}, specific false-accept "
                      f"probability {t['pfa']})")
     return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- per-item results
+
+def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
+    """One results.json item (``src`` its path, e.g. ``items.bias``) as every output states it,
+    by the one statement rule (:func:`gonio.result.statement.item_statement`): ``value``,
+    ``U``, ``k``, ``nu`` as :class:`Num` (or None), ``p`` (per-cent text or None), ``upper``
+    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`).
+    ``factor`` scales value and U first (a unit conversion of the DCC).
+
+    >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
+    ...     {"U": 159.4, "k": 2.38068, "nu_eff": 6.2, "p": 0.95}}, "items.bias")
+    >>> str(n["value"]), n["value"].rule, str(n["U"]), str(n["k"]), str(n["nu"]), n["p"]
+    ('790', 'dec-1', '160', '2.38', '6', '95')
+    """
+    from gonio.result.statement import item_statement
+
+    it = item
+    if factor != 1.0:
+        unc = dict(item.get("uncertainty") or {})
+        if unc.get("U") is not None:
+            unc["U"] = float(unc["U"]) * factor
+        it = {**item, "value": None if item.get("value") is None
+              else float(item["value"]) * factor, "uncertainty": unc}
+    st = item_statement(it, sig=sig)
+    out = {"statement": st, "value": None, "U": None, "k": None, "nu": None, "p": st.p,
+           "upper": st.upper}
+    if st.value == "—":
+        return out
+    if st.exponent:
+        rule = U_rule = f"sci{st.exponent}.{st.decimals + st.exponent}"
+    else:
+        rule = f"dec{st.decimals}" if st.decimals is not None else f"sig{sig}"
+        U_rule = "U"
+    out["value"] = Num(st.value_text, f"{src}.value", rule)
+    if st.U is not None:
+        out["U"] = Num(st.U_text, f"{src}.uncertainty.U", U_rule)
+        if st.k is not None:
+            out["k"] = Num(st.k, f"{src}.uncertainty.k", "k")
+        if st.nu_eff is not None:
+            out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
+    return out

@@ -20,7 +20,7 @@ from gonio.report.certificate import Block, certificate_id
 from gonio.report.i18n import display, display_uncertainty, rule_at_U
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
                                            spec_content, write_spec_certificate)
-from gonio.report.stated import num
+from gonio.report.stated import item_nums, num
 from gonio.report.triad_figures import alignment_panels, thermal_check_panels, thermal_model_panels
 from gonio.specs import get
 
@@ -38,9 +38,8 @@ def _pm(res: dict, key: str) -> list | str:
     it = res["items"][key]
     if not it["measured"]:
         return "—"
-    U = (it.get("uncertainty") or {}).get("U")
-    return [num(res, f"items.{key}.value", rule_at_U(U, 6), U), " ± ",
-            num(res, f"items.{key}.uncertainty.U", "U", U)]
+    n = item_nums(it, f"items.{key}", sig=6)          # the one statement rule
+    return [n["value"], " ± ", n["U"]] if n["U"] is not None else [n["value"] or "—"]
 
 
 def _pm_scaled(v: float, U: float, f: float = 1.0) -> str:
@@ -244,10 +243,21 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
             "blocks": blocks, "results": res}
 
 
-def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "en") -> dict:
-    """``certificate.html`` and ``certificate.pdf`` of a triad calibration, atomically."""
+def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "en",
+                            dcc: bool = False) -> dict:
+    """``certificate.html`` and ``certificate.pdf`` of a triad calibration (with ``dcc`` also
+    the DCC 3.3.0 XML of :mod:`gonio.report.item_dcc`), atomically."""
+    dcc_fn = None
+    if dcc:
+        from gonio.report.item_dcc import item_dcc_bytes
+
+        p = (result.to_json().get("alignment") or {}).get("coverage_probability")
+
+        def dcc_fn(r, *, lab, cert_id):
+            return item_dcc_bytes(r, lab=lab, cert_id=cert_id,
+                                  data=spec_content("triad-alignment"), coverage_probability=p)
     return write_spec_certificate(result, out, triad_certificate_blocks, triad_figures(result),
-                                  truth=truth, lab=lab, lang=lang)
+                                  truth=truth, lab=lab, lang=lang, dcc_fn=dcc_fn)
 
 
 __all__ = ["write_triad_certificate", "triad_certificate_blocks", "triad_figures",

@@ -193,6 +193,9 @@ class Item:
     uncertainty: Uncertainty | None = None
     details: dict = field(default_factory=dict)
     conformity: Conformity | None = None
+    #: A quantity that cannot be negative (a noise level, a threshold, a time): stated with
+    #: an upper bound when U exceeds the value (:func:`gonio.result.statement.state`).
+    nonnegative: bool = False
 
     @property
     def U(self) -> float | None:
@@ -218,14 +221,15 @@ class Item:
                 "uncertainty": (None if self.uncertainty is None or not measured
                                 else self.uncertainty.to_json()),
                 "conformity": None if self.conformity is None else self.conformity.to_json(),
-                "details": json_safe(self.details)}
+                "nonnegative": bool(self.nonnegative), "details": json_safe(self.details)}
 
     @classmethod
     def from_json(cls, d: dict, key: str | None = None) -> "Item":
         return cls(d.get("key") or key, d.get("title", ""), d.get("clause", ""),
                    d.get("unit", ""), d.get("value"), bool(d.get("measured", True)),
                    d.get("reason", ""), Uncertainty.from_json(d.get("uncertainty")),
-                   dict(d.get("details") or {}), Conformity.from_json(d.get("conformity")))
+                   dict(d.get("details") or {}), Conformity.from_json(d.get("conformity")),
+                   bool(d.get("nonnegative", False)))
 
 
 def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> Item:

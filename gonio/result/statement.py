@@ -7,6 +7,7 @@ Contents
 :func:`decimals_for_sig`   the decimal place that leaves ``sig`` significant digits
 :func:`decimals_at_U`      the decimal place of U stated to two significant digits
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
+:func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
 :func:`k_text`             a coverage factor as stated (3 significant digits)
@@ -30,8 +31,8 @@ The rule (JCGM 100:2008 (GUM) 7.2.6, 7.2.2; JCGM 101 and EA-4/02 the same):
 * a quantity without an uncertainty keeps the specification's number of significant
   digits (``sig``, 3 unless the specification says otherwise);
 * U stated to more than six decimal places (or a value of 10¹⁵ or more) is written with a
-  power of ten common to value and U, the mantissa of U keeping its two digits ("2.2×10⁻⁵ ± 1.3×10⁻⁶" is never written:
-  both share U's exponent, "21.8×10⁻⁶ ± 1.3×10⁻⁶");
+  power of ten common to value and U, that of the larger one's leading digit, both mantissas
+  at U's decimal place ("2.18×10⁻⁵ ± 0.13×10⁻⁵", never "2.2×10⁻⁵ ± 1.3×10⁻⁶");
 * units are printed in the SI form of :func:`unit_text` (degree, hour and second of arc are
   units accepted for use with the SI, SI Brochure table 8) and written to a DCC in the
   D-SI form of :func:`dsi_unit`.
@@ -58,7 +59,7 @@ signed deviation) is declared ``nonnegative=False`` and is never given a bound.
 >>> t.value, t.U, t.upper, t.text()
 ('0.010', '0.088', '0.098', '0.010 ± 0.088 °/s (k = 2, p ≈ 95 %); upper bound: ≤ 0.098 °/s (interval [0, 0.098])')
 >>> state(2.1805064e-05, 1.3e-06, k=2).text()
-'21.8×10⁻⁶ ± 1.3×10⁻⁶ (k = 2)'
+'2.18×10⁻⁵ ± 0.13×10⁻⁵ (k = 2)'
 >>> state(76434.8425925926, None, sig=8, unit="1").text()
 '76434.843'
 """
@@ -320,12 +321,15 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     dec = decimals_at_U(U)
     exponent = 0
     if dec > 6 or abs(value) >= 1e15:
-        exponent = -(dec - 1)                  # U's mantissa keeps its two digits: d.d
+        # a power of ten common to value and U: that of the larger of the two's leading digit
         with _wide():
+            exponent = max(Decimal(repr(abs(value))).adjusted() if value else -999_999,
+                           Decimal(repr(U)).adjusted())
             value_m = float(Decimal(repr(value)).scaleb(-exponent))
             U_m = float(Decimal(repr(U)).scaleb(-exponent))
-        vt, Ut = round_half_up(value_m, 1), round_half_up(U_m, 1)
-        upper = (round_half_up(value_m + U_m, 1, ROUND_CEILING)
+        md = dec + exponent                    # the mantissas' decimal place (U keeps 2 digits)
+        vt, Ut = round_half_up(value_m, md), round_half_up(U_m, md)
+        upper = (round_half_up(value_m + U_m, md, ROUND_CEILING)
                  if nonnegative and U > value else None)
     else:
         vt, Ut = round_half_up(value, dec), round_half_up(U, dec)
@@ -333,3 +337,40 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
             else None
     return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
                      decimals=dec)
+
+
+def _get(obj, key: str, default=None):
+    """``obj[key]`` of a results.json dict or ``obj.key`` of a model object."""
+    if obj is None:
+        return default
+    if isinstance(obj, dict):
+        return obj.get(key, default)
+    return getattr(obj, key, default)
+
+
+def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> Statement:
+    """The statement of one item, from a results.json item (dict) or a model ``Item``: its
+    ``value``, ``unit`` and ``uncertainty`` (``U``, ``k``, ``nu_eff``, ``coverage_probability``
+    or ``p``). Every output states an item through this one call, so the certificate,
+    ``summary.txt``, the CLI and the DCC cannot differ. ``nonnegative`` (default: the item's
+    own ``nonnegative`` key, else False) asks for the upper bound of the module docstring.
+
+    >>> item_statement({"value": 786.485, "unit": "°/h", "measured": True,
+    ...                 "uncertainty": {"U": 159.4, "k": 2.38068, "nu_eff": 6.2, "p": 0.95}}).text()
+    '790 ± 160 °/h (k = 2.38, ν_eff = 6, p ≈ 95 %)'
+    >>> item_statement({"value": None, "unit": "s", "measured": False}).value
+    '—'
+    """
+    unc = _get(item, "uncertainty")
+    U = _get(unc, "U")
+    ok = U is not None and math.isfinite(float(U)) and float(U) > 0
+    p = _get(unc, "coverage_probability")
+    if p is None:
+        p = _get(unc, "p")
+    if nonnegative is None:
+        nonnegative = bool(_get(item, "nonnegative", False))
+    measured = _get(item, "measured", True)
+    return state(_get(item, "value") if measured else None, U if ok else None,
+                 k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,
+                 p=p if ok else None, unit=_get(item, "unit", ""), sig=sig,
+                 nonnegative=nonnegative)

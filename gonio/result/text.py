@@ -6,27 +6,13 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 
 from __future__ import annotations
 
-import math
-
-try:                                     # the statement rule (issue 25) lands beside this
-    from gonio.result.statement import state
-except ImportError:                      # pragma: no cover - until it is on main
-    state = None
+from gonio.result.statement import item_statement
 
 
 def item_text(it) -> str:
-    """``value ± U unit (k, ν_eff, p)`` of one measured item, or its value alone."""
-    unc = it.uncertainty
-    U = None if unc is None else unc.U
-    ok = U is not None and math.isfinite(U) and U > 0
-    if state is not None:
-        return state(it.value, U if ok else None, k=unc.k if ok else None,
-                     nu_eff=unc.nu_eff if ok else None,
-                     p=unc.coverage_probability if ok else None, unit=it.unit).text()
-    if not ok:
-        return f"{it.value:.6g} {it.unit}"
-    nu = "" if unc.nu_eff is None else f", ν_eff = {unc.nu_eff:.3g}"
-    return f"{it.value:.6g} ± {U:.2g} {it.unit} (k = {unc.k:.3g}{nu})"
+    """``value ± U unit (k, ν_eff, p)`` of one measured item by the one statement rule
+    (:func:`gonio.result.statement.item_statement`: the certificate's and the DCC's numbers)."""
+    return item_statement(it).text()
 
 
 def conformity_text(c) -> str:

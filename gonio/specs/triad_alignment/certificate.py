@@ -111,3 +111,17 @@ READINGS_TAKEN_ZH = (
     "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
     "（论文 §6.1）。",
 )
+
+#: The matrices the DCC writes as lists (name, item keys row by row).
+MATRICES = (
+    ("system matrix M", (("M_xx", "M_xy", "M_xz"), ("M_yx", "M_yy", "M_yz"),
+                         ("M_zx", "M_zy", "M_zz"))),
+    ("bias b", (("b_x", "b_y", "b_z"),)),
+    ("cross-axis sensitivity S", (("S_xy", "S_xz", "S_yx", "S_yz", "S_zx", "S_zy"),)),
+    ("residual leakage after alignment L", (("L_xy", "L_xz", "L_yx", "L_yz", "L_zx", "L_zy"),)),
+)
+#: The documents the triad calibration follows (with their number and year), en and zh.
+NORM = ("Gyro triad alignment per the gonio procedure (docs/alignment.md) with "
+        "IEC 62047-20:2014 5.2 (cross-axis sensitivity) and JCGM 100:2008",
+        "三轴陀螺组件对准（gonio 程序，docs/alignment.md），交叉轴灵敏度按 IEC 62047-20:2014 "
+        "5.2，不确定度按 JCGM 100:2008")
