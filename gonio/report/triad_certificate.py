@@ -251,7 +251,7 @@ def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "e
     if dcc:
         from gonio.report.item_dcc import item_dcc_bytes
 
-        p = (result.to_json().get("alignment") or {}).get("coverage_probability")
+        p = (result.extra.get("alignment") or {}).get("coverage_probability")
 
         def dcc_fn(r, *, lab, cert_id):
             return item_dcc_bytes(r, lab=lab, cert_id=cert_id,

@@ -12,7 +12,7 @@ from gonio.result.statement import item_statement
 def item_text(it) -> str:
     """``value ± U unit (k, ν_eff, p)`` of one measured item by the one statement rule
     (:func:`gonio.result.statement.item_statement`: the certificate's and the DCC's numbers)."""
-    return item_statement(it).text()
+    return item_statement(it.to_json()).text()        # as results.json states it (ν_eff ∞: null)
 
 
 def conformity_text(c) -> str:

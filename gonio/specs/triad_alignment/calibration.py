@@ -89,7 +89,8 @@ def _type_a(symbol: str, source: str, u: float, nu: float, u_mc: float | None = 
     comp = [{"symbol": symbol, "source": source, "type": "A", "u": float(u), "c": 1.0,
              "contribution": float(u), "dof": float(nu)}]
     mc = None if u_mc is None or not math.isfinite(u_mc) else {"trials": trials, "u": float(u_mc)}
-    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc)
+    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc, COVERAGE,
+                       "Student's t for 95.45 % at the fit's ν")
 
 
 def alignment_items(al: AlignmentResult, trials: int) -> dict[str, Item]:
