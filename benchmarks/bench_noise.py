@@ -11,7 +11,10 @@ Prints:
 * MDEV "all" at 10⁵ and 10⁶ samples (white): the growth with N (O(N log³ N));
 * allantools' "all"-τ oadev/mdev at 2·10⁴ samples, extrapolated as O(N²).
 
-Run: ``python benchmarks/bench_noise.py``
+* the all-τ ADEV of 10⁶ white samples for seeds 2024, 0, 1, each in a fresh process
+  (issue 26: its time must depend on N only; ``--seeds`` runs only this part).
+
+Run: ``python benchmarks/bench_noise.py [--seeds]``
 """
 
 from __future__ import annotations
@@ -63,6 +66,26 @@ def count_redo(fn):
         allan_mod._direct_sums = orig
 
 
+def seed_times() -> None:
+    """issue 26: the time of the all-τ ADEV must depend on N, not on the realisation. Each
+    seed's record of white rate noise runs in a fresh process (the capped-branch edf grid
+    is kept per process: a fresh one pays for it as a user's first run does)."""
+    import subprocess
+    import sys
+    code = ("import sys, time, numpy as np; from gonio.analysis.noise import allan_deviation; "
+            "s = int(sys.argv[1]); r = np.random.default_rng(s); "
+            "_ = r.standard_normal(10_000_000) if s == 2024 else None; "
+            "w = r.standard_normal(1_000_000); c = time.process_time(); "
+            "t = time.perf_counter(); a = allan_deviation(w, 1e-3, 'rate', 'all'); "
+            "print(f'{time.perf_counter() - t:.2f} {time.process_time() - c:.2f} '"
+            "      f'{sorted(set(a.alpha[-1000:].tolist()))}')")
+    for seed in (2024, 0, 1):
+        out = subprocess.run([sys.executable, "-c", code, str(seed)], capture_output=True,
+                             text=True, check=True).stdout.split(maxsplit=2)
+        print(f"all tau ADEV, 1e6 white samples, seed {seed:4d}: {out[0]} s (CPU {out[1]} s);"
+              f" noise type identified at the largest tau: alpha {out[2].strip()}")
+
+
 def main() -> None:
     import allantools
 
@@ -102,6 +125,8 @@ def main() -> None:
             print(f"  peak memory / input ('all', {kind}, {name}): {ratio:.2f} "
                   f"(of which the result's own arrays: {own / data.nbytes:.2f})")
 
+    seed_times()
+
     t5, _ = best_of(lambda: allan_deviation(white[:100_000], tau0, "rate", "all",
                                             kind="mdev"), 1)
     t6, _ = best_of(lambda: allan_deviation(white, tau0, "rate", "all", kind="mdev"), 1)
@@ -124,4 +149,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys as _sys
+    seed_times() if "--seeds" in _sys.argv[1:] else main()

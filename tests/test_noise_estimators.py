@@ -146,10 +146,11 @@ def test_greenhall_table_coefficients_from_the_basic_sum(alpha, d, table):
 
 def test_edf_of_all_taus_capped_branch_interpolation():
     """With more than 512 estimates the capped branch is interpolated (``all`` τ):
-    within 2e-5 of the exact evaluation except flicker phase noise."""
+    within 2e-5 of the exact evaluation, flicker phase noise (α = 1) included since the
+    grid holds the kinks of the sum (issue 26)."""
     for kind in ("adev", "mdev", "hdev"):
         ms = noise.averaging_factors(6001, "all", kind=kind)
-        for a in (0, -1, -2):
+        for a in (1, 0, -1, -2):
             fast = noise.edf_for(kind, 6001, ms, np.full(ms.size, a))
             edfmod._CAPPED_EXACT, keep = 10 ** 9, edfmod._CAPPED_EXACT
             try:
@@ -342,3 +343,29 @@ def test_overwrite_data_detrends_in_place_with_the_same_result(kind):
     _, dev, _, _ = peer(x - np.linspace(x[0], x[-1], x.size), rate=100.0, data_type="phase",
                         taus=a.tau_s)
     np.testing.assert_allclose(b.adev, dev, rtol=1e-9)
+
+
+def test_all_tau_edf_capped_grid_is_built_once_whatever_the_noise_type(monkeypatch):
+    """issue 26: the all-τ ADEV took 2 s on some white-noise records of 10⁶ samples and
+    14 s on others. The cause: the capped branch of Greenhall's edf rebuilt its grid for
+    every chunk of 16 384 τ, and whether that branch ran at all depended on the noise type
+    identified at the largest τ (by chance: α = 2 has a closed form, α = 1 or ≤ 0 not).
+    The grid is now built once per branch, α and d (per record length): at most one
+    grid evaluation per noise type, however many chunks of τ and whatever the data."""
+    grids = []
+    real = edfmod._basic_sum
+
+    def counting(j_lim, *a, **k):
+        if np.size(j_lim) > 512:
+            grids.append(np.size(j_lim))
+        return real(j_lim, *a, **k)
+
+    monkeypatch.setattr(edfmod, "_basic_sum", counting)
+    monkeypatch.setattr(edfmod, "_CAPPED_CACHE", {})
+    x = np.random.default_rng(3).standard_normal(80_000)
+    for alpha in (1, 0):
+        r = noise.allan_deviation(x, 1.0, "rate", "all", alpha=alpha)
+        assert r.m.size > 2 * 16_384          # several chunks of τ
+    assert len(grids) == 2, grids             # one grid per noise type, not one per chunk
+    noise.allan_deviation(x, 1.0, "rate", "all", alpha=1)
+    assert len(grids) == 2                    # and kept for the next record of this length

@@ -185,6 +185,8 @@ def _meta(md: dict, key: str, L) -> str:
 
 #: Longest table printed on the certificate; the rest is in tables/*.csv and results.json.
 MAX_TABLE_ROWS: int = 200
+#: Findings listed one per line on the certificate (the rest in results.json).
+MAX_FINDING_LINES: int = 20
 
 
 def _summarised(kind: str, data):
@@ -197,6 +199,22 @@ def _summarised(kind: str, data):
         return data
     note = [f"… {len(rows) - MAX_TABLE_ROWS} more rows in tables/*.csv"] + [""] * (len(head) - 1)
     return head, rows[:MAX_TABLE_ROWS] + [note]
+
+
+def screening_notes(res: dict, L: dict, add) -> None:
+    """A notice when the screening set data aside or found the programme incomplete
+    (results.json ``findings``; issue 24): the count, then one line per finding."""
+    found = [f for f in res.get("findings") or () if f["action"] != "refused"]
+    if not found:
+        return
+    aside = sum(f["action"] == "set_aside" for f in found)
+    flagged = len(found) - aside
+    add("notice", L["screening_note"].format(n=aside, m=flagged))
+    for f in found[:MAX_FINDING_LINES]:
+        where = f"line {f['line']}: " if f.get("line") is not None else ""
+        add("p", [f"{where}{f['message']}"])
+    if len(found) > MAX_FINDING_LINES:
+        add("p", [f"… {len(found) - MAX_FINDING_LINES} more in results.json (findings)"])
 
 
 def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
@@ -330,6 +348,12 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     else:
         add("p", [L["no_E_U"]], "U")
     del st_e
+    screening_notes(res, L, add)
+    if res["scale_factor"].get("measurand"):
+        sf = res["scale_factor"]
+        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
+        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
+                                           ppm=f"{ppm:.2g}")])
 
     # decision rule and conformity: only when the laboratory file gives limits
     conf = conformity_for(res, lab)

@@ -82,8 +82,8 @@ def _sw(t: np.ndarray, alpha: int) -> np.ndarray:
     a = np.abs(t)
     if alpha in (2, 0, -2, -4):
         return {2: -a, 0: a ** 3, -2: a ** 5, -4: a ** 7}[alpha]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lg = np.where(a > 0, np.log(np.where(a > 0, a, 1.0)), 0.0)
+    lg = np.zeros(a.shape)                   # the same values as ln a where a > 0, in one pass
+    np.log(a, out=lg, where=a > 0)
     return {1: t ** 2 * lg, -1: t ** 4 * lg, -3: t ** 6 * lg}[alpha]
 
 
@@ -139,17 +139,46 @@ def _basic_sum(j_lim, m_terms, s, f, alpha, d):
 _CAPPED_EXACT = 512
 
 
-def _capped(r: np.ndarray, fn) -> np.ndarray:
+#: Points of the capped branch's grid, uniform in ln r (see :func:`_capped`).
+_CAPPED_GRID = 4096
+#: The capped branch's grids, by (branch, α, d, lowest decade of r): computed once.
+_CAPPED_CACHE: dict = {}
+
+
+def _capped(r: np.ndarray, fn, key, d: int, n_phase: float) -> np.ndarray:
     """fn(r) for the capped branch of [GR2003] (J > J_MAX, r ≤ d + 1), where the
     basic sum depends on r = M/S alone. For many values (``taus="all"``) fn is
-    evaluated on a uniform grid of 4096 values of r and interpolated linearly
-    (relative error below 1e-5 — checked in the tests — against the few per cent by
-    which this branch of the algorithm itself approximates the edf)."""
+    evaluated once on a fixed grid — :data:`_CAPPED_GRID` values uniform in ln r from the
+    decade below 1/``n_phase`` (no r = M/S is smaller) to d + 1, half as many more uniform
+    in r on [1, d + 1], plus every r = J_MAX·k/j (j < J_MAX, k ≥ 1),
+    where a term sz(j·r/J_MAX) crosses an integer and the sum has a kink — kept for the
+    process (``key`` names the branch, α and d), and interpolated linearly in ln r
+    (relative error below 2e-5 — checked in the tests — against the few per cent by
+    which this branch of the algorithm itself approximates the edf).
+
+    The grid depends on the record's length only (through the decade of 1/n), never on
+    the chunk of τ or on the data: before issue 26 a grid
+    was rebuilt for every chunk of 16 384 τ, and how many chunks took this branch
+    depended on the noise type identified at the largest τ (from a few terms, so by
+    chance): 2 s for a white-noise record identified α = 2 there (closed form), 14 s for
+    another of the same length identified α = 1."""
     if r.size <= _CAPPED_EXACT:
         return fn(r)
-    lo, hi = float(r.min()), float(r.max())
-    grid = np.linspace(lo, hi, 4096)
-    return np.interp(r, grid, fn(grid))
+    decade = min(math.floor(math.log10(1.0 / float(n_phase))),
+                 math.floor(math.log10(float(r.min()))))
+    ck = (key, decade, d)
+    table = _CAPPED_CACHE.get(ck)
+    if table is None:
+        lo, hi = 10.0 ** decade, d + 1.0
+        j = np.arange(1, J_MAX)
+        kinks = np.concatenate([J_MAX * k / j for k in range(1, d + 2)])
+        kinks = kinks[(kinks > lo) & (kinks < hi)]
+        # uniform in ln r, and denser on [1, d + 1] where the kinks lie
+        grid = np.unique(np.concatenate((np.geomspace(lo, hi, _CAPPED_GRID),
+                                         np.linspace(1.0, hi, _CAPPED_GRID // 2), kinks)))
+        table = (np.log(grid), fn(grid))
+        _CAPPED_CACHE[ck] = table
+    return np.interp(np.log(r), *table)
 
 
 def _table(tab, alpha, d):
@@ -225,7 +254,8 @@ def edf_greenhall(alpha: int, d: int, m, n_phase: int, *, modified: bool = False
         if capped.any():
             inv[capped] = _capped(r[capped], lambda rr: _basic_sum(
                 np.full(rr.size, J_MAX), np.full(rr.size, J_MAX), J_MAX / rr,
-                np.ones(rr.size), alpha, d) / (_sz(0.0, 1.0, alpha, d) ** 2 * J_MAX))
+                np.ones(rr.size), alpha, d) / (_sz(0.0, 1.0, alpha, d) ** 2 * J_MAX),
+                ("modified", alpha), d, n)
         return 1.0 / inv
 
     if alpha <= 0:
@@ -245,7 +275,7 @@ def edf_greenhall(alpha: int, d: int, m, n_phase: int, *, modified: bool = False
         if capped.any():
             inv[capped] = _capped(r[capped], lambda rr: _basic_sum(
                 np.full(rr.size, J_MAX), np.full(rr.size, J_MAX), J_MAX / rr, None,
-                alpha, d) / (_sz(0.0, None, alpha, d) ** 2 * J_MAX))
+                alpha, d) / (_sz(0.0, None, alpha, d) ** 2 * J_MAX), ("limit", alpha), d, n)
         return 1.0 / inv
 
     # alpha == +1, unmodified
@@ -261,7 +291,8 @@ def edf_greenhall(alpha: int, d: int, m, n_phase: int, *, modified: bool = False
     if capped.any():
         i = capped
         g = _capped(r[i], lambda rr: _basic_sum(
-            np.full(rr.size, J_MAX), np.full(rr.size, J_MAX), J_MAX / rr, J_MAX / rr, 1, d))
+            np.full(rr.size, J_MAX), np.full(rr.size, J_MAX), J_MAX / rr, J_MAX / rr, 1, d),
+            ("flicker", 1), d, n)
         inv[i] = g / ((b0 + b1 * np.log(m[i])) ** 2 * J_MAX)
     return 1.0 / inv
 

@@ -321,6 +321,47 @@ def g_sensitivity_axis(rate_plus_dps: float, rate_minus_dps: float,
     return ((rate_plus_dps - earth_plus_dps) - (rate_minus_dps - earth_minus_dps)) / 2.0
 
 
+def last_exceedance_time(time_s, stat, level: float) -> float:
+    """The time (from the first sample) of the point after the last one whose ``stat``
+    exceeds ``level``: 0 when none does, NaN when the last point still does. The detection
+    rule of JJF 1535 7.2.9 (stat: window stability) and IEC 62047-20 5.3.3.9 (stat:
+    |smoothed output − settled bias|).
+
+    >>> last_exceedance_time([0, 10, 20, 30], [5, 3, 1, 0.5], 2.0)
+    20.0
+    """
+    t, x = _arr(time_s, "time_s"), _arr(stat, "stat")
+    over = np.flatnonzero(x > level)
+    if over.size == 0:
+        return 0.0
+    return math.nan if over[-1] + 1 >= t.size else float(t[over[-1] + 1] - t[0])
+
+
+def detection_interval(time_s, stat, level: float, sd: float, z: float) -> tuple[float, float]:
+    """Where the noise-free crossing of ``level`` can lie, from the data: the last exceedance
+    of level + z·sd (earlier: an excursion that large is not noise alone, with the
+    confidence z gives) and of level − z·sd (later). ``sd`` is the standard deviation of the
+    statistic's noise; z the two-sided 95 % point for the number of independent looks.
+    The detection term of the warm-up (JJF 7.2.9) and start-up (IEC 5.3.3.9) budgets.
+
+    >>> detection_interval([0, 10, 20, 30, 40], [5, 3, 2.2, 1.6, 0.5], 2.0, 0.25, 2.0)
+    (20.0, 40.0)
+    """
+    return (last_exceedance_time(time_s, stat, level + z * sd),
+            last_exceedance_time(time_s, stat, level - z * sd))
+
+
+def window_stabilities(time_s, rate, *, window: int, block: int) -> tuple[np.ndarray, np.ndarray]:
+    """JJF 1535 7.2.9 reading: the block-mean stability (eq (18), P = ``block``) of every
+    window of ``window`` samples starting at a block boundary: (start times, stabilities)."""
+    t, x = _arr(time_s, "time_s"), _arr(rate, "rate")
+    if x.size < window or window < 2 * block:
+        raise GonioError(f"warm-up needs a record ≥ window ({window}) ≥ 2 blocks ({block})")
+    starts = np.arange(0, x.size - window + 1, block)
+    return t[starts], np.array([block_mean_stability(x[s:s + window], 1.0, block)
+                                for s in starts])
+
+
 def warmup_time_s(time_s, rate, *, window: int, block: int, nominal: float) -> float:
     """JJF 1535 7.2.9, reading taken: the earliest start t such that the block-mean stability
     (eq (18), P = ``block``) of every later window of ``window`` samples is ≤ ``nominal``.
@@ -334,16 +375,8 @@ def warmup_time_s(time_s, rate, *, window: int, block: int, nominal: float) -> f
     >>> warmup_time_s(t, r, window=20, block=2, nominal=1e-9)
     30.0
     """
-    t, x = _arr(time_s, "time_s"), _arr(rate, "rate")
-    if x.size < window or window < 2 * block:
-        raise GonioError(f"warm-up needs a record ≥ window ({window}) ≥ 2 blocks ({block})")
-    starts = np.arange(0, x.size - window + 1, block)
-    ok = np.array([block_mean_stability(x[s:s + window], 1.0, block) <= nominal for s in starts])
-    if not ok[-1]:
-        return math.nan
-    bad = np.flatnonzero(~ok)
-    first = 0 if bad.size == 0 else int(bad[-1]) + 1
-    return float(t[starts[first]] - t[0])
+    ts, st = window_stabilities(time_s, rate, window=window, block=block)
+    return last_exceedance_time(ts, st, nominal)
 
 
 # --------------------------------------------------------------------------- Allan

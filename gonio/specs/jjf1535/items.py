@@ -448,19 +448,35 @@ def bias_repeatability(ctx: Context) -> Item:
 def warmup_time(ctx: Context) -> Item:
     """JJF 1535 7.2.9, reading taken: per record (from power-on) the earliest time after which
     every window of W samples has a block-mean stability ≤ the nominal value; the mean over
-    the N records. Uncertainty: spread over the records (type A) and the window step."""
+    the N records.
+
+    Uncertainty: spread over the records (type A), the window step, and the detection: a
+    window's stability s is an estimate with relative standard deviation r = 1/√(2(n_b − 1))
+    (n_b blocks per window), so the crossing of the nominal value can lie anywhere between
+    the last exceedance of nominal·(1 + z·r) and of nominal·(1 − z·r), z = 1.96
+    (95 % for one window near the crossing)
+    (:func:`gonio.specs._rate_family.formulas.detection_interval`); the larger distance from the
+    record's time to that interval's ends is that record's 95 % half-width, and the records'
+    detections are independent (u = rms(half-width/2)/√N)."""
+    from scipy.stats import norm
     title, clause, unit = "warm-up time", "7.2.9", "s"
     miss = _need(ctx, "warmup", "warmup_time", title, clause, unit)
     if miss:
         return miss
     w = ctx.protocol["warmup"]
     nominal = w["nominal_stability_dph"] / S_PER_H
-    times = []
+    nb = w["window_samples"] // w["block_samples"]
+    r = 1.0 / math.sqrt(2 * (nb - 1))
+    times, halves = [], []
     for m in segment_means(ctx.df, "warmup"):
         g = segment_samples(ctx.df, "warmup", m.run, m.step)
-        times.append(rg.warmup_time_s(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
-                                      window=w["window_samples"], block=w["block_samples"],
-                                      nominal=nominal))
+        ts, st = rg.window_stabilities(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
+                                       window=w["window_samples"], block=w["block_samples"])
+        t_n = rg.last_exceedance_time(ts, st, nominal)
+        z = float(norm.ppf(0.975))
+        lo, hi = rg.detection_interval(ts, st, nominal, nominal * r, z)
+        times.append(t_n)
+        halves.append(max(t_n - lo, (hi if math.isfinite(hi) else float(ts[-1] - ts[0])) - t_n))
     t = np.array(times)
     if np.any(~np.isfinite(t)):
         return not_measured("warmup_time", title, clause, unit,
@@ -470,10 +486,15 @@ def warmup_time(ctx: Context) -> Item:
     inputs = [from_u("t_w", float(t.mean()), 0.0),
               from_u("s_t", 0.0, float(t.std(ddof=1) / math.sqrt(t.size)) if t.size > 1 else 0.0,
                      dof=max(t.size - 1, 1), source="spread over the power-ups"),
-              type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0")]
-    u = gum(lambda a, b, c: a + b + c, inputs)
+              type_b("step", 0.0, step / 2.0, "rectangular", source="window start step P·t0"),
+              type_b("detect", 0.0, float(np.sqrt(np.mean(np.square(halves)) / t.size)),
+                     "normal", k=2,
+                     source="detection: where the stability crosses nominal·(1 ± z·r), "
+                            "r the relative sampling deviation of a window's stability")]
+    u = gum(lambda a, b, c, d: a + b + c + d, inputs)
     return Item("warmup_time", title, clause, unit, float(t.mean()), uncertainty=u,
-                details={"t_n_s": t, "nominal_stability_dph": w["nominal_stability_dph"]})
+                details={"t_n_s": t, "detection_half_width_s": halves,
+                         "nominal_stability_dph": w["nominal_stability_dph"]})
 
 
 def g_sensitivity(ctx: Context) -> Item:

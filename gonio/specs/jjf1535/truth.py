@@ -212,12 +212,17 @@ def truth(bench: RateBench, proto) -> dict:
     w = P["warmup"]
     nom = w["nominal_stability_dph"] / S_PER_H
     s_noise = expected_block_std(bench, dt, w["window_samples"], w["block_samples"], 0.0)
+    with_noise = _warmup_truth(g, w, dt, math.sqrt(nom ** 2 - s_noise ** 2), kr) \
+        if nom > s_noise else math.nan
     out["warmup_time"] = {
-        "value": _warmup_truth(g, w, dt, nom, kr),
-        "value_with_noise": _warmup_truth(g, w, dt, math.sqrt(nom ** 2 - s_noise ** 2), kr)
-        if nom > s_noise else math.nan,
+        "value": with_noise, "value_with_noise": with_noise,
+        "noise_free_s": _warmup_truth(g, w, dt, nom, kr),
         "noise_block_std_dph": s_noise * S_PER_H,
-        "how": "7.2.9 on the exact transient: first block boundary ≥ τ·ln(s₀/nominal)"}
+        "how": "7.2.9: the first block boundary where the expected window stability, "
+               "√(s_transient² + E[s²_noise]), meets the nominal — the gyro's own noise is "
+               "part of the stability its specification states; closed form "
+               "τ·ln(s₀/√(nominal² − E[s²_noise])) (the noise-free transient's time, "
+               "noise_free_s, when the noise is off)"}
     out["g_sensitivity"] = _g_truth(g, lat, kr)
     out["angle_random_walk"] = {"value": g.arw_deg_sqrt_h * (1 + g.arw_tc1_per_c * (room - g.reference_temperature_c)),
                                 "how": "ARW parameter at room temperature"}

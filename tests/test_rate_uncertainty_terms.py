@@ -1,0 +1,158 @@
+"""Budget terms and decision boundaries that a formula mutation must not get past (issue 24,
+scripts/mutation.py): each number is recomputed here from the readings by a second route
+(pandas group means and numpy.polyfit, not the items' code), and each boundary is probed
+exactly on it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gonio.analysis.conformity import DecisionRule, Limits, decide
+from gonio.formats.rate_readings import RateReadings
+from gonio.pipeline.rate_coverage import reduced_protocol, study_bench
+
+
+def _comp(item, symbol):
+    return next(c for c in item.uncertainty.components if c["symbol"] == symbol)
+
+
+@pytest.fixture(scope="module")
+def jjf(tmp_path_factory):
+    from gonio.specs.jjf1535 import calibrate
+    from gonio.specs.jjf1535.simulate import simulate
+    p = reduced_protocol("jjf1535-2015", tmp_path_factory.mktemp("u3") / "p.toml",
+                         {"arw": {"samples": 3000}, "bias": {"samples": 300}})
+    res = simulate(study_bench(), str(p), seed=4242, noise=True)
+    rd = RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()})
+    return calibrate(rd, str(p)), res.data
+
+
+def _k_by_polyfit(df) -> np.ndarray:
+    """K_m of each calibration: rest-removed rate-point means, numpy.polyfit (second route)."""
+    d = df[df["test"] == "scale_factor"]
+    Ks = []
+    for _, run in d.groupby("run"):
+        means = run.groupby("step").agg(rate=("rate_dps", "first"), role=("role", "first"),
+                                        y=("output", "mean"))
+        pts = means[means["role"] == "rate"]
+        Ks.append(np.polyfit(pts["rate"].to_numpy(), pts["y"].to_numpy(), 1)[0])
+    return np.array(Ks)
+
+
+def test_jjf_scale_factor_budget_u3_and_combination(jjf):
+    """7.2.1 budget: K̄ = mean of K_m; u3 = s(K_m)/√Q (ν = Q − 1); u1, u2 relative × K̄;
+    u_c = √(u1² + u2² + u3²) to first order; U = t₉₅(ν_eff)·u_c with Welch–Satterthwaite."""
+    from scipy.stats import t as student
+    r, df = jjf
+    it = r.items["scale_factor"]
+    Ks = _k_by_polyfit(df)
+    Q = Ks.size
+    assert Q == 3
+    assert it.value == pytest.approx(Ks.mean(), rel=1e-12)
+    u3 = Ks.std(ddof=1) / math.sqrt(Q)
+    assert u3 > 0
+    c3 = _comp(it, "s_K")
+    assert c3["u"] == pytest.approx(u3, rel=1e-9)
+    assert c3["dof"] == Q - 1
+    u1 = 2.5e-4 * Ks.mean()
+    u2 = 3.0e-5 * Ks.mean()
+    uc = math.sqrt(u1 ** 2 + u2 ** 2 + u3 ** 2)
+    assert it.uncertainty.u_c == pytest.approx(uc, rel=1e-6)
+    nu = uc ** 4 / (u3 ** 4 / (Q - 1))
+    assert it.uncertainty.nu_eff == pytest.approx(nu, rel=1e-6)
+    assert it.uncertainty.U == pytest.approx(student.ppf(0.975, nu) * uc, rel=1e-6)
+
+
+def test_jjf_sf_repeatability_chi2_upper_limit(jjf):
+    """7.2.4: K_r = s(K_m)/K̄; its U is the distance to the χ² 95 % upper limit,
+    s·(√(ν/χ²_0.025,ν) − 1), ν = Q − 1 (k = 2 on the normal term: u = U_term/2)."""
+    from scipy.stats import chi2
+    r, df = jjf
+    Ks = _k_by_polyfit(df)
+    kr = Ks.std(ddof=1) / Ks.mean()
+    it = r.items["sf_repeatability"]
+    assert it.value == pytest.approx(kr, rel=1e-9)
+    half = kr * (math.sqrt(2 / chi2.ppf(0.025, 2)) - 1)
+    assert _comp(it, "s(s)")["u"] == pytest.approx(half / 2, rel=1e-9)
+
+
+def test_jjf_bias_repeatability_and_stability_by_hand(jjf):
+    """7.2.8, 7.2.10, 7.2.11: B_0 the mean of the record biases, B_r their Bessel standard
+    deviation (°/h), B_s the mean of the records' block-mean standard deviations."""
+    r, df = jjf
+    d = df[df["test"] == "bias"]
+    K = r.items["scale_factor"].value
+    P = 10
+    rec_b, rec_s = [], []
+    for _, g in d.groupby("run"):
+        y = g["output"].to_numpy()
+        rec_b.append(y.mean())
+        n = y.size // P
+        rec_s.append(y[: n * P].reshape(n, P).mean(1).std(ddof=1) / K * 3600)
+    br = np.std(np.array(rec_b) / K * 3600, ddof=1)
+    assert r.items["bias_repeatability"].value == pytest.approx(br, rel=1e-9)
+    assert r.items["bias_stability"].value == pytest.approx(np.mean(rec_s), rel=1e-9)
+
+
+LIM = Limits(-0.5, 0.5)
+
+
+def test_conformity_value_exactly_on_a_limit_is_accepted():
+    """JCGM 106 3.3.9: the limits belong to the interval (y >= lo, y <= hi, not > / <)."""
+    r = DecisionRule("simple")
+    for y in (-0.5, 0.5):
+        d = decide("E", y, 0.25, 2.0, LIM, r)
+        assert d.outcome == "pass" and d.accepted, (y, d.outcome)
+    assert decide("E", -0.5000001, 0.25, 2.0, LIM, r).outcome == "fail"
+    assert decide("E", 0.5000001, 0.25, 2.0, LIM, r).outcome == "fail"
+
+
+def test_conformity_guard_band_edges_are_exact():
+    """Non-binary, w = U = 0.25 (exact in binary): acceptance [−0.25, 0.25]; on its edges
+    'pass'; just beyond a limit by exactly w 'conditional fail', further 'fail'."""
+    r = DecisionRule("non-binary")
+    d = decide("E", -0.25, 0.25, 2.0, LIM, r)
+    assert d.guard_band == 0.25 and d.acceptance_lower == -0.25 and d.acceptance_upper == 0.25
+    assert d.outcome == "pass"
+    assert decide("E", 0.25, 0.25, 2.0, LIM, r).outcome == "pass"
+    assert decide("E", -0.2500001, 0.25, 2.0, LIM, r).outcome == "conditional pass"
+    assert decide("E", -0.5, 0.25, 2.0, LIM, r).outcome == "conditional pass"
+    assert decide("E", -0.75, 0.25, 2.0, LIM, r).outcome == "conditional fail"
+    assert decide("E", 0.75, 0.25, 2.0, LIM, r).outcome == "conditional fail"
+    assert decide("E", 0.7500001, 0.25, 2.0, LIM, r).outcome == "fail"
+    assert decide("E", -0.7500001, 0.25, 2.0, LIM, r).outcome == "fail"
+
+
+def test_iec_symmetry_sign_follows_the_gyro():
+    """5.1.3.8: S = (a_CW − a_CCW)/a_TYP is signed: a gyro stronger clockwise (α > 0) gives
+    S > 0, the mirror gyro (α < 0) S < 0, each equal to the closed form 100·K·α/a_TYP
+    (no cubic term: K± = K(1 ± α/2) exactly)."""
+    from dataclasses import replace
+
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
+    from gonio.specs.iec62047_20.protocol import load_protocol
+    proto = load_protocol("iec62047-20")
+    for alpha in (3e-3, -3e-3):
+        b = study_bench()
+        b = replace(b, gyro=replace(b.gyro, sf_asymmetry=alpha, sf_cubic_per_dps2=0.0))
+        res = simulate(b, proto, seed=1, noise=False)
+        sf = res.data[res.data["test"] == "scale_factor"]
+        rd = RateReadings(sf, {k: str(v) for k, v in res.metadata.items()})
+        s = calibrate(rd, proto).items["symmetry"].value
+        K = float(b.gyro.scale_factor_at(22.5, 5.0))
+        assert s == pytest.approx(100 * K * alpha / b.gyro.scale_factor, rel=1e-6)
+        assert math.copysign(1, s) == math.copysign(1, alpha)
+
+
+def test_conformity_single_point_acceptance_interval():
+    """A guard band leaving exactly one point (T_U − T_L = 2w): the closed interval [0, 0]
+    still holds 0 (the limits belong to it); a guard band one ulp wider passes nothing.
+    (The lo <= hi clause of the interval test is observable only here.)"""
+    r = DecisionRule("guarded")
+    assert decide("E", 0.0, 0.5, 2.0, LIM, r).outcome == "pass"
+    assert decide("E", 0.0, 0.5000000001, 2.0, LIM, r).outcome == "fail"
