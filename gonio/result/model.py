@@ -340,8 +340,8 @@ def flat_view(d: dict) -> dict:
     """A results.json (version 1) as the flat dict the optical draft's results.json was before
     the one result model: each item at the top level as ``{item: title, value, unit, clause,
     measured, reason, <details>, uncertainty}`` and each ``extra`` section at the top level;
-    ``gonio_version``, ``source``, ``metadata``, ``unused_readings``, ``readings_taken``
-    kept. For readers written against that shape (a Num path such as
+    ``gonio_version``, ``source``, ``metadata``, ``unused_readings``, ``findings``,
+    ``readings_taken`` kept. For readers written against that shape (a Num path such as
     ``angle_deviation.max_abs_arcsec`` or ``uncertainty.U_arcsec`` resolves in it).
 
     >>> flat_view({"version": 1, "items": {"K": {"title": "K", "value": 2.0, "unit": "1",
@@ -359,6 +359,7 @@ def flat_view(d: dict) -> dict:
         flat["conformity"] = it.get("conformity")
         out[key] = flat
     out["unused_readings"] = d.get("unused_readings", [])
+    out["findings"] = d.get("findings", [])
     out.update(d.get("extra") or {})
     out["readings_taken"] = d.get("readings_taken", [])
     return out
