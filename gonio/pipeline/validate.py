@@ -63,6 +63,7 @@ from gonio.pipeline.calibrate import calibrate
 from gonio.errors import GonioError
 from gonio.units import PPM, deg_to_arcsec
 from gonio.formats.readings import Readings
+from gonio.limits import limit
 from gonio.progress import Progress
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
@@ -299,6 +300,8 @@ def trial_seeds(seed: int, case: str, trials: int) -> list[int]:
 
 #: Largest batch (trials per task).
 MAX_BATCH = 250
+#: Tasks per worker a study is cut into by default (:func:`study_workers`).
+TASKS_PER_WORKER = 4
 #: Folder (inside ``--out``) holding the finished batches of a study in progress.
 PARTIAL_DIR = ".validate-partial"
 
@@ -455,6 +458,7 @@ def execution_backend(workers: int, scheduler: str | None):
             raise GonioError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}",
                              key="scheduler") from None
         try:
+            _warm_workers(client, scheduler)
             with parallel_config(backend="dask"):
                 yield -1
         finally:
@@ -464,23 +468,70 @@ def execution_backend(workers: int, scheduler: str | None):
             cluster.close()
 
 
+def _warm_worker() -> str:
+    """Import what a batch needs (in a Dask worker, once, before the first task)."""
+    import gonio.pipeline.validate  # noqa: F401  (the trial code and its libraries)
+    return worker_threads()
+
+
+def _warm_workers(client, scheduler: str) -> None:
+    """Every worker of the cluster imports the trial code once, all at the same time,
+    before any task is sent (not each on its first task); a worker that cannot import
+    gonio is one clear error, not a traceback per task."""
+    try:
+        client.run(_warm_worker)
+    except Exception as exc:  # noqa: BLE001 - any worker-side failure, reported in one line
+        raise GonioError(f"the Dask workers of {scheduler!r} cannot run gonio "
+                         f"({type(exc).__name__}: {str(exc)[:200]}); install gonio there",
+                         key="scheduler") from None
+
+
 def study_workers(trials: int, workers: int | None, scheduler: str | None,
-                  batch_size: int | None) -> tuple[int | None, int]:
-    """(workers, batch size) of a study: ``workers`` default min(2, cores), at most the
-    machine's cores (ignored with a ``scheduler``); the batch size default up to
-    :data:`MAX_BATCH`, at least 4 tasks per worker. Bad values are GonioErrors."""
+                  batch_size: int | None, cases: int = 1) -> tuple[int | None, int]:
+    """(workers, batch size) of a study.
+
+    ``workers`` default min(2, cores); local workers and a ``local:N`` cluster are capped
+    at the machine's cores (``GONIO_MAX_WORKERS`` raises the cap), checked before anything
+    starts (``local:100000`` once ran for minutes and ran out of memory). The batch size
+    default comes from the trial count and the workers: all ``cases`` × ``trials`` trials
+    in about :data:`TASKS_PER_WORKER` tasks per worker (so that the last tasks finish
+    together and a slow worker holds little back), at most ``trials`` (batches are per
+    case) and :data:`MAX_BATCH`. Bad values are GonioErrors. The results never depend on
+    either.
+
+    >>> study_workers(320, 1, None, None)           # one worker: 4 tasks of 80
+    (1, 80)
+    >>> study_workers(320, 1, None, None, cases=5)  # 1600 trials: batches capped at 250
+    (1, 250)
+    """
+    if os.environ.get("GONIO_MAX_WORKERS", "").strip():
+        cap = limit("GONIO_MAX_WORKERS")
+        cap_note = f"GONIO_MAX_WORKERS = {cap:g}"
+    else:
+        cap = available_cores()
+        cap_note = f"this machine's {cap} cores"
     if scheduler is None:
-        cores = available_cores()
         if workers is None:
-            workers = min(2, cores)
+            workers = min(2, available_cores())
         if not isinstance(workers, int) or workers < 1:
             raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
-        if workers > cores:
-            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
-                             "--scheduler to run on a cluster", key="workers")
+        if workers > cap:
+            raise GonioError(f"--workers {workers} exceeds {cap_note} (set GONIO_MAX_WORKERS "
+                             "to raise the cap, or give --scheduler tcp://... to run on a "
+                             "cluster)", key="workers")
+    elif scheduler.startswith("local:"):
+        n = scheduler[len("local:"):]
+        if not (n.isdigit() and len(n) <= 9) or int(n) < 1:
+            raise GonioError(f"--scheduler local:N needs N >= 1 workers, got {scheduler!r}",
+                             key="scheduler")
+        if int(n) > cap:
+            raise GonioError(f"--scheduler {scheduler}: {int(n)} worker processes exceed "
+                             f"{cap_note} (set GONIO_MAX_WORKERS to raise the cap)",
+                             key="scheduler")
     n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
     if batch_size is None:
-        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
+        per_task = -(-(trials * max(1, cases)) // (TASKS_PER_WORKER * max(1, n_workers)))
+        batch_size = max(1, min(MAX_BATCH, trials, per_task))
     if not isinstance(batch_size, int) or batch_size < 1:
         raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
                          key="batch_size")
@@ -852,7 +903,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
     base = bench if isinstance(bench, Bench) else load_bench(bench)
     base = replace(base, sample_rate_hz=float(sample_rate_hz))
-    workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
+    workers, batch_size = study_workers(trials, workers, scheduler, batch_size, len(cases))
     settings = {"trials": trials, "seed": seed,
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),

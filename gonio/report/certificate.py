@@ -1048,9 +1048,12 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
-            from gonio.report.dcc import dcc_bytes
+            from gonio.report.dcc import bilingual, dcc_bytes, label_translator
+            from gonio.report.i18n import READING_NOTES_ZH
 
-            write_bytes(stage / "certificate.dcc.xml",
-                        dcc_bytes(report, lab=lab_d, cert_id=content["id"]))
+            doc = dcc_bytes(report, lab=lab_d, cert_id=content["id"])
+            if lang == "zh":                   # Chinese beside English (issue 25)
+                doc = bilingual(doc, label_translator(dict(READING_NOTES_ZH)))
+            write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
     return {n: out / n for n in names}

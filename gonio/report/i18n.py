@@ -112,6 +112,8 @@ LABELS: dict[str, dict[str, str]] = {
     "u_i_item": {"en": "u_i (input's unit)", "zh": "u_i（输入量单位）"},
     "readings_taken": {"en": "Readings taken of the draft's ambiguities",
                        "zh": "对规范草案中不明确之处的理解"},
+    "readings_taken_std": {"en": "Readings taken of the specification's text",
+                           "zh": "对规范条文的理解"},
     "details": {"en": "Details of the measurements", "zh": "测量详细数据"},
     "figures": {"en": "Figures", "zh": "图"},
     "eda": {"en": "Rotary-table calibration by equal-division averaging (IEC 62047-20 Annex A.3)",
