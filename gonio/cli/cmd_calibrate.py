@@ -125,7 +125,8 @@ def run(args) -> int:
                                  "for a triad calibration: the readings carry what it needs)",
                                  key=flag)
 
-        inputs.append(args.thermal)
+        from gonio.formats.triad import named_inputs
+        inputs += [args.thermal, *named_inputs(args.readings)]   # never replaced or removed
         check_output_dir(args.out, inputs=inputs, force=args.force)
         with output_set(args.out, inputs=inputs, force=args.force):
             result, _ = calibrate_triad(args.readings, args.out, thermal=args.thermal,

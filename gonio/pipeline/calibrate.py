@@ -395,20 +395,8 @@ def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None
         return proto, conflicts
     if not metadata_name:
         return load_protocol("ogam-draft"), conflicts
-    from gonio.errors import GonioError
-    cands = [metadata_name]
-    if readings_path is not None:
-        base = Path(readings_path).parent
-        cands += [base / metadata_name, base / f"{metadata_name}.toml"]
-    for c in cands:
-        try:
-            return load_protocol(c), conflicts
-        except GonioError as exc:
-            if "not found" not in exc.message:
-                raise
-    raise GonioError(f"the readings file names protocol {metadata_name!r}, which is neither a "
-                     "built-in protocol nor a file next to it: give --protocol FILE",
-                     file=readings_path, key="protocol")
+    from gonio.resources import readings_protocol     # one rule for every readings file
+    return load_protocol(readings_protocol(metadata_name, readings_path, None)), conflicts
 
 
 def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list[Conflict]]:

@@ -300,6 +300,46 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
                          float(shortest_dwell_s), sufficient, list(map(float, tau)), adevs)
 
 
+#: Monte Carlo trials held in memory at once; more are combined chunk by chunk.
+MC_CHUNK = 100_000
+
+
+def chunked_std(trial, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.ndarray]:
+    """Sample standard deviations (ddof 1) of the two vectors ``trial()`` returns, over
+    ``n`` trials, in bounded memory: chunks of ``chunk`` trials combined by Chan et al.'s
+    pairwise update (count, mean, sum of squared deviations). Up to one chunk the result is
+    ``np.std`` of all trials, exactly.
+
+    >>> it = iter(range(10))
+    >>> def f():
+    ...     v = float(next(it))
+    ...     return np.array([v]), np.array([2 * v])
+    >>> [round(float(a[0]), 6) for a in chunked_std(f, 10, chunk=3)]
+    [3.02765, 6.055301]
+    """
+    acc = None
+    done = 0
+    while done < n:
+        k = min(chunk, n - done)
+        first = [trial() for _ in range(k)]
+        blocks = [np.array([f[j] for f in first]) for j in (0, 1)]
+        del first
+        if acc is None and k == n:
+            return tuple(np.std(b, axis=0, ddof=1) for b in blocks)
+        stats_ = [(k, b.mean(axis=0), ((b - b.mean(axis=0)) ** 2).sum(axis=0)) for b in blocks]
+        if acc is None:
+            acc = stats_
+        else:
+            merged = []
+            for (na, ma, sa), (nb, mb_, sb) in zip(acc, stats_):
+                d = mb_ - ma
+                nn = na + nb
+                merged.append((nn, ma + d * nb / nn, sa + sb + d * d * na * nb / nn))
+            acc = merged
+        done += k
+    return tuple(np.sqrt(sq / (cnt - 1)) for cnt, _, sq in acc)
+
+
 def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
                        monte_carlo: int = 0, seed: int = 0, target_deg: float = 0.1,
                        ) -> AlignmentResult:
@@ -351,14 +391,12 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))
         fitted = x @ mb.T
         sd = np.array(sig)[None, :] / np.sqrt(w)[:, None]
-        th_s, der_s = [], []
-        for _ in range(int(monte_carlo)):
+        def trial():
             ys = fitted + sd * rng.standard_normal(fitted.shape)
             t = np.concatenate([_wls(x, ys[:, i], w) for i in range(3)])
-            th_s.append(t)
-            der_s.append(_derived(t))
-        u_mc_theta = np.std(np.array(th_s), axis=0, ddof=1)
-        u_mc = _split(np.std(np.array(der_s), axis=0, ddof=1))
+            return t, _derived(t)
+        u_mc_theta, u_der_mc = chunked_std(trial, int(monte_carlo))
+        u_mc = _split(u_der_mc)
     dofa = np.array(dof)
     k = stats.t.ppf(0.5 + COVERAGE / 2, dofa)
     rates = rows["rate_dps"].abs()
