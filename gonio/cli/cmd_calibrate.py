@@ -70,7 +70,7 @@ def show(spec, result, as_json: bool, lab_d: dict | None = None, lang: str = "en
     if note:
         sys.stderr.write(f"gonio: note: {note}\n")
     if as_json:
-        sys.stdout.write(json.dumps(r.results_json(result), indent=2, ensure_ascii=False,
+        sys.stdout.write(json.dumps(r.results_json(result, lab_d), indent=2, ensure_ascii=False,
                                     allow_nan=False) + "\n")
     else:
         sys.stdout.write(r.summary(result, lab_d))

@@ -1,5 +1,7 @@
-"""The rate specifications' rendering side (``SPEC.outputs``): results.json, summary.txt,
-the certificate (HTML, PDF) and its DCC XML of a rate result.
+"""The per-item specifications' rendering side (``SPEC.outputs`` of the rate specifications,
+reused by the triad and by plug-ins whose result is a :class:`gonio.result.model.Result`):
+conformity decided for every item a laboratory file limits, results.json, summary.txt,
+tables, the certificate (HTML, PDF) and its DCC XML.
 
 Imported by the pipeline through the registry (it may import the report); the calibration
 path never imports it.
@@ -7,14 +9,14 @@ path never imports it.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from gonio.atomic import output_dir, write_text
+from gonio.analysis.conformity import decide_result
 from gonio.report.rate_certificate import write_rate_certificate
+from gonio.result.tables import write_results
 
 
-def results_json(result) -> dict:
+def results_json(result, lab: dict | None = None) -> dict:
     """The ``results.json`` content."""
     return result.to_json()
 
@@ -26,12 +28,11 @@ def summary(result, lab: dict | None = None) -> str:
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
           dcc: bool = False) -> dict[str, Path]:
-    """results.json, summary.txt and the certificate (``dcc``: its DCC XML) into ``out``."""
+    """Conformity decided (:func:`gonio.analysis.conformity.decide_result`), then
+    results.json, summary.txt, tables (:func:`gonio.result.tables.write_results`) and the
+    certificate (``dcc``: its DCC XML) into ``out``."""
+    decide_result(result, lab)
     out = Path(out)
-    with output_dir(out) as stage:
-        write_text(stage / "results.json", json.dumps(results_json(result), indent=2,
-                                                      ensure_ascii=False, allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", summary(result))
-    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths = write_results(result, out)
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc))
     return paths

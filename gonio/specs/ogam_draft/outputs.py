@@ -8,7 +8,6 @@ the report and the bench; the calibration path never imports it).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from gonio.atomic import output_dir, output_set, write_text
@@ -16,15 +15,16 @@ from gonio.bench import load_bench, run_session, write_session
 from gonio.protocol import load_protocol
 from gonio.report.certificate import write_certificate
 from gonio.report.stated import summary_text
+from gonio.result.tables import results_json_text, write_tables
 from gonio.specs.ogam_draft.calibration import CalibrationReport, calibrate
-from gonio.specs.ogam_draft.items import ITEM_KEYS, LISTED_ROWS
+from gonio.specs.ogam_draft.items import ITEM_KEYS
 
 ITEM_NAMES = ITEM_KEYS
 
 
-def results_json(report: CalibrationReport) -> dict:
-    """The ``results.json`` content."""
-    return report.to_dict()
+def results_json(report: CalibrationReport, lab: dict | None = None) -> dict:
+    """The ``results.json`` content (the one result model, conformity decided)."""
+    return report.decided_result(lab).to_json()
 
 
 def warnings(report: CalibrationReport) -> list[str]:
@@ -98,26 +98,11 @@ def write_calibration(report: CalibrationReport, out: str | Path,
     to ``summary.txt``, as the certificate and the CLI show them.
     """
     out = Path(out)
-    names = {}
+    result = report.decided_result(lab)
     with output_dir(out) as stage:
-        d = report.to_dict()
-        write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
-                                                      allow_nan=False) + "\n")
+        write_text(stage / "results.json", results_json_text(result))
         write_text(stage / "summary.txt", summary(report, lab))
-        tables = stage / "tables"
-        for item in report.results.items():
-            for tname, df in (getattr(item, "tables", None) or {}).items():
-                if df is not None and len(df):
-                    write_text(tables / f"{item.name}_{tname}.csv",
-                               df.to_csv(index=False, lineterminator="\n"))
-            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
-                write_text(tables / f"{item.name}_table.csv",
-                           item.table.to_csv(index=False, lineterminator="\n"))
-        if len(report.results.unused_readings) > LISTED_ROWS:
-            write_text(tables / "unused_readings.csv",
-                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
-        write_text(tables / "uncertainty_budget.csv",
-                   report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
+        write_tables(result, stage)
         names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
     return names
 

@@ -39,6 +39,7 @@ from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFD
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
+from gonio.result.model import Covariance
 
 KEY = "triad-alignment"
 TITLE_EN = ("Gyro triad: mechanical misalignment budget, electrical alignment and extended "
@@ -89,7 +90,8 @@ def _type_a(symbol: str, source: str, u: float, nu: float, u_mc: float | None = 
     comp = [{"symbol": symbol, "source": source, "type": "A", "u": float(u), "c": 1.0,
              "contribution": float(u), "dof": float(nu)}]
     mc = None if u_mc is None or not math.isfinite(u_mc) else {"trials": trials, "u": float(u_mc)}
-    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc)
+    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc, COVERAGE,
+                       "Student's t for 95.45 % at the fit's ν")
 
 
 def _with_bias_instability(unc: Uncertainty, key: str, u_long: float, nu_long: float
@@ -354,7 +356,33 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
         extra["cross_axis"] = cross_axis_table(al).to_dict(orient="records")
     src = source_info(r)
     return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),
-                            extra=json_safe(extra), alignment=al, thermal=th, compensation=comp)
+                            extra=json_safe(extra), alignment=al, thermal=th, compensation=comp,
+                            covariances=alignment_covariances(al),
+                            tables=prediction_tables(extra["thermal_model"]))
+
+
+def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:
+    """Per gyro, the covariance of its row of M and its bias (one fit: M_i·, b_i),
+    s²(XᵀWX)⁻¹ in the items' units (the fits of the three gyros are independent)."""
+    if al is None:
+        return []
+    out = []
+    for i in range(3):
+        keys = [f"M_{AXES[i]}{AXES[j]}" for j in range(3)] + [f"b_{AXES[i]}"]
+        block = np.asarray(al.cov_theta)[4 * i:4 * i + 4, 4 * i:4 * i + 4]
+        out.append(Covariance(keys, block.tolist(), f"gyro {AXES[i]}: weighted least-squares "
+                              "fit of all dwells, s²(XᵀWX)⁻¹ (JCGM 100 4.2)"))
+    return out
+
+
+def prediction_tables(thermal_json: dict | None) -> dict:
+    """Per modelled gyro, ``thermal_prediction_<gyro>.csv``: the prediction band."""
+    import pandas as pd
+
+    tm = thermal_json or {}
+    return {f"thermal_prediction_{ch}.csv": pd.DataFrame(
+        {k: v for k, v in pr.items() if isinstance(v, list)})
+        for ch, pr in (tm.get("prediction_U") or {}).items()}
 
 
 def article_budget() -> MisalignmentBudget:
