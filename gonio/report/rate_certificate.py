@@ -198,6 +198,24 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
     return head, rows
 
 
+def screening_blocks(res: dict, lang: str, limit: int = 20) -> list[Block]:
+    """The screening's findings (readings set aside, planned points missing; issue 24), one
+    line each with its place in the file; nothing when the screening found nothing."""
+    found = res.get("findings") or []
+    if not found:
+        return []
+    blocks = [Block("h", "读数筛查" if lang == "zh" else "Screening of the readings"),
+              Block("p", [res.get("screening", "")])]
+    for f in found[:limit]:
+        where = ", ".join(p for p in (f.get("line") and f"line {f['line']}",
+                                       f.get("column")) if p)
+        act = {"set_aside": "set aside", "flagged": "flagged", "refused": "refused"}[f["action"]]
+        blocks.append(Block("p", [f"• [{act}] {f.get('clause') or ''} {where}: {f['message']}"]))
+    if len(found) > limit:
+        blocks.append(Block("p", [f"… {len(found) - limit} more in results.json (findings)"]))
+    return blocks
+
+
 def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
     """The certificate's content: identifier, banner flag, lab name and blocks."""
     res = result.to_json()
@@ -213,6 +231,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
         "widths": (0.07, 0.27, 0.09, 0.15, 0.10, 0.07, 0.08, 0.17), "id": "results"})
     u_clause = getattr(data, "U_CLAUSE", ("JJF 1535 clause 8 k)",) * 2)   # the spec's own rule
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
+    blocks += screening_blocks(res, lang)
     blocks += conformity_blocks(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
                                     if lang == "zh" else res["items"][k]["title"]),

@@ -13,7 +13,9 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.specs import Specification
+from gonio.specs._rate_family.screening import screened, screening_extra
 from gonio.specs.iec62047_20 import items as _items
+from gonio.specs.iec62047_20.screen import screen
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
 from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
@@ -61,6 +63,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         raise GonioError(f"the readings are for specification {spec!r}, not {KEY!r}",
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, IECProtocol) else load_protocol(protocol or KEY)
+    rd, findings = screened(rd, screen(rd, proto))
     md, P = rd.metadata, proto.sections
     ratiometric = str(md.get("ratiometric", "")).strip().lower() in ("true", "yes", "1")
     df, n_corr = _items.supply_correction(rd.data, ratiometric)
@@ -82,7 +85,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
-                                     "ratiometric": ratiometric, "rows_corrected": n_corr}})
+                                     "ratiometric": ratiometric, "rows_corrected": n_corr},
+                                     **screening_extra(findings)})
 
 
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,

@@ -13,8 +13,10 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.specs import Specification
+from gonio.specs._rate_family.screening import screened, screening_extra
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
+from gonio.specs.jjf1535.screen import screen
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
 from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation, Item, RateCalibrationResult, load_readings, not_measured,
                                      source_info)
@@ -80,6 +82,7 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
         raise GonioError(f"the readings are for specification {spec!r}, not {KEY!r}",
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or KEY)
+    rd, findings = screened(rd, screen(rd, proto))
     ctx = make_context(rd, proto)
     items: dict[str, Item] = {}
     # the Allan fit (7.2.13) is computed early: later items use it for the bias drift
@@ -95,7 +98,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     items = {r[0]: items[r[0]] for r in _items_mod.ITEMS}
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
-                                 extra={"annex_a": annex_a().to_dict()})
+                                 extra={"annex_a": annex_a().to_dict(),
+                                        **screening_extra(findings)})
 
 
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
