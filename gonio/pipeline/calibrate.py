@@ -29,8 +29,12 @@ from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationRes
                                           compute_characteristics)
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
+from gonio.result.findings import findings_to_json
 from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
+from gonio.analysis.conformity import decide_result
+from gonio.result.model import Item, Result, Uncertainty
+from gonio.result.tables import results_json_text, write_tables
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate). The
@@ -132,6 +136,9 @@ class CalibrationReport:
     budget_notes: list = field(default_factory=list)
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
+    findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
+    #: The specification's key in results.json (this report is the optical draft's).
+    spec_key: str = "ogam-draft"
 
     @property
     def e_measured(self) -> bool:
@@ -171,6 +178,10 @@ class CalibrationReport:
             "metadata": dict(self.readings.metadata),
         }
         out.update(d)
+        if out["scale_factor"].get("measured"):
+            out["scale_factor"].update(scale_factor_as_mounted(
+                float(self.results.scale_factor.value),
+                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
         for name in ITEM_NAMES:
             iu = self.item_uncertainty.get(name)
             out[name]["uncertainty"] = iu.to_dict() if iu is not None else None
@@ -202,10 +213,65 @@ class CalibrationReport:
             out["equal_division"] = {"clause": "IEC 62047-20 Annex A.3", **self.eda.to_dict()}
         out["uncertainty"] = self.uncertainty_dict()
         out["conflicts"] = [c.to_dict() for c in self.conflicts]
+        out["findings"] = findings_to_json(self.findings)
         out["precedence_rule"] = PRECEDENCE_RULE
         out["readings_taken"] = readings_taken(self.repeatability_source) if self.e_measured \
             else list(READINGS_TAKEN)
         return json_safe(out)
+
+    def to_result(self) -> Result:
+        """The one result model (:class:`gonio.result.model.Result`) of this calibration:
+        the seven items (each item's own fields under ``details``), E's full budget, the
+        conflicts and the precedence rule under ``extra``; the detail tables as
+        ``tables``."""
+        d = self.to_dict()
+        items = {}
+        for name in ITEM_NAMES:
+            it = d[name]
+            details = {k: v for k, v in it.items() if k not in LEGACY_ITEM_KEYS}
+            unc = it.get("uncertainty")
+            items[name] = Item(name, it["item"], it["clause"], it["unit"], it["value"],
+                               bool(it["measured"]), it.get("reason") or "",
+                               None if unc is None else Uncertainty(
+                                   unc["components"], unc["u_c"], unc["U"], unc["k"],
+                                   unc["nu_eff"], unc.get("monte_carlo"),
+                                   unc.get("coverage_probability"), unc.get("k_source") or "",
+                                   unc.get("interval")), details)
+        extra = {k: d[k] for k in ("uncertainty", "conflicts", "precedence_rule",
+                                   "equal_division", "unused_readings_summary") if k in d}
+        known = set(ITEM_NAMES) | set(extra) | {"gonio_version", "specification", "protocol",
+                                               "source", "metadata", "unused_readings",
+                                               "readings_taken", "findings"}
+        extra.update({k: v for k, v in d.items() if k not in known})   # nothing dropped
+        title = self.protocol.specification or spec_title(self.spec_key)
+        return Result(self.spec_key, title, items, d["metadata"],
+                      d["source"], list(d["readings_taken"]), extra,
+                      settings={"protocol": d["protocol"], "budget_kind": self.budget_kind,
+                                "repeatability_source": self.repeatability_source or None},
+                      unused_readings=list(d.get("unused_readings") or []),
+                      findings=list(self.findings),
+                      gonio_version=d["gonio_version"], tables=self.detail_tables())
+
+    def decided_result(self, lab: dict | None = None) -> Result:
+        """:meth:`to_result` with the conformity of every item the laboratory file limits
+        decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json."""
+        result = self.to_result()
+        decide_result(result, lab)
+        return result
+
+    def detail_tables(self) -> dict:
+        """The tables written beside results.json (names as before the one result model)."""
+        out = {}
+        for item in self.results.items():
+            for tname, df in (getattr(item, "tables", None) or {}).items():
+                if df is not None and len(df):
+                    out[f"{item.name}_{tname}.csv"] = df
+            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
+                out[f"{item.name}_table.csv"] = item.table
+        if len(self.results.unused_readings) > LISTED_ROWS:
+            out["unused_readings.csv"] = self.results.unused_readings
+        out["uncertainty_budget.csv"] = self.uncertainty.table()
+        return out
 
     def warnings(self) -> list[str]:
         """One line per conflict and per excluded reading group (for stderr)."""
@@ -216,6 +282,7 @@ class CalibrationReport:
                 out.append(f"gonio: warning: {len(g)} {test} reading(s) excluded (lines "
                            f"{', '.join(str(int(x)) for x in g['line'][:5])}"
                            f"{', …' if len(g) > 5 else ''}): {g['reason'].iloc[0]}")
+        out += [f"gonio: warning: {f.message}" for f in self.findings if f.action == "flagged"]
         return out
 
     def summary(self, lab: dict | None = None) -> str:
@@ -248,10 +315,42 @@ class CalibrationReport:
         return "\n".join(lines) + "\n"
 
 
+def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float) -> dict:
+    """What K of 7.1 is (docs/draft-readings.md, 7.1): the scale factor *as mounted*.
+
+    Tilted by ψ the instrument senses θ̇ cos ψ, so 7.1 measures K_own cos ψ; the draft
+    bounds ψ (A.1) and lets the calibration on the mount fix k (A.4.2), so K is stated as
+    mounted and the instrument's own K as the one-sided bound K ≤ K_own ≤ K / cos ψ_max.
+
+    >>> d = scale_factor_as_mounted(76434.84, 0.1)
+    >>> round((d["instrument_own_upper_counts_per_deg"] / 76434.84 - 1) * 1e6, 2)
+    1.52
+    """
+    c = math.cos(math.radians(tilt_bound_deg))
+    return {"measurand": (f"K as mounted: the instrument on the table with its sensing plane "
+                          f"within {tilt_bound_deg:g}° of the table plane (Annex A.1); the "
+                          "instrument's own K (sensing axis along the rotation axis) lies "
+                          f"between K and K/cos ψ, up to {(1 / c - 1) * 1e6:.2g} ppm above K, "
+                          "not included in U"),
+            "tilt_bound_deg": float(tilt_bound_deg),
+            "instrument_own_upper_counts_per_deg": float(k_counts_per_deg / c)}
+
+
 ITEM_NAMES = ITEM_KEYS
+#: The keys of an optical item's dict that the one result model's Item holds itself (the
+#: rest go under the item's ``details``).
+LEGACY_ITEM_KEYS = ("item", "value", "unit", "clause", "measured", "reason", "uncertainty")
 
 
 # --------------------------------------------------------------------------- settings
+
+def spec_title(key: str) -> str:
+    """The registered specification's English title (its key if none is registered)."""
+    from gonio.specs import available
+
+    spec = available().get(key)
+    return spec.title_en if spec is not None else key
+
 
 def file_metadata(path: str | Path) -> dict:
     """The ``# key: value`` metadata lines at the head of a readings file or stream."""
@@ -296,20 +395,8 @@ def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None
         return proto, conflicts
     if not metadata_name:
         return load_protocol("ogam-draft"), conflicts
-    from gonio.errors import GonioError
-    cands = [metadata_name]
-    if readings_path is not None:
-        base = Path(readings_path).parent
-        cands += [base / metadata_name, base / f"{metadata_name}.toml"]
-    for c in cands:
-        try:
-            return load_protocol(c), conflicts
-        except GonioError as exc:
-            if "not found" not in exc.message:
-                raise
-    raise GonioError(f"the readings file names protocol {metadata_name!r}, which is neither a "
-                     "built-in protocol nor a file next to it: give --protocol FILE",
-                     file=readings_path, key="protocol")
+    from gonio.resources import readings_protocol     # one rule for every readings file
+    return load_protocol(readings_protocol(metadata_name, readings_path, None)), conflicts
 
 
 def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list[Conflict]]:
@@ -343,109 +430,21 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
 
 # --------------------------------------------------------------------------- checks
 
-_ROTATION_TESTS = ("scale_factor", "angle_deviation", "rate_consistency", "pointing_consistency")
+def screen_readings(readings: Readings, protocol: Protocol
+                    ) -> tuple[Readings, "pd.DataFrame", list]:
+    """Screen the readings (:func:`gonio.specs.ogam_draft.screen.screen`: every column against
+    the protocol and the other readings) and set aside or refuse what it finds.
 
-
-def _item_for(protocol: Protocol, test: str, rate: float, orientation: str):
-    if test == "scale_factor":
-        cands = [protocol.scale_factor]
-    elif test == "angle_deviation":
-        cands = [protocol.angle_deviation]
-    elif test == "rate_consistency":
-        cands = list(protocol.rate_consistency) + [protocol.angle_deviation]
-    else:
-        cands = list(protocol.pointing_consistency) + [protocol.angle_deviation]
-    for it in cands:
-        if it is not None and math.isclose(it.rate_dps, rate, rel_tol=1e-9) \
-                and it.orientation == orientation:
-            return it
-    return None
-
-
-def screen_readings(readings: Readings, protocol: Protocol) -> tuple[Readings, "pd.DataFrame"]:
-    """Check every clause-7 rotation reading against the protocol (defects 1 and 4).
-
-    A reading fits when its round exists in the protocol item of its test, rate and
-    orientation, its ``table_deg`` equals that round's stop − start within the item's
-    ``position_tolerance_deg`` (so the series of a round agree on the position), and
-    its ``time_s`` (time from zeroing to reading) is within ``max_time_to_reading_s``
-    (Annex A.1) when the protocol sets one. A reading that does not fit is an error
-    naming its line when the item says ``on_bad_reading = "error"``; otherwise it is
-    excluded and listed with the reason — unless a round is left with no reading,
-    which is an error (the item would not stand without it). Rows the protocol has no
-    item for are left to the characteristics (reported unused there).
-
-    Returns the readings kept and a DataFrame of the excluded rows
-    (line, test, series, round, rate_dps, orientation, reason).
+    Returns the readings kept, a DataFrame of the rows set aside (line, test, series,
+    round, rate_dps, orientation, reason) and the findings (``results.json`` ``findings``).
+    A refused reading, or setting aside the last reading of a round, is a GonioError
+    naming the line.
     """
-    import pandas as pd
+    from gonio.specs.ogam_draft.screen import apply_findings, screen
 
-    from gonio.errors import GonioError
-
-    df = readings.data
-    bad: dict[int, str] = {}
-    for test in _ROTATION_TESTS:
-        rows = df[df["test"] == test]
-        if not len(rows):
-            continue
-        for (rate, orient), g in rows.groupby(["rate_dps", "orientation"], sort=False):
-            it = _item_for(protocol, test, float(rate), str(orient))
-            if it is None:
-                continue
-            n_rounds = len(it.rounds)
-            bad_here = []
-            # vectorised pre-check: only rows that may not fit are looked at one by one
-            rn = g["round"].to_numpy()
-            inside = (rn >= 1) & (rn <= n_rounds)
-            want_deg = np.array([r.stop_deg - r.start_deg for r in it.rounds] or [0.0])
-            want_deg = want_deg[np.clip(rn - 1, 0, max(n_rounds - 1, 0))]
-            with np.errstate(invalid="ignore"):
-                fits = inside & (np.abs(g["table_deg"].to_numpy(float) - want_deg)
-                                 <= it.position_tolerance_deg)
-                if it.max_time_to_reading_s is not None:
-                    fits &= ~(g["time_s"].to_numpy(float) > it.max_time_to_reading_s + 1e-9)
-            g_check = g[~fits]
-            for line, rnd, tab, t in zip(g_check["line"], g_check["round"],
-                                         g_check["table_deg"], g_check["time_s"]):
-                line, rnd = int(line), int(rnd)
-                why, col = None, None
-                if not 1 <= rnd <= n_rounds:
-                    why, col = (f"{test} round {rnd} is not one of the protocol's {n_rounds} "
-                                f"rounds ({protocol.name})", "round")
-                else:
-                    r = it.rounds[rnd - 1]
-                    want = r.stop_deg - r.start_deg
-                    if not (abs(float(tab) - want) <= it.position_tolerance_deg):
-                        why, col = (f"{test} round {rnd}: table_deg {float(tab):g} differs from "
-                                    f"the protocol's {want:g}° (tolerance "
-                                    f"{it.position_tolerance_deg:g}°)", "table_deg")
-                    elif it.max_time_to_reading_s is not None and \
-                            float(t) > it.max_time_to_reading_s + 1e-9:
-                        why, col = (f"{test} round {rnd}: read {float(t):g} s after zeroing, "
-                                    f"beyond the protocol's max_time_to_reading_s = "
-                                    f"{it.max_time_to_reading_s:g} s (Annex A.1)", "time_s")
-                if why is None:
-                    continue
-                if it.on_bad_reading == "error":
-                    raise GonioError(why, file=readings.path, line=line, column=col)
-                bad_here.append((line, rnd, why))
-            if not bad_here:
-                continue
-            for line, _, why in bad_here:
-                bad[line] = why
-            left = g[~g["line"].isin([b[0] for b in bad_here])]
-            for line, rnd, why in bad_here:
-                if 1 <= rnd <= n_rounds and not (left["round"] == rnd).any():
-                    raise GonioError(f"{why}; no reading of this round is left, the item "
-                                     "cannot stand without it", file=readings.path, line=line)
-    cols = ["line", "test", "series", "round", "rate_dps", "orientation"]
-    if not bad:
-        return readings, pd.DataFrame(columns=cols + ["reason"])
-    mask = df["line"].isin(list(bad))
-    ex = df.loc[mask, cols].copy()
-    ex["reason"] = [bad[int(l)] for l in ex["line"]]
-    kept = Readings(df[~mask].reset_index(drop=True), dict(readings.metadata), readings.path)
-    return kept, ex.sort_values("line").reset_index(drop=True)
+    findings = screen(readings, protocol)
+    kept, excluded = apply_findings(readings, findings, protocol)
+    return kept, excluded, findings
 
 
 _ITEM_TESTS = {"scale_factor": ("scale_factor",), "scale_factor_nonlinearity": ("scale_factor",),
@@ -649,9 +648,15 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         t_zs = rd.loc[rd["series"] == zs.details["series"], "time_s"].to_numpy(dtype=float)
         comp = protocol.session.static_s if protocol.session.earth_compensation == "measured" \
             else None
+        zlines = rd.loc[rd["series"] == zs.details["series"], "line"]
+        zrows = readings.data[readings.data["line"].isin(list(zlines))]
+        res_deg = iu.reading_resolution_deg(
+            zrows["gyro_deg"].to_numpy(dtype=float),
+            None if zrows["gyro_deg"].notna().all() else results.scale_factor_for_angles_counts_per_deg
+            or metadata_float(readings.metadata, "nominal_scale_factor_counts_per_deg"))
         out["zero_stability"] = iu.zero_stability_budget(
             float(zs.value), int(zs.details["n_readings"]), time_s=t_zs,
-            compensation_time_s=comp, k=k_fixed)
+            compensation_time_s=comp, k=k_fixed, resolution_deg=res_deg)
     e = results.angle_deviation
     if e.measured:
         out["angle_deviation"] = iu.angle_deviation_budget(
@@ -823,7 +828,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
         sha = sha256_file(readings)
     settings, more = session_settings(rd, proto)
     conflicts += more
-    kept, excluded = screen_readings(rd, proto)
+    kept, excluded, findings = screen_readings(rd, proto)
     res = compute_characteristics(kept, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=proto.pointing_reference)
     _note_exclusions(res, excluded)
@@ -838,7 +843,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     return CalibrationReport(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                              item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                              budget_notes=notes, excluded=excluded,
-                             zero_stability_readings=zs_readings)
+                             zero_stability_readings=zs_readings, findings=findings)
 
 
 def zero_stability_readings(results: CalibrationResults, items: dict, noise,
@@ -967,25 +972,10 @@ def write_calibration(report: CalibrationReport, out: str | Path,
     to ``summary.txt``, as the certificate and the CLI show them.
     """
     out = Path(out)
-    names = {}
+    result = report.decided_result(lab)
     with output_dir(out) as stage:
-        d = report.to_dict()
-        write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
-                                                      allow_nan=False) + "\n")
+        write_text(stage / "results.json", results_json_text(result))
         write_text(stage / "summary.txt", report.summary(lab))
-        tables = stage / "tables"
-        for item in report.results.items():
-            for tname, df in (getattr(item, "tables", None) or {}).items():
-                if df is not None and len(df):
-                    write_text(tables / f"{item.name}_{tname}.csv",
-                               df.to_csv(index=False, lineterminator="\n"))
-            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
-                write_text(tables / f"{item.name}_table.csv",
-                           item.table.to_csv(index=False, lineterminator="\n"))
-        if len(report.results.unused_readings) > LISTED_ROWS:
-            write_text(tables / "unused_readings.csv",
-                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
-        write_text(tables / "uncertainty_budget.csv",
-                   report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
+        write_tables(result, stage)
         names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
     return names

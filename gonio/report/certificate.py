@@ -48,7 +48,7 @@ from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
                                  stated_item, u_cell)
-from gonio.formats.toml import Field, non_negative, read_toml, validate_table
+from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
 
@@ -92,7 +92,7 @@ LAB_SCHEMA: dict[str, Field] = {
         "guard_band_factor": Field("float", default=1.0, check=non_negative, expect="≥ 0"),
         "agreed": _S}),
     "specification_limits": Field("table_list", default=None, schema={
-        "item": Field("str", choices=ITEMS),
+        "item": Field("str"),       # checked against the specification's items when decided
         "lower": Field("float", default=None), "upper": Field("float", default=None),
         "mpe": Field("float", default=None, check=lambda x: x > 0, expect="> 0"),
         "source": _S}),
@@ -127,6 +127,7 @@ def load_lab(path: str | Path) -> dict:
     gonio.errors.GonioError: ...lab.toml: key laboratory.fax: unknown key (known: name, address, accreditation, contact)
     """
     raw = _dates_to_text(read_toml(path))
+    check_text_fields(raw, path)          # no control characters, no megabyte of name
     lab = validate_table(raw, LAB_SCHEMA, "", path)
     for key in ("instrument", "environment"):
         if lab[key] is None:
@@ -185,6 +186,8 @@ def _meta(md: dict, key: str, L) -> str:
 
 #: Longest table printed on the certificate; the rest is in tables/*.csv and results.json.
 MAX_TABLE_ROWS: int = 200
+#: Findings listed one per line on the certificate (the rest in results.json).
+MAX_FINDING_LINES: int = 20
 
 
 def _summarised(kind: str, data):
@@ -197,6 +200,22 @@ def _summarised(kind: str, data):
         return data
     note = [f"… {len(rows) - MAX_TABLE_ROWS} more rows in tables/*.csv"] + [""] * (len(head) - 1)
     return head, rows[:MAX_TABLE_ROWS] + [note]
+
+
+def screening_notes(res: dict, L: dict, add) -> None:
+    """A notice when the screening set data aside or found the programme incomplete
+    (results.json ``findings``; issue 24): the count, then one line per finding."""
+    found = [f for f in res.get("findings") or () if f["action"] != "refused"]
+    if not found:
+        return
+    aside = sum(f["action"] == "set_aside" for f in found)
+    flagged = len(found) - aside
+    add("notice", L["screening_note"].format(n=aside, m=flagged))
+    for f in found[:MAX_FINDING_LINES]:
+        where = f"line {f['line']}: " if f.get("line") is not None else ""
+        add("p", [f"{where}{f['message']}"])
+    if len(found) > MAX_FINDING_LINES:
+        add("p", [f"… {len(found) - MAX_FINDING_LINES} more in results.json (findings)"])
 
 
 def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
@@ -330,6 +349,12 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     else:
         add("p", [L["no_E_U"]], "U")
     del st_e
+    screening_notes(res, L, add)
+    if res["scale_factor"].get("measurand"):
+        sf = res["scale_factor"]
+        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
+        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
+                                           ppm=f"{ppm:.2g}")])
 
     # decision rule and conformity: only when the laboratory file gives limits
     conf = conformity_for(res, lab)
@@ -1024,9 +1049,12 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
-            from gonio.report.dcc import dcc_bytes
+            from gonio.report.dcc import bilingual, dcc_bytes, label_translator
+            from gonio.report.i18n import READING_NOTES_ZH
 
-            write_bytes(stage / "certificate.dcc.xml",
-                        dcc_bytes(report, lab=lab_d, cert_id=content["id"]))
+            doc = dcc_bytes(report, lab=lab_d, cert_id=content["id"])
+            if lang == "zh":                   # Chinese beside English (issue 25)
+                doc = bilingual(doc, label_translator(dict(READING_NOTES_ZH)))
+            write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
     return {n: out / n for n in names}

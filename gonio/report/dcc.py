@@ -198,6 +198,48 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
                 quantity(data, nm, display("sig3", v), "one")
 
 
+def bilingual(doc: bytes, translate) -> bytes:
+    """The DCC ``doc`` with Chinese beside English: every dcc:content that ``translate(text)``
+    gives a Chinese form for is marked ``lang="en"`` and followed by a ``lang="zh"`` sibling;
+    the core data then list both used languages (English stays mandatory)."""
+    root = etree.fromstring(doc)
+    for c in list(root.iter(f"{{{DCC_NS}}}content")):
+        if c.get("lang") or not c.text:
+            continue
+        zh = translate(c.text)
+        if zh and zh != c.text:
+            c.set("lang", "en")
+            z = etree.Element(f"{{{DCC_NS}}}content", lang="zh")
+            z.text = zh
+            c.addnext(z)
+    core = root.find(f".//{{{DCC_NS}}}coreData")
+    used = core.find(f"{{{DCC_NS}}}usedLangCodeISO639_1")
+    if used is not None and core.find(f"{{{DCC_NS}}}usedLangCodeISO639_1[.='zh']") is None:
+        z = etree.Element(f"{{{DCC_NS}}}usedLangCodeISO639_1")
+        z.text = "zh"
+        used.addnext(z)
+    return tree_bytes(root)
+
+
+def label_translator(extra: dict | None = None, tables=()):
+    """``translate(text)`` for :func:`bilingual`: the certificate labels' English → Chinese,
+    ``extra`` (English → Chinese; a key may be the opening words of a longer text, e.g. a
+    note's "7.2.1:"), then the phrase ``tables`` (:func:`gonio.report.i18n.phrase_zh`)."""
+    from gonio.report.i18n import LABELS, phrase_zh
+
+    table = {v["en"]: v["zh"] for v in LABELS.values()}
+    table.update(extra or {})
+
+    def translate(text: str) -> str | None:
+        if text in table:
+            return table[text]
+        for k, v in (extra or {}).items():       # a note known by its opening words
+            if len(k) < len(text) and text.startswith(k):
+                return v
+        return phrase_zh(text, tables)
+    return translate
+
+
 def _decimal_or_nan(v) -> str:
     """A shown number (Num or plain decimal text) as an si:decimal; "—" or None as NaN."""
     try:

@@ -86,6 +86,19 @@ LABELS: dict[str, dict[str, str]] = {
     "uncertainty": {"en": "Measurement uncertainty", "zh": "测量不确定度"},
     "U_line": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}",
                "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}"},
+    "K_as_mounted": {"en": "The scale factor K is stated as mounted: sensing plane within {psi}° "
+                           "of the table plane (Annex A.1). The instrument's own K (sensing axis "
+                           "along the rotation axis) is larger by up to {ppm} ppm (1/cos ψ − 1); "
+                           "this is not included in U.",
+                     "zh": "标度因数 K 为安装状态下的值：敏感平面与转台台面的夹角不超过 {psi}°"
+                           "（附录A.1）。仪器自身的 K（敏感轴沿转轴）最多大 {ppm} ppm"
+                           "（1/cos ψ − 1），未计入 U。"},
+    "screening_note": {"en": "Screening of the readings: {n} reading(s) set aside (not used; "
+                             "listed in results.json with line and reason) and {m} finding(s) "
+                             "on the completeness of the programme; the results above rest "
+                             "on the remaining data.",
+                       "zh": "读数筛查：{n} 个读数被剔除（未使用，行号与原因见 results.json），"
+                             "{m} 项关于校准程序完整性的提示；以上结果基于其余数据。"},
     "u_c_line": {"en": "combined standard uncertainty u_c = {u}″ (Annex A.6)",
                  "zh": "合成标准不确定度 u_c = {u}″（附录A.6）"},
     "budget": {"en": "Uncertainty budget (Annex A)", "zh": "不确定度分量（附录A）"},
@@ -99,6 +112,8 @@ LABELS: dict[str, dict[str, str]] = {
     "u_i_item": {"en": "u_i (input's unit)", "zh": "u_i（输入量单位）"},
     "readings_taken": {"en": "Readings taken of the draft's ambiguities",
                        "zh": "对规范草案中不明确之处的理解"},
+    "readings_taken_std": {"en": "Readings taken of the specification's text",
+                           "zh": "对规范条文的理解"},
     "details": {"en": "Details of the measurements", "zh": "测量详细数据"},
     "figures": {"en": "Figures", "zh": "图"},
     "eda": {"en": "Rotary-table calibration by equal-division averaging (IEC 62047-20 Annex A.3)",

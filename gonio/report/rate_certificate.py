@@ -17,6 +17,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.certificate import (Block, Num, certificate_id, font_families, load_lab,
                                       render_html, render_pdf)
+from gonio.report.dcc import bilingual
 from gonio.report.figures import figure_svg
 from gonio.report.i18n import display, labels, reason_text, source_text
 from gonio.report.stated import conformity_blocks, item_nums
@@ -150,6 +151,16 @@ def factors_cell(n: dict, L: dict) -> list:
     return seg or ["—"]
 
 
+def readings_note(note: str, table: dict, lang: str) -> str:
+    """A "reading taken" note in ``lang``: the specification's Chinese by the note's clause
+    prefix (``READINGS_ZH`` of its certificate data), else the note as written."""
+    if lang == "zh":
+        for prefix, zh in table.items():
+            if note.startswith(prefix):
+                return zh
+    return note
+
+
 def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
                    notes: list | tuple | None = None, recal: str | None = None) -> list[Block]:
     """The readings taken (``notes``, default results.json's), the signatures and the
@@ -229,7 +240,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
         "widths": (0.07, 0.27, 0.09, 0.15, 0.10, 0.07, 0.08, 0.17), "id": "results"})
-    u_clause = getattr(data, "U_CLAUSE", ("JJF 1535 clause 8 k)",) * 2)   # the spec's own rule
+    u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     blocks += screening_blocks(res, lang)
     blocks += conformity_blocks(
@@ -241,7 +252,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
                   budget_rows(res, L, phrases=getattr(data, "PHRASES_ZH", ()))),
         (0.09, 0.10, 0.51, 0.15, 0.15))
     recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
-    blocks += closing_blocks(res, L, lab, recal=recal and recal[1 if lang == "zh" else 0])
+    notes = [readings_note(n, getattr(data, "READINGS_ZH", {}), lang)
+             for n in res.get("readings_taken", [])]
+    blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes,
+                             recal=recal and recal[1 if lang == "zh" else 0])
     blocks += figure_blocks(FIGURES, L, lang)
     return {"id": certificate_id(result, lab), "virtual": lab is None,
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
@@ -266,10 +280,41 @@ def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc_fn is not None:
-            write_bytes(stage / "certificate.dcc.xml",
-                        dcc_fn(result, lab=lab_d, cert_id=content["id"]))
+            doc = dcc_fn(result, lab=lab_d, cert_id=content["id"])
+            if lang == "zh":                   # Chinese beside English (issue 25)
+                doc = bilingual(doc, dcc_translator(result, content_fn))
+            write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc_fn else [])
     return {n: out / n for n in names}
+
+
+def dcc_translator(result, content_fn):
+    """The English → Chinese of a per-item DCC: labels, the specification's title, group and
+    item names, readings taken and budget phrases from its certificate data."""
+    from gonio.report.dcc import label_translator
+
+    res = result.to_json()
+    key = res.get("spec") or getattr(result, "spec_key", None)
+    spec = get(key)
+    try:
+        data = spec_content(key)
+    except (ImportError, AttributeError):
+        data = None
+    extra = {spec.title_en: spec.title_zh}
+    titles = getattr(data, "TITLES_ZH", {})
+    for k, it in res.get("items", {}).items():
+        if k in titles:
+            extra[it["title"]] = titles[k]
+    for _, en, zh, _ in getattr(data, "GROUPS", ()):
+        extra[en] = zh
+    heading = getattr(data, "HEADING", None)
+    if heading:
+        extra[heading[0]] = heading[1]
+    extra.update(getattr(data, "READINGS_ZH", {}))
+    norm = getattr(data, "NORM", None)
+    if norm:
+        extra[norm[0]] = norm[1]
+    return label_translator(extra, getattr(data, "PHRASES_ZH", ()))
 
 
 def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",

@@ -21,6 +21,55 @@ import math
 import numpy as np
 
 from gonio.report.i18n import display
+from gonio.result.statement import item_statement
+
+
+#: Figure text, (English, Chinese).
+FIG_TEXT: dict[str, tuple[str, str]] = {
+    "no_sf": ("scale factor not measured", "未测标度因数"),
+    "no_asym": ("asymmetry not measured", "未测不对称度"),
+    "no_temp": ("temperature items not measured", "未测温度项目"),
+    "no_arw": ("angle random walk not measured", "未测角度随机游走"),
+    "no_bw": ("bandwidth not measured", "未测带宽"),
+    "F̄_j − F_r": ("F̄_j − F_r", "F̄_j − F_r"),
+    "output y_j": ("output y_j", "输出 y_j"),
+    "fit_line": ("fitted line, K = {K}", "拟合直线，K = {K}"),
+    "output": ("output ({u})", "输出（{u}）"),
+    "rate": ("input rate Ω (°/s)", "输入角速率 Ω (°/s)"),
+    "residual": ("residual v_j", "残差 v_j"),
+    "cw": ("forward (CW)", "正转"), "ccw": ("reverse (CCW)", "反转"),
+    "asym": ("asymmetry K_a = {v}", "不对称度 K_a = {v}"),
+    "sym": ("symmetry = {v} {u}", "对称性 = {v} {u}"),
+    "bias_dph": ("bias (°/h)", "零偏 (°/h)"),
+    "temp": ("temperature (°C)", "温度 (°C)"),
+    "adev": ("overlapping Allan deviation", "重叠 Allan 偏差"),
+    "adev_fit": ("five-term fit: N → {a} °/√h, B {b} °/h", "五项拟合：N → {a} °/√h，B {b} °/h"),
+    "eq24": ("eq (24) as printed (not the Allan variance)", "按原文式(24)（非 Allan 方差）"),
+    "gain": ("gain (dB)", "增益 (dB)"),
+    "m3db": ("−3 dB at {f} Hz", "−3 dB 点 {f} Hz"),
+    "p90": ("; 90° lag at {f} Hz", "；相位滞后 90° 点 {f} Hz"),
+    "phase": ("phase (°)", "相位 (°)"),
+    "freq": ("frequency (Hz)", "频率 (Hz)"),
+}
+
+
+def _t(L: dict, key: str, **kw) -> str:
+    """Figure text ``key`` in the certificate's language (``L["_lang"]``)."""
+    return FIG_TEXT[key][1 if L.get("_lang") == "zh" else 0].format(**kw)
+
+
+def _stated(it) -> str:
+    """An item's value as every output states it (the one statement rule)."""
+    return item_statement(it.to_json() if hasattr(it, "to_json") else it).value_text
+
+
+def _at_item(x: float, it) -> str:
+    """A number drawn beside item ``it`` (e.g. one calibration's K) at the decimal place the
+    item is stated to, so a legend never shows more digits than the certificate."""
+    st = item_statement(it.to_json() if hasattr(it, "to_json") else it)
+    if st.decimals is not None and not st.exponent:
+        return display(f"dec{st.decimals}", x)
+    return display("sig6", x)
 
 
 def _item(result, *keys):
@@ -63,49 +112,51 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
     it = _item(result, "scale_factor")
     line = _io_points(it)
     if line is None:
-        _empty(ax, "scale factor not measured")
+        _empty(ax, _t(L, "no_sf"))
         ax2.set_visible(False)
         return
     r, y, K, F0, residuals, label = line
     o = np.argsort(r)
-    ax.plot(r[o], y[o], "o", ms=3, label=label)
-    ax.plot(r[o], K * r[o] + F0, "-", lw=0.8, label=f"K = {K:.6g}")
-    ax.set_ylabel(f"output ({result.metadata.get('output_unit', '')})")
+    ax.plot(r[o], y[o], "o", ms=3, label=_t(L, label) if label in FIG_TEXT else label)
+    ax.plot(r[o], K * r[o] + F0, "-", lw=0.8, label=_t(L, "fit_line", K=_at_item(K, it)))
+    ax.set_ylabel(_t(L, "output", u=result.metadata.get("output_unit", "")))
     ax.legend(loc="upper left")
     ax.tick_params(labelbottom=False)
     for m, res in enumerate(residuals):
         ax2.plot(r[o], np.asarray(res, float)[o], "o-", ms=2, lw=0.6, label=f"m = {m + 1}")
     ax2.axhline(0, color="0.5", lw=0.6)
-    ax2.set_xlabel("input rate Ω (°/s)")
-    ax2.set_ylabel("residual v_j")
+    ax2.set_xlabel(_t(L, "rate"))
+    ax2.set_ylabel(_t(L, "residual"))
     ax2.legend(loc="best", ncol=3)
 
 
 def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
     """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line."""
     ax = fig.add_subplot(spec)
-    line = _io_points(_item(result, "scale_factor"))
+    line_it = _item(result, "scale_factor")
+    line = _io_points(line_it)
     a = _item(result, "asymmetry", "symmetry")
     if line is None or a is None:
-        _empty(ax, "asymmetry not measured")
+        _empty(ax, _t(L, "no_asym"))
         return
     r, y, K, F0, _, _ = line
     d = a.details
     jjf = "K_pos_m" in d
     off = 0.0 if jjf else F0      # IEC outputs carry the null output b_BASE: take it off
-    for sel, name, kk in ((r > 0, "forward (CW)", d["K_pos_m"][0] if jjf else d["a_CW"]),
-                          (r < 0, "reverse (CCW)", d["K_neg_m"][0] if jjf else d["a_CCW"])):
+    for sel, name, kk in ((r > 0, _t(L, "cw"), d["K_pos_m"][0] if jjf else d["a_CW"]),
+                          (r < 0, _t(L, "ccw"), d["K_neg_m"][0] if jjf else d["a_CCW"])):
         rr, yy = r[sel], y[sel]
         o = np.argsort(rr)
         p = np.polyfit(rr, yy, 1)
-        ax.plot(rr[o], yy[o] - K * rr[o] - off, "o", ms=3, label=f"{name}: K = {kk:.6g}")
+        ax.plot(rr[o], yy[o] - K * rr[o] - off, "o", ms=3,
+                label=f"{name}: K = {_at_item(kk, line_it)}")
         ax.plot(rr[o], np.polyval(p, rr[o]) - K * rr[o] - off, "-", lw=0.8)
     ax.axhline(0, color="0.5", lw=0.6)
-    ax.set_xlabel("input rate Ω (°/s)")
+    ax.set_xlabel(_t(L, "rate"))
     ax.set_ylabel("F̄_j − K̄·Ω_j" if jjf else "y_j − (K·Ω_j + b_BASE)")
     ax.legend(loc="best")
-    ax.set_title(f"asymmetry K_a = {a.value:.3g}" if jjf else
-                 f"symmetry (IEC 5.1.3.8) = {a.value:.3g} {a.unit}")
+    ax.set_title(_t(L, "asym", v=_stated(a)) if jjf else
+                 _t(L, "sym", v=_stated(a), u=a.unit))
 
 
 def draw_temperature(fig, spec, result, L, truth=None) -> None:
@@ -114,14 +165,14 @@ def draw_temperature(fig, spec, result, L, truth=None) -> None:
     b = _item(result, "bias_temperature_sensitivity", "bias_temperature_coefficient")
     k = _item(result, "sf_temperature_sensitivity", "sf_temperature_coefficient")
     if b is None and k is None:
-        _empty(ax, "temperature items not measured")
+        _empty(ax, _t(L, "no_temp"))
         return
     if b is not None:
         T = np.asarray(b.details["temperatures_c"], float)
         B = np.asarray(b.details["bias_dph"], float)
         o = np.argsort(T)
-        ax.plot(T[o], B[o], "o-", ms=4, color="C0", label="bias (°/h)")
-        ax.set_ylabel("bias (°/h)", color="C0")
+        ax.plot(T[o], B[o], "o-", ms=4, color="C0", label=_t(L, "bias_dph"))
+        ax.set_ylabel(_t(L, "bias_dph"), color="C0")
     if k is not None:
         ax2 = ax.twinx()
         T = np.asarray(k.details["temperatures_c"], float)
@@ -130,7 +181,7 @@ def draw_temperature(fig, spec, result, L, truth=None) -> None:
         ax2.plot(T[o], K[o], "s--", ms=4, color="C1", label="K")
         ax2.set_ylabel(f"K ({result.metadata.get('output_unit', '')}/(°/s))", color="C1")
         ax2.grid(False)
-    ax.set_xlabel("temperature (°C)")
+    ax.set_xlabel(_t(L, "temp"))
 
 
 def draw_allan(fig, spec, result, L, truth=None) -> None:
@@ -140,17 +191,18 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
     ax = fig.add_subplot(spec)
     it = _item(result, "angle_random_walk", "bias_instability")   # JJF 7.2.13, IEC 5.4.5.3
     if it is None or "allan" not in it.details:
-        _empty(ax, "angle random walk not measured")
+        _empty(ax, _t(L, "no_arw"))
         return
     a = it.details["allan"]
     tau = np.asarray(a["tau_s"], float)
     adev = np.asarray(a["adev_dph"], float)
     ax.fill_between(tau, np.asarray(a["ci_low"], float), np.asarray(a["ci_high"], float),
                     color="C0", alpha=0.2, lw=0)
-    ax.loglog(tau, adev, "o", ms=2.5, color="C0", label="overlapping ADEV")
+    ax.loglog(tau, adev, "o", ms=2.5, color="C0", label=_t(L, "adev"))
     f = it.details["fit"]
     ax.loglog(tau, model_adev(tau, f["Q"], f["N"], f["B"], f["K"], f["R"]), "-", color="C3",
-              lw=1, label=f"fit: ARW {f['arw_deg_sqrt_h']:.3g} °/√h, B {f['B']:.3g} °/h")
+              lw=1, label=_t(L, "adev_fit", a=display("sig3", f["arw_deg_sqrt_h"]),
+                             b=display("sig3", f["B"])))
     ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
     pr = it.details.get("printed_eq22_24_statistic") or {}
     if pr:
@@ -158,7 +210,7 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
         dt = tau[0] / np.asarray(a.get("m", [1]), float)[0] if "m" in a else tau[0]
         pv = np.array([pr[k]["printed_eq24_dph2"] for k in pr], float)
         ax.loglog(ks * dt, np.sqrt(pv), "x", color="C2", ms=4,
-                  label="JJF eq (24) as printed (not AVAR)")
+                  label=_t(L, "eq24"))
     ax.set_xlabel("τ (s)")
     ax.set_ylabel("σ(τ) (°/h)")
     ax.legend(loc="best")
@@ -171,7 +223,7 @@ def draw_frequency(fig, spec, result, L, truth=None) -> None:
     ax2 = fig.add_subplot(gs[1], sharex=ax)
     it = _item(result, "bandwidth", "frequency_band")
     if it is None:
-        _empty(ax, "bandwidth not measured")
+        _empty(ax, _t(L, "no_bw"))
         ax2.set_visible(False)
         return
     f = np.asarray(it.details["freq_hz"], float)
@@ -180,18 +232,18 @@ def draw_frequency(fig, spec, result, L, truth=None) -> None:
     f3 = it.details.get("minus3db_hz", it.value)     # the −3 dB point, not the band's value
     p90 = it.details.get("phase90_hz", it.details.get("phase90_hz_iec"))
     ax.axvline(f3, color="C3", lw=0.7)
-    ax.set_ylabel("gain (dB)")
-    title = f"−3 dB at {display('sig4', f3)} Hz"
+    ax.set_ylabel(_t(L, "gain"))
+    title = _t(L, "m3db", f=display("sig4", f3))
     if p90 is not None and math.isfinite(p90):
-        title += f"; 90° lag at {display('sig4', p90)} Hz"
+        title += _t(L, "p90", f=display("sig4", p90))
     ax.set_title(title)
     ax.tick_params(labelbottom=False)
     ax2.semilogx(f, np.asarray(it.details["phase_deg"], float), "s-", ms=3, color="C1")
     ax2.axhline(-90.0, color="C3", lw=0.7, ls="--")
     if p90 is not None and math.isfinite(p90):
         ax2.axvline(p90, color="C1", lw=0.7)
-    ax2.set_ylabel("phase (°)")
-    ax2.set_xlabel("frequency (Hz)")
+    ax2.set_ylabel(_t(L, "phase"))
+    ax2.set_xlabel(_t(L, "freq"))
 
 
 #: (key, caption en, caption zh, draw function) in the certificate's order.
@@ -203,6 +255,7 @@ FIGURES = (
      draw_temperature),
     ("allan", "Allan deviation of the static record with the five-term fit",
      "静态数据的Allan偏差及五项拟合", draw_allan),
-    ("frequency", "Amplitude and phase response; −3 dB point", "幅频与相频特性及−3 dB点",
+    ("frequency", "Amplitude and phase response; −3 dB and 90° lag points",
+     "幅频与相频特性及 −3 dB 点、相位滞后 90° 点",
      draw_frequency),
 )

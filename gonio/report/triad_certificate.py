@@ -21,7 +21,8 @@ from gonio.report.i18n import display, display_uncertainty, rule_at_U
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
                                            spec_content, write_spec_certificate)
 from gonio.report.stated import item_nums, num
-from gonio.report.triad_figures import alignment_panels, thermal_check_panels, thermal_model_panels
+from gonio.report.triad_figures import (alignment_panels, language, thermal_check_panels,
+                                        thermal_model_panels)
 from gonio.specs import get
 
 AXES = "xyz"
@@ -56,7 +57,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     if not items["M_xx"]["measured"]:
         out.append(Block("p", [f"{L['not_measured']}: {items['M_xx']['reason']}"]))
         return out
-    al = res["alignment"]
+    al = res["extra"]["alignment"]
     unit = al["output_unit"] or "output"
     out.append(Block("p", [T("alignment_note", unit=unit, n=al["n_dwells"],
                              robust=T("robust") if al["robust"] else "")]))
@@ -122,7 +123,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
 def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
     """The temperature-model page (module docstring); not measured → the reason."""
     out: list[Block] = [Block("h", T("h_thermal"))]
-    tm = res.get("thermal_model")
+    tm = res["extra"].get("thermal_model")
     if tm is None:
         it = res["items"].get("thermal_model", {})
         out.append(Block("p", [f"{L['not_measured']}: {it.get('reason', '')}"]))
@@ -195,9 +196,10 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
 
 
 def _draw_alignment(fig, spec, result, L, truth=None) -> None:
+    language(L.get("_lang", "en"))
     if result.alignment is None:
         ax = fig.add_subplot(spec)
-        ax.text(0.5, 0.5, "alignment not measured", ha="center", va="center",
+        ax.text(0.5, 0.5, L["not_measured"], ha="center", va="center",
                 transform=ax.transAxes)
         return
     alignment_panels(fig, spec, result.alignment, (truth or {}).get("system_matrix"))
@@ -212,9 +214,11 @@ def triad_figures(result) -> list[tuple]:
         comp = result.compensation.get(ch)
 
         def model(fig, spec, r, L, truth=None, m=m):
+            language(L.get("_lang", "en"))
             thermal_model_panels(fig, spec, m)
 
         def check(fig, spec, r, L, truth=None, m=m, comp=comp):
+            language(L.get("_lang", "en"))
             thermal_check_panels(fig, spec, m, comp)
         figs.append((f"thermal-model-{ch}", text["fig_model"][0].format(ch=ch),
                      text["fig_model"][1].format(ch=ch), model))
@@ -251,7 +255,7 @@ def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "e
     if dcc:
         from gonio.report.item_dcc import item_dcc_bytes
 
-        p = (result.to_json().get("alignment") or {}).get("coverage_probability")
+        p = (result.extra.get("alignment") or {}).get("coverage_probability")
 
         def dcc_fn(r, *, lab, cert_id):
             return item_dcc_bytes(r, lab=lab, cert_id=cert_id,

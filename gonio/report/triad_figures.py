@@ -19,6 +19,49 @@ from gonio.analysis.thermal_model import ChannelModel, Compensation
 from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult
 from gonio.units import dps_to_dph
 
+#: Figure text, (English, Chinese); the language is set per drawing by :func:`language`.
+FIG_TEXT: dict[str, tuple[str, str]] = {
+    "before_S": ("before: S_ij = M_ij/M_ii", "对准前：S_ij = M_ij/M_ii"),
+    "after_true": ("after M⁻¹: true leakage ± 2u", "M⁻¹ 对准后：真实残余耦合 ± 2u"),
+    "after_0": ("after M⁻¹: 0 ± 2u", "M⁻¹ 对准后：0 ± 2u"),
+    "cross": ("cross-axis sensitivity (‰)", "交叉轴灵敏度 (‰)"),
+    "cross_title": ("Cross-axis sensitivity before and after alignment", "对准前后的交叉轴灵敏度"),
+    "no_static": ("no static record", "无静态记录"),
+    "gyro": ("gyro {ch}", "陀螺 {ch}"),
+    "limit": ("limit ω sin ψ_T/10 = {v} °/h", "限值 ω sin ψ_T/10 = {v} °/h"),
+    "adev": ("Allan deviation (°/h)", "Allan 偏差 (°/h)"),
+    "avg_title": ("Averaging time from the Allan deviation", "由 Allan 偏差确定平均时间"),
+    "theta_ref": ("ϑ (°C from reference)", "ϑ（相对参考温度，°C）"),
+    "bias": ("bias (°/s)", "零偏 (°/s)"),
+    "ramp_obs": ("ramp blocks: observed bias", "斜坡段：实测零偏"),
+    "soak": ("static-soak model (rms error {v} °/s)", "静态保温模型（均方根误差 {v} °/s）"),
+    "ramp_title": ("ramps: lag τ fit {tau} s; hysteresis at equal chamber temperature "
+                   "(rising − falling) {h} °/s",
+                   "斜坡：滞后 τ 拟合 {tau} s；同一温箱温度下升降温滞回 {h} °/s"),
+    "no_ramp": ("no ramp blocks", "无斜坡段"),
+    "b_before": ("bias before (rms {v} °/s)", "补偿前零偏（均方根 {v} °/s）"),
+    "b_after": ("bias after (rms {v} °/s)", "补偿后零偏（均方根 {v} °/s）"),
+    "k_before": ("K error before (ppm)", "补偿前 K 误差 (ppm)"),
+    "k_after": ("K error after (ppm)", "补偿后 K 误差 (ppm)"),
+    "sf_err": ("scale-factor error (ppm)", "标度因数误差 (ppm)"),
+    "comp_title": ("before / after compensation", "补偿前后"),
+    "resid": ("residual bias (°/s)", "残余零偏 (°/s)"),
+    "b_title": ("gyro {ch}: b(ϑ, U), order {nt}/{nu}", "陀螺 {ch}：b(ϑ, U)，阶次 {nt}/{nu}"),
+    "k_title": ("K(ϑ, U), order {nt}/{nu}", "K(ϑ, U)，阶次 {nt}/{nu}"),
+    "arw_title": ("ARW(ϑ), order {nt}", "ARW(ϑ)，阶次 {nt}"),
+}
+_LANG = {"lang": "en"}
+
+
+def language(lang: str) -> None:
+    """The language of the figure text drawn next (the certificate sets it before drawing)."""
+    _LANG["lang"] = lang
+
+
+def _t(key: str, **kw) -> str:
+    return FIG_TEXT[key][1 if _LANG["lang"] == "zh" else 0].format(**kw)
+
+
 def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure:
     """Two panels: cross-axis sensitivity / leakage (‰) and the Allan deviation with the
     averaging-time choice (:func:`alignment_panels` on a new Figure)."""
@@ -37,36 +80,36 @@ def alignment_panels(fig, spec, result: AlignmentResult, true_system_matrix=None
     s = np.asarray(result.derived["cross_axis"]) * 1e3
     u = np.asarray(result.u_derived["cross_axis"]) * 1e3
     k = float(np.max(result.coverage_factor))
-    ax1.bar(x - 0.2, s, 0.4, yerr=k * u, label="before: S_ij = M_ij/M_ii", color="tab:blue")
+    ax1.bar(x - 0.2, s, 0.4, yerr=k * u, label=_t("before_S"), color="tab:blue")
     lu = np.array([result.leakage_u[int("xyz".index(n[0])), int("xyz".index(n[1]))]
                    for n in OFFDIAG]) * 1e3
     if true_system_matrix is not None:
         lk = result.leakage_against(true_system_matrix)
         lv = np.array([lk["xyz".index(n[0]), "xyz".index(n[1])] for n in OFFDIAG]) * 1e3
         ax1.bar(x + 0.2, lv, 0.4, yerr=k * lu, color="tab:orange",
-                label="after M⁻¹: true leakage ± 2u")
+                label=_t("after_true"))
     else:
         ax1.bar(x + 0.2, np.zeros(6), 0.4, yerr=k * lu, color="tab:orange",
-                label="after M⁻¹: 0 ± 2u")
+                label=_t("after_0"))
     ax1.set_xticks(x, [f"{n[0]}←{n[1]}" for n in OFFDIAG])
-    ax1.set_ylabel("cross-axis sensitivity (‰)")
-    ax1.set_title("Cross-axis sensitivity before and after alignment")
+    ax1.set_ylabel(_t("cross"))
+    ax1.set_title(_t("cross_title"))
     ax1.legend(fontsize=7)
     avg = result.averaging
     if avg is None:
-        ax2.text(0.5, 0.5, "no static record", ha="center", transform=ax2.transAxes)
+        ax2.text(0.5, 0.5, _t("no_static"), ha="center", transform=ax2.transAxes)
     else:
         for i, a in enumerate(avg.adev_dph):
-            ax2.loglog(avg.tau_s, a, marker=".", label=f"gyro {'xyz'[i]}")
+            ax2.loglog(avg.tau_s, a, marker=".", label=_t("gyro", ch="xyz"[i]))
         lim = dps_to_dph(avg.noise_limit_dps)
         ax2.axhline(lim, color="k", ls="--", lw=0.8,
-                    label=f"limit ω sin ψ_T/10 = {lim:.1f} °/h")
+                    label=_t("limit", v=f"{lim:.1f}"))
         need = [t for t in avg.tau_needed_s if np.isfinite(t)]
         if need:
             ax2.axvline(max(need), color="tab:red", ls=":", label=f"τ ≥ {max(need):g} s")
         ax2.set_xlabel("τ (s)")
-        ax2.set_ylabel("Allan deviation (°/h)")
-        ax2.set_title("Averaging time from the Allan deviation")
+        ax2.set_ylabel(_t("adev"))
+        ax2.set_title(_t("avg_title"))
         ax2.legend(fontsize=7)
 
 
@@ -97,9 +140,9 @@ def thermal_model_panels(fig, spec, model: ChannelModel) -> None:
         ub = model.bias.u_predict(grid, uv)
         ax.plot(grid, b, lw=0.8)
         ax.fill_between(grid, b - 2 * ub, b + 2 * ub, alpha=0.2)
-    ax.set_xlabel("ϑ (°C from reference)")
-    ax.set_ylabel("bias (°/s)")
-    ax.set_title(f"gyro {model.channel}: b(ϑ, U), order {model.bias.n_t}/{model.bias.n_u} "
+    ax.set_xlabel(_t("theta_ref"))
+    ax.set_ylabel(_t("bias"))
+    ax.set_title(_t("b_title", ch=model.channel, nt=model.bias.n_t, nu=model.bias.n_u) + " "
                  f"({model.bias.criterion})")
     ax.legend(fontsize=6)
     ax = axs[0, 1]
@@ -114,7 +157,7 @@ def thermal_model_panels(fig, spec, model: ChannelModel) -> None:
                         alpha=0.2)
     ax.set_xlabel("ϑ (°C)")
     ax.set_ylabel("K/k0 − 1 (ppm)")
-    ax.set_title(f"K(ϑ, U), order {model.scale.n_t}/{model.scale.n_u}")
+    ax.set_title(_t("k_title", nt=model.scale.n_t, nu=model.scale.n_u))
 
 
 def thermal_check_panels(fig, spec, model: ChannelModel,
@@ -128,32 +171,32 @@ def thermal_check_panels(fig, spec, model: ChannelModel,
     ax = axs[1, 0]
     if model.ramp is not None:
         r = model.ramp
-        ax.plot(r.theta_c, r.bias_dps, ".", ms=2, label="ramp blocks: observed bias")
+        ax.plot(r.theta_c, r.bias_dps, ".", ms=2, label=_t("ramp_obs"))
         ax.plot(r.theta_c, np.asarray(r.bias_dps) - np.asarray(r.residual_dps), lw=0.8,
-                label=f"static-soak model (rms error {r.rms_static_model_dps:.2g} °/s)")
-        ax.set_title(f"ramps: lag τ fit {r.tau_s:.0f} s, hysteresis {r.hysteresis_dps:.2g} °/s")
+                label=_t("soak", v=f"{r.rms_static_model_dps:.2g}"))
+        ax.set_title(_t("ramp_title", tau=f"{r.tau_s:.0f}", h=f"{r.hysteresis_dps:.2g}"))
         ax.set_xlabel("ϑ (°C)")
-        ax.set_ylabel("bias (°/s)")
+        ax.set_ylabel(_t("bias"))
         ax.legend(fontsize=6)
     elif model.arw is not None:
-        ax.set_title("no ramp blocks")
+        ax.set_title(_t("no_ramp"))
     ax = axs[1, 1]
     if compensation is not None:
         c = compensation.points
         ax.plot(c["theta_c"], c["bias_before_dps"], "o", ms=3,
-                label=f"bias before (rms {compensation.rms_bias_before_dps:.2g} °/s)")
+                label=_t("b_before", v=f"{compensation.rms_bias_before_dps:.2g}"))
         ax.plot(c["theta_c"], c["bias_after_dps"], "s", ms=3,
-                label=f"bias after (rms {compensation.rms_bias_after_dps:.2g} °/s)")
+                label=_t("b_after", v=f"{compensation.rms_bias_after_dps:.2g}"))
         ax2 = ax.twinx()
         ax2.plot(c["theta_c"], c["scale_before_rel"] * 1e6, "^", ms=3, color="tab:green",
-                 label="K error before (ppm)")
+                 label=_t("k_before"))
         ax2.plot(c["theta_c"], c["scale_after_rel"] * 1e6, "v", ms=3, color="tab:red",
-                 label="K error after (ppm)")
-        ax2.set_ylabel("scale-factor error (ppm)")
+                 label=_t("k_after"))
+        ax2.set_ylabel(_t("sf_err"))
         ax2.legend(fontsize=6, loc="lower right")
-        ax.set_title("before / after compensation")
+        ax.set_title(_t("comp_title"))
         ax.set_xlabel("ϑ (°C)")
-        ax.set_ylabel("residual bias (°/s)")
+        ax.set_ylabel(_t("resid"))
         ax.legend(fontsize=6, loc="upper left")
     elif model.arw is not None:
         ap = pts.dropna(subset=["arw_deg_sqrt_h"])
@@ -164,4 +207,4 @@ def thermal_check_panels(fig, spec, model: ChannelModel,
         ax.fill_between(grid, a - 2 * ua, a + 2 * ua, alpha=0.2)
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel("ARW (°/√h)")
-        ax.set_title(f"ARW(ϑ), order {model.arw.n_t}")
+        ax.set_title(_t("arw_title", nt=model.arw.n_t))

@@ -2,6 +2,9 @@
 (scale factor 5.1, cross-axis 5.2, bias 5.3, noise 5.4, frequency band 5.5, resolution
 5.6)."""
 
+from gonio.specs._rate_family.certificate_zh import COMMON_PHRASES_ZH
+
+
 GROUPS = (
     (1, "Scale factor (5.1)", "标度因数 (5.1)", ("scale_factor", "initial_sf_variation",
                                                "sf_temperature_coefficient", "ratiometric_error",
@@ -39,3 +42,78 @@ RECAL = ("Recalibration interval: decided by the user (IEC 62047-20 is a test me
 #: has none; the certificate follows JJF 1535 clause 8 k) and says so.
 U_CLAUSE = ("IEC 62047-20 sets no rule for it; stated as JJF 1535 clause 8 k) asks",
             "IEC 62047-20 未作规定，按 JJF 1535 第8章 k) 给出")
+
+#: The readings taken (results.json's English notes) in Chinese, by the note's clause prefix.
+READINGS_ZH = {
+    "5.1.3.1:": "5.1.3.1：静止点作为拟合点（2n + 1 个点），与 JJF 1535 不同。",
+    "5.1.3.4:": "5.1.3.4：温度系数报告为 100·T_c,SF/a_BASE，单位 %/°C；斜率一并给出。",
+    "5.1.3.5:": "5.1.3.5：R = [a_V − a_BASE·V/V_BASE]/a_BASE（比值 V/V_BASE，理想比例式陀螺为零）。",
+    "5.1.3.6:": "5.1.3.6：FullScale = 实测 y(CW 最大) − y(CCW 最大)；线性度 = max |L_i|。",
+    "5.1.3.8:": "5.1.3.8：由不含静止点的正反转分别拟合，带符号 (a_CW − a_CCW)/a_TYP。",
+    "5.2:": "5.2：ω = (Out − Out,rest)/SF（原文的 × SF 量纲有误）；整周转动；±ω 半差作为不受零偏影响的改进。",
+    "5.3.3.1:": "5.3.3.1：原文地球自转分量的 sin 与 cos 互换（勘误）；按物理关系：轴向上 Ω_E sin λ，"
+                "水平 Ω_E cos λ cos φ。",
+    "5.3.3.4:": "5.3.3.4：零偏重复性取各段记录的半极差 (max − min)/2。",
+    "5.3.3.6:": "5.3.3.6：对 基准 → 最高 → 基准 → 最低 → 基准 的每次到达作最小二乘斜率。",
+    "5.4.5.2:": "5.4.5.2：在局部斜率为 −½ ± 0.1 处拟合斜率 −½ 的直线，在 1 h 处读数。",
+    "5.4.5.3:": "5.4.5.3：在不少于 10 个分组的 τ 上取底值，除以 √(2 ln 2/π)。",
+    "5.5:": "5.5：频带取 −3 dB 频率与相位滞后 90° 频率中较低者，两者均给出。",
+    "5.1.4.1 e)": "5.1.4.1 e) 式(18)：记录了设定电压时，比例式陀螺的输出按各次运行自身的设定电压折算，"
+                  "y = y_RAW·V_set/V_actual。",
+    "5.3.3.3:": "5.3.3.3：各供电运行的零偏取其静止输出（含零点）；R 以 % 表示，输出单位下的偏离（表4 的 V）见详细数据。",
+    "5.3.3.7:": "5.3.3.7：自下方到达为“升”，自上方到达为“降”；滞回 = max |B_up − B_down|。",
+    "5.3.3.8:": "5.3.3.8：a = g cos γ，输入轴向上时 γ = 0（式(28)的 sin γ 自水平起算）；各角度扣除地球自转"
+                "角速度；等步长转一整周。",
+    "5.4.5.1 c)": "5.4.5.1 c)：宽带噪声 = 单边谱密度在 band_hz … broadband_high_hz 上的均方根；20 dB/dec 的 "
+                  "c/f 值 c (°/s^1.5) 见详细数据。",
+    "5.6:": "5.6：滤波为一个台阶内采样的平均；Noise,RMS = 静态记录 T 秒平均值的标准偏差；分辨率 = "
+            "max(Out,resolution, Noise,RMS)。",
+    "Uncertainties are computed": "不确定度由本次校准数据评定（GUM，k = t95(ν_eff)）。",
+}
+
+#: Budget sources and reasons in Chinese (see gonio.report.i18n.phrase_zh).
+PHRASES_ZH = COMMON_PHRASES_ZH + (
+    (r"acquisition gain on the whole output \(null included\)", "整个输出（含零点）上的采集增益"),
+    (r"acquisition, relative", "数据采集（相对）"),
+    (r"rate table, relative", "速率转台（相对）"),
+    (r"alignment of the input axis to the plane perpendicular to the rotation axis \(table axis "
+     r"and fixture\): sin\(half-width\)", "输入轴与转轴垂直面的对准（转台轴与夹具）：sin(半宽)"),
+    (r"bias of 5\.3\.3\.1", "5.3.3.1 的零偏"),
+    (r"chamber deviation \(independent per point\)", "温箱温度偏差（各点独立）"),
+    (r"chamber temperature deviation \(Table 2\)", "温箱温度偏差（表2）"),
+    (r"cross-axis coupling of the Earth rate \(bound\)", "地球自转角速度的交叉轴耦合（界限）"),
+    (r"falling visit at (\S+) °C", "{1} °C 处的降温到达"),
+    (r"rising visit at (\S+) °C", "{1} °C 处的升温到达"),
+    (r"five-term AVAR fit, u\(N\)", "五项 Allan 方差拟合，u(N)"),
+    (r"least-squares slope(?: \(parallel\)| \(residual scatter\))?", "最小二乘斜率"),
+    (r"noise of the point means / FullScale", "各点平均值的噪声 / FullScale"),
+    (r"noise of the rotating means", "转动平均值的噪声"),
+    (r"noise of the smoothed output", "平滑后输出的噪声"),
+    (r"other noise terms at the floor τ \(five-term fit\): .*", "底值 τ 处的其他噪声项（五项拟合）"),
+    (r"phase/gain noise of the bracketing points", "相邻点的相位/增益噪声"),
+    (r"rest output at (\S+) V", "{1} V 时的静止输出"),
+    (r"slope from the K_i standard errors", "由 K_i 标准误差得到的斜率"),
+    (r"slope standard errors of the two fits", "两次拟合斜率的标准误差"),
+    (r"spread of the records", "各段记录的分散性"),
+    (r"spread over the power-ups", "各次上电之间的分散性"),
+    (r"step between the candidate and the next tested value", "候选值与下一试验值之间的步长"),
+    (r"smoothing step", "平滑步长"),
+    (r"Welch estimate", "Welch 谱估计"),
+    (r"Welch estimate over the broadband lines", "宽带谱线上的 Welch 谱估计"),
+    (r"χ² interval at the floor", "底值处的 χ² 区间"),
+    (r"χ² intervals of the fit points", "拟合点的 χ² 区间"),
+    (r"95 % bound of the largest noise difference over the temperatures visited twice",
+     "两次到达的各温度上最大噪声差的 95 % 界限"),
+    (r"95 % bound of the largest noise excursion over the record .*",
+     "记录中最大噪声偏移的 95 % 界限"),
+    (r"bias drift between the two positions \(Allan fit: RRW, BI\)",
+     "两个位置之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift between the two records \(Allan fit: RRW, BI\)",
+     "两段记录之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift between the two rest points \(Allan fit: RRW, BI\)",
+     "两个静止点之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift between the visits \(Allan fit: RRW, BI\)",
+     "各次到达之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift over the turn projected on the regressor, u_drift\(duration\)·√\(2/n\)",
+     "转动期间零偏漂移在回归量上的投影，u_drift(时长)·√(2/n)"),
+)

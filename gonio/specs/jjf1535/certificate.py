@@ -6,6 +6,9 @@ has no uncertainty line; clause 8 k) requires one, so the certificate shows U (k
 each result that has a budget. The rendering is :mod:`gonio.report.rate_certificate`.
 """
 
+from gonio.specs._rate_family.certificate_zh import COMMON_PHRASES_ZH
+
+
 #: (group number, English heading, Chinese heading, item keys in order)
 GROUPS = (
     (1, "Scale factor", "标度因数", ("scale_factor", "nonlinearity", "asymmetry",
@@ -37,3 +40,73 @@ HEADING = ("MEMS gyroscope calibration results", "微机电(MEMS)陀螺仪校准
 RECAL = ("Recalibration interval: one year recommended; the owner may decide from the "
          "instrument's use (JJF 1535-2015 clause 9).",
          "复校时间间隔建议为1年；使用者可根据实际使用情况自主决定（JJF 1535-2015 第9章）。")
+
+#: The readings taken (results.json's English notes) in Chinese, by the note's clause prefix.
+READINGS_ZH = {
+    "7.2.1:": "7.2.1：K 取 Q 次最小二乘 K_m 的平均值；每次校准前后静止输出的平均值被扣除；静止点不作拟合点。",
+    "7.2.2:": "7.2.2：式(6)的分母取拟合量程 K(Ω_max+ − Ω_max−)，Ω_max− 带符号。",
+    "7.2.3:": "7.2.3：K̄_m = (K+ + K−)/2，报告其绝对值。",
+    "7.2.6/7.2.7:": "7.2.6/7.2.7：式(13)/(14)的关系按双侧理解，|…|/|F*| ≤ 50 %。",
+    "7.2.8/7.2.12:": "7.2.8/7.2.12：扣除地球自转角速度在输入轴上的投影（规范未扣除；在北纬 40° 处，"
+                     "真值 5 (°/h)/g 会读成 14.7 (°/h)/g）。",
+    "7.2.9:": "7.2.9：准备时间取此后每个窗口均满足标称稳定性的最早时刻。",
+    "7.2.13:": "7.2.13：式(22)–(24)按原文相邻一个采样求差，随 2/k² 下降；角度随机游走取自重叠 "
+               "Allan 方差（IEEE 952），原文统计量并列给出并注明。",
+    "7.2.14:": "7.2.14：各 B_i 使用同一温度下校准的标度因数。",
+    "7.2.15:": "7.2.15：0 dB 取最低试验频率；−3 dB 即幅值比 10^(−3/20)；按对数频率插值。",
+    "Uncertainties are computed": "不确定度由本次校准数据评定（GUM，k = t95(ν_eff)）；附录 A 另行复现"
+                                  "（见 gonio 的附录 A 预算命令）。",
+}
+
+#: Budget sources and reasons (the analyses' English phrases) in Chinese: (regular expression,
+#: Chinese template with the groups as {1}, {2}…); see gonio.report.i18n.phrase_zh.
+PHRASES_ZH = COMMON_PHRASES_ZH + (
+    (r"mean of K_m", "K_m 的平均值"),
+    (r"rate table, relative(?: \(u1\))?", "速率转台（相对）"),
+    (r"data acquisition, relative(?: \(u2\))?", "数据采集（相对）"),
+    (r"acquisition, relative", "数据采集（相对）"),
+    (r"repeatability of the mean of Q calibrations, s\(K_m\)/√Q", "Q 次校准平均值的重复性 s(K_m)/√Q"),
+    (r"mean of K_n,m", "K_n,m 的平均值"),
+    (r"noise of the rate-point means", "各速率点平均值的噪声"),
+    (r"spread of K_n,m", "K_n,m 的分散性"),
+    (r"spread of K_a,m", "K_a,m 的分散性"),
+    (r"standard errors of K\+ and K−", "K+ 与 K− 的标准误差"),
+    (r"χ² 95 % upper limit of a standard deviation of Q = (\d+) values",
+     "Q = {1} 个值标准偏差的 χ² 95 % 上限"),
+    (r"K at (\S+) °C \(fit standard error\)", "{1} °C 时的 K（拟合标准误差）"),
+    (r"K at room temperature (\S+) °C", "室温 {1} °C 时的 K"),
+    (r"chamber temperature deviation \(Table 2\)", "温箱温度偏差（表2）"),
+    (r"chamber deviation \(independent per point\)", "温箱温度偏差（各点独立）"),
+    (r"step between the candidate and the next tested value", "候选值与下一试验值之间的步长"),
+    (r"95 % range of the 50 % rule's outcome under the data's noise", "数据噪声下 50 % 判据结果的 95 % 范围"),
+    (r"bias at (\S+) °C", "{1} °C 时的零偏"),
+    (r"mean of the Q records \(type A\)", "Q 段记录的平均值（A类）"),
+    (r"scale factor, relative", "标度因数（相对）"),
+    (r"input-axis alignment × horizontal Earth rate", "输入轴对准 × 地球自转角速度水平分量"),
+    (r"window start step P·t0", "窗口起点步长 P·t0"),
+    (r"noise of the smoothed output", "平滑后输出的噪声"),
+    (r"spread of B_s,m over the records", "各段记录 B_s,m 的分散性"),
+    (r"bias drift between the two positions \(Allan fit: RRW, BI\)",
+     "两个位置之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift between the two records \(Allan fit: RRW, BI\)",
+     "两段记录之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift between the two rest points \(Allan fit: RRW, BI\)",
+     "两个静止点之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift between the visits \(Allan fit: RRW, BI\)",
+     "各次到达之间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"bias drift over the turn projected on the regressor, u_drift\(duration\)·√\(2/n\)",
+     "转动期间零偏漂移在回归量上的投影，u_drift(时长)·√(2/n)"),
+    (r"spread of the records", "各段记录的分散性"),
+    (r"\+axis up mean", "输入轴向上的平均值"), (r"−axis up mean", "输入轴向下的平均值"),
+    (r"five-term AVAR fit, u\(N\)", "五项 Allan 方差拟合，u(N)"),
+    (r"sampling of a standard deviation", "标准偏差的抽样"),
+    (r"least-squares slope", "最小二乘斜率"),
+    (r"noise of the bracketing gains", "相邻增益点的噪声"),
+    (r"interpolation \(linear vs quadratic in log f\)", "插值（对数频率下线性与二次之差）"),
+    (r"interpolation between grid points", "网格点间插值"),
+    (r"smoothing step", "平滑步长"),
+    (r"between the result and the next step", "结果与下一步长之间"),
+)
+
+#: Where the specification asks for the uncertainty statement, (English, Chinese).
+U_CLAUSE = ("JJF 1535-2015 clause 8 k)", "JJF 1535-2015 第8章 k)")

@@ -38,7 +38,7 @@ from typing import Sequence
 import numpy as np
 import sympy
 
-from gonio.units import ARCSEC_PER_DEG
+from gonio.units import ARCSEC_PER_DEG, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, coverage_factor, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
@@ -101,6 +101,9 @@ class ItemUncertainty:
     #: ``model`` (B_s: the χ² relation, the noise model's square root): f(rng, M) → array.
     sampler: object = field(default=None, repr=False, compare=False)
     model_kind: str = "linear"
+    #: A quantity that cannot be negative (B_s): when U exceeds the value, results.json
+    #: carries the upper bound of :func:`gonio.result.statement.state` beside it.
+    nonnegative: bool = False
 
     @property
     def U(self) -> float:
@@ -115,6 +118,13 @@ class ItemUncertainty:
              "k_source": self.k_source}
         if self.interval is not None:
             d["interval"] = [float(self.interval[0]), float(self.interval[1])]
+        if self.nonnegative:
+            from gonio.result.statement import state
+
+            st = state(self.value, self.U, k=self.k, unit=self.unit, nonnegative=True)
+            d["nonnegative"] = True
+            d["upper_bound"] = None if st.upper is None else float(st.upper) * \
+                10.0 ** st.exponent
         return d
 
 
@@ -374,10 +384,32 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
 
 # --------------------------------------------------------------------------- 7.3, 7.5
 
+def reading_resolution_deg(angles_deg=None, counts_per_deg: float | None = None) -> float:
+    """The resolution δ of angle readings, °: one count (1/K) for readings given as counts,
+    else the last decimal place the ``gyro_deg`` values carry (10⁻ᵈ, the smallest d ≤ 12 at
+    which every value is a whole number of 10⁻ᵈ).
+
+    >>> reading_resolution_deg(counts_per_deg=3600.0) == 1 / 3600
+    True
+    >>> reading_resolution_deg([0.0, 0.00005, 0.00002])
+    1e-05
+    """
+    if counts_per_deg:
+        return 1.0 / float(counts_per_deg)
+    x = np.asarray([] if angles_deg is None else angles_deg, dtype=float)
+    x = x[np.isfinite(x)]
+    for d in range(13):
+        y = x * 10.0 ** d
+        if np.all(np.abs(y - np.round(y)) <= 1e-9 * np.maximum(1.0, np.abs(y))):
+            return 10.0 ** -d
+    return 1e-12
+
+
 def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
                           readings: str = "random_walk", time_s=None,
                           compensation_time_s: float | None = None,
-                          k: float | None = None) -> ItemUncertainty:
+                          k: float | None = None,
+                          resolution_deg: float | None = None) -> ItemUncertainty:
     """u(B_s) of B_s = s(M)/T (draft 7.3), °/h: a standard deviation of n readings.
 
     Type A, u = B_s/√(2ν) (JCGM 100 E.4.3), interval from χ²(ν) (stated, because s is
@@ -422,15 +454,28 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
         how = f"independent readings, nu = {nu}"
     else:
         raise ValueError(f"readings must be random_walk or independent, got {readings!r}")
-    lines = [_Line(from_u("s_B", 0.0, stdev_u(b_s_deg_per_h, nu), dof=nu, type="A",
+    s_obs = float(b_s_deg_per_h)
+    u_s, s_int, floor_txt = stdev_u(b_s_deg_per_h, nu), s_obs, ""
+    if resolution_deg and time_s is not None and len(time_s) >= 2:
+        # Resolution floor (JCGM 100 F.2.2.1; EA-4/02 when the scatter is below the
+        # resolution): each reading is two floored values, triangular ±δ, u = δ/√6, so
+        # s(M)/T is not resolved below b_res = (δ/√6)/T. u(B_s) = max(B_s/√(2ν), b_res) and
+        # the χ² interval from max(s, b_res): identical readings never give U = 0, and a
+        # budget whose scatter exceeds the resolution is unchanged.
+        dur_h = (float(np.max(time_s)) - float(np.min(time_s))) / S_PER_H
+        b_res = float(resolution_deg) / math.sqrt(6.0) / dur_h
+        if b_res > u_s:
+            floor_txt = (f"; floored at the readings' resolution {resolution_deg:.3g}° over T "
+                         f"(u = (δ/√6)/T = {b_res:.3g} °/h, JCGM 100 F.2.2.1)")
+        u_s, s_int = max(u_s, b_res), max(s_obs, b_res)
+    lines = [_Line(from_u("s_B", 0.0, u_s, dof=nu, type="A",
                           source=f"standard deviation of {n_readings} readings, chi-square "
-                                 f"({how})"),
+                                 f"({how}){floor_txt}"),
                    "sampling of s(M)", True, "7.3")]
     b = _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=None,
-                interval=stdev_interval(b_s_deg_per_h, nu, COVERAGE_PROBABILITY))
-    s_obs = float(b_s_deg_per_h)
-    b = replace(b, model_kind="nonlinear",
-                sampler=lambda rng, m: s_obs * np.sqrt(nu / rng.chisquare(nu, m)))
+                interval=stdev_interval(s_int, nu, COVERAGE_PROBABILITY))
+    b = replace(b, model_kind="nonlinear", nonnegative=True,
+                sampler=lambda rng, m: s_int * np.sqrt(nu / rng.chisquare(nu, m)))
     if k is not None and abs(float(k) - b.k) > 1e-9:
         # A fixed k presumes many degrees of freedom; with ν_eff ≈ 1–2.5 a k = 2 covers
         # about 75 % (gonio validate --all-items): the t-factor is kept and this says so.

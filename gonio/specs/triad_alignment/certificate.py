@@ -73,11 +73,12 @@ TEXT = {
     "pred_note": ("k = {ks} for K, {kb} for b.", "K 的 k = {ks}，b 的 k = {kb}。"),
     "ramp": ("Ramps: the static-soak model leaves {rms} °/s rms on the ramp blocks; with a "
              "rate-of-temperature-change term γ·dϑ/dt (γ = {g} (°/s)/(°C/s)) {rmsg} °/s; with a "
-             "first-order lag of the temperature (τ = {tau} s) {rmsl} °/s; up/down hysteresis "
-             "{hys} °/s.",
+             "first-order lag of the temperature (τ = {tau} s) {rmsl} °/s; hysteresis between "
+             "rising and falling ramps at equal chamber temperature (the model's input, not "
+             "the sensor's) {hys} °/s.",
              "温度斜坡：静态保温模型在斜坡段的残差均方根为 {rms} °/s；加入温度变化率项 γ·dϑ/dt"
              "（γ = {g} (°/s)/(°C/s)）后为 {rmsg} °/s；对温度施加一阶滞后（τ = {tau} s）后为 "
-             "{rmsl} °/s；升降温滞回 {hys} °/s。"),
+             "{rmsl} °/s；同一温箱温度（模型输入，而非传感器温度）下升降温斜坡之间的滞回 {hys} °/s。"),
     "sub_comp": ("Compensation: residuals before and after", "补偿前后的残差"),
     "comp_note": ("The model applied to the calibration record itself: at the soak points the "
                   "residuals are the fit's; the ramp blocks were not used by the polynomial fit.",

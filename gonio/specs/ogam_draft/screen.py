@@ -1,0 +1,314 @@
+"""Screening of optical-draft readings: every reading against the protocol and the other readings.
+
+:func:`screen` returns one :class:`gonio.result.Finding` per reading a rule fired on, and one
+per incomplete programme; :func:`apply_findings` refuses (GonioError naming the line) or sets
+aside what the findings say. The rules, their thresholds and why (docs/draft-readings.md,
+"Screening"):
+
+- **round** — the reading's round must be one of its protocol item's rounds (7.1, 7.4, 7.6, 7.7).
+- **condition** — its rate and orientation must be a condition of the programme of its test
+  (a 7.6 reading at 1 000 °/s is a typo, not an eighth rate).
+- **angle** — ``table_deg`` must equal the round's stop − start within the item's
+  ``position_tolerance_deg``.
+- **time** — ``time_s`` (from zeroing to reading) within the item's ``max_time_to_reading_s``;
+  for 7.4 and 7.7 a protocol that omits the key gets Annex A.1's 0.5 min
+  (:data:`A1_MAX_TIME_S`); only an explicit key widens it.
+- **indicated angle** — each reading's indicated angle (``gyro_deg``, else
+  ``gyro_counts`` / K_ref with K_ref the median of counts / table angle over every rotation
+  reading of the file, so the other rounds predict it) less the table angle, against the
+  other readings of its condition (test, rate, orientation): set aside when
+  ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``; 7.3 readings (at rest)
+  the same against the other 7.3 readings of their series.
+- **incomplete programme** — a round of 7.1, 7.4, 7.6 or 7.7 missing from every series of a
+  condition present in the file, or a programme condition (rate, orientation) absent, is
+  flagged (the item is computed on what is there, and says so).
+
+A reading that breaks a rule is set aside (``on_bad_reading = "exclude"``, the default) or
+refused (``"error"``); setting aside the last reading of a round refuses instead, because the
+item would silently lose a point.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from gonio.errors import GonioError
+from gonio.formats.readings import Readings, metadata_float
+from gonio.result.findings import Finding
+from gonio.units import S_PER_MIN, deg_to_arcsec
+
+#: Annex A.1: "the time from the start to each calibration position is within 0.5 min".
+A1_MAX_TIME_S: float = 0.5 * S_PER_MIN
+#: The tests Annex A.1 bounds (E is determined: 7.4, and each direction of 7.7).
+A1_TESTS: tuple[str, ...] = ("angle_deviation", "pointing_consistency")
+#: Robust z threshold of the indicated-angle rule (1.4826·MAD estimates σ for normal data:
+#: 5 σ is a false alarm in ~6e-7 of healthy readings).
+ROBUST_Z: float = 5.0
+#: Floor of the indicated-angle rule, ″: above the spread of a healthy session on the bench
+#: (≤ 0.4″ at 60 °/s; ≤ 3″ at 1 °/s, where a six-minute turn drifts; ≤ 10″ over the 70 min
+#: of 7.3), below a typo in the hundreds of counts (100 counts = 4.7″ on an RLG of 76 435
+#: counts/°) and far below a one-degree typo (3 600″).
+ANGLE_FLOOR_ARCSEC: float = 5.0
+
+#: Rounds read in at least this many series are screened round by round.
+PER_ROUND_MIN: int = 5
+
+CLAUSES = {"scale_factor": "7.1", "zero_stability": "7.3", "angle_deviation": "7.4",
+           "rate_consistency": "7.6", "pointing_consistency": "7.7"}
+ROTATION_TESTS = ("scale_factor", "angle_deviation", "rate_consistency", "pointing_consistency")
+
+_ANGLE_RULE = (f"|r − median(r of the condition)| > max({ROBUST_Z:g} · 1.4826 · MAD, "
+               f"{ANGLE_FLOOR_ARCSEC:g}″), r = indicated − table angle, indicated = gyro_deg or "
+               "gyro_counts / K_ref, K_ref = median(gyro_counts / table_deg) of all rotation "
+               "readings")
+
+
+def items_of(protocol, test: str) -> list:
+    """The protocol's rotation items of ``test`` (7.6 and 7.7 may reuse 7.4's reference)."""
+    if test == "scale_factor":
+        its = [protocol.scale_factor]
+    elif test == "angle_deviation":
+        its = [protocol.angle_deviation]
+    elif test == "rate_consistency":
+        its = list(protocol.rate_consistency) + [protocol.angle_deviation]
+    else:
+        its = list(protocol.pointing_consistency) + [protocol.angle_deviation]
+    return [it for it in its if it is not None]
+
+
+def item_for(protocol, test: str, rate: float, orientation: str):
+    """The protocol item of a reading's test, rate and orientation, or None."""
+    for it in items_of(protocol, test):
+        if math.isclose(it.rate_dps, rate, rel_tol=1e-9) and it.orientation == orientation:
+            return it
+    return None
+
+
+def time_limit_s(item, test: str) -> tuple[float | None, str]:
+    """The time-to-reading bound of a reading: the protocol's, else A.1's for 7.4/7.7."""
+    if item.max_time_to_reading_s is not None:
+        return float(item.max_time_to_reading_s), (
+            f"the protocol's max_time_to_reading_s = {item.max_time_to_reading_s:g} s")
+    if test in A1_TESTS:
+        return A1_MAX_TIME_S, (f"Annex A.1's 0.5 min ({A1_MAX_TIME_S:g} s; the protocol sets "
+                               "no max_time_to_reading_s, only an explicit one widens it)")
+    return None, ""
+
+
+def _action(item) -> str:
+    return "refused" if item is not None and item.on_bad_reading == "error" else "set_aside"
+
+
+def _protocol_rules(df: pd.DataFrame, protocol, file, aside_lines: set) -> list[Finding]:
+    """Round, condition, angle and time of every rotation reading against the protocol.
+
+    A condition outside the programme is one finding (its first line, the count and the
+    line range); its other lines go into ``aside_lines``."""
+    out = []
+    for test in ROTATION_TESTS:
+        rows = df[df["test"] == test]
+        if not len(rows) or not items_of(protocol, test):
+            continue
+        clause = CLAUSES[test]
+        for (rate, orient), g in rows.groupby(["rate_dps", "orientation"], sort=False):
+            it = item_for(protocol, test, float(rate), str(orient))
+            if it is None:
+                lines = sorted(int(x) for x in g["line"])
+                more = (f"; {len(lines)} readings, lines {lines[0]}–{lines[-1]}, all set aside"
+                        if len(lines) > 1 else "")
+                out.append(Finding(
+                    "condition-not-in-programme",
+                    f"{test} at {float(rate):g} °/s, axis {orient}: not a condition of the "
+                    f"protocol's programme ({protocol.name}){more}", "set_aside", file=file,
+                    line=lines[0], column="rate_dps", test=test, clause=clause,
+                    rule="rate and orientation must be a programme condition"))
+                aside_lines.update(lines[1:])
+                continue
+            n = len(it.rounds)
+            want = np.array([r.stop_deg - r.start_deg for r in it.rounds])
+            limit, limit_txt = time_limit_s(it, test)
+            for line, rnd, tab, t in zip(g["line"], g["round"], g["table_deg"], g["time_s"]):
+                rnd, tab, t = int(rnd), float(tab), float(t)
+                f = dict(file=file, line=int(line), test=test, clause=clause)
+                if not 1 <= rnd <= n:
+                    out.append(Finding("round-not-in-programme",
+                                       f"{test} round {rnd} is not one of the protocol's {n} "
+                                       f"rounds ({protocol.name})", _action(it), column="round",
+                                       rule=f"1 ≤ round ≤ {n}", **f))
+                elif not abs(tab - want[rnd - 1]) <= it.position_tolerance_deg:
+                    out.append(Finding("angle-off-nominal",
+                                       f"{test} round {rnd}: table_deg {tab:g} differs from the "
+                                       f"protocol's {want[rnd - 1]:g}° (tolerance "
+                                       f"{it.position_tolerance_deg:g}°)", _action(it),
+                                       column="table_deg",
+                                       rule="|table_deg − (stop − start)| ≤ "
+                                            "position_tolerance_deg", **f))
+                elif limit is not None and t > limit + 1e-9:
+                    out.append(Finding("late-reading",
+                                       f"{test} round {rnd}: read {t:g} s after zeroing, beyond "
+                                       f"{limit_txt} (Annex A.1)", _action(it), column="time_s",
+                                       rule=f"time_s ≤ {limit:g} s", **f))
+    return out
+
+
+def reference_scale_factor(df: pd.DataFrame, metadata: dict, file=None) -> float | None:
+    """K_ref: the median of gyro_counts / table_deg over every rotation reading, robust to
+    a few typos (≥ 3 readings); else the metadata's nominal K; else None."""
+    rot = df[df["test"].isin(ROTATION_TESTS)]
+    c, a = rot["gyro_counts"].to_numpy(float), rot["table_deg"].to_numpy(float)
+    ok = np.isfinite(c) & np.isfinite(a) & (np.abs(a) > 0)
+    if ok.sum() >= 3:
+        return float(np.median(c[ok] / a[ok]))
+    return metadata_float(metadata, "nominal_scale_factor_counts_per_deg", file=file)
+
+
+def _outliers(r: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The indices outside the rule, the median and the threshold (″)."""
+    med = float(np.median(r))
+    thr = max(ROBUST_Z * 1.4826 * float(np.median(np.abs(r - med))), ANGLE_FLOOR_ARCSEC)
+    return np.flatnonzero(np.abs(r - med) > thr), med, thr
+
+
+def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[Finding]:
+    """Each reading's indicated angle against what the other readings of its condition say."""
+    deg = df["gyro_deg"].to_numpy(float)
+    cnt = df["gyro_counts"].to_numpy(float)
+    ind = np.where(np.isfinite(deg), deg, cnt / k_ref if k_ref else np.nan)
+    col = np.where(np.isfinite(deg), "gyro_deg", "gyro_counts")
+    table = df["table_deg"].to_numpy(float)
+    is_zs = (df["test"] == "zero_stability").to_numpy()
+    r = deg_to_arcsec(ind - np.where(is_zs, 0.0, table))
+    work = df.assign(_r=r, _col=col)
+    work = work[np.isfinite(work["_r"]) & ~work["line"].isin(skip)]
+    out = []
+    keys = ["test", "rate_dps", "orientation"]
+    for key, g in work[work["test"].isin(ROTATION_TESTS)].groupby(keys, sort=False):
+        what = f"{key[0]} at {float(key[1]):g} °/s, axis {key[2]}"
+        per_round = g.groupby("round", sort=False)
+        if per_round.size().min() >= PER_ROUND_MIN:
+            # many series: each reading against the other series of its round (an error
+            # proportional to the angle, e.g. of K, does not widen the small rounds' rule)
+            for _, gr in per_round:
+                out += _group_outliers(gr, key[0], what, file, k_ref)
+        else:
+            out += _group_outliers(g, key[0], what, file, k_ref)
+    for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
+        out += _group_outliers(g, "zero_stability", f"zero_stability series {int(se)}",
+                               file, k_ref)
+    return out
+
+
+def _group_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[Finding]:
+    if len(g) < 3:
+        return []
+    idx, med, thr = _outliers(g["_r"].to_numpy())
+    out = []
+    for i in idx:
+        row = g.iloc[i]
+        col = str(row["_col"])
+        by = (f" (K_ref = {k_ref:.9g} counts/° from the other readings)"
+              if col == "gyro_counts" else "")
+        out.append(Finding(
+            "indicated-angle-outlier",
+            f"{what} round {int(row['round'])}: indicated − table angle {row['_r']:.4g}″ departs "
+            f"from the condition's median {med:.3g}″ by {abs(row['_r'] - med):.4g}″ "
+            f"(> {thr:.3g}″){by}", "set_aside", file=file, line=int(row["line"]), column=col,
+            test=test, clause=CLAUSES[test], rule=_ANGLE_RULE))
+    return out
+
+
+def _incomplete(df: pd.DataFrame, protocol, file, present) -> list[Finding]:
+    """Rounds missing from every series, conditions of the programme absent (flagged), for
+    the tests ``present`` in the file."""
+    out = []
+    for test in ROTATION_TESTS:
+        rows = df[df["test"] == test]
+        if test not in present:
+            continue
+        own = items_of(protocol, test)
+        if test in ("rate_consistency", "pointing_consistency"):
+            own = own[:-1] if own and own[-1] is protocol.angle_deviation else own
+        for it in own:
+            g = rows[np.isclose(rows["rate_dps"].to_numpy(float), it.rate_dps)
+                     & (rows["orientation"] == it.orientation)]
+            cond = f"{it.rate_dps:g} °/s, axis {it.orientation}"
+            if not len(g):
+                out.append(Finding("incomplete-programme",
+                                   f"{test} ({CLAUSES[test]}): the programme's condition {cond} "
+                                   "has no reading", "flagged", file=file, test=test,
+                                   clause=CLAUSES[test], rule="every programme condition read"))
+                continue
+            have = set(int(x) for x in g["round"])
+            missing = [i for i in range(1, len(it.rounds) + 1) if i not in have]
+            for i in missing:
+                r = it.rounds[i - 1]
+                out.append(Finding(
+                    "incomplete-programme",
+                    f"{test} ({CLAUSES[test]}) at {cond}: round {i} ({r.stop_deg - r.start_deg:g}°)"
+                    f" is missing from every series; the item rests on "
+                    f"{len(it.rounds) - len(missing)} of the programme's {len(it.rounds)} rounds",
+                    "flagged", file=file, column="round", test=test, clause=CLAUSES[test],
+                    rule="every programme round read in at least one series"))
+    return out
+
+
+def screen(readings: Readings, protocol) -> list[Finding]:
+    """Every finding on the readings of an optical-draft calibration (module docstring).
+
+    The indicated-angle rule runs on the readings the protocol rules leave; the incomplete
+    programme is judged on what is left after everything set aside.
+    """
+    df, file = readings.data, readings.path
+    name = None if file is None else str(file)
+    aside_lines: set = set()
+    found = _protocol_rules(df, protocol, name, aside_lines)
+    out_lines = {f.line for f in found} | aside_lines
+    k_ref = reference_scale_factor(df[~df["line"].isin(out_lines)], readings.metadata, file)
+    found += _indicated_rule(df, protocol, name, k_ref, out_lines)
+    gone = {f.line for f in found} | aside_lines
+    found += _incomplete(df[~df["line"].isin(gone)], protocol, name, set(df["test"]))
+    return found
+
+
+def apply_findings(readings: Readings, findings: list[Finding], protocol=None
+                   ) -> tuple[Readings, pd.DataFrame]:
+    """The readings kept and the DataFrame of those set aside (line, test, series, round,
+    rate_dps, orientation, reason); a refused reading, or setting aside the last reading of
+    a round, raises a GonioError naming the line."""
+    df = readings.data
+    for f in findings:
+        if f.action == "refused":
+            raise GonioError(f.message, file=readings.path, line=f.line, column=f.column)
+    aside = {}
+    for f in findings:
+        if f.action == "set_aside" and f.line is not None:
+            aside.setdefault(f.line, f)
+            if f.code == "condition-not-in-programme":      # one finding per condition
+                row = df[df["line"] == f.line].iloc[0]
+                same = df[(df["test"] == row["test"]) & (df["rate_dps"] == row["rate_dps"])
+                          & (df["orientation"] == row["orientation"])]
+                for line in same["line"]:
+                    aside.setdefault(int(line), f)
+    cols = ["line", "test", "series", "round", "rate_dps", "orientation"]
+    if not aside:
+        return readings, pd.DataFrame(columns=cols + ["reason"])
+    mask = df["line"].isin(list(aside))
+    left = df[~mask]
+    for line, f in aside.items():
+        if f.code in ("condition-not-in-programme", "round-not-in-programme"):
+            continue
+        row = df[df["line"] == line].iloc[0]
+        same = left[(left["test"] == row["test"]) & (left["round"] == row["round"])
+                    & (left["orientation"] == row["orientation"])
+                    & ((left["rate_dps"] == row["rate_dps"])
+                       | (left["rate_dps"].isna() & pd.isna(row["rate_dps"])))]
+        if row["test"] in ROTATION_TESTS and not len(same):
+            raise GonioError(f"{f.message}; no reading of this round is left, the item cannot "
+                             "stand without it", file=readings.path, line=line, column=f.column)
+    ex = df.loc[mask, cols].copy()
+    ex["reason"] = [f"{aside[int(x)].message} [{aside[int(x)].code}]" for x in ex["line"]]
+    kept = Readings(left.reset_index(drop=True), dict(readings.metadata), readings.path)
+    return kept, ex.sort_values("line").reset_index(drop=True)
