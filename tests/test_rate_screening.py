@@ -104,7 +104,7 @@ def test_a_typo_in_any_column_is_set_aside_by_line(simulated, column):
     # set aside: the scale factor is the clean file's up to the one sample less
     assert r.items["scale_factor"].value == pytest.approx(r_clean.items["scale_factor"].value,
                                                           rel=1e-4)
-    assert "set aside" in r.to_json()["screening"]
+    assert "set aside" in r.to_json()["extra"]["screening"]
 
 
 def test_missing_programme_point_is_named_and_on_the_certificate(simulated):
@@ -119,7 +119,7 @@ def test_missing_programme_point_is_named_and_on_the_certificate(simulated):
     assert any(f"rate_dps = {rate}" in f["message"] and "scale_factor run 0" in f["message"]
                for f in miss), js["findings"]
     assert all(f["action"] == "flagged" for f in miss)
-    assert "planned point(s) missing" in js["screening"]
+    assert "planned point(s) missing" in js["extra"]["screening"]
     html = next(p for k, p in paths.items() if str(p).endswith(".html"))
     page = html.read_text(encoding="utf-8")
     assert "Screening of the readings" in page and f"rate_dps = {rate}" in page

@@ -216,7 +216,7 @@ def screening_blocks(res: dict, lang: str, limit: int = 20) -> list[Block]:
     if not found:
         return []
     blocks = [Block("h", "读数筛查" if lang == "zh" else "Screening of the readings"),
-              Block("p", [res.get("screening", "")])]
+              Block("p", [(res.get("extra") or {}).get("screening", "")])]
     for f in found[:limit]:
         where = ", ".join(p for p in (f.get("line") and f"line {f['line']}",
                                        f.get("column")) if p)

@@ -33,7 +33,7 @@ from scipy.ndimage import median_filter
 
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings
-from gonio.result.findings import Finding, findings_to_json
+from gonio.result.findings import Finding
 
 #: The robust threshold, in units of 1.4826·MAD (a robust σ).
 K_ROBUST = 10.0
@@ -263,6 +263,6 @@ def screened(readings, findings: list[Finding]):
 
 
 def screening_extra(findings: list[Finding]) -> dict:
-    """What ``results.json`` carries of the screening: ``findings`` (in file order) and a
-    one-sentence ``screening`` summary (empty when nothing was found)."""
-    return {"findings": findings_to_json(findings), "screening": summary(findings)}
+    """The ``extra`` section of the screening: a one-sentence ``screening`` summary (empty
+    when nothing was found); the findings themselves are the result's ``findings``."""
+    return {"screening": summary(findings)}

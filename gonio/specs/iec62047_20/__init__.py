@@ -86,7 +86,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
                                      "ratiometric": ratiometric, "rows_corrected": n_corr},
-                                     **screening_extra(findings)})
+                                     **screening_extra(findings)},
+                                 findings=findings)
 
 
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,

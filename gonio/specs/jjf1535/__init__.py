@@ -99,7 +99,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"annex_a": annex_a().to_dict(),
-                                        **screening_extra(findings)})
+                                        **screening_extra(findings)},
+                                 findings=findings)
 
 
 SPEC = Specification(key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
