@@ -207,7 +207,11 @@ def main() -> int:
             uploads(base, Path(tmp) / "run" / "readings.csv")
         finally:
             proc.terminate()
-            proc.wait(60)
+            try:
+                proc.wait(30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
     return 0
 
 
