@@ -341,6 +341,31 @@ def test_triad_rows_refused(request, name):
     count(f"triad-rows:{name}")
 
 
+def test_thermal_programme_at_one_temperature(tmp_path, capsys):
+    """A thermal programme soaked at −40 °C only: thermal-model refuses it and calibrate
+    states the model "not measured" with the reason (before: K_z at the 25 °C reference was
+    certified 49.10 ± 0.39 against 49.69 from the whole programme)."""
+    import re
+
+    from gonio.specs import get
+
+    text = (PROTOCOLS / "triad-alignment.toml").read_text(encoding="utf-8")
+    p = tmp_path / "one.toml"
+    p.write_text(re.sub(r"(?m)^setpoints_c = .*$", "setpoints_c = [-40.0]", text, count=1),
+                 encoding="utf-8")
+    assert main(["simulate", "--spec", "triad-alignment", "--protocol", str(p),
+                 "--out", str(tmp_path / "D")]) == 0
+    capsys.readouterr()
+    th = tmp_path / "D" / "thermal.csv"
+    msg = cli(["thermal-model", th], capsys)
+    assert "one temperature" in msg or "extrapolation" in msg, msg
+    res = get("triad-alignment").calibrate(tmp_path / "D" / "readings.csv")
+    it = res.items["thermal_model"]
+    assert not it.measured and ("one temperature" in it.reason or "extrapolation" in it.reason)
+    assert not any(k.startswith("K_") for k in res.items)
+    count("triad:thermal-one-temperature")
+
+
 def test_triad_cli_values(sims, capsys):
     """align --seed -1 and --monte-carlo beyond the limit: one-line refusals at once."""
     r = sims["TRI"] / "readings.csv"
