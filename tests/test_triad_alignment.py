@@ -410,9 +410,19 @@ def test_specification_plug_in(tmp_path):
     paths = write_triad_session(run_alignment_session(protocol(static_s=0.0), b, seed=9),
                                 tmp_path / "s")
     cal = spec.calibrate(paths["readings"])
-    out = json.loads(json.dumps(cal.to_json(), allow_nan=False))
+    out = json.loads(json.dumps(cal.to_json(), allow_nan=False))["extra"]
     assert out["thermal_model"] is None and out["alignment"]["averaging_time"] is None
     m = np.array(out["alignment"]["system_matrix"])
     u = np.array(out["alignment"]["u_system_matrix"])
     assert np.all(np.abs(m - b.system_matrix) <= 5 * u)
     assert len(out["cross_axis"]) == 6
+    # the matrix elements are items with their covariance: per gyro, its row of M and its bias
+    # from one fit; the diagonal is each item's u_c squared, the matrix symmetric
+    covs = cal.to_json()["covariances"]
+    assert [c["items"] for c in covs] == [[f"M_{a}x", f"M_{a}y", f"M_{a}z", f"b_{a}"]
+                                          for a in "xyz"]
+    for c in covs:
+        C = np.array(c["matrix"])
+        assert np.allclose(C, C.T, rtol=1e-12, atol=0)
+        assert np.allclose(np.sqrt(np.diag(C)), [cal.items[k].uncertainty.u_c for k in c["items"]],
+                           rtol=1e-12)

@@ -13,6 +13,8 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError, check_input_file, check_not_binary, read_utf8
+from gonio.analysis.conformity import decide_result
+from gonio.result.tables import write_results
 from gonio.specs import Specification, get
 from gonio.specs._rate_family.rate_records import json_safe, load_readings
 from gonio.formats.triad import FORMAT as TRIAD_FORMAT
@@ -121,12 +123,9 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
                                      spec.default_protocol)
     result = spec.calibrate(rd, protocol or spec.default_protocol,
                             monte_carlo_trials=monte_carlo_trials)
+    decide_result(result, lab_d)
     out = Path(out)
-    with output_dir(out) as stage:
-        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
-                                                      ensure_ascii=False, allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", result.summary())
-    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths = write_results(result, out)
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
                                         dcc=dcc))
     return result, paths

@@ -826,8 +826,18 @@ def item_coverage_lines(cases) -> list[str]:
             if "within_U_intrinsic" in it:
                 txt += (f"   vs intrinsic truth "
                         f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
+            if "two_sided" in it:
+                txt += "   " + two_sided_text(it["two_sided"])
             out.append(txt)
     return out
+
+
+def two_sided_text(t: dict) -> str:
+    """``CP [lo, hi] %, z mean/sd, flags`` of :func:`gonio.pipeline.item_coverage.two_sided`."""
+    z = ("z —" if t["z_sd"] is None else
+         f"z mean {t['z_mean']:+.2f} sd {t['z_sd']:.2f}")
+    flags = f"  FLAG: {', '.join(t['flags'])}" if t["flags"] else ""
+    return f"CP95 [{100 * t['cp_low']:.0f}, {100 * t['cp_high']:.0f}] %, {z}{flags}"
 
 
 @dataclass

@@ -43,7 +43,7 @@ import pandas as pd
 from scipy import stats
 
 from gonio.physics.earth import earth_rate_enu
-from gonio.units import dps_to_dph
+from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
@@ -252,6 +252,43 @@ class AlignmentResult:
             "offdiagonal_order": list(OFFDIAG),
         }
         return out
+
+
+#: How long the stated bias is meant to hold (s): one day of operation. The long-term term of
+#: b integrates the bias instability's flicker spectrum from the shortest dwell to this.
+BIAS_HORIZON_S: float = S_PER_DAY
+#: Allan floor of flicker bias noise: σ_A = √(2 ln 2 / π) · B (IEEE 952 Annex C).
+FLICKER_FLOOR: float = math.sqrt(2.0 * math.log(2.0) / math.pi)
+
+
+def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
+                           horizon_s: float = BIAS_HORIZON_S) -> tuple[np.ndarray, np.ndarray]:
+    """Long-term term of the bias b (°/s per gyro) and its degrees of freedom (issue 24).
+
+    The fit's u(b) is in-run: it holds for the mean bias over this record. The bias a
+    certificate states is meant to hold beyond it, and a gyro's bias wanders (bias
+    instability, flicker: one-sided PSD h/f with h = B²/π). Between time scales τ_d and
+    τ_L that wander has variance ∫ h/f df = (B²/π) ln(τ_L/τ_d), so
+
+        u_BI = B̂ √(ln(τ_L/τ_d)/π),   B̂ = min σ_A(τ) / √(2 ln 2/π),
+
+    B̂ from the static record's Allan deviation, τ_d the shortest dwell (faster wander
+    averages within a dwell and shows in the fit's residuals), τ_L = ``horizon_s``. Its
+    degrees of freedom are those of the Allan deviation at its minimum, T/τ − 1 for a
+    record of T = ``static_s`` (at least 1). Without a static record: zeros, ν = ∞.
+
+    >>> av = AveragingTime(0.0, 0.1, 50.0, [1.0] * 3, [50.0] * 3, [3.0] * 3, 10.0, True)
+    >>> u, nu = bias_instability_u_dps(av, 300.0)
+    >>> round(float(u[0]) * 3600, 3), float(nu[0])
+    (7.671, 5.0)
+    """
+    if averaging is None or not static_s:
+        return np.zeros(3), np.full(3, math.inf)
+    b = dph_to_dps(np.asarray(averaging.min_adev_dph, dtype=float)) / FLICKER_FLOOR
+    tau_d = averaging.shortest_dwell_s if math.isfinite(averaging.shortest_dwell_s) else 1.0
+    u = b * math.sqrt(max(math.log(horizon_s / tau_d), 0.0) / math.pi)
+    nu = np.maximum(static_s / np.asarray(averaging.tau_min_adev_s, dtype=float) - 1.0, 1.0)
+    return u, nu
 
 
 def _split(vec: np.ndarray) -> dict:
