@@ -128,16 +128,17 @@ def iec(sims):
     return Text(sims["IEC"] / "readings.csv")
 
 
-def refused(text: Text, *fragments: str, line: int | None = None) -> str:
-    """parse_rate_readings refuses the text; the one-line message holds every fragment."""
+def refused(text: Text, *fragments: str, line: int | None = None,
+            parse=parse_rate_readings, name: str = "r.csv") -> str:
+    """``parse`` refuses the text; the one-line message holds every fragment (and the line)."""
     with pytest.raises(GonioError) as ei:
-        parse_rate_readings(text.text(), path="r.csv")
+        parse(text.text(), path=name)
     msg = str(ei.value)
-    assert "\n" not in msg and msg.startswith("r.csv"), msg
+    assert "\n" not in msg and msg.startswith(name), msg
     for f in fragments:
         assert f in msg, msg
     if line is not None:
-        assert msg.startswith(f"r.csv:{line}:"), msg
+        assert msg.startswith(f"{name}:{line}:"), msg
     return msg
 
 
@@ -300,13 +301,7 @@ def thermal(sims):
 
 
 def triad_refused(text: Text, *fragments: str) -> str:
-    with pytest.raises(GonioError) as ei:
-        parse_triad_readings(text.text(), path="t.csv")
-    msg = str(ei.value)
-    assert "\n" not in msg and msg.startswith("t.csv:"), msg
-    for f in fragments:
-        assert f in msg, msg
-    return msg
+    return refused(text, *fragments, parse=parse_triad_readings, name="t.csv")
 
 
 def _tri_dup(t: Text) -> Text:
