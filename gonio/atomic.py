@@ -49,6 +49,20 @@ MANIFEST = "gonio-manifest.json"
 PROTECTED_NAMES: tuple[str, ...] = ("readings.csv", "stream.csv")
 
 _ACTIVE: dict[str, Path] = {}          # resolved out folder -> staging folder of the open set
+_COMMAND: list[str | None] = [None]     # the CLI command running (recorded in the manifest)
+#: Files that mark a folder as a coverage study of ``gonio validate``.
+STUDY_NAMES: tuple[str, ...] = ("validation.json", ".validate-partial")
+
+
+def set_command(name: str | None) -> None:
+    """Record which ``gonio`` command is running: the manifests it writes name it, and a
+    folder holding another command's outputs is refused where the two would mix."""
+    _COMMAND[0] = name
+
+
+def current_command() -> str | None:
+    """The command :func:`set_command` recorded (None when gonio is used as a library)."""
+    return _COMMAND[0]
 
 
 def _umask() -> int:
@@ -138,6 +152,60 @@ def check_output_file(path, *, what: str = "--out", inputs: Iterable = (),
     if protected and not force:
         raise GonioError(f"{what} exists and holds data; give --force to replace it", file=path)
     return path
+
+
+#: Suffixes of the files a laboratory's data and gonio's results live in.
+DATA_SUFFIXES: tuple[str, ...] = (".csv", ".parquet", ".toml", ".json", ".npz", ".xml", ".txt")
+
+
+def holds_data(path) -> bool:
+    """Whether ``path`` is an existing file that holds data (by suffix, or by content: a
+    ``#`` metadata line or a Parquet file), which a figure or report never replaces."""
+    p = Path(path)
+    if not p.is_file():
+        return False
+    if p.suffix.lower() in DATA_SUFFIXES:
+        return True
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(4)
+    except OSError:
+        return False
+    return head.startswith((b"#", b"\xef\xbb\xbf#", b"PAR1"))
+
+
+def check_output_files(places: dict, *, inputs: Iterable = (),
+                       formats: dict | None = None) -> dict:
+    """:func:`check_output_file` for each named output (``{"--report": path, ...}``, None
+    skipped) against every input, before any work; two outputs at one place are refused,
+    so is a suffix not in ``formats[what]`` (e.g. a figure named ``out.parquet``) and an
+    existing data file (:func:`holds_data`).
+
+    >>> check_output_files({"--plot": "a.png", "--report": "a.png"})
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: --report and --plot name the same file a.png
+    """
+    inputs = [i for i in inputs if i is not None]
+    seen: dict[str, str] = {}
+    for what, path in places.items():
+        if path is None:
+            continue
+        check_output_file(path, what=what, inputs=inputs)
+        allowed = (formats or {}).get(what)
+        if allowed and Path(path).suffix.lstrip(".").lower() not in allowed:
+            raise GonioError(f"{what}: cannot write a file of type "
+                             f"{Path(path).suffix or '(none)'!r}; use "
+                             f"{', '.join('.' + f for f in allowed)}", file=path)
+        if holds_data(path):
+            raise GonioError(f"{what} would replace {path}, a data file (readings, stream, "
+                             "protocol, results); a figure or page never replaces one",
+                             file=path)
+        key = os.path.abspath(path)
+        if key in seen:
+            raise GonioError(f"{what} and {seen[key]} name the same file {path}")
+        seen[key] = what
+    return places
 
 
 def write_bytes(path: str | Path, data: bytes) -> Path:
@@ -325,6 +393,8 @@ def _manifest(stage: Path, source_sha256, extra: dict | None, exclude=()) -> Non
             files[p.relative_to(stage).as_posix()] = sha256_file(p)
     d = {"gonio_version": __version__, "source_sha256": source_sha256, **(extra or {}),
          "files": files}
+    if current_command() is not None:
+        d["command"] = current_command()
     write_text(stage / MANIFEST, json.dumps(d, indent=2, ensure_ascii=False, sort_keys=True)
                + "\n")
 
@@ -347,6 +417,8 @@ def carried_inputs(out: Path, inputs: Iterable) -> dict[str, Path]:
     """
     real_out = os.path.realpath(out)
     out_rel: dict[str, Path] = {}
+    inputs = list(inputs)
+    inputs += source_set_files(out, inputs)
     for inp in inputs:
         if inp is None or not str(inp).strip():
             continue
@@ -359,6 +431,74 @@ def carried_inputs(out: Path, inputs: Iterable) -> dict[str, Path]:
                                  "regular file", file=out)
             out_rel[Path(os.path.relpath(ri, real_out)).as_posix()] = Path(ri)
     return out_rel
+
+
+def _is_source_set(man: dict) -> bool:
+    """Whether a manifest is that of data a run reads (``gonio simulate``: readings,
+    stream, thermal programme, truth), not of results."""
+    cmd = man.get("command")
+    if cmd is not None:
+        return cmd == "simulate"
+    files = man["files"]
+    return not any(n in files for n in ("results.json", "validation.json")) and \
+        any(Path(n).name in PROTECTED_NAMES or Path(n).name.startswith("stream.") for n in files)
+
+
+def source_set_files(out, inputs: Iterable) -> list[Path]:
+    """Files of ``out`` that are a run's inputs beyond those named: when one input lies in
+    ``out`` and ``out`` holds the simulated set it came from, every file of that set
+    (readings, the thermal file the readings name, truth.json); and the inputs a previous
+    run into ``out`` kept (its manifest's ``inputs_kept``). They are kept, never deleted."""
+    out = Path(out)
+    man = read_manifest(out)
+    if man is None:
+        return []
+    real_out = os.path.realpath(out)
+    kept = [n for n in man.get("inputs_kept") or () if isinstance(n, str)]
+    inside = any(inp is not None and str(inp).strip() and
+                 os.path.realpath(inp).startswith(real_out + os.sep) for inp in inputs)
+    names = list(kept)
+    if inside and _is_source_set(man):
+        names += list(man["files"])
+    found = []
+    for n in dict.fromkeys(names):
+        p = out / n
+        if ".." not in Path(n).parts and not Path(n).is_absolute() and p.is_file() \
+                and not p.is_symlink():
+            found.append(p)
+    return found
+
+
+def holds_study(out: Path, man: dict | None = None) -> bool:
+    """Whether ``out`` holds a coverage study of ``gonio validate`` (its JSON, its partial
+    batches, or a manifest that says so)."""
+    if man is None:
+        man = read_manifest(out)
+    if man is not None and man.get("command") == "validate":
+        return True
+    return any(os.path.lexists(Path(out) / n) for n in STUDY_NAMES)
+
+
+def _refuse_mixing(out: Path, what: str) -> None:
+    """A folder holds the outputs of one command: a coverage study and a calibration (or
+    a simulation) never share one, whichever comes second; nothing of the other is
+    deleted."""
+    if _lstat(out) is None:
+        return
+    man = read_manifest(out)
+    cmd = current_command()
+    if cmd == "validate":
+        other = None if man is None else man.get("command")
+        if other not in (None, "validate") or (other is None and man is not None
+                                                and not holds_study(out, man)):
+            name = f"gonio {other}" if other else "another gonio run"
+            raise GonioError(f"{what} holds the outputs of {name}; a folder holds one "
+                             "command's outputs: choose another folder for the study",
+                             file=out)
+    elif holds_study(out, man):
+        raise GonioError(f"{what} holds a coverage study of gonio validate (validation.json "
+                         "or .validate-partial); a folder holds one command's outputs: "
+                         "choose another folder", file=out)
 
 
 def _folder_files(out: Path, what: str) -> list[str]:
@@ -393,6 +533,7 @@ def foreign_files(out: Path, inputs: Iterable = (), what: str = "--out") -> list
 
 
 def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
+    _refuse_mixing(out, what)
     man = read_manifest(out)
     if man is None:
         return                            # nothing gonio wrote; foreign files are kept
@@ -519,6 +660,7 @@ def output_dir(out: str | Path) -> Iterator[Path]:
     stage = None
     try:
         clean_stale(out)
+        _refuse_mixing(out, "output folder")
         stage = _stage(out)
         yield stage
         items = [p for p in sorted(stage.rglob("*")) if p.is_file()]
@@ -529,6 +671,8 @@ def output_dir(out: str | Path) -> Iterator[Path]:
                 raise GonioError(f"output place is {_kind(s.st_mode)}; only a regular file is "
                                  "replaced", file=target)
         man = read_manifest(out)
+        if man is None and current_command() is not None:     # the folder says who wrote it
+            man = {"gonio_version": _version(), "command": current_command(), "files": {}}
         try:
             for item in items:
                 target = out / item.relative_to(stage)
@@ -555,8 +699,16 @@ def output_dir(out: str | Path) -> Iterator[Path]:
 def check_output_folder_place(out, what: str = "--out") -> Path:
     """The place checks alone (not empty, not a root or the current folder, a real folder
     or nothing yet, its parent a folder) for a command that adds to its folder instead of
-    replacing it (``gonio validate`` keeps resumable batches there)."""
-    return _check_dir_place(out, what)
+    replacing it (``gonio validate`` keeps resumable batches there), and no other
+    command's outputs there (:func:`_refuse_mixing`)."""
+    out = _check_dir_place(out, what)
+    _refuse_mixing(out, what)
+    return out
+
+
+def _version() -> str:
+    from gonio import __version__
+    return __version__
 
 
 def check_output_dir(out, *, inputs: Iterable = (), force: bool = False,

@@ -119,11 +119,40 @@ def read_utf8(path: str | Path, what: str = "file", limit_bytes: float | None = 
     """
     path = Path(path)
     raw = read_input(path, what, limit_bytes)
+    check_not_binary(raw, path)
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
                          line=raw[:exc.start].count(b"\n") + 1) from None
+
+
+#: Leading bytes of binary formats a text file is sometimes confused with.
+MAGIC: tuple[tuple[bytes, str], ...] = (
+    (b"PAR1", "a Parquet file (name it .parquet)"), (b"PK\x03\x04", "a ZIP archive (or .npz, .xlsx)"),
+    (b"\x1f\x8b", "a gzip-compressed file"), (b"%PDF", "a PDF document"),
+    (b"\x89PNG", "a PNG image"), (b"\x93NUMPY", "a NumPy array file"),
+    (b"SQLite format 3", "an SQLite database"))
+
+
+def binary_kind(head: bytes) -> str | None:
+    """What a binary file is, by its first bytes, or None.
+
+    >>> binary_kind(b"PAR1\x15\x04"), binary_kind(b"# spec: x")
+    ('a Parquet file (name it .parquet)', None)
+    """
+    for magic, kind in MAGIC:
+        if head.startswith(magic):
+            return kind
+    return None
+
+
+def check_not_binary(head: bytes, path) -> None:
+    """GonioError naming what a text input really is when its first bytes say so (a Parquet
+    stream renamed .csv is 'a Parquet file', not 'not UTF-8 text (byte 7)')."""
+    kind = binary_kind(head)
+    if kind is not None:
+        raise GonioError(f"this is {kind}, not a UTF-8 text file (a file renamed?)", file=path)
 
 
 def check_header(columns, required, *, file, line) -> set:

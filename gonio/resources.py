@@ -61,3 +61,29 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     names = builtin_names(kind)
     plural = "benches" if kind == "bench" else f"{kind}s"
     raise GonioError(f"{kind} file not found: {name_or_path} (built-in {plural}: {', '.join(names)})")
+
+
+def readings_protocol(metadata_name: str | None, readings_path, default: str | None):
+    """The protocol a readings file's ``# protocol:`` metadata names: ``default`` when it
+    names none (or the default itself), else a built-in name, a path, or a file of that
+    name next to the readings (``NAME`` or ``NAME.toml``). A name that cannot be found is a
+    GonioError naming the readings file and the key, never replaced by the default.
+    """
+    from gonio.errors import GonioError
+
+    name = (metadata_name or "").strip()
+    if not name or name == default:
+        return default
+    cands: list = [name]
+    if readings_path is not None:
+        base = Path(readings_path).parent
+        cands += [base / name, base / f"{name}.toml"]
+    for c in cands:
+        try:
+            return resolve(c)
+        except GonioError as exc:
+            if "not found" not in exc.message:
+                raise
+    raise GonioError(f"the readings file names protocol {name!r}, which is neither a "
+                     "built-in protocol nor a file next to it: give --protocol FILE",
+                     file=readings_path, key="protocol")

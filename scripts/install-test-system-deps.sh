@@ -4,11 +4,14 @@
 #   chromium        headless rendering of certificate.html (screenshot, --dump-dom)
 #   poppler-utils   pdftoppm / pdftotext for the PDF checks
 #   fonts-noto-cjk  CJK glyphs for `--lang zh`
+#   postgresql      the server binaries (initdb, pg_ctl) the records tests start a throwaway
+#                   cluster with (tests/records/conftest.py; the same tests run on SQLite);
+#                   Chromium also serves the browser test of gonio serve (Playwright)
 # Idempotent: packages already present are not reinstalled; `apt-get update` runs at most once.
 # Without root or without apt-get it prints what to install and exits 0 (the tests then fail
 # with a message pointing here).
 set -u
-PKGS="chromium poppler-utils fonts-noto-cjk"
+PKGS="chromium poppler-utils fonts-noto-cjk postgresql"
 
 missing=""
 for p in $PKGS; do

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session, write_session
 from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.errors import GonioError
@@ -57,7 +58,7 @@ def run(tmp_path_factory):
     lab_dir = d / "lab"
     cert.write_certificate(report, lab_dir, lab=protocols_dir() / "lab-example.toml")
     return {"dir": d, "report": report, "paths": paths, "lab_dir": lab_dir,
-            "results": json.loads((d / "results.json").read_text())}
+            "results": flat_view(json.loads((d / "results.json").read_text()))}
 
 
 def lookup(results: dict, src: str):

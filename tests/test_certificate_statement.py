@@ -25,6 +25,7 @@ import pytest
 from matplotlib.figure import Figure
 from scipy.stats import norm
 
+from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session, write_session
 from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.errors import GonioError
@@ -81,7 +82,7 @@ def run(tmp_path_factory):
     printed = {lang: chromium_print(d / lang / "certificate.html", d / f"{lang}-print.pdf", d)
                for lang in ("en", "zh")}
     return {"dir": d, "report": report, "lab": lab, "truth": session.truth,
-            "results": json.loads((d / "results.json").read_text()), "printed": printed}
+            "results": flat_view(json.loads((d / "results.json").read_text())), "printed": printed}
 
 
 def half_up(x: float, dec: int) -> str:

@@ -19,6 +19,7 @@ import pytest
 from lxml import etree
 from scipy.stats import norm
 
+from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session, write_session
 from gonio.pipeline.calibrate import calibrate, write_calibration
 from gonio.protocol import parse_protocol
@@ -57,7 +58,7 @@ def run(tmp_path_factory):
     docs = {"lab": dcc_bytes(report, lab=lab, cert_id=certificate_id(report, lab)),
             "virtual": dcc_bytes(report, lab=None, cert_id=certificate_id(report, None))}
     return {"report": report, "lab": lab, "docs": docs,
-            "results": json.loads((d / "results.json").read_text())}
+            "results": flat_view(json.loads((d / "results.json").read_text()))}
 
 
 def lookup(res, src):

@@ -142,7 +142,9 @@ def test_ug2_ring_laser_sagnac_frequency_from_the_cli(capsys):
 @pytest.mark.parametrize("argv, what", [
     (["--rlg", "--area-m2", "2000", "--perimeter-m", "121.4"], "can enclose"),  # > P²/4π
     (["--rlg", "--area-m2", "0", "--perimeter-m", "1"], "--area-m2"),
-    (["--rlg", "--area-m2", "1e-300", "--perimeter-m", "1e300"], "not representable"),
+    (["--rlg", "--area-m2", "1e-300", "--perimeter-m", "1"], "below one wavelength"),
+    (["--rlg", "--area-m2", "1", "--perimeter-m", "4", "--wavelength-nm", "1e-310"],
+     "not representable"),
     (["--fog", "--length-m", "1e300", "--diameter-m", "1e300"], "not representable"),
 ])
 def test_sagnac_bounds_are_physics_and_representability(capsys, argv, what):

@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session
 from gonio.bench.config import Harmonic, TableConfig
 from gonio.bench.instrument import harmonic_sum_arcsec
@@ -128,7 +129,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     write_session(run_session(proto, bench_for(np.random.default_rng(0)), seed=1), tmp_path)
     report = calibrate(tmp_path / "readings.csv", proto)
     write_calibration(report, tmp_path)
-    res = json.loads((tmp_path / "results.json").read_text())
+    res = flat_view(json.loads((tmp_path / "results.json").read_text()))
     assert res["unused_readings"] == []
     e = res["equal_division"]
     assert (e["n_starts"], e["m_points"], e["repeats"], e["noise"]) == (4, 8, 2, "random_walk")

@@ -37,7 +37,9 @@ LAYERS: dict[str, int] = {
     "gonio.specs": 6,
     "gonio.report": 7,
     "gonio.pipeline": 8,
-    "gonio.cli": 9, "gonio.__main__": 10,
+    "gonio.records": 9,
+    "gonio.web": 10,
+    "gonio.cli": 11, "gonio.__main__": 12,
 }
 
 

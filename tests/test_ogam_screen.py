@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from gonio.result.model import flat_view
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.readings import Readings, read_readings
@@ -97,7 +98,7 @@ def test_one_degree_typo_in_a_7_4_reading_is_set_aside(bench_file, tmp_path, cap
     clean = calibrate(bench_file, SMALL).to_dict()
     code, err = run_cli(f, tmp_path / "o", capsys)
     assert code == 0
-    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
     fd = [x for x in res["findings"] if x["line"] == i + 1]
     assert len(fd) == 1 and fd[0]["action"] == "set_aside" and fd[0]["column"] == "gyro_counts"
     assert fd[0]["clause"] == "7.4" and "MAD" in fd[0]["rule"] and "K_ref" in fd[0]["message"]
@@ -151,7 +152,7 @@ def test_reading_an_hour_late_without_the_key_is_set_aside(bench_file, tmp_path,
                + ls[i + 1:])
     code, _ = run_cli(f, tmp_path / "o", capsys)
     assert code == 0
-    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
     fd = [x for x in res["findings"] if x["line"] == i + 1]
     assert fd and fd[0]["code"] == "late-reading" and fd[0]["column"] == "time_s"
     assert "Annex A.1" in fd[0]["message"] and "0.5 min" in fd[0]["message"]
@@ -181,7 +182,7 @@ def test_a_7_4_point_missing_from_every_series_is_named(bench_file, tmp_path, ca
     f = damage(bench_file, tmp_path / "in", drop)
     code, err = run_cli(f, tmp_path / "o", capsys)
     assert code == 0
-    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
     fd = [x for x in res["findings"] if x["code"] == "incomplete-programme"]
     assert len(fd) == 1 and fd[0]["action"] == "flagged" and fd[0]["clause"] == "7.4"
     assert "round 3 (270°)" in fd[0]["message"] and "3 of the programme's 4" in fd[0]["message"]

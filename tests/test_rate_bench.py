@@ -143,8 +143,9 @@ def test_jjf_results_json_shape(jjf_noise_off):
         assert set(it) >= {"value", "unit", "clause", "measured", "reason", "uncertainty"}
         assert it["clause"].startswith("7.2.")
         if it["measured"]:
-            assert set(it["uncertainty"]) == {"components", "u_c", "U", "k", "nu_eff", "p"}
-            assert it["uncertainty"]["p"] == 0.95
+            assert set(it["uncertainty"]) == {"components", "u_c", "U", "k", "nu_eff",
+                                              "coverage_probability", "k_source"}
+            assert it["uncertainty"]["coverage_probability"] == 0.95
     json.dumps(js, allow_nan=False)
     lit = js["items"]["g_sensitivity"]["details"]["literal_per_axis_dph_per_g"]["z"]
     cor = js["items"]["g_sensitivity"]["details"]["per_axis_dph_per_g"]["z"]

@@ -32,6 +32,12 @@ def test_wilson_and_item_coverage_by_hand():
     assert (c.n, c.hits, c.coverage) == (4, 3, 0.75)
     assert c.u_coverage == pytest.approx((0.75 * 0.25 / 4) ** 0.5)
     assert c.max_norm_error == pytest.approx(4.0) and c.median_norm_error == pytest.approx(1.625)
+    # Clopper–Pearson against scipy's exact interval; z = e/u_c of the trials with u_c > 0
+    from scipy.stats import binomtest
+    ci = binomtest(3, 4).proportion_ci(method="exact")
+    assert (c.cp_low, c.cp_high) == pytest.approx((ci.low, ci.high), abs=1e-12)
+    z = [-0.05 / 0.05, -0.2 / 0.05, -0.09 / 0.04]
+    assert c.z_mean == pytest.approx(sum(z) / 3) and c.flags == ("under-covers",)
 
 
 @pytest.mark.slow

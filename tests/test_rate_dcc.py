@@ -115,7 +115,7 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
         assert _as_display(mu.find("si:valueExpandedMU", NS).text) == display(U_rule,
                                                                               unc["U"] * factor)
         assert mu.find("si:coverageFactor", NS).text == display("k", unc["k"])
-        assert float(mu.find("si:coverageProbability", NS).text) == unc["p"] == 0.95
+        assert float(mu.find("si:coverageProbability", NS).text) == unc["coverage_probability"] == 0.95
     # per-g items are per m s⁻²: the value times g_n is the results.json value
     per_g = [(s, f, r, ru) for s, ru, f, r in shown if f != 1.0]
     assert per_g and all(res["items"][s.split(".")[1]]["unit"].endswith("/g")
@@ -198,10 +198,24 @@ def test_not_measured_items_carry_their_reason(run, schema):
 def test_calibrate_cli_writes_the_dcc_in_the_set(run, schema, capsys):
     from gonio.cli import main
     out = run["tmp"] / "cal"
-    lab = protocols_dir() / "lab-example.toml"
+    example = protocols_dir() / "lab-example.toml"
+    # the example's limits name the optical draft's items: refused, naming this spec's items
+    assert main(["calibrate", str(run["readings"]), "--protocol", str(run["proto"]),
+                 "--lab", str(example), "--out", str(run["tmp"] / "refused")]) == 2
+    err = capsys.readouterr().err
+    assert f"{run['spec']} has no item 'angle_deviation' (its items: " in err and "bias" in err
+    assert not (run["tmp"] / "refused" / "results.json").exists()
+    text = example.read_text(encoding="utf-8").split("\n[[specification_limits]]\n")[0] + "\n"
+    lab = run["tmp"] / "lab-rate.toml"
+    lab.write_text(text + '[[specification_limits]]\nitem = "bias"\nmpe = 1.0e6\n'
+                   'source = "test limit"\n', encoding="utf-8")
     assert main(["calibrate", str(run["readings"]), "--protocol", str(run["proto"]), "--dcc",
                  "--lab", str(lab), "--out", str(out)]) == 0
     capsys.readouterr()
+    # conformity decided in the pipeline, written to results.json (non-binary, the lab's rule)
+    conf = json.loads((out / "results.json").read_text())["items"]["bias"]["conformity"]
+    assert (conf["rule"], conf["outcome"], conf["limits_from"]) == ("non-binary", "pass",
+                                                                    "lab file")
     man = json.loads((out / "gonio-manifest.json").read_text())
     assert {"certificate.dcc.xml", "certificate.html", "certificate.pdf",
             "results.json"} <= set(man["files"])

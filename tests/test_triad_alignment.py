@@ -393,10 +393,12 @@ def test_uneven_static_record_is_an_error_naming_the_line():
     df = s.readings.copy()
     idx = df.index[df.test == "static"][10]
     df.loc[idx, "time_s"] += 0.5
-    r = parse_triad_readings(format_triad_readings(df, s.metadata), "u.csv")
-    with pytest.raises(GonioError) as e:
-        estimate_alignment(r)
-    assert f"u.csv:{int(r.data.loc[idx, 'line'])}" in str(e.value) and "time_s" in str(e.value)
+    line = int(s.readings.index.get_loc(idx)) + 1 + sum(
+        1 for ln in format_triad_readings(df, s.metadata).splitlines() if ln.startswith("#")) + 1
+    with pytest.raises(GonioError) as e:       # the reader refuses times that go back (issue 26)
+        estimate_alignment(parse_triad_readings(format_triad_readings(df, s.metadata), "u.csv"))
+    assert (f"u.csv:{line}:" in str(e.value) or f"line {line} " in str(e.value)) \
+        and "time_s" in str(e.value), str(e.value)
 
 
 def test_specification_plug_in(tmp_path):
@@ -408,9 +410,19 @@ def test_specification_plug_in(tmp_path):
     paths = write_triad_session(run_alignment_session(protocol(static_s=0.0), b, seed=9),
                                 tmp_path / "s")
     cal = spec.calibrate(paths["readings"])
-    out = json.loads(json.dumps(cal.to_json(), allow_nan=False))
+    out = json.loads(json.dumps(cal.to_json(), allow_nan=False))["extra"]
     assert out["thermal_model"] is None and out["alignment"]["averaging_time"] is None
     m = np.array(out["alignment"]["system_matrix"])
     u = np.array(out["alignment"]["u_system_matrix"])
     assert np.all(np.abs(m - b.system_matrix) <= 5 * u)
     assert len(out["cross_axis"]) == 6
+    # the matrix elements are items with their covariance: per gyro, its row of M and its bias
+    # from one fit; the diagonal is each item's u_c squared, the matrix symmetric
+    covs = cal.to_json()["covariances"]
+    assert [c["items"] for c in covs] == [[f"M_{a}x", f"M_{a}y", f"M_{a}z", f"b_{a}"]
+                                          for a in "xyz"]
+    for c in covs:
+        C = np.array(c["matrix"])
+        assert np.allclose(C, C.T, rtol=1e-12, atol=0)
+        assert np.allclose(np.sqrt(np.diag(C)), [cal.items[k].uncertainty.u_c for k in c["items"]],
+                           rtol=1e-12)

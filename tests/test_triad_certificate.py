@@ -75,7 +75,7 @@ def test_results_json_per_item_shape(run):
     assert u["k"] == pytest.approx(stats.t.ppf(0.5 + 0.9545 / 2, u["nu_eff"]), rel=1e-9)
     # the thermal programme (named by the readings' metadata) gives the model's items
     assert res["items"]["K_z_c0"]["measured"] and res["items"]["b_z_c0"]["measured"]
-    assert res["thermal_model"]["channels"]["z"]["scale"]["criterion"] == "bic"
+    assert res["extra"]["thermal_model"]["channels"]["z"]["scale"]["criterion"] == "bic"
 
 
 def test_estimate_within_uncertainty_of_the_bench_truth(run):

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from gonio.result.model import flat_view
 from gonio.pipeline.calibrate import calibrate
 from gonio.cli import main
 from gonio.errors import GonioError
@@ -90,7 +91,7 @@ def cli_json(argv, capsys):
     capsys.readouterr()
     code = main(argv + ["--json"])
     out = capsys.readouterr()
-    return code, (json.loads(out.out) if code == 0 else None), out.err
+    return code, (flat_view(json.loads(out.out)) if code == 0 else None), out.err
 
 
 # --------------------------------------------------------------------------- defect 1

@@ -138,3 +138,47 @@ def test_progress_shows_rate_and_eta_only_when_asked():
     q.update(5)
     q.close()
     assert quiet.getvalue() == ""
+
+
+@pytest.mark.parametrize("scheduler", ["local:100000", "local:3"])
+def test_local_cluster_capped_at_the_cores_before_anything_starts(monkeypatch, scheduler):
+    """issue 26: `--scheduler local:100000` ran for minutes, > 1.5 GB, no result; local:64
+    on 2 cores printed ~140 lines of tracebacks. Refused at once, one line naming the key."""
+    import time
+
+    monkeypatch.delenv("GONIO_MAX_WORKERS", raising=False)
+    monkeypatch.setattr(V, "available_cores", lambda: 2)
+    t0 = time.perf_counter()
+    with pytest.raises(V.GonioError) as e:
+        V.validate(4, seed=3, bench=bench(), protocol=tiny_protocol(), sample_rate_hz=10.0,
+                   show_progress=False, scheduler=scheduler)
+    assert time.perf_counter() - t0 < 5
+    assert e.value.key == "scheduler" and "2 cores" in str(e.value)
+    assert "\n" not in str(e.value) and "GONIO_MAX_WORKERS" in str(e.value)
+    buf = io.StringIO()
+    import contextlib
+    with contextlib.redirect_stderr(buf):
+        assert main(["validate", "--trials", "4", "--scheduler", scheduler]) == 2
+    assert len(buf.getvalue().strip().splitlines()) == 1 and "Traceback" not in buf.getvalue()
+    monkeypatch.setenv("GONIO_MAX_WORKERS", "100000")      # the cap can be raised
+    assert V.study_workers(4, None, scheduler, None)[1] >= 1
+
+
+def test_default_batches_give_several_tasks_per_worker(monkeypatch):
+    """The default batch size comes from the trials and the workers: about 4 tasks per
+    worker over all cases (issue 26: 320 trials must not become 2 tasks for 16 workers)."""
+    monkeypatch.setenv("GONIO_MAX_WORKERS", "64")
+    for trials, workers, cases in [(320, 16, 1), (3200, 16, 1), (320, 16, 5), (50, 2, 1),
+                                   (100_000, 16, 1)]:
+        _, b = V.study_workers(trials, workers, None, None, cases)
+        tasks = cases * len(V.batches(range(trials), b))
+        assert tasks >= min(trials * cases, 4 * workers), (trials, workers, cases, b)
+        assert b <= V.MAX_BATCH
+    _, b = V.study_workers(320, None, "local:16", None)
+    assert len(V.batches(range(320), b)) >= 4 * 16
+
+
+def test_bytes_identical_with_default_batches_on_any_workers():
+    one = run(workers=1)
+    assert run(workers=2) == one
+    assert run(workers=2, batch_size=1) == one

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from gonio.result.model import flat_view
 from gonio.analysis.noise.fit import design_matrix
 from gonio.analysis.noise.readings import (expected_sample_variance, expected_zero_stability,
                                            generalised_covariance, reading_weights)
@@ -183,7 +184,8 @@ def test_cli_readings_file_states_the_chi_square_interval_and_t_factor(tmp_path)
     p.write_text(proto, encoding="utf-8")
     r = _run("calibrate", f, "--protocol", p, "--out", tmp_path / "o")
     assert r.returncode == 0, r.stderr
-    zs = json.loads((tmp_path / "o" / "results.json").read_text(encoding="utf-8"))["zero_stability"]
+    zs = flat_view(json.loads((tmp_path / "o" / "results.json").read_text(
+        encoding="utf-8")))["zero_stability"]
     m = np.loadtxt(f, delimiter=",", skiprows=2, usecols=8)
     b_s = float(np.std(m, ddof=1)) / (T_READ[-1] / 3600.0)
     u = zs["uncertainty"]

@@ -11,6 +11,10 @@ Contents
 :func:`conformance_probability`  p_c = Φ((T_U − y)/u) − Φ((T_L − y)/u)   (JCGM 106 7.3)
 :func:`acceptance_interval`      [T_L + w, T_U − w] of a guarded rule     (JCGM 106 8.3, ILAC-G8 4.2.2)
 :func:`decide`                   the statement for one item under one rule
+:func:`limits_of`                a ``[[specification_limits]]`` entry as :class:`Limits`
+:func:`rule_of`                  a ``[decision_rule]`` table as :class:`DecisionRule`
+:func:`decide_items`             every limited item of a result decided, stored in its Item
+:func:`decide_result`            a laboratory file's limits and a specification's defaults
 ===============================  ===========================================================
 
 The measurement model is the normal one of JCGM 106 7.3: given the measured value
@@ -44,9 +48,14 @@ certificate shows no conformity section).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, replace
 
 from gonio.errors import GonioError
+from gonio.result.model import Conformity
+
+__all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
+           "conformance_probability", "acceptance_interval", "decide", "limits_of",
+           "rule_of", "decide_items", "decide_result"]
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``).
 RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
@@ -90,31 +99,6 @@ class Limits:
             raise GonioError("a specification limit needs lower, upper or mpe")
         if self.lower is not None and self.upper is not None and not self.lower < self.upper:
             raise GonioError(f"lower limit {self.lower} is not below upper limit {self.upper}")
-
-
-@dataclass(frozen=True)
-class Conformity:
-    """The conformity statement for one item (all values in the item's unit)."""
-
-    item: str
-    value: float
-    U: float
-    k: float
-    lower: float | None
-    upper: float | None
-    rule: str
-    guard_band: float
-    acceptance_lower: float | None
-    acceptance_upper: float | None
-    outcome: str
-    accepted: bool
-    conformance_probability: float
-    false_accept_probability: float | None
-    false_reject_probability: float | None
-    source: str = ""
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 def normal_cdf(z: float) -> float:
@@ -211,4 +195,98 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
                       accepted=accepted, conformance_probability=p_c,
                       false_accept_probability=(1.0 - p_c) if accepted else None,
                       false_reject_probability=p_c if not accepted else None,
-                      source=limits.source)
+                      source=limits.source, guard_factor=float(rule.guard_factor))
+
+
+def limits_of(lim: dict) -> Limits:
+    """A ``[[specification_limits]]`` entry as :class:`Limits` (``mpe`` = symmetric ±mpe).
+
+    >>> limits_of({"item": "bias", "mpe": 0.5})
+    Limits(lower=-0.5, upper=0.5, source='')
+    """
+    if lim.get("mpe") is not None:
+        return Limits(-abs(lim["mpe"]), abs(lim["mpe"]), lim.get("source", "") or "")
+    return Limits(lim.get("lower"), lim.get("upper"), lim.get("source", "") or "")
+
+
+def rule_of(table: dict | None) -> DecisionRule:
+    """A ``[decision_rule]`` table (``rule``, ``guard_band_factor``) as :class:`DecisionRule`."""
+    t = table or {}
+    factor = t.get("guard_band_factor")
+    return DecisionRule(t.get("rule") or "simple", 1.0 if factor is None else float(factor))
+
+
+def _undecided(key: str, lim: Limits, rule: DecisionRule, origin: str,
+               reason: str) -> Conformity:
+    return Conformity(item=key, value=None, U=None, k=None, lower=lim.lower, upper=lim.upper,
+                      rule=rule.kind, guard_band=None, acceptance_lower=None,
+                      acceptance_upper=None, outcome=None, accepted=None,
+                      conformance_probability=None, false_accept_probability=None,
+                      false_reject_probability=None, source=lim.source,
+                      guard_factor=float(rule.guard_factor), limits_from=origin, reason=reason)
+
+
+def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,
+                 origin: str = "lab file", where: str = "specification_limits") -> list:
+    """Decide every item of ``result`` (a :class:`gonio.result.model.Result`) that a limit
+    names, and store the :class:`Conformity` in the item (``Item.conformity``).
+
+    ``limits``: ``[[specification_limits]]`` entries (``item``; ``mpe`` or ``lower`` /
+    ``upper``; ``source``), from a laboratory file or a specification's default tolerances
+    (``origin`` says which; a lab file's limit replaces a default for the same item). A
+    limit naming an item the specification does not have is a GonioError naming that
+    specification's items; an item not measured, or without U, gets a Conformity with no
+    outcome and the ``reason``. Returns the decisions in the order of ``limits``.
+
+    >>> from gonio.result.model import Item, Result, Uncertainty
+    >>> r = Result("s", "S", {"bias": Item("bias", "bias", "7.2.8", "°/h", 0.4,
+    ...            uncertainty=Uncertainty([], 0.05, 0.1, 2.0, None))}, {}, {})
+    >>> [c.outcome for c in decide_items(r, [{"item": "bias", "mpe": 0.5}], {"rule": "simple"})]
+    ['pass']
+    >>> decide_items(r, [{"item": "K", "mpe": 1}], None)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[0].item: s has no item 'K' (its items: bias)
+    """
+    rule = rule if isinstance(rule, DecisionRule) else rule_of(rule)
+    out = []
+    for i, lim in enumerate(limits or []):
+        key = lim.get("item")
+        if key not in result.items:
+            raise GonioError(f"{result.spec_key} has no item {key!r} (its items: "
+                             f"{', '.join(result.items)})", key=f"{where}[{i}].item")
+        it = result.items[key]
+        bounds = limits_of(lim)
+        unc = it.uncertainty
+        if not it.measured or it.value is None:
+            c = _undecided(key, bounds, rule, origin, "not measured: " + (it.reason or ""))
+        elif (unc is None or unc.U is None or unc.k is None or not unc.U > 0
+              or not math.isfinite(unc.U)):
+            c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
+        else:
+            c = replace(decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule),
+                        limits_from=origin)
+        it.conformity = c
+        out.append(c)
+    return out
+
+
+
+def decide_result(result, lab: dict | None, defaults: list[dict] | None = None,
+                  defaults_origin: str = "specification's tolerance") -> list:
+    """Conformity of every item that has limits, stored in the result's items (the pipeline
+    calls this for every specification; the report only renders ``Item.conformity``).
+
+    The limits are the laboratory file's ``[[specification_limits]]`` (decided under its
+    ``[decision_rule]``) and, for items the lab file does not limit, ``defaults`` (a
+    specification's or protocol's tolerances, same entries; decided under the lab file's
+    rule, else simple acceptance). No limits: no decision, every ``conformity`` stays None.
+    """
+    lab = lab or {}
+    lab_limits = list(lab.get("specification_limits") or [])
+    named = {lim.get("item") for lim in lab_limits}
+    rule = rule_of(lab.get("decision_rule"))
+    out = decide_items(result, [d for d in defaults or [] if d.get("item") not in named], rule,
+                       origin=defaults_origin, where="tolerances")
+    out += decide_items(result, lab_limits, rule, origin="lab file")
+    return out

@@ -572,6 +572,23 @@ def run_alignment_session(protocol: TriadProtocol, bench: TriadBench, seed: int 
     return TriadSession(data, _metadata(bench, protocol, seed, "alignment"), _truth(bench))
 
 
+def check_ramp_rows(th: dict) -> float:
+    """The rows the thermal programme's ramps will record (every ``up``, every set point,
+    ``ramp_block_s`` each), checked against ``GONIO_MAX_READING_ROWS`` before any block is
+    simulated: a block of 0.01 s would otherwise grow the session without end. The error
+    names the key."""
+    from gonio.limits import check
+
+    rows, at = 0.0, th["start_c"]
+    for sp in th["setpoints_c"]:
+        rows += math.ceil(abs(sp - at) / th["ramp_c_per_min"] * 60.0 / th["ramp_block_s"])
+        at = sp
+    rows *= len(th["up"])
+    check("GONIO_MAX_READING_ROWS", rows, "thermal.ramp_block_s: the ramps would record",
+          unit="rows")
+    return rows
+
+
 def run_thermal_session(protocol: TriadProtocol, bench: TriadBench, seed: int = 0) -> TriadSession:
     """Temperature-chamber and supply programme (thesis §5.2.3–5.2.4, §6.2).
 
@@ -591,6 +608,7 @@ def run_thermal_session(protocol: TriadProtocol, bench: TriadBench, seed: int = 
     r.chamber_c = r.die_c = th["start_c"]
     volts = _alternating(th["supply_v"])
     rate = th["rate_dps"]
+    check_ramp_rows(th)                       # sized before the first block is simulated
     for up in th["up"]:
         north0 = {"x": "+y", "y": "+z", "z": "+x"}[up[1]]
         for sp in th["setpoints_c"]:

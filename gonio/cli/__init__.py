@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("always")
             parser = build_parser()
             args = parser.parse_args(argv)
-            rc = int(args.func(args) or 0)
+            rc = _run(args)
             sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit
         seen = set()
         for w in caught:
@@ -135,6 +135,18 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write(f"gonio: internal error: {type(exc).__name__}: {_short(exc, 300)} "
                          "(GONIO_DEBUG=1 shows the traceback)\n")
         return 1
+
+
+def _run(args) -> int:
+    """Run the sub-command, its name recorded for the manifests it writes
+    (:func:`gonio.atomic.set_command`)."""
+    from gonio.atomic import set_command
+
+    set_command(args.command)
+    try:
+        return int(args.func(args) or 0)
+    finally:
+        set_command(None)
 
 
 def _quiet_shutdown() -> None:

@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 
+from gonio.cli.checks import int_range, seed
 from gonio.errors import GonioError
 
 
@@ -30,9 +31,9 @@ def register(sub) -> None:
     p.add_argument("--robust", action="store_true",
                    help="iteratively reweighted least squares (Tukey bisquare): outlying "
                         "dwells are down-weighted and listed")
-    p.add_argument("--monte-carlo", type=int, default=2000, metavar="N",
+    p.add_argument("--monte-carlo", type=int_range(0), default=2000, metavar="N",
                    help="Monte Carlo trials for the uncertainties (0: GUM only; default 2000)")
-    p.add_argument("--seed", type=int, default=0, help="Monte Carlo seed")
+    p.add_argument("--seed", type=seed, default=0, help="Monte Carlo seed")
     p.add_argument("--target-deg", type=float, default=0.1,
                    help="alignment target ψ_T for the averaging time (default 0.1°)")
     p.set_defaults(func=run)
@@ -50,9 +51,22 @@ def run(args) -> int:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
     if not 0 < args.target_deg < 90:
         raise GonioError(f"--target-deg must be in (0, 90), got {args.target_deg}")
+    from gonio.atomic import check_output_files
+    from gonio.formats.triad import named_inputs
+    from gonio.limits import check
+    from gonio.specs.triad_alignment.calibration import consistency_check
+
+    check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
+    from gonio.report.figure_files import FIGURE_FORMATS
+
+    check_output_files({"--plot": args.plot, "--report": args.report},
+                       formats={"--plot": FIGURE_FORMATS},
+                       inputs=[args.readings, *named_inputs(args.readings)])
     r = read_triad_readings(args.readings)
     res = estimate_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,
                              seed=args.seed, target_deg=args.target_deg)
+    if not args.robust:
+        consistency_check(res, r)              # the check calibrate makes, the same function
     if args.plot or args.report:
         from gonio.report.figure_files import save_figure
         from gonio.report.triad_figures import alignment_figure

@@ -76,8 +76,8 @@ def print_outputs(report, as_json: bool, lab_d: dict | None, lang: str) -> None:
     if note:
         sys.stderr.write(f"gonio: note: {note}\n")
     if as_json:
-        sys.stdout.write(json.dumps(report.to_dict(), indent=2, ensure_ascii=False,
-                                    allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(report.decided_result(lab_d).to_json(), indent=2,
+                                    ensure_ascii=False, allow_nan=False) + "\n")
     else:
         sys.stdout.write(report.summary(lab_d))
     sys.stdout.flush()
@@ -125,7 +125,8 @@ def run(args) -> int:
                                  "for a triad calibration: the readings carry what it needs)",
                                  key=flag)
 
-        inputs.append(args.thermal)
+        from gonio.formats.triad import named_inputs
+        inputs += [args.thermal, *named_inputs(args.readings)]   # never replaced or removed
         check_output_dir(args.out, inputs=inputs, force=args.force)
         with output_set(args.out, inputs=inputs, force=args.force):
             result, _ = calibrate_triad(args.readings, args.out, thermal=args.thermal,

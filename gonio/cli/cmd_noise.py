@@ -248,13 +248,16 @@ def _table(result) -> str:
 
 def run(args) -> int:
     """Run ``gonio noise``; prints a table or JSON, optionally writes the plot."""
-    from gonio.atomic import check_output_file
+    from gonio.atomic import check_output_files
     from gonio.errors import check_input_file
     from gonio.report.noise_figures import write_noise_figure
 
     check_input_file(args.stream, "stream file")
     if args.plot is not None:
-        check_output_file(args.plot, what="--plot", inputs=[args.stream])
+        from gonio.report.figure_files import FIGURE_FORMATS
+
+        check_output_files({"--plot": args.plot}, inputs=[args.stream],
+                           formats={"--plot": FIGURE_FORMATS})
 
     results = stream_noise(args.stream, args.input, taus=args.taus, modified=args.modified,
                            kind=args.kind, scale_factor=args.scale_factor,

@@ -34,7 +34,15 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from gonio.analysis.thermal_model import compensate_record, identify_thermal_model
-    from gonio.formats.triad import json_safe, read_triad_readings
+    from gonio.atomic import check_output_files
+    from gonio.formats.triad import json_safe, named_inputs, read_triad_readings
+
+    inputs = [args.readings, args.compensate]
+    from gonio.report.figure_files import FIGURE_FORMATS
+
+    check_output_files({"--plot": args.plot, "--report": args.report},
+                       formats={"--plot": FIGURE_FORMATS},
+                       inputs=inputs + [q for i in inputs if i for q in named_inputs(i)])
 
     r = read_triad_readings(args.readings)
     res = identify_thermal_model(r, criterion=args.criterion, temperature=args.temperature)

@@ -46,10 +46,12 @@ def register(sub) -> None:
                         "results do not depend on it)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run on a Dask cluster: tcp://host:8786, or local:N to start a "
-                        "LocalCluster of N processes (needs pip install 'gonio[dask]'; results "
-                        "do not depend on it)")
+                        "LocalCluster of N processes, N at most the machine's cores "
+                        "(GONIO_MAX_WORKERS raises it; needs pip install 'gonio[dask]'; "
+                        "results do not depend on it)")
     p.add_argument("--batch", type=int, default=None, metavar="N",
-                   help="trials per task (default up to 250; results do not depend on it)")
+                   help="trials per task (default: about 4 tasks per worker over all cases, "
+                        "at most 250; results do not depend on it)")
     p.add_argument("--out", default=None,
                    help="folder for validation.json; finished batches are kept in "
                         "OUT/.validate-partial until the study completes")

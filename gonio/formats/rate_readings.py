@@ -61,9 +61,39 @@ DEFAULTS = {"rate_dps": 0.0, "freq_hz": 0.0, "temperature_c": math.nan, "supply_
             "up_axis": "+z", "north_axis": "+x", "reference_dps": math.nan, "stand_deg": 0.0,
             "stand_axis": "+x", "supply_set_v": math.nan}
 AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
-NUMERIC_METADATA = {"nominal_scale_factor": "a non-zero number", "null_output": "a number",
-                    "latitude_deg": "a number in [-90, 90]", "room_temperature_c": "a number",
-                    "supply_nominal_v": "a number > 0"}
+#: Numeric metadata: key -> (lowest, highest, expected) — physically plausible ranges
+#: (docs/formats.md "Rate-gyro metadata"); a value outside is refused naming the key,
+#: before any arithmetic could overflow or a budget lose its meaning.
+META_RANGES: dict[str, tuple[float, float, str]] = {
+    "nominal_scale_factor": (-1e12, 1e12, "a non-zero number in [-1e12, 1e12]"),
+    "null_output": (-1e12, 1e12, "a number in [-1e12, 1e12]"),
+    "latitude_deg": (-90.0, 90.0, "a number in [-90, 90]"),
+    "room_temperature_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
+    "supply_nominal_v": (1e-3, 1e3, "a voltage in [0.001, 1000] V"),
+    "rate_table_u_rel": (0.0, 0.5, "a relative standard uncertainty in [0, 0.5]"),
+    "acquisition_u_rel": (0.0, 0.5, "a relative standard uncertainty in [0, 0.5]"),
+    "chamber_deviation_bound_c": (0.0, 50.0, "a temperature bound in [0, 50] °C"),
+}
+NUMERIC_METADATA = {k: v[2] for k, v in META_RANGES.items()}
+#: Plausible range of each numeric column: (lowest, highest, expected). A value outside is
+#: a unit or transcription error (1e308 mV, 300 °C in a gyro chamber, a supply of 0 V).
+COLUMN_RANGES: dict[str, tuple[float, float, str]] = {
+    "time_s": (-1e9, 1e9, "a time in [-1e9, 1e9] s"),
+    "rate_dps": (-1e5, 1e5, "a rate in [-1e5, 1e5] °/s"),
+    "freq_hz": (0.0, 1e5, "a frequency in [0, 1e5] Hz"),
+    "temperature_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
+    "supply_v": (1e-3, 1e3, "a voltage in [0.001, 1000] V"),
+    "supply_set_v": (1e-3, 1e3, "a voltage in [0.001, 1000] V"),
+    "reference_dps": (-1e5, 1e5, "a rate in [-1e5, 1e5] °/s"),
+    "output": (-1e12, 1e12, "a number in [-1e12, 1e12]"),
+    "stand_deg": (-1e4, 1e4, "an angle in [-1e4, 1e4]°"),
+}
+#: Tests whose rows are records (one segment sampled in time): a constant output there is
+#: a stuck gyro or a filled column, never a measurement of zero noise.
+RECORD_TESTS: tuple[str, ...] = ("bias", "warmup", "static", "bias_temperature")
+#: A run of this many consecutive samples at the file's largest (or smallest) output is a
+#: clipped, saturated gyro: its scale factor and noise would be certified from a flat top.
+SATURATION_RUN = 5
 
 
 @dataclass
@@ -91,8 +121,8 @@ def _meta_number(key: str, v: str, path) -> float:
     except ValueError:
         raise GonioError(f"expected {NUMERIC_METADATA.get(key, 'a number')}, got {v!r}",
                          file=path, key=key) from None
-    bad = not math.isfinite(x) or (key == "latitude_deg" and abs(x) > 90) or \
-        (key == "supply_nominal_v" and x <= 0) or (key == "nominal_scale_factor" and x == 0)
+    lo, hi, _ = META_RANGES.get(key, (-math.inf, math.inf, ""))
+    bad = not math.isfinite(x) or not lo <= x <= hi or (key == "nominal_scale_factor" and x == 0)
     if bad:
         raise GonioError(f"expected {NUMERIC_METADATA.get(key, 'a number')}, got {v!r}",
                          file=path, key=key)
@@ -153,12 +183,14 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
         df = pd.read_csv(io.StringIO(body), dtype=str, keep_default_na=False,
                          skip_blank_lines=True)
     except pd.errors.ParserError as exc:
+        _field_counts(lines, i, len(header), fname)
         raise GonioError(f"CSV: {exc}".replace("\n", " "), file=fname) from None
     # line numbers of the data rows (blank lines skipped)
     line_no = np.array([j + 1 for j in range(i + 1, len(lines)) if lines[j].strip()], dtype=np.int64)
     if len(df) == 0:
         raise GonioError("no readings: header only", file=fname, line=header_line)
     if len(line_no) != len(df):
+        _field_counts(lines, i, len(header), fname)
         raise GonioError("a row has more fields than the header", file=fname)
     out = pd.DataFrame({"line": line_no})
     for col in COLUMNS:
@@ -200,7 +232,101 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
         else:
             out[col] = np.where(empty.to_numpy(), DEFAULTS.get(col, math.nan), arr)
     out = out[list(COLUMNS) + ["line"]]
+    check_rate_rows(out, fname, ratiometric=md.get("ratiometric", "").strip().lower()
+                    in ("true", "yes", "1"),
+                    noise_free=md.get("noise", "").strip().lower() in ("off", "false", "no"))
     return RateReadings(out, md, None if path is None else Path(path))
+
+
+def _field_counts(lines: list[str], i: int, n: int, fname) -> None:
+    """GonioError naming the first data line (file numbering) whose field count differs
+    from the header's ``n`` (pandas numbers the lines of the part it was given)."""
+    for j in range(i + 1, len(lines)):
+        if lines[j].strip() and lines[j].count(",") + 1 != n:
+            raise GonioError(f"expected {n} fields as in the header (line {i + 1}), got "
+                             f"{lines[j].count(',') + 1}", file=fname, line=j + 1)
+
+
+def _first(mask: np.ndarray) -> int:
+    return int(np.flatnonzero(mask)[0])
+
+
+def check_rate_rows(df: pd.DataFrame, fname, *, ratiometric: bool = False,
+                    noise_free: bool = False) -> None:
+    """Whole-file checks after every cell is read, each a GonioError naming the line:
+
+    * every number within :data:`COLUMN_RANGES` (and, for a ratiometric gyro, a supply on
+      every row of the ``ratiometric`` test: eq (18) divides by it);
+    * within each (``test``, ``run``), ``time_s`` strictly increasing from row to row — a
+      duplicated sample, shuffled rows or a column of equal times is refused (each would
+      weigh a sample twice, reorder a record, or make a warm-up or a frequency response
+      from no time at all);
+    * a record test (:data:`RECORD_TESTS`) is one segment per run (one ``step``);
+    * no record test whose output is one value in every sample (a stuck gyro, or a
+      column filled with zeros: the noise would be certified as 0);
+    * no run of :data:`SATURATION_RUN` consecutive samples at the file's largest or
+      smallest output (a clipped, saturated gyro).
+
+    The last two do not apply to a noise-free virtual bench (metadata ``noise: off``),
+    whose records are constant by construction.
+    """
+    line = df["line"].to_numpy()
+    for col, (lo, hi, expect) in COLUMN_RANGES.items():
+        v = df[col].to_numpy(dtype=float)
+        bad = ~np.isnan(v) & ((v < lo) | (v > hi))
+        if bad.any():
+            k = _first(bad)
+            raise GonioError(f"expected {expect}, got {v[k]:.6g}", file=fname,
+                             line=int(line[k]), column=col)
+    if ratiometric:
+        rows = (df["test"] == "ratiometric").to_numpy() & np.isnan(df["supply_v"].to_numpy(float))
+        if rows.any():
+            k = _first(rows)
+            raise GonioError("a ratiometric row needs the actual supply voltage (IEC eq (18) "
+                             "divides by it)", file=fname, line=int(line[k]), column="supply_v")
+    t = df["time_s"].to_numpy(dtype=float)
+    key = df["test"].astype(str).to_numpy() + "/" + df["run"].astype(str).to_numpy()
+    same = np.r_[False, key[1:] == key[:-1]]
+    back = same & np.r_[False, t[1:] <= t[:-1]]
+    if back.any():
+        k = _first(back)
+        raise GonioError(f"time_s must increase from sample to sample within test "
+                         f"{df['test'].iat[k]} run {df['run'].iat[k]}; {t[k]:.6g} s does not "
+                         f"follow {t[k - 1]:.6g} s on line {int(line[k - 1])} (a duplicated "
+                         "sample, reordered rows or one time for all)", file=fname,
+                         line=int(line[k]), column="time_s")
+    y = df["output"].to_numpy(dtype=float)
+    step = df["step"].to_numpy()
+    rec = df["test"].isin(RECORD_TESTS).to_numpy()
+    moved = rec & same & np.r_[False, step[1:] != step[:-1]]
+    if moved.any():
+        k = _first(moved)
+        raise GonioError(f"test {df['test'].iat[k]} run {df['run'].iat[k]} is one record: its "
+                         f"rows share one step (step {step[k]} follows step {step[k - 1]})",
+                         file=fname, line=int(line[k]), column="step")
+    if noise_free:
+        return
+    for test in RECORD_TESTS:
+        for run in np.unique(df["run"].to_numpy()[(df["test"] == test).to_numpy()]):
+            m = ((df["test"] == test) & (df["run"] == run)).to_numpy()
+            v = y[m]
+            if v.size >= 2 and np.all(v == v[0]):
+                raise GonioError(f"the output is {v[0]:.6g} in every sample of test {test} run "
+                                 f"{run}: a stuck gyro or a filled column, not a record (its "
+                                 "noise would be certified as 0)", file=fname,
+                                 line=int(line[m][0]), column="output")
+    for ext, word in ((y.max(), "largest"), (y.min(), "smallest")):
+        at = (y == ext).astype(np.int64)
+        if at.sum() < SATURATION_RUN:
+            continue
+        run = np.convolve(at, np.ones(SATURATION_RUN, dtype=np.int64), "valid")
+        hit = np.flatnonzero(run == SATURATION_RUN)
+        if hit.size:
+            k = int(hit[0])
+            raise GonioError(f"{SATURATION_RUN} or more consecutive samples at the file's "
+                             f"{word} output {ext:.6g}: the gyro saturated (clipped); a scale "
+                             "factor or noise from a flat top would be wrong", file=fname,
+                             line=int(line[k]), column="output")
 
 
 def write_rate_readings(data: pd.DataFrame, metadata: dict, path: str | Path) -> Path:

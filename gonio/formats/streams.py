@@ -52,7 +52,7 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
-from gonio.errors import GonioError, check_header
+from gonio.errors import GonioError, check_header, check_not_binary
 from gonio.formats.metadata import NUMERIC_METADATA, metadata_bool, metadata_float
 
 #: Column order of a written stream file.
@@ -162,6 +162,8 @@ def _parse_header(path: Path) -> _Header:
             offset += len(raw)
             if lineno == 1 and raw.startswith(b"\xef\xbb\xbf"):
                 raw = raw[3:]
+            if lineno == 1:
+                check_not_binary(raw, fname)          # a Parquet file renamed .csv says so
             try:
                 line = raw.decode("utf-8").rstrip("\r\n")
             except UnicodeDecodeError:
@@ -1061,6 +1063,7 @@ def _open_parquet(path: Path):
         except UnicodeDecodeError:
             raise GonioError("metadata not UTF-8 text", file=path) from None
     cols = list(schema.names)
+    check_header(cols, (), file=path, line=None)      # a column named twice: refused by name
     for c in cols:
         if c in STREAM_COLUMNS:
             t = schema.field(c).type

@@ -211,3 +211,37 @@ def validate_table(table: dict, schema: dict[str, Field], prefix: str = "",
         else:
             out[key] = f.default
     return out
+
+
+#: Longest text a laboratory file's field may hold (a name, an address, a note): a page
+#: lays it out, and a megabyte of name is a mistake, not a laboratory.
+MAX_TEXT_FIELD = 2000
+#: Characters a certificate never carries: C0 controls but tab and line feed, DEL, C1
+#: controls, and the Unicode non-characters (U+FDD0–U+FDEF, U+xFFFE, U+xFFFF).
+_BAD_TEXT = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\ufdd0-\ufdef\ufffe\uffff]")
+
+
+def check_text_fields(table, path, prefix: str = "", limit: int = MAX_TEXT_FIELD) -> None:
+    """Every string in a TOML table (nested tables and arrays too): at most ``limit``
+    characters and no control or non-character code point; a GonioError names the key
+    (``laboratory.name``, ``standards[2].id``) and the code point.
+
+    >>> check_text_fields({"laboratory": {"name": "A\\x01B"}}, "lab.toml")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: lab.toml: key laboratory.name: control character U+0001 at position 2; certificates carry printable text only
+    """
+    items = table.items() if isinstance(table, dict) else enumerate(table)
+    for k, v in items:
+        key = f"{prefix}[{k}]" if isinstance(table, list) else (f"{prefix}.{k}" if prefix else str(k))
+        if isinstance(v, (dict, list)):
+            check_text_fields(v, path, key, limit)
+        elif isinstance(v, str):
+            if len(v) > limit:
+                raise GonioError(f"text of {len(v)} characters, over the limit of {limit}",
+                                 file=path, key=key)
+            m = _BAD_TEXT.search(v)
+            if m:
+                raise GonioError(f"control character U+{ord(m.group()):04X} at position "
+                                 f"{m.start() + 1}; certificates carry printable text only",
+                                 file=path, key=key)

@@ -54,6 +54,19 @@ _OPTIONAL_FLOATS = ("chamber_c", "sensor_c", "supply_v") + SD
 NUMERIC_METADATA = {"latitude_deg": (lambda v: -90 <= v <= 90, "a number in [-90, 90]"),
                     "sample_rate_hz": (lambda v: v > 0, "a number > 0")}
 REQUIRED_METADATA = ("format", "latitude_deg", "sample_rate_hz", "output_unit")
+#: Plausible range of each numeric column (docs/formats-triad.md): a value outside is a
+#: unit or transcription error, refused with its line before any arithmetic can overflow.
+RANGES: dict[str, tuple[float, float, str]] = {
+    "table_deg": (-1e6, 1e6, "a number in [-1e6, 1e6]"),
+    "rate_dps": (-1e5, 1e5, "a number in [-1e5, 1e5] °/s"),
+    "time_s": (-1e9, 1e9, "a number in [-1e9, 1e9] s"),
+    "duration_s": (0.0, 1e7, "a number in (0, 1e7] s"),
+    "chamber_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
+    "sensor_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
+    "supply_v": (1e-3, 1e3, "a supply voltage in [0.001, 1000] V"),
+    **{c: (-1e12, 1e12, "a number in [-1e12, 1e12]") for c in OUT},
+    **{c: (0.0, 1e12, "a number in [0, 1e12]") for c in SD},
+}
 
 
 @dataclass
@@ -188,7 +201,74 @@ def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReading
         df[c] = df[c].astype(np.int64)
     for c in _FLOATS:
         df[c] = df[c].astype(float)
+    check_triad_rows(df, file)
     return TriadReadings(df, meta, file)
+
+
+def check_triad_rows(df: pd.DataFrame, file) -> None:
+    """Whole-file checks after every cell is read, each a GonioError naming the line:
+
+    * every number within :data:`RANGES` (1e308 °/s or a temperature of 1e300 °C is a
+      transcription error, not a measurement);
+    * within each test, ``step`` unique and ``time_s`` strictly increasing from row to
+      row (a duplicated, repeated or shuffled row, or a file whose times were all set to
+      one value, is refused: each would weigh a dwell twice or order a ramp wrongly);
+    * no output channel with one value in every row of a test (a gyro that did not
+      respond, or a column filled with zeros: no scale factor can come from it).
+    """
+    line = df["line"].to_numpy()
+    for c, (lo, hi, expect) in RANGES.items():
+        v = df[c].to_numpy(dtype=float)
+        bad = ~np.isnan(v) & ((v < lo) | (v > hi) | ((v == lo) & (c == "duration_s")))
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise GonioError(f"expected {expect}, got {v[k]:.6g}", file=file, line=int(line[k]),
+                             column=c)
+    for test, g in df.groupby("test", sort=False):
+        ln = g["line"].to_numpy()
+        dup = g["step"].duplicated().to_numpy()
+        if dup.any():
+            k = int(np.flatnonzero(dup)[0])
+            first = int(ln[np.flatnonzero(g["step"].to_numpy() == g["step"].iloc[k])[0]])
+            raise GonioError(f"step {int(g['step'].iloc[k])} of test {test} given twice (first on "
+                             f"line {first}): a duplicated row", file=file, line=int(ln[k]),
+                             column="step")
+        t = g["time_s"].to_numpy(dtype=float)
+        back = np.flatnonzero(np.diff(t) <= 0)
+        if back.size:
+            k = int(back[0]) + 1
+            raise GonioError(f"time_s must increase from row to row within test {test}; "
+                             f"{t[k]:.6g} s does not follow {t[k - 1]:.6g} s on line "
+                             f"{int(ln[k - 1])} (a repeated, reordered or constant time)",
+                             file=file, line=int(ln[k]), column="time_s")
+        if len(g) < 2 or test == "static":
+            continue
+        for c in OUT:
+            v = g[c].to_numpy(dtype=float)
+            if np.all(v == v[0]):
+                raise GonioError(f"{c} is {v[0]:.6g} in every {test} row: the gyro did not "
+                                 "respond (or the column was filled with one value)",
+                                 file=file, line=int(ln[0]), column=c)
+
+
+def named_inputs(path: str | Path) -> list[Path]:
+    """The files a triad readings file names as part of its data (``# thermal_readings:``,
+    relative to its folder): inputs no output may replace. Only the metadata lines at the
+    top are read; an unreadable file names nothing (the reader reports it later)."""
+    out = []
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1 << 16).decode("utf-8", "replace")
+    except OSError:
+        return out
+    for ln in head.splitlines():
+        if not ln.startswith("#"):
+            break
+        k, sep, v = ln[1:].partition(":")
+        if sep and k.strip() == "thermal_readings" and v.strip():
+            p = Path(v.strip())
+            out.append(p if p.is_absolute() else Path(path).parent / p)
+    return out
 
 
 def read_triad_readings(path: str | Path) -> TriadReadings:

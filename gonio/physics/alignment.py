@@ -324,6 +324,19 @@ class MisalignmentBudget:
     def to_dict(self) -> dict:
         return asdict(self)
 
+    def to_text(self) -> str:
+        """The chain as printed by ``gonio budget --spec triad-alignment`` (one line a term)."""
+        rows = [("ψ_x, ledge tilt (eq. 5a)", self.tilt_x_deg, "°"),
+                ("R_S, rotation radius", self.rotation_radius_mm, "mm"),
+                ("ψ_z, skew in the holes (eq. 5b)", self.skew_z_deg, "°"),
+                ("ψ_sys, largest mounting term", self.psi_sys_deg, "°"),
+                ("ψ_IMU, axis-to-frame specification", self.psi_imu_deg, "°"),
+                ("ψ_total, RSS (eq. 5c)", self.total_deg, "°"),
+                ("cos ψ_total, wanted scale", self.wanted_scale, ""),
+                ("sin ψ_total, leakage", self.leakage, "")]
+        return "Misalignment budget of the mounting (article eq. 5a–5c)\n" + "".join(
+            f"  {name:38s} {v:.6g} {unit}".rstrip() + "\n" for name, v, unit in rows)
+
 
 def misalignment_budget(*, ledge_tolerance_mm: float, width_mm: float,
                         hole_diameter_mm: float, screw_diameter_mm: float,

@@ -31,6 +31,7 @@ def rlg_scale_factor_counts_per_rad(area_m2: float, perimeter_m: float,
     (136856, 2388.59)
     """
     _check_positive(area_m2=area_m2, perimeter_m=perimeter_m, wavelength_m=wavelength_m)
+    _check_optical(wavelength_m, perimeter_m=perimeter_m, area_m2=area_m2)
     # isoperimetric inequality: no closed path of perimeter P encloses more than P²/(4π)
     # (as A/P > P/4π, which cannot overflow)
     if area_m2 / perimeter_m > perimeter_m / (4.0 * math.pi) * (1.0 + 1e-12):
@@ -50,6 +51,18 @@ def _check_positive(**values: float) -> None:
             raise GonioError(f"{name} must be a positive finite number, got {v}")
 
 
+def _check_optical(wavelength_m: float, **sizes: float) -> None:
+    """The Sagnac formulas treat light as rays along the ring or coil: every length must be
+    at least one wavelength, an area at least a square wavelength (a "ring" smaller than
+    its light has no Sagnac beat to count)."""
+    for name, v in sizes.items():
+        floor = wavelength_m ** 2 if name.startswith("area") else wavelength_m
+        if v < floor:
+            unit = "λ²" if name.startswith("area") else "λ"
+            raise GonioError(f"{name} = {v:g} is below one wavelength ({unit} = {floor:g}): "
+                             "the Sagnac formula assumes rays along the ring")
+
+
 def _representable(what: str, value: float) -> float:
     """``value`` itself, refused when it over- or underflows a double (no inf, no 0)."""
     if not (math.isfinite(value) and value >= 2.2250738585072014e-308):
@@ -66,6 +79,7 @@ def fog_phase_per_rate_s(length_m: float, diameter_m: float,
     1.352
     """
     _check_positive(length_m=length_m, diameter_m=diameter_m, wavelength_m=wavelength_m)
+    _check_optical(wavelength_m, length_m=length_m, diameter_m=diameter_m)
     return _representable("Sagnac phase per rate 2πLD/(λc)",
                           2.0 * math.pi * length_m * diameter_m
                           / (wavelength_m * SPEED_OF_LIGHT_M_S))

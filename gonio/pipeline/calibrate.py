@@ -32,6 +32,9 @@ from gonio.errors import GonioError
 from gonio.result.findings import findings_to_json
 from gonio.formats.records import StaticRecord
 from gonio.protocol import Protocol, load_protocol
+from gonio.analysis.conformity import decide_result
+from gonio.result.model import Item, Result, Uncertainty
+from gonio.result.tables import results_json_text, write_tables
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate). The
@@ -134,6 +137,8 @@ class CalibrationReport:
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
+    #: The specification's key in results.json (this report is the optical draft's).
+    spec_key: str = "ogam-draft"
 
     @property
     def e_measured(self) -> bool:
@@ -214,6 +219,60 @@ class CalibrationReport:
             else list(READINGS_TAKEN)
         return json_safe(out)
 
+    def to_result(self) -> Result:
+        """The one result model (:class:`gonio.result.model.Result`) of this calibration:
+        the seven items (each item's own fields under ``details``), E's full budget, the
+        conflicts and the precedence rule under ``extra``; the detail tables as
+        ``tables``."""
+        d = self.to_dict()
+        items = {}
+        for name in ITEM_NAMES:
+            it = d[name]
+            details = {k: v for k, v in it.items() if k not in LEGACY_ITEM_KEYS}
+            unc = it.get("uncertainty")
+            items[name] = Item(name, it["item"], it["clause"], it["unit"], it["value"],
+                               bool(it["measured"]), it.get("reason") or "",
+                               None if unc is None else Uncertainty(
+                                   unc["components"], unc["u_c"], unc["U"], unc["k"],
+                                   unc["nu_eff"], unc.get("monte_carlo"),
+                                   unc.get("coverage_probability"), unc.get("k_source") or "",
+                                   unc.get("interval")), details)
+        extra = {k: d[k] for k in ("uncertainty", "conflicts", "precedence_rule",
+                                   "equal_division", "unused_readings_summary") if k in d}
+        known = set(ITEM_NAMES) | set(extra) | {"gonio_version", "specification", "protocol",
+                                               "source", "metadata", "unused_readings",
+                                               "readings_taken", "findings"}
+        extra.update({k: v for k, v in d.items() if k not in known})   # nothing dropped
+        title = self.protocol.specification or spec_title(self.spec_key)
+        return Result(self.spec_key, title, items, d["metadata"],
+                      d["source"], list(d["readings_taken"]), extra,
+                      settings={"protocol": d["protocol"], "budget_kind": self.budget_kind,
+                                "repeatability_source": self.repeatability_source or None},
+                      unused_readings=list(d.get("unused_readings") or []),
+                      findings=list(self.findings),
+                      gonio_version=d["gonio_version"], tables=self.detail_tables())
+
+    def decided_result(self, lab: dict | None = None) -> Result:
+        """:meth:`to_result` with the conformity of every item the laboratory file limits
+        decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json."""
+        result = self.to_result()
+        decide_result(result, lab)
+        return result
+
+    def detail_tables(self) -> dict:
+        """The tables written beside results.json (names as before the one result model)."""
+        out = {}
+        for item in self.results.items():
+            for tname, df in (getattr(item, "tables", None) or {}).items():
+                if df is not None and len(df):
+                    out[f"{item.name}_{tname}.csv"] = df
+            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
+                out[f"{item.name}_table.csv"] = item.table
+        if len(self.results.unused_readings) > LISTED_ROWS:
+            out["unused_readings.csv"] = self.results.unused_readings
+        out["uncertainty_budget.csv"] = self.uncertainty.table()
+        return out
+
     def warnings(self) -> list[str]:
         """One line per conflict and per excluded reading group (for stderr)."""
         out = [c.warning() for c in self.conflicts]
@@ -278,9 +337,20 @@ def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float) -> d
 
 
 ITEM_NAMES = ITEM_KEYS
+#: The keys of an optical item's dict that the one result model's Item holds itself (the
+#: rest go under the item's ``details``).
+LEGACY_ITEM_KEYS = ("item", "value", "unit", "clause", "measured", "reason", "uncertainty")
 
 
 # --------------------------------------------------------------------------- settings
+
+def spec_title(key: str) -> str:
+    """The registered specification's English title (its key if none is registered)."""
+    from gonio.specs import available
+
+    spec = available().get(key)
+    return spec.title_en if spec is not None else key
+
 
 def file_metadata(path: str | Path) -> dict:
     """The ``# key: value`` metadata lines at the head of a readings file or stream."""
@@ -325,20 +395,8 @@ def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None
         return proto, conflicts
     if not metadata_name:
         return load_protocol("ogam-draft"), conflicts
-    from gonio.errors import GonioError
-    cands = [metadata_name]
-    if readings_path is not None:
-        base = Path(readings_path).parent
-        cands += [base / metadata_name, base / f"{metadata_name}.toml"]
-    for c in cands:
-        try:
-            return load_protocol(c), conflicts
-        except GonioError as exc:
-            if "not found" not in exc.message:
-                raise
-    raise GonioError(f"the readings file names protocol {metadata_name!r}, which is neither a "
-                     "built-in protocol nor a file next to it: give --protocol FILE",
-                     file=readings_path, key="protocol")
+    from gonio.resources import readings_protocol     # one rule for every readings file
+    return load_protocol(readings_protocol(metadata_name, readings_path, None)), conflicts
 
 
 def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list[Conflict]]:
@@ -914,25 +972,10 @@ def write_calibration(report: CalibrationReport, out: str | Path,
     to ``summary.txt``, as the certificate and the CLI show them.
     """
     out = Path(out)
-    names = {}
+    result = report.decided_result(lab)
     with output_dir(out) as stage:
-        d = report.to_dict()
-        write_text(stage / "results.json", json.dumps(d, indent=2, ensure_ascii=False,
-                                                      allow_nan=False) + "\n")
+        write_text(stage / "results.json", results_json_text(result))
         write_text(stage / "summary.txt", report.summary(lab))
-        tables = stage / "tables"
-        for item in report.results.items():
-            for tname, df in (getattr(item, "tables", None) or {}).items():
-                if df is not None and len(df):
-                    write_text(tables / f"{item.name}_{tname}.csv",
-                               df.to_csv(index=False, lineterminator="\n"))
-            if len(item.table) > LISTED_ROWS:       # summarised in results.json: all here
-                write_text(tables / f"{item.name}_table.csv",
-                           item.table.to_csv(index=False, lineterminator="\n"))
-        if len(report.results.unused_readings) > LISTED_ROWS:
-            write_text(tables / "unused_readings.csv",
-                       report.results.unused_readings.to_csv(index=False, lineterminator="\n"))
-        write_text(tables / "uncertainty_budget.csv",
-                   report.uncertainty.table().to_csv(index=False, lineterminator="\n"))
+        write_tables(result, stage)
         names = {p.name: out / p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
     return names

@@ -12,7 +12,9 @@ import json
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
-from gonio.errors import GonioError, check_input_file, read_utf8
+from gonio.errors import GonioError, check_input_file, check_not_binary, read_utf8
+from gonio.analysis.conformity import decide_result
+from gonio.result.tables import write_results
 from gonio.specs import Specification, get
 from gonio.specs._rate_family.rate_records import json_safe, load_readings
 from gonio.formats.triad import FORMAT as TRIAD_FORMAT
@@ -51,6 +53,8 @@ def readings_spec(path: str | Path) -> str | None:
         head = b""
         while True:
             piece = fh.read(1 << 16)
+            if not head:
+                check_not_binary(piece, path)      # a Parquet file renamed .csv says so
             head += piece
             try:
                 text = head.decode("utf-8")
@@ -113,14 +117,15 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     spec = get(key)
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     rd = load_readings(readings)
+    if protocol is None:                       # the readings' '# protocol:', never ignored
+        from gonio.resources import readings_protocol
+        protocol = readings_protocol(rd.metadata.get("protocol"), readings,
+                                     spec.default_protocol)
     result = spec.calibrate(rd, protocol or spec.default_protocol,
                             monte_carlo_trials=monte_carlo_trials)
+    decide_result(result, lab_d)
     out = Path(out)
-    with output_dir(out) as stage:
-        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
-                                                      ensure_ascii=False, allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", result.summary())
-    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
+    paths = write_results(result, out)
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
                                         dcc=dcc))
     return result, paths

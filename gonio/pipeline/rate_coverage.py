@@ -30,6 +30,7 @@ from gonio.atomic import write_text
 
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import RateReadings
+from gonio.pipeline.item_coverage import two_sided
 from gonio.pipeline.rate import RATE_SPECS, spec_module, spec_simulator
 from gonio.specs import get
 
@@ -51,6 +52,11 @@ class ItemCoverage:
     wilson_high: float
     median_norm_error: float
     max_norm_error: float
+    cp_low: float = math.nan
+    cp_high: float = math.nan
+    z_mean: float | None = None
+    z_sd: float | None = None
+    flags: tuple = ()
 
 
 def study_bench(name: str = "mems-adxrs610"):
@@ -147,8 +153,12 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
     lo, hi = wilson_interval(hits, n)
     ne = sorted(abs(v - t) / u if u > 0 else (0.0 if v == t else math.inf)
                 for v, t, _, u in records)
+    both = two_sided([v - t for v, t, _, _ in records], [U for _, _, U, _ in records],
+                     [u for _, _, _, u in records])
     return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
-                        ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1])
+                        ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
+                        both["cp_low"], both["cp_high"], both["z_mean"], both["z_sd"],
+                        tuple(both["flags"]))
 
 
 def _rate_spec(spec_key: str):
@@ -207,15 +217,18 @@ def coverage_study(spec_key: str, seeds, *, bench=None, protocol=None,
 
 def format_coverage(df: pd.DataFrame, title: str) -> str:
     """The per-item coverage table as printed by ``gonio validate --spec`` and the benchmark."""
-    lines = [title, f"{'item':32s} {'clause':10s} {'n':>4s} {'cover':>6s} {'u':>6s} "
-             f"{'Wilson 95 %':>14s} {'med|e|/u':>8s} {'max|e|/u':>8s}"]
+    lines = [title, f"{'item':32s} {'clause':10s} {'n':>4s} {'cover':>6s} "
+             f"{'Clopper-Pearson 95 %':>20s} {'z mean':>7s} {'z sd':>6s} {'max|z|':>7s}"]
     for r in df.itertuples():
-        flag = "" if r.coverage >= 0.9 else "  < 90 %"
-        lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} {r.u_coverage:6.3f} "
-                     f"[{r.wilson_low:.3f}, {r.wilson_high:.3f}] {r.median_norm_error:8.2f} "
-                     f"{r.max_norm_error:8.2f}{flag}")
-    lines.append("cover: fraction of trials with |value - truth| <= U; u: binomial standard "
-                 "uncertainty; |e|/u: |value - truth|/u_c")
+        flag = f"  FLAG: {', '.join(r.flags)}" if len(r.flags) else ""
+        zm = "—" if r.z_mean is None or r.z_mean != r.z_mean else f"{r.z_mean:+.2f}"
+        zs = "—" if r.z_sd is None or r.z_sd != r.z_sd else f"{r.z_sd:.2f}"
+        lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
+                     f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
+                     f"{r.max_norm_error:7.2f}{flag}")
+    lines.append("cover: fraction of trials with |value - truth| <= U (95 % Clopper-Pearson "
+                 "interval); z = (value - truth)/u_c; flagged: coverage < 90 % (under-covers), "
+                 "sd z < 0.3 (over-wide U)")
     return "\n".join(lines) + "\n"
 
 
@@ -266,7 +279,9 @@ class RateValidationReport:
         from gonio import __version__
         return {"gonio_version": __version__, "settings": self.settings,
                 "criterion": "|value - truth| <= U, U the item's own expanded uncertainty "
-                             "(k = t95(nu_eff)); per item coverage >= 0.90 required",
+                             "(k = t95(nu_eff)); per item coverage >= 0.90 required and "
+                             "sd of z = (value - truth)/u_c >= 0.3 (U not over-wide); "
+                             "95 % Clopper-Pearson interval of the coverage",
                 "items": json.loads(self.coverage.to_json(orient="records", double_precision=15))}
 
     def table(self) -> str:

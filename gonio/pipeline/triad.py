@@ -11,9 +11,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from gonio.atomic import output_dir, output_set, write_text
+from gonio.atomic import output_set
 from gonio.report.certificate import load_lab
 from gonio.report.triad_certificate import write_triad_certificate
+from gonio.analysis.conformity import decide_result
+from gonio.result.tables import write_results
 from gonio.specs import get
 
 KEY = "triad-alignment"
@@ -28,43 +30,12 @@ def calibrate(readings, out, *, thermal=None, lab=None, lang: str = "en", truth=
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     result = get(KEY).calibrate(readings, monte_carlo_trials=monte_carlo_trials, robust=robust,
                                 thermal=thermal)
+    decide_result(result, lab_d)
     out = Path(out)
-    tables = result_tables(result)
-    with output_dir(out) as stage:
-        write_text(stage / "results.json", json.dumps(result.to_json(), indent=2,
-                                                      ensure_ascii=False, allow_nan=False) + "\n")
-        write_text(stage / "summary.txt", result.summary())
-        for name, df in tables.items():
-            write_text(stage / "tables" / name, df.to_csv(index=False,
-                                                          lineterminator="\n"))
-    paths = {"results": out / "results.json", "summary": out / "summary.txt"}
-    paths.update({f"tables/{n}": out / "tables" / n for n in tables})
+    paths = write_results(result, out)
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab_d, lang=lang,
                                          dcc=dcc))
     return result, paths
-
-
-def result_tables(result) -> dict:
-    """The result's tables as DataFrames, by file name (``tables/*.csv`` beside results.json):
-    ``items.csv`` (every measured item: key, value, unit, u, U, k, ν) and, per
-    modelled gyro, ``thermal_prediction_<gyro>.csv`` (the prediction band)."""
-    import pandas as pd
-
-    rows = []
-    for key, it in result.items.items():
-        if not it.measured:
-            continue
-        u = it.uncertainty
-        rows.append({"item": key, "clause": it.clause, "value": it.value, "unit": it.unit,
-                     "u": None if u is None else u.u_c, "U": None if u is None else u.U,
-                     "k": None if u is None else u.k, "nu": None if u is None else u.nu_eff})
-    out = {"items.csv": pd.DataFrame(rows, columns=["item", "clause", "value", "unit", "u", "U",
-                                                    "k", "nu"])}
-    tm = result.extra.get("thermal_model") or {}
-    for ch, pr in (tm.get("prediction_U") or {}).items():
-        out[f"thermal_prediction_{ch}.csv"] = pd.DataFrame(
-            {k: v for k, v in pr.items() if isinstance(v, list)})
-    return out
 
 
 #: Monte Carlo trials of the demo's uncertainties (JCGM 101 beside the GUM).

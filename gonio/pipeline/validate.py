@@ -45,6 +45,7 @@ import io
 import json
 import math
 import os
+import re
 import shutil
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -63,6 +64,7 @@ from gonio.pipeline.calibrate import calibrate
 from gonio.errors import GonioError
 from gonio.units import PPM, deg_to_arcsec
 from gonio.formats.readings import Readings
+from gonio.limits import limit
 from gonio.progress import Progress
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
@@ -299,6 +301,8 @@ def trial_seeds(seed: int, case: str, trials: int) -> list[int]:
 
 #: Largest batch (trials per task).
 MAX_BATCH = 250
+#: Tasks per worker a study is cut into by default (:func:`study_workers`).
+TASKS_PER_WORKER = 4
 #: Folder (inside ``--out``) holding the finished batches of a study in progress.
 PARTIAL_DIR = ".validate-partial"
 
@@ -455,6 +459,7 @@ def execution_backend(workers: int, scheduler: str | None):
             raise GonioError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}",
                              key="scheduler") from None
         try:
+            _warm_workers(client, scheduler)
             with parallel_config(backend="dask"):
                 yield -1
         finally:
@@ -464,23 +469,70 @@ def execution_backend(workers: int, scheduler: str | None):
             cluster.close()
 
 
+def _warm_worker() -> str:
+    """Import what a batch needs (in a Dask worker, once, before the first task)."""
+    import gonio.pipeline.validate  # noqa: F401  (the trial code and its libraries)
+    return worker_threads()
+
+
+def _warm_workers(client, scheduler: str) -> None:
+    """Every worker of the cluster imports the trial code once, all at the same time,
+    before any task is sent (not each on its first task); a worker that cannot import
+    gonio is one clear error, not a traceback per task."""
+    try:
+        client.run(_warm_worker)
+    except Exception as exc:  # noqa: BLE001 - any worker-side failure, reported in one line
+        raise GonioError(f"the Dask workers of {scheduler!r} cannot run gonio "
+                         f"({type(exc).__name__}: {str(exc)[:200]}); install gonio there",
+                         key="scheduler") from None
+
+
 def study_workers(trials: int, workers: int | None, scheduler: str | None,
-                  batch_size: int | None) -> tuple[int | None, int]:
-    """(workers, batch size) of a study: ``workers`` default min(2, cores), at most the
-    machine's cores (ignored with a ``scheduler``); the batch size default up to
-    :data:`MAX_BATCH`, at least 4 tasks per worker. Bad values are GonioErrors."""
+                  batch_size: int | None, cases: int = 1) -> tuple[int | None, int]:
+    """(workers, batch size) of a study.
+
+    ``workers`` default min(2, cores); local workers and a ``local:N`` cluster are capped
+    at the machine's cores (``GONIO_MAX_WORKERS`` raises the cap), checked before anything
+    starts (``local:100000`` once ran for minutes and ran out of memory). The batch size
+    default comes from the trial count and the workers: all ``cases`` × ``trials`` trials
+    in about :data:`TASKS_PER_WORKER` tasks per worker (so that the last tasks finish
+    together and a slow worker holds little back), at most ``trials`` (batches are per
+    case) and :data:`MAX_BATCH`. Bad values are GonioErrors. The results never depend on
+    either.
+
+    >>> study_workers(320, 1, None, None)           # one worker: 4 tasks of 80
+    (1, 80)
+    >>> study_workers(320, 1, None, None, cases=5)  # 1600 trials: batches capped at 250
+    (1, 250)
+    """
+    if os.environ.get("GONIO_MAX_WORKERS", "").strip():
+        cap = limit("GONIO_MAX_WORKERS")
+        cap_note = f"GONIO_MAX_WORKERS = {cap:g}"
+    else:
+        cap = available_cores()
+        cap_note = f"this machine's {cap} cores"
     if scheduler is None:
-        cores = available_cores()
         if workers is None:
-            workers = min(2, cores)
+            workers = min(2, available_cores())
         if not isinstance(workers, int) or workers < 1:
             raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
-        if workers > cores:
-            raise GonioError(f"--workers {workers} exceeds this machine's {cores} cores; give "
-                             "--scheduler to run on a cluster", key="workers")
+        if workers > cap:
+            raise GonioError(f"--workers {workers} exceeds {cap_note} (set GONIO_MAX_WORKERS "
+                             "to raise the cap, or give --scheduler tcp://... to run on a "
+                             "cluster)", key="workers")
+    elif scheduler.startswith("local:"):
+        n = scheduler[len("local:"):]
+        if not (n.isdigit() and len(n) <= 9) or int(n) < 1:
+            raise GonioError(f"--scheduler local:N needs N >= 1 workers, got {scheduler!r}",
+                             key="scheduler")
+        if int(n) > cap:
+            raise GonioError(f"--scheduler {scheduler}: {int(n)} worker processes exceed "
+                             f"{cap_note} (set GONIO_MAX_WORKERS to raise the cap)",
+                             key="scheduler")
     n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
     if batch_size is None:
-        batch_size = max(1, min(MAX_BATCH, -(-trials // (4 * max(1, n_workers)))))
+        per_task = -(-(trials * max(1, cases)) // (TASKS_PER_WORKER * max(1, n_workers)))
+        batch_size = max(1, min(MAX_BATCH, trials, per_task))
     if not isinstance(batch_size, int) or batch_size < 1:
         raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
                          key="batch_size")
@@ -503,58 +555,146 @@ def _fingerprint(job_settings: dict) -> str:
     return hashlib.sha256(repr(sorted(job_settings.items())).encode()).hexdigest()
 
 
+#: What a batch file is named: ``<case>_<first trial>_<stop>.npz`` (10-digit indices).
+BATCH_NAME = re.compile(r"^(?P<case>.+)_(?P<start>[0-9]{10})_(?P<stop>[0-9]{10})\.npz$")
+
+
+def batch_digest(packed: Mapping) -> str:
+    """SHA-256 over a batch's arrays (names, dtypes, shapes, bytes) in name order; stored in
+    the batch (``digest``) so that an edited value is found even without ``study.json``."""
+    h = hashlib.sha256()
+    for k in sorted(packed):
+        if k == "digest":
+            continue
+        a = np.ascontiguousarray(packed[k])
+        h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
 class PartialStore:
     """Finished batches of a study, one ``.npz`` file each, written atomically.
 
-    ``study.json`` records the settings' fingerprint; a store made for other
-    settings is refused.
+    ``study.json`` records the settings' fingerprint (seed included) and every batch
+    written: its case, trial range and the SHA-256 of its bytes. Each batch also carries the
+    fingerprint and a digest of its arrays. ``resume`` reuses a batch only when all agree
+    (:meth:`load_batch`): a batch of another study, edited, reordered, truncated or empty,
+    a FIFO or any non-regular file in its place, is refused with its name — never waited
+    on, never silently mixed in.
     """
 
     def __init__(self, folder: Path, fingerprint: str, describe: dict):
         self.folder = Path(folder)
         self.fingerprint = fingerprint
         self.describe = describe
+        self.batches: dict[str, dict] = {}
 
     def exists(self) -> bool:
         return (self.folder / "study.json").exists()
+
+    def _write_head(self) -> None:
+        write_text(self.folder / "study.json",
+                   json.dumps({"fingerprint": self.fingerprint, "settings": self.describe,
+                               "batches": self.batches}, indent=2, sort_keys=True) + "\n")
+
+    def _head(self, head: Path) -> dict:
+        from gonio.errors import check_input_file
+
+        check_input_file(head, "partial study record")       # a FIFO is refused, not read
+        try:
+            info = json.loads(head.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise GonioError(f"unreadable partial study: {exc}", file=head) from None
+        if not isinstance(info, dict) or not isinstance(info.get("fingerprint"), str) or \
+                not isinstance(info.get("batches", {}), dict):
+            raise GonioError("not a partial-study record (expected an object with the study's "
+                             f"fingerprint and batches); remove {self.folder}", file=head)
+        return info
 
     def open(self, resume: bool) -> dict[str, dict[int, TrialResult]]:
         """Create the store, or (``resume``) load what it holds: case → {index: trial}."""
         head = self.folder / "study.json"
         done: dict[str, dict[int, TrialResult]] = {}
-        if head.exists():
+        if os.path.lexists(head):
             if not resume:
                 raise GonioError(f"{self.folder.parent} holds an unfinished study; give --resume "
                                  f"to continue it, or remove {self.folder}", key="resume")
-            try:
-                info = json.loads(head.read_text(encoding="utf-8"))
-            except (OSError, ValueError) as exc:
-                raise GonioError(f"unreadable partial study: {exc}", file=head) from None
-            if info.get("fingerprint") != self.fingerprint:
+            info = self._head(head)
+            if info["fingerprint"] != self.fingerprint:
                 raise GonioError("the unfinished study here was started with other settings "
                                  f"({info.get('settings')}); resume it with those, or remove "
                                  f"{self.folder}", file=head, key="resume")
-            for f in sorted(self.folder.glob("*.npz")):
-                try:
-                    with np.load(f, allow_pickle=False) as z:
-                        packed = {k: z[k] for k in z.files}
-                except (OSError, ValueError) as exc:
-                    raise GonioError(f"unreadable partial batch: {exc}", file=f) from None
-                case = str(packed["case"])
-                for i, tr in unpack_trials(packed).items():
+            self.batches = {k: v for k, v in info.get("batches", {}).items()
+                            if isinstance(v, dict)}
+            for f in sorted(self.folder.iterdir()):
+                if f.name == "study.json" or f.name.startswith(".gonio-"):
+                    continue                         # the record; a killed write's temporary
+                case, got = self.load_batch(f)
+                for i, tr in got.items():
                     done.setdefault(case, {}).setdefault(i, tr)
             return done
-        write_text(head, json.dumps({"fingerprint": self.fingerprint,
-                                     "settings": self.describe}, indent=2) + "\n")
+        self._write_head()
         return done
 
+    def load_batch(self, f: Path) -> tuple[str, dict[int, TrialResult]]:
+        """(case, trials) of one batch file, every check of the class docstring made."""
+        import stat
+        import zipfile
+
+        def bad(why: str) -> GonioError:
+            return GonioError(f"partial batch refused: {why}; remove it (its trials are run "
+                              "again) or the whole folder", file=f)
+
+        st = os.lstat(f)
+        if not stat.S_ISREG(st.st_mode):
+            raise bad("not a regular file (a FIFO, link, device or folder)")
+        m = BATCH_NAME.match(f.name)
+        if m is None:
+            raise bad("not a batch of this study (name <case>_<start>_<stop>.npz)")
+        data = f.read_bytes()
+        try:
+            with np.load(io.BytesIO(data), allow_pickle=False) as z:
+                packed = {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+            raise bad(f"unreadable (truncated or damaged: {str(exc)[:80]})") from None
+        if str(packed.get("fingerprint", "")) != self.fingerprint:
+            raise bad("written by another study (other settings, seed or gonio version)")
+        rec = self.batches.get(f.name)
+        if rec is not None and rec.get("sha256") != hashlib.sha256(data).hexdigest():
+            raise bad("its bytes differ from the checksum study.json recorded (edited or "
+                      "replaced)")
+        if str(packed.get("digest", "")) != batch_digest(packed):
+            raise bad("its values differ from its digest (edited)")
+        start, stop = int(m["start"]), int(m["stop"])
+        idx = packed.get("index")
+        if stop <= start or str(packed.get("case")) != m["case"] or idx is None or \
+                idx.shape != (stop - start,) or not np.array_equal(idx, np.arange(start, stop)):
+            raise bad("its trials are not the range its name says (reordered, renamed, "
+                      "truncated or empty)")
+        try:
+            got = unpack_trials(packed)
+        except (KeyError, IndexError, ValueError, TypeError) as exc:
+            raise bad(f"incomplete ({type(exc).__name__})") from None
+        if rec is None:                       # written, then killed before study.json was
+            self.batches[f.name] = {"sha256": hashlib.sha256(data).hexdigest(),
+                                    "case": m["case"], "start": start, "stop": stop}
+        return m["case"], got
+
     def save(self, packed: dict) -> None:
-        """Store one finished batch (atomic: the file is complete or absent)."""
+        """Store one finished batch (atomic: the file is complete or absent), then record it
+        with its checksum in ``study.json``."""
         idx = packed["index"]
         name = f"{packed['case']}_{int(idx[0]):010d}_{int(idx[-1]) + 1:010d}.npz"
+        packed = {**packed, "fingerprint": np.array(self.fingerprint)}
+        packed["digest"] = np.array(batch_digest(packed))
         buf = io.BytesIO()
         np.savez(buf, **packed)
-        write_bytes(self.folder / name, buf.getvalue())
+        data = buf.getvalue()
+        write_bytes(self.folder / name, data)
+        self.batches[name] = {"sha256": hashlib.sha256(data).hexdigest(),
+                              "case": str(packed["case"]), "start": int(idx[0]),
+                              "stop": int(idx[-1]) + 1}
+        self._write_head()
 
     def remove(self) -> None:
         """Drop the store (the study is complete)."""
@@ -686,8 +826,18 @@ def item_coverage_lines(cases) -> list[str]:
             if "within_U_intrinsic" in it:
                 txt += (f"   vs intrinsic truth "
                         f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
+            if "two_sided" in it:
+                txt += "   " + two_sided_text(it["two_sided"])
             out.append(txt)
     return out
+
+
+def two_sided_text(t: dict) -> str:
+    """``CP [lo, hi] %, z mean/sd, flags`` of :func:`gonio.pipeline.item_coverage.two_sided`."""
+    z = ("z —" if t["z_sd"] is None else
+         f"z mean {t['z_mean']:+.2f} sd {t['z_sd']:.2f}")
+    flags = f"  FLAG: {', '.join(t['flags'])}" if t["flags"] else ""
+    return f"CP95 [{100 * t['cp_low']:.0f}, {100 * t['cp_high']:.0f}] %, {z}{flags}"
 
 
 @dataclass
@@ -842,7 +992,7 @@ def validate(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
     base = bench if isinstance(bench, Bench) else load_bench(bench)
     base = replace(base, sample_rate_hz=float(sample_rate_hz))
-    workers, batch_size = study_workers(trials, workers, scheduler, batch_size)
+    workers, batch_size = study_workers(trials, workers, scheduler, batch_size, len(cases))
     settings = {"trials": trials, "seed": seed,
                 "bench": base.name if isinstance(bench, Bench) else str(bench),
                 "cases": cases, "sample_rate_hz": float(sample_rate_hz),

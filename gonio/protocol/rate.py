@@ -56,6 +56,11 @@ def read_sections(path, schemas: dict[str, dict], spec_key: str,
     ``bench_keys`` take a number or the word "bench" (default "bench")."""
     p = resolve(path, kind="protocol")
     raw = read_toml(p)
+    head = raw.get("protocol")
+    if isinstance(head, dict) and isinstance(head.get("spec"), str) and head["spec"] != spec_key:
+        raise GonioError(f"this protocol is for {head['spec']!r}, but the calibration is for "
+                         f"{spec_key!r} (--spec or the readings' '# spec:'): give a protocol "
+                         f"for {spec_key!r}", file=p, key="protocol.spec")
     for sec in raw:
         if sec not in schemas:
             raise GonioError(f"unknown section (known: {', '.join(schemas)})", file=p, key=sec)

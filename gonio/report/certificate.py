@@ -48,7 +48,7 @@ from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class
 from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
                                  stated_item, u_cell)
-from gonio.formats.toml import Field, non_negative, read_toml, validate_table
+from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
 
@@ -92,7 +92,7 @@ LAB_SCHEMA: dict[str, Field] = {
         "guard_band_factor": Field("float", default=1.0, check=non_negative, expect="≥ 0"),
         "agreed": _S}),
     "specification_limits": Field("table_list", default=None, schema={
-        "item": Field("str", choices=ITEMS),
+        "item": Field("str"),       # checked against the specification's items when decided
         "lower": Field("float", default=None), "upper": Field("float", default=None),
         "mpe": Field("float", default=None, check=lambda x: x > 0, expect="> 0"),
         "source": _S}),
@@ -127,6 +127,7 @@ def load_lab(path: str | Path) -> dict:
     gonio.errors.GonioError: ...lab.toml: key laboratory.fax: unknown key (known: name, address, accreditation, contact)
     """
     raw = _dates_to_text(read_toml(path))
+    check_text_fields(raw, path)          # no control characters, no megabyte of name
     lab = validate_table(raw, LAB_SCHEMA, "", path)
     for key in ("instrument", "environment"):
         if lab[key] is None:

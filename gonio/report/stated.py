@@ -33,7 +33,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from gonio.analysis.conformity import Conformity, DecisionRule, Limits, decide
+from gonio.analysis.conformity import Conformity, DecisionRule, Limits, decide, limits_of  # noqa: F401
 from gonio.specs.ogam_draft.items import ITEM_KEYS
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
 from gonio.result.statement import decimals_for_sig, round_half_up
@@ -193,13 +193,6 @@ def conformity_for(res: dict, lab: dict | None) -> list[dict]:
                                          limits, rule)
         out.append(entry)
     return out
-
-
-def limits_of(lim: dict) -> Limits:
-    """A ``[[specification_limits]]`` entry as :class:`Limits` (``mpe`` = symmetric ±mpe)."""
-    if lim.get("mpe") is not None:
-        return Limits(-abs(lim["mpe"]), abs(lim["mpe"]), lim.get("source", ""))
-    return Limits(lim.get("lower"), lim.get("upper"), lim.get("source", ""))
 
 
 def given_text(v: float) -> str:

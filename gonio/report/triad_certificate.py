@@ -57,7 +57,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     if not items["M_xx"]["measured"]:
         out.append(Block("p", [f"{L['not_measured']}: {items['M_xx']['reason']}"]))
         return out
-    al = res["alignment"]
+    al = res["extra"]["alignment"]
     unit = al["output_unit"] or "output"
     out.append(Block("p", [T("alignment_note", unit=unit, n=al["n_dwells"],
                              robust=T("robust") if al["robust"] else "")]))
@@ -123,7 +123,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
 def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
     """The temperature-model page (module docstring); not measured → the reason."""
     out: list[Block] = [Block("h", T("h_thermal"))]
-    tm = res.get("thermal_model")
+    tm = res["extra"].get("thermal_model")
     if tm is None:
         it = res["items"].get("thermal_model", {})
         out.append(Block("p", [f"{L['not_measured']}: {it.get('reason', '')}"]))
@@ -255,7 +255,7 @@ def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "e
     if dcc:
         from gonio.report.item_dcc import item_dcc_bytes
 
-        p = (result.to_json().get("alignment") or {}).get("coverage_probability")
+        p = (result.extra.get("alignment") or {}).get("coverage_probability")
 
         def dcc_fn(r, *, lab, cert_id):
             return item_dcc_bytes(r, lab=lab, cert_id=cert_id,

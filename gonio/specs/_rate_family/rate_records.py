@@ -23,30 +23,17 @@ from gonio.atomic import sha256_file
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
+from gonio.result.model import Item, Result, Uncertainty, not_measured  # noqa: F401
 from uncertainty import monte_carlo, propagate, validate_gum
 
+
 # --------------------------------------------------------------------------- results
+#
+# The items and the result are the one result model's (gonio.result.model): a rate
+# specification's calibrate() returns a Result of Items, written as the one results.json shape.
 
-
-@dataclass
-class Uncertainty:
-    """An item's uncertainty: components (symbol, source, u, c, |c|u, dof), u_c, U, k, ν_eff,
-    the coverage probability p of U (None: a fixed k was asked for)."""
-
-    components: list[dict]
-    u_c: float
-    U: float
-    k: float
-    nu_eff: float
-    monte_carlo: dict | None = None
-    p: float | None = None
-
-    def to_json(self) -> dict:
-        out = {"components": self.components, "u_c": _f(self.u_c), "U": _f(self.U),
-               "k": _f(self.k), "nu_eff": _f(self.nu_eff), "p": _f(self.p)}
-        if self.monte_carlo is not None:
-            out["monte_carlo"] = json_safe(self.monte_carlo)
-        return out
+#: A rate-gyro calibration result is the one :class:`~gonio.result.model.Result`.
+RateCalibrationResult = Result
 
 
 def _f(x):
@@ -54,75 +41,6 @@ def _f(x):
         return None
     x = float(x)
     return x if math.isfinite(x) else None
-
-
-@dataclass
-class Item:
-    """One calibration item: value, unit, clause, measured, reason, uncertainty, details."""
-
-    key: str
-    title: str
-    clause: str
-    unit: str
-    value: float | None = None
-    measured: bool = True
-    reason: str = ""
-    uncertainty: Uncertainty | None = None
-    details: dict = field(default_factory=dict)
-
-    def to_json(self) -> dict:
-        return {"value": _f(self.value), "unit": self.unit, "clause": self.clause,
-                "title": self.title, "measured": bool(self.measured), "reason": self.reason,
-                "uncertainty": None if self.uncertainty is None else self.uncertainty.to_json(),
-                "details": json_safe(self.details)}
-
-
-def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> Item:
-    """An item the readings do not allow, with the reason."""
-    return Item(key, title, clause, unit, None, False, reason)
-
-
-
-@dataclass
-class RateCalibrationResult:
-    """A rate-gyro calibration: items in the specification's order, metadata, source."""
-
-    spec_key: str
-    spec_title: str
-    items: dict[str, Item]
-    metadata: dict
-    source: dict
-    readings_taken: list[str]
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def source_sha256(self) -> str:
-        return self.source.get("sha256", "")
-
-    def to_json(self) -> dict:
-        """results.json: one entry per item {value, unit, clause, measured, reason,
-        uncertainty{components, u_c, U, k, nu_eff}} plus specification, source, metadata."""
-        out = {"specification": self.spec_title, "spec": self.spec_key,
-               "source": self.source, "metadata": self.metadata,
-               "items": {k: v.to_json() for k, v in self.items.items()},
-               "readings_taken": self.readings_taken}
-        out.update(json_safe(self.extra))
-        return out
-
-    def to_dict(self) -> dict:
-        return self.to_json()
-
-    def summary(self) -> str:
-        """One line per item."""
-        lines = [f"{self.spec_title}"]
-        for it in self.items.values():
-            if not it.measured:
-                lines.append(f"  {it.clause:10s} {it.title}: not measured ({it.reason})")
-                continue
-            from gonio.result.statement import item_statement   # the one statement rule
-
-            lines.append(f"  {it.clause:10s} {it.title}: {item_statement(it.to_json()).text()}")
-        return "\n".join(lines) + "\n"
 
 
 _MC = contextvars.ContextVar("rate_gyro_monte_carlo", default=(0, 0))
@@ -156,7 +74,8 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
         mc = {"trials": trials, "u": m.u, "low": m.low, "high": m.high,
               "gum_low": v.gum_interval[0], "gum_high": v.gum_interval[1],
               "d_low": v.d_low, "d_high": v.d_high, "delta": v.delta, "validated": v.passed}
-    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc, p)
+    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc, p,
+                       "welch-satterthwaite" if p is not None else "fixed")
 
 
 # --------------------------------------------------------------------------- readings

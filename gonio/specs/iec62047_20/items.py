@@ -652,12 +652,21 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
     apart from the calibration's own static record (5.4): the five-term Allan fit's rate
     random walk K√Δt and bias instability (√2·0.664·B), with the fit's uncertainties and an
     unresolved RRW bounded by the longest τ (:func:`gonio.specs._rate_family.formulas.bias_drift_u`);
-    0 without a varying static record."""
-    if not ctx.has("static") or ctx.a_base is None:
-        return 0.0
+    without a static record of at least 100 samples the term is not known, never 0: a
+    GonioError, so the item is "not measured" with the reason. A record that does not vary
+    comes only from a noise-free bench (``noise: off``; the reader refuses it otherwise):
+    its drift term is 0."""
+    why = ("the budget's bias-drift term needs the static noise record (5.4) of at least "
+           "100 samples")
+    if not ctx.has("static"):
+        raise GonioError(f"{why}; the readings have none")
+    if ctx.a_base is None:
+        raise GonioError(f"{why} and the scale factor of 5.1.3.1")
     y = segment_samples(ctx.df, "static", 0, 0)["output"].to_numpy()
-    if y.size < 100 or np.ptp(y) == 0:
-        return 0.0
+    if y.size < 100:
+        raise GonioError(f"{why}; it has {y.size} samples")
+    if np.ptp(y) == 0:
+        return 0.0              # a noise-free bench (the reader refuses a stuck record)
     fit = _noise_fit(ctx)
     allan = _static(ctx)[0]
     return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,

@@ -76,10 +76,14 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
     instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
     by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`); 0 without a static record."""
+    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`). Without a static record the term is
+    not known, never 0: a GonioError, so the item is "not measured" with the reason."""
     fit = ctx.cache.get("noise_fit")
+    if fit is None and ctx.cache.get("static_noise_free"):
+        return 0.0                                   # a noise-free bench: no drift
     if fit is None:
-        return 0.0
+        raise GonioError("the budget's bias-drift term needs the static Allan record "
+                         "(7.2.13), which the readings lack or which could not be analysed")
     allan = ctx.cache["allan"]
     return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
                            separation_s)
@@ -557,6 +561,7 @@ def angle_random_walk(ctx: Context) -> Item:
     dt = float((t[-1] - t[0]) / (t.size - 1))
     rate_dph = (g["output"].to_numpy() - ctx.null_output) / ctx.K * S_PER_H
     if np.ptp(rate_dph) == 0:
+        ctx.cache["static_noise_free"] = True      # noise: off (the reader refuses it else)
         return Item("angle_random_walk", title, clause, unit, 0.0,
                     uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})

@@ -76,6 +76,11 @@ def load_protocol(path: str | Path = KEY) -> JJFProtocol:
     secs, p = read_sections(path, SCHEMAS, KEY, (("protocol", "null_output"),
                                                  ("bias", "latitude_deg")))
     sf = secs["scale_factor"]
+    rates = sf["rates_dps"]
+    if rates and (len(rates) < 2 or len(set(rates)) != len(rates)):
+        raise GonioError("expected at least 2 distinct rates of one direction (7.2.3 fits a "
+                         "line through distinct rates)", file=p,
+                         key="scale_factor.rates_dps")
     if not sf["rates_dps"] and not sf["lowest_rate_dps"] < sf["highest_rate_dps"]:
         raise GonioError("lowest_rate_dps must be below highest_rate_dps", file=p,
                          key="scale_factor.lowest_rate_dps")

@@ -43,7 +43,7 @@ import pandas as pd
 from scipy import stats
 
 from gonio.physics.earth import earth_rate_enu
-from gonio.units import dps_to_dph
+from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
@@ -254,6 +254,43 @@ class AlignmentResult:
         return out
 
 
+#: How long the stated bias is meant to hold (s): one day of operation. The long-term term of
+#: b integrates the bias instability's flicker spectrum from the shortest dwell to this.
+BIAS_HORIZON_S: float = S_PER_DAY
+#: Allan floor of flicker bias noise: σ_A = √(2 ln 2 / π) · B (IEEE 952 Annex C).
+FLICKER_FLOOR: float = math.sqrt(2.0 * math.log(2.0) / math.pi)
+
+
+def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
+                           horizon_s: float = BIAS_HORIZON_S) -> tuple[np.ndarray, np.ndarray]:
+    """Long-term term of the bias b (°/s per gyro) and its degrees of freedom (issue 24).
+
+    The fit's u(b) is in-run: it holds for the mean bias over this record. The bias a
+    certificate states is meant to hold beyond it, and a gyro's bias wanders (bias
+    instability, flicker: one-sided PSD h/f with h = B²/π). Between time scales τ_d and
+    τ_L that wander has variance ∫ h/f df = (B²/π) ln(τ_L/τ_d), so
+
+        u_BI = B̂ √(ln(τ_L/τ_d)/π),   B̂ = min σ_A(τ) / √(2 ln 2/π),
+
+    B̂ from the static record's Allan deviation, τ_d the shortest dwell (faster wander
+    averages within a dwell and shows in the fit's residuals), τ_L = ``horizon_s``. Its
+    degrees of freedom are those of the Allan deviation at its minimum, T/τ − 1 for a
+    record of T = ``static_s`` (at least 1). Without a static record: zeros, ν = ∞.
+
+    >>> av = AveragingTime(0.0, 0.1, 50.0, [1.0] * 3, [50.0] * 3, [3.0] * 3, 10.0, True)
+    >>> u, nu = bias_instability_u_dps(av, 300.0)
+    >>> round(float(u[0]) * 3600, 3), float(nu[0])
+    (7.671, 5.0)
+    """
+    if averaging is None or not static_s:
+        return np.zeros(3), np.full(3, math.inf)
+    b = dph_to_dps(np.asarray(averaging.min_adev_dph, dtype=float)) / FLICKER_FLOOR
+    tau_d = averaging.shortest_dwell_s if math.isfinite(averaging.shortest_dwell_s) else 1.0
+    u = b * math.sqrt(max(math.log(horizon_s / tau_d), 0.0) / math.pi)
+    nu = np.maximum(static_s / np.asarray(averaging.tau_min_adev_s, dtype=float) - 1.0, 1.0)
+    return u, nu
+
+
 def _split(vec: np.ndarray) -> dict:
     return {k: vec[s] for k, s in _DERIVED_SLICES.items()}
 
@@ -298,6 +335,46 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
     sufficient = bool(np.all(np.isfinite(need)) and shortest_dwell_s >= max(need))
     return AveragingTime(limit, target_deg, test_rate_dps, need, tmin, amin,
                          float(shortest_dwell_s), sufficient, list(map(float, tau)), adevs)
+
+
+#: Monte Carlo trials held in memory at once; more are combined chunk by chunk.
+MC_CHUNK = 100_000
+
+
+def chunked_std(trial, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.ndarray]:
+    """Sample standard deviations (ddof 1) of the two vectors ``trial()`` returns, over
+    ``n`` trials, in bounded memory: chunks of ``chunk`` trials combined by Chan et al.'s
+    pairwise update (count, mean, sum of squared deviations). Up to one chunk the result is
+    ``np.std`` of all trials, exactly.
+
+    >>> it = iter(range(10))
+    >>> def f():
+    ...     v = float(next(it))
+    ...     return np.array([v]), np.array([2 * v])
+    >>> [round(float(a[0]), 6) for a in chunked_std(f, 10, chunk=3)]
+    [3.02765, 6.055301]
+    """
+    acc = None
+    done = 0
+    while done < n:
+        k = min(chunk, n - done)
+        first = [trial() for _ in range(k)]
+        blocks = [np.array([f[j] for f in first]) for j in (0, 1)]
+        del first
+        if acc is None and k == n:
+            return tuple(np.std(b, axis=0, ddof=1) for b in blocks)
+        stats_ = [(k, b.mean(axis=0), ((b - b.mean(axis=0)) ** 2).sum(axis=0)) for b in blocks]
+        if acc is None:
+            acc = stats_
+        else:
+            merged = []
+            for (na, ma, sa), (nb, mb_, sb) in zip(acc, stats_):
+                d = mb_ - ma
+                nn = na + nb
+                merged.append((nn, ma + d * nb / nn, sa + sb + d * d * na * nb / nn))
+            acc = merged
+        done += k
+    return tuple(np.sqrt(sq / (cnt - 1)) for cnt, _, sq in acc)
 
 
 def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
@@ -351,14 +428,12 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))
         fitted = x @ mb.T
         sd = np.array(sig)[None, :] / np.sqrt(w)[:, None]
-        th_s, der_s = [], []
-        for _ in range(int(monte_carlo)):
+        def trial():
             ys = fitted + sd * rng.standard_normal(fitted.shape)
             t = np.concatenate([_wls(x, ys[:, i], w) for i in range(3)])
-            th_s.append(t)
-            der_s.append(_derived(t))
-        u_mc_theta = np.std(np.array(th_s), axis=0, ddof=1)
-        u_mc = _split(np.std(np.array(der_s), axis=0, ddof=1))
+            return t, _derived(t)
+        u_mc_theta, u_der_mc = chunked_std(trial, int(monte_carlo))
+        u_mc = _split(u_der_mc)
     dofa = np.array(dof)
     k = stats.t.ppf(0.5 + COVERAGE / 2, dofa)
     rates = rows["rate_dps"].abs()

@@ -33,11 +33,13 @@ from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, 
                                          not_measured, source_info)
 from gonio.analysis.thermal_model import (Compensation, ThermalModelResult, compensate_record,
                                           identify_thermal_model)
-from gonio.specs.triad_alignment.analysis import (COVERAGE, OFFDIAG, AlignmentResult,
-                                            cross_axis_table, estimate_alignment)
+from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
+                                                 AlignmentResult, bias_instability_u_dps,
+                                                 cross_axis_table, estimate_alignment)
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
+from gonio.result.model import Covariance
 
 KEY = "triad-alignment"
 TITLE_EN = ("Gyro triad: mechanical misalignment budget, electrical alignment and extended "
@@ -88,10 +90,28 @@ def _type_a(symbol: str, source: str, u: float, nu: float, u_mc: float | None = 
     comp = [{"symbol": symbol, "source": source, "type": "A", "u": float(u), "c": 1.0,
              "contribution": float(u), "dof": float(nu)}]
     mc = None if u_mc is None or not math.isfinite(u_mc) else {"trials": trials, "u": float(u_mc)}
-    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc)
+    return Uncertainty(comp, float(u), k * float(u), k, float(nu), mc, COVERAGE,
+                       "Student's t for 95.45 % at the fit's ν")
 
 
-def alignment_items(al: AlignmentResult, trials: int) -> dict[str, Item]:
+def _with_bias_instability(unc: Uncertainty, key: str, u_long: float, nu_long: float
+                           ) -> Uncertainty:
+    """The fit's in-run u(b) plus the long-term bias-instability term
+    (:func:`gonio.specs.triad_alignment.analysis.bias_instability_u_dps`), k = t_0.9545 of
+    the Welch–Satterthwaite ν_eff (JCGM 100 G.4)."""
+    comp = list(unc.components) + [{
+        "symbol": f"{key}_BI", "type": "B", "u": u_long, "c": 1.0, "contribution": u_long,
+        "dof": nu_long,
+        "source": "bias instability over the bias's horizon: B̂ √(ln(τ_L/τ_d)/π), B̂ from the "
+                  "static record's Allan floor (IEEE 952 Annex C)"}]
+    u_c = math.hypot(unc.u_c, u_long)
+    nu = u_c ** 4 / (unc.u_c ** 4 / unc.nu_eff + u_long ** 4 / nu_long)
+    k = float(stats.t.ppf(0.5 + COVERAGE / 2, nu))
+    return Uncertainty(comp, u_c, k * u_c, k, float(nu), unc.monte_carlo)
+
+
+def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
+                    ) -> dict[str, Item]:
     """The alignment items (module docstring) from an :class:`AlignmentResult`."""
     unit = al.output_unit or "output"
     items: dict[str, Item] = {}
@@ -106,13 +126,25 @@ def alignment_items(al: AlignmentResult, trials: int) -> dict[str, Item]:
                               float(al.system_matrix[i, j]), uncertainty=_type_a(
                                   key, fit, um[i, j], al.dof[i],
                                   None if mc_m is None else mc_m[i, j], trials))
+    u_bi, nu_bi = bias_instability_u_dps(al.averaging, static_s)
     for i in range(3):
         key = f"b_{AXES[i]}"
+        unc = _type_a(key, fit, ub[i], al.dof[i], None if mc_m is None else mc_m[i, 3], trials)
+        u_long = float(u_bi[i] * abs(al.system_matrix[i, i]))
+        if u_long > 0:
+            unc = _with_bias_instability(unc, key, u_long, float(nu_bi[i]))
         items[key] = Item(key, f"bias {key}", "§4 eq. 28–30a", unit, float(al.bias_output[i]),
-                          uncertainty=_type_a(key, fit, ub[i], al.dof[i],
-                                              None if mc_m is None else mc_m[i, 3], trials),
+                          uncertainty=unc,
                           details={"bias_dps": float(al.derived["bias_dps"][i]),
-                                   "u_bias_dps": float(al.u_derived["bias_dps"][i])})
+                                   "u_bias_dps": float(al.u_derived["bias_dps"][i]),
+                                   "u_bias_in_run_dps": float(al.u_derived["bias_dps"][i]),
+                                   "u_bias_instability_dps": float(u_bi[i]),
+                                   "bias_horizon_s": BIAS_HORIZON_S,
+                                   "stated": ("long-term bias: the in-run fit plus the bias "
+                                              "instability from the shortest dwell to "
+                                              f"{BIAS_HORIZON_S / 3600:g} h" if u_long > 0
+                                              else "in-run bias over this record (no static "
+                                              "record: no bias-instability term)")})
     tab = cross_axis_table(al)
     nu_min = float(np.min(al.dof))
     for n, r in enumerate(tab.itertuples(index=False)):
@@ -268,7 +300,11 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     accepted for the plug-in interface: everything the analysis uses is in the file.
     """
 
+    from gonio.result.findings import findings_to_json
+    from gonio.specs.triad_alignment.screen import check
+
     r = _as_readings(readings)
+    findings = check(r)                      # refused readings stop here, naming the line
     unit = r.metadata.get("output_unit", "output")
     items: dict[str, Item] = {}
     al = None
@@ -282,13 +318,18 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
             al = None
             items.update(_alignment_not_measured(f"the data were refused: {exc.message}", unit))
         else:
-            items.update(alignment_items(al, monte_carlo_trials))
+            st = r.rows("static")
+            items.update(alignment_items(al, monte_carlo_trials,
+                                         float(st["duration_s"].sum()) if len(st) else 0.0))
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)
+    if tr is not None and tr is not r:
+        findings += check(tr)
     th = None
     comp: dict[str, Compensation] = {}
-    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None}
+    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None,
+             "findings": findings_to_json(findings)}
     if tr is None:
         items["thermal_model"] = not_measured(
             "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)", "thesis eq. 6.14",
@@ -315,7 +356,33 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
         extra["cross_axis"] = cross_axis_table(al).to_dict(orient="records")
     src = source_info(r)
     return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),
-                            extra=json_safe(extra), alignment=al, thermal=th, compensation=comp)
+                            extra=json_safe(extra), alignment=al, thermal=th, compensation=comp,
+                            covariances=alignment_covariances(al),
+                            tables=prediction_tables(extra["thermal_model"]))
+
+
+def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:
+    """Per gyro, the covariance of its row of M and its bias (one fit: M_i·, b_i),
+    s²(XᵀWX)⁻¹ in the items' units (the fits of the three gyros are independent)."""
+    if al is None:
+        return []
+    out = []
+    for i in range(3):
+        keys = [f"M_{AXES[i]}{AXES[j]}" for j in range(3)] + [f"b_{AXES[i]}"]
+        block = np.asarray(al.cov_theta)[4 * i:4 * i + 4, 4 * i:4 * i + 4]
+        out.append(Covariance(keys, block.tolist(), f"gyro {AXES[i]}: weighted least-squares "
+                              "fit of all dwells, s²(XᵀWX)⁻¹ (JCGM 100 4.2)"))
+    return out
+
+
+def prediction_tables(thermal_json: dict | None) -> dict:
+    """Per modelled gyro, ``thermal_prediction_<gyro>.csv``: the prediction band."""
+    import pandas as pd
+
+    tm = thermal_json or {}
+    return {f"thermal_prediction_{ch}.csv": pd.DataFrame(
+        {k: v for k, v in pr.items() if isinstance(v, list)})
+        for ch, pr in (tm.get("prediction_U") or {}).items()}
 
 
 def article_budget() -> MisalignmentBudget:

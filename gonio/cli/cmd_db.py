@@ -1,0 +1,151 @@
+"""``gonio db``: the records database from the command line (init, create-user, import,
+backup, restore), and the ``--record`` option of ``gonio calibrate`` (added here, so the
+calibrate command itself is not touched: it runs, then its output folder is imported)."""
+
+from __future__ import annotations
+
+import getpass
+import os
+import sys
+
+from gonio.cli.cmd_serve import add_store_options
+from gonio.errors import GonioError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("db", help="the records database: init, users, import, backup, restore",
+                       description="Manage the laboratory's records database.")
+    dsub = p.add_subparsers(dest="db_command", metavar="ACTION")
+    dsub.required = True
+    q = dsub.add_parser("init", help="create or upgrade the database")
+    add_store_options(q)
+    for k in ("lab_name", "lab_address", "lab_accreditation", "lab_contact"):
+        q.add_argument("--" + k.replace("_", "-"), dest=k, default=None)
+    q.set_defaults(func=run_init)
+    q = dsub.add_parser("create-user", help="add a user (password from $GONIO_PASSWORD or asked)")
+    add_store_options(q)
+    q.add_argument("username")
+    q.add_argument("--roles", default="technician",
+                   help="space- or comma-separated: technician, reviewer, admin")
+    q.add_argument("--full-name", default="")
+    q.set_defaults(func=run_create_user)
+    q = dsub.add_parser("import", help="import gonio output folders as computed calibrations")
+    add_store_options(q)
+    q.add_argument("folders", nargs="+")
+    q.add_argument("--customer", default="(imported)")
+    q.set_defaults(func=run_import)
+    for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
+                           ("restore", "restore an archive into an empty database")):
+        q = dsub.add_parser(name, help=helptext)
+        add_store_options(q)
+        q.add_argument("archive")
+        q.set_defaults(func=run_backup if name == "backup" else run_restore)
+    hook_calibrate(sub)
+
+
+def hook_calibrate(sub) -> None:
+    """Add ``--record`` (with ``--database``/``--data``) to ``gonio calibrate``."""
+    import argparse
+
+    p = sub.choices.get("calibrate")
+    if p is None:
+        return
+    try:
+        p.add_argument("--record", action="store_true",
+                       help="also put the calibration into the records database, computed "
+                            "and awaiting review (see gonio serve)")
+        add_store_options(p)
+    except argparse.ArgumentError:           # calibrate has grown its own --record
+        return
+    inner = p.get_default("func")
+
+    def run_recorded(args) -> int:
+        rc = inner(args)
+        if rc == 0 and args.record:
+            from gonio.records.importer import import_output_folder
+            store = _store(args)
+            try:
+                cid = import_output_folder(store, args.out, readings=args.readings,
+                                           spec_key=args.spec)
+            finally:
+                store.close()
+            sys.stderr.write(f"gonio: recorded as calibration {cid}\n")
+        return rc
+
+    p.set_defaults(func=run_recorded)
+
+
+def _store(args):
+    from gonio.records.db import open_store
+    return open_store(args.database, args.data)
+
+
+def run_init(args) -> int:
+    from gonio.records import services
+
+    store = _store(args)
+    try:
+        values = {k: getattr(args, k) for k in ("lab_name", "lab_address", "lab_accreditation",
+                                                "lab_contact") if getattr(args, k) is not None}
+        if values:
+            services.set_settings(store, None, **values)
+        print(f"records ready: {store.engine.url.render_as_string(hide_password=True)}")
+    finally:
+        store.close()
+    return 0
+
+
+def run_create_user(args) -> int:
+    from gonio.records import services
+
+    password = os.environ.get("GONIO_PASSWORD")
+    if password is None:
+        if not sys.stdin.isatty():
+            raise GonioError("give the password in $GONIO_PASSWORD (no terminal to ask on)",
+                             key="password")
+        password = getpass.getpass(f"password for {args.username}: ")
+    store = _store(args)
+    try:
+        u = services.create_user(store, None, args.username, password,
+                                 args.roles.replace(",", " "), args.full_name)
+        print(f"user {u.username} ({u.roles})")
+    finally:
+        store.close()
+    return 0
+
+
+def run_import(args) -> int:
+    from gonio.records.importer import import_output_folder
+
+    store = _store(args)
+    try:
+        for folder in args.folders:
+            cid = import_output_folder(store, folder, customer=args.customer)
+            print(f"{folder}: calibration {cid}")
+    finally:
+        store.close()
+    return 0
+
+
+def run_backup(args) -> int:
+    from gonio.records.backup import backup
+
+    store = _store(args)
+    try:
+        counts = backup(store, args.archive)
+    finally:
+        store.close()
+    print(f"{args.archive}: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    return 0
+
+
+def run_restore(args) -> int:
+    from gonio.records.backup import restore
+
+    store = _store(args)
+    try:
+        counts = restore(store, args.archive)
+    finally:
+        store.close()
+    print("restored: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    return 0

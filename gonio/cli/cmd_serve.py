@@ -1,0 +1,68 @@
+"""``gonio serve``: the laboratory's records in a browser (docs/records.md)."""
+
+from __future__ import annotations
+
+import secrets
+import sys
+
+
+def add_store_options(p) -> None:
+    """``--database URL`` and ``--data DIR`` (shared by serve, db and calibrate --record)."""
+    p.add_argument("--database", default=None, metavar="URL",
+                   help="database URL (default: SQLite in the data folder; "
+                        "postgresql://USER:PASSWORD@HOST/DB for several workstations)")
+    p.add_argument("--data", default=None, metavar="DIR",
+                   help="data folder: SQLite database and stored files (default: $GONIO_DATA "
+                        "or ~/.local/share/gonio)")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("serve", help="the laboratory's records in a browser",
+                       description="Serve the records (instruments, calibrations, "
+                                   "certificates) to a browser on this machine.")
+    add_store_options(p)
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=int, default=8765, help="port (default 8765)")
+    p.add_argument("--workers", type=int, default=2,
+                   help="calibrations run at the same time (default 2)")
+    p.set_defaults(func=run)
+
+
+def first_admin(store) -> str | None:
+    """On a database without users: create ``admin`` with a random password (returned)."""
+    from gonio.records import queries, services
+
+    if queries.users(store):
+        return None
+    password = secrets.token_urlsafe(12)
+    services.create_user(store, None, "admin", password, "admin technician reviewer",
+                         "Administrator")
+    return password
+
+
+def run(args) -> int:
+    import uvicorn
+
+    from gonio.errors import GonioError
+    from gonio.records.db import open_store
+    from gonio.records.worker import Dispatcher
+    from gonio.web.app import create_app
+
+    if not 0 < args.port < 65536:
+        raise GonioError("not a port number", key="--port")
+    store = open_store(args.database, args.data)
+    password = first_admin(store)
+    if password:
+        sys.stderr.write(f"gonio: first start: user 'admin', password '{password}' "
+                         "(change it: create your users and deactivate this one)\n")
+    dispatcher = Dispatcher(store, workers=args.workers).start()
+    app = create_app(store, dispatcher)
+    sys.stderr.write(f"gonio: serving the records at http://{args.host}:{args.port}/ "
+                     f"(database {store.engine.url.render_as_string(hide_password=True)})\n")
+    try:
+        uvicorn.run(app, host=args.host, port=args.port, log_level="warning")
+    finally:
+        dispatcher.stop(wait=False)
+        store.close()
+    return 0

@@ -1,0 +1,95 @@
+"""The one place the records call gonio's calibration pipeline.
+
+:func:`calibrate_folder` turns a readings file into gonio's output set (results.json,
+summary.txt, certificate.html/.pdf and, where the specification has one, the DCC) in a
+folder, for any specification, with a laboratory details file; the worker
+(:mod:`gonio.records.worker`) runs it in its own process. :func:`write_lab_toml` writes the
+laboratory details the records assemble (``gonio.report.certificate.LAB_SCHEMA``) as the
+TOML file the pipeline reads, so the certificate is validated exactly as on the command line.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+
+from gonio.atomic import output_set, write_text
+
+#: a readings file whose first bytes are these is a Parquet stream
+PARQUET_MAGIC = b"PAR1"
+
+
+def readings_suffix(head: bytes) -> str:
+    """The file name suffix a stored readings file is given in a work folder (its content
+    decides, never the uploaded name): ``.parquet`` for a Parquet stream, else ``.csv``.
+
+    >>> readings_suffix(b"PAR1...."), readings_suffix(b"# spec: x")
+    ('.parquet', '.csv')
+    """
+    return ".parquet" if head[:4] == PARQUET_MAGIC else ".csv"
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(float(v)) if isinstance(v, float) else str(v)
+    # a JSON string is a valid TOML basic string (\uXXXX escapes for control characters)
+    return json.dumps(str(v), ensure_ascii=False)
+
+
+def lab_toml(lab: dict) -> str:
+    """The laboratory details as TOML (tables and arrays of tables; None values left out).
+
+    >>> print(lab_toml({"laboratory": {"name": 'A "B"', "x": None}, "standards": [{"name": "T"}]}))
+    [laboratory]
+    name = "A \\"B\\""
+    <BLANKLINE>
+    [[standards]]
+    name = "T"
+    <BLANKLINE>
+    """
+    lines: list[str] = []
+    for section, body in lab.items():
+        rows = body if isinstance(body, list) else [body]
+        for row in rows:
+            if row is None:
+                continue
+            lines.append(f"[[{section}]]" if isinstance(body, list) else f"[{section}]")
+            lines += [f"{k} = {_toml_value(v)}" for k, v in row.items() if v is not None]
+            lines.append("")
+    return "\n".join(lines)
+
+
+def write_lab_toml(lab: dict, path: str | Path) -> Path:
+    """Write :func:`lab_toml` to ``path`` (atomically)."""
+    return write_text(path, lab_toml(lab))
+
+
+def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
+                     protocol: str | None = None, lab: str | Path | None = None) -> list[str]:
+    """Calibrate ``readings`` per ``spec_key`` into ``out`` with the certificate (and the DCC
+    where the specification's pipeline writes one); returns the file names written."""
+    from gonio.pipeline import rate as rate_pipeline
+    from gonio.pipeline import triad as triad_pipeline
+    from gonio.specs import get
+
+    get(spec_key)                             # an unknown key: GonioError listing the known
+    out = Path(out)
+    if spec_key == triad_pipeline.KEY:
+        with output_set(out, inputs=[readings, lab]):
+            triad_pipeline.calibrate(readings, out, lab=lab)
+    elif spec_key in rate_pipeline.RATE_SPECS:
+        dcc = "dcc" in inspect.signature(rate_pipeline.calibrate).parameters
+        with output_set(out, inputs=[readings, protocol, lab]):
+            rate_pipeline.calibrate(readings, out, spec_key=spec_key, protocol=protocol,
+                                    lab=lab, dcc=dcc)
+    else:
+        from gonio.pipeline.calibrate import calibrate, write_outputs
+        from gonio.report.certificate import load_lab
+
+        lab_d = load_lab(lab) if lab else None
+        report = calibrate(readings, protocol)
+        write_outputs(report, out, lab=lab_d, dcc=True, inputs=[readings, protocol, lab])
+    return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())

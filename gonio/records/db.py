@@ -1,0 +1,145 @@
+"""Opening the records database: SQLite (WAL) in a data folder by default, PostgreSQL
+(psycopg 3) by URL; the schema is brought up to date by the shipped Alembic migrations
+on every open.
+
+>>> import tempfile
+>>> store = open_store(data=tempfile.mkdtemp())
+>>> store.url.startswith("sqlite:///") and store.engine.dialect.name
+'sqlite'
+>>> store.close()
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from sqlalchemy import create_engine, event
+from sqlalchemy.engine import Engine, make_url
+from sqlalchemy.exc import ArgumentError
+from sqlalchemy.orm import Session, sessionmaker
+
+from gonio.errors import GonioError
+
+#: Default data folder (database, blob store, worker folders): ``$GONIO_DATA`` or
+#: ``~/.local/share/gonio``.
+DEFAULT_DATA = "~/.local/share/gonio"
+
+MIGRATIONS = Path(__file__).resolve().parent / "migrations"
+
+
+def data_folder(data: str | os.PathLike | None) -> Path:
+    """The data folder to use (created, mode 0700 when new)."""
+    path = Path(os.path.expanduser(str(data or os.environ.get("GONIO_DATA") or DEFAULT_DATA)))
+    try:
+        path.mkdir(parents=True, exist_ok=True, mode=0o700)
+    except OSError as exc:
+        raise GonioError(f"cannot create the data folder: {exc.strerror}", file=path) from None
+    if not path.is_dir():
+        raise GonioError("the data folder is not a folder", file=path)
+    return path
+
+
+def database_url(database: str | None, data: Path) -> str:
+    """``database`` as a SQLAlchemy URL: None → SQLite ``records.sqlite3`` in ``data``;
+    ``postgresql://…`` is read with the psycopg 3 driver."""
+    if not database:
+        return f"sqlite:///{data / 'records.sqlite3'}"
+    try:
+        url = make_url(database)
+    except ArgumentError:
+        raise GonioError("not a database URL (sqlite:///FILE or postgresql://USER@HOST/DB)",
+                         key="--database") from None
+    if url.drivername in ("postgresql", "postgres"):
+        url = url.set(drivername="postgresql+psycopg")
+    if url.get_backend_name() not in ("sqlite", "postgresql"):
+        raise GonioError(f"unsupported database {url.get_backend_name()!r} "
+                         "(sqlite or postgresql)", key="--database")
+    return url.render_as_string(hide_password=False)
+
+
+def _sqlite_connect(dbapi_conn, _record) -> None:
+    dbapi_conn.isolation_level = None          # transactions are begun by _sqlite_begin
+    cur = dbapi_conn.cursor()
+    cur.execute("PRAGMA journal_mode=WAL")
+    cur.execute("PRAGMA synchronous=NORMAL")
+    cur.execute("PRAGMA foreign_keys=ON")
+    cur.execute("PRAGMA busy_timeout=30000")
+    cur.close()
+
+
+def _sqlite_begin(conn) -> None:
+    # a writing session takes the write lock at BEGIN, so concurrent writers wait on the
+    # busy timeout instead of failing when a read snapshot turns out stale at the write
+    immediate = conn.get_execution_options().get("gonio_write", False)
+    conn.exec_driver_sql("BEGIN IMMEDIATE" if immediate else "BEGIN")
+
+
+def make_engine(url: str) -> Engine:
+    """An engine for ``url``; SQLite gets WAL, foreign keys and a 30 s busy timeout."""
+    if url.startswith("sqlite"):
+        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 30})
+        event.listen(engine, "connect", _sqlite_connect)
+        event.listen(engine, "begin", _sqlite_begin)
+        return engine
+    return create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
+
+
+def migrate(engine: Engine, revision: str = "head") -> None:
+    """Bring the schema to ``revision`` with the shipped Alembic migrations."""
+    from alembic import command
+    from alembic.config import Config
+
+    cfg = Config()
+    cfg.set_main_option("script_location", str(MIGRATIONS))
+    with engine.begin() as conn:
+        cfg.attributes["connection"] = conn
+        command.upgrade(cfg, revision)
+
+
+@dataclass
+class Store:
+    """An open records store: the database engine, a session factory, the data folder
+    (its ``blobs/`` hold the content-addressed files)."""
+
+    url: str
+    engine: Engine
+    sessions: sessionmaker
+    data: Path
+
+    def session(self) -> Session:
+        """A session for reading (and small writes)."""
+        return self.sessions()
+
+    def writing(self) -> Session:
+        """A session that writes: on SQLite it holds the write lock from its first
+        statement (BEGIN IMMEDIATE), so concurrent writers queue instead of failing."""
+        return self.sessions(bind=self.engine.execution_options(gonio_write=True))
+
+    @property
+    def blob_root(self) -> Path:
+        return self.data / "blobs"
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+
+def open_store(database: str | None = None, data: str | os.PathLike | None = None, *,
+               upgrade: bool = True) -> Store:
+    """Open (and migrate) the records: SQLite in ``data`` unless ``database`` is a URL."""
+    folder = data_folder(data)
+    url = database_url(database, folder)
+    engine = make_engine(url)
+    if upgrade:
+        try:
+            migrate(engine)
+        except Exception as exc:
+            engine.dispose()
+            from sqlalchemy.exc import OperationalError
+            if isinstance(exc, OperationalError):
+                raise GonioError(f"cannot open the database: {str(exc.orig).strip()}",
+                                 key="--database") from None
+            raise
+    return Store(url=url, engine=engine,
+                 sessions=sessionmaker(engine, expire_on_commit=False), data=folder)

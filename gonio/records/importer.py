@@ -1,0 +1,109 @@
+"""Command-line work into the records: an output folder of ``gonio calibrate`` or
+``gonio demo`` (results.json, certificate, the readings) becomes a computed calibration,
+ready for review, of the instrument its readings name.
+
+The readings file must be the one results.json was computed from (its SHA-256 is checked
+against ``source.sha256``): the records never hold a result without its readings. The
+instrument is found by (manufacturer, model, serial) from the readings' metadata, else
+registered under the customer given (default ``(imported)``). The folder is only read.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import getpass
+import json
+from pathlib import Path
+
+from sqlalchemy import select
+
+from gonio.errors import GonioError
+from gonio.records import blobs, services
+from gonio.records.models import Blob, Calibration, Customer, Instrument, User
+from gonio.records.results import result_items
+
+#: readings file names looked for in a folder when none is given
+READINGS_NAMES = ("readings.csv", "readings.parquet", "stream.csv", "stream.parquet")
+
+
+def _readings_in(folder: Path, sha: str, given: Path | None) -> Path:
+    cands = [given] if given else [folder / n for n in READINGS_NAMES]
+    for p in cands:
+        if p is not None and p.is_file() and blobs_sha(p) == sha:
+            return p
+    raise GonioError("no readings file matching results.json's source SHA-256 "
+                     f"({sha[:12]}…); give it with --readings", file=folder)
+
+
+def blobs_sha(path: Path) -> str:
+    from gonio.atomic import sha256_file
+    return sha256_file(path)
+
+
+def _instrument(s, meta: dict, spec_key: str, customer: str, actor) -> Instrument:
+    def field(k):
+        return services.text(str(meta.get(k, "") or ""), k)
+
+    serial = field("serial") or "(unknown serial)"
+    manufacturer, model = field("manufacturer"), field("model") or field("instrument")
+    inst = s.scalar(select(Instrument).where(Instrument.manufacturer == manufacturer,
+                                             Instrument.model == model,
+                                             Instrument.serial == serial))
+    if inst is not None:
+        return inst
+    cust = s.scalar(select(Customer).where(Customer.name == customer))
+    if cust is None:
+        cust = Customer(name=customer, address="")
+        s.add(cust)
+        s.flush()
+        services.audit(s, actor, "create", "customer", cust.id, None, services.state(cust))
+    inst = Instrument(customer_id=cust.id, kind=field("instrument"), manufacturer=manufacturer,
+                      model=model, serial=serial, spec_key=spec_key, limits_json="[]")
+    s.add(inst)
+    s.flush()
+    services.audit(s, actor, "create", "instrument", inst.id, None, services.state(inst))
+    return inst
+
+
+def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
+                         spec_key: str | None = None, customer: str = "(imported)",
+                         actor: User | None = None) -> int:
+    """Import one output folder as a computed calibration; returns its id."""
+    folder = Path(folder)
+    res_path = folder / "results.json"
+    try:
+        results = json.loads(res_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise GonioError(f"no readable results.json ({exc})", file=folder) from None
+    result_items(results)                      # a folder without items is refused here
+    source = results.get("source") or {}
+    meta = results.get("metadata") or {}
+    key = spec_key or results.get("spec") or meta.get("spec") or "ogam-draft"
+    from gonio.specs import get
+    get(key)
+    rd = _readings_in(folder, str(source.get("sha256", "")), Path(readings) if readings else None)
+    rsha, rsize = blobs.put_file(store.blob_root, rd)
+    who = actor.username if actor else f"command line ({getpass.getuser()})"
+    with store.writing() as s:
+        if s.get(Blob, rsha) is None:
+            s.add(Blob(sha256=rsha, size=rsize))
+            s.flush()
+        inst = _instrument(s, meta, key, customer, actor)
+        day = _dt.date.fromisoformat(str(meta["date"])[:10]) if meta.get("date") else \
+            _dt.date.fromtimestamp(res_path.stat().st_mtime)
+        cal = Calibration(instrument_id=inst.id, spec_key=key, readings_sha256=rsha,
+                          readings_name=rd.name, protocol=str(results.get("protocol") or "")[:64],
+                          performed_on=day, status="running", created_by_id=actor.id
+                          if actor else None, progress=f"imported from {folder.name} by {who}")
+        s.add(cal)
+        s.flush()
+        services.audit(s, actor, "import", "calibration", cal.id, None,
+                       dict(services.state(cal), folder=str(folder)))
+        s.commit()
+        cal_id = cal.id
+    try:
+        services.store_run(store, cal_id, folder)   # files and items as a worker's run stores
+    except Exception as exc:
+        services.fail(store, cal_id, f"import failed: {exc}")
+        raise
+    return cal_id

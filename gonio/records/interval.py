@@ -1,0 +1,165 @@
+"""Recalibration intervals from an instrument's history (ILAC-G24:2007, OIML D 10).
+
+Two of ILAC-G24's methods, both documented with their formulas in docs/records.md#intervals:
+
+* :func:`drift_to_limit` — the drift of an item fitted over its calibrations (weighted least
+  squares, weights 1/u², u = U/k) and extrapolated: the interval is the time after the last
+  calibration at which the fitted value plus k times the standard uncertainty of the fit
+  reaches the item's specification limit (ILAC-G24 clause 4, "control chart" / drift
+  methods: the history predicts when the instrument leaves its tolerance);
+* :func:`staircase` — ILAC-G24 method 1, the simple response ("staircase") method: after each
+  calibration the interval is lengthened by :data:`EXTEND` when every item was found within
+  its limits and shortened by :data:`REDUCE` otherwise.
+
+:func:`propose` combines them with the specification's clause-9 default: the drift method
+where an item has at least :data:`MIN_POINTS` calibrations and a limit, else the staircase,
+else the default; never longer than :data:`MAX_FACTOR` times the default.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+#: days in a mean Gregorian month (time is measured in days, intervals shown in months)
+DAYS_PER_MONTH = 365.25 / 12
+#: the specification's default interval when it states none (clause 9: "normally ≤ 12 months")
+DEFAULT_MONTHS = 12
+#: staircase factors (ILAC-G24 method 1 leaves them to the laboratory)
+EXTEND, REDUCE = 1.25, 0.5
+#: the longest interval proposed, as a multiple of the specification's default
+MAX_FACTOR = 2.0
+#: calibrations an item needs before its drift is extrapolated (two define a line, the
+#: third is the first check of it)
+MIN_POINTS = 3
+#: coverage factor of the predicted value's uncertainty band
+K_PREDICT = 2.0
+
+
+@dataclass(frozen=True)
+class DriftFit:
+    """y(t) = a + b·t (t in days after the last calibration) and the covariance of (a, b)."""
+
+    a: float
+    b: float
+    var_a: float
+    var_b: float
+    cov_ab: float
+    birge: float            # sqrt(chi2/nu) of the fit; the covariance is scaled by max(1, birge²)
+
+    def u(self, t):
+        """Standard uncertainty of the fitted value at t days."""
+        return np.sqrt(np.maximum(self.var_a + 2 * t * self.cov_ab + t * t * self.var_b, 0.0))
+
+
+def fit_drift(t_days, values, u) -> DriftFit:
+    """Weighted straight line through (t, value) with standard uncertainties u; t is shifted
+    so that the last calibration is t = 0. With more points than two the covariance is
+    scaled by the Birge ratio² when the scatter exceeds the stated uncertainties."""
+    t = np.asarray(t_days, float) - float(np.max(t_days))
+    y, u = np.asarray(values, float), np.asarray(u, float)
+    w = 1.0 / u**2
+    X = np.column_stack([np.ones_like(t), t])
+    cov = np.linalg.inv(X.T @ (X * w[:, None]))
+    a, b = cov @ (X.T @ (w * y))
+    nu = len(t) - 2
+    chi2 = float(np.sum(w * (y - a - b * t) ** 2))
+    birge = math.sqrt(chi2 / nu) if nu > 0 else 1.0
+    cov = cov * max(1.0, birge**2)
+    return DriftFit(float(a), float(b), float(cov[0, 0]), float(cov[1, 1]), float(cov[0, 1]),
+                    birge)
+
+
+def time_to_limit(fit: DriftFit, lower: float | None, upper: float | None,
+                  k: float = K_PREDICT, horizon_days: float = 3650.0) -> float:
+    """Days after the last calibration until a + b·t ± k·u(t) first reaches a limit;
+    0 when it is at or beyond a limit already, ``inf`` when not within ``horizon_days``."""
+    best = math.inf
+    for limit, sign in ((upper, 1.0), (lower, -1.0)):
+        if limit is None:
+            continue
+
+        def margin(t, limit=limit, sign=sign):
+            # distance from the band's edge to the limit, positive while inside
+            return sign * (limit - (fit.a + fit.b * t)) - k * float(fit.u(t))
+
+        if margin(0.0) <= 0:
+            return 0.0
+        if margin(horizon_days) > 0:
+            continue
+        best = min(best, brentq(margin, 0.0, horizon_days, xtol=1e-9))
+    return best
+
+
+def drift_to_limit(t_days, values, U, k, lower, upper) -> tuple[float, DriftFit]:
+    """(days to the limit, the fit) for one item's history (U and k per calibration)."""
+    u = np.asarray(U, float) / np.asarray(k, float)
+    fit = fit_drift(t_days, values, u)
+    return time_to_limit(fit, lower, upper), fit
+
+
+def staircase(start_months: float, in_tolerance: list[bool], *,
+              max_months: float) -> float:
+    """ILAC-G24 method 1: the interval after each calibration's finding in turn."""
+    months = float(start_months)
+    for ok in in_tolerance:
+        months = min(months * EXTEND, max_months) if ok else max(months * REDUCE, 1.0)
+    return months
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A proposed interval, the method that gave it, and the default beside it."""
+
+    months: int
+    method: str
+    detail: str
+    default_months: int
+    per_item: dict            # key -> months to the limit (drift method), inf if none
+
+
+def _within(value, U, lower, upper) -> bool:
+    if value is None:
+        return True
+    return (upper is None or value <= upper) and (lower is None or value >= lower)
+
+
+def propose(history: dict, default_months: int = DEFAULT_MONTHS) -> Proposal:
+    """The interval for an instrument from ``history``: item key → list of (t_days,
+    value, U, k, lower, upper) in calibration order (limits may be None)."""
+    cap = MAX_FACTOR * default_months
+    per_item: dict[str, float] = {}
+    findings: dict[int, bool] = {}
+    for key, rows in history.items():
+        rows = [r for r in rows if r[1] is not None and r[2] and r[3]]
+        if not rows:
+            continue
+        lower, upper = rows[-1][4], rows[-1][5]
+        if lower is None and upper is None:
+            continue
+        for i, r in enumerate(rows):
+            findings[i] = findings.get(i, True) and _within(r[1], r[2], r[4], r[5])
+        if len(rows) >= MIN_POINTS and len({r[0] for r in rows}) >= 2:
+            days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in rows]),
+                                     lower, upper)
+            per_item[key] = days / DAYS_PER_MONTH
+    if per_item:
+        key = min(per_item, key=per_item.get)
+        months = int(max(0, math.floor(min(per_item[key], cap))))
+        return Proposal(months, "drift-to-limit (ILAC-G24)",
+                        f"limited by {key}: fitted value + {K_PREDICT:g}·u reaches its limit "
+                        f"after {per_item[key]:.1f} months" if math.isfinite(per_item[key])
+                        else f"no item reaches its limit within {cap:g} months",
+                        default_months, per_item)
+    if findings:
+        months = staircase(default_months, [findings[i] for i in sorted(findings)],
+                           max_months=cap)
+        return Proposal(int(math.floor(months)), "simple response / staircase (ILAC-G24 "
+                        "method 1)", f"{len(findings)} calibration(s) against the limits",
+                        default_months, per_item)
+    return Proposal(default_months, "specification default (clause 9)",
+                    "no specification limits: the history cannot be judged against a limit",
+                    default_months, per_item)

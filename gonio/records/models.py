@@ -1,0 +1,249 @@
+"""The laboratory's records as SQLAlchemy 2 tables (docs/records.md#model).
+
+Every table is created by the Alembic migrations shipped in
+``gonio/records/migrations`` (never by ``create_all`` outside tests), so a database
+made by one gonio version is upgraded in place by the next.
+
+Tables that must never change once written are guarded in the database itself by
+triggers (the migrations create them, for SQLite and PostgreSQL alike):
+
+* ``audit_events``  append-only: no UPDATE, no DELETE;
+* ``certificates``  an issued certificate is frozen: no UPDATE, no DELETE;
+* ``blobs``         a stored file's record is never changed (the bytes live in the
+                    content-addressed store, named by their SHA-256).
+
+Times are naive UTC ``datetime`` values; dates (due dates, calibration dates) are
+``date`` values.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+
+from sqlalchemy import (BigInteger, Boolean, Date, DateTime, Float, ForeignKey, Integer, String, Text,
+                        UniqueConstraint)
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
+
+
+def utcnow() -> _dt.datetime:
+    """Now, UTC, without tzinfo (what every DateTime column holds)."""
+    return _dt.datetime.now(_dt.timezone.utc).replace(tzinfo=None)
+
+
+class Base(DeclarativeBase):
+    pass
+
+
+#: Roles a user may hold (space-separated in ``users.roles``).
+ROLES = ("technician", "reviewer", "admin")
+
+#: A calibration's states, in workflow order (docs/records.md#workflow).
+STATES = ("queued", "running", "failed", "computed", "reviewed", "rejected", "approved",
+          "issuing", "issued")
+
+
+class User(Base):
+    __tablename__ = "users"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    username: Mapped[str] = mapped_column(String(64), unique=True)
+    full_name: Mapped[str] = mapped_column(String(200), default="")
+    password_hash: Mapped[str] = mapped_column(String(255))
+    roles: Mapped[str] = mapped_column(String(100), default="technician")
+    active: Mapped[bool] = mapped_column(Boolean, default=True)
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+    def has(self, role: str) -> bool:
+        return role in self.roles.split()
+
+
+class WebSession(Base):
+    """A browser session: the cookie holds a random token, the table its SHA-256."""
+    __tablename__ = "web_sessions"
+    id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id"))
+    csrf_token: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    expires_at: Mapped[_dt.datetime] = mapped_column(DateTime)
+    user: Mapped[User] = relationship()
+
+
+class LoginFailure(Base):
+    """One failed login (throttling counts them per user name and per address)."""
+    __tablename__ = "login_failures"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    username: Mapped[str] = mapped_column(String(64), index=True)
+    address: Mapped[str] = mapped_column(String(64), index=True)
+    at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow, index=True)
+
+
+class Setting(Base):
+    """Laboratory-wide settings (name, address, accreditation, contact, decision rule)."""
+    __tablename__ = "settings"
+    key: Mapped[str] = mapped_column(String(64), primary_key=True)
+    value: Mapped[str] = mapped_column(Text, default="")
+
+
+class Blob(Base):
+    """A file in the content-addressed store (bytes on disk under their SHA-256)."""
+    __tablename__ = "blobs"
+    sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    size: Mapped[int] = mapped_column(BigInteger)
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class Customer(Base):
+    __tablename__ = "customers"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200), unique=True)
+    address: Mapped[str] = mapped_column(Text, default="")
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class Instrument(Base):
+    """An instrument under calibration: type, manufacturer, model, serial, owner."""
+    __tablename__ = "instruments"
+    __table_args__ = (UniqueConstraint("manufacturer", "model", "serial"),)
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    customer_id: Mapped[int] = mapped_column(ForeignKey("customers.id"), index=True)
+    kind: Mapped[str] = mapped_column(String(200), default="")
+    manufacturer: Mapped[str] = mapped_column(String(200), default="")
+    model: Mapped[str] = mapped_column(String(200), default="")
+    serial: Mapped[str] = mapped_column(String(200))
+    spec_key: Mapped[str] = mapped_column(String(64))
+    #: the interval set by the laboratory (months); None: the specification's default
+    interval_months: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    #: specification limits: JSON list of {item, lower, upper, mpe, source}
+    limits_json: Mapped[str] = mapped_column(Text, default="[]")
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    customer: Mapped[Customer] = relationship()
+
+
+class Standard(Base):
+    """Bench equipment / reference standard with its own calibration and due date."""
+    __tablename__ = "standards"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200))
+    identifier: Mapped[str] = mapped_column(String(200), unique=True)
+    accuracy: Mapped[str] = mapped_column(String(200), default="")
+    certificate: Mapped[str] = mapped_column(String(200), default="")
+    traceability: Mapped[str] = mapped_column(String(200), default="")
+    calibrated_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
+    due_on: Mapped[_dt.date] = mapped_column(Date)
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class Calibration(Base):
+    """One calibration of one instrument: inputs, state, result, people."""
+    __tablename__ = "calibrations"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    instrument_id: Mapped[int] = mapped_column(ForeignKey("instruments.id"), index=True)
+    spec_key: Mapped[str] = mapped_column(String(64))
+    protocol: Mapped[str] = mapped_column(String(200), default="")
+    protocol_sha256: Mapped[str | None] = mapped_column(ForeignKey("blobs.sha256"),
+                                                        nullable=True)
+    readings_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    readings_name: Mapped[str] = mapped_column(String(255), default="")
+    temperature_c: Mapped[float | None] = mapped_column(Float, nullable=True)
+    humidity_pct: Mapped[float | None] = mapped_column(Float, nullable=True)
+    place: Mapped[str] = mapped_column(String(200), default="")
+    received_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
+    performed_on: Mapped[_dt.date] = mapped_column(Date, index=True)
+    status: Mapped[str] = mapped_column(String(16), index=True, default="queued")
+    progress: Mapped[str] = mapped_column(String(200), default="")
+    error: Mapped[str] = mapped_column(Text, default="")
+    worker_host: Mapped[str] = mapped_column(String(200), default="")
+    worker_pid: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    results_sha256: Mapped[str | None] = mapped_column(ForeignKey("blobs.sha256"),
+                                                       nullable=True)
+    created_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    started_at: Mapped[_dt.datetime | None] = mapped_column(DateTime, nullable=True)
+    finished_at: Mapped[_dt.datetime | None] = mapped_column(DateTime, nullable=True)
+    reviewed_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    reviewed_at: Mapped[_dt.datetime | None] = mapped_column(DateTime, nullable=True)
+    review_comment: Mapped[str] = mapped_column(Text, default="")
+    approved_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    approved_at: Mapped[_dt.datetime | None] = mapped_column(DateTime, nullable=True)
+    #: an amendment being issued: the certificate it replaces and why
+    pending_replaces_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    pending_reason: Mapped[str] = mapped_column(Text, default="")
+    #: the certificate number reserved when issuing starts (kept if the run fails)
+    pending_number: Mapped[str] = mapped_column(String(32), default="")
+    instrument: Mapped[Instrument] = relationship()
+    created_by: Mapped[User | None] = relationship(foreign_keys=[created_by_id])
+    reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])
+    approved_by: Mapped[User | None] = relationship(foreign_keys=[approved_by_id])
+
+
+class CalibrationStandard(Base):
+    """A standard used in a calibration, with its due date as it was when used."""
+    __tablename__ = "calibration_standards"
+    calibration_id: Mapped[int] = mapped_column(ForeignKey("calibrations.id"),
+                                                primary_key=True)
+    standard_id: Mapped[int] = mapped_column(ForeignKey("standards.id"), primary_key=True)
+    due_on_at_use: Mapped[_dt.date] = mapped_column(Date)
+    standard: Mapped[Standard] = relationship()
+
+
+class ResultItem(Base):
+    """One item of a calibration's result (value, U), for history plots and lists."""
+    __tablename__ = "result_items"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    calibration_id: Mapped[int] = mapped_column(ForeignKey("calibrations.id"), index=True)
+    key: Mapped[str] = mapped_column(String(64))
+    title: Mapped[str] = mapped_column(String(200), default="")
+    clause: Mapped[str] = mapped_column(String(64), default="")
+    unit: Mapped[str] = mapped_column(String(32), default="")
+    measured: Mapped[bool] = mapped_column(Boolean, default=True)
+    value: Mapped[float | None] = mapped_column(Float, nullable=True)
+    U: Mapped[float | None] = mapped_column(Float, nullable=True)
+    k: Mapped[float | None] = mapped_column(Float, nullable=True)
+
+
+class CalibrationFile(Base):
+    """A file a calibration run produced (draft certificate, DCC, results, summary)."""
+    __tablename__ = "calibration_files"
+    calibration_id: Mapped[int] = mapped_column(ForeignKey("calibrations.id"),
+                                                primary_key=True)
+    name: Mapped[str] = mapped_column(String(64), primary_key=True)
+    sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+
+
+class CertificateCounter(Base):
+    """The last certificate sequence number used in a year (GC-YYYY-NNNN)."""
+    __tablename__ = "certificate_counters"
+    year: Mapped[int] = mapped_column(Integer, primary_key=True)
+    last: Mapped[int] = mapped_column(Integer, default=0)
+
+
+class Certificate(Base):
+    """An issued certificate: frozen (database triggers refuse UPDATE and DELETE)."""
+    __tablename__ = "certificates"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    number: Mapped[str] = mapped_column(String(32), unique=True)
+    calibration_id: Mapped[int] = mapped_column(ForeignKey("calibrations.id"), index=True)
+    issued_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    issued_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    replaces_id: Mapped[int | None] = mapped_column(ForeignKey("certificates.id"),
+                                                    nullable=True)
+    reason: Mapped[str] = mapped_column(Text, default="")
+    html_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    pdf_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    dcc_sha256: Mapped[str | None] = mapped_column(ForeignKey("blobs.sha256"), nullable=True)
+    results_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    calibration: Mapped[Calibration] = relationship()
+    replaces: Mapped["Certificate | None"] = relationship(remote_side=[id])
+
+
+class AuditEvent(Base):
+    """Append-only trail: who did what, when, from which record state to which."""
+    __tablename__ = "audit_events"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow, index=True)
+    user_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    username: Mapped[str] = mapped_column(String(64), default="")
+    action: Mapped[str] = mapped_column(String(64))
+    entity: Mapped[str] = mapped_column(String(64))
+    entity_id: Mapped[str] = mapped_column(String(64), default="")
+    before_json: Mapped[str] = mapped_column(Text, default="")
+    after_json: Mapped[str] = mapped_column(Text, default="")

@@ -1,0 +1,789 @@
+"""The laboratory's workflow as Python functions (docs/records.md#workflow): what the web
+interface and the ``gonio db`` / ``gonio calibrate --record`` commands call.
+
+Every function takes the open :class:`~gonio.records.db.Store` and, where a person acts,
+the acting :class:`~gonio.records.models.User`; roles are checked here, on the server, so
+no interface can skip them. Every change writes an audit event (who, what, when, the
+record's state before and after) in the same transaction as the change.
+
+ISO/IEC 17025 7.8 as states of a calibration::
+
+    queued → running → computed → reviewed → approved → issuing → issued
+                 ↘ failed (run again)      ↘ rejected
+
+* a technician creates a calibration (instrument, readings, standards, environment); the
+  worker runs it; the draft certificate is marked DRAFT;
+* a reviewer who did not create it reviews it (accept or reject, with a comment);
+* a reviewer who did not create it approves it, and issuing starts: the certificate number
+  is reserved (GC-YYYY-NNNN), the calibration is recomputed from the stored readings with
+  the final details (number, signatories, date of issue) and the result is checked to be
+  the one reviewed; only then, in one transaction, the frozen certificate row is written;
+* an issued certificate is amended by a new certificate (new number) that names the one it
+  replaces and why; nothing issued is ever updated or deleted (database triggers refuse it).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import re
+import socket
+from pathlib import Path
+from typing import Iterable
+
+from sqlalchemy import func, select, update
+from sqlalchemy.orm import Session
+
+from gonio.errors import GonioError
+from gonio.records import blobs
+from gonio.records.auth import check_roles, hash_password
+from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
+                                  CalibrationStandard, Certificate, CertificateCounter, Customer,
+                                  Instrument, ResultItem, Setting, Standard, User, utcnow)
+from gonio.records.results import result_items
+
+#: The certificate numbering scheme: prefix, year, four-digit sequence per year.
+NUMBER_PREFIX = "GC"
+#: Longest one-line text field (names, serials) and multi-line field (addresses, comments).
+MAX_LINE, MAX_TEXT = 200, 4000
+#: Largest readings or protocol file accepted through the records (bytes).
+MAX_UPLOAD = float(os.environ.get("GONIO_MAX_UPLOAD_BYTES", 256 * 2**20))
+
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f\u2028\u2029\ufeff]")
+_CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")
+
+#: Laboratory settings and their defaults.
+SETTINGS = {"lab_name": "Calibration laboratory", "lab_address": "(address not set)",
+            "lab_accreditation": "", "lab_contact": "", "lab_place": "",
+            "decision_rule": "non-binary", "guard_band_factor": "1.0"}
+
+
+# --------------------------------------------------------------------------- checks
+
+
+def text(value, name: str, *, max_len: int = MAX_LINE, multiline: bool = False,
+         required: bool = False) -> str:
+    """A text field checked: a string, no control characters (newlines and tabs only in a
+    multi-line field), at most ``max_len`` characters, stripped; GonioError naming the field.
+
+    >>> text("  RLG-0001 ", "serial")
+    'RLG-0001'
+    >>> text("a\\x00b", "serial")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key serial: control characters are not allowed
+    """
+    if value is None:
+        value = ""
+    if not isinstance(value, str):
+        raise GonioError("must be text", key=name)
+    if len(value) > max_len:
+        raise GonioError(f"longer than {max_len} characters ({len(value)})", key=name)
+    if (_CONTROL if multiline else _CONTROL_LINE).search(value):
+        raise GonioError("control characters are not allowed", key=name)
+    value = value.strip()
+    if required and not value:
+        raise GonioError("must not be empty", key=name)
+    return value
+
+
+def date_value(value, name: str, *, required: bool = False) -> _dt.date | None:
+    """An ISO date (``YYYY-MM-DD``) or a date; None when empty and not required."""
+    if isinstance(value, _dt.date):
+        return value
+    value = text(value, name, max_len=10)
+    if not value:
+        if required:
+            raise GonioError("a date YYYY-MM-DD is required", key=name)
+        return None
+    try:
+        return _dt.date.fromisoformat(value)
+    except ValueError:
+        raise GonioError("not a date YYYY-MM-DD", key=name) from None
+
+
+def number_value(value, name: str, lo: float, hi: float) -> float | None:
+    """A number within [lo, hi], or None when empty."""
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    try:
+        x = float(text(value, name, max_len=40) if isinstance(value, str) else value)
+    except (TypeError, ValueError):
+        raise GonioError("not a number", key=name) from None
+    if not lo <= x <= hi:
+        raise GonioError(f"must be within {lo:g} … {hi:g}", key=name)
+    return x
+
+
+def require(actor: User | None, role: str) -> User:
+    """``actor`` holds ``role`` (and is active), else a GonioError."""
+    if actor is None or not actor.active or not actor.has(role):
+        raise GonioError(f"this needs the {role} role", key="role")
+    return actor
+
+
+# --------------------------------------------------------------------------- audit
+
+
+def state(obj) -> dict:
+    """A record's column values as JSON-able data (the audit trail's before/after)."""
+    if obj is None:
+        return {}
+    out = {}
+    for col in obj.__table__.columns:
+        v = getattr(obj, col.key)
+        if col.key == "password_hash":
+            v = "(hidden)"
+        elif isinstance(v, (_dt.date, _dt.datetime)):
+            v = v.isoformat()
+        out[col.key] = v
+    return out
+
+
+def audit(s: Session, actor: User | None, action: str, entity: str, entity_id,
+          before: dict | None = None, after: dict | None = None) -> None:
+    """Append one audit event to the session's transaction."""
+    s.add(AuditEvent(user_id=actor.id if actor else None,
+                     username=actor.username if actor else "(system)", action=action,
+                     entity=entity, entity_id=str(entity_id),
+                     before_json=json.dumps(before or {}, sort_keys=True, default=str),
+                     after_json=json.dumps(after or {}, sort_keys=True, default=str)))
+
+
+# --------------------------------------------------------------------------- settings, users
+
+
+def settings(store) -> dict:
+    """The laboratory settings (defaults for those never set)."""
+    with store.session() as s:
+        rows = {r.key: r.value for r in s.scalars(select(Setting))}
+    return {k: rows.get(k, v) for k, v in SETTINGS.items()}
+
+
+def set_settings(store, actor: User | None, **values) -> dict:
+    """Change laboratory settings (admin; ``actor=None`` from the command line)."""
+    if actor is not None:
+        require(actor, "admin")
+    with store.writing() as s:
+        for k, v in values.items():
+            if k not in SETTINGS:
+                raise GonioError(f"unknown setting (known: {', '.join(SETTINGS)})", key=k)
+            v = text(v, k, max_len=MAX_TEXT, multiline=k == "lab_address")
+            row = s.get(Setting, k)
+            before = state(row)
+            if row is None:
+                row = Setting(key=k, value=v)
+                s.add(row)
+            row.value = v
+            audit(s, actor, "setting", "settings", k, before, {"key": k, "value": v})
+        s.commit()
+    return settings(store)
+
+
+def create_user(store, actor: User | None, username: str, password: str, roles,
+                full_name: str = "") -> User:
+    """A new user (admin; ``actor=None`` from ``gonio db create-user``)."""
+    if actor is not None:
+        require(actor, "admin")
+    username = text(username, "username", max_len=64, required=True)
+    if not re.fullmatch(r"[A-Za-z0-9._-]+", username):
+        raise GonioError("letters, digits, '.', '_' and '-' only", key="username")
+    user = User(username=username, full_name=text(full_name, "full_name"),
+                password_hash=hash_password(password), roles=check_roles(roles))
+    return _create(store, actor, user, "user", User.username == username,
+                   "a user with this name exists", "username")
+
+
+def user(store, username: str) -> User | None:
+    """The user with this name (detached), or None."""
+    with store.session() as s:
+        u = s.scalar(select(User).where(User.username == username))
+        if u is not None:
+            s.expunge(u)
+        return u
+
+
+# --------------------------------------------------------------------------- register
+
+
+def add_customer(store, actor: User, name: str, address: str = "") -> Customer:
+    """A new customer (technician)."""
+    require(actor, "technician")
+    c = Customer(name=text(name, "customer name", required=True),
+                 address=text(address, "customer address", max_len=MAX_TEXT, multiline=True))
+    return _create(store, actor, c, "customer", Customer.name == c.name,
+                   "a customer with this name exists", "customer name")
+
+
+def _create(store, actor: User | None, obj, entity: str, same, message: str, key: str):
+    """Insert ``obj`` with its audit event, unless a row matching ``same`` exists."""
+    with store.writing() as s:
+        if s.scalar(select(type(obj)).where(same)):
+            raise GonioError(message, key=key)
+        s.add(obj)
+        s.flush()
+        audit(s, actor, "create", entity, obj.id, None, state(obj))
+        s.commit()
+    return obj
+
+
+def check_limits(limits) -> list[dict]:
+    """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
+    checks them (``LAB_SCHEMA['specification_limits']``)."""
+    from gonio.formats.toml import validate_table
+    from gonio.report.certificate import LAB_SCHEMA
+
+    if isinstance(limits, str):
+        try:
+            limits = json.loads(limits or "[]")
+        except json.JSONDecodeError as exc:
+            raise GonioError(f"not JSON: {exc.msg}", key="limits") from None
+    if not isinstance(limits, list) or len(limits) > 50:
+        raise GonioError("a list of at most 50 limits", key="limits")
+    schema = LAB_SCHEMA["specification_limits"].schema
+    out = []
+    for i, lim in enumerate(limits):
+        if not isinstance(lim, dict):
+            raise GonioError("each limit is an object", key=f"limits[{i}]")
+        d = validate_table(lim, schema, f"limits[{i}]", "limits")
+        if d["mpe"] is None and d["lower"] is None and d["upper"] is None:
+            raise GonioError("give mpe or lower/upper", key=f"limits[{i}]")
+        if d["mpe"] is not None and (d["lower"] is not None or d["upper"] is not None):
+            raise GonioError("give mpe or lower/upper, not both", key=f"limits[{i}]")
+        d["source"] = text(d["source"], f"limits[{i}].source")
+        out.append(d)
+    return out
+
+
+def register_instrument(store, actor: User, *, customer_id: int, serial: str, spec_key: str,
+                        kind: str = "", manufacturer: str = "", model: str = "",
+                        interval_months=None, limits=()) -> Instrument:
+    """A new instrument of a customer (technician)."""
+    from gonio.specs import get
+
+    require(actor, "technician")
+    get(text(spec_key, "spec", max_len=64, required=True))
+    months = number_value(interval_months, "interval_months", 1, 120)
+    inst = Instrument(customer_id=int(customer_id), serial=text(serial, "serial", required=True),
+                      spec_key=spec_key.strip(), kind=text(kind, "type"),
+                      manufacturer=text(manufacturer, "manufacturer"),
+                      model=text(model, "model"),
+                      interval_months=None if months is None else int(months),
+                      limits_json=json.dumps(check_limits(list(limits) if not isinstance(
+                          limits, str) else limits)))
+    with store.writing() as s:
+        if s.get(Customer, inst.customer_id) is None:
+            raise GonioError("no such customer", key="customer")
+        if s.scalar(select(Instrument).where(Instrument.manufacturer == inst.manufacturer,
+                                             Instrument.model == inst.model,
+                                             Instrument.serial == inst.serial)):
+            raise GonioError("this instrument (manufacturer, model, serial) is registered",
+                             key="serial")
+        s.add(inst)
+        s.flush()
+        audit(s, actor, "create", "instrument", inst.id, None, state(inst))
+        s.commit()
+    return inst
+
+
+def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
+                 calibrated_on=None, accuracy: str = "", certificate: str = "",
+                 traceability: str = "") -> Standard:
+    """A reference standard or piece of bench equipment with its due date (technician)."""
+    require(actor, "technician")
+    st = Standard(name=text(name, "name", required=True),
+                  identifier=text(identifier, "identifier", required=True),
+                  accuracy=text(accuracy, "accuracy"), certificate=text(certificate, "certificate"),
+                  traceability=text(traceability, "traceability"),
+                  calibrated_on=date_value(calibrated_on, "calibrated_on"),
+                  due_on=date_value(due_on, "due_on", required=True))
+    return _create(store, actor, st, "standard", Standard.identifier == st.identifier,
+                   "a standard with this identifier exists", "identifier")
+
+
+# --------------------------------------------------------------------------- files
+
+
+def store_file(store, stream, *, limit_bytes: float = MAX_UPLOAD) -> tuple[str, int]:
+    """Put an uploaded file into the content-addressed store; (sha256, size). Its name is
+    never used: only the digest names it."""
+    digest, size = blobs.put_stream(store.blob_root, stream, limit_bytes=limit_bytes)
+    with store.writing() as s:
+        if s.get(Blob, digest) is None:
+            s.add(Blob(sha256=digest, size=size))
+            s.commit()
+    return digest, size
+
+
+def file_bytes(store, sha256: str) -> bytes:
+    """A stored file's bytes (checked against the digest)."""
+    return blobs.get_bytes(store.blob_root, sha256)
+
+
+# --------------------------------------------------------------------------- calibrations
+
+
+def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
+                       readings_name: str = "", spec_key: str | None = None,
+                       protocol: str | None = None, protocol_sha256: str | None = None,
+                       standard_ids: Iterable[int] = (), temperature_c=None,
+                       humidity_pct=None, performed_on=None, received_on=None,
+                       place: str = "") -> Calibration:
+    """A new calibration, queued for the worker (technician). Standards past their due
+    date on the day of the calibration are refused (ISO/IEC 17025 6.4.7)."""
+    from gonio.specs import get
+
+    require(actor, "technician")
+    day = date_value(performed_on, "performed_on") or _dt.date.today()
+    with store.writing() as s:
+        inst = s.get(Instrument, int(instrument_id))
+        if inst is None:
+            raise GonioError("no such instrument", key="instrument")
+        key = text(spec_key, "spec", max_len=64) or inst.spec_key
+        get(key)
+        for sha in (readings_sha256, protocol_sha256):
+            if sha is not None and s.get(Blob, sha) is None:
+                raise GonioError("no such stored file", key="sha256")
+        cal = Calibration(instrument_id=inst.id, spec_key=key,
+                          protocol=text(protocol, "protocol", max_len=64),
+                          protocol_sha256=protocol_sha256, readings_sha256=readings_sha256,
+                          readings_name=text(readings_name, "readings file name", max_len=255),
+                          temperature_c=number_value(temperature_c, "temperature_c", -50, 100),
+                          humidity_pct=number_value(humidity_pct, "humidity_pct", 0, 100),
+                          place=text(place, "place"), performed_on=day,
+                          received_on=date_value(received_on, "received_on"),
+                          status="queued", progress="waiting for a worker",
+                          created_by_id=actor.id)
+        s.add(cal)
+        s.flush()
+        for sid in sorted(set(int(i) for i in standard_ids)):
+            st = s.get(Standard, sid)
+            if st is None:
+                raise GonioError("no such standard", key="standards")
+            if st.due_on < day:
+                raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
+                                 f"the calibration date {day}): calibrate it first",
+                                 key="standards")
+            s.add(CalibrationStandard(calibration_id=cal.id, standard_id=sid,
+                                      due_on_at_use=st.due_on))
+        audit(s, actor, "create", "calibration", cal.id, None, state(cal))
+        s.commit()
+    return cal
+
+
+def _check(s: Session, actor: User, cal_id: int, action: str,
+           allowed: tuple[str, ...]) -> Calibration:
+    cal = s.get(Calibration, int(cal_id))
+    if cal is None:
+        raise GonioError("no such calibration", key="calibration")
+    if cal.status not in allowed:
+        raise GonioError(f"cannot {action} a calibration that is {cal.status}", key="status")
+    if action in ("review", "approve") and cal.created_by_id == actor.id:
+        raise GonioError(f"the person who created a calibration may not {action} it "
+                         "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
+    return cal
+
+
+def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],
+                number: bool = False, **changes) -> Calibration:
+    """Check the state (and the second person), apply ``changes``, audit — one transaction;
+    with ``number`` a certificate number is reserved in it (none is used up by a refusal)."""
+    with store.writing() as s:
+        cal = _check(s, actor, cal_id, action, allowed)
+        before = state(cal)
+        if number and not cal.pending_number:
+            changes["pending_number"] = _reserve_number(s, utcnow().year)
+        for k, v in changes.items():
+            setattr(cal, k, v)
+        audit(s, actor, action, "calibration", cal.id, before, state(cal))
+        s.commit()
+    return cal
+
+
+def review(store, actor: User, cal_id: int, *, accept: bool, comment: str = "") -> Calibration:
+    """Review a computed calibration (reviewer, not its creator): accepted → reviewed,
+    else rejected (a rejected calibration is closed; create a new one)."""
+    require(actor, "reviewer")
+    comment = text(comment, "comment", max_len=MAX_TEXT, multiline=True)
+    if not accept and not comment:
+        raise GonioError("say why the calibration is rejected", key="comment")
+    return _transition(store, actor, cal_id, "review", ("computed",),
+                       status="reviewed" if accept else "rejected", reviewed_by_id=actor.id,
+                       reviewed_at=utcnow(), review_comment=comment)
+
+
+def _reserve_number(s: Session, year: int) -> str:
+    """The next certificate number of ``year`` (the counter row is locked until commit:
+    numbers are unique and without gaps, also with several workstations)."""
+    if s.get_bind().dialect.name == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert
+    else:
+        from sqlalchemy.dialects.sqlite import insert
+    s.execute(insert(CertificateCounter).values(year=year, last=0)
+              .on_conflict_do_nothing(index_elements=["year"]))
+    row = s.scalar(select(CertificateCounter).where(CertificateCounter.year == year)
+                   .with_for_update())
+    row.last += 1
+    return f"{NUMBER_PREFIX}-{year:04d}-{row.last:04d}"
+
+
+def approve(store, actor: User, cal_id: int) -> Calibration:
+    """Approve a reviewed calibration (reviewer, not its creator) and start issuing: the
+    certificate number is reserved and the worker renders the final certificate."""
+    require(actor, "reviewer")
+    return _transition(store, actor, cal_id, "approve", ("reviewed",), number=True,
+                       status="issuing", approved_by_id=actor.id, approved_at=utcnow(),
+                       progress="waiting for a worker", error="")
+
+
+def retry(store, actor: User, cal_id: int) -> Calibration:
+    """Run a failed calibration again (technician): a failed run is queued again, a failed
+    issue (its number reserved) goes back to issuing."""
+    require(actor, "technician")
+    cal = calibration(store, cal_id)
+    return _transition(store, actor, cal_id, "retry", ("failed",),
+                       status="issuing" if cal.pending_number else "queued",
+                       progress="waiting for a worker", error="", worker_pid=None,
+                       worker_host="")
+
+
+def amend(store, actor: User, certificate_id: int, reason: str) -> Calibration:
+    """Amend an issued certificate (reviewer): a new certificate with a new number is issued
+    for the same calibration, naming the one it replaces and why (ISO/IEC 17025 7.8.8)."""
+    require(actor, "reviewer")
+    reason = text(reason, "reason", max_len=MAX_TEXT, multiline=True, required=True)
+    with store.session() as s:
+        cert = s.get(Certificate, int(certificate_id))
+        if cert is None:
+            raise GonioError("no such certificate", key="certificate")
+        if s.scalar(select(Certificate).where(Certificate.replaces_id == cert.id)):
+            raise GonioError(f"{cert.number} has been replaced already; amend the newest "
+                             "certificate", key="certificate")
+        cal_id = cert.calibration_id
+    return _transition(store, actor, cal_id, "amend", ("issued",), number=True,
+                       status="issuing", pending_replaces_id=cert.id, pending_reason=reason,
+                       approved_by_id=actor.id, approved_at=utcnow(),
+                       progress="waiting for a worker", error="")
+
+
+# --------------------------------------------------------------------------- the worker's side
+
+
+def claim_next(store, host: str | None = None) -> Calibration | None:
+    """Claim the oldest queued calibration, or one waiting to be issued, for a worker on
+    ``host`` (atomically: two dispatchers never claim the same one). Queued → running;
+    issuing stays issuing. The worker's process id is set by :func:`attach`."""
+    host = host or socket.gethostname()
+    with store.writing() as s:
+        cal = s.scalar(select(Calibration).where(
+            (Calibration.status == "queued")
+            | ((Calibration.status == "issuing") & (Calibration.worker_host == "")))
+            .order_by(Calibration.id).limit(1).with_for_update(skip_locked=True))
+        if cal is None:
+            return None
+        before = state(cal)
+        if cal.status == "queued":
+            cal.status = "running"
+        cal.worker_host, cal.worker_pid = host, None
+        cal.started_at, cal.progress = utcnow(), "starting a worker"
+        audit(s, None, "claim", "calibration", cal.id, before, state(cal))
+        s.commit()
+    return cal
+
+
+def attach(store, cal_id: int, pid: int) -> None:
+    """Record the process id of the worker running a claimed calibration."""
+    with store.writing() as s:
+        s.execute(update(Calibration).where(Calibration.id == cal_id).values(worker_pid=pid))
+        s.commit()
+
+
+def set_progress(store, cal_id: int, message: str) -> None:
+    """The worker's progress line for a calibration."""
+    with store.writing() as s:
+        s.execute(update(Calibration).where(Calibration.id == cal_id)
+                  .values(progress=message[:200]))
+        s.commit()
+
+
+def fail(store, cal_id: int, error: str) -> None:
+    """A run ended without a result: running or issuing → failed, with the error. Nothing
+    was issued (the certificate row is written only by :func:`store_issue`); a failed issue
+    keeps its reserved number for :func:`retry`."""
+    with store.writing() as s:
+        cal = s.get(Calibration, cal_id)
+        before = state(cal)
+        cal.status = "failed"
+        cal.error = error[:MAX_TEXT]
+        cal.progress = "issuing failed" if cal.pending_number else "failed"
+        cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
+        audit(s, None, "fail", "calibration", cal.id, before, state(cal))
+        s.commit()
+
+
+def recover(store, host: str | None = None, alive=None) -> list[int]:
+    """Calibrations whose worker on this host died (server killed, power lost) are marked
+    failed, so that they can be run again; returns their ids. ``alive(pid)`` decides
+    whether a worker process still runs (default: ``os.kill(pid, 0)``)."""
+    host = host or socket.gethostname()
+    alive = alive or _pid_alive
+    with store.session() as s:
+        rows = s.scalars(select(Calibration).where(
+            Calibration.status.in_(("running", "issuing")),
+            Calibration.worker_host == host)).all()
+    dead = [c.id for c in rows if c.worker_pid is None or not alive(c.worker_pid)]
+    for cid in dead:
+        fail(store, cid, "interrupted: the worker stopped before the run finished "
+                         "(server stopped or killed); nothing was issued — run it again")
+    return dead
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:                       # a zombie child of ours counts as dead
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().split(") ")[-1][:1] != "Z"
+    except OSError:
+        return True
+
+
+def lab_details(store, cal_id: int, *, final: bool) -> dict:
+    """The laboratory details file (``LAB_SCHEMA``) for a calibration's certificate: the
+    draft (number DRAFT-<id>, not approved) or the final one (reserved number, signatories,
+    date of issue)."""
+    cfg = settings(store)
+    with store.session() as s:
+        cal = s.get(Calibration, cal_id)
+        inst, cust = cal.instrument, cal.instrument.customer
+        stds = [cs.standard for cs in s.scalars(select(CalibrationStandard).where(
+            CalibrationStandard.calibration_id == cal.id))]
+        limits = json.loads(inst.limits_json or "[]")
+        number = cal.pending_number if final else f"DRAFT-{cal.id}"
+        if final and cal.pending_replaces_id:
+            old = s.get(Certificate, cal.pending_replaces_id)
+            number = f"{number} (replaces {old.number})"
+        who = {k: (getattr(cal, k).full_name or getattr(cal, k).username)
+               if getattr(cal, k) else "" for k in ("created_by", "reviewed_by", "approved_by")}
+        lab = {
+            "laboratory": {"name": cfg["lab_name"], "address": cfg["lab_address"],
+                           "accreditation": cfg["lab_accreditation"],
+                           "contact": cfg["lab_contact"]},
+            "certificate": {"number": number,
+                            "date_of_issue": utcnow().date().isoformat() if final else "",
+                            "date_of_receipt": cal.received_on.isoformat()
+                            if cal.received_on else "",
+                            "date_of_calibration": cal.performed_on.isoformat(),
+                            "place": cal.place or cfg["lab_place"]},
+            "customer": {"name": cust.name, "address": cust.address},
+            "instrument": {"description": inst.kind, "model": inst.model,
+                           "serial": inst.serial, "manufacturer": inst.manufacturer},
+            "standards": [{"name": st.name, "identifier": st.identifier,
+                           "accuracy": st.accuracy, "certificate": st.certificate,
+                           "traceability": st.traceability} for st in stds],
+            "environment": {"temperature_c": cal.temperature_c,
+                            "humidity_pct": cal.humidity_pct},
+            "signatory": {"calibrated_by": who["created_by"], "checked_by": who["reviewed_by"],
+                          "approved_by": who["approved_by"] if final
+                          else "(not approved: draft for review)"},
+        }
+        if limits:
+            lab["decision_rule"] = {"rule": cfg["decision_rule"],
+                                    "guard_band_factor": float(cfg["guard_band_factor"]),
+                                    "agreed": "laboratory's decision rule"}
+            lab["specification_limits"] = limits
+    return lab
+
+
+#: The files of a run kept in the store (tables stay in the worker's folder only).
+KEPT = ("results.json", "summary.txt", "certificate.html", "certificate.pdf",
+        "certificate.dcc.xml")
+
+
+def store_run(store, cal_id: int, out: Path) -> None:
+    """Record a finished draft run: its files into the blob store, its items, computed."""
+    files = {n: blobs.put_file(store.blob_root, out / n) for n in KEPT if (out / n).is_file()}
+    items = result_items(json.loads((out / "results.json").read_text(encoding="utf-8")))
+    with store.writing() as s:
+        cal = s.get(Calibration, cal_id)
+        before = state(cal)
+        for name, (sha, size) in files.items():
+            if s.get(Blob, sha) is None:
+                s.add(Blob(sha256=sha, size=size))
+            s.flush()
+            old = s.get(CalibrationFile, (cal_id, name))
+            if old is None:
+                s.add(CalibrationFile(calibration_id=cal_id, name=name, sha256=sha))
+            else:
+                old.sha256 = sha
+        s.query(ResultItem).filter(ResultItem.calibration_id == cal_id).delete()
+        for it in items:
+            s.add(ResultItem(calibration_id=cal_id, key=it.key, title=it.title[:200],
+                             clause=it.clause[:64], unit=it.unit[:32], measured=it.measured,
+                             value=it.value, U=it.U, k=it.k))
+        cal.results_sha256 = files["results.json"][0]
+        cal.status, cal.progress, cal.error = "computed", "done", ""
+        cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
+        audit(s, None, "computed", "calibration", cal.id, before, state(cal))
+        s.commit()
+
+
+def _same_items(a, b) -> bool:
+    key = [(i.key, i.value, i.U) for i in a]
+    return key == [(i.key, i.value, i.U) for i in b]
+
+
+def store_issue(store, cal_id: int, out: Path) -> Certificate:
+    """Record an issued certificate: the final run's files, checked to carry the reviewed
+    result, and the frozen certificate row, in one transaction."""
+    files = {n: blobs.put_file(store.blob_root, out / n) for n in KEPT if (out / n).is_file()}
+    new_items = result_items(json.loads((out / "results.json").read_text(encoding="utf-8")))
+    reviewed = result_items(json.loads(file_bytes(store, calibration(store, cal_id)
+                                                  .results_sha256)))
+    if not _same_items(new_items, reviewed):
+        raise GonioError("the recomputed result differs from the reviewed one: nothing "
+                         "issued", key="issue")
+    with store.writing() as s:
+        cal = s.get(Calibration, cal_id)
+        before = state(cal)
+        for sha, size in files.values():
+            if s.get(Blob, sha) is None:
+                s.add(Blob(sha256=sha, size=size))
+        s.flush()
+        cert = Certificate(number=cal.pending_number, calibration_id=cal.id,
+                           issued_by_id=cal.approved_by_id, replaces_id=cal.pending_replaces_id,
+                           reason=cal.pending_reason, html_sha256=files["certificate.html"][0],
+                           pdf_sha256=files["certificate.pdf"][0],
+                           dcc_sha256=files.get("certificate.dcc.xml", (None,))[0],
+                           results_sha256=files["results.json"][0])
+        s.add(cert)
+        cal.status, cal.progress, cal.error = "issued", "issued", ""
+        cal.pending_number, cal.pending_replaces_id, cal.pending_reason = "", None, ""
+        cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
+        s.flush()
+        audit(s, None, "issue", "certificate", cert.id, before,
+              {"certificate": state(cert), "calibration": state(cal)})
+        s.commit()
+    return cert
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def calibration(store, cal_id: int) -> Calibration:
+    """A calibration with its instrument, customer and people loaded (detached)."""
+    from sqlalchemy.orm import selectinload
+
+    with store.session() as s:
+        cal = s.scalar(select(Calibration).where(Calibration.id == int(cal_id)).options(
+            selectinload(Calibration.instrument).selectinload(Instrument.customer),
+            selectinload(Calibration.created_by), selectinload(Calibration.reviewed_by),
+            selectinload(Calibration.approved_by)))
+        if cal is None:
+            raise GonioError("no such calibration", key="calibration")
+        return cal
+
+
+def history(store, instrument_id: int) -> dict:
+    """An instrument's item history: key → list of dicts (calibration id, date, value, U,
+    k, unit, title, status, certificate number), oldest first; failed, rejected and
+    unfinished calibrations are left out."""
+    done = ("computed", "reviewed", "approved", "issuing", "issued")
+    with store.session() as s:
+        rows = s.execute(
+            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id)
+            .join(Calibration, ResultItem.calibration_id == Calibration.id)
+            .where(Calibration.instrument_id == int(instrument_id),
+                   Calibration.status.in_(done))
+            .order_by(Calibration.performed_on, Calibration.id)).all()
+        numbers = dict(s.execute(
+            select(Certificate.calibration_id, func.max(Certificate.number))
+            .join(Calibration, Certificate.calibration_id == Calibration.id)
+            .where(Calibration.instrument_id == int(instrument_id))
+            .group_by(Certificate.calibration_id)).all())
+    out: dict[str, list] = {}
+    for it, day, status, cid in rows:
+        out.setdefault(it.key, []).append(
+            {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
+             "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
+             "certificate": numbers.get(cid, "")})
+    return out
+
+
+def instrument_limits(inst: Instrument) -> dict:
+    """Item key → (lower, upper) from the instrument's specification limits."""
+    from gonio.report.stated import limits_of
+
+    out = {}
+    for lim in json.loads(inst.limits_json or "[]"):
+        lo_hi = limits_of(lim)
+        out[lim["item"]] = (lo_hi.lower, lo_hi.upper)
+    return out
+
+
+def default_interval(spec_key: str) -> tuple[int, str]:
+    """The specification's clause-9 default interval in months, and where it comes from:
+    the specification's own ``recalibration_interval_months`` where it states one, else
+    12 months (JJF 1535-2015 clause 9 recommends one year; the optical draft's clause 9
+    leaves it to the user, normally ≤ 12 months)."""
+    from gonio.records.interval import DEFAULT_MONTHS
+    from gonio.specs import get
+
+    months = getattr(get(spec_key), "recalibration_interval_months", None)
+    if months:
+        return int(months), "the specification's clause 9"
+    return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"
+
+
+def propose_interval(store, instrument_id: int):
+    """The recalibration interval proposed from the instrument's history
+    (:func:`gonio.records.interval.propose`), with the specification's default beside it."""
+    from gonio.records.interval import propose
+
+    with store.session() as s:
+        inst = s.get(Instrument, int(instrument_id))
+        if inst is None:
+            raise GonioError("no such instrument", key="instrument")
+    limits = instrument_limits(inst)
+    hist = history(store, instrument_id)
+    dates = [r["date"] for rows in hist.values() for r in rows]
+    t0 = min(dates) if dates else None
+    table = {key: [((r["date"] - t0).days, r["value"], r["U"], r["k"],
+                    *limits.get(key, (None, None))) for r in rows]
+             for key, rows in hist.items()}
+    months, _ = default_interval(inst.spec_key)
+    return propose(table, months)
+
+
+def due_instruments(store, today: _dt.date | None = None, within_days: int = 30) -> list[dict]:
+    """Instruments due for recalibration within ``within_days`` or overdue: the last issued
+    calibration's date plus the instrument's interval (else the specification's default)."""
+    today = today or _dt.date.today()
+    with store.session() as s:
+        last = dict(s.execute(
+            select(Calibration.instrument_id, func.max(Calibration.performed_on))
+            .where(Calibration.status == "issued").group_by(Calibration.instrument_id)).all())
+        insts = s.scalars(select(Instrument).where(Instrument.id.in_(list(last)))).all()
+        out = []
+        for inst in insts:
+            months = inst.interval_months or default_interval(inst.spec_key)[0]
+            due = _add_months(last[inst.id], months)
+            if (due - today).days <= within_days:
+                out.append({"instrument_id": inst.id, "serial": inst.serial,
+                            "model": inst.model, "customer": inst.customer.name,
+                            "last": last[inst.id], "due": due,
+                            "overdue": due < today})
+    return sorted(out, key=lambda d: d["due"])
+
+
+def _add_months(day: _dt.date, months: int) -> _dt.date:
+    import calendar
+
+    y, m = divmod(day.month - 1 + int(months), 12)
+    year, month = day.year + y, m + 1
+    return _dt.date(year, month, min(day.day, calendar.monthrange(year, month)[1]))

@@ -1,0 +1,153 @@
+"""Running calibrations for the records, each in its own process.
+
+:func:`execute` runs one claimed calibration to its end: the stored readings (and protocol)
+are copied into a private work folder under names gonio chooses (``readings.csv`` or
+``readings.parquet`` by content), the laboratory details are written as a TOML file, the
+pipeline runs (:func:`gonio.records.compute.calibrate_folder`), and the outputs go into the
+content-addressed store and the database in one transaction. Any failure marks the
+calibration failed with the one-line reason; a killed process leaves it running with a
+dead worker, which :func:`gonio.records.services.recover` marks failed.
+
+:class:`Dispatcher` is the server's side: a thread that claims queued work and starts
+``python -m gonio.records.worker ID`` processes (at most ``workers`` at a time; the
+database URL travels in the environment, never on the command line).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import secrets
+import shutil
+import subprocess
+import sys
+import threading
+
+from gonio.errors import GonioError
+from gonio.records import services
+from gonio.records.compute import calibrate_folder, readings_suffix, write_lab_toml
+
+
+def execute(store, cal_id: int) -> bool:
+    """Run calibration ``cal_id`` (claimed: running or issuing). True when it succeeded."""
+    cal = services.calibration(store, cal_id)
+    final = cal.status == "issuing"
+    work = store.data / "work" / f"cal-{cal_id}-{secrets.token_hex(6)}"
+    try:
+        work.mkdir(parents=True, mode=0o700)
+        services.set_progress(store, cal_id, "preparing the readings")
+        data = services.file_bytes(store, cal.readings_sha256)
+        readings = work / ("readings" + readings_suffix(data[:4]))
+        readings.write_bytes(data)
+        del data
+        protocol = cal.protocol or None
+        if cal.protocol_sha256:
+            protocol = str(work / "protocol.toml")
+            (work / "protocol.toml").write_bytes(services.file_bytes(store, cal.protocol_sha256))
+        lab = write_lab_toml(services.lab_details(store, cal_id, final=final), work / "lab.toml")
+        services.set_progress(store, cal_id, "computing the items and their uncertainties, "
+                                             "rendering the " + ("final" if final else "draft")
+                              + " certificate")
+        calibrate_folder(readings, work / "out", spec_key=cal.spec_key, protocol=protocol,
+                         lab=lab)
+        services.set_progress(store, cal_id, "storing the files")
+        if final:
+            services.store_issue(store, cal_id, work / "out")
+        else:
+            services.store_run(store, cal_id, work / "out")
+        return True
+    except GonioError as exc:
+        services.fail(store, cal_id, str(exc))
+    except Exception as exc:  # a bug: recorded on the calibration, the server keeps running
+        services.fail(store, cal_id, f"internal error: {type(exc).__name__}: {exc}")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return False
+
+
+class Dispatcher:
+    """Claims queued calibrations and runs each in a worker process, ``workers`` at a time.
+
+    ``start()`` first marks calibrations whose worker died (on this host) failed."""
+
+    def __init__(self, store, workers: int = 2, poll_s: float = 0.5):
+        self.store, self.workers, self.poll_s = store, max(1, int(workers)), poll_s
+        self.children: dict[int, subprocess.Popen] = {}
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> "Dispatcher":
+        services.recover(self.store)
+        self._thread = threading.Thread(target=self._loop, name="gonio-dispatcher",
+                                        daemon=True)
+        self._thread.start()
+        return self
+
+    def wake(self) -> None:
+        """New work was queued: look now instead of at the next poll."""
+        self._wake.set()
+
+    def stop(self, wait: bool = True, timeout_s: float = 600) -> None:
+        """Stop claiming; with ``wait`` let the running workers finish."""
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        if wait:
+            for p in list(self.children.values()):
+                p.wait(timeout_s)
+            self._reap()
+
+    def _reap(self) -> None:
+        for cid, p in list(self.children.items()):
+            rc = p.poll()
+            if rc is None:
+                continue
+            del self.children[cid]
+            cal = services.calibration(self.store, cid)
+            if cal.status in ("running", "issuing") and cal.worker_pid == p.pid:
+                services.fail(self.store, cid, f"the worker process ended with code {rc}")
+
+    def _spawn(self, cal_id: int) -> None:
+        env = dict(os.environ, GONIO_RECORDS_DATABASE=self.store.url,
+                   GONIO_RECORDS_DATA=str(self.store.data))
+        p = subprocess.Popen([sys.executable, "-m", "gonio.records.worker", str(cal_id)],
+                             env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+        self.children[cal_id] = p
+        services.attach(self.store, cal_id, p.pid)
+
+    def _loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._reap()
+                while len(self.children) < self.workers and not self._stop.is_set():
+                    cal = services.claim_next(self.store)
+                    if cal is None:
+                        break
+                    self._spawn(cal.id)
+            except Exception as exc:  # the database went away a moment: try again later
+                sys.stderr.write(f"gonio: dispatcher: {type(exc).__name__}: {exc}\n")
+            self._wake.wait(self.poll_s)
+            self._wake.clear()
+
+
+def main(argv=None) -> int:
+    """``python -m gonio.records.worker ID``: run one claimed calibration (the database URL
+    and data folder from ``GONIO_RECORDS_DATABASE`` / ``GONIO_RECORDS_DATA``)."""
+    from gonio.records.db import open_store
+
+    ap = argparse.ArgumentParser(prog="gonio.records.worker")
+    ap.add_argument("calibration", type=int)
+    args = ap.parse_args(argv)
+    store = open_store(os.environ.get("GONIO_RECORDS_DATABASE"),
+                       os.environ.get("GONIO_RECORDS_DATA"), upgrade=False)
+    try:
+        return 0 if execute(store, args.calibration) else 1
+    finally:
+        store.close()
+
+
+if __name__ == "__main__":  # pragma: no cover - run as a process by the Dispatcher
+    raise SystemExit(main())

@@ -1,0 +1,365 @@
+"""The one result model every specification returns (issue 23): a :class:`Result` of
+:class:`Item` s, written as one ``results.json`` shape (``docs/formats.md#results-file``,
+JSON Schema ``docs/results.schema.json``).
+
+An :class:`Item` is one calibrated characteristic: key, clause, title, value and unit, whether
+it was measured (or the reason not), its :class:`Uncertainty` (combined standard uncertainty
+u_c, coverage factor k, ν_eff, U, coverage probability, the budget rows) and the statement of
+conformity the pipeline decided for it (:class:`Conformity`; ``None`` without limits), plus
+the specification's own details (tables, intermediate values) under ``details``.
+
+A :class:`Result` holds the items in the specification's order, the screening findings
+(:class:`~gonio.result.findings.Finding`), the readings not used, the source file's name and
+SHA-256, the metadata and settings, the specification's key and title, gonio's version,
+covariances between items (a triad's matrix elements), and ``extra``: sections a
+specification adds beside its items (an annex budget, a thermal model).
+
+Decisions and roundings are made here or in the pipeline; renderers only render.
+
+>>> it = Item("K", "scale factor K", "7.1", "counts/deg", 2.0, uncertainty=Uncertainty(
+...     [budget_row("s_K", "scatter", 0.01, 1.0, dof=4)], 0.01, 0.0278, 2.78, 4.0))
+>>> r = Result("demo", "a demo", {"K": it}, {}, {"file": "r.csv", "sha256": "0" * 64})
+>>> d = r.to_json()
+>>> d["version"], d["items"]["K"]["uncertainty"]["U"], Result.from_json(d).items["K"].U
+(1, 0.0278, 0.0278)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+from gonio import __version__
+from gonio.errors import GonioError
+from gonio.formats.jsonsafe import json_safe
+from gonio.result.findings import Finding, findings_to_json
+
+#: The version of the results.json shape (docs/formats.md#results-file). Raise it when a
+#: key is renamed or removed; adding an optional key keeps it.
+RESULTS_VERSION = 1
+#: The coverage probability gonio's expanded uncertainties are stated for (GUM 6.2.2).
+COVERAGE_PROBABILITY = 0.95
+#: The keys every budget row carries in results.json (others, e.g. ``distribution``, may
+#: follow): u = u(x_i), c = c_i, contribution = |c_i|·u(x_i), dof = ν_i (None: infinite).
+ROW_KEYS = ("symbol", "source", "type", "u", "c", "contribution", "dof", "clause",
+            "beyond_standard")
+
+
+def _f(x):
+    """A finite float or None (JSON has no NaN or infinity)."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def budget_row(symbol: str, source: str, u, c=1.0, contribution=None, dof=None, *,
+               type: str = "", clause: str = "", beyond_standard: bool = False,
+               **more) -> dict:
+    """One row of an item's budget as results.json writes it (:data:`ROW_KEYS` first).
+
+    ``contribution`` defaults to |c|·u. ``beyond_standard``: the term is not in the
+    specification's own budget (gonio adds it; the certificate marks it).
+    """
+    if contribution is None and u is not None and c is not None:
+        contribution = abs(float(c)) * float(u)
+    row = {"symbol": str(symbol), "source": str(source), "type": type, "u": _f(u), "c": _f(c),
+           "contribution": _f(contribution), "dof": _f(dof), "clause": clause,
+           "beyond_standard": bool(beyond_standard)}
+    row.update(json_safe(more))
+    return row
+
+
+def normalise_row(row: dict) -> dict:
+    """A budget row from the earlier shapes (``beyond_draft``; no ``c``: a row that gives
+    u_i(y), the item's standard uncertainty due to this input, has c_i = 1) with
+    :data:`ROW_KEYS` present."""
+    r = dict(row)
+    beyond = r.pop("beyond_standard", r.pop("beyond_draft", False))
+    u = r.pop("u", None)
+    c = r.pop("c", None)
+    contribution = r.pop("contribution", None)
+    if c is None and contribution is None and u is not None:
+        c = 1.0          # a row given as u_i(y): its input already in the item's unit
+    return budget_row(r.pop("symbol", ""), r.pop("source", ""), u, c, contribution,
+                      r.pop("dof", None), type=r.pop("type", "") or "",
+                      clause=r.pop("clause", "") or "", beyond_standard=bool(beyond), **r)
+
+
+@dataclass
+class Uncertainty:
+    """An item's uncertainty (JCGM 100): the budget rows (``components``, see
+    :func:`budget_row`), u_c, U, k, ν_eff (None or inf: infinite), the coverage probability
+    of U (None: a fixed k was asked for), optional JCGM 101 Monte Carlo figures, how k was
+    chosen and, for a non-negative quantity, an interval (e.g. χ²) stated beside U."""
+
+    components: list[dict]
+    u_c: float
+    U: float
+    k: float
+    nu_eff: float | None
+    monte_carlo: dict | None = None
+    coverage_probability: float | None = None
+    k_source: str = ""
+    interval: tuple[float, float] | None = None
+
+    @property
+    def p(self) -> float | None:
+        """The coverage probability (the name the rate items were written with)."""
+        return self.coverage_probability
+
+    @property
+    def u(self) -> float:
+        """The combined standard uncertainty u_c."""
+        return self.u_c
+
+    def to_json(self) -> dict:
+        out = {"u_c": _f(self.u_c), "U": _f(self.U), "k": _f(self.k),
+               "nu_eff": _f(self.nu_eff), "coverage_probability": _f(self.coverage_probability),
+               "k_source": self.k_source,
+               "components": [normalise_row(c) for c in self.components]}
+        if self.interval is not None:
+            out["interval"] = [_f(self.interval[0]), _f(self.interval[1])]
+        if self.monte_carlo is not None:
+            out["monte_carlo"] = json_safe(self.monte_carlo)
+        return out
+
+    @classmethod
+    def from_json(cls, d: dict | None) -> "Uncertainty | None":
+        if d is None:
+            return None
+        iv = d.get("interval")
+        return cls(list(d.get("components") or []), d.get("u_c"), d.get("U"), d.get("k"),
+                   d.get("nu_eff"), d.get("monte_carlo"), d.get("coverage_probability"),
+                   d.get("k_source") or "", None if iv is None else (iv[0], iv[1]))
+
+
+@dataclass(frozen=True)
+class Conformity:
+    """The statement of conformity of one item (ILAC-G8:09/2019, JCGM 106), in the item's
+    unit, as decided by :func:`gonio.analysis.conformity.decide`.
+
+    ``outcome`` is None when a limit was given but no decision is possible (the item was not
+    measured, or has no U); ``reason`` then says why. ``limits_from`` says where the limits
+    came from (``lab file``, ``protocol``, the specification's tolerance).
+    """
+
+    item: str
+    value: float | None
+    U: float | None
+    k: float | None
+    lower: float | None
+    upper: float | None
+    rule: str
+    guard_band: float | None
+    acceptance_lower: float | None
+    acceptance_upper: float | None
+    outcome: str | None
+    accepted: bool | None
+    conformance_probability: float | None
+    false_accept_probability: float | None
+    false_reject_probability: float | None
+    source: str = ""
+    guard_factor: float | None = None
+    limits_from: str = ""
+    reason: str = ""
+
+    def to_dict(self) -> dict:
+        return {f.name: (_f(getattr(self, f.name))
+                         if isinstance(getattr(self, f.name), float) else getattr(self, f.name))
+                for f in fields(self)}
+
+    to_json = to_dict
+
+    @classmethod
+    def from_json(cls, d: dict | None) -> "Conformity | None":
+        if d is None:
+            return None
+        names = {f.name for f in fields(cls)}
+        return cls(**{k: v for k, v in d.items() if k in names})
+
+
+@dataclass
+class Item:
+    """One calibration item (see the module docstring)."""
+
+    key: str
+    title: str
+    clause: str
+    unit: str
+    value: float | None = None
+    measured: bool = True
+    reason: str = ""
+    uncertainty: Uncertainty | None = None
+    details: dict = field(default_factory=dict)
+    conformity: Conformity | None = None
+    #: A quantity that cannot be negative (a noise level, a threshold, a time): stated with
+    #: an upper bound when U exceeds the value (:func:`gonio.result.statement.state`).
+    nonnegative: bool = False
+
+    @property
+    def U(self) -> float | None:
+        return None if self.uncertainty is None else self.uncertainty.U
+
+    @property
+    def u(self) -> float | None:
+        return None if self.uncertainty is None else self.uncertainty.u_c
+
+    @property
+    def k(self) -> float | None:
+        return None if self.uncertainty is None else self.uncertainty.k
+
+    @property
+    def nu_eff(self) -> float | None:
+        return None if self.uncertainty is None else self.uncertainty.nu_eff
+
+    def to_json(self) -> dict:
+        measured = bool(self.measured)
+        return {"key": self.key, "clause": self.clause, "title": self.title,
+                "value": _f(self.value) if measured else None, "unit": self.unit,
+                "measured": measured, "reason": self.reason,
+                "uncertainty": (None if self.uncertainty is None or not measured
+                                else self.uncertainty.to_json()),
+                "conformity": None if self.conformity is None else self.conformity.to_json(),
+                "nonnegative": bool(self.nonnegative), "details": json_safe(self.details)}
+
+    @classmethod
+    def from_json(cls, d: dict, key: str | None = None) -> "Item":
+        return cls(d.get("key") or key, d.get("title", ""), d.get("clause", ""),
+                   d.get("unit", ""), d.get("value"), bool(d.get("measured", True)),
+                   d.get("reason", ""), Uncertainty.from_json(d.get("uncertainty")),
+                   dict(d.get("details") or {}), Conformity.from_json(d.get("conformity")),
+                   bool(d.get("nonnegative", False)))
+
+
+def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> Item:
+    """An item the readings do not allow, with the reason."""
+    if not reason:
+        raise GonioError(f"item {key!r} is not measured: the reason must be given")
+    return Item(key, title, clause, unit, None, False, reason)
+
+
+@dataclass
+class Covariance:
+    """Covariance matrix (in the items' units) between the values of ``items``, e.g. the
+    elements of one row of a triad's system matrix and its bias from one least-squares fit."""
+
+    items: list[str]
+    matrix: list[list[float]]
+    source: str = ""
+
+    def to_json(self) -> dict:
+        return {"items": list(self.items), "matrix": json_safe(self.matrix),
+                "source": self.source}
+
+    @classmethod
+    def from_json(cls, d: dict) -> "Covariance":
+        return cls(list(d["items"]), [list(r) for r in d["matrix"]], d.get("source", ""))
+
+
+@dataclass
+class Result:
+    """A calibration's result (see the module docstring).
+
+    The first seven fields are positional in the order the rate specifications built
+    their results (key, title, items, metadata, source, readings taken, extra).
+    ``tables`` (name → DataFrame) are written by :func:`gonio.result.tables.write_tables`
+    beside results.json and are not part of it; ``objects`` keep the analysis objects a
+    certificate draws from (never written).
+    """
+
+    spec_key: str
+    spec_title: str
+    items: dict[str, Item]
+    metadata: dict
+    source: dict
+    readings_taken: list[str] = field(default_factory=list)
+    extra: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    findings: list[Finding] = field(default_factory=list)
+    unused_readings: list[dict] = field(default_factory=list)
+    covariances: list[Covariance] = field(default_factory=list)
+    gonio_version: str = __version__
+    tables: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def source_sha256(self) -> str:
+        return (self.source or {}).get("sha256") or ""
+
+    def item(self, key: str) -> Item:
+        """The item ``key``; an unknown key is an error naming this specification's items."""
+        if key not in self.items:
+            raise GonioError(f"{self.spec_key} has no item {key!r} (its items: "
+                             f"{', '.join(self.items)})")
+        return self.items[key]
+
+    def to_json(self) -> dict:
+        """``results.json`` (plain JSON types, deterministic; docs/results.schema.json)."""
+        return {"version": RESULTS_VERSION, "gonio_version": self.gonio_version,
+                "spec": self.spec_key, "specification": self.spec_title,
+                "source": json_safe(self.source), "metadata": json_safe(self.metadata),
+                "settings": json_safe(self.settings),
+                "items": {k: it.to_json() for k, it in self.items.items()},
+                "covariances": [c.to_json() for c in self.covariances],
+                "findings": findings_to_json(self.findings),
+                "unused_readings": json_safe(self.unused_readings),
+                "readings_taken": list(self.readings_taken),
+                "extra": json_safe(self.extra)}
+
+    def to_dict(self) -> dict:
+        return self.to_json()
+
+    @classmethod
+    def from_json(cls, d: dict) -> "Result":
+        """The result back from its results.json (tables and analysis objects are not kept)."""
+        v = d.get("version")
+        if v != RESULTS_VERSION:
+            raise GonioError(f"results.json version {v!r} is not the one this gonio reads "
+                             f"({RESULTS_VERSION})", key="version")
+        fnames = {f.name for f in fields(Finding)}
+        return cls(d["spec"], d.get("specification", ""),
+                   {k: Item.from_json(it, k) for k, it in d["items"].items()},
+                   dict(d.get("metadata") or {}), dict(d.get("source") or {}),
+                   list(d.get("readings_taken") or []), dict(d.get("extra") or {}),
+                   dict(d.get("settings") or {}),
+                   [Finding(**{k: x for k, x in f.items() if k in fnames})
+                    for f in d.get("findings") or []],
+                   list(d.get("unused_readings") or []),
+                   [Covariance.from_json(c) for c in d.get("covariances") or []],
+                   d.get("gonio_version", ""))
+
+    def summary(self) -> str:
+        """One line per item: clause, title, value ± U (k, ν_eff) unit, or why not measured;
+        then the conformity decisions and the screening findings (``summary.txt``)."""
+        from gonio.result.text import summary_lines
+
+        return "\n".join(summary_lines(self)) + "\n"
+
+
+def flat_view(d: dict) -> dict:
+    """A results.json (version 1) as the flat dict the optical draft's results.json was before
+    the one result model: each item at the top level as ``{item: title, value, unit, clause,
+    measured, reason, <details>, uncertainty}`` and each ``extra`` section at the top level;
+    ``gonio_version``, ``source``, ``metadata``, ``unused_readings``, ``findings``,
+    ``readings_taken`` kept. For readers written against that shape (a Num path such as
+    ``angle_deviation.max_abs_arcsec`` or ``uncertainty.U_arcsec`` resolves in it).
+
+    >>> flat_view({"version": 1, "items": {"K": {"title": "K", "value": 2.0, "unit": "1",
+    ...   "details": {"n": 3}, "uncertainty": None}}, "extra": {"notes": []}})["K"]["n"]
+    3
+    """
+    out = {k: d[k] for k in ("gonio_version", "specification", "source", "metadata") if k in d}
+    out["protocol"] = (d.get("settings") or {}).get("protocol")
+    for key, it in d["items"].items():
+        flat = {"item": it.get("title", ""), "value": it.get("value"), "unit": it.get("unit"),
+                "clause": it.get("clause"), "measured": it.get("measured", True),
+                "reason": it.get("reason", "")}
+        flat.update(it.get("details") or {})
+        flat["uncertainty"] = it.get("uncertainty")
+        flat["conformity"] = it.get("conformity")
+        out[key] = flat
+    out["unused_readings"] = d.get("unused_readings", [])
+    out["findings"] = d.get("findings", [])
+    out.update(d.get("extra") or {})
+    out["readings_taken"] = d.get("readings_taken", [])
+    return out

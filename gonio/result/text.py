@@ -1,0 +1,48 @@
+"""The one ``summary()`` of a :class:`~gonio.result.model.Result` (``summary.txt`` and the
+command line): one line per item, stated by the one statement rule
+(:func:`gonio.result.statement.state`: U to two significant digits, the value to U's decimal
+place, k, ν_eff and p beside it), then the conformity decisions and the screening findings.
+"""
+
+from __future__ import annotations
+
+from gonio.result.statement import item_statement
+
+
+def item_text(it) -> str:
+    """``value ± U unit (k, ν_eff, p)`` of one measured item by the one statement rule
+    (:func:`gonio.result.statement.item_statement`: the certificate's and the DCC's numbers)."""
+    return item_statement(it.to_json()).text()        # as results.json states it (ν_eff ∞: null)
+
+
+def conformity_text(c) -> str:
+    """One conformity decision as a line."""
+    lo = "−∞" if c.lower is None else f"{c.lower:g}"
+    hi = "+∞" if c.upper is None else f"{c.upper:g}"
+    if c.outcome is None:
+        return f"{c.item}: limits [{lo}, {hi}] ({c.rule}): no decision: {c.reason}"
+    pc = "" if c.conformance_probability is None else \
+        f", probability of conformance {100 * c.conformance_probability:.3g} %"
+    gb = "" if not c.guard_band else f", guard band {c.guard_band:.2g}"
+    return f"{c.item}: limits [{lo}, {hi}] ({c.rule}{gb}): {c.outcome}{pc}"
+
+
+def summary_lines(result) -> list[str]:
+    """The lines of :meth:`~gonio.result.model.Result.summary`."""
+    lines = [result.spec_title or result.spec_key]
+    for it in result.items.values():
+        head = f"  {it.clause:10s} {it.title}"
+        if not it.measured or it.value is None:
+            lines.append(f"{head}: not measured ({it.reason})")
+        else:
+            lines.append(f"{head}: {item_text(it)}")
+    decided = [it.conformity for it in result.items.values() if it.conformity is not None]
+    if decided:
+        lines.append("conformity:")
+        lines += [f"  {conformity_text(c)}" for c in decided]
+    for f in result.findings:
+        where = f.location()
+        lines.append(f"{f.action.replace('_', ' ')}: {where + ': ' if where else ''}{f.message}")
+    if result.unused_readings:
+        lines.append(f"readings not used: {len(result.unused_readings)}")
+    return lines

@@ -1,0 +1,134 @@
+"""Screening of triad readings: the triad specification's rules (issue 24).
+
+:func:`screen` returns one :class:`gonio.result.Finding` per reading a rule fired on; every
+rule here refuses (a triad fit has no way to carry a reading it does not trust: one wrong
+dwell moves M and b for every gyro), so :func:`check` raises the first as a GonioError
+naming the line. The rules (docs/alignment.md, "Screening"):
+
+- **duplicated row** — two rows of the same test with the same ``step`` (the dwell's index)
+  or with identical data: a copied dwell would count twice in the fit.
+- **rate sign** — a rotating alignment dwell about axis a (``up`` = ±a) must show the sign
+  of rate × sign(up) × sign(nominal scale) on gyro a's output, when that output is far
+  from the bias (|out − median static out| > :data:`SIGN_MIN_RATIO` × the dwell's
+  sample deviation): a sign-flipped dwell otherwise enters the fit as a wrong column of M.
+- **one temperature** — a thermal programme whose soak rows span less than
+  :data:`MIN_TEMPERATURE_SPAN_C` (chamber) cannot identify a temperature model; it was
+  certified as a model before.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from gonio.errors import GonioError
+from gonio.formats.triad import OUT
+from gonio.result.findings import Finding
+
+#: A rotating dwell's output must stand this many sample deviations from the static median
+#: before its sign is judged (at 50 °/s the bench's gyro shows ~1000 sd).
+SIGN_MIN_RATIO: float = 20.0
+#: Smallest chamber-temperature span of the soak rows a thermal model needs, °C.
+MIN_TEMPERATURE_SPAN_C: float = 1.0
+
+_AXES = "xyz"
+
+
+def _duplicates(df: pd.DataFrame, file) -> list[Finding]:
+    out, seen = [], set()
+    data_cols = [c for c in df.columns if c not in ("line", "step")]
+    for key, what in ((["test", "step"], "the same test and step"),
+                      (data_cols, "identical data")):
+        cand = df[df.duplicated(subset=key, keep=False)]
+        for _, g in cand.groupby(key, sort=False, dropna=False):
+            if len(g) < 2:
+                continue
+            first = int(g["line"].iloc[0])
+            for line, test in zip(g["line"].iloc[1:], g["test"].iloc[1:]):
+                if int(line) in seen:
+                    continue
+                seen.add(int(line))
+                out.append(Finding("duplicated-row", f"{test} row repeats line {first} "
+                                   f"({what}): a copied dwell would count twice", "refused",
+                                   file=file, line=int(line), column="step", test=str(test),
+                                   clause="triad screening", rule=f"no two rows with {what}"))
+    return sorted(out, key=lambda f: f.line)
+
+
+def _scale_signs(metadata: dict) -> np.ndarray:
+    raw = str(metadata.get("nominal_scale_per_dps", "")).split()
+    try:
+        v = np.array([float(x) for x in raw])
+    except ValueError:
+        v = np.array([])
+    return np.sign(v) if v.size == 3 and np.all(v != 0) else np.ones(3)
+
+
+def _rate_signs(df: pd.DataFrame, metadata: dict, file) -> list[Finding]:
+    rows = df[df["test"] == "alignment"]
+    static = rows[rows["rate_dps"] == 0]
+    rot = rows[rows["rate_dps"] != 0]
+    if not len(rot):
+        return []
+    base = np.array([float(np.median(static[c])) if len(static) else 0.0 for c in OUT])
+    sgn = _scale_signs(metadata)
+    out = []
+    for _, row in rot.iterrows():
+        up = str(row["up"]).strip()
+        if len(up) != 2 or up[1] not in _AXES or up[0] not in "+-":
+            continue
+        a = _AXES.index(up[1])
+        dev = float(row[OUT[a]]) - base[a]
+        sd = float(row.get(f"sd_{up[1]}", np.nan))
+        if not np.isfinite(sd) or sd <= 0 or abs(dev) < SIGN_MIN_RATIO * sd:
+            continue
+        want = np.sign(row["rate_dps"]) * (1 if up[0] == "+" else -1) * sgn[a]
+        if np.sign(dev) != want:
+            out.append(Finding(
+                "rate-sign", f"alignment dwell about {up} at {float(row['rate_dps']):g} °/s: "
+                f"gyro {up[1]}'s output moved {dev:+.4g} from the static median, the opposite "
+                "sign of the rate (a sign-flipped rate_dps or up?)", "flagged", file=file,
+                line=int(row["line"]), column="rate_dps", test="alignment",
+                clause="triad screening",
+                rule=f"sign(out − static median) = sign(rate·up·K) when |out − median| > "
+                     f"{SIGN_MIN_RATIO:g} sd"))
+    return out
+
+
+def _one_temperature(df: pd.DataFrame, file) -> list[Finding]:
+    th = df[df["test"] == "thermal"]
+    if not len(th):
+        return []
+    soak = th[th["phase"].astype(str) != "ramp"] if "phase" in th else th
+    soak = soak if len(soak) else th
+    t = soak["chamber_c"].to_numpy(float)
+    t = t[np.isfinite(t)]
+    if not t.size:
+        t = soak["sensor_c"].to_numpy(float)
+        t = t[np.isfinite(t)]
+    if t.size and float(t.max() - t.min()) < MIN_TEMPERATURE_SPAN_C:
+        return [Finding("one-temperature",
+                        f"the thermal programme's soak rows span {t.max() - t.min():.3g} °C "
+                        f"(around {np.median(t):.4g} °C): a temperature model needs at least "
+                        f"{MIN_TEMPERATURE_SPAN_C:g} °C between set points", "refused", file=file,
+                        line=int(soak["line"].iloc[0]), column="chamber_c", test="thermal",
+                        clause="thesis eq. 6.14",
+                        rule=f"max − min chamber_c of the soak rows ≥ {MIN_TEMPERATURE_SPAN_C:g} °C")]
+    return []
+
+
+def screen(readings, protocol=None) -> list[Finding]:
+    """Every finding on a triad readings file (:class:`gonio.formats.triad.TriadReadings`)."""
+    df = readings.data
+    file = None if readings.path is None else str(readings.path)
+    return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
+            + _one_temperature(df, file))
+
+
+def check(readings, protocol=None) -> list[Finding]:
+    """:func:`screen`, raising the first refused finding as a GonioError naming its line."""
+    found = screen(readings, protocol)
+    for f in found:
+        if f.action == "refused":
+            raise GonioError(f.message, file=readings.path, line=f.line, column=f.column)
+    return found

@@ -1,0 +1,452 @@
+"""The pages and forms of ``gonio serve`` (each a few lines over gonio.records)."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import re
+
+from fastapi import APIRouter, Request
+from fastapi.responses import RedirectResponse, Response
+
+from gonio.errors import GonioError
+from gonio.records import auth, queries, services
+from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
+                              Forbidden, current, file_response, form, fresh_token, page_of,
+                              render, wake)
+
+router = APIRouter()
+
+
+def register(app) -> None:
+    app.include_router(router)
+
+
+def _back(url: str) -> RedirectResponse:
+    return RedirectResponse(url, status_code=303)
+
+
+def _store(request: Request):
+    return request.app.state.store
+
+
+# --------------------------------------------------------------------------- login
+
+
+@router.get("/login")
+def login_page(request: Request):
+    token = fresh_token()
+    r = render(request, "login.html", None, token)
+    r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
+    return r
+
+
+@router.post("/login")
+async def login(request: Request):
+    data = await request.form(max_files=0, max_fields=10, max_part_size=4096)
+    if not auth.same_token(data.get("csrf"), request.cookies.get(LOGIN_COOKIE)):
+        raise Forbidden()
+    address = request.client.host if request.client else ""
+    try:
+        user = auth.authenticate(_store(request), str(data.get("username", ""))[:200],
+                                 str(data.get("password", ""))[:2000], address)
+    except GonioError as exc:
+        token = fresh_token()
+        code = 429 if "too many" in str(exc) else 401
+        r = render(request, "login.html", None, token, status_code=code,
+                   error=str(exc).split(": ", 1)[-1])
+        r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
+        return r
+    token, _ = auth.open_session(_store(request), user)
+    r = _back("/")
+    r.set_cookie(COOKIE, token, httponly=True, samesite="strict",
+                 max_age=int(auth.SESSION_LIFETIME.total_seconds()))
+    r.delete_cookie(LOGIN_COOKIE)
+    return r
+
+
+@router.post("/logout")
+async def logout(request: Request):
+    user, csrf = current(request)
+    await form(request, csrf)
+    auth.close_session(_store(request), request.cookies.get(COOKIE))
+    r = _back("/login")
+    r.delete_cookie(COOKIE)
+    return r
+
+
+# --------------------------------------------------------------------------- dashboard
+
+
+@router.get("/")
+def dashboard(request: Request):
+    user, csrf = current(request)
+    store = _store(request)
+    review, _ = queries.calibrations(store, 1, 20, "computed")
+    approve, _ = queries.calibrations(store, 1, 20, "reviewed")
+    active, _ = queries.calibrations(store, 1, 20, "running")
+    return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
+                  due=services.due_instruments(store), review=review, approve=approve,
+                  active=active, today=_dt.date.today())
+
+
+# --------------------------------------------------------------------------- customers
+
+
+@router.get("/customers")
+def customers_page(request: Request):
+    user, csrf = current(request)
+    return render(request, "customers.html", user, csrf,
+                  customers=queries.customers(_store(request)))
+
+
+@router.post("/customers")
+async def customers_add(request: Request):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        services.add_customer(_store(request), user, data.get("name"), data.get("address"))
+    except GonioError as exc:
+        return render(request, "customers.html", user, csrf, status_code=400, error=str(exc),
+                      customers=queries.customers(_store(request)))
+    return _back("/customers")
+
+
+# --------------------------------------------------------------------------- instruments
+
+
+def _instruments(request, user, csrf, status_code=200, error=""):
+    store = _store(request)
+    page = page_of(request)
+    search = request.query_params.get("q", "")[:100]
+    rows, total = queries.instruments(store, page, PAGE, search)
+    from gonio.specs import available
+    return render(request, "instruments.html", user, csrf, status_code=status_code,
+                  error=error, instruments=rows, total=total, page=page, size=PAGE, q=search,
+                  customers=queries.customers(store), specs=list(available()))
+
+
+@router.get("/instruments")
+def instruments_page(request: Request):
+    user, csrf = current(request)
+    return _instruments(request, user, csrf)
+
+
+@router.post("/instruments")
+async def instruments_add(request: Request):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        inst = services.register_instrument(
+            _store(request), user, customer_id=_int(data.get("customer_id"), "customer"),
+            serial=data.get("serial"), spec_key=data.get("spec_key"), kind=data.get("kind"),
+            manufacturer=data.get("manufacturer"), model=data.get("model"),
+            interval_months=data.get("interval_months"), limits=_limits_from(data))
+    except GonioError as exc:
+        return _instruments(request, user, csrf, 400, str(exc))
+    return _back(f"/instruments/{inst.id}")
+
+
+def _int(v, name: str) -> int:
+    try:
+        return int(str(v))
+    except (TypeError, ValueError):
+        raise GonioError("not a number", key=name) from None
+
+
+def _limits_from(data) -> list[dict]:
+    """Up to three limit rows of the form: item, lower, upper, mpe, source."""
+    out = []
+    for i in range(3):
+        item = str(data.get(f"limit_item_{i}", "") or "").strip()
+        if not item:
+            if any(str(data.get(f"limit_{k}_{i}", "") or "").strip()
+                   for k in ("lower", "upper", "mpe", "source")):
+                raise GonioError("a limit needs its item key", key=f"limit {i + 1}")
+            continue
+        row = {"item": item, "source": str(data.get(f"limit_source_{i}", "") or "")}
+        for k in ("lower", "upper", "mpe"):
+            v = services.number_value(data.get(f"limit_{k}_{i}"), f"limit {k}", -1e12, 1e12)
+            if v is not None:
+                row[k] = v
+        out.append(row)
+    return out
+
+
+@router.get("/instruments/{inst_id}")
+def instrument_page(request: Request, inst_id: int):
+    user, csrf = current(request)
+    store = _store(request)
+    inst, cals = queries.instrument(store, inst_id)
+    if inst is None:
+        return Response("no such instrument", status_code=404)
+    hist = services.history(store, inst_id)
+    return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
+                  proposal=services.propose_interval(store, inst_id),
+                  default=services.default_interval(inst.spec_key),
+                  limits=services.instrument_limits(inst), n_points=max(
+                      (len(v) for v in hist.values()), default=0))
+
+
+@router.get("/instruments/{inst_id}/history.svg")
+def instrument_history(request: Request, inst_id: int):
+    current(request)
+    from gonio.report.history_figure import history_svg
+
+    store = _store(request)
+    inst, _ = queries.instrument(store, inst_id)
+    if inst is None:
+        return Response("no such instrument", status_code=404)
+    svg = history_svg(services.history(store, inst_id), services.instrument_limits(inst))
+    return Response(svg, media_type="image/svg+xml")
+
+
+# --------------------------------------------------------------------------- standards
+
+
+@router.get("/standards")
+def standards_page(request: Request):
+    user, csrf = current(request)
+    return render(request, "standards.html", user, csrf, standards=queries.standards(
+        _store(request)), today=_dt.date.today())
+
+
+@router.post("/standards")
+async def standards_add(request: Request):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        services.add_standard(_store(request), user, **{k: data.get(k) for k in (
+            "name", "identifier", "due_on", "calibrated_on", "accuracy", "certificate",
+            "traceability")})
+    except GonioError as exc:
+        return render(request, "standards.html", user, csrf, status_code=400, error=str(exc),
+                      standards=queries.standards(_store(request)), today=_dt.date.today())
+    return _back("/standards")
+
+
+# --------------------------------------------------------------------------- calibrations
+
+
+@router.get("/calibrations")
+def calibrations_page(request: Request):
+    user, csrf = current(request)
+    page = page_of(request)
+    status = request.query_params.get("status", "")
+    status = status if status in ("queued", "running", "failed", "computed", "reviewed",
+                                  "rejected", "issuing", "issued") else ""
+    rows, total = queries.calibrations(_store(request), page, PAGE, status)
+    return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
+                  size=PAGE, status=status)
+
+
+def _new_form(request, user, csrf, inst_id, status_code=200, error=""):
+    store = _store(request)
+    inst, _ = queries.instrument(store, inst_id)
+    if inst is None:
+        return Response("no such instrument", status_code=404)
+    from gonio.specs import available
+    return render(request, "calibration_new.html", user, csrf, status_code=status_code,
+                  error=error, inst=inst, standards=[s for s in queries.standards(store)],
+                  specs=list(available()), today=_dt.date.today())
+
+
+@router.get("/instruments/{inst_id}/calibrate")
+def calibration_new(request: Request, inst_id: int):
+    user, csrf = current(request)
+    return _new_form(request, user, csrf, inst_id)
+
+
+def clean_name(name) -> str:
+    """An uploaded file's name for display only: last path part, printable, ≤ 255.
+
+    >>> clean_name("../../etc/passwd"), clean_name("C:\\\\x\\\\r.csv"), clean_name("a\\x00b")
+    ('passwd', 'r.csv', 'ab')
+    """
+    name = re.split(r"[\\\\/]", str(name or ""))[-1]
+    return re.sub(r"[\x00-\x1f\x7f]", "", name)[:255]
+
+
+@router.post("/instruments/{inst_id}/calibrate")
+async def calibration_create(request: Request, inst_id: int):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    store = _store(request)
+    try:
+        services.require(user, "technician")
+        up = data.get("readings")
+        if up is None or not hasattr(up, "read") or not up.filename:
+            raise GonioError("choose a readings file", key="readings")
+        sha, _ = services.store_file(store, up.file)
+        proto_sha = None
+        pf = data.get("protocol_file")
+        if pf is not None and hasattr(pf, "read") and pf.filename:
+            proto_sha, _ = services.store_file(store, pf.file, limit_bytes=2**20)
+        cal = services.create_calibration(
+            store, user, instrument_id=inst_id, readings_sha256=sha,
+            readings_name=clean_name(up.filename), spec_key=data.get("spec_key") or None,
+            protocol=data.get("protocol") or None, protocol_sha256=proto_sha,
+            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+            performed_on=data.get("performed_on"), received_on=data.get("received_on"),
+            place=data.get("place"))
+    except GonioError as exc:
+        return _new_form(request, user, csrf, inst_id, 400, str(exc))
+    wake(request)
+    return _back(f"/calibrations/{cal.id}")
+
+
+@router.get("/calibrations/{cal_id}")
+def calibration_page(request: Request, cal_id: int):
+    user, csrf = current(request)
+    d = queries.calibration_page(_store(request), cal_id)
+    if d is None:
+        return Response("no such calibration", status_code=404)
+    return render(request, "calibration.html", user, csrf, **d,
+                  refresh=d["cal"].status in ("queued", "running", "issuing"),
+                  error=request.query_params.get("error", "")[:300])
+
+
+@router.get("/calibrations/{cal_id}/progress")
+def calibration_progress(request: Request, cal_id: int):
+    """The state as JSON, for a script or a test polling the run."""
+    current(request)
+    cal = services.calibration(_store(request), cal_id)
+    return {"id": cal.id, "status": cal.status, "progress": cal.progress, "error": cal.error}
+
+
+async def _act(request: Request, cal_id: int, do) -> Response:
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        do(user, data)
+    except GonioError as exc:
+        from urllib.parse import quote
+        return _back(f"/calibrations/{cal_id}?error={quote(str(exc)[:300])}")
+    wake(request)
+    return _back(f"/calibrations/{cal_id}")
+
+
+@router.post("/calibrations/{cal_id}/review")
+async def calibration_review(request: Request, cal_id: int):
+    return await _act(request, cal_id, lambda u, d: services.review(
+        _store(request), u, cal_id, accept=d.get("decision") == "accept",
+        comment=d.get("comment")))
+
+
+@router.post("/calibrations/{cal_id}/approve")
+async def calibration_approve(request: Request, cal_id: int):
+    return await _act(request, cal_id, lambda u, d: services.approve(_store(request), u, cal_id))
+
+
+@router.post("/calibrations/{cal_id}/retry")
+async def calibration_retry(request: Request, cal_id: int):
+    return await _act(request, cal_id, lambda u, d: services.retry(_store(request), u, cal_id))
+
+
+@router.get("/calibrations/{cal_id}/files/{name}")
+def calibration_file(request: Request, cal_id: int, name: str):
+    current(request)
+    d = queries.calibration_page(_store(request), cal_id)
+    if d is None or name not in FILE_TYPES or name not in d["files"]:
+        return Response("no such file", status_code=404)
+    from gonio.records.models import CalibrationFile
+    with _store(request).session() as s:
+        sha = s.get(CalibrationFile, (cal_id, name)).sha256
+    return file_response(_store(request), sha, name)
+
+
+# --------------------------------------------------------------------------- certificates
+
+
+@router.get("/certificates")
+def certificates_page(request: Request):
+    user, csrf = current(request)
+    page = page_of(request)
+    rows, total = queries.certificates(_store(request), page, PAGE)
+    return render(request, "certificates.html", user, csrf, certs=rows, total=total, page=page,
+                  size=PAGE)
+
+
+@router.get("/certificates/{cert_id}")
+def certificate_page(request: Request, cert_id: int):
+    user, csrf = current(request)
+    cert, newer = queries.certificate(_store(request), cert_id)
+    if cert is None:
+        return Response("no such certificate", status_code=404)
+    return render(request, "certificate.html", user, csrf, cert=cert, newer=newer,
+                  error=request.query_params.get("error", "")[:300])
+
+
+@router.get("/certificates/{cert_id}/{name}")
+def certificate_file(request: Request, cert_id: int, name: str):
+    current(request)
+    cert, _ = queries.certificate(_store(request), cert_id)
+    sha = None if cert is None else {"certificate.pdf": cert.pdf_sha256,
+                                     "certificate.html": cert.html_sha256,
+                                     "certificate.dcc.xml": cert.dcc_sha256,
+                                     "results.json": cert.results_sha256}.get(name)
+    if sha is None:
+        return Response("no such file", status_code=404)
+    return file_response(_store(request), sha, name, "attachment")
+
+
+@router.post("/certificates/{cert_id}/amend")
+async def certificate_amend(request: Request, cert_id: int):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        cal = services.amend(_store(request), user, cert_id, data.get("reason"))
+    except GonioError as exc:
+        from urllib.parse import quote
+        return _back(f"/certificates/{cert_id}?error={quote(str(exc)[:300])}")
+    wake(request)
+    return _back(f"/calibrations/{cal.id}")
+
+
+# --------------------------------------------------------------------------- admin
+
+
+@router.get("/audit")
+def audit_page(request: Request):
+    user, csrf = current(request)
+    page = page_of(request)
+    rows, total = queries.audit_events(_store(request), page, 100)
+    return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
+                  size=100)
+
+
+@router.get("/users")
+def users_page(request: Request):
+    user, csrf = current(request)
+    return render(request, "users.html", user, csrf, users=queries.users(_store(request)),
+                  settings=services.settings(_store(request)))
+
+
+@router.post("/users")
+async def users_add(request: Request):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _users_form(request, user, csrf, lambda: services.create_user(
+        _store(request), user, data.get("username"), data.get("password"),
+        data.getlist("roles"), data.get("full_name")))
+
+
+def _users_form(request, user, csrf, do):
+    """Run ``do`` and go back to the users page, or show it again with the error."""
+    try:
+        do()
+    except GonioError as exc:
+        return render(request, "users.html", user, csrf, status_code=400, error=str(exc),
+                      users=queries.users(_store(request)),
+                      settings=services.settings(_store(request)))
+    return _back("/users")
+
+
+@router.post("/settings")
+async def settings_save(request: Request):
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _users_form(request, user, csrf, lambda: services.set_settings(
+        _store(request), user, **{k: data.get(k) for k in services.SETTINGS
+                                  if data.get(k) is not None}))
+

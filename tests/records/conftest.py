@@ -1,0 +1,204 @@
+"""Fixtures of the records and web tests: a throwaway PostgreSQL cluster (Debian's server
+binaries, started in a temporary folder), stores on SQLite and PostgreSQL, users, readings
+from the virtual bench and one real pipeline run shared by the service tests."""
+
+from __future__ import annotations
+
+import glob
+import os
+import pwd
+import shutil
+import socket
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SMALL_PROTOCOL = REPO / "tests" / "data" / "small-protocol.toml"
+PASSWORD = "correct horse battery"
+
+
+def pg_bindir() -> Path | None:
+    """The PostgreSQL server binaries (initdb, pg_ctl), or None when not installed."""
+    found = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"))
+    if found:
+        return Path(found[-1]).parent
+    w = shutil.which("initdb")
+    return Path(w).parent if w else None
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _as_pg_user(cmd: list[str]) -> list[str]:
+    # initdb and postgres refuse to run as root: run them as the 'postgres' account
+    if os.geteuid() == 0:
+        pwd.getpwnam("postgres")
+        return ["runuser", "-u", "postgres", "--"] + cmd
+    return cmd
+
+
+@pytest.fixture(scope="session")
+def pg_server(tmp_path_factory):
+    """A PostgreSQL server on 127.0.0.1 (trust authentication) in a temporary folder, for
+    this test session; its URL without a database name. Skipped only when the server
+    binaries are absent (scripts/install-test-system-deps.sh installs them)."""
+    bindir = pg_bindir()
+    if bindir is None:
+        pytest.skip("PostgreSQL server binaries not installed "
+                    "(bash scripts/install-test-system-deps.sh)")
+    import tempfile
+
+    # not under pytest's base folder: that is private to root, and the server runs as postgres
+    root = Path(tempfile.mkdtemp(prefix="gonio-pg-"))
+    data = root / "cluster"
+    if os.geteuid() == 0:
+        os.chmod(root, 0o755)
+        os.makedirs(data, mode=0o700)
+        shutil.chown(data, "postgres", "postgres")
+    subprocess.run(_as_pg_user([str(bindir / "initdb"), "-D", str(data), "-U", "postgres",
+                                "--auth=trust", "-E", "UTF8", "--no-sync"]),
+                   check=True, capture_output=True)
+    port = free_port()
+    log = data / "server.log"
+    subprocess.run(_as_pg_user([str(bindir / "pg_ctl"), "-D", str(data), "-l", str(log), "-w",
+                                "-o", f"-p {port} -k {data} -c listen_addresses=127.0.0.1 "
+                                      "-c fsync=off -c max_connections=200", "start"]),
+                   check=True, capture_output=True)
+    try:
+        yield f"postgresql://postgres@127.0.0.1:{port}"
+    finally:
+        subprocess.run(_as_pg_user([str(bindir / "pg_ctl"), "-D", str(data), "-m", "immediate",
+                                    "stop"]), capture_output=True)
+        shutil.rmtree(root, ignore_errors=True)
+
+
+_counter = iter(range(10**6))
+
+
+def new_pg_database(server: str) -> str:
+    import psycopg
+
+    name = f"gonio_test_{os.getpid()}_{next(_counter)}"
+    with psycopg.connect(server.replace("postgresql://", "postgresql://", 1) + "/postgres",
+                         autocommit=True) as conn:
+        conn.execute(f'CREATE DATABASE "{name}"')
+    return f"{server}/{name}"
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def store(request, tmp_path):
+    """An open, migrated records store on SQLite or on PostgreSQL (a new database)."""
+    from gonio.records.db import open_store
+
+    url = None
+    if request.param == "postgresql":
+        url = new_pg_database(request.getfixturevalue("pg_server"))
+    st = open_store(url, tmp_path / "data")
+    yield st
+    st.close()
+
+
+@pytest.fixture
+def sqlite_store(tmp_path):
+    from gonio.records.db import open_store
+
+    st = open_store(None, tmp_path / "data")
+    yield st
+    st.close()
+
+
+def make_people(store):
+    """tech (technician), rev (reviewer), admin — with :data:`PASSWORD`."""
+    from gonio.records import services
+
+    return {name: services.create_user(store, None, name, PASSWORD, roles)
+            for name, roles in (("tech", "technician"), ("rev", "reviewer"),
+                                ("rev2", "reviewer"), ("admin", "admin technician reviewer"))}
+
+
+@pytest.fixture
+def people(store):
+    return make_people(store)
+
+
+@pytest.fixture(scope="session")
+def bench_readings(tmp_path_factory):
+    """Two readings files of the small optical protocol (seeds 1 and 2) from the virtual
+    bench."""
+    from gonio.bench import load_bench, run_session, write_session
+    from gonio.protocol import load_protocol
+
+    root = tmp_path_factory.mktemp("bench")
+    out = []
+    for seed in (1, 2):
+        session = run_session(load_protocol(SMALL_PROTOCOL), load_bench("rlg"), seed=seed)
+        write_session(session, root / f"run{seed}")
+        out.append(root / f"run{seed}" / "readings.csv")
+    return out
+
+
+@pytest.fixture(scope="session")
+def computed_folder(bench_readings, tmp_path_factory):
+    """One real pipeline run (readings of seed 1, small protocol, certificate and DCC):
+    what the worker stores, reused by the service tests so they need not recompute."""
+    from gonio.records.compute import calibrate_folder
+
+    out = tmp_path_factory.mktemp("computed") / "out"
+    calibrate_folder(bench_readings[0], out, spec_key="ogam-draft",
+                     protocol=str(SMALL_PROTOCOL))
+    return out
+
+
+class Server:
+    """Start and stop ``gonio serve`` processes (each in its own process group, so that a
+    test can kill the server together with its worker processes)."""
+
+    def __init__(self):
+        self.procs = []
+
+    def start(self, data: Path, workers: int = 2):
+        import sys
+        import urllib.request
+
+        port = free_port()
+        proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data", str(data),
+                                 "--port", str(port), "--workers", str(workers)],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                start_new_session=True)
+        self.procs.append(proc)
+        end = time.monotonic() + 240
+        while time.monotonic() < end:
+            if proc.poll() is not None:
+                raise AssertionError(f"gonio serve ended: {proc.stderr.read().decode()}")
+            try:
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/login", timeout=2)
+                return proc, f"http://127.0.0.1:{port}"
+            except OSError:
+                time.sleep(0.5)
+        raise AssertionError("gonio serve did not answer within 240 s")
+
+    def stop(self, proc, sig=None) -> None:
+        import signal
+
+        if proc.poll() is None:
+            os.killpg(proc.pid, sig or signal.SIGTERM)
+            try:
+                proc.wait(30)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+
+
+@pytest.fixture
+def serve():
+    """A :class:`Server`; every server it started is stopped after the test."""
+    srv = Server()
+    yield srv
+    for p in srv.procs:
+        srv.stop(p)

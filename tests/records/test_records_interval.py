@@ -1,0 +1,88 @@
+"""The recalibration-interval methods (docs/records.md#intervals) against closed forms and a
+second algorithm (numpy.polyfit)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gonio.records.interval import (DAYS_PER_MONTH, DriftFit, fit_drift, propose, staircase,
+                                    time_to_limit)
+
+
+def closed_form_time(fit: DriftFit, limit: float, sign: float, k: float) -> float:
+    """Smallest t ≥ 0 with sign·(limit − a − b t) = k·u(t): the quadratic
+    (c − β t)² = k² (Vaa + 2 Vab t + Vbb t²), c = sign·(limit − a), β = sign·b,
+    restricted to c − β t ≥ 0."""
+    c, beta = sign * (limit - fit.a), sign * fit.b
+    k2 = k * k
+    A = beta**2 - k2 * fit.var_b
+    B = -2 * c * beta - 2 * k2 * sign * sign * fit.cov_ab
+    C = c * c - k2 * fit.var_a
+    roots = np.roots([A, B, C])
+    good = [r.real for r in roots if abs(r.imag) < 1e-9 and r.real >= 0
+            and c - beta * r.real >= 0]
+    return min(good) if good else math.inf
+
+
+def test_exact_line_reaches_limit_at_closed_form_time():
+    fit = DriftFit(a=0.10, b=0.002, var_a=0.0, var_b=0.0, cov_ab=0.0, birge=1.0)
+    assert time_to_limit(fit, None, 0.5) == pytest.approx((0.5 - 0.10) / 0.002, rel=1e-9)
+    assert time_to_limit(DriftFit(0.1, -0.002, 0, 0, 0, 1), -0.5, None) == pytest.approx(300)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_band_edge_reaches_limit_at_quadratic_root(seed):
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 1500, 4))
+    u = rng.uniform(0.02, 0.06, 4)
+    y = 0.05 + 2e-4 * t + rng.normal(0, u)
+    fit = fit_drift(t, y, u)
+    for lower, upper, sign, limit in ((None, 0.8, 1.0, 0.8), (-0.3, None, -1.0, -0.3)):
+        if fit.b * sign <= 0:
+            continue
+        got = time_to_limit(fit, lower, upper, k=2.0, horizon_days=1e6)
+        assert got == pytest.approx(closed_form_time(fit, limit, sign, 2.0), rel=1e-6)
+
+
+def test_fit_matches_numpy_polyfit():
+    t = np.array([0.0, 365.0, 730.0, 1100.0, 1460.0])
+    u = np.array([0.05, 0.04, 0.05, 0.03, 0.04])
+    y = np.array([0.10, 0.19, 0.33, 0.38, 0.52])
+    fit = fit_drift(t, y, u)
+    # numpy's weighted fit (w = 1/σ) about the last point, covariance unscaled then Birge
+    p, cov = np.polyfit(t - t.max(), y, 1, w=1 / u, cov="unscaled")
+    resid = y - np.polyval(p, t - t.max())
+    birge2 = np.sum((resid / u) ** 2) / (len(t) - 2)
+    cov = cov * max(1.0, birge2)
+    assert (fit.b, fit.a) == pytest.approx(tuple(p), rel=1e-10)
+    assert fit.var_a == pytest.approx(cov[1, 1], rel=1e-9)
+    assert fit.var_b == pytest.approx(cov[0, 0], rel=1e-9)
+    assert fit.cov_ab == pytest.approx(cov[0, 1], rel=1e-9)
+    assert fit.birge**2 == pytest.approx(birge2, rel=1e-10)
+
+
+def test_already_at_the_limit_and_never_reaching_it():
+    assert time_to_limit(DriftFit(0.49, 0.0, 0.01**2, 0, 0, 1), None, 0.5) == 0.0
+    assert time_to_limit(DriftFit(0.0, 0.0, 0.01**2, 0, 0, 1), None, 0.5) == math.inf
+
+
+def test_staircase_method():
+    assert staircase(12, [True, True, False], max_months=24) == pytest.approx(12 * 1.25 * 1.25 / 2)
+    assert staircase(12, [True] * 10, max_months=24) == 24
+    assert staircase(2, [False] * 5, max_months=24) == 1
+
+
+def test_propose_uses_drift_with_three_points_else_staircase_else_default():
+    rows = [(0, 0.10, 0.04, 2.0, -0.5, 0.5), (365, 0.20, 0.04, 2.0, -0.5, 0.5),
+            (730, 0.30, 0.04, 2.0, -0.5, 0.5)]
+    p = propose({"angle_deviation": rows}, 12)
+    fit = fit_drift([r[0] for r in rows], [r[1] for r in rows], [0.02] * 3)
+    days = closed_form_time(fit, 0.5, 1.0, 2.0)
+    assert p.method.startswith("drift") and p.months == math.floor(days / DAYS_PER_MONTH)
+    assert 0 < p.months < 24
+    assert propose({"angle_deviation": rows[:2]}, 12).method.startswith("simple response")
+    nolim = [(r[0], r[1], r[2], r[3], None, None) for r in rows]
+    assert propose({"angle_deviation": nolim}, 12).months == 12

@@ -1,0 +1,282 @@
+"""The records' workflow on SQLite and PostgreSQL: ISO/IEC 17025 7.8 states, roles on the
+server, certificate numbers, frozen certificates and audit trail (database triggers),
+amendments, failures and recovery, history, backup and restore, import."""
+
+from __future__ import annotations
+
+import datetime as dt
+import io
+import json
+import shutil
+import threading
+
+import pytest
+from sqlalchemy import func, select, text
+
+from gonio.errors import GonioError
+from gonio.records import services, worker
+from gonio.records.models import (AuditEvent, Base, Calibration, Certificate, ResultItem,
+                                  CertificateCounter)
+
+SMALL_PROTOCOL = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / \
+    "small-protocol.toml"
+
+
+def fake_pipeline(folder):
+    """The pipeline's real output of the session fixture copied into ``out`` (the
+    computation itself is exercised by the browser and kill tests)."""
+    def run(readings, out, *, spec_key, protocol=None, lab=None):
+        shutil.copytree(folder, out)
+        return sorted(p.name for p in out.iterdir())
+    return run
+
+
+def setup_instrument(store, people, limits=()):
+    tech = people["tech"]
+    cust = services.add_customer(store, tech, "Example Navigation Co.", "2 Sample Street")
+    inst = services.register_instrument(store, tech, customer_id=cust.id, serial="RLG-0001",
+                                        spec_key="ogam-draft", kind="RLG goniometer",
+                                        manufacturer="Example Gyro Works", model="RLG-GM-1",
+                                        limits=list(limits))
+    std = services.add_standard(store, tech, name="rotary table", identifier="RT-07",
+                                due_on=dt.date.today() + dt.timedelta(days=300))
+    return inst, std
+
+
+def new_calibration(store, people, inst, std, readings, day=None):
+    sha, _ = services.store_file(store, open(readings, "rb"))
+    psha, _ = services.store_file(store, open(SMALL_PROTOCOL, "rb"))
+    return services.create_calibration(store, people["tech"], instrument_id=inst.id,
+                                       readings_sha256=sha, readings_name="readings.csv",
+                                       protocol_sha256=psha, standard_ids=[std.id],
+                                       temperature_c=20.1, humidity_pct=45,
+                                       performed_on=day)
+
+
+def run_worker(store, monkeypatch, folder):
+    monkeypatch.setattr(worker, "calibrate_folder", fake_pipeline(folder))
+    cal = services.claim_next(store)
+    assert cal is not None
+    assert worker.execute(store, cal.id), services.calibration(store, cal.id).error
+    return services.calibration(store, cal.id)
+
+
+def test_workflow_roles_numbers_and_frozen_certificates(store, people, computed_folder,
+                                                        bench_readings, monkeypatch):
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    assert cal.status == "queued"
+    cal = run_worker(store, monkeypatch, computed_folder)
+    assert cal.status == "computed"
+    # the items are results.json's, read independently here
+    res = json.loads((computed_folder / "results.json").read_text())
+    with store.session() as s:
+        K = s.scalar(select(ResultItem).where(ResultItem.calibration_id == cal.id,
+                                              ResultItem.key == "scale_factor"))
+    assert K.value == res["scale_factor"]["value"]
+    assert K.U == res["scale_factor"]["uncertainty"]["U"]
+    # roles and the second person, on the server
+    with pytest.raises(GonioError, match="reviewer role"):
+        services.review(store, people["tech"], cal.id, accept=True)
+    with pytest.raises(GonioError, match="that is computed"):
+        services.approve(store, people["rev"], cal.id)           # not reviewed yet
+    services.review(store, people["rev"], cal.id, accept=True, comment="checked")
+    with pytest.raises(GonioError, match="reviewer role"):
+        services.approve(store, people["tech"], cal.id)
+    services.approve(store, people["rev2"], cal.id)
+    year = dt.datetime.now(dt.timezone.utc).year
+    assert services.calibration(store, cal.id).pending_number == f"GC-{year}-0001"
+    cal = run_worker(store, monkeypatch, computed_folder)
+    assert cal.status == "issued"
+    with store.session() as s:
+        cert = s.scalar(select(Certificate).where(Certificate.calibration_id == cal.id))
+    assert cert.number == f"GC-{year}-0001" and cert.replaces_id is None
+    assert services.file_bytes(store, cert.pdf_sha256).startswith(b"%PDF")
+    # frozen: the database itself refuses to change or delete an issued certificate or
+    # an audit event
+    for sql in ("UPDATE certificates SET number = 'X'", "DELETE FROM certificates",
+                "UPDATE audit_events SET action = 'x'", "DELETE FROM audit_events"):
+        with store.writing() as s, pytest.raises(Exception, match="frozen|append-only"):
+            s.execute(text(sql))
+            s.commit()
+    # an amendment is a new certificate naming the old one
+    services.amend(store, people["rev"], cert.id, "customer address corrected")
+    cal = run_worker(store, monkeypatch, computed_folder)
+    with store.session() as s:
+        certs = s.scalars(select(Certificate).order_by(Certificate.id)).all()
+    assert [c.number for c in certs] == [f"GC-{year}-0001", f"GC-{year}-0002"]
+    assert certs[1].replaces_id == certs[0].id and "address" in certs[1].reason
+    with pytest.raises(GonioError, match="replaced already"):
+        services.amend(store, people["rev"], cert.id, "again")
+    with store.session() as s:
+        actions = [a for (a,) in s.execute(select(AuditEvent.action).order_by(AuditEvent.id))]
+    for a in ("create", "claim", "computed", "review", "approve", "issue", "amend"):
+        assert a in actions
+
+
+def test_creator_may_not_review_own_calibration(store, people, computed_folder,
+                                                bench_readings, monkeypatch):
+    inst, std = setup_instrument(store, people)
+    sha, _ = services.store_file(store, open(bench_readings[0], "rb"))
+    cal = services.create_calibration(store, people["admin"], instrument_id=inst.id,
+                                      readings_sha256=sha)
+    run_worker(store, monkeypatch, computed_folder)
+    with pytest.raises(GonioError, match="second person"):
+        services.review(store, people["admin"], cal.id, accept=True)
+    with pytest.raises(GonioError, match="why"):
+        services.review(store, people["rev"], cal.id, accept=False)
+    assert services.review(store, people["rev"], cal.id, accept=False,
+                           comment="wrong protocol").status == "rejected"
+
+
+def test_overdue_standard_refused(store, people, bench_readings):
+    inst, _ = setup_instrument(store, people)
+    old = services.add_standard(store, people["tech"], name="autocollimator", identifier="AC-1",
+                                due_on="2020-01-01")
+    sha, _ = services.store_file(store, open(bench_readings[0], "rb"))
+    with pytest.raises(GonioError, match="AC-1 was due"):
+        services.create_calibration(store, people["tech"], instrument_id=inst.id,
+                                    readings_sha256=sha, standard_ids=[old.id])
+    with store.session() as s:
+        assert s.scalar(select(func.count()).select_from(Calibration)) == 0
+
+
+def test_numbers_unique_and_gapless_under_concurrency(store, people):
+    year = 2031
+    got, errors = [], []
+
+    def reserve():
+        try:
+            with store.writing() as s:
+                got.append(services._reserve_number(s, year))
+                s.commit()
+        except Exception as exc:     # pragma: no cover - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=reserve) for _ in range(12)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert sorted(got) == [f"GC-2031-{i:04d}" for i in range(1, 13)]
+    with store.session() as s:
+        assert s.get(CertificateCounter, year).last == 12
+
+
+def test_dead_worker_marked_failed_then_retried(store, people, bench_readings,
+                                                computed_folder, monkeypatch):
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    services.claim_next(store)
+    services.attach(store, cal.id, 999_999_999)         # a process that does not exist
+    assert services.recover(store) == [cal.id]
+    cal = services.calibration(store, cal.id)
+    assert cal.status == "failed" and "interrupted" in cal.error
+    with store.session() as s:
+        assert s.scalar(select(func.count()).select_from(Certificate)) == 0
+    services.retry(store, people["tech"], cal.id)
+    assert run_worker(store, monkeypatch, computed_folder).status == "computed"
+
+
+def test_issue_refused_when_recomputed_result_differs(store, people, computed_folder,
+                                                      bench_readings, monkeypatch, tmp_path):
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    run_worker(store, monkeypatch, computed_folder)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev2"], cal.id)
+    changed = tmp_path / "changed"
+    shutil.copytree(computed_folder, changed)
+    res = json.loads((changed / "results.json").read_text())
+    res["scale_factor"]["value"] += 1e-6
+    (changed / "results.json").write_text(json.dumps(res))
+    monkeypatch.setattr(worker, "calibrate_folder", fake_pipeline(changed))
+    services.claim_next(store)
+    assert not worker.execute(store, cal.id)
+    cal = services.calibration(store, cal.id)
+    assert cal.status == "failed" and "differs from the reviewed" in cal.error
+    with store.session() as s:
+        assert s.scalar(select(func.count()).select_from(Certificate)) == 0
+
+
+def test_history_and_interval_with_limits(store, people, computed_folder, bench_readings,
+                                          monkeypatch):
+    inst, std = setup_instrument(store, people, limits=[{"item": "angle_deviation",
+                                                        "mpe": 0.5}])
+    for day in ("2024-01-10", "2025-01-10"):
+        new_calibration(store, people, inst, std, bench_readings[0], day=day)
+        run_worker(store, monkeypatch, computed_folder)
+    hist = services.history(store, inst.id)
+    assert [r["date"].isoformat() for r in hist["angle_deviation"]] == ["2024-01-10",
+                                                                       "2025-01-10"]
+    p = services.propose_interval(store, inst.id)
+    # two calibrations within ±0.5″: the staircase lengthens 12 months twice
+    assert p.method.startswith("simple response") and p.months == 18
+    assert services.instrument_limits(services.calibration(store, 1).instrument) == {
+        "angle_deviation": (-0.5, 0.5)}
+
+
+def plain(v):
+    """A value as text, so that each database's own return types compare."""
+    if isinstance(v, bool):
+        return str(int(v))
+    if isinstance(v, dt.datetime):
+        return v.isoformat(" ")
+    return v if v is None else str(v)
+
+
+def test_backup_restore_round_trip(store, people, computed_folder, bench_readings, monkeypatch,
+                                   tmp_path):
+    from gonio.records.backup import backup, restore
+    from gonio.records.db import open_store
+
+    inst, std = setup_instrument(store, people)
+    new_calibration(store, people, inst, std, bench_readings[0])
+    run_worker(store, monkeypatch, computed_folder)
+    archive = tmp_path / "records.zip"
+    counts = backup(store, archive)
+    assert counts["calibrations"] == 1 and counts["files"] >= 6
+    target = open_store(None, tmp_path / "restored")     # always restored into SQLite
+    try:
+        assert restore(target, archive) == {k: v for k, v in counts.items() if v}
+        for table in Base.metadata.sorted_tables:
+            with store.session() as a, target.session() as b:
+                got = [[tuple(map(plain, r)) for r in x.execute(select(table).order_by(
+                    *table.primary_key))] for x in (a, b)]
+            assert got[0] == got[1], table.name
+        cal = services.calibration(target, 1)
+        assert services.file_bytes(target, cal.readings_sha256) == bench_readings[0].read_bytes()
+        with pytest.raises(GonioError, match="holds records already"):
+            restore(target, archive)
+    finally:
+        target.close()
+
+
+def test_import_output_folder(store, people, computed_folder, bench_readings, tmp_path):
+    from gonio.records.importer import import_output_folder
+
+    with pytest.raises(GonioError, match="no readings file matching"):
+        import_output_folder(store, computed_folder, readings=bench_readings[1])
+    cid = import_output_folder(store, computed_folder, readings=bench_readings[0])
+    cal = services.calibration(store, cid)
+    assert cal.status == "computed" and cal.instrument.serial == "RLG-0001"
+    assert services.history(store, cal.instrument_id)["scale_factor"][0]["value"] == \
+        json.loads((computed_folder / "results.json").read_text())["scale_factor"]["value"]
+
+
+def test_blob_store_checks_digest(sqlite_store):
+    from gonio.records import blobs
+
+    h, n = services.store_file(sqlite_store, io.BytesIO(b"readings"))
+    assert services.store_file(sqlite_store, io.BytesIO(b"readings")) == (h, n)
+    path = blobs.blob_path(sqlite_store.blob_root, h)
+    path.chmod(0o644)
+    path.write_bytes(b"changed")
+    with pytest.raises(GonioError, match="does not match"):
+        services.file_bytes(sqlite_store, h)
+    with pytest.raises(GonioError, match="not a SHA-256"):
+        blobs.blob_path(sqlite_store.blob_root, "../../etc/passwd")
+    with pytest.raises(GonioError, match="larger than the limit"):
+        services.store_file(sqlite_store, io.BytesIO(b"x" * 2000), limit_bytes=1000)
+

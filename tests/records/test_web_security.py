@@ -1,0 +1,222 @@
+"""gonio serve's security, tested through HTTP (Starlette's TestClient, no browser): sessions
+on every page, CSRF on every POST, roles on the server, login throttling, hostile input in
+every field (HTML, SQL, path traversal, 10 MB strings, control characters)."""
+
+from __future__ import annotations
+
+import io
+import re
+
+import pytest
+from sqlalchemy import func, select
+
+from gonio.records import services
+from gonio.records.models import Calibration, Customer, Instrument, Standard, User
+
+PASSWORD = "correct horse battery"
+HOSTILE = {
+    "html": "<script>alert('x')</script><img src=x onerror=alert(1)>",
+    "sql": "x'); DROP TABLE users; --",
+    "traversal": "../../../../etc/passwd",
+    "control": "bad\x00name\x1b[31m",
+    "huge": "A" * (10 * 2**20),
+}
+
+
+@pytest.fixture
+def app(sqlite_store):
+    from gonio.web.app import create_app
+
+    for name, roles in (("tech", "technician"), ("rev", "reviewer"),
+                        ("admin", "admin technician reviewer")):
+        services.create_user(sqlite_store, None, name, PASSWORD, roles)
+    return create_app(sqlite_store)
+
+
+def client(app):
+    from fastapi.testclient import TestClient
+    return TestClient(app, follow_redirects=False)
+
+
+def login(app, name: str):
+    c = client(app)
+    token = c.cookies.get("gonio_login") or _login_token(c)
+    r = c.post("/login", data={"username": name, "password": PASSWORD, "csrf": token})
+    assert r.status_code == 303, r.text
+    return c
+
+
+def _login_token(c) -> str:
+    r = c.get("/login")
+    return re.search(r'name="csrf" value="([^"]+)"', r.text).group(1)
+
+
+def csrf_of(c) -> str:
+    return re.search(r'name="csrf" value="([^"]+)"', c.get("/").text).group(1)
+
+
+def get_routes(app):
+    from fastapi.routing import APIRoute
+
+    from gonio.web.pages import router
+
+    for r in router.routes:
+        if isinstance(r, APIRoute):
+            path = re.sub(r"\{[^}]+\}", "1", r.path)
+            for m in r.methods:
+                yield m, path, r.path
+
+
+def test_every_page_but_login_needs_a_session(app):
+    c = client(app)
+    checked = 0
+    for method, path, template in get_routes(app):
+        if template == "/login":
+            continue
+        r = c.request(method, path, data={"csrf": "x"})
+        assert r.status_code in (303, 403), (method, path, r.status_code)
+        if r.status_code == 303:
+            assert r.headers["location"] == "/login", (method, path)
+        checked += 1
+    assert checked >= 25
+    assert c.get("/login").status_code == 200
+    assert c.get("/static/style.css").status_code == 200
+
+
+def test_every_post_needs_the_csrf_token(app, sqlite_store):
+    c = login(app, "admin")
+    for method, path, template in get_routes(app):
+        if method != "POST" or template == "/login":
+            continue
+        for data in ({}, {"csrf": "forged"}):
+            r = c.post(path, data=dict(data, name="x", reason="x", username="evil"))
+            assert r.status_code == 403, (path, data, r.status_code)
+    with sqlite_store.session() as s:
+        assert s.scalar(select(func.count()).select_from(Customer)) == 0
+        assert s.scalar(select(func.count()).select_from(User)) == 3
+    # the login form: its own cookie token
+    c2 = client(app)
+    _login_token(c2)
+    r = c2.post("/login", data={"username": "admin", "password": PASSWORD, "csrf": "forged"})
+    assert r.status_code == 403
+
+
+def test_login_throttled_after_repeated_failures(app):
+    c = client(app)
+    for _ in range(5):
+        r = c.post("/login", data={"username": "tech", "password": "wrong password",
+                                   "csrf": _login_token(c)})
+        assert r.status_code == 401 and "wrong user name or password" in r.text
+    r = c.post("/login", data={"username": "tech", "password": PASSWORD,
+                               "csrf": _login_token(c)})
+    assert r.status_code == 429 and "too many failed logins" in r.text
+    assert "gonio_session" not in r.cookies
+    login(app, "rev")                       # another user is not locked out
+
+
+def test_roles_enforced_on_the_server(app, sqlite_store):
+    rev = login(app, "rev")
+    r = rev.post("/customers", data={"csrf": csrf_of(rev), "name": "ACME"})
+    assert r.status_code == 400 and "technician role" in r.text
+    r = rev.post("/users", data={"csrf": csrf_of(rev), "username": "mallory",
+                                 "password": "password123", "roles": "admin"})
+    assert r.status_code == 400 and "admin role" in r.text
+    tech = login(app, "tech")
+    tech.post("/customers", data={"csrf": csrf_of(tech), "name": "ACME"})
+    cust = services.add_customer(sqlite_store, services.user(sqlite_store, "tech"), "B")
+    r = tech.post("/instruments", data={"csrf": csrf_of(tech), "customer_id": cust.id,
+                                        "serial": "S1", "spec_key": "ogam-draft"})
+    assert r.status_code == 303
+    inst_id = int(r.headers["location"].rsplit("/", 1)[1])
+    r = tech.post(f"/instruments/{inst_id}/calibrate",
+                  data={"csrf": csrf_of(tech)}, files={"readings": ("r.csv", b"x,y\n")})
+    assert r.status_code == 303
+    cal_id = int(r.headers["location"].rsplit("/", 1)[1])
+    with sqlite_store.writing() as s:               # as if the worker had computed it
+        s.get(Calibration, cal_id).status = "computed"
+        s.commit()
+    for url in (f"/calibrations/{cal_id}/review", f"/calibrations/{cal_id}/approve"):
+        r = tech.post(url, data={"csrf": csrf_of(tech), "decision": "accept"})
+        assert r.status_code == 303 and "reviewer%20role" in r.headers["location"]
+    assert services.calibration(sqlite_store, cal_id).status == "computed"
+
+
+def _fields_posts(inst_id, cust_id):
+    """Every form of the application with its text fields."""
+    return [
+        ("/customers", ["name", "address"], {}),
+        ("/instruments", ["kind", "manufacturer", "model", "serial", "limit_item_0",
+                          "limit_source_0"],
+         {"customer_id": str(cust_id), "serial": "S-OK", "spec_key": "ogam-draft"}),
+        ("/standards", ["name", "identifier", "accuracy", "certificate", "traceability"],
+         {"name": "n", "identifier": "id-ok", "due_on": "2099-01-01"}),
+        (f"/instruments/{inst_id}/calibrate", ["place", "protocol", "temperature_c"], {}),
+        ("/users", ["username", "full_name"], {"username": "u-ok", "password": "password123",
+                                               "roles": "technician"}),
+        ("/settings", ["lab_name", "lab_address"], {}),
+    ]
+
+
+@pytest.mark.parametrize("kind", sorted(HOSTILE))
+def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind):
+    admin = login(app, "admin")
+    actor = services.user(sqlite_store, "admin")
+    cust = services.add_customer(sqlite_store, actor, "Base customer")
+    inst = services.register_instrument(sqlite_store, actor, customer_id=cust.id,
+                                        serial="BASE", spec_key="ogam-draft")
+    value = HOSTILE[kind]
+    for url, fields, base in _fields_posts(inst.id, cust.id):
+        for field in fields:
+            data = dict(base, csrf=csrf_of(admin))
+            data[field] = value
+            files = {"readings": ("r.csv", b"a\n")} if "calibrate" in url else None
+            r = admin.post(url, data=data, files=files)
+            assert r.status_code in (303, 400, 413), (url, field, r.status_code)
+            if kind in ("control", "huge"):
+                assert r.status_code in (400, 413), (url, field)
+            if r.status_code == 400:
+                assert "Traceback" not in r.text
+    # stored hostile text comes back escaped on every page, and the tables are intact
+    pages = ["/", "/customers", "/instruments", "/standards", "/calibrations", "/users",
+             "/audit", f"/instruments/{inst.id}"]
+    with sqlite_store.session() as s:
+        pages += [f"/calibrations/{c}" for c in s.scalars(select(Calibration.id))]
+        pages += [f"/instruments/{i}" for i in s.scalars(select(Instrument.id))]
+        assert s.scalar(select(func.count()).select_from(User)) >= 3
+    for page in pages:
+        r = admin.get(page)
+        assert r.status_code == 200, page
+        assert "<script>alert" not in r.text and "<img src=x" not in r.text, page
+    if kind == "html":
+        assert "&lt;script&gt;alert(" in admin.get("/customers").text
+
+
+def test_uploaded_file_name_never_becomes_a_path(app, sqlite_store):
+    tech = login(app, "tech")
+    actor = services.user(sqlite_store, "tech")
+    cust = services.add_customer(sqlite_store, actor, "C")
+    inst = services.register_instrument(sqlite_store, actor, customer_id=cust.id, serial="S",
+                                        spec_key="ogam-draft")
+    body = b"# spec: ogam-draft\n"
+    r = tech.post(f"/instruments/{inst.id}/calibrate", data={"csrf": csrf_of(tech)},
+                  files={"readings": ("../../../../tmp/evil\x00.csv", io.BytesIO(body))})
+    assert r.status_code == 303
+    cal = services.calibration(sqlite_store, int(r.headers["location"].rsplit("/", 1)[1]))
+    assert "/" not in cal.readings_name and cal.readings_name.startswith("evil")
+    stored = list(sqlite_store.blob_root.rglob("*"))
+    assert all(p.name == cal.readings_sha256 or p.is_dir() or p.name.startswith(".")
+               for p in stored if p.is_file()) and any(p.name == cal.readings_sha256
+                                                      for p in stored)
+    with sqlite_store.session() as s:
+        assert s.scalar(select(func.count()).select_from(Standard)) == 0
+
+
+def test_security_headers_and_cookie_flags(app):
+    c = client(app)
+    r = c.get("/login")
+    assert "frame-ancestors 'none'" in r.headers["content-security-policy"]
+    assert r.headers["x-content-type-options"] == "nosniff"
+    token = _login_token(c)
+    r = c.post("/login", data={"username": "tech", "password": PASSWORD, "csrf": token})
+    cookie = r.headers["set-cookie"]
+    assert "HttpOnly" in cookie and "SameSite=strict" in cookie.replace("Strict", "strict")
