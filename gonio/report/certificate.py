@@ -336,7 +336,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
                      ")"]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
-        {"widths": (0.06, 0.21, 0.075, 0.325, 0.24, 0.09), "id": "results"})
+        {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     st_e = stated_item(res, "angle_deviation")
     if U is not None:
         add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
