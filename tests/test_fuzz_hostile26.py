@@ -128,16 +128,17 @@ def iec(sims):
     return Text(sims["IEC"] / "readings.csv")
 
 
-def refused(text: Text, *fragments: str, line: int | None = None) -> str:
-    """parse_rate_readings refuses the text; the one-line message holds every fragment."""
+def refused(text: Text, *fragments: str, line: int | None = None,
+            parse=parse_rate_readings, name: str = "r.csv") -> str:
+    """``parse`` refuses the text; the one-line message holds every fragment (and the line)."""
     with pytest.raises(GonioError) as ei:
-        parse_rate_readings(text.text(), path="r.csv")
+        parse(text.text(), path=name)
     msg = str(ei.value)
-    assert "\n" not in msg and msg.startswith("r.csv"), msg
+    assert "\n" not in msg and msg.startswith(name), msg
     for f in fragments:
         assert f in msg, msg
     if line is not None:
-        assert msg.startswith(f"r.csv:{line}:"), msg
+        assert msg.startswith(f"{name}:{line}:"), msg
     return msg
 
 
@@ -300,13 +301,7 @@ def thermal(sims):
 
 
 def triad_refused(text: Text, *fragments: str) -> str:
-    with pytest.raises(GonioError) as ei:
-        parse_triad_readings(text.text(), path="t.csv")
-    msg = str(ei.value)
-    assert "\n" not in msg and msg.startswith("t.csv:"), msg
-    for f in fragments:
-        assert f in msg, msg
-    return msg
+    return refused(text, *fragments, parse=parse_triad_readings, name="t.csv")
 
 
 def _tri_dup(t: Text) -> Text:
@@ -315,7 +310,7 @@ def _tri_dup(t: Text) -> Text:
 
 
 TRIAD_CASES = {
-    "alignment-duplicated-row": ("tri", _tri_dup, ("given twice",)),
+    "alignment-duplicated-row": ("tri", _tri_dup, ("repeats line",)),
     "alignment-zero-outputs": ("tri", lambda t: [t.set(c, "0.0", test="alignment")
                                                  for c in ("out_x", "out_y", "out_z")][-1],
                                ("did not respond",)),
@@ -339,6 +334,35 @@ def test_triad_rows_refused(request, name):
     fam, mutate, frags = TRIAD_CASES[name]
     triad_refused(mutate(request.getfixturevalue(fam).only()), *frags)
     count(f"triad-rows:{name}")
+
+
+def test_thermal_programme_at_one_temperature(tmp_path, capsys):
+    """A thermal programme soaked at −40 °C only: thermal-model refuses it and calibrate
+    states the model "not measured" with the reason (before: K_z at the 25 °C reference was
+    certified 49.10 ± 0.39 against 49.69 from the whole programme)."""
+    import re
+
+    from gonio.specs import get
+
+    text = (PROTOCOLS / "triad-alignment.toml").read_text(encoding="utf-8")
+    p = tmp_path / "one.toml"
+    p.write_text(re.sub(r"(?m)^setpoints_c = .*$", "setpoints_c = [-40.0]", text, count=1),
+                 encoding="utf-8")
+    assert main(["simulate", "--spec", "triad-alignment", "--protocol", str(p),
+                 "--out", str(tmp_path / "D")]) == 0
+    capsys.readouterr()
+    th = tmp_path / "D" / "thermal.csv"
+    msg = cli(["thermal-model", th], capsys)
+    assert "one temperature" in msg or "extrapolation" in msg, msg
+    try:                                  # refused whole by the screening, or not measured
+        res = get("triad-alignment").calibrate(tmp_path / "D" / "readings.csv")
+    except GonioError as exc:
+        assert "thermal.csv" in str(exc) and "temperature" in str(exc), str(exc)
+    else:
+        it = res.items["thermal_model"]
+        assert not it.measured and "temperature" in it.reason, it.reason
+        assert not any(k.startswith("K_") for k in res.items)
+    count("triad:thermal-one-temperature")
 
 
 def test_triad_cli_values(sims, capsys):

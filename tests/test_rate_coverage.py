@@ -3,7 +3,8 @@
 
 The default run uses GONIO_COVERAGE_SEEDS (default 10) seeds per specification on the
 reduced programme of SPEC.coverage.reduced and requires, per item, that the
-coverage is not significantly below 90 %: the upper Wilson 95 % limit reaches 0.90. The
+coverage is not significantly below 90 % (the upper Clopper–Pearson 95 % limit reaches
+0.90) and that U is not over-wide (sd of z = (value − truth)/u_c ≥ 0.3): both sides. The
 benchmark benchmarks/bench_rate_coverage.py runs 100–200 seeds (figures in
 docs/jjf1535-readings.md#coverage-of-the-budgets); set GONIO_COVERAGE_SEEDS=100 to run
 the same here.
@@ -40,12 +41,50 @@ def test_wilson_and_item_coverage_by_hand():
     assert c.z_mean == pytest.approx(sum(z) / 3) and c.flags == ("under-covers",)
 
 
+#: Items whose U the coverage study finds over-wide today (sd z < 0.3), each with the
+#: issue that fixes it; the test fails if the list is wrong either way.
+KNOWN_OVER_WIDE = {
+    ("iec62047-20", "scale_factor"): "issue 24: IEC scale factor U ≈ 17× too wide",
+    ("jjf1535-2015", "sf_repeatability"): "found here: sd z 0.17 on 10 seeds (U ≈ 6× too wide)",
+    **{("iec62047-20", k): f"found here: sd z {v} on 10 seeds" for k, v in (
+        ("initial_sf_variation", 0.10), ("sf_temperature_coefficient", 0.09),
+        ("ratiometric_error", 0.17), ("cross_axis", 0.06), ("startup_time", 0.28),
+        ("bias_instability", 0.29))},
+    ("jjf1535-2015", "warmup_time"): "the study bench has no power-on transient: the warm-up "
+                                     "time is found exactly (z ≡ 0), U is all detection term",
+}
+
+
+def two_sided_failures(df, spec) -> dict:
+    """Rows failing either side: coverage significantly below 90 % (upper Clopper–Pearson
+    limit < 0.90) or flagged over-wide (sd z < 0.3; gonio's own budgets)."""
+    low = set(df.loc[df["cp_high"] < 0.90, "key"])
+    wide = {r.key for r in df.itertuples() if "over-wide" in r.flags}
+    return {"under": low, "over-wide": wide - {k for s, k in KNOWN_OVER_WIDE if s == spec}}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("spec", ("jjf1535-2015", "iec62047-20"))
 def test_coverage_per_item(spec, tmp_path):
+    from gonio.pipeline.coverage import coverage_table_from, trial_records
+    from gonio.specs._rate_family.simulate import study_bench
+    from gonio.specs import get
+
     proto = reduced_protocol(spec, tmp_path / "reduced.toml")
-    df = coverage_study(spec, range(500, 500 + SEEDS), protocol=str(proto))
+    bench = study_bench(get(spec).default_bench)
+    trials = [trial_records(spec, bench, str(proto), s) for s in range(500, 500 + SEEDS)]
+    df = coverage_table_from(trials)
     assert len(df) >= (15 if spec == "jjf1535-2015" else 20)
-    low = df[df["wilson_high"] < 0.90]
-    assert low.empty, "coverage significantly below 90 %:\n" + low.to_string()
     assert (df["n"] == SEEDS).all()
+    bad = two_sided_failures(df, spec)
+    assert bad == {"under": set(), "over-wide": set()}, df.to_string()
+    known = {k for s, k in KNOWN_OVER_WIDE if s == spec}
+    assert known <= {r.key for r in df.itertuples() if "over-wide" in r.flags}, \
+        "an item listed as over-wide is no longer: remove it from KNOWN_OVER_WIDE"
+    # the check fails on both sides: every U (and u_c) ×20 → over-wide, ÷20 → under-covers
+    for factor, side in ((20.0, "over-wide"), (1 / 20, "under")):
+        scaled = [{k: dict(r, U=r["U"] * factor, u_c=r["u_c"] * factor)
+                   if r["U"] is not None else r for k, r in t.items()} for t in trials]
+        sdf = coverage_table_from(scaled)
+        spread = set(sdf.loc[sdf["z_sd"].astype(float) > 0, "key"])
+        assert two_sided_failures(sdf, spec)[side] >= spread - known, side

@@ -418,6 +418,25 @@ class ThermalModelResult:
                 "channels": {k: v.to_json() for k, v in self.channels.items()}}
 
 
+def check_temperature_span(theta_c: np.ndarray, channel: str, readings: TriadReadings) -> None:
+    """GonioError unless the soak points of a gyro hold at least two temperatures (1 °C
+    apart) and bracket the reference temperature (ϑ = 0): a model from one temperature, or
+    its value at a reference outside the temperatures soaked, is an extrapolation that
+    would be certified as a measurement (issue 26: −40 °C only gave K at 25 °C as
+    49.10 ± 0.39 against 49.69)."""
+    ref = float(readings.metadata.get("reference_c", 25.0))
+    levels = np.unique(np.round(theta_c))
+    lo, hi = float(theta_c.min()) + ref, float(theta_c.max()) + ref
+    if levels.size < 2:
+        raise GonioError(f"gyro {channel}: the thermal programme holds one temperature "
+                         f"({lo:.1f} °C); a temperature model needs at least two",
+                         file=readings.path)
+    if not theta_c.min() <= 0.0 <= theta_c.max():
+        raise GonioError(f"gyro {channel}: the reference {ref:g} °C lies outside the "
+                         f"temperatures soaked ({lo:.1f} … {hi:.1f} °C); the model there "
+                         "would be an extrapolation", file=readings.path, key="reference_c")
+
+
 def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
                            temperature: str = "sensor", max_order_t: int = 4,
                            max_order_u: int = 2, max_order_arw: int = 2,
@@ -431,6 +450,7 @@ def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
     pts = soak_points(readings, temperature=temperature)
     out = {}
     for ch, grp in pts.groupby("channel", sort=True):
+        check_temperature_span(grp["theta_c"].to_numpy(float), ch, readings)
         kf = fit_polynomial(f"K_{ch}", grp["theta_c"], grp["u_v"], grp["scale"],
                             criterion=criterion, max_t=max_order_t, max_u=max_order_u,
                             orders=fo.get("scale"))

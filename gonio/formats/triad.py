@@ -230,9 +230,8 @@ def check_triad_rows(df: pd.DataFrame, file) -> None:
         if dup.any():
             k = int(np.flatnonzero(dup)[0])
             first = int(ln[np.flatnonzero(g["step"].to_numpy() == g["step"].iloc[k])[0]])
-            raise GonioError(f"step {int(g['step'].iloc[k])} of test {test} given twice (first on "
-                             f"line {first}): a duplicated row", file=file, line=int(ln[k]),
-                             column="step")
+            raise GonioError(f"step {int(g['step'].iloc[k])} of test {test} repeats line {first} "
+                             "(a duplicated row)", file=file, line=int(ln[k]), column="step")
         t = g["time_s"].to_numpy(dtype=float)
         back = np.flatnonzero(np.diff(t) <= 0)
         if back.size:

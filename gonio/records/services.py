@@ -25,6 +25,7 @@ ISO/IEC 17025 7.8 as states of a calibration::
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import json
 import os
 import re
@@ -726,6 +727,7 @@ def instrument_limits(inst: Instrument) -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=64)
 def default_interval(spec_key: str) -> tuple[int, str]:
     """The specification's clause-9 default interval in months, and where it comes from:
     the specification's own ``recalibration_interval_months`` where it states one, else
@@ -740,9 +742,10 @@ def default_interval(spec_key: str) -> tuple[int, str]:
     return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"
 
 
-def propose_interval(store, instrument_id: int):
+def propose_interval(store, instrument_id: int, hist: dict | None = None):
     """The recalibration interval proposed from the instrument's history
-    (:func:`gonio.records.interval.propose`), with the specification's default beside it."""
+    (:func:`gonio.records.interval.propose`; ``hist``: its :func:`history` if at hand), with
+    the specification's default beside it."""
     from gonio.records.interval import propose
 
     with store.session() as s:
@@ -750,7 +753,7 @@ def propose_interval(store, instrument_id: int):
         if inst is None:
             raise GonioError("no such instrument", key="instrument")
     limits = instrument_limits(inst)
-    hist = history(store, instrument_id)
+    hist = history(store, instrument_id) if hist is None else hist
     dates = [r["date"] for rows in hist.values() for r in rows]
     t0 = min(dates) if dates else None
     table = {key: [((r["date"] - t0).days, r["value"], r["U"], r["k"],

@@ -336,7 +336,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
                      ")"]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
-        {"widths": (0.045, 0.22, 0.075, 0.33, 0.24, 0.09), "id": "results"})
+        {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     st_e = stated_item(res, "angle_deviation")
     if U is not None:
         add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
@@ -648,6 +648,35 @@ def _width(s: str) -> int:
     return sum(2 if unicodedata.east_asian_width(ch) in "WF" else 1 for ch in s)
 
 
+#: Characters that never begin a line (closing brackets and punctuation, GB/T 15834 4.1)
+#: and that never end one (opening brackets).
+_NO_START = set("。，、；：？！）」』】〉》)]}%,;:")
+_NO_END = set("（「『【〈《([{")
+
+
+def _glue(tokens: list[str]) -> list[str]:
+    """Wrapping tokens with a closing mark joined to the token before it and an opening mark
+    to the token after it, so no line starts with ")" or "。" nor ends with "(".
+
+    >>> _glue(["k", "）", "。"]), _glue(["（", "a", "b"])
+    (['k）。'], ['（a', 'b'])
+    """
+    out: list[str] = []
+    carry = ""
+    for tok in tokens:
+        tok = carry + tok
+        carry = ""
+        if out and tok and tok[0] in _NO_START and not out[-1].endswith(" "):
+            out[-1] += tok
+        elif tok and tok[-1] in _NO_END and len(tok) == 1:
+            carry = tok
+        else:
+            out.append(tok)
+    if carry:
+        out.append(carry)
+    return out
+
+
 def _wrap(text: str, width: int) -> list[str]:
     """Wrap ``text`` to ``width`` columns (CJK characters count two; breaks at spaces or CJK)."""
     lines: list[str] = []
@@ -668,7 +697,7 @@ def _wrap(text: str, width: int) -> list[str]:
                 word += ch
         if word:
             tokens.append(word)
-        for tok in tokens:
+        for tok in _glue(tokens):
             tw = _width(tok)
             if w + tw > width and line:
                 lines.append(line.rstrip())
@@ -800,8 +829,8 @@ def block_start(block: Block, units: list) -> float:
 def layout_pages(content: dict, L: dict) -> list[list]:
     """Lay the blocks out on pages. A heading (h, sub) is kept on the page of the first
     unit of the block after it (:func:`block_start`: a table's head and first rows, a short
-    paragraph whole, a figure, a long paragraph's first line), so no page ends with a
-    heading."""
+    paragraph whole, a figure, a long paragraph's first line), and of a table's start when a
+    short note stands between them, so no page ends with a heading."""
     lay = _Layout(8.5)
     fs, ln = lay.fs, lay.line
     title_h = 30 * _PT
@@ -822,6 +851,11 @@ def layout_pages(content: dict, L: dict) -> list[list]:
                 j += 1
             if j < len(blocks):
                 keep += block_start(blocks[j], units[j])
+                # a short note between a heading and its table: keep the table's start too
+                if (blocks[j].kind == "p" and j + 1 < len(blocks)
+                        and blocks[j + 1].kind == "table"
+                        and len(units[j]) <= KEEP_PARAGRAPH_LINES):
+                    keep += block_start(blocks[j + 1], units[j + 1])
             lay.need(units[i][0][0] + keep)
         elif b.kind in ("p", "notice"):
             lay.need(block_start(b, units[i]))

@@ -20,7 +20,7 @@ from gonio.report.certificate import (Block, Num, certificate_id, font_families,
 from gonio.report.dcc import bilingual
 from gonio.report.figures import figure_svg
 from gonio.report.i18n import display, labels, reason_text, source_text
-from gonio.report.stated import conformity_blocks, item_nums
+from gonio.report.stated import NoBreakText, conformity_blocks, item_nums
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
@@ -64,7 +64,7 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
         (L["date_calibration"], cert.get("date_of_calibration") or md.get("date") or ns),
         (L["date_issue"], cert.get("date_of_issue") or ns),
         (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
-        (L["specification"], spec.title_zh if lang == "zh" else spec.title_en),
+        (L["specification"], norm_text(spec, lang)),
         (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
                            + L["rows_word"].format(n=res['source']['rows']) + ")"),
     ])
@@ -101,6 +101,19 @@ def chamber_points(res: dict) -> list[float]:
             if isinstance(x, (int, float)) and math.isfinite(x):
                 seen.setdefault(float(x), None)
     return list(seen)
+
+
+def norm_text(spec, lang: str) -> str:
+    """The normative document followed, with its number and year: the specification's
+    ``NORM`` (en, zh) from its certificate data where it has one (a procedure that is not a
+    published standard names the documents it follows), else its title."""
+    try:
+        norm = getattr(spec_content(spec.key), "NORM", None)
+    except (ImportError, AttributeError):
+        norm = None
+    if norm:
+        return norm[1 if lang == "zh" else 0]
+    return spec.title_zh if lang == "zh" else spec.title_en
 
 
 def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
@@ -203,10 +216,28 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
                              reason_text(it["reason"], L, phrases)])
                 continue
             n = item_nums(it, f"items.{key}")
-            rows.append(["", name, it["clause"], n["value"] or "—", n["U"] or "—",
+            rows.append(["", name, NoBreakText(it["clause"]), n["value"] or "—", n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
     return head, rows
+
+
+def screening_blocks(res: dict, lang: str, limit: int = 20) -> list[Block]:
+    """The screening's findings (readings set aside, planned points missing; issue 24), one
+    line each with its place in the file; nothing when the screening found nothing."""
+    found = res.get("findings") or []
+    if not found:
+        return []
+    blocks = [Block("h", "读数筛查" if lang == "zh" else "Screening of the readings"),
+              Block("p", [(res.get("extra") or {}).get("screening", "")])]
+    for f in found[:limit]:
+        where = ", ".join(p for p in (f.get("line") and f"line {f['line']}",
+                                       f.get("column")) if p)
+        act = {"set_aside": "set aside", "flagged": "flagged", "refused": "refused"}[f["action"]]
+        blocks.append(Block("p", [f"• [{act}] {f.get('clause') or ''} {where}: {f['message']}"]))
+    if len(found) > limit:
+        blocks.append(Block("p", [f"… {len(found) - limit} more in results.json (findings)"]))
+    return blocks
 
 
 def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
@@ -221,9 +252,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     # results, grouped (Annex B)
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
-        "widths": (0.07, 0.27, 0.09, 0.15, 0.10, 0.07, 0.08, 0.17), "id": "results"})
+        "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
     u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
+    blocks += screening_blocks(res, lang)
     blocks += conformity_blocks(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
                                     if lang == "zh" else res["items"][k]["title"]),
@@ -231,7 +263,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", L["budget_items"])
     add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
                   budget_rows(res, L, phrases=getattr(data, "PHRASES_ZH", ()))),
-        (0.09, 0.10, 0.51, 0.15, 0.15))
+        (0.11, 0.10, 0.49, 0.15, 0.15))
     recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
     notes = [readings_note(n, getattr(data, "READINGS_ZH", {}), lang)
              for n in res.get("readings_taken", [])]

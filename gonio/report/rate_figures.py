@@ -121,7 +121,7 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
     ax.plot(r[o], K * r[o] + F0, "-", lw=0.8, label=_t(L, "fit_line", K=_at_item(K, it)))
     ax.set_ylabel(_t(L, "output", u=result.metadata.get("output_unit", "")))
     ax.legend(loc="upper left")
-    ax.tick_params(labelbottom=False)
+    ax.tick_params(which="both", labelbottom=False)   # minor log labels too
     for m, res in enumerate(residuals):
         ax2.plot(r[o], np.asarray(res, float)[o], "o-", ms=2, lw=0.6, label=f"m = {m + 1}")
     ax2.axhline(0, color="0.5", lw=0.6)
@@ -237,7 +237,7 @@ def draw_frequency(fig, spec, result, L, truth=None) -> None:
     if p90 is not None and math.isfinite(p90):
         title += _t(L, "p90", f=display("sig4", p90))
     ax.set_title(title)
-    ax.tick_params(labelbottom=False)
+    ax.tick_params(which="both", labelbottom=False)   # minor log labels too
     ax2.semilogx(f, np.asarray(it.details["phase_deg"], float), "s-", ms=3, color="C1")
     ax2.axhline(-90.0, color="C3", lw=0.7, ls="--")
     if p90 is not None and math.isfinite(p90):

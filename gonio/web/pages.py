@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import re
 
 from fastapi import APIRouter, Request
@@ -181,7 +182,7 @@ def instrument_page(request: Request, inst_id: int):
         return Response("no such instrument", status_code=404)
     hist = services.history(store, inst_id)
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
-                  proposal=services.propose_interval(store, inst_id),
+                  proposal=services.propose_interval(store, inst_id, hist),
                   default=services.default_interval(inst.spec_key),
                   limits=services.instrument_limits(inst), n_points=max(
                       (len(v) for v in hist.values()), default=0))
@@ -196,8 +197,18 @@ def instrument_history(request: Request, inst_id: int):
     inst, _ = queries.instrument(store, inst_id)
     if inst is None:
         return Response("no such instrument", status_code=404)
-    svg = history_svg(services.history(store, inst_id), services.instrument_limits(inst))
+    hist, limits = services.history(store, inst_id), services.instrument_limits(inst)
+    key = hashlib.sha256(repr((sorted(hist.items()), sorted(limits.items()))).encode()
+                         ).hexdigest()
+    svg = _SVG_CACHE.get(key)
+    if svg is None:                  # drawn once per state of the history (~1 s of CPU)
+        svg = _SVG_CACHE[key] = history_svg(hist, limits)
+        while len(_SVG_CACHE) > 256:
+            _SVG_CACHE.pop(next(iter(_SVG_CACHE)))
     return Response(svg, media_type="image/svg+xml")
+
+
+_SVG_CACHE: dict[str, str] = {}
 
 
 # --------------------------------------------------------------------------- standards

@@ -18,6 +18,8 @@ COMMON_PHRASES_ZH = (
     (r"95 % range of the 50 % rule's outcome under the data's noise",
      "数据噪声下 50 % 判据结果的 95 % 范围"),
     (r"smoothing step", "平滑步长"),
+    (r"detection: where the stability crosses nominal.*relative sampling\s+deviation of a "
+     r"window's stability", "判定：稳定性穿越 标称值·(1 ± z·r) 之处，r 为窗口稳定性的相对抽样偏差"),
     (r"noise of the smoothed output", "平滑后输出的噪声"),
     (r"five-term AVAR fit, u\(N\)", "五项 Allan 方差拟合，u(N)"),
     (r"chamber deviation \(independent per point\)", "温箱温度偏差（各点独立）"),

@@ -14,7 +14,9 @@ from pathlib import Path
 from gonio.errors import GonioError
 from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
+from gonio.specs._rate_family.screening import screened, screening_extra
 from gonio.specs.iec62047_20 import items as _items
+from gonio.specs.iec62047_20.screen import screen
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
 from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation,
                                                    protocol_named, RateCalibrationResult, load_readings, not_measured,
@@ -64,6 +66,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, IECProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
+    rd, findings = screened(rd, screen(rd, proto))
     md, P = rd.metadata, proto.sections
     ratiometric = str(md.get("ratiometric", "")).strip().lower() in ("true", "yes", "1")
     df, n_corr = _items.supply_correction(rd.data, ratiometric)
@@ -88,7 +91,9 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
-                                     "ratiometric": ratiometric, "rows_corrected": n_corr}})
+                                     "ratiometric": ratiometric, "rows_corrected": n_corr},
+                                     **screening_extra(findings)},
+                                 findings=findings)
 
 
 #: The coverage study's programme over the built-in protocol (gonio validate --spec): small

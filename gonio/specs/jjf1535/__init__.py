@@ -14,8 +14,10 @@ from pathlib import Path
 from gonio.errors import GonioError
 from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
+from gonio.specs._rate_family.screening import screened, screening_extra
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
+from gonio.specs.jjf1535.screen import screen
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
 from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation,
                                                    protocol_named, Item, RateCalibrationResult, load_readings, not_measured,
@@ -83,6 +85,7 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, JJFProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
+    rd, findings = screened(rd, screen(rd, proto))
     ctx = make_context(rd, proto)
     items: dict[str, Item] = {}
     rows = {r[0]: r for r in _items_mod.ITEMS}
@@ -97,7 +100,9 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     items = {k: items[k] for k in rows}
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
-                                 extra={"annex_a": annex_a().to_dict()})
+                                 extra={"annex_a": annex_a().to_dict(),
+                                        **screening_extra(findings)},
+                                 findings=findings)
 
 
 #: The coverage study's programme over the built-in protocol (gonio validate --spec): small

@@ -124,5 +124,5 @@ MATRICES = (
 #: The documents the triad calibration follows (with their number and year), en and zh.
 NORM = ("Gyro triad alignment per the gonio procedure (docs/alignment.md) with "
         "IEC 62047-20:2014 5.2 (cross-axis sensitivity) and JCGM 100:2008",
-        "三轴陀螺组件对准（gonio 程序，docs/alignment.md），交叉轴灵敏度按 IEC 62047-20:2014 "
+        "三轴陀螺组件对准（gonio 程序），交叉轴灵敏度按 IEC 62047-20:2014 "
         "5.2，不确定度按 JCGM 100:2008")

@@ -1,0 +1,104 @@
+"""Coverage of every JJF 1535 / IEC 62047-20 item on the BUILT-IN programme (issue 24), on
+fresh seeds no test uses: per item the coverage of U with its Clopper–Pearson 95 %
+interval, and the mean and spread of z = (value − truth)/u_c (two-sided: sd z < 0.3 flags
+an over-wide U, coverage < 0.90 a narrow one).
+
+    PYTHONPATH=$PWD python benchmarks/bench_rate_coverage_builtin.py --spec iec62047-20 \
+        --seeds 100 --first 910000 [--draw-equipment] [--records out.jsonl]
+
+Bench: the default bench (mems-adxrs610) as gonio.specs._rate_family.simulate.study_bench makes it
+(thermal lag and cross-axis coupling of a turning Earth rate off: history effects the truths
+leave out) but WITH the power-on transient, so the warm-up and start-up items are measured.
+``--draw-equipment``: each trial's rate-table rate error and voltmeter gain error are drawn
+from the normal distributions their certificates state (the bench's u of each), so the
+type-B terms of the budgets are exercised instead of one fixed realisation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from dataclasses import replace
+
+import numpy as np
+
+
+def bench_for(seed: int, draw: bool):
+    from gonio.bench.rate_gyro import load_rate_bench
+    from gonio.specs._rate_family.simulate import study_bench
+
+    b = study_bench("mems-adxrs610")
+    b = replace(b, gyro=replace(b.gyro, warmup_bias_dps=load_rate_bench("mems-adxrs610")
+                                .gyro.warmup_bias_dps))
+    if draw:
+        rng = np.random.default_rng([seed, 24])
+        eq = b.equipment
+        eq = replace(eq, rate_table=replace(eq.rate_table,
+                                            rate_error_rel=rng.normal(0, eq.rate_table_u_rel)),
+                     acquisition=replace(eq.acquisition,
+                                         gain_error_rel=rng.normal(0, eq.acquisition_u_rel)))
+        b = replace(b, equipment=eq)
+    return b
+
+
+def clopper_pearson(k: int, n: int) -> tuple[float, float]:
+    from scipy.stats import binomtest
+    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="exact")
+    return ci.low, ci.high
+
+
+def table(records: list[dict]) -> str:
+    per: dict[str, list] = {}
+    for r in records:
+        for k, v in r["r"].items():
+            if v["value"] is not None:
+                per.setdefault(k, []).append(v)
+    lines = [f"{'item':30s} {'n':>4s} {'cover':>6s} {'Clopper-Pearson 95 %':>21s} "
+             f"{'z mean':>7s} {'z sd':>6s}"]
+    for k, vs in per.items():
+        n = len(vs)
+        hits = sum(abs(v["value"] - v["truth"]) <= v["U"] for v in vs)
+        z = np.array([(v["value"] - v["truth"]) / v["u_c"] for v in vs if v["u_c"] > 0])
+        lo, hi = clopper_pearson(hits, n)
+        zm, zs = (float(z.mean()), float(z.std(ddof=1))) if z.size > 1 else (math.nan, math.nan)
+        flag = ("  < 90 %" if hits / n < 0.9 else "") + ("  sd z < 0.3" if zs < 0.3 else "")
+        lines.append(f"{k:30s} {n:4d} {hits / n:6.3f}   [{lo:.3f}, {hi:.3f}]      "
+                     f"{zm:7.2f} {zs:6.2f}{flag}")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--spec", default="iec62047-20")
+    ap.add_argument("--seeds", type=int, default=100)
+    ap.add_argument("--first", type=int, default=910000)
+    ap.add_argument("--draw-equipment", action="store_true")
+    ap.add_argument("--records", help="append each trial's records (JSON lines) here")
+    ap.add_argument("--table-only", help="print the table of a records file and exit")
+    a = ap.parse_args(argv)
+    if a.table_only:
+        recs = [json.loads(x) for x in open(a.table_only, encoding="utf-8")]
+        print(table(recs), end="")
+        return 0
+    from gonio.pipeline.coverage import trial_records
+
+    recs = []
+    t0 = time.perf_counter()
+    for s in range(a.first, a.first + a.seeds):
+        r = {"seed": s, "r": trial_records(a.spec, bench_for(s, a.draw_equipment), a.spec, s)}
+        recs.append(r)
+        if a.records:
+            with open(a.records, "a", encoding="utf-8") as f:
+                f.write(json.dumps(r) + "\n")
+    print(f"{a.spec}: built-in programme, {a.seeds} seeds from {a.first}, "
+          f"{'equipment drawn' if a.draw_equipment else 'fixed equipment'}, "
+          f"{time.perf_counter() - t0:.0f} s")
+    print(table(recs), end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

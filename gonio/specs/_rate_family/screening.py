@@ -1,0 +1,268 @@
+"""Screening of rate-gyro readings (JJF 1535, IEC 62047-20; issue 24): every reading is
+checked against what the rest of its segment predicts, in every column, and the programme
+against the protocol. Each specification's ``screen(readings, protocol)`` calls these rules
+with its own programme; the calibration sets the flagged rows aside and states every
+finding in ``results.json`` (``findings``) and on the certificate.
+
+Rules (one segment = the rows of one test, run and step, in time order):
+
+* ``output-outlier`` — the output against its two neighbours, r = y_i − (y_{i−1} + y_{i+1})/2:
+  a row is set aside when |r| > 15·1.4826·(median |r| over the 21 rows around it, at least
+  the segment's) and is the local maximum (a spike lifts its neighbours by half) — a robust
+  15σ of the local scale, which a smooth trend raises with itself, so a warm-up transient
+  or a vibration sine is not flagged; a slip of a digit above the noise is. A segment of
+  fewer than 8 rows: |y − its median| > 10·1.4826·(median of |y − median| pooled over the
+  test's short segments). Also the reference rate of a vibration segment.
+* ``setting-departs`` — rate, frequency, temperature, supply voltage, axes and stand angle
+  are settings of the segment: a row whose value differs from the segment's median by more
+  than max(10·1.4826·MAD, tolerance) (rate 10⁻⁶ relative + 10⁻⁹ °/s, temperature 1 °C,
+  supply 0.01 V, frequency 10⁻⁶ relative, stand angle 0.01°; axes: any difference) is set
+  aside.
+* ``time-departs`` — times of a segment follow t₀ + i·Δt (Δt the median step): a row more
+  than Δt/4 off that line, or not increasing, is set aside.
+* ``programme-point-missing`` — a rate point, record, position or set point the protocol
+  plans and the readings lack is named (flagged: the item is computed from what is there
+  and the certificate says what is missing).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy.ndimage import median_filter
+
+from gonio.errors import GonioError
+from gonio.formats.rate_readings import RateReadings
+from gonio.result.findings import Finding
+
+#: The robust threshold, in units of 1.4826·MAD (a robust σ).
+K_ROBUST = 10.0
+#: The spike threshold of the output rule, in local robust σ of the second difference.
+K_SPIKE = 15.0
+#: Absolute tolerances of the setting columns (below them a difference is not a typo).
+SETTING_TOL = {"rate_dps": (1e-6, 1e-9), "freq_hz": (1e-6, 0.0), "temperature_c": (0.0, 1.0),
+               "supply_v": (0.0, 0.01), "supply_set_v": (0.0, 0.01), "stand_deg": (0.0, 0.01)}
+AXES = ("up_axis", "north_axis", "stand_axis")
+
+
+def _finding(code, message, row, column, file, clauses, rule) -> Finding:
+    line = row.get("line")
+    return Finding(code, message, "set_aside", file=file,
+                   line=None if line is None else int(line), column=column,
+                   test=str(row["test"]), clause=clauses.get(str(row["test"])), rule=rule)
+
+
+def spike_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(r, limit) per sample: r_i = y_i − (y_{i−1} + y_{i+1})/2 (ends: against the one
+    neighbour), limit_i = 15·1.4826·median |r| over the 21 samples around i (at least the
+    segment's median |r|) — a local robust scale, so a smooth trend (a warm-up transient, a
+    sine of the vibration table) raises its own limit — floored at 3 quanta of the output (its smallest non-zero step) and 10⁻⁹ of
+    its size. A one-digit slip above the noise stands far above its neighbours' scale.
+
+    >>> y = np.r_[np.zeros(30), 5.0, np.zeros(30)] + 0.01 * np.sin(np.arange(61))
+    >>> r, lim = spike_residuals(y)
+    >>> [int(i) for i in np.flatnonzero(np.abs(r) > lim)]
+    [29, 30, 31]
+    """
+    n = y.size
+    r = np.empty(n)
+    r[1:-1] = y[1:-1] - 0.5 * (y[:-2] + y[2:])
+    r[0], r[-1] = y[0] - y[1], y[-1] - y[-2]
+    local = np.maximum(median_filter(np.abs(r), size=21, mode="nearest"),
+                       float(np.median(np.abs(r))))
+    steps = np.abs(np.diff(y))
+    q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
+    floor = max(3.0 * q, 1e-9 * (1.0 + float(np.max(np.abs(y)))))
+    return r, np.maximum(K_SPIKE * 1.4826 * local, floor)
+
+
+def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> list[Finding]:
+    y = df[col].to_numpy(dtype=float)[idx]
+    if y.size < 3 or not np.all(np.isfinite(y)):
+        return []
+    if y.size < 8:              # a short segment: against its median, the test's pooled MAD
+        r = y - np.median(y)
+        lim = np.full(y.size, max(K_ROBUST * 1.4826 * float(pooled or 0.0),
+                                  1e-9 * (1.0 + float(np.max(np.abs(y))))))
+    else:
+        r, lim = spike_residuals(y)
+    out = []
+    for i in np.flatnonzero(np.abs(r) > lim):
+        # a spike lifts its neighbours' r by half: only the local maximum is the reading
+        if y.size < 8 or abs(r[i]) >= max(abs(r[max(i - 1, 0)]), abs(r[min(i + 1, y.size - 1)])):
+            out.append(_finding("output-outlier", f"{col} {y[i]:.10g} departs from its "
+                                f"neighbours by {r[i]:+.4g} (limit {lim[i]:.3g})",
+                                df.iloc[idx[i]], col, file, clauses,
+                                "|y_i − (y_i−1 + y_i+1)/2| > 15·1.4826·local median"))
+    return out
+
+
+def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> list[Finding]:
+    if col in AXES:
+        v = df[col].astype(str)
+        vc = (pd.DataFrame({"k": key.to_numpy(), "v": v.to_numpy()}).groupby(["k", "v"]).size()
+              .reset_index(name="n").sort_values(["k", "n"], ascending=[True, False])
+              .drop_duplicates("k"))
+        mode = key.map(dict(zip(vc["k"], vc["v"])))
+        bad = np.flatnonzero((v != mode).to_numpy())
+        return [_finding("setting-departs", f"{col} {v.iloc[i]!r} differs from the segment's "
+                         f"{mode.iloc[i]!r}", df.iloc[i], col, file, clauses,
+                         "axis differs from the segment's") for i in bad]
+    v = pd.to_numeric(df[col], errors="coerce")
+    med = v.groupby(key).transform("median")
+    dev = (v - med).abs()
+    mad = dev.groupby(key).transform("median") * 1.4826
+    rel, ab = SETTING_TOL[col]
+    lim = np.maximum(K_ROBUST * mad, rel * med.abs() + ab)
+    bad = [i for i in np.flatnonzero((dev > lim).fillna(False).to_numpy())
+           if not (col == "rate_dps" and df["test"].iloc[i] == "vibration")]
+    return [_finding("setting-departs", f"{col} {v.iloc[i]:.10g} departs from the segment's "
+                     f"{med.iloc[i]:.10g} (limit {lim.iloc[i]:.3g})", df.iloc[i], col, file,
+                     clauses, "|x − median| > max(10·1.4826·MAD, tolerance)") for i in bad]
+
+
+def _time_rule(df: pd.DataFrame, key: pd.Series, file, clauses) -> list[Finding]:
+    t = pd.to_numeric(df["time_s"], errors="coerce")
+    i = df.groupby(key).cumcount()
+    dt = t.groupby(key).diff().groupby(key).transform("median")
+    t0 = (t - i * dt).groupby(key).transform("median")
+    off = t - (t0 + i * dt)
+    bad = np.flatnonzero(((off.abs() > dt / 4) & (dt > 0)).fillna(False).to_numpy())
+    return [_finding("time-departs", f"time {t.iloc[k]:.10g} s is {off.iloc[k]:+.4g} s off the "
+                     f"segment's sampling (step {dt.iloc[k]:.6g} s)", df.iloc[k], "time_s",
+                     file, clauses, "|t − (t0 + i·Δt)| > Δt/4") for k in bad]
+
+
+def screen(readings, segments, clauses: dict) -> list[Finding]:
+    """Every rule on a RateReadings against the planned ``segments``."""
+    file = None if readings.path is None else str(readings.path)
+    return screen_rows(readings.data, file, clauses) + missing_points(
+        readings.data, expected_from_plan(segments), file=file, clauses=clauses)
+
+
+def screen_rows(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[Finding]:
+    """The row rules over every segment of ``df`` (columns of the rate readings format,
+    rows of a segment in time order as a readings file holds them)."""
+    clauses = clauses or {}
+    key = df.groupby(["test", "run", "step"], sort=False).ngroup()
+    out: list[Finding] = []
+    groups = list(df.groupby(key, sort=False).indices.values())
+    y_all = df["output"].to_numpy(dtype=float)
+    tests = df["test"].to_numpy()
+    short: dict = {}
+    for idx in groups:                   # pooled |y − median| of the short segments per test
+        if 3 <= idx.size < 8:
+            short.setdefault(tests[idx[0]], []).append(np.abs(y_all[idx] - np.median(y_all[idx])))
+    pooled = {t: float(np.median(np.concatenate(v))) for t, v in short.items()}
+    for idx in groups:
+        out += _output_rule(df, idx, "output", file, clauses, pooled.get(tests[idx[0]]))
+        if "reference_dps" in df and df["test"].iloc[idx[0]] == "vibration":
+            out += _output_rule(df, idx, "reference_dps", file, clauses)
+    for col in list(SETTING_TOL) + list(AXES):
+        if col in df:
+            out += _setting_rule(df, key, col, file, clauses)
+    out += _time_rule(df, key, file, clauses)
+    return out
+
+
+#: Tolerances when matching a planned set point with the readings' (temperature: the
+#: chamber deviation of JJF Table 2, ±2 °C, plus margin).
+MATCH_TOL = {"rate_dps": (1e-6, 1e-9), "temperature_c": (0.0, 2.5), "supply_v": (0.0, 0.05),
+             "stand_deg": (0.0, 0.01)}
+
+
+def expected_from_plan(segments, skip=("vibration",)) -> dict:
+    """{(test, run): [(column, value), …]} of a programme (``plan(protocol, …)`` segments):
+    the rate of every non-rest segment, and where set the temperature, supply voltage,
+    mounting (g-sensitivity, cross-axis) and stand angle."""
+    out: dict = {}
+    for s in segments:
+        if s.test in skip:
+            continue
+        want = out.setdefault((s.test, s.run), [])
+        items = [] if s.role == "rest" else [("rate_dps", float(s.rate_dps))]
+        if s.temperature_c is not None:
+            items.append(("temperature_c", float(s.temperature_c)))
+        if s.supply_v is not None:
+            items.append(("supply_v", float(s.supply_v)))
+        if s.test in ("g_sensitivity", "cross_axis"):
+            items.append(("up_axis", str(s.up_axis)))
+        if s.test == "g_sensitivity" and getattr(s, "stand_deg", None) is not None:
+            items.append(("stand_deg", float(s.stand_deg)))
+        want += [w for w in items if w not in want]
+    return out
+
+
+def missing_points(df: pd.DataFrame, expected: dict, *, file=None,
+                   clauses: dict | None = None) -> list[Finding]:
+    """``expected``: {(test, run): [(what, value), …]} with ``what`` a column (``rate_dps``,
+    ``temperature_c``, ``supply_v``, ``up_axis``, ``stand_deg``) and the value each planned
+    segment of that run has; a value absent from the readings' segments is named. A run
+    absent altogether is named once."""
+    out = []
+    clauses = clauses or {}
+    seg = df.groupby(["test", "run", "step"], sort=False).first().reset_index()
+    for (test, run), wants in expected.items():
+        have = seg[(seg["test"] == test) & (seg["run"] == run)]
+        cl = clauses.get(test)
+        if have.empty:
+            if (df["test"] == test).any():
+                out.append(Finding("programme-point-missing", f"{test} run {run} (all of it) "
+                                   "is missing from the readings", "flagged", file=file,
+                                   test=test, clause=cl, rule="every planned run present"))
+            continue
+        for what, value in wants:
+            col = have[what] if what in have else pd.Series([], dtype=object)
+            if isinstance(value, str):
+                found = (col.astype(str) == value).any()
+            else:
+                rel, ab = MATCH_TOL.get(what, (1e-9, 1e-9))
+                found = bool(np.any(np.isclose(col.to_numpy(dtype=float), value,
+                                               rtol=rel, atol=ab)))
+            if not found:
+                shown = value if isinstance(value, str) else f"{value:g}"
+                out.append(Finding("programme-point-missing",
+                                   f"{test} run {run}: the planned {what} = {shown} is "
+                                   "missing from the readings", "flagged", file=file,
+                                   test=test, clause=cl, rule="every planned point present"))
+    return out
+
+
+def apply(df: pd.DataFrame, findings: list[Finding]) -> pd.DataFrame:
+    """The readings without the rows set aside (by line; the input is not modified)."""
+    lines = {f.line for f in findings if f.action == "set_aside" and f.line is not None}
+    if not lines or "line" not in df:
+        return df
+    return df[~df["line"].isin(lines)].reset_index(drop=True)
+
+
+def summary(findings: list[Finding]) -> str:
+    """One sentence for the certificate: how many rows set aside, points missing."""
+    n_set = len({f.line for f in findings if f.action == "set_aside"})
+    miss = [f for f in findings if f.code == "programme-point-missing"]
+    parts = []
+    if n_set:
+        parts.append(f"{n_set} reading(s) set aside by the screening")
+    if miss:
+        parts.append(f"{len(miss)} planned point(s) missing")
+    return "; ".join(parts) + ("" if not parts else " (see findings)")
+
+
+
+def screened(readings, findings: list[Finding]):
+    """(readings without the rows set aside, findings); a refused finding stops here with
+    the one-line error naming the reading."""
+    for f in findings:
+        if f.action == "refused":
+            raise GonioError(f"refused by the screening: {f.message}", file=f.file,
+                             line=f.line, column=f.column)
+    if not any(f.action == "set_aside" for f in findings):
+        return readings, findings
+    return RateReadings(apply(readings.data, findings), readings.metadata,
+                        readings.path), findings
+
+
+def screening_extra(findings: list[Finding]) -> dict:
+    """The ``extra`` section of the screening: a one-sentence ``screening`` summary (empty
+    when nothing was found); the findings themselves are the result's ``findings``."""
+    return {"screening": summary(findings)}

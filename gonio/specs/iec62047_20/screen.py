@@ -1,0 +1,27 @@
+"""Screening of IEC 62047-20 readings (issue 24): each reading against what the rest of its
+segment predicts, in every column, and the programme of the protocol (a rate point, set
+point, supply voltage, stand angle or record planned and absent is named). The rules are
+those of :mod:`gonio.specs._rate_family.screening`; this module gives them the IEC programme
+(:func:`gonio.specs.iec62047_20.protocol.plan`) and the clause of each test.
+"""
+
+from __future__ import annotations
+
+from gonio.result.findings import Finding
+from gonio.specs._rate_family import screening
+from gonio.specs._rate_family.rate_records import load_readings
+from gonio.specs.iec62047_20.protocol import IECProtocol, load_protocol, plan
+
+CLAUSES = {"scale_factor": "5.1.3.1", "sf_temperature": "5.1.3.3", "ratiometric": "5.1.3.5",
+           "cross_axis": "5.2", "bias": "5.3.3.1", "warmup": "5.3.3.5",
+           "bias_temperature": "5.3.3.6", "g_sensitivity": "5.3.3.8", "static": "5.4.5",
+           "vibration": "5.5", "resolution": "5.6"}
+
+
+def screen(readings, protocol=None) -> list[Finding]:
+    """Findings of the screening of an IEC 62047-20 readings file (path or RateReadings)
+    under ``protocol`` (file, built-in name or loaded; default the built-in programme)."""
+    rd = load_readings(readings)
+    proto = protocol if isinstance(protocol, IECProtocol) else load_protocol(protocol or
+                                                                            "iec62047-20")
+    return screening.screen(rd, plan(proto, None), CLAUSES)

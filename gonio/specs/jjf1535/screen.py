@@ -1,0 +1,30 @@
+"""Screening of JJF 1535 readings (issue 24): each reading against what the rest of its
+segment predicts, in every column, and the programme of the protocol (a rate point, record
+or position planned and absent is named). The rules are those of
+:mod:`gonio.specs._rate_family.screening`; this module gives them the JJF programme
+(:func:`gonio.specs.jjf1535.protocol.plan`) and the clause of each test.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+from gonio.result.findings import Finding
+from gonio.specs._rate_family import screening
+from gonio.specs._rate_family.rate_records import load_readings
+from gonio.specs.jjf1535.protocol import JJFProtocol, load_protocol, plan
+
+CLAUSES = {"scale_factor": "7.2.1", "sf_temperature": "7.2.5", "threshold": "7.2.6",
+           "resolution": "7.2.7", "bias": "7.2.8", "warmup": "7.2.9", "g_sensitivity": "7.2.12",
+           "static": "7.2.13", "bias_temperature": "7.2.14", "vibration": "7.2.15"}
+
+
+def screen(readings, protocol=None) -> list[Finding]:
+    """Findings of the screening of a JJF 1535 readings file (path or RateReadings) under
+    ``protocol`` (file, built-in name or loaded; default the built-in programme)."""
+    rd = load_readings(readings)
+    proto = protocol if isinstance(protocol, JJFProtocol) else load_protocol(protocol or
+                                                                            "jjf1535-2015")
+    # the plan needs a bench only for the vibration frequencies, which are not checked here
+    stand_in = SimpleNamespace(gyro=SimpleNamespace(datasheet_bandwidth_hz=1.0))
+    return screening.screen(rd, plan(proto, stand_in), CLAUSES)

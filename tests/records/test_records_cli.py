@@ -1,0 +1,59 @@
+"""``gonio db`` (init, create-user, import, backup, restore) and ``gonio calibrate --record``
+through the command line's entry point; bad input is one line and exit code 2."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from gonio.cli import main
+from gonio.records import services
+from gonio.records.db import open_store
+
+
+def test_db_commands_round_trip(tmp_path, computed_folder, bench_readings, monkeypatch,
+                                capsys):
+    data, other = tmp_path / "data", tmp_path / "other"
+    assert main(["db", "init", "--data", str(data), "--lab-name", "Angle Lab"]) == 0
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "alice", "--roles", "technician,reviewer",
+                 "--data", str(data)]) == 0
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    shutil.copy(bench_readings[0], folder / "readings.csv")
+    assert main(["db", "import", str(folder), "--data", str(data)]) == 0
+    assert main(["db", "backup", str(tmp_path / "b.zip"), "--data", str(data)]) == 0
+    assert main(["db", "restore", str(tmp_path / "b.zip"), "--data", str(other)]) == 0
+    st = open_store(None, other)
+    try:
+        assert services.settings(st)["lab_name"] == "Angle Lab"
+        assert services.user(st, "alice").roles == "technician reviewer"
+        assert services.calibration(st, 1).status == "computed"
+    finally:
+        st.close()
+    capsys.readouterr()
+    # a second restore into the same records, a short password, an unknown role: one line, 2
+    for argv in (["db", "restore", str(tmp_path / "b.zip"), "--data", str(other)],
+                 ["db", "create-user", "bob", "--roles", "root", "--data", str(data)],
+                 ["db", "import", str(tmp_path), "--data", str(data)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("gonio: error: ") and err.count("\n") == 1, err
+    monkeypatch.setenv("GONIO_PASSWORD", "short")
+    assert main(["db", "create-user", "carol", "--data", str(data)]) == 2
+
+
+def test_calibrate_record_puts_the_run_into_the_records(tmp_path, bench_readings, capsys):
+    data = tmp_path / "data"
+    out = tmp_path / "cal"
+    protocol = str(Path(__file__).resolve().parents[1] / "data" / "small-protocol.toml")
+    assert main(["calibrate", str(bench_readings[1]), "--protocol", protocol, "--out", str(out),
+                 "--record", "--data", str(data)]) == 0
+    assert "recorded as calibration 1" in capsys.readouterr().err
+    st = open_store(None, data)
+    try:
+        cal = services.calibration(st, 1)
+        assert cal.status == "computed" and cal.instrument.serial == "RLG-0001"
+        assert services.file_bytes(st, cal.readings_sha256) == bench_readings[1].read_bytes()
+    finally:
+        st.close()
