@@ -300,7 +300,6 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     accepted for the plug-in interface: everything the analysis uses is in the file.
     """
 
-    from gonio.result.findings import findings_to_json
     from gonio.specs.triad_alignment.screen import check
 
     r = _as_readings(readings)
@@ -328,8 +327,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
         findings += check(tr)
     th = None
     comp: dict[str, Compensation] = {}
-    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None,
-             "findings": findings_to_json(findings)}
+    extra = {"alignment": None if al is None else al.to_json(), "thermal_model": None}
     if tr is None:
         items["thermal_model"] = not_measured(
             "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)", "thesis eq. 6.14",
@@ -357,7 +355,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     src = source_info(r)
     return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),
                             extra=json_safe(extra), alignment=al, thermal=th, compensation=comp,
-                            covariances=alignment_covariances(al),
+                            covariances=alignment_covariances(al), findings=list(findings),
                             tables=prediction_tables(extra["thermal_model"]))
 
 
