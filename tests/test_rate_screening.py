@@ -14,6 +14,8 @@ import json
 
 import pytest
 
+from gonio.errors import GonioError
+
 from gonio.pipeline.coverage import reduced_protocol
 from gonio.pipeline.dispatch import calibrate as calibrate_file
 from gonio.pipeline.dispatch import simulate as simulate_files
@@ -96,6 +98,13 @@ def test_a_typo_in_any_column_is_set_aside_by_line(simulated, column):
 
     bad = tmp / f"typo-{column}.csv"
     line = _edit(readings, bad, pick, change)
+    if column == "time_s":
+        # a time that jumps ahead and back breaks the samples' order: the reader refuses the
+        # file naming the next line (the jump's return) and the column, before any screening
+        with pytest.raises(GonioError) as exc:
+            _findings(spec, bad, proto)
+        assert exc.value.line in (line, line + 1) and exc.value.column == "time_s"
+        return
     r_clean, _ = _findings(spec, readings, proto)
     r, found = _findings(spec, bad, proto)
     hit = [f for f in found if f["line"] == line]
