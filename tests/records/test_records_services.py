@@ -73,8 +73,8 @@ def test_workflow_roles_numbers_and_frozen_certificates(store, people, computed_
     with store.session() as s:
         K = s.scalar(select(ResultItem).where(ResultItem.calibration_id == cal.id,
                                               ResultItem.key == "scale_factor"))
-    assert K.value == res["scale_factor"]["value"]
-    assert K.U == res["scale_factor"]["uncertainty"]["U"]
+    assert K.value == res["items"]["scale_factor"]["value"]
+    assert K.U == res["items"]["scale_factor"]["uncertainty"]["U"]
     # roles and the second person, on the server
     with pytest.raises(GonioError, match="reviewer role"):
         services.review(store, people["tech"], cal.id, accept=True)
@@ -189,7 +189,7 @@ def test_issue_refused_when_recomputed_result_differs(store, people, computed_fo
     changed = tmp_path / "changed"
     shutil.copytree(computed_folder, changed)
     res = json.loads((changed / "results.json").read_text())
-    res["scale_factor"]["value"] += 1e-6
+    res["items"]["scale_factor"]["value"] += 1e-6
     (changed / "results.json").write_text(json.dumps(res))
     monkeypatch.setattr(worker, "calibrate_folder", fake_pipeline(changed))
     services.claim_next(store)
@@ -262,7 +262,7 @@ def test_import_output_folder(store, people, computed_folder, bench_readings, tm
     cal = services.calibration(store, cid)
     assert cal.status == "computed" and cal.instrument.serial == "RLG-0001"
     assert services.history(store, cal.instrument_id)["scale_factor"][0]["value"] == \
-        json.loads((computed_folder / "results.json").read_text())["scale_factor"]["value"]
+        json.loads((computed_folder / "results.json").read_text())["items"]["scale_factor"]["value"]
 
 
 def test_blob_store_checks_digest(sqlite_store):
