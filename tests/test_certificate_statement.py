@@ -435,7 +435,11 @@ def test_demo_cli_help_and_wrote_list(run, tmp_path, monkeypatch, capsys):
     assert seed.help and "seed" in seed.help
     out = tmp_path / "d"
     paths = [out / "results.json", out / "tables" / "uncertainty_budget.csv"]
-    monkeypatch.setattr(cmd_demo, "demo", lambda *a, **k: (run["report"], paths))
+    import gonio.cli.cmd_calibrate as cmd_calibrate
+    import gonio.pipeline.dispatch as dispatch
+
+    monkeypatch.setattr(dispatch, "demo", lambda *a, **k: (run["report"], dict(enumerate(paths))))
+    monkeypatch.setattr(cmd_calibrate, "show", lambda *a, **k: None)
     args = build_parser().parse_args(["demo", "--out", str(out)])
     assert cmd_demo.run(args) == 0
     wrote = capsys.readouterr().out.splitlines()[-1]
