@@ -430,4 +430,4 @@ def test_rate_certificates_cite_their_own_specifications_clauses(iec_noise_off, 
     assert "IEC 62047-20 sets no rule for it; stated as JJF 1535 clause 8 k) asks" in iec
     assert "IEC 62047-20 is a test method and sets none" in iec and "draft clause 9" not in iec
     jjf = text(jjf_noise_off[0])
-    assert "JJF 1535 clause 8 k)" in jjf and "JJF 1535-2015 clause 9" in jjf
+    assert "JJF 1535-2015 clause 8 k)" in jjf and "JJF 1535-2015 clause 9" in jjf

@@ -415,7 +415,10 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     if st.value == "—":
         return out
     if st.exponent:
-        rule = U_rule = f"sci{st.exponent}.{st.decimals + st.exponent}"
+        # without U the mantissa keeps its significant digits: its own decimal places
+        md = (st.decimals + st.exponent if st.decimals is not None
+              else len(st.value.partition(".")[2]))
+        rule = U_rule = f"sci{st.exponent}.{md}"
     else:
         rule = f"dec{st.decimals}" if st.decimals is not None else f"sig{sig}"
         U_rule = "U"
