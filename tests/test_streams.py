@@ -187,7 +187,7 @@ rounds = [{stop_deg = 30.0}, {stop_deg = 180.0}]
                     if k not in ("source", "metadata", "line")}
         return [strip(v) for v in d] if isinstance(d, list) else d
     assert strip(a) == strip(b)
-    assert a["scale_factor"]["value"] == b["scale_factor"]["value"]
+    assert a["items"]["scale_factor"]["value"] == b["items"]["scale_factor"]["value"]
 
 
 def test_residual_step_bound_is_an_upper_bound_rounding_included():
