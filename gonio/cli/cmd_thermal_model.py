@@ -1,6 +1,6 @@
 """``gonio thermal-model``: identify K(ϑ, U), b(ϑ, U) and ARW(ϑ) from a triad thermal
 readings file (docs/thermal-model.md); a thin layer over
-:func:`gonio.analysis.thermal_model.identify_thermal_model`."""
+:func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from gonio.analysis.thermal_model import compensate_record, identify_thermal_model
+    from gonio.specs.triad_alignment.thermal_model import compensate_record, identify_thermal_model
     from gonio.atomic import check_output_files
     from gonio.formats.triad import json_safe, named_inputs, read_triad_readings
 
