@@ -449,6 +449,18 @@ def test_study_and_calibration_never_share_a_folder(tmp_path, triad_calibrated, 
     count("mixing:calibrate-into-study")
 
 
+def test_simulate_into_a_calibration_folder_is_refused(triad_calibrated, capsys):
+    """``gonio simulate --out CALDIR`` would replace a calibration's outputs (another
+    command's): refused, nothing deleted."""
+    d = triad_calibrated[0]
+    before = tree(d)
+    for extra in ([], ["--force"]):
+        msg = cli(["simulate", "--spec", "triad-alignment", "--out", d, *extra], capsys)
+        assert "gonio calibrate" in msg, msg
+        assert tree(d) == before
+    count("mixing:simulate-into-calibration")
+
+
 # ------------------------------------------------------------ lab files, budgets, figures
 
 LAB = Path(__file__).resolve().parents[1] / "protocols" / "lab-example.toml"
