@@ -52,7 +52,7 @@ def run(args) -> int:
         comp = {ch: compensate_record(m, r2) for ch, m in res.channels.items()}
     if args.plot:
         from gonio.report.figure_files import save_figure
-        from gonio.report.triad_figures import thermal_figure
+        from gonio.specs.triad_alignment.figures import thermal_figure
 
         ch = args.gyro
         if ch is None:
@@ -65,8 +65,8 @@ def run(args) -> int:
                              key="--gyro")
         save_figure(thermal_figure(res.channels[ch], comp.get(ch)), args.plot)
     if args.report:
-        from gonio.report.triad_figures import thermal_figure
-        from gonio.report.triad_pages import thermal_page, write_report
+        from gonio.specs.triad_alignment.figures import thermal_figure
+        from gonio.specs.triad_alignment.pages import thermal_page, write_report
 
         figs = {ch: thermal_figure(m, comp.get(ch)) for ch, m in res.channels.items()}
         write_report(args.report, [thermal_page(res, comp, figs)],
