@@ -552,6 +552,12 @@ SIZE_CASES = {
     "jjf-rates-10-10": ("jjf1535-2015", "# rates_dps = [1, 2, 5, 10, 20, 50, 100]",
                         "rates_dps = [10, 10]", "gonio.specs.jjf1535.protocol",
                         "scale_factor.rates_dps"),
+    "jjf-stability-block-1e5": ("jjf1535-2015", "stability_block_samples = 10 ",
+                                "stability_block_samples = 100000 ",
+                                "gonio.specs.jjf1535.protocol", "bias.stability_block_samples"),
+    "jjf-stability-block-half": ("jjf1535-2015", "stability_block_samples = 10 ",
+                                 "stability_block_samples = 1801 ",
+                                 "gonio.specs.jjf1535.protocol", "bias.stability_block_samples"),
 }
 
 
