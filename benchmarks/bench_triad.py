@@ -22,7 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a check
 
 import numpy as np  # noqa: E402
 
-from gonio.analysis.thermal_model import compensate_record, identify_thermal_model  # noqa: E402
+from gonio.specs.triad_alignment.thermal_model import (compensate_record,  # noqa: E402
+                                                      identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import estimate_alignment  # noqa: E402
 from gonio.bench.triad import (load_triad_bench, load_triad_protocol,  # noqa: E402
                                run_alignment_session, run_thermal_session)

@@ -449,6 +449,18 @@ def test_study_and_calibration_never_share_a_folder(tmp_path, triad_calibrated, 
     count("mixing:calibrate-into-study")
 
 
+def test_simulate_into_a_calibration_folder_is_refused(triad_calibrated, capsys):
+    """``gonio simulate --out CALDIR`` would replace a calibration's outputs (another
+    command's): refused, nothing deleted."""
+    d = triad_calibrated[0]
+    before = tree(d)
+    for extra in ([], ["--force"]):
+        msg = cli(["simulate", "--spec", "triad-alignment", "--out", d, *extra], capsys)
+        assert "gonio calibrate" in msg, msg
+        assert tree(d) == before
+    count("mixing:simulate-into-calibration")
+
+
 # ------------------------------------------------------------ lab files, budgets, figures
 
 LAB = Path(__file__).resolve().parents[1] / "protocols" / "lab-example.toml"
@@ -540,6 +552,12 @@ SIZE_CASES = {
     "jjf-rates-10-10": ("jjf1535-2015", "# rates_dps = [1, 2, 5, 10, 20, 50, 100]",
                         "rates_dps = [10, 10]", "gonio.specs.jjf1535.protocol",
                         "scale_factor.rates_dps"),
+    "jjf-stability-block-1e5": ("jjf1535-2015", "stability_block_samples = 10 ",
+                                "stability_block_samples = 100000 ",
+                                "gonio.specs.jjf1535.protocol", "bias.stability_block_samples"),
+    "jjf-stability-block-half": ("jjf1535-2015", "stability_block_samples = 10 ",
+                                 "stability_block_samples = 1801 ",
+                                 "gonio.specs.jjf1535.protocol", "bias.stability_block_samples"),
 }
 
 

@@ -18,8 +18,8 @@ import pytest
 from scipy import stats
 
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.analysis.thermal_model import (compensate_record, fit_polynomial,
-                                          identify_thermal_model)
+from gonio.specs.triad_alignment.thermal_model import (compensate_record, fit_polynomial,
+                                                      identify_thermal_model)
 from gonio.bench.triad import (ThermalModel, TriadBench, TriadNoise, TriadProtocol,
                                _alternating, run_thermal_session)
 from gonio.cli import main

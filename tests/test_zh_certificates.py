@@ -91,7 +91,7 @@ def calibrated(request, tmp_path_factory):
 
 def _write(c, out, lab):
     if c["key"] == "triad-alignment":
-        from gonio.report.triad_certificate import write_triad_certificate as w
+        from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate as w
     else:
         from gonio.report.rate_certificate import write_rate_certificate as w
     return w(c["result"], out, lab=lab, lang="zh", dcc=True)

@@ -69,13 +69,13 @@ def run(args) -> int:
         consistency_check(res, r)              # the check calibrate makes, the same function
     if args.plot or args.report:
         from gonio.report.figure_files import save_figure
-        from gonio.report.triad_figures import alignment_figure
+        from gonio.specs.triad_alignment.figures import alignment_figure
 
         fig = alignment_figure(res)
         if args.plot:
             save_figure(fig, args.plot)
         if args.report:
-            from gonio.report.triad_pages import alignment_page, write_report
+            from gonio.specs.triad_alignment.pages import alignment_page, write_report
 
             write_report(args.report, [alignment_page(res, fig)],
                          f"Gyro-triad alignment — {r.metadata.get('instrument', '')} "

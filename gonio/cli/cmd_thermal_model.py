@@ -1,6 +1,6 @@
 """``gonio thermal-model``: identify K(ϑ, U), b(ϑ, U) and ARW(ϑ) from a triad thermal
 readings file (docs/thermal-model.md); a thin layer over
-:func:`gonio.analysis.thermal_model.identify_thermal_model`."""
+:func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from gonio.analysis.thermal_model import compensate_record, identify_thermal_model
+    from gonio.specs.triad_alignment.thermal_model import compensate_record, identify_thermal_model
     from gonio.atomic import check_output_files
     from gonio.formats.triad import json_safe, named_inputs, read_triad_readings
 
@@ -52,7 +52,7 @@ def run(args) -> int:
         comp = {ch: compensate_record(m, r2) for ch, m in res.channels.items()}
     if args.plot:
         from gonio.report.figure_files import save_figure
-        from gonio.report.triad_figures import thermal_figure
+        from gonio.specs.triad_alignment.figures import thermal_figure
 
         ch = args.gyro
         if ch is None:
@@ -65,8 +65,8 @@ def run(args) -> int:
                              key="--gyro")
         save_figure(thermal_figure(res.channels[ch], comp.get(ch)), args.plot)
     if args.report:
-        from gonio.report.triad_figures import thermal_figure
-        from gonio.report.triad_pages import thermal_page, write_report
+        from gonio.specs.triad_alignment.figures import thermal_figure
+        from gonio.specs.triad_alignment.pages import thermal_page, write_report
 
         figs = {ch: thermal_figure(m, comp.get(ch)) for ch, m in res.channels.items()}
         write_report(args.report, [thermal_page(res, comp, figs)],

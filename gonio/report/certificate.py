@@ -334,6 +334,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         elif name == "repeatability" and item.get("position_deg") is not None:
             cell += [" (", *segments(L["note_at"], p=_num(res, f"{name}.position_deg", "pos", U)),
                      ")"]
+        if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
+            cell += ["; ", *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})

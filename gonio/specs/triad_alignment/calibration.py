@@ -31,8 +31,8 @@ from scipy import stats
 
 from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
                                          not_measured, source_info)
-from gonio.analysis.thermal_model import (Compensation, ThermalModelResult, compensate_record,
-                                          identify_thermal_model)
+from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
+                                                      compensate_record, identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
                                                  AlignmentResult, bias_instability_u_dps,
                                                  cross_axis_table, estimate_alignment)
@@ -295,7 +295,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     Alignment from the ``alignment`` (and ``static``) rows
     (:func:`gonio.specs.triad_alignment.analysis.estimate_alignment`), Monte Carlo with
     ``monte_carlo_trials`` draws; the extended model from the thermal programme
-    (:func:`_thermal_readings`; :func:`gonio.analysis.thermal_model.identify_thermal_model`),
+    (:func:`_thermal_readings`; :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`),
     applied back to the same record for the before/after comparison. ``protocol`` is
     accepted for the plug-in interface: everything the analysis uses is in the file.
     """

@@ -1,5 +1,6 @@
 """The triad-alignment certificate's own text, as data (English, Chinese); the rendering is
-:mod:`gonio.report.triad_certificate` on the shared certificate machinery."""
+:mod:`gonio.specs.triad_alignment.certificate_pages` on the shared certificate
+machinery."""
 
 #: label key → (English, Chinese)
 TEXT = {

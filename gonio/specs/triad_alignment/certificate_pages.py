@@ -10,7 +10,8 @@ K(ϑ, U), b(ϑ, U), ARW(ϑ) polynomials with the order-selection criterion, para
 uncertainties, the prediction band across the operating range, the ramp analysis and the
 before/after compensation). Every number of an item is a :class:`~gonio.report.stated.Num`
 whose ``data-src`` is its path in ``results.json``. The text is data in
-:mod:`gonio.specs.triad_alignment.certificate`.
+:mod:`gonio.specs.triad_alignment.certificate`; this module is the specification's rendering
+side (it imports the report), called by :mod:`gonio.specs.triad_alignment.outputs`.
 """
 
 from __future__ import annotations
@@ -19,18 +20,19 @@ from __future__ import annotations
 from gonio.report.certificate import Block, certificate_id
 from gonio.report.i18n import display, display_uncertainty, rule_at_U
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
-                                           spec_content, write_spec_certificate)
+                                           write_spec_certificate)
 from gonio.report.stated import item_nums, num
-from gonio.report.triad_figures import (alignment_panels, language, thermal_check_panels,
-                                        thermal_model_panels)
 from gonio.specs import get
+from gonio.specs.triad_alignment import certificate as content
+from gonio.specs.triad_alignment.figures import (alignment_panels, language,
+                                                 thermal_check_panels, thermal_model_panels)
 
 AXES = "xyz"
 OFFDIAG = ("xy", "xz", "yx", "yz", "zx", "zy")
 
 
 def _t(lang: str):
-    text = spec_content("triad-alignment").TEXT
+    text = content.TEXT
     return lambda key, **kw: text[key][1 if lang == "zh" else 0].format(**kw)
 
 
@@ -208,7 +210,7 @@ def _draw_alignment(fig, spec, result, L, truth=None) -> None:
 def triad_figures(result) -> list[tuple]:
     """(key, caption en, caption zh, draw) of the certificate's figures: the alignment figure,
     and per modelled gyro its model and its ramp / compensation figure."""
-    text = spec_content("triad-alignment").TEXT
+    text = content.TEXT
     figs = [("alignment", text["fig_alignment"][0], text["fig_alignment"][1], _draw_alignment)]
     for ch, m in (result.thermal.channels.items() if result.thermal else ()):
         comp = result.compensation.get(ch)
@@ -236,7 +238,7 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
                            [T("std_table"), "—", "—", "—"])
     blocks += alignment_blocks(res, T, L)
     blocks += thermal_blocks(res, T, L, lang)
-    zh = spec_content(result.spec_key).READINGS_TAKEN_ZH
+    zh = content.READINGS_TAKEN_ZH
     notes = res.get("readings_taken", [])
     if lang == "zh" and len(zh) == len(notes):
         notes = list(zh)
@@ -259,7 +261,7 @@ def write_triad_certificate(result, out, *, truth=None, lab=None, lang: str = "e
 
         def dcc_fn(r, *, lab, cert_id):
             return item_dcc_bytes(r, lab=lab, cert_id=cert_id,
-                                  data=spec_content("triad-alignment"), coverage_probability=p)
+                                  data=content, coverage_probability=p)
     return write_spec_certificate(result, out, triad_certificate_blocks, triad_figures(result),
                                   truth=truth, lab=lab, lang=lang, dcc_fn=dcc_fn)
 

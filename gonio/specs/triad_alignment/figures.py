@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from gonio.analysis.thermal_model import ChannelModel, Compensation
+from gonio.specs.triad_alignment.thermal_model import ChannelModel, Compensation
 from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult
 from gonio.units import dps_to_dph
 

@@ -18,7 +18,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import stats
 
-from gonio.analysis.thermal_model import Compensation, ThermalModelResult
+from gonio.specs.triad_alignment.thermal_model import Compensation, ThermalModelResult
 from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult, cross_axis_table
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
