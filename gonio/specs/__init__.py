@@ -60,8 +60,8 @@ class Coverage:
     engine : str
         ``"items"``: the generic study (:mod:`gonio.pipeline.coverage`): simulate with
         noise, calibrate, count per item how often |value − truth| ≤ U over the trials.
-        ``"cases"``: the optical study of the Annex A budget over bench cases
-        (:mod:`gonio.pipeline.validate`).
+        ``"cases"``: a study the specification describes itself (``study``), run by the
+        engine of :mod:`gonio.pipeline.validate` (batches, partial results, resume).
     stream : int
         The index of the study's seed stream: trial i is seeded by
         ``SeedSequence(seed, spawn_key=(stream, i))``; distinct per specification so that two
@@ -74,6 +74,12 @@ class Coverage:
         effects its truth leaves out). None: the bench as loaded.
     options : frozenset
         The ``gonio validate`` options the engine takes beyond the common ones.
+    study : callable or None
+        ``"cases"`` engine: ``study(trials, *, seed, bench, protocol, **options)`` → the
+        planned study: ``settings`` (dict), ``jobs`` (part → picklable job whose
+        ``run(start, stop)`` packs those trials as arrays with ``case`` and ``index``),
+        ``unpack(packed)`` → {trial index: trial}, ``report(done)`` → an object with
+        ``to_dict()`` (validation.json) and ``table()`` (docs/writing-a-specification.md).
     """
 
     engine: str = "items"
@@ -81,6 +87,7 @@ class Coverage:
     reduced: dict = field(default_factory=dict)
     study_bench: Callable[..., Any] | None = None
     options: frozenset = frozenset()
+    study: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -10,7 +10,7 @@ reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.m
 """
 
 from gonio.formats.triad import FORMAT, named_inputs
-from gonio.specs import Specification
+from gonio.specs import Specification, lazy
 from gonio.specs.triad_alignment.calibration import article_budget, calibrate
 
 
@@ -34,6 +34,7 @@ SPEC = Specification(
     default_bench="mems-triad",
     calibrate=calibrate,
     simulate=_simulate,
+    truth=lazy("gonio.specs.triad_alignment.truth:truth"),
     budget=article_budget,
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
