@@ -40,7 +40,7 @@ from typing import Any, Callable
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
-from gonio.analysis.conformity import RULES
+from gonio.analysis.conformity import RULES, check_one_limit_per_item
 from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
 from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
                                reading_note, rule_at_U, specification_text)
@@ -135,6 +135,7 @@ def load_lab(path: str | Path) -> dict:
     if lab["standards"] is None:
         lab["standards"] = []
     limits = lab["specification_limits"] or []
+    check_one_limit_per_item(limits, file=path)
     for i, lim in enumerate(limits):
         key = f"specification_limits[{i}]"
         if lim["mpe"] is not None and (lim["lower"] is not None or lim["upper"] is not None):
@@ -334,6 +335,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         elif name == "repeatability" and item.get("position_deg") is not None:
             cell += [" (", *segments(L["note_at"], p=_num(res, f"{name}.position_deg", "pos", U)),
                      ")"]
+        if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
+            cell += ["; ", *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})

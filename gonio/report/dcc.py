@@ -157,6 +157,15 @@ def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None
 
 
 
+def bound_quantity(data, upper, unit: str = "", dsi: str | None = None) -> "etree.Element":
+    """The upper bound of a non-negative quantity whose U exceeds its value, as the
+    statement rule states it (:func:`gonio.result.statement.state`): a results.json
+    ``unit`` or the D-SI ``dsi``."""
+    return quantity(data, "upper bound (coverage interval [0, upper bound]: a non-negative "
+                          "quantity whose U exceeds its value)", upper, unit,
+                    ref_type="gonio_upperBound", dsi=dsi)
+
+
 def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
     """The decision rule(s) and one dcc:statement per item the pipeline decided (results.json
     ``items.<key>.conformity``), each with the rule, the outcome (dcc:conformity), the limits,
@@ -516,6 +525,8 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
                 quantity(data, "position of the extreme", s["position"], "deg")
         else:
             quantity(data, L[name], s["value"], item["unit"], **kw)
+        if s["upper"] is not None:
+            bound_quantity(data, s["upper"], item["unit"])
         _detail_lists(data, res, name)
     return root
 

@@ -173,6 +173,10 @@ LABELS: dict[str, dict[str, str]] = {
                                  "t₉₅(ν_eff)"},
     "note_zero_model": {"en": "noise model of the 7.3 record (beside, not stated): {v} °/h",
                         "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
+    # a non-negative quantity whose U exceeds its value (gonio.result.statement.state)
+    "note_upper": {"en": "upper bound: ≤\u00a0{b} {u} (interval [0, {b}])",
+                   "zh": "上限：≤\u00a0{b} {u}（区间 [0, {b}]）"},
+    "note_upper_short": {"en": "upper bound ≤ {b}", "zh": "上限 ≤ {b}"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures

@@ -216,7 +216,10 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
                              reason_text(it["reason"], L, phrases)])
                 continue
             n = item_nums(it, f"items.{key}")
-            rows.append(["", name, NoBreakText(it["clause"]), n["value"] or "—", n["U"] or "—",
+            val = n["value"] or "—"
+            if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
+                val = [val, "; " + L["note_upper_short"].format(b=n["statement"]._x(n["upper"]))]
+            rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
     return head, rows

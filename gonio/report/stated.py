@@ -107,7 +107,7 @@ def stated_item(res: dict, name: str) -> dict:
     item = res[name]
     out = {"measured": bool(item["measured"]), "reason": item.get("reason", ""),
            "clause": item["clause"], "unit": item["unit"], "value": "—", "signed": None,
-           "position": None, "U": None, "k": None, "p": None, "U_raw": None}
+           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None}
     if not item["measured"]:
         return out
     unc = item_uncertainty(res, name)
@@ -132,7 +132,24 @@ def stated_item(res: dict, name: str) -> dict:
         out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
         if unc["p"] is not None:
             out["p"] = display("k", 100.0 * float(unc["p"]))
+        out["upper"] = upper_bound(res, name, out["value"])
     return out
+
+
+def upper_bound(res: dict, name: str, value: Num | str) -> Num | None:
+    """The upper bound of a non-negative item whose U exceeds its value (the item's
+    uncertainty says ``nonnegative``; B_s), as :func:`gonio.result.statement.state` states
+    it, at the value's decimal place; None otherwise."""
+    from gonio.result.statement import state
+
+    iu = res[name].get("uncertainty") or {}
+    if not iu.get("nonnegative") or not isinstance(value, Num) or iu.get("U") is None:
+        return None
+    st = state(res[name]["value"], iu["U"], k=iu.get("k"), nonnegative=True)
+    if st.upper is None:
+        return None
+    return Num(st._x(st.upper), f"{name}.upper_bound",
+               f"sci{st.exponent}.{st.decimals + st.exponent}" if st.exponent else value.rule)
 
 
 def segments(template: str, **nums) -> list:
@@ -345,7 +362,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     """
     L = labels(lang)
     head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
-    rows, notes = [], []
+    rows, notes, notes_b = [], [], []
     for i, name in enumerate(ITEMS, 1):
         st = stated_item(res, name)
         title = res[name].get("item", name)
@@ -359,9 +376,14 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
                                          f"p ≈ {st['p'] or '—'} %)"
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
+        if st["upper"] is not None:
+            notes_b.append(f"{i}. {title}: " + L["note_upper"].format(
+                b=st["upper"], u=L.get("u_" + st["unit"], st["unit"])).replace("\u00a0", " "))
     widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
     fmt = lambda r: "  ".join(s.ljust(w) for s, w in zip(r, widths)).rstrip()  # noqa: E731
     lines = [fmt(head), "  ".join("-" * w for w in widths)] + [fmt(r) for r in rows]
+    if notes_b:          # a non-negative quantity whose U exceeds it: its upper bound
+        lines += [""] + notes_b
     if notes:
         lines += ["", "not measured:"] + ["  " + n for n in notes]
     u = res["uncertainty"]

@@ -236,7 +236,8 @@ class CalibrationReport:
                                    unc["components"], unc["u_c"], unc["U"], unc["k"],
                                    unc["nu_eff"], unc.get("monte_carlo"),
                                    unc.get("coverage_probability"), unc.get("k_source") or "",
-                                   unc.get("interval")), details)
+                                   unc.get("interval")), details,
+                               nonnegative=bool((unc or {}).get("nonnegative")))
         extra = {k: d[k] for k in ("uncertainty", "conflicts", "precedence_rule",
                                    "equal_division", "unused_readings_summary") if k in d}
         known = set(ITEM_NAMES) | set(extra) | {"gonio_version", "specification", "protocol",
