@@ -81,7 +81,7 @@ import sys, time
 t0 = time.perf_counter()
 from dataclasses import replace
 from gonio.bench import load_bench
-from gonio.pipeline.validate import run_trial, validation_protocol
+from gonio.specs.ogam_draft.study import run_trial, validation_protocol
 t1 = time.perf_counter()
 p = validation_protocol(); b = replace(load_bench("rlg"), sample_rate_hz=100.0)
 run_trial(p, b, 1)
