@@ -179,8 +179,23 @@ def test_dead_worker_marked_failed_then_retried(store, people, bench_readings,
     assert run_worker(store, monkeypatch, computed_folder).status == "computed"
 
 
+def _value_moved(it):
+    it["value"] += 1e-6
+
+
+def _k_changed(it):
+    it["uncertainty"]["k"] = 3.0
+
+
+def _decision_appears(it):       # a limit edited after review: a decision nobody reviewed
+    it["conformity"] = {"item": "scale_factor", "rule": "simple", "lower": None,
+                        "upper": 1e9, "outcome": "pass"}
+
+
+@pytest.mark.parametrize("change", (_value_moved, _k_changed, _decision_appears))
 def test_issue_refused_when_recomputed_result_differs(store, people, computed_folder,
-                                                      bench_readings, monkeypatch, tmp_path):
+                                                      bench_readings, monkeypatch, tmp_path,
+                                                      change):
     inst, std = setup_instrument(store, people)
     cal = new_calibration(store, people, inst, std, bench_readings[0])
     run_worker(store, monkeypatch, computed_folder)
@@ -189,7 +204,7 @@ def test_issue_refused_when_recomputed_result_differs(store, people, computed_fo
     changed = tmp_path / "changed"
     shutil.copytree(computed_folder, changed)
     res = json.loads((changed / "results.json").read_text())
-    res["items"]["scale_factor"]["value"] += 1e-6
+    change(res["items"]["scale_factor"])
     (changed / "results.json").write_text(json.dumps(res))
     monkeypatch.setattr(worker, "calibrate_folder", fake_pipeline(changed))
     services.claim_next(store)
