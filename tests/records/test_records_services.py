@@ -273,9 +273,20 @@ def test_import_output_folder(store, people, computed_folder, bench_readings, tm
 
     with pytest.raises(GonioError, match="no readings file matching"):
         import_output_folder(store, computed_folder, readings=bench_readings[1])
-    cid = import_output_folder(store, computed_folder, readings=bench_readings[0])
+    # computed with a protocol file that is not built in: named, not silently the default
+    with pytest.raises(GonioError, match="give the file with --protocol"):
+        import_output_folder(store, computed_folder, readings=bench_readings[0])
+    other = tmp_path / "other.toml"
+    other.write_text(SMALL_PROTOCOL.read_text() + "\n# edited\n")
+    with pytest.raises(GonioError, match="not the one results.json was computed with"):
+        import_output_folder(store, computed_folder, readings=bench_readings[0],
+                             protocol=other)
+    cid = import_output_folder(store, computed_folder, readings=bench_readings[0],
+                               protocol=SMALL_PROTOCOL)
     cal = services.calibration(store, cid)
     assert cal.status == "computed" and cal.instrument.serial == "RLG-0001"
+    # the very protocol file is stored: the recomputation uses it
+    assert services.file_bytes(store, cal.protocol_sha256) == SMALL_PROTOCOL.read_bytes()
     assert services.history(store, cal.instrument_id)["scale_factor"][0]["value"] == \
         json.loads((computed_folder / "results.json").read_text())["items"]["scale_factor"]["value"]
 
