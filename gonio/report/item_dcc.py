@@ -1,5 +1,5 @@
 """The Digital Calibration Certificate (PTB DCC 3.3.0) of any per-item result, with the
-matrices a specification names written as lists: the triad's (and any plug-in's) DCC.
+matrices a specification names written as lists (its ``MATRICES``; any plug-in's DCC).
 
 Contents
 ========

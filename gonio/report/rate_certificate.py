@@ -107,10 +107,7 @@ def norm_text(spec, lang: str) -> str:
     """The normative document followed, with its number and year: the specification's
     ``NORM`` (en, zh) from its certificate data where it has one (a procedure that is not a
     published standard names the documents it follows), else its title."""
-    try:
-        norm = getattr(spec_content(spec.key), "NORM", None)
-    except (ImportError, AttributeError):
-        norm = None
+    norm = getattr(spec.content(), "NORM", None) if spec.certificate_content else None
     if norm:
         return norm[1 if lang == "zh" else 0]
     return spec.title_zh if lang == "zh" else spec.title_en
@@ -312,10 +309,7 @@ def dcc_translator(result, content_fn):
     res = result.to_json()
     key = res.get("spec") or getattr(result, "spec_key", None)
     spec = get(key)
-    try:
-        data = spec_content(key)
-    except (ImportError, AttributeError):
-        data = None
+    data = spec.content() if spec.certificate_content else None
     extra = {spec.title_en: spec.title_zh}
     titles = getattr(data, "TITLES_ZH", {})
     for k, it in res.get("items", {}).items():

@@ -123,8 +123,8 @@ def dsi_unit(unit: str, output_unit: str, file=None) -> tuple[str, float]:
 def clause_ref_type(spec_key: str, clause: str) -> str:
     """The refType of an item's quantity: ``gonio_<spec>_clause_<clause>`` (no spaces).
 
-    >>> clause_ref_type("iec62047-20", "5.4.5.1 b)")
-    'gonio_iec62047-20_clause_5.4.5.1b'
+    >>> clause_ref_type("lab-procedure", "5.4.5.1 b)")
+    'gonio_lab-procedure_clause_5.4.5.1b'
     """
     c = "".join(ch for ch in clause if ch.isalnum() or ch == ".")
     return f"gonio_{spec_key}_clause_{c}"
