@@ -40,9 +40,12 @@ COST = r"""
 import sys, time
 from dataclasses import replace
 try:
-    from gonio.pipeline.validate import validation_protocol, run_trial
+    from gonio.specs.ogam_draft.study import validation_protocol, run_trial
 except ImportError:
-    from gonio.validate import validation_protocol, run_trial
+    try:
+        from gonio.pipeline.validate import validation_protocol, run_trial
+    except ImportError:
+        from gonio.validate import validation_protocol, run_trial
 from gonio.bench import load_bench
 p = validation_protocol(); b = replace(load_bench("rlg"), sample_rate_hz=100.0)
 run_trial(p, b, 12345)                         # warm-up (imports, caches)

@@ -97,13 +97,25 @@ def is_rendering(mod: str) -> bool:
     return parts[:2] == ["gonio", "specs"] and len(parts) == 4 and parts[3] in RENDERING_MODULES
 
 
+#: A specification's command-line module (``Specification.commands``): it sits on the
+#: command line's layer (it may import anything gonio's own ``gonio/cli/cmd_*.py`` may).
+COMMAND_MODULES = ("commands",)
+
+
+def is_command(mod: str) -> bool:
+    parts = mod.split(".")
+    return parts[:2] == ["gonio", "specs"] and len(parts) == 4 and parts[3] in COMMAND_MODULES
+
+
 def layer_violations(files: list[Path]) -> list[str]:
     bad = []
     for path in files:
         mod = module_name(path)
         tree = ast.parse(path.read_text(encoding="utf-8"))
         g = group(mod)
-        if is_rendering(mod):
+        if is_command(mod):
+            g = "gonio.cli"              # the command line's layer, below nothing
+        elif is_rendering(mod):
             for target, _, line in imports_of(tree, mod, False):
                 tg = group(target) if target.startswith("gonio") else None
                 if tg is not None and LAYERS[tg] > RENDERING_LAYER:
@@ -122,7 +134,7 @@ def layer_violations(files: list[Path]) -> list[str]:
                 continue
             if LAYERS[tg] > LAYERS[g] or (LAYERS[tg] == LAYERS[g] and tg != g and LAYERS[g] > 0):
                 bad.append(f"{mod}:{line}: imports {target} (layer {tg} above or beside {g})")
-            if tg == "gonio.specs" and g == "gonio.specs":
+            if tg == "gonio.specs" and mod.startswith("gonio.specs."):
                 a = mod.split(".")[:3]
                 b = target.split(".")[:3]
                 # a family package (specs/_rate_family/) is the shared ground of several
@@ -135,8 +147,9 @@ def layer_violations(files: list[Path]) -> list[str]:
 #: family package (``gonio.specs._rate_family``), the registry and the layer-0 modules.
 SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.result",
                    "gonio.reduce", "gonio.analysis", "gonio.budget", "uncertainty")
-#: A specification's modules that run the virtual bench: the only ones that may import it.
-SIMULATION_MODULES = ("simulate", "plan", "truth")
+#: A specification's modules that run the virtual bench: the only ones that may import it
+#: (``study``: its coverage study of ``gonio validate``, which simulates every trial).
+SIMULATION_MODULES = ("simulate", "plan", "truth", "study")
 
 
 def spec_import_violations(files: list[Path]) -> list[str]:
@@ -150,7 +163,7 @@ def spec_import_violations(files: list[Path]) -> list[str]:
         parts = mod.split(".")
         if parts[:2] != ["gonio", "specs"]:
             continue
-        if is_rendering(mod):
+        if is_rendering(mod) or is_command(mod):
             continue                     # checked by layer_violations (report, bench allowed)
         sim = len(parts) > 3 and parts[3] in SIMULATION_MODULES
         tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -164,7 +177,7 @@ def spec_import_violations(files: list[Path]) -> list[str]:
             if tg == "gonio.specs" or LAYERS.get(tg, -1) == 0 or tg in SPEC_MAY_IMPORT:
                 continue
             bad.append(f"{mod}:{line}: a specification imports {target}"
-                       + (" (only its simulate/plan/truth modules may)" if tg == "gonio.bench"
+                       + (" (only its simulate/plan/truth/study modules may)" if tg == "gonio.bench"
                           else ""))
     return bad
 
@@ -172,8 +185,7 @@ def spec_import_violations(files: list[Path]) -> list[str]:
 #: A specification named outside gonio/specs/: its key or its package.
 NAMES_A_SPEC = re.compile(r"ogam|jjf|iec62047|triad.alignment")
 #: Modules that still name one (not yet through the registry; docs/architecture.md).
-STILL_NAMING = {"gonio/cli/cmd_align.py", "gonio/cli/cmd_thermal_model.py",
-                "gonio/pipeline/validate.py", "gonio/pipeline/item_coverage.py"}
+STILL_NAMING: set[str] = set()
 
 
 def spec_naming_violations(files: list[Path]) -> list[str]:
@@ -380,6 +392,10 @@ def test_rules_fire_on_bad_examples(fake_root):
                     "from gonio.bench import z\nfrom gonio.pipeline.dispatch import w\n")
     report_in_items = _write(fake_root, "gonio/specs/a/certificate.py", "from gonio.report import y\n")
     assert len(layer_violations([render, report_in_items])) == 2
+    command = _write(fake_root, "gonio/specs/a/commands.py", "from gonio.cli.checks import seed\n"
+                     "from gonio.specs.a.pages import p\nfrom gonio.specs.b.items import q\n")
+    cli_in_items = _write(fake_root, "gonio/specs/a/items.py", "from gonio.cli.checks import seed\n")
+    assert len(layer_violations([command, cli_in_items])) == 2    # b's items, the cli in items
     cli = _write(fake_root, "gonio/cli/cmd_x.py", "if spec == 'jjf1535-2015':\n    pass\n"
                  "from gonio.specs.iec62047_20 import calibrate\nfrom gonio.specs import get\n")
     assert len(spec_naming_violations([cli])) == 2

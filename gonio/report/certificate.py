@@ -40,7 +40,7 @@ from typing import Any, Callable
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
-from gonio.analysis.conformity import RULES
+from gonio.analysis.conformity import RULES, check_one_limit_per_item
 from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
 from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, finding_text,
                                labels,
@@ -136,6 +136,7 @@ def load_lab(path: str | Path) -> dict:
     if lab["standards"] is None:
         lab["standards"] = []
     limits = lab["specification_limits"] or []
+    check_one_limit_per_item(limits, file=path)
     for i, lim in enumerate(limits):
         key = f"specification_limits[{i}]"
         if lim["mpe"] is not None and (lim["lower"] is not None or lim["upper"] is not None):

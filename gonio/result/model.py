@@ -163,6 +163,7 @@ class Conformity:
     guard_factor: float | None = None
     limits_from: str = ""
     reason: str = ""
+    probability_model: str = "normal"
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))

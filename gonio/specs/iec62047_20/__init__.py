@@ -88,6 +88,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "", f"the data were refused: {exc.message}")
     items = {k: items[k] for k in rows}
+    for key in _items.NONNEGATIVE & items.keys():
+        items[key].nonnegative = True
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {

@@ -980,3 +980,9 @@ ITEMS = (
 #: What each item needs computed before it (gonio.specs.item_order orders them): every
 #: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1).
 NEEDS = {row[0]: ("scale_factor",) for row in ITEMS if row[0] != "scale_factor"}
+
+
+#: Items that are non-negative by their definition (a maximum of absolute values, a standard
+#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
+#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
+NONNEGATIVE = frozenset({"linearity", "sf_stability", "bias_repeatability", "bias_drift_after_power_on", "bias_hysteresis", "arw", "bias_instability", "inband_noise", "frequency_band", "startup_time", "broadband_noise", "resolution"})

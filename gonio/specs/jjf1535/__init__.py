@@ -98,6 +98,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
             items[key] = not_measured(key, title, clause, "",
                                       f"the data were refused: {exc.message}")
     items = {k: items[k] for k in rows}
+    for key in _items_mod.NONNEGATIVE & items.keys():
+        items[key].nonnegative = True
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"annex_a": annex_a().to_dict(),

@@ -33,4 +33,6 @@ SPEC = Specification(
     # gonio's renderer of a per-item result: results.json, summary, certificate, DCC
     outputs="gonio.specs._rate_family.outputs",
     calibrate_options=frozenset({"protocol", "dcc"}),
+    # its own sub-command, added to gonio's command line through the registry
+    commands=(("acme-programme", "acme_rate_check.commands:add_programme"),),
 )
