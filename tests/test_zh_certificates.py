@@ -28,7 +28,7 @@ from gonio.report.dcc import DCC_NS
 
 #: Symbols, units, names and standard numbers a Chinese certificate may print in Latin letters.
 WHITELIST = set("""
-JJF IEC GUM JCGM ILAC ISO CNAS IEEE MEMS Allan Welch SHA VB gonio csv dB Hz mV lsb ppm
+JJF IEC GUM JCGM ILAC ISO CNAS IEEE MEMS Allan Welch Satterthwaite SHA VB gonio csv dB Hz mV lsb ppm
 sin cos max min ln rms RMS ARW RRW BI BIC bic SF Out FullScale Noise CW CCW band_hz
 broadband_high dec resolution rest cov WX monte carlo ADXRS dt results json
 """.split())

@@ -743,6 +743,9 @@ DCC_ZH: dict[str, str] = {
         "各项目的扩展不确定度 U = k·u_c 由本次校准数据求得（JCGM 100），k = t95(ν_eff)"
         "（Welch–Satterthwaite 公式），包含概率 95 %；各分量见 results.json。",
     "Decision rule": "判定规则",
+    "non-binary": "非二元判定",
+    "guarded": "带保护带的二元判定",
+    "simple": "简单接受",
     "lower specification limit": "规定下限",
     "upper specification limit": "规定上限",
     "probability of conformance": "符合概率",
@@ -882,11 +885,12 @@ def translator(extra: dict | None = None, tables=()):
         m = re.fullmatch(r"([^:;]+): (.+)", text, flags=re.S)    # "label: value"
         if m and m.group(1) in table:
             return f"{table[m.group(1)]}：{part(m.group(2))}"
-        if "; " in text:                                        # "a; b; c", each translated
-            parts = text.split("; ")
-            zh = [translate(p, depth + 1) for p in parts]
-            if any(z is not None for z in zh):
-                return "；".join(z if z is not None else p for z, p in zip(zh, parts))
+        for sep, zsep in (("; ", "；"), (", ", "，")):           # "a; b; c", each translated
+            if sep in text:
+                parts = text.split(sep)
+                zh = [translate(p, depth + 1) for p in parts]
+                if any(z is not None for z in zh):
+                    return zsep.join(z if z is not None else p for z, p in zip(zh, parts))
         return None
     return translate
 

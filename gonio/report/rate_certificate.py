@@ -12,6 +12,7 @@ and the figures of :mod:`gonio.report.rate_figures`.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
@@ -330,7 +331,9 @@ def dcc_translator(result, content_fn):
     norm = getattr(data, "NORM", None)
     if norm:
         extra[norm[0]] = norm[1]
-    return label_translator(extra, getattr(data, "PHRASES_ZH", ()))
+    # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
+    own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
+    return label_translator(extra, own + tuple(getattr(data, "PHRASES_ZH", ())))
 
 
 def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",

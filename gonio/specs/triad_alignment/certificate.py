@@ -145,6 +145,10 @@ PHRASES_ZH = (
     (r"(\w+): U\^(\d+) coefficient", "{1}：U^{2} 项系数"),
     (r"MEMS gyro triad \(virtual\)", "微机电三轴陀螺组件（虚拟）"),
     (r"mems-triad", "微机电三轴陀螺组件虚拟台架（mems-triad）"),
+    # the clauses of the sources (docs/alignment.md, docs/thermal-model.md)
+    (r"§4 eq\. (\S+)", "文章 §4 式 {1}"),
+    (r"§4 (M̂⁻¹M − I)", "文章 §4 {1}"),
+    (r"thesis eq\. (\S+)", "论文式 {1}"),
     # the screening's findings a certificate shows (gonio.specs.triad_alignment.screen)
     (r"alignment dwell about (\S+) at (\S+) °/s: gyro (\w)'s output moved (\S+) from the "
      r"static median, the opposite sign of the rate \(a sign-flipped rate_dps or up\?\)",
