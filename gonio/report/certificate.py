@@ -46,9 +46,9 @@ from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, 
                                labels,
                                reading_note, reason_text, rule_at_U, specification_text)
 from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class)
-from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
+from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
-                                 stated_item, u_cell)
+                                 item_names, stated_item, u_cell)
 from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
@@ -306,7 +306,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
     rrows = []
-    for i, name in enumerate(ITEMS, 1):
+    for i, name in enumerate(item_names(res), 1):
         item = res[name]
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
         st = stated_item(res, name)
@@ -1053,9 +1053,9 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
     Parameters
     ----------
-    report : gonio.specs.ogam_draft.calibration.CalibrationReport
-        What :func:`gonio.specs.ogam_draft.calibration.calibrate` returned (``results.json`` is written
-        by :func:`gonio.specs.ogam_draft.outputs.write_calibration`, not here).
+    report : the specification's calibration report
+        What the specification's ``calibrate`` returned (``results.json`` is written by its
+        ``outputs`` module, not here).
     out : path
         Output folder; both files appear together or not at all (staged, then renamed).
     truth : dict, optional

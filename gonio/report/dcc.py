@@ -52,8 +52,8 @@ from lxml import etree
 
 from gonio.atomic import write_bytes
 from gonio.report.i18n import display, labels, reading_note, specification_text
-from gonio.report.stated import (ITEMS, Num, conformity_for, conformity_texts, item_uncertainty,
-                                 method_rows, num, stated_item)
+from gonio.report.stated import (Num, conformity_for, conformity_texts, item_uncertainty,
+                                 item_names, method_rows, num, stated_item)
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -443,7 +443,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
     norm = specification_text(res.get("specification") or "not stated", "en")
     sts = administrative_data(
         root, md, lab, cert_id=cert_id, norm=norm,
-        clauses=[res[n]["clause"] for n in ITEMS if res[n]["measured"]],
+        clauses=[res[n]["clause"] for n in item_names(res) if res[n]["measured"]],
         readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
     conf = conformity_for(res, lab)
     if conf:
@@ -502,7 +502,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
     influence_conditions(mr, conds)
 
     results = element(mr, "dcc:results")
-    for name in ITEMS:
+    for name in item_names(res):
         item = res[name]
         r = element(results, "dcc:result", id=f"result-{name}")
         text_element(r, "dcc:name", f"{L[name]} ({item['clause']})")

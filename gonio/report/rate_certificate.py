@@ -108,10 +108,7 @@ def norm_text(spec, lang: str) -> str:
     """The normative document followed, with its number and year: the specification's
     ``NORM`` (en, zh) from its certificate data where it has one (a procedure that is not a
     published standard names the documents it follows), else its title."""
-    try:
-        norm = getattr(spec_content(spec.key), "NORM", None)
-    except (ImportError, AttributeError):
-        norm = None
+    norm = getattr(spec.content(), "NORM", None) if spec.certificate_content else None
     if norm:
         return norm[1 if lang == "zh" else 0]
     return spec.title_zh if lang == "zh" else spec.title_en
@@ -219,7 +216,7 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
             if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
-                val = [val, "; " + L["note_upper_short"].format(b=n["statement"]._x(n["upper"]))]
+                val = [val, "; " + L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
@@ -313,10 +310,7 @@ def dcc_translator(result, content_fn):
     res = result.to_json()
     key = res.get("spec") or getattr(result, "spec_key", None)
     spec = get(key)
-    try:
-        data = spec_content(key)
-    except (ImportError, AttributeError):
-        data = None
+    data = spec.content() if spec.certificate_content else None
     extra = {spec.title_en: spec.title_zh}
     titles = getattr(data, "TITLES_ZH", {})
     for k, it in res.get("items", {}).items():

@@ -22,6 +22,7 @@ import numpy as np
 
 from gonio.report.i18n import display
 from gonio.result.statement import item_statement
+from gonio.specs import get
 
 
 #: Figure text, (English, Chinese).
@@ -142,20 +143,23 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
 
 
 def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
-    """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line."""
+    """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line.
+    What differs between specifications (the item, where each direction's scale factor sits
+    in its details, whether the null output is taken off, the axis label, the title) is the
+    specification's ``CW_CCW`` in its certificate content (:func:`forward_reverse`)."""
     ax = fig.add_subplot(spec)
     line_it = _item(result, "scale_factor")
     line = _io_points(line_it)
-    a = _item(result, "asymmetry", "symmetry")
+    how = forward_reverse(result)
+    a = _item(result, how["item"]) if how else None
     if line is None or a is None:
         _empty(ax, _t(L, "no_asym"))
         return
     r, y, K, F0, _, _ = line
     d = a.details
-    jjf = "K_pos_m" in d
-    off = 0.0 if jjf else F0      # IEC outputs carry the null output b_BASE: take it off
-    for sel, name, kk in ((r > 0, _t(L, "cw"), d["K_pos_m"][0] if jjf else d["a_CW"]),
-                          (r < 0, _t(L, "ccw"), d["K_neg_m"][0] if jjf else d["a_CCW"])):
+    off = F0 if how["null_output_off"] else 0.0
+    for sel, name, (key, i) in ((r > 0, _t(L, "cw"), how["cw"]), (r < 0, _t(L, "ccw"), how["ccw"])):
+        kk = d[key] if i is None else d[key][i]
         rr, yy = r[sel], y[sel]
         o = np.argsort(rr)
         p = np.polyfit(rr, yy, 1)
@@ -164,10 +168,20 @@ def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
         ax.plot(rr[o], np.polyval(p, rr[o]) - K * rr[o] - off, "-", lw=0.8)
     ax.axhline(0, color="0.5", lw=0.6)
     ax.set_xlabel(_t(L, "rate"))
-    ax.set_ylabel("F̄_j − K̄·Ω_j" if jjf else "y_j − (K·Ω_j + b_BASE)")
+    ax.set_ylabel(how["ylabel"])
     ax.legend(loc="best")
-    ax.set_title(_t(L, "asym", v=_stated(a)) if jjf else
-                 _t(L, "sym", v=_stated(a), u=a.unit))
+    ax.set_title(_t(L, how["title"], v=_stated(a), u=a.unit))
+
+
+def forward_reverse(result) -> dict | None:
+    """The specification's description of its forward/reverse figure, ``CW_CCW`` in its
+    certificate content (``Specification.certificate_content``): ``item`` (the key of the
+    item whose details hold the directions), ``cw``/``ccw`` ((details key, index or None) of
+    each direction's scale factor), ``null_output_off`` (take the fitted null output off the
+    points), ``ylabel`` and ``title`` (a :data:`FIG_TEXT` key formatted with the item's
+    value ``v`` and unit ``u``). None: the specification has no such figure."""
+    spec = get(result.spec_key)
+    return getattr(spec.content(), "CW_CCW", None) if spec.certificate_content else None
 
 
 def draw_temperature(fig, spec, result, L, truth=None) -> None:

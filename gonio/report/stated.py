@@ -4,7 +4,7 @@ Contents
 ========
 ===========================  ================================================================
 :class:`Num`                 a shown number: its text, its path in ``results.json``, its rule
-:data:`ITEMS`                the draft's seven items, in Annex B order
+:func:`item_names`           the items of a results dict, in its order
 :func:`item_uncertainty`     U, k and coverage probability of one item (or None)
 :func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
                              position, U, k, p
@@ -34,7 +34,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from gonio.analysis.conformity import Conformity, DecisionRule, Limits, decide, limits_of  # noqa: F401
-from gonio.specs.ogam_draft.items import ITEM_KEYS
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
 from gonio.result.statement import decimals_for_sig, round_half_up
 
@@ -44,7 +43,19 @@ class NoBreakText(str):
     ``nowrap``, one token in the PDF's wrapping (``gonio.report.certificate.NoBreak``)."""
 
 
-ITEMS: tuple[str, ...] = ITEM_KEYS
+
+
+def item_names(res: dict) -> list[str]:
+    """The items of a results dict, in its own order (the specification's: every entry with a
+    ``clause`` and a ``measured`` flag); the renderer lists what the result holds and names
+    no specification's items itself.
+
+    >>> item_names({"metadata": {}, "b": {"clause": "7.2", "measured": True},
+    ...             "a": {"clause": "7.1", "measured": False}, "unused_readings": []})
+    ['b', 'a']
+    """
+    return [k for k, v in res.items() if isinstance(v, dict) and "clause" in v and "measured" in v]
+
 #: Coverage probability of the Annex A budget's U (k = 2, normal; Annex A.7).
 ANNEX_A_COVERAGE: float = 0.95
 
@@ -148,7 +159,7 @@ def upper_bound(res: dict, name: str, value: Num | str) -> Num | None:
     st = state(res[name]["value"], iu["U"], k=iu.get("k"), nonnegative=True)
     if st.upper is None:
         return None
-    return Num(st._x(st.upper), f"{name}.upper_bound",
+    return Num(st.upper_text, f"{name}.upper_bound",
                f"sci{st.exponent}.{st.decimals + st.exponent}" if st.exponent else value.rule)
 
 
@@ -307,7 +318,7 @@ def method_rows(report, res: dict, L: dict, lab: dict | None, lang: str = "en",
     p = report.protocol
     md = res.get("metadata", {})
     ns = L["not_stated"]
-    measured = [res[n]["clause"].split(" ")[0] for n in ITEMS if res[n]["measured"]]
+    measured = [res[n]["clause"].split(" ")[0] for n in item_names(res) if res[n]["measured"]]
     spec = specification_text(res.get("specification") or ns, lang, cjk)
     rows = [(L["m_spec"], f"{spec}; " + L["m_clauses"].format(c=", ".join(measured)))]
     rates = []
@@ -363,7 +374,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     L = labels(lang)
     head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
     rows, notes, notes_b = [], [], []
-    for i, name in enumerate(ITEMS, 1):
+    for i, name in enumerate(item_names(res), 1):
         st = stated_item(res, name)
         title = res[name].get("item", name)
         if not st["measured"]:
