@@ -362,8 +362,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
                                            ppm=f"{ppm:.2g}")])
 
-    # decision rule and conformity: only when the laboratory file gives limits
-    conf = conformity_for(res, lab)
+    # decision rule and conformity: the decisions the pipeline made (results.json), rendered
+    conf = conformity_for(res, lab, report.conformity)
     if conf:
         add("h", L["conformity"])
         rule = conf[0]["rule"]

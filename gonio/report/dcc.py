@@ -445,7 +445,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
         root, md, lab, cert_id=cert_id, norm=norm,
         clauses=[res[n]["clause"] for n in item_names(res) if res[n]["measured"]],
         readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
-    conf = conformity_for(res, lab)
+    conf = conformity_for(res, lab, report.conformity)
     if conf:
         rule = conf[0]["rule"]
         st = element(sts, "dcc:statement", id="decision-rule")
