@@ -159,7 +159,7 @@ def upper_bound(res: dict, name: str, value: Num | str) -> Num | None:
     st = state(res[name]["value"], iu["U"], k=iu.get("k"), nonnegative=True)
     if st.upper is None:
         return None
-    return Num(st._x(st.upper), f"{name}.upper_bound",
+    return Num(st.upper_text, f"{name}.upper_bound",
                f"sci{st.exponent}.{st.decimals + st.exponent}" if st.exponent else value.rule)
 
 

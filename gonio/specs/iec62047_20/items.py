@@ -939,7 +939,6 @@ def resolution(ctx: Context) -> Item:
         "decided_by": by})
 
 
-#: The characteristics in the order of Table 4: (key, title, clause, function).
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
     """The context of an item: the calibration's, with a_BASE from the scale-factor item
     (5.1.3.1) when it was measured (items read it; none writes it)."""
@@ -949,6 +948,7 @@ def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
     return replace(ctx, a_base=sf.value)
 
 
+#: The characteristics in the order of Table 4: (key, title, clause, function).
 ITEMS = (
     ("scale_factor", "scale factor a_BASE", "5.1.3.1", scale_factor),
     ("initial_sf_variation", "initial scale-factor variation", "5.1.3.2", initial_sf_variation),

@@ -23,6 +23,7 @@ import pandas as pd
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
 from gonio.atomic import sha256_file
+from gonio.resources import protocol_provenance
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
@@ -247,7 +248,10 @@ class CalibrationReport:
         title = self.protocol.specification or spec_title(self.spec_key)
         return Result(self.spec_key, title, items, d["metadata"],
                       d["source"], list(d["readings_taken"]), extra,
-                      settings={"protocol": d["protocol"], "budget_kind": self.budget_kind,
+                      settings={"protocol": d["protocol"],
+                                "protocol_sha256": protocol_provenance(
+                                    self.protocol.path or None).get("protocol_sha256"),
+                                "budget_kind": self.budget_kind,
                                 "repeatability_source": self.repeatability_source or None},
                       unused_readings=list(d.get("unused_readings") or []),
                       findings=list(self.findings),
