@@ -138,6 +138,9 @@ class CalibrationReport:
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
+    #: item → gonio.result.model.Conformity: the pipeline's decision (:meth:`decided_result`),
+    #: the one the certificate, the DCC and summary.txt render (results.json carries it)
+    conformity: dict = field(default_factory=dict)
     #: The specification's key in results.json (this report is the optical draft's).
     spec_key: str = "ogam-draft"
 
@@ -259,9 +262,13 @@ class CalibrationReport:
 
     def decided_result(self, lab: dict | None = None) -> Result:
         """:meth:`to_result` with the conformity of every item the laboratory file limits
-        decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json."""
+        decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json. The
+        decisions are kept in :attr:`conformity` too, for the certificate, the DCC and
+        summary.txt to render (they decide nothing themselves)."""
         result = self.to_result()
         decide_result(result, lab)
+        self.conformity = {k: it.conformity for k, it in result.items.items()
+                           if it.conformity is not None}
         return result
 
     def detail_tables(self) -> dict:
