@@ -453,10 +453,8 @@ def source_set_files(out, inputs: Iterable) -> list[Path]:
     man = read_manifest(out)
     if man is None:
         return []
-    real_out = os.path.realpath(out)
     kept = [n for n in man.get("inputs_kept") or () if isinstance(n, str)]
-    inside = any(inp is not None and str(inp).strip() and
-                 os.path.realpath(inp).startswith(real_out + os.sep) for inp in inputs)
+    inside = _reads_from(out, inputs)
     names = list(kept)
     if inside and _is_source_set(man):
         names += list(man["files"])
@@ -479,14 +477,23 @@ def holds_study(out: Path, man: dict | None = None) -> bool:
     return any(os.path.lexists(Path(out) / n) for n in STUDY_NAMES)
 
 
-def _refuse_mixing(out: Path, what: str) -> None:
-    """A folder holds the outputs of one command: a coverage study and a calibration (or
-    a simulation) never share one, whichever comes second; nothing of the other is
-    deleted."""
+def _refuse_mixing(out: Path, what: str, inputs: Iterable = ()) -> None:
+    """A folder holds the outputs of one run of one command: a coverage study and a
+    calibration (or a simulation) never share one, whichever comes second; a folder another
+    command wrote (``gonio demo``'s set, a calibration) is not replaced by a different
+    command — the one exception is the documented workflow, a run whose input lies in the
+    folder ``gonio simulate`` wrote, which keeps that whole set (:func:`source_set_files`).
+    Nothing of the other run is deleted."""
     if _lstat(out) is None:
         return
     man = read_manifest(out)
     cmd = current_command()
+    other = None if man is None else man.get("command")
+    if cmd is not None and other is not None and other != cmd and cmd != "validate" \
+            and not (other == "simulate" and _reads_from(out, inputs)):
+        raise GonioError(f"{what} holds the outputs of gonio {other}; a folder holds one "
+                         f"command's outputs and gonio {cmd} would replace them: choose "
+                         "another folder", file=out)
     if cmd == "validate":
         other = None if man is None else man.get("command")
         if other not in (None, "validate") or (other is None and man is not None
@@ -532,8 +539,16 @@ def foreign_files(out: Path, inputs: Iterable = (), what: str = "--out") -> list
     return [f for f in _folder_files(out, what) if f not in carried and f not in listed]
 
 
+def _reads_from(out: Path, inputs: Iterable) -> bool:
+    """Whether one of ``inputs`` lies inside the folder ``out``."""
+    real_out = os.path.realpath(out)
+    return any(inp is not None and str(inp).strip() and
+               os.path.realpath(inp).startswith(real_out + os.sep) for inp in inputs)
+
+
 def _check_replaceable(out: Path, inputs: Iterable, force: bool, what: str) -> None:
-    _refuse_mixing(out, what)
+    inputs = list(inputs)
+    _refuse_mixing(out, what, inputs)
     man = read_manifest(out)
     if man is None:
         return                            # nothing gonio wrote; foreign files are kept

@@ -8,7 +8,7 @@ import numpy as np
 
 from gonio.bench import load_bench
 from gonio.bench.session import _Variant, _motion, _simulate_many, plan_session
-from gonio.pipeline.validate import validation_protocol
+from gonio.specs.ogam_draft.study import validation_protocol
 
 
 def test_motion_on_runs_equals_the_timeline_sample_by_sample():

@@ -9,6 +9,7 @@ limit the specific false-accept probability is Φ(−2); two-sided intervals giv
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
@@ -111,3 +112,51 @@ def test_bad_rules_and_limits_name_the_key():
     with pytest.raises(ValueError):
         decide("E", 0.0, 0.0, 2.0, LIM, DecisionRule())
     assert not math.isnan(normal_cdf(math.inf))
+
+
+def test_chi2_model_of_a_standard_deviation_against_inverse_gamma():
+    # σ² given s (ν dof) is scaled inverse-χ², i.e. Inv-Gamma(ν/2, ν s²/2): a second route
+    from scipy.stats import invgamma
+    from gonio.analysis.conformity import conformance_probability_chi2
+    for s, nu, lo, hi in ((0.124, 9, None, 0.3), (1.0, 3, 0.5, 2.0), (0.02, 40, None, 0.021)):
+        ref = invgamma.cdf(hi ** 2, nu / 2, scale=nu * s * s / 2) - (
+            0.0 if lo is None else invgamma.cdf(lo ** 2, nu / 2, scale=nu * s * s / 2))
+        assert conformance_probability_chi2(s, nu, lo, hi) == pytest.approx(ref, rel=1e-9)
+
+
+def _result_with(value, U, k, nu, interval):
+    from gonio.result.model import Item, Result, Uncertainty
+    return Result("s", "S", {"R": Item("R", "repeatability", "7.5", "″", value,
+                                       uncertainty=Uncertainty([], U / k, U, k, nu,
+                                                               interval=interval))}, {}, {})
+
+
+def test_a_standard_deviation_with_its_chi2_interval_is_decided_on_chi2():
+    # review of stop 28: R = 0.124″ (ν = 9) against ≤ 0.3″ stated a false-accept risk of
+    # 9×10⁻¹⁰ from the normal model; σ = s·√(ν/χ²_ν) gives 0.31 %
+    from gonio.analysis.conformity import decide_items
+    r = _result_with(0.124, 0.066, 2.26, 9.0, (0.085, 0.226))
+    (c,) = decide_items(r, [{"item": "R", "upper": 0.3}], {"rule": "simple"})
+    assert c.outcome == "pass" and c.probability_model.startswith("chi-square")
+    assert c.false_accept_probability == pytest.approx(0.00314, abs=2e-5)
+    # no χ² interval: the normal model, as before
+    r = _result_with(0.124, 0.066, 2.26, 9.0, None)
+    (c,) = decide_items(r, [{"item": "R", "upper": 0.3}], {"rule": "simple"})
+    assert c.probability_model == "normal" and c.false_accept_probability < 1e-6
+
+
+def test_a_second_limit_for_one_item_is_an_error_not_an_override(tmp_path):
+    from gonio.analysis.conformity import decide_items
+    from gonio.report.certificate import load_lab
+    r = _result_with(0.124, 0.066, 2.26, 9.0, None)
+    with pytest.raises(GonioError, match=r"'R' has a limit already") as exc:
+        decide_items(r, [{"item": "R", "upper": 0.3}, {"item": "R", "upper": 0.5}], None)
+    assert exc.value.key == "specification_limits[1].item"
+    example = Path(__file__).resolve().parents[1] / "protocols" / "lab-example.toml"
+    lab = tmp_path / "lab.toml"
+    lab.write_text(example.read_text(encoding="utf-8") + '\n[[specification_limits]]\n'
+                   'item = "angle_deviation"\nmpe = 0.7\n', encoding="utf-8")
+    with pytest.raises(GonioError, match="limit already") as exc:
+        load_lab(lab)
+    assert exc.value.key.endswith("].item") and "angle_deviation" in str(exc.value)
+    assert "lab.toml" in str(exc.value)

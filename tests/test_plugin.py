@@ -6,6 +6,7 @@ and loading a specification never imports the virtual bench."""
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import json
 import subprocess
@@ -116,6 +117,48 @@ def test_validate_counts_coverage_against_the_bench_truth(plugin, tmp_path, caps
     assert main(["validate", "--spec", "acme-rate-check", "--trials", "2", "--cases",
                  "all"]) == 2
     assert "--cases does not apply" in capsys.readouterr().err
+
+
+def test_the_plugin_adds_its_own_command(plugin, capsys):
+    """``Specification.commands``: the plug-in's ``gonio acme-programme`` is on gonio's
+    command line, listed with the built-in commands, and ends like them (exit 2, one line)."""
+    assert main(["--help"]) == 0
+    assert "acme-programme" in capsys.readouterr().out
+    assert main(["acme-programme", "--samples", "5"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines == [f"{s}{r:g} °/s  5 samples" for r in (10, 50, 100) for s in "+-"]
+    assert main(["acme-programme", "--samples", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err == "gonio: error: --samples must be at least 2 (clause 4.1), got 1\n"
+
+
+def test_a_broken_command_leaves_the_others_working(monkeypatch, capsys):
+    """A specification that cannot be loaded, a command module that cannot be imported and
+    a command name taken twice each cost only that command, with a warning naming it."""
+    import gonio.specs as specs
+    from gonio.specs import BUILT_IN
+
+    broken = {**BUILT_IN, "nope": "no_such_module:SPEC"}
+    monkeypatch.setattr(specs, "_entry_points", lambda: broken)
+    assert main(["earth", "--latitude-deg", "30", "--axis", "up"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("gonio: warning: the specification entry point nope = "
+                          "'no_such_module:SPEC' cannot be loaded")
+    with pytest.warns(UserWarning, match="nope.*its commands are not available"):
+        names = [n for n, _ in specs.commands()]
+    assert {"align", "thermal-model"} <= set(names)
+    triad = specs.get("triad-alignment")
+    bad = dataclasses.replace(triad, commands=(("align", "no_such_module:add"),
+                                               ("thermal-model", triad.commands[1][1]),
+                                               ("thermal-model", triad.commands[1][1])))
+    monkeypatch.setattr(specs, "_entry_points", lambda: {"triad-alignment": "x:SPEC"})
+    monkeypatch.setattr(specs, "_load", lambda key, ref: bad)
+    with pytest.warns(UserWarning) as rec:
+        names = [n for n, _ in specs.commands()]
+    assert names == ["thermal-model"]
+    msgs = " | ".join(str(w.message) for w in rec)
+    assert "'align' of specification 'triad-alignment' ('no_such_module:add') cannot be " \
+        "loaded" in msgs and "adds one by that name" in msgs
 
 
 def test_a_broken_entry_point_is_one_clear_error(tmp_path):

@@ -59,6 +59,21 @@ def test_rerun_without_force_is_refused_like_the_optical_demo(first_set, capsys)
     assert "readings.csv" in err2 and "--force" in err2 and "Traceback" not in err2
 
 
+def test_calibrate_into_the_demo_folder_is_refused_and_deletes_nothing(first_set, capsys):
+    """``gonio calibrate D/readings.csv --out D`` on a folder ``gonio demo`` wrote: refused
+    before any work (the demo's truth.json and results are another command's outputs), with
+    or without --force (before: exit 0, truth.json deleted)."""
+    prev = tree(first_set)
+    for extra in ([], ["--force"]):
+        capsys.readouterr()
+        assert main(["calibrate", str(first_set / "readings.csv"), "--out", str(first_set),
+                     *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "gonio demo" in err[0] and "Traceback" not in err[0], err
+        assert tree(first_set) == prev
+    no_debris(first_set.parent)
+
+
 def test_failure_after_results_leaves_previous_set(first_set, tmp_path, monkeypatch, capsys):
     prev = tree(first_set)
     import gonio.specs._rate_family.outputs as rc        # the rate specifications' renderer

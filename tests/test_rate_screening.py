@@ -132,3 +132,24 @@ def test_missing_programme_point_is_named_and_on_the_certificate(simulated):
     html = next(p for k, p in paths.items() if str(p).endswith(".html"))
     page = html.read_text(encoding="utf-8")
     assert "Screening of the readings" in page and f"rate_dps = {rate}" in page
+
+
+def test_one_missing_sample_is_a_named_gap_not_half_a_record_set_aside(simulated):
+    # a logger that drops one sample leaves every later row on the grid, one step further:
+    # a fit t₀ + i·Δt by row index set aside every row after the gap (review of stop 28)
+    spec, proto, readings, tmp = simulated
+    text, head, header = _rows(readings)
+    rows = [dict(zip(header, next(csv.reader([s])))) for s in text[head + 1:]]
+    seg = {}
+    for i, row in enumerate(rows):
+        seg.setdefault((row["test"], row["run"], row["step"]), []).append(i)
+    longest = max(seg.values(), key=len)
+    gone = longest[len(longest) // 2]
+    bad = tmp / "gap.csv"
+    bad.write_text("".join(text[:head + 1 + gone] + text[head + 2 + gone:]), encoding="utf-8")
+    _, found = _findings(spec, bad, proto)
+    assert not [f for f in found if f["action"] == "set_aside"], found
+    gaps = [f for f in found if f["code"] == "time-gap"]
+    # the row after the dropped one now sits on the dropped one's line
+    assert len(gaps) == 1 and gaps[0]["line"] == head + 2 + gone, found
+    assert gaps[0]["action"] == "flagged" and gaps[0]["message"].startswith("1 sample(s)")

@@ -51,6 +51,26 @@ def test_upper_bound_of_non_negative_quantity():
     assert state(0.01, 0.088).upper is None
 
 
+@pytest.mark.parametrize("value,U,upper", [(0.1, 0.2, "0.30"), (1.1, 2.2, "3.3"),
+                                           (0.7, 1.4, "2.1"), (2.2e-7, 4.4e-7, "6.6")])
+def test_upper_bound_not_raised_by_a_float_artefact(value, U, upper):
+    # 0.1 + 0.2 = 0.30000000000000004 in binary: rounding *that* up would state ≤ 0.31
+    assert state(value, U, nonnegative=True).upper == upper
+
+
+def test_upper_bound_against_decimal_sum():
+    rng = np.random.default_rng(25)
+    for _ in range(2000):
+        U = float(rng.uniform(0.1, 9.9)) * 10.0 ** int(rng.integers(-5, 4))
+        value = U * float(rng.uniform(0, 1))
+        s = state(value, U, nonnegative=True)
+        q = Decimal(1).scaleb(-s.decimals)
+        exact = (Decimal(repr(value)) + Decimal(repr(U))).quantize(q, rounding="ROUND_CEILING")
+        if s.exponent:
+            continue            # mantissa form: checked by the hand cases
+        assert Decimal(s.upper) == exact, (value, U)
+
+
 def test_small_numbers_share_U_exponent():
     s = state(2.1805064e-05, 1.3e-06, k=2)
     assert (s.value_text, s.U_text) == ("2.18×10⁻⁵", "0.13×10⁻⁵")

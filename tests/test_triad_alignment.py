@@ -373,7 +373,7 @@ def test_cli_simulate_align_and_errors(tmp_path, capsys):
     page = pages[0]
     assert pages[0] == pages[1] and b"<svg" in page
     # the page shows M with U = k·u, U to 2 significant digits, value to U's decimal place
-    from gonio.report.triad_pages import value_with_u
+    from gonio.specs.triad_alignment.pages import value_with_u
     kk = res["coverage_factor"][0]
     cell = value_with_u(m[0][0], kk * u[0][0])
     assert cell.encode() in page

@@ -17,8 +17,8 @@ import pytest
 from gonio.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.formats.readings import Readings
-from gonio.pipeline.item_coverage import item_coverage, trial_items
-from gonio.pipeline.validate import validation_protocol
+from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
+from gonio.specs.ogam_draft.study import validation_protocol
 
 SEEDS = 24
 #: Items whose U this study finds over-wide (sd of z = (result − truth)/u_c < 0.3), with why.

@@ -17,7 +17,8 @@ from gonio.cli import main
 from gonio.protocol import parse_protocol
 from gonio.budget.extra import tilt_coupling_coefficients
 from gonio.physics.earth import earth_rate_split
-from gonio.pipeline.validate import binomial_u, coverage, trial_seeds, validate
+from gonio.pipeline.validate import binomial_u, coverage, validate
+from gonio.specs.ogam_draft.study import trial_seeds
 from gonio.units import dps_to_arcsec_s
 
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import gonio.pipeline.validate as V
+import gonio.specs.ogam_draft.study as S
 from gonio.bench import Bench, InstrumentConfig, TableConfig
 from gonio.cli import main
 from gonio.progress import Progress
@@ -42,9 +43,9 @@ def run(**kw):
 
 def test_seeds_by_trial_index_match_spawned_children():
     # SeedSequence(seed, spawn_key=(case, i)) is the i-th spawned child (numpy's own spawn).
-    for case_i, case in enumerate(V.CASES):
+    for case_i, case in enumerate(S.CASES):
         kids = np.random.SeedSequence(11, spawn_key=(case_i,)).spawn(5)
-        assert [V.trial_seed(11, case, i) for i in range(5)] == \
+        assert [S.trial_seed(11, case, i) for i in range(5)] == \
             [int(k.generate_state(1, np.uint32)[0]) for k in kids]
 
 
@@ -56,7 +57,7 @@ def test_bytes_identical_for_workers_batches_and_a_dask_cluster():
     assert run(scheduler="local:2", batch_size=2) == one
     # the trials really differ (a seed change changes the bytes)
     assert json.loads(one)["cases"][0]["seeds_first"] == \
-        [V.trial_seed(3, "default", i) for i in range(3)]
+        [S.trial_seed(3, "default", i) for i in range(3)]
 
 
 def test_interrupted_study_resumes_without_repeating_or_losing(tmp_path, monkeypatch):

@@ -130,6 +130,33 @@ def conformance_probability(y: float, u: float, lower: float | None,
     return max(0.0, hi - lo)
 
 
+def conformance_probability_chi2(s: float, nu: float, lower: float | None,
+                                 upper: float | None) -> float:
+    """p_c of a standard deviation σ estimated by s with ν degrees of freedom.
+
+    σ is distributed as s·√(ν/χ²_ν) — the distribution whose 95 % interval is the χ²
+    interval stated beside such an item's U (JCGM 100 E.4.3; JCGM 106 7.3 with this PDF of
+    σ in place of a normal one): P(σ ≤ T) = P(χ²_ν ≥ ν·s²/T²) for T > 0, and 0 for T ≤ 0.
+    The normal model N(s, u²) puts far too little probability in the long upper tail:
+    s = 0.124, ν = 9 against T_U = 0.3 gives 1 − p_c ≈ 0.31 % here and ≈ 10⁻⁹ there.
+
+    >>> round(1 - conformance_probability_chi2(0.124, 9, None, 0.3), 4)   # = χ²₉.cdf(9·0.124²/0.3²)
+    0.0031
+    >>> conformance_probability_chi2(0.124, 9, -0.3, None)
+    1.0
+    """
+    from scipy.stats import chi2
+    if not (s > 0 and math.isfinite(s) and nu > 0 and math.isfinite(nu)):
+        raise ValueError(f"s and nu must be finite and > 0, got s={s!r}, nu={nu!r}")
+
+    def below(t: float | None, open_end: float) -> float:      # P(σ ≤ t)
+        if t is None:
+            return open_end
+        return float(chi2.sf(nu * s * s / (t * t), nu)) if t > 0 else 0.0
+
+    return max(0.0, below(upper, 1.0) - below(lower, 0.0))
+
+
 def acceptance_interval(limits: Limits, w: float) -> tuple[float | None, float | None]:
     """[T_L + w, T_U − w]: the acceptance interval of a guard band w (JCGM 106 8.3.2).
 
@@ -150,7 +177,7 @@ def _inside(y: float, lo: float | None, hi: float | None) -> bool:
 
 
 def decide(item: str, y: float, U: float, k: float, limits: Limits,
-           rule: DecisionRule) -> Conformity:
+           rule: DecisionRule, *, chi2_nu: float | None = None) -> Conformity:
     """The statement of conformity for one item (ILAC-G8:09/2019 4.2; JCGM 106 8–9).
 
     Parameters
@@ -161,6 +188,9 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
         extreme lying inside that interval.
     U, k : expanded uncertainty and its coverage factor (u = U/k, normal model).
     limits, rule : the tolerance interval and the decision rule agreed.
+    chi2_nu : for a standard deviation stated with its χ² interval, its degrees of freedom:
+        the probabilities come from :func:`conformance_probability_chi2` instead of the
+        normal model (``probability_model`` says which).
 
     A value exactly on a limit of the acceptance interval is accepted (the limits
     are part of the interval, JCGM 106 3.3.9).
@@ -172,7 +202,12 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
     if not (U > 0 and math.isfinite(U) and k > 0 and math.isfinite(k)):
         raise ValueError(f"{item}: U and k must be finite and > 0 (U={U!r}, k={k!r})")
     u = U / k
-    p_c = conformance_probability(y, u, limits.lower, limits.upper)
+    if chi2_nu is not None and y > 0:
+        p_c = conformance_probability_chi2(y, chi2_nu, limits.lower, limits.upper)
+        model = f"chi-square, nu = {chi2_nu:g}"
+    else:
+        p_c = conformance_probability(y, u, limits.lower, limits.upper)
+        model = "normal"
     w = rule.guard_band(U)
     a_lo, a_hi = acceptance_interval(limits, w)
     in_tol = _inside(y, limits.lower, limits.upper)
@@ -195,7 +230,8 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
                       accepted=accepted, conformance_probability=p_c,
                       false_accept_probability=(1.0 - p_c) if accepted else None,
                       false_reject_probability=p_c if not accepted else None,
-                      source=limits.source, guard_factor=float(rule.guard_factor))
+                      source=limits.source, guard_factor=float(rule.guard_factor),
+                      probability_model=model)
 
 
 def limits_of(lim: dict) -> Limits:
@@ -226,6 +262,26 @@ def _undecided(key: str, lim: Limits, rule: DecisionRule, origin: str,
                       guard_factor=float(rule.guard_factor), limits_from=origin, reason=reason)
 
 
+def check_one_limit_per_item(limits, where: str = "specification_limits", *,
+                             file=None) -> None:
+    """One limit per item: a second entry for the same item is an error naming both, never
+    a silent override (the last decision would win in results.json while the certificate
+    showed both).
+
+    >>> check_one_limit_per_item([{"item": "R", "mpe": 0.3}, {"item": "R", "mpe": 0.5}])
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[1].item: 'R' has a limit already (specification_limits[0]); give one limit per item
+    """
+    first: dict = {}
+    for i, lim in enumerate(limits or []):
+        key = lim.get("item")
+        if key in first:
+            raise GonioError(f"{key!r} has a limit already ({where}[{first[key]}]); give one "
+                             f"limit per item", file=file, key=f"{where}[{i}].item")
+        first[key] = i
+
+
 def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,
                  origin: str = "lab file", where: str = "specification_limits") -> list:
     """Decide every item of ``result`` (a :class:`gonio.result.model.Result`) that a limit
@@ -249,6 +305,7 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
     gonio.errors.GonioError: key specification_limits[0].item: s has no item 'K' (its items: bias)
     """
     rule = rule if isinstance(rule, DecisionRule) else rule_of(rule)
+    check_one_limit_per_item(limits, where)
     out = []
     for i, lim in enumerate(limits or []):
         key = lim.get("item")
@@ -264,8 +321,10 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
               or not math.isfinite(unc.U)):
             c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
         else:
-            c = replace(decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule),
-                        limits_from=origin)
+            chi2_nu = (float(unc.nu_eff) if unc.interval is not None and unc.nu_eff is not None
+                       and math.isfinite(unc.nu_eff) and unc.nu_eff > 0 else None)
+            c = replace(decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
+                               chi2_nu=chi2_nu), limits_from=origin)
         it.conformity = c
         out.append(c)
     return out

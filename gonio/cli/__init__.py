@@ -2,8 +2,10 @@
 
 Each sub-command lives in its own module ``gonio/cli/cmd_<name>.py`` that
 defines ``register(subparsers)``; the parser it adds sets ``func`` to a
-function ``run(args) -> int``. Modules are discovered in name order, so adding
-a command never edits a shared list.
+function ``run(args) -> int``. A specification adds its own sub-commands the same
+way through the registry (``Specification.commands``, :func:`gonio.specs.commands`:
+``align`` and ``thermal-model``, say). Commands are registered in name order,
+so adding one never edits a shared list.
 
 Every way a run can end is one line on stderr, never a traceback:
 
@@ -66,12 +68,30 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"gonio {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    import gonio.cli as pkg
-
-    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if info.name.startswith("cmd_"):
-            importlib.import_module(f"gonio.cli.{info.name}").register(sub)
+    for _, register in sorted(_commands().items()):
+        register(sub)
     return parser
+
+
+def _commands() -> dict:
+    """{command name: register(subparsers)}: gonio's ``cmd_*`` modules and the commands the
+    registered specifications add (:func:`gonio.specs.commands`); a specification's command
+    that takes a built-in name is not added, with a warning naming it."""
+    import gonio.cli as pkg
+    from gonio.specs import commands
+
+    found = {}
+    for info in pkgutil.iter_modules(pkg.__path__):
+        if info.name.startswith("cmd_"):
+            mod = importlib.import_module(f"gonio.cli.{info.name}")
+            found[info.name[4:].replace("_", "-")] = mod.register
+    for name, add_parser in commands():
+        if name in found:
+            warnings.warn(f"a specification's command {name!r} is not available: gonio has a "
+                          "command by that name")
+            continue
+        found[name] = add_parser
+    return found
 
 
 def _error(msg: str) -> int:

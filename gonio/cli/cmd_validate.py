@@ -1,6 +1,7 @@
 """``gonio validate``: the coverage of a specification's uncertainties over many virtual
-calibrations (``SPEC.coverage``: the generic item study of :mod:`gonio.pipeline.coverage`, or
-the Annex A study over bench cases of :mod:`gonio.pipeline.validate`)."""
+calibrations (``SPEC.coverage``, run by :func:`gonio.pipeline.validate.validate`: the generic
+item study of :mod:`gonio.pipeline.coverage`, or a study the specification describes, such as
+the default specification's Annex A study over bench cases)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
-from gonio.pipeline.validate import CASES, EXTRA_SYMBOLS, PARTIAL_DIR, TRUTHS, validate
+from gonio.pipeline.validate import PARTIAL_DIR, validate
 from gonio.specs import DEFAULT_KEY
 
 
@@ -36,12 +37,14 @@ def register(sub) -> None:
                    help="protocol (default: the specification's, restricted or reduced to the "
                         "study's programme)")
     p.add_argument("--cases", default=None,
-                   help=f"comma-separated cases, or 'all' ({', '.join(CASES)})")
-    p.add_argument("--truth", default=None, choices=TRUTHS,
-                   help="truth of the printed table (all are in the JSON)")
+                   help="comma-separated cases of a study over bench cases, or 'all' (an "
+                        "unknown case is refused naming the known ones)")
+    p.add_argument("--truth", default=None,
+                   help="truth of the printed table of a study over bench cases (all are in "
+                        "the JSON; an unknown one is refused naming the known ones)")
     p.add_argument("--extra-components", nargs="?", const="all", default=None, metavar="NAMES",
                    help="also evaluate the budget with the components the annex lacks: all, or "
-                        f"a comma-separated subset of {','.join(EXTRA_SYMBOLS)}")
+                        "a comma-separated subset of their symbols")
     p.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=None,
                    help="multiply U (default 1; < 1 deliberately breaks the budget)")
     p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=None,
@@ -73,10 +76,10 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-#: Options of the bench-case study, with the values they have when not given.
-CASE_OPTIONS = {"cases": "default", "truth": "systematic", "extra_components": None,
-                "u_scale": 1.0, "sample_rate_hz": 100.0, "all_items": False, "resume": False,
-                "monte_carlo": 0}
+#: Options of a study the specification describes (``SPEC.coverage.options`` says which it
+#: takes; the study's own defaults apply where not given).
+STUDY_OPTIONS = ("cases", "truth", "extra_components", "u_scale", "sample_rate_hz",
+                 "all_items", "resume", "monte_carlo")
 
 
 def run(args) -> int:
@@ -96,36 +99,27 @@ def run(args) -> int:
     if spec.coverage is None:
         raise GonioError(f"{spec.key} has no coverage study (SPEC.coverage is None)",
                          key="--spec")
-    given = refuse_options(spec, {k: getattr(args, k) for k in CASE_OPTIONS},
+    given = refuse_options(spec, {k: getattr(args, k) for k in STUDY_OPTIONS},
                            spec.coverage.options, "validate")
     if args.out is not None:
         from gonio.atomic import check_output_folder_place
         check_output_folder_place(args.out)          # before any batch is written there
     if spec.coverage.engine == "items":
         return run_items(spec, args)
-    return run_cases(spec, args, {**CASE_OPTIONS, **given})
+    return run_study(spec, args, given)
 
 
-def run_cases(spec, args, opts: dict) -> int:
-    """The Annex A study over bench cases (:func:`gonio.pipeline.validate.validate`)."""
-    cases = list(CASES) if opts["cases"].strip() == "all" else \
-        [c.strip() for c in opts["cases"].split(",") if c.strip()]
-    ec = opts["extra_components"]
-    if ec is None:
-        extras = False
-    elif ec.strip() == "all":
-        extras = True
-    else:
-        extras = [e.strip() for e in ec.split(",") if e.strip()]
+def run_study(spec, args, opts: dict) -> int:
+    """A study the specification describes (:func:`gonio.pipeline.validate.validate`), with
+    its partial results kept in ``--out``."""
+    opts = dict(opts)
+    resume = bool(opts.pop("resume", False))
     partial = Path(args.out) / PARTIAL_DIR if args.out is not None else None
     try:
-        report = validate(args.trials, seed=args.seed, bench=args.bench or spec.default_bench,
-                          cases=cases, sample_rate_hz=opts["sample_rate_hz"],
-                          protocol=args.protocol or spec.default_protocol,
-                          extra_components=extras, truth=opts["truth"],
-                          u_scale=opts["u_scale"], workers=args.workers, scheduler=args.scheduler,
-                          batch_size=args.batch, partial_dir=partial, resume=opts["resume"],
-                          all_items=opts["all_items"], monte_carlo=opts["monte_carlo"])
+        report = validate(args.trials, spec=spec, seed=args.seed, bench=args.bench,
+                          protocol=args.protocol, workers=args.workers,
+                          scheduler=args.scheduler, batch_size=args.batch, partial_dir=partial,
+                          resume=resume, **opts)
     except KeyboardInterrupt:
         if partial is not None and partial.exists():
             sys.stderr.write(f"gonio: interrupted: the finished trials are kept in {partial}; "
@@ -153,13 +147,12 @@ def emit(report, args) -> None:
 
 
 def run_items(spec, args) -> int:
-    """The item coverage study (:func:`gonio.pipeline.coverage.coverage_validate`)."""
-    from gonio.pipeline.coverage import coverage_validate
-
+    """The item coverage study (:func:`gonio.pipeline.validate.validate` →
+    :func:`gonio.pipeline.coverage.coverage_validate`)."""
     try:
-        report = coverage_validate(spec.key, args.trials, seed=args.seed, bench=args.bench,
-                                   protocol=args.protocol, workers=args.workers,
-                                   scheduler=args.scheduler, batch_size=args.batch)
+        report = validate(args.trials, spec=spec, seed=args.seed, bench=args.bench,
+                          protocol=args.protocol, workers=args.workers,
+                          scheduler=args.scheduler, batch_size=args.batch)
     except KeyboardInterrupt:
         sys.stderr.write("gonio: interrupted (an item study keeps no partial results)\n")
         return 130

@@ -8,7 +8,8 @@ counts per item how often the bench's true value (``truth["items"][key]["value"]
 bench's physical parameters) lies within the reported expanded uncertainty,
 |value − truth| ≤ U. The coverage c = hits/n is reported with its binomial standard
 uncertainty √(c(1 − c)/n) and the Wilson 95 % interval, and the normalised errors
-|value − truth|/u_c are summarised.
+|value − truth|/u_c are summarised (:func:`gonio.analysis.coverage.item_coverage`, the
+statistics every study of ``gonio validate`` uses).
 
 The study's bench is ``SPEC.coverage.study_bench(name)`` (a specification switches off there
 what its truth leaves out) and its programme the built-in protocol changed by
@@ -21,41 +22,18 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-
 from pathlib import Path
 
 import pandas as pd
 
+from gonio.analysis.coverage import ItemCoverage, item_coverage, spawn_seed, wilson_interval
 from gonio.atomic import write_text
-
 from gonio.errors import GonioError
-from gonio.pipeline.item_coverage import two_sided
 from gonio.specs import Specification, get
 
-#: Wilson-interval coverage factor (95 %).
-_Z95 = 1.959963984540054
-
-
-@dataclass(frozen=True)
-class ItemCoverage:
-    """One item's coverage over the seeds."""
-
-    key: str
-    clause: str
-    n: int
-    hits: int
-    coverage: float
-    u_coverage: float
-    wilson_low: float
-    wilson_high: float
-    median_norm_error: float
-    max_norm_error: float
-    cp_low: float = math.nan
-    cp_high: float = math.nan
-    z_mean: float | None = None
-    z_sd: float | None = None
-    flags: tuple = ()
-
+__all__ = ["coverage_study", "coverage_validate", "coverage_table_from", "trial_records",
+           "reduced_protocol", "study_bench", "format_coverage", "CoverageReport", "TrialJob",
+           "run_batch", "ItemCoverage", "item_coverage", "wilson_interval"]
 
 def study_bench(spec: Specification, name=None):
     """The bench of ``spec``'s coverage study: ``name`` (default the specification's bench)
@@ -91,45 +69,6 @@ def reduced_protocol(spec_key: str, path, changes: dict | None = None) -> Path:
         lines += [f"{k} = {_toml_value(v)}" for k, v in tab.items()]
     write_text(Path(path), "\n".join(lines) + "\n")
     return Path(path)
-
-
-def wilson_interval(hits: int, n: int, z: float = _Z95) -> tuple[float, float]:
-    """Wilson score interval of a binomial proportion.
-
-    >>> [round(v, 4) for v in wilson_interval(95, 100)]
-    [0.8882, 0.9785]
-    """
-    if n < 1:
-        raise GonioError("a coverage needs at least one trial")
-    p = hits / n
-    d = 1 + z * z / n
-    c = (p + z * z / (2 * n)) / d
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return max(0.0, c - h), min(1.0, c + h)
-
-
-def item_coverage(records: list[tuple[float, float, float, float]], key: str = "",
-                  clause: str = "") -> ItemCoverage:
-    """Coverage of one item from (value, truth, U, u_c) per seed.
-
-    >>> c = item_coverage([(1.0, 1.1, 0.2, 0.1), (1.0, 1.3, 0.2, 0.1)])
-    >>> c.hits, c.coverage, round(c.u_coverage, 4)
-    (1, 0.5, 0.3536)
-    """
-    n = len(records)
-    if n == 0:
-        raise GonioError(f"item {key!r}: no seed gave a measured value with a truth")
-    hits = sum(abs(v - t) <= U for v, t, U, _ in records)
-    c = hits / n
-    lo, hi = wilson_interval(hits, n)
-    ne = sorted(abs(v - t) / u if u > 0 else (0.0 if v == t else math.inf)
-                for v, t, _, u in records)
-    both = two_sided([v - t for v, t, _, _ in records], [U for _, _, U, _ in records],
-                     [u for _, _, _, u in records])
-    return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
-                        ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
-                        both["cp_low"], both["cp_high"], both["z_mean"], both["z_sd"],
-                        tuple(both["flags"]))
 
 
 def _studied(spec_key: str) -> Specification:
@@ -206,7 +145,7 @@ def format_coverage(df: pd.DataFrame, title: str) -> str:
 
 # ----------------------------------------------------------------------------- the study
 # ``gonio validate --spec``: the trials of :func:`trial_records` run in batches through
-# the engine of :mod:`gonio.pipeline.validate` (joblib locally or on Dask, batches of
+# the engine of :mod:`gonio.pipeline.engine` (joblib locally or on Dask, batches of
 # trials, trial i seeded by SeedSequence(seed, spawn_key=(spec index, i))); the records
 # are put back in trial order, so the report does not depend on workers or batching.
 
@@ -224,10 +163,10 @@ class TrialJob:
 def run_batch(job: "TrialJob", start: int, stop: int) -> list[tuple[int, int, str]]:
     """Trials ``start`` … ``stop − 1``: (index, seed, records as JSON text — lossless),
     with the numerical libraries' thread pools held to
-    :data:`gonio.pipeline.validate.WORKER_THREADS`, as the optical study's batches are."""
+    :data:`gonio.pipeline.engine.WORKER_THREADS`, as the optical study's batches are."""
     from threadpoolctl import threadpool_limits
 
-    from gonio.pipeline.validate import WORKER_THREADS, spawn_seed
+    from gonio.pipeline.engine import WORKER_THREADS
 
     key = get(job.spec_key).coverage.stream
     out = []
@@ -279,7 +218,7 @@ def coverage_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str |
     import tempfile
 
     from gonio.limits import check
-    from gonio.pipeline.validate import run_parallel, study_workers
+    from gonio.pipeline.engine import run_parallel, study_workers
     from gonio.progress import Progress
 
     spec = _studied(spec_key)

@@ -1,5 +1,5 @@
 """The Digital Calibration Certificate (PTB DCC 3.3.0) of any per-item result, with the
-matrices a specification names written as lists: the triad's (and any plug-in's) DCC.
+matrices a specification names written as lists (its ``MATRICES``; any plug-in's DCC).
 
 Contents
 ========
@@ -25,8 +25,8 @@ import math
 import re
 
 from gonio.errors import GonioError
-from gonio.report.dcc import (administrative_data, conformity_statements, element,
-                              measurement_result, new_document, not_measured_quantity,
+from gonio.report.dcc import (administrative_data, bound_quantity, conformity_statements,
+                              element, measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
 from gonio.report.stated import item_nums
@@ -113,6 +113,8 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
             kw = {"U": n["U"], "k": n["k"], "p": float(p)}
         quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"]),
                  ref_type="basic_measuredValue", **kw)
+        if n["upper"] is not None:
+            bound_quantity(d, n["statement"].upper_text, dsi=compose_dsi(it["unit"]))
     for mname, keys in getattr(data, "MATRICES", ()) if data is not None else ():
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

@@ -163,6 +163,7 @@ class Conformity:
     guard_factor: float | None = None
     limits_from: str = ""
     reason: str = ""
+    probability_model: str = "normal"
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))
@@ -221,7 +222,16 @@ class Item:
                 "uncertainty": (None if self.uncertainty is None or not measured
                                 else self.uncertainty.to_json()),
                 "conformity": None if self.conformity is None else self.conformity.to_json(),
-                "nonnegative": bool(self.nonnegative), "details": json_safe(self.details)}
+                "nonnegative": bool(self.nonnegative), "details": json_safe(self.details),
+                **({"upper_bound": self.upper_bound()} if self.nonnegative else {})}
+
+    def upper_bound(self) -> float | None:
+        """The upper bound the statement rule gives a non-negative item whose U exceeds its
+        value (:func:`gonio.result.statement.state`), or None."""
+        from gonio.result.statement import item_statement
+
+        st = item_statement(self, nonnegative=True)
+        return None if st.upper is None else float(f"{st.upper}e{st.exponent}")
 
     @classmethod
     def from_json(cls, d: dict, key: str | None = None) -> "Item":
@@ -357,6 +367,8 @@ def flat_view(d: dict) -> dict:
         flat.update(it.get("details") or {})
         flat["uncertainty"] = it.get("uncertainty")
         flat["conformity"] = it.get("conformity")
+        if "upper_bound" in it:
+            flat["upper_bound"] = it["upper_bound"]
         out[key] = flat
     out["unused_readings"] = d.get("unused_readings", [])
     out["findings"] = d.get("findings", [])

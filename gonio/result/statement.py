@@ -78,23 +78,36 @@ def _wide():
     return localcontext(prec=1400, Emax=999_999, Emin=-999_999)
 
 
-def round_half_up(x: float, decimals: int, rounding: str = ROUND_HALF_UP) -> str:
+def _exact_sum(a: float, b: float) -> Decimal:
+    """``a + b`` of the two floats' shortest reprs, exactly: an upper bound rounded up
+    (ROUND_CEILING) from a float sum would carry its binary artefact one place up
+    (0.1 + 0.2 = 0.30000000000000004 → "0.31").
+
+    >>> _exact_sum(0.1, 0.2)
+    Decimal('0.3')
+    """
+    with _wide():
+        return Decimal(repr(float(a))) + Decimal(repr(float(b)))
+
+
+def round_half_up(x: float | Decimal, decimals: int, rounding: str = ROUND_HALF_UP) -> str:
     """``x`` rounded half up to ``decimals`` places (negative: tens, hundreds...), as text.
 
-    Works on the shortest repr of the float, so 0.125 → "0.13" and 2.675 → "2.68"; a
-    result that rounds to zero has no sign.
+    Works on the shortest repr of the float, so 0.125 → "0.13" and 2.675 → "2.68" (a
+    :class:`~decimal.Decimal` is taken exactly); a result that rounds to zero has no sign.
 
     >>> round_half_up(0.35896, 2), round_half_up(-0.11879, 2), round_half_up(76434.84259, 3)
     ('0.36', '-0.12', '76434.843')
     >>> round_half_up(0.125, 2), round_half_up(1234.5, -2), round_half_up(-0.0004, 2)
     ('0.13', '1200', '0.00')
     """
+    exact = x if isinstance(x, Decimal) else None
     x = float(x)
     if not math.isfinite(x):
         return "—"
     with _wide():              # total: any finite float and any place (no InvalidOperation)
         q = Decimal(1).scaleb(-decimals)
-        d = Decimal(repr(x)).quantize(q, rounding=rounding)
+        d = (exact if exact is not None else Decimal(repr(x))).quantize(q, rounding=rounding)
         if d == 0:
             d = abs(d)
         return f"{d:f}" if decimals >= 0 else f"{d.quantize(Decimal(1)):f}"
@@ -249,6 +262,11 @@ class Statement:
         """U as printed (with the common power of ten), or None."""
         return self._x(self.U) if self.U is not None else None
 
+    @property
+    def upper_text(self) -> str | None:
+        """The upper bound of a non-negative quantity as printed, or None."""
+        return self._x(self.upper) if self.upper is not None else None
+
     def factors(self) -> str:
         """"k = 1.97, ν_eff = 58, p ≈ 95 %" (the parts known), or ""."""
         parts = []
@@ -329,12 +347,12 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
             U_m = float(Decimal(repr(U)).scaleb(-exponent))
         md = dec + exponent                    # the mantissas' decimal place (U keeps 2 digits)
         vt, Ut = round_half_up(value_m, md), round_half_up(U_m, md)
-        upper = (round_half_up(value_m + U_m, md, ROUND_CEILING)
+        upper = (round_half_up(_exact_sum(value_m, U_m), md, ROUND_CEILING)
                  if nonnegative and U > value else None)
     else:
         vt, Ut = round_half_up(value, dec), round_half_up(U, dec)
-        upper = round_half_up(value + U, dec, ROUND_CEILING) if nonnegative and U > value \
-            else None
+        upper = (round_half_up(_exact_sum(value, U), dec, ROUND_CEILING)
+                 if nonnegative and U > value else None)
     return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
                      decimals=dec)
 

@@ -5,8 +5,9 @@ exposes ``SPEC``, a :class:`Specification`: its key (the ``--spec`` value), titl
 clauses, its default protocol and bench, and the hooks gonio calls — ``calibrate``
 (readings → result), ``screen`` (readings → findings), ``simulate`` and ``truth`` (the
 virtual bench), ``budget`` (its own uncertainty annex), ``coverage`` (the settings of its
-coverage study) and ``outputs`` (the module that renders a result: results.json, summary,
-tables, certificate, DCC). docs/writing-a-specification.md builds one from scratch.
+coverage study), ``outputs`` (the module that renders a result: results.json, summary,
+tables, certificate, DCC) and ``commands`` (the ``gonio`` sub-commands it adds, such as the
+triad's ``align``). docs/writing-a-specification.md builds one from scratch.
 
 Packages register through the entry-point group ``gonio.specs`` (``key = "pkg:SPEC"``), as
 pytest plug-ins do: gonio's four built-in specifications are listed in gonio's own
@@ -30,7 +31,7 @@ from typing import Any, Callable
 
 from gonio.errors import GonioError
 
-__all__ = ["Coverage", "Specification", "available", "get", "item_order", "lazy",
+__all__ = ["Coverage", "Specification", "available", "commands", "get", "item_order", "lazy",
            "ENTRY_POINT_GROUP", "BUILT_IN", "DEFAULT_KEY"]
 
 #: The entry-point group a specification package registers under.
@@ -59,8 +60,8 @@ class Coverage:
     engine : str
         ``"items"``: the generic study (:mod:`gonio.pipeline.coverage`): simulate with
         noise, calibrate, count per item how often |value − truth| ≤ U over the trials.
-        ``"cases"``: the optical study of the Annex A budget over bench cases
-        (:mod:`gonio.pipeline.validate`).
+        ``"cases"``: a study the specification describes itself (``study``), run by the
+        engine of :mod:`gonio.pipeline.validate` (batches, partial results, resume).
     stream : int
         The index of the study's seed stream: trial i is seeded by
         ``SeedSequence(seed, spawn_key=(stream, i))``; distinct per specification so that two
@@ -73,6 +74,12 @@ class Coverage:
         effects its truth leaves out). None: the bench as loaded.
     options : frozenset
         The ``gonio validate`` options the engine takes beyond the common ones.
+    study : callable or None
+        ``"cases"`` engine: ``study(trials, *, seed, bench, protocol, **options)`` → the
+        planned study: ``settings`` (dict), ``jobs`` (part → picklable job whose
+        ``run(start, stop)`` packs those trials as arrays with ``case`` and ``index``),
+        ``unpack(packed)`` → {trial index: trial}, ``report(done)`` → an object with
+        ``to_dict()`` (validation.json) and ``table()`` (docs/writing-a-specification.md).
     """
 
     engine: str = "items"
@@ -80,6 +87,7 @@ class Coverage:
     reduced: dict = field(default_factory=dict)
     study_bench: Callable[..., Any] | None = None
     options: frozenset = frozenset()
+    study: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -139,6 +147,16 @@ class Specification:
     named_inputs : callable or None
         (readings path) → the other files the readings name as part of their data (inputs
         no output may replace).
+    certificate_content : str
+        The module holding its certificate's content as data (its headings, groups, Chinese
+        titles, ``NORM``, what its figures differ in); the shared renderers read it through
+        :meth:`content`, never by guessing from a module's name. Empty: none.
+    commands : tuple of (str, str)
+        The ``gonio`` sub-commands the specification adds: ``(name, "module:function")``
+        pairs; ``function(subparsers)`` adds the parser ``name`` (argparse) and sets its
+        ``func`` to ``run(args) -> int``, as gonio's own ``gonio/cli/cmd_*.py`` modules do.
+        The module is imported only when the command line is built; it sits on the command
+        line's layer (it may import ``gonio.cli.checks``).
     """
 
     key: str
@@ -162,6 +180,8 @@ class Specification:
     budget_options: frozenset = frozenset()
     readings_format: str = ""
     named_inputs: Callable[..., list] | None = None
+    certificate_content: str = ""
+    commands: tuple[tuple[str, str], ...] = ()
 
     def renderer(self):
         """The module named by ``outputs`` (imported on first use)."""
@@ -169,6 +189,13 @@ class Specification:
             raise GonioError(f"specification {self.key!r} names no outputs module (it cannot "
                              "write results or a certificate)", key="--spec")
         return importlib.import_module(self.outputs)
+
+    def content(self):
+        """The module named by ``certificate_content`` (imported on first use)."""
+        if not self.certificate_content:
+            raise GonioError(f"specification {self.key!r} names no certificate content "
+                             "(certificate_content)", key="--spec")
+        return importlib.import_module(self.certificate_content)
 
 
 class lazy:
@@ -258,3 +285,37 @@ def get(key: str) -> Specification:
         raise GonioError(f"unknown specification {key!r} (known: {', '.join(sorted(eps))})",
                          key="spec")
     return _load(key, eps[key])
+
+
+def commands() -> list[tuple[str, Callable[..., None]]]:
+    """``(name, add_parser)`` of every sub-command a registered specification contributes
+    (``Specification.commands``), in name order. A specification (or a command module) that
+    cannot be loaded adds none, and a name a second specification adds again is not added
+    again: each is a warning naming it, so that a broken plug-in never takes the other
+    commands down (its own ``--spec`` still fails with the error).
+
+    >>> [name for name, _ in commands() if name == "align"]
+    ['align']
+    """
+    import warnings
+
+    found: dict[str, tuple[str, Callable[..., None]]] = {}
+    for key, ref in sorted(_entry_points().items()):
+        try:
+            spec = _load(key, ref)
+        except GonioError as exc:
+            warnings.warn(f"{exc.message}; its commands are not available", stacklevel=2)
+            continue
+        for name, fn_ref in spec.commands:
+            if name in found:
+                warnings.warn(f"the command {name!r} of specification {key!r} is not available: "
+                              f"specification {found[name][0]!r} adds one by that name",
+                              stacklevel=2)
+                continue
+            mod, _, attr = fn_ref.partition(":")
+            try:
+                found[name] = (key, getattr(importlib.import_module(mod), attr))
+            except (ImportError, AttributeError) as exc:
+                warnings.warn(f"the command {name!r} of specification {key!r} ({fn_ref!r}) "
+                              f"cannot be loaded ({type(exc).__name__}: {exc})", stacklevel=2)
+    return [(name, fn) for name, (_, fn) in sorted(found.items())]

@@ -18,8 +18,11 @@ Rules (one segment = the rows of one test, run and step, in time order):
   than max(10·1.4826·MAD, tolerance) (rate 10⁻⁶ relative + 10⁻⁹ °/s, temperature 1 °C,
   supply 0.01 V, frequency 10⁻⁶ relative, stand angle 0.01°; axes: any difference) is set
   aside.
-* ``time-departs`` — times of a segment follow t₀ + i·Δt (Δt the median step): a row more
-  than Δt/4 off that line, or not increasing, is set aside.
+* ``time-departs`` — times of a segment lie on a grid t₀ + n·Δt (Δt the median step, t₀
+  the grid's phase as the circular mean of the rows' fractional steps): a row more than
+  Δt/4 off the grid is set aside.
+* ``time-gap`` — whole samples missing from the grid (n jumps by more than one): flagged,
+  not set aside — the rows around a gap are good; the certificate names the gap.
 * ``programme-point-missing`` — a rate point, record, position or set point the protocol
   plans and the readings lack is named (flagged: the item is computed from what is there
   and the certificate says what is missing).
@@ -123,14 +126,34 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
 
 def _time_rule(df: pd.DataFrame, key: pd.Series, file, clauses) -> list[Finding]:
     t = pd.to_numeric(df["time_s"], errors="coerce")
-    i = df.groupby(key).cumcount()
     dt = t.groupby(key).diff().groupby(key).transform("median")
-    t0 = (t - i * dt).groupby(key).transform("median")
-    off = t - (t0 + i * dt)
-    bad = np.flatnonzero(((off.abs() > dt / 4) & (dt > 0)).fillna(False).to_numpy())
-    return [_finding("time-departs", f"time {t.iloc[k]:.10g} s is {off.iloc[k]:+.4g} s off the "
-                     f"segment's sampling (step {dt.iloc[k]:.6g} s)", df.iloc[k], "time_s",
-                     file, clauses, "|t − (t0 + i·Δt)| > Δt/4") for k in bad]
+    u = (t - t.groupby(key).transform("first")) / dt          # grid steps from the first row
+    # the grid's phase: circular mean of the fractional steps (a robust t₀ that a gap,
+    # unlike a fit of t₀ + i·Δt by row index, does not move)
+    z = np.exp(2j * np.pi * (u - np.round(u)))
+    phase = np.angle(pd.Series(z, index=t.index).groupby(key).transform("mean")) / (2 * np.pi)
+    n = np.round(u - phase)
+    off = (u - phase - n) * dt
+    ok = (dt > 0).fillna(False)
+    bad_mask = ((off.abs() > dt / 4) & ok).fillna(False)
+    out = [_finding("time-departs", f"time {t.iloc[k]:.10g} s is {off.iloc[k]:+.4g} s off the "
+                    f"segment's sampling grid (step {dt.iloc[k]:.6g} s)", df.iloc[k], "time_s",
+                    file, clauses, "|t − (t₀ + n·Δt)| > Δt/4")
+           for k in np.flatnonzero(bad_mask.to_numpy())]
+    # samples missing from the grid: kept (the rows there are good), named
+    # (grid steps between neighbouring good rows) − (rows between them): a row set aside
+    # above still occupies its place on the grid
+    on_grid = ok & ~bad_mask
+    row = pd.Series(np.arange(len(t)), index=t.index).groupby(key).cumcount()
+    missing = (n[on_grid].groupby(key[on_grid]).diff()
+               - row[on_grid].groupby(key[on_grid]).diff())
+    for k in missing.index[(missing > 0).fillna(False).to_numpy()]:
+        pos = df.index.get_loc(k)
+        f = _finding("time-gap", f"{int(missing[k])} sample(s) missing before time "
+                     f"{t.loc[k]:.10g} s (step {dt.loc[k]:.6g} s)", df.iloc[pos], "time_s",
+                     file, clauses, "(n_i − n_j) − (i − j) > 0 between neighbouring rows on the grid t₀ + n·Δt")
+        out.append(Finding(**{**f.to_json(), "action": "flagged"}))
+    return out
 
 
 def screen(readings, segments, clauses: dict) -> list[Finding]:

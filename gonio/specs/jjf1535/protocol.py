@@ -88,6 +88,12 @@ def load_protocol(path: str | Path = KEY) -> JJFProtocol:
         v = secs[sec][key]
         if any(b >= a for a, b in zip(v, v[1:])):
             raise GonioError("expected a strictly decreasing list", file=p, key=f"{sec}.{key}")
+    b = secs["bias"]
+    if 2 * b["stability_block_samples"] > b["samples"]:
+        raise GonioError(f"need 2·stability_block_samples ≤ bias.samples = {b['samples']} "
+                         "(eq (18) takes the standard deviation of at least two block means), "
+                         f"got {b['stability_block_samples']}", file=p,
+                         key="bias.stability_block_samples")
     w = secs["warmup"]
     if w["window_samples"] < 2 * w["block_samples"] or w["window_samples"] > w["samples"]:
         raise GonioError("need 2·block_samples ≤ window_samples ≤ samples", file=p,

@@ -31,52 +31,75 @@ def _earth_body(lat: float, up: str, north: str) -> np.ndarray:
     return R.T @ np.degrees(earth_rate_enu(lat))
 
 
-def block_mean_covariance(bench: RateBench, dt: float, n_blocks: int, P: int,
-                          t_start_s: float) -> np.ndarray:
-    """Covariance (°/s)² of the n_blocks means of P samples of the rate noise, the record
-    starting t_start_s after power-on: white (N²/dt per sample), each Gauss–Markov term of
-    the bias-instability sum (σ² a^|k|), the rate random walk (q²·min(t_i, t_j), from
-    power-on)."""
+def _lag_sum(f0: float, f: np.ndarray) -> float:
+    """Σ_ij of an n×n matrix whose entries depend on |i − j| only: f0 on the diagonal and
+    ``f[k − 1]`` at lag k = 1 … n − 1 (n = f.size + 1), without forming the matrix."""
+    n = f.size + 1
+    return n * f0 + 2.0 * float(np.sum((n - np.arange(1, n)) * f))
+
+
+def block_mean_moments(bench: RateBench, dt: float, n_blocks: int, P: int,
+                       t_start_s: float) -> tuple[float, float]:
+    """(trace, sum of all entries) of the covariance (°/s)² of the ``n_blocks`` means of
+    ``P`` samples of the rate noise, the record starting ``t_start_s`` after power-on: white
+    (N²/dt per sample), each Gauss–Markov term of the bias-instability sum (σ² a^|k|), the
+    rate random walk (q²·min(t_i, t_j), from power-on).
+
+    The only moments the truths need, in O(n_blocks + P) time and memory (issue 26: the
+    n×n matrix and its P×P inner sums took 3 GB and more for ``stability_block_samples =
+    100000`` or a long record). Each GM term's matrix depends on the lag only, the random
+    walk's off-diagonal entries on the earlier block only, so both sums are written by lag;
+    the GM cross-block sums are formed as a^((k−1)P)·Σa^j·Σa^(P−i) (no a^(−P) overflow)."""
     g = bench.gyro
     ns = NoiseState(g, np.random.default_rng(0), enabled=True)   # only for taus and sigmas
-    n = n_blocks
-    C = np.zeros((n, n))
+    n = int(n_blocks)
+    if n < 1 or P < 1:
+        raise ValueError(f"need at least one block of at least one sample, got {n} × {P}")
     N = g.arw_deg_sqrt_h / math.sqrt(S_PER_H)
-    C += np.eye(n) * (N ** 2 / dt) / P
-    u = np.arange(P)
-    d = np.arange(n)
-    lag = d[None, :] - d[:, None]
+    white = (N ** 2 / dt) / P
+    trace, total = n * white, n * white
+    u = np.arange(P, dtype=float)
+    k = np.arange(1, n, dtype=float)
     for tau, s in zip(ns.taus, ns.sig):
         a = math.exp(-dt / tau)
-        same = float(np.sum(a ** np.abs(u[:, None] - u[None, :]))) / P ** 2
-        cross = float(np.sum(a ** u) * np.sum(a ** (-u.astype(float)))) / P ** 2
-        Cg = np.where(lag == 0, same, cross * a ** (P * np.abs(lag).astype(float)))
-        C += s ** 2 * Cg
+        # (1/P²) Σ_{i,j<P} a^|i−j| by lag
+        same = (P + 2.0 * float(np.sum((P - u[1:]) * a ** u[1:]))) / P ** 2
+        s0 = float(np.sum(a ** u))                      # Σ_{j<P} a^j
+        s1 = float(np.sum(a ** (u + 1.0)))              # Σ_{m=1..P} a^m
+        cross = s0 * s1 * a ** ((k - 1.0) * P) / P ** 2  # lag k ≥ 1
+        trace += s ** 2 * n * same
+        total += s ** 2 * _lag_sum(same, cross)
     q2 = (g.rrw_dph_sqrt_h / S_PER_H / math.sqrt(S_PER_H)) ** 2
     if q2 > 0:
         k0 = t_start_s / dt
+        d = np.arange(n, dtype=float)
         # sample i (0-based in the record) carries i + 1 steps after the start value
-        mean_idx = (d * P + (P - 1) / 2.0 + 1.0)
-        same_min = float(np.mean(np.minimum(u[:, None], u[None, :]))) + 1.0
-        Cr = np.where(lag == 0, d * P + same_min, np.minimum(mean_idx[:, None], mean_idx[None, :]))
-        C += q2 * dt * (Cr + k0)
-    return C
+        mean_idx = d * P + (P - 1) / 2.0 + 1.0
+        # mean of min(u_i, u_j) over the P×P pairs: min = v for 2(P − v) − 1 pairs
+        same_min = float(np.sum(u * (2.0 * (P - u) - 1.0))) / P ** 2 + 1.0
+        diag = float(np.sum(d * P + same_min))
+        # off-diagonal: min(mean_idx_i, mean_idx_j) = the earlier block's, counted for each
+        # later block j (n − 1 − i of them, both triangles)
+        off = 2.0 * float(np.sum(mean_idx * (n - 1.0 - d)))
+        trace += q2 * dt * (diag + n * k0)
+        total += q2 * dt * (diag + off + n * n * k0)
+    return trace, total
 
 
 def expected_block_std(bench: RateBench, dt: float, n_samples: int, P: int,
                        t_start_s: float) -> float:
     """√E[s²] of the block means of one record (the population value B_s estimates), °/s."""
     n = n_samples // P
-    C = block_mean_covariance(bench, dt, n, P, t_start_s)
-    es2 = (np.trace(C) - C.sum() / n) / (n - 1)
+    trace, total = block_mean_moments(bench, dt, n, P, t_start_s)
+    es2 = (trace - total / n) / (n - 1)
     return math.sqrt(max(es2, 0.0))
 
 
 def record_mean_variance(bench: RateBench, dt: float, n_samples: int, t_start_s: float) -> float:
     """Variance (°/s)² of the mean of one record of the rate noise (from power-on)."""
     P = 10 if n_samples % 10 == 0 else 1
-    C = block_mean_covariance(bench, dt, n_samples // P, P, t_start_s)
-    return float(C.sum()) / (n_samples // P) ** 2
+    _, total = block_mean_moments(bench, dt, n_samples // P, P, t_start_s)
+    return total / (n_samples // P) ** 2
 
 
 def _scale_factor_truths(g, K0: float, rates: np.ndarray, ez: float) -> dict:

@@ -4,7 +4,10 @@
 :mod:`~gonio.specs.ogam_draft.calibration` the whole calibration path (``SPEC.calibrate``:
 readings or stream → items, Annex A budget, item uncertainties);
 :mod:`~gonio.specs.ogam_draft.budget` the Annex A budget; :mod:`.simulate` the virtual bench;
-:mod:`.outputs` the rendering (results, tables, certificate, DCC, demo). The clause-by-clause
+:mod:`.truth` the true values from the bench (``SPEC.truth``); :mod:`.study` the coverage
+study of ``gonio validate`` (its trial, truths and bench cases) and :mod:`.item_coverage`
+what each item's coverage is checked against; :mod:`.outputs` the rendering (results,
+tables, certificate, DCC, demo). The clause-by-clause
 reading is ``docs/draft-readings.md``.
 """
 
@@ -26,10 +29,13 @@ SPEC = Specification(
     calibrate=calibrate,
     screen=screen,
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
+    truth=lazy("gonio.specs.ogam_draft.truth:truth"),
     budget=annex_a_budget,
-    coverage=Coverage(engine="cases", stream=0, options=frozenset({
-        "cases", "truth", "extra_components", "u_scale", "sample_rate_hz", "all_items",
-        "resume", "monte_carlo"})),
+    coverage=Coverage(engine="cases", stream=0,
+                      study=lazy("gonio.specs.ogam_draft.study:plan_study"),
+                      options=frozenset({"cases", "truth", "extra_components", "u_scale",
+                                         "sample_rate_hz", "all_items", "resume",
+                                         "monte_carlo"})),
     outputs="gonio.specs.ogam_draft.outputs",
     simulate_options=frozenset({"table", "stream", "stream_format"}),
     calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt"}),

@@ -4,12 +4,13 @@ Not a standard: a calibration built on the alignment application article ([Loone
 misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis ([Vagner2015]:
 K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.2.
 :mod:`~gonio.specs.triad_alignment.calibration` computes the results;
-:mod:`~gonio.specs.triad_alignment.simulate` simulates them on the virtual bench. The
+:mod:`~gonio.specs.triad_alignment.simulate` simulates them on the virtual bench;
+:mod:`~gonio.specs.triad_alignment.commands` adds ``gonio align`` and ``gonio thermal-model``. The
 reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
 """
 
 from gonio.formats.triad import FORMAT, named_inputs
-from gonio.specs import Specification
+from gonio.specs import Specification, lazy
 from gonio.specs.triad_alignment.calibration import article_budget, calibrate
 
 
@@ -33,9 +34,13 @@ SPEC = Specification(
     default_bench="mems-triad",
     calibrate=calibrate,
     simulate=_simulate,
+    truth=lazy("gonio.specs.triad_alignment.truth:truth"),
     budget=article_budget,
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
     readings_format=FORMAT,
     named_inputs=named_inputs,
+    certificate_content="gonio.specs.triad_alignment.certificate",
+    commands=(("align", "gonio.specs.triad_alignment.commands:add_align"),
+              ("thermal-model", "gonio.specs.triad_alignment.commands:add_thermal_model")),
 )

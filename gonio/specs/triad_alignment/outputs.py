@@ -13,7 +13,7 @@ from pathlib import Path
 
 from gonio.analysis.conformity import decide_result
 from gonio.atomic import output_set
-from gonio.report.triad_certificate import write_triad_certificate
+from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate
 from gonio.result.tables import write_results
 from gonio.specs._rate_family.outputs import results_json, summary  # noqa: F401  (per-item result)
 

@@ -32,5 +32,8 @@ SPEC = Specification(
     coverage=Coverage(engine="items", stream=101),
     # gonio's renderer of a per-item result: results.json, summary, certificate, DCC
     outputs="gonio.specs._rate_family.outputs",
+    certificate_content="acme_rate_check.certificate",   # its headings and groups, as data
     calibrate_options=frozenset({"protocol", "dcc"}),
+    # its own sub-command, added to gonio's command line through the registry
+    commands=(("acme-programme", "acme_rate_check.commands:add_programme"),),
 )

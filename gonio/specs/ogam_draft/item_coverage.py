@@ -1,4 +1,6 @@
-"""Coverage of every item's uncertainty on the virtual bench (issue 12, clause 8).
+"""Coverage of every item's uncertainty on the virtual bench (issue 12, clause 8): what the
+optical draft's study (:mod:`gonio.specs.ogam_draft.study`) feeds the generic coverage
+statistics (:mod:`gonio.analysis.coverage`).
 
 :func:`item_record` takes one virtual calibration (its report and the bench's truth)
 and keeps, per item, the result, its U (and interval) and what the truth is;
@@ -29,85 +31,16 @@ import math
 import numpy as np
 import pandas as pd
 
+from gonio.analysis.coverage import two_sided, within
 from gonio.specs.ogam_draft.items import RECORD_KEYS
 
 __all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS",
-           "zero_stability_truth", "item_monte_carlo", "clopper_pearson", "two_sided",
-           "coverage_flags", "MIN_COVERAGE", "MIN_SD_Z"]
-
-#: Below this coverage of U an item is flagged as under-covering (issue 24).
-MIN_COVERAGE = 0.90
-#: Below this spread of z = (result − truth)/u_c an item's U is flagged as over-wide, where
-#: the budget is gonio's own (a standard's prescribed annex budget is stated as it is).
-MIN_SD_Z = 0.30
-
+           "zero_stability_truth", "item_monte_carlo", "PRESCRIBED"]
 
 #: Items whose U is a standard's prescribed annex budget (stated as prescribed: not flagged
 #: as over-wide): E under the draft's four Annex A lines.
 PRESCRIBED = ("angle_deviation_draft",)
 
-
-def clopper_pearson(hits: int, n: int, level: float = 0.95) -> tuple[float, float]:
-    """The exact (Clopper–Pearson) interval of a binomial proportion, through
-    :func:`scipy.stats.binomtest` (``proportion_ci(method="exact")``).
-
-    >>> [round(x, 4) for x in clopper_pearson(95, 100)]
-    [0.8872, 0.9836]
-    """
-    from scipy.stats import binomtest
-
-    if n < 1:
-        return (math.nan, math.nan)
-    ci = binomtest(int(hits), int(n)).proportion_ci(confidence_level=level, method="exact")
-    return float(ci.low), float(ci.high)
-
-
-def coverage_flags(coverage: float, sd_z: float | None, own_budget: bool = True) -> list[str]:
-    """``under-covers`` (coverage < :data:`MIN_COVERAGE`) and ``over-wide`` (sd z <
-    :data:`MIN_SD_Z`, only where the budget is gonio's own).
-
-    >>> coverage_flags(0.85, 1.0), coverage_flags(1.0, 0.05), coverage_flags(1.0, 0.05, False)
-    (['under-covers'], ['over-wide'], [])
-    """
-    flags = []
-    if not coverage >= MIN_COVERAGE:
-        flags.append("under-covers")
-    if own_budget and sd_z is not None and math.isfinite(sd_z) and sd_z < MIN_SD_Z:
-        flags.append("over-wide")
-    return flags
-
-
-def two_sided(errors, U, u_c, own_budget: bool = True) -> dict:
-    """Both sides of an item's coverage from its trials: ``errors`` = result − truth,
-    ``U`` and ``u_c`` per trial (arrays of the same shape; E's points flattened).
-
-    ``coverage`` (|error| ≤ U) with ``hits``, ``n`` and the 95 % Clopper–Pearson interval
-    (``cp_low``, ``cp_high``); ``z_mean`` and ``z_sd`` of z = error/u_c (an honest budget
-    has z_mean ≈ 0 and z_sd ≈ 1: z_sd ≪ 1 is a U too wide, ≫ 1 too narrow); ``flags``
-    (:func:`coverage_flags`); ``own_budget``.
-
-    >>> r = two_sided([0.1, -0.2, 0.05, 0.3], [0.4] * 4, [0.2] * 4)
-    >>> r["coverage"], r["hits"], round(r["z_sd"], 3), r["flags"]
-    (1.0, 4, 1.028, [])
-    >>> two_sided([0.1, -0.2, 0.05, 0.3], [8.0] * 4, [4.0] * 4)["flags"]
-    ['over-wide']
-    """
-    e = np.asarray(errors, dtype=float).ravel()
-    U = np.broadcast_to(np.asarray(U, dtype=float), np.shape(errors)).ravel()
-    u = np.broadcast_to(np.asarray(u_c, dtype=float), np.shape(errors)).ravel()
-    ok = np.isfinite(e) & np.isfinite(U)
-    e, U, u = e[ok], U[ok], u[ok]
-    n = int(e.size)
-    hits = int(np.count_nonzero(np.abs(e) <= U))
-    cov = hits / n if n else math.nan
-    lo, hi = clopper_pearson(hits, n)
-    zok = np.isfinite(u) & (u > 0)
-    z = e[zok] / u[zok]
-    z_mean = float(z.mean()) if z.size else None
-    z_sd = float(z.std(ddof=1)) if z.size > 1 else None
-    return {"n": n, "hits": hits, "coverage": cov, "cp_low": lo, "cp_high": hi,
-            "z_mean": z_mean, "z_sd": z_sd, "own_budget": bool(own_budget),
-            "flags": coverage_flags(cov, z_sd, own_budget)}
 
 ITEM_TRUTHS = {
     "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
@@ -261,13 +194,6 @@ def trial_items(report, truth: dict) -> dict:
     return rec
 
 
-def _cov(hits) -> dict:
-    h = np.asarray(hits, dtype=bool)
-    p = float(h.mean()) if h.size else math.nan
-    return {"fraction": p, "n": int(h.size),
-            "u_binomial": math.sqrt(p * (1 - p) / h.size) if h.size else math.nan}
-
-
 def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
     """Per item, over the trials: coverage of |result − truth| ≤ U (k as stated), and for
     B_s and R of the truth by the 95 % interval; ``two_sided`` (:func:`two_sided`): the
@@ -295,29 +221,29 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
         own = name not in PRESCRIBED
         if name.startswith("angle_deviation"):
             d = np.array([np.subtract(r["points"], r["truth_points"]) for r in rs])
-            item["within_U"] = _cov(np.abs(d) <= U[:, None])
+            item["within_U"] = within(np.abs(d) <= U[:, None])
             item["two_sided"] = two_sided(d, U[:, None], u_c[:, None], own)
             if intrinsic_points is not None:
                 di = np.array([np.subtract(r["points"], intrinsic_points) for r in rs])
-                item["within_U_intrinsic"] = _cov(np.abs(di) <= U[:, None])
+                item["within_U_intrinsic"] = within(np.abs(di) <= U[:, None])
         elif name == "repeatability":
             s2 = np.array([r["s_points"] for r in rs]) ** 2
             truth = float(np.sqrt(s2.mean(axis=0)).max())
             item["ensemble_truth"] = truth
-            item["within_U"] = _cov(np.abs(vals - truth) <= U)
+            item["within_U"] = within(np.abs(vals - truth) <= U)
             item["two_sided"] = two_sided(vals - truth, U, u_c, own)
             iv = np.array([r["interval"] for r in rs])
-            item["interval_holds_truth"] = _cov((iv[:, 0] <= truth) & (truth <= iv[:, 1]))
+            item["interval_holds_truth"] = within((iv[:, 0] <= truth) & (truth <= iv[:, 1]))
         else:
             t = np.array([r["truth"] for r in rs])
-            item["within_U"] = _cov(np.abs(vals - t) <= U)
+            item["within_U"] = within(np.abs(vals - t) <= U)
             item["two_sided"] = two_sided(vals - t, U, u_c, own)
             if name.startswith("zero_stability"):
                 item["population_truth"] = float(np.mean(t))
                 item["k_mean"] = float(np.mean([r.get("k", math.nan) for r in rs]))
                 if all(r.get("interval") is not None for r in rs):
                     iv = np.array([r["interval"] for r in rs])
-                    item["interval_holds_truth"] = _cov((iv[:, 0] <= t) & (t <= iv[:, 1]))
+                    item["interval_holds_truth"] = within((iv[:, 0] <= t) & (t <= iv[:, 1]))
                 st = sorted({r.get("stated", "draft") for r in rs})
                 if st:
                     item["stated"] = st

@@ -1,0 +1,220 @@
+"""Coverage statistics of an uncertainty study, for any specification (the engines of
+``gonio validate``, :mod:`gonio.pipeline.validate` and :mod:`gonio.pipeline.coverage`, and the
+specifications' own studies feed them their trials).
+
+:func:`two_sided` both sides of one item's coverage from its errors (result − truth), U and u_c
+per comparison: coverage with its Clopper–Pearson interval, the spread of z = error/u_c and
+the flags (under-covers, over-wide); :func:`within` and :func:`coverage` the fraction of
+|error| ≤ U with its binomial u (:func:`binomial_u`) and, for clustered comparisons, the
+standard error over trials; :func:`item_coverage` one item's row (:class:`ItemCoverage`)
+from (value, truth, U, u_c) per trial with the Wilson interval (:func:`wilson_interval`).
+Nothing here knows a specification: each says what its truth and its errors are.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.errors import GonioError
+
+__all__ = ["MIN_COVERAGE", "MIN_SD_Z", "clopper_pearson", "coverage_flags", "two_sided",
+           "within", "binomial_u", "coverage", "wilson_interval", "ItemCoverage",
+           "item_coverage", "spawn_seed"]
+
+#: Wilson-interval coverage factor (95 %).
+_Z95 = 1.959963984540054
+
+#: Below this coverage of U an item is flagged as under-covering (issue 24).
+MIN_COVERAGE = 0.90
+#: Below this spread of z = (result − truth)/u_c an item's U is flagged as over-wide, where
+#: the budget is gonio's own (a standard's prescribed annex budget is stated as it is).
+MIN_SD_Z = 0.30
+
+
+def clopper_pearson(hits: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """The exact (Clopper–Pearson) interval of a binomial proportion, through
+    :func:`scipy.stats.binomtest` (``proportion_ci(method="exact")``).
+
+    >>> [round(x, 4) for x in clopper_pearson(95, 100)]
+    [0.8872, 0.9836]
+    """
+    from scipy.stats import binomtest
+
+    if n < 1:
+        return (math.nan, math.nan)
+    ci = binomtest(int(hits), int(n)).proportion_ci(confidence_level=level, method="exact")
+    return float(ci.low), float(ci.high)
+
+
+def coverage_flags(coverage: float, sd_z: float | None, own_budget: bool = True) -> list[str]:
+    """``under-covers`` (coverage < :data:`MIN_COVERAGE`) and ``over-wide`` (sd z <
+    :data:`MIN_SD_Z`, only where the budget is gonio's own).
+
+    >>> coverage_flags(0.85, 1.0), coverage_flags(1.0, 0.05), coverage_flags(1.0, 0.05, False)
+    (['under-covers'], ['over-wide'], [])
+    """
+    flags = []
+    if not coverage >= MIN_COVERAGE:
+        flags.append("under-covers")
+    if own_budget and sd_z is not None and math.isfinite(sd_z) and sd_z < MIN_SD_Z:
+        flags.append("over-wide")
+    return flags
+
+
+def two_sided(errors, U, u_c, own_budget: bool = True) -> dict:
+    """Both sides of an item's coverage from its trials: ``errors`` = result − truth,
+    ``U`` and ``u_c`` per trial (arrays of the same shape; E's points flattened).
+
+    ``coverage`` (|error| ≤ U) with ``hits``, ``n`` and the 95 % Clopper–Pearson interval
+    (``cp_low``, ``cp_high``); ``z_mean`` and ``z_sd`` of z = error/u_c (an honest budget
+    has z_mean ≈ 0 and z_sd ≈ 1: z_sd ≪ 1 is a U too wide, ≫ 1 too narrow); ``flags``
+    (:func:`coverage_flags`); ``own_budget``.
+
+    >>> r = two_sided([0.1, -0.2, 0.05, 0.3], [0.4] * 4, [0.2] * 4)
+    >>> r["coverage"], r["hits"], round(r["z_sd"], 3), r["flags"]
+    (1.0, 4, 1.028, [])
+    >>> two_sided([0.1, -0.2, 0.05, 0.3], [8.0] * 4, [4.0] * 4)["flags"]
+    ['over-wide']
+    """
+    e = np.asarray(errors, dtype=float).ravel()
+    U = np.broadcast_to(np.asarray(U, dtype=float), np.shape(errors)).ravel()
+    u = np.broadcast_to(np.asarray(u_c, dtype=float), np.shape(errors)).ravel()
+    ok = np.isfinite(e) & np.isfinite(U)
+    e, U, u = e[ok], U[ok], u[ok]
+    n = int(e.size)
+    hits = int(np.count_nonzero(np.abs(e) <= U))
+    cov = hits / n if n else math.nan
+    lo, hi = clopper_pearson(hits, n)
+    zok = np.isfinite(u) & (u > 0)
+    z = e[zok] / u[zok]
+    z_mean = float(z.mean()) if z.size else None
+    z_sd = float(z.std(ddof=1)) if z.size > 1 else None
+    return {"n": n, "hits": hits, "coverage": cov, "cp_low": lo, "cp_high": hi,
+            "z_mean": z_mean, "z_sd": z_sd, "own_budget": bool(own_budget),
+            "flags": coverage_flags(cov, z_sd, own_budget)}
+
+
+def within(hits) -> dict:
+    """Fraction of the comparisons ``hits`` (booleans) that hold, with its count and binomial u.
+
+    >>> within([True, True, False, True])["fraction"]
+    0.75
+    """
+    h = np.asarray(hits, dtype=bool)
+    p = float(h.mean()) if h.size else math.nan
+    return {"fraction": p, "n": int(h.size),
+            "u_binomial": math.sqrt(p * (1 - p) / h.size) if h.size else math.nan}
+
+
+def binomial_u(p: float, n: int) -> float:
+    """Standard uncertainty of a coverage fraction p from n independent Bernoulli trials.
+
+    u = √(p(1 − p)/n) (binomial distribution); for the clustered comparisons of a
+    validation this is a lower bound (see ``u_trials`` in :func:`coverage`).
+
+    >>> round(binomial_u(0.95, 200), 5)
+    0.01541
+    """
+    return math.sqrt(p * (1.0 - p) / n) if n > 0 else math.nan
+
+
+def coverage(abs_err: np.ndarray, U: np.ndarray) -> dict:
+    """Coverage of |E − truth| ≤ U; axis 0 = trials, further axes pooled.
+
+    Returns the overall fraction, its binomial u (:func:`binomial_u`, as if every
+    comparison were independent), ``u_trials`` (standard error of the mean of the
+    per-trial fractions: accounts for the correlation within a trial), the number
+    of comparisons, and the fraction per point (last axis).
+
+    >>> c = coverage(np.array([[0.1, 0.5], [0.2, 0.1]]), np.array([0.3, 0.3]))
+    >>> c["fraction"], c["n"], c["per_point"]
+    (0.75, 4, [1.0, 0.5])
+    """
+    a = np.asarray(abs_err, dtype=float)
+    u = np.asarray(U, dtype=float).reshape((-1,) + (1,) * (a.ndim - 1))
+    hit = a <= u
+    p = float(hit.mean())
+    per_trial = hit.reshape(hit.shape[0], -1).mean(axis=1)
+    t = per_trial.size
+    u_tr = float(per_trial.std(ddof=1) / math.sqrt(t)) if t > 1 else math.nan
+    per_point = hit.reshape(-1, hit.shape[-1]).mean(axis=0)
+    return {"fraction": p, "u_binomial": binomial_u(p, hit.size), "u_trials": u_tr,
+            "n": int(hit.size), "per_point": [float(x) for x in per_point]}
+
+
+def spawn_seed(seed: int, key: int, index: int) -> int:
+    """numpy SeedSequence(seed, spawn_key=(key, index)) as one 32-bit seed: the seed of
+    trial ``index`` of study part ``key`` (a case, a specification's stream), independent of
+    every other trial — the same number as the ``index``-th child of
+    ``SeedSequence(seed, spawn_key=(key,)).spawn(...)``, so a trial's random stream does not
+    depend on which other trials run, in which batch, on which worker, or in which order.
+
+    >>> kid = np.random.SeedSequence(0, spawn_key=(2,)).spawn(5)[4]
+    >>> spawn_seed(0, 2, 4) == int(kid.generate_state(1, np.uint32)[0])
+    True
+    """
+    ss = np.random.SeedSequence(seed, spawn_key=(int(key), int(index)))
+    return int(ss.generate_state(1, np.uint32)[0])
+
+
+def wilson_interval(hits: int, n: int, z: float = _Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion.
+
+    >>> [round(v, 4) for v in wilson_interval(95, 100)]
+    [0.8882, 0.9785]
+    """
+    if n < 1:
+        raise GonioError("a coverage needs at least one trial")
+    p = hits / n
+    d = 1 + z * z / n
+    c = (p + z * z / (2 * n)) / d
+    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return max(0.0, c - h), min(1.0, c + h)
+
+
+@dataclass(frozen=True)
+class ItemCoverage:
+    """One item's coverage over the seeds."""
+
+    key: str
+    clause: str
+    n: int
+    hits: int
+    coverage: float
+    u_coverage: float
+    wilson_low: float
+    wilson_high: float
+    median_norm_error: float
+    max_norm_error: float
+    cp_low: float = math.nan
+    cp_high: float = math.nan
+    z_mean: float | None = None
+    z_sd: float | None = None
+    flags: tuple = ()
+
+
+def item_coverage(records: list[tuple[float, float, float, float]], key: str = "",
+                  clause: str = "") -> ItemCoverage:
+    """Coverage of one item from (value, truth, U, u_c) per seed.
+
+    >>> c = item_coverage([(1.0, 1.1, 0.2, 0.1), (1.0, 1.3, 0.2, 0.1)])
+    >>> c.hits, c.coverage, round(c.u_coverage, 4)
+    (1, 0.5, 0.3536)
+    """
+    n = len(records)
+    if n == 0:
+        raise GonioError(f"item {key!r}: no seed gave a measured value with a truth")
+    hits = sum(abs(v - t) <= U for v, t, U, _ in records)
+    c = hits / n
+    lo, hi = wilson_interval(hits, n)
+    ne = sorted(abs(v - t) / u if u > 0 else (0.0 if v == t else math.inf)
+                for v, t, _, u in records)
+    both = two_sided([v - t for v, t, _, _ in records], [U for _, _, U, _ in records],
+                     [u for _, _, _, u in records])
+    return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
+                        ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
+                        both["cp_low"], both["cp_high"], both["z_mean"], both["z_sd"],
+                        tuple(both["flags"]))

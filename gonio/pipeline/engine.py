@@ -1,0 +1,204 @@
+"""How the trials of a study run (``gonio validate``): batches of trials through joblib's
+local process pool or its Dask backend, the numerical libraries held to one thread per worker,
+the number of workers and the batch size checked before anything starts. Shared by every
+study (:mod:`gonio.pipeline.validate`, :mod:`gonio.pipeline.coverage`); nothing here knows
+what a trial is.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from typing import Sequence
+
+from gonio.errors import GonioError
+from gonio.limits import limit
+
+__all__ = ["MAX_BATCH", "TASKS_PER_WORKER", "WORKER_THREADS", "worker_threads", "batches",
+           "available_cores", "execution_backend", "study_workers", "run_parallel"]
+
+#: Largest batch (trials per task).
+MAX_BATCH = 250
+#: Tasks per worker a study is cut into by default (:func:`study_workers`).
+TASKS_PER_WORKER = 4
+
+
+#: Threads each worker's numerical libraries (OpenBLAS, OpenMP) may use while it runs a
+#: batch: one, so that N workers use N cores (a trial is single-threaded Python and numpy;
+#: a library pool of its own would only compete with the other workers).
+WORKER_THREADS = 1
+
+def worker_threads() -> str:
+    """The thread pools a batch runs with, as ``library: threads`` (for benchmarks and logs)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    with threadpool_limits(limits=WORKER_THREADS):
+        pools = [f"{p['internal_api']}: {p['num_threads']}" for p in threadpool_info()]
+    return ", ".join(pools) or "no BLAS/OpenMP thread pool loaded"
+
+
+def batches(indices: Sequence[int], size: int) -> list[tuple[int, int]]:
+    """Contiguous runs of the sorted ``indices`` cut into (start, stop) pieces of ≤ ``size``.
+
+    >>> batches([0, 1, 2, 3, 4, 7, 8, 9], 3)
+    [(0, 3), (3, 5), (7, 10)]
+    """
+    idx = sorted(int(i) for i in indices)
+    out: list[tuple[int, int]] = []
+    j = 0
+    while j < len(idx):
+        k = j
+        while k + 1 < len(idx) and idx[k + 1] == idx[k] + 1 and k + 1 - j < size:
+            k += 1
+        out.append((idx[j], idx[k] + 1))
+        j = k + 1
+    return out
+
+
+def available_cores() -> int:
+    """CPU cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+@contextlib.contextmanager
+def execution_backend(workers: int, scheduler: str | None):
+    """joblib's configuration for the study: yields the ``n_jobs`` to give ``Parallel``.
+
+    ``scheduler=None``: joblib's local process pool with ``workers`` processes
+    (1: in this process). ``"local:N"``: a ``distributed.LocalCluster`` of N
+    single-threaded worker processes started here; ``"tcp://host:port"`` (or any
+    address ``distributed.Client`` accepts): an existing Dask cluster. Both use
+    joblib's Dask backend, so the trials run through the same code either way.
+    """
+    if scheduler is None:
+        yield workers
+        return
+    try:
+        from distributed import Client, LocalCluster
+        from joblib import parallel_config
+    except ImportError:
+        raise GonioError("a Dask scheduler needs the optional extra: pip install 'gonio[dask]'",
+                         key="scheduler") from None
+    import logging
+
+    cluster = None
+    if scheduler.startswith("local:"):
+        n = scheduler[len("local:"):]
+        if not n.isdigit() or int(n) < 1:
+            raise GonioError(f"--scheduler local:N needs N >= 1 workers, got {scheduler!r}",
+                             key="scheduler")
+        cluster = LocalCluster(n_workers=int(n), threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        address = cluster
+    else:
+        address = scheduler
+    try:
+        try:
+            client = Client(address, timeout="20s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise GonioError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}",
+                             key="scheduler") from None
+        try:
+            _warm_workers(client, scheduler)
+            with parallel_config(backend="dask"):
+                yield -1
+        finally:
+            client.close()
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def _warm_worker() -> str:
+    """Import what a batch needs (in a Dask worker, once, before the first task): the
+    registered specifications (their calibration code and its libraries)."""
+    from gonio.specs import available
+
+    available()
+    return worker_threads()
+
+
+def _warm_workers(client, scheduler: str) -> None:
+    """Every worker of the cluster imports the trial code once, all at the same time,
+    before any task is sent (not each on its first task); a worker that cannot import
+    gonio is one clear error, not a traceback per task."""
+    try:
+        client.run(_warm_worker)
+    except Exception as exc:  # noqa: BLE001 - any worker-side failure, reported in one line
+        raise GonioError(f"the Dask workers of {scheduler!r} cannot run gonio "
+                         f"({type(exc).__name__}: {str(exc)[:200]}); install gonio there",
+                         key="scheduler") from None
+
+
+def study_workers(trials: int, workers: int | None, scheduler: str | None,
+                  batch_size: int | None, cases: int = 1) -> tuple[int | None, int]:
+    """(workers, batch size) of a study.
+
+    ``workers`` default min(2, cores); local workers and a ``local:N`` cluster are capped
+    at the machine's cores (``GONIO_MAX_WORKERS`` raises the cap), checked before anything
+    starts (``local:100000`` once ran for minutes and ran out of memory). The batch size
+    default comes from the trial count and the workers: all ``cases`` × ``trials`` trials
+    in about :data:`TASKS_PER_WORKER` tasks per worker (so that the last tasks finish
+    together and a slow worker holds little back), at most ``trials`` (batches are per
+    case) and :data:`MAX_BATCH`. Bad values are GonioErrors. The results never depend on
+    either.
+
+    >>> study_workers(320, 1, None, None)           # one worker: 4 tasks of 80
+    (1, 80)
+    >>> study_workers(320, 1, None, None, cases=5)  # 1600 trials: batches capped at 250
+    (1, 250)
+    """
+    if os.environ.get("GONIO_MAX_WORKERS", "").strip():
+        cap = limit("GONIO_MAX_WORKERS")
+        cap_note = f"GONIO_MAX_WORKERS = {cap:g}"
+    else:
+        cap = available_cores()
+        cap_note = f"this machine's {cap} cores"
+    if scheduler is None:
+        if workers is None:
+            workers = min(2, available_cores())
+        if not isinstance(workers, int) or workers < 1:
+            raise GonioError(f"--workers must be an integer >= 1, got {workers}", key="workers")
+        if workers > cap:
+            raise GonioError(f"--workers {workers} exceeds {cap_note} (set GONIO_MAX_WORKERS "
+                             "to raise the cap, or give --scheduler tcp://... to run on a "
+                             "cluster)", key="workers")
+    elif scheduler.startswith("local:"):
+        n = scheduler[len("local:"):]
+        if not (n.isdigit() and len(n) <= 9) or int(n) < 1:
+            raise GonioError(f"--scheduler local:N needs N >= 1 workers, got {scheduler!r}",
+                             key="scheduler")
+        if int(n) > cap:
+            raise GonioError(f"--scheduler {scheduler}: {int(n)} worker processes exceed "
+                             f"{cap_note} (set GONIO_MAX_WORKERS to raise the cap)",
+                             key="scheduler")
+    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
+    if batch_size is None:
+        per_task = -(-(trials * max(1, cases)) // (TASKS_PER_WORKER * max(1, n_workers)))
+        batch_size = max(1, min(MAX_BATCH, trials, per_task))
+    if not isinstance(batch_size, int) or batch_size < 1:
+        raise GonioError(f"batch size must be an integer >= 1, got {batch_size}",
+                         key="batch_size")
+    return workers, batch_size
+
+
+def run_parallel(fn, tasks: list[tuple], workers: int | None, scheduler: str | None):
+    """``fn(*task)`` for every task through joblib (:func:`execution_backend`), yielded as
+    they finish (unordered: the caller puts them back in trial order)."""
+    if not tasks:
+        return
+    from joblib import Parallel, delayed
+
+    with execution_backend(workers, scheduler) as n_jobs:
+        run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+        yield from run(delayed(fn)(*t) for t in tasks)
+
+
+def _scheduler_workers(scheduler: str) -> int:
+    """Workers a scheduler string promises (for the default batch size; 2 if unknown)."""
+    if scheduler.startswith("local:") and scheduler[6:].isdigit():
+        return max(1, int(scheduler[6:]))
+    return 2

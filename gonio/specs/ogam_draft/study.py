@@ -1,0 +1,683 @@
+"""The optical draft's coverage study: its Annex A budget against the truth of many virtual
+calibrations (``gonio validate --spec ogam-draft``; ``SPEC.coverage.study``).
+
+This module describes the study (its trial, budget, truths, estimators and bench cases) and
+summarises it; the generic engine of :mod:`gonio.pipeline.validate` runs it (batches, joblib
+or Dask, partial results and resume, seeding by trial index). The protocol it follows is
+:func:`plan_study` → :class:`OpticalStudy` (``settings``, ``jobs``, ``unpack``, ``report``),
+documented in docs/writing-a-specification.md.
+
+Contents
+--------
+:func:`validation_protocol`   the draft's protocol restricted to what E and U need (7.1, 7.4/7.5)
+:data:`CASES`, :func:`case_bench`   the default bench and the named stress cases
+:func:`run_trial`             one virtual calibration: E_ij, E_i, truth, U (Annex A)
+:func:`gonio.budget.extra.budget_extra_components` (used here) extra budget lines the annex lacks (off by default)
+:func:`plan_study`            the study's settings and jobs; :class:`ValidationReport` its report
+:func:`gonio.analysis.coverage.coverage`, :func:`~gonio.analysis.coverage.binomial_u` coverage
+                              fraction and its uncertainty
+
+The question asked (issue 3): a calibration on the virtual bench states, at each
+calibration point i, E_i (mean over the 10 series of 7.4/7.5, as
+:mod:`gonio.specs.ogam_draft.items` computes it) with the expanded uncertainty U of Annex A
+(k = 2, u(r) from the calibration's own 7.5 data). How often is |E_i − truth_i| ≤ U?
+Also for each single series E_ij, which is what the Annex A budget (u(r) of a single
+reading) actually describes. A budget that holds covers ≈ 95 % or more.
+
+Truth definitions (all from the bench's noise-free rerun, :func:`gonio.bench.run_session`):
+
+``systematic`` (default)
+    ``systematic_deviation_arcsec``: noise-free indicated angle through the mount's true
+    scale factor minus the true table angle; the instrument's real deviation *as mounted*
+    (the tilt × Earth-rate coupling and any warm-up drift are part of it).
+``calibrated``
+    ``systematic_deviation_calibrated_arcsec``: the same with the K the noise-free 7.1
+    gives (table and tilt errors of 7.1 included in the truth).
+``intrinsic``
+    the deviation the same instrument shows on an ideal set-up (no tilt, no Earth rate,
+    no bias or drift, error-free table): what a certificate is about; everything the
+    set-up adds is an error of the calibration.
+
+Sample rate: the validation runs the bench at 100 Hz by default instead of the
+bench file's 1 kHz. The RLG counter integrates the table term in closed form and the
+smooth terms by the trapezoid rule, so the counts at the readings do not depend on the
+rate (the noise is drawn per sample with the right variance at any rate); 100 Hz keeps
+200 trials under two minutes on two cores.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field, replace
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from gonio import __version__
+from gonio.analysis.coverage import coverage, spawn_seed
+from gonio.bench import Bench, TableConfig, load_bench, run_session
+from gonio.bench.config import Harmonic
+from gonio.budget.extra import EXTRA_SYMBOLS, budget_extra_components
+from gonio.errors import GonioError
+from gonio.formats.readings import Readings
+from gonio.formats.toml import read_toml
+from gonio.protocol import Protocol, parse_protocol
+from gonio.resources import resolve
+from gonio.specs.ogam_draft.budget import annex_a_budget
+from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
+from gonio.units import PPM, deg_to_arcsec
+
+__all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
+           "TrialResult", "budget_extra_components", "plan_study", "OpticalStudy",
+           "ValidationReport", "trial_seeds", "trial_seed", "TrialJob",
+           "pack_trials", "unpack_trials", "EXTRA_SYMBOLS"]
+
+#: Stress cases: name → what is changed (see :func:`case_bench`).
+CASES = {
+    "default": "the bench as loaded (inside the budget's assumptions)",
+    "tilt": "sensing plane tilted at the Annex A.1 bound (tilt_deg = annex_a.tilt_bound_deg)",
+    "drift": "Gauss-Markov bias instability sigma = 0.005/sqrt(2) deg/h, tau = 300 s: the "
+             "bias change since the Earth-rate compensation has an RMS of 0.005 deg/h (A.4.3 bound)",
+    "table": "table positioning harmonics scaled so that sum |a_h| = table MPE (A.4.1 bound), "
+             "random scatter off",
+    "ideal": "no noise, no tilt, no bias, no harmonics, error-free table (sanity check)",
+}
+
+
+#: Truth definitions (see the module docstring).
+TRUTHS = ("systematic", "calibrated", "intrinsic")
+
+_TRUTH_DOC = {
+    "systematic": "systematic_deviation_arcsec of the bench truth: noise-free indicated angle "
+                  "through the mount's true scale factor minus the true table angle",
+    "calibrated": "systematic_deviation_calibrated_arcsec: the same with the K of the "
+                  "noise-free rerun's own 7.1 rounds",
+    "intrinsic": "systematic_deviation_arcsec of a noise-free session of the same instrument "
+                 "on an ideal set-up (no tilt, Earth rate, bias or drift; error-free table)",
+}
+
+
+def validation_protocol(protocol: str = "ogam-draft", all_items: bool = False) -> Protocol:
+    """The protocol restricted to what E and U need: 7.1 and 7.4 (10 series, 7.5).
+
+    7.3, 7.6 and 7.7 are dropped (they do not enter E_i or its Annex A budget) unless
+    ``all_items`` (then every item's coverage is measured); timings, rests and the
+    Earth-rate compensation of the draft are kept. k is the draft's A.7 k = 2 when the
+    protocol does not fix it (the criterion of the study).
+
+    >>> p = validation_protocol()
+    >>> p.zero_stability is None, p.rate_consistency, p.angle_deviation.series
+    (True, (), 10)
+    """
+    raw = read_toml(resolve(protocol, "protocol"))
+    for key in ("zero_stability", "rate_consistency", "pointing_consistency"):
+        if not all_items:
+            raw.pop(key, None)
+    raw.setdefault("annex_a", {}).setdefault("coverage_factor", 2.0)
+    if "angle_deviation" not in raw or "scale_factor" not in raw:
+        raise GonioError("validation needs scale_factor (7.1) and angle_deviation (7.4) sections",
+                         file=str(protocol), key="angle_deviation")
+    return parse_protocol(raw, resolve(protocol, "protocol"))
+
+
+def ideal_bench(bench: Bench) -> Bench:
+    """The same instrument (K, nonlinearity, position harmonics) on an ideal set-up.
+
+    No tilt, no Earth rate, no bias or warm-up drift, no noise or quantisation,
+    error-free table (same acceleration, so the timings are the same).
+
+    >>> b = ideal_bench(load_bench("rlg"))
+    >>> b.instrument.tilt_deg, b.earth_rate, b.table.error_bound_arcsec()
+    (0.0, False, 0.0)
+    """
+    inst = replace(bench.random_off().instrument, tilt_deg=0.0, bias_dph=0.0,
+                   warmup_drift_dph=0.0)
+    table = TableConfig(accel_dps2=bench.table.accel_dps2, mpe_arcsec=bench.table.mpe_arcsec)
+    return replace(bench, instrument=inst, table=table, earth_rate=False)
+
+
+def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
+    """The bench of a named case (see :data:`CASES`).
+
+    >>> p = validation_protocol(); b = load_bench("rlg")
+    >>> case_bench("tilt", b, p).instrument.tilt_deg
+    0.1
+    >>> round(sum(abs(h.amplitude_arcsec)
+    ...           for h in case_bench("table", b, p).table.positioning_harmonics), 12)
+    0.1
+    """
+    if case == "default":
+        return bench
+    if case == "tilt":
+        return replace(bench, instrument=replace(bench.instrument,
+                                                 tilt_deg=protocol.annex_a.tilt_bound_deg))
+    if case == "drift":
+        return replace(bench, instrument=replace(bench.instrument,
+                                                 bias_instability_dph=0.005 / math.sqrt(2.0),
+                                                 bias_instability_tau_s=300.0))
+    if case == "table":
+        hs = bench.table.positioning_harmonics or (Harmonic(1, 1.0, 0.0),)
+        total = sum(abs(h.amplitude_arcsec) for h in hs)
+        scale = bench.table.mpe_arcsec / total
+        hs = tuple(replace(h, amplitude_arcsec=h.amplitude_arcsec * scale) for h in hs)
+        return replace(bench, table=replace(bench.table, positioning_harmonics=hs,
+                                            positioning_random_arcsec=0.0))
+    if case == "ideal":
+        b = ideal_bench(bench)
+        return replace(b, instrument=replace(b.instrument, position_harmonics=()),
+                       earth_rate=True)
+    raise GonioError(f"unknown case {case!r} (known: {', '.join(CASES)})", key="cases")
+
+
+@dataclass
+class TrialResult:
+    """One virtual calibration; arrays are (series, points), arcsec."""
+
+    seed: int
+    position_deg: np.ndarray
+    E_ij: np.ndarray
+    truth_systematic: np.ndarray
+    truth_calibrated: np.ndarray
+    U_arcsec: float
+    U_extended_arcsec: float
+    u_r_arcsec: float
+    k_cal: float
+    k_mount: float
+    extras: list
+    items: dict = field(default_factory=dict)     # item_coverage.trial_items of this trial
+
+
+def _matrix(df, col: str) -> np.ndarray:
+    """(series, round) matrix of ``col``, rows and columns in ascending order, NaN where a
+    (series, round) is absent (what ``DataFrame.pivot`` gives, without its cost).
+
+    >>> _matrix({"series": [2, 1, 1], "round": [1, 2, 1], "v": [5.0, 4.0, 3.0]}, "v").tolist()
+    [[3.0, 4.0], [5.0, nan]]
+    """
+    s_idx = np.asarray(df["series"])
+    r_idx = np.asarray(df["round"])
+    us, si = np.unique(s_idx, return_inverse=True)
+    ur, ri = np.unique(r_idx, return_inverse=True)
+    if np.unique(si * ur.size + ri).size != si.size:
+        raise ValueError("a (series, round) pair is given twice")
+    out = np.full((us.size, ur.size), np.nan)
+    out[si, ri] = np.asarray(df[col], dtype=float)
+    return out
+
+
+def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
+              truth: str = "systematic", extras_used: Sequence[str] = EXTRA_SYMBOLS
+              ) -> TrialResult:
+    """One virtual calibration on ``bench``: session, calibration, Annex A U, truth.
+
+    U is the calibration's own Annex A U (k = 2, u(r) from its 7.5 data), times
+    ``u_scale`` (1 except to test the validation's power); ``U_extended_arcsec``
+    adds the :func:`budget_extra_components` named in ``extras_used``.
+    """
+    res = run_session(protocol, bench, seed=seed)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    # the continuous record of the 7.3 rest, as a stream calibration has it (B_s's model)
+    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft",
+                    static_record=res.static_record)
+    ad = rep.results.angle_deviation.tables["readings"]
+    e = _matrix(ad, "E_arcsec")
+    pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
+    rows = [r for r in res.truth["readings"] if r["test"] == "angle_deviation"]
+    tr = {k: [r[k] for r in rows] for k in ("series", "round", "systematic_deviation_arcsec",
+                                             "systematic_deviation_calibrated_arcsec")}
+    u_r = float(rep.uncertainty.parameters["repeatability_arcsec"])
+    extras = [e for e in budget_extra_components(res.readings, protocol, bench.latitude_deg, u_r,
+                                                 truth=truth, accel_dps2=bench.table.accel_dps2)
+              if e.symbol in extras_used]
+    par = rep.uncertainty.parameters
+    ext = annex_a_budget(table_mpe_arcsec=par["table_mpe_arcsec"], tilt_deg=par["tilt_deg"],
+                         zero_stability_dph=par["zero_stability_dph"],
+                         duration_min=par["duration_min"], repeatability_arcsec=u_r, k=par["k"],
+                         extra_components=extras)
+    return TrialResult(seed=seed, position_deg=pos, E_ij=e,
+                       truth_systematic=_matrix(tr, "systematic_deviation_arcsec"),
+                       truth_calibrated=_matrix(tr, "systematic_deviation_calibrated_arcsec"),
+                       U_arcsec=float(rep.uncertainty.U_arcsec) * u_scale,
+                       U_extended_arcsec=float(ext.U_arcsec) * u_scale, u_r_arcsec=u_r,
+                       k_cal=float(rep.results.scale_factor.value),
+                       k_mount=float(res.truth["scale_factor_through_mount_counts_per_deg"]),
+                       extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras],
+                       items=trial_items(rep, res.truth))
+
+
+def trial_seed(seed: int, case: str, index: int) -> int:
+    """Seed of trial ``index`` of ``case``: numpy SeedSequence(seed, spawn_key=(case, index)).
+
+    The same number as the ``index``-th child of ``SeedSequence(seed,
+    spawn_key=(case,)).spawn(...)``, computed from the index alone: a trial's
+    random stream does not depend on which other trials run, in which batch, on
+    which worker, or in which order.
+
+    >>> trial_seed(0, "default", 4) == trial_seeds(0, "default", 5)[4]
+    True
+    """
+    return spawn_seed(seed, list(CASES).index(case), index)
+
+
+def trial_seeds(seed: int, case: str, trials: int) -> list[int]:
+    """Seeds of the first ``trials`` trials of one case (:func:`trial_seed` by index).
+
+    A case's seeds do not depend on which other cases run, and the first n seeds
+    do not depend on the number of trials.
+
+    >>> trial_seeds(0, "default", 3) == trial_seeds(0, "default", 5)[:3]
+    True
+    """
+    return [trial_seed(seed, case, i) for i in range(trials)]
+
+
+@dataclass(frozen=True)
+class TrialJob:
+    """What a worker needs to run trials of one case (picklable)."""
+
+    protocol: Protocol
+    bench: Bench
+    case: str
+    seed: int
+    u_scale: float
+    truth: str
+    extras_used: tuple
+
+    def run(self, start: int, stop: int) -> dict:
+        """Trials ``start`` … ``stop − 1`` of this case, packed (:func:`pack_trials`); the
+        engine (:func:`gonio.pipeline.validate.run_batch`) calls it in a worker."""
+        idx = range(start, stop)
+        res = [run_trial(self.protocol, self.bench, trial_seed(self.seed, self.case, i),
+                         self.u_scale, self.truth, self.extras_used) for i in idx]
+        return pack_trials(self.case, list(idx), res)
+
+
+def pack_trials(case: str, indices: Sequence[int], trials: Sequence[TrialResult]) -> dict:
+    """Trials as a dict of numpy arrays (lossless: float64 bits are kept)."""
+    ex = trials[0].extras
+    return {
+        "case": np.array(case), "index": np.asarray(indices, dtype=np.int64),
+        "seed": np.array([t.seed for t in trials], dtype=np.int64),
+        "position_deg": np.stack([t.position_deg for t in trials]),
+        "E_ij": np.stack([t.E_ij for t in trials]),
+        "truth_systematic": np.stack([t.truth_systematic for t in trials]),
+        "truth_calibrated": np.stack([t.truth_calibrated for t in trials]),
+        "U_arcsec": np.array([t.U_arcsec for t in trials]),
+        "U_extended_arcsec": np.array([t.U_extended_arcsec for t in trials]),
+        "u_r_arcsec": np.array([t.u_r_arcsec for t in trials]),
+        "k_cal": np.array([t.k_cal for t in trials]),
+        "k_mount": np.array([t.k_mount for t in trials]),
+        "extras_symbol": np.array([e[0] for e in ex], dtype=str),
+        "extras_distribution": np.array([e[2] for e in ex], dtype=str),
+        "extras_half_width": np.array([[e[1] for e in t.extras] for t in trials],
+                                      dtype=np.float64).reshape(len(trials), len(ex)),
+        # per-item records (nested dicts of floats): JSON text, lossless (repr of each float)
+        "items_json": np.array([json.dumps(t.items, sort_keys=True) for t in trials], dtype=str),
+    }
+
+
+def unpack_trials(packed: Mapping) -> dict[int, TrialResult]:
+    """Trial index → :class:`TrialResult` from :func:`pack_trials`."""
+    sym = [str(x) for x in packed["extras_symbol"]]
+    dist = [str(x) for x in packed["extras_distribution"]]
+    out = {}
+    for j, i in enumerate(packed["index"].tolist()):
+        out[int(i)] = TrialResult(
+            seed=int(packed["seed"][j]), position_deg=packed["position_deg"][j],
+            E_ij=packed["E_ij"][j], truth_systematic=packed["truth_systematic"][j],
+            truth_calibrated=packed["truth_calibrated"][j],
+            U_arcsec=float(packed["U_arcsec"][j]),
+            U_extended_arcsec=float(packed["U_extended_arcsec"][j]),
+            u_r_arcsec=float(packed["u_r_arcsec"][j]), k_cal=float(packed["k_cal"][j]),
+            k_mount=float(packed["k_mount"][j]),
+            extras=[(s, float(packed["extras_half_width"][j, m]), d)
+                    for m, (s, d) in enumerate(zip(sym, dist))],
+            items=json.loads(str(packed["items_json"][j])) if "items_json" in packed else {})
+    return out
+
+
+
+@dataclass
+class CaseResult:
+    """Every trial of one case, and its summary (``summary``: plain dict)."""
+
+    name: str
+    description: str
+    trials: list[TrialResult]
+    truth_intrinsic: np.ndarray
+    summary: dict = field(default_factory=dict)
+
+
+def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
+    tr = case.trials
+    pos = tr[0].position_deg
+    E = np.stack([t.E_ij for t in tr])                     # (trials, series, points)
+    truths = {"systematic": np.stack([t.truth_systematic for t in tr]),
+              "calibrated": np.stack([t.truth_calibrated for t in tr]),
+              "intrinsic": np.broadcast_to(case.truth_intrinsic, E.shape)}
+    U = np.array([t.U_arcsec for t in tr])
+    Ux = np.array([t.U_extended_arcsec for t in tr])
+    Ei = E.mean(axis=1)
+
+    def block(Uv):
+        out = {}
+        for name, T in truths.items():
+            Ti = T.mean(axis=1)
+            d_i, d_ij = Ei - Ti, E - T
+            out[name] = {
+                "coverage_E_i": coverage(np.abs(d_i), Uv),
+                "coverage_E_ij": coverage(np.abs(d_ij), Uv),
+                "mean_abs_error_E_i_arcsec": float(np.abs(d_i).mean()),
+                "mean_abs_error_E_ij_arcsec": float(np.abs(d_ij).mean()),
+                "bias_E_i_per_point_arcsec": [float(x) for x in d_i.mean(axis=0)],
+                "std_E_i_per_point_arcsec": [float(x) for x in d_i.std(axis=0, ddof=1)]
+                if len(tr) > 1 else None,
+            }
+        return out
+
+    k_term = deg_to_arcsec(np.array([(t.k_mount / t.k_cal - 1.0) for t in tr])[:, None] * pos[None, :])
+    diag = {
+        "scale_factor_term_rms_per_point_arcsec": [float(x) for x in
+                                                   np.sqrt((k_term ** 2).mean(axis=0))],
+        "scale_factor_rel_error_rms_ppm": float(np.sqrt(np.mean(
+            [(t.k_cal / t.k_mount - 1.0) ** 2 for t in tr])) / PPM),
+        "setup_minus_intrinsic_per_point_arcsec": [float(x) for x in
+                                                   (truths["systematic"].mean(axis=(0, 1))
+                                                    - case.truth_intrinsic.mean(axis=0))],
+        "residual_after_scale_factor_term_rms_E_i_arcsec": float(np.sqrt(np.mean(
+            (Ei - k_term - truths["systematic"].mean(axis=1)) ** 2))),
+    }
+    s = {
+        "name": case.name, "description": case.description,
+        "positions_deg": [float(x) for x in pos], "points": int(pos.size),
+        "series": int(E.shape[1]), "trials": len(tr),
+        "seeds_first": [t.seed for t in tr[:3]],
+        "mean_U_arcsec": float(U.mean()), "min_U_arcsec": float(U.min()),
+        "mean_u_r_arcsec": float(np.mean([t.u_r_arcsec for t in tr])),
+        "annex_a": block(U),
+        "items": item_coverage([t.items for t in tr],
+                               np.asarray(case.truth_intrinsic).mean(axis=0)),
+        "diagnosis": diag,
+        "primary": {"truth": truth},
+    }
+    if extended:
+        s["extra_components"] = [
+            {"symbol": sym, "distribution": dist,
+             "mean_half_width_arcsec": float(np.mean([dict((e[0], e[1]) for e in t.extras)[sym]
+                                                      for t in tr]))}
+            for sym, _, dist in tr[0].extras]
+        s["mean_U_extended_arcsec"] = float(Ux.mean())
+        s["extended"] = block(Ux)
+        s["extended_for_truth"] = truth
+    return s
+
+
+def item_coverage_lines(cases) -> list[str]:
+    """Per case, the coverage of every measured item (|result − truth| ≤ U; interval)."""
+    out = ["", "coverage per item (|result - truth| <= U as stated; for B_s and R also the "
+               "95 % interval holding the truth)"]
+    for c in cases:
+        for name, it in c.summary.get("items", {}).items():
+            w = it["within_U"]
+            txt = (f"{c.name:<10}{name:<28}{it['trials']:>5} trials  within U "
+                   f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
+            if "interval_holds_truth" in it:
+                txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+            if "within_U_intrinsic" in it:
+                txt += (f"   vs intrinsic truth "
+                        f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
+            if "two_sided" in it:
+                txt += "   " + two_sided_text(it["two_sided"])
+            out.append(txt)
+    return out
+
+
+def two_sided_text(t: dict) -> str:
+    """``CP [lo, hi] %, z mean/sd, flags`` of :func:`gonio.analysis.coverage.two_sided`."""
+    z = ("z —" if t["z_sd"] is None else
+         f"z mean {t['z_mean']:+.2f} sd {t['z_sd']:.2f}")
+    flags = f"  FLAG: {', '.join(t['flags'])}" if t["flags"] else ""
+    return f"CP95 [{100 * t['cp_low']:.0f}, {100 * t['cp_high']:.0f}] %, {z}{flags}"
+
+
+@dataclass
+class ValidationReport:
+    """The validation study: settings and, per case, coverage and diagnosis."""
+
+    settings: dict
+    cases: list[CaseResult]
+
+    def to_dict(self) -> dict:
+        """Plain dict for ``validation.json`` (deterministic)."""
+        return {"gonio_version": __version__, "settings": self.settings,
+                "truth_definitions": dict(_TRUTH_DOC),
+                "estimators": {"E_i": "mean over the series at point i (gonio.specs.ogam_draft.items)",
+                               "E_ij": "single series j at point i (what u(r) describes)"},
+                "criterion": "|E - truth| <= U, U = the calibration's own Annex A U (k = 2)",
+                "cases": [c.summary for c in self.cases]}
+
+    def table(self) -> str:
+        """case, points, trials, coverage of E_i and E_ij, mean |E − truth|, mean U."""
+        truth = self.settings["truth"]
+        lines = [f"truth: {truth}   criterion |E - truth| <= U (k = 2)",
+                 f"{'case':<10}{'budget':<10}{'points':>7}{'trials':>7}{'cov E_i':>16}"
+                 f"{'cov E_ij':>16}{'|E_i-T|':>9}{'|E_ij-T|':>9}{'mean U':>8}"]
+        for c in self.cases:
+            s = c.summary
+            rows = [("annex", s["annex_a"][truth], s["mean_U_arcsec"])]
+            if "extended" in s:
+                rows.append(("+extra", s["extended"][truth], s["mean_U_extended_arcsec"]))
+            for label, b, mu in rows:
+                ci, cij = b["coverage_E_i"], b["coverage_E_ij"]
+                lines.append(
+                    f"{c.name:<10}{label:<10}{s['points']:>7}{s['trials']:>7}"
+                    f"{100 * ci['fraction']:>8.1f} ± {100 * ci['u_trials']:>4.1f}%"
+                    f"{100 * cij['fraction']:>8.1f} ± {100 * cij['u_trials']:>4.1f}%"
+                    f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
+                    f"{mu:>8.3f}")
+        lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += item_coverage_lines(self.cases)
+        lines += monte_carlo_lines(self.cases)
+        return "\n".join(lines) + "\n"
+
+
+
+#: The ``gonio validate`` options this study takes beyond the engine's (``SPEC.coverage.options``).
+STUDY_OPTIONS = frozenset({"cases", "truth", "extra_components", "u_scale", "sample_rate_hz",
+                           "all_items", "monte_carlo"})
+
+
+def study_cases(cases: str | Sequence[str]) -> list[str]:
+    """The cases asked for: a sequence of names from :data:`CASES`, or the command line's text
+    (comma-separated, or ``all``); an unknown one is a GonioError listing them.
+
+    >>> study_cases("default, tilt"), len(study_cases("all")) == len(CASES)
+    (['default', 'tilt'], True)
+    """
+    if isinstance(cases, str):
+        cases = list(CASES) if cases.strip() == "all" else \
+            [c.strip() for c in cases.split(",") if c.strip()]
+    cases = list(cases)
+    if not cases:
+        raise GonioError("no cases given", key="cases")
+    for c in cases:
+        if c not in CASES:
+            raise GonioError(f"unknown case {c!r} (known: {', '.join(CASES)})", key="cases")
+    return cases
+
+
+def extras_used(extra_components: bool | str | Sequence[str]) -> tuple[str, ...]:
+    """The extra budget components to evaluate: True or ``"all"`` every one of
+    :data:`EXTRA_SYMBOLS`, False/None none, else the symbols (a sequence or comma-separated).
+
+    >>> extras_used(False), extras_used("all") == EXTRA_SYMBOLS
+    ((), True)
+    """
+    if isinstance(extra_components, str):
+        extra_components = True if extra_components.strip() == "all" else \
+            [e.strip() for e in extra_components.split(",") if e.strip()]
+    if extra_components is True:
+        return EXTRA_SYMBOLS
+    if not extra_components:
+        return ()
+    used = tuple(extra_components)
+    for e in used:
+        if e not in EXTRA_SYMBOLS:
+            raise GonioError(f"unknown extra component {e!r} (known: "
+                             f"{', '.join(EXTRA_SYMBOLS)})", key="extra_components")
+    return used
+
+
+def _check_options(truth: str, u_scale: float, sample_rate_hz: float, monte_carlo: int) -> None:
+    if truth not in TRUTHS:
+        raise GonioError(f"unknown truth {truth!r} (known: {', '.join(TRUTHS)})", key="truth")
+    if not (math.isfinite(u_scale) and u_scale > 0):
+        raise GonioError(f"u_scale must be > 0, got {u_scale}", key="u_scale")
+    if not (1.0 <= sample_rate_hz <= 100_000.0):
+        raise GonioError(f"--sample-rate-hz must be within 1–100000, got {sample_rate_hz}",
+                         key="sample_rate_hz")
+    if int(monte_carlo) != monte_carlo or monte_carlo < 0 or monte_carlo == 1:
+        raise GonioError(f"--monte-carlo must be 0 or an integer >= 2, got {monte_carlo}",
+                         key="monte_carlo")
+
+
+def study_protocol(protocol: str | Protocol, all_items: bool) -> Protocol:
+    """The study's protocol: a Protocol as given, else :func:`validation_protocol`; k = 2
+    (the draft's A.7) where it fixes none; 7.1 and 7.4 with at least 2 series required."""
+    proto = protocol if isinstance(protocol, Protocol) else \
+        validation_protocol(protocol, all_items=all_items)
+    if proto.annex_a.coverage_factor is None:        # the study's criterion: the draft's k = 2
+        proto = replace(proto, annex_a=replace(proto.annex_a, coverage_factor=2.0))
+    if proto.scale_factor is None or proto.angle_deviation is None \
+            or proto.angle_deviation.series < 2:
+        raise GonioError("validation needs 7.1 and 7.4 with at least 2 series", key="protocol")
+    return proto
+
+
+def plan_study(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
+               protocol: str | Protocol = "ogam-draft",
+               cases: str | Sequence[str] = ("default",), sample_rate_hz: float = 100.0,
+               extra_components: bool | str | Sequence[str] = False,
+               truth: str = "systematic", u_scale: float = 1.0, all_items: bool = False,
+               monte_carlo: int = 0) -> "OpticalStudy":
+    """``SPEC.coverage.study``: the study of ``trials`` independent virtual calibrations per
+    case (run by :func:`gonio.pipeline.validate.validate`).
+
+    Parameters
+    ----------
+    trials, seed : int
+        Calibrations per case; master seed (trial seeds from :func:`trial_seeds`).
+    bench : str or Bench
+        Bench file / built-in name, or a :class:`~gonio.bench.Bench`.
+    protocol : str or Protocol
+        A protocol name/path (restricted by :func:`validation_protocol`) or a Protocol
+        used as given.
+    cases : str or sequence of str
+        Names from :data:`CASES` (:func:`study_cases`).
+    sample_rate_hz : float
+        Simulation rate (default 100 Hz, see the module docstring).
+    extra_components : bool, str or sequence of str
+        Also evaluate the budget with :func:`budget_extra_components` (:func:`extras_used`).
+    truth : str
+        The truth of the printed table (all of :data:`TRUTHS` are in the JSON).
+    u_scale : float
+        Multiplies U (1; < 1 deliberately breaks the budget, to test the study).
+    all_items : bool
+        Keep 7.3, 7.6 and 7.7 in the protocol, so that every item's coverage is measured
+        (summary ``items``, :func:`gonio.specs.ogam_draft.item_coverage.item_coverage`).
+    monte_carlo : int
+        When > 0, the JCGM 101 Monte Carlo (this many trials, fixed M) of every item
+        budget of each case's first calibration, compared with its GUM result (JCGM 101
+        8.2; summary ``monte_carlo``, :func:`gonio.specs.ogam_draft.item_coverage.item_monte_carlo`).
+    """
+    _check_options(truth, u_scale, sample_rate_hz, monte_carlo)
+    cases = study_cases(cases)
+    used = extras_used(extra_components)
+    proto = study_protocol(protocol, all_items)
+    base = bench if isinstance(bench, Bench) else load_bench(bench)
+    base = replace(base, sample_rate_hz=float(sample_rate_hz))
+    settings = {"trials": trials, "seed": seed,
+                "bench": base.name if isinstance(bench, Bench) else str(bench),
+                "cases": cases, "sample_rate_hz": float(sample_rate_hz),
+                "protocol": proto.name,
+                "protocol_items": ["7.1", f"7.4 x {proto.angle_deviation.series} series (7.5)"]
+                + (["7.3", "7.6", "7.7"] if all_items else []),
+                "extra_components": list(used), "truth": truth,
+                "u_scale": float(u_scale), "monte_carlo_trials": int(monte_carlo),
+                "seeding": "numpy SeedSequence(seed, spawn_key=(case index, trial index))"}
+    jobs = {name: TrialJob(proto, case_bench(name, base, proto), name, seed, float(u_scale),
+                           truth, tuple(used)) for name in cases}
+    return OpticalStudy(settings, jobs, proto)
+
+
+@dataclass
+class OpticalStudy:
+    """The planned study (:func:`plan_study`), in the form the engine runs: ``settings``
+    (validation.json's, and the partial store's identity), ``jobs`` (case → picklable
+    :class:`TrialJob`; ``job.run(start, stop)`` → packed arrays), :meth:`unpack` and
+    :meth:`report`."""
+
+    settings: dict
+    jobs: dict
+    protocol: Protocol
+
+    @staticmethod
+    def unpack(packed: Mapping) -> dict[int, TrialResult]:
+        """Trial index → trial, from one packed batch (:func:`unpack_trials`)."""
+        return unpack_trials(packed)
+
+    def report(self, done: dict[str, list]) -> ValidationReport:
+        """The report of the finished study: ``done`` case → its trials in trial order."""
+        s = self.settings
+        out = []
+        for name, res in done.items():
+            b = self.jobs[name].bench
+            intr = pd.DataFrame(run_session(self.protocol, ideal_bench(b), seed=0)
+                                .truth["readings"])
+            t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
+            cr = CaseResult(name, CASES[name], list(res), t_int)
+            cr.summary = _summarise(cr, s["truth"], bool(s["extra_components"]))
+            if s["monte_carlo_trials"]:
+                cr.summary["monte_carlo"] = _monte_carlo_case(
+                    self.protocol, b, trial_seed(s["seed"], name, 0), s["monte_carlo_trials"],
+                    s["seed"])
+            out.append(cr)
+        return ValidationReport(s, out)
+
+
+def _monte_carlo_case(proto: Protocol, bench: Bench, trial_seed_: int, trials: int,
+                      seed: int) -> dict:
+    """JCGM 101 check of every item budget of the case's first calibration (trial 0)."""
+    from gonio.specs.ogam_draft.item_coverage import item_monte_carlo
+
+    res = run_session(proto, bench, seed=trial_seed_)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    rep = calibrate(Readings(df, dict(res.metadata)), proto, budget="draft",
+                    static_record=res.static_record)
+    return {"trials": trials, "trial": 0, "seed": trial_seed_,
+            "criterion": "JCGM 101 8.2: d_low, d_high <= delta (u_c to 2 significant digits)",
+            "items": item_monte_carlo(rep, trials, seed)}
+
+
+def monte_carlo_lines(cases) -> list[str]:
+    """Per case and item: the JCGM 101 validation of the GUM result (pass/fail, d_low, d_high)."""
+    out = []
+    for c in cases:
+        mc = c.summary.get("monte_carlo")
+        if not mc:
+            continue
+        out += ["", f"JCGM 101 Monte Carlo per item (M = {mc['trials']}, trial 0; GUM interval "
+                    "validated when d_low, d_high <= delta)"]
+        for name, r in mc["items"].items():
+            out.append(f"{c.name:<10}{name:<28}{r['model']:<10}"
+                       f"{'pass' if r['passed'] else 'FAIL':<6}d_low {r['d_low']:.3g}  "
+                       f"d_high {r['d_high']:.3g}  delta {r['delta']:.2g}"
+                       + ("" if r["passed"] else "  (GUM interval contains MC's)"
+                          if r["gum_contains_mc"] else "  (GUM interval too short)"))
+    return out
+

@@ -1,0 +1,91 @@
+"""``SPEC.truth`` of the optical draft and the triad alignment (issue 23): the true values come
+from the bench's physical parameters, never from the estimators — a noise-free calibration
+on an ideal bench finds them, and the truth does not move when the estimators are broken."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gonio.specs import get
+from gonio.units import deg_to_arcsec
+
+
+def _ogam_noise_free():
+    from gonio.bench import load_bench, run_session
+    from gonio.formats.readings import Readings
+    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.study import ideal_bench
+
+    bench = replace(ideal_bench(load_bench("rlg")), sample_rate_hz=20.0)
+    proto = load_protocol("ogam-draft")
+    res = run_session(proto, bench, seed=0)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    rep = get("ogam-draft").calibrate(Readings(df, dict(res.metadata)), proto,
+                                      static_record=res.static_record)
+    return bench, proto, res, rep
+
+
+def test_ogam_truth_is_what_a_noise_free_calibration_finds(monkeypatch):
+    bench, proto, res, rep = _ogam_noise_free()
+    truth = get("ogam-draft").truth(bench, proto)
+    assert set(truth) == {"scale_factor", "scale_factor_nonlinearity", "zero_stability",
+                          "angle_deviation"}
+    items = rep.to_result().items
+    # K and K_l: the noise-free 7.1 on an error-free table is the bench's K through the mount
+    for key in ("scale_factor", "scale_factor_nonlinearity"):
+        assert items[key].value == pytest.approx(truth[key]["value"], rel=1e-12), key
+    assert truth["scale_factor_nonlinearity"]["value"] > 0       # the instrument's own K_l
+    assert items["zero_stability"].value == pytest.approx(truth["zero_stability"]["value"],
+                                                          abs=1e-12)
+    # E: the truth is referred to the mount's true K, the calibration to its own K from 7.1;
+    # per point they differ by exactly the scale-factor term (K_mount/K_cal − 1)·angle
+    pts = rep.results.angle_deviation.table
+    k_mount = float(res.truth["scale_factor_through_mount_counts_per_deg"])
+    k_cal = float(rep.results.scale_factor.value)
+    term = deg_to_arcsec((k_mount / k_cal - 1.0) * pts["position_deg"].to_numpy(float))
+    got = pts["E_arcsec"].to_numpy(float) - np.asarray(truth["angle_deviation"]["points"])
+    assert np.abs(term).max() > 1e-3                             # the check has something to see
+    np.testing.assert_allclose(got, term, atol=1e-6)
+    # never through an estimator: breaking them leaves the truth as it was
+    import gonio.specs.ogam_draft.items as items_mod
+
+    def broken(*a, **k):
+        raise AssertionError("the truth called an estimator")
+    for name in ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+                 "angle_deviation", "compute_characteristics"):
+        monkeypatch.setattr(items_mod, name, broken)
+    assert get("ogam-draft").truth(bench, proto) == truth
+
+
+def _triad_noise_free():
+    from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_alignment_session
+    from gonio.formats.triad import TriadReadings
+
+    b = load_triad_bench("mems-triad")
+    b = replace(b, arw_deg_sqrt_h=(0.0,) * 3, bias_instability_dph=(0.0,) * 3,
+                rate_random_walk_dph_sqrt_h=(0.0,) * 3)
+    p = load_triad_protocol("triad-alignment")
+    s = run_alignment_session(p, b, 0)
+    df = s.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    return b, p, get("triad-alignment").calibrate(TriadReadings(df, s.metadata, None))
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_triad_truth_is_what_a_noise_free_calibration_finds(monkeypatch):
+    b, p, result = _triad_noise_free()
+    truth = get("triad-alignment").truth(b, p)
+    assert len(truth) == 9 + 3 + 6 + 6
+    for key, t in truth.items():
+        assert result.items[key].value == pytest.approx(t["value"], rel=1e-11, abs=1e-13), key
+    assert truth["M_xy"]["value"] != 0 and truth["b_y"]["value"] != 0
+    import gonio.specs.triad_alignment.analysis as an
+
+    def broken(*a, **k):
+        raise AssertionError("the truth called the estimator")
+    monkeypatch.setattr(an, "estimate_alignment", broken)
+    assert get("triad-alignment").truth(b, p) == truth
