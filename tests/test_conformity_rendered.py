@@ -6,7 +6,9 @@ renderer given limits nobody decided refuses instead of deciding or dropping the
 from __future__ import annotations
 
 import json
+import tomllib
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -19,16 +21,8 @@ from gonio.resources import protocols_dir
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.specs.ogam_draft.outputs import write
 
-SMALL = {
-    "protocol": {"name": "small", "specification": "draft for comment"},
-    "session": {"static_s": 30.0},
-    "scale_factor": {"rest_s": 15.0, "rounds": [{"stop_deg": 180.0}, {"stop_deg": 360.0}]},
-    "zero_stability": {"readings": 4, "interval_s": 20.0},
-    "angle_deviation": {"series": 2, "rest_s": 15.0,
-                        "rounds": [{"stop_deg": 120.0 * i} for i in range(1, 4)]},
-    "rate_consistency": {"rates_dps": [30.0, 60.0], "rest_s": 15.0},
-    "pointing_consistency": {"orientations": ["up", "north"], "rest_s": 15.0},
-}
+SMALL = tomllib.loads((Path(__file__).parent / "data" / "small-protocol.toml")
+                     .read_text(encoding="utf-8"))
 
 
 @pytest.fixture(scope="module")
@@ -51,6 +45,7 @@ def test_certificate_dcc_and_summary_state_the_decision_of_results_json(written)
     # repeatability is a standard deviation stated with its chi-square interval: the
     # pipeline's probabilities follow that model, and so must every rendering of them
     assert decided["repeatability"]["probability_model"].startswith("chi-square")
+    assert decided["repeatability"]["false_accept_probability"] is not None
     html = (out / "certificate.html").read_text(encoding="utf-8")
     summary = (out / "summary.txt").read_text(encoding="utf-8")
     dcc = (out / "certificate.dcc.xml").read_text(encoding="utf-8")

@@ -28,6 +28,7 @@ rule, half up); in the HTML each carries ``data-src`` (its path in
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import html
 import io
@@ -150,6 +151,28 @@ def load_lab(path: str | Path) -> dict:
                          "([decision_rule] rule = simple | guarded | non-binary)", file=path,
                          key="decision_rule")
     return lab
+
+
+@contextlib.contextmanager
+def naming_lab_file(path):
+    """Errors about the lab file's limits raised while its limits are decided (an item the
+    specification does not have: known only once the calibration ran) name the lab file
+    ``path`` as well as the key.
+
+    >>> try:
+    ...     with naming_lab_file("lab.toml"):
+    ...         raise GonioError("s has no item 'K'", key="specification_limits[0].item")
+    ... except GonioError as e:
+    ...     print(e)
+    lab.toml: key specification_limits[0].item: s has no item 'K'
+    """
+    try:
+        yield
+    except GonioError as exc:
+        if path is None or exc.file is not None or exc.line is not None \
+                or not str(exc.key or "").startswith(("specification_limits", "decision_rule")):
+            raise
+        raise GonioError(exc.message, file=path, key=exc.key) from None
 
 
 def certificate_id(report, lab: dict | None = None) -> str:

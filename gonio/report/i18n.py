@@ -901,7 +901,7 @@ def translator(extra: dict | None = None, tables=()):
 FINDING_ACTIONS = {"set_aside": ("set aside", "剔除"), "flagged": ("flagged", "标记"),
                    "refused": ("refused", "拒收")}
 
-#: The optical draft's screening messages (gonio.specs.ogam_draft.screen) in Chinese; each
+#: The optical draft's screening messages (its screen module) in Chinese; each
 #: group is itself translated where it can be (an axis "up", a test's item name).
 FINDINGS_ZH: tuple[tuple[str, str], ...] = (
     (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\); "
@@ -938,7 +938,7 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
 )
 
 
-#: Why an optical item was not measured (gonio.specs.ogam_draft.items), in Chinese.
+#: Why an optical item was not measured (the draft's items module), in Chinese.
 REASONS_ZH: tuple[tuple[str, str], ...] = (
     (r"no (\w+) rows in file", "文件中没有 {1} 数据行"),
     (r"scale factor not measured: (.+)", "标度因数未测：{1}"),
