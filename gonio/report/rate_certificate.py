@@ -216,7 +216,7 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
             if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
-                val = [val, "; " + L["note_upper_short"].format(b=n["statement"].upper_text)]
+                val = [val, L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
