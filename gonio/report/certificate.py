@@ -236,7 +236,7 @@ def screening_notes(res: dict, L: dict, add) -> None:
     aside = sum(f["action"] == "set_aside" for f in found)
     flagged = len(found) - aside
     add("notice", L["screening_note"].format(n=aside, m=flagged))
-    names = {k: L[k] for k in ITEMS}                  # a test named by its item
+    names = {k: L[k] for k in item_names(res)}        # a test named by its item
     for f in found[:MAX_FINDING_LINES]:
         add("p", [finding_text(f, L, extra=names)])
     if len(found) > MAX_FINDING_LINES:
@@ -329,6 +329,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
     rrows = []
+    named = {k: L[k] for k in item_names(res)}        # a reason naming an item, translated
     for i, name in enumerate(item_names(res), 1):
         item = res[name]
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
@@ -336,7 +337,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         if not st["measured"]:
             rrows.append([str(i), L[name], item["clause"],
                           f"{L['not_measured']}: "
-                          f"{reason_text(item['reason'], L, extra={k: L[k] for k in ITEMS})}",
+                          f"{reason_text(item['reason'], L, extra=named)}",
                           "—", ""])
             continue
         cell: list = [st["value"]]
@@ -1117,7 +1118,8 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
             doc = dcc_bytes(report, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English (issue 25)
-                extra = {**READING_NOTES_ZH, **{k: L[k] for k in ITEMS},
+                extra = {**READING_NOTES_ZH,
+                         **{k: L[k] for k in item_names(report.to_dict())},
                          method_text(report, lab_d, "en"): method_text(report, lab_d, "zh")}
                 doc = bilingual(doc, label_translator(extra))
             write_bytes(stage / "certificate.dcc.xml", doc)
