@@ -87,3 +87,21 @@ def readings_protocol(metadata_name: str | None, readings_path, default: str | N
     raise GonioError(f"the readings file names protocol {name!r}, which is neither a "
                      "built-in protocol nor a file next to it: give --protocol FILE",
                      file=readings_path, key="protocol")
+
+
+def protocol_provenance(path: str | Path | None) -> dict:
+    """``results.json``'s ``settings`` entries naming the protocol a calibration used: the
+    built-in name (or the file's path) and the SHA-256 of its bytes, so the records can
+    store the very file and check it (empty for a protocol that is not a file).
+
+    >>> d = protocol_provenance(resolve("ogam-draft"))
+    >>> d["protocol"], len(d["protocol_sha256"])
+    ('ogam-draft', 64)
+    """
+    if path is None or not Path(path).is_file():
+        return {}
+    from gonio.atomic import sha256_file
+    p = Path(path)
+    builtin = p.resolve().parent == protocols_dir().resolve()
+    return {"protocol": p.stem if builtin else str(p), "protocol_sha256": sha256_file(p)}
+

@@ -57,7 +57,9 @@ def run(tmp_path_factory):
     write_calibration(report, d)
     paths = cert.write_certificate(report, d, truth=session.truth)
     lab_dir = d / "lab"
-    cert.write_certificate(report, lab_dir, lab=protocols_dir() / "lab-example.toml")
+    lab = cert.load_lab(protocols_dir() / "lab-example.toml")
+    report.decided_result(lab)           # the pipeline decides; the certificate renders
+    cert.write_certificate(report, lab_dir, lab=lab)
     return {"dir": d, "report": report, "paths": paths, "lab_dir": lab_dir,
             "results": flat_view(json.loads((d / "results.json").read_text()))}
 

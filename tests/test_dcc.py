@@ -56,6 +56,7 @@ def run(tmp_path_factory):
     report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
     write_calibration(report, d)
     lab = load_lab(protocols_dir() / "lab-example.toml")
+    report.decided_result(lab)           # the pipeline decides; the DCC renders
     docs = {"lab": dcc_bytes(report, lab=lab, cert_id=certificate_id(report, lab)),
             "virtual": dcc_bytes(report, lab=None, cert_id=certificate_id(report, None))}
     return {"report": report, "lab": lab, "docs": docs,

@@ -490,6 +490,91 @@ def test_lab_text_fields(tmp_path, value, frag):
     count(f"lab:{frag}")
 
 
+LIMIT = '[[specification_limits]]\nitem = "angle_deviation"\nmpe = 0.5\n'
+#: name: (text replacing LIMIT or a (old, new) pair in the lab file, key named)
+LIMIT_CASES = {
+    "mpe-inf": (LIMIT.replace("0.5", "inf"), "specification_limits[0].mpe"),
+    "mpe-nan": (LIMIT.replace("0.5", "nan"), "specification_limits[0].mpe"),
+    "mpe-1e308": (LIMIT.replace("0.5", "1e308"), "specification_limits[0].mpe"),
+    "mpe-subnormal": (LIMIT.replace("0.5", "5e-324"), "specification_limits[0].mpe"),
+    "mpe-text": (LIMIT.replace("0.5", '"0.5"'), "specification_limits[0].mpe"),
+    "mpe-bool": (LIMIT.replace("0.5", "true"), "specification_limits[0].mpe"),
+    "mpe-zero": (LIMIT.replace("0.5", "0.0"), "specification_limits[0].mpe"),
+    "lower-nan": (LIMIT.replace("mpe = 0.5", "lower = nan\nupper = 1.0"),
+                  "specification_limits[0].lower"),
+    "lower-minus-inf": (LIMIT.replace("mpe = 0.5", "lower = -inf\nupper = 1.0"),
+                        "specification_limits[0].lower"),
+    "upper-inf": (LIMIT.replace("mpe = 0.5", "upper = inf"), "specification_limits[0].upper"),
+    "upper-1e999": (LIMIT.replace("mpe = 0.5", "upper = 1e999"), "specification_limits[0].upper"),
+    "upper-1e20": (LIMIT.replace("mpe = 0.5", "upper = 99999999999999999999"),
+                   "specification_limits[0].upper"),
+    "lower-above-upper": (LIMIT.replace("mpe = 0.5", "lower = 2.0\nupper = 1.0"),
+                          "specification_limits[0]"),
+    "lower-equals-upper": (LIMIT.replace("mpe = 0.5", "lower = 1.0\nupper = 1.0"),
+                           "specification_limits[0]"),
+    "no-bound": (LIMIT.replace("mpe = 0.5\n", ""), "specification_limits[0]"),
+    "mpe-and-upper": (LIMIT.replace("mpe = 0.5", "mpe = 0.5\nupper = 1.0"),
+                      "specification_limits[0]"),
+    "item-missing": (LIMIT.replace('item = "angle_deviation"\n', ""),
+                     "specification_limits[0].item"),
+    "item-number": (LIMIT.replace('"angle_deviation"', "3"), "specification_limits[0].item"),
+    "item-twice": (LIMIT + "\n" + LIMIT, "specification_limits[1].item"),
+    "unknown-key": (LIMIT.replace("mpe = 0.5", 'mpe = 0.5\nunit = "arcsec"'),
+                    "specification_limits[0].unit"),
+    "guard-band-inf": (("guard_band_factor = 1.0", "guard_band_factor = inf"),
+                       "decision_rule.guard_band_factor"),
+    "guard-band-nan": (("guard_band_factor = 1.0", "guard_band_factor = nan"),
+                       "decision_rule.guard_band_factor"),
+    "guard-band-negative": (("guard_band_factor = 1.0", "guard_band_factor = -1.0"),
+                            "decision_rule.guard_band_factor"),
+    "rule-upper-case": (('rule = "non-binary"', 'rule = "NON-BINARY"'), "decision_rule.rule"),
+    "rule-empty": (('rule = "non-binary"', 'rule = ""'), "decision_rule.rule"),
+    "limits-without-rule": (("[decision_rule]", "[decision_rule_x]"), "decision_rule"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(LIMIT_CASES))
+def test_lab_conformity_limits_refused_by_key(tmp_path, name):
+    """Conformity limits and the decision rule in a lab file: non-finite, absurd, empty,
+    contradictory, duplicated or mistyped entries are refused when the file is read (before
+    any work), one line naming file and key."""
+    from gonio.report.certificate import load_lab
+
+    change, key = LIMIT_CASES[name]
+    text = LAB.read_text(encoding="utf-8")
+    assert LIMIT in text
+    if isinstance(change, tuple):
+        assert change[0] in text
+        text = text.replace(*change, 1)
+    else:
+        text = text.replace(LIMIT, change, 1)
+    p = tmp_path / "lab.toml"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(GonioError) as ei:
+        load_lab(p)
+    msg = str(ei.value)
+    assert msg.startswith(str(p)) and f"key {key}" in msg and "\n" not in msg, msg
+    count(f"limits:{name}")
+
+
+@pytest.mark.parametrize("item", ["", " scale_factor", "angle_deviation"])
+def test_lab_limit_on_an_item_the_spec_lacks(sims, tmp_path, capsys, item):
+    """A limit on an item the specification does not have (empty, a stray space, another
+    specification's item): exit 2, one line naming the lab file, the key and the
+    specification's items; no output folder (before: the key without the file)."""
+    text = LAB.read_text(encoding="utf-8").replace(
+        LIMIT, LIMIT.replace('"angle_deviation"', f'"{item}"'), 1).replace(
+        'item = "repeatability"', 'item = "bias"', 1)
+    lab = tmp_path / "lab.toml"
+    lab.write_text(text, encoding="utf-8")
+    out = tmp_path / "C"
+    msg = cli(["calibrate", sims["JS"] / "readings.csv", "--out", out, "--lab", lab,
+               "--monte-carlo", "0"], capsys)
+    assert f"{lab}: key specification_limits[0].item" in msg and "scale_factor" in msg, msg
+    assert not out.exists()
+    count(f"limits:item:{item!r}")
+
+
 def test_budget_of_every_spec(capsys):
     """gonio budget for every registered specification: exit 0 (before: triad-alignment
     raised AttributeError, exit 1)."""

@@ -4,7 +4,13 @@ laboratory file and without one; the HTML text, the figure text (matplotlib writ
 text as an SVG comment) and the PDF text (pdftotext) may hold Latin-letter words only from
 a whitelist of symbols, units, model and software names and standard numbers, the budget's
 component symbols, and what the readings file or the laboratory file itself says (data,
-not certificate text)."""
+not certificate text: the readings' test and column names a finding points at, the
+protocol's name). The optical draft's certificate is rendered too, from damaged readings (a
+count typo set aside, a 7.4 round missing from every series, no pointing-consistency rows)
+so that the screening's findings and an item not measured reach the page; the laboratory
+file gives limits for three items of each specification (conformity statements). In the zh
+DCC every text holding such a word is English (lang="en") with its Chinese beside it, and
+the Chinese holds none."""
 
 from __future__ import annotations
 
@@ -15,13 +21,16 @@ import subprocess
 
 import pytest
 
+from lxml import etree
+
 from gonio.report.certificate import load_lab
+from gonio.report.dcc import DCC_NS
 
 #: Symbols, units, names and standard numbers a Chinese certificate may print in Latin letters.
 WHITELIST = set("""
-JJF IEC GUM JCGM ILAC ISO CNAS IEEE MEMS Allan Welch SHA VB gonio csv dB Hz mV lsb ppm
+JJF IEC GUM JCGM ILAC ISO CNAS IEEE MEMS Allan Welch Satterthwaite SHA VB gonio csv dB Hz mV lsb ppm
 sin cos max min ln rms RMS ARW RRW BI BIC bic SF Out FullScale Noise CW CCW band_hz
-broadband_high dec resolution rest cov WX monte carlo ADXRS dt
+broadband_high dec resolution rest cov WX monte carlo ADXRS dt results json
 """.split())
 WORD = re.compile(r"(?<![A-Za-z0-9_\\])[A-Za-z][A-Za-z]+(?:_[A-Za-z0-9,]+)?")
 
@@ -62,6 +71,30 @@ approved_title = "技术负责人"
 """
 
 
+#: Limits for three items of each specification (conformity statements on the page).
+LIMITS = {"ogam-draft": ("angle_deviation", "repeatability", "zero_stability"),
+          "jjf1535-2015": ("bias", "scale_factor", "angle_random_walk"),
+          "iec62047-20": ("bias", "arw", "frequency_band"),
+          "triad-alignment": ("M_xx", "b_x", "S_xy")}
+SMALL = "tests/data/small-protocol.toml"
+
+
+def _optical(d):
+    """The small optical programme, damaged (module docstring)."""
+    from gonio.cli import main
+    from gonio.specs.ogam_draft.calibration import calibrate
+    from tests.test_ogam_screen import data_line, nominal_k, set_col
+    assert main(["simulate", "--protocol", SMALL, "--seed", "2411", "--out", str(d / "sim")]) == 0
+    lines = (d / "sim" / "readings.csv").read_text().splitlines(keepends=True)
+    i = data_line(lines, "angle_deviation", 2, 2)
+    lines[i] = set_col(lines[i], 7, lambda c: str(int(c) + round(nominal_k(lines))))
+    lines = [ln for ln in lines if not ln.startswith("pointing_consistency,") and not (
+        ln.startswith("angle_deviation,") and ln.split(",")[2] == "3")]
+    path = d / "readings.csv"
+    path.write_text("".join(lines))
+    return calibrate(path, SMALL), path
+
+
 def _rate(spec_key, d):
     from tests.test_rate_dcc import _simulate
     mod, proto, path, _ = _simulate(spec_key, d, 3)
@@ -76,30 +109,41 @@ def _triad(d):
     return get("triad-alignment").calibrate(d / "sim" / "readings.csv"), d / "sim" / "readings.csv"
 
 
-@pytest.fixture(scope="module", params=("jjf1535-2015", "iec62047-20", "triad-alignment"))
+@pytest.fixture(scope="module", params=("ogam-draft", "jjf1535-2015", "iec62047-20",
+                                        "triad-alignment"))
 def calibrated(request, tmp_path_factory):
     if shutil.which("pdftotext") is None:
         pytest.fail("pdftotext not found: run scripts/install-test-system-deps.sh")
     d = tmp_path_factory.mktemp(request.param)
-    result, readings = _triad(d) if request.param == "triad-alignment" else \
-        _rate(request.param, d)
+    make = {"ogam-draft": _optical, "triad-alignment": _triad}.get(
+        request.param, lambda d: _rate(request.param, d))
+    result, readings = make(d)
     lab = d / "lab-zh.toml"
-    lab.write_text(LAB_ZH, encoding="utf-8")
+    lab.write_text(LAB_ZH + '[decision_rule]\nrule = "non-binary"\nguard_band_factor = 1.0\n'
+                   + "".join(f'[[specification_limits]]\nitem = "{k}"\nmpe = 1.0e6\n'
+                             f'source = "制造商技术指标"\n' for k in LIMITS[request.param]),
+                   encoding="utf-8")
     return {"key": request.param, "result": result, "dir": d, "lab": lab,
             "readings": readings}
 
 
 def _write(c, out, lab):
-    if c["key"] == "triad-alignment":
-        from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate as w
-    else:
-        from gonio.report.rate_certificate import write_rate_certificate as w
-    return w(c["result"], out, lab=lab, lang="zh", dcc=True)
+    from gonio.specs import get
+    return get(c["key"]).renderer().write(c["result"], out, lab=load_lab(lab) if lab else None,
+                                          lang="zh", dcc=True)
+
+
+def _json(c) -> dict:
+    r = c["result"]
+    return (r.to_result() if hasattr(r, "to_result") else r).to_json()
 
 
 def _allowed(c, lab) -> set:
-    res = c["result"].to_json()
+    res = _json(c)
     ok = set(WHITELIST)
+    for f in res.get("findings") or []:       # the readings' own test and column names
+        ok |= set(WORD.findall(f"{f.get('test') or ''} {f.get('column') or ''}"))
+    ok |= set(WORD.findall(str((res.get("settings") or {}).get("protocol") or "")))
     for it in res["items"].values():
         for comp in (it.get("uncertainty") or {}).get("components") or []:
             ok |= set(WORD.findall(comp.get("symbol") or ""))
@@ -127,9 +171,20 @@ def test_no_english_word_on_a_chinese_certificate(calibrated, with_lab, tmp_path
     for where, t in (("HTML", text), ("figures", figures), ("PDF", pdf)):
         bad = sorted({w for w in WORD.findall(t) if w not in allowed})
         assert not bad, f"{calibrated['key']} zh {where}: English words {bad}"
-    # the zh DCC carries Chinese beside English
+    # the zh DCC carries Chinese beside every English text, and the Chinese is Chinese
     doc = (out / "certificate.dcc.xml").read_text(encoding="utf-8")
     assert doc.count('lang="zh"') >= 4 and "<dcc:usedLangCodeISO639_1>zh<" in doc
+    root = etree.fromstring(doc.encode("utf-8"))
+    for el in root.iter(f"{{{DCC_NS}}}content"):
+        bad = sorted({w for w in WORD.findall(el.text or "") if w not in allowed})
+        if el.get("lang") == "zh":
+            assert not bad, f"{calibrated['key']} zh DCC: English words {bad} in {el.text!r}"
+        elif bad:
+            nxt = el.getnext()
+            assert el.get("lang") == "en" and nxt is not None and nxt.get("lang") == "zh", \
+                f"{calibrated['key']} zh DCC: no Chinese beside {el.text!r}"
+    if calibrated["key"] == "ogam-draft":        # the findings and the item not measured
+        assert "第 3 测回（270°）在各组中均缺失" in text and "[剔除]" in text and "未测" in text
 
 
 def test_the_check_can_fail(calibrated, tmp_path):

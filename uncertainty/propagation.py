@@ -11,6 +11,10 @@
   same decimal place (JCGM 100 7.2.6).
 
 Compiled (lambdified) sympy models are cached, so evaluating the same model again is fast.
+SymPy is imported only when a sympy model is compiled: an additive model written as a
+:class:`LinearModel` (its coefficients known) is evaluated and differentiated without it,
+so a process that only propagates such models (a coverage study's workers) never pays the
+SymPy import.
 """
 
 from __future__ import annotations
@@ -21,20 +25,64 @@ from dataclasses import dataclass, field
 from decimal import ROUND_HALF_UP, Decimal
 from typing import Callable, Sequence
 
+import sys
+
 import numpy as np
-import sympy
 from scipy import stats
 
 from uncertainty.quantities import InputQuantity
 
-__all__ = ["Contribution", "GumResult", "compile_model", "sensitivity_coefficients",
+__all__ = ["Contribution", "GumResult", "LinearModel", "compile_model", "sensitivity_coefficients",
            "combined_uncertainty", "welch_satterthwaite", "coverage_factor", "propagate",
            "round_uncertainty", "round_result"]
 
 
 # --------------------------------------------------------------------------- model evaluation
+@dataclass(frozen=True)
+class LinearModel:
+    """y = ``value`` + Σ ``coeffs``[i]·X_i over the inputs named ``names``: an additive
+    model whose sensitivity coefficients are the coefficients themselves (JCGM 100 5.1.3),
+    evaluated and differentiated without SymPy. :meth:`to_sympy` gives the same model as a
+    sympy expression (Float(value) + Σ Float(c_i)·X_i) for whatever needs one.
+
+    >>> m = LinearModel(2.0, (1.0, -0.5), ("a", "b"))
+    >>> float(m(1.0, 4.0)), m.gradient(1.0, 4.0)
+    (1.0, [1.0, -0.5])
+    >>> m.to_sympy()
+    1.0*a - 0.5*b + 2.0
+    """
+
+    value: float
+    coeffs: tuple[float, ...]
+    names: tuple[str, ...]
+
+    def __call__(self, *x):
+        y = self.value
+        for c, xi in zip(self.coeffs, x):
+            y = y + c * xi
+        return y
+
+    def gradient(self, *x) -> list[float]:
+        """∂y/∂X_i: the coefficients (in ``names`` order)."""
+        return [float(c) for c in self.coeffs]
+
+    def to_sympy(self):
+        """The model as the sympy expression Float(value) + Σ Float(c_i)·Symbol(X_i, real)."""
+        import sympy
+        syms = [sympy.Symbol(n, real=True) for n in self.names]
+        return sympy.Float(self.value) + sum((sympy.Float(c) * x for c, x in
+                                              zip(self.coeffs, syms)), sympy.Integer(0))
+
+
+def _is_sympy(model) -> bool:
+    """Whether ``model`` is a sympy object (never true while SymPy is not imported)."""
+    sp = sys.modules.get("sympy")
+    return sp is not None and isinstance(model, sp.Basic)
+
+
 @functools.lru_cache(maxsize=512)
-def _lambdified(expr: sympy.Expr, names: tuple[str, ...]):
+def _lambdified(expr, names: tuple[str, ...]):
+    import sympy
     by_name = {s.name: s for s in expr.free_symbols}
     missing = set(by_name) - set(names)
     if missing:
@@ -52,13 +100,22 @@ def compile_model(model, names: Sequence[str]) -> tuple[Callable, Callable | Non
     model and None for a callable (whose derivatives are taken numerically). The
     sympy compilation is cached on (expression, names).
 
+    >>> import sympy
     >>> x, y = sympy.symbols("x y")
     >>> f, grad = compile_model(x * y, ("x", "y"))
     >>> float(f(2.0, 3.0)), [float(g) for g in grad(2.0, 3.0)]
     (6.0, [3.0, 2.0])
     """
     names = tuple(names)
-    if isinstance(model, sympy.Basic):
+    if isinstance(model, LinearModel):
+        if tuple(model.names) != names:
+            if set(model.names) - set(names):
+                raise ValueError("model symbols without an input quantity: "
+                                 + ", ".join(sorted(set(model.names) - set(names))))
+            model = model.to_sympy()
+        else:
+            return model, model.gradient
+    if _is_sympy(model):
         return _lambdified(model, names)
     if callable(model):
         return model, None
@@ -92,6 +149,7 @@ def sensitivity_coefficients(model, inputs: Sequence[InputQuantity]) -> np.ndarr
     Symbolic for a sympy expression, central differences for a callable.
 
     >>> from uncertainty.quantities import type_b
+    >>> import sympy
     >>> a, b = sympy.symbols("a b")
     >>> q = [type_b("a", 2.0, 0.1), type_b("b", 4.0, 0.1)]
     >>> sensitivity_coefficients(a / b, q).tolist()
@@ -269,6 +327,7 @@ def propagate(model, inputs: Sequence[InputQuantity], *, correlation=None, covar
     Draft Annex A.2 model Δ = (φ_e + B_E) − P plus repeatability r:
 
     >>> from uncertainty.quantities import type_b, from_u
+    >>> import sympy
     >>> P, phi, B, r = sympy.symbols("P phi_e B_E r")
     >>> q = [type_b("P", 0, 0.1), type_b("phi_e", 0, 0.0785), type_b("B_E", 0, 0.15),
     ...      from_u("r", 0, 0.096)]

@@ -4,7 +4,7 @@ Each sub-command lives in its own module ``gonio/cli/cmd_<name>.py`` that
 defines ``register(subparsers)``; the parser it adds sets ``func`` to a
 function ``run(args) -> int``. A specification adds its own sub-commands the same
 way through the registry (``Specification.commands``, :func:`gonio.specs.commands`:
-the triad's ``align`` and ``thermal-model``). Commands are registered in name order,
+``align`` and ``thermal-model``, say). Commands are registered in name order,
 so adding one never edits a shared list.
 
 Every way a run can end is one line on stderr, never a traceback:

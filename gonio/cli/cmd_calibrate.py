@@ -96,10 +96,12 @@ def run(args) -> int:
         check_output_dir(args.out, inputs=inputs, force=args.force)
     lab_d = load_lab_file(args.lab)                               # validated before the work
     status("calibrating")
-    result, _ = calibrate(args.readings, args.out, spec_key=spec.key, protocol=args.protocol,
-                          lab=lab_d, lang=args.lang, dcc=args.dcc,
-                          monte_carlo_trials=args.monte_carlo, inputs=inputs, force=args.force,
-                          **{k: getattr(args, k) for k in SPEC_OPTIONS})
+    from gonio.report.certificate import naming_lab_file
+    with naming_lab_file(args.lab):
+        result, _ = calibrate(args.readings, args.out, spec_key=spec.key, protocol=args.protocol,
+                              lab=lab_d, lang=args.lang, dcc=args.dcc,
+                              monte_carlo_trials=args.monte_carlo, inputs=inputs,
+                              force=args.force, **{k: getattr(args, k) for k in SPEC_OPTIONS})
     status("")
     show(spec, result, args.json, lab_d, args.lang)
     return 0

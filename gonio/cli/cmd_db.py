@@ -33,6 +33,9 @@ def register(sub) -> None:
     add_store_options(q)
     q.add_argument("folders", nargs="+")
     q.add_argument("--customer", default="(imported)")
+    q.add_argument("--protocol", default=None,
+                   help="the protocol file (or built-in name) the folders were computed with, "
+                        "when it is not the one results.json names")
     q.set_defaults(func=run_import)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database")):
@@ -66,7 +69,8 @@ def hook_calibrate(sub) -> None:
             store = _store(args)
             try:
                 cid = import_output_folder(store, args.out, readings=args.readings,
-                                           spec_key=args.spec)
+                                           spec_key=args.spec,
+                                           protocol=getattr(args, "protocol", None))
             finally:
                 store.close()
             sys.stderr.write(f"gonio: recorded as calibration {cid}\n")
@@ -120,7 +124,8 @@ def run_import(args) -> int:
     store = _store(args)
     try:
         for folder in args.folders:
-            cid = import_output_folder(store, folder, customer=args.customer)
+            cid = import_output_folder(store, folder, customer=args.customer,
+                                       protocol=args.protocol)
             print(f"{folder}: calibration {cid}")
     finally:
         store.close()

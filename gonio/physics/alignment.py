@@ -174,18 +174,24 @@ def decompose_system_matrix(m) -> dict:
     >>> d["scale"], d["psi_rad"]
     ([2.0, 2.0, 2.0], [0.0, 0.0, 0.0])
     """
-    m = np.asarray(m, dtype=float).reshape(3, 3)
-    k = np.linalg.norm(m, axis=1)
+    d = decompose_system_matrices(np.asarray(m, dtype=float).reshape(1, 3, 3))
+    return {k: v[0].tolist() for k, v in d.items()}
+
+
+def decompose_system_matrices(m: np.ndarray) -> dict:
+    """:func:`decompose_system_matrix` of a stack of system matrices (shape (k, 3, 3)), as
+    arrays with the stack first (a Monte Carlo chunk at once)."""
+    m = np.asarray(m, dtype=float)
+    k = np.linalg.norm(m, axis=2)
     if np.any(k == 0):
         raise GonioError("system matrix has a zero row (a gyro with no output)")
-    u = m / k[:, None]
-    psi = np.arccos(np.clip(np.abs(np.diag(u)), -1.0, 1.0))
-    phi = np.arcsin(np.clip(u, -1.0, 1.0))
-    np.fill_diagonal(phi, 0.0)
-    s = m / np.diag(m)[:, None]
-    np.fill_diagonal(s, 0.0)
-    return {"scale": k.tolist(), "axes": u.tolist(), "psi_rad": psi.tolist(),
-            "phi_rad": phi.tolist(), "cross_axis": s.tolist()}
+    u = m / k[:, :, None]
+    eye = np.eye(3, dtype=bool)
+    diag = np.diagonal(m, axis1=1, axis2=2)
+    psi = np.arccos(np.clip(np.abs(np.diagonal(u, axis1=1, axis2=2)), -1.0, 1.0))
+    phi = np.where(eye, 0.0, np.arcsin(np.clip(u, -1.0, 1.0)))
+    s = np.where(eye, 0.0, m / diag[:, :, None])
+    return {"scale": k, "axes": u, "psi_rad": psi, "phi_rad": phi, "cross_axis": s}
 
 
 def first_column_from_orthogonality(col_y, col_z) -> np.ndarray:

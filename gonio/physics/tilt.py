@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import sympy
 from scipy import integrate, special
 
 from gonio.units import ARCSEC_PER_DEG, ARCSEC_PER_RAD
@@ -95,17 +94,19 @@ def _error_quad_rad(theta: np.ndarray, psi: float) -> np.ndarray:
 
 # ----------------------------------------------------------------------- series
 @functools.lru_cache(maxsize=8)
-def elliptic_series(order: int = 4) -> sympy.Expr:
+def elliptic_series(order: int = 4) -> "sympy.Expr":
     """Δ(θ; ψ) in radians as a sympy series in ψ through ψ^order (draft Annex A.4.2).
 
     Derived here: expand 1/√(1 − sin²ψ cos²θ) in ψ, integrate term by term from 0 to
     θ and to 2π, form 2π·F(θ)/F(2π) − θ and re-expand. The leading term is
     (ψ²/8)·sin 2θ.
 
+    >>> import sympy
     >>> th, ps = sympy.symbols("theta psi", real=True)
     >>> sympy.simplify(elliptic_series(2) - ps**2 * sympy.sin(2 * th) / 8)
     0
     """
+    import sympy                       # lazily: only the series needs it
     th, ps, t = sympy.symbols("theta psi t", real=True)
     n = order + 1
     f = sympy.series(1 / sympy.sqrt(1 - sympy.sin(ps) ** 2 * sympy.cos(t) ** 2), ps, 0, n).removeO()
@@ -124,6 +125,7 @@ def elliptic_series(order: int = 4) -> sympy.Expr:
 
 @functools.lru_cache(maxsize=8)
 def _series_fn(order: int):
+    import sympy
     th, ps = sympy.symbols("theta psi", real=True)
     return sympy.lambdify((th, ps), elliptic_series(order), "numpy")
 

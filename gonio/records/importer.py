@@ -65,10 +65,43 @@ def _instrument(s, meta: dict, spec_key: str, customer: str, actor) -> Instrumen
     return inst
 
 
+def _protocol_file(results: dict, given: str | Path | None, folder: Path) -> Path | None:
+    """The protocol file the folder's calibration used: ``given`` (a file or built-in name),
+    else what results.json names (``settings.protocol``, the readings' ``# protocol:``),
+    checked against ``settings.protocol_sha256`` when results.json has it; None when
+    results.json names none (the specification's default protocol was used)."""
+    from gonio.resources import resolve
+    settings = results.get("settings") or {}
+    meta = results.get("metadata") or {}
+    name = given or settings.get("protocol") or meta.get("protocol") or results.get("protocol")
+    if not name:
+        return None
+    try:
+        path = resolve(str(name))
+    except GonioError:
+        cand = folder / str(name)
+        if not cand.is_file():
+            raise GonioError(f"results.json was computed with protocol {str(name)!r}, which is "
+                             "neither a built-in protocol nor a file here; give the file with "
+                             "--protocol", file=folder, key="protocol") from None
+        path = cand
+    want = settings.get("protocol_sha256")
+    if want and blobs_sha(path) != want:
+        raise GonioError(f"protocol {str(path)!r} is not the one results.json was computed "
+                         f"with (SHA-256 {str(want)[:12]}…)", file=folder, key="protocol")
+    return path
+
+
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
                          spec_key: str | None = None, customer: str = "(imported)",
-                         actor: User | None = None) -> int:
-    """Import one output folder as a computed calibration; returns its id."""
+                         actor: User | None = None,
+                         protocol: str | Path | None = None) -> int:
+    """Import one output folder as a computed calibration; returns its id.
+
+    The protocol is stored with the readings (its file, as a blob), so that the issue's
+    recomputation uses the very protocol the result was computed with: ``protocol`` (a file
+    or built-in name), else the one results.json names; a protocol that cannot be found, or
+    whose SHA-256 differs from results.json's, is an error."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:
@@ -83,16 +116,24 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     get(key)
     rd = _readings_in(folder, str(source.get("sha256", "")), Path(readings) if readings else None)
     rsha, rsize = blobs.put_file(store.blob_root, rd)
+    proto = _protocol_file(results, protocol, folder)
+    psha = None
+    if proto is not None:
+        psha, psize = blobs.put_file(store.blob_root, proto)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
-        if s.get(Blob, rsha) is None:
-            s.add(Blob(sha256=rsha, size=rsize))
-            s.flush()
+        for sha, size in ((rsha, rsize), (psha, psize if psha else 0)):
+            if sha and s.get(Blob, sha) is None:
+                s.add(Blob(sha256=sha, size=size))
+                s.flush()
         inst = _instrument(s, meta, key, customer, actor)
         day = _dt.date.fromisoformat(str(meta["date"])[:10]) if meta.get("date") else \
             _dt.date.fromtimestamp(res_path.stat().st_mtime)
         cal = Calibration(instrument_id=inst.id, spec_key=key, readings_sha256=rsha,
-                          readings_name=rd.name, protocol=str(results.get("protocol") or "")[:64],
+                          readings_name=rd.name,
+                          protocol=services.text(proto.name if proto else "", "protocol",
+                                                 max_len=200),
+                          protocol_sha256=psha,
                           performed_on=day, status="running", created_by_id=actor.id
                           if actor else None, progress=f"imported from {folder.name} by {who}")
         s.add(cal)

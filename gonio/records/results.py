@@ -37,6 +37,8 @@ class Item:
     U: float | None
     k: float | None
     limits: tuple[float | None, float | None] | None = None   # (lower, upper) if stated
+    outcome: str | None = None           # the conformity decision, if limits were given
+    rule: str | None = None              # its decision rule
 
 
 def _num(x) -> float | None:
@@ -55,13 +57,23 @@ def _limits(d: dict):
     return None if lo is None and hi is None else (lo, hi)
 
 
+def _decision(d: dict) -> tuple[str | None, str | None]:
+    c = d.get("conformity")
+    if not isinstance(c, dict):
+        return None, None
+    return (None if c.get("outcome") is None else str(c["outcome"]),
+            None if c.get("rule") is None else str(c["rule"]))
+
+
 def _item(key: str, d: dict, unc: dict | None) -> Item:
     unc = unc if isinstance(unc, dict) else {}
+    outcome, rule = _decision(d)
     return Item(key=str(key), title=str(d.get("title") or d.get("item") or key),
                 clause=str(d.get("clause") or ""), unit=str(d.get("unit") or ""),
                 measured=bool(d.get("measured", d.get("value") is not None)),
                 value=_num(d.get("value")), U=_num(d.get("U", unc.get("U"))),
-                k=_num(d.get("k", unc.get("k"))), limits=_limits(d))
+                k=_num(d.get("k", unc.get("k"))), limits=_limits(d), outcome=outcome,
+                rule=rule)
 
 
 def result_items(results: dict) -> list[Item]:

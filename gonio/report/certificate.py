@@ -28,6 +28,7 @@ rule, half up); in the HTML each carries ``data-src`` (its path in
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import html
 import io
@@ -42,12 +43,13 @@ from gonio.report.text import clean_tree, fit_header
 from gonio.errors import GonioError
 from gonio.analysis.conformity import RULES, check_one_limit_per_item
 from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
-from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, labels,
-                               reading_note, rule_at_U, specification_text)
+from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, finding_text,
+                               labels,
+                               reading_note, reason_text, rule_at_U, specification_text)
 from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class)
-from gonio.report.stated import (ANNEX_A_COVERAGE, ITEMS, Num, conformity_for,
+from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for,
                                  conformity_texts, limits_of, method_rows, num, segments,
-                                 stated_item, u_cell)
+                                 item_names, stated_item, u_cell)
 from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
 
 # --------------------------------------------------------------------------- lab file
@@ -151,6 +153,28 @@ def load_lab(path: str | Path) -> dict:
     return lab
 
 
+@contextlib.contextmanager
+def naming_lab_file(path):
+    """Errors about the lab file's limits raised while its limits are decided (an item the
+    specification does not have: known only once the calibration ran) name the lab file
+    ``path`` as well as the key.
+
+    >>> try:
+    ...     with naming_lab_file("lab.toml"):
+    ...         raise GonioError("s has no item 'K'", key="specification_limits[0].item")
+    ... except GonioError as e:
+    ...     print(e)
+    lab.toml: key specification_limits[0].item: s has no item 'K'
+    """
+    try:
+        yield
+    except GonioError as exc:
+        if path is None or exc.file is not None or exc.line is not None \
+                or not str(exc.key or "").startswith(("specification_limits", "decision_rule")):
+            raise
+        raise GonioError(exc.message, file=path, key=exc.key) from None
+
+
 def certificate_id(report, lab: dict | None = None) -> str:
     """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash.
 
@@ -212,11 +236,11 @@ def screening_notes(res: dict, L: dict, add) -> None:
     aside = sum(f["action"] == "set_aside" for f in found)
     flagged = len(found) - aside
     add("notice", L["screening_note"].format(n=aside, m=flagged))
+    names = {k: L[k] for k in ITEMS}                  # a test named by its item
     for f in found[:MAX_FINDING_LINES]:
-        where = f"line {f['line']}: " if f.get("line") is not None else ""
-        add("p", [f"{where}{f['message']}"])
+        add("p", [finding_text(f, L, extra=names)])
     if len(found) > MAX_FINDING_LINES:
-        add("p", [f"… {len(found) - MAX_FINDING_LINES} more in results.json (findings)"])
+        add("p", [L["more_findings"].format(n=len(found) - MAX_FINDING_LINES)])
 
 
 def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
@@ -281,7 +305,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     if not std_rows:
         mpe = md.get("table_mpe_arcsec")
         std_rows.append([_meta(md, "table", L), "—",
-                         f"MPE ±{mpe}″" if mpe else ns, "—",
+                         L["std_mpe"].format(v=mpe) if mpe else ns, "—",
                          L["virtual_trace"] if virtual else ns])
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
@@ -305,12 +329,14 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
     rrows = []
-    for i, name in enumerate(ITEMS, 1):
+    for i, name in enumerate(item_names(res), 1):
         item = res[name]
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
         st = stated_item(res, name)
         if not st["measured"]:
-            rrows.append([str(i), L[name], item["clause"], f"{L['not_measured']}: {item['reason']}",
+            rrows.append([str(i), L[name], item["clause"],
+                          f"{L['not_measured']}: "
+                          f"{reason_text(item['reason'], L, extra={k: L[k] for k in ITEMS})}",
                           "—", ""])
             continue
         cell: list = [st["value"]]
@@ -359,8 +385,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
                                            ppm=f"{ppm:.2g}")])
 
-    # decision rule and conformity: only when the laboratory file gives limits
-    conf = conformity_for(res, lab)
+    # decision rule and conformity: the decisions the pipeline made (results.json), rendered
+    conf = conformity_for(res, lab, report.conformity)
     if conf:
         add("h", L["conformity"])
         rule = conf[0]["rule"]
@@ -1050,9 +1076,9 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
     Parameters
     ----------
-    report : gonio.specs.ogam_draft.calibration.CalibrationReport
-        What :func:`gonio.specs.ogam_draft.calibration.calibrate` returned (``results.json`` is written
-        by :func:`gonio.specs.ogam_draft.outputs.write_calibration`, not here).
+    report : the specification's calibration report
+        What the specification's ``calibrate`` returned (``results.json`` is written by its
+        ``outputs`` module, not here).
     out : path
         Output folder; both files appear together or not at all (staged, then renamed).
     truth : dict, optional
@@ -1086,12 +1112,14 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
-            from gonio.report.dcc import bilingual, dcc_bytes, label_translator
+            from gonio.report.dcc import bilingual, dcc_bytes, label_translator, method_text
             from gonio.report.i18n import READING_NOTES_ZH
 
             doc = dcc_bytes(report, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English (issue 25)
-                doc = bilingual(doc, label_translator(dict(READING_NOTES_ZH)))
+                extra = {**READING_NOTES_ZH, **{k: L[k] for k in ITEMS},
+                         method_text(report, lab_d, "en"): method_text(report, lab_d, "zh")}
+                doc = bilingual(doc, label_translator(extra))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
     return {n: out / n for n in names}

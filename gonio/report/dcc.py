@@ -52,8 +52,8 @@ from lxml import etree
 
 from gonio.atomic import write_bytes
 from gonio.report.i18n import display, labels, reading_note, specification_text
-from gonio.report.stated import (ITEMS, Num, conformity_for, conformity_texts, item_uncertainty,
-                                 method_rows, num, stated_item)
+from gonio.report.stated import (Num, conformity_for, conformity_texts, item_uncertainty,
+                                 item_names, method_rows, num, stated_item)
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -231,22 +231,10 @@ def bilingual(doc: bytes, translate) -> bytes:
 
 
 def label_translator(extra: dict | None = None, tables=()):
-    """``translate(text)`` for :func:`bilingual`: the certificate labels' English → Chinese,
-    ``extra`` (English → Chinese; a key may be the opening words of a longer text, e.g. a
-    note's "7.2.1:"), then the phrase ``tables`` (:func:`gonio.report.i18n.phrase_zh`)."""
-    from gonio.report.i18n import LABELS, phrase_zh
+    """``translate(text)`` for :func:`bilingual` (:func:`gonio.report.i18n.translator`)."""
+    from gonio.report.i18n import translator
 
-    table = {v["en"]: v["zh"] for v in LABELS.values()}
-    table.update(extra or {})
-
-    def translate(text: str) -> str | None:
-        if text in table:
-            return table[text]
-        for k, v in (extra or {}).items():       # a note known by its opening words
-            if len(k) < len(text) and text.startswith(k):
-                return v
-        return phrase_zh(text, tables)
-    return translate
+    return translator(extra, tables)
 
 
 def _decimal_or_nan(v) -> str:
@@ -436,6 +424,15 @@ def not_measured_quantity(data, name: str, reason: str) -> "etree.Element":
     return q
 
 
+def method_text(report, lab: dict | None, lang: str = "en") -> str:
+    """The method statement (:func:`gonio.report.stated.method_rows`) on one line, as the
+    optical DCC's method description (``lang`` "zh": its Chinese, written beside it)."""
+    rows = method_rows(report, report.to_dict(), labels(lang), lab, lang)
+    if lang == "zh":
+        return "；".join(f"{k}：{v}" for k, v in rows)
+    return "; ".join(f"{k}: {v}" for k, v in rows)
+
+
 def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
     """The DCC 3.3.0 document of one calibration (see the module docstring for its content)."""
     L = labels("en")
@@ -446,9 +443,9 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
     norm = specification_text(res.get("specification") or "not stated", "en")
     sts = administrative_data(
         root, md, lab, cert_id=cert_id, norm=norm,
-        clauses=[res[n]["clause"] for n in ITEMS if res[n]["measured"]],
+        clauses=[res[n]["clause"] for n in item_names(res) if res[n]["measured"]],
         readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
-    conf = conformity_for(res, lab)
+    conf = conformity_for(res, lab, report.conformity)
     if conf:
         rule = conf[0]["rule"]
         st = element(sts, "dcc:statement", id="decision-rule")
@@ -492,7 +489,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
                                       "certificate": "", "traceability": ""}]
     mr = measurement_result(
         root, "Calibration of an optical-gyroscope angle measuring instrument",
-        method="; ".join(f"{k}: {v}" for k, v in method_rows(report, res, L, lab, "en")),
+        method=method_text(report, lab, "en"),
         norm=norm, standards=stds)
     env = lab_.get("environment") or {}
     conds = []
@@ -505,7 +502,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
     influence_conditions(mr, conds)
 
     results = element(mr, "dcc:results")
-    for name in ITEMS:
+    for name in item_names(res):
         item = res[name]
         r = element(results, "dcc:result", id=f"result-{name}")
         text_element(r, "dcc:name", f"{L[name]} ({item['clause']})")

@@ -18,7 +18,7 @@ Contents
 =====================  =================================================================
 
 Each ``draw_*`` takes ``(fig, spec, report, L, truth)``: a matplotlib Figure, a
-SubplotSpec to draw in, the :class:`~gonio.specs.ogam_draft.calibration.CalibrationReport`, the
+SubplotSpec to draw in, the calibration report the specification's ``calibrate`` returned, the
 label mapping of :func:`gonio.report.i18n.labels`, and the virtual-bench truth
 (or None). The same function draws into the HTML's SVG and into a PDF page.
 An item that was not measured gives an empty panel saying so.

@@ -20,6 +20,7 @@ Every number the certificate shows (HTML, PDF and figure annotations) goes throu
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from decimal import Decimal
@@ -93,6 +94,10 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "标度因数 K 为安装状态下的值：敏感平面与转台台面的夹角不超过 {psi}°"
                            "（附录A.1）。仪器自身的 K（敏感轴沿转轴）最多大 {ppm} ppm"
                            "（1/cos ψ − 1），未计入 U。"},
+    "std_mpe": {"en": "MPE ±{v}″", "zh": "最大允许误差 ±{v}″"},
+    "screening_h": {"en": "Screening of the readings", "zh": "读数筛查"},
+    "more_findings": {"en": "… {n} more in results.json (findings)",
+                      "zh": "……另有 {n} 条，见 results.json"},
     "screening_note": {"en": "Screening of the readings: {n} reading(s) set aside (not used; "
                              "listed in results.json with line and reason) and {m} finding(s) "
                              "on the completeness of the programme; the results above rest "
@@ -719,8 +724,271 @@ def source_text(src: str, L: dict, table=()) -> str:
     return out + (f" ({L['beyond_draft']})" if note else "")
 
 
-def reason_text(reason: str, L: dict, table=()) -> str:
-    """Why an item was not measured, in the certificate's language."""
+def reason_text(reason: str, L: dict, table=(), extra: dict | None = None) -> str:
+    """Why an item was not measured, in the certificate's language: in Chinese through the
+    specification's ``table`` and the shared ones (:func:`translator`, :data:`REASONS_ZH`);
+    a reason no table knows stays as written."""
     if L.get("_lang") == "zh":
-        return phrase_zh(reason, table) or reason
+        return translator(extra, tuple(table) + REASONS_ZH)(reason) or reason
     return reason
+
+
+# --------------------------------------------------------------------------- DCC texts (zh)
+
+#: The fixed English texts of every DCC (gonio.report.dcc, rate_dcc, item_dcc) → Chinese,
+#: written beside the English in a zh DCC (:func:`gonio.report.dcc.bilingual`).
+DCC_ZH: dict[str, str] = {
+    "serial number": "出厂编号",
+    "Reading taken of the specification's text": "对规范条文的理解",
+    "Reading taken of the sources": "对参考文献的理解",
+    "Reading taken of the draft's text": "对规范草案条文的理解",
+    "Uncertainty of measurement": "测量不确定度",
+    "Each item's expanded uncertainty U = k·u_c is computed from the calibration's own data "
+    "(JCGM 100), with k = t95(ν_eff) (Welch–Satterthwaite), coverage probability 95 %; the "
+    "components are in results.json.":
+        "各项目的扩展不确定度 U = k·u_c 由本次校准数据求得（JCGM 100），k = t95(ν_eff)"
+        "（Welch–Satterthwaite 公式），包含概率 95 %；各分量见 results.json。",
+    "Decision rule": "判定规则",
+    "non-binary": "非二元判定",
+    "guarded": "带保护带的二元判定",
+    "simple": "简单接受",
+    "lower specification limit": "规定下限",
+    "upper specification limit": "规定上限",
+    "probability of conformance": "符合概率",
+    "specific false-accept probability": "特定误接受概率",
+    "specific false-reject probability": "特定误拒绝概率",
+    "room temperature": "室温",
+    "temperature": "温度",
+    "relative humidity": "相对湿度",
+    "nominal supply voltage": "标称电源电压",
+    "latitude of the site (Earth-rate components)": "所在地纬度（地球自转角速度分量）",
+    "scale-factor input rates": "标度因数输入角速度",
+    "chamber temperature points": "温箱温度点",
+    "supply voltages": "电源电压",
+    "angular vibration frequencies": "角振动频率",
+    "traceable to none (virtual bench)": "无溯源（虚拟台架）",
+    "none (virtual bench)": "无（虚拟台架）",
+    "per-point table": "逐点数据表",
+    "round angle θ_i": "测回角 θ_i",
+    "B_s per series": "各组 B_s",
+    "linear drift per series": "各组线性漂移",
+    "E = ± max|E_i| (draft 7.4)": "E = ± max|E_i|（规范草案 7.4）",
+    "signed extreme of E_i": "E_i 的带符号极值",
+    "position of the extreme": "极值所在位置",
+    "position": "位置",
+    "table rate": "转台角速度",
+    "axis direction": "轴向",
+    "upper bound (coverage interval [0, upper bound]: a non-negative quantity whose U exceeds "
+    "its value)": "上限（包含区间 [0, 上限]：非负量，U 大于其值）",
+    "Calibration of an optical-gyroscope angle measuring instrument": "光学陀螺测角仪校准",
+    "MEMS rate gyro (virtual)": "微机电速率陀螺（虚拟）",
+    "MEMS gyro triad (virtual)": "微机电三轴陀螺组件（虚拟）",
+    "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
+    "FOG goniometer (virtual)": "光纤陀螺测角仪（虚拟）",
+    "precision low-speed rotary table (virtual)": "精密低速转台（虚拟）",
+    "rate table, two-axis position table, angular vibration table, chamber (virtual)":
+        "速率转台、双轴位置转台、角振动台、温箱（虚拟）",
+}
+
+#: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},
+#: {2}…; each group is itself translated where it can be, :func:`gonio.report.dcc.label_translator`).
+DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
+    (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
+    (r"Statement of conformity: (.+)", "符合性声明：{1}"),
+    (r"(pass|fail|conditional pass|conditional fail)(; rule \S+)?; limits (.+?); acceptance "
+     r"interval (.+?); specific false-accept probability ([^;]+)(; false-reject probability "
+     r"[^;]+)?; limits from: (.*)",
+     "{1}{2}；规定限 {3}；接受区间 {4}；特定误接受概率 {5}{6}；规定限来源：{7}"),
+    (r"; rule (\S+)", "；判定规则 {1}"),
+    (r"; (.+)", "；{1}"),
+    (r"(Decision rule: .+) Agreed: (.+)\.", "{1}约定：{2}。"),
+    (r"max \|E_i\|", "max |E_i|（最大值）"),
+    (r"MPE (.+)", "最大允许误差 {1}"),
+    (r"no statement: (.+)", "不作声明：{1}"),
+    (r"not measured: (.+)", "未测：{1}"),
+    (r"(.+) \(row by row: (.+)\)", "{1}（按行：{2}）"),
+    (r"(.+); certificate (.+); traceable to (.+)", "{1}；证书 {2}；溯源至 {3}"),
+    (r"(.+); traceable to (.+)", "{1}；溯源至 {2}"),
+    (r"rate U_rel = (\S+) \(k = 2\)", "速率相对扩展不确定度 U_rel = {1}（k = 2）"),
+    (r"(.+) in results\.json, written per m s⁻² \(g_n = (\S+) m s⁻²\)",
+     "results.json 中为 {1}，此处按每 m s⁻² 给出（g_n = {2} m s⁻²）"),
+    (r"Produced by gonio from a virtual bench \(simulated readings\)\. It demonstrates the "
+     r"layout and the computations only; it certifies nothing about any instrument\. "
+     r"Performance dates are the placeholder (\S+)\.",
+     "本文件由 gonio 根据虚拟台架（模拟读数）生成，仅演示版式与计算，不证明任何仪器的计量特性。"
+     "日期为占位值 {1}。"),
+)
+
+
+@functools.lru_cache(maxsize=1)
+def label_templates() -> tuple[tuple["re.Pattern", str], ...]:
+    """The certificate labels with fields ("Agreed: {a}") as (regular expression, Chinese
+    template): a DCC text formatted from a label is translated with its fields."""
+    import string
+
+    out = []
+    for v in LABELS.values():
+        en, zh = v.get("en"), v.get("zh")
+        if not isinstance(en, str) or not isinstance(zh, str) or "{" not in en:
+            continue
+        pat, seen, ok = "", set(), True
+        for lit, name, spec, conv in string.Formatter().parse(en):
+            pat += re.escape(lit)
+            if name is None:
+                continue
+            if spec or conv or not name.isidentifier():
+                ok = False
+                break
+            pat += f"(?P={name})" if name in seen else f"(?P<{name}>.+?)"
+            seen.add(name)
+        if ok:
+            out.append((re.compile(pat, re.S), zh))
+    return tuple(out)
+
+
+#: "name (clause)": a head and one last bracket (which may itself hold one bracket pair).
+_BRACKETED = re.compile(r"(.+?) \(([^()]*(?:\([^()]*\)[^()]*)*)\)", re.S)
+
+
+def translator(extra: dict | None = None, tables=()):
+    """``translate(text)`` → its Chinese, or None (a zh DCC's texts beside the English,
+    :func:`gonio.report.dcc.bilingual`; screening findings): the certificate labels' English
+    → Chinese, the DCC's own texts (:data:`DCC_ZH`), ``extra`` (English → Chinese; a
+    key may be the opening words of a longer text, e.g. a note's "7.2.1:"), the phrase
+    ``tables`` (:func:`phrase_zh`); then texts built from parts: the DCC
+    phrases (:data:`DCC_PHRASES_ZH`) and the labels with fields, each part
+    translated in turn, and "name (clause)" with its name translated. None: no Chinese."""
+    table = {v["en"]: v["zh"] for v in LABELS.values()}
+    table.update(DCC_ZH)
+    table.update(extra or {})
+    templates = label_templates()
+
+    def translate(text: str, depth: int = 0) -> str | None:
+        if text in table:
+            return table[text]
+        for k, v in (extra or {}).items() if depth == 0 else ():
+            if len(k) < len(text) and text.startswith(k) and not k.isidentifier():
+                # a note known by its opening words ("7.2.1:"; not a bare name)
+                return v
+        if depth > 4:
+            return phrase_zh(text, tables)
+
+        def part(g):
+            return (translate(g, depth + 1) or g) if g else g
+        for pat, zh in (*tables, *DCC_PHRASES_ZH, *REASONS_ZH):
+            m = re.fullmatch(pat, text, flags=re.S)
+            if m:
+                return zh.format(None, *(part(g) or "" for g in m.groups()))
+        for rx, zh in templates:
+            m = rx.fullmatch(text)
+            if m:
+                return zh.format(**{k: part(g) for k, g in m.groupdict().items()})
+        m = _BRACKETED.fullmatch(text)
+        if m:
+            head = translate(m.group(1), depth + 1)
+            if head is not None:
+                return f"{head}（{part(m.group(2))}）"
+        m = re.fullmatch(r"([^:;]+): (.+)", text, flags=re.S)    # "label: value"
+        if m and m.group(1) in table:
+            return f"{table[m.group(1)]}：{part(m.group(2))}"
+        for sep, zsep in (("; ", "；"), (", ", "，")):           # "a; b; c", each translated
+            if sep in text:
+                parts = text.split(sep)
+                zh = [translate(p, depth + 1) for p in parts]
+                if any(z is not None for z in zh):
+                    return zsep.join(z if z is not None else p for z, p in zip(zh, parts))
+        return None
+    return translate
+
+
+# --------------------------------------------------------------------------- screening findings
+
+#: What the screening did with a reading (results.json ``findings[].action``), en and zh.
+FINDING_ACTIONS = {"set_aside": ("set aside", "剔除"), "flagged": ("flagged", "标记"),
+                   "refused": ("refused", "拒收")}
+
+#: The optical draft's screening messages (its screen module) in Chinese; each
+#: group is itself translated where it can be (an axis "up", a test's item name).
+FINDINGS_ZH: tuple[tuple[str, str], ...] = (
+    (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\); "
+     r"(\d+) readings, lines (\d+)–(\d+), all set aside",
+     "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件；第 {6}–{7} 行共 {5} 个读数均剔除"),
+    (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\)",
+     "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件"),
+    (r"(\w+) round (\d+) is not one of the protocol's (\d+) rounds \((.+)\)",
+     "{1} 第 {2} 测回不属于校准方案（{4}）的 {3} 个测回"),
+    (r"(\w+) round (\d+): table_deg (\S+) differs from the protocol's (\S+)° \(tolerance (\S+)°\)",
+     "{1} 第 {2} 测回：转台角 {3}° 与校准方案的 {4}° 不符（允差 {5}°）"),
+    (r"(\w+) round (\d+): read (\S+) s after zeroing, beyond the protocol's "
+     r"max_time_to_reading_s = (\S+) s \(Annex A\.1\)",
+     "{1} 第 {2} 测回：清零后 {3} s 才读数，超过校准方案规定的 {4} s（附录A.1）"),
+    (r"(\w+) round (\d+): read (\S+) s after zeroing, beyond Annex A\.1's 0\.5 min \((\S+) s; "
+     r"the protocol sets no max_time_to_reading_s, only an explicit one widens it\) "
+     r"\(Annex A\.1\)",
+     "{1} 第 {2} 测回：清零后 {3} s 才读数，超过附录A.1 的 0.5 min（{4} s；校准方案未另行规定）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the condition's median "
+     r"(\S+)″ by (\S+)″ \(> (\S+)″\) \(K_ref = (\S+) counts/° from the other readings\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件的中位数 {4}″ 达 {5}″（> {6}″；"
+     "K_ref = {7} 脉冲数/(°)，由其余读数求得）"),
+    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the condition's median "
+     r"(\S+)″ by (\S+)″ \(> (\S+)″\)",
+     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件的中位数 {4}″ 达 {5}″（> {6}″）"),
+    (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
+    (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
+    (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading",
+     "{1}（{2}）：校准方案的测量条件 {3} °/s、{4}轴没有读数"),
+    (r"(\w+) \((\S+)\) at (\S+) °/s, axis (\w+): round (\d+) \((\S+)°\) is missing from every "
+     r"series; the item rests on (\d+) of the programme's (\d+) rounds",
+     "{1}（{2}），{3} °/s，{4}轴：第 {5} 测回（{6}°）在各组中均缺失；该项目仅依据校准方案 {8} "
+     "个测回中的 {7} 个"),
+)
+
+
+#: Why an optical item was not measured (the draft's items module), in Chinese.
+REASONS_ZH: tuple[tuple[str, str], ...] = (
+    (r"no (\w+) rows in file", "文件中没有 {1} 数据行"),
+    (r"scale factor not measured: (.+)", "标度因数未测：{1}"),
+    (r"needs at least 2 scale_factor rounds, file has 1", "至少需要 2 个标度因数测回，文件只有 1 个"),
+    (r"zero_stability needs at least 2 readings in a series", "零位稳定性每组至少需要 2 个读数"),
+    (r"no angle_deviation rows at the 7\.4 condition \((.+)\)", "没有 7.4 测量条件（{1}）下的 "
+     "angle_deviation 数据行"),
+    (r"repeatability needs at least 2 angle_deviation series, file has 1",
+     "重复性至少需要 2 组 angle_deviation 数据，文件只有 1 组"),
+    (r"no (\w+) rows at (.+)", "没有 {2} 下的 {1} 数据行"),
+    (r"no reference condition \((.+)\): neither (\w+) nor angle_deviation rows there",
+     "没有参考条件（{1}）：该条件下既无 {2} 也无 angle_deviation 数据行"),
+    (r"(\S+) needs at least 2 conditions, file has only (.+)", "{1} 至少需要 2 个测量条件，文件只有 {2}"),
+    (r"(\S+) needs at least 2 complete conditions", "{1} 至少需要 2 个完整的测量条件"),
+    (r"no calibration position common to every condition", "各测量条件没有共同的校准位置"),
+    (r"(\S+) deg/s, axis (\w+)", "{1} °/s，{2}轴"),
+    (r"(\S+) deg/s", "{1} °/s"),
+)
+
+
+def finding_text(f: dict, L: dict, table=(), extra: dict | None = None) -> str:
+    """One screening finding (results.json ``findings``) as a certificate line in L's
+    language: "[set aside] 7.4, column gyro_counts, line 12: message". In Chinese the action,
+    line and column are named in Chinese and the message goes through the translation tables
+    (the specification's ``table`` of (regular expression, Chinese), :data:`FINDINGS_ZH`,
+    ``extra`` English → Chinese); a message no table knows stays as written (data).
+
+    >>> f = {"action": "flagged", "clause": "7.4", "line": None, "column": "round",
+    ...      "message": "angle_deviation (7.4) at 60 °/s, axis up: round 3 (270°) is missing "
+    ...                 "from every series; the item rests on 3 of the programme's 4 rounds"}
+    >>> finding_text(f, labels("en"))[:42]
+    '[flagged] 7.4, column round: angle_deviati'
+    >>> finding_text(f, labels("zh"), extra={"angle_deviation": "角位置偏差 E"})[:62]
+    '[标记] 7.4，round 列：角位置偏差 E（7.4），60 °/s，竖直向上轴：第 3 测回（270°）在各组中均缺失'
+    """
+    zh = L.get("_lang") == "zh"
+    act = FINDING_ACTIONS.get(f.get("action"), (f.get("action"),) * 2)[1 if zh else 0]
+    parts = [f.get("clause") or ""]
+    if f.get("column"):
+        parts.append(f"{f['column']} 列" if zh else f"column {f['column']}")
+    if f.get("line") is not None:
+        parts.append(f"第 {f['line']} 行" if zh else f"line {f['line']}")
+    msg = f.get("message") or ""
+    if zh:
+        msg = translator(extra, tuple(table) + FINDINGS_ZH)(msg) or msg
+    where = ("，" if zh else ", ").join(p for p in parts if p)
+    return f"[{act}] {where}{'：' if zh else ': '}{msg}"

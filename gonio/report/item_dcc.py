@@ -1,5 +1,5 @@
 """The Digital Calibration Certificate (PTB DCC 3.3.0) of any per-item result, with the
-matrices a specification names written as lists: the triad's (and any plug-in's) DCC.
+matrices a specification names written as lists (its ``MATRICES``; any plug-in's DCC).
 
 Contents
 ========
@@ -114,7 +114,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
         quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"]),
                  ref_type="basic_measuredValue", **kw)
         if n["upper"] is not None:
-            bound_quantity(d, n["statement"]._x(n["upper"]), dsi=compose_dsi(it["unit"]))
+            bound_quantity(d, n["statement"].upper_text, dsi=compose_dsi(it["unit"]))
     for mname, keys in getattr(data, "MATRICES", ()) if data is not None else ():
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

@@ -12,6 +12,7 @@ and the figures of :mod:`gonio.report.rate_figures`.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
@@ -19,7 +20,7 @@ from gonio.report.certificate import (Block, Num, certificate_id, font_families,
                                       render_html, render_pdf)
 from gonio.report.dcc import bilingual
 from gonio.report.figures import figure_svg
-from gonio.report.i18n import display, labels, reason_text, source_text
+from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
 from gonio.report.stated import NoBreakText, conformity_blocks, item_nums
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
@@ -107,10 +108,7 @@ def norm_text(spec, lang: str) -> str:
     """The normative document followed, with its number and year: the specification's
     ``NORM`` (en, zh) from its certificate data where it has one (a procedure that is not a
     published standard names the documents it follows), else its title."""
-    try:
-        norm = getattr(spec_content(spec.key), "NORM", None)
-    except (ImportError, AttributeError):
-        norm = None
+    norm = getattr(spec.content(), "NORM", None) if spec.certificate_content else None
     if norm:
         return norm[1 if lang == "zh" else 0]
     return spec.title_zh if lang == "zh" else spec.title_en
@@ -218,28 +216,28 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
             if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
-                val = [val, "; " + L["note_upper_short"].format(b=n["statement"]._x(n["upper"]))]
+                val = [val, "; " + L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
     return head, rows
 
 
-def screening_blocks(res: dict, lang: str, limit: int = 20) -> list[Block]:
-    """The screening's findings (readings set aside, planned points missing; issue 24), one
-    line each with its place in the file; nothing when the screening found nothing."""
-    found = res.get("findings") or []
+def screening_blocks(res: dict, L: dict, phrases=(), extra: dict | None = None,
+                     limit: int = 20) -> list[Block]:
+    """The screening's findings (readings set aside, planned points missing; issue 24): the
+    count, then one line each with its place in the file, in the certificate's language
+    (:func:`gonio.report.i18n.finding_text`; ``phrases`` the specification's table);
+    nothing when the screening found nothing."""
+    found = [f for f in res.get("findings") or () if f["action"] != "refused"]
     if not found:
         return []
-    blocks = [Block("h", "读数筛查" if lang == "zh" else "Screening of the readings"),
-              Block("p", [(res.get("extra") or {}).get("screening", "")])]
-    for f in found[:limit]:
-        where = ", ".join(p for p in (f.get("line") and f"line {f['line']}",
-                                       f.get("column")) if p)
-        act = {"set_aside": "set aside", "flagged": "flagged", "refused": "refused"}[f["action"]]
-        blocks.append(Block("p", [f"• [{act}] {f.get('clause') or ''} {where}: {f['message']}"]))
+    aside = sum(f["action"] == "set_aside" for f in found)
+    blocks = [Block("h", L["screening_h"]),
+              Block("p", [L["screening_note"].format(n=aside, m=len(found) - aside)])]
+    blocks += [Block("p", ["• " + finding_text(f, L, phrases, extra)]) for f in found[:limit]]
     if len(found) > limit:
-        blocks.append(Block("p", [f"… {len(found) - limit} more in results.json (findings)"]))
+        blocks.append(Block("p", [L["more_findings"].format(n=len(found) - limit)]))
     return blocks
 
 
@@ -258,7 +256,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
     u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
-    blocks += screening_blocks(res, lang)
+    blocks += screening_blocks(res, L, getattr(data, "PHRASES_ZH", ()))
     blocks += conformity_blocks(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
                                     if lang == "zh" else res["items"][k]["title"]),
@@ -312,10 +310,7 @@ def dcc_translator(result, content_fn):
     res = result.to_json()
     key = res.get("spec") or getattr(result, "spec_key", None)
     spec = get(key)
-    try:
-        data = spec_content(key)
-    except (ImportError, AttributeError):
-        data = None
+    data = spec.content() if spec.certificate_content else None
     extra = {spec.title_en: spec.title_zh}
     titles = getattr(data, "TITLES_ZH", {})
     for k, it in res.get("items", {}).items():
@@ -330,7 +325,9 @@ def dcc_translator(result, content_fn):
     norm = getattr(data, "NORM", None)
     if norm:
         extra[norm[0]] = norm[1]
-    return label_translator(extra, getattr(data, "PHRASES_ZH", ()))
+    # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
+    own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
+    return label_translator(extra, own + tuple(getattr(data, "PHRASES_ZH", ())))
 
 
 def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",

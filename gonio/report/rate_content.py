@@ -3,17 +3,13 @@ specification's certificate content (its groups and titles) and the standards us
 
 from __future__ import annotations
 
-import importlib
-
 from gonio.specs import get
 
 
 def spec_content(spec_key: str):
-    """The specification's certificate data module (GROUPS, TITLES_ZH, HEADING)."""
-    spec = get(spec_key)
-    mod = importlib.import_module(spec.calibrate.__module__)     # a package or a submodule
-    pkg = mod.__name__ if hasattr(mod, "__path__") else mod.__name__.rpartition(".")[0]
-    return importlib.import_module(pkg + ".certificate")
+    """The specification's certificate data module (GROUPS, TITLES_ZH, HEADING, …), the one
+    it names (``Specification.certificate_content``); none named is a GonioError."""
+    return get(spec_key).content()
 
 
 def rate_standards(md: dict, lab: dict | None, not_stated: str = "not stated") -> list[dict]:

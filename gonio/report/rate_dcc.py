@@ -123,8 +123,8 @@ def dsi_unit(unit: str, output_unit: str, file=None) -> tuple[str, float]:
 def clause_ref_type(spec_key: str, clause: str) -> str:
     """The refType of an item's quantity: ``gonio_<spec>_clause_<clause>`` (no spaces).
 
-    >>> clause_ref_type("iec62047-20", "5.4.5.1 b)")
-    'gonio_iec62047-20_clause_5.4.5.1b'
+    >>> clause_ref_type("lab-procedure", "5.4.5.1 b)")
+    'gonio_lab-procedure_clause_5.4.5.1b'
     """
     c = "".join(ch for ch in clause if ch.isalnum() or ch == ".")
     return f"gonio_{spec_key}_clause_{c}"
@@ -217,7 +217,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                                   f"results.json, written per m s⁻² (g_n = "
                                   f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv else None, **kw)
             if n["upper"] is not None:
-                bound_quantity(data, n["statement"]._x(n["upper"]), dsi=dsi)
+                bound_quantity(data, n["statement"].upper_text, dsi=dsi)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"]),
                           labels("en"))

@@ -22,6 +22,7 @@ import numpy as np
 
 from gonio.report.i18n import display
 from gonio.result.statement import item_statement
+from gonio.specs import get
 
 
 #: Figure text, (English, Chinese).
@@ -34,6 +35,8 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
     "F̄_j − F_r": ("F̄_j − F_r", "F̄_j − F_r"),
     "output y_j": ("output y_j", "输出 y_j"),
     "fit_line": ("fitted line, K = {K}", "拟合直线，K = {K}"),
+    "fit_line_m1": ("fitted line of calibration m = 1, K_1 = {K}",
+                    "第 1 次校准的拟合直线，K_1 = {K}"),
     "output": ("output ({u})", "输出（{u}）"),
     "rate": ("input rate Ω (°/s)", "输入角速率 Ω (°/s)"),
     "residual": ("residual v_j", "残差 v_j"),
@@ -43,7 +46,8 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
     "bias_dph": ("bias (°/h)", "零偏 (°/h)"),
     "temp": ("temperature (°C)", "温度 (°C)"),
     "adev": ("overlapping Allan deviation", "重叠 Allan 偏差"),
-    "adev_fit": ("five-term fit: N → {a} °/√h, B {b} °/h", "五项拟合：N → {a} °/√h，B {b} °/h"),
+    "adev_fit": ("five-term fit: N → {a} °/√h, coefficient B {b} °/h",
+                 "五项拟合：N → {a} °/√h，系数 B {b} °/h"),
     "eq24": ("eq (24) as printed (not the Allan variance)", "按原文式(24)（非 Allan 方差）"),
     "gain": ("gain (dB)", "增益 (dB)"),
     "m3db": ("−3 dB at {f} Hz", "−3 dB 点 {f} Hz"),
@@ -70,6 +74,12 @@ def _at_item(x: float, it) -> str:
     if st.decimals is not None and not st.exponent:
         return display(f"dec{st.decimals}", x)
     return display("sig6", x)
+
+
+def _near(x: float, it) -> str:
+    """A fitted number beside the item it underlies (or 3 significant digits without one),
+    at that item's decimal place."""
+    return display("sig3", x) if it is None else _at_item(x, it)
 
 
 def _item(result, *keys):
@@ -118,7 +128,9 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
     r, y, K, F0, residuals, label = line
     o = np.argsort(r)
     ax.plot(r[o], y[o], "o", ms=3, label=_t(L, label) if label in FIG_TEXT else label)
-    ax.plot(r[o], K * r[o] + F0, "-", lw=0.8, label=_t(L, "fit_line", K=_at_item(K, it)))
+    ax.plot(r[o], K * r[o] + F0, "-", lw=0.8,     # JJF: the first calibration's own K_1
+            label=_t(L, "fit_line_m1" if "means_m" in it.details else "fit_line",
+                     K=_at_item(K, it)))
     ax.set_ylabel(_t(L, "output", u=result.metadata.get("output_unit", "")))
     ax.legend(loc="upper left")
     ax.tick_params(which="both", labelbottom=False)   # minor log labels too
@@ -131,20 +143,23 @@ def draw_io_line(fig, spec, result, L, truth=None) -> None:
 
 
 def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
-    """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line."""
+    """Separate forward and reverse fits: each direction's F̄_j − K̄Ω_j with its own line.
+    What differs between specifications (the item, where each direction's scale factor sits
+    in its details, whether the null output is taken off, the axis label, the title) is the
+    specification's ``CW_CCW`` in its certificate content (:func:`forward_reverse`)."""
     ax = fig.add_subplot(spec)
     line_it = _item(result, "scale_factor")
     line = _io_points(line_it)
-    a = _item(result, "asymmetry", "symmetry")
+    how = forward_reverse(result)
+    a = _item(result, how["item"]) if how else None
     if line is None or a is None:
         _empty(ax, _t(L, "no_asym"))
         return
     r, y, K, F0, _, _ = line
     d = a.details
-    jjf = "K_pos_m" in d
-    off = 0.0 if jjf else F0      # IEC outputs carry the null output b_BASE: take it off
-    for sel, name, kk in ((r > 0, _t(L, "cw"), d["K_pos_m"][0] if jjf else d["a_CW"]),
-                          (r < 0, _t(L, "ccw"), d["K_neg_m"][0] if jjf else d["a_CCW"])):
+    off = F0 if how["null_output_off"] else 0.0
+    for sel, name, (key, i) in ((r > 0, _t(L, "cw"), how["cw"]), (r < 0, _t(L, "ccw"), how["ccw"])):
+        kk = d[key] if i is None else d[key][i]
         rr, yy = r[sel], y[sel]
         o = np.argsort(rr)
         p = np.polyfit(rr, yy, 1)
@@ -153,10 +168,20 @@ def draw_cw_ccw(fig, spec, result, L, truth=None) -> None:
         ax.plot(rr[o], np.polyval(p, rr[o]) - K * rr[o] - off, "-", lw=0.8)
     ax.axhline(0, color="0.5", lw=0.6)
     ax.set_xlabel(_t(L, "rate"))
-    ax.set_ylabel("F̄_j − K̄·Ω_j" if jjf else "y_j − (K·Ω_j + b_BASE)")
+    ax.set_ylabel(how["ylabel"])
     ax.legend(loc="best")
-    ax.set_title(_t(L, "asym", v=_stated(a)) if jjf else
-                 _t(L, "sym", v=_stated(a), u=a.unit))
+    ax.set_title(_t(L, how["title"], v=_stated(a), u=a.unit))
+
+
+def forward_reverse(result) -> dict | None:
+    """The specification's description of its forward/reverse figure, ``CW_CCW`` in its
+    certificate content (``Specification.certificate_content``): ``item`` (the key of the
+    item whose details hold the directions), ``cw``/``ccw`` ((details key, index or None) of
+    each direction's scale factor), ``null_output_off`` (take the fitted null output off the
+    points), ``ylabel`` and ``title`` (a :data:`FIG_TEXT` key formatted with the item's
+    value ``v`` and unit ``u``). None: the specification has no such figure."""
+    spec = get(result.spec_key)
+    return getattr(spec.content(), "CW_CCW", None) if spec.certificate_content else None
 
 
 def draw_temperature(fig, spec, result, L, truth=None) -> None:
@@ -201,8 +226,9 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
     ax.loglog(tau, adev, "o", ms=2.5, color="C0", label=_t(L, "adev"))
     f = it.details["fit"]
     ax.loglog(tau, model_adev(tau, f["Q"], f["N"], f["B"], f["K"], f["R"]), "-", color="C3",
-              lw=1, label=_t(L, "adev_fit", a=display("sig3", f["arw_deg_sqrt_h"]),
-                             b=display("sig3", f["B"])))
+              lw=1, label=_t(L, "adev_fit", a=_near(f["arw_deg_sqrt_h"], _item(
+                                 result, "angle_random_walk", "arw")),
+                             b=_near(f["B"], _item(result, "bias_instability"))))
     ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
     pr = it.details.get("printed_eq22_24_statistic") or {}
     if pr:
@@ -233,9 +259,9 @@ def draw_frequency(fig, spec, result, L, truth=None) -> None:
     p90 = it.details.get("phase90_hz", it.details.get("phase90_hz_iec"))
     ax.axvline(f3, color="C3", lw=0.7)
     ax.set_ylabel(_t(L, "gain"))
-    title = _t(L, "m3db", f=display("sig4", f3))
+    title = _t(L, "m3db", f=_at_item(f3, it))       # at the item's decimal place
     if p90 is not None and math.isfinite(p90):
-        title += _t(L, "p90", f=display("sig4", p90))
+        title += _t(L, "p90", f=_at_item(p90, it))
     ax.set_title(title)
     ax.tick_params(which="both", labelbottom=False)   # minor log labels too
     ax2.semilogx(f, np.asarray(it.details["phase_deg"], float), "s-", ms=3, color="C1")

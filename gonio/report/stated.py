@@ -4,7 +4,7 @@ Contents
 ========
 ===========================  ================================================================
 :class:`Num`                 a shown number: its text, its path in ``results.json``, its rule
-:data:`ITEMS`                the draft's seven items, in Annex B order
+:func:`item_names`           the items of a results dict, in its order
 :func:`item_uncertainty`     U, k and coverage probability of one item (or None)
 :func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
                              position, U, k, p
@@ -34,8 +34,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from gonio.analysis.conformity import (DEFAULT_LIMITS_ORIGIN, Conformity, DecisionRule,  # noqa: F401
-                                      Limits, decide, limits_of)
-from gonio.specs.ogam_draft.items import ITEM_KEYS
+                                      Limits, limits_of, rule_of)
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
 from gonio.result.statement import decimals_for_sig, round_half_up
 
@@ -45,7 +44,19 @@ class NoBreakText(str):
     ``nowrap``, one token in the PDF's wrapping (``gonio.report.certificate.NoBreak``)."""
 
 
-ITEMS: tuple[str, ...] = ITEM_KEYS
+
+
+def item_names(res: dict) -> list[str]:
+    """The items of a results dict, in its own order (the specification's: every entry with a
+    ``clause`` and a ``measured`` flag); the renderer lists what the result holds and names
+    no specification's items itself.
+
+    >>> item_names({"metadata": {}, "b": {"clause": "7.2", "measured": True},
+    ...             "a": {"clause": "7.1", "measured": False}, "unused_readings": []})
+    ['b', 'a']
+    """
+    return [k for k, v in res.items() if isinstance(v, dict) and "clause" in v and "measured" in v]
+
 #: Coverage probability of the Annex A budget's U (k = 2, normal; Annex A.7).
 ANNEX_A_COVERAGE: float = 0.95
 
@@ -149,7 +160,7 @@ def upper_bound(res: dict, name: str, value: Num | str) -> Num | None:
     st = state(res[name]["value"], iu["U"], k=iu.get("k"), nonnegative=True)
     if st.upper is None:
         return None
-    return Num(st._x(st.upper), f"{name}.upper_bound",
+    return Num(st.upper_text, f"{name}.upper_bound",
                f"sci{st.exponent}.{st.decimals + st.exponent}" if st.exponent else value.rule)
 
 
@@ -181,34 +192,41 @@ def u_cell(st: dict, L: dict) -> list | str:
 
 # --------------------------------------------------------------------------- conformity
 
-def conformity_for(res: dict, lab: dict | None) -> list[dict]:
-    """The conformity statements the laboratory file's limits ask for (none without limits).
+def conformity_for(res: dict, lab: dict | None, decided: dict | None) -> list[dict]:
+    """The conformity statements the pipeline decided, as the certificate, the DCC and
+    summary.txt list them (none without limits); the report decides nothing.
 
-    One entry per ``[[specification_limits]]``: ``{"item", "limits", "rule",
-    "conformity"}`` where ``conformity`` is a :class:`~gonio.analysis.conformity.Conformity`
-    or None with ``reason`` (not measured, or no uncertainty to decide with). E is
-    compared through its signed extreme (|E_i| ≤ MPE at every position ⇔ the signed
-    extreme lies in [−MPE, +MPE]).
+    ``decided``: {item: :class:`~gonio.result.model.Conformity`}, the decisions the pipeline
+    stored in the result (results.json ``items.<key>.conformity``; the optical report's
+    ``conformity``). One entry per limit of the laboratory file ``lab``, in its order, then
+    any item decided against a specification's own tolerance: ``{"item", "limits", "rule",
+    "conformity"}`` where ``conformity`` is the decision, or None with ``reason`` (not
+    measured, or no uncertainty to decide with). A lab limit the pipeline did not decide, or
+    decided under other limits, is a programming error (ValueError), never a missing or
+    stale statement.
     """
-    if not lab or not lab.get("specification_limits"):
-        return []
-    dr = lab.get("decision_rule") or {}
-    rule = DecisionRule(dr.get("rule", "simple"), float(dr.get("guard_band_factor", 1.0)))
+    decided = dict(decided or {})
+    lab_limits = list((lab or {}).get("specification_limits") or [])
+    rule = rule_of((lab or {}).get("decision_rule"))
+    named = [lim["item"] for lim in lab_limits]
     out = []
-    for lim in lab["specification_limits"]:
-        name = lim["item"]
-        limits = limits_of(lim)
-        entry: dict = {"item": name, "limits": limits, "rule": rule, "conformity": None,
-                       "reason": ""}
-        item = res[name]
-        unc = item_uncertainty(res, name)
-        if not item["measured"] or item["value"] is None:
-            entry["reason"] = "c_not_measured"
-        elif unc is None or unc["k"] is None:
-            entry["reason"] = "c_no_U"
-        else:
-            entry["conformity"] = decide(name, float(item["value"]), unc["U"], float(unc["k"]),
-                                         limits, rule)
+    for name in named + [k for k, c in decided.items()
+                         if k not in named and c.limits_from != "lab file"]:
+        c = decided.get(name)
+        if c is None:
+            raise ValueError(f"the conformity of {name!r} was not decided: the pipeline decides "
+                             "it (decide_result) before the report renders it")
+        if name in named:
+            want = limits_of(lab_limits[named.index(name)])
+            if (c.lower, c.upper) != (want.lower, want.upper):
+                raise ValueError(f"the conformity of {name!r} was decided under other limits "
+                                 f"({c.lower}, {c.upper}) than the laboratory file's")
+        entry: dict = {"item": name, "limits": Limits(c.lower, c.upper, c.source or ""),
+                       "rule": rule, "conformity": c if c.outcome else None, "reason": ""}
+        if not c.outcome:
+            item = res[name]
+            entry["reason"] = ("c_not_measured" if not item["measured"] or item["value"] is None
+                               else "c_no_U")
         out.append(entry)
     return out
 
@@ -313,7 +331,7 @@ def method_rows(report, res: dict, L: dict, lab: dict | None, lang: str = "en",
     p = report.protocol
     md = res.get("metadata", {})
     ns = L["not_stated"]
-    measured = [res[n]["clause"].split(" ")[0] for n in ITEMS if res[n]["measured"]]
+    measured = [res[n]["clause"].split(" ")[0] for n in item_names(res) if res[n]["measured"]]
     spec = specification_text(res.get("specification") or ns, lang, cjk)
     rows = [(L["m_spec"], f"{spec}; " + L["m_clauses"].format(c=", ".join(measured)))]
     rates = []
@@ -361,15 +379,17 @@ def method_rows(report, res: dict, L: dict, lab: dict | None, lang: str = "en",
 
 # --------------------------------------------------------------------------- summary
 
-def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
+def summary_text(res: dict, lang: str = "en", lab: dict | None = None,
+                 decided: dict | None = None) -> str:
     """``summary.txt`` and what the CLI prints: the seven items as the certificate states
     them (same rounding, E as ± max|E_i| with its signed extreme and position, U with k and
-    coverage probability), then the Annex A line and any conformity statements.
+    coverage probability), then the Annex A line and the conformity statements the pipeline
+    decided (``decided``: {item: Conformity}, :func:`conformity_for`).
     """
     L = labels(lang)
     head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
     rows, notes, notes_b = [], [], []
-    for i, name in enumerate(ITEMS, 1):
+    for i, name in enumerate(item_names(res), 1):
         st = stated_item(res, name)
         title = res[name].get("item", name)
         if not st["measured"]:
@@ -402,7 +422,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
                       f"U = {num(res, 'uncertainty.U_arcsec', 'U')}″ "
                       f"(k = {num(res, 'uncertainty.k', 'k')}, coverage probability "
                       f"{coverage_text(ANNEX_A_COVERAGE, lang)})"]
-    for e in conformity_for(res, lab):
+    for e in conformity_for(res, lab, decided):
         c = e["conformity"]
         if c is None:
             lines.append(f"conformity {e['item']}: {L[e['reason']]}")

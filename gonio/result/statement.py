@@ -262,6 +262,11 @@ class Statement:
         """U as printed (with the common power of ten), or None."""
         return self._x(self.U) if self.U is not None else None
 
+    @property
+    def upper_text(self) -> str | None:
+        """The upper bound of a non-negative quantity as printed, or None."""
+        return self._x(self.upper) if self.upper is not None else None
+
     def factors(self) -> str:
         """"k = 1.97, ν_eff = 58, p ≈ 95 %" (the parts known), or ""."""
         parts = []

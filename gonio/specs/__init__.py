@@ -150,6 +150,10 @@ class Specification:
     named_inputs : callable or None
         (readings path) → the other files the readings name as part of their data (inputs
         no output may replace).
+    certificate_content : str
+        The module holding its certificate's content as data (its headings, groups, Chinese
+        titles, ``NORM``, what its figures differ in); the shared renderers read it through
+        :meth:`content`, never by guessing from a module's name. Empty: none.
     commands : tuple of (str, str)
         The ``gonio`` sub-commands the specification adds: ``(name, "module:function")``
         pairs; ``function(subparsers)`` adds the parser ``name`` (argparse) and sets its
@@ -180,6 +184,7 @@ class Specification:
     readings_format: str = ""
     named_inputs: Callable[..., list] | None = None
     default_limits: tuple = ()
+    certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
 
     def renderer(self):
@@ -188,6 +193,13 @@ class Specification:
             raise GonioError(f"specification {self.key!r} names no outputs module (it cannot "
                              "write results or a certificate)", key="--spec")
         return importlib.import_module(self.outputs)
+
+    def content(self):
+        """The module named by ``certificate_content`` (imported on first use)."""
+        if not self.certificate_content:
+            raise GonioError(f"specification {self.key!r} names no certificate content "
+                             "(certificate_content)", key="--spec")
+        return importlib.import_module(self.certificate_content)
 
 
 class lazy:

@@ -21,7 +21,9 @@ def test_db_commands_round_trip(tmp_path, computed_folder, bench_readings, monke
     folder = tmp_path / "run"
     shutil.copytree(computed_folder, folder)
     shutil.copy(bench_readings[0], folder / "readings.csv")
-    assert main(["db", "import", str(folder), "--data", str(data)]) == 0
+    small = Path(__file__).resolve().parents[1] / "data" / "small-protocol.toml"
+    assert main(["db", "import", str(folder), "--data", str(data), "--protocol",
+                 str(small)]) == 0
     assert main(["db", "backup", str(tmp_path / "b.zip"), "--data", str(data)]) == 0
     assert main(["db", "restore", str(tmp_path / "b.zip"), "--data", str(other)]) == 0
     st = open_store(None, other)

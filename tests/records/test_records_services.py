@@ -179,8 +179,23 @@ def test_dead_worker_marked_failed_then_retried(store, people, bench_readings,
     assert run_worker(store, monkeypatch, computed_folder).status == "computed"
 
 
+def _value_moved(it):
+    it["value"] += 1e-6
+
+
+def _k_changed(it):
+    it["uncertainty"]["k"] = 3.0
+
+
+def _decision_appears(it):       # a limit edited after review: a decision nobody reviewed
+    it["conformity"] = {"item": "scale_factor", "rule": "simple", "lower": None,
+                        "upper": 1e9, "outcome": "pass"}
+
+
+@pytest.mark.parametrize("change", (_value_moved, _k_changed, _decision_appears))
 def test_issue_refused_when_recomputed_result_differs(store, people, computed_folder,
-                                                      bench_readings, monkeypatch, tmp_path):
+                                                      bench_readings, monkeypatch, tmp_path,
+                                                      change):
     inst, std = setup_instrument(store, people)
     cal = new_calibration(store, people, inst, std, bench_readings[0])
     run_worker(store, monkeypatch, computed_folder)
@@ -189,7 +204,7 @@ def test_issue_refused_when_recomputed_result_differs(store, people, computed_fo
     changed = tmp_path / "changed"
     shutil.copytree(computed_folder, changed)
     res = json.loads((changed / "results.json").read_text())
-    res["items"]["scale_factor"]["value"] += 1e-6
+    change(res["items"]["scale_factor"])
     (changed / "results.json").write_text(json.dumps(res))
     monkeypatch.setattr(worker, "calibrate_folder", fake_pipeline(changed))
     services.claim_next(store)
@@ -258,9 +273,20 @@ def test_import_output_folder(store, people, computed_folder, bench_readings, tm
 
     with pytest.raises(GonioError, match="no readings file matching"):
         import_output_folder(store, computed_folder, readings=bench_readings[1])
-    cid = import_output_folder(store, computed_folder, readings=bench_readings[0])
+    # computed with a protocol file that is not built in: named, not silently the default
+    with pytest.raises(GonioError, match="give the file with --protocol"):
+        import_output_folder(store, computed_folder, readings=bench_readings[0])
+    other = tmp_path / "other.toml"
+    other.write_text(SMALL_PROTOCOL.read_text() + "\n# edited\n")
+    with pytest.raises(GonioError, match="not the one results.json was computed with"):
+        import_output_folder(store, computed_folder, readings=bench_readings[0],
+                             protocol=other)
+    cid = import_output_folder(store, computed_folder, readings=bench_readings[0],
+                               protocol=SMALL_PROTOCOL)
     cal = services.calibration(store, cid)
     assert cal.status == "computed" and cal.instrument.serial == "RLG-0001"
+    # the very protocol file is stored: the issue's recomputation uses it
+    assert services.file_bytes(store, cal.protocol_sha256) == SMALL_PROTOCOL.read_bytes()
     assert services.history(store, cal.instrument_id)["scale_factor"][0]["value"] == \
         json.loads((computed_folder / "results.json").read_text())["items"]["scale_factor"]["value"]
 

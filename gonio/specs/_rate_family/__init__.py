@@ -12,7 +12,8 @@ def rate_specification(package: str, **fields):
     """The :class:`~gonio.specs.Specification` of a rate specification in ``package``
     (``gonio.specs.<name>``): the hooks both share — its ``simulate`` module's programme
     runner written out (:mod:`.simulate`) or held in memory for the coverage study, its
-    ``truth`` module, the rate study bench, the per-item renderer (:mod:`.outputs`) — plus
+    ``truth`` module, the rate study bench, the per-item renderer (:mod:`.outputs`), its
+``certificate`` module (the certificate's content) — plus
     ``fields`` (key, titles, clauses, protocol, calibrate, budget, the coverage stream and
     programme ``stream=``/``reduced=``)."""
     from gonio.specs import Coverage, Specification, lazy
@@ -26,4 +27,5 @@ def rate_specification(package: str, **fields):
         run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", run),
         truth=lazy(f"{package}.truth:truth"), coverage=coverage,
         outputs="gonio.specs._rate_family.outputs", default_bench="mems-adxrs610",
+        certificate_content=f"{package}.certificate",
         calibrate_options=frozenset({"protocol", "dcc"}), **fields)

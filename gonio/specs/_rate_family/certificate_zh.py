@@ -34,4 +34,18 @@ COMMON_PHRASES_ZH = (
      "各次到达之间的零偏漂移（Allan 拟合：RRW、BI）"),
     (r"bias drift over the turn projected on the regressor, u_drift\(duration\)·√\(2/n\)",
      "转动期间零偏漂移在回归量上的投影，u_drift(时长)·√(2/n)"),
+    # the screening's findings (gonio.specs._rate_family.screening), on the certificate
+    (r"(\w+) (\S+) departs from its neighbours by (\S+) \(limit (\S+)\)",
+     "{1} 值 {2} 偏离相邻样本 {3}（限 {4}）"),
+    (r"(\w+) (\S+) differs from the segment's (\S+)", "{1} 值 {2} 与该段的 {3} 不同"),
+    (r"(\w+) (\S+) departs from the segment's (\S+) \(limit (\S+)\)",
+     "{1} 值 {2} 偏离该段的 {3}（限 {4}）"),
+    (r"time (\S+) s is (\S+) s off the segment's sampling grid \(step (\S+) s\)",
+     "时间 {1} s 偏离该段采样网格 {2} s（步长 {3} s）"),
+    (r"(\d+) sample\(s\) missing before time (\S+) s \(step (\S+) s\)",
+     "时间 {2} s 之前缺少 {1} 个样本（步长 {3} s）"),
+    (r"(\w+) run (\S+) \(all of it\) is missing from the readings",
+     "{1} 第 {2} 次运行（全部）在读数中缺失"),
+    (r"(\w+) run (\S+): the planned (\w+) = (.+) is missing from the readings",
+     "{1} 第 {2} 次运行：计划的 {3} = {4} 在读数中缺失"),
 )

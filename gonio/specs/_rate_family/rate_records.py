@@ -187,10 +187,16 @@ def segment_samples(df: pd.DataFrame, test: str, run: int, step: int) -> pd.Data
 def static_rate_dph(df: pd.DataFrame, null_output: float, scale_factor: float):
     """The static record (test ``static``) as a rate in °/h, (output − null)/K, and its
     sampling interval in s (from the first and last time stamps)."""
-    g = segment_samples(df, "static", 0, 0)
-    t = g["time_s"].to_numpy()
-    dt = float((t[-1] - t[0]) / (t.size - 1))
-    return (g["output"].to_numpy() - null_output) / scale_factor * S_PER_H, dt
+    # the two columns only, never a copy of the whole frame (a long static record)
+    idx = np.flatnonzero(((df["test"] == "static") & (df["run"] == 0) & (df["step"] == 0))
+                         .to_numpy())
+    time_s = df["time_s"].to_numpy()
+    dt = float((time_s[idx[-1]] - time_s[idx[0]]) / (idx.size - 1))
+    rate = df["output"].to_numpy(dtype=float)[idx]
+    rate -= null_output                      # in place: the same numbers, one array
+    rate /= scale_factor
+    rate *= S_PER_H
+    return rate, dt
 
 
 def sf_calibration_means(means: list[SegmentMean], run: int):

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.resources import protocol_provenance
 from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
 from gonio.specs._rate_family.screening import screened, screening_extra
@@ -90,12 +91,15 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         except GonioError as exc:
             items[key] = not_measured(key, title, clause, "", f"the data were refused: {exc.message}")
     items = {k: items[k] for k in rows}
+    for key in _items.NONNEGATIVE & items.keys():
+        items[key].nonnegative = True
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
                                      "ratiometric": ratiometric, "rows_corrected": n_corr},
                                      **screening_extra(findings)},
-                                 findings=findings)
+                                 findings=findings,
+                                 settings=protocol_provenance(proto.path))
 
 
 #: The coverage study's programme over the built-in protocol (gonio validate --spec): small

@@ -101,3 +101,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"95 % bound of the largest noise excursion over the record .*",
      "记录中最大噪声偏移的 95 % 界限"),
 )
+
+#: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 5.1.3.8's symmetry
+#: item holds a_CW and a_CCW; the outputs carry the null output b_BASE, taken off the points.
+CW_CCW = {"item": "symmetry", "cw": ("a_CW", None), "ccw": ("a_CCW", None),
+          "null_output_off": True, "ylabel": "y_j − (K·Ω_j + b_BASE)", "title": "sym"}

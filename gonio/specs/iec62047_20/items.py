@@ -14,11 +14,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from scipy import signal
 
 from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
 from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise.psd import welch_psd
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means,
@@ -473,9 +473,8 @@ def inband_noise(ctx: Context) -> Item:
     m = _miss(ctx, "static", "inband_noise", t, cl, un) or _quiet(ctx, "inband_noise", t, cl, un)
     if m:
         return m
-    _, rate_dph, dt = _static(ctx)
-    x = rate_dph / S_PER_H
-    f, p = signal.welch(x - x.mean(), fs=1.0 / dt, nperseg=min(4096, x.size))
+    _, x, dt = _static(ctx)                  # °/h; the density in °/s, in bounded pieces
+    f, p = welch_psd(x, 1.0 / dt, min(4096, x.size), divisor=S_PER_H)
     band = ctx.protocol["noise"]["band_hz"]
     sel = (f > 0) & (f <= band)
     rms = math.sqrt(float(np.trapezoid(p[sel], f[sel])))
@@ -843,10 +842,9 @@ def broadband_noise(ctx: Context) -> Item:
     m = _miss(ctx, "static", "broadband_noise", t, cl, un) or _quiet(ctx, "broadband_noise", t, cl, un)
     if m:
         return m
-    _, rate_dph, dt = _static(ctx)
-    x = rate_dph / S_PER_H
+    _, x, dt = _static(ctx)                  # °/h; the density in °/s, in bounded pieces
     nper = min(4096, x.size)
-    f, p = signal.welch(x - x.mean(), fs=1.0 / dt, nperseg=nper)
+    f, p = welch_psd(x, 1.0 / dt, nper, divisor=S_PER_H)
     nz = ctx.protocol["noise"]
     hi = nz.get("broadband_high_hz", 0.0) or 0.5 / dt
     d = ief.broadband_noise_iec(f, p, nz["band_hz"], min(hi, 0.5 / dt))
@@ -943,7 +941,6 @@ def resolution(ctx: Context) -> Item:
         "decided_by": by})
 
 
-#: The characteristics in the order of Table 4: (key, title, clause, function).
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
     """The context of an item: the calibration's, with a_BASE from the scale-factor item
     (5.1.3.1) when it was measured (items read it; none writes it)."""
@@ -953,6 +950,7 @@ def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
     return replace(ctx, a_base=sf.value)
 
 
+#: The characteristics in the order of Table 4: (key, title, clause, function).
 ITEMS = (
     ("scale_factor", "scale factor a_BASE", "5.1.3.1", scale_factor),
     ("initial_sf_variation", "initial scale-factor variation", "5.1.3.2", initial_sf_variation),
@@ -982,3 +980,9 @@ ITEMS = (
 #: What each item needs computed before it (gonio.specs.item_order orders them): every
 #: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1).
 NEEDS = {row[0]: ("scale_factor",) for row in ITEMS if row[0] != "scale_factor"}
+
+
+#: Items that are non-negative by their definition (a maximum of absolute values, a standard
+#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
+#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
+NONNEGATIVE = frozenset({"linearity", "sf_stability", "bias_repeatability", "bias_drift_after_power_on", "bias_hysteresis", "arw", "bias_instability", "inband_noise", "frequency_band", "startup_time", "broadband_noise", "resolution"})

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.resources import protocol_provenance
 from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
 from gonio.specs._rate_family.screening import screened, screening_extra
@@ -100,11 +101,14 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
             items[key] = not_measured(key, title, clause, "",
                                       f"the data were refused: {exc.message}")
     items = {k: items[k] for k in rows}
+    for key in _items_mod.NONNEGATIVE & items.keys():
+        items[key].nonnegative = True
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"annex_a": annex_a().to_dict(),
                                         **screening_extra(findings)},
-                                 findings=findings)
+                                 findings=findings,
+                                 settings=protocol_provenance(proto.path))
 
 
 #: The coverage study's programme over the built-in protocol (gonio validate --spec): small

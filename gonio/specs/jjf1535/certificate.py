@@ -86,3 +86,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
 
 #: Where the specification asks for the uncertainty statement, (English, Chinese).
 U_CLAUSE = ("JJF 1535-2015 clause 8 k)", "JJF 1535-2015 第8章 k)")
+
+#: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 7.2.3's asymmetry
+#: item holds each direction's mean scale factor (first of the m series); the outputs are
+#: plotted as F̄_j − K̄·Ω_j (the output zero is in the mean line).
+CW_CCW = {"item": "asymmetry", "cw": ("K_pos_m", 0), "ccw": ("K_neg_m", 0),
+          "null_output_off": False, "ylabel": "F̄_j − K̄·Ω_j", "title": "asym"}

@@ -275,10 +275,31 @@ def allan_variance_printed_jjf(rate, k: int) -> float:
     k = int(k)
     if k < 1 or x.size < k + 3:
         raise GonioError(f"printed eq (24) needs n ≥ k + 3, got n = {x.size}, k = {k}")
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    means = (c[k:] - c[:-k]) / k           # n − k + 1 overlapping means
-    d2 = means[2:] - 2 * means[1:-1] + means[:-2]
-    return float((d2 ** 2).sum() / (2.0 * (x.size - k - 1)))
+    c = _cumsum0(x)
+    # overlapping means Ω̄_p = (c[p+k] − c[p])/k, p = 0 … n − k; terms p = 0 … n − k − 2
+    total = 0.0
+    for a, b in _pieces(x.size - k - 1):
+        m = (c[a + k: b + k + 2] - c[a: b + 2]) / k
+        d2 = m[2:] - 2 * m[1:-1] + m[:-2]
+        total += float((d2 ** 2).sum())
+    return total / (2.0 * (x.size - k - 1))
+
+
+#: Terms formed at a time by the direct Allan forms (bounded temporaries on long records).
+_PIECE = 1 << 16
+
+
+def _pieces(n: int):
+    """(start, end) of consecutive pieces of range(n)."""
+    return ((a, min(n, a + _PIECE)) for a in range(0, n, _PIECE))
+
+
+def _cumsum0(x: np.ndarray) -> np.ndarray:
+    """[0, cumsum(x)] in one array (no concatenated copy)."""
+    c = np.empty(x.size + 1)
+    c[0] = 0.0
+    np.cumsum(x, out=c[1:])
+    return c
 
 
 def allan_variance_overlapping(rate, k: int) -> float:
@@ -295,10 +316,13 @@ def allan_variance_overlapping(rate, k: int) -> float:
     k = int(k)
     if k < 1 or x.size < 2 * k + 1:
         raise GonioError(f"overlapping AVAR needs n ≥ 2k + 1, got n = {x.size}, k = {k}")
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    means = (c[k:] - c[:-k]) / k
-    d = means[k:] - means[:-k]
-    return float((d ** 2).sum() / (2.0 * d.size))
+    c = _cumsum0(x)
+    # d_p = Ω̄_{p+k} − Ω̄_p, p = 0 … n − 2k, summed in pieces
+    total, n_d = 0.0, x.size - 2 * k + 1
+    for a, b in _pieces(n_d):
+        d = (c[a + 2 * k: b + 2 * k] - c[a + k: b + k]) / k - (c[a + k: b + k] - c[a: b]) / k
+        total += float((d ** 2).sum())
+    return total / (2.0 * n_d)
 
 
 def arw_from_coefficient(a_minus1: float, *, rate_unit: str, tau_unit: str) -> float:

@@ -753,3 +753,9 @@ ITEMS = (
      bias_temperature_sensitivity),
     ("bandwidth", "bandwidth B_w", "7.2.15", bandwidth),
 )
+
+
+#: Items that are non-negative by their definition (a maximum of absolute values, a standard
+#: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
+#: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
+NONNEGATIVE = frozenset({"nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold", "resolution", "bias_stability", "bias_repeatability", "warmup_time", "angle_random_walk", "bias_temperature_sensitivity", "bandwidth"})

@@ -31,18 +31,18 @@ from typing import Any, ClassVar, Sequence
 
 import numpy as np
 import pandas as pd
-import sympy
 
 from gonio.budget.extra import ExtraComponent
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, MIN_PER_H
 from gonio.physics.tilt import elliptic_extreme
+from uncertainty.propagation import LinearModel
 from uncertainty import (GumResult, MonteCarloResult, ValidationResult, budget_table,
                          from_u, monte_carlo, propagate, render_html, render_markdown,
                          render_text, round_uncertainty, type_b, validate_gum)
 
 __all__ = ["AnnexABudget", "annex_a_budget", "annex_a5_rounding",
-           "repeatability_from_deviations", "annex_a_model"]
+           "repeatability_from_deviations", "annex_a_model", "annex_a_linear_model"]
 
 #: Arc-seconds per minute of a drift given in °/h: 1 °/h = 3600″/60 min = 60 ″/min.
 ARCSEC_PER_MIN_PER_DPH = ARCSEC_PER_DEG / MIN_PER_H
@@ -86,17 +86,30 @@ def annex_a5_rounding(u_arcsec: float, type_: str) -> float:
     return float(Decimal(repr(float(u_arcsec))).quantize(Decimal("0.01"), rounding=mode))
 
 
-def annex_a_model(extra_symbols: Sequence[str] = ()) -> sympy.Expr:
+def annex_a_model(extra_symbols: Sequence[str] = ()) -> "sympy.Expr":
     """Δ = (φ_e + B_E) − P + r (+ extra terms) as a sympy expression (draft Annex A.2).
 
     >>> annex_a_model()
     B_E - P + phi_e + r
     """
+    import sympy                      # lazily: the GUM path uses annex_a_linear_model
     p, phi, b, r = sympy.symbols("P phi_e B_E r", real=True)
     expr = (phi + b) - p + r
     for s in extra_symbols:
         expr = expr + sympy.Symbol(s, real=True)
     return expr
+
+
+def annex_a_linear_model(extra_symbols: Sequence[str] = ()) -> LinearModel:
+    """:func:`annex_a_model` as a :class:`uncertainty.propagation.LinearModel` (inputs P, φ_e,
+    B_E, r, extras, each estimated 0; coefficients −1, +1, +1, +1, +1): the same GUM
+    numbers without SymPy.
+
+    >>> annex_a_linear_model(("K_P",)).coeffs
+    (-1.0, 1.0, 1.0, 1.0, 1.0)
+    """
+    names = ("P", "phi_e", "B_E", "r", *extra_symbols)
+    return LinearModel(0.0, (-1.0,) + (1.0,) * (len(names) - 1), names)
 
 
 @dataclass(frozen=True)
@@ -292,7 +305,7 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                                  source=e.source))
         except ValueError as exc:
             raise _err("extra_components", str(exc)) from None
-    model = annex_a_model(tuple(e.symbol for e in extras))
+    model = annex_a_linear_model(tuple(e.symbol for e in extras))
     gum = propagate(model, inputs, k=k) if k is not None else \
         propagate(model, inputs, k=None, p=0.95)
     k = gum.k
@@ -306,7 +319,8 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
 
     mc = val = None
     if monte_carlo_trials:
-        mc = monte_carlo(model, inputs, int(monte_carlo_trials), seed=seed)
+        mc = monte_carlo(annex_a_model(tuple(e.symbol for e in extras)), inputs,
+                         int(monte_carlo_trials), seed=seed)
         val = validate_gum(gum, mc, ndig=2)
     params = dict(table_mpe_arcsec=table_mpe_arcsec, tilt_deg=tilt_deg,
                   zero_stability_dph=zero_stability_dph, duration_min=duration_min,

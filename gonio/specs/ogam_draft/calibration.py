@@ -23,6 +23,7 @@ import pandas as pd
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio import __version__
 from gonio.atomic import sha256_file
+from gonio.resources import protocol_provenance
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
@@ -137,6 +138,9 @@ class CalibrationReport:
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
+    #: item → gonio.result.model.Conformity: the pipeline's decision (:meth:`decided_result`),
+    #: the one the certificate, the DCC and summary.txt render (results.json carries it)
+    conformity: dict = field(default_factory=dict)
     #: The specification's key in results.json (this report is the optical draft's).
     spec_key: str = "ogam-draft"
 
@@ -247,7 +251,10 @@ class CalibrationReport:
         title = self.protocol.specification or spec_title(self.spec_key)
         return Result(self.spec_key, title, items, d["metadata"],
                       d["source"], list(d["readings_taken"]), extra,
-                      settings={"protocol": d["protocol"], "budget_kind": self.budget_kind,
+                      settings={"protocol": d["protocol"],
+                                "protocol_sha256": protocol_provenance(
+                                    self.protocol.path or None).get("protocol_sha256"),
+                                "budget_kind": self.budget_kind,
                                 "repeatability_source": self.repeatability_source or None},
                       unused_readings=list(d.get("unused_readings") or []),
                       findings=list(self.findings),
@@ -256,12 +263,16 @@ class CalibrationReport:
     def decided_result(self, lab: dict | None = None) -> Result:
         """:meth:`to_result` with the conformity of every item the laboratory file limits
         (or the specification's default tolerances, ``SPEC.default_limits``: the draft gives
-        none) decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json."""
+        none) decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json.
+        The decisions are kept in :attr:`conformity` too, for the certificate, the DCC and
+        summary.txt to render (they decide nothing themselves)."""
         from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
         from gonio.specs import default_limits
 
         result = self.to_result()
         decide_result(result, lab, default_limits(self.spec_key), DEFAULT_LIMITS_ORIGIN)
+        self.conformity = {k: it.conformity for k, it in result.items.items()
+                           if it.conformity is not None}
         return result
 
     def detail_tables(self) -> dict:

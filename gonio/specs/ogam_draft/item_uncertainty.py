@@ -36,11 +36,11 @@ from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
-import sympy
 
 from gonio.units import ARCSEC_PER_DEG, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, coverage_factor, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
+from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                max_stdev_interval, random_walk_stdev_dof, stdev_interval,
                                stdev_u)
@@ -150,10 +150,11 @@ def _budget(item: str, unit: str, value: float, lines: Sequence[_Line], *,
             k: float | None = None, correlation=None, coeffs: Sequence[float] | None = None,
             interval=None) -> ItemUncertainty:
     """y = value + Σ c_i X_i (X_i estimates 0), by the law of propagation (JCGM 100 5)."""
-    syms = [sympy.Symbol(ln.q.symbol, real=True) for ln in lines]
     cs = [1.0] * len(lines) if coeffs is None else list(coeffs)
-    model = sympy.Float(value) + sum((sympy.Float(c) * s for c, s in zip(cs, syms)),
-                                     sympy.Integer(0))
+    # additive: the coefficients are the sensitivities, no SymPy needed (a coverage study's
+    # workers never import it); LinearModel.to_sympy() is the same model as an expression
+    model = LinearModel(float(value), tuple(float(c) for c in cs),
+                        tuple(ln.q.symbol for ln in lines))
     gum = propagate(model, [ln.q for ln in lines], correlation=correlation, k=2.0)
     kk, src = _k(gum.dof, k)
     comps = tuple(Component(name=ln.name, symbol=ln.q.symbol, u=float(c.contribution),
@@ -165,6 +166,12 @@ def _budget(item: str, unit: str, value: float, lines: Sequence[_Line], *,
                            u_c=float(gum.u_c), nu_eff=float(gum.dof), k=kk, k_source=src,
                            interval=interval, gum=gum, model=model,
                            inputs=tuple(ln.q for ln in lines), correlation=correlation)
+
+
+def _expr(model):
+    """The model for JCGM 101 sampling: an additive budget's model as the sympy expression it
+    always was (the same Monte Carlo numbers), any other model as it is."""
+    return model.to_sympy() if isinstance(model, LinearModel) else model
 
 
 def monte_carlo_check(b: ItemUncertainty, trials: int = 200_000, seed: int = 0):
@@ -182,7 +189,7 @@ def monte_carlo_check(b: ItemUncertainty, trials: int = 200_000, seed: int = 0):
     >>> round(mc.u / b.u_c, 1), round((mc.high - mc.value) / b.u_c, 1), round(b.k, 2)
     (1.3, 2.6, 2.57)
     """
-    mc = monte_carlo(b.model, list(b.inputs), int(trials), seed=seed,
+    mc = monte_carlo(_expr(b.model), list(b.inputs), int(trials), seed=seed,
                      correlation=b.correlation)
     return mc, validate_gum(b.gum, mc, ndig=1)
 
@@ -256,7 +263,7 @@ def monte_carlo_item(b: ItemUncertainty, trials: int = 200_000, seed: int = 0,
         mc = MonteCarloResult(value=mv, u=mu, low=mlo, high=mhi, p=COVERAGE_PROBABILITY,
                               trials=int(trials), shortest=False)
     else:
-        mc = monte_carlo(b.model, list(b.inputs), int(trials), rng=rng,
+        mc = monte_carlo(_expr(b.model), list(b.inputs), int(trials), rng=rng,
                          correlation=b.correlation)
     v = validate_gum(b.gum, mc, ndig=ndig)
     return ItemMonteCarlo(item=b.item, model_kind=b.model_kind, trials=int(trials),

@@ -35,7 +35,8 @@ def warnings(report: CalibrationReport) -> list[str]:
 def write(report: CalibrationReport, out, *, truth: dict | None = None, lab=None,
           lang: str = "en", dcc: bool = False) -> dict[str, Path]:
     """results.json, summary.txt, tables/*.csv and the certificate (``dcc``: its DCC XML)
-    into ``out`` (the caller stages the set)."""
+    into ``out`` (the caller stages the set). Conformity is decided once, for results.json
+    (:meth:`CalibrationReport.decided_result`); the certificate renders that decision."""
     paths = dict(write_calibration(report, out, lab=lab))
     paths.update(write_certificate(report, out, truth=truth, lab=lab, lang=lang, dcc=dcc))
     return paths
@@ -45,7 +46,9 @@ def summary(report: CalibrationReport, lab: dict | None = None) -> str:
     """The seven items, U (k, coverage probability) and any conformity statements as a
     fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
     then the 95 % intervals of the standard-deviation items and the budget's notes."""
-    lines = [summary_text(report.to_dict(), "en", lab).rstrip("\n")]
+    if (lab or {}).get("specification_limits") and not report.conformity:
+        report.decided_result(lab)          # the pipeline's decision, kept in report.conformity
+    lines = [summary_text(report.to_dict(), "en", lab, report.conformity).rstrip("\n")]
     for name in ITEM_NAMES:
         iu = report.item_uncertainty.get(name)
         if iu is not None and iu.interval is not None:

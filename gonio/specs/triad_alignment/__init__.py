@@ -41,6 +41,7 @@ SPEC = Specification(
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
     readings_format=FORMAT,
     named_inputs=named_inputs,
+    certificate_content="gonio.specs.triad_alignment.certificate",
     commands=(("align", "gonio.specs.triad_alignment.commands:add_align"),
               ("thermal-model", "gonio.specs.triad_alignment.commands:add_thermal_model")),
 )

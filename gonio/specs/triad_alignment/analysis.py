@@ -47,7 +47,7 @@ from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
-from gonio.physics.alignment import (alignment_noise_limit_dps, decompose_system_matrix,
+from gonio.physics.alignment import (alignment_noise_limit_dps, decompose_system_matrices,
                                      mean_earth_rate_ref, signed_axis)
 
 #: Huber tuning constant (95 % efficiency at the normal distribution).
@@ -123,19 +123,27 @@ def _fit_channel(x, y, w, robust: bool, max_iter: int = 100):
     return theta, s2 * xtwx_inv, math.sqrt(s2), rw, dof
 
 
-def _derived(theta12: np.ndarray) -> np.ndarray:
-    """Derived quantities as one vector from θ (rows of [M | b] stacked):
-    vec(M⁻¹) (9), scale factors (3), ψ (3), φ off-diagonal (6), cross-axis S (6),
-    bias in °/s = M⁻¹ b (3)."""
-    mb = theta12.reshape(3, 4)
-    m, b = mb[:, :3], mb[:, 3]
+#: Off-diagonal (i, j) in the order of :data:`OFFDIAG`.
+_OFF = ((0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1))
+
+
+def _derived_batch(thetas: np.ndarray) -> np.ndarray:
+    """Derived quantities of each row of ``thetas`` (shape (k, 12), θ = rows of [M | b]
+    stacked), one row each: vec(M⁻¹) (9), scale factors (3), ψ (3), φ off-diagonal (6),
+    cross-axis S (6), bias in °/s = M⁻¹ b (3)."""
+    mb = np.asarray(thetas, dtype=float).reshape(-1, 3, 4)
+    m, b = mb[:, :, :3], mb[:, :, 3]
     minv = np.linalg.inv(m)
-    d = decompose_system_matrix(m)
-    off = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
-    phi = np.array(d["phi_rad"])
-    s = np.array(d["cross_axis"])
-    return np.concatenate([minv.ravel(), d["scale"], d["psi_rad"],
-                           [phi[i, j] for i, j in off], [s[i, j] for i, j in off], minv @ b])
+    d = decompose_system_matrices(m)
+    i, j = np.array(_OFF).T
+    return np.concatenate([minv.reshape(-1, 9), d["scale"], d["psi_rad"],
+                           d["phi_rad"][:, i, j], d["cross_axis"][:, i, j],
+                           np.matmul(minv, b[:, :, None])[:, :, 0]], axis=1)
+
+
+def _derived(theta12: np.ndarray) -> np.ndarray:
+    """:func:`_derived_batch` of one θ."""
+    return _derived_batch(np.asarray(theta12, dtype=float)[None, :])[0]
 
 
 _DERIVED_SLICES = {"alignment_matrix": slice(0, 9), "scale": slice(9, 12), "psi_rad": slice(12, 15),
@@ -339,18 +347,21 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
 
 #: Monte Carlo trials held in memory at once; more are combined chunk by chunk.
 MC_CHUNK = 100_000
+#: Normal draws made at once inside a chunk (bounded temporaries of the vectorised trials).
+MC_DRAWS = 1 << 20
 
 
-def chunked_std(trial, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.ndarray]:
-    """Sample standard deviations (ddof 1) of the two vectors ``trial()`` returns, over
-    ``n`` trials, in bounded memory: chunks of ``chunk`` trials combined by Chan et al.'s
-    pairwise update (count, mean, sum of squared deviations). Up to one chunk the result is
-    ``np.std`` of all trials, exactly.
+def chunked_std(batch, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.ndarray]:
+    """Sample standard deviations (ddof 1) of the two vectors per trial that ``batch(k)``
+    returns for ``k`` trials at once (two arrays of k rows), over ``n`` trials, in bounded
+    memory: chunks of ``chunk`` trials combined by Chan et al.'s pairwise update (count,
+    mean, sum of squared deviations). Up to one chunk the result is ``np.std`` of all
+    trials, exactly.
 
     >>> it = iter(range(10))
-    >>> def f():
-    ...     v = float(next(it))
-    ...     return np.array([v]), np.array([2 * v])
+    >>> def f(k):
+    ...     v = np.array([float(next(it)) for _ in range(k)])[:, None]
+    ...     return v, 2 * v
     >>> [round(float(a[0]), 6) for a in chunked_std(f, 10, chunk=3)]
     [3.02765, 6.055301]
     """
@@ -358,12 +369,11 @@ def chunked_std(trial, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.nd
     done = 0
     while done < n:
         k = min(chunk, n - done)
-        first = [trial() for _ in range(k)]
-        blocks = [np.array([f[j] for f in first]) for j in (0, 1)]
-        del first
+        blocks = batch(k)
         if acc is None and k == n:
             return tuple(np.std(b, axis=0, ddof=1) for b in blocks)
         stats_ = [(k, b.mean(axis=0), ((b - b.mean(axis=0)) ** 2).sum(axis=0)) for b in blocks]
+        del blocks
         if acc is None:
             acc = stats_
         else:
@@ -375,6 +385,30 @@ def chunked_std(trial, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.nd
             acc = merged
         done += k
     return tuple(np.sqrt(sq / (cnt - 1)) for cnt, _, sq in acc)
+
+
+def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray, rng):
+    """The Monte Carlo trials of :func:`estimate_alignment`, vectorised: ``trials(k)`` draws
+    k synthetic outputs (fitted + sd·N(0, 1), the draws in the order of one trial after the
+    other), refits each channel by weighted least squares (all trials as right-hand sides
+    of one solve) and returns (θ, derived) with k rows each, in pieces of at most
+    :data:`MC_DRAWS` normal draws."""
+    sw = np.sqrt(w)
+    xw = x * sw[:, None]
+    per = max(1, MC_DRAWS // fitted.size)
+
+    def trials(k: int):
+        th = np.empty((k, 12))
+        der = np.empty((k, max(sl.stop for sl in _DERIVED_SLICES.values())))
+        for a in range(0, k, per):
+            kk = min(per, k - a)
+            ys = fitted + sd * rng.standard_normal((kk,) + fitted.shape)   # (kk, rows, 3)
+            for i in range(3):
+                t, *_ = np.linalg.lstsq(xw, ys[:, :, i].T * sw[:, None], rcond=None)
+                th[a:a + kk, 4 * i:4 * i + 4] = t.T
+            der[a:a + kk] = _derived_batch(th[a:a + kk])
+        return th, der
+    return trials
 
 
 def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
@@ -428,11 +462,7 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))
         fitted = x @ mb.T
         sd = np.array(sig)[None, :] / np.sqrt(w)[:, None]
-        def trial():
-            ys = fitted + sd * rng.standard_normal(fitted.shape)
-            t = np.concatenate([_wls(x, ys[:, i], w) for i in range(3)])
-            return t, _derived(t)
-        u_mc_theta, u_der_mc = chunked_std(trial, int(monte_carlo))
+        u_mc_theta, u_der_mc = chunked_std(_mc_trials(x, w, fitted, sd, rng), int(monte_carlo))
         u_mc = _split(u_der_mc)
     dofa = np.array(dof)
     k = stats.t.ppf(0.5 + COVERAGE / 2, dofa)

@@ -127,3 +127,31 @@ NORM = ("Gyro triad alignment per the gonio procedure (docs/alignment.md) with "
         "IEC 62047-20:2014 5.2 (cross-axis sensitivity) and JCGM 100:2008",
         "三轴陀螺组件对准（gonio 程序），交叉轴灵敏度按 IEC 62047-20:2014 "
         "5.2，不确定度按 JCGM 100:2008")
+
+#: The readings taken in Chinese by their opening words (the DCC's zh beside the English).
+READINGS_ZH = dict(zip(("Alignment:", "Uncertainties:", "Residual leakage after alignment:",
+                        "Averaging time:", "Temperature model:"), READINGS_TAKEN_ZH))
+
+#: The items' and matrices' names in Chinese (gonio.report.i18n.phrase_zh), for the DCC.
+PHRASES_ZH = (
+    (r"system matrix (M(?:_\w+)?)", "系统矩阵 {1}"),
+    (r"bias (b(?:_\w+)?)", "零偏 {1}"),
+    (r"cross-axis sensitivity (S(?:_\w+ = M_\w+/M_\w+)?)", "交叉轴灵敏度 {1}"),
+    (r"residual leakage after alignment (L(?:_\w+)?)(?: \(M̂⁻¹M − I\))?",
+     "对准后残余交叉耦合 {1}（M̂⁻¹M − I）"),
+    (r"averaging time from the Allan deviation", "由 Allan 偏差确定的平均时间"),
+    (r"(\w+) at the reference \(ϑ = 0, U = 0\)", "{1} 在参考点（ϑ = 0，U = 0）的值"),
+    (r"(\w+): ϑ\^(\d+) coefficient", "{1}：ϑ^{2} 项系数"),
+    (r"(\w+): U\^(\d+) coefficient", "{1}：U^{2} 项系数"),
+    (r"MEMS gyro triad \(virtual\)", "微机电三轴陀螺组件（虚拟）"),
+    (r"mems-triad", "微机电三轴陀螺组件虚拟台架（mems-triad）"),
+    # the clauses of the sources (docs/alignment.md, docs/thermal-model.md)
+    (r"§4 eq\. (\S+)", "文章 §4 式 {1}"),
+    (r"§4 (M̂⁻¹M − I)", "文章 §4 {1}"),
+    (r"thesis eq\. (\S+)", "论文式 {1}"),
+    # the screening's findings a certificate shows (gonio.specs.triad_alignment.screen)
+    (r"alignment dwell about (\S+) at (\S+) °/s: gyro (\w)'s output moved (\S+) from the "
+     r"static median, the opposite sign of the rate \(a sign-flipped rate_dps or up\?\)",
+     "绕 {1} 的对准测量段（{2} °/s）：陀螺 {3} 的输出相对静态中位数变化 {4}，与角速率符号相反"
+     "（rate_dps 或 up 的符号可能有误）"),
+)

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 
 from gonio.report.certificate import Block, certificate_id
-from gonio.report.i18n import display, display_uncertainty, rule_at_U
+from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_at_U,
+                               translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
-                                           write_spec_certificate)
-from gonio.report.stated import item_nums, num
+                                           screening_blocks, write_spec_certificate)
+from gonio.report.stated import conformity_blocks, item_nums, num
+from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
 from gonio.specs.triad_alignment.figures import (alignment_panels, language,
@@ -34,6 +36,11 @@ OFFDIAG = ("xy", "xz", "yx", "yz", "zx", "zy")
 def _t(lang: str):
     text = content.TEXT
     return lambda key, **kw: text[key][1 if lang == "zh" else 0].format(**kw)
+
+
+def _why(text: str, L: dict) -> str:
+    """A reason (or an item's title) in the certificate's language, by the triad's phrases."""
+    return reason_text(text, L, content.PHRASES_ZH)
 
 
 def _pm(res: dict, key: str) -> list | str:
@@ -57,7 +64,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     out: list[Block] = [Block("h", T("h_alignment"))]
     items = res["items"]
     if not items["M_xx"]["measured"]:
-        out.append(Block("p", [f"{L['not_measured']}: {items['M_xx']['reason']}"]))
+        out.append(Block("p", [f"{L['not_measured']}: {_why(items['M_xx']['reason'], L)}"]))
         return out
     al = res["extra"]["alignment"]
     unit = al["output_unit"] or "output"
@@ -100,7 +107,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
                                  dwell=display("sig3", d["shortest_dwell_s"]),
                                  ok=T("sufficient") if d["sufficient"] else T("insufficient"))]))
     else:
-        out.append(Block("p", [f"{av['title']}: {L['not_measured']}: {av['reason']}"]))
+        out.append(Block("p", [f"{_why(av['title'], L)}: {L['not_measured']}: {_why(av['reason'], L)}"]))
     if al["outliers"]:
         out.append(Block("p", [T("outliers", list=", ".join(
             f"line {o['line']} ({o['channel']}, w = {o['weight']:.2f})" for o in al["outliers"]))]))
@@ -128,7 +135,7 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
     tm = res["extra"].get("thermal_model")
     if tm is None:
         it = res["items"].get("thermal_model", {})
-        out.append(Block("p", [f"{L['not_measured']}: {it.get('reason', '')}"]))
+        out.append(Block("p", [f"{L['not_measured']}: {_why(it.get('reason', ''), L)}"]))
         return out
     crit = T("crit_" + tm["criterion"])
     first = next(iter(tm["channels"].values()))
@@ -230,13 +237,19 @@ def triad_figures(result) -> list[tuple]:
 
 
 def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> dict:
-    """The certificate's content: header, alignment-matrix page, temperature-model page,
+    """The certificate's content: header, alignment-matrix page (then the screening's
+    findings and the statements of conformity the pipeline decided), temperature-model page,
     readings taken, signatures, statements, figures."""
     res = result.to_json()
     T = _t(lang)
     blocks = header_blocks(res, get(result.spec_key), L, lang, lab,
                            [T("std_table"), "—", "—", "—"])
     blocks += alignment_blocks(res, T, L)
+    blocks += screening_blocks(res, L, content.PHRASES_ZH)
+    name = translator(tables=content.PHRASES_ZH) if lang == "zh" else (lambda t: None)
+    blocks += conformity_blocks(                     # the pipeline's decisions, rendered
+        res["items"], L, lambda k: name(res["items"][k]["title"]) or res["items"][k]["title"],
+        lambda k: unit_text(res["items"][k]["unit"]), Block)
     blocks += thermal_blocks(res, T, L, lang)
     zh = content.READINGS_TAKEN_ZH
     notes = res.get("readings_taken", [])

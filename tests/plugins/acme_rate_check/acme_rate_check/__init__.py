@@ -32,6 +32,7 @@ SPEC = Specification(
     coverage=Coverage(engine="items", stream=101),
     # gonio's renderer of a per-item result: results.json, summary, certificate, DCC
     outputs="gonio.specs._rate_family.outputs",
+    certificate_content="acme_rate_check.certificate",   # its headings and groups, as data
     calibrate_options=frozenset({"protocol", "dcc"}),
     # the tolerance its document gives (clause 6): decided where the lab file sets none
     default_limits=({"item": "bias", "mpe": 0.5, "source": "ACME RC-1 clause 6"},),
