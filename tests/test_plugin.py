@@ -166,6 +166,22 @@ def test_the_plugin_adds_its_own_command(plugin, capsys):
     assert err == "gonio: error: --samples must be at least 2 (clause 4.1), got 1\n"
 
 
+def test_a_builtin_command_loads_no_specification_for_its_parser(monkeypatch):
+    """``gonio earth …`` builds its parser without loading every specification (a second of
+    start-up); ``gonio --help`` and a specification's own command load them."""
+    import gonio.specs as specs
+    from gonio.cli import build_parser
+
+    def subcommands(parser):
+        return set(next(a for a in parser._actions if a.dest == "command").choices)
+
+    assert {"align", "thermal-model"} <= subcommands(build_parser([]))
+    assert "align" in subcommands(build_parser(["align", "x.csv"]))
+    monkeypatch.setattr(specs, "commands", lambda: pytest.fail("loaded the specifications"))
+    got = subcommands(build_parser(["earth", "--latitude-deg", "30"]))
+    assert "earth" in got and "align" not in got
+
+
 def test_a_broken_command_leaves_the_others_working(monkeypatch, capsys):
     """A specification that cannot be loaded, a command module that cannot be imported and
     a command name taken twice each cost only that command, with a warning naming it."""
@@ -175,9 +191,13 @@ def test_a_broken_command_leaves_the_others_working(monkeypatch, capsys):
     broken = {**BUILT_IN, "nope": "no_such_module:SPEC"}
     monkeypatch.setattr(specs, "_entry_points", lambda: broken)
     assert main(["earth", "--latitude-deg", "30", "--axis", "up"]) == 0
-    err = capsys.readouterr().err
-    assert err.startswith("gonio: warning: the specification entry point nope = "
-                          "'no_such_module:SPEC' cannot be loaded")
+    assert capsys.readouterr().err == ""          # a built-in command loads no specification
+    from gonio.cli import build_parser
+
+    with pytest.warns(UserWarning, match="the specification entry point nope = "
+                      "'no_such_module:SPEC' cannot be loaded"):
+        parser = build_parser([])                  # gonio --help: every specification
+    assert "align" in next(a for a in parser._actions if a.dest == "command").choices
     with pytest.warns(UserWarning, match="nope.*its commands are not available"):
         names = [n for n, _ in specs.commands()]
     assert {"align", "thermal-model"} <= set(names)
