@@ -181,7 +181,7 @@ LABELS: dict[str, dict[str, str]] = {
     # a non-negative quantity whose U exceeds its value (gonio.result.statement.state)
     "note_upper": {"en": "upper bound: ≤\u00a0{b} {u} (interval [0, {b}])",
                    "zh": "上限：≤\u00a0{b} {u}（区间 [0, {b}]）"},
-    "note_upper_short": {"en": "upper bound ≤ {b}", "zh": "上限 ≤ {b}"},
+    "note_upper_short": {"en": "; upper bound ≤\u00a0{b}", "zh": "；上限 ≤\u00a0{b}"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
