@@ -93,6 +93,40 @@ def test_simulate_calibrate_certificate(plugin, tmp_path, capsys):
         capsys.readouterr().err
 
 
+def test_the_procedures_tolerance_is_the_default_limit(plugin, tmp_path, capsys):
+    """``SPEC.default_limits`` (ACME RC-1 clause 6: |B| ≤ 1 °/s) is decided where the lab
+    file gives no limit for the bias, labelled as the specification's default in
+    results.json and on the certificate; a lab file's own limit replaces it."""
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--spec", "acme-rate-check", "--seed", "3", "--out", str(sim)]) == 0
+    assert main(["calibrate", str(sim / "readings.csv"), "--out", str(tmp_path / "a")]) == 0
+    res = json.loads((tmp_path / "a" / "results.json").read_text(encoding="utf-8"))
+    c = res["items"]["bias"]["conformity"]
+    assert (c["limits_from"], c["source"], c["lower"], c["upper"]) == \
+        ("specification default", "ACME RC-1 clause 6", -1.0, 1.0)
+    assert c["outcome"] == "pass" and c["rule"] == "simple"
+    assert res["items"]["scale_factor"]["conformity"] is None
+    html = (tmp_path / "a" / "certificate.html").read_text(encoding="utf-8")
+    assert "(default of the specification)" in html and "ACME RC-1 clause 6" in html
+    lab = tmp_path / "lab.toml"
+    example = (ROOT / "protocols" / "lab-example.toml").read_text(encoding="utf-8")
+    lab.write_text(example.split("\n[[specification_limits]]\n")[0] + "\n"
+                   '[[specification_limits]]\nitem = "bias"\nupper = 1.0e-9\n'
+                   'source = "customer"\n', encoding="utf-8")
+    capsys.readouterr()
+    assert main(["calibrate", str(sim / "readings.csv"), "--lab", str(lab),
+                 "--out", str(tmp_path / "b")]) == 0
+    res = json.loads((tmp_path / "b" / "results.json").read_text(encoding="utf-8"))
+    c = res["items"]["bias"]["conformity"]
+    assert (c["limits_from"], c["source"], c["lower"], c["upper"]) == \
+        ("lab file", "customer", None, 1.0e-9)
+    html = (tmp_path / "b" / "certificate.html").read_text(encoding="utf-8")
+    assert "(default of the specification)" not in html
+    # gonio's four documents give no tolerance of their items (docs/certificate.md)
+    from gonio.specs import BUILT_IN, default_limits
+    assert all(default_limits(k) == [] for k in BUILT_IN)
+
+
 def test_demo_writes_a_valid_dcc(plugin, tmp_path, dcc_schema, capsys):
     d = tmp_path / "demo"
     assert main(["demo", "--spec", "acme-rate-check", "--out", str(d)]) == 0
@@ -132,6 +166,22 @@ def test_the_plugin_adds_its_own_command(plugin, capsys):
     assert err == "gonio: error: --samples must be at least 2 (clause 4.1), got 1\n"
 
 
+def test_a_builtin_command_loads_no_specification_for_its_parser(monkeypatch):
+    """``gonio earth …`` builds its parser without loading every specification (a second of
+    start-up); ``gonio --help`` and a specification's own command load them."""
+    import gonio.specs as specs
+    from gonio.cli import build_parser
+
+    def subcommands(parser):
+        return set(next(a for a in parser._actions if a.dest == "command").choices)
+
+    assert {"align", "thermal-model"} <= subcommands(build_parser([]))
+    assert "align" in subcommands(build_parser(["align", "x.csv"]))
+    monkeypatch.setattr(specs, "commands", lambda: pytest.fail("loaded the specifications"))
+    got = subcommands(build_parser(["earth", "--latitude-deg", "30"]))
+    assert "earth" in got and "align" not in got
+
+
 def test_a_broken_command_leaves_the_others_working(monkeypatch, capsys):
     """A specification that cannot be loaded, a command module that cannot be imported and
     a command name taken twice each cost only that command, with a warning naming it."""
@@ -141,9 +191,13 @@ def test_a_broken_command_leaves_the_others_working(monkeypatch, capsys):
     broken = {**BUILT_IN, "nope": "no_such_module:SPEC"}
     monkeypatch.setattr(specs, "_entry_points", lambda: broken)
     assert main(["earth", "--latitude-deg", "30", "--axis", "up"]) == 0
-    err = capsys.readouterr().err
-    assert err.startswith("gonio: warning: the specification entry point nope = "
-                          "'no_such_module:SPEC' cannot be loaded")
+    assert capsys.readouterr().err == ""          # a built-in command loads no specification
+    from gonio.cli import build_parser
+
+    with pytest.warns(UserWarning, match="the specification entry point nope = "
+                      "'no_such_module:SPEC' cannot be loaded"):
+        parser = build_parser([])                  # gonio --help: every specification
+    assert "align" in next(a for a in parser._actions if a.dest == "command").choices
     with pytest.warns(UserWarning, match="nope.*its commands are not available"):
         names = [n for n, _ in specs.commands()]
     assert {"align", "thermal-model"} <= set(names)

@@ -58,8 +58,11 @@ def _short(text: str, limit: int = 400) -> str:
     return text if len(text) <= limit else text[:limit] + f"… ({len(text)} characters)"
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser, with every ``cmd_*`` module registered."""
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The full argument parser, with every ``cmd_*`` module and every specification's
+    commands registered. ``argv`` (the arguments about to be parsed) naming one of gonio's
+    own commands first leaves the specifications' commands out: loading every
+    specification costs about a second, and that command does not need them."""
     from gonio import __version__
 
     parser = _Parser(prog="gonio", description=(
@@ -68,15 +71,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"gonio {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for _, register in sorted(_commands().items()):
+    for _, register in sorted(_commands(argv).items()):
         register(sub)
     return parser
 
 
-def _commands() -> dict:
+def _commands(argv: list[str] | None = None) -> dict:
     """{command name: register(subparsers)}: gonio's ``cmd_*`` modules and the commands the
-    registered specifications add (:func:`gonio.specs.commands`); a specification's command
-    that takes a built-in name is not added, with a warning naming it."""
+    registered specifications add (:func:`gonio.specs.commands`; not when ``argv`` starts
+    with a built-in command); a specification's command that takes a built-in name is not
+    added, with a warning naming it."""
     import gonio.cli as pkg
     from gonio.specs import commands
 
@@ -85,6 +89,8 @@ def _commands() -> dict:
         if info.name.startswith("cmd_"):
             mod = importlib.import_module(f"gonio.cli.{info.name}")
             found[info.name[4:].replace("_", "-")] = mod.register
+    if argv and argv[0] in found:
+        return found
     for name, add_parser in commands():
         if name in found:
             warnings.warn(f"a specification's command {name!r} is not available: gonio has a "
@@ -109,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            parser = build_parser()
+            parser = build_parser(sys.argv[1:] if argv is None else list(argv))
             args = parser.parse_args(argv)
             rc = _run(args)
             sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit

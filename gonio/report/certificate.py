@@ -236,7 +236,7 @@ def screening_notes(res: dict, L: dict, add) -> None:
     aside = sum(f["action"] == "set_aside" for f in found)
     flagged = len(found) - aside
     add("notice", L["screening_note"].format(n=aside, m=flagged))
-    names = {k: L[k] for k in ITEMS}                  # a test named by its item
+    names = {k: L[k] for k in item_names(res) if k in L}   # a test named by its item
     for f in found[:MAX_FINDING_LINES]:
         add("p", [finding_text(f, L, extra=names)])
     if len(found) > MAX_FINDING_LINES:
@@ -336,7 +336,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         if not st["measured"]:
             rrows.append([str(i), L[name], item["clause"],
                           f"{L['not_measured']}: "
-                          f"{reason_text(item['reason'], L, extra={k: L[k] for k in ITEMS})}",
+                          f"{reason_text(item['reason'], L, extra={k: L[k] for k in item_names(res) if k in L})}",
                           "—", ""])
             continue
         cell: list = [st["value"]]
@@ -687,15 +687,16 @@ def _glue(tokens: list[str]) -> list[str]:
     """Wrapping tokens with a closing mark joined to the token before it and an opening mark
     to the token after it, so no line starts with ")" or "。" nor ends with "(".
 
-    >>> _glue(["k", "）", "。"]), _glue(["（", "a", "b"])
-    (['k）。'], ['（a', 'b'])
+    >>> _glue(["k", "）", "。"]), _glue(["（", "a", "b"]), _glue(["≈ ", "95 ", "%)"])
+    (['k）。'], ['（a', 'b'], ['≈ ', '95 %)'])
     """
     out: list[str] = []
     carry = ""
     for tok in tokens:
         tok = carry + tok
         carry = ""
-        if out and tok and tok[0] in _NO_START and not out[-1].endswith(" "):
+        if out and tok and tok[0] in _NO_START and (not out[-1].endswith(" ")
+                                                      or tok[0] == "%"):   # "95 %" whole
             out[-1] += tok
         elif tok and tok[-1] in _NO_END and len(tok) == 1:
             carry = tok
@@ -1117,7 +1118,8 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
 
             doc = dcc_bytes(report, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English (issue 25)
-                extra = {**READING_NOTES_ZH, **{k: L[k] for k in ITEMS},
+                extra = {**READING_NOTES_ZH,
+                         **{k: L[k] for k in item_names(report.to_dict()) if k in L},
                          method_text(report, lab_d, "en"): method_text(report, lab_d, "zh")}
                 doc = bilingual(doc, label_translator(extra))
             write_bytes(stage / "certificate.dcc.xml", doc)

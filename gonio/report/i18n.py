@@ -181,7 +181,7 @@ LABELS: dict[str, dict[str, str]] = {
     # a non-negative quantity whose U exceeds its value (gonio.result.statement.state)
     "note_upper": {"en": "upper bound: ≤\u00a0{b} {u} (interval [0, {b}])",
                    "zh": "上限：≤\u00a0{b} {u}（区间 [0, {b}]）"},
-    "note_upper_short": {"en": "upper bound ≤ {b}", "zh": "上限 ≤ {b}"},
+    "note_upper_short": {"en": "; upper bound ≤\u00a0{b}", "zh": "；上限 ≤\u00a0{b}"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
@@ -302,6 +302,12 @@ LABELS: dict[str, dict[str, str]] = {
                               "给出特定误接受概率。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
+    "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
+    "c_default_note": {"en": "Limits marked as the default of the specification are the "
+                             "tolerances its document gives ({s}), used where the laboratory "
+                             "file gives none.",
+                       "zh": "标注为规范默认值的规定限取自规范文件给出的允差（{s}），"
+                             "仅用于实验室文件未给出限值的项目。"},
     "c_accept": {"en": "Acceptance interval", "zh": "接受区间"},
     "c_outcome": {"en": "Outcome", "zh": "判定结果"},
     "c_pfa": {"en": "Specific false-accept probability", "zh": "特定误接受概率"},
@@ -901,7 +907,7 @@ def translator(extra: dict | None = None, tables=()):
 FINDING_ACTIONS = {"set_aside": ("set aside", "剔除"), "flagged": ("flagged", "标记"),
                    "refused": ("refused", "拒收")}
 
-#: The optical draft's screening messages (gonio.specs.ogam_draft.screen) in Chinese; each
+#: The optical draft's screening messages (its screen module) in Chinese; each
 #: group is itself translated where it can be (an axis "up", a test's item name).
 FINDINGS_ZH: tuple[tuple[str, str], ...] = (
     (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\); "
@@ -938,7 +944,7 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
 )
 
 
-#: Why an optical item was not measured (gonio.specs.ogam_draft.items), in Chinese.
+#: Why an optical item was not measured (the draft's items module), in Chinese.
 REASONS_ZH: tuple[tuple[str, str], ...] = (
     (r"no (\w+) rows in file", "文件中没有 {1} 数据行"),
     (r"scale factor not measured: (.+)", "标度因数未测：{1}"),

@@ -287,9 +287,33 @@ def _thermal_readings(r: TriadReadings, thermal) -> TriadReadings | None:
     return r if (r.data["test"] == "thermal").any() else None
 
 
+def screen_files(readings, protocol=None, *, thermal=None, **_options) -> list:
+    """``SPEC.screen``: the findings (:func:`gonio.specs.triad_alignment.screen.screen`) on the
+    readings and on the thermal programme they name (or ``thermal``), refused ones included;
+    the pipeline hands them to :func:`calibrate` (``findings=``)."""
+    from gonio.specs.triad_alignment.screen import screen
+
+    r = _as_readings(readings)
+    found = screen(r, protocol)
+    tr = _thermal_readings(r, thermal)
+    if tr is not None and tr is not r:
+        found += screen(tr, protocol)
+    return found
+
+
+def refuse(findings) -> list:
+    """The findings, after raising the first refused one as a GonioError naming its file and
+    line (the readings stop there)."""
+    for f in findings:
+        if f.action == "refused":
+            raise GonioError(f.message, file=f.file, line=f.line, column=f.column)
+    return list(findings)
+
+
 def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: bool = False,
               seed: int = 0, target_deg: float = 0.1, criterion: str = "bic",
-              temperature: str = "sensor", thermal=None, **_options) -> TriadCalibration:
+              temperature: str = "sensor", thermal=None, findings: list | None = None,
+              **_options) -> TriadCalibration:
     """Every item of the module docstring from a triad readings file (path or TriadReadings).
 
     Alignment from the ``alignment`` (and ``static``) rows
@@ -298,12 +322,16 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     (:func:`_thermal_readings`; :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`),
     applied back to the same record for the before/after comparison. ``protocol`` is
     accepted for the plug-in interface: everything the analysis uses is in the file.
+    ``findings``: the screening of both files already made (:func:`screen_files`, the
+    pipeline's ``SPEC.screen``); None: screened here.
     """
 
     from gonio.specs.triad_alignment.screen import check
 
     r = _as_readings(readings)
-    findings = check(r)                      # refused readings stop here, naming the line
+    screened = findings is not None
+    # refused readings stop here, naming the line
+    findings = refuse(findings) if screened else check(r)
     unit = r.metadata.get("output_unit", "output")
     items: dict[str, Item] = {}
     al = None
@@ -323,7 +351,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)
-    if tr is not None and tr is not r:
+    if tr is not None and tr is not r and not screened:
         findings += check(tr)
     th = None
     comp: dict[str, Compensation] = {}
