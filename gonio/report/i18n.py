@@ -302,11 +302,11 @@ LABELS: dict[str, dict[str, str]] = {
                               "给出特定误接受概率。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
-    "c_default": {"en": "(default of the specification)", "zh": "(规范默认值)"},
+    "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
     "c_default_note": {"en": "Limits marked as the default of the specification are the "
                              "tolerances its document gives ({s}), used where the laboratory "
                              "file gives none.",
-                       "zh": "标注为规范默认值的规定限取自规范文件给出的允差({s}),"
+                       "zh": "标注为规范默认值的规定限取自规范文件给出的允差（{s}），"
                              "仅用于实验室文件未给出限值的项目。"},
     "c_accept": {"en": "Acceptance interval", "zh": "接受区间"},
     "c_outcome": {"en": "Outcome", "zh": "判定结果"},
