@@ -786,6 +786,7 @@ DCC_ZH: dict[str, str] = {
     "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
     "FOG goniometer (virtual)": "光纤陀螺测角仪（虚拟）",
     "precision low-speed rotary table (virtual)": "精密低速转台（虚拟）",
+    "gonio virtual bench": "gonio 虚拟台架",
     "rate table, two-axis position table, angular vibration table, chamber (virtual)":
         "速率转台、双轴位置转台、角振动台、温箱（虚拟）",
 }
