@@ -94,7 +94,7 @@ def test_simulate_calibrate_certificate(plugin, tmp_path, capsys):
 
 
 def test_the_procedures_tolerance_is_the_default_limit(plugin, tmp_path, capsys):
-    """``SPEC.default_limits`` (ACME RC-1 clause 6: |B| ≤ 0.5 °/s) is decided where the lab
+    """``SPEC.default_limits`` (ACME RC-1 clause 6: |B| ≤ 1 °/s) is decided where the lab
     file gives no limit for the bias, labelled as the specification's default in
     results.json and on the certificate; a lab file's own limit replaces it."""
     sim = tmp_path / "sim"
@@ -103,7 +103,7 @@ def test_the_procedures_tolerance_is_the_default_limit(plugin, tmp_path, capsys)
     res = json.loads((tmp_path / "a" / "results.json").read_text(encoding="utf-8"))
     c = res["items"]["bias"]["conformity"]
     assert (c["limits_from"], c["source"], c["lower"], c["upper"]) == \
-        ("specification default", "ACME RC-1 clause 6", -0.5, 0.5)
+        ("specification default", "ACME RC-1 clause 6", -1.0, 1.0)
     assert c["outcome"] == "pass" and c["rule"] == "simple"
     assert res["items"]["scale_factor"]["conformity"] is None
     html = (tmp_path / "a" / "certificate.html").read_text(encoding="utf-8")

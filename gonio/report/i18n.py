@@ -302,11 +302,11 @@ LABELS: dict[str, dict[str, str]] = {
                               "给出特定误接受概率。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
-    "c_default": {"en": "(default of the specification)", "zh": "(规范默认值)"},
+    "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
     "c_default_note": {"en": "Limits marked as the default of the specification are the "
                              "tolerances its document gives ({s}), used where the laboratory "
                              "file gives none.",
-                       "zh": "标注为规范默认值的规定限取自规范文件给出的允差({s}),"
+                       "zh": "标注为规范默认值的规定限取自规范文件给出的允差（{s}），"
                              "仅用于实验室文件未给出限值的项目。"},
     "c_accept": {"en": "Acceptance interval", "zh": "接受区间"},
     "c_outcome": {"en": "Outcome", "zh": "判定结果"},
@@ -786,6 +786,7 @@ DCC_ZH: dict[str, str] = {
     "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
     "FOG goniometer (virtual)": "光纤陀螺测角仪（虚拟）",
     "precision low-speed rotary table (virtual)": "精密低速转台（虚拟）",
+    "gonio virtual bench": "gonio 虚拟台架",
     "rate table, two-axis position table, angular vibration table, chamber (virtual)":
         "速率转台、双轴位置转台、角振动台、温箱（虚拟）",
 }
