@@ -22,7 +22,7 @@ def test_slope_noise_u_is_the_pseudo_inverse_row_propagated():
 def test_slope_drift_u_is_the_random_walk_covariance_propagated():
     # a random-walk drift: D(τ) = q τ, cov(d(t_i), d(t_j)) = q min(t_i, t_j) (+ a common
     # start offset that the slope's Σ w_i = 0 cancels)
-    x = np.array([-150.0, -100, -50, 0, 50, 100, 150])
+    x = np.array([-150.0, -100, -50, 0, 50, 100, 170])          # mean ≠ 0 on purpose
     t = np.array([0.0, 40, 85, 130, 170, 215, 260]) + 30.0
     q = 2.5e-6
     w = np.linalg.pinv(np.column_stack([x, np.ones_like(x)]))[0]
@@ -31,3 +31,12 @@ def test_slope_drift_u_is_the_random_walk_covariance_propagated():
         float(np.sqrt(w @ cov @ w)), rel=1e-10)
     # a drift the same at every point (D = 0) does not move a slope
     assert slope_drift_u(x, t, lambda tau: 0.0) == 0.0
+
+
+def test_two_points_are_a_slope():
+    # the smallest programme a slope has: two rates (noise: u√2/Δx; drift: half of u_diff·2/Δx)
+    x, t = np.array([-1.0, 1.0]), np.array([0.0, 10.0])
+    assert slope_noise_u(x, np.array([0.1, 0.1])) == pytest.approx(0.1 * np.sqrt(2) / 2)
+    assert slope_drift_u(x, t, lambda tau: 0.1) == pytest.approx(0.05)
+    assert np.isnan(slope_noise_u(x[:1], np.array([0.1]))) and np.isnan(
+        slope_drift_u(x[:1], t[:1], lambda tau: 0.1))
