@@ -721,7 +721,9 @@ def source_text(src: str, L: dict, table=()) -> str:
     """
     base, _, note = src.partition(" [beyond the draft")
     out = (phrase_zh(base, table) or base) if L.get("_lang") == "zh" else base
-    return out + (f" ({L['beyond_draft']})" if note else "")
+    if not note:
+        return out
+    return out + (f"（{L['beyond_draft']}）" if L.get("_lang") == "zh" else f" ({L['beyond_draft']})")
 
 
 def reason_text(reason: str, L: dict, table=(), extra: dict | None = None) -> str:
