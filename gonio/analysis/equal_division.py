@@ -725,26 +725,8 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     """
     if gauge not in ("closure", "zero"):
         raise GonioError(f"gauge must be 'closure' or 'zero', got {gauge!r}", key="gauge")
-    try:
-        D = np.asarray(D, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise GonioError(f"D is not a numeric array: {exc}", key="D") from None
-    if D.ndim == 2:
-        D = D[None]
-    elif D.ndim == 3:
-        D = np.moveaxis(D, 0 if repeats_axis is None else repeats_axis, 0)
-    else:
-        raise GonioError(f"D must be 2-D (n, m) or 3-D (R, n, m), got shape {D.shape}", key="D")
-    if not np.all(np.isfinite(D)):
-        raise GonioError("D contains non-finite values (every reading is needed)", key="D")
-    R, n, m_cols = D.shape
-    m = _check_step(float(step_deg))
-    if m_cols != m:
-        raise GonioError(f"D has {m_cols} columns but the step {step_deg:.9g}° gives "
-                         f"m = {m} points per revolution (columns are j = 1..m)", key="D")
-    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
-    if start_deg.shape != (n,):
-        raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
+    D, start_deg, m = _eda_input(D, start_deg, step_deg, repeats_axis)
+    R, n, _ = D.shape
     p = _grid_indices(start_deg, float(step_deg))
 
     tw = None
@@ -767,35 +749,8 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     y_sum = D.sum(axis=0).ravel()
     cfit = None
     if coupling is not None:
-        C = np.asarray(coupling, dtype=float)
-        if C.shape != (n, m, 2) or not np.all(np.isfinite(C)):
-            raise GonioError(f"coupling design must be finite with shape {(n, m, 2)}, got "
-                             f"{C.shape}", key="coupling")
-        cols = C.reshape(n * m, 2)
-        q = cols.shape[1]
-        Cw = np.asarray(Wn @ cols)
-        A_ext = sp.hstack([A, sp.csr_matrix(Cw)]).tocsr()
-        N_ext = (A_ext.T @ A_ext).toarray()
-        Z_ext = np.zeros((2 * m + q, Z.shape[1] + q))
-        Z_ext[:2 * m, :Z.shape[1]] = Z
-        Z_ext[2 * m:, Z.shape[1]:] = np.eye(q)
-        M_ext = Z_ext.T @ (R * N_ext) @ Z_ext
-        scale = np.sqrt(np.clip(np.diag(M_ext), 1e-300, None))
-        cond = np.linalg.cond(M_ext / np.outer(scale, scale))
-        if cond < COUPLING_COND_LIMIT:
-            A, Z, N1 = A_ext, Z_ext, N_ext / 1.0
-            cfit = "fit"
-        else:
-            size = math.nan
-            if coupling_bound_arcsec_s is not None:
-                size = float(coupling_bound_arcsec_s) * float(np.max(np.hypot(C[..., 0],
-                                                                               C[..., 1])))
-            cfit = CouplingFit(False, math.nan, math.nan, math.nan, math.nan, math.nan,
-                               math.nan, size,
-                               "the coupling cannot be separated from the table and "
-                               f"goniometer errors (condition number {cond:.2g}); it is not "
-                               "in the result" + (f": up to {size:.3g}″ at the tilt bound"
-                                                  if math.isfinite(size) else ""))
+        A, Z, N1, cfit = _with_coupling(A, Z, N1, R, Wn, coupling, n, m,
+                                        coupling_bound_arcsec_s)
     b = A.T @ y_sum
     M = Z.T @ (R * N1) @ Z
     Minv = np.linalg.inv(M)
@@ -813,30 +768,13 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     g, t = theta[:m], theta[m:2 * m]
     cov_g, cov_t = cov[:m, :m], cov[m:2 * m, m:2 * m]
     if cfit == "fit":
-        ab, cab = theta[2 * m:2 * m + 2], cov[2 * m:2 * m + 2, 2 * m:2 * m + 2]
-        amp = float(np.hypot(*ab))
-        grad = ab / amp if amp > 0 else np.array([1.0, 0.0])
-        eff = np.asarray(coupling, dtype=float) @ ab
-        cfit = CouplingFit(True, float(ab[0]), float(ab[1]), math.sqrt(max(cab[0, 0], 0.0)),
-                           math.sqrt(max(cab[1, 1], 0.0)), amp,
-                           math.sqrt(max(float(grad @ cab @ grad), 0.0)),
-                           float(np.max(np.abs(eff))),
-                           "tilt × Earth-rate coupling estimated jointly with the table and "
-                           "goniometer errors (nuisance, first harmonic of the absolute "
-                           "position growing with the time since zeroing) and removed")
+        cfit = _coupling_estimate(theta[2 * m:2 * m + 2], cov[2 * m:2 * m + 2, 2 * m:2 * m + 2],
+                                  coupling)
     if gauge == "zero":
         G = np.eye(m)
         G[:, 0] -= 1.0
         t = G @ t
         cov_t = G @ cov_t @ G.T
-    # full-turn closure: column j = m involves g_m only
-    full = float(g[-1])
-    u_full = math.sqrt(max(cov_g[-1, -1], 0.0))
-    z = full / u_full if u_full > 0 else (0.0 if full == 0 else math.inf)
-    closure = ClosureCheck(
-        table_sum_arcsec=float(t.sum()), full_turn_arcsec=full, u_full_turn_arcsec=u_full,
-        z=float(z), per_start_full_turn_arcsec=D_raw[:, :, -1].mean(axis=0),
-        consistent=bool(abs(z) <= CLOSURE_Z_LIMIT))
     harm = _harmonic_frame(start_deg, p, m, B, int(max_order or 2 * m))
     step = float(step_deg)
     return EdaResult(
@@ -848,8 +786,92 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         gonio_cov_arcsec2=cov_g,
         residual_std_arcsec=math.sqrt(s2), dof=int(dof), residuals_arcsec=resid,
         start_deg=start_deg, step_deg=step, repeats=R, gauge=gauge,
-        unobservable_dim=int(d - 1), harmonics=harm, closure=closure, noise=noise,
-        coupling=cfit)
+        unobservable_dim=int(d - 1), harmonics=harm,
+        closure=_closure_check(g, cov_g, t, D_raw), noise=noise, coupling=cfit)
+
+
+def _eda_input(D, start_deg, step_deg: float, repeats_axis: int | None):
+    """D as (R, n, m) finite arcseconds, the starts as (n,), m from the step; GonioError
+    naming the argument otherwise."""
+    try:
+        D = np.asarray(D, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise GonioError(f"D is not a numeric array: {exc}", key="D") from None
+    if D.ndim == 2:
+        D = D[None]
+    elif D.ndim == 3:
+        D = np.moveaxis(D, 0 if repeats_axis is None else repeats_axis, 0)
+    else:
+        raise GonioError(f"D must be 2-D (n, m) or 3-D (R, n, m), got shape {D.shape}", key="D")
+    if not np.all(np.isfinite(D)):
+        raise GonioError("D contains non-finite values (every reading is needed)", key="D")
+    _, n, m_cols = D.shape
+    m = _check_step(float(step_deg))
+    if m_cols != m:
+        raise GonioError(f"D has {m_cols} columns but the step {step_deg:.9g}° gives "
+                         f"m = {m} points per revolution (columns are j = 1..m)", key="D")
+    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
+    if start_deg.shape != (n,):
+        raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
+    return D, start_deg, m
+
+
+def _with_coupling(A, Z, N1, R: int, Wn, coupling, n: int, m: int, bound_arcsec_s):
+    """The design extended by the tilt × Earth-rate coupling's two columns when they can be
+    separated from the table and goniometer errors (then ``cfit`` is ``"fit"``); else the
+    plain design and a :class:`CouplingFit` saying why, with the coupling's size at the
+    tilt bound."""
+    C = np.asarray(coupling, dtype=float)
+    if C.shape != (n, m, 2) or not np.all(np.isfinite(C)):
+        raise GonioError(f"coupling design must be finite with shape {(n, m, 2)}, got "
+                         f"{C.shape}", key="coupling")
+    cols = C.reshape(n * m, 2)
+    q = cols.shape[1]
+    Cw = np.asarray(Wn @ cols)
+    A_ext = sp.hstack([A, sp.csr_matrix(Cw)]).tocsr()
+    N_ext = (A_ext.T @ A_ext).toarray()
+    Z_ext = np.zeros((2 * m + q, Z.shape[1] + q))
+    Z_ext[:2 * m, :Z.shape[1]] = Z
+    Z_ext[2 * m:, Z.shape[1]:] = np.eye(q)
+    M_ext = Z_ext.T @ (R * N_ext) @ Z_ext
+    scale = np.sqrt(np.clip(np.diag(M_ext), 1e-300, None))
+    cond = np.linalg.cond(M_ext / np.outer(scale, scale))
+    if cond < COUPLING_COND_LIMIT:
+        return A_ext, Z_ext, N_ext / 1.0, "fit"
+    size = math.nan
+    if bound_arcsec_s is not None:
+        size = float(bound_arcsec_s) * float(np.max(np.hypot(C[..., 0], C[..., 1])))
+    return A, Z, N1, CouplingFit(
+        False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, size,
+        "the coupling cannot be separated from the table and goniometer errors (condition "
+        f"number {cond:.2g}); it is not in the result"
+        + (f": up to {size:.3g}″ at the tilt bound" if math.isfinite(size) else ""))
+
+
+def _coupling_estimate(ab: np.ndarray, cab: np.ndarray, coupling) -> CouplingFit:
+    """The coupling's two coefficients, their amplitude and its largest effect."""
+    amp = float(np.hypot(*ab))
+    grad = ab / amp if amp > 0 else np.array([1.0, 0.0])
+    eff = np.asarray(coupling, dtype=float) @ ab
+    return CouplingFit(True, float(ab[0]), float(ab[1]), math.sqrt(max(cab[0, 0], 0.0)),
+                       math.sqrt(max(cab[1, 1], 0.0)), amp,
+                       math.sqrt(max(float(grad @ cab @ grad), 0.0)),
+                       float(np.max(np.abs(eff))),
+                       "tilt × Earth-rate coupling estimated jointly with the table and "
+                       "goniometer errors (nuisance, first harmonic of the absolute "
+                       "position growing with the time since zeroing) and removed")
+
+
+def _closure_check(g: np.ndarray, cov_g: np.ndarray, t: np.ndarray,
+                   D_raw: np.ndarray) -> ClosureCheck:
+    """The full-turn closure: column j = m involves g_m only."""
+    full = float(g[-1])
+    u_full = math.sqrt(max(cov_g[-1, -1], 0.0))
+    z = full / u_full if u_full > 0 else (0.0 if full == 0 else math.inf)
+    return ClosureCheck(
+        table_sum_arcsec=float(t.sum()), full_turn_arcsec=full, u_full_turn_arcsec=u_full,
+        z=float(z), per_start_full_turn_arcsec=D_raw[:, :, -1].mean(axis=0),
+        consistent=bool(abs(z) <= CLOSURE_Z_LIMIT))
 
 
 # --------------------------------------------------------------------------- comparison
