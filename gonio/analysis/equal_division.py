@@ -729,13 +729,7 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     R, n, _ = D.shape
     p = _grid_indices(start_deg, float(step_deg))
 
-    tw = None
-    if noise_time_s is not None:
-        tw = np.asarray(noise_time_s, dtype=float)
-        tw = tw.reshape(-1, m).mean(axis=0)            # the schedule: mean over starts
-    W = noise_whitening(m, noise, tw, compensation_time_s)
-    Wn = sp.kron(sp.eye(n), sp.csr_matrix(W))
-    A = sp.csr_matrix(Wn @ _design(p, m))
+    W, Wn, A = _whitened_design(p, n, m, noise, noise_time_s, compensation_time_s)
     D_raw = D
     D = D @ W.T          # whiten each start's row of readings (GLS)
     N1 = (A.T @ A).toarray()
@@ -751,19 +745,7 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     if coupling is not None:
         A, Z, N1, cfit = _with_coupling(A, Z, N1, R, Wn, coupling, n, m,
                                         coupling_bound_arcsec_s)
-    b = A.T @ y_sum
-    M = Z.T @ (R * N1) @ Z
-    Minv = np.linalg.inv(M)
-    theta = Z @ (Minv @ (Z.T @ b))
-    fitted = (A @ theta).reshape(n, m)
-    resid = D - fitted[None]          # whitened residuals: independent under the model
-    rank = M.shape[0]
-    dof = R * n * m - rank
-    if dof <= 0:
-        raise GonioError(f"no residual degrees of freedom ({R * n * m} readings, {rank} "
-                         f"parameters): add starts or repeats", key="D")
-    s2 = float(np.sum(resid ** 2)) / dof
-    cov = s2 * (Z @ Minv @ Z.T)
+    theta, cov, resid, dof, s2 = _gauged_least_squares(A, Z, N1, D, y_sum)
 
     g, t = theta[:m], theta[m:2 * m]
     cov_g, cov_t = cov[:m, :m], cov[m:2 * m, m:2 * m]
@@ -788,6 +770,35 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         start_deg=start_deg, step_deg=step, repeats=R, gauge=gauge,
         unobservable_dim=int(d - 1), harmonics=harm,
         closure=_closure_check(g, cov_g, t, D_raw), noise=noise, coupling=cfit)
+
+
+def _whitened_design(p: np.ndarray, n: int, m: int, noise: str, noise_time_s,
+                     compensation_time_s):
+    """The whitening W of one start's readings (its schedule the mean over starts), W for
+    all n starts, and the whitened design matrix (GLS)."""
+    tw = None
+    if noise_time_s is not None:
+        tw = np.asarray(noise_time_s, dtype=float).reshape(-1, m).mean(axis=0)
+    W = noise_whitening(m, noise, tw, compensation_time_s)
+    Wn = sp.kron(sp.eye(n), sp.csr_matrix(W))
+    return W, Wn, sp.csr_matrix(Wn @ _design(p, m))
+
+
+def _gauged_least_squares(A, Z, N1, D: np.ndarray, y_sum: np.ndarray):
+    """θ = Z (Zᵀ R·AᵀA Z)⁻¹ Zᵀ Aᵀ Σ_r y_r, the whitened residuals, ν = R·n·m − rank,
+    s² = RSS/ν and the covariance s² Z (Zᵀ R·AᵀA Z)⁻¹ Zᵀ (GUM H.3)."""
+    R, n, m = D.shape
+    M = Z.T @ (R * N1) @ Z
+    Minv = np.linalg.inv(M)
+    theta = Z @ (Minv @ (Z.T @ (A.T @ y_sum)))
+    resid = D - (A @ theta).reshape(n, m)[None]  # whitened residuals: independent under the model
+    rank = M.shape[0]
+    dof = R * n * m - rank
+    if dof <= 0:
+        raise GonioError(f"no residual degrees of freedom ({R * n * m} readings, {rank} "
+                         f"parameters): add starts or repeats", key="D")
+    s2 = float(np.sum(resid ** 2)) / dof
+    return theta, s2 * (Z @ Minv @ Z.T), resid, dof, s2
 
 
 def _eda_input(D, start_deg, step_deg: float, repeats_axis: int | None):
@@ -1112,6 +1123,35 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
     (array([[[ 1.,  0.],
             [-1.,  0.]]]), array([  0., 180.]), 180.0)
     """
+    rows, num, has_start = _eda_numbers(df, file)
+    table_all = num["table_deg"].to_numpy()
+    keep = np.abs(table_all) > STEP_TOL_DEG                   # drop readings at the zero
+    labels = rows.index[keep]
+    series = num["series"].to_numpy()[keep].astype(int)
+    rnd = num["round"].to_numpy()[keep].astype(int)
+    table = table_all[keep]
+    dev = (num["gyro_deg"].to_numpy()[keep] - table) * ARCSEC_PER_DEG
+    if table.size == 0:
+        raise GonioError("equal_division rows have no reading away from the zero",
+                         file=file, column="table_deg")
+    j, m, step, R, n = _eda_grid(df, labels, series, rnd, table, file)
+    D = np.empty((R, n, m))
+    D[series - 1, rnd - 1, j - 1] = dev
+    start = _eda_starts(df, num, keep, labels, rnd, n, m, starts, has_start, file)
+    if not return_times:
+        return D, start, step
+    T = None
+    if "time_s" in rows.columns:
+        tv = pd.to_numeric(rows["time_s"], errors="coerce").to_numpy(dtype=float)[keep]
+        if np.all(np.isfinite(tv)):
+            T = np.empty((R, n, m))
+            T[series - 1, rnd - 1, j - 1] = tv
+    return D, start, step, T
+
+
+def _eda_numbers(df: pd.DataFrame, file):
+    """The ``equal_division`` rows and their numeric columns (series and round integers
+    ≥ 1), GonioError naming the line otherwise; whether start positions are given."""
     if "test" not in df.columns:
         raise GonioError("missing required column", file=file, column="test")
     rows = df[df["test"].astype(str).str.strip() == "equal_division"]
@@ -1139,16 +1179,12 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
             i = int(np.argmax(bad.to_numpy()))
             raise GonioError("expected an integer ≥ 1", file=file, column=c,
                              **_where(df, rows.index[i]))
-    table_all = num["table_deg"].to_numpy()
-    keep = np.abs(table_all) > STEP_TOL_DEG                   # drop readings at the zero
-    labels = rows.index[keep]
-    series = num["series"].to_numpy()[keep].astype(int)
-    rnd = num["round"].to_numpy()[keep].astype(int)
-    table = table_all[keep]
-    dev = (num["gyro_deg"].to_numpy()[keep] - table) * ARCSEC_PER_DEG
-    if table.size == 0:
-        raise GonioError("equal_division rows have no reading away from the zero",
-                         file=file, column="table_deg")
+    return rows, num, has_start
+
+
+def _eda_grid(df: pd.DataFrame, labels, series, rnd, table, file):
+    """Step index j of every reading, m points per revolution and the step, R series and
+    n rounds: the grid complete, without duplicates, numbered from 1."""
     # points per revolution: the most common number of readings in a round
     _, counts = np.unique(np.stack([series, rnd]), axis=1, return_counts=True)
     vals, freq = np.unique(counts, return_counts=True)
@@ -1187,8 +1223,13 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
         raise GonioError(f"incomplete grid: no reading for series {missing[0]}, round "
                          f"{missing[1]}, table_deg {missing[2] * step:.9g} ({len(full) - len(have)}"
                          f" of {len(full)} readings missing)", file=file, column="table_deg")
-    D = np.empty((R, n, m))
-    D[series - 1, rnd - 1, j - 1] = dev
+    return j, m, step, R, n
+
+
+def _eda_starts(df: pd.DataFrame, num, keep, labels, rnd, n: int, m: int,
+                starts: int | None, has_start: bool, file) -> np.ndarray:
+    """Each round's start position: the file's ``start_deg`` (one per round), else
+    (round − 1)·360°/n with n dividing m (IEC 62047-20 A.3)."""
     if has_start:
         st = num["start_deg"].to_numpy()[keep]
         start = np.full(n, np.nan)
@@ -1220,15 +1261,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              "A.3 needs n to divide m, or a start_deg column)", file=file,
                              column="round")
         start = np.arange(n) * 360.0 / n
-    if not return_times:
-        return D, start, step
-    T = None
-    if "time_s" in rows.columns:
-        tv = pd.to_numeric(rows["time_s"], errors="coerce").to_numpy(dtype=float)[keep]
-        if np.all(np.isfinite(tv)):
-            T = np.empty((R, n, m))
-            T[series - 1, rnd - 1, j - 1] = tv
-    return D, start, step, T
+    return start
 
 
 def coupling_bound_arcsec_s(latitude_deg: float | None, tilt_bound_deg: float | None,
