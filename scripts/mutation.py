@@ -72,7 +72,10 @@ TARGETS: dict[str, list[tuple[str, list[str]]]] = {
                    ("gonio.specs.ogam_draft.budget", ["*"]),
                    ("gonio.specs.ogam_draft.item_uncertainty", ["*"])],
     "triad-alignment": [("gonio.specs.triad_alignment.calibration", ["*"]),
-                        ("gonio.specs.triad_alignment.analysis", ["*"])],
+                        ("gonio.specs.triad_alignment.analysis", ["*"]),
+                        ("gonio.specs.triad_alignment.thermal_model", [
+                            "soak_covariance", "order_uncertainty", "fit_polynomial",
+                            "design", "PolyFit.coefficients"])],
 }
 
 #: Per specification: the fast tests that should notice (pytest arguments).
@@ -91,7 +94,10 @@ TESTS: dict[str, list[str]] = {
                     "tests/test_rate_bench.py::test_iec_bias_erratum_detail",
                     "tests/test_rate_iec_truth.py::test_noise_off_recovery_exact"],
     "ogam-draft": ["tests/test_characteristics.py", "tests/test_budget.py"],
-    "triad-alignment": ["tests/test_triad_alignment.py"],
+    "triad-alignment": ["tests/test_thermal_coverage.py::test_true_coefficients_re_expand_the_bench_polynomials",
+                        "tests/test_thermal_coverage.py::test_soak_covariance_is_the_fit_of_the_soak_means_on_a_balanced_design",
+                        "tests/test_thermal_coverage.py::test_order_term_closed_form_for_two_candidates",
+                        "tests/test_triad_alignment.py"],
 }
 
 SKIP_KEYWORDS = {"details", "source", "reason", "title", "note", "how", "unit"}

@@ -379,9 +379,9 @@ BUDGET_SOURCES_ZH: dict[str, str] = {
     "phi_e": "敏感平面与台面不平行（A.4.2）",
     "B_E": "零位漂移（A.4.3）",
     "r": "重复性（A.4.4）",
-    "K_P": "7.1 各停位转台误差经标度因数传入 E（超出草案）",
-    "K_r": "7.1 读数分散性经标度因数传入 E（超出草案）",
-    "tilt_E": "倾斜与地速耦合（超出草案，第7章前言地速补偿与A.1倾斜限）",
+    "K_P": "7.1 各停位转台误差经标度因数传入 E",
+    "K_r": "7.1 读数分散性经标度因数传入 E",
+    "tilt_E": "倾斜与地速耦合（第7章前言地速补偿与A.1倾斜限）",
 }
 #: English form of Chinese titles, used when no CJK font is installed (the en certificate).
 TITLES_EN: dict[str, str] = {
@@ -721,7 +721,9 @@ def source_text(src: str, L: dict, table=()) -> str:
     """
     base, _, note = src.partition(" [beyond the draft")
     out = (phrase_zh(base, table) or base) if L.get("_lang") == "zh" else base
-    return out + (f" ({L['beyond_draft']})" if note else "")
+    if not note:
+        return out
+    return out + (f"（{L['beyond_draft']}）" if L.get("_lang") == "zh" else f" ({L['beyond_draft']})")
 
 
 def reason_text(reason: str, L: dict, table=(), extra: dict | None = None) -> str:

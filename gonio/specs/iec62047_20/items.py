@@ -103,15 +103,74 @@ def _sf_runs(ctx: Context, test: str) -> list[dict]:
             nb = yy.size // 5
             u_y.append(float(yy[: nb * 5].reshape(nb, 5).mean(1).std(ddof=1) / math.sqrt(nb))
                        if nb >= 2 else m.std / math.sqrt(m.n))
+        u_y = np.array(u_y)
+        tt = np.array([m.time_s for m in pts])
+        a0 = a if test == "scale_factor" else _sf_runs(ctx, "scale_factor")[0]["a"]
         out.append({"run": run, "x": x, "y": y, "a": a, "b": b, "se": se,
-                    "t": np.array([m.time_s for m in pts]),
-                    "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": np.array(u_y)})
+                    "u_a": _slope_u(ctx, x, u_y, tt, se, a0),
+                    "u_a_cw": _slope_u(ctx, x[x > 0], u_y[x > 0], tt[x > 0], se * math.sqrt(2), a0),
+                    "u_a_ccw": _slope_u(ctx, x[x < 0], u_y[x < 0], tt[x < 0], se * math.sqrt(2),
+                                        a0),
+                    "t": tt, "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": u_y})
     ctx.cache[("sf", test)] = out
     return out
 
 
+def _slope_u(ctx: Context, x: np.ndarray, u_y: np.ndarray, t: np.ndarray, se: float,
+             a_guess: float) -> float:
+    """u(a) of a least-squares slope: the noise of its point means
+    (:func:`slope_noise_u`) and the bias's drift between them (:func:`slope_drift_u`, from
+    the static record's noise fit); without a static record the drift is not known and
+    the fit's residual standard error ``se`` (an upper bound: it holds the nonlinearity
+    too) is used instead. ``a_guess``: the scale factor that converts the drift to output
+    units when a_BASE is not yet known (the slope being computed is a_BASE itself)."""
+    try:
+        base = ctx if ctx.a_base is not None else replace(ctx, a_base=a_guess)
+        drift = slope_drift_u(x, t, lambda dt: drift_u_dps(base, dt) * abs(base.a_base))
+    except (GonioError, IndexError, KeyError):
+        return se
+    return math.hypot(slope_noise_u(x, u_y), drift)
+
+
+def slope_drift_u(x: np.ndarray, t: np.ndarray, u_diff) -> float:
+    """Standard uncertainty of a least-squares slope a = Σ w_i y_i from a drift d(t) of the
+    bias while the points are taken: Σ w_i = 0, so var(Σ w_i d(t_i)) = −½ Σ_ij w_i w_j
+    D(|t_i − t_j|) with D(τ) = E[(d(t + τ) − d(t))²] = ``u_diff``(τ)², the structure
+    function of the drift (for stationary increments; Yaglom 1987). A drift linear in the
+    points' order reads directly as a slope, which the noise of the point means misses.
+
+    >>> round(slope_drift_u(np.array([-1.0, 1.0]), np.array([0.0, 10.0]), lambda dt: 0.1), 6)
+    0.05
+    """
+    if x.size < 2:
+        return math.nan
+    w = (x - x.mean()) / float(((x - x.mean()) ** 2).sum())
+    dt = np.abs(t[:, None] - t[None, :])
+    d = np.vectorize(lambda v: u_diff(float(v)) ** 2 if v > 0 else 0.0)(dt)
+    return math.sqrt(max(0.0, -0.5 * float(w @ d @ w)))
+
+
+def slope_noise_u(x: np.ndarray, u_y: np.ndarray) -> float:
+    """Standard uncertainty of a least-squares slope from the noise of its point means:
+    a = Σ w_i y_i, w_i = (x_i − x̄)/Sxx, so u(a) = √(Σ w_i² u(y_i)²) (JCGM 100 eq. (10)).
+
+    The slope's residual standard error √(RSS/(n − 2)/Sxx) is not used: the residuals of the
+    2n + 1 points are mostly the gyro's nonlinearity, which the clause's a_BASE (a
+    least-squares slope over those rates, by definition) contains and does not err by;
+    on the bench it made U(a_BASE) ≈ 5× the spread (issue 24, docs/iec62047-20-readings.md).
+
+    >>> round(slope_noise_u(np.array([-1.0, 0.0, 1.0]), np.array([0.1, 0.1, 0.1])), 6)
+    0.070711
+    """
+    if x.size < 2:
+        return math.nan
+    w = (x - x.mean()) / float(((x - x.mean()) ** 2).sum())
+    return float(math.sqrt(float(np.sum(w ** 2 * u_y ** 2))))
+
+
 def _u_rel_sf(ctx: Context, c: dict) -> list:
-    return [from_u("a", c["a"], c["se"], dof=c["x"].size - 2, source="least-squares slope"),
+    return [from_u("a", c["a"], c["u_a"], dof=50,
+                   source="least-squares slope, from the noise of the point means"),
             from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B", source="rate table, relative"),
             from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative")]
 
@@ -169,6 +228,10 @@ def symmetry(ctx: Context) -> Item:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     s, aw, bw, ac, bc = ief.symmetry_iec(c["x"], c["y"], ctx.a_typ)
+    # Kept on the residual standard error (over-wide): the two slopes' noise and drift
+    # (c["u_a_cw"], c["u_a_ccw"]) under-cover on the built-in programme — the chamber's
+    # temperature fluctuation moves K between the CW and CCW halves, a term this budget
+    # cannot size yet (docs/iec62047-20-readings.md#over-wide-budgets-left).
     u_dir = c["se"] * math.sqrt(2.0) * 2.0      # each direction's slope: ~2× the full fit's se
     u = gum(lambda d: 100 * d / ctx.a_typ, [from_u("a_CW-a_CCW", aw - ac, u_dir, dof=2 * len(c["x"]) // 2 - 4,
                                                    source="slope standard errors of the two fits")])
@@ -215,12 +278,12 @@ def sf_temperature(ctx: Context) -> Item:
     slope, icpt = rg.least_squares_line(T, a)
     var = 100 * (a - a[ib]) / a[ib]
     sxx = float(((T - T.mean()) ** 2).sum())
-    u_slope = math.sqrt(sum((c["se"] ** 2) * ((Ti - T.mean()) / sxx) ** 2 for c, Ti in zip(runs, T)))
+    u_slope = math.sqrt(sum((c["u_a"] ** 2) * ((Ti - T.mean()) / sxx) ** 2 for c, Ti in zip(runs, T)))
     u_T = ctx.chamber_deviation_c / math.sqrt(3) * abs(slope) / math.sqrt(sxx / T.size) / math.sqrt(T.size)
     u = gum(lambda s, e, ab: 100 * (s + e) / ab,
-            [from_u("T_c", slope, u_slope, dof=50, source="slope from the K_i standard errors"),
+            [from_u("T_c", slope, u_slope, dof=50, source="slope from the K_i's noise u(a_i)"),
              from_u("dT", 0.0, u_T, type="B", source="chamber deviation (independent per point)"),
-             from_u("a_BASE", a[ib], runs[ib]["se"], dof=50)])
+             from_u("a_BASE", a[ib], runs[ib]["u_a"], dof=50)])
     return Item("sf_temperature_coefficient", t, cl, un, 100 * slope / a[ib], uncertainty=u,
                 details={"T_c_SF": slope, "c": icpt, "temperatures_c": T, "K_i": a,
                          "S_F_VAR_pct": var})
@@ -241,7 +304,7 @@ def ratiometric(ctx: Context) -> Item:
     R = np.array([ief.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
     i = int(np.argmax(np.abs(R)))
     u = gum(lambda ai, ab: 100 * abs(ief.ratiometric_error_iec(ai, ab, V[i], V[ib])),
-            [from_u("a_Vi", a[i], runs[i]["se"], dof=50), from_u("a_Vb", a[ib], runs[ib]["se"], dof=50)])
+            [from_u("a_Vi", a[i], runs[i]["u_a"], dof=50), from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=50)])
     return Item("ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
                 details={"V": V, "a_V": a, "R_pct": 100 * R,
                          "supply_sensitivity_pct": 100 * (a - a[ib]) / a[ib]})

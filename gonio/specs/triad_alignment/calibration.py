@@ -222,6 +222,28 @@ def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
                 file=readings.path, line=int(rows["line"].iloc[k]))
 
 
+def _fit_and_order(key: str, fit, c: dict, term: str) -> Uncertainty:
+    """A thermal coefficient's budget: the fit (Type A, soak-components covariance,
+    :func:`gonio.specs.triad_alignment.thermal_model.soak_covariance`) and the model-order
+    term (:func:`gonio.specs.triad_alignment.thermal_model.order_uncertainty`; none when the
+    orders were fixed). k = t_0.9545(ν) of the coefficient's fit ν for both (the order term
+    is given the fit's ν: conservative, it is estimated from the same points)."""
+    u_fit, u_ord = c["u_fit_" + term], c["u_order_" + term]
+    nu = fit.dof_of(term)
+    unc = _type_a(key, f"least-squares fit of the soak points, order ϑ {fit.n_t} / U "
+                  f"{fit.n_u} by {fit.criterion} ({fit.cov_method})", u_fit, nu)
+    if fit.criterion == "fixed":
+        return unc
+    comp = list(unc.components) + [{
+        "symbol": f"{key}_order", "type": "B", "u": u_ord, "c": 1.0, "contribution": u_ord,
+        "dof": nu,
+        "source": f"model order: {fit.criterion.upper()}-weighted spread of the candidate "
+                  "orders' coefficients about the selected one (Burnham & Anderson 2002 §4.3)"}]
+    u_c = math.hypot(u_fit, u_ord)
+    return Uncertainty(comp, u_c, unc.k * u_c, unc.k, nu, None, COVERAGE,
+                       "Student's t for 95.45 % at the coefficient's fit ν")
+
+
 def thermal_items(th: ThermalModelResult, unit: str) -> dict[str, Item]:
     """One item per coefficient of every identified polynomial, in physical units."""
     items: dict[str, Item] = {}
@@ -245,11 +267,11 @@ def thermal_items(th: ThermalModelResult, unit: str) -> dict[str, Item]:
                 key = f"{name}_{ch}_{term}"
                 clause = {"K": "thesis eq. 6.17", "b": "thesis eq. 6.18",
                           "ARW": "thesis eq. 6.20"}[name]
-                items[key] = Item(key, title, clause, tu, c[term], uncertainty=_type_a(
-                    key, f"least-squares fit of the soak points, order ϑ {fit.n_t} / U "
-                    f"{fit.n_u} by {fit.criterion}", c["u_" + term], fit.dof),
-                    details={"order_temperature": fit.n_t, "order_supply": fit.n_u,
-                             "criterion": fit.criterion})
+                items[key] = Item(key, title, clause, tu, c[term],
+                                  uncertainty=_fit_and_order(key, fit, c, term),
+                                  details={"order_temperature": fit.n_t, "order_supply": fit.n_u,
+                                           "criterion": fit.criterion,
+                                           "covariance": fit.cov_method})
     return items
 
 
