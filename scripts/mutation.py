@@ -49,26 +49,33 @@ ROOT = Path(__file__).resolve().parents[1]
 TARGETS: dict[str, list[tuple[str, list[str]]]] = {
     "jjf1535-2015": [("gonio.specs.jjf1535.items", ["*"]),
                      ("gonio.specs.jjf1535.budget", ["*"]),
-                     ("gonio.specs._rate_family.formulas", [
-                         "least_squares_line", "rest_level", "fit_scale_factor",
+                     ("gonio.specs.jjf1535.formulas", [
+                         "rest_level", "fit_scale_factor",
                          "nonlinearity_jjf", "asymmetry_jjf", "relative_std", "sample_std",
                          "temperature_sensitivity", "fifty_percent_candidate",
-                         "block_mean_stability", "earth_rate_projection_dps",
-                         "g_sensitivity_axis", "warmup_time_s", "minus3db_frequency",
+                         "g_sensitivity_axis", "warmup_time_s"]),
+                     ("gonio.specs._rate_family.formulas", [
+                         "least_squares_line", "block_mean_stability",
+                         "earth_rate_projection_dps", "minus3db_frequency",
                          "_log_crossing", "bias_drift_u"]),
                      ("gonio.analysis.conformity", ["*"])],
     "iec62047-20": [("gonio.specs.iec62047_20.items", ["*"]),
-                    ("gonio.specs._rate_family.formulas", [
-                        "least_squares_line", "linearity_errors_iec", "symmetry_iec",
+                    ("gonio.specs.iec62047_20.formulas", [
+                        "linearity_errors_iec", "symmetry_iec",
                         "ratiometric_error_iec", "cross_axis_iec", "voltage_corrected",
                         "hysteresis_iec", "resolution_iec", "boxcar_noise_rms",
                         "broadband_noise_iec", "g_slope_iec", "arw_minus_half_line",
-                        "bias_instability_floor", "phase90_frequency", "minus3db_frequency"])],
+                        "bias_instability_floor"]),
+                    ("gonio.specs._rate_family.formulas", [
+                        "least_squares_line", "phase90_frequency", "minus3db_frequency"])],
     "ogam-draft": [("gonio.specs.ogam_draft.items", ["*"]),
                    ("gonio.specs.ogam_draft.budget", ["*"]),
                    ("gonio.specs.ogam_draft.item_uncertainty", ["*"])],
     "triad-alignment": [("gonio.specs.triad_alignment.calibration", ["*"]),
-                        ("gonio.specs.triad_alignment.analysis", ["*"])],
+                        ("gonio.specs.triad_alignment.analysis", ["*"]),
+                        ("gonio.specs.triad_alignment.thermal_model", [
+                            "soak_covariance", "order_uncertainty", "fit_polynomial",
+                            "design", "PolyFit.coefficients"])],
 }
 
 #: Per specification: the fast tests that should notice (pytest arguments).
@@ -87,7 +94,10 @@ TESTS: dict[str, list[str]] = {
                     "tests/test_rate_bench.py::test_iec_bias_erratum_detail",
                     "tests/test_rate_iec_truth.py::test_noise_off_recovery_exact"],
     "ogam-draft": ["tests/test_characteristics.py", "tests/test_budget.py"],
-    "triad-alignment": ["tests/test_triad_alignment.py"],
+    "triad-alignment": ["tests/test_thermal_coverage.py::test_true_coefficients_re_expand_the_bench_polynomials",
+                        "tests/test_thermal_coverage.py::test_soak_covariance_is_the_fit_of_the_soak_means_on_a_balanced_design",
+                        "tests/test_thermal_coverage.py::test_order_term_closed_form_for_two_candidates",
+                        "tests/test_triad_alignment.py"],
 }
 
 SKIP_KEYWORDS = {"details", "source", "reason", "title", "note", "how", "unit"}

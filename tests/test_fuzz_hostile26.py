@@ -575,6 +575,61 @@ def test_lab_limit_on_an_item_the_spec_lacks(sims, tmp_path, capsys, item):
     count(f"limits:item:{item!r}")
 
 
+@pytest.fixture(scope="module")
+def jjf_computed(sims, tmp_path_factory):
+    """A JJF output folder (calibrate of the simulated folder) holding its readings, and an
+    initialised records database."""
+    base = tmp_path_factory.mktemp("imp")
+    out = base / "CJ"
+    assert main(["calibrate", str(sims["JS"] / "readings.csv"), "--out", str(out),
+                 "--monte-carlo", "0"]) == 0
+    shutil.copy(sims["JS"] / "readings.csv", out / "readings.csv")
+    data = base / "data"
+    assert main(["db", "init", "--data", str(data)]) == 0
+    return out, data
+
+
+#: name: (edit of the results.json dict, or raw text; the key the one-line refusal names)
+IMPORT_CASES = {
+    "results-list": ("[]", "results"),
+    "results-null": ("null", "results"),
+    "not-json": ("{", None),
+    "empty-file": ("", None),
+    "items-empty-list": (lambda d: d.__setitem__("items", []), "items"),
+    "items-empty-dict": (lambda d: d.__setitem__("items", {}), "items"),
+    "items-of-numbers": (lambda d: d.__setitem__("items", {"a": 1, "b": 2}), "items"),
+    "metadata-list": (lambda d: d.__setitem__("metadata", [1]), "metadata"),
+    "source-list": (lambda d: d.__setitem__("source", ["x"]), "source"),
+    "date-month-13": (lambda d: d["metadata"].__setitem__("date", "2026-13-45"),
+                      "metadata.date"),
+    "date-text": (lambda d: d["metadata"].__setitem__("date", "yesterday"), "metadata.date"),
+    "spec-unknown": (lambda d: d.__setitem__("spec", "no-such-spec"), "spec"),
+    "serial-control": (lambda d: d["metadata"].__setitem__("serial", "A\u0001B"), "serial"),
+    "serial-huge": (lambda d: d["metadata"].__setitem__("serial", "S" * 100_000), "serial"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(IMPORT_CASES))
+def test_records_import_of_damaged_results(jjf_computed, tmp_path, capsys, name):
+    """``gonio db import`` of an output folder whose results.json is damaged: exit 2 with one
+    line (before: a list as metadata or source, or a month 13, ended in an internal error,
+    and an empty list of items was imported as a calibration)."""
+    src, data = jjf_computed
+    d = tmp_path / name
+    shutil.copytree(src, d)
+    edit, key = IMPORT_CASES[name]
+    if isinstance(edit, str):
+        text = edit
+    else:
+        res = json.loads((src / "results.json").read_text(encoding="utf-8"))
+        edit(res)
+        text = json.dumps(res)
+    (d / "results.json").write_text(text, encoding="utf-8")
+    msg = cli(["db", "import", d, "--data", data], capsys)
+    assert key is None or f"key {key}" in msg, msg
+    count(f"import:{name}")
+
+
 def test_budget_of_every_spec(capsys):
     """gonio budget for every registered specification: exit 0 (before: triad-alignment
     raised AttributeError, exit 1)."""

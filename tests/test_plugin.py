@@ -93,6 +93,40 @@ def test_simulate_calibrate_certificate(plugin, tmp_path, capsys):
         capsys.readouterr().err
 
 
+def test_the_procedures_tolerance_is_the_default_limit(plugin, tmp_path, capsys):
+    """``SPEC.default_limits`` (ACME RC-1 clause 6: |B| ≤ 1 °/s) is decided where the lab
+    file gives no limit for the bias, labelled as the specification's default in
+    results.json and on the certificate; a lab file's own limit replaces it."""
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--spec", "acme-rate-check", "--seed", "3", "--out", str(sim)]) == 0
+    assert main(["calibrate", str(sim / "readings.csv"), "--out", str(tmp_path / "a")]) == 0
+    res = json.loads((tmp_path / "a" / "results.json").read_text(encoding="utf-8"))
+    c = res["items"]["bias"]["conformity"]
+    assert (c["limits_from"], c["source"], c["lower"], c["upper"]) == \
+        ("specification default", "ACME RC-1 clause 6", -1.0, 1.0)
+    assert c["outcome"] == "pass" and c["rule"] == "simple"
+    assert res["items"]["scale_factor"]["conformity"] is None
+    html = (tmp_path / "a" / "certificate.html").read_text(encoding="utf-8")
+    assert "(default of the specification)" in html and "ACME RC-1 clause 6" in html
+    lab = tmp_path / "lab.toml"
+    example = (ROOT / "protocols" / "lab-example.toml").read_text(encoding="utf-8")
+    lab.write_text(example.split("\n[[specification_limits]]\n")[0] + "\n"
+                   '[[specification_limits]]\nitem = "bias"\nupper = 1.0e-9\n'
+                   'source = "customer"\n', encoding="utf-8")
+    capsys.readouterr()
+    assert main(["calibrate", str(sim / "readings.csv"), "--lab", str(lab),
+                 "--out", str(tmp_path / "b")]) == 0
+    res = json.loads((tmp_path / "b" / "results.json").read_text(encoding="utf-8"))
+    c = res["items"]["bias"]["conformity"]
+    assert (c["limits_from"], c["source"], c["lower"], c["upper"]) == \
+        ("lab file", "customer", None, 1.0e-9)
+    html = (tmp_path / "b" / "certificate.html").read_text(encoding="utf-8")
+    assert "(default of the specification)" not in html
+    # gonio's four documents give no tolerance of their items (docs/certificate.md)
+    from gonio.specs import BUILT_IN, default_limits
+    assert all(default_limits(k) == [] for k in BUILT_IN)
+
+
 def test_demo_writes_a_valid_dcc(plugin, tmp_path, dcc_schema, capsys):
     d = tmp_path / "demo"
     assert main(["demo", "--spec", "acme-rate-check", "--out", str(d)]) == 0

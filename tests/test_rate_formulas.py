@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from gonio.specs._rate_family import formulas as rg
+from gonio.specs.jjf1535 import formulas as jf
+from gonio.specs.iec62047_20 import formulas as ief
 from gonio.errors import GonioError
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.units import S_PER_H
@@ -55,37 +57,37 @@ def _example5():
 
 def test_scale_factor_nonlinearity_asymmetry_example():
     om, F = _example5()
-    fit = rg.fit_scale_factor(om, F)
+    fit = jf.fit_scale_factor(om, F)
     assert fit.K == pytest.approx(9.985702, abs=1e-6)
     assert fit.F0 == pytest.approx(0.489818, abs=1e-6)
     i = int(np.argmax(np.abs(fit.residuals)))
     assert abs(fit.residuals[i]) == pytest.approx(2.080420, abs=1e-6) and om[i] == -100
     assert fit.K * 200 == pytest.approx(1997.1405, abs=1e-4)
-    assert rg.nonlinearity_jjf(fit) == pytest.approx(1.0417e-3, abs=5e-8)
+    assert jf.nonlinearity_jjf(fit) == pytest.approx(1.0417e-3, abs=5e-8)
     measured_span = F[om == 100][0] - F[om == -100][0]
     assert measured_span == pytest.approx(1996.00, abs=1e-2)
     assert abs(fit.residuals[i]) / measured_span == pytest.approx(1.0423e-3, abs=5e-8)
     assert abs(fit.residuals[i]) / abs(F).max() == pytest.approx(2.0804e-3, abs=5e-8)
-    a = rg.asymmetry_jjf(om, fit.means)
+    a = jf.asymmetry_jjf(om, fit.means)
     assert (a.K_pos, a.F0_pos) == pytest.approx((10.002814, 0.178162), abs=1e-6)
     assert (a.K_neg, a.F0_neg) == pytest.approx((9.962814, -0.178162), abs=1e-6)
     assert a.value == pytest.approx(4.0069e-3, abs=5e-8)
-    assert rg.asymmetry_jjf(om, fit.means, mean_of="all", K_all=fit.K).value == \
+    assert jf.asymmetry_jjf(om, fit.means, mean_of="all", K_all=fit.K).value == \
         pytest.approx(4.0057e-3, abs=5e-8)
 
 
 def test_rest_points_refused_as_fit_points():
     with pytest.raises(GonioError, match="rest point"):
-        rg.fit_scale_factor([0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
+        jf.fit_scale_factor([0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
 
 
 def test_repeatability_and_temperature_sensitivities():
-    m, s, r = rg.relative_std([10.0000, 10.0012, 9.9991])
+    m, s, r = jf.relative_std([10.0000, 10.0012, 9.9991])
     assert (round(m, 4), s, r) == (10.0001, pytest.approx(1.0536e-3, rel=1e-4),
                                    pytest.approx(1.0536e-4, rel=1e-4))
-    kt, sl = rg.temperature_sensitivity([10.0, 10.03, 9.97], [20, 70, -40], 0, relative=True)
+    kt, sl = jf.temperature_sensitivity([10.0, 10.03, 9.97], [20, 70, -40], 0, relative=True)
     assert kt == pytest.approx(6.0e-5) and sl[2] == pytest.approx(5.0e-5)
-    bt, sl = rg.temperature_sensitivity([36, 61, -12], [20, 70, -40], 0, relative=False)
+    bt, sl = jf.temperature_sensitivity([36, 61, -12], [20, 70, -40], 0, relative=False)
     assert (bt, sl[1]) == (pytest.approx(0.8), pytest.approx(0.5))
 
 
@@ -101,21 +103,21 @@ def test_g_sensitivity_earth_rate_example():
     e = rg.earth_rate_projection_dps(40, [0, 0, 1]) * S_PER_H
     up, down = 35 + 5 + e, 35 - 5 - e
     assert (up, down) == (pytest.approx(49.668, abs=1e-3), pytest.approx(20.332, abs=1e-3))
-    assert rg.g_sensitivity_axis(up, down) == pytest.approx(14.668, abs=1e-3)
-    assert rg.g_sensitivity_axis(up, down, e, -e) == pytest.approx(5.000, abs=1e-9)
+    assert jf.g_sensitivity_axis(up, down) == pytest.approx(14.668, abs=1e-3)
+    assert jf.g_sensitivity_axis(up, down, e, -e) == pytest.approx(5.000, abs=1e-9)
 
 
 def test_threshold_example():
-    c, dev = rg.fifty_percent_candidate([0.05, 0.02, 0.01, 0.005], [0.49, 0.21, 0.06, 0.01],
+    c, dev = jf.fifty_percent_candidate([0.05, 0.02, 0.01, 0.005], [0.49, 0.21, 0.06, 0.01],
                                         [0.5, 0.2, 0.1, 0.05])
     assert c == 0.01 and dev == pytest.approx([0.02, 0.05, 0.40, 0.80])
     # the first step failing gives no candidate
-    assert rg.fifty_percent_candidate([0.1], [0.0], [1.0])[0] is None
+    assert jf.fifty_percent_candidate([0.1], [0.0], [1.0])[0] is None
 
 
 def test_bandwidth_grid_and_second_order():
-    assert rg.bandwidth_grid(70) == [10, 20, 30, 40, 50, 60, 65, 70, 75, 80]
-    assert rg.bandwidth_grid(100) == [13.75, 27.5, 41.25, 55, 68.75, 82.5, 96.25, 98.125, 100,
+    assert jf.bandwidth_grid(70) == [10, 20, 30, 40, 50, 60, 65, 70, 75, 80]
+    assert jf.bandwidth_grid(100) == [13.75, 27.5, 41.25, 55, 68.75, 82.5, 96.25, 98.125, 100,
                                       105, 110]
     assert rg.MINUS_3DB_RATIO == pytest.approx(0.70795, abs=1e-5)
     f = np.linspace(100, 150, 50001)
@@ -132,21 +134,21 @@ def test_bandwidth_grid_and_second_order():
 
 
 def test_arw_units_and_floor_factor():
-    assert rg.arw_from_coefficient(0.0064, rate_unit="deg/h", tau_unit="h") == pytest.approx(0.08)
+    assert jf.arw_from_coefficient(0.0064, rate_unit="deg/h", tau_unit="h") == pytest.approx(0.08)
     assert math.sqrt(23.04) == pytest.approx(4.8)
-    assert rg.arw_from_coefficient(23.04, rate_unit="deg/h", tau_unit="s") == pytest.approx(0.08)
+    assert jf.arw_from_coefficient(23.04, rate_unit="deg/h", tau_unit="s") == pytest.approx(0.08)
     assert rg.FLICKER_FLOOR_EXACT == pytest.approx(0.664282, abs=1e-6)
-    assert rg.bias_instability_floor([2.0, 0.4, 0.5])[0] == pytest.approx(0.6021, abs=1e-4)
+    assert ief.bias_instability_floor([2.0, 0.4, 0.5])[0] == pytest.approx(0.6021, abs=1e-4)
 
 
 def test_allan_estimator_guard_printed_vs_overlapping():
     """Digest check 14: unit white noise → AVAR 1/k; printed eq (24): 3 at k = 1, 2/k²."""
     x = np.random.default_rng(5).standard_normal(400_000)
     for k in (1, 2, 4, 8):
-        assert rg.allan_variance_overlapping(x, k) == pytest.approx(1.0 / k, rel=0.03)
-    assert rg.allan_variance_printed_jjf(x, 1) == pytest.approx(3.0, rel=0.03)
+        assert jf.allan_variance_overlapping(x, k) == pytest.approx(1.0 / k, rel=0.03)
+    assert jf.allan_variance_printed_jjf(x, 1) == pytest.approx(3.0, rel=0.03)
     for k, v in ((2, 0.5), (4, 0.125), (8, 0.03125)):
-        assert rg.allan_variance_printed_jjf(x, k) == pytest.approx(v, rel=0.05)
+        assert jf.allan_variance_printed_jjf(x, k) == pytest.approx(v, rel=0.05)
     # non-overlapping Hadamard-with-½ reading gives 3/k
     k = 4
     m = x[: x.size // k * k].reshape(-1, k).mean(1)
@@ -160,7 +162,7 @@ def test_overlapping_avar_matches_allantools():
         0.01 * np.random.default_rng(8).standard_normal(20000))
     ms = [1, 3, 10, 30, 100]
     t, ad, _, _ = allantools.oadev(x, rate=1.0, data_type="freq", taus=np.array(ms, float))
-    ours = [math.sqrt(rg.allan_variance_overlapping(x, m)) for m in ms]
+    ours = [math.sqrt(jf.allan_variance_overlapping(x, m)) for m in ms]
     assert ours == pytest.approx(list(ad), rel=1e-9)
 
 
@@ -186,27 +188,27 @@ def test_iec_earth_components_and_erratum():
 
 def test_iec_noise_numbers():
     tau = np.geomspace(1, 3600, 30)
-    arw, mask = rg.arw_minus_half_line(tau, 4.8 / np.sqrt(tau))
+    arw, mask = ief.arw_minus_half_line(tau, 4.8 / np.sqrt(tau))
     assert arw == pytest.approx(0.08) and mask.all()
     assert 4.8 / math.sqrt(3600) == pytest.approx(0.08)
     assert 0.4 / 0.664 == pytest.approx(0.602, abs=1e-3)
     assert 2 * 0.5 / 200 == pytest.approx(0.005)                        # 5.2.4: 0.5 %
-    assert rg.cross_axis_iec(3.0, 0.0, 6.0, 100.0) == pytest.approx(0.005)
-    assert rg.voltage_corrected(1000.00, 5.0, 4.9998) == pytest.approx(1000.04, abs=5e-3)
+    assert ief.cross_axis_iec(3.0, 0.0, 6.0, 100.0) == pytest.approx(0.005)
+    assert ief.voltage_corrected(1000.00, 5.0, 4.9998) == pytest.approx(1000.04, abs=5e-3)
     assert 5.0 / 4.9998 == pytest.approx(1.00004, abs=1e-8)
-    c, _ = rg.fifty_percent_candidate([0.01], [0.005], [0.01])          # 5.6.3: exactly 50 %
+    c, _ = jf.fifty_percent_candidate([0.01], [0.005], [0.01])          # 5.6.3: exactly 50 %
     assert c == 0.01
 
 
 def test_iec_scale_factor_linearity_symmetry():
     a, b = rg.least_squares_line(IEC_X, IEC_Y)
     assert (a, b) == (pytest.approx(5.993600, abs=1e-6), pytest.approx(2500.981818, abs=1e-6))
-    L, a2, b2, fs = rg.linearity_errors_iec(IEC_X, IEC_Y)
+    L, a2, b2, fs = ief.linearity_errors_iec(IEC_X, IEC_Y)
     assert fs == pytest.approx(3594.60)
     assert 100 * L == pytest.approx([0.044461, 0.008407, -0.013181, -0.023920, -0.027425,
                                      -0.027314, -0.007172, 0.009352, 0.018644, 0.017086,
                                      0.001062], abs=2e-6)
-    s, aw, bw, ac, bc = rg.symmetry_iec(IEC_X, IEC_Y, 6.0)
+    s, aw, bw, ac, bc = ief.symmetry_iec(IEC_X, IEC_Y, 6.0)
     assert (aw, ac) == (pytest.approx(5.995050, abs=1e-6), pytest.approx(5.983050, abs=1e-6))
     assert (bw, bc) == (pytest.approx(2501.001, abs=1e-3), pytest.approx(2498.999, abs=1e-3))
     assert 100 * s == pytest.approx(0.2000, abs=1e-4)
@@ -224,7 +226,7 @@ def test_iec_temperature_ratiometric_stability():
     s, c = rg.least_squares_line(T, aT)
     assert (s, c) == (pytest.approx(4.704e-4, abs=1e-7), pytest.approx(5.988816, abs=1e-6))
     assert 100 * s / 6.0 == pytest.approx(0.00784, abs=1e-5)
-    R = [rg.ratiometric_error_iec(av, 6.0, v, 5.0) for av, v in ((5.403, 4.5), (6.0, 5.0), (6.597, 5.5))]
+    R = [ief.ratiometric_error_iec(av, 6.0, v, 5.0) for av, v in ((5.403, 4.5), (6.0, 5.0), (6.597, 5.5))]
     assert [100 * r for r in R] == pytest.approx([0.05, 0.0, -0.05], abs=1e-9)
     assert [100 * (av - 6) / 6 for av in (5.403, 6.597)] == pytest.approx([-9.95, 9.95])
     y = np.array([1801.0, 1801.2, 1800.8, 1801.1, 1800.9])

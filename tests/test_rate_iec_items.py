@@ -13,6 +13,8 @@ import pandas as pd
 import pytest
 
 from gonio.specs._rate_family import formulas as rg
+from gonio.specs.jjf1535 import formulas as jf
+from gonio.specs.iec62047_20 import formulas as ief
 from gonio.physics.alignment import body_rotation, mount_matrix
 from gonio.formats.rate_readings import RateReadings
 from gonio.physics.earth import earth_rate_enu
@@ -39,40 +41,40 @@ def test_hysteresis_pairs_visits_by_direction():
     # up = 0.4. Largest |up − down| = 0.5 at 50 °C.
     T = [25, 50, 85, 50, 25, 0, -40, 0, 25]
     B = [1.0, 2.0, 3.0, 2.5, 1.2, 0.5, 0.1, 0.4, 0.9]
-    h, d = rg.hysteresis_iec(T, B)
+    h, d = ief.hysteresis_iec(T, B)
     assert h == pytest.approx(0.5)
     assert d[25.0] == pytest.approx(0.9 - 1.2) and d[0.0] == pytest.approx(0.4 - 0.5)
     with pytest.raises(Exception, match="5.3.3.7"):
-        rg.hysteresis_iec([25, 50, 85], [1, 2, 3])
+        ief.hysteresis_iec([25, 50, 85], [1, 2, 3])
 
 
 def test_bias_ratiometric_by_hand():
     # an ideal ratiometric rest output 2500 mV at 5 V is 2250 mV at 4.5 V: R = 0
-    assert rg.ratiometric_error_iec(2250.0, 2500.0, 4.5, 5.0) == pytest.approx(0.0, abs=1e-15)
+    assert ief.ratiometric_error_iec(2250.0, 2500.0, 4.5, 5.0) == pytest.approx(0.0, abs=1e-15)
     # 2251.25 mV at 4.5 V: departure 1.25 mV, R = 1.25/2500 = 5e-4
-    assert rg.ratiometric_error_iec(2251.25, 2500.0, 4.5, 5.0) == pytest.approx(5e-4, rel=1e-12)
+    assert ief.ratiometric_error_iec(2251.25, 2500.0, 4.5, 5.0) == pytest.approx(5e-4, rel=1e-12)
 
 
 def test_resolution_rule_digest_number_6():
     # 0.01 °/s step answered by 0.005 °/s is exactly 50 %: resolution 0.01 °/s
-    assert rg.resolution_iec([0.02, 0.01, 0.005], [0.02, 0.005, 0.0024])[0] == 0.01
+    assert ief.resolution_iec([0.02, 0.01, 0.005], [0.02, 0.005, 0.0024])[0] == 0.01
     # one-sided: an over-response (200 %) passes; the JJF two-sided reading would fail it
-    assert rg.resolution_iec([0.02, 0.01], [0.02, 0.02])[0] == 0.01
-    assert rg.fifty_percent_candidate([0.02, 0.01], [0.02, 0.02], [0.02, 0.01])[0] == 0.02
+    assert ief.resolution_iec([0.02, 0.01], [0.02, 0.02])[0] == 0.01
+    assert jf.fifty_percent_candidate([0.02, 0.01], [0.02, 0.02], [0.02, 0.01])[0] == 0.02
 
 
 def test_boxcar_noise_and_broadband_closed_forms():
     n_s = 1.8 / 60.0                                     # 1.8 °/√h in °/√s
     f = np.linspace(0.0, 5.0, 500001)
     # white: rms of a 30 s mean = N/√30
-    assert rg.boxcar_noise_rms(f, np.full(f.size, 2 * n_s ** 2), 30.0) == \
+    assert ief.boxcar_noise_rms(f, np.full(f.size, 2 * n_s ** 2), 30.0) == \
         pytest.approx(n_s / math.sqrt(30.0), rel=2e-3)
     # broadband rms of white over [1, 5] Hz = √(2N²·4)
-    d = rg.broadband_noise_iec(f, np.full(f.size, 2 * n_s ** 2), 1.0, 5.0)
+    d = ief.broadband_noise_iec(f, np.full(f.size, 2 * n_s ** 2), 1.0, 5.0)
     assert d["rms_dps"] == pytest.approx(math.sqrt(8.0) * n_s, rel=1e-9)
     assert d["slope_db_per_decade"] == pytest.approx(0.0, abs=1e-9)
     # c/f density: c recovered exactly, slope −20 dB/decade
-    d = rg.broadband_noise_iec(f, (0.37 / np.maximum(f, 1e-9)) ** 2, 1.0, 5.0)
+    d = ief.broadband_noise_iec(f, (0.37 / np.maximum(f, 1e-9)) ** 2, 1.0, 5.0)
     assert d["c_dps_1p5"] == pytest.approx(0.37, rel=1e-12)
     assert d["slope_db_per_decade"] == pytest.approx(-20.0, rel=1e-9)
 
@@ -83,10 +85,10 @@ def test_g_slope_cos_gamma_and_earth_removed():
     lat = 40.0
     e = 4.178074e-3 * math.sin(math.radians(lat)) * np.cos(gam)      # turns with the axis
     w = 0.15 + 0.06 * a - 0.015 * tr + e
-    s1, s2 = rg.g_slope_iec(a, w, e, tr)
+    s1, s2 = ief.g_slope_iec(a, w, e, tr)
     assert s1 == pytest.approx(0.06, rel=1e-12) and s2 == pytest.approx(-0.015, rel=1e-12)
     # left in, the Earth rate adds Ω_E sin λ per g to the slope (the reading taken removes it)
-    assert rg.g_slope_iec(a, w, None, tr)[0] - 0.06 == pytest.approx(
+    assert ief.g_slope_iec(a, w, None, tr)[0] - 0.06 == pytest.approx(
         4.178074e-3 * math.sin(math.radians(40.0)), rel=1e-9)
 
 

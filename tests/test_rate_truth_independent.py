@@ -4,7 +4,8 @@ the estimators under test (issue 24).
 1. The closed forms of :mod:`gonio.bench.rate_truth` against a brute-force least-squares fit
    (numpy.polyfit) of the bench's own response function ``RateGyroConfig.response`` — the
    physics the session simulates — and against hand algebra for a linear gyro.
-2. Every estimator formula of :mod:`gonio.specs._rate_family.formulas` replaced by a wrong one: the
+2. Every estimator formula (:mod:`gonio.specs._rate_family.formulas`,
+   :mod:`gonio.specs.jjf1535.formulas`, :mod:`gonio.specs.iec62047_20.formulas`) replaced by a wrong one: the
    truths of JJF 1535 and IEC 62047-20 do not move (so the noise-off tests of
    tests/test_rate_bench.py, which compare the estimates with these truths, see a mutated
    formula; scripts/mutation.py shows that they do).
@@ -19,6 +20,8 @@ import numpy as np
 import pytest
 
 from gonio.specs._rate_family import formulas as rg
+from gonio.specs.iec62047_20 import formulas as ief
+from gonio.specs.jjf1535 import formulas as jf
 from gonio.bench import rate_truth as rt
 from gonio.bench.rate_gyro import load_rate_bench
 
@@ -77,11 +80,13 @@ def test_closed_forms_by_hand():
 
 def _wrong(monkeypatch):
     """Replace every estimator formula the items use by a wrong one (sign, factor, offset)."""
-    orig = {n: getattr(rg, n) for n in (
-        "least_squares_line", "fit_scale_factor", "nonlinearity_jjf", "asymmetry_jjf",
-        "temperature_sensitivity", "fifty_percent_candidate", "warmup_time_s",
-        "minus3db_frequency", "linearity_errors_iec", "symmetry_iec", "ratiometric_error_iec",
-        "g_slope_iec", "resolution_iec", "hysteresis_iec")}
+    where = {"least_squares_line": rg, "minus3db_frequency": rg,
+             **{n: jf for n in ("fit_scale_factor", "nonlinearity_jjf", "asymmetry_jjf",
+                                "temperature_sensitivity", "fifty_percent_candidate",
+                                "warmup_time_s")},
+             **{n: ief for n in ("linearity_errors_iec", "symmetry_iec", "ratiometric_error_iec",
+                                 "g_slope_iec", "resolution_iec", "hysteresis_iec")}}
+    orig = {n: getattr(m, n) for n, m in where.items()}
 
     def scaled(name, factor):
         # floats and tuples of floats scaled; any other return (a ScaleFactorFit, an
@@ -96,7 +101,7 @@ def _wrong(monkeypatch):
         return f
 
     for name in orig:
-        monkeypatch.setattr(rg, name, scaled(name, 1.37))
+        monkeypatch.setattr(where[name], name, scaled(name, 1.37))
     monkeypatch.setattr(rg, "OMEGA_E_DPS", rg.OMEGA_E_DPS * 2)
     monkeypatch.setattr(rg, "MINUS_3DB_RATIO", 0.5)
 

@@ -15,7 +15,7 @@ import pytest
 from scipy import signal
 
 from gonio.analysis.noise import psd
-from gonio.specs._rate_family import formulas as rg
+from gonio.specs.jjf1535 import formulas as jf
 from gonio.specs._rate_family.rate_records import static_rate_dph
 from gonio.units import S_PER_H
 
@@ -61,13 +61,13 @@ def avar_whole(x, k):
 @pytest.mark.parametrize("piece", [1, 7, 1000, 1 << 16])
 @pytest.mark.parametrize("k", [1, 2, 4, 16])
 def test_printed_and_overlapping_statistics_in_pieces(monkeypatch, piece, k):
-    monkeypatch.setattr(rg, "_PIECE", piece)
+    monkeypatch.setattr(jf, "_PIECE", piece)
     x = np.random.default_rng(k).standard_normal(5003) * 0.3 + 2.0
-    assert rg.allan_variance_printed_jjf(x, k) == pytest.approx(printed_whole(x, k), rel=1e-12)
-    assert rg.allan_variance_overlapping(x, k) == pytest.approx(avar_whole(x, k), rel=1e-12)
+    assert jf.allan_variance_printed_jjf(x, k) == pytest.approx(printed_whole(x, k), rel=1e-12)
+    assert jf.allan_variance_overlapping(x, k) == pytest.approx(avar_whole(x, k), rel=1e-12)
     # white noise of unit variance: AVAR(k) ≈ 1/k, the printed statistic 3 at k = 1, 2/k²
     w = np.random.default_rng(0).standard_normal(200_000)
-    assert rg.allan_variance_overlapping(w, k) == pytest.approx(1.0 / k, rel=0.05)
+    assert jf.allan_variance_overlapping(w, k) == pytest.approx(1.0 / k, rel=0.05)
 
 
 def test_static_rate_is_the_segment_rate():

@@ -128,9 +128,10 @@ def test_parameter_and_prediction_uncertainty_coverage():
                            (m.bias, [B0, *BT, BU[0]])):
             c = fit.coefficients()
             est = [c[k] for k in c if not k.startswith("u_")]
-            unc = [c[k] for k in c if k.startswith("u_")]
-            kf = stats.t.ppf(0.5 + 0.9545 / 2, fit.dof)
-            hits += [abs(e - t) <= kf * s for e, t, s in zip(est, truth, unc)]
+            terms = [k for k in c if not k.startswith("u_")]
+            unc = [c["u_" + k] for k in terms]
+            kf = [stats.t.ppf(0.5 + 0.9545 / 2, fit.dof_of(k)) for k in terms]
+            hits += [abs(e - t) <= kk * s for e, t, s, kk in zip(est, truth, unc, kf)]
             nu = fit.dof
         kb = stats.t.ppf(0.5 + 0.9545 / 2, m.bias.dof)
         pred_hits += list(np.abs(m.bias.predict(grid, 0.1) - true_bias(grid, 0.1))

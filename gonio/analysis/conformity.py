@@ -55,7 +55,11 @@ from gonio.result.model import Conformity
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
-           "rule_of", "decide_items", "decide_result"]
+           "rule_of", "decide_items", "decide_result", "DEFAULT_LIMITS_ORIGIN"]
+
+#: ``limits_from`` of an item decided on a specification's default tolerance
+#: (``SPEC.default_limits``), where the laboratory file gives no limit for it.
+DEFAULT_LIMITS_ORIGIN = "specification default"
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``).
 RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")

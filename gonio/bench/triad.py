@@ -509,6 +509,53 @@ def _metadata(bench: TriadBench, protocol: TriadProtocol, seed: int, kind: str) 
             "bench": bench.name, "protocol": protocol.name, "seed": str(int(seed))}
 
 
+def _shifted(coef, offset: float) -> list[float]:
+    """c_k of Σ_j a_j (x − offset)^j = Σ_k c_k x^k (binomial expansion), ``coef`` = a_0 … a_n."""
+    n = len(coef) - 1
+    return [float(sum(coef[j] * math.comb(j, k) * (-offset) ** (j - k) for j in range(k, n + 1)))
+            for k in range(n + 1)]
+
+
+def true_thermal_coefficients(bench: TriadBench, channel: str, *, temperature: str = "sensor") -> dict[str, dict[str, float]]:
+    """The bench's true K(ϑ, U), b(ϑ, U), ARW(ϑ) of gyro ``channel`` as the thermal model
+    writes them (:mod:`gonio.specs.triad_alignment.thermal_model`, thesis eq. 6.17–6.20), in
+    closed form from the physical parameters — no estimator involved:
+
+    * ϑ is the temperature the model is fed minus the reference: the gyro's sensor reads the
+      die temperature + ``sensor_offset_c`` (+ supply term), so in sensor coordinates each
+      polynomial in the die's ϑ is re-expanded about −offset (binomial); ``chamber`` keeps
+      the die's coordinates (the chamber equals the die once soaked);
+    * the rotation about the gyro's own reference axis (thermal ``up`` = ±channel) is sensed
+      through m = (axes + cross coupling)[i, i], so K_meas = K·m, b_meas = b/m,
+      ARW_meas = ARW/m (the other components of the Earth rate average out over whole
+      revolutions, the vertical one is removed);
+    * U terms as the bench states them (scale: K₀·m·κ_Uj; bias: β_Uj/m).
+
+    Returns {"K": {...}, "b": {...}, "ARW": {...}} with keys c0, theta1 …, u1 … (every
+    order the bench has; a term the bench lacks is 0)."""
+    i = "xyz".index(channel)
+    th = bench.thermal
+    m = float((bench.axes + bench.cross_coupling)[i, i])
+    if th.sensor_supply_c_per_v != 0.0 and temperature == "sensor":
+        raise GonioError("true_thermal_coefficients: a supply-dependent sensor offset mixes "
+                         "ϑ and U; not written out")
+    off = th.sensor_offset_c if temperature == "sensor" else 0.0
+    k0 = bench.scale_per_dps[i] * m
+    arw0 = bench.arw_deg_sqrt_h[i] / m
+
+    def poly(c0, temp, supply):
+        t = _shifted([c0] + list(temp), off)
+        d = {"c0": t[0], **{f"theta{j}": v for j, v in enumerate(t[1:], 1)}}
+        d.update({f"u{j}": float(v) for j, v in enumerate(supply, 1)})
+        return d
+
+    return {"K": poly(k0, [k0 * c for c in th.scale_temp_rel[i]],
+                      [k0 * c for c in th.scale_supply_rel[i]]),
+            "b": poly(bench.bias_dps[i] / m, [c / m for c in th.bias_temp_dps[i]],
+                      [c / m for c in th.bias_supply_dps[i]]),
+            "ARW": poly(arw0, [arw0 * c for c in th.arw_temp_rel[i]], [])}
+
+
 def _truth(bench: TriadBench) -> dict:
     m = bench.system_matrix
     return {"system_matrix": m.tolist(), "bias_output": bench.bias_output.tolist(),

@@ -29,6 +29,7 @@ import pandas as pd
 from gonio.analysis.coverage import ItemCoverage, item_coverage, spawn_seed, wilson_interval
 from gonio.atomic import write_text
 from gonio.errors import GonioError
+from gonio.pipeline.dispatch import screen_and_calibrate
 from gonio.specs import Specification, get
 
 __all__ = ["coverage_study", "coverage_validate", "coverage_table_from", "trial_records",
@@ -85,7 +86,7 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
     etc. None when the item was not measured or has no truth in this trial."""
     spec = _studied(spec_key)
     readings, truth_d = spec.run_trial(bench, protocol, int(seed))
-    result = spec.calibrate(readings, protocol)
+    result = screen_and_calibrate(spec, readings, protocol)
     truth = truth_d["items"]
     out = {}
     for key, it in result.items.items():

@@ -123,6 +123,20 @@ def load_lab_file(lab):
     return lab
 
 
+def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
+                         monte_carlo_trials: int = 0, **options):
+    """The specification's screening (``SPEC.screen(readings, protocol, **options)``: what it
+    refuses, sets aside or flags), then its calibration with those findings
+    (``SPEC.calibrate(..., findings=…)``), which applies them and states every one in the
+    result. A specification without a screening hook is calibrated as it is."""
+    if spec.screen is None:
+        return spec.calibrate(readings, protocol, monte_carlo_trials=monte_carlo_trials,
+                              **options)
+    findings = spec.screen(readings, protocol, **options)
+    return spec.calibrate(readings, protocol, monte_carlo_trials=monte_carlo_trials,
+                          findings=findings, **options)
+
+
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
               dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
@@ -137,7 +151,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
-    result = spec.calibrate(readings, proto, monte_carlo_trials=monte_carlo_trials, **opts)
+    result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
+                                  **opts)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
@@ -169,7 +184,7 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
                             bench=bench or spec.default_bench, seed=seed)
         truth = json.loads((stage / sim["truth"].name).read_text(encoding="utf-8"))
         say("demo: calibrating")
-        result = spec.calibrate(stage / sim["readings"].name, None)
+        result = screen_and_calibrate(spec, stage / sim["readings"].name, None)
         say("demo: writing the results and the certificate")
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
                                dcc=dcc and "dcc" in spec.calibrate_options)

@@ -108,9 +108,23 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         results = json.loads(res_path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         raise GonioError(f"no readable results.json ({exc})", file=folder) from None
-    result_items(results)                      # a folder without items is refused here
+    try:
+        result_items(results)                  # a folder without items is refused here
+    except GonioError as exc:
+        raise GonioError(exc.message, file=res_path, key=exc.key) from None
     source = results.get("source") or {}
     meta = results.get("metadata") or {}
+    for name, v in (("source", source), ("metadata", meta)):
+        if not isinstance(v, dict):
+            raise GonioError(f"results.json's {name} is not a JSON object", file=res_path,
+                             key=name)
+    day = None
+    if meta.get("date"):
+        try:
+            day = _dt.date.fromisoformat(str(meta["date"])[:10])
+        except ValueError:
+            raise GonioError(f"not a date (YYYY-MM-DD): {str(meta['date'])[:40]!r}",
+                             file=res_path, key="metadata.date") from None
     key = spec_key or results.get("spec") or meta.get("spec") or "ogam-draft"
     from gonio.specs import get
     get(key)
@@ -127,8 +141,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                 s.add(Blob(sha256=sha, size=size))
                 s.flush()
         inst = _instrument(s, meta, key, customer, actor)
-        day = _dt.date.fromisoformat(str(meta["date"])[:10]) if meta.get("date") else \
-            _dt.date.fromtimestamp(res_path.stat().st_mtime)
+        day = day or _dt.date.fromtimestamp(res_path.stat().st_mtime)
         cal = Calibration(instrument_id=inst.id, spec_key=key, readings_sha256=rsha,
                           readings_name=rd.name,
                           protocol=services.text(proto.name if proto else "", "protocol",

@@ -81,13 +81,17 @@ def result_items(results: dict) -> list[Item]:
     if not isinstance(results, dict):
         raise GonioError("results.json is not a JSON object", key="results")
     items = results.get("items")
-    if isinstance(items, list):
-        return [_item(d.get("key", f"item{i}"), d, d.get("uncertainty"))
-                for i, d in enumerate(items) if isinstance(d, dict)]
-    if isinstance(items, dict):
-        return [_item(k, d, d.get("uncertainty")) for k, d in items.items()
-                if isinstance(d, dict)]
     out = []
+    if isinstance(items, list):
+        out = [_item(d.get("key", f"item{i}"), d, d.get("uncertainty"))
+               for i, d in enumerate(items) if isinstance(d, dict)]
+    elif isinstance(items, dict):
+        out = [_item(k, d, d.get("uncertainty")) for k, d in items.items()
+               if isinstance(d, dict)]
+    if items is not None:
+        if not out:                      # an empty or damaged list of items: nothing to record
+            raise GonioError("results.json holds no items", key="items")
+        return out
     for k, d in results.items():
         if isinstance(d, dict) and "value" in d and "unit" in d and "clause" in d:
             out.append(_item(k, d, d.get("uncertainty")))

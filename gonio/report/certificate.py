@@ -205,8 +205,15 @@ def _num(results: dict, src: str, rule: str, U: float | None) -> Num | str:
 
 
 def _meta(md: dict, key: str, L) -> str:
+    """A readings metadata value as shown (the virtual bench's own descriptions in the page's
+    language where the tables know them; data otherwise)."""
     v = md.get(key)
-    return str(v) if v not in (None, "") else L["not_stated"]
+    if v in (None, ""):
+        return L["not_stated"]
+    if L.get("_lang") == "zh":
+        from gonio.report.i18n import translator
+        return translator()(str(v)) or str(v)
+    return str(v)
 
 
 #: Longest table printed on the certificate; the rest is in tables/*.csv and results.json.
@@ -419,7 +426,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         brows.append([NoBreak(f"u({c['symbol'].replace('phi_e', 'φ_e')})"),
                       budget_source(c["symbol"], c["source"].partition(" [beyond the draft")[0],
                                     lang)
-                      + (f" ({L['beyond_draft']})" if c.get("beyond_draft") else ""), c["type"],
+                      + ((f"（{L['beyond_draft']}）" if lang == "zh" else f" ({L['beyond_draft']})")
+                         if c.get("beyond_draft") else ""), c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])
     add("table", ([L["component"], L["source"], L["type"], L["u_i"], L["d_contrib"]], brows),

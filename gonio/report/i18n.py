@@ -181,7 +181,7 @@ LABELS: dict[str, dict[str, str]] = {
     # a non-negative quantity whose U exceeds its value (gonio.result.statement.state)
     "note_upper": {"en": "upper bound: ≤\u00a0{b} {u} (interval [0, {b}])",
                    "zh": "上限：≤\u00a0{b} {u}（区间 [0, {b}]）"},
-    "note_upper_short": {"en": "upper bound ≤ {b}", "zh": "上限 ≤ {b}"},
+    "note_upper_short": {"en": "; upper bound ≤\u00a0{b}", "zh": "；上限 ≤\u00a0{b}"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
@@ -307,6 +307,12 @@ LABELS: dict[str, dict[str, str]] = {
                               "给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
+    "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
+    "c_default_note": {"en": "Limits marked as the default of the specification are the "
+                             "tolerances its document gives ({s}), used where the laboratory "
+                             "file gives none.",
+                       "zh": "标注为规范默认值的规定限取自规范文件给出的允差（{s}），"
+                             "仅用于实验室文件未给出限值的项目。"},
     "c_accept": {"en": "Acceptance interval", "zh": "接受区间"},
     "c_outcome": {"en": "Outcome", "zh": "判定结果"},
     "c_pfa": {"en": "Specific false-accept probability", "zh": "特定误接受概率"},
@@ -378,9 +384,9 @@ BUDGET_SOURCES_ZH: dict[str, str] = {
     "phi_e": "敏感平面与台面不平行（A.4.2）",
     "B_E": "零位漂移（A.4.3）",
     "r": "重复性（A.4.4）",
-    "K_P": "7.1 各停位转台误差经标度因数传入 E（超出草案）",
-    "K_r": "7.1 读数分散性经标度因数传入 E（超出草案）",
-    "tilt_E": "倾斜与地速耦合（超出草案，第7章前言地速补偿与A.1倾斜限）",
+    "K_P": "7.1 各停位转台误差经标度因数传入 E",
+    "K_r": "7.1 读数分散性经标度因数传入 E",
+    "tilt_E": "倾斜与地速耦合（第7章前言地速补偿与A.1倾斜限）",
 }
 #: English form of Chinese titles, used when no CJK font is installed (the en certificate).
 TITLES_EN: dict[str, str] = {
@@ -720,7 +726,9 @@ def source_text(src: str, L: dict, table=()) -> str:
     """
     base, _, note = src.partition(" [beyond the draft")
     out = (phrase_zh(base, table) or base) if L.get("_lang") == "zh" else base
-    return out + (f" ({L['beyond_draft']})" if note else "")
+    if not note:
+        return out
+    return out + (f"（{L['beyond_draft']}）" if L.get("_lang") == "zh" else f" ({L['beyond_draft']})")
 
 
 def reason_text(reason: str, L: dict, table=(), extra: dict | None = None) -> str:
@@ -785,6 +793,7 @@ DCC_ZH: dict[str, str] = {
     "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
     "FOG goniometer (virtual)": "光纤陀螺测角仪（虚拟）",
     "precision low-speed rotary table (virtual)": "精密低速转台（虚拟）",
+    "gonio virtual bench": "gonio 虚拟台架",
     "rate table, two-axis position table, angular vibration table, chamber (virtual)":
         "速率转台、双轴位置转台、角振动台、温箱（虚拟）",
 }

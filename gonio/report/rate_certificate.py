@@ -34,6 +34,15 @@ def _num(value, src: str, rule: str, U=None):
     return Num(display(rule, value, U), src, rule)
 
 
+def _zh(text, L: dict):
+    """A text the virtual bench or gonio wrote (an instrument's or a table's description, a
+    standard's accuracy) in the page's language where a table knows it (data otherwise)."""
+    if not text or L.get("_lang") != "zh":
+        return text
+    from gonio.report.i18n import translator
+    return translator()(str(text)) or text
+
+
 def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
                   standard_row: list) -> list[Block]:
     """The certificate's opening blocks (JJF 1535 clause 8 a–j) for a specification whose
@@ -57,10 +66,10 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
     inst = lab_.get("instrument", {})
     add("kv", [
         (L["customer"], cust.get("name") or ns),
-        (L["description"], inst.get("description") or md.get("instrument") or ns),
+        (L["description"], inst.get("description") or _zh(md.get("instrument"), L) or ns),
         (L["model"], inst.get("model") or md.get("model") or ns),
         (L["serial"], inst.get("serial") or md.get("serial") or ns),
-        (L["manufacturer"], inst.get("manufacturer") or md.get("manufacturer") or ns),
+        (L["manufacturer"], inst.get("manufacturer") or _zh(md.get("manufacturer"), L) or ns),
         (L["date_receipt"], cert.get("date_of_receipt") or ns),
         (L["date_calibration"], cert.get("date_of_calibration") or md.get("date") or ns),
         (L["date_issue"], cert.get("date_of_issue") or ns),
@@ -72,8 +81,8 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
     add("h", L["standards"])
     std_rows = [[s["name"], s["identifier"] or "—", s["accuracy"] or "—", s["certificate"] or "—",
                  s["traceability"] or "—"] for s in (lab_.get("standards") or [])]
-    if not std_rows:
-        std_rows = [standard_row + [L["virtual_trace"] if virtual else ns]]
+    if not std_rows:             # the readings' equipment, named in the page's language
+        std_rows = [[_zh(c, L) for c in standard_row] + [L["virtual_trace"] if virtual else ns]]
     add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
                   std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
     add("h", L["environment"])
@@ -216,7 +225,7 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
             if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
-                val = [val, "; " + L["note_upper_short"].format(b=n["statement"].upper_text)]
+                val = [val, L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]

@@ -33,7 +33,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from gonio.analysis.conformity import Conformity, DecisionRule, Limits, limits_of, rule_of  # noqa: F401
+from gonio.analysis.conformity import (DEFAULT_LIMITS_ORIGIN, Conformity, DecisionRule,  # noqa: F401
+                                      Limits, limits_of, rule_of)
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
 from gonio.result.statement import decimals_for_sig, round_half_up
 
@@ -299,7 +300,8 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
         t = conformity_texts(c, None, L)
         pc = c.get("conformance_probability")
         u = unit_of(key)
-        rows.append([name_of(key), NoBreakText(f"{t['limits']} {u}".strip()),
+        mark = f" {L['c_default']}" if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN else ""
+        rows.append([name_of(key), NoBreakText(f"{t['limits']} {u}".strip() + mark),
                      NoBreakText(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
                                  else f"{t['acceptance']} {u}".strip()),
                      t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else ""),
@@ -307,6 +309,10 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
     out.append(block("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"],
                                 L["c_pc"], L["c_pfa"]], rows),
                      {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"}))
+    sources = list(dict.fromkeys(c.get("source") or "—" for _, c in decided
+                                 if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN))
+    if sources:
+        out.append(block("p", [L["c_default_note"].format(s="; ".join(sources))], None))
     return out
 
 

@@ -111,12 +111,15 @@ class Specification:
         (name, file, loaded protocol or None) → the protocol (its schema and defaults);
         None means the protocol is passed on as given.
     calibrate : callable
-        ``calibrate(readings, protocol=None, **options)`` → the result (readings: a file or
-        the readings object the specification reads); ``options`` are those of
-        ``calibrate_options`` (``monte_carlo_trials`` always).
+        ``calibrate(readings, protocol=None, *, findings=None, **options)`` → the result
+        (readings: a file or the readings object the specification reads); ``options`` are
+        those of ``calibrate_options`` (``monte_carlo_trials`` always); ``findings``: the
+        screening the pipeline made (``screen``), applied as given (None: screen here).
     screen : callable or None
-        ``screen(readings)`` → ``list[gonio.result.Finding]``: the readings the
-        specification refuses, sets aside or flags, before calibrating.
+        ``screen(readings, protocol=None, **options)`` → ``list[gonio.result.Finding]``:
+        the readings the specification refuses, sets aside or flags, before calibrating.
+        The pipeline calls it first (:func:`gonio.pipeline.dispatch.screen_and_calibrate`)
+        and hands the findings to ``calibrate``, which applies them and states every one.
     simulate : callable or None
         ``simulate(out, *, protocol=None, bench=None, seed=0, **options)`` → {name: path}:
         run the protocol on the virtual bench and write the readings a laboratory would
@@ -180,6 +183,7 @@ class Specification:
     budget_options: frozenset = frozenset()
     readings_format: str = ""
     named_inputs: Callable[..., list] | None = None
+    default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
 
@@ -246,6 +250,20 @@ def item_order(keys, needs) -> list[str]:
         out += ready
         ts.done(*ready)
     return out
+
+
+def default_limits(key: str) -> list[dict]:
+    """The default tolerances (``SPEC.default_limits``) of the specification ``key``, as
+    ``[[specification_limits]]`` entries (copies); none for a key no longer registered.
+
+    >>> default_limits("ogam-draft")           # the draft gives no tolerance of its items
+    []
+    """
+    try:
+        spec = get(key)
+    except GonioError:
+        return []
+    return [dict(d) for d in spec.default_limits]
 
 
 def _entry_points() -> dict[str, str]:

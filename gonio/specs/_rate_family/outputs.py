@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gonio.analysis.conformity import decide_result
+from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+from gonio.specs import default_limits
 from gonio.report.rate_certificate import write_rate_certificate
 from gonio.result.tables import write_results
 
@@ -31,7 +32,7 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     """Conformity decided (:func:`gonio.analysis.conformity.decide_result`), then
     results.json, summary.txt, tables (:func:`gonio.result.tables.write_results`) and the
     certificate (``dcc``: its DCC XML) into ``out``."""
-    decide_result(result, lab)
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
     out = Path(out)
     paths = write_results(result, out)
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc))

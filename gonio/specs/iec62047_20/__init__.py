@@ -58,7 +58,8 @@ READINGS_TAKEN = (
 
 
 def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
-              monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
+              monte_carlo_trials: int = 0, findings: list | None = None,
+              **options) -> RateCalibrationResult:
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
     rd = load_readings(readings)
     spec = rd.metadata.get("spec", KEY)
@@ -67,7 +68,8 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, IECProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
-    rd, findings = screened(rd, screen(rd, proto))
+    # the pipeline screens first (SPEC.screen) and hands the findings here
+    rd, findings = screened(rd, screen(rd, proto) if findings is None else list(findings))
     md, P = rd.metadata, proto.sections
     ratiometric = str(md.get("ratiometric", "")).strip().lower() in ("true", "yes", "1")
     df, n_corr = _items.supply_correction(rd.data, ratiometric)
@@ -113,5 +115,6 @@ STUDY_PROGRAMME = {
 SPEC = rate_specification(
     "gonio.specs.iec62047_20", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
     clause_doc="docs/iec62047-20-readings.md", clauses=tuple(r[2] for r in _items.ITEMS),
-    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, budget=None,
+    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, screen=screen,
+    budget=None,
     stream=1, reduced=STUDY_PROGRAMME)

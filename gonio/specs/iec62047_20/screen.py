@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from gonio.result.findings import Finding
 from gonio.specs._rate_family import screening
-from gonio.specs._rate_family.rate_records import load_readings
-from gonio.specs.iec62047_20.protocol import IECProtocol, load_protocol, plan
+from gonio.specs._rate_family.rate_records import load_readings, protocol_named
+from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, plan
 
 CLAUSES = {"scale_factor": "5.1.3.1", "sf_temperature": "5.1.3.3", "ratiometric": "5.1.3.5",
            "cross_axis": "5.2", "bias": "5.3.3.1", "warmup": "5.3.3.5",
@@ -18,10 +18,12 @@ CLAUSES = {"scale_factor": "5.1.3.1", "sf_temperature": "5.1.3.3", "ratiometric"
            "vibration": "5.5", "resolution": "5.6"}
 
 
-def screen(readings, protocol=None) -> list[Finding]:
+def screen(readings, protocol=None, **_options) -> list[Finding]:
     """Findings of the screening of an IEC 62047-20 readings file (path or RateReadings)
-    under ``protocol`` (file, built-in name or loaded; default the built-in programme)."""
+    under ``protocol`` (file, built-in name or loaded; default the one the readings name, else
+    the built-in programme, as :func:`calibrate` takes it). ``SPEC.screen``: the pipeline hands
+    the findings to :func:`calibrate` (``findings=``)."""
     rd = load_readings(readings)
-    proto = protocol if isinstance(protocol, IECProtocol) else load_protocol(protocol or
-                                                                            "iec62047-20")
+    proto = protocol if isinstance(protocol, IECProtocol) else \
+        load_protocol(protocol_named(rd, protocol, KEY))
     return screening.screen(rd, plan(proto, None), CLAUSES)

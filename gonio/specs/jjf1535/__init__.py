@@ -70,7 +70,8 @@ def make_context(rd, proto: JJFProtocol):
 
 
 def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
-              monte_carlo_trials: int = 0, **options) -> RateCalibrationResult:
+              monte_carlo_trials: int = 0, findings: list | None = None,
+              **options) -> RateCalibrationResult:
     """Every JJF 1535 Table 3 item from a rate readings file (path or RateReadings).
 
     ``protocol``: file, built-in name or loaded protocol; default the readings' metadata
@@ -86,7 +87,8 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
                          file=rd.path, key="spec")
     proto = protocol if isinstance(protocol, JJFProtocol) else \
         load_protocol(protocol_named(rd, protocol, KEY))
-    rd, findings = screened(rd, screen(rd, proto))
+    # the pipeline screens first (SPEC.screen) and hands the findings here
+    rd, findings = screened(rd, screen(rd, proto) if findings is None else list(findings))
     ctx = make_context(rd, proto)
     items: dict[str, Item] = {}
     rows = {r[0]: r for r in _items_mod.ITEMS}
@@ -127,5 +129,6 @@ STUDY_PROGRAMME = {
 SPEC = rate_specification(
     "gonio.specs.jjf1535", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
     clause_doc="docs/jjf1535-readings.md", clauses=tuple(r[2] for r in _items_mod.ITEMS),
-    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, budget=annex_a,
+    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, screen=screen,
+    budget=annex_a,
     stream=0, reduced=STUDY_PROGRAMME)

@@ -4,7 +4,8 @@ Each function takes a :class:`Context` (the readings and what the calibration al
 knows: K, null output, latitude, protocol values) and returns an
 :class:`~gonio.specs._rate_family.rate_records.Item` with its value, unit, clause, and an uncertainty
 computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
-k = t₉₅(ν_eff). The formulas are in :mod:`gonio.specs._rate_family.formulas`; the readings taken
+k = t₉₅(ν_eff). The formulas are in :mod:`gonio.specs.jjf1535.formulas` (JJF alone) and
+:mod:`gonio.specs._rate_family.formulas` (shared with IEC 62047-20); the readings taken
 are documented in ``docs/jjf1535-readings.md``.
 
 Rates are reported in °/h (bias family) or °/s (threshold, resolution) as JJF Table 1
@@ -19,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gonio.specs._rate_family import formulas as rg
+from gonio.specs.jjf1535 import formulas as jf
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
@@ -119,9 +121,9 @@ def calibrations(ctx: Context, test: str = "scale_factor") -> list[dict]:
     out = []
     for run in sorted({m.run for m in means}):
         first, last, rates, ys, _ = sf_calibration_means(means, run)
-        fr = rg.rest_level(first.mean, last.mean)
-        fit = rg.fit_scale_factor(rates, ys, rest=fr)
-        asym = rg.asymmetry_jjf(rates, fit.means)
+        fr = jf.rest_level(first.mean, last.mean)
+        fit = jf.fit_scale_factor(rates, ys, rest=fr)
+        asym = jf.asymmetry_jjf(rates, fit.means)
         n = rates.size
         se = math.sqrt(float((fit.residuals ** 2).sum()) / (n - 2)
                        / float(((rates - rates.mean()) ** 2).sum())) if n > 2 else math.nan
@@ -182,7 +184,7 @@ def nonlinearity(ctx: Context) -> Item:
     if miss:
         return miss
     cals = calibrations(ctx)
-    kn = np.array([rg.nonlinearity_jjf(c["fit"]) for c in cals])
+    kn = np.array([jf.nonlinearity_jjf(c["fit"]) for c in cals])
     span = np.array([abs(c["fit"].K * (c["rates"].max() - c["rates"].min())) for c in cals])
     u_noise = float(np.sqrt(np.mean([np.mean(c["u_means"] ** 2) for c in cals])) / span.mean()
                     / math.sqrt(len(cals)))
@@ -227,7 +229,7 @@ def sf_repeatability(ctx: Context) -> Item:
     if len(cals) < 2:
         return not_measured("sf_repeatability", title, clause, unit,
                             f"needs Q ≥ 2 calibrations, the readings hold {len(cals)}")
-    _, _, kr = rg.relative_std([c["fit"].K for c in cals])
+    _, _, kr = jf.relative_std([c["fit"].K for c in cals])
     Q = len(cals)
     u = gum(lambda a, b: a + b, [from_u("K_r", kr, 0.0),
                                  type_b("s(s)", 0.0, std_upper_half_width(kr, Q - 1), "normal", k=2,
@@ -249,7 +251,7 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
     Ks = [c["fit"].K for c in cals]
     Ts = [c["temperature_c"] for c in cals]
     rt = int(np.argmin(np.abs(np.array(Ts) - ctx.room_temperature_c)))
-    value, slopes = rg.temperature_sensitivity(Ks, Ts, rt, relative=True)
+    value, slopes = jf.temperature_sensitivity(Ks, Ts, rt, relative=True)
     i = int(np.nanargmax(np.abs(slopes)))
     c_i, c_rt = cals[i], cals[rt]
     inputs = [from_u("K_i", c_i["fit"].K, c_i["se_K"], dof=len(c_i["rates"]) - 2,
@@ -321,7 +323,7 @@ def threshold(ctx: Context) -> Item:
             meas.append(m.mean - f0)
             exp.append(ctx.K * m.rate_dps)
             sig.append(math.sqrt(m.std ** 2 / m.n + v0))
-        c, dev = rg.fifty_percent_candidate(rates, meas, exp)
+        c, dev = jf.fifty_percent_candidate(rates, meas, exp)
         cands.append(c)
         pmfs.append(rg.fifty_percent_outcome_pmf(
             rates, rg.fifty_percent_pass_probability(meas, sig, exp)))
@@ -356,7 +358,7 @@ def resolution(ctx: Context) -> Item:
             meas.append(m.mean - base.mean)
             exp.append(ctx.K * d)
             sig.append(math.sqrt(m.std ** 2 / m.n + base.std ** 2 / base.n))
-        c, dev = rg.fifty_percent_candidate(steps, meas, exp)
+        c, dev = jf.fifty_percent_candidate(steps, meas, exp)
         cands.append(c)
         pmfs.append(rg.fifty_percent_outcome_pmf(
             steps, rg.fifty_percent_pass_probability(meas, sig, exp)))
@@ -460,7 +462,7 @@ def bias_repeatability(ctx: Context) -> Item:
     if len(b) < 2:
         return not_measured("bias_repeatability", title, clause, unit,
                             f"needs ≥ 2 bias records, the readings hold {len(b)}")
-    br = rg.sample_std(b)
+    br = jf.sample_std(b)
     Q = len(b)
     u = gum(lambda a, c: a + c, [from_u("B_r", br, 0.0),
                                  type_b("s(s)", 0.0, std_upper_half_width(br, Q - 1), "normal", k=2,
@@ -479,7 +481,7 @@ def warmup_time(ctx: Context) -> Item:
     (n_b blocks per window), so the crossing of the nominal value can lie anywhere between
     the last exceedance of nominal·(1 + z·r) and of nominal·(1 − z·r), z = 1.96
     (95 % for one window near the crossing)
-    (:func:`gonio.specs._rate_family.formulas.detection_interval`); the larger distance from the
+    (:func:`gonio.specs.jjf1535.formulas.detection_interval`); the larger distance from the
     record's time to that interval's ends is that record's 95 % half-width, and the records'
     detections are independent (u = rms(half-width/2)/√N)."""
     from scipy.stats import norm
@@ -494,11 +496,11 @@ def warmup_time(ctx: Context) -> Item:
     times, halves = [], []
     for m in segment_means(ctx.df, "warmup"):
         g = segment_samples(ctx.df, "warmup", m.run, m.step)
-        ts, st = rg.window_stabilities(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
+        ts, st = jf.window_stabilities(g["time_s"].to_numpy(), g["output"].to_numpy() / ctx.K,
                                        window=w["window_samples"], block=w["block_samples"])
         t_n = rg.last_exceedance_time(ts, st, nominal)
         z = float(norm.ppf(0.975))
-        lo, hi = rg.detection_interval(ts, st, nominal, nominal * r, z)
+        lo, hi = jf.detection_interval(ts, st, nominal, nominal * r, z)
         times.append(t_n)
         halves.append(max(t_n - lo, (hi if math.isfinite(hi) else float(ts[-1] - ts[0])) - t_n))
     t = np.array(times)
@@ -541,8 +543,8 @@ def g_sensitivity(ctx: Context) -> Item:
         p, n = pos.get("+" + ax), pos.get("-" + ax)
         if p is None or n is None:
             continue
-        res[ax] = rg.g_sensitivity_axis(p["w"], n["w"], p["earth"], n["earth"]) * S_PER_H
-        lit[ax] = rg.g_sensitivity_axis(p["w"], n["w"]) * S_PER_H
+        res[ax] = jf.g_sensitivity_axis(p["w"], n["w"], p["earth"], n["earth"]) * S_PER_H
+        lit[ax] = jf.g_sensitivity_axis(p["w"], n["w"]) * S_PER_H
         us[ax] = (p, n)
     if not res:
         return not_measured("g_sensitivity", title, clause, unit,
@@ -588,8 +590,8 @@ def angle_random_walk(ctx: Context) -> Item:
     if ctx.protocol.get("arw", {}).get("print_standard_statistic", True):
         for k in (1, 2, 4, 8, 16):
             if rate_dph.size >= 2 * k + 3:
-                pv = rg.allan_variance_printed_jjf(rate_dph, k)
-                av = rg.allan_variance_overlapping(rate_dph, k)
+                pv = jf.allan_variance_printed_jjf(rate_dph, k)
+                av = jf.allan_variance_overlapping(rate_dph, k)
                 printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
                                    "ratio": pv / av if av > 0 else None}
     u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
@@ -629,7 +631,7 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
         T.append(m.temperature_c)
         U.append((um / abs(K) * S_PER_H, nu))
     rt = int(np.argmin(np.abs(np.array(T) - ctx.room_temperature_c)))
-    value, slopes = rg.temperature_sensitivity(B, T, rt, relative=False)
+    value, slopes = jf.temperature_sensitivity(B, T, rt, relative=False)
     i = int(np.nanargmax(np.abs(slopes)))
     inputs = [from_u("B_i", B[i], U[i][0], dof=U[i][1], source=f"bias at {T[i]:g} °C"),
               from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),

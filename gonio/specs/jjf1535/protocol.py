@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gonio.specs._rate_family.formulas import bandwidth_grid
+from gonio.specs.jjf1535.formulas import bandwidth_grid
 from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
 from gonio.protocol.programme import calibration_segments as sf_segments

@@ -262,11 +262,15 @@ class CalibrationReport:
 
     def decided_result(self, lab: dict | None = None) -> Result:
         """:meth:`to_result` with the conformity of every item the laboratory file limits
-        decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json. The
-        decisions are kept in :attr:`conformity` too, for the certificate, the DCC and
+        (or the specification's default tolerances, ``SPEC.default_limits``: the draft gives
+        none) decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json.
+        The decisions are kept in :attr:`conformity` too, for the certificate, the DCC and
         summary.txt to render (they decide nothing themselves)."""
+        from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
+        from gonio.specs import default_limits
+
         result = self.to_result()
-        decide_result(result, lab)
+        decide_result(result, lab, default_limits(self.spec_key), DEFAULT_LIMITS_ORIGIN)
         self.conformity = {k: it.conformity for k, it in result.items.items()
                            if it.conformity is not None}
         return result
@@ -413,10 +417,11 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
 
 # --------------------------------------------------------------------------- checks
 
-def screen_readings(readings: Readings, protocol: Protocol
+def screen_readings(readings: Readings, protocol: Protocol, findings: list | None = None
                     ) -> tuple[Readings, "pd.DataFrame", list]:
     """Screen the readings (:func:`gonio.specs.ogam_draft.screen.screen`: every column against
-    the protocol and the other readings) and set aside or refuse what it finds.
+    the protocol and the other readings) and set aside or refuse what it finds; ``findings``:
+    the screening already made (``SPEC.screen``, called by the pipeline), applied as given.
 
     Returns the readings kept, a DataFrame of the rows set aside (line, test, series,
     round, rate_dps, orientation, reason) and the findings (``results.json`` ``findings``).
@@ -425,9 +430,10 @@ def screen_readings(readings: Readings, protocol: Protocol
     """
     from gonio.specs.ogam_draft.screen import apply_findings, screen
 
-    findings = screen(readings, protocol)
+    if findings is None:
+        findings = screen(readings, protocol)
     kept, excluded = apply_findings(readings, findings, protocol)
-    return kept, excluded, findings
+    return kept, excluded, list(findings)
 
 
 _ITEM_TESTS = {"scale_factor": ("scale_factor",), "scale_factor_nonlinearity": ("scale_factor",),
@@ -436,18 +442,22 @@ _ITEM_TESTS = {"scale_factor": ("scale_factor",), "scale_factor_nonlinearity": (
                "pointing_consistency": ("pointing_consistency", "angle_deviation")}
 
 
-def screen(readings, protocol: str | Path | Protocol | None = None) -> list[Finding]:
+def screen(readings, protocol: str | Path | Protocol | None = None, **_options) -> list[Finding]:
     """``SPEC.screen``: every finding on a readings file or stream (refused, set aside,
     flagged; :func:`gonio.specs.ogam_draft.screen.screen`) under the protocol the file names
-    (or ``protocol``), without calibrating."""
+    (or ``protocol``), without calibrating. The pipeline hands them to :func:`calibrate`
+    (``findings=``); a file read here is kept for that calibration (:func:`_load`: a stream
+    is reduced once)."""
     from gonio.specs.ogam_draft.screen import screen as findings_of
 
     if isinstance(readings, Readings):
         proto, _ = resolve_protocol(readings.path, readings.metadata.get("protocol"), protocol)
         rd = readings
     else:
+        from gonio.errors import check_input_file
+        check_input_file(readings, "readings or stream file")   # before any byte is read
         proto, _ = resolve_protocol(readings, file_protocol_name(readings), protocol)
-        rd, _ = _load(readings, proto)
+        rd, _ = _load(readings, proto, keep=True)
     return findings_of(rd, proto)
 
 
@@ -691,11 +701,37 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     return out
 
 
-def _load(path: str | Path, protocol: Protocol):
+#: The last file :func:`screen` read, for the :func:`calibrate` that follows it in the pipeline
+#: (one entry, taken by that calibration): {key: (readings, static record)}, the key the
+#: file's path, size, modification time and the protocol (a changed file is read again).
+_KEPT: dict = {}
+
+
+def _load_key(path: str | Path, protocol: Protocol) -> tuple:
+    import os
+
+    st = os.stat(path)
+    return (os.path.realpath(path), st.st_size, st.st_mtime_ns, repr(protocol))
+
+
+def _load(path: str | Path, protocol: Protocol, keep: bool = False):
+    """(readings, static record or None) of a readings file or stream; ``keep``: also keep
+    them for the next call on the same, unchanged file (screen, then calibrate)."""
     from gonio.errors import check_input_file
-    from gonio.formats.streams import StreamFile, sniff_kind
 
     check_input_file(path, "readings or stream file")
+    key = _load_key(path, protocol)
+    kept = _KEPT.pop(key, None)
+    if kept is None:
+        kept = _read(path, protocol)
+    _KEPT.clear()
+    if keep:
+        _KEPT[key] = kept
+    return kept
+
+
+def _read(path: str | Path, protocol: Protocol):
+    from gonio.formats.streams import StreamFile, sniff_kind
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
@@ -795,7 +831,8 @@ def check_counts_agree(readings: Readings, results: CalibrationResults) -> None:
 def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
-              tilt=None, zero_stability: str = ZERO_STABILITY_STATED) -> CalibrationReport:
+              tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
+              findings: list | None = None) -> CalibrationReport:
     """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
     ``protocol``: explicit (the command line's ``--protocol``), else the file's
@@ -810,6 +847,8 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     record over the 7.3 rest when there is one: cut from the stream, or given as
     ``static_record`` (the virtual bench's). ``zero_stability``: which reading of B_s is
     stated, ``"draft"`` (default) or ``"model"`` (:func:`zero_stability_readings`).
+    ``findings``: the screening of these readings already made (``SPEC.screen``, the
+    pipeline's first step), applied as given; None: screened here.
     """
     if isinstance(readings, Readings):
         proto, conflicts = resolve_protocol(readings.path, readings.metadata.get("protocol"),
@@ -826,7 +865,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
         sha = sha256_file(readings)
     settings, more = session_settings(rd, proto)
     conflicts += more
-    kept, excluded, findings = screen_readings(rd, proto)
+    kept, excluded, findings = screen_readings(rd, proto, findings)
     res = compute_characteristics(kept, reference_rate_dps=proto.rate_reference_dps,
                                   reference_orientation=proto.pointing_reference)
     _note_exclusions(res, excluded)

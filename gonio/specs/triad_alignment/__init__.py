@@ -11,7 +11,7 @@ reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.m
 
 from gonio.formats.triad import FORMAT, named_inputs
 from gonio.specs import Specification, lazy
-from gonio.specs.triad_alignment.calibration import article_budget, calibrate
+from gonio.specs.triad_alignment.calibration import article_budget, calibrate, screen_files
 
 
 def _simulate(out, *, protocol="triad-alignment", bench="mems-triad", seed: int = 0):
@@ -33,6 +33,7 @@ SPEC = Specification(
     default_protocol="triad-alignment",
     default_bench="mems-triad",
     calibrate=calibrate,
+    screen=screen_files,
     simulate=_simulate,
     truth=lazy("gonio.specs.triad_alignment.truth:truth"),
     budget=article_budget,

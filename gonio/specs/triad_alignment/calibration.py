@@ -222,6 +222,28 @@ def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
                 file=readings.path, line=int(rows["line"].iloc[k]))
 
 
+def _fit_and_order(key: str, fit, c: dict, term: str) -> Uncertainty:
+    """A thermal coefficient's budget: the fit (Type A, soak-components covariance,
+    :func:`gonio.specs.triad_alignment.thermal_model.soak_covariance`) and the model-order
+    term (:func:`gonio.specs.triad_alignment.thermal_model.order_uncertainty`; none when the
+    orders were fixed). k = t_0.9545(ν) of the coefficient's fit ν for both (the order term
+    is given the fit's ν: conservative, it is estimated from the same points)."""
+    u_fit, u_ord = c["u_fit_" + term], c["u_order_" + term]
+    nu = fit.dof_of(term)
+    unc = _type_a(key, f"least-squares fit of the soak points, order ϑ {fit.n_t} / U "
+                  f"{fit.n_u} by {fit.criterion} ({fit.cov_method})", u_fit, nu)
+    if fit.criterion == "fixed":
+        return unc
+    comp = list(unc.components) + [{
+        "symbol": f"{key}_order", "type": "B", "u": u_ord, "c": 1.0, "contribution": u_ord,
+        "dof": nu,
+        "source": f"model order: {fit.criterion.upper()}-weighted spread of the candidate "
+                  "orders' coefficients about the selected one (Burnham & Anderson 2002 §4.3)"}]
+    u_c = math.hypot(u_fit, u_ord)
+    return Uncertainty(comp, u_c, unc.k * u_c, unc.k, nu, None, COVERAGE,
+                       "Student's t for 95.45 % at the coefficient's fit ν")
+
+
 def thermal_items(th: ThermalModelResult, unit: str) -> dict[str, Item]:
     """One item per coefficient of every identified polynomial, in physical units."""
     items: dict[str, Item] = {}
@@ -245,11 +267,11 @@ def thermal_items(th: ThermalModelResult, unit: str) -> dict[str, Item]:
                 key = f"{name}_{ch}_{term}"
                 clause = {"K": "thesis eq. 6.17", "b": "thesis eq. 6.18",
                           "ARW": "thesis eq. 6.20"}[name]
-                items[key] = Item(key, title, clause, tu, c[term], uncertainty=_type_a(
-                    key, f"least-squares fit of the soak points, order ϑ {fit.n_t} / U "
-                    f"{fit.n_u} by {fit.criterion}", c["u_" + term], fit.dof),
-                    details={"order_temperature": fit.n_t, "order_supply": fit.n_u,
-                             "criterion": fit.criterion})
+                items[key] = Item(key, title, clause, tu, c[term],
+                                  uncertainty=_fit_and_order(key, fit, c, term),
+                                  details={"order_temperature": fit.n_t, "order_supply": fit.n_u,
+                                           "criterion": fit.criterion,
+                                           "covariance": fit.cov_method})
     return items
 
 
@@ -287,9 +309,33 @@ def _thermal_readings(r: TriadReadings, thermal) -> TriadReadings | None:
     return r if (r.data["test"] == "thermal").any() else None
 
 
+def screen_files(readings, protocol=None, *, thermal=None, **_options) -> list:
+    """``SPEC.screen``: the findings (:func:`gonio.specs.triad_alignment.screen.screen`) on the
+    readings and on the thermal programme they name (or ``thermal``), refused ones included;
+    the pipeline hands them to :func:`calibrate` (``findings=``)."""
+    from gonio.specs.triad_alignment.screen import screen
+
+    r = _as_readings(readings)
+    found = screen(r, protocol)
+    tr = _thermal_readings(r, thermal)
+    if tr is not None and tr is not r:
+        found += screen(tr, protocol)
+    return found
+
+
+def refuse(findings) -> list:
+    """The findings, after raising the first refused one as a GonioError naming its file and
+    line (the readings stop there)."""
+    for f in findings:
+        if f.action == "refused":
+            raise GonioError(f.message, file=f.file, line=f.line, column=f.column)
+    return list(findings)
+
+
 def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: bool = False,
               seed: int = 0, target_deg: float = 0.1, criterion: str = "bic",
-              temperature: str = "sensor", thermal=None, **_options) -> TriadCalibration:
+              temperature: str = "sensor", thermal=None, findings: list | None = None,
+              **_options) -> TriadCalibration:
     """Every item of the module docstring from a triad readings file (path or TriadReadings).
 
     Alignment from the ``alignment`` (and ``static``) rows
@@ -298,12 +344,16 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     (:func:`_thermal_readings`; :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`),
     applied back to the same record for the before/after comparison. ``protocol`` is
     accepted for the plug-in interface: everything the analysis uses is in the file.
+    ``findings``: the screening of both files already made (:func:`screen_files`, the
+    pipeline's ``SPEC.screen``); None: screened here.
     """
 
     from gonio.specs.triad_alignment.screen import check
 
     r = _as_readings(readings)
-    findings = check(r)                      # refused readings stop here, naming the line
+    screened = findings is not None
+    # refused readings stop here, naming the line
+    findings = refuse(findings) if screened else check(r)
     unit = r.metadata.get("output_unit", "output")
     items: dict[str, Item] = {}
     al = None
@@ -323,7 +373,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)
-    if tr is not None and tr is not r:
+    if tr is not None and tr is not r and not screened:
         findings += check(tr)
     th = None
     comp: dict[str, Compensation] = {}

@@ -11,7 +11,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from gonio.analysis.conformity import decide_result
+from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+from gonio.specs import default_limits
 from gonio.atomic import output_set
 from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate
 from gonio.result.tables import write_results
@@ -23,7 +24,7 @@ def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
     """Conformity decided for every item the lab file limits, then ``results.json``,
     ``summary.txt``, ``tables/*.csv`` (:func:`gonio.result.tables.write_results`), the
     certificate (HTML, PDF; ``dcc``: its DCC XML) into ``out`` (the caller stages the set)."""
-    decide_result(result, lab)
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
     out = Path(out)
     paths = write_results(result, out)
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang,

@@ -77,7 +77,9 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
     v_ref = float(readings.metadata.get("reference_v", 5.0))
     w_enu = np.degrees(earth_rate_enu(readings.latitude_deg))
     fs = readings.sample_rate_hz
-    soak = th[th["phase"] == "soak"].to_dict("records")
+    # a soak: one run of consecutive soak rows (a ramp or another up axis ends it)
+    block = ((th["phase"] != th["phase"].shift()) | (th["up"] != th["up"].shift())).cumsum()
+    soak = th.assign(soak=block)[th["phase"] == "soak"].to_dict("records")
     pts = []
     k = 0
     while k < len(soak) - 1:
@@ -99,7 +101,8 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
                     arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
             pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
                         "u_v": a["supply_v"] - v_ref, "scale": kk, "bias_dps": bias,
-                        "arw_deg_sqrt_h": arw, "time_s": a["time_s"], "line": int(a["line"])})
+                        "arw_deg_sqrt_h": arw, "time_s": a["time_s"], "line": int(a["line"]),
+                        "soak": int(a["soak"])})
             k += 2
         else:
             k += 1
@@ -133,6 +136,17 @@ class PolyFit:
     table: list                  # every candidate: n_t, n_u, rss, aic, bic
     scale_t: float = 1.0         # ϑ and U are divided by these inside the fit (conditioning)
     scale_u: float = 1.0
+    u_order: np.ndarray | None = None   # model-order standard uncertainty per coefficient
+    cov_method: str = "ols"      # "ols" s²(XᵀX)⁻¹ or "soak components" (:func:`soak_covariance`)
+    dof_coef: np.ndarray | None = None   # ν of each coefficient (``dof``: the smallest)
+
+    def dof_of(self, term: str) -> float:
+        """ν of one coefficient (``c0``, ``theta2``, ``u1`` …)."""
+        if self.dof_coef is None:
+            return float(self.dof)
+        idx = 0 if term == "c0" else int(term[5:]) if term.startswith("theta") \
+            else self.n_t + int(term[1:])
+        return float(self.dof_coef[idx])
 
     def _x(self, theta, u):
         return design(np.asarray(theta, float) / self.scale_t, np.asarray(u, float) / self.scale_u,
@@ -151,22 +165,29 @@ class PolyFit:
         return np.sqrt(np.einsum("ij,jk,ik->i", x, self.cov, x))
 
     def coefficients(self) -> dict:
-        """Coefficients in physical units: c0, ϑ^j and U^j terms, with standard uncertainties."""
-        out = {"c0": float(self.coef[0]), "u_c0": float(math.sqrt(self.cov[0, 0]))}
-        for j in range(1, self.n_t + 1):
-            f = self.scale_t ** j
-            out[f"theta{j}"] = float(self.coef[j] / f)
-            out[f"u_theta{j}"] = float(math.sqrt(self.cov[j, j]) / f)
-        for j in range(1, self.n_u + 1):
-            idx = self.n_t + j
-            f = self.scale_u ** j
-            out[f"u{j}"] = float(self.coef[idx] / f)
-            out[f"u_u{j}"] = float(math.sqrt(self.cov[idx, idx]) / f)
+        """Coefficients in physical units: c0, ϑ^j and U^j terms, each with its standard
+        uncertainty ``u_<term>`` = √(u_fit² + u_order²): ``u_fit_<term>`` from the fit's
+        covariance, ``u_order_<term>`` the model-order term (:func:`order_uncertainty`)."""
+        uo = np.zeros(self.coef.size) if self.u_order is None else self.u_order
+        terms = ["c0"] + [f"theta{j}" for j in range(1, self.n_t + 1)] \
+            + [f"u{j}" for j in range(1, self.n_u + 1)]
+        facs = [1.0] + [self.scale_t ** j for j in range(1, self.n_t + 1)] \
+            + [self.scale_u ** j for j in range(1, self.n_u + 1)]
+        out = {}
+        for idx, (term, f) in enumerate(zip(terms, facs)):
+            u_fit = math.sqrt(self.cov[idx, idx]) / f
+            out[term] = float(self.coef[idx] / f)
+            out[f"u_{term}"] = float(math.hypot(u_fit, uo[idx] / f))
+            out[f"u_fit_{term}"] = float(u_fit)
+            out[f"u_order_{term}"] = float(uo[idx] / f)
         return out
 
     def to_json(self) -> dict:
         return {"name": self.name, "order_temperature": self.n_t, "order_supply": self.n_u,
                 "criterion": self.criterion, "s": self.s, "dof": self.dof,
+                "dof_coefficients": None if self.dof_coef is None else
+                [float(v) for v in self.dof_coef],
+                "covariance": self.cov_method,
                 "coefficients": self.coefficients(), "candidates": self.table}
 
 
@@ -176,8 +197,87 @@ def _ols(x, y):
     return coef, float(r @ r)
 
 
+def soak_covariance(x: np.ndarray, r: np.ndarray, groups: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, str]:
+    """Covariance of the least-squares coefficients when the points of one soak share an
+    error (the gyro's bias wanders over the minutes a soak's supply steps take, so the
+    three points at one temperature move together): Σ = σ_w² I + σ_b² ZZᵀ, Z the soak
+    indicator — the split-plot analysis (whole plots: soaks; Searle et al. 1992 §4.6).
+    SS_w, the residual left after the soak means (ν_w = n − rank[Z X]), gives MS_w;
+    SS_b = RSS − SS_w (ν_b = rank[Z X] − p) has E[SS_b] = σ_w² ν_b + σ_b² tr(M ZZᵀ)
+    (M = I − X(XᵀX)⁻¹Xᵀ), so σ̂_b² = (SS_b − MS_w ν_b)/tr. The covariance is
+    MS_w (XᵀX)⁻¹ + σ̂_b² HZ(HZ)ᵀ (H = (XᵀX)⁻¹Xᵀ), i.e. (XᵀX)⁻¹XᵀΣ̂X(XᵀX)⁻¹; coefficient j
+    has var_j = (a_j − b_j ν_b/tr)·MS_w + (b_j ν_b/tr)·MS_b (a_j = [(XᵀX)⁻¹]_jj,
+    b_j = [HZ(HZ)ᵀ]_jj) and its Welch–Satterthwaite ν_j (JCGM 100 G.4). For a balanced
+    programme a temperature coefficient's variance is exactly that of the fit of the soak
+    means, with ν = the soaks less the temperature terms.
+
+    Returns (cov, ν per coefficient, method). Without replicated soaks (ν_w = 0), without
+    between-soak degrees of freedom (ν_b ≤ 0) or when the soak means scatter no more than
+    the points within a soak (σ̂_b² ≤ 0: no shared error seen) it is the ordinary
+    s²(XᵀX)⁻¹ with ν = n − p ("ols"). That last case is the residual weakness: with 8
+    soaks and up to 5 temperature terms ν_b is 3–4, and a shared error the soak means
+    happen to hide falls back to s² (docs/thermal-model.md §2, the coverage figures)."""
+    n, p = x.shape
+    rss = float(r @ r)
+    xtx_inv = np.linalg.inv(x.T @ x)
+    ols = (rss / (n - p) * xtx_inv, np.full(p, float(n - p)), "ols")
+    _, inv = np.unique(groups, return_inverse=True)
+    z = np.zeros((n, inv.max() + 1))
+    z[np.arange(n), inv] = 1.0
+    zx = np.column_stack([z, x])
+    rank = int(np.linalg.matrix_rank(zx))
+    nu_w, nu_b = n - rank, rank - p
+    if nu_w <= 0 or nu_b <= 0:
+        return ols
+    coef_w, *_ = np.linalg.lstsq(zx, r, rcond=None)
+    rw = r - zx @ coef_w
+    ss_w = float(rw @ rw)
+    ss_b = rss - ss_w
+    ms_w, ms_b = ss_w / nu_w, ss_b / nu_b
+    tr = float(np.trace(z.T @ (np.eye(n) - x @ xtx_inv @ x.T) @ z))
+    if ms_b <= ms_w or tr <= 0:
+        return ols
+    hz = xtx_inv @ x.T @ z
+    b = np.sum(hz ** 2, axis=1)
+    cov = ms_w * xtx_inv + (ss_b - ms_w * nu_b) / tr * hz @ hz.T
+    cw, cb = (np.diag(xtx_inv) - b * nu_b / tr) * ms_w, b * nu_b / tr * ms_b
+    nu = (cw + cb) ** 2 / (cw ** 2 / nu_w + cb ** 2 / nu_b)
+    return cov, nu, "soak components"
+
+
+def order_uncertainty(fits: dict, table: list, sel: tuple[int, int], criterion: str
+                      ) -> np.ndarray:
+    """Model-order standard uncertainty of each coefficient of the selected model ``sel``:
+    u_order² = Σ_m w_m (c_m − ĉ)², over every candidate order m with the criterion's weights
+    w_m ∝ exp(−Δ_m/2) (Akaike / Schwarz weights, Burnham & Anderson 2002 §4.2–4.3, the
+    unconditional variance of Buckland et al. 1997 centred on the selected model); a
+    candidate without the term counts it as 0. The F-test uses the BIC weights. The spread
+    of the neighbouring orders' coefficients is what selecting one order leaves out of
+    s²(XᵀX)⁻¹ (docs/thermal-model.md §2)."""
+    key = "aic" if criterion == "aic" else "bic"
+    crit = np.array([row[key] for row in table])
+    w = np.exp(-(crit - crit.min()) / 2.0)
+    w /= w.sum()
+    nt, nu = sel
+    c_sel = fits[sel][0]
+    var = np.zeros(c_sel.size)
+    for wm, row in zip(w, table):
+        mt, mu = row["order_temperature"], row["order_supply"]
+        cm = fits[(mt, mu)][0]
+        aligned = np.zeros(c_sel.size)
+        aligned[0] = cm[0]
+        for j in range(1, nt + 1):
+            aligned[j] = cm[j] if j <= mt else 0.0
+        for j in range(1, nu + 1):
+            aligned[nt + j] = cm[mt + j] if j <= mu else 0.0
+        var += wm * (aligned - c_sel) ** 2
+    return np.sqrt(var)
+
+
 def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int = 4,
-                   max_u: int = 2, orders: tuple[int, int] | None = None) -> PolyFit:
+                   max_u: int = 2, orders: tuple[int, int] | None = None,
+                   soak=None) -> PolyFit:
     """Fit y = poly(ϑ) + poly(U) choosing the orders by ``criterion``:
 
     * ``bic``: n ln(RSS/n) + p ln n, the smallest wins (Schwarz 1978);
@@ -190,6 +290,10 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
     Orders are capped by the number of distinct ϑ levels (rounded to 0.5 °C) and U levels
     minus one, and by n − 2 parameters in all. ``orders`` = (n_t, n_u) fixes the orders
     (criterion recorded as ``fixed``).
+
+    Uncertainty: the covariance of :func:`soak_covariance` (points of one soak ``soak``
+    — default: ϑ rounded to 0.5 °C — share an error) and, unless the orders are fixed,
+    the model-order term of :func:`order_uncertainty` beside it (``PolyFit.u_order``).
     """
     if criterion not in CRITERIA:
         raise GonioError(f"order criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
@@ -198,6 +302,8 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
     y = np.asarray(y, float)
     ok = np.isfinite(theta) & np.isfinite(u) & np.isfinite(y)
     theta, u, y = theta[ok], u[ok], y[ok]
+    if soak is not None:
+        soak = np.asarray(soak)[ok]
     n = y.size
     if n < 3:
         raise GonioError(f"{name}: need at least 3 points to fit a temperature model, got {n}")
@@ -245,10 +351,12 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
                 break
             sel = best[1]
     coef, rss, x = fits[sel]
-    dof = n - x.shape[1]
-    s2 = rss / dof
-    cov = s2 * np.linalg.inv(x.T @ x)
-    return PolyFit(name, sel[0], sel[1], coef, cov, math.sqrt(s2), dof, criterion, table, st, su)
+    s2 = rss / (n - x.shape[1])
+    cov, nu, method = soak_covariance(x, y - x @ coef, soak if soak is not None
+                                      else np.round(theta * 2))
+    u_order = None if criterion == "fixed" else order_uncertainty(fits, table, sel, criterion)
+    return PolyFit(name, sel[0], sel[1], coef, cov, math.sqrt(s2), float(np.min(nu)), criterion,
+                   table, st, su, u_order, method, nu)
 
 
 # --------------------------------------------------------------------------- ramps
@@ -453,16 +561,16 @@ def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
         check_temperature_span(grp["theta_c"].to_numpy(float), ch, readings)
         kf = fit_polynomial(f"K_{ch}", grp["theta_c"], grp["u_v"], grp["scale"],
                             criterion=criterion, max_t=max_order_t, max_u=max_order_u,
-                            orders=fo.get("scale"))
+                            orders=fo.get("scale"), soak=grp["soak"])
         bf = fit_polynomial(f"b_{ch}", grp["theta_c"], grp["u_v"], grp["bias_dps"],
                             criterion=criterion, max_t=max_order_t, max_u=max_order_u,
-                            orders=fo.get("bias"))
+                            orders=fo.get("bias"), soak=grp["soak"])
         arw = grp.dropna(subset=["arw_deg_sqrt_h"])
         af = None
         if len(arw) >= 3:
             af = fit_polynomial(f"ARW_{ch}", arw["theta_c"], np.zeros(len(arw)),
                                 arw["arw_deg_sqrt_h"], criterion=criterion, max_t=max_order_arw,
-                                max_u=0, orders=fo.get("arw"))
+                                max_u=0, orders=fo.get("arw"), soak=arw["soak"])
         ra = ramp_analysis(readings, kf, bf, ch, temperature=temperature) if ramps else None
         out[ch] = ChannelModel(ch, kf, bf, af, ra, grp.reset_index(drop=True), temperature,
                                (float(grp["theta_c"].min()), float(grp["theta_c"].max())),

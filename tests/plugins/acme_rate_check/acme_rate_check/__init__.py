@@ -5,7 +5,7 @@ The procedure: the gyro, input axis vertical, is turned at a few table rates Ω_
 directions (clause 4.1); the mean output at each rate is recorded. Items: the scale factor K
 (4.2, the least-squares slope of output on rate) and the bias B (4.3, the intercept divided
 by K, in °/s, the Earth rate not removed). Uncertainties by the GUM from the calibration's
-own data (clause 5).
+own data (clause 5). Tolerance (clause 6): |B| ≤ 1 °/s.
 """
 
 from gonio.specs import Coverage, Specification, lazy
@@ -34,6 +34,8 @@ SPEC = Specification(
     outputs="gonio.specs._rate_family.outputs",
     certificate_content="acme_rate_check.certificate",   # its headings and groups, as data
     calibrate_options=frozenset({"protocol", "dcc"}),
+    # the tolerance its document gives (clause 6): decided where the lab file sets none
+    default_limits=({"item": "bias", "mpe": 1.0, "source": "ACME RC-1 clause 6"},),
     # its own sub-command, added to gonio's command line through the registry
     commands=(("acme-programme", "acme_rate_check.commands:add_programme"),),
 )

@@ -65,8 +65,9 @@ def read_readings(path) -> Readings:
     return Readings(df, md, str(path))
 
 
-def screen(readings) -> list[Finding]:
-    """Clause 4.1: a rate with fewer than two samples is set aside (no spread to judge)."""
+def screen(readings, protocol=None, **_options) -> list[Finding]:
+    """Clause 4.1: a rate with fewer than two samples is set aside (no spread to judge).
+    gonio calls it before :func:`calibrate` and hands the findings over (``findings=``)."""
     rd = readings if isinstance(readings, Readings) else read_readings(readings)
     counts = rd.data.groupby("rate_dps").size()
     return [Finding(code="few_samples", action="set_aside", clause="4.1",
@@ -125,9 +126,15 @@ ITEMS = (ItemDef("scale_factor", "scale factor K", "4.2", scale_factor),
 
 
 def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0,
-              **_options) -> RateCalibrationResult:
-    """Every item of ACME RC-1 from a readings file (path or :class:`Readings`)."""
+              findings: list | None = None, **_options) -> RateCalibrationResult:
+    """Every item of ACME RC-1 from a readings file (path or :class:`Readings`); ``findings``
+    the screening gonio made (:func:`screen`), else screened here: a rate set aside is left out
+    of the fit and the finding is stated in the result."""
     rd = readings if isinstance(readings, Readings) else read_readings(readings)
+    findings = screen(rd) if findings is None else list(findings)
+    if any(f.action == "set_aside" for f in findings):
+        n = rd.data.groupby("rate_dps")["rate_dps"].transform("size")
+        rd = Readings(rd.data[n >= 2].reset_index(drop=True), rd.metadata, rd.path)
     spec = rd.metadata.get("spec", KEY)
     if spec != KEY:
         raise GonioError(f"the readings are for specification {spec!r}, not {KEY!r}",
@@ -152,4 +159,5 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0,
               "sha256": sha256_file(rd.path) if rd.path else "", "rows": int(len(rd.data))}
     return RateCalibrationResult(KEY, "ACME RC-1 Rate-table check of a rate gyro",
                                  {k: done[k] for k in defs}, dict(rd.metadata), source,
-                                 ["4.3: the Earth rate is not removed from the bias."])
+                                 ["4.3: the Earth rate is not removed from the bias."],
+                                 findings=findings)

@@ -1,0 +1,248 @@
+"""The formulas of IEC 62047-20:2014 alone (the ``*_iec`` functions and the IEC readings
+taken); what IEC 62047-20 and JJF 1535 share is :mod:`gonio.specs._rate_family.formulas`.
+
+Conventions as there: Ω (``rate_dps``) in °/s; y the gyro's output; temperatures in °C. The
+clause readings are documented in ``docs/iec62047-20-readings.md``.
+
+Contents
+========
+==============================  ==================================================
+:func:`linearity_errors_iec`    IEC (8), (9)
+:func:`symmetry_iec`            IEC (13)–(17)
+:func:`ratiometric_error_iec`   IEC (7), (26)
+:func:`cross_axis_iec`          IEC (20)–(23), read as a division by SF
+:func:`arw_minus_half_line`     IEC 5.4.5.2 e): slope −½ line read at 1 h
+:func:`bias_instability_floor`  IEC 5.4.5.3 c): floor / 0.664
+:func:`voltage_corrected`       IEC (18): each run referred to its own set voltage
+:func:`hysteresis_iec`          IEC 5.3.3.7 reading: up/down visits of each temperature
+:func:`resolution_iec`          IEC 5.6.3: the one-sided 50 % walk
+:func:`boxcar_noise_rms`        IEC 5.6.3 reading: noise of a T-second mean from S(f)
+:func:`broadband_noise_iec`     IEC 5.4.5.1 c) reading: rms and the 20 dB/dec value
+:func:`g_slope_iec`             IEC 5.3.3.8 reading: slope against g cos γ, Earth rate removed
+==============================  ==================================================
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gonio.errors import GonioError
+from gonio.specs._rate_family.formulas import FLICKER_FLOOR_EXACT, as_array, least_squares_line
+from gonio.units import S_PER_H
+
+
+
+
+def arw_minus_half_line(tau_s, adev_dph, *, slope_tol: float = 0.05) -> tuple[float, np.ndarray]:
+    """IEC 62047-20 5.4.5.2 e), reading taken: a line of slope −½ through the short-τ part of
+    the Allan curve — the τ from the shortest one up to the first whose local slope leaves
+    −½ ± ``slope_tol`` — its value at τ = 1 h in °/h is the ARW in °/√h. Returns
+    (ARW °/√h, mask of the τ used).
+
+    >>> tau = np.array([1.0, 2, 4, 8, 16])
+    >>> round(arw_minus_half_line(tau, 4.8 / np.sqrt(tau))[0], 6)
+    0.08
+    """
+    t, s = as_array(tau_s, "tau_s"), as_array(adev_dph, "adev")
+    lt, ls = np.log(t), np.log(s)
+    slope = np.gradient(ls, lt)
+    ok = np.abs(slope + 0.5) <= slope_tol
+    first_bad = np.flatnonzero(~ok)
+    first_bad = first_bad[first_bad > int(np.argmax(ok))] if ok.any() else first_bad
+    end = int(first_bad[0]) if first_bad.size else ok.size
+    mask = ok & (np.arange(ok.size) < end)
+    if not mask.any():
+        raise GonioError("IEC 62047-20 5.4.5.2: no part of the Allan curve has slope −½")
+    n_sqrt_s = math.exp(float(np.mean(ls[mask] + 0.5 * lt[mask])))   # (°/h)·√s
+    return n_sqrt_s / math.sqrt(S_PER_H), mask
+
+
+def bias_instability_floor(adev_dph, *, n_clusters=None, min_clusters: int = 10) -> tuple[float, int]:
+    """IEC 62047-20 5.4.5.3 c): the floor (minimum) of the Allan deviation divided by
+    √(2 ln 2/π) = 0.664282; reading taken: only τ with ≥ ``min_clusters`` independent
+    clusters (``n_clusters``) count. Returns (B, index of the floor).
+
+    >>> round(bias_instability_floor([1.0, 0.4, 0.5])[0], 3)
+    0.602
+    """
+    s = as_array(adev_dph, "adev")
+    ok = np.ones(s.size, bool) if n_clusters is None else np.asarray(n_clusters) >= min_clusters
+    if not ok.any():
+        raise GonioError("no τ has enough clusters for the bias-instability floor")
+    idx = np.flatnonzero(ok)[int(np.argmin(s[ok]))]
+    return float(s[idx] / FLICKER_FLOOR_EXACT), int(idx)
+
+
+def linearity_errors_iec(rates_dps, outputs) -> tuple[np.ndarray, float, float, float]:
+    """IEC 62047-20 5.1.3.6 eqs (8), (9): L_i = [y_i − (a x_i + b)]/FullScale, the line of
+    5.1.3.1 (rest point included), FullScale = y(CW max) − y(CCW max) (measured, magnitude).
+
+    Returns (L_i array, a_BASE, b_BASE, FullScale).
+    """
+    x, y = as_array(rates_dps, "rate_dps"), as_array(outputs, "output")
+    a, b = least_squares_line(x, y)
+    fs = abs(float(y[np.argmax(x)] - y[np.argmin(x)]))
+    if fs == 0:
+        raise GonioError("IEC 62047-20 (9): full-scale span is zero")
+    return (y - (a * x + b)) / fs, a, b, fs
+
+
+def symmetry_iec(rates_dps, outputs, a_typ: float) -> tuple[float, float, float, float, float]:
+    """IEC 62047-20 5.1.3.8 eqs (13)–(17): separate CW (x > 0) and CCW (x < 0) fits without
+    the rest point; S = (a_CW − a_CCW)/a_TYP (signed). Returns (S, a_CW, b_CW, a_CCW, b_CCW).
+    """
+    x, y = as_array(rates_dps, "rate_dps"), as_array(outputs, "output")
+    aw, bw = least_squares_line(x[x > 0], y[x > 0])
+    ac, bc = least_squares_line(x[x < 0], y[x < 0])
+    return (aw - ac) / a_typ, aw, bw, ac, bc
+
+
+def ratiometric_error_iec(a_v: float, a_base: float, v: float, v_base: float) -> float:
+    """IEC 62047-20 5.1.3.5 eq (7) and 5.3.3.3 eq (26), reading taken (ratio V_i/V_BASE):
+    R = [a_V − a_BASE·V/V_BASE]/a_BASE.
+
+    >>> round(ratiometric_error_iec(5.403, 6.0, 4.5, 5.0), 6)
+    0.0005
+    """
+    return (a_v - a_base * v / v_base) / a_base
+
+
+def cross_axis_iec(out_rotating: float, out_rest: float, sf: float, applied_dps: float) -> float:
+    """IEC 62047-20 5.2.3 eqs (20)–(23), reading taken: ω_x = (Out,x − Out,rest)/SF (the
+    printed ×SF is dimensionally wrong), K_x = ω_x/ω.
+
+    >>> cross_axis_iec(3.0, 0.0, 6.0, 100.0)
+    0.005
+    """
+    return (out_rotating - out_rest) / sf / applied_dps
+
+
+def voltage_corrected(y_raw, v_set: float, v_actual: float):
+    """IEC 62047-20 5.1.4.1 e) eq (18): y = y_RAW·V_set/V_actual, each run referred to its own
+    set voltage (reading taken).
+
+    >>> round(voltage_corrected(1000.0, 5.0, 4.9998), 2)
+    1000.04
+    """
+    return np.asarray(y_raw, float) * (v_set / v_actual) if np.ndim(y_raw) else \
+        float(y_raw) * v_set / v_actual
+
+
+def hysteresis_iec(temps_c, values) -> tuple[float, dict]:
+    """IEC 62047-20 5.3.3.7, reading taken: each visit of the programme base → max → base →
+    min → base (5.3.4.4 e)) is "up" when reached from a lower temperature and "down" when
+    reached from a higher one (the first visit has neither); the hysteresis is
+    max over temperatures of |B_up(T) − B_down(T)|. Returns (value, {T: B_up − B_down}).
+
+    >>> T = [25, 50, 85, 50, 25, 0, -40, 0, 25]
+    >>> B = [1.0, 2.0, 3.0, 2.5, 1.2, 0.5, 0.1, 0.4, 0.9]
+    >>> h, d = hysteresis_iec(T, B)
+    >>> round(h, 12), {k: round(v, 12) for k, v in d.items()}
+    (0.5, {0.0: -0.1, 25.0: -0.3, 50.0: -0.5})
+    """
+    t, b = as_array(temps_c, "temperature_c"), as_array(values, "bias")
+    if t.size != b.size:
+        raise GonioError("hysteresis: temperatures and biases must have equal length")
+    up: dict[float, float] = {}
+    down: dict[float, float] = {}
+    for i in range(1, t.size):
+        if t[i] > t[i - 1]:
+            up[float(t[i])] = float(b[i])
+        elif t[i] < t[i - 1]:
+            down[float(t[i])] = float(b[i])
+    both = sorted(set(up) & set(down))
+    if not both:
+        raise GonioError("IEC 62047-20 5.3.3.7: no temperature visited both rising and falling")
+    d = {T: up[T] - down[T] for T in both}
+    return float(max(abs(v) for v in d.values())), d
+
+
+def resolution_iec(steps_dps, response_dps, *, limit: float = 0.5) -> tuple[float | None, list[float]]:
+    """IEC 62047-20 5.6.3: the smallest input-rate change whose output change (as a rate,
+    output change / scale factor) is at least ``limit`` = 50 % of it, walking the steps in
+    the order given (decreasing) and stopping at the first that fails (one-sided: "at least
+    50 %"). Returns (resolution or None when the first step fails, ratios response/step).
+
+    Digest number 6: a 0.01 °/s step answered by 0.005 °/s is exactly 50 %.
+
+    >>> resolution_iec([0.02, 0.01, 0.005], [0.019, 0.005, 0.002])
+    (0.01, [0.95, 0.5, 0.4])
+    """
+    s, r = as_array(steps_dps, "step"), as_array(response_dps, "response")
+    if s.size != r.size or s.size == 0:
+        raise GonioError("5.6.3: steps and responses must have equal, non-zero length")
+    ratio = r / s
+    out = None
+    for i in range(s.size):
+        if ratio[i] >= limit - 1e-12:
+            out = float(abs(s[i]))
+        else:
+            break
+    return out, [round(float(v), 12) for v in ratio]
+
+
+def boxcar_noise_rms(freq_hz, psd_one_sided, averaging_s: float) -> float:
+    """IEC 62047-20 5.6.3 reading taken: Noise,RMS of a rate averaged over ``averaging_s``
+    (the filter of the resolution test) from a one-sided density S(f):
+    √∫ S(f)·sinc²(π f T) df (trapezoid over the given f). For white S = 2N² this is
+    N/√T, the standard deviation of a T-second mean.
+
+    >>> f = np.linspace(0, 500, 200001)
+    >>> round(boxcar_noise_rms(f, np.full(f.size, 2.0 * 0.03 ** 2), 5.0) / (0.03 / 5 ** 0.5), 3)
+    1.0
+    """
+    f, p = as_array(freq_hz, "freq_hz"), as_array(psd_one_sided, "psd")
+    if not averaging_s > 0:
+        raise GonioError(f"averaging time must be > 0, got {averaging_s}")
+    h2 = np.sinc(f * averaging_s) ** 2          # numpy sinc(x) = sin(πx)/(πx)
+    return math.sqrt(float(np.trapezoid(p * h2, f)))
+
+
+def broadband_noise_iec(freq_hz, psd_one_sided, f_low_hz: float, f_high_hz: float) -> dict:
+    """IEC 62047-20 5.4.5.1 c), reading taken: over the broadband region [f_low, f_high]
+    (above the in-band limit), (i) the rms noise √∫S df (°/s, Table 4's unit) and (ii) the
+    "20 dB/dec value": the coefficient c of an amplitude density c/f fitted with the slope
+    fixed at −1 (log c = mean of log(√S·f)), in °/s^1.5, with the free log–log slope beside it
+    so a reader sees whether the region really falls at 20 dB/dec.
+
+    >>> f = np.linspace(0.5, 50, 9901)                 # ∫₁⁵⁰ 0.04/f² df = 0.04·(1 − 1/50)
+    >>> d = broadband_noise_iec(f, (0.2 / f) ** 2, 1.0, 50.0)
+    >>> round(d["c_dps_1p5"], 9), round(d["slope_db_per_decade"], 6), round(d["rms_dps"] ** 2, 4)
+    (0.2, -20.0, 0.0392)
+    """
+    f, p = as_array(freq_hz, "freq_hz"), as_array(psd_one_sided, "psd")
+    if not 0 < f_low_hz < f_high_hz:
+        raise GonioError(f"broadband region needs 0 < f_low < f_high, got {f_low_hz}, {f_high_hz}")
+    sel = (f >= f_low_hz) & (f <= f_high_hz) & (p > 0)
+    if sel.sum() < 3:
+        raise GonioError("5.4.5.1 c): fewer than 3 spectral lines in the broadband region")
+    fs, ps = f[sel], p[sel]
+    la = 0.5 * np.log10(ps)
+    lf = np.log10(fs)
+    c = 10.0 ** float(np.mean(la + lf))
+    slope = least_squares_line(lf, la)[0]
+    return {"rms_dps": math.sqrt(float(np.trapezoid(ps, fs))), "c_dps_1p5": c,
+            "slope_db_per_decade": 20.0 * slope, "lines": int(sel.sum())}
+
+
+def g_slope_iec(accel_g, rate_dps, earth_dps=None, transverse_g=None) -> tuple[float, float]:
+    """IEC 62047-20 5.3.3.8, reading taken: the first-order fit of the gyro rate against the
+    applied acceleration a = g cos γ (γ = 0 with the input axis up), the Earth-rate
+    projection at each angle subtracted first; with ``transverse_g`` (the second transverse
+    component, g sin γ) both slopes are fitted jointly, ω = c + s₁a₁ + s₂a₂. Returns
+    (slope along ``accel_g``, slope along ``transverse_g`` or NaN), (°/s)/g.
+
+    >>> g = np.cos(np.radians(np.arange(0, 360, 45)))
+    >>> round(g_slope_iec(g, 0.1 + 0.02 * g + 0.003 * g, 0.003 * g)[0], 12)
+    0.02
+    """
+    a = as_array(accel_g, "acceleration")
+    w = as_array(rate_dps, "rate_dps") - (0.0 if earth_dps is None else as_array(earth_dps, "earth"))
+    cols = [np.ones_like(a), a] + ([] if transverse_g is None else [as_array(transverse_g, "accel")])
+    A = np.column_stack(cols)
+    if a.size < A.shape[1] + 1 or np.linalg.matrix_rank(A) < A.shape[1]:
+        raise GonioError("5.3.3.8: the stand angles do not determine the slope")
+    coef, *_ = np.linalg.lstsq(A, w, rcond=None)
+    return float(coef[1]), (float(coef[2]) if transverse_g is not None else math.nan)

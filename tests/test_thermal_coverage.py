@@ -1,0 +1,106 @@
+"""Issue 24: the triad's certified thermal coefficients (K, b, ARW polynomials) cover the
+bench's truth, on both sides, on the built-in chamber programme.
+
+Truth: :func:`gonio.bench.triad.true_thermal_coefficients`, the bench's parameters
+re-expanded in closed form into the model's coordinates (sensor temperature), never an
+estimate. The two uncertainty terms are checked against independent computations: the
+soak-components covariance against the ordinary fit of the soak means (the split-plot
+identity of a balanced design), the model-order term against its closed form for two
+candidates. The full study (200 trials) is benchmarks/bench_thermal_coverage.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gonio.bench.triad import load_triad_bench, true_thermal_coefficients
+from gonio.pipeline.coverage import coverage_table_from
+from gonio.specs.triad_alignment.thermal_model import (design, order_uncertainty,
+                                                       soak_covariance)
+
+
+def test_true_coefficients_re_expand_the_bench_polynomials():
+    b = load_triad_bench("mems-triad")
+    t = true_thermal_coefficients(b, "z")
+    th = b.thermal
+    m = float((b.axes + b.cross_coupling)[2, 2])
+    for die in (-60.0, -3.0, 0.0, 41.0):          # ϑ of the die; the sensor reads +offset
+        s = die + th.sensor_offset_c
+        bias = sum(t["b"][f"theta{j}"] * s ** j for j in range(1, 4)) + t["b"]["c0"]
+        assert bias * m == pytest.approx(th.bias_dps(2, die + th.reference_c, th.reference_v,
+                                                     b.bias_dps[2]), rel=1e-12)
+        k = sum(t["K"][f"theta{j}"] * s ** j for j in range(1, 3)) + t["K"]["c0"]
+        assert k / m == pytest.approx(th.scale_factor(2, die + th.reference_c, th.reference_v,
+                                                      b.scale_per_dps[2]), rel=1e-12)
+    assert t["b"]["u1"] * m == pytest.approx(th.bias_supply_dps[2][0])
+    assert "theta4" not in t["b"]
+
+
+def test_soak_covariance_is_the_fit_of_the_soak_means_on_a_balanced_design():
+    rng = np.random.default_rng(11)
+    theta = np.repeat(np.array([-60.0, -40, -20, 0, 20, 40, 60, 5]), 3)
+    u = np.tile([0.0, 0.25, -0.25], 8)
+    soak = np.repeat(np.arange(8), 3)
+    y = 0.1 + 1e-3 * theta + 0.4 * u + rng.normal(0, 2e-3, 8)[soak] + rng.normal(0, 5e-4, 24)
+    x = design(theta / 60, u / 0.25, 2, 1)
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    cov, nu, method = soak_covariance(x, y - x @ coef, soak)
+    assert method == "soak components"
+    # independent: ordinary least squares on the 8 soak means (U cancels in each mean)
+    xg = design(theta[::3] / 60, np.zeros(8), 2, 0)
+    yg = y.reshape(8, 3).mean(1)
+    cg, *_ = np.linalg.lstsq(xg, yg, rcond=None)
+    rg = yg - xg @ cg
+    cov_g = float(rg @ rg) / (8 - 3) * np.linalg.inv(xg.T @ xg) / 1.0
+    assert cg == pytest.approx(coef[:3], rel=1e-10)
+    assert cov[:3, :3] == pytest.approx(cov_g, rel=1e-9)
+    assert nu[:3] == pytest.approx([8 - 3] * 3, rel=1e-6)      # the soak means' ν
+    # without replicated soaks it is the ordinary s²(XᵀX)⁻¹ with ν = n − p
+    y2 = 0.1 + 1e-3 * theta + rng.normal(0, 5e-4, 24)
+    c2, *_ = np.linalg.lstsq(x, y2, rcond=None)
+    r2 = y2 - x @ c2
+    cov2, nu2, m2 = soak_covariance(x, r2, np.arange(24))      # no replication
+    assert m2 == "ols" and list(nu2) == [20.0] * 4
+    assert cov2 == pytest.approx(float(r2 @ r2) / 20 * np.linalg.inv(x.T @ x))
+
+
+def test_order_term_closed_form_for_two_candidates():
+    # two candidates: cubic (selected) and quartic, criterion values 0 and Δ
+    fits = {(3, 0): (np.array([1.0, 2.0, 3.0, 4.0]),), (4, 0): (np.array([1.1, 2.0, 2.5, 4.0, 0.7]),)}
+    for delta in (0.5, 3.0):
+        table = [{"order_temperature": 3, "order_supply": 0, "bic": 0.0},
+                 {"order_temperature": 4, "order_supply": 0, "bic": delta}]
+        w4 = math.exp(-delta / 2) / (1 + math.exp(-delta / 2))
+        uo = order_uncertainty(fits, table, (3, 0), "bic")
+        assert uo == pytest.approx(math.sqrt(w4) * np.array([0.1, 0.0, 0.5, 0.0]), rel=1e-12)
+        # selected quartic: its ϑ⁴ term counts as 0 in the cubic, so u_order(ϑ⁴) = √w₃·0.7
+        t2 = [dict(table[0], bic=delta), dict(table[1], bic=0.0)]
+        uo4 = order_uncertainty(fits, t2, (4, 0), "bic")
+        assert uo4[4] == pytest.approx(math.sqrt(w4) * 0.7, rel=1e-12)
+
+
+@pytest.mark.slow
+def test_thermal_coefficients_cover_on_the_built_in_programme():
+    from gonio.specs.triad_alignment.simulate import thermal_trial
+
+    trials = [thermal_trial(s) for s in range(24_900, 24_916)]
+    df = coverage_table_from(trials).set_index("key")
+    msg = df[["n", "coverage", "cp_low", "cp_high", "z_mean", "z_sd"]].to_string()
+    regular = df[df["n"] >= 12]                 # the orders the selection keeps every time
+    assert {"b_z_c0", "b_z_theta1", "b_z_theta2", "b_z_theta3", "K_z_theta1",
+            "ARW_z_c0"} <= set(regular.index), msg
+    assert (regular["cp_high"] >= 0.90).all(), msg
+    assert (regular["z_sd"] >= 0.3).all(), msg
+    # pooled over every coefficient: not significantly below 90 %
+    hits, n = int(df["hits"].sum()), int(df["n"].sum())
+    from scipy.stats import binomtest
+    assert binomtest(hits, n).proportion_ci(0.95, method="exact").high >= 0.90, msg
+    # both sides can fail: U ÷ 4 under-covers the bias terms, U × 20 is over-wide
+    for f, col, bad in ((0.25, "cp_high", lambda v: v < 0.90), (20.0, "z_sd", lambda v: v < 0.3)):
+        scaled = [{k: dict(r, U=r["U"] * f, u_c=r["u_c"] * f) for k, r in t.items()}
+                  for t in trials]
+        sdf = coverage_table_from(scaled).set_index("key")
+        assert bad(sdf.loc["b_z_theta1", col]), (f, sdf.loc["b_z_theta1"].to_dict())
