@@ -185,6 +185,8 @@ def test_no_english_word_on_a_chinese_certificate(calibrated, with_lab, tmp_path
                 f"{calibrated['key']} zh DCC: no Chinese beside {el.text!r}"
     if calibrated["key"] == "ogam-draft":        # the findings and the item not measured
         assert "第 3 测回（270°）在各组中均缺失" in text and "[剔除]" in text and "未测" in text
+        # "beyond the draft" once per budget row (was "…（超出草案） (超出草案)")
+        assert not re.search(r"超出草案[）)]?\s*[（(]超出草案", re.sub(r"\s+", " ", text))
 
 
 def test_the_check_can_fail(calibrated, tmp_path):

@@ -426,7 +426,8 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         brows.append([NoBreak(f"u({c['symbol'].replace('phi_e', 'φ_e')})"),
                       budget_source(c["symbol"], c["source"].partition(" [beyond the draft")[0],
                                     lang)
-                      + (f" ({L['beyond_draft']})" if c.get("beyond_draft") else ""), c["type"],
+                      + ((f"（{L['beyond_draft']}）" if lang == "zh" else f" ({L['beyond_draft']})")
+                         if c.get("beyond_draft") else ""), c["type"],
                       _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
                       _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])
     add("table", ([L["component"], L["source"], L["type"], L["u_i"], L["d_contrib"]], brows),

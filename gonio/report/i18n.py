@@ -285,21 +285,26 @@ LABELS: dict[str, dict[str, str]] = {
                    "zh": "符合性声明（ISO/IEC 17025 7.8.6）"},
     "rule_simple": {"en": "Decision rule: simple acceptance (ILAC-G8:09/2019 4.2.1, guard band "
                           "w = 0); the specific false-accept probability is stated under a "
-                          "normal measurement model (JCGM 106).",
+                          "normal measurement model (JCGM 106), for a standard deviation "
+                          "stated with its χ² interval under its χ² model.",
                     "zh": "判定规则：简单接受（ILAC-G8:09/2019 4.2.1，保护带 w = 0）；按正态测量模型"
-                          "（JCGM 106）给出特定误接受概率。"},
+                          "（JCGM 106）给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_guarded": {"en": "Decision rule: binary statement with guarded acceptance, guard band "
                            "w = {r}·U (ILAC-G8:09/2019 4.2.2); the specific false-accept "
-                           "probability is stated under a normal measurement model (JCGM 106).",
+                           "probability is stated under a normal measurement model (JCGM 106), "
+                           "for a standard deviation stated with its χ² interval under its χ² "
+                           "model.",
                      "zh": "判定规则：带保护带的二元判定，保护带 w = {r}·U（ILAC-G8:09/2019 4.2.2）；"
-                           "按正态测量模型（JCGM 106）给出特定误接受概率。"},
+                           "按正态测量模型（JCGM 106）给出特定误接受概率，以 χ² 区间给出的标准偏差"
+                           "按其 χ² 模型。"},
     "rule_non-binary": {"en": "Decision rule: non-binary statement with guard band w = {r}·U "
                               "(ILAC-G8:09/2019 4.2.3): pass, conditional pass, conditional fail, "
                               "fail; the specific false-accept probability is stated under a "
-                              "normal measurement model (JCGM 106).",
+                              "normal measurement model (JCGM 106), for a standard deviation "
+                              "stated with its χ² interval under its χ² model.",
                         "zh": "判定规则：带保护带 w = {r}·U 的非二元判定（ILAC-G8:09/2019 4.2.3）："
                               "合格、有条件合格、有条件不合格、不合格；按正态测量模型（JCGM 106）"
-                              "给出特定误接受概率。"},
+                              "给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
     "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
@@ -379,9 +384,9 @@ BUDGET_SOURCES_ZH: dict[str, str] = {
     "phi_e": "敏感平面与台面不平行（A.4.2）",
     "B_E": "零位漂移（A.4.3）",
     "r": "重复性（A.4.4）",
-    "K_P": "7.1 各停位转台误差经标度因数传入 E（超出草案）",
-    "K_r": "7.1 读数分散性经标度因数传入 E（超出草案）",
-    "tilt_E": "倾斜与地速耦合（超出草案，第7章前言地速补偿与A.1倾斜限）",
+    "K_P": "7.1 各停位转台误差经标度因数传入 E",
+    "K_r": "7.1 读数分散性经标度因数传入 E",
+    "tilt_E": "倾斜与地速耦合（第7章前言地速补偿与A.1倾斜限）",
 }
 #: English form of Chinese titles, used when no CJK font is installed (the en certificate).
 TITLES_EN: dict[str, str] = {
@@ -721,7 +726,9 @@ def source_text(src: str, L: dict, table=()) -> str:
     """
     base, _, note = src.partition(" [beyond the draft")
     out = (phrase_zh(base, table) or base) if L.get("_lang") == "zh" else base
-    return out + (f" ({L['beyond_draft']})" if note else "")
+    if not note:
+        return out
+    return out + (f"（{L['beyond_draft']}）" if L.get("_lang") == "zh" else f" ({L['beyond_draft']})")
 
 
 def reason_text(reason: str, L: dict, table=(), extra: dict | None = None) -> str:
