@@ -80,6 +80,18 @@ def test_order_term_closed_form_for_two_candidates():
         t2 = [dict(table[0], bic=delta), dict(table[1], bic=0.0)]
         uo4 = order_uncertainty(fits, t2, (4, 0), "bic")
         assert uo4[4] == pytest.approx(math.sqrt(w4) * 0.7, rel=1e-12)
+    # supply terms sit after the ϑ terms, whose number differs between the candidates:
+    # selected (2, 1) = [c0, ϑ, ϑ², U]; candidate (1, 1) = [c0, ϑ, U] aligns as [c0, ϑ, 0, U]
+    fits = {(2, 1): (np.array([1.0, 2.0, 0.3, 5.0]),), (1, 1): (np.array([1.2, 2.1, 4.0]),),
+            (2, 2): (np.array([1.0, 2.0, 0.3, 5.5, 0.9]),)}
+    table = [{"order_temperature": 2, "order_supply": 1, "aic": 0.0},
+             {"order_temperature": 1, "order_supply": 1, "aic": 1.0},
+             {"order_temperature": 2, "order_supply": 2, "aic": 2.0}]
+    w = np.exp(-np.array([0.0, 1.0, 2.0]) / 2)
+    w /= w.sum()
+    expect = np.sqrt(w[1] * np.array([0.2, 0.1, 0.3, 1.0]) ** 2
+                     + w[2] * np.array([0.0, 0.0, 0.0, 0.5]) ** 2)
+    assert order_uncertainty(fits, table, (2, 1), "aic") == pytest.approx(expect, rel=1e-12)
 
 
 @pytest.mark.slow
