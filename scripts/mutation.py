@@ -87,7 +87,8 @@ TESTS: dict[str, list[str]] = {
                      "tests/test_rate_bench.py::test_jjf_bandwidth_noise_off_exact",
                      "tests/test_rate_bench.py::test_jjf_warmup_noise_off",
                      "tests/test_rate_bench.py::test_jjf_results_json_shape"],
-    "iec62047-20": ["tests/test_rate_formulas.py", "tests/test_rate_iec_items.py",
+    "iec62047-20": ["tests/test_iec_slope_u.py", "tests/test_rate_formulas.py",
+                    "tests/test_rate_iec_items.py",
                     "tests/test_rate_uncertainty_terms.py",
                     "tests/test_rate_bench.py::test_iec_noise_off_exact",
                     "tests/test_rate_bench.py::test_iec_power_on_items_noise_off",
@@ -97,6 +98,8 @@ TESTS: dict[str, list[str]] = {
     "triad-alignment": ["tests/test_thermal_coverage.py::test_true_coefficients_re_expand_the_bench_polynomials",
                         "tests/test_thermal_coverage.py::test_soak_covariance_is_the_fit_of_the_soak_means_on_a_balanced_design",
                         "tests/test_thermal_coverage.py::test_order_term_closed_form_for_two_candidates",
+                        "tests/test_thermal_coverage.py::test_soak_covariance_degrees_of_freedom_boundaries",
+                        "tests/test_thermal_coverage.py::test_soak_covariance_one_within_degree_of_freedom",
                         "tests/test_triad_alignment.py"],
 }
 

@@ -236,6 +236,25 @@ def test_noise_free_records_still_read(js):
     count("rate-rows:noise-free")
 
 
+def test_jjf_static_record_with_spikes_is_not_arw_zero(js, tmp_path):
+    """Every third static sample a spike of 10⁶: the five-term fit finds no white noise;
+    ARW is "not measured" with the reason, never 0 ± 0 (before: certified 0.0 ± 0.0 °/√h)."""
+    from gonio.specs.jjf1535 import calibrate
+
+    t = js.only("scale_factor", "static")
+    k, n = t.col("output"), 0
+    for r in t.rows:
+        if r[0] == "static":
+            n += 1
+            if n % 3 == 0:
+                r[k] = "1000000"
+    res = calibrate(t.write(tmp_path / "r.csv"))
+    it = res.items["angle_random_walk"]
+    assert not it.measured and "no angle random walk" in it.reason, it
+    assert res.items["scale_factor"].measured
+    count("rate:jjf-static-spikes-arw")
+
+
 def test_parquet_renamed_csv(tmp_path, capsys):
     """A Parquet file named .csv is named as Parquet (before: 'not UTF-8 text (byte 7)')."""
     pa = pytest.importorskip("pyarrow")

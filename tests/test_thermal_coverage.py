@@ -104,3 +104,36 @@ def test_thermal_coefficients_cover_on_the_built_in_programme():
                   for t in trials]
         sdf = coverage_table_from(scaled).set_index("key")
         assert bad(sdf.loc["b_z_theta1", col]), (f, sdf.loc["b_z_theta1"].to_dict())
+
+
+@pytest.mark.parametrize("n_soaks, per_soak, n_t, expect", [
+    (3, 3, 2, "ols"),                  # ν_b = 0: the temperature terms take every soak mean
+    (5, 3, 3, "soak components"),      # ν_b = 1: the smallest between-soak ν still used
+    (8, 1, 2, "ols"),                  # ν_w = 0: no replicated soak
+])
+def test_soak_covariance_degrees_of_freedom_boundaries(n_soaks, per_soak, n_t, expect):
+    rng = np.random.default_rng(5)
+    theta = np.repeat(np.linspace(-60.0, 60.0, n_soaks), per_soak)
+    soak = np.repeat(np.arange(n_soaks), per_soak)
+    y = 1e-3 * theta + rng.normal(0, 1e-2, n_soaks)[soak] + rng.normal(0, 1e-5, theta.size)
+    x = design(theta / 60, np.zeros(theta.size), n_t, 0)
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    cov, nu, method = soak_covariance(x, y - x @ coef, soak)
+    assert method == expect
+    if expect == "soak components":
+        assert nu[0] == pytest.approx(1.0, rel=1e-6)
+        assert np.all(np.isfinite(np.diag(cov))) and np.all(np.diag(cov) > 0)
+
+
+def test_soak_covariance_one_within_degree_of_freedom():
+    # ν_w = 1: one soak measured twice, the others once; the soak means scatter far more
+    rng = np.random.default_rng(9)
+    theta = np.r_[np.linspace(-60.0, 60.0, 8), 60.0]
+    soak = np.r_[np.arange(8), 7]
+    y = 1e-3 * theta + rng.normal(0, 1e-2, 8)[soak] + rng.normal(0, 1e-5, 9)
+    x = design(theta / 60, np.zeros(9), 1, 0)
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    cov, nu, method = soak_covariance(x, y - x @ coef, soak)
+    assert method == "soak components"
+    # the slope rests on the soak means: ≈ the fit of the 8 means (one counted with its pair)
+    assert nu[1] == pytest.approx(6.0, rel=0.05)

@@ -725,35 +725,11 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     """
     if gauge not in ("closure", "zero"):
         raise GonioError(f"gauge must be 'closure' or 'zero', got {gauge!r}", key="gauge")
-    try:
-        D = np.asarray(D, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise GonioError(f"D is not a numeric array: {exc}", key="D") from None
-    if D.ndim == 2:
-        D = D[None]
-    elif D.ndim == 3:
-        D = np.moveaxis(D, 0 if repeats_axis is None else repeats_axis, 0)
-    else:
-        raise GonioError(f"D must be 2-D (n, m) or 3-D (R, n, m), got shape {D.shape}", key="D")
-    if not np.all(np.isfinite(D)):
-        raise GonioError("D contains non-finite values (every reading is needed)", key="D")
-    R, n, m_cols = D.shape
-    m = _check_step(float(step_deg))
-    if m_cols != m:
-        raise GonioError(f"D has {m_cols} columns but the step {step_deg:.9g}° gives "
-                         f"m = {m} points per revolution (columns are j = 1..m)", key="D")
-    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
-    if start_deg.shape != (n,):
-        raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
+    D, start_deg, m = _eda_input(D, start_deg, step_deg, repeats_axis)
+    R, n, _ = D.shape
     p = _grid_indices(start_deg, float(step_deg))
 
-    tw = None
-    if noise_time_s is not None:
-        tw = np.asarray(noise_time_s, dtype=float)
-        tw = tw.reshape(-1, m).mean(axis=0)            # the schedule: mean over starts
-    W = noise_whitening(m, noise, tw, compensation_time_s)
-    Wn = sp.kron(sp.eye(n), sp.csr_matrix(W))
-    A = sp.csr_matrix(Wn @ _design(p, m))
+    W, Wn, A = _whitened_design(p, n, m, noise, noise_time_s, compensation_time_s)
     D_raw = D
     D = D @ W.T          # whiten each start's row of readings (GLS)
     N1 = (A.T @ A).toarray()
@@ -767,76 +743,20 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
     y_sum = D.sum(axis=0).ravel()
     cfit = None
     if coupling is not None:
-        C = np.asarray(coupling, dtype=float)
-        if C.shape != (n, m, 2) or not np.all(np.isfinite(C)):
-            raise GonioError(f"coupling design must be finite with shape {(n, m, 2)}, got "
-                             f"{C.shape}", key="coupling")
-        cols = C.reshape(n * m, 2)
-        q = cols.shape[1]
-        Cw = np.asarray(Wn @ cols)
-        A_ext = sp.hstack([A, sp.csr_matrix(Cw)]).tocsr()
-        N_ext = (A_ext.T @ A_ext).toarray()
-        Z_ext = np.zeros((2 * m + q, Z.shape[1] + q))
-        Z_ext[:2 * m, :Z.shape[1]] = Z
-        Z_ext[2 * m:, Z.shape[1]:] = np.eye(q)
-        M_ext = Z_ext.T @ (R * N_ext) @ Z_ext
-        scale = np.sqrt(np.clip(np.diag(M_ext), 1e-300, None))
-        cond = np.linalg.cond(M_ext / np.outer(scale, scale))
-        if cond < COUPLING_COND_LIMIT:
-            A, Z, N1 = A_ext, Z_ext, N_ext / 1.0
-            cfit = "fit"
-        else:
-            size = math.nan
-            if coupling_bound_arcsec_s is not None:
-                size = float(coupling_bound_arcsec_s) * float(np.max(np.hypot(C[..., 0],
-                                                                               C[..., 1])))
-            cfit = CouplingFit(False, math.nan, math.nan, math.nan, math.nan, math.nan,
-                               math.nan, size,
-                               "the coupling cannot be separated from the table and "
-                               f"goniometer errors (condition number {cond:.2g}); it is not "
-                               "in the result" + (f": up to {size:.3g}″ at the tilt bound"
-                                                  if math.isfinite(size) else ""))
-    b = A.T @ y_sum
-    M = Z.T @ (R * N1) @ Z
-    Minv = np.linalg.inv(M)
-    theta = Z @ (Minv @ (Z.T @ b))
-    fitted = (A @ theta).reshape(n, m)
-    resid = D - fitted[None]          # whitened residuals: independent under the model
-    rank = M.shape[0]
-    dof = R * n * m - rank
-    if dof <= 0:
-        raise GonioError(f"no residual degrees of freedom ({R * n * m} readings, {rank} "
-                         f"parameters): add starts or repeats", key="D")
-    s2 = float(np.sum(resid ** 2)) / dof
-    cov = s2 * (Z @ Minv @ Z.T)
+        A, Z, N1, cfit = _with_coupling(A, Z, N1, R, Wn, coupling, n, m,
+                                        coupling_bound_arcsec_s)
+    theta, cov, resid, dof, s2 = _gauged_least_squares(A, Z, N1, D, y_sum)
 
     g, t = theta[:m], theta[m:2 * m]
     cov_g, cov_t = cov[:m, :m], cov[m:2 * m, m:2 * m]
     if cfit == "fit":
-        ab, cab = theta[2 * m:2 * m + 2], cov[2 * m:2 * m + 2, 2 * m:2 * m + 2]
-        amp = float(np.hypot(*ab))
-        grad = ab / amp if amp > 0 else np.array([1.0, 0.0])
-        eff = np.asarray(coupling, dtype=float) @ ab
-        cfit = CouplingFit(True, float(ab[0]), float(ab[1]), math.sqrt(max(cab[0, 0], 0.0)),
-                           math.sqrt(max(cab[1, 1], 0.0)), amp,
-                           math.sqrt(max(float(grad @ cab @ grad), 0.0)),
-                           float(np.max(np.abs(eff))),
-                           "tilt × Earth-rate coupling estimated jointly with the table and "
-                           "goniometer errors (nuisance, first harmonic of the absolute "
-                           "position growing with the time since zeroing) and removed")
+        cfit = _coupling_estimate(theta[2 * m:2 * m + 2], cov[2 * m:2 * m + 2, 2 * m:2 * m + 2],
+                                  coupling)
     if gauge == "zero":
         G = np.eye(m)
         G[:, 0] -= 1.0
         t = G @ t
         cov_t = G @ cov_t @ G.T
-    # full-turn closure: column j = m involves g_m only
-    full = float(g[-1])
-    u_full = math.sqrt(max(cov_g[-1, -1], 0.0))
-    z = full / u_full if u_full > 0 else (0.0 if full == 0 else math.inf)
-    closure = ClosureCheck(
-        table_sum_arcsec=float(t.sum()), full_turn_arcsec=full, u_full_turn_arcsec=u_full,
-        z=float(z), per_start_full_turn_arcsec=D_raw[:, :, -1].mean(axis=0),
-        consistent=bool(abs(z) <= CLOSURE_Z_LIMIT))
     harm = _harmonic_frame(start_deg, p, m, B, int(max_order or 2 * m))
     step = float(step_deg)
     return EdaResult(
@@ -848,8 +768,121 @@ def equal_division_analysis(D, start_deg, step_deg: float, *, repeats_axis: int 
         gonio_cov_arcsec2=cov_g,
         residual_std_arcsec=math.sqrt(s2), dof=int(dof), residuals_arcsec=resid,
         start_deg=start_deg, step_deg=step, repeats=R, gauge=gauge,
-        unobservable_dim=int(d - 1), harmonics=harm, closure=closure, noise=noise,
-        coupling=cfit)
+        unobservable_dim=int(d - 1), harmonics=harm,
+        closure=_closure_check(g, cov_g, t, D_raw), noise=noise, coupling=cfit)
+
+
+def _whitened_design(p: np.ndarray, n: int, m: int, noise: str, noise_time_s,
+                     compensation_time_s):
+    """The whitening W of one start's readings (its schedule the mean over starts), W for
+    all n starts, and the whitened design matrix (GLS)."""
+    tw = None
+    if noise_time_s is not None:
+        tw = np.asarray(noise_time_s, dtype=float).reshape(-1, m).mean(axis=0)
+    W = noise_whitening(m, noise, tw, compensation_time_s)
+    Wn = sp.kron(sp.eye(n), sp.csr_matrix(W))
+    return W, Wn, sp.csr_matrix(Wn @ _design(p, m))
+
+
+def _gauged_least_squares(A, Z, N1, D: np.ndarray, y_sum: np.ndarray):
+    """θ = Z (Zᵀ R·AᵀA Z)⁻¹ Zᵀ Aᵀ Σ_r y_r, the whitened residuals, ν = R·n·m − rank,
+    s² = RSS/ν and the covariance s² Z (Zᵀ R·AᵀA Z)⁻¹ Zᵀ (GUM H.3)."""
+    R, n, m = D.shape
+    M = Z.T @ (R * N1) @ Z
+    Minv = np.linalg.inv(M)
+    theta = Z @ (Minv @ (Z.T @ (A.T @ y_sum)))
+    resid = D - (A @ theta).reshape(n, m)[None]  # whitened residuals: independent under the model
+    rank = M.shape[0]
+    dof = R * n * m - rank
+    if dof <= 0:
+        raise GonioError(f"no residual degrees of freedom ({R * n * m} readings, {rank} "
+                         f"parameters): add starts or repeats", key="D")
+    s2 = float(np.sum(resid ** 2)) / dof
+    return theta, s2 * (Z @ Minv @ Z.T), resid, dof, s2
+
+
+def _eda_input(D, start_deg, step_deg: float, repeats_axis: int | None):
+    """D as (R, n, m) finite arcseconds, the starts as (n,), m from the step; GonioError
+    naming the argument otherwise."""
+    try:
+        D = np.asarray(D, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise GonioError(f"D is not a numeric array: {exc}", key="D") from None
+    if D.ndim == 2:
+        D = D[None]
+    elif D.ndim == 3:
+        D = np.moveaxis(D, 0 if repeats_axis is None else repeats_axis, 0)
+    else:
+        raise GonioError(f"D must be 2-D (n, m) or 3-D (R, n, m), got shape {D.shape}", key="D")
+    if not np.all(np.isfinite(D)):
+        raise GonioError("D contains non-finite values (every reading is needed)", key="D")
+    _, n, m_cols = D.shape
+    m = _check_step(float(step_deg))
+    if m_cols != m:
+        raise GonioError(f"D has {m_cols} columns but the step {step_deg:.9g}° gives "
+                         f"m = {m} points per revolution (columns are j = 1..m)", key="D")
+    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
+    if start_deg.shape != (n,):
+        raise GonioError(f"{start_deg.size} start positions for {n} rows of D", key="start_deg")
+    return D, start_deg, m
+
+
+def _with_coupling(A, Z, N1, R: int, Wn, coupling, n: int, m: int, bound_arcsec_s):
+    """The design extended by the tilt × Earth-rate coupling's two columns when they can be
+    separated from the table and goniometer errors (then ``cfit`` is ``"fit"``); else the
+    plain design and a :class:`CouplingFit` saying why, with the coupling's size at the
+    tilt bound."""
+    C = np.asarray(coupling, dtype=float)
+    if C.shape != (n, m, 2) or not np.all(np.isfinite(C)):
+        raise GonioError(f"coupling design must be finite with shape {(n, m, 2)}, got "
+                         f"{C.shape}", key="coupling")
+    cols = C.reshape(n * m, 2)
+    q = cols.shape[1]
+    Cw = np.asarray(Wn @ cols)
+    A_ext = sp.hstack([A, sp.csr_matrix(Cw)]).tocsr()
+    N_ext = (A_ext.T @ A_ext).toarray()
+    Z_ext = np.zeros((2 * m + q, Z.shape[1] + q))
+    Z_ext[:2 * m, :Z.shape[1]] = Z
+    Z_ext[2 * m:, Z.shape[1]:] = np.eye(q)
+    M_ext = Z_ext.T @ (R * N_ext) @ Z_ext
+    scale = np.sqrt(np.clip(np.diag(M_ext), 1e-300, None))
+    cond = np.linalg.cond(M_ext / np.outer(scale, scale))
+    if cond < COUPLING_COND_LIMIT:
+        return A_ext, Z_ext, N_ext / 1.0, "fit"
+    size = math.nan
+    if bound_arcsec_s is not None:
+        size = float(bound_arcsec_s) * float(np.max(np.hypot(C[..., 0], C[..., 1])))
+    return A, Z, N1, CouplingFit(
+        False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, size,
+        "the coupling cannot be separated from the table and goniometer errors (condition "
+        f"number {cond:.2g}); it is not in the result"
+        + (f": up to {size:.3g}″ at the tilt bound" if math.isfinite(size) else ""))
+
+
+def _coupling_estimate(ab: np.ndarray, cab: np.ndarray, coupling) -> CouplingFit:
+    """The coupling's two coefficients, their amplitude and its largest effect."""
+    amp = float(np.hypot(*ab))
+    grad = ab / amp if amp > 0 else np.array([1.0, 0.0])
+    eff = np.asarray(coupling, dtype=float) @ ab
+    return CouplingFit(True, float(ab[0]), float(ab[1]), math.sqrt(max(cab[0, 0], 0.0)),
+                       math.sqrt(max(cab[1, 1], 0.0)), amp,
+                       math.sqrt(max(float(grad @ cab @ grad), 0.0)),
+                       float(np.max(np.abs(eff))),
+                       "tilt × Earth-rate coupling estimated jointly with the table and "
+                       "goniometer errors (nuisance, first harmonic of the absolute "
+                       "position growing with the time since zeroing) and removed")
+
+
+def _closure_check(g: np.ndarray, cov_g: np.ndarray, t: np.ndarray,
+                   D_raw: np.ndarray) -> ClosureCheck:
+    """The full-turn closure: column j = m involves g_m only."""
+    full = float(g[-1])
+    u_full = math.sqrt(max(cov_g[-1, -1], 0.0))
+    z = full / u_full if u_full > 0 else (0.0 if full == 0 else math.inf)
+    return ClosureCheck(
+        table_sum_arcsec=float(t.sum()), full_turn_arcsec=full, u_full_turn_arcsec=u_full,
+        z=float(z), per_start_full_turn_arcsec=D_raw[:, :, -1].mean(axis=0),
+        consistent=bool(abs(z) <= CLOSURE_Z_LIMIT))
 
 
 # --------------------------------------------------------------------------- comparison
@@ -1090,6 +1123,35 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
     (array([[[ 1.,  0.],
             [-1.,  0.]]]), array([  0., 180.]), 180.0)
     """
+    rows, num, has_start = _eda_numbers(df, file)
+    table_all = num["table_deg"].to_numpy()
+    keep = np.abs(table_all) > STEP_TOL_DEG                   # drop readings at the zero
+    labels = rows.index[keep]
+    series = num["series"].to_numpy()[keep].astype(int)
+    rnd = num["round"].to_numpy()[keep].astype(int)
+    table = table_all[keep]
+    dev = (num["gyro_deg"].to_numpy()[keep] - table) * ARCSEC_PER_DEG
+    if table.size == 0:
+        raise GonioError("equal_division rows have no reading away from the zero",
+                         file=file, column="table_deg")
+    j, m, step, R, n = _eda_grid(df, labels, series, rnd, table, file)
+    D = np.empty((R, n, m))
+    D[series - 1, rnd - 1, j - 1] = dev
+    start = _eda_starts(df, num, keep, labels, rnd, n, m, starts, has_start, file)
+    if not return_times:
+        return D, start, step
+    T = None
+    if "time_s" in rows.columns:
+        tv = pd.to_numeric(rows["time_s"], errors="coerce").to_numpy(dtype=float)[keep]
+        if np.all(np.isfinite(tv)):
+            T = np.empty((R, n, m))
+            T[series - 1, rnd - 1, j - 1] = tv
+    return D, start, step, T
+
+
+def _eda_numbers(df: pd.DataFrame, file):
+    """The ``equal_division`` rows and their numeric columns (series and round integers
+    ≥ 1), GonioError naming the line otherwise; whether start positions are given."""
     if "test" not in df.columns:
         raise GonioError("missing required column", file=file, column="test")
     rows = df[df["test"].astype(str).str.strip() == "equal_division"]
@@ -1117,16 +1179,12 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
             i = int(np.argmax(bad.to_numpy()))
             raise GonioError("expected an integer ≥ 1", file=file, column=c,
                              **_where(df, rows.index[i]))
-    table_all = num["table_deg"].to_numpy()
-    keep = np.abs(table_all) > STEP_TOL_DEG                   # drop readings at the zero
-    labels = rows.index[keep]
-    series = num["series"].to_numpy()[keep].astype(int)
-    rnd = num["round"].to_numpy()[keep].astype(int)
-    table = table_all[keep]
-    dev = (num["gyro_deg"].to_numpy()[keep] - table) * ARCSEC_PER_DEG
-    if table.size == 0:
-        raise GonioError("equal_division rows have no reading away from the zero",
-                         file=file, column="table_deg")
+    return rows, num, has_start
+
+
+def _eda_grid(df: pd.DataFrame, labels, series, rnd, table, file):
+    """Step index j of every reading, m points per revolution and the step, R series and
+    n rounds: the grid complete, without duplicates, numbered from 1."""
     # points per revolution: the most common number of readings in a round
     _, counts = np.unique(np.stack([series, rnd]), axis=1, return_counts=True)
     vals, freq = np.unique(counts, return_counts=True)
@@ -1165,8 +1223,13 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
         raise GonioError(f"incomplete grid: no reading for series {missing[0]}, round "
                          f"{missing[1]}, table_deg {missing[2] * step:.9g} ({len(full) - len(have)}"
                          f" of {len(full)} readings missing)", file=file, column="table_deg")
-    D = np.empty((R, n, m))
-    D[series - 1, rnd - 1, j - 1] = dev
+    return j, m, step, R, n
+
+
+def _eda_starts(df: pd.DataFrame, num, keep, labels, rnd, n: int, m: int,
+                starts: int | None, has_start: bool, file) -> np.ndarray:
+    """Each round's start position: the file's ``start_deg`` (one per round), else
+    (round − 1)·360°/n with n dividing m (IEC 62047-20 A.3)."""
     if has_start:
         st = num["start_deg"].to_numpy()[keep]
         start = np.full(n, np.nan)
@@ -1198,15 +1261,7 @@ def eda_matrix_from_readings(df: pd.DataFrame, *, starts: int | None = None,
                              "A.3 needs n to divide m, or a start_deg column)", file=file,
                              column="round")
         start = np.arange(n) * 360.0 / n
-    if not return_times:
-        return D, start, step
-    T = None
-    if "time_s" in rows.columns:
-        tv = pd.to_numeric(rows["time_s"], errors="coerce").to_numpy(dtype=float)[keep]
-        if np.all(np.isfinite(tv)):
-            T = np.empty((R, n, m))
-            T[series - 1, rnd - 1, j - 1] = tv
-    return D, start, step, T
+    return start
 
 
 def coupling_bound_arcsec_s(latitude_deg: float | None, tilt_bound_deg: float | None,

@@ -285,21 +285,26 @@ LABELS: dict[str, dict[str, str]] = {
                    "zh": "符合性声明（ISO/IEC 17025 7.8.6）"},
     "rule_simple": {"en": "Decision rule: simple acceptance (ILAC-G8:09/2019 4.2.1, guard band "
                           "w = 0); the specific false-accept probability is stated under a "
-                          "normal measurement model (JCGM 106).",
+                          "normal measurement model (JCGM 106), for a standard deviation "
+                          "stated with its χ² interval under its χ² model.",
                     "zh": "判定规则：简单接受（ILAC-G8:09/2019 4.2.1，保护带 w = 0）；按正态测量模型"
-                          "（JCGM 106）给出特定误接受概率。"},
+                          "（JCGM 106）给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_guarded": {"en": "Decision rule: binary statement with guarded acceptance, guard band "
                            "w = {r}·U (ILAC-G8:09/2019 4.2.2); the specific false-accept "
-                           "probability is stated under a normal measurement model (JCGM 106).",
+                           "probability is stated under a normal measurement model (JCGM 106), "
+                           "for a standard deviation stated with its χ² interval under its χ² "
+                           "model.",
                      "zh": "判定规则：带保护带的二元判定，保护带 w = {r}·U（ILAC-G8:09/2019 4.2.2）；"
-                           "按正态测量模型（JCGM 106）给出特定误接受概率。"},
+                           "按正态测量模型（JCGM 106）给出特定误接受概率，以 χ² 区间给出的标准偏差"
+                           "按其 χ² 模型。"},
     "rule_non-binary": {"en": "Decision rule: non-binary statement with guard band w = {r}·U "
                               "(ILAC-G8:09/2019 4.2.3): pass, conditional pass, conditional fail, "
                               "fail; the specific false-accept probability is stated under a "
-                              "normal measurement model (JCGM 106).",
+                              "normal measurement model (JCGM 106), for a standard deviation "
+                              "stated with its χ² interval under its χ² model.",
                         "zh": "判定规则：带保护带 w = {r}·U 的非二元判定（ILAC-G8:09/2019 4.2.3）："
                               "合格、有条件合格、有条件不合格、不合格；按正态测量模型（JCGM 106）"
-                              "给出特定误接受概率。"},
+                              "给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
     "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},

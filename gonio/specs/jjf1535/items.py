@@ -584,6 +584,13 @@ def angle_random_walk(ctx: Context) -> Item:
                     uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
     rate_dph, allan, fit = noise["rate_dph"], noise["allan"], noise["fit"]
+    if not (fit.N > 0 and fit.u_N > 0):
+        # a record that varies but whose fit holds no white rate noise (spikes, a periodic
+        # disturbance): never certified as 0 ± 0
+        raise GonioError("the five-term Allan fit of the static record (7.2.13) finds no "
+                         "angle random walk although the record varies (N = 0 with u(N) = 0): "
+                         "the record is not gyro noise (spikes, a periodic disturbance?)",
+                         key="static")
     arw = fit.N / math.sqrt(S_PER_H)
     u_arw = fit.u_N / math.sqrt(S_PER_H)
     printed = {}
