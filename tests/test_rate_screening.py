@@ -153,3 +153,24 @@ def test_one_missing_sample_is_a_named_gap_not_half_a_record_set_aside(simulated
     # the row after the dropped one now sits on the dropped one's line
     assert len(gaps) == 1 and gaps[0]["line"] == head + 2 + gone, found
     assert gaps[0]["action"] == "flagged" and gaps[0]["message"].startswith("1 sample(s)")
+
+
+def test_a_run_entered_with_the_wrong_sign_is_refused_by_line(simulated, tmp_path):
+    # every rate of one scale-factor run sign-flipped: averaged in, K came out a third of
+    # the true one (K = 2.00 ± 17 for 6.00) with no word (review of stop 28)
+    spec, proto, readings, _ = simulated
+    text, head, header = _rows(readings)
+    first = None
+    for i in range(head + 1, len(text)):
+        row = dict(zip(header, next(csv.reader([text[i]]))))
+        if row["test"] == "scale_factor" and row["run"] == "1" and row["role"] == "rate":
+            first = first or i + 1
+            row["rate_dps"] = repr(-float(row["rate_dps"]))
+            buf = io.StringIO()
+            csv.writer(buf, lineterminator="\n").writerow([row[h] for h in header])
+            text[i] = buf.getvalue()
+    bad = tmp_path / "flipped.csv"
+    bad.write_text("".join(text), encoding="utf-8")
+    with pytest.raises(GonioError, match="sign differs") as exc:
+        _findings(spec, bad, proto)
+    assert exc.value.line == first and exc.value.column == "rate_dps"

@@ -145,6 +145,8 @@ LABELS: dict[str, dict[str, str]] = {
     "statement_copy": {"en": "This certificate shall not be reproduced except in full without "
                              "the written approval of the issuing laboratory.",
                        "zh": "未经本机构书面批准，不得部分复制本证书。"},
+    "statement_recal_user": {"en": "Recalibration interval: decided by the user.",
+                             "zh": "复校时间间隔由用户自行确定。"},
     "statement_recal": {"en": "Recalibration interval: decided by the user, usually not more "
                               "than 12 months (draft clause 9).",
                         "zh": "复校时间间隔由用户自行确定，一般不超过12个月（规范第9章）。"},

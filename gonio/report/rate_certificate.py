@@ -195,7 +195,8 @@ def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | No
                                (L["checked_by"], sig.get("checked_by") or "—"),
                                (L["approved_by"], sig.get("approved_by") or "—")]))
     blocks += [Block("p", [L[k]]) for k in ("statement_item", "statement_copy")]
-    blocks.append(Block("p", [recal or L["statement_recal"]]))
+    # a specification's own recalibration clause, else no clause at all (not the draft's 9)
+    blocks.append(Block("p", [recal or L["statement_recal_user"]]))
     return blocks
 
 

@@ -23,6 +23,9 @@ Rules (one segment = the rows of one test, run and step, in time order):
   Δt/4 off the grid is set aside.
 * ``time-gap`` — whole samples missing from the grid (n jumps by more than one): flagged,
   not set aside — the rows around a gap are good; the certificate names the gap.
+* ``run-sign-departs`` — a run of a scale-factor test (``scale_factor``,
+  ``sf_temperature``) whose output-against-rate slope has the other sign than the
+  majority of the test's runs is refused, naming its first line.
 * ``programme-point-missing`` — a rate point, record, position or set point the protocol
   plans and the readings lack is named (flagged: the item is computed from what is there
   and the certificate says what is missing).
@@ -156,10 +159,59 @@ def _time_rule(df: pd.DataFrame, key: pd.Series, file, clauses) -> list[Finding]
     return out
 
 
+#: Tests whose runs each measure the scale factor over ± rates: a run's K has the sign of
+#: the others' (cross-axis runs, whose slope is near zero, are not among them).
+SLOPE_TESTS = ("scale_factor", "sf_temperature")
+
+
+def _run_slopes(df: pd.DataFrame, test: str) -> dict:
+    """{run: (slope of the step-mean output against the rate, first row)} of one test's
+    runs with at least two distinct rates."""
+    rows = df[(df["test"] == test) & (df["role"].astype(str) == "rate")] if "role" in df \
+        else df[df["test"] == test]
+    out = {}
+    for run, h in rows.groupby("run", sort=False):
+        m = h.groupby("step").agg(r=("rate_dps", "mean"), y=("output", "mean"))
+        if m["r"].nunique() >= 2:
+            out[run] = (float(np.polyfit(m["r"].to_numpy(float), m["y"].to_numpy(float),
+                                         1)[0]), h.iloc[0])
+    return out
+
+
+def sign_rule(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[Finding]:
+    """``run-sign-departs``: a run of a scale-factor test whose output falls with the rate
+    while the other runs' rises (or the reverse) — rates or outputs of a whole run entered
+    with the wrong sign — is refused, naming the run's first line: averaged in, it gives
+    a K of a third of the true one (review of stop 28: K = 2.00 ± 17 for 6.00). A tie
+    (as many runs of each sign) names the first run of the sign the first run lacks."""
+    clauses = clauses or {}
+    out = []
+    for test in SLOPE_TESTS:
+        slopes = _run_slopes(df, test)
+        signs = {run: np.sign(k) for run, (k, _) in slopes.items() if k != 0}
+        if len(set(signs.values())) < 2:
+            continue
+        pos = sum(v > 0 for v in signs.values())
+        major = 1.0 if pos > len(signs) - pos else -1.0 if pos < len(signs) - pos else \
+            next(iter(signs.values()))
+        for run, sg in signs.items():
+            if sg != major:
+                k, row = slopes[run]
+                others = float(np.median([slopes[r][0] for r in signs if signs[r] == major]))
+                f = _finding("run-sign-departs", f"{test} run {run}: output against rate has "
+                             f"slope {k:.6g}, the other runs' {others:.6g} (sign differs: "
+                             "rates or outputs of this run entered with the wrong sign?)",
+                             row, "rate_dps", file, clauses,
+                             "sign of a run's slope ≠ the majority of the test's runs")
+                out.append(Finding(**{**f.to_json(), "action": "refused"}))
+    return out
+
+
 def screen(readings, segments, clauses: dict) -> list[Finding]:
     """Every rule on a RateReadings against the planned ``segments``."""
     file = None if readings.path is None else str(readings.path)
-    return screen_rows(readings.data, file, clauses) + missing_points(
+    return screen_rows(readings.data, file, clauses) + sign_rule(
+        readings.data, file, clauses) + missing_points(
         readings.data, expected_from_plan(segments), file=file, clauses=clauses)
 
 
