@@ -90,6 +90,16 @@ def _item(result, *keys):
     return None
 
 
+def _role(result, role: str):
+    """The measured item a figure draws for ``role``, as the specification names it in its
+    certificate content (``FIGURE_ITEMS``: ``bias_temperature``, ``sf_temperature``,
+    ``allan``, ``arw``, ``bias_instability``, ``bandwidth``); None when it names none or the item was not
+    measured."""
+    spec = get(result.spec_key)
+    roles = getattr(spec.content(), "FIGURE_ITEMS", {}) if spec.certificate_content else {}
+    return _item(result, roles[role]) if role in roles else None
+
+
 def _empty(ax, text: str) -> None:
     ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, color="0.4")
     ax.set_xticks([])
@@ -187,8 +197,7 @@ def forward_reverse(result) -> dict | None:
 def draw_temperature(fig, spec, result, L, truth=None) -> None:
     """Bias (°/h) against temperature, and the scale factor on a second axis."""
     ax = fig.add_subplot(spec)
-    b = _item(result, "bias_temperature_sensitivity", "bias_temperature_coefficient")
-    k = _item(result, "sf_temperature_sensitivity", "sf_temperature_coefficient")
+    b, k = _role(result, "bias_temperature"), _role(result, "sf_temperature")
     if b is None and k is None:
         _empty(ax, _t(L, "no_temp"))
         return
@@ -214,7 +223,7 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
     from gonio.analysis.noise import model_adev
 
     ax = fig.add_subplot(spec)
-    it = _item(result, "angle_random_walk", "bias_instability")   # JJF 7.2.13, IEC 5.4.5.3
+    it = _role(result, "allan")
     if it is None or "allan" not in it.details:
         _empty(ax, _t(L, "no_arw"))
         return
@@ -226,9 +235,8 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
     ax.loglog(tau, adev, "o", ms=2.5, color="C0", label=_t(L, "adev"))
     f = it.details["fit"]
     ax.loglog(tau, model_adev(tau, f["Q"], f["N"], f["B"], f["K"], f["R"]), "-", color="C3",
-              lw=1, label=_t(L, "adev_fit", a=_near(f["arw_deg_sqrt_h"], _item(
-                                 result, "angle_random_walk", "arw")),
-                             b=_near(f["B"], _item(result, "bias_instability"))))
+              lw=1, label=_t(L, "adev_fit", a=_near(f["arw_deg_sqrt_h"], _role(result, "arw")),
+                             b=_near(f["B"], _role(result, "bias_instability"))))
     ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
     pr = it.details.get("printed_eq22_24_statistic") or {}
     if pr:
@@ -247,7 +255,7 @@ def draw_frequency(fig, spec, result, L, truth=None) -> None:
     gs = spec.subgridspec(2, 1, hspace=0.18)
     ax = fig.add_subplot(gs[0])
     ax2 = fig.add_subplot(gs[1], sharex=ax)
-    it = _item(result, "bandwidth", "frequency_band")
+    it = _role(result, "bandwidth")
     if it is None:
         _empty(ax, _t(L, "no_bw"))
         ax2.set_visible(False)

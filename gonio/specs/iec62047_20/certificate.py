@@ -106,5 +106,10 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
 
 #: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 5.1.3.8's symmetry
 #: item holds a_CW and a_CCW; the outputs carry the null output b_BASE, taken off the points.
+#: The items the rate figures draw, by their role (gonio.report.rate_figures).
+FIGURE_ITEMS = {"bias_temperature": "bias_temperature_coefficient",
+                "sf_temperature": "sf_temperature_coefficient", "allan": "bias_instability",
+                "arw": "arw", "bias_instability": "bias_instability",
+                "bandwidth": "frequency_band"}
 CW_CCW = {"item": "symmetry", "cw": ("a_CW", None), "ccw": ("a_CCW", None),
           "null_output_off": True, "ylabel": "y_j − (K·Ω_j + b_BASE)", "title": "sym"}

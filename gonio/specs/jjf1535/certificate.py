@@ -90,5 +90,9 @@ U_CLAUSE = ("JJF 1535-2015 clause 8 k)", "JJF 1535-2015 第8章 k)")
 #: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 7.2.3's asymmetry
 #: item holds each direction's mean scale factor (first of the m series); the outputs are
 #: plotted as F̄_j − K̄·Ω_j (the output zero is in the mean line).
+#: The items the rate figures draw, by their role (gonio.report.rate_figures).
+FIGURE_ITEMS = {"bias_temperature": "bias_temperature_sensitivity",
+                "sf_temperature": "sf_temperature_sensitivity", "allan": "angle_random_walk",
+                "arw": "angle_random_walk", "bandwidth": "bandwidth"}
 CW_CCW = {"item": "asymmetry", "cw": ("K_pos_m", 0), "ccw": ("K_neg_m", 0),
           "null_output_off": False, "ylabel": "F̄_j − K̄·Ω_j", "title": "asym"}
