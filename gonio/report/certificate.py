@@ -260,7 +260,6 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     """
     res = clean_tree(report.to_dict())          # user text shown literally (report/text.py)
     lab = clean_tree(lab) if lab else lab
-    md = res.get("metadata", {})
     unc = res["uncertainty"]
     U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
     virtual = lab is None
@@ -269,6 +268,68 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     add = lambda kind, data, extra=None: blocks.append(  # noqa: E731
         Block(kind, _summarised(kind, data), extra))
 
+    _admin_blocks(add, res, lab_, L, lang=lang, cjk=cjk, virtual=virtual)
+
+    # method
+    add("h", L["method"])
+    add("kv", method_rows(report, res, L, lab, lang, cjk))
+    add("p", [L["m_readings"]])
+
+    # results: Annex B, each item with its U, k and coverage probability
+    add("h", L["results"])
+    rrows = _result_rows(res, L, U)
+    add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
+        {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
+    if U is not None:
+        add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
+                          k=_num(res, "uncertainty.k", "k", U),
+                          p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
+        add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+        ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
+        if ks:
+            add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
+    else:
+        add("p", [L["no_E_U"]], "U")
+    screening_notes(res, L, add)
+    if res["scale_factor"].get("measurand"):
+        sf = res["scale_factor"]
+        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
+        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
+                                           ppm=f"{ppm:.2g}")])
+
+    _conformity_blocks(add, res, lab, report.conformity, L)
+
+    _budget_blocks(add, res, U, L, lang)
+
+    # readings taken
+    add("h", L["readings_taken"])
+    for note in res.get("readings_taken", []):
+        add("p", ["• " + reading_note(note, lang)])
+
+    _signatory_blocks(add, lab_, L)
+
+    # details of the measurements
+    add("h", L["details"])
+    _detail_tables(res, L, U, add)
+
+    # table calibration by equal-division averaging, when the readings hold it
+    if res.get("equal_division"):
+        _eda_section(res, L, U, add)
+
+    # figures
+    add("h", L["figures"])
+    for key, cap, draw in FIGURES:
+        add("fig", (key, L[cap], draw))
+    return {"id": certificate_id(report, lab), "virtual": virtual,
+            "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
+            "blocks": blocks, "results": res}
+
+
+def _admin_blocks(add, res: dict, lab_: dict, L: dict, *, lang: str, cjk: bool,
+                  virtual: bool) -> None:
+    """Laboratory, customer, instrument, dates, document and readings; standards and their
+    traceability; the environment (ISO/IEC 17025 7.8.2.1 a–h)."""
+    md = res.get("metadata", {})
     # a, b, c: title, laboratory, place; d: identifier (header of every page)
     if virtual:
         add("notice", L["virtual_note"])
@@ -328,13 +389,11 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     add("h", L["environment"])
     add("kv", [(L["temperature"], t_txt), (L["humidity"], h_txt)])
 
-    # method
-    add("h", L["method"])
-    add("kv", method_rows(report, res, L, lab, lang, cjk))
-    add("p", [L["m_readings"]])
 
-    # results: Annex B, each item with its U, k and coverage probability
-    add("h", L["results"])
+
+def _result_rows(res: dict, L: dict, U: float | None) -> list:
+    """The results table's rows (Annex B): each item with its U, k and coverage
+    probability, or the reason it was not measured."""
     rrows = []
     for i, name in enumerate(item_names(res), 1):
         item = res[name]
@@ -371,29 +430,14 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
             cell += ["; ", *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
-    add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
-        {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
-    st_e = stated_item(res, "angle_deviation")
-    if U is not None:
-        add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
-                          k=_num(res, "uncertainty.k", "k", U),
-                          p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
-        add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
-        ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
-        if ks:
-            add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
-    else:
-        add("p", [L["no_E_U"]], "U")
-    del st_e
-    screening_notes(res, L, add)
-    if res["scale_factor"].get("measurand"):
-        sf = res["scale_factor"]
-        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
-        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
-                                           ppm=f"{ppm:.2g}")])
+    return rrows
 
+
+def _conformity_blocks(add, res: dict, lab: dict | None, decided, L: dict) -> None:
+    """The decision rule and the conformity table: the decisions the pipeline made."""
+    lab_ = lab or {}
     # decision rule and conformity: the decisions the pipeline made (results.json), rendered
-    conf = conformity_for(res, lab, report.conformity)
+    conf = conformity_for(res, lab, decided)
     if conf:
         add("h", L["conformity"])
         rule = conf[0]["rule"]
@@ -416,6 +460,11 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
         add("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"], L["c_pfa"]],
                       crow), {"widths": (0.26, 0.19, 0.19, 0.20, 0.16), "id": "conformity"})
 
+
+
+def _budget_blocks(add, res: dict, U: float | None, L: dict, lang: str) -> None:
+    """The uncertainty budget of E (Annex A), each component with its source."""
+    unc = res["uncertainty"]
     # budget
     add("h", L["budget"])
     kind = unc.get("budget_kind")
@@ -433,11 +482,10 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     add("table", ([L["component"], L["source"], L["type"], L["u_i"], L["d_contrib"]], brows),
         (0.14, 0.50, 0.08, 0.14, 0.14))
 
-    # readings taken
-    add("h", L["readings_taken"])
-    for note in res.get("readings_taken", []):
-        add("p", ["• " + reading_note(note, lang)])
 
+
+def _signatory_blocks(add, lab_: dict, L: dict) -> None:
+    """Signatories and the certificate's statements."""
     # statements and signatures
     add("h", L["signatory"])
     sig = lab_.get("signatory", {})
@@ -450,22 +498,6 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     add("p", [L["statement_item"]])
     add("p", [L["statement_copy"]])
     add("p", [L["statement_recal"]])
-
-    # details of the measurements
-    add("h", L["details"])
-    _detail_tables(res, L, U, add)
-
-    # table calibration by equal-division averaging, when the readings hold it
-    if res.get("equal_division"):
-        _eda_section(res, L, U, add)
-
-    # figures
-    add("h", L["figures"])
-    for key, cap, draw in FIGURES:
-        add("fig", (key, L[cap], draw))
-    return {"id": certificate_id(report, lab), "virtual": virtual,
-            "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
-            "blocks": blocks, "results": res}
 
 
 def _eda_section(res: dict, L: dict, U: float, add) -> None:
