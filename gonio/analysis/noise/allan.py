@@ -1100,15 +1100,7 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
     >>> [round(float(v), 6) for v in r.adev]
     [1.414214, 0.0]
     """
-    if not (0 < float(confidence) < 1):
-        raise GonioError(f"confidence must be in (0, 1), not {confidence}", key="confidence")
-    if kind is None:
-        kind = "mdev" if modified else "adev"
-    elif modified and kind != "mdev":
-        raise GonioError(f"modified=True contradicts kind={kind!r}", key="kind")
-    if kind not in KIND_METHODS:
-        raise GonioError(f"kind must be one of {', '.join(KIND_METHODS)}, not {kind!r}",
-                         key="kind")
+    kind = _resolve_kind(kind, modified, confidence)
     tau0_s, scale = _check_args(input_type, tau0_s, scale)
     arr = _as_array(data)
     n_samples = arr.size
@@ -1124,8 +1116,46 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
     n = x.size
     ms = averaging_factors(n, taus, kind=kind)
     all_requested = isinstance(taus, str) and taus.strip().lower() == "all"
+    ms, sums, n_terms, n_eff, n_gaps = _deviation_sums(kind, x, bad, angle, ms,
+                                                       all_requested, rtol_all)
+    if alpha is None:
+        alpha_arr, alpha_b1 = _identify(kind, x, bad, angle, ms, all_requested)
+    else:
+        alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=np.int64), ms.shape).copy()
+        alpha_b1 = np.full(ms.size, np.nan)
+    del x, bad
+    tau, dev, ms, n_terms, edf, lo, hi = _deviation_and_interval(
+        kind, ms, sums, n_terms, n_eff, alpha_arr, tau0_s, factor, n, float(confidence),
+        compact=all_requested and ms.size > 64)
+    return AllanResult(tau_s=tau, adev=dev, m=ms, n_pairs=np.asarray(n_terms), edf=edf,
+                       alpha=alpha_arr, ci_low=lo, ci_high=hi,
+                       input_type=input_type, method=KIND_METHODS[kind],
+                       tau0_s=tau0_s, n_samples=int(n_samples),
+                       confidence=float(confidence), unit=unit, alpha_b1=alpha_b1,
+                       n_phase=int(n), n_gaps=n_gaps)
+
+
+def _resolve_kind(kind: str | None, modified: bool, confidence: float) -> str:
+    """The estimator's kind from ``kind``/``modified``, and the confidence level checked."""
+    if not (0 < float(confidence) < 1):
+        raise GonioError(f"confidence must be in (0, 1), not {confidence}", key="confidence")
+    if kind is None:
+        kind = "mdev" if modified else "adev"
+    elif modified and kind != "mdev":
+        raise GonioError(f"modified=True contradicts kind={kind!r}", key="kind")
+    if kind not in KIND_METHODS:
+        raise GonioError(f"kind must be one of {', '.join(KIND_METHODS)}, not {kind!r}",
+                         key="kind")
+    return kind
+
+
+def _deviation_sums(kind: str, x, bad, angle: bool, ms, all_requested: bool,
+                    rtol_all: float | None):
+    """(ms, sums of squares, terms, effective lengths (gaps) or None, gap samples) of the
+    estimator at every m: over the gaps, by the O(N log² N) expansion for every m, or
+    directly."""
+    n = x.size
     p_last = {"adev": 2, "totdev": 2, "hdev": 3, "mdev": 3}[kind]
-    n_gaps = 0
     if bad is not None:
         n_gaps = int(bad.sum()) if angle else int(bad[-1])
         if kind == "totdev":
@@ -1136,35 +1166,32 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
         if not keep.any():
             raise GonioError("no valid terms at any τ: gaps too dense", key="data")
         ms, sums, n_terms = ms[keep], sums[keep], n_terms[keep]
-        n_eff = n_terms + (p_last * ms if kind != "mdev" else 3 * ms - 1)
+        return ms, sums, n_terms, n_terms + (p_last * ms if kind != "mdev" else 3 * ms - 1), \
+            n_gaps
+    if kind == "totdev":
+        if all_requested and n > 20_000:
+            raise GonioError("total deviation with 'all' τ costs O(N) per τ; use "
+                             "'octave' or 'decade:N' for records over 20000 points",
+                             key="taus")
+        return ms, _totdev_sums(x, ms), np.full(ms.size, n - 2, dtype=np.int64), None, 0
+    if all_requested and ms.size > 64 and kind == "mdev":
+        sums = _mdev_local_sums(x, ms, 1e-9 if rtol_all is None else rtol_all)
+    elif all_requested and ms.size > 64:
+        sums = _expanded_sums(kind, x, ms, 1e-6 if rtol_all is None else rtol_all)
+    elif kind == "adev":
+        sums = _sums_direct_shared(x, ms)
     else:
-        if kind == "totdev":
-            if all_requested and n > 20_000:
-                raise GonioError("total deviation with 'all' τ costs O(N) per τ; use "
-                                 "'octave' or 'decade:N' for records over 20000 points",
-                                 key="taus")
-            sums = _totdev_sums(x, ms)
-            n_terms = np.full(ms.size, n - 2, dtype=np.int64)
-        elif all_requested and ms.size > 64 and kind == "mdev":
-            sums = _mdev_local_sums(x, ms, 1e-9 if rtol_all is None else rtol_all)
-        elif all_requested and ms.size > 64:
-            sums = _expanded_sums(kind, x, ms, 1e-6 if rtol_all is None else rtol_all)
-        elif kind == "adev":
-            sums = _sums_direct_shared(x, ms)
-        else:
-            sums = _direct_sums(kind, x, ms)
-        if kind != "totdev":
-            n_terms = n - p_last * ms + (1 if kind == "mdev" else 0)
-        n_eff = None
-    if alpha is None:
-        alpha_arr, alpha_b1 = _identify(kind, x, bad, angle, ms, all_requested)
-    else:
-        alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=np.int64), ms.shape).copy()
-        alpha_b1 = np.full(ms.size, np.nan)
-    del x, bad
-    compact = all_requested and ms.size > 64
+        sums = _direct_sums(kind, x, ms)
+    return ms, sums, n - p_last * ms + (1 if kind == "mdev" else 0), None, 0
+
+
+def _deviation_and_interval(kind: str, ms, sums, n_terms, n_eff, alpha_arr, tau0_s: float,
+                            factor: float, n: int, confidence: float, *, compact: bool):
+    """(τ, deviation, m, terms, edf, CI low, CI high): the sums normalised into the
+    deviation in place, chunk by chunk (bounded temporaries for "all"), with Greenhall's
+    edf and the χ² interval; a large result stored compactly (see AllanResult)."""
     n_terms = np.asarray(n_terms)
-    if compact:  # the per-τ arrays of a large result are stored compactly (see AllanResult)
+    if compact:
         ms = ms.astype(np.int32)
         n_terms = n_terms.astype(np.int32)
     ftype = np.float32 if compact else np.float64
@@ -1189,18 +1216,13 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
         else:
             e = np.array([edf_for(kind, int(ne), [mm], [a])[0]
                           for ne, mm, a in zip(n_eff[sl], ms[sl], alpha_arr[sl])])
-        lo_c, hi_c = chi2_interval(var, e, float(confidence))
+        lo_c, hi_c = chi2_interval(var, e, confidence)
         edf[sl] = e
         lo[sl] = np.sqrt(lo_c)
         hi[sl] = np.sqrt(hi_c)
         dev[sl] = np.sqrt(var)
         del var, e, lo_c, hi_c, den, mf
-    return AllanResult(tau_s=tau, adev=dev, m=ms, n_pairs=np.asarray(n_terms), edf=edf,
-                       alpha=alpha_arr, ci_low=lo, ci_high=hi,
-                       input_type=input_type, method=KIND_METHODS[kind],
-                       tau0_s=tau0_s, n_samples=int(n_samples),
-                       confidence=float(confidence), unit=unit, alpha_b1=alpha_b1,
-                       n_phase=int(n), n_gaps=n_gaps)
+    return tau, dev, ms, n_terms, edf, lo, hi
 
 
 def modified_allan_deviation(data, tau0_s: float, input_type: str, taus="octave",
