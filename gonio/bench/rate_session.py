@@ -163,46 +163,12 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
                              else 0.0) @ R0
         tilt = math.radians(eq.rate_table.tilt_deg)
         table_axis = np.array([math.sin(tilt), 0.0, math.cos(tilt)])
-        ref = np.full(n, np.nan)
         if seg.vib_amplitude_dps > 0:
-            f = float(seg.freq_hz)
-            vt = eq.vibration_table
-            amp = seg.vib_amplitude_dps * (1 + vt.amplitude_error_rel)
-            ph = 2 * math.pi * f * t
-            h1, h2 = g.dynamics(f), g.dynamics(2 * f)
-            true_in = amp * (np.sin(ph) + vt.distortion_rel * np.sin(2 * ph))
-            dyn = amp * (abs(h1) * np.sin(ph + np.angle(h1))
-                         + vt.distortion_rel * abs(h2) * np.sin(2 * ph + np.angle(h2)))
-            zb = R0 @ np.array([0, 0, 1.0])
-            w_in = dyn * float(table_axis @ zb) + float(omega_enu @ zb)
-            det = g.response(w_in)
-            xb, yb = R0 @ np.array([1.0, 0, 0]), R0 @ np.array([0, 1.0, 0])
-            det = det + g.cross_axis_x * float(omega_enu @ xb) + g.cross_axis_y * float(omega_enu @ yb)
-            fb = R0.T @ np.array([0, 0, 1.0])
-            det = det + float(np.dot(g.g_sensitivity_dps_per_g, fb))
-            ref = true_in + (vt.reference_noise_dps * rng.standard_normal(n) if noise else 0.0)
-            mean_in = float(np.mean(true_in)) + float(omega_enu @ zb)
+            det, ref, mean_in = _vibration_input(seg, g, eq, t, R0, table_axis, omega_enu,
+                                                 rng, noise)
         else:
-            w_set = float(seg.rate_dps)
-            w_act = w_set * (1 + eq.rate_table.rate_error_rel)
-            nsub = RATE_SUBSAMPLES if w_set != 0 else 1
-            frac = (np.arange(nsub) + 0.5) / nsub
-            ts = (t[:, None] + dt * frac[None, :]) - st.t                     # time in segment
-            theta = st.theta + math.radians(w_act) * ts
-            R = _rz(theta) @ R0                                                # (n, nsub, 3, 3)
-            zb, xb, yb = R[..., :, 2], R[..., :, 0], R[..., :, 1]
-            ripple = eq.rate_table.ripple_rel * abs(w_set) * np.sin(
-                theta + math.radians(eq.rate_table.ripple_phase_deg))
-            table_rate = (w_act + ripple)[..., None] * table_axis
-            w_vec = table_rate + omega_enu                                      # ENU, °/s
-            w_in = np.einsum("...i,...i", w_vec, zb)
-            det = g.response(w_in) + g.cross_axis_x * np.einsum("...i,...i", w_vec, xb) \
-                + g.cross_axis_y * np.einsum("...i,...i", w_vec, yb)
-            fb = np.einsum("...ij,j->...i", np.swapaxes(R, -1, -2), np.array([0, 0, 1.0]))
-            det = det + fb @ np.asarray(g.g_sensitivity_dps_per_g, float)
-            det = det.mean(axis=1)
-            mean_in = float(w_in.mean())
-            st.theta = float(theta[-1, -1] + math.radians(w_act) * dt * 0.5 / nsub)
+            ref = np.full(n, np.nan)
+            det, mean_in = _table_input(seg, g, eq, t, st, R0, table_axis, omega_enu, dt)
         err = st.noise.samples(n, dt, temp_g)
         out = null + K * (det + bias + warm + err)
         out = out * (1 + eq.acquisition.gain_error_rel)
@@ -210,23 +176,7 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         if lsb > 0:
             out = np.round(out / lsb) * lsb
         st.t += n * dt
-        cols["test"] += [seg.test] * n
-        cols["run"] += [seg.run] * n
-        cols["step"] += [seg.step] * n
-        cols["role"] += [seg.role] * n
-        cols["time_s"] += list(t)
-        cols["rate_dps"] += [seg.vib_amplitude_dps if seg.vib_amplitude_dps > 0 else seg.rate_dps] * n
-        cols["freq_hz"] += [seg.freq_hz] * n
-        cols["temperature_c"] += [room_temperature_c if seg.temperature_c is None
-                                  else seg.temperature_c] * n
-        cols["supply_v"] += [v] * n
-        cols["up_axis"] += [seg.up_axis] * n
-        cols["north_axis"] += [seg.north_axis] * n
-        cols["reference_dps"] += list(ref)
-        cols["output"] += list(out)
-        cols["stand_deg"] += [seg.stand_deg] * n
-        cols["stand_axis"] += [seg.stand_axis] * n
-        cols["supply_set_v"] += [v_set if eq.supply.error_v else math.nan] * n
+        _append_columns(cols, seg, t, v, v_set, ref, out, room_temperature_c, eq)
         seg_truth.append({"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
                           "temperature_c": target,
                           "power_cycle": st.run,
@@ -241,6 +191,82 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
     truth = {"gyro": g.to_dict(), "equipment": eq.to_dict(), "latitude_deg": bench.latitude_deg,
              "seed": seed, "noise": noise, "power_cycles": runs, "segments": seg_truth}
     return RateSessionResult(df, md, truth)
+
+
+def _vibration_input(seg: Segment, g, eq, t: np.ndarray, R0: np.ndarray,
+                 table_axis: np.ndarray, omega_enu: np.ndarray, rng, noise: bool):
+    """(detected rate, reference rate, mean input) of a vibration segment: the table's sine
+    with its distortion through the gyro's dynamics, Earth rate, cross-axis and g terms."""
+    n = t.size
+    f = float(seg.freq_hz)
+    vt = eq.vibration_table
+    amp = seg.vib_amplitude_dps * (1 + vt.amplitude_error_rel)
+    ph = 2 * math.pi * f * t
+    h1, h2 = g.dynamics(f), g.dynamics(2 * f)
+    true_in = amp * (np.sin(ph) + vt.distortion_rel * np.sin(2 * ph))
+    dyn = amp * (abs(h1) * np.sin(ph + np.angle(h1))
+                 + vt.distortion_rel * abs(h2) * np.sin(2 * ph + np.angle(h2)))
+    zb = R0 @ np.array([0, 0, 1.0])
+    w_in = dyn * float(table_axis @ zb) + float(omega_enu @ zb)
+    det = g.response(w_in)
+    xb, yb = R0 @ np.array([1.0, 0, 0]), R0 @ np.array([0, 1.0, 0])
+    det = det + g.cross_axis_x * float(omega_enu @ xb) + g.cross_axis_y * float(omega_enu @ yb)
+    fb = R0.T @ np.array([0, 0, 1.0])
+    det = det + float(np.dot(g.g_sensitivity_dps_per_g, fb))
+    ref = true_in + (vt.reference_noise_dps * rng.standard_normal(n) if noise else 0.0)
+    mean_in = float(np.mean(true_in)) + float(omega_enu @ zb)
+    return det, ref, mean_in
+
+
+def _table_input(seg: Segment, g, eq, t: np.ndarray, st, R0: np.ndarray,
+             table_axis: np.ndarray, omega_enu: np.ndarray, dt: float):
+    """(detected rate, mean input) of a rate-table segment, averaged over sub-samples of
+    each interval as the table turns (its rate error, ripple and tilt, Earth rate,
+    cross-axis and g terms); the table's angle ``st.theta`` moves on."""
+    w_set = float(seg.rate_dps)
+    w_act = w_set * (1 + eq.rate_table.rate_error_rel)
+    nsub = RATE_SUBSAMPLES if w_set != 0 else 1
+    frac = (np.arange(nsub) + 0.5) / nsub
+    ts = (t[:, None] + dt * frac[None, :]) - st.t                     # time in segment
+    theta = st.theta + math.radians(w_act) * ts
+    R = _rz(theta) @ R0                                                # (n, nsub, 3, 3)
+    zb, xb, yb = R[..., :, 2], R[..., :, 0], R[..., :, 1]
+    ripple = eq.rate_table.ripple_rel * abs(w_set) * np.sin(
+        theta + math.radians(eq.rate_table.ripple_phase_deg))
+    table_rate = (w_act + ripple)[..., None] * table_axis
+    w_vec = table_rate + omega_enu                                      # ENU, °/s
+    w_in = np.einsum("...i,...i", w_vec, zb)
+    det = g.response(w_in) + g.cross_axis_x * np.einsum("...i,...i", w_vec, xb) \
+        + g.cross_axis_y * np.einsum("...i,...i", w_vec, yb)
+    fb = np.einsum("...ij,j->...i", np.swapaxes(R, -1, -2), np.array([0, 0, 1.0]))
+    det = det + fb @ np.asarray(g.g_sensitivity_dps_per_g, float)
+    det = det.mean(axis=1)
+    mean_in = float(w_in.mean())
+    st.theta = float(theta[-1, -1] + math.radians(w_act) * dt * 0.5 / nsub)
+    return det, mean_in
+
+
+def _append_columns(cols: dict, seg: Segment, t: np.ndarray, v: float, v_set: float,
+                    ref: np.ndarray, out: np.ndarray, room_temperature_c: float, eq) -> None:
+    """One segment's rows into the readings columns."""
+    n = t.size
+    cols["test"] += [seg.test] * n
+    cols["run"] += [seg.run] * n
+    cols["step"] += [seg.step] * n
+    cols["role"] += [seg.role] * n
+    cols["time_s"] += list(t)
+    cols["rate_dps"] += [seg.vib_amplitude_dps if seg.vib_amplitude_dps > 0 else seg.rate_dps] * n
+    cols["freq_hz"] += [seg.freq_hz] * n
+    cols["temperature_c"] += [room_temperature_c if seg.temperature_c is None
+                              else seg.temperature_c] * n
+    cols["supply_v"] += [v] * n
+    cols["up_axis"] += [seg.up_axis] * n
+    cols["north_axis"] += [seg.north_axis] * n
+    cols["reference_dps"] += list(ref)
+    cols["output"] += list(out)
+    cols["stand_deg"] += [seg.stand_deg] * n
+    cols["stand_axis"] += [seg.stand_axis] * n
+    cols["supply_set_v"] += [v_set if eq.supply.error_v else math.nan] * n
 
 
 def constant_rate_spread_dps(bench: RateBench, rate_dps: float, interval_s: float,
