@@ -8,9 +8,8 @@ Contents (one module per piece of physics or procedure):
 ``gonio.protocol``         the draft's procedures as data (TOML), validated
 ``gonio.bench``            the virtual bench: table, instrument, session
 ``gonio.formats.readings``               readings and stream files (docs/formats.md)
-``gonio.specs.ogam_draft.items``  the seven characteristics of draft clause 7
+``gonio.specs``            the registry: every procedure (items, budget, certificate) a plug-in
 ``gonio.physics.tilt``             Annex A.4.2 elliptic projection; rigid-body tilt
-``gonio.specs.ogam_draft.budget``           the Annex A uncertainty budget
 ``gonio.analysis.noise``            Allan deviation and the gyro noise model
 ``gonio.analysis.equal_division``              equal-division averaging, rotary-table comparison
 ``gonio.report``           certificate and figures

@@ -2,7 +2,7 @@
 
 A programme is a list of :class:`Segment` (one contiguous record under fixed conditions:
 table rate, mounting, chamber set point, supply, vibration), produced from a protocol by
-a specification package (e.g. :func:`gonio.specs.jjf1535.protocol.plan`). The runner
+a specification package (its ``plan``). The runner
 keeps the physical state between segments: time since power-on, the noise processes,
 the gyro temperature lagging behind the chamber (ramps and soaks in the unrecorded
 ``delay_s``), the table angle, and the power-cycle draws of K and b.

@@ -518,7 +518,7 @@ def _shifted(coef, offset: float) -> list[float]:
 
 def true_thermal_coefficients(bench: TriadBench, channel: str, *, temperature: str = "sensor") -> dict[str, dict[str, float]]:
     """The bench's true K(ϑ, U), b(ϑ, U), ARW(ϑ) of gyro ``channel`` as the thermal model
-    writes them (:mod:`gonio.specs.triad_alignment.thermal_model`, thesis eq. 6.17–6.20), in
+    writes them (the triad specification's thermal model, thesis eq. 6.17–6.20), in
     closed form from the physical parameters — no estimator involved:
 
     * ϑ is the temperature the model is fed minus the reference: the gyro's sensor reads the

@@ -150,7 +150,7 @@ def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
     protocol (at the protocol's orientation, rates and timing); arcsine
     distribution, because the error is a sinusoid of an unknown, uniformly
     distributed tilt azimuth α (JCGM 101 6.4.6: u = a/√2). Pass the result to
-    :func:`gonio.specs.ogam_draft.budget.annex_a_budget` (or another specification's budget) in ``extra_components``. The draft's
+    a specification's budget in ``extra_components``. The draft's
     budget has no such line (``docs/draft-readings.md#tilt-and-earth-rate-coupling``).
 
     Examples

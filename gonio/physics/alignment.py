@@ -1,6 +1,6 @@
 """Rotations, misalignment matrices and the mechanical misalignment budget of a gyro triad.
 
-Conventions (used by :mod:`gonio.bench.triad` and :mod:`gonio.specs.triad_alignment.analysis`)
+Conventions (used by :mod:`gonio.bench.triad` and the triad specification's analysis)
 ---------------------------------------------------------------------------------------
 * The *reference frame* is the fixture's (rate table's) frame, axes x, y, z. A triad's
   outputs obey G = M ω + b ([Looney-alignment] eq. 14, docs/references.md): ω the rate vector in
@@ -331,7 +331,7 @@ class MisalignmentBudget:
         return asdict(self)
 
     def to_text(self) -> str:
-        """The chain as printed by ``gonio budget --spec triad-alignment`` (one line a term)."""
+        """The chain as printed by ``gonio budget --spec KEY`` of the triad specification (one line a term)."""
         rows = [("ψ_x, ledge tilt (eq. 5a)", self.tilt_x_deg, "°"),
                 ("R_S, rotation radius", self.rotation_radius_mm, "mm"),
                 ("ψ_z, skew in the holes (eq. 5b)", self.skew_z_deg, "°"),

@@ -41,7 +41,7 @@ reading, q = 1/K the counter's quantum (two counter readings, each floored).
 Either residual rate r becomes an angle error r·t at a reading taken t after
 zeroing (Annex A.1: t ≤ 0.5 min). :func:`gonio.budget.extra.compensation_component`
 turns its standard uncertainty into an :class:`~gonio.budget.extra.ExtraComponent`
-(normal, half-width = u) for :func:`gonio.specs.ogam_draft.budget.annex_a_budget` — off by
+(normal, half-width = u) for a specification's Annex A budget — off by
 default, so the draft's budget stays reproducible. A tilted sensing axis adds a
 further, position-dependent residual (:mod:`gonio.physics.coupling`).
 """
@@ -254,7 +254,7 @@ def pointing_consistency_prediction(latitude_deg: float, times_s,
     With a constant residual r_g in orientation g (:func:`computed_residual_dps`
     plus an uncompensated bias), the reading at point i taken t_i after zeroing
     is off by r_g·t_i; E_g is the signed extreme over the points (draft 7.4
-    "E = ± max |E_i|", :func:`gonio.specs.ogam_draft.items.signed_extreme`), and
+    "E = ± max |E_i|", the signed extreme of the specification's items), and
     C_g's spread is max E_g − min E_g (draft 7.7).
 
     Examples

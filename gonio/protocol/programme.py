@@ -2,7 +2,7 @@
 
 A programme says what is recorded and under which conditions (table rate, mounting, chamber
 set point, supply, vibration); it is planned by a specification package (e.g.
-:func:`gonio.specs.jjf1535.protocol.plan`) and run on the virtual bench by
+a specification's ``plan``) and run on the virtual bench by
 :func:`gonio.bench.rate_session.run_rate_session` (or on a real bench by the laboratory).
 Planning never needs the simulator, so the calibration path can read a protocol without
 importing :mod:`gonio.bench`.
