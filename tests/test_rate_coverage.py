@@ -45,8 +45,15 @@ def test_wilson_and_item_coverage_by_hand():
 #: issue that fixes it; the test fails if the list is wrong either way.
 KNOWN_OVER_WIDE = {
     ("jjf1535-2015", "sf_repeatability"): "found here: sd z 0.17 on 10 seeds (U ≈ 6× too wide)",
-    **{("iec62047-20", k): f"found here: sd z {v} on 10 seeds" for k, v in (
-        ("startup_time", 0.28), ("bias_instability", 0.29))},
+    ("iec62047-20", "startup_time"): "the study bench has no power-on transient: the true "
+                                     "start-up time is 0 and found 0 in most trials (z ≡ 0); "
+                                     "observed on the built-in benchmark, transient on "
+                                     "(docs/iec62047-20-readings.md#over-wide-budgets-left)",
+    ("iec62047-20", "bias_instability"): "the reduced 6 000 s record puts the Allan floor where "
+                                         "ARW/RRW lift it: a one-sided offset entered as "
+                                         "±excess (sd z 0.29); not over-wide on the built-in "
+                                         "programme (docs/iec62047-20-readings.md"
+                                         "#over-wide-budgets-left)",
     ("jjf1535-2015", "warmup_time"): "the study bench has no power-on transient: the warm-up "
                                      "time is found exactly (z ≡ 0), U is all detection term",
 }
