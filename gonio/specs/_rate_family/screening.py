@@ -6,15 +6,25 @@ finding in ``results.json`` (``findings``) and on the certificate.
 
 Rules (one segment = the rows of one test, run and step, in time order):
 
-* ``output-outlier`` — the output against its two neighbours, r = y_i − (y_{i−1} + y_{i+1})/2:
+* ``output-outlier`` of a record of ≥ 200 rows (not vibration) — the Hampel rule
+  (:func:`hampel_residuals`): y against its running median over 21 samples, set aside beyond
+  8·1.4826·the local median departure (101 samples, at least the segment's); of a rate
+  point (8–199 rows): |y − its median| > 10·1.4826·max(its MAD, the test's pooled MAD).
+* ``record-damaged`` — more than 5 % (and ≥ 3) of a segment's outputs set aside, or in a
+  record at least max(5, 0.1 %) of the rows between 5 and 8 robust σ: refused, naming the
+  first (issue 24: bias records full of ±1000 spikes passed with B_s 48 ± 9 for 19 °/h).
+* ``label-departs`` — ≤ 2 rows whose (test, run, step) differs from that of the rows just
+  before and after them: set aside (a typo moving a reading into a segment of its own).
+* ``output-outlier`` of a vibration segment — the output against its two neighbours, r = y_i − (y_{i−1} + y_{i+1})/2:
   a row is set aside when |r| > 15·1.4826·(median |r| over the 21 rows around it, at least
   the segment's) and is the local maximum (a spike lifts its neighbours by half) — a robust
   15σ of the local scale, which a smooth trend raises with itself, so a warm-up transient
   or a vibration sine is not flagged; a slip of a digit above the noise is. A segment of
   fewer than 8 rows: |y − its median| > 10·1.4826·(median of |y − median| pooled over the
   test's short segments). Also the reference rate of a vibration segment.
-* ``setting-departs`` — rate, frequency, temperature, supply voltage, axes and stand angle
-  are settings of the segment: a row whose value differs from the segment's median by more
+* ``setting-departs`` — rate, frequency, temperature, supply voltage, axes, role and stand
+  angle are settings of the segment (a value given where the segment's other rows have none,
+  or the reverse, is set aside too): a row whose value differs from the segment's median by more
   than max(10·1.4826·MAD, tolerance) (rate 10⁻⁶ relative + 10⁻⁹ °/s, temperature 1 °C,
   supply 0.01 V, frequency 10⁻⁶ relative, stand angle 0.01°; axes: any difference) is set
   aside.
