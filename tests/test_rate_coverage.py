@@ -44,13 +44,6 @@ def test_wilson_and_item_coverage_by_hand():
 #: Items whose U the coverage study finds over-wide today (sd z < 0.3), each with the
 #: issue that fixes it; the test fails if the list is wrong either way.
 KNOWN_OVER_WIDE = {
-    **{("iec62047-20", k): f"{why}; the study bench holds that equipment error at one value, "
-                           "so z cannot spread (docs/iec62047-20-readings.md#over-wide-budgets-left)"
-       for k, why in (("scale_factor", "U is the rate table's certificate term (2.5e-4)"),
-                      ("initial_sf_variation", "U is the rate table's certificate term"),
-                      ("sf_temperature_coefficient", "U is the chamber deviation (±2 °C per "
-                                                     "point, JJF Table 2)"),
-                      ("cross_axis", "U is the input axis's alignment (±0.05°)"))},
     ("jjf1535-2015", "sf_repeatability"): "found here: sd z 0.17 on 10 seeds (U ≈ 6× too wide)",
     **{("iec62047-20", k): f"found here: sd z {v} on 10 seeds" for k, v in (
         ("startup_time", 0.28), ("bias_instability", 0.29))},
