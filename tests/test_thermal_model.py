@@ -115,7 +115,11 @@ def test_order_selection_rates_match_their_statistics():
 
 def test_parameter_and_prediction_uncertainty_coverage():
     """White noise, true orders: coefficient and prediction intervals with
-    k = t_{0.9545,ν} cover 95.45 %; bounds reject u off by 20 %."""
+    k = t_{0.9545,ν} cover at least 95.45 % (within 3.5 binomial sd; a u 20 % small is
+    rejected) and at most 99 %: without a shared soak error about half the draws see soak
+    means scattering less than the points within a soak, and the "never pool" rule of
+    :func:`soak_covariance` (issue 24) keeps their ν_b, so the intervals are conservative
+    there — the price of covering when a shared error is present and hidden."""
     b = tbench()
     p = tproto()
     n_seeds = 120
@@ -140,14 +144,14 @@ def test_parameter_and_prediction_uncertainty_coverage():
     cov = float(np.mean(hits))
     n = len(hits)
     sd = math.sqrt(0.9545 * 0.0455 / n)
-    lo, hi = 0.9545 - 3.5 * sd, 0.9545 + 3.5 * sd
+    lo, hi = 0.9545 - 3.5 * sd, 0.99
     k = stats.t.ppf(0.5 + 0.9545 / 2, nu)
-    for f in (0.8, 1.2):
-        alt = 2 * stats.t.cdf(k * f, nu) - 1
-        assert not lo <= alt <= hi
+    assert 2 * stats.t.cdf(k * 0.8, nu) - 1 < lo
     assert lo <= cov <= hi, (cov, lo, hi)
-    # predictions at 6 temperatures share one fit: correlated, looser check
-    assert 0.90 <= np.mean(pred_hits) <= 0.995
+    # predictions at 6 temperatures share one fit: correlated, looser check; k is the
+    # fit's smallest ν, ν_b where the floor applied, so no upper bound here (the
+    # coefficients' ≤ 99 % above is the over-wide guard)
+    assert 0.90 <= np.mean(pred_hits), np.mean(pred_hits)
 
 
 def test_selected_model_predicts_within_uncertainty_and_arw():
