@@ -11,6 +11,7 @@ import numpy as np
 from gonio.bench.triad import (load_triad_bench, load_triad_protocol, run_alignment_session,
                                run_thermal_session, true_thermal_coefficients)
 from gonio.formats.triad import TriadReadings, format_triad_readings
+from gonio.specs.triad_alignment.calibration import KEY
 
 
 def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed: int = 0,
@@ -19,7 +20,7 @@ def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed:
     table is enabled, the chamber programme (→ ``thermal.csv``, named by the readings'
     ``# thermal_readings:`` metadata); ``truth.json`` holds the
     bench's true values. All files are written atomically; same seed → same bytes."""
-    p = load_triad_protocol(protocol)
+    p = load_triad_protocol(protocol, KEY)
     b = load_triad_bench(bench)
     al = run_alignment_session(p, b, seed)
     md = dict(al.metadata)
@@ -45,7 +46,7 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
     from gonio.specs.triad_alignment.calibration import thermal_items
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 
-    p, b = load_triad_protocol(protocol), load_triad_bench(bench)
+    p, b = load_triad_protocol(protocol, KEY), load_triad_bench(bench)
     s = run_thermal_session(p, b, int(seed))
     r = TriadReadings(s.readings.assign(line=np.arange(len(s.readings)) + 1), s.metadata, None)
     th = identify_thermal_model(r, criterion=criterion, ramps=False)
