@@ -669,6 +669,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     u_r = float(budget.parameters["repeatability_arcsec"])
     drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
     df = readings.data
+    k_u_rel = float(out["scale_factor"].u_c / abs(float(sf.value))) \
+        if "scale_factor" in out and float(sf.value) else 0.0
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
         if not c.measured:
@@ -687,7 +689,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
         out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
                                           scale, table_mpe_arcsec=mpe,
-                                          drift_half_width_arcsec=drift * t_min, k=k_fixed)
+                                          drift_half_width_arcsec=drift * t_min,
+                                          scale_factor_u_rel=k_u_rel, k=k_fixed)
     return out
 
 
