@@ -10,7 +10,7 @@ Rules (one segment = the rows of one test, run and step, in time order):
   (:func:`hampel_residuals`): y against its running median over 21 samples, set aside beyond
   8·1.4826·the local median departure (101 samples, at least the segment's); of a rate
   point (8–199 rows): |y − its median| > 10·1.4826·max(its MAD, the test's pooled MAD).
-* ``record-damaged`` — more than 5 % (and ≥ 3) of a segment's outputs set aside, or in a
+* ``record-damaged`` — more than 5 % (and ≥ 3) of the outputs of a segment of ≥ 20 rows, or in a
   record at least max(5, 0.1 %) of the rows between 5 and 8 robust σ: refused, naming the
   first (issue 24: bias records full of ±1000 spikes passed with B_s 48 ± 9 for 19 °/h).
 * ``label-departs`` — ≤ 2 rows whose (test, run, step) differs from that of the rows just
@@ -101,6 +101,9 @@ HAMPEL_MIN_ROWS = 200
 #: DENSE_MIN_ROWS rows) the record is refused: a record that full of outliers is damaged
 #: (a loose connector, a logger fault), and what is left of it is not a sample of the gyro.
 DENSE_SHARE, DENSE_MIN_ROWS = 0.05, 3
+#: Segments shorter than this are not refused as a whole (a rate point of a few samples:
+#: its outliers are set aside one by one; a noise-free point has no scale to judge by).
+DENSE_MIN_SEGMENT = 20
 
 
 def _quantum_floor(y: np.ndarray) -> float:
@@ -147,8 +150,7 @@ def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> l
         lim = np.full(y.size, max(K_ROBUST * 1.4826 * max(float(pooled or 0.0), own),
                                   _quantum_floor(y) if y.size >= 8 else 0.0,
                                   1e-9 * (1.0 + float(np.max(np.abs(y))))))
-        rule = ("|y − median| > 10·1.4826·max(MAD, pooled MAD of the test's segments "
-                f"< {HAMPEL_MIN_ROWS} rows)")
+        rule = "|y − median| > 10·1.4826·max(MAD, pooled MAD of the test's segments < 8 rows)"
     elif hampel:                # a record or rate point: against its running median
         r, lim = hampel_residuals(y)
         rule = "|y_i − running median (21)| > 8·1.4826·local median |y − running median|"
@@ -163,7 +165,8 @@ def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> l
             out.append(_finding("output-outlier", f"{col} {y[i]:.10g} departs from its "
                                 f"neighbours by {r[i]:+.4g} (limit {lim[i]:.3g})",
                                 df.iloc[idx[i]], col, file, clauses, rule))
-    if len(out) >= DENSE_MIN_ROWS and len(out) > DENSE_SHARE * y.size:
+    if y.size >= DENSE_MIN_SEGMENT and len(out) >= DENSE_MIN_ROWS \
+            and len(out) > DENSE_SHARE * y.size:
         return [_damaged(df, idx, np.abs(r) > lim, col, file, clauses,
                          f"{len(out)} of its {y.size} {col} values are outliers (more than "
                          f"{DENSE_SHARE:.0%}, the first here)",
@@ -328,7 +331,7 @@ def screen_rows(df: pd.DataFrame, file=None, clauses: dict | None = None) -> lis
     tests = df["test"].to_numpy()
     short: dict = {}
     for idx in groups:                   # pooled |y − median| of the short segments per test
-        if 3 <= idx.size < HAMPEL_MIN_ROWS and tests[idx[0]] != "vibration":
+        if 3 <= idx.size < 8:
             short.setdefault(tests[idx[0]], []).append(np.abs(y_all[idx] - np.median(y_all[idx])))
     pooled = {t: float(np.median(np.concatenate(v))) for t, v in short.items()}
     for idx in groups:
