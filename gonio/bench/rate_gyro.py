@@ -323,6 +323,18 @@ class RateBench:
     latitude_deg: float
     north_azimuth_deg: float = 0.0     # azimuth of the gyro's body +x when the mount says "north"
     path: Path | None = None
+    #: The coverage studies' bench: each trial draws the equipment's type-B errors from its
+    #: seed (gonio.bench.equipment.draw_equipment) before it runs.
+    draw_equipment: bool = False
+
+    def for_trial(self, seed: int) -> "RateBench":
+        """The bench one trial of seed ``seed`` runs on: with ``draw_equipment``, the
+        equipment's errors drawn from the seed (:func:`gonio.bench.equipment.draw_equipment`);
+        else this bench."""
+        if not self.draw_equipment:
+            return self
+        from gonio.bench.equipment import draw_equipment
+        return replace(self, equipment=draw_equipment(self.equipment, seed), draw_equipment=False)
 
     def without_noise(self) -> "RateBench":
         """The same bench with every random and equipment error off (truth-recovery checks)."""

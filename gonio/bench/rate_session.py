@@ -89,7 +89,7 @@ def _chamber_track(st: _State, target: float, ramp_c_per_min: float, duration_s:
     start = st.chamber_set
     ramp_t = abs(target - start) / rate if rate > 0 else 0.0
     ch = np.where(t < ramp_t, start + np.sign(target - start) * rate * t, target)
-    off = 0.0 if target == st.room else eq.chamber.deviation_c
+    off = 0.0 if target == st.room else eq.chamber.deviation_at(target)
     ch = ch + np.where(t < ramp_t, 0.0, off)
     a = math.exp(-(duration_s / n) / st.bench.gyro.thermal_tau_s)
     y, _ = signal.lfilter([1 - a], [1, -a], ch, zi=[a * st.temp])
@@ -135,7 +135,7 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         t = st.t + dt * np.arange(n)
         # gyro temperature along the record (chamber holding, with fluctuation)
         ch = target + (0.0 if seg.temperature_c is None else
-                       eq.chamber.deviation_c + eq.chamber.fluctuation_c
+                       eq.chamber.deviation_at(target) + eq.chamber.fluctuation_c
                        * np.sin(2 * math.pi * t / eq.chamber.fluctuation_period_s))
         a = math.exp(-dt / g.thermal_tau_s)
         temp, _ = signal.lfilter([1 - a], [1, -a], np.broadcast_to(ch, (n,)).astype(float),
@@ -157,6 +157,7 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         R0 = mount_matrix(seg.up_axis, seg.north_axis)
         if seg.stand_deg:
             R0 = R0 @ body_rotation(seg.stand_axis, seg.stand_deg)
+        R0 = R0 @ eq.fixture.matrix()                 # the gyro's misalignment in its fixture
         R0 = _small_rotation(rng, math.radians(eq.position_table.position_error_arcsec / ARCSEC_PER_DEG)
                              if noise and seg.rate_dps == 0 and seg.vib_amplitude_dps == 0
                              and ((seg.up_axis, seg.north_axis) != ("+z", "+x") or seg.stand_deg)

@@ -259,6 +259,9 @@ def coverage_validate(spec_key: str, trials: int, *, seed: int = 0, bench: str |
                 "study_bench": f"SPEC.coverage.study_bench = {spec.coverage.study_bench!r}"
                 if spec.coverage.study_bench else "the bench as loaded",
                 "protocol": proto_name,
+                "equipment": "type-B errors drawn per trial from the trial's seed "
+                             "(gonio.bench.equipment.draw_equipment)"
+                if getattr(b, "draw_equipment", False) else "as the bench states",
                 "seeding": f"numpy SeedSequence(seed, spawn_key=({spec.coverage.stream}, "
                            "trial index))"}
     return CoverageReport(settings, coverage_table_from([done[i] for i in range(trials)]))

@@ -145,6 +145,33 @@ def load_readings(readings) -> RateReadings:
     return read_rate_readings(readings)
 
 
+def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str, Item]:
+    """Every item of a rate specification's ``items_module`` computed on ``ctx``: each after
+    the items it needs (``NEEDS``, :func:`gonio.specs.item_order`), each inside
+    :func:`monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
+    refuses the data (a :class:`GonioError`) is reported not measured with the refusal as
+    its reason, nothing dropped; the items returned in ``ITEMS`` order, those in
+    ``NONNEGATIVE`` marked non-negative. ``items_module`` has ``ITEMS`` (rows key, title,
+    clause, function of the context), ``NEEDS``, ``NONNEGATIVE`` and ``with_needs(ctx, done)``
+    (the context an item sees, given the items done so far)."""
+    from gonio.specs import item_order
+
+    items: dict[str, Item] = {}
+    rows = {r[0]: r for r in items_module.ITEMS}
+    for key in item_order(rows, items_module.NEEDS):       # each after the items it needs
+        _, title, clause, fn = rows[key]
+        try:
+            with monte_carlo_validation(monte_carlo_trials):
+                items[key] = fn(items_module.with_needs(ctx, items))
+        except GonioError as exc:
+            items[key] = not_measured(key, title, clause, "",
+                                      f"the data were refused: {exc.message}")
+    items = {k: items[k] for k in rows}
+    for key in items_module.NONNEGATIVE & items.keys():
+        items[key].nonnegative = True
+    return items
+
+
 @dataclass(frozen=True)
 class SegmentMean:
     """Mean and spread of one (test, run, step) segment."""

@@ -34,17 +34,29 @@ def write_simulation(run, out: Path, *, protocol, bench, seed: int = 0,
 
 
 def run_trial(run, bench, protocol, seed: int):
-    """One simulated calibration in memory (noise on): (RateReadings, truth dict)."""
+    """One simulated calibration in memory (noise on): (RateReadings, truth dict). A study
+    bench (``bench.draw_equipment``) first draws its equipment's type-B errors from
+    ``seed`` (:meth:`gonio.bench.rate_gyro.RateBench.for_trial`); the truth records them."""
+    if getattr(bench, "draw_equipment", False):
+        bench = bench.for_trial(int(seed))
     res = run(bench, protocol, int(seed), noise=True)
     return RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), res.truth
 
 
-def study_bench(name: str = "mems-adxrs610"):
+def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True):
     """The rate bench of the coverage study: ``name`` with the power-on transient, the thermal
     lag (τ = 1 s) and the cross-axis sensitivity switched off, the three deterministic,
     history-dependent effects the truth formulas leave out; every random term (noise,
-    power-cycle scatter, quantisation, equipment errors) stays on."""
+    power-cycle scatter, quantisation) stays on.
+
+    ``draw_equipment`` (the default): each trial draws every equipment error a budget
+    carries as type B from its seed — the rate table's rate error and the voltmeter's gain
+    (normal, their certificates' u), the chamber's deviation per set point (uniform,
+    ±2 °C) and the gyro's misalignment in its fixture (uniform, ±0.05° about body x and
+    y); :func:`gonio.bench.equipment.draw_equipment`. Held at one value instead, a type-B
+    error cannot spread z, and a U made of it always looks over-wide (issue 24).
+    ``draw_equipment=False``: the bench file's one realisation in every trial."""
     b = load_rate_bench(name)
     g = replace(b.gyro, warmup_bias_dps=0.0, thermal_tau_s=1.0, cross_axis_x=0.0,
                 cross_axis_y=0.0)
-    return replace(b, gyro=g)
+    return replace(b, gyro=g, draw_equipment=bool(draw_equipment))
