@@ -104,10 +104,15 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
 
 def chamber_points(res: dict) -> list[float]:
     """The chamber temperature points the items were measured at (every item's
-    ``details.temperatures_c``, in order of first appearance)."""
+    ``details.temperatures_c``, in order of first appearance), else the result's
+    ``extra.chamber_profile_c`` (a thermal programme's set points, held by the result)."""
     seen: dict[float, None] = {}
-    for it in res.get("items", {}).values():
-        for x in (it.get("details") or {}).get("temperatures_c") or []:
+    lists = [(it.get("details") or {}).get("temperatures_c") or []
+             for it in res.get("items", {}).values()]
+    if not any(lists):
+        lists = [(res.get("extra") or {}).get("chamber_profile_c") or []]
+    for xs in lists:
+        for x in xs:
             if isinstance(x, (int, float)) and math.isfinite(x):
                 seen.setdefault(float(x), None)
     return list(seen)
