@@ -24,6 +24,7 @@ from gonio.specs.jjf1535 import formulas as jf
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise.stream import value_range
 from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means, Uncertainty)
 from gonio.units import S_PER_H
@@ -131,7 +132,7 @@ def static_noise(ctx: Context) -> dict | None:
         return ctx.cache["static_noise"]
     rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.K)
     out = None
-    if np.ptp(rate_dph) != 0:
+    if value_range(rate_dph) != 0:
         allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
         out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan)}
     ctx.cache["static_noise"] = out
