@@ -78,6 +78,10 @@ def _std_dev_budget(it, s, Q):
     assert it.uncertainty.U == pytest.approx(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1),
                                              rel=1e-9)
     assert it.uncertainty.nu_eff == nu and it.uncertainty.coverage_probability == 0.95
+    assert it.uncertainty.k == pytest.approx(it.uncertainty.U / (s / math.sqrt(2 * nu)))
+    (row,) = it.uncertainty.components             # one type-A row: u = contribution = u_c
+    assert (row["type"], row["c"], row["dof"]) == ("A", 1.0, nu)
+    assert row["u"] == row["contribution"] == pytest.approx(s / math.sqrt(2 * nu), rel=1e-9)
     lo, hi = it.uncertainty.interval
     assert lo == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.975, nu)), rel=1e-9)
     assert hi == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.025, nu)), rel=1e-9)

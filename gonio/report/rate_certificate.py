@@ -271,6 +271,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
     u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
+    chi2 = [k for k, it in res["items"].items()
+            if ((it.get("uncertainty") or {}).get("k_source") == "chi-square")]
+    if chi2:                  # a standard deviation of a few repeats (issue 24): U to the χ² limit
+        add("p", [L["k_chi_square"]])
     blocks += screening_blocks(res, L, getattr(data, "PHRASES_ZH", ()))
     blocks += conformity_blocks(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
