@@ -73,9 +73,10 @@ def main() -> None:
           f"scale-factor rms {c.rms_scale_before_rel * 1e6:.0f} → {c.rms_scale_after_rel * 1e6:.1f} ppm")
     r = modc.ramp
     print(f"  ramps on chamber temperature: static-soak rms {r.rms_static_model_dps:.4f} °/s, "
-          f"lag τ = {r.tau_s:.0f} s (bench 300 s) → {r.rms_with_lag_dps:.4f} °/s; "
+          f"lag {r.lag_text()} (bench 300 s) → {r.rms_with_lag_dps:.4f} °/s; "
           f"γ·dT/dt → {r.rms_with_ramp_term_dps:.4f} °/s; hysteresis {r.hysteresis_dps:.3f} °/s")
-    print(f"  ramps on the internal sensor: rms {mod.ramp.rms_static_model_dps:.4f} °/s")
+    print(f"  ramps on the internal sensor: rms {mod.ramp.rms_static_model_dps:.4f} °/s; "
+          f"lag {mod.ramp.lag_text()} (bench: none)")
 
 
 if __name__ == "__main__":

@@ -146,7 +146,7 @@ def test_same_seed_same_bytes(tmp_path):
 def test_rotation_time_limit_enforced():
     bench = replace(load_bench("rlg"), table=TableConfig(accel_dps2=5.0))
     with pytest.raises(GonioError, match="scale_factor.rounds"):
-        run_session(load_protocol(), bench, seed=0)
+        run_session(load_protocol("ogam-draft"), bench, seed=0)
 
 
 def test_earth_rate_compensation_needed():

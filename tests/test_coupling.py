@@ -137,7 +137,7 @@ def test_table_frame_directions():
 
 def test_budget_component_off_by_default_and_adds_in_quadrature():
     base = annex_a_budget()
-    comp = coupling_budget_component(load_protocol(), 40.0, 0.1)
+    comp = coupling_budget_component(load_protocol("ogam-draft"), 40.0, 0.1)
     with_c = annex_a_budget(extra_components=[comp])
     u_c = comp.half_width_arcsec / math.sqrt(2)            # arcsine, JCGM 101 6.4.6
     assert with_c.gum.u_c == pytest.approx(math.hypot(base.gum.u_c, u_c), rel=1e-9)

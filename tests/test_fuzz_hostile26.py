@@ -623,6 +623,8 @@ IMPORT_CASES = {
                       "metadata.date"),
     "date-text": (lambda d: d["metadata"].__setitem__("date", "yesterday"), "metadata.date"),
     "spec-unknown": (lambda d: d.__setitem__("spec", "no-such-spec"), "spec"),
+    # no specification named anywhere: refused, not guessed (it was taken as the optical draft)
+    "spec-missing": (lambda d: [d.pop("spec"), d["metadata"].pop("spec", None)], "spec"),
     "serial-control": (lambda d: d["metadata"].__setitem__("serial", "A\u0001B"), "serial"),
     "serial-huge": (lambda d: d["metadata"].__setitem__("serial", "S" * 100_000), "serial"),
 }

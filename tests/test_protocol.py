@@ -76,3 +76,21 @@ def test_toml_syntax_error_names_file(tmp_path):
         read_toml(f)
     with pytest.raises(GonioError, match="protocol file not found"):
         load_protocol(tmp_path / "missing.toml")
+
+
+def test_optical_readings_protocol_name_from_the_one_header_reader(tmp_path):
+    """The optical calibration reads '# protocol:' with the pipeline's header reader
+    (gonio.formats.metadata.header_lines; its own copy is gone): BOM and blank lines skipped,
+    the first line wins, a line after the data is no metadata; a file that is not text gives
+    None and is left to the readings reader to name."""
+    from gonio.specs.ogam_draft.calibration import file_protocol_name
+
+    p = tmp_path / "r.csv"
+    p.write_text("\ufeff# spec: ogam-draft\n\n# protocol: mylab\n# protocol: second\n"
+                 "test,table_deg\n# protocol: after\n", encoding="utf-8")
+    assert file_protocol_name(p) == "mylab"
+    p.write_text("# spec: ogam-draft\ntest,table_deg\n# protocol: after\n", encoding="utf-8")
+    assert file_protocol_name(p) is None
+    p.write_bytes(b"PAR1\x00\x01\x02binary")
+    assert file_protocol_name(p) is None
+    assert file_protocol_name(tmp_path / "missing.csv") is None

@@ -143,8 +143,11 @@ def test_jjf_results_json_shape(jjf_noise_off):
         assert set(it) >= {"value", "unit", "clause", "measured", "reason", "uncertainty"}
         assert it["clause"].startswith("7.2.")
         if it["measured"]:
-            assert set(it["uncertainty"]) == {"components", "u_c", "U", "k", "nu_eff",
-                                              "coverage_probability", "k_source"}
+            # K_r and B_r state their χ² interval beside U (issue 24)
+            assert set(it["uncertainty"]) - {"interval"} == {
+                "components", "u_c", "U", "k", "nu_eff", "coverage_probability", "k_source"}
+            assert ("interval" in it["uncertainty"]) == (key in ("sf_repeatability",
+                                                                 "bias_repeatability")), key
             assert it["uncertainty"]["coverage_probability"] == 0.95
     json.dumps(js, allow_nan=False)
     lit = js["items"]["g_sensitivity"]["details"]["literal_per_axis_dph_per_g"]["z"]

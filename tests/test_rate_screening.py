@@ -12,6 +12,7 @@ import csv
 import io
 import json
 
+import numpy as np
 import pytest
 
 from gonio.errors import GonioError
@@ -174,3 +175,146 @@ def test_a_run_entered_with_the_wrong_sign_is_refused_by_line(simulated, tmp_pat
     with pytest.raises(GonioError, match="sign differs") as exc:
         _findings(spec, bad, proto)
     assert exc.value.line == first and exc.value.column == "rate_dps"
+
+
+# --------------------------------------------------------------- issue 24, review of r-jjf
+# A record full of spikes (±1000 in the output of a bias/static record gave B_s = 48 ± 9 °/h
+# for 19 with no finding): each spike is set aside by line while they are few, the record
+# refused when they are many, also when each spike alone stays under the row limit.
+
+def _longest(text, head, header):
+    seg: dict = {}
+    for i in range(head + 1, len(text)):
+        row = dict(zip(header, next(csv.reader([text[i]]))))
+        if row["test"] != "vibration":
+            seg.setdefault((row["test"], row["run"], row["step"]), []).append(i)
+    return max(seg.values(), key=len)
+
+
+def _spiked(readings, dst, every, amp):
+    """``readings`` with ±``amp`` added to the output of every ``every``-th row of its
+    longest record (alternating sign); returns the spiked lines (1-based)."""
+    text, head, header = _rows(readings)
+    rows = _longest(text, head, header)
+    hit = rows[5::every]
+    for n, i in enumerate(hit):
+        row = dict(zip(header, next(csv.reader([text[i]]))))
+        row["output"] = repr(float(row["output"]) + (amp if n % 2 else -amp))
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow([row[h] for h in header])
+        text[i] = buf.getvalue()
+    dst.write_text("".join(text), encoding="utf-8")
+    return [i + 1 for i in hit], len(rows)
+
+
+def _third_point_row(spec):
+    """(pick, seen): ``pick`` selects the third row of the scale-factor point; ``seen`` the
+    rows of that point it has passed."""
+    seen: list = []
+
+    def pick(row):
+        if _sf_point(row, spec):
+            seen.append(row)
+        return len(seen) == 3 and seen[-1] is row
+    return pick, seen
+
+
+def test_a_record_full_of_spikes_is_refused_naming_the_first(simulated, tmp_path):
+    spec, proto, readings, _ = simulated
+    lines, n = _spiked(readings, tmp_path / "dense.csv", 10, 1000.0)     # 10 % of the rows
+    assert n >= 200
+    with pytest.raises(GonioError, match="damaged") as exc:
+        _findings(spec, tmp_path / "dense.csv", proto)
+    assert exc.value.line == lines[0] and exc.value.column == "output"
+
+
+def test_dense_spikes_under_the_row_limit_are_refused_by_the_tail_rule(simulated, tmp_path):
+    # each spike 6.5 robust σ (under the 8σ row limit, over the 5σ tail): 10 % of the rows
+    from gonio.formats.rate_readings import read_rate_readings
+    from gonio.specs._rate_family.screening import hampel_residuals
+    spec, proto, readings, _ = simulated
+    text, head, header = _rows(readings)
+    df = read_rate_readings(readings).data
+    rows = _longest(text, head, header)
+    first = dict(zip(header, next(csv.reader([text[rows[0]]]))))
+    y = df[(df["test"] == first["test"]) & (df["run"].astype(str) == first["run"])
+           & (df["step"].astype(str) == first["step"])]["output"].to_numpy(float)
+    d, lim = hampel_residuals(y)
+    sigma = float(np.median(lim)) / 8.0                 # the robust σ the limit is made of
+    _spiked(readings, tmp_path / "tail.csv", 10, 6.5 * sigma)
+    with pytest.raises(GonioError, match="beyond 5 robust σ"):
+        _findings(spec, tmp_path / "tail.csv", proto)
+
+
+def test_sparse_spikes_are_set_aside_by_line_and_stated(simulated, tmp_path):
+    spec, proto, readings, _ = simulated
+    bad = tmp_path / "sparse.csv"
+    lines, n = _spiked(readings, bad, 97, 1000.0)                         # ≈ 1 %
+    assert len(lines) >= 2
+    result, paths = calibrate_file(bad, tmp_path / "cal", protocol=str(proto))
+    js = json.loads(paths["results"].read_text(encoding="utf-8"))
+    out = [f for f in js["findings"] if f["code"] == "output-outlier"]
+    assert sorted(f["line"] for f in out) == lines and all(
+        f["action"] == "set_aside" and f["column"] == "output" for f in out), js["findings"]
+    assert f"{len(lines)} reading(s) set aside" in js["extra"]["screening"]
+    clean = get(spec).calibrate(str(readings), str(proto))
+    for key, it in result.items.items():          # nothing of the spikes reaches an item
+        if it.measured and clean.items[key].measured and it.uncertainty is not None:
+            assert abs(it.value - clean.items[key].value) <= 0.5 * it.uncertainty.U, key
+    html = next(p for p in paths.values() if str(p).endswith(".html"))
+    page = html.read_text(encoding="utf-8")
+    assert "Screening of the readings" in page and str(lines[0]) in page
+
+
+@pytest.mark.parametrize("column", ("test", "run", "step", "role"))
+def test_a_typo_in_a_label_column_is_set_aside_by_line(simulated, tmp_path, column):
+    # a reading moved by a typo into a segment of its own was a rate point of one sample
+    spec, proto, readings, _ = simulated
+    seen = []
+
+    def pick(row):
+        if _sf_point(row, spec):
+            seen.append(row)
+        return len(seen) == 3 and seen[-1] is row
+
+    def change(row):
+        row[column] = {"test": "bias", "run": "7",
+                       "step": str(int(row["step"]) + 50), "role": "rest"}[column]
+
+    bad = tmp_path / f"label-{column}.csv"
+    line = _edit(readings, bad, pick, change)
+    _, found = _findings(spec, bad, proto)
+    aside = [f for f in found if f["action"] == "set_aside"]
+    assert [(f["line"], f["column"]) for f in aside] == [(line, column)], found
+
+
+def test_a_setting_where_the_segment_has_none_is_set_aside(simulated, tmp_path):
+    spec, proto, readings, _ = simulated
+    pick, _ = _third_point_row(spec)          # its supply_set_v is blank in both formats
+
+    line = _edit(readings, tmp_path / "set.csv", pick,
+                 lambda row: row.__setitem__("supply_set_v", "5.5"))
+    _, found = _findings(spec, tmp_path / "set.csv", proto)
+    assert [(f["line"], f["column"]) for f in found if f["action"] == "set_aside"] == \
+        [(line, "supply_set_v")], found
+
+
+def test_a_late_sample_is_set_aside_and_a_duplicated_one_refused(simulated, tmp_path):
+    spec, proto, readings, _ = simulated
+    pick, seen = _third_point_row(spec)
+
+    def late(row):                              # 0.4 of a sampling step after its time
+        step = float(seen[-1]["time_s"]) - float(seen[-2]["time_s"])
+        row["time_s"] = repr(float(row["time_s"]) + 0.4 * step)
+
+    line = _edit(readings, tmp_path / "late.csv", pick, late)
+    _, found = _findings(spec, tmp_path / "late.csv", proto)
+    late = [f for f in found if f["action"] == "set_aside"]
+    assert [(f["line"], f["column"], f["code"]) for f in late] == \
+        [(line, "time_s", "time-departs")], found
+    text, head, header = _rows(readings)
+    dup = text[:line] + [text[line - 1]] + text[line:]
+    (tmp_path / "dup.csv").write_text("".join(dup), encoding="utf-8")
+    with pytest.raises(GonioError, match="duplicated") as exc:
+        _findings(spec, tmp_path / "dup.csv", proto)
+    assert exc.value.line == line + 1 and exc.value.column == "time_s"

@@ -68,17 +68,53 @@ def test_jjf_scale_factor_budget_u3_and_combination(jjf):
     assert it.uncertainty.U == pytest.approx(student.ppf(0.975, nu) * uc, rel=1e-6)
 
 
-def test_jjf_sf_repeatability_chi2_upper_limit(jjf):
-    """7.2.4: K_r = s(K_m)/K̄; its U is the distance to the χ² 95 % upper limit,
-    s·(√(ν/χ²_0.025,ν) − 1), ν = Q − 1 (k = 2 on the normal term: u = U_term/2)."""
+def _std_dev_budget(it, s, Q):
+    """u_c = s/√(2ν) (GUM E.4.3), U = s·(√(ν/χ²_0.025,ν) − 1), the χ² interval
+    [s·√(ν/χ²_0.975,ν), s·√(ν/χ²_0.025,ν)], ν = Q − 1 (scipy's χ², not the item's code)."""
     from scipy.stats import chi2
+    nu = Q - 1
+    assert it.value == pytest.approx(s, rel=1e-9)
+    assert it.uncertainty.u_c == pytest.approx(s / math.sqrt(2 * nu), rel=1e-9)
+    assert it.uncertainty.U == pytest.approx(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1),
+                                             rel=1e-9)
+    assert it.uncertainty.nu_eff == nu and it.uncertainty.coverage_probability == 0.95
+    assert it.uncertainty.k == pytest.approx(it.uncertainty.U / (s / math.sqrt(2 * nu)))
+    (row,) = it.uncertainty.components             # one type-A row: u = contribution = u_c
+    assert (row["type"], row["c"], row["dof"]) == ("A", 1.0, nu)
+    assert row["u"] == row["contribution"] == pytest.approx(s / math.sqrt(2 * nu), rel=1e-9)
+    lo, hi = it.uncertainty.interval
+    assert lo == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.975, nu)), rel=1e-9)
+    assert hi == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.025, nu)), rel=1e-9)
+
+
+def test_jjf_sf_repeatability_chi2_upper_limit(jjf):
+    """7.2.4: K_r = s(K_m)/K̄; u_c = K_r/√(2ν) (before issue 24 the χ² half-width was a
+    normal term expanded again: u_c 5.3× too large), U the distance to the χ² 95 % upper
+    limit, ν = Q − 1."""
     r, df = jjf
     Ks = _k_by_polyfit(df)
-    kr = Ks.std(ddof=1) / Ks.mean()
-    it = r.items["sf_repeatability"]
-    assert it.value == pytest.approx(kr, rel=1e-9)
-    half = kr * (math.sqrt(2 / chi2.ppf(0.025, 2)) - 1)
-    assert _comp(it, "s(s)")["u"] == pytest.approx(half / 2, rel=1e-9)
+    _std_dev_budget(r.items["sf_repeatability"], Ks.std(ddof=1) / Ks.mean(), Ks.size)
+
+
+def test_jjf_repeatabilities_with_two_and_one_power_ups(jjf, tmp_path):
+    """Q = 2 is a standard deviation with ν = 1; Q = 1 is not measured (the guard Q ≥ 2)."""
+    from gonio.specs.jjf1535 import calibrate
+    r, df = jjf
+    p = reduced_protocol("jjf1535-2015", tmp_path / "p.toml",
+                         {"arw": {"samples": 3000}, "bias": {"samples": 300}})
+    for runs in ((0, 1), (0,)):
+        keep = ~df["test"].isin(["scale_factor", "bias"]) | df["run"].isin(runs)
+        rq = calibrate(RateReadings(df[keep].reset_index(drop=True), {
+            k: str(v) for k, v in r.metadata.items()}), str(p))
+        Ks = _k_by_polyfit(df[keep])
+        d = df[keep & (df["test"] == "bias")]
+        b = d.groupby("run")["output"].mean().to_numpy() / rq.items["scale_factor"].value * 3600
+        if len(runs) == 2:
+            _std_dev_budget(rq.items["sf_repeatability"], Ks.std(ddof=1) / Ks.mean(), 2)
+            _std_dev_budget(rq.items["bias_repeatability"], b.std(ddof=1), 2)
+        else:
+            assert not rq.items["sf_repeatability"].measured
+            assert not rq.items["bias_repeatability"].measured
 
 
 def test_jjf_bias_repeatability_and_stability_by_hand(jjf):
@@ -95,7 +131,7 @@ def test_jjf_bias_repeatability_and_stability_by_hand(jjf):
         n = y.size // P
         rec_s.append(y[: n * P].reshape(n, P).mean(1).std(ddof=1) / K * 3600)
     br = np.std(np.array(rec_b) / K * 3600, ddof=1)
-    assert r.items["bias_repeatability"].value == pytest.approx(br, rel=1e-9)
+    _std_dev_budget(r.items["bias_repeatability"], br, len(rec_b))
     assert r.items["bias_stability"].value == pytest.approx(np.mean(rec_s), rel=1e-9)
 
 

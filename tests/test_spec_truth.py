@@ -79,8 +79,11 @@ def _triad_noise_free():
 def test_triad_truth_is_what_a_noise_free_calibration_finds(monkeypatch):
     b, p, result = _triad_noise_free()
     truth = get("triad-alignment").truth(b, p)
-    assert len(truth) == 9 + 3 + 6 + 6
-    for key, t in truth.items():
+    alignment = {k: t for k, t in truth.items() if k.split("_")[0] in ("M", "b", "S", "L")
+                 and k.count("_") == 1}
+    assert len(alignment) == 9 + 3 + 6 + 6
+    assert len(truth) == len(alignment) + 3 * (7 + 7 + 3)       # K, b to ϑ⁴/U², ARW to ϑ²
+    for key, t in alignment.items():
         assert result.items[key].value == pytest.approx(t["value"], rel=1e-11, abs=1e-13), key
     assert truth["M_xy"]["value"] != 0 and truth["b_y"]["value"] != 0
     import gonio.specs.triad_alignment.analysis as an
@@ -88,4 +91,42 @@ def test_triad_truth_is_what_a_noise_free_calibration_finds(monkeypatch):
     def broken(*a, **k):
         raise AssertionError("the truth called the estimator")
     monkeypatch.setattr(an, "estimate_alignment", broken)
+    assert get("triad-alignment").truth(b, p) == truth
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_triad_thermal_truth_is_what_a_noise_free_identification_finds(monkeypatch):
+    """Issue 24: SPEC.truth holds the thermal coefficients (closed form from the bench's
+    polynomials, :func:`gonio.bench.triad.true_thermal_coefficients`); the built-in chamber
+    programme with settled soaks on a noise-free bench, identified with the bench's orders,
+    finds K and b to 1e-9; a noise-free
+    record has no white noise, so ARW is checked on the noisy bench in the coverage study."""
+    from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_thermal_session
+    from gonio.formats.triad import TriadReadings
+    from gonio.specs.triad_alignment.calibration import thermal_items
+    from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
+
+    b = load_triad_bench("mems-triad")
+    b = replace(b, arw_deg_sqrt_h=(0.0,) * 3, bias_instability_dph=(0.0,) * 3,
+                rate_random_walk_dph_sqrt_h=(0.0,) * 3,
+                thermal=replace(b.thermal, sensor_noise_c=0.0))
+    p = load_triad_protocol("triad-alignment")
+    # soaks of 24 τ_th: settled to e⁻²⁴ (the built-in 1800 s = 6 τ leaves the die drifting
+    # by ~e⁻⁶ of the step during the dwells: a real, 1e-5-relative error of the programme)
+    settled = replace(p, thermal=dict(p.thermal, soak_s=7200.0))
+    s = run_thermal_session(settled, b, 0)
+    r = TriadReadings(s.readings.assign(line=np.arange(len(s.readings)) + 2), s.metadata, None)
+    th = identify_thermal_model(r, fixed_orders={"scale": (2, 1), "bias": (3, 1)}, ramps=False)
+    items = {k: it for k, it in thermal_items(th, "").items() if not k.startswith("ARW")}
+    truth = get("triad-alignment").truth(b, p)
+    assert len(items) == 4 + 5
+    for key, it in items.items():
+        assert it.value == pytest.approx(truth[key]["value"], rel=1e-9, abs=1e-15), key
+    assert truth["b_z_theta3"]["value"] != 0 and truth["b_z_theta4"]["value"] == 0.0
+    import gonio.specs.triad_alignment.thermal_model as tm
+
+    def broken(*a, **k):
+        raise AssertionError("the truth called the estimator")
+    monkeypatch.setattr(tm, "identify_thermal_model", broken)
+    monkeypatch.setattr(tm, "fit_polynomial", broken)
     assert get("triad-alignment").truth(b, p) == truth

@@ -149,3 +149,32 @@ def test_soak_covariance_one_within_degree_of_freedom():
     assert method == "soak components"
     # the slope rests on the soak means: ≈ the fit of the 8 means (one counted with its pair)
     assert nu[1] == pytest.approx(6.0, rel=0.05)
+
+
+def test_soak_covariance_never_pools_when_the_soak_means_hide_their_error():
+    """Issue 24: when the soak means scatter no more than the points within a soak
+    (σ̂_b² ≤ 0), MS_b is floored at MS_w and keeps its ν_b: covariance MS_w (XᵀX)⁻¹, and a
+    temperature coefficient (which rests on the soak means) keeps ν ≈ ν_b, not the n − p of
+    the pooled s²(XᵀX)⁻¹ that gave the study's heavy tails (|z| 6–7 at k ≈ 2.1)."""
+    theta = np.repeat(np.linspace(-60.0, 60.0, 8), 3)
+    u = np.tile([0.0, 0.25, -0.25], 8)
+    soak = np.repeat(np.arange(8), 3)
+    x = design(theta / 60, u / 0.25, 3, 1)
+    rng = np.random.default_rng(3)
+    for _ in range(50):                      # a draw whose soak means scatter little
+        y = 1e-3 * theta + rng.normal(0, 1e-3, 24)
+        coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+        r = y - x @ coef
+        cov, nu, method = soak_covariance(x, r, soak)
+        if method != "soak components":
+            break
+    assert method == "soak components, MS_b floored at MS_w"
+    # independent: MS_w from the residuals of the fit with one mean per soak
+    zx = np.column_stack([np.eye(8)[soak], u / 0.25])
+    cw, *_ = np.linalg.lstsq(zx, y, rcond=None)
+    rw = y - zx @ cw
+    ms_w = float(rw @ rw) / (24 - 9)
+    assert cov == pytest.approx(ms_w * np.linalg.inv(x.T @ x), rel=1e-9)
+    nu_b = 8 - 4                              # soak means less the c0…ϑ³ terms
+    assert nu[1] < nu_b + 1.5 and nu[1] < 0.5 * (24 - 5), nu
+    assert nu[4] > 10                         # the supply term rests on within-soak differences

@@ -23,6 +23,7 @@ from gonio.specs.triad_alignment.thermal_model import (compensate_record, fit_po
 from gonio.bench.triad import (ThermalModel, TriadBench, TriadNoise, TriadProtocol,
                                _alternating, run_thermal_session)
 from gonio.cli import main
+from gonio.formats.jsonsafe import json_safe
 from gonio.formats.triad import TriadReadings, format_triad_readings
 from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dps_to_dph
 
@@ -114,7 +115,11 @@ def test_order_selection_rates_match_their_statistics():
 
 def test_parameter_and_prediction_uncertainty_coverage():
     """White noise, true orders: coefficient and prediction intervals with
-    k = t_{0.9545,ν} cover 95.45 %; bounds reject u off by 20 %."""
+    k = t_{0.9545,ν} cover at least 95.45 % (within 3.5 binomial sd; a u 20 % small is
+    rejected) and at most 99 %: without a shared soak error about half the draws see soak
+    means scattering less than the points within a soak, and the "never pool" rule of
+    :func:`soak_covariance` (issue 24) keeps their ν_b, so the intervals are conservative
+    there — the price of covering when a shared error is present and hidden."""
     b = tbench()
     p = tproto()
     n_seeds = 120
@@ -139,14 +144,14 @@ def test_parameter_and_prediction_uncertainty_coverage():
     cov = float(np.mean(hits))
     n = len(hits)
     sd = math.sqrt(0.9545 * 0.0455 / n)
-    lo, hi = 0.9545 - 3.5 * sd, 0.9545 + 3.5 * sd
+    lo, hi = 0.9545 - 3.5 * sd, 0.99
     k = stats.t.ppf(0.5 + 0.9545 / 2, nu)
-    for f in (0.8, 1.2):
-        alt = 2 * stats.t.cdf(k * f, nu) - 1
-        assert not lo <= alt <= hi
+    assert 2 * stats.t.cdf(k * 0.8, nu) - 1 < lo
     assert lo <= cov <= hi, (cov, lo, hi)
-    # predictions at 6 temperatures share one fit: correlated, looser check
-    assert 0.90 <= np.mean(pred_hits) <= 0.995
+    # predictions at 6 temperatures share one fit: correlated, looser check; k is the
+    # fit's smallest ν, ν_b where the floor applied, so no upper bound here (the
+    # coefficients' ≤ 99 % above is the over-wide guard)
+    assert 0.90 <= np.mean(pred_hits), np.mean(pred_hits)
 
 
 def test_selected_model_predicts_within_uncertainty_and_arw():
@@ -209,6 +214,11 @@ def test_ramp_error_of_a_static_soak_model_and_the_lag():
     assert np.sqrt(np.mean(resid[steady] ** 2)) == pytest.approx(
         np.sqrt(np.mean(lag_err[steady] ** 2)), rel=0.25)
     assert ra.tau_s == pytest.approx(tau, rel=0.15)
+    # its 95 % interval holds the bench's τ; on the sensor (no lag) no lag is resolved
+    assert ra.tau_resolved and ra.lag_case == "fit"
+    assert ra.tau_low_s <= tau <= ra.tau_high_s, (ra.tau_low_s, ra.tau_high_s)
+    assert not se.ramp.tau_resolved and se.ramp.tau_low_s == 0.0
+    assert se.ramp.lag_text().startswith("not resolved")
     assert ra.rms_with_lag_dps < 0.3 * ra.rms_static_model_dps
     assert ra.hysteresis_dps > 5 * se.ramp.rms_static_model_dps
     assert se.ramp.rms_static_model_dps < 0.2 * ra.rms_static_model_dps
@@ -275,3 +285,28 @@ def test_cli_plot_needs_a_gyro_choice_when_several(tmp_path, capsys):
     assert "--gyro" in capsys.readouterr().err
     assert main(["thermal-model", str(f), "--plot", str(tmp_path / "p.png"), "--gyro", "x"]) == 0
     assert (tmp_path / "p.png").stat().st_size > 1000
+
+
+def test_lag_interval_on_the_built_in_programme_covers_and_never_states_a_bound():
+    """Issue 24: on the built-in programme the chamber-to-die lag (bench τ = 300 s) lies in
+    the fitted lag's 95 % interval (the first-order-hold discretisation: a zero-order hold
+    biased τ̂ by +30 s, half a 60 s block, outside every interval); fed with the internal
+    sensor (no lag on the bench) the lag is stated 'not resolved' with its upper bound,
+    never as the search's bound τ̂ = 0 (seed 3 printed 'lag τ fit 0 s')."""
+    from gonio.bench.triad import load_triad_bench, load_triad_protocol
+    from gonio.specs.triad_alignment.certificate import lag_phrase
+
+    p, b = load_triad_protocol("triad-alignment"), load_triad_bench("mems-triad")
+    taus = []
+    for seed in (3, 5):
+        r = readings(run_thermal_session(p, b, seed=seed))
+        ch = identify_thermal_model(r, temperature="chamber").channels["z"].ramp
+        se = identify_thermal_model(r, temperature="sensor").channels["z"].ramp
+        assert ch.tau_resolved and ch.tau_low_s <= 300.0 <= ch.tau_high_s, ch.lag_text()
+        taus.append(ch.tau_s)
+        assert se.lag_case == "bound" and se.tau_high_s < 60.0, se.lag_text()
+        for lang in ("en", "zh"):
+            text = lag_phrase(json_safe(se.to_json()), lang)
+            assert "τ ≤" in text and "τ = " not in text, text
+        assert lag_phrase(json_safe(ch.to_json()), "en").startswith(f"τ = {ch.tau_s:.0f} s")
+    assert abs(np.mean(taus) - 300.0) < 15.0, taus

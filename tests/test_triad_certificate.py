@@ -282,3 +282,21 @@ def test_triad_programme_beyond_the_limits_is_refused_naming_the_key(tmp_path, c
     assert rc == 2 and len(err) == 1, err
     assert key in err[0] and var in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_environment_states_the_chamber_profile(run):
+    """The triad's environment block had no chamber-profile row (leftover 5): the set points
+    the thermal programme soaked at, read here from thermal.csv's soak rows, are stated
+    there; a calibration without a thermal programme states none."""
+    import pandas as pd
+    from gonio.report.i18n import labels
+
+    th = pd.read_csv(run["dir"] / "sim" / "thermal.csv", comment="#")
+    points = list(dict.fromkeys(round(float(x), 1) for x in th[th["phase"] == "soak"]["chamber_c"]))
+    assert len(points) >= 3
+    want = ", ".join(f"{x:g}" for x in points) + " °C"
+    assert run["res"]["extra"]["chamber_profile_c"] == points
+    L = labels("en")
+    row = re.search(rf"<td>{re.escape(html.escape(L['chamber_profile']))}</td><td>([^<]*)</td>",
+                    run["html"])
+    assert row is not None and row[1] == html.escape(want), row

@@ -183,3 +183,35 @@ def test_bytes_identical_with_default_batches_on_any_workers():
     one = run(workers=1)
     assert run(workers=2) == one
     assert run(workers=2, batch_size=1) == one
+
+
+def test_cluster_by_address_sized_by_its_workers_and_reused(monkeypatch):
+    """issue 26: a study on a cluster given by its address cuts its default batches for the
+    cluster's own worker count (not a guess of 2: 320 trials on 16 workers must not be 8
+    tasks), and a second study on the same cluster reuses the client and its warmed
+    workers; the bytes stay those of one local worker."""
+    pytest.importorskip("distributed")
+    import logging
+
+    import gonio.pipeline.engine as E
+    from distributed import LocalCluster
+
+    _, b = V.study_workers(320, None, "tcp://127.0.0.1:1", None, 1, cluster_workers=16)
+    assert len(V.batches(range(320), b)) >= 4 * 16
+    assert V.study_workers(320, None, "tcp://127.0.0.1:1", None)[1] == 40   # before connecting
+    sizes = []
+    real = E.study_workers
+    monkeypatch.setattr(V, "study_workers", lambda *a, **k: sizes.append(a) or real(*a, **k))
+    one = run(workers=1)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+        addr = cluster.scheduler_address
+        try:
+            assert run(scheduler=addr) == one
+            client = E._CLIENTS[addr]
+            warmed = set(E._WARMED[addr])
+            assert len(warmed) == 2 and sizes[-1][-1] == 2      # the cluster's own count
+            assert run(scheduler=addr) == one
+            assert E._CLIENTS[addr] is client and E._WARMED[addr] == warmed
+        finally:
+            E._forget(addr)

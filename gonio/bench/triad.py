@@ -289,7 +289,7 @@ class TriadNoise:
 _PROTOCOL_SCHEMA = {
     "protocol": Field("table", schema={
         "name": Field("str"),
-        "spec": Field("str", default="triad-alignment"),
+        "spec": Field("str", default=""),     # "": the loader's spec_key
     }),
     "alignment": Field("table", schema={
         "rates_dps": Field("float_list", check=positive, expect="> 0"),
@@ -324,7 +324,7 @@ _PROTOCOL_SCHEMA = {
 
 @dataclass(frozen=True)
 class TriadProtocol:
-    """The triad session (``protocols/triad-alignment.toml``)."""
+    """The triad session (a triad protocol file, ``protocols/<name>.toml``)."""
 
     name: str
     spec: str
@@ -339,10 +339,14 @@ class TriadProtocol:
     path: str = ""
 
 
-def load_triad_protocol(name_or_path) -> TriadProtocol:
-    """Read and validate a triad protocol file."""
+def load_triad_protocol(name_or_path, spec_key: str | None = None) -> TriadProtocol:
+    """Read and validate a triad protocol file. Its ``[protocol] spec`` names the
+    specification the readings are for; a file without one takes ``spec_key`` (the
+    specification package that loads it passes its key), and with neither it is refused."""
     path = resolve(name_or_path, kind="protocol")
     cfg = validate_table(read_toml(path), _PROTOCOL_SCHEMA, file=path)
+    if not (cfg["protocol"]["spec"] or spec_key):
+        raise GonioError("the protocol names no specification", file=path, key="protocol.spec")
     al = cfg["alignment"]
     north0 = al["north0"] or {"x": "+y", "y": "+z", "z": "+x"}
     from gonio.physics.alignment import SIGNED_AXES
@@ -356,7 +360,8 @@ def load_triad_protocol(name_or_path) -> TriadProtocol:
             raise GonioError(f"expected one of {', '.join(SIGNED_AXES)}, got {code!r}", file=path,
                              key=f"thermal.up[{i}]")
     st = cfg["static"] or {"duration_s": 600.0}
-    return TriadProtocol(cfg["protocol"]["name"], cfg["protocol"]["spec"], tuple(al["rates_dps"]),
+    return TriadProtocol(cfg["protocol"]["name"], cfg["protocol"]["spec"] or spec_key,
+                         tuple(al["rates_dps"]),
                          al["revolutions"], al["settle_s"], al["static_positions"],
                          al["static_dwell_s"], dict(north0), st["duration_s"], dict(th), str(path))
 

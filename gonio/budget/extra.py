@@ -160,7 +160,8 @@ def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
     expanded, has no line for it):
 
     >>> from gonio.protocol import load_protocol
-    >>> c = coupling_budget_component(load_protocol(), 40.0, 0.1)
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> c = coupling_budget_component(load_protocol(get(DEFAULT_KEY).default_protocol), 40.0, 0.1)
     >>> c.symbol, c.distribution, round(c.half_width_arcsec, 2)
     ('C_te', 'arcsine', 0.48)
     """
@@ -245,7 +246,8 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
     Examples
     --------
     >>> from gonio.protocol import load_protocol
-    >>> p = load_protocol()
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
     >>> df = pd.DataFrame({"test": ["scale_factor"] * 6 + ["angle_deviation"] * 2,
     ...     "table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0, 180.0, 360.0],
     ...     "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0, 13.0, 16.0]})

@@ -94,7 +94,7 @@ def run(args) -> int:
     if spec.named_inputs is not None:                # never replaced or removed
         inputs += list(spec.named_inputs(args.readings))
         check_output_dir(args.out, inputs=inputs, force=args.force)
-    lab_d = load_lab_file(args.lab)                               # validated before the work
+    lab_d = load_lab_file(args.lab, spec)                               # validated before the work
     status("calibrating")
     from gonio.report.certificate import naming_lab_file
     with naming_lab_file(args.lab):

@@ -11,7 +11,7 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, check_not_binary
 from gonio.units import ARCSEC_PER_DEG
 
 #: Metadata keys the package understands (others are kept).
@@ -37,6 +37,48 @@ _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")
 _NUMBER = re.compile(r"^[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?$")
 _NONFINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
+
+
+def header_lines(path):
+    """The leading ``# key: value`` lines of a text file (a stream of gigabytes is never
+    read whole), as (key, value) pairs in file order (a line without ``:`` gives the value
+    ``""``). A binary file or one that is not UTF-8 is a GonioError naming it.
+
+    >>> import tempfile, os
+    >>> with tempfile.NamedTemporaryFile("w", suffix=".csv", delete=False) as f:
+    ...     _ = f.write(chr(0xFEFF) + "# spec: x" + 2 * chr(10) + "# protocol : p" + chr(10)
+    ...                 + "t,v" + chr(10) + "# not: metadata" + chr(10))
+    >>> list(header_lines(f.name))
+    [('spec', 'x'), ('protocol', 'p')]
+    >>> os.remove(f.name)
+    """
+    fh = open(path, "rb")
+    with fh:
+        head = b""
+        while True:
+            piece = fh.read(1 << 16)
+            if not head:
+                check_not_binary(piece, path)      # a Parquet file renamed .csv says so
+            head += piece
+            try:
+                text = head.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                if exc.start < len(head) - 4 or not piece:
+                    raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
+                                     line=head[:exc.start].count(b"\n") + 1) from None
+                continue                           # a character cut at the piece's end
+            lines = text.lstrip("\ufeff").splitlines()
+            complete = lines if not piece else lines[:-1]
+            for line in complete:
+                s = line.strip()
+                if not s:
+                    continue
+                if not s.startswith("#"):
+                    return
+                key, _, value = s[1:].partition(":")
+                yield key.strip(), value.strip()
+            if not piece:
+                return
 
 
 def metadata_float(metadata: Mapping[str, str], key: str, *,

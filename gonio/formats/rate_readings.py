@@ -136,11 +136,11 @@ def read_rate_readings(path: str | Path) -> RateReadings:
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
-    >>> _ = p.write_text("# spec: jjf1535-2015\\ntest,run,step,role,time_s,output\\n"
+    >>> _ = p.write_text("# spec: a-rate-spec\\ntest,run,step,role,time_s,output\\n"
     ...                  "bias,0,0,record,1800,2500.06\\n")
     >>> r = read_rate_readings(p)
     >>> r.metadata["spec"], float(r.data["output"][0]), r.data["up_axis"][0]
-    ('jjf1535-2015', 2500.06, '+z')
+    ('a-rate-spec', 2500.06, '+z')
     """
     path = Path(path)
     return parse_rate_readings(read_utf8(path, "readings file"), path=path)

@@ -12,7 +12,8 @@ import json
 from pathlib import Path
 
 from gonio.atomic import output_set
-from gonio.errors import GonioError, check_input_file, check_not_binary, read_utf8
+from gonio.errors import GonioError, check_input_file, read_utf8
+from gonio.formats.metadata import header_lines
 from gonio.specs import Specification, get
 
 #: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
@@ -41,38 +42,6 @@ def refuse_options(spec: Specification, given: dict, accepted: frozenset, comman
     return out
 
 
-def _header_lines(path):
-    """The leading ``# key: value`` lines of a text file (a stream of gigabytes is never
-    read whole), as (key, value) pairs."""
-    fh = open(path, "rb")
-    with fh:
-        head = b""
-        while True:
-            piece = fh.read(1 << 16)
-            if not head:
-                check_not_binary(piece, path)      # a Parquet file renamed .csv says so
-            head += piece
-            try:
-                text = head.decode("utf-8")
-            except UnicodeDecodeError as exc:
-                if exc.start < len(head) - 4 or not piece:
-                    raise GonioError(f"not UTF-8 text (byte {exc.start})", file=path,
-                                     line=head[:exc.start].count(b"\n") + 1) from None
-                continue                           # a character cut at the piece's end
-            lines = text.lstrip("\ufeff").splitlines()
-            complete = lines if not piece else lines[:-1]
-            for line in complete:
-                s = line.strip()
-                if not s:
-                    continue
-                if not s.startswith("#"):
-                    return
-                key, _, value = s[1:].partition(":")
-                yield key.strip(), value.strip()
-            if not piece:
-                return
-
-
 def readings_spec(path: str | Path) -> str | None:
     """The ``# spec: …`` metadata of a readings file (None when absent), or the key of the
     specification whose ``readings_format`` the file's ``# format:`` line names.
@@ -89,7 +58,7 @@ def readings_spec(path: str | Path) -> str | None:
     except OSError:
         read_utf8(path, "readings file")       # the one-line error naming the file
         raise
-    for key, value in _header_lines(path):
+    for key, value in header_lines(path):
         if key == "spec":
             return value
         if key == "format":
@@ -115,11 +84,21 @@ def simulate(spec_key: str, out: str | Path, *, bench: str | None = None,
                              bench=bench or spec.default_bench, seed=seed, **opts)
 
 
-def load_lab_file(lab):
-    """The laboratory file as a dict (validated before any work), or the dict given."""
-    if isinstance(lab, (str, Path)):
+def load_lab_file(lab, spec: Specification | None = None):
+    """The laboratory file as a dict (validated before any work), or the dict given. With
+    ``spec``, a ``[[specification_limits]]`` entry naming an item the specification does not
+    have (``spec.item_keys``, when it knows them before the data) is a GonioError naming the
+    file, the entry and the item: refused before anything is computed, not after."""
+    path = lab if isinstance(lab, (str, Path)) else None
+    if path is not None:
         from gonio.report.certificate import load_lab
-        return load_lab(lab)
+        lab = load_lab(path)
+    if spec is not None and spec.item_keys and lab:
+        for i, lim in enumerate(lab.get("specification_limits") or []):
+            if lim.get("item") not in spec.item_keys:
+                raise GonioError(f"{spec.key} has no item {lim.get('item')!r} (its items: "
+                                 f"{', '.join(spec.item_keys)})", file=path,
+                                 key=f"specification_limits[{i}].item")
     return lab
 
 
@@ -147,7 +126,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     spec = spec_of(spec_key, readings)
     opts = refuse_options(spec, {"protocol": protocol, "dcc": dcc, **options},
                           spec.calibrate_options, "calibrate")
-    lab_d = load_lab_file(lab)
+    lab_d = load_lab_file(lab, spec)
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
@@ -169,7 +148,7 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
     write. Returns (result, {name: path})."""
     spec = get(spec_key)
     renderer = spec.renderer()
-    lab_d = load_lab_file(lab)                  # validate inputs before simulating
+    lab_d = load_lab_file(lab, spec)            # validate inputs before simulating
     ins = [x for x in (*inputs, lab, bench) if isinstance(x, (str, Path)) and str(x)]
     if hasattr(renderer, "demo"):
         return renderer.demo(out, bench=bench or spec.default_bench, seed=seed, lab=lab_d,

@@ -7,6 +7,7 @@ what a trial is.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
 from typing import Sequence
@@ -15,7 +16,8 @@ from gonio.errors import GonioError
 from gonio.limits import limit
 
 __all__ = ["MAX_BATCH", "TASKS_PER_WORKER", "WORKER_THREADS", "worker_threads", "batches",
-           "available_cores", "execution_backend", "study_workers", "run_parallel"]
+           "available_cores", "execution_backend", "study_workers", "run_parallel",
+           "close_clients"]
 
 #: Largest batch (trials per task).
 MAX_BATCH = 250
@@ -63,6 +65,18 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
+#: Dask settings of the LocalCluster a study starts (``--scheduler local:N``): the
+#: workers' statistical profiler (a thread sampling the running task every 10 ms, which
+#: competes with it for the GIL) is off; a trial needs no profile.
+LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False}
+
+#: Clients of the Dask schedulers this process has connected to, by address: a study on the
+#: same cluster reuses its client and its warmed workers (issue 26: the cluster warmed
+#: once, not per study). Closed when the process exits.
+_CLIENTS: dict[str, object] = {}
+_WARMED: dict[str, set] = {}
+
+
 @contextlib.contextmanager
 def execution_backend(workers: int, scheduler: str | None):
     """joblib's configuration for the study: yields the ``n_jobs`` to give ``Parallel``.
@@ -73,8 +87,16 @@ def execution_backend(workers: int, scheduler: str | None):
     address ``distributed.Client`` accepts): an existing Dask cluster. Both use
     joblib's Dask backend, so the trials run through the same code either way.
     """
+    with _backend(workers, scheduler) as (n_jobs, _):
+        yield n_jobs
+
+
+@contextlib.contextmanager
+def _backend(workers: int, scheduler: str | None):
+    """(n_jobs, worker count) of :func:`execution_backend`; the count is the cluster's
+    own for a Dask scheduler (its threads), which sizes the default batch."""
     if scheduler is None:
-        yield workers
+        yield workers, workers
         return
     try:
         from distributed import Client, LocalCluster
@@ -84,32 +106,69 @@ def execution_backend(workers: int, scheduler: str | None):
                          key="scheduler") from None
     import logging
 
+    import dask
+
     cluster = None
     if scheduler.startswith("local:"):
         n = scheduler[len("local:"):]
         if not n.isdigit() or int(n) < 1:
             raise GonioError(f"--scheduler local:N needs N >= 1 workers, got {scheduler!r}",
                              key="scheduler")
-        cluster = LocalCluster(n_workers=int(n), threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
-        address = cluster
-    else:
-        address = scheduler
+        with dask.config.set(LOCAL_CLUSTER_CONFIG):
+            cluster = LocalCluster(n_workers=int(n), threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
     try:
-        try:
-            client = Client(address, timeout="20s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise GonioError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}",
-                             key="scheduler") from None
+        client = _client(Client, cluster if cluster is not None else scheduler, scheduler,
+                         keep=cluster is None)
         try:
             _warm_workers(client, scheduler)
-            with parallel_config(backend="dask"):
-                yield -1
+            with parallel_config(backend="dask", client=client):
+                yield -1, max(1, sum(client.nthreads().values()))
         finally:
-            client.close()
+            if cluster is not None:
+                client.close()
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _client(Client, address, scheduler: str, keep: bool):
+    """A client of ``address``: for an existing cluster (``keep``) the one this process
+    already holds when it still answers, else a new one (kept for the next study)."""
+    old = _CLIENTS.get(scheduler) if keep else None
+    if old is not None:
+        try:
+            if old.status == "running":
+                old.scheduler_info()             # answers: the cluster is still there
+                return old
+        except Exception:  # noqa: BLE001 - a stale client: connect afresh
+            pass
+        _forget(scheduler)
+    try:
+        client = Client(address, timeout="20s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise GonioError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}",
+                         key="scheduler") from None
+    if keep:
+        if not _CLIENTS:
+            atexit.register(close_clients)
+        _CLIENTS[scheduler] = client
+    return client
+
+
+def _forget(scheduler: str) -> None:
+    client = _CLIENTS.pop(scheduler, None)
+    _WARMED.pop(scheduler, None)
+    if client is not None:
+        with contextlib.suppress(Exception):
+            client.close()
+
+
+def close_clients() -> None:
+    """Close the clients kept for clusters given by address (call before shutting such a
+    cluster down in a process that goes on; done at exit)."""
+    for scheduler in list(_CLIENTS):
+        _forget(scheduler)
 
 
 def _warm_worker() -> str:
@@ -123,18 +182,26 @@ def _warm_worker() -> str:
 
 def _warm_workers(client, scheduler: str) -> None:
     """Every worker of the cluster imports the trial code once, all at the same time,
-    before any task is sent (not each on its first task); a worker that cannot import
+    before any task is sent (not each on its first task; a worker already warmed by an
+    earlier study of this process is not asked again); a worker that cannot import
     gonio is one clear error, not a traceback per task."""
+    workers = set(client.scheduler_info().get("workers", {}))
+    warmed = _WARMED.setdefault(scheduler, set())
+    if workers and workers <= warmed:
+        return
     try:
-        client.run(_warm_worker)
+        client.run(_warm_worker, workers=sorted(workers - warmed) or None)
+        warmed |= workers
     except Exception as exc:  # noqa: BLE001 - any worker-side failure, reported in one line
+        _WARMED.pop(scheduler, None)
         raise GonioError(f"the Dask workers of {scheduler!r} cannot run gonio "
                          f"({type(exc).__name__}: {str(exc)[:200]}); install gonio there",
                          key="scheduler") from None
 
 
 def study_workers(trials: int, workers: int | None, scheduler: str | None,
-                  batch_size: int | None, cases: int = 1) -> tuple[int | None, int]:
+                  batch_size: int | None, cases: int = 1,
+                  cluster_workers: int | None = None) -> tuple[int | None, int]:
     """(workers, batch size) of a study.
 
     ``workers`` default min(2, cores); local workers and a ``local:N`` cluster are capped
@@ -143,8 +210,10 @@ def study_workers(trials: int, workers: int | None, scheduler: str | None,
     default comes from the trial count and the workers: all ``cases`` × ``trials`` trials
     in about :data:`TASKS_PER_WORKER` tasks per worker (so that the last tasks finish
     together and a slow worker holds little back), at most ``trials`` (batches are per
-    case) and :data:`MAX_BATCH`. Bad values are GonioErrors. The results never depend on
-    either.
+    case) and :data:`MAX_BATCH`. On a Dask cluster the workers are ``cluster_workers``
+    (its own count once connected, :func:`run_parallel`), else the N of ``local:N``
+    (2 for an address before connecting). Bad values are GonioErrors. The results never
+    depend on either.
 
     >>> study_workers(320, 1, None, None)           # one worker: 4 tasks of 80
     (1, 80)
@@ -175,7 +244,8 @@ def study_workers(trials: int, workers: int | None, scheduler: str | None,
             raise GonioError(f"--scheduler {scheduler}: {int(n)} worker processes exceed "
                              f"{cap_note} (set GONIO_MAX_WORKERS to raise the cap)",
                              key="scheduler")
-    n_workers = workers if scheduler is None else _scheduler_workers(scheduler)
+    n_workers = workers if scheduler is None else (cluster_workers
+                                                   or _scheduler_workers(scheduler))
     if batch_size is None:
         per_task = -(-(trials * max(1, cases)) // (TASKS_PER_WORKER * max(1, n_workers)))
         batch_size = max(1, min(MAX_BATCH, trials, per_task))
@@ -185,14 +255,20 @@ def study_workers(trials: int, workers: int | None, scheduler: str | None,
     return workers, batch_size
 
 
-def run_parallel(fn, tasks: list[tuple], workers: int | None, scheduler: str | None):
+def run_parallel(fn, tasks, workers: int | None, scheduler: str | None):
     """``fn(*task)`` for every task through joblib (:func:`execution_backend`), yielded as
-    they finish (unordered: the caller puts them back in trial order)."""
-    if not tasks:
+    they finish (unordered: the caller puts them back in trial order). ``tasks``: a list,
+    or a function of the number of workers the backend has (a Dask cluster's own count,
+    known once connected) giving the list."""
+    if not callable(tasks) and not tasks:
         return
     from joblib import Parallel, delayed
 
-    with execution_backend(workers, scheduler) as n_jobs:
+    with _backend(workers, scheduler) as (n_jobs, n_workers):
+        if callable(tasks):
+            tasks = tasks(n_workers)
+            if not tasks:
+                return
         run = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
         yield from run(delayed(fn)(*t) for t in tasks)
 

@@ -349,11 +349,16 @@ def run_study(study, trials: int, *, workers: int | None = None, scheduler: str 
     :func:`run_parallel`), keeping each finished batch in ``partial_dir`` and reusing them
     on ``resume``; the report comes from the trials put back in trial order."""
     names = list(study.jobs)
+    default_batch = batch_size is None
     workers, batch_size = study_workers(trials, workers, scheduler, batch_size, len(names))
     done: dict[str, dict] = {name: {} for name in names}
     store = _open_store(study, trials, partial_dir, resume, done)
-    tasks = [(study.jobs[name], a, b) for name in names
-             for a, b in batches([i for i in range(trials) if i not in done[name]], batch_size)]
+    def tasks(n_workers: int) -> list[tuple]:
+        size = batch_size
+        if default_batch and scheduler is not None:     # the cluster's own worker count
+            size = study_workers(trials, workers, scheduler, None, len(names), n_workers)[1]
+        return [(study.jobs[name], a, b) for name in names
+                for a, b in batches([i for i in range(trials) if i not in done[name]], size)]
     already = sum(len(d) for d in done.values())
     prog = Progress(trials * len(names), label="validate: trials", done=already,
                     force=False) if show_progress else None

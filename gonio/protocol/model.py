@@ -1,7 +1,8 @@
-"""The draft's procedures as data: loading and validating a protocol (TOML).
+"""The optical draft's procedures as data: loading and validating a protocol (TOML).
 
-``protocols/ogam-draft.toml`` restates clauses 6, 7.1–7.7 and Annex A of the
-draft as data; a laboratory writes its own protocol (say 24 points at 15°, or
+The optical draft's built-in protocol (``protocols/<its default_protocol>.toml``, named by
+the registry, :mod:`gonio.specs`) restates clauses 6, 7.1–7.7 and Annex A of the draft as
+data; a laboratory writes its own protocol (say 24 points at 15°, or
 5 repeats) without touching code. :func:`load_protocol` validates every key:
 an unknown key, a wrong type or an impossible value is a
 :class:`~gonio.errors.GonioError` naming the file and the key.
@@ -439,10 +440,12 @@ def check_protocol_ranges(sec: dict, raw: dict, file) -> None:
             "(set GONIO_MAX_READINGS to raise it)")
 
 
-def load_protocol(path: str | Path = "ogam-draft") -> Protocol:
-    """Load and validate a protocol file (a path, or a built-in name such as ``ogam-draft``).
+def load_protocol(path: str | Path) -> Protocol:
+    """Load and validate a protocol file (a path, or a built-in name: a specification's
+    ``default_protocol``; the caller names it, this layer knows no specification).
 
-    >>> p = load_protocol()
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
     >>> [r.stop_deg for r in p.scale_factor.rounds]
     [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> p.angle_deviation.series, len(p.angle_deviation.rounds)

@@ -125,7 +125,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         except ValueError:
             raise GonioError(f"not a date (YYYY-MM-DD): {str(meta['date'])[:40]!r}",
                              file=res_path, key="metadata.date") from None
-    key = spec_key or results.get("spec") or meta.get("spec") or "ogam-draft"
+    key = spec_key or results.get("spec") or meta.get("spec")
+    if not key:      # every results.json gonio writes names its specification: no guessing
+        raise GonioError("results.json names no specification (no 'spec'); give the "
+                         "specification's key (--spec)", file=res_path, key="spec")
     from gonio.specs import get
     get(key)
     rd = _readings_in(folder, str(source.get("sha256", "")), Path(readings) if readings else None)

@@ -33,6 +33,7 @@ import datetime as _dt
 import html
 import io
 import math
+import re
 import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
@@ -634,15 +635,28 @@ def css_string(text: str) -> str:
     return '"' + text + '"'
 
 
-def _h(x) -> str:
+#: A lone relation sign in a table cell's text, bound to its sides with no-break spaces (and
+#: a per-cent sign to the number segment before it), so a browser never wraps "p ≈ / 95 %"
+#: (the PDF: :func:`_glue`). A plain "27 %" keeps its space.
+_BIND = re.compile(r" (≈|=|≤|≥|&lt;|&gt;) ")
+
+
+def _h(x, cell: bool = False) -> str:
+    """HTML of a text, a number (its span with the rule it was rounded by), a NoBreak or a
+    list of them; ``cell``: a table cell's text, relations bound (:data:`_BIND`)."""
     if isinstance(x, Num):
         return (f'<span class="num" data-src="{html.escape(x.src)}" '
                 f'data-rule="{html.escape(x.rule)}">{html.escape(x.text)}</span>')
     if isinstance(x, NoBreak):
         return f'<span class="nb">{html.escape(str(x))}</span>'
     if isinstance(x, list):
-        return "".join(_h(s) for s in x)
-    return html.escape(str(x))
+        return "".join(_h(s, cell) for s in x)
+    s = html.escape(str(x))
+    if cell:
+        s = _BIND.sub(lambda m: f"\u00a0{m[1]}\u00a0", s)
+        if s.startswith(" %"):                  # "95 %" whose number is the segment before
+            s = "\u00a0" + s[1:]
+    return s
 
 
 def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: str | None) -> str:
@@ -686,11 +700,11 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         elif b.kind == "table":
             head, rows = b.data
             tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
-            keep = len(rows) <= KEEP_WHOLE_ROWS         # kept whole on a printed page
+            keep = html_keep_whole(head, rows, b.extra)   # kept whole on a printed page
             out.append(('<div class="keep">' if keep else "")
                        + f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
                        + "</tr></thead><tbody>"
-                       + "".join("<tr>" + "".join(f"<td>{_h(c)}</td>" for c in r) + "</tr>"
+                       + "".join("<tr>" + "".join(f"<td>{_h(c, True)}</td>" for c in r) + "</tr>"
                                  for r in rows) + "</tbody></table>" + ("</div>" if keep else ""))
         elif b.kind == "fig":
             key, cap, _ = b.data
@@ -723,18 +737,32 @@ _NO_START = set("。，、；：？！）」』】〉》)]}%,;:")
 _NO_END = set("（「『【〈《([{")
 
 
+#: A relation standing alone between spaces binds its two sides: "p ≈ 95 %", "k = 2.07".
+_RELATIONS = frozenset("≈=≤≥<>")
+
+
 def _glue(tokens: list[str]) -> list[str]:
     """Wrapping tokens with a closing mark joined to the token before it and an opening mark
-    to the token after it, so no line starts with ")" or "。" nor ends with "(".
+    to the token after it, so no line starts with ")" or "。" nor ends with "("; a lone
+    relation sign is joined to both its sides (no line ends with "p ≈").
 
     >>> _glue(["k", "）", "。"]), _glue(["（", "a", "b"]), _glue(["≈ ", "95 ", "%)"])
-    (['k）。'], ['（a', 'b'], ['≈ ', '95 %)'])
+    (['k）。'], ['（a', 'b'], ['≈ 95 %)'])
+    >>> _glue(["0.012 ", "(k ", "= ", "2.07, ", "p ", "≈ ", "95 ", "%)"])
+    ['0.012 ', '(k = 2.07, ', 'p ≈ 95 %)']
     """
     out: list[str] = []
     carry = ""
+    bind = False
     for tok in tokens:
         tok = carry + tok
         carry = ""
+        relation = tok.strip() in _RELATIONS and len(tok.strip()) == 1
+        if out and (bind or relation):
+            out[-1] += tok
+            bind = relation
+            continue
+        bind = relation
         if out and tok and tok[0] in _NO_START and (not out[-1].endswith(" ")
                                                       or tok[0] == "%"):   # "95 %" whole
             out[-1] += tok
@@ -747,27 +775,33 @@ def _glue(tokens: list[str]) -> list[str]:
     return out
 
 
+def _tokens(para: str) -> list[str]:
+    """The unbreakable pieces of one paragraph: words with their trailing space, each CJK
+    character alone, glued (:func:`_glue`)."""
+    tokens: list[str] = []
+    word = ""
+    for ch in para:
+        if ch == " ":
+            tokens.append(word + " ")
+            word = ""
+        elif unicodedata.east_asian_width(ch) in "WF":
+            if word:
+                tokens.append(word)
+            tokens.append(ch)
+            word = ""
+        else:
+            word += ch
+    if word:
+        tokens.append(word)
+    return _glue(tokens)
+
+
 def _wrap(text: str, width: int) -> list[str]:
     """Wrap ``text`` to ``width`` columns (CJK characters count two; breaks at spaces or CJK)."""
     lines: list[str] = []
     for para in str(text).split("\n"):
         line, w = "", 0
-        tokens: list[str] = []
-        word = ""
-        for ch in para:
-            if ch == " ":
-                tokens.append(word + " ")
-                word = ""
-            elif unicodedata.east_asian_width(ch) in "WF":
-                if word:
-                    tokens.append(word)
-                tokens.append(ch)
-                word = ""
-            else:
-                word += ch
-        if word:
-            tokens.append(word)
-        for tok in _glue(tokens):
+        for tok in _tokens(para):
             tw = _width(tok)
             if w + tw > width and line:
                 lines.append(line.rstrip())
@@ -801,9 +835,8 @@ def _longest_token(c) -> int:
     """Width (columns) of the longest unbreakable piece of a cell."""
     if isinstance(c, NoBreak):
         return _width(str(c))
-    toks = _text(c).replace("\n", " ").split(" ")
-    return max((_width(t) if not any(unicodedata.east_asian_width(ch) in "WF" for ch in t)
-                else 2 for t in toks), default=0)
+    return max((_width(t.rstrip()) for para in _text(c).split("\n") for t in _tokens(para)),
+               default=0)
 
 
 def fit_widths(widths, head, rows, cols_per_frac: float) -> tuple[float, ...]:
@@ -867,14 +900,47 @@ KEEP_WHOLE_ROWS: int = 8
 #: A longer table starts on a page with its head and at least this many rows; its head is
 #: repeated on every continuation page.
 KEEP_FIRST_ROWS: int = 3
+#: A short table is not kept whole when moving it to the next page would leave more than this
+#: fraction of the page's text height blank (the optical certificate's page 1 was left with a
+#: fifth of it blank): it starts where it is, with its head and first
+#: :data:`SPLIT_FIRST_ROWS` rows, and goes on under its repeated head.
+MAX_BLANK_FRACTION: float = 1 / 8
+#: The rows a short table split by :data:`MAX_BLANK_FRACTION` starts with (no lone row).
+SPLIT_FIRST_ROWS: int = 2
+#: The HTML (laid out by the browser) keeps a short table whole when it is at most this
+#: fraction of a page's text height (:func:`html_keep_whole`).
+HTML_KEEP_WHOLE_FRACTION: float = 1 / 4
 
 
-def table_start(units: list) -> float:
+def html_keep_whole(head, rows, extra) -> bool:
+    """Whether the HTML keeps a table whole on a printed page (the browser lays it out, so
+    PDF's rule of :func:`table_start` cannot be applied): at most :data:`KEEP_WHOLE_ROWS` rows
+    and, counted in lines at the PDF's column widths, at most
+    :data:`HTML_KEEP_WHOLE_FRACTION` of a page, so that moving it whole never leaves more
+    than that blank."""
+    if len(rows) > KEEP_WHOLE_ROWS:
+        return False
+    lay = _Layout(8.5)
+    widths = extra["widths"] if isinstance(extra, dict) else extra
+    widths = fit_widths(widths, head, rows, lay.cols(1.0) * 1.0)
+    lines = sum(max(len(_cell_lines(c, lay.cols(w) - 1)) for c, w in zip(r, widths))
+                for r in [head, *rows])
+    return lines * lay.line <= HTML_KEEP_WHOLE_FRACTION * (_TOP - _BOTTOM)
+
+
+def table_start(units: list, room: float | None = None) -> float:
     """Height a table needs where it starts: its head with its first rows — all of them for a
     table of at most :data:`KEEP_WHOLE_ROWS` rows, else :data:`KEEP_FIRST_ROWS` — so a head
-    never ends a page with its rows on the next one."""
+    never ends a page with its rows on the next one. ``room``: the height left on the page;
+    a short table that does not fit there is still started there (head and
+    :data:`SPLIT_FIRST_ROWS` rows) when keeping it whole would leave more than
+    :data:`MAX_BLANK_FRACTION` of the page blank."""
     rows = [u for u in units if u[2] == "row"]
     n = len(rows) if len(rows) <= KEEP_WHOLE_ROWS else KEEP_FIRST_ROWS
+    whole = units[0][0] + sum(u[0] for u in rows)
+    if (room is not None and n == len(rows) and whole > room
+            and room > MAX_BLANK_FRACTION * (_TOP - _BOTTOM)):
+        n = min(n, SPLIT_FIRST_ROWS)
     h = units[0][0] + sum(u[0] for u in rows[:n])
     return h if h <= _TOP - _BOTTOM - 40 * _PT else units[0][0] + sum(u[0] for u in rows[:1])
 
@@ -883,16 +949,17 @@ def table_start(units: list) -> float:
 KEEP_PARAGRAPH_LINES: int = 4
 
 
-def block_start(block: Block, units: list) -> float:
-    """Height a block needs on the page where it starts: a table's :func:`table_start`, a
-    short paragraph whole (at most :data:`KEEP_PARAGRAPH_LINES` lines), else its first unit."""
+def block_start(block: Block, units: list, room: float | None = None) -> float:
+    """Height a block needs on the page where it starts: a table's :func:`table_start` (with
+    the ``room`` left), a short paragraph whole (at most :data:`KEEP_PARAGRAPH_LINES` lines),
+    else its first unit."""
     if not units:
         return 0.0
     if block.kind == "table":
-        return table_start(units)
+        return table_start(units, room)
     lines = [u[0] for u in units if u[2] == "line"]
     if block.kind in ("p", "notice") and len(lines) <= KEEP_PARAGRAPH_LINES:
-        return sum(lines)
+        return sum(u[0] for u in units)         # its lines and the gap after them
     return units[0][0]
 
 
@@ -911,6 +978,7 @@ def layout_pages(content: dict, L: dict) -> list[list]:
     lay.put(title_h, title)
     blocks = content["blocks"]
     units = [_units(b, lay, content, L) for b in blocks]
+    room_at: dict[int, float] = {}     # a table's room as judged where its heading was placed
     for i, b in enumerate(blocks):
         if b.kind in ("h", "sub"):
             # keep with the next block's first unit (and every following heading's)
@@ -920,12 +988,15 @@ def layout_pages(content: dict, L: dict) -> list[list]:
                 keep += units[j][0][0]
                 j += 1
             if j < len(blocks):
-                keep += block_start(blocks[j], units[j])
+                room = lay.y - _BOTTOM - units[i][0][0] - keep
+                room_at[j] = room
+                keep += block_start(blocks[j], units[j], room)
                 # a short note between a heading and its table: keep the table's start too
                 if (blocks[j].kind == "p" and j + 1 < len(blocks)
                         and blocks[j + 1].kind == "table"
                         and len(units[j]) <= KEEP_PARAGRAPH_LINES):
-                    keep += block_start(blocks[j + 1], units[j + 1])
+                    room_at[j + 1] = room - keep
+                    keep += block_start(blocks[j + 1], units[j + 1], room - keep)
             lay.need(units[i][0][0] + keep)
         elif b.kind in ("p", "notice"):
             lay.need(block_start(b, units[i]))
@@ -934,8 +1005,8 @@ def layout_pages(content: dict, L: dict) -> list[list]:
                 head_h, head_op, _ = units[i][0]
                 lay.need(h + head_h)
                 lay.put(head_h, head_op)
-            elif kind == "head":
-                lay.need(table_start(units[i]))
+            elif kind == "head":      # decided as for its heading: it stays with it
+                lay.need(table_start(units[i], room_at.get(i, lay.y - _BOTTOM)))
             if kind == "gap":
                 lay.y -= h
                 continue

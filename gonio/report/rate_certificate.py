@@ -104,10 +104,15 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
 
 def chamber_points(res: dict) -> list[float]:
     """The chamber temperature points the items were measured at (every item's
-    ``details.temperatures_c``, in order of first appearance)."""
+    ``details.temperatures_c``, in order of first appearance), else the result's
+    ``extra.chamber_profile_c`` (a thermal programme's set points, held by the result)."""
     seen: dict[float, None] = {}
-    for it in res.get("items", {}).values():
-        for x in (it.get("details") or {}).get("temperatures_c") or []:
+    lists = [(it.get("details") or {}).get("temperatures_c") or []
+             for it in res.get("items", {}).values()]
+    if not any(lists):
+        lists = [(res.get("extra") or {}).get("chamber_profile_c") or []]
+    for xs in lists:
+        for x in xs:
             if isinstance(x, (int, float)) and math.isfinite(x):
                 seen.setdefault(float(x), None)
     return list(seen)
@@ -266,6 +271,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
     u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
+    chi2 = [k for k, it in res["items"].items()
+            if ((it.get("uncertainty") or {}).get("k_source") == "chi-square")]
+    if chi2:                  # a standard deviation of a few repeats (issue 24): U to the χ² limit
+        add("p", [L["k_chi_square"]])
     blocks += screening_blocks(res, L, getattr(data, "PHRASES_ZH", ()))
     blocks += conformity_blocks(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])

@@ -23,6 +23,7 @@ import numpy as np
 from gonio.report.i18n import display
 from gonio.result.statement import item_statement
 from gonio.specs import get
+from gonio.units import dph_sqrt_hz_from_deg_sqrt_h
 
 
 #: Figure text, (English, Chinese).
@@ -48,6 +49,13 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
     "adev": ("overlapping Allan deviation", "重叠 Allan 偏差"),
     "adev_fit": ("five-term fit: N → {a} °/√h, coefficient B {b} °/h",
                  "五项拟合：N → {a} °/√h，系数 B {b} °/h"),
+    "fit_is_cert": (" (N is the certified ARW, {c})", "（N 即证书所给 ARW，{c}）"),
+    "fit_not_cert": ("five-term fit, drawn only: N {a} °/√h, B {b} °/h (not certified)",
+                     "五项拟合（仅作图）：N {a} °/√h，B {b} °/h（非证书值）"),
+    "arw_cert": ("N/√τ at the certified ARW {v} °/√h ({c}, its own estimator)",
+                 "N/√τ，证书所给 ARW {v} °/√h（{c}，其自身估计方法）"),
+    "bi_cert": ("certified bias instability {v} °/h ({c}, its own estimator)",
+                "证书所给零偏不稳定性 {v} °/h（{c}，其自身估计方法）"),
     "eq24": ("eq (24) as printed (not the Allan variance)", "按原文式(24)（非 Allan 方差）"),
     "gain": ("gain (dB)", "增益 (dB)"),
     "m3db": ("−3 dB at {f} Hz", "−3 dB 点 {f} Hz"),
@@ -218,6 +226,24 @@ def draw_temperature(fig, spec, result, L, truth=None) -> None:
     ax.set_xlabel(_t(L, "temp"))
 
 
+def _same(certified, fitted) -> bool:
+    """Whether a certified value is the five-term fit's own number (the same estimator)."""
+    return fitted is not None and math.isclose(float(certified), float(fitted), rel_tol=1e-9)
+
+
+def _fit_label(L: dict, f: dict, arw, bi) -> str:
+    """The five-term fit's legend: its N and B beside the certified items they are, or
+    marked as drawn only when the certified ARW (or bias instability) comes from another
+    estimator (IEC 62047-20 5.4.5.2 reads a slope −½ line at 1 h), so that the figure never
+    shows a number beside the stated value as if it were the one certified."""
+    arw_fit = arw is not None and _same(arw.value, f["arw_deg_sqrt_h"])
+    bi_fit = bi is None or _same(bi.value, f.get("bias_instability_dph"))
+    if (arw is None or arw_fit) and bi_fit:
+        label = _t(L, "adev_fit", a=_near(f["arw_deg_sqrt_h"], arw), b=_near(f["B"], bi))
+        return label + (_t(L, "fit_is_cert", c=arw.clause) if arw_fit else "")
+    return _t(L, "fit_not_cert", a=_near(f["arw_deg_sqrt_h"], arw), b=_near(f["B"], bi))
+
+
 def draw_allan(fig, spec, result, L, truth=None) -> None:
     """Overlapping Allan deviation (°/h) with its χ² band and the fitted five-term model."""
     from gonio.analysis.noise import model_adev
@@ -234,10 +260,17 @@ def draw_allan(fig, spec, result, L, truth=None) -> None:
                     color="C0", alpha=0.2, lw=0)
     ax.loglog(tau, adev, "o", ms=2.5, color="C0", label=_t(L, "adev"))
     f = it.details["fit"]
+    arw, bi = _role(result, "arw"), _role(result, "bias_instability")
     ax.loglog(tau, model_adev(tau, f["Q"], f["N"], f["B"], f["K"], f["R"]), "-", color="C3",
-              lw=1, label=_t(L, "adev_fit", a=_near(f["arw_deg_sqrt_h"], _role(result, "arw")),
-                             b=_near(f["B"], _role(result, "bias_instability"))))
-    ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
+              lw=1, label=_fit_label(L, f, arw, bi))
+    if arw is not None and not _same(arw.value, f["arw_deg_sqrt_h"]):
+        # the certified ARW comes from another estimator than the fit's N: its own line
+        ax.loglog(tau, dph_sqrt_hz_from_deg_sqrt_h(arw.value) / np.sqrt(tau), ":", color="0.2",
+                  lw=1.0, label=_t(L, "arw_cert", v=_stated(arw), c=arw.clause))
+    else:
+        ax.loglog(tau, f["N"] / np.sqrt(tau), ":", color="0.4", lw=0.8, label="N/√τ")
+    if bi is not None and not _same(bi.value, f.get("bias_instability_dph")):
+        ax.plot([], [], " ", label=_t(L, "bi_cert", v=_stated(bi), c=bi.clause))
     pr = it.details.get("printed_eq22_24_statistic") or {}
     if pr:
         ks = np.array([int(k) for k in pr], float)

@@ -154,6 +154,11 @@ class Specification:
         The module holding its certificate's content as data (its headings, groups, Chinese
         titles, ``NORM``, what its figures differ in); the shared renderers read it through
         :meth:`content`, never by guessing from a module's name. Empty: none.
+    item_keys : tuple of str
+        The keys of the items every result of it holds, whatever the data: a laboratory
+        file's ``[[specification_limits]]`` entry naming another item is refused before any
+        work (:func:`gonio.pipeline.dispatch.load_lab_file`). Empty: the items depend on the
+        data (they are checked once calibrated).
     commands : tuple of (str, str)
         The ``gonio`` sub-commands the specification adds: ``(name, "module:function")``
         pairs; ``function(subparsers)`` adds the parser ``name`` (argparse) and sets its
@@ -186,6 +191,7 @@ class Specification:
     default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
+    item_keys: tuple[str, ...] = ()
 
     def renderer(self):
         """The module named by ``outputs`` (imported on first use)."""

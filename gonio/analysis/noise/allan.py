@@ -65,6 +65,7 @@ from scipy import fft as sfft
 from gonio.analysis.noise.edf import (
     chi2_interval, edf_for, noise_id_b1, noise_id_lag1, remove_quadratic,
 )
+from gonio.analysis.noise.stream import CumulativeSum, Record
 from gonio.errors import GonioError
 
 __all__ = [
@@ -90,6 +91,9 @@ _BLOCK = 1 << 16  # samples per chunk of the direct O(N) sums (keeps temporaries
 _BLOCK_SHARED = 1 << 16  # chunk of the chunk-outside loop (:func:`_sums_direct_shared`)
 #: Most decimated points the noise identification looks at (a central sub-record).
 ID_MAX_POINTS = 1 << 16
+#: τ whose decimated sub-records a streamed phase gives in one pass (memory: this many
+#: times ID_MAX_POINTS points).
+_ID_GROUP = 4
 
 
 # --------------------------------------------------------------------- dataclass
@@ -353,6 +357,11 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
     ms = [int(m) for m in ms]
     n = x.size
     bsz = min(_BLOCK_SHARED, n)
+    if isinstance(x, CumulativeSum) and len(ms) > 1 and max(ms) > bsz:
+        # a streamed phase: each m beyond a chunk on its own (its three far pieces then
+        # move along the blocks together and stay cached; all m at once would evict them);
+        # every m's chunks are summed in the same order, so the sums are the same
+        return _split_sums(x, ms, bsz)
     buf = np.empty(3 * bsz)
     total = np.zeros(len(ms))
     lengths = [n - 2 * m for m in ms]
@@ -367,7 +376,8 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
             k = e - s
             if m <= bsz:
                 d1 = buf[: k + m]
-                sub(x[s + m: e + 2 * m], x[s: e + m], out=d1)
+                xs = x[s: e + 2 * m]            # one slice (a streamed phase: one copy)
+                sub(xs[m:], xs[: k + m], out=d1)
                 v = buf[k + m: 2 * k + m]
                 sub(d1[m:], d1[:k], out=v)
             else:
@@ -380,6 +390,19 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
     return total
 
 
+def _split_sums(x, ms: list[int], bsz: int) -> np.ndarray:
+    """:func:`_sums_direct_shared` of a streamed phase: the m within a chunk together,
+    each larger m alone."""
+    small = [i for i, m in enumerate(ms) if m <= bsz]
+    out = np.empty(len(ms))
+    if small:
+        out[small] = _sums_direct_shared(x, [ms[i] for i in small])
+    for i, m in enumerate(ms):
+        if m > bsz:
+            out[i] = _sums_direct_shared(x, [m])[0]
+    return out
+
+
 def _sum_sq_mod(x: np.ndarray, m: int) -> float:
     """Σ_j (Σ_{i=j}^{j+m−1} x[i+2m] − 2x[i+m] + x[i])², j = 0 … N−3m (SP 1065 eq. 14).
 
@@ -389,6 +412,8 @@ def _sum_sq_mod(x: np.ndarray, m: int) -> float:
     """
     n = x.size
     n_terms = n - 3 * m + 1
+    if m > _BLOCK and isinstance(x, (CumulativeSum, _Window)):
+        return _sum_sq_mod_streamed(x, m, n_terms)
     chunk = max(_BLOCK, m)
     e = np.empty(chunk + m)
     total = 0.0
@@ -402,6 +427,24 @@ def _sum_sq_mod(x: np.ndarray, m: int) -> float:
         e[0] = 0.0
         np.cumsum(e[: k + 1], out=e[: k + 1])
         total += _ssq(e[m: k + 1] - e[: k + 1 - m])
+    return total
+
+
+def _sum_sq_mod_streamed(x, m: int, n_terms: int) -> float:
+    """:func:`_sum_sq_mod` of a streamed phase at a large m, in bounded memory: the moving
+    sums of the second differences as differences of their cumulative sum, itself
+    streamed (never an array of m points)."""
+    def second_differences(a, b):
+        d = x[a + 2 * m: b + 2 * m]
+        d -= x[a + m: b + m]
+        d -= x[a + m: b + m]
+        d += x[a:b]
+        return d
+    c = CumulativeSum(Record(n_terms + m - 1, second_differences))
+    total = 0.0
+    for s in range(0, n_terms, _BLOCK):
+        e = min(n_terms, s + _BLOCK)
+        total += _ssq(c[s + m: e + m] - c[s:e])
     return total
 
 
@@ -984,6 +1027,11 @@ def _mdev_local_sums(x: np.ndarray, ms: np.ndarray, rtol: float) -> np.ndarray:
 
 
 # -------------------------------------------------------------------- public API
+def _id_start(size: int, m: int) -> int:
+    """First point of the central sub-record the identification looks at, at m."""
+    return max(0, (size - ID_MAX_POINTS * m) // 2)
+
+
 def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_taus: bool):
     """Noise type per τ: lag-1 autocorrelation (d_max 3 for hdev, else 2) on the
     longest gap-free stretch of x (a central sub-record of at most ID_MAX_POINTS
@@ -1010,19 +1058,36 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
     a_lag = np.zeros(probe.size, dtype=np.int64)
     a_b1 = np.full(probe.size, np.nan)
     last = 0
+    decs: dict[int, np.ndarray] = {}
     for i, m in enumerate(probe):
+        if isinstance(seg, CumulativeSum) and int(m) not in decs:
+            # the decimated sub-records of the next τ in one pass over the phase, as many
+            # as hold _ID_GROUP sub-records of ID_MAX_POINTS points together
+            group, points = [], 0
+            for v in (int(v) for v in probe[i:]):
+                size = min(ID_MAX_POINTS, seg.size // v + 1)
+                if group and points + size > _ID_GROUP * ID_MAX_POINTS:
+                    break
+                group.append(v)
+                points += size
+            decs = dict(zip(group, seg.decimations(
+                [(_id_start(seg.size, v), _id_start(seg.size, v) + ID_MAX_POINTS * v, v)
+                 for v in group])))
         m = int(m)
         span = ID_MAX_POINTS * m
-        if seg.size > span:
-            c0 = (seg.size - span) // 2
-            sub = seg[c0: c0 + span]
+        c0 = _id_start(seg.size, m)
+        if isinstance(seg, CumulativeSum):
+            # streamed: the decimated points only (≤ ID_MAX_POINTS), R(n) from the sums
+            dec = decs[m]
+            r = noise_id_lag1(dec, 1, d_max=d_max)
+            b = noise_id_b1(dec, m, rn_ratio=lambda: _rn_streamed(seg, c0, span, m))
         else:
-            sub = seg
-        r = noise_id_lag1(sub, m, d_max=d_max)
+            sub = seg[c0: c0 + span] if seg.size > span else seg
+            r = noise_id_lag1(sub, m, d_max=d_max)
+            b = noise_id_b1(sub, m)
         if r is not None:
             last = r[0]
         a_lag[i] = last
-        b = noise_id_b1(sub, m)
         if b is not None:
             a_b1[i] = b
     if probe is ms:
@@ -1036,6 +1101,39 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
         out_a[c0: c0 + step] = a_lag[pos]
         out_b[c0: c0 + step] = a_b1[pos]
     return out_a, out_b
+
+
+class _Window:
+    """Points c0 … c0 + size − 1 of a sliceable series, indexed from 0."""
+
+    def __init__(self, base, c0: int, size: int):
+        self.base, self.c0, self.size = base, int(c0), int(min(size, base.size - c0))
+
+    def __getitem__(self, key):
+        a, b, step = key.indices(self.size)
+        return self.base[self.c0 + a: self.c0 + max(a, b): step]
+
+
+def _rn_streamed(x, c0: int, span: int, m: int) -> float | None:
+    """R(n) = MVAR/AVAR at m (:func:`gonio.analysis.noise.edf.noise_id_b1`) of the points
+    c0 … c0 + span − 1 of a streamed phase, from the chunked sums of eqs. 11 and 14."""
+    w = _Window(x, c0, span)
+    n = w.size
+    if n - 3 * m + 1 < 1:
+        return None
+    avar = float(_sums_direct_shared(w, [m])[0]) / (n - 2 * m)
+    mvar = _sum_sq_mod(w, m) / (m * m * (n - 3 * m + 1))
+    return mvar / avar if avar > 0 else None
+
+
+def _streamed_phase(data: Record, input_type: str, taus, kind: str):
+    """The phase of a :class:`~gonio.analysis.noise.stream.Record` given as a rate, as a
+    :class:`~gonio.analysis.noise.stream.CumulativeSum` (never held whole), or None where
+    the estimator needs the whole array (gaps, angle input, total deviation, every τ)."""
+    every = isinstance(taus, str) and taus.strip().lower() == "all"
+    if input_type != "rate" or kind == "totdev" or every or not data.all_finite():
+        return None
+    return CumulativeSum(data, data.mean())
 
 
 def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
@@ -1102,10 +1200,19 @@ def allan_deviation(data, tau0_s: float, input_type: str, taus="octave", *,
     """
     kind = _resolve_kind(kind, modified, confidence)
     tau0_s, scale = _check_args(input_type, tau0_s, scale)
-    arr = _as_array(data)
+    x = None
+    if isinstance(data, Record):
+        if data.size < 3:
+            raise GonioError(f"need at least 3 samples, got {data.size}", key="data")
+        x = _streamed_phase(data, input_type, taus, kind)
+        if x is None:
+            data = data.to_array()
+    arr = data if x is not None else _as_array(data)
     n_samples = arr.size
     factor = 1.0
-    if input_type == "rate":
+    if x is not None:
+        bad, factor = None, tau0_s
+    elif input_type == "rate":
         # the phase is τ0·x: applied to the deviation at the end (one pass less)
         x, bad = _phase(arr, "increment", tau0_s, 1.0)
         factor = tau0_s

@@ -495,7 +495,7 @@ def rn_expected(m: int, alpha: int) -> float:
     raise GonioError("R(n) is used for alpha 2 and 1 only", key="alpha")
 
 
-def noise_id_b1(x: np.ndarray, m: int) -> int | None:
+def noise_id_b1(x: np.ndarray, m: int, *, rn_ratio=None) -> int | None:
     """Noise type α at averaging factor m by the B1 ratio, with R(n) separating white
     from flicker phase noise (SP 1065 §5.6.2; the cross-check of :func:`noise_id_lag1`).
 
@@ -511,10 +511,14 @@ def noise_id_b1(x: np.ndarray, m: int) -> int | None:
     >>> rng = np.random.default_rng(1)
     >>> noise_id_b1(np.cumsum(rng.standard_normal(20000)), 8)   # white rate
     0
+
+    ``rn_ratio``: ``x`` is then the phase already decimated (``phase[::m]``) and
+    ``rn_ratio()`` gives R(n) at m of the whole-resolution phase, or None where it cannot
+    be formed (a record analysed in pieces, :mod:`gonio.analysis.noise.stream`).
     """
     x = np.asarray(x, dtype=np.float64)
     m = int(m)
-    xd = x[::m]
+    xd = x[::m] if rn_ratio is None else x
     nav = xd.size - 1
     if nav < 8:
         return None
@@ -528,10 +532,18 @@ def noise_id_b1(x: np.ndarray, m: int) -> int | None:
                                                  / b1_expected(nav, c[0]))))
     if best[0] != -2 or m < 2:
         return best[1]
-    # R(n): modified / overlapping Allan variance at m
+    rn = _rn_ratio(x, m) if rn_ratio is None else rn_ratio()
+    if rn is None:
+        return 2
+    bound = math.sqrt(rn_expected(m, 2) * rn_expected(m, 1))
+    return 2 if rn < bound else 1
+
+
+def _rn_ratio(x: np.ndarray, m: int) -> float | None:
+    """R(n) = MVAR/AVAR at m of the phase ``x``; None when too short or AVAR is 0."""
     n = x.size
     if n - 3 * m + 1 < 1:
-        return 2
+        return None
     # One record-sized array at a time (the values and summation order of
     # sd = x[2m:] − 2x[m:n−m] + x[:n−2m]; avar = mean(sd²); c = [0, cumsum(sd)];
     # w = (c[m:] − c[:−m])/m; mvar = mean(w²)): sd whole for its mean, then c built
@@ -562,11 +574,7 @@ def noise_id_b1(x: np.ndarray, m: int) -> int | None:
     np.square(w, out=w)
     mvar = float(np.mean(w))
     del w, c
-    if avar_o <= 0:
-        return 2
-    rn = mvar / avar_o
-    bound = math.sqrt(rn_expected(m, 2) * rn_expected(m, 1))
-    return 2 if rn < bound else 1
+    return mvar / avar_o if avar_o > 0 else None
 
 
 # ---------------------------------------------------------------------- intervals

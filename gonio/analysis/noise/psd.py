@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
+from gonio.analysis.noise.stream import Record
+
 __all__ = ["welch_psd", "WELCH_PIECE_SEGMENTS"]
 
 #: Segments whose periodograms are formed at a time.
@@ -42,7 +44,7 @@ def welch_psd(x, fs: float, nperseg: int, *, divisor: float = 1.0,
     >>> bool(np.array_equal(f, f0)), bool(np.allclose(p, p0, rtol=1e-12, atol=0))
     (True, True)
     """
-    x = np.asarray(x)
+    x = x if isinstance(x, Record) else np.asarray(x)   # a Record: read in pieces
     n = x.size
     nperseg = int(nperseg)
     if not 1 <= nperseg <= n:

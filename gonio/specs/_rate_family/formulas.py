@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 
+from gonio.analysis.noise.stream import Record
 from gonio.physics.earth import OMEGA_E_RAD_S, earth_rate_enu
 from gonio.errors import GonioError
 from gonio.protocol.rate import r5_rates  # noqa: F401  (JJF 7.2.1.1 c) series, re-exported)
@@ -51,7 +52,12 @@ G_STANDARD = 9.80665
 
 
 def as_array(x, name: str) -> np.ndarray:
-    """``x`` as a flat float64 array; a non-finite value is a GonioError naming ``name``."""
+    """``x`` as a flat float64 array; a non-finite value is a GonioError naming ``name``. A
+    long record (:class:`~gonio.analysis.noise.stream.Record`) is returned as it is, checked
+    piece by piece: the functions given one read it by slices."""
+    if isinstance(x, Record):               # a long record, read in pieces (issue 26)
+        x.check_finite(name)
+        return x
     a = np.asarray(x, dtype=np.float64).ravel()
     if not np.all(np.isfinite(a)):
         raise GonioError(f"{name} holds a non-finite value", key=name)
@@ -96,7 +102,7 @@ def block_mean_stability(samples, K: float, block: int) -> float:
     n = x.size // P
     if P < 1 or n < 2:
         raise GonioError(f"bias stability needs ≥ 2 blocks of {P} samples, got {x.size} samples")
-    means = x[: n * P].reshape(n, P).mean(axis=1)
+    means = x.block_means(P) if isinstance(x, Record) else x[: n * P].reshape(n, P).mean(axis=1)
     return float(means.std(ddof=1) / abs(K))
 
 

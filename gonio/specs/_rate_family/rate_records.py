@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
+from gonio.analysis.noise import stream
 from gonio.atomic import sha256_file
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
@@ -146,6 +147,33 @@ def load_readings(readings) -> RateReadings:
     return read_rate_readings(readings)
 
 
+def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str, Item]:
+    """Every item of a rate specification's ``items_module`` computed on ``ctx``: each after
+    the items it needs (``NEEDS``, :func:`gonio.specs.item_order`), each inside
+    :func:`monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
+    refuses the data (a :class:`GonioError`) is reported not measured with the refusal as
+    its reason, nothing dropped; the items returned in ``ITEMS`` order, those in
+    ``NONNEGATIVE`` marked non-negative. ``items_module`` has ``ITEMS`` (rows key, title,
+    clause, function of the context), ``NEEDS``, ``NONNEGATIVE`` and ``with_needs(ctx, done)``
+    (the context an item sees, given the items done so far)."""
+    from gonio.specs import item_order
+
+    items: dict[str, Item] = {}
+    rows = {r[0]: r for r in items_module.ITEMS}
+    for key in item_order(rows, items_module.NEEDS):       # each after the items it needs
+        _, title, clause, fn = rows[key]
+        try:
+            with monte_carlo_validation(monte_carlo_trials):
+                items[key] = fn(items_module.with_needs(ctx, items))
+        except GonioError as exc:
+            items[key] = not_measured(key, title, clause, "",
+                                      f"the data were refused: {exc.message}")
+    items = {k: items[k] for k in rows}
+    for key in items_module.NONNEGATIVE & items.keys():
+        items[key].nonnegative = True
+    return items
+
+
 @dataclass(frozen=True)
 class SegmentMean:
     """Mean and spread of one (test, run, step) segment."""
@@ -186,19 +214,42 @@ def segment_samples(df: pd.DataFrame, test: str, run: int, step: int) -> pd.Data
     return df[(df["test"] == test) & (df["run"] == run) & (df["step"] == step)]
 
 
+def _static_rows(df: pd.DataFrame) -> tuple[int, int, np.ndarray | None]:
+    """The rows of the static record (test ``static``, run 0, step 0),
+    :func:`gonio.analysis.noise.stream.rows_where`."""
+    rows = stream.rows_where(df, lambda d: (d["test"] == "static") & (d["run"] == 0)
+                             & (d["step"] == 0))
+    if rows[1] == 0:
+        raise GonioError("no 'static' records in the readings", key="static")
+    return rows
+
+
+def static_output(df: pd.DataFrame):
+    """The output column of the static record, raw: an array, or for a long record a
+    :class:`~gonio.analysis.noise.stream.Record` read from the frame piece by piece."""
+    return stream.frame_column(df, "output", _static_rows(df))
+
+
 def static_rate_dph(df: pd.DataFrame, null_output: float, scale_factor: float):
     """The static record (test ``static``) as a rate in °/h, (output − null)/K, and its
-    sampling interval in s (from the first and last time stamps)."""
+    sampling interval in s (from the first and last time stamps). A long record is a
+    :class:`~gonio.analysis.noise.stream.Record` (bounded memory, issue 26) with the same
+    numbers, which the noise items read piece by piece."""
     # the two columns only, never a copy of the whole frame (a long static record)
-    idx = np.flatnonzero(((df["test"] == "static") & (df["run"] == 0) & (df["step"] == 0))
-                         .to_numpy())
+    rows = first, count, idx = _static_rows(df)
     time_s = df["time_s"].to_numpy()
-    dt = float((time_s[idx[-1]] - time_s[idx[0]]) / (idx.size - 1))
-    rate = df["output"].to_numpy(dtype=float)[idx]
-    rate -= null_output                      # in place: the same numbers, one array
-    rate /= scale_factor
-    rate *= S_PER_H
-    return rate, dt
+    last = first + count - 1 if idx is None else int(idx[-1])
+    dt = float((time_s[last] - time_s[first]) / (count - 1))
+    out = stream.frame_column(df, "output", rows)
+
+    def rate(r):
+        r -= null_output                     # in place: the same numbers, one array
+        r /= scale_factor
+        r *= S_PER_H
+        return r
+    if isinstance(out, stream.Record):
+        return stream.Record(out.size, lambda a, b: rate(out[a:b])), dt
+    return rate(out), dt
 
 
 def sf_calibration_means(means: list[SegmentMean], run: int):

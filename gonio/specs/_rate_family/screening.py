@@ -6,15 +6,25 @@ finding in ``results.json`` (``findings``) and on the certificate.
 
 Rules (one segment = the rows of one test, run and step, in time order):
 
-* ``output-outlier`` — the output against its two neighbours, r = y_i − (y_{i−1} + y_{i+1})/2:
+* ``output-outlier`` of a record of ≥ 200 rows (not vibration) — the Hampel rule
+  (:func:`hampel_residuals`): y against its running median over 21 samples, set aside beyond
+  8·1.4826·the local median departure (101 samples, at least the segment's); of a rate
+  point (8–199 rows): |y − its median| > 10·1.4826·max(its MAD, the test's pooled MAD).
+* ``record-damaged`` — more than 5 % (and ≥ 3) of the outputs of a segment of ≥ 20 rows, or in a
+  record at least max(5, 0.1 %) of the rows between 5 and 8 robust σ: refused, naming the
+  first (issue 24: bias records full of ±1000 spikes passed with B_s 48 ± 9 for 19 °/h).
+* ``label-departs`` — ≤ 2 rows whose (test, run, step) differs from that of the rows just
+  before and after them: set aside (a typo moving a reading into a segment of its own).
+* ``output-outlier`` of a vibration segment — the output against its two neighbours, r = y_i − (y_{i−1} + y_{i+1})/2:
   a row is set aside when |r| > 15·1.4826·(median |r| over the 21 rows around it, at least
   the segment's) and is the local maximum (a spike lifts its neighbours by half) — a robust
   15σ of the local scale, which a smooth trend raises with itself, so a warm-up transient
   or a vibration sine is not flagged; a slip of a digit above the noise is. A segment of
   fewer than 8 rows: |y − its median| > 10·1.4826·(median of |y − median| pooled over the
   test's short segments). Also the reference rate of a vibration segment.
-* ``setting-departs`` — rate, frequency, temperature, supply voltage, axes and stand angle
-  are settings of the segment: a row whose value differs from the segment's median by more
+* ``setting-departs`` — rate, frequency, temperature, supply voltage, axes, role and stand
+  angle are settings of the segment (a value given where the segment's other rows have none,
+  or the reverse, is set aside too): a row whose value differs from the segment's median by more
   than max(10·1.4826·MAD, tolerance) (rate 10⁻⁶ relative + 10⁻⁹ °/s, temperature 1 °C,
   supply 0.01 V, frequency 10⁻⁶ relative, stand angle 0.01°; axes: any difference) is set
   aside.
@@ -49,6 +59,8 @@ K_SPIKE = 15.0
 SETTING_TOL = {"rate_dps": (1e-6, 1e-9), "freq_hz": (1e-6, 0.0), "temperature_c": (0.0, 1.0),
                "supply_v": (0.0, 0.01), "supply_set_v": (0.0, 0.01), "stand_deg": (0.0, 0.01)}
 AXES = ("up_axis", "north_axis", "stand_axis")
+#: Columns compared as labels (any difference from the segment's most common value).
+CATEGORICAL = AXES + ("role",)
 
 
 def _finding(code, message, row, column, file, clauses, rule) -> Finding:
@@ -76,35 +88,119 @@ def spike_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r[0], r[-1] = y[0] - y[1], y[-1] - y[-2]
     local = np.maximum(median_filter(np.abs(r), size=21, mode="nearest"),
                        float(np.median(np.abs(r))))
+    return r, np.maximum(K_SPIKE * 1.4826 * local, _quantum_floor(y))
+
+
+#: Window (samples) of the running median of the Hampel rule, and of the local scale; its
+#: threshold in robust σ (8σ: a normal sample exceeds it with probability 10⁻¹⁵).
+HAMPEL_WINDOW, SCALE_WINDOW, K_HAMPEL = 21, 101, 8.0
+#: Segments of fewer rows (rate points) are screened against their median instead: the local
+#: scale of a running median is not reliable over a few tens of samples.
+HAMPEL_MIN_ROWS = 200
+#: Largest share of a segment's outputs the screening sets aside; above it (and at least
+#: DENSE_MIN_ROWS rows) the record is refused: a record that full of outliers is damaged
+#: (a loose connector, a logger fault), and what is left of it is not a sample of the gyro.
+DENSE_SHARE, DENSE_MIN_ROWS = 0.05, 3
+#: Segments shorter than this are not refused as a whole (a rate point of a few samples:
+#: its outliers are set aside one by one; a noise-free point has no scale to judge by).
+DENSE_MIN_SEGMENT = 20
+
+
+def _quantum_floor(y: np.ndarray) -> float:
     steps = np.abs(np.diff(y))
     q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
-    floor = max(3.0 * q, 1e-9 * (1.0 + float(np.max(np.abs(y)))))
-    return r, np.maximum(K_SPIKE * 1.4826 * local, floor)
+    return max(3.0 * q, 1e-9 * (1.0 + float(np.max(np.abs(y)))))
+
+
+def hampel_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d, limit) per sample of a record (issue 24, review of r-jjf: bias records full of
+    ±1000 spikes gave B_s = 48 ± 9 °/h for 19 with no finding — the second-difference rule's
+    local scale, median |r|, is itself made of spikes once they are dense):
+    d_i = y_i − median(y over the 21 samples around i), limit_i = 8·1.4826·max(median |d|
+    over the 101 samples around i, the segment's median |d|), floored at 3 quanta of the
+    output and 10⁻⁹ of its size. The running median follows a smooth trend (a warm-up
+    transient) and ignores up to 10 spikes among 21 samples; the scale is made of the
+    good samples as long as they are the majority.
+
+    >>> rng = np.random.default_rng(0)
+    >>> y = rng.normal(0, 1, 400) + 50 * np.exp(-np.arange(400) / 60)
+    >>> bad = rng.choice(400, 60, replace=False)                 # 15 % of the samples
+    >>> y[bad] += rng.choice([-1000.0, 1000.0], 60)
+    >>> d, lim = hampel_residuals(y)
+    >>> sorted(np.flatnonzero(np.abs(d) > lim).tolist()) == sorted(bad.tolist())
+    True
+    """
+    d = y - median_filter(y, size=HAMPEL_WINDOW, mode="nearest")
+    a = np.abs(d)
+    local = np.maximum(median_filter(a, size=SCALE_WINDOW, mode="nearest"), float(np.median(a)))
+    return d, np.maximum(K_HAMPEL * 1.4826 * local, _quantum_floor(y))
 
 
 def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> list[Finding]:
     y = df[col].to_numpy(dtype=float)[idx]
     if y.size < 3 or not np.all(np.isfinite(y)):
         return []
-    if y.size < 8:              # a short segment: against its median, the test's pooled MAD
+    vib = str(df["test"].iloc[idx[0]]) == "vibration"
+    hampel = y.size >= HAMPEL_MIN_ROWS and not vib
+    if y.size < 8 or (y.size < HAMPEL_MIN_ROWS and not vib):
+        # a short segment (a rate point): against its median, the larger of its own MAD
+        # (8 rows or more) and the test's pooled MAD of its short segments
         r = y - np.median(y)
-        lim = np.full(y.size, max(K_ROBUST * 1.4826 * float(pooled or 0.0),
+        own = float(np.median(np.abs(r))) if y.size >= 8 else 0.0
+        lim = np.full(y.size, max(K_ROBUST * 1.4826 * max(float(pooled or 0.0), own),
+                                  _quantum_floor(y) if y.size >= 8 else 0.0,
                                   1e-9 * (1.0 + float(np.max(np.abs(y))))))
-    else:
+        rule = "|y − median| > 10·1.4826·max(MAD, pooled MAD of the test's segments < 8 rows)"
+    elif hampel:                # a record or rate point: against its running median
+        r, lim = hampel_residuals(y)
+        rule = "|y_i − running median (21)| > 8·1.4826·local median |y − running median|"
+    else:                       # a vibration sine: against its neighbours
         r, lim = spike_residuals(y)
+        rule = "|y_i − (y_i−1 + y_i+1)/2| > 15·1.4826·local median"
     out = []
     for i in np.flatnonzero(np.abs(r) > lim):
         # a spike lifts its neighbours' r by half: only the local maximum is the reading
-        if y.size < 8 or abs(r[i]) >= max(abs(r[max(i - 1, 0)]), abs(r[min(i + 1, y.size - 1)])):
+        if y.size < HAMPEL_MIN_ROWS or hampel or \
+                abs(r[i]) >= max(abs(r[max(i - 1, 0)]), abs(r[min(i + 1, y.size - 1)])):
             out.append(_finding("output-outlier", f"{col} {y[i]:.10g} departs from its "
                                 f"neighbours by {r[i]:+.4g} (limit {lim[i]:.3g})",
-                                df.iloc[idx[i]], col, file, clauses,
-                                "|y_i − (y_i−1 + y_i+1)/2| > 15·1.4826·local median"))
+                                df.iloc[idx[i]], col, file, clauses, rule))
+    if y.size >= DENSE_MIN_SEGMENT and len(out) >= DENSE_MIN_ROWS \
+            and len(out) > DENSE_SHARE * y.size:
+        return [_damaged(df, idx, np.abs(r) > lim, col, file, clauses,
+                         f"{len(out)} of its {y.size} {col} values are outliers (more than "
+                         f"{DENSE_SHARE:.0%}, the first here)",
+                         f"outliers > {DENSE_SHARE:.0%} of a segment's rows")]
+    if hampel:                  # many below the row limit: a tail no normal record has
+        tail = (np.abs(r) > (K_TAIL / K_HAMPEL) * lim) & (np.abs(r) <= lim)
+        if tail.sum() >= max(TAIL_MIN_ROWS, TAIL_SHARE * y.size):
+            return [_damaged(df, idx, tail, col, file, clauses,
+                             f"{int(tail.sum())} of its {y.size} {col} values lie beyond "
+                             f"{K_TAIL:g} robust σ of the running median (a normal record of "
+                             f"this length has {y.size * TAIL_P:.2g}; the first here)",
+                             f"count of |y − running median| > {K_TAIL:g}·1.4826·local MAD "
+                             f"≥ max({TAIL_MIN_ROWS}, {TAIL_SHARE:g}·n)")]
     return out
 
 
+#: The tail rule of a record: at least max(5, 0.1 % of its rows) beyond 5 robust σ (a normal
+#: sample has a share 5.7·10⁻⁷ there; rows beyond the 8σ limit are set aside, not counted) —
+#: spikes dense but each below the 8σ row limit (±1 mV
+#: on 5 % of a bias record: B_s 62 for 46 °/h) are refused with the record.
+K_TAIL, TAIL_MIN_ROWS, TAIL_SHARE, TAIL_P = 5.0, 5, 1e-3, 5.7e-7
+
+
+def _damaged(df, idx, mask, col, file, clauses, what: str, rule: str) -> Finding:
+    """The refused finding of a damaged segment, on the line of its first bad row."""
+    row = df.iloc[idx[int(np.flatnonzero(mask)[0])]]
+    f = _finding("record-damaged", f"{row['test']} run {row['run']} step {row['step']}: "
+                 f"{what}: the record is damaged, not a sample of the gyro", row, col, file,
+                 clauses, rule)
+    return Finding(**{**f.to_json(), "action": "refused"})
+
+
 def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> list[Finding]:
-    if col in AXES:
+    if col in CATEGORICAL:
         v = df[col].astype(str)
         vc = (pd.DataFrame({"k": key.to_numpy(), "v": v.to_numpy()}).groupby(["k", "v"]).size()
               .reset_index(name="n").sort_values(["k", "n"], ascending=[True, False])
@@ -115,6 +211,14 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
                          f"{mode.iloc[i]!r}", df.iloc[i], col, file, clauses,
                          "axis differs from the segment's") for i in bad]
     v = pd.to_numeric(df[col], errors="coerce")
+    # a value where the segment's other rows have none (or the reverse) is a typo too
+    present = v.notna()
+    absent_odd = (present != (present.groupby(key).transform("mean") > 0.5)).to_numpy()
+    out = [_finding("setting-departs", f"{col} {'blank' if pd.isna(v.iloc[i]) else f'{v.iloc[i]:.10g}'}"
+                    f" where the segment's other rows have "
+                    f"{'a value' if pd.isna(v.iloc[i]) else 'none'}", df.iloc[i], col, file,
+                    clauses, "a setting present in some rows of a segment only")
+           for i in np.flatnonzero(absent_odd)]
     med = v.groupby(key).transform("median")
     dev = (v - med).abs()
     mad = dev.groupby(key).transform("median") * 1.4826
@@ -122,9 +226,10 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
     lim = np.maximum(K_ROBUST * mad, rel * med.abs() + ab)
     bad = [i for i in np.flatnonzero((dev > lim).fillna(False).to_numpy())
            if not (col == "rate_dps" and df["test"].iloc[i] == "vibration")]
-    return [_finding("setting-departs", f"{col} {v.iloc[i]:.10g} departs from the segment's "
-                     f"{med.iloc[i]:.10g} (limit {lim.iloc[i]:.3g})", df.iloc[i], col, file,
-                     clauses, "|x − median| > max(10·1.4826·MAD, tolerance)") for i in bad]
+    return out + [_finding("setting-departs", f"{col} {v.iloc[i]:.10g} departs from the "
+                           f"segment's {med.iloc[i]:.10g} (limit {lim.iloc[i]:.3g})",
+                           df.iloc[i], col, file, clauses,
+                           "|x − median| > max(10·1.4826·MAD, tolerance)") for i in bad]
 
 
 def _time_rule(df: pd.DataFrame, key: pd.Series, file, clauses) -> list[Finding]:
@@ -233,10 +338,43 @@ def screen_rows(df: pd.DataFrame, file=None, clauses: dict | None = None) -> lis
         out += _output_rule(df, idx, "output", file, clauses, pooled.get(tests[idx[0]]))
         if "reference_dps" in df and df["test"].iloc[idx[0]] == "vibration":
             out += _output_rule(df, idx, "reference_dps", file, clauses)
-    for col in list(SETTING_TOL) + list(AXES):
+    for col in list(SETTING_TOL) + list(CATEGORICAL):
         if col in df:
             out += _setting_rule(df, key, col, file, clauses)
     out += _time_rule(df, key, file, clauses)
+    return out + label_rule(df, file, clauses)
+
+
+#: Longest block of rows the label rule treats as mislabelled (a typo touches a row or two).
+LABEL_BLOCK = 2
+
+
+def label_rule(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[Finding]:
+    """``label-departs``: a block of at most 2 consecutive rows whose (test, run, step)
+    differs from the rows just before and just after it, which share one — a typo in the
+    test, run or step of a reading moves it into a segment of its own (or another), where
+    it would be a rate point of one sample; each such row is set aside, naming the column
+    that differs."""
+    clauses = clauses or {}
+    cols = ("test", "run", "step")
+    k = df.groupby(list(cols), sort=False).ngroup().to_numpy()
+    if k.size < 3:
+        return []
+    starts = np.flatnonzero(np.r_[True, k[1:] != k[:-1]])      # blocks of equal keys
+    ends = np.r_[starts[1:], k.size]
+    out = []
+    for j in range(1, starts.size - 1):
+        a, b = starts[j], ends[j]
+        if b - a <= LABEL_BLOCK and k[a - 1] == k[b] != k[a]:
+            before = df.iloc[a - 1]
+            for i in range(a, b):
+                row = df.iloc[i]
+                col = next(c for c in cols if str(row[c]) != str(before[c]))
+                out.append(_finding("label-departs", f"{col} {row[col]!s} between rows of "
+                                    f"{before['test']} run {before['run']} step "
+                                    f"{before['step']}", row, col, file, clauses,
+                                    "(test, run, step) of ≤ 2 rows ≠ that of the rows "
+                                    "before and after"))
     return out
 
 

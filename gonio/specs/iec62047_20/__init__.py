@@ -13,15 +13,14 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
-from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
 from gonio.specs._rate_family.screening import screened, screening_extra
 from gonio.specs.iec62047_20 import items as _items
 from gonio.specs.iec62047_20.screen import screen
 from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation,
-                                                   protocol_named, RateCalibrationResult, load_readings, not_measured,
-                                     source_info)
+from gonio.specs._rate_family.rate_records import (calibrate_items, metadata_number,
+                                                   protocol_named, RateCalibrationResult,
+                                                   load_readings, source_info)
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
 TITLE_ZH = "IEC 62047-20:2014 半导体器件 微机电器件 第20部分：陀螺仪（测量方法）"
@@ -85,18 +84,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         chamber_fluctuation_c=metadata_number(md, "chamber_fluctuation_c", 1.0, rd.path),
         chamber_fluctuation_period_s=metadata_number(md, "chamber_fluctuation_period_s", 0.0,
                                                      rd.path) or None)
-    items = {}
-    rows = {r[0]: r for r in _items.ITEMS}
-    for key in item_order(rows, _items.NEEDS):            # each after the items it needs
-        _, title, clause, fn = rows[key]
-        try:
-            with monte_carlo_validation(monte_carlo_trials):
-                items[key] = fn(_items.with_needs(ctx, items))
-        except GonioError as exc:
-            items[key] = not_measured(key, title, clause, "", f"the data were refused: {exc.message}")
-    items = {k: items[k] for k in rows}
-    for key in _items.NONNEGATIVE & items.keys():
-        items[key].nonnegative = True
+    items = calibrate_items(ctx, _items, monte_carlo_trials)
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"supply_correction_eq18": {
@@ -119,6 +107,7 @@ STUDY_PROGRAMME = {
 SPEC = rate_specification(
     "gonio.specs.iec62047_20", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
     clause_doc="docs/iec62047-20-readings.md", clauses=tuple(r[2] for r in _items.ITEMS),
+    item_keys=tuple(r[0] for r in _items.ITEMS),
     default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, screen=screen,
     budget=None,
     stream=1, reduced=STUDY_PROGRAMME)

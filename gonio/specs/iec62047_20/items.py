@@ -19,9 +19,10 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.analysis.noise.psd import welch_psd
+from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, static_output, static_rate_dph, gum, not_measured, segment_means,
                                          segment_samples)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
@@ -524,8 +525,8 @@ def _static(ctx: Context):
 
 def _quiet(ctx: Context, key: str, title: str, clause: str, unit: str) -> Item | None:
     """A static record without any variation (noise-free bench): the noise terms are 0."""
-    y = segment_samples(ctx.df, "static", 0, 0)["output"].to_numpy()
-    if y.size and np.ptp(y) == 0:
+    y = static_output(ctx.df)
+    if y.size and value_range(y) == 0:
         return Item(key, title, clause, unit, 0.0, uncertainty=gum(lambda v: v, [from_u(key, 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
     return None
@@ -803,10 +804,10 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
         raise GonioError(f"{why}; the readings have none")
     if ctx.a_base is None:
         raise GonioError(f"{why} and the scale factor of 5.1.3.1")
-    y = segment_samples(ctx.df, "static", 0, 0)["output"].to_numpy()
+    y = static_output(ctx.df)
     if y.size < 100:
         raise GonioError(f"{why}; it has {y.size} samples")
-    if np.ptp(y) == 0:
+    if value_range(y) == 0:
         return 0.0              # a noise-free bench (the reader refuses a stuck record)
     fit = _noise_fit(ctx)
     allan = _static(ctx)[0]

@@ -13,16 +13,15 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
-from gonio.specs import item_order
 from gonio.specs._rate_family import rate_specification
 from gonio.specs._rate_family.screening import screened, screening_extra
 from gonio.specs.jjf1535 import items as _items_mod
 from gonio.specs.jjf1535.budget import annex_a
 from gonio.specs.jjf1535.screen import screen
 from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
-from gonio.specs._rate_family.rate_records import (metadata_number, monte_carlo_validation,
-                                                   protocol_named, Item, RateCalibrationResult, load_readings, not_measured,
-                                     source_info)
+from gonio.specs._rate_family.rate_records import (calibrate_items, metadata_number,
+                                                   protocol_named, RateCalibrationResult,
+                                                   load_readings, source_info)
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
 TITLE_ZH = "JJF 1535-2015 微机电(MEMS)陀螺仪校准规范"
@@ -90,19 +89,7 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     # the pipeline screens first (SPEC.screen) and hands the findings here
     rd, findings = screened(rd, screen(rd, proto) if findings is None else list(findings))
     ctx = make_context(rd, proto)
-    items: dict[str, Item] = {}
-    rows = {r[0]: r for r in _items_mod.ITEMS}
-    for key in item_order(rows, _items_mod.NEEDS):        # each after the items it needs
-        _, title, clause, fn = rows[key]
-        try:
-            with monte_carlo_validation(monte_carlo_trials):
-                items[key] = fn(_items_mod.with_needs(ctx, items))
-        except GonioError as exc:
-            items[key] = not_measured(key, title, clause, "",
-                                      f"the data were refused: {exc.message}")
-    items = {k: items[k] for k in rows}
-    for key in _items_mod.NONNEGATIVE & items.keys():
-        items[key].nonnegative = True
+    items = calibrate_items(ctx, _items_mod, monte_carlo_trials)
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
                                  list(READINGS_TAKEN),
                                  extra={"annex_a": annex_a().to_dict(),
@@ -129,6 +116,7 @@ STUDY_PROGRAMME = {
 SPEC = rate_specification(
     "gonio.specs.jjf1535", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
     clause_doc="docs/jjf1535-readings.md", clauses=tuple(r[2] for r in _items_mod.ITEMS),
+    item_keys=tuple(r[0] for r in _items_mod.ITEMS),
     default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, screen=screen,
     budget=annex_a,
     stream=0, reduced=STUDY_PROGRAMME)

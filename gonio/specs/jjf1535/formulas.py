@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gonio.analysis.noise.stream import CumulativeSum, Record
 from gonio.errors import GonioError
 from gonio.specs._rate_family.formulas import (as_array, block_mean_stability,
                                                last_exceedance_time, least_squares_line)
@@ -295,7 +296,10 @@ def _pieces(n: int):
 
 
 def _cumsum0(x: np.ndarray) -> np.ndarray:
-    """[0, cumsum(x)] in one array (no concatenated copy)."""
+    """[0, cumsum(x)] in one array (no concatenated copy); of a long record read in pieces,
+    the same numbers rebuilt block by block (never held whole)."""
+    if isinstance(x, Record):
+        return CumulativeSum(x)
     c = np.empty(x.size + 1)
     c[0] = 0.0
     np.cumsum(x, out=c[1:])

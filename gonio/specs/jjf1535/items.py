@@ -24,8 +24,9 @@ from gonio.specs.jjf1535 import formulas as jf
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise.stream import value_range
 from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
-                                     sf_calibration_means)
+                                     sf_calibration_means, Uncertainty)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
@@ -73,6 +74,32 @@ def std_upper_half_width(s: float, nu: int) -> float:
     return float(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1.0))
 
 
+def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
+    """Uncertainty of a standard deviation ``s`` of ν + 1 values (7.2.4 K_r, 7.2.11 B_r;
+    issue 24): u_c = s/√(2ν), the GUM's standard uncertainty of an experimental standard
+    deviation (JCGM 100 E.4.3; type A, ν degrees of freedom), and U = the distance from s to
+    the upper χ² 95 % limit, s·(√(ν/χ²_0.025,ν) − 1) (:func:`std_upper_half_width`), with
+    k = U/u_c and the χ² interval [s·√(ν/χ²_0.975,ν), s·√(ν/χ²_0.025,ν)] stated beside it.
+
+    Before, the χ² half-width was entered as a normal type-B term with k = 2 and expanded
+    again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's sd z
+    0.17). U is unchanged in size (the exact χ² limit), only u_c is now honest.
+
+    >>> u = std_dev_uncertainty(1.0, 2, "K_r")
+    >>> round(u.u_c, 3), round(u.U, 3), round(u.k, 2), [round(x, 3) for x in u.interval]
+    (0.5, 5.285, 10.57, [0.521, 6.285])
+    """
+    from scipy.stats import chi2
+    u_c = float(s / math.sqrt(2.0 * nu))
+    U = std_upper_half_width(s, nu)
+    lo = float(s * math.sqrt(nu / chi2.ppf(0.975, nu)))
+    row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
+           f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the χ² 95 % upper limit",
+           "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
+    return Uncertainty([row], u_c, U, U / u_c if u_c > 0 else math.nan, float(nu), None, 0.95,
+                       "chi-square", interval=(lo, s + U))
+
+
 def drift_u_dph(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/h) of a bias difference between two records ``separation_s``
     apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
@@ -105,7 +132,7 @@ def static_noise(ctx: Context) -> dict | None:
         return ctx.cache["static_noise"]
     rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.K)
     out = None
-    if np.ptp(rate_dph) != 0:
+    if value_range(rate_dph) != 0:
         allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
         out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan)}
     ctx.cache["static_noise"] = out
@@ -220,7 +247,8 @@ def asymmetry(ctx: Context) -> Item:
 def sf_repeatability(ctx: Context) -> Item:
     """JJF 1535 7.2.4 eq (10): K_r = s(K_m)/K̄ over Q calibrations with power off between.
 
-    Uncertainty of a standard deviation from Q values: K_r/√(2(Q − 1)), ν = Q − 1."""
+    Uncertainty of a standard deviation from Q values: u_c = K_r/√(2(Q − 1)), ν = Q − 1,
+    U to the χ² 95 % upper limit (:func:`std_dev_uncertainty`)."""
     title, clause, unit = "scale-factor repeatability K_r", "7.2.4", "1"
     miss = _need(ctx, "scale_factor", "sf_repeatability", title, clause, unit)
     if miss:
@@ -231,10 +259,7 @@ def sf_repeatability(ctx: Context) -> Item:
                             f"needs Q ≥ 2 calibrations, the readings hold {len(cals)}")
     _, _, kr = jf.relative_std([c["fit"].K for c in cals])
     Q = len(cals)
-    u = gum(lambda a, b: a + b, [from_u("K_r", kr, 0.0),
-                                 type_b("s(s)", 0.0, std_upper_half_width(kr, Q - 1), "normal", k=2,
-                                        source=f"χ² 95 % upper limit of a standard deviation "
-                                               f"of Q = {Q} values")])
+    u = std_dev_uncertainty(kr, Q - 1, "K_r")
     return Item("sf_repeatability", title, clause, unit, kr, uncertainty=u, details={"Q": Q})
 
 
@@ -453,7 +478,8 @@ def bias_stability(ctx: Context) -> Item:
 
 def bias_repeatability(ctx: Context) -> Item:
     """JJF 1535 7.2.11 eq (20): B_r = s(B_0,m) over Q power-ups, °/h; the Earth rate cancels.
-    Uncertainty of a standard deviation of Q values: B_r/√(2(Q − 1))."""
+    Uncertainty of a standard deviation of Q values: u_c = B_r/√(2(Q − 1)), U to the χ²
+    95 % upper limit (:func:`std_dev_uncertainty`)."""
     title, clause, unit = "bias repeatability B_r", "7.2.11", "°/h"
     miss = _need(ctx, "bias", "bias_repeatability", title, clause, unit)
     if miss:
@@ -464,10 +490,7 @@ def bias_repeatability(ctx: Context) -> Item:
                             f"needs ≥ 2 bias records, the readings hold {len(b)}")
     br = jf.sample_std(b)
     Q = len(b)
-    u = gum(lambda a, c: a + c, [from_u("B_r", br, 0.0),
-                                 type_b("s(s)", 0.0, std_upper_half_width(br, Q - 1), "normal", k=2,
-                                        source=f"χ² 95 % upper limit of a standard deviation "
-                                               f"of Q = {Q} values")])
+    u = std_dev_uncertainty(br, Q - 1, "B_r")
     return Item("bias_repeatability", title, clause, unit, br, uncertainty=u, details={"Q": Q})
 
 

@@ -15,6 +15,7 @@ from gonio.protocol import load_protocol
 from gonio.specs import Coverage, Specification, lazy
 from gonio.specs.ogam_draft.budget import annex_a_budget
 from gonio.specs.ogam_draft.calibration import calibrate, screen
+from gonio.specs.ogam_draft.items import ITEM_KEYS
 
 SPEC = Specification(
     key="ogam-draft",
@@ -23,6 +24,7 @@ SPEC = Specification(
     title_zh="光学陀螺测角仪校准规范(征求意见稿)",
     clause_doc="docs/draft-readings.md",
     clauses=("7.1", "7.2", "7.3", "7.4", "7.5", "7.6", "7.7"),
+    item_keys=tuple(ITEM_KEYS),
     default_protocol="ogam-draft",
     default_bench="rlg",
     load_protocol=load_protocol,

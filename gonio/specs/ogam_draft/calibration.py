@@ -28,6 +28,7 @@ from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, 
 from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
+from gonio.formats.metadata import header_lines
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.result.findings import findings_to_json
@@ -339,28 +340,17 @@ def spec_title(key: str) -> str:
     return spec.title_en if spec is not None else key
 
 
-def file_metadata(path: str | Path) -> dict:
-    """The ``# key: value`` metadata lines at the head of a readings file or stream."""
-    out: dict = {}
-    try:
-        with open(path, encoding="utf-8-sig") as fh:
-            for line in fh:
-                t = line.strip()
-                if not t:
-                    continue
-                if not t.startswith("#"):
-                    break
-                key, sep, value = t[1:].partition(":")
-                if sep:
-                    out.setdefault(key.strip(), value.strip())
-    except (OSError, UnicodeDecodeError):
-        return {}
-    return out
-
-
 def file_protocol_name(path: str | Path) -> str | None:
-    """The ``# protocol: NAME`` metadata of a readings file or stream, read from its head."""
-    return file_metadata(path).get("protocol") or None
+    """The ``# protocol: NAME`` metadata of a readings file or stream, read from its head
+    (:func:`gonio.formats.metadata.header_lines`; the first such line). None when absent or
+    when the file cannot be read as text: the readings reader then says why."""
+    try:
+        for key, value in header_lines(path):
+            if key == "protocol":
+                return value or None
+    except (OSError, GonioError):
+        pass
+    return None
 
 
 def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None,
@@ -396,7 +386,7 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
     >>> from gonio.formats.readings import Readings
     >>> import pandas as pd
     >>> s, c = session_settings(Readings(pd.DataFrame(), {"table_mpe_arcsec": "0.2"}),
-    ...                         load_protocol())
+    ...                         load_protocol("ogam-draft"))
     >>> s["table_mpe_arcsec"], c[0].to_dict()["protocol_value"], c[0].used
     (0.2, 0.1, 0.2)
     """
@@ -679,6 +669,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     u_r = float(budget.parameters["repeatability_arcsec"])
     drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
     df = readings.data
+    k_u_rel = float(out["scale_factor"].u_c / abs(float(sf.value))) \
+        if "scale_factor" in out and float(sf.value) else 0.0
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
         if not c.measured:
@@ -697,7 +689,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
         out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
                                           scale, table_mpe_arcsec=mpe,
-                                          drift_half_width_arcsec=drift * t_min, k=k_fixed)
+                                          drift_half_width_arcsec=drift * t_min,
+                                          scale_factor_u_rel=k_u_rel, k=k_fixed)
     return out
 
 

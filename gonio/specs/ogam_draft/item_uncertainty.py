@@ -621,6 +621,7 @@ class ConditionDeviation:
 def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                        reference_angle_arcsec: float, scale: float, *,
                        table_mpe_arcsec: float, drift_half_width_arcsec: float,
+                       scale_factor_u_rel: float = 0.0,
                        k: float | None = None) -> ItemUncertainty:
     """u(C) of C = (max E_v − min E_v)/reference · scale (draft 7.6: ppm, 7.7: %).
 
@@ -630,7 +631,11 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     MPE (A.4.1), *correlated* ρ = 1 when both extremes are at the same table position
     (the same table error enters both and cancels), 0 otherwise; the zero drift of
     each, rectangular (A.4.3), independent; and the spread noise alone gives the n
-    conditions, d₂(n)·ū(E_v), rectangular (a range is biased upwards by noise).
+    conditions, d₂(n)·ū(E_v), rectangular (a range is biased upwards by noise); and the
+    scale factor's error carried into the spread: every E_v is computed with the one K of
+    7.1, so a relative error δ of K moves E_v by δ·θ at its position θ and the spread by
+    δ·(θ_a − θ_b), normal with ``scale_factor_u_rel`` = u(K)/K (0 when a and b are at the
+    same position: the term cancels like the table's).
 
     Examples
     --------
@@ -651,6 +656,18 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     ...                        drift_half_width_arcsec=0.15)
     >>> round(b.u_c, 4), round(b.value, 4)
     (0.1491, 0.5556)
+
+    K known to 0.2 ppm, extremes 30° apart (the first example): the spread moves by
+    0.2e-6·108000″ = 0.0216″, 0.01667 ppm of the reference, added in quadrature:
+
+    >>> cs = [ConditionDeviation("60", 0.36, 360.0, 0.096, 1),
+    ...       ConditionDeviation("10", -0.36, 330.0, 0.096, 1)]
+    >>> kw = dict(table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15)
+    >>> u0 = consistency_budget("rate_consistency", cs, 1296000.0, 1e6, **kw).u_c
+    >>> u1 = consistency_budget("rate_consistency", cs, 1296000.0, 1e6, **kw,
+    ...                         scale_factor_u_rel=0.2e-6).u_c
+    >>> round(u1, 4), abs(u1 - math.hypot(u0, 0.2e-6 * 30 * 3600 / 1.296)) < 1e-12
+    (0.1627, True)
     """
     cs = list(conditions)
     if len(cs) < 2:
@@ -690,11 +707,16 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                      * float(np.mean([mean_u(c) for c in cs])) * f, "rectangular",
                      source=f"spread noise alone gives {len(cs)} conditions"),
               "range inflation by noise", True, clause),
+        _Line(from_u("K_ab", 0.0, scale_factor_u_rel * abs(a.position_deg - b.position_deg)
+                     * ARCSEC_PER_DEG * f, type="B",
+                     source=f"u(K)/K = {scale_factor_u_rel:.3g} over "
+                            f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
+              "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
     ]
     same = abs(a.position_deg - b.position_deg) < 1e-6
     corr = np.eye(len(lines))
     if same:
         corr[2, 3] = corr[3, 2] = 1.0
-    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0]
+    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0]
     value = (a.e_arcsec - b.e_arcsec) * f
     return _budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs)

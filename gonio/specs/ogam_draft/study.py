@@ -72,7 +72,7 @@ from gonio.units import PPM, deg_to_arcsec
 
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "plan_study", "OpticalStudy",
-           "ValidationReport", "trial_seeds", "trial_seed", "TrialJob",
+           "ValidationReport", "trial_seeds", "trial_seed", "TrialJob", "trial_bench",
            "pack_trials", "unpack_trials", "EXTRA_SYMBOLS"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
@@ -84,6 +84,9 @@ CASES = {
     "table": "table positioning harmonics scaled so that sum |a_h| = table MPE (A.4.1 bound), "
              "random scatter off",
     "ideal": "no noise, no tilt, no bias, no harmonics, error-free table (sanity check)",
+    "mounted": "each trial's tilt drawn uniformly over the disc psi <= annex_a.tilt_bound_deg "
+               "(azimuth uniform): a tilt the laboratory bounds but does not know, so the "
+               "budget's tilt terms are exercised, not held at one value",
 }
 
 
@@ -169,7 +172,31 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         b = ideal_bench(bench)
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
+    if case == "mounted":
+        return bench                      # the tilt is drawn per trial (:func:`trial_bench`)
     raise GonioError(f"unknown case {case!r} (known: {', '.join(CASES)})", key="cases")
+
+
+def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench:
+    """The bench of one trial of ``case``: ``bench`` itself, except in the ``mounted`` case,
+    whose tilt is drawn from the trial's seed uniformly over the disc ψ ≤ the Annex A.1
+    bound (ψ = bound·√u, azimuth uniform): the distribution of a tilt that is only known to
+    lie within the bound, so the budget's tilt terms (u(φ_e), and the physical budget's
+    tilt × Earth-rate line) meet tilts of every size they allow.
+
+    >>> p = validation_protocol(); b = load_bench("rlg")
+    >>> t = [trial_bench("mounted", b, p, s).instrument for s in range(200)]
+    >>> max(i.tilt_deg for i in t) <= p.annex_a.tilt_bound_deg, len({i.tilt_deg for i in t})
+    (True, 200)
+    >>> trial_bench("default", b, p, 3) is b
+    True
+    """
+    if case != "mounted":
+        return bench
+    rng = np.random.default_rng([int(seed), 0x7117])
+    psi = float(protocol.annex_a.tilt_bound_deg) * math.sqrt(float(rng.uniform()))
+    return replace(bench, instrument=replace(bench.instrument, tilt_deg=psi,
+                                             tilt_azimuth_deg=float(rng.uniform(0.0, 360.0))))
 
 
 @dataclass
@@ -291,8 +318,9 @@ class TrialJob:
         """Trials ``start`` … ``stop − 1`` of this case, packed (:func:`pack_trials`); the
         engine (:func:`gonio.pipeline.validate.run_batch`) calls it in a worker."""
         idx = range(start, stop)
-        res = [run_trial(self.protocol, self.bench, trial_seed(self.seed, self.case, i),
-                         self.u_scale, self.truth, self.extras_used) for i in idx]
+        seeds = [trial_seed(self.seed, self.case, i) for i in idx]
+        res = [run_trial(self.protocol, trial_bench(self.case, self.bench, self.protocol, sd),
+                         sd, self.u_scale, self.truth, self.extras_used) for sd in seeds]
         return pack_trials(self.case, list(idx), res)
 
 
@@ -642,8 +670,9 @@ class OpticalStudy:
             cr = CaseResult(name, CASES[name], list(res), t_int)
             cr.summary = _summarise(cr, s["truth"], bool(s["extra_components"]))
             if s["monte_carlo_trials"]:
+                t0 = trial_seed(s["seed"], name, 0)
                 cr.summary["monte_carlo"] = _monte_carlo_case(
-                    self.protocol, b, trial_seed(s["seed"], name, 0), s["monte_carlo_trials"],
+                    self.protocol, trial_bench(name, b, self.protocol, t0), trial_seed(s["seed"], name, 0), s["monte_carlo_trials"],
                     s["seed"])
             out.append(cr)
         return ValidationReport(s, out)

@@ -47,6 +47,7 @@ from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
+from gonio.analysis.noise.stream import Record, frame_column, rows_where
 from gonio.physics.alignment import (alignment_noise_limit_dps, decompose_system_matrices,
                                      mean_earth_rate_ref, signed_axis)
 
@@ -303,6 +304,24 @@ def _split(vec: np.ndarray) -> dict:
     return {k: vec[s] for k, s in _DERIVED_SLICES.items()}
 
 
+def _check_static_steps(readings: TriadReadings, rows, tau0: float) -> None:
+    """Every time step of the static record is 1/sample_rate_hz (±1 %), checked in pieces;
+    the first one that is not is a GonioError naming its line."""
+    t = frame_column(readings.data, "time_s", rows)
+    for s in range(0, t.size, 1 << 16):
+        base = s - 1 if s else 0                 # x[j] = t[base + j]
+        x = t[base: s + (1 << 16)]
+        steps = np.diff(x)
+        bad = np.nonzero(np.abs(steps - tau0) > 0.01 * tau0)[0]
+        if bad.size:
+            k = base + int(bad[0]) + 1           # the sample after the step
+            first, _, idx = rows
+            pos = first + k if idx is None else int(idx[k])
+            raise GonioError(f"static record not sampled every 1/sample_rate_hz = {tau0:g} s "
+                             f"(step {steps[bad[0]]:g} s)", file=readings.path,
+                             line=int(readings.data["line"].iloc[pos]), column="time_s")
+
+
 def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float = 0.1,
                    fraction: float = 0.1, test_rate_dps: float | None = None,
                    shortest_dwell_s: float = math.nan) -> AveragingTime | None:
@@ -312,8 +331,9 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
     ω_TR sin ψ_T · ``fraction``; the result is the shortest octave τ at which every
     channel's Allan deviation is below it. ``None`` when the file has no static record.
     """
-    st = readings.rows("static")
-    if len(st) < 16:
+    data = readings.data
+    rows = rows_where(data, lambda d: d["test"] == "static")    # never a copy of the rows
+    if rows[1] < 16:
         return None
     rates = readings.rows("alignment")["rate_dps"].abs()
     if test_rate_dps is None:
@@ -322,17 +342,14 @@ def averaging_time(readings: TriadReadings, scale_per_dps, *, target_deg: float 
         return None
     limit = alignment_noise_limit_dps(test_rate_dps, math.radians(target_deg), fraction)
     tau0 = 1.0 / readings.sample_rate_hz
-    steps = np.diff(st["time_s"].to_numpy(float))
-    bad = np.nonzero(np.abs(steps - tau0) > 0.01 * tau0)[0]
-    if bad.size:
-        raise GonioError(f"static record not sampled every 1/sample_rate_hz = {tau0:g} s "
-                         f"(step {steps[bad[0]]:g} s)", file=readings.path,
-                         line=int(st["line"].iloc[bad[0] + 1]), column="time_s")
+    _check_static_steps(readings, rows, tau0)
     need, tmin, amin, adevs = [], [], [], []
     tau = None
     for i, c in enumerate(OUT):
-        y = st[c].to_numpy() / float(scale_per_dps[i])
-        res = allan_deviation(y - y.mean(), tau0, "rate", taus="octave", alpha=0)
+        y = frame_column(data, c, rows) / float(scale_per_dps[i])
+        # a long record is read in pieces (bounded memory); the estimator removes its mean
+        res = allan_deviation(y if isinstance(y, Record) else y - y.mean(), tau0, "rate",
+                              taus="octave", alpha=0)
         tau = res.tau_s
         ok = np.nonzero(res.adev <= limit)[0]
         need.append(float(res.tau_s[ok[0]]) if ok.size else math.nan)

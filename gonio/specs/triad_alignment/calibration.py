@@ -384,6 +384,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
             "", "the readings include no thermal programme (no thermal rows, no "
                 "'# thermal_readings:' file)")
     else:
+        extra["chamber_profile_c"] = chamber_set_points(tr)    # the certificate's environment
         try:
             th = identify_thermal_model(tr, criterion=criterion, temperature=temperature)
             comp = {ch: compensate_record(m, tr) for ch, m in th.channels.items()}
@@ -407,6 +408,30 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
                             extra=json_safe(extra), alignment=al, thermal=th, compensation=comp,
                             covariances=alignment_covariances(al), findings=list(findings),
                             tables=prediction_tables(extra["thermal_model"]))
+
+
+def chamber_set_points(readings: TriadReadings) -> list[float]:
+    """The chamber temperatures the thermal programme soaked at (°C, 0.1 °C), in the order
+    first held: the mean ``chamber_c`` of each run of consecutive soak rows, whatever the
+    readings' metadata says of the programme.
+
+    >>> import pandas as pd
+    >>> rows = pd.DataFrame({"test": "thermal", "phase": ["soak", "soak", "ramp", "soak", "soak"],
+    ...                      "chamber_c": [-40.02, -39.98, -30.0, 20.04, 20.0]})
+    >>> chamber_set_points(TriadReadings(rows, {}, None))
+    [-40.0, 20.0]
+    """
+    th = readings.rows("thermal")
+    if th.empty:
+        return []
+    run = (th["phase"] != th["phase"].shift()).cumsum()
+    soak = th[th["phase"] == "soak"]
+    out: list[float] = []
+    for _, g in soak.groupby(run[soak.index], sort=False):
+        t = round(float(g["chamber_c"].mean()), 1) + 0.0       # no −0.0
+        if math.isfinite(t) and t not in out:
+            out.append(t)
+    return out
 
 
 def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:

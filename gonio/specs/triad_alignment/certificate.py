@@ -2,6 +2,27 @@
 :mod:`gonio.specs.triad_alignment.certificate_pages` on the shared certificate
 machinery."""
 
+#: The thermal lag τ of the ramp analysis, by ``RampAnalysis.lag_case`` (English, Chinese):
+#: a lag the ramps do not resolve is stated as not resolved with its bound, never as τ̂.
+LAG_TEXT = {
+    "fit": ("τ = {tau} s, 95 %: {lo}–{hi} s", "τ = {tau} s，95 %：{lo}–{hi} s"),
+    "above": ("τ ≥ {lo} s (95 %)", "τ ≥ {lo} s（95 %）"),
+    "bound": ("not resolved: τ ≤ {hi} s (95 %)", "未分辨：τ ≤ {hi} s（95 %）"),
+    "open": ("not resolved by the ramps", "斜坡数据无法分辨"),
+}
+
+
+def lag_phrase(ramp: dict, lang: str, fmt=lambda v: f"{v:.0f}") -> str:
+    """The lag of a ramp analysis (its JSON: ``lag_case``, ``tau_s``, ``tau_low_s``,
+    ``tau_high_s``) in ``lang``; ``fmt`` renders a time in seconds."""
+    case = ramp.get("lag_case", "fit")
+    text = LAG_TEXT[case][1 if lang == "zh" else 0]
+    vals = {k: fmt(ramp[f]) for k, f in (("tau", "tau_s"), ("lo", "tau_low_s"),
+                                          ("hi", "tau_high_s"))
+            if ramp.get(f) is not None and ramp[f] == ramp[f] and abs(ramp[f]) != float("inf")}
+    return text.format(**vals)
+
+
 #: label key → (English, Chinese)
 TEXT = {
     "std_table": ("rate table with temperature chamber", "速率转台及温度试验箱"),
@@ -74,11 +95,11 @@ TEXT = {
     "pred_note": ("k = {ks} for K, {kb} for b.", "K 的 k = {ks}，b 的 k = {kb}。"),
     "ramp": ("Ramps: the static-soak model leaves {rms} °/s rms on the ramp blocks; with a "
              "rate-of-temperature-change term γ·dϑ/dt (γ = {g} (°/s)/(°C/s)) {rmsg} °/s; with a "
-             "first-order lag of the temperature (τ = {tau} s) {rmsl} °/s; hysteresis between "
+             "first-order lag of the temperature ({lag}) {rmsl} °/s; hysteresis between "
              "rising and falling ramps at equal chamber temperature (the model's input, not "
              "the sensor's) {hys} °/s.",
              "温度斜坡：静态保温模型在斜坡段的残差均方根为 {rms} °/s；加入温度变化率项 γ·dϑ/dt"
-             "（γ = {g} (°/s)/(°C/s)）后为 {rmsg} °/s；对温度施加一阶滞后（τ = {tau} s）后为 "
+             "（γ = {g} (°/s)/(°C/s)）后为 {rmsg} °/s；对温度施加一阶滞后（{lag}）后为 "
              "{rmsl} °/s；同一温箱温度（模型输入，而非传感器温度）下升降温斜坡之间的滞回 {hys} °/s。"),
     "sub_comp": ("Compensation: residuals before and after", "补偿前后的残差"),
     "comp_note": ("The model applied to the calibration record itself: at the soak points the "

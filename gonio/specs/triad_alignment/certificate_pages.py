@@ -186,7 +186,8 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
             out.append(Block("p", [T("ramp", rms=display("sig3", ra["rms_static_model_dps"]),
                                      g=display("sig3", ra["gamma_dps_per_c_per_s"]),
                                      rmsg=display("sig3", ra["rms_with_ramp_term_dps"]),
-                                     tau=display("int", ra["tau_s"]),
+                                     lag=content.lag_phrase(ra, lang,
+                                                            lambda v: display("int", v)),
                                      rmsl=display("sig3", ra["rms_with_lag_dps"]),
                                      hys=display("sig3", ra["hysteresis_dps"]))]))
         cp = c.get("compensation")

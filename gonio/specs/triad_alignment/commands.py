@@ -208,7 +208,7 @@ def run_thermal_model(args) -> int:
             ra = m.ramp
             print(f"  ramps: static-soak model rms error {ra.rms_static_model_dps:.3g} °/s; "
                   f"with γ·dϑ/dt (γ = {ra.gamma_dps_per_c_per_s:.3g} (°/s)/(°C/s)) "
-                  f"{ra.rms_with_ramp_term_dps:.3g}; with a lag τ = {ra.tau_s:.0f} s "
+                  f"{ra.rms_with_ramp_term_dps:.3g}; with a lag ({ra.lag_text()}) "
                   f"{ra.rms_with_lag_dps:.3g}; hysteresis {ra.hysteresis_dps:.3g} °/s")
         if ch in comp:
             c = comp[ch]

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from gonio.specs.triad_alignment.certificate import lag_phrase
 from gonio.specs.triad_alignment.thermal_model import ChannelModel, Compensation
 from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult
 from gonio.units import dps_to_dph
@@ -35,9 +36,9 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
     "bias": ("bias (°/s)", "零偏 (°/s)"),
     "ramp_obs": ("ramp blocks: observed bias", "斜坡段：实测零偏"),
     "soak": ("static-soak model (rms error {v} °/s)", "静态保温模型（均方根误差 {v} °/s）"),
-    "ramp_title": ("ramps: lag τ fit {tau} s\nhysteresis (rising − falling) at equal\n"
+    "ramp_title": ("ramps: lag {lag}\nhysteresis (rising − falling) at equal\n"
                    "chamber temperature {h} °/s",
-                   "斜坡：滞后 τ 拟合 {tau} s\n同一温箱温度下升降温滞回 {h} °/s"),
+                   "斜坡：滞后 {lag}\n同一温箱温度下升降温滞回 {h} °/s"),
     "no_ramp": ("no ramp blocks", "无斜坡段"),
     "b_before": ("bias before (rms {v} °/s)", "补偿前零偏（均方根 {v} °/s）"),
     "b_after": ("bias after (rms {v} °/s)", "补偿后零偏（均方根 {v} °/s）"),
@@ -174,7 +175,8 @@ def thermal_check_panels(fig, spec, model: ChannelModel,
         ax.plot(r.theta_c, r.bias_dps, ".", ms=2, label=_t("ramp_obs"))
         ax.plot(r.theta_c, np.asarray(r.bias_dps) - np.asarray(r.residual_dps), lw=0.8,
                 label=_t("soak", v=f"{r.rms_static_model_dps:.2g}"))
-        ax.set_title(_t("ramp_title", tau=f"{r.tau_s:.0f}", h=f"{r.hysteresis_dps:.2g}"),
+        ax.set_title(_t("ramp_title", lag=lag_phrase(r.to_json(), _LANG["lang"]),
+                        h=f"{r.hysteresis_dps:.2g}"),
                      fontsize=8)
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel(_t("bias"))

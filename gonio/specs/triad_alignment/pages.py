@@ -141,8 +141,8 @@ def thermal_page(res: ThermalModelResult, compensation: dict | None = None,
             ra = m.ramp
             out.append(f"<p>Ramps: static-soak model rms error {ra.rms_static_model_dps:.3g} °/s; "
                        f"with γ·dϑ/dt {ra.rms_with_ramp_term_dps:.3g} °/s (γ = "
-                       f"{ra.gamma_dps_per_c_per_s:.3g} (°/s)/(°C/s)); with a lag τ = "
-                       f"{ra.tau_s:.0f} s {ra.rms_with_lag_dps:.3g} °/s; hysteresis "
+                       f"{ra.gamma_dps_per_c_per_s:.3g} (°/s)/(°C/s)); with a lag "
+                       f"({ra.lag_text()}) {ra.rms_with_lag_dps:.3g} °/s; hysteresis "
                        f"{ra.hysteresis_dps:.3g} °/s.</p>")
         c: Compensation | None = (compensation or {}).get(ch)
         if c is not None:

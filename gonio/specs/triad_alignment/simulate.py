@@ -9,8 +9,9 @@ from gonio.atomic import output_dir
 import numpy as np
 
 from gonio.bench.triad import (load_triad_bench, load_triad_protocol, run_alignment_session,
-                               run_thermal_session, true_thermal_coefficients)
+                               run_thermal_session)
 from gonio.formats.triad import TriadReadings, format_triad_readings
+from gonio.specs.triad_alignment.calibration import KEY
 
 
 def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed: int = 0,
@@ -19,7 +20,7 @@ def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed:
     table is enabled, the chamber programme (→ ``thermal.csv``, named by the readings'
     ``# thermal_readings:`` metadata); ``truth.json`` holds the
     bench's true values. All files are written atomically; same seed → same bytes."""
-    p = load_triad_protocol(protocol)
+    p = load_triad_protocol(protocol, KEY)
     b = load_triad_bench(bench)
     al = run_alignment_session(p, b, seed)
     md = dict(al.metadata)
@@ -40,19 +41,22 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
                   criterion: str = "bic") -> dict[str, dict]:
     """One simulated chamber programme identified as ``calibrate`` does, every certified
     thermal coefficient (``K_z_theta1`` …) against the bench's closed-form truth
-    (:func:`gonio.bench.triad.true_thermal_coefficients`): {key: {clause, value, truth, U,
+    (``SPEC.truth``, :mod:`gonio.specs.triad_alignment.truth`, from
+    :func:`gonio.bench.triad.true_thermal_coefficients`): {key: {clause, value, truth, U,
     u_c}}, the records of :func:`gonio.pipeline.coverage.coverage_table_from`."""
     from gonio.specs.triad_alignment.calibration import thermal_items
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 
-    p, b = load_triad_protocol(protocol), load_triad_bench(bench)
+    from gonio.specs.triad_alignment.truth import truth
+
+    p, b = load_triad_protocol(protocol, KEY), load_triad_bench(bench)
     s = run_thermal_session(p, b, int(seed))
     r = TriadReadings(s.readings.assign(line=np.arange(len(s.readings)) + 1), s.metadata, None)
     th = identify_thermal_model(r, criterion=criterion, ramps=False)
+    true = truth(b, p)                          # SPEC.truth: one truth hook
     out = {}
     for key, it in thermal_items(th, "").items():
-        name, ch, term = key.split("_", 2)
-        truth = true_thermal_coefficients(b, ch)[name].get(term, 0.0)
-        out[key] = {"clause": it.clause, "value": float(it.value), "truth": float(truth),
+        out[key] = {"clause": it.clause, "value": float(it.value),
+                    "truth": float(true[key]["value"]),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}
     return out

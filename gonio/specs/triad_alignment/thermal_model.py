@@ -212,12 +212,15 @@ def soak_covariance(x: np.ndarray, r: np.ndarray, groups: np.ndarray
     programme a temperature coefficient's variance is exactly that of the fit of the soak
     means, with ν = the soaks less the temperature terms.
 
-    Returns (cov, ν per coefficient, method). Without replicated soaks (ν_w = 0), without
-    between-soak degrees of freedom (ν_b ≤ 0) or when the soak means scatter no more than
-    the points within a soak (σ̂_b² ≤ 0: no shared error seen) it is the ordinary
-    s²(XᵀX)⁻¹ with ν = n − p ("ols"). That last case is the residual weakness: with 8
-    soaks and up to 5 temperature terms ν_b is 3–4, and a shared error the soak means
-    happen to hide falls back to s² (docs/thermal-model.md §2, the coverage figures)."""
+    Returns (cov, ν per coefficient, method). Without replicated soaks (ν_w = 0) or
+    without between-soak degrees of freedom (ν_b ≤ 0) it is the ordinary s²(XᵀX)⁻¹ with
+    ν = n − p ("ols"). When the soak means scatter no more than the points within a soak
+    (σ̂_b² ≤ 0) MS_b is floored at MS_w, its ν_b kept: the covariance is MS_w (XᵀX)⁻¹ and a
+    temperature coefficient keeps ν ≈ ν_b. Pooling into s² with ν = n − p there (as
+    before issue 24) gave the heavy tails of the coverage study: with 8 soaks and up to 5
+    temperature terms ν_b is 3–4, and a shared error the soak means happen to hide (often
+    by an order that absorbed the wander) was then certified with k ≈ 2.1
+    (docs/thermal-model.md §2, §7)."""
     n, p = x.shape
     rss = float(r @ r)
     xtx_inv = np.linalg.inv(x.T @ x)
@@ -236,14 +239,22 @@ def soak_covariance(x: np.ndarray, r: np.ndarray, groups: np.ndarray
     ss_b = rss - ss_w
     ms_w, ms_b = ss_w / nu_w, ss_b / nu_b
     tr = float(np.trace(z.T @ (np.eye(n) - x @ xtx_inv @ x.T) @ z))
-    if ms_b <= ms_w or tr <= 0:
+    if tr <= 0:
         return ols
+    method = "soak components"
+    if ms_b <= ms_w:
+        # σ̂_b² ≤ 0: the soak means scatter no more than the points within a soak. Not
+        # pooled into s²(XᵀX)⁻¹ with ν = n − p: the shared error is then merely hidden by
+        # ν_b = 3–4 soak-mean degrees of freedom (often by an order that absorbed it), and
+        # the temperature terms still rest on the soak means — MS_b is floored at MS_w and
+        # keeps its ν_b (the "never pool" rule of split-plot analysis).
+        ms_b, ss_b, method = ms_w, ms_w * nu_b, "soak components, MS_b floored at MS_w"
     hz = xtx_inv @ x.T @ z
     b = np.sum(hz ** 2, axis=1)
     cov = ms_w * xtx_inv + (ss_b - ms_w * nu_b) / tr * hz @ hz.T
     cw, cb = (np.diag(xtx_inv) - b * nu_b / tr) * ms_w, b * nu_b / tr * ms_b
     nu = (cw + cb) ** 2 / (cw ** 2 / nu_w + cb ** 2 / nu_b)
-    return cov, nu, "soak components"
+    return cov, nu, method
 
 
 def order_uncertainty(fits: dict, table: list, sel: tuple[int, int], criterion: str
@@ -361,14 +372,29 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
 
 # --------------------------------------------------------------------------- ramps
 def _lagged(time_s, temp, tau_s):
-    """First-order lag of a (possibly unevenly sampled) temperature series: the exact
-    discretisation T_f[k] = T_f[k−1] + (1 − e^{−Δt/τ})(T[k] − T_f[k−1]) of τ dT_f/dt = T − T_f
-    (the chamber-to-sample lag of [Vagner2015] Fig. 5.7)."""
+    """First-order lag of a (possibly unevenly sampled) temperature series, τ dT_f/dt = T − T_f
+    (the chamber-to-sample lag of [Vagner2015] Fig. 5.7), discretised exactly for a
+    temperature linear between the samples (first-order hold): with α = e^{−Δt/τ} and
+    s = (T[k] − T[k−1])/Δt, T_f[k] = α T_f[k−1] + (1 − α) T[k] − s (τ(1 − α) − αΔt).
+    The samples are block means at the blocks' mid-times, on a ramp the temperature there;
+    holding each sample constant instead (zero-order hold) would lag the ramp by a further
+    Δt/2 and bias the fitted τ by half a block (30 s on the built-in programme).
+
+    >>> t = np.arange(0.0, 6001.0, 60.0)
+    >>> f = _lagged(t, t / 60.0, 300.0)          # 1 °C/min ramp, τ = 300 s
+    >>> round(float(t[-1] / 60.0 - f[-1]) * 60.0, 4)   # settled: the lag is τ·dT/dt
+    300.0
+    """
     out = np.empty_like(temp)
     out[0] = temp[0]
     for k in range(1, temp.size):
-        a = 1.0 - math.exp(-(time_s[k] - time_s[k - 1]) / tau_s) if tau_s > 0 else 1.0
-        out[k] = out[k - 1] + a * (temp[k] - out[k - 1])
+        dt = time_s[k] - time_s[k - 1]
+        if tau_s <= 0 or dt <= 0:
+            out[k] = temp[k]
+            continue
+        a = math.exp(-dt / tau_s)
+        slope = (temp[k] - temp[k - 1]) / dt
+        out[k] = a * out[k - 1] + (1.0 - a) * temp[k] - slope * (tau_s * (1.0 - a) - a * dt)
     return out
 
 
@@ -384,14 +410,36 @@ class RampAnalysis:
     tau_s: float                         # fitted lag of the temperature
     rms_with_lag_dps: float
     hysteresis_dps: float                # max |up-ramp − down-ramp| bias at equal temperature
+    tau_low_s: float = math.nan          # 95 % profile interval of τ (:func:`lag_interval`)
+    tau_high_s: float = math.nan         # inf: the ramps bound τ from above no tighter than 10⁴ s
+    tau_resolved: bool = False           # τ = 0 (no lag) lies outside the interval
     time_s: list = field(default_factory=list)
     theta_c: list = field(default_factory=list)
     dtheta_dt: list = field(default_factory=list)
     bias_dps: list = field(default_factory=list)
     residual_dps: list = field(default_factory=list)
 
+    @property
+    def lag_case(self) -> str:
+        """How the lag is stated (the decision is the result's; the report renders it):
+        ``fit`` τ with its 95 % interval; ``above`` resolved but unbounded above (τ ≥ low);
+        ``bound`` not resolved, τ ≤ high; ``open`` not resolved and unbounded — never τ̂
+        alone where no lag is inside the interval (:func:`lag_interval`)."""
+        if self.tau_resolved:
+            return "fit" if math.isfinite(self.tau_high_s) else "above"
+        return "bound" if math.isfinite(self.tau_high_s) else "open"
+
+    def lag_text(self) -> str:
+        """The lag in words (English, for the terminal and the HTML report)."""
+        return {"fit": f"τ = {self.tau_s:.0f} s (95 %: {self.tau_low_s:.0f}–{self.tau_high_s:.0f} s)",
+                "above": f"τ ≥ {self.tau_low_s:.0f} s (95 %)",
+                "bound": f"not resolved, τ ≤ {self.tau_high_s:.0f} s (95 %)",
+                "open": "not resolved by the ramps"}[self.lag_case]
+
     def to_json(self) -> dict:
-        return dict(self.__dict__)
+        d = dict(self.__dict__)
+        d["lag_case"] = self.lag_case
+        return d
 
 
 def ramp_analysis(readings: TriadReadings, scale: PolyFit, bias: PolyFit, channel: str, *,
@@ -428,21 +476,31 @@ def ramp_analysis(readings: TriadReadings, scale: PolyFit, bias: PolyFit, channe
     s2 = float(r1 @ r1) / max(1, r1.size - 1)
     u_g = math.sqrt(s2 / float(x[:, 0] @ x[:, 0])) if np.any(x) else math.nan
 
-    def cost(log_tau):
-        lag = _lagged(all_t, all_T, math.exp(log_tau))[is_ramp]
+    def cost_tau(tau_s):
+        lag = _lagged(all_t, all_T, tau_s)[is_ramp]
         kl = scale.predict(lag, u)
         r = ramp[OUT[c]].to_numpy() / kl - e - bias.predict(lag, u)
         return float(r @ r)
+
+    def cost(log_tau):
+        return cost_tau(math.exp(log_tau))
     grid = np.linspace(math.log(1.0), math.log(1e4), 41)
     vals = [cost(v) for v in grid]
     j = int(np.argmin(vals))
     lo, hi = grid[max(0, j - 1)], grid[min(len(grid) - 1, j + 1)]
     opt = optimize.minimize_scalar(cost, bounds=(lo, hi), method="bounded",
                                    options={"xatol": 1e-4})
-    tau = math.exp(opt.x)
-    if cost(math.log(1e-6 + 1.0)) <= opt.fun and j == 0:
-        tau = 0.0
-    rms_lag = math.sqrt(min(opt.fun, vals[j]) / resid.size)
+    tau, best = math.exp(opt.x), min(opt.fun, vals[j])
+    if opt.fun > vals[j]:
+        tau = math.exp(grid[j])
+    c0 = cost_tau(0.0)
+    if c0 <= best:
+        tau, best = 0.0, c0
+    rms_lag = math.sqrt(best / resid.size)
+    lag = _lagged(all_t, all_T, tau)[is_ramp]
+    r_lag = ramp[OUT[c]].to_numpy() / scale.predict(lag, u) - e - bias.predict(lag, u)
+    t_lo, t_hi, resolved = lag_interval(cost, grid, vals, tau, best, c0,
+                                        effective_blocks(r_lag))
     # hysteresis: bias on rising vs falling ramps at the same temperature (uses chamber
     # temperature as the abscissa, the quantity an operator sets)
     ch = ramp["chamber_c"].to_numpy()
@@ -457,8 +515,62 @@ def ramp_analysis(readings: TriadReadings, scale: PolyFit, bias: PolyFit, channe
             dn_b = np.interp(grid_t, ch[~rising][o2], b_obs[~rising][o2])
             hyst = float(np.max(np.abs(up_b - dn_b)))
     return RampAnalysis(channel, rms0, float(g[0]), u_g, float(np.sqrt(np.mean(r1 ** 2))), tau,
-                        rms_lag, hyst, ramp["time_s"].tolist(), theta.tolist(), dtdt.tolist(),
-                        b_obs.tolist(), resid.tolist())
+                        rms_lag, hyst, t_lo, t_hi, resolved, ramp["time_s"].tolist(),
+                        theta.tolist(), dtdt.tolist(), b_obs.tolist(), resid.tolist())
+
+
+def effective_blocks(resid) -> float:
+    """Number of independent ramp blocks the residuals ``resid`` (in time order) are worth:
+    n / (1 + 2 Σ_k ρ_k), the autocorrelations ρ_k summed while the sums of pairs
+    ρ_{2m} + ρ_{2m+1} stay positive (Geyer's initial positive sequence, Statist. Sci. 1992).
+    The bias instability's wander makes neighbouring 60 s blocks move together over many
+    blocks, so the n blocks carry fewer independent errors. At least 2."""
+    r = np.asarray(resid, float) - float(np.mean(resid))
+    n = r.size
+    den = float(r @ r)
+    if den <= 0 or n < 4:
+        return float(max(n, 2))
+    rho = np.array([float(r[k:] @ r[:n - k]) / den for k in range(n // 2)])
+    total = -1.0                        # Σ over pairs starts with ρ_0 = 1: 1 + 2Σρ_k = 2Σ − 1
+    for m in range(rho.size // 2):
+        pair = rho[2 * m] + rho[2 * m + 1]
+        if pair <= 0:
+            break
+        total += 2.0 * pair
+    return max(n / max(total, 1.0), 2.0)
+
+
+def lag_interval(cost, grid, vals, tau: float, best: float, cost0: float, n: float
+                 ) -> tuple[float, float, bool]:
+    """95 % profile interval of the fitted lag τ: the τ whose residual sum of squares
+    exceeds the minimum S by no more than S/(n − 1)·F₀.₉₅(1, n − 1) (the extra-sum-of-squares
+    interval of one nonlinear parameter, Bates & Watts 1988 §6.1; n the ramp blocks'
+    effective number, :func:`effective_blocks`). ``cost`` is
+    the sum of squares against ln τ, ``grid``/``vals`` its values on the search grid
+    (1 s … 10⁴ s), ``cost0`` that without a lag. Returns (τ_low, τ_high, resolved):
+    ``resolved`` is False when no lag (τ = 0) is inside — the ramps then do not show a lag
+    and τ̂ (often 0, the search's bound, or a few seconds of noise) is no measured value;
+    τ_low = 0 then. τ_high = inf when the sum of squares stays under the threshold up to the
+    grid's end (10⁴ s): the ramps bound τ on neither side. The certificate, the report and the
+    figure state the interval, or 'not resolved' with the upper bound (issue 24)."""
+    limit = best * (1.0 + float(stats.f.ppf(0.95, 1, max(n - 1, 1))) / max(n - 1, 1))
+    resolved = cost0 > limit
+    vals = np.asarray(vals, float)
+    lt = math.log(tau) if tau > 0 else grid[0]
+
+    def edge(side: int) -> float:
+        idx = np.nonzero((vals > limit) & ((grid > lt) if side > 0 else (grid < lt)))[0]
+        if idx.size == 0:
+            return math.inf if side > 0 else 0.0
+        k = int(idx[0] if side > 0 else idx[-1])
+        inner = max(grid[k - 1], lt) if side > 0 else min(grid[k + 1], lt)
+        if cost(inner) > limit:         # the threshold crossed between the grid points
+            return float(math.exp(inner))
+        return float(math.exp(optimize.brentq(lambda v: cost(v) - limit, *sorted((inner,
+                                                                             grid[k])))))
+    hi = edge(+1)
+    lo = edge(-1) if resolved else 0.0
+    return lo, hi, bool(resolved)
 
 
 # --------------------------------------------------------------------------- model

@@ -2,6 +2,7 @@
 virtual calibration per specification, on one seed and a small protocol.
 
     python tests/data/pins/make_pins.py            # rewrite tests/data/pins/pins.json
+    python tests/data/pins/make_pins.py ogam-draft # recompute one specification's pins only
 
 The pins were first made from main at commit ae98dc5 (before the issue-23 refactors: one
 result model, one specification interface), so that the refactors can be shown to change no
@@ -82,18 +83,27 @@ def run(spec: str, protocol: str | None, seed: int, work: Path) -> dict[str, dic
     return item_numbers(results(spec, protocol, seed, work))
 
 
-def compute() -> dict:
-    """The pins' content: {spec: {"protocol", "seed", "items": item_numbers}}."""
+def compute(specs=None) -> dict:
+    """The pins' content: {spec: {"protocol", "seed", "items": item_numbers}}, of every
+    specification of :data:`RUNS` or of those named in ``specs``."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         for spec, protocol, seed in RUNS:
+            if specs and spec not in specs:
+                continue
             out[spec] = {"protocol": protocol, "seed": seed,
                          "items": run(spec, protocol, seed, Path(tmp))}
     return out
 
 
 def main() -> None:
-    pins = compute()
+    specs = sys.argv[1:]
+    unknown = set(specs) - {r[0] for r in RUNS}
+    if unknown:
+        raise SystemExit(f"make_pins: unknown specification(s) {sorted(unknown)}")
+    pins = compute(specs)
+    if specs:            # the others keep their pins
+        pins = {**json.loads(PINS.read_text(encoding="utf-8")), **pins}
     PINS.write_text(json.dumps(pins, indent=1, sort_keys=True, allow_nan=False) + "\n",
                     encoding="utf-8")
     print(f"wrote {PINS} ({sum(len(v['items']) for v in pins.values())} items)")
