@@ -226,7 +226,7 @@ def main() -> int:
     dask_label = f"Dask LocalCluster, {top} workers"
     import dask
 
-    from gonio.pipeline.engine import LOCAL_CLUSTER_CONFIG
+    from gonio.pipeline.engine import LOCAL_CLUSTER_CONFIG, close_clients
     t0 = time.perf_counter()
     validate(max(4, top), **{**kw, "batch_size": 1}, scheduler=f"local:{top}")
     print(f"--scheduler local:{top} (cluster started, workers warmed, {max(4, top)} one-trial "
@@ -246,6 +246,7 @@ def main() -> int:
             for n in counts:
                 study(f"joblib, {n} worker{'s' if n > 1 else ''}", workers=n)
             study(dask_label, scheduler=addr)
+        close_clients()                 # the engine's kept client, before the cluster goes
     best = {k: max(v) for k, v in rates.items()}
     for k, (rate, l0, l1) in best.items():
         print(f"best of {a.rounds}: {k:<28} {rate:.2f} trials/s (load {l0:.1f} -> {l1:.1f})")

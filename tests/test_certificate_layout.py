@@ -56,6 +56,7 @@ def test_a_relation_is_never_left_at_a_line_end():
                Num("95", "p", "r"), " %)"], True)
     assert "(k\u00a0=\u00a0<span" in cell and "p\u00a0≈\u00a0<span" in cell, cell
     assert "</span>\u00a0%)" in cell and "\u00a0" not in _h(", p ≈ ")    # cells only
+    assert _h("27 %", True) == "27 %"             # a plain text keeps its space
 
 
 def _table_block(tall_row_lines: int) -> Block:

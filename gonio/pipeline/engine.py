@@ -16,7 +16,8 @@ from gonio.errors import GonioError
 from gonio.limits import limit
 
 __all__ = ["MAX_BATCH", "TASKS_PER_WORKER", "WORKER_THREADS", "worker_threads", "batches",
-           "available_cores", "execution_backend", "study_workers", "run_parallel"]
+           "available_cores", "execution_backend", "study_workers", "run_parallel",
+           "close_clients"]
 
 #: Largest batch (trials per task).
 MAX_BATCH = 250
@@ -150,7 +151,7 @@ def _client(Client, address, scheduler: str, keep: bool):
                          key="scheduler") from None
     if keep:
         if not _CLIENTS:
-            atexit.register(_close_clients)
+            atexit.register(close_clients)
         _CLIENTS[scheduler] = client
     return client
 
@@ -163,7 +164,9 @@ def _forget(scheduler: str) -> None:
             client.close()
 
 
-def _close_clients() -> None:
+def close_clients() -> None:
+    """Close the clients kept for clusters given by address (call before shutting such a
+    cluster down in a process that goes on; done at exit)."""
     for scheduler in list(_CLIENTS):
         _forget(scheduler)
 

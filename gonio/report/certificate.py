@@ -635,9 +635,10 @@ def css_string(text: str) -> str:
     return '"' + text + '"'
 
 
-#: A lone relation sign and the per-cent sign in a table cell's text: bound to their sides
-#: with no-break spaces, so a browser never wraps "p ≈ / 95 %" (the PDF: :func:`_glue`).
-_BIND = re.compile(r" (≈|=|≤|≥|&lt;|&gt;) | (%)")
+#: A lone relation sign in a table cell's text, bound to its sides with no-break spaces (and
+#: a per-cent sign to the number segment before it), so a browser never wraps "p ≈ / 95 %"
+#: (the PDF: :func:`_glue`). A plain "27 %" keeps its space.
+_BIND = re.compile(r" (≈|=|≤|≥|&lt;|&gt;) ")
 
 
 def _h(x, cell: bool = False) -> str:
@@ -652,7 +653,9 @@ def _h(x, cell: bool = False) -> str:
         return "".join(_h(s, cell) for s in x)
     s = html.escape(str(x))
     if cell:
-        s = _BIND.sub(lambda m: f"\u00a0{m[1]}\u00a0" if m[1] else "\u00a0%", s)
+        s = _BIND.sub(lambda m: f"\u00a0{m[1]}\u00a0", s)
+        if s.startswith(" %"):                  # "95 %" whose number is the segment before
+            s = "\u00a0" + s[1:]
     return s
 
 
