@@ -37,8 +37,9 @@ def test_fluctuation_term_against_monte_carlo():
     # for each half of ±1, ±2
     xs = np.array([-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0])
     ts = 40.0 * np.arange(xs.size)
-    assert fluctuation_u_rel(xs, ts, 1e-4, 700.0) == pytest.approx(
-        _mc_fluct(xs, ts, 1e-4, 700.0), rel=0.02)
+    for period, tt in ((700.0, ts), (260.0, ts), (450.0, ts ** 1.1)):
+        assert fluctuation_u_rel(xs, tt, 1e-4, period) == pytest.approx(
+            _mc_fluct(xs, tt, 1e-4, period), rel=0.02)
     assert fluctuation_u_rel(np.array([-2.0, -1.0, 1.0, 2.0]), ts[:4], 1e-4, None) == \
         pytest.approx(6e-4 / math.sqrt(2), rel=1e-12)
     assert fluctuation_u_rel(x, t, 0.0, 900.0) == 0.0
