@@ -87,7 +87,8 @@ TESTS: dict[str, list[str]] = {
                      "tests/test_rate_bench.py::test_jjf_bandwidth_noise_off_exact",
                      "tests/test_rate_bench.py::test_jjf_warmup_noise_off",
                      "tests/test_rate_bench.py::test_jjf_results_json_shape"],
-    "iec62047-20": ["tests/test_iec_slope_u.py", "tests/test_rate_formulas.py",
+    "iec62047-20": ["tests/test_iec_slope_u.py", "tests/test_iec_equipment_terms.py",
+                    "tests/test_rate_formulas.py",
                     "tests/test_rate_iec_items.py",
                     "tests/test_rate_uncertainty_terms.py",
                     "tests/test_rate_bench.py::test_iec_noise_off_exact",
@@ -265,7 +266,12 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=300.0, help="seconds per mutant")
     ap.add_argument("--list", action="store_true", help="list the mutants, run nothing")
     ap.add_argument("--out", help="write the results as JSON here")
+    ap.add_argument("--tests", action="append", help="run only these tests (pytest "
+                    "arguments, repeatable) instead of the specification's TESTS")
     a = ap.parse_args(argv)
+    if a.tests:
+        for spec in TESTS:
+            TESTS[spec] = list(a.tests)
     os.chdir(ROOT)
     sys.path.insert(0, str(ROOT))
     specs = list(TARGETS) if a.spec == "all" else [a.spec]

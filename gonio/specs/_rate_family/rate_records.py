@@ -108,6 +108,8 @@ class RateContext:
     acquisition_u_rel: float = 3.0e-5
     chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
     axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
+    chamber_fluctuation_c: float = 1.0        # JJF Table 2: temperature fluctuation ±1 °C
+    chamber_fluctuation_period_s: float | None = None   # not stated: bounded instead
     cache: dict = field(default_factory=dict)
 
     def has(self, test: str) -> bool:

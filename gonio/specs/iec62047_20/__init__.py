@@ -79,7 +79,11 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         a_typ=metadata_number(md, "nominal_scale_factor", P["protocol"]["nominal_scale_factor"], rd.path),
         t_base_c=t_base(proto), v_base=metadata_number(md, "supply_nominal_v", 5.0, rd.path), protocol=P,
         rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
-        acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path))
+        acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
+        chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path),
+        chamber_fluctuation_c=metadata_number(md, "chamber_fluctuation_c", 1.0, rd.path),
+        chamber_fluctuation_period_s=metadata_number(md, "chamber_fluctuation_period_s", 0.0,
+                                                     rd.path) or None)
     items = calibrate_items(ctx, _items, monte_carlo_trials)
     return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
                                  list(READINGS_TAKEN),

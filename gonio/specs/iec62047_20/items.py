@@ -173,18 +173,39 @@ def _u_rel_sf(ctx: Context, c: dict) -> list:
     return [from_u("a", c["a"], c["u_a"], dof=50,
                    source="least-squares slope, from the noise of the point means"),
             from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B", source="rate table, relative"),
-            from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative")]
+            from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative"),
+            type_b("e_T", 0.0, ctx.chamber_deviation_c * abs(sf_tc_rel(ctx)), "rectangular",
+                   source="chamber deviation at T_BASE (± bound) × T_c,SF/a of 5.1.3.4's "
+                          "runs (0 without them)")]
+
+
+def sf_tc_rel(ctx: Context) -> float:
+    """T_c,SF/a (1/°C): the least-squares slope of the 5.1.3.4 slopes against temperature
+    over their mean; 0 when the readings hold no such runs. The chamber realises T_BASE
+    only within its deviation bound, and a_BASE moves by this much per °C of it."""
+    if not ctx.has("sf_temperature"):
+        return 0.0
+    try:
+        runs = _sf_runs(ctx, "sf_temperature")
+        T, a = np.array([c["T"] for c in runs]), np.array([c["a"] for c in runs])
+        if len(set(T.tolist())) < 2:
+            return 0.0
+        return float(rg.least_squares_line(T, a)[0] / a.mean())
+    except (GonioError, ValueError, IndexError, KeyError):
+        return 0.0          # runs the 5.1.3.4 item itself refuses: no coefficient to use
 
 
 def scale_factor(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.1 eqs (1), (2): a_BASE, least squares over the 2n + 1 points (rest
-    included) at T_BASE, V_BASE."""
+    included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
+    the rate table and the voltmeter (relative), and the chamber's deviation at T_BASE
+    times T_c,SF/a (:func:`sf_tc_rel`)."""
     t, cl, un = "scale factor a_BASE", "5.1.3.1", f"{ctx.output_unit}/(°/s)"
     m = _miss(ctx, "scale_factor", "scale_factor", t, cl, un, need_a=False)
     if m:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
-    u = gum(lambda a, et, ea: a * (1 + ea) / (1 + et), _u_rel_sf(ctx, c))
+    u = gum(lambda a, et, ea, eT: a * (1 + ea) * (1 + eT) / (1 + et), _u_rel_sf(ctx, c))
     return Item("scale_factor", t, cl, un, c["a"], uncertainty=u,
                 details={"b_BASE": c["b"], "x_dps": c["x"], "y": c["y"]})
 
@@ -197,7 +218,8 @@ def initial_sf_variation(ctx: Context) -> Item:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     ins = _u_rel_sf(ctx, c)
-    u = gum(lambda a, et, ea: 100 * (a * (1 + ea) / (1 + et) - ctx.a_typ) / ctx.a_typ, ins)
+    u = gum(lambda a, et, ea, eT: 100 * (a * (1 + ea) * (1 + eT) / (1 + et) - ctx.a_typ)
+            / ctx.a_typ, ins)
     return Item("initial_sf_variation", t, cl, un, 100 * (c["a"] - ctx.a_typ) / ctx.a_typ,
                 uncertainty=u, details={"a_TYP": ctx.a_typ})
 
@@ -222,22 +244,66 @@ def linearity(ctx: Context) -> Item:
 
 def symmetry(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.8 eqs (13)–(17): (a_CW − a_CCW)/a_TYP from separate fits without the
-    rest point, signed, in %."""
+    rest point, signed, in %. Budget: the two slopes' noise of the point means and bias
+    drift, and the chamber's temperature fluctuation moving K by T_c,SF between the CW and
+    CCW points (:func:`fluctuation_u_rel`; amplitude and period from the readings'
+    metadata, JJF Table 2's ±1 °C and a bound over any period when absent); without the
+    5.1.3.4 runs (T_c,SF unknown) the fits' residual standard error instead."""
     t, cl, un = "scale-factor symmetry", "5.1.3.8", "%"
     m = _miss(ctx, "scale_factor", "symmetry", t, cl, un)
     if m:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     s, aw, bw, ac, bc = ief.symmetry_iec(c["x"], c["y"], ctx.a_typ)
-    # Kept on the residual standard error (over-wide): the two slopes' noise and drift
-    # (c["u_a_cw"], c["u_a_ccw"]) under-cover on the built-in programme — the chamber's
-    # temperature fluctuation moves K between the CW and CCW halves, a term this budget
-    # cannot size yet (docs/iec62047-20-readings.md#over-wide-budgets-left).
-    u_dir = c["se"] * math.sqrt(2.0) * 2.0      # each direction's slope: ~2× the full fit's se
-    u = gum(lambda d: 100 * d / ctx.a_typ, [from_u("a_CW-a_CCW", aw - ac, u_dir, dof=2 * len(c["x"]) // 2 - 4,
-                                                   source="slope standard errors of the two fits")])
+    k_rel = sf_tc_rel(ctx)
+    if ctx.has("sf_temperature") and math.isfinite(c["u_a_cw"]) and math.isfinite(c["u_a_ccw"]):
+        # the two slopes' noise and drift, and the chamber's fluctuation moving K between
+        # the CW and the CCW points (:func:`fluctuation_u_rel`)
+        u_fl = fluctuation_u_rel(c["x"], c["t"], k_rel * ctx.chamber_fluctuation_c,
+                                 ctx.chamber_fluctuation_period_s) * abs(ctx.a_base)
+        u = gum(lambda d, f: 100 * (d + f) / ctx.a_typ, [
+            from_u("a_CW-a_CCW", aw - ac, math.hypot(c["u_a_cw"], c["u_a_ccw"]), dof=50,
+                   source="the two slopes' noise of the point means and bias drift"),
+            from_u("fluct", 0.0, u_fl, type="B",
+                   source="chamber fluctuation (± amplitude, period) × T_c,SF between the "
+                          "CW and CCW points")])
+    else:
+        # without 5.1.3.4's runs T_c,SF is not known: the residual standard error (an
+        # upper bound that holds the fluctuation too)
+        u_dir = c["se"] * math.sqrt(2.0) * 2.0   # each direction's slope: ~2× the full fit's se
+        u = gum(lambda d: 100 * d / ctx.a_typ, [
+            from_u("a_CW-a_CCW", aw - ac, u_dir, dof=2 * len(c["x"]) // 2 - 4,
+                   source="slope standard errors of the two fits")])
     return Item("symmetry", t, cl, un, 100 * s, uncertainty=u, details={
         "a_CW": aw, "b_CW": bw, "a_CCW": ac, "b_CCW": bc})
+
+
+def fluctuation_u_rel(x: np.ndarray, t: np.ndarray, amp_rel: float,
+                      period_s: float | None) -> float:
+    """Relative standard uncertainty of a_CW − a_CCW (5.1.3.8) from a periodic fluctuation
+    of K, K(t) = K̄(1 + A sin(2πt/P + φ)), φ unknown (uniform): each half's slope is
+    K̄(1 + Σ v_i A sin(ωt_i + φ)) with v_i = (x_i − x̄)x_i/Sxx (Σ v_i = 1, the points of
+    that half), so the difference is A·Im(e^{iφ} Z), Z = Σ_CW v_i e^{iωt_i} −
+    Σ_CCW v_j e^{iωt_j}, of standard deviation A|Z|/√2. ``amp_rel`` = A (T_c,SF/a times
+    the chamber's fluctuation amplitude); ``period_s`` None: the period is not stated and
+    |Z| is bounded by Σ|v_CW| + Σ|v_CCW|.
+
+    >>> round(fluctuation_u_rel(np.array([-2.0, -1.0, 1.0, 2.0]), np.array([0.0, 1.0, 2.0, 3.0]),
+    ...                         1e-4, None), 9)
+    0.000424264
+    """
+    z, bound = 0j, 0.0
+    for half in (x > 0, x < 0):
+        xs, ts = x[half], t[half]
+        if xs.size < 2:
+            return math.nan
+        v = (xs - xs.mean()) * xs / float(((xs - xs.mean()) ** 2).sum())
+        sign = 1.0 if xs[0] > 0 else -1.0
+        bound += float(np.abs(v).sum())
+        if period_s:
+            z += sign * complex(np.sum(v * np.exp(2j * math.pi * ts / period_s)))
+    mag = abs(z) if period_s else bound
+    return abs(amp_rel) * mag / math.sqrt(2.0)
 
 
 def sf_stability(ctx: Context) -> Item:
@@ -354,8 +420,10 @@ def bias(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.1 eq (24): N_bias = Out,ave − Earth-rate component (°/s), computed in
     output units then divided by a_BASE (reading taken). The Earth component uses the
     physics (axis up Ω_E sin λ, horizontal Ω_E cos λ cos φ); the printed sin/cos are swapped
-    (erratum). Mean over the records. Budget: the records' spread (type A) and the
-    acquisition's relative gain uncertainty on the whole output, null included."""
+    (erratum). Mean over the records. Budget: the records' spread (type A), the
+    acquisition's relative gain uncertainty on the whole output, null included, the chamber's
+    deviation at T_BASE (± bound, rectangular) times the bias temperature coefficient of the
+    5.3.3.6 visits, and the input axis's alignment on the horizontal Earth rate."""
     t, cl, un = "bias N_bias", "5.3.3.1", "°/s"
     m = _miss(ctx, "bias", "bias", t, cl, un)
     if m:
@@ -366,13 +434,26 @@ def bias(ctx: Context) -> Item:
         vals.append((s.mean - ctx.null_output - ctx.a_base * earth) / ctx.a_base)
         raw.append(s.mean)
     v = np.array(vals)
-    u = gum(lambda b, en: b + en,
+    try:
+        pts = _bias_temperature_points(ctx) if ctx.has("bias_temperature") else []
+        b_tc = rg.least_squares_line(np.array([p[0] for p in pts]),
+                                     np.array([p[1] for p in pts]))[0] \
+            if len({p[0] for p in pts}) >= 2 else 0.0
+    except (GonioError, ValueError, IndexError, KeyError):
+        b_tc = 0.0          # visits the 5.3.3.6 item itself refuses: no coefficient to use
+    u = gum(lambda b, en, eT, eal: b + en + eT + eal,
             [from_u("N_bias", float(v.mean()),
                     float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
                     dof=max(v.size - 1, 1), source="spread of the records"),
              from_u("e_acq_null", 0.0, ctx.acquisition_u_rel * abs(float(np.mean(raw)))
                     / abs(ctx.a_base), type="B",
-                    source="acquisition gain on the whole output (null included)")])
+                    source="acquisition gain on the whole output (null included)"),
+             type_b("e_T", 0.0, ctx.chamber_deviation_c * abs(float(b_tc)), "rectangular",
+                    source="chamber deviation at T_BASE (± bound) × the bias temperature "
+                           "coefficient of 5.3.3.6's visits (0 without them)"),
+             type_b("e_align", 0.0, rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg))
+                    * math.sin(math.radians(ctx.axis_alignment_deg)), "rectangular",
+                    source="input-axis alignment × horizontal Earth rate")])
     return Item("bias", t, cl, un, float(v.mean()), uncertainty=u, details={
         "records_dps": v, "earth_component_dps": earth,
         "printed_formula_earth_dps": rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg)),

@@ -27,6 +27,9 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
           "room_temperature_c": repr(t_base(proto)), "supply_nominal_v": repr(g.supply_nominal_v),
           "rate_table_u_rel": repr(eq.rate_table_u_rel),
           "acquisition_u_rel": repr(eq.acquisition_u_rel),
+          "chamber_deviation_bound_c": repr(eq.chamber_deviation_bound_c),
+          "chamber_fluctuation_c": repr(eq.chamber.fluctuation_c),
+          "chamber_fluctuation_period_s": repr(eq.chamber.fluctuation_period_s),
           "ratiometric": "true" if g.ratiometric else "false"}
     res = run_rate_session(plan(proto, b), b, seed, room_temperature_c=20.0, metadata=md,
                            noise=noise)

@@ -1,0 +1,123 @@
+"""IEC 62047-20 budget terms for the equipment the coverage study now draws (issue 24): the
+chamber's deviation at T_BASE in a_BASE and the bias, and the chamber's fluctuation in the
+symmetry. Each is recomputed here by a second route (Monte Carlo over the fluctuation's
+phase with numpy.polyfit; the bench's own temperature polynomials), so a mutated term
+fails."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gonio.specs.iec62047_20.items import fluctuation_u_rel
+
+
+def _mc_fluct(x, t, amp, period, n=100_000):
+    """sd of (a_CW − a_CCW)/K̄ over a uniform phase, by numpy.polyfit on each half."""
+    phi = np.random.default_rng(1).uniform(0, 2 * np.pi, n)
+    y = x[:, None] * (1 + amp * np.sin(2 * np.pi * t[:, None] / period + phi[None, :]))
+    cw, ccw = x > 0, x < 0
+    a_cw = np.polyfit(x[cw], y[cw], 1)[0]
+    a_ccw = np.polyfit(x[ccw], y[ccw], 1)[0]
+    return float(np.std(a_cw - a_ccw))
+
+
+def test_fluctuation_term_against_monte_carlo():
+    # the built-in programme's order (CCW max → rest → CW max), 40 s per point
+    x = np.array([-300, -240, -180, -120, -60, 0, 60, 120, 180, 240, 300], float)
+    t = 40.0 * np.arange(x.size)
+    for period in (900.0, 300.0, 5000.0):
+        mc = _mc_fluct(x, t, 4.5e-5, period)
+        assert fluctuation_u_rel(x, t, 4.5e-5, period) == pytest.approx(mc, rel=0.02)
+        # without a stated period: a bound over any period
+        assert fluctuation_u_rel(x, t, 4.5e-5, None) >= mc
+    # small rates (below 1 °/s) count as CW/CCW points too; the bound by hand: Σ|v| = 3
+    # for each half of ±1, ±2
+    xs = np.array([-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0])
+    ts = 40.0 * np.arange(xs.size)
+    assert fluctuation_u_rel(xs, ts, 1e-4, 700.0) == pytest.approx(
+        _mc_fluct(xs, ts, 1e-4, 700.0), rel=0.02)
+    assert fluctuation_u_rel(np.array([-2.0, -1.0, 1.0, 2.0]), ts[:4], 1e-4, None) == \
+        pytest.approx(6e-4 / math.sqrt(2), rel=1e-12)
+    assert fluctuation_u_rel(x, t, 0.0, 900.0) == 0.0
+    assert math.isnan(fluctuation_u_rel(np.array([-1.0, 0.0, 1.0]), t[:3], 1e-4, 900.0))
+
+
+@pytest.fixture(scope="module")
+def iec_noise_free(tmp_path_factory):
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.pipeline.coverage import reduced_protocol
+    from gonio.specs._rate_family.simulate import study_bench
+    from gonio.specs.iec62047_20 import calibrate
+    from gonio.specs.iec62047_20.simulate import simulate
+
+    p = str(reduced_protocol("iec62047-20", tmp_path_factory.mktemp("eq") / "p.toml",
+                             {"noise": {"samples": 600}, "power_on": {"samples": 300}}))
+    b = study_bench(draw_equipment=False)
+    res = simulate(b, p, seed=3, noise=False)
+    keep = res.data["test"].isin(["scale_factor", "sf_temperature", "bias", "bias_temperature",
+                                  "static"])
+    rd = RateReadings(res.data[keep], {k: str(v) for k, v in res.metadata.items()})
+    return calibrate(rd, p), b, res, p
+
+
+def _comp(item, symbol):
+    return next(c for c in item.uncertainty.components if c["symbol"] == symbol)
+
+
+def test_chamber_deviation_at_t_base_in_a_base_and_bias(iec_noise_free):
+    """e_T of a_BASE: ±2 °C rectangular × (LS slope of K(T_i) / mean K(T_i)) of the bench's
+    polynomial at the protocol's temperatures; e_T of the bias: ±2 °C × the LS slope of the
+    bench's b(T) there (noise-free, ideal equipment: the estimates are the polynomials')."""
+    r, b, res, _ = iec_noise_free
+    g = b.gyro
+    T = np.array(sorted({s["temperature_c"] for s in res.truth["segments"]
+                         if s["test"] == "sf_temperature"}), float)
+    K = g.scale_factor_at(T, g.supply_nominal_v)
+    k_rel = np.polyfit(T, K, 1)[0] / K.mean()
+    assert r.metadata["chamber_deviation_bound_c"] == "2.0"
+    assert _comp(r.items["scale_factor"], "e_T")["u"] == pytest.approx(
+        2.0 / math.sqrt(3) * abs(k_rel), rel=2e-3)
+    assert _comp(r.items["initial_sf_variation"], "e_T")["u"] == pytest.approx(
+        2.0 / math.sqrt(3) * abs(k_rel), rel=2e-3)
+    Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
+                   if s["test"] == "bias_temperature"], float)
+    b_tc = np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]
+    assert _comp(r.items["bias"], "e_T")["u"] == pytest.approx(
+        2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
+    # both enter u_c: the scale factor's relative u_c holds the chamber term in quadrature
+    sf = r.items["scale_factor"]
+    others = [c["u"] for c in sf.uncertainty.components if c["symbol"] in ("e_table", "e_acq")]
+    assert (sf.uncertainty.u_c / sf.value) ** 2 >= sum(u * u for u in others) \
+        + (2.0 / math.sqrt(3) * k_rel) ** 2 * 0.999
+
+
+def test_symmetry_budget_holds_the_fluctuation(iec_noise_free):
+    """The fluctuation term of 5.1.3.8 against a Monte Carlo over the phase, with the
+    amplitude and period the readings state (the noise-free run's ideal chamber states 0;
+    the bench file's chamber, ±0.3 °C over 900 s, is stated here instead)."""
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.specs.iec62047_20 import calibrate
+
+    r0, b, res, p = iec_noise_free
+    eq = b.equipment
+    assert r0.metadata["chamber_fluctuation_c"] == "0.0"
+    assert _comp(r0.items["symmetry"], "fluct")["u"] == 0.0
+    md = {k: str(v) for k, v in res.metadata.items()}
+    md.update(chamber_fluctuation_c=repr(eq.chamber.fluctuation_c),
+              chamber_fluctuation_period_s=repr(eq.chamber.fluctuation_period_s))
+    keep = res.data["test"].isin(["scale_factor", "sf_temperature"])
+    r = calibrate(RateReadings(res.data[keep], md), p)
+    c = _comp(r.items["symmetry"], "fluct")
+    sf = res.data[(res.data["test"] == "scale_factor") & (res.data["run"] == 0)]
+    pts = sf.groupby("step").agg(x=("rate_dps", "first"), t=("time_s", "first"))
+    T = np.array(sorted({s["temperature_c"] for s in res.truth["segments"]
+                         if s["test"] == "sf_temperature"}), float)
+    K = b.gyro.scale_factor_at(T, b.gyro.supply_nominal_v)
+    amp = abs(np.polyfit(T, K, 1)[0] / K.mean()) * eq.chamber.fluctuation_c
+    mc = _mc_fluct(pts["x"].to_numpy(float), pts["t"].to_numpy(float), amp,
+                   eq.chamber.fluctuation_period_s)
+    a_base = r.items["scale_factor"].value
+    assert c["u"] == pytest.approx(mc * a_base, rel=0.03)
