@@ -677,10 +677,12 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
             continue
         col = "rate_dps" if name == "rate_consistency" else "orientation"
         pts = c.tables["points"]
-        conds = []
+        conds, curves = [], []
         for row in c.table.itertuples(index=False):
             v = getattr(row, col)
             p = pts[pts[col] == v]
+            curves.append((p["position_deg"].to_numpy(dtype=float),
+                           p["E_arcsec"].to_numpy(dtype=float)))
             at = p.loc[(p["E_arcsec"] - row.E_arcsec).abs().idxmin(), "position_deg"]
             conds.append(iu.ConditionDeviation(f"{v:g} deg/s" if col == "rate_dps"
                                                else f"axis {v}", float(row.E_arcsec),
@@ -690,7 +692,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
                                           scale, table_mpe_arcsec=mpe,
                                           drift_half_width_arcsec=drift * t_min,
-                                          scale_factor_u_rel=k_u_rel, k=k_fixed)
+                                          scale_factor_u_rel=k_u_rel, curves=curves,
+                                          k=k_fixed)
     return out
 
 

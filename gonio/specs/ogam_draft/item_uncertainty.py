@@ -621,7 +621,7 @@ class ConditionDeviation:
 def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                        reference_angle_arcsec: float, scale: float, *,
                        table_mpe_arcsec: float, drift_half_width_arcsec: float,
-                       scale_factor_u_rel: float = 0.0,
+                       scale_factor_u_rel: float = 0.0, curves=None,
                        k: float | None = None) -> ItemUncertainty:
     """u(C) of C = (max E_v − min E_v)/reference · scale (draft 7.6: ppm, 7.7: %).
 
@@ -636,6 +636,13 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     7.1, so a relative error δ of K moves E_v by δ·θ at its position θ and the spread by
     δ·(θ_a − θ_b), normal with ``scale_factor_u_rel`` = u(K)/K (0 when a and b are at the
     same position: the term cancels like the table's).
+
+    ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, in the order of
+    ``conditions``) adds the *choice of the extreme* (``C_sel``): E_v is the signed value of
+    largest magnitude of a curve, so where a curve's positive and negative excursions are
+    close, noise can pick the other one and move C by their sum, which no linear line
+    holds. :func:`extreme_selection_u` gives its u by Monte Carlo (JCGM 101) of the draft's
+    functional against the same draws with the extremes held.
 
     Examples
     --------
@@ -713,10 +720,70 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                             f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
               "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
     ]
+    if curves is not None:
+        u_sel = extreme_selection_u(curves, [mean_u(c) for c in cs], table_mpe_arcsec,
+                                    drift_half_width_arcsec, scale_factor_u_rel) * f
+        lines.append(_Line(from_u("C_sel", 0.0, u_sel, type="B",
+                                  source="Monte Carlo of the signed extremes (JCGM 101)"),
+                           "choice of each condition's extreme", True, clause))
     same = abs(a.position_deg - b.position_deg) < 1e-6
     corr = np.eye(len(lines))
     if same:
         corr[2, 3] = corr[3, 2] = 1.0
-    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0]
+    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0][:len(lines)]
     value = (a.e_arcsec - b.e_arcsec) * f
     return _budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs)
+
+
+def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
+                        drift_half_width_arcsec: float, scale_factor_u_rel: float = 0.0,
+                        draws: int = 4000) -> float:
+    """u (arcsec) of the spread max E_v − min E_v from the *choice* of each E_v (7.6, 7.7).
+
+    E_v is the signed value of largest magnitude of condition v's curve (the draft's
+    "E = ± max |E_i|", :func:`gonio.specs.ogam_draft.items.signed_extreme`). Each draw
+    perturbs every curve as the budget's lines say: each point by its mean's u
+    (``u_mean_arcsec`` per condition, normal, independent), the table at each position
+    (rectangular ±MPE, the same for every condition at that position), K (normal
+    ``scale_factor_u_rel``·θ, the same for all) and each condition's zero drift (a
+    rectangular ramp over its points). The spread is taken once with the extremes chosen
+    afresh (the draft's functional) and once at the estimate's own extreme points (the
+    linear model of the other lines), both between the estimate's largest and smallest
+    condition (which condition is largest is the range's part, the ``C_rng`` line); u² is
+    the first variance minus the second, 0 when noise never changes a choice. Fixed seed:
+    the same curves give the same u.
+
+    >>> far = [([30.0, 60.0], [0.9, 0.1]), ([30.0, 60.0], [-0.8, 0.0])]
+    >>> extreme_selection_u(far, [0.05, 0.05], 0.1, 0.0)
+    0.0
+    >>> tie = [([30.0, 60.0], [0.4, -0.38]), ([30.0, 60.0], [-0.8, 0.0])]
+    >>> 0.3 < extreme_selection_u(tie, [0.05, 0.05], 0.1, 0.0) < 0.5
+    True
+    """
+    rng = np.random.default_rng(20240607)
+    pos_all = np.unique(np.concatenate([np.asarray(p, dtype=float) for p, _ in curves]))
+    table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec, (draws, pos_all.size))
+    dk = rng.normal(0.0, scale_factor_u_rel, draws) if scale_factor_u_rel > 0 \
+        else np.zeros(draws)
+    free, held = [], []
+    for (pos, e), u in zip(curves, u_mean_arcsec):
+        pos = np.asarray(pos, dtype=float)
+        e = np.asarray(e, dtype=float)
+        ok = ~np.isnan(e)
+        pos, e = pos[ok], e[ok]
+        ramp = np.arange(1, e.size + 1) / e.size
+        sim = (e + rng.normal(0.0, u, (draws, e.size))
+               + table[:, np.searchsorted(pos_all, pos)]
+               + dk[:, None] * pos * ARCSEC_PER_DEG
+               + rng.uniform(-drift_half_width_arcsec, drift_half_width_arcsec,
+                             draws)[:, None] * ramp)
+        j = int(np.argmax(np.abs(e)))
+        free.append(sim[np.arange(draws), np.argmax(np.abs(sim), axis=1)])
+        held.append(sim[:, j])
+    e_hat = np.array([float(np.asarray(e, dtype=float)[~np.isnan(e)][
+        int(np.argmax(np.abs(np.asarray(e, dtype=float)[~np.isnan(e)])))]) for _, e in curves])
+    a, b = int(np.argmax(e_hat)), int(np.argmin(e_hat))
+    free, held = np.array(free), np.array(held)
+    c_free = free[a] - free[b]        # which condition is max/min: the C_rng line's part
+    c_held = held[a] - held[b]
+    return float(math.sqrt(max(0.0, c_free.var() - c_held.var())))
