@@ -318,3 +318,57 @@ def test_a_late_sample_is_set_aside_and_a_duplicated_one_refused(simulated, tmp_
     with pytest.raises(GonioError, match="duplicated") as exc:
         _findings(spec, tmp_path / "dup.csv", proto)
     assert exc.value.line == line + 1 and exc.value.column == "time_s"
+
+
+def _bias_record(y, temperature=None):
+    """A bias record of one segment in the rate readings' columns (the row rules' input)."""
+    import pandas as pd
+
+    n = len(y)
+    return pd.DataFrame({"test": "bias", "run": 1, "step": 1, "line": np.arange(2, n + 2),
+                         "time_s": np.arange(n) * 1.0, "rate_dps": 0.0,
+                         "temperature_c": temperature if temperature is not None else 25.0,
+                         "output": y})
+
+
+@pytest.mark.parametrize("sigma_lsb", (0.5, 0.6, 0.7))
+def test_coarsely_quantised_clean_record_is_not_refused(sigma_lsb):
+    """Review finding: at 0.5–0.7 LSB of noise most residuals are exactly 0, the median |d|
+    collapsed to 0 and the 3-quanta floor made every 2-quanta residual a '5σ' tail: a clean
+    record was refused as damaged (5 of 5 seeds). Now no finding at all."""
+    from gonio.specs._rate_family.screening import screen_rows
+
+    for seed in range(5):
+        rng = np.random.default_rng(seed)
+        y = np.round(rng.normal(0.0, sigma_lsb, 3600)) * 1e-3 + 2.5
+        assert screen_rows(_bias_record(y)) == [], (sigma_lsb, seed)
+
+
+def test_coarsely_quantised_record_with_spikes_is_still_caught():
+    from gonio.specs._rate_family.screening import screen_rows
+
+    rng = np.random.default_rng(3)
+    y = np.round(rng.normal(0.0, 0.6, 3600)) * 1e-3 + 2.5
+    bad = rng.choice(3600, 40, replace=False)
+    y[bad] += rng.choice([-1.0, 1.0], 40)                 # ±1 V spikes, 1.1 % of the rows
+    f = screen_rows(_bias_record(y))
+    assert {x.line - 2 for x in f if x.action == "set_aside"} == set(bad.tolist())
+
+
+def test_a_slow_temperature_sensor_sets_no_output_aside():
+    """Review finding: temperature logged on every 10th row set the 30 rows that HAVE it aside
+    (10 % of the output). A measured column's blank/extra value is now flagged only; a tie
+    (half the rows) is no finding."""
+    from gonio.specs._rate_family.screening import apply, screen_rows
+
+    rng = np.random.default_rng(1)
+    y = rng.normal(2.5, 1e-3, 300)
+    temp = np.full(300, np.nan)
+    temp[::10] = 25.0
+    df = _bias_record(y, temp)
+    f = screen_rows(df)
+    assert f and all(x.action == "flagged" and x.column == "temperature_c" for x in f)
+    assert len(apply(df, f)) == 300
+    temp = np.full(300, np.nan)
+    temp[::2] = 25.0                                        # half and half: no finding
+    assert screen_rows(_bias_record(y, temp)) == []

@@ -35,6 +35,7 @@ from gonio.units import dps_to_arcsec_s
 
 __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "session_coupling",
            "coupling_budget_component", "tilt_coupling_coefficients", "budget_extra_components",
+           "scale_factor_tilt_bias",
            "EXTRA_SYMBOLS"]
 
 #: Symbols of :func:`budget_extra_components`.
@@ -216,6 +217,39 @@ def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s:
         c[i], s[i] = terms.p_s, terms.q_s
     inverse = inverse.reshape(-1)
     return c[inverse].reshape(th.shape), s[inverse].reshape(th.shape)
+
+
+def scale_factor_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
+                           latitude_deg: float, tilt_deg: float,
+                           accel_dps2: float = 60.0) -> float:
+    """Worst case over the tilt azimuth of the bias the tilt × Earth-rate coupling of the
+    7.1 rounds gives K, as the error it makes in an angle: A_K (arcsec per degree), so an
+    angle θ read with that K is off by up to A_K·θ (arcsine in the unknown azimuth).
+
+    K = mean C_k/θ_k; round k's coupling e_k(α) = Ω_⊥ sin ψ (C_k cos α − S_k sin α)
+    (:func:`tilt_coupling_coefficients`) moves it by mean_k e_k/θ_k, whose amplitude over α
+    is Ω_⊥ sin ψ · |(mean C_k/θ_k, mean S_k/θ_k)|. This is the part of
+    :func:`budget_extra_components`'s ``tilt_E`` that enters through K; a difference of
+    two angles θ_a, θ_b read with the same K carries A_K·|θ_a − θ_b|.
+
+    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
+    >>> sf = pd.DataFrame({"table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0],
+    ...                    "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0]})
+    >>> a = scale_factor_tilt_bias(sf, p, 40.0, 0.1)
+    >>> 0 < a * 360 / 1296000 < 1e-6, scale_factor_tilt_bias(sf, p, 40.0, 0.0)
+    (True, 0.0)
+    """
+    th_k = np.abs(scale_factor_rows["table_deg"].to_numpy(dtype=float))
+    t_k = scale_factor_rows["time_s"].to_numpy(dtype=float)
+    sfi = protocol.scale_factor
+    if sfi is None or th_k.size == 0:
+        return 0.0
+    omega = dps_to_arcsec_s(earth_rate_split(latitude_deg, sfi.orientation).perpendicular_dps) \
+        * math.sin(math.radians(tilt_deg))
+    ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s, accel_dps2)
+    return float(abs(omega) * math.hypot(float(np.mean(ck / th_k)), float(np.mean(sk / th_k))))
 
 
 def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,

@@ -55,6 +55,7 @@ def header_lines(path):
     fh = open(path, "rb")
     with fh:
         head = b""
+        done = 0                                   # complete lines already yielded
         while True:
             piece = fh.read(1 << 16)
             if not head:
@@ -69,7 +70,7 @@ def header_lines(path):
                 continue                           # a character cut at the piece's end
             lines = text.lstrip("\ufeff").splitlines()
             complete = lines if not piece else lines[:-1]
-            for line in complete:
+            for line in complete[done:]:
                 s = line.strip()
                 if not s:
                     continue
@@ -77,6 +78,7 @@ def header_lines(path):
                     return
                 key, _, value = s[1:].partition(":")
                 yield key.strip(), value.strip()
+            done = len(complete)
             if not piece:
                 return
 

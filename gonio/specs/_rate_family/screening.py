@@ -43,6 +43,8 @@ Rules (one segment = the rows of one test, run and step, in time order):
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 from scipy.ndimage import median_filter
@@ -61,6 +63,9 @@ SETTING_TOL = {"rate_dps": (1e-6, 1e-9), "freq_hz": (1e-6, 0.0), "temperature_c"
 AXES = ("up_axis", "north_axis", "stand_axis")
 #: Columns compared as labels (any difference from the segment's most common value).
 CATEGORICAL = AXES + ("role",)
+#: Setting columns that are measured alongside the output rather than set (a blank or an
+#: extra value there is flagged, never a reason to set the row's output aside).
+MEASURED = ("temperature_c", "supply_v")
 
 
 def _finding(code, message, row, column, file, clauses, rule) -> Finding:
@@ -106,10 +111,14 @@ DENSE_SHARE, DENSE_MIN_ROWS = 0.05, 3
 DENSE_MIN_SEGMENT = 20
 
 
-def _quantum_floor(y: np.ndarray) -> float:
+def _quantum(y: np.ndarray) -> float:
+    """The output's resolution: its smallest non-zero step (0 for a constant)."""
     steps = np.abs(np.diff(y))
-    q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
-    return max(3.0 * q, 1e-9 * (1.0 + float(np.max(np.abs(y)))))
+    return float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
+
+
+def _quantum_floor(y: np.ndarray) -> float:
+    return max(3.0 * _quantum(y), 1e-9 * (1.0 + float(np.max(np.abs(y)))))
 
 
 def hampel_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -117,7 +126,9 @@ def hampel_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ±1000 spikes gave B_s = 48 ± 9 °/h for 19 with no finding — the second-difference rule's
     local scale, median |r|, is itself made of spikes once they are dense):
     d_i = y_i − median(y over the 21 samples around i), limit_i = 8·1.4826·max(median |d|
-    over the 101 samples around i, the segment's median |d|), floored at 3 quanta of the
+    over the 101 samples around i, the segment's median |d|; where the output is quantised
+    so coarsely that the median |d| is below one quantum, at least the rms of min(|d|, 5
+    quanta): a clean record at 0.5 LSB noise was refused), floored at 3 quanta of the
     output and 10⁻⁹ of its size. The running median follows a smooth trend (a warm-up
     transient) and ignores up to 10 spikes among 21 samples; the scale is made of the
     good samples as long as they are the majority.
@@ -133,7 +144,13 @@ def hampel_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     d = y - median_filter(y, size=HAMPEL_WINDOW, mode="nearest")
     a = np.abs(d)
     local = np.maximum(median_filter(a, size=SCALE_WINDOW, mode="nearest"), float(np.median(a)))
-    return d, np.maximum(K_HAMPEL * 1.4826 * local, _quantum_floor(y))
+    scale = 1.4826 * local
+    q = _quantum(y)
+    if q > 0 and 1.4826 * float(np.median(a)) < q:
+        # coarse quantisation (noise ≲ 1 quantum): most d are exactly 0 and the median |d|
+        # collapses; σ from the rms of |d| winsorised at 5 quanta (the rounding's q²/12 in it)
+        scale = np.maximum(scale, math.sqrt(float(np.mean(np.minimum(a, 5.0 * q) ** 2))))
+    return d, np.maximum(K_HAMPEL * scale, _quantum_floor(y))
 
 
 def _output_rule(df, idx: np.ndarray, col: str, file, clauses, pooled=None) -> list[Finding]:
@@ -211,14 +228,19 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
                          f"{mode.iloc[i]!r}", df.iloc[i], col, file, clauses,
                          "axis differs from the segment's") for i in bad]
     v = pd.to_numeric(df[col], errors="coerce")
-    # a value where the segment's other rows have none (or the reverse) is a typo too
+    # a value where the segment's other rows have none (or the reverse) is a typo too — of a
+    # setting the items group by; a measured column (MEASURED: a slow sensor logs every n-th
+    # row) is only flagged, its row's output kept; a tie (half and half) is no finding
     present = v.notna()
-    absent_odd = (present != (present.groupby(key).transform("mean") > 0.5)).to_numpy()
+    share = present.groupby(key).transform("mean")
+    absent_odd = ((present & (share < 0.5)) | (~present & (share > 0.5))).to_numpy()
     out = [_finding("setting-departs", f"{col} {'blank' if pd.isna(v.iloc[i]) else f'{v.iloc[i]:.10g}'}"
                     f" where the segment's other rows have "
                     f"{'a value' if pd.isna(v.iloc[i]) else 'none'}", df.iloc[i], col, file,
                     clauses, "a setting present in some rows of a segment only")
            for i in np.flatnonzero(absent_odd)]
+    if col in MEASURED:
+        out = [Finding(**{**f.to_json(), "action": "flagged"}) for f in out]
     med = v.groupby(key).transform("median")
     dev = (v - med).abs()
     mad = dev.groupby(key).transform("median") * 1.4826

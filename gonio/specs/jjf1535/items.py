@@ -83,7 +83,8 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
 
     Before, the χ² half-width was entered as a normal type-B term with k = 2 and expanded
     again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's sd z
-    0.17). U is unchanged in size (the exact χ² limit), only u_c is now honest.
+    0.17). U is now exactly the distance to the χ² 95 % upper limit (before, 2 % smaller:
+    the pins' bias_repeatability U 369.1 → 376.7), and u_c is honest.
 
     >>> u = std_dev_uncertainty(1.0, 2, "K_r")
     >>> round(u.u_c, 3), round(u.U, 3), round(u.k, 2), [round(x, 3) for x in u.interval]

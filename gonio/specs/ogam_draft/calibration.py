@@ -563,6 +563,21 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     return budget, src, notes
 
 
+def _scale_factor_tilt(results, readings, protocol, budget) -> float:
+    """A_K of :func:`gonio.budget.extra.scale_factor_tilt_bias` for this calibration's 7.1
+    rounds, at the budget's tilt bound and the file's latitude (the equator's, the worst
+    case, when not stated); 0 when K does not come from 7.1."""
+    from gonio.budget.extra import scale_factor_tilt_bias
+
+    if not results.scale_factor.measured or protocol.scale_factor is None:
+        return 0.0
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    df = readings.data
+    sf = df[df["line"].isin(list(results.scale_factor.used_lines))]
+    return scale_factor_tilt_bias(sf, protocol, 0.0 if lat is None else lat,
+                                  float(budget.parameters["tilt_deg"]))
+
+
 def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
@@ -671,6 +686,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     df = readings.data
     k_u_rel = float(out["scale_factor"].u_c / abs(float(sf.value))) \
         if "scale_factor" in out and float(sf.value) else 0.0
+    k_tilt = _scale_factor_tilt(results, readings, protocol, budget)
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
         if not c.measured:
@@ -692,8 +708,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
                                           scale, table_mpe_arcsec=mpe,
                                           drift_half_width_arcsec=drift * t_min,
-                                          scale_factor_u_rel=k_u_rel, curves=curves,
-                                          k=k_fixed)
+                                          scale_factor_u_rel=k_u_rel,
+                                          scale_factor_tilt=k_tilt, curves=curves, k=k_fixed)
     return out
 
 

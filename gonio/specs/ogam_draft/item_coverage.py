@@ -52,10 +52,8 @@ ITEM_TRUTHS = {
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
     "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
     "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
-    "rate_consistency": "spread of the noise-free E_v (the procedure's own K, noise-free: "
-                        "systematic_deviation_calibrated_arcsec) over the reference angle, ppm",
-    "pointing_consistency": "spread of the noise-free E_g (the procedure's own K, noise-free) "
-                            "over the reference angle, %",
+    "rate_consistency": "spread of the noise-free E_v over the reference angle, ppm",
+    "pointing_consistency": "spread of the noise-free E_g over the reference angle, %",
 }
 
 
@@ -72,15 +70,8 @@ def _signed_extreme(v) -> float:
 
 
 def _consistency_truth(tr: pd.DataFrame, c, col: str, scale: float) -> float:
-    """Spread of the noise-free per-condition extremes, at the result's points.
-
-    The deviations are the noise-free rerun's with the K its own 7.1 rounds give
-    (``systematic_deviation_calibrated_arcsec``), not the mount's closed-form K: every
-    E_v of 7.6/7.7 is computed with the one K of 7.1, and on a tilted mount that K carries
-    the tilt × Earth-rate coupling of the 7.1 rounds (0.3 ppm at the A.1 bound), which
-    moves every condition's extreme by K's error × its position. That is the procedure's
-    outcome as mounted; K's noise (u(K)) is in the budget's ``K_ab`` line.
-    """
+    """Spread of the noise-free per-condition extremes, at the result's points (as mounted:
+    the mount's closed-form K; the tilt bias of 7.1's K is the budget's ``K_tilt`` line)."""
     pts = c.tables["points"]
     e = []
     for row in c.table.itertuples(index=False):
@@ -93,8 +84,7 @@ def _consistency_truth(tr: pd.DataFrame, c, col: str, scale: float) -> float:
             rows = rows[rows["orientation"] == v]
         if src == "angle_deviation":     # the reference condition taken from 7.4
             rows = rows[np.isclose(rows["rate_dps"].to_numpy(dtype=float), 60.0)]
-        e.append(_signed_extreme(rows.groupby("round")["systematic_deviation_calibrated_arcsec"]
-                                 .mean()))
+        e.append(_signed_extreme(rows.groupby("round")["systematic_deviation_arcsec"].mean()))
     e = np.array(e)
     return float((e.max() - e.min()) / float(c.details["reference_angle_arcsec"]) * scale)
 

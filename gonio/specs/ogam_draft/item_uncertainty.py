@@ -621,8 +621,8 @@ class ConditionDeviation:
 def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                        reference_angle_arcsec: float, scale: float, *,
                        table_mpe_arcsec: float, drift_half_width_arcsec: float,
-                       scale_factor_u_rel: float = 0.0, curves=None,
-                       k: float | None = None) -> ItemUncertainty:
+                       scale_factor_u_rel: float = 0.0, scale_factor_tilt: float = 0.0,
+                       curves=None, k: float | None = None) -> ItemUncertainty:
     """u(C) of C = (max E_v − min E_v)/reference · scale (draft 7.6: ppm, 7.7: %).
 
     Inputs, for the conditions a (max E_v) and b (min E_v): their Type A means
@@ -635,7 +635,10 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     scale factor's error carried into the spread: every E_v is computed with the one K of
     7.1, so a relative error δ of K moves E_v by δ·θ at its position θ and the spread by
     δ·(θ_a − θ_b), normal with ``scale_factor_u_rel`` = u(K)/K (0 when a and b are at the
-    same position: the term cancels like the table's).
+    same position: the term cancels like the table's). On a mount tilted within the A.1
+    bound the coupling of the 7.1 rounds biases K too: ``scale_factor_tilt`` (A_K,
+    arcsec per degree, :func:`gonio.budget.extra.scale_factor_tilt_bias`) gives the
+    ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|.
 
     ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, in the order of
     ``conditions``) adds the *choice of the extreme* (``C_sel``): E_v is the signed value of
@@ -719,6 +722,11 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                      source=f"u(K)/K = {scale_factor_u_rel:.3g} over "
                             f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
               "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
+        _Line(type_b("K_tilt", 0.0, scale_factor_tilt * abs(a.position_deg - b.position_deg)
+                     * f, "arcsine",
+                     source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
+                            f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
+              "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)"),
     ]
     if curves is not None:
         u_sel = extreme_selection_u(curves, [mean_u(c) for c in cs], table_mpe_arcsec,
@@ -730,7 +738,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     corr = np.eye(len(lines))
     if same:
         corr[2, 3] = corr[3, 2] = 1.0
-    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0][:len(lines)]
+    coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0][:len(lines)]
     value = (a.e_arcsec - b.e_arcsec) * f
     return _budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs)
 
