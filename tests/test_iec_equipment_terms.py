@@ -122,3 +122,33 @@ def test_symmetry_budget_holds_the_fluctuation(iec_noise_free):
                    eq.chamber.fluctuation_period_s)
     a_base = r.items["scale_factor"].value
     assert c["u"] == pytest.approx(mc * a_base, rel=0.03)
+
+
+def test_chamber_uniformity_in_a_base(iec_noise_free):
+    """Review finding (coverage 0.900, a constant 4.5e-5 left): the gyro's place in the
+    chamber's volume, ± half the stated uniformity, rectangular × T_c,SF/a of the bench's
+    polynomial; the draw puts the gyro uniformly in that range."""
+    from gonio.bench.equipment import Chamber, Equipment, draw_equipment
+
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.specs.iec62047_20 import calibrate
+
+    r0, b, res, p = iec_noise_free
+    assert _comp(r0.items["scale_factor"], "e_U")["u"] == 0.0    # the ideal chamber states 0
+    md = {k: str(v) for k, v in res.metadata.items()}
+    md.update(chamber_uniformity_c=repr(b.equipment.chamber.uniformity_c))   # the bench's 0.4
+    keep = res.data["test"].isin(["scale_factor", "sf_temperature"])
+    r = calibrate(RateReadings(res.data[keep], md), p)
+    g = b.gyro
+    T = np.array(sorted({s["temperature_c"] for s in res.truth["segments"]
+                         if s["test"] == "sf_temperature"}), float)
+    K = g.scale_factor_at(T, g.supply_nominal_v)
+    k_rel = np.polyfit(T, K, 1)[0] / K.mean()
+    half = 0.2
+    for item in ("scale_factor", "initial_sf_variation"):
+        assert _comp(r.items[item], "e_U")["u"] == pytest.approx(
+            half / math.sqrt(3) * abs(k_rel), rel=2e-3)
+    eq = Equipment(chamber=Chamber(uniformity_c=0.4))
+    pos = np.array([draw_equipment(eq, s).chamber.position_offset() for s in range(3000)])
+    assert np.abs(pos).max() <= 0.2 and np.var(pos) == pytest.approx(0.2 ** 2 / 3, rel=0.08)
+    assert Chamber(uniformity_c=0.4).position_offset() == 0.2       # not drawn: the far corner

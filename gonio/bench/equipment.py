@@ -77,6 +77,17 @@ class Chamber:
     max_ramp_c_per_min: float = 5.0
     point_deviation_c: float = 0.0       # > 0: per-set-point deviation, uniform in ±this
     deviation_seed: int = 0
+    position_offset_c: float | None = None   # the gyro's place in the volume; None: +half
+
+    def position_offset(self) -> float:
+        """The gyro's temperature offset from the chamber's (°C): ``position_offset_c``,
+        or + ``uniformity_c``/2 (the far corner of the volume) when it is not set.
+
+        >>> Chamber(uniformity_c=0.4).position_offset(), Chamber(0.0, position_offset_c=-0.1).position_offset()
+        (0.2, -0.1)
+        """
+        return 0.5 * self.uniformity_c if self.position_offset_c is None \
+            else float(self.position_offset_c)
 
     def deviation_at(self, set_point_c: float) -> float:
         """The chamber's deviation from the set point ``set_point_c`` (°C).
@@ -191,11 +202,13 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     - the chamber's deviation, at each set point its own: uniform in
       ±``chamber_deviation_bound_c`` (Chamber.point_deviation_c, seeded per trial);
     - the gyro's misalignment in its fixture about body x and y: each uniform in
-      ±``axis_alignment_bound_deg``.
+      ±``axis_alignment_bound_deg``;
+    - the gyro's place in the chamber's volume: its temperature offset uniform in
+      ±``uniformity_c``/2 (drawn last, so the draws above are as before).
 
     What stays as the bench sets it: the table's ripple and axis tilt, the position table's
     error (already drawn per position by the session), the vibration table, the chamber's
-    fluctuation and uniformity, the supply error — no budget carries them as a type-B term
+    fluctuation, the supply error — no budget carries them as a type-B term
     of the equipment. Same seed → same equipment.
 
     >>> e = draw_equipment(Equipment(), 3)
@@ -210,11 +223,13 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     a = eq.axis_alignment_bound_deg
     mis_x, mis_y = (float(v) for v in rng.uniform(-a, a, 2)) if a > 0 else (0.0, 0.0)
     ch_seed = int(rng.integers(0, 2 ** 31))
+    h = 0.5 * eq.chamber.uniformity_c
+    pos = float(rng.uniform(-h, h)) if h > 0 else 0.0
     return replace(
         eq, rate_table=replace(eq.rate_table, rate_error_rel=rate_err),
         acquisition=replace(eq.acquisition, gain_error_rel=gain_err),
         chamber=replace(eq.chamber, point_deviation_c=eq.chamber_deviation_bound_c,
-                        deviation_seed=ch_seed),
+                        deviation_seed=ch_seed, position_offset_c=pos),
         fixture=Fixture(mis_x, mis_y))
 
 

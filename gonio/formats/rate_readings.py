@@ -74,6 +74,7 @@ META_RANGES: dict[str, tuple[float, float, str]] = {
     "acquisition_u_rel": (0.0, 0.5, "a relative standard uncertainty in [0, 0.5]"),
     "chamber_deviation_bound_c": (0.0, 50.0, "a temperature bound in [0, 50] °C"),
     "chamber_fluctuation_c": (0.0, 50.0, "a temperature amplitude in [0, 50] °C"),
+    "chamber_uniformity_c": (0.0, 50.0, "a temperature uniformity in [0, 50] °C"),
     "chamber_fluctuation_period_s": (0.0, 1e7, "a period in [0, 1e7] s (0: not stated)"),
 }
 NUMERIC_METADATA = {k: v[2] for k, v in META_RANGES.items()}

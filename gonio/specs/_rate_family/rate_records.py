@@ -109,6 +109,7 @@ class RateContext:
     chamber_deviation_c: float = 2.0          # JJF Table 2: temperature deviation ±2 °C
     axis_alignment_deg: float = 0.05          # input axis to the fixture/table axis, half-width
     chamber_fluctuation_c: float = 1.0        # JJF Table 2: temperature fluctuation ±1 °C
+    chamber_uniformity_c: float = 2.0         # JJF Table 2: uniformity 2 °C (gyro within ±half)
     chamber_fluctuation_period_s: float | None = None   # not stated: bounded instead
     cache: dict = field(default_factory=dict)
 

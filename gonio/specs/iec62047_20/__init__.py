@@ -82,6 +82,7 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
         chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path),
         chamber_fluctuation_c=metadata_number(md, "chamber_fluctuation_c", 1.0, rd.path),
+        chamber_uniformity_c=metadata_number(md, "chamber_uniformity_c", 2.0, rd.path),
         chamber_fluctuation_period_s=metadata_number(md, "chamber_fluctuation_period_s", 0.0,
                                                      rd.path) or None)
     items = calibrate_items(ctx, _items, monte_carlo_trials)

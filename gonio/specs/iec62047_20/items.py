@@ -176,7 +176,10 @@ def _u_rel_sf(ctx: Context, c: dict) -> list:
             from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative"),
             type_b("e_T", 0.0, ctx.chamber_deviation_c * abs(sf_tc_rel(ctx)), "rectangular",
                    source="chamber deviation at T_BASE (± bound) × T_c,SF/a of 5.1.3.4's "
-                          "runs (0 without them)")]
+                          "runs (0 without them)"),
+            type_b("e_U", 0.0, 0.5 * ctx.chamber_uniformity_c * abs(sf_tc_rel(ctx)),
+                   "rectangular", source="the gyro's place in the chamber's volume (± half "
+                                         "its uniformity, JJF Table 2) × T_c,SF/a")]
 
 
 def sf_tc_rel(ctx: Context) -> float:
@@ -198,14 +201,15 @@ def sf_tc_rel(ctx: Context) -> float:
 def scale_factor(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.1 eqs (1), (2): a_BASE, least squares over the 2n + 1 points (rest
     included) at T_BASE, V_BASE. Budget (:func:`_u_rel_sf`): the slope's noise and drift,
-    the rate table and the voltmeter (relative), and the chamber's deviation at T_BASE
-    times T_c,SF/a (:func:`sf_tc_rel`)."""
+    the rate table and the voltmeter (relative), and the chamber's deviation at T_BASE and
+    the gyro's place in its volume (± half the uniformity) times T_c,SF/a (:func:`sf_tc_rel`)."""
     t, cl, un = "scale factor a_BASE", "5.1.3.1", f"{ctx.output_unit}/(°/s)"
     m = _miss(ctx, "scale_factor", "scale_factor", t, cl, un, need_a=False)
     if m:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
-    u = gum(lambda a, et, ea, eT: a * (1 + ea) * (1 + eT) / (1 + et), _u_rel_sf(ctx, c))
+    u = gum(lambda a, et, ea, eT, eU: a * (1 + ea) * (1 + eT) * (1 + eU) / (1 + et),
+            _u_rel_sf(ctx, c))
     return Item("scale_factor", t, cl, un, c["a"], uncertainty=u,
                 details={"b_BASE": c["b"], "x_dps": c["x"], "y": c["y"]})
 
@@ -218,8 +222,8 @@ def initial_sf_variation(ctx: Context) -> Item:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     ins = _u_rel_sf(ctx, c)
-    u = gum(lambda a, et, ea, eT: 100 * (a * (1 + ea) * (1 + eT) / (1 + et) - ctx.a_typ)
-            / ctx.a_typ, ins)
+    u = gum(lambda a, et, ea, eT, eU: 100 * (a * (1 + ea) * (1 + eT) * (1 + eU) / (1 + et)
+                                             - ctx.a_typ) / ctx.a_typ, ins)
     return Item("initial_sf_variation", t, cl, un, 100 * (c["a"] - ctx.a_typ) / ctx.a_typ,
                 uncertainty=u, details={"a_TYP": ctx.a_typ})
 

@@ -29,6 +29,7 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
           "acquisition_u_rel": repr(eq.acquisition_u_rel),
           "chamber_deviation_bound_c": repr(eq.chamber_deviation_bound_c),
           "chamber_fluctuation_c": repr(eq.chamber.fluctuation_c),
+          "chamber_uniformity_c": repr(eq.chamber.uniformity_c),
           "chamber_fluctuation_period_s": repr(eq.chamber.fluctuation_period_s),
           "ratiometric": "true" if g.ratiometric else "false"}
     res = run_rate_session(plan(proto, b), b, seed, room_temperature_c=20.0, metadata=md,
