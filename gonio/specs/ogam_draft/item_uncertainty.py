@@ -640,12 +640,9 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     arcsec per degree, :func:`gonio.budget.extra.scale_factor_tilt_bias`) gives the
     ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|.
 
-    ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, in the order of
-    ``conditions``) adds the *choice of the extreme* (``C_sel``): E_v is the signed value of
-    largest magnitude of a curve, so where a curve's positive and negative excursions are
-    close, noise can pick the other one and move C by their sum, which no linear line
-    holds. :func:`extreme_selection_u` gives its u by Monte Carlo (JCGM 101) of the draft's
-    functional against the same draws with the extremes held.
+    ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, as ``conditions``) adds the
+    *choice of the extreme* (``C_sel``, :func:`extreme_selection_u`): noise can pick a
+    curve's other excursion, which no linear line holds.
 
     Examples
     --------
@@ -667,11 +664,9 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     >>> round(b.u_c, 4), round(b.value, 4)
     (0.1491, 0.5556)
 
-    K known to 0.2 ppm, extremes 30° apart (the first example): the spread moves by
-    0.2e-6·108000″ = 0.0216″, 0.01667 ppm of the reference, added in quadrature:
+    K known to 0.2 ppm, extremes 30° apart (the first example): 0.2e-6·108000″ in quadrature:
 
-    >>> cs = [ConditionDeviation("60", 0.36, 360.0, 0.096, 1),
-    ...       ConditionDeviation("10", -0.36, 330.0, 0.096, 1)]
+    >>> cs[1] = ConditionDeviation("10", -0.36, 330.0, 0.096, 1)
     >>> kw = dict(table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15)
     >>> u0 = consistency_budget("rate_consistency", cs, 1296000.0, 1e6, **kw).u_c
     >>> u1 = consistency_budget("rate_consistency", cs, 1296000.0, 1e6, **kw,
