@@ -6,6 +6,18 @@ COMMON_PHRASES_ZH = (
     (r"acquisition gain on the whole output \(null included\)", "整个输出（含零点）上的采集增益"),
     (r"acquisition, relative", "数据采集（相对）"),
     (r"rate table, relative", "速率转台（相对）"),
+    (r"chamber deviation at T_BASE \(± bound\) × T_c,SF/a of 5\.1\.3\.4's runs "
+     r"\(0 without them\)", "T_BASE 处温箱温度偏差（± 界限）× 5.1.3.4 各次试验的 T_c,SF/a（无该试验时为 0）"),
+    (r"chamber deviation at T_BASE \(± bound\) × the bias temperature coefficient of "
+     r"5\.3\.3\.6's visits \(0 without them\)",
+     "T_BASE 处温箱温度偏差（± 界限）× 5.3.3.6 各次测量的零偏温度系数（无该测量时为 0）"),
+    (r"the gyro's place in the chamber's volume \(± half its uniformity, JJF Table 2\) × "
+     r"T_c,SF/a", "陀螺在温箱容积内的位置（± 均匀度之半，JJF 表2）× T_c,SF/a"),
+    (r"the two slopes' noise of the point means and bias drift",
+     "两条斜率的各点均值噪声与零偏漂移"),
+    (r"chamber fluctuation \(± amplitude, period\) × T_c,SF between the CW and CCW points",
+     "顺时针与逆时针各点之间的温箱温度波动（± 幅值、周期）× T_c,SF"),
+    (r"input-axis alignment × horizontal Earth rate", "输入轴对准 × 地球自转角速度水平分量"),
     (r"scale factor, relative", "标度因数（相对）"),
     (r"spread over the power-ups", "各次上电之间的分散性"),
     (r"spread of the records", "各段记录的分散性"),
