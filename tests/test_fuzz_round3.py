@@ -280,5 +280,42 @@ def test_triad_dwell_with_sd_zero_gives_no_warning(tmp_path_factory):
     count("triad:sd-zero")
 
 
+# ------------------------------------------- protocols that plan what the reader refuses
+
+PROTOCOL_TEMPERATURES = {
+    # case: (spec, old text, new text, key the message names)
+    "iec-operating-min-below-absolute-zero": ("iec62047-20", "operating_min_c = -40.0",
+                                              "operating_min_c = -300.0",
+                                              "protocol.operating_min_c"),
+    "jjf-room-300": ("jjf1535-2015", "room_temperature_c = 20.0", "room_temperature_c = 300.0",
+                     "protocol.room_temperature_c"),
+    "jjf-point-300": ("jjf1535-2015", "points_c = [70.0, -40.0]", "points_c = [300.0, -40.0]",
+                      "temperature.points_c"),
+    "triad-setpoint-minus-400": ("triad-alignment", "setpoints_c = [-40.0,",
+                                 "setpoints_c = [-400.0,", "thermal.setpoints_c"),
+    "triad-start-1e6": ("triad-alignment", "start_c = 25.0", "start_c = 1e6",
+                        "thermal.start_c"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PROTOCOL_TEMPERATURES))
+def test_protocol_temperatures_the_reader_would_refuse(tmp_path, capsys, name):
+    """A protocol temperature outside what the readings reader takes: before, IEC
+    operating_min_c = -300 °C (below absolute zero) and JJF room 300 °C were simulated (exit 0)
+    into a file the reader then refused; triad start_c = 1e6 blamed thermal.ramp_block_s.
+    Now refused when the protocol is read, naming the key; nothing written."""
+    spec, old, new, key = PROTOCOL_TEMPERATURES[name]
+    text = (protocols_dir() / f"{spec}.toml").read_text(encoding="utf-8")
+    assert old in text
+    p = tmp_path / "p.toml"
+    p.write_text(text.replace(old, new, 1), encoding="utf-8")
+    before = sha(p)
+    msg = cli(["simulate", "--spec", spec, "--protocol", p, "--seed", "1", "--out",
+               tmp_path / "o"], capsys, 2)
+    assert msg.startswith(f"gonio: error: {p}: key {key}:") and "[-100, 200]" in msg, msg
+    assert not (tmp_path / "o").exists() and sha(p) == before
+    count(f"protocol-temperature:{name}")
+
+
 def test_case_count_reported():
     assert len(CASES) >= 1
