@@ -457,29 +457,28 @@ def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray,
     The weighted least-squares estimate is linear in the outputs, θ̂_i = P y_i with
     P = (XᵀWX)⁻¹XᵀW the same (4 × dwells) matrix for every trial (X has full column rank,
     checked before), so P is formed once (``lstsq`` of the weighted design against the
-    weights, the solve the per-trial fit made) and a piece of trials is one matrix product,
-    θ̂ = θ + P (sd·z): the same estimates as refitting every trial, to rounding (tested
-    against a per-trial ``lstsq`` loop), without a least-squares solve per piece."""
+    weights, the solve the per-trial fit made) and a piece of trials is three small products,
+    θ̂_i = θ_i + (P sd_i) z_i: the same estimates as refitting every trial, to rounding
+    (tested against a per-trial ``lstsq`` loop), without a least-squares solve per piece.
+    The normal draws go into one reused buffer (the same numbers as a fresh array)."""
     sw = np.sqrt(w)
     proj, *_ = np.linalg.lstsq(x * sw[:, None], np.diag(sw), rcond=None)   # P, (4, rows)
-    rows = fitted.shape[0]
-    # one product per piece: a trial's draws z (rows × 3, row-major) times the block matrix
-    # that applies P, with channel i's sd folded in, to channel i's column → θ (12)
-    big = np.zeros((rows, 3, 3, 4))
-    for i in range(3):
-        big[:, i, i, :] = (proj * sd[:, i][None, :]).T
-    big = big.reshape(rows * 3, 12)
+    # channel i's fit applied to its draws: P with sd[:, i] folded in, (3, 4, rows)
+    proj_sd = np.ascontiguousarray(proj[None, :, :] * sd.T[:, None, :])
     theta0 = (proj @ fitted).T.reshape(12)         # the fit's θ (P X θ = θ)
     per = max(1, MC_DRAWS // fitted.size)
+    z_buf = np.empty((min(per, MC_CHUNK),) + fitted.shape)
 
     def trials(k: int):
         th = np.empty((k, 12))
         der = np.empty((k, max(sl.stop for sl in _DERIVED_SLICES.values())))
         for a in range(0, k, per):
             kk = min(per, k - a)
-            z = rng.standard_normal((kk,) + fitted.shape)            # (kk, rows, 3)
+            z = z_buf[:kk] if kk <= z_buf.shape[0] else np.empty((kk,) + fitted.shape)
+            rng.standard_normal(out=z)                               # (kk, rows, 3)
             t = th[a:a + kk]
-            np.matmul(z.reshape(kk, -1), big, out=t)
+            for i in range(3):        # einsum: no BLAS threads spinning on a shared machine
+                np.einsum("kr,pr->kp", z[:, :, i], proj_sd[i], out=t[:, 4 * i: 4 * i + 4])
             t += theta0
             der[a:a + kk] = _derived_trials(t)
         return th, der
