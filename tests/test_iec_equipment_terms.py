@@ -152,3 +152,27 @@ def test_chamber_uniformity_in_a_base(iec_noise_free):
     pos = np.array([draw_equipment(eq, s).chamber.position_offset() for s in range(3000)])
     assert np.abs(pos).max() <= 0.2 and np.var(pos) == pytest.approx(0.2 ** 2 / 3, rel=0.08)
     assert Chamber(uniformity_c=0.4).position_offset() == 0.2       # not drawn: the far corner
+
+
+def test_chamber_uniformity_in_the_bias(iec_noise_free):
+    """Review of stop 30: the place in the volume moves the gyro's temperature, hence its
+    bias by place × b'(T); the bias (and the initial bias variation, which reuses it)
+    carries e_U = ± half the uniformity, rectangular × the bench's b(T) slope over the
+    5.3.3.6 visits. Mutation: e_U taken out of the bias budget fails here."""
+    from gonio.formats.rate_readings import RateReadings
+    from gonio.specs.iec62047_20 import calibrate
+
+    r0, b, res, p = iec_noise_free
+    assert _comp(r0.items["bias"], "e_U")["u"] == 0.0              # the ideal chamber states 0
+    md = {k: str(v) for k, v in res.metadata.items()}
+    md.update(chamber_uniformity_c="4.0")
+    keep = res.data["test"].isin(["scale_factor", "bias", "bias_temperature", "static"])
+    r = calibrate(RateReadings(res.data[keep], md), p)
+    g = b.gyro
+    Tb = np.array([s["temperature_c"] for s in res.truth["segments"]
+                   if s["test"] == "bias_temperature"], float)
+    b_tc = np.polyfit(Tb, g.bias_at(Tb, g.supply_nominal_v), 1)[0]
+    assert _comp(r.items["bias"], "e_U")["u"] == pytest.approx(
+        2.0 / math.sqrt(3) * abs(b_tc), rel=2e-2)
+    assert r.items["bias"].uncertainty.u_c > r0.items["bias"].uncertainty.u_c
+    assert r.items["initial_bias_variation"].uncertainty.u_c == r.items["bias"].uncertainty.u_c

@@ -40,3 +40,19 @@ def test_two_points_are_a_slope():
     assert slope_drift_u(x, t, lambda tau: 0.1) == pytest.approx(0.05)
     assert np.isnan(slope_noise_u(x[:1], np.array([0.1]))) and np.isnan(
         slope_drift_u(x[:1], t[:1], lambda tau: 0.1))
+
+
+def test_slope_degrees_of_freedom_from_the_points_blocks():
+    """Review of stop 30: a slope's ν was 50 whatever its points held. Now Welch–
+    Satterthwaite over the points (ν_i = blocks − 1), computed here from the variances
+    of the slope's pseudo-inverse row; a programme of short points has few."""
+    from gonio.specs.iec62047_20.items import slope_noise_dof
+    rng = np.random.default_rng(5)
+    x = np.array([-150.0, -100, -50, 0, 50, 100, 150])
+    u = rng.uniform(0.001, 0.01, x.size)
+    nu = rng.integers(1, 12, x.size).astype(float)
+    row = np.linalg.pinv(np.column_stack([x, np.ones_like(x)]))[0]
+    v = row ** 2 * u ** 2
+    assert slope_noise_dof(x, u, nu) == pytest.approx(v.sum() ** 2 / np.sum(v ** 2 / nu),
+                                                      rel=1e-10)
+    assert slope_noise_dof(x, np.full(7, 0.01), np.full(7, 1.0)) < 7   # 1 dof a point

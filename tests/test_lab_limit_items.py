@@ -7,6 +7,7 @@ tests make the pipeline's calibration and every renderer fail loudly if they are
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -30,8 +31,8 @@ mpe = 1.0
 """
 
 
-def test_the_rate_and_optical_specifications_know_their_items():
-    assert {"ogam-draft", "jjf1535-2015", "iec62047-20"} <= set(KNOWN)
+def test_every_built_in_specification_knows_its_items():
+    assert {"ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment"} <= set(KNOWN)
 
 
 @pytest.fixture
@@ -72,3 +73,74 @@ def test_known_items_pass_the_check(tmp_path):
                    encoding="utf-8")
     d = load_lab_file(lab, spec)
     assert [x["item"] for x in d["specification_limits"]] == ["bias", "bandwidth"]
+
+
+# -- the gyro triad: fixed alignment keys, thermal coefficients as patterns ------------------
+
+TRIAD_LAB = LAB[:LAB.index("\n[[specification_limits]]")].replace("{{", "{").replace("}}", "}")
+
+
+def triad_lab(tmp_path, limits) -> Path:
+    """The example laboratory file with ``limits`` ({item: (lower, upper)}) as its own."""
+    text = TRIAD_LAB + "".join(f"\n[[specification_limits]]\nitem = {k!r}\nlower = {lo!r}\n"
+                               f"upper = {hi!r}\n" for k, (lo, hi) in limits.items())
+    lab = tmp_path / "lab.toml"
+    lab.write_text(text, encoding="utf-8")
+    return lab
+
+
+@pytest.fixture(scope="module")
+def triad_readings(tmp_path_factory):
+    d = tmp_path_factory.mktemp("triadlab")
+    assert main(["simulate", "--spec", "triad-alignment", "--out", str(d / "sim")]) == 0
+    return d / "sim"
+
+
+@pytest.mark.parametrize("typo", ["M_xq", "K_z_theta5", "b_z_u3", "ARW_z_u1", "k_z_c0",
+                                  "K_w_c0", "thermal_model", "K_z_theta1x"])
+def test_triad_typo_refused_before_the_calibration(typo, triad_readings, tmp_path, capsys,
+                                                   no_work):
+    """A real triad readings file, a limit on an item no triad result can hold (a typo, an
+    order above the highest the selection tries, a gyro the triad has not, ARW's supply term,
+    the value-less placeholder): exit 2, one line naming the file, the entry and the key,
+    nothing calibrated or written."""
+    lab = triad_lab(tmp_path, {"M_xx": (49.0, 51.0), typo: (0.0, 1.0)})
+    out = tmp_path / "out"
+    rc = main(["calibrate", str(triad_readings / "readings.csv"), "--lab", str(lab),
+               "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert str(lab) in err and "specification_limits[1].item" in err and repr(typo) in err, err
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_triad_lab_limits_reach_results_and_certificate(triad_readings, tmp_path):
+    """Limits on an alignment item and on thermal coefficients (pattern keys) pass the
+    check and are decided against the bench's truth: M_xx within ±0.05 of the true
+    system-matrix element passes, M_yy with its upper limit 0.05 below the truth fails, the
+    z gyro's K at the reference within ±0.1 of the true scale factor passes. And every key
+    the result holds passes the check (the patterns cannot drift from the items named)."""
+    truth = json.loads((triad_readings / "truth.json").read_text(encoding="utf-8"))
+    m = truth["system_matrix"]
+    k_z = truth["scale_per_dps"][2]
+    limits = {"M_xx": (m[0][0] - 0.05, m[0][0] + 0.05), "M_yy": (m[1][1] - 1.0, m[1][1] - 0.05),
+              "K_z_c0": (k_z - 0.1, k_z + 0.1)}
+    lab = triad_lab(tmp_path, limits)
+    out = tmp_path / "out"
+    assert main(["calibrate", str(triad_readings / "readings.csv"), "--lab", str(lab),
+                 "--out", str(out)]) == 0
+    items = json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
+    outcome = {k: items[k]["conformity"]["outcome"] for k in limits}
+    assert outcome == {"M_xx": "pass", "M_yy": "fail", "K_z_c0": "pass"}
+    for k, (lo, hi) in limits.items():
+        c = items[k]["conformity"]
+        assert (c["lower"], c["upper"], c["limits_from"]) == (lo, hi, "lab file")
+    html = (out / "certificate.html").read_text(encoding="utf-8")
+    assert "Example Angle Metrology Laboratory" in html and "K_z_c0" in html
+    # every key a real result holds passes the check: the patterns follow thermal_items
+    spec = available()["triad-alignment"]
+    held = [k for k, it in items.items() if it["value"] is not None]
+    assert any(k.startswith("ARW_z_") for k in held) and "M_zz" in held
+    assert [k for k in held if not spec.knows_item(k)] == []
+

@@ -69,13 +69,13 @@ def test_jjf_scale_factor_budget_u3_and_combination(jjf):
 
 
 def _std_dev_budget(it, s, Q):
-    """u_c = s/√(2ν) (GUM E.4.3), U = s·(√(ν/χ²_0.025,ν) − 1), the χ² interval
-    [s·√(ν/χ²_0.975,ν), s·√(ν/χ²_0.025,ν)], ν = Q − 1 (scipy's χ², not the item's code)."""
+    """u_c = s/√(2ν) (GUM E.4.3), U = s·(√(ν/χ²_0.05,ν) − 1), the one-sided 95 % interval
+    [0, s·√(ν/χ²_0.05,ν)], ν = Q − 1 (scipy's χ², not the item's code)."""
     from scipy.stats import chi2
     nu = Q - 1
     assert it.value == pytest.approx(s, rel=1e-9)
     assert it.uncertainty.u_c == pytest.approx(s / math.sqrt(2 * nu), rel=1e-9)
-    assert it.uncertainty.U == pytest.approx(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1),
+    assert it.uncertainty.U == pytest.approx(s * (math.sqrt(nu / chi2.ppf(0.05, nu)) - 1),
                                              rel=1e-9)
     assert it.uncertainty.nu_eff == nu and it.uncertainty.coverage_probability == 0.95
     assert it.uncertainty.k == pytest.approx(it.uncertainty.U / (s / math.sqrt(2 * nu)))
@@ -83,8 +83,26 @@ def _std_dev_budget(it, s, Q):
     assert (row["type"], row["c"], row["dof"]) == ("A", 1.0, nu)
     assert row["u"] == row["contribution"] == pytest.approx(s / math.sqrt(2 * nu), rel=1e-9)
     lo, hi = it.uncertainty.interval
-    assert lo == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.975, nu)), rel=1e-9)
-    assert hi == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.025, nu)), rel=1e-9)
+    assert lo == 0.0 and hi == pytest.approx(s * math.sqrt(nu / chi2.ppf(0.05, nu)), rel=1e-9)
+
+
+@pytest.mark.parametrize("nu", [1, 2, 4, 9])
+def test_std_dev_uncertainty_covers_95_percent(nu):
+    """Review of stop 30: s ± U must hold σ with the probability it states (95 %). Normal
+    samples of ν + 1 values, σ = 1: the fraction of s − U ≤ σ ≤ s + U (for ν ≤ 5 the lower
+    side is below 0) against scipy's binomial test. The two-sided χ² limit it had covered
+    97.5 %."""
+    from scipy.stats import binomtest
+    from gonio.specs._rate_family.rate_records import std_dev_uncertainty
+    rng = np.random.default_rng(nu)
+    n = 20000
+    s = rng.standard_normal((n, nu + 1)).std(axis=1, ddof=1)
+    U = np.array([std_dev_uncertainty(float(v), nu, "x").U for v in s[:50]])
+    assert np.all(s[:50] - U < 0) == (nu <= 5)
+    ratio = U[0] / s[0]                            # U is proportional to s
+    hits = int(np.sum((s * (1.0 - ratio) <= 1.0) & (1.0 <= s * (1.0 + ratio))))
+    ci = binomtest(hits, n).proportion_ci(0.999)
+    assert ci.low <= 0.95 <= ci.high, (hits / n, ci)
 
 
 def test_jjf_sf_repeatability_chi2_upper_limit(jjf):

@@ -36,6 +36,9 @@ def register(sub) -> None:
     q.add_argument("--protocol", default=None,
                    help="the protocol file (or built-in name) the folders were computed with, "
                         "when it is not the one results.json names")
+    q.add_argument("--lab", default=None, metavar="FILE",
+                   help="the laboratory file the folders were computed with: its decision "
+                        "rule and limits decide them at issue too")
     q.set_defaults(func=run_import)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database")):
@@ -70,7 +73,8 @@ def hook_calibrate(sub) -> None:
             try:
                 cid = import_output_folder(store, args.out, readings=args.readings,
                                            spec_key=args.spec,
-                                           protocol=getattr(args, "protocol", None))
+                                           protocol=getattr(args, "protocol", None),
+                                           lab=getattr(args, "lab", None))
             finally:
                 store.close()
             sys.stderr.write(f"gonio: recorded as calibration {cid}\n")
@@ -125,7 +129,7 @@ def run_import(args) -> int:
     try:
         for folder in args.folders:
             cid = import_output_folder(store, folder, customer=args.customer,
-                                       protocol=args.protocol)
+                                       protocol=args.protocol, lab=args.lab)
             print(f"{folder}: calibration {cid}")
     finally:
         store.close()

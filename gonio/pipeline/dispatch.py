@@ -88,14 +88,15 @@ def load_lab_file(lab, spec: Specification | None = None):
     """The laboratory file as a dict (validated before any work), or the dict given. With
     ``spec``, a ``[[specification_limits]]`` entry naming an item the specification does not
     have (``spec.item_keys``, when it knows them before the data) is a GonioError naming the
-    file, the entry and the item: refused before anything is computed, not after."""
+    file, the entry and the item: refused before anything is computed, not after
+    (:meth:`gonio.specs.Specification.knows_item`: exact keys or patterns)."""
     path = lab if isinstance(lab, (str, Path)) else None
     if path is not None:
         from gonio.report.certificate import load_lab
         lab = load_lab(path)
     if spec is not None and spec.item_keys and lab:
         for i, lim in enumerate(lab.get("specification_limits") or []):
-            if lim.get("item") not in spec.item_keys:
+            if not spec.knows_item(lim.get("item")):
                 raise GonioError(f"{spec.key} has no item {lim.get('item')!r} (its items: "
                                  f"{', '.join(spec.item_keys)})", file=path,
                                  key=f"specification_limits[{i}].item")

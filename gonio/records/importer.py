@@ -92,16 +92,33 @@ def _protocol_file(results: dict, given: str | Path | None, folder: Path) -> Pat
     return path
 
 
+def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int]:
+    """(sha256, size) of the laboratory file stored, or (None, 0): none given, or one that
+    gives no limits (it decides nothing the records keep)."""
+    if lab is None:
+        return None, 0
+    from gonio.pipeline.dispatch import load_lab_file
+    from gonio.specs import get
+    if not load_lab_file(lab, get(spec_key)).get("specification_limits"):
+        return None, 0
+    return blobs.put_file(store.blob_root, Path(lab))
+
+
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
                          spec_key: str | None = None, customer: str = "(imported)",
                          actor: User | None = None,
-                         protocol: str | Path | None = None) -> int:
+                         protocol: str | Path | None = None,
+                         lab: str | Path | None = None) -> int:
     """Import one output folder as a computed calibration; returns its id.
 
     The protocol is stored with the readings (its file, as a blob), so that the issue's
     recomputation uses the very protocol the result was computed with: ``protocol`` (a file
     or built-in name), else the one results.json names; a protocol that cannot be found, or
-    whose SHA-256 differs from results.json's, is an error."""
+    whose SHA-256 differs from results.json's, is an error. ``lab``: the laboratory file the
+    folder was computed with (``--lab``), validated as on the command line; when it gives
+    limits it is stored as the calibration's laboratory file
+    (:func:`gonio.records.services.lab_file`), so that the issue decides with the same limits
+    and rule as the run reviewed."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:
@@ -137,9 +154,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     psha = None
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
+    lsha, lsize = _lab_file(store, lab, key)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
-        for sha, size in ((rsha, rsize), (psha, psize if psha else 0)):
+        for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize)):
             if sha and s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
                 s.flush()
@@ -149,7 +167,9 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                           readings_name=rd.name,
                           protocol=services.text(proto.name if proto else "", "protocol",
                                                  max_len=200),
-                          protocol_sha256=psha,
+                          protocol_sha256=psha, lab_sha256=lsha,
+                          lab_name=services.text(Path(lab).name if lsha else "",
+                                                 "laboratory file name", max_len=255),
                           performed_on=day, status="running", created_by_id=actor.id
                           if actor else None, progress=f"imported from {folder.name} by {who}")
         s.add(cal)

@@ -143,6 +143,10 @@ class Calibration(Base):
                                                         nullable=True)
     readings_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
     readings_name: Mapped[str] = mapped_column(String(255), default="")
+    #: a laboratory file (``--lab`` TOML) whose decision rule and limits this calibration
+    #: is decided with, in place of the instrument's (None: the instrument's)
+    lab_sha256: Mapped[str | None] = mapped_column(ForeignKey("blobs.sha256"), nullable=True)
+    lab_name: Mapped[str] = mapped_column(String(255), default="")
     temperature_c: Mapped[float | None] = mapped_column(Float, nullable=True)
     humidity_pct: Mapped[float | None] = mapped_column(Float, nullable=True)
     place: Mapped[str] = mapped_column(String(200), default="")

@@ -325,14 +325,56 @@ def file_bytes(store, sha256: str) -> bytes:
 # --------------------------------------------------------------------------- calibrations
 
 
+#: Largest laboratory file accepted through the records (bytes; a TOML file of details).
+MAX_LAB_BYTES = 2**20
+
+
+def lab_file(store, sha256: str, name: str, spec_key: str) -> dict:
+    """The decision rule and limits of a stored laboratory file (the ``--lab`` TOML of the
+    command line): ``{"decision_rule": …, "specification_limits": [...]}``.
+
+    The file is read and validated whole by the command line's own function,
+    :func:`gonio.pipeline.dispatch.load_lab_file` with the specification ``spec_key`` (so a
+    limit on an item the specification cannot have is refused before any work); a
+    GonioError names the file by its uploaded ``name``, never by where it is kept. The
+    records take only its ``[decision_rule]`` and ``[[specification_limits]]`` (for this
+    calibration, in place of the instrument's): the laboratory, certificate, customer,
+    instrument, standards and signatories are the records' own, which the workflow controls.
+    A file without limits is refused (it would only take the instrument's away).
+    """
+    import tempfile
+
+    from gonio.pipeline.dispatch import load_lab_file
+    from gonio.specs import get
+
+    spec = get(spec_key)
+    shown = text(name, "laboratory file name", max_len=255) or "laboratory file"
+    with tempfile.TemporaryDirectory(prefix="gonio-lab-") as tmp:
+        path = Path(tmp) / "lab.toml"
+        path.write_bytes(file_bytes(store, sha256))
+        try:
+            lab = load_lab_file(path, spec)
+        except GonioError as exc:
+            raise GonioError(exc.message.replace(str(path), shown), file=shown, line=exc.line,
+                             column=exc.column, key=exc.key) from None
+    if not lab.get("specification_limits"):
+        raise GonioError("no [[specification_limits]]: the records take a laboratory file for "
+                         "its decision rule and limits only", file=shown)
+    return {"decision_rule": lab["decision_rule"],
+            "specification_limits": lab["specification_limits"]}
+
+
 def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
                        readings_name: str = "", spec_key: str | None = None,
                        protocol: str | None = None, protocol_sha256: str | None = None,
+                       lab_sha256: str | None = None, lab_name: str = "",
                        standard_ids: Iterable[int] = (), temperature_c=None,
                        humidity_pct=None, performed_on=None, received_on=None,
                        place: str = "") -> Calibration:
     """A new calibration, queued for the worker (technician). Standards past their due
-    date on the day of the calibration are refused (ISO/IEC 17025 6.4.7)."""
+    date on the day of the calibration are refused (ISO/IEC 17025 6.4.7). ``lab_sha256``:
+    a stored laboratory file whose decision rule and limits decide this calibration,
+    validated here (:func:`lab_file`) before anything is queued."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -343,13 +385,18 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             raise GonioError("no such instrument", key="instrument")
         key = text(spec_key, "spec", max_len=64) or inst.spec_key
         get(key)
-        for sha in (readings_sha256, protocol_sha256):
+        for sha in (readings_sha256, protocol_sha256, lab_sha256):
             if sha is not None and s.get(Blob, sha) is None:
                 raise GonioError("no such stored file", key="sha256")
+        if lab_sha256 is not None:
+            lab_file(store, lab_sha256, lab_name, key)
         cal = Calibration(instrument_id=inst.id, spec_key=key,
                           protocol=text(protocol, "protocol", max_len=64),
                           protocol_sha256=protocol_sha256, readings_sha256=readings_sha256,
                           readings_name=text(readings_name, "readings file name", max_len=255),
+                          lab_sha256=lab_sha256,
+                          lab_name=text(lab_name, "laboratory file name", max_len=255)
+                          if lab_sha256 else "",
                           temperature_c=number_value(temperature_c, "temperature_c", -50, 100),
                           humidity_pct=number_value(humidity_pct, "humidity_pct", 0, 100),
                           place=text(place, "place"), performed_on=day,
@@ -557,7 +604,8 @@ def _pid_alive(pid: int) -> bool:
 def lab_details(store, cal_id: int, *, final: bool) -> dict:
     """The laboratory details file (``LAB_SCHEMA``) for a calibration's certificate: the
     draft (number DRAFT-<id>, not approved) or the final one (reserved number, signatories,
-    date of issue)."""
+    date of issue). The decision rule and limits are the calibration's laboratory file's
+    (:func:`lab_file`) if it has one, else the instrument's under the laboratory's rule."""
     cfg = settings(store)
     with store.session() as s:
         cal = s.get(Calibration, cal_id)
@@ -593,7 +641,9 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
                           "approved_by": who["approved_by"] if final
                           else "(not approved: draft for review)"},
         }
-        if limits:
+        if cal.lab_sha256:             # the calibration's own laboratory file
+            lab.update(lab_file(store, cal.lab_sha256, cal.lab_name, cal.spec_key))
+        elif limits:
             lab["decision_rule"] = {"rule": cfg["decision_rule"],
                                     "guard_band_factor": float(cfg["guard_band_factor"]),
                                     "agreed": "laboratory's decision rule"}

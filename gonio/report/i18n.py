@@ -241,10 +241,11 @@ LABELS: dict[str, dict[str, str]] = {
                     "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
                           "不确定度分量）；{clause}。"},
     "k_chi_square": {"en": "For a standard deviation of a few repeats (the repeatabilities), "
-                           "u_c = s/√(2ν) (JCGM 100 E.4.3) and U reaches the upper limit of "
-                           "the χ² 95 % interval of σ, so k = U/u_c exceeds t95(ν).",
+                           "u_c = s/√(2ν) (JCGM 100 E.4.3) and U reaches the one-sided χ² 95 % "
+                           "upper limit of σ (σ ≤ s + U with 95 % probability), so k = U/u_c "
+                           "exceeds t95(ν).",
                      "zh": "对少数重复测量的标准偏差（重复性各项），u_c = s/√(2ν)（JCGM 100 E.4.3），"
-                           "U 取至 σ 的 χ² 95 % 区间上限，故 k = U/u_c 大于 t95(ν)。"},
+                           "U 取至 σ 的单侧 χ² 95 % 上限（σ ≤ s + U 的概率为 95 %），故 k = U/u_c 大于 t95(ν)。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "

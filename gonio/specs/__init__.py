@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass, field
+from fnmatch import fnmatchcase
 from graphlib import CycleError, TopologicalSorter
 from importlib.metadata import entry_points
 from typing import Any, Callable
@@ -155,10 +156,13 @@ class Specification:
         titles, ``NORM``, what its figures differ in); the shared renderers read it through
         :meth:`content`, never by guessing from a module's name. Empty: none.
     item_keys : tuple of str
-        The keys of the items every result of it holds, whatever the data: a laboratory
-        file's ``[[specification_limits]]`` entry naming another item is refused before any
-        work (:func:`gonio.pipeline.dispatch.load_lab_file`). Empty: the items depend on the
-        data (they are checked once calibrated).
+        The keys of the items a result of it can hold: a laboratory file's
+        ``[[specification_limits]]`` entry naming another item is refused before any work
+        (:func:`gonio.pipeline.dispatch.load_lab_file`, :meth:`knows_item`). An entry may be
+        a :mod:`fnmatch` pattern (``K_[xyz]_theta[1-4]``) where the names depend on the data
+        (a model order chosen by a criterion); such an item absent from a result is still
+        refused once calibrated (:func:`gonio.analysis.conformity.decide_items`). Empty: the
+        items are checked once calibrated only.
     commands : tuple of (str, str)
         The ``gonio`` sub-commands the specification adds: ``(name, "module:function")``
         pairs; ``function(subparsers)`` adds the parser ``name`` (argparse) and sets its
@@ -192,6 +196,23 @@ class Specification:
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
     item_keys: tuple[str, ...] = ()
+
+    def knows_item(self, key) -> bool:
+        """Whether ``key`` is one of :attr:`item_keys` or matches one of its patterns
+        (:func:`fnmatch.fnmatchcase`: case-sensitive, ``[xyz]``, ``[1-4]``, ``*``). A
+        specification without ``item_keys`` knows every key (checked once calibrated).
+
+        >>> s = Specification(key="s", title_en="S", title_zh="S", clause_doc="",
+        ...                   default_protocol="", default_bench="", calibrate=print,
+        ...                   item_keys=("M_xx", "K_[xyz]_theta[1-4]"))
+        >>> [s.knows_item(k) for k in ("M_xx", "K_y_theta2", "K_y_theta5", "m_xx", None)]
+        [True, True, False, False, False]
+        """
+        if not self.item_keys:
+            return True
+        if not isinstance(key, str):
+            return False
+        return key in self.item_keys or any(fnmatchcase(key, k) for k in self.item_keys)
 
     def renderer(self):
         """The module named by ``outputs`` (imported on first use)."""

@@ -277,6 +277,16 @@ def clean_name(name) -> str:
     return re.sub(r"[\x00-\x1f\x7f]", "", name)[:255]
 
 
+def _upload(store, data, field: str, limit_bytes: float) -> tuple[str | None, str]:
+    """An optional uploaded file of the form into the store: (sha256, display name), or
+    (None, "") when none was chosen."""
+    f = data.get(field)
+    if f is None or not hasattr(f, "read") or not f.filename:
+        return None, ""
+    sha, _ = services.store_file(store, f.file, limit_bytes=limit_bytes)
+    return sha, clean_name(f.filename)
+
+
 @router.post("/instruments/{inst_id}/calibrate")
 async def calibration_create(request: Request, inst_id: int):
     user, csrf = current(request)
@@ -288,14 +298,13 @@ async def calibration_create(request: Request, inst_id: int):
         if up is None or not hasattr(up, "read") or not up.filename:
             raise GonioError("choose a readings file", key="readings")
         sha, _ = services.store_file(store, up.file)
-        proto_sha = None
-        pf = data.get("protocol_file")
-        if pf is not None and hasattr(pf, "read") and pf.filename:
-            proto_sha, _ = services.store_file(store, pf.file, limit_bytes=2**20)
+        proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
+        lab_sha, lab_name = _upload(store, data, "lab_file", services.MAX_LAB_BYTES)
         cal = services.create_calibration(
             store, user, instrument_id=inst_id, readings_sha256=sha,
             readings_name=clean_name(up.filename), spec_key=data.get("spec_key") or None,
             protocol=data.get("protocol") or None, protocol_sha256=proto_sha,
+            lab_sha256=lab_sha, lab_name=lab_name,
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),

@@ -59,3 +59,37 @@ def test_calibrate_record_puts_the_run_into_the_records(tmp_path, bench_readings
         assert services.file_bytes(st, cal.readings_sha256) == bench_readings[1].read_bytes()
     finally:
         st.close()
+
+
+def test_calibrate_record_keeps_the_lab_file_for_the_issue(tmp_path, bench_readings):
+    """``gonio calibrate --lab FILE --record``: the laboratory file is stored with the
+    calibration, so that the issue's recomputation (the records' details written as the lab
+    file, the same pipeline) decides with the file's limits and rule and carries the reviewed
+    result item for item (before: the instrument's limits, none, and the issue was refused)."""
+    import json
+
+    from gonio.records.compute import calibrate_folder, write_lab_toml
+    from gonio.records.results import result_items
+
+    repo = Path(__file__).resolve().parents[2]
+    lab = repo / "protocols" / "lab-example.toml"
+    data, out = tmp_path / "data", tmp_path / "cal"
+    protocol = str(repo / "tests" / "data" / "small-protocol.toml")
+    assert main(["calibrate", str(bench_readings[1]), "--protocol", protocol, "--out", str(out),
+                 "--lab", str(lab), "--record", "--data", str(data)]) == 0
+    st = open_store(None, data)
+    try:
+        cal = services.calibration(st, 1)
+        assert cal.lab_name == "lab-example.toml"
+        assert services.file_bytes(st, cal.lab_sha256) == lab.read_bytes()
+        details = services.lab_details(st, 1, final=True)
+        again = tmp_path / "again"
+        calibrate_folder(bench_readings[1], again, spec_key=cal.spec_key, protocol=protocol,
+                         lab=write_lab_toml(details, tmp_path / "lab.toml"))
+        reviewed = result_items(json.loads(services.file_bytes(st, cal.results_sha256)))
+        recomputed = result_items(json.loads((again / "results.json").read_text("utf-8")))
+        assert recomputed == reviewed
+        decided = {it.key: it.limits for it in reviewed if it.outcome is not None}
+        assert decided == {"angle_deviation": (-0.5, 0.5), "repeatability": (None, 0.3)}
+    finally:
+        st.close()

@@ -3,6 +3,9 @@
 #: Budget-source phrases both rate specifications' analyses use, in Chinese (each
 #: specification's certificate data adds these to its own PHRASES_ZH).
 COMMON_PHRASES_ZH = (
+    (r"sampling of a standard deviation of (\d+) values, s/√\(2ν\) \(GUM E\.4\.3\); U to "
+     r"the one-sided χ² 95 % upper limit",
+     "{1} 个值的标准偏差的抽样，s/√(2ν)（GUM E.4.3）；U 取至单侧 χ² 95 % 上限"),
     (r"acquisition gain on the whole output \(null included\)", "整个输出（含零点）上的采集增益"),
     (r"acquisition, relative", "数据采集（相对）"),
     (r"rate table, relative", "速率转台（相对）"),
@@ -13,6 +16,8 @@ COMMON_PHRASES_ZH = (
      "T_BASE 处温箱温度偏差（± 界限）× 5.3.3.6 各次测量的零偏温度系数（无该测量时为 0）"),
     (r"the gyro's place in the chamber's volume \(± half its uniformity, JJF Table 2\) × "
      r"T_c,SF/a", "陀螺在温箱容积内的位置（± 均匀度之半，JJF 表2）× T_c,SF/a"),
+    (r"the gyro's place in the chamber's volume \(± half its uniformity, JJF Table 2\) × "
+     r"the bias temperature coefficient", "陀螺在温箱容积内的位置（± 均匀度之半，JJF 表2）× 零偏温度系数"),
     (r"the two slopes' noise of the point means and bias drift",
      "两条斜率的各点均值噪声与零偏漂移"),
     (r"chamber fluctuation \(± amplitude, period\) × T_c,SF between the CW and CCW points",

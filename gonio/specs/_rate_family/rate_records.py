@@ -82,6 +82,34 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
 
 # --------------------------------------------------------------------------- readings
 
+def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
+    """Uncertainty of a standard deviation ``s`` of ν + 1 values (JJF 7.2.4 K_r,
+    7.2.11 B_r; IEC 5.6 Noise,RMS of the resolution; issue 24): u_c = s/√(2ν), the GUM's standard uncertainty of an experimental standard
+    deviation (JCGM 100 E.4.3; type A, ν degrees of freedom), and U = the distance from s to
+    the one-sided χ² 95 % upper limit of σ, s·(√(ν/χ²_0.05,ν) − 1)
+    (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`), with k = U/u_c and the
+    one-sided interval [0, s + U] (P(σ ≤ s + U) = 95 %) stated beside it.
+
+    Before issue 24 the χ² half-width was entered as a normal type-B term with k = 2 and
+    expanded again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's
+    sd z 0.17). Until the review of stop 30, U reached the two-sided limit s·√(ν/χ²_0.025,ν),
+    which σ stays below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s →
+    3.415·s).
+
+    >>> u = std_dev_uncertainty(1.0, 2, "K_r")
+    >>> round(u.u_c, 3), round(u.U, 3), round(u.k, 2), [round(x, 3) for x in u.interval]
+    (0.5, 3.415, 6.83, [0.0, 4.415])
+    """
+    u_c = float(s / math.sqrt(2.0 * nu))
+    from gonio.specs._rate_family.formulas import std_upper_half_width
+    U = std_upper_half_width(s, nu)
+    row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
+           f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the one-sided χ² 95 % upper limit",
+           "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
+    return Uncertainty([row], u_c, U, U / u_c if u_c > 0 else math.nan, float(nu), None, 0.95,
+                       "chi-square", interval=(0.0, s + U))
+
+
 def source_info(rd: RateReadings) -> dict:
     """File name, SHA-256 and row count of the readings."""
     if rd.path is not None and Path(rd.path).is_file():

@@ -95,7 +95,6 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "拟合五项模型下 −½ 斜率直线的偏差修正（取其一半）"),
     (r"detection: back to the last excursion beyond band \+ zσ \(not noise alone\)",
      "判定：回溯至最后一次超出 带宽 + zσ 的偏移（非仅噪声）"),
-    (r"χ² 95 % upper limit of the std of (\d+) T-means", "{1} 个 T 秒平均值标准偏差的 χ² 95 % 上限"),
     (r"least-squares slope \((\w+)\)", "最小二乘斜率（{1}）"),
     (r"χ² intervals of the fit points", "拟合点的 χ² 区间"),
     (r"95 % bound of the largest noise difference over the temperatures visited twice",

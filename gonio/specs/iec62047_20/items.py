@@ -22,10 +22,10 @@ from gonio.analysis.noise.psd import welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.specs._rate_family.rate_records import (Item, RateContext, static_output, static_rate_dph, gum, not_measured, segment_means,
+from gonio.specs._rate_family.rate_records import (Item, RateContext, std_dev_uncertainty, static_output, static_rate_dph, gum, not_measured, segment_means,
                                          segment_samples)
 from gonio.units import S_PER_H
-from uncertainty import from_u, type_b
+from uncertainty import from_u, type_b, welch_satterthwaite
 
 
 @dataclass(kw_only=True)
@@ -98,39 +98,65 @@ def _sf_runs(ctx: Context, test: str) -> list[dict]:
         r = y - (a * x + b)
         se = math.sqrt(float(r @ r) / (x.size - 2) / float(((x - x.mean()) ** 2).sum())) \
             if x.size > 2 else math.nan
-        u_y = []
+        u_y, nu_y = [], []
         for m in pts:
             yy = segment_samples(ctx.df, test, m.run, m.step)["output"].to_numpy()
             nb = yy.size // 5
             u_y.append(float(yy[: nb * 5].reshape(nb, 5).mean(1).std(ddof=1) / math.sqrt(nb))
                        if nb >= 2 else m.std / math.sqrt(m.n))
-        u_y = np.array(u_y)
+            nu_y.append(nb - 1 if nb >= 2 else max(m.n - 1, 1))
+        u_y, nu_y = np.array(u_y), np.array(nu_y, dtype=float)
         tt = np.array([m.time_s for m in pts])
         a0 = a if test == "scale_factor" else _sf_runs(ctx, "scale_factor")[0]["a"]
+        cw, ccw = x > 0, x < 0
+        (u_a, nu_a), (u_cw, nu_cw), (u_ccw, nu_ccw) = (
+            _slope_u(ctx, x[k], u_y[k], nu_y[k], tt[k], se * f, a0)
+            for k, f in ((slice(None), 1.0), (cw, math.sqrt(2)), (ccw, math.sqrt(2))))
         out.append({"run": run, "x": x, "y": y, "a": a, "b": b, "se": se,
-                    "u_a": _slope_u(ctx, x, u_y, tt, se, a0),
-                    "u_a_cw": _slope_u(ctx, x[x > 0], u_y[x > 0], tt[x > 0], se * math.sqrt(2), a0),
-                    "u_a_ccw": _slope_u(ctx, x[x < 0], u_y[x < 0], tt[x < 0], se * math.sqrt(2),
-                                        a0),
-                    "t": tt, "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": u_y})
+                    "u_a": u_a, "nu_a": nu_a, "u_a_cw": u_cw, "nu_a_cw": nu_cw,
+                    "u_a_ccw": u_ccw, "nu_a_ccw": nu_ccw, "t": tt, "T": pts[0].temperature_c, "V": pts[0].supply_v, "u_y": u_y})
     ctx.cache[("sf", test)] = out
     return out
 
 
-def _slope_u(ctx: Context, x: np.ndarray, u_y: np.ndarray, t: np.ndarray, se: float,
-             a_guess: float) -> float:
-    """u(a) of a least-squares slope: the noise of its point means
-    (:func:`slope_noise_u`) and the bias's drift between them (:func:`slope_drift_u`, from
-    the static record's noise fit); without a static record the drift is not known and
-    the fit's residual standard error ``se`` (an upper bound: it holds the nonlinearity
-    too) is used instead. ``a_guess``: the scale factor that converts the drift to output
-    units when a_BASE is not yet known (the slope being computed is a_BASE itself)."""
+def _slope_u(ctx: Context, x: np.ndarray, u_y: np.ndarray, nu_y: np.ndarray, t: np.ndarray,
+             se: float, a_guess: float) -> tuple[float, float]:
+    """(u(a), ν) of a least-squares slope: the noise of its point means
+    (:func:`slope_noise_u`, ν by :func:`slope_noise_dof` from each point's blocks) and the
+    bias's drift between them (:func:`slope_drift_u`, from the static record's noise fit,
+    taken as exact: that fit rests on the whole static record); without a static record the
+    drift is not known and the fit's residual standard error ``se`` (an upper bound: it
+    holds the nonlinearity too) is used instead, ν = points − 2. ``a_guess``: the scale
+    factor that converts the drift to output units when a_BASE is not yet known (the slope
+    being computed is a_BASE itself)."""
     try:
         base = ctx if ctx.a_base is not None else replace(ctx, a_base=a_guess)
         drift = slope_drift_u(x, t, lambda dt: drift_u_dps(base, dt) * abs(base.a_base))
     except (GonioError, IndexError, KeyError):
-        return se
-    return math.hypot(slope_noise_u(x, u_y), drift)
+        return se, float(max(x.size - 2, 1))
+    un = slope_noise_u(x, u_y)
+    u = math.hypot(un, drift)
+    nu = slope_noise_dof(x, u_y, nu_y) * (u / un) ** 4 if un > 0 else math.inf
+    return u, nu
+
+
+def _ws(us, nus) -> float:
+    """ν_eff of a sum of independent terms (JCGM 100 G.4.1)."""
+    return welch_satterthwaite(math.sqrt(sum(u * u for u in us)), us, nus)
+
+
+def slope_noise_dof(x: np.ndarray, u_y: np.ndarray, nu_y: np.ndarray) -> float:
+    """Welch–Satterthwaite degrees of freedom (JCGM 100 G.4.1) of :func:`slope_noise_u`:
+    (Σ w_i² u_i²)² / Σ (w_i² u_i²)²/ν_i, ν_i = the blocks of point i less one. Until the
+    review of stop 30 every slope term was given ν = 50 whatever its points held.
+
+    >>> round(slope_noise_dof(np.array([-1.0, 0.0, 1.0]), np.array([0.1, 0.1, 0.1]),
+    ...                       np.array([5.0, 5.0, 5.0])), 9)
+    10.0
+    """
+    w = (x - x.mean()) / float(((x - x.mean()) ** 2).sum())
+    c = w ** 2 * u_y ** 2                     # each point's variance contribution
+    return welch_satterthwaite(math.sqrt(float(np.sum(c))), np.sqrt(c), nu_y)
 
 
 def slope_drift_u(x: np.ndarray, t: np.ndarray, u_diff) -> float:
@@ -170,7 +196,7 @@ def slope_noise_u(x: np.ndarray, u_y: np.ndarray) -> float:
 
 
 def _u_rel_sf(ctx: Context, c: dict) -> list:
-    return [from_u("a", c["a"], c["u_a"], dof=50,
+    return [from_u("a", c["a"], c["u_a"], dof=c["nu_a"],
                    source="least-squares slope, from the noise of the point means"),
             from_u("e_table", 0.0, ctx.rate_table_u_rel, type="B", source="rate table, relative"),
             from_u("e_acq", 0.0, ctx.acquisition_u_rel, type="B", source="acquisition, relative"),
@@ -266,7 +292,8 @@ def symmetry(ctx: Context) -> Item:
         u_fl = fluctuation_u_rel(c["x"], c["t"], k_rel * ctx.chamber_fluctuation_c,
                                  ctx.chamber_fluctuation_period_s) * abs(ctx.a_base)
         u = gum(lambda d, f: 100 * (d + f) / ctx.a_typ, [
-            from_u("a_CW-a_CCW", aw - ac, math.hypot(c["u_a_cw"], c["u_a_ccw"]), dof=50,
+            from_u("a_CW-a_CCW", aw - ac, math.hypot(c["u_a_cw"], c["u_a_ccw"]),
+                   dof=_ws((c["u_a_cw"], c["u_a_ccw"]), (c["nu_a_cw"], c["nu_a_ccw"])),
                    source="the two slopes' noise of the point means and bias drift"),
             from_u("fluct", 0.0, u_fl, type="B",
                    source="chamber fluctuation (± amplitude, period) × T_c,SF between the "
@@ -349,12 +376,14 @@ def sf_temperature(ctx: Context) -> Item:
     slope, icpt = rg.least_squares_line(T, a)
     var = 100 * (a - a[ib]) / a[ib]
     sxx = float(((T - T.mean()) ** 2).sum())
-    u_slope = math.sqrt(sum((c["u_a"] ** 2) * ((Ti - T.mean()) / sxx) ** 2 for c, Ti in zip(runs, T)))
+    parts = [c["u_a"] * abs(Ti - T.mean()) / sxx for c, Ti in zip(runs, T)]
+    u_slope = math.sqrt(sum(p ** 2 for p in parts))
     u_T = ctx.chamber_deviation_c / math.sqrt(3) * abs(slope) / math.sqrt(sxx / T.size) / math.sqrt(T.size)
     u = gum(lambda s, e, ab: 100 * (s + e) / ab,
-            [from_u("T_c", slope, u_slope, dof=50, source="slope from the K_i's noise u(a_i)"),
+            [from_u("T_c", slope, u_slope, dof=_ws(parts, [c["nu_a"] for c in runs]),
+                    source="slope from the K_i's noise u(a_i)"),
              from_u("dT", 0.0, u_T, type="B", source="chamber deviation (independent per point)"),
-             from_u("a_BASE", a[ib], runs[ib]["u_a"], dof=50)])
+             from_u("a_BASE", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"])])
     return Item("sf_temperature_coefficient", t, cl, un, 100 * slope / a[ib], uncertainty=u,
                 details={"T_c_SF": slope, "c": icpt, "temperatures_c": T, "K_i": a,
                          "S_F_VAR_pct": var})
@@ -375,7 +404,8 @@ def ratiometric(ctx: Context) -> Item:
     R = np.array([ief.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
     i = int(np.argmax(np.abs(R)))
     u = gum(lambda ai, ab: 100 * abs(ief.ratiometric_error_iec(ai, ab, V[i], V[ib])),
-            [from_u("a_Vi", a[i], runs[i]["u_a"], dof=50), from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=50)])
+            [from_u("a_Vi", a[i], runs[i]["u_a"], dof=runs[i]["nu_a"]),
+             from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"])])
     return Item("ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
                 details={"V": V, "a_V": a, "R_pct": 100 * R,
                          "supply_sensitivity_pct": 100 * (a - a[ib]) / a[ib]})
@@ -427,7 +457,10 @@ def bias(ctx: Context) -> Item:
     (erratum). Mean over the records. Budget: the records' spread (type A), the
     acquisition's relative gain uncertainty on the whole output, null included, the chamber's
     deviation at T_BASE (± bound, rectangular) times the bias temperature coefficient of the
-    5.3.3.6 visits, and the input axis's alignment on the horizontal Earth rate."""
+    5.3.3.6 visits, the gyro's place in the chamber's volume (± half its uniformity,
+    rectangular) times the same coefficient (e_U; a_BASE and the initial scale-factor
+    variation carry it since stop 30, the bias since its review), and the input axis's
+    alignment on the horizontal Earth rate."""
     t, cl, un = "bias N_bias", "5.3.3.1", "°/s"
     m = _miss(ctx, "bias", "bias", t, cl, un)
     if m:
@@ -445,7 +478,7 @@ def bias(ctx: Context) -> Item:
             if len({p[0] for p in pts}) >= 2 else 0.0
     except (GonioError, ValueError, IndexError, KeyError):
         b_tc = 0.0          # visits the 5.3.3.6 item itself refuses: no coefficient to use
-    u = gum(lambda b, en, eT, eal: b + en + eT + eal,
+    u = gum(lambda b, en, eT, eU, eal: b + en + eT + eU + eal,
             [from_u("N_bias", float(v.mean()),
                     float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
                     dof=max(v.size - 1, 1), source="spread of the records"),
@@ -455,6 +488,10 @@ def bias(ctx: Context) -> Item:
              type_b("e_T", 0.0, ctx.chamber_deviation_c * abs(float(b_tc)), "rectangular",
                     source="chamber deviation at T_BASE (± bound) × the bias temperature "
                            "coefficient of 5.3.3.6's visits (0 without them)"),
+             type_b("e_U", 0.0, 0.5 * ctx.chamber_uniformity_c * abs(float(b_tc)),
+                    "rectangular", source="the gyro's place in the chamber's volume (± half "
+                                          "its uniformity, JJF Table 2) × the bias "
+                                          "temperature coefficient"),
              type_b("e_align", 0.0, rg.OMEGA_E_DPS * math.cos(math.radians(ctx.latitude_deg))
                     * math.sin(math.radians(ctx.axis_alignment_deg)), "rectangular",
                     source="input-axis alignment × horizontal Earth rate")])
@@ -1014,8 +1051,9 @@ def resolution(ctx: Context) -> Item:
     of the static record (5.4), i.e. the in-band noise seen through that filter.
 
     Uncertainty: for Out,resolution the step to the next tested value (rectangular) and the
-    95 % range of the rule's outcome under the data's noise; for Noise,RMS the χ² upper
-    limit of a standard deviation of the block means; the larger of the two budgets is
+    95 % range of the rule's outcome under the data's noise; for Noise,RMS, a standard
+    deviation of the block means, u_c = s/√(2ν) and U to the one-sided χ² 95 % upper limit
+    (:func:`gonio.specs._rate_family.rate_records.std_dev_uncertainty`); the larger of the two budgets is
     reported (it covers the maximum of the two)."""
     t, cl, un = "resolution", "5.6", "°/s"
     m = _miss(ctx, "resolution", "resolution", t, cl, un)
@@ -1070,13 +1108,8 @@ def resolution(ctx: Context) -> Item:
         type_b("step", 0.0, step / 2, "rectangular", source="between the result and the next step"),
         type_b("rule_noise", 0.0, half, "normal", k=2,
                source="95 % range of the 50 % rule's outcome under the data's noise")])
-    if math.isfinite(noise) and nb >= 2:
-        from scipy.stats import chi2
-        Un = noise * (math.sqrt((nb - 1) / chi2.ppf(0.025, nb - 1)) - 1.0)
-        u_noise = gum(lambda v, e: v + e, [from_u("Noise_RMS", noise, 0.0),
-                                           type_b("s(s)", 0.0, Un, "normal", k=2,
-                                                  source="χ² 95 % upper limit of the std of "
-                                                         f"{nb} T-means")])
+    if math.isfinite(noise) and nb >= 2:     # one-sided χ² upper limit of a std (JJF's K_r)
+        u_noise = std_dev_uncertainty(noise, nb - 1, "Noise,RMS")
     else:
         u_noise = None
     if u_noise is not None and noise > out_res:

@@ -70,8 +70,6 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"spread of K_n,m", "K_n,m 的分散性"),
     (r"spread of K_a,m", "K_a,m 的分散性"),
     (r"standard errors of K\+ and K−", "K+ 与 K− 的标准误差"),
-    (r"sampling of a standard deviation of (\d+) values, s/√\(2ν\) \(GUM E\.4\.3\); U to "
-     r"the χ² 95 % upper limit", "{1} 个值的标准偏差的抽样，s/√(2ν)（GUM E.4.3）；U 取至 χ² 95 % 上限"),
     (r"K at (\S+) °C \(fit standard error\)", "{1} °C 时的 K（拟合标准误差）"),
     (r"K at room temperature (\S+) °C", "室温 {1} °C 时的 K"),
     (r"bias at (\S+) °C", "{1} °C 时的零偏"),

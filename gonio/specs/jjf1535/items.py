@@ -26,7 +26,7 @@ from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.analysis.noise.stream import value_range
 from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
-                                     sf_calibration_means, Uncertainty)
+                                     sf_calibration_means, std_dev_uncertainty, Uncertainty)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b
 
@@ -59,46 +59,6 @@ def _block_std_of_mean(y: np.ndarray, block: int = 10) -> tuple[float, float]:
                 max(y.size - 1, 1))
     m = y[: n * block].reshape(n, block).mean(axis=1)
     return float(m.std(ddof=1) / math.sqrt(n)), n - 1
-
-
-def std_upper_half_width(s: float, nu: int) -> float:
-    """Expanded uncertainty (95 %) of a standard deviation s with ν degrees of freedom: the
-    distance from s to the upper χ² limit s·√(ν/χ²_0.025,ν) (the lower limit is always
-    nearer). For ν = 2 this is 5.285·s; the symmetric s/√(2ν) with k = t₉₅(ν) would cover
-    the true σ only ≈ 90 % of the time.
-
-    >>> round(std_upper_half_width(1.0, 2), 3)
-    5.285
-    """
-    from scipy.stats import chi2
-    return float(s * (math.sqrt(nu / chi2.ppf(0.025, nu)) - 1.0))
-
-
-def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
-    """Uncertainty of a standard deviation ``s`` of ν + 1 values (7.2.4 K_r, 7.2.11 B_r;
-    issue 24): u_c = s/√(2ν), the GUM's standard uncertainty of an experimental standard
-    deviation (JCGM 100 E.4.3; type A, ν degrees of freedom), and U = the distance from s to
-    the upper χ² 95 % limit, s·(√(ν/χ²_0.025,ν) − 1) (:func:`std_upper_half_width`), with
-    k = U/u_c and the χ² interval [s·√(ν/χ²_0.975,ν), s·√(ν/χ²_0.025,ν)] stated beside it.
-
-    Before, the χ² half-width was entered as a normal type-B term with k = 2 and expanded
-    again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's sd z
-    0.17). U is now exactly the distance to the χ² 95 % upper limit (before, 2 % smaller:
-    the pins' bias_repeatability U 369.1 → 376.7), and u_c is honest.
-
-    >>> u = std_dev_uncertainty(1.0, 2, "K_r")
-    >>> round(u.u_c, 3), round(u.U, 3), round(u.k, 2), [round(x, 3) for x in u.interval]
-    (0.5, 5.285, 10.57, [0.521, 6.285])
-    """
-    from scipy.stats import chi2
-    u_c = float(s / math.sqrt(2.0 * nu))
-    U = std_upper_half_width(s, nu)
-    lo = float(s * math.sqrt(nu / chi2.ppf(0.975, nu)))
-    row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
-           f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the χ² 95 % upper limit",
-           "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
-    return Uncertainty([row], u_c, U, U / u_c if u_c > 0 else math.nan, float(nu), None, 0.95,
-                       "chi-square", interval=(lo, s + U))
 
 
 def drift_u_dph(ctx: Context, separation_s: float) -> float:

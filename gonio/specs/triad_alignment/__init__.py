@@ -11,7 +11,8 @@ reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.m
 
 from gonio.formats.triad import FORMAT, named_inputs
 from gonio.specs import Specification, lazy
-from gonio.specs.triad_alignment.calibration import article_budget, calibrate, screen_files
+from gonio.specs.triad_alignment.calibration import (article_budget, calibrate, item_keys,
+                                                     screen_files)
 
 
 def _simulate(out, *, protocol="triad-alignment", bench="mems-triad", seed: int = 0):
@@ -42,6 +43,7 @@ SPEC = Specification(
     readings_format=FORMAT,
     named_inputs=named_inputs,
     certificate_content="gonio.specs.triad_alignment.certificate",
+    item_keys=item_keys(),
     commands=(("align", "gonio.specs.triad_alignment.commands:add_align"),
               ("thermal-model", "gonio.specs.triad_alignment.commands:add_thermal_model")),
 )

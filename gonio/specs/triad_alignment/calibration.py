@@ -31,7 +31,8 @@ from scipy import stats
 
 from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
                                          not_measured, source_info)
-from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
+from gonio.specs.triad_alignment.thermal_model import (MAX_ORDER_ARW, MAX_ORDER_T, MAX_ORDER_U,
+                                                      Compensation, ThermalModelResult,
                                                       compensate_record, identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
                                                  AlignmentResult, bias_instability_u_dps,
@@ -187,6 +188,32 @@ ALIGNMENT_KEYS = ([f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in
                   + ["averaging_time"])
 
 
+#: The thermal model's coefficient items (:func:`thermal_items`): ``<model>_<gyro>_<term>``,
+#: model → (highest ϑ order, highest U order) the selection may choose.
+THERMAL_MODELS = {"K": (MAX_ORDER_T, MAX_ORDER_U), "b": (MAX_ORDER_T, MAX_ORDER_U),
+                  "ARW": (MAX_ORDER_ARW, 0)}
+
+
+def item_keys() -> tuple[str, ...]:
+    """Every item a triad result can hold, for ``SPEC.item_keys`` (a laboratory file's limit
+    on any other key is refused before the calibration): the alignment's keys, then the
+    thermal coefficients as :mod:`fnmatch` patterns, since which gyros the chamber exercised
+    and the orders the criterion chose depend on the data (``K_[xyz]_theta[1-4]``). The
+    ``thermal_model`` placeholder item (no value: the reason the model is missing) is no
+    quantity to limit.
+
+    >>> [k for k in item_keys() if k.startswith("ARW")]
+    ['ARW_[xyz]_c0', 'ARW_[xyz]_theta[1-2]']
+    """
+    gyros = "[" + AXES + "]"
+    out = list(ALIGNMENT_KEYS)
+    for name, (n_t, n_u) in THERMAL_MODELS.items():
+        out.append(f"{name}_{gyros}_c0")
+        out += [f"{name}_{gyros}_{term}[1-{n}]" for term, n in (("theta", n_t), ("u", n_u))
+                if n > 0]
+    return tuple(out)
+
+
 def _alignment_not_measured(reason: str, unit: str) -> dict[str, Item]:
     out = {}
     for key in ALIGNMENT_KEYS:
@@ -210,8 +237,9 @@ def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
         if not ok.any() or al.residuals is None:
             continue
         expect = np.median(sd[ok] / np.sqrt(n[ok]))
-        r = np.abs(al.residuals[:, c]) / (sd / np.sqrt(n))
-        r = np.where(ok, r, 0.0)
+        # a dwell without a usable sd (0: a filled column) is not divided by (no warning)
+        r = np.zeros(sd.size)
+        r[ok] = np.abs(al.residuals[ok, c]) / (sd[ok] / np.sqrt(n[ok]))
         rms = float(np.sqrt(np.mean((al.residuals[:, c] / expect) ** 2)))
         if rms > CONSISTENCY_RATIO:
             k = int(np.argmax(r))

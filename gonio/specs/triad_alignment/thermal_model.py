@@ -55,6 +55,9 @@ from gonio.physics.alignment import AXES, mean_earth_rate_ref, signed_axis
 
 CRITERIA = ("bic", "aic", "ftest")
 F_TEST_ALPHA = 0.05
+#: The highest polynomial orders the selection tries (temperature, supply; the ARW model has
+#: no supply term): the largest set of coefficient items a result can hold.
+MAX_ORDER_T, MAX_ORDER_U, MAX_ORDER_ARW = 4, 2, 2
 
 
 # --------------------------------------------------------------------------- data
@@ -658,8 +661,8 @@ def check_temperature_span(theta_c: np.ndarray, channel: str, readings: TriadRea
 
 
 def identify_thermal_model(readings: TriadReadings, *, criterion: str = "bic",
-                           temperature: str = "sensor", max_order_t: int = 4,
-                           max_order_u: int = 2, max_order_arw: int = 2,
+                           temperature: str = "sensor", max_order_t: int = MAX_ORDER_T,
+                           max_order_u: int = MAX_ORDER_U, max_order_arw: int = MAX_ORDER_ARW,
                            fixed_orders: dict | None = None,
                            ramps: bool = True) -> ThermalModelResult:
     """Identify K(ϑ, U), b(ϑ, U), ARW(ϑ) for every gyro the thermal rows exercise
