@@ -250,6 +250,19 @@ def test_known_extra_columns_and_keys_still_read(js_bias):
     count("jjf:extras-kept")
 
 
+@pytest.mark.parametrize("cut", [12, 9, 4])
+def test_rate_file_cut_in_its_last_line_is_refused(js_bias, cut):
+    """A file cut inside its last row ('2501.29' → '25'): before, read with the output 25
+    (the missing cells blank); now refused naming the line and the field count."""
+    text = "".join(js_bias[:-1])
+    last = js_bias[-1].rstrip("\n")
+    with pytest.raises(GonioError) as ei:
+        parse_rate_readings(text + last[:-cut], path="r.csv")
+    assert str(ei.value).startswith(f"r.csv:{len(js_bias)}: expected 16 fields"), ei.value
+    parse_rate_readings(text + last, path="r.csv")         # no final newline: complete
+    count(f"jjf:truncated-last-line:{cut}")
+
+
 def _screen_rate(tmp_path, lines):
     from gonio.specs import get
 
@@ -286,16 +299,40 @@ def test_coarse_quantisation_of_a_record_is_stated(tmp_path, js_bias):
 
 # ------------------------------------------------------------------------------ triad
 
-def test_triad_dwell_with_sd_zero_gives_no_warning(tmp_path_factory):
+@pytest.fixture(scope="module")
+def tri(tmp_path_factory):
+    d = tmp_path_factory.mktemp("tri")
+    assert main(["simulate", "--spec", "triad-alignment", "--seed", "1", "--out",
+                 str(d / "TRI")]) == 0
+    return d / "TRI" / "readings.csv"
+
+
+def test_triad_missing_dwell_is_named(tri):
+    """One alignment dwell deleted: before, every U changed (M_xx 0.0027 → 0.0035) with no
+    finding; now a flagged programme-point-missing naming the gap's line."""
+    from gonio.pipeline.dispatch import screen_and_calibrate
+    from gonio.specs import get
+
+    lines = tri.read_text(encoding="utf-8").splitlines(keepends=True)
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("alignment,3,"))
+    p = tri.parent / "missing.csv"
+    p.write_text("".join(lines[:i] + lines[i + 1:]), encoding="utf-8")
+    res = screen_and_calibrate(get("triad-alignment"), p, None).to_json()
+    f = [x for x in res["findings"] if x["code"] == "programme-point-missing"]
+    assert len(f) == 1 and f[0]["action"] == "flagged" and f[0]["line"] == i + 1, f
+    assert "step 3 missing" in f[0]["message"]
+    assert res["items"]["M_xx"]["measured"]
+    count("triad:missing-dwell")
+
+
+def test_triad_dwell_with_sd_zero_gives_no_warning(tri):
     """A dwell whose sd_x is 0 (a filled column) was divided by in the consistency check: a
     RuntimeWarning on stderr of a run that exits 0. The values are those of the intact file."""
     from gonio.pipeline.dispatch import screen_and_calibrate
     from gonio.specs import get
 
-    d = tmp_path_factory.mktemp("tri")
-    assert main(["simulate", "--spec", "triad-alignment", "--seed", "1", "--out",
-                 str(d / "TRI")]) == 0
-    src = d / "TRI" / "readings.csv"
+    src = tri
+    d = tri.parent.parent
     lines = src.read_text(encoding="utf-8").splitlines(keepends=True)
     i = next(k for k, ln in enumerate(lines) if ln.startswith("test,"))
     cols = lines[i].strip().split(",")

@@ -197,6 +197,10 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
     if len(line_no) != len(df):
         _field_counts(lines, i, len(header), fname)
         raise GonioError("a row has more fields than the header", file=fname)
+    if '"' not in body:
+        # a short row (a file cut in its last line: '2501.29' read as '25') is refused; the
+        # CSV reader would fill the missing cells as blanks (hostile round 3)
+        _field_counts(lines, i, len(header), fname)
     out = pd.DataFrame({"line": line_no})
     for col in COLUMNS:
         cells = df[col].str.strip() if col in df else None

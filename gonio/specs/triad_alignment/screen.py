@@ -11,6 +11,8 @@ naming the line. The rules (docs/alignment.md, "Screening"):
   of rate × sign(up) × sign(nominal scale) on gyro a's output, when that output is far
   from the bias (|out − median static out| > :data:`SIGN_MIN_RATIO` × the dwell's
   sample deviation): a sign-flipped dwell otherwise enters the fit as a wrong column of M.
+- **step gap** (flagged) — a jump in the rows' ``step`` numbers: a dwell or samples
+  missing from the file, named.
 - **one temperature** — a thermal programme whose soak rows span less than
   :data:`MIN_TEMPERATURE_SPAN_C` (chamber) cannot identify a temperature model; it was
   certified as a model before.
@@ -117,12 +119,34 @@ def _one_temperature(df: pd.DataFrame, file) -> list[Finding]:
     return []
 
 
+def _step_gaps(df: pd.DataFrame, file) -> list[Finding]:
+    """``programme-point-missing`` (flagged): the rows' ``step`` numbers the programme's rows
+    in file order; a jump of more than one is a dwell (or samples) missing from the file —
+    a row lost or deleted — named once per gap (hostile round 3: one alignment dwell
+    removed changed every U with no word)."""
+    if "step" not in df or len(df) < 2:
+        return []
+    step = pd.to_numeric(df["step"], errors="coerce").to_numpy(float)
+    jump = np.diff(step)
+    out = []
+    for k in np.flatnonzero(jump > 1) + 1:
+        row = df.iloc[k]
+        a, b = int(step[k - 1]) + 1, int(step[k]) - 1
+        steps = f"step {a}" if a == b else f"steps {a}–{b}"
+        out.append(Finding("programme-point-missing",
+                           f"{steps} missing before {row['test']} step {int(step[k])}: the "
+                           "results rest on the rows present", "flagged", file=file,
+                           line=int(row["line"]), column="step", test=str(row["test"]),
+                           rule="steps numbered without gaps in file order"))
+    return out
+
+
 def screen(readings, protocol=None) -> list[Finding]:
     """Every finding on a triad readings file (:class:`gonio.formats.triad.TriadReadings`)."""
     df = readings.data
     file = None if readings.path is None else str(readings.path)
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
-            + _one_temperature(df, file))
+            + _one_temperature(df, file) + _step_gaps(df, file))
 
 
 def check(readings, protocol=None) -> list[Finding]:
