@@ -155,6 +155,38 @@ def check_not_binary(head: bytes, path) -> None:
         raise GonioError(f"this is {kind}, not a UTF-8 text file (a file renamed?)", file=path)
 
 
+#: How close (difflib ratio) an unknown name must be to a known one to be taken for a
+#: misspelling of it (latitude_dge, rate_table_urel, temperature for temperature_c: 0.83–0.97).
+NEAR_MISS = 0.8
+
+
+def check_near_miss(given, known, *, what: str, file, line=None) -> None:
+    """Refuse a name of ``given`` that gonio does not know but that is a near miss of a
+    ``known`` name the file does not give (a header key or column typo would otherwise be
+    kept as an extra and the value it meant replaced by a default, silently).
+
+    >>> check_near_miss(["latitude_dge"], ["latitude_deg"], what="metadata key", file="r.csv")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: r.csv: key latitude_dge: unknown metadata key, did you mean 'latitude_deg'? (a misspelt key is never ignored)
+    >>> check_near_miss(["operator", "latitude_deg"], ["latitude_deg"], what="metadata key",
+    ...                 file="r.csv")
+    """
+    import difflib
+
+    given = list(given)
+    absent = [k for k in known if k not in given]
+    for name in given:
+        if name in known:
+            continue
+        m = difflib.get_close_matches(name, absent, n=1, cutoff=NEAR_MISS)
+        if m:
+            where = {"key": name} if "key" in what else {"column": name}
+            raise GonioError(f"unknown {what}, did you mean {m[0]!r}? (a misspelt "
+                             f"{'key' if 'key' in what else 'column'} is never ignored)",
+                             file=file, line=line, **where)
+
+
 def check_header(columns, required, *, file, line) -> set:
     """Column names of a CSV header: none empty, none twice, every required one present.
 

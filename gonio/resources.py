@@ -53,12 +53,15 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
     p = Path(name_or_path)
     if p.is_file():
         return p
-    if os.path.lexists(p):
-        from gonio.errors import check_input_file
-        check_input_file(p, f"{kind} file")      # names a FIFO, device or folder precisely
     base = protocols_dir() if kind == "protocol" else protocols_dir() / "benches"
     cand = base / (p.name if p.suffix == ".toml" else p.name + ".toml")
-    if cand.is_file() and p.parent == Path("."):
+    builtin = cand.is_file() and p.parent == Path(".")
+    if os.path.lexists(p) and not (builtin and p.is_dir()):
+        # a folder named like a built-in (`simulate --spec X --out X`, then `cd` back) is
+        # never a protocol: the built-in name wins; a FIFO, device or other folder is named
+        from gonio.errors import check_input_file
+        check_input_file(p, f"{kind} file")
+    if builtin:
         return cand
     names = builtin_names(kind)
     plural = "benches" if kind == "bench" else f"{kind}s"

@@ -77,3 +77,27 @@ def test_chunks_and_draw_pieces_do_not_change_the_figures(readings, monkeypatch)
     np.testing.assert_allclose(parts.u_mc_theta, whole.u_mc_theta, rtol=1e-11)
     other = an.estimate_alignment(readings, monte_carlo=2500, seed=5)
     assert not np.allclose(other.u_mc_theta, whole.u_mc_theta, rtol=1e-6)   # the seed matters
+
+
+def test_derived_trials_equal_the_stacked_formulas():
+    """The Monte Carlo's element-by-element derived quantities (Cramer's rule, row norms)
+    equal the stacked LAPACK inverse and the physics module's decomposition to rounding,
+    on matrices far from the identity (misaligned, unequal scale factors, signs)."""
+    rng = np.random.default_rng(8)
+    th = rng.normal(0.0, 0.3, (500, 12))
+    th[:, [0, 5, 10]] += rng.choice([-1.0, 1.0], (500, 3)) * rng.uniform(0.5, 80.0, (500, 3))
+    got, ref = an._derived_trials(th), an._derived_batch(th)
+    np.testing.assert_allclose(got, ref, rtol=1e-11, atol=1e-14)
+    sl = an._DERIVED_SLICES
+    for k in ("scale", "psi_rad", "phi_rad", "cross_axis"):     # no inverse: the same ops
+        np.testing.assert_allclose(got[:, sl[k]], ref[:, sl[k]], rtol=1e-15, atol=0)
+
+
+def test_derived_trials_refuse_singular_and_zero_rows():
+    th = np.tile(np.eye(3, 4).ravel(), (4, 1))
+    th[2, 4:7] = th[2, 0:3]                       # trial 2: two equal rows, det 0
+    with pytest.raises(an.GonioError, match="singular"):
+        an._derived_trials(th)
+    th[2, 4:7] = 0.0                              # a zero row is singular too
+    with pytest.raises(an.GonioError):
+        an._derived_trials(th)

@@ -227,3 +227,79 @@ def test_streamed_modified_sums_at_large_m(monkeypatch):
     r1 = allan_deviation(record_of(y), 0.1, "rate", "decade:10", kind="mdev")
     assert r0.m[-1] > 64
     np.testing.assert_allclose(r1.adev, r0.adev, rtol=1e-12, atol=0)
+
+
+# ------------------------------------------------ the streamed path's CPU cost (issue 26)
+def whole_phase(y: np.ndarray, offset: float) -> np.ndarray:
+    c = np.empty(y.size + 1)
+    c[0] = 0.0
+    np.subtract(y, offset, out=c[1:])
+    np.cumsum(c, out=c)
+    return c
+
+
+@pytest.mark.parametrize("block,fine", [(4096, 64), (1000, 4096), (64, 64)])
+def test_span_and_lazy_checkpoints_are_the_whole_array(monkeypatch, block, fine):
+    """:meth:`CumulativeSum.span` (from the fine checkpoints, found lazily as the blocks are
+    first built, with no pass of their own) and the point-by-point decimations give the
+    whole cumulative sum bit for bit, also when the far end is asked for first."""
+    monkeypatch.setattr(stream, "FINE", fine)
+    y = noisy(20_003, seed=4)
+    c = whole_phase(y, 2.9)
+    cs = stream.CumulativeSum(record_of(y), 2.9, block=block, cache_blocks=2)
+    assert cs._done == 0                                  # nothing built by the constructor
+    for a, b in [(19_990, 20_004), (0, 20_004), (4095, 4097), (63, 64), (17, 9000),
+                 (20_003, 20_004), (5, 5)]:
+        assert np.array_equal(cs.span(a, b), c[a:b]), (a, b)
+    ranges = [(5, 20_004, 64), (0, 20_004, 5000), (17, 9000, 3), (100, 101, 4096)]
+    for got, (a, b, m) in zip(cs.decimations(ranges), ranges):
+        assert np.array_equal(got, c[a:b:m]), (a, b, m)
+
+
+def direct_sum(x: np.ndarray, m: int) -> float:
+    v = x[2 * m:] - 2 * x[m:-m] + x[:-2 * m]
+    return float(np.sum(v * v))
+
+
+@pytest.mark.parametrize("m", [1001, 1999, 2000, 2001, 7777, 9999, 10_000])
+def test_far_sums_in_chains_equal_the_direct_sum(monkeypatch, m):
+    """The chained far sums (each point rebuilt about once) hold every term once: equal to
+    the plain sum over the whole phase, for m just past the chunk, a multiple of it, a
+    chunk width that does not divide m, and the largest m (one term)."""
+    from gonio.analysis.noise import allan
+    monkeypatch.setattr(stream, "FINE", 64)
+    y = noisy(20_000, seed=6)
+    c = whole_phase(y, float(y.mean()))
+    cs = stream.CumulativeSum(record_of(y), float(y.mean()), block=4096)
+    assert allan._sums_far(cs, m, 1000) == pytest.approx(direct_sum(c, m), rel=1e-13)
+
+
+def test_streamed_far_taus_equal_the_array_path_and_allantools(monkeypatch):
+    """With chunks of 1000 points most decade τ are 'far' (the chained sums): the streamed
+    ADEV, identified noise types and intervals equal the array path, and allantools."""
+    from gonio.analysis.noise import allan
+    monkeypatch.setattr(allan, "_BLOCK_SHARED", 1000)
+    monkeypatch.setattr(stream, "PIECE", 4096)
+    monkeypatch.setattr(stream, "FINE", 256)
+    y = noisy(60_000, seed=9)
+    r0 = allan_deviation(y, 0.1, "rate", "decade:10")
+    r1 = allan_deviation(record_of(y), 0.1, "rate", "decade:10")
+    assert (r1.m > 1000).sum() >= 10
+    np.testing.assert_allclose(r1.adev, r0.adev, rtol=1e-12, atol=0)
+    assert np.array_equal(r1.alpha, r0.alpha) and np.array_equal(r1.edf, r0.edf)
+    _, dev, _, _ = allantools.oadev(y, rate=10.0, data_type="freq", taus=r1.tau_s)
+    np.testing.assert_allclose(r1.adev, dev, rtol=1e-12, atol=0)
+
+
+def test_jjf_statistics_in_one_pass_equal_the_per_k_forms():
+    """JJF 1535's eq (22)–(24) statistic and the overlapping AVAR for all k from one
+    cumulative sum equal the per-k functions bit for bit, for an array and a streamed
+    record, across piece boundaries."""
+    from gonio.specs.jjf1535 import formulas as jf
+    ks = [1, 2, 4, 8, 16]
+    for n in (35, 65_536 + 20, 2 * 65_536 - 30):
+        x = noisy(n, seed=n)
+        want = {k: (jf.allan_variance_printed_jjf(x, k), jf.allan_variance_overlapping(x, k))
+                for k in ks}
+        assert jf.allan_variances_jjf(x, ks) == want
+        assert jf.allan_variances_jjf(record_of(x), ks) == want

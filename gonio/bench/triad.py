@@ -51,7 +51,7 @@ from scipy import signal
 from gonio.atomic import output_dir
 from gonio.physics.earth import earth_rate_enu
 from gonio.errors import GonioError
-from gonio.formats.triad import COLUMNS, format_triad_readings
+from gonio.formats.triad import COLUMNS, RANGES, format_triad_readings
 from gonio.physics.alignment import (mean_earth_rate_ref, ref_to_enu, sensing_axis_matrix,
                                      system_matrix)
 from gonio.resources import resolve
@@ -286,6 +286,15 @@ class TriadNoise:
 
 
 # --------------------------------------------------------------------------- protocol
+_CHAMBER_LO, _CHAMBER_HI, _CHAMBER_TXT = RANGES["chamber_c"]
+
+
+def _chamber_c(x) -> bool:
+    """A chamber temperature the triad reader accepts (a set point outside it was simulated
+    and then refused by the reader, or grew the ramps past the row limit)."""
+    return _CHAMBER_LO <= x <= _CHAMBER_HI
+
+
 _PROTOCOL_SCHEMA = {
     "protocol": Field("table", schema={
         "name": Field("str"),
@@ -307,8 +316,8 @@ _PROTOCOL_SCHEMA = {
     "thermal": Field("table", default={}, schema={
         "enabled": Field("bool", default=False),
         "up": Field("str_list", default=["+z"]),
-        "setpoints_c": Field("float_list", default=[25.0]),
-        "start_c": Field("float", default=25.0),
+        "setpoints_c": Field("float_list", default=[25.0], check=_chamber_c, expect=_CHAMBER_TXT),
+        "start_c": Field("float", default=25.0, check=_chamber_c, expect=_CHAMBER_TXT),
         "supply_v": Field("float_list", default=[5.0], check=positive, expect="> 0"),
         "ramp_c_per_min": Field("float", default=1.0, check=positive, expect="> 0"),
         "soak_s": Field("float", default=1800.0, check=non_negative, expect=">= 0"),

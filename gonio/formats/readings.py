@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.atomic import write_text
-from gonio.errors import GonioError, check_header, read_utf8
+from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
 from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
                                     metadata_float, parse_number)
 from gonio.formats.metadata import show_value as _show
@@ -195,6 +195,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     for key in metadata:
         if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
+    check_near_miss(metadata, KNOWN_METADATA, what="metadata key", file=fname)
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
     seen = check_header(header, REQUIRED_COLUMNS, file=fname, line=header_line)

@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 
 from gonio.errors import GonioError
+from gonio.formats.rate_readings import COLUMN_RANGES
 from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 from gonio.resources import resolve
 
@@ -90,6 +91,17 @@ def read_sections(path, schemas: dict[str, dict], spec_key: str,
 PINT = Field("int", check=lambda x: x >= 1, expect="an integer ≥ 1")
 PFLOAT = Field("float", check=positive, expect="> 0")
 NNFLOAT = Field("float", default=0.0, check=non_negative, expect="≥ 0")
+
+
+def _reader_temperature(x) -> bool:
+    lo, hi, _ = COLUMN_RANGES["temperature_c"]
+    return lo <= x <= hi
+
+
+#: A chamber or room temperature of a rate protocol: within the range the readings reader
+#: accepts (hostile round 3: -300 °C was planned, simulated and then refused by the reader).
+TEMP_C = Field("float", check=_reader_temperature,
+               expect=COLUMN_RANGES["temperature_c"][2] + " (the readings' range)")
 
 
 def rate_series(rates, highest: float, lowest: float):

@@ -367,7 +367,10 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
     lengths = [n - 2 * m for m in ms]
     order = sorted(range(len(ms)), key=lambda i: ms[i])
     sub, add = np.subtract, np.add
+    reach = 2 * max((m for m in ms if m <= bsz), default=0)
     for s in range(0, max(lengths), bsz):
+        # one slice of x for every m within a chunk (a streamed phase: one copy per chunk)
+        near = x[s: min(n, s + bsz + reach)] if reach else None
         for i in order:
             m, length = ms[i], lengths[i]
             if s >= length:
@@ -376,7 +379,7 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
             k = e - s
             if m <= bsz:
                 d1 = buf[: k + m]
-                xs = x[s: e + 2 * m]            # one slice (a streamed phase: one copy)
+                xs = near[: k + 2 * m]          # x[s: e + 2m]
                 sub(xs[m:], xs[: k + m], out=d1)
                 v = buf[k + m: 2 * k + m]
                 sub(d1[m:], d1[:k], out=v)
@@ -392,15 +395,41 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
 
 def _split_sums(x, ms: list[int], bsz: int) -> np.ndarray:
     """:func:`_sums_direct_shared` of a streamed phase: the m within a chunk together,
-    each larger m alone."""
+    each larger m alone (:func:`_sums_far`)."""
     small = [i for i, m in enumerate(ms) if m <= bsz]
     out = np.empty(len(ms))
     if small:
         out[small] = _sums_direct_shared(x, [ms[i] for i in small])
     for i, m in enumerate(ms):
         if m > bsz:
-            out[i] = _sums_direct_shared(x, [m])[0]
+            out[i] = _sums_far(x, m, bsz)
     return out
+
+
+def _sums_far(x: CumulativeSum, m: int, width: int) -> float:
+    """Σ_n (x[n+2m] − 2x[n+m] + x[n])² (SP 1065 eq. 11) of a streamed phase at an m beyond
+    a chunk, in bounded memory and with each point of the phase rebuilt about once.
+
+    Taken in order of n, a chunk needs three far pieces (at n, n + m, n + 2m), each rebuilt
+    from the record: three rebuilds of every point. Here the terms go in chains instead:
+    for every chunk start s of [0, m), n ∈ s + qm + [0, w) for q = 0, 1, …, so that the
+    pieces a chunk needs are the previous chunk's two later ones and one new piece
+    (:meth:`~gonio.analysis.noise.stream.CumulativeSum.span`, from the fine checkpoints).
+    The same terms as the array path, summed in another order (equal to rounding)."""
+    length = x.size - 2 * m
+    total = 0.0
+    for s in range(0, min(m, length), width):
+        w = min(width, m - s)
+        p0, p1 = x.span(s, s + w), x.span(s + m, s + m + w)
+        for n0 in range(s, length, m):
+            k = min(w, length - n0)
+            p2 = x.span(n0 + 2 * m, n0 + 2 * m + w)        # at least k points
+            v = np.subtract(p2[:k], p1[:k])
+            v -= p1[:k]
+            v += p0[:k]
+            total += _ssq(v)
+            p0, p1 = p1, p2
+    return total
 
 
 def _sum_sq_mod(x: np.ndarray, m: int) -> float:

@@ -17,11 +17,18 @@ A :class:`Record` answers ``len``, ``.size`` and slicing ``r[a:b]`` (a fresh, wr
 float64 array), which is all the direct Allan sums (:mod:`.allan`), the Welch density
 (:mod:`.psd`) and the JJF 1535 direct forms ask of an array: they run on it unchanged, with
 temporaries of one piece. The Allan phase of a rate record (``x = [0, cumsum(y − ȳ)]``,
-:func:`gonio.analysis.noise.allan.angle_series`) is a :class:`CumulativeSum`: one pass
-stores the value at every block boundary; a slice is then rebuilt from the nearest
+:func:`gonio.analysis.noise.allan.angle_series`) is a :class:`CumulativeSum`: the first
+time its blocks are built in order it stores the value at every block boundary and every
+:data:`FINE` points (no pass of its own); a slice is then rebuilt from the nearest
 checkpoint with the same sequential additions as ``np.cumsum`` (a few recently used blocks
-are kept). Memory: the checkpoints (N/65536 numbers) and a few blocks of 65536 points,
-whatever the record's length.
+are kept). Memory: the checkpoints (N/4096 numbers: 2 MB for 10⁹ samples) and a few blocks
+of 65536 points, whatever the record's length.
+
+CPU (issue 26): a far piece read once (the chained far sums of
+:func:`gonio.analysis.noise.allan._sums_far`, the sparse decimations of the noise
+identification) is rebuilt from a fine checkpoint (:meth:`CumulativeSum.span`), so that
+every point is rebuilt about once per averaging time rather than three times; a frame's
+float64 column is read by numpy slices of its own array (no pandas call per piece).
 """
 
 from __future__ import annotations
@@ -41,6 +48,8 @@ __all__ = ["STREAM_MIN_SAMPLES", "PIECE", "Record", "CumulativeSum", "value_rang
 STREAM_MIN_SAMPLES = 1 << 20
 #: Samples formed at a time.
 PIECE = 1 << 16
+#: Spacing of the fine checkpoints of a :class:`CumulativeSum` (a divisor of its block).
+FINE = 1 << 12
 
 
 def _slice(key, size: int) -> tuple[int, int, int]:
@@ -161,6 +170,11 @@ def frame_column(df, column: str, rows: tuple[int, int, np.ndarray | None]):
     if count < STREAM_MIN_SAMPLES:
         return df[column].to_numpy(dtype=float)[first: first + count].copy()
     col = df[column]
+    if col.dtype == np.float64:
+        # the frame's own float64 array (a view, no copy): pieces are numpy slices, without
+        # pandas' cost per piece
+        vals = col.to_numpy(copy=False)
+        return Record(count, lambda a, b: vals[first + a: first + b].copy())
     return Record(count, lambda a, b: col.iloc[first + a: first + b].to_numpy(dtype=float,
                                                                              copy=True))
 
@@ -173,7 +187,14 @@ def value_range(x) -> float:
 class CumulativeSum:
     """``c = [0, cumsum(y − offset)]`` of a :class:`Record` (``size`` = N + 1), never held
     whole (module docstring). Slices equal those of the whole array bit for bit: each
-    block starts from the exact value the sequential sum has at its first point."""
+    block starts from the exact value the sequential sum has at its first point.
+
+    The checkpoints are found lazily, as the blocks are first built in order (no pass of
+    its own over the record): a block past the last one built is reached by building the
+    blocks between. Besides the value at every block boundary the value every
+    :data:`FINE` points is kept (N/FINE numbers), from which :meth:`span` rebuilds any
+    slice with at most FINE − 1 points of overhead (the far pieces of a large averaging
+    time, :func:`gonio.analysis.noise.allan._sums_far`)."""
 
     ndim = 1
     dtype = np.dtype(np.float64)
@@ -189,20 +210,30 @@ class CumulativeSum:
         nb = -(-self.size // self.block)
         self._start = np.empty(nb)            # c at the first point of every block
         self._start[0] = 0.0
-        for j in range(nb - 1):
-            self._start[j + 1] = self._build(j)[-1]
+        self._done = 0                        # blocks built in order so far (checkpoints)
+        self._fine_step = FINE if self.block % FINE == 0 else self.block
+        self._fine = np.empty(-(-self.size // self._fine_step))   # c every _fine_step points
+        self._fine[0] = 0.0
 
     def __len__(self) -> int:
         return self.size
 
     def _build(self, j: int) -> np.ndarray:
         """c[jB … min((j+1)B, N)] (one point past the block: the next block's start)."""
+        while self._done < j:                 # the checkpoints up to block j, in order
+            self._build(self._done)
         a = j * self.block
         b = min(a + self.block, self.size - 1)
         out = np.empty(b - a + 1)
         out[0] = self._start[j]
         np.subtract(self.record[a:b], self.offset, out=out[1:])
         np.cumsum(out, out=out)
+        if j == self._done:                   # first time: its checkpoints
+            f = self._fine_step
+            self._fine[a // f: -(-(b + 1) // f)] = out[::f]
+            if j + 1 < self._start.size:
+                self._start[j + 1] = out[-1]
+            self._done += 1
         return out
 
     def _get(self, j: int) -> np.ndarray:
@@ -215,6 +246,24 @@ class CumulativeSum:
         else:
             self._cache.move_to_end(j)
         return blk
+
+    def span(self, a: int, b: int) -> np.ndarray:
+        """c[a:b] (a fresh array, equal bit for bit to the slice of the whole array) rebuilt
+        from the last fine checkpoint at or before ``a``, without the block cache: for
+        pieces read once each at scattered places."""
+        b = min(b, self.size)
+        if b <= a:
+            return np.empty(0)
+        if a // self.block >= self._done:
+            self._build(a // self.block)                   # checkpoints that far
+        f = self._fine_step
+        a0 = (a // f) * f
+        out = np.empty(b - a0)
+        out[0] = self._fine[a // f]
+        if b - a0 > 1:
+            np.subtract(self.record[a0: b - 1], self.offset, out=out[1:])
+            np.cumsum(out, out=out)
+        return out[a - a0:]
 
     def __getitem__(self, key) -> np.ndarray:
         a, b, step = _slice(key, self.size)
@@ -243,13 +292,21 @@ class CumulativeSum:
 
     def decimations(self, ranges) -> list[np.ndarray]:
         """``c[a:b:m]`` for every (a, b, m) of ``ranges``, in one pass over the blocks
-        (the block cache untouched)."""
+        (the block cache untouched); a range whose step is at least the fine checkpoints'
+        spacing point by point from them instead (:meth:`span` of one point: fewer than
+        that spacing rebuilt per point, not every block)."""
         out: list[list[np.ndarray]] = [[] for _ in ranges]
+        sparse = {k for k, (_, _, m) in enumerate(ranges) if m >= self._fine_step}
+        for k in sparse:
+            a, b, m = ranges[k]
+            pts = range(a, min(b, self.size), m)
+            out[k] = [np.array([self.span(i, i + 1)[0] for i in pts])] if len(pts) else []
         B = self.block
-        for j in range(self._start.size):
+        for j in range(self._start.size if len(sparse) < len(ranges) else 0):
             lo = j * B
             hi = min(lo + B, self.size)
-            need = [k for k, (a, b, _) in enumerate(ranges) if a < hi and min(b, self.size) > lo]
+            need = [k for k, (a, b, _) in enumerate(ranges)
+                    if k not in sparse and a < hi and min(b, self.size) > lo]
             if not need:
                 continue
             blk = self._build(j)[:B]

@@ -20,14 +20,14 @@ from pathlib import Path
 from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
 from gonio.protocol.programme import calibration_segments as sf_segments
-from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, read_sections
+from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, TEMP_C, read_sections
 from gonio.formats.toml import Field
 
 KEY = "iec62047-20"
 
 SCHEMAS = {
     "protocol": {"spec": Field("str"), "name": Field("str", default=""),
-                 "operating_min_c": Field("float"), "operating_max_c": Field("float"),
+                 "operating_min_c": TEMP_C, "operating_max_c": TEMP_C,
                  "sample_interval_s": PFLOAT, "warmup_s": NNFLOAT},
     "scale_factor": {"full_scale_dps": PFLOAT,
                      "divisions": Field("int", check=lambda x: 2 <= x <= 1000,

@@ -18,6 +18,7 @@ Contents
 :func:`g_sensitivity_axis`      JJF 7.2.12.2, Earth rate removed per position
 :func:`allan_variance_printed_jjf`  JJF (22)–(24) as printed (not an Allan variance)
 :func:`allan_variance_overlapping`  the reading taken: IEEE 952 overlapping AVAR
+:func:`allan_variances_jjf`   both of the above for several k in one pass
 :func:`arw_from_coefficient`    JJF (26), unit handling of 7.2.13
 :func:`bandwidth_grid`          JJF 7.2.15.1 b) frequency grid
 :func:`warmup_time_s`           JJF 7.2.9 reading: sliding-window stability
@@ -277,13 +278,50 @@ def allan_variance_printed_jjf(rate, k: int) -> float:
     if k < 1 or x.size < k + 3:
         raise GonioError(f"printed eq (24) needs n ≥ k + 3, got n = {x.size}, k = {k}")
     c = _cumsum0(x)
-    # overlapping means Ω̄_p = (c[p+k] − c[p])/k, p = 0 … n − k; terms p = 0 … n − k − 2
-    total = 0.0
-    for a, b in _pieces(x.size - k - 1):
-        m = (c[a + k: b + k + 2] - c[a: b + 2]) / k
-        d2 = m[2:] - 2 * m[1:-1] + m[:-2]
-        total += float((d2 ** 2).sum())
+    total = sum(_printed_terms(c, a, b, k) for a, b in _pieces(x.size - k - 1))
     return total / (2.0 * (x.size - k - 1))
+
+
+def _printed_terms(c, a: int, b: int, k: int) -> float:
+    """Σ of the printed eq (24) terms p = a … b − 1 from c = [0, cumsum(rate)]: overlapping
+    means Ω̄_p = (c[p+k] − c[p])/k, p = 0 … n − k; terms p = 0 … n − k − 2."""
+    m = (c[a + k: b + k + 2] - c[a: b + 2]) / k
+    d2 = m[2:] - 2 * m[1:-1] + m[:-2]
+    return float((d2 ** 2).sum())
+
+
+def _overlapping_terms(c, a: int, b: int, k: int) -> float:
+    """Σ of the overlapping AVAR terms p = a … b − 1 from c = [0, cumsum(rate)]:
+    d_p = Ω̄_{p+k} − Ω̄_p, p = 0 … n − 2k."""
+    d = (c[a + 2 * k: b + 2 * k] - c[a + k: b + k]) / k - (c[a + k: b + k] - c[a: b]) / k
+    return float((d ** 2).sum())
+
+
+def allan_variances_jjf(rate, ks) -> dict[int, tuple[float, float]]:
+    """{k: (:func:`allan_variance_printed_jjf`, :func:`allan_variance_overlapping`)} for
+    every k of ``ks`` at once, equal to the two functions bit for bit (the same terms in the
+    same pieces) but from one cumulative sum read in one pass (each piece of it sliced once
+    for every k): a long record's sum is rebuilt once, not twice per k.
+
+    >>> allan_variances_jjf([1.0, -1.0] * 8, [1, 2])[1][1]
+    2.0
+    """
+    x = as_array(rate, "rate")
+    ks = sorted({int(k) for k in ks})
+    if not ks or ks[0] < 1 or x.size < 2 * ks[-1] + 3:
+        raise GonioError(f"the eq (22)–(24) statistics need n ≥ 2k + 3, got n = {x.size}, "
+                         f"k = {ks[-1] if ks else None}")
+    c = _cumsum0(x)
+    n = x.size
+    tot = {k: [0.0, 0.0] for k in ks}
+    for a in range(0, n - ks[0] - 1, _PIECE):
+        cs = c[a: a + _PIECE + 2 * ks[-1] + 2]        # c[a + i] = cs[i]: one slice for all k
+        for k in ks:
+            for j, n_terms, terms in ((0, n - k - 1, _printed_terms),
+                                      (1, n - 2 * k + 1, _overlapping_terms)):
+                if a < n_terms:
+                    tot[k][j] += terms(cs, 0, min(n_terms, a + _PIECE) - a, k)
+    return {k: (p / (2.0 * (n - k - 1)), o / (2.0 * (n - 2 * k + 1))) for k, (p, o) in tot.items()}
 
 
 #: Terms formed at a time by the direct Allan forms (bounded temporaries on long records).
@@ -321,12 +359,8 @@ def allan_variance_overlapping(rate, k: int) -> float:
     if k < 1 or x.size < 2 * k + 1:
         raise GonioError(f"overlapping AVAR needs n ≥ 2k + 1, got n = {x.size}, k = {k}")
     c = _cumsum0(x)
-    # d_p = Ω̄_{p+k} − Ω̄_p, p = 0 … n − 2k, summed in pieces
-    total, n_d = 0.0, x.size - 2 * k + 1
-    for a, b in _pieces(n_d):
-        d = (c[a + 2 * k: b + 2 * k] - c[a + k: b + k]) / k - (c[a + k: b + k] - c[a: b]) / k
-        total += float((d ** 2).sum())
-    return total / (2.0 * n_d)
+    n_d = x.size - 2 * k + 1              # summed in pieces
+    return sum(_overlapping_terms(c, a, b, k) for a, b in _pieces(n_d)) / (2.0 * n_d)
 
 
 def arw_from_coefficient(a_minus1: float, *, rate_unit: str, tau_unit: str) -> float:

@@ -579,12 +579,10 @@ def angle_random_walk(ctx: Context) -> Item:
     u_arw = fit.u_N / math.sqrt(S_PER_H)
     printed = {}
     if ctx.protocol.get("arw", {}).get("print_standard_statistic", True):
-        for k in (1, 2, 4, 8, 16):
-            if rate_dph.size >= 2 * k + 3:
-                pv = jf.allan_variance_printed_jjf(rate_dph, k)
-                av = jf.allan_variance_overlapping(rate_dph, k)
-                printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
-                                   "ratio": pv / av if av > 0 else None}
+        ks = [k for k in (1, 2, 4, 8, 16) if rate_dph.size >= 2 * k + 3]
+        for k, (pv, av) in (jf.allan_variances_jjf(rate_dph, ks) if ks else {}).items():
+            printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
+                               "ratio": pv / av if av > 0 else None}
     u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
                                               source="five-term AVAR fit, u(N)"),
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])

@@ -20,14 +20,15 @@ from gonio.specs.jjf1535.formulas import bandwidth_grid
 from gonio.protocol.programme import Segment
 from gonio.errors import GonioError
 from gonio.protocol.programme import calibration_segments as sf_segments
-from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, rate_series, read_sections
+from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, TEMP_C, rate_series, read_sections
 from gonio.formats.toml import Field
 
 KEY = "jjf1535-2015"
 
 SCHEMAS = {
     "protocol": {"spec": Field("str"), "name": Field("str", default=""),
-                 "room_temperature_c": Field("float", default=20.0),
+                 "room_temperature_c": Field("float", default=20.0, check=TEMP_C.check,
+                                             expect=TEMP_C.expect),
                  "sample_interval_s": PFLOAT, "warmup_s": NNFLOAT},
     "scale_factor": {"lowest_rate_dps": PFLOAT, "highest_rate_dps": PFLOAT,
                      "rates_dps": Field("float_list", default=[], check=lambda x: x > 0,
@@ -37,7 +38,8 @@ SCHEMAS = {
                      "calibrations": Field("int", check=lambda x: x >= 1, expect="Q ≥ 1"),
                      "interval_s": NNFLOAT, "power_off": Field("bool", default=True),
                      "order": Field("str", default="ascending", choices=("ascending", "alternating"))},
-    "temperature": {"points_c": Field("float_list", default=[]),
+    "temperature": {"points_c": Field("float_list", default=[], check=TEMP_C.check,
+                                         expect=TEMP_C.expect),
                     "ramp_c_per_min": PFLOAT, "soak_s": NNFLOAT, "bias_samples": PINT},
     "threshold": {"rates_dps": Field("float_list", check=lambda x: x > 0, expect="rates > 0"),
                   "samples": PINT, "rest_samples": PINT},

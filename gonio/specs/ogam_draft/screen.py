@@ -5,7 +5,8 @@ per incomplete programme; :func:`apply_findings` refuses (GonioError naming the 
 aside what the findings say. The rules, their thresholds and why (docs/draft-readings.md,
 "Screening"):
 
-- **round** — the reading's round must be one of its protocol item's rounds (7.1, 7.4, 7.6, 7.7).
+- **round** — the reading's round must be one of its protocol item's rounds (7.1, 7.4, 7.6, 7.7),
+  its series one of the item's series (a series 11 of a 10-series item is a label typo).
 - **condition** — its rate and orientation must be a condition of the programme of its test
   (a 7.6 reading at 1 000 °/s is a typo, not an eighth rate).
 - **angle** — ``table_deg`` must equal the round's stop − start within the item's
@@ -20,8 +21,9 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
   ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``; 7.3 readings (at rest)
   the same against the other 7.3 readings of their series.
 - **incomplete programme** — a round of 7.1, 7.4, 7.6 or 7.7 missing from every series of a
-  condition present in the file, or a programme condition (rate, orientation) absent, is
-  flagged (the item is computed on what is there, and says so).
+  condition present in the file, a programme condition (rate, orientation) absent, or a
+  round read in some series and not in another series present, is flagged (the item is
+  computed on what is there, and says so).
 
 A reading that breaks a rule is set aside (``on_bad_reading = "exclude"``, the default) or
 refused (``"error"``); setting aside the last reading of a round refuses instead, because the
@@ -130,10 +132,16 @@ def _protocol_rules(df: pd.DataFrame, protocol, file, aside_lines: set) -> list[
             n = len(it.rounds)
             want = np.array([r.stop_deg - r.start_deg for r in it.rounds])
             limit, limit_txt = time_limit_s(it, test)
-            for line, rnd, tab, t in zip(g["line"], g["round"], g["table_deg"], g["time_s"]):
+            for line, se, rnd, tab, t in zip(g["line"], g["series"], g["round"], g["table_deg"],
+                                             g["time_s"]):
                 rnd, tab, t = int(rnd), float(tab), float(t)
                 f = dict(file=file, line=int(line), test=test, clause=clause)
-                if not 1 <= rnd <= n:
+                if not 1 <= int(se) <= it.series:
+                    out.append(Finding("series-not-in-programme",
+                                       f"{test} series {int(se)} is not one of the protocol's "
+                                       f"{it.series} series ({protocol.name})", _action(it),
+                                       column="series", rule=f"1 ≤ series ≤ {it.series}", **f))
+                elif not 1 <= rnd <= n:
                     out.append(Finding("round-not-in-programme",
                                        f"{test} round {rnd} is not one of the protocol's {n} "
                                        f"rounds ({protocol.name})", _action(it), column="round",
@@ -220,9 +228,11 @@ def _group_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[
     return out
 
 
-def _incomplete(df: pd.DataFrame, protocol, file, present) -> list[Finding]:
+def _incomplete(df: pd.DataFrame, protocol, file, present, df_all: pd.DataFrame
+                ) -> list[Finding]:
     """Rounds missing from every series, conditions of the programme absent (flagged), for
-    the tests ``present`` in the file."""
+    the tests ``present`` in the file; a round absent from one series of the file
+    ``df_all`` (not one set aside: that has its own finding)."""
     out = []
     for test in ROTATION_TESTS:
         rows = df[df["test"] == test]
@@ -243,6 +253,11 @@ def _incomplete(df: pd.DataFrame, protocol, file, present) -> list[Finding]:
                 continue
             have = set(int(x) for x in g["round"])
             missing = [i for i in range(1, len(it.rounds) + 1) if i not in have]
+            whole = df_all[(df_all["test"] == test)
+                           & np.isclose(df_all["rate_dps"].to_numpy(float), it.rate_dps)
+                           & (df_all["orientation"] == it.orientation)
+                           & df_all["series"].between(1, it.series)]
+            out += _missing_in_series(whole, test, cond, file)
             for i in missing:
                 r = it.rounds[i - 1]
                 out.append(Finding(
@@ -252,6 +267,25 @@ def _incomplete(df: pd.DataFrame, protocol, file, present) -> list[Finding]:
                     f"{len(it.rounds) - len(missing)} of the programme's {len(it.rounds)} rounds",
                     "flagged", file=file, column="round", test=test, clause=CLAUSES[test],
                     rule="every programme round read in at least one series"))
+    return out
+
+
+def _missing_in_series(g: pd.DataFrame, test: str, cond: str, file) -> list[Finding]:
+    """A round read in some series of a condition and not in another series that has
+    readings (a reading lost or mislabelled): flagged, one finding per gap — the round's
+    mean is over the series present, and the certificate says which one is short."""
+    have = {(int(se), int(rd)) for se, rd in zip(g["series"], g["round"])}
+    rounds = sorted({rd for _, rd in have})
+    out = []
+    for se in sorted({se for se, _ in have}):
+        for rd in rounds:
+            if (se, rd) not in have:
+                out.append(Finding(
+                    "incomplete-programme",
+                    f"{test} ({CLAUSES[test]}) at {cond}: series {se} has no reading of round "
+                    f"{rd} (the round's mean is over the other series)", "flagged", file=file,
+                    column="round", test=test, clause=CLAUSES[test],
+                    rule="every round read in every series present"))
     return out
 
 
@@ -269,7 +303,7 @@ def screen(readings: Readings, protocol) -> list[Finding]:
     k_ref = reference_scale_factor(df[~df["line"].isin(out_lines)], readings.metadata, file)
     found += _indicated_rule(df, protocol, name, k_ref, out_lines)
     gone = {f.line for f in found} | aside_lines
-    found += _incomplete(df[~df["line"].isin(gone)], protocol, name, set(df["test"]))
+    found += _incomplete(df[~df["line"].isin(gone)], protocol, name, set(df["test"]), df)
     return found
 
 

@@ -142,6 +142,45 @@ def _derived_batch(thetas: np.ndarray) -> np.ndarray:
                            np.matmul(minv, b[:, :, None])[:, :, 0]], axis=1)
 
 
+def _derived_trials(thetas: np.ndarray) -> np.ndarray:
+    """:func:`_derived_batch` of a Monte Carlo piece (shape (k, 12)), written out element by
+    element for speed (each quantity a few operations on arrays of k, no stacked 3 × 3
+    LAPACK calls or full 3 × 3 temporaries): M⁻¹ = adj(M)/det M (Cramer's rule), K_i the
+    row norms, ψ_i = acos|M_ii/K_i|, φ_ij = asin(M_ij/K_i), S_ij = M_ij/M_ii, M⁻¹b — the
+    same formulas as :func:`gonio.physics.alignment.decompose_system_matrices` (equal to
+    :func:`_derived_batch` to rounding, tested). A trial whose M has a zero row or is
+    singular is a GonioError, as in :func:`_derived_batch`."""
+    t = np.ascontiguousarray(np.asarray(thetas, dtype=float).T)      # (12, k): one row each
+    m = [[t[4 * i + j] for j in range(3)] for i in range(3)]
+    b = [t[4 * i + 3] for i in range(3)]
+    out = np.empty((30, t.shape[1]))
+    # cofactors C_ij; M⁻¹[j][i] = C_ij / det
+    cof = [[m[(i + 1) % 3][(j + 1) % 3] * m[(i + 2) % 3][(j + 2) % 3]
+            - m[(i + 1) % 3][(j + 2) % 3] * m[(i + 2) % 3][(j + 1) % 3] for j in range(3)]
+           for i in range(3)]
+    det = m[0][0] * cof[0][0] + m[0][1] * cof[0][1] + m[0][2] * cof[0][2]
+    if not np.all(np.isfinite(det) & (det != 0)):
+        raise GonioError("a Monte Carlo trial's system matrix is singular: the dwells "
+                         "hardly determine M")
+    for r in range(3):
+        for c in range(3):
+            np.divide(cof[c][r], det, out=out[3 * r + c])
+    scale = out[9:12]
+    for i in range(3):
+        np.sqrt(m[i][0] * m[i][0] + m[i][1] * m[i][1] + m[i][2] * m[i][2], out=scale[i])
+    if np.any(scale == 0):
+        raise GonioError("system matrix has a zero row (a gyro with no output)")
+    for i in range(3):
+        np.arccos(np.clip(np.abs(m[i][i] / scale[i]), -1.0, 1.0), out=out[12 + i])
+    for n, (i, j) in enumerate(_OFF):
+        np.arcsin(np.clip(m[i][j] / scale[i], -1.0, 1.0), out=out[15 + n])
+        np.divide(m[i][j], m[i][i], out=out[21 + n])
+    for r in range(3):
+        minv = out[3 * r: 3 * r + 3]
+        np.add(minv[0] * b[0] + minv[1] * b[1], minv[2] * b[2], out=out[27 + r])
+    return out.T
+
+
 def _derived(theta12: np.ndarray) -> np.ndarray:
     """:func:`_derived_batch` of one θ."""
     return _derived_batch(np.asarray(theta12, dtype=float)[None, :])[0]
@@ -370,7 +409,8 @@ MC_DRAWS = 1 << 20
 
 def chunked_std(batch, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.ndarray]:
     """Sample standard deviations (ddof 1) of the two vectors per trial that ``batch(k)``
-    returns for ``k`` trials at once (two arrays of k rows), over ``n`` trials, in bounded
+    returns for ``k`` trials at once (two fresh arrays of k rows, which this function may
+    change), over ``n`` trials, in bounded
     memory: chunks of ``chunk`` trials combined by Chan et al.'s pairwise update (count,
     mean, sum of squared deviations). Up to one chunk the result is ``np.std`` of all
     trials, exactly.
@@ -389,7 +429,11 @@ def chunked_std(batch, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.nd
         blocks = batch(k)
         if acc is None and k == n:
             return tuple(np.std(b, axis=0, ddof=1) for b in blocks)
-        stats_ = [(k, b.mean(axis=0), ((b - b.mean(axis=0)) ** 2).sum(axis=0)) for b in blocks]
+        stats_ = []
+        for b in blocks:
+            mean = b.mean(axis=0)
+            b -= mean                      # the block is this function's: deviations in place
+            stats_.append((k, mean, np.einsum("ij,ij->j", b, b)))
         del blocks
         if acc is None:
             acc = stats_
@@ -407,23 +451,36 @@ def chunked_std(batch, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.nd
 def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray, rng):
     """The Monte Carlo trials of :func:`estimate_alignment`, vectorised: ``trials(k)`` draws
     k synthetic outputs (fitted + sd·N(0, 1), the draws in the order of one trial after the
-    other), refits each channel by weighted least squares (all trials as right-hand sides
-    of one solve) and returns (θ, derived) with k rows each, in pieces of at most
-    :data:`MC_DRAWS` normal draws."""
+    other), refits each channel by weighted least squares and returns (θ, derived) with k
+    rows each, in pieces of at most :data:`MC_DRAWS` normal draws.
+
+    The weighted least-squares estimate is linear in the outputs, θ̂_i = P y_i with
+    P = (XᵀWX)⁻¹XᵀW the same (4 × dwells) matrix for every trial (X has full column rank,
+    checked before), so P is formed once (``lstsq`` of the weighted design against the
+    weights, the solve the per-trial fit made) and a piece of trials is three small products,
+    θ̂_i = θ_i + (P sd_i) z_i: the same estimates as refitting every trial, to rounding
+    (tested against a per-trial ``lstsq`` loop), without a least-squares solve per piece.
+    The normal draws go into one reused buffer (the same numbers as a fresh array)."""
     sw = np.sqrt(w)
-    xw = x * sw[:, None]
+    proj, *_ = np.linalg.lstsq(x * sw[:, None], np.diag(sw), rcond=None)   # P, (4, rows)
+    # channel i's fit applied to its draws: P with sd[:, i] folded in, (3, 4, rows)
+    proj_sd = np.ascontiguousarray(proj[None, :, :] * sd.T[:, None, :])
+    theta0 = (proj @ fitted).T.reshape(12)         # the fit's θ (P X θ = θ)
     per = max(1, MC_DRAWS // fitted.size)
+    z_buf = np.empty((min(per, MC_CHUNK),) + fitted.shape)
 
     def trials(k: int):
         th = np.empty((k, 12))
         der = np.empty((k, max(sl.stop for sl in _DERIVED_SLICES.values())))
         for a in range(0, k, per):
             kk = min(per, k - a)
-            ys = fitted + sd * rng.standard_normal((kk,) + fitted.shape)   # (kk, rows, 3)
-            for i in range(3):
-                t, *_ = np.linalg.lstsq(xw, ys[:, :, i].T * sw[:, None], rcond=None)
-                th[a:a + kk, 4 * i:4 * i + 4] = t.T
-            der[a:a + kk] = _derived_batch(th[a:a + kk])
+            z = z_buf[:kk] if kk <= z_buf.shape[0] else np.empty((kk,) + fitted.shape)
+            rng.standard_normal(out=z)                               # (kk, rows, 3)
+            t = th[a:a + kk]
+            for i in range(3):        # einsum: no BLAS threads spinning on a shared machine
+                np.einsum("kr,pr->kp", z[:, :, i], proj_sd[i], out=t[:, 4 * i: 4 * i + 4])
+            t += theta0
+            der[a:a + kk] = _derived_trials(t)
         return th, der
     return trials
 

@@ -237,8 +237,9 @@ def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
         if not ok.any() or al.residuals is None:
             continue
         expect = np.median(sd[ok] / np.sqrt(n[ok]))
-        r = np.abs(al.residuals[:, c]) / (sd / np.sqrt(n))
-        r = np.where(ok, r, 0.0)
+        # a dwell without a usable sd (0: a filled column) is not divided by (no warning)
+        r = np.zeros(sd.size)
+        r[ok] = np.abs(al.residuals[ok, c]) / (sd[ok] / np.sqrt(n[ok]))
         rms = float(np.sqrt(np.mean((al.residuals[:, c] / expect) ** 2)))
         if rms > CONSISTENCY_RATIO:
             k = int(np.argmax(r))

@@ -1,0 +1,321 @@
+"""Hostile round 3 (issue 26): what was added since rounds 1 and 2, through what a user does.
+
+Folders are made with ``gonio simulate`` (one per file family, once per module) and damaged
+copies written into the test's own temporary folder. Each case checks what a user gets: an
+exit code 0 or 2 with one line naming file, line, column or key; inputs byte-unchanged; and
+what reaches the result — a reading that is missing, mislabelled or misspelt is refused or
+stated (a finding), never silently absorbed into a number that looks right.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import warnings
+from pathlib import Path
+
+import pytest
+
+from gonio.cli import main
+from gonio.errors import GonioError
+from gonio.formats.rate_readings import parse_rate_readings
+from gonio.formats.readings import read_readings
+from gonio.protocol import load_protocol
+from gonio.resources import builtin_names, protocols_dir, resolve
+from gonio.specs.ogam_draft.screen import screen
+
+ROOT = Path(__file__).resolve().parents[1]
+SMALL = ROOT / "tests" / "data" / "small-protocol.toml"
+CASES: list[str] = []
+
+
+def count(name: str) -> None:
+    CASES.append(name)
+
+
+def sha(p: Path) -> str:
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+def cli(argv, capsys, expect: int) -> str:
+    rc = main([str(a) for a in argv])
+    cap = capsys.readouterr()
+    assert rc == expect, (argv, rc, cap.err[-2000:])
+    if expect == 2:
+        lines = cap.err.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in cap.err, cap.err
+        return lines[0]
+    return cap.err
+
+
+# ------------------------------------------------------------------ the folders, once
+
+@pytest.fixture(scope="module")
+def sims(tmp_path_factory):
+    """A small optical session (the small protocol) and a JJF folder, seed 1."""
+    base = tmp_path_factory.mktemp("round3")
+    assert main(["simulate", "--protocol", str(SMALL), "--seed", "1", "--out",
+                 str(base / "OG")]) == 0
+    assert main(["simulate", "--spec", "jjf1535-2015", "--seed", "1", "--out",
+                 str(base / "JS")]) == 0
+    return {"OG": base / "OG" / "readings.csv", "JS": base / "JS" / "readings.csv"}
+
+
+@pytest.fixture(scope="module")
+def og_lines(sims):
+    return sims["OG"].read_text(encoding="utf-8").splitlines(keepends=True)
+
+
+@pytest.fixture(scope="module")
+def js_bias(sims):
+    """The JJF readings cut to the bias test (metadata, header and its rows)."""
+    out = []
+    for ln in sims["JS"].read_text(encoding="utf-8").splitlines(keepends=True):
+        if ln.startswith("#") or ln.startswith("test,") or ln.startswith("bias,"):
+            out.append(ln)
+    return out
+
+
+COLS = ("test", "series", "round", "rate_dps", "orientation", "time_s", "table_deg",
+        "gyro_counts", "gyro_deg")
+
+
+def og_index(lines, test: str, series: int, rnd: int) -> int:
+    for i, ln in enumerate(lines):
+        c = ln.split(",")
+        if c[0] == test and c[1] == str(series) and c[2] == str(rnd):
+            return i
+    raise AssertionError((test, series, rnd))
+
+
+def og_set(lines, i: int, col: str, value) -> list[str]:
+    out = list(lines)
+    c = out[i].rstrip("\n").split(",")
+    k = COLS.index(col)
+    c[k] = value(c[k]) if callable(value) else value
+    out[i] = ",".join(c) + "\n"
+    return out
+
+
+def og_screen(tmp_path, lines, name="r.csv"):
+    p = tmp_path / name
+    p.write_text("".join(lines), encoding="utf-8")
+    before = sha(p)
+    found = screen(read_readings(p), load_protocol(SMALL))
+    assert sha(p) == before
+    return found
+
+
+# ------------------------------------------------ a folder named like a built-in protocol
+
+@pytest.mark.parametrize("name", builtin_names())
+def test_a_folder_named_like_a_builtin_is_not_the_protocol(tmp_path, monkeypatch, name):
+    """``gonio simulate --spec X --out X`` makes a folder X in the working folder; every later
+    command there that meant the built-in X (the default protocol, ``# protocol: X``) was
+    refused: 'X: protocol file is a folder, not a regular file' — for every specification."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / name).mkdir()
+    assert resolve(name) == protocols_dir() / f"{name}.toml"
+    count(f"folder-named:{name}")
+
+
+def test_simulate_into_a_folder_named_like_the_spec(tmp_path, monkeypatch, capsys):
+    """The README workflow with the natural folder name: exit 0, readings written."""
+    monkeypatch.chdir(tmp_path)
+    cli(["simulate", "--spec", "ogam-draft", "--seed", "1", "--out", "ogam-draft"], capsys, 0)
+    assert (tmp_path / "ogam-draft" / "readings.csv").is_file()
+    count("folder-named:simulate-cli")
+
+
+def test_a_fifo_or_other_folder_is_still_named(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mylab").mkdir()
+    with pytest.raises(GonioError, match="is a folder"):
+        resolve("mylab")
+    with pytest.raises(GonioError, match="is a folder"):
+        resolve(tmp_path / "mylab")
+    count("folder-named:not-builtin")
+
+
+# -------------------------------------------------------------- optical: series and gaps
+
+def test_clean_session_has_no_finding(tmp_path, og_lines):
+    assert og_screen(tmp_path, og_lines) == []
+    count("ogam:clean")
+
+
+def test_a_reading_missing_from_one_series_is_flagged(tmp_path, og_lines):
+    """One 7.4 reading absent (the other series have its round): before, nothing said so —
+    E's round mean was over the other series and the certificate was silent."""
+    i = og_index(og_lines, "angle_deviation", 2, 3)
+    found = og_screen(tmp_path, og_lines[:i] + og_lines[i + 1:])
+    assert [(f.code, f.action) for f in found] == [("incomplete-programme", "flagged")], found
+    assert "series 2 has no reading of round 3" in found[0].message
+    count("ogam:missing-reading")
+
+
+def test_a_series_typo_is_set_aside_and_the_gap_flagged(tmp_path, og_lines):
+    """series 1 → 9 on one reading (the protocol has 3 series): before, accepted as a new
+    series and series 1 short of a round, with no finding."""
+    i = og_index(og_lines, "angle_deviation", 1, 4)
+    found = og_screen(tmp_path, og_set(og_lines, i, "series", "9"))
+    codes = sorted((f.code, f.action) for f in found)
+    assert codes == [("incomplete-programme", "flagged"),
+                     ("series-not-in-programme", "set_aside")], found
+    bad = next(f for f in found if f.code == "series-not-in-programme")
+    assert bad.line == i + 1 and bad.column == "series" and "3 series" in bad.message
+    count("ogam:series-typo")
+
+
+def test_a_late_reading_is_not_also_a_gap(tmp_path, og_lines):
+    """A reading set aside (late) has its own finding; it is not reported twice."""
+    i = og_index(og_lines, "angle_deviation", 1, 4)
+    found = og_screen(tmp_path, og_set(og_lines, i, "time_s", lambda v: str(float(v) + 100)))
+    assert [f.code for f in found] == ["late-reading"], found
+    count("ogam:late")
+
+
+@pytest.mark.parametrize("test", ["scale_factor", "angle_deviation"])
+@pytest.mark.parametrize("how", ["+1deg", "-1deg", "sign"])
+def test_a_one_degree_typo_in_the_counts_is_never_certified(tmp_path, og_lines, test, how):
+    """A 1° slip (± K counts) or a sign typo in one optical reading's counts: set aside by
+    line, or refused by line where its round would be lost — never in a certified value."""
+    i = og_index(og_lines, test, 1, 2)
+    k = 76435
+    f = {"+1deg": lambda v: str(int(v) + k), "-1deg": lambda v: str(int(v) - k),
+         "sign": lambda v: str(-int(v))}[how]
+    try:
+        found = og_screen(tmp_path, og_set(og_lines, i, "gyro_counts", f))
+    except GonioError as e:
+        assert f"r.csv:{i + 1}:" in str(e) and "gyro_counts" in str(e), e
+    else:
+        assert any(x.line == i + 1 and x.action in ("set_aside", "refused") for x in found), found
+    count(f"ogam:counts-{how}:{test}")
+
+
+# ----------------------------------------------------- misspelt keys and columns, every family
+
+def test_ogam_misspelt_metadata_key_is_refused(tmp_path, og_lines, capsys):
+    """``# latitude_dge:`` was kept as an extra key and the latitude taken as not stated
+    (the coupling line at the equator's worst case): refused, naming the key."""
+    lines = [ln.replace("# latitude_deg:", "# latitude_dge:") for ln in og_lines]
+    assert lines != og_lines
+    p = tmp_path / "r.csv"
+    p.write_text("".join(lines), encoding="utf-8")
+    msg = cli(["calibrate", p, "--protocol", SMALL, "--out", tmp_path / "o"], capsys, 2)
+    assert "key latitude_dge" in msg and "'latitude_deg'" in msg and str(p) in msg, msg
+    assert not (tmp_path / "o").exists()
+    count("ogam:meta-key-typo")
+
+
+@pytest.mark.parametrize("old,new,frag", [
+    ("# rate_table_u_rel:", "# rate_table_urel:", "key rate_table_urel"),
+    ("# acquisition_u_rel:", "# acquisiton_u_rel:", "key acquisiton_u_rel"),
+    ("# chamber_deviation_bound_c:", "# chamber_deviation_bound:", "key chamber_deviation_bound"),
+])
+def test_rate_misspelt_metadata_key_is_refused(js_bias, old, new, frag):
+    """A misspelt numeric key: before, the default replaced the value silently (2.5e-4 for the
+    rate table; the budget changed with no word)."""
+    lines = [ln.replace(old, new) for ln in js_bias]
+    assert lines != js_bias
+    with pytest.raises(GonioError) as ei:
+        parse_rate_readings("".join(lines), path="r.csv")
+    assert frag in str(ei.value) and "did you mean" in str(ei.value), ei.value
+    count(f"jjf:meta-typo:{new}")
+
+
+@pytest.mark.parametrize("old,new", [("temperature_c", "temperature"), ("supply_v", "suply_v"),
+                                     ("rate_dps", "rate_dsp")])
+def test_rate_misspelt_column_is_refused(js_bias, old, new):
+    """A header typo made the column an ignored extra and every row took the default (rate 0,
+    no temperature): refused, naming the column and the header line."""
+    i = next(k for k, ln in enumerate(js_bias) if ln.startswith("test,"))
+    lines = list(js_bias)
+    lines[i] = lines[i].replace(old, new)
+    with pytest.raises(GonioError) as ei:
+        parse_rate_readings("".join(lines), path="r.csv")
+    msg = str(ei.value)
+    assert msg.startswith(f"r.csv:{i + 1}: column {new}:") and repr(old) in msg, msg
+    count(f"jjf:column-typo:{new}")
+
+
+def test_known_extra_columns_and_keys_still_read(js_bias):
+    """Names far from every known one (a lab's own note column or key) are kept as before."""
+    i = next(k for k, ln in enumerate(js_bias) if ln.startswith("test,"))
+    lines = ["# operator_badge: 42\n"] + [
+        ln.rstrip("\n") + (",note\n" if k == i else ",x\n") if k >= i else ln
+        for k, ln in enumerate(js_bias)]
+    rd = parse_rate_readings("".join(lines), path="r.csv")
+    assert len(rd.data) == len(js_bias) - i - 1
+    count("jjf:extras-kept")
+
+
+# ------------------------------------------------------------------------------ triad
+
+def test_triad_dwell_with_sd_zero_gives_no_warning(tmp_path_factory):
+    """A dwell whose sd_x is 0 (a filled column) was divided by in the consistency check: a
+    RuntimeWarning on stderr of a run that exits 0. The values are those of the intact file."""
+    from gonio.pipeline.dispatch import screen_and_calibrate
+    from gonio.specs import get
+
+    d = tmp_path_factory.mktemp("tri")
+    assert main(["simulate", "--spec", "triad-alignment", "--seed", "1", "--out",
+                 str(d / "TRI")]) == 0
+    src = d / "TRI" / "readings.csv"
+    lines = src.read_text(encoding="utf-8").splitlines(keepends=True)
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("test,"))
+    cols = lines[i].strip().split(",")
+    c = lines[i + 3].rstrip("\n").split(",")
+    c[cols.index("sd_x")] = "0"
+    lines[i + 3] = ",".join(c) + "\n"
+    p = d / "TRI" / "r.csv"
+    p.write_text("".join(lines), encoding="utf-8")
+    spec = get("triad-alignment")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = screen_and_calibrate(spec, p, None)
+    ref = screen_and_calibrate(spec, src, None)
+    a, b = res.to_json()["items"], ref.to_json()["items"]
+    assert a["M_xx"]["value"] == b["M_xx"]["value"] and a["M_xx"]["measured"]
+    count("triad:sd-zero")
+
+
+# ------------------------------------------- protocols that plan what the reader refuses
+
+PROTOCOL_TEMPERATURES = {
+    # case: (spec, old text, new text, key the message names)
+    "iec-operating-min-below-absolute-zero": ("iec62047-20", "operating_min_c = -40.0",
+                                              "operating_min_c = -300.0",
+                                              "protocol.operating_min_c"),
+    "jjf-room-300": ("jjf1535-2015", "room_temperature_c = 20.0", "room_temperature_c = 300.0",
+                     "protocol.room_temperature_c"),
+    "jjf-point-300": ("jjf1535-2015", "points_c = [70.0, -40.0]", "points_c = [300.0, -40.0]",
+                      "temperature.points_c"),
+    "triad-setpoint-minus-400": ("triad-alignment", "setpoints_c = [-40.0,",
+                                 "setpoints_c = [-400.0,", "thermal.setpoints_c"),
+    "triad-start-1e6": ("triad-alignment", "start_c = 25.0", "start_c = 1e6",
+                        "thermal.start_c"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PROTOCOL_TEMPERATURES))
+def test_protocol_temperatures_the_reader_would_refuse(tmp_path, capsys, name):
+    """A protocol temperature outside what the readings reader takes: before, IEC
+    operating_min_c = -300 °C (below absolute zero) and JJF room 300 °C were simulated (exit 0)
+    into a file the reader then refused; triad start_c = 1e6 blamed thermal.ramp_block_s.
+    Now refused when the protocol is read, naming the key; nothing written."""
+    spec, old, new, key = PROTOCOL_TEMPERATURES[name]
+    text = (protocols_dir() / f"{spec}.toml").read_text(encoding="utf-8")
+    assert old in text
+    p = tmp_path / "p.toml"
+    p.write_text(text.replace(old, new, 1), encoding="utf-8")
+    before = sha(p)
+    msg = cli(["simulate", "--spec", spec, "--protocol", p, "--seed", "1", "--out",
+               tmp_path / "o"], capsys, 2)
+    assert msg.startswith(f"gonio: error: {p}: key {key}:") and "[-100, 200]" in msg, msg
+    assert not (tmp_path / "o").exists() and sha(p) == before
+    count(f"protocol-temperature:{name}")
+
+
+def test_case_count_reported():
+    assert len(CASES) >= 1
