@@ -250,6 +250,40 @@ def test_known_extra_columns_and_keys_still_read(js_bias):
     count("jjf:extras-kept")
 
 
+def _screen_rate(tmp_path, lines):
+    from gonio.specs import get
+
+    p = tmp_path / "r.csv"
+    p.write_text("".join(lines), encoding="utf-8")
+    spec = get("jjf1535-2015")
+    return spec.screen(p, None)
+
+
+def test_coarse_quantisation_of_a_record_is_stated(tmp_path, js_bias):
+    """The bias record logged to 1 mV (noise ≈ 0.2 mV): before, a file of such records was
+    refused as 'saturated' (5 samples in a row at the largest output, 2502 — two levels
+    only), and with a scale-factor test beside it accepted with no word, its noise items
+    (IEC in-band noise 0.0483 for 0.0434, JJF ARW 2.02 ± 0.04 for 1.79) certified as the
+    gyro's; now read, with one flagged finding per test naming the resolution. The intact
+    record has none."""
+    assert not [f for f in _screen_rate(tmp_path, js_bias) if f.code == "coarse-quantisation"]
+    k = js_bias[next(i for i, ln in enumerate(js_bias) if ln.startswith("test,"))].split(",")
+    k = k.index("output")
+
+    def rounded(ln):
+        if not ln.startswith("bias,"):
+            return ln
+        c = ln.rstrip("\n").split(",")
+        c[k] = str(round(float(c[k])))
+        return ",".join(c) + "\n"
+
+    found = [f for f in _screen_rate(tmp_path, [rounded(ln) for ln in js_bias])
+             if f.code == "coarse-quantisation"]
+    assert len(found) == 1 and found[0].action == "flagged" and found[0].test == "bias", found
+    assert "resolution 1 " in found[0].message and "q/√12" in found[0].message
+    count("jjf:coarse-quantisation")
+
+
 # ------------------------------------------------------------------------------ triad
 
 def test_triad_dwell_with_sd_zero_gives_no_warning(tmp_path_factory):

@@ -321,17 +321,34 @@ def check_rate_rows(df: pd.DataFrame, fname, *, ratiometric: bool = False,
                                  "noise would be certified as 0)", file=fname,
                                  line=int(line[m][0]), column="output")
     for ext, word in ((y.max(), "largest"), (y.min(), "smallest")):
+        need = _saturation_run(y, ext)
         at = (y == ext).astype(np.int64)
-        if at.sum() < SATURATION_RUN:
+        if at.sum() < need:
             continue
-        run = np.convolve(at, np.ones(SATURATION_RUN, dtype=np.int64), "valid")
-        hit = np.flatnonzero(run == SATURATION_RUN)
+        run = np.convolve(at, np.ones(need, dtype=np.int64), "valid")
+        hit = np.flatnonzero(run == need)
         if hit.size:
             k = int(hit[0])
-            raise GonioError(f"{SATURATION_RUN} or more consecutive samples at the file's "
+            raise GonioError(f"{need} or more consecutive samples at the file's "
                              f"{word} output {ext:.6g}: the gyro saturated (clipped); a scale "
                              "factor or noise from a flat top would be wrong", file=fname,
                              line=int(line[k]), column="output")
+
+
+def _saturation_run(y: np.ndarray, ext: float) -> int:
+    """The run of equal samples at the extreme ``ext`` that is a clipped top:
+    :data:`SATURATION_RUN`, or longer where the output is so coarsely quantised that equal
+    neighbours are common away from that level too (share p of the other samples): the
+    length a chance run reaches with probability ≤ 1 % over the file,
+    1 + log(0.01/N)/log p (hostile round 3: a bias record logged to 1 mV with 0.2 mV noise
+    was refused as 'saturated')."""
+    other = (y[1:] != ext) & (y[:-1] != ext)
+    p = float(np.mean(y[1:][other] == y[:-1][other])) if other.any() else 0.0
+    if p >= 1.0:
+        return y.size + 1
+    if p <= 0.0:
+        return SATURATION_RUN
+    return max(SATURATION_RUN, math.ceil(1 + math.log(0.01 / y.size) / math.log(p)))
 
 
 def write_rate_readings(data: pd.DataFrame, metadata: dict, path: str | Path) -> Path:

@@ -36,6 +36,8 @@ Rules (one segment = the rows of one test, run and step, in time order):
 * ``run-sign-departs`` — a run of a scale-factor test (``scale_factor``,
   ``sf_temperature``) whose output-against-rate slope has the other sign than the
   majority of the test's runs is refused, naming its first line.
+* ``coarse-quantisation`` — a record whose noise is below one step of the output's
+  resolution: flagged once per test (its noise items hold the rounding's q/√12).
 * ``programme-point-missing`` — a rate point, record, position or set point the protocol
   plans and the readings lack is named (flagged: the item is computed from what is there
   and the certificate says what is missing).
@@ -334,12 +336,49 @@ def sign_rule(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[
     return out
 
 
+def quantisation_rule(df: pd.DataFrame, file=None, clauses: dict | None = None
+                      ) -> list[Finding]:
+    """``coarse-quantisation`` (flagged, one per test): a record (≥ 200 rows, not vibration)
+    whose noise is below one step of the output's resolution — the same test as the
+    screening's coarse branch of :func:`hampel_residuals`. Its noise and stability items
+    then hold the rounding's q/√12 (the acquisition's, not the gyro's): stated, so a
+    certificate never presents it as the gyro's noise (hostile round 3: output logged to
+    1 mV with 0.2 mV noise, IEC in-band noise 0.0483 for 0.0434 with no word)."""
+    clauses = clauses or {}
+    key = df.groupby(["test", "run", "step"], sort=False).ngroup()
+    y_all = df["output"].to_numpy(dtype=float)
+    out, seen = [], set()
+    for idx in df.groupby(key, sort=False).indices.values():
+        test = str(df["test"].iloc[idx[0]])
+        if test in seen or test == "vibration" or idx.size < HAMPEL_MIN_ROWS:
+            continue
+        y = y_all[idx]
+        q = _quantum(y)
+        if not (q > 0 and np.all(np.isfinite(y))):
+            continue
+        sigma = 1.4826 * float(np.median(np.abs(
+            y - median_filter(y, size=HAMPEL_WINDOW, mode="nearest"))))
+        if sigma < q:
+            seen.add(test)
+            f = _finding("coarse-quantisation", f"{test}: the output's resolution {q:.6g} is "
+                         f"coarser than its noise (robust σ {sigma:.3g} about the running "
+                         f"median): its noise and stability items include the rounding's "
+                         f"q/√12 = {q / math.sqrt(12):.3g}, the acquisition's, not the gyro's",
+                         df.iloc[idx[0]], "output", file, clauses,
+                         "1.4826·median |y − running median (21)| < the output's smallest step")
+            out.append(Finding(**{**f.to_json(), "action": "flagged"}))
+    return out
+
+
 def screen(readings, segments, clauses: dict) -> list[Finding]:
-    """Every rule on a RateReadings against the planned ``segments``."""
+    """Every rule on a RateReadings against the planned ``segments`` (the quantisation rule
+    where the bench had noise: a noise-free virtual record has none to compare with)."""
     file = None if readings.path is None else str(readings.path)
+    noisy = str(readings.metadata.get("noise", "on")).strip().lower() != "off"
     return screen_rows(readings.data, file, clauses) + sign_rule(
         readings.data, file, clauses) + missing_points(
-        readings.data, expected_from_plan(segments), file=file, clauses=clauses)
+        readings.data, expected_from_plan(segments), file=file, clauses=clauses) + (
+        quantisation_rule(readings.data, file, clauses) if noisy else [])
 
 
 def screen_rows(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[Finding]:
