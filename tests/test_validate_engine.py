@@ -60,6 +60,34 @@ def test_bytes_identical_for_workers_batches_and_a_dask_cluster():
         [S.trial_seed(3, "default", i) for i in range(3)]
 
 
+def test_local_cluster_workers_run_with_the_quiet_settings():
+    """Issue 26: the worker processes of ``local:N`` run with the engine's settings (the
+    profiler off, the event-loop tick, memory and system monitors slowed), not Dask's
+    defaults (True, 20 ms, 100 ms, 500 ms), and without the nanny's MALLOC_TRIM_THRESHOLD_
+    (set at all, it switches off glibc's dynamic mmap threshold: 3× the system time):
+    read back in a worker through the trial path."""
+    pytest.importorskip("distributed")
+    import os
+
+    import dask
+    from dask.utils import parse_timedelta
+    from gonio.pipeline.engine import LOCAL_CLUSTER_CONFIG, run_parallel
+    keys = sorted(k for k, v in LOCAL_CLUSTER_CONFIG.items() if v is not None)
+    if "MALLOC_TRIM_THRESHOLD_" in os.environ:
+        pytest.skip("this process's environment sets MALLOC_TRIM_THRESHOLD_ itself")
+    # local:2: with one worker joblib runs the tasks in this process (its n_jobs = 1)
+    got = list(run_parallel(dask.config.get, [(k,) for k in keys], None, "local:2"))
+    assert sorted(map(str, got)) == sorted(str(LOCAL_CLUSTER_CONFIG[k]) for k in keys)
+    assert sorted(map(str, got)) != sorted(str(dask.config.get(k)) for k in keys)
+    env = list(run_parallel(os.environ.get, [("MALLOC_TRIM_THRESHOLD_",)] * 2, None,
+                            "local:2"))
+    assert env == [None, None]
+    assert dask.config.get("distributed.nanny.pre-spawn-environ")["MALLOC_TRIM_THRESHOLD_"]
+    assert LOCAL_CLUSTER_CONFIG["distributed.worker.profile.enabled"] is False
+    assert min(parse_timedelta(v) for k, v in LOCAL_CLUSTER_CONFIG.items()
+               if "interval" in k) >= 1.0 and len(keys) == 4
+
+
 def test_interrupted_study_resumes_without_repeating_or_losing(tmp_path, monkeypatch):
     ref = run(workers=1, batch_size=2)
     calls = []
