@@ -297,6 +297,67 @@ def test_coarse_quantisation_of_a_record_is_stated(tmp_path, js_bias):
     count("jjf:coarse-quantisation")
 
 
+# ------------------------------------------ JSON inputs nested too deeply or too long
+
+DEEP = "[" * 100_000 + "]" * 100_000 + "\n"
+BIGNUM = "1" * 5000 + "\n"
+
+
+@pytest.mark.parametrize("body", [DEEP, BIGNUM], ids=["deep", "5000-digits"])
+def test_tilt_file_not_json_enough_names_the_file(tmp_path, sims, capsys, body):
+    """``calibrate --tilt F``: a JSON nested 10⁵ deep said 'input nested too deeply' naming
+    no file; a 5000-digit number escaped the JSON error handling. Now one line naming F."""
+    t = tmp_path / "tilt.json"
+    t.write_text(body, encoding="utf-8")
+    msg = cli(["calibrate", sims["OG"], "--protocol", SMALL, "--tilt", t, "--out",
+               tmp_path / "o"], capsys, 2)
+    assert f"{t}: not a tilt result" in msg, msg
+    assert not (tmp_path / "o").exists()
+    count(f"json:tilt:{len(body)}")
+
+
+def test_db_import_of_a_deep_results_json_names_the_folder(tmp_path, capsys):
+    d = tmp_path / "c"
+    d.mkdir()
+    (d / "results.json").write_text(DEEP, encoding="utf-8")
+    msg = cli(["db", "import", d, "--data", tmp_path / "data"], capsys, 2)
+    assert f"{d}: no readable results.json" in msg, msg
+    count("json:db-import")
+
+
+def test_db_restore_of_a_deep_records_json_names_the_archive(tmp_path, capsys):
+    import zipfile
+
+    z = tmp_path / "b.zip"
+    with zipfile.ZipFile(z, "w") as zf:
+        zf.writestr("records.json", DEEP)
+    msg = cli(["db", "restore", z, "--data", tmp_path / "data"], capsys, 2)
+    assert f"{z}: no readable records.json" in msg, msg
+    count("json:db-restore")
+
+
+def test_resume_with_a_deep_study_json_names_it(tmp_path):
+    """``validate --resume`` over a study.json nested 10⁵ deep: a RecursionError (exit 1 in
+    Python, a one-line message naming no file on the CLI); now a GonioError naming it."""
+    import importlib.util
+
+    import gonio.pipeline.validate as V
+
+    spec = importlib.util.spec_from_file_location(
+        "_validate_engine", Path(__file__).with_name("test_validate_engine.py"))
+    eng = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(eng)
+    part = tmp_path / "s" / V.PARTIAL_DIR
+    part.mkdir(parents=True)
+    (part / "study.json").write_text(DEEP, encoding="utf-8")
+    with pytest.raises(GonioError) as ei:
+        V.validate(6, seed=3, bench=eng.bench(), protocol=eng.tiny_protocol(),
+                   sample_rate_hz=10.0, show_progress=False, workers=1, batch_size=2,
+                   partial_dir=part, resume=True)
+    assert str(ei.value).startswith(f"{part / 'study.json'}: unreadable partial study"), ei.value
+    count("json:resume-study")
+
+
 # ------------------------------------------------------------------------------ triad
 
 @pytest.fixture(scope="module")

@@ -140,6 +140,8 @@ class PartialStore:
             info = json.loads(head.read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:
             raise GonioError(f"unreadable partial study: {exc}", file=head) from None
+        except RecursionError:                  # '[' nested 10⁵ deep: not a study record
+            raise GonioError("unreadable partial study: nested too deeply", file=head) from None
         if not isinstance(info, dict) or not isinstance(info.get("fingerprint"), str) or \
                 not isinstance(info.get("batches", {}), dict):
             raise GonioError("not a partial-study record (expected an object with the study's "

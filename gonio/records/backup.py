@@ -96,8 +96,9 @@ def restore(store, path: str | os.PathLike) -> dict:
     with zf:
         try:
             doc = json.loads(zf.read("records.json"))
-        except (KeyError, ValueError) as exc:
-            raise GonioError(f"no readable records.json ({exc})", file=path) from None
+        except (KeyError, ValueError, RecursionError) as exc:   # RecursionError: too deep
+            raise GonioError(f"no readable records.json ({str(exc)[:120] or 'nested too deeply'})",
+                             file=path) from None
         if doc.get("format") != FORMAT:
             raise GonioError(f"unknown backup format {doc.get('format')!r}", file=path)
         names = {n[len("blobs/"):] for n in zf.namelist() if n.startswith("blobs/")}

@@ -123,8 +123,9 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     res_path = folder / "results.json"
     try:
         results = json.loads(res_path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise GonioError(f"no readable results.json ({exc})", file=folder) from None
+    except (OSError, ValueError, RecursionError) as exc:    # RecursionError: '[' 10⁵ deep
+        raise GonioError(f"no readable results.json ({str(exc)[:120] or 'nested too deeply'})",
+                         file=folder) from None
     try:
         result_items(results)                  # a folder without items is refused here
     except GonioError as exc:

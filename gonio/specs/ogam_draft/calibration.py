@@ -492,6 +492,9 @@ def _load_tilt(tilt) -> tuple[float, str]:
             raise GonioError(f"cannot read tilt file: {exc.strerror}", file=tilt) from None
         except json.JSONDecodeError as exc:
             raise GonioError(f"not JSON: {exc.msg}", file=tilt, line=exc.lineno) from None
+        except (ValueError, RecursionError) as exc:   # a 5000-digit number, '[' 10⁵ deep
+            raise GonioError(f"not a tilt result: {str(exc)[:80] or 'nested too deeply'}",
+                             file=tilt) from None
         src = Path(tilt).name
     else:
         d, src = dict(tilt), "tilt estimate"
