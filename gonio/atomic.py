@@ -201,11 +201,32 @@ def check_output_files(places: dict, *, inputs: Iterable = (),
             raise GonioError(f"{what} would replace {path}, a data file (readings, stream, "
                              "protocol, results); a figure or page never replaces one",
                              file=path)
+        owner = _set_owning(path)
+        if owner is not None:
+            raise GonioError(f"{what} would replace {path}, a file of the output set in "
+                             f"{owner} ({MANIFEST} lists it: another gonio run's); choose "
+                             "another place", file=path)
         key = os.path.abspath(path)
         if key in seen:
             raise GonioError(f"{what} and {seen[key]} name the same file {path}")
         seen[key] = what
     return places
+
+
+def _set_owning(path) -> Path | None:
+    """The output folder (this file's folder or up to two above) whose manifest lists the
+    existing file ``path``: a figure or page of one command never replaces a file of
+    another command's set (hostile round 3: ``align --report CAL/certificate.html``
+    replaced a calibration's certificate, exit 0)."""
+    p = Path(path)
+    if not p.is_file():
+        return None
+    real = Path(os.path.realpath(p))
+    for folder in list(real.parents)[:3]:
+        m = read_manifest(folder)
+        if m is not None and real.relative_to(folder).as_posix() in m["files"]:
+            return folder
+    return None
 
 
 def write_bytes(path: str | Path, data: bytes) -> Path:

@@ -297,6 +297,52 @@ def test_coarse_quantisation_of_a_record_is_stated(tmp_path, js_bias):
     count("jjf:coarse-quantisation")
 
 
+# ------------------------------------------ a page or figure into another command's set
+
+def _fake_set(d: Path) -> Path:
+    """An output set as calibrate leaves it: files listed in its manifest."""
+    from gonio.atomic import MANIFEST
+
+    d.mkdir()
+    files = {}
+    for name in ("certificate.html", "allan.png"):
+        (d / name).write_bytes(b"<html>" + name.encode())
+        files[name] = sha(d / name)
+    (d / MANIFEST).write_text(json.dumps({"command": "calibrate", "files": files}),
+                              encoding="utf-8")
+    return d
+
+
+@pytest.mark.parametrize("argv", [
+    ["align", "{R}", "--report", "{C}/certificate.html"],
+    ["thermal-model", "{R}", "--report", "{C}/certificate.html"],
+    ["align", "{R}", "--plot", "{C}/allan.png"],
+    ["noise", "{R}", "--plot", "{C}/allan.png"],
+    ["eda", "{R}", "--plot", "{C}/allan.png"],
+], ids=lambda a: f"{a[0]}-{a[2]}")
+def test_a_page_or_figure_never_replaces_a_file_of_another_set(tmp_path, capsys, argv):
+    """``gonio align R --report CAL/certificate.html`` replaced a calibration's certificate
+    (exit 0), leaving its folder with two runs' files; ``eda --plot`` did not even check for
+    a data file before the work. Now refused at once, naming the set; the set unchanged."""
+    c = _fake_set(tmp_path / "CAL")
+    before = {p.name: sha(p) for p in c.iterdir()}
+    r = tmp_path / "r.csv"
+    r.write_text("# x: y\n", encoding="utf-8")
+    msg = cli([a.format(R=r, C=c) for a in argv], capsys, 2)
+    assert "a file of the output set in" in msg and str(c.resolve()) in msg, msg
+    assert {p.name: sha(p) for p in c.iterdir()} == before
+    count(f"other-set:{argv[0]}{argv[2]}")
+
+
+def test_rewriting_ones_own_page_is_still_allowed(tmp_path, capsys):
+    """A page outside any set (or rewritten by a rerun) is not refused by this rule."""
+    from gonio.atomic import check_output_files
+
+    (tmp_path / "r.html").write_text("old", encoding="utf-8")
+    assert check_output_files({"--report": tmp_path / "r.html"})
+    count("other-set:own-page")
+
+
 # ------------------------------------------ JSON inputs nested too deeply or too long
 
 DEEP = "[" * 100_000 + "]" * 100_000 + "\n"

@@ -77,11 +77,13 @@ def _text(res: EdaResult) -> str:
 
 def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
-    from gonio.atomic import check_output_file
+    from gonio.atomic import check_output_files
     from gonio.protocol import load_protocol
+    from gonio.report.figure_files import FIGURE_FORMATS
 
-    if args.plot is not None:
-        check_output_file(args.plot, what="--plot", inputs=[args.readings])
+    if args.plot is not None:      # before the work: place, suffix, data file, another set's
+        check_output_files({"--plot": args.plot}, inputs=[args.readings],
+                           formats={"--plot": FIGURE_FORMATS})
     proto = load_protocol(args.protocol)
     sess = proto.session
     res = equal_division_from_readings(
