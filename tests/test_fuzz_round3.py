@@ -297,6 +297,32 @@ def test_coarse_quantisation_of_a_record_is_stated(tmp_path, js_bias):
     count("jjf:coarse-quantisation")
 
 
+# ----------------------------------------------------- --spec of another family's file
+
+def test_optical_spec_on_rate_or_triad_readings_names_the_mismatch(tmp_path, js_bias, tri,
+                                                                    capsys):
+    """``calibrate --spec ogam-draft`` on JJF or triad readings: the optical protocol reader
+    got the file's own protocol and said 'jjf1535-2015.toml: key temperature: unknown
+    section'; now the protocol's specification and how to give it."""
+    r = tmp_path / "r.csv"
+    r.write_text("".join(js_bias), encoding="utf-8")
+    for readings, other in ((r, "jjf1535-2015"), (tri, "triad-alignment")):
+        msg = cli(["calibrate", readings, "--spec", "ogam-draft", "--out", tmp_path / "o"],
+                  capsys, 2)
+        assert f"{other}.toml: key protocol.spec: this protocol is for '{other}'" in msg, msg
+        assert f"--spec {other}" in msg and not (tmp_path / "o").exists()
+    count("spec-mismatch:ogam-on-rate-and-triad")
+
+
+def test_rate_spec_on_optical_readings_names_the_header(tmp_path, sims, capsys):
+    """The misspelt-key rule does not hide a file of another format: the header is judged
+    first ('column run: missing required column'), not '# temperature_c' taken for a typo."""
+    msg = cli(["calibrate", sims["OG"], "--spec", "jjf1535-2015", "--out", tmp_path / "o"],
+              capsys, 2)
+    assert "column run: missing required column" in msg, msg
+    count("spec-mismatch:jjf-on-ogam")
+
+
 # ------------------------------------------ a page or figure into another command's set
 
 def _fake_set(d: Path) -> Path:

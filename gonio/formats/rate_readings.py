@@ -172,12 +172,12 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
     for key in md:
         if key in NUMERIC_METADATA:
             _meta_number(key, md[key], fname)
-    check_near_miss(md, NUMERIC_METADATA, what="metadata key", file=fname)
     if i >= len(lines):
         raise GonioError("no readings: the file has no header row", file=fname, line=max(i, 1))
     header_line = i + 1
     header = [h.strip() for h in lines[i].split(",")]
-    check_header(header, REQUIRED, file=fname, line=header_line)
+    check_header(header, REQUIRED, file=fname, line=header_line)   # another format: named
+    check_near_miss(md, NUMERIC_METADATA, what="metadata key", file=fname)
     check_near_miss(header, COLUMNS, what="column", file=fname, line=header_line)
     body = "\n".join(lines[i:])
     for j in range(i + 1, len(lines)):

@@ -272,6 +272,14 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
     if not isinstance(raw, dict):
         raise GonioError("a protocol must be a TOML table", file=file)
     known = set(SCHEMA) | set(_EXTRA)
+    head = raw.get("protocol")
+    if isinstance(head, dict) and isinstance(head.get("spec"), str):
+        # another specification's protocol names it in protocol.spec (hostile round 3: the
+        # rate readings under --spec of the optical draft blamed 'unknown section')
+        raise GonioError(f"this protocol is for {head['spec']!r}, not for this calibration's "
+                         f"specification (--spec, or the readings' '# spec:'): give "
+                         f"--spec {head['spec']} or a protocol of this specification",
+                         file=file, key="protocol.spec")
     for key in raw:
         if key not in known:
             raise GonioError(f"unknown section (known: {', '.join(sorted(known))})",
