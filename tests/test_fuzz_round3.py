@@ -297,6 +297,18 @@ def test_coarse_quantisation_of_a_record_is_stated(tmp_path, js_bias):
     count("jjf:coarse-quantisation")
 
 
+@pytest.mark.parametrize("address", ["tcp://", "tcp://host", "tcp://host:port"])
+def test_a_malformed_scheduler_address_is_refused_before_the_study(tmp_path, capsys, address):
+    """``validate --scheduler tcp://``: 40 s, then the error and a Client.__del__ traceback
+    on stderr, and a partial study left in --out that refused the corrected rerun. Now one
+    line at once, nothing written."""
+    msg = cli(["validate", "--trials", "2", "--scheduler", address, "--out", tmp_path / "v"],
+              capsys, 2)
+    assert "key scheduler" in msg and "not a scheduler address" in msg, msg
+    assert not (tmp_path / "v").exists()
+    count(f"validate:scheduler:{address}")
+
+
 # ----------------------------------------------------- --spec of another family's file
 
 def test_optical_spec_on_rate_or_triad_readings_names_the_mismatch(tmp_path, js_bias, tri,

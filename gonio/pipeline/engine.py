@@ -154,6 +154,24 @@ def _backend(workers: int, scheduler: str | None):
             cluster.close()
 
 
+def check_address(scheduler: str) -> None:
+    """A ``scheme://HOST:PORT`` scheduler address has its host and port (``tcp://`` waited
+    40 s, then printed a Client.__del__ traceback; hostile round 3) — checked before the
+    study starts, so no partial study is left to block the corrected rerun."""
+    if "://" not in scheduler:
+        return
+    from urllib.parse import urlsplit
+
+    u = urlsplit(scheduler)
+    try:
+        port = u.port
+    except ValueError:
+        port = None
+    if not u.hostname or port is None:
+        raise GonioError(f"--scheduler {scheduler!r} is not a scheduler address: give "
+                         "tcp://HOST:PORT or local:N", key="scheduler")
+
+
 def _client(Client, address, scheduler: str, keep: bool):
     """A client of ``address``: for an existing cluster (``keep``) the one this process
     already holds when it still answers, else a new one (kept for the next study)."""
@@ -166,6 +184,8 @@ def _client(Client, address, scheduler: str, keep: bool):
         except Exception:  # noqa: BLE001 - a stale client: connect afresh
             pass
         _forget(scheduler)
+    if isinstance(address, str):
+        check_address(address)
     try:
         client = Client(address, timeout="20s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -248,6 +268,8 @@ def study_workers(trials: int, workers: int | None, scheduler: str | None,
     else:
         cap = available_cores()
         cap_note = f"this machine's {cap} cores"
+    if scheduler is not None:
+        check_address(scheduler)
     if scheduler is None:
         if workers is None:
             workers = min(2, available_cores())
