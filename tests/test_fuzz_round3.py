@@ -535,3 +535,33 @@ def test_protocol_temperatures_the_reader_would_refuse(tmp_path, capsys, name):
 
 def test_case_count_reported():
     assert len(CASES) >= 1
+
+
+def test_triad_without_static_record_is_said(tri, tmp_path):
+    """Hostile round 3 (left by the round, done by the lead): the static rows deleted, the
+    bias U fell about 6× (the bias-instability term needs the static record) with exit 0 and
+    the change only in a detail; now a flagged static-record-missing that reaches
+    results.json and the certificate, and the bias's details say what it is."""
+    lines = tri.read_text(encoding="utf-8").splitlines(keepends=True)
+    keep = [ln for ln in lines if not ln.startswith("static,")]
+    assert len(keep) < len(lines)
+    p = tri.parent / "nostatic.csv"           # beside the thermal file it names
+    p.write_text("".join(keep), encoding="utf-8")
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(p), "--spec", "triad-alignment", "--out", str(out)]) == 0
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    f = [x for x in res["findings"] if x["code"] == "static-record-missing"]
+    assert len(f) == 1 and f[0]["action"] == "flagged", res["findings"]
+    assert "no bias-instability term" in res["items"]["b_x"]["details"]["stated"]
+    assert "no static record" in (out / "certificate.html").read_text(encoding="utf-8")
+    zh = tmp_path / "zh"
+    assert main(["calibrate", str(p), "--spec", "triad-alignment", "--lang", "zh", "--out",
+                 str(zh)]) == 0
+    html = (zh / "certificate.html").read_text(encoding="utf-8")
+    assert "无静态记录" in html and "no static record" not in html
+    # the intact file gives no such finding
+    from gonio.pipeline.dispatch import screen_and_calibrate
+    from gonio.specs import get
+    assert not [x for x in screen_and_calibrate(get("triad-alignment"), tri, None)
+                .to_json()["findings"] if x["code"] == "static-record-missing"]
+    count("triad:no-static-record")

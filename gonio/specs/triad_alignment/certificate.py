@@ -175,4 +175,11 @@ PHRASES_ZH = (
      r"static median, the opposite sign of the rate \(a sign-flipped rate_dps or up\?\)",
      "绕 {1} 的对准测量段（{2} °/s）：陀螺 {3} 的输出相对静态中位数变化 {4}，与角速率符号相反"
      "（rate_dps 或 up 的符号可能有误）"),
+    (r"no static record: the biases b_i are the in-run bias over this record, without the "
+     r"bias-instability term, and the averaging time is not measured",
+     "无静态记录：零偏 b_i 为本次记录内的零偏，不含零偏不稳定性分量，平均时间未测"),
+    (r"steps? (\S+) missing before (\w+) step (\d+): the results rest on the rows present",
+     "{2} 第 {3} 步之前缺少第 {1} 步：结果仅基于现有各行"),
+    (r"the readings have no static record \(rows test = static\)",
+     "读数中没有静态记录（test = static 的行）"),
 )

@@ -13,6 +13,10 @@ naming the line. The rules (docs/alignment.md, "Screening"):
   sample deviation): a sign-flipped dwell otherwise enters the fit as a wrong column of M.
 - **step gap** (flagged) — a jump in the rows' ``step`` numbers: a dwell or samples
   missing from the file, named.
+- **no static record** (flagged) — alignment dwells without a ``static`` record: the
+  biases b_i are then the in-run bias over this record, without the bias-instability term
+  (their U holds the fit alone, about 6× smaller on the bench), and the averaging time is not
+  measured; said on the certificate, not left to a detail.
 - **one temperature** — a thermal programme whose soak rows span less than
   :data:`MIN_TEMPERATURE_SPAN_C` (chamber) cannot identify a temperature model; it was
   certified as a model before.
@@ -141,12 +145,27 @@ def _step_gaps(df: pd.DataFrame, file) -> list[Finding]:
     return out
 
 
+def _no_static_record(df: pd.DataFrame, file) -> list[Finding]:
+    """``static-record-missing`` (flagged): alignment rows and no ``static`` row (hostile
+    round 3: the bias U fell 0.36 → 0.056 with no finding, the change only in a detail)."""
+    tests = set(df["test"].astype(str))
+    if "alignment" not in tests or "static" in tests:
+        return []
+    first = df[df["test"].astype(str) == "alignment"]
+    return [Finding("static-record-missing", "no static record: the biases b_i are the "
+                    "in-run bias over this record, without the bias-instability term, and "
+                    "the averaging time is not measured", "flagged", file=file,
+                    line=int(first["line"].iloc[0]), column="test", test="static",
+                    rule="a static record beside the alignment dwells")]
+
+
 def screen(readings, protocol=None) -> list[Finding]:
     """Every finding on a triad readings file (:class:`gonio.formats.triad.TriadReadings`)."""
     df = readings.data
     file = None if readings.path is None else str(readings.path)
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
-            + _one_temperature(df, file) + _step_gaps(df, file))
+            + _one_temperature(df, file) + _step_gaps(df, file)
+            + _no_static_record(df, file))
 
 
 def check(readings, protocol=None) -> list[Finding]:
