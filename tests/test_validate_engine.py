@@ -118,6 +118,29 @@ def test_interrupted_study_resumes_without_repeating_or_losing(tmp_path, monkeyp
                    show_progress=False, partial_dir=part, resume=True)
 
 
+def test_study_stopped_before_its_first_batch_does_not_block_the_rerun(tmp_path, monkeypatch):
+    """Hostile round 3: a study that finished no batch (a cluster that never answered, a
+    Ctrl-C at start-up) left a study.json that refused the corrected rerun without
+    --resume; nothing is lost by starting afresh, so it no longer does. A study with a
+    finished batch, or an unreadable record, still refuses (the test above)."""
+    ref = run(workers=1, batch_size=2)
+    real = V.run_batch
+
+    def stop(job, a, b):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(V, "run_batch", stop)
+    part = tmp_path / V.PARTIAL_DIR
+    with pytest.raises(KeyboardInterrupt):
+        run(workers=1, batch_size=2, partial_dir=part)
+    assert [p.name for p in part.iterdir()] == ["study.json"]
+    monkeypatch.setattr(V, "run_batch", real)
+    assert run(workers=1, batch_size=2, partial_dir=part) == ref
+    (part / "study.json").write_text("[]", encoding="utf-8")      # unreadable: still refused
+    with pytest.raises(V.GonioError, match="--resume"):
+        run(workers=1, batch_size=2, partial_dir=part)
+
+
 def test_cli_keeps_partial_results_and_resumes(tmp_path, capsys, monkeypatch):
     proto = tmp_path / "p.toml"
     proto.write_text('[protocol]\nname = "t"\n[session]\nstatic_s = 5.0\nwarm_up_s = 0.0\n'

@@ -152,6 +152,9 @@ class PartialStore:
         """Create the store, or (``resume``) load what it holds: case → {index: trial}."""
         head = self.folder / "study.json"
         done: dict[str, dict[int, object]] = {}
+        if os.path.lexists(head) and not resume and self._holds_nothing(head):
+            self._write_head()          # a study that finished no batch: nothing to keep
+            return done
         if os.path.lexists(head):
             if not resume:
                 raise GonioError(f"{self.folder.parent} holds an unfinished study; give --resume "
@@ -172,6 +175,20 @@ class PartialStore:
             return done
         self._write_head()
         return done
+
+    def _holds_nothing(self, head: Path) -> bool:
+        """Whether the unfinished study here finished no batch (its record lists none and no
+        other file is in the folder): a study stopped before its first batch (a cluster
+        that never answered, a Ctrl-C during start-up) then does not block the rerun
+        without ``--resume`` (hostile round 3). A record that cannot be read is not judged
+        empty: the refusal stands."""
+        try:
+            info = self._head(head)
+        except GonioError:
+            return False
+        others = [f for f in self.folder.iterdir()
+                  if f.name != "study.json" and not f.name.startswith(".gonio-")]
+        return not info.get("batches") and not others
 
     def load_batch(self, f: Path) -> tuple[str, dict[int, object]]:
         """(case, trials) of one batch file, every check of the class docstring made."""
