@@ -565,3 +565,39 @@ def test_triad_without_static_record_is_said(tri, tmp_path):
     assert not [x for x in screen_and_calibrate(get("triad-alignment"), tri, None)
                 .to_json()["findings"] if x["code"] == "static-record-missing"]
     count("triad:no-static-record")
+
+
+@pytest.mark.parametrize("every", [2, 3])
+def test_rate_blank_on_half_a_segment_is_refused(sims, tmp_path, capsys, every):
+    """rate_dps blank on every other row (a blank reads as the default 0 °/s): before, every
+    item 'not measured' with 100 missing-point findings and no word on the cause; now
+    refused by line, naming the segment and its split. Blank on every third row leaves a
+    majority: those rows are set aside by line, as before, and the file is calibrated."""
+    lines = sims["JS"].read_text(encoding="utf-8").splitlines(keepends=True)
+    hdr = next(i for i, ln in enumerate(lines) if ln.startswith("test,"))
+    ri = lines[hdr].strip().split(",").index("rate_dps")
+    out, k = lines[:hdr + 1], 0
+    for ln in lines[hdr + 1:]:
+        f = ln.rstrip("\n").split(",")
+        if f[0] == "scale_factor" and f[ri] not in ("0", ""):
+            if k % every == 0:
+                f[ri] = ""
+            k += 1
+        out.append(",".join(f) + "\n")
+    p = tmp_path / "half.csv"
+    p.write_text("".join(out), encoding="utf-8")
+    before = p.read_bytes()
+    rc = main(["calibrate", str(p), "--out", str(tmp_path / "cal")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert p.read_bytes() == before
+    if every == 2:
+        assert rc == 2 and len(err) == 1, err
+        assert "rate_dps has no majority value" in err[0] and "scale_factor run" in err[0]
+        assert not (tmp_path / "cal").exists()
+    else:
+        assert rc == 0
+        res = json.loads((tmp_path / "cal" / "results.json").read_text(encoding="utf-8"))
+        assert res["items"]["scale_factor"]["measured"]
+        assert any(f["code"] == "setting-departs" and f["action"] == "set_aside"
+                   for f in res["findings"])
+    count(f"jjf:rate-blank-every-{every}")

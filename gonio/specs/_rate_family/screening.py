@@ -38,6 +38,8 @@ Rules (one segment = the rows of one test, run and step, in time order):
   majority of the test's runs is refused, naming its first line.
 * ``coarse-quantisation`` — a record whose noise is below one step of the output's
   resolution: flagged once per test (its noise items hold the rounding's q/√12).
+* ``setting-departs`` with no majority — a set column with no value on more than half of a
+  segment's rows (a column blank on every other row) is refused: the typos cannot be told.
 * ``programme-point-missing`` — a rate point, record, position or set point the protocol
   plans and the readings lack is named (flagged: the item is computed from what is there
   and the certificate says what is missing).
@@ -243,6 +245,8 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
            for i in np.flatnonzero(absent_odd)]
     if col in MEASURED:
         out = [Finding(**{**f.to_json(), "action": "flagged"}) for f in out]
+    else:
+        out += _setting_ties(df, key, v, col, file, clauses)
     med = v.groupby(key).transform("median")
     dev = (v - med).abs()
     mad = dev.groupby(key).transform("median") * 1.4826
@@ -254,6 +258,38 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
                            f"segment's {med.iloc[i]:.10g} (limit {lim.iloc[i]:.3g})",
                            df.iloc[i], col, file, clauses,
                            "|x − median| > max(10·1.4826·MAD, tolerance)") for i in bad]
+
+
+def _setting_ties(df, key, v, col, file, clauses) -> list[Finding]:
+    """A set column (not MEASURED) with no majority value in a segment (a blank cell reads
+    as the column's default, so a column blank on every other row splits its segment half
+    and half): which rows are the typos cannot be told, and the items would group them as
+    other points (hostile round 3: ``rate_dps`` blank on every other row made every item
+    'not measured', with 100 findings of missing points and no word on the cause). Refused,
+    once per segment, on its first row off the segment's first value."""
+    vals = v.fillna(np.inf).to_numpy()
+    frame = pd.DataFrame({"k": key.to_numpy(), "v": vals})
+    top = frame.groupby(["k", "v"]).size().groupby(level=0).max()
+    size = frame.groupby("k").size()
+    no_major = (2 * top <= size) & (size >= 2)
+    if col == "rate_dps":
+        vib = frame["k"][(df["test"] == "vibration").to_numpy()].unique()
+        no_major[no_major.index.isin(vib)] = False
+    out = []
+    for k in no_major.index[no_major.to_numpy()]:
+        idx = np.flatnonzero((frame["k"] == k).to_numpy())
+        first = vals[idx[0]]
+        i = next(j for j in idx if vals[j] != first)
+        row = df.iloc[i]
+        counts = frame["v"].iloc[idx].value_counts()
+        what = ", ".join(f"{'blank' if not np.isfinite(x) else f'{x:.10g}'} on {n}"
+                         for x, n in counts.head(3).items())
+        f = _finding("setting-departs", f"{row['test']} run {row['run']} step {row['step']}: "
+                     f"{col} has no majority value in its {len(idx)} rows ({what}): which "
+                     "are the typos cannot be told", row, col, file, clauses,
+                     "one value on more than half of a segment's rows")
+        out.append(Finding(**{**f.to_json(), "action": "refused"}))
+    return out
 
 
 def _time_rule(df: pd.DataFrame, key: pd.Series, file, clauses) -> list[Finding]:
