@@ -265,6 +265,11 @@ def test_large_file_is_summarised_not_copied(large):
     assert len(at30) == 300 and at30["reason"].str.contains("not a condition of the "
                                                             "protocol's programme").all(), us
     assert len(un) == us["total"]
+    # series beyond the protocol's, complete: kept, one flagged finding per condition
+    # (not one per reading: 9 900 findings, 3 MB, before)
+    fs = json.loads((out / "results.json").read_text(encoding="utf-8"))["findings"]
+    beyond = [f for f in fs if f["code"] == "series-beyond-programme"]
+    assert beyond and all(f["action"] == "flagged" for f in beyond) and len(fs) < 100
     # the 7.4 matrix: at most 50 series columns in results.json
     mx = res["angle_deviation"]["matrix"]
     assert len([c for c in mx[0] if c.startswith("series_")]) == 50
