@@ -931,6 +931,14 @@ FINDINGS_ZH: tuple[tuple[str, str], ...] = (
      "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件；第 {6}–{7} 行共 {5} 个读数均剔除"),
     (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\)",
      "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件"),
+    (r"(\w+) series (.+?) (?:is not one of|are not among) the protocol's (\d+) series \((.+?)\); "
+     r"(\d+) readings, lines (\d+)–(\d+), complete, measured beyond the programme: used",
+     "{1} 第 {2} 系列超出校准方案（{4}）的 {3} 个系列，测回完整，予以采用；第 {6}–{7} 行共 {5} 个读数"),
+    (r"(\w+) series (.+?) (?:is not one of|are not among) the protocol's (\d+) series \((.+?)\); "
+     r"(\d+) readings, lines (\d+)–(\d+), all set aside",
+     "{1} 第 {2} 系列不属于校准方案（{4}）的 {3} 个系列；第 {6}–{7} 行共 {5} 个读数均剔除"),
+    (r"(\w+) series (.+?) (?:is not one of|are not among) the protocol's (\d+) series \((.+?)\)$",
+     "{1} 第 {2} 系列不属于校准方案（{4}）的 {3} 个系列"),
     (r"(\w+) round (\d+) is not one of the protocol's (\d+) rounds \((.+)\)",
      "{1} 第 {2} 测回不属于校准方案（{4}）的 {3} 个测回"),
     (r"(\w+) round (\d+): table_deg (\S+) differs from the protocol's (\S+)° \(tolerance (\S+)°\)",

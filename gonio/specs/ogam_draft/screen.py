@@ -136,12 +136,12 @@ def _series_outside(g: pd.DataFrame, it, test: str, clause, name: str, file,
         nums = sorted(set(se[mask].tolist()))
         which = (f"series {nums[0]}" if len(nums) == 1 else
                  f"series {', '.join(map(str, nums[:5]))}{', …' if len(nums) > 5 else ''}")
-        verb = "is not one" if len(nums) == 1 else "are not"
+        verb = "is not one of" if len(nums) == 1 else "are not among"
         more = (f"; {len(lines)} readings, lines {lines[0]}–{lines[-1]}, {what}"
                 if len(lines) > 1 else ("" if action != "flagged" else f"; {what}"))
         if action != "flagged":
             aside_lines.update(lines[1:])
-        out.append(Finding(code, f"{test} {which} {verb} of the protocol's {it.series} "
+        out.append(Finding(code, f"{test} {which} {verb} the protocol's {it.series} "
                            f"series ({name}){more}", action, file=file, line=lines[0],
                            column="series", test=test, clause=clause,
                            rule=f"1 ≤ series ≤ {it.series}, or a complete series beyond"))
