@@ -50,6 +50,14 @@ def register(sub) -> None:
         add_store_options(q)
         q.add_argument("archive")
         q.set_defaults(func=run_backup if name == "backup" else run_restore)
+    q = dsub.add_parser("verify", help="check every stored file, result and signed seal of "
+                                       "the live records (or find a certificate file's record)")
+    add_store_options(q)
+    q.add_argument("--certificate", default=None, metavar="FILE",
+                   help="a certificate file (PDF, HTML, DCC or results.json): find its "
+                        "record by SHA-256 and check its result against the seal it was "
+                        "issued from")
+    q.set_defaults(func=run_verify)
     hook_calibrate(sub)
 
 
@@ -168,6 +176,35 @@ def run_backup(args) -> int:
     finally:
         store.close()
     print(f"{args.archive}: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    return 0
+
+
+def run_verify(args) -> int:
+    from gonio.records import services
+    from gonio.records.backup import verify
+
+    store = _store(args)
+    try:
+        if args.certificate:
+            try:
+                data = open(args.certificate, "rb").read()
+            except OSError as exc:
+                raise GonioError(f"cannot read: {exc.strerror}", file=args.certificate) from None
+            found = services.verify_certificate(store, data)
+            print(f"{args.certificate}: {found['file']} of certificate {found['number']}"
+                  + (f" (replaces {found['replaces']})" if found["replaces"] else "")
+                  + f", issued {found['issued_at']:%Y-%m-%d %H:%M} UTC; SHA-256 "
+                  f"{found['sha256']}; sealed result {found['seal_now']} as issued")
+            return 0
+        counts, problems = verify(store)
+    finally:
+        store.close()
+    for p in problems:
+        print(p)
+    if problems:
+        raise GonioError(f"{len(problems)} problem(s) in the records (listed above)",
+                         key="verify")
+    print("records verified: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
     return 0
 
 
