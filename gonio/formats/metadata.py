@@ -134,12 +134,6 @@ def show_value(text) -> str:
     return repr(text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)")
 
 
-def number_text_ok(text: str) -> bool:
-    """Whether ``text`` is a plain decimal number (what :func:`parse_number` reads as a
-    finite value)."""
-    return _NUMBER.match(text) is not None
-
-
 def parse_number(text: str) -> float | None:
     """float of a plain decimal number text, inf/nan for those words, else None.
 
