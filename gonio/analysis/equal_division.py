@@ -229,7 +229,7 @@ class EdaResult:
 
 @dataclass(frozen=True)
 class CouplingFit:
-    """The tilt × Earth-rate coupling estimated as a nuisance parameter (issue 12).
+    """The tilt × Earth-rate coupling estimated as a nuisance parameter.
 
     Model: a sensing axis tilted by ψ on a table whose axis is not along the Earth's
     axis picks up Ω_⊥ sin ψ cos(θ + α) as the table turns (gonio.coupling); after
