@@ -9,7 +9,7 @@ import re
 from fastapi import APIRouter, Request
 from fastapi.responses import RedirectResponse, Response
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, queries, services
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
                               Forbidden, current, file_response, form, fresh_token, page_of,
@@ -52,7 +52,7 @@ async def login(request: Request):
                                  str(data.get("password", ""))[:2000], address)
     except GonioError as exc:
         token = fresh_token()
-        code = 429 if "too many" in str(exc) else 401
+        code = 429 if isinstance(exc, TooManyAttemptsError) else 401
         r = render(request, "login.html", None, token, status_code=code,
                    error=str(exc).split(": ", 1)[-1])
         r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
