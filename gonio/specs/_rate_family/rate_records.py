@@ -25,6 +25,7 @@ from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
 from gonio.result.model import Item, Result, Uncertainty, not_measured  # noqa: F401
+from gonio.result.statement import stated_gum
 from gonio.units import S_PER_H
 from uncertainty import monte_carlo, propagate, validate_gum
 
@@ -62,9 +63,10 @@ def monte_carlo_validation(trials: int, seed: int = 0):
 def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
     """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
     the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
-    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats;
-    ``p=None`` uses the fixed ``k``."""
-    r = propagate(value_fn, inputs, k=None if p is not None else k, p=p)
+    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats, of the
+    ν_eff as stated (:func:`gonio.result.statement.coverage_k`: its integer part, ∞ above
+    1000); ``p=None`` uses the fixed ``k``."""
+    r = stated_gum(propagate(value_fn, inputs, k=None if p is not None else k, p=p))
     comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
               "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
              for c in r.contributions]
