@@ -54,7 +54,14 @@ possible values) and the ISO 80000-1 way of stating a bound, the statement keeps
 "value ± U" (the numbers every output compares) and adds the coverage interval truncated
 at zero, stated as an **upper bound**: ``upper`` = value + U rounded *up* at U's decimal
 place (so the bound is never understated) and printed "≤ upper". Its coverage probability
-is at least the stated p (the part cut away holds no possible value). Wording used by
+is at least the stated p (the part cut away holds no possible value). **A non-negative
+quantity whose whole interval lies at or below zero** (value + U ≤ 0: an estimate below
+zero by more than its U) has no coverage interval of possible values at all; the rule
+refuses to state it (:class:`~gonio.errors.GonioError`), and a specification reports such
+an item as not measured with that reason; it is never printed as a negative bound
+("≤ -4.0 s"). An empty acceptance interval of such a quantity (guard band wider than the
+limit) is likewise said in words, never as a negative limit
+(:func:`gonio.report.stated.conformity_texts`). Wording used by
 every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098])", zh "上限：≤ 0.098
 °/s（区间 [0, 0.098]）". The issue-24 coverage studies check such items one-sidedly: the
 truth must lie below ``upper``. A quantity that may be negative (a bias, an offset, a
@@ -79,6 +86,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal, localcontext
+
+from gonio.errors import GonioError
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -406,6 +415,11 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     True
     >>> state(175.0, 1200.0, k=2, nonnegative=True, unit="s").text()
     '200 ± 1200 s (k = 2); upper bound: ≤ 1400 s (interval [0, 1400])'
+    >>> state(-3.0, 4.0, nonnegative=True, unit="s").text()
+    '-3.0 ± 4.0 s; upper bound: ≤ 1.0 s (interval [0, 1.0])'
+    >>> state(-5.0, 1.0, nonnegative=True, unit="s")
+    Traceback (most recent call last):
+    gonio.errors.GonioError: -5 ± 1 s: a non-negative quantity whose interval lies wholly at or below zero has no coverage interval of possible values; not stated
     >>> state(9.996e-5).value_text, state(9.99996e-5, 1.0e-8).text()
     ('1.00×10⁻⁴', '1.00000×10⁻⁴ ± 0.00010×10⁻⁴')
     """
@@ -428,6 +442,10 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
         return Statement(round_half_up(value, max(decimals_for_sig(value, sig), 0)), None,
                          kt, nt, pt, unit_s)
     U = float(U)
+    if nonnegative and value + U <= 0:
+        raise GonioError(f"{value:g} ± {U:g}{' ' + unit_s if unit_s else ''}: a non-negative "
+                         "quantity whose interval lies wholly at or below zero has no "
+                         "coverage interval of possible values; not stated")
     dec = decimals_at_U(U)
     q = Decimal(1).scaleb(-dec)
     with _wide():
