@@ -16,6 +16,26 @@ def add_store_options(p) -> None:
                         "or ~/.local/share/gonio)")
 
 
+def database_errors(run):
+    """``run`` with a database error (a corrupt, locked or read-only database) turned into
+    the one-line GonioError of :func:`gonio.records.db.database_problem`."""
+    import functools
+
+    @functools.wraps(run)
+    def wrapped(args) -> int:
+        from gonio.records.db import database_problem
+
+        try:
+            return run(args)
+        except Exception as exc:
+            problem = database_problem(exc)
+            if problem is None:
+                raise
+            from gonio.errors import GonioError
+            raise GonioError(problem, key="--database") from None
+    return wrapped
+
+
 def register(sub) -> None:
     p = sub.add_parser("serve", help="the laboratory's records in a browser",
                        description="Serve the records (instruments, calibrations, "
@@ -25,8 +45,9 @@ def register(sub) -> None:
                    help="address to listen on (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=8765, help="port (default 8765)")
     p.add_argument("--workers", type=int, default=2,
-                   help="calibrations run at the same time (default 2)")
-    p.set_defaults(func=run)
+                   help="calibrations run at the same time (default 2; at most "
+                        "$GONIO_MAX_WORKERS, else the number of processors)")
+    p.set_defaults(func=database_errors(run))
 
 
 def first_admin(store) -> str | None:
@@ -41,6 +62,36 @@ def first_admin(store) -> str | None:
     return password
 
 
+def max_workers() -> int:
+    """The most worker processes ``gonio serve`` may start: ``$GONIO_MAX_WORKERS``, else the
+    number of processors (at least the default 2)."""
+    import os
+
+    from gonio.errors import GonioError
+
+    raw = os.environ.get("GONIO_MAX_WORKERS", "").strip()
+    if not raw:
+        return max(2, os.cpu_count() or 1)
+    try:
+        n = int(raw)
+    except ValueError:
+        raise GonioError(f"not a whole number: {raw[:20]!r}", key="GONIO_MAX_WORKERS") from None
+    if n < 1:
+        raise GonioError("must be at least 1", key="GONIO_MAX_WORKERS")
+    return n
+
+
+def check_workers(workers: int) -> int:
+    """``--workers`` within 1 … :func:`max_workers`, else a GonioError."""
+    from gonio.errors import GonioError
+
+    top = max_workers()
+    if not 1 <= workers <= top:
+        raise GonioError(f"must be within 1 … {top} (GONIO_MAX_WORKERS or the number of "
+                         f"processors), got {workers}", key="--workers")
+    return workers
+
+
 def run(args) -> int:
     import uvicorn
 
@@ -51,6 +102,7 @@ def run(args) -> int:
 
     if not 0 < args.port < 65536:
         raise GonioError("not a port number", key="--port")
+    check_workers(args.workers)
     store = open_store(args.database, args.data)
     password = first_admin(store)
     if password:
