@@ -44,9 +44,9 @@ def register(sub) -> None:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=8765, help="port (default 8765)")
-    p.add_argument("--workers", type=int, default=2,
+    p.add_argument("--workers", type=int, default=None,
                    help="calibrations run at the same time (default 2; at most "
-                        "$GONIO_MAX_WORKERS, else the number of processors)")
+                        "$GONIO_MAX_WORKERS, else the machine's cores)")
     p.set_defaults(func=database_errors(run))
 
 
@@ -62,33 +62,23 @@ def first_admin(store) -> str | None:
     return password
 
 
-def max_workers() -> int:
-    """The most worker processes ``gonio serve`` may start: ``$GONIO_MAX_WORKERS``, else the
-    number of processors (at least the default 2)."""
+def check_workers(workers: int | None) -> int:
+    """``--workers`` within 1 … ``GONIO_MAX_WORKERS`` (:func:`gonio.limits.limit`; unset:
+    the machine's cores, at least the default 2), else a GonioError; None: 2, or the cap if
+    lower."""
     import os
 
     from gonio.errors import GonioError
+    from gonio.limits import limit
 
-    raw = os.environ.get("GONIO_MAX_WORKERS", "").strip()
-    if not raw:
-        return max(2, os.cpu_count() or 1)
-    try:
-        n = int(raw)
-    except ValueError:
-        raise GonioError(f"not a whole number: {raw[:20]!r}", key="GONIO_MAX_WORKERS") from None
-    if n < 1:
-        raise GonioError("must be at least 1", key="GONIO_MAX_WORKERS")
-    return n
-
-
-def check_workers(workers: int) -> int:
-    """``--workers`` within 1 … :func:`max_workers`, else a GonioError."""
-    from gonio.errors import GonioError
-
-    top = max_workers()
+    top = max(1, int(limit("GONIO_MAX_WORKERS")))
+    if not os.environ.get("GONIO_MAX_WORKERS", "").strip():
+        top = max(2, top)
+    if workers is None:
+        return min(2, top)
     if not 1 <= workers <= top:
-        raise GonioError(f"must be within 1 … {top} (GONIO_MAX_WORKERS or the number of "
-                         f"processors), got {workers}", key="--workers")
+        raise GonioError(f"must be within 1 … {top} (GONIO_MAX_WORKERS, else the machine's "
+                         f"cores), got {workers}", key="--workers")
     return workers
 
 
@@ -102,13 +92,13 @@ def run(args) -> int:
 
     if not 0 < args.port < 65536:
         raise GonioError("not a port number", key="--port")
-    check_workers(args.workers)
+    workers = check_workers(args.workers)
     store = open_store(args.database, args.data)
     password = first_admin(store)
     if password:
         sys.stderr.write(f"gonio: first start: user 'admin', password '{password}' "
                          "(change it: create your users and deactivate this one)\n")
-    dispatcher = Dispatcher(store, workers=args.workers).start()
+    dispatcher = Dispatcher(store, workers=workers).start()
     app = create_app(store, dispatcher)
     sys.stderr.write(f"gonio: serving the records at http://{args.host}:{args.port}/ "
                      f"(database {store.engine.url.render_as_string(hide_password=True)})\n")

@@ -90,7 +90,7 @@ def test_what_does_not_exist_is_404(app):  # noqa: F811
 
 @pytest.mark.parametrize("workers,limit,msg", [
     ("1000", "4", "must be within 1 … 4"), ("-3", "4", "got -3"), ("0", "", "got 0"),
-    ("2", "x", "GONIO_MAX_WORKERS: not a whole number")])
+    ("2", "x", "GONIO_MAX_WORKERS must be a number")])
 def test_workers_bounded(tmp_path, capsys, monkeypatch, workers, limit, msg):
     monkeypatch.setenv("GONIO_MAX_WORKERS", limit)
     err = cli(["serve", "--workers", workers, "--data", tmp_path / "data"], capsys)
