@@ -1032,7 +1032,7 @@ def default_interval(spec_key: str) -> tuple[int, str]:
     from gonio.records.interval import DEFAULT_MONTHS
     from gonio.specs import get
 
-    months = getattr(get(spec_key), "recalibration_interval_months", None)
+    months = get(spec_key).recalibration_interval_months
     if months:
         return int(months), "the specification's clause 9"
     return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"
