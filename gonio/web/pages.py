@@ -376,7 +376,7 @@ def calibration_file(request: Request, cal_id: int, name: str):
     from gonio.records.models import CalibrationFile
     with _store(request).session() as s:
         sha = s.get(CalibrationFile, (cal_id, name)).sha256
-    return file_response(_store(request), sha, name)
+    return file_response(_store(request), sha, name, number=f"DRAFT-{cal_id}")
 
 
 # --------------------------------------------------------------------------- certificates
@@ -411,7 +411,7 @@ def certificate_file(request: Request, cert_id: int, name: str):
                                      "results.json": cert.results_sha256}.get(name)
     if sha is None:
         return Response("no such file", status_code=404)
-    return file_response(_store(request), sha, name, "attachment")
+    return file_response(_store(request), sha, name, "attachment", number=cert.number)
 
 
 @router.post("/certificates/{cert_id}/amend")
