@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import html
 import re
-import shutil
 import subprocess
 
 import pytest
@@ -46,11 +45,8 @@ ITEM = {"ogam-draft": "angle_deviation", "jjf1535-2015": "bias", "iec62047-20": 
 
 @pytest.fixture(scope="module", params=tuple(ITEM))
 def calibrated(request, tmp_path_factory):
-    from tests.test_zh_certificates import small_result
-    if shutil.which("pdftotext") is None:
-        pytest.fail("pdftotext not found: run scripts/install-test-system-deps.sh")
-    d = tmp_path_factory.mktemp(request.param)
-    result, _ = small_result(request.param, d)
+    from tests.test_zh_certificates import small_calibration
+    d, result = small_calibration(request.param, tmp_path_factory)
     lab = d / "lab.toml"
     lab.write_text(LAB.replace("{item}", ITEM[request.param]), encoding="utf-8")
     return {"key": request.param, "result": result, "dir": d, "lab": load_lab(lab)}

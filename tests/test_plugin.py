@@ -52,8 +52,11 @@ def test_simulate_calibrate_certificate(plugin, tmp_path, capsys):
     assert res["spec"] == "acme-rate-check"
     html = (cal / "certificate.html").read_text(encoding="utf-8")
     assert "Rate gyro rate-table check results" in html and "ACME RC-1 clause 5" in html
-    # the optical draft's recalibration clause is the draft's, not every procedure's
-    assert "draft clause 9" not in html and "Recalibration interval: decided by the user." in html
+    # no recalibration interval unless the laboratory file says one was agreed (17025 7.8.4.3)
+    assert "Recalibration interval" not in html
+    # only the figures of roles the plug-in has: no empty "not measured" panels
+    import re
+    assert re.findall(r'<figure id="fig-([a-z_]+)"', html) == ["io_line", "cw_ccw"]
     assert (cal / "certificate.pdf").read_bytes()[:5] == b"%PDF-"
     assert b"acme-rate-check" in (cal / "certificate.dcc.xml").read_bytes() or \
         b"ACME RC-1" in (cal / "certificate.dcc.xml").read_bytes()

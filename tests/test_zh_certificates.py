@@ -115,6 +115,15 @@ def small_result(key, d):
     return make(d)
 
 
+def small_calibration(key, tmp_path_factory):
+    """(folder, result) of a small calibration of ``key`` in a new temporary folder, for
+    tests that read rendered PDFs (pdftotext must be installed)."""
+    if shutil.which("pdftotext") is None:
+        pytest.fail("pdftotext not found: run scripts/install-test-system-deps.sh")
+    d = tmp_path_factory.mktemp(key)
+    return d, small_result(key, d)[0]
+
+
 @pytest.fixture(scope="module", params=("ogam-draft", "jjf1535-2015", "iec62047-20",
                                         "triad-alignment"))
 def calibrated(request, tmp_path_factory):

@@ -1,6 +1,6 @@
 """The laboratory details file (``--lab FILE``): laboratory, certificate, customer,
 instrument, standards, environment, signatories, the decision rule and specification limits
-agreed with the customer.
+agreed with the customer, and a recalibration interval where one was agreed with the customer.
 
 Contents
 ========
@@ -24,7 +24,8 @@ import datetime as _dt
 from pathlib import Path
 
 from gonio.errors import GonioError
-from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
+from gonio.formats.toml import (Field, check_text_fields, non_negative, positive, read_toml,
+                                validate_table)
 
 __all__ = ["LAB_SCHEMA", "DECISION_RULES", "load_lab", "naming_lab_file",
            "check_one_limit_per_item", "check_interval"]
@@ -52,7 +53,7 @@ LAB_SCHEMA: dict[str, Field] = {
         "name": Field("str"), "address": Field("str"), "accreditation": _S, "contact": _S}),
     "certificate": Field("table", schema={
         "number": Field("str"), "date_of_issue": _DATE, "date_of_receipt": _DATE,
-        "date_of_calibration": _DATE, "place": _S}),
+        "date_of_calibration": _DATE, "place": _S, "procedure": _S}),
     "customer": Field("table", schema={"name": Field("str"), "address": _S}),
     "instrument": Field("table", default=None, schema={
         "description": _S, "model": _S, "serial": _S, "manufacturer": _S}),
@@ -77,6 +78,12 @@ LAB_SCHEMA: dict[str, Field] = {
         "lower": Field("float", default=None), "upper": Field("float", default=None),
         "mpe": Field("float", default=None, check=lambda x: x > 0, expect="> 0"),
         "source": _S}),
+    # ISO/IEC 17025 7.8.4.3: a certificate recommends a recalibration interval only where
+    # one was agreed with the customer; without this table it states none
+    "recalibration": Field("table", default=None, schema={
+        "interval_months": Field("int", check=positive, expect="> 0"),
+        "agreed": Field("str", check=lambda s: s.strip() != "",
+                        expect="how and when it was agreed with the customer")}),
 }
 
 

@@ -140,7 +140,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     for note in res.get("readings_taken", []):
         add("p", ["• " + reading_note(note, lang)])
 
-    for b in signature_blocks(lab, L, L["statement_recal"]):
+    for b in signature_blocks(lab, L):
         add(b.kind, b.data, b.extra)
 
     # details of the measurements

@@ -94,6 +94,8 @@ def dsi_decimal(text: str) -> str:
     m = re.fullmatch(r"(-?\d+(?:\.\d+)?)×10([⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+)", t)
     if m:
         return f"{m.group(1)}e{m.group(2).translate(_SUP)}"
+    if re.fullmatch(r"-?\d+(?:\.\d+)?[eE][-+]?\d+", t):      # a limit as given: "-1e-05"
+        return t.lower()
     if not re.fullmatch(r"-?\d+(?:\.\d+)?", t):
         raise ValueError(f"not a displayed number: {text!r}")
     return t

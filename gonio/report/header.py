@@ -14,7 +14,7 @@ Contents
                               standards and traceability, environment (7.8.2.1 a–h, 7.8.4.1)
 :func:`decision_rule_blocks`  the rule agreed with the customer and the limits' source (7.8.6)
 :func:`conformity_section`    the conformity table of a per-item result with those lines
-:func:`signature_blocks`      signatories with the approver's title, the statements, and the
+:func:`signature_blocks`      signatories with the approver's title, the statements, and a
                               recalibration interval only where one was agreed (7.8.4.3)
 :func:`meta_text`             a readings metadata value in the page's language
 ============================  ================================================================
@@ -92,6 +92,7 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str) -> list
         (L["date_issue"], cert.get("date_of_issue") or ns),
         (L["place"], cert.get("place") or (L["virtual_place"] if lab is None else ns)),
         (L["specification"], specification),
+        *([(L["procedure"], cert["procedure"])] if cert.get("procedure") else []),
         (L["source_file"], f"{src['file']} (SHA-256 {src['sha256'][:16]}…, "
                            + L["rows_word"].format(n=src['rows']) + ")"),
     ]
@@ -175,7 +176,8 @@ def conformity_section(items: dict, L: dict, name_of, unit_of, lab: dict | None)
     """The statement-of-conformity section of a per-item result (results.json
     ``items.<key>.conformity``, decided by the pipeline; none: no section): the rule, the
     rule as agreed and the limits' source (:func:`decision_rule_blocks`), the table."""
-    blocks = conformity_blocks(items, L, name_of, unit_of, Block)
+    # every limit with its unit: a quantity of dimension one says so (never a bare "≤ 1")
+    blocks = conformity_blocks(items, L, name_of, lambda k: unit_of(k) or L["unit_one"], Block)
     if not blocks:
         return []
     at = next(i for i, b in enumerate(blocks) if b.kind == "table")
@@ -183,9 +185,11 @@ def conformity_section(items: dict, L: dict, name_of, unit_of, lab: dict | None)
     return blocks[:at] + decision_rule_blocks(lab, decided, L, name_of) + blocks[at:]
 
 
-def signature_blocks(lab: dict | None, L: dict, recal: str | None = None) -> list[Block]:
+def signature_blocks(lab: dict | None, L: dict) -> list[Block]:
     """Signatories (the approver with the title), the statements on scope and reproduction,
-    and the recalibration statement ``recal`` (none when None)."""
+    and a recalibration interval only where the laboratory file says one was agreed with the
+    customer (``[recalibration]``; ISO/IEC 17025 7.8.4.3: no recommendation otherwise, whatever
+    a specification's document suggests)."""
     sig = (lab or {}).get("signatory", {})
     approved = sig.get("approved_by") or "—"
     if sig.get("approved_title"):
@@ -195,6 +199,8 @@ def signature_blocks(lab: dict | None, L: dict, recal: str | None = None) -> lis
                         (L["checked_by"], sig.get("checked_by") or "—"),
                         (L["approved_by"], approved)]),
            Block("p", [L["statement_item"]]), Block("p", [L["statement_copy"]])]
+    recal = (lab or {}).get("recalibration")
     if recal:
-        out.append(Block("p", [recal]))
-    return out
+        out.append(Block("p", [L["statement_recal_agreed"].format(
+            n=recal["interval_months"], a=recal["agreed"])]))
+    return [Block("keep", out)]                  # one page, printed or PDF

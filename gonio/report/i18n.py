@@ -46,6 +46,8 @@ ITEMS_AT_U_PLACE: tuple[str, ...] = ("angle_deviation", "repeatability")
 LABELS: dict[str, dict[str, str]] = {
     "title": {"en": "Calibration Certificate", "zh": "校准证书"},
     "certificate_no": {"en": "Certificate No.", "zh": "证书编号"},
+    "colon": {"en": ": ", "zh": "："},
+    "paren": {"en": " ({x})", "zh": "（{x}）"},
     "page_of": {"en": "Page {x} of {y}", "zh": "第 {x} 页 共 {y} 页"},
     "virtual": {"en": "VIRTUAL BENCH EXAMPLE — NOT A CALIBRATION CERTIFICATE",
                 "zh": "虚拟台架示例 — 非校准证书"},
@@ -146,11 +148,9 @@ LABELS: dict[str, dict[str, str]] = {
     "statement_copy": {"en": "This certificate shall not be reproduced except in full without "
                              "the written approval of the issuing laboratory.",
                        "zh": "未经本机构书面批准，不得部分复制本证书。"},
-    "statement_recal_user": {"en": "Recalibration interval: decided by the user.",
-                             "zh": "复校时间间隔由用户自行确定。"},
-    "statement_recal": {"en": "Recalibration interval: decided by the user, usually not more "
-                              "than 12 months (draft clause 9).",
-                        "zh": "复校时间间隔由用户自行确定，一般不超过12个月（规范第9章）。"},
+    "statement_recal_agreed": {"en": "Recalibration interval: {n} months, as agreed with the "
+                                     "customer ({a}).",
+                               "zh": "复校时间间隔：{n} 个月（与委托方约定：{a}）。"},
     "virtual_note": {"en": "Produced by gonio from a virtual bench (simulated readings). It "
                            "demonstrates the layout and the computations only; it certifies "
                            "nothing about any instrument.",
@@ -321,6 +321,9 @@ LABELS: dict[str, dict[str, str]] = {
                           "zh": "实验室文件（未注明出处）"},
     "list_sep": {"en": ", ", "zh": "、"},
     "end_mark": {"en": "End of certificate", "zh": "证书结束"},
+    "fig_no": {"en": "Fig. {n}", "zh": "图{n}"},
+    "unit_one": {"en": "(dimensionless)", "zh": "（量纲为一）"},
+    "procedure": {"en": "Laboratory procedure", "zh": "实验室校准程序"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
     "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
     "c_default_note": {"en": "Limits marked as the default of the specification are the "

@@ -26,7 +26,7 @@ from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText, Num, item_nums
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
-from gonio.report.rate_figures import FIGURES
+from gonio.report.rate_figures import figures_of
 from gonio.specs import content_field, get
 
 
@@ -101,7 +101,8 @@ def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
         for j, c in enumerate(unc["components"]):
             if not c.get("u"):
                 continue
-            brows.append([it["clause"], c["symbol"], component_source(c, L, phrases),
+            brows.append([it["clause"], symbol_text(c["symbol"]),
+                          component_source(c, L, phrases),
                           _num(c["u"], f"items.{key}.uncertainty.components.{j}.u", "sig3"),
                           _num(c["contribution"],
                                f"items.{key}.uncertainty.components.{j}.contribution", "sig3")])
@@ -111,6 +112,25 @@ def budget_rows(res: dict, L: dict, keys=None, phrases=()) -> list[list]:
         if n["U"] is not None:
             brows.append([it["clause"], "U", factors_cell(n, L), "", n["U"]])
     return brows
+
+
+#: Budget components an analysis names by a word (its machine name in results.json), written
+#: on the certificate as a symbol: δ with a short subscript, in every language.
+WORD_SYMBOLS: dict[str, str] = {
+    "noise": "δ_n", "noise_max": "δ_n,max", "grid": "δ_g", "drift": "δ_d", "step": "δ_s",
+    "detect": "δ_det", "interp": "δ_int", "fit": "δ_fit", "floor": "δ_fl", "fluct": "δ_ϑ",
+    "slope": "δ_a", "corr": "δ_c", "delta": "δ_σ", "align": "δ_al", "rms": "δ_rms",
+    "res": "δ_res", "resolution": "δ_res", "threshold": "δ_thr", "rule_noise": "δ_rule",
+    "other_terms": "δ_oth"}
+
+
+def symbol_text(symbol: str) -> str:
+    """A budget component's symbol as the certificate writes it (:data:`WORD_SYMBOLS`).
+
+    >>> symbol_text("noise"), symbol_text("e_table")
+    ('δ_n', 'e_table')
+    """
+    return WORD_SYMBOLS.get(symbol, symbol)
 
 
 def component_source(c: dict, L: dict, phrases=()) -> str:
@@ -147,15 +167,13 @@ def readings_note(note: str, table: dict, lang: str) -> str:
 
 
 def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
-                   notes: list | tuple | None = None, recal: str | None = None) -> list[Block]:
+                   notes: list | tuple | None = None) -> list[Block]:
     """The readings taken (``notes``, default results.json's), then the signatures and the
-    statements (:func:`gonio.report.header.signature_blocks`; ``recal`` replaces the
-    recalibration statement)."""
+    statements (:func:`gonio.report.header.signature_blocks`)."""
     blocks = [Block("h", reading_title or L["readings_taken"])]
     blocks += [Block("p", ["• " + note])
                for note in (notes if notes is not None else res.get("readings_taken", []))]
-    # a specification's own recalibration clause, else no clause at all (not the draft's 9)
-    return blocks + signature_blocks(lab, L, recal or L["statement_recal_user"])
+    return blocks + signature_blocks(lab, L)
 
 
 def figure_blocks(figures, L: dict, lang: str) -> list[Block]:
@@ -237,12 +255,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
                   budget_rows(res, L, phrases=content_field(data, "PHRASES_ZH"))),
         (0.11, 0.10, 0.49, 0.15, 0.15))
-    recal = content_field(data, "RECAL")          # the specification's own clause, if any
     notes = [readings_note(n, content_field(data, "READINGS_ZH"), lang)
              for n in res.get("readings_taken", [])]
-    blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes,
-                             recal=recal and recal[1 if lang == "zh" else 0])
-    blocks += figure_blocks(FIGURES, L, lang)
+    blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes)
+    blocks += figure_blocks(figures_of(result), L, lang)
     return {"id": certificate_id(result, lab), "virtual": lab is None,
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
@@ -311,5 +327,5 @@ def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en
     if dcc:
         from gonio.report.rate_dcc import rate_dcc_bytes
         dcc_fn = rate_dcc_bytes
-    return write_spec_certificate(result, out, rate_certificate_blocks, FIGURES, truth=truth,
-                                  lab=lab, lang=lang, dcc_fn=dcc_fn)
+    return write_spec_certificate(result, out, rate_certificate_blocks, figures_of(result),
+                                  truth=truth, lab=lab, lang=lang, dcc_fn=dcc_fn)

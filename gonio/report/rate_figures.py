@@ -326,3 +326,19 @@ FIGURES = (
      "幅频与相频特性及 −3 dB 点、相位滞后 90° 点",
      draw_frequency),
 )
+
+
+def figures_of(result) -> tuple:
+    """The :data:`FIGURES` a specification's certificate draws: those whose role it has — the
+    input–output line where its results have a ``scale_factor`` item, the forward/reverse
+    figure where its content gives ``CW_CCW``, the others where its ``FIGURE_ITEMS`` names
+    their role (temperature: ``bias_temperature`` or ``sf_temperature``; ``allan``;
+    ``bandwidth``). A figure of a role it has whose item was not measured in this run says
+    so; a role it does not have draws no figure at all."""
+    spec = get(result.spec_key)
+    roles = set(spec.content_value("FIGURE_ITEMS") or {})
+    has = {"io_line": "scale_factor" in result.items,
+           "cw_ccw": "scale_factor" in result.items and bool(spec.content_value("CW_CCW")),
+           "temperature": bool({"bias_temperature", "sf_temperature"} & roles),
+           "allan": "allan" in roles, "frequency": "bandwidth" in roles}
+    return tuple(f for f in FIGURES if has[f[0]])

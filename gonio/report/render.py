@@ -39,7 +39,9 @@ from gonio.report.text import fit_header
 @dataclass
 class Block:
     """One piece of content: kind is h (heading), sub (sub-heading), p, kv, table, fig,
-    notice. Headings and sub-headings are kept on the page of what follows them."""
+    notice, or keep (its data: a list of blocks kept together on one page, in the PDF and in
+    the browser's print). Headings and sub-headings are kept on the page of what follows
+    them."""
 
     kind: str
     data: Any
@@ -121,6 +123,58 @@ def _h(x, cell: bool = False) -> str:
     return s
 
 
+#: A caption that already begins with its figure number ("Fig. 1 …", "图1 …").
+_NUMBERED = re.compile(r"^(Fig\.|Figure|图)\s*\d")
+
+
+def figure_captions(blocks, L: dict) -> dict[str, str]:
+    """Each figure's caption by its key, numbered in the order of the certificate ("Fig. 3 …",
+    "图 3 …") unless its specification numbered it already.
+
+    >>> figure_captions([Block("fig", ("a", "Allan deviation", None)),
+    ...                  Block("fig", ("b", "Fig. 2 Bias", None))], {"fig_no": "Fig. {n}"})
+    {'a': 'Fig. 1 Allan deviation', 'b': 'Fig. 2 Bias'}
+    """
+    out: dict[str, str] = {}
+    figs = [b.data for b in blocks if b.kind == "fig"]
+    for n, (key, cap, _) in enumerate(figs, 1):
+        out[key] = cap if _NUMBERED.match(cap) else f"{L['fig_no'].format(n=n)} {cap}"
+    return out
+
+
+def _block_html(b: Block, svgs: dict[str, str], caps: dict[str, str]) -> str:
+    """One block as HTML; a "keep" block (its data: blocks) is kept on one printed page."""
+    if b.kind == "keep":
+        return ('<div class="keep">' + "\n".join(_block_html(c, svgs, caps) for c in b.data)
+                + "</div>")
+    if b.kind == "h":
+        return f"<h2>{html.escape(b.data)}</h2>"
+    if b.kind == "sub":
+        return f"<h3>{html.escape(b.data)}</h3>"
+    if b.kind == "notice":
+        return f'<p class="notice">{html.escape(b.data)}</p>'
+    if b.kind == "p":
+        cls = ' class="u" id="U-line"' if b.extra == "U" else ""
+        return f"<p{cls}>{_h(b.data)}</p>"
+    if b.kind == "kv":
+        return ('<table class="kv">' + "".join(
+            f"<tr><td>{_h(k)}</td><td>{_h(v)}</td></tr>" for k, v in b.data) + "</table>")
+    if b.kind == "table":
+        head, rows = b.data
+        tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
+        keep = html_keep_whole(head, rows, b.extra)   # kept whole on a printed page
+        return (('<div class="keep">' if keep else "")
+                + f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
+                + "</tr></thead><tbody>"
+                + "".join("<tr>" + "".join(f"<td>{_h(c, True)}</td>" for c in r) + "</tr>"
+                          for r in rows) + "</tbody></table>" + ("</div>" if keep else ""))
+    if b.kind == "fig":
+        key = b.data[0]
+        return (f'<figure id="fig-{key}">{svgs[key]}<figcaption>'
+                f"{html.escape(caps[key])}</figcaption></figure>")
+    return ""
+
+
 def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: str | None) -> str:
     """The certificate as one self-contained HTML page (no external resources).
 
@@ -135,7 +189,7 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
             L["page_of"].replace("{x}", "\0counter(page)\0").replace(
                 "{y}", "\0counter(pages)\0").split("\0")) if part)
     css = _CSS % {"font": ff, "pageword": pageword, "lab": css_string(content["lab_name"]),
-                  "cid": css_string(f"{L['certificate_no']}: {cid}")}
+                  "cid": css_string(f"{L['certificate_no']}{L['colon']}{cid}")}
     out = ["<!DOCTYPE html>", f'<html lang="{"zh-CN" if lang == "zh" else "en"}">', "<head>",
            '<meta charset="utf-8">', f"<title>{html.escape(L['title'])} {html.escape(cid)}</title>",
            f"<style>{css}</style>", "</head>", "<body>"]
@@ -143,37 +197,13 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         out.append(f'<div class="watermark" aria-hidden="true">{html.escape(L["virtual_short"])}</div>')
         out.append(f'<div class="banner" id="virtual-banner">{html.escape(L["virtual"])}</div>')
     out.append(f'<header class="page"><span>{html.escape(content["lab_name"])}</span>'
-               f'<span id="cert-id" class="nb">{html.escape(L["certificate_no"])}: '
+               f'<span id="cert-id" class="nb">{html.escape(L["certificate_no"] + L["colon"])}'
                f'{html.escape(cid)}</span></header>')
     out.append(f"<h1>{html.escape(L['title'])}</h1>")
-    for b in content["blocks"]:
-        if b.kind == "h":
-            out.append(f"<h2>{html.escape(b.data)}</h2>")
-        elif b.kind == "sub":
-            out.append(f"<h3>{html.escape(b.data)}</h3>")
-        elif b.kind == "notice":
-            out.append(f'<p class="notice">{html.escape(b.data)}</p>')
-        elif b.kind == "p":
-            cls = ' class="u" id="U-line"' if b.extra == "U" else ""
-            out.append(f"<p{cls}>{_h(b.data)}</p>")
-        elif b.kind == "kv":
-            out.append('<table class="kv">' + "".join(
-                f"<tr><td>{_h(k)}</td><td>{_h(v)}</td></tr>" for k, v in b.data) + "</table>")
-        elif b.kind == "table":
-            head, rows = b.data
-            tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""
-            keep = html_keep_whole(head, rows, b.extra)   # kept whole on a printed page
-            out.append(('<div class="keep">' if keep else "")
-                       + f"<table{tid}><thead><tr>" + "".join(f"<th>{_h(c)}</th>" for c in head)
-                       + "</tr></thead><tbody>"
-                       + "".join("<tr>" + "".join(f"<td>{_h(c, True)}</td>" for c in r) + "</tr>"
-                                 for r in rows) + "</tbody></table>" + ("</div>" if keep else ""))
-        elif b.kind == "fig":
-            key, cap, _ = b.data
-            out.append(f'<figure id="fig-{key}">{svgs[key]}<figcaption>{html.escape(cap)}'
-                       f"</figcaption></figure>")
+    caps = figure_captions(content["blocks"], L)
+    out += [_block_html(b, svgs, caps) for b in content["blocks"]]
     out.append(f'<p class="end" id="end-of-certificate">— {html.escape(L["end_mark"])} —</p>')
-    out.append(f"<footer>{html.escape(L['certificate_no'])}: {html.escape(cid)} — "
+    out.append(f"<footer>{html.escape(L['certificate_no'] + L['colon'])}{html.escape(cid)} — "
                f"{html.escape(L['statement_copy'])}</footer>")
     if content["virtual"]:
         out.append(f'<div class="banner">{html.escape(L["virtual"])}</div>')
@@ -300,6 +330,24 @@ def _longest_token(c) -> int:
         return _width(str(c))
     return max((_width(t.rstrip()) for para in _text(c).split("\n") for t in _tokens(para)),
                default=0)
+
+
+#: Smallest font (pt) a table is set in so that its longest words fit their columns.
+MIN_TABLE_FONT: float = 6.0
+
+
+def table_font(head, rows, lay: "_Layout") -> float:
+    """The body font size of a table whose columns each fit their longest word (a cell wraps
+    only between words: no "Probabilit|y"): the page's size, or smaller — down to
+    :data:`MIN_TABLE_FONT` — when the longest words of all columns together do not fit the
+    text width at it."""
+    need = [0] * len(head)
+    for r in [head, *rows]:
+        for j, c in enumerate(r):
+            need[j] = max(need[j], _longest_token(c) + 2.5)
+    total = sum(need)
+    have = lay.cols(1.0)
+    return lay.fs if total <= have else max(MIN_TABLE_FONT, lay.fs * have / total)
 
 
 def fit_widths(widths, head, rows, cols_per_frac: float) -> tuple[float, ...]:
@@ -467,6 +515,8 @@ def layout_pages(content: dict, L: dict) -> list[list]:
             lay.need(units[i][0][0] + keep)
         elif b.kind in ("p", "notice"):
             lay.need(block_start(b, units[i]))
+        elif b.kind == "keep":                   # on one page (when it fits on one)
+            lay.need(sum(u[0] for u in units[i]))
         for k, (h, op, kind) in enumerate(units[i]):
             if kind == "row" and not lay.fits(h):          # repeat the table head
                 head_h, head_op, _ = units[i][0]
@@ -486,6 +536,8 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
     """A block as (height, draw op, kind) units that are never split across pages."""
     fs, ln = lay.fs, lay.line
     out: list[tuple[float, Callable, str]] = []
+    if b.kind == "keep":
+        return [u for c in b.data for u in _units(c, lay, content, L)]
     if b.kind in ("h", "sub"):
         big = b.kind == "h"
 
@@ -518,14 +570,16 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
         out.append((4 * _PT, None, "gap"))
     elif b.kind == "table":
         head, rows = b.data
+        tl = _Layout(table_font(head, rows, lay))   # smaller where a word would not fit
+        fs, ln = tl.fs, tl.line
         widths = b.extra["widths"] if isinstance(b.extra, dict) else b.extra
-        widths = fit_widths(widths, head, rows, lay.cols(1.0) * 1.0)
+        widths = fit_widths(widths, head, rows, tl.cols(1.0) * 1.0)
         xs = [_LEFT]
         for w in widths[:-1]:
             xs.append(xs[-1] + w * (_RIGHT - _LEFT))
 
         def row_unit(cells, bold=False, shade=False):
-            wrapped = [_cell_lines(c, lay.cols(w) - 1) for c, w in zip(cells, widths)]
+            wrapped = [_cell_lines(c, tl.cols(w) - 1) for c, w in zip(cells, widths)]
             n = max(len(w) for w in wrapped)
 
             def op(fig, y, wrapped=wrapped, n=n, xs=tuple(xs)):
@@ -544,8 +598,8 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
             out.append((h2, op2, "row"))
         out.append((6 * _PT, None, "gap"))
     elif b.kind == "fig":
-        key, cap, draw = b.data
-        cap_lines = _wrap(cap, lay.cols(1.0))
+        key, _, draw = b.data
+        cap_lines = _wrap(figure_captions(content["blocks"], L)[key], lay.cols(1.0))
         h = _FIG_H + ln * len(cap_lines) + 6 * _PT
 
         def op(fig, y, draw=draw, cap_lines=cap_lines):
@@ -595,7 +649,7 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
 
 def _page_frame(fig, content, L, p, n) -> None:
     page = L["page_of"].format(x=p, y=n)
-    cid = f"{L['certificate_no']}: {content['id']}"
+    cid = f"{L['certificate_no']}{L['colon']}{content['id']}"
     # the lab name never runs into the certificate number (9 pt: ~0.56 em a character)
     cols = int((_RIGHT - _LEFT) * A4_IN[0] * 72.0 / (9 * 0.6))
     fig.text(_LEFT, 0.955, fit_header(content["lab_name"], cid, cols), fontsize=9,

@@ -236,10 +236,14 @@ def conformity_for(res: dict, lab: dict | None, decided: dict | None) -> list[di
 def given_text(v: float) -> str:
     """A specification limit as the laboratory gave it (no rounding: it is not measured).
 
-    >>> given_text(0.3), given_text(-0.5), given_text(1e-05)
-    ('0.3', '-0.5', '1e-05')
+    >>> given_text(0.3), given_text(-0.5), given_text(1e-05), given_text(-2.5e6)
+    ('0.3', '-0.5', '1×10⁻⁵', '-2.5×10⁶')
     """
-    return f"{float(v):g}"
+    text = f"{float(v):g}"
+    if "e" not in text:
+        return text
+    mant, exp = text.split("e")           # the certificate's power-of-ten form, never "1e-05"
+    return f"{mant}×10{str(int(exp)).translate(str.maketrans('-0123456789', '⁻⁰¹²³⁴⁵⁶⁷⁸⁹'))}"
 
 
 def interval_text(lo, hi, f) -> str:
@@ -320,7 +324,7 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
         rows.append([name_of(key), NoBreakText(f"{t['limits']} {u}".strip() + mark),
                      NoBreakText(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
                                  else f"{t['acceptance']} {u}".strip()),
-                     t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else ""),
+                     t["outcome"] + (L["paren"].format(x=t["pfr"]) if t["pfr"] else ""),
                      display("sig3", 100.0 * pc) + " %" if pc is not None else "—", t["pfa"]])
     out.append(block("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"],
                                 L["c_pc"], L["c_pfa"]], rows),

@@ -9,6 +9,7 @@ names. Written in a fixed order with ``\\n`` line ends (byte-identical on every 
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pandas as pd
@@ -28,7 +29,10 @@ def items_table(result) -> pd.DataFrame:
                      "value": it.value if it.measured else None, "unit": it.unit,
                      "u": None if unc is None else unc.u_c, "U": None if unc is None else unc.U,
                      "k": None if unc is None else unc.k,
-                     "nu": None if unc is None else unc.nu_eff,
+                     # ν_eff None and inf are both infinite (Uncertainty): one form, "inf",
+                     # as results.json (null) read back gives the same table
+                     "nu": None if unc is None else (math.inf if unc.nu_eff is None
+                                                     else unc.nu_eff),
                      "p": None if unc is None else unc.coverage_probability,
                      "measured": bool(it.measured),
                      "conformity": None if it.conformity is None else it.conformity.outcome})

@@ -6,18 +6,18 @@ from gonio.specs._rate_family.certificate_zh import COMMON_PHRASES_ZH
 
 
 GROUPS = (
-    (1, "Scale factor (5.1)", "标度因数 (5.1)", ("scale_factor", "initial_sf_variation",
+    (1, "Scale factor (5.1)", "标度因数（5.1）", ("scale_factor", "initial_sf_variation",
                                                "sf_temperature_coefficient", "ratiometric_error",
                                                "linearity", "sf_stability", "symmetry")),
-    (2, "Cross-axis sensitivity (5.2)", "交叉轴灵敏度 (5.2)", ("cross_axis",)),
-    (3, "Bias (5.3)", "零偏 (5.3)", ("bias", "initial_bias_variation", "bias_repeatability",
+    (2, "Cross-axis sensitivity (5.2)", "交叉轴灵敏度（5.2）", ("cross_axis",)),
+    (3, "Bias (5.3)", "零偏（5.3）", ("bias", "initial_bias_variation", "bias_repeatability",
                                     "bias_drift_after_power_on", "bias_temperature_coefficient",
                                     "bias_ratiometric_error", "bias_hysteresis", "g_sensitivity",
                                     "startup_time")),
-    (4, "Output noise (5.4)", "输出噪声 (5.4)", ("inband_noise", "broadband_noise", "arw",
+    (4, "Output noise (5.4)", "输出噪声（5.4）", ("inband_noise", "broadband_noise", "arw",
                                                 "bias_instability")),
-    (5, "Frequency band (5.5)", "频带 (5.5)", ("frequency_band",)),
-    (6, "Resolution (5.6)", "分辨率 (5.6)", ("resolution",)),
+    (5, "Frequency band (5.5)", "频带（5.5）", ("frequency_band",)),
+    (6, "Resolution (5.6)", "分辨率（5.6）", ("resolution",)),
 )
 
 TITLES_ZH = {
@@ -32,11 +32,8 @@ TITLES_ZH = {
     "g_sensitivity": "线性加速度灵敏度", "broadband_noise": "宽带噪声", "resolution": "分辨率",
 }
 
-HEADING = ("MEMS gyroscope test results (IEC 62047-20)", "MEMS陀螺仪测试结果 (IEC 62047-20)")
-
-#: The recalibration statement: IEC 62047-20 is a test method and sets no interval.
-RECAL = ("Recalibration interval: decided by the user (IEC 62047-20 is a test method and sets "
-         "none).", "复校时间间隔由用户自行确定（IEC 62047-20 为试验方法标准，未作规定）。")
+HEADING = ("MEMS gyroscope calibration results (IEC 62047-20 test methods)",
+           "MEMS陀螺仪校准结果（按 IEC 62047-20 试验方法）")
 
 #: Where the rule to state U with each result comes from: IEC 62047-20 is a test method and
 #: has none; the certificate follows JJF 1535 clause 8 k) and says so.
@@ -61,7 +58,7 @@ READINGS_ZH = {
     "5.1.4.1 e)": "5.1.4.1 e) 式(18)：记录了设定电压时，比例式陀螺的输出按各次运行自身的设定电压折算，"
                   "y = y_RAW·V_set/V_actual。",
     "5.3.3.3:": "5.3.3.3：各供电运行的零偏取其静止输出（含零点）；R 以 % 表示，输出单位下的偏离（表4 的 V）见详细数据。",
-    "5.3.3.7:": "5.3.3.7：自下方到达为“升”，自上方到达为“降”；滞回 = max |B_up − B_down|。",
+    "5.3.3.7:": "5.3.3.7：自下方到达为“升”，自上方到达为“降”；迟滞 = max |B_up − B_down|。",
     "5.3.3.8:": "5.3.3.8：a = g cos γ，输入轴向上时 γ = 0（式(28)的 sin γ 自水平起算）；各角度扣除地球自转"
                 "角速度；等步长转一整周。",
     "5.4.5.1 c)": "5.4.5.1 c)：宽带噪声 = 单边谱密度在 band_hz … broadband_high_hz 上的均方根；20 dB/dec 的 "

@@ -35,12 +35,6 @@ TITLES_ZH = {
 #: Page title.
 HEADING = ("MEMS gyroscope calibration results", "微机电(MEMS)陀螺仪校准结果")
 
-#: The recalibration statement (JJF 1535-2015 clause 9: one year recommended; the owner may
-#: decide from the instrument's use).
-RECAL = ("Recalibration interval: one year recommended; the owner may decide from the "
-         "instrument's use (JJF 1535-2015 clause 9).",
-         "复校时间间隔建议为1年；使用者可根据实际使用情况自主决定（JJF 1535-2015 第9章）。")
-
 #: The readings taken (results.json's English notes) in Chinese, by the note's clause prefix.
 READINGS_ZH = {
     "7.2.1:": "7.2.1：K 取 Q 次最小二乘 K_m 的平均值；每次校准前后静止输出的平均值被扣除；静止点不作拟合点。",

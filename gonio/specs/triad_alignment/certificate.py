@@ -100,13 +100,11 @@ TEXT = {
              "the sensor's) {hys} °/s.",
              "温度斜坡：静态保温模型在斜坡段的残差均方根为 {rms} °/s；加入温度变化率项 γ·dϑ/dt"
              "（γ = {g} (°/s)/(°C/s)）后为 {rmsg} °/s；对温度施加一阶滞后（{lag}）后为 "
-             "{rmsl} °/s；同一温箱温度（模型输入，而非传感器温度）下升降温斜坡之间的滞回 {hys} °/s。"),
+             "{rmsl} °/s；同一温箱温度（模型输入，而非传感器温度）下升降温斜坡之间的迟滞 {hys} °/s。"),
     "sub_comp": ("Compensation: residuals before and after", "补偿前后的残差"),
     "comp_note": ("The model applied to the calibration record itself: at the soak points the "
                   "residuals are the fit's; the ramp blocks were not used by the polynomial fit.",
                   "模型用于本次温度试验数据本身：保温点的残差即拟合残差；斜坡段未参与多项式拟合。"),
-    "recal": ("Recalibration interval: decided by the user (no specification sets one for a "
-              "triad).", "复校时间间隔由用户自行确定（三轴陀螺组件无规范规定）。"),
     "readings_taken": ("Readings taken of the sources", "对参考文献的理解"),
     "residual": ("residual (rms)", "残差（均方根）"),
     "before": ("before (constant k0, b0)", "补偿前（常数 k0、b0）"),
@@ -144,10 +142,11 @@ MATRICES = (
     ("residual leakage after alignment L", (("L_xy", "L_xz", "L_yx", "L_yz", "L_zx", "L_zy"),)),
 )
 #: The documents the triad calibration follows (with their number and year), en and zh.
-NORM = ("Gyro triad alignment per the gonio procedure (docs/alignment.md) with "
-        "IEC 62047-20:2014 5.2 (cross-axis sensitivity) and JCGM 100:2008",
-        "三轴陀螺组件对准（gonio 程序），交叉轴灵敏度按 IEC 62047-20:2014 "
-        "5.2，不确定度按 JCGM 100:2008")
+#: (The laboratory's own controlled procedure is its lab file's ``[certificate] procedure``.)
+NORM = ("Gyro triad alignment (gonio method) with IEC 62047-20:2014 5.2 "
+        "(cross-axis sensitivity) and JCGM 100:2008",
+        "三轴陀螺组件对准（gonio 方法），交叉轴灵敏度按 IEC 62047-20:2014 5.2，"
+        "不确定度按 JCGM 100:2008")
 
 #: The readings taken in Chinese by their opening words (the DCC's zh beside the English).
 READINGS_ZH = dict(zip(("Alignment:", "Uncertainties:", "Residual leakage after alignment:",

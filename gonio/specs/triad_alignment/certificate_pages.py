@@ -257,7 +257,7 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
     notes = res.get("readings_taken", [])
     if lang == "zh" and len(zh) == len(notes):
         notes = list(zh)
-    blocks += closing_blocks(res, L, lab, T("readings_taken"), notes, T("recal"))
+    blocks += closing_blocks(res, L, lab, T("readings_taken"), notes)
     blocks += figure_blocks(triad_figures(result), L, lang)
     return {"id": certificate_id(result, lab), "virtual": lab is None,
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],

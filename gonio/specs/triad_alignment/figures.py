@@ -38,7 +38,7 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
     "soak": ("static-soak model (rms error {v} °/s)", "静态保温模型（均方根误差 {v} °/s）"),
     "ramp_title": ("ramps: lag {lag}\nhysteresis (rising − falling) at equal\n"
                    "chamber temperature {h} °/s",
-                   "斜坡：滞后 {lag}\n同一温箱温度下升降温滞回 {h} °/s"),
+                   "斜坡：滞后 {lag}\n同一温箱温度下升降温迟滞 {h} °/s"),
     "no_ramp": ("no ramp blocks", "无斜坡段"),
     "b_before": ("bias before (rms {v} °/s)", "补偿前零偏（均方根 {v} °/s）"),
     "b_after": ("bias after (rms {v} °/s)", "补偿后零偏（均方根 {v} °/s）"),

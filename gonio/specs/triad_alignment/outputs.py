@@ -51,5 +51,5 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
         sim = simulate(SPEC.default_protocol, bench or SPEC.default_bench, seed, out)
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
         result = SPEC.calibrate(stage / "readings.csv", monte_carlo_trials=monte_carlo_trials)
-        paths = write(result, out, truth=truth, lab=lab, lang=lang)
+        paths = write(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
     return result, {**sim, **paths}
