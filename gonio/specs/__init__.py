@@ -608,7 +608,9 @@ def _defines(module: str, name: str) -> bool:
     origin = importlib.util.find_spec(module).origin
     if not origin or not origin.endswith(".py"):
         return True
-    tree = ast.parse(open(origin, encoding="utf-8").read())
+    from pathlib import Path
+
+    tree = ast.parse(Path(origin).read_text(encoding="utf-8"))
     bound = set()
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
