@@ -230,7 +230,10 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
                 continue
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
-            if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
+            if n["statement"].interval is not None:     # stated by its interval, with p
+                val = [val, ("；" if lang == "zh" else "; ")
+                       + n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")]
+            elif n["upper"] is not None:    # non-negative, U exceeds the value (statement rule)
                 val = [val, L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])

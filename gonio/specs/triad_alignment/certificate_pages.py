@@ -43,13 +43,16 @@ def _why(text: str, L: dict) -> str:
     return reason_text(text, L, content.PHRASES_ZH)
 
 
-def _pm(res: dict, key: str) -> list | str:
-    """Cell "value ± U" of an item, each number at U's decimal place (JCGM 100 7.2.6)."""
+def _pm(res: dict, key: str, with_k: bool = False) -> list | str:
+    """Cell "value ± U" of an item, each number at U's decimal place (JCGM 100 7.2.6);
+    ``with_k`` adds the item's own k ("(k = 2.42)") where the table's k column is another's."""
     it = res["items"][key]
     if not it["measured"]:
         return "—"
     n = item_nums(it, f"items.{key}", sig=6)          # the one statement rule
-    return [n["value"], " ± ", n["U"]] if n["U"] is not None else [n["value"] or "—"]
+    if n["U"] is None:
+        return [n["value"] or "—"]
+    return [n["value"], " ± ", n["U"]] + ([" (k = ", n["k"], ")"] if with_k and n["k"] else [])
 
 
 def _pm_scaled(v: float, U: float, f: float = 1.0) -> str:
@@ -73,7 +76,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     rows = []
     for i, a in enumerate(AXES):
         rows.append([f"{T('gyro')} {a}"] + [_pm(res, f"M_{a}{b}") for b in AXES]
-                    + [_pm(res, f"b_{a}"),
+                    + [_pm(res, f"b_{a}", with_k=True),
                        [num(res, f"items.M_{a}x.uncertainty.k", "k"), " (",
                         num(res, f"items.M_{a}x.uncertainty.nu_eff", "int"), ")"]])
     out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})", T("k_nu")], rows),
@@ -92,9 +95,11 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
         s, lk = items[f"S_{p}"], items[f"L_{p}"]
         k = s["uncertainty"]["k"]
         crow.append([f"{p[0]} ← ω_{p[1]}",
-                     _pm_scaled(s["value"], s["uncertainty"]["U"], 1e3),
+                     [_pm_scaled(s["value"], s["uncertainty"]["U"], 1e3), " (k = ",
+                      num(res, f"items.S_{p}.uncertainty.k", "k"), ")"],
                      display_uncertainty(k * mc["cross_axis"][n] * 1e3) if mc else "—",
-                     _pm_scaled(lk["value"], lk["uncertainty"]["U"], 1e3)])
+                     [_pm_scaled(lk["value"], lk["uncertainty"]["U"], 1e3), " (k = ",
+                      num(res, f"items.L_{p}.uncertainty.k", "k"), ")"]])
     out.append(Block("table", ([T("pair"), T("S_col"), T("mc_col"), T("L_col")], crow),
                      {"widths": (0.2, 0.28, 0.22, 0.3), "id": "cross-axis"}))
     av = items["averaging_time"]
