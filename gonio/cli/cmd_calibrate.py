@@ -64,7 +64,8 @@ def show(spec, result, as_json: bool, lab_d: dict | None = None, lang: str = "en
     from gonio.report.certificate import cjk_notice
 
     r = spec.renderer()
-    for w in (r.warnings(result) if hasattr(r, "warnings") else []):
+    warn = spec.output_hook("warnings")
+    for w in (warn(result) if warn is not None else []):
         print(w, file=sys.stderr)
     note = cjk_notice(lang)
     if note:

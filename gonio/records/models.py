@@ -249,6 +249,8 @@ class Certificate(Base):
     min_people: Mapped[int | None] = mapped_column(Integer, nullable=True)
     calibration: Mapped[Calibration] = relationship()
     replaces: Mapped["Certificate | None"] = relationship(remote_side=[id])
+    issued_by: Mapped[User | None] = relationship(foreign_keys=[issued_by_id])
+    reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])
 
 
 class AuditEvent(Base):

@@ -112,7 +112,8 @@ def certificate(store, cert_id: int):
     with store.session() as s:
         cert = s.scalar(select(Certificate).options(
             selectinload(Certificate.calibration).selectinload(Calibration.instrument)
-            .selectinload(Instrument.customer), selectinload(Certificate.replaces))
+            .selectinload(Instrument.customer), selectinload(Certificate.replaces),
+            selectinload(Certificate.issued_by), selectinload(Certificate.reviewed_by))
             .where(Certificate.id == cert_id))
         newer = s.scalar(select(Certificate).where(Certificate.replaces_id == cert_id)) \
             if cert else None

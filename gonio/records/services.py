@@ -204,10 +204,11 @@ def check_setting(key: str, value) -> str:
         number_value(value, key, 0, 1e6)
         if not value:
             raise GonioError("must not be empty", key=key)
-    if key in ("decision_rule", "guard_band_factor"):
-        rule = {"decision_rule": {"rule": value}, "guard_band_factor": {
-            "rule": SETTINGS["decision_rule"], "guard_band_factor": float(value)}}[key]
-        validate_table(rule, LAB_SCHEMA["decision_rule"].schema, "decision_rule")
+    if key == "decision_rule":
+        validate_table({"rule": value}, LAB_SCHEMA["decision_rule"].schema, "decision_rule")
+    if key == "guard_band_factor":
+        validate_table({"rule": SETTINGS["decision_rule"], "guard_band_factor": float(value)},
+                       LAB_SCHEMA["decision_rule"].schema, "decision_rule")
     return value
 
 
@@ -223,6 +224,45 @@ def create_user(store, actor: User | None, username: str, password: str, roles,
                 password_hash=hash_password(password), roles=check_roles(roles))
     return _create(store, actor, user, "user", User.username == username,
                    "a user with this name exists", "username")
+
+
+def update_user(store, actor: User | None, username: str, *, active: bool | None = None,
+                password: str | None = None, roles=None, full_name: str | None = None) -> User:
+    """Deactivate or reactivate a user, reset the password, change the roles or name
+    (admin; ``actor=None`` from ``gonio db set-user``), with its audit event. An admin cannot
+    deactivate themself, and the last active admin keeps the admin role and stays active.
+    A deactivated user's sessions end at their next request; nothing they did is removed."""
+    if actor is not None:
+        require(actor, "admin")
+    with store.writing() as s:
+        u = s.scalar(select(User).where(User.username == text(username, "username",
+                                                               max_len=64)))
+        if u is None:
+            raise GonioError("no such user", key="username")
+        before = state(u)
+        if active is not None:
+            if not active and actor is not None and actor.id == u.id:
+                raise GonioError("you cannot deactivate yourself", key="active")
+            u.active = bool(active)
+        if roles is not None:
+            u.roles = check_roles(roles)
+        if full_name is not None:
+            u.full_name = text(full_name, "full_name")
+        if password:
+            u.password_hash = hash_password(password)
+        s.flush()
+        admins = s.scalar(select(func.count()).select_from(User).where(
+            User.active.is_(True), User.roles.like("%admin%")))
+        if before["active"] and "admin" in before["roles"].split() and not admins:
+            raise GonioError("the last active admin cannot be deactivated nor lose the admin "
+                             "role: make another admin first", key="username")
+        after = state(u)
+        if password:
+            after["password_hash"] = "(reset)"
+        audit(s, actor, "update", "user", u.id, before, after)
+        s.commit()
+        s.expunge(u)
+    return u
 
 
 def user(store, username: str) -> User | None:
@@ -408,6 +448,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
 
     require(actor, "technician")
     day = date_value(performed_on, "performed_on") or _dt.date.today()
+    received = date_value(received_on, "received_on")
+    plausible_dates(day, received)
     with store.writing() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
@@ -429,8 +471,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           temperature_c=number_value(temperature_c, "temperature_c", -50, 100),
                           humidity_pct=number_value(humidity_pct, "humidity_pct", 0, 100),
                           place=text(place, "place"), performed_on=day,
-                          received_on=date_value(received_on, "received_on"),
-                          status="queued", progress="waiting for a worker",
+                          received_on=received, status="queued", progress="waiting for a worker",
                           created_by_id=actor.id)
         s.add(cal)
         s.flush()
@@ -447,6 +488,24 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
         audit(s, actor, "create", "calibration", cal.id, None, state(cal))
         s.commit()
     return cal
+
+
+def plausible_dates(performed: _dt.date, received: _dt.date | None,
+                    today: _dt.date | None = None) -> None:
+    """Dates a certificate can carry: the calibration not in the future (its certificate is
+    issued on or after it) and the item received on or before it; else a GonioError.
+
+    >>> plausible_dates(_dt.date(9999, 12, 31), None, _dt.date(2026, 1, 1))
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key performed_on: 9999-12-31 is in the future (today 2026-01-01)
+    """
+    today = today or _dt.date.today()
+    if performed > today:
+        raise GonioError(f"{performed} is in the future (today {today})", key="performed_on")
+    if received is not None and received > performed:
+        raise GonioError(f"the item was received on {received}, after the calibration "
+                         f"date {performed}", key="received_on")
 
 
 def _check(s: Session, actor: User, cal_id: int, action: str,
@@ -708,7 +767,20 @@ def recover(store, host: str | None = None, alive=None) -> list[int]:
     for cid in dead:
         fail(store, cid, "interrupted: the worker stopped before the run finished "
                          "(server stopped or killed); nothing was issued — run it again")
+        remove_work(store, cid)
     return dead
+
+
+def remove_work(store, cal_id: int) -> list[Path]:
+    """Remove a calibration's work folders (``<data>/work/cal-<id>-*``, the copied readings
+    of a worker that was killed before its own clean-up); returns those removed."""
+    import shutil
+
+    gone = []
+    for path in (store.data / "work").glob(f"cal-{int(cal_id)}-*"):
+        shutil.rmtree(path, ignore_errors=True)
+        gone.append(path)
+    return gone
 
 
 def _pid_alive(pid: int) -> bool:
@@ -960,7 +1032,7 @@ def default_interval(spec_key: str) -> tuple[int, str]:
     from gonio.records.interval import DEFAULT_MONTHS
     from gonio.specs import get
 
-    months = getattr(get(spec_key), "recalibration_interval_months", None)
+    months = get(spec_key).recalibration_interval_months
     if months:
         return int(months), "the specification's clause 9"
     return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"

@@ -376,7 +376,7 @@ def calibration_file(request: Request, cal_id: int, name: str):
     from gonio.records.models import CalibrationFile
     with _store(request).session() as s:
         sha = s.get(CalibrationFile, (cal_id, name)).sha256
-    return file_response(_store(request), sha, name)
+    return file_response(_store(request), sha, name, number=f"DRAFT-{cal_id}")
 
 
 # --------------------------------------------------------------------------- certificates
@@ -411,7 +411,7 @@ def certificate_file(request: Request, cert_id: int, name: str):
                                      "results.json": cert.results_sha256}.get(name)
     if sha is None:
         return Response("no such file", status_code=404)
-    return file_response(_store(request), sha, name, "attachment")
+    return file_response(_store(request), sha, name, "attachment", number=cert.number)
 
 
 @router.post("/certificates/{cert_id}/amend")
@@ -430,9 +430,20 @@ async def certificate_amend(request: Request, cert_id: int):
 # --------------------------------------------------------------------------- admin
 
 
+def _may_read(user, *roles) -> Response | None:
+    """A 403 page unless ``user`` holds one of ``roles`` (technicians see what their work
+    needs: not the users, not the whole audit trail)."""
+    if any(user.has(r) for r in roles):
+        return None
+    return Response(f"this needs the {' or '.join(roles)} role", status_code=403)
+
+
 @router.get("/audit")
 def audit_page(request: Request):
     user, csrf = current(request)
+    refused = _may_read(user, "reviewer", "admin")
+    if refused:
+        return refused
     page = page_of(request)
     rows, total = queries.audit_events(_store(request), page, 100)
     return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
@@ -442,6 +453,9 @@ def audit_page(request: Request):
 @router.get("/users")
 def users_page(request: Request):
     user, csrf = current(request)
+    refused = _may_read(user, "admin")
+    if refused:
+        return refused
     return render(request, "users.html", user, csrf, users=queries.users(_store(request)),
                   settings=services.settings(_store(request)))
 
@@ -453,6 +467,16 @@ async def users_add(request: Request):
     return _users_form(request, user, csrf, lambda: services.create_user(
         _store(request), user, data.get("username"), data.get("password"),
         data.getlist("roles"), data.get("full_name")))
+
+
+@router.post("/users/{username}")
+async def users_update(request: Request, username: str):
+    """Change a user: roles, active, a new password (admin)."""
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _users_form(request, user, csrf, lambda: services.update_user(
+        _store(request), user, username, active=data.get("active") == "yes",
+        roles=data.getlist("roles"), password=data.get("password") or None))
 
 
 def _users_form(request, user, csrf, do):
