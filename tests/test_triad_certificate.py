@@ -20,7 +20,7 @@ import pytest
 
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.report.certificate import Block, KEEP_FIRST_ROWS, layout_pages
+from gonio.report.render import Block, KEEP_FIRST_ROWS, layout_pages
 from gonio.report.i18n import labels
 
 AX = "xyz"

@@ -51,18 +51,20 @@ import math
 from dataclasses import dataclass, replace
 
 from gonio.errors import GonioError
+from gonio.formats.lab import DECISION_RULES, check_interval, check_one_limit_per_item
 from gonio.result.model import Conformity
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
-           "rule_of", "decide_items", "decide_result", "DEFAULT_LIMITS_ORIGIN"]
+           "rule_of", "check_one_limit_per_item", "decide_items", "decide_result",
+           "DEFAULT_LIMITS_ORIGIN"]
 
 #: ``limits_from`` of an item decided on a specification's default tolerance
 #: (``SPEC.default_limits``), where the laboratory file gives no limit for it.
 DEFAULT_LIMITS_ORIGIN = "specification default"
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``).
-RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
+RULES: tuple[str, ...] = DECISION_RULES
 #: Outcomes, in the words of ILAC-G8:09/2019 4.2.3.
 OUTCOMES: tuple[str, ...] = ("pass", "conditional pass", "conditional fail", "fail")
 
@@ -99,10 +101,7 @@ class Limits:
     source: str = ""
 
     def __post_init__(self):
-        if self.lower is None and self.upper is None:
-            raise GonioError("a specification limit needs lower, upper or mpe")
-        if self.lower is not None and self.upper is not None and not self.lower < self.upper:
-            raise GonioError(f"lower limit {self.lower} is not below upper limit {self.upper}")
+        check_interval(self.lower, self.upper)
 
 
 def normal_cdf(z: float) -> float:
@@ -273,26 +272,6 @@ def _undecided(key: str, lim: Limits, rule: DecisionRule, origin: str,
                       conformance_probability=None, false_accept_probability=None,
                       false_reject_probability=None, source=lim.source,
                       guard_factor=float(rule.guard_factor), limits_from=origin, reason=reason)
-
-
-def check_one_limit_per_item(limits, where: str = "specification_limits", *,
-                             file=None) -> None:
-    """One limit per item: a second entry for the same item is an error naming both, never
-    a silent override (the last decision would win in results.json while the certificate
-    showed both).
-
-    >>> check_one_limit_per_item([{"item": "R", "mpe": 0.3}, {"item": "R", "mpe": 0.5}])
-    Traceback (most recent call last):
-    ...
-    gonio.errors.GonioError: key specification_limits[1].item: 'R' has a limit already (specification_limits[0]); give one limit per item
-    """
-    first: dict = {}
-    for i, lim in enumerate(limits or []):
-        key = lim.get("item")
-        if key in first:
-            raise GonioError(f"{key!r} has a limit already ({where}[{first[key]}]); give one "
-                             f"limit per item", file=file, key=f"{where}[{i}].item")
-        first[key] = i
 
 
 def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,

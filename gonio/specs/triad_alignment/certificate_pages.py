@@ -1,5 +1,5 @@
 """The certificate of a gyro-triad calibration (``triad-alignment``), rendered by the shared
-certificate machinery (:mod:`gonio.report.certificate` blocks and renderers, the per-item
+certificate machinery (:mod:`gonio.report.render` blocks and renderers, the per-item
 parts of :mod:`gonio.report.rate_certificate`: header, closing statements, figures, writer).
 
 Its own pages: the **alignment-matrix table** (M and b with each element's U and k, M⁻¹, the
@@ -17,12 +17,13 @@ side (it imports the report), called by :mod:`gonio.specs.triad_alignment.output
 from __future__ import annotations
 
 
-from gonio.report.certificate import Block, certificate_id
+from gonio.report.header import certificate_id, conformity_section
 from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_at_U,
                                translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
                                            screening_blocks, write_spec_certificate)
-from gonio.report.stated import conformity_blocks, item_nums, num
+from gonio.report.render import Block
+from gonio.report.stated import item_nums, num
 from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
@@ -253,9 +254,9 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
     blocks += alignment_blocks(res, T, L)
     blocks += screening_blocks(res, L, content.PHRASES_ZH)
     name = translator(tables=content.PHRASES_ZH) if lang == "zh" else (lambda t: None)
-    blocks += conformity_blocks(                     # the pipeline's decisions, rendered
+    blocks += conformity_section(                    # the pipeline's decisions, rendered
         res["items"], L, lambda k: name(res["items"][k]["title"]) or res["items"][k]["title"],
-        lambda k: unit_text(res["items"][k]["unit"]), Block)
+        lambda k: unit_text(res["items"][k]["unit"]), lab)
     blocks += thermal_blocks(res, T, L, lang)
     zh = content.READINGS_TAKEN_ZH
     notes = res.get("readings_taken", [])
