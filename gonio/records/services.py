@@ -302,7 +302,7 @@ def check_limits(limits) -> list[dict]:
     """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
     checks them (``LAB_SCHEMA['specification_limits']``)."""
     from gonio.formats.toml import validate_table
-    from gonio.report.certificate import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA
 
     if isinstance(limits, str):
         try:
