@@ -191,7 +191,7 @@ def check_setting(key: str, value) -> str:
     the decision rule's choices, a guard-band factor ≥ 0, printable text within the
     certificate's limits), ``min_people`` 2 or 3; the value as stored (text)."""
     from gonio.formats.toml import MAX_TEXT_FIELD, check_text_fields, validate_table
-    from gonio.report.certificate import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA
 
     if key not in SETTINGS:
         raise GonioError(f"unknown setting (known: {', '.join(SETTINGS)})", key=key)
