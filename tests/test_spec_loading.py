@@ -199,3 +199,21 @@ def test_the_outputs_module_is_checked(tmp_path, monkeypatch):
     assert specs.get("jjf1535-2015").output_hook("demo") is None
     with pytest.raises(KeyError):
         specs.get("jjf1535-2015").output_hook("write")
+
+
+def test_the_item_renderer_needs_its_content_fields(tmp_path, monkeypatch):
+    """The per-item renderer reads GROUPS, TITLES_ZH and HEADING without a default: a
+    content module without one is refused naming it (an AttributeError deep in the
+    certificate before)."""
+    from gonio.kit import ITEM_RENDERER
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "cc_short.py").write_text("GROUPS = ()\nTITLES_ZH = {}\n", encoding="utf-8")
+    s = Specification(**{**BASE, "key": "cc-short"}, outputs=ITEM_RENDERER,
+                      certificate_content="cc_short")
+    with pytest.raises(GonioError, match=r"cc_short\) defines no HEADING, which its outputs"):
+        s.renderer()
+    with pytest.raises(GonioError, match="defines no GROUPS, TITLES_ZH, HEADING"):
+        Specification(**{**BASE, "key": "cc-none"}, outputs=ITEM_RENDERER).renderer()
+    for key in ("jjf1535-2015", "iec62047-20", "triad-alignment"):
+        specs.get(key).renderer()
