@@ -92,7 +92,7 @@ def load_lab_file(lab, spec: Specification | None = None):
     (:meth:`gonio.specs.Specification.knows_item`: exact keys or patterns)."""
     path = lab if isinstance(lab, (str, Path)) else None
     if path is not None:
-        from gonio.report.certificate import load_lab
+        from gonio.formats.lab import load_lab
         lab = load_lab(path)
     if spec is not None and spec.item_keys and lab:
         for i, lim in enumerate(lab.get("specification_limits") or []):
