@@ -39,6 +39,10 @@ def register(sub) -> None:
     q.add_argument("--lab", default=None, metavar="FILE",
                    help="the laboratory file the folders were computed with: its decision "
                         "rule and limits decide them at issue too")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user importing (recorded as the calibrations' creator, "
+                        "who may then neither review nor approve them; default $GONIO_USER). "
+                        "A calibration imported without one cannot be reviewed")
     q.set_defaults(func=run_import)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database")):
@@ -46,6 +50,14 @@ def register(sub) -> None:
         add_store_options(q)
         q.add_argument("archive")
         q.set_defaults(func=run_backup if name == "backup" else run_restore)
+    q = dsub.add_parser("verify", help="check every stored file, result and signed seal of "
+                                       "the live records (or find a certificate file's record)")
+    add_store_options(q)
+    q.add_argument("--certificate", default=None, metavar="FILE",
+                   help="a certificate file (PDF, HTML, DCC or results.json): find its "
+                        "record by SHA-256 and check its result against the seal it was "
+                        "issued from")
+    q.set_defaults(func=run_verify)
     hook_calibrate(sub)
 
 
@@ -60,6 +72,9 @@ def hook_calibrate(sub) -> None:
         p.add_argument("--record", action="store_true",
                        help="also put the calibration into the records database, computed "
                             "and awaiting review (see gonio serve)")
+        p.add_argument("--record-user", default=None, metavar="NAME",
+                       help="with --record: the records user recording it (its creator; "
+                            "default $GONIO_USER)")
         add_store_options(p)
     except argparse.ArgumentError:           # calibrate has grown its own --record
         return
@@ -74,13 +89,28 @@ def hook_calibrate(sub) -> None:
                 cid = import_output_folder(store, args.out, readings=args.readings,
                                            spec_key=args.spec,
                                            protocol=getattr(args, "protocol", None),
-                                           lab=getattr(args, "lab", None))
+                                           lab=getattr(args, "lab", None),
+                                           actor=importing_user(store, args.record_user))
             finally:
                 store.close()
             sys.stderr.write(f"gonio: recorded as calibration {cid}\n")
         return rc
 
     p.set_defaults(func=run_recorded)
+
+
+def importing_user(store, name: str | None):
+    """The records user named by ``--user`` (else ``$GONIO_USER``), active and a technician;
+    None when neither names one."""
+    from gonio.records import services
+
+    name = name or os.environ.get("GONIO_USER") or None
+    if name is None:
+        return None
+    u = services.user(store, name)
+    if u is None or not u.active:
+        raise GonioError(f"no active records user {name!r}", key="--user")
+    return services.require(u, "technician")
 
 
 def _store(args):
@@ -127,9 +157,10 @@ def run_import(args) -> int:
 
     store = _store(args)
     try:
+        actor = importing_user(store, args.user)
         for folder in args.folders:
             cid = import_output_folder(store, folder, customer=args.customer,
-                                       protocol=args.protocol, lab=args.lab)
+                                       protocol=args.protocol, lab=args.lab, actor=actor)
             print(f"{folder}: calibration {cid}")
     finally:
         store.close()
@@ -145,6 +176,35 @@ def run_backup(args) -> int:
     finally:
         store.close()
     print(f"{args.archive}: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    return 0
+
+
+def run_verify(args) -> int:
+    from gonio.records import services
+    from gonio.records.backup import verify
+
+    store = _store(args)
+    try:
+        if args.certificate:
+            try:
+                data = open(args.certificate, "rb").read()
+            except OSError as exc:
+                raise GonioError(f"cannot read: {exc.strerror}", file=args.certificate) from None
+            found = services.verify_certificate(store, data)
+            print(f"{args.certificate}: {found['file']} of certificate {found['number']}"
+                  + (f" (replaces {found['replaces']})" if found["replaces"] else "")
+                  + f", issued {found['issued_at']:%Y-%m-%d %H:%M} UTC; SHA-256 "
+                  f"{found['sha256']}; sealed result {found['seal_now']} as issued")
+            return 0
+        counts, problems = verify(store)
+    finally:
+        store.close()
+    for p in problems:
+        print(p)
+    if problems:
+        raise GonioError(f"{len(problems)} problem(s) in the records (listed above)",
+                         key="verify")
+    print("records verified: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
     return 0
 
 

@@ -425,16 +425,6 @@ def budget_source(symbol: str, source: str, lang: str) -> str:
     return source
 
 
-def has_cjk(text: str) -> bool:
-    """True when ``text`` holds a CJK character.
-
-    >>> has_cjk("JJF xxxx 光学"), has_cjk("JJF")
-    (True, False)
-    """
-    import unicodedata as _u
-    return any(_u.east_asian_width(ch) in "WF" and ch.isalpha() for ch in text)
-
-
 def specification_text(spec: str, lang: str, cjk: bool = True) -> str:
     """The specification's name as shown: "(draft for comment)" in ``lang``; without a CJK
     font (``cjk`` False) a known Chinese title is replaced by its English form so nothing

@@ -9,7 +9,7 @@ import re
 from fastapi import APIRouter, Request
 from fastapi.responses import RedirectResponse, Response
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, queries, services
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
                               Forbidden, current, file_response, form, fresh_token, page_of,
@@ -52,7 +52,7 @@ async def login(request: Request):
                                  str(data.get("password", ""))[:2000], address)
     except GonioError as exc:
         token = fresh_token()
-        code = 429 if "too many" in str(exc) else 401
+        code = 429 if isinstance(exc, TooManyAttemptsError) else 401
         r = render(request, "login.html", None, token, status_code=code,
                    error=str(exc).split(": ", 1)[-1])
         r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
@@ -244,7 +244,7 @@ def calibrations_page(request: Request):
     page = page_of(request)
     status = request.query_params.get("status", "")
     status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued") else ""
+                                  "rejected", "issuing", "issued", "amending") else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -330,7 +330,10 @@ def calibration_page(request: Request, cal_id: int):
 def calibration_progress(request: Request, cal_id: int):
     """The state as JSON, for a script or a test polling the run."""
     current(request)
-    cal = services.calibration(_store(request), cal_id)
+    try:
+        cal = services.calibration(_store(request), cal_id)
+    except GonioError:
+        return Response("no such calibration", status_code=404)
     return {"id": cal.id, "status": cal.status, "progress": cal.progress, "error": cal.error}
 
 
@@ -350,12 +353,13 @@ async def _act(request: Request, cal_id: int, do) -> Response:
 async def calibration_review(request: Request, cal_id: int):
     return await _act(request, cal_id, lambda u, d: services.review(
         _store(request), u, cal_id, accept=d.get("decision") == "accept",
-        comment=d.get("comment")))
+        comment=d.get("comment"), shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/approve")
 async def calibration_approve(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.approve(_store(request), u, cal_id))
+    return await _act(request, cal_id, lambda u, d: services.approve(
+        _store(request), u, cal_id, shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/retry")
