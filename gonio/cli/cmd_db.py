@@ -8,7 +8,7 @@ import getpass
 import os
 import sys
 
-from gonio.cli.cmd_serve import add_store_options
+from gonio.cli.cmd_serve import add_store_options, database_errors
 from gonio.errors import GonioError
 
 
@@ -29,6 +29,17 @@ def register(sub) -> None:
                    help="space- or comma-separated: technician, reviewer, admin")
     q.add_argument("--full-name", default="")
     q.set_defaults(func=run_create_user)
+    q = dsub.add_parser("set-user", help="deactivate or reactivate a user, change the roles, "
+                                         "reset the password ($GONIO_PASSWORD or asked)")
+    add_store_options(q)
+    q.add_argument("username")
+    g = q.add_mutually_exclusive_group()
+    g.add_argument("--deactivate", dest="active", action="store_const", const=False)
+    g.add_argument("--activate", dest="active", action="store_const", const=True)
+    q.add_argument("--roles", default=None,
+                   help="the new roles, space- or comma-separated")
+    q.add_argument("--reset-password", action="store_true")
+    q.set_defaults(func=run_set_user, active=None)
     q = dsub.add_parser("import", help="import gonio output folders as computed calibrations")
     add_store_options(q)
     q.add_argument("folders", nargs="+")
@@ -39,6 +50,9 @@ def register(sub) -> None:
     q.add_argument("--lab", default=None, metavar="FILE",
                    help="the laboratory file the folders were computed with: its decision "
                         "rule and limits decide them at issue too")
+    q.add_argument("--readings", default=None, metavar="FILE",
+                   help="the readings file results.json was computed from, when it is not "
+                        "in the folder (gonio calibrate's output holds none); one folder only")
     q.add_argument("--user", default=None, metavar="NAME",
                    help="the records user importing (recorded as the calibrations' creator, "
                         "who may then neither review nor approve them; default $GONIO_USER). "
@@ -58,6 +72,8 @@ def register(sub) -> None:
                         "record by SHA-256 and check its result against the seal it was "
                         "issued from")
     q.set_defaults(func=run_verify)
+    for action in dsub.choices.values():
+        action.set_defaults(func=database_errors(action.get_default("func")))
     hook_calibrate(sub)
 
 
@@ -136,17 +152,38 @@ def run_init(args) -> int:
 def run_create_user(args) -> int:
     from gonio.records import services
 
-    password = os.environ.get("GONIO_PASSWORD")
-    if password is None:
-        if not sys.stdin.isatty():
-            raise GonioError("give the password in $GONIO_PASSWORD (no terminal to ask on)",
-                             key="password")
-        password = getpass.getpass(f"password for {args.username}: ")
+    password = _password(args.username)
     store = _store(args)
     try:
         u = services.create_user(store, None, args.username, password,
                                  args.roles.replace(",", " "), args.full_name)
         print(f"user {u.username} ({u.roles})")
+    finally:
+        store.close()
+    return 0
+
+
+def _password(username: str) -> str:
+    password = os.environ.get("GONIO_PASSWORD")
+    if password is None:
+        if not sys.stdin.isatty():
+            raise GonioError("give the password in $GONIO_PASSWORD (no terminal to ask on)",
+                             key="password")
+        password = getpass.getpass(f"password for {username}: ")
+    return password
+
+
+def run_set_user(args) -> int:
+    from gonio.records import services
+
+    password = _password(args.username) if args.reset_password else None
+    store = _store(args)
+    try:
+        u = services.update_user(store, None, args.username, active=args.active,
+                                 roles=None if args.roles is None
+                                 else args.roles.replace(",", " "), password=password)
+        print(f"user {u.username} ({u.roles}; {'active' if u.active else 'deactivated'})"
+              + ("; password reset" if password else ""))
     finally:
         store.close()
     return 0
@@ -158,9 +195,12 @@ def run_import(args) -> int:
     store = _store(args)
     try:
         actor = importing_user(store, args.user)
+        if args.readings and len(args.folders) > 1:
+            raise GonioError("give --readings with one folder only", key="--readings")
         for folder in args.folders:
             cid = import_output_folder(store, folder, customer=args.customer,
-                                       protocol=args.protocol, lab=args.lab, actor=actor)
+                                       protocol=args.protocol, lab=args.lab, actor=actor,
+                                       readings=args.readings)
             print(f"{folder}: calibration {cid}")
     finally:
         store.close()

@@ -204,10 +204,11 @@ def check_setting(key: str, value) -> str:
         number_value(value, key, 0, 1e6)
         if not value:
             raise GonioError("must not be empty", key=key)
-    if key in ("decision_rule", "guard_band_factor"):
-        rule = {"decision_rule": {"rule": value}, "guard_band_factor": {
-            "rule": SETTINGS["decision_rule"], "guard_band_factor": float(value)}}[key]
-        validate_table(rule, LAB_SCHEMA["decision_rule"].schema, "decision_rule")
+    if key == "decision_rule":
+        validate_table({"rule": value}, LAB_SCHEMA["decision_rule"].schema, "decision_rule")
+    if key == "guard_band_factor":
+        validate_table({"rule": SETTINGS["decision_rule"], "guard_band_factor": float(value)},
+                       LAB_SCHEMA["decision_rule"].schema, "decision_rule")
     return value
 
 
@@ -223,6 +224,45 @@ def create_user(store, actor: User | None, username: str, password: str, roles,
                 password_hash=hash_password(password), roles=check_roles(roles))
     return _create(store, actor, user, "user", User.username == username,
                    "a user with this name exists", "username")
+
+
+def update_user(store, actor: User | None, username: str, *, active: bool | None = None,
+                password: str | None = None, roles=None, full_name: str | None = None) -> User:
+    """Deactivate or reactivate a user, reset the password, change the roles or name
+    (admin; ``actor=None`` from ``gonio db set-user``), with its audit event. An admin cannot
+    deactivate themself, and the last active admin keeps the admin role and stays active.
+    A deactivated user's sessions end at their next request; nothing they did is removed."""
+    if actor is not None:
+        require(actor, "admin")
+    with store.writing() as s:
+        u = s.scalar(select(User).where(User.username == text(username, "username",
+                                                               max_len=64)))
+        if u is None:
+            raise GonioError("no such user", key="username")
+        before = state(u)
+        if active is not None:
+            if not active and actor is not None and actor.id == u.id:
+                raise GonioError("you cannot deactivate yourself", key="active")
+            u.active = bool(active)
+        if roles is not None:
+            u.roles = check_roles(roles)
+        if full_name is not None:
+            u.full_name = text(full_name, "full_name")
+        if password:
+            u.password_hash = hash_password(password)
+        s.flush()
+        admins = s.scalar(select(func.count()).select_from(User).where(
+            User.active.is_(True), User.roles.like("%admin%")))
+        if before["active"] and "admin" in before["roles"].split() and not admins:
+            raise GonioError("the last active admin cannot be deactivated nor lose the admin "
+                             "role: make another admin first", key="username")
+        after = state(u)
+        if password:
+            after["password_hash"] = "(reset)"
+        audit(s, actor, "update", "user", u.id, before, after)
+        s.commit()
+        s.expunge(u)
+    return u
 
 
 def user(store, username: str) -> User | None:
@@ -262,7 +302,7 @@ def check_limits(limits) -> list[dict]:
     """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
     checks them (``LAB_SCHEMA['specification_limits']``)."""
     from gonio.formats.toml import validate_table
-    from gonio.report.certificate import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA
 
     if isinstance(limits, str):
         try:
@@ -329,7 +369,98 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
     return _create(store, actor, st, "standard", Standard.identifier == st.identifier,
-                   "a standard with this identifier exists", "identifier")
+                   "a standard with this identifier exists (record its recalibration by "
+                   "editing it: new certificate and due date)", "identifier")
+
+
+def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire=None,
+            unique=None, message: str = "") -> object:
+    """Apply ``values`` (only the fields to change) to the row and, with ``retire`` True or
+    False, retire it today or bring it back; its audit event (before, after) in the same
+    transaction. ``unique(obj)``: a statement matching another row that would clash
+    (refused with ``message``)."""
+    if retire is not None:
+        values["retired_on"] = utcnow().date() if retire else None
+    with store.writing() as s:
+        obj = s.get(model, int(obj_id))
+        if obj is None:
+            raise GonioError(f"no such {entity}", key=entity)
+        before = state(obj)
+        if retire and obj.retired_on is not None:
+            values.pop("retired_on")                      # retired already: keep the date
+        with s.no_autoflush:
+            for k, v in values.items():
+                setattr(obj, k, v)
+            if unique is not None and s.scalar(unique(obj).where(model.id != obj.id)):
+                raise GonioError(message, key=entity)
+        after = state(obj)
+        if after != before:
+            audit(s, actor, "update", entity, obj.id, before, after)
+        s.commit()
+        s.expunge(obj)
+    return obj
+
+
+def _given(**fields) -> dict:
+    """The fields that were given (not None)."""
+    return {k: v for k, v in fields.items() if v is not None}
+
+
+def update_customer(store, actor: User, customer_id: int, *, name=None, address=None,
+                    retire: bool | None = None) -> Customer:
+    """Edit a customer's name or address, retire it or bring it back (technician)."""
+    require(actor, "technician")
+    values = _given(name=None if name is None else text(name, "customer name", required=True),
+                    address=None if address is None else text(
+                        address, "customer address", max_len=MAX_TEXT, multiline=True))
+    return _update(store, actor, Customer, customer_id, "customer", values, retire,
+                   lambda o: select(Customer).where(Customer.name == o.name),
+                   "a customer with this name exists")
+
+
+def update_instrument(store, actor: User, instrument_id: int, *, customer_id=None, kind=None,
+                      manufacturer=None, model=None, serial=None, interval_months="",
+                      limits=None, retire: bool | None = None) -> Instrument:
+    """Edit an instrument: transfer it to another customer, correct its description, set its
+    interval (None or blank: the specification's default; ``""`` by default: unchanged) or
+    limits, retire it or bring it back (technician)."""
+    require(actor, "technician")
+    values = _given(kind=kind, manufacturer=manufacturer, model=model, serial=serial)
+    values = {k: text(v, k, required=k == "serial") for k, v in values.items()}
+    if customer_id is not None:
+        with store.session() as s:
+            if s.get(Customer, int(customer_id)) is None:
+                raise GonioError("no such customer", key="customer")
+        values["customer_id"] = int(customer_id)
+    if interval_months != "":
+        months = number_value(interval_months, "interval_months", 1, 120)
+        values["interval_months"] = None if months is None else int(months)
+    if limits is not None:
+        values["limits_json"] = json.dumps(check_limits(limits))
+    return _update(store, actor, Instrument, instrument_id, "instrument", values, retire,
+                   lambda o: select(Instrument).where(
+                       Instrument.manufacturer == o.manufacturer, Instrument.model == o.model,
+                       Instrument.serial == o.serial),
+                   "this instrument (manufacturer, model, serial) is registered")
+
+
+def update_standard(store, actor: User, standard_id: int, *, name=None, accuracy=None,
+                    certificate=None, traceability=None, calibrated_on=None, due_on=None,
+                    retire: bool | None = None) -> Standard:
+    """Record a standard's recalibration (its new certificate, calibration and due date: the
+    audit trail keeps every earlier one), correct its details, retire it or bring it back
+    (technician)."""
+    require(actor, "technician")
+    values = {k: text(v, k) for k, v in _given(accuracy=accuracy, certificate=certificate,
+                                               traceability=traceability).items()}
+    if name is not None:
+        values["name"] = text(name, "name", required=True)
+    for k, v in _given(calibrated_on=calibrated_on or None, due_on=due_on or None).items():
+        values[k] = date_value(v, k)
+    if values.get("calibrated_on") and values.get("due_on") and \
+            values["due_on"] < values["calibrated_on"]:
+        raise GonioError("the due date is before the calibration date", key="due_on")
+    return _update(store, actor, Standard, standard_id, "standard", values, retire)
 
 
 # --------------------------------------------------------------------------- files
@@ -408,10 +539,15 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
 
     require(actor, "technician")
     day = date_value(performed_on, "performed_on") or _dt.date.today()
+    received = date_value(received_on, "received_on")
+    plausible_dates(day, received)
     with store.writing() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
             raise GonioError("no such instrument", key="instrument")
+        if inst.retired_on is not None:
+            raise GonioError(f"the instrument was retired on {inst.retired_on}",
+                             key="instrument")
         key = text(spec_key, "spec", max_len=64) or inst.spec_key
         get(key)
         for sha in (readings_sha256, protocol_sha256, lab_sha256):
@@ -429,8 +565,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           temperature_c=number_value(temperature_c, "temperature_c", -50, 100),
                           humidity_pct=number_value(humidity_pct, "humidity_pct", 0, 100),
                           place=text(place, "place"), performed_on=day,
-                          received_on=date_value(received_on, "received_on"),
-                          status="queued", progress="waiting for a worker",
+                          received_on=received, status="queued", progress="waiting for a worker",
                           created_by_id=actor.id)
         s.add(cal)
         s.flush()
@@ -438,6 +573,9 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             st = s.get(Standard, sid)
             if st is None:
                 raise GonioError("no such standard", key="standards")
+            if st.retired_on is not None:
+                raise GonioError(f"standard {st.identifier} was retired on {st.retired_on}",
+                                 key="standards")
             if st.due_on < day:
                 raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
                                  f"the calibration date {day}): calibrate it first",
@@ -447,6 +585,24 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
         audit(s, actor, "create", "calibration", cal.id, None, state(cal))
         s.commit()
     return cal
+
+
+def plausible_dates(performed: _dt.date, received: _dt.date | None,
+                    today: _dt.date | None = None) -> None:
+    """Dates a certificate can carry: the calibration not in the future (its certificate is
+    issued on or after it) and the item received on or before it; else a GonioError.
+
+    >>> plausible_dates(_dt.date(9999, 12, 31), None, _dt.date(2026, 1, 1))
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key performed_on: 9999-12-31 is in the future (today 2026-01-01)
+    """
+    today = today or _dt.date.today()
+    if performed > today:
+        raise GonioError(f"{performed} is in the future (today {today})", key="performed_on")
+    if received is not None and received > performed:
+        raise GonioError(f"the item was received on {received}, after the calibration "
+                         f"date {performed}", key="received_on")
 
 
 def _check(s: Session, actor: User, cal_id: int, action: str,
@@ -708,7 +864,20 @@ def recover(store, host: str | None = None, alive=None) -> list[int]:
     for cid in dead:
         fail(store, cid, "interrupted: the worker stopped before the run finished "
                          "(server stopped or killed); nothing was issued — run it again")
+        remove_work(store, cid)
     return dead
+
+
+def remove_work(store, cal_id: int) -> list[Path]:
+    """Remove a calibration's work folders (``<data>/work/cal-<id>-*``, the copied readings
+    of a worker that was killed before its own clean-up); returns those removed."""
+    import shutil
+
+    gone = []
+    for path in (store.data / "work").glob(f"cal-{int(cal_id)}-*"):
+        shutil.rmtree(path, ignore_errors=True)
+        gone.append(path)
+    return gone
 
 
 def _pid_alive(pid: int) -> bool:
@@ -960,7 +1129,7 @@ def default_interval(spec_key: str) -> tuple[int, str]:
     from gonio.records.interval import DEFAULT_MONTHS
     from gonio.specs import get
 
-    months = getattr(get(spec_key), "recalibration_interval_months", None)
+    months = get(spec_key).recalibration_interval_months
     if months:
         return int(months), "the specification's clause 9"
     return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"

@@ -315,6 +315,12 @@ LABELS: dict[str, dict[str, str]] = {
                               "合格、有条件合格、有条件不合格、不合格；按正态测量模型（JCGM 106）"
                               "给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
+    "c_source_line": {"en": "Source of the specification limits: {s}.",
+                      "zh": "规定限的来源：{s}。"},
+    "c_source_unstated": {"en": "laboratory file (source not stated)",
+                          "zh": "实验室文件（未注明出处）"},
+    "list_sep": {"en": ", ", "zh": "、"},
+    "end_mark": {"en": "End of certificate", "zh": "证书结束"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
     "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
     "c_default_note": {"en": "Limits marked as the default of the specification are the "

@@ -15,6 +15,8 @@ from gonio.errors import GonioError
 from gonio.records import services, worker
 from gonio.records.models import Certificate, ResultItem
 
+from .conftest import PASSWORD
+from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 from .test_records_services import fake_pipeline, new_calibration, run_worker, setup_instrument
 
 
@@ -187,3 +189,32 @@ def test_amendment_needs_another_person_and_keeps_the_original(store, people, co
     assert (new.issued_by_id, new.reviewed_by_id) == (people["rev"].id, people["rev2"].id)
     assert new.replaces_id == old.id and new.reason == "customer address corrected"
     assert new.seal_sha256 == old.seal_sha256
+
+
+def test_certificate_page_shows_seal_people_and_downloads_by_number(
+        app, sqlite_store, computed_folder, bench_readings, monkeypatch):  # noqa: F811
+    people = {n: services.user(sqlite_store, n) for n in ("tech", "rev", "admin")}
+    people["rev2"] = services.create_user(sqlite_store, None, "rev2", PASSWORD, "reviewer")
+    cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
+    rev = login(app, "rev")
+    page = rev.get(f"/calibrations/{cal.id}").text
+    signed = services.seal(sqlite_store, cal.id)
+    assert f'<code id="seal">{signed}</code>' in page
+    r = rev.get(f"/calibrations/{cal.id}/files/certificate.pdf")
+    assert f'filename="DRAFT-{cal.id}.pdf"' in r.headers["content-disposition"]
+    # the page's seal travels with the decision; a changed result is refused
+    r = rev.post(f"/calibrations/{cal.id}/review", data={
+        "csrf": csrf_of(rev), "decision": "accept", "seal": "f" * 64})
+    assert "changed%20since%20the%20page" in r.headers["location"]
+    rev.post(f"/calibrations/{cal.id}/review", data={"csrf": csrf_of(rev),
+                                                     "decision": "accept", "seal": signed})
+    services.approve(sqlite_store, people["rev2"], cal.id)
+    run_worker(sqlite_store, monkeypatch, computed_folder)
+    (cert,) = certificates(sqlite_store)
+    page = rev.get(f"/certificates/{cert.id}").text
+    assert signed in page and "Reviewed by</dt><dd>rev<" in page
+    assert "Approved by</dt><dd>rev2<" in page and "3 different people" in page
+    for name, shown in (("certificate.pdf", ".pdf"), ("certificate.dcc.xml", ".dcc.xml"),
+                        ("results.json", "-results.json")):
+        r = rev.get(f"/certificates/{cert.id}/{name}")
+        assert f'filename="{cert.number}{shown}"' in r.headers["content-disposition"], name
