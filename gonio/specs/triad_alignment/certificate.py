@@ -97,13 +97,14 @@ TEXT = {
     "points_note": ("K(ϑ, U) and b(ϑ, U) of the gyro soaked at each chamber set point T and "
                     "supply V (ϑ: the reading of the gyro's sensor there, relative to {tref} °C, "
                     "at which the model is evaluated), ARW(ϑ) at each set point; each cell "
-                    "value ± U with its own k = t(ν_eff) for 95.45 %. U includes the fit, the "
+                    "value ± U with its own k = t(ν_eff) for a coverage probability of "
+                    "approximately 95 %. U includes the fit, the "
                     "model order (the spread of the candidate orders' values at the point) and "
                     "the temperature reading; the bias is {bias}. The polynomial coefficients "
                     "below are information, not certified values.",
                     "陀螺在各温度箱设定点 T 保温、电源电压为 V 时的 K(ϑ, U) 与 b(ϑ, U)（ϑ：该点陀螺温度"
                     "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
-                    " 值 ± U，各自的 k = t(ν_eff)，包含概率 95.45 %。U 含拟合、模型阶次（各候选阶次"
+                    " 值 ± U，各自的 k = t(ν_eff)，包含概率约 95 %。U 含拟合、模型阶次（各候选阶次"
                     "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
     "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
                        "b_i of the alignment)", "长期零偏（含一天时间范围内的零偏不稳定性分量，"
