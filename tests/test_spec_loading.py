@@ -100,6 +100,19 @@ def test_gonio_help_and_another_spec_keep_working(broken, tmp_path, capsys):
     assert err.startswith("gonio: error: ") and err.count("\n") == 1 and "brk-typo" in err
 
 
+def test_calibrate_another_specification_beside_broken_ones(broken, plugin, tmp_path,
+                                                           monkeypatch, capsys):
+    """gonio simulate and calibrate --spec of a working plug-in, with every broken one
+    registered beside it: exit 0, results written."""
+    eps = {**broken, "acme-rate-check": "acme_rate_check:SPEC"}
+    monkeypatch.setattr(specs, "_entry_points", lambda: eps)
+    sim, cal = tmp_path / "sim", tmp_path / "cal"
+    assert main(["simulate", "--spec", "acme-rate-check", "--out", str(sim)]) == 0
+    assert main(["calibrate", str(sim / "readings.csv"), "--spec", "acme-rate-check",
+                 "--out", str(cal)]) == 0
+    assert (cal / "results.json").is_file() and "bias B" in capsys.readouterr().out
+
+
 BASE = dict(key="s", title_en="S", title_zh="S", clause_doc="", default_protocol="",
             default_bench="", calibrate=print)
 
@@ -199,3 +212,21 @@ def test_the_outputs_module_is_checked(tmp_path, monkeypatch):
     assert specs.get("jjf1535-2015").output_hook("demo") is None
     with pytest.raises(KeyError):
         specs.get("jjf1535-2015").output_hook("write")
+
+
+def test_the_item_renderer_needs_its_content_fields(tmp_path, monkeypatch):
+    """The per-item renderer reads GROUPS, TITLES_ZH and HEADING without a default: a
+    content module without one is refused naming it (an AttributeError deep in the
+    certificate before)."""
+    from gonio.kit import ITEM_RENDERER
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "cc_short.py").write_text("GROUPS = ()\nTITLES_ZH = {}\n", encoding="utf-8")
+    s = Specification(**{**BASE, "key": "cc-short"}, outputs=ITEM_RENDERER,
+                      certificate_content="cc_short")
+    with pytest.raises(GonioError, match=r"cc_short\) defines no HEADING, which its outputs"):
+        s.renderer()
+    with pytest.raises(GonioError, match="defines no GROUPS, TITLES_ZH, HEADING"):
+        Specification(**{**BASE, "key": "cc-none"}, outputs=ITEM_RENDERER).renderer()
+    for key in ("jjf1535-2015", "iec62047-20", "triad-alignment"):
+        specs.get(key).renderer()

@@ -35,7 +35,8 @@ from typing import Any
 
 from gonio.analysis.conformity import (DEFAULT_LIMITS_ORIGIN, Conformity, DecisionRule,  # noqa: F401
                                       Limits, limits_of, rule_of)
-from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
+from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display,
+                               display_uncertainty, labels, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 
 
@@ -460,7 +461,8 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     """One results.json item (``src`` its path, e.g. ``items.bias``) as every output states it,
     by the one statement rule (:func:`gonio.result.statement.item_statement`): ``value``,
     ``U``, ``k``, ``nu`` as :class:`Num` (or None), ``p`` (per-cent text or None), ``upper``
-    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`).
+    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`). An item
+    stated by its interval has ``U`` and ``k`` None and ``statement.interval`` set.
     ``factor`` scales value and U first (a unit conversion of the DCC).
 
     >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
@@ -473,13 +475,20 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     it = item
     if factor != 1.0:
         unc = dict(item.get("uncertainty") or {})
-        if unc.get("U") is not None:
-            unc["U"] = float(unc["U"]) * factor
+        for key in ("U", "u_c"):
+            if unc.get(key) is not None:
+                unc[key] = float(unc[key]) * factor
+        if unc.get("interval") is not None:
+            unc["interval"] = [float(x) * factor for x in unc["interval"]]
         it = {**item, "value": None if item.get("value") is None
               else float(item["value"]) * factor, "uncertainty": unc}
     st = item_statement(it, sig=sig)
+    u_c = (it.get("uncertainty") or {}).get("u_c")
     out = {"statement": st, "value": None, "U": None, "k": None, "nu": None, "p": st.p,
-           "upper": st.upper}
+           "upper": st.upper, "interval": None}
+    if st.interval is not None:     # the DCC's coverage interval: ends and u (2 digits)
+        out["interval"] = {"ends": st.interval_ends,
+                           "u": None if not u_c else display_uncertainty(float(u_c))}
     if st.value == "—":
         return out
     if st.exponent:
@@ -495,6 +504,6 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
         out["U"] = Num(st.U_text, f"{src}.uncertainty.U", U_rule)
         if st.k is not None:
             out["k"] = Num(st.k, f"{src}.uncertainty.k", "k")
-        if st.nu_eff is not None:
-            out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
+    if st.nu_eff is not None and (st.U is not None or st.interval is not None):
+        out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
     return out

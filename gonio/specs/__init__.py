@@ -7,7 +7,12 @@ clauses, its default protocol and bench, and the hooks gonio calls — ``calibra
 virtual bench), ``budget`` (its own uncertainty annex), ``coverage`` (the settings of its
 coverage study), ``outputs`` (the module that renders a result: results.json, summary,
 tables, certificate, DCC) and ``commands`` (the ``gonio`` sub-commands it adds, such as the
-triad's ``align``). docs/writing-a-specification.md builds one from scratch.
+triad's ``align``). docs/writing-a-specification.md builds one from scratch; a specification
+written outside gonio imports what it needs from :mod:`gonio.kit` (docs/kit.md).
+
+Every field is checked when ``SPEC`` is built and when the registry loads it (one line
+naming the entry point and the field); a specification that cannot be loaded is left out of
+:func:`available` with a warning, so it costs only its own key.
 
 Packages register through the entry-point group ``gonio.specs`` (``key = "pkg:SPEC"``), as
 pytest plug-ins do: gonio's four built-in specifications are listed in gonio's own
@@ -70,7 +75,8 @@ _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
-#: ``warnings(result)``).
+#: ``warnings(result)``). An outputs module may also list, as ``CONTENT_REQUIRED``, the
+#: :data:`CONTENT_FIELDS` the certificate content must define for it.
 OUTPUTS_REQUIRED = ("write", "results_json", "summary")
 OUTPUTS_OPTIONAL = ("demo", "warnings")
 
@@ -364,6 +370,14 @@ class Specification:
             if (fn is None and name in OUTPUTS_REQUIRED) or (fn is not None and not callable(fn)):
                 raise GonioError(f"specification {self.key!r}: its outputs module {self.outputs} "
                                  f"has no function {name}", key="--spec")
+        needs = tuple(getattr(mod, "CONTENT_REQUIRED", ()))
+        content = self.content() if needs and self.certificate_content else None
+        missing = [n for n in needs if not hasattr(content, n)]
+        if missing:
+            raise GonioError(f"specification {self.key!r}: its certificate content "
+                             f"({self.certificate_content or 'none named'}) defines no "
+                             f"{', '.join(missing)}, which its outputs module {self.outputs} "
+                             "needs", key="--spec")
         return mod
 
     def output_hook(self, name: str):
@@ -599,7 +613,9 @@ def _defines(module: str, name: str) -> bool:
     origin = importlib.util.find_spec(module).origin
     if not origin or not origin.endswith(".py"):
         return True
-    tree = ast.parse(open(origin, encoding="utf-8").read())
+    from pathlib import Path
+
+    tree = ast.parse(Path(origin).read_text(encoding="utf-8"))
     bound = set()
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):

@@ -227,7 +227,8 @@ def instrument_page(request: Request, inst_id: int):
     hist = services.history(store, inst_id)
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
                   customers=queries.customers(store),
-                  error=request.query_params.get("error", "")[:300], proposal=services.propose_interval(store, inst_id, hist),
+                  error=request.query_params.get("error", "")[:300],
+                  proposal=services.propose_interval(store, inst_id, hist),
                   default=services.default_interval(inst.spec_key),
                   limits=services.instrument_limits(inst), n_points=max(
                       (len(v) for v in hist.values()), default=0))
@@ -290,7 +291,7 @@ def calibrations_page(request: Request):
     page = page_of(request)
     status = request.query_params.get("status", "")
     status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued", "amending") else ""
+                                  "rejected", "issuing", "issued", "amending", "void") else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -408,6 +409,12 @@ async def calibration_approve(request: Request, cal_id: int):
         _store(request), u, cal_id, shown_seal=d.get("seal") or None))
 
 
+@router.post("/calibrations/{cal_id}/void")
+async def calibration_void(request: Request, cal_id: int):
+    return await _act(request, cal_id, lambda u, d: services.void(
+        _store(request), u, cal_id, d.get("reason")))
+
+
 @router.post("/calibrations/{cal_id}/retry")
 async def calibration_retry(request: Request, cal_id: int):
     return await _act(request, cal_id, lambda u, d: services.retry(_store(request), u, cal_id))
@@ -484,16 +491,69 @@ def _may_read(user, *roles) -> Response | None:
     return Response(f"this needs the {' or '.join(roles)} role", status_code=403)
 
 
+AUDIT_FILTERS = ("entity", "entity_id", "username")
+
+
+def _filters(request: Request, names) -> dict:
+    return {k: request.query_params.get(k, "")[:64] for k in names}
+
+
 @router.get("/audit")
 def audit_page(request: Request):
     user, csrf = current(request)
     refused = _may_read(user, "reviewer", "admin")
     if refused:
         return refused
+    from urllib.parse import urlencode
+
     page = page_of(request)
-    rows, total = queries.audit_events(_store(request), page, 100)
+    filters = _filters(request, AUDIT_FILTERS)
+    rows, total = queries.audit_events(_store(request), page, 100, **filters)
+    query = urlencode({k: v for k, v in filters.items() if v})
     return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
-                  size=100)
+                  size=100, filters=filters, extra="&" + query if query else "", query=query)
+
+
+def csv_text(header: list[str], rows: list[list]) -> str:
+    """CSV (RFC 4180) of a list; a cell a spreadsheet would run as a formula (=, +, -, @,
+    tab, CR first) is prefixed with an apostrophe (OWASP CSV injection).
+
+    >>> csv_text(["a", "b"], [["=1+1", 2.5], [None, "x,y"]]).splitlines()
+    ['a,b', "'=1+1,2.5", ',"x,y"']
+    """
+    import csv
+    import io
+
+    def cell(v):
+        if v is None:
+            return ""
+        v = v.isoformat() if isinstance(v, (_dt.date, _dt.datetime)) else v
+        if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r"):
+            return "'" + v
+        return v
+
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(header)
+    w.writerows([[cell(v) for v in r] for r in rows])
+    return buf.getvalue()
+
+
+@router.get("/export/{name}.csv")
+def export_csv(request: Request, name: str):
+    """A whole list as CSV (the audit trail for reviewers and admins, filtered as its page)."""
+    user, _ = current(request)
+    if name == "audit":
+        refused = _may_read(user, "reviewer", "admin")
+        if refused:
+            return refused
+    got = queries.export_rows(_store(request), name, _filters(
+        request, AUDIT_FILTERS + ("status", "customer")))
+    if got is None:
+        return Response("no such list", status_code=404)
+    stamp = _dt.date.today().isoformat()
+    return Response(csv_text(*got), media_type="text/csv; charset=utf-8", headers={
+        "Content-Disposition": f'attachment; filename="gonio-{name}-{stamp}.csv"'})
 
 
 @router.get("/users")

@@ -29,10 +29,12 @@ TEXT = {
     "h_alignment": ("Alignment matrix", "对准矩阵"),
     "alignment_note": ("System matrix M ({unit} per °/s) and bias vector b ({unit}) of G = M ω + b, "
                        "from {n} dwells{robust}; each cell value ± U, U = k·u for a coverage "
-                       "probability of 95.45 %, k = t(ν) of the gyro's fit (last column).",
+                       "probability of approximately 95 %, k = t(ν) of the element's own fit: "
+                       "the last column gives k and ν of the row's M, the b cell its own k.",
                        "系统矩阵 M（{unit}/(°/s)）与零偏向量 b（{unit}），模型 G = M ω + b，"
-                       "由 {n} 个测量段{robust}求得；各格为 值 ± U，U = k·u，包含概率 95.45 %，"
-                       "k 按该陀螺拟合的自由度 ν 取 t 分布因子（末列）。"),
+                       "由 {n} 个测量段{robust}求得；各格为 值 ± U，U = k·u，包含概率约 95 %，"
+                       "k 按各元素自身拟合的自由度 ν 取 t 分布因子：末列为该行 M 的 k 与 ν，"
+                       "b 格内注明其自身的 k。"),
     "robust": (" (robust fit, IRLS)", "（稳健拟合，IRLS）"),
     "gyro": ("gyro", "陀螺"),
     "k_nu": ("k (ν)", "k（ν）"),
@@ -86,13 +88,32 @@ TEXT = {
     "model": ("model", "模型"),
     "order": ("order ϑ / U", "阶次 ϑ / U"),
     "term": ("term", "项"),
-    "coef": ("coefficient ± U", "系数 ± U"),
+    "coef": ("coefficient", "系数"),
     "orders_line": ("{name}: order ϑ {nt}, U {nu} chosen by {crit}; runner-up ϑ {nt2}, U {nu2} "
                     "({crit} {d} larger).",
                     "{name}：按 {crit} 选定阶次 ϑ {nt}、U {nu}；次优 ϑ {nt2}、U {nu2}（{crit} 大 {d}）。"),
-    "sub_pred": ("Prediction across the operating range (band ± U, parameter uncertainty)",
-                 "工作范围内的预测值（± U 带，参数不确定度）"),
-    "pred_note": ("k = {ks} for K, {kb} for b.", "K 的 k = {ks}，b 的 k = {kb}。"),
+    "sub_points": ("Certified values at the programme's set points",
+                   "在温度试验设定点的校准值"),
+    "points_note": ("K(ϑ, U) and b(ϑ, U) of the gyro soaked at each chamber set point T and "
+                    "supply V (ϑ: the reading of the gyro's sensor there, relative to {tref} °C, "
+                    "at which the model is evaluated), ARW(ϑ) at each set point; each cell "
+                    "value ± U with its own k = t(ν_eff) for a coverage probability of "
+                    "approximately 95 %. U includes the fit, the "
+                    "model order (the spread of the candidate orders' values at the point) and "
+                    "the temperature reading; the bias is {bias}. The polynomial coefficients "
+                    "below are information, not certified values.",
+                    "陀螺在各温度箱设定点 T 保温、电源电压为 V 时的 K(ϑ, U) 与 b(ϑ, U)（ϑ：该点陀螺温度"
+                    "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
+                    " 值 ± U，各自的 k = t(ν_eff)，包含概率约 95 %。U 含拟合、模型阶次（各候选阶次"
+                    "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
+    "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
+                       "b_i of the alignment)", "长期零偏（含一天时间范围内的零偏不稳定性分量，"
+                                                "与对准的 b_i 相同）"),
+    "bias_in-run": ("the in-run bias of this programme (no static record for the "
+                    "bias-instability term)", "本次试验内的零偏（无静态记录，不含零偏不稳定性分量）"),
+    "points_unit": ("{name} in {unit}:", "{name} 单位 {unit}："),
+    "sub_coef": ("Polynomial coefficients (information, not certified; u standard uncertainty)",
+                 "多项式系数（仅供参考，非校准值；u 为标准不确定度）"),
     "ramp": ("Ramps: the static-soak model leaves {rms} °/s rms on the ramp blocks; with a "
              "rate-of-temperature-change term γ·dϑ/dt (γ = {g} (°/s)/(°C/s)) {rmsg} °/s; with a "
              "first-order lag of the temperature ({lag}) {rmsl} °/s; hysteresis between "
@@ -125,12 +146,13 @@ TEXT = {
 READINGS_TAKEN_ZH = (
     "对准：对全部测量段（绕各轴的 ± 角速率及静态位置）一次拟合 G = M ω + b，各方位的地球自转角速度"
     "按转台扫过的角度精确平均；只有一对 ± 测量时退化为文章的差分公式。",
-    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 95.45 %；运行了试验时旁列蒙特卡洛法"
+    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率约 95 %；运行了试验时旁列蒙特卡洛法"
     "（JCGM 101）标准不确定度。",
     "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
     "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",
     "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
-    "（论文 §6.1）。",
+    "（论文 §6.1）；校准值为各温度设定点与电源电压下的 K、b 及 ARW，阶次选择的影响计入 U，"
+    "多项式系数仅供参考。",
 )
 
 #: The matrices the DCC writes as lists (name, item keys row by row).
@@ -160,9 +182,9 @@ PHRASES_ZH = (
     (r"residual leakage after alignment (L(?:_\w+)?)(?: \(M̂⁻¹M − I\))?",
      "对准后残余交叉耦合 {1}（M̂⁻¹M − I）"),
     (r"averaging time from the Allan deviation", "由 Allan 偏差确定的平均时间"),
-    (r"(\w+) at the reference \(ϑ = 0, U = 0\)", "{1} 在参考点（ϑ = 0，U = 0）的值"),
-    (r"(\w+): ϑ\^(\d+) coefficient", "{1}：ϑ^{2} 项系数"),
-    (r"(\w+): U\^(\d+) coefficient", "{1}：U^{2} 项系数"),
+    (r"scale factor (K_\w+) at (\S+) °C, (\S+) V", "标度因数 {1}（{2} °C，{3} V）"),
+    (r"bias (b_\w+) at (\S+) °C, (\S+) V", "零偏 {1}（{2} °C，{3} V）"),
+    (r"angle random walk (ARW_\w+) at (\S+) °C", "角度随机游走 {1}（{2} °C）"),
     (r"MEMS gyro triad \(virtual\)", "微机电三轴陀螺组件（虚拟）"),
     (r"mems-triad", "微机电三轴陀螺组件虚拟台架（mems-triad）"),
     # the clauses of the sources (docs/alignment.md, docs/thermal-model.md)
