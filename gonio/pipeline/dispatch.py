@@ -117,6 +117,18 @@ def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
                           findings=findings, **options)
 
 
+def decide_conformity(result, lab: dict | None):
+    """Conformity of every item the laboratory file ``lab`` limits, or the specification's
+    own tolerances (``SPEC.default_limits``) limit, decided once, in the result's items
+    (:func:`gonio.analysis.conformity.decide_result`), before anything is written: every
+    output renders these decisions. Returns ``result``."""
+    from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+    from gonio.specs import default_limits
+
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    return result
+
+
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
               dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
@@ -133,6 +145,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
+    decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
@@ -164,7 +177,8 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
                             bench=bench or spec.default_bench, seed=seed)
         truth = json.loads((stage / sim["truth"].name).read_text(encoding="utf-8"))
         say("demo: calibrating")
-        result = screen_and_calibrate(spec, stage / sim["readings"].name, None)
+        result = decide_conformity(screen_and_calibrate(spec, stage / sim["readings"].name,
+                                                        None), lab_d)
         say("demo: writing the results and the certificate")
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
                                dcc=dcc and "dcc" in spec.calibrate_options)
