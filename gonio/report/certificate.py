@@ -50,7 +50,8 @@ from gonio.report.i18n import (budget_source, cjk_font, coverage_text, display, 
                                reading_note, reason_text, rule_at_U, specification_text)
 from gonio.report.stated import NoBreakText as NoBreak  # noqa: E402  (one class)
 from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for,
-                                 conformity_texts, detail, e_budget, item_path, limits_of,
+                                 conformity_texts, detail, e_budget, followed, item_path,
+                                 limits_of,
                                  method_rows, num, segments, item_names, stated_item, u_cell)
 from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
 
@@ -177,9 +178,9 @@ def naming_lab_file(path):
         raise GonioError(exc.message, file=path, key=exc.key) from None
 
 
-def certificate_id(res: dict, lab: dict | None = None) -> str:
+def certificate_id(res, lab: dict | None = None) -> str:
     """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash
-    (``res``: results.json).
+    (``res``: results.json, or the :class:`~gonio.result.model.Result`).
 
     >>> r = {"source": {"sha256": "adf7d70bf7f73fcbe3e7897ae81a78dd"}}
     >>> certificate_id(r), certificate_id(r, {"certificate": {"number": "GON-2026-017"}})
@@ -187,7 +188,8 @@ def certificate_id(res: dict, lab: dict | None = None) -> str:
     """
     if lab:
         return lab["certificate"]["number"]
-    sha = (res.get("source") or {}).get("sha256") or "0" * 10
+    source = res.get("source") if isinstance(res, dict) else res.source
+    sha = (source or {}).get("sha256") or "0" * 10
     return "VB-" + sha[:10].upper()
 
 
@@ -363,7 +365,7 @@ def _admin_blocks(add, res: dict, lab_: dict, L: dict, *, lang: str, cjk: bool,
         (L["date_calibration"], cert.get("date_of_calibration") or _meta(md, "date", L)),
         (L["date_issue"], cert.get("date_of_issue") or ns),
         (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
-        (L["specification"], specification_text(res.get("specification") or ns, lang, cjk)),
+        (L["specification"], specification_text(followed(res) or ns, lang, cjk)),
         (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
                            + L["rows_word"].format(n=res['source']['rows']) + ")"),
     ]

@@ -52,7 +52,7 @@ from lxml import etree
 
 from gonio.atomic import write_bytes
 from gonio.report.i18n import display, labels, reading_note, specification_text
-from gonio.report.stated import (Num, conformity_for, conformity_texts, e_budget,
+from gonio.report.stated import (Num, conformity_for, conformity_texts, e_budget, followed,
                                  item_path, item_uncertainty, item_names, method_rows, num,
                                  stated_item)
 
@@ -442,7 +442,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> "etree.Elem
     md = res.get("metadata", {})
     lab_ = lab or {}
     root = new_document()
-    norm = specification_text(res.get("specification") or "not stated", "en")
+    norm = specification_text(followed(res) or "not stated", "en")
     sts = administrative_data(
         root, md, lab, cert_id=cert_id, norm=norm,
         clauses=[res["items"][n]["clause"] for n in item_names(res)

@@ -19,8 +19,8 @@ Contents
 =====================  =================================================================
 
 Each ``draw_*`` takes ``(fig, spec, res, L, truth)``: a matplotlib Figure, a
-SubplotSpec to draw in, the results.json ``res`` (its ``extra.figures`` series:
-:mod:`gonio.specs.ogam_draft.figure_data`), the label mapping of
+SubplotSpec to draw in, the results.json ``res`` (its ``extra.figures`` series, computed by
+the specification when it calibrated), the label mapping of
 :func:`gonio.report.i18n.labels`, and the virtual-bench truth (or None). The same
 function draws into the HTML's SVG and into a PDF page.
 An item that was not measured gives an empty panel saying so.

@@ -306,7 +306,7 @@ def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=
     font = fonts[0] if lang == "zh" else None
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     content = content_fn(result, L, lang, lab=lab_d)
-    content["_report"], content["_truth"] = result, truth
+    content["_results"], content["_truth"] = result, truth
     svgs = {key: figure_svg(draw, result, L, truth, fonts) for key, _, _, draw in figures}
     out = Path(out)
     with output_dir(out) as stage:

@@ -77,6 +77,12 @@ def detail(res: dict, name: str, field: str, default: Any = None) -> Any:
     return (res["items"][name].get("details") or {}).get(field, default)
 
 
+def followed(res: dict) -> str:
+    """The specification the calibration followed, as its protocol names it (results.json
+    ``extra.method.specification``; empty when the protocol names none)."""
+    return (res["extra"].get("method") or {}).get("specification") or ""
+
+
 def e_budget(res: dict) -> dict:
     """E's Annex A budget (results.json ``extra.uncertainty``; empty when there is none)."""
     return (res.get("extra") or {}).get("uncertainty") or {}
@@ -362,7 +368,7 @@ def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
     ns = L["not_stated"]
     measured = [res["items"][n]["clause"].split(" ")[0] for n in item_names(res)
                 if res["items"][n]["measured"]]
-    spec = specification_text(res.get("specification") or ns, lang, cjk)
+    spec = specification_text(followed(res) or ns, lang, cjk)
     rows = [(L["m_spec"], f"{spec}; " + L["m_clauses"].format(c=", ".join(measured)))]
     ad_rate = m["angle_deviation_rate_dps"]
     rows.append((L["m_rates"], ", ".join(display("pos", r) for r in m["rates_dps"]) + " °/s"

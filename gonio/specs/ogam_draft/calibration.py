@@ -289,8 +289,8 @@ def _plain_value(c, value=None):
 
 
 def method_settings(protocol: Protocol) -> dict:
-    """The protocol's settings the method statement states (JJF 1535 8 g/h): the rates, the
-    rounds and series, the zero-stability readings, the read delay and time to reading, the
+    """The protocol's settings the certificate states (JJF 1535 8 g/h): the specification it
+    follows (as the protocol names it), the rates, the rounds and series, the zero-stability readings, the read delay and time to reading, the
     Earth-rate compensation, the axis directions and the reference conditions."""
     p = protocol
     rates = []
@@ -302,7 +302,8 @@ def method_settings(protocol: Protocol) -> dict:
     cond = p.conditions
     cget = (cond.get if isinstance(cond, dict)
             else lambda key, default: getattr(cond, key, default))
-    return {"rates_dps": sorted(float(r) for r in rates),
+    return {"specification": p.specification or "",
+            "rates_dps": sorted(float(r) for r in rates),
             "angle_deviation_rate_dps": (float(p.angle_deviation.rate_dps)
                                          if p.angle_deviation else None),
             "scale_factor_rounds": len(p.scale_factor.rounds) if p.scale_factor else 0,
