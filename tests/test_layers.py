@@ -36,6 +36,7 @@ LAYERS: dict[str, int] = {
     "gonio.analysis": 4,
     "gonio.budget": 5,
     "gonio.specs": 6,
+    "gonio.kit": 6.5,            # the public plug-in kit: re-exports, above the specifications
     "gonio.report": 7,
     "gonio.pipeline": 8,
     "gonio.records": 9,

@@ -39,7 +39,7 @@ ROLES = ("technician", "reviewer", "admin")
 
 #: A calibration's states, in workflow order (docs/records.md#workflow).
 STATES = ("queued", "running", "failed", "computed", "reviewed", "rejected", "approved",
-          "issuing", "issued")
+          "issuing", "issued", "amending", "void")
 
 
 class User(Base):
@@ -173,6 +173,12 @@ class Calibration(Base):
     pending_reason: Mapped[str] = mapped_column(Text, default="")
     #: the certificate number reserved when issuing starts (kept if the run fails)
     pending_number: Mapped[str] = mapped_column(String(32), default="")
+    #: the seal (:func:`gonio.records.services.seal`) the reviewer signed, and the approver
+    reviewed_seal: Mapped[str] = mapped_column(String(64), default="")
+    approved_seal: Mapped[str] = mapped_column(String(64), default="")
+    #: who asked for the amendment being issued (it is approved by another person)
+    amend_requested_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"),
+                                                              nullable=True)
     instrument: Mapped[Instrument] = relationship()
     created_by: Mapped[User | None] = relationship(foreign_keys=[created_by_id])
     reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])
@@ -235,8 +241,16 @@ class Certificate(Base):
     pdf_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
     dcc_sha256: Mapped[str | None] = mapped_column(ForeignKey("blobs.sha256"), nullable=True)
     results_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    #: the sealed result it was issued from (signed by reviewer and approver), the person
+    #: who reviewed it (for an amendment: who asked for it) and the laboratory's minimum
+    #: number of distinct people (creator, reviewer, approver) it was issued under
+    seal_sha256: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    reviewed_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    min_people: Mapped[int | None] = mapped_column(Integer, nullable=True)
     calibration: Mapped[Calibration] = relationship()
     replaces: Mapped["Certificate | None"] = relationship(remote_side=[id])
+    issued_by: Mapped[User | None] = relationship(foreign_keys=[issued_by_id])
+    reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])
 
 
 class AuditEvent(Base):

@@ -71,7 +71,8 @@ def calibrations(store, page: int = 1, size: int = 50, status: str = ""):
 
 def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows."""
-    from gonio.records.services import calibration
+    from gonio.errors import GonioError
+    from gonio.records.services import calibration, seal
 
     try:
         cal = calibration(store, cal_id)
@@ -88,7 +89,12 @@ def calibration_page(store, cal_id: int) -> dict | None:
                          .where(CalibrationStandard.calibration_id == cal_id)).all()
         certs = s.scalars(select(Certificate).where(Certificate.calibration_id == cal_id)
                           .order_by(Certificate.id)).all()
-    return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs}
+    try:
+        sealed, broken = seal(store, cal_id), ""
+    except GonioError as exc:                 # no result yet, or one that no longer matches
+        sealed, broken = "", str(exc) if cal.results_sha256 else ""
+    return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
+            "seal": sealed, "seal_error": broken}
 
 
 def certificates(store, page: int = 1, size: int = 50):
@@ -106,7 +112,8 @@ def certificate(store, cert_id: int):
     with store.session() as s:
         cert = s.scalar(select(Certificate).options(
             selectinload(Certificate.calibration).selectinload(Calibration.instrument)
-            .selectinload(Instrument.customer), selectinload(Certificate.replaces))
+            .selectinload(Instrument.customer), selectinload(Certificate.replaces),
+            selectinload(Certificate.issued_by), selectinload(Certificate.reviewed_by))
             .where(Certificate.id == cert_id))
         newer = s.scalar(select(Certificate).where(Certificate.replaces_id == cert_id)) \
             if cert else None

@@ -25,7 +25,7 @@ from gonio.report.stated import NoBreakText, conformity_blocks, item_nums
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
-from gonio.specs import get
+from gonio.specs import content_field, get
 
 
 def _num(value, src: str, rule: str, U=None):
@@ -122,7 +122,7 @@ def norm_text(spec, lang: str) -> str:
     """The normative document followed, with its number and year: the specification's
     ``NORM`` (en, zh) from its certificate data where it has one (a procedure that is not a
     published standard names the documents it follows), else its title."""
-    norm = getattr(spec.content(), "NORM", None) if spec.certificate_content else None
+    norm = spec.content_value("NORM")
     if norm:
         return norm[1 if lang == "zh" else 0]
     return spec.title_zh if lang == "zh" else spec.title_en
@@ -216,7 +216,7 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
     """The grouped results (JJF 1535 Annex B; IEC 62047-20 clause 5): value and U stated by
     the one rule (:func:`gonio.report.stated.item_nums`), k and ν_eff beside U."""
     rows = []
-    phrases = getattr(data, "PHRASES_ZH", ())
+    phrases = content_field(data, "PHRASES_ZH")
     for num, en, zh, keys in data.GROUPS:
         rows.append([str(num), zh if lang == "zh" else en, "", "", "", "", "", ""])
         for key in keys:
@@ -269,23 +269,23 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
-    u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
+    u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     chi2 = [k for k, it in res["items"].items()
             if ((it.get("uncertainty") or {}).get("k_source") == "chi-square")]
     if chi2:                  # a standard deviation of a few repeats (issue 24): U to the χ² limit
         add("p", [L["k_chi_square"]])
-    blocks += screening_blocks(res, L, getattr(data, "PHRASES_ZH", ()))
+    blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
     blocks += conformity_blocks(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
                                     if lang == "zh" else res["items"][k]["title"]),
         lambda k: unit_text(res["items"][k]["unit"]), Block)
     add("h", L["budget_items"])
     add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
-                  budget_rows(res, L, phrases=getattr(data, "PHRASES_ZH", ()))),
+                  budget_rows(res, L, phrases=content_field(data, "PHRASES_ZH"))),
         (0.11, 0.10, 0.49, 0.15, 0.15))
-    recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
-    notes = [readings_note(n, getattr(data, "READINGS_ZH", {}), lang)
+    recal = content_field(data, "RECAL")          # the specification's own clause, if any
+    notes = [readings_note(n, content_field(data, "READINGS_ZH"), lang)
              for n in res.get("readings_taken", [])]
     blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes,
                              recal=recal and recal[1 if lang == "zh" else 0])
@@ -327,26 +327,26 @@ def dcc_translator(result, content_fn):
     from gonio.report.dcc import label_translator
 
     res = result.to_json()
-    key = res.get("spec") or getattr(result, "spec_key", None)
+    key = res.get("spec") or result.spec_key
     spec = get(key)
     data = spec.content() if spec.certificate_content else None
     extra = {spec.title_en: spec.title_zh}
-    titles = getattr(data, "TITLES_ZH", {})
+    titles = content_field(data, "TITLES_ZH")
     for k, it in res.get("items", {}).items():
         if k in titles:
             extra[it["title"]] = titles[k]
-    for _, en, zh, _ in getattr(data, "GROUPS", ()):
+    for _, en, zh, _ in content_field(data, "GROUPS"):
         extra[en] = zh
-    heading = getattr(data, "HEADING", None)
+    heading = content_field(data, "HEADING")
     if heading:
         extra[heading[0]] = heading[1]
-    extra.update(getattr(data, "READINGS_ZH", {}))
-    norm = getattr(data, "NORM", None)
+    extra.update(content_field(data, "READINGS_ZH"))
+    norm = content_field(data, "NORM")
     if norm:
         extra[norm[0]] = norm[1]
     # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
     own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
-    return label_translator(extra, own + tuple(getattr(data, "PHRASES_ZH", ())))
+    return label_translator(extra, own + tuple(content_field(data, "PHRASES_ZH")))
 
 
 def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",

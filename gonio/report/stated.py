@@ -36,7 +36,7 @@ from typing import Any
 from gonio.analysis.conformity import (DEFAULT_LIMITS_ORIGIN, Conformity, DecisionRule,  # noqa: F401
                                       Limits, limits_of, rule_of)
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
-from gonio.result.statement import decimals_for_sig, round_half_up
+from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 
 
 class NoBreakText(str):
@@ -156,6 +156,7 @@ def stated_item(res: dict, name: str) -> dict:
     unc = item_uncertainty(res, name)
     U = unc["U"] if unc else None
     sig = ITEM_SIG_DIGITS.get(name, 3)
+    own = None                      # the item stated by its own U (item_nums)
     max_abs = detail(res, name, "max_abs_arcsec")
     if name == "angle_deviation" and max_abs is not None:
         out["value"] = num(res, item_path(name, "max_abs_arcsec"),
@@ -169,14 +170,17 @@ def stated_item(res: dict, name: str) -> dict:
         # E's U, as the per-position table beside E (JCGM 100 7.2.6 applied to the pair)
         out["value"] = num(res, item_path(name, "value"),
                            rule_at_U(item_uncertainty(res, "angle_deviation")["U"], sig))
-    else:
-        out["value"] = num(res, item_path(name, "value"), rule_at_U(U, sig))
+    else:                           # the item's own U: the one statement rule, power of ten
+        own = (item_nums(item, f"items.{name}", sig=sig)
+               if unc and unc["src_U"].startswith(f"items.{name}.") else None)
+        out["value"] = own["value"] if own else num(res, item_path(name, "value"),
+                                                    rule_at_U(U, sig))
     if unc:
         out["U_raw"] = U
-        out["U"] = num(res, unc["src_U"], "U")
+        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
         out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
         if unc["p"] is not None:
-            out["p"] = display("k", 100.0 * float(unc["p"]))
+            out["p"] = p_text(float(unc["p"]))
         out["upper"] = upper_bound(res, name, out["value"])
     return out
 
@@ -289,18 +293,32 @@ def interval_text(lo, hi, f) -> str:
     return f"[{f(lo)}, {f(hi)}]"
 
 
-def conformity_texts(c, res: dict | None, L: dict) -> dict:
+def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = None) -> dict:
     """Limits (as given), acceptance interval (at U's decimal place), outcome and
     probabilities of one statement as text. ``c`` is a
     :class:`~gonio.analysis.conformity.Conformity` or its results.json dict. An empty
-    acceptance interval (guard bands wider than the tolerance) is said in words."""
+    acceptance interval (guard bands wider than the tolerance) is said in words; so is the
+    acceptance interval of a non-negative quantity (``nonnegative``, else the item's own flag
+    in ``res``) whose upper end lies below zero: [0, -40] is empty, never "≤ -40 s".
+
+    >>> L = {"c_acc_empty": "none", "accept": "conforms"}
+    >>> c = {"U": 100.0, "upper": 60.0, "acceptance_upper": -40.0, "outcome": "accept"}
+    >>> conformity_texts(c, None, L)["acceptance"], conformity_texts(c, None, L, True)["acceptance"]
+    ('≤ -40', 'none')
+    """
     g = (lambda k: c.get(k)) if isinstance(c, dict) else (lambda k: getattr(c, k, None))  # noqa: E731
+    if nonnegative is None and res is not None:
+        it = res.get(g("item")) if g("item") else None
+        it = it if isinstance(it, dict) else {}
+        nonnegative = bool(it.get("nonnegative") or (it.get("uncertainty") or {}).get(
+            "nonnegative"))
     U = g("U")
     dec = decimals_for_sig(float(U), 2) if U else None
     f = (lambda v: round_half_up(v, dec)) if dec is not None \
         else given_text  # noqa: E731
     al, au = g("acceptance_lower"), g("acceptance_upper")
-    if al is not None and au is not None and al > au:
+    if (al is not None and au is not None and al > au) or (nonnegative and au is not None
+                                                           and au < 0):
         acc = L["c_acc_empty"]
     else:
         acc = interval_text(al, au, f)
@@ -331,7 +349,7 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
                                                                  given_text)), "—",
                          L["c_no_statement"].format(r=c.get("reason") or "—"), "—", "—"])
             continue
-        t = conformity_texts(c, None, L)
+        t = conformity_texts(c, None, L, bool(items[key].get("nonnegative")))
         pc = c.get("conformance_probability")
         u = unit_of(key)
         mark = f" {L['c_default']}" if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN else ""

@@ -6,12 +6,18 @@ Contents
 :func:`round_half_up`      a number to a given decimal place, half up, as text
 :func:`decimals_for_sig`   the decimal place that leaves ``sig`` significant digits
 :func:`decimals_at_U`      the decimal place of U stated to two significant digits
+:func:`rounded`            a number to ``sig`` significant digits, as a float (a budget that
+                           carries a stated number on into a later step)
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
 :func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
 :func:`k_text`             a coverage factor as stated (3 significant digits)
 :func:`nu_text`            effective degrees of freedom as stated (integer part, or ∞)
+:func:`stated_nu`          ν_eff as stated and as k is computed from (integer part; ∞ above
+                           :data:`NU_INFINITE`)
+:func:`coverage_k`         k = t_p(ν) of the stated ν (so k and the printed ν agree)
+:func:`stated_gum`         a GUM result with k and U from :func:`coverage_k`
 :func:`p_text`             a coverage probability in per cent as stated
 :func:`unit_text`          a results.json unit in its SI (accepted-unit) printed form
 :func:`dsi_unit`           a results.json unit in D-SI form (with the factor applied)
@@ -27,12 +33,16 @@ The rule (JCGM 100:2008 (GUM) 7.2.6, 7.2.2; JCGM 101 and EA-4/02 the same):
 * beside U: the coverage factor k (3 significant digits, trailing zeros dropped: 1.97414 →
   1.97, 2.000 → 2), the effective degrees of freedom ν_eff (the integer part, GUM G.6.4:
   "truncate to the next lower integer"; ∞ where the budget has infinite degrees of
-  freedom) and the coverage probability p in per cent (2 significant digits: 0.9545 → 95);
+  freedom or more than :data:`NU_INFINITE`) and the coverage probability p in per cent (2 significant digits: 0.9545 → 95);
 * a quantity without an uncertainty keeps the specification's number of significant
   digits (``sig``, 3 unless the specification says otherwise);
 * U stated to more than six decimal places (or a value of 10¹⁵ or more) is written with a
   power of ten common to value and U, that of the larger one's leading digit, both mantissas
   at U's decimal place ("2.18×10⁻⁵ ± 0.13×10⁻⁵", never "2.2×10⁻⁵ ± 1.3×10⁻⁶");
+* k and the printed ν_eff agree: k is computed from the ν_eff as stated
+  (:func:`coverage_k`: t_p of the integer part; the normal quantile above
+  :data:`NU_INFINITE`), never from the unrounded ν_eff (ν_eff 2.43 is stated "2" with
+  k = t_95(2) = 4.30, not k = 3.78);
 * units are printed in the SI form of :func:`unit_text` (degree, hour and second of arc are
   units accepted for use with the SI, SI Brochure table 8) and written to a DCC in the
   D-SI form of :func:`dsi_unit`.
@@ -44,7 +54,14 @@ possible values) and the ISO 80000-1 way of stating a bound, the statement keeps
 "value ± U" (the numbers every output compares) and adds the coverage interval truncated
 at zero, stated as an **upper bound**: ``upper`` = value + U rounded *up* at U's decimal
 place (so the bound is never understated) and printed "≤ upper". Its coverage probability
-is at least the stated p (the part cut away holds no possible value). Wording used by
+is at least the stated p (the part cut away holds no possible value). **A non-negative
+quantity whose whole interval lies at or below zero** (value + U ≤ 0: an estimate below
+zero by more than its U) has no coverage interval of possible values at all; the rule
+refuses to state it (:class:`~gonio.errors.GonioError`), and a specification reports such
+an item as not measured with that reason; it is never printed as a negative bound
+("≤ -4.0 s"). An empty acceptance interval of such a quantity (guard band wider than the
+limit) is likewise said in words, never as a negative limit
+(:func:`gonio.report.stated.conformity_texts`). Wording used by
 every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098])", zh "上限：≤ 0.098
 °/s（区间 [0, 0.098]）". The issue-24 coverage studies check such items one-sidedly: the
 truth must lie below ``upper``. A quantity that may be negative (a bias, an offset, a
@@ -69,6 +86,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal, localcontext
+
+from gonio.errors import GonioError
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -142,6 +161,20 @@ def decimals_at_U(U: float) -> int:
     return decimals_for_sig(U, 2)
 
 
+def rounded(x: float, sig: int = 2) -> float:
+    """``x`` to ``sig`` significant digits, half up, as a float: the stated number of a
+    budget that carries it on (an annex computing with the rounded u_c of an earlier step).
+    Zero and non-finite numbers are returned unchanged.
+
+    >>> rounded(0.1487), rounded(0.297), rounded(0.0996), rounded(0.0034449, 3)
+    (0.15, 0.3, 0.1, 0.00344)
+    """
+    x = float(x)
+    if x == 0 or not math.isfinite(x):
+        return x
+    return float(round_half_up(x, decimals_for_sig(x, sig)))
+
+
 def k_text(k: float | None) -> str | None:
     """A coverage factor as stated: 3 significant digits, trailing zeros dropped.
 
@@ -154,16 +187,67 @@ def k_text(k: float | None) -> str | None:
     return s.rstrip("0").rstrip(".") if "." in s else s
 
 
-def nu_text(nu: float | None) -> str | None:
-    """Effective degrees of freedom as stated: the integer part (GUM G.6.4), ∞ if infinite.
+#: Above this many effective degrees of freedom ν_eff is stated "∞" and k is the normal
+#: quantile: t_0.975(1000) = 1.9623 and z_0.975 = 1.9600 differ by 0.12 %, far below U's two
+#: significant digits. (Welch–Satterthwaite gives ν_eff of 10⁷ where a Type B input
+#: dominates; stating "13539172" would claim a precision ν_eff does not have.)
+NU_INFINITE: float = 1000.0
 
-    >>> nu_text(58.7), nu_text(math.inf), nu_text(3.0), nu_text(None)
-    ('58', '∞', '3', None)
+
+def stated_nu(nu: float | None) -> float | None:
+    """ν_eff as stated, and as k is computed from (GUM G.6.4: "truncate to the next lower
+    integer"): the integer part, at least 1; ∞ above :data:`NU_INFINITE` or when infinite;
+    None when unknown.
+
+    >>> stated_nu(58.7), stated_nu(2.43), stated_nu(13539172.4), stated_nu(0.7), stated_nu(None)
+    (58.0, 2.0, inf, 1.0, None)
     """
     if nu is None or (isinstance(nu, float) and math.isnan(nu)):
         return None
     nu = float(nu)
-    return "∞" if math.isinf(nu) or nu >= 1e15 else str(int(math.floor(nu)))
+    if math.isnan(nu):
+        return None
+    if math.isinf(nu) or nu > NU_INFINITE:
+        return math.inf
+    return float(max(1, math.floor(nu)))
+
+
+def coverage_k(nu: float | None, p: float = 0.95) -> float:
+    """The coverage factor k = t_p(ν) of a two-sided interval, ν = :func:`stated_nu` of
+    ``nu`` (the normal quantile when ν is ∞ or unknown), so the k a statement prints is the
+    one of the ν it prints (JCGM 100 G.3, G.4, G.6.4).
+
+    >>> round(coverage_k(2.43), 2), round(coverage_k(2.0), 2), round(coverage_k(5000.0), 2)
+    (4.3, 4.3, 1.96)
+    """
+    from uncertainty import coverage_factor
+
+    nu_s = stated_nu(nu)
+    return coverage_factor(math.inf if nu_s is None else nu_s, p)
+
+
+def stated_gum(r):
+    """An ``uncertainty.GumResult`` computed with p whose k (and U = k·u_c) follow
+    :func:`coverage_k` of its ν_eff; a result with a fixed k (``p`` None) is returned as is."""
+    from dataclasses import replace
+
+    if r.p is None:
+        return r
+    k = coverage_k(r.dof, r.p)
+    return replace(r, k=k, U=k * r.u_c)
+
+
+def nu_text(nu: float | None) -> str | None:
+    """Effective degrees of freedom as stated (:func:`stated_nu`): the integer part, ∞ if
+    infinite or above :data:`NU_INFINITE`.
+
+    >>> nu_text(58.7), nu_text(math.inf), nu_text(3.0), nu_text(13539172.0), nu_text(None)
+    ('58', '∞', '3', '∞', None)
+    """
+    nu_s = stated_nu(nu)
+    if nu_s is None:
+        return None
+    return "∞" if math.isinf(nu_s) else str(int(nu_s))
 
 
 def p_text(p: float | None) -> str | None:
@@ -305,6 +389,13 @@ class Statement:
         return asdict(self)
 
 
+def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
+    """The already rounded Decimal ``d`` as a mantissa × 10^exponent at ``decimals`` places."""
+    with _wide():
+        m = d.scaleb(-exponent)
+        return round_half_up(m, decimals)
+
+
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
           nu_eff: float | None = None, p: float | None = None, unit: str | None = "",
           sig: int = 3, nonnegative: bool = False) -> Statement:
@@ -314,12 +405,23 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     ``sig`` significant digits. ``nonnegative`` declares a quantity that cannot be negative
     (see the module docstring for the bound it may get).
 
+    The form (plain or with a power of ten) and the power of ten are chosen from the
+    numbers *as rounded*, so a rounding that carries into the next power is stated in it:
+    9.996×10⁻⁵ to three digits is "1.00×10⁻⁴", never "10.0×10⁻⁵".
+
     >>> state(5.99906, 0.00316).value, state(-0.00004, 0.0031).value, state(None).value
     ('5.9991', '0.0000', '—')
     >>> state(0.01, 0.088, nonnegative=False).upper is None
     True
     >>> state(175.0, 1200.0, k=2, nonnegative=True, unit="s").text()
     '200 ± 1200 s (k = 2); upper bound: ≤ 1400 s (interval [0, 1400])'
+    >>> state(-3.0, 4.0, nonnegative=True, unit="s").text()
+    '-3.0 ± 4.0 s; upper bound: ≤ 1.0 s (interval [0, 1.0])'
+    >>> state(-5.0, 1.0, nonnegative=True, unit="s")
+    Traceback (most recent call last):
+    gonio.errors.GonioError: -5 ± 1 s: a non-negative quantity whose interval lies wholly at or below zero has no coverage interval of possible values; not stated
+    >>> state(9.996e-5).value_text, state(9.99996e-5, 1.0e-8).text()
+    ('1.00×10⁻⁴', '1.00000×10⁻⁴ ± 0.00010×10⁻⁴')
     """
     unit_s = unit_text(unit)
     kt, nt, pt = k_text(k), nu_text(nu_eff), p_text(p)
@@ -327,32 +429,37 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
         return Statement("—", None, kt, nt, pt, unit_s)
     value = float(value)
     if U is None or not math.isfinite(float(U)) or float(U) <= 0:
-        if value != 0 and (abs(value) < 1e-3 or abs(value) >= 1e15):
-            e = int(math.floor(math.log10(abs(value))))
-            with _wide():
-                m = float(Decimal(repr(value)).scaleb(-e))
-            return Statement(round_half_up(m, max(decimals_for_sig(m, sig), 0)), None,
-                             kt, nt, pt, unit_s, exponent=e)
-        v = round_half_up(value, max(decimals_for_sig(value, sig), 0)) if value else "0"
-        return Statement(v, None, kt, nt, pt, unit_s)
-    U = float(U)
-    dec = decimals_at_U(U)
-    exponent = 0
-    if dec > 6 or abs(value) >= 1e15:
-        # a power of ten common to value and U: that of the larger of the two's leading digit
+        if value == 0:
+            return Statement("0", None, kt, nt, pt, unit_s)
         with _wide():
-            exponent = max(Decimal(repr(abs(value))).adjusted() if value else -999_999,
-                           Decimal(repr(U)).adjusted())
-            value_m = float(Decimal(repr(value)).scaleb(-exponent))
-            U_m = float(Decimal(repr(U)).scaleb(-exponent))
-        md = dec + exponent                    # the mantissas' decimal place (U keeps 2 digits)
-        vt, Ut = round_half_up(value_m, md), round_half_up(U_m, md)
-        upper = (round_half_up(_exact_sum(value_m, U_m), md, ROUND_CEILING)
-                 if nonnegative and U > value else None)
-    else:
-        vt, Ut = round_half_up(value, dec), round_half_up(U, dec)
-        upper = (round_half_up(_exact_sum(value, U), dec, ROUND_CEILING)
-                 if nonnegative and U > value else None)
+            d = Decimal(repr(value))
+            r = d.quantize(Decimal(1).scaleb(-decimals_for_sig(value, sig)),
+                           rounding=ROUND_HALF_UP)
+            e = r.adjusted()                   # the rounded number's leading digit
+        if abs(r) < Decimal("1e-3") or abs(r) >= Decimal("1e15"):
+            return Statement(_scaled(r, e, sig - 1), None, kt, nt, pt, unit_s, exponent=e)
+        # digits left of the point are never rounded away without U (1296000.003 → 1296000)
+        return Statement(round_half_up(value, max(decimals_for_sig(value, sig), 0)), None,
+                         kt, nt, pt, unit_s)
+    U = float(U)
+    if nonnegative and value + U <= 0:
+        raise GonioError(f"{value:g} ± {U:g}{' ' + unit_s if unit_s else ''}: a non-negative "
+                         "quantity whose interval lies wholly at or below zero has no "
+                         "coverage interval of possible values; not stated")
+    dec = decimals_at_U(U)
+    q = Decimal(1).scaleb(-dec)
+    with _wide():
+        vr = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
+        Ur = Decimal(repr(U)).quantize(q, rounding=ROUND_HALF_UP)
+        ur = (_exact_sum(value, U).quantize(q, rounding=ROUND_CEILING)
+              if nonnegative and U > value else None)
+        exponent = 0
+        if dec > 6 or abs(vr) >= Decimal("1e15"):
+            # a power of ten common to value and U: that of the larger rounded one's leading digit
+            exponent = max(vr.adjusted() if vr != 0 else Ur.adjusted(), Ur.adjusted())
+    md = dec + exponent                        # the mantissas' decimal place (U keeps 2 digits)
+    vt, Ut = _scaled(vr, exponent, md), _scaled(Ur, exponent, md)
+    upper = _scaled(ur, exponent, md) if ur is not None else None
     return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
                      decimals=dec)
 

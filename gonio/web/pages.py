@@ -9,7 +9,7 @@ import re
 from fastapi import APIRouter, Request
 from fastapi.responses import RedirectResponse, Response
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, queries, services
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
                               Forbidden, current, file_response, form, fresh_token, page_of,
@@ -52,7 +52,7 @@ async def login(request: Request):
                                  str(data.get("password", ""))[:2000], address)
     except GonioError as exc:
         token = fresh_token()
-        code = 429 if "too many" in str(exc) else 401
+        code = 429 if isinstance(exc, TooManyAttemptsError) else 401
         r = render(request, "login.html", None, token, status_code=code,
                    error=str(exc).split(": ", 1)[-1])
         r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
@@ -244,7 +244,7 @@ def calibrations_page(request: Request):
     page = page_of(request)
     status = request.query_params.get("status", "")
     status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued") else ""
+                                  "rejected", "issuing", "issued", "amending") else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -330,7 +330,10 @@ def calibration_page(request: Request, cal_id: int):
 def calibration_progress(request: Request, cal_id: int):
     """The state as JSON, for a script or a test polling the run."""
     current(request)
-    cal = services.calibration(_store(request), cal_id)
+    try:
+        cal = services.calibration(_store(request), cal_id)
+    except GonioError:
+        return Response("no such calibration", status_code=404)
     return {"id": cal.id, "status": cal.status, "progress": cal.progress, "error": cal.error}
 
 
@@ -350,12 +353,13 @@ async def _act(request: Request, cal_id: int, do) -> Response:
 async def calibration_review(request: Request, cal_id: int):
     return await _act(request, cal_id, lambda u, d: services.review(
         _store(request), u, cal_id, accept=d.get("decision") == "accept",
-        comment=d.get("comment")))
+        comment=d.get("comment"), shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/approve")
 async def calibration_approve(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.approve(_store(request), u, cal_id))
+    return await _act(request, cal_id, lambda u, d: services.approve(
+        _store(request), u, cal_id, shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/retry")
@@ -372,7 +376,7 @@ def calibration_file(request: Request, cal_id: int, name: str):
     from gonio.records.models import CalibrationFile
     with _store(request).session() as s:
         sha = s.get(CalibrationFile, (cal_id, name)).sha256
-    return file_response(_store(request), sha, name)
+    return file_response(_store(request), sha, name, number=f"DRAFT-{cal_id}")
 
 
 # --------------------------------------------------------------------------- certificates
@@ -407,7 +411,7 @@ def certificate_file(request: Request, cert_id: int, name: str):
                                      "results.json": cert.results_sha256}.get(name)
     if sha is None:
         return Response("no such file", status_code=404)
-    return file_response(_store(request), sha, name, "attachment")
+    return file_response(_store(request), sha, name, "attachment", number=cert.number)
 
 
 @router.post("/certificates/{cert_id}/amend")
@@ -426,9 +430,20 @@ async def certificate_amend(request: Request, cert_id: int):
 # --------------------------------------------------------------------------- admin
 
 
+def _may_read(user, *roles) -> Response | None:
+    """A 403 page unless ``user`` holds one of ``roles`` (technicians see what their work
+    needs: not the users, not the whole audit trail)."""
+    if any(user.has(r) for r in roles):
+        return None
+    return Response(f"this needs the {' or '.join(roles)} role", status_code=403)
+
+
 @router.get("/audit")
 def audit_page(request: Request):
     user, csrf = current(request)
+    refused = _may_read(user, "reviewer", "admin")
+    if refused:
+        return refused
     page = page_of(request)
     rows, total = queries.audit_events(_store(request), page, 100)
     return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
@@ -438,6 +453,9 @@ def audit_page(request: Request):
 @router.get("/users")
 def users_page(request: Request):
     user, csrf = current(request)
+    refused = _may_read(user, "admin")
+    if refused:
+        return refused
     return render(request, "users.html", user, csrf, users=queries.users(_store(request)),
                   settings=services.settings(_store(request)))
 
@@ -449,6 +467,16 @@ async def users_add(request: Request):
     return _users_form(request, user, csrf, lambda: services.create_user(
         _store(request), user, data.get("username"), data.get("password"),
         data.getlist("roles"), data.get("full_name")))
+
+
+@router.post("/users/{username}")
+async def users_update(request: Request, username: str):
+    """Change a user: roles, active, a new password (admin)."""
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _users_form(request, user, csrf, lambda: services.update_user(
+        _store(request), user, username, active=data.get("active") == "yes",
+        roles=data.getlist("roles"), password=data.get("password") or None))
 
 
 def _users_form(request, user, csrf, do):

@@ -25,6 +25,7 @@ from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
 from gonio.result.model import Item, Result, Uncertainty, not_measured  # noqa: F401
+from gonio.result.statement import item_statement, stated_gum
 from gonio.units import S_PER_H
 from uncertainty import monte_carlo, propagate, validate_gum
 
@@ -62,9 +63,10 @@ def monte_carlo_validation(trials: int, seed: int = 0):
 def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
     """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
     the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
-    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats;
-    ``p=None`` uses the fixed ``k``."""
-    r = propagate(value_fn, inputs, k=None if p is not None else k, p=p)
+    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats, of the
+    ν_eff as stated (:func:`gonio.result.statement.coverage_k`: its integer part, ∞ above
+    1000); ``p=None`` uses the fixed ``k``."""
+    r = stated_gum(propagate(value_fn, inputs, k=None if p is not None else k, p=p))
     comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
               "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
              for c in r.contributions]
@@ -182,7 +184,8 @@ def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str,
     :func:`monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
     refuses the data (a :class:`GonioError`) is reported not measured with the refusal as
     its reason, nothing dropped; the items returned in ``ITEMS`` order, those in
-    ``NONNEGATIVE`` marked non-negative. ``items_module`` has ``ITEMS`` (rows key, title,
+    ``NONNEGATIVE`` marked non-negative (one the statement rule refuses, value + U ≤ 0, is
+    reported not measured with the refusal). ``items_module`` has ``ITEMS`` (rows key, title,
     clause, function of the context), ``NEEDS``, ``NONNEGATIVE`` and ``with_needs(ctx, done)``
     (the context an item sees, given the items done so far)."""
     from gonio.specs import item_order
@@ -200,6 +203,13 @@ def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str,
     items = {k: items[k] for k in rows}
     for key in items_module.NONNEGATIVE & items.keys():
         items[key].nonnegative = True
+        try:                       # refused by the statement rule: value + U ≤ 0
+            item_statement(items[key], nonnegative=True)
+        except GonioError as exc:
+            it = items[key]
+            items[key] = not_measured(key, it.title, it.clause, it.unit,
+                                      f"no statement possible: {exc.message}")
+            items[key].nonnegative = True
     return items
 
 
