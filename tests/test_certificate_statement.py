@@ -380,8 +380,8 @@ def test_english_certificate_without_cjk_font_has_no_tofu(run, monkeypatch):
     def no_font():
         raise GonioError("no CJK font")
     monkeypatch.setattr(cert, "cjk_font", no_font)
-    res = {**run["results"],
-           "specification": "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"}
+    res = json.loads(json.dumps(run["results"]))
+    res["extra"]["method"]["specification"] = "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"
     assert cert.font_families("en") == ("DejaVu Sans",)
     assert cert.cjk_notice("en") and "fonts-noto-cjk" in cert.cjk_notice("en")
     content = cert.certificate_blocks(res, labels("en"), lab=None, truth=None,
