@@ -44,6 +44,9 @@ BROKEN = {
                     "not exist"),
     "brk_command": ("SPEC = Specification(key='brk-command', commands=(('x', 'nomod:add'),),"
                     " **BASE)\n", "field commands['x'] names module 'nomod'"),
+    "brk_cmdfn": ("SPEC = Specification(key='brk-cmdfn', commands=(('x', 'brk_cmdfn.cli:ad'),),"
+                  " **BASE)\n", "field commands['x'] names 'brk_cmdfn.cli:ad', and "
+                  "brk_cmdfn.cli defines no ad"),
 }
 
 
@@ -53,6 +56,7 @@ def broken(tmp_path, monkeypatch):
     for name, (body, _) in BROKEN.items():
         (tmp_path / name).mkdir()
         (tmp_path / name / "__init__.py").write_text(HEAD + body, encoding="utf-8")
+        (tmp_path / name / "cli.py").write_text("def add(sub):\n    pass\n", encoding="utf-8")
     monkeypatch.syspath_prepend(str(tmp_path))
     importlib.invalidate_caches()
     eps = {**BUILT_IN, **{n.replace("_", "-"): f"{n}:SPEC" for n in BROKEN}}
@@ -112,6 +116,8 @@ BASE = dict(key="s", title_en="S", title_zh="S", clause_doc="", default_protocol
     ("dcc_units", {"ppm": "ppm"}, "field dcc_units['ppm'] must be a D-SI unit"),
     ("recalibration_interval_months", 0, "must be a positive int or None"),
     ("key", "Bad Key", "field key must be lower-case letters"),
+    ("coverage", Coverage(reduced={"rates": {"samples": 2}}),
+     "field coverage.reduced must be empty unless default_protocol is a TOML file"),
 ])
 def test_a_field_of_the_wrong_type_is_refused_naming_it(field, value, says):
     with pytest.raises(GonioError, match=None) as exc:
@@ -177,3 +183,37 @@ def test_the_records_read_the_typed_interval(monkeypatch):
     default_interval.cache_clear()
     assert default_interval("jjf1535-2015") == (6, "the specification's clause 9")
     default_interval.cache_clear()
+
+
+def test_the_outputs_module_is_checked(tmp_path, monkeypatch):
+    """The renderer's functions: the required ones present, the optional ones found through
+    a typed accessor (the pipeline asked hasattr(renderer, 'demo') before)."""
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "out_short.py").write_text("def write(*a, **k): pass\n"
+                                           "def results_json(r, lab=None): pass\n"
+                                           "summary = 'not a function'\n", encoding="utf-8")
+    s = Specification(**{**BASE, "key": "out-short"}, outputs="out_short")
+    with pytest.raises(GonioError, match="its outputs module out_short has no function summary"):
+        s.renderer()
+    assert callable(specs.get("triad-alignment").output_hook("demo"))
+    assert specs.get("jjf1535-2015").output_hook("demo") is None
+    with pytest.raises(KeyError):
+        specs.get("jjf1535-2015").output_hook("write")
+
+
+def test_the_item_renderer_needs_its_content_fields(tmp_path, monkeypatch):
+    """The per-item renderer reads GROUPS, TITLES_ZH and HEADING without a default: a
+    content module without one is refused naming it (an AttributeError deep in the
+    certificate before)."""
+    from gonio.kit import ITEM_RENDERER
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "cc_short.py").write_text("GROUPS = ()\nTITLES_ZH = {}\n", encoding="utf-8")
+    s = Specification(**{**BASE, "key": "cc-short"}, outputs=ITEM_RENDERER,
+                      certificate_content="cc_short")
+    with pytest.raises(GonioError, match=r"cc_short\) defines no HEADING, which its outputs"):
+        s.renderer()
+    with pytest.raises(GonioError, match="defines no GROUPS, TITLES_ZH, HEADING"):
+        Specification(**{**BASE, "key": "cc-none"}, outputs=ITEM_RENDERER).renderer()
+    for key in ("jjf1535-2015", "iec62047-20", "triad-alignment"):
+        specs.get(key).renderer()

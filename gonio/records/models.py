@@ -97,6 +97,8 @@ class Customer(Base):
     name: Mapped[str] = mapped_column(String(200), unique=True)
     address: Mapped[str] = mapped_column(Text, default="")
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    #: retired (no new calibration uses it; its history stays); None: in use
+    retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
 
 
 class Instrument(Base):
@@ -115,6 +117,8 @@ class Instrument(Base):
     #: specification limits: JSON list of {item, lower, upper, mpe, source}
     limits_json: Mapped[str] = mapped_column(Text, default="[]")
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    #: retired (no new calibration uses it; its history stays); None: in use
+    retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
     customer: Mapped[Customer] = relationship()
 
 
@@ -130,6 +134,8 @@ class Standard(Base):
     calibrated_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
     due_on: Mapped[_dt.date] = mapped_column(Date)
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    #: retired (no new calibration uses it; its history stays); None: in use
+    retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
 
 
 class Calibration(Base):

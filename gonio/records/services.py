@@ -302,7 +302,7 @@ def check_limits(limits) -> list[dict]:
     """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
     checks them (``LAB_SCHEMA['specification_limits']``)."""
     from gonio.formats.toml import validate_table
-    from gonio.report.certificate import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA
 
     if isinstance(limits, str):
         try:
@@ -369,7 +369,98 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
     return _create(store, actor, st, "standard", Standard.identifier == st.identifier,
-                   "a standard with this identifier exists", "identifier")
+                   "a standard with this identifier exists (record its recalibration by "
+                   "editing it: new certificate and due date)", "identifier")
+
+
+def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire=None,
+            unique=None, message: str = "") -> object:
+    """Apply ``values`` (only the fields to change) to the row and, with ``retire`` True or
+    False, retire it today or bring it back; its audit event (before, after) in the same
+    transaction. ``unique(obj)``: a statement matching another row that would clash
+    (refused with ``message``)."""
+    if retire is not None:
+        values["retired_on"] = utcnow().date() if retire else None
+    with store.writing() as s:
+        obj = s.get(model, int(obj_id))
+        if obj is None:
+            raise GonioError(f"no such {entity}", key=entity)
+        before = state(obj)
+        if retire and obj.retired_on is not None:
+            values.pop("retired_on")                      # retired already: keep the date
+        with s.no_autoflush:
+            for k, v in values.items():
+                setattr(obj, k, v)
+            if unique is not None and s.scalar(unique(obj).where(model.id != obj.id)):
+                raise GonioError(message, key=entity)
+        after = state(obj)
+        if after != before:
+            audit(s, actor, "update", entity, obj.id, before, after)
+        s.commit()
+        s.expunge(obj)
+    return obj
+
+
+def _given(**fields) -> dict:
+    """The fields that were given (not None)."""
+    return {k: v for k, v in fields.items() if v is not None}
+
+
+def update_customer(store, actor: User, customer_id: int, *, name=None, address=None,
+                    retire: bool | None = None) -> Customer:
+    """Edit a customer's name or address, retire it or bring it back (technician)."""
+    require(actor, "technician")
+    values = _given(name=None if name is None else text(name, "customer name", required=True),
+                    address=None if address is None else text(
+                        address, "customer address", max_len=MAX_TEXT, multiline=True))
+    return _update(store, actor, Customer, customer_id, "customer", values, retire,
+                   lambda o: select(Customer).where(Customer.name == o.name),
+                   "a customer with this name exists")
+
+
+def update_instrument(store, actor: User, instrument_id: int, *, customer_id=None, kind=None,
+                      manufacturer=None, model=None, serial=None, interval_months="",
+                      limits=None, retire: bool | None = None) -> Instrument:
+    """Edit an instrument: transfer it to another customer, correct its description, set its
+    interval (None or blank: the specification's default; ``""`` by default: unchanged) or
+    limits, retire it or bring it back (technician)."""
+    require(actor, "technician")
+    values = _given(kind=kind, manufacturer=manufacturer, model=model, serial=serial)
+    values = {k: text(v, k, required=k == "serial") for k, v in values.items()}
+    if customer_id is not None:
+        with store.session() as s:
+            if s.get(Customer, int(customer_id)) is None:
+                raise GonioError("no such customer", key="customer")
+        values["customer_id"] = int(customer_id)
+    if interval_months != "":
+        months = number_value(interval_months, "interval_months", 1, 120)
+        values["interval_months"] = None if months is None else int(months)
+    if limits is not None:
+        values["limits_json"] = json.dumps(check_limits(limits))
+    return _update(store, actor, Instrument, instrument_id, "instrument", values, retire,
+                   lambda o: select(Instrument).where(
+                       Instrument.manufacturer == o.manufacturer, Instrument.model == o.model,
+                       Instrument.serial == o.serial),
+                   "this instrument (manufacturer, model, serial) is registered")
+
+
+def update_standard(store, actor: User, standard_id: int, *, name=None, accuracy=None,
+                    certificate=None, traceability=None, calibrated_on=None, due_on=None,
+                    retire: bool | None = None) -> Standard:
+    """Record a standard's recalibration (its new certificate, calibration and due date: the
+    audit trail keeps every earlier one), correct its details, retire it or bring it back
+    (technician)."""
+    require(actor, "technician")
+    values = {k: text(v, k) for k, v in _given(accuracy=accuracy, certificate=certificate,
+                                               traceability=traceability).items()}
+    if name is not None:
+        values["name"] = text(name, "name", required=True)
+    for k, v in _given(calibrated_on=calibrated_on or None, due_on=due_on or None).items():
+        values[k] = date_value(v, k)
+    if values.get("calibrated_on") and values.get("due_on") and \
+            values["due_on"] < values["calibrated_on"]:
+        raise GonioError("the due date is before the calibration date", key="due_on")
+    return _update(store, actor, Standard, standard_id, "standard", values, retire)
 
 
 # --------------------------------------------------------------------------- files
@@ -454,6 +545,9 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
             raise GonioError("no such instrument", key="instrument")
+        if inst.retired_on is not None:
+            raise GonioError(f"the instrument was retired on {inst.retired_on}",
+                             key="instrument")
         key = text(spec_key, "spec", max_len=64) or inst.spec_key
         get(key)
         for sha in (readings_sha256, protocol_sha256, lab_sha256):
@@ -479,6 +573,9 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             st = s.get(Standard, sid)
             if st is None:
                 raise GonioError("no such standard", key="standards")
+            if st.retired_on is not None:
+                raise GonioError(f"standard {st.identifier} was retired on {st.retired_on}",
+                                 key="standards")
             if st.due_on < day:
                 raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
                                  f"the calibration date {day}): calibrate it first",

@@ -1,5 +1,5 @@
 """The certificate of a rate-gyro calibration (JJF 1535 Annex B content; IEC 62047-20 items),
-rendered by the optical certificate's machinery (:mod:`gonio.report.certificate`: the same
+rendered by the shared machinery (:mod:`gonio.report.render`: the same
 blocks, HTML and PDF renderers, lab file, identifier, virtual-bench banner, zh/en).
 
 The specification supplies its content as data (``gonio/specs/<name>/certificate.py``:
@@ -16,12 +16,14 @@ import re
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
-from gonio.report.certificate import (Block, Num, certificate_id, font_families, load_lab,
-                                      render_html, render_pdf)
+from gonio.formats.lab import load_lab
 from gonio.report.dcc import bilingual
 from gonio.report.figures import figure_svg
+from gonio.report.header import (certificate_id, conformity_section, opening_blocks,
+                                 signature_blocks)
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
-from gonio.report.stated import NoBreakText, conformity_blocks, item_nums
+from gonio.report.render import Block, font_families, render_html, render_pdf
+from gonio.report.stated import NoBreakText, Num, item_nums
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
@@ -45,61 +47,19 @@ def _zh(text, L: dict):
 
 def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
                   standard_row: list) -> list[Block]:
-    """The certificate's opening blocks (JJF 1535 clause 8 a–j) for a specification whose
-    results have the per-item shape: the virtual-bench notice, laboratory, customer and
-    instrument, the standards used (``standard_row`` when the lab file names none) and the
-    environment."""
+    """The certificate's opening blocks (:func:`gonio.report.header.opening_blocks`) for a
+    specification whose results have the per-item shape, with the chamber's temperature
+    points when the items were measured in one; ``standard_row``: the readings' equipment
+    (four cells, translated here) when the lab file names no standard."""
     md = res.get("metadata", {})
-    virtual = lab is None
-    lab_ = lab or {}
-    blocks: list[Block] = []
-    add = lambda kind, d, extra=None: blocks.append(Block(kind, d, extra))  # noqa: E731
-    ns = L["not_stated"]
-    if virtual:
-        add("notice", L["virtual_note"])
-        add("kv", [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")])
-    else:
-        la = lab_["laboratory"]
-        add("kv", [(L["laboratory"], la["name"]), (L["address"], la["address"])])
-    cert = lab_.get("certificate", {})
-    cust = lab_.get("customer", {"name": ns, "address": ""})
-    inst = lab_.get("instrument", {})
-    add("kv", [
-        (L["customer"], cust.get("name") or ns),
-        (L["description"], inst.get("description") or _zh(md.get("instrument"), L) or ns),
-        (L["model"], inst.get("model") or md.get("model") or ns),
-        (L["serial"], inst.get("serial") or md.get("serial") or ns),
-        (L["manufacturer"], inst.get("manufacturer") or _zh(md.get("manufacturer"), L) or ns),
-        (L["date_receipt"], cert.get("date_of_receipt") or ns),
-        (L["date_calibration"], cert.get("date_of_calibration") or md.get("date") or ns),
-        (L["date_issue"], cert.get("date_of_issue") or ns),
-        (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
-        (L["specification"], norm_text(spec, lang)),
-        (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
-                           + L["rows_word"].format(n=res['source']['rows']) + ")"),
-    ])
-    add("h", L["standards"])
-    std_rows = [[s["name"], s["identifier"] or "—", s["accuracy"] or "—", s["certificate"] or "—",
-                 s["traceability"] or "—"] for s in (lab_.get("standards") or [])]
-    if not std_rows:             # the readings' equipment, named in the page's language
-        std_rows = [[_zh(c, L) for c in standard_row] + [L["virtual_trace"] if virtual else ns]]
-    add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
-                  std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
-    add("h", L["environment"])
-    env = lab_.get("environment") or {}
-    t = env.get("temperature_c")
-    room = md.get("room_temperature_c")
-    h = env.get("humidity_pct")
-    rows = [(L["temperature"], f"{t:g} °C" if t is not None else
-             f"{room} °C" if room else ns),     # "not stated", not "not stated °C"
-            (L["humidity"], f"{h:g} %" if h is not None else ns)]
+    more = []
     temps = chamber_points(res)
     if temps:
         bound = md.get("chamber_deviation_bound_c")
-        rows.append((L["chamber_profile"], ", ".join(f"{x:g}" for x in temps) + " °C"
+        more.append((L["chamber_profile"], ", ".join(f"{x:g}" for x in temps) + " °C"
                      + (L["chamber_bound"].format(b=bound) if bound not in (None, "") else "")))
-    add("kv", rows)
-    return blocks
+    return opening_blocks(res, lab, L, specification=norm_text(spec, lang),
+                          standard_row=[_zh(c, L) for c in standard_row], environment=more)
 
 
 def chamber_points(res: dict) -> list[float]:
@@ -188,21 +148,14 @@ def readings_note(note: str, table: dict, lang: str) -> str:
 
 def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
                    notes: list | tuple | None = None, recal: str | None = None) -> list[Block]:
-    """The readings taken (``notes``, default results.json's), the signatures and the
-    statements (clause 8 l–n; ``recal`` replaces the recalibration statement)."""
-    lab_ = lab or {}
+    """The readings taken (``notes``, default results.json's), then the signatures and the
+    statements (:func:`gonio.report.header.signature_blocks`; ``recal`` replaces the
+    recalibration statement)."""
     blocks = [Block("h", reading_title or L["readings_taken"])]
     blocks += [Block("p", ["• " + note])
                for note in (notes if notes is not None else res.get("readings_taken", []))]
-    blocks.append(Block("h", L["signatory"]))
-    sig = lab_.get("signatory", {})
-    blocks.append(Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
-                               (L["checked_by"], sig.get("checked_by") or "—"),
-                               (L["approved_by"], sig.get("approved_by") or "—")]))
-    blocks += [Block("p", [L[k]]) for k in ("statement_item", "statement_copy")]
     # a specification's own recalibration clause, else no clause at all (not the draft's 9)
-    blocks.append(Block("p", [recal or L["statement_recal_user"]]))
-    return blocks
+    return blocks + signature_blocks(lab, L, recal or L["statement_recal_user"])
 
 
 def figure_blocks(figures, L: dict, lang: str) -> list[Block]:
@@ -230,7 +183,10 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
                 continue
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
-            if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
+            if n["statement"].interval is not None:     # stated by its interval, with p
+                val = [val, ("；" if lang == "zh" else "; ")
+                       + n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")]
+            elif n["upper"] is not None:    # non-negative, U exceeds the value (statement rule)
                 val = [val, L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
@@ -276,10 +232,10 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     if chi2:                  # a standard deviation of a few repeats (issue 24): U to the χ² limit
         add("p", [L["k_chi_square"]])
     blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
-    blocks += conformity_blocks(
+    blocks += conformity_section(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
                                     if lang == "zh" else res["items"][k]["title"]),
-        lambda k: unit_text(res["items"][k]["unit"]), Block)
+        lambda k: unit_text(res["items"][k]["unit"]), lab)
     add("h", L["budget_items"])
     add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
                   budget_rows(res, L, phrases=content_field(data, "PHRASES_ZH"))),
@@ -306,7 +262,7 @@ def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=
     font = fonts[0] if lang == "zh" else None
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     content = content_fn(result, L, lang, lab=lab_d)
-    content["_results"], content["_truth"] = result, truth
+    content["_report"], content["_truth"] = result, truth
     svgs = {key: figure_svg(draw, result, L, truth, fonts) for key, _, _, draw in figures}
     out = Path(out)
     with output_dir(out) as stage:

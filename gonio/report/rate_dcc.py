@@ -45,7 +45,7 @@ import numpy as np
 from lxml import etree
 
 from gonio.errors import GonioError
-from gonio.report.certificate import Num
+from gonio.report.stated import Num
 from gonio.report.dcc import (administrative_data, bound_quantity, conformity_statements,
                               element, influence_conditions, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)

@@ -480,7 +480,8 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     """One results.json item (``src`` its path, e.g. ``items.bias``) as every output states it,
     by the one statement rule (:func:`gonio.result.statement.item_statement`): ``value``,
     ``U``, ``k``, ``nu`` as :class:`Num` (or None), ``p`` (per-cent text or None), ``upper``
-    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`).
+    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`). An item
+    stated by its interval has ``U`` and ``k`` None and ``statement.interval`` set.
     ``factor`` scales value and U first (a unit conversion of the DCC).
 
     >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
@@ -515,6 +516,6 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
         out["U"] = Num(st.U_text, f"{src}.uncertainty.U", U_rule)
         if st.k is not None:
             out["k"] = Num(st.k, f"{src}.uncertainty.k", "k")
-        if st.nu_eff is not None:
-            out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
+    if st.nu_eff is not None and (st.U is not None or st.interval is not None):
+        out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
     return out

@@ -91,12 +91,15 @@ class Uncertainty:
     """An item's uncertainty (JCGM 100): the budget rows (``components``, see
     :func:`budget_row`), u_c, U, k, ν_eff (None or inf: infinite), the coverage probability
     of U (None: a fixed k was asked for), optional JCGM 101 Monte Carlo figures, how k was
-    chosen and, for a non-negative quantity, an interval (e.g. χ²) stated beside U."""
+    chosen and an interval (e.g. χ²). With ``k`` None the interval *is* the statement (a
+    dispersion, range or extreme: :func:`gonio.result.statement.state_interval`), U is then
+    the distance from the value to the interval's upper end, used by the decision rule's
+    guard band; otherwise the interval is stated beside U (the optical draft's items)."""
 
     components: list[dict]
     u_c: float
     U: float
-    k: float
+    k: float | None             # None: stated by ``interval`` alone (no coverage factor)
     nu_eff: float | None
     monte_carlo: dict | None = None
     coverage_probability: float | None = None

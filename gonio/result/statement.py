@@ -9,6 +9,8 @@ Contents
 :func:`rounded`            a number to ``sig`` significant digits, as a float (a budget that
                            carries a stated number on into a later step)
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
+:func:`state_interval`     value and its coverage interval (a dispersion, range, extreme)
+                           → a :class:`Statement` with one interval, no ± U and no k
 :func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
@@ -85,7 +87,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal, localcontext
+from decimal import ROUND_CEILING, ROUND_FLOOR, ROUND_HALF_UP, Decimal, localcontext
 
 from gonio.errors import GonioError
 
@@ -332,6 +334,7 @@ class Statement:
     upper: str | None = None
     exponent: int = 0
     decimals: int | None = None
+    interval: tuple[str, str] | None = None
 
     def _x(self, s: str) -> str:
         return f"{s}×10{str(self.exponent).translate(_SUP)}" if self.exponent else s
@@ -372,9 +375,35 @@ class Statement:
             return f"上限：≤ {b}{u}（区间 [0, {b}]）"
         return f"upper bound: ≤ {b}{u} (interval [0, {b}])"
 
-    def text(self, lang: str = "en") -> str:
-        """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)"."""
+    def interval_text(self, lang: str = "en", short: bool = False) -> str:
+        """The coverage interval of an item stated by its interval (see :func:`state`), with
+        its probability: "upper bound: ≤ 0.53 °/h (interval [0, 0.53], p ≈ 95 %)" or
+        "interval [0.066, 0.204] ″ (p ≈ 95 %)"; "" for an item stated by U. ``short``: the
+        form of a table cell whose unit is in another column, "≤ 0.53 (p ≈ 95 %)" or
+        "[0.066, 0.204] (p ≈ 95 %)"."""
+        if self.interval is None:
+            return ""
         u = f" {self.unit}" if self.unit else ""
+        lo, hi = (self._x(x) for x in self.interval)
+        p = f"p ≈ {self.p} %" if self.p is not None else ""
+        if short:
+            iv = f"≤ {hi}" if self.upper is not None else f"[{lo}, {hi}]"
+            return iv + ((f"（{p}）" if lang == "zh" else f" ({p})") if p else "")
+        if self.upper is not None:                      # one-sided from the natural bound 0
+            if lang == "zh":
+                return f"上限：≤ {hi}{u}（区间 [0, {hi}]" + (f"，{p}）" if p else "）")
+            return f"upper bound: ≤ {hi}{u} (interval [0, {hi}]" + (f", {p})" if p else ")")
+        if lang == "zh":
+            return f"区间 [{lo}, {hi}]{u}" + (f"（{p}）" if p else "")
+        return f"interval [{lo}, {hi}]{u}" + (f" ({p})" if p else "")
+
+    def text(self, lang: str = "en") -> str:
+        """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)", or for
+        an item stated by its interval "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)"."""
+        u = f" {self.unit}" if self.unit else ""
+        if self.interval is not None:
+            return f"{self.value_text}{u}" + ("；" if lang == "zh" else "; ") + \
+                self.interval_text(lang)
         if self.U is None:
             return f"{self.value_text}{u}"
         s = f"{self.value_text} ± {self.U_text}{u}"
@@ -394,6 +423,58 @@ def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
     with _wide():
         m = d.scaleb(-exponent)
         return round_half_up(m, decimals)
+
+
+def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float | None = None,
+                   p: float | None = None, unit: str | None = "",
+                   nonnegative: bool = False) -> Statement:
+    """A value stated by its coverage interval [lo, hi] (a dispersion, range or extreme whose
+    distribution is not symmetric about the estimate: χ² for a standard deviation, Monte
+    Carlo for an extreme): no "± U" and no k, one interval with its probability.
+
+    The ends are stated at the decimal place that gives the nearer end's distance from the
+    value two significant digits (the far end's, for an interval from 0), the lower end
+    rounded down and the upper end up (never narrower than computed), the value half up at
+    the same place. For a non-negative quantity an interval starting at 0 is a one-sided
+    upper bound (``upper``).
+
+    Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
+    holding the value, of zero width, or reaching below zero for a non-negative quantity:
+    no coverage interval is like that.
+
+    >>> state_interval(0.112, (0.0662, 0.2038), p=0.95, unit="arcsec").text()
+    '0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)'
+    >>> s = state_interval(1.0, (0.0, 4.415), nu_eff=2, p=0.95, nonnegative=True, unit="°/h")
+    >>> s.text(), s.U, s.k, s.upper
+    ('1.0 °/h; upper bound: ≤ 4.5 °/h (interval [0, 4.5], p ≈ 95 %)', None, None, '4.5')
+    >>> state_interval(-5.0, (-6.0, -4.0), nonnegative=True)
+    Traceback (most recent call last):
+    gonio.errors.GonioError: interval [-6, -4] of -5: a non-negative quantity's interval reaches below zero; not stated
+    """
+    unit_s = unit_text(unit)
+    value, lo, hi = float(value), float(interval[0]), float(interval[1])
+    where = f"interval [{lo:g}, {hi:g}] of {value:g}"
+    if not all(math.isfinite(x) for x in (value, lo, hi)) or not lo <= value <= hi or lo == hi:
+        raise GonioError(f"{where}: a coverage interval must be finite, of positive width "
+                         "and hold the value; not stated")
+    if nonnegative and lo < 0:
+        raise GonioError(f"{where}: a non-negative quantity's interval reaches below zero; "
+                         "not stated")
+    one_sided = nonnegative and lo == 0
+    gaps = [g for g in ((hi - value,) if one_sided else (value - lo, hi - value)) if g > 0]
+    dec = decimals_for_sig(min(gaps) if gaps else hi - lo, 2)
+    q = Decimal(1).scaleb(-dec)
+    with _wide():
+        vr = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
+        lr = Decimal(repr(lo)).quantize(q, rounding=ROUND_FLOOR)
+        hr = Decimal(repr(hi)).quantize(q, rounding=ROUND_CEILING)
+        exponent = max(vr.adjusted() if vr != 0 else hr.adjusted(), hr.adjusted()) \
+            if dec > 6 or abs(hr) >= Decimal("1e15") else 0
+    md = dec + exponent
+    ht = _scaled(hr, exponent, md)
+    return Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff), p_text(p), unit_s,
+                     upper=ht if one_sided else None, exponent=exponent, decimals=dec,
+                     interval=(_scaled(lr, exponent, md), ht))
 
 
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
@@ -495,6 +576,11 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
     if nonnegative is None:
         nonnegative = bool(_get(item, "nonnegative", False))
     measured = _get(item, "measured", True)
+    iv = _get(unc, "interval")
+    if measured and iv is not None and _get(unc, "k") is None and _get(item, "value") is not None:
+        # stated by its interval (no coverage factor exists for it): one statement
+        return state_interval(_get(item, "value"), (iv[0], iv[1]), nu_eff=_get(unc, "nu_eff"),
+                              p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative)
     return state(_get(item, "value") if measured else None, U if ok else None,
                  k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,
                  p=p if ok else None, unit=_get(item, "unit", ""), sig=sig,

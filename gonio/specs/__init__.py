@@ -23,6 +23,7 @@ find every one through :func:`available` and :func:`get`.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 import re
@@ -66,6 +67,20 @@ _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "def
                   "outputs", "readings_format", "certificate_content")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
           "named_inputs")
+#: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
+#: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
+#: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
+#: ``warnings(result)``). An outputs module may also list, as ``CONTENT_REQUIRED``, the
+#: :data:`CONTENT_FIELDS` the certificate content must define for it.
+OUTPUTS_REQUIRED = ("write", "results_json", "summary")
+OUTPUTS_OPTIONAL = ("demo", "warnings")
+
+
+@functools.lru_cache(maxsize=1)
+def _builtin() -> tuple[str, ...]:
+    """gonio's built-in protocol names (:func:`gonio.resources.builtin_names`)."""
+    from gonio.resources import builtin_names
+    return tuple(builtin_names())
 
 
 def _field_error(where: str, name: str, expected: str, got) -> GonioError:
@@ -282,6 +297,11 @@ class Specification:
         if self.coverage is not None and not isinstance(self.coverage, Coverage):
             raise _field_error(where, "coverage", "a gonio.specs.Coverage or None",
                                self.coverage)
+        if self.coverage is not None and self.coverage.reduced and not (
+                self.default_protocol.endswith(".toml") or self.default_protocol in _builtin()):
+            raise _field_error(where, "coverage.reduced", "empty unless default_protocol is "
+                               "a TOML file (the study's programme is written over it)",
+                               self.coverage.reduced)
         for name in ("simulate_options", "calibrate_options", "budget_options"):
             _set_strings(self, where, name, frozenset)
         for name in ("clauses", "item_keys"):
@@ -333,11 +353,34 @@ class Specification:
         return key in self.item_keys or any(fnmatchcase(key, k) for k in self.item_keys)
 
     def renderer(self):
-        """The module named by ``outputs`` (imported on first use)."""
+        """The module named by ``outputs`` (imported on first use), checked: the functions of
+        :data:`OUTPUTS_REQUIRED` callable, those of :data:`OUTPUTS_OPTIONAL` callable where
+        defined (one GonioError naming the specification and the function)."""
         if not self.outputs:
             raise GonioError(f"specification {self.key!r} names no outputs module (it cannot "
                              "write results or a certificate)", key="--spec")
-        return importlib.import_module(self.outputs)
+        mod = importlib.import_module(self.outputs)
+        for name in OUTPUTS_REQUIRED + OUTPUTS_OPTIONAL:
+            fn = getattr(mod, name, None)
+            if (fn is None and name in OUTPUTS_REQUIRED) or (fn is not None and not callable(fn)):
+                raise GonioError(f"specification {self.key!r}: its outputs module {self.outputs} "
+                                 f"has no function {name}", key="--spec")
+        needs = tuple(getattr(mod, "CONTENT_REQUIRED", ()))
+        content = self.content() if needs and self.certificate_content else None
+        missing = [n for n in needs if not hasattr(content, n)]
+        if missing:
+            raise GonioError(f"specification {self.key!r}: its certificate content "
+                             f"({self.certificate_content or 'none named'}) defines no "
+                             f"{', '.join(missing)}, which its outputs module {self.outputs} "
+                             "needs", key="--spec")
+        return mod
+
+    def output_hook(self, name: str):
+        """The outputs module's optional function ``name`` (:data:`OUTPUTS_OPTIONAL`:
+        ``demo``, ``warnings``), or None where it defines none."""
+        if name not in OUTPUTS_OPTIONAL:
+            raise KeyError(f"{name!r} is no optional outputs function (OUTPUTS_OPTIONAL)")
+        return getattr(self.renderer(), name, None)
 
     def content(self):
         """The module named by ``certificate_content`` (imported on first use), checked against
@@ -548,7 +591,36 @@ def _load(name: str, ref: str) -> Specification:
         if not _module_exists(module):
             raise GonioError(f"{head} is invalid: field {field_name} names module {module!r}, "
                              "which does not exist", key="--spec")
+    for name, ref in obj.commands:
+        module, _, function = ref.partition(":")
+        if not _defines(module, function):
+            raise GonioError(f"{head} is invalid: field commands[{name!r}] names {ref!r}, and "
+                             f"{module} defines no {function}", key="--spec")
     return obj
+
+
+def _defines(module: str, name: str) -> bool:
+    """Whether the source of ``module`` binds ``name`` at its top level (read, not imported:
+    a command module sits on the command line's layer). True where there is no source to
+    read (the import then decides)."""
+    import ast
+
+    origin = importlib.util.find_spec(module).origin
+    if not origin or not origin.endswith(".py"):
+        return True
+    from pathlib import Path
+
+    tree = ast.parse(Path(origin).read_text(encoding="utf-8"))
+    bound = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            bound.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            bound |= {(a.asname or a.name).split(".")[0] for a in node.names}
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            bound |= {t.id for t in targets if isinstance(t, ast.Name)}
+    return name in bound
 
 
 def _named_modules(spec: Specification) -> list[tuple[str, str]]:

@@ -97,7 +97,8 @@ def dashboard(request: Request):
 def customers_page(request: Request):
     user, csrf = current(request)
     return render(request, "customers.html", user, csrf,
-                  customers=queries.customers(_store(request)))
+                  customers=queries.customers(_store(request)),
+                  error=request.query_params.get("error", "")[:300])
 
 
 @router.post("/customers")
@@ -110,6 +111,49 @@ async def customers_add(request: Request):
         return render(request, "customers.html", user, csrf, status_code=400, error=str(exc),
                       customers=queries.customers(_store(request)))
     return _back("/customers")
+
+
+def _retire_of(data) -> bool | None:
+    """The edit forms' state: "retired" → True, "in use" → False, absent → unchanged."""
+    v = data.get("state")
+    return None if v is None else v == "retired"
+
+
+async def _edit(request: Request, back: str, do) -> Response:
+    """An edit form: ``do(user, data)``, then back to ``back`` (with the error if refused)."""
+    from urllib.parse import quote
+
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        do(user, data)
+    except GonioError as exc:
+        return _back(f"{back}?error={quote(str(exc)[:300])}")
+    return _back(back)
+
+
+@router.post("/customers/{cust_id}/edit")
+async def customer_edit(request: Request, cust_id: int):
+    return await _edit(request, "/customers", lambda u, d: services.update_customer(
+        _store(request), u, cust_id, name=d.get("name"), address=d.get("address"),
+        retire=_retire_of(d)))
+
+
+@router.post("/standards/{std_id}/edit")
+async def standard_edit(request: Request, std_id: int):
+    return await _edit(request, "/standards", lambda u, d: services.update_standard(
+        _store(request), u, std_id, **{k: d.get(k) for k in (
+            "name", "accuracy", "certificate", "traceability", "calibrated_on", "due_on")},
+        retire=_retire_of(d)))
+
+
+@router.post("/instruments/{inst_id}/edit")
+async def instrument_edit(request: Request, inst_id: int):
+    return await _edit(request, f"/instruments/{inst_id}", lambda u, d: services.update_instrument(
+        _store(request), u, inst_id, customer_id=d.get("customer_id") and _int(
+            d.get("customer_id"), "customer"),
+        **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial")},
+        interval_months=d.get("interval_months", ""), retire=_retire_of(d)))
 
 
 # --------------------------------------------------------------------------- instruments
@@ -182,7 +226,8 @@ def instrument_page(request: Request, inst_id: int):
         return Response("no such instrument", status_code=404)
     hist = services.history(store, inst_id)
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
-                  proposal=services.propose_interval(store, inst_id, hist),
+                  customers=queries.customers(store),
+                  error=request.query_params.get("error", "")[:300], proposal=services.propose_interval(store, inst_id, hist),
                   default=services.default_interval(inst.spec_key),
                   limits=services.instrument_limits(inst), n_points=max(
                       (len(v) for v in hist.values()), default=0))
@@ -218,7 +263,8 @@ _SVG_CACHE: dict[str, str] = {}
 def standards_page(request: Request):
     user, csrf = current(request)
     return render(request, "standards.html", user, csrf, standards=queries.standards(
-        _store(request)), today=_dt.date.today())
+        _store(request)), today=_dt.date.today(),
+        error=request.query_params.get("error", "")[:300])
 
 
 @router.post("/standards")
@@ -438,16 +484,69 @@ def _may_read(user, *roles) -> Response | None:
     return Response(f"this needs the {' or '.join(roles)} role", status_code=403)
 
 
+AUDIT_FILTERS = ("entity", "entity_id", "username")
+
+
+def _filters(request: Request, names) -> dict:
+    return {k: request.query_params.get(k, "")[:64] for k in names}
+
+
 @router.get("/audit")
 def audit_page(request: Request):
     user, csrf = current(request)
     refused = _may_read(user, "reviewer", "admin")
     if refused:
         return refused
+    from urllib.parse import urlencode
+
     page = page_of(request)
-    rows, total = queries.audit_events(_store(request), page, 100)
+    filters = _filters(request, AUDIT_FILTERS)
+    rows, total = queries.audit_events(_store(request), page, 100, **filters)
+    query = urlencode({k: v for k, v in filters.items() if v})
     return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
-                  size=100)
+                  size=100, filters=filters, extra="&" + query if query else "", query=query)
+
+
+def csv_text(header: list[str], rows: list[list]) -> str:
+    """CSV (RFC 4180) of a list; a cell a spreadsheet would run as a formula (=, +, -, @,
+    tab, CR first) is prefixed with an apostrophe (OWASP CSV injection).
+
+    >>> csv_text(["a", "b"], [["=1+1", 2.5], [None, "x,y"]]).splitlines()
+    ['a,b', "'=1+1,2.5", ',"x,y"']
+    """
+    import csv
+    import io
+
+    def cell(v):
+        if v is None:
+            return ""
+        v = v.isoformat() if isinstance(v, (_dt.date, _dt.datetime)) else v
+        if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r"):
+            return "'" + v
+        return v
+
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(header)
+    w.writerows([[cell(v) for v in r] for r in rows])
+    return buf.getvalue()
+
+
+@router.get("/export/{name}.csv")
+def export_csv(request: Request, name: str):
+    """A whole list as CSV (the audit trail for reviewers and admins, filtered as its page)."""
+    user, _ = current(request)
+    if name == "audit":
+        refused = _may_read(user, "reviewer", "admin")
+        if refused:
+            return refused
+    got = queries.export_rows(_store(request), name, _filters(
+        request, AUDIT_FILTERS + ("status", "customer")))
+    if got is None:
+        return Response("no such list", status_code=404)
+    stamp = _dt.date.today().isoformat()
+    return Response(csv_text(*got), media_type="text/csv; charset=utf-8", headers={
+        "Content-Disposition": f'attachment; filename="gonio-{name}-{stamp}.csv"'})
 
 
 @router.get("/users")

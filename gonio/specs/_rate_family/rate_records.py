@@ -86,11 +86,14 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
 
 def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     """Uncertainty of a standard deviation ``s`` of ν + 1 values (JJF 7.2.4 K_r,
-    7.2.11 B_r; IEC 5.6 Noise,RMS of the resolution; issue 24): u_c = s/√(2ν), the GUM's standard uncertainty of an experimental standard
-    deviation (JCGM 100 E.4.3; type A, ν degrees of freedom), and U = the distance from s to
-    the one-sided χ² 95 % upper limit of σ, s·(√(ν/χ²_0.05,ν) − 1)
-    (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`), with k = U/u_c and the
-    one-sided interval [0, s + U] (P(σ ≤ s + U) = 95 %) stated beside it.
+    7.2.11 B_r; IEC 5.6 Noise,RMS of the resolution): u_c = s/√(2ν), the GUM's standard
+    uncertainty of an experimental standard deviation (JCGM 100 E.4.3; type A, ν degrees of
+    freedom), and the one-sided χ² 95 % interval of σ, [0, s·√(ν/χ²_0.05,ν)]
+    (P(σ ≤ upper end) = 95 %), which is the item's statement
+    (:func:`gonio.result.statement.state_interval`): no k (σ's distribution is not symmetric
+    about s, so no coverage factor exists; k = U/u_c, 6.83 for ν = 2, was one). U is the
+    distance from s to the upper end (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`),
+    the guard band of the decision rule, so a guarded upper limit is the upper end.
 
     Before issue 24 the χ² half-width was entered as a normal type-B term with k = 2 and
     expanded again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's
@@ -99,8 +102,8 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     3.415·s).
 
     >>> u = std_dev_uncertainty(1.0, 2, "K_r")
-    >>> round(u.u_c, 3), round(u.U, 3), round(u.k, 2), [round(x, 3) for x in u.interval]
-    (0.5, 3.415, 6.83, [0.0, 4.415])
+    >>> round(u.u_c, 3), round(u.U, 3), u.k, [round(x, 3) for x in u.interval]
+    (0.5, 3.415, None, [0.0, 4.415])
     """
     u_c = float(s / math.sqrt(2.0 * nu))
     from gonio.specs._rate_family.formulas import std_upper_half_width
@@ -108,7 +111,7 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
            f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the one-sided χ² 95 % upper limit",
            "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
-    return Uncertainty([row], u_c, U, U / u_c if u_c > 0 else math.nan, float(nu), None, 0.95,
+    return Uncertainty([row], u_c, U, None, float(nu), None, 0.95,
                        "chi-square", interval=(0.0, s + U))
 
 

@@ -99,7 +99,7 @@ def write_outputs(result: Result, out: str | Path, *, truth: dict | None = None,
     """
     out = Path(out) if str(out).strip() else out
     if isinstance(lab, (str, Path)):
-        from gonio.report.certificate import load_lab
+        from gonio.formats.lab import load_lab
         lab = load_lab(lab)
     decide(result, lab)
     with output_set(out, inputs=inputs, force=force, source_sha256=result.source_sha256) as st:
@@ -114,7 +114,7 @@ def write_calibration(result: Result, out: str | Path,
                       lab: dict | None = None) -> dict[str, Path]:
     """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
 
-    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds the conformity statements
+    ``lab`` (a :func:`gonio.formats.lab.load_lab` dict) adds the conformity statements
     decided on its limits to ``summary.txt``, as the certificate and the CLI show them.
     """
     out = Path(out)
@@ -142,7 +142,7 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
     """
     say = on_stage or (lambda message: None)
     if isinstance(lab, (str, Path)):
-        from gonio.report.certificate import load_lab
+        from gonio.formats.lab import load_lab
         lab = load_lab(lab)                     # validate inputs before simulating
     out = Path(out) if str(out).strip() else out
     proto = load_protocol(protocol)
