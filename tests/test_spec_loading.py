@@ -100,6 +100,19 @@ def test_gonio_help_and_another_spec_keep_working(broken, tmp_path, capsys):
     assert err.startswith("gonio: error: ") and err.count("\n") == 1 and "brk-typo" in err
 
 
+def test_calibrate_another_specification_beside_broken_ones(broken, plugin, tmp_path,
+                                                           monkeypatch, capsys):
+    """gonio simulate and calibrate --spec of a working plug-in, with every broken one
+    registered beside it: exit 0, results written."""
+    eps = {**broken, "acme-rate-check": "acme_rate_check:SPEC"}
+    monkeypatch.setattr(specs, "_entry_points", lambda: eps)
+    sim, cal = tmp_path / "sim", tmp_path / "cal"
+    assert main(["simulate", "--spec", "acme-rate-check", "--out", str(sim)]) == 0
+    assert main(["calibrate", str(sim / "readings.csv"), "--spec", "acme-rate-check",
+                 "--out", str(cal)]) == 0
+    assert (cal / "results.json").is_file() and "bias B" in capsys.readouterr().out
+
+
 BASE = dict(key="s", title_en="S", title_zh="S", clause_doc="", default_protocol="",
             default_bench="", calibrate=print)
 

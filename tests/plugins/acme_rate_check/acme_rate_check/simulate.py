@@ -18,7 +18,7 @@ from acme_rate_check.items import KEY, Readings, load_protocol, with_lines
 
 #: The built-in bench: true K (mV per °/s), bias b (mV), noise σ (mV), table error bound,
 #: scale-factor asymmetry a (ppm).
-BENCHES = {"acme-bench": {"K": 25.0, "b": 12.5, "noise": 4.0, "table_u_rel": 1e-4,
+BENCHES = {"acme-bench": {"K": 25.0, "b": 12.5, "noise": 1.0, "table_u_rel": 1e-4,
                           "asym_ppm": 800.0}}
 
 
