@@ -41,6 +41,7 @@ from typing import Any, Callable
 
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.text import clean_tree, fit_header
+from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.errors import GonioError
 from gonio.analysis.conformity import RULES, check_one_limit_per_item
 from gonio.report.figures import FIGURES, figure_svg, mpl_style, plain_log_ticks
@@ -263,7 +264,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     lab = clean_tree(lab) if lab else lab
     unc = res["uncertainty"]
     U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
-    virtual = lab is None
+    virtual = is_virtual(res, lab)              # the readings' provenance, not the lab file
     lab_ = lab or {}
     blocks: list[Block] = []
     add = lambda kind, data, extra=None: blocks.append(  # noqa: E731
@@ -333,7 +334,8 @@ def _admin_blocks(add, res: dict, lab_: dict, L: dict, *, lang: str, cjk: bool,
     md = res.get("metadata", {})
     # a, b, c: title, laboratory, place; d: identifier (header of every page)
     if virtual:
-        add("notice", L["virtual_note"])
+        add("notice", " ".join(virtual_lines(res, L)))
+    if not lab_.get("laboratory"):
         lab_rows = [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")]
     else:
         la = lab_["laboratory"]

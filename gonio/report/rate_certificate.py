@@ -19,6 +19,7 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.report.certificate import (Block, Num, certificate_id, font_families, load_lab,
                                       render_html, render_pdf)
 from gonio.report.dcc import bilingual
+from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.figures import figure_svg
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
 from gonio.report.stated import NoBreakText, conformity_blocks, item_nums
@@ -50,13 +51,14 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
     instrument, the standards used (``standard_row`` when the lab file names none) and the
     environment."""
     md = res.get("metadata", {})
-    virtual = lab is None
+    virtual = is_virtual(res, lab)              # the readings' provenance, not the lab file
     lab_ = lab or {}
     blocks: list[Block] = []
     add = lambda kind, d, extra=None: blocks.append(Block(kind, d, extra))  # noqa: E731
     ns = L["not_stated"]
     if virtual:
-        add("notice", L["virtual_note"])
+        add("notice", " ".join(virtual_lines(res, L)))
+    if lab is None:
         add("kv", [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")])
     else:
         la = lab_["laboratory"]
@@ -290,7 +292,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes,
                              recal=recal and recal[1 if lang == "zh" else 0])
     blocks += figure_blocks(FIGURES, L, lang)
-    return {"id": certificate_id(result, lab), "virtual": lab is None,
+    return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 
 from gonio.report.certificate import Block, certificate_id
+from gonio.report.provenance import is_virtual
 from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_at_U,
                                translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
@@ -258,7 +259,7 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
         notes = list(zh)
     blocks += closing_blocks(res, L, lab, T("readings_taken"), notes, T("recal"))
     blocks += figure_blocks(triad_figures(result), L, lang)
-    return {"id": certificate_id(result, lab), "virtual": lab is None,
+    return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 
