@@ -8,9 +8,10 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-#: The DCC 3.3.0 schema set: the offline copy beside the repository, or $GONIO_DCC_SCHEMA_DIR.
+#: The DCC 3.3.0 schema set: the offline copy the repository carries (tests/data/dcc-3.3.0,
+#: with its licences), or $GONIO_DCC_SCHEMA_DIR.
 SCHEMA_DIR = Path(os.environ.get("GONIO_DCC_SCHEMA_DIR",
-                                 REPO.parent / "shared" / "schemas" / "dcc-3.3.0")).resolve()
+                                 REPO / "tests" / "data" / "dcc-3.3.0")).resolve()
 QUDT_URL = "https://www.ptb.de/si/v2.2.1/qudt/quantitykind.xsd"
 
 

@@ -143,6 +143,28 @@ def test_same_seed_same_bytes(tmp_path):
     assert a["readings"].read_bytes() != c["readings"].read_bytes()
 
 
+def test_write_session_refuses_to_replace_readings_as_the_cli_does(tmp_path):
+    """The Python API refuses what ``gonio simulate --out`` refuses: an existing readings or
+    truth file (a laboratory's, or an earlier run's) is replaced only with ``force``."""
+    from gonio.bench import write_session
+
+    bench = replace(load_bench("rlg"), sample_rate_hz=100.0)
+    s7 = run_session(small_protocol(series=1), bench, seed=7)
+    s8 = run_session(small_protocol(series=1), bench, seed=8)
+    first = write_session(s7, tmp_path / "run")["readings"].read_bytes()
+    with pytest.raises(GonioError, match="readings.csv exists"):
+        write_session(s8, tmp_path / "run")
+    assert (tmp_path / "run" / "readings.csv").read_bytes() == first       # untouched
+    lab = tmp_path / "lab"
+    lab.mkdir()
+    (lab / "truth.json").write_text("{}")                  # a file gonio did not write
+    with pytest.raises(GonioError, match="truth.json exists"):
+        write_session(s8, lab)
+    assert not (lab / "readings.csv").exists() and (lab / "truth.json").read_text() == "{}"
+    again = write_session(s8, tmp_path / "run", force=True)["readings"].read_bytes()
+    assert again != first
+
+
 def test_rotation_time_limit_enforced():
     bench = replace(load_bench("rlg"), table=TableConfig(accel_dps2=5.0))
     with pytest.raises(GonioError, match="scale_factor.rounds"):

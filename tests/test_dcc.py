@@ -2,7 +2,7 @@
 results.json through the certificate's rounding rule, D-SI units parsed by a D-SI parser,
 conformity equal to the closed form.
 
-The schema set is the offline copy in ``../shared/schemas/dcc-3.3.0`` beside the repository
+The schema set is the offline copy the repository carries, ``tests/data/dcc-3.3.0``
 (or ``$GONIO_DCC_SCHEMA_DIR``), loaded with xmlschema with remote access refused. D-SI unit
 strings are parsed with the ``dsiunits`` package (PTB's D-SI parser; test-only dependency).
 """

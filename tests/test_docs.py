@@ -32,7 +32,9 @@ MD_LINK = re.compile(r"\]\((?P<target>[^)\s]+)\)")
 #: External sources a clone does not have (part b). Written in pieces so this file does
 #: not match its own pattern.
 FORBIDDEN = re.compile("|".join(re.escape(s) for s in (
-    "shared" + "/spec", "shared" + "/seeds", ".." + "/shared")))
+    "shared" + "/spec", "shared" + "/seeds", "shared" + "/schemas", ".." + "/shared")))
+#: A test reaching for a folder beside the repository (the reference shelf a clone lacks).
+BESIDE_REPO = re.compile(r"""\.parent\s*/\s*["']shared["']|\.\./shared|["']shared/schemas""")
 #: In the package, protocols and README (not in docs/, which may explain these names):
 #: the old names of the external sources, and any Markdown file that is not a docs/ path.
 FORBIDDEN_IN_CODE = re.compile(
@@ -235,3 +237,28 @@ def test_no_citation_of_sources_outside_the_repository():
     """(b) nothing in the package, protocols, README or docs cites shared sources."""
     problems = forbidden_problems(ROOT)
     assert not problems, "\n" + "\n".join(problems)
+
+
+def test_no_test_reads_a_folder_beside_the_repository():
+    """A clone alone must pass its tests: no test builds a path to a folder beside the
+    repository (the DCC schema set is carried in tests/data/dcc-3.3.0)."""
+    bad = [f"{p.relative_to(ROOT)}:{n}: {line.strip()}"
+           for p in sorted((ROOT / "tests").rglob("*.py")) if p != THIS
+           for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+           if BESIDE_REPO.search(line)]
+    assert not bad, "\n" + "\n".join(bad)
+    assert BESIDE_REPO.search('SCHEMA = REPO.parent / "shared" / "schemas"')
+    assert not BESIDE_REPO.search('SCHEMA = REPO / "tests" / "data"')
+
+
+def test_dcc_schema_copy_is_the_published_one():
+    """The carried DCC 3.3.0 schema files are the byte-for-byte copies its README lists."""
+    import hashlib
+    d = ROOT / "tests" / "data" / "dcc-3.3.0"
+    listed = dict((m.group(2), m.group(1)) for m in re.finditer(
+        r"^\s+([0-9a-f]{64})\s+(\S+)", (d / "README.md").read_text(encoding="utf-8"), re.M))
+    assert set(listed) == {"dcc.xsd", "si/SI_Format.xsd", "d-sig/xmldsig-core-schema.xsd"}
+    for name, digest in listed.items():
+        assert hashlib.sha256((d / name).read_bytes()).hexdigest() == digest, name
+    for licence in ("COPYING", "COPYING.LESSER", "W3C-LICENSE"):
+        assert (d / licence).stat().st_size > 1000, licence

@@ -10,7 +10,7 @@ from scipy import stats
 
 from uncertainty import (COLUMNS, DISTRIBUTIONS, budget_table, coverage_factor, distribution,
                          from_u, monte_carlo, propagate, render_html, render_markdown,
-                         render_text, round_result, round_uncertainty, sample_inputs, type_a,
+                         render_text, sample_inputs, type_a,
                          type_b)
 
 # scipy's own standard deviations for half-width a = 1 (independent of our divisors)
@@ -75,15 +75,6 @@ def test_fixed_k_and_p():
     assert propagate(x, q, p=0.95).k == pytest.approx(stats.t.ppf(0.975, 9))
     with pytest.raises(ValueError):
         propagate(x, q, k=0)
-
-
-def test_rounding_two_significant_digits():
-    assert round_uncertainty(0.14868) == 0.15
-    assert round_uncertainty(0.2974) == 0.30
-    assert round_uncertainty(0.00996) == 0.010
-    assert round_uncertainty(31.669) == 32.0
-    assert round_result(1.234567, 0.0123) == (1.235, 0.012, 3)
-    assert round_result(50000838.4, 31.7) == (50000838.0, 32.0, 0)
 
 
 def test_table_columns_and_renderings():

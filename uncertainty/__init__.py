@@ -16,7 +16,7 @@ Law of propagation (:mod:`uncertainty.propagation`)
     :func:`combined_uncertainty`      u_c² = cᵀVc, correlated inputs (JCGM 100 5.2.2)
     :func:`welch_satterthwaite`       ν_eff (JCGM 100 G.4.1)
     :func:`coverage_factor`           k = t_p(ν) (JCGM 100 G.3)
-    :func:`round_uncertainty`, :func:`round_result`   two significant digits (JCGM 100 7.2.6)
+    (stating a result, U to two significant digits, is gonio's ``gonio.result.statement``)
 
 Monte Carlo (:mod:`uncertainty.montecarlo`)
     :func:`monte_carlo`               propagation of distributions (JCGM 101 7)
@@ -44,7 +44,6 @@ from uncertainty.montecarlo import (MonteCarloResult, ValidationResult, adaptive
                                     sample_inputs, validate_gum)
 from uncertainty.propagation import (Contribution, GumResult, coverage_factor,
                                      combined_uncertainty, compile_model, propagate,
-                                     round_result, round_uncertainty,
                                      sensitivity_coefficients, welch_satterthwaite)
 from uncertainty.quantities import InputQuantity, from_u, type_a, type_b
 from uncertainty.table import (COLUMNS, budget_table, render_html, render_markdown,
@@ -53,7 +52,7 @@ from uncertainty.table import (COLUMNS, budget_table, render_html, render_markdo
 __all__ = [
     "DISTRIBUTIONS", "distribution", "InputQuantity", "type_a", "type_b", "from_u",
     "Contribution", "GumResult", "propagate", "sensitivity_coefficients", "combined_uncertainty",
-    "welch_satterthwaite", "coverage_factor", "compile_model", "round_uncertainty", "round_result",
+    "welch_satterthwaite", "coverage_factor", "compile_model",
     "MonteCarloResult", "ValidationResult", "monte_carlo", "adaptive_monte_carlo",
     "coverage_interval", "numerical_tolerance", "validate_gum", "sample_inputs",
     "COLUMNS", "budget_table", "render_text", "render_markdown", "render_html",

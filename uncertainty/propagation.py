@@ -7,8 +7,10 @@
 - :func:`welch_satterthwaite` — ν_eff (JCGM 100 G.4.1).
 - :func:`coverage_factor` — k = t_p(ν_eff) (JCGM 100 G.3, G.4).
 - :func:`propagate` — all of the above in one :class:`GumResult`.
-- :func:`round_uncertainty`, :func:`round_result` — two significant digits, value to the
-  same decimal place (JCGM 100 7.2.6).
+
+How a result is stated (U to two significant digits, the value at its decimal place, JCGM 100
+7.2.6) is not this engine's business: gonio states every number by one rule,
+``gonio.result.statement``.
 
 Compiled (lambdified) sympy models are cached, so evaluating the same model again is fast.
 SymPy is imported only when a sympy model is compiled: an additive model written as a
@@ -22,7 +24,6 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
-from decimal import ROUND_HALF_UP, Decimal
 from typing import Callable, Sequence
 
 import sys
@@ -33,8 +34,7 @@ from scipy import stats
 from uncertainty.quantities import InputQuantity
 
 __all__ = ["Contribution", "GumResult", "LinearModel", "compile_model", "sensitivity_coefficients",
-           "combined_uncertainty", "welch_satterthwaite", "coverage_factor", "propagate",
-           "round_uncertainty", "round_result"]
+           "combined_uncertainty", "welch_satterthwaite", "coverage_factor", "propagate"]
 
 
 # --------------------------------------------------------------------------- model evaluation
@@ -370,39 +370,3 @@ def propagate(model, inputs: Sequence[InputQuantity], *, correlation=None, covar
     rt = None if r is None else tuple(tuple(float(v) for v in row) for row in r)
     return GumResult(value=y, u_c=u_c, dof=nu_eff, k=kk, U=kk * u_c, p=p,
                      contributions=rows, correlation=rt)
-
-
-# --------------------------------------------------------------------------- rounding
-def _decimal_place(u: float, sig: int) -> int:
-    """Exponent l of the last kept digit when u is given to ``sig`` significant digits."""
-    if u <= 0 or not math.isfinite(u):
-        raise ValueError(f"uncertainty to round must be positive and finite, got {u}")
-    d = Decimal(repr(float(u)))
-    e = d.adjusted() - (sig - 1)
-    # rounding may carry into a new digit (0.0996 -> 0.10): recompute from the rounded value
-    r = d.quantize(Decimal(1).scaleb(e), rounding=ROUND_HALF_UP)
-    return r.adjusted() - (sig - 1)
-
-
-def round_uncertainty(u: float, sig: int = 2) -> float:
-    """u rounded to ``sig`` significant digits, half up (JCGM 100 7.2.6).
-
-    >>> round_uncertainty(0.1487), round_uncertainty(0.297), round_uncertainty(0.0996)
-    (0.15, 0.3, 0.1)
-    """
-    e = _decimal_place(u, sig)
-    return float(Decimal(repr(float(u))).quantize(Decimal(1).scaleb(e), rounding=ROUND_HALF_UP))
-
-
-def round_result(value: float, u: float, sig: int = 2) -> tuple[float, float, int]:
-    """(value, u) with u to ``sig`` significant digits and the value to the same
-    decimal place (JCGM 100 7.2.6); also the number of decimals.
-
-    >>> round_result(50.000838123, 0.0000323)
-    (50.000838, 3.2e-05, 6)
-    """
-    e = _decimal_place(u, sig)
-    q = Decimal(1).scaleb(e)
-    ur = float(Decimal(repr(float(u))).quantize(q, rounding=ROUND_HALF_UP))
-    vr = float(Decimal(repr(float(value))).quantize(q, rounding=ROUND_HALF_UP))
-    return vr, ur, max(0, -e)

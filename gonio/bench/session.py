@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from gonio import __version__
-from gonio.atomic import output_dir, write_text
+from gonio.atomic import active_stage, check_output_dir, output_dir, write_text
 from gonio.bench.config import Bench
 from gonio.bench.instrument import (Integrator, counts_from_angle, deterministic_signature,
                                     geometry, harmonic_sum_arcsec, rate_nonlinearity)
@@ -623,11 +623,35 @@ def json_plain(x):
     return x
 
 
-def write_session(result: SessionResult, out: str | Path) -> dict[str, Path]:
-    """Write ``readings.csv`` and ``truth.json`` into ``out`` atomically."""
+def write_session(result: SessionResult, out: str | Path, *,
+                  force: bool = False) -> dict[str, Path]:
+    """Write ``readings.csv`` and ``truth.json`` into ``out`` atomically.
+
+    As ``gonio simulate --out`` does, an existing ``readings.csv`` or ``truth.json`` in
+    ``out`` (a laboratory's data, or an earlier run) is refused unless ``force``: a
+    GonioError naming the file, nothing written. Inside an output set being staged for
+    ``out`` (:func:`gonio.atomic.output_set`, which made its own checks) the files go into
+    that set.
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "readings.csv").write_text("a laboratory's readings")
+    >>> try:
+    ...     write_session(None, d)
+    ... except GonioError as e:
+    ...     print(e.message)
+    readings.csv exists in the output folder; give force=True to replace it
+    """
     from gonio.formats.readings import write_readings
 
     out = Path(out)
+    if active_stage(out) is None:
+        check_output_dir(out, force=force, what="output folder")
+        for name in ("readings.csv", "truth.json"):
+            if (out / name).exists() or (out / name).is_symlink():
+                if not force:
+                    raise GonioError(f"{name} exists in the output folder; give force=True to "
+                                     "replace it", file=out / name)
     with output_dir(out) as stage:
         write_readings(result.readings, stage / "readings.csv", result.metadata)
         write_text(stage / "truth.json", json.dumps(json_plain(result.truth), indent=2,

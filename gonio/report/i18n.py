@@ -26,7 +26,8 @@ import re
 from decimal import Decimal
 
 from gonio.errors import GonioError
-from gonio.result.statement import decimals_for_sig, nu_text, round_half_up  # noqa: F401
+from gonio.result.statement import (decimals_at_U, decimals_for_sig, k_text, nu_text,  # noqa: F401
+                                    p_text, round_half_up, state)
 # (the one rule: gonio.result.statement)
 
 #: Languages the certificate can be written in.
@@ -520,10 +521,13 @@ _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 def display_number(x: float | None, sig: int = 3) -> str:
     """``x`` to ``sig`` significant digits, half up; below 10⁻³ as ``m×10⁻ⁿ``.
 
+    A thin wrapper of the one statement rule (:func:`gonio.result.statement.state` without
+    U); it adds only the text of a non-number (returned as written).
+
     >>> display_number(76434.8425925926, 8), display_number(2.0533102, 3)
     ('76434.843', '2.05')
-    >>> display_number(2.1805064433995786e-05, 3), display_number(8.191e-05, 3)
-    ('2.18×10⁻⁵', '8.19×10⁻⁵')
+    >>> display_number(2.1805064433995786e-05, 3), display_number(9.996e-05, 3)
+    ('2.18×10⁻⁵', '1.00×10⁻⁴')
     >>> display_number(0.0, 3), display_number(None)
     ('0', '—')
     """
@@ -531,29 +535,17 @@ def display_number(x: float | None, sig: int = 3) -> str:
         x = None if x is None else float(x)
     except (TypeError, ValueError):
         return str(x)
-    if x is None or not math.isfinite(x):
-        return "—"
-    if x == 0:
-        return "0"
-    if abs(x) < 1e-3 or abs(x) >= 1e15:
-        e = Decimal(repr(abs(float(x)))).adjusted()
-        m = float(Decimal(repr(float(x))).scaleb(-e))
-        mant = round_half_up(m, decimals_for_sig(m, sig))
-        if mant.lstrip("-").startswith("10"):      # 9.996e-5 → 1.00×10⁻⁴
-            e += 1
-            m = float(Decimal(repr(float(x))).scaleb(-e))
-            mant = round_half_up(m, decimals_for_sig(m, sig))
-        return f"{mant}×10{str(e).translate(_SUP)}"
-    return round_half_up(x, max(decimals_for_sig(x, sig), 0))   # never round away integer digits
+    return state(x, sig=sig).value_text
 
 
 def display_uncertainty(U: float) -> str:
-    """Expanded uncertainty to 2 significant digits, half up (JCGM 100 7.2.6).
+    """Expanded uncertainty alone to 2 significant digits, half up (JCGM 100 7.2.6): the U
+    part of :func:`gonio.result.statement.state`, without a common power of ten.
 
     >>> display_uncertainty(0.3589621064934065), display_uncertainty(0.297), display_uncertainty(0.0996)
     ('0.36', '0.30', '0.10')
     """
-    return round_half_up(U, decimals_for_sig(U, 2))
+    return round_half_up(U, decimals_at_U(U))
 
 
 def display_item(name: str, value: float | None, U: float | None = None) -> str:
@@ -663,7 +655,7 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     if rule == "int":
         return round_half_up(value, 0)
     if rule == "k":
-        return display_position(float(display_number(value, 3)))
+        return k_text(value) or "—"
     if rule == "nu":
         return nu_text(value) or "—"
     if rule.startswith("sci"):                  # "sci<E>.<N>": the mantissa at N decimals
@@ -709,7 +701,7 @@ def coverage_text(p: float | None, lang: str = "en") -> str:
     """
     if p is None:
         return "—"
-    pct = display_position(float(display_number(100.0 * p, 2)))
+    pct = p_text(p)
     return ("约 " if lang == "zh" else "approximately ") + pct + " %"
 
 

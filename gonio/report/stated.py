@@ -36,7 +36,7 @@ from typing import Any
 from gonio.analysis.conformity import (DEFAULT_LIMITS_ORIGIN, Conformity, DecisionRule,  # noqa: F401
                                       Limits, limits_of, rule_of)
 from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
-from gonio.result.statement import decimals_for_sig, round_half_up
+from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 
 
 class NoBreakText(str):
@@ -125,6 +125,7 @@ def stated_item(res: dict, name: str) -> dict:
     unc = item_uncertainty(res, name)
     U = unc["U"] if unc else None
     sig = ITEM_SIG_DIGITS.get(name, 3)
+    own = None                      # the item stated by its own U (item_nums)
     if name == "angle_deviation" and item.get("max_abs_arcsec") is not None:
         out["value"] = num(res, f"{name}.max_abs_arcsec",
                            rule_at_U(U, sig, item["max_abs_arcsec"], "pmdec"))
@@ -136,14 +137,15 @@ def stated_item(res: dict, name: str) -> dict:
         # E's U, as the per-position table beside E (JCGM 100 7.2.6 applied to the pair)
         out["value"] = num(res, f"{name}.value",
                            rule_at_U(item_uncertainty(res, "angle_deviation")["U"], sig))
-    else:
-        out["value"] = num(res, f"{name}.value", rule_at_U(U, sig))
+    else:                           # the item's own U: the one statement rule, power of ten
+        own = item_nums(item, name, sig=sig) if unc and unc["src_U"].startswith(name) else None
+        out["value"] = own["value"] if own else num(res, f"{name}.value", rule_at_U(U, sig))
     if unc:
         out["U_raw"] = U
-        out["U"] = num(res, unc["src_U"], "U")
+        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
         out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
         if unc["p"] is not None:
-            out["p"] = display("k", 100.0 * float(unc["p"]))
+            out["p"] = p_text(float(unc["p"]))
         out["upper"] = upper_bound(res, name, out["value"])
     return out
 

@@ -6,6 +6,8 @@ Contents
 :func:`round_half_up`      a number to a given decimal place, half up, as text
 :func:`decimals_for_sig`   the decimal place that leaves ``sig`` significant digits
 :func:`decimals_at_U`      the decimal place of U stated to two significant digits
+:func:`rounded`            a number to ``sig`` significant digits, as a float (a budget that
+                           carries a stated number on into a later step)
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
 :func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
@@ -140,6 +142,20 @@ def decimals_at_U(U: float) -> int:
     (4, -1, 2)
     """
     return decimals_for_sig(U, 2)
+
+
+def rounded(x: float, sig: int = 2) -> float:
+    """``x`` to ``sig`` significant digits, half up, as a float: the stated number of a
+    budget that carries it on (an annex computing with the rounded u_c of an earlier step).
+    Zero and non-finite numbers are returned unchanged.
+
+    >>> rounded(0.1487), rounded(0.297), rounded(0.0996), rounded(0.0034449, 3)
+    (0.15, 0.3, 0.1, 0.00344)
+    """
+    x = float(x)
+    if x == 0 or not math.isfinite(x):
+        return x
+    return float(round_half_up(x, decimals_for_sig(x, sig)))
 
 
 def k_text(k: float | None) -> str | None:
@@ -305,6 +321,13 @@ class Statement:
         return asdict(self)
 
 
+def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
+    """The already rounded Decimal ``d`` as a mantissa × 10^exponent at ``decimals`` places."""
+    with _wide():
+        m = d.scaleb(-exponent)
+        return round_half_up(m, decimals)
+
+
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
           nu_eff: float | None = None, p: float | None = None, unit: str | None = "",
           sig: int = 3, nonnegative: bool = False) -> Statement:
@@ -314,12 +337,18 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     ``sig`` significant digits. ``nonnegative`` declares a quantity that cannot be negative
     (see the module docstring for the bound it may get).
 
+    The form (plain or with a power of ten) and the power of ten are chosen from the
+    numbers *as rounded*, so a rounding that carries into the next power is stated in it:
+    9.996×10⁻⁵ to three digits is "1.00×10⁻⁴", never "10.0×10⁻⁵".
+
     >>> state(5.99906, 0.00316).value, state(-0.00004, 0.0031).value, state(None).value
     ('5.9991', '0.0000', '—')
     >>> state(0.01, 0.088, nonnegative=False).upper is None
     True
     >>> state(175.0, 1200.0, k=2, nonnegative=True, unit="s").text()
     '200 ± 1200 s (k = 2); upper bound: ≤ 1400 s (interval [0, 1400])'
+    >>> state(9.996e-5).value_text, state(9.99996e-5, 1.0e-8).text()
+    ('1.00×10⁻⁴', '1.00000×10⁻⁴ ± 0.00010×10⁻⁴')
     """
     unit_s = unit_text(unit)
     kt, nt, pt = k_text(k), nu_text(nu_eff), p_text(p)
@@ -327,32 +356,33 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
         return Statement("—", None, kt, nt, pt, unit_s)
     value = float(value)
     if U is None or not math.isfinite(float(U)) or float(U) <= 0:
-        if value != 0 and (abs(value) < 1e-3 or abs(value) >= 1e15):
-            e = int(math.floor(math.log10(abs(value))))
-            with _wide():
-                m = float(Decimal(repr(value)).scaleb(-e))
-            return Statement(round_half_up(m, max(decimals_for_sig(m, sig), 0)), None,
-                             kt, nt, pt, unit_s, exponent=e)
-        v = round_half_up(value, max(decimals_for_sig(value, sig), 0)) if value else "0"
-        return Statement(v, None, kt, nt, pt, unit_s)
+        if value == 0:
+            return Statement("0", None, kt, nt, pt, unit_s)
+        with _wide():
+            d = Decimal(repr(value))
+            r = d.quantize(Decimal(1).scaleb(-decimals_for_sig(value, sig)),
+                           rounding=ROUND_HALF_UP)
+            e = r.adjusted()                   # the rounded number's leading digit
+        if abs(r) < Decimal("1e-3") or abs(r) >= Decimal("1e15"):
+            return Statement(_scaled(r, e, sig - 1), None, kt, nt, pt, unit_s, exponent=e)
+        # digits left of the point are never rounded away without U (1296000.003 → 1296000)
+        return Statement(round_half_up(value, max(decimals_for_sig(value, sig), 0)), None,
+                         kt, nt, pt, unit_s)
     U = float(U)
     dec = decimals_at_U(U)
-    exponent = 0
-    if dec > 6 or abs(value) >= 1e15:
-        # a power of ten common to value and U: that of the larger of the two's leading digit
-        with _wide():
-            exponent = max(Decimal(repr(abs(value))).adjusted() if value else -999_999,
-                           Decimal(repr(U)).adjusted())
-            value_m = float(Decimal(repr(value)).scaleb(-exponent))
-            U_m = float(Decimal(repr(U)).scaleb(-exponent))
-        md = dec + exponent                    # the mantissas' decimal place (U keeps 2 digits)
-        vt, Ut = round_half_up(value_m, md), round_half_up(U_m, md)
-        upper = (round_half_up(_exact_sum(value_m, U_m), md, ROUND_CEILING)
-                 if nonnegative and U > value else None)
-    else:
-        vt, Ut = round_half_up(value, dec), round_half_up(U, dec)
-        upper = (round_half_up(_exact_sum(value, U), dec, ROUND_CEILING)
-                 if nonnegative and U > value else None)
+    q = Decimal(1).scaleb(-dec)
+    with _wide():
+        vr = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
+        Ur = Decimal(repr(U)).quantize(q, rounding=ROUND_HALF_UP)
+        ur = (_exact_sum(value, U).quantize(q, rounding=ROUND_CEILING)
+              if nonnegative and U > value else None)
+        exponent = 0
+        if dec > 6 or abs(vr) >= Decimal("1e15"):
+            # a power of ten common to value and U: that of the larger rounded one's leading digit
+            exponent = max(vr.adjusted() if vr != 0 else Ur.adjusted(), Ur.adjusted())
+    md = dec + exponent                        # the mantissas' decimal place (U keeps 2 digits)
+    vt, Ut = _scaled(vr, exponent, md), _scaled(Ur, exponent, md)
+    upper = _scaled(ur, exponent, md) if ur is not None else None
     return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
                      decimals=dec)
 

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from uncertainty import from_u, propagate, round_uncertainty, type_b
+from gonio.result.statement import rounded
+from uncertainty import from_u, propagate, type_b
 
 #: The annex's slips and the readings taken.
 ANNEX_SLIPS: tuple[str, ...] = (
@@ -101,14 +102,14 @@ def annex_a(*, table_U_rel: float = 5e-4, acquisition_U_rel: float = 6e-5,
     r1 = propagate(lambda e_om, e_f, rep: (1 + e_f) * (1 + rep) / (1 + e_om), q, k=k)
     sf = AnnexBudget("A.1 scale factor K (relative)",
                      tuple((c.symbol, c.source, c.u_xi) for c in r1.contributions),
-                     r1.u_c, k, r1.U, round_uncertainty(r1.u_c, 3), round_uncertainty(r1.U, 2))
+                     r1.u_c, k, r1.U, rounded(r1.u_c, 3), rounded(r1.U, 2))
     # A.2: B0 = F/K; u(K)/K = the rounded A.1.3 value (as the annex does)
-    uK = round_uncertainty(r1.u_c, 3)
+    uK = rounded(r1.u_c, 3)
     q2 = [type_b("u1", 0.0, acquisition_U_rel, "normal", k=2,
                  source="data acquisition (printed heading u1, computed as u2)"),
           from_u("u2", 0.0, uK, type="B", source="scale factor, u_c(K)/K of A.1.3")]
     r2 = propagate(lambda e_f, e_k: (1 + e_f) / (1 + e_k), q2, k=k)
     bias = AnnexBudget("A.2 bias B_0 (relative)",
                        tuple((c.symbol, c.source, c.u_xi) for c in r2.contributions),
-                       r2.u_c, k, r2.U, round_uncertainty(r2.u_c, 3), round_uncertainty(r2.U, 2))
+                       r2.u_c, k, r2.U, rounded(r2.u_c, 3), rounded(r2.U, 2))
     return AnnexA(sf, bias)

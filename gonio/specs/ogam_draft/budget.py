@@ -36,10 +36,11 @@ from gonio.budget.extra import ExtraComponent
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, MIN_PER_H
 from gonio.physics.tilt import elliptic_extreme
+from gonio.result.statement import rounded as rounded_sig
 from uncertainty.propagation import LinearModel
 from uncertainty import (GumResult, MonteCarloResult, ValidationResult, budget_table,
                          from_u, monte_carlo, propagate, render_html, render_markdown,
-                         render_text, round_uncertainty, type_b, validate_gum)
+                         render_text, type_b, validate_gum)
 
 __all__ = ["AnnexABudget", "annex_a_budget", "annex_a5_rounding",
            "repeatability_from_deviations", "annex_a_model", "annex_a_linear_model"]
@@ -314,8 +315,8 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     u_c_r = math.sqrt(sum(u * u for u in rounded))
     annex_rounded = {"components": {c.symbol: r for c, r in zip(gum.contributions, rounded)},
                      "u_c_arcsec": u_c_r, "U_arcsec": k * u_c_r}
-    stated_u = round_uncertainty(gum.u_c) if gum.u_c > 0 else 0.0
-    stated_U = round_uncertainty(gum.U) if gum.U > 0 else 0.0
+    stated_u = rounded_sig(gum.u_c) if gum.u_c > 0 else 0.0
+    stated_U = rounded_sig(gum.U) if gum.U > 0 else 0.0
 
     mc = val = None
     if monte_carlo_trials:
