@@ -13,7 +13,9 @@ from pathlib import Path
 
 from gonio.atomic import output_set
 from gonio.errors import GonioError, check_input_file, read_utf8
-from gonio.formats.metadata import header_lines, readings_provenance
+from gonio.formats.metadata import header_lines
+from gonio.formats.provenance import readings_provenance
+from gonio.pipeline.identity import check_identity
 from gonio.specs import Specification, get
 
 #: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
@@ -119,7 +121,7 @@ def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
 
 def mark_provenance(result, readings) -> None:
     """Set ``result.provenance`` from the readings' own metadata
-    (:func:`gonio.formats.metadata.readings_provenance`): readings from the virtual bench are
+    (:func:`gonio.formats.provenance.readings_provenance`): readings from the virtual bench are
     marked virtual on every output whatever the laboratory file says; nothing turns it off."""
     result.provenance = readings_provenance(readings)
 
@@ -138,9 +140,12 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
+    identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
+                              else None)       # refused here, before the work
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
     mark_provenance(result, readings)
+    result.findings = list(result.findings) + identity    # proceeding: stated as findings
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)

@@ -1,5 +1,5 @@
 """The virtual-bench marking of every output (certificate pages in HTML and PDF, summary.txt,
-the DCC): driven by the result's provenance (:func:`gonio.formats.metadata.result_provenance`:
+the DCC): driven by the result's provenance (:func:`gonio.formats.provenance.result_provenance`:
 the readings' own metadata), not by whether a laboratory file was given. Readings from the
 virtual bench are marked whatever the laboratory file says; no option turns the mark off
 (docs/formats.md#provenance).
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from gonio.formats.metadata import result_provenance
+from gonio.formats.provenance import result_provenance
 
 
 def is_virtual(res: Mapping, lab: dict | None) -> bool:

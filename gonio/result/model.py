@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, fields
 from gonio import __version__
 from gonio.errors import GonioError
 from gonio.formats.jsonsafe import json_safe
-from gonio.formats.metadata import result_provenance
+from gonio.formats.provenance import result_provenance
 from gonio.result.findings import Finding, findings_to_json
 
 #: The version of the results.json shape (docs/formats.md#results-file). Raise it when a
@@ -292,7 +292,7 @@ class Result:
     covariances: list[Covariance] = field(default_factory=list)
     gonio_version: str = __version__
     tables: dict = field(default_factory=dict, repr=False, compare=False)
-    #: Where the readings come from (:func:`gonio.formats.metadata.provenance`), set by the
+    #: Where the readings come from (:func:`gonio.formats.provenance.provenance`), set by the
     #: pipeline from the readings; ``virtual`` also whenever the metadata say so.
     provenance: dict = field(default_factory=dict)
 

@@ -6,7 +6,7 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 
 from __future__ import annotations
 
-from gonio.formats.metadata import result_provenance
+from gonio.formats.provenance import result_provenance
 from gonio.result.statement import item_statement
 
 #: summary.txt's first line for readings from the virtual bench (their own metadata say so).
@@ -16,7 +16,7 @@ VIRTUAL_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the read
 
 def virtual_line(res: dict) -> list[str]:
     """``[VIRTUAL_LINE]`` filled in for a results.json dict whose readings come from the virtual
-    bench (:func:`gonio.formats.metadata.result_provenance`), else ``[]``."""
+    bench (:func:`gonio.formats.provenance.result_provenance`), else ``[]``."""
     prov = result_provenance(res)
     if not prov["virtual"]:
         return []

@@ -28,7 +28,8 @@ from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, 
 from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
-from gonio.formats.metadata import header_lines, result_provenance
+from gonio.formats.metadata import header_lines
+from gonio.formats.provenance import result_provenance
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.result.findings import findings_to_json
@@ -144,7 +145,7 @@ class CalibrationReport:
     conformity: dict = field(default_factory=dict)
     #: The specification's key in results.json (this report is the optical draft's).
     spec_key: str = "ogam-draft"
-    #: Where the readings come from (gonio.formats.metadata.provenance; the pipeline sets it)
+    #: Where the readings come from (gonio.formats.provenance.provenance; the pipeline sets it)
     provenance: dict = field(default_factory=dict)
 
     @property

@@ -71,6 +71,8 @@ def summary(report: CalibrationReport, lab: dict | None = None) -> str:
         lines.append(f"note: {zr['note']}")
     if report.e_measured:
         lines += [f"note: {n}" for n in report.budget_notes]
+    lines += [f"flagged: {f.location()}: {f.message}" for f in report.findings
+              if f.code == "identity-mismatch"]       # the readings against the lab file
     return "\n".join(lines) + "\n"
 
 
