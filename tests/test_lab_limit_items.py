@@ -78,9 +78,9 @@ def test_known_items_pass_the_check(tmp_path):
 
 # -- the gyro triad: fixed alignment keys, thermal coefficients as patterns ------------------
 
-TRIAD_LAB = re.sub(r"\[instrument\].*?\n\n", "",          # the triad's serial is its own
+TRIAD_LAB = re.sub(r"^\[instrument\]\n.*?\n\n", "",          # the triad's serial is its own
                    LAB[:LAB.index("\n[[specification_limits]]")].replace("{{", "{").replace("}}", "}"),
-                   flags=re.S)
+                   flags=re.S | re.M)
 
 
 def triad_lab(tmp_path, limits) -> Path:
