@@ -216,7 +216,7 @@ def check_output_files(places: dict, *, inputs: Iterable = (),
 def _set_owning(path) -> Path | None:
     """The output folder (this file's folder or up to two above) whose manifest lists the
     existing file ``path``: a figure or page of one command never replaces a file of
-    another command's set (hostile round 3: ``align --report CAL/certificate.html``
+    another command's set (``align --report CAL/certificate.html``
     replaced a calibration's certificate, exit 0)."""
     p = Path(path)
     if not p.is_file():

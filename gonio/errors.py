@@ -47,6 +47,20 @@ class GonioError(ValueError):
         return text if len(text) <= 600 else text[:600] + f"… ({len(text)} characters)"
 
 
+class NotFoundError(GonioError):
+    """A named input (a protocol, a bench, a file) does not exist: callers that try several
+    places catch this one and let every other error through."""
+
+
+class MissingColumnError(GonioError):
+    """A required column is absent from a file's header (a reader that guesses a file's
+    kind from its header catches this one)."""
+
+
+class TooManyAttemptsError(GonioError):
+    """An action refused for a while after too many failures (the login throttle)."""
+
+
 #: Default largest input file, bytes (``GONIO_MAX_INPUT_BYTES`` overrides; see gonio.limits).
 MAX_INPUT_BYTES: int = 2 * 1024 ** 3
 
@@ -206,5 +220,5 @@ def check_header(columns, required, *, file, line) -> set:
         seen.add(name)
     for name in required:
         if name not in seen:
-            raise GonioError("missing required column", file=file, line=line, column=name)
+            raise MissingColumnError("missing required column", file=file, line=line, column=name)
     return seen

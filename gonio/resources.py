@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, NotFoundError
 
 
 def protocols_dir() -> Path:
@@ -65,7 +65,7 @@ def resolve(name_or_path: str | Path, kind: str = "protocol") -> Path:
         return cand
     names = builtin_names(kind)
     plural = "benches" if kind == "bench" else f"{kind}s"
-    raise GonioError(f"{kind} file not found: {name_or_path} (built-in {plural}: {', '.join(names)})")
+    raise NotFoundError(f"{kind} file not found: {name_or_path} (built-in {plural}: {', '.join(names)})")
 
 
 def readings_protocol(metadata_name: str | None, readings_path, default: str | None):
@@ -74,7 +74,7 @@ def readings_protocol(metadata_name: str | None, readings_path, default: str | N
     name next to the readings (``NAME`` or ``NAME.toml``). A name that cannot be found is a
     GonioError naming the readings file and the key, never replaced by the default.
     """
-    from gonio.errors import GonioError
+    from gonio.errors import GonioError, NotFoundError
 
     name = (metadata_name or "").strip()
     if not name or name == default:
@@ -86,9 +86,8 @@ def readings_protocol(metadata_name: str | None, readings_path, default: str | N
     for c in cands:
         try:
             return resolve(c)
-        except GonioError as exc:
-            if "not found" not in exc.message:
-                raise
+        except NotFoundError:
+            continue
     raise GonioError(f"the readings file names protocol {name!r}, which is neither a "
                      "built-in protocol nor a file next to it: give --protocol FILE",
                      file=readings_path, key="protocol")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Mutation testing of the specifications' item formulas and budgets (issue 24: "mutate a
+"""Mutation testing of the specifications' item formulas and budgets ("mutate a
 formula now and then: a test must notice"). Not part of the default test run.
 
     python scripts/mutation.py --list                      # the mutants, no tests run

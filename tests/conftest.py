@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import importlib
 import os
+import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -25,3 +28,38 @@ def dcc_schema():
         str(SCHEMA_DIR / "dcc.xsd"),
         uri_mapper={QUDT_URL: (SCHEMA_DIR / "si" / "qudt" / "quantitykind.xsd").as_uri()},
         allow="local")
+
+
+#: The guide's example specification package (docs/writing-a-specification.md).
+PLUGIN = REPO / "tests" / "plugins" / "acme_rate_check"
+
+
+def install_entry_points(site: Path, project: Path) -> None:
+    """What ``pip install project`` leaves for importlib.metadata: a dist-info with the
+    entry points the project's pyproject.toml declares (the package itself on sys.path)."""
+    meta = tomllib.loads((project / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    di = site / f"{meta['name'].replace('-', '_')}-{meta['version']}.dist-info"
+    di.mkdir(parents=True)
+    (di / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {meta['name']}\n"
+                                 f"Version: {meta['version']}\n", encoding="utf-8")
+    lines = []
+    for group, eps in meta["entry-points"].items():
+        lines.append(f"[{group}]")
+        lines += [f"{name} = {ref}" for name, ref in eps.items()]
+    (di / "entry_points.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+@pytest.fixture(scope="module")
+def plugin(tmp_path_factory):
+    """The example specification package (tests/plugins/acme_rate_check) installed as pip
+    leaves it, for the tests of one module; removed again after them."""
+    site = tmp_path_factory.mktemp("site")
+    install_entry_points(site, PLUGIN)
+    sys.path[:0] = [str(site), str(PLUGIN)]
+    importlib.invalidate_caches()
+    yield site
+    for p in (str(site), str(PLUGIN)):
+        sys.path.remove(p)
+    for m in [m for m in sys.modules if m.split(".")[0] == "acme_rate_check"]:
+        del sys.modules[m]
+    importlib.invalidate_caches()

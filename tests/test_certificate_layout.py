@@ -5,7 +5,7 @@ with a closing mark (a lone ")" or "。")."""
 
 from __future__ import annotations
 
-from gonio.report.certificate import Block, KEEP_PARAGRAPH_LINES, _wrap, layout_pages
+from gonio.report.render import Block, KEEP_PARAGRAPH_LINES, _wrap, layout_pages
 from gonio.report.i18n import labels
 
 
@@ -44,7 +44,7 @@ def test_no_line_starts_with_a_closing_mark():
 def test_a_relation_is_never_left_at_a_line_end():
     """The optical results table's U cell wrapped as "p ≈ / 95 %)" (leftover 5): "k = 2.07,"
     and "p ≈ 95 %)" are wrapped whole, in the PDF (_wrap) and the HTML (no-break spaces)."""
-    from gonio.report.certificate import Num, _h
+    from gonio.report.render import Num, _h
 
     text = "0.012 (k = 2.07, p ≈ 95 %)"
     for width in range(10, 30):
@@ -71,7 +71,7 @@ def test_short_table_starts_where_it_is_rather_than_leave_half_a_page_blank():
     whole when that leaves at most MAX_BLANK_FRACTION of the page blank; otherwise it starts
     on the page with its head and first rows and goes on under its repeated head (the
     filler is one line a block, a line and a gap: about 45 blocks fill a page)."""
-    from gonio.report.certificate import (_BOTTOM, _TOP, MAX_BLANK_FRACTION, SPLIT_FIRST_ROWS,
+    from gonio.report.render import (_BOTTOM, _TOP, MAX_BLANK_FRACTION, SPLIT_FIRST_ROWS,
                                           _Layout)
 
     L = labels("en")

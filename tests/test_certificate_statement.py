@@ -377,13 +377,14 @@ def test_importing_the_report_does_not_switch_the_backend():
 def test_english_certificate_without_cjk_font_has_no_tofu(run, monkeypatch):
     def no_font():
         raise GonioError("no CJK font")
-    monkeypatch.setattr(cert, "cjk_font", no_font)
+    from gonio.report import render
+    monkeypatch.setattr(render, "cjk_font", no_font)
     cls = type(run["report"])
     orig = cls.to_dict
     monkeypatch.setattr(cls, "to_dict", lambda self: {
         **orig(self), "specification": "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"})
-    assert cert.font_families("en") == ("DejaVu Sans",)
-    assert cert.cjk_notice("en") and "fonts-noto-cjk" in cert.cjk_notice("en")
+    assert render.font_families("en") == ("DejaVu Sans",)
+    assert render.cjk_notice("en") and "fonts-noto-cjk" in render.cjk_notice("en")
     content = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None,
                                       lang="en", cjk=False)
     spec = [v for b in content["blocks"] if b.kind == "kv" for k, v in b.data

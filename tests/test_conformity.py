@@ -147,7 +147,7 @@ def test_a_standard_deviation_with_its_chi2_interval_is_decided_on_chi2():
 
 def test_a_second_limit_for_one_item_is_an_error_not_an_override(tmp_path):
     from gonio.analysis.conformity import decide_items
-    from gonio.report.certificate import load_lab
+    from gonio.formats.lab import load_lab
     r = _result_with(0.124, 0.066, 2.26, 9.0, None)
     with pytest.raises(GonioError, match=r"'R' has a limit already") as exc:
         decide_items(r, [{"item": "R", "upper": 0.3}, {"item": "R", "upper": 0.5}], None)

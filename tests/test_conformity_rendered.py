@@ -14,7 +14,7 @@ import pytest
 
 from gonio.bench import load_bench, run_session, write_session
 from gonio.protocol import parse_protocol
-from gonio.report.certificate import load_lab
+from gonio.formats.lab import load_lab
 from gonio.report.i18n import display
 from gonio.report.stated import conformity_for
 from gonio.resources import protocols_dir

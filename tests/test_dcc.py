@@ -24,7 +24,8 @@ from gonio.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.protocol import parse_protocol
-from gonio.report.certificate import certificate_id, load_lab
+from gonio.formats.lab import load_lab
+from gonio.report.header import certificate_id
 from gonio.report.dcc import DCC_NS, SI_NS, dcc_bytes
 from gonio.report.i18n import display, last_digit_unit, parse_display
 from gonio.resources import protocols_dir

@@ -500,7 +500,7 @@ def test_lab_text_fields(tmp_path, value, frag):
     character name took 389 s to lay out)."""
     import time
 
-    from gonio.report.certificate import load_lab
+    from gonio.formats.lab import load_lab
 
     p = tmp_path / "lab.toml"
     p.write_text(LAB.read_text(encoding="utf-8").replace(
@@ -562,7 +562,7 @@ def test_lab_conformity_limits_refused_by_key(tmp_path, name):
     """Conformity limits and the decision rule in a lab file: non-finite, absurd, empty,
     contradictory, duplicated or mistyped entries are refused when the file is read (before
     any work), one line naming file and key."""
-    from gonio.report.certificate import load_lab
+    from gonio.formats.lab import load_lab
 
     change, key = LIMIT_CASES[name]
     text = LAB.read_text(encoding="utf-8")

@@ -165,7 +165,7 @@ READERS = {
     "readings": read_readings,
     "protocol": load_protocol,
     "bench": load_bench,
-    "lab": lambda p: __import__("gonio.report.certificate", fromlist=["load_lab"]).load_lab(p),
+    "lab": lambda p: __import__("gonio.formats.lab", fromlist=["load_lab"]).load_lab(p),
     "calibrate": lambda p: __import__("gonio.specs.ogam_draft.calibration", fromlist=["calibrate"]).calibrate(p),
     "toml": read_toml,
 }
@@ -923,7 +923,7 @@ def test_user_text_rendered_literally(tmp_path):
     before, they were stripped or clipped on the page)."""
     from gonio.specs.ogam_draft.calibration import calibrate
     from gonio.specs.ogam_draft.outputs import write_outputs
-    from gonio.report.certificate import load_lab
+    from gonio.formats.lab import load_lab
 
     hostile = [("$\\foo$ \u202eevil\u202c <script>alert(1)</script>", "a b $x^2$ \\textbf{b}", None),
                ("x" * 2000, "名" * 300, None),

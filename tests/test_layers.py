@@ -33,9 +33,10 @@ LAYERS: dict[str, int] = {
     "gonio.physics": 1, "gonio.formats": 1,
     "gonio.protocol": 2, "gonio.result": 2,
     "gonio.bench": 3, "gonio.reduce": 3,
-    "gonio.analysis": 4,
+    "gonio.analysis": 4, "gonio.instruments": 4,
     "gonio.budget": 5,
     "gonio.specs": 6,
+    "gonio.kit": 6.5,            # the public plug-in kit: re-exports, above the specifications
     "gonio.report": 7,
     "gonio.pipeline": 8,
     "gonio.records": 9,

@@ -19,7 +19,8 @@ from lxml import etree
 from gonio.formats.rate_readings import RateReadings, read_rate_readings, write_rate_readings
 from gonio.pipeline.coverage import reduced_protocol
 from gonio.specs._rate_family.simulate import study_bench
-from gonio.report.certificate import certificate_id, load_lab
+from gonio.formats.lab import load_lab
+from gonio.report.header import certificate_id
 from gonio.report.dcc import DCC_NS, SI_NS
 from gonio.report.i18n import display, last_digit_unit, parse_display
 from gonio.report.stated import lookup

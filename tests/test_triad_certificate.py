@@ -20,7 +20,7 @@ import pytest
 
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.report.certificate import Block, KEEP_FIRST_ROWS, layout_pages
+from gonio.report.render import Block, KEEP_FIRST_ROWS, layout_pages
 from gonio.report.i18n import labels
 
 AX = "xyz"
@@ -300,3 +300,22 @@ def test_environment_states_the_chamber_profile(run):
     row = re.search(rf"<td>{re.escape(html.escape(L['chamber_profile']))}</td><td>([^<]*)</td>",
                     run["html"])
     assert row is not None and row[1] == html.escape(want), row
+
+
+def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
+    """The matrix table's b cell states b's own k (the row's k column is M's); S and L in ‰
+    carry their k; the coverage probability 0.9545 is stated "approximately 95 %" as in
+    summary.txt ("p ≈ 95 %"), never "95.45 %"."""
+    res, page = run["res"], run["html"]
+    spans = [(src, text) for src, rule, text in SPANS.findall(page)]
+    srcs = [s for s, _ in spans]
+    for a in AX:
+        assert f"items.b_{a}.uncertainty.k" in srcs          # b's own k in its cell
+        k_b = dict(spans)[f"items.b_{a}.uncertainty.k"]
+        assert float(k_b) == pytest.approx(res["items"][f"b_{a}"]["uncertainty"]["k"], rel=5e-3)
+    for p in ("xy", "xz", "yx", "yz", "zx", "zy"):
+        assert f"items.S_{p}.uncertainty.k" in srcs and f"items.L_{p}.uncertainty.k" in srcs
+    text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
+    assert "95.45 %" not in text and "approximately 95 %" in text
+    summary = (run["dir"] / "cal" / "summary.txt").read_text(encoding="utf-8")
+    assert "95.45" not in summary and "p ≈ 95 %" in summary

@@ -99,7 +99,7 @@ def test_draft_B_s_interval_and_t_factor_cover_and_k2_does_not():
     # u, U and the interval scale with B_s (k and ν do not): one budget per unit B_s
     b = zero_stability_budget(1.0, 15, time_s=T_READ, compensation_time_s=T_COMP, k=2.0)
     assert "not applied" in b.k_source and b.k > 4
-    assert b.U == pytest.approx(stats.t.ppf(0.975, b.nu_eff) * b.u_c)
+    assert b.U == pytest.approx(stats.t.ppf(0.975, math.floor(b.nu_eff)) * b.u_c)  # stated ν
     b_s = M.std(axis=1, ddof=1) / T
     hit_ws = np.abs(b_s - truth) <= b.U * b_s
     hit_iv = (b.interval[0] * b_s <= truth) & (truth <= b.interval[1] * b_s)
@@ -191,7 +191,7 @@ def test_cli_readings_file_states_the_chi_square_interval_and_t_factor(tmp_path)
     u = zs["uncertainty"]
     nu = u["nu_eff"]
     assert zs["value"] == pytest.approx(b_s, rel=1e-9) and zs["stated"] == "draft"
-    assert u["k"] == pytest.approx(stats.t.ppf(0.975, nu), rel=1e-9)      # not the lab's 2
+    assert u["k"] == pytest.approx(stats.t.ppf(0.975, math.floor(nu)), rel=1e-9)  # not the lab's 2; t of the stated ν
     assert "not applied" in u["k_source"]
     assert u["interval"][1] == pytest.approx(b_s * math.sqrt(nu / stats.chi2.ppf(0.025, nu)),
                                              rel=1e-9)

@@ -23,7 +23,7 @@ import pytest
 
 from lxml import etree
 
-from gonio.report.certificate import load_lab
+from gonio.formats.lab import load_lab
 from gonio.report.dcc import DCC_NS
 
 #: Symbols, units, names and standard numbers a Chinese certificate may print in Latin letters.
@@ -109,15 +109,19 @@ def _triad(d):
     return get("triad-alignment").calibrate(d / "sim" / "readings.csv"), d / "sim" / "readings.csv"
 
 
+def small_result(key, d):
+    """(result, readings path) of a small calibration of specification ``key`` in ``d``."""
+    make = {"ogam-draft": _optical, "triad-alignment": _triad}.get(key, lambda d: _rate(key, d))
+    return make(d)
+
+
 @pytest.fixture(scope="module", params=("ogam-draft", "jjf1535-2015", "iec62047-20",
                                         "triad-alignment"))
 def calibrated(request, tmp_path_factory):
     if shutil.which("pdftotext") is None:
         pytest.fail("pdftotext not found: run scripts/install-test-system-deps.sh")
     d = tmp_path_factory.mktemp(request.param)
-    make = {"ogam-draft": _optical, "triad-alignment": _triad}.get(
-        request.param, lambda d: _rate(request.param, d))
-    result, readings = make(d)
+    result, readings = small_result(request.param, d)
     lab = d / "lab-zh.toml"
     lab.write_text(LAB_ZH + '[decision_rule]\nrule = "non-binary"\nguard_band_factor = 1.0\n'
                    + "".join(f'[[specification_limits]]\nitem = "{k}"\nmpe = 1.0e6\n'

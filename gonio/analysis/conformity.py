@@ -51,18 +51,20 @@ import math
 from dataclasses import dataclass, replace
 
 from gonio.errors import GonioError
+from gonio.formats.lab import DECISION_RULES, check_interval, check_one_limit_per_item
 from gonio.result.model import Conformity
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
-           "rule_of", "decide_items", "decide_result", "DEFAULT_LIMITS_ORIGIN"]
+           "rule_of", "check_one_limit_per_item", "decide_items", "decide_result",
+           "DEFAULT_LIMITS_ORIGIN"]
 
 #: ``limits_from`` of an item decided on a specification's default tolerance
 #: (``SPEC.default_limits``), where the laboratory file gives no limit for it.
 DEFAULT_LIMITS_ORIGIN = "specification default"
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``).
-RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
+RULES: tuple[str, ...] = DECISION_RULES
 #: Outcomes, in the words of ILAC-G8:09/2019 4.2.3.
 OUTCOMES: tuple[str, ...] = ("pass", "conditional pass", "conditional fail", "fail")
 
@@ -99,10 +101,7 @@ class Limits:
     source: str = ""
 
     def __post_init__(self):
-        if self.lower is None and self.upper is None:
-            raise GonioError("a specification limit needs lower, upper or mpe")
-        if self.lower is not None and self.upper is not None and not self.lower < self.upper:
-            raise GonioError(f"lower limit {self.lower} is not below upper limit {self.upper}")
+        check_interval(self.lower, self.upper)
 
 
 def normal_cdf(z: float) -> float:
@@ -180,8 +179,9 @@ def _inside(y: float, lo: float | None, hi: float | None) -> bool:
         (lo is None or hi is None or lo <= hi)
 
 
-def decide(item: str, y: float, U: float, k: float, limits: Limits,
-           rule: DecisionRule, *, chi2_nu: float | None = None) -> Conformity:
+def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
+           rule: DecisionRule, *, chi2_nu: float | None = None,
+           u: float | None = None) -> Conformity:
     """The statement of conformity for one item (ILAC-G8:09/2019 4.2; JCGM 106 8–9).
 
     Parameters
@@ -190,11 +190,17 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
     y : measured value; for the draft's E (7.4) the signed extreme, compared with
         [−MPE, +MPE]: |E_i| ≤ MPE at every position is the same as the signed
         extreme lying inside that interval.
-    U, k : expanded uncertainty and its coverage factor (u = U/k, normal model).
+    U, k : expanded uncertainty and its coverage factor (u = U/k, normal model); for an
+        item stated by its χ² interval k is None and U the distance to the interval's upper
+        end (the guard band then makes the guarded upper limit the interval's upper end).
     limits, rule : the tolerance interval and the decision rule agreed.
     chi2_nu : for a standard deviation stated with its χ² interval, its degrees of freedom:
         the probabilities come from :func:`conformance_probability_chi2` instead of the
         normal model (``probability_model`` says which).
+    u : the standard uncertainty of the normal model where ``k`` is None and no χ² model
+        applies (an item stated by another interval, e.g. a half range: its guard band is
+        U, the distance to the interval's upper end; the probabilities are the normal
+        approximation with u).
 
     A value exactly on a limit of the acceptance interval is accepted (the limits
     are part of the interval, JCGM 106 3.3.9).
@@ -203,9 +209,10 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
     >>> d.outcome, round(d.false_accept_probability, 4)
     ('conditional pass', 0.1587)
     """
-    if not (U > 0 and math.isfinite(U) and k > 0 and math.isfinite(k)):
+    if not (U > 0 and math.isfinite(U)) or (chi2_nu is None and u is None and not (
+            k is not None and k > 0 and math.isfinite(k))):
         raise ValueError(f"{item}: U and k must be finite and > 0 (U={U!r}, k={k!r})")
-    u = U / k
+    u = U / k if k else u
     if chi2_nu is not None and y > 0:
         p_c = conformance_probability_chi2(y, chi2_nu, limits.lower, limits.upper)
         model = f"chi-square, nu = {chi2_nu:g}"
@@ -228,7 +235,8 @@ def decide(item: str, y: float, U: float, k: float, limits: Limits,
     else:
         outcome = "pass" if in_acc else "fail"
     accepted = outcome in ("pass", "conditional pass")
-    return Conformity(item=item, value=float(y), U=float(U), k=float(k), lower=limits.lower,
+    return Conformity(item=item, value=float(y), U=float(U), k=None if k is None else float(k),
+                      lower=limits.lower,
                       upper=limits.upper, rule=rule.kind, guard_band=float(w),
                       acceptance_lower=a_lo, acceptance_upper=a_hi, outcome=outcome,
                       accepted=accepted, conformance_probability=p_c,
@@ -266,26 +274,6 @@ def _undecided(key: str, lim: Limits, rule: DecisionRule, origin: str,
                       guard_factor=float(rule.guard_factor), limits_from=origin, reason=reason)
 
 
-def check_one_limit_per_item(limits, where: str = "specification_limits", *,
-                             file=None) -> None:
-    """One limit per item: a second entry for the same item is an error naming both, never
-    a silent override (the last decision would win in results.json while the certificate
-    showed both).
-
-    >>> check_one_limit_per_item([{"item": "R", "mpe": 0.3}, {"item": "R", "mpe": 0.5}])
-    Traceback (most recent call last):
-    ...
-    gonio.errors.GonioError: key specification_limits[1].item: 'R' has a limit already (specification_limits[0]); give one limit per item
-    """
-    first: dict = {}
-    for i, lim in enumerate(limits or []):
-        key = lim.get("item")
-        if key in first:
-            raise GonioError(f"{key!r} has a limit already ({where}[{first[key]}]); give one "
-                             f"limit per item", file=file, key=f"{where}[{i}].item")
-        first[key] = i
-
-
 def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,
                  origin: str = "lab file", where: str = "specification_limits") -> list:
     """Decide every item of ``result`` (a :class:`gonio.result.model.Result`) that a limit
@@ -319,16 +307,26 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
         it = result.items[key]
         bounds = limits_of(lim)
         unc = it.uncertainty
+        c = chi2_nu = None
         if not it.measured or it.value is None:
             c = _undecided(key, bounds, rule, origin, "not measured: " + (it.reason or ""))
-        elif (unc is None or unc.U is None or unc.k is None or not unc.U > 0
-              or not math.isfinite(unc.U)):
+        elif (unc is None or unc.U is None or not unc.U > 0 or not math.isfinite(unc.U)
+              or (unc.k is None and unc.interval is None)):
             c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
         else:
             chi2_nu = (float(unc.nu_eff) if unc.interval is not None and unc.nu_eff is not None
-                       and math.isfinite(unc.nu_eff) and unc.nu_eff > 0 else None)
-            c = replace(decide(key, float(it.value), float(unc.U), float(unc.k), bounds, rule,
-                               chi2_nu=chi2_nu), limits_from=origin)
+                       and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
+                       and (unc.k is not None or unc.k_source == "chi-square") else None)
+        u_normal = (float(unc.u_c) if c is None and unc.k is None and unc.u_c is not None
+                    and unc.u_c > 0 else None)
+        if c is None and unc.k is None and not ((chi2_nu is not None and it.value > 0)
+                                                or u_normal is not None):
+            c = _undecided(key, bounds, rule, origin, "no interval model to decide with")
+        elif c is None:
+            c = replace(decide(key, float(it.value), float(unc.U),
+                               None if unc.k is None else float(unc.k), bounds, rule,
+                               chi2_nu=chi2_nu if chi2_nu is not None and it.value > 0
+                               else None, u=u_normal), limits_from=origin)
         it.conformity = c
         out.append(c)
     return out

@@ -27,7 +27,7 @@ __all__ = ["MIN_COVERAGE", "MIN_SD_Z", "clopper_pearson", "coverage_flags", "two
 #: Wilson-interval coverage factor (95 %).
 _Z95 = 1.959963984540054
 
-#: Below this coverage of U an item is flagged as under-covering (issue 24).
+#: Below this coverage of U an item is flagged as under-covering.
 MIN_COVERAGE = 0.90
 #: Below this spread of z = (result − truth)/u_c an item's U is flagged as over-wide, where
 #: the budget is gonio's own (a standard's prescribed annex budget is stated as it is).

@@ -90,7 +90,6 @@ NULL_RTOL = 1e-9
 CLOSURE_Z_LIMIT = 3.0
 
 
-
 # --------------------------------------------------------------------------- results
 @dataclass(frozen=True)
 class ClosureCheck:
@@ -201,12 +200,6 @@ class EdaResult:
                              "error_arcsec": self.table_error_arcsec,
                              "u_arcsec": self.table_u_arcsec})
 
-    def gonio_frame(self) -> pd.DataFrame:
-        """The goniometer error as a DataFrame (angle turned, error, uncertainty)."""
-        return pd.DataFrame({"angle_deg": self.gonio_angle_deg,
-                             "error_arcsec": self.gonio_error_arcsec,
-                             "u_arcsec": self.gonio_u_arcsec})
-
     def to_dict(self) -> dict:
         """Plain, JSON-ready summary (floats rounded to 1e-6 arcsec for determinism)."""
         def r(a):
@@ -236,7 +229,7 @@ class EdaResult:
 
 @dataclass(frozen=True)
 class CouplingFit:
-    """The tilt × Earth-rate coupling estimated as a nuisance parameter (issue 12).
+    """The tilt × Earth-rate coupling estimated as a nuisance parameter.
 
     Model: a sensing axis tilted by ψ on a table whose axis is not along the Earth's
     axis picks up Ω_⊥ sin ψ cos(θ + α) as the table turns (gonio.coupling); after
@@ -355,7 +348,6 @@ def coupling_design(time_s, start_deg, step_deg: float, read_delay_s: float,
             out[k, j, 1] = (float(np.sin(p) @ dur) + float(corr_s[: j + 1] @ done)
                             - math.sin(x0[k]) * tj)
     return out
-
 
 
 def _move_integrals(step_deg: float, rate_dps: float,

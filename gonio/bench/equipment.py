@@ -18,7 +18,7 @@
 
 :func:`draw_equipment` draws every one of these errors that a specification's budget carries
 as type B from the distribution the equipment's certificate (or the laboratory's stated
-bound) gives, from a seed: the coverage studies use it per trial (issue 24), so the type-B
+bound) gives, from a seed: the coverage studies use it per trial, so the type-B
 terms of the budgets are exercised instead of one fixed realisation.
 
 The Earth rate is applied on every axis orientation by the session runner
@@ -195,7 +195,7 @@ EQUIPMENT_STREAM = 24
 
 def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     """``eq`` with every error that a budget carries as type B drawn, from ``seed``, from
-    the distribution its certificate or stated bound gives (issue 24):
+    the distribution its certificate or stated bound gives:
 
     - the rate table's relative rate error: normal, σ = ``rate_table_u_rel``;
     - the voltmeter's relative gain error: normal, σ = ``acquisition_u_rel``;

@@ -45,7 +45,6 @@ from gonio.units import S_PER_H
 from gonio.formats.toml import Field, non_negative, positive, read_toml, validate_table
 
 
-
 @dataclass(frozen=True)
 class RateGyroConfig:
     """Every parameter of the rate-gyro model (units in the names; see module docstring)."""
@@ -131,23 +130,6 @@ class RateGyroConfig:
         """H(j2πf) of the second-order dynamics (complex)."""
         u = np.asarray(freq_hz, float) / self.natural_frequency_hz
         return 1.0 / (1.0 - u ** 2 + 2j * self.damping * u)
-
-    def bandwidth_true_hz(self) -> float:
-        """The −3 dB frequency (ratio 10^(−3/20)) of H relative to its DC gain, by bisection
-        on the exact |H| (used as truth; NaN when |H| never falls that far)."""
-        target = 10.0 ** (-3.0 / 20.0)
-        lo, hi = 0.0, self.natural_frequency_hz
-        while abs(self.dynamics(hi)) > target:
-            hi *= 2
-            if hi > 1e6 * self.natural_frequency_hz:
-                return math.nan
-        for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            if abs(self.dynamics(mid)) > target:
-                lo = mid
-            else:
-                hi = mid
-        return 0.5 * (lo + hi)
 
     def to_dict(self) -> dict:
         d = asdict(self)

@@ -100,6 +100,18 @@ def _commands(argv: list[str] | None = None) -> dict:
     return found
 
 
+def _print_warnings(caught) -> None:
+    """Each distinct warning (RuntimeWarnings of numpy left out) as one line on stderr."""
+    seen = set()
+    for w in caught:
+        if issubclass(w.category, RuntimeWarning):
+            continue
+        msg = _short(str(w.message), 200)
+        if msg not in seen:
+            seen.add(msg)
+            sys.stderr.write(f"gonio: warning: {msg}\n")
+
+
 def _error(msg: str) -> int:
     sys.stderr.write(f"gonio: error: {_short(msg)}\n")
     return 2
@@ -115,18 +127,15 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            parser = build_parser(sys.argv[1:] if argv is None else list(argv))
-            args = parser.parse_args(argv)
+            try:
+                parser = build_parser(sys.argv[1:] if argv is None else list(argv))
+                args = parser.parse_args(argv)
+            except SystemExit:          # --help, --version: still say what was left out
+                _print_warnings(caught)
+                raise
             rc = _run(args)
             sys.stdout.flush()          # a closed pipe shows here, not at interpreter exit
-        seen = set()
-        for w in caught:
-            if issubclass(w.category, RuntimeWarning):
-                continue
-            msg = _short(str(w.message), 200)
-            if msg not in seen:
-                seen.add(msg)
-                sys.stderr.write(f"gonio: warning: {msg}\n")
+        _print_warnings(caught)
         return rc
     except GonioError as exc:
         return _error(str(exc))

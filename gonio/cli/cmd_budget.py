@@ -68,9 +68,9 @@ def run(args) -> int:
         b = budget(args.spec, **given)
     except GonioError as exc:
         opt = _OPTIONS.get(exc.key or "")
-        if opt is None or exc.message.startswith("--"):
+        if opt is None:
             raise
-        raise GonioError(f"{opt}: {exc.message}") from None
+        raise GonioError(f"{opt}: {exc.message}") from None      # the option, not the argument
     if args.json:
         print(json.dumps(json_safe(b.to_dict()), indent=2, ensure_ascii=False, allow_nan=False))
     elif args.format != "text":

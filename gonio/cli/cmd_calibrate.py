@@ -61,10 +61,11 @@ def add_certificate_options(p) -> None:
 def show(spec, result, as_json: bool, lab_d: dict | None = None, lang: str = "en") -> None:
     """Print the result's results.json (``--json``) or its summary, after its warnings and
     the one-line CJK font note, through the specification's renderer."""
-    from gonio.report.certificate import cjk_notice
+    from gonio.report.render import cjk_notice
 
     r = spec.renderer()
-    for w in (r.warnings(result) if hasattr(r, "warnings") else []):
+    warn = spec.output_hook("warnings")
+    for w in (warn(result) if warn is not None else []):
         print(w, file=sys.stderr)
     note = cjk_notice(lang)
     if note:
@@ -96,7 +97,7 @@ def run(args) -> int:
         check_output_dir(args.out, inputs=inputs, force=args.force)
     lab_d = load_lab_file(args.lab, spec)                               # validated before the work
     status("calibrating")
-    from gonio.report.certificate import naming_lab_file
+    from gonio.formats.lab import naming_lab_file
     with naming_lab_file(args.lab):
         result, _ = calibrate(args.readings, args.out, spec_key=spec.key, protocol=args.protocol,
                               lab=lab_d, lang=args.lang, dcc=args.dcc,

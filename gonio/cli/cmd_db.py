@@ -8,7 +8,7 @@ import getpass
 import os
 import sys
 
-from gonio.cli.cmd_serve import add_store_options
+from gonio.cli.cmd_serve import add_store_options, database_errors
 from gonio.errors import GonioError
 
 
@@ -29,6 +29,17 @@ def register(sub) -> None:
                    help="space- or comma-separated: technician, reviewer, admin")
     q.add_argument("--full-name", default="")
     q.set_defaults(func=run_create_user)
+    q = dsub.add_parser("set-user", help="deactivate or reactivate a user, change the roles, "
+                                         "reset the password ($GONIO_PASSWORD or asked)")
+    add_store_options(q)
+    q.add_argument("username")
+    g = q.add_mutually_exclusive_group()
+    g.add_argument("--deactivate", dest="active", action="store_const", const=False)
+    g.add_argument("--activate", dest="active", action="store_const", const=True)
+    q.add_argument("--roles", default=None,
+                   help="the new roles, space- or comma-separated")
+    q.add_argument("--reset-password", action="store_true")
+    q.set_defaults(func=run_set_user, active=None)
     q = dsub.add_parser("import", help="import gonio output folders as computed calibrations")
     add_store_options(q)
     q.add_argument("folders", nargs="+")
@@ -39,6 +50,13 @@ def register(sub) -> None:
     q.add_argument("--lab", default=None, metavar="FILE",
                    help="the laboratory file the folders were computed with: its decision "
                         "rule and limits decide them at issue too")
+    q.add_argument("--readings", default=None, metavar="FILE",
+                   help="the readings file results.json was computed from, when it is not "
+                        "in the folder (gonio calibrate's output holds none); one folder only")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user importing (recorded as the calibrations' creator, "
+                        "who may then neither review nor approve them; default $GONIO_USER). "
+                        "A calibration imported without one cannot be reviewed")
     q.set_defaults(func=run_import)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database")):
@@ -46,6 +64,16 @@ def register(sub) -> None:
         add_store_options(q)
         q.add_argument("archive")
         q.set_defaults(func=run_backup if name == "backup" else run_restore)
+    q = dsub.add_parser("verify", help="check every stored file, result and signed seal of "
+                                       "the live records (or find a certificate file's record)")
+    add_store_options(q)
+    q.add_argument("--certificate", default=None, metavar="FILE",
+                   help="a certificate file (PDF, HTML, DCC or results.json): find its "
+                        "record by SHA-256 and check its result against the seal it was "
+                        "issued from")
+    q.set_defaults(func=run_verify)
+    for action in dsub.choices.values():
+        action.set_defaults(func=database_errors(action.get_default("func")))
     hook_calibrate(sub)
 
 
@@ -60,6 +88,9 @@ def hook_calibrate(sub) -> None:
         p.add_argument("--record", action="store_true",
                        help="also put the calibration into the records database, computed "
                             "and awaiting review (see gonio serve)")
+        p.add_argument("--record-user", default=None, metavar="NAME",
+                       help="with --record: the records user recording it (its creator; "
+                            "default $GONIO_USER)")
         add_store_options(p)
     except argparse.ArgumentError:           # calibrate has grown its own --record
         return
@@ -74,13 +105,28 @@ def hook_calibrate(sub) -> None:
                 cid = import_output_folder(store, args.out, readings=args.readings,
                                            spec_key=args.spec,
                                            protocol=getattr(args, "protocol", None),
-                                           lab=getattr(args, "lab", None))
+                                           lab=getattr(args, "lab", None),
+                                           actor=importing_user(store, args.record_user))
             finally:
                 store.close()
             sys.stderr.write(f"gonio: recorded as calibration {cid}\n")
         return rc
 
     p.set_defaults(func=run_recorded)
+
+
+def importing_user(store, name: str | None):
+    """The records user named by ``--user`` (else ``$GONIO_USER``), active and a technician;
+    None when neither names one."""
+    from gonio.records import services
+
+    name = name or os.environ.get("GONIO_USER") or None
+    if name is None:
+        return None
+    u = services.user(store, name)
+    if u is None or not u.active:
+        raise GonioError(f"no active records user {name!r}", key="--user")
+    return services.require(u, "technician")
 
 
 def _store(args):
@@ -106,12 +152,7 @@ def run_init(args) -> int:
 def run_create_user(args) -> int:
     from gonio.records import services
 
-    password = os.environ.get("GONIO_PASSWORD")
-    if password is None:
-        if not sys.stdin.isatty():
-            raise GonioError("give the password in $GONIO_PASSWORD (no terminal to ask on)",
-                             key="password")
-        password = getpass.getpass(f"password for {args.username}: ")
+    password = _password(args.username)
     store = _store(args)
     try:
         u = services.create_user(store, None, args.username, password,
@@ -122,14 +163,44 @@ def run_create_user(args) -> int:
     return 0
 
 
+def _password(username: str) -> str:
+    password = os.environ.get("GONIO_PASSWORD")
+    if password is None:
+        if not sys.stdin.isatty():
+            raise GonioError("give the password in $GONIO_PASSWORD (no terminal to ask on)",
+                             key="password")
+        password = getpass.getpass(f"password for {username}: ")
+    return password
+
+
+def run_set_user(args) -> int:
+    from gonio.records import services
+
+    password = _password(args.username) if args.reset_password else None
+    store = _store(args)
+    try:
+        u = services.update_user(store, None, args.username, active=args.active,
+                                 roles=None if args.roles is None
+                                 else args.roles.replace(",", " "), password=password)
+        print(f"user {u.username} ({u.roles}; {'active' if u.active else 'deactivated'})"
+              + ("; password reset" if password else ""))
+    finally:
+        store.close()
+    return 0
+
+
 def run_import(args) -> int:
     from gonio.records.importer import import_output_folder
 
     store = _store(args)
     try:
+        actor = importing_user(store, args.user)
+        if args.readings and len(args.folders) > 1:
+            raise GonioError("give --readings with one folder only", key="--readings")
         for folder in args.folders:
             cid = import_output_folder(store, folder, customer=args.customer,
-                                       protocol=args.protocol, lab=args.lab)
+                                       protocol=args.protocol, lab=args.lab, actor=actor,
+                                       readings=args.readings)
             print(f"{folder}: calibration {cid}")
     finally:
         store.close()
@@ -145,6 +216,35 @@ def run_backup(args) -> int:
     finally:
         store.close()
     print(f"{args.archive}: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    return 0
+
+
+def run_verify(args) -> int:
+    from gonio.records import services
+    from gonio.records.backup import verify
+
+    store = _store(args)
+    try:
+        if args.certificate:
+            try:
+                data = open(args.certificate, "rb").read()
+            except OSError as exc:
+                raise GonioError(f"cannot read: {exc.strerror}", file=args.certificate) from None
+            found = services.verify_certificate(store, data)
+            print(f"{args.certificate}: {found['file']} of certificate {found['number']}"
+                  + (f" (replaces {found['replaces']})" if found["replaces"] else "")
+                  + f", issued {found['issued_at']:%Y-%m-%d %H:%M} UTC; SHA-256 "
+                  f"{found['sha256']}; sealed result {found['seal_now']} as issued")
+            return 0
+        counts, problems = verify(store)
+    finally:
+        store.close()
+    for p in problems:
+        print(p)
+    if problems:
+        raise GonioError(f"{len(problems)} problem(s) in the records (listed above)",
+                         key="verify")
+    print("records verified: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
     return 0
 
 

@@ -39,7 +39,7 @@ def run(args) -> int:
     check_output_dir(args.out, inputs=[args.lab, args.bench], force=args.force)
     spec = get(args.spec)
     lab_d = load_lab_file(args.lab, spec)
-    from gonio.report.certificate import naming_lab_file
+    from gonio.formats.lab import naming_lab_file
     with naming_lab_file(args.lab):
         result, paths = demo(spec.key, args.out, bench=args.bench, seed=args.seed, lab=args.lab,
                              lang=args.lang, force=args.force, on_stage=status)

@@ -120,7 +120,7 @@ def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bo
     deviation is in °/h. Raises GonioError (one line) for a readings file, a stream
     without a usable scale factor, non-uniform sampling, or a window with motion.
 
-    Memory (issue 26): the file is read once in blocks to find the rests, then only the
+    Memory: the file is read once in blocks to find the rests, then only the
     analysed window's counts, piece by piece, into one array (memory-mapped beyond
     :data:`gonio.analysis.noise.record.MEMMAP_SAMPLES` samples) analysed in place; the
     numbers are those of the whole stream read into memory (tests/test_noise_memory.py).

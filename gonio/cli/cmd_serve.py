@@ -16,6 +16,26 @@ def add_store_options(p) -> None:
                         "or ~/.local/share/gonio)")
 
 
+def database_errors(run):
+    """``run`` with a database error (a corrupt, locked or read-only database) turned into
+    the one-line GonioError of :func:`gonio.records.db.database_problem`."""
+    import functools
+
+    @functools.wraps(run)
+    def wrapped(args) -> int:
+        from gonio.records.db import database_problem
+
+        try:
+            return run(args)
+        except Exception as exc:
+            problem = database_problem(exc)
+            if problem is None:
+                raise
+            from gonio.errors import GonioError
+            raise GonioError(problem, key="--database") from None
+    return wrapped
+
+
 def register(sub) -> None:
     p = sub.add_parser("serve", help="the laboratory's records in a browser",
                        description="Serve the records (instruments, calibrations, "
@@ -24,9 +44,10 @@ def register(sub) -> None:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=8765, help="port (default 8765)")
-    p.add_argument("--workers", type=int, default=2,
-                   help="calibrations run at the same time (default 2)")
-    p.set_defaults(func=run)
+    p.add_argument("--workers", type=int, default=None,
+                   help="calibrations run at the same time (default 2; at most "
+                        "$GONIO_MAX_WORKERS, else the machine's cores)")
+    p.set_defaults(func=database_errors(run))
 
 
 def first_admin(store) -> str | None:
@@ -41,6 +62,26 @@ def first_admin(store) -> str | None:
     return password
 
 
+def check_workers(workers: int | None) -> int:
+    """``--workers`` within 1 … ``GONIO_MAX_WORKERS`` (:func:`gonio.limits.limit`; unset:
+    the machine's cores, at least the default 2), else a GonioError; None: 2, or the cap if
+    lower."""
+    import os
+
+    from gonio.errors import GonioError
+    from gonio.limits import limit
+
+    top = max(1, int(limit("GONIO_MAX_WORKERS")))
+    if not os.environ.get("GONIO_MAX_WORKERS", "").strip():
+        top = max(2, top)
+    if workers is None:
+        return min(2, top)
+    if not 1 <= workers <= top:
+        raise GonioError(f"must be within 1 … {top} (GONIO_MAX_WORKERS, else the machine's "
+                         f"cores), got {workers}", key="--workers")
+    return workers
+
+
 def run(args) -> int:
     import uvicorn
 
@@ -51,12 +92,13 @@ def run(args) -> int:
 
     if not 0 < args.port < 65536:
         raise GonioError("not a port number", key="--port")
+    workers = check_workers(args.workers)
     store = open_store(args.database, args.data)
     password = first_admin(store)
     if password:
         sys.stderr.write(f"gonio: first start: user 'admin', password '{password}' "
                          "(change it: create your users and deactivate this one)\n")
-    dispatcher = Dispatcher(store, workers=args.workers).start()
+    dispatcher = Dispatcher(store, workers=workers).start()
     app = create_app(store, dispatcher)
     sys.stderr.write(f"gonio: serving the records at http://{args.host}:{args.port}/ "
                      f"(database {store.engine.url.render_as_string(hide_password=True)})\n")

@@ -23,7 +23,7 @@ KNOWN_METADATA: tuple[str, ...] = (
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
 # from physics (absolute zero, a percentage, a latitude, half a turn) and representability
 # (1e-50 .. 1e50 where a number divides or scales data), not from the instruments one has in
-# mind (issue 26: UG-2's 834 m² ring was refused by such a bound).
+# mind (UG-2's 834 m² ring was refused by such a bound).
 NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
     "nominal_scale_factor_counts_per_deg": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
     "latitude_deg": (-90.0, True, 90.0, "a number in [-90, 90]"),
@@ -132,12 +132,6 @@ def show_value(text) -> str:
     """
     text = str(text)
     return repr(text if len(text) <= 40 else text[:40] + f"…({len(text)} chars)")
-
-
-def number_text_ok(text: str) -> bool:
-    """Whether ``text`` is a plain decimal number (what :func:`parse_number` reads as a
-    finite value)."""
-    return _NUMBER.match(text) is not None
 
 
 def parse_number(text: str) -> float | None:

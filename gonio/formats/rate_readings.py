@@ -108,16 +108,6 @@ class RateReadings:
     metadata: dict = field(default_factory=dict)
     path: Path | None = None
 
-    def meta_float(self, key: str, default: float | None = None) -> float:
-        """A numeric metadata value; missing without default → GonioError naming the key."""
-        v = self.metadata.get(key)
-        if v is None or v == "":
-            if default is None:
-                raise GonioError("required metadata key is missing", file=self.path, key=key)
-            return float(default)
-        return _meta_number(key, v, self.path)
-
-
 def _meta_number(key: str, v: str, path) -> float:
     try:
         x = float(v)

@@ -42,7 +42,8 @@ import numpy as np
 import pandas as pd
 
 from gonio.atomic import write_text
-from gonio.errors import GonioError, check_header, check_near_miss, read_utf8
+from gonio.errors import (GonioError, MissingColumnError, check_header, check_near_miss,
+                          read_utf8)
 from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
                                     metadata_float, parse_number)
 from gonio.formats.metadata import show_value as _show
@@ -663,7 +664,7 @@ def format_readings(readings_or_df: Readings | pd.DataFrame,
     quantised = metadata_bool(metadata, "counts_quantised", True)
     for name in REQUIRED_COLUMNS:
         if name not in df.columns:
-            raise GonioError("missing required column", column=name)
+            raise MissingColumnError("missing required column", column=name)
     n = len(df)
     if n == 0:
         raise GonioError("no readings to write (the protocol or the reduction produced none)")

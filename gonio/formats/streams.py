@@ -52,7 +52,7 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
-from gonio.errors import GonioError, check_header, check_not_binary
+from gonio.errors import GonioError, MissingColumnError, check_header, check_not_binary
 from gonio.formats.metadata import NUMERIC_METADATA, metadata_bool, metadata_float
 
 #: Column order of a written stream file.
@@ -1350,12 +1350,11 @@ def sniff_kind(path: str | Path) -> str:
         return "stream"
     try:
         h = _parse_header(path)
-    except GonioError as exc:
-        if "missing required column" not in exc.message:
-            # let the readings reader report what is wrong with this file
-            return "readings"
+    except MissingColumnError:
         cols = _first_header(path)
         return "readings" if "test" in cols or "time_s" not in cols else "stream"
+    except GonioError:
+        return "readings"         # let the readings reader report what is wrong with this file
     return "readings" if "test" in h.columns else "stream"
 
 

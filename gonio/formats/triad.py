@@ -34,7 +34,6 @@ import numpy as np
 import pandas as pd
 
 from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
-from gonio.atomic import write_text
 from gonio.errors import GonioError, check_header, read_utf8
 
 FORMAT = "gonio-triad-readings/1"
@@ -297,7 +296,3 @@ def format_triad_readings(data: pd.DataFrame, metadata: dict) -> str:
         w.writerow([_cell(v) for v in row])
     return out.getvalue()
 
-
-def write_triad_readings(path: str | Path, data: pd.DataFrame, metadata: dict) -> Path:
-    """Write a triad readings file atomically."""
-    return write_text(path, format_triad_readings(data, metadata))

@@ -85,16 +85,6 @@ def fog_phase_per_rate_s(length_m: float, diameter_m: float,
                           / (wavelength_m * SPEED_OF_LIGHT_M_S))
 
 
-def earth_rate_pulse_rate_hz(scale_factor_counts_per_deg: float, latitude_deg: float,
-                             axis="up") -> float:
-    """Pulses per second that the Earth rate alone produces on an axis.
-
-    >>> round(earth_rate_pulse_rate_hz(3600.0, 40.0, "up"), 3)   # 1 count = 1″
-    9.668
-    """
-    return scale_factor_counts_per_deg * earth_rate_on_axis_dps(latitude_deg, axis)
-
-
 @dataclass(frozen=True)
 class Sagnac:
     """Sagnac scale factor of a gyro and the signal the Earth rate gives it."""

@@ -1,6 +1,6 @@
 """The item coverage study of any specification (``gonio validate --spec KEY`` where
-``SPEC.coverage.engine == "items"``; issue 17: "coverage checked on the bench, ≥ 90 % per
-item over many seeds").
+``SPEC.coverage.engine == "items"``): coverage checked on the bench, per item, over many
+seeds.
 
 :func:`coverage_study` runs a specification's programme on its study bench for many seeds
 (noise on; ``SPEC.run_trial``), calibrates each readings set (``SPEC.calibrate``), and

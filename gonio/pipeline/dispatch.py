@@ -94,7 +94,7 @@ def load_lab_file(lab, spec: Specification | None = None):
     (:meth:`gonio.specs.Specification.knows_item`: exact keys or patterns)."""
     path = lab if isinstance(lab, (str, Path)) else None
     if path is not None:
-        from gonio.report.certificate import load_lab
+        from gonio.formats.lab import load_lab
         lab = load_lab(path)
     if spec is not None and spec.item_keys and lab:
         for i, lim in enumerate(lab.get("specification_limits") or []):
@@ -164,9 +164,10 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
     renderer = spec.renderer()
     lab_d = load_lab_file(lab, spec)            # validate inputs before simulating
     ins = [x for x in (*inputs, lab, bench) if isinstance(x, (str, Path)) and str(x)]
-    if hasattr(renderer, "demo"):
-        return renderer.demo(out, bench=bench or spec.default_bench, seed=seed, lab=lab_d,
-                             lang=lang, dcc=dcc, force=force, inputs=ins, on_stage=on_stage)
+    own_demo = spec.output_hook("demo")
+    if own_demo is not None:
+        return own_demo(out, bench=bench or spec.default_bench, seed=seed, lab=lab_d,
+                        lang=lang, dcc=dcc, force=force, inputs=ins, on_stage=on_stage)
     if spec.simulate is None:
         raise GonioError(f"{spec.key} has no virtual bench (its SPEC.simulate is None)",
                          key="--spec")

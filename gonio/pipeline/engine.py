@@ -81,7 +81,7 @@ def available_cores() -> int:
 #:   pages fault in again on every use — the workers spent 3× joblib's system time (2.2 s
 #:   against 0.65 s per 16 trials). Not set (None unsets it); a trial's memory is small.
 #:
-#: Measured on 2 cores (issue 26, A/B alternated on the same warm machine): the parent's CPU
+#: Measured on 2 cores (A/B alternated on the same warm machine): the parent's CPU
 #: per study (scheduler, nannies, client) fell about 3× with the first three, and the CPU per
 #: trial of a 2-worker LocalCluster from 0.54–0.66 s to 0.44 s (joblib's 2 workers: 0.39 s).
 #: A cluster given by its address keeps its own settings (its operator can set the same in
@@ -93,7 +93,7 @@ LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
                         "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 
 #: Clients of the Dask schedulers this process has connected to, by address: a study on the
-#: same cluster reuses its client and its warmed workers (issue 26: the cluster warmed
+#: same cluster reuses its client and its warmed workers (the cluster warmed
 #: once, not per study). Closed when the process exits.
 _CLIENTS: dict[str, object] = {}
 _WARMED: dict[str, set] = {}
@@ -156,7 +156,7 @@ def _backend(workers: int, scheduler: str | None):
 
 def check_address(scheduler: str) -> None:
     """A ``scheme://HOST:PORT`` scheduler address has its host and port (``tcp://`` waited
-    40 s, then printed a Client.__del__ traceback; hostile round 3) — checked before the
+    40 s, then printed a Client.__del__ traceback) — checked before the
     study starts, so no partial study is left to block the corrected rerun."""
     if "://" not in scheduler:
         return

@@ -180,7 +180,7 @@ class PartialStore:
         """Whether the unfinished study here finished no batch (its record lists none and no
         other file is in the folder): a study stopped before its first batch (a cluster
         that never answered, a Ctrl-C during start-up) then does not block the rerun
-        without ``--resume`` (hostile round 3). A record that cannot be read is not judged
+        without ``--resume``. A record that cannot be read is not judged
         empty: the refusal stands."""
         try:
             info = self._head(head)

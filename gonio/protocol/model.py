@@ -274,7 +274,7 @@ def parse_protocol(raw: dict, file: str | Path | None = None) -> Protocol:
     known = set(SCHEMA) | set(_EXTRA)
     head = raw.get("protocol")
     if isinstance(head, dict) and isinstance(head.get("spec"), str):
-        # another specification's protocol names it in protocol.spec (hostile round 3: the
+        # another specification's protocol names it in protocol.spec (the
         # rate readings under --spec of the optical draft blamed 'unknown section')
         raise GonioError(f"this protocol is for {head['spec']!r}, not for this calibration's "
                          f"specification (--spec, or the readings' '# spec:'): give "

@@ -99,7 +99,7 @@ def _reader_temperature(x) -> bool:
 
 
 #: A chamber or room temperature of a rate protocol: within the range the readings reader
-#: accepts (hostile round 3: -300 °C was planned, simulated and then refused by the reader).
+#: accepts (-300 °C was planned, simulated and then refused by the reader).
 TEMP_C = Field("float", check=_reader_temperature,
                expect=COLUMN_RANGES["temperature_c"][2] + " (the readings' range)")
 

@@ -21,7 +21,7 @@ from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError, VerifyMismatchError
 from sqlalchemy import delete, func, select
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records.models import ROLES, LoginFailure, User, WebSession, utcnow
 
 MAX_FAILURES = 5
@@ -70,7 +70,7 @@ def authenticate(store, username: str, password: str, address: str = "") -> User
     address = (address or "")[:64]
     with store.writing() as s:
         if throttled(s, username, address):
-            raise GonioError("too many failed logins; try again later", key="login")
+            raise TooManyAttemptsError("too many failed logins; try again later", key="login")
         user = s.scalar(select(User).where(User.username == username))
         ok = False
         try:

@@ -57,6 +57,10 @@ def backup(store, path: str | os.PathLike) -> dict:
             doc["tables"][table.name] = {"columns": cols, "rows": rows}
             counts[table.name] = len(rows)
         shas = [r[0] for r in s.execute(select(Blob.sha256))]
+    bad = damaged_files(store, shas)
+    if bad:
+        raise GonioError(f"{len(bad)} stored file(s) missing or damaged, first {bad[0]}: "
+                         "nothing written (gonio db verify lists them)", file=path)
     fd, tmp = tempfile.mkstemp(prefix=".backup-", suffix=".zip", dir=path.parent or ".")
     os.close(fd)
     try:
@@ -73,21 +77,83 @@ def backup(store, path: str | os.PathLike) -> dict:
     return counts
 
 
-def _convert(table, cols: list[str], row: list):
+def damaged_files(store, shas) -> list[str]:
+    """The stored files among ``shas`` that are missing or do not match their SHA-256, each
+    as "<sha256> (missing|damaged)"."""
+    out = []
+    for sha in shas:
+        path = blobs.blob_path(store.blob_root, sha)
+        if not path.is_file():
+            out.append(f"{sha} (missing)")
+        elif not blobs.verify(store.blob_root, sha):
+            out.append(f"{sha} (damaged)")
+    return out
+
+
+def _convert(table, cols: list[str], row: list, where: str):
+    if not isinstance(row, list) or len(row) != len(cols):
+        raise GonioError(f"{where}: a row is a list of {len(cols)} values", key=table.name)
     out = {}
     for name, v in zip(cols, row):
         col = table.columns[name]
-        if v is not None and isinstance(col.type, DateTime):
-            v = _dt.datetime.fromisoformat(v)
-        elif v is not None and isinstance(col.type, Date):
-            v = _dt.date.fromisoformat(v)
+        try:
+            if v is not None and isinstance(col.type, DateTime):
+                v = _dt.datetime.fromisoformat(v)
+            elif v is not None and isinstance(col.type, Date):
+                v = _dt.date.fromisoformat(v)
+        except (TypeError, ValueError):
+            raise GonioError(f"{where}: {name} is not a date: {str(v)[:40]!r}",
+                             key=table.name) from None
+        if v is not None and not isinstance(v, (str, int, float, bool, _dt.date)):
+            raise GonioError(f"{where}: {name} is not a plain value", key=table.name)
         out[name] = v
+    return out
+
+
+def _rows(doc, path) -> dict:
+    """records.json's tables as {table name: [row dicts]}, every row converted and checked:
+    known tables and columns only, dates that are dates, every reference to another row
+    (a calibration's instrument, a certificate's files) present in the archive."""
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
+        raise GonioError(f"unknown backup format {got!r}", file=path)
+    tables = doc.get("tables")
+    if not isinstance(tables, dict):
+        raise GonioError("records.json has no tables", file=path)
+    known = {t.name: t for t in _tables()}
+    unknown = sorted(set(tables) - set(known))
+    if unknown:       # a table this gonio does not know would be lost: refused
+        raise GonioError(f"records.json has tables this gonio does not know {unknown}: "
+                         "restore with the gonio version that wrote it", file=path)
+    out = {}
+    for name, table in known.items():
+        t = tables.get(name) or {"columns": [], "rows": []}
+        if not isinstance(t, dict) or not isinstance(t.get("columns"), list) \
+                or not isinstance(t.get("rows"), list) \
+                or not all(isinstance(c, str) for c in t["columns"]):
+            raise GonioError(f"table {name} is not {{columns: [...], rows: [...]}}", file=path)
+        extra = set(t["columns"]) - set(table.columns.keys())
+        if extra:
+            raise GonioError(f"table {name} has unknown columns {sorted(extra)}", file=path)
+        out[name] = [_convert(table, t["columns"], r, f"{name} row {i + 1}")
+                     for i, r in enumerate(t["rows"])]
+    for name, table in known.items():              # every reference resolved in the archive
+        for fk in table.foreign_keys:
+            target = fk.column
+            have = {r.get(target.name) for r in out[target.table.name]}
+            for i, r in enumerate(out[name]):
+                v = r.get(fk.parent.name)
+                if v is not None and v not in have:
+                    raise GonioError(f"{name} row {i + 1}: {fk.parent.name} {str(v)[:64]} is "
+                                     f"not among the archive's {target.table.name}", file=path)
     return out
 
 
 def restore(store, path: str | os.PathLike) -> dict:
     """Restore the archive at ``path`` into the (empty) database of ``store``; returns the
-    counts restored."""
+    counts restored. Everything is checked before anything is written: records.json's
+    tables, rows and references, every file listed in ``blobs`` present in the archive
+    (complete) and matching its SHA-256 (intact), no file the records do not list."""
     path = Path(path)
     try:
         zf = zipfile.ZipFile(path)
@@ -99,11 +165,23 @@ def restore(store, path: str | os.PathLike) -> dict:
         except (KeyError, ValueError, RecursionError) as exc:   # RecursionError: too deep
             raise GonioError(f"no readable records.json ({str(exc)[:120] or 'nested too deeply'})",
                              file=path) from None
-        if doc.get("format") != FORMAT:
-            raise GonioError(f"unknown backup format {doc.get('format')!r}", file=path)
+        rows = _rows(doc, path)
         names = {n[len("blobs/"):] for n in zf.namelist() if n.startswith("blobs/")}
-        for sha in names:                                 # every file checked first
-            data = zf.read(f"blobs/{sha}")
+        listed = {r["sha256"] for r in rows["blobs"]}
+        missing, unlisted = sorted(listed - names), sorted(names - listed)
+        if missing:
+            raise GonioError(f"incomplete: {len(missing)} stored file(s) of the records are "
+                             f"not in the archive, first {str(missing[0])[:64]}: nothing "
+                             "restored", file=path)
+        if unlisted:
+            raise GonioError(f"{len(unlisted)} file(s) in the archive are not in its records, "
+                             f"first {unlisted[0][:64]}: nothing restored", file=path)
+        for sha in sorted(names):                         # every file checked first
+            try:
+                data = zf.read(f"blobs/{sha}")
+            except (zipfile.BadZipFile, OSError) as exc:
+                raise GonioError(f"stored file {sha[:12]}… unreadable ({exc})",
+                                 file=path) from None
             if hashlib.sha256(data).hexdigest() != sha:
                 raise GonioError(f"stored file {sha[:12]}… does not match its SHA-256",
                                  file=path)
@@ -115,17 +193,19 @@ def restore(store, path: str | os.PathLike) -> dict:
         for sha in names:
             blobs.put_bytes(store.blob_root, zf.read(f"blobs/{sha}"))
     counts = {}
+    from sqlalchemy.exc import SQLAlchemyError
+
     with store.writing() as s:
-        for table in _tables():
-            t = doc["tables"].get(table.name)
-            if not t or not t["rows"]:
-                continue
-            unknown = set(t["columns"]) - set(table.columns.keys())
-            if unknown:
-                raise GonioError(f"table {table.name} has unknown columns {sorted(unknown)}",
-                                 file=path)
-            s.execute(table.insert(), [_convert(table, t["columns"], r) for r in t["rows"]])
-            counts[table.name] = len(t["rows"])
+        try:
+            for table in _tables():
+                if rows[table.name]:
+                    s.execute(table.insert(), rows[table.name])
+                    counts[table.name] = len(rows[table.name])
+        except SQLAlchemyError as exc:
+            s.rollback()
+            msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
+            raise GonioError(f"records.json refused by the database ({msg}): nothing "
+                             "restored", file=path) from None
         if store.engine.dialect.name == "postgresql":
             for table in _tables():
                 pk = list(table.primary_key.columns)
@@ -136,3 +216,38 @@ def restore(store, path: str | os.PathLike) -> dict:
         s.commit()
     counts["files"] = len(names)
     return counts
+
+
+def verify(store) -> tuple[dict, list[str]]:
+    """Check a live database as a backup and a restore check an archive: every stored file
+    present and matching its SHA-256, every computed calibration's result rows matching its
+    stored results.json and, where it was signed, its seal the one signed (at review, at
+    approval, on its newest certificate). Returns (counts, problems: one line each)."""
+    from gonio.records import services
+    from gonio.records.models import Calibration, Certificate
+
+    problems = []
+    with store.session() as s:
+        shas = [r[0] for r in s.execute(select(Blob.sha256))]
+        cals = s.execute(select(Calibration.id, Calibration.status, Calibration.reviewed_seal,
+                                Calibration.approved_seal).where(
+            Calibration.results_sha256.is_not(None)).order_by(Calibration.id)).all()
+        certs = s.execute(select(Certificate.calibration_id, Certificate.number,
+                                 Certificate.seal_sha256).order_by(Certificate.id)).all()
+    problems += [f"stored file {b}" for b in damaged_files(store, shas)]
+    newest = {cid: (number, sealed) for cid, number, sealed in certs}
+    for cid, status, reviewed, approved in cals:
+        try:
+            now = services.seal(store, cid)
+        except GonioError as exc:
+            problems.append(f"calibration {cid}: {exc.message}")
+            continue
+        signed = [("its review", reviewed if status in ("reviewed",) else ""),
+                  ("its approval", approved if status in ("issuing", "amending") else ""),
+                  (f"certificate {newest.get(cid, ('', ''))[0]}",
+                   newest.get(cid, ("", ""))[1] or "")]
+        for what, sealed in signed:
+            if sealed and sealed != now:
+                problems.append(f"calibration {cid}: its stored result no longer matches the "
+                                f"seal of {what}")
+    return {"files": len(shas), "calibrations": len(cals), "certificates": len(certs)}, problems

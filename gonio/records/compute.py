@@ -4,7 +4,7 @@
 summary.txt, certificate.html/.pdf and, where the specification has one, the DCC) in a
 folder, for any specification, with a laboratory details file; the worker
 (:mod:`gonio.records.worker`) runs it in its own process. :func:`write_lab_toml` writes the
-laboratory details the records assemble (``gonio.report.certificate.LAB_SCHEMA``) as the
+laboratory details the records assemble (``gonio.formats.lab.LAB_SCHEMA``) as the
 TOML file the pipeline reads, so the certificate is validated exactly as on the command line.
 """
 

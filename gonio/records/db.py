@@ -59,13 +59,17 @@ def database_url(database: str | None, data: Path) -> str:
     return url.render_as_string(hide_password=False)
 
 
+#: How long a SQLite connection waits for another process's lock before giving up (s).
+BUSY_TIMEOUT_S = 30
+
+
 def _sqlite_connect(dbapi_conn, _record) -> None:
     dbapi_conn.isolation_level = None          # transactions are begun by _sqlite_begin
     cur = dbapi_conn.cursor()
     cur.execute("PRAGMA journal_mode=WAL")
     cur.execute("PRAGMA synchronous=NORMAL")
     cur.execute("PRAGMA foreign_keys=ON")
-    cur.execute("PRAGMA busy_timeout=30000")
+    cur.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
     cur.close()
 
 
@@ -79,7 +83,8 @@ def _sqlite_begin(conn) -> None:
 def make_engine(url: str) -> Engine:
     """An engine for ``url``; SQLite gets WAL, foreign keys and a 30 s busy timeout."""
     if url.startswith("sqlite"):
-        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 30})
+        engine = create_engine(url, connect_args={"check_same_thread": False,
+                                                  "timeout": BUSY_TIMEOUT_S})
         event.listen(engine, "connect", _sqlite_connect)
         event.listen(engine, "begin", _sqlite_begin)
         return engine
@@ -96,6 +101,32 @@ def migrate(engine: Engine, revision: str = "head") -> None:
     with engine.begin() as conn:
         cfg.attributes["connection"] = conn
         command.upgrade(cfg, revision)
+
+
+def database_problem(exc: BaseException) -> str | None:
+    """The one line a database error deserves (a file that is no database, a database locked
+    by another process, a read-only database, one that cannot be reached), or None when
+    ``exc`` is no database error.
+
+    >>> import sqlite3
+    >>> from sqlalchemy.exc import OperationalError
+    >>> database_problem(OperationalError("x", {}, sqlite3.OperationalError("database is locked")))
+    'the database is locked by another process (waited 30 s): try again when it is done'
+    """
+    from sqlalchemy.exc import DBAPIError
+
+    if not isinstance(exc, DBAPIError):
+        return None
+    msg = str(exc.orig).strip().splitlines()[0] if exc.orig is not None else str(exc)
+    low = msg.lower()
+    if "locked" in low:
+        return (f"the database is locked by another process (waited {BUSY_TIMEOUT_S:g} s): "
+                "try again when it is done")
+    if "readonly" in low or "read-only" in low:
+        return f"the database is read-only ({msg}): give a writable file or folder"
+    if "not a database" in low or "malformed" in low or "corrupt" in low:
+        return f"not a readable records database ({msg}): restore it from a backup"
+    return f"cannot use the database: {msg[:200]}"
 
 
 @dataclass
@@ -136,10 +167,9 @@ def open_store(database: str | None = None, data: str | os.PathLike | None = Non
             migrate(engine)
         except Exception as exc:
             engine.dispose()
-            from sqlalchemy.exc import OperationalError
-            if isinstance(exc, OperationalError):
-                raise GonioError(f"cannot open the database: {str(exc.orig).strip()}",
-                                 key="--database") from None
+            problem = database_problem(exc)
+            if problem:
+                raise GonioError(problem, key="--database") from None
             raise
     return Store(url=url, engine=engine,
                  sessions=sessionmaker(engine, expire_on_commit=False), data=folder)

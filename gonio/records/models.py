@@ -39,7 +39,7 @@ ROLES = ("technician", "reviewer", "admin")
 
 #: A calibration's states, in workflow order (docs/records.md#workflow).
 STATES = ("queued", "running", "failed", "computed", "reviewed", "rejected", "approved",
-          "issuing", "issued")
+          "issuing", "issued", "amending", "void")
 
 
 class User(Base):
@@ -97,6 +97,8 @@ class Customer(Base):
     name: Mapped[str] = mapped_column(String(200), unique=True)
     address: Mapped[str] = mapped_column(Text, default="")
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    #: retired (no new calibration uses it; its history stays); None: in use
+    retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
 
 
 class Instrument(Base):
@@ -115,6 +117,8 @@ class Instrument(Base):
     #: specification limits: JSON list of {item, lower, upper, mpe, source}
     limits_json: Mapped[str] = mapped_column(Text, default="[]")
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    #: retired (no new calibration uses it; its history stays); None: in use
+    retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
     customer: Mapped[Customer] = relationship()
 
 
@@ -130,6 +134,8 @@ class Standard(Base):
     calibrated_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
     due_on: Mapped[_dt.date] = mapped_column(Date)
     created_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    #: retired (no new calibration uses it; its history stays); None: in use
+    retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
 
 
 class Calibration(Base):
@@ -173,6 +179,12 @@ class Calibration(Base):
     pending_reason: Mapped[str] = mapped_column(Text, default="")
     #: the certificate number reserved when issuing starts (kept if the run fails)
     pending_number: Mapped[str] = mapped_column(String(32), default="")
+    #: the seal (:func:`gonio.records.services.seal`) the reviewer signed, and the approver
+    reviewed_seal: Mapped[str] = mapped_column(String(64), default="")
+    approved_seal: Mapped[str] = mapped_column(String(64), default="")
+    #: who asked for the amendment being issued (it is approved by another person)
+    amend_requested_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"),
+                                                              nullable=True)
     instrument: Mapped[Instrument] = relationship()
     created_by: Mapped[User | None] = relationship(foreign_keys=[created_by_id])
     reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])
@@ -235,8 +247,16 @@ class Certificate(Base):
     pdf_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
     dcc_sha256: Mapped[str | None] = mapped_column(ForeignKey("blobs.sha256"), nullable=True)
     results_sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    #: the sealed result it was issued from (signed by reviewer and approver), the person
+    #: who reviewed it (for an amendment: who asked for it) and the laboratory's minimum
+    #: number of distinct people (creator, reviewer, approver) it was issued under
+    seal_sha256: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    reviewed_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    min_people: Mapped[int | None] = mapped_column(Integer, nullable=True)
     calibration: Mapped[Calibration] = relationship()
     replaces: Mapped["Certificate | None"] = relationship(remote_side=[id])
+    issued_by: Mapped[User | None] = relationship(foreign_keys=[issued_by_id])
+    reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])
 
 
 class AuditEvent(Base):

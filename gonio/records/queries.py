@@ -71,7 +71,8 @@ def calibrations(store, page: int = 1, size: int = 50, status: str = ""):
 
 def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows."""
-    from gonio.records.services import calibration
+    from gonio.errors import GonioError
+    from gonio.records.services import calibration, seal
 
     try:
         cal = calibration(store, cal_id)
@@ -88,7 +89,12 @@ def calibration_page(store, cal_id: int) -> dict | None:
                          .where(CalibrationStandard.calibration_id == cal_id)).all()
         certs = s.scalars(select(Certificate).where(Certificate.calibration_id == cal_id)
                           .order_by(Certificate.id)).all()
-    return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs}
+    try:
+        sealed, broken = seal(store, cal_id), ""
+    except GonioError as exc:                 # no result yet, or one that no longer matches
+        sealed, broken = "", str(exc) if cal.results_sha256 else ""
+    return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
+            "seal": sealed, "seal_error": broken}
 
 
 def certificates(store, page: int = 1, size: int = 50):
@@ -106,7 +112,8 @@ def certificate(store, cert_id: int):
     with store.session() as s:
         cert = s.scalar(select(Certificate).options(
             selectinload(Certificate.calibration).selectinload(Calibration.instrument)
-            .selectinload(Instrument.customer), selectinload(Certificate.replaces))
+            .selectinload(Instrument.customer), selectinload(Certificate.replaces),
+            selectinload(Certificate.issued_by), selectinload(Certificate.reviewed_by))
             .where(Certificate.id == cert_id))
         newer = s.scalar(select(Certificate).where(Certificate.replaces_id == cert_id)) \
             if cert else None
@@ -124,10 +131,69 @@ def users(store):
         return s.scalars(select(User).order_by(User.username)).all()
 
 
-def audit_events(store, page: int = 1, size: int = 100):
-    """(audit events newest first, total)."""
+def audit_events(store, page: int = 1, size: int = 100, entity: str = "",
+                 entity_id: str = "", username: str = ""):
+    """(audit events newest first, total), filtered by record (``entity`` such as
+    "calibration", and its id) and person (user name) where given."""
+    stmt = select(AuditEvent).order_by(AuditEvent.id.desc())
+    for col, v in ((AuditEvent.entity, entity), (AuditEvent.entity_id, entity_id),
+                   (AuditEvent.username, username)):
+        if v:
+            stmt = stmt.where(col == v)
     with store.session() as s:
-        return _page(s, select(AuditEvent).order_by(AuditEvent.id.desc()), page, size)
+        return _page(s, stmt, page, size)
+
+
+#: The lists ``gonio serve`` exports as CSV: name → (header, rows(store, params)).
+def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] | None:
+    """A whole list as (header, rows) for its CSV export, or None for an unknown list;
+    ``params``: the list's filters (audit: entity, entity_id, username; due: customer)."""
+    from gonio.records import services
+
+    big = 10**7
+    if name == "customers":
+        return (["id", "name", "address", "retired_on"],
+                [[c.id, c.name, c.address, c.retired_on] for c in customers(store)])
+    if name == "instruments":
+        rows, _ = instruments(store, 1, big)
+        return (["id", "customer", "type", "manufacturer", "model", "serial", "specification",
+                 "interval_months", "retired_on"],
+                [[i.id, i.customer.name, i.kind, i.manufacturer, i.model, i.serial, i.spec_key,
+                  i.interval_months, i.retired_on] for i in rows])
+    if name == "standards":
+        return (["id", "name", "identifier", "accuracy", "certificate", "traceability",
+                 "calibrated_on", "due_on", "retired_on"],
+                [[x.id, x.name, x.identifier, x.accuracy, x.certificate, x.traceability,
+                  x.calibrated_on, x.due_on, x.retired_on] for x in standards(store)])
+    if name == "calibrations":
+        rows, _ = calibrations(store, 1, big, params.get("status", ""))
+        return (["id", "customer", "instrument_serial", "specification", "performed_on",
+                 "status", "created_by", "error"],
+                [[c.id, c.instrument.customer.name, c.instrument.serial, c.spec_key,
+                  c.performed_on, c.status, c.created_by.username if c.created_by else "",
+                  c.error] for c in rows])
+    if name == "certificates":
+        rows, _ = certificates(store, 1, big)
+        return (["number", "issued_at", "calibration", "customer", "instrument_serial",
+                 "replaces", "reason", "seal_sha256", "pdf_sha256"],
+                [[c.number, c.issued_at, c.calibration_id, c.calibration.instrument.customer
+                  .name, c.calibration.instrument.serial, c.replaces.number if c.replaces
+                  else "", c.reason, c.seal_sha256, c.pdf_sha256] for c in rows])
+    if name == "due":
+        rows = services.due_instruments(store)
+        if params.get("customer"):
+            rows = [r for r in rows if r["customer"] == params["customer"]]
+        return (["customer", "instrument", "model", "serial", "last_calibration", "due",
+                 "overdue"],
+                [[r["customer"], r["instrument_id"], r["model"], r["serial"], r["last"],
+                  r["due"], "yes" if r["overdue"] else "no"] for r in rows])
+    if name == "audit":
+        rows, _ = audit_events(store, 1, big, params.get("entity", ""),
+                               params.get("entity_id", ""), params.get("username", ""))
+        return (["id", "at", "user", "action", "entity", "entity_id", "before", "after"],
+                [[e.id, e.at, e.username, e.action, e.entity, e.entity_id, e.before_json,
+                  e.after_json] for e in rows])
+    return None
 
 
 def counts_by_status(store) -> dict:

@@ -57,7 +57,11 @@ _CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")
 #: Laboratory settings and their defaults.
 SETTINGS = {"lab_name": "Calibration laboratory", "lab_address": "(address not set)",
             "lab_accreditation": "", "lab_contact": "", "lab_place": "",
-            "decision_rule": "non-binary", "guard_band_factor": "1.0"}
+            "decision_rule": "non-binary", "guard_band_factor": "1.0", "min_people": "3"}
+
+#: What ``min_people`` may be: 3 (creator, reviewer and approver three different people) or
+#: 2 for a small laboratory (the reviewer may approve; the creator never reviews or approves).
+MIN_PEOPLE = ("2", "3")
 
 
 # --------------------------------------------------------------------------- checks
@@ -81,6 +85,8 @@ def text(value, name: str, *, max_len: int = MAX_LINE, multiline: bool = False,
         raise GonioError("must be text", key=name)
     if len(value) > max_len:
         raise GonioError(f"longer than {max_len} characters ({len(value)})", key=name)
+    if multiline:                      # line ends as laboratories type them: CR LF, CR
+        value = value.replace("\r\n", "\n").replace("\r", "\n")
     if (_CONTROL if multiline else _CONTROL_LINE).search(value):
         raise GonioError("control characters are not allowed", key=name)
     value = value.strip()
@@ -166,11 +172,9 @@ def set_settings(store, actor: User | None, **values) -> dict:
     """Change laboratory settings (admin; ``actor=None`` from the command line)."""
     if actor is not None:
         require(actor, "admin")
+    values = {k: check_setting(k, v) for k, v in values.items()}
     with store.writing() as s:
         for k, v in values.items():
-            if k not in SETTINGS:
-                raise GonioError(f"unknown setting (known: {', '.join(SETTINGS)})", key=k)
-            v = text(v, k, max_len=MAX_TEXT, multiline=k == "lab_address")
             row = s.get(Setting, k)
             before = state(row)
             if row is None:
@@ -180,6 +184,32 @@ def set_settings(store, actor: User | None, **values) -> dict:
             audit(s, actor, "setting", "settings", k, before, {"key": k, "value": v})
         s.commit()
     return settings(store)
+
+
+def check_setting(key: str, value) -> str:
+    """A laboratory setting checked by the laboratory file's own schema (``LAB_SCHEMA``:
+    the decision rule's choices, a guard-band factor ≥ 0, printable text within the
+    certificate's limits), ``min_people`` 2 or 3; the value as stored (text)."""
+    from gonio.formats.toml import MAX_TEXT_FIELD, check_text_fields, validate_table
+    from gonio.report.certificate import LAB_SCHEMA
+
+    if key not in SETTINGS:
+        raise GonioError(f"unknown setting (known: {', '.join(SETTINGS)})", key=key)
+    multi = key == "lab_address"
+    value = text(value, key, max_len=MAX_TEXT_FIELD if multi else MAX_LINE, multiline=multi)
+    check_text_fields({key: value}, None)
+    if key == "min_people" and value not in MIN_PEOPLE:
+        raise GonioError("2 or 3 (distinct people: creator, reviewer, approver)", key=key)
+    if key == "guard_band_factor":
+        number_value(value, key, 0, 1e6)
+        if not value:
+            raise GonioError("must not be empty", key=key)
+    if key == "decision_rule":
+        validate_table({"rule": value}, LAB_SCHEMA["decision_rule"].schema, "decision_rule")
+    if key == "guard_band_factor":
+        validate_table({"rule": SETTINGS["decision_rule"], "guard_band_factor": float(value)},
+                       LAB_SCHEMA["decision_rule"].schema, "decision_rule")
+    return value
 
 
 def create_user(store, actor: User | None, username: str, password: str, roles,
@@ -194,6 +224,45 @@ def create_user(store, actor: User | None, username: str, password: str, roles,
                 password_hash=hash_password(password), roles=check_roles(roles))
     return _create(store, actor, user, "user", User.username == username,
                    "a user with this name exists", "username")
+
+
+def update_user(store, actor: User | None, username: str, *, active: bool | None = None,
+                password: str | None = None, roles=None, full_name: str | None = None) -> User:
+    """Deactivate or reactivate a user, reset the password, change the roles or name
+    (admin; ``actor=None`` from ``gonio db set-user``), with its audit event. An admin cannot
+    deactivate themself, and the last active admin keeps the admin role and stays active.
+    A deactivated user's sessions end at their next request; nothing they did is removed."""
+    if actor is not None:
+        require(actor, "admin")
+    with store.writing() as s:
+        u = s.scalar(select(User).where(User.username == text(username, "username",
+                                                               max_len=64)))
+        if u is None:
+            raise GonioError("no such user", key="username")
+        before = state(u)
+        if active is not None:
+            if not active and actor is not None and actor.id == u.id:
+                raise GonioError("you cannot deactivate yourself", key="active")
+            u.active = bool(active)
+        if roles is not None:
+            u.roles = check_roles(roles)
+        if full_name is not None:
+            u.full_name = text(full_name, "full_name")
+        if password:
+            u.password_hash = hash_password(password)
+        s.flush()
+        admins = s.scalar(select(func.count()).select_from(User).where(
+            User.active.is_(True), User.roles.like("%admin%")))
+        if before["active"] and "admin" in before["roles"].split() and not admins:
+            raise GonioError("the last active admin cannot be deactivated nor lose the admin "
+                             "role: make another admin first", key="username")
+        after = state(u)
+        if password:
+            after["password_hash"] = "(reset)"
+        audit(s, actor, "update", "user", u.id, before, after)
+        s.commit()
+        s.expunge(u)
+    return u
 
 
 def user(store, username: str) -> User | None:
@@ -233,7 +302,7 @@ def check_limits(limits) -> list[dict]:
     """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
     checks them (``LAB_SCHEMA['specification_limits']``)."""
     from gonio.formats.toml import validate_table
-    from gonio.report.certificate import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA
 
     if isinstance(limits, str):
         try:
@@ -300,7 +369,98 @@ def add_standard(store, actor: User, *, name: str, identifier: str, due_on,
                   calibrated_on=date_value(calibrated_on, "calibrated_on"),
                   due_on=date_value(due_on, "due_on", required=True))
     return _create(store, actor, st, "standard", Standard.identifier == st.identifier,
-                   "a standard with this identifier exists", "identifier")
+                   "a standard with this identifier exists (record its recalibration by "
+                   "editing it: new certificate and due date)", "identifier")
+
+
+def _update(store, actor: User, model, obj_id, entity: str, values: dict, retire=None,
+            unique=None, message: str = "") -> object:
+    """Apply ``values`` (only the fields to change) to the row and, with ``retire`` True or
+    False, retire it today or bring it back; its audit event (before, after) in the same
+    transaction. ``unique(obj)``: a statement matching another row that would clash
+    (refused with ``message``)."""
+    if retire is not None:
+        values["retired_on"] = utcnow().date() if retire else None
+    with store.writing() as s:
+        obj = s.get(model, int(obj_id))
+        if obj is None:
+            raise GonioError(f"no such {entity}", key=entity)
+        before = state(obj)
+        if retire and obj.retired_on is not None:
+            values.pop("retired_on")                      # retired already: keep the date
+        with s.no_autoflush:
+            for k, v in values.items():
+                setattr(obj, k, v)
+            if unique is not None and s.scalar(unique(obj).where(model.id != obj.id)):
+                raise GonioError(message, key=entity)
+        after = state(obj)
+        if after != before:
+            audit(s, actor, "update", entity, obj.id, before, after)
+        s.commit()
+        s.expunge(obj)
+    return obj
+
+
+def _given(**fields) -> dict:
+    """The fields that were given (not None)."""
+    return {k: v for k, v in fields.items() if v is not None}
+
+
+def update_customer(store, actor: User, customer_id: int, *, name=None, address=None,
+                    retire: bool | None = None) -> Customer:
+    """Edit a customer's name or address, retire it or bring it back (technician)."""
+    require(actor, "technician")
+    values = _given(name=None if name is None else text(name, "customer name", required=True),
+                    address=None if address is None else text(
+                        address, "customer address", max_len=MAX_TEXT, multiline=True))
+    return _update(store, actor, Customer, customer_id, "customer", values, retire,
+                   lambda o: select(Customer).where(Customer.name == o.name),
+                   "a customer with this name exists")
+
+
+def update_instrument(store, actor: User, instrument_id: int, *, customer_id=None, kind=None,
+                      manufacturer=None, model=None, serial=None, interval_months="",
+                      limits=None, retire: bool | None = None) -> Instrument:
+    """Edit an instrument: transfer it to another customer, correct its description, set its
+    interval (None or blank: the specification's default; ``""`` by default: unchanged) or
+    limits, retire it or bring it back (technician)."""
+    require(actor, "technician")
+    values = _given(kind=kind, manufacturer=manufacturer, model=model, serial=serial)
+    values = {k: text(v, k, required=k == "serial") for k, v in values.items()}
+    if customer_id is not None:
+        with store.session() as s:
+            if s.get(Customer, int(customer_id)) is None:
+                raise GonioError("no such customer", key="customer")
+        values["customer_id"] = int(customer_id)
+    if interval_months != "":
+        months = number_value(interval_months, "interval_months", 1, 120)
+        values["interval_months"] = None if months is None else int(months)
+    if limits is not None:
+        values["limits_json"] = json.dumps(check_limits(limits))
+    return _update(store, actor, Instrument, instrument_id, "instrument", values, retire,
+                   lambda o: select(Instrument).where(
+                       Instrument.manufacturer == o.manufacturer, Instrument.model == o.model,
+                       Instrument.serial == o.serial),
+                   "this instrument (manufacturer, model, serial) is registered")
+
+
+def update_standard(store, actor: User, standard_id: int, *, name=None, accuracy=None,
+                    certificate=None, traceability=None, calibrated_on=None, due_on=None,
+                    retire: bool | None = None) -> Standard:
+    """Record a standard's recalibration (its new certificate, calibration and due date: the
+    audit trail keeps every earlier one), correct its details, retire it or bring it back
+    (technician)."""
+    require(actor, "technician")
+    values = {k: text(v, k) for k, v in _given(accuracy=accuracy, certificate=certificate,
+                                               traceability=traceability).items()}
+    if name is not None:
+        values["name"] = text(name, "name", required=True)
+    for k, v in _given(calibrated_on=calibrated_on or None, due_on=due_on or None).items():
+        values[k] = date_value(v, k)
+    if values.get("calibrated_on") and values.get("due_on") and \
+            values["due_on"] < values["calibrated_on"]:
+        raise GonioError("the due date is before the calibration date", key="due_on")
+    return _update(store, actor, Standard, standard_id, "standard", values, retire)
 
 
 # --------------------------------------------------------------------------- files
@@ -379,10 +539,15 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
 
     require(actor, "technician")
     day = date_value(performed_on, "performed_on") or _dt.date.today()
+    received = date_value(received_on, "received_on")
+    plausible_dates(day, received)
     with store.writing() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
             raise GonioError("no such instrument", key="instrument")
+        if inst.retired_on is not None:
+            raise GonioError(f"the instrument was retired on {inst.retired_on}",
+                             key="instrument")
         key = text(spec_key, "spec", max_len=64) or inst.spec_key
         get(key)
         for sha in (readings_sha256, protocol_sha256, lab_sha256):
@@ -400,8 +565,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           temperature_c=number_value(temperature_c, "temperature_c", -50, 100),
                           humidity_pct=number_value(humidity_pct, "humidity_pct", 0, 100),
                           place=text(place, "place"), performed_on=day,
-                          received_on=date_value(received_on, "received_on"),
-                          status="queued", progress="waiting for a worker",
+                          received_on=received, status="queued", progress="waiting for a worker",
                           created_by_id=actor.id)
         s.add(cal)
         s.flush()
@@ -409,6 +573,9 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             st = s.get(Standard, sid)
             if st is None:
                 raise GonioError("no such standard", key="standards")
+            if st.retired_on is not None:
+                raise GonioError(f"standard {st.identifier} was retired on {st.retired_on}",
+                                 key="standards")
             if st.due_on < day:
                 raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
                                  f"the calibration date {day}): calibrate it first",
@@ -420,6 +587,24 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     return cal
 
 
+def plausible_dates(performed: _dt.date, received: _dt.date | None,
+                    today: _dt.date | None = None) -> None:
+    """Dates a certificate can carry: the calibration not in the future (its certificate is
+    issued on or after it) and the item received on or before it; else a GonioError.
+
+    >>> plausible_dates(_dt.date(9999, 12, 31), None, _dt.date(2026, 1, 1))
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key performed_on: 9999-12-31 is in the future (today 2026-01-01)
+    """
+    today = today or _dt.date.today()
+    if performed > today:
+        raise GonioError(f"{performed} is in the future (today {today})", key="performed_on")
+    if received is not None and received > performed:
+        raise GonioError(f"the item was received on {received}, after the calibration "
+                         f"date {performed}", key="received_on")
+
+
 def _check(s: Session, actor: User, cal_id: int, action: str,
            allowed: tuple[str, ...]) -> Calibration:
     cal = s.get(Calibration, int(cal_id))
@@ -427,10 +612,36 @@ def _check(s: Session, actor: User, cal_id: int, action: str,
         raise GonioError("no such calibration", key="calibration")
     if cal.status not in allowed:
         raise GonioError(f"cannot {action} a calibration that is {cal.status}", key="status")
-    if action in ("review", "approve") and cal.created_by_id == actor.id:
+    if action in ("review", "approve", "amend"):
+        check_duties(s, cal, actor, action)
+    return cal
+
+
+def min_people(s: Session) -> int:
+    """The laboratory's minimum number of distinct people on a certificate (setting
+    ``min_people``: 3, or 2 for a small laboratory)."""
+    row = s.get(Setting, "min_people")
+    return int(row.value) if row is not None and row.value in MIN_PEOPLE else 3
+
+
+def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None:
+    """ISO/IEC 17025 6.2 / 7.8.1.1 on every path: the creator of a calibration never
+    reviews, approves or amends it (a calibration whose creator is not recorded cannot be
+    reviewed); with ``min_people`` 3 the approver is neither the reviewer nor, for an
+    amendment, the person who asked for it."""
+    if cal.created_by_id is None:
+        raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
+                         "(import it again with --user)", key="role")
+    if cal.created_by_id == actor.id:
         raise GonioError(f"the person who created a calibration may not {action} it "
                          "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
-    return cal
+    if action == "approve" and min_people(s) >= 3:
+        other = cal.amend_requested_by_id if cal.status == "amending" else cal.reviewed_by_id
+        if other == actor.id:
+            raise GonioError("the person who " + ("asked for the amendment" if
+                             cal.status == "amending" else "reviewed the calibration")
+                             + " may not approve it (the laboratory requires three "
+                             "different people)", key="role")
 
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],
@@ -449,16 +660,68 @@ def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str
     return cal
 
 
-def review(store, actor: User, cal_id: int, *, accept: bool, comment: str = "") -> Calibration:
+def review(store, actor: User, cal_id: int, *, accept: bool, comment: str = "",
+           shown_seal: str | None = None) -> Calibration:
     """Review a computed calibration (reviewer, not its creator): accepted → reviewed,
-    else rejected (a rejected calibration is closed; create a new one)."""
+    else rejected (a rejected calibration is closed; create a new one). The reviewer signs
+    the result's :func:`seal` (``shown_seal``: the one the page showed, which must still be
+    the result's)."""
     require(actor, "reviewer")
     comment = text(comment, "comment", max_len=MAX_TEXT, multiline=True)
     if not accept and not comment:
         raise GonioError("say why the calibration is rejected", key="comment")
+    signed = seal(store, cal_id)
+    _signs(signed, shown_seal)
     return _transition(store, actor, cal_id, "review", ("computed",),
                        status="reviewed" if accept else "rejected", reviewed_by_id=actor.id,
-                       reviewed_at=utcnow(), review_comment=comment)
+                       reviewed_at=utcnow(), review_comment=comment, reviewed_seal=signed)
+
+
+def _signs(signed: str, shown: str | None) -> None:
+    """The seal a person saw (on the page) is the result's seal now."""
+    if shown is not None and shown != signed:
+        raise GonioError("the result changed since the page was shown: reload it and check "
+                         "the result again", key="seal")
+
+
+def seal(store, cal_id: int) -> str:
+    """The content hash of a calibration's stored result, which the reviewer and the
+    approver sign and the issue checks: SHA-256 of the canonical JSON of the stored files'
+    digests (results.json, summary, draft certificate) and every result row (key, title,
+    clause, unit, measured, value, U, k). Every stored file is checked against its digest
+    and every row against the stored results.json first: a GonioError names what no longer
+    matches (a row changed in the database, a file changed on disk)."""
+    import hashlib
+
+    with store.session() as s:
+        cal = s.get(Calibration, int(cal_id))
+        if cal is None:
+            raise GonioError("no such calibration", key="calibration")
+        if not cal.results_sha256:
+            raise GonioError("the calibration has no stored result", key="calibration")
+        files = dict(s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
+            CalibrationFile.calibration_id == cal.id)).all())
+        files["results.json"] = cal.results_sha256
+        rows = [(r.key, r.title, r.clause, r.unit, bool(r.measured), r.value, r.U, r.k)
+                for r in s.scalars(select(ResultItem).where(
+                    ResultItem.calibration_id == cal.id).order_by(ResultItem.id))]
+    for name, sha in sorted(files.items()):
+        if not blobs.verify(store.blob_root, sha):
+            raise GonioError(f"the stored {name} is missing or does not match its SHA-256",
+                             key=f"calibration {cal_id}")
+    items = result_items(json.loads(file_bytes(store, cal.results_sha256)))
+    expect = [(it.key, it.title[:200], it.clause[:64], it.unit[:32], it.measured, it.value,
+               it.U, it.k) for it in items]
+    if len(expect) != len(rows):
+        raise GonioError(f"{len(rows)} stored result rows, results.json has {len(expect)}",
+                         key=f"calibration {cal_id}")
+    for row, want in zip(rows, expect):
+        if row != want:
+            raise GonioError(f"the stored result row {row[0]} differs from the stored "
+                             "results.json (changed in the database)", key=f"calibration {cal_id}")
+    doc = json.dumps({"files": files, "items": rows}, sort_keys=True, separators=(",", ":"),
+                     allow_nan=False)
+    return hashlib.sha256(doc.encode("utf-8")).hexdigest()
 
 
 def _reserve_number(s: Session, year: int) -> str:
@@ -476,12 +739,26 @@ def _reserve_number(s: Session, year: int) -> str:
     return f"{NUMBER_PREFIX}-{year:04d}-{row.last:04d}"
 
 
-def approve(store, actor: User, cal_id: int) -> Calibration:
-    """Approve a reviewed calibration (reviewer, not its creator) and start issuing: the
-    certificate number is reserved and the worker renders the final certificate."""
+def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> Calibration:
+    """Approve a reviewed calibration, or an amendment asked for (reviewer; not its creator,
+    and with ``min_people`` 3 not its reviewer nor the amendment's asker) and start issuing:
+    the certificate number is reserved and the worker renders the final certificate. The
+    approver signs the same :func:`seal` the reviewer signed (an amendment: the one its
+    calibration was approved with); a result changed since is refused."""
     require(actor, "reviewer")
-    return _transition(store, actor, cal_id, "approve", ("reviewed",), number=True,
-                       status="issuing", approved_by_id=actor.id, approved_at=utcnow(),
+    cal = calibration(store, cal_id)
+    if cal.status not in ("reviewed", "amending"):
+        raise GonioError(f"cannot approve a calibration that is {cal.status}", key="status")
+    signed = seal(store, cal_id)
+    _signs(signed, shown_seal)
+    before = cal.approved_seal if cal.status == "amending" else cal.reviewed_seal
+    if signed != before:
+        raise GonioError("the stored result no longer matches the one reviewed (its seal "
+                         f"{signed[:12]}… is not the signed {before[:12] or '(none)'}…): "
+                         "nothing approved", key=f"calibration {cal_id}")
+    return _transition(store, actor, cal_id, "approve", ("reviewed", "amending"),
+                       number=True, status="issuing", approved_by_id=actor.id,
+                       approved_at=utcnow(), approved_seal=signed,
                        progress="waiting for a worker", error="")
 
 
@@ -497,8 +774,10 @@ def retry(store, actor: User, cal_id: int) -> Calibration:
 
 
 def amend(store, actor: User, certificate_id: int, reason: str) -> Calibration:
-    """Amend an issued certificate (reviewer): a new certificate with a new number is issued
-    for the same calibration, naming the one it replaces and why (ISO/IEC 17025 7.8.8)."""
+    """Ask for an amendment of an issued certificate (reviewer, not the calibration's
+    creator): once another person approves it (:func:`approve`), a new certificate with a
+    new number is issued for the same calibration, naming the one it replaces and why
+    (ISO/IEC 17025 7.8.8); the replaced certificate keeps its own approvals."""
     require(actor, "reviewer")
     reason = text(reason, "reason", max_len=MAX_TEXT, multiline=True, required=True)
     with store.session() as s:
@@ -509,10 +788,11 @@ def amend(store, actor: User, certificate_id: int, reason: str) -> Calibration:
             raise GonioError(f"{cert.number} has been replaced already; amend the newest "
                              "certificate", key="certificate")
         cal_id = cert.calibration_id
-    return _transition(store, actor, cal_id, "amend", ("issued",), number=True,
-                       status="issuing", pending_replaces_id=cert.id, pending_reason=reason,
-                       approved_by_id=actor.id, approved_at=utcnow(),
-                       progress="waiting for a worker", error="")
+    return _transition(store, actor, cal_id, "amend", ("issued",), status="amending",
+                       pending_replaces_id=cert.id, pending_reason=reason,
+                       amend_requested_by_id=actor.id,
+                       progress="amendment asked for: awaiting approval by another person",
+                       error="")
 
 
 # --------------------------------------------------------------------------- the worker's side
@@ -584,7 +864,20 @@ def recover(store, host: str | None = None, alive=None) -> list[int]:
     for cid in dead:
         fail(store, cid, "interrupted: the worker stopped before the run finished "
                          "(server stopped or killed); nothing was issued — run it again")
+        remove_work(store, cid)
     return dead
+
+
+def remove_work(store, cal_id: int) -> list[Path]:
+    """Remove a calibration's work folders (``<data>/work/cal-<id>-*``, the copied readings
+    of a worker that was killed before its own clean-up); returns those removed."""
+    import shutil
+
+    gone = []
+    for path in (store.data / "work").glob(f"cal-{int(cal_id)}-*"):
+        shutil.rmtree(path, ignore_errors=True)
+        gone.append(path)
+    return gone
 
 
 def _pid_alive(pid: int) -> bool:
@@ -620,7 +913,7 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
         who = {k: (getattr(cal, k).full_name or getattr(cal, k).username)
                if getattr(cal, k) else "" for k in ("created_by", "reviewed_by", "approved_by")}
         lab = {
-            "laboratory": {"name": cfg["lab_name"], "address": cfg["lab_address"],
+            "laboratory": {"name": cfg["lab_name"], "address": _lines(cfg["lab_address"]),
                            "accreditation": cfg["lab_accreditation"],
                            "contact": cfg["lab_contact"]},
             "certificate": {"number": number,
@@ -629,7 +922,7 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
                             if cal.received_on else "",
                             "date_of_calibration": cal.performed_on.isoformat(),
                             "place": cal.place or cfg["lab_place"]},
-            "customer": {"name": cust.name, "address": cust.address},
+            "customer": {"name": cust.name, "address": _lines(cust.address)},
             "instrument": {"description": inst.kind, "model": inst.model,
                            "serial": inst.serial, "manufacturer": inst.manufacturer},
             "standards": [{"name": st.name, "identifier": st.identifier,
@@ -649,6 +942,11 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
                                     "agreed": "laboratory's decision rule"}
             lab["specification_limits"] = limits
     return lab
+
+
+def _lines(value: str) -> str:
+    """Multi-line text with its line ends as LF (a value stored before CR was normalised)."""
+    return (value or "").replace("\r\n", "\n").replace("\r", "\n")
 
 
 #: The files of a run kept in the store (tables stay in the worker's folder only).
@@ -700,9 +998,15 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
     if not _same_items(new_items, reviewed):
         raise GonioError("the recomputed result differs from the reviewed one: nothing "
                          "issued", key="issue")
+    signed = seal(store, cal_id)
     with store.writing() as s:
         cal = s.get(Calibration, cal_id)
         before = state(cal)
+        if not cal.approved_seal or signed != cal.approved_seal:
+            raise GonioError("the stored result no longer matches the one reviewed and "
+                             f"approved (seal {signed[:12]}…, signed "
+                             f"{cal.approved_seal[:12] or '(none)'}…): nothing issued",
+                             key="issue")
         for sha, size in files.values():
             if s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
@@ -712,16 +1016,54 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
                            reason=cal.pending_reason, html_sha256=files["certificate.html"][0],
                            pdf_sha256=files["certificate.pdf"][0],
                            dcc_sha256=files.get("certificate.dcc.xml", (None,))[0],
-                           results_sha256=files["results.json"][0])
+                           results_sha256=files["results.json"][0], seal_sha256=signed,
+                           reviewed_by_id=cal.amend_requested_by_id if cal.pending_replaces_id
+                           else cal.reviewed_by_id, min_people=min_people(s))
         s.add(cert)
         cal.status, cal.progress, cal.error = "issued", "issued", ""
         cal.pending_number, cal.pending_replaces_id, cal.pending_reason = "", None, ""
+        cal.amend_requested_by_id = None
         cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
         s.flush()
         audit(s, None, "issue", "certificate", cert.id, before,
               {"certificate": state(cert), "calibration": state(cal)})
         s.commit()
     return cert
+
+
+def verify_certificate(store, data: bytes) -> dict:
+    """The record of a certificate file (its PDF, HTML or DCC, or results.json): found by
+    its SHA-256 among the issued certificates, with the seal it was issued from and the seal
+    of its calibration's stored result now (which must be the same: a GonioError names what
+    no longer matches). ``{"number", "file", "sha256", "seal", "seal_now", "issued_at",
+    "replaces"}``; a file that is no issued certificate is a GonioError."""
+    import hashlib
+
+    digest = hashlib.sha256(data).hexdigest()
+    cols = {"certificate.pdf": Certificate.pdf_sha256, "certificate.html":
+            Certificate.html_sha256, "certificate.dcc.xml": Certificate.dcc_sha256,
+            "results.json": Certificate.results_sha256}
+    with store.session() as s:
+        for name, col in cols.items():
+            cert = s.scalar(select(Certificate).where(col == digest).order_by(Certificate.id))
+            if cert is not None:
+                break
+        else:
+            raise GonioError(f"no certificate issued in these records has this file "
+                             f"(SHA-256 {digest})", key="certificate")
+        replaces = cert.replaces.number if cert.replaces else ""
+    out = {"number": cert.number, "file": name, "sha256": digest, "seal": cert.seal_sha256,
+           "issued_at": cert.issued_at, "replaces": replaces}
+    for col in ("html_sha256", "pdf_sha256", "dcc_sha256", "results_sha256"):
+        sha = getattr(cert, col)
+        if sha and not blobs.verify(store.blob_root, sha):
+            raise GonioError(f"the stored file of {cert.number} ({col[:-7]}) is missing or "
+                             "does not match its SHA-256", key="certificate")
+    out["seal_now"] = seal(store, cert.calibration_id)
+    if cert.seal_sha256 and out["seal_now"] != cert.seal_sha256:
+        raise GonioError(f"{cert.number}: its calibration's stored result no longer matches "
+                         "the seal it was issued from", key="certificate")
+    return out
 
 
 # --------------------------------------------------------------------------- reading
@@ -787,7 +1129,7 @@ def default_interval(spec_key: str) -> tuple[int, str]:
     from gonio.records.interval import DEFAULT_MONTHS
     from gonio.specs import get
 
-    months = getattr(get(spec_key), "recalibration_interval_months", None)
+    months = get(spec_key).recalibration_interval_months
     if months:
         return int(months), "the specification's clause 9"
     return DEFAULT_MONTHS, "clause 9: normally ≤ 12 months"

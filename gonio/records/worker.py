@@ -108,6 +108,7 @@ class Dispatcher:
             cal = services.calibration(self.store, cid)
             if cal.status in ("running", "issuing") and cal.worker_pid == p.pid:
                 services.fail(self.store, cid, f"the worker process ended with code {rc}")
+            services.remove_work(self.store, cid)
 
     def _spawn(self, cal_id: int) -> None:
         env = dict(os.environ, GONIO_RECORDS_DATABASE=self.store.url,

@@ -586,12 +586,6 @@ class _Ctx:
     def c(self, i: int):
         return self.st.counts_at(i)
 
-    def rest_of(self, i: int) -> int | None:
-        for q in range(len(self.rests)):
-            if self.rests[q].i_start <= i <= self.rests[q].i_end:
-                return q
-        return None
-
     def counts(self, kz: int, kr: int, comp: float) -> float:
         d = self.c(kr) - self.c(kz)
         raw = float(d) - comp * float(self.t(kr) - self.t(kz))

@@ -246,12 +246,14 @@ LABELS: dict[str, dict[str, str]] = {
                           "degrees of freedom (shown per item in the budgets below); {clause}.",
                     "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
                           "不确定度分量）；{clause}。"},
-    "k_chi_square": {"en": "For a standard deviation of a few repeats (the repeatabilities), "
-                           "u_c = s/√(2ν) (JCGM 100 E.4.3) and U reaches the one-sided χ² 95 % "
-                           "upper limit of σ (σ ≤ s + U with 95 % probability), so k = U/u_c "
-                           "exceeds t95(ν).",
-                     "zh": "对少数重复测量的标准偏差（重复性各项），u_c = s/√(2ν)（JCGM 100 E.4.3），"
-                           "U 取至 σ 的单侧 χ² 95 % 上限（σ ≤ s + U 的概率为 95 %），故 k = U/u_c 大于 t95(ν)。"},
+    "k_chi_square": {"en": "A standard deviation of a few repeats (the repeatabilities) or a "
+                           "half range is stated by one interval, its one-sided 95 % upper "
+                           "limit (σ's χ² distribution, JCGM 100 E.4.3; the range of normal "
+                           "values for a half range), shown in the result with its probability; "
+                           "such an item has no U and no k.",
+                     "zh": "少数重复测量的标准偏差（重复性各项）或半极差以一个区间表述，即其单侧 95 % "
+                           "上限（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），"
+                           "在结果栏中连同包含概率给出；此类项目无 U，无 k。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "
@@ -320,6 +322,12 @@ LABELS: dict[str, dict[str, str]] = {
                               "合格、有条件合格、有条件不合格、不合格；按正态测量模型（JCGM 106）"
                               "给出特定误接受概率，以 χ² 区间给出的标准偏差按其 χ² 模型。"},
     "rule_agreed": {"en": "Agreed: {a}", "zh": "约定：{a}"},
+    "c_source_line": {"en": "Source of the specification limits: {s}.",
+                      "zh": "规定限的来源：{s}。"},
+    "c_source_unstated": {"en": "laboratory file (source not stated)",
+                          "zh": "实验室文件（未注明出处）"},
+    "list_sep": {"en": ", ", "zh": "、"},
+    "end_mark": {"en": "End of certificate", "zh": "证书结束"},
     "c_limits": {"en": "Specification limits", "zh": "规定限"},
     "c_default": {"en": "(default of the specification)", "zh": "（规范默认值）"},
     "c_default_note": {"en": "Limits marked as the default of the specification are the "
@@ -428,16 +436,6 @@ def budget_source(symbol: str, source: str, lang: str) -> str:
     if lang == "zh" and symbol in BUDGET_SOURCES_ZH:
         return BUDGET_SOURCES_ZH[symbol]
     return source
-
-
-def has_cjk(text: str) -> bool:
-    """True when ``text`` holds a CJK character.
-
-    >>> has_cjk("JJF xxxx 光学"), has_cjk("JJF")
-    (True, False)
-    """
-    import unicodedata as _u
-    return any(_u.east_asian_width(ch) in "WF" and ch.isalpha() for ch in text)
 
 
 def specification_text(spec: str, lang: str, cjk: bool = True) -> str:

@@ -40,10 +40,11 @@ _HEADS = ((r"lsb/(°/s)", r"\one\degree\tothe{-1}\second"), (r"counts/(°/s)",
 _PER = {"°C": r"\kelvin", "V": r"\volt", "s": r"\second", "h": r"\hour"}
 
 
-def compose_dsi(unit: str) -> str:
-    """A results.json unit in D-SI form: a known unit (:func:`gonio.result.statement.dsi_unit`)
-    or a sensor-output head followed by "/°C^n", "/V^n" divisors (a temperature difference
-    of 1 °C is 1 K). An unknown unit is a GonioError naming it.
+def compose_dsi(unit: str, extra=None) -> str:
+    """A results.json unit in D-SI form: a known unit (:func:`gonio.result.statement.dsi_unit`),
+    one of the specification's own (``extra``: its ``Specification.dcc_units``), or a
+    sensor-output head followed by "/°C^n", "/V^n" divisors (a temperature difference of
+    1 °C is 1 K). An unknown unit is a GonioError naming it.
 
     >>> compose_dsi("lsb/(°/s)/°C^2"), compose_dsi("°/s/V"), compose_dsi("1")
     ('\\\\one\\\\degree\\\\tothe{-1}\\\\second\\\\kelvin\\\\tothe{-2}', '\\\\degree\\\\second\\\\tothe{-1}\\\\volt\\\\tothe{-1}', '\\\\one')
@@ -51,6 +52,8 @@ def compose_dsi(unit: str) -> str:
     known = dsi_unit(unit)
     if known is not None and known[1] == 1.0:
         return known[0]
+    if extra and unit in extra:
+        return extra[unit]
     for head, dsi in _HEADS:
         if unit.startswith(head):
             rest, out = unit[len(head):], dsi
@@ -75,13 +78,13 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
     """The DCC 3.3.0 document of a per-item result (module docstring). ``data`` is the
     specification's certificate data (``MATRICES``, ``HEADING``), ``coverage_probability``
     the p of items whose own record leaves it out."""
-    from gonio.specs import get
+    from gonio.specs import content_field, get
 
     res = result.to_json()
     md = res.get("metadata", {})
     spec = get(res.get("spec") or result.spec_key)
     items = res["items"]
-    norm = getattr(data, "NORM", (spec.title_en,))[0] if data is not None else spec.title_en
+    norm = (content_field(data, "NORM") or (spec.title_en,))[0]
     root = new_document()
     sts = administrative_data(root, md, lab, cert_id=cert_id, norm=norm,
                               provenance=res.get("provenance"),
@@ -90,7 +93,7 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
                               readings_taken=list(res.get("readings_taken", [])),
                               readings_name="Reading taken of the sources")
     src = res["source"]
-    heading = getattr(data, "HEADING", (spec.title_en,))[0] if data is not None else spec.title_en
+    heading = (content_field(data, "HEADING") or (spec.title_en,))[0]
     mr = measurement_result(
         root, heading, method=f"{spec.title_en}; readings {src.get('file')} (SHA-256 "
                               f"{src.get('sha256')})", norm=norm,
@@ -112,17 +115,19 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
         kw = {}
         if n["U"] is not None and n["k"] is not None and p is not None:
             kw = {"U": n["U"], "k": n["k"], "p": float(p)}
-        quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"]),
+        quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
                  ref_type="basic_measuredValue", **kw)
         if n["upper"] is not None:
-            bound_quantity(d, n["statement"].upper_text, dsi=compose_dsi(it["unit"]))
-    for mname, keys in getattr(data, "MATRICES", ()) if data is not None else ():
+            bound_quantity(d, n["statement"].upper_text,
+                           dsi=compose_dsi(it["unit"], spec.dcc_units))
+    for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):
             continue
         matrix_result(results, mname, flat, items, coverage_probability)
     conformity_statements(sts, items, lambda k: items[k]["title"],
-                          lambda k: (compose_dsi(items[k]["unit"]), 1.0), labels("en"))
+                          lambda k: (compose_dsi(items[k]["unit"], spec.dcc_units), 1.0),
+                          labels("en"))
     return root
 
 

@@ -1,5 +1,5 @@
 """The certificate of a rate-gyro calibration (JJF 1535 Annex B content; IEC 62047-20 items),
-rendered by the optical certificate's machinery (:mod:`gonio.report.certificate`: the same
+rendered by the shared machinery (:mod:`gonio.report.render`: the same
 blocks, HTML and PDF renderers, lab file, identifier, virtual-bench banner, zh/en).
 
 The specification supplies its content as data (``gonio/specs/<name>/certificate.py``:
@@ -16,17 +16,19 @@ import re
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
-from gonio.report.certificate import (Block, Num, certificate_id, font_families, load_lab,
-                                      render_html, render_pdf)
+from gonio.formats.lab import load_lab
 from gonio.report.dcc import bilingual
-from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.figures import figure_svg
+from gonio.report.header import (certificate_id, conformity_section, opening_blocks,
+                                 signature_blocks)
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
-from gonio.report.stated import NoBreakText, conformity_blocks, item_nums
+from gonio.report.provenance import is_virtual
+from gonio.report.render import Block, font_families, render_html, render_pdf
+from gonio.report.stated import NoBreakText, Num, item_nums
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import FIGURES
-from gonio.specs import get
+from gonio.specs import content_field, get
 
 
 def _num(value, src: str, rule: str, U=None):
@@ -46,62 +48,19 @@ def _zh(text, L: dict):
 
 def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
                   standard_row: list) -> list[Block]:
-    """The certificate's opening blocks (JJF 1535 clause 8 a–j) for a specification whose
-    results have the per-item shape: the virtual-bench notice, laboratory, customer and
-    instrument, the standards used (``standard_row`` when the lab file names none) and the
-    environment."""
+    """The certificate's opening blocks (:func:`gonio.report.header.opening_blocks`) for a
+    specification whose results have the per-item shape, with the chamber's temperature
+    points when the items were measured in one; ``standard_row``: the readings' equipment
+    (four cells, translated here) when the lab file names no standard."""
     md = res.get("metadata", {})
-    virtual = is_virtual(res, lab)              # the readings' provenance, not the lab file
-    lab_ = lab or {}
-    blocks: list[Block] = []
-    add = lambda kind, d, extra=None: blocks.append(Block(kind, d, extra))  # noqa: E731
-    ns = L["not_stated"]
-    if virtual:
-        add("notice", " ".join(virtual_lines(res, L)))
-    if lab is None:
-        add("kv", [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")])
-    else:
-        la = lab_["laboratory"]
-        add("kv", [(L["laboratory"], la["name"]), (L["address"], la["address"])])
-    cert = lab_.get("certificate", {})
-    cust = lab_.get("customer", {"name": ns, "address": ""})
-    inst = lab_.get("instrument", {})
-    add("kv", [
-        (L["customer"], cust.get("name") or ns),
-        (L["description"], inst.get("description") or _zh(md.get("instrument"), L) or ns),
-        (L["model"], inst.get("model") or md.get("model") or ns),
-        (L["serial"], inst.get("serial") or md.get("serial") or ns),
-        (L["manufacturer"], inst.get("manufacturer") or _zh(md.get("manufacturer"), L) or ns),
-        (L["date_receipt"], cert.get("date_of_receipt") or ns),
-        (L["date_calibration"], cert.get("date_of_calibration") or md.get("date") or ns),
-        (L["date_issue"], cert.get("date_of_issue") or ns),
-        (L["place"], cert.get("place") or (L["virtual_place"] if virtual else ns)),
-        (L["specification"], norm_text(spec, lang)),
-        (L["source_file"], f"{res['source']['file']} (SHA-256 {res['source']['sha256'][:16]}…, "
-                           + L["rows_word"].format(n=res['source']['rows']) + ")"),
-    ])
-    add("h", L["standards"])
-    std_rows = [[s["name"], s["identifier"] or "—", s["accuracy"] or "—", s["certificate"] or "—",
-                 s["traceability"] or "—"] for s in (lab_.get("standards") or [])]
-    if not std_rows:             # the readings' equipment, named in the page's language
-        std_rows = [[_zh(c, L) for c in standard_row] + [L["virtual_trace"] if virtual else ns]]
-    add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
-                  std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
-    add("h", L["environment"])
-    env = lab_.get("environment") or {}
-    t = env.get("temperature_c")
-    room = md.get("room_temperature_c")
-    h = env.get("humidity_pct")
-    rows = [(L["temperature"], f"{t:g} °C" if t is not None else
-             f"{room} °C" if room else ns),     # "not stated", not "not stated °C"
-            (L["humidity"], f"{h:g} %" if h is not None else ns)]
+    more = []
     temps = chamber_points(res)
     if temps:
         bound = md.get("chamber_deviation_bound_c")
-        rows.append((L["chamber_profile"], ", ".join(f"{x:g}" for x in temps) + " °C"
+        more.append((L["chamber_profile"], ", ".join(f"{x:g}" for x in temps) + " °C"
                      + (L["chamber_bound"].format(b=bound) if bound not in (None, "") else "")))
-    add("kv", rows)
-    return blocks
+    return opening_blocks(res, lab, L, specification=norm_text(spec, lang),
+                          standard_row=[_zh(c, L) for c in standard_row], environment=more)
 
 
 def chamber_points(res: dict) -> list[float]:
@@ -124,7 +83,7 @@ def norm_text(spec, lang: str) -> str:
     """The normative document followed, with its number and year: the specification's
     ``NORM`` (en, zh) from its certificate data where it has one (a procedure that is not a
     published standard names the documents it follows), else its title."""
-    norm = getattr(spec.content(), "NORM", None) if spec.certificate_content else None
+    norm = spec.content_value("NORM")
     if norm:
         return norm[1 if lang == "zh" else 0]
     return spec.title_zh if lang == "zh" else spec.title_en
@@ -190,21 +149,14 @@ def readings_note(note: str, table: dict, lang: str) -> str:
 
 def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | None = None,
                    notes: list | tuple | None = None, recal: str | None = None) -> list[Block]:
-    """The readings taken (``notes``, default results.json's), the signatures and the
-    statements (clause 8 l–n; ``recal`` replaces the recalibration statement)."""
-    lab_ = lab or {}
+    """The readings taken (``notes``, default results.json's), then the signatures and the
+    statements (:func:`gonio.report.header.signature_blocks`; ``recal`` replaces the
+    recalibration statement)."""
     blocks = [Block("h", reading_title or L["readings_taken"])]
     blocks += [Block("p", ["• " + note])
                for note in (notes if notes is not None else res.get("readings_taken", []))]
-    blocks.append(Block("h", L["signatory"]))
-    sig = lab_.get("signatory", {})
-    blocks.append(Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
-                               (L["checked_by"], sig.get("checked_by") or "—"),
-                               (L["approved_by"], sig.get("approved_by") or "—")]))
-    blocks += [Block("p", [L[k]]) for k in ("statement_item", "statement_copy")]
     # a specification's own recalibration clause, else no clause at all (not the draft's 9)
-    blocks.append(Block("p", [recal or L["statement_recal_user"]]))
-    return blocks
+    return blocks + signature_blocks(lab, L, recal or L["statement_recal_user"])
 
 
 def figure_blocks(figures, L: dict, lang: str) -> list[Block]:
@@ -218,7 +170,7 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
     """The grouped results (JJF 1535 Annex B; IEC 62047-20 clause 5): value and U stated by
     the one rule (:func:`gonio.report.stated.item_nums`), k and ν_eff beside U."""
     rows = []
-    phrases = getattr(data, "PHRASES_ZH", ())
+    phrases = content_field(data, "PHRASES_ZH")
     for num, en, zh, keys in data.GROUPS:
         rows.append([str(num), zh if lang == "zh" else en, "", "", "", "", "", ""])
         for key in keys:
@@ -232,7 +184,10 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
                 continue
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
-            if n["upper"] is not None:      # non-negative, U exceeds the value (statement rule)
+            if n["statement"].interval is not None:     # stated by its interval, with p
+                val = [val, ("；" if lang == "zh" else "; ")
+                       + n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")]
+            elif n["upper"] is not None:    # non-negative, U exceeds the value (statement rule)
                 val = [val, L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
@@ -271,23 +226,23 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
-    u_clause = getattr(data, "U_CLAUSE", ("JCGM 100:2008", "JCGM 100:2008"))   # the spec's own
+    u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     chi2 = [k for k, it in res["items"].items()
             if ((it.get("uncertainty") or {}).get("k_source") == "chi-square")]
     if chi2:                  # a standard deviation of a few repeats (issue 24): U to the χ² limit
         add("p", [L["k_chi_square"]])
-    blocks += screening_blocks(res, L, getattr(data, "PHRASES_ZH", ()))
-    blocks += conformity_blocks(
+    blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
+    blocks += conformity_section(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
                                     if lang == "zh" else res["items"][k]["title"]),
-        lambda k: unit_text(res["items"][k]["unit"]), Block)
+        lambda k: unit_text(res["items"][k]["unit"]), lab)
     add("h", L["budget_items"])
     add("table", ([L["clause"], L["component"], L["source"], L["u_i_item"], "|c_i|·u_i"],
-                  budget_rows(res, L, phrases=getattr(data, "PHRASES_ZH", ()))),
+                  budget_rows(res, L, phrases=content_field(data, "PHRASES_ZH"))),
         (0.11, 0.10, 0.49, 0.15, 0.15))
-    recal = getattr(data, "RECAL", None)          # the specification's own clause, if any
-    notes = [readings_note(n, getattr(data, "READINGS_ZH", {}), lang)
+    recal = content_field(data, "RECAL")          # the specification's own clause, if any
+    notes = [readings_note(n, content_field(data, "READINGS_ZH"), lang)
              for n in res.get("readings_taken", [])]
     blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes,
                              recal=recal and recal[1 if lang == "zh" else 0])
@@ -329,26 +284,26 @@ def dcc_translator(result, content_fn):
     from gonio.report.dcc import label_translator
 
     res = result.to_json()
-    key = res.get("spec") or getattr(result, "spec_key", None)
+    key = res.get("spec") or result.spec_key
     spec = get(key)
     data = spec.content() if spec.certificate_content else None
     extra = {spec.title_en: spec.title_zh}
-    titles = getattr(data, "TITLES_ZH", {})
+    titles = content_field(data, "TITLES_ZH")
     for k, it in res.get("items", {}).items():
         if k in titles:
             extra[it["title"]] = titles[k]
-    for _, en, zh, _ in getattr(data, "GROUPS", ()):
+    for _, en, zh, _ in content_field(data, "GROUPS"):
         extra[en] = zh
-    heading = getattr(data, "HEADING", None)
+    heading = content_field(data, "HEADING")
     if heading:
         extra[heading[0]] = heading[1]
-    extra.update(getattr(data, "READINGS_ZH", {}))
-    norm = getattr(data, "NORM", None)
+    extra.update(content_field(data, "READINGS_ZH"))
+    norm = content_field(data, "NORM")
     if norm:
         extra[norm[0]] = norm[1]
     # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
     own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
-    return label_translator(extra, own + tuple(getattr(data, "PHRASES_ZH", ())))
+    return label_translator(extra, own + tuple(content_field(data, "PHRASES_ZH")))
 
 
 def write_rate_certificate(result, out, *, truth=None, lab=None, lang: str = "en",

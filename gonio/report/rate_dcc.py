@@ -45,7 +45,7 @@ import numpy as np
 from lxml import etree
 
 from gonio.errors import GonioError
-from gonio.report.certificate import Num
+from gonio.report.stated import Num
 from gonio.report.dcc import (administrative_data, bound_quantity, conformity_statements,
                               element, influence_conditions, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
@@ -100,9 +100,11 @@ SETTINGS = (
 )
 
 
-def dsi_unit(unit: str, output_unit: str, file=None) -> tuple[str, float]:
+def dsi_unit(unit: str, output_unit: str, file=None, extra=None) -> tuple[str, float]:
     """(D-SI unit, factor) of a rate item's results.json ``unit``; the scale factor's
-    ``<output>/(°/s)`` through :data:`OUTPUT_DSI`. An unknown unit is a GonioError naming it.
+    ``<output>/(°/s)`` through :data:`OUTPUT_DSI`; a unit of the specification's own
+    (``extra``: its ``Specification.dcc_units``, {unit: D-SI}) with factor 1. An unknown unit
+    is a GonioError naming it.
 
     >>> dsi_unit("mV/(°/s)", "mV")
     ('\\\\milli\\\\volt\\\\degree\\\\tothe{-1}\\\\second', 1.0)
@@ -115,9 +117,12 @@ def dsi_unit(unit: str, output_unit: str, file=None) -> tuple[str, float]:
                              f"(known: {', '.join(OUTPUT_DSI)}); calibrate without --dcc",
                              file=file, key="output_unit")
         return OUTPUT_DSI[output_unit], 1.0
-    if unit not in RATE_DSI:
-        raise GonioError(f"unit {unit!r} has no D-SI form for the DCC", file=file, key="unit")
-    return RATE_DSI[unit]
+    if unit in RATE_DSI:
+        return RATE_DSI[unit]
+    if extra and unit in extra:
+        return extra[unit], 1.0
+    raise GonioError(f"unit {unit!r} has no D-SI form for the DCC (a specification states "
+                     "its own units in Specification.dcc_units)", file=file, key="unit")
 
 
 def clause_ref_type(spec_key: str, clause: str) -> str:
@@ -204,7 +209,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             if not it["measured"] or value is None or not math.isfinite(value):
                 not_measured_quantity(data, name, it["reason"] or "no finite value")
                 continue
-            dsi, factor = dsi_unit(it["unit"], out_unit, src["file"])
+            dsi, factor = dsi_unit(it["unit"], out_unit, src["file"], spec.dcc_units)
             n = item_nums(it, f"items.{key}", factor=factor)     # the certificate's rule
             kw = {}
             if n["U"] is not None and n["k"] is not None and n["p"] is not None:
@@ -219,7 +224,8 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             if n["upper"] is not None:
                 bound_quantity(data, n["statement"].upper_text, dsi=dsi)
     conformity_statements(sts, items, lambda k: items[k]["title"],
-                          lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"]),
+                          lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
+                                           spec.dcc_units),
                           labels("en"))
     return root
 

@@ -104,7 +104,7 @@ def _role(result, role: str):
     ``allan``, ``arw``, ``bias_instability``, ``bandwidth``); None when it names none or the item was not
     measured."""
     spec = get(result.spec_key)
-    roles = getattr(spec.content(), "FIGURE_ITEMS", {}) if spec.certificate_content else {}
+    roles = spec.content_value("FIGURE_ITEMS")
     return _item(result, roles[role]) if role in roles else None
 
 
@@ -199,7 +199,7 @@ def forward_reverse(result) -> dict | None:
     points), ``ylabel`` and ``title`` (a :data:`FIG_TEXT` key formatted with the item's
     value ``v`` and unit ``u``). None: the specification has no such figure."""
     spec = get(result.spec_key)
-    return getattr(spec.content(), "CW_CCW", None) if spec.certificate_content else None
+    return spec.content_value("CW_CCW")
 
 
 def draw_temperature(fig, spec, result, L, truth=None) -> None:

@@ -257,18 +257,32 @@ def interval_text(lo, hi, f) -> str:
     return f"[{f(lo)}, {f(hi)}]"
 
 
-def conformity_texts(c, res: dict | None, L: dict) -> dict:
+def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = None) -> dict:
     """Limits (as given), acceptance interval (at U's decimal place), outcome and
     probabilities of one statement as text. ``c`` is a
     :class:`~gonio.analysis.conformity.Conformity` or its results.json dict. An empty
-    acceptance interval (guard bands wider than the tolerance) is said in words."""
+    acceptance interval (guard bands wider than the tolerance) is said in words; so is the
+    acceptance interval of a non-negative quantity (``nonnegative``, else the item's own flag
+    in ``res``) whose upper end lies below zero: [0, -40] is empty, never "≤ -40 s".
+
+    >>> L = {"c_acc_empty": "none", "accept": "conforms"}
+    >>> c = {"U": 100.0, "upper": 60.0, "acceptance_upper": -40.0, "outcome": "accept"}
+    >>> conformity_texts(c, None, L)["acceptance"], conformity_texts(c, None, L, True)["acceptance"]
+    ('≤ -40', 'none')
+    """
     g = (lambda k: c.get(k)) if isinstance(c, dict) else (lambda k: getattr(c, k, None))  # noqa: E731
+    if nonnegative is None and res is not None:
+        it = res.get(g("item")) if g("item") else None
+        it = it if isinstance(it, dict) else {}
+        nonnegative = bool(it.get("nonnegative") or (it.get("uncertainty") or {}).get(
+            "nonnegative"))
     U = g("U")
     dec = decimals_for_sig(float(U), 2) if U else None
     f = (lambda v: round_half_up(v, dec)) if dec is not None \
         else given_text  # noqa: E731
     al, au = g("acceptance_lower"), g("acceptance_upper")
-    if al is not None and au is not None and al > au:
+    if (al is not None and au is not None and al > au) or (nonnegative and au is not None
+                                                           and au < 0):
         acc = L["c_acc_empty"]
     else:
         acc = interval_text(al, au, f)
@@ -299,7 +313,7 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
                                                                  given_text)), "—",
                          L["c_no_statement"].format(r=c.get("reason") or "—"), "—", "—"])
             continue
-        t = conformity_texts(c, None, L)
+        t = conformity_texts(c, None, L, bool(items[key].get("nonnegative")))
         pc = c.get("conformance_probability")
         u = unit_of(key)
         mark = f" {L['c_default']}" if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN else ""
@@ -442,7 +456,8 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     """One results.json item (``src`` its path, e.g. ``items.bias``) as every output states it,
     by the one statement rule (:func:`gonio.result.statement.item_statement`): ``value``,
     ``U``, ``k``, ``nu`` as :class:`Num` (or None), ``p`` (per-cent text or None), ``upper``
-    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`).
+    (text or None), ``statement`` (the :class:`~gonio.result.statement.Statement`). An item
+    stated by its interval has ``U`` and ``k`` None and ``statement.interval`` set.
     ``factor`` scales value and U first (a unit conversion of the DCC).
 
     >>> n = item_nums({"value": 786.485, "unit": "°/h", "measured": True, "uncertainty":
@@ -477,6 +492,6 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
         out["U"] = Num(st.U_text, f"{src}.uncertainty.U", U_rule)
         if st.k is not None:
             out["k"] = Num(st.k, f"{src}.uncertainty.k", "k")
-        if st.nu_eff is not None:
-            out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
+    if st.nu_eff is not None and (st.U is not None or st.interval is not None):
+        out["nu"] = Num(st.nu_eff, f"{src}.uncertainty.nu_eff", "nu")
     return out

@@ -58,3 +58,28 @@ def findings_to_json(findings) -> list[dict]:
     """``results.json``'s ``findings``: in file order (line, then code)."""
     return [f.to_json() for f in sorted(findings, key=lambda f: (f.line is None, f.line or 0,
                                                                    f.code))]
+
+
+def set_aside(data, findings):
+    """``data`` (a DataFrame with a ``line`` column: each row's line in its file) without the
+    rows a ``set_aside`` finding names by its line; a ``refused`` finding stops here with the
+    one-line error naming the reading (:class:`GonioError`); ``flagged`` findings change
+    nothing. The input is not modified.
+
+    >>> import pandas as pd
+    >>> df = pd.DataFrame({"line": [5, 6, 7], "output": [1.0, 99.0, 1.1]})
+    >>> f = Finding("spike", "output 99 is 50 σ from its neighbours", "set_aside", line=6)
+    >>> set_aside(df, [f])["output"].tolist()
+    [1.0, 1.1]
+    """
+    for f in findings:
+        if f.action == "refused":
+            raise GonioError(f"refused by the screening: {f.message}", file=f.file,
+                             line=f.line, column=f.column)
+    lines = {f.line for f in findings if f.action == "set_aside" and f.line is not None}
+    if not lines:
+        return data
+    if "line" not in data:
+        raise GonioError("the readings have no 'line' column: findings that set rows aside "
+                         "name them by their line in the file", key="line")
+    return data[~data["line"].isin(lines)].reset_index(drop=True)

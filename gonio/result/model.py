@@ -92,12 +92,15 @@ class Uncertainty:
     """An item's uncertainty (JCGM 100): the budget rows (``components``, see
     :func:`budget_row`), u_c, U, k, ν_eff (None or inf: infinite), the coverage probability
     of U (None: a fixed k was asked for), optional JCGM 101 Monte Carlo figures, how k was
-    chosen and, for a non-negative quantity, an interval (e.g. χ²) stated beside U."""
+    chosen and an interval (e.g. χ²). With ``k`` None the interval *is* the statement (a
+    dispersion, range or extreme: :func:`gonio.result.statement.state_interval`), U is then
+    the distance from the value to the interval's upper end, used by the decision rule's
+    guard band; otherwise the interval is stated beside U (the optical draft's items)."""
 
     components: list[dict]
     u_c: float
     U: float
-    k: float
+    k: float | None             # None: stated by ``interval`` alone (no coverage factor)
     nu_eff: float | None
     monte_carlo: dict | None = None
     coverage_probability: float | None = None
@@ -327,22 +330,27 @@ class Result:
 
     @classmethod
     def from_json(cls, d: dict) -> "Result":
-        """The result back from its results.json (tables and analysis objects are not kept)."""
-        v = d.get("version")
+        """The result back from its results.json (tables and analysis objects are not kept);
+        a malformed document (a key missing, a list for an object) is a GonioError."""
+        v = d.get("version") if isinstance(d, dict) else None
         if v != RESULTS_VERSION:
             raise GonioError(f"results.json version {v!r} is not the one this gonio reads "
                              f"({RESULTS_VERSION})", key="version")
         fnames = {f.name for f in fields(Finding)}
-        return cls(d["spec"], d.get("specification", ""),
-                   {k: Item.from_json(it, k) for k, it in d["items"].items()},
-                   dict(d.get("metadata") or {}), dict(d.get("source") or {}),
-                   list(d.get("readings_taken") or []), dict(d.get("extra") or {}),
-                   dict(d.get("settings") or {}),
-                   [Finding(**{k: x for k, x in f.items() if k in fnames})
-                    for f in d.get("findings") or []],
-                   list(d.get("unused_readings") or []),
-                   [Covariance.from_json(c) for c in d.get("covariances") or []],
-                   d.get("gonio_version", ""), provenance=dict(d.get("provenance") or {}))
+        try:
+            return cls(d["spec"], d.get("specification", ""),
+                       {k: Item.from_json(it, k) for k, it in d["items"].items()},
+                       dict(d.get("metadata") or {}), dict(d.get("source") or {}),
+                       list(d.get("readings_taken") or []), dict(d.get("extra") or {}),
+                       dict(d.get("settings") or {}),
+                       [Finding(**{k: x for k, x in f.items() if k in fnames})
+                        for f in d.get("findings") or []],
+                       list(d.get("unused_readings") or []),
+                       [Covariance.from_json(c) for c in d.get("covariances") or []],
+                       d.get("gonio_version", ""), provenance=dict(d.get("provenance") or {}))
+        except (KeyError, AttributeError, IndexError, TypeError, ValueError) as exc:
+            raise GonioError(f"malformed results.json: {type(exc).__name__} {str(exc)[:80]}",
+                             key="results") from None
 
     def summary(self) -> str:
         """One line per item: clause, title, value ± U (k, ν_eff) unit, or why not measured;

@@ -9,11 +9,17 @@ Contents
 :func:`rounded`            a number to ``sig`` significant digits, as a float (a budget that
                            carries a stated number on into a later step)
 :func:`state`              value, U, k, ν_eff, p and unit → a :class:`Statement`
+:func:`state_interval`     value and its coverage interval (a dispersion, range, extreme)
+                           → a :class:`Statement` with one interval, no ± U and no k
 :func:`item_statement`     the statement of one results.json item (or model ``Item``)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
 :func:`k_text`             a coverage factor as stated (3 significant digits)
 :func:`nu_text`            effective degrees of freedom as stated (integer part, or ∞)
+:func:`stated_nu`          ν_eff as stated and as k is computed from (integer part; ∞ above
+                           :data:`NU_INFINITE`)
+:func:`coverage_k`         k = t_p(ν) of the stated ν (so k and the printed ν agree)
+:func:`stated_gum`         a GUM result with k and U from :func:`coverage_k`
 :func:`p_text`             a coverage probability in per cent as stated
 :func:`unit_text`          a results.json unit in its SI (accepted-unit) printed form
 :func:`dsi_unit`           a results.json unit in D-SI form (with the factor applied)
@@ -29,12 +35,16 @@ The rule (JCGM 100:2008 (GUM) 7.2.6, 7.2.2; JCGM 101 and EA-4/02 the same):
 * beside U: the coverage factor k (3 significant digits, trailing zeros dropped: 1.97414 →
   1.97, 2.000 → 2), the effective degrees of freedom ν_eff (the integer part, GUM G.6.4:
   "truncate to the next lower integer"; ∞ where the budget has infinite degrees of
-  freedom) and the coverage probability p in per cent (2 significant digits: 0.9545 → 95);
+  freedom or more than :data:`NU_INFINITE`) and the coverage probability p in per cent (2 significant digits: 0.9545 → 95);
 * a quantity without an uncertainty keeps the specification's number of significant
   digits (``sig``, 3 unless the specification says otherwise);
 * U stated to more than six decimal places (or a value of 10¹⁵ or more) is written with a
   power of ten common to value and U, that of the larger one's leading digit, both mantissas
   at U's decimal place ("2.18×10⁻⁵ ± 0.13×10⁻⁵", never "2.2×10⁻⁵ ± 1.3×10⁻⁶");
+* k and the printed ν_eff agree: k is computed from the ν_eff as stated
+  (:func:`coverage_k`: t_p of the integer part; the normal quantile above
+  :data:`NU_INFINITE`), never from the unrounded ν_eff (ν_eff 2.43 is stated "2" with
+  k = t_95(2) = 4.30, not k = 3.78);
 * units are printed in the SI form of :func:`unit_text` (degree, hour and second of arc are
   units accepted for use with the SI, SI Brochure table 8) and written to a DCC in the
   D-SI form of :func:`dsi_unit`.
@@ -46,7 +56,14 @@ possible values) and the ISO 80000-1 way of stating a bound, the statement keeps
 "value ± U" (the numbers every output compares) and adds the coverage interval truncated
 at zero, stated as an **upper bound**: ``upper`` = value + U rounded *up* at U's decimal
 place (so the bound is never understated) and printed "≤ upper". Its coverage probability
-is at least the stated p (the part cut away holds no possible value). Wording used by
+is at least the stated p (the part cut away holds no possible value). **A non-negative
+quantity whose whole interval lies at or below zero** (value + U ≤ 0: an estimate below
+zero by more than its U) has no coverage interval of possible values at all; the rule
+refuses to state it (:class:`~gonio.errors.GonioError`), and a specification reports such
+an item as not measured with that reason; it is never printed as a negative bound
+("≤ -4.0 s"). An empty acceptance interval of such a quantity (guard band wider than the
+limit) is likewise said in words, never as a negative limit
+(:func:`gonio.report.stated.conformity_texts`). Wording used by
 every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098])", zh "上限：≤ 0.098
 °/s（区间 [0, 0.098]）". The issue-24 coverage studies check such items one-sidedly: the
 truth must lie below ``upper``. A quantity that may be negative (a bias, an offset, a
@@ -70,7 +87,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal, localcontext
+from decimal import ROUND_CEILING, ROUND_FLOOR, ROUND_HALF_UP, Decimal, localcontext
+
+from gonio.errors import GonioError
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -170,16 +189,67 @@ def k_text(k: float | None) -> str | None:
     return s.rstrip("0").rstrip(".") if "." in s else s
 
 
-def nu_text(nu: float | None) -> str | None:
-    """Effective degrees of freedom as stated: the integer part (GUM G.6.4), ∞ if infinite.
+#: Above this many effective degrees of freedom ν_eff is stated "∞" and k is the normal
+#: quantile: t_0.975(1000) = 1.9623 and z_0.975 = 1.9600 differ by 0.12 %, far below U's two
+#: significant digits. (Welch–Satterthwaite gives ν_eff of 10⁷ where a Type B input
+#: dominates; stating "13539172" would claim a precision ν_eff does not have.)
+NU_INFINITE: float = 1000.0
 
-    >>> nu_text(58.7), nu_text(math.inf), nu_text(3.0), nu_text(None)
-    ('58', '∞', '3', None)
+
+def stated_nu(nu: float | None) -> float | None:
+    """ν_eff as stated, and as k is computed from (GUM G.6.4: "truncate to the next lower
+    integer"): the integer part, at least 1; ∞ above :data:`NU_INFINITE` or when infinite;
+    None when unknown.
+
+    >>> stated_nu(58.7), stated_nu(2.43), stated_nu(13539172.4), stated_nu(0.7), stated_nu(None)
+    (58.0, 2.0, inf, 1.0, None)
     """
     if nu is None or (isinstance(nu, float) and math.isnan(nu)):
         return None
     nu = float(nu)
-    return "∞" if math.isinf(nu) or nu >= 1e15 else str(int(math.floor(nu)))
+    if math.isnan(nu):
+        return None
+    if math.isinf(nu) or nu > NU_INFINITE:
+        return math.inf
+    return float(max(1, math.floor(nu)))
+
+
+def coverage_k(nu: float | None, p: float = 0.95) -> float:
+    """The coverage factor k = t_p(ν) of a two-sided interval, ν = :func:`stated_nu` of
+    ``nu`` (the normal quantile when ν is ∞ or unknown), so the k a statement prints is the
+    one of the ν it prints (JCGM 100 G.3, G.4, G.6.4).
+
+    >>> round(coverage_k(2.43), 2), round(coverage_k(2.0), 2), round(coverage_k(5000.0), 2)
+    (4.3, 4.3, 1.96)
+    """
+    from uncertainty import coverage_factor
+
+    nu_s = stated_nu(nu)
+    return coverage_factor(math.inf if nu_s is None else nu_s, p)
+
+
+def stated_gum(r):
+    """An ``uncertainty.GumResult`` computed with p whose k (and U = k·u_c) follow
+    :func:`coverage_k` of its ν_eff; a result with a fixed k (``p`` None) is returned as is."""
+    from dataclasses import replace
+
+    if r.p is None:
+        return r
+    k = coverage_k(r.dof, r.p)
+    return replace(r, k=k, U=k * r.u_c)
+
+
+def nu_text(nu: float | None) -> str | None:
+    """Effective degrees of freedom as stated (:func:`stated_nu`): the integer part, ∞ if
+    infinite or above :data:`NU_INFINITE`.
+
+    >>> nu_text(58.7), nu_text(math.inf), nu_text(3.0), nu_text(13539172.0), nu_text(None)
+    ('58', '∞', '3', '∞', None)
+    """
+    nu_s = stated_nu(nu)
+    if nu_s is None:
+        return None
+    return "∞" if math.isinf(nu_s) else str(int(nu_s))
 
 
 def p_text(p: float | None) -> str | None:
@@ -264,6 +334,7 @@ class Statement:
     upper: str | None = None
     exponent: int = 0
     decimals: int | None = None
+    interval: tuple[str, str] | None = None
 
     def _x(self, s: str) -> str:
         return f"{s}×10{str(self.exponent).translate(_SUP)}" if self.exponent else s
@@ -304,9 +375,35 @@ class Statement:
             return f"上限：≤ {b}{u}（区间 [0, {b}]）"
         return f"upper bound: ≤ {b}{u} (interval [0, {b}])"
 
-    def text(self, lang: str = "en") -> str:
-        """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)"."""
+    def interval_text(self, lang: str = "en", short: bool = False) -> str:
+        """The coverage interval of an item stated by its interval (see :func:`state`), with
+        its probability: "upper bound: ≤ 0.53 °/h (interval [0, 0.53], p ≈ 95 %)" or
+        "interval [0.066, 0.204] ″ (p ≈ 95 %)"; "" for an item stated by U. ``short``: the
+        form of a table cell whose unit is in another column, "≤ 0.53 (p ≈ 95 %)" or
+        "[0.066, 0.204] (p ≈ 95 %)"."""
+        if self.interval is None:
+            return ""
         u = f" {self.unit}" if self.unit else ""
+        lo, hi = (self._x(x) for x in self.interval)
+        p = f"p ≈ {self.p} %" if self.p is not None else ""
+        if short:
+            iv = f"≤ {hi}" if self.upper is not None else f"[{lo}, {hi}]"
+            return iv + ((f"（{p}）" if lang == "zh" else f" ({p})") if p else "")
+        if self.upper is not None:                      # one-sided from the natural bound 0
+            if lang == "zh":
+                return f"上限：≤ {hi}{u}（区间 [0, {hi}]" + (f"，{p}）" if p else "）")
+            return f"upper bound: ≤ {hi}{u} (interval [0, {hi}]" + (f", {p})" if p else ")")
+        if lang == "zh":
+            return f"区间 [{lo}, {hi}]{u}" + (f"（{p}）" if p else "")
+        return f"interval [{lo}, {hi}]{u}" + (f" ({p})" if p else "")
+
+    def text(self, lang: str = "en") -> str:
+        """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)", or for
+        an item stated by its interval "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)"."""
+        u = f" {self.unit}" if self.unit else ""
+        if self.interval is not None:
+            return f"{self.value_text}{u}" + ("；" if lang == "zh" else "; ") + \
+                self.interval_text(lang)
         if self.U is None:
             return f"{self.value_text}{u}"
         s = f"{self.value_text} ± {self.U_text}{u}"
@@ -328,6 +425,58 @@ def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
         return round_half_up(m, decimals)
 
 
+def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float | None = None,
+                   p: float | None = None, unit: str | None = "",
+                   nonnegative: bool = False) -> Statement:
+    """A value stated by its coverage interval [lo, hi] (a dispersion, range or extreme whose
+    distribution is not symmetric about the estimate: χ² for a standard deviation, Monte
+    Carlo for an extreme): no "± U" and no k, one interval with its probability.
+
+    The ends are stated at the decimal place that gives the nearer end's distance from the
+    value two significant digits (the far end's, for an interval from 0), the lower end
+    rounded down and the upper end up (never narrower than computed), the value half up at
+    the same place. For a non-negative quantity an interval starting at 0 is a one-sided
+    upper bound (``upper``).
+
+    Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
+    holding the value, of zero width, or reaching below zero for a non-negative quantity:
+    no coverage interval is like that.
+
+    >>> state_interval(0.112, (0.0662, 0.2038), p=0.95, unit="arcsec").text()
+    '0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)'
+    >>> s = state_interval(1.0, (0.0, 4.415), nu_eff=2, p=0.95, nonnegative=True, unit="°/h")
+    >>> s.text(), s.U, s.k, s.upper
+    ('1.0 °/h; upper bound: ≤ 4.5 °/h (interval [0, 4.5], p ≈ 95 %)', None, None, '4.5')
+    >>> state_interval(-5.0, (-6.0, -4.0), nonnegative=True)
+    Traceback (most recent call last):
+    gonio.errors.GonioError: interval [-6, -4] of -5: a non-negative quantity's interval reaches below zero; not stated
+    """
+    unit_s = unit_text(unit)
+    value, lo, hi = float(value), float(interval[0]), float(interval[1])
+    where = f"interval [{lo:g}, {hi:g}] of {value:g}"
+    if not all(math.isfinite(x) for x in (value, lo, hi)) or not lo <= value <= hi or lo == hi:
+        raise GonioError(f"{where}: a coverage interval must be finite, of positive width "
+                         "and hold the value; not stated")
+    if nonnegative and lo < 0:
+        raise GonioError(f"{where}: a non-negative quantity's interval reaches below zero; "
+                         "not stated")
+    one_sided = nonnegative and lo == 0
+    gaps = [g for g in ((hi - value,) if one_sided else (value - lo, hi - value)) if g > 0]
+    dec = decimals_for_sig(min(gaps) if gaps else hi - lo, 2)
+    q = Decimal(1).scaleb(-dec)
+    with _wide():
+        vr = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
+        lr = Decimal(repr(lo)).quantize(q, rounding=ROUND_FLOOR)
+        hr = Decimal(repr(hi)).quantize(q, rounding=ROUND_CEILING)
+        exponent = max(vr.adjusted() if vr != 0 else hr.adjusted(), hr.adjusted()) \
+            if dec > 6 or abs(hr) >= Decimal("1e15") else 0
+    md = dec + exponent
+    ht = _scaled(hr, exponent, md)
+    return Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff), p_text(p), unit_s,
+                     upper=ht if one_sided else None, exponent=exponent, decimals=dec,
+                     interval=(_scaled(lr, exponent, md), ht))
+
+
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
           nu_eff: float | None = None, p: float | None = None, unit: str | None = "",
           sig: int = 3, nonnegative: bool = False) -> Statement:
@@ -347,6 +496,11 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     True
     >>> state(175.0, 1200.0, k=2, nonnegative=True, unit="s").text()
     '200 ± 1200 s (k = 2); upper bound: ≤ 1400 s (interval [0, 1400])'
+    >>> state(-3.0, 4.0, nonnegative=True, unit="s").text()
+    '-3.0 ± 4.0 s; upper bound: ≤ 1.0 s (interval [0, 1.0])'
+    >>> state(-5.0, 1.0, nonnegative=True, unit="s")
+    Traceback (most recent call last):
+    gonio.errors.GonioError: -5 ± 1 s: a non-negative quantity whose interval lies wholly at or below zero has no coverage interval of possible values; not stated
     >>> state(9.996e-5).value_text, state(9.99996e-5, 1.0e-8).text()
     ('1.00×10⁻⁴', '1.00000×10⁻⁴ ± 0.00010×10⁻⁴')
     """
@@ -369,6 +523,10 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
         return Statement(round_half_up(value, max(decimals_for_sig(value, sig), 0)), None,
                          kt, nt, pt, unit_s)
     U = float(U)
+    if nonnegative and value + U <= 0:
+        raise GonioError(f"{value:g} ± {U:g}{' ' + unit_s if unit_s else ''}: a non-negative "
+                         "quantity whose interval lies wholly at or below zero has no "
+                         "coverage interval of possible values; not stated")
     dec = decimals_at_U(U)
     q = Decimal(1).scaleb(-dec)
     with _wide():
@@ -418,6 +576,11 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
     if nonnegative is None:
         nonnegative = bool(_get(item, "nonnegative", False))
     measured = _get(item, "measured", True)
+    iv = _get(unc, "interval")
+    if measured and iv is not None and _get(unc, "k") is None and _get(item, "value") is not None:
+        # stated by its interval (no coverage factor exists for it): one statement
+        return state_interval(_get(item, "value"), (iv[0], iv[1]), nu_eff=_get(unc, "nu_eff"),
+                              p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative)
     return state(_get(item, "value") if measured else None, U if ok else None,
                  k=_get(unc, "k") if ok else None, nu_eff=_get(unc, "nu_eff") if ok else None,
                  p=p if ok else None, unit=_get(item, "unit", ""), sig=sig,

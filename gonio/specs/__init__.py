@@ -23,7 +23,10 @@ find every one through :func:`available` and :func:`get`.
 
 from __future__ import annotations
 
+import functools
 import importlib
+import importlib.util
+import re
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
 from graphlib import CycleError, TopologicalSorter
@@ -33,7 +36,8 @@ from typing import Any, Callable
 from gonio.errors import GonioError
 
 __all__ = ["Coverage", "Specification", "available", "commands", "get", "item_order", "lazy",
-           "ENTRY_POINT_GROUP", "BUILT_IN", "DEFAULT_KEY"]
+           "CONTENT_FIELDS", "FIGURE_ROLES", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
+           "DEFAULT_KEY"]
 
 #: The entry-point group a specification package registers under.
 ENTRY_POINT_GROUP = "gonio.specs"
@@ -50,6 +54,54 @@ BUILT_IN: dict[str, str] = {
     "iec62047-20": "gonio.specs.iec62047_20:SPEC",
     "triad-alignment": "gonio.specs.triad_alignment:SPEC",
 }
+
+#: A specification's key; a module name; a ``"module:function"`` reference.
+_KEY = re.compile(r"[a-z0-9][a-z0-9._-]*")
+_MODULE = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*")
+_REF = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*")
+#: A D-SI unit (D-SI 2.x): ``\\unit`` tokens (prefixes are tokens too), each optionally
+#: raised ``\\tothe{n}``.
+_DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
+#: The fields of a :class:`Specification` that are strings, and its optional hooks.
+_STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
+                  "outputs", "readings_format", "certificate_content")
+_HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
+          "named_inputs")
+#: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
+#: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
+#: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
+#: ``warnings(result)``). An outputs module may also list, as ``CONTENT_REQUIRED``, the
+#: :data:`CONTENT_FIELDS` the certificate content must define for it.
+OUTPUTS_REQUIRED = ("write", "results_json", "summary")
+OUTPUTS_OPTIONAL = ("demo", "warnings")
+
+
+@functools.lru_cache(maxsize=1)
+def _builtin() -> tuple[str, ...]:
+    """gonio's built-in protocol names (:func:`gonio.resources.builtin_names`)."""
+    from gonio.resources import builtin_names
+    return tuple(builtin_names())
+
+
+def _field_error(where: str, name: str, expected: str, got) -> GonioError:
+    shown = repr(got)
+    shown = shown if len(shown) <= 60 else shown[:57] + "..."
+    return GonioError(f"{where}: field {name} must be {expected}, got {shown}", key="--spec")
+
+
+def _check_callable(obj, where: str, name: str) -> None:
+    value = getattr(obj, name)
+    if value is not None and not callable(value):
+        raise _field_error(where, name, "a callable or None", value)
+
+
+def _set_strings(obj, where: str, name: str, kind: type) -> None:
+    """Check that the field ``name`` is a collection of strings and store it as ``kind``."""
+    value = getattr(obj, name)
+    if isinstance(value, (str, bytes, dict)) or not isinstance(
+            value, (tuple, list, set, frozenset)) or not all(isinstance(v, str) for v in value):
+        raise _field_error(where, name, f"a {kind.__name__} of str", value)
+    object.__setattr__(obj, name, kind(value))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -89,6 +141,22 @@ class Coverage:
     study_bench: Callable[..., Any] | None = None
     options: frozenset = frozenset()
     study: Callable[..., Any] | None = None
+
+    def __post_init__(self):
+        where = "Coverage"
+        if self.engine not in ("items", "cases"):
+            raise _field_error(where, "engine", "'items' or 'cases'", self.engine)
+        if isinstance(self.stream, bool) or not isinstance(self.stream, int) or self.stream < 0:
+            raise _field_error(where, "stream", "a non-negative int", self.stream)
+        if not isinstance(self.reduced, dict) or not all(
+                isinstance(k, str) and isinstance(v, dict) for k, v in self.reduced.items()):
+            raise _field_error(where, "reduced", "a dict {section: {key: value}}", self.reduced)
+        _set_strings(self, where, "options", frozenset)
+        for name in ("study_bench", "study"):
+            _check_callable(self, where, name)
+        if self.engine == "cases" and self.study is None:
+            raise _field_error(where, "study", "a callable (engine 'cases' runs the "
+                               "specification's own study)", None)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -169,6 +237,18 @@ class Specification:
         ``func`` to ``run(args) -> int``, as gonio's own ``gonio/cli/cmd_*.py`` modules do.
         The module is imported only when the command line is built; it sits on the command
         line's layer (it may import ``gonio.cli.checks``).
+    dcc_units : dict of str to str
+        The D-SI form (``"\\ppm"``, ``"\\micro\\volt"``) of every unit its items state
+        that gonio's DCC writers do not know (``"ppm"``); checked when the specification loads
+        (a D-SI string is ``\\unit`` tokens, optionally with prefixes and ``\\tothe{n}``).
+    recalibration_interval_months : int or None
+        The recalibration interval the specification's document itself recommends (the
+        records' proposal shows it beside the one computed from the history); None: the
+        document leaves it to the user.
+
+    Every field is checked when the specification is built (:meth:`__post_init__`): a value
+    of the wrong type is a :class:`GonioError` naming the specification and the field, and an
+    unknown field (a misspelt hook) a ``TypeError`` that the registry reports the same way.
     """
 
     key: str
@@ -196,6 +276,64 @@ class Specification:
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
     item_keys: tuple[str, ...] = ()
+    dcc_units: dict[str, str] = field(default_factory=dict)
+    recalibration_interval_months: int | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.key, str) or not _KEY.fullmatch(self.key):
+            raise _field_error("Specification", "key", "lower-case letters, digits, '-', "
+                               "'_' or '.'", self.key)
+        where = f"specification {self.key!r}"
+        for name in _STRING_FIELDS:
+            if not isinstance(getattr(self, name), str):
+                raise _field_error(where, name, "a str", getattr(self, name))
+        for name in ("outputs", "certificate_content"):
+            if getattr(self, name) and not _MODULE.fullmatch(getattr(self, name)):
+                raise _field_error(where, name, "a module name", getattr(self, name))
+        if not callable(self.calibrate):
+            raise _field_error(where, "calibrate", "a callable", self.calibrate)
+        for name in _HOOKS:
+            _check_callable(self, where, name)
+        if self.coverage is not None and not isinstance(self.coverage, Coverage):
+            raise _field_error(where, "coverage", "a gonio.specs.Coverage or None",
+                               self.coverage)
+        if self.coverage is not None and self.coverage.reduced and not (
+                self.default_protocol.endswith(".toml") or self.default_protocol in _builtin()):
+            raise _field_error(where, "coverage.reduced", "empty unless default_protocol is "
+                               "a TOML file (the study's programme is written over it)",
+                               self.coverage.reduced)
+        for name in ("simulate_options", "calibrate_options", "budget_options"):
+            _set_strings(self, where, name, frozenset)
+        for name in ("clauses", "item_keys"):
+            _set_strings(self, where, name, tuple)
+        self._check_tables(where)
+
+    def _check_tables(self, where: str) -> None:
+        limits = self.default_limits
+        if not isinstance(limits, (tuple, list)) or not all(
+                isinstance(d, dict) and isinstance(d.get("item"), str) for d in limits):
+            raise _field_error(where, "default_limits", "a tuple of dicts each naming its "
+                               "'item'", limits)
+        object.__setattr__(self, "default_limits", tuple(limits))
+        cmds = self.commands
+        if not isinstance(cmds, (tuple, list)) or not all(
+                isinstance(c, (tuple, list)) and len(c) == 2 and all(isinstance(x, str) for x in c)
+                and _REF.fullmatch(c[1]) for c in cmds):
+            raise _field_error(where, "commands", "a tuple of (name, 'module:function') pairs",
+                               cmds)
+        object.__setattr__(self, "commands", tuple(tuple(c) for c in cmds))
+        units = self.dcc_units
+        if not isinstance(units, dict) or not all(isinstance(k, str) and k for k in units):
+            raise _field_error(where, "dcc_units", "a dict {unit: D-SI unit}", units)
+        for unit, dsi in units.items():
+            if not isinstance(dsi, str) or not _DSI.fullmatch(dsi):
+                raise _field_error(where, f"dcc_units[{unit!r}]", "a D-SI unit such as "
+                                   "'\\ppm' or '\\milli\\volt\\second\\tothe{-1}'", dsi)
+        months = self.recalibration_interval_months
+        if months is not None and (isinstance(months, bool) or not isinstance(months, int)
+                                   or months <= 0):
+            raise _field_error(where, "recalibration_interval_months",
+                               "a positive int or None", months)
 
     def knows_item(self, key) -> bool:
         """Whether ``key`` is one of :attr:`item_keys` or matches one of its patterns
@@ -215,18 +353,143 @@ class Specification:
         return key in self.item_keys or any(fnmatchcase(key, k) for k in self.item_keys)
 
     def renderer(self):
-        """The module named by ``outputs`` (imported on first use)."""
+        """The module named by ``outputs`` (imported on first use), checked: the functions of
+        :data:`OUTPUTS_REQUIRED` callable, those of :data:`OUTPUTS_OPTIONAL` callable where
+        defined (one GonioError naming the specification and the function)."""
         if not self.outputs:
             raise GonioError(f"specification {self.key!r} names no outputs module (it cannot "
                              "write results or a certificate)", key="--spec")
-        return importlib.import_module(self.outputs)
+        mod = importlib.import_module(self.outputs)
+        for name in OUTPUTS_REQUIRED + OUTPUTS_OPTIONAL:
+            fn = getattr(mod, name, None)
+            if (fn is None and name in OUTPUTS_REQUIRED) or (fn is not None and not callable(fn)):
+                raise GonioError(f"specification {self.key!r}: its outputs module {self.outputs} "
+                                 f"has no function {name}", key="--spec")
+        needs = tuple(getattr(mod, "CONTENT_REQUIRED", ()))
+        content = self.content() if needs and self.certificate_content else None
+        missing = [n for n in needs if not hasattr(content, n)]
+        if missing:
+            raise GonioError(f"specification {self.key!r}: its certificate content "
+                             f"({self.certificate_content or 'none named'}) defines no "
+                             f"{', '.join(missing)}, which its outputs module {self.outputs} "
+                             "needs", key="--spec")
+        return mod
+
+    def output_hook(self, name: str):
+        """The outputs module's optional function ``name`` (:data:`OUTPUTS_OPTIONAL`:
+        ``demo``, ``warnings``), or None where it defines none."""
+        if name not in OUTPUTS_OPTIONAL:
+            raise KeyError(f"{name!r} is no optional outputs function (OUTPUTS_OPTIONAL)")
+        return getattr(self.renderer(), name, None)
 
     def content(self):
-        """The module named by ``certificate_content`` (imported on first use)."""
+        """The module named by ``certificate_content`` (imported on first use), checked against
+        :data:`CONTENT_FIELDS`: a value of the wrong shape, or an upper-case name close to one
+        of them (``FIGURE_ITEM``: a typo that would silently drop a figure), is a GonioError
+        naming the specification and the name."""
         if not self.certificate_content:
             raise GonioError(f"specification {self.key!r} names no certificate content "
                              "(certificate_content)", key="--spec")
-        return importlib.import_module(self.certificate_content)
+        mod = importlib.import_module(self.certificate_content)
+        if mod.__name__ not in _CHECKED_CONTENT:
+            _check_content(self.key, mod)
+            _CHECKED_CONTENT.add(mod.__name__)
+        return mod
+
+    def content_value(self, name: str):
+        """The certificate content's ``name`` (one of :data:`CONTENT_FIELDS`), or its default
+        when the module does not define it or the specification names no content module.
+
+        >>> from gonio.specs import get
+        >>> get("jjf1535-2015").content_value("U_CLAUSE")[0]
+        'JJF 1535-2015 clause 8 k)'
+        >>> get("ogam-draft").content_value("FIGURE_ITEMS")
+        {}
+        """
+        return content_field(self.content() if self.certificate_content else None, name)
+
+
+#: The figure roles a certificate content's ``FIGURE_ITEMS`` may name (each drawn by the
+#: per-item renderer from the item named; docs/kit.md lists the data each reads).
+FIGURE_ROLES = ("bias_temperature", "sf_temperature", "allan", "arw", "bias_instability",
+                "bandwidth")
+
+
+def _strs(v, n=None) -> bool:
+    return isinstance(v, tuple) and all(isinstance(x, str) for x in v) and (
+        n is None or len(v) == n)
+
+
+def _str_dict(v) -> bool:
+    return isinstance(v, dict) and all(isinstance(k, str) and isinstance(x, str)
+                                       for k, x in v.items())
+
+
+def _groups(v) -> bool:
+    return isinstance(v, tuple) and all(
+        isinstance(g, tuple) and len(g) == 4 and isinstance(g[0], int) and _strs(g[1:3])
+        and _strs(tuple(g[3])) for g in v)
+
+
+#: What a certificate content module (``Specification.certificate_content``) may define for
+#: gonio's shared renderers: name → (what it is, check of the value, default when absent).
+#: A module may hold names of its own besides (its own renderer's), but none close to these.
+CONTENT_FIELDS: dict[str, tuple[str, Callable[[Any], bool], Any]] = {
+    "GROUPS": ("a tuple of (number, English heading, Chinese heading, item keys)", _groups, ()),
+    "TITLES_ZH": ("a dict {item key: Chinese title}", _str_dict, {}),
+    "HEADING": ("an (English, Chinese) pair: the results page's title",
+                lambda v: _strs(v, 2), None),
+    "U_CLAUSE": ("an (English, Chinese) pair: the clause saying how U is stated",
+                 lambda v: _strs(v, 2), ("JCGM 100:2008", "JCGM 100:2008")),
+    "NORM": ("a tuple of str: the norm as the certificate names it",
+             lambda v: _strs(v) and len(v) > 0, None),
+    "RECAL": ("an (English, Chinese) pair: the document's recalibration clause",
+              lambda v: _strs(v, 2), None),
+    "READINGS_ZH": ("a dict {clause prefix of a reading taken: its Chinese}", _str_dict, {}),
+    "PHRASES_ZH": ("a tuple of (English regular expression, Chinese) pairs",
+                   lambda v: isinstance(v, tuple) and all(_strs(x, 2) for x in v), ()),
+    "FIGURE_ITEMS": (f"a dict {{figure role ({', '.join(FIGURE_ROLES)}): item key}}",
+                     lambda v: _str_dict(v) and set(v) <= set(FIGURE_ROLES), {}),
+    "CW_CCW": ("a dict with 'item', 'cw', 'ccw', 'null_output_off', 'ylabel', 'title'",
+               lambda v: isinstance(v, dict) and {"item", "cw", "ccw"} <= set(v), None),
+    "MATRICES": ("a tuple of (name, rows of item keys): the DCC's matrices of item values",
+                 lambda v: isinstance(v, tuple) and all(
+                     isinstance(m, tuple) and len(m) == 2 and isinstance(m[0], str)
+                     and all(_strs(r) for r in m[1]) for m in v), ()),
+}
+
+_CHECKED_CONTENT: set[str] = set()
+
+
+def content_field(content, name: str):
+    """``name`` (one of :data:`CONTENT_FIELDS`; another is a KeyError, a renderer's bug) of a
+    certificate content module (checked by :meth:`Specification.content`), or its default
+    where the module does not define it or ``content`` is None.
+
+    >>> content_field(None, "PHRASES_ZH")
+    ()
+    """
+    if name not in CONTENT_FIELDS:
+        raise KeyError(f"{name!r} is no certificate content field (CONTENT_FIELDS)")
+    return getattr(content, name, CONTENT_FIELDS[name][2])
+
+
+def _check_content(key: str, mod) -> None:
+    """Check a certificate content module against :data:`CONTENT_FIELDS` (one GonioError
+    naming the specification and the name)."""
+    import difflib
+
+    where = f"specification {key!r}: certificate content {mod.__name__}"
+    for name in [n for n in vars(mod) if n.isupper() and not n.startswith("_")]:
+        if name in CONTENT_FIELDS:
+            what, check, _ = CONTENT_FIELDS[name]
+            if not check(getattr(mod, name)):
+                raise _field_error(where, name, what, getattr(mod, name))
+            continue
+        close = difflib.get_close_matches(name, CONTENT_FIELDS, n=1, cutoff=0.85)
+        if close:
+            raise GonioError(f"{where}: {name} is not a content field; did you mean "
+                             f"{close[0]}? (CONTENT_FIELDS)", key="--spec")
 
 
 class lazy:
@@ -301,26 +564,109 @@ def _entry_points() -> dict[str, str]:
 
 
 def _load(name: str, ref: str) -> Specification:
+    """The :class:`Specification` the entry point ``name = ref`` names, checked: anything that
+    goes wrong (an import error, an exception while its module runs, a field of the wrong type
+    or a misspelt one, not a Specification, another key, a module it names that does not
+    exist) is one :class:`GonioError` naming the entry point."""
     mod, _, attr = ref.partition(":")
+    head = f"the specification entry point {name} = {ref!r}"
     try:
         obj = importlib.import_module(mod)
         for part in (attr or "SPEC").split("."):
             obj = getattr(obj, part)
-    except (ImportError, AttributeError) as exc:
-        raise GonioError(f"the specification entry point {name} = {ref!r} cannot be loaded "
-                         f"({type(exc).__name__}: {exc})", key="--spec") from None
+    except GonioError as exc:              # a field refused by Specification.__post_init__
+        raise GonioError(f"{head} is invalid: {exc.message}", key="--spec") from None
+    except TypeError as exc:               # an unknown (misspelt) field, a missing one
+        raise GonioError(f"{head} is invalid: {exc}{_did_you_mean(str(exc))}",
+                         key="--spec") from None
+    except Exception as exc:               # the plug-in's own bug: its key fails, not gonio
+        raise GonioError(f"{head} cannot be loaded ({type(exc).__name__}: {exc})",
+                         key="--spec") from None
     if not isinstance(obj, Specification):
-        raise GonioError(f"the specification entry point {name} = {ref!r} is not a "
-                         "gonio.specs.Specification", key="--spec")
+        raise GonioError(f"{head} is not a gonio.specs.Specification", key="--spec")
     if obj.key != name:
         raise GonioError(f"the specification entry point {name!r} loads key {obj.key!r} "
                          "(the entry point's name must be the key)", key="--spec")
+    for field_name, module in _named_modules(obj):
+        if not _module_exists(module):
+            raise GonioError(f"{head} is invalid: field {field_name} names module {module!r}, "
+                             "which does not exist", key="--spec")
+    for name, ref in obj.commands:
+        module, _, function = ref.partition(":")
+        if not _defines(module, function):
+            raise GonioError(f"{head} is invalid: field commands[{name!r}] names {ref!r}, and "
+                             f"{module} defines no {function}", key="--spec")
     return obj
 
 
+def _defines(module: str, name: str) -> bool:
+    """Whether the source of ``module`` binds ``name`` at its top level (read, not imported:
+    a command module sits on the command line's layer). True where there is no source to
+    read (the import then decides)."""
+    import ast
+
+    origin = importlib.util.find_spec(module).origin
+    if not origin or not origin.endswith(".py"):
+        return True
+    from pathlib import Path
+
+    tree = ast.parse(Path(origin).read_text(encoding="utf-8"))
+    bound = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            bound.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            bound |= {(a.asname or a.name).split(".")[0] for a in node.names}
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            bound |= {t.id for t in targets if isinstance(t, ast.Name)}
+    return name in bound
+
+
+def _named_modules(spec: Specification) -> list[tuple[str, str]]:
+    """(field, module) of every module a specification names by string."""
+    out = [(n, getattr(spec, n)) for n in ("outputs", "certificate_content") if getattr(spec, n)]
+    return out + [(f"commands[{name!r}]", ref.partition(":")[0]) for name, ref in spec.commands]
+
+
+def _module_exists(module: str) -> bool:
+    """Whether ``module`` can be found (:func:`importlib.util.find_spec`; its parent packages
+    are imported, the module itself is not)."""
+    try:
+        return importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def _did_you_mean(message: str) -> str:
+    """`` (did you mean 'calibrate'?)`` for a TypeError naming an unknown keyword that is
+    close to a field of :class:`Specification` or :class:`Coverage`."""
+    import difflib
+    from dataclasses import fields
+
+    m = re.search(r"unexpected keyword argument '(\w+)'", message)
+    if not m:
+        return ""
+    names = [f.name for cls in (Specification, Coverage) for f in fields(cls)]
+    close = difflib.get_close_matches(m.group(1), names, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def available() -> dict[str, Specification]:
-    """Every registered specification, by key (entry-point group ``gonio.specs``)."""
-    return {k: _load(k, ref) for k, ref in sorted(_entry_points().items())}
+    """Every registered specification that loads, by key (entry-point group ``gonio.specs``).
+    One that cannot be loaded is left out with a warning naming it (``gonio --help``, the
+    other specifications and the web keep working); :func:`get` of its key raises the error.
+    """
+    import warnings
+
+    out = {}
+    for key, ref in sorted(_entry_points().items()):
+        try:
+            out[key] = _load(key, ref)
+        except GonioError as exc:
+            warnings.warn(f"{exc.message}; specification {key!r} is not available",
+                          stacklevel=2)
+    return out
 
 
 def get(key: str) -> Specification:

@@ -42,7 +42,8 @@ def create_app(store, dispatcher=None) -> FastAPI:
     app.state.store, app.state.dispatcher = store, dispatcher
     templates = Jinja2Templates(directory=str(HERE / "templates"))
     templates.env.globals.update(fmt=fmt, STATES=("queued", "running", "failed", "computed",
-                                                   "reviewed", "rejected", "issuing", "issued"))
+                                                   "reviewed", "rejected", "amending", "issuing",
+                                                   "issued"))
     app.state.templates = templates
     app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import re
 import secrets
 
 from fastapi import Request
@@ -82,9 +83,16 @@ def wake(request: Request) -> None:
         d.wake()
 
 
-def file_response(store, sha: str, name: str, disposition: str = "inline") -> Response:
+def file_response(store, sha: str, name: str, disposition: str = "inline",
+                  number: str = "") -> Response:
+    """A stored file; its download name carries the certificate ``number`` (``GC-2026-0001.pdf``,
+    ``GC-2026-0001.dcc.xml``, ``GC-2026-0001-results.json``) when one is given."""
     media = FILE_TYPES.get(name, "application/octet-stream")
-    headers = {"Content-Disposition": f'{disposition}; filename="{name}"'}
+    shown = name
+    if number and re.fullmatch(r"[A-Za-z0-9-]+", number):
+        shown = number + (name[len("certificate"):] if name.startswith("certificate.")
+                          else "-" + name)
+    headers = {"Content-Disposition": f'{disposition}; filename="{shown}"'}
     if media == "text/html":
         headers["Content-Security-Policy"] = "sandbox; default-src 'none'; img-src data:; " \
                                              "style-src 'unsafe-inline'"

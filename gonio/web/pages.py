@@ -9,7 +9,7 @@ import re
 from fastapi import APIRouter, Request
 from fastapi.responses import RedirectResponse, Response
 
-from gonio.errors import GonioError
+from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, queries, services
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
                               Forbidden, current, file_response, form, fresh_token, page_of,
@@ -52,7 +52,7 @@ async def login(request: Request):
                                  str(data.get("password", ""))[:2000], address)
     except GonioError as exc:
         token = fresh_token()
-        code = 429 if "too many" in str(exc) else 401
+        code = 429 if isinstance(exc, TooManyAttemptsError) else 401
         r = render(request, "login.html", None, token, status_code=code,
                    error=str(exc).split(": ", 1)[-1])
         r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
@@ -97,7 +97,8 @@ def dashboard(request: Request):
 def customers_page(request: Request):
     user, csrf = current(request)
     return render(request, "customers.html", user, csrf,
-                  customers=queries.customers(_store(request)))
+                  customers=queries.customers(_store(request)),
+                  error=request.query_params.get("error", "")[:300])
 
 
 @router.post("/customers")
@@ -110,6 +111,49 @@ async def customers_add(request: Request):
         return render(request, "customers.html", user, csrf, status_code=400, error=str(exc),
                       customers=queries.customers(_store(request)))
     return _back("/customers")
+
+
+def _retire_of(data) -> bool | None:
+    """The edit forms' state: "retired" → True, "in use" → False, absent → unchanged."""
+    v = data.get("state")
+    return None if v is None else v == "retired"
+
+
+async def _edit(request: Request, back: str, do) -> Response:
+    """An edit form: ``do(user, data)``, then back to ``back`` (with the error if refused)."""
+    from urllib.parse import quote
+
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    try:
+        do(user, data)
+    except GonioError as exc:
+        return _back(f"{back}?error={quote(str(exc)[:300])}")
+    return _back(back)
+
+
+@router.post("/customers/{cust_id}/edit")
+async def customer_edit(request: Request, cust_id: int):
+    return await _edit(request, "/customers", lambda u, d: services.update_customer(
+        _store(request), u, cust_id, name=d.get("name"), address=d.get("address"),
+        retire=_retire_of(d)))
+
+
+@router.post("/standards/{std_id}/edit")
+async def standard_edit(request: Request, std_id: int):
+    return await _edit(request, "/standards", lambda u, d: services.update_standard(
+        _store(request), u, std_id, **{k: d.get(k) for k in (
+            "name", "accuracy", "certificate", "traceability", "calibrated_on", "due_on")},
+        retire=_retire_of(d)))
+
+
+@router.post("/instruments/{inst_id}/edit")
+async def instrument_edit(request: Request, inst_id: int):
+    return await _edit(request, f"/instruments/{inst_id}", lambda u, d: services.update_instrument(
+        _store(request), u, inst_id, customer_id=d.get("customer_id") and _int(
+            d.get("customer_id"), "customer"),
+        **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial")},
+        interval_months=d.get("interval_months", ""), retire=_retire_of(d)))
 
 
 # --------------------------------------------------------------------------- instruments
@@ -182,7 +226,8 @@ def instrument_page(request: Request, inst_id: int):
         return Response("no such instrument", status_code=404)
     hist = services.history(store, inst_id)
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
-                  proposal=services.propose_interval(store, inst_id, hist),
+                  customers=queries.customers(store),
+                  error=request.query_params.get("error", "")[:300], proposal=services.propose_interval(store, inst_id, hist),
                   default=services.default_interval(inst.spec_key),
                   limits=services.instrument_limits(inst), n_points=max(
                       (len(v) for v in hist.values()), default=0))
@@ -218,7 +263,8 @@ _SVG_CACHE: dict[str, str] = {}
 def standards_page(request: Request):
     user, csrf = current(request)
     return render(request, "standards.html", user, csrf, standards=queries.standards(
-        _store(request)), today=_dt.date.today())
+        _store(request)), today=_dt.date.today(),
+        error=request.query_params.get("error", "")[:300])
 
 
 @router.post("/standards")
@@ -244,7 +290,7 @@ def calibrations_page(request: Request):
     page = page_of(request)
     status = request.query_params.get("status", "")
     status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued") else ""
+                                  "rejected", "issuing", "issued", "amending") else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -330,7 +376,10 @@ def calibration_page(request: Request, cal_id: int):
 def calibration_progress(request: Request, cal_id: int):
     """The state as JSON, for a script or a test polling the run."""
     current(request)
-    cal = services.calibration(_store(request), cal_id)
+    try:
+        cal = services.calibration(_store(request), cal_id)
+    except GonioError:
+        return Response("no such calibration", status_code=404)
     return {"id": cal.id, "status": cal.status, "progress": cal.progress, "error": cal.error}
 
 
@@ -350,12 +399,13 @@ async def _act(request: Request, cal_id: int, do) -> Response:
 async def calibration_review(request: Request, cal_id: int):
     return await _act(request, cal_id, lambda u, d: services.review(
         _store(request), u, cal_id, accept=d.get("decision") == "accept",
-        comment=d.get("comment")))
+        comment=d.get("comment"), shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/approve")
 async def calibration_approve(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.approve(_store(request), u, cal_id))
+    return await _act(request, cal_id, lambda u, d: services.approve(
+        _store(request), u, cal_id, shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/retry")
@@ -372,7 +422,7 @@ def calibration_file(request: Request, cal_id: int, name: str):
     from gonio.records.models import CalibrationFile
     with _store(request).session() as s:
         sha = s.get(CalibrationFile, (cal_id, name)).sha256
-    return file_response(_store(request), sha, name)
+    return file_response(_store(request), sha, name, number=f"DRAFT-{cal_id}")
 
 
 # --------------------------------------------------------------------------- certificates
@@ -407,7 +457,7 @@ def certificate_file(request: Request, cert_id: int, name: str):
                                      "results.json": cert.results_sha256}.get(name)
     if sha is None:
         return Response("no such file", status_code=404)
-    return file_response(_store(request), sha, name, "attachment")
+    return file_response(_store(request), sha, name, "attachment", number=cert.number)
 
 
 @router.post("/certificates/{cert_id}/amend")
@@ -426,18 +476,85 @@ async def certificate_amend(request: Request, cert_id: int):
 # --------------------------------------------------------------------------- admin
 
 
+def _may_read(user, *roles) -> Response | None:
+    """A 403 page unless ``user`` holds one of ``roles`` (technicians see what their work
+    needs: not the users, not the whole audit trail)."""
+    if any(user.has(r) for r in roles):
+        return None
+    return Response(f"this needs the {' or '.join(roles)} role", status_code=403)
+
+
+AUDIT_FILTERS = ("entity", "entity_id", "username")
+
+
+def _filters(request: Request, names) -> dict:
+    return {k: request.query_params.get(k, "")[:64] for k in names}
+
+
 @router.get("/audit")
 def audit_page(request: Request):
     user, csrf = current(request)
+    refused = _may_read(user, "reviewer", "admin")
+    if refused:
+        return refused
+    from urllib.parse import urlencode
+
     page = page_of(request)
-    rows, total = queries.audit_events(_store(request), page, 100)
+    filters = _filters(request, AUDIT_FILTERS)
+    rows, total = queries.audit_events(_store(request), page, 100, **filters)
+    query = urlencode({k: v for k, v in filters.items() if v})
     return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
-                  size=100)
+                  size=100, filters=filters, extra="&" + query if query else "", query=query)
+
+
+def csv_text(header: list[str], rows: list[list]) -> str:
+    """CSV (RFC 4180) of a list; a cell a spreadsheet would run as a formula (=, +, -, @,
+    tab, CR first) is prefixed with an apostrophe (OWASP CSV injection).
+
+    >>> csv_text(["a", "b"], [["=1+1", 2.5], [None, "x,y"]]).splitlines()
+    ['a,b', "'=1+1,2.5", ',"x,y"']
+    """
+    import csv
+    import io
+
+    def cell(v):
+        if v is None:
+            return ""
+        v = v.isoformat() if isinstance(v, (_dt.date, _dt.datetime)) else v
+        if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r"):
+            return "'" + v
+        return v
+
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(header)
+    w.writerows([[cell(v) for v in r] for r in rows])
+    return buf.getvalue()
+
+
+@router.get("/export/{name}.csv")
+def export_csv(request: Request, name: str):
+    """A whole list as CSV (the audit trail for reviewers and admins, filtered as its page)."""
+    user, _ = current(request)
+    if name == "audit":
+        refused = _may_read(user, "reviewer", "admin")
+        if refused:
+            return refused
+    got = queries.export_rows(_store(request), name, _filters(
+        request, AUDIT_FILTERS + ("status", "customer")))
+    if got is None:
+        return Response("no such list", status_code=404)
+    stamp = _dt.date.today().isoformat()
+    return Response(csv_text(*got), media_type="text/csv; charset=utf-8", headers={
+        "Content-Disposition": f'attachment; filename="gonio-{name}-{stamp}.csv"'})
 
 
 @router.get("/users")
 def users_page(request: Request):
     user, csrf = current(request)
+    refused = _may_read(user, "admin")
+    if refused:
+        return refused
     return render(request, "users.html", user, csrf, users=queries.users(_store(request)),
                   settings=services.settings(_store(request)))
 
@@ -449,6 +566,16 @@ async def users_add(request: Request):
     return _users_form(request, user, csrf, lambda: services.create_user(
         _store(request), user, data.get("username"), data.get("password"),
         data.getlist("roles"), data.get("full_name")))
+
+
+@router.post("/users/{username}")
+async def users_update(request: Request, username: str):
+    """Change a user: roles, active, a new password (admin)."""
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _users_form(request, user, csrf, lambda: services.update_user(
+        _store(request), user, username, active=data.get("active") == "yes",
+        roles=data.getlist("roles"), password=data.get("password") or None))
 
 
 def _users_form(request, user, csrf, do):

@@ -48,6 +48,8 @@ def test_kill_during_run_and_during_issue(tmp_path, serve, bench_readings, compu
         got = _wait_for(lambda: (c := services.calibration(st, cal.id)).status == "failed"
                        and c, 120)
         assert "interrupted" in got.error
+        # the killed worker's copy of the readings is removed with it
+        assert not list((data / "work").glob(f"cal-{cal.id}-*"))
         serve.stop(proc)
 
         # 2. killed while issuing: the number is reserved, no certificate row exists
@@ -55,7 +57,8 @@ def test_kill_during_run_and_during_issue(tmp_path, serve, bench_readings, compu
         services.claim_next(st)
         services.store_run(st, cal2.id, computed_folder)
         services.review(st, rev, cal2.id, accept=True)
-        services.approve(st, rev, cal2.id)
+        services.approve(st, services.create_user(st, None, "rev2", PASSWORD, "reviewer"),
+                         cal2.id)                     # a third person approves
         number = services.calibration(st, cal2.id).pending_number
         proc, _ = serve.start(data, workers=1)
         _wait_for(lambda: (c := services.calibration(st, cal2.id)).worker_pid

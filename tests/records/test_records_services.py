@@ -101,6 +101,8 @@ def test_workflow_roles_numbers_and_frozen_certificates(store, people, computed_
             s.commit()
     # an amendment is a new certificate naming the old one
     services.amend(store, people["rev"], cert.id, "customer address corrected")
+    assert services.calibration(store, cal.id).status == "amending"
+    services.approve(store, people["rev2"], cal.id)      # another person approves it
     cal = run_worker(store, monkeypatch, computed_folder)
     with store.session() as s:
         certs = s.scalars(select(Certificate).order_by(Certificate.id)).all()

@@ -209,6 +209,11 @@ def test_whole_workflow_in_chromium(live, browser, bench_readings, tmp_path):
     page.goto(base + "/certificates")
     shot(page, "certificates")
     page.goto(base + "/audit")
+    assert "reviewer or admin role" in page.content()     # not a technician's to read
+    page.goto(base + "/")
+    log_out(page)
+    log_in(page, base, "rev")
+    page.goto(base + "/audit")
     shot(page, "audit")
     from gonio.records.db import open_store
     st = open_store(None, data)

@@ -113,7 +113,7 @@ def test_lab_file_limits_decide_the_run(app, sqlite_store, bench_readings):  # n
     res = json.loads(services.file_bytes(sqlite_store, sha))
     items = res["items"]
     items = {it["key"]: it for it in items} if isinstance(items, list) else items
-    from gonio.report.certificate import load_lab
+    from gonio.formats.lab import load_lab
     lab = load_lab(REPO / "protocols" / "lab-example.toml")
     for lim in lab["specification_limits"]:
         c = items[lim["item"]]["conformity"]

@@ -1,4 +1,4 @@
-"""Welch power spectral density of a long record in bounded memory (issue 26).
+"""Welch power spectral density of a long record in bounded memory.
 
 :func:`welch_psd` gives what ``scipy.signal.welch(x / divisor − mean, fs, nperseg=n)``
 gives (Hann window, half-overlapping segments, each detrended by its own mean, one-sided

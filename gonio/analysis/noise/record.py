@@ -14,7 +14,7 @@ Contents
 :func:`window_record`          one window's counts, in memory or memory-mapped
 =============================  ==============================================
 
-Memory (issue 26): ``gonio noise`` never holds a whole stream. The file is read once in
+Memory: ``gonio noise`` never holds a whole stream. The file is read once in
 blocks to find the rests (:func:`source_windows`, the reducer's own rest finder on the
 same samples), then only the chosen window's counts are read, piece by piece, into one
 float64 array — in memory up to :data:`MEMMAP_SAMPLES` samples, beyond that in a

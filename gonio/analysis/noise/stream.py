@@ -1,4 +1,4 @@
-"""Long records analysed in bounded pieces (issue 26): a series that is never held whole.
+"""Long records analysed in bounded pieces: a series that is never held whole.
 
 =========================  =====================================================
 :class:`Record`            a 1-D float64 series produced piece by piece (e.g. the
@@ -24,7 +24,7 @@ checkpoint with the same sequential additions as ``np.cumsum`` (a few recently u
 are kept). Memory: the checkpoints (N/4096 numbers: 2 MB for 10⁹ samples) and a few blocks
 of 65536 points, whatever the record's length.
 
-CPU (issue 26): a far piece read once (the chained far sums of
+CPU: a far piece read once (the chained far sums of
 :func:`gonio.analysis.noise.allan._sums_far`, the sparse decimations of the noise
 identification) is rebuilt from a fine checkpoint (:meth:`CumulativeSum.span`), so that
 every point is rebuilt about once per averaging time rather than three times; a frame's

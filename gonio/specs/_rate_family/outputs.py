@@ -16,6 +16,10 @@ from gonio.specs import default_limits
 from gonio.report.rate_certificate import write_rate_certificate
 from gonio.result.tables import write_results
 
+#: The certificate content fields this renderer reads without a default (checked by
+#: ``Specification.renderer``).
+CONTENT_REQUIRED = ("GROUPS", "TITLES_ZH", "HEADING")
+
 
 def results_json(result, lab: dict | None = None) -> dict:
     """The ``results.json`` content."""

@@ -25,6 +25,7 @@ from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
 from gonio.result.model import Item, Result, Uncertainty, not_measured  # noqa: F401
+from gonio.result.statement import item_statement, stated_gum
 from gonio.units import S_PER_H
 from uncertainty import monte_carlo, propagate, validate_gum
 
@@ -62,9 +63,10 @@ def monte_carlo_validation(trials: int, seed: int = 0):
 def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
     """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
     the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
-    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats;
-    ``p=None`` uses the fixed ``k``."""
-    r = propagate(value_fn, inputs, k=None if p is not None else k, p=p)
+    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats, of the
+    ν_eff as stated (:func:`gonio.result.statement.coverage_k`: its integer part, ∞ above
+    1000); ``p=None`` uses the fixed ``k``."""
+    r = stated_gum(propagate(value_fn, inputs, k=None if p is not None else k, p=p))
     comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
               "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
              for c in r.contributions]
@@ -84,11 +86,14 @@ def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertai
 
 def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     """Uncertainty of a standard deviation ``s`` of ν + 1 values (JJF 7.2.4 K_r,
-    7.2.11 B_r; IEC 5.6 Noise,RMS of the resolution; issue 24): u_c = s/√(2ν), the GUM's standard uncertainty of an experimental standard
-    deviation (JCGM 100 E.4.3; type A, ν degrees of freedom), and U = the distance from s to
-    the one-sided χ² 95 % upper limit of σ, s·(√(ν/χ²_0.05,ν) − 1)
-    (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`), with k = U/u_c and the
-    one-sided interval [0, s + U] (P(σ ≤ s + U) = 95 %) stated beside it.
+    7.2.11 B_r; IEC 5.6 Noise,RMS of the resolution): u_c = s/√(2ν), the GUM's standard
+    uncertainty of an experimental standard deviation (JCGM 100 E.4.3; type A, ν degrees of
+    freedom), and the one-sided χ² 95 % interval of σ, [0, s·√(ν/χ²_0.05,ν)]
+    (P(σ ≤ upper end) = 95 %), which is the item's statement
+    (:func:`gonio.result.statement.state_interval`): no k (σ's distribution is not symmetric
+    about s, so no coverage factor exists; k = U/u_c, 6.83 for ν = 2, was one). U is the
+    distance from s to the upper end (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`),
+    the guard band of the decision rule, so a guarded upper limit is the upper end.
 
     Before issue 24 the χ² half-width was entered as a normal type-B term with k = 2 and
     expanded again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's
@@ -97,8 +102,8 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     3.415·s).
 
     >>> u = std_dev_uncertainty(1.0, 2, "K_r")
-    >>> round(u.u_c, 3), round(u.U, 3), round(u.k, 2), [round(x, 3) for x in u.interval]
-    (0.5, 3.415, 6.83, [0.0, 4.415])
+    >>> round(u.u_c, 3), round(u.U, 3), u.k, [round(x, 3) for x in u.interval]
+    (0.5, 3.415, None, [0.0, 4.415])
     """
     u_c = float(s / math.sqrt(2.0 * nu))
     from gonio.specs._rate_family.formulas import std_upper_half_width
@@ -106,7 +111,7 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
            f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the one-sided χ² 95 % upper limit",
            "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
-    return Uncertainty([row], u_c, U, U / u_c if u_c > 0 else math.nan, float(nu), None, 0.95,
+    return Uncertainty([row], u_c, U, None, float(nu), None, 0.95,
                        "chi-square", interval=(0.0, s + U))
 
 
@@ -182,7 +187,8 @@ def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str,
     :func:`monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
     refuses the data (a :class:`GonioError`) is reported not measured with the refusal as
     its reason, nothing dropped; the items returned in ``ITEMS`` order, those in
-    ``NONNEGATIVE`` marked non-negative. ``items_module`` has ``ITEMS`` (rows key, title,
+    ``NONNEGATIVE`` marked non-negative (one the statement rule refuses, value + U ≤ 0, is
+    reported not measured with the refusal). ``items_module`` has ``ITEMS`` (rows key, title,
     clause, function of the context), ``NEEDS``, ``NONNEGATIVE`` and ``with_needs(ctx, done)``
     (the context an item sees, given the items done so far)."""
     from gonio.specs import item_order
@@ -200,6 +206,13 @@ def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str,
     items = {k: items[k] for k in rows}
     for key in items_module.NONNEGATIVE & items.keys():
         items[key].nonnegative = True
+        try:                       # refused by the statement rule: value + U ≤ 0
+            item_statement(items[key], nonnegative=True)
+        except GonioError as exc:
+            it = items[key]
+            items[key] = not_measured(key, it.title, it.clause, it.unit,
+                                      f"no statement possible: {exc.message}")
+            items[key].nonnegative = True
     return items
 
 

@@ -19,6 +19,9 @@ Contents
 :func:`boxcar_noise_rms`        IEC 5.6.3 reading: noise of a T-second mean from S(f)
 :func:`broadband_noise_iec`     IEC 5.4.5.1 c) reading: rms and the 20 dB/dec value
 :func:`g_slope_iec`             IEC 5.3.3.8 reading: slope against g cos γ, Earth rate removed
+:func:`normal_range_cdf`        P(R/σ ≤ w), range of n normal values (Tippett)
+:func:`normal_range_mean`       d_n = E[R/σ] of n normal values
+:func:`half_range_upper`        IEC 5.3.3.4: one-sided upper limit of the expected half range
 ==============================  ==================================================
 """
 
@@ -246,3 +249,50 @@ def g_slope_iec(accel_g, rate_dps, earth_dps=None, transverse_g=None) -> tuple[f
         raise GonioError("5.3.3.8: the stand angles do not determine the slope")
     coef, *_ = np.linalg.lstsq(A, w, rcond=None)
     return float(coef[1]), (float(coef[2]) if transverse_g is not None else math.nan)
+
+
+# --------------------------------------------------------------------------- range of n normals
+
+def normal_range_cdf(w: float, n: int) -> float:
+    """P(R/σ ≤ w) for the range R of ``n`` independent normal values of standard deviation σ
+    (Tippett 1925): n ∫ φ(x) [Φ(x + w) − Φ(x)]^(n−1) dx.
+
+    >>> round(normal_range_cdf(3.314, 3), 3)     # Pearson–Hartley table: w_0.95(3) = 3.314
+    0.95
+    """
+    from scipy import integrate, stats
+
+    if w <= 0:
+        return 0.0
+    f = lambda x: stats.norm.pdf(x) * (stats.norm.cdf(x + w) - stats.norm.cdf(x)) ** (n - 1)  # noqa: E731
+    return float(min(1.0, n * integrate.quad(f, -12.0, 12.0, limit=200)[0]))
+
+
+def normal_range_mean(n: int) -> float:
+    """d_n = E[R/σ], the mean range of ``n`` normal values: ∫ 1 − Φ(x)ⁿ − (1 − Φ(x))ⁿ dx.
+
+    >>> round(normal_range_mean(2), 4), round(normal_range_mean(3), 4)   # 2/√π, d₃ = 1.693
+    (1.1284, 1.6926)
+    """
+    from scipy import integrate, stats
+
+    f = lambda x: 1.0 - stats.norm.cdf(x) ** n - stats.norm.sf(x) ** n  # noqa: E731
+    return float(integrate.quad(f, -12.0, 12.0, limit=200)[0])
+
+
+def half_range_upper(half_range: float, n: int, p: float = 0.95) -> float:
+    """IEC 62047-20 5.3.3.4, reading taken: the one-sided ``p`` upper limit of the expected
+    half range θ = d_n σ/2 of ``n`` records, from the observed half range h = R/2:
+    P(θ ≤ h·d_n/w_(1−p)) = P(R/σ ≥ w_(1−p)) = p, w_q the q-quantile of the normal range.
+
+    >>> round(half_range_upper(1.0, 3), 3)       # d₃/w_0.05(3) = 1.6926/0.4315 (Harter)
+    3.923
+    """
+    from scipy import optimize
+
+    if not (n >= 2 and 0.0 < p < 1.0 and half_range >= 0.0):
+        raise GonioError(f"half range {half_range!r} of {n} records at p = {p!r}: needs n ≥ 2")
+    q = 1.0 - p
+    w = optimize.brentq(lambda x: normal_range_cdf(x, n) - q, 1e-9, 40.0, xtol=1e-12)
+    return float(half_range * normal_range_mean(n) / w)
+

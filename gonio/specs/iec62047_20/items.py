@@ -23,7 +23,7 @@ from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.specs._rate_family.rate_records import (Item, RateContext, std_dev_uncertainty, static_output, static_rate_dph, gum, not_measured, segment_means,
-                                         segment_samples)
+                                         segment_samples, Uncertainty)
 from gonio.units import S_PER_H
 from uncertainty import from_u, type_b, welch_satterthwaite
 
@@ -504,7 +504,9 @@ def bias(ctx: Context) -> Item:
 
 def bias_repeatability(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.4, reading taken: the records' deviations from their mean as
-    +max/−min and the half range (max − min)/2 (°/s) as the single ± value."""
+    +max/−min and the half range (max − min)/2 (°/s) as the single ± value. Stated by the
+    one-sided 95 % interval of the expected half range from the distribution of the range of
+    n normal records (:func:`gonio.specs.iec62047_20.formulas.half_range_upper`)."""
     t, cl, un = "bias repeatability (half range)", "5.3.3.4", "°/s"
     m = _miss(ctx, "bias", "bias_repeatability", t, cl, un)
     if m:
@@ -513,7 +515,15 @@ def bias_repeatability(ctx: Context) -> Item:
     if v.size < 2:
         return not_measured("bias_repeatability", t, cl, un, "needs ≥ 2 records")
     hr = float((v.max() - v.min()) / 2)
-    u = gum(lambda x: x, [from_u("hr", hr, hr / math.sqrt(2 * (v.size - 1)), dof=v.size - 1)])
+    # stated by one interval from the distribution of the range of n normal records:
+    # [0, upper limit of the expected half range] (no k: the range is skewed; t was used)
+    hi = ief.half_range_upper(hr, v.size, 0.95)
+    u_c = hr / math.sqrt(2 * (v.size - 1))
+    u = Uncertainty([{"symbol": "hr", "source": f"half range of {v.size} records; interval "
+                      "from the distribution of the range of normal values (Tippett)",
+                      "type": "A", "u": u_c, "c": 1.0, "contribution": u_c,
+                      "dof": float(v.size - 1)}], u_c, hi - hr, None, float(v.size - 1), None,
+                    0.95, "normal range", interval=(0.0, hi))
     return Item("bias_repeatability", t, cl, un, hr, uncertainty=u, details={
         "plus_dps": float(v.max() - v.mean()), "minus_dps": float(v.min() - v.mean())})
 
@@ -1118,6 +1128,9 @@ def resolution(ctx: Context) -> Item:
         value, by = out_res, "Out,resolution"
     # |max(a, b) − max(a_t, b_t)| ≤ max(|a − a_t|, |b − b_t|): the larger U covers the max
     u = u_rule if u_noise is None or u_rule.U >= u_noise.U else u_noise
+    if u is u_noise:       # stated by σ's one-sided χ² interval, reaching the rule's U too
+        hi = max(u_noise.interval[1], out_res + u_rule.U)
+        u = replace(u_noise, U=hi - value, interval=(0.0, hi))
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by})

@@ -193,15 +193,7 @@ def plan(proto: JJFProtocol, bench) -> list[Segment]:
     return segs
 
 
-def room_temperature(proto: JJFProtocol) -> float:
-    return proto["protocol"]["room_temperature_c"]
-
-
 def null_output(proto: JJFProtocol, bench) -> float:
     v = proto["protocol"]["null_output"]
     return float(bench.gyro.null_output) if v == "bench" else float(v)
 
-
-def latitude(proto: JJFProtocol, bench) -> float:
-    v = proto["bias"]["latitude_deg"]
-    return float(bench.latitude_deg) if v == "bench" else float(v)

@@ -36,7 +36,7 @@ from gonio.budget.extra import ExtraComponent
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, MIN_PER_H
 from gonio.physics.tilt import elliptic_extreme
-from gonio.result.statement import rounded as rounded_sig
+from gonio.result.statement import rounded as rounded_sig, stated_gum
 from uncertainty.propagation import LinearModel
 from uncertainty import (GumResult, MonteCarloResult, ValidationResult, budget_table,
                          from_u, monte_carlo, propagate, render_html, render_markdown,
@@ -308,7 +308,7 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
             raise _err("extra_components", str(exc)) from None
     model = annex_a_linear_model(tuple(e.symbol for e in extras))
     gum = propagate(model, inputs, k=k) if k is not None else \
-        propagate(model, inputs, k=None, p=0.95)
+        stated_gum(propagate(model, inputs, k=None, p=0.95))   # k of the stated ν_eff
     k = gum.k
 
     rounded = tuple(annex_a5_rounding(c.u_xi, c.type) for c in gum.contributions)

@@ -37,8 +37,9 @@ from typing import Sequence
 
 import numpy as np
 
+from gonio.result.statement import coverage_k
 from gonio.units import ARCSEC_PER_DEG, S_PER_H
-from uncertainty import (GumResult, MonteCarloResult, coverage_factor, from_u, monte_carlo,
+from uncertainty import (GumResult, MonteCarloResult, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
 from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
@@ -141,9 +142,8 @@ class _Line:
 def _k(nu_eff: float, k: float | None) -> tuple[float, str]:
     if k is not None:
         return float(k), "fixed by laboratory"
-    if not math.isfinite(nu_eff) and not math.isinf(nu_eff):   # NaN: WS not valid
-        return coverage_factor(math.inf, COVERAGE_PROBABILITY), "welch-satterthwaite"
-    return coverage_factor(nu_eff, COVERAGE_PROBABILITY), "welch-satterthwaite"
+    # k of the ν_eff as stated (integer part, ∞ above 1000; NaN: WS not valid → normal)
+    return coverage_k(nu_eff, COVERAGE_PROBABILITY), "welch-satterthwaite"
 
 
 def _budget(item: str, unit: str, value: float, lines: Sequence[_Line], *,

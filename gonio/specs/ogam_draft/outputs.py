@@ -101,7 +101,7 @@ def write_calibration(report: CalibrationReport, out: str | Path,
                       lab: dict | None = None) -> dict[str, Path]:
     """Write ``results.json``, ``summary.txt`` and ``tables/*.csv`` into ``out`` atomically.
 
-    ``lab`` (a :func:`gonio.report.certificate.load_lab` dict) adds its conformity statements
+    ``lab`` (a :func:`gonio.formats.lab.load_lab` dict) adds its conformity statements
     to ``summary.txt``, as the certificate and the CLI show them.
     """
     out = Path(out)
@@ -129,7 +129,7 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
     """
     say = on_stage or (lambda message: None)
     if isinstance(lab, (str, Path)):
-        from gonio.report.certificate import load_lab
+        from gonio.formats.lab import load_lab
         lab = load_lab(lab)                     # validate inputs before simulating
     out = Path(out) if str(out).strip() else out
     proto = load_protocol(protocol)

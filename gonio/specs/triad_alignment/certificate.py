@@ -29,10 +29,12 @@ TEXT = {
     "h_alignment": ("Alignment matrix", "对准矩阵"),
     "alignment_note": ("System matrix M ({unit} per °/s) and bias vector b ({unit}) of G = M ω + b, "
                        "from {n} dwells{robust}; each cell value ± U, U = k·u for a coverage "
-                       "probability of 95.45 %, k = t(ν) of the gyro's fit (last column).",
+                       "probability of approximately 95 %, k = t(ν) of the element's own fit: "
+                       "the last column gives k and ν of the row's M, the b cell its own k.",
                        "系统矩阵 M（{unit}/(°/s)）与零偏向量 b（{unit}），模型 G = M ω + b，"
-                       "由 {n} 个测量段{robust}求得；各格为 值 ± U，U = k·u，包含概率 95.45 %，"
-                       "k 按该陀螺拟合的自由度 ν 取 t 分布因子（末列）。"),
+                       "由 {n} 个测量段{robust}求得；各格为 值 ± U，U = k·u，包含概率约 95 %，"
+                       "k 按各元素自身拟合的自由度 ν 取 t 分布因子：末列为该行 M 的 k 与 ν，"
+                       "b 格内注明其自身的 k。"),
     "robust": (" (robust fit, IRLS)", "（稳健拟合，IRLS）"),
     "gyro": ("gyro", "陀螺"),
     "k_nu": ("k (ν)", "k（ν）"),
@@ -127,7 +129,7 @@ TEXT = {
 READINGS_TAKEN_ZH = (
     "对准：对全部测量段（绕各轴的 ± 角速率及静态位置）一次拟合 G = M ω + b，各方位的地球自转角速度"
     "按转台扫过的角度精确平均；只有一对 ± 测量时退化为文章的差分公式。",
-    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率 95.45 %；运行了试验时旁列蒙特卡洛法"
+    "不确定度：由拟合残差作 A 类评定，k = t(ν)，包含概率约 95 %；运行了试验时旁列蒙特卡洛法"
     "（JCGM 101）标准不确定度。",
     "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
     "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",

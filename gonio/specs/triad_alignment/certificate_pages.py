@@ -1,5 +1,5 @@
 """The certificate of a gyro-triad calibration (``triad-alignment``), rendered by the shared
-certificate machinery (:mod:`gonio.report.certificate` blocks and renderers, the per-item
+certificate machinery (:mod:`gonio.report.render` blocks and renderers, the per-item
 parts of :mod:`gonio.report.rate_certificate`: header, closing statements, figures, writer).
 
 Its own pages: the **alignment-matrix table** (M and b with each element's U and k, M⁻¹, the
@@ -17,13 +17,14 @@ side (it imports the report), called by :mod:`gonio.specs.triad_alignment.output
 from __future__ import annotations
 
 
-from gonio.report.certificate import Block, certificate_id
-from gonio.report.provenance import is_virtual
+from gonio.report.header import certificate_id, conformity_section
 from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_at_U,
                                translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
                                            screening_blocks, write_spec_certificate)
-from gonio.report.stated import conformity_blocks, item_nums, num
+from gonio.report.provenance import is_virtual
+from gonio.report.render import Block
+from gonio.report.stated import item_nums, num
 from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
@@ -44,13 +45,16 @@ def _why(text: str, L: dict) -> str:
     return reason_text(text, L, content.PHRASES_ZH)
 
 
-def _pm(res: dict, key: str) -> list | str:
-    """Cell "value ± U" of an item, each number at U's decimal place (JCGM 100 7.2.6)."""
+def _pm(res: dict, key: str, with_k: bool = False) -> list | str:
+    """Cell "value ± U" of an item, each number at U's decimal place (JCGM 100 7.2.6);
+    ``with_k`` adds the item's own k ("(k = 2.42)") where the table's k column is another's."""
     it = res["items"][key]
     if not it["measured"]:
         return "—"
     n = item_nums(it, f"items.{key}", sig=6)          # the one statement rule
-    return [n["value"], " ± ", n["U"]] if n["U"] is not None else [n["value"] or "—"]
+    if n["U"] is None:
+        return [n["value"] or "—"]
+    return [n["value"], " ± ", n["U"]] + ([" (k = ", n["k"], ")"] if with_k and n["k"] else [])
 
 
 def _pm_scaled(v: float, U: float, f: float = 1.0) -> str:
@@ -74,7 +78,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     rows = []
     for i, a in enumerate(AXES):
         rows.append([f"{T('gyro')} {a}"] + [_pm(res, f"M_{a}{b}") for b in AXES]
-                    + [_pm(res, f"b_{a}"),
+                    + [_pm(res, f"b_{a}", with_k=True),
                        [num(res, f"items.M_{a}x.uncertainty.k", "k"), " (",
                         num(res, f"items.M_{a}x.uncertainty.nu_eff", "int"), ")"]])
     out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})", T("k_nu")], rows),
@@ -93,9 +97,11 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
         s, lk = items[f"S_{p}"], items[f"L_{p}"]
         k = s["uncertainty"]["k"]
         crow.append([f"{p[0]} ← ω_{p[1]}",
-                     _pm_scaled(s["value"], s["uncertainty"]["U"], 1e3),
+                     [_pm_scaled(s["value"], s["uncertainty"]["U"], 1e3), " (k = ",
+                      num(res, f"items.S_{p}.uncertainty.k", "k"), ")"],
                      display_uncertainty(k * mc["cross_axis"][n] * 1e3) if mc else "—",
-                     _pm_scaled(lk["value"], lk["uncertainty"]["U"], 1e3)])
+                     [_pm_scaled(lk["value"], lk["uncertainty"]["U"], 1e3), " (k = ",
+                      num(res, f"items.L_{p}.uncertainty.k", "k"), ")"]])
     out.append(Block("table", ([T("pair"), T("S_col"), T("mc_col"), T("L_col")], crow),
                      {"widths": (0.2, 0.28, 0.22, 0.3), "id": "cross-axis"}))
     av = items["averaging_time"]
@@ -249,9 +255,9 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
     blocks += alignment_blocks(res, T, L)
     blocks += screening_blocks(res, L, content.PHRASES_ZH)
     name = translator(tables=content.PHRASES_ZH) if lang == "zh" else (lambda t: None)
-    blocks += conformity_blocks(                     # the pipeline's decisions, rendered
+    blocks += conformity_section(                    # the pipeline's decisions, rendered
         res["items"], L, lambda k: name(res["items"][k]["title"]) or res["items"][k]["title"],
-        lambda k: unit_text(res["items"][k]["unit"]), Block)
+        lambda k: unit_text(res["items"][k]["unit"]), lab)
     blocks += thermal_blocks(res, T, L, lang)
     zh = content.READINGS_TAKEN_ZH
     notes = res.get("readings_taken", [])

@@ -62,7 +62,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
     k = res.coverage_factor
     unit = res.output_unit or "output"
     m, um = res.system_matrix, res.u_system_matrix
-    out = [f"<h2>Alignment matrix (k = {k[0]:.2f} for ν = {res.dof[0]:.0f}, p = 95.45 %)</h2>",
+    out = [f"<h2>Alignment matrix (k = {k[0]:.2f} for ν = {res.dof[0]:.0f}, p ≈ 95 %)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
            f"{' (robust fit)' if res.robust else ''}.</p>"]

@@ -4,7 +4,7 @@ recording. gonio's command line finds it through the registry; nothing in gonio 
 
 from __future__ import annotations
 
-from gonio.errors import GonioError
+from gonio.kit import GonioError
 
 from acme_rate_check.items import load_protocol
 

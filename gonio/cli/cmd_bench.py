@@ -1,0 +1,56 @@
+"""``gonio bench serve``: the virtual bench's table and acquisition module served as
+instruments on 127.0.0.1 (:func:`gonio.instruments.served.serve_bench`)."""
+
+from __future__ import annotations
+
+import time
+
+from gonio.cli.checks import seed
+from gonio.units import S_PER_H
+
+
+def register(sub) -> None:
+    p = sub.add_parser("bench", help="the virtual bench as instruments (bench serve)",
+                       description="The virtual bench as instruments a laboratory's software "
+                                   "drives through VISA.")
+    bsub = p.add_subparsers(dest="bench_command", metavar="ACTION")
+    bsub.required = True
+    s = bsub.add_parser("serve", help="serve the simulated table and acquisition module",
+                        description="Serve a bench's rotary table and the goniometer's "
+                                    "acquisition module on 127.0.0.1 over line-terminated SCPI "
+                                    "sockets (the command sets of docs/instruments.md), with "
+                                    "simulated time --speed times faster than real time, until "
+                                    "interrupted. Prints their VISA resource strings.")
+    s.add_argument("--bench", default="rlg", help="bench file or built-in name (default rlg)")
+    s.add_argument("--table-port", type=int, required=True,
+                   help="TCP port of the table (0: a free one, printed)")
+    s.add_argument("--gyro-port", type=int, required=True,
+                   help="TCP port of the acquisition module (0: a free one, printed)")
+    s.add_argument("--speed", type=float, default=1.0,
+                   help="simulated seconds per real second (default 1)")
+    s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
+    s.add_argument("--range-deg", type=float, default=360.0,
+                   help="the table's stated range, ±degrees (default 360)")
+    s.add_argument("--warm-up", type=float, default=S_PER_H,
+                   help="seconds the instrument has been on when serving starts (default: an "
+                        "hour, the draft's 7.3 warm-up)")
+    s.add_argument("--fault", action="append", default=[],
+                   help="inject a fault for testing: table-error:N (the N-th move fails with an "
+                        "axis fault), gyro-drop:N (the module drops its link at its N-th reading)")
+    s.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from gonio.bench import load_bench
+    from gonio.instruments.served import Faults, serve_bench
+
+    served = serve_bench(load_bench(args.bench), args.table_port, args.gyro_port,
+                         speed=args.speed, seed=args.seed, range_deg=args.range_deg,
+                         warm_up_s=args.warm_up, faults=Faults.parse(args.fault))
+    print(f"table: {served.table_resource}")
+    print(f"gyro: {served.gyro_resource}", flush=True)
+    try:
+        while True:
+            time.sleep(60.0)
+    finally:
+        served.close()

@@ -1,0 +1,197 @@
+"""The laboratory details file (``--lab FILE``): laboratory, certificate, customer,
+instrument, standards, environment, signatories, the decision rule and specification limits
+agreed with the customer.
+
+Contents
+========
+===============================  ==========================================================
+:data:`LAB_SCHEMA`               every key of the file, its type and default
+:data:`DECISION_RULES`           the decision rules the file may name
+:func:`load_lab`                 read and validate the file (example ``protocols/lab-example.toml``)
+:func:`naming_lab_file`          errors about its limits found later name the file
+:func:`check_one_limit_per_item` one limit per item, never a silent override
+:func:`check_interval`           a limit's lower end below its upper end, one end at least
+===============================  ==========================================================
+
+The certificate renders what this file holds (ISO/IEC 17025 7.8.2.1, 7.8.4, 7.8.6); the
+decisions on its limits are taken by :mod:`gonio.analysis.conformity`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+from pathlib import Path
+
+from gonio.errors import GonioError
+from gonio.formats.toml import Field, check_text_fields, non_negative, read_toml, validate_table
+
+__all__ = ["LAB_SCHEMA", "DECISION_RULES", "load_lab", "naming_lab_file",
+           "check_one_limit_per_item", "check_interval"]
+
+#: Decision rules a laboratory file may name (``[decision_rule] rule = ...``; ILAC-G8:09/2019
+#: clause 4, :mod:`gonio.analysis.conformity`).
+DECISION_RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
+
+
+def _iso_date(x: str) -> bool:
+    try:
+        _dt.date.fromisoformat(x)
+    except ValueError:
+        return False
+    return True
+
+
+_S = Field("str", default="")
+_DATE = Field("str", default="", check=lambda s: s == "" or _iso_date(s),
+              expect="a date YYYY-MM-DD")
+
+#: The laboratory details file (``--lab FILE``): every key, its type and default.
+LAB_SCHEMA: dict[str, Field] = {
+    "laboratory": Field("table", schema={
+        "name": Field("str"), "address": Field("str"), "accreditation": _S, "contact": _S}),
+    "certificate": Field("table", schema={
+        "number": Field("str"), "date_of_issue": _DATE, "date_of_receipt": _DATE,
+        "date_of_calibration": _DATE, "place": _S}),
+    "customer": Field("table", schema={"name": Field("str"), "address": _S}),
+    "instrument": Field("table", default=None, schema={
+        "description": _S, "model": _S, "serial": _S, "manufacturer": _S}),
+    "standards": Field("table_list", default=None, schema={
+        "name": Field("str"), "identifier": _S, "accuracy": _S, "certificate": _S,
+        "traceability": _S}),
+    "environment": Field("table", default=None, schema={
+        "temperature_c": Field("float", default=None),
+        "humidity_pct": Field("float", default=None, check=lambda h: 0 <= h <= 100,
+                              expect="0–100 %")}),
+    # the readings' identity and conditions against [instrument] and [environment]
+    # (gonio.pipeline.identity): a contradiction is refused unless on_mismatch = "proceed"
+    "identity": Field("table", default=None, schema={
+        "on_mismatch": Field("str", default="refuse", choices=("refuse", "proceed")),
+        "temperature_tolerance_c": Field("float", default=None, check=non_negative,
+                                         expect="≥ 0"),
+        "humidity_tolerance_pct": Field("float", default=None, check=non_negative,
+                                        expect="≥ 0")}),
+    "signatory": Field("table", schema={
+        "calibrated_by": _S, "checked_by": _S, "approved_by": Field("str"),
+        "approved_title": _S}),
+    # ISO/IEC 17025 7.1.3 / 7.8.6: the decision rule agreed with the customer, and the
+    # specification limits of the items a statement of conformity is asked for
+    "decision_rule": Field("table", default=None, schema={
+        "rule": Field("str", choices=DECISION_RULES),
+        "guard_band_factor": Field("float", default=1.0, check=non_negative, expect="≥ 0"),
+        "agreed": _S}),
+    "specification_limits": Field("table_list", default=None, schema={
+        "item": Field("str"),       # checked against the specification's items when decided
+        "lower": Field("float", default=None), "upper": Field("float", default=None),
+        "mpe": Field("float", default=None, check=lambda x: x > 0, expect="> 0"),
+        "source": _S}),
+}
+
+
+def _dates_to_text(x):
+    if isinstance(x, dict):
+        return {k: _dates_to_text(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_dates_to_text(v) for v in x]
+    if isinstance(x, (_dt.date, _dt.datetime)):
+        return x.isoformat()[:10]
+    return x
+
+
+def check_interval(lower: float | None, upper: float | None) -> None:
+    """A tolerance interval has one end at least, and its lower end below its upper end.
+
+    >>> check_interval(1.0, 0.5)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: lower limit 1.0 is not below upper limit 0.5
+    """
+    if lower is None and upper is None:
+        raise GonioError("a specification limit needs lower, upper or mpe")
+    if lower is not None and upper is not None and not lower < upper:
+        raise GonioError(f"lower limit {lower} is not below upper limit {upper}")
+
+
+def check_one_limit_per_item(limits, where: str = "specification_limits", *,
+                             file=None) -> None:
+    """One limit per item: a second entry for the same item is an error naming both, never
+    a silent override (the last decision would win in results.json while the certificate
+    showed both).
+
+    >>> check_one_limit_per_item([{"item": "R", "mpe": 0.3}, {"item": "R", "mpe": 0.5}])
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[1].item: 'R' has a limit already (specification_limits[0]); give one limit per item
+    """
+    first: dict = {}
+    for i, lim in enumerate(limits or []):
+        key = lim.get("item")
+        if key in first:
+            raise GonioError(f"{key!r} has a limit already ({where}[{first[key]}]); give one "
+                             f"limit per item", file=file, key=f"{where}[{i}].item")
+        first[key] = i
+
+
+def load_lab(path: str | Path) -> dict:
+    """Read and validate a laboratory details file (see ``protocols/lab-example.toml``).
+
+    TOML dates are accepted as well as "YYYY-MM-DD" text. An unknown key, a
+    missing required key or a wrong type raises a GonioError naming the file and
+    the key.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "lab.toml"
+    >>> _ = p.write_text('[laboratory]\\nname = "L"\\naddress = "A"\\nfax = "1"\\n')
+    >>> load_lab(p)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: ...lab.toml: key laboratory.fax: unknown key (known: name, address, accreditation, contact)
+    """
+    raw = _dates_to_text(read_toml(path))
+    check_text_fields(raw, path)          # no control characters, no megabyte of name
+    lab = validate_table(raw, LAB_SCHEMA, "", path)
+    for key in ("instrument", "environment"):
+        if lab[key] is None:
+            lab[key] = validate_table({}, LAB_SCHEMA[key].schema, key, path)
+    if lab["standards"] is None:
+        lab["standards"] = []
+    limits = lab["specification_limits"] or []
+    check_one_limit_per_item(limits, file=path)
+    for i, lim in enumerate(limits):
+        key = f"specification_limits[{i}]"
+        if lim["mpe"] is not None and (lim["lower"] is not None or lim["upper"] is not None):
+            raise GonioError("give mpe or lower/upper, not both", file=path, key=key)
+        try:
+            if lim["mpe"] is None:
+                check_interval(lim["lower"], lim["upper"])
+        except GonioError as exc:
+            raise GonioError(exc.message, file=path, key=key) from None
+    if limits and lab["decision_rule"] is None:
+        raise GonioError("specification limits need the decision rule agreed "
+                         "([decision_rule] rule = simple | guarded | non-binary)", file=path,
+                         key="decision_rule")
+    return lab
+
+
+@contextlib.contextmanager
+def naming_lab_file(path):
+    """Errors about the lab file's limits raised while its limits are decided (an item the
+    specification does not have: known only once the calibration ran) name the lab file
+    ``path`` as well as the key.
+
+    >>> try:
+    ...     with naming_lab_file("lab.toml"):
+    ...         raise GonioError("s has no item 'K'", key="specification_limits[0].item")
+    ... except GonioError as e:
+    ...     print(e)
+    lab.toml: key specification_limits[0].item: s has no item 'K'
+    """
+    try:
+        yield
+    except GonioError as exc:
+        if path is None or exc.file is not None or exc.line is not None \
+                or not str(exc.key or "").startswith(("specification_limits", "decision_rule")):
+            raise
+        raise GonioError(exc.message, file=path, key=exc.key) from None

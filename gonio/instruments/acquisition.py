@@ -1,0 +1,124 @@
+"""The goniometer's data-acquisition module (draft clause 4, Fig. 2): zero, trigger, read.
+
+:class:`AcquisitionModule` speaks the SCPI-style command set of
+:data:`AcquisitionModule.COMMANDS` (what ``gonio bench serve`` serves): ``ZERO`` starts a
+measurement (the pulse counter's reference), ``READ?`` triggers a reading and answers
+``<counts>,<time_s>`` — the counter since the zeroing as its register shows it (rolling
+over at its width) and the module's time since the zeroing. The counter's roll-over is
+undone with the expected count (:func:`unwrap_near`, on :mod:`gonio.formats.counters`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.formats.counters import wrap_counter
+from gonio.instruments.link import Driver, InstrumentError
+
+
+def unwrap_near(shown: int, expected: float, bits: int) -> int:
+    """The count nearest ``expected`` that a ``bits``-wide counter shows as ``shown``.
+
+    Between a zeroing and a reading the counter may roll over any number of times (a turn
+    of an RLG is ~2.75·10⁷ counts, a 24-bit counter rolls over at 1.7·10⁷); the count is
+    ``shown`` plus the multiple of 2^bits that brings it nearest the count expected from the
+    table's angle, exact while the instrument's error is below half the counter's range.
+
+    >>> unwrap_near(3, 2**24 + 5.0, 24)              # one roll-over
+    16777219
+    >>> unwrap_near(-2, -1.0, 16), unwrap_near(65534, -1.0, 16)    # signed or unsigned
+    (-2, -2)
+    """
+    if bits >= 64:
+        return int(shown)
+    base = int(round(expected))
+    resid = wrap_counter(np.array([int(shown) - base]), bits, True)[0]
+    return base + int(resid)
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One triggered reading: counts since the zeroing and the module's time since it."""
+
+    counts: int
+    time_s: float
+
+
+class AcquisitionModule(Driver):
+    """An angle/rate acquisition module, or a counter in totalize mode used as one.
+
+    Operations: ``zero``, ``read`` (``<counts>,<time_s>``), ``read_angle``
+    (``<deg>,<time_s>``), ``rate`` (°/s), ``temperature`` (°C), ``clock`` (the module's
+    time, s: the acquisition times every wait on it), ``counter_bits``/``counter_signed``
+    (the register's width and sign), ``scale_factor`` (its nominal counts per degree),
+    ``trigger_source`` (``BUS`` or ``EXT``).
+    """
+
+    KIND = "acquisition module"
+    COMMANDS = {
+        **Driver.COMMANDS,
+        "zero": "ZERO",
+        "read": "READ?",
+        "read_angle": "READ:ANG?",
+        "rate": "MEAS:RATE?",
+        "temperature": "MEAS:TEMP?",
+        "clock": "SYST:TIME?",
+        "counter_bits": "CONF:COUN:BITS?",
+        "counter_signed": "CONF:COUN:SIGN?",
+        "scale_factor": "CONF:SCAL?",
+        "trigger_source": "TRIG:SOUR {source}",
+    }
+
+    _bits: int | None = None
+
+    def counter_bits(self) -> int:
+        """The counter register's width (64 when the module does not say)."""
+        if self._bits is None:
+            self._bits = int(self.number("counter_bits")) if self.has("counter_bits") else 64
+        return self._bits
+
+    def zero(self) -> None:
+        """Zero: the counter's reference and the time origin of the next readings."""
+        self.send("zero")
+
+    def _pair(self, op: str) -> tuple[float, float]:
+        ans = self.send(op)
+        try:
+            a, t = (float(x) for x in ans.split(",")[:2])
+        except ValueError:
+            raise InstrumentError(f"acquisition module {self.link.name}: {op}: expected "
+                                  f"'value,time_s', got {ans!r}") from None
+        return a, t
+
+    def read(self, expected_counts: float = 0.0) -> Reading:
+        """Trigger and read: counts since the zeroing (roll-over undone near
+        ``expected_counts``) and the module's time since the zeroing."""
+        shown, t = self._pair("read")
+        return Reading(unwrap_near(int(shown), expected_counts, self.counter_bits()), t)
+
+    def read_angle_deg(self) -> tuple[float, float]:
+        """Trigger and read the indicated angle since the zeroing, ° (and its time, s)."""
+        return self._pair("read_angle")
+
+    def rate_dps(self) -> float:
+        """The sensed rate, °/s."""
+        return self.number("rate")
+
+    def temperature_c(self) -> float:
+        """The module's temperature, °C."""
+        return self.number("temperature")
+
+    def clock_s(self) -> float:
+        """The module's clock, s (no error check: it is polled while waiting)."""
+        ans = self.send("clock", check=False)
+        try:
+            return float(ans)
+        except ValueError:
+            raise InstrumentError(f"acquisition module {self.link.name}: clock: expected a "
+                                  f"number, got {ans!r}") from None
+
+    def scale_factor_counts_per_deg(self) -> float | None:
+        """Its nominal scale factor, when it states one."""
+        return self.number("scale_factor") if self.has("scale_factor") else None

@@ -1,0 +1,523 @@
+"""The virtual bench served as instruments: a rotary table and an acquisition module on TCP.
+
+``gonio bench serve`` (:func:`serve_bench`) serves, on 127.0.0.1 only, the simulated table and
+the goniometer's acquisition module of a bench file over line-terminated SCPI sockets, in
+exactly the command sets of the default drivers (:class:`~gonio.instruments.table.RotaryTable`,
+:class:`~gonio.instruments.acquisition.AcquisitionModule`), with their errors in the SCPI
+error queue (``SYST:ERR?``): a move beyond the range or the top rate (−222), a move while
+moving or a read before zeroing (−221), an unknown header (−113), a bad parameter (−224).
+
+The physics is the virtual bench's own, not a copy: the table's motion is a
+:class:`gonio.physics.kinematics.Timeline` built as the commands arrive (a stop mid-move
+replays it with the move cut to its stopping distance, so the motion already integrated is
+unchanged), its positioning error the bench's harmonics and scatter; the instrument is the
+bench's :class:`gonio.bench.instrument.Integrator` on its sample grid, its counter
+:func:`gonio.bench.instrument.counts_from_angle` with the same dither and the
+angle-position error of the angle since the zeroing (draft 4.2), its random streams seeded
+as :func:`gonio.bench.session.run_session` seeds them. Simulated time runs ``speed`` times
+faster than the wall clock; the instrument is integrated lazily up to the instant of each
+query. The readings therefore agree with ``gonio simulate`` on the same bench within the
+noise (not bit for bit: the timing of a served session is the host's).
+
+Fault injection for tests of the acquisition's safety (``faults``): ``table-error:N`` (the
+N-th move answers an axis fault, −310, and is not made), ``gyro-drop:N`` (the module closes
+its connection at its N-th reading).
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import socketserver
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gonio import __version__
+from gonio.bench.config import Bench
+from gonio.bench.instrument import Integrator, counts_from_angle, geometry, harmonic_sum_arcsec
+from gonio.errors import GonioError
+from gonio.formats.counters import wrap_counter
+from gonio.physics.earth import NAMED_AXES
+from gonio.physics.kinematics import Timeline
+from gonio.units import S_PER_H, arcsec_to_deg
+
+#: Samples integrated per call of the instrument model (bounded memory for long waits).
+CHUNK = 1 << 18
+#: The module's temperature: the bench's optical instrument has no thermal model, so the
+#: module reports the draft's Table 2 reference room.
+ROOM_C = 20.0
+
+
+def scpi_match(header: str, mnemonic: str) -> bool:
+    """Whether a received header matches a mnemonic in SCPI's short/long forms
+    (``SYST:ERR?`` and ``:system:error?`` both match ``SYSTem:ERRor?``).
+
+    >>> scpi_match(":syst:err?", "SYSTem:ERRor?"), scpi_match("SYSTEM:ERROR?", "SYSTem:ERRor?")
+    (True, True)
+    >>> scpi_match("SYSTE:ERR?", "SYSTem:ERRor?"), scpi_match("SYST:ERR", "SYSTem:ERRor?")
+    (False, False)
+    """
+    h, m = header.lstrip(":"), mnemonic
+    if h.endswith("?") != m.endswith("?"):
+        return False
+    hp, mp = h.rstrip("?").split(":"), m.rstrip("?").split(":")
+    if len(hp) != len(mp):
+        return False
+    for tok, mn in zip(hp, mp):
+        short = "".join(c for c in mn if not c.islower())
+        if tok.upper() not in (short.upper(), mn.upper()):
+            return False
+    return True
+
+
+class ScpiError(Exception):
+    """An error the served instrument puts in its queue: ``code,"message"``."""
+
+    def __init__(self, code: int, message: str):
+        super().__init__(f'{code},"{message}"')
+        self.code = code
+
+
+@dataclass
+class Faults:
+    """Injected faults (see the module's docstring)."""
+
+    table_error_at_move: int | None = None
+    gyro_drop_at_read: int | None = None
+    moves: int = 0
+    reads: int = 0
+
+    @classmethod
+    def parse(cls, specs: list[str] | None) -> "Faults":
+        f = cls()
+        for spec in specs or []:
+            name, _, n = spec.partition(":")
+            if not n.isdigit() or int(n) < 1 or name not in ("table-error", "gyro-drop"):
+                raise GonioError(f"--fault {spec!r}: expected table-error:N or gyro-drop:N "
+                                 "(N ≥ 1)")
+            if name == "table-error":
+                f.table_error_at_move = int(n)
+            else:
+                f.gyro_drop_at_read = int(n)
+        return f
+
+
+@dataclass
+class _Zero:
+    k: int
+    phi_deg: float
+    counts: float
+
+
+class ServedBench:
+    """The shared simulated state behind both served instruments (one lock for all).
+
+    ``range_deg``: the table's stated range, [−range_deg, +range_deg]. ``warm_up_s``: how
+    long the instrument has been on when serving starts (its warm-up transient and its
+    clock, ``SYST:TIME?``, count from power-on).
+    """
+
+    def __init__(self, bench: Bench, *, seed: int = 0, speed: float = 1.0,
+                 warm_up_s: float = S_PER_H, range_deg: float = 360.0, clock=time.monotonic,
+                 faults: Faults | None = None):
+        if not (speed > 0 and math.isfinite(speed)):
+            raise GonioError(f"--speed must be a positive number, got {speed}")
+        self.bench, self.speed, self.warm_up_s, self.range_deg = bench, speed, warm_up_s, range_deg
+        self.clock, self.faults = clock, faults or Faults()
+        ss = np.random.SeedSequence(seed)
+        self.rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
+        self.dither_key = int(ss.generate_state(1, np.uint64)[0])
+        self.dt = 1.0 / bench.sample_rate_hz
+        self.integ = Integrator(bench.instrument, bench.sample_rate_hz, warm_up_s, rng_inst)
+        self.lock = threading.RLock()
+        self.start_true_deg = self.true_position(0.0)
+        self.ops: list[tuple] = []
+        self.timeline = Timeline(start_angle_deg=self.start_true_deg)
+        self.indicated_deg = 0.0
+        self.rotating = False
+        self.orientation = "up"
+        self.geom = geometry(bench, "up")
+        self.k_done, self.phi_deg = -1, 0.0
+        self.zero: _Zero | None = None
+        self.wall0 = clock()
+
+    # ------------------------------------------------------------------ time, table
+    def now_s(self) -> float:
+        """Simulated time since serving started, s."""
+        return (self.clock() - self.wall0) * self.speed
+
+    def true_position(self, x_deg: float) -> float:
+        """The true angle of the table when it indicates ``x_deg`` (the bench's positioning
+        harmonics plus its random scatter, as the virtual bench's planner draws them)."""
+        tab = self.bench.table
+        err = float(harmonic_sum_arcsec(np.array([x_deg]), tab.positioning_harmonics)[0])
+        if tab.positioning_random_arcsec:
+            err += tab.positioning_random_arcsec * float(self.rng_table.standard_normal())
+        return x_deg - arcsec_to_deg(err)
+
+    def moving(self, t: float) -> bool:
+        return t < self.timeline.end_s
+
+    def _extend_to(self, t: float) -> None:
+        if self.timeline.end_s < t:
+            d = t - self.timeline.end_s
+            self.timeline.dwell(d)
+            self.ops.append(("dwell", d))
+
+    def move(self, x_deg: float, rate_dps: float) -> None:
+        """Start a move to the indicated angle ``x_deg`` now (checked: range, rate, at rest)."""
+        t = self.now_s()
+        tab = self.bench.table
+        if self.moving(t):
+            raise ScpiError(-221, "Settings conflict; table moving")
+        if not -self.range_deg <= x_deg <= self.range_deg:
+            raise ScpiError(-222, f"Data out of range; angle {x_deg:g} beyond +/-{self.range_deg:g}")
+        if not 0.0 < rate_dps <= tab.max_rate_dps:
+            raise ScpiError(-222, f"Data out of range; rate {rate_dps:g} beyond {tab.max_rate_dps:g}")
+        self._advance(t)
+        self._extend_to(t)
+        to = self.true_position(x_deg)
+        rate = rate_dps * (1.0 + tab.rate_error_rel)
+        self.timeline.move(to, rate, tab.accel_dps2)
+        self.ops.append(("move", to, rate, tab.accel_dps2))
+        self.indicated_deg, self.rotating = x_deg, False
+
+    def rotate(self, rate_dps: float) -> None:
+        """Rate mode: turn at the signed ``rate_dps`` until stopped (a move far away)."""
+        t = self.now_s()
+        tab = self.bench.table
+        if self.moving(t):
+            raise ScpiError(-221, "Settings conflict; table moving")
+        if not 0.0 < abs(rate_dps) <= tab.max_rate_dps:
+            raise ScpiError(-222, f"Data out of range; rate {rate_dps:g}")
+        self._advance(t)
+        self._extend_to(t)
+        rate = abs(rate_dps) * (1.0 + tab.rate_error_rel)
+        to = self.timeline.end_angle_deg + math.copysign(rate * 1e6, rate_dps)
+        self.timeline.move(to, rate, tab.accel_dps2)
+        self.ops.append(("move", to, rate, tab.accel_dps2))
+        self.rotating = True
+
+    def stop(self) -> None:
+        """Stop now: the move in progress is cut to its stopping distance at the table's
+        acceleration; the motion up to now is unchanged (same trapezoid so far)."""
+        t = self.now_s()
+        if not self.moving(t):
+            return
+        self._advance(t)
+        theta = float(self.timeline.angle_deg(np.array([t]))[0])
+        v = float(self.timeline.rate_dps(np.array([t]))[0])
+        _, to, rate, acc = self.ops[-1]
+        stop_at = theta + math.copysign(v * v / (2.0 * acc), v) if v else theta
+        if abs(to - theta) > abs(stop_at - theta) + 1e-12:      # not yet decelerating
+            self.ops[-1] = ("move", stop_at, rate, acc)
+            tl = Timeline(start_angle_deg=self.start_true_deg)
+            for op in self.ops:
+                tl.dwell(op[1]) if op[0] == "dwell" else tl.move(*op[1:])
+            self.timeline = tl
+            x = self.ops[-1][1]
+            self.indicated_deg = x + arcsec_to_deg(float(harmonic_sum_arcsec(
+                np.array([x]), self.bench.table.positioning_harmonics)[0]))
+        self.rotating = False
+
+    def position_deg(self) -> float:
+        """The encoder's indicated angle (the commanded angle at rest)."""
+        t = self.now_s()
+        if not self.moving(t):
+            return self.indicated_deg
+        th = float(self.timeline.angle_deg(np.array([t]))[0])
+        return th + arcsec_to_deg(float(harmonic_sum_arcsec(
+            np.array([th]), self.bench.table.positioning_harmonics)[0]))
+
+    def state(self) -> str:
+        t = self.now_s()
+        if not self.moving(t):
+            return "IDLE"
+        return "ROT" if self.rotating else "MOV"
+
+    def set_axis(self, orientation: str) -> None:
+        if orientation not in NAMED_AXES:
+            raise ScpiError(-224, f"Illegal parameter value; axis {orientation}")
+        t = self.now_s()
+        if self.moving(t):
+            raise ScpiError(-221, "Settings conflict; table moving")
+        self._advance(t)
+        self.orientation, self.geom = orientation, geometry(self.bench, orientation)
+        self.integ.start_block()
+
+    # ------------------------------------------------------------------ instrument
+    def _advance(self, t: float) -> int:
+        """Integrate the instrument up to the last grid sample at or before ``t``."""
+        k_end = int(math.floor(t / self.dt + 1e-9))
+        while self.k_done < k_end:
+            a = self.k_done + 1
+            b = min(k_end, a + CHUNK - 1)
+            ts = np.arange(a, b + 1) * self.dt
+            phi = self.integ.advance(ts, self.timeline.angle_deg(ts), self.timeline.rate_dps(ts),
+                                     self.geom)
+            self.k_done, self.phi_deg = b, float(phi[-1])
+        return k_end
+
+    def _counts(self, k: int, phi: float) -> float:
+        """The counter at sample k: angle plus the angle-position error of the angle since
+        the zeroing, g(φ−φ₀) − g(0) (draft 4.2), times K, dithered and floored."""
+        inst = self.bench.instrument
+        g = 0.0
+        if self.zero is not None and inst.position_harmonics:
+            g = float(harmonic_sum_arcsec(np.array([phi - self.zero.phi_deg]),
+                                          inst.position_harmonics)[0]
+                      - harmonic_sum_arcsec(np.zeros(1), inst.position_harmonics)[0])
+        return float(counts_from_angle(np.array([phi + arcsec_to_deg(g)]), inst,
+                                       np.array([k]), self.dither_key)[0])
+
+    def do_zero(self) -> None:
+        k = self._advance(self.now_s())
+        self.zero = _Zero(k, self.phi_deg, 0.0)
+        self.zero.counts = self._counts(k, self.phi_deg)
+
+    def read(self, wrap: bool = True) -> tuple[float, float]:
+        """Counts since the zeroing (as the register shows them with ``wrap``) and the time
+        since it."""
+        if self.zero is None:
+            raise ScpiError(-221, "Settings conflict; read before zeroing")
+        k = self._advance(self.now_s())
+        inst = self.bench.instrument
+        c = self._counts(k, self.phi_deg) - self.zero.counts
+        if inst.quantisation and wrap:
+            c = float(wrap_counter(np.array([int(c)]), inst.counter_bits, inst.counter_signed)[0])
+        return c, (k - self.zero.k) * self.dt
+
+    def rate_dps(self) -> float:
+        """The sensed rate now: the table's rate on the tilted axis plus the Earth rate."""
+        t = self.now_s()
+        th = self.timeline.angle_deg(np.array([t]))
+        w = self.timeline.rate_dps(np.array([t])) * self.geom.cos_psi + self.geom.earth_dps(th)
+        return float(w[0])
+
+
+def _parse_float(arg: str) -> float:
+    try:
+        v = float(arg)
+    except ValueError:
+        raise ScpiError(-104, f"Data type error; {arg!r}") from None
+    if not math.isfinite(v):
+        raise ScpiError(-224, f"Illegal parameter value; {arg!r}")
+    return v
+
+
+@dataclass
+class _Instrument:
+    """One served instrument: its command table (mnemonic → handler) and error queue."""
+
+    name: str
+    idn: str
+    commands: list = field(default_factory=list)
+    errors: deque = field(default_factory=lambda: deque(maxlen=16))
+
+    def execute(self, line: str) -> str | None:
+        """Run one line: commands separated by ``;`` (SCPI's compound form); the answers
+        of its queries joined by ``;`` (None when it has none)."""
+        answers = [a for a in (self.execute_one(c) for c in line.split(";") if c.strip())
+                   if a is not None]
+        return ";".join(answers) if answers else None
+
+    def execute_one(self, command: str) -> str | None:
+        """Run one command; the answer of a query (None for a command)."""
+        header, _, arg = command.strip().partition(" ")
+        for mnemonic, handler in self.commands:
+            if scpi_match(header, mnemonic):
+                try:
+                    return handler(arg.strip())
+                except ScpiError as exc:
+                    self.errors.append(str(exc))
+                except (ArithmeticError, ValueError, GonioError) as exc:
+                    self.errors.append(f'-300,"Device-specific error; {type(exc).__name__}"')
+                return "9.91E+37" if header.endswith("?") else None
+        self.errors.append(f'-113,"Undefined header; {header}"')
+        return "9.91E+37" if header.endswith("?") else None
+
+    def next_error(self, _arg: str = "") -> str:
+        return self.errors.popleft() if self.errors else '0,"No error"'
+
+
+class _Drop(Exception):
+    """Close the connection (an injected fault)."""
+
+
+def table_instrument(sb: ServedBench) -> _Instrument:
+    """The served rotary table: :class:`~gonio.instruments.table.RotaryTable`'s commands."""
+    b = sb.bench
+
+    def locked(f):
+        def g(arg):
+            with sb.lock:
+                return f(arg)
+        return g
+
+    def move(arg):
+        parts = arg.split(",")
+        if len(parts) != 2:
+            raise ScpiError(-109, "Missing parameter; MOVE:ABS angle,rate")
+        sb.faults.moves += 1
+        if sb.faults.table_error_at_move == sb.faults.moves:
+            raise ScpiError(-310, "System error; axis fault (injected)")
+        sb.move(_parse_float(parts[0]), _parse_float(parts[1]))
+
+    def opc(_):
+        while True:
+            with sb.lock:
+                left = sb.timeline.end_s - sb.now_s()
+                if left <= 0 or sb.rotating:
+                    return "1"
+            time.sleep(min(left / sb.speed, 0.05))
+
+    inst = _Instrument("table", f"gonio,virtual rotary table ({b.table.name}),"
+                                f"{b.name}-table,gonio {__version__}")
+    inst.commands = [
+        ("*IDN?", lambda a: inst.idn), ("*RST", locked(lambda a: sb.stop())),
+        ("*CLS", lambda a: inst.errors.clear()), ("*OPC?", opc),
+        ("SYSTem:ERRor?", inst.next_error),
+        ("MOVE:ABSolute", locked(move)),
+        ("ROTate", locked(lambda a: sb.rotate(_parse_float(a)))),
+        ("STOP", locked(lambda a: sb.stop())),
+        ("POSition?", locked(lambda a: repr(sb.position_deg()))),
+        ("STATe?", locked(lambda a: sb.state())),
+        ("AXIS", locked(lambda a: sb.set_axis(a.strip().lower()))),
+        ("AXIS?", lambda a: sb.orientation),
+        ("LIMit:POSition?", lambda a: f"{-sb.range_deg!r},{sb.range_deg!r}"),
+        ("LIMit:RATE?", lambda a: repr(b.table.max_rate_dps)),
+        ("LIMit:ACCeleration?", lambda a: repr(b.table.accel_dps2)),
+    ]
+    return inst
+
+
+def gyro_instrument(sb: ServedBench) -> _Instrument:
+    """The served acquisition module: :class:`~gonio.instruments.acquisition.AcquisitionModule`'s."""
+    b, inst_cfg = sb.bench, sb.bench.instrument
+    source = {"value": "BUS"}
+
+    def read(_):
+        with sb.lock:
+            sb.faults.reads += 1
+            if sb.faults.gyro_drop_at_read == sb.faults.reads:
+                raise _Drop()
+            c, t = sb.read()
+        return f"{c:.0f},{t!r}" if inst_cfg.quantisation else f"{c!r},{t!r}"
+
+    def read_angle(_):
+        with sb.lock:
+            c, t = sb.read(wrap=False)
+        return f"{c / inst_cfg.nominal_scale_factor_counts_per_deg!r},{t!r}"
+
+    def trig(arg):
+        if arg.upper() not in ("BUS", "EXT", "EXTERNAL", "IMM", "IMMEDIATE"):
+            raise ScpiError(-224, f"Illegal parameter value; {arg}")
+        source["value"] = arg.upper()
+
+    def locked(f):
+        def g(arg):
+            with sb.lock:
+                return f(arg)
+        return g
+
+    inst = _Instrument("gyro", f"{inst_cfg.manufacturer or 'gonio'},{inst_cfg.name},"
+                               f"{inst_cfg.serial or b.name},gonio {__version__}")
+    inst.commands = [
+        ("*IDN?", lambda a: inst.idn), ("*RST", lambda a: None),
+        ("*CLS", lambda a: inst.errors.clear()), ("*OPC?", lambda a: "1"),
+        ("SYSTem:ERRor?", inst.next_error),
+        ("SYSTem:TIME?", locked(lambda a: repr(sb.warm_up_s + sb.now_s()))),
+        ("ZERO", locked(lambda a: sb.do_zero())),
+        ("READ?", read), ("READ:ANGle?", read_angle),
+        ("MEASure:RATE?", locked(lambda a: repr(sb.rate_dps()))),
+        ("MEASure:TEMPerature?", lambda a: repr(ROOM_C)),
+        ("CONFigure:COUNter:BITS?", lambda a: str(inst_cfg.counter_bits)),
+        ("CONFigure:COUNter:SIGN?", lambda a: "1" if inst_cfg.counter_signed else "0"),
+        ("CONFigure:SCALe?", lambda a: repr(inst_cfg.nominal_scale_factor_counts_per_deg)),
+        ("TRIGger:SOURce", trig),
+    ]
+    return inst
+
+
+def _handler(inst: _Instrument):
+    class Handler(socketserver.StreamRequestHandler):
+        def handle(self):
+            for raw in self.rfile:
+                line = raw.decode("ascii", "replace").strip()
+                if not line:
+                    continue
+                try:
+                    answer = inst.execute(line)
+                except _Drop:
+                    return
+                if answer is not None:
+                    self.wfile.write((answer + "\n").encode("ascii", "replace"))
+                    self.wfile.flush()
+    return Handler
+
+
+class _Server(socketserver.ThreadingTCPServer):
+    allow_reuse_address = True
+    daemon_threads = True
+
+    def get_request(self):
+        conn, addr = super().get_request()
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return conn, addr
+
+
+@dataclass
+class Served:
+    """The running servers: their ports, VISA resource strings and ``close``."""
+
+    bench: ServedBench
+    servers: list
+    threads: list
+
+    @property
+    def table_port(self) -> int:
+        return self.servers[0].server_address[1]
+
+    @property
+    def gyro_port(self) -> int:
+        return self.servers[1].server_address[1]
+
+    @property
+    def table_resource(self) -> str:
+        return f"TCPIP0::127.0.0.1::{self.table_port}::SOCKET"
+
+    @property
+    def gyro_resource(self) -> str:
+        return f"TCPIP0::127.0.0.1::{self.gyro_port}::SOCKET"
+
+    def close(self) -> None:
+        for s in self.servers:
+            s.shutdown()
+            s.server_close()
+
+
+def serve_bench(bench: Bench, table_port: int = 0, gyro_port: int = 0, *, speed: float = 1.0,
+                seed: int = 0, range_deg: float = 360.0, warm_up_s: float = S_PER_H,
+                faults: Faults | None = None) -> Served:
+    """Serve ``bench``'s table and acquisition module on 127.0.0.1 (port 0: a free one) in
+    background threads; returns the :class:`Served` (``close()`` stops them)."""
+    sb = ServedBench(bench, seed=seed, speed=speed, range_deg=range_deg, warm_up_s=warm_up_s,
+                     faults=faults)
+    servers, threads = [], []
+    for port, inst in ((table_port, table_instrument(sb)), (gyro_port, gyro_instrument(sb))):
+        try:
+            srv = _Server(("127.0.0.1", port), _handler(inst))
+        except OSError as exc:
+            for s in servers:
+                s.server_close()
+            raise GonioError(f"cannot serve the {inst.name} on 127.0.0.1:{port}: "
+                             f"{exc.strerror or exc}") from None
+        th = threading.Thread(target=srv.serve_forever, name=f"serve-{inst.name}", daemon=True)
+        th.start()
+        servers.append(srv)
+        threads.append(th)
+    return Served(sb, servers, threads)

@@ -1,0 +1,202 @@
+"""The ISO/IEC 17025 7.8 content every certificate carries, from the laboratory file.
+
+Every specification's certificate (gonio's own and a plug-in's) opens and closes with the
+same blocks, built here from the same laboratory file
+(:mod:`gonio.formats.lab`) and the stored result; only the results pages between them are
+the specification's own.
+
+Contents
+========
+============================  ================================================================
+:func:`certificate_id`        the identifier: the lab file's number, else ``VB-`` + readings hash
+:func:`opening_blocks`        laboratory (accreditation, contact), customer and address,
+                              instrument, dates, place, specification, readings file,
+                              standards and traceability, environment (7.8.2.1 a–h, 7.8.4.1)
+:func:`decision_rule_blocks`  the rule agreed with the customer and the limits' source (7.8.6)
+:func:`conformity_section`    the conformity table of a per-item result with those lines
+:func:`signature_blocks`      signatories with the approver's title, the statements, and the
+                              recalibration interval only where one was agreed (7.8.4.3)
+:func:`meta_text`             a readings metadata value in the page's language
+============================  ================================================================
+
+"Page x of y" on every page and the end-of-certificate mark are the renderer's
+(:mod:`gonio.report.render`).
+"""
+
+from __future__ import annotations
+
+from gonio.report.provenance import is_virtual, virtual_lines
+from gonio.report.render import Block
+from gonio.report.stated import NoBreakText as NoBreak
+from gonio.report.stated import conformity_blocks
+
+__all__ = ["certificate_id", "opening_blocks", "decision_rule_blocks", "conformity_section",
+           "signature_blocks", "meta_text"]
+
+
+def certificate_id(result, lab: dict | None = None) -> str:
+    """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash.
+
+    >>> class R: source_sha256 = "adf7d70bf7f73fcbe3e7897ae81a78dd"
+    >>> certificate_id(R()), certificate_id(R(), {"certificate": {"number": "GON-2026-017"}})
+    ('VB-ADF7D70BF7', 'GON-2026-017')
+    """
+    if lab:
+        return lab["certificate"]["number"]
+    sha = result.source_sha256 or "0" * 10
+    return "VB-" + sha[:10].upper()
+
+
+def meta_text(md: dict, key: str, L: dict) -> str:
+    """A readings metadata value as shown: the virtual bench's own descriptions in the page's
+    language where the tables know them, data otherwise; "not stated" when absent."""
+    v = md.get(key)
+    if v in (None, ""):
+        return L["not_stated"]
+    if L.get("_lang") == "zh":
+        from gonio.report.i18n import translator
+        return translator()(str(v)) or str(v)
+    return str(v)
+
+
+def _laboratory_rows(lab: dict | None, L: dict) -> list:
+    if lab is None:
+        return [(L["laboratory"], L["virtual_lab"]), (L["address"], "—")]
+    la = lab["laboratory"]
+    rows = [(L["laboratory"], la["name"]), (L["address"], la["address"])]
+    if la["accreditation"]:
+        rows.append((L["accreditation"], la["accreditation"]))
+    if la["contact"]:
+        rows.append((L["contact"], NoBreak(la["contact"])))
+    return rows
+
+
+def _item_rows(res: dict, lab: dict | None, L: dict, specification: str) -> list:
+    """Customer and address, instrument, dates, place, specification and readings file."""
+    md = res.get("metadata", {})
+    lab_ = lab or {}
+    ns = L["not_stated"]
+    cert = lab_.get("certificate", {})
+    cust = lab_.get("customer", {"name": ns, "address": ""})
+    inst = lab_.get("instrument", {})
+    rows = [(L["customer"], cust["name"] or ns)]
+    if cust.get("address"):
+        rows.append((L["customer_address"], cust["address"]))
+    src = res["source"]
+    rows += [
+        (L["description"], inst.get("description") or meta_text(md, "instrument", L)),
+        (L["model"], NoBreak(inst.get("model") or meta_text(md, "model", L))),
+        (L["serial"], NoBreak(inst.get("serial") or meta_text(md, "serial", L))),
+        (L["manufacturer"], inst.get("manufacturer") or meta_text(md, "manufacturer", L)),
+        (L["date_receipt"], cert.get("date_of_receipt") or ns),
+        (L["date_calibration"], cert.get("date_of_calibration") or meta_text(md, "date", L)),
+        (L["date_issue"], cert.get("date_of_issue") or ns),
+        (L["place"], cert.get("place") or (L["virtual_place"] if lab is None else ns)),
+        (L["specification"], specification),
+        (L["source_file"], f"{src['file']} (SHA-256 {src['sha256'][:16]}…, "
+                           + L["rows_word"].format(n=src['rows']) + ")"),
+    ]
+    return rows
+
+
+def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
+    """Temperature and humidity: the lab file's, else the readings file's."""
+    ns = L["not_stated"]
+    env = (lab or {}).get("environment") or {}
+    t, h = env.get("temperature_c"), env.get("humidity_pct")
+    t_md = md.get("temperature_c") or md.get("room_temperature_c")
+    t_txt = f"{t:g} °C" if t is not None else (f"{t_md} °C" if t_md else ns)
+    h_txt = f"{h:g} %" if h is not None else (f"{md['humidity_pct']} %"
+                                             if md.get("humidity_pct") else ns)
+    return [(L["temperature"], t_txt), (L["humidity"], h_txt)]
+
+
+def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
+                   standard_row: list, environment=(), summarise=None) -> list[Block]:
+    """The certificate's opening (ISO/IEC 17025 7.8.2.1 a–h; JJF 1535 clause 8 a–j): the
+    virtual-bench notice when the readings come from the virtual bench or there is no
+    laboratory file (:func:`gonio.report.provenance.is_virtual`), the laboratory with its
+    accreditation and contact, the customer with the address, the instrument, the dates, the
+    place, the specification followed (``specification``, in the page's language), the
+    readings file, the standards with their traceability (``standard_row``, four cells in
+    the page's language, when the lab file names none), and the environment (then
+    ``environment``: more (label, value) rows, e.g. a chamber's profile).
+    ``summarise(kind, data)`` shortens a long table (default: none)."""
+    md = res.get("metadata", {})
+    out: list[Block] = []
+
+    def add(kind, data, extra=None):
+        out.append(Block(kind, summarise(kind, data) if summarise else data, extra))
+    if is_virtual(res, lab):            # the readings' provenance, not the lab file's absence
+        add("notice", " ".join(virtual_lines(res, L)))
+    add("kv", _laboratory_rows(lab, L))
+    add("kv", _item_rows(res, lab, L, specification))
+    add("h", L["standards"])
+    std_rows = [[s["name"], NoBreak(s["identifier"] or "—"), s["accuracy"] or "—",
+                 NoBreak(s["certificate"] or "—"), s["traceability"] or "—"]
+                for s in ((lab or {}).get("standards") or [])]
+    if not std_rows:
+        std_rows = [list(standard_row) + [L["virtual_trace"] if lab is None
+                                          else L["not_stated"]]]
+    add("table", ([L["std_name"], L["std_id"], L["std_spec"], L["std_cert"], L["std_trace"]],
+                  std_rows), (0.30, 0.13, 0.17, 0.15, 0.25))
+    add("h", L["environment"])
+    add("kv", _environment_rows(md, lab, L) + list(environment))
+    return out
+
+
+def _source_text(c, L: dict) -> str:
+    g = (lambda k: c.get(k)) if isinstance(c, dict) else (lambda k: getattr(c, k, None))  # noqa: E731
+    src = (g("source") or "").strip()
+    if g("limits_from") == "lab file" or not g("limits_from"):
+        return src or L["c_source_unstated"]
+    return (src or L["not_stated"]) + " " + L["c_default"]
+
+
+def decision_rule_blocks(lab: dict | None, decided, L: dict, name_of) -> list[Block]:
+    """What the statements of conformity rest on (ISO/IEC 17025 7.1.3, 7.8.6.2): the decision
+    rule as agreed with the customer (the lab file's ``[decision_rule] agreed``), and the
+    source of each item's specification limits. ``decided``: (item key, Conformity or its
+    results.json dict) of every item decided; ``name_of(key)`` its name on the page."""
+    out: list[Block] = []
+    agreed = ((lab or {}).get("decision_rule") or {}).get("agreed")
+    if agreed:
+        out.append(Block("p", [L["rule_agreed"].format(a=agreed)]))
+    by_source: dict[str, list[str]] = {}
+    for key, c in decided:
+        by_source.setdefault(_source_text(c, L), []).append(name_of(key))
+    if by_source:
+        sep = "；" if L.get("_lang") == "zh" else "; "
+        out.append(Block("p", [L["c_source_line"].format(s=sep.join(
+            f"{L['list_sep'].join(names)}{'：' if L.get('_lang') == 'zh' else ': '}{src}"
+            for src, names in by_source.items()))]))
+    return out
+
+
+def conformity_section(items: dict, L: dict, name_of, unit_of, lab: dict | None) -> list[Block]:
+    """The statement-of-conformity section of a per-item result (results.json
+    ``items.<key>.conformity``, decided by the pipeline; none: no section): the rule, the
+    rule as agreed and the limits' source (:func:`decision_rule_blocks`), the table."""
+    blocks = conformity_blocks(items, L, name_of, unit_of, Block)
+    if not blocks:
+        return []
+    at = next(i for i, b in enumerate(blocks) if b.kind == "table")
+    decided = [(k, it["conformity"]) for k, it in items.items() if it.get("conformity")]
+    return blocks[:at] + decision_rule_blocks(lab, decided, L, name_of) + blocks[at:]
+
+
+def signature_blocks(lab: dict | None, L: dict, recal: str | None = None) -> list[Block]:
+    """Signatories (the approver with the title), the statements on scope and reproduction,
+    and the recalibration statement ``recal`` (none when None)."""
+    sig = (lab or {}).get("signatory", {})
+    approved = sig.get("approved_by") or "—"
+    if sig.get("approved_title"):
+        approved += f", {sig['approved_title']}"
+    out = [Block("h", L["signatory"]),
+           Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
+                        (L["checked_by"], sig.get("checked_by") or "—"),
+                        (L["approved_by"], approved)]),
+           Block("p", [L["statement_item"]]), Block("p", [L["statement_copy"]])]
+    if recal:
+        out.append(Block("p", [recal]))
+    return out

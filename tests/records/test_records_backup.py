@@ -1,0 +1,166 @@
+"""Backups that restore: ``gonio db backup`` refuses (exit 2, naming it) a stored file that
+is missing or damaged; ``gonio db restore`` checks completeness, integrity and every row and
+reference of the archive before writing anything; ``gonio db verify`` checks the live
+records (files, result rows, signed seals) and finds a certificate file's record."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+
+import pytest
+from sqlalchemy import func, select, text
+
+from gonio.cli import main
+from gonio.errors import GonioError
+from gonio.records import blobs, services
+from gonio.records.backup import backup, restore
+from gonio.records.db import open_store
+from gonio.records.models import Certificate, User
+
+from .conftest import make_people
+from .test_records_services import new_calibration, run_worker, setup_instrument
+
+
+@pytest.fixture
+def records(sqlite_store, computed_folder, bench_readings, monkeypatch):
+    """A SQLite records store with one issued certificate and one computed calibration."""
+    people = make_people(sqlite_store)
+    inst, std = setup_instrument(sqlite_store, people)
+    cal = new_calibration(sqlite_store, people, inst, std, bench_readings[0])
+    run_worker(sqlite_store, monkeypatch, computed_folder)
+    services.review(sqlite_store, people["rev"], cal.id, accept=True)
+    services.approve(sqlite_store, people["rev2"], cal.id)
+    run_worker(sqlite_store, monkeypatch, computed_folder)
+    new_calibration(sqlite_store, people, inst, std, bench_readings[1])
+    run_worker(sqlite_store, monkeypatch, computed_folder)
+    return sqlite_store
+
+
+def cli(argv, capsys, rc):
+    assert main([str(a) for a in argv]) == rc
+    out = capsys.readouterr()
+    if rc == 2:
+        assert out.err.startswith("gonio: error: ") and out.err.count("\n") == 1, out.err
+    return out
+
+
+def damage(store, sha):
+    path = blobs.blob_path(store.blob_root, sha)
+    path.chmod(0o644)
+    path.write_bytes(path.read_bytes() + b"\n")
+
+
+def first_pdf(store):
+    with store.session() as s:
+        return s.scalar(select(Certificate.pdf_sha256))
+
+
+def test_backup_refuses_a_damaged_stored_file(records, tmp_path, capsys):
+    sha = first_pdf(records)
+    damage(records, sha)
+    archive = tmp_path / "b.zip"
+    out = cli(["db", "backup", archive, "--data", records.data], capsys, 2)
+    assert sha in out.err and "damaged" in out.err
+    assert not archive.exists() and not list(tmp_path.glob(".backup-*"))
+    out = cli(["db", "verify", "--data", records.data], capsys, 2)
+    assert f"stored file {sha} (damaged)" in out.out
+
+
+def test_verify_live_records_and_a_certificate_file(records, tmp_path, capsys):
+    out = cli(["db", "verify", "--data", records.data], capsys, 0)
+    assert "records verified: files" in out.out and "certificates 1" in out.out
+    pdf = tmp_path / "c.pdf"
+    pdf.write_bytes(services.file_bytes(records, first_pdf(records)))
+    out = cli(["db", "verify", "--certificate", pdf, "--data", records.data], capsys, 0)
+    with records.session() as s:
+        cert = s.scalar(select(Certificate))
+    assert cert.number in out.out and cert.seal_sha256 in out.out
+    with records.writing() as s:
+        s.execute(text("UPDATE result_items SET value = value*1.5 WHERE key='scale_factor'"))
+        s.commit()
+    out = cli(["db", "verify", "--data", records.data], capsys, 2)
+    assert "calibration 1: the stored result row scale_factor differs" in out.out
+    assert "calibration 2: the stored result row scale_factor differs" in out.out
+    out = cli(["db", "verify", "--certificate", pdf, "--data", records.data], capsys, 2)
+    assert "scale_factor differs" in out.err
+
+
+def archive_without(src, dst, drop=None, records_json=None):
+    with zipfile.ZipFile(src) as a, zipfile.ZipFile(dst, "w") as b:
+        for n in a.namelist():
+            if n == drop:
+                continue
+            data = a.read(n)
+            if n == "records.json" and records_json is not None:
+                data = json.dumps(records_json(json.loads(data))).encode()
+            b.writestr(n, data)
+    return dst
+
+
+def empty_target(tmp_path):
+    return open_store(None, tmp_path / "target")
+
+
+def assert_empty(store):
+    with store.session() as s:
+        assert s.scalar(select(func.count()).select_from(User)) == 0
+    assert not list(store.blob_root.rglob("*")) or not any(
+        p.is_file() and not p.name.startswith(".") for p in store.blob_root.rglob("*"))
+
+
+def test_restore_refuses_an_incomplete_archive(records, tmp_path):
+    full = tmp_path / "full.zip"
+    backup(records, full)
+    part = archive_without(full, tmp_path / "part.zip", drop=f"blobs/{first_pdf(records)}")
+    target = empty_target(tmp_path)
+    try:
+        with pytest.raises(GonioError, match="incomplete: 1 stored file"):
+            restore(target, part)
+        assert_empty(target)
+        assert restore(target, full)["certificates"] == 1
+    finally:
+        target.close()
+
+
+def _set(table, col, value, row=0):
+    def edit(doc):
+        t = doc["tables"][table]
+        t["rows"][row][t["columns"].index(col)] = value
+        return doc
+    return edit
+
+
+HOSTILE = {
+    "a list": (lambda doc: [doc], "unknown backup format 'list'"),
+    "not a date": (_set("calibrations", "performed_on", "not a date"),
+                   "calibrations row 1: performed_on is not a date: 'not a date'"),
+    "instrument 999999": (_set("calibrations", "instrument_id", 999999),
+                          "calibrations row 1: instrument_id 999999 is not among the "
+                          "archive's instruments"),
+    "tables a list": (lambda doc: dict(doc, tables=[]), "records.json has no tables"),
+    "rows a string": (lambda doc: (doc["tables"]["users"].update(rows="x"), doc)[1],
+                      "table users is not"),
+    "short row": (lambda doc: (doc["tables"]["users"]["rows"][0].pop(), doc)[1],
+                  "users row 1: a row is a list of"),
+    "unknown table": (lambda doc: (doc["tables"].update(extra={"columns": [], "rows": []}),
+                                   doc)[1], "tables this gonio does not know"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HOSTILE))
+def test_restore_refuses_a_hostile_archive_with_one_line(records, tmp_path, capsys, name):
+    full = tmp_path / "full.zip"
+    backup(records, full)
+    edit, message = HOSTILE[name]
+    bad = archive_without(full, tmp_path / "bad.zip", records_json=edit)
+    out = cli(["db", "restore", bad, "--data", tmp_path / "target"], capsys, 2)
+    assert message in out.err, out.err
+    target = empty_target(tmp_path)
+    try:
+        assert_empty(target)
+    finally:
+        target.close()
+
+
+

@@ -1,0 +1,137 @@
+"""A robust service: one line (exit 2) for a corrupt, locked or read-only database; 404 for
+what does not exist; implausible dates refused; --workers bounded; gonio db import of a
+calibrate folder says what to give; a malformed results.json is a GonioError; a killed
+worker's folder removed."""
+
+from __future__ import annotations
+
+import datetime as dt
+import io
+import os
+import sqlite3
+
+import pytest
+
+from gonio.cli import main
+from gonio.errors import GonioError
+from gonio.records import services
+
+from .conftest import SMALL_PROTOCOL, make_people
+from .test_records_services import setup_instrument
+from .test_web_security import app, login  # noqa: F401  (the app fixture)
+
+
+def cli(argv, capsys, rc=2):
+    assert main([str(a) for a in argv]) == rc
+    out = capsys.readouterr()
+    if rc == 2:
+        assert out.err.startswith("gonio: error: ") and out.err.count("\n") == 1, out.err
+    return out.err
+
+
+def test_a_file_of_random_bytes_is_no_database(tmp_path, capsys):
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "records.sqlite3").write_bytes(os.urandom(4096))
+    err = cli(["db", "init", "--data", data], capsys)
+    assert "not a readable records database" in err and "restore it from a backup" in err
+
+
+def test_a_locked_database_is_one_line(tmp_path, capsys, monkeypatch):
+    from gonio.records import db
+
+    data = tmp_path / "data"
+    cli(["db", "init", "--data", data], capsys, 0)
+    monkeypatch.setattr(db, "BUSY_TIMEOUT_S", 0.3)
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    other = sqlite3.connect(data / "records.sqlite3", isolation_level=None)
+    other.execute("BEGIN EXCLUSIVE")
+    try:
+        err = cli(["db", "create-user", "alice", "--data", data], capsys)
+    finally:
+        other.execute("ROLLBACK")
+        other.close()
+    assert "locked by another process (waited 0.3 s)" in err
+
+
+def test_a_read_only_database_is_one_line(tmp_path, capsys, monkeypatch):
+    data = tmp_path / "data"
+    cli(["db", "init", "--data", data], capsys, 0)
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    url = f"sqlite:///file:{data / 'records.sqlite3'}?mode=ro&uri=true"
+    err = cli(["db", "create-user", "alice", "--database", url, "--data", data], capsys)
+    assert "the database is read-only" in err
+
+
+def test_implausible_dates_refused(sqlite_store):
+    people = make_people(sqlite_store)
+    inst, _ = setup_instrument(sqlite_store, people)
+    sha, _ = services.store_file(sqlite_store, io.BytesIO(b"x"))
+    for kw, msg in (({"performed_on": "9999-12-31"}, "key performed_on: 9999-12-31 is in "
+                     "the future"),
+                    ({"performed_on": dt.date.today() + dt.timedelta(days=1)}, "in the future"),
+                    ({"performed_on": "2025-03-01", "received_on": "2025-03-02"},
+                     "received on 2025-03-02, after the calibration date 2025-03-01")):
+        with pytest.raises(GonioError, match=msg):
+            services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
+                                        readings_sha256=sha, **kw)
+    ok = services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
+                                     readings_sha256=sha, performed_on="2025-03-02",
+                                     received_on="2025-03-01")
+    assert ok.status == "queued"
+
+
+def test_what_does_not_exist_is_404(app):  # noqa: F811
+    tech = login(app, "tech")
+    for url in ("/calibrations/999999/progress", "/calibrations/999999",
+                "/certificates/999999", "/instruments/999999/calibrate"):
+        assert tech.get(url).status_code == 404, url
+
+
+@pytest.mark.parametrize("workers,limit,msg", [
+    ("1000", "4", "must be within 1 … 4"), ("-3", "4", "got -3"), ("0", "", "got 0"),
+    ("2", "x", "GONIO_MAX_WORKERS must be a number")])
+def test_workers_bounded(tmp_path, capsys, monkeypatch, workers, limit, msg):
+    monkeypatch.setenv("GONIO_MAX_WORKERS", limit)
+    err = cli(["serve", "--workers", workers, "--data", tmp_path / "data"], capsys)
+    assert msg in err
+    assert not (tmp_path / "data").exists()            # refused before anything was opened
+
+
+def test_import_of_a_calibrate_folder_takes_its_readings(tmp_path, capsys, computed_folder,
+                                                         bench_readings):
+    data = tmp_path / "data"
+    err = cli(["db", "import", computed_folder, "--data", data, "--protocol", SMALL_PROTOCOL],
+              capsys)
+    assert "give it with --readings" in err
+    out = cli(["db", "import", computed_folder, "--data", data, "--protocol", SMALL_PROTOCOL,
+               "--readings", bench_readings[0]], capsys, 0)
+    assert out == ""
+
+
+@pytest.mark.parametrize("doc", [{"spec": "x"}, {"spec": "x", "items": []},
+                                 {"spec": "x", "items": {"K": [1]}},
+                                 {"spec": "x", "items": {"K": {"uncertainty": {
+                                     "interval": [1]}}}}])
+def test_result_from_malformed_json_is_a_gonio_error(doc):
+    from gonio.result.model import RESULTS_VERSION, Result
+
+    with pytest.raises(GonioError, match="malformed results.json"):
+        Result.from_json(dict(doc, version=RESULTS_VERSION))
+
+
+def test_killed_workers_folder_removed(sqlite_store):
+    people = make_people(sqlite_store)
+    inst, std = setup_instrument(sqlite_store, people)
+    sha, _ = services.store_file(sqlite_store, io.BytesIO(b"readings"))
+    cal = services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
+                                      readings_sha256=sha)
+    services.claim_next(sqlite_store)
+    services.attach(sqlite_store, cal.id, 999_999_999)
+    work = sqlite_store.data / "work" / f"cal-{cal.id}-0123456789ab"
+    work.mkdir(parents=True)
+    (work / "readings.csv").write_bytes(b"readings")
+    keep = sqlite_store.data / "work" / f"cal-{cal.id + 1}-0123456789ab"
+    keep.mkdir()
+    assert services.recover(sqlite_store) == [cal.id]
+    assert not work.exists() and keep.exists()

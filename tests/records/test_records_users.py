@@ -1,0 +1,115 @@
+"""User management (deactivate, reset a password, change roles, with the audit trail) on the
+server, the command line and the web; technicians do not read the users nor the whole audit
+trail; laboratory settings checked by the laboratory file's schema; multi-line addresses."""
+
+from __future__ import annotations
+
+import pytest
+from sqlalchemy import select
+
+from gonio.cli import main
+from gonio.errors import GonioError
+from gonio.records import auth, services
+from gonio.records.models import AuditEvent
+
+from .conftest import PASSWORD, make_people
+from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
+
+
+def test_deactivate_reset_and_roles_with_audit(sqlite_store):
+    people = make_people(sqlite_store)
+    admin = people["admin"]
+    with pytest.raises(GonioError, match="admin role"):
+        services.update_user(sqlite_store, people["rev"], "tech", active=False)
+    with pytest.raises(GonioError, match="deactivate yourself"):
+        services.update_user(sqlite_store, admin, "admin", active=False)
+    with pytest.raises(GonioError, match="last active admin"):
+        services.update_user(sqlite_store, None, "admin", roles="technician")
+    services.update_user(sqlite_store, admin, "tech", active=False)
+    with pytest.raises(GonioError):
+        auth.authenticate(sqlite_store, "tech", PASSWORD)
+    services.update_user(sqlite_store, admin, "rev", password="a new long password",
+                         roles="reviewer technician")
+    assert auth.authenticate(sqlite_store, "rev", "a new long password").roles == \
+        "technician reviewer"
+    with pytest.raises(GonioError):
+        auth.authenticate(sqlite_store, "rev", PASSWORD)
+    with sqlite_store.session() as s:
+        ev = s.scalars(select(AuditEvent).where(AuditEvent.entity == "user",
+                                                AuditEvent.action == "update")).all()
+    assert len(ev) == 2 and '"(reset)"' in ev[1].after_json and "argon2" not in ev[1].after_json
+
+
+def test_set_user_from_the_command_line(tmp_path, monkeypatch, capsys):
+    data = str(tmp_path / "data")
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "admin", "--roles", "admin", "--data", data]) == 0
+    assert main(["db", "create-user", "alice", "--data", data]) == 0
+    monkeypatch.setenv("GONIO_PASSWORD", "another long password")
+    assert main(["db", "set-user", "alice", "--deactivate", "--roles", "reviewer",
+                 "--reset-password", "--data", data]) == 0
+    assert "alice (reviewer; deactivated); password reset" in capsys.readouterr().out
+    assert main(["db", "set-user", "admin", "--deactivate", "--data", data]) == 2
+    assert "last active admin" in capsys.readouterr().err
+
+
+def test_web_user_management_and_what_technicians_read(app, sqlite_store):  # noqa: F811
+    tech = login(app, "tech")
+    for page in ("/users", "/audit"):
+        assert tech.get(page).status_code == 403, page
+    assert 'href="/audit"' not in tech.get("/").text
+    admin = login(app, "admin")
+    assert admin.get("/audit").status_code == 200
+    r = admin.post("/users/tech", data={"csrf": csrf_of(admin), "roles": "technician"})
+    assert r.status_code == 303                       # no 'active': deactivated
+    assert not services.user(sqlite_store, "tech").active
+    assert tech.get("/").status_code == 303           # the session ended with it
+    r = admin.post("/users/tech", data={"csrf": csrf_of(admin), "roles": ["technician",
+                   "reviewer"], "active": "yes", "password": "brand new password"})
+    assert r.status_code == 303 and services.user(sqlite_store, "tech").roles == \
+        "technician reviewer"
+    assert auth.authenticate(sqlite_store, "tech", "brand new password").active
+    rev = login(app, "rev")
+    r = rev.post("/users/tech", data={"csrf": csrf_of(rev), "roles": "admin",
+                                      "active": "yes"})
+    assert r.status_code == 400 and "admin role" in r.text
+    assert services.user(sqlite_store, "tech").roles == "technician reviewer"
+
+
+def test_settings_checked_by_the_laboratory_schema(sqlite_store):
+    with pytest.raises(GonioError, match="key guard_band_factor: not a number"):
+        services.set_settings(sqlite_store, None, guard_band_factor="abc")
+    with pytest.raises(GonioError, match="decision_rule.rule"):
+        services.set_settings(sqlite_store, None, decision_rule="lenient")
+    with pytest.raises(GonioError, match="key lab_name: longer than 200"):
+        services.set_settings(sqlite_store, None, lab_name="L" * 4000)
+    assert services.settings(sqlite_store)["guard_band_factor"] == "1.0"
+    got = services.set_settings(sqlite_store, None, lab_address="1 Road\r\nTown\rCountry",
+                                guard_band_factor="1.5")
+    assert got["lab_address"] == "1 Road\nTown\nCountry" and got["guard_band_factor"] == "1.5"
+
+
+def test_two_line_customer_address_reaches_the_laboratory_file(sqlite_store, tmp_path):
+    """A customer's two-line address typed with CR LF (a browser's textarea) is kept as lines
+    and the laboratory file written for the worker reads back (before: 'control character
+    U+000D' on every calibration of that customer)."""
+    import datetime as dt
+
+    from gonio.records.compute import write_lab_toml
+    from gonio.records.models import Calibration
+    from gonio.report.certificate import load_lab
+
+    people = make_people(sqlite_store)
+    tech = people["tech"]
+    cust = services.add_customer(sqlite_store, tech, "Two Lines Ltd", "1 Road\r\nTown")
+    inst = services.register_instrument(sqlite_store, tech, customer_id=cust.id, serial="S",
+                                        spec_key="ogam-draft")
+    sha, _ = services.store_file(sqlite_store, __import__("io").BytesIO(b"x"))
+    cal = services.create_calibration(sqlite_store, tech, instrument_id=inst.id,
+                                      readings_sha256=sha, performed_on=dt.date.today())
+    with sqlite_store.writing() as s:                # stored before the normalisation
+        s.get(Calibration, cal.id).instrument.customer.address = "1 Road\r\nOld Town"
+        s.commit()
+    lab = load_lab(write_lab_toml(services.lab_details(sqlite_store, cal.id, final=False),
+                                  tmp_path / "lab.toml"))
+    assert lab["customer"]["address"] == "1 Road\nOld Town"

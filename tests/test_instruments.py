@@ -1,0 +1,312 @@
+"""The instrument layer against the virtual bench served as instruments, through pyvisa-py.
+
+Every path runs on real sockets (127.0.0.1) with PyVISA's ``@py`` backend; nothing of VISA
+is mocked. The whole small draft programme taken with ``acquire`` must calibrate to the same
+items as ``gonio simulate`` on the same bench and seed, within their U; an interrupted
+acquisition keeps its readings and completes with ``--resume``; a lost link, an instrument
+error and a move beyond the range stop the table (or never move it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gonio.bench import load_bench
+from gonio.cli import main
+from gonio.errors import GonioError
+from gonio.formats.counters import wrap_counter
+from gonio.formats.readings import read_readings
+from gonio.instruments.acquire import (Block, Step, acquire, plan_programme, read_previous,
+                                       resume_plan)
+from gonio.instruments.acquisition import AcquisitionModule, unwrap_near
+from gonio.instruments.link import InstrumentError, IOLog, Link, LinkLost
+from gonio.instruments.served import (Faults, ServedBench, gyro_instrument, scpi_match,
+                                      serve_bench, table_instrument)
+from gonio.instruments.table import RotaryTable
+from gonio.protocol import load_protocol
+from gonio.units import deg_to_arcsec
+
+ROOT = Path(__file__).resolve().parents[1]
+SMALL = ROOT / "tests" / "data" / "small-protocol.toml"
+SEED = 3
+SPEED = 200.0          # simulated seconds per real second: the small programme in ~6 s
+META = {"latitude_deg": "40.2"}
+
+
+@pytest.fixture(scope="module")
+def rlg():
+    return load_bench("rlg")
+
+
+@pytest.fixture()
+def served(rlg):
+    s = serve_bench(rlg, speed=SPEED, seed=SEED)
+    yield s
+    s.close()
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """``gonio simulate`` + ``gonio calibrate`` of the small programme on the same bench."""
+    d = tmp_path_factory.mktemp("sim")
+    assert main(["simulate", "--protocol", str(SMALL), "--bench", "rlg", "--seed", str(SEED),
+                 "--out", str(d / "sim")]) == 0
+    return d / "sim" / "readings.csv", _calibrate(d / "sim" / "readings.csv", d / "cal")
+
+
+def _calibrate(readings: Path, out: Path) -> dict:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["calibrate", str(readings), "--protocol", str(SMALL), "--out", str(out)])
+    assert rc == 0, err.getvalue()
+    return json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
+
+
+def _agree_within_u(a: dict, b: dict) -> None:
+    assert a.keys() == b.keys()
+    for key in a:
+        va, vb = a[key]["value"], b[key]["value"]
+        ua, ub = a[key]["uncertainty"]["U"], b[key]["uncertainty"]["U"]
+        assert va is not None and vb is not None, key
+        assert abs(va - vb) <= np.hypot(ua, ub), (key, va, vb, ua, ub)
+
+
+def _drivers(s, log=None):
+    log = log or IOLog()
+    return (RotaryTable(Link(s.table_resource, name="table", log=log)),
+            AcquisitionModule(Link(s.gyro_resource, name="gyro", log=log)), log)
+
+
+def _keys(path: Path) -> list:
+    df = read_readings(path).data
+    return sorted(zip(df["test"], df["series"], df["round"], df["rate_dps"].fillna(0.0),
+                      df["orientation"]))
+
+
+# ------------------------------------------------------------------ command sets
+def test_served_instruments_speak_exactly_the_drivers_command_sets(rlg):
+    """Every driver command is a served mnemonic, and every served mnemonic is one the
+    drivers send: neither side has a command the other lacks."""
+    sb = ServedBench(rlg, speed=1.0)
+    for driver, inst in ((RotaryTable, table_instrument(sb)), (AcquisitionModule, gyro_instrument(sb))):
+        sent = [tpl.split(" ")[0] for tpl in driver.COMMANDS.values() if tpl]
+        sent.append(driver.ERROR_QUERY)
+        served = [m for m, _ in inst.commands]
+        assert [h for h in sent if not any(scpi_match(h, m) for m in served)] == []
+        assert [m for m in served if not any(scpi_match(h, m) for h in sent)] == []
+    assert scpi_match("SYSTEM:ERROR?", "SYSTem:ERRor?") and not scpi_match("SY:ERR?", "SYSTem:ERRor?")
+
+
+def test_unwrap_near_undoes_any_number_of_roll_overs():
+    """A count wrapped by gonio.formats.counters comes back from the expected count, for
+    signed and unsigned 24- and 32-bit registers and several roll-overs."""
+    rng = np.random.default_rng(1)
+    for bits in (24, 32):
+        for signed in (True, False):
+            counts = rng.integers(-5 * 2**bits, 5 * 2**bits, 200)
+            shown = wrap_counter(counts, bits, signed)
+            noise = rng.uniform(-0.4, 0.4, 200) * 2**(bits - 1)
+            back = [unwrap_near(int(s), float(c + e), bits) for s, c, e in zip(shown, counts, noise)]
+            assert back == counts.tolist()
+
+
+def test_stop_mid_move_keeps_the_motion_so_far(rlg):
+    """A stop cuts the move to its stopping distance at the table's acceleration; the angles
+    already passed are unchanged (the trapezoid so far is the same)."""
+    now = [0.0]
+    sb = ServedBench(rlg, speed=1.0, clock=lambda: now[0])
+    sb.move(300.0, 60.0)
+    now[0] = 3.0                                  # cruising at 60 °/s since t = 1 s
+    past = np.linspace(0.0, 3.0, 31)
+    before = sb.timeline.angle_deg(past)
+    theta = float(sb.timeline.angle_deg(np.array([3.0]))[0])
+    v = float(sb.timeline.rate_dps(np.array([3.0]))[0])
+    assert v == pytest.approx(60.0, rel=1e-4)
+    sb.stop()
+    assert np.array_equal(sb.timeline.angle_deg(past), before)
+    a = rlg.table.accel_dps2
+    assert sb.timeline.end_angle_deg == pytest.approx(theta + v * v / (2 * a), abs=1e-9)
+    assert sb.timeline.end_s == pytest.approx(3.0 + v / a, abs=1e-9)
+
+
+# ------------------------------------------------------------------ drivers on sockets
+def test_driver_errors_come_from_the_served_error_queue(served):
+    table, gyro, log = _drivers(served)
+    assert table.identify().startswith("gonio,virtual rotary table")
+    with pytest.raises(InstrumentError, match="-221.*read before zeroing"):
+        gyro.read()
+    with pytest.raises(InstrumentError, match="-222"):          # sent raw: the table refuses
+        table.send("move", angle_deg=400.0, rate_dps=60.0)
+    assert served.bench.faults.moves == 1
+    with pytest.raises(GonioError, match="outside the table's range"):   # checked: never sent
+        table.move(400.0, 60.0)
+    assert served.bench.faults.moves == 1
+    assert not any("MOVE:ABS 400" in ln for ln in log.lines[-4:])
+    gyro.zero()
+    table.move(90.0, 60.0)
+    while table.state() != "idle":
+        time.sleep(0.002)
+    r = gyro.read(90.0 * 76434.87)
+    assert r.counts / 76434.87 == pytest.approx(90.0, abs=2.0)  # plus the Earth rate since zero
+    assert table.position_deg() == 90.0
+
+
+# ------------------------------------------------------------------ whole programme
+def test_small_programme_calibrates_like_simulate(served, simulated, tmp_path):
+    sim_readings, sim_items = simulated
+    res = acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource,
+                  tmp_path / "acq", metadata=META)
+    assert res.complete and res.taken == res.total == 27
+    r = read_readings(res.readings)
+    assert r.metadata["acquisition"] == "complete"
+    assert r.metadata["instrument"] == "RLG goniometer (virtual)"
+    assert _keys(res.readings) == _keys(sim_readings)
+    # Row by row, the angle indicated agrees with the table's to within arc seconds (the
+    # instrument's errors), as the simulated file's does.
+    for data in (r.data, read_readings(sim_readings).data):
+        rot = data[data["test"] != "zero_stability"]
+        dev = deg_to_arcsec(rot["gyro_counts"] / 76434.87 - rot["table_deg"])
+        assert float(np.abs(dev).max()) < 2.0      # tilt, scale-factor error, harmonics, noise
+    _agree_within_u(_calibrate(res.readings, tmp_path / "cal"), sim_items)
+    log = res.io_log.read_text(encoding="utf-8")
+    assert "table > *IDN?" in log and "gyro < gonio virtual bench,RLG goniometer" in log
+    assert log.rstrip().splitlines()[-1].endswith("table > STOP")
+
+
+# ------------------------------------------------------------------ safety
+def _wait_rows(path: Path, n: int, timeout_s: float = 40.0) -> None:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout_s:
+        if path.exists() and sum(1 for ln in path.read_text().splitlines()
+                                 if ln and not ln.startswith("#")) > n:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"{path}: fewer than {n} readings after {timeout_s} s")
+
+
+def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_path):
+    out = tmp_path / "acq"
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    cmd = [sys.executable, "-m", "gonio", "acquire", "--protocol", str(SMALL), "--table",
+           served.table_resource, "--gyro", served.gyro_resource, "--out", str(out),
+           "--meta", "latitude_deg=40.2"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        _wait_rows(out / "readings.csv", 10)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert b"continue with --resume" in err
+    kept = read_readings(out / "readings.csv")
+    assert kept.metadata["acquisition"] == "incomplete"
+    assert "SIGINT" in kept.metadata["acquisition_stopped"]
+    n_kept = len(kept.data)
+    assert 10 <= n_kept < 27
+    log = (out / "io.log").read_text(encoding="utf-8").splitlines()
+    assert log[-1].endswith("table > STOP")
+    assert served.bench.state() == "IDLE"
+    res = acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource, out,
+                  resume=True, metadata=META)
+    assert res.complete and res.taken <= 27 - n_kept + 4     # at most 7.3's block again
+    assert _keys(out / "readings.csv") == _keys(simulated[0])   # every reading once
+    _agree_within_u(_calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
+
+
+def _failing_run(rlg, tmp_path, faults: str):
+    s = serve_bench(rlg, speed=SPEED, seed=SEED, faults=Faults.parse([faults]))
+    try:
+        with pytest.raises(GonioError) as info:
+            acquire(load_protocol(SMALL), s.table_resource, s.gyro_resource, tmp_path / "acq",
+                    metadata=META, timeout_s=3.0)      # a dropped socket shows as a timeout
+        # the table was stopped: at rest now, and STOP was the last thing it was sent
+        deadline = time.monotonic() + 5.0
+        while s.bench.state() != "IDLE" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert s.bench.state() == "IDLE"
+    finally:
+        s.close()
+    log = (tmp_path / "acq" / "io.log").read_text(encoding="utf-8").splitlines()
+    assert [ln for ln in log if " table > " in ln][-1].endswith("table > STOP")
+    kept = read_readings(tmp_path / "acq" / "readings.csv")
+    assert kept.metadata["acquisition"] == "incomplete"
+    return info.value, kept
+
+
+def test_lost_connection_stops_the_table_and_keeps_the_readings(rlg, tmp_path):
+    err, kept = _failing_run(rlg, tmp_path, "gyro-drop:12")
+    assert isinstance(err, LinkLost) and "gyro" in str(err)
+    assert 4 <= len(kept.data) < 12
+    assert "connection lost" in kept.metadata["acquisition_stopped"]
+
+
+def test_instrument_error_stops_the_table_and_keeps_the_readings(rlg, tmp_path):
+    err, kept = _failing_run(rlg, tmp_path, "table-error:9")
+    assert isinstance(err, InstrumentError) and "-310" in str(err) and "axis fault" in str(err)
+    assert len(kept.data) >= 4
+    assert "axis fault" in kept.metadata["acquisition_stopped"]
+
+
+def test_move_beyond_the_range_is_refused_before_anything_moves(rlg, tmp_path):
+    s = serve_bench(rlg, speed=SPEED, seed=SEED, range_deg=200.0)
+    try:
+        with pytest.raises(GonioError, match=r"scale_factor series 1 round 2: a move to 240° is "
+                                             r"outside the table's range \[-200°, 200°\]"):
+            acquire(load_protocol(SMALL), s.table_resource, s.gyro_resource, tmp_path / "acq")
+        assert s.bench.faults.moves == 0
+    finally:
+        s.close()
+    log = (tmp_path / "acq" / "io.log").read_text(encoding="utf-8")
+    assert "MOVE" not in log and "LIM:POS?" in log
+
+
+# ------------------------------------------------------------------ resume and the CLI
+def test_resume_keeps_complete_rounds_and_retakes_shared_zeroings(tmp_path):
+    rest = Block("zero_stability", "up", [Step("zero_stability", 1, n, None, "up")
+                                          for n in (1, 2, 3)], at_rest=True, rezero=False)
+    rot = Block("angle_deviation", "up", [Step("angle_deviation", 1, n, 60.0, "up", 0.0, 90.0 * n)
+                                          for n in (1, 2, 3)])
+    rows = ["zero_stability,1,1,,up,0.0,,0,\n", "zero_stability,1,2,,up,20.0,,1,\n",
+            "angle_deviation,1,1,60.0,up,12.0,90.0,6879138,\n"]
+    keys = {("zero_stability", 1, 1, None, "up"), ("zero_stability", 1, 2, None, "up"),
+            ("angle_deviation", 1, 1, 60.0, "up")}
+    kept, done = resume_plan([rest, rot], rows, keys)
+    assert kept == rows[2:] and done == {("angle_deviation", 1, 1, 60.0, "up")}
+    f = tmp_path / "readings.csv"
+    f.write_text("# acquisition: incomplete\n# protocol: small\ntest,series,round,rate_dps,"
+                 "orientation,time_s,table_deg,gyro_counts,gyro_deg\n" + "".join(rows)
+                 + "angle_deviation,1,2,60.0,up,1", encoding="utf-8")     # a row cut short
+    assert read_previous(f, load_protocol(SMALL)) == (rows, keys)
+    with pytest.raises(GonioError, match="protocol 'small', not"):
+        read_previous(f, load_protocol(ROOT / "tests" / "data" / "full.toml"))
+    # 7.3, 7.1, 7.4 × 3 series, 7.6 at 30 °/s, 7.7 north (60 °/s and up reuse 7.4)
+    assert len(plan_programme(load_protocol(SMALL))) == 1 + 1 + 3 + 1 + 1
+
+
+def test_bench_serve_command_serves_on_loopback(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    proc = subprocess.Popen([sys.executable, "-m", "gonio", "bench", "serve", "--bench", "fog",
+                             "--table-port", "0", "--gyro-port", "0", "--speed", "50"],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        lines = [proc.stdout.readline().strip() for _ in range(2)]
+        assert lines[0].startswith("table: TCPIP0::127.0.0.1::") and lines[0].endswith("::SOCKET")
+        gyro = AcquisitionModule(Link(lines[1].split(" ", 1)[1], name="gyro"))
+        assert gyro.identify().split(",")[1] == "FOG goniometer (virtual)"
+        assert gyro.counter_bits() == 32
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=20) == 143
+    finally:
+        proc.kill()
