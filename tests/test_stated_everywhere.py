@@ -62,8 +62,13 @@ def _dcc_values(doc: bytes) -> dict:
         if rid.startswith("result-") and real is not None:
             mu = real.find("si:measurementUncertaintyUnivariate/si:expandedMU/"
                            "si:valueExpandedMU", NS)
+            ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
             out[rid[len("result-"):]] = (real.find("si:value", NS).text,
-                                         None if mu is None else mu.text)
+                                         None if mu is None else mu.text,
+                                         None if ci is None else
+                                         (ci.find("si:intervalMin", NS).text,
+                                          ci.find("si:intervalMax", NS).text,
+                                          ci.find("si:coverageProbability", NS).text))
     return out
 
 
@@ -73,7 +78,7 @@ def test_same_rounded_numbers_in_every_output(run):
     for key, what, text in SPANS.findall(run["html"]):
         spans.setdefault((key, what), set()).add(text)
     dcc = _dcc_values(run["dcc"])
-    checked = 0
+    checked = intervals = 0
     for key, it in res["items"].items():
         if not it["measured"] or it["value"] is None:
             continue
@@ -89,11 +94,19 @@ def test_same_rounded_numbers_in_every_output(run):
             checked += 1
         # the DCC (per-g items are written per m s⁻² and skipped here: test_rate_dcc)
         if key in dcc and not it["unit"].endswith("/g"):
-            v, U = dcc[key]
+            v, U, ci = dcc[key]
             assert v == dsi_decimal(st.value_text), (key, v, st.value_text)
             if st.U is not None:
                 assert U == dsi_decimal(st.U_text), (key, U, st.U_text)
+            if st.interval is not None:       # one interval, the same in every output
+                intervals += 1
+                assert U is None and ci is not None, key
+                assert ci[:2] == tuple(dsi_decimal(x) for x in st.interval_ends), (key, ci)
+                assert float(ci[2]) == it["uncertainty"]["coverage_probability"]
+                assert " ± " not in st.text() and "k =" not in st.text()
     assert checked >= 8, checked
+    if run["key"] == "jjf1535-2015":                  # K_r and B_r
+        assert intervals >= 2, intervals
 
 
 def test_every_dcc_validates_with_dsi_units(run):

@@ -191,7 +191,7 @@ def check_setting(key: str, value) -> str:
     the decision rule's choices, a guard-band factor ≥ 0, printable text within the
     certificate's limits), ``min_people`` 2 or 3; the value as stored (text)."""
     from gonio.formats.toml import MAX_TEXT_FIELD, check_text_fields, validate_table
-    from gonio.report.certificate import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA
 
     if key not in SETTINGS:
         raise GonioError(f"unknown setting (known: {', '.join(SETTINGS)})", key=key)
@@ -607,7 +607,10 @@ def plausible_dates(performed: _dt.date, received: _dt.date | None,
 
 def _check(s: Session, actor: User, cal_id: int, action: str,
            allowed: tuple[str, ...]) -> Calibration:
-    cal = s.get(Calibration, int(cal_id))
+    # the row locked until commit (SELECT … FOR UPDATE on PostgreSQL; SQLite's writing
+    # session holds the database's write lock already): two people acting at once on one
+    # calibration are serialised, and the second sees the first one's state
+    cal = s.get(Calibration, int(cal_id), with_for_update=True)
     if cal is None:
         raise GonioError("no such calibration", key="calibration")
     if cal.status not in allowed:
@@ -771,6 +774,21 @@ def retry(store, actor: User, cal_id: int) -> Calibration:
                        status="issuing" if cal.pending_number else "queued",
                        progress="waiting for a worker", error="", worker_pid=None,
                        worker_host="")
+
+
+def void(store, actor: User, cal_id: int, reason: str) -> Calibration:
+    """Void a failed run that will not be run again (technician or reviewer), with the
+    reason; it stays in the records, out of the lists of work. A failed issue, which holds
+    a reserved certificate number, is not voided: it is issued again (the number is used)."""
+    if not (actor is not None and actor.active and (actor.has("technician")
+                                                   or actor.has("reviewer"))):
+        raise GonioError("this needs the technician or reviewer role", key="role")
+    reason = text(reason, "reason", max_len=MAX_TEXT, multiline=True, required=True)
+    if calibration(store, cal_id).pending_number:
+        raise GonioError("a failed issue holds its reserved certificate number: run it "
+                         "again", key="status")
+    return _transition(store, actor, cal_id, "void", ("failed",), status="void",
+                       progress="void", error=f"void: {reason}")
 
 
 def amend(store, actor: User, certificate_id: int, reason: str) -> Calibration:
@@ -1136,9 +1154,9 @@ def default_interval(spec_key: str) -> tuple[int, str]:
 
 
 def propose_interval(store, instrument_id: int, hist: dict | None = None):
-    """The recalibration interval proposed from the instrument's history
-    (:func:`gonio.records.interval.propose`; ``hist``: its :func:`history` if at hand), with
-    the specification's default beside it."""
+    """The recalibration interval proposed from the instrument's issued calibrations
+    (:func:`gonio.records.interval.propose`; ``hist``: its :func:`history` if at hand, of
+    which only the issued ones count), with the specification's default beside it."""
     from gonio.records.interval import propose
 
     with store.session() as s:
@@ -1147,6 +1165,9 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
             raise GonioError("no such instrument", key="instrument")
     limits = instrument_limits(inst)
     hist = history(store, instrument_id) if hist is None else hist
+    # only what was issued: a calibration not (yet) reviewed and approved is no evidence
+    hist = {k: [r for r in rows if r["status"] == "issued"] for k, rows in hist.items()}
+    hist = {k: rows for k, rows in hist.items() if rows}
     dates = [r["date"] for rows in hist.values() for r in rows]
     t0 = min(dates) if dates else None
     table = {key: [((r["date"] - t0).days, r["value"], r["U"], r["k"],

@@ -122,13 +122,16 @@ def text_element(parent, tag: str, text: str, lang: str | None = None) -> "etree
 
 def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | None = None,
          p: float | None = None, label: str | None = None,
-         dsi: str | None = None, note: str = "") -> "etree.Element":
+         dsi: str | None = None, note: str = "",
+         interval: tuple[str, str] | None = None, u_std: str | None = None) -> "etree.Element":
     """si:real with the stated value, its D-SI unit and (when given) the expanded uncertainty.
 
     ``unit`` is a results.json unit of :data:`DSI_UNITS`, or ``dsi`` gives the D-SI string
     itself. Each si:value / si:valueExpandedMU carries ``refId``-free text; the path in
     results.json is recorded in an XML comment before the si:real (for the number checks),
-    with ``note`` (e.g. ``factor=…`` of a unit conversion) appended."""
+    with ``note`` (e.g. ``factor=…`` of a unit conversion) appended. An item stated by its
+    coverage interval (``interval`` the stated ends, ``u_std`` its standard uncertainty,
+    ``p``) is written as si:coverageIntervalMU instead of an expanded uncertainty."""
     if isinstance(value, Num):
         parent.append(etree.Comment(f" src={value.src} rule={value.rule}{note} "))
     r = element(parent, "si:real")
@@ -141,6 +144,12 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
         element(mu, "si:valueExpandedMU", dsi_decimal(str(U)))
         element(mu, "si:coverageFactor", dsi_decimal(str(k)))
         element(mu, "si:coverageProbability", repr(float(p)))
+    elif interval is not None and u_std is not None and p is not None:
+        ci = element(element(r, "si:measurementUncertaintyUnivariate"), "si:coverageIntervalMU")
+        element(ci, "si:valueStandardMU", dsi_decimal(u_std))
+        element(ci, "si:intervalMin", dsi_decimal(interval[0]))
+        element(ci, "si:intervalMax", dsi_decimal(interval[1]))
+        element(ci, "si:coverageProbability", repr(float(p)))
     return r
 
 

@@ -115,9 +115,12 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
         kw = {}
         if n["U"] is not None and n["k"] is not None and p is not None:
             kw = {"U": n["U"], "k": n["k"], "p": float(p)}
+        elif n["interval"] is not None and n["interval"]["u"] and p is not None:
+            kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
+                  "p": float(p)}                       # stated by its coverage interval
         quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
                  ref_type="basic_measuredValue", **kw)
-        if n["upper"] is not None:
+        if n["upper"] is not None and n["interval"] is None:   # not an interval item
             bound_quantity(d, n["statement"].upper_text,
                            dsi=compose_dsi(it["unit"], spec.dcc_units))
     for mname, keys in content_field(data, "MATRICES"):

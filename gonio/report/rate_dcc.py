@@ -214,6 +214,9 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
             kw = {}
             if n["U"] is not None and n["k"] is not None and n["p"] is not None:
                 kw = {"U": n["U"], "k": n["k"], "p": float(item_p(it))}
+            elif n["interval"] is not None and n["interval"]["u"] and n["p"] is not None:
+                kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
+                      "p": float(item_p(it))}         # stated by its coverage interval
             conv = factor != 1.0
             quantity(data, name, n["value"], "", dsi=dsi,
                      note=f" factor={factor!r}" if conv else "",
@@ -221,7 +224,7 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                      description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
                                   f"results.json, written per m s⁻² (g_n = "
                                   f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv else None, **kw)
-            if n["upper"] is not None:
+            if n["upper"] is not None and n["interval"] is None:   # not an interval item
                 bound_quantity(data, n["statement"].upper_text, dsi=dsi)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],

@@ -35,7 +35,8 @@ from typing import Any
 
 from gonio.analysis.conformity import (DEFAULT_LIMITS_ORIGIN, Conformity, DecisionRule,  # noqa: F401
                                       Limits, limits_of, rule_of)
-from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display, labels, rule_at_U)
+from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display,
+                               display_uncertainty, labels, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 
 
@@ -470,13 +471,20 @@ def item_nums(item: dict, src: str, sig: int = 3, factor: float = 1.0) -> dict:
     it = item
     if factor != 1.0:
         unc = dict(item.get("uncertainty") or {})
-        if unc.get("U") is not None:
-            unc["U"] = float(unc["U"]) * factor
+        for key in ("U", "u_c"):
+            if unc.get(key) is not None:
+                unc[key] = float(unc[key]) * factor
+        if unc.get("interval") is not None:
+            unc["interval"] = [float(x) * factor for x in unc["interval"]]
         it = {**item, "value": None if item.get("value") is None
               else float(item["value"]) * factor, "uncertainty": unc}
     st = item_statement(it, sig=sig)
+    u_c = (it.get("uncertainty") or {}).get("u_c")
     out = {"statement": st, "value": None, "U": None, "k": None, "nu": None, "p": st.p,
-           "upper": st.upper}
+           "upper": st.upper, "interval": None}
+    if st.interval is not None:     # the DCC's coverage interval: ends and u (2 digits)
+        out["interval"] = {"ends": st.interval_ends,
+                           "u": None if not u_c else display_uncertainty(float(u_c))}
     if st.value == "—":
         return out
     if st.exponent:

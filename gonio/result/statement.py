@@ -350,6 +350,12 @@ class Statement:
         return self._x(self.U) if self.U is not None else None
 
     @property
+    def interval_ends(self) -> tuple[str, str] | None:
+        """The ends of the coverage interval as printed (with the common power of ten)."""
+        return None if self.interval is None else (self._x(self.interval[0]),
+                                                   self._x(self.interval[1]))
+
+    @property
     def upper_text(self) -> str | None:
         """The upper bound of a non-negative quantity as printed, or None."""
         return self._x(self.upper) if self.upper is not None else None

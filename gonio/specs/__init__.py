@@ -7,7 +7,12 @@ clauses, its default protocol and bench, and the hooks gonio calls — ``calibra
 virtual bench), ``budget`` (its own uncertainty annex), ``coverage`` (the settings of its
 coverage study), ``outputs`` (the module that renders a result: results.json, summary,
 tables, certificate, DCC) and ``commands`` (the ``gonio`` sub-commands it adds, such as the
-triad's ``align``). docs/writing-a-specification.md builds one from scratch.
+triad's ``align``). docs/writing-a-specification.md builds one from scratch; a specification
+written outside gonio imports what it needs from :mod:`gonio.kit` (docs/kit.md).
+
+Every field is checked when ``SPEC`` is built and when the registry loads it (one line
+naming the entry point and the field); a specification that cannot be loaded is left out of
+:func:`available` with a warning, so it costs only its own key.
 
 Packages register through the entry-point group ``gonio.specs`` (``key = "pkg:SPEC"``), as
 pytest plug-ins do: gonio's four built-in specifications are listed in gonio's own

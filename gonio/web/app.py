@@ -43,7 +43,7 @@ def create_app(store, dispatcher=None) -> FastAPI:
     templates = Jinja2Templates(directory=str(HERE / "templates"))
     templates.env.globals.update(fmt=fmt, STATES=("queued", "running", "failed", "computed",
                                                    "reviewed", "rejected", "amending", "issuing",
-                                                   "issued"))
+                                                   "issued", "void"))
     app.state.templates = templates
     app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
 

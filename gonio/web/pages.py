@@ -227,7 +227,8 @@ def instrument_page(request: Request, inst_id: int):
     hist = services.history(store, inst_id)
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
                   customers=queries.customers(store),
-                  error=request.query_params.get("error", "")[:300], proposal=services.propose_interval(store, inst_id, hist),
+                  error=request.query_params.get("error", "")[:300],
+                  proposal=services.propose_interval(store, inst_id, hist),
                   default=services.default_interval(inst.spec_key),
                   limits=services.instrument_limits(inst), n_points=max(
                       (len(v) for v in hist.values()), default=0))
@@ -290,7 +291,7 @@ def calibrations_page(request: Request):
     page = page_of(request)
     status = request.query_params.get("status", "")
     status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued", "amending") else ""
+                                  "rejected", "issuing", "issued", "amending", "void") else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -384,15 +385,10 @@ def calibration_progress(request: Request, cal_id: int):
 
 
 async def _act(request: Request, cal_id: int, do) -> Response:
-    user, csrf = current(request)
-    data = await form(request, csrf)
-    try:
-        do(user, data)
-    except GonioError as exc:
-        from urllib.parse import quote
-        return _back(f"/calibrations/{cal_id}?error={quote(str(exc)[:300])}")
+    """A calibration's action (:func:`_edit` back to its page), and the dispatcher woken."""
+    r = await _edit(request, f"/calibrations/{cal_id}", do)
     wake(request)
-    return _back(f"/calibrations/{cal_id}")
+    return r
 
 
 @router.post("/calibrations/{cal_id}/review")
@@ -406,6 +402,12 @@ async def calibration_review(request: Request, cal_id: int):
 async def calibration_approve(request: Request, cal_id: int):
     return await _act(request, cal_id, lambda u, d: services.approve(
         _store(request), u, cal_id, shown_seal=d.get("seal") or None))
+
+
+@router.post("/calibrations/{cal_id}/void")
+async def calibration_void(request: Request, cal_id: int):
+    return await _act(request, cal_id, lambda u, d: services.void(
+        _store(request), u, cal_id, d.get("reason")))
 
 
 @router.post("/calibrations/{cal_id}/retry")

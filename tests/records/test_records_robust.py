@@ -135,3 +135,29 @@ def test_killed_workers_folder_removed(sqlite_store):
     keep.mkdir()
     assert services.recover(sqlite_store) == [cal.id]
     assert not work.exists() and keep.exists()
+
+
+def test_a_failed_run_is_voided_with_a_reason(app, sqlite_store):  # noqa: F811
+    tech = services.user(sqlite_store, "tech")
+    cust = services.add_customer(sqlite_store, tech, "C")
+    inst = services.register_instrument(sqlite_store, tech, customer_id=cust.id, serial="S",
+                                        spec_key="ogam-draft")
+    sha, _ = services.store_file(sqlite_store, io.BytesIO(b"not readings"))
+    cal = services.create_calibration(sqlite_store, tech, instrument_id=inst.id,
+                                      readings_sha256=sha)
+    with pytest.raises(GonioError, match="cannot void a calibration that is queued"):
+        services.void(sqlite_store, tech, cal.id, "wrong file")
+    services.claim_next(sqlite_store)
+    services.fail(sqlite_store, cal.id, "not a readings file")
+    with pytest.raises(GonioError, match="key reason: must not be empty"):
+        services.void(sqlite_store, tech, cal.id, " ")
+    web = login(app, "tech")
+    page = web.get(f"/calibrations/{cal.id}").text
+    assert f'action="/calibrations/{cal.id}/void"' in page
+    from .test_web_security import csrf_of
+    r = web.post(f"/calibrations/{cal.id}/void", data={"csrf": csrf_of(web),
+                                                       "reason": "a rate-gyro file"})
+    assert r.status_code == 303 and "error" not in r.headers["location"]
+    got = services.calibration(sqlite_store, cal.id)
+    assert got.status == "void" and got.error == "void: a rate-gyro file"
+    assert web.get("/calibrations?status=void").text.count(f"/calibrations/{cal.id}\"") == 1

@@ -97,7 +97,7 @@ def test_two_line_customer_address_reaches_the_laboratory_file(sqlite_store, tmp
 
     from gonio.records.compute import write_lab_toml
     from gonio.records.models import Calibration
-    from gonio.report.certificate import load_lab
+    from gonio.formats.lab import load_lab
 
     people = make_people(sqlite_store)
     tech = people["tech"]
