@@ -19,6 +19,7 @@ from gonio.report.certificate import write_certificate
 from gonio.report.stated import summary_text
 from gonio.result.model import Result
 from gonio.result.tables import results_json_text, write_tables
+from gonio.result.text import virtual_line
 from gonio.specs.ogam_draft.calibration import calibrate
 
 
@@ -59,8 +60,9 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
     then the 95 % intervals of the standard-deviation items and the budget's notes; from the
     result or its results.json."""
-    d = result.to_json() if isinstance(result, Result) else result
-    lines = [summary_text(d, "en", lab).rstrip("\n")]
+    result = result if isinstance(result, Result) else Result.from_json(result)
+    d = result.to_json()
+    lines = virtual_line(d) + [summary_text(d, "en", lab).rstrip("\n")]
     for name, it in d["items"].items():
         iv = (it.get("uncertainty") or {}).get("interval")
         if iv is not None:
@@ -82,6 +84,8 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     unc = d["extra"]["uncertainty"]
     if unc.get("measured"):
         lines += [f"note: {n}" for n in unc.get("notes") or []]
+    lines += [f"flagged: {f.location()}: {f.message}" for f in result.findings
+              if f.code == "identity-mismatch"]       # the readings against the lab file
     return "\n".join(lines) + "\n"
 
 
