@@ -272,6 +272,27 @@ def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_p
     _agree_within_u(_calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
 
 
+def test_sigterm_stops_the_table_and_keeps_the_readings(served, tmp_path):
+    out = tmp_path / "acq"
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    proc = subprocess.Popen([sys.executable, "-m", "gonio", "acquire", "--protocol", str(SMALL),
+                             "--table", served.table_resource, "--gyro", served.gyro_resource,
+                             "--out", str(out)], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    try:
+        _wait_rows(out / "readings.csv", 3)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, err
+    kept = read_readings(out / "readings.csv")
+    assert kept.metadata["acquisition"] == "incomplete" and len(kept.data) >= 3
+    assert "SIGTERM" in kept.metadata["acquisition_stopped"]
+    log = (out / "io.log").read_text(encoding="utf-8").splitlines()
+    assert log[-1].endswith("table > STOP")
+
+
 def _failing_run(rlg, tmp_path, faults: str):
     s = serve_bench(rlg, speed=SPEED, seed=SEED, faults=Faults.parse([faults]))
     try:
