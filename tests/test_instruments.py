@@ -140,6 +140,27 @@ def test_stop_mid_move_keeps_the_motion_so_far(rlg):
     assert sb.timeline.end_s == pytest.approx(3.0 + v / a, abs=1e-9)
 
 
+def test_run_length_integration_equals_per_sample_integration(rlg):
+    """The served instrument integrates rests as runs (Integrator.rates' form); a per-sample
+    pass of the bench's Integrator over the same motion gives the same angle."""
+    bench = rlg.random_off()
+    now = [0.0]
+    a = ServedBench(bench, clock=lambda: now[0])
+    for i in range(4):
+        now[0] += 1.0
+        a.do_zero()
+        a.move(30.0 * (i + 1), 60.0)
+        now[0] += 15.0
+        a.read()
+        a.move(0.0, 60.0)
+        now[0] += 10.0
+    k = a._advance(now[0])
+    b = ServedBench(bench, clock=lambda: 0.0)
+    ts = np.arange(k + 1) * a.dt
+    phi = b.integ.advance(ts, a.timeline.angle_deg(ts), a.timeline.rate_dps(ts), a.geom)
+    assert a.phi_deg == pytest.approx(float(phi[-1]), abs=1e-12)
+
+
 # ------------------------------------------------------------------ drivers on sockets
 def test_driver_errors_come_from_the_served_error_queue(served):
     table, gyro, log = _drivers(served)
@@ -182,6 +203,32 @@ def test_small_programme_calibrates_like_simulate(served, simulated, tmp_path):
     log = res.io_log.read_text(encoding="utf-8")
     assert "table > *IDN?" in log and "gyro < gonio virtual bench,RLG goniometer" in log
     assert log.rstrip().splitlines()[-1].endswith("table > STOP")
+
+
+class HandSetTable(RotaryTable):
+    """A controller without an axis fixture: an operator points the axis."""
+
+    COMMANDS = {**RotaryTable.COMMANDS, "set_axis": None, "axis": None}
+
+
+class HostTimedModule(AcquisitionModule):
+    """A module without an external trigger: read when the host's wait ends."""
+
+    COMMANDS = {**AcquisitionModule.COMMANDS, "arm": None, "fetch": None, "trigger_delay": None}
+
+
+def test_operator_prompt_and_host_timed_reads(served, tmp_path):
+    """A table that cannot set its axis asks the operator (once per change of orientation);
+    a module without an external trigger is read on the host's wait; both complete."""
+    asked = []
+    res = acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource,
+                  tmp_path / "acq", metadata=META, table_cls=HandSetTable,
+                  gyro_cls=HostTimedModule, prompt=asked.append)
+    assert res.complete and res.taken == 27
+    assert asked == ["Set the table axis to UP and press Enter: ",
+                     "Set the table axis to NORTH and press Enter: "]
+    log = res.io_log.read_text(encoding="utf-8")
+    assert "AXIS" not in log and "INIT" not in log and "READ?" in log
 
 
 # ------------------------------------------------------------------ safety

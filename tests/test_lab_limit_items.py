@@ -8,6 +8,7 @@ tests make the pipeline's calibration and every renderer fail loudly if they are
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -75,9 +76,11 @@ def test_known_items_pass_the_check(tmp_path):
     assert [x["item"] for x in d["specification_limits"]] == ["bias", "bandwidth"]
 
 
-# -- the gyro triad: fixed alignment keys, thermal coefficients as patterns ------------------
+# -- the gyro triad: fixed alignment keys, thermal values at the set points as patterns ----
 
-TRIAD_LAB = LAB[:LAB.index("\n[[specification_limits]]")].replace("{{", "{").replace("}}", "}")
+TRIAD_LAB = re.sub(r"^\[instrument\]\n.*?\n\n", "",          # the triad's serial is its own
+                   LAB[:LAB.index("\n[[specification_limits]]")].replace("{{", "{").replace("}}", "}"),
+                   flags=re.S | re.M)
 
 
 def triad_lab(tmp_path, limits) -> Path:
@@ -96,13 +99,14 @@ def triad_readings(tmp_path_factory):
     return d / "sim"
 
 
-@pytest.mark.parametrize("typo", ["M_xq", "K_z_theta5", "b_z_u3", "ARW_z_u1", "k_z_c0",
-                                  "K_w_c0", "thermal_model", "K_z_theta1x"])
+@pytest.mark.parametrize("typo", ["M_xq", "K_z_theta1", "b_z_c0", "ARW_z_t1_v1", "k_z_t1_v1",
+                                  "K_w_t1_v1", "thermal_model", "K_z_t0_v1", "b_z_t1"])
 def test_triad_typo_refused_before_the_calibration(typo, triad_readings, tmp_path, capsys,
                                                    no_work):
-    """A real triad readings file, a limit on an item no triad result can hold (a typo, an
-    order above the highest the selection tries, a gyro the triad has not, ARW's supply term,
-    the value-less placeholder): exit 2, one line naming the file, the entry and the key,
+    """A real triad readings file, a limit on an item no triad result can hold (a typo, a
+    polynomial coefficient — information, not a certified item —, a gyro the triad has not,
+    ARW's supply level, a set point numbered 0, a bias without its supply level, the
+    value-less placeholder): exit 2, one line naming the file, the entry and the key,
     nothing calibrated or written."""
     lab = triad_lab(tmp_path, {"M_xx": (49.0, 51.0), typo: (0.0, 1.0)})
     out = tmp_path / "out"
@@ -116,28 +120,29 @@ def test_triad_typo_refused_before_the_calibration(typo, triad_readings, tmp_pat
 
 
 def test_triad_lab_limits_reach_results_and_certificate(triad_readings, tmp_path):
-    """Limits on an alignment item and on thermal coefficients (pattern keys) pass the
-    check and are decided against the bench's truth: M_xx within ±0.05 of the true
-    system-matrix element passes, M_yy with its upper limit 0.05 below the truth fails, the
-    z gyro's K at the reference within ±0.1 of the true scale factor passes. And every key
-    the result holds passes the check (the patterns cannot drift from the items named)."""
+    """Limits on an alignment item and on a thermal value (pattern keys) pass the check and
+    are decided against the bench's truth: M_xx within ±0.05 of the true system-matrix
+    element passes, M_yy with its upper limit 0.05 below the truth fails, the z gyro's K at
+    25 °C (set point 5 of the programme) and 5 V within ±0.1 of the true scale factor passes.
+    And every key the result holds passes the check (the patterns cannot drift from the
+    items named)."""
     truth = json.loads((triad_readings / "truth.json").read_text(encoding="utf-8"))
     m = truth["system_matrix"]
     k_z = truth["scale_per_dps"][2]
     limits = {"M_xx": (m[0][0] - 0.05, m[0][0] + 0.05), "M_yy": (m[1][1] - 1.0, m[1][1] - 0.05),
-              "K_z_c0": (k_z - 0.1, k_z + 0.1)}
+              "K_z_t5_v2": (k_z - 0.1, k_z + 0.1)}
     lab = triad_lab(tmp_path, limits)
     out = tmp_path / "out"
     assert main(["calibrate", str(triad_readings / "readings.csv"), "--lab", str(lab),
                  "--out", str(out)]) == 0
     items = json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
     outcome = {k: items[k]["conformity"]["outcome"] for k in limits}
-    assert outcome == {"M_xx": "pass", "M_yy": "fail", "K_z_c0": "pass"}
+    assert outcome == {"M_xx": "pass", "M_yy": "fail", "K_z_t5_v2": "pass"}
     for k, (lo, hi) in limits.items():
         c = items[k]["conformity"]
         assert (c["lower"], c["upper"], c["limits_from"]) == (lo, hi, "lab file")
     html = (out / "certificate.html").read_text(encoding="utf-8")
-    assert "Example Angle Metrology Laboratory" in html and "K_z_c0" in html
+    assert "Example Angle Metrology Laboratory" in html and "K_z_t5_v2" in html
     # every key a real result holds passes the check: the patterns follow thermal_items
     spec = available()["triad-alignment"]
     held = [k for k, it in items.items() if it["value"] is not None]

@@ -434,3 +434,30 @@ def test_rate_certificates_cite_their_own_specifications_clauses(iec_noise_off, 
     assert "IEC 62047-20 is a test method and sets none" in iec and "draft clause 9" not in iec
     jjf = text(jjf_noise_off[0])
     assert "JJF 1535-2015 clause 8 k)" in jjf and "JJF 1535-2015 clause 9" in jjf
+
+
+def test_jjf_warmup_states_its_window_block_and_nominal(jjf_noise_off):
+    """7.2.9: the warm-up time is defined by W, P, t0 and the nominal; the item's details
+    hold the protocol's values and the certificate states them, in English and Chinese."""
+    from gonio.report.i18n import labels
+    from gonio.report.rate_certificate import rate_certificate_blocks
+
+    result = jjf_noise_off[0]
+    it = result.items["warmup_time"]
+    assert it.measured, it.reason
+    # the built-in protocol's [warmup] with the reduced programme's changes (small_protocol)
+    from gonio.specs import get
+    w = tomllib.loads((ROOT / "protocols" / "jjf1535-2015.toml").read_text(encoding="utf-8"))
+    w = {**w["warmup"], **get("jjf1535-2015").coverage.reduced.get("warmup", {})}
+    d = it.details
+    assert (d["window_samples"], d["block_samples"], d["nominal_stability_dph"]) == \
+        (w["window_samples"], w["block_samples"], w["nominal_stability_dph"])
+    assert d["window_s"] == pytest.approx(d["window_samples"] * d["sample_interval_s"])
+    assert d["block_s"] == pytest.approx(d["block_samples"] * d["sample_interval_s"])
+    for lang, words in (("en", ("W = {}", "P = {}", "nominal {:g} °/h")),
+                        ("zh", ("W = {}", "P = {}", "标称值 {:g} °/h"))):
+        blocks = rate_certificate_blocks(result, labels(lang), lang, lab=None)["blocks"]
+        text = " ".join(str(b.data) for b in blocks)
+        for word, v in zip(words, (d["window_samples"], d["block_samples"],
+                                   d["nominal_stability_dph"])):
+            assert word.format(v) in text, (lang, word.format(v))

@@ -129,3 +129,26 @@ def test_truth_does_not_use_the_estimators(spec, monkeypatch):
     assert rg.least_squares_line([0, 1, 2], [0, 1, 2])[0] == pytest.approx(1.37)
     after = _flat(truth(bench, proto))
     assert after == before
+
+
+def test_warmup_truth_does_not_use_the_warmup_estimator(monkeypatch):
+    """7.2.9: the warm-up truth (noise on: the expected window stability, and noise off) comes
+    from the bench's transient, its noise covariance and the procedure's W, P, t0, nominal —
+    never from the estimator's window stabilities, exceedance search or detection interval."""
+    from gonio.specs.jjf1535.protocol import load_protocol
+    from gonio.specs.jjf1535.truth import truth
+
+    proto = load_protocol("jjf1535-2015")
+    noisy = load_rate_bench("mems-adxrs610")
+    benches = (noisy, noisy.without_noise())
+    before = [truth(b, proto)["warmup_time"] for b in benches]
+    assert all(math.isfinite(t["value"]) and t["value"] > 0 for t in before)
+    assert before[0]["value"] != before[0]["noise_free_s"]      # the noise is part of it
+
+    def refuse(*_a, **_k):
+        raise AssertionError("the warm-up truth called an estimator")
+    for mod, name in ((jf, "window_stabilities"), (jf, "detection_interval"),
+                      (jf, "last_exceedance_time"), (rg, "last_exceedance_time"),
+                      (jf, "warmup_time_s")):
+        monkeypatch.setattr(mod, name, refuse)
+    assert [truth(b, proto)["warmup_time"] for b in benches] == before

@@ -74,7 +74,7 @@ def test_results_json_per_item_shape(run):
     from scipy import stats
     assert u["k"] == pytest.approx(stats.t.ppf(0.5 + 0.9545 / 2, u["nu_eff"]), rel=1e-9)
     # the thermal programme (named by the readings' metadata) gives the model's items
-    assert res["items"]["K_z_c0"]["measured"] and res["items"]["b_z_c0"]["measured"]
+    assert res["items"]["K_z_t1_v1"]["measured"] and res["items"]["b_z_t1_v1"]["measured"]
     assert res["extra"]["thermal_model"]["channels"]["z"]["scale"]["criterion"] == "bic"
 
 
@@ -102,10 +102,16 @@ def test_certificate_shows_the_matrix_values_of_results_json(run):
             U_txt, dec = two_sig(it["uncertainty"]["U"])
             assert spans[f"items.{key}.uncertainty.U"] == U_txt
             assert spans[f"items.{key}.value"] == half_up(it["value"], dec)
+    for key in ("K_z_t1_v1", "K_z_t8_v3", "b_z_t5_v2", "ARW_z_t3"):   # the certified points
+        it = res["items"][key]
+        U_txt, dec = two_sig(it["uncertainty"]["U"])
+        assert spans[f"items.{key}.uncertainty.U"] == U_txt, key
+        assert spans[f"items.{key}.value"] == half_up(it["value"], dec), key
+        assert f"items.{key}.uncertainty.k" in spans, key
     for src, rule, text in SPANS.findall(page):        # every span points at results.json
         assert lookup(res, src) is not None, src
     assert 'id="alignment-matrix"' in page and 'id="cross-axis"' in page
-    assert 'id="thermal-z"' in page and 'id="prediction-z"' in page
+    assert 'id="thermal-z"' in page and 'id="points-K-z"' in page and 'id="points-b-z"' in page
     assert 'id="fig-alignment"' in page and 'id="fig-thermal-model-z"' in page
     text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
     assert "Averaging time from the Allan deviation" in text
@@ -146,7 +152,7 @@ def test_damaged_readings_give_items_not_measured_with_the_reason(run, tmp_path,
     res = json.loads((tmp_path / "o" / "results.json").read_text())
     m = res["items"]["M_xz"]
     assert not m["measured"] and "all three axes" in m["reason"]
-    assert res["items"]["K_z_c0"]["measured"]          # the thermal model still stands
+    assert res["items"]["K_z_t1_v1"]["measured"]      # the thermal model still stands
     page = (tmp_path / "o" / "certificate.html").read_text(encoding="utf-8")
     assert "not measured" in page and "all three axes" in page
 

@@ -36,7 +36,7 @@ def register(sub) -> None:
                         "hour, the draft's 7.3 warm-up)")
     s.add_argument("--fault", action="append", default=[],
                    help="inject a fault for testing: table-error:N (the N-th move fails with an "
-                        "axis fault), gyro-drop:N (the module drops its link at its N-th reading)")
+                        "axis fault), gyro-drop:N (the module drops its link at its N-th READ? or FETC?)")
     s.set_defaults(func=run)
 
 

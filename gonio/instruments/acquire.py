@@ -10,9 +10,10 @@ above the table's or the protocol's top rate, a rotation longer than the round's
 ``max_rotation_s`` at the table's acceleration, and a reading planned later than
 ``max_time_to_reading_s`` after its zeroing (Annex A.1's 0.5 min).
 
-:class:`Acquisition` takes the readings: per round it zeroes the module at rest, moves the
-table at the round's rate, waits for the arrival plus ``read_delay_s`` on the module's
-clock, triggers a reading (counts since the zeroing, roll-over undone), subtracts the
+:class:`Acquisition` takes the readings: per round it zeroes the module at rest, arms it to read
+``read_delay_s`` after the table's in-position signal (its external trigger, draft clause
+4; a module without one is read when the host's wait on the module's clock ends), moves the
+table at the round's rate, fetches the reading (counts since the zeroing, roll-over undone), subtracts the
 compensation × time since zeroing, writes the row to ``readings.csv`` at once (append,
 flush, fsync) and rests out ``rest_s``; a reading later than the Annex A.1 limit is
 retaken. Every wait is timed on the module's clock, so a served bench running N× faster
@@ -308,6 +309,9 @@ class Acquisition:
         self.clock = ModuleClock(self.gyro)
         self.position = None
         self.axis = None
+        self.triggered = self.gyro.can_trigger_on_table
+        if self.triggered:
+            self.gyro.send("trigger_source", source="EXT")
 
     # -- table motion
     def move(self, angle_deg: float, rate_dps: float) -> float:
@@ -321,7 +325,9 @@ class Acquisition:
         self.table.move(angle_deg, rate_dps)
         expect = trapezoid_duration_s(dist, rate_dps, lim.accel_dps2)
         t = self.clock.wait_until(t0 + expect)
-        deadline = t0 + expect * 1.2 + 5.0
+        # a move late by more than a fifth, 5 s and a second of the host's own delays (the
+        # module's clock may run N× faster than the host's) is the table's fault
+        deadline = t0 + expect * 1.2 + 5.0 + (self.clock.speed() or 1.0)
         while self.table.state() != "idle":
             if t > deadline:
                 raise GonioError(f"table: still moving {t - t0:.1f} s after a move planned to "
@@ -384,13 +390,19 @@ class Acquisition:
             if self.position != st.start_deg:
                 self.move(st.start_deg, self.s.return_rate_dps)
                 self.dwell(self.s.settle_s)
+            if self.triggered:                  # armed first: the zeroing right before the move
+                self.gyro.arm(st.read_delay_s)
             if zero_x[0] is None or b.rezero or attempt:
                 self.gyro.zero()
                 zero_x[0] = st.start_deg
-            arrive = self.move(st.stop_deg, st.rate_dps)
-            self.clock.wait_until(arrive + st.read_delay_s)
             angle = st.stop_deg - zero_x[0]
-            r = self.gyro.read(self.K * angle)
+            if self.triggered:                  # read by the module, on the table's signal
+                arrive = self.move(st.stop_deg, st.rate_dps)
+                r = self.gyro.fetch(self.K * angle, wait=lambda: self.dwell(0.1))
+            else:                               # read when the host says, on its clock
+                arrive = self.move(st.stop_deg, st.rate_dps)
+                self.clock.wait_until(arrive + st.read_delay_s)
+                r = self.gyro.read(self.K * angle)
             self.clock.wait_until(arrive + st.rest_s)
             lim = st.max_time_to_reading_s
             if lim is None or r.time_s <= lim + 1e-9 or not b.rezero:

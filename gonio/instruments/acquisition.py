@@ -10,6 +10,7 @@ undone with the expected count (:func:`unwrap_near`, on :mod:`gonio.formats.coun
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,7 +70,12 @@ class AcquisitionModule(Driver):
         "counter_signed": "CONF:COUN:SIGN?",
         "scale_factor": "CONF:SCAL?",
         "trigger_source": "TRIG:SOUR {source}",
+        "trigger_delay": "TRIG:DEL {delay_s:.10g}",
+        "arm": "INIT",
+        "fetch": "FETC?",
     }
+    #: The error a ``FETC?`` answers while its trigger is still to come (SCPI −230).
+    PENDING = re.compile(r"^\s*-230\s*,")
 
     _bits: int | None = None
 
@@ -84,7 +90,9 @@ class AcquisitionModule(Driver):
         self.send("zero")
 
     def _pair(self, op: str) -> tuple[float, float]:
-        ans = self.send(op)
+        return self._parse_pair(op, self.send(op))
+
+    def _parse_pair(self, op: str, ans: str) -> tuple[float, float]:
         try:
             a, t = (float(x) for x in ans.split(",")[:2])
         except ValueError:
@@ -97,6 +105,30 @@ class AcquisitionModule(Driver):
         ``expected_counts``) and the module's time since the zeroing."""
         shown, t = self._pair("read")
         return Reading(unwrap_near(int(shown), expected_counts, self.counter_bits()), t)
+
+    @property
+    def can_trigger_on_table(self) -> bool:
+        """Whether the module reads on an external trigger (the table's in-position signal)."""
+        return self.has("arm") and self.has("fetch") and self.has("trigger_delay")
+
+    def arm(self, delay_s: float) -> None:
+        """Take the next reading ``delay_s`` after the table's next in-position signal."""
+        self.send("trigger_delay", delay_s=delay_s)
+        self.send("arm")
+
+    def fetch(self, expected_counts: float = 0.0, wait=None) -> Reading:
+        """The armed reading; while it is still to come (−230) ``wait()`` and ask again."""
+        while True:
+            ans = self.send("fetch", check=False)
+            first = self.link.query(self.ERROR_QUERY) if self.ERROR_QUERY else None
+            if first is not None and self.PENDING.match(first):
+                self.after_command("FETC?")          # nothing else may be queued
+                if wait is not None:
+                    wait()
+                continue
+            self.after_command("FETC?", first)
+            shown, t = self._parse_pair("fetch", ans)
+            return Reading(unwrap_near(int(shown), expected_counts, self.counter_bits()), t)
 
     def read_angle_deg(self) -> tuple[float, float]:
         """Trigger and read the indicated angle since the zeroing, ° (and its time, s)."""

@@ -21,7 +21,7 @@ noise (not bit for bit: the timing of a served session is the host's).
 
 Fault injection for tests of the acquisition's safety (``faults``): ``table-error:N`` (the
 N-th move answers an axis fault, −310, and is not made), ``gyro-drop:N`` (the module closes
-its connection at its N-th reading).
+its connection at its N-th reading request, ``READ?`` or ``FETC?``).
 """
 
 from __future__ import annotations
@@ -50,6 +50,10 @@ CHUNK = 1 << 18
 #: The module's temperature: the bench's optical instrument has no thermal model, so the
 #: module reports the draft's Table 2 reference room.
 ROOM_C = 20.0
+#: Samples the background integration takes per hold of the lock.
+KEEP_UP_SAMPLES = 1 << 14
+#: Wall seconds a ``FETC?`` waits for its trigger before answering −230 (the host asks again).
+FETCH_WAIT_S = 1.0
 
 
 def scpi_match(header: str, mnemonic: str) -> bool:
@@ -113,6 +117,19 @@ class _Zero:
     counts: float
 
 
+@dataclass
+class _Trigger:
+    """The module's trigger: ``EXT`` is the table's in-position signal (the end of a move),
+    the reading taken ``delay_s`` after it on the sample grid; ``k`` its sample once known,
+    ``reading`` (counts since zeroing, time since zeroing) once taken."""
+
+    source: str = "BUS"
+    delay_s: float = 0.0
+    armed: bool = False
+    k: int | None = None
+    reading: tuple | None = None
+
+
 class ServedBench:
     """The shared simulated state behind both served instruments (one lock for all).
 
@@ -143,6 +160,7 @@ class ServedBench:
         self.geom = geometry(bench, "up")
         self.k_done, self.phi_deg = -1, 0.0
         self.zero: _Zero | None = None
+        self.trigger = _Trigger()
         self.wall0 = clock()
 
     # ------------------------------------------------------------------ time, table
@@ -185,6 +203,44 @@ class ServedBench:
         self.timeline.move(to, rate, tab.accel_dps2)
         self.ops.append(("move", to, rate, tab.accel_dps2))
         self.indicated_deg, self.rotating = x_deg, False
+        self._schedule_trigger()
+
+    def _schedule_trigger(self, moving: bool = True) -> None:
+        """An armed external trigger fires at the end of the move just commanded (or in
+        progress when armed: ``moving``)."""
+        tr = self.trigger
+        if tr.armed and tr.k is None and moving:
+            tr.k = max(int(math.ceil((self.timeline.end_s + tr.delay_s) / self.dt - 1e-9)),
+                       self.k_done + 1)
+
+    def arm(self) -> None:
+        """``INIT``: take the next reading on the trigger (EXT: the next arrival + delay)."""
+        if self.trigger.source != "EXT":
+            raise ScpiError(-221, "Settings conflict; INIT needs TRIG:SOUR EXT")
+        self.trigger.armed, self.trigger.k, self.trigger.reading = True, None, None
+        self._schedule_trigger(self.moving(self.now_s()))
+
+    def fetch(self, wait_s: float) -> tuple[float, float] | None:
+        """``FETC?``: the triggered reading (wrapped counts, time since zeroing), waiting up
+        to ``wait_s`` of wall time for it; None while it is still to come."""
+        tr = self.trigger
+        if not tr.armed:
+            raise ScpiError(-221, "Settings conflict; FETC? before INIT")
+        if self.zero is None:
+            raise ScpiError(-221, "Settings conflict; read before zeroing")
+        deadline = time.monotonic() + wait_s
+        while True:
+            with self.lock:
+                if tr.k is not None:
+                    t_k = tr.k * self.dt
+                    if self.now_s() >= t_k:
+                        self._advance(t_k + 0.5 * self.dt)
+                        if tr.reading is not None:
+                            return tr.reading
+                left = (tr.k * self.dt - self.now_s()) / self.speed if tr.k is not None else 0.05
+            if time.monotonic() >= deadline:
+                return None
+            time.sleep(min(max(left, 1e-4), 0.05, max(deadline - time.monotonic(), 0.0)))
 
     def rotate(self, rate_dps: float) -> None:
         """Rate mode: turn at the signed ``rate_dps`` until stopped (a move far away)."""
@@ -250,6 +306,23 @@ class ServedBench:
         self.integ.start_block()
 
     # ------------------------------------------------------------------ instrument
+    def _motion_runs(self, ts: np.ndarray):
+        """Table angle and rate on runs of samples (:meth:`Integrator.rates`' form): a sample
+        inside a move is its own run, the samples of a rest one run (one angle)."""
+        segs = self.timeline.segments()
+        spans = np.array([(g.t0_s, g.t0_s + g.duration_s) for g in segs if g.distance_deg],
+                         dtype=np.float64).reshape(-1, 2)
+        spans = spans[(spans[:, 1] >= ts[0]) & (spans[:, 0] <= ts[-1])]
+        edge = np.zeros(ts.size + 1, dtype=np.int64)
+        np.add.at(edge, np.searchsorted(ts, spans[:, 0], side="left"), 1)
+        np.add.at(edge, np.searchsorted(ts, spans[:, 1], side="right"), -1)
+        moving = np.cumsum(edge[:-1]) > 0
+        first = np.ones(ts.size, dtype=bool)
+        first[1:] = moving[1:] | moving[:-1]
+        idx = np.flatnonzero(first)
+        te = ts[idx]
+        return self.timeline.angle_deg(te), self.timeline.rate_dps(te), np.diff(np.append(idx, ts.size))
+
     def _advance(self, t: float) -> int:
         """Integrate the instrument up to the last grid sample at or before ``t``."""
         k_end = int(math.floor(t / self.dt + 1e-9))
@@ -257,10 +330,28 @@ class ServedBench:
             a = self.k_done + 1
             b = min(k_end, a + CHUNK - 1)
             ts = np.arange(a, b + 1) * self.dt
-            phi = self.integ.advance(ts, self.timeline.angle_deg(ts), self.timeline.rate_dps(ts),
-                                     self.geom)
+            theta_u, rate_u, rep = self._motion_runs(ts)
+            det = self.integ.rates(ts, theta_u, rate_u, rep, self.geom)
+            phi = self.integ.integrate(det, np.repeat(theta_u, rep))
             self.k_done, self.phi_deg = b, float(phi[-1])
+            tr = self.trigger
+            if (tr.armed and tr.k is not None and a <= tr.k <= b and tr.reading is None
+                    and self.zero is not None):
+                tr.reading = self._since_zero(tr.k, float(phi[tr.k - a]), wrap=True)
         return k_end
+
+    def keep_up(self, stop: threading.Event, period_s: float = 0.005) -> None:
+        """Integrate in the background up to now every ``period_s`` of wall time, so that a
+        query finds the instrument integrated but for its last few samples (its answer's
+        latency does not grow with the time since the previous query)."""
+        while not stop.wait(period_s):
+            behind = True
+            while behind and not stop.is_set():
+                with self.lock:             # a short hold at a time: queries get in between
+                    t = self.now_s()
+                    step = min(t, (self.k_done + KEEP_UP_SAMPLES) * self.dt)
+                    self._advance(step)
+                    behind = step < t
 
     def _counts(self, k: int, phi: float) -> float:
         """The counter at sample k: angle plus the angle-position error of the angle since
@@ -281,12 +372,15 @@ class ServedBench:
 
     def read(self, wrap: bool = True) -> tuple[float, float]:
         """Counts since the zeroing (as the register shows them with ``wrap``) and the time
-        since it."""
+        since it, now."""
         if self.zero is None:
             raise ScpiError(-221, "Settings conflict; read before zeroing")
         k = self._advance(self.now_s())
+        return self._since_zero(k, self.phi_deg, wrap)
+
+    def _since_zero(self, k: int, phi: float, wrap: bool) -> tuple[float, float]:
         inst = self.bench.instrument
-        c = self._counts(k, self.phi_deg) - self.zero.counts
+        c = self._counts(k, phi) - self.zero.counts
         if inst.quantisation and wrap:
             c = float(wrap_counter(np.array([int(c)]), inst.counter_bits, inst.counter_signed)[0])
         return c, (k - self.zero.k) * self.dt
@@ -398,13 +492,16 @@ def table_instrument(sb: ServedBench) -> _Instrument:
 def gyro_instrument(sb: ServedBench) -> _Instrument:
     """The served acquisition module: :class:`~gonio.instruments.acquisition.AcquisitionModule`'s."""
     b, inst_cfg = sb.bench, sb.bench.instrument
-    source = {"value": "BUS"}
 
-    def read(_):
+    def count_read():
         with sb.lock:
             sb.faults.reads += 1
             if sb.faults.gyro_drop_at_read == sb.faults.reads:
                 raise _Drop()
+
+    def read(_):
+        count_read()
+        with sb.lock:
             c, t = sb.read()
         return f"{c:.0f},{t!r}" if inst_cfg.quantisation else f"{c!r},{t!r}"
 
@@ -414,9 +511,23 @@ def gyro_instrument(sb: ServedBench) -> _Instrument:
         return f"{c / inst_cfg.nominal_scale_factor_counts_per_deg!r},{t!r}"
 
     def trig(arg):
-        if arg.upper() not in ("BUS", "EXT", "EXTERNAL", "IMM", "IMMEDIATE"):
+        if arg.upper() not in ("BUS", "EXT", "EXTERNAL"):
             raise ScpiError(-224, f"Illegal parameter value; {arg}")
-        source["value"] = arg.upper()
+        sb.trigger.source = arg.upper()[:3]
+
+    def delay(arg):
+        d = _parse_float(arg)
+        if d < 0:
+            raise ScpiError(-222, f"Data out of range; delay {d:g}")
+        sb.trigger.delay_s = d
+
+    def fetch(_):
+        count_read()
+        got = sb.fetch(FETCH_WAIT_S)
+        if got is None:
+            raise ScpiError(-230, "Data stale; trigger pending")
+        c, t = got
+        return f"{c:.0f},{t!r}" if inst_cfg.quantisation else f"{c!r},{t!r}"
 
     def locked(f):
         def g(arg):
@@ -430,7 +541,7 @@ def gyro_instrument(sb: ServedBench) -> _Instrument:
         ("*IDN?", lambda a: inst.idn), ("*RST", lambda a: None),
         ("*CLS", lambda a: inst.errors.clear()), ("*OPC?", lambda a: "1"),
         ("SYSTem:ERRor?", inst.next_error),
-        ("SYSTem:TIME?", locked(lambda a: repr(sb.warm_up_s + sb.now_s()))),
+        ("SYSTem:TIME?", lambda a: repr(sb.warm_up_s + sb.now_s())),
         ("ZERO", locked(lambda a: sb.do_zero())),
         ("READ?", read), ("READ:ANGle?", read_angle),
         ("MEASure:RATE?", locked(lambda a: repr(sb.rate_dps()))),
@@ -438,7 +549,8 @@ def gyro_instrument(sb: ServedBench) -> _Instrument:
         ("CONFigure:COUNter:BITS?", lambda a: str(inst_cfg.counter_bits)),
         ("CONFigure:COUNter:SIGN?", lambda a: "1" if inst_cfg.counter_signed else "0"),
         ("CONFigure:SCALe?", lambda a: repr(inst_cfg.nominal_scale_factor_counts_per_deg)),
-        ("TRIGger:SOURce", trig),
+        ("TRIGger:SOURce", locked(trig)), ("TRIGger:DELay", locked(delay)),
+        ("INITiate", locked(lambda a: sb.arm())), ("FETCh?", fetch),
     ]
     return inst
 
@@ -477,6 +589,7 @@ class Served:
     bench: ServedBench
     servers: list
     threads: list
+    stop: threading.Event = field(default_factory=threading.Event)
 
     @property
     def table_port(self) -> int:
@@ -495,6 +608,7 @@ class Served:
         return f"TCPIP0::127.0.0.1::{self.gyro_port}::SOCKET"
 
     def close(self) -> None:
+        self.stop.set()
         for s in self.servers:
             s.shutdown()
             s.server_close()
@@ -520,4 +634,9 @@ def serve_bench(bench: Bench, table_port: int = 0, gyro_port: int = 0, *, speed:
         th.start()
         servers.append(srv)
         threads.append(th)
-    return Served(sb, servers, threads)
+    served = Served(sb, servers, threads)
+    th = threading.Thread(target=sb.keep_up, args=(served.stop,), name="serve-integrate",
+                          daemon=True)
+    th.start()
+    threads.append(th)
+    return served

@@ -22,6 +22,7 @@ from gonio.report.figures import figure_svg
 from gonio.report.header import (certificate_id, conformity_section, opening_blocks,
                                  signature_blocks)
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
+from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText, Num, item_nums
 from gonio.result.statement import unit_text
@@ -225,6 +226,11 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
+    # what defines an item's measurand (a module's own field until CONTENT_FIELDS lists it)
+    for key, text in getattr(data, "ITEM_CONDITIONS", {}).items():
+        it = res["items"].get(key) or {}
+        if it.get("measured"):
+            add("p", [text[1 if lang == "zh" else 0].format(**it["details"])])
     u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     chi2 = [k for k, it in res["items"].items()
@@ -246,7 +252,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes,
                              recal=recal and recal[1 if lang == "zh" else 0])
     blocks += figure_blocks(FIGURES, L, lang)
-    return {"id": certificate_id(result, lab), "virtual": lab is None,
+    return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

@@ -32,6 +32,21 @@ TITLES_ZH = {
     "bias_temperature_sensitivity": "零偏温度灵敏度", "bandwidth": "带宽",
 }
 
+#: The conditions that define an item's measurand, stated under the results table (English,
+#: Chinese templates filled from the item's details): the warm-up time (7.2.9) depends on the
+#: window W, the block P and the nominal stability the reading taken compares with.
+ITEM_CONDITIONS = {
+    "warmup_time": (
+        "Warm-up time (7.2.9): the earliest time after power-on from which every window of "
+        "W = {window_samples} samples ({window_s:g} s) has a stability of P-sample block means "
+        "(P = {block_samples} samples, {block_s:g} s; eq (18)) of at most the nominal "
+        "{nominal_stability_dph:g} °/h; the mean over {records} power-ups, window starts "
+        "every P samples.",
+        "准备时间（7.2.9）：自通电起，此后每个 W = {window_samples} 个采样（{window_s:g} s）的窗口内，"
+        "P 个采样平均值（P = {block_samples} 个采样，{block_s:g} s；式(18)）的稳定性均不超过标称值 "
+        "{nominal_stability_dph:g} °/h 的最早时刻；取 {records} 次通电的平均值，窗口起点步长为 P 个采样。"),
+}
+
 #: Page title.
 HEADING = ("MEMS gyroscope calibration results", "微机电(MEMS)陀螺仪校准结果")
 

@@ -504,7 +504,12 @@ def warmup_time(ctx: Context) -> Item:
     u = gum(lambda a, b, c, d: a + b + c + d, inputs)
     return Item("warmup_time", title, clause, unit, float(t.mean()), uncertainty=u,
                 details={"t_n_s": t, "detection_half_width_s": halves,
-                         "nominal_stability_dph": w["nominal_stability_dph"]})
+                         "nominal_stability_dph": w["nominal_stability_dph"],
+                         # the measurand's definition, stated on the certificate: W, P, t0
+                         "window_samples": int(w["window_samples"]),
+                         "block_samples": int(w["block_samples"]),
+                         "sample_interval_s": dt, "window_s": w["window_samples"] * dt,
+                         "block_s": step, "records": int(t.size)})
 
 
 def g_sensitivity(ctx: Context) -> Item:

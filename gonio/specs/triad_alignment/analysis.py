@@ -310,7 +310,8 @@ FLICKER_FLOOR: float = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
 
 def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
-                           horizon_s: float = BIAS_HORIZON_S) -> tuple[np.ndarray, np.ndarray]:
+                           horizon_s: float = BIAS_HORIZON_S, tau_d_s: float | None = None
+                           ) -> tuple[np.ndarray, np.ndarray]:
     """Long-term term of the bias b (°/s per gyro) and its degrees of freedom (issue 24).
 
     The fit's u(b) is in-run: it holds for the mean bias over this record. The bias a
@@ -324,6 +325,7 @@ def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
     averages within a dwell and shows in the fit's residuals), τ_L = ``horizon_s``. Its
     degrees of freedom are those of the Allan deviation at its minimum, T/τ − 1 for a
     record of T = ``static_s`` (at least 1). Without a static record: zeros, ν = ∞.
+    ``tau_d_s`` replaces the alignment's shortest dwell (the thermal programme's dwells).
 
     >>> av = AveragingTime(0.0, 0.1, 50.0, [1.0] * 3, [50.0] * 3, [3.0] * 3, 10.0, True)
     >>> u, nu = bias_instability_u_dps(av, 300.0)
@@ -334,6 +336,7 @@ def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
         return np.zeros(3), np.full(3, math.inf)
     b = dph_to_dps(np.asarray(averaging.min_adev_dph, dtype=float)) / FLICKER_FLOOR
     tau_d = averaging.shortest_dwell_s if math.isfinite(averaging.shortest_dwell_s) else 1.0
+    tau_d = tau_d if tau_d_s is None else tau_d_s
     u = b * math.sqrt(max(math.log(horizon_s / tau_d), 0.0) / math.pi)
     nu = np.maximum(static_s / np.asarray(averaging.tau_min_adev_s, dtype=float) - 1.0, 1.0)
     return u, nu

@@ -10,9 +10,10 @@ reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.specs._rate_
 * ``L_ij`` — residual cross-axis leakage after alignment, M̂⁻¹M − I: 0 by construction, with
   its uncertainty (what the alignment leaves);
 * ``averaging_time`` — the averaging time chosen from the Allan deviation (article eq. 30b);
-* ``K_<gyro>_<term>``, ``b_<gyro>_<term>``, ``ARW_<gyro>_<term>`` — the coefficients of the
-  identified K(ϑ, U), b(ϑ, U), ARW(ϑ) polynomials (thesis eq. 6.17–6.20), orders chosen by
-  the stated criterion.
+* ``K_<gyro>_t<i>_v<j>``, ``b_<gyro>_t<i>_v<j>``, ``ARW_<gyro>_t<i>`` — the identified
+  K(ϑ, U), b(ϑ, U), ARW(ϑ) (thesis eq. 6.17–6.20) at the programme's chamber set points and
+  supply levels, the model order's effect inside U (the polynomial coefficients, whose
+  order the criterion chooses, are information in ``thermal_model``).
 
 Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: s²(XᵀWX)⁻¹, ν = n − p,
 k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
@@ -31,8 +32,7 @@ from scipy import stats
 
 from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
                                          not_measured, source_info)
-from gonio.specs.triad_alignment.thermal_model import (MAX_ORDER_ARW, MAX_ORDER_T, MAX_ORDER_U,
-                                                      Compensation, ThermalModelResult,
+from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
                                                       compensate_record, identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
                                                  AlignmentResult, bias_instability_u_dps,
@@ -63,7 +63,9 @@ READINGS_TAKEN = (
     "Averaging time: the shortest octave τ at which every gyro's Allan deviation of the "
     "static record is below ω sin ψ_T / 10 (article eq. 30b).",
     "Temperature model: polynomial orders chosen by the stated criterion, not fixed; the "
-    "model is fed with the gyro's internal temperature sensor (thesis §6.1).",
+    "model is fed with the gyro's internal temperature sensor (thesis §6.1); the certified "
+    "values are K, b and ARW at the programme's set points and supply levels, the order "
+    "choice inside U; the coefficients are information.",
 )
 
 
@@ -189,30 +191,28 @@ ALIGNMENT_KEYS = ([f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in
                   + ["averaging_time"])
 
 
-#: The thermal model's coefficient items (:func:`thermal_items`): ``<model>_<gyro>_<term>``,
-#: model → (highest ϑ order, highest U order) the selection may choose.
-THERMAL_MODELS = {"K": (MAX_ORDER_T, MAX_ORDER_U), "b": (MAX_ORDER_T, MAX_ORDER_U),
-                  "ARW": (MAX_ORDER_ARW, 0)}
+#: The thermal model's certified items (:func:`thermal_items`): the value of each model at
+#: the programme's chamber set points t1, t2 … (ascending) and supply levels v1, v2 …
+#: (ascending) — ``K_<gyro>_t<i>_v<j>``, ``b_<gyro>_t<i>_v<j>``, ``ARW_<gyro>_t<i>``.
+#: (1–99 set points, 1–99 supply levels; fnmatch has no "digits only" repetition).
+_INDEX = ("[1-9]", "[1-9][0-9]")
+THERMAL_POINT_KEYS = tuple(f"{m}_[xyz]_t{i}_v{j}" for m in ("K", "b") for i in _INDEX
+                           for j in _INDEX) + tuple(f"ARW_[xyz]_t{i}" for i in _INDEX)
 
 
 def item_keys() -> tuple[str, ...]:
     """Every item a triad result can hold, for ``SPEC.item_keys`` (a laboratory file's limit
     on any other key is refused before the calibration): the alignment's keys, then the
-    thermal coefficients as :mod:`fnmatch` patterns, since which gyros the chamber exercised
-    and the orders the criterion chose depend on the data (``K_[xyz]_theta[1-4]``). The
-    ``thermal_model`` placeholder item (no value: the reason the model is missing) is no
-    quantity to limit.
+    thermal model's values at the programme's set points as :mod:`fnmatch` patterns, since
+    which gyros the chamber exercised and how many set points and supply levels the programme
+    has depend on the data (``K_[xyz]_t[1-9]_v[1-9]`` …). The polynomial coefficients are
+    information in ``thermal_model``, not items; the ``thermal_model`` placeholder item (no
+    value: the reason the model is missing) is no quantity to limit.
 
     >>> [k for k in item_keys() if k.startswith("ARW")]
-    ['ARW_[xyz]_c0', 'ARW_[xyz]_theta[1-2]']
+    ['ARW_[xyz]_t[1-9]', 'ARW_[xyz]_t[1-9][0-9]']
     """
-    gyros = "[" + AXES + "]"
-    out = list(ALIGNMENT_KEYS)
-    for name, (n_t, n_u) in THERMAL_MODELS.items():
-        out.append(f"{name}_{gyros}_c0")
-        out += [f"{name}_{gyros}_{term}[1-{n}]" for term, n in (("theta", n_t), ("u", n_u))
-                if n > 0]
-    return tuple(out)
+    return tuple(ALIGNMENT_KEYS) + THERMAL_POINT_KEYS
 
 
 def _alignment_not_measured(reason: str, unit: str) -> dict[str, Item]:
@@ -251,56 +251,106 @@ def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
                 file=readings.path, line=int(rows["line"].iloc[k]))
 
 
-def _fit_and_order(key: str, fit, c: dict, term: str) -> Uncertainty:
-    """A thermal coefficient's budget: the fit (Type A, soak-components covariance,
-    :func:`gonio.specs.triad_alignment.thermal_model.soak_covariance`) and the model-order
-    term (:func:`gonio.specs.triad_alignment.thermal_model.order_uncertainty`; none when the
-    orders were fixed). k = t_0.9545(ν) of the coefficient's fit ν for both (the order term
-    is given the fit's ν: conservative, it is estimated from the same points)."""
-    u_fit, u_ord = c["u_fit_" + term], c["u_order_" + term]
-    nu = fit.dof_of(term)
-    unc = _type_a(key, f"least-squares fit of the soak points, order ϑ {fit.n_t} / U "
-                  f"{fit.n_u} by {fit.criterion} ({fit.cov_method})", u_fit, nu)
-    if fit.criterion == "fixed":
-        return unc
-    comp = list(unc.components) + [{
-        "symbol": f"{key}_order", "type": "B", "u": u_ord, "c": 1.0, "contribution": u_ord,
-        "dof": nu,
-        "source": f"model order: {fit.criterion.upper()}-weighted spread of the candidate "
-                  "orders' coefficients about the selected one (Burnham & Anderson 2002 §4.3)"}]
-    u_c = math.hypot(u_fit, u_ord)
-    return Uncertainty(comp, u_c, unc.k * u_c, unc.k, nu, None, COVERAGE,
-                       "Student's t for 95.45 % at the coefficient's fit ν")
+def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None) -> Uncertainty:
+    """A certified point value's budget: the fit at the point (Type A, soak-components
+    variance of xᵀĉ, :func:`gonio.specs.triad_alignment.thermal_model.linear_variance`), the
+    model order (the criterion-weighted spread of the candidate orders' values at the point;
+    none with fixed orders), the temperature reading of the set point (slope × the Type A
+    uncertainty of the soak's mean sensor − chamber difference) and, for the bias,
+    ``long_term`` = (u, ν) of the bias instability over the horizon
+    (:func:`thermal_long_term`): a soak's bias is the gyro's bias plus its wander at that
+    hour, and the wander common to several soaks is invisible in the fit's residuals (the
+    alignment's b_i carry the same term). k = t_0.9545 of the
+    Welch–Satterthwaite ν_eff (JCGM 100 G.4); the order term is given the fit's ν (it is
+    estimated from the same points)."""
+    lines = [(f"{key}_fit", "A", pt["u_fit"], pt["nu"],
+              f"least-squares fit of the soak points at this point, order ϑ {fit.n_t} / U "
+              f"{fit.n_u} by {fit.criterion} ({fit.cov_method})")]
+    if fit.criterion != "fixed":
+        lines.append((f"{key}_order", "B", pt["u_order"], pt["nu"],
+                      f"model order: {fit.criterion.upper()}-weighted spread of the candidate "
+                      "orders' values at this point about the selected one (Burnham & "
+                      "Anderson 2002 §4.3)"))
+    if long_term is not None and long_term[0] > 0:
+        lines.append((f"{key}_BI", "B", long_term[0], long_term[1],
+                      "bias instability over the bias's horizon: B̂ √(ln(τ_L/τ_d)/π), B̂ from "
+                      "the static record's Allan floor (IEEE 952 Annex C), τ_d the spacing "
+                      "of the soaks (faster wander is in the fit)"))
+    if pt["nu_theta"] > 0:
+        lines.append((f"{key}_T", "A", abs(pt["slope"]) * pt["u_theta_c"], pt["nu_theta"],
+                      "temperature reading of the soaked set point: slope × u of the soak's "
+                      "mean (sensor − chamber)"))
+    comp = [{"symbol": sym, "type": typ, "u": float(u), "c": 1.0, "contribution": float(u),
+             "dof": float(nu), "source": src} for sym, typ, u, nu, src in lines]
+    u_c = math.sqrt(sum(c["u"] ** 2 for c in comp))
+    den = sum(c["u"] ** 4 / c["dof"] for c in comp if c["u"] > 0)
+    nu_eff = u_c ** 4 / den if den > 0 else math.inf
+    k = float(stats.t.ppf(0.5 + COVERAGE / 2, nu_eff))
+    return Uncertainty(comp, u_c, k * u_c, k, float(nu_eff), None, COVERAGE,
+                       "Student's t for 95.45 % at the Welch–Satterthwaite ν_eff")
 
 
-def thermal_items(th: ThermalModelResult, unit: str) -> dict[str, Item]:
-    """One item per coefficient of every identified polynomial, in physical units."""
-    items: dict[str, Item] = {}
+def thermal_long_term(al: AlignmentResult | None, readings: TriadReadings,
+                      th: ThermalModelResult) -> dict[str, tuple[float, float]]:
+    """Per gyro (u, ν) of the long-term bias term of the thermal model's bias values, from
+    the alignment's static record (:func:`gonio.specs.triad_alignment.analysis.bias_instability_u_dps`)
+    with τ_d the median spacing of consecutive soaks: the wander faster than that is
+    independent between soaks and shows in the fit's between-soak scatter (MS_b); the slower
+    wander moves neighbouring soaks together — with the set points run in order it is
+    confounded with the temperature polynomial and invisible in the residuals — and is
+    counted here up to the horizon τ_L. Empty without a static record or with one soak (the
+    bias values are then in-run, as the alignment's b_i are)."""
+    st = readings.rows("static")
+    if al is None or not len(st):
+        return {}
+    out = {}
     for ch, m in th.channels.items():
-        for name, fit, yunit in (("K", m.scale, f"{unit}/(°/s)"), ("b", m.bias, "°/s"),
-                                 ("ARW", m.arw, "°/√h")):
-            if fit is None:
-                continue
-            c = fit.coefficients()
-            for term in [t for t in c if not t.startswith("u_")]:
-                if term == "c0":
-                    tu, title = yunit, f"{name}_{ch} at the reference (ϑ = 0, U = 0)"
-                elif term.startswith("theta"):
-                    p = int(term[5:])
-                    tu = f"{yunit}/°C" + (f"^{p}" if p > 1 else "")
-                    title = f"{name}_{ch}: ϑ^{p} coefficient"
-                else:
-                    p = int(term[1:])
-                    tu = f"{yunit}/V" + (f"^{p}" if p > 1 else "")
-                    title = f"{name}_{ch}: U^{p} coefficient"
-                key = f"{name}_{ch}_{term}"
-                clause = {"K": "thesis eq. 6.17", "b": "thesis eq. 6.18",
-                          "ARW": "thesis eq. 6.20"}[name]
-                items[key] = Item(key, title, clause, tu, c[term],
-                                  uncertainty=_fit_and_order(key, fit, c, term),
-                                  details={"order_temperature": fit.n_t, "order_supply": fit.n_u,
-                                           "criterion": fit.criterion,
-                                           "covariance": fit.cov_method})
+        starts = np.sort(m.points.groupby("soak")["time_s"].min().to_numpy(float))
+        if starts.size < 2:
+            continue
+        u, nu = bias_instability_u_dps(al.averaging, float(st["duration_s"].sum()),
+                                       tau_d_s=float(np.median(np.diff(starts))))
+        i = AXES.index(ch)
+        if u[i] > 0:
+            out[ch] = (float(u[i]), float(nu[i]))
+    return out
+
+
+def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None
+                  ) -> dict[str, Item]:
+    """The certified values of the identified K(ϑ, U), b(ϑ, U), ARW(ϑ) at the programme's
+    set points and supply levels (:meth:`ChannelModel.certified_points`), in physical units:
+    a fixed measurand per item, whatever orders the criterion chose (the coefficients are
+    information in ``thermal_model``). ``long_term`` ({gyro: (u, ν)}, :func:`thermal_long_term`)
+    makes the bias values long-term; without it they are in-run (details ``bias``)."""
+    long_term = long_term or {}
+    items: dict[str, Item] = {}
+    units = {"K": f"{unit}/(°/s)", "b": "°/s", "ARW": "°/√h"}
+    names = {"K": "scale factor", "b": "bias", "ARW": "angle random walk"}
+    clauses = {"K": "thesis eq. 6.17", "b": "thesis eq. 6.18", "ARW": "thesis eq. 6.20"}
+    for ch, m in th.channels.items():
+        fits = {"K": m.scale, "b": m.bias, "ARW": m.arw}
+        for pt in m.certified_points(th.reference_c, th.reference_v):
+            name, fit = pt["model"], fits[pt["model"]]
+            at = f"{pt['setpoint_c']:g} °C"
+            if name == "ARW":
+                key = f"ARW_{ch}_t{pt['t']}"
+            else:
+                key = f"{name}_{ch}_t{pt['t']}_v{pt['v']}"
+                at += f", {pt['supply_v']:g} V"
+            items[key] = Item(key, f"{names[name]} {name}_{ch} at {at}", clauses[name],
+                              units[name], pt["value"],
+                              uncertainty=_point_budget(
+                                  key, fit, pt, long_term.get(ch) if name == "b" else None),
+                              details={"setpoint_c": pt["setpoint_c"],
+                                       "supply_v": pt["supply_v"],
+                                       "theta_c": pt["theta_c"], "u_v": pt["u_v"],
+                                       "temperature_source": m.temperature,
+                                       "order_temperature": fit.n_t, "order_supply": fit.n_u,
+                                       "criterion": fit.criterion,
+                                       "covariance": fit.cov_method,
+                                       **({"bias": "long-term" if ch in long_term
+                                           else "in-run"} if name == "b" else {})})
     return items
 
 
@@ -423,7 +473,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
                 "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)",
                 "thesis eq. 6.14", "", f"the data were refused: {exc.message}")
         else:
-            items.update(thermal_items(th, unit))
+            items.update(thermal_items(th, unit, thermal_long_term(al, r, th)))
             tj = th.to_json()
             for ch, c in comp.items():
                 tj["channels"][ch]["compensation"] = c.to_json()

@@ -88,13 +88,32 @@ TEXT = {
     "model": ("model", "模型"),
     "order": ("order ϑ / U", "阶次 ϑ / U"),
     "term": ("term", "项"),
-    "coef": ("coefficient ± U", "系数 ± U"),
+    "coef": ("coefficient", "系数"),
     "orders_line": ("{name}: order ϑ {nt}, U {nu} chosen by {crit}; runner-up ϑ {nt2}, U {nu2} "
                     "({crit} {d} larger).",
                     "{name}：按 {crit} 选定阶次 ϑ {nt}、U {nu}；次优 ϑ {nt2}、U {nu2}（{crit} 大 {d}）。"),
-    "sub_pred": ("Prediction across the operating range (band ± U, parameter uncertainty)",
-                 "工作范围内的预测值（± U 带，参数不确定度）"),
-    "pred_note": ("k = {ks} for K, {kb} for b.", "K 的 k = {ks}，b 的 k = {kb}。"),
+    "sub_points": ("Certified values at the programme's set points",
+                   "在温度试验设定点的校准值"),
+    "points_note": ("K(ϑ, U) and b(ϑ, U) of the gyro soaked at each chamber set point T and "
+                    "supply V (ϑ: the reading of the gyro's sensor there, relative to {tref} °C, "
+                    "at which the model is evaluated), ARW(ϑ) at each set point; each cell "
+                    "value ± U with its own k = t(ν_eff) for a coverage probability of "
+                    "approximately 95 %. U includes the fit, the "
+                    "model order (the spread of the candidate orders' values at the point) and "
+                    "the temperature reading; the bias is {bias}. The polynomial coefficients "
+                    "below are information, not certified values.",
+                    "陀螺在各温度箱设定点 T 保温、电源电压为 V 时的 K(ϑ, U) 与 b(ϑ, U)（ϑ：该点陀螺温度"
+                    "传感器读数相对 {tref} °C 的值，模型在该处求值），以及各设定点的 ARW(ϑ)；各格为"
+                    " 值 ± U，各自的 k = t(ν_eff)，包含概率约 95 %。U 含拟合、模型阶次（各候选阶次"
+                    "在该点的值的分散）及温度读数分量；零偏为{bias}。下列多项式系数仅供参考，不是校准值。"),
+    "bias_long-term": ("the long-term bias (with the bias-instability term over one day, as "
+                       "b_i of the alignment)", "长期零偏（含一天时间范围内的零偏不稳定性分量，"
+                                                "与对准的 b_i 相同）"),
+    "bias_in-run": ("the in-run bias of this programme (no static record for the "
+                    "bias-instability term)", "本次试验内的零偏（无静态记录，不含零偏不稳定性分量）"),
+    "points_unit": ("{name} in {unit}:", "{name} 单位 {unit}："),
+    "sub_coef": ("Polynomial coefficients (information, not certified; u standard uncertainty)",
+                 "多项式系数（仅供参考，非校准值；u 为标准不确定度）"),
     "ramp": ("Ramps: the static-soak model leaves {rms} °/s rms on the ramp blocks; with a "
              "rate-of-temperature-change term γ·dϑ/dt (γ = {g} (°/s)/(°C/s)) {rmsg} °/s; with a "
              "first-order lag of the temperature ({lag}) {rmsl} °/s; hysteresis between "
@@ -134,7 +153,8 @@ READINGS_TAKEN_ZH = (
     "对准后残余耦合：M̂⁻¹M − I 对估计值本身为零；其不确定度即对准后残留的量。",
     "平均时间：取各陀螺静态数据 Allan 偏差均低于 ω sin ψ_T / 10 的最短倍频程 τ（文章式 30b）。",
     "温度模型：多项式阶次按所述准则选取而非固定；模型输入为陀螺内部温度传感器的读数"
-    "（论文 §6.1）。",
+    "（论文 §6.1）；校准值为各温度设定点与电源电压下的 K、b 及 ARW，阶次选择的影响计入 U，"
+    "多项式系数仅供参考。",
 )
 
 #: The matrices the DCC writes as lists (name, item keys row by row).
@@ -163,9 +183,9 @@ PHRASES_ZH = (
     (r"residual leakage after alignment (L(?:_\w+)?)(?: \(M̂⁻¹M − I\))?",
      "对准后残余交叉耦合 {1}（M̂⁻¹M − I）"),
     (r"averaging time from the Allan deviation", "由 Allan 偏差确定的平均时间"),
-    (r"(\w+) at the reference \(ϑ = 0, U = 0\)", "{1} 在参考点（ϑ = 0，U = 0）的值"),
-    (r"(\w+): ϑ\^(\d+) coefficient", "{1}：ϑ^{2} 项系数"),
-    (r"(\w+): U\^(\d+) coefficient", "{1}：U^{2} 项系数"),
+    (r"scale factor (K_\w+) at (\S+) °C, (\S+) V", "标度因数 {1}（{2} °C，{3} V）"),
+    (r"bias (b_\w+) at (\S+) °C, (\S+) V", "零偏 {1}（{2} °C，{3} V）"),
+    (r"angle random walk (ARW_\w+) at (\S+) °C", "角度随机游走 {1}（{2} °C）"),
     (r"MEMS gyro triad \(virtual\)", "微机电三轴陀螺组件（虚拟）"),
     (r"mems-triad", "微机电三轴陀螺组件虚拟台架（mems-triad）"),
     # the clauses of the sources (docs/alignment.md, docs/thermal-model.md)

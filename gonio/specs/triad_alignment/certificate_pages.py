@@ -5,10 +5,10 @@ parts of :mod:`gonio.report.rate_certificate`: header, closing statements, figur
 Its own pages: the **alignment-matrix table** (M and b with each element's U and k, M⁻¹, the
 cross-axis sensitivities before and the residual leakage after alignment, the averaging time
 chosen from the Allan deviation), the uncertainty of M and b (GUM and Monte Carlo), and — when
-the readings include a thermal programme — the **temperature-model page** (the identified
-K(ϑ, U), b(ϑ, U), ARW(ϑ) polynomials with the order-selection criterion, parameter
-uncertainties, the prediction band across the operating range, the ramp analysis and the
-before/after compensation). Every number of an item is a :class:`~gonio.report.stated.Num`
+the readings include a thermal programme — the **temperature-model page** (the certified
+K(ϑ, U), b(ϑ, U) at the programme's set points and supply levels and ARW(ϑ) at the set points,
+each with its U and k; the order-selection criterion; the polynomial coefficients as
+information; the ramp analysis and the before/after compensation). Every number of an item is a :class:`~gonio.report.stated.Num`
 whose ``data-src`` is its path in ``results.json``. The text is data in
 :mod:`gonio.specs.triad_alignment.certificate`; this module is the specification's rendering
 side (it imports the report), called by :mod:`gonio.specs.triad_alignment.outputs`.
@@ -22,6 +22,7 @@ from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_a
                                translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
                                            screening_blocks, write_spec_certificate)
+from gonio.report.provenance import is_virtual
 from gonio.report.render import Block
 from gonio.report.stated import item_nums, num
 from gonio.result.statement import unit_text
@@ -153,6 +154,7 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
         th, uv = c["theta_range_c"], c["supply_range_v"]
         out.append(Block("sub", T("sub_channel", ch=ch, lo=f"{th[0]:.1f}", hi=f"{th[1]:.1f}",
                                   ulo=f"{uv[0]:+.2f}", uhi=f"{uv[1]:+.2f}")))
+        out += certified_point_blocks(res, ch, c, T)
         rows = []
         for name, part in (("K", "scale"), ("b", "bias"), ("ARW", "arw")):
             f = c.get(part)
@@ -166,27 +168,15 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
                              nt2=cand[1]["order_temperature"], nu2=cand[1]["order_supply"],
                              d=display("sig3", cand[1][f["criterion"]] - cand[0][f["criterion"]]))
                 out.append(Block("p", [out_line]))
-            for term in [t for t in f["coefficients"] if not t.startswith("u_")]:
-                key = f"{name}_{ch}_{term}"
-                it = res["items"][key]
+            co = f["coefficients"]
+            for term in [t for t in co if not t.startswith("u_")]:
                 rows.append([name, f"{f['order_temperature']} / {f['order_supply']}",
                              {"c0": "1"}.get(term, term.replace("theta", "ϑ^").replace("u", "U^")),
-                             _pm(res, key), it["unit"],
-                             num(res, f"items.{key}.uncertainty.k", "k")])
-        out.append(Block("table", ([T("model"), T("order"), T("term"), T("coef"), L["unit"], "k"],
-                                   rows), {"widths": (0.08, 0.12, 0.08, 0.32, 0.28, 0.12),
-                                           "id": f"thermal-{ch}"}))
-        pr = tm["prediction_U"][ch]
-        out.append(Block("sub", T("sub_pred")))
-        prow = []
-        for n in range(len(pr["theta_c"])):
-            prow.append([f"{pr['theta_c'][n]:.1f}", f"{pr['u_v'][n]:+.2f}",
-                         _pm_scaled(pr["scale"][n], pr["U_scale"][n]),
-                         _pm_scaled(pr["bias_dps"][n], pr["U_bias_dps"][n])])
-        out.append(Block("table", (["ϑ (°C)", "U (V)", "K ± U", "b (°/s) ± U"], prow),
-                         {"widths": (0.15, 0.15, 0.35, 0.35), "id": f"prediction-{ch}"}))
-        out.append(Block("p", [T("pred_note", ks=display("k", pr["k_scale"]),
-                                 kb=display("k", pr["k_bias"]))]))
+                             display(rule_at_U(co["u_" + term], 6), co[term]),
+                             display_uncertainty(co["u_" + term])])
+        out.append(Block("sub", T("sub_coef")))
+        out.append(Block("table", ([T("model"), T("order"), T("term"), T("coef"), "u"], rows),
+                         {"widths": (0.1, 0.14, 0.1, 0.36, 0.3), "id": f"thermal-{ch}"}))
         ra = c.get("ramp")
         if ra:
             out.append(Block("p", [T("ramp", rms=display("sig3", ra["rms_static_model_dps"]),
@@ -208,6 +198,48 @@ def thermal_blocks(res: dict, T, L: dict, lang: str) -> list[Block]:
                 [T("r_ramp"), display("sig3", cp["rms_ramp_before_dps"]),
                  display("sig3", cp["rms_ramp_after_dps"])]]),
                 {"widths": (0.46, 0.27, 0.27), "id": f"compensation-{ch}"}))
+    return out
+
+
+def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
+    """The certified values of gyro ``ch``: K and b at every set point (rows) and supply
+    level (a value ± U and a k column each), ARW at every set point — the items
+    ``K_<ch>_t<i>_v<j>``, ``b_<ch>_t<i>_v<j>``, ``ARW_<ch>_t<i>``."""
+    items = res["items"]
+    pts = [p for p in c.get("certified_points", ()) if p["model"] == "K"]
+    temps = sorted({(p["t"], p["setpoint_c"], p["theta_c"]) for p in pts})
+    levels = sorted({(p["v"], p["supply_v"]) for p in pts})
+    if not temps:
+        return []
+    first_b = items.get(f"b_{ch}_t1_v1") or {}
+    out = [Block("sub", T("sub_points")),
+           Block("p", [T("points_note", tref=display("sig3", res["extra"]["thermal_model"]
+                                                     ["reference_c"]),
+                         bias=T("bias_" + (first_b.get("details") or {}).get("bias", "in-run")))])]
+    for name in ("K", "b"):
+        unit = (items.get(f"{name}_{ch}_t1_v1") or {}).get("unit", "")
+        head = ["T (°C)", "ϑ (°C)"]
+        for _, v in levels:
+            head += [f"{name} ({display('sig3', v)} V) ± U", "k"]
+        rows = []
+        for i, t_set, theta in temps:
+            row = [display("sig3", t_set), f"{theta:+.1f}"]
+            for j, _ in levels:
+                key = f"{name}_{ch}_t{i}_v{j}"
+                row += ([_pm(res, key), num(res, f"items.{key}.uncertainty.k", "k")]
+                        if key in items else ["—", "—"])
+            rows.append(row)
+        out.append(Block("p", [T("points_unit", name=name, unit=unit_text(unit))]))
+        share = 0.8 / len(levels)
+        out.append(Block("table", (head, rows), {
+            "widths": (0.1, 0.1) + (share * 0.78, share * 0.22) * len(levels),
+            "id": f"points-{name}-{ch}"}))
+    arw = [(i, t) for i, t, _ in temps if f"ARW_{ch}_t{i}" in items]
+    if arw:
+        out.append(Block("table", (["T (°C)", "ARW (°/√h) ± U", "k"], [
+            [display("sig3", t), _pm(res, f"ARW_{ch}_t{i}"),
+             num(res, f"items.ARW_{ch}_t{i}.uncertainty.k", "k")] for i, t in arw]),
+            {"widths": (0.3, 0.45, 0.25), "id": f"points-ARW-{ch}"}))
     return out
 
 
@@ -264,7 +296,7 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
         notes = list(zh)
     blocks += closing_blocks(res, L, lab, T("readings_taken"), notes, T("recal"))
     blocks += figure_blocks(triad_figures(result), L, lang)
-    return {"id": certificate_id(result, lab), "virtual": lab is None,
+    return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

@@ -39,12 +39,14 @@ def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed:
 
 def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = "mems-triad",
                   criterion: str = "bic") -> dict[str, dict]:
-    """One simulated chamber programme identified as ``calibrate`` does, every certified
-    thermal coefficient (``K_z_theta1`` …) against the bench's closed-form truth
+    """One simulated programme (the chamber programme and, for its static record, the
+    alignment session) identified as ``calibrate`` does, every certified thermal value
+    (``K_z_t1_v2``, ``b_z_t3_v1``, ``ARW_z_t2`` …) against the bench's closed-form truth
     (``SPEC.truth``, :mod:`gonio.specs.triad_alignment.truth`, from
     :func:`gonio.bench.triad.true_thermal_coefficients`): {key: {clause, value, truth, U,
     u_c}}, the records of :func:`gonio.pipeline.coverage.coverage_table_from`."""
-    from gonio.specs.triad_alignment.calibration import thermal_items
+    from gonio.specs.triad_alignment.analysis import estimate_alignment
+    from gonio.specs.triad_alignment.calibration import thermal_items, thermal_long_term
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 
     from gonio.specs.triad_alignment.truth import truth
@@ -53,9 +55,12 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
     s = run_thermal_session(p, b, int(seed))
     r = TriadReadings(s.readings.assign(line=np.arange(len(s.readings)) + 1), s.metadata, None)
     th = identify_thermal_model(r, criterion=criterion, ramps=False)
+    a = run_alignment_session(p, b, int(seed))       # its static record: the long-term term
+    ra = TriadReadings(a.readings.assign(line=np.arange(len(a.readings)) + 1), a.metadata, None)
+    al = estimate_alignment(ra)
     true = truth(b, p)                          # SPEC.truth: one truth hook
     out = {}
-    for key, it in thermal_items(th, "").items():
+    for key, it in thermal_items(th, "", thermal_long_term(al, ra, th)).items():
         out[key] = {"clause": it.clause, "value": float(it.value),
                     "truth": float(true[key]["value"]),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}

@@ -103,6 +103,7 @@ def soak_points(readings: TriadReadings, *, temperature: str = "sensor") -> pd.D
                 if s["rate_dps"] == 0 and s["supply_v"] == a["supply_v"] and np.isfinite(s[f"sd_{AXES[c]}"]):
                     arw = s[f"sd_{AXES[c]}"] / abs(kk) * math.sqrt(1.0 / fs) / deg_sqrt_s_from_deg_sqrt_h(1.0)
             pts.append({"channel": AXES[c], "theta_c": 0.5 * (a[col] + b[col]) - t_ref,
+                        "chamber_c": 0.5 * (a["chamber_c"] + b["chamber_c"]),
                         "u_v": a["supply_v"] - v_ref, "scale": kk, "bias_dps": bias,
                         "arw_deg_sqrt_h": arw, "time_s": a["time_s"], "line": int(a["line"]),
                         "soak": int(a["soak"])})
@@ -142,6 +143,33 @@ class PolyFit:
     u_order: np.ndarray | None = None   # model-order standard uncertainty per coefficient
     cov_method: str = "ols"      # "ols" s²(XᵀX)⁻¹ or "soak components" (:func:`soak_covariance`)
     dof_coef: np.ndarray | None = None   # ν of each coefficient (``dof``: the smallest)
+    parts: dict | None = None    # :func:`soak_parts` of the selected fit (point variances)
+    candidate_coef: dict | None = None   # (n_t, n_u) → coefficients of every candidate order
+
+    def point(self, theta: float, u: float = 0.0) -> dict:
+        """The fitted value at one point (ϑ, U) with its standard uncertainties: ``u_fit``
+        and ``nu`` of the fit (:func:`linear_variance`: the soak components, ν by
+        Welch–Satterthwaite) and ``u_order`` = √(Σ_m w_m (ŷ_m − ŷ)²), the spread of every
+        candidate order's value at the point about the selected one with the criterion's
+        weights (:func:`criterion_weights`; 0 with fixed orders). Inside the soaked range
+        the orders the criterion nearly chose agree closely at a point even where their
+        coefficients do not: the point value is the same measurand whatever the order."""
+        g = self._x(np.atleast_1d(float(theta)), np.atleast_1d(float(u)))[0]
+        value = float(g @ self.coef)
+        if self.parts is None:
+            var, nu = float(g @ self.cov @ g), float(self.dof)
+        else:
+            var, nu = linear_variance(self.parts, g)
+        u_order = 0.0
+        if self.criterion != "fixed" and self.candidate_coef:
+            w = criterion_weights(self.table, self.criterion)
+            lt, lu = np.atleast_1d(theta / self.scale_t), np.atleast_1d(u / self.scale_u)
+            spread = [(design(lt, lu, row["order_temperature"], row["order_supply"])[0]
+                       @ self.candidate_coef[(row["order_temperature"], row["order_supply"])]
+                       - value) ** 2 for row in self.table]
+            u_order = math.sqrt(float(np.dot(w, spread)))
+        return {"value": value, "u_fit": math.sqrt(max(var, 0.0)), "nu": float(nu),
+                "u_order": u_order}
 
     def dof_of(self, term: str) -> float:
         """ν of one coefficient (``c0``, ``theta2``, ``u1`` …)."""
@@ -224,10 +252,26 @@ def soak_covariance(x: np.ndarray, r: np.ndarray, groups: np.ndarray
     temperature terms ν_b is 3–4, and a shared error the soak means happen to hide (often
     by an order that absorbed the wander) was then certified with k ≈ 2.1
     (docs/thermal-model.md §2, §7)."""
+    parts = soak_parts(x, r, groups)
+    if parts["method"] == "ols":
+        return parts["s2"] * parts["xtx_inv"], np.full(x.shape[1], parts["nu_ols"]), "ols"
+    hz, ms_w, nu_b, tr = parts["hz"], parts["ms_w"], parts["nu_b"], parts["tr"]
+    b = np.sum(hz ** 2, axis=1)
+    cov = ms_w * parts["xtx_inv"] + (parts["ss_b"] - ms_w * nu_b) / tr * hz @ hz.T
+    cw, cb = (np.diag(parts["xtx_inv"]) - b * nu_b / tr) * ms_w, b * nu_b / tr * parts["ms_b"]
+    nu = (cw + cb) ** 2 / (cw ** 2 / parts["nu_w"] + cb ** 2 / nu_b)
+    return cov, nu, parts["method"]
+
+
+def soak_parts(x: np.ndarray, r: np.ndarray, groups: np.ndarray) -> dict:
+    """The pieces of :func:`soak_covariance` (MS_w, MS_b with ν_w, ν_b, tr(M ZZᵀ),
+    (XᵀX)⁻¹, H Z, and the method), from which the variance and the Welch–Satterthwaite ν
+    of any linear combination gᵀĉ follow (:func:`linear_variance`): a point value
+    K̂(ϑ, U) = x(ϑ, U)ᵀĉ is such a combination."""
     n, p = x.shape
     rss = float(r @ r)
     xtx_inv = np.linalg.inv(x.T @ x)
-    ols = (rss / (n - p) * xtx_inv, np.full(p, float(n - p)), "ols")
+    ols = {"method": "ols", "s2": rss / (n - p), "nu_ols": float(n - p), "xtx_inv": xtx_inv}
     _, inv = np.unique(groups, return_inverse=True)
     z = np.zeros((n, inv.max() + 1))
     z[np.arange(n), inv] = 1.0
@@ -252,12 +296,31 @@ def soak_covariance(x: np.ndarray, r: np.ndarray, groups: np.ndarray
         # the temperature terms still rest on the soak means — MS_b is floored at MS_w and
         # keeps its ν_b (the "never pool" rule of split-plot analysis).
         ms_b, ss_b, method = ms_w, ms_w * nu_b, "soak components, MS_b floored at MS_w"
-    hz = xtx_inv @ x.T @ z
-    b = np.sum(hz ** 2, axis=1)
-    cov = ms_w * xtx_inv + (ss_b - ms_w * nu_b) / tr * hz @ hz.T
-    cw, cb = (np.diag(xtx_inv) - b * nu_b / tr) * ms_w, b * nu_b / tr * ms_b
-    nu = (cw + cb) ** 2 / (cw ** 2 / nu_w + cb ** 2 / nu_b)
-    return cov, nu, method
+    return {"method": method, "xtx_inv": xtx_inv, "hz": xtx_inv @ x.T @ z, "ms_w": ms_w,
+            "ms_b": ms_b, "ss_b": ss_b, "nu_w": nu_w, "nu_b": nu_b, "tr": tr}
+
+
+def linear_variance(parts: dict, g: np.ndarray) -> tuple[float, float]:
+    """Variance of gᵀĉ and its Welch–Satterthwaite ν (JCGM 100 G.4) from the pieces of
+    :func:`soak_parts`: (gᵀ(XᵀX)⁻¹g − ‖gᵀHZ‖² ν_b/tr)·MS_w + (‖gᵀHZ‖² ν_b/tr)·MS_b, the
+    coefficient formula of :func:`soak_covariance` with g in place of a unit vector; the
+    ordinary s² gᵀ(XᵀX)⁻¹g with ν = n − p where the soaks are not replicated."""
+    g = np.asarray(g, float)
+    a = float(g @ parts["xtx_inv"] @ g)
+    if parts["method"] == "ols":
+        return parts["s2"] * a, parts["nu_ols"]
+    bb = float(np.sum((g @ parts["hz"]) ** 2)) * parts["nu_b"] / parts["tr"]
+    cw, cb = (a - bb) * parts["ms_w"], bb * parts["ms_b"]
+    return cw + cb, (cw + cb) ** 2 / (cw ** 2 / parts["nu_w"] + cb ** 2 / parts["nu_b"])
+
+
+def criterion_weights(table: list, criterion: str) -> np.ndarray:
+    """The candidates' weights w_m ∝ exp(−Δ_m/2) of the criterion (Akaike / Schwarz weights,
+    Burnham & Anderson 2002 §4.2); the F-test and fixed orders use the BIC's."""
+    key = "aic" if criterion == "aic" else "bic"
+    crit = np.array([row[key] for row in table])
+    w = np.exp(-(crit - crit.min()) / 2.0)
+    return w / w.sum()
 
 
 def order_uncertainty(fits: dict, table: list, sel: tuple[int, int], criterion: str
@@ -269,10 +332,7 @@ def order_uncertainty(fits: dict, table: list, sel: tuple[int, int], criterion: 
     candidate without the term counts it as 0. The F-test uses the BIC weights. The spread
     of the neighbouring orders' coefficients is what selecting one order leaves out of
     s²(XᵀX)⁻¹ (docs/thermal-model.md §2)."""
-    key = "aic" if criterion == "aic" else "bic"
-    crit = np.array([row[key] for row in table])
-    w = np.exp(-(crit - crit.min()) / 2.0)
-    w /= w.sum()
+    w = criterion_weights(table, criterion)
     nt, nu = sel
     c_sel = fits[sel][0]
     var = np.zeros(c_sel.size)
@@ -366,11 +426,12 @@ def fit_polynomial(name: str, theta, u, y, *, criterion: str = "bic", max_t: int
             sel = best[1]
     coef, rss, x = fits[sel]
     s2 = rss / (n - x.shape[1])
-    cov, nu, method = soak_covariance(x, y - x @ coef, soak if soak is not None
-                                      else np.round(theta * 2))
+    groups = soak if soak is not None else np.round(theta * 2)
+    cov, nu, method = soak_covariance(x, y - x @ coef, groups)
     u_order = None if criterion == "fixed" else order_uncertainty(fits, table, sel, criterion)
     return PolyFit(name, sel[0], sel[1], coef, cov, math.sqrt(s2), float(np.min(nu)), criterion,
-                   table, st, su, u_order, method, nu)
+                   table, st, su, u_order, method, nu, soak_parts(x, y - x @ coef, groups),
+                   {k: v[0] for k, v in fits.items()})
 
 
 # --------------------------------------------------------------------------- ramps
@@ -607,6 +668,41 @@ class ChannelModel:
             df["u_arw_deg_sqrt_h"] = self.arw.u_predict(df["theta_c"].to_numpy())
         return df
 
+    def certified_points(self, reference_c: float, reference_v: float) -> list[dict]:
+        """The certified values: K(ϑ, U) and b(ϑ, U) at every chamber set point of the
+        programme (soaked; the chamber temperature rounded to 0.1 °C) and every supply level,
+        ARW(ϑ) at every set point — fixed measurands, whatever orders the criterion chose.
+        With the sensor temperature as input the model is evaluated at the sensor's reading
+        of the soaked set point: the soak's mean (sensor − chamber) added to the set point,
+        so a chamber that settled a little off its set point does not move the measurand;
+        that mean's Type A uncertainty (``u_theta_c``, ν = points − 1) enters through the
+        model's slope. Each entry: t, v (1-based indices, ascending), setpoint_c, supply_v,
+        theta_c, u_v (the model's coordinates), u_theta_c, nu_theta and, per model, the
+        :meth:`PolyFit.point` record with the slope."""
+        pts = self.points
+        sp = np.round(pts["chamber_c"].to_numpy(float), 1)
+        off = pts["theta_c"].to_numpy(float) - (pts["chamber_c"].to_numpy(float) - reference_c)
+        levels = sorted({round(float(v), 6) for v in pts["u_v"]})
+        out = []
+        for i, t_set in enumerate(sorted(set(sp.tolist())), 1):
+            o = off[sp == t_set]
+            theta = float(np.mean(o)) + t_set - reference_c
+            u_th = float(np.std(o, ddof=1) / math.sqrt(o.size)) if o.size > 1 else 0.0
+            fits = [("K", self.scale, levels), ("b", self.bias, levels)]
+            if self.arw is not None:
+                fits.append(("ARW", self.arw, [0.0]))
+            for name, fit, us in fits:
+                for j, uv in enumerate(us, 1):
+                    rec = fit.point(theta, uv)
+                    rec["slope"] = float((fit.predict(theta + 0.01, uv)[0]
+                                          - fit.predict(theta - 0.01, uv)[0]) / 0.02)
+                    out.append({"model": name, "t": i, "v": j if name != "ARW" else 0,
+                                "setpoint_c": float(t_set),
+                                "supply_v": None if name == "ARW" else float(uv + reference_v),
+                                "theta_c": theta, "u_v": float(uv), "u_theta_c": u_th,
+                                "nu_theta": float(o.size - 1), **rec})
+        return out
+
     def compensate(self, outputs, theta_c, u_v=0.0, dtheta_dt=None) -> np.ndarray:
         """ω̂ = y/K̂(ϑ, U) − b̂(ϑ, U) (− γ dϑ/dt when given and a ramp term was fitted), °/s."""
         y = np.asarray(outputs, float)
@@ -638,7 +734,8 @@ class ThermalModelResult:
         return {"kind": "thermal-model", "reference_c": self.reference_c,
                 "reference_v": self.reference_v, "criterion": self.criterion,
                 "output_unit": self.output_unit,
-                "channels": {k: v.to_json() for k, v in self.channels.items()}}
+                "channels": {k: dict(v.to_json(), certified_points=v.certified_points(
+                    self.reference_c, self.reference_v)) for k, v in self.channels.items()}}
 
 
 def check_temperature_span(theta_c: np.ndarray, channel: str, readings: TriadReadings) -> None:
