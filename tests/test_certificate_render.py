@@ -58,8 +58,14 @@ def run(tmp_path_factory):
     paths = cert.write_certificate(report, d, truth=session.truth)
     lab_dir = d / "lab"
     lab = cert.load_lab(protocols_dir() / "lab-example.toml")
-    report.decided_result(lab)           # the pipeline decides; the certificate renders
-    cert.write_certificate(report, lab_dir, lab=lab)
+    # a laboratory's own readings: the bench's metadata lines out (else marked virtual)
+    lab_readings = d / "lab-readings.csv"
+    lab_readings.write_text("".join(
+        x for x in (d / "readings.csv").read_text().splitlines(keepends=True)
+        if not re.match(r"# (bench|seed|generator):", x)))
+    lab_report = calibrate(lab_readings, proto, static_record=session.static_record)
+    lab_report.decided_result(lab)       # the pipeline decides; the certificate renders
+    cert.write_certificate(lab_report, lab_dir, lab=lab)
     return {"dir": d, "report": report, "paths": paths, "lab_dir": lab_dir,
             "results": flat_view(json.loads((d / "results.json").read_text()))}
 
@@ -180,6 +186,18 @@ def test_lab_file_details_and_no_virtual_mark(run, tmp_path):
                   lab["signatory"]["approved_by"], lab["standards"][0]["traceability"]):
         assert html.escape(value) in page, value
     assert labels("en")["virtual"] not in page
+
+
+def test_virtual_readings_with_a_lab_file_are_marked(run, tmp_path):
+    """The simulated readings with the laboratory file: every page says virtual."""
+    lab = cert.load_lab(protocols_dir() / "lab-example.toml")
+    run["report"].decided_result(lab)
+    cert.write_certificate(run["report"], tmp_path, lab=lab)
+    pages = pdf_pages_text(tmp_path / "certificate.pdf", tmp_path)
+    assert all(labels("en")["virtual_short"] in t for t in pages)
+    page = (tmp_path / "certificate.html").read_text()
+    assert labels("en")["virtual"] in page and html.escape(lab["laboratory"]["name"]) in page
+    run["report"].decided_result(None)
 
 
 def test_bad_lab_file_names_the_key(tmp_path):

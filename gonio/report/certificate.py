@@ -36,6 +36,7 @@ from gonio.report.header import (certificate_id, decision_rule_blocks, meta_text
                                  opening_blocks, signature_blocks)
 from gonio.report.i18n import (budget_source, coverage_text, display, finding_text, labels,
                                reading_note, reason_text, rule_at_U, specification_text)
+from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for, conformity_texts,
@@ -96,7 +97,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     lab = clean_tree(lab) if lab else lab
     unc = res["uncertainty"]
     U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
-    virtual = lab is None
+    virtual = is_virtual(res, lab)              # the readings' provenance, not the lab file
     lab_ = lab or {}
     blocks: list[Block] = []
     add = lambda kind, data, extra=None: blocks.append(  # noqa: E731

@@ -51,6 +51,7 @@ from pathlib import Path
 from lxml import etree
 
 from gonio.atomic import write_bytes
+from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels, reading_note, specification_text
 from gonio.report.stated import (Num, conformity_for, conformity_texts, item_uncertainty,
                                  item_names, method_rows, num, stated_item)
@@ -287,17 +288,20 @@ def new_document() -> "etree.Element":
 
 def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm: str,
                         clauses: list[str], readings_taken: list[str],
-                        readings_name: str | None = None) -> "etree.Element":
+                        readings_name: str | None = None,
+                        provenance: dict | None = None) -> "etree.Element":
     """dcc:administrativeData shared by every specification's DCC: the software, core data
     (identifier, dates, place), the item, laboratory, responsible persons, customer and the
     statements: the specification followed (``norm``, the ``clauses`` calibrated), the
     virtual-bench notice and one statement per reading taken (already in English; named
-    ``readings_name``, default the optical certificate's heading).
+    ``readings_name``, default the optical certificate's heading). The virtual-bench statement
+    is made where the readings' ``provenance`` (or ``md``) say virtual, whatever ``lab`` holds.
     Returns the dcc:statements element (a specification adds its own statements)."""
     from gonio import __version__
 
     L = labels("en")
-    virtual = lab is None
+    prov = {"metadata": md, "provenance": provenance}
+    virtual = is_virtual(prov, lab)               # the readings' provenance, not the lab file
     lab_ = lab or {}
     adm = element(root, "dcc:administrativeData")
     sw = element(element(adm, "dcc:dccSoftware"), "dcc:software")
@@ -371,6 +375,10 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
         text_element(st, "dcc:declaration", L["virtual_note"] + (
             f" Performance dates are the placeholder {PLACEHOLDER_DATE}."
             if date == PLACEHOLDER_DATE else ""))
+        for i, line in enumerate(virtual_lines(prov, L)[1:], 1):   # bench and seed
+            st = element(sts, "dcc:statement", id=f"virtual-bench-readings-{i}")
+            text_element(st, "dcc:name", L["virtual"])
+            text_element(st, "dcc:declaration", line)
     for i, note in enumerate(readings_taken, 1):
         st = element(sts, "dcc:statement", id=f"reading-taken-{i}")
         text_element(st, "dcc:name", readings_name or L["readings_taken"])
@@ -451,7 +459,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
     root = new_document()
     norm = specification_text(res.get("specification") or "not stated", "en")
     sts = administrative_data(
-        root, md, lab, cert_id=cert_id, norm=norm,
+        root, md, lab, cert_id=cert_id, norm=norm, provenance=res.get("provenance"),
         clauses=[res[n]["clause"] for n in item_names(res) if res[n]["measured"]],
         readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
     conf = conformity_for(res, lab, report.conformity)

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, fields
 from gonio import __version__
 from gonio.errors import GonioError
 from gonio.formats.jsonsafe import json_safe
+from gonio.formats.provenance import result_provenance
 from gonio.result.findings import Finding, findings_to_json
 
 #: The version of the results.json shape (docs/formats.md#results-file). Raise it when a
@@ -294,6 +295,9 @@ class Result:
     covariances: list[Covariance] = field(default_factory=list)
     gonio_version: str = __version__
     tables: dict = field(default_factory=dict, repr=False, compare=False)
+    #: Where the readings come from (:func:`gonio.formats.provenance.provenance`), set by the
+    #: pipeline from the readings; ``virtual`` also whenever the metadata say so.
+    provenance: dict = field(default_factory=dict)
 
     @property
     def source_sha256(self) -> str:
@@ -317,7 +321,9 @@ class Result:
                 "findings": findings_to_json(self.findings),
                 "unused_readings": json_safe(self.unused_readings),
                 "readings_taken": list(self.readings_taken),
-                "extra": json_safe(self.extra)}
+                "extra": json_safe(self.extra),
+                "provenance": json_safe(result_provenance(
+                    {"provenance": self.provenance, "metadata": self.metadata}))}
 
     def to_dict(self) -> dict:
         return self.to_json()
@@ -341,7 +347,7 @@ class Result:
                         for f in d.get("findings") or []],
                        list(d.get("unused_readings") or []),
                        [Covariance.from_json(c) for c in d.get("covariances") or []],
-                       d.get("gonio_version", ""))
+                       d.get("gonio_version", ""), provenance=dict(d.get("provenance") or {}))
         except (KeyError, AttributeError, IndexError, TypeError, ValueError) as exc:
             raise GonioError(f"malformed results.json: {type(exc).__name__} {str(exc)[:80]}",
                              key="results") from None

@@ -385,15 +385,10 @@ def calibration_progress(request: Request, cal_id: int):
 
 
 async def _act(request: Request, cal_id: int, do) -> Response:
-    user, csrf = current(request)
-    data = await form(request, csrf)
-    try:
-        do(user, data)
-    except GonioError as exc:
-        from urllib.parse import quote
-        return _back(f"/calibrations/{cal_id}?error={quote(str(exc)[:300])}")
+    """A calibration's action (:func:`_edit` back to its page), and the dispatcher woken."""
+    r = await _edit(request, f"/calibrations/{cal_id}", do)
     wake(request)
-    return _back(f"/calibrations/{cal_id}")
+    return r
 
 
 @router.post("/calibrations/{cal_id}/review")

@@ -29,6 +29,7 @@ from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
+from gonio.formats.provenance import result_provenance
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.result.findings import findings_to_json
@@ -144,6 +145,8 @@ class CalibrationReport:
     conformity: dict = field(default_factory=dict)
     #: The specification's key in results.json (this report is the optical draft's).
     spec_key: str = "ogam-draft"
+    #: Where the readings come from (gonio.formats.provenance.provenance; the pipeline sets it)
+    provenance: dict = field(default_factory=dict)
 
     @property
     def e_measured(self) -> bool:
@@ -220,6 +223,8 @@ class CalibrationReport:
         out["conflicts"] = [c.to_dict() for c in self.conflicts]
         out["findings"] = findings_to_json(self.findings)
         out["precedence_rule"] = PRECEDENCE_RULE
+        out["provenance"] = result_provenance({"provenance": self.provenance,
+                                               "metadata": out["metadata"]})
         out["readings_taken"] = readings_taken(self.repeatability_source) if self.e_measured \
             else list(READINGS_TAKEN)
         return json_safe(out)
@@ -247,7 +252,7 @@ class CalibrationReport:
                                    "equal_division", "unused_readings_summary") if k in d}
         known = set(ITEM_NAMES) | set(extra) | {"gonio_version", "specification", "protocol",
                                                "source", "metadata", "unused_readings",
-                                               "readings_taken", "findings"}
+                                               "readings_taken", "findings", "provenance"}
         extra.update({k: v for k, v in d.items() if k not in known})   # nothing dropped
         title = self.protocol.specification or spec_title(self.spec_key)
         return Result(self.spec_key, title, items, d["metadata"],
@@ -259,7 +264,8 @@ class CalibrationReport:
                                 "repeatability_source": self.repeatability_source or None},
                       unused_readings=list(d.get("unused_readings") or []),
                       findings=list(self.findings),
-                      gonio_version=d["gonio_version"], tables=self.detail_tables())
+                      gonio_version=d["gonio_version"], tables=self.detail_tables(),
+                      provenance=d["provenance"])
 
     def decided_result(self, lab: dict | None = None) -> Result:
         """:meth:`to_result` with the conformity of every item the laboratory file limits

@@ -16,6 +16,7 @@ from gonio.protocol import load_protocol
 from gonio.report.certificate import write_certificate
 from gonio.report.stated import summary_text
 from gonio.result.tables import results_json_text, write_tables
+from gonio.result.text import virtual_line
 from gonio.specs.ogam_draft.calibration import CalibrationReport, calibrate
 from gonio.specs.ogam_draft.items import ITEM_KEYS
 
@@ -48,7 +49,8 @@ def summary(report: CalibrationReport, lab: dict | None = None) -> str:
     then the 95 % intervals of the standard-deviation items and the budget's notes."""
     if (lab or {}).get("specification_limits") and not report.conformity:
         report.decided_result(lab)          # the pipeline's decision, kept in report.conformity
-    lines = [summary_text(report.to_dict(), "en", lab, report.conformity).rstrip("\n")]
+    res = report.to_dict()
+    lines = virtual_line(res) + [summary_text(res, "en", lab, report.conformity).rstrip("\n")]
     for name in ITEM_NAMES:
         iu = report.item_uncertainty.get(name)
         if iu is not None and iu.interval is not None:
@@ -69,6 +71,8 @@ def summary(report: CalibrationReport, lab: dict | None = None) -> str:
         lines.append(f"note: {zr['note']}")
     if report.e_measured:
         lines += [f"note: {n}" for n in report.budget_notes]
+    lines += [f"flagged: {f.location()}: {f.message}" for f in report.findings
+              if f.code == "identity-mismatch"]       # the readings against the lab file
     return "\n".join(lines) + "\n"
 
 
