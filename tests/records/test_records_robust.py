@@ -181,3 +181,18 @@ def test_a_form_with_an_error_keeps_what_was_entered(app, sqlite_store):  # noqa
     for kept in ('value="9999-12-31"', 'value="2025-01-02"', 'value="20.5"', 'value="41"',
                  'value="Room 2"', f'value="{std.id}"  checked'):
         assert kept in r.text, kept
+
+
+def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, computed_folder,
+                                                        bench_readings):
+    import json
+    import shutil
+
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    res = json.loads((folder / "results.json").read_text())
+    res.setdefault("metadata", {})["date"] = "9999-12-31"
+    (folder / "results.json").write_text(json.dumps(res))
+    err = cli(["db", "import", folder, "--data", tmp_path / "data", "--protocol",
+               SMALL_PROTOCOL, "--readings", bench_readings[0]], capsys)
+    assert "key metadata.date: 9999-12-31 is in the future" in err
