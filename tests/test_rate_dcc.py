@@ -110,6 +110,14 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
             last_digit_unit(_as_display(text))       # dec-1: rounded to tens
         assert abs(x - v) <= 0.5 * step + 1e-12 * abs(v), src
         unc = res["items"][key]["uncertainty"]
+        if unc["k"] is None:       # stated by its coverage interval (σ's χ², a half range)
+            ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+            lo, hi = (float(ci.find(f"si:interval{e}", NS).text) for e in ("Min", "Max"))
+            assert lo <= unc["interval"][0] * factor and hi >= unc["interval"][1] * factor
+            assert hi == pytest.approx(unc["interval"][1] * factor, rel=0.05)
+            assert float(ci.find("si:coverageProbability", NS).text) == 0.95
+            assert real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS) is None
+            continue
         mu = real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS)
         U = float(mu.find("si:valueExpandedMU", NS).text)
         assert U == pytest.approx(unc["U"] * factor, rel=0.05)     # 2 significant digits
@@ -208,6 +216,8 @@ def test_calibrate_cli_writes_the_dcc_in_the_set(run, schema, capsys):
     assert f"{run['spec']} has no item 'angle_deviation' (its items: " in err and "bias" in err
     assert not (run["tmp"] / "refused" / "results.json").exists()
     text = example.read_text(encoding="utf-8").split("\n[[specification_limits]]\n")[0] + "\n"
+    # the example names the optical bench's instrument and room: these readings' are others
+    text = re.sub(r"^\[(instrument|environment)\]\n.*?\n\n", "", text, flags=re.S | re.M)
     lab = run["tmp"] / "lab-rate.toml"
     lab.write_text(text + '[[specification_limits]]\nitem = "bias"\nmpe = 1.0e6\n'
                    'source = "test limit"\n', encoding="utf-8")

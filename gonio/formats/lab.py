@@ -64,6 +64,14 @@ LAB_SCHEMA: dict[str, Field] = {
         "temperature_c": Field("float", default=None),
         "humidity_pct": Field("float", default=None, check=lambda h: 0 <= h <= 100,
                               expect="0–100 %")}),
+    # the readings' identity and conditions against [instrument] and [environment]
+    # (gonio.pipeline.identity): a contradiction is refused unless on_mismatch = "proceed"
+    "identity": Field("table", default=None, schema={
+        "on_mismatch": Field("str", default="refuse", choices=("refuse", "proceed")),
+        "temperature_tolerance_c": Field("float", default=None, check=non_negative,
+                                         expect="≥ 0"),
+        "humidity_tolerance_pct": Field("float", default=None, check=non_negative,
+                                        expect="≥ 0")}),
     "signatory": Field("table", schema={
         "calibrated_by": _S, "checked_by": _S, "approved_by": Field("str"),
         "approved_title": _S}),

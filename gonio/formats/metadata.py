@@ -147,3 +147,4 @@ def parse_number(text: str) -> float | None:
     if not _NUMBER.match(text):
         return None
     return float(text)
+

@@ -14,6 +14,8 @@ from pathlib import Path
 from gonio.atomic import output_set
 from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.formats.metadata import header_lines
+from gonio.formats.provenance import readings_provenance
+from gonio.pipeline.identity import check_identity
 from gonio.specs import Specification, get
 
 #: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
@@ -117,6 +119,25 @@ def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
                           findings=findings, **options)
 
 
+def decide_conformity(result, lab: dict | None):
+    """Conformity of every item the laboratory file ``lab`` limits, or the specification's
+    own tolerances (``SPEC.default_limits``) limit, decided once, in the result's items
+    (:func:`gonio.analysis.conformity.decide_result`), before anything is written: every
+    output renders these decisions. Returns ``result``."""
+    from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+    from gonio.specs import default_limits
+
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    return result
+
+
+def mark_provenance(result, readings) -> None:
+    """Set ``result.provenance`` from the readings' own metadata
+    (:func:`gonio.formats.provenance.readings_provenance`): readings from the virtual bench are
+    marked virtual on every output whatever the laboratory file says; nothing turns it off."""
+    result.provenance = readings_provenance(readings)
+
+
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
               dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
@@ -131,8 +152,13 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     renderer = spec.renderer()
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
+    identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
+                              else None)       # refused here, before the work
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
+    mark_provenance(result, readings)
+    result.findings = list(result.findings) + identity    # proceeding: stated as findings
+    decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
@@ -166,6 +192,8 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
         truth = json.loads((stage / sim["truth"].name).read_text(encoding="utf-8"))
         say("demo: calibrating")
         result = screen_and_calibrate(spec, stage / sim["readings"].name, None)
+        mark_provenance(result, stage / sim["readings"].name)
+        decide_conformity(result, lab_d)
         say("demo: writing the results and the certificate")
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
                                dcc=dcc and "dcc" in spec.calibrate_options)

@@ -94,7 +94,39 @@ def calibration_page(store, cal_id: int) -> dict | None:
     except GonioError as exc:                 # no result yet, or one that no longer matches
         sealed, broken = "", str(exc) if cal.results_sha256 else ""
     return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
-            "seal": sealed, "seal_error": broken}
+            "seal": sealed, "seal_error": broken,
+            "stated": stated_items(store, cal.results_sha256) if sealed else {}}
+
+
+def stated_items(store, results_sha256: str) -> dict:
+    """Item key → its statement by the one statement rule
+    (:func:`gonio.result.statement.item_statement`), from the stored results.json itself
+    (the sealed result), as every certificate states it; an item the rule refuses to state
+    is left out (the page then says "not stated")."""
+    import json
+
+    from gonio.errors import GonioError
+    from gonio.records.services import file_bytes
+    from gonio.result.statement import item_statement
+
+    doc = json.loads(file_bytes(store, results_sha256))
+    items = doc.get("items") if isinstance(doc, dict) else None
+    if isinstance(items, list):
+        items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
+    if not isinstance(items, dict):        # the optical draft's older shape: one per key
+        items = {k: v for k, v in (doc or {}).items()
+                 if isinstance(v, dict) and "value" in v and "unit" in v}
+    out = {}
+    for key, it in items.items():
+        if not isinstance(it, dict):
+            continue
+        if "uncertainty" not in it:          # the unified list's U and k beside the value
+            it = dict(it, uncertainty={"U": it.get("U"), "k": it.get("k")})
+        try:
+            out[key] = item_statement(it)
+        except (GonioError, TypeError, ValueError):
+            continue
+    return out
 
 
 def certificates(store, page: int = 1, size: int = 50):

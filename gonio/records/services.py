@@ -1154,9 +1154,9 @@ def default_interval(spec_key: str) -> tuple[int, str]:
 
 
 def propose_interval(store, instrument_id: int, hist: dict | None = None):
-    """The recalibration interval proposed from the instrument's history
-    (:func:`gonio.records.interval.propose`; ``hist``: its :func:`history` if at hand), with
-    the specification's default beside it."""
+    """The recalibration interval proposed from the instrument's issued calibrations
+    (:func:`gonio.records.interval.propose`; ``hist``: its :func:`history` if at hand, of
+    which only the issued ones count), with the specification's default beside it."""
     from gonio.records.interval import propose
 
     with store.session() as s:
@@ -1165,6 +1165,9 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
             raise GonioError("no such instrument", key="instrument")
     limits = instrument_limits(inst)
     hist = history(store, instrument_id) if hist is None else hist
+    # only what was issued: a calibration not (yet) reviewed and approved is no evidence
+    hist = {k: [r for r in rows if r["status"] == "issued"] for k, rows in hist.items()}
+    hist = {k: rows for k, rows in hist.items() if rows}
     dates = [r["date"] for rows in hist.values() for r in rows]
     t0 = min(dates) if dates else None
     table = {key: [((r["date"] - t0).days, r["value"], r["U"], r["k"],

@@ -25,6 +25,7 @@ Contents
 
 from __future__ import annotations
 
+from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.render import Block
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import conformity_blocks
@@ -34,7 +35,8 @@ __all__ = ["certificate_id", "opening_blocks", "decision_rule_blocks", "conformi
 
 
 def certificate_id(result, lab: dict | None = None) -> str:
-    """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash.
+    """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash
+    (``result``: the Result or its results.json).
 
     >>> class R: source_sha256 = "adf7d70bf7f73fcbe3e7897ae81a78dd"
     >>> certificate_id(R()), certificate_id(R(), {"certificate": {"number": "GON-2026-017"}})
@@ -42,7 +44,8 @@ def certificate_id(result, lab: dict | None = None) -> str:
     """
     if lab:
         return lab["certificate"]["number"]
-    sha = result.source_sha256 or "0" * 10
+    sha = ((result.get("source") or {}).get("sha256") if isinstance(result, dict)
+           else result.source_sha256) or "0" * 10
     return "VB-" + sha[:10].upper()
 
 
@@ -114,7 +117,8 @@ def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
 def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
                    standard_row: list, environment=(), summarise=None) -> list[Block]:
     """The certificate's opening (ISO/IEC 17025 7.8.2.1 a–h; JJF 1535 clause 8 a–j): the
-    virtual-bench notice when there is no laboratory file, the laboratory with its
+    virtual-bench notice when the readings come from the virtual bench or there is no
+    laboratory file (:func:`gonio.report.provenance.is_virtual`), the laboratory with its
     accreditation and contact, the customer with the address, the instrument, the dates, the
     place, the specification followed (``specification``, in the page's language), the
     readings file, the standards with their traceability (``standard_row``, four cells in
@@ -126,8 +130,8 @@ def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
 
     def add(kind, data, extra=None):
         out.append(Block(kind, summarise(kind, data) if summarise else data, extra))
-    if lab is None:
-        add("notice", L["virtual_note"])
+    if is_virtual(res, lab):            # the readings' provenance, not the lab file's absence
+        add("notice", " ".join(virtual_lines(res, L)))
     add("kv", _laboratory_rows(lab, L))
     add("kv", _item_rows(res, lab, L, specification))
     add("h", L["standards"])

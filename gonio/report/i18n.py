@@ -156,6 +156,11 @@ LABELS: dict[str, dict[str, str]] = {
                            "nothing about any instrument.",
                      "zh": "本文件由 gonio 根据虚拟台架（模拟读数）生成，仅演示版式与计算，"
                            "不证明任何仪器的计量特性。"},
+    "virtual_source": {"en": "The readings name the virtual bench {bench}, seed {seed}, in "
+                             "their own metadata: every output says so, whatever the laboratory "
+                             "file says.",
+                       "zh": "读数文件的元数据表明其来自虚拟台架 {bench}（种子 {seed}）：无论实验室"
+                             "文件如何填写，所有输出均如此标明。"},
     "source_file": {"en": "Readings file", "zh": "读数文件"},
     "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
     # the seven items (Annex B order) — the draft's own Chinese terms

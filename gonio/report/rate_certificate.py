@@ -22,6 +22,7 @@ from gonio.report.figures import figure_svg
 from gonio.report.header import (certificate_id, conformity_section, opening_blocks,
                                  signature_blocks)
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
+from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText, Num, item_nums
 from gonio.result.statement import unit_text
@@ -267,7 +268,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
              for n in res.get("readings_taken", [])]
     blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes)
     blocks += figure_blocks(figures_of(result), L, lang)
-    return {"id": certificate_id(result, lab), "virtual": lab is None,
+    return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, fields
 from gonio import __version__
 from gonio.errors import GonioError
 from gonio.formats.jsonsafe import json_safe
+from gonio.formats.provenance import result_provenance
 from gonio.result.findings import Finding, findings_to_json
 
 #: The version of the results.json shape (docs/formats.md#results-file). Raise it when a
@@ -277,8 +278,9 @@ class Result:
     The first seven fields are positional in the order the rate specifications built
     their results (key, title, items, metadata, source, readings taken, extra).
     ``tables`` (name → DataFrame) are written by :func:`gonio.result.tables.write_tables`
-    beside results.json and are not part of it; ``objects`` keep the analysis objects a
-    certificate draws from (never written).
+    beside results.json and are not part of it; everything a certificate shows (the
+    series each figure draws included) is in results.json, so the certificate can be
+    rendered again from the stored file.
     """
 
     spec_key: str
@@ -294,6 +296,9 @@ class Result:
     covariances: list[Covariance] = field(default_factory=list)
     gonio_version: str = __version__
     tables: dict = field(default_factory=dict, repr=False, compare=False)
+    #: Where the readings come from (:func:`gonio.formats.provenance.provenance`), set by the
+    #: pipeline from the readings; ``virtual`` also whenever the metadata say so.
+    provenance: dict = field(default_factory=dict)
 
     @property
     def source_sha256(self) -> str:
@@ -317,7 +322,9 @@ class Result:
                 "findings": findings_to_json(self.findings),
                 "unused_readings": json_safe(self.unused_readings),
                 "readings_taken": list(self.readings_taken),
-                "extra": json_safe(self.extra)}
+                "extra": json_safe(self.extra),
+                "provenance": json_safe(result_provenance(
+                    {"provenance": self.provenance, "metadata": self.metadata}))}
 
     def to_dict(self) -> dict:
         return self.to_json()
@@ -341,7 +348,7 @@ class Result:
                         for f in d.get("findings") or []],
                        list(d.get("unused_readings") or []),
                        [Covariance.from_json(c) for c in d.get("covariances") or []],
-                       d.get("gonio_version", ""))
+                       d.get("gonio_version", ""), provenance=dict(d.get("provenance") or {}))
         except (KeyError, AttributeError, IndexError, TypeError, ValueError) as exc:
             raise GonioError(f"malformed results.json: {type(exc).__name__} {str(exc)[:80]}",
                              key="results") from None
@@ -352,34 +359,3 @@ class Result:
         from gonio.result.text import summary_lines
 
         return "\n".join(summary_lines(self)) + "\n"
-
-
-def flat_view(d: dict) -> dict:
-    """A results.json (version 1) as the flat dict the optical draft's results.json was before
-    the one result model: each item at the top level as ``{item: title, value, unit, clause,
-    measured, reason, <details>, uncertainty}`` and each ``extra`` section at the top level;
-    ``gonio_version``, ``source``, ``metadata``, ``unused_readings``, ``findings``,
-    ``readings_taken`` kept. For readers written against that shape (a Num path such as
-    ``angle_deviation.max_abs_arcsec`` or ``uncertainty.U_arcsec`` resolves in it).
-
-    >>> flat_view({"version": 1, "items": {"K": {"title": "K", "value": 2.0, "unit": "1",
-    ...   "details": {"n": 3}, "uncertainty": None}}, "extra": {"notes": []}})["K"]["n"]
-    3
-    """
-    out = {k: d[k] for k in ("gonio_version", "specification", "source", "metadata") if k in d}
-    out["protocol"] = (d.get("settings") or {}).get("protocol")
-    for key, it in d["items"].items():
-        flat = {"item": it.get("title", ""), "value": it.get("value"), "unit": it.get("unit"),
-                "clause": it.get("clause"), "measured": it.get("measured", True),
-                "reason": it.get("reason", "")}
-        flat.update(it.get("details") or {})
-        flat["uncertainty"] = it.get("uncertainty")
-        flat["conformity"] = it.get("conformity")
-        if "upper_bound" in it:
-            flat["upper_bound"] = it["upper_bound"]
-        out[key] = flat
-    out["unused_readings"] = d.get("unused_readings", [])
-    out["findings"] = d.get("findings", [])
-    out.update(d.get("extra") or {})
-    out["readings_taken"] = d.get("readings_taken", [])
-    return out

@@ -6,7 +6,21 @@ place, k, ν_eff and p beside it), then the conformity decisions and the screeni
 
 from __future__ import annotations
 
+from gonio.formats.provenance import result_provenance
 from gonio.result.statement import item_statement
+
+#: summary.txt's first line for readings from the virtual bench (their own metadata say so).
+VIRTUAL_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings name the "
+                "virtual bench {bench}, seed {seed}, in their own metadata")
+
+
+def virtual_line(res: dict) -> list[str]:
+    """``[VIRTUAL_LINE]`` filled in for a results.json dict whose readings come from the virtual
+    bench (:func:`gonio.formats.provenance.result_provenance`), else ``[]``."""
+    prov = result_provenance(res)
+    if not prov["virtual"]:
+        return []
+    return [VIRTUAL_LINE.format(bench=prov["bench"] or "-", seed=prov["seed"] or "-")]
 
 
 def item_text(it) -> str:
@@ -29,7 +43,8 @@ def conformity_text(c) -> str:
 
 def summary_lines(result) -> list[str]:
     """The lines of :meth:`~gonio.result.model.Result.summary`."""
-    lines = [result.spec_title or result.spec_key]
+    lines = virtual_line({"provenance": result.provenance, "metadata": result.metadata})
+    lines.append(result.spec_title or result.spec_key)
     for it in result.items.values():
         head = f"  {it.clause:10s} {it.title}"
         if not it.measured or it.value is None:

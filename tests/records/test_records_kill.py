@@ -24,7 +24,7 @@ def prepare(data, readings, protocol):
     tech = services.create_user(st, None, "tech", PASSWORD, "technician")
     rev = services.create_user(st, None, "rev", PASSWORD, "reviewer")
     cust = services.add_customer(st, tech, "C")
-    inst = services.register_instrument(st, tech, customer_id=cust.id, serial="S1",
+    inst = services.register_instrument(st, tech, customer_id=cust.id, serial="RLG-0001",
                                         spec_key="ogam-draft")
     sha, _ = services.store_file(st, open(readings, "rb"))
     psha, _ = services.store_file(st, open(protocol, "rb"))

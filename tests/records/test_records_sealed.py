@@ -6,6 +6,7 @@ amendments included; certificates verified against their record."""
 from __future__ import annotations
 
 import hashlib
+import math
 import json
 
 import pytest
@@ -218,3 +219,23 @@ def test_certificate_page_shows_seal_people_and_downloads_by_number(
                         ("results.json", "-results.json")):
         r = rev.get(f"/certificates/{cert.id}/{name}")
         assert f'filename="{cert.number}{shown}"' in r.headers["content-disposition"], name
+
+
+def test_page_states_every_item_by_the_statement_rule(store, people, computed_folder,
+                                                      bench_readings, monkeypatch):
+    """The calibration page states each item as the certificate does: the statement rule
+    applied to the stored results.json (checked here against the rule's own texts, and
+    against U to two significant digits computed independently)."""
+    from gonio.records import queries
+    from gonio.result.statement import item_statement
+
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    page = queries.calibration_page(store, cal.id)
+    res = json.loads((computed_folder / "results.json").read_text())
+    items = res["items"]
+    assert set(page["stated"]) == set(items)
+    K = items["scale_factor"]
+    assert page["stated"]["scale_factor"].text() == item_statement(K).text()
+    U = K["uncertainty"]["U"]
+    two = f"{U:.{max(0, 1 - math.floor(math.log10(abs(U))))}f}"
+    assert page["stated"]["scale_factor"].U_text in (two, two.rstrip("0").rstrip("."))

@@ -222,7 +222,10 @@ def test_history_and_interval_with_limits(store, people, computed_folder, bench_
     inst, std = setup_instrument(store, people, limits=[{"item": "angle_deviation",
                                                         "mpe": 0.5}])
     for day in ("2024-01-10", "2025-01-10"):
-        new_calibration(store, people, inst, std, bench_readings[0], day=day)
+        cal = new_calibration(store, people, inst, std, bench_readings[0], day=day)
+        run_worker(store, monkeypatch, computed_folder)
+        services.review(store, people["rev"], cal.id, accept=True)
+        services.approve(store, people["rev2"], cal.id)
         run_worker(store, monkeypatch, computed_folder)
     hist = services.history(store, inst.id)
     assert [r["date"].isoformat() for r in hist["angle_deviation"]] == ["2024-01-10",
@@ -230,6 +233,13 @@ def test_history_and_interval_with_limits(store, people, computed_folder, bench_
     p = services.propose_interval(store, inst.id)
     # two calibrations within ±0.5″: the staircase lengthens 12 months twice
     assert p.method.startswith("simple response") and p.months == 18
+    assert p.detail.startswith("2 calibration(s)")
+    # a third calibration computed but never issued is no evidence for the interval
+    # (before: proposals came from calibrations that were never issued)
+    new_calibration(store, people, inst, std, bench_readings[0], day="2025-06-10")
+    run_worker(store, monkeypatch, computed_folder)
+    assert len(services.history(store, inst.id)["angle_deviation"]) == 3
+    assert services.propose_interval(store, inst.id).detail.startswith("2 calibration(s)")
     assert services.instrument_limits(services.calibration(store, 1).instrument) == {
         "angle_deviation": (-0.5, 0.5)}
 

@@ -138,7 +138,7 @@ def test_whole_workflow_in_chromium(live, browser, bench_readings, tmp_path):
     shot(page, "standards")
     page.goto(base + "/instruments")
     page.fill("input[name=kind]", "RLG goniometer")
-    page.fill("input[name=manufacturer]", "Example Gyro Works")
+    page.fill("input[name=manufacturer]", "gonio virtual bench")
     page.fill("input[name=model]", "RLG-GM-1")
     page.fill("input[name=serial]", "RLG-0001")
     page.select_option("select[name=spec_key]", "ogam-draft")

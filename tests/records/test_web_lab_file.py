@@ -37,7 +37,7 @@ def instrument(store, spec_key="ogam-draft"):
     actor = services.user(store, "tech")
     cust = services.add_customer(store, actor, "C")
     # the instrument's own limit: a lab file's replace it for the calibration
-    return services.register_instrument(store, actor, customer_id=cust.id, serial="S",
+    return services.register_instrument(store, actor, customer_id=cust.id, serial="RLG-0001",
                                         spec_key=spec_key,
                                         limits=[{"item": "repeatability", "mpe": 9.0}])
 

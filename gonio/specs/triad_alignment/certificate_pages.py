@@ -22,6 +22,7 @@ from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_a
                                translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
                                            screening_blocks, write_spec_certificate)
+from gonio.report.provenance import is_virtual
 from gonio.report.render import Block
 from gonio.report.stated import item_nums, num
 from gonio.result.statement import unit_text
@@ -295,7 +296,7 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
         notes = list(zh)
     blocks += closing_blocks(res, L, lab, T("readings_taken"), notes)
     blocks += figure_blocks(triad_figures(result), L, lang)
-    return {"id": certificate_id(result, lab), "virtual": lab is None,
+    return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

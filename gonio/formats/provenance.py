@@ -1,0 +1,73 @@
+"""Where readings come from (docs/formats.md#provenance): the virtual bench's readings and
+streams say so in their own metadata (``# bench:``, ``# seed:``, ``# generator: gonio …``);
+:func:`provenance` reads it, :func:`result_provenance` gives it for a results.json."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from gonio.formats.metadata import header_lines
+
+#: Metadata keys only gonio's virtual bench writes (``gonio simulate``, ``gonio demo``, a
+#: stream from the bench): their presence marks the readings virtual (docs/formats.md#provenance).
+VIRTUAL_BENCH_KEYS: tuple[str, ...] = ("bench", "seed")
+
+
+def provenance(metadata: Mapping[str, object] | None) -> dict:
+    """Where readings come from, from their metadata: ``{"virtual": bool, "bench", "seed",
+    "generator", "evidence"}``. Readings are virtual when their metadata name the virtual
+    bench (``# bench:``), its seed (``# seed:``) or gonio as their generator
+    (``# generator: gonio …``); ``evidence`` lists the keys that said so. Nothing else (a
+    laboratory file, an option) can make readings that say so non-virtual.
+
+    >>> provenance({"bench": "rlg-typical", "seed": "3", "serial": "X"})["virtual"]
+    True
+    >>> provenance({"serial": "X", "generator": "LabVIEW 2021"})
+    {'virtual': False, 'bench': None, 'seed': None, 'generator': 'LabVIEW 2021', 'evidence': []}
+    """
+    md = {str(k).strip().lower(): v for k, v in (metadata or {}).items()}
+
+    def text(key):
+        v = md.get(key)
+        return None if v is None or str(v).strip() == "" else str(v).strip()
+
+    generator = text("generator")
+    evidence = [k for k in VIRTUAL_BENCH_KEYS if text(k) is not None]
+    if generator is not None and generator.lower().split()[0] == "gonio":
+        evidence.append("generator")
+    return {"virtual": bool(evidence), "bench": text("bench"), "seed": text("seed"),
+            "generator": generator, "evidence": evidence}
+
+
+def readings_metadata(path) -> dict[str, str]:
+    """A readings file's or a stream's metadata: the ``# key: value`` lines at the top of a
+    CSV file (the first of a key given twice), a Parquet stream's key-value metadata."""
+    if Path(path).suffix.lower() == ".parquet":
+        from gonio.formats.streams import StreamFile
+        return dict(StreamFile(path).metadata)
+    out: dict[str, str] = {}
+    for key, value in header_lines(path):
+        out.setdefault(key, value)
+    return out
+
+
+def readings_provenance(path) -> dict:
+    """:func:`provenance` of a readings file's or a stream's metadata
+    (:func:`readings_metadata`)."""
+    return provenance(readings_metadata(path))
+
+
+def result_provenance(res: Mapping) -> dict:
+    """The provenance of a results.json dict (or a result's ``to_dict``): its ``provenance``
+    as the pipeline set it, made virtual also where the metadata it carries say so (a result
+    made outside the pipeline, an older results.json)."""
+    given = dict(res.get("provenance") or {})
+    from_md = provenance(res.get("metadata") or {})
+    if not given:
+        return from_md
+    if from_md["virtual"] and not given.get("virtual"):
+        return {**given, **{k: from_md[k] for k in ("bench", "seed", "generator")
+                            if not given.get(k)}, "virtual": True,
+                "evidence": sorted(set(given.get("evidence") or []) | set(from_md["evidence"]))}
+    return given

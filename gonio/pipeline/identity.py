@@ -1,0 +1,121 @@
+"""The instrument's identity and the conditions of the readings against the laboratory file
+(docs/formats.md#identity-and-conditions).
+
+The readings' own metadata (``# serial:``, ``# model:``, ``# manufacturer:``, the
+temperature ``# temperature_c:`` or ``# room_temperature_c:``, ``# humidity_pct:``) are
+compared with the laboratory file's ``[instrument]`` and ``[environment]``: a text that
+differs (compared without regard to case and runs of white space) or a temperature or
+humidity further apart than the tolerance (``[identity]`` ``temperature_tolerance_c``, default
+:data:`TEMPERATURE_TOLERANCE_C`; ``humidity_tolerance_pct``, default
+:data:`HUMIDITY_TOLERANCE_PCT`) is a contradiction. Where either side is silent nothing is
+compared. A contradiction refuses the calibration with one line (``GonioError``, exit 2)
+unless the laboratory file says ``[identity] on_mismatch = "proceed"``: then each one is a
+flagged finding (code ``identity-mismatch``) stated on the certificate, in summary.txt and in
+results.json.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+from gonio.errors import GonioError
+from gonio.formats.metadata import parse_number
+from gonio.formats.provenance import readings_metadata
+from gonio.result.findings import Finding
+
+#: Default largest difference, °C, between the readings' and the laboratory file's temperature.
+TEMPERATURE_TOLERANCE_C = 1.0
+#: Default largest difference, percentage points, between the two relative humidities.
+HUMIDITY_TOLERANCE_PCT = 10.0
+#: (what, laboratory file section and key, the readings' metadata keys in order of preference)
+TEXT_FIELDS = (("serial", "instrument", "serial", ("serial",)),
+               ("model", "instrument", "model", ("model",)),
+               ("manufacturer", "instrument", "manufacturer", ("manufacturer",)))
+NUMBER_FIELDS = (("temperature", "environment", "temperature_c",
+                  ("temperature_c", "room_temperature_c"), "temperature_tolerance_c", "°C"),
+                 ("humidity", "environment", "humidity_pct", ("humidity_pct",),
+                  "humidity_tolerance_pct", "%"))
+
+
+def _norm(text) -> str:
+    return re.sub(r"\s+", " ", str(text)).strip().casefold()
+
+
+def _first(md: dict, keys) -> tuple[str | None, str | None]:
+    for k in keys:
+        v = md.get(k)
+        if v is not None and str(v).strip():
+            return k, str(v).strip()
+    return None, None
+
+
+def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
+    """Each contradiction between the readings' ``metadata`` and ``lab`` (a loaded laboratory
+    file): ``{"what", "key" (the metadata key), "readings", "lab", "lab_key", "tolerance"}``.
+
+    >>> lab = {"instrument": {"serial": "SN-0001", "model": ""},
+    ...        "environment": {"temperature_c": 20.1}}
+    >>> [c["what"] for c in contradictions({"serial": "MEMS-0610-001", "model": "M",
+    ...                                      "room_temperature_c": "22.5"}, lab)]
+    ['serial', 'temperature']
+    >>> contradictions({"serial": " sn-0001 ", "temperature_c": "20.9"}, lab)
+    []
+    """
+    if not lab:
+        return []
+    out = []
+    rules = lab.get("identity") or {}
+    for what, section, key, md_keys in TEXT_FIELDS:
+        theirs = ((lab.get(section) or {}).get(key) or "").strip()
+        k, ours = _first(metadata, md_keys)
+        if theirs and ours is not None and _norm(theirs) != _norm(ours):
+            out.append({"what": what, "key": k, "readings": f"'{ours}'", "lab": f"'{theirs}'",
+                        "lab_key": f"{section}.{key}", "tolerance": None})
+    for what, section, key, md_keys, tol_key, unit in NUMBER_FIELDS:
+        theirs = (lab.get(section) or {}).get(key)
+        k, text = _first(metadata, md_keys)
+        ours = parse_number(text) if text is not None else None
+        if theirs is None or ours is None or not math.isfinite(ours):
+            continue
+        default = TEMPERATURE_TOLERANCE_C if what == "temperature" else HUMIDITY_TOLERANCE_PCT
+        tol = rules.get(tol_key)
+        tol = default if tol is None else float(tol)
+        if abs(float(theirs) - ours) > tol:
+            out.append({"what": what, "key": k, "readings": f"{ours:g} {unit}",
+                        "lab": f"{float(theirs):g} {unit}", "lab_key": f"{section}.{key}",
+                        "tolerance": f"{tol:g} {unit}"})
+    return out
+
+
+def _message(c: dict) -> str:
+    tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
+    return (f"{c['what']}: the readings say {c['readings']} (# {c['key']}), the laboratory "
+            f"file {c['lab']} ({c['lab_key']}){tol}")
+
+
+def check_identity(readings, lab: dict | None, *, lab_file=None) -> list[Finding]:
+    """Compare the readings' identity and conditions with ``lab`` (module docstring): no
+    contradiction gives ``[]``; one refuses (GonioError naming the readings and the key)
+    unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged findings are
+    returned for the result."""
+    if not lab:
+        return []
+    found = contradictions(readings_metadata(readings), lab)
+    if not found:
+        return []
+    if ((lab.get("identity") or {}).get("on_mismatch") or "refuse") != "proceed":
+        c = found[0]
+        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+        where = f" ({lab_file})" if lab_file else ""
+        raise GonioError(f"{_message(c)}{more}: the readings are not of the instrument or "
+                         f"conditions the laboratory file{where} names; correct one of them, "
+                         "or set [identity] on_mismatch = \"proceed\" to state it on the "
+                         "certificate", file=Path(readings).name)
+    name = Path(readings).name
+    return [Finding("identity-mismatch", _message(c) + "; the laboratory file chose to proceed "
+                    "([identity] on_mismatch = \"proceed\"): the certificate's identity and "
+                    "conditions are the laboratory file's", "flagged", file=name, column=c["key"],
+                    rule="identity and conditions of the readings = the laboratory file's")
+            for c in found]

@@ -1,0 +1,183 @@
+"""Readings from the virtual bench are marked virtual on every output, whatever the laboratory
+file says (docs/formats.md#provenance): ``gonio simulate`` then ``gonio calibrate --lab`` for
+every specification gives the mark on every PDF page (poppler's text of each page), in the
+HTML, summary.txt, results.json (``provenance``) and the DCC. The same readings with the
+bench's metadata lines taken out give no mark (the check can fail).
+
+The instrument's identity and the conditions (docs/formats.md#identity-and-conditions): a
+laboratory file whose serial or temperature contradicts the readings' metadata is refused with
+one line (exit 2), for every specification; with ``[identity] on_mismatch = "proceed"`` the
+contradiction is a flagged finding on the certificate (every format), summary.txt and
+results.json.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gonio.formats.provenance import provenance, readings_provenance
+from gonio.report.i18n import labels
+
+HERE = Path(__file__).resolve().parent
+PINS = HERE / "data" / "pins"
+ROOT = HERE.parent
+#: (specification, a small protocol of tests/data/pins or None for the built-in one, seed)
+RUNS = (("ogam-draft", "ogam-draft-small.toml", 3),
+        ("jjf1535-2015", "jjf1535-2015-small.toml", 3),
+        ("iec62047-20", "iec62047-20-small.toml", 3),
+        ("triad-alignment", None, 3))
+BANNER = labels("en")["virtual_short"]
+
+
+#: The laboratory file's serial: no simulated instrument has it.
+LAB_SERIAL = "SN-0001"
+
+
+def lab_file(tmp: Path, identity: str = "", name: str = "lab.toml",
+             temperature_c: float | None = None) -> Path:
+    """The example laboratory file without its limits (they name the optical items), its
+    instrument the serial :data:`LAB_SERIAL` only, its environment ``temperature_c`` (none:
+    no [environment]), with ``identity`` as its [identity] section's body."""
+    text = (ROOT / "protocols" / "lab-example.toml").read_text(encoding="utf-8")
+    text = text[:text.index("# Statement of conformity")]
+    text = re.sub(r"^\[instrument\]\n.*?\n\n", f'[instrument]\nserial = "{LAB_SERIAL}"\n\n', text,
+                  flags=re.S | re.M)
+    env = "" if temperature_c is None else f"[environment]\ntemperature_c = {temperature_c}\n\n"
+    text = re.sub(r"^\[environment\]\n.*?\n\n", env, text, flags=re.S | re.M)
+    if identity:
+        text += f"\n[identity]\n{identity}\n"
+    p = tmp / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def gonio(*args, cwd: Path, rc: int = 0) -> subprocess.CompletedProcess:
+    r = subprocess.run([sys.executable, "-m", "gonio", *map(str, args)], cwd=cwd,
+                       capture_output=True, text=True)
+    assert r.returncode == rc, r.stderr
+    return r
+
+
+def pdf_pages(pdf: Path) -> list[str]:
+    tool = shutil.which("pdftotext")
+    if not tool:
+        pytest.skip("pdftotext is missing: run scripts/install-test-system-deps.sh")
+    n = int(re.search(r"Pages:\s+(\d+)", subprocess.run(
+        [shutil.which("pdfinfo"), str(pdf)], capture_output=True, text=True,
+        check=True).stdout).group(1))
+    return [subprocess.run([tool, "-f", str(i), "-l", str(i), str(pdf), "-"],
+                           capture_output=True, text=True, check=True).stdout
+            for i in range(1, n + 1)]
+
+
+def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip=False) -> Path:
+    proto = [] if protocol is None else ["--protocol", PINS / protocol]
+    sim, cal = work / "sim", work / "cal"
+    gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
+    readings = sim / "readings.csv"
+    if strip:                        # a laboratory's own file: no bench, seed or generator
+        lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)
+        readings = work / "lab-readings.csv"
+        readings.write_text("".join(
+            x for x in lines if not re.match(r"# (bench|seed|generator):", x)), encoding="utf-8")
+        for extra in ("thermal.csv",):
+            if (sim / extra).exists():
+                shutil.copy(sim / extra, work / extra)
+    gonio("calibrate", readings, "--spec", spec, *proto, "--lab", lab, "--dcc", "--out", cal,
+          cwd=work)
+    return cal
+
+
+@pytest.fixture(scope="module", params=RUNS, ids=[r[0] for r in RUNS])
+def run(request, tmp_path_factory):
+    """Simulated readings calibrated with a laboratory file that names another serial and
+    proceeds (``on_mismatch = "proceed"``)."""
+    spec, protocol, seed = request.param
+    work = tmp_path_factory.mktemp(spec)
+    lab = lab_file(work, 'on_mismatch = "proceed"')
+    return spec, seed, simulate_calibrate(spec, protocol, seed, work, lab)
+
+
+def test_contradicting_lab_file_is_refused(run):
+    """The same readings with the laboratory file that does not proceed: exit 2, one line
+    naming the serial both ways; a temperature 5 °C off (the readings' own metadata) too."""
+    spec, seed, cal = run
+    work = cal.parent
+    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
+    r = gonio("calibrate", work / "sim" / "readings.csv", "--spec", spec, *proto, "--lab",
+              lab_file(work, name="strict.toml"), "--out", work / "refused", cwd=work, rc=2)
+    line = r.stderr.strip()
+    assert "\n" not in line and "serial" in line and LAB_SERIAL in line, line
+    assert not (work / "refused").exists()
+    md = json.loads((cal / "results.json").read_text(encoding="utf-8"))["metadata"]
+    t = md.get("temperature_c") or md.get("room_temperature_c")
+    if t is not None:                 # the triad's readings state no room temperature
+        hot = lab_file(work, 'on_mismatch = "refuse"', name="hot.toml",
+                       temperature_c=float(t) + 5.0)
+        hot.write_text(re.sub(r"^\[instrument\]\n.*?\n\n", "", hot.read_text(),
+                              flags=re.S | re.M))
+        r = gonio("calibrate", work / "sim" / "readings.csv", "--spec", spec, *proto, "--lab",
+                  hot, "--out", work / "refused", cwd=work, rc=2)
+        assert "temperature" in r.stderr and "more than 1 °C apart" in r.stderr, r.stderr
+
+
+def test_proceeding_states_the_contradiction(run):
+    spec, seed, cal = run
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    found = [f for f in res["findings"] if f["code"] == "identity-mismatch"]
+    assert len(found) == 1 and found[0]["action"] == "flagged"
+    serial = res["metadata"]["serial"]
+    assert serial in found[0]["message"] and LAB_SERIAL in found[0]["message"]
+    text = " ".join(pdf_pages(cal / "certificate.pdf"))
+    assert re.search(r"the\s+readings\s+say\s+\W?" + re.escape(serial), text), spec
+    assert serial in (cal / "certificate.html").read_text(encoding="utf-8")
+    summary = (cal / "summary.txt").read_text(encoding="utf-8")
+    assert f"say '{serial}'" in summary and LAB_SERIAL in summary
+
+
+def test_virtual_readings_marked_everywhere_with_a_lab_file(run):
+    spec, seed, cal = run
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    prov = res["provenance"]
+    assert prov["virtual"] is True and prov["seed"] == str(seed) and prov["bench"]
+    pages = pdf_pages(cal / "certificate.pdf")
+    assert len(pages) >= 2
+    for i, text in enumerate(pages, 1):
+        assert BANNER in text, f"{spec}: PDF page {i} of {len(pages)} lacks the mark"
+    page = (cal / "certificate.html").read_text(encoding="utf-8")
+    assert labels("en")["virtual"] in page and prov["bench"] in page
+    assert "Example Angle Metrology Laboratory" in page          # the lab file is still used
+    summary = (cal / "summary.txt").read_text(encoding="utf-8")
+    assert summary.startswith("VIRTUAL BENCH EXAMPLE") and f"seed {seed}" in summary.splitlines()[0]
+    dcc = (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+    assert 'id="virtual-bench"' in dcc and prov["bench"] in dcc
+
+
+def test_laboratory_readings_are_not_marked(tmp_path):
+    """The same simulated readings less the bench's metadata lines: no mark anywhere."""
+    cal = simulate_calibrate("jjf1535-2015", "jjf1535-2015-small.toml", 3, tmp_path,
+                             lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=True)
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    assert res["provenance"]["virtual"] is False
+    assert not any(BANNER in t for t in pdf_pages(cal / "certificate.pdf"))
+    assert labels("en")["virtual"] not in (cal / "certificate.html").read_text(encoding="utf-8")
+    assert "VIRTUAL" not in (cal / "summary.txt").read_text(encoding="utf-8")
+    assert 'id="virtual-bench"' not in (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+
+
+def test_provenance_rules(tmp_path):
+    assert provenance({"seed": "0"})["evidence"] == ["seed"]
+    assert provenance({"generator": "gonio 0.1.0"})["virtual"] is True
+    assert provenance({"generator": "gonioscope 2"})["virtual"] is False
+    assert provenance({"bench": ""})["virtual"] is False
+    f = tmp_path / "r.csv"
+    f.write_text("# serial: X\n# bench: rlg\nangle\n# seed: 9\n", encoding="utf-8")
+    p = readings_provenance(f)                 # only the lines above the header count
+    assert p["virtual"] and p["bench"] == "rlg" and p["seed"] is None
