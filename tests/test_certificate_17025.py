@@ -53,8 +53,10 @@ def calibrated(request, tmp_path_factory):
 
 
 def _texts(c, lang):
+    from gonio.pipeline.dispatch import decide_conformity
     from gonio.specs import get
     out = c["dir"] / f"out-{lang}"
+    decide_conformity(c["result"], c["lab"])          # the pipeline's one decision
     get(c["key"]).renderer().write(c["result"], out, lab=c["lab"], lang=lang)
     page = (out / "certificate.html").read_text(encoding="utf-8")
     text = html.unescape(re.sub(r"<[^>]+>", " ", page.split("<body>")[1]))

@@ -54,9 +54,11 @@ def calibrated(request, tmp_path_factory):
 
 
 def _render(c, lang, lab="lab.toml", name=None):
+    from gonio.pipeline.dispatch import decide_conformity
     from gonio.specs import get
     out = c["dir"] / (name or f"{lang}-{lab}")
     if not out.exists():
+        decide_conformity(c["result"], load_lab(c["dir"] / lab))   # the pipeline's decision
         get(c["key"]).renderer().write(c["result"], out, lab=load_lab(c["dir"] / lab),
                                        lang=lang, dcc=True)
     page = (out / "certificate.html").read_text(encoding="utf-8")
