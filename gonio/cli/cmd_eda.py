@@ -11,10 +11,6 @@ from __future__ import annotations
 
 import json
 
-from gonio.analysis.equal_division import EdaResult, equal_division_from_readings
-from gonio.formats.readings import read_readings
-
-
 from gonio.cli.checks import int_range, json_safe
 
 
@@ -45,7 +41,8 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _text(res: EdaResult) -> str:
+def _text(res) -> str:
+    """The result (an :class:`~gonio.analysis.equal_division.EdaResult`) as text."""
     out = [f"equal-division averaging (IEC 62047-20 Annex A.3): n = {res.n_starts} starts, "
            f"m = {res.m_points} points ({res.step_deg:g}° step), {res.repeats} repeat(s)",
            f"residual std {res.residual_std_arcsec:.4f}″, dof {res.dof}, gauge {res.gauge}, "
@@ -77,7 +74,9 @@ def _text(res: EdaResult) -> str:
 
 def run(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
+    from gonio.analysis.equal_division import equal_division_from_readings
     from gonio.atomic import check_output_files
+    from gonio.formats.readings import read_readings
     from gonio.protocol import load_protocol
     from gonio.report.figure_files import FIGURE_FORMATS
 

@@ -7,11 +7,6 @@ import json
 from gonio.errors import GonioError, check_input_file
 from gonio.atomic import check_output_file
 from gonio.cli.checks import LARGE, float_range
-from gonio.formats.readings import write_readings
-from gonio.protocol import load_protocol
-from gonio.formats.override import read_override
-from gonio.formats.streams import StreamFile
-from gonio.reduce import reduce_stream
 
 
 def register(sub) -> None:
@@ -41,7 +36,12 @@ def run(args) -> int:
     check_input_file(args.stream, "stream file")
     check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
                       force=args.force, protected=True)
+    from gonio.formats.override import read_override
+    from gonio.formats.readings import write_readings
+    from gonio.formats.streams import StreamFile
     from gonio.progress import status
+    from gonio.protocol import load_protocol
+    from gonio.reduce import reduce_stream
 
     from gonio.specs import DEFAULT_KEY, get
     proto = load_protocol(args.protocol or get(DEFAULT_KEY).default_protocol)

@@ -11,9 +11,6 @@ import json
 import math
 
 from gonio.errors import GonioError
-from gonio.physics.tilt import elliptic_extreme, rigid_extreme
-
-
 from gonio.cli.checks import float_range
 
 
@@ -35,6 +32,8 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Compute and print the extreme tilt error."""
+    from gonio.physics.tilt import elliptic_extreme, rigid_extreme
+
     t = args.tilt_deg
     if not (math.isfinite(t) and 0.0 <= t < 90.0):
         raise GonioError(f"--tilt-deg: must satisfy 0 <= tilt < 90 degrees, got {t}")

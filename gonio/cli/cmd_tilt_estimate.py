@@ -8,9 +8,6 @@ from __future__ import annotations
 
 import json
 
-from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
-
-
 from gonio.cli.checks import float_range, positive_magnitude
 
 
@@ -34,6 +31,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Read the file, estimate, print."""
+    from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
     from gonio.formats.readings import read_readings
 
     r = read_readings(args.file)
