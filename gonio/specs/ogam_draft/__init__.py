@@ -7,7 +7,8 @@ readings or stream → items, Annex A budget, item uncertainties);
 :mod:`.truth` the true values from the bench (``SPEC.truth``); :mod:`.study` the coverage
 study of ``gonio validate`` (its trial, truths and bench cases) and :mod:`.item_coverage`
 what each item's coverage is checked against; :mod:`.outputs` the rendering (results,
-tables, certificate, DCC, demo). The clause-by-clause
+tables, certificate, DCC, demo); :mod:`.commands` its own ``gonio`` sub-commands (``reduce``,
+``tilt``, ``tilt-estimate``, ``eda``). The clause-by-clause
 reading is ``docs/draft-readings.md``.
 """
 
@@ -41,4 +42,8 @@ SPEC = Specification(
     budget_options=frozenset({"table_mpe_arcsec", "tilt_deg", "zero_stability_dph",
                               "duration_min", "repeatability_arcsec", "k",
                               "monte_carlo_trials", "seed"}),
+    commands=(("eda", "gonio.specs.ogam_draft.commands:add_eda"),
+              ("reduce", "gonio.specs.ogam_draft.commands:add_reduce"),
+              ("tilt", "gonio.specs.ogam_draft.commands:add_tilt"),
+              ("tilt-estimate", "gonio.specs.ogam_draft.commands:add_tilt_estimate")),
 )
