@@ -75,7 +75,9 @@ TARGETS: dict[str, list[tuple[str, list[str]]]] = {
                         ("gonio.specs.triad_alignment.analysis", ["*"]),
                         ("gonio.specs.triad_alignment.thermal_model", [
                             "soak_covariance", "order_uncertainty", "fit_polynomial",
-                            "design", "PolyFit.coefficients"])],
+                            "design", "PolyFit.coefficients", "soak_parts", "linear_variance",
+                            "criterion_weights", "point",
+                            "certified_points"])],
 }
 
 #: Per specification: the fast tests that should notice (pytest arguments).
@@ -101,6 +103,9 @@ TESTS: dict[str, list[str]] = {
                         "tests/test_thermal_coverage.py::test_order_term_closed_form_for_two_candidates",
                         "tests/test_thermal_coverage.py::test_soak_covariance_degrees_of_freedom_boundaries",
                         "tests/test_thermal_coverage.py::test_soak_covariance_one_within_degree_of_freedom",
+                        "tests/test_thermal_coverage.py::test_point_variance_is_the_covariance_form_and_the_order_term_its_closed_form",
+                        "tests/test_thermal_coverage.py::test_certified_points_of_a_set_point_measured_once",
+                        "tests/test_spec_truth.py::test_triad_thermal_truth_is_what_a_noise_free_identification_finds",
                         "tests/test_triad_alignment.py"],
 }
 

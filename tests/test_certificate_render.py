@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.result.model import flat_view
+from gonio.result.model import Result
 from gonio.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
@@ -53,9 +54,9 @@ def run(tmp_path_factory):
     proto = parse_protocol(SMALL)
     session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=100.0), seed=4)
     write_session(session, d)
-    report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
-    write_calibration(report, d)
-    paths = cert.write_certificate(report, d, truth=session.truth)
+    result = calibrate(d / "readings.csv", proto, static_record=session.static_record)
+    write_calibration(result, d)
+    paths = cert.write_certificate(result.to_json(), d, truth=session.truth, dcc=True)
     lab_dir = d / "lab"
     lab = cert.load_lab(protocols_dir() / "lab-example.toml")
     # a laboratory's own readings: the bench's metadata lines out (else marked virtual)
@@ -63,11 +64,11 @@ def run(tmp_path_factory):
     lab_readings.write_text("".join(
         x for x in (d / "readings.csv").read_text().splitlines(keepends=True)
         if not re.match(r"# (bench|seed|generator):", x)))
-    lab_report = calibrate(lab_readings, proto, static_record=session.static_record)
-    lab_report.decided_result(lab)       # the pipeline decides; the certificate renders
-    cert.write_certificate(lab_report, lab_dir, lab=lab)
-    return {"dir": d, "report": report, "paths": paths, "lab_dir": lab_dir,
-            "results": flat_view(json.loads((d / "results.json").read_text()))}
+    lab_result = calibrate(lab_readings, proto, static_record=session.static_record)
+    decide_conformity(lab_result, lab)   # the pipeline decides; the certificate renders
+    cert.write_certificate(lab_result.to_json(), lab_dir, lab=lab)
+    return {"dir": d, "paths": paths, "lab_dir": lab_dir, "truth": session.truth,
+            "results": json.loads((d / "results.json").read_text())}
 
 
 def lookup(results: dict, src: str):
@@ -87,11 +88,11 @@ def test_every_number_in_html_equals_results_json(run):
     page = run["paths"]["certificate.html"].read_text()
     nums = shown_numbers(page)
     assert len(nums) >= 20
-    U = run["results"]["uncertainty"]["U_arcsec"]
+    U = run["results"]["extra"]["uncertainty"]["U_arcsec"]
     srcs = {s for s, _, _ in nums}
     for item in ITEMS:
-        assert f"{item}.value" in srcs, item
-    assert "uncertainty.U_arcsec" in srcs
+        assert f"items.{item}.value" in srcs, item
+    assert "extra.uncertainty.U_arcsec" in srcs
     for src, rule, text in nums:
         assert text == display(rule, lookup(run["results"], src), U), (src, rule, text)
     # The stated U obeys GUM 7.2.6: two significant digits.
@@ -131,8 +132,8 @@ def test_html_in_chromium_items_u_and_figures_visible(run, tmp_path):
     text = re.sub(r"\s+", " ", html.unescape(re.sub(r"<[^>]+>", " ", dom)))
     for item in ITEMS:
         assert L[item] in text, item
-    U = display("U", run["results"]["uncertainty"]["U_arcsec"])
-    k = display("k", run["results"]["uncertainty"]["k"])
+    U = display("U", run["results"]["extra"]["uncertainty"]["U_arcsec"])
+    k = display("k", run["results"]["extra"]["uncertainty"]["k"])
     assert re.search(rf"U = {re.escape(U)} ?″, k = {re.escape(k)}", text), "U with its k is not shown"
     assert L["virtual"] in text
     shot = tmp_path / "certificate.png"
@@ -164,11 +165,11 @@ def test_pdf_pages_numbered_nonblank_and_numbers_match(run, tmp_path):
         assert float(np.std(mpimg.imread(png)[..., :3])) > 0.02, f"page {i} is blank"
         assert f"Page {i} of {n}" in txt, f"page {i} lacks 'Page {i} of {n}'"
         assert labels("en")["virtual_short"] in txt, f"page {i} lacks the virtual-bench mark"
-    ident = cert.certificate_id(run["report"])
+    ident = cert.certificate_id(run["results"])
     assert all(ident in t for t in pages)
     # Every number the HTML shows appears in the PDF text, formatted by the same rule.
     alltext = " ".join(pages)
-    U = run["results"]["uncertainty"]["U_arcsec"]
+    U = run["results"]["extra"]["uncertainty"]["U_arcsec"]
     for src, rule, text in shown_numbers(run["paths"]["certificate.html"].read_text()):
         expect = display(rule, lookup(run["results"], src), U)
         assert expect in alltext, (src, expect)
@@ -191,13 +192,12 @@ def test_lab_file_details_and_no_virtual_mark(run, tmp_path):
 def test_virtual_readings_with_a_lab_file_are_marked(run, tmp_path):
     """The simulated readings with the laboratory file: every page says virtual."""
     lab = cert.load_lab(protocols_dir() / "lab-example.toml")
-    run["report"].decided_result(lab)
-    cert.write_certificate(run["report"], tmp_path, lab=lab)
+    result = decide_conformity(Result.from_json(run["results"]), lab)   # the pipeline's step
+    cert.write_certificate(result.to_json(), tmp_path, lab=lab)
     pages = pdf_pages_text(tmp_path / "certificate.pdf", tmp_path)
     assert all(labels("en")["virtual_short"] in t for t in pages)
     page = (tmp_path / "certificate.html").read_text()
     assert labels("en")["virtual"] in page and html.escape(lab["laboratory"]["name"]) in page
-    run["report"].decided_result(None)
 
 
 def test_bad_lab_file_names_the_key(tmp_path):
@@ -217,7 +217,7 @@ def test_failure_leaves_no_half_written_certificate(run, tmp_path, monkeypatch):
 
     monkeypatch.setattr(cert, "render_pdf", boom)
     with pytest.raises(RuntimeError):
-        cert.write_certificate(run["report"], tmp_path / "out")
+        cert.write_certificate(run["results"], tmp_path / "out")
     assert not list((tmp_path / "out").glob("certificate.*"))
 
 
@@ -226,7 +226,7 @@ def test_chinese_labels(run, tmp_path):
 
     if cjk_font() is None:
         pytest.skip(f"no CJK font: {HINT}")
-    paths = cert.write_certificate(run["report"], tmp_path, lang="zh")
+    paths = cert.write_certificate(run["results"], tmp_path, lang="zh")
     page = paths["certificate.html"].read_text()
     for term in ("标度因数", "标度因数非线性度", "零位稳定性", "角位置偏差", "角位置重复性",
                  "速率一致性", "指向一致性"):
@@ -255,7 +255,22 @@ def test_cli_calibrate_writes_certificate_with_lab(run, tmp_path, capsys):
 
 
 def test_same_inputs_same_certificate_bytes(run, tmp_path):
-    a = cert.write_certificate(run["report"], tmp_path / "a")
-    b = cert.write_certificate(run["report"], tmp_path / "b")
+    a = cert.write_certificate(run["results"], tmp_path / "a")
+    b = cert.write_certificate(run["results"], tmp_path / "b")
     for name in ("certificate.html", "certificate.pdf"):
         assert a[name].read_bytes() == b[name].read_bytes(), name
+
+
+def test_rendered_again_from_the_stored_results_json_alone(run, tmp_path):
+    """The certificate (HTML, PDF), its figures and its DCC are a pure function of the stored
+    results.json (and the virtual run's truth.json): rendered again from the file, read back
+    through the one result model, they are the bytes the calibration wrote."""
+    stored = Result.from_json(json.loads((run["dir"] / "results.json").read_text()))
+    truth = json.loads((run["dir"] / "truth.json").read_text())
+    again = cert.write_certificate(stored.to_json(), tmp_path, truth=truth, dcc=True)
+    for name in ("certificate.html", "certificate.pdf", "certificate.dcc.xml"):
+        assert again[name].read_bytes() == run["paths"][name].read_bytes(), name
+    # the figures are drawn from the series results.json holds, not from analysis objects
+    page = again["certificate.html"].read_text()
+    assert page.count("<svg") >= len(FIGURES)
+    assert set(stored.extra["figures"]) == {key for key, _, _ in FIGURES}

@@ -25,9 +25,9 @@ import pytest
 from matplotlib.figure import Figure
 from scipy.stats import norm
 
-from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
@@ -75,15 +75,16 @@ def run(tmp_path_factory):
     proto = parse_protocol(SMALL)
     session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=50.0), seed=4)
     write_session(session, d)
-    report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
     lab = cert.load_lab(LAB)
-    write_calibration(report, d, lab=lab)
-    cert.write_certificate(report, d / "en", truth=session.truth, lab=lab, dcc=True)
-    cert.write_certificate(report, d / "zh", truth=session.truth, lang="zh")
+    result = decide_conformity(calibrate(d / "readings.csv", proto,
+                                         static_record=session.static_record), lab)
+    write_calibration(result, d, lab=lab)
+    cert.write_certificate(result.to_json(), d / "en", truth=session.truth, lab=lab, dcc=True)
+    cert.write_certificate(result.to_json(), d / "zh", truth=session.truth, lang="zh")
     printed = {lang: chromium_print(d / lang / "certificate.html", d / f"{lang}-print.pdf", d)
                for lang in ("en", "zh")}
-    return {"dir": d, "report": report, "lab": lab, "truth": session.truth,
-            "results": flat_view(json.loads((d / "results.json").read_text())), "printed": printed}
+    return {"dir": d, "result": result, "lab": lab, "truth": session.truth,
+            "results": json.loads((d / "results.json").read_text()), "printed": printed}
 
 
 def half_up(x: float, dec: int) -> str:
@@ -109,13 +110,13 @@ def visible_text(page: str) -> str:
 
 def test_E_in_plus_minus_form_identical_in_every_output(run):
     res = run["results"]
-    E = [r["E_arcsec"] for r in res["angle_deviation"]["table"]]
+    E = [r["E_arcsec"] for r in res["items"]["angle_deviation"]["details"]["table"]]
     j = int(np.argmax(np.abs(E)))
-    dec = u_decimals(res["uncertainty"]["U_arcsec"])
+    dec = u_decimals(res["extra"]["uncertainty"]["U_arcsec"])
     pm = "±" + half_up(abs(E[j]), dec)
     signed = half_up(E[j], dec)
     signed = signed if signed.startswith("-") else "+" + signed
-    pos = f"{res['angle_deviation']['table'][j]['position_deg']:g}"
+    pos = f"{res['items']['angle_deviation']['details']['table'][j]['position_deg']:g}"
     expect = f"{pm}; signed extreme {signed}″ at {pos}°"
     page = visible_text((run["dir"] / "en" / "certificate.html").read_text())
     assert re.sub(r"\s+", " ", expect) in re.sub(r"\s+", " ", page)
@@ -137,15 +138,15 @@ def test_summary_and_certificate_use_the_same_numbers(run):
         st = stated_item(res, name)
         assert f'data-src="{st["value"].src}"' in table
         assert f">{html.escape(st['value'].text)}</span>" in table
-        line = next(li for li in summary.splitlines() if res[name]["item"] in li)
+        line = next(li for li in summary.splitlines() if res["items"][name]["title"] in li)
         assert st["value"].text in line, (name, line)
     # U to two significant digits, the same in both; u_c not "0.2″" beside "0.20″"
-    U = res["uncertainty"]["U_arcsec"]
-    uc = res["uncertainty"]["u_c_arcsec"]
+    U = res["extra"]["uncertainty"]["U_arcsec"]
+    uc = res["extra"]["uncertainty"]["u_c_arcsec"]
     assert f"U = {half_up(U, u_decimals(U))}″" in summary
     assert f"u_c = {half_up(uc, u_decimals(uc))}″" in summary
     # R shown at E's decimal place everywhere (figure legend included)
-    R = half_up(res["repeatability"]["value"], u_decimals(U))
+    R = half_up(res["items"]["repeatability"]["value"], u_decimals(U))
     assert stated_item(res, "repeatability")["value"].text == R
 
 
@@ -163,15 +164,15 @@ def test_coverage_probability_beside_every_U(run):
 
 def test_per_item_uncertainty_is_shown_when_results_carry_it(run):
     res = json.loads(json.dumps(run["results"]))
-    res["scale_factor"]["uncertainty"] = {"components": [], "u_c": 0.0123, "U": 0.0246, "k": 2.0,
-                                          "nu_eff": None, "coverage_probability": 0.95,
-                                          "unit": "counts/deg"}
+    res["items"]["scale_factor"]["uncertainty"] = {
+        "components": [], "u_c": 0.0123, "U": 0.0246, "k": 2.0, "nu_eff": None,
+        "coverage_probability": 0.95, "unit": "counts/deg"}
     st = stated_item(res, "scale_factor")
     assert st["U"].text == "0.025" and st["k"].text == "2" and st["p"] == "95"
-    assert st["value"].text == half_up(res["scale_factor"]["value"], 3)   # U's decimal place
+    assert st["value"].text == half_up(res["items"]["scale_factor"]["value"], 3)   # U's place
     assert "0.025 (k = 2, p ≈ 95 %)" in summary_text(res)
     bare = json.loads(json.dumps(run["results"]))
-    bare["scale_factor"]["uncertainty"] = None            # an item without its uncertainty
+    bare["items"]["scale_factor"]["uncertainty"] = None   # an item without its uncertainty
     without = stated_item(bare, "scale_factor")
     assert without["U"] is None and "—" in summary_text(bare).splitlines()[2]
 
@@ -192,8 +193,8 @@ def test_conformity_only_with_limits_and_outcome_from_closed_form(run, tmp_path)
     page = visible_text((run["dir"] / "en" / "certificate.html").read_text())
     assert "Statement of conformity" in page and "non-binary" in page
     # lab example: E within ±0.5″, w = U, non-binary
-    y = res["angle_deviation"]["value"]
-    U = res["uncertainty"]["U_arcsec"]
+    y = res["items"]["angle_deviation"]["value"]
+    U = res["extra"]["uncertainty"]["U_arcsec"]
     u = U / 2.0
     p_c = norm.cdf((0.5 - y) / u) - norm.cdf((-0.5 - y) / u)
     if abs(y) <= 0.5 - U:
@@ -230,7 +231,7 @@ def test_chinese_is_complete(run):
     res = run["results"]
     for note in res["readings_taken"]:
         assert any(note.startswith(p) for p in READING_NOTES_ZH), f"no zh form: {note[:40]}"
-    for c in res["uncertainty"]["components"]:
+    for c in res["extra"]["uncertainty"]["components"]:
         assert c["symbol"] in BUDGET_SOURCES_ZH, c["symbol"]
     missing = [k for k, v in LABELS.items() if not v.get("zh")]
     assert not missing
@@ -254,7 +255,7 @@ def test_units_never_wrap(run):
 
 def test_every_printed_page_has_identifier_and_page_x_of_y(run):
     cid_en = run["lab"]["certificate"]["number"]
-    cid_zh = cert.certificate_id(run["report"], None)
+    cid_zh = cert.certificate_id(run["results"], None)
     for lang, cid, fmt in (("en", cid_en, "Page {x} of {y}"), ("zh", cid_zh, "第 {x} 页 共 {y} 页")):
         for pdf in (run["dir"] / lang / "certificate.pdf", run["printed"][lang]):
             pages = pdf_pages(pdf)
@@ -284,7 +285,7 @@ def test_identifiers_never_break(run):
 
 def _headings(run, lang):
     L = labels(lang)
-    blocks = cert.certificate_blocks(run["report"], L, lab=run["lab"] if lang == "en" else None,
+    blocks = cert.certificate_blocks(run["results"], L, lab=run["lab"] if lang == "en" else None,
                                      truth=None, lang=lang)["blocks"]
     return {b.data.strip() for b in blocks if b.kind in ("h", "sub")}
 
@@ -304,7 +305,7 @@ def test_no_page_ends_with_a_heading(run):
 
 
 def test_rate_and_pointing_tables_labelled_reference_first(run):
-    blocks = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None)["blocks"]
+    blocks = cert.certificate_blocks(run["results"], labels("en"), lab=None, truth=None)["blocks"]
     tables = {b.extra["id"]: b.data for b in blocks if b.kind == "table"
               and isinstance(b.extra, dict) and b.extra["id"].startswith("table-")}
     assert set(tables) == {"table-rate_consistency", "table-pointing_consistency"}
@@ -319,7 +320,7 @@ def test_rate_and_pointing_tables_labelled_reference_first(run):
 def _draw(run, draw, L=None):
     fig = Figure(figsize=figs.HTML_FIGSIZE)
     with figs.mpl_style():
-        draw(fig, fig.add_gridspec(1, 1)[0], run["report"], L or labels("en"), run["truth"])
+        draw(fig, fig.add_gridspec(1, 1)[0], run["results"], L or labels("en"), run["truth"])
         fig.canvas.draw()
     return fig
 
@@ -350,8 +351,9 @@ def test_figure_numbers_rounded_as_the_tables(run):
 
 def test_zero_stability_drift_comes_from_results(run):
     res = run["results"]
-    row = res["zero_stability"]["table"][0]
-    rd = [r for r in res["zero_stability"]["readings"] if r["series"] == row["series"]]
+    row = res["items"]["zero_stability"]["details"]["table"][0]
+    rd = [r for r in res["items"]["zero_stability"]["details"]["readings"]
+          if r["series"] == row["series"]]
     t = np.array([r["time_s"] for r in rd]) - rd[0]["time_s"]
     m = np.array([r["angle_deg"] for r in rd])
     slope = ((t - t.mean()) * (m - m.mean())).sum() / ((t - t.mean()) ** 2).sum()  # closed form
@@ -379,13 +381,11 @@ def test_english_certificate_without_cjk_font_has_no_tofu(run, monkeypatch):
         raise GonioError("no CJK font")
     from gonio.report import render
     monkeypatch.setattr(render, "cjk_font", no_font)
-    cls = type(run["report"])
-    orig = cls.to_dict
-    monkeypatch.setattr(cls, "to_dict", lambda self: {
-        **orig(self), "specification": "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"})
+    res = json.loads(json.dumps(run["results"]))
+    res["extra"]["method"]["specification"] = "JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)"
     assert render.font_families("en") == ("DejaVu Sans",)
     assert render.cjk_notice("en") and "fonts-noto-cjk" in render.cjk_notice("en")
-    content = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None,
+    content = cert.certificate_blocks(res, labels("en"), lab=None, truth=None,
                                       lang="en", cjk=False)
     spec = [v for b in content["blocks"] if b.kind == "kv" for k, v in b.data
             if k == "Specification followed"][0]
@@ -439,7 +439,7 @@ def test_demo_cli_help_and_wrote_list(run, tmp_path, monkeypatch, capsys):
     import gonio.cli.cmd_calibrate as cmd_calibrate
     import gonio.pipeline.dispatch as dispatch
 
-    monkeypatch.setattr(dispatch, "demo", lambda *a, **k: (run["report"], dict(enumerate(paths))))
+    monkeypatch.setattr(dispatch, "demo", lambda *a, **k: (run["result"], dict(enumerate(paths))))
     monkeypatch.setattr(cmd_calibrate, "show", lambda *a, **k: None)
     args = build_parser().parse_args(["demo", "--out", str(out)])
     assert cmd_demo.run(args) == 0
@@ -461,43 +461,39 @@ def test_eda_error_bars_say_they_are_u():
         assert any("± u (k = 1)" in t for t in texts), texts
 
 
-def test_budget_kind_beyond_draft_lines_and_no_E(run, monkeypatch):
-    cls = type(run["report"])
-    orig = cls.to_dict
-
-    def physical(self):
-        d = json.loads(json.dumps(orig(self)))
-        d["uncertainty"]["budget_kind"] = "physical"
-        d["uncertainty"]["components"][1]["beyond_draft"] = True
+def test_budget_kind_beyond_draft_lines_and_no_E(run):
+    def physical(results):
+        d = json.loads(json.dumps(results))
+        d["extra"]["uncertainty"]["budget_kind"] = "physical"
+        d["extra"]["uncertainty"]["components"][1]["beyond_draft"] = True
         return d
-    monkeypatch.setattr(cls, "to_dict", physical)
-    blocks = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None)["blocks"]
+    blocks = cert.certificate_blocks(physical(run["results"]), labels("en"), lab=None,
+                                     truth=None)["blocks"]
     text = " ".join("".join(str(x) for x in b.data) for b in blocks if b.kind == "p")
     assert "lines marked \"beyond the draft\" are not in Annex A" in text
     budget = [b.data for b in blocks if b.kind == "table" and b.data[0][0] == "Component"][0]
     marked = [r[1] for r in budget[1] if "(beyond the draft)" in r[1]]
     already = sum(bool(c.get("beyond_draft")) for i, c in
-                  enumerate(orig(run["report"])["uncertainty"]["components"]) if i != 1)
+                  enumerate(run["results"]["extra"]["uncertainty"]["components"]) if i != 1)
     assert len(marked) == 1 + already
-    res = physical(run["report"])
+    res = physical(run["results"])
     assert "(physical budget)" in summary_text(res)
-    res["uncertainty"].update({"U_arcsec": None, "u_c_arcsec": None})
-    res["angle_deviation"].update({"measured": False, "value": None, "reason": "no rows"})
+    res["extra"]["uncertainty"].update({"U_arcsec": None, "u_c_arcsec": None})
+    res["items"]["angle_deviation"].update({"measured": False, "value": None,
+                                            "reason": "no rows"})
     s = summary_text(res)
     assert "no uncertainty stated" in s and "±" not in s
 
 
-def test_equal_division_errors_rounded_to_their_own_u(run, monkeypatch):
-    cls = type(run["report"])
-    orig = cls.to_dict
+def test_equal_division_errors_rounded_to_their_own_u(run):
     eda = {"n_starts": 4, "m_points": 2, "repeats": 1, "noise": "white",
            "table": {"position_deg": [0.0, 180.0], "error_arcsec": [0.00744, -0.31649],
                      "u_arcsec": [0.022, 0.0049]},
            "goniometer": {"angle_deg": [180.0, 360.0], "error_arcsec": [1.23456, 0.0],
                           "u_arcsec": [0.13, 0.0]},
            "closure": {"full_turn_arcsec": 0.01234, "u_full_turn_arcsec": 0.0456}}
-    monkeypatch.setattr(cls, "to_dict", lambda self: {**orig(self), "equal_division": eda})
-    blocks = cert.certificate_blocks(run["report"], labels("en"), lab=None, truth=None)["blocks"]
+    res = {**run["results"], "extra": {**run["results"]["extra"], "equal_division": eda}}
+    blocks = cert.certificate_blocks(res, labels("en"), lab=None, truth=None)["blocks"]
     i = [k for k, b in enumerate(blocks) if b.kind == "h" and "equal-division" in b.data][0]
     rows = [b for b in blocks[i:] if b.kind == "table"][0].data[1]
     assert [str(c) for c in rows[0]] == ["0", "0.007", "0.022", "180", "1.23", "0.13"]
@@ -524,7 +520,7 @@ def test_status_line_only_on_a_terminal():
 
 def test_zh_says_where_k_comes_from_in_chinese(run):
     """Issue 13's zh gap: the line on the origin of k went through i18n."""
-    ks = run["results"]["uncertainty"].get("k_source")
+    ks = run["results"]["extra"]["uncertainty"].get("k_source")
     page = visible_text((run["dir"] / "zh" / "certificate.html").read_text(encoding="utf-8"))
     assert "t-factor" not in page and "welch-satterthwaite" not in page
     if ks:

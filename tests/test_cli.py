@@ -9,7 +9,6 @@ import sys
 
 import pytest
 
-from gonio.result.model import flat_view
 from gonio.cli import main
 
 UNITS = {"scale_factor": "counts/deg", "scale_factor_nonlinearity": "%", "zero_stability": "deg/h",
@@ -42,11 +41,11 @@ def test_simulate_then_calibrate(small_run, capsys):
     printed = json.loads(capsys.readouterr().out)
     written = json.loads((d / "cal" / "results.json").read_text())
     assert printed == written
-    written = flat_view(written)
     for key, unit in UNITS.items():
-        assert written[key]["unit"] == unit and written[key]["measured"] is True, key
-        assert isinstance(written[key]["value"], float)
-    u = written["uncertainty"]
+        it = written["items"][key]
+        assert it["unit"] == unit and it["measured"] is True, key
+        assert isinstance(it["value"], float)
+    u = written["extra"]["uncertainty"]
     assert {"components", "u_c_arcsec", "U_arcsec", "k"} <= set(u)
     # the physical budget (default): the annex's four lines, then those beyond the draft
     assert [c["symbol"] for c in u["components"]][:4] == ["P", "phi_e", "B_E", "r"]
@@ -54,7 +53,8 @@ def test_simulate_then_calibrate(small_run, capsys):
     assert [c["beyond_draft"] for c in u["components"]] == [False] * 4 + [True] * 3
     assert u["U_arcsec"] == pytest.approx(u["k"] * u["u_c_arcsec"])
     # u(r) is this calibration's own repeatability (7.5).
-    assert u["components"][3]["u_arcsec"] == pytest.approx(written["repeatability"]["value"])
+    assert u["components"][3]["u_arcsec"] == pytest.approx(
+        written["items"]["repeatability"]["value"])
 
 
 def test_partial_file_reports_not_measured(small_run, tmp_path, capsys):
@@ -65,7 +65,7 @@ def test_partial_file_reports_not_measured(small_run, tmp_path, capsys):
     f.write_text("".join(keep))
     assert main(["calibrate", str(f), "--protocol", str(small_run / "small.toml"),
                  "--out", str(tmp_path / "o")]) == 0
-    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
+    res = json.loads((tmp_path / "o" / "results.json").read_text())["items"]
     assert res["angle_deviation"]["measured"] and res["repeatability"]["measured"]
     for key in ("scale_factor", "zero_stability", "rate_consistency", "pointing_consistency"):
         assert res[key]["measured"] is False and res[key]["value"] is None and res[key]["reason"]
@@ -112,8 +112,8 @@ def test_incomplete_equal_division_rows_do_not_stop_the_calibration(tmp_path):
     full = Path(__file__).parent / "data" / "full.csv"
     assert main(["calibrate", str(full), "--protocol", str(full.with_suffix(".toml")),
                  "--out", str(tmp_path / "o")]) == 0
-    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
-    assert "equal_division" not in res
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    assert "equal_division" not in res["extra"]
     stray = [u for u in res["unused_readings"] if u["test"] == "equal_division"]
     assert stray and all("equal-division analysis not possible" in u["reason"] for u in stray)
-    assert res["angle_deviation"]["measured"]
+    assert res["items"]["angle_deviation"]["measured"]

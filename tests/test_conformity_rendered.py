@@ -19,6 +19,7 @@ from gonio.report.i18n import display
 from gonio.report.stated import conformity_for
 from gonio.resources import protocols_dir
 from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write
 
 SMALL = tomllib.loads((Path(__file__).parent / "data" / "small-protocol.toml")
@@ -31,14 +32,15 @@ def written(tmp_path_factory):
     proto = parse_protocol(SMALL)
     session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=20.0), seed=7)
     write_session(session, d)
-    report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
+    result = calibrate(d / "readings.csv", proto, static_record=session.static_record)
     lab = load_lab(protocols_dir() / "lab-example.toml")       # limits E and repeatability
-    write(report, d / "out", lab=lab, dcc=True)
-    return report, lab, d / "out"
+    decide_conformity(result, lab)                              # the pipeline decides, once
+    write(result, d / "out", lab=lab, dcc=True)
+    return result, lab, d / "out"
 
 
 def test_certificate_dcc_and_summary_state_the_decision_of_results_json(written):
-    report, lab, out = written
+    result, lab, out = written
     items = json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
     decided = {k: it["conformity"] for k, it in items.items() if it.get("conformity")}
     assert set(decided) == {"angle_deviation", "repeatability"}
@@ -60,14 +62,17 @@ def test_certificate_dcc_and_summary_state_the_decision_of_results_json(written)
 
 
 def test_the_report_decides_nothing(written):
-    report, lab, _ = written
-    res = report.to_dict()
-    entries = conformity_for(res, lab, report.conformity)
+    result, lab, _ = written
+    res = result.to_json()
+    entries = conformity_for(res, lab)
     assert [e["item"] for e in entries] == [lim["item"] for lim in lab["specification_limits"]]
-    assert all(e["conformity"] is report.conformity[e["item"]] for e in entries)
+    assert all(e["conformity"] == result.items[e["item"]].conformity for e in entries)
+    undecided = json.loads(json.dumps(res))
+    for it in undecided["items"].values():
+        it["conformity"] = None
     with pytest.raises(ValueError, match="was not decided"):
-        conformity_for(res, lab, {})
+        conformity_for(undecided, lab)
     other = {**lab, "specification_limits": [{"item": "repeatability", "upper": 0.9}]}
     with pytest.raises(ValueError, match="decided under other limits"):
-        conformity_for(res, other, report.conformity)
-    assert conformity_for(res, None, report.conformity) == []    # lab-file limits only
+        conformity_for(res, other)
+    assert conformity_for(res, None) == []    # lab-file limits only

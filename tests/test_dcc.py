@@ -19,9 +19,9 @@ import pytest
 from lxml import etree
 from scipy.stats import norm
 
-from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.protocol import parse_protocol
 from gonio.formats.lab import load_lab
@@ -54,14 +54,14 @@ def run(tmp_path_factory):
     proto = parse_protocol(SMALL)
     session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=20.0), seed=7)
     write_session(session, d)
-    report = calibrate(d / "readings.csv", proto, static_record=session.static_record)
-    write_calibration(report, d)
+    result = calibrate(d / "readings.csv", proto, static_record=session.static_record)
+    write_calibration(result, d)
     lab = load_lab(protocols_dir() / "lab-example.toml")
-    report.decided_result(lab)           # the pipeline decides; the DCC renders
-    docs = {"lab": dcc_bytes(report, lab=lab, cert_id=certificate_id(report, lab)),
-            "virtual": dcc_bytes(report, lab=None, cert_id=certificate_id(report, None))}
-    return {"report": report, "lab": lab, "docs": docs,
-            "results": flat_view(json.loads((d / "results.json").read_text()))}
+    res = decide_conformity(result, lab).to_json()   # the pipeline decides; the DCC renders
+    docs = {"lab": dcc_bytes(res, lab=lab, cert_id=certificate_id(res, lab)),
+            "virtual": dcc_bytes(res, lab=None, cert_id=certificate_id(res, None))}
+    return {"res": res, "lab": lab, "docs": docs,
+            "results": json.loads((d / "results.json").read_text())}
 
 
 def lookup(res, src):
@@ -122,13 +122,15 @@ def _as_display(text: str) -> str:
 
 def test_every_number_equals_results_json(run):
     res = run["results"]
-    U = res["uncertainty"]["U_arcsec"]
+    U = res["extra"]["uncertainty"]["U_arcsec"]
     nums = _numbers(run["docs"]["lab"])
     assert len(nums) > 25
     srcs = {s for s, _, _ in nums}
-    for must in ("angle_deviation.max_abs_arcsec", "angle_deviation.value", "scale_factor.value",
-                 "zero_stability.value", "repeatability.value", "rate_consistency.value",
-                 "pointing_consistency.value", "angle_deviation.table.0.E_arcsec"):
+    for must in ("items.angle_deviation.details.max_abs_arcsec", "items.angle_deviation.value",
+                 "items.scale_factor.value", "items.zero_stability.value",
+                 "items.repeatability.value", "items.rate_consistency.value",
+                 "items.pointing_consistency.value",
+                 "items.angle_deviation.details.table.0.E_arcsec"):
         assert must in srcs, must
     for src, rule, text in nums:
         v = lookup(res, src)
@@ -141,7 +143,7 @@ def test_every_number_equals_results_json(run):
     root = etree.fromstring(run["docs"]["lab"])
     mu = root.find(".//dcc:result[@id='result-angle_deviation']//si:expandedMU", NS)
     assert float(mu.find("si:valueExpandedMU", NS).text) == pytest.approx(U, abs=0.005 * 1.0001)
-    assert mu.find("si:coverageFactor", NS).text == display("k", res["uncertainty"]["k"])
+    assert mu.find("si:coverageFactor", NS).text == display("k", res["extra"]["uncertainty"]["k"])
     assert float(mu.find("si:coverageProbability", NS).text) == 0.95
 
 
@@ -173,7 +175,7 @@ def test_administrative_data_and_conformity(run):
     assert signers == [lab["signatory"]["approved_by"]]
     assert "光学陀螺测角仪校准规范" in t(".//dcc:statement[@id='specification']/dcc:norm")
     # conformity: E against ±0.5″, non-binary, w = U, outcome and p from the closed form
-    y, U = res["angle_deviation"]["value"], res["uncertainty"]["U_arcsec"]
+    y, U = res["items"]["angle_deviation"]["value"], res["extra"]["uncertainty"]["U_arcsec"]
     st = root.find(".//dcc:statement[@id='conformity-angle_deviation']", NS)
     expect = ("pass" if abs(y) <= 0.5 - U else "conditionalPass" if abs(y) <= 0.5
               else "conditionalFail" if abs(y) <= 0.5 + U else "fail")
@@ -193,6 +195,6 @@ def test_administrative_data_and_conformity(run):
 
 
 def test_same_inputs_same_bytes(run):
-    r = run["report"]
+    r = run["res"]
     assert dcc_bytes(r, lab=run["lab"], cert_id="X-1") == dcc_bytes(r, lab=run["lab"],
                                                                   cert_id="X-1")

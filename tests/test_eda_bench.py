@@ -10,7 +10,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.result.model import flat_view
 from gonio.bench import load_bench, run_session
 from gonio.bench.config import Harmonic, TableConfig
 from gonio.bench.instrument import harmonic_sum_arcsec
@@ -121,6 +120,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     import re
 
     from gonio.bench import write_session
+    from gonio.formats.readings import read_readings
     from gonio.specs.ogam_draft.calibration import calibrate
     from gonio.specs.ogam_draft.outputs import write_calibration
     from gonio.report.certificate import write_certificate
@@ -128,26 +128,27 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
 
     proto = eda_protocol(4, 8, repeats=2)
     write_session(run_session(proto, bench_for(np.random.default_rng(0)), seed=1), tmp_path)
-    report = calibrate(tmp_path / "readings.csv", proto)
-    write_calibration(report, tmp_path)
-    res = flat_view(json.loads((tmp_path / "results.json").read_text()))
+    result = calibrate(tmp_path / "readings.csv", proto)
+    write_calibration(result, tmp_path)
+    res = json.loads((tmp_path / "results.json").read_text())
     assert res["unused_readings"] == []
-    e = res["equal_division"]
+    e = res["extra"]["equal_division"]
     assert (e["n_starts"], e["m_points"], e["repeats"], e["noise"]) == (4, 8, 2, "random_walk")
     from gonio.analysis.equal_division import analyse_eda_readings
 
-    direct = analyse_eda_readings(report.readings.data, proto.extra["equal_division"],
+    rd = read_readings(tmp_path / "readings.csv")
+    direct = analyse_eda_readings(rd.data, proto.extra["equal_division"],
                                   compensation_time_s=proto.session.static_s,
                                   latitude_deg=90.0, tilt_bound_deg=0.1,
-                                  table_accel_dps2=float(
-                                      report.readings.metadata["table_accel_dps2"]))
+                                  table_accel_dps2=float(rd.metadata["table_accel_dps2"]))
     assert e["coupling"]["note"] == direct.coupling.note
     assert np.allclose(e["table"]["error_arcsec"], direct.table_error_arcsec, atol=1e-6)
-    page = write_certificate(report, tmp_path)["certificate.html"].read_text()
+    page = write_certificate(res, tmp_path)["certificate.html"].read_text()
     assert html.escape(labels("en")["eda"]) in page
-    nums = re.findall(r'data-src="(equal_division[^"]+)" data-rule="([^"]+)"[^>]*>([^<]*)<', page)
+    nums = re.findall(r'data-src="(extra\.equal_division[^"]+)" data-rule="([^"]+)"[^>]*>([^<]*)<',
+                      page)
     assert len(nums) == 6 * 8 + 2
-    U = res["uncertainty"]["U_arcsec"]
+    U = res["extra"]["uncertainty"]["U_arcsec"]
     for src, rule, text in nums:
         v = res
         for part in src.split("."):

@@ -280,7 +280,7 @@ def _read_then_calibrate(p: Path) -> None:
         except GonioError as e:
             assert e.file is not None and "\n" not in str(e) and len(str(e)) < 800, str(e)
         else:
-            d = rep.to_dict()
+            d = rep.to_json()
             json.dumps(d, allow_nan=False)
             for v in _floats(d):
                 assert isinstance(display_number(v), str)

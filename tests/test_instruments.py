@@ -242,20 +242,27 @@ def _wait_rows(path: Path, n: int, timeout_s: float = 40.0) -> None:
     raise AssertionError(f"{path}: fewer than {n} readings after {timeout_s} s")
 
 
-def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_path):
-    out = tmp_path / "acq"
+def _interrupted_acquire(served, out: Path, rows: int, sig) -> tuple[int, bytes]:
+    """``gonio acquire`` of the small programme in a subprocess, sent ``sig`` once it has
+    written ``rows`` readings; its exit code and stderr."""
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
     cmd = [sys.executable, "-m", "gonio", "acquire", "--protocol", str(SMALL), "--table",
            served.table_resource, "--gyro", served.gyro_resource, "--out", str(out),
            "--meta", "latitude_deg=40.2"]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        _wait_rows(out / "readings.csv", 10)
-        proc.send_signal(signal.SIGINT)
+        _wait_rows(out / "readings.csv", rows)
+        proc.send_signal(sig)
         _, err = proc.communicate(timeout=30)
     finally:
         proc.kill()
-    assert proc.returncode == 130, err
+    return proc.returncode, err
+
+
+def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_path):
+    out = tmp_path / "acq"
+    rc, err = _interrupted_acquire(served, out, 10, signal.SIGINT)
+    assert rc == 130, err
     assert b"continue with --resume" in err
     kept = read_readings(out / "readings.csv")
     assert kept.metadata["acquisition"] == "incomplete"
@@ -270,6 +277,17 @@ def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_p
     assert res.complete and res.taken <= 27 - n_kept + 4     # at most 7.3's block again
     assert _keys(out / "readings.csv") == _keys(simulated[0])   # every reading once
     _agree_within_u(_calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
+
+
+def test_sigterm_stops_the_table_and_keeps_the_readings(served, tmp_path):
+    out = tmp_path / "acq"
+    rc, err = _interrupted_acquire(served, out, 3, signal.SIGTERM)
+    assert rc == 143, err
+    kept = read_readings(out / "readings.csv")
+    assert kept.metadata["acquisition"] == "incomplete" and len(kept.data) >= 3
+    assert "SIGTERM" in kept.metadata["acquisition_stopped"]
+    log = (out / "io.log").read_text(encoding="utf-8").splitlines()
+    assert log[-1].endswith("table > STOP")
 
 
 def _failing_run(rlg, tmp_path, faults: str):

@@ -14,7 +14,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.result.model import flat_view
 from gonio.cli import main
 from gonio.errors import GonioError, check_header
 from gonio.formats import readings as R
@@ -236,14 +235,14 @@ def large(tmp_path_factory):
 
 def test_large_file_is_summarised_not_copied(large):
     p, out = large
-    res = flat_view(json.loads((out / "results.json").read_text(encoding="utf-8")))
+    res = json.loads((out / "results.json").read_text(encoding="utf-8"))
     assert (out / "results.json").stat().st_size < 600_000
     assert (out / "certificate.html").stat().st_size < 1_500_000
     # the 7.1 table: 200 rows listed, the summary's count and extremes from the file itself
     raw = pd.read_csv(p, comment="#")
     sf = raw[raw["test"] == "scale_factor"]
     k_i = (sf["gyro_counts"] / sf["table_deg"]).to_numpy()
-    t = res["scale_factor"]
+    t = res["items"]["scale_factor"]["details"]
     assert len(t["table"]) == 200
     sm = t["table_summary"]
     assert sm["rows"] == len(sf) > 200 and sm["column"] == "K_i_counts_per_deg"
@@ -256,7 +255,7 @@ def test_large_file_is_summarised_not_copied(large):
     full = pd.read_csv(out / "tables" / "scale_factor_table.csv")
     assert len(full) == len(sf)
     # unused readings: summarised by reason with the total, every one in the CSV
-    us = res["unused_readings_summary"]
+    us = res["extra"]["unused_readings_summary"]
     assert us["total"] >= 300 and len(res["unused_readings"]) == 200
     assert sum(us["by_reason"].values()) == us["total"]
     # the 300 7.7 readings at 30 °/s: set aside by the screening (not a programme condition)
@@ -271,7 +270,7 @@ def test_large_file_is_summarised_not_copied(large):
     beyond = [f for f in fs if f["code"] == "series-beyond-programme"]
     assert beyond and all(f["action"] == "flagged" for f in beyond) and len(fs) < 100
     # the 7.4 matrix: at most 50 series columns in results.json
-    mx = res["angle_deviation"]["matrix"]
+    mx = res["items"]["angle_deviation"]["details"]["matrix"]
     assert len([c for c in mx[0] if c.startswith("series_")]) == 50
     html = (out / "certificate.html").read_text(encoding="utf-8")
     assert f"200 of {len(sf)} rows listed" in html

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import pytest
 
-from gonio.result.model import flat_view
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.readings import Readings, read_readings
@@ -95,17 +94,17 @@ def test_one_degree_typo_in_a_7_4_reading_is_set_aside(bench_file, tmp_path, cap
     f = damage(bench_file, tmp_path / "in",
                lambda ls: ls[:i] + [set_col(ls[i], 7, lambda c: str(int(c) + round(k)))]
                + ls[i + 1:])
-    clean = calibrate(bench_file, SMALL).to_dict()
+    clean = calibrate(bench_file, SMALL).items
     code, err = run_cli(f, tmp_path / "o", capsys)
     assert code == 0
-    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
     fd = [x for x in res["findings"] if x["line"] == i + 1]
     assert len(fd) == 1 and fd[0]["action"] == "set_aside" and fd[0]["column"] == "gyro_counts"
     assert fd[0]["clause"] == "7.4" and "MAD" in fd[0]["rule"] and "K_ref" in fd[0]["message"]
     assert i + 1 in {u["line"] for u in res["unused_readings"]}
     # R stays that of the healthy data (not 1 138″); E close to the clean file's
-    assert res["repeatability"]["value"] < 1.0
-    assert abs(res["angle_deviation"]["value"] - clean["angle_deviation"]["value"]) < 0.5
+    assert res["items"]["repeatability"]["value"] < 1.0
+    assert abs(res["items"]["angle_deviation"]["value"] - clean["angle_deviation"].value) < 0.5
     page = (tmp_path / "o" / "certificate.html").read_text()
     assert "1 reading(s) set aside" in page and f"line {i + 1}:" in page
     assert "excluded" in err
@@ -152,12 +151,12 @@ def test_reading_an_hour_late_without_the_key_is_set_aside(bench_file, tmp_path,
                + ls[i + 1:])
     code, _ = run_cli(f, tmp_path / "o", capsys)
     assert code == 0
-    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
     fd = [x for x in res["findings"] if x["line"] == i + 1]
     assert fd and fd[0]["code"] == "late-reading" and fd[0]["column"] == "time_s"
     assert "Annex A.1" in fd[0]["message"] and "0.5 min" in fd[0]["message"]
     # u(B_E) from the readings used, not from one hour
-    b_e = [c for c in res["uncertainty"]["components"] if c["symbol"] == "B_E"][0]
+    b_e = [c for c in res["extra"]["uncertainty"]["components"] if c["symbol"] == "B_E"][0]
     assert b_e["u_arcsec"] < 0.2
     assert "set aside" in (tmp_path / "o" / "certificate.html").read_text()
 
@@ -182,7 +181,7 @@ def test_a_7_4_point_missing_from_every_series_is_named(bench_file, tmp_path, ca
     f = damage(bench_file, tmp_path / "in", drop)
     code, err = run_cli(f, tmp_path / "o", capsys)
     assert code == 0
-    res = flat_view(json.loads((tmp_path / "o" / "results.json").read_text()))
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
     fd = [x for x in res["findings"] if x["code"] == "incomplete-programme"]
     assert len(fd) == 1 and fd[0]["action"] == "flagged" and fd[0]["clause"] == "7.4"
     assert "round 3 (270°)" in fd[0]["message"] and "3 of the programme's 4" in fd[0]["message"]

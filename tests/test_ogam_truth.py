@@ -74,11 +74,11 @@ def test_certificate_states_k_as_mounted(tmp_path):
     from gonio.cli import main
     assert main(["simulate", "--protocol", str(SMALL), "--seed", "2412", "--out",
                  str(tmp_path / "s")]) == 0
-    rep = calibrate(tmp_path / "s" / "readings.csv", SMALL)
-    sf = rep.to_dict()["scale_factor"]
+    rep = calibrate(tmp_path / "s" / "readings.csv", SMALL).to_json()
+    sf = rep["items"]["scale_factor"]["details"]
     assert sf["measurand"].startswith("K as mounted") and sf["tilt_bound_deg"] == 0.1
     assert sf["instrument_own_upper_counts_per_deg"] == pytest.approx(
-        sf["value"] / math.cos(math.radians(0.1)), rel=1e-12)
+        rep["items"]["scale_factor"]["value"] / math.cos(math.radians(0.1)), rel=1e-12)
     from gonio.report.certificate import certificate_blocks
     from gonio.report.i18n import labels
     for lang, text in (("en", "stated as mounted"), ("zh", "安装状态下的值")):
@@ -97,7 +97,7 @@ def _bs(tmp_path, edit):
     out = [edit(ln) if ln.startswith("zero_stability,") else ln for ln in lines]
     f = tmp_path / "z.csv"
     f.write_text("".join(out))
-    return calibrate(f, SMALL).to_dict()
+    return calibrate(f, SMALL).to_json()["items"]
 
 
 def test_identical_7_3_readings_do_not_give_u_zero(tmp_path):
@@ -114,7 +114,7 @@ def test_identical_7_3_readings_do_not_give_u_zero(tmp_path):
     b_res = (1 / k) / math.sqrt(6) / (60.0 / 3600.0)
     assert u["u_c"] == pytest.approx(b_res, rel=1e-9)
     assert u["U"] > 0 and u["interval"][1] > 0
-    assert u["nonnegative"] and u["upper_bound"] >= u["U"]
+    assert zs["nonnegative"] and zs["upper_bound"] >= u["U"]
     assert "resolution" in u["components"][0]["source"]
 
 

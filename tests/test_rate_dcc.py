@@ -110,6 +110,14 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
             last_digit_unit(_as_display(text))       # dec-1: rounded to tens
         assert abs(x - v) <= 0.5 * step + 1e-12 * abs(v), src
         unc = res["items"][key]["uncertainty"]
+        if unc["k"] is None:       # stated by its coverage interval (σ's χ², a half range)
+            ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+            lo, hi = (float(ci.find(f"si:interval{e}", NS).text) for e in ("Min", "Max"))
+            assert lo <= unc["interval"][0] * factor and hi >= unc["interval"][1] * factor
+            assert hi == pytest.approx(unc["interval"][1] * factor, rel=0.05)
+            assert float(ci.find("si:coverageProbability", NS).text) == 0.95
+            assert real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS) is None
+            continue
         mu = real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS)
         U = float(mu.find("si:valueExpandedMU", NS).text)
         assert U == pytest.approx(unc["U"] * factor, rel=0.05)     # 2 significant digits

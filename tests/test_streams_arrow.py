@@ -282,12 +282,12 @@ def test_long_rest_level_is_a_strided_median(monkeypatch):
 
 def test_calibrate_stream_writes_no_temporary_readings_file(tmp_path, monkeypatch):
     import gonio.formats.readings as RD
-    from gonio.specs.ogam_draft.calibration import calibrate
+    from gonio.specs.ogam_draft.calibration import analyse
     path, res, _, _ = _bench_stream(tmp_path, "c", 32, "parquet")
 
     def refuse(*a, **k):
         raise AssertionError("a readings file was written")
     monkeypatch.setattr(RD, "write_readings", refuse)
     monkeypatch.setattr("tempfile.TemporaryDirectory", refuse)
-    rep = calibrate(path, PROTO)
+    rep = analyse(path, PROTO)
     assert rep.readings.data["gyro_counts"].tolist() == res.readings["gyro_counts"].tolist()

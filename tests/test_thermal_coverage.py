@@ -219,3 +219,44 @@ def test_soak_covariance_never_pools_when_the_soak_means_hide_their_error():
     nu_b = 8 - 4                              # soak means less the c0…ϑ³ terms
     assert nu[1] < nu_b + 1.5 and nu[1] < 0.5 * (24 - 5), nu
     assert nu[4] > 10                         # the supply term rests on within-soak differences
+
+
+def test_certified_points_of_a_set_point_measured_once():
+    """A set point with one soak point has no Type A spread of its (sensor − chamber): its
+    temperature-reading term is 0 with ν 0 (no NaN, no budget line), the values stay finite;
+    the others keep u_theta_c from their three points, (sd/√n of sensor − chamber)."""
+    from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_thermal_session
+    from gonio.formats.triad import TriadReadings
+    from gonio.specs.triad_alignment.calibration import thermal_items
+    from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
+
+    p = load_triad_protocol("triad-alignment", "triad-alignment")
+    s = run_thermal_session(p, load_triad_bench("mems-triad"), 31)
+    r = TriadReadings(s.readings.assign(line=np.arange(len(s.readings)) + 1), s.metadata, None)
+    th = identify_thermal_model(r, ramps=False)
+    m = th.channels["z"]
+    low = np.round(m.points["chamber_c"], 1) == -40.0
+    assert low.sum() == 3
+    m.points = m.points.drop(index=m.points.index[low][1:])
+    pts = {(q["model"], q["t"], q["v"]): q for q in m.certified_points(th.reference_c,
+                                                                         th.reference_v)}
+    one, three = pts[("K", 1, 1)], pts[("K", 2, 1)]
+    assert one["u_theta_c"] == 0.0 and one["nu_theta"] == 0.0
+    g = m.points[np.round(m.points["chamber_c"], 1) == -20.0]
+    o = g["theta_c"] - (g["chamber_c"] - th.reference_c)
+    assert three["u_theta_c"] == pytest.approx(float(o.std(ddof=1)) / math.sqrt(3), rel=1e-12)
+    items = thermal_items(th, "lsb")
+    it = items["K_z_t1_v1"]
+    assert math.isfinite(it.uncertainty.U) and math.isfinite(it.value)
+    assert [c["symbol"] for c in it.uncertainty.components] == ["K_z_t1_v1_fit",
+                                                                 "K_z_t1_v1_order"]
+    assert "K_z_t2_v1_T" in [c["symbol"] for c in items["K_z_t2_v1"].uncertainty.components]
+    # the stated point is the programme's: −40 °C, the lowest supply (4.75 V)
+    assert (it.details["setpoint_c"], it.details["supply_v"]) == (-40.0, 4.75)
+    assert items["b_z_t8_v3"].details["supply_v"] == 5.25
+    # the slope the temperature term uses is the polynomial's derivative (closed form)
+    for key, fit in (("K", m.scale), ("b", m.bias)):
+        c = fit.coefficients()
+        q = pts[(key, 2, 1)]
+        d = sum(j * c[f"theta{j}"] * q["theta_c"] ** (j - 1) for j in range(1, fit.n_t + 1))
+        assert q["slope"] == pytest.approx(d, rel=1e-6), key

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from gonio.bench import load_bench, run_session
-from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.calibration import analyse
 from gonio.formats.readings import Readings
 from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
 from gonio.specs.ogam_draft.study import ideal_bench, trial_bench, validation_protocol
@@ -56,7 +56,7 @@ def records(proto, base):
         res = run_session(proto, bench, seed=500 + seed)
         df = res.readings.copy()
         df["line"] = np.arange(2, len(df) + 2)
-        rep = calibrate(Readings(df, dict(res.metadata)), proto, budget="draft")
+        rep = analyse(Readings(df, dict(res.metadata)), proto, budget="draft")
         assert rep.uncertainty.k == 2.0
         out.append(trial_items(rep, res.truth))
     return out

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.result.model import flat_view
-from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.calibration import analyse, calibrate
+from gonio.specs.ogam_draft.outputs import warnings
 from gonio.cli import main
 from gonio.errors import GonioError
 
@@ -83,15 +83,15 @@ def line_of(lines, series, rnd):
 
 def api(f, p=None, **kw):
     """The Python API: results.json content and the stderr warnings, without writing."""
-    rep = calibrate(f, p, **kw)
-    return rep.to_dict(), "\n".join(rep.warnings())
+    result = calibrate(f, p, **kw)
+    return result.to_json(), "\n".join(warnings(result))
 
 
 def cli_json(argv, capsys):
     capsys.readouterr()
     code = main(argv + ["--json"])
     out = capsys.readouterr()
-    return code, (flat_view(json.loads(out.out)) if code == 0 else None), out.err
+    return code, (json.loads(out.out) if code == 0 else None), out.err
 
 
 # --------------------------------------------------------------------------- defect 1
@@ -99,7 +99,7 @@ def cli_json(argv, capsys):
 def test_defect1_inconsistent_round_is_excluded_and_said(tmp_path, capsys):
     f, p, lines = write_case(tmp_path, rows={(2, 1): (91.0, 10.0)})
     res, err = api(f, p)
-    ad = res["angle_deviation"]
+    ad = res["items"]["angle_deviation"]["details"]
     pts = {round(r["position_deg"], 6): r for r in ad["table"]}
     assert sorted(pts) == POS                       # no "position 90.5°"
     # E at 90° is the mean of the four series that fit, not five
@@ -115,7 +115,8 @@ def test_defect1_inconsistent_round_is_excluded_and_said(tmp_path, capsys):
 def test_defect1_swapped_positions_are_not_two_points(tmp_path, capsys):
     f, p, lines = write_case(tmp_path, rows={(2, 2): (270.0, 11.0), (2, 3): (180.0, 12.0)})
     res, _ = api(f, p)
-    assert [r["position_deg"] for r in res["angle_deviation"]["table"]] == POS
+    table = res["items"]["angle_deviation"]["details"]["table"]
+    assert [r["position_deg"] for r in table] == POS
     lines_bad = {line_of(lines, 2, 2), line_of(lines, 2, 3)}
     assert lines_bad <= {u["line"] for u in res["unused_readings"]}
 
@@ -150,9 +151,10 @@ def test_defect2_no_E_no_U(tmp_path, capsys):
     f.write_text("".join(text))
     code, res, _ = cli_json(["calibrate", str(f), "--out", str(tmp_path / "o")], capsys)
     assert code == 0
-    assert res["uncertainty"]["U_arcsec"] is None and res["uncertainty"]["measured"] is False
+    u = res["extra"]["uncertainty"]
+    assert u["U_arcsec"] is None and u["measured"] is False
     for item in ("scale_factor", "angle_deviation", "repeatability", "zero_stability"):
-        assert res[item]["measured"] is False and res[item]["uncertainty"] is None
+        assert res["items"][item]["measured"] is False and res["items"][item]["uncertainty"] is None
     page = (tmp_path / "o" / "certificate.html").read_text()
     assert "U = " not in page and "no uncertainty" in page
 
@@ -160,10 +162,11 @@ def test_defect2_no_E_no_U(tmp_path, capsys):
 def test_defect2_counts_without_scale_factor(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, scale_factor=False, counts=True)
     rep = calibrate(f, p)
-    res = rep.to_dict()
-    assert not res["angle_deviation"]["measured"]
-    assert res["uncertainty"]["U_arcsec"] is None
-    assert all(res[k]["uncertainty"] is None for k in ("angle_deviation", "repeatability"))
+    res = rep.to_json()
+    assert not res["items"]["angle_deviation"]["measured"]
+    assert res["extra"]["uncertainty"]["U_arcsec"] is None
+    assert all(res["items"][k]["uncertainty"] is None
+               for k in ("angle_deviation", "repeatability"))
     from gonio.specs.ogam_draft.outputs import summary
 
     assert "U = " not in summary(rep) and "no uncertainty stated" in summary(rep)
@@ -175,8 +178,8 @@ def test_defect3_one_series_u_r_from_protocol_said_so(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, series=1)
     code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
                              str(tmp_path / "o"), "--budget", "draft"], capsys)
-    assert code == 0 and not res["repeatability"]["measured"]
-    u = res["uncertainty"]
+    assert code == 0 and not res["items"]["repeatability"]["measured"]
+    u = res["extra"]["uncertainty"]
     r = u["components"][3]
     assert r["symbol"] == "r" and r["type"] == "B" and r["u_arcsec"] == 0.096
     assert "protocol" in u["repeatability_source"] and "protocol" in r["source"]
@@ -189,7 +192,7 @@ def test_defect3_one_series_u_r_from_protocol_said_so(tmp_path, capsys):
 def test_defect3_five_series_k_from_welch_satterthwaite(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, series=5)
     res, _ = api(f, p, budget="draft")
-    u = res["uncertainty"]
+    u = res["extra"]["uncertainty"]
     R = max(np.std(E, axis=0, ddof=1))
     comp = {c["symbol"]: c["u_arcsec"] for c in u["components"]}
     assert comp["r"] == pytest.approx(R) and u["components"][3]["dof"] == 4
@@ -199,15 +202,15 @@ def test_defect3_five_series_k_from_welch_satterthwaite(tmp_path, capsys):
     assert u["nu_eff"] == pytest.approx(nu, rel=1e-9)
     assert u["k"] == pytest.approx(stats.t.ppf(0.975, math.floor(nu)), rel=1e-9) and u["k"] > 2.05
     assert u["k_source"] == "welch-satterthwaite"
-    assert res["angle_deviation"]["uncertainty"]["k"] == pytest.approx(u["k"])
+    assert res["items"]["angle_deviation"]["uncertainty"]["k"] == pytest.approx(u["k"])
 
 
 def test_defect3_laboratory_fixes_k(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, annex="coverage_factor = 2.0")
     code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
                              str(tmp_path / "o")], capsys)
-    assert code == 0 and res["uncertainty"]["k"] == 2.0
-    assert res["uncertainty"]["k_source"] == "fixed by laboratory"
+    assert code == 0 and res["extra"]["uncertainty"]["k"] == 2.0
+    assert res["extra"]["uncertainty"]["k_source"] == "fixed by laboratory"
     assert "fixed by laboratory" in (tmp_path / "o" / "certificate.html").read_text()
 
 
@@ -220,7 +223,7 @@ def test_defect4_late_reading_excluded_and_u_BE_from_actual_time(tmp_path, capsy
     un = {u["line"]: u["reason"] for u in res["unused_readings"]}
     assert "max_time_to_reading_s = 30" in un[late]
     # u(B_E) = 0.005 °/h × 60 ″/min/(°/h) × (24 s / 60) / √3, the longest time actually used
-    b_e = [c for c in res["uncertainty"]["components"] if c["symbol"] == "B_E"][0]
+    b_e = [c for c in res["extra"]["uncertainty"]["components"] if c["symbol"] == "B_E"][0]
     assert b_e["u_arcsec"] == pytest.approx(0.005 * 60 * 24 / 60 / math.sqrt(3), rel=1e-9)
 
 
@@ -236,10 +239,11 @@ def test_defect4_late_reading_error_policy(tmp_path, capsys):
 def test_defect5_metadata_table_mpe_conflict_reported(tmp_path, capsys):
     f, p, _ = write_case(tmp_path, meta={"table_mpe_arcsec": "0.2"})
     res, err = api(f, p, budget="draft")
-    assert res["conflicts"] == [{"setting": "table_mpe_arcsec", "file_value": 0.2,
+    assert res["extra"]["conflicts"] == [{"setting": "table_mpe_arcsec", "file_value": 0.2,
                                  "protocol_value": 0.1, "used": 0.2,
                                  "rule": "readings-file metadata over protocol annex_a"}]
-    assert res["uncertainty"]["components"][0]["u_arcsec"] == pytest.approx(0.2 / math.sqrt(3))
+    assert res["extra"]["uncertainty"]["components"][0]["u_arcsec"] == \
+        pytest.approx(0.2 / math.sqrt(3))
     assert err.count("warning: table_mpe_arcsec") == 1
 
 
@@ -250,11 +254,12 @@ def test_defect5_protocol_named_in_file_is_used_or_refused(tmp_path, capsys):
     # the same name as a file next to the readings: used, and recorded
     (tmp_path / "lab-24x15.toml").write_text(p.read_text().replace('"hand"', '"lab-24x15"'))
     res, _ = api(f)
-    assert res["protocol"] == "lab-24x15" and res["conflicts"] == []
+    assert res["settings"]["protocol"] == "lab-24x15" and res["extra"]["conflicts"] == []
     # --protocol overrides: the conflict is reported
     res, err = api(f, p)
-    assert res["protocol"] == "hand"
-    assert res["conflicts"][0]["setting"] == "protocol" and res["conflicts"][0]["used"] == "hand"
+    assert res["settings"]["protocol"] == "hand"
+    c = res["extra"]["conflicts"][0]
+    assert c["setting"] == "protocol" and c["used"] == "hand"
     assert "warning: protocol" in err
 
 
@@ -265,8 +270,11 @@ def test_precedence_rule_documented():
 
 def test_python_api_same_as_cli(tmp_path):
     f, p, _ = write_case(tmp_path, rows={(2, 1): (91.0, 10.0)})
-    rep = calibrate(f, p)
+    rep = analyse(f, p)                  # the analysis objects behind the sealed result
     assert rep.results.angle_deviation.details["excluded_readings"] == 1
+    res = calibrate(f, p).to_json()
+    assert res["items"]["angle_deviation"]["details"]["excluded_readings"] == 1
+    assert {k for k, it in res["items"].items() if it["uncertainty"]} == set(rep.item_uncertainty)
     assert set(rep.item_uncertainty) == {"scale_factor", "scale_factor_nonlinearity",
                                          "angle_deviation", "repeatability"}
 
@@ -277,20 +285,21 @@ def test_draft_budget_has_the_annex_four_lines_physical_more(tmp_path):
     f, p, _ = write_case(tmp_path)
     draft, _ = api(f, p, budget="draft")
     phys, _ = api(f, p)
-    assert [c["symbol"] for c in draft["uncertainty"]["components"]] == ["P", "phi_e", "B_E", "r"]
-    assert draft["uncertainty"]["budget_kind"] == "draft"
-    extra = [c for c in phys["uncertainty"]["components"] if c["beyond_draft"]]
+    assert [c["symbol"] for c in draft["extra"]["uncertainty"]["components"]] == \
+        ["P", "phi_e", "B_E", "r"]
+    assert draft["extra"]["uncertainty"]["budget_kind"] == "draft"
+    extra = [c for c in phys["extra"]["uncertainty"]["components"] if c["beyond_draft"]]
     assert {c["symbol"] for c in extra} == {"tilt_E"}    # angles in degrees: no K in E
     (tmp_path / "c").mkdir()
     fc, pc, _ = write_case(tmp_path / "c", counts=True)   # angles from counts through K
     physc, _ = api(fc, pc)
     e_i = E.mean(axis=0)                                   # 0.2, −0.26, 0.3, 0.26
-    assert physc["angle_deviation"]["value"] == pytest.approx(e_i[np.argmax(np.abs(e_i))],
+    assert physc["items"]["angle_deviation"]["value"] == pytest.approx(e_i[np.argmax(np.abs(e_i))],
                                                               abs=1e-9)
-    extra = [c for c in physc["uncertainty"]["components"] if c["beyond_draft"]]
+    extra = [c for c in physc["extra"]["uncertainty"]["components"] if c["beyond_draft"]]
     assert {c["symbol"] for c in extra} == {"K_P", "K_r", "tilt_E"}
     assert all(c["clause"] for c in extra)
-    assert phys["uncertainty"]["U_arcsec"] > draft["uncertainty"]["U_arcsec"]
+    assert phys["extra"]["uncertainty"]["U_arcsec"] > draft["extra"]["uncertainty"]["U_arcsec"]
 
 
 def test_measured_tilt_scales_the_coupling_line(tmp_path):
@@ -302,11 +311,11 @@ def test_measured_tilt_scales_the_coupling_line(tmp_path):
     t.write_text(json.dumps({"tilt_deg": 0.01, "U95_tilt_deg": 0.005}))
     a, _ = api(f, p)
     b, _ = api(f, p, tilt=t)
-    ua = {c["symbol"]: c["u_arcsec"] for c in a["uncertainty"]["components"]}
-    ub = {c["symbol"]: c["u_arcsec"] for c in b["uncertainty"]["components"]}
+    ua = {c["symbol"]: c["u_arcsec"] for c in a["extra"]["uncertainty"]["components"]}
+    ub = {c["symbol"]: c["u_arcsec"] for c in b["extra"]["uncertainty"]["components"]}
     ratio = math.sin(math.radians(0.015)) / math.sin(math.radians(0.1))
     assert ub["tilt_E"] / ua["tilt_E"] == pytest.approx(ratio, rel=1e-6)
-    assert any("measured tilt" in n for n in b["uncertainty"]["notes"])
+    assert any("measured tilt" in n for n in b["extra"]["uncertainty"]["notes"])
     t.write_text("{}")
     with pytest.raises(GonioError, match="tilt_deg"):
         calibrate(f, p, tilt=t)
@@ -315,18 +324,19 @@ def test_measured_tilt_scales_the_coupling_line(tmp_path):
 def test_every_measured_item_has_the_results_json_shape(tmp_path):
     f, p, _ = write_case(tmp_path)
     res, _ = api(f, p)
-    keys = {"components", "u_c", "U", "k", "nu_eff", "coverage_probability", "unit", "k_source"}
-    ckeys = {"name", "symbol", "u", "unit", "type", "distribution", "dof", "source",
-             "beyond_draft", "clause"}
+    keys = {"components", "u_c", "U", "k", "nu_eff", "coverage_probability", "k_source"}
+    ckeys = {"name", "symbol", "u", "c", "contribution", "unit", "type", "distribution", "dof",
+             "source", "beyond_standard", "clause"}
     for item in ("scale_factor", "scale_factor_nonlinearity", "angle_deviation",
                  "repeatability"):
-        u = res[item]["uncertainty"]
+        u = res["items"][item]["uncertainty"]
         assert keys <= set(u) and u["coverage_probability"] == 0.95, item
         assert all(ckeys == set(c) for c in u["components"]), item
         assert u["U"] == pytest.approx(u["k"] * u["u_c"])
-    assert res["repeatability"]["uncertainty"]["interval"][0] < res["repeatability"]["value"]
+    rep_ = res["items"]["repeatability"]
+    assert rep_["uncertainty"]["interval"][0] < rep_["value"]
     for item in ("zero_stability", "rate_consistency", "pointing_consistency"):
-        assert res[item]["uncertainty"] is None
+        assert res["items"][item]["uncertainty"] is None
 
 
 def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
@@ -336,11 +346,11 @@ def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
     code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
                              str(tmp_path / "o"), "--budget", "draft", "--tilt", str(t)],
                             capsys)
-    assert code == 0 and res["uncertainty"]["budget_kind"] == "draft"
-    assert len(res["uncertainty"]["components"]) == 4
+    assert code == 0 and res["extra"]["uncertainty"]["budget_kind"] == "draft"
+    assert len(res["extra"]["uncertainty"]["components"]) == 4
     # the measured tilt bounds φ_e too: elliptic extreme at 0.03° instead of 0.1° (A.4.2)
     from gonio.physics.tilt import elliptic_extreme
-    phi = res["uncertainty"]["components"][1]
+    phi = res["extra"]["uncertainty"]["components"][1]
     assert phi["half_width_arcsec"] == pytest.approx(elliptic_extreme(0.03).extreme_arcsec)
     from gonio.report.i18n import labels
 

@@ -99,7 +99,7 @@ def test_says_when_coupling_cannot_be_estimated():
     so, with its size at the tilt bound."""
     import pandas as pd
 
-    from gonio.cli.cmd_eda import _text
+    from gonio.specs.ogam_draft.commands import eda_text as _text
 
     rows = [{"test": "equal_division", "series": 1, "round": k + 1, "table_deg": 90.0 * j,
              "gyro_deg": 90.0 * j + 1e-5 * (j % 3), "start_deg": 90.0 * k}

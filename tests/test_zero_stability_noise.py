@@ -49,5 +49,5 @@ def test_readings_file_alone_says_why_there_is_no_allan(tmp_path):
     from gonio.bench import write_session
 
     write_session(run_session(ZS, bench, seed=0), tmp_path)
-    d = calibrate(tmp_path / "readings.csv", ZS).to_dict()
-    assert d["zero_stability"]["noise"] is None and "stream" in d["zero_stability"]["noise_reason"]
+    d = calibrate(tmp_path / "readings.csv", ZS).to_json()["items"]["zero_stability"]["details"]
+    assert d["noise"] is None and "stream" in d["noise_reason"]

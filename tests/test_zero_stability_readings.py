@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.result.model import flat_view
 from gonio.analysis.noise.fit import design_matrix
 from gonio.analysis.noise.readings import (expected_sample_variance, expected_zero_stability,
                                            generalised_covariance, reading_weights)
@@ -184,18 +183,19 @@ def test_cli_readings_file_states_the_chi_square_interval_and_t_factor(tmp_path)
     p.write_text(proto, encoding="utf-8")
     r = _run("calibrate", f, "--protocol", p, "--out", tmp_path / "o")
     assert r.returncode == 0, r.stderr
-    zs = flat_view(json.loads((tmp_path / "o" / "results.json").read_text(
-        encoding="utf-8")))["zero_stability"]
+    zs = json.loads((tmp_path / "o" / "results.json").read_text(
+        encoding="utf-8"))["items"]["zero_stability"]
     m = np.loadtxt(f, delimiter=",", skiprows=2, usecols=8)
     b_s = float(np.std(m, ddof=1)) / (T_READ[-1] / 3600.0)
     u = zs["uncertainty"]
     nu = u["nu_eff"]
-    assert zs["value"] == pytest.approx(b_s, rel=1e-9) and zs["stated"] == "draft"
+    assert zs["value"] == pytest.approx(b_s, rel=1e-9) and zs["details"]["stated"] == "draft"
     assert u["k"] == pytest.approx(stats.t.ppf(0.975, math.floor(nu)), rel=1e-9)  # not the lab's 2; t of the stated ν
     assert "not applied" in u["k_source"]
     assert u["interval"][1] == pytest.approx(b_s * math.sqrt(nu / stats.chi2.ppf(0.025, nu)),
                                              rel=1e-9)
-    assert zs["estimates"]["model"] is None and "no continuous record" in zs["stated_note"]
+    assert zs["details"]["estimates"]["model"] is None
+    assert "no continuous record" in zs["details"]["stated_note"]
     html = (tmp_path / "o" / "certificate.html").read_text(encoding="utf-8")
     assert "95 % interval (χ², ν_eff" in html
 

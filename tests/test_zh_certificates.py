@@ -132,14 +132,15 @@ def calibrated(request, tmp_path_factory):
 
 
 def _write(c, out, lab):
+    from gonio.pipeline.dispatch import decide_conformity
     from gonio.specs import get
-    return get(c["key"]).renderer().write(c["result"], out, lab=load_lab(lab) if lab else None,
-                                          lang="zh", dcc=True)
+    lab_d = load_lab(lab) if lab else None
+    decide_conformity(c["result"], lab_d)          # the pipeline's one decision
+    return get(c["key"]).renderer().write(c["result"], out, lab=lab_d, lang="zh", dcc=True)
 
 
 def _json(c) -> dict:
-    r = c["result"]
-    return (r.to_result() if hasattr(r, "to_result") else r).to_json()
+    return c["result"].to_json()
 
 
 def _allowed(c, lab) -> set:

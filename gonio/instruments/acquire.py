@@ -522,9 +522,12 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         if writer is not None:
             writer.finish(False, reason)
         status("")
-        sys.stderr.write(f"gonio acquire: stopped ({reason}); the table was sent a stop; "
-                         f"{len(writer.rows) if writer else len(rows)} readings kept in {path}"
-                         " (incomplete: continue with --resume)\n")
+        if writer is None:
+            sys.stderr.write(f"gonio acquire: stopped before the programme began ({reason})\n")
+        else:
+            sys.stderr.write(f"gonio acquire: stopped ({reason}); the table was sent a stop; "
+                             f"{len(writer.rows)} readings kept in {path} (incomplete: "
+                             "continue with --resume)\n")
         raise
     finally:
         _safe_stop(table, log)

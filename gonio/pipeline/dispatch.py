@@ -119,6 +119,18 @@ def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
                           findings=findings, **options)
 
 
+def decide_conformity(result, lab: dict | None):
+    """Conformity of every item the laboratory file ``lab`` limits, or the specification's
+    own tolerances (``SPEC.default_limits``) limit, decided once, in the result's items
+    (:func:`gonio.analysis.conformity.decide_result`), before anything is written: every
+    output renders these decisions. Returns ``result``."""
+    from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+    from gonio.specs import default_limits
+
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    return result
+
+
 def mark_provenance(result, readings) -> None:
     """Set ``result.provenance`` from the readings' own metadata
     (:func:`gonio.formats.provenance.readings_provenance`): readings from the virtual bench are
@@ -146,6 +158,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
                                   **opts)
     mark_provenance(result, readings)
     result.findings = list(result.findings) + identity    # proceeding: stated as findings
+    decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
@@ -180,6 +193,7 @@ def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int 
         say("demo: calibrating")
         result = screen_and_calibrate(spec, stage / sim["readings"].name, None)
         mark_provenance(result, stage / sim["readings"].name)
+        decide_conformity(result, lab_d)
         say("demo: writing the results and the certificate")
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang,
                                dcc=dcc and "dcc" in spec.calibrate_options)

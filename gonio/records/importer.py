@@ -164,6 +164,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                 s.flush()
         inst = _instrument(s, meta, key, customer, actor)
         day = day or _dt.date.fromtimestamp(res_path.stat().st_mtime)
+        try:
+            services.plausible_dates(day, None)
+        except GonioError as exc:
+            raise GonioError(exc.message, file=res_path, key="metadata.date") from None
         cal = Calibration(instrument_id=inst.id, spec_key=key, readings_sha256=rsha,
                           readings_name=rd.name,
                           protocol=services.text(proto.name if proto else "", "protocol",

@@ -1,4 +1,5 @@
-"""The calibration certificate: HTML (self-contained) and PDF, from a calibration report.
+"""The calibration certificate: HTML (self-contained) and PDF, from a calibration's
+``results.json`` (a pure function of it, the laboratory file and the truth of a virtual run).
 
 Contents
 ========
@@ -40,7 +41,8 @@ from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for, conformity_texts,
-                                 item_names, method_rows, num, segments, stated_item, u_cell)
+                                 detail, e_budget, followed, item_names, item_path,
+                                 method_rows, num, segments, stated_item, u_cell)
 from gonio.report.text import clean_tree
 
 
@@ -85,17 +87,18 @@ def screening_notes(res: dict, L: dict, add) -> None:
         add("p", [L["more_findings"].format(n=len(found) - MAX_FINDING_LINES)])
 
 
-def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
+def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict | None,
                        lang: str = "en", cjk: bool = True) -> dict:
-    """The certificate's content: header fields and the list of blocks, in order.
+    """The certificate's content from ``results`` (results.json): header fields and the list
+    of blocks, in order.
 
     Returns a dict with ``id``, ``virtual`` (bool), ``lab_name``, ``blocks`` and
     ``results``. ``cjk`` False (no CJK font installed) writes the specification's
     Chinese title in English so that nothing prints as boxes.
     """
-    res = clean_tree(report.to_dict())          # user text shown literally (report/text.py)
+    res = clean_tree(results)                   # user text shown literally (report/text.py)
     lab = clean_tree(lab) if lab else lab
-    unc = res["uncertainty"]
+    unc = e_budget(res)
     U = float(unc["U_arcsec"]) if unc.get("U_arcsec") is not None else None
     virtual = is_virtual(res, lab)              # the readings' provenance, not the lab file
     lab_ = lab or {}
@@ -107,7 +110,7 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
 
     # method
     add("h", L["method"])
-    add("kv", method_rows(report, res, L, lab, lang, cjk))
+    add("kv", method_rows(res, L, lab, lang, cjk))
     add("p", [L["m_readings"]])
 
     # results: Annex B, each item with its U, k and coverage probability
@@ -116,23 +119,24 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
-        add("p", segments(L["U_line_p"], U=_num(res, "uncertainty.U_arcsec", "U", U),
-                          k=_num(res, "uncertainty.k", "k", U),
+        add("p", segments(L["U_line_p"], U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
+                          k=_num(res, "extra.uncertainty.k", "k", U),
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
-        add("p", segments(L["u_c_line"], u=_num(res, "uncertainty.u_c_arcsec", "U", U)))
+        add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
         ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
         if ks:
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
     screening_notes(res, L, add)
-    if res["scale_factor"].get("measurand"):
-        sf = res["scale_factor"]
-        ppm = (sf["instrument_own_upper_counts_per_deg"] / sf["value"] - 1) * 1e6
+    if detail(res, "scale_factor", "measurand"):
+        sf = res["items"]["scale_factor"]["details"]
+        ppm = (sf["instrument_own_upper_counts_per_deg"] / res["items"]["scale_factor"]["value"]
+               - 1) * 1e6
         add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
                                            ppm=f"{ppm:.2g}")])
 
-    _conformity_blocks(add, res, lab, report.conformity, L)
+    _conformity_blocks(add, res, lab, L)
 
     _budget_blocks(add, res, U, L, lang)
 
@@ -149,14 +153,14 @@ def certificate_blocks(report, L: dict, *, lab: dict | None, truth: dict | None,
     _detail_tables(res, L, U, add)
 
     # table calibration by equal-division averaging, when the readings hold it
-    if res.get("equal_division"):
+    if res["extra"].get("equal_division"):
         _eda_section(res, L, U, add)
 
     # figures
     add("h", L["figures"])
     for key, cap, draw in FIGURES:
         add("fig", (key, L[cap], draw))
-    return {"id": certificate_id(report, lab), "virtual": virtual,
+    return {"id": certificate_id(res, lab), "virtual": virtual,
             "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
             "blocks": blocks, "results": res}
 
@@ -168,7 +172,7 @@ def _admin_blocks(add, res: dict, lab: dict | None, L: dict, *, lang: str, cjk: 
     ns = L["not_stated"]
     mpe = md.get("table_mpe_arcsec")
     for b in opening_blocks(
-            res, lab, L, specification=specification_text(res.get("specification") or ns,
+            res, lab, L, specification=specification_text(followed(res) or ns,
                                                           lang, cjk),
             standard_row=[meta_text(md, "table", L), "—",
                           L["std_mpe"].format(v=mpe) if mpe else ns, "—"]):
@@ -180,7 +184,7 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
     probability, or the reason it was not measured."""
     rrows = []
     for i, name in enumerate(item_names(res), 1):
-        item = res[name]
+        item = res["items"][name]
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
         st = stated_item(res, name)
         if not st["measured"]:
@@ -192,24 +196,26 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
         cell: list = [st["value"]]
         if st["signed"] is not None:
             cell += ["; ", *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
-        elif name == "zero_stability" and item.get("range_deg_per_h") is not None:
+        elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
             cell += ["; ", *segments(L["note_zero_range"],
-                                     v=_num(res, f"{name}.range_deg_per_h", "sig3", U))]
+                                     v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]
             iu = item.get("uncertainty") or {}
             if iu.get("interval") and iu.get("nu_eff"):
-                cell += ["; ", *segments(L["note_zero_interval"],
-                                         n=_num(res, f"{name}.uncertainty.nu_eff", "k", U),
-                                         lo=_num(res, f"{name}.uncertainty.interval.0", "sig3", U),
-                                         hi=_num(res, f"{name}.uncertainty.interval.1", "sig3",
-                                                 U))]
-            if item.get("stated") == "draft" and (item.get("estimates") or {}).get("model"):
-                cell += ["; ", *segments(L["note_zero_model"],
-                                         v=_num(res, f"{name}.estimates.model.value", "sig3", U))]
+                cell += ["; ", *segments(
+                    L["note_zero_interval"],
+                    n=_num(res, item_path(name, "uncertainty.nu_eff"), "k", U),
+                    lo=_num(res, item_path(name, "uncertainty.interval.0"), "sig3", U),
+                    hi=_num(res, item_path(name, "uncertainty.interval.1"), "sig3", U))]
+            if detail(res, name, "stated") == "draft" and \
+                    (detail(res, name, "estimates") or {}).get("model"):
+                cell += ["; ", *segments(L["note_zero_model"], v=_num(
+                    res, item_path(name, "estimates.model.value"), "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += ["; ", *segments(L["note_spread"],
-                                     v=_num(res, f"{name}.spread_arcsec", "atU", U))]
-        elif name == "repeatability" and item.get("position_deg") is not None:
-            cell += [" (", *segments(L["note_at"], p=_num(res, f"{name}.position_deg", "pos", U)),
+                                     v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]
+        elif name == "repeatability" and detail(res, name, "position_deg") is not None:
+            cell += [" (", *segments(L["note_at"],
+                                     p=_num(res, item_path(name, "position_deg"), "pos", U)),
                      ")"]
         if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
             cell += ["; ", *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
@@ -217,20 +223,21 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
     return rrows
 
 
-def _conformity_blocks(add, res: dict, lab: dict | None, decided, L: dict) -> None:
+def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
     """The decision rule and the conformity table: the decisions the pipeline made."""
     # decision rule and conformity: the decisions the pipeline made (results.json), rendered
-    conf = conformity_for(res, lab, decided)
+    conf = conformity_for(res, lab)
     if conf:
         add("h", L["conformity"])
         rule = conf[0]["rule"]
         add("p", [L[f"rule_{rule.kind}"].format(r=display("k", rule.guard_factor))])
-        for b in decision_rule_blocks(lab, [(e["item"], decided[e["item"]]) for e in conf], L,
-                                      lambda k: L[k]):
+        for b in decision_rule_blocks(lab, [(e["item"], res["items"][e["item"]]["conformity"])
+                                            for e in conf], L, lambda k: L[k]):
             add(b.kind, b.data, b.extra)
         crow = []
         for e in conf:
-            unit = L.get("u_" + res[e["item"]]["unit"], res[e["item"]]["unit"])
+            item_unit = res["items"][e["item"]]["unit"]
+            unit = L.get("u_" + item_unit, item_unit)
             c = e["conformity"]
             if c is None:
                 crow.append([L[e["item"]], "—", "—", L[e["reason"]], "—"])
@@ -247,7 +254,7 @@ def _conformity_blocks(add, res: dict, lab: dict | None, decided, L: dict) -> No
 
 def _budget_blocks(add, res: dict, U: float | None, L: dict, lang: str) -> None:
     """The uncertainty budget of E (Annex A), each component with its source."""
-    unc = res["uncertainty"]
+    unc = e_budget(res)
     # budget
     add("h", L["budget"])
     kind = unc.get("budget_kind")
@@ -260,8 +267,9 @@ def _budget_blocks(add, res: dict, U: float | None, L: dict, lang: str) -> None:
                                     lang)
                       + ((f"（{L['beyond_draft']}）" if lang == "zh" else f" ({L['beyond_draft']})")
                          if c.get("beyond_draft") else ""), c["type"],
-                      _num(res, f"uncertainty.components.{j}.u_arcsec", "U", U),
-                      _num(res, f"uncertainty.components.{j}.contribution_arcsec", "U", U)])
+                      _num(res, f"extra.uncertainty.components.{j}.u_arcsec", "U", U),
+                      _num(res, f"extra.uncertainty.components.{j}.contribution_arcsec", "U",
+                           U)])
     add("table", ([L["component"], L["source"], L["type"], L["u_i"], L["d_contrib"]], brows),
         (0.14, 0.50, 0.08, 0.14, 0.14))
 
@@ -270,7 +278,7 @@ def _budget_blocks(add, res: dict, U: float | None, L: dict, lang: str) -> None:
 def _eda_section(res: dict, L: dict, U: float, add) -> None:
     """The table-calibration page: table and goniometer errors with their uncertainties;
     each error to the decimal place of its own u (JCGM 100 7.2.6)."""
-    e = res["equal_division"]
+    e = res["extra"]["equal_division"]
     add("h", L["eda"])
     add("p", [L["eda_note"].format(n=e["n_starts"], m=e["m_points"], r=e["repeats"],
                                    noise=e["noise"])])
@@ -278,19 +286,19 @@ def _eda_section(res: dict, L: dict, U: float, add) -> None:
     for i in range(e["m_points"]):
         ut = e["table"]["u_arcsec"][i]
         ug = e["goniometer"]["u_arcsec"][i]
-        rows.append([_num(res, f"equal_division.table.position_deg.{i}", "pos", U),
-                     _num(res, f"equal_division.table.error_arcsec.{i}", rule_at_U(ut), U),
-                     _num(res, f"equal_division.table.u_arcsec.{i}", "U", U),
-                     _num(res, f"equal_division.goniometer.angle_deg.{i}", "pos", U),
-                     _num(res, f"equal_division.goniometer.error_arcsec.{i}", rule_at_U(ug), U),
-                     _num(res, f"equal_division.goniometer.u_arcsec.{i}", "U", U)])
+        rows.append([_num(res, f"extra.equal_division.table.position_deg.{i}", "pos", U),
+                     _num(res, f"extra.equal_division.table.error_arcsec.{i}", rule_at_U(ut), U),
+                     _num(res, f"extra.equal_division.table.u_arcsec.{i}", "U", U),
+                     _num(res, f"extra.equal_division.goniometer.angle_deg.{i}", "pos", U),
+                     _num(res, f"extra.equal_division.goniometer.error_arcsec.{i}", rule_at_U(ug), U),
+                     _num(res, f"extra.equal_division.goniometer.u_arcsec.{i}", "U", U)])
     add("table", ([L["eda_position"], L["eda_table"], "u (″)", L["eda_turned"], L["eda_gonio"],
                    "u (″)"], rows), (0.18, 0.17, 0.15, 0.18, 0.17, 0.15))
     cl = e["closure"]
     add("p", segments(L["eda_closure"],
-                      v=_num(res, "equal_division.closure.full_turn_arcsec",
+                      v=_num(res, "extra.equal_division.closure.full_turn_arcsec",
                              rule_at_U(cl.get("u_full_turn_arcsec")), U),
-                      u=_num(res, "equal_division.closure.u_full_turn_arcsec", "U", U)))
+                      u=_num(res, "extra.equal_division.closure.u_full_turn_arcsec", "U", U)))
     cp = e.get("coupling")                   # tilt × Earth-rate coupling (issue 12, defect 6)
     if cp:
         txt = cp["note"]
@@ -301,50 +309,53 @@ def _eda_section(res: dict, L: dict, U: float, add) -> None:
 
 
 def _detail_tables(res: dict, L: dict, U: float, add) -> None:
-    sf = res["scale_factor"]
+    sf = res["items"]["scale_factor"]
     if sf["measured"]:
-        rows = [[_num(res, f"scale_factor.table.{i}.round", "int", U),
-                 _num(res, f"scale_factor.table.{i}.table_deg", "pos", U),
-                 _num(res, f"scale_factor.table.{i}.gyro_counts", "int", U),
-                 _num(res, f"scale_factor.table.{i}.K_i_counts_per_deg", "sig8", U)]
-                for i in range(len(sf["table"]))]
+        rows = [[_num(res, item_path("scale_factor", f"table.{i}.{col}"), rule, U)
+                 for col, rule in (("round", "int"), ("table_deg", "pos"),
+                                   ("gyro_counts", "int"), ("K_i_counts_per_deg", "sig8"))]
+                for i in range(len(sf["details"]["table"]))]
         add("sub", L["scale_factor"] + " (7.1)")
         add("table", ([L["d_round"], L["d_theta"], L["d_counts"], L["d_K"]], rows),
             (0.15, 0.25, 0.30, 0.30))
-        sm = sf.get("table_summary")
+        sm = sf["details"].get("table_summary")
         if sm:
             add("p", [L["d_listed"].format(name="scale_factor", **{
                 k: (f"{sm[k]:.9g}" if isinstance(sm.get(k), float) else sm.get(k))
                 for k in ("rows", "listed", "column", "min", "max")})])
-    ad, rp = res["angle_deviation"], res["repeatability"]
+    ad, rp = res["items"]["angle_deviation"], res["items"]["repeatability"]
     if ad["measured"]:
-        rmap = {r["position_deg"]: j for j, r in enumerate(rp["table"])} if rp["measured"] else {}
+        rmap = ({r["position_deg"]: j for j, r in enumerate(rp["details"]["table"])}
+                if rp["measured"] else {})
         rows = []
-        for i, r in enumerate(ad["table"]):
+        for i, r in enumerate(ad["details"]["table"]):
             j = rmap.get(r["position_deg"])
-            rows.append([_num(res, f"angle_deviation.table.{i}.position_deg", "pos", U),
-                         _num(res, f"angle_deviation.table.{i}.E_arcsec", "atU", U),
-                         _num(res, f"repeatability.table.{j}.R_arcsec", "atU", U)
+            rows.append([_num(res, item_path("angle_deviation", f"table.{i}.position_deg"),
+                              "pos", U),
+                         _num(res, item_path("angle_deviation", f"table.{i}.E_arcsec"), "atU",
+                              U),
+                         _num(res, item_path("repeatability", f"table.{j}.R_arcsec"), "atU", U)
                          if j is not None else "—",
-                         _num(res, f"angle_deviation.table.{i}.n_series", "int", U)])
+                         _num(res, item_path("angle_deviation", f"table.{i}.n_series"), "int",
+                              U)])
         add("sub", L["angle_deviation"] + " / " + L["repeatability"] + " (7.4, 7.5)")
         add("table", ([L["d_position"], L["d_E"], L["d_R"], L["d_n"]], rows),
             (0.25, 0.25, 0.25, 0.25))
     for name, col, fmt in (("rate_consistency", "rate_dps", "pos"),
                            ("pointing_consistency", "orientation", None)):
-        c = res[name]
+        c = res["items"][name]
         if not c["measured"]:
             continue
-        order = sorted(range(len(c["table"])), key=lambda i: (not c["table"][i].get("reference"),
-                                                              i))
+        table = c["details"]["table"]
+        order = sorted(range(len(table)), key=lambda i: (not table[i].get("reference"), i))
         rows = []
         for i in order:
-            r = c["table"][i]
-            cond = (_num(res, f"{name}.table.{i}.{col}", fmt, U) if fmt
+            r = table[i]
+            cond = (_num(res, item_path(name, f"table.{i}.{col}"), fmt, U) if fmt
                     else L.get(str(r[col]), str(r[col])))
             rows.append([cond, L["d_reference"] if r.get("reference") else L["d_compared"],
-                         _num(res, f"{name}.table.{i}.E_arcsec", "atU", U),
-                         _num(res, f"{name}.table.{i}.max_abs_arcsec", "atU", U)])
+                         _num(res, item_path(name, f"table.{i}.E_arcsec"), "atU", U),
+                         _num(res, item_path(name, f"table.{i}.max_abs_arcsec"), "atU", U)])
         add("sub", L[name] + f" ({c['clause']})")
         head = L["d_rate"] if col == "rate_dps" else L["d_axis"]
         add("table", ([head, L["d_role"], L["d_Ev"], L["d_maxabs"]], rows),
@@ -353,17 +364,18 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
 
 # --------------------------------------------------------------------------- entry point
 
-def write_certificate(report, out: str | Path, *, truth: dict | None = None,
+def write_certificate(results: dict, out: str | Path, *, truth: dict | None = None,
                       lab: str | Path | dict | None = None, lang: str = "en",
                       dcc: bool = False) -> dict[str, Path]:
     """Write ``certificate.html`` and ``certificate.pdf`` (and with ``dcc`` the PTB DCC
-    3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.dcc`) for ``report`` into ``out``.
+    3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.dcc`) of ``results`` into ``out``:
+    a pure function of its arguments, so the stored results.json gives the same files again.
 
     Parameters
     ----------
-    report : the specification's calibration report
-        What the specification's ``calibrate`` returned (``results.json`` is written by its
-        ``outputs`` module, not here).
+    results : dict
+        The calibration's ``results.json`` (``Result.to_json()``, conformity decided by the
+        pipeline; written by the specification's ``outputs`` module, not here).
     out : path
         Output folder; both files appear together or not at all (staged, then renamed).
     truth : dict, optional
@@ -389,9 +401,9 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
     font = fonts[0] if lang == "zh" else None
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     cjk = len(fonts) > 1 or lang == "zh"
-    content = certificate_blocks(report, L, lab=lab_d, truth=truth, lang=lang, cjk=cjk)
-    content["_report"], content["_truth"] = report, truth
-    svgs = {key: figure_svg(draw, report, L, truth, fonts) for key, _, draw in FIGURES}
+    content = certificate_blocks(results, L, lab=lab_d, truth=truth, lang=lang, cjk=cjk)
+    content["_report"], content["_truth"] = results, truth     # what the figures draw from
+    svgs = {key: figure_svg(draw, results, L, truth, fonts) for key, _, draw in FIGURES}
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
@@ -400,11 +412,11 @@ def write_certificate(report, out: str | Path, *, truth: dict | None = None,
             from gonio.report.dcc import bilingual, dcc_bytes, label_translator, method_text
             from gonio.report.i18n import READING_NOTES_ZH
 
-            doc = dcc_bytes(report, lab=lab_d, cert_id=content["id"])
-            if lang == "zh":                   # Chinese beside English (issue 25)
+            doc = dcc_bytes(results, lab=lab_d, cert_id=content["id"])
+            if lang == "zh":                   # Chinese beside English
                 extra = {**READING_NOTES_ZH,
-                         **{k: L[k] for k in item_names(report.to_dict()) if k in L},
-                         method_text(report, lab_d, "en"): method_text(report, lab_d, "zh")}
+                         **{k: L[k] for k in item_names(results) if k in L},
+                         method_text(results, lab_d, "en"): method_text(results, lab_d, "zh")}
                 doc = bilingual(doc, label_translator(extra))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])

@@ -53,8 +53,9 @@ from lxml import etree
 from gonio.atomic import write_bytes
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels, reading_note, specification_text
-from gonio.report.stated import (Num, conformity_for, conformity_texts, item_uncertainty,
-                                 item_names, method_rows, num, stated_item)
+from gonio.report.stated import (Num, conformity_for, conformity_texts, e_budget, followed,
+                                 item_path, item_uncertainty, item_names, method_rows, num,
+                                 stated_item)
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -441,28 +442,30 @@ def not_measured_quantity(data, name: str, reason: str) -> "etree.Element":
     return q
 
 
-def method_text(report, lab: dict | None, lang: str = "en") -> str:
-    """The method statement (:func:`gonio.report.stated.method_rows`) on one line, as the
-    optical DCC's method description (``lang`` "zh": its Chinese, written beside it)."""
-    rows = method_rows(report, report.to_dict(), labels(lang), lab, lang)
+def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
+    """The method statement (:func:`gonio.report.stated.method_rows`) of results.json ``res``
+    on one line, as the optical DCC's method description (``lang`` "zh": its Chinese,
+    written beside it)."""
+    rows = method_rows(res, labels(lang), lab, lang)
     if lang == "zh":
         return "；".join(f"{k}：{v}" for k, v in rows)
     return "; ".join(f"{k}: {v}" for k, v in rows)
 
 
-def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
-    """The DCC 3.3.0 document of one calibration (see the module docstring for its content)."""
+def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> "etree.Element":
+    """The DCC 3.3.0 document of one calibration's results.json ``res`` (see the module
+    docstring for its content)."""
     L = labels("en")
-    res = report.to_dict()
     md = res.get("metadata", {})
     lab_ = lab or {}
     root = new_document()
-    norm = specification_text(res.get("specification") or "not stated", "en")
+    norm = specification_text(followed(res) or "not stated", "en")
     sts = administrative_data(
         root, md, lab, cert_id=cert_id, norm=norm, provenance=res.get("provenance"),
-        clauses=[res[n]["clause"] for n in item_names(res) if res[n]["measured"]],
+        clauses=[res["items"][n]["clause"] for n in item_names(res)
+                 if res["items"][n]["measured"]],
         readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
-    conf = conformity_for(res, lab, report.conformity)
+    conf = conformity_for(res, lab)
     if conf:
         rule = conf[0]["rule"]
         st = element(sts, "dcc:statement", id="decision-rule")
@@ -487,7 +490,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
                   + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}")
             element(st, "dcc:conformity", DCC_CONFORMITY[c.outcome])
             data = element(st, "dcc:data")
-            unit = res[e["item"]]["unit"]
+            unit = res["items"][e["item"]]["unit"]
             for nm, v in (("lower specification limit", c.lower),
                           ("upper specification limit", c.upper)):
                 if v is not None:
@@ -506,7 +509,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
                                       "certificate": "", "traceability": ""}]
     mr = measurement_result(
         root, "Calibration of an optical-gyroscope angle measuring instrument",
-        method=method_text(report, lab, "en"),
+        method=method_text(res, lab, "en"),
         norm=norm, standards=stds)
     env = lab_.get("environment") or {}
     conds = []
@@ -520,7 +523,7 @@ def dcc_tree(report, *, lab: dict | None = None, cert_id: str) -> "etree.Element
 
     results = element(mr, "dcc:results")
     for name in item_names(res):
-        item = res[name]
+        item = res["items"][name]
         r = element(results, "dcc:result", id=f"result-{name}")
         text_element(r, "dcc:name", f"{L[name]} ({item['clause']})")
         data = element(r, "dcc:data")
@@ -552,9 +555,8 @@ def _limit_rule(c) -> str:
 
 def _detail_lists(data, res: dict, name: str) -> None:
     """The per-point tables of one item as dcc:list of columns, displayed as the certificate."""
-    item = res[name]
-    U = res["uncertainty"]["U_arcsec"]
-    tab = item.get("table") or []
+    U = e_budget(res).get("U_arcsec")
+    tab = res["items"][name]["details"].get("table") or []
     if not tab:
         return
     cols: list[tuple[str, str, str, str]] = []
@@ -585,7 +587,7 @@ def _detail_lists(data, res: dict, name: str) -> None:
     for label, key, rule, unit in cols:
         if key not in tab[0]:
             continue
-        list_quantity(lst, label, [num(res, f"{name}.table.{i}.{key}", rule, U)
+        list_quantity(lst, label, [num(res, item_path(name, f"table.{i}.{key}"), rule, U)
                                     for i in range(len(tab))], unit)
 
 
@@ -594,14 +596,16 @@ def tree_bytes(root) -> bytes:
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
 
-def dcc_bytes(report, *, lab: dict | None = None, cert_id: str) -> bytes:
-    """The DCC as UTF-8 XML bytes, with declaration, pretty-printed, deterministic."""
-    return tree_bytes(dcc_tree(report, lab=lab, cert_id=cert_id))
+def dcc_bytes(res: dict, *, lab: dict | None = None, cert_id: str) -> bytes:
+    """The DCC of results.json ``res`` as UTF-8 XML bytes, with declaration, pretty-printed,
+    deterministic."""
+    return tree_bytes(dcc_tree(res, lab=lab, cert_id=cert_id))
 
 
-def write_dcc(report, out: str | Path, *, lab: dict | None = None,
+def write_dcc(res: dict, out: str | Path, *, lab: dict | None = None,
               cert_id: str) -> dict[str, Path]:
-    """Write ``certificate.dcc.xml`` into ``out`` atomically; returns ``{name: path}``."""
+    """Write ``certificate.dcc.xml`` of results.json ``res`` into ``out`` atomically;
+    returns ``{name: path}``."""
     path = Path(out) / "certificate.dcc.xml"
-    write_bytes(path, dcc_bytes(report, lab=lab, cert_id=cert_id))
+    write_bytes(path, dcc_bytes(res, lab=lab, cert_id=cert_id))
     return {"certificate.dcc.xml": path}

@@ -35,7 +35,8 @@ __all__ = ["certificate_id", "opening_blocks", "decision_rule_blocks", "conformi
 
 
 def certificate_id(result, lab: dict | None = None) -> str:
-    """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash.
+    """The certificate's identifier: the lab file's number, else ``VB-`` + readings hash
+    (``result``: the Result or its results.json).
 
     >>> class R: source_sha256 = "adf7d70bf7f73fcbe3e7897ae81a78dd"
     >>> certificate_id(R()), certificate_id(R(), {"certificate": {"number": "GON-2026-017"}})
@@ -43,7 +44,8 @@ def certificate_id(result, lab: dict | None = None) -> str:
     """
     if lab:
         return lab["certificate"]["number"]
-    sha = result.source_sha256 or "0" * 10
+    sha = ((result.get("source") or {}).get("sha256") if isinstance(result, dict)
+           else result.source_sha256) or "0" * 10
     return "VB-" + sha[:10].upper()
 
 

@@ -278,8 +278,9 @@ class Result:
     The first seven fields are positional in the order the rate specifications built
     their results (key, title, items, metadata, source, readings taken, extra).
     ``tables`` (name → DataFrame) are written by :func:`gonio.result.tables.write_tables`
-    beside results.json and are not part of it; ``objects`` keep the analysis objects a
-    certificate draws from (never written).
+    beside results.json and are not part of it; everything a certificate shows (the
+    series each figure draws included) is in results.json, so the certificate can be
+    rendered again from the stored file.
     """
 
     spec_key: str
@@ -358,34 +359,3 @@ class Result:
         from gonio.result.text import summary_lines
 
         return "\n".join(summary_lines(self)) + "\n"
-
-
-def flat_view(d: dict) -> dict:
-    """A results.json (version 1) as the flat dict the optical draft's results.json was before
-    the one result model: each item at the top level as ``{item: title, value, unit, clause,
-    measured, reason, <details>, uncertainty}`` and each ``extra`` section at the top level;
-    ``gonio_version``, ``source``, ``metadata``, ``unused_readings``, ``findings``,
-    ``readings_taken`` kept. For readers written against that shape (a Num path such as
-    ``angle_deviation.max_abs_arcsec`` or ``uncertainty.U_arcsec`` resolves in it).
-
-    >>> flat_view({"version": 1, "items": {"K": {"title": "K", "value": 2.0, "unit": "1",
-    ...   "details": {"n": 3}, "uncertainty": None}}, "extra": {"notes": []}})["K"]["n"]
-    3
-    """
-    out = {k: d[k] for k in ("gonio_version", "specification", "source", "metadata") if k in d}
-    out["protocol"] = (d.get("settings") or {}).get("protocol")
-    for key, it in d["items"].items():
-        flat = {"item": it.get("title", ""), "value": it.get("value"), "unit": it.get("unit"),
-                "clause": it.get("clause"), "measured": it.get("measured", True),
-                "reason": it.get("reason", "")}
-        flat.update(it.get("details") or {})
-        flat["uncertainty"] = it.get("uncertainty")
-        flat["conformity"] = it.get("conformity")
-        if "upper_bound" in it:
-            flat["upper_bound"] = it["upper_bound"]
-        out[key] = flat
-    out["unused_readings"] = d.get("unused_readings", [])
-    out["findings"] = d.get("findings", [])
-    out.update(d.get("extra") or {})
-    out["readings_taken"] = d.get("readings_taken", [])
-    return out

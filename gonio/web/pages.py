@@ -297,15 +297,24 @@ def calibrations_page(request: Request):
                   size=PAGE, status=status)
 
 
-def _new_form(request, user, csrf, inst_id, status_code=200, error=""):
+#: the calibration form's text fields, kept when the form comes back with an error
+NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
+              "humidity_pct", "place")
+
+
+def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None):
+    """The calibration form; ``data``: what was entered, kept when it comes back with an
+    error (text fields and ticked standards; files must be chosen again)."""
     store = _store(request)
     inst, _ = queries.instrument(store, inst_id)
     if inst is None:
         return Response("no such instrument", status_code=404)
     from gonio.specs import available
+    entered = {k: str(data.get(k) or "")[:200] for k in NEW_FIELDS} if data else {}
+    ticked = {str(v) for v in data.getlist("standards")} if data else set()
     return render(request, "calibration_new.html", user, csrf, status_code=status_code,
                   error=error, inst=inst, standards=[s for s in queries.standards(store)],
-                  specs=list(available()), today=_dt.date.today())
+                  specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked)
 
 
 @router.get("/instruments/{inst_id}/calibrate")
@@ -357,7 +366,7 @@ async def calibration_create(request: Request, inst_id: int):
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),
             place=data.get("place"))
     except GonioError as exc:
-        return _new_form(request, user, csrf, inst_id, 400, str(exc))
+        return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
     return _back(f"/calibrations/{cal.id}")
 

@@ -161,3 +161,38 @@ def test_a_failed_run_is_voided_with_a_reason(app, sqlite_store):  # noqa: F811
     got = services.calibration(sqlite_store, cal.id)
     assert got.status == "void" and got.error == "void: a rate-gyro file"
     assert web.get("/calibrations?status=void").text.count(f"/calibrations/{cal.id}\"") == 1
+
+
+def test_a_form_with_an_error_keeps_what_was_entered(app, sqlite_store):  # noqa: F811
+    from .test_web_security import csrf_of
+
+    tech = services.user(sqlite_store, "tech")
+    cust = services.add_customer(sqlite_store, tech, "C")
+    inst = services.register_instrument(sqlite_store, tech, customer_id=cust.id, serial="S",
+                                        spec_key="ogam-draft")
+    std = services.add_standard(sqlite_store, tech, name="table", identifier="T-1",
+                                due_on="2099-01-01")
+    web = login(app, "tech")
+    r = web.post(f"/instruments/{inst.id}/calibrate", data={
+        "csrf": csrf_of(web), "performed_on": "9999-12-31", "received_on": "2025-01-02",
+        "temperature_c": "20.5", "humidity_pct": "41", "place": "Room 2",
+        "standards": [str(std.id)]}, files={"readings": ("r.csv", b"x\n")})
+    assert r.status_code == 400 and "9999-12-31 is in the future" in r.text
+    for kept in ('value="9999-12-31"', 'value="2025-01-02"', 'value="20.5"', 'value="41"',
+                 'value="Room 2"', f'value="{std.id}"  checked'):
+        assert kept in r.text, kept
+
+
+def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, computed_folder,
+                                                        bench_readings):
+    import json
+    import shutil
+
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    res = json.loads((folder / "results.json").read_text())
+    res.setdefault("metadata", {})["date"] = "9999-12-31"
+    (folder / "results.json").write_text(json.dumps(res))
+    err = cli(["db", "import", folder, "--data", tmp_path / "data", "--protocol",
+               SMALL_PROTOCOL, "--readings", bench_readings[0]], capsys)
+    assert "key metadata.date: 9999-12-31 is in the future" in err

@@ -73,6 +73,8 @@ READINGS_ZH = {
 
 #: Budget sources and reasons in Chinese (see gonio.report.i18n.phrase_zh).
 PHRASES_ZH = COMMON_PHRASES_ZH + (
+    (r"half range of (\d+) records; interval from the distribution of the range of normal "
+     r"values \(Tippett\)", "{1} 次记录的半极差；区间按正态值极差的分布求得"),
     (r"alignment of the input axis to the plane perpendicular to the rotation axis \(table axis "
      r"and fixture\): sin\(half-width\)", "输入轴与转轴垂直面的对准（转台轴与夹具）：sin(半宽)"),
     (r"bias of 5\.3\.3\.1", "5.3.3.1 的零偏"),

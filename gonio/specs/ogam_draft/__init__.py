@@ -7,15 +7,13 @@ readings or stream → items, Annex A budget, item uncertainties);
 :mod:`.truth` the true values from the bench (``SPEC.truth``); :mod:`.study` the coverage
 study of ``gonio validate`` (its trial, truths and bench cases) and :mod:`.item_coverage`
 what each item's coverage is checked against; :mod:`.outputs` the rendering (results,
-tables, certificate, DCC, demo). The clause-by-clause
+tables, certificate, DCC, demo); :mod:`.commands` its own ``gonio`` sub-commands (``reduce``,
+``tilt``, ``tilt-estimate``, ``eda``). The clause-by-clause
 reading is ``docs/draft-readings.md``.
 """
 
-from gonio.protocol import load_protocol
 from gonio.specs import Coverage, Specification, lazy
-from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.specs.ogam_draft.calibration import calibrate, screen
-from gonio.specs.ogam_draft.items import ITEM_KEYS
+from gonio.specs.ogam_draft.keys import ITEM_KEYS
 
 SPEC = Specification(
     key="ogam-draft",
@@ -27,12 +25,12 @@ SPEC = Specification(
     item_keys=tuple(ITEM_KEYS),
     default_protocol="ogam-draft",
     default_bench="rlg",
-    load_protocol=load_protocol,
-    calibrate=calibrate,
-    screen=screen,
+    load_protocol=lazy("gonio.protocol:load_protocol"),
+    calibrate=lazy("gonio.specs.ogam_draft.calibration:calibrate"),
+    screen=lazy("gonio.specs.ogam_draft.calibration:screen"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
-    budget=annex_a_budget,
+    budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),
     coverage=Coverage(engine="cases", stream=0,
                       study=lazy("gonio.specs.ogam_draft.study:plan_study"),
                       options=frozenset({"cases", "truth", "extra_components", "u_scale",
@@ -44,4 +42,8 @@ SPEC = Specification(
     budget_options=frozenset({"table_mpe_arcsec", "tilt_deg", "zero_stability_dph",
                               "duration_min", "repeatability_arcsec", "k",
                               "monte_carlo_trials", "seed"}),
+    commands=(("eda", "gonio.specs.ogam_draft.commands:add_eda"),
+              ("reduce", "gonio.specs.ogam_draft.commands:add_reduce"),
+              ("tilt", "gonio.specs.ogam_draft.commands:add_tilt"),
+              ("tilt-estimate", "gonio.specs.ogam_draft.commands:add_tilt_estimate")),
 )

@@ -1,7 +1,8 @@
 """From a readings file to results: the seven characteristics and the Annex A budget.
 
 :func:`calibrate` is the specification's ``SPEC.calibrate`` (what ``gonio calibrate`` and
-``gonio demo`` run); it returns a :class:`CalibrationReport` (usable from a notebook), and
+``gonio demo`` run); it returns the one sealed :class:`~gonio.result.model.Result`
+(:func:`analyse` keeps the analysis objects in memory, :class:`Analysis`), and
 :func:`gonio.specs.ogam_draft.outputs.write_calibration` writes ``results.json``,
 ``summary.txt`` and the detail tables as CSV, atomically. The uncertainty of the angle-position deviation is the
 Annex A budget with u(r) taken from the calibration's own repeatability data
@@ -20,23 +21,20 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
+from gonio.formats.jsonsafe import json_safe
 from gonio import __version__
 from gonio.atomic import sha256_file
 from gonio.resources import protocol_provenance
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
 from gonio.units import S_PER_MIN
-from gonio.specs.ogam_draft.items import (ITEM_KEYS, LISTED_ROWS, CalibrationResults,
+from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
-from gonio.formats.provenance import result_provenance
 from gonio.formats.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
-from gonio.result.findings import findings_to_json
 from gonio.formats.records import StaticRecord
 from gonio.result import Finding
 from gonio.protocol import Protocol, load_protocol
-from gonio.analysis.conformity import decide_result
 from gonio.result.model import Item, Result, Uncertainty
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
@@ -114,14 +112,16 @@ class Conflict:
 
 
 @dataclass
-class CalibrationReport:
-    """Everything one calibration produced.
+class Analysis:
+    """One optical calibration in memory, before it is sealed into the one Result.
 
-    ``uncertainty`` is E's budget (:class:`~gonio.budget.AnnexABudget`; the draft's four
-    lines, or the physical budget with the lines beyond the draft); when E is not
-    measured it is kept for reference but nothing of it is reported (no item, no U).
-    ``item_uncertainty`` maps each measured item to its
-    :class:`~gonio.specs.ogam_draft.item_uncertainty.ItemUncertainty`.
+    ``results`` the seven items with their DataFrames; ``uncertainty`` E's budget
+    (:class:`~gonio.specs.ogam_draft.budget.AnnexABudget`; the draft's four lines, or the
+    physical budget with the lines beyond the draft); when E is not measured it is kept for
+    reference but nothing of it is reported (no item, no U). ``item_uncertainty`` maps each
+    measured item to its :class:`~gonio.specs.ogam_draft.item_uncertainty.ItemUncertainty`.
+    :func:`calibrate` returns :meth:`result`; the coverage study (:mod:`.study`,
+    :mod:`.item_coverage`) reads the analysis objects themselves (:func:`analyse`).
     """
 
     results: CalibrationResults
@@ -140,13 +140,6 @@ class CalibrationReport:
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
-    #: item → gonio.result.model.Conformity: the pipeline's decision (:meth:`decided_result`),
-    #: the one the certificate, the DCC and summary.txt render (results.json carries it)
-    conformity: dict = field(default_factory=dict)
-    #: The specification's key in results.json (this report is the optical draft's).
-    spec_key: str = "ogam-draft"
-    #: Where the readings come from (gonio.formats.provenance.provenance; the pipeline sets it)
-    provenance: dict = field(default_factory=dict)
 
     @property
     def e_measured(self) -> bool:
@@ -154,7 +147,8 @@ class CalibrationReport:
         return bool(e.measured and e.value is not None)
 
     def uncertainty_dict(self) -> dict:
-        """``results.json``'s ``uncertainty``: E's budget, or no U when E is not measured."""
+        """``results.json``'s ``extra.uncertainty``: E's budget, or no U when E is not
+        measured."""
         if not self.e_measured:
             return {"budget_kind": self.budget_kind, "measured": False,
                     "reason": "the angle-position deviation E (7.4) was not measured: "
@@ -173,117 +167,86 @@ class CalibrationReport:
             c["beyond_draft"], c["clause"] = ic.beyond_draft, ic.clause
         return unc
 
-    def to_dict(self) -> dict:
-        """The ``results.json`` content (plain JSON types, deterministic)."""
-        d = self.results.to_dict()
-        out = {
-            "gonio_version": __version__,
-            "specification": self.protocol.specification,
-            "protocol": self.protocol.name,
-            "source": {"file": Path(self.readings.path).name if self.readings.path else None,
-                       "sha256": self.source_sha256,
-                       "rows": int(len(self.readings.data))},
-            "metadata": dict(self.readings.metadata),
-        }
-        out.update(d)
-        if out["scale_factor"].get("measured"):
-            out["scale_factor"].update(scale_factor_as_mounted(
-                float(self.results.scale_factor.value),
-                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
-        for name in ITEM_NAMES:
-            iu = self.item_uncertainty.get(name)
-            out[name]["uncertainty"] = iu.to_dict() if iu is not None else None
+    def item_details(self, c) -> dict:
+        """The details of item ``c`` in results.json (its own fields beyond the Item's:
+        tables listed, the 7.1 measurand, the two readings of B_s and the noise analysis)."""
+        d = {k: v for k, v in c.to_dict().items() if k not in ITEM_FIELDS}
+        if c.name == "scale_factor" and c.measured:
+            d.update(scale_factor_as_mounted(
+                float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
+        if c.name != "zero_stability":
+            return d
         zr = self.zero_stability_readings
         if zr:
-            zs = dict(out["zero_stability"])
-            draft_value = zs["value"]
-            zs["value"] = float(self.item_uncertainty["zero_stability"].value)
-            zs["stated"] = zr["stated"]
-            zs["stated_note"] = zr["note"]
-            zs["estimates"] = {
-                "draft": {"label": ZERO_STABILITY_READINGS["draft"], "value": draft_value,
+            d["stated"], d["stated_note"] = zr["stated"], zr["note"]
+            d["estimates"] = {
+                "draft": {"label": ZERO_STABILITY_READINGS["draft"], "value": _plain_value(c),
                           "uncertainty": zr["draft"].to_dict()},
                 "model": None if zr["model"] is None else
                 {"label": ZERO_STABILITY_READINGS["model"], "value": float(zr["model"].value),
                  "uncertainty": zr["model"].to_dict(),
                  "variance_shares": zr["expected"].to_dict()["variance_shares"]}}
-            out["zero_stability"] = zs
         if self.noise is not None:
-            zs = dict(out["zero_stability"])
-            zs["noise"] = {"source": self.noise_source, **self.noise.to_dict()}
-            out["zero_stability"] = zs
+            d["noise"] = {"source": self.noise_source, **self.noise.to_dict()}
         else:
-            out["zero_stability"] = {**out["zero_stability"], "noise": None,
-                                     "noise_reason": "the Allan analysis of 7.3 needs the "
-                                     "instrument's continuous record (a stream); a readings "
-                                     "file holds only the 15 readings"}
+            d["noise"] = None
+            d["noise_reason"] = ("the Allan analysis of 7.3 needs the instrument's continuous "
+                                 "record (a stream); a readings file holds only the 15 readings")
+        return d
+
+    def item(self, c) -> Item:
+        """Item ``c`` of the seven as the one result model holds it."""
+        iu = self.item_uncertainty.get(c.name)
+        unc = None if iu is None else iu.to_dict()
+        value = c.value
+        if c.name == "zero_stability" and self.zero_stability_readings:
+            value = float(iu.value)               # the stated reading of B_s
+        return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
+                    c.reason or "",
+                    None if unc is None else Uncertainty(
+                        unc["components"], unc["u_c"], unc["U"], unc["k"], unc["nu_eff"],
+                        unc.get("monte_carlo"), unc.get("coverage_probability"),
+                        unc.get("k_source") or "", unc.get("interval")),
+                    json_safe(self.item_details(c)), nonnegative=bool((unc or {}).get("nonnegative")))
+
+    def result(self) -> Result:
+        """The sealed Result of this calibration: the seven items (each item's own fields
+        under ``details``); under ``extra`` E's full budget, the conflicts, the precedence
+        rule, the equal-division analysis, the method's settings (:func:`method_settings`),
+        the series every figure draws (:mod:`.figure_data`) and the warnings; the detail
+        tables as ``tables``."""
+        from gonio.specs.ogam_draft.figure_data import figure_series
+
+        rd = self.results.to_dict()
+        items = {c.name: self.item(c) for c in self.results.items()}
+        extra = {"uncertainty": self.uncertainty_dict(),
+                 "conflicts": [c.to_dict() for c in self.conflicts],
+                 "precedence_rule": PRECEDENCE_RULE}
         if self.eda is not None:
-            out["equal_division"] = {"clause": "IEC 62047-20 Annex A.3", **self.eda.to_dict()}
-        out["uncertainty"] = self.uncertainty_dict()
-        out["conflicts"] = [c.to_dict() for c in self.conflicts]
-        out["findings"] = findings_to_json(self.findings)
-        out["precedence_rule"] = PRECEDENCE_RULE
-        out["provenance"] = result_provenance({"provenance": self.provenance,
-                                               "metadata": out["metadata"]})
-        out["readings_taken"] = readings_taken(self.repeatability_source) if self.e_measured \
-            else list(READINGS_TAKEN)
-        return json_safe(out)
-
-    def to_result(self) -> Result:
-        """The one result model (:class:`gonio.result.model.Result`) of this calibration:
-        the seven items (each item's own fields under ``details``), E's full budget, the
-        conflicts and the precedence rule under ``extra``; the detail tables as
-        ``tables``."""
-        d = self.to_dict()
-        items = {}
-        for name in ITEM_NAMES:
-            it = d[name]
-            details = {k: v for k, v in it.items() if k not in LEGACY_ITEM_KEYS}
-            unc = it.get("uncertainty")
-            items[name] = Item(name, it["item"], it["clause"], it["unit"], it["value"],
-                               bool(it["measured"]), it.get("reason") or "",
-                               None if unc is None else Uncertainty(
-                                   unc["components"], unc["u_c"], unc["U"], unc["k"],
-                                   unc["nu_eff"], unc.get("monte_carlo"),
-                                   unc.get("coverage_probability"), unc.get("k_source") or "",
-                                   unc.get("interval")), details,
-                               nonnegative=bool((unc or {}).get("nonnegative")))
-        extra = {k: d[k] for k in ("uncertainty", "conflicts", "precedence_rule",
-                                   "equal_division", "unused_readings_summary") if k in d}
-        known = set(ITEM_NAMES) | set(extra) | {"gonio_version", "specification", "protocol",
-                                               "source", "metadata", "unused_readings",
-                                               "readings_taken", "findings", "provenance"}
-        extra.update({k: v for k, v in d.items() if k not in known})   # nothing dropped
-        title = self.protocol.specification or spec_title(self.spec_key)
-        return Result(self.spec_key, title, items, d["metadata"],
-                      d["source"], list(d["readings_taken"]), extra,
-                      settings={"protocol": d["protocol"],
-                                "protocol_sha256": protocol_provenance(
-                                    self.protocol.path or None).get("protocol_sha256"),
-                                "budget_kind": self.budget_kind,
-                                "repeatability_source": self.repeatability_source or None},
-                      unused_readings=list(d.get("unused_readings") or []),
-                      findings=list(self.findings),
-                      gonio_version=d["gonio_version"], tables=self.detail_tables(),
-                      provenance=d["provenance"])
-
-    def decided_result(self, lab: dict | None = None) -> Result:
-        """:meth:`to_result` with the conformity of every item the laboratory file limits
-        (or the specification's default tolerances, ``SPEC.default_limits``: the draft gives
-        none) decided in it (:func:`gonio.analysis.conformity.decide_result`): results.json.
-        The decisions are kept in :attr:`conformity` too, for the certificate, the DCC and
-        summary.txt to render (they decide nothing themselves)."""
-        from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
-        from gonio.specs import default_limits
-
-        result = self.to_result()
-        decide_result(result, lab, default_limits(self.spec_key), DEFAULT_LIMITS_ORIGIN)
-        self.conformity = {k: it.conformity for k, it in result.items.items()
-                           if it.conformity is not None}
-        return result
+            extra["equal_division"] = {"clause": "IEC 62047-20 Annex A.3", **self.eda.to_dict()}
+        if "unused_readings_summary" in rd:
+            extra["unused_readings_summary"] = rd["unused_readings_summary"]
+        extra["method"] = method_settings(self.protocol)
+        extra["figures"] = figure_series(self.results, self.uncertainty)
+        extra["warnings"] = self.warnings()
+        src = {"file": Path(self.readings.path).name if self.readings.path else None,
+               "sha256": self.source_sha256, "rows": int(len(self.readings.data))}
+        return Result(
+            SPEC_KEY, self.protocol.specification or spec_title(SPEC_KEY), items,
+            dict(self.readings.metadata), src,
+            readings_taken(self.repeatability_source) if self.e_measured else list(READINGS_TAKEN),
+            extra,
+            settings={"protocol": self.protocol.name,
+                      "protocol_sha256": protocol_provenance(
+                          self.protocol.path or None).get("protocol_sha256"),
+                      "budget_kind": self.budget_kind,
+                      "repeatability_source": self.repeatability_source or None},
+            unused_readings=list(rd.get("unused_readings") or []),
+            findings=list(self.findings), gonio_version=__version__,
+            tables=self.detail_tables())
 
     def detail_tables(self) -> dict:
-        """The tables written beside results.json (names as before the one result model)."""
+        """The tables written beside results.json (``tables/*.csv``)."""
         out = {}
         for item in self.results.items():
             for tname, df in (getattr(item, "tables", None) or {}).items():
@@ -309,6 +272,56 @@ class CalibrationReport:
         return out
 
 
+#: The specification's key in results.json.
+SPEC_KEY = "ogam-draft"
+#: The fields of an optical item that the one result model's Item holds itself (the rest
+#: go under the item's ``details``).
+ITEM_FIELDS = ("item", "value", "unit", "clause", "measured", "reason")
+
+
+def _plain_value(c, value=None):
+    """An item's value as results.json writes it (None when not a finite number)."""
+    v = c.value if value is None else value
+    if v is None:
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def method_settings(protocol: Protocol) -> dict:
+    """The protocol's settings the certificate states (JJF 1535 8 g/h): the specification it
+    follows (as the protocol names it), the rates, the rounds and series, the zero-stability readings, the read delay and time to reading, the
+    Earth-rate compensation, the axis directions and the reference conditions."""
+    p = protocol
+    rates = []
+    for it in (p.scale_factor, p.angle_deviation, *p.rate_consistency):
+        if it is not None and it.rate_dps not in rates:
+            rates.append(it.rate_dps)
+    zs = p.zero_stability
+    ad = p.angle_deviation or p.scale_factor
+    cond = p.conditions
+    cget = (cond.get if isinstance(cond, dict)
+            else lambda key, default: getattr(cond, key, default))
+    return {"specification": p.specification or "",
+            "rates_dps": sorted(float(r) for r in rates),
+            "angle_deviation_rate_dps": (float(p.angle_deviation.rate_dps)
+                                         if p.angle_deviation else None),
+            "scale_factor_rounds": len(p.scale_factor.rounds) if p.scale_factor else 0,
+            "angle_deviation_rounds": len(p.angle_deviation.rounds) if p.angle_deviation else 0,
+            "series": p.angle_deviation.series if p.angle_deviation else 0,
+            "zero_stability_readings": zs.readings if zs else 0,
+            "zero_stability_interval_s": zs.interval_s if zs else None,
+            "read_delay_s": ad.read_delay_s if ad is not None else None,
+            "max_time_to_reading_s": ad.max_time_to_reading_s if ad is not None else None,
+            "earth_compensation": p.session.earth_compensation,
+            "static_s": p.session.static_s,
+            "compensation_latitude_deg": p.session.compensation_latitude_deg,
+            "axes": [p.pointing_reference] + [it.orientation for it in p.pointing_consistency
+                                              if it.orientation != p.pointing_reference],
+            "temperature_c": cget("temperature_c", 20.0),
+            "temperature_tolerance_c": cget("temperature_tolerance_c", 1.0)}
+
+
 def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float) -> dict:
     """What K of 7.1 is (docs/draft-readings.md, 7.1): the scale factor *as mounted*.
 
@@ -330,10 +343,6 @@ def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float) -> d
             "instrument_own_upper_counts_per_deg": float(k_counts_per_deg / c)}
 
 
-ITEM_NAMES = ITEM_KEYS
-#: The keys of an optical item's dict that the one result model's Item holds itself (the
-#: rest go under the item's ``details``).
-LEGACY_ITEM_KEYS = ("item", "value", "unit", "clause", "measured", "reason", "uncertainty")
 
 
 # --------------------------------------------------------------------------- settings
@@ -854,12 +863,26 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
               tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-              findings: list | None = None) -> CalibrationReport:
+              findings: list | None = None) -> Result:
+    """``SPEC.calibrate``: the seven characteristics and their uncertainties from a readings
+    file or stream, as the one sealed :class:`~gonio.result.model.Result` (:func:`analyse`,
+    then :meth:`Analysis.result`; the arguments are :func:`analyse`'s). Conformity is not
+    decided here: the pipeline decides it once, on the laboratory file's limits."""
+    return analyse(readings, protocol, monte_carlo_trials=monte_carlo_trials, seed=seed,
+                   static_record=static_record, budget=budget, tilt=tilt,
+                   zero_stability=zero_stability, findings=findings).result()
+
+
+def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
+            *, monte_carlo_trials: int = 0, seed: int = 0,
+            static_record: StaticRecord | None = None, budget: str = "physical",
+            tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
+            findings: list | None = None) -> Analysis:
     """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
     ``protocol``: explicit (the command line's ``--protocol``), else the file's
     ``# protocol:``, else ``ogam-draft`` (:func:`resolve_protocol`; conflicts are
-    reported in ``report.conflicts``). The readings are checked against the protocol
+    reported in ``conflicts``). The readings are checked against the protocol
     (:func:`screen_readings`). Items whose readings the file does not hold are
     reported as not measured, without uncertainty. ``budget``: ``"physical"`` (the
     default: the draft's Annex A lines plus those beyond it, :func:`deviation_budget`)
@@ -899,10 +922,10 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
-    return CalibrationReport(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
-                             item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
-                             budget_notes=notes, excluded=excluded,
-                             zero_stability_readings=zs_readings, findings=findings)
+    return Analysis(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
+                    item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
+                    budget_notes=notes, excluded=excluded,
+                    zero_stability_readings=zs_readings, findings=findings)
 
 
 def zero_stability_readings(results: CalibrationResults, items: dict, noise,

@@ -124,7 +124,7 @@ def item_record(report, truth: dict) -> dict:
     """Per measured item: value, U, interval, truth (None for ensemble truths) and the
     per-trial data the ensemble truths need.
 
-    ``report`` is a :class:`gonio.calibrate.CalibrationReport`, ``truth`` the session's
+    ``report`` is an :class:`gonio.specs.ogam_draft.calibration.Analysis`, ``truth`` the session's
     truth dict (``run_session(...).truth``).
     """
     tr = pd.DataFrame(truth["readings"])

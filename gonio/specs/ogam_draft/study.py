@@ -66,7 +66,7 @@ from gonio.formats.toml import read_toml
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.specs.ogam_draft.calibration import calibrate
+from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
 from gonio.units import PPM, deg_to_arcsec
 
@@ -248,8 +248,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
     # the continuous record of the 7.3 rest, as a stream calibration has it (B_s's model)
-    rep = calibrate(Readings(df, dict(res.metadata)), protocol, budget="draft",
-                    static_record=res.static_record)
+    rep = analyse(Readings(df, dict(res.metadata)), protocol, budget="draft",
+                  static_record=res.static_record)
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
@@ -686,8 +686,8 @@ def _monte_carlo_case(proto: Protocol, bench: Bench, trial_seed_: int, trials: i
     res = run_session(proto, bench, seed=trial_seed_)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
-    rep = calibrate(Readings(df, dict(res.metadata)), proto, budget="draft",
-                    static_record=res.static_record)
+    rep = analyse(Readings(df, dict(res.metadata)), proto, budget="draft",
+                  static_record=res.static_record)
     return {"trials": trials, "trial": 0, "seed": trial_seed_,
             "criterion": "JCGM 101 8.2: d_low, d_high <= delta (u_c to 2 significant digits)",
             "items": item_monte_carlo(rep, trials, seed)}

@@ -56,7 +56,7 @@ from gonio.physics.alignment import AXES, mean_earth_rate_ref, signed_axis
 CRITERIA = ("bic", "aic", "ftest")
 F_TEST_ALPHA = 0.05
 #: The highest polynomial orders the selection tries (temperature, supply; the ARW model has
-#: no supply term): the largest set of coefficient items a result can hold.
+#: no supply term): the largest polynomial a result can hold (its coefficients are information).
 MAX_ORDER_T, MAX_ORDER_U, MAX_ORDER_ARW = 4, 2, 2
 
 
