@@ -666,10 +666,12 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     mpe = settings["table_mpe_arcsec"]
     out = {}
     sf = results.scale_factor
+    k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
     if sf.measured:
         t = sf.table
         out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
-                                                     mpe, k=k_fixed)
+                                                     mpe, k=k_fixed,
+                                                     tilt_bias_arcsec_per_deg=k_tilt)
         if results.scale_factor_nonlinearity.measured:
             out["scale_factor_nonlinearity"] = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed)
@@ -702,9 +704,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     u_r = float(budget.parameters["repeatability_arcsec"])
     drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
     df = readings.data
-    k_u_rel = float(out["scale_factor"].u_c / abs(float(sf.value))) \
-        if "scale_factor" in out and float(sf.value) else 0.0
-    k_tilt = _scale_factor_tilt(results, readings, protocol, budget)
+    # the tilt bias of K enters the consistencies by their own K_tilt line, not through u(K)
+    k_u_rel = iu.without_tilt_u_rel(out["scale_factor"]) if "scale_factor" in out else 0.0
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
         if not c.measured:
