@@ -1,8 +1,7 @@
-"""The items of IEC 62047-20 as data (key, title, clause), in a module that imports nothing:
-loading ``SPEC`` (``gonio --help`` lists every specification's commands) reads them without
-importing the analysis; :data:`.items.ITEMS` adds each item's function."""
+"""The IEC 62047-20 characteristics (clauses 5.1–5.6) without their computation, so that
+loading ``SPEC`` stays light; :data:`.items.ITEMS` pairs each row with its function."""
 
-#: The specification's key (``--spec``, ``# spec:``).
+#: The key of the specification (``--spec``, the readings' ``# spec:`` line).
 KEY = "iec62047-20"
 
 #: (key, title, clause) of every item, in the specification's order (the one copy of this list).

@@ -1,8 +1,7 @@
-"""The items of Table 3 of JJF 1535-2015 as data (key, title, clause), in a module that imports nothing:
-loading ``SPEC`` (``gonio --help`` lists every specification's commands) reads them without
-importing the analysis; :data:`.items.ITEMS` adds each item's function."""
+"""JJF 1535-2015 Table 3 as plain data, importing nothing: ``SPEC`` (loaded by
+``gonio --help``) takes its keys and clauses from here; :data:`.items.ITEMS` adds the
+function of each row."""
 
-#: The specification's key (``--spec``, ``# spec:``).
 KEY = "jjf1535-2015"
 
 #: (key, title, clause) of every item, in the specification's order (the one copy of this list).
