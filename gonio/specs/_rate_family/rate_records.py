@@ -95,11 +95,10 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     distance from s to the upper end (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`),
     the guard band of the decision rule, so a guarded upper limit is the upper end.
 
-    Before issue 24 the χ² half-width was entered as a normal type-B term with k = 2 and
-    expanded again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's
-    sd z 0.17). Until the review of stop 30, U reached the two-sided limit s·√(ν/χ²_0.025,ν),
-    which σ stays below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s →
-    3.415·s).
+    Two readings this rule replaces: the χ² half-width entered as a normal type-B term with
+    k = 2 and expanded again by t₉₅ (u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2; the coverage
+    study's sd z 0.17), and U reaching the two-sided limit s·√(ν/χ²_0.025,ν), which σ stays
+    below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s → 3.415·s).
 
     >>> u = std_dev_uncertainty(1.0, 2, "K_r")
     >>> round(u.u_c, 3), round(u.U, 3), u.k, [round(x, 3) for x in u.interval]
@@ -320,7 +319,7 @@ def static_output(df: pd.DataFrame):
 def static_rate_dph(df: pd.DataFrame, null_output: float, scale_factor: float):
     """The static record (test ``static``) as a rate in °/h, (output − null)/K, and its
     sampling interval in s (from the first and last time stamps). A long record is a
-    :class:`~gonio.analysis.noise.stream.Record` (bounded memory, issue 26) with the same
+    :class:`~gonio.analysis.noise.stream.Record` (bounded memory) with the same
     numbers, which the noise items read piece by piece."""
     # the two columns only, never a copy of the whole frame (a long static record)
     rows = first, count, idx = _static_rows(df)

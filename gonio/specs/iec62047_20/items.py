@@ -185,7 +185,7 @@ def slope_noise_u(x: np.ndarray, u_y: np.ndarray) -> float:
     The slope's residual standard error √(RSS/(n − 2)/Sxx) is not used: the residuals of the
     2n + 1 points are mostly the gyro's nonlinearity, which the clause's a_BASE (a
     least-squares slope over those rates, by definition) contains and does not err by;
-    on the bench it made U(a_BASE) ≈ 5× the spread (issue 24, docs/iec62047-20-readings.md).
+    on the bench it made U(a_BASE) ≈ 5× the spread (docs/iec62047-20-readings.md).
 
     >>> round(slope_noise_u(np.array([-1.0, 0.0, 1.0]), np.array([0.1, 0.1, 0.1])), 6)
     0.070711

@@ -92,7 +92,7 @@ def readings_taken(repeatability_source: str) -> list[str]:
 
 @dataclass(frozen=True)
 class Conflict:
-    """A setting given differently in two places, and which value was used (defect 5)."""
+    """A setting given differently in two places, and which value was used."""
 
     setting: str
     file_value: object
@@ -370,7 +370,7 @@ def file_protocol_name(path: str | Path) -> str | None:
 
 def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None,
                      protocol: str | Path | Protocol | None) -> tuple[Protocol, list[Conflict]]:
-    """The protocol to use, by :data:`PRECEDENCE_RULE` (defect 5 of issue 12).
+    """The protocol to use, by :data:`PRECEDENCE_RULE`.
 
     An explicit ``protocol`` (the command line's ``--protocol``) wins; a different
     ``# protocol:`` in the readings file is reported as a conflict. Without one, the
@@ -528,7 +528,7 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
                      monte_carlo_trials: int = 0, seed: int = 0
                      ) -> tuple[AnnexABudget, str, list[str]]:
     """E's budget: the draft's four Annex A lines, plus, for ``kind="physical"``, the lines
-    the validation showed to matter (issue 12):
+    the validation showed to matter:
 
     - ``tilt_E``: the tilt × Earth-rate coupling at the site's latitude (metadata
       ``latitude_deg``; the equator's, the worst case, when not stated) with the tilt

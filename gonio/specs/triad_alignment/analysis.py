@@ -312,7 +312,7 @@ FLICKER_FLOOR: float = math.sqrt(2.0 * math.log(2.0) / math.pi)
 def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
                            horizon_s: float = BIAS_HORIZON_S, tau_d_s: float | None = None
                            ) -> tuple[np.ndarray, np.ndarray]:
-    """Long-term term of the bias b (°/s per gyro) and its degrees of freedom (issue 24).
+    """Long-term term of the bias b (°/s per gyro) and its degrees of freedom.
 
     The fit's u(b) is in-run: it holds for the mean bias over this record. The bias a
     certificate states is meant to hold beyond it, and a gyro's bias wanders (bias
