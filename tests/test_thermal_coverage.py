@@ -251,3 +251,12 @@ def test_certified_points_of_a_set_point_measured_once():
     assert [c["symbol"] for c in it.uncertainty.components] == ["K_z_t1_v1_fit",
                                                                  "K_z_t1_v1_order"]
     assert "K_z_t2_v1_T" in [c["symbol"] for c in items["K_z_t2_v1"].uncertainty.components]
+    # the stated point is the programme's: −40 °C, the lowest supply (4.75 V)
+    assert (it.details["setpoint_c"], it.details["supply_v"]) == (-40.0, 4.75)
+    assert items["b_z_t8_v3"].details["supply_v"] == 5.25
+    # the slope the temperature term uses is the polynomial's derivative (closed form)
+    for key, fit in (("K", m.scale), ("b", m.bias)):
+        c = fit.coefficients()
+        q = pts[(key, 2, 1)]
+        d = sum(j * c[f"theta{j}"] * q["theta_c"] ** (j - 1) for j in range(1, fit.n_t + 1))
+        assert q["slope"] == pytest.approx(d, rel=1e-6), key

@@ -13,7 +13,6 @@ import argparse
 import math
 import re
 
-from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported for the sub-commands)
 
 #: Upper bound of physical magnitudes typed on the command line (scale factors, lengths, times,
 #: accelerations): beyond any quantity of these kinds in SI units (the observable universe is
@@ -63,6 +62,14 @@ def float_range(lo: float = -math.inf, hi: float = math.inf, *, lo_open: bool = 
 def positive_magnitude(text: str) -> float:
     """A physical magnitude that divides or scales data: in [1/LARGE, LARGE] (representable)."""
     return float_range(1.0 / LARGE, LARGE, what="a positive number")(text)
+
+
+def json_safe(obj):
+    """:func:`gonio.formats.jsonsafe.json_safe` (for the sub-commands), imported on first use:
+    building the parser imports this module, and it must not import numpy."""
+    from gonio.formats.jsonsafe import json_safe as convert
+
+    return convert(obj)
 
 
 def seed(text: str) -> int:

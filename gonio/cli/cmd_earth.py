@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 import math
 
-from gonio.physics.earth import earth_rate
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range
 
@@ -30,6 +29,8 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Compute and print the Earth rate on the axis."""
+    from gonio.physics.earth import earth_rate
+
     if not math.isfinite(args.latitude_deg) or abs(args.latitude_deg) > 90:
         raise GonioError(f"--latitude-deg: must be within ±90°, got {args.latitude_deg}")
     try:

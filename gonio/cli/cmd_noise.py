@@ -26,8 +26,6 @@ from __future__ import annotations
 import json
 import math
 
-import numpy as np
-
 from gonio.errors import GonioError
 from gonio.units import S_PER_H
 from gonio.cli.checks import (float_range, int_range, json_safe, positive_magnitude,

@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import math
 
-from gonio.physics.sagnac import sagnac_fog, sagnac_rlg
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, json_safe
 
@@ -41,6 +40,8 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Compute and print the scale factor."""
+    from gonio.physics.sagnac import sagnac_fog, sagnac_rlg
+
     if args.rlg:
         for opt in ("area_m2", "perimeter_m"):
             if getattr(args, opt) is None:

@@ -13,7 +13,6 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.cli.checks import float_range, int_range, seed
-from gonio.pipeline.validate import PARTIAL_DIR, validate
 from gonio.specs import DEFAULT_KEY
 
 
@@ -112,6 +111,8 @@ def run(args) -> int:
 def run_study(spec, args, opts: dict) -> int:
     """A study the specification describes (:func:`gonio.pipeline.validate.validate`), with
     its partial results kept in ``--out``."""
+    from gonio.pipeline.validate import PARTIAL_DIR, validate
+
     opts = dict(opts)
     resume = bool(opts.pop("resume", False))
     partial = Path(args.out) / PARTIAL_DIR if args.out is not None else None
@@ -149,6 +150,8 @@ def emit(report, args) -> None:
 def run_items(spec, args) -> int:
     """The item coverage study (:func:`gonio.pipeline.validate.validate` →
     :func:`gonio.pipeline.coverage.coverage_validate`)."""
+    from gonio.pipeline.validate import validate
+
     try:
         report = validate(args.trials, spec=spec, seed=args.seed, bench=args.bench,
                           protocol=args.protocol, workers=args.workers,

@@ -1,4 +1,4 @@
-"""The one result model every specification returns (issue 23).
+"""The one result model every specification returns.
 
 This package is being built up: :mod:`gonio.result.findings` holds the screening
 findings that every specification's ``screen(readings)`` returns; :mod:`gonio.result.statement`

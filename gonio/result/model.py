@@ -1,4 +1,4 @@
-"""The one result model every specification returns (issue 23): a :class:`Result` of
+"""The one result model every specification returns: a :class:`Result` of
 :class:`Item` s, written as one ``results.json`` shape (``docs/formats.md#results-file``,
 JSON Schema ``docs/results.schema.json``).
 

@@ -55,6 +55,9 @@ COMMON_PHRASES_ZH = (
     (r"(\w+) (\S+) departs from its neighbours by (\S+) \(limit (\S+)\)",
      "{1} 值 {2} 偏离相邻样本 {3}（限 {4}）"),
     (r"(\w+) (\S+) differs from the segment's (\S+)", "{1} 值 {2} 与该段的 {3} 不同"),
+    (r"(\w+): (\w+) logged on 1 row in (\d+) \((\d+) of (\d+) rows\); each blank row takes the "
+     r"value interpolated in time between the logged rows of its segment",
+     "{1}：{2} 每 {3} 行记录一次（{5} 行中 {4} 行）；空白行取本段相邻记录值按时间线性插值"),
     (r"(\w+) (\S+) departs from the segment's (\S+) \(limit (\S+)\)",
      "{1} 值 {2} 偏离该段的 {3}（限 {4}）"),
     (r"time (\S+) s is (\S+) s off the segment's sampling grid \(step (\S+) s\)",

@@ -56,7 +56,7 @@ def as_array(x, name: str) -> np.ndarray:
     """``x`` as a flat float64 array; a non-finite value is a GonioError naming ``name``. A
     long record (:class:`~gonio.analysis.noise.stream.Record`) is returned as it is, checked
     piece by piece: the functions given one read it by slices."""
-    if isinstance(x, Record):               # a long record, read in pieces (issue 26)
+    if isinstance(x, Record):               # a long record, read in pieces
         x.check_finite(name)
         return x
     a = np.asarray(x, dtype=np.float64).ravel()

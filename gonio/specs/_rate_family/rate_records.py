@@ -95,11 +95,10 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
     distance from s to the upper end (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`),
     the guard band of the decision rule, so a guarded upper limit is the upper end.
 
-    Before issue 24 the χ² half-width was entered as a normal type-B term with k = 2 and
-    expanded again by t₉₅: u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2 (the coverage study's
-    sd z 0.17). Until the review of stop 30, U reached the two-sided limit s·√(ν/χ²_0.025,ν),
-    which σ stays below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s →
-    3.415·s).
+    Two readings this rule replaces: the χ² half-width entered as a normal type-B term with
+    k = 2 and expanded again by t₉₅ (u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2; the coverage
+    study's sd z 0.17), and U reaching the two-sided limit s·√(ν/χ²_0.025,ν), which σ stays
+    below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s → 3.415·s).
 
     >>> u = std_dev_uncertainty(1.0, 2, "K_r")
     >>> round(u.u_c, 3), round(u.U, 3), u.k, [round(x, 3) for x in u.interval]
@@ -236,9 +235,54 @@ class SegmentMean:
     freq_hz: float
 
 
+#: Columns measured alongside the output by a sensor that may log on some rows only (a slow
+#: chamber logger writes every n-th row): the blank rows are filled by :func:`fill_measured`.
+MEASURED_COLUMNS = ("temperature_c", "supply_v")
+
+
+def _interp_blanks(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    ok = np.isfinite(v)
+    if ok.all() or not ok.any():
+        return v
+    order = np.argsort(t[ok], kind="stable")
+    out = v.copy()
+    out[~ok] = np.interp(t[~ok], t[ok][order], v[ok][order])
+    return out
+
+
+def fill_measured(d: pd.DataFrame, col: str) -> np.ndarray:
+    """``col`` of the rows ``d`` (one test) with each blank cell given the value interpolated
+    linearly in time between the logged rows of its own segment (test, run, step: one set
+    point), held at the segment's first or last logged value beyond them; a segment logged on
+    no row takes the same interpolation over its run's logged rows (one run: one chamber set
+    point of the temperature tests), a run logged on no row over the test's. A chamber temperature
+    logged on every n-th row thus reads, at every row, what the logger saw then
+    (docs/formats.md#which-cells-may-be-empty). A column logged on no row of the test stays
+    blank (the items that need it say so).
+
+    >>> d = pd.DataFrame({"time_s": [0.0, 1.0, 2.0, 3.0, 4.0, 5.0], "run": [0] * 6,
+    ...                   "step": [0, 0, 0, 0, 1, 1],
+    ...                   "temperature_c": [math.nan, 20.0, math.nan, 22.0, math.nan, 70.0]})
+    >>> fill_measured(d, "temperature_c").tolist()
+    [20.0, 20.0, 21.0, 22.0, 70.0, 70.0]
+    """
+    v = pd.to_numeric(d[col], errors="coerce").to_numpy(dtype=float)
+    if np.isfinite(v).all():
+        return v
+    t = pd.to_numeric(d["time_s"], errors="coerce").to_numpy(dtype=float)
+    out = v.copy()
+    for keys in (["run", "step"], ["run"]):
+        for idx in d.groupby(keys, sort=False).indices.values():
+            out[idx] = _interp_blanks(t[idx], out[idx])
+    return _interp_blanks(t, out)
+
+
 def segment_means(df: pd.DataFrame, test: str) -> list[SegmentMean]:
-    """Per-segment means of ``test``, ordered by run then step."""
+    """Per-segment means of ``test``, ordered by run then step; a segment's temperature and
+    supply voltage are those of its first row (blank cells filled by :func:`fill_measured`)."""
     d = df[df["test"] == test]
+    if any(d[c].isna().any() for c in MEASURED_COLUMNS if c in d):
+        d = d.assign(**{c: fill_measured(d, c) for c in MEASURED_COLUMNS if c in d})
     out = []
     for (run, step), g in d.groupby(["run", "step"], sort=True):
         y = g["output"].to_numpy()
@@ -275,7 +319,7 @@ def static_output(df: pd.DataFrame):
 def static_rate_dph(df: pd.DataFrame, null_output: float, scale_factor: float):
     """The static record (test ``static``) as a rate in °/h, (output − null)/K, and its
     sampling interval in s (from the first and last time stamps). A long record is a
-    :class:`~gonio.analysis.noise.stream.Record` (bounded memory, issue 26) with the same
+    :class:`~gonio.analysis.noise.stream.Record` (bounded memory) with the same
     numbers, which the noise items read piece by piece."""
     # the two columns only, never a copy of the whole frame (a long static record)
     rows = first, count, idx = _static_rows(df)

@@ -244,7 +244,10 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
                     clauses, "a setting present in some rows of a segment only")
            for i in np.flatnonzero(absent_odd)]
     if col in MEASURED:
-        out = [Finding(**{**f.to_json(), "action": "flagged"}) for f in out]
+        sparse = _sparse_logged(df, present, col, file, clauses)
+        tests = {f.test for f in sparse}
+        out = sparse + [Finding(**{**f.to_json(), "action": "flagged"}) for f in out
+                        if f.test not in tests]
     else:
         out += _setting_ties(df, key, v, col, file, clauses)
     med = v.groupby(key).transform("median")
@@ -258,6 +261,36 @@ def _setting_rule(df: pd.DataFrame, key: pd.Series, col: str, file, clauses) -> 
                            f"segment's {med.iloc[i]:.10g} (limit {lim.iloc[i]:.3g})",
                            df.iloc[i], col, file, clauses,
                            "|x − median| > max(10·1.4826·MAD, tolerance)") for i in bad]
+
+
+#: A measured column logged on every n-th row of a test (n ≥ 2) on at least this share of the
+#: gaps between its logged rows is a slow logger's cadence, not a typo.
+SPARSE_REGULAR_SHARE = 0.9
+
+
+def _sparse_logged(df, present: pd.Series, col: str, file, clauses) -> list[Finding]:
+    """One flagged ``measured-sparse`` finding per test whose ``col`` (MEASURED) is logged on
+    every n-th row (a slow chamber logger, blank between): the blank rows take the value
+    interpolated in time within their segment (:func:`gonio.specs._rate_family.rate_records.
+    fill_measured`), instead of one finding per row."""
+    out = []
+    for test, idx in df.groupby("test", sort=False).indices.items():
+        p = present.to_numpy()[idx]
+        logged = np.flatnonzero(p)
+        if logged.size < 2 or 2 * logged.size >= idx.size:     # a tie or more: no cadence
+            continue
+        gaps = np.diff(logged)
+        n = int(np.median(gaps))
+        if n < 2 or np.mean(gaps == n) < SPARSE_REGULAR_SHARE:
+            continue
+        row = df.iloc[idx[logged[0]]]
+        f = _finding("measured-sparse", f"{test}: {col} logged on 1 row in {n} ({logged.size} "
+                     f"of {idx.size} rows); each blank row takes the value interpolated in time "
+                     "between the logged rows of its segment", row, col, file, clauses,
+                     f"a measured column logged on every n-th row (n ≥ 2, on ≥ "
+                     f"{SPARSE_REGULAR_SHARE:.0%} of the gaps)")
+        out.append(Finding(**{**f.to_json(), "action": "flagged"}))
+    return out
 
 
 def _setting_ties(df, key, v, col, file, clauses) -> list[Finding]:

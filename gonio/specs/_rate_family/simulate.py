@@ -54,7 +54,7 @@ def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True):
     (normal, their certificates' u), the chamber's deviation per set point (uniform,
     ±2 °C) and the gyro's misalignment in its fixture (uniform, ±0.05° about body x and
     y); :func:`gonio.bench.equipment.draw_equipment`. Held at one value instead, a type-B
-    error cannot spread z, and a U made of it always looks over-wide (issue 24).
+    error cannot spread z, and a U made of it always looks over-wide.
     ``draw_equipment=False``: the bench file's one realisation in every trial."""
     b = load_rate_bench(name)
     g = replace(b.gyro, warmup_bias_dps=0.0, thermal_tau_s=1.0, cross_axis_x=0.0,

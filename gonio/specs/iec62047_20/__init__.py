@@ -13,14 +13,9 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
+from gonio.specs import lazy
 from gonio.specs._rate_family import rate_specification
-from gonio.specs._rate_family.screening import screened, screening_extra
-from gonio.specs.iec62047_20 import items as _items
-from gonio.specs.iec62047_20.screen import screen
-from gonio.specs.iec62047_20.protocol import KEY, IECProtocol, load_protocol, t_base
-from gonio.specs._rate_family.rate_records import (calibrate_items, metadata_number,
-                                                   protocol_named, RateCalibrationResult,
-                                                   load_readings, source_info)
+from gonio.specs.iec62047_20.keys import ITEM_ROWS, KEY
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
 TITLE_ZH = "IEC 62047-20:2014 半导体器件 微机电器件 第20部分：陀螺仪（测量方法）"
@@ -60,6 +55,14 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
               monte_carlo_trials: int = 0, findings: list | None = None,
               **options) -> RateCalibrationResult:
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
+    from gonio.specs._rate_family.rate_records import (RateCalibrationResult, calibrate_items,
+                                                       load_readings, metadata_number,
+                                                       protocol_named, source_info)
+    from gonio.specs._rate_family.screening import screened, screening_extra
+    from gonio.specs.iec62047_20 import items as _items
+    from gonio.specs.iec62047_20.protocol import IECProtocol, load_protocol, t_base
+    from gonio.specs.iec62047_20.screen import screen
+
     rd = load_readings(readings)
     spec = rd.metadata.get("spec", KEY)
     if spec != KEY:
@@ -107,8 +110,9 @@ STUDY_PROGRAMME = {
 
 SPEC = rate_specification(
     "gonio.specs.iec62047_20", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
-    clause_doc="docs/iec62047-20-readings.md", clauses=tuple(r[2] for r in _items.ITEMS),
-    item_keys=tuple(r[0] for r in _items.ITEMS),
-    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, screen=screen,
+    clause_doc="docs/iec62047-20-readings.md", clauses=tuple(r[2] for r in ITEM_ROWS),
+    item_keys=tuple(r[0] for r in ITEM_ROWS),
+    default_protocol=KEY, load_protocol=lazy("gonio.specs.iec62047_20.protocol:load_protocol"),
+    calibrate=calibrate, screen=lazy("gonio.specs.iec62047_20.screen:screen"),
     budget=None,
     stream=1, reduced=STUDY_PROGRAMME)

@@ -25,6 +25,7 @@ from gonio.physics.alignment import input_axis_enu
 from gonio.specs._rate_family.rate_records import (Item, RateContext, std_dev_uncertainty, static_output, static_rate_dph, gum, not_measured, segment_means,
                                          segment_samples, Uncertainty)
 from gonio.units import S_PER_H
+from gonio.specs.iec62047_20.keys import ITEM_ROWS
 from uncertainty import from_u, type_b, welch_satterthwaite
 
 
@@ -184,7 +185,7 @@ def slope_noise_u(x: np.ndarray, u_y: np.ndarray) -> float:
     The slope's residual standard error √(RSS/(n − 2)/Sxx) is not used: the residuals of the
     2n + 1 points are mostly the gyro's nonlinearity, which the clause's a_BASE (a
     least-squares slope over those rates, by definition) contains and does not err by;
-    on the bench it made U(a_BASE) ≈ 5× the spread (issue 24, docs/iec62047-20-readings.md).
+    on the bench it made U(a_BASE) ≈ 5× the spread (docs/iec62047-20-readings.md).
 
     >>> round(slope_noise_u(np.array([-1.0, 0.0, 1.0]), np.array([0.1, 0.1, 0.1])), 6)
     0.070711
@@ -1146,31 +1147,10 @@ def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
 
 
 #: The characteristics in the order of Table 4: (key, title, clause, function).
-ITEMS = (
-    ("scale_factor", "scale factor a_BASE", "5.1.3.1", scale_factor),
-    ("initial_sf_variation", "initial scale-factor variation", "5.1.3.2", initial_sf_variation),
-    ("sf_temperature_coefficient", "scale-factor temperature coefficient", "5.1.3.4", sf_temperature),
-    ("ratiometric_error", "scale-factor ratiometric error", "5.1.3.5", ratiometric),
-    ("linearity", "linearity", "5.1.3.6", linearity),
-    ("sf_stability", "scale-factor stability", "5.1.3.7", sf_stability),
-    ("symmetry", "scale-factor symmetry", "5.1.3.8", symmetry),
-    ("cross_axis", "cross-axis sensitivity", "5.2", cross_axis),
-    ("bias", "bias N_bias", "5.3.3.1", bias),
-    ("initial_bias_variation", "initial bias variation", "5.3.3.2", initial_bias_variation),
-    ("bias_repeatability", "bias repeatability", "5.3.3.4", bias_repeatability),
-    ("bias_drift_after_power_on", "bias drift after power on", "5.3.3.5", bias_drift_after_power_on),
-    ("bias_temperature_coefficient", "bias temperature coefficient", "5.3.3.6", bias_temperature),
-    ("bias_ratiometric_error", "bias ratiometric error", "5.3.3.3", bias_ratiometric),
-    ("bias_hysteresis", "bias hysteresis", "5.3.3.7", bias_hysteresis),
-    ("g_sensitivity", "linear g sensitivity", "5.3.3.8", g_sensitivity),
-    ("startup_time", "start-up time", "5.3.3.9", startup_time),
-    ("inband_noise", "in-band noise", "5.4.5.1 b)", inband_noise),
-    ("broadband_noise", "broadband noise", "5.4.5.1 c)", broadband_noise),
-    ("arw", "angular random walk", "5.4.5.2", arw),
-    ("bias_instability", "bias instability", "5.4.5.3", bias_instability),
-    ("frequency_band", "frequency band", "5.5", frequency_band),
-    ("resolution", "resolution", "5.6", resolution),
-)
+#: The function of each item whose name is not its key.
+_FUNCTION_OF = {"sf_temperature_coefficient": sf_temperature, "ratiometric_error": ratiometric, "bias_temperature_coefficient": bias_temperature, "bias_ratiometric_error": bias_ratiometric}
+ITEMS = tuple((key, title, clause, _FUNCTION_OF.get(key) or globals()[key])
+              for key, title, clause in ITEM_ROWS)
 
 #: What each item needs computed before it (gonio.specs.item_order orders them): every
 #: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1).

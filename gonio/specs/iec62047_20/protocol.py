@@ -23,7 +23,7 @@ from gonio.protocol.programme import calibration_segments as sf_segments
 from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, TEMP_C, read_sections
 from gonio.formats.toml import Field
 
-KEY = "iec62047-20"
+from gonio.specs.iec62047_20.keys import KEY  # noqa: E402  (the one copy)
 
 SCHEMAS = {
     "protocol": {"spec": Field("str"), "name": Field("str", default=""),

@@ -1,4 +1,4 @@
-"""Screening of IEC 62047-20 readings (issue 24): each reading against what the rest of its
+"""Screening of IEC 62047-20 readings: each reading against what the rest of its
 segment predicts, in every column, and the programme of the protocol (a rate point, set
 point, supply voltage, stand angle or record planned and absent is named). The rules are
 those of :mod:`gonio.specs._rate_family.screening`; this module gives them the IEC programme

@@ -13,15 +13,9 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
+from gonio.specs import lazy
 from gonio.specs._rate_family import rate_specification
-from gonio.specs._rate_family.screening import screened, screening_extra
-from gonio.specs.jjf1535 import items as _items_mod
-from gonio.specs.jjf1535.budget import annex_a
-from gonio.specs.jjf1535.screen import screen
-from gonio.specs.jjf1535.protocol import KEY, JJFProtocol, load_protocol
-from gonio.specs._rate_family.rate_records import (calibrate_items, metadata_number,
-                                                   protocol_named, RateCalibrationResult,
-                                                   load_readings, source_info)
+from gonio.specs.jjf1535.keys import ITEM_ROWS, KEY
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
 TITLE_ZH = "JJF 1535-2015 微机电(MEMS)陀螺仪校准规范"
@@ -49,6 +43,9 @@ READINGS_TAKEN = (
 def make_context(rd, proto: JJFProtocol):
     """The :class:`~.items.Context` of a readings file: null, latitude, units from the metadata
     (the protocol's values when the metadata lacks them)."""
+    from gonio.specs._rate_family.rate_records import metadata_number
+    from gonio.specs.jjf1535 import items as _items_mod
+
     md = rd.metadata
     p = proto.sections
     null = metadata_number(md, "null_output",
@@ -79,6 +76,15 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     with the reason; nothing is dropped silently. ``monte_carlo_trials`` > 0 also propagates
     every item's budget by JCGM 101 Monte Carlo and validates the GUM interval against it.
     """
+    from gonio.specs._rate_family.rate_records import (RateCalibrationResult, calibrate_items,
+                                                       load_readings, protocol_named,
+                                                       source_info)
+    from gonio.specs._rate_family.screening import screened, screening_extra
+    from gonio.specs.jjf1535 import items as _items_mod
+    from gonio.specs.jjf1535.budget import annex_a
+    from gonio.specs.jjf1535.protocol import JJFProtocol, load_protocol
+    from gonio.specs.jjf1535.screen import screen
+
     rd = load_readings(readings)
     spec = rd.metadata.get("spec", KEY)
     if spec != KEY:
@@ -115,8 +121,9 @@ STUDY_PROGRAMME = {
 
 SPEC = rate_specification(
     "gonio.specs.jjf1535", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,
-    clause_doc="docs/jjf1535-readings.md", clauses=tuple(r[2] for r in _items_mod.ITEMS),
-    item_keys=tuple(r[0] for r in _items_mod.ITEMS),
-    default_protocol=KEY, load_protocol=load_protocol, calibrate=calibrate, screen=screen,
-    budget=annex_a,
+    clause_doc="docs/jjf1535-readings.md", clauses=tuple(r[2] for r in ITEM_ROWS),
+    item_keys=tuple(r[0] for r in ITEM_ROWS),
+    default_protocol=KEY, load_protocol=lazy("gonio.specs.jjf1535.protocol:load_protocol"),
+    calibrate=calibrate, screen=lazy("gonio.specs.jjf1535.screen:screen"),
+    budget=lazy("gonio.specs.jjf1535.budget:annex_a"),
     stream=0, reduced=STUDY_PROGRAMME)

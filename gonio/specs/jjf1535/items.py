@@ -28,6 +28,7 @@ from gonio.analysis.noise.stream import value_range
 from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
                                      sf_calibration_means, std_dev_uncertainty, Uncertainty)
 from gonio.units import S_PER_H
+from gonio.specs.jjf1535.keys import ITEM_ROWS
 from uncertainty import from_u, type_b
 
 
@@ -728,25 +729,8 @@ def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
 
 
 #: Table 3 in order: (key, title, clause, function).
-ITEMS = (
-    ("scale_factor", "scale factor K", "7.2.1", scale_factor),
-    ("nonlinearity", "scale-factor nonlinearity K_n", "7.2.2", nonlinearity),
-    ("asymmetry", "scale-factor asymmetry K_a", "7.2.3", asymmetry),
-    ("sf_repeatability", "scale-factor repeatability K_r", "7.2.4", sf_repeatability),
-    ("sf_temperature_sensitivity", "scale-factor temperature sensitivity K_t", "7.2.5",
-     sf_temperature_sensitivity),
-    ("threshold", "threshold", "7.2.6", threshold),
-    ("resolution", "resolution", "7.2.7", resolution),
-    ("bias", "bias B_0", "7.2.8", bias),
-    ("warmup_time", "warm-up time", "7.2.9", warmup_time),
-    ("bias_stability", "bias stability B_s", "7.2.10", bias_stability),
-    ("bias_repeatability", "bias repeatability B_r", "7.2.11", bias_repeatability),
-    ("g_sensitivity", "bias acceleration sensitivity B_g", "7.2.12", g_sensitivity),
-    ("angle_random_walk", "angle random walk ARW", "7.2.13", angle_random_walk),
-    ("bias_temperature_sensitivity", "bias temperature sensitivity B_t", "7.2.14",
-     bias_temperature_sensitivity),
-    ("bandwidth", "bandwidth B_w", "7.2.15", bandwidth),
-)
+#: (key, title, clause, function): each item's function has the item's name.
+ITEMS = tuple((key, title, clause, globals()[key]) for key, title, clause in ITEM_ROWS)
 
 
 #: Items that are non-negative by their definition (a maximum of absolute values, a standard

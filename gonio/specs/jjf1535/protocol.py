@@ -23,7 +23,7 @@ from gonio.protocol.programme import calibration_segments as sf_segments
 from gonio.protocol.rate import NNFLOAT, PFLOAT, PINT, TEMP_C, rate_series, read_sections
 from gonio.formats.toml import Field
 
-KEY = "jjf1535-2015"
+from gonio.specs.jjf1535.keys import KEY  # noqa: E402  (the one copy)
 
 SCHEMAS = {
     "protocol": {"spec": Field("str"), "name": Field("str", default=""),

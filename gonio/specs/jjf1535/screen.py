@@ -1,4 +1,4 @@
-"""Screening of JJF 1535 readings (issue 24): each reading against what the rest of its
+"""Screening of JJF 1535 readings: each reading against what the rest of its
 segment predicts, in every column, and the programme of the protocol (a rate point, record
 or position planned and absent is named). The rules are those of
 :mod:`gonio.specs._rate_family.screening`; this module gives them the JJF programme

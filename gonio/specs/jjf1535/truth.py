@@ -45,7 +45,7 @@ def block_mean_moments(bench: RateBench, dt: float, n_blocks: int, P: int,
     (N²/dt per sample), each Gauss–Markov term of the bias-instability sum (σ² a^|k|), the
     rate random walk (q²·min(t_i, t_j), from power-on).
 
-    The only moments the truths need, in O(n_blocks + P) time and memory (issue 26: the
+    The only moments the truths need, in O(n_blocks + P) time and memory (the
     n×n matrix and its P×P inner sums took 3 GB and more for ``stability_block_samples =
     100000`` or a long record). Each GM term's matrix depends on the lag only, the random
     walk's off-diagonal entries on the earlier block only, so both sums are written by lag;

@@ -12,11 +12,8 @@ tables, certificate, DCC, demo); :mod:`.commands` its own ``gonio`` sub-commands
 reading is ``docs/draft-readings.md``.
 """
 
-from gonio.protocol import load_protocol
 from gonio.specs import Coverage, Specification, lazy
-from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.specs.ogam_draft.calibration import calibrate, screen
-from gonio.specs.ogam_draft.items import ITEM_KEYS
+from gonio.specs.ogam_draft.keys import ITEM_KEYS
 
 SPEC = Specification(
     key="ogam-draft",
@@ -28,12 +25,12 @@ SPEC = Specification(
     item_keys=tuple(ITEM_KEYS),
     default_protocol="ogam-draft",
     default_bench="rlg",
-    load_protocol=load_protocol,
-    calibrate=calibrate,
-    screen=screen,
+    load_protocol=lazy("gonio.protocol:load_protocol"),
+    calibrate=lazy("gonio.specs.ogam_draft.calibration:calibrate"),
+    screen=lazy("gonio.specs.ogam_draft.calibration:screen"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
-    budget=annex_a_budget,
+    budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),
     coverage=Coverage(engine="cases", stream=0,
                       study=lazy("gonio.specs.ogam_draft.study:plan_study"),
                       options=frozenset({"cases", "truth", "extra_components", "u_scale",

@@ -92,7 +92,7 @@ def readings_taken(repeatability_source: str) -> list[str]:
 
 @dataclass(frozen=True)
 class Conflict:
-    """A setting given differently in two places, and which value was used (defect 5)."""
+    """A setting given differently in two places, and which value was used."""
 
     setting: str
     file_value: object
@@ -370,7 +370,7 @@ def file_protocol_name(path: str | Path) -> str | None:
 
 def resolve_protocol(readings_path: str | Path | None, metadata_name: str | None,
                      protocol: str | Path | Protocol | None) -> tuple[Protocol, list[Conflict]]:
-    """The protocol to use, by :data:`PRECEDENCE_RULE` (defect 5 of issue 12).
+    """The protocol to use, by :data:`PRECEDENCE_RULE`.
 
     An explicit ``protocol`` (the command line's ``--protocol``) wins; a different
     ``# protocol:`` in the readings file is reported as a conflict. Without one, the
@@ -528,7 +528,7 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
                      monte_carlo_trials: int = 0, seed: int = 0
                      ) -> tuple[AnnexABudget, str, list[str]]:
     """E's budget: the draft's four Annex A lines, plus, for ``kind="physical"``, the lines
-    the validation showed to matter (issue 12):
+    the validation showed to matter:
 
     - ``tilt_E``: the tilt × Earth-rate coupling at the site's latitude (metadata
       ``latitude_deg``; the equator's, the worst case, when not stated) with the tilt
@@ -666,10 +666,12 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     mpe = settings["table_mpe_arcsec"]
     out = {}
     sf = results.scale_factor
+    k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
     if sf.measured:
         t = sf.table
         out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
-                                                     mpe, k=k_fixed)
+                                                     mpe, k=k_fixed,
+                                                     tilt_bias_arcsec_per_deg=k_tilt)
         if results.scale_factor_nonlinearity.measured:
             out["scale_factor_nonlinearity"] = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed)
@@ -702,9 +704,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     u_r = float(budget.parameters["repeatability_arcsec"])
     drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
     df = readings.data
-    k_u_rel = float(out["scale_factor"].u_c / abs(float(sf.value))) \
-        if "scale_factor" in out and float(sf.value) else 0.0
-    k_tilt = _scale_factor_tilt(results, readings, protocol, budget)
+    # the tilt bias of K enters the consistencies by their own K_tilt line, not through u(K)
+    k_u_rel = iu.without_tilt_u_rel(out["scale_factor"]) if "scale_factor" in out else 0.0
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
         if not c.measured:

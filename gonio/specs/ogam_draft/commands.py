@@ -19,18 +19,9 @@ from __future__ import annotations
 import json
 import math
 
-from gonio.analysis.equal_division import EdaResult, equal_division_from_readings
-from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
 from gonio.atomic import check_output_file
-from gonio.cli.checks import LARGE, float_range, int_range, positive_magnitude
+from gonio.cli.checks import LARGE, float_range, int_range, json_safe, positive_magnitude
 from gonio.errors import GonioError, check_input_file
-from gonio.formats.jsonsafe import json_safe
-from gonio.formats.override import read_override
-from gonio.formats.readings import read_readings, write_readings
-from gonio.formats.streams import StreamFile
-from gonio.physics.tilt import elliptic_extreme, rigid_extreme
-from gonio.protocol import load_protocol
-from gonio.reduce import reduce_stream
 
 
 # --------------------------------------------------------------------------- gonio reduce
@@ -64,9 +55,14 @@ def run_reduce(args) -> int:
     check_input_file(args.stream, "stream file")
     check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
                       force=args.force, protected=True)
+    from gonio.formats.override import read_override
+    from gonio.formats.readings import write_readings
+    from gonio.formats.streams import StreamFile
     from gonio.progress import status
-
+    from gonio.protocol import load_protocol
+    from gonio.reduce import reduce_stream
     from gonio.specs.ogam_draft import SPEC
+
     proto = load_protocol(args.protocol or SPEC.default_protocol)
     override = read_override(args.override) if args.override else None
     status(f"reduce: reading {args.stream}")
@@ -111,6 +107,8 @@ def add_tilt(subparsers) -> None:
 
 def run_tilt(args) -> int:
     """Compute and print the extreme tilt error."""
+    from gonio.physics.tilt import elliptic_extreme, rigid_extreme
+
     t = args.tilt_deg
     if not (math.isfinite(t) and 0.0 <= t < 90.0):
         raise GonioError(f"--tilt-deg: must satisfy 0 <= tilt < 90 degrees, got {t}")
@@ -150,6 +148,9 @@ def add_tilt_estimate(subparsers) -> None:
 
 def run_tilt_estimate(args) -> int:
     """Read the file, estimate, print."""
+    from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
+    from gonio.formats.readings import read_readings
+
     r = read_readings(args.file)
     e = tilt_estimate_from_readings(r, args.scale_factor, args.latitude_deg, args.u_latitude_deg)
     if args.json:
@@ -194,8 +195,9 @@ def add_eda(subparsers) -> None:
     p.set_defaults(func=run_eda)
 
 
-def eda_text(res: EdaResult) -> str:
-    """The printed form of an equal-division result (tables, closure, coupling)."""
+def eda_text(res) -> str:
+    """The printed form of an equal-division result (an
+    :class:`~gonio.analysis.equal_division.EdaResult`: tables, closure, coupling)."""
     out = [f"equal-division averaging (IEC 62047-20 Annex A.3): n = {res.n_starts} starts, "
            f"m = {res.m_points} points ({res.step_deg:g}° step), {res.repeats} repeat(s)",
            f"residual std {res.residual_std_arcsec:.4f}″, dof {res.dof}, gauge {res.gauge}, "
@@ -227,7 +229,10 @@ def eda_text(res: EdaResult) -> str:
 
 def run_eda(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
+    from gonio.analysis.equal_division import equal_division_from_readings
     from gonio.atomic import check_output_files
+    from gonio.formats.readings import read_readings
+    from gonio.protocol import load_protocol
     from gonio.report.figure_files import FIGURE_FORMATS
 
     if args.plot is not None:      # before the work: place, suffix, data file, another set's

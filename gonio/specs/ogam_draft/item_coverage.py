@@ -1,4 +1,4 @@
-"""Coverage of every item's uncertainty on the virtual bench (issue 12, clause 8): what the
+"""Coverage of every item's uncertainty on the virtual bench (clause 8): what the
 optical draft's study (:mod:`gonio.specs.ogam_draft.study`) feeds the generic coverage
 statistics (:mod:`gonio.analysis.coverage`).
 

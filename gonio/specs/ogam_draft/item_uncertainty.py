@@ -285,7 +285,8 @@ def _single_round_u(k_i: np.ndarray, theta_deg: np.ndarray, table_mpe_arcsec: fl
 
 
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
-                        k: float | None = None) -> ItemUncertainty:
+                        k: float | None = None,
+                        tilt_bias_arcsec_per_deg: float = 0.0) -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
@@ -293,6 +294,13 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     independent between stops: u = (1/n)√Σ(K_i u(θ)/θ_i)²; the count quantisation,
     triangular ±1 count (two floored counter readings): u = (1/n)√Σ(u_C/θ_i)². The
     Type A scatter also holds the random part of the other two (conservative).
+
+    ``tilt_bias_arcsec_per_deg`` (A_K of :func:`gonio.budget.extra.scale_factor_tilt_bias`,
+    at the tilt bound of A.1): the sensing plane tilted by ψ against the table couples the
+    Earth rate into every 7.1 round, a bias of K that is the same in every round (the Type A
+    scatter does not see it) and whose sign depends on the tilt's unknown azimuth: the
+    ``K_tilt`` line, arcsine with half-width |K|·A_K/3600 (A_K″ per degree of angle is a
+    relative error A_K/3600 of K). It is not in the draft's budget (``beyond_standard``).
 
     Examples
     --------
@@ -328,7 +336,21 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     # from_u marks distribution "normal"; the table and quantisation lines are not normal
     lines[-2] = _Line(_as_dist(lines[-2].q, "rectangular"), *_rest(lines[-2]))
     lines[-1] = _Line(_as_dist(lines[-1].q, "triangular"), *_rest(lines[-1]))
+    if tilt_bias_arcsec_per_deg:
+        a_k = float(tilt_bias_arcsec_per_deg)
+        lines.append(_Line(type_b("K_tilt", 0.0, abs(float(np.mean(k_i))) * a_k / ARCSEC_PER_DEG,
+                                  "arcsine",
+                                  source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
+                                         f"{a_k:.3g}″/° at the A.1 bound, worst azimuth"),
+                           "tilt bias of K", True, "A.1 applied to 7.1"))
     return _budget("scale_factor", "counts/deg", float(np.mean(k_i)), lines, k=k)
+
+
+def without_tilt_u_rel(b: ItemUncertainty) -> float:
+    """u(K)/K of a :func:`scale_factor_budget` less its ``K_tilt`` line: the part of u(K) an
+    item that carries the tilt bias of K by its own ``K_tilt`` line takes as normal."""
+    u2 = b.u_c ** 2 - sum(c.u ** 2 for c in b.components if c.symbol == "K_tilt")
+    return math.sqrt(max(u2, 0.0)) / abs(b.value) if b.value else 0.0
 
 
 def _rest(ln: _Line):

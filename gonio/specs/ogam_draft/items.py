@@ -38,14 +38,11 @@ import pandas as pd
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, S_PER_H  # noqa: F401
 from gonio.formats.readings import Readings, metadata_float
+from gonio.specs.ogam_draft.keys import ITEM_KEYS  # noqa: F401  (the seven, in Annex B order)
 
 #: Positions of different conditions (7.6, 7.7) are matched on table_deg rounded to this many decimals.
 POSITION_DECIMALS: int = 2
 
-#: The seven characteristics of clause 7, in Annex B order (the one copy of this list).
-ITEM_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
-                              "angle_deviation", "repeatability", "rate_consistency",
-                              "pointing_consistency")
 #: The keys of the validation records: the seven, with the draft's and the model's readings
 #: of the zero stability and the angle deviation beside them.
 RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",

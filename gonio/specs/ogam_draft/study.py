@@ -17,7 +17,7 @@ Contents
 :func:`gonio.analysis.coverage.coverage`, :func:`~gonio.analysis.coverage.binomial_u` coverage
                               fraction and its uncertainty
 
-The question asked (issue 3): a calibration on the virtual bench states, at each
+The question asked: a calibration on the virtual bench states, at each
 calibration point i, E_i (mean over the 10 series of 7.4/7.5, as
 :mod:`gonio.specs.ogam_draft.items` computes it) with the expanded uncertainty U of Annex A
 (k = 2, u(r) from the calibration's own 7.5 data). How often is |E_i − truth_i| ≤ U?

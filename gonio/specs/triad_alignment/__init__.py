@@ -9,10 +9,12 @@ K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.
 reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
 """
 
-from gonio.formats.triad import FORMAT, named_inputs
 from gonio.specs import Specification, lazy
-from gonio.specs.triad_alignment.calibration import (article_budget, calibrate, item_keys,
-                                                     screen_files)
+from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, THERMAL_POINT_KEYS
+
+#: ``gonio.formats.triad.FORMAT``, written here so that loading ``SPEC`` imports no reader
+#: (tests/test_cli_startup.py checks that the two agree).
+FORMAT = "gonio-triad-readings/1"
 
 
 def _simulate(out, *, protocol="triad-alignment", bench="mems-triad", seed: int = 0):
@@ -33,17 +35,17 @@ SPEC = Specification(
     clause_doc="docs/alignment.md",
     default_protocol="triad-alignment",
     default_bench="mems-triad",
-    calibrate=calibrate,
-    screen=screen_files,
+    calibrate=lazy("gonio.specs.triad_alignment.calibration:calibrate"),
+    screen=lazy("gonio.specs.triad_alignment.calibration:screen_files"),
     simulate=_simulate,
     truth=lazy("gonio.specs.triad_alignment.truth:truth"),
-    budget=article_budget,
+    budget=lazy("gonio.specs.triad_alignment.calibration:article_budget"),
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
     readings_format=FORMAT,
-    named_inputs=named_inputs,
+    named_inputs=lazy("gonio.formats.triad:named_inputs"),
     certificate_content="gonio.specs.triad_alignment.certificate",
-    item_keys=item_keys(),
+    item_keys=tuple(ALIGNMENT_KEYS) + THERMAL_POINT_KEYS,
     commands=(("align", "gonio.specs.triad_alignment.commands:add_align"),
               ("thermal-model", "gonio.specs.triad_alignment.commands:add_thermal_model")),
 )

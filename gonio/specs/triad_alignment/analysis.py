@@ -45,6 +45,7 @@ from scipy import stats
 from gonio.physics.earth import earth_rate_enu
 from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
+from gonio.specs.triad_alignment.keys import OFFDIAG  # noqa: F401  (the off-diagonal pairs)
 from gonio.formats.triad import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
 from gonio.analysis.noise.stream import Record, frame_column, rows_where
@@ -188,7 +189,6 @@ def _derived(theta12: np.ndarray) -> np.ndarray:
 
 _DERIVED_SLICES = {"alignment_matrix": slice(0, 9), "scale": slice(9, 12), "psi_rad": slice(12, 15),
                    "phi_rad": slice(15, 21), "cross_axis": slice(21, 27), "bias_dps": slice(27, 30)}
-OFFDIAG = ("xy", "xz", "yx", "yz", "zx", "zy")
 
 
 def gum_propagate(f, x: np.ndarray, cov: np.ndarray, rel_step: float = 1e-6) -> np.ndarray:
@@ -312,7 +312,7 @@ FLICKER_FLOOR: float = math.sqrt(2.0 * math.log(2.0) / math.pi)
 def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
                            horizon_s: float = BIAS_HORIZON_S, tau_d_s: float | None = None
                            ) -> tuple[np.ndarray, np.ndarray]:
-    """Long-term term of the bias b (°/s per gyro) and its degrees of freedom (issue 24).
+    """Long-term term of the bias b (°/s per gyro) and its degrees of freedom.
 
     The fit's u(b) is in-run: it holds for the mean bias over this record. The bias a
     certificate states is meant to hold beyond it, and a gyro's bias wanders (bias

@@ -41,11 +41,11 @@ from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
 from gonio.result.model import Covariance
+from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
 
 KEY = "triad-alignment"
 TITLE_EN = ("Gyro triad: mechanical misalignment budget, electrical alignment and extended "
             "temperature / supply model")
-AXES = "xyz"
 #: Largest ratio of the alignment fit's residual noise to the noise the dwells' own sample
 #: deviations imply before the dwells are called inconsistent (a wrong orientation or sign).
 CONSISTENCY_RATIO = 20.0
@@ -184,20 +184,6 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
                     "test_rate_dps": av.test_rate_dps, "tau_needed_s": av.tau_needed_s,
                     "shortest_dwell_s": av.shortest_dwell_s, "sufficient": av.sufficient})
     return items
-
-
-ALIGNMENT_KEYS = ([f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in AXES]
-                  + [f"S_{n}" for n in OFFDIAG] + [f"L_{n}" for n in OFFDIAG]
-                  + ["averaging_time"])
-
-
-#: The thermal model's certified items (:func:`thermal_items`): the value of each model at
-#: the programme's chamber set points t1, t2 … (ascending) and supply levels v1, v2 …
-#: (ascending) — ``K_<gyro>_t<i>_v<j>``, ``b_<gyro>_t<i>_v<j>``, ``ARW_<gyro>_t<i>``.
-#: (1–99 set points, 1–99 supply levels; fnmatch has no "digits only" repetition).
-_INDEX = ("[1-9]", "[1-9][0-9]")
-THERMAL_POINT_KEYS = tuple(f"{m}_[xyz]_t{i}_v{j}" for m in ("K", "b") for i in _INDEX
-                           for j in _INDEX) + tuple(f"ARW_[xyz]_t{i}" for i in _INDEX)
 
 
 def item_keys() -> tuple[str, ...]:

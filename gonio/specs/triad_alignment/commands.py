@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
-
 from gonio.cli.checks import int_range, seed
 from gonio.errors import GonioError
 
@@ -54,6 +52,8 @@ def _fmt_matrix(m, u, digits=6) -> list[str]:
 def run_align(args) -> int:
     """``gonio align``: the alignment estimate printed (or ``--json``), with the optional
     figure (``--plot``) and page (``--report``); exit code 0."""
+    import numpy as np
+
     from gonio.specs.triad_alignment.analysis import cross_axis_table, estimate_alignment
     from gonio.formats.triad import json_safe, read_triad_readings
 

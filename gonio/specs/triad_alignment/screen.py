@@ -1,4 +1,4 @@
-"""Screening of triad readings: the triad specification's rules (issue 24).
+"""Screening of triad readings: the triad specification's rules.
 
 :func:`screen` returns one :class:`gonio.result.Finding` per reading a rule fired on; every
 rule here refuses (a triad fit has no way to carry a reading it does not trust: one wrong
@@ -126,7 +126,7 @@ def _one_temperature(df: pd.DataFrame, file) -> list[Finding]:
 def _step_gaps(df: pd.DataFrame, file) -> list[Finding]:
     """``programme-point-missing`` (flagged): the rows' ``step`` numbers the programme's rows
     in file order; a jump of more than one is a dwell (or samples) missing from the file —
-    a row lost or deleted — named once per gap (hostile round 3: one alignment dwell
+    a row lost or deleted — named once per gap (one alignment dwell
     removed changed every U with no word)."""
     if "step" not in df or len(df) < 2:
         return []

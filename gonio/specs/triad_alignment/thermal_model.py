@@ -248,7 +248,7 @@ def soak_covariance(x: np.ndarray, r: np.ndarray, groups: np.ndarray
     ν = n − p ("ols"). When the soak means scatter no more than the points within a soak
     (σ̂_b² ≤ 0) MS_b is floored at MS_w, its ν_b kept: the covariance is MS_w (XᵀX)⁻¹ and a
     temperature coefficient keeps ν ≈ ν_b. Pooling into s² with ν = n − p there (as
-    before issue 24) gave the heavy tails of the coverage study: with 8 soaks and up to 5
+    an earlier version did) gave the heavy tails of the coverage study: with 8 soaks and up to 5
     temperature terms ν_b is 3–4, and a shared error the soak means happen to hide (often
     by an order that absorbed the wander) was then certified with k ≈ 2.1
     (docs/thermal-model.md §2, §7)."""
@@ -616,7 +616,7 @@ def lag_interval(cost, grid, vals, tau: float, best: float, cost0: float, n: flo
     and τ̂ (often 0, the search's bound, or a few seconds of noise) is no measured value;
     τ_low = 0 then. τ_high = inf when the sum of squares stays under the threshold up to the
     grid's end (10⁴ s): the ramps bound τ on neither side. The certificate, the report and the
-    figure state the interval, or 'not resolved' with the upper bound (issue 24)."""
+    figure state the interval, or 'not resolved' with the upper bound."""
     limit = best * (1.0 + float(stats.f.ppf(0.95, 1, max(n - 1, 1))) / max(n - 1, 1))
     resolved = cost0 > limit
     vals = np.asarray(vals, float)
@@ -742,7 +742,7 @@ def check_temperature_span(theta_c: np.ndarray, channel: str, readings: TriadRea
     """GonioError unless the soak points of a gyro hold at least two temperatures (1 °C
     apart) and bracket the reference temperature (ϑ = 0): a model from one temperature, or
     its value at a reference outside the temperatures soaked, is an extrapolation that
-    would be certified as a measurement (issue 26: −40 °C only gave K at 25 °C as
+    would be certified as a measurement (−40 °C only gave K at 25 °C as
     49.10 ± 0.39 against 49.69)."""
     ref = float(readings.metadata.get("reference_c", 25.0))
     levels = np.unique(np.round(theta_c))

@@ -1,0 +1,32 @@
+"""The IEC 62047-20 characteristics (clauses 5.1–5.6) without their computation, so that
+loading ``SPEC`` stays light; :data:`.items.ITEMS` pairs each row with its function."""
+
+#: The key of the specification (``--spec``, the readings' ``# spec:`` line).
+KEY = "iec62047-20"
+
+#: (key, title, clause) of every item, in the specification's order (the one copy of this list).
+ITEM_ROWS = (
+    ("scale_factor", "scale factor a_BASE", "5.1.3.1"),
+    ("initial_sf_variation", "initial scale-factor variation", "5.1.3.2"),
+    ("sf_temperature_coefficient", "scale-factor temperature coefficient", "5.1.3.4"),
+    ("ratiometric_error", "scale-factor ratiometric error", "5.1.3.5"),
+    ("linearity", "linearity", "5.1.3.6"),
+    ("sf_stability", "scale-factor stability", "5.1.3.7"),
+    ("symmetry", "scale-factor symmetry", "5.1.3.8"),
+    ("cross_axis", "cross-axis sensitivity", "5.2"),
+    ("bias", "bias N_bias", "5.3.3.1"),
+    ("initial_bias_variation", "initial bias variation", "5.3.3.2"),
+    ("bias_repeatability", "bias repeatability", "5.3.3.4"),
+    ("bias_drift_after_power_on", "bias drift after power on", "5.3.3.5"),
+    ("bias_temperature_coefficient", "bias temperature coefficient", "5.3.3.6"),
+    ("bias_ratiometric_error", "bias ratiometric error", "5.3.3.3"),
+    ("bias_hysteresis", "bias hysteresis", "5.3.3.7"),
+    ("g_sensitivity", "linear g sensitivity", "5.3.3.8"),
+    ("startup_time", "start-up time", "5.3.3.9"),
+    ("inband_noise", "in-band noise", "5.4.5.1 b)"),
+    ("broadband_noise", "broadband noise", "5.4.5.1 c)"),
+    ("arw", "angular random walk", "5.4.5.2"),
+    ("bias_instability", "bias instability", "5.4.5.3"),
+    ("frequency_band", "frequency band", "5.5"),
+    ("resolution", "resolution", "5.6"),
+)
