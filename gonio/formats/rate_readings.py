@@ -189,7 +189,7 @@ def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateRea
         raise GonioError("a row has more fields than the header", file=fname)
     if '"' not in body:
         # a short row (a file cut in its last line: '2501.29' read as '25') is refused; the
-        # CSV reader would fill the missing cells as blanks (hostile round 3)
+        # CSV reader would fill the missing cells as blanks
         _field_counts(lines, i, len(header), fname)
     out = pd.DataFrame({"line": line_no})
     for col in COLUMNS:
@@ -334,7 +334,7 @@ def _saturation_run(y: np.ndarray, ext: float) -> int:
     :data:`SATURATION_RUN`, or longer where the output is so coarsely quantised that equal
     neighbours are common away from that level too (share p of the other samples): the
     length a chance run reaches with probability ≤ 1 % over the file,
-    1 + log(0.01/N)/log p (hostile round 3: a bias record logged to 1 mV with 0.2 mV noise
+    1 + log(0.01/N)/log p (a bias record logged to 1 mV with 0.2 mV noise
     was refused as 'saturated')."""
     other = (y[1:] != ext) & (y[:-1] != ext)
     p = float(np.mean(y[1:][other] == y[:-1][other])) if other.any() else 0.0

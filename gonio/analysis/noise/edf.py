@@ -157,11 +157,11 @@ def _capped(r: np.ndarray, fn, key, d: int, n_phase: float) -> np.ndarray:
     which this branch of the algorithm itself approximates the edf).
 
     The grid depends on the record's length only (through the decade of 1/n), never on
-    the chunk of τ or on the data: before issue 26 a grid
-    was rebuilt for every chunk of 16 384 τ, and how many chunks took this branch
-    depended on the noise type identified at the largest τ (from a few terms, so by
-    chance): 2 s for a white-noise record identified α = 2 there (closed form), 14 s for
-    another of the same length identified α = 1."""
+    the chunk of τ or on the data (an earlier version rebuilt a grid for every chunk of
+    16 384 τ, and how many chunks took this branch depended on the noise type identified
+    at the largest τ, from a few terms, so by chance: 2 s for a white-noise record
+    identified α = 2 there (closed form), 14 s for another of the same length identified
+    α = 1)."""
     if r.size <= _CAPPED_EXACT:
         return fn(r)
     decade = min(math.floor(math.log10(1.0 / float(n_phase))),

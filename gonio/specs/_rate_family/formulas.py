@@ -134,8 +134,8 @@ def std_upper_half_width(s: float, nu: int, p: float = 0.95) -> float:
     [0, s + U] is the statement and its coverage is p; above, s ± U covers p less
     P(σ < s − U), below 4·10⁻⁴ up to ν = 20 (ν = 6: s − U = 0.08·s, P ≈ 10⁻¹⁷⁷).
 
-    Until the review of stop 30 U reached the upper end of the two-sided interval,
-    s·√(ν/χ²_0.025,ν): P(σ ≤ s + U) = 0.975 under a label of 95 %.
+    Not the upper end of the two-sided interval, s·√(ν/χ²_0.025,ν): there
+    P(σ ≤ s + U) = 0.975 under a label of 95 %.
 
     >>> round(std_upper_half_width(1.0, 2), 3)       # √(2/χ²_0.05,2) − 1 = √(2/0.1026) − 1
     3.415

@@ -1,4 +1,4 @@
-"""Screening of rate-gyro readings (JJF 1535, IEC 62047-20; issue 24): every reading is
+"""Screening of rate-gyro readings (JJF 1535, IEC 62047-20): every reading is
 checked against what the rest of its segment predicts, in every column, and the programme
 against the protocol. Each specification's ``screen(readings, protocol)`` calls these rules
 with its own programme; the calibration sets the flagged rows aside and states every
@@ -12,7 +12,7 @@ Rules (one segment = the rows of one test, run and step, in time order):
   point (8–199 rows): |y − its median| > 10·1.4826·max(its MAD, the test's pooled MAD).
 * ``record-damaged`` — more than 5 % (and ≥ 3) of the outputs of a segment of ≥ 20 rows, or in a
   record at least max(5, 0.1 %) of the rows between 5 and 8 robust σ: refused, naming the
-  first (issue 24: bias records full of ±1000 spikes passed with B_s 48 ± 9 for 19 °/h).
+  first (bias records full of ±1000 spikes passed with B_s 48 ± 9 for 19 °/h).
 * ``label-departs`` — ≤ 2 rows whose (test, run, step) differs from that of the rows just
   before and after them: set aside (a typo moving a reading into a segment of its own).
 * ``output-outlier`` of a vibration segment — the output against its two neighbours, r = y_i − (y_{i−1} + y_{i+1})/2:
@@ -126,7 +126,7 @@ def _quantum_floor(y: np.ndarray) -> float:
 
 
 def hampel_residuals(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(d, limit) per sample of a record (issue 24, review of r-jjf: bias records full of
+    """(d, limit) per sample of a record (bias records full of
     ±1000 spikes gave B_s = 48 ± 9 °/h for 19 with no finding — the second-difference rule's
     local scale, median |r|, is itself made of spikes once they are dense):
     d_i = y_i − median(y over the 21 samples around i), limit_i = 8·1.4826·max(median |d|
@@ -297,7 +297,7 @@ def _setting_ties(df, key, v, col, file, clauses) -> list[Finding]:
     """A set column (not MEASURED) with no majority value in a segment (a blank cell reads
     as the column's default, so a column blank on every other row splits its segment half
     and half): which rows are the typos cannot be told, and the items would group them as
-    other points (hostile round 3: ``rate_dps`` blank on every other row made every item
+    other points (``rate_dps`` blank on every other row made every item
     'not measured', with 100 findings of missing points and no word on the cause). Refused,
     once per segment, on its first row off the segment's first value."""
     vals = v.fillna(np.inf).to_numpy()
@@ -380,7 +380,7 @@ def sign_rule(df: pd.DataFrame, file=None, clauses: dict | None = None) -> list[
     """``run-sign-departs``: a run of a scale-factor test whose output falls with the rate
     while the other runs' rises (or the reverse) — rates or outputs of a whole run entered
     with the wrong sign — is refused, naming the run's first line: averaged in, it gives
-    a K of a third of the true one (review of stop 28: K = 2.00 ± 17 for 6.00). A tie
+    a K of a third of the true one (K = 2.00 ± 17 for 6.00 on the bench). A tie
     (as many runs of each sign) names the first run of the sign the first run lacks."""
     clauses = clauses or {}
     out = []
@@ -411,7 +411,7 @@ def quantisation_rule(df: pd.DataFrame, file=None, clauses: dict | None = None
     whose noise is below one step of the output's resolution — the same test as the
     screening's coarse branch of :func:`hampel_residuals`. Its noise and stability items
     then hold the rounding's q/√12 (the acquisition's, not the gyro's): stated, so a
-    certificate never presents it as the gyro's noise (hostile round 3: output logged to
+    certificate never presents it as the gyro's noise (output logged to
     1 mV with 0.2 mV noise, IEC in-band noise 0.0483 for 0.0434 with no word)."""
     clauses = clauses or {}
     key = df.groupby(["test", "run", "step"], sort=False).ngroup()

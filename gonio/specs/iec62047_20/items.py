@@ -148,8 +148,8 @@ def _ws(us, nus) -> float:
 
 def slope_noise_dof(x: np.ndarray, u_y: np.ndarray, nu_y: np.ndarray) -> float:
     """Welch–Satterthwaite degrees of freedom (JCGM 100 G.4.1) of :func:`slope_noise_u`:
-    (Σ w_i² u_i²)² / Σ (w_i² u_i²)²/ν_i, ν_i = the blocks of point i less one. Until the
-    review of stop 30 every slope term was given ν = 50 whatever its points held.
+    (Σ w_i² u_i²)² / Σ (w_i² u_i²)²/ν_i, ν_i = the blocks of point i less one (not a fixed
+    ν = 50 whatever the points hold).
 
     >>> round(slope_noise_dof(np.array([-1.0, 0.0, 1.0]), np.array([0.1, 0.1, 0.1]),
     ...                       np.array([5.0, 5.0, 5.0])), 9)
@@ -459,8 +459,8 @@ def bias(ctx: Context) -> Item:
     acquisition's relative gain uncertainty on the whole output, null included, the chamber's
     deviation at T_BASE (± bound, rectangular) times the bias temperature coefficient of the
     5.3.3.6 visits, the gyro's place in the chamber's volume (± half its uniformity,
-    rectangular) times the same coefficient (e_U; a_BASE and the initial scale-factor
-    variation carry it since stop 30, the bias since its review), and the input axis's
+    rectangular) times the same coefficient (e_U; a_BASE, the initial scale-factor
+    variation and the bias carry it), and the input axis's
     alignment on the horizontal Earth rate."""
     t, cl, un = "bias N_bias", "5.3.3.1", "°/s"
     m = _miss(ctx, "bias", "bias", t, cl, un)

@@ -1,4 +1,4 @@
-"""Gyro-triad electrical alignment and the extended MEMS-gyro model (issue 18).
+"""Gyro-triad electrical alignment and the extended MEMS-gyro model.
 
 Not a standard: a calibration built on the alignment application article ([Looney-alignment]:
 misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis ([Vagner2015]:
