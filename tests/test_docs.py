@@ -262,3 +262,34 @@ def test_dcc_schema_copy_is_the_published_one():
         assert hashlib.sha256((d / name).read_bytes()).hexdigest() == digest, name
     for licence in ("COPYING", "COPYING.LESSER", "W3C-LICENSE"):
         assert (d / licence).stat().st_size > 1000, licence
+
+
+#: Tracker history: issue numbers, attack rounds, defect numbers, reviews of a stop. It
+#: belongs in commit messages, never in the package's text (written in pieces so this file
+#: does not match itself).
+TRACKER = re.compile("|".join((r"\b[Ii]ssues? ?#?\d+", "hostile " + r"round", "attack " + r"round",
+                               r"\b[Dd]efect \d+", r"review of (?:r-\w+|stop \d+)",
+                               r"\bstop \d+\b")))
+
+
+def tracker_history(root: Path) -> list[str]:
+    """One line per mention of tracker history in the package, the engine and protocols."""
+    out = []
+    for sub in ("gonio", "uncertainty", "protocols"):
+        for p in sorted((root / sub).rglob("*")):
+            if p.suffix in (".py", ".toml", ".html") and "__pycache__" not in p.parts:
+                for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1):
+                    m = TRACKER.search(line)
+                    if m:
+                        out.append(f"{p.relative_to(root)}:{n}: {m.group(0)}")
+    return out
+
+
+def test_package_text_carries_no_tracker_history(tmp_path):
+    assert tracker_history(ROOT) == []
+    (tmp_path / "gonio").mkdir()
+    (tmp_path / "gonio" / "m.py").write_text(
+        "# fixed in issue 24\n# the first of 3 stops\n# hostile " + "round 3: x\n"
+        "# (defect 5)\n# clause 7.4, round 3 of the series\n", encoding="utf-8")
+    assert tracker_history(tmp_path) == [
+        "gonio/m.py:1: issue 24", "gonio/m.py:3: hostile " + "round", "gonio/m.py:4: defect 5"]

@@ -73,7 +73,7 @@ def _summarised(kind: str, data):
 
 def screening_notes(res: dict, L: dict, add) -> None:
     """A notice when the screening set data aside or found the programme incomplete
-    (results.json ``findings``; issue 24): the count, then one line per finding."""
+    (results.json ``findings``): the count, then one line per finding."""
     found = [f for f in res.get("findings") or () if f["action"] != "refused"]
     if not found:
         return
@@ -123,7 +123,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
                           k=_num(res, "extra.uncertainty.k", "k", U),
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
         add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
-        ks = unc.get("k_source")                 # issue 12, defect 3: say where k comes from
+        ks = unc.get("k_source")                 # say where k comes from
         if ks:
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
@@ -299,7 +299,7 @@ def _eda_section(res: dict, L: dict, U: float, add) -> None:
                       v=_num(res, "extra.equal_division.closure.full_turn_arcsec",
                              rule_at_U(cl.get("u_full_turn_arcsec")), U),
                       u=_num(res, "extra.equal_division.closure.u_full_turn_arcsec", "U", U)))
-    cp = e.get("coupling")                   # tilt × Earth-rate coupling (issue 12, defect 6)
+    cp = e.get("coupling")                   # tilt × Earth-rate coupling
     if cp:
         txt = cp["note"]
         if cp.get("separable"):

@@ -15,7 +15,7 @@ Contents
 :func:`write_dcc`          ``certificate.dcc.xml`` into a folder, atomically
 =========================  ==============================================================
 
-What the DCC holds (issue 13):
+What the DCC holds:
 
 administrativeData
     the software (gonio and its version); core data (country, languages, the

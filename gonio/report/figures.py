@@ -25,7 +25,7 @@ the specification when it calibrated), the label mapping of
 function draws into the HTML's SVG and into a PDF page.
 An item that was not measured gives an empty panel saying so.
 
-Rules every figure keeps (issue 13): no pyplot and no backend switch (a
+Rules every figure keeps: no pyplot and no backend switch (a
 ``matplotlib.figure.Figure`` is drawn and saved directly, so importing this module
 changes nothing global); no offset or scientific axis labels; legends outside the
 axes, above them, so they never hide data; every number in a legend rounded by the

@@ -238,7 +238,7 @@ LABELS: dict[str, dict[str, str]] = {
     "U_line_p": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}, "
                        "coverage probability {p}",
                  "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}，包含概率{p}"},
-    # where the coverage factor k comes from (issue 12, defect 3; zh gap of issue 13)
+    # where the coverage factor k comes from
     "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
     "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
                 "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},

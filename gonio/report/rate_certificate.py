@@ -215,7 +215,7 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
 
 def screening_blocks(res: dict, L: dict, phrases=(), extra: dict | None = None,
                      limit: int = 20) -> list[Block]:
-    """The screening's findings (readings set aside, planned points missing; issue 24): the
+    """The screening's findings (readings set aside, planned points missing): the
     count, then one line each with its place in the file, in the certificate's language
     (:func:`gonio.report.i18n.finding_text`; ``phrases`` the specification's table);
     nothing when the screening found nothing."""
@@ -253,7 +253,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     chi2 = [k for k, it in res["items"].items()
             if ((it.get("uncertainty") or {}).get("k_source") == "chi-square")]
-    if chi2:                  # a standard deviation of a few repeats (issue 24): U to the χ² limit
+    if chi2:                  # a standard deviation of a few repeats: U to the χ² limit
         add("p", [L["k_chi_square"]])
     blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
     blocks += conformity_section(
@@ -292,7 +292,7 @@ def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc_fn is not None:
             doc = dcc_fn(result, lab=lab_d, cert_id=content["id"])
-            if lang == "zh":                   # Chinese beside English (issue 25)
+            if lang == "zh":                   # Chinese beside English
                 doc = bilingual(doc, dcc_translator(result, content_fn))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc_fn else [])
