@@ -42,6 +42,15 @@ def test_impossible_intervals_are_refused(value, iv):
         state_interval(value, iv)
 
 
+def test_a_dispersion_of_exactly_zero_is_stated_as_zero():
+    """Readings that do not differ at all (a noise-free bench) give s = 0 with the interval
+    [0, 0]: stated as the value, with no interval; a point elsewhere is still refused."""
+    s = state_interval(0.0, (0.0, 0.0), nonnegative=True, unit="°/h")
+    assert s.text() == "0 °/h" and s.interval is None and s.U is None
+    with pytest.raises(GonioError):
+        state_interval(0.0, (0.0, 0.0))                  # a signed quantity: no such interval
+
+
 def test_negative_end_of_non_negative_quantity_refused():
     with pytest.raises(GonioError, match="below zero"):
         state_interval(0.5, (-0.1, 1.0), nonnegative=True)

@@ -446,13 +446,17 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
 
     Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
     holding the value, of zero width, or reaching below zero for a non-negative quantity:
-    no coverage interval is like that.
+    no coverage interval is like that. The one point interval stated is a dispersion of
+    exactly zero ([0, 0] of 0, a non-negative quantity: readings that did not differ at all,
+    as a noise-free bench gives): it is stated as the value alone, "0", with no interval.
 
     >>> state_interval(0.112, (0.0662, 0.2038), p=0.95, unit="arcsec").text()
     '0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)'
     >>> s = state_interval(1.0, (0.0, 4.415), nu_eff=2, p=0.95, nonnegative=True, unit="°/h")
     >>> s.text(), s.U, s.k, s.upper
     ('1.0 °/h; upper bound: ≤ 4.5 °/h (interval [0, 4.5], p ≈ 95 %)', None, None, '4.5')
+    >>> state_interval(0.0, (0.0, 0.0), nonnegative=True, unit="s").text()
+    '0 s'
     >>> state_interval(-5.0, (-6.0, -4.0), nonnegative=True)
     Traceback (most recent call last):
     gonio.errors.GonioError: interval [-6, -4] of -5: a non-negative quantity's interval reaches below zero; not stated
@@ -460,6 +464,8 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     unit_s = unit_text(unit)
     value, lo, hi = float(value), float(interval[0]), float(interval[1])
     where = f"interval [{lo:g}, {hi:g}] of {value:g}"
+    if nonnegative and value == lo == hi == 0.0:
+        return state(0.0, None, nu_eff=nu_eff, unit=unit)     # no dispersion in the readings
     if not all(math.isfinite(x) for x in (value, lo, hi)) or not lo <= value <= hi or lo == hi:
         raise GonioError(f"{where}: a coverage interval must be finite, of positive width "
                          "and hold the value; not stated")
