@@ -108,7 +108,7 @@ def test_item_displays_agree(value, U, k, p):
     st_ = item_statement(item)
     n = item_nums(item, "items.x")
     assert str(n["value"]) == st_.value_text
-    s = stated_item({"x": item}, "x")
+    s = stated_item({"items": {"x": item}}, "x")      # a results.json
     assert str(s["value"]) == st_.value_text
     if st_.U is not None:
         assert str(n["U"]) == st_.U_text == str(s["U"])
