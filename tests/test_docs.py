@@ -6,7 +6,7 @@
     between the documents (``[x](formats.md#y)``, ``[x](#y)``) are checked the same way.
 (b) No file of the package, the protocols, the README or the documents cites the
     project's external sources (the shared digests or seed texts, or anything through a
-    ``../shared`` path); the package, protocols and README also do not cite them by their
+    ``..``-relative path to the reference shelf); the package, protocols and README also do not cite them by their
     old names (the "data-formats" contract, "thesis 004", "seed 00N") or any Markdown
     file outside ``docs/``: a clone of the repository alone must explain every reading.
 
@@ -34,7 +34,7 @@ MD_LINK = re.compile(r"\]\((?P<target>[^)\s]+)\)")
 FORBIDDEN = re.compile("|".join(re.escape(s) for s in (
     "shared" + "/spec", "shared" + "/seeds", "shared" + "/schemas", ".." + "/shared")))
 #: A test reaching for a folder beside the repository (the reference shelf a clone lacks).
-BESIDE_REPO = re.compile(r"""\.parent\s*/\s*["']shared["']|\.\./shared|["']shared/schemas""")
+BESIDE_REPO = re.compile(r"""\.parent\s*/\s*["']shared["']|\.\./""" + "shared" + r"""|["']""" + "shared" + "/schemas")
 #: In the package, protocols and README (not in docs/, which may explain these names):
 #: the old names of the external sources, and any Markdown file that is not a docs/ path.
 FORBIDDEN_IN_CODE = re.compile(
