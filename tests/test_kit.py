@@ -174,3 +174,19 @@ def test_dcc_units_of_a_specification():
     assert compose_dsi("furlong", {"furlong": r"\metre"}) == r"\metre"
     with pytest.raises(GonioError, match="unit 'furlong' has no D-SI form"):
         compose_dsi("furlong")
+
+
+def test_item_loop_reports_an_unstateable_item_as_not_measured():
+    """The kit's item loop keeps the built-ins' rule: a non-negative item whose value + U ≤ 0
+    has no interval the statement rule can state, so it is not measured with the reason (it
+    is never handed to a renderer that would then fail)."""
+    unc = kit.Uncertainty([], 0.5, 1.0, 2.0, None)
+    defs = [kit.ItemDef("n", "noise", "4.5", lambda: kit.Item("n", "noise", "4.5", "mV", -5.0,
+                                                                    uncertainty=unc),
+                        nonnegative=True),
+            kit.ItemDef("s", "signed", "4.6", lambda: kit.Item("s", "signed", "4.6", "mV", -5.0,
+                                                                     uncertainty=unc))]
+    got = kit.calibrate_items(defs)
+    assert not got["n"].measured and "no statement possible" in got["n"].reason
+    assert got["n"].nonnegative
+    assert got["s"].measured and got["s"].value == -5.0          # a signed quantity is stated

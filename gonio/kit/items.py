@@ -18,7 +18,7 @@ from typing import Any, Callable
 from gonio.errors import GonioError
 from gonio.result.model import Item, not_measured
 from gonio.specs import item_order
-from gonio.specs._rate_family.rate_records import monte_carlo_validation
+from gonio.specs._rate_family.rate_records import monte_carlo_validation, stateable
 
 __all__ = ["ItemDef", "calibrate_items"]
 
@@ -58,8 +58,9 @@ def calibrate_items(defs, *args: Any, monte_carlo_trials: int = 0,
     """Every item of ``defs`` (:class:`ItemDef`, in the specification's order) computed from
     ``args``: each after the items it needs (:func:`gonio.specs.item_order`), each inside
     :func:`~gonio.kit.monte_carlo_validation` with ``monte_carlo_trials`` draws (0: the GUM
-    alone). An item whose needs are not measured, or whose ``compute`` raises a
-    :class:`GonioError`, is :func:`~gonio.kit.not_measured` with the reason; any other
+    alone). An item whose needs are not measured, whose ``compute`` raises a
+    :class:`GonioError`, or which the statement rule cannot state (a non-negative quantity
+    with value + U ≤ 0), is :func:`~gonio.kit.not_measured` with the reason; any other
     exception is a bug and propagates. Returned in the order of ``defs``.
 
     >>> from gonio.kit import Item
@@ -86,6 +87,5 @@ def calibrate_items(defs, *args: Any, monte_carlo_trials: int = 0,
                                 f"the data were refused: {exc.message}")
         if not isinstance(item, Item) or item.key != key:
             raise TypeError(f"item {key!r}: compute returned {item!r}, not Item {key!r}")
-        item.nonnegative = item.nonnegative or d.nonnegative
-        done[key] = item
+        done[key] = stateable(item, nonnegative=d.nonnegative)   # as the built-ins do
     return {k: done[k] for k in defs}

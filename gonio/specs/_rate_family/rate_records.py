@@ -204,15 +204,25 @@ def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str,
                                       f"the data were refused: {exc.message}")
     items = {k: items[k] for k in rows}
     for key in items_module.NONNEGATIVE & items.keys():
-        items[key].nonnegative = True
-        try:                       # refused by the statement rule: value + U ≤ 0
-            item_statement(items[key], nonnegative=True)
-        except GonioError as exc:
-            it = items[key]
-            items[key] = not_measured(key, it.title, it.clause, it.unit,
-                                      f"no statement possible: {exc.message}")
-            items[key].nonnegative = True
+        items[key] = stateable(items[key], nonnegative=True)
     return items
+
+
+def stateable(item: Item, *, nonnegative: bool = False) -> Item:
+    """``item`` as the item loop keeps it: marked non-negative where declared, and reported
+    not measured, with the refusal as its reason, where the statement rule can state no
+    interval for it (a non-negative quantity with value + U ≤ 0)."""
+    item.nonnegative = item.nonnegative or nonnegative
+    if not item.measured:
+        return item
+    try:
+        item_statement(item, nonnegative=item.nonnegative)
+    except GonioError as exc:
+        out = not_measured(item.key, item.title, item.clause, item.unit,
+                           f"no statement possible: {exc.message}")
+        out.nonnegative = item.nonnegative
+        return out
+    return item
 
 
 @dataclass(frozen=True)
