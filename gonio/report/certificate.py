@@ -33,7 +33,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
 from gonio.report.figures import FIGURES, figure_svg
-from gonio.report.header import (certificate_id, decision_rule_blocks, meta_text,
+from gonio.report.header import (certificate_id, is_draft, decision_rule_blocks, meta_text,
                                  opening_blocks, signature_blocks)
 from gonio.report.i18n import (budget_source, coverage_text, display, finding_text, labels,
                                reading_note, reason_text, rule_at_U, specification_text)
@@ -160,7 +160,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
     add("h", L["figures"])
     for key, cap, draw in FIGURES:
         add("fig", (key, L[cap], draw))
-    return {"id": certificate_id(res, lab), "virtual": virtual,
+    return {"id": certificate_id(res, lab), "virtual": virtual, "draft": is_draft(lab),
             "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
             "blocks": blocks, "results": res}
 
