@@ -1174,7 +1174,7 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
                     *limits.get(key, (None, None))) for r in rows]
              for key, rows in hist.items()}
     months, _ = default_interval(inst.spec_key)
-    return propose(table, months)
+    return propose(table, months, limited_items=tuple(limits))
 
 
 def due_instruments(store, today: _dt.date | None = None, within_days: int = 30) -> list[dict]:
