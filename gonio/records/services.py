@@ -1154,7 +1154,7 @@ def history(store, instrument_id: int) -> dict:
 
 def instrument_limits(inst: Instrument) -> dict:
     """Item key → (lower, upper) from the instrument's specification limits."""
-    from gonio.report.stated import limits_of
+    from gonio.analysis.conformity import limits_of
 
     out = {}
     for lim in json.loads(inst.limits_json or "[]"):
