@@ -45,7 +45,8 @@ def lab(tmp_path, serve, monkeypatch):
 
     data = tmp_path / "data"
     st = open_store(None, data)
-    for name, roles in (("tech", "technician"), ("rev", "reviewer")):
+    for name, roles in (("tech", "technician"), ("rev", "reviewer"),
+                        ("admin", "admin technician reviewer")):
         services.create_user(st, None, name, PASSWORD, roles, name.upper() + " Person")
     services.set_settings(st, None, lab_name="Example Angle Laboratory",
                           lab_address="1 Example Road\nXi'an")
@@ -111,6 +112,9 @@ def test_new_flows_on_a_phone(lab, browser, bench_readings, tmp_path):  # noqa: 
     base, inst_id, std_id = lab
     shot = Shots()
     page = browser.new_page(viewport=PHONE, accept_downloads=True)
+    page.goto(base + "/login")
+    no_sideways(page)
+    shot(page, "login")
     log_in(page, base, "tech")
     form_url = f"{base}/instruments/{inst_id}/calibrate"
 
@@ -224,3 +228,10 @@ def test_new_flows_on_a_phone(lab, browser, bench_readings, tmp_path):  # noqa: 
         page.goto(base + path)
         no_sideways(page)
         shot(page, path.strip("/").replace("/", "-") or "overview")
+    page.click("form.logout button")
+    log_in(page, base, "admin")
+    for path in ("/users", "/audit", "/certificates/1"):
+        page.goto(base + path)
+        assert page.locator("h1").count() == 1, path
+        no_sideways(page)
+        shot(page, path.strip("/").replace("/", "-"))
