@@ -25,8 +25,9 @@ import pytest
 
 from gonio.records import services
 
-from .test_web_browser import PASSWORD, PROTOCOL, browser, log_in, wait_status  # noqa: F401
-from .test_web_lists import fleet, issued
+from .test_web_browser import (PASSWORD, PROTOCOL, Shots, browser, log_in,  # noqa: F401
+                               wait_status)
+from .test_web_lists import fleet, issued, recalibrated_standard
 
 SHOTS = Path(os.environ.get("GONIO_SCREENSHOTS_PHONE", "/tmp/gonio-web-shots-phone"))
 PHONE = {"width": 390, "height": 844}
@@ -51,11 +52,9 @@ def lab(tmp_path, serve, monkeypatch):
     services.set_settings(st, None, lab_name="Example Angle Laboratory",
                           lab_address="1 Example Road\nXi'an")
     tech = services.user(st, "tech")
-    std = services.add_standard(st, tech, name="Precision rotary table", identifier="RT-07",
-                                certificate="NIM-2024-1", calibrated_on="2024-06-01",
-                                due_on="2025-06-01")
-    services.update_standard(st, tech, std.id, certificate="NIM-2025-3",
-                             calibrated_on="2025-05-20", due_on="2030-05-20")
+    std = recalibrated_standard(st, "Precision rotary table",
+                                ("NIM-2024-1", "2024-06-01", "2025-06-01"),
+                                ("NIM-2025-3", "2025-05-20", "2030-05-20"))
     _, made = fleet(st, 30, dt.date.today())
     for inst, day in made[:3]:
         issued(st, inst.id, day - dt.timedelta(days=380), f"GC-2024-{inst.id:04d}", std.id)
@@ -69,17 +68,6 @@ def lab(tmp_path, serve, monkeypatch):
     proc, base = serve.start(data, workers=1)
     yield base, inst.id, std.id
     serve.stop(proc)
-
-
-class Shots:
-    def __init__(self):
-        shutil.rmtree(SHOTS, ignore_errors=True)
-        SHOTS.mkdir(parents=True)
-        self.n = 0
-
-    def __call__(self, page, name: str) -> None:
-        self.n += 1
-        page.screenshot(path=str(SHOTS / f"{self.n:02d}-{name}.png"), full_page=True)
 
 
 def no_sideways(page) -> None:
@@ -110,7 +98,7 @@ def send(page) -> None:
 
 def test_new_flows_on_a_phone(lab, browser, bench_readings, tmp_path):  # noqa: F811
     base, inst_id, std_id = lab
-    shot = Shots()
+    shot = Shots(SHOTS)
     page = browser.new_page(viewport=PHONE, accept_downloads=True)
     page.goto(base + "/login")
     no_sideways(page)
