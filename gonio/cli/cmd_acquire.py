@@ -20,6 +20,10 @@ def register(sub) -> None:
                    help="VISA resource of the table controller, e.g. TCPIP0::host::5025::SOCKET")
     p.add_argument("--gyro", required=True,
                    help="VISA resource of the acquisition module, e.g. ASRL/dev/ttyUSB0::INSTR")
+    p.add_argument("--chamber", help="VISA resource of the temperature chamber (a rate "
+                                     "specification's programme with temperature points)")
+    p.add_argument("--supply", help="VISA resource of the gyro's power supply (a rate "
+                                    "specification's programme: power cycles)")
     p.add_argument("--out", required=True, help="output folder (readings.csv, io.log)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted acquisition in --out from its last complete "
@@ -41,12 +45,46 @@ def _meta(items: list[str]) -> dict:
     return md
 
 
-def run(args) -> int:
-    from gonio.instruments.acquire import acquire
-    from gonio.protocol import load_protocol
+def acquisition_hook(protocol: str):
+    """The acquisition programme hook of the specification a protocol file names
+    (``[protocol] spec``); None: the goniometer's programme
+    (:mod:`gonio.instruments.acquire`)."""
+    from gonio.formats.toml import read_toml
+    from gonio.resources import resolve
+    from gonio.specs import get
 
-    res = acquire(load_protocol(args.protocol), args.table, args.gyro, args.out,
-                  resume=args.resume, metadata=_meta(args.meta), timeout_s=args.timeout)
+    sec = read_toml(resolve(protocol, kind="protocol")).get("protocol", {})
+    key = sec.get("spec") if isinstance(sec, dict) else None
+    if not isinstance(key, str) or not key:
+        return None
+    hook = get(key).acquisition
+    if hook is None:
+        raise GonioError(f"--protocol {protocol}: gonio acquire does not run {key} "
+                         "programmes yet (the specification has no acquisition hook)")
+    return hook
+
+
+def run(args) -> int:
+    hook = acquisition_hook(args.protocol)
+    if hook is not None:
+        res = _run_rate(hook, args)
+    else:
+        from gonio.instruments.acquire import acquire
+        from gonio.protocol import load_protocol
+
+        res = acquire(load_protocol(args.protocol), args.table, args.gyro, args.out,
+                      resume=args.resume, metadata=_meta(args.meta), timeout_s=args.timeout)
     print(res.readings)
     print(res.io_log)
     return 0
+
+
+def _run_rate(hook, args):
+    """A rate specification's programme (its ``acquisition`` hook) on the rate bench."""
+    from gonio.instruments.rate_acquire import acquire_rate
+
+    prog = hook(args.protocol, _meta(args.meta))
+    return acquire_rate(prog.segments, prog.metadata,
+                        {"table": args.table, "gyro": args.gyro, "chamber": args.chamber,
+                         "supply": args.supply}, args.out, resume=args.resume,
+                        room_temperature_c=prog.room_temperature_c, timeout_s=args.timeout)
