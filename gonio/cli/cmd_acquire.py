@@ -45,46 +45,13 @@ def _meta(items: list[str]) -> dict:
     return md
 
 
-def acquisition_hook(protocol: str):
-    """The acquisition programme hook of the specification a protocol file names
-    (``[protocol] spec``); None: the goniometer's programme
-    (:mod:`gonio.instruments.acquire`)."""
-    from gonio.formats.toml import read_toml
-    from gonio.resources import resolve
-    from gonio.specs import get
-
-    sec = read_toml(resolve(protocol, kind="protocol")).get("protocol", {})
-    key = sec.get("spec") if isinstance(sec, dict) else None
-    if not isinstance(key, str) or not key:
-        return None
-    hook = get(key).acquisition
-    if hook is None:
-        raise GonioError(f"--protocol {protocol}: gonio acquire does not run {key} "
-                         "programmes yet (the specification has no acquisition hook)")
-    return hook
-
-
 def run(args) -> int:
-    hook = acquisition_hook(args.protocol)
-    if hook is not None:
-        res = _run_rate(hook, args)
-    else:
-        from gonio.instruments.acquire import acquire
-        from gonio.protocol import load_protocol
+    from gonio.pipeline.acquire import acquire
 
-        res = acquire(load_protocol(args.protocol), args.table, args.gyro, args.out,
-                      resume=args.resume, metadata=_meta(args.meta), timeout_s=args.timeout)
+    res = acquire(args.protocol, {"table": args.table, "gyro": args.gyro,
+                                  "chamber": args.chamber, "supply": args.supply},
+                  args.out, metadata=_meta(args.meta), resume=args.resume,
+                  timeout_s=args.timeout)
     print(res.readings)
     print(res.io_log)
     return 0
-
-
-def _run_rate(hook, args):
-    """A rate specification's programme (its ``acquisition`` hook) on the rate bench."""
-    from gonio.instruments.rate_acquire import acquire_rate
-
-    prog = hook(args.protocol, _meta(args.meta))
-    return acquire_rate(prog.segments, prog.metadata,
-                        {"table": args.table, "gyro": args.gyro, "chamber": args.chamber,
-                         "supply": args.supply}, args.out, resume=args.resume,
-                        room_temperature_c=prog.room_temperature_c, timeout_s=args.timeout)

@@ -299,7 +299,7 @@ def calibrations_page(request: Request):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place")
+              "humidity_pct", "place", "table", "gyro", "chamber", "supply", "metadata")
 
 
 def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None):
@@ -354,17 +354,43 @@ async def calibration_create(request: Request, inst_id: int):
         if up is None or not hasattr(up, "read") or not up.filename:
             raise GonioError("choose a readings file", key="readings")
         sha, _ = services.store_file(store, up.file)
-        proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
-        lab_sha, lab_name = _upload(store, data, "lab_file", services.MAX_LAB_BYTES)
         cal = services.create_calibration(
             store, user, instrument_id=inst_id, readings_sha256=sha,
-            readings_name=clean_name(up.filename), spec_key=data.get("spec_key") or None,
-            protocol=data.get("protocol") or None, protocol_sha256=proto_sha,
-            lab_sha256=lab_sha, lab_name=lab_name,
-            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
-            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
-            performed_on=data.get("performed_on"), received_on=data.get("received_on"),
-            place=data.get("place"))
+            readings_name=clean_name(up.filename), **_calibration_fields(store, data))
+    except GonioError as exc:
+        return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
+    wake(request)
+    return _back(f"/calibrations/{cal.id}")
+
+
+def _calibration_fields(store, data) -> dict:
+    """The form's fields every new calibration takes (protocol and laboratory files stored)."""
+    proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
+    lab_sha, lab_name = _upload(store, data, "lab_file", services.MAX_LAB_BYTES)
+    return dict(spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+                protocol_sha256=proto_sha, lab_sha256=lab_sha, lab_name=lab_name,
+                standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+                temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+                performed_on=data.get("performed_on"), received_on=data.get("received_on"),
+                place=data.get("place"))
+
+
+@router.post("/instruments/{inst_id}/acquire")
+async def calibration_acquire(request: Request, inst_id: int):
+    """A calibration started from a connected bench: the worker takes the readings through
+    the instruments (:mod:`gonio.records.bench`), then calibrates them."""
+    from gonio.records import bench
+
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    store = _store(request)
+    try:
+        services.require(user, "technician")
+        cal = bench.create_bench_calibration(
+            store, user, instrument_id=inst_id,
+            resources={r: data.get(r) for r in bench.ROLES},
+            metadata=bench.parse_metadata_lines(data.get("metadata")),
+            **_calibration_fields(store, data))
     except GonioError as exc:
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
