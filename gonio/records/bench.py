@@ -75,12 +75,19 @@ def parse_metadata_lines(text: str) -> dict:
 
 def create_bench_calibration(store, actor, *, instrument_id: int, resources: dict,
                              metadata: dict | None = None, standard_ids: Iterable[int] = (),
-                             **fields) -> Calibration:
+                             temperature_c=None, humidity_pct=None, performed_on=None,
+                             received_on=None, **fields) -> Calibration:
     """Queue a calibration whose readings the worker acquires from the bench at
-    ``resources`` (by role) with the laboratory's ``metadata`` lines; ``fields`` as
-    :func:`gonio.records.services.create_calibration` takes them (protocol, environment,
-    dates, laboratory file)."""
+    ``resources`` (by role) with the laboratory's ``metadata`` lines, after the form's own
+    submission checks (:func:`gonio.records.submission.check_form`: a standard, the
+    environment, the dates); ``fields`` as :func:`gonio.records.services.create_calibration`
+    takes them (protocol, place, laboratory file). The readings' checks (specification,
+    instrument, conditions) run on the readings once taken (:func:`store_acquisition`)."""
+    from gonio.records.submission import check_form
+
     services.require(actor, "technician")
+    day, received, ids, temp, hum = check_form(performed_on, received_on, standard_ids,
+                                               temperature_c, humidity_pct)
     request = check_request(resources, metadata or {})
     data = json.dumps(request, sort_keys=True, indent=1).encode("utf-8") + b"\n"
     sha = blobs.put_bytes(store.blob_root, data)
@@ -90,7 +97,8 @@ def create_bench_calibration(store, actor, *, instrument_id: int, resources: dic
             s.commit()
     cal = services.create_calibration(store, actor, instrument_id=instrument_id,
                                       readings_sha256=sha, readings_name=PENDING_NAME,
-                                      standard_ids=standard_ids, **fields)
+                                      standard_ids=ids, temperature_c=temp, humidity_pct=hum,
+                                      performed_on=day, received_on=received, **fields)
     with store.writing() as s:
         s.add(CalibrationFile(calibration_id=cal.id, name=REQUEST, sha256=sha))
         s.commit()
@@ -119,7 +127,7 @@ def acquire_for(store, cal: Calibration, request: dict, work: Path,
     res = acquire(protocol or get(cal.spec_key).default_protocol, request["resources"],
                   work / "acq", spec_key=cal.spec_key, metadata=request.get("metadata", {}),
                   prompt=_no_operator)
-    store_acquisition(store, cal.id, res.readings, res.io_log)
+    store_acquisition(store, cal, res.readings, res.io_log)
     return res.readings
 
 
@@ -129,9 +137,15 @@ def _no_operator(message: str) -> str:
                      "it, or gonio acquire at the bench")
 
 
-def store_acquisition(store, cal_id: int, readings: Path, io_log: Path) -> None:
-    """The acquired readings become the calibration's readings; the raw I/O log its file
-    ``io.log``; one audit event."""
+def store_acquisition(store, cal: Calibration, readings: Path, io_log: Path) -> None:
+    """The raw I/O log becomes the calibration's file ``io.log``; the readings taken, once
+    they pass the submission's readings checks against the calibration
+    (:func:`gonio.records.submission.check_readings`: specification, the instrument's
+    serial, model and manufacturer, the environment entered), its readings; one audit
+    event. Readings that fail are kept in the store, the calibration keeps its request (run
+    again, it acquires again) and fails with the reason."""
+    from gonio.records.submission import check_readings, readings_facts
+
     r_sha, r_size = blobs.put_file(store.blob_root, readings)
     l_sha, l_size = blobs.put_file(store.blob_root, io_log)
     with store.writing() as s:
@@ -139,13 +153,17 @@ def store_acquisition(store, cal_id: int, readings: Path, io_log: Path) -> None:
             if s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
         s.flush()
-        cal = s.get(Calibration, cal_id)
-        before = services.state(cal)
-        cal.readings_sha256, cal.readings_name = r_sha, "readings.csv"
-        old = s.get(CalibrationFile, (cal_id, IO_LOG))
+        old = s.get(CalibrationFile, (cal.id, IO_LOG))
         if old is None:
-            s.add(CalibrationFile(calibration_id=cal_id, name=IO_LOG, sha256=l_sha))
+            s.add(CalibrationFile(calibration_id=cal.id, name=IO_LOG, sha256=l_sha))
         else:
             old.sha256 = l_sha
-        services.audit(s, None, "acquired", "calibration", cal.id, before, services.state(cal))
+        s.commit()
+    check_readings(readings_facts(store, r_sha), cal.instrument, cal.spec_key,
+                   cal.temperature_c, cal.humidity_pct)
+    with store.writing() as s:
+        row = s.get(Calibration, cal.id)
+        before = services.state(row)
+        row.readings_sha256, row.readings_name = r_sha, "readings.csv"
+        services.audit(s, None, "acquired", "calibration", row.id, before, services.state(row))
         s.commit()

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import datetime as _dt
 import hashlib
+import hmac
+import html
 import re
 
 from fastapi import APIRouter, Request
-from fastapi.responses import RedirectResponse, Response
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from gonio.errors import GonioError, TooManyAttemptsError
-from gonio.records import auth, queries, services
+from gonio.records import auth, blobs, queries, services, submission
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
                               Forbidden, current, file_response, form, fresh_token, page_of,
                               render, wake)
@@ -299,22 +301,49 @@ def calibrations_page(request: Request):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place", "table", "gyro", "chamber", "supply", "metadata")
+              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
+              "metadata")
+#: the calibration form's files: field, largest size (bytes)
+NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
+             ("lab_file", services.MAX_LAB_BYTES))
 
 
-def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None):
+def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None,
+              kept=None, reuse=False):
     """The calibration form; ``data``: what was entered, kept when it comes back with an
-    error (text fields and ticked standards; files must be chosen again)."""
+    error (text fields and ticked standards); ``kept``: field → (token, name) of the files
+    already uploaded (:func:`kept_token`), sent again with the form so none is chosen twice;
+    ``reuse``: the readings were used before (the form asks why they are used again)."""
     store = _store(request)
     inst, _ = queries.instrument(store, inst_id)
     if inst is None:
         return Response("no such instrument", status_code=404)
     from gonio.specs import available
-    entered = {k: str(data.get(k) or "")[:200] for k in NEW_FIELDS} if data else {}
+    entered = {k: str(data.get(k) or "")[:2000] for k in NEW_FIELDS} if data else {}
     ticked = {str(v) for v in data.getlist("standards")} if data else set()
     return render(request, "calibration_new.html", user, csrf, status_code=status_code,
                   error=error, inst=inst, standards=[s for s in queries.standards(store)],
-                  specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked)
+                  specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked,
+                  kept=kept or {}, reuse=reuse or bool(entered.get("reuse_reason")),
+                  limit=blobs.size_text(services.MAX_UPLOAD))
+
+
+def kept_token(csrf: str, sha: str, name: str) -> str:
+    """A stored upload handed back with a form that came back with an error: its digest and
+    an HMAC over digest and shown name keyed by the session's CSRF token, so that a form can
+    name only files this session uploaded."""
+    mac = hmac.new(csrf.encode(), f"{sha}\0{name}".encode(), "sha256").hexdigest()
+    return f"{sha}.{mac}"
+
+
+def _kept(data, field: str, csrf: str) -> tuple[str | None, str]:
+    """(sha256, name) of a file kept from the form's earlier sending, or (None, "")."""
+    token = str(data.get("kept_" + field) or "")
+    name = clean_name(data.get("kept_" + field + "_name"))
+    sha = token.split(".", 1)[0]
+    if token and hmac.compare_digest(token, kept_token(csrf, sha, name)):
+        return sha, name
+    return None, ""
 
 
 @router.get("/instruments/{inst_id}/calibrate")
@@ -346,33 +375,41 @@ def _upload(store, data, field: str, limit_bytes: float) -> tuple[str | None, st
 @router.post("/instruments/{inst_id}/calibrate")
 async def calibration_create(request: Request, inst_id: int):
     user, csrf = current(request)
+    try:
+        services.check_upload_size(request.headers.get("content-length"),
+                                   services.MAX_UPLOAD)
+    except GonioError as exc:         # refused before the upload is read
+        return HTMLResponse(f"<!doctype html><title>Upload too large</title><p role=alert>"
+                            f"{html.escape(str(exc))}. <a href='/instruments/{inst_id}/"
+                            "calibrate'>Back to the form</a></p>", status_code=413)
     data = await form(request, csrf)
     store = _store(request)
+    files: dict[str, tuple] = {}
     try:
         services.require(user, "technician")
-        up = data.get("readings")
-        if up is None or not hasattr(up, "read") or not up.filename:
+        for field, limit in NEW_FILES:
+            files[field] = _upload(store, data, field, limit)
+            if files[field][0] is None:
+                files[field] = _kept(data, field, csrf)
+        sha, name = files["readings"]
+        if sha is None:
             raise GonioError("choose a readings file", key="readings")
-        sha, _ = services.store_file(store, up.file)
-        cal = services.create_calibration(
-            store, user, instrument_id=inst_id, readings_sha256=sha,
-            readings_name=clean_name(up.filename), **_calibration_fields(store, data))
+        cal = submission.submit_calibration(
+            store, user, instrument_id=inst_id, readings_sha256=sha, readings_name=name,
+            spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+            protocol_sha256=files["protocol_file"][0], lab_sha256=files["lab_file"][0],
+            lab_name=files["lab_file"][1],
+            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+            performed_on=data.get("performed_on"), received_on=data.get("received_on"),
+            place=data.get("place"), reuse_reason=data.get("reuse_reason"))
     except GonioError as exc:
-        return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
+        kept = {f: (kept_token(csrf, sha, name), name) for f, (sha, name) in files.items()
+                if sha is not None}
+        return _new_form(request, user, csrf, inst_id, 400, str(exc), data, kept,
+                         reuse=exc.key == submission.REUSE_KEY)
     wake(request)
     return _back(f"/calibrations/{cal.id}")
-
-
-def _calibration_fields(store, data) -> dict:
-    """The form's fields every new calibration takes (protocol and laboratory files stored)."""
-    proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
-    lab_sha, lab_name = _upload(store, data, "lab_file", services.MAX_LAB_BYTES)
-    return dict(spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
-                protocol_sha256=proto_sha, lab_sha256=lab_sha, lab_name=lab_name,
-                standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
-                temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
-                performed_on=data.get("performed_on"), received_on=data.get("received_on"),
-                place=data.get("place"))
 
 
 @router.post("/instruments/{inst_id}/acquire")
@@ -386,11 +423,16 @@ async def calibration_acquire(request: Request, inst_id: int):
     store = _store(request)
     try:
         services.require(user, "technician")
+        proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
         cal = bench.create_bench_calibration(
             store, user, instrument_id=inst_id,
             resources={r: data.get(r) for r in bench.ROLES},
             metadata=bench.parse_metadata_lines(data.get("metadata")),
-            **_calibration_fields(store, data))
+            spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+            protocol_sha256=proto_sha, place=data.get("place"),
+            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+            performed_on=data.get("performed_on"))
     except GonioError as exc:
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)

@@ -53,7 +53,10 @@ def test_calibration_from_a_connected_bench(app, sqlite_store, served_bench):  #
     cust = services.add_customer(store, actor, "C")
     inst = services.register_instrument(store, actor, customer_id=cust.id, serial="RLG-0001",
                                         spec_key="ogam-draft")
+    std = services.add_standard(store, actor, name="rotary table", identifier="RT-07",
+                                due_on=dt.date.today() + dt.timedelta(days=300))
     form = {"csrf": csrf_of(tech), "performed_on": str(dt.date.today()),
+            "standards": str(std.id), "temperature_c": "20.0", "humidity_pct": "45",
             "table": served_bench["table"], "gyro": served_bench["gyro"],
             "metadata": "latitude_deg=40.2\noperator=A. Tester"}
     files = {"protocol_file": ("small.toml", SMALL_PROTOCOL.read_bytes())}
@@ -61,6 +64,9 @@ def test_calibration_from_a_connected_bench(app, sqlite_store, served_bench):  #
                     data={**form, "gyro": "not a resource"})
     assert bad.status_code == 400
     assert "not a VISA resource string" in html_module.unescape(bad.text)
+    bad = tech.post(f"/instruments/{inst.id}/acquire", files=files,
+                    data={k: v for k, v in form.items() if k != "standards"})
+    assert bad.status_code == 400 and "tick the reference standard" in bad.text
     r = tech.post(f"/instruments/{inst.id}/acquire", files=files, data=form)
     assert r.status_code == 303, r.text[:2000]
     cal_id = int(r.headers["location"].rsplit("/", 1)[1])
@@ -93,6 +99,30 @@ def test_calibration_from_a_connected_bench(app, sqlite_store, served_bench):  #
     page = tech.get(f"/calibrations/{cal_id}").text
     assert "io.log" in page
     assert tech.get(f"/calibrations/{cal_id}/files/io.log").status_code == 200
+
+
+def test_readings_of_another_instrument_fail_the_run_and_keep_the_log(sqlite_store,
+                                                                       served_bench):
+    """The readings taken are checked as an upload is: the bench's gyro (serial RLG-0001)
+    is not the instrument registered, so the run fails with the reason; the I/O log is
+    stored, the request stays the readings (run again, it acquires again)."""
+    store = sqlite_store
+    actor = services.create_user(store, None, "tech", "correct horse battery", "technician")
+    cust = services.add_customer(store, actor, "C")
+    inst = services.register_instrument(store, actor, customer_id=cust.id, serial="RLG-9999",
+                                        spec_key="ogam-draft")
+    std = services.add_standard(store, actor, name="rotary table", identifier="RT-07",
+                                due_on=dt.date.today() + dt.timedelta(days=300))
+    psha, _ = services.store_file(store, open(SMALL_PROTOCOL, "rb"))
+    cal = bench.create_bench_calibration(
+        store, actor, instrument_id=inst.id, resources=served_bench,
+        metadata={"latitude_deg": "40.2"}, protocol_sha256=psha, standard_ids=[std.id],
+        temperature_c=20.0, humidity_pct=45)
+    assert services.claim_next(store).id == cal.id and not worker.execute(store, cal.id)
+    failed = services.calibration(store, cal.id)
+    assert failed.status == "failed" and "RLG-0001" in failed.error, failed.error
+    assert failed.readings_name == bench.PENDING_NAME
+    assert b"gyro > ZERO" in _file(store, cal.id, "io.log")
 
 
 def test_a_request_is_checked_before_anything_is_queued():
