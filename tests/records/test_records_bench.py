@@ -46,15 +46,19 @@ def _file(store, cal_id: int, name: str) -> bytes:
     return services.file_bytes(store, f.sha256)
 
 
+def _registered(store, actor, serial: str):
+    """An instrument of the optical draft with ``serial`` and a standard due in 300 days."""
+    cust = services.add_customer(store, actor, "C")
+    return (services.register_instrument(store, actor, customer_id=cust.id, serial=serial,
+                                         spec_key="ogam-draft"),
+            services.add_standard(store, actor, name="rotary table", identifier="RT-07",
+                                  due_on=dt.date.today() + dt.timedelta(days=300)))
+
+
 def test_calibration_from_a_connected_bench(app, sqlite_store, served_bench):  # noqa: F811
     store = sqlite_store
     tech = login(app, "tech")
-    actor = services.user(store, "tech")
-    cust = services.add_customer(store, actor, "C")
-    inst = services.register_instrument(store, actor, customer_id=cust.id, serial="RLG-0001",
-                                        spec_key="ogam-draft")
-    std = services.add_standard(store, actor, name="rotary table", identifier="RT-07",
-                                due_on=dt.date.today() + dt.timedelta(days=300))
+    inst, std = _registered(store, services.user(store, "tech"), "RLG-0001")
     form = {"csrf": csrf_of(tech), "performed_on": str(dt.date.today()),
             "standards": str(std.id), "temperature_c": "20.0", "humidity_pct": "45",
             "table": served_bench["table"], "gyro": served_bench["gyro"],
@@ -108,11 +112,7 @@ def test_readings_of_another_instrument_fail_the_run_and_keep_the_log(sqlite_sto
     stored, the request stays the readings (run again, it acquires again)."""
     store = sqlite_store
     actor = services.create_user(store, None, "tech", "correct horse battery", "technician")
-    cust = services.add_customer(store, actor, "C")
-    inst = services.register_instrument(store, actor, customer_id=cust.id, serial="RLG-9999",
-                                        spec_key="ogam-draft")
-    std = services.add_standard(store, actor, name="rotary table", identifier="RT-07",
-                                due_on=dt.date.today() + dt.timedelta(days=300))
+    inst, std = _registered(store, actor, "RLG-9999")
     psha, _ = services.store_file(store, open(SMALL_PROTOCOL, "rb"))
     cal = bench.create_bench_calibration(
         store, actor, instrument_id=inst.id, resources=served_bench,
