@@ -26,7 +26,7 @@ import sys
 import threading
 
 from gonio.errors import GonioError
-from gonio.records import services
+from gonio.records import bench, services
 from gonio.records.compute import (calibrate_folder, readings_suffix, render_folder,
                                    write_lab_toml)
 
@@ -63,6 +63,9 @@ def _compute(store, cal, work) -> None:
     if cal.protocol_sha256:
         protocol = str(work / "protocol.toml")
         (work / "protocol.toml").write_bytes(services.file_bytes(store, cal.protocol_sha256))
+    request = bench.pending_request(store, cal)
+    if request is not None:              # started from a connected bench: acquire first
+        readings = bench.acquire_for(store, cal, request, work, protocol)
     lab = write_lab_toml(services.lab_details(store, cal.id, final=False), work / "lab.toml")
     services.set_progress(store, cal.id, "computing the items and their uncertainties, "
                                          "rendering the draft certificate")
