@@ -227,7 +227,7 @@ def test_upload_over_the_limit_says_so(app, sqlite_store, monkeypatch):  # noqa:
     r = post_form(web, inst, {}, {"readings": ("big.csv", big)})
     assert r.status_code == 413
     text = html_module.unescape(re.sub(r"<[^>]+>", "", r.text))
-    assert "key upload: the upload (5 MiB" in text
+    assert "key upload: the upload, 5 MiB (5,2" in text
     assert "is larger than the limit of 1 MiB (1,048,576 bytes) for a readings file" in text
     with pytest.raises(GonioError, match=r"larger than the limit of 1 MiB \(1,048,576 bytes\)"):
         services.store_file(sqlite_store, io.BytesIO(b"x" * (2**20 + 1)), limit_bytes=2**20)
