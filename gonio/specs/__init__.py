@@ -561,6 +561,19 @@ def default_limits(key: str) -> list[dict]:
     return [dict(d) for d in spec.default_limits]
 
 
+def decide_conformity(result, lab: dict | None):
+    """Conformity of every item the laboratory file ``lab`` limits, or the specification's
+    own tolerances (:func:`default_limits`) limit, decided once, in the result's items
+    (:func:`gonio.analysis.conformity.decide_result`), before anything is written: every
+    output renders these decisions and none makes one. The pipeline's step
+    (:func:`gonio.pipeline.dispatch.decide_conformity`); a specification's own ``demo``
+    calls it as the pipeline would. Returns ``result``."""
+    from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    return result
+
+
 def _entry_points() -> dict[str, str]:
     """``{name: "module:attr"}`` of the installed ``gonio.specs`` entry points, with gonio's
     own from :data:`BUILT_IN` where gonio itself is not installed."""
