@@ -72,7 +72,7 @@ _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
                   "outputs", "readings_format", "certificate_content", "calibrate_arguments")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs")
+          "named_inputs", "acquisition")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -205,6 +205,12 @@ class Specification:
     run_trial : callable or None
         ``run_trial(bench, protocol, seed)`` → (readings, truth dict): one simulated
         calibration held in memory, for the coverage study.
+    acquisition : callable or None
+        ``acquisition(protocol=None, metadata=None)`` →
+        :class:`gonio.protocol.programme.Programme`: the segments ``gonio acquire`` runs on
+        a laboratory's rate bench (:mod:`gonio.instruments.rate_acquire`) and the readings'
+        metadata; ``metadata`` holds the laboratory's ``--meta`` values. None: the
+        specification is not acquired through gonio's rate instruments.
     budget : callable or None
         ``budget(**options)`` → the specification's own uncertainty annex, reproduced (an
         object with ``to_dict()`` and ``to_text()``).
@@ -279,6 +285,7 @@ class Specification:
     simulate: Callable[..., dict] | None = None
     truth: Callable[..., dict] | None = None
     run_trial: Callable[..., tuple] | None = None
+    acquisition: Callable[..., Any] | None = None
     budget: Callable[..., Any] | None = None
     coverage: Coverage | None = None
     outputs: str = ""
