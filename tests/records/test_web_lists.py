@@ -151,3 +151,28 @@ def test_standard_history_page(app, sqlite_store):  # noqa: F811
     d = queries.standard_history(sqlite_store, std.id, 1, 1)
     assert d["total"] == 2 and len(d["uses"]) == 1
     assert web.get("/standards/999999").status_code == 404
+
+
+def test_due_and_standard_history_queries(store):
+    """The due list's and a standard's history queries on SQLite and PostgreSQL."""
+    from .conftest import make_people
+
+    make_people(store)
+    today = dt.date.today()
+    std = recalibrated_standard(store, "rotary table", ("A-1", "2024-01-05", "2025-01-05"),
+                                ("A-2", "2025-01-03", "2026-01-03"))
+    _, made = fleet(store, 40, today)
+    for inst, day in made[:3]:
+        issued(store, inst.id, day - dt.timedelta(days=400), f"GC-2024-{inst.id:04d}", std.id)
+    want = sorted((plus_months(day, 12), inst.serial) for inst, day in made)
+    due_serials = [serial for d, serial in want if (d - today).days <= 30]
+    rows, total = queries.due(store, 2, 10, "sn-0")
+    assert total == len([s for s in due_serials if s.startswith("SN-0")])
+    assert [r["serial"] for r in rows] == [s for s in due_serials if s.startswith("SN-0")][10:20]
+    notices = queries.recall(store, "Beta Nav Co")
+    assert [n["customer"] for n in notices] == ["Beta Nav Co"]
+    assert [r["serial"] for r in notices[0]["rows"]] == [s for s in due_serials
+                                                        if int(s[3:]) % 2 == 1]
+    d = queries.standard_history(store, std.id, 1, 2)
+    assert [c["certificate"] for c in d["changes"]] == ["A-1", "A-2"]
+    assert d["total"] == 3 and len(d["uses"]) == 2
