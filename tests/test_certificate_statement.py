@@ -34,7 +34,8 @@ from gonio.protocol import parse_protocol
 from gonio.report.figures import HTML_FIGSIZE, mpl_style
 from gonio.specs.ogam_draft import certificate_pages as cert
 from gonio.specs.ogam_draft import figures as figs
-from gonio.report.i18n import (BUDGET_SOURCES_ZH, READING_NOTES_ZH, LABELS, labels)
+from gonio.report.i18n import LABELS, labels
+from gonio.specs.ogam_draft.phrases import BUDGET_SOURCES_ZH, READING_NOTES_ZH
 from gonio.specs.ogam_draft.stated import stated_item, summary_text
 from gonio.resources import builtin_names, protocols_dir
 

@@ -35,17 +35,18 @@ from gonio.formats.lab import load_lab
 from gonio.report.figures import figure_svg
 from gonio.report.header import (certificate_id, decision_rule_blocks, meta_text,
                                  opening_blocks, signature_blocks)
-from gonio.report.i18n import (budget_source, coverage_text, display, finding_text, labels,
-                               reading_note, reason_text, rule_at_U, specification_text)
+from gonio.report.i18n import (coverage_text, display, finding_text, labels, reason_text,
+                               rule_at_U)
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import Num, conformity_texts, num
 from gonio.report.text import clean_tree
 from gonio.specs.ogam_draft.figures import FIGURES
-from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, conformity_for, detail, e_budget,
-                                           followed, item_names, item_path, method_rows,
-                                           segments, stated_item, u_cell)
+from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
+                                           detail, e_budget, followed, item_names, item_path,
+                                           method_rows, reading_note, segments,
+                                           specification_text, stated_item, u_cell)
 
 
 # --------------------------------------------------------------------------- content blocks
@@ -412,7 +413,7 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
             from gonio.report.dcc import bilingual, label_translator
-            from gonio.report.i18n import READING_NOTES_ZH
+            from gonio.specs.ogam_draft.phrases import READING_NOTES_ZH
             from gonio.specs.ogam_draft.dcc import dcc_bytes, method_text
 
             doc = dcc_bytes(results, lab=lab_d, cert_id=content["id"])

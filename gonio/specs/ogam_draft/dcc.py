@@ -25,11 +25,11 @@ from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bound_quantit
                               influence_conditions, list_quantity, measurement_result,
                               new_document, not_measured_quantity, quantity, text_element,
                               tree_bytes)
-from gonio.report.i18n import display, labels, reading_note, specification_text
+from gonio.report.i18n import display, labels
 from gonio.report.stated import Num, conformity_texts, num
 from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
                                            item_path, item_uncertainty, method_rows,
-                                           stated_item)
+                                           reading_note, specification_text, stated_item)
 
 
 def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
