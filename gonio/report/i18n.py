@@ -38,6 +38,8 @@ LABELS: dict[str, dict[str, str]] = {
     "certificate_no": {"en": "Certificate No.", "zh": "证书编号"},
     "colon": {"en": ": ", "zh": "："},
     "paren": {"en": " ({x})", "zh": "（{x}）"},
+    "semi": {"en": "; ", "zh": "；"},
+    "comma": {"en": ", ", "zh": "，"},
     "page_of": {"en": "Page {x} of {y}", "zh": "第 {x} 页 共 {y} 页"},
     "virtual": {"en": "VIRTUAL BENCH EXAMPLE — NOT A CALIBRATION CERTIFICATE",
                 "zh": "虚拟台架示例 — 非校准证书"},
@@ -123,10 +125,10 @@ LABELS: dict[str, dict[str, str]] = {
                  "zh": "起始位置 {n} 个，每周 {m} 点，重复 {r} 次；转台误差为示值减真值，Σt = 0；"
                        "测角仪误差为转角的函数；标准不确定度由残差求得（{noise} 读数误差模型）。"
                        "阶次为 n 倍数的转台谐波不可观测。"},
-    "eda_position": {"en": "table position (°)", "zh": "转台位置 (°)"},
-    "eda_table": {"en": "table error (″)", "zh": "转台误差 (″)"},
-    "eda_turned": {"en": "angle turned (°)", "zh": "转角 (°)"},
-    "eda_gonio": {"en": "goniometer error (″)", "zh": "测角仪误差 (″)"},
+    "eda_position": {"en": "table position (°)", "zh": "转台位置（°）"},
+    "eda_table": {"en": "table error (″)", "zh": "转台误差（″）"},
+    "eda_turned": {"en": "angle turned (°)", "zh": "转角（°）"},
+    "eda_gonio": {"en": "goniometer error (″)", "zh": "测角仪误差（″）"},
     "eda_closure": {"en": "Full-circle closure: goniometer error at 360° = {v}″ ± {u}″",
                     "zh": "整周闭合：测角仪 360° 误差 = {v}″ ± {u}″"},
     "signatory": {"en": "Signatures", "zh": "签字"},
@@ -166,6 +168,7 @@ LABELS: dict[str, dict[str, str]] = {
     "u_counts/deg": {"en": "counts/°", "zh": "脉冲数/(°)"},
     "u_%": {"en": "%", "zh": "%"},
     "u_deg/h": {"en": "°/h", "zh": "(°)/h"},
+    "u_deg/s": {"en": "°/s", "zh": "(°)/s"},
     "u_arcsec": {"en": "″", "zh": "″"},
     "u_ppm": {"en": "ppm", "zh": "ppm"},
     # item notes
@@ -198,19 +201,19 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "图7 不同指向下的角位置偏差（7.7）"},
     "fig_budget": {"en": "Fig. 8 Uncertainty budget: contributions |c_i|·u_i (Annex A)",
                    "zh": "图8 不确定度分量 |c_i|·u_i（附录A）"},
-    "ax_position": {"en": "table position (°)", "zh": "转台位置 (°)"},
-    "ax_deviation": {"en": "deviation E (″)", "zh": "偏差 E (″)"},
-    "ax_std": {"en": "standard deviation s (″)", "zh": "标准偏差 s (″)"},
-    "ax_tilt": {"en": "error Δ (″)", "zh": "误差 Δ (″)"},
-    "ax_round_angle": {"en": "round angle θ_i (°)", "zh": "测回角度 θ_i (°)"},
-    "ax_K": {"en": "K_i (counts/°)", "zh": "K_i (脉冲数/(°))"},
-    "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间 (min)"},
-    "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M (″)"},
-    "ax_contribution": {"en": "contribution (″)", "zh": "分量 (″)"},
+    "ax_position": {"en": "table position (°)", "zh": "转台位置（°）"},
+    "ax_deviation": {"en": "deviation E (″)", "zh": "偏差 E（″）"},
+    "ax_std": {"en": "standard deviation s (″)", "zh": "标准偏差 s（″）"},
+    "ax_tilt": {"en": "error Δ (″)", "zh": "误差 Δ（″）"},
+    "ax_round_angle": {"en": "round angle θ_i (°)", "zh": "测回角度 θ_i（°）"},
+    "ax_K": {"en": "K_i (counts/°)", "zh": "K_i（脉冲数/(°)）"},
+    "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间（min）"},
+    "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M（″）"},
+    "ax_contribution": {"en": "contribution (″)", "zh": "分量（″）"},
     "lg_series": {"en": "series", "zh": "组"},
     "lg_mean": {"en": "mean E_i", "zh": "平均 E_i"},
     "lg_elliptic": {"en": "elliptic model, ψ = {psi}°", "zh": "椭圆模型, ψ = {psi}°"},
-    "lg_rigid": {"en": "rigid body, after 7.1 (≡ 0)", "zh": "刚体模型, 经7.1标定后 (≡ 0)"},
+    "lg_rigid": {"en": "rigid body, after 7.1 (≡ 0)", "zh": "刚体模型，经7.1标定后（≡ 0）"},
     "lg_rigid_uncal": {"en": "rigid body, uncalibrated", "zh": "刚体模型, 未标定"},
     "lg_mean_K": {"en": "K (mean)", "zh": "K（平均）"},
     "lg_drift": {"en": "linear drift {v} °/h", "zh": "线性漂移 {v} (°)/h"},
@@ -354,11 +357,11 @@ LABELS: dict[str, dict[str, str]] = {
                        "{column} (range {min} … {max}); every row is in tables/{name}_table.csv.",
                  "zh": "共 {rows} 行，列出 {listed} 行：{column} 偏离中位数最远者（范围 {min} … "
                        "{max}）；全部数据见 tables/{name}_table.csv。"},
-    "d_position": {"en": "position (°)", "zh": "位置 (°)"},
+    "d_position": {"en": "position (°)", "zh": "位置（°）"},
     "d_E": {"en": "E_i (″)", "zh": "E_i (″)"},
     "d_R": {"en": "R_i (″)", "zh": "R_i (″)"},
     "d_n": {"en": "series n", "zh": "组数 n"},
-    "d_rate": {"en": "rate (°/s)", "zh": "速率 ((°)/s)"},
+    "d_rate": {"en": "rate (°/s)", "zh": "速率（(°)/s）"},
     "d_axis": {"en": "axis direction", "zh": "轴向"},
     "d_role": {"en": "role", "zh": "作用"},
     "d_reference": {"en": "reference condition", "zh": "参考条件"},
@@ -376,6 +379,20 @@ LABELS: dict[str, dict[str, str]] = {
                     "zh": "未安装中文字体"},
     "lg_u_bar": {"en": "error bars: standard uncertainty u", "zh": "误差棒：标准不确定度 u"},
 }
+
+
+_CLAUSE_REMARK = re.compile(r"^(\S+) \(([^()]+)\)$")
+
+
+def clause_text(clause: str, L: dict) -> str:
+    """A clause with its bracketed reference ("7.3 (3.3)": clause 7.3, definition 3.3) in the
+    page's brackets (``L["paren"]``: full-width on a Chinese page).
+
+    >>> clause_text("7.3 (3.3)", {"paren": "（{x}）"}), clause_text("7.1", {"paren": "（{x}）"})
+    ('7.3（3.3）', '7.1')
+    """
+    m = _CLAUSE_REMARK.match(clause or "")
+    return m.group(1) + L["paren"].format(x=m.group(2)) if m else clause
 
 
 def labels(lang: str = "en") -> dict[str, str]:

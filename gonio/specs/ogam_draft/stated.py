@@ -37,9 +37,8 @@ from typing import Any
 from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
 import math
 
-from gonio.report.i18n import (coverage_text, display, display_number, labels, parse_display,
-                               rule_at_U)
-from gonio.report.stated import Num, conformity_texts, item_nums, num
+from gonio.kit.render import (Num, conformity_texts, coverage_text, display, display_number,
+                              item_nums, labels, num, parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_ZH, ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
                                             READING_NOTES_ZH, TITLES_EN)
@@ -254,10 +253,13 @@ def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
     measured = [res["items"][n]["clause"].split(" ")[0] for n in item_names(res)
                 if res["items"][n]["measured"]]
     spec = specification_text(followed(res) or ns, lang, cjk)
-    rows = [(L["m_spec"], f"{spec}; " + L["m_clauses"].format(c=", ".join(measured)))]
+    rows = [(L["m_spec"],
+             spec + L["semi"] + L["m_clauses"].format(c=L["list_sep"].join(measured)))]
     ad_rate = m["angle_deviation_rate_dps"]
-    rows.append((L["m_rates"], ", ".join(display("pos", r) for r in m["rates_dps"]) + " °/s"
-                 + f" (7.1, 7.4: {display('pos', ad_rate)} °/s)"
+    dps = L["u_deg/s"]
+    rows.append((L["m_rates"], ", ".join(display("pos", r) for r in m["rates_dps"]) + f" {dps}"
+                 + L["paren"].format(x="7.1" + L["list_sep"] + "7.4" + L["colon"]
+                                     + f"{display('pos', ad_rate)} {dps}")
                  if ad_rate is not None else ""))
     zi = m["zero_stability_interval_s"]
     rows.append((L["m_rounds"], L["m_rounds_v"].format(
