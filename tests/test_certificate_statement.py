@@ -243,7 +243,7 @@ def test_chinese_is_complete(run):
                     "7.3: the protocol", "Annex A.4.4: u(r)",
                     "signed extreme", "approximately"):
         assert english not in page, english
-    assert re.search(r"\d+ 行\)", page)
+    assert re.search(r"\d+ 行）", page)                  # full-width (the bracket rule)
 
 
 def test_units_never_wrap(run):

@@ -66,7 +66,7 @@ __all__ = [
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",
     "measurement_result", "meta_text", "mpl_style", "new_document", "not_measured_quantity",
-    "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks", "quantity", "reason_text",
-    "render_html", "render_pdf", "rule_at_U", "signature_blocks", "text_element",
+    "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks", "quantity",
+    "reason_text", "render_html", "render_pdf", "rule_at_U", "signature_blocks", "text_element",
     "tree_bytes",
 ]
