@@ -491,7 +491,7 @@ def check_upload_size(declared_bytes, limit_bytes: float = MAX_UPLOAD) -> None:
     except (TypeError, ValueError):
         return                        # not declared: the store counts while it reads
     if n > limit_bytes + FORM_OVERHEAD_BYTES:
-        raise GonioError(f"the upload ({blobs.size_text(n)}) is larger than the limit of "
+        raise GonioError(f"the upload, {blobs.size_text(n)}, is larger than the limit of "
                          f"{blobs.size_text(limit_bytes)} for a readings file; nothing was "
                          "stored", key="upload")
 
@@ -1203,14 +1203,20 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
 
 
 def due_instruments(store, today: _dt.date | None = None, within_days: int = 30) -> list[dict]:
-    """Instruments due for recalibration within ``within_days`` or overdue: the last issued
-    calibration's date plus the instrument's interval (else the specification's default)."""
+    """Instruments in use (not retired) due for recalibration within ``within_days`` or
+    overdue: the last issued calibration's date plus the instrument's interval (else the
+    specification's default)."""
     today = today or _dt.date.today()
     with store.session() as s:
-        last = dict(s.execute(
+        last = dict(s.execute(       # issued: it has a certificate (also while amended)
             select(Calibration.instrument_id, func.max(Calibration.performed_on))
-            .where(Calibration.status == "issued").group_by(Calibration.instrument_id)).all())
-        insts = s.scalars(select(Instrument).where(Instrument.id.in_(list(last)))).all()
+            .where(Calibration.id.in_(select(Certificate.calibration_id)))
+            .group_by(Calibration.instrument_id)).all())
+        from sqlalchemy.orm import selectinload
+
+        insts = s.scalars(select(Instrument).options(selectinload(Instrument.customer))
+                          .where(Instrument.id.in_(list(last)),
+                                 Instrument.retired_on.is_(None))).all()
         out = []
         for inst in insts:
             months = inst.interval_months or default_interval(inst.spec_key)[0]
@@ -1220,7 +1226,7 @@ def due_instruments(store, today: _dt.date | None = None, within_days: int = 30)
                             "model": inst.model, "customer": inst.customer.name,
                             "last": last[inst.id], "due": due,
                             "overdue": due < today})
-    return sorted(out, key=lambda d: d["due"])
+    return sorted(out, key=lambda d: (d["due"], d["customer"], d["serial"]))
 
 
 def _add_months(day: _dt.date, months: int) -> _dt.date:

@@ -87,8 +87,9 @@ def dashboard(request: Request):
     review, _ = queries.calibrations(store, 1, 20, "computed")
     approve, _ = queries.calibrations(store, 1, 20, "reviewed")
     active, _ = queries.calibrations(store, 1, 20, "running")
+    due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
-                  due=services.due_instruments(store), review=review, approve=approve,
+                  due=due, n_due=n_due, review=review, approve=approve,
                   active=active, today=_dt.date.today())
 
 
@@ -259,7 +260,61 @@ def instrument_history(request: Request, inst_id: int):
 _SVG_CACHE: dict[str, str] = {}
 
 
+# --------------------------------------------------------------------------- due list, recall
+
+#: how far ahead the due list may look (days)
+DUE_WINDOWS = (30, 90, 180, 365)
+
+
+def _due_filters(request: Request) -> dict:
+    """The due list's filters from the query: ``q`` (search), ``within_days`` (one of
+    :data:`DUE_WINDOWS`), ``customer`` (one customer, exactly)."""
+    try:
+        within = int(request.query_params.get("within_days", "30"))
+    except ValueError:
+        within = 30
+    return {"q": request.query_params.get("q", "")[:100],
+            "within_days": within if within in DUE_WINDOWS else 30,
+            "customer": request.query_params.get("customer", "")[:200]}
+
+
+@router.get("/due")
+def due_page(request: Request):
+    user, csrf = current(request)
+    from urllib.parse import urlencode
+
+    page, filters = page_of(request), _due_filters(request)
+    rows, total = queries.due(_store(request), page, PAGE, filters["q"],
+                              filters["within_days"], filters["customer"])
+    query = urlencode({k: v for k, v in filters.items() if v})
+    return render(request, "due.html", user, csrf, rows=rows, total=total, page=page,
+                  size=PAGE, f=filters, windows=DUE_WINDOWS, query=query,
+                  extra="&" + query if query else "", today=_dt.date.today())
+
+
+@router.get("/due/recall")
+def recall_page(request: Request):
+    """The recall notices, one printed page per customer (the print stylesheet)."""
+    user, csrf = current(request)
+    filters = _due_filters(request)
+    return render(request, "recall.html", user, csrf, today=_dt.date.today(),
+                  notices=queries.recall(_store(request), filters["customer"],
+                                         filters["within_days"]),
+                  f=filters, lab=services.settings(_store(request)))
+
+
 # --------------------------------------------------------------------------- standards
+
+
+@router.get("/standards/{std_id}")
+def standard_page(request: Request, std_id: int):
+    user, csrf = current(request)
+    page = page_of(request)
+    d = queries.standard_history(_store(request), std_id, page, PAGE)
+    if d is None:
+        return Response("no such standard", status_code=404)
+    return render(request, "standard.html", user, csrf, **d, page=page, size=PAGE,
+                  today=_dt.date.today())
 
 
 @router.get("/standards")
@@ -301,7 +356,8 @@ def calibrations_page(request: Request):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place", "reuse_reason")
+              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
+              "metadata")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
              ("lab_file", services.MAX_LAB_BYTES))
@@ -407,6 +463,33 @@ async def calibration_create(request: Request, inst_id: int):
                 if sha is not None}
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data, kept,
                          reuse=exc.key == submission.REUSE_KEY)
+    wake(request)
+    return _back(f"/calibrations/{cal.id}")
+
+
+@router.post("/instruments/{inst_id}/acquire")
+async def calibration_acquire(request: Request, inst_id: int):
+    """A calibration started from a connected bench: the worker takes the readings through
+    the instruments (:mod:`gonio.records.bench`), then calibrates them."""
+    from gonio.records import bench
+
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    store = _store(request)
+    try:
+        services.require(user, "technician")
+        proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
+        cal = bench.create_bench_calibration(
+            store, user, instrument_id=inst_id,
+            resources={r: data.get(r) for r in bench.ROLES},
+            metadata=bench.parse_metadata_lines(data.get("metadata")),
+            spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+            protocol_sha256=proto_sha, place=data.get("place"),
+            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+            performed_on=data.get("performed_on"))
+    except GonioError as exc:
+        return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
     return _back(f"/calibrations/{cal.id}")
 
@@ -591,8 +674,9 @@ def export_csv(request: Request, name: str):
         refused = _may_read(user, "reviewer", "admin")
         if refused:
             return refused
-    got = queries.export_rows(_store(request), name, _filters(
-        request, AUDIT_FILTERS + ("status", "customer")))
+    params = _filters(request, AUDIT_FILTERS + ("status",))
+    params.update(_due_filters(request))
+    got = queries.export_rows(_store(request), name, params)
     if got is None:
         return Response("no such list", status_code=404)
     stamp = _dt.date.today().isoformat()

@@ -41,6 +41,7 @@ from gonio.errors import GonioError
 from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
 from gonio.result.model import Covariance
+from gonio.specs.triad_alignment.figure_data import figure_series
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
 
 KEY = "triad-alignment"
@@ -468,6 +469,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
             extra["thermal_model"] = tj
     if al is not None:
         extra["cross_axis"] = cross_axis_table(al).to_dict(orient="records")
+    extra["figures"] = figure_series(al, th)      # what the certificate's figures draw
     src = source_info(r)
     return TriadCalibration(KEY, TITLE_EN, items, dict(r.metadata), src, list(READINGS_TAKEN),
                             extra=json_safe(extra), alignment=al, thermal=th, compensation=comp,
