@@ -14,7 +14,7 @@ Layout (HTML and A4 PDF)        :class:`Block`, :func:`render_html`, :func:`rend
 The content every certificate   :func:`certificate_id`, :func:`opening_blocks`,
 shares (ISO/IEC 17025 7.8)      :func:`decision_rule_blocks`, :func:`signature_blocks`,
                                 :func:`conformity_section`, :func:`meta_text`,
-                                :func:`is_virtual`, :func:`clean_tree`
+                                :func:`is_virtual`, :func:`is_draft`, :func:`clean_tree`
 Labels and numbers              :func:`labels`, :func:`display`, :func:`display_number`,
                                 :func:`display_uncertainty`, :func:`rule_at_U`,
                                 :func:`coverage_text`, :func:`finding_text`,
