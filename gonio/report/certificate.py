@@ -42,7 +42,8 @@ from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for, conformity_texts,
                                  detail, e_budget, followed, item_names, item_path,
-                                 method_rows, num, segments, stated_item, u_cell)
+                                 interval_cell, method_rows, num, segments, stated_item,
+                                 u_cell)
 from gonio.report.text import clean_tree
 
 
@@ -115,7 +116,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
 
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
-    rrows = _result_rows(res, L, U)
+    rrows = _result_rows(res, L, U, lang)
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
@@ -128,6 +129,8 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
+    if any(stated_item(res, n)["interval"] is not None for n in item_names(res)):
+        add("p", [L["k_chi_square"]])          # B_s, R: stated by their χ² interval alone
     screening_notes(res, L, add)
     if detail(res, "scale_factor", "measurand"):
         sf = res["items"]["scale_factor"]["details"]
@@ -179,9 +182,10 @@ def _admin_blocks(add, res: dict, lab: dict | None, L: dict, *, lang: str, cjk: 
         add(b.kind, b.data, b.extra)
 
 
-def _result_rows(res: dict, L: dict, U: float | None) -> list:
+def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
     """The results table's rows (Annex B): each item with its U, k and coverage
-    probability, or the reason it was not measured."""
+    probability (an item stated by its coverage interval: that interval beside the value and
+    no U), or the reason it was not measured."""
     rrows = []
     for i, name in enumerate(item_names(res), 1):
         item = res["items"][name]
@@ -199,13 +203,6 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
         elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
             cell += ["; ", *segments(L["note_zero_range"],
                                      v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]
-            iu = item.get("uncertainty") or {}
-            if iu.get("interval") and iu.get("nu_eff"):
-                cell += ["; ", *segments(
-                    L["note_zero_interval"],
-                    n=_num(res, item_path(name, "uncertainty.nu_eff"), "k", U),
-                    lo=_num(res, item_path(name, "uncertainty.interval.0"), "sig3", U),
-                    hi=_num(res, item_path(name, "uncertainty.interval.1"), "sig3", U))]
             if detail(res, name, "stated") == "draft" and \
                     (detail(res, name, "estimates") or {}).get("model"):
                 cell += ["; ", *segments(L["note_zero_model"], v=_num(
@@ -217,8 +214,8 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
             cell += [" (", *segments(L["note_at"],
                                      p=_num(res, item_path(name, "position_deg"), "pos", U)),
                      ")"]
-        if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
-            cell += ["; ", *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
+        if st["interval"] is not None:    # B_s, R: the one statement, its χ² interval
+            cell[1:1] = [("；" if lang == "zh" else "; ") + interval_cell(st, lang)]
         rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
     return rrows
 

@@ -170,15 +170,6 @@ def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None
 
 
 
-def bound_quantity(data, upper, unit: str = "", dsi: str | None = None) -> "etree.Element":
-    """The upper bound of a non-negative quantity whose U exceeds its value, as the
-    statement rule states it (:func:`gonio.result.statement.state`): a results.json
-    ``unit`` or the D-SI ``dsi``."""
-    return quantity(data, "upper bound (coverage interval [0, upper bound]: a non-negative "
-                          "quantity whose U exceeds its value)", upper, unit,
-                    ref_type="gonio_upperBound", dsi=dsi)
-
-
 def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
     """The decision rule(s) and one dcc:statement per item the pipeline decided (results.json
     ``items.<key>.conformity``), each with the rule, the outcome (dcc:conformity), the limits,
@@ -537,6 +528,10 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> "etree.Elem
         kw = {}
         if unc and s["U"] is not None and s["k"] is not None and unc["p"] is not None:
             kw = {"U": s["U"], "k": s["k"], "p": float(unc["p"])}
+        elif unc and s["interval"] is not None and s["interval"]["interval"]["u"] \
+                and unc["p"] is not None:          # stated by its coverage interval alone
+            kw = {"interval": s["interval"]["interval"]["ends"],
+                  "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
         if name == "angle_deviation" and s["signed"] is not None:
             quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"], **kw)
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
@@ -544,8 +539,6 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> "etree.Elem
                 quantity(data, "position of the extreme", s["position"], "deg")
         else:
             quantity(data, L[name], s["value"], item["unit"], **kw)
-        if s["upper"] is not None:
-            bound_quantity(data, s["upper"], item["unit"])
         _detail_lists(data, res, name)
     return root
 
