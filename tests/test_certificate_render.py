@@ -25,8 +25,8 @@ from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
-from gonio.report import certificate as cert
-from gonio.report.figures import FIGURES
+from gonio.specs.ogam_draft import certificate_pages as cert
+from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.report.i18n import display, labels
 from gonio.resources import protocols_dir
 

@@ -154,3 +154,19 @@ def test_the_triad_demo_writes_its_dcc(tmp_path):
     doc = (tmp_path / "d" / "certificate.dcc.xml").read_bytes()
     assert doc.startswith(b"<?xml") and b"digitalCalibrationCertificate" in doc
     assert "certificate.dcc.xml" in {p.name for p in paths.values()}
+
+
+@pytest.mark.parametrize("lang", ("en", "zh"))
+def test_a_printed_certificate_never_ends_on_a_page_of_its_closing_alone(calibrated, lang,
+                                                                          tmp_path):
+    """Printed from the browser, the end mark, footer and banner stay with the last block:
+    the last page holds more than "end of certificate" and the page furniture."""
+    from tests.test_certificate_statement import chromium_print, pdf_pages
+    out, page, *_ = _render(calibrated, lang)
+    assert re.search(r'<div class="closing">\s*<p class="end"', page)
+    pages = pdf_pages(chromium_print(out / "certificate.html", tmp_path / "p.pdf", tmp_path))
+    furniture = (r"End of certificate|证书结束|Certificate No\.|证书编号|Page \d+ of|第 \d+ 页|"
+                 r"shall not be reproduced|不得|VIRTUAL|虚拟|NOT A CALIBRATION|Lab Seventeen|"
+                 r"EXAMPLE|示例|^\W*$")
+    rest = [li for li in pages[-1].splitlines() if li.strip() and not re.search(furniture, li)]
+    assert rest, (calibrated["key"], lang, pages[-1])

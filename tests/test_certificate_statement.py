@@ -31,10 +31,11 @@ from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
-from gonio.report import certificate as cert
-from gonio.report import figures as figs
+from gonio.report.figures import HTML_FIGSIZE, mpl_style
+from gonio.specs.ogam_draft import certificate_pages as cert
+from gonio.specs.ogam_draft import figures as figs
 from gonio.report.i18n import (BUDGET_SOURCES_ZH, READING_NOTES_ZH, LABELS, labels)
-from gonio.report.stated import stated_item, summary_text
+from gonio.specs.ogam_draft.stated import stated_item, summary_text
 from gonio.resources import builtin_names, protocols_dir
 
 HINT = "run scripts/install-test-system-deps.sh (chromium, poppler-utils, fonts-noto-cjk)"
@@ -318,8 +319,8 @@ def test_rate_and_pointing_tables_labelled_reference_first(run):
 # --------------------------------------------------------------------------- figures
 
 def _draw(run, draw, L=None):
-    fig = Figure(figsize=figs.HTML_FIGSIZE)
-    with figs.mpl_style():
+    fig = Figure(figsize=HTML_FIGSIZE)
+    with mpl_style():
         draw(fig, fig.add_gridspec(1, 1)[0], run["results"], L or labels("en"), run["truth"])
         fig.canvas.draw()
     return fig
@@ -368,9 +369,10 @@ def test_zero_stability_drift_comes_from_results(run):
 
 def test_importing_the_report_does_not_switch_the_backend():
     code = ("import matplotlib; b = matplotlib.get_backend(); "
-            "import gonio.report.certificate, gonio.report.figures, gonio.report.dcc; "
+            "import gonio.specs.ogam_draft.certificate_pages, gonio.report.figures, "
+            "gonio.specs.ogam_draft.figures, gonio.specs.ogam_draft.dcc; "
             "assert matplotlib.get_backend() == b, (b, matplotlib.get_backend()); print(b)")
-    env = dict(os.environ, MPLBACKEND="svg", PYTHONPATH=str(Path(cert.__file__).parents[2]))
+    env = dict(os.environ, MPLBACKEND="svg", PYTHONPATH=str(Path(cert.__file__).parents[3]))
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "svg"
@@ -400,7 +402,7 @@ def test_cli_output_into_a_closed_pipe_exits_quietly():
     code = ("import os, sys; r, w = os.pipe(); os.close(r); os.dup2(w, 1); "
             "from gonio.cli import main; rc = main(['budget', '--json']); "
             "sys.stderr.write(f'rc={rc}\\n'); sys.exit(rc)")
-    env = dict(os.environ, PYTHONPATH=str(Path(cert.__file__).parents[2]))
+    env = dict(os.environ, PYTHONPATH=str(Path(cert.__file__).parents[3]))
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                        timeout=120)
     assert p.returncode == 0, p.stderr

@@ -16,7 +16,7 @@ from gonio.bench import load_bench, run_session, write_session
 from gonio.protocol import parse_protocol
 from gonio.formats.lab import load_lab
 from gonio.report.i18n import display
-from gonio.report.stated import conformity_for
+from gonio.specs.ogam_draft.stated import conformity_for
 from gonio.resources import protocols_dir
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.pipeline.dispatch import decide_conformity

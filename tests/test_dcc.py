@@ -26,7 +26,8 @@ from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.protocol import parse_protocol
 from gonio.formats.lab import load_lab
 from gonio.report.header import certificate_id
-from gonio.report.dcc import DCC_NS, SI_NS, dcc_bytes
+from gonio.report.dcc import DCC_NS, SI_NS
+from gonio.specs.ogam_draft.dcc import dcc_bytes
 from gonio.report.i18n import display, last_digit_unit, parse_display
 from gonio.resources import protocols_dir
 

@@ -123,7 +123,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     from gonio.formats.readings import read_readings
     from gonio.specs.ogam_draft.calibration import calibrate
     from gonio.specs.ogam_draft.outputs import write_calibration
-    from gonio.report.certificate import write_certificate
+    from gonio.specs.ogam_draft.certificate_pages import write_certificate
     from gonio.report.i18n import display, labels
 
     proto = eda_protocol(4, 8, repeats=2)

@@ -89,7 +89,7 @@ def python_files(*tops: str) -> list[Path]:
 #: certificate pages, figures, standalone pages): they sit between the report and the pipeline
 #: (they render the specification's results with the report; the pipeline loads ``outputs``
 #: through the registry, never by name). Its data module ``certificate`` is not one.
-RENDERING_MODULES = ("outputs", "certificate_pages", "figures", "pages")
+RENDERING_MODULES = ("outputs", "certificate_pages", "figures", "pages", "dcc", "stated")
 RENDERING_LAYER = LAYERS["gonio.report"] + 0.5
 
 

@@ -133,6 +133,8 @@ def test_proceeding_states_the_contradiction(run):
     res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
     found = [f for f in res["findings"] if f["code"] == "identity-mismatch"]
     assert len(found) == 1 and found[0]["action"] == "flagged"
+    # the message names its header line ("# serial"); it is not a readings column
+    assert not found[0].get("column"), found[0]
     serial = res["metadata"]["serial"]
     assert serial in found[0]["message"] and LAB_SERIAL in found[0]["message"]
     text = " ".join(pdf_pages(cal / "certificate.pdf"))

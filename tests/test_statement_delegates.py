@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 
 from gonio.report.i18n import (coverage_text, display, display_number, display_uncertainty,
                                parse_display)
-from gonio.report.stated import item_nums, stated_item
+from gonio.report.stated import item_nums
+from gonio.specs.ogam_draft.stated import stated_item
 from gonio.result.statement import item_statement, k_text, p_text, rounded, state
 
 finite = st.floats(min_value=-1e20, max_value=1e20, allow_nan=False, allow_infinity=False)

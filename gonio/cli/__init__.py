@@ -62,7 +62,10 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     """The full argument parser, with every ``cmd_*`` module and every specification's
     commands registered. ``argv`` (the arguments about to be parsed) naming one of gonio's
     own commands first leaves the specifications' commands out: loading every
-    specification costs about a second, and that command does not need them."""
+    specification costs about a second, and that command does not need them. The options
+    the specifications add to one of gonio's commands (``gonio calibrate``'s,
+    ``Specification.calibrate_arguments``) are added when that command runs or the whole
+    parser is built."""
     from gonio import __version__
 
     parser = _Parser(prog="gonio", description=(
@@ -73,7 +76,26 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     sub.required = True
     for _, register in sorted(_commands(argv).items()):
         register(sub)
+    for name, add_spec_options in _spec_option_hooks().items():
+        # the options the specifications add to a command (gonio calibrate's) load every
+        # specification: only for that command, or when the whole parser is built
+        if not argv or argv[0] == name:
+            add_spec_options(sub.choices[name])
     return parser
+
+
+def _spec_option_hooks() -> dict:
+    """{command name: add_spec_options(parser)} of the ``cmd_*`` modules whose command takes
+    options the specifications add (``gonio calibrate``: ``Specification.calibrate_arguments``)."""
+    import gonio.cli as pkg
+
+    found = {}
+    for info in pkgutil.iter_modules(pkg.__path__):
+        if info.name.startswith("cmd_"):
+            mod = importlib.import_module(f"gonio.cli.{info.name}")
+            if hasattr(mod, "add_spec_options"):
+                found[info.name[4:].replace("_", "-")] = mod.add_spec_options
+    return found
 
 
 def _commands(argv: list[str] | None = None) -> dict:

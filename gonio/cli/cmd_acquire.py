@@ -20,6 +20,10 @@ def register(sub) -> None:
                    help="VISA resource of the table controller, e.g. TCPIP0::host::5025::SOCKET")
     p.add_argument("--gyro", required=True,
                    help="VISA resource of the acquisition module, e.g. ASRL/dev/ttyUSB0::INSTR")
+    p.add_argument("--chamber", help="VISA resource of the temperature chamber (a rate "
+                                     "specification's programme with temperature points)")
+    p.add_argument("--supply", help="VISA resource of the gyro's power supply (a rate "
+                                    "specification's programme: power cycles)")
     p.add_argument("--out", required=True, help="output folder (readings.csv, io.log)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted acquisition in --out from its last complete "
@@ -42,11 +46,12 @@ def _meta(items: list[str]) -> dict:
 
 
 def run(args) -> int:
-    from gonio.instruments.acquire import acquire
-    from gonio.protocol import load_protocol
+    from gonio.pipeline.acquire import acquire
 
-    res = acquire(load_protocol(args.protocol), args.table, args.gyro, args.out,
-                  resume=args.resume, metadata=_meta(args.meta), timeout_s=args.timeout)
+    res = acquire(args.protocol, {"table": args.table, "gyro": args.gyro,
+                                  "chamber": args.chamber, "supply": args.supply},
+                  args.out, metadata=_meta(args.meta), resume=args.resume,
+                  timeout_s=args.timeout)
     print(res.readings)
     print(res.io_log)
     return 0

@@ -72,9 +72,11 @@ def register(subparsers) -> None:
                    help="analyse this interval (s) only; refused if the table moves in it")
     p.add_argument("--each-window", action="store_true",
                    help="analyse every rest found, not only the longest")
-    p.add_argument("--bootstrap", type=int_range(0, 10_000), default=20, metavar="B",
+    p.add_argument("--bootstrap", type=int_range(0, 10_000), default=0, metavar="B",
                    help="parameter uncertainties by a parametric bootstrap of B records "
-                        "(default 20; 0: least-squares covariance, a quick indication)")
+                        "(e.g. 20; its time and memory grow with the window: "
+                        "B records of its length); default 0: the weighted "
+                        "least-squares covariance, conservative (1.4-1.8x too wide)")
     p.add_argument("--seed", type=seed_type, default=0, help="seed of the bootstrap")
     p.add_argument("--scale-factor", type=positive_magnitude, default=None, metavar="K",
                    help="counts per degree (default: metadata "
@@ -109,7 +111,7 @@ class _Counted:
 def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bool = False,
                  kind: str | None = None, scale_factor: float | None = None,
                  confidence: float = 0.683, window=None, each_window: bool = False,
-                 bootstrap: int = 20, seed: int = 0, show_progress: bool = True) -> list:
+                 bootstrap: int = 0, seed: int = 0, show_progress: bool = True) -> list:
     """Noise analysis of the static part of a stream file, in bounded memory.
 
     Returns a list of :class:`gonio.analysis.noise.StaticNoiseResult` — one (the
@@ -122,6 +124,9 @@ def stream_noise(path, input_kind: str = "angle", *, taus="octave", modified: bo
     analysed window's counts, piece by piece, into one array (memory-mapped beyond
     :data:`gonio.analysis.noise.record.MEMMAP_SAMPLES` samples) analysed in place; the
     numbers are those of the whole stream read into memory (tests/test_noise_memory.py).
+    The parameters' uncertainties are the fit's covariance unless ``bootstrap`` > 0 asks
+    for the parametric bootstrap (B records of the window's length, each synthesised
+    whole: its memory and time grow with the window, see the README's noise section).
     Progress on a terminal (``show_progress``), quiet otherwise.
     """
     import tempfile

@@ -116,6 +116,6 @@ def check_identity(readings, lab: dict | None, *, lab_file=None) -> list[Finding
     name = Path(readings).name
     return [Finding("identity-mismatch", _message(c) + "; the laboratory file chose to proceed "
                     "([identity] on_mismatch = \"proceed\"): the certificate's identity and "
-                    "conditions are the laboratory file's", "flagged", file=name, column=c["key"],
+                    "conditions are the laboratory file's", "flagged", file=name,
                     rule="identity and conditions of the readings = the laboratory file's")
             for c in found]

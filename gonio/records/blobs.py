@@ -31,6 +31,19 @@ from gonio.errors import GonioError
 _HEX = re.compile(r"[0-9a-f]{64}")
 
 
+def size_text(n_bytes: float) -> str:
+    """A size for a person: binary units with the exact bytes.
+
+    >>> size_text(256 * 2**20), size_text(1000)
+    ('256 MiB (268,435,456 bytes)', '1,000 bytes')
+    """
+    n = int(n_bytes)
+    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= scale:
+            return f"{n / scale:.4g} {unit} ({n:,} bytes)"
+    return f"{n:,} bytes"
+
+
 def blob_path(root: str | os.PathLike, sha256: str) -> Path:
     """Where the file with this digest lives (the digest is checked to be 64 hex digits)."""
     if not isinstance(sha256, str) or not _HEX.fullmatch(sha256):
@@ -55,8 +68,8 @@ def put_stream(root: str | os.PathLike, stream: BinaryIO, *,
                     break
                 size += len(piece)
                 if limit_bytes is not None and size > limit_bytes:
-                    raise GonioError(f"file larger than the limit of {int(limit_bytes)} bytes",
-                                     key="upload")
+                    raise GonioError(f"the file is larger than the limit of "
+                                     f"{size_text(limit_bytes)}", key="upload")
                 h.update(piece)
                 fh.write(piece)
             fh.flush()

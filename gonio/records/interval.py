@@ -13,7 +13,13 @@ Two of ILAC-G24's methods, both documented with their formulas in docs/records.m
 
 :func:`propose` combines them with the specification's clause-9 default: the drift method
 where an item has at least :data:`MIN_POINTS` calibrations and a limit, else the staircase,
-else the default; never longer than :data:`MAX_FACTOR` times the default.
+else the default; never longer than :data:`MAX_FACTOR` times the default, never shorter than
+:data:`MIN_MONTHS` (a method that gives less is stated, with why, in the proposal's detail).
+Each method's conditions are checked: the drift method needs its history to span
+:data:`MIN_SPAN_FRACTION` of the default interval, and the staircase counts a recalibration
+found within the limits only when it follows the previous calibration by at least
+:data:`MIN_GAP_FRACTION` of the interval then in force (two calibrations days apart are no
+evidence for a year's interval).
 """
 
 from __future__ import annotations
@@ -32,6 +38,14 @@ DEFAULT_MONTHS = 12
 EXTEND, REDUCE = 1.25, 0.5
 #: the longest interval proposed, as a multiple of the specification's default
 MAX_FACTOR = 2.0
+#: the shortest interval proposed (months)
+MIN_MONTHS = 1
+#: a recalibration found within the limits lengthens the interval in force only when it
+#: follows the previous calibration by at least this fraction of that interval (ILAC-G24
+#: method 1 judges the interval that was actually run)
+MIN_GAP_FRACTION = 0.5
+#: the drift method needs calibrations spanning at least this fraction of the default interval
+MIN_SPAN_FRACTION = 1.0
 #: calibrations an item needs before its drift is extrapolated (two define a line, the
 #: third is the first check of it)
 MIN_POINTS = 3
@@ -106,8 +120,35 @@ def staircase(start_months: float, in_tolerance: list[bool], *,
     """ILAC-G24 method 1: the interval after each calibration's finding in turn."""
     months = float(start_months)
     for ok in in_tolerance:
-        months = min(months * EXTEND, max_months) if ok else max(months * REDUCE, 1.0)
+        months = min(months * EXTEND, max_months) if ok else max(months * REDUCE, MIN_MONTHS)
     return months
+
+
+def staircase_history(start_months: float, findings, *, max_months: float
+                      ) -> tuple[float, int, int]:
+    """ILAC-G24 method 1 over a dated history: ``findings`` (t_days, within the limits) in
+    time order → (months, steps counted, recalibrations not counted). The first calibration
+    starts the interval (it says nothing yet about how long the instrument stays within its
+    limits); a later one within the limits lengthens the interval in force only when it
+    follows the previous calibration by at least :data:`MIN_GAP_FRACTION` of it; one found
+    outside the limits always shortens it.
+
+    >>> staircase_history(12, [(0, True), (3, True)], max_months=24)
+    (12.0, 0, 1)
+    >>> staircase_history(12, [(0, True), (366, True)], max_months=24)
+    (15.0, 1, 0)
+    """
+    months, last, counted, skipped = float(start_months), None, 0, 0
+    for t, ok in findings:
+        if not ok:
+            months, counted = staircase(months, [False], max_months=max_months), counted + 1
+        elif last is not None:
+            if t - last >= MIN_GAP_FRACTION * months * DAYS_PER_MONTH:
+                months, counted = staircase(months, [True], max_months=max_months), counted + 1
+            else:
+                skipped += 1
+        last = t
+    return months, counted, skipped
 
 
 @dataclass(frozen=True)
@@ -127,12 +168,16 @@ def _within(value, U, lower, upper) -> bool:
     return (upper is None or value <= upper) and (lower is None or value >= lower)
 
 
-def propose(history: dict, default_months: int = DEFAULT_MONTHS) -> Proposal:
+def propose(history: dict, default_months: int = DEFAULT_MONTHS,
+            limited_items=()) -> Proposal:
     """The interval for an instrument from ``history``: item key → list of (t_days,
-    value, U, k, lower, upper) in calibration order (limits may be None)."""
+    value, U, k, lower, upper) in calibration order (limits may be None);
+    ``limited_items``: the keys the instrument has limits for (what the detail says when no
+    history can be judged against them)."""
     cap = MAX_FACTOR * default_months
     per_item: dict[str, float] = {}
-    findings: dict[int, bool] = {}
+    findings: dict[float, bool] = {}
+    spans = []
     for key, rows in history.items():
         rows = [r for r in rows if r[1] is not None and r[2] and r[3]]
         if not rows:
@@ -140,26 +185,54 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS) -> Proposal:
         lower, upper = rows[-1][4], rows[-1][5]
         if lower is None and upper is None:
             continue
-        for i, r in enumerate(rows):
-            findings[i] = findings.get(i, True) and _within(r[1], r[2], r[4], r[5])
-        if len(rows) >= MIN_POINTS and len({r[0] for r in rows}) >= 2:
+        for r in rows:
+            findings[r[0]] = findings.get(r[0], True) and _within(r[1], r[2], r[4], r[5])
+        span = max(r[0] for r in rows) - min(r[0] for r in rows)
+        spans.append(span)
+        if len(rows) >= MIN_POINTS and \
+                span >= MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH:
             days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in rows]),
                                      lower, upper)
             per_item[key] = days / DAYS_PER_MONTH
     if per_item:
-        key = min(per_item, key=per_item.get)
-        months = int(max(0, math.floor(min(per_item[key], cap))))
-        return Proposal(months, "drift-to-limit (ILAC-G24)",
-                        f"limited by {key}: fitted value + {K_PREDICT:g}·u reaches its limit "
-                        f"after {per_item[key]:.1f} months" if math.isfinite(per_item[key])
-                        else f"no item reaches its limit within {cap:g} months",
-                        default_months, per_item)
+        return _drift_proposal(per_item, cap, default_months)
     if findings:
-        months = staircase(default_months, [findings[i] for i in sorted(findings)],
-                           max_months=cap)
+        months, counted, skipped = staircase_history(
+            default_months, sorted(findings.items()), max_months=cap)
+        detail = f"{len(findings)} calibration(s) against the limits, {counted} counted"
+        if skipped:
+            detail += (f"; {skipped} found within the limits less than "
+                       f"{MIN_GAP_FRACTION:g} of the interval after the one before: not "
+                       "counted")
+        if max(spans, default=0) < MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH \
+                and any(len(r) >= MIN_POINTS for r in history.values()):
+            detail += (f"; drift not extrapolated: the history spans less than "
+                       f"{MIN_SPAN_FRACTION * default_months:g} months")
         return Proposal(int(math.floor(months)), "simple response / staircase (ILAC-G24 "
-                        "method 1)", f"{len(findings)} calibration(s) against the limits",
-                        default_months, per_item)
-    return Proposal(default_months, "specification default (clause 9)",
-                    "no specification limits: the history cannot be judged against a limit",
+                        "method 1)", detail, default_months, per_item)
+    if limited_items:
+        why = ("no issued calibration with a measured value and U of a limited item ("
+               + ", ".join(sorted(limited_items)) + ") yet")
+    else:
+        why = "no specification limits: the history cannot be judged against a limit"
+    return Proposal(default_months, "specification default (clause 9)", why,
                     default_months, per_item)
+
+
+def _drift_proposal(per_item: dict, cap: float, default_months: int) -> Proposal:
+    """The drift method's proposal: the item reaching its limit first, in whole months, at
+    most ``cap``, at least :data:`MIN_MONTHS` (stated with why when the drift gives less)."""
+    key = min(per_item, key=per_item.get)
+    got = per_item[key]
+    months = int(math.floor(min(got, cap)))
+    if not math.isfinite(got):
+        detail = f"no item reaches its limit within {cap:g} months"
+    else:
+        detail = (f"limited by {key}: fitted value + {K_PREDICT:g}·u reaches its limit "
+                  f"after {got:.1f} months")
+    if months < MIN_MONTHS:
+        months = MIN_MONTHS
+        detail += (f", less than the shortest interval proposed ({MIN_MONTHS} month): "
+                   f"{key} is at or near its limit — adjust or repair the instrument before "
+                   "it is used again")
+    return Proposal(months, "drift-to-limit (ILAC-G24)", detail, default_months, per_item)

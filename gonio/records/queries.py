@@ -158,6 +158,89 @@ def standards(store):
         return s.scalars(select(Standard).order_by(Standard.due_on)).all()
 
 
+def standard_history(store, std_id: int, page: int = 1, size: int = 50) -> dict | None:
+    """A reference standard's history (None when there is no such standard): ``standard``;
+    ``changes``, its recorded states over time from the audit trail, oldest first (each
+    ``{"at", "username", "action", "certificate", "calibrated_on", "due_on", "retired_on"}``:
+    its registration, each recalibration recorded with its certificate and due date, a
+    retirement); ``uses``, the calibrations that used it, newest first, a page of them
+    (``{"calibration_id", "performed_on", "status", "serial", "model", "customer",
+    "due_on_at_use", "certificates"}``) and ``total`` of them."""
+    import json
+
+    with store.session() as s:
+        std = s.get(Standard, int(std_id))
+        if std is None:
+            return None
+        events = s.scalars(select(AuditEvent).where(AuditEvent.entity == "standard",
+                                                    AuditEvent.entity_id == str(std.id))
+                           .order_by(AuditEvent.id)).all()
+        stmt = (select(CalibrationStandard.calibration_id, Calibration.performed_on,
+                       Calibration.status, Instrument.serial, Instrument.model, Customer.name,
+                       CalibrationStandard.due_on_at_use)
+                .join(Calibration, CalibrationStandard.calibration_id == Calibration.id)
+                .join(Instrument, Calibration.instrument_id == Instrument.id)
+                .join(Customer, Instrument.customer_id == Customer.id)
+                .where(CalibrationStandard.standard_id == std.id)
+                .order_by(Calibration.performed_on.desc(), Calibration.id.desc()))
+        total = s.scalar(select(func.count()).select_from(stmt.order_by(None).subquery()))
+        rows = s.execute(stmt.limit(size).offset((page - 1) * size)).all()
+        numbers: dict[int, list] = {}
+        for cid, cert_id, number in s.execute(
+                select(Certificate.calibration_id, Certificate.id, Certificate.number)
+                .where(Certificate.calibration_id.in_([r[0] for r in rows]))
+                .order_by(Certificate.id)):
+            numbers.setdefault(cid, []).append((cert_id, number))
+    keys = ("certificate", "calibrated_on", "due_on", "retired_on")
+    changes = []
+    for e in events:
+        after = json.loads(e.after_json or "{}")
+        changes.append({"at": e.at, "username": e.username, "action": e.action,
+                        **{k: after.get(k) for k in keys}})
+    uses = [{"calibration_id": r[0], "performed_on": r[1], "status": r[2], "serial": r[3],
+             "model": r[4], "customer": r[5], "due_on_at_use": r[6],
+             "certificates": numbers.get(r[0], [])} for r in rows]
+    return {"standard": std, "changes": changes, "uses": uses, "total": total}
+
+
+def due(store, page: int = 1, size: int = 50, search: str = "", within_days: int = 30,
+        customer: str = "", today=None) -> tuple[list[dict], int]:
+    """(a page of the instruments due for recalibration within ``within_days`` or overdue,
+    soonest due first, their total) — :func:`gonio.records.services.due_instruments` —,
+    ``search`` matching serial, model or customer (substring, any case), ``customer`` one
+    customer's exactly (a recall list)."""
+    from gonio.records.services import due_instruments
+
+    rows = due_instruments(store, today, within_days)
+    if customer:
+        rows = [r for r in rows if r["customer"] == customer]
+    if search:
+        needle = search.casefold()
+        rows = [r for r in rows if any(needle in str(r[k]).casefold()
+                                       for k in ("serial", "model", "customer"))]
+    return rows[(page - 1) * size: page * size], len(rows)
+
+
+def recall(store, customer: str = "", within_days: int = 30, today=None) -> list[dict]:
+    """Recall notices: per customer (one, or every customer with something due), the
+    customer's name and address and its instruments due within ``within_days`` or overdue
+    (:func:`due`), with the number of the last certificate issued for each."""
+    rows, _ = due(store, 1, 10**7, "", within_days, customer, today)
+    with store.session() as s:
+        addresses = dict(s.execute(select(Customer.name, Customer.address)).all())
+        last_cert = dict(s.execute(
+            select(Calibration.instrument_id, func.max(Certificate.number))
+            .join(Calibration, Certificate.calibration_id == Calibration.id)
+            .where(Calibration.instrument_id.in_([r["instrument_id"] for r in rows]))
+            .group_by(Calibration.instrument_id)).all())
+    out: dict[str, dict] = {}
+    for r in rows:
+        notice = out.setdefault(r["customer"], {"customer": r["customer"], "address":
+                                                addresses.get(r["customer"], ""), "rows": []})
+        notice["rows"].append(dict(r, certificate=last_cert.get(r["instrument_id"], "")))
+    return [out[k] for k in sorted(out)]
+
+
 def users(store):
     with store.session() as s:
         return s.scalars(select(User).order_by(User.username)).all()
@@ -179,9 +262,8 @@ def audit_events(store, page: int = 1, size: int = 100, entity: str = "",
 #: The lists ``gonio serve`` exports as CSV: name → (header, rows(store, params)).
 def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] | None:
     """A whole list as (header, rows) for its CSV export, or None for an unknown list;
-    ``params``: the list's filters (audit: entity, entity_id, username; due: customer)."""
-    from gonio.records import services
-
+    ``params``: the list's filters (audit: entity, entity_id, username; due: q,
+    within_days, customer as :func:`due` takes them)."""
     big = 10**7
     if name == "customers":
         return (["id", "name", "address", "retired_on"],
@@ -212,9 +294,8 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
                   .name, c.calibration.instrument.serial, c.replaces.number if c.replaces
                   else "", c.reason, c.seal_sha256, c.pdf_sha256] for c in rows])
     if name == "due":
-        rows = services.due_instruments(store)
-        if params.get("customer"):
-            rows = [r for r in rows if r["customer"] == params["customer"]]
+        rows, _ = due(store, 1, big, params.get("q", ""), params.get("within_days", 30),
+                      params.get("customer", ""))
         return (["customer", "instrument", "model", "serial", "last_calibration", "due",
                  "overdue"],
                 [[r["customer"], r["instrument_id"], r["model"], r["serial"], r["last"],

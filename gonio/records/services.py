@@ -477,6 +477,25 @@ def store_file(store, stream, *, limit_bytes: float = MAX_UPLOAD) -> tuple[str, 
     return digest, size
 
 
+#: what a calibration form may carry beside its readings file: a protocol and a laboratory
+#: file (1 MiB each) and the form's fields
+FORM_OVERHEAD_BYTES = 3 * 2**20
+
+
+def check_upload_size(declared_bytes, limit_bytes: float = MAX_UPLOAD) -> None:
+    """An upload whose declared size (the request's Content-Length) exceeds the readings
+    limit (``GONIO_MAX_UPLOAD_BYTES``, default 256 MiB) plus :data:`FORM_OVERHEAD_BYTES` is
+    refused before a byte of it is read: a GonioError with the limit, in one line."""
+    try:
+        n = int(declared_bytes)
+    except (TypeError, ValueError):
+        return                        # not declared: the store counts while it reads
+    if n > limit_bytes + FORM_OVERHEAD_BYTES:
+        raise GonioError(f"the upload ({blobs.size_text(n)}) is larger than the limit of "
+                         f"{blobs.size_text(limit_bytes)} for a readings file; nothing was "
+                         "stored", key="upload")
+
+
 def file_bytes(store, sha256: str) -> bytes:
     """A stored file's bytes (checked against the digest)."""
     return blobs.get_bytes(store.blob_root, sha256)
@@ -530,11 +549,15 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        lab_sha256: str | None = None, lab_name: str = "",
                        standard_ids: Iterable[int] = (), temperature_c=None,
                        humidity_pct=None, performed_on=None, received_on=None,
-                       place: str = "") -> Calibration:
+                       place: str = "", reuse_note: dict | None = None) -> Calibration:
     """A new calibration, queued for the worker (technician). Standards past their due
     date on the day of the calibration are refused (ISO/IEC 17025 6.4.7). ``lab_sha256``:
     a stored laboratory file whose decision rule and limits decide this calibration,
-    validated here (:func:`lab_file`) before anything is queued."""
+    validated here (:func:`lab_file`) before anything is queued. The submission checks
+    (a standard, the environment, the readings against the instrument, readings used
+    before) are :func:`gonio.records.submission.submit_calibration`'s, which the web form
+    calls; ``reuse_note``: its record of readings used again (who, why, used by which
+    calibrations), audited with the creation."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -583,6 +606,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             s.add(CalibrationStandard(calibration_id=cal.id, standard_id=sid,
                                       due_on_at_use=st.due_on))
         audit(s, actor, "create", "calibration", cal.id, None, state(cal))
+        if reuse_note:
+            audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
         s.commit()
     return cal
 
@@ -1129,7 +1154,7 @@ def history(store, instrument_id: int) -> dict:
 
 def instrument_limits(inst: Instrument) -> dict:
     """Item key → (lower, upper) from the instrument's specification limits."""
-    from gonio.report.stated import limits_of
+    from gonio.analysis.conformity import limits_of
 
     out = {}
     for lim in json.loads(inst.limits_json or "[]"):
@@ -1174,18 +1199,24 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
                     *limits.get(key, (None, None))) for r in rows]
              for key, rows in hist.items()}
     months, _ = default_interval(inst.spec_key)
-    return propose(table, months)
+    return propose(table, months, limited_items=tuple(limits))
 
 
 def due_instruments(store, today: _dt.date | None = None, within_days: int = 30) -> list[dict]:
-    """Instruments due for recalibration within ``within_days`` or overdue: the last issued
-    calibration's date plus the instrument's interval (else the specification's default)."""
+    """Instruments in use (not retired) due for recalibration within ``within_days`` or
+    overdue: the last issued calibration's date plus the instrument's interval (else the
+    specification's default)."""
     today = today or _dt.date.today()
     with store.session() as s:
-        last = dict(s.execute(
+        last = dict(s.execute(       # issued: it has a certificate (also while amended)
             select(Calibration.instrument_id, func.max(Calibration.performed_on))
-            .where(Calibration.status == "issued").group_by(Calibration.instrument_id)).all())
-        insts = s.scalars(select(Instrument).where(Instrument.id.in_(list(last)))).all()
+            .where(Calibration.id.in_(select(Certificate.calibration_id)))
+            .group_by(Calibration.instrument_id)).all())
+        from sqlalchemy.orm import selectinload
+
+        insts = s.scalars(select(Instrument).options(selectinload(Instrument.customer))
+                          .where(Instrument.id.in_(list(last)),
+                                 Instrument.retired_on.is_(None))).all()
         out = []
         for inst in insts:
             months = inst.interval_months or default_interval(inst.spec_key)[0]
@@ -1195,7 +1226,7 @@ def due_instruments(store, today: _dt.date | None = None, within_days: int = 30)
                             "model": inst.model, "customer": inst.customer.name,
                             "last": last[inst.id], "due": due,
                             "overdue": due < today})
-    return sorted(out, key=lambda d: d["due"])
+    return sorted(out, key=lambda d: (d["due"], d["customer"], d["serial"]))
 
 
 def _add_months(day: _dt.date, months: int) -> _dt.date:

@@ -73,6 +73,7 @@ figure svg{width:100%%;height:auto}
 figcaption{font-size:13px;color:#333;text-align:center}
 .u{font-weight:bold;font-size:15px}
 p.end{text-align:center;font-weight:bold;margin-top:18px}
+div.closing{break-before:avoid;page-break-before:avoid;break-inside:avoid;page-break-inside:avoid}
 footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
 @page{size:A4;margin:20mm 14mm 18mm 14mm;
  @top-left{content:%(lab)s;font-family:%(font)s;font-size:9pt}
@@ -202,11 +203,15 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
     out.append(f"<h1>{html.escape(L['title'])}</h1>")
     caps = figure_captions(content["blocks"], L)
     out += [_block_html(b, svgs, caps) for b in content["blocks"]]
+    # the end mark, footer and closing banner travel together and stay with the last block,
+    # so a printed certificate never ends with a page holding only its end mark
+    out.append('<div class="closing">')
     out.append(f'<p class="end" id="end-of-certificate">— {html.escape(L["end_mark"])} —</p>')
     out.append(f"<footer>{html.escape(L['certificate_no'] + L['colon'])}{html.escape(cid)} — "
                f"{html.escape(L['statement_copy'])}</footer>")
     if content["virtual"]:
         out.append(f'<div class="banner">{html.escape(L["virtual"])}</div>')
+    out.append("</div>")
     out += ["</body>", "</html>", ""]
     return "\n".join(out)
 

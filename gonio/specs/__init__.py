@@ -40,7 +40,8 @@ from typing import Any, Callable
 
 from gonio.errors import GonioError
 
-__all__ = ["Coverage", "Specification", "available", "commands", "get", "item_order", "lazy",
+__all__ = ["Coverage", "Specification", "available", "calibrate_arguments", "commands", "get",
+           "item_order", "lazy",
            "CONTENT_FIELDS", "FIGURE_ROLES", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
            "DEFAULT_KEY"]
 
@@ -69,9 +70,9 @@ _REF = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*"
 _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 #: The fields of a :class:`Specification` that are strings, and its optional hooks.
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
-                  "outputs", "readings_format", "certificate_content")
+                  "outputs", "readings_format", "certificate_content", "calibrate_arguments")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs")
+          "named_inputs", "acquisition")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -204,6 +205,12 @@ class Specification:
     run_trial : callable or None
         ``run_trial(bench, protocol, seed)`` → (readings, truth dict): one simulated
         calibration held in memory, for the coverage study.
+    acquisition : callable or None
+        ``acquisition(protocol=None, metadata=None)`` →
+        :class:`gonio.protocol.programme.Programme`: the segments ``gonio acquire`` runs on
+        a laboratory's rate bench (:mod:`gonio.instruments.rate_acquire`) and the readings'
+        metadata; ``metadata`` holds the laboratory's ``--meta`` values. None: the
+        specification is not acquired through gonio's rate instruments.
     budget : callable or None
         ``budget(**options)`` → the specification's own uncertainty annex, reproduced (an
         object with ``to_dict()`` and ``to_text()``).
@@ -218,6 +225,15 @@ class Specification:
         The command-line options of ``gonio simulate|calibrate|budget`` the hooks take
         beyond the common ones (``protocol`` and ``dcc`` among them where they apply); any
         other is refused naming the specification.
+    calibrate_arguments : str
+        ``"module:function"``: the ``gonio calibrate`` options of the specification's own
+        (those of ``calibrate_options`` beyond ``protocol`` and ``dcc``, such as the optical
+        draft's ``--budget``). ``function(group)`` adds them with ``group.add_argument`` as
+        argparse does; each option's ``dest`` is the keyword its ``calibrate`` takes, its
+        default None (False for a flag: not given), and an option whose ``metavar`` is
+        ``"FILE"`` names an input file (never replaced by an output). The command line
+        imports the module only when it builds ``gonio calibrate``'s parser, so it imports
+        argparse-level modules only (as a ``commands`` module does); empty: none.
     readings_format : str
         The ``# format:`` line its readings files carry, when that alone names it (a file
         without ``# spec:``); empty: none.
@@ -269,6 +285,7 @@ class Specification:
     simulate: Callable[..., dict] | None = None
     truth: Callable[..., dict] | None = None
     run_trial: Callable[..., tuple] | None = None
+    acquisition: Callable[..., Any] | None = None
     budget: Callable[..., Any] | None = None
     coverage: Coverage | None = None
     outputs: str = ""
@@ -280,6 +297,7 @@ class Specification:
     default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
+    calibrate_arguments: str = ""
     item_keys: tuple[str, ...] = ()
     dcc_units: dict[str, str] = field(default_factory=dict)
     recalibration_interval_months: int | None = None
@@ -327,6 +345,9 @@ class Specification:
             raise _field_error(where, "commands", "a tuple of (name, 'module:function') pairs",
                                cmds)
         object.__setattr__(self, "commands", tuple(tuple(c) for c in cmds))
+        if self.calibrate_arguments and not _REF.fullmatch(self.calibrate_arguments):
+            raise _field_error(where, "calibrate_arguments", "a 'module:function' reference",
+                               self.calibrate_arguments)
         units = self.dcc_units
         if not isinstance(units, dict) or not all(isinstance(k, str) and k for k in units):
             raise _field_error(where, "dcc_units", "a dict {unit: D-SI unit}", units)
@@ -596,10 +617,13 @@ def _load(name: str, ref: str) -> Specification:
         if not _module_exists(module):
             raise GonioError(f"{head} is invalid: field {field_name} names module {module!r}, "
                              "which does not exist", key="--spec")
-    for name, ref in obj.commands:
+    refs = [(f"commands[{name!r}]", ref) for name, ref in obj.commands]
+    if obj.calibrate_arguments:
+        refs.append(("calibrate_arguments", obj.calibrate_arguments))
+    for field_name, ref in refs:
         module, _, function = ref.partition(":")
         if not _defines(module, function):
-            raise GonioError(f"{head} is invalid: field commands[{name!r}] names {ref!r}, and "
+            raise GonioError(f"{head} is invalid: field {field_name} names {ref!r}, and "
                              f"{module} defines no {function}", key="--spec")
     return obj
 
@@ -631,6 +655,8 @@ def _defines(module: str, name: str) -> bool:
 def _named_modules(spec: Specification) -> list[tuple[str, str]]:
     """(field, module) of every module a specification names by string."""
     out = [(n, getattr(spec, n)) for n in ("outputs", "certificate_content") if getattr(spec, n)]
+    if spec.calibrate_arguments:
+        out.append(("calibrate_arguments", spec.calibrate_arguments.partition(":")[0]))
     return out + [(f"commands[{name!r}]", ref.partition(":")[0]) for name, ref in spec.commands]
 
 
@@ -681,6 +707,37 @@ def get(key: str) -> Specification:
         raise GonioError(f"unknown specification {key!r} (known: {', '.join(sorted(eps))})",
                          key="spec")
     return _load(key, eps[key])
+
+
+def calibrate_arguments() -> list[tuple[Specification, Callable[..., None]]]:
+    """``(specification, add)`` of every registered specification with its own ``gonio
+    calibrate`` options (``Specification.calibrate_arguments``), in key order: ``add(group)``
+    adds them to an argparse argument group. A specification, or a module, that cannot be
+    loaded adds none, with a warning naming it (its own ``--spec`` still fails with the error).
+
+    >>> [s.key for s, _ in calibrate_arguments() if s.key == "ogam-draft"]
+    ['ogam-draft']
+    """
+    import warnings
+
+    out = []
+    for key, ref in sorted(_entry_points().items()):
+        try:
+            spec = _load(key, ref)
+        except GonioError as exc:
+            warnings.warn(f"{exc.message}; its calibrate options are not available",
+                          stacklevel=2)
+            continue
+        if not spec.calibrate_arguments:
+            continue
+        mod, _, attr = spec.calibrate_arguments.partition(":")
+        try:
+            out.append((spec, getattr(importlib.import_module(mod), attr)))
+        except Exception as exc:     # the plug-in's own bug costs only its own options
+            warnings.warn(f"the calibrate options of specification {key!r} "
+                          f"({spec.calibrate_arguments!r}) cannot be loaded "
+                          f"({type(exc).__name__}: {exc})", stacklevel=2)
+    return out
 
 
 def commands() -> list[tuple[str, Callable[..., None]]]:

@@ -16,6 +16,7 @@ a browser needs:
 
 from __future__ import annotations
 
+import html
 from pathlib import Path
 
 from fastapi import FastAPI, Request
@@ -66,8 +67,11 @@ def create_app(store, dispatcher=None) -> FastAPI:
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException):
+        # a form the parser refused (a part too large, too many fields) says what it was
+        said = html.escape(str(exc.detail)) if exc.status_code in (400, 413) and \
+            exc.detail else "not found or not allowed"
         return HTMLResponse(f"<!doctype html><title>{exc.status_code}</title>"
-                            f"<p>{exc.status_code}: not found or not allowed. "
+                            f"<p>{exc.status_code}: {said}. "
                             "<a href='/'>Back</a></p>", status_code=exc.status_code)
 
     pages.register(app)

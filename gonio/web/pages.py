@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import datetime as _dt
 import hashlib
+import hmac
+import html
 import re
 
 from fastapi import APIRouter, Request
-from fastapi.responses import RedirectResponse, Response
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from gonio.errors import GonioError, TooManyAttemptsError
-from gonio.records import auth, queries, services
+from gonio.records import auth, blobs, queries, services, submission
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
                               Forbidden, current, file_response, form, fresh_token, page_of,
                               render, wake)
@@ -85,8 +87,9 @@ def dashboard(request: Request):
     review, _ = queries.calibrations(store, 1, 20, "computed")
     approve, _ = queries.calibrations(store, 1, 20, "reviewed")
     active, _ = queries.calibrations(store, 1, 20, "running")
+    due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
-                  due=services.due_instruments(store), review=review, approve=approve,
+                  due=due, n_due=n_due, review=review, approve=approve,
                   active=active, today=_dt.date.today())
 
 
@@ -257,7 +260,61 @@ def instrument_history(request: Request, inst_id: int):
 _SVG_CACHE: dict[str, str] = {}
 
 
+# --------------------------------------------------------------------------- due list, recall
+
+#: how far ahead the due list may look (days)
+DUE_WINDOWS = (30, 90, 180, 365)
+
+
+def _due_filters(request: Request) -> dict:
+    """The due list's filters from the query: ``q`` (search), ``within_days`` (one of
+    :data:`DUE_WINDOWS`), ``customer`` (one customer, exactly)."""
+    try:
+        within = int(request.query_params.get("within_days", "30"))
+    except ValueError:
+        within = 30
+    return {"q": request.query_params.get("q", "")[:100],
+            "within_days": within if within in DUE_WINDOWS else 30,
+            "customer": request.query_params.get("customer", "")[:200]}
+
+
+@router.get("/due")
+def due_page(request: Request):
+    user, csrf = current(request)
+    from urllib.parse import urlencode
+
+    page, filters = page_of(request), _due_filters(request)
+    rows, total = queries.due(_store(request), page, PAGE, filters["q"],
+                              filters["within_days"], filters["customer"])
+    query = urlencode({k: v for k, v in filters.items() if v})
+    return render(request, "due.html", user, csrf, rows=rows, total=total, page=page,
+                  size=PAGE, f=filters, windows=DUE_WINDOWS, query=query,
+                  extra="&" + query if query else "", today=_dt.date.today())
+
+
+@router.get("/due/recall")
+def recall_page(request: Request):
+    """The recall notices, one printed page per customer (the print stylesheet)."""
+    user, csrf = current(request)
+    filters = _due_filters(request)
+    return render(request, "recall.html", user, csrf, today=_dt.date.today(),
+                  notices=queries.recall(_store(request), filters["customer"],
+                                         filters["within_days"]),
+                  f=filters, lab=services.settings(_store(request)))
+
+
 # --------------------------------------------------------------------------- standards
+
+
+@router.get("/standards/{std_id}")
+def standard_page(request: Request, std_id: int):
+    user, csrf = current(request)
+    page = page_of(request)
+    d = queries.standard_history(_store(request), std_id, page, PAGE)
+    if d is None:
+        return Response("no such standard", status_code=404)
+    return render(request, "standard.html", user, csrf, **d, page=page, size=PAGE,
+                  today=_dt.date.today())
 
 
 @router.get("/standards")
@@ -299,22 +356,49 @@ def calibrations_page(request: Request):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place")
+              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
+              "metadata")
+#: the calibration form's files: field, largest size (bytes)
+NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
+             ("lab_file", services.MAX_LAB_BYTES))
 
 
-def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None):
+def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None,
+              kept=None, reuse=False):
     """The calibration form; ``data``: what was entered, kept when it comes back with an
-    error (text fields and ticked standards; files must be chosen again)."""
+    error (text fields and ticked standards); ``kept``: field → (token, name) of the files
+    already uploaded (:func:`kept_token`), sent again with the form so none is chosen twice;
+    ``reuse``: the readings were used before (the form asks why they are used again)."""
     store = _store(request)
     inst, _ = queries.instrument(store, inst_id)
     if inst is None:
         return Response("no such instrument", status_code=404)
     from gonio.specs import available
-    entered = {k: str(data.get(k) or "")[:200] for k in NEW_FIELDS} if data else {}
+    entered = {k: str(data.get(k) or "")[:2000] for k in NEW_FIELDS} if data else {}
     ticked = {str(v) for v in data.getlist("standards")} if data else set()
     return render(request, "calibration_new.html", user, csrf, status_code=status_code,
                   error=error, inst=inst, standards=[s for s in queries.standards(store)],
-                  specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked)
+                  specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked,
+                  kept=kept or {}, reuse=reuse or bool(entered.get("reuse_reason")),
+                  limit=blobs.size_text(services.MAX_UPLOAD))
+
+
+def kept_token(csrf: str, sha: str, name: str) -> str:
+    """A stored upload handed back with a form that came back with an error: its digest and
+    an HMAC over digest and shown name keyed by the session's CSRF token, so that a form can
+    name only files this session uploaded."""
+    mac = hmac.new(csrf.encode(), f"{sha}\0{name}".encode(), "sha256").hexdigest()
+    return f"{sha}.{mac}"
+
+
+def _kept(data, field: str, csrf: str) -> tuple[str | None, str]:
+    """(sha256, name) of a file kept from the form's earlier sending, or (None, "")."""
+    token = str(data.get("kept_" + field) or "")
+    name = clean_name(data.get("kept_" + field + "_name"))
+    sha = token.split(".", 1)[0]
+    if token and hmac.compare_digest(token, kept_token(csrf, sha, name)):
+        return sha, name
+    return None, ""
 
 
 @router.get("/instruments/{inst_id}/calibrate")
@@ -346,25 +430,64 @@ def _upload(store, data, field: str, limit_bytes: float) -> tuple[str | None, st
 @router.post("/instruments/{inst_id}/calibrate")
 async def calibration_create(request: Request, inst_id: int):
     user, csrf = current(request)
+    try:
+        services.check_upload_size(request.headers.get("content-length"),
+                                   services.MAX_UPLOAD)
+    except GonioError as exc:         # refused before the upload is read
+        return HTMLResponse(f"<!doctype html><title>Upload too large</title><p role=alert>"
+                            f"{html.escape(str(exc))}. <a href='/instruments/{inst_id}/"
+                            "calibrate'>Back to the form</a></p>", status_code=413)
+    data = await form(request, csrf)
+    store = _store(request)
+    files: dict[str, tuple] = {}
+    try:
+        services.require(user, "technician")
+        for field, limit in NEW_FILES:
+            files[field] = _upload(store, data, field, limit)
+            if files[field][0] is None:
+                files[field] = _kept(data, field, csrf)
+        sha, name = files["readings"]
+        if sha is None:
+            raise GonioError("choose a readings file", key="readings")
+        cal = submission.submit_calibration(
+            store, user, instrument_id=inst_id, readings_sha256=sha, readings_name=name,
+            spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+            protocol_sha256=files["protocol_file"][0], lab_sha256=files["lab_file"][0],
+            lab_name=files["lab_file"][1],
+            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+            performed_on=data.get("performed_on"), received_on=data.get("received_on"),
+            place=data.get("place"), reuse_reason=data.get("reuse_reason"))
+    except GonioError as exc:
+        kept = {f: (kept_token(csrf, sha, name), name) for f, (sha, name) in files.items()
+                if sha is not None}
+        return _new_form(request, user, csrf, inst_id, 400, str(exc), data, kept,
+                         reuse=exc.key == submission.REUSE_KEY)
+    wake(request)
+    return _back(f"/calibrations/{cal.id}")
+
+
+@router.post("/instruments/{inst_id}/acquire")
+async def calibration_acquire(request: Request, inst_id: int):
+    """A calibration started from a connected bench: the worker takes the readings through
+    the instruments (:mod:`gonio.records.bench`), then calibrates them."""
+    from gonio.records import bench
+
+    user, csrf = current(request)
     data = await form(request, csrf)
     store = _store(request)
     try:
         services.require(user, "technician")
-        up = data.get("readings")
-        if up is None or not hasattr(up, "read") or not up.filename:
-            raise GonioError("choose a readings file", key="readings")
-        sha, _ = services.store_file(store, up.file)
         proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
-        lab_sha, lab_name = _upload(store, data, "lab_file", services.MAX_LAB_BYTES)
-        cal = services.create_calibration(
-            store, user, instrument_id=inst_id, readings_sha256=sha,
-            readings_name=clean_name(up.filename), spec_key=data.get("spec_key") or None,
-            protocol=data.get("protocol") or None, protocol_sha256=proto_sha,
-            lab_sha256=lab_sha, lab_name=lab_name,
+        cal = bench.create_bench_calibration(
+            store, user, instrument_id=inst_id,
+            resources={r: data.get(r) for r in bench.ROLES},
+            metadata=bench.parse_metadata_lines(data.get("metadata")),
+            spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+            protocol_sha256=proto_sha, place=data.get("place"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
-            performed_on=data.get("performed_on"), received_on=data.get("received_on"),
-            place=data.get("place"))
+            performed_on=data.get("performed_on"))
     except GonioError as exc:
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
@@ -551,8 +674,9 @@ def export_csv(request: Request, name: str):
         refused = _may_read(user, "reviewer", "admin")
         if refused:
             return refused
-    got = queries.export_rows(_store(request), name, _filters(
-        request, AUDIT_FILTERS + ("status", "customer")))
+    params = _filters(request, AUDIT_FILTERS + ("status",))
+    params.update(_due_filters(request))
+    got = queries.export_rows(_store(request), name, params)
     if got is None:
         return Response("no such list", status_code=404)
     stamp = _dt.date.today().isoformat()

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from gonio.records.interval import (DAYS_PER_MONTH, DriftFit, fit_drift, propose, staircase,
-                                    time_to_limit)
+from gonio.records.interval import (DAYS_PER_MONTH, MIN_MONTHS, DriftFit, fit_drift, propose,
+                                    staircase, time_to_limit)
 
 
 def closed_form_time(fit: DriftFit, limit: float, sign: float, k: float) -> float:
@@ -86,3 +86,48 @@ def test_propose_uses_drift_with_three_points_else_staircase_else_default():
     assert propose({"angle_deviation": rows[:2]}, 12).method.startswith("simple response")
     nolim = [(r[0], r[1], r[2], r[3], None, None) for r in rows]
     assert propose({"angle_deviation": nolim}, 12).months == 12
+
+
+def lim_rows(days, values, U=0.04, lim=0.5):
+    return [(t, v, U, 2.0, -lim, lim) for t, v in zip(days, values)]
+
+
+def test_calibrations_days_apart_do_not_lengthen_the_interval():
+    """Two calibrations three days apart, both within the limits, are no evidence for a
+    longer interval (before: 12 × 1.25 × 1.25 → 18 months)."""
+    p = propose({"angle_deviation": lim_rows([0, 3], [0.1, 0.1])}, 12)
+    assert p.months == 12 and "1 found within the limits" in p.detail
+    # a year apart the second one counts once: 12 × 1.25, by the method's own rule
+    p = propose({"angle_deviation": lim_rows([0, 366], [0.1, 0.1])}, 12)
+    assert p.months == math.floor(staircase(12, [True], max_months=24))
+    # one found outside always shortens, however soon it came
+    assert propose({"angle_deviation": lim_rows([0, 3], [0.1, 0.7])}, 12).months == 6
+
+
+def test_drift_needs_the_history_to_span_an_interval():
+    """Three calibrations within a month cannot be extrapolated over a year: the staircase
+    decides, and the detail says why the drift was not used."""
+    p = propose({"angle_deviation": lim_rows([0, 10, 20], [0.1, 0.2, 0.3])}, 12)
+    assert p.method.startswith("simple response")
+    assert "drift not extrapolated: the history spans less than 12 months" in p.detail
+
+
+def test_never_zero_months_and_saying_why():
+    """An item whose fitted band is at its limit already: the drift gives 0 months; the
+    proposal is the stated minimum, with the reason (before: "0 months")."""
+    rows = lim_rows([0, 365, 730], [0.30, 0.40, 0.49], U=0.02)
+    fit = fit_drift([r[0] for r in rows], [r[1] for r in rows], [0.01] * 3)
+    assert time_to_limit(fit, -0.5, 0.5) < DAYS_PER_MONTH     # the drift says < 1 month
+    p = propose({"angle_deviation": rows}, 12)
+    assert p.months == MIN_MONTHS == 1
+    assert "less than the shortest interval proposed" in p.detail and "angle_deviation" in \
+        p.detail
+
+
+def test_no_history_with_limits_is_not_called_no_limits():
+    """An instrument with limits but no issued calibration yet: the default, and the
+    detail names the limited items (before: "no specification limits")."""
+    p = propose({}, 12, limited_items=("angle_deviation",))
+    assert p.months == 12 and "no specification limits" not in p.detail
+    assert "angle_deviation" in p.detail
+    assert "no specification limits" in propose({}, 12).detail

@@ -231,8 +231,9 @@ def test_history_and_interval_with_limits(store, people, computed_folder, bench_
     assert [r["date"].isoformat() for r in hist["angle_deviation"]] == ["2024-01-10",
                                                                        "2025-01-10"]
     p = services.propose_interval(store, inst.id)
-    # two calibrations within ±0.5″: the staircase lengthens 12 months twice
-    assert p.method.startswith("simple response") and p.months == 18
+    # two calibrations a year apart within ±0.5″: the first starts the 12 months, the second
+    # (after more than half of them) lengthens them once (before: ×1.25 for each, 18 months)
+    assert p.method.startswith("simple response") and p.months == 15
     assert p.detail.startswith("2 calibration(s)")
     # a third calibration computed but never issued is no evidence for the interval
     # (before: proposals came from calibrations that were never issued)

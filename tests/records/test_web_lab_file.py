@@ -36,6 +36,8 @@ def limits_toml(*items) -> str:
 def instrument(store, spec_key="ogam-draft"):
     actor = services.user(store, "tech")
     cust = services.add_customer(store, actor, "C")
+    services.add_standard(store, actor, name="rotary table", identifier="RT-07",
+                          due_on="2099-01-01")
     # the instrument's own limit: a lab file's replace it for the calibration
     return services.register_instrument(store, actor, customer_id=cust.id, serial="RLG-0001",
                                         spec_key=spec_key,
@@ -50,7 +52,9 @@ def post(client, inst, readings: bytes, lab: str | bytes | None, name="my-lab.to
     if protocol is not None:
         files["protocol_file"] = ("protocol.toml", io.BytesIO(protocol))
     return client.post(f"/instruments/{inst.id}/calibrate", files=files,
-                       data={"csrf": csrf_of(client), "performed_on": str(dt.date.today())})
+                       data={"csrf": csrf_of(client), "performed_on": str(dt.date.today()),
+                             "standards": ["1"], "temperature_c": "20.1",
+                             "humidity_pct": "45"})
 
 
 def alert(html: str) -> str:

@@ -128,8 +128,12 @@ def test_roles_enforced_on_the_server(app, sqlite_store):
                                         "serial": "S1", "spec_key": "ogam-draft"})
     assert r.status_code == 303
     inst_id = int(r.headers["location"].rsplit("/", 1)[1])
+    std = services.add_standard(sqlite_store, services.user(sqlite_store, "tech"), name="T",
+                                identifier="T-1", due_on="2099-01-01")
     r = tech.post(f"/instruments/{inst_id}/calibrate",
-                  data={"csrf": csrf_of(tech)}, files={"readings": ("r.csv", b"x,y\n")})
+                  data={"csrf": csrf_of(tech), "standards": [str(std.id)],
+                        "temperature_c": "20", "humidity_pct": "40"},
+                  files={"readings": ("r.csv", b"x,y\n")})
     assert r.status_code == 303
     cal_id = int(r.headers["location"].rsplit("/", 1)[1])
     with sqlite_store.writing() as s:               # as if the worker had computed it
@@ -197,8 +201,12 @@ def test_uploaded_file_name_never_becomes_a_path(app, sqlite_store):
     cust = services.add_customer(sqlite_store, actor, "C")
     inst = services.register_instrument(sqlite_store, actor, customer_id=cust.id, serial="S",
                                         spec_key="ogam-draft")
-    body = b"# spec: ogam-draft\n"
-    r = tech.post(f"/instruments/{inst.id}/calibrate", data={"csrf": csrf_of(tech)},
+    std = services.add_standard(sqlite_store, actor, name="T", identifier="T-1",
+                                due_on="2099-01-01")
+    body = b"# spec: ogam-draft\ntest,series,round,time_s,table_deg\n"
+    r = tech.post(f"/instruments/{inst.id}/calibrate", data={
+        "csrf": csrf_of(tech), "standards": [str(std.id)], "temperature_c": "20",
+        "humidity_pct": "40"},
                   files={"readings": ("../../../../tmp/evil\x00.csv", io.BytesIO(body))})
     assert r.status_code == 303
     cal = services.calibration(sqlite_store, int(r.headers["location"].rsplit("/", 1)[1]))
@@ -208,7 +216,7 @@ def test_uploaded_file_name_never_becomes_a_path(app, sqlite_store):
                for p in stored if p.is_file()) and any(p.name == cal.readings_sha256
                                                       for p in stored)
     with sqlite_store.session() as s:
-        assert s.scalar(select(func.count()).select_from(Standard)) == 0
+        assert s.scalar(select(func.count()).select_from(Standard)) == 1
 
 
 def test_security_headers_and_cookie_flags(app):

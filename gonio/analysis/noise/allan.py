@@ -357,14 +357,18 @@ def _sum_sq_diff(z: np.ndarray, m: int, coef, buf: np.ndarray) -> float:
     return total
 
 
-def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
+def _sums_direct_shared(x: np.ndarray, ms, order: int = 2) -> np.ndarray:
     """Σ (x[n+2m] − 2x[n+m] + x[n])² for each m (SP 1065 eq. 11), chunks outside, m
     inside: for a set like the octaves the data a chunk needs for one m is largely
     what the next m needs, so each chunk of ``x`` comes from main memory about once
-    for all m (the sums are bound by memory bandwidth)."""
+    for all m (the sums are bound by memory bandwidth). ``order`` 3: the third
+    differences x[n+3m] − 3x[n+2m] + 3x[n+m] − x[n] of the Hadamard variance (eq. 20;
+    an in-memory phase only)."""
     ms = [int(m) for m in ms]
     n = x.size
     bsz = min(_BLOCK_SHARED, n)
+    if order == 3:
+        return _sums_shared_third(x, ms, bsz)
     if isinstance(x, CumulativeSum) and len(ms) > 1 and max(ms) > bsz:
         # a streamed phase: each m beyond a chunk on its own (its three far pieces then
         # move along the blocks together and stay cached; all m at once would evict them);
@@ -397,6 +401,44 @@ def _sums_direct_shared(x: np.ndarray, ms) -> np.ndarray:
                 sub(x[s + 2 * m: e + 2 * m], mid, out=v)
                 sub(v, mid, out=v)
                 add(v, x[s:e], out=v)
+            total[i] += _ssq(v)
+    return total
+
+
+def _sums_shared_third(x: np.ndarray, ms: list[int], bsz: int) -> np.ndarray:
+    """:func:`_sums_direct_shared` of the third differences (the Hadamard variance):
+    within a chunk by three successive differences at lag m of one slice of ``x``, beyond
+    it from the four far pieces (no temporaries: two work buffers)."""
+    n = x.size
+    buf = np.empty(6 * bsz)
+    tmp = np.empty(bsz)
+    total = np.zeros(len(ms))
+    lengths = [n - 3 * m for m in ms]
+    order = sorted(range(len(ms)), key=lambda i: ms[i])
+    sub, add = np.subtract, np.add
+    reach = 3 * max((m for m in ms if m <= bsz), default=0)
+    for s in range(0, max(lengths), bsz):
+        near = x[s: min(n, s + bsz + reach)] if reach else None
+        for i in order:
+            m, length = ms[i], lengths[i]
+            if s >= length:
+                break
+            e = min(length, s + bsz)
+            k = e - s
+            if m <= bsz:
+                xs = near[: k + 3 * m]          # x[s: e + 3m]
+                d1 = buf[: k + 2 * m]
+                sub(xs[m:], xs[: k + 2 * m], out=d1)
+                d2 = buf[k + 2 * m: 2 * k + 3 * m]
+                sub(d1[m:], d1[: k + m], out=d2)
+                v = buf[2 * k + 3 * m: 3 * k + 3 * m]
+                sub(d2[m:], d2[:k], out=v)
+            else:
+                v, t = buf[:k], tmp[:k]
+                sub(x[s + 3 * m: e + 3 * m], x[s:e], out=v)
+                sub(x[s + m: e + m], x[s + 2 * m: e + 2 * m], out=t)
+                t *= 3.0
+                add(v, t, out=v)
             total[i] += _ssq(v)
     return total
 
@@ -453,18 +495,74 @@ def _sum_sq_mod(x: np.ndarray, m: int) -> float:
         return _sum_sq_mod_streamed(x, m, n_terms)
     chunk = max(_BLOCK, m)
     e = np.empty(chunk + m)
+    d1 = np.empty(chunk + 2 * m)            # first differences, then the moving sums
     total = 0.0
     for a in range(0, n_terms, chunk):
         b = min(n_terms, a + chunk)
         k = b - a + m - 1  # second differences i = a … b + m − 2
         ee = e[1: k + 1]
-        np.subtract(x[a + 2 * m: a + 2 * m + k], x[a + m: a + m + k], out=ee)
-        ee -= x[a + m: a + m + k]
-        ee += x[a: a + k]
+        # (x[i+2m] − x[i+m]) − (x[i+m] − x[i]): two passes of first differences
+        np.subtract(x[a + m: a + 2 * m + k], x[a: a + m + k], out=d1[: k + m])
+        np.subtract(d1[m: k + m], d1[:k], out=ee)
         e[0] = 0.0
         np.cumsum(e[: k + 1], out=e[: k + 1])
-        total += _ssq(e[m: k + 1] - e[: k + 1 - m])
+        w = d1[: k + 1 - m]
+        np.subtract(e[m: k + 1], e[: k + 1 - m], out=w)
+        total += _ssq(w)
     return total
+
+
+#: Phase points up to which the modified variance's octave sums take the in-memory path
+#: (:func:`_mdev_octave_sums`: one more record-length array); beyond, the chunked sums.
+MDEV_IN_MEMORY = 1 << 24
+
+
+def _mdev_octave_sums(x: np.ndarray, ms) -> np.ndarray:
+    """Σ_j (Σ_{i=j}^{j+m−1} x[i+2m] − 2x[i+m] + x[i])² (SP 1065 eq. 14) at every m of
+    ``ms`` that is a power of two (NaN at the others), with no running sum.
+
+    With y[t] = x[t+1] − x[t] and W_m[j] = Σ_{i=j}^{j+m−1} (x[i+m] − x[i]) (a triangular
+    window of y of width 2m − 1), the inner sum is W_m[j+m] − W_m[j], and the windows
+    double exactly: W_1 = y, W_2m[j] = W_m[j] + 2·W_m[j+m] + W_m[j+2m]. Each octave
+    costs a few vectorised passes over the record where a running sum (a sequential
+    loop) cost several times more; W is the same local sum of y as the chunked path's
+    (no cumulative sum of the record), built in place (one record-length array)."""
+    ms = np.asarray(ms, dtype=np.int64)
+    out = np.full(ms.size, np.nan)
+    pow2 = (ms > 0) & ((ms & (ms - 1)) == 0)
+    if not pow2.any():
+        return out
+    n = x.size
+    w = np.subtract(x[1:], x[:-1])              # W_1 = y, length n − 1
+    size = n - 1
+    buf = np.empty(_BLOCK)
+    top = int(ms[pow2].max())
+    m = 1
+    while True:
+        n_terms = n - 3 * m + 1
+        if n_terms < 1:
+            break
+        hit = np.flatnonzero(ms == m)
+        if hit.size:
+            total = 0.0
+            for a in range(0, n_terms, _BLOCK):
+                b = min(n_terms, a + _BLOCK)
+                v = buf[: b - a]
+                np.subtract(w[a + m: b + m], w[a:b], out=v)
+                total += _ssq(v)
+            out[hit] = total
+        if m >= top:
+            break
+        size -= 2 * m                           # W_2m: W_m[j] + 2 W_m[j+m] + W_m[j+2m]
+        for a in range(0, size, _BLOCK):        # in place, ascending: every read lies
+            b = min(size, a + _BLOCK)           # at or after what this piece writes
+            v = buf[: b - a]
+            np.add(w[a + m: b + m], w[a + m: b + m], out=v)
+            v += w[a:b]
+            v += w[a + 2 * m: b + 2 * m]
+            w[a:b] = v
+        m *= 2
+    return out
 
 
 def _sum_sq_mod_streamed(x, m: int, n_terms: int) -> float:
@@ -490,8 +588,15 @@ def _direct_sums(kind: str, x: np.ndarray, ms) -> np.ndarray:
     if kind == "adev":
         return _sums_direct_shared(x, ms)
     if kind == "mdev":
-        return np.array([_sum_sq_mod(x, int(m)) for m in ms])
+        out = np.full(len(ms), np.nan)
+        if type(x) is np.ndarray and x.size <= MDEV_IN_MEMORY:
+            out = _mdev_octave_sums(x, ms)
+        for i in np.flatnonzero(np.isnan(out)):
+            out[i] = _sum_sq_mod(x, int(ms[i]))
+        return out
     if kind == "hdev":
+        if isinstance(x, np.ndarray):
+            return _sums_direct_shared(x, ms, order=3)
         buf = np.empty(min(_BLOCK, x.size))
         return np.array([_sum_sq_diff(x, int(m), _COEF["hdev"], buf) for m in ms])
     raise AssertionError(kind)

@@ -404,16 +404,32 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
 
 
 # ---------------------------------------------------------------- simulation
-def _flicker_rate(rng, n: int, tau0_s: float, b: float) -> np.ndarray:
+def _flicker_shape(nf: int, ntot: int, tau0_s: float, h: float) -> np.ndarray:
+    """The flicker spectrum's amplitude √(h/f·ntot/(4τ0))·sinc(fτ0) at bins 1..nf−1 of an
+    ``ntot``-point record (f = k/(ntot τ0), rfftfreq's), built piece by piece with the
+    same operations per element as the whole-array form."""
+    shape = np.empty(nf - 1)
+    val = 1.0 / (ntot * tau0_s)               # rfftfreq's spacing
+    for a in range(1, nf, _SYNTH_PIECE):
+        e = min(nf, a + _SYNTH_PIECE)
+        f = np.arange(a, e) * val
+        shape[a - 1:e - 1] = np.sqrt(h / f * ntot / (4.0 * tau0_s)) * np.sinc(f * tau0_s)
+    return shape
+
+
+def _flicker_rate(rng, n: int, tau0_s: float, b: float, cache: dict | None = None,
+                  add_to: np.ndarray | None = None) -> np.ndarray:
     """Rate samples (means over τ0) of flicker rate noise with AVAR (2 ln2/π)B²:
     one-sided PSD h/f, h = B²/π (IEEE 952 C.3), synthesised in the frequency domain
     on a record at least 4× longer than asked (the 1/f shape holds well below the
     record length; the length is the next 5-smooth one, ``scipy.fft.next_fast_len``:
     an FFT of a length with a large prime factor is 20× slower) and cut; each sample
     is the mean of the continuous process over τ0 (the sinc² of the averaging is
-    applied)."""
+    applied). ``cache``: a dict that keeps the spectrum's shape for further records of
+    the same length, τ0 and B (the draws differ, the shape does not). ``add_to``: an
+    array of n rates the samples are added to (and returned) instead of a new one."""
     if b == 0:
-        return np.zeros(n)
+        return np.zeros(n) if add_to is None else add_to
     ntot = next_fast_len(4 * n, real=True)
     nf = ntot // 2 + 1
     # Built piece by piece in place (the spectrum is 4× the record: whole-array
@@ -429,14 +445,20 @@ def _flicker_rate(rng, n: int, tau0_s: float, b: float) -> np.ndarray:
             part[a:e] = piece[: e - a]
     del piece
     spec[0] = 0.0
-    h = b * b / math.pi
-    val = 1.0 / (ntot * tau0_s)               # rfftfreq's spacing
-    for a in range(1, nf, _SYNTH_PIECE):
-        e = min(nf, a + _SYNTH_PIECE)
-        f = np.arange(a, e) * val
-        spec[a:e] *= np.sqrt(h / f * ntot / (4.0 * tau0_s)) * np.sinc(f * tau0_s)
+    key = (nf, ntot, float(tau0_s), float(b))
+    shape = None if cache is None else cache.get(key)
+    if shape is None:
+        shape = _flicker_shape(nf, ntot, tau0_s, b * b / math.pi)
+        if cache is not None:             # a bootstrap's replicates share one shape
+            cache.clear()
+            cache[key] = shape
+    spec[1:] *= shape
+    del shape
     x = np.fft.irfft(spec, ntot)
     del spec
+    if add_to is not None:
+        add_to += x[:n]
+        return add_to
     out = x[:n].copy()                        # not a view keeping the 4× record alive
     return out
 
@@ -446,7 +468,8 @@ _SYNTH_PIECE = 1 << 18
 
 
 def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
-                   rng=None, input_type: str = "rate") -> np.ndarray:
+                   rng=None, input_type: str = "rate", cache: dict | None = None
+                   ) -> np.ndarray:
     """A record of the five-term model (rate unit u, τ0 in s), as rate samples
     (each the mean rate over its interval) or, with ``input_type="angle"``, the
     integrated angle (u·s, n + 1 points).
@@ -454,7 +477,8 @@ def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
     White phase of sd Q on the angle; white rate of sd N/√τ0; flicker rate
     (:func:`_flicker_rate`); rate random walk with increments of sd K·√τ0; rate ramp
     R·t. These are the processes whose responses :func:`design_matrix` lists (IEEE
-    952-1997 Annex C).
+    952-1997 Annex C). ``cache``: see :func:`_flicker_rate` (the same numbers with or
+    without it).
     """
     rng = np.random.default_rng(rng)
     # Each term is added piece by piece (a long record's memory is the record, not one
@@ -473,7 +497,7 @@ def simulate_noise(n: int, tau0_s: float, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0, *,
             z *= c
             y[a: a + z.size] += z
     if B:
-        y += _flicker_rate(rng, n, tau0_s, B)
+        _flicker_rate(rng, n, tau0_s, B, cache, add_to=y)
     if K:
         c, carry = K * math.sqrt(tau0_s), 0.0
         for a in range(0, n, step):
@@ -526,12 +550,13 @@ def bootstrap_uncertainty(allan: AllanResult, values, *, terms: Sequence[str] = 
     n = int(allan.n_samples if allan.input_type != "angle" else allan.n_samples - 1)
     tau0 = float(allan.tau0_s)
     out = np.empty((n_boot, 5))
+    shapes: dict = {}                       # the flicker spectrum's shape, built once
     for b in range(n_boot):
         # the record as angles (its rates integrated in place) analysed in place: one
         # record-length array in memory, not two (the mean rate removed by the rate path
         # and the end-to-end line removed here are the same detrending)
         x = None                            # the last record is freed before the next
-        x = simulate_noise(n, tau0, *values, rng=rng, input_type="angle")
+        x = simulate_noise(n, tau0, *values, rng=rng, input_type="angle", cache=shapes)
         r = allan_deviation(x, tau0, "angle", allan.m.astype(np.int64), kind=allan.kind,
                             alpha=0, unit=allan.unit, overwrite_data=True)
         del x

@@ -39,6 +39,7 @@ SPEC = Specification(
     outputs="gonio.specs.ogam_draft.outputs",
     simulate_options=frozenset({"table", "stream", "stream_format"}),
     calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt"}),
+    calibrate_arguments="gonio.specs.ogam_draft.commands:add_calibrate_options",
     budget_options=frozenset({"table_mpe_arcsec", "tilt_deg", "zero_stability_dph",
                               "duration_min", "repeatability_arcsec", "k",
                               "monte_carlo_trials", "seed"}),

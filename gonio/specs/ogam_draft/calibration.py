@@ -597,6 +597,24 @@ def _scale_factor_tilt(results, readings, protocol, budget) -> float:
                                   float(budget.parameters["tilt_deg"]))
 
 
+def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
+    """A_l of :func:`gonio.budget.extra.nonlinearity_tilt_bias` for the largest and smallest
+    of this calibration's 7.1 rounds, at the budget's tilt bound and the file's latitude
+    (the equator's when not stated, as :func:`_scale_factor_tilt`)."""
+    from gonio.budget.extra import nonlinearity_tilt_bias
+
+    if not results.scale_factor.measured or protocol.scale_factor is None:
+        return 0.0
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    t = results.scale_factor.table
+    df = readings.data
+    sf = df.set_index("line").loc[t["line"].to_numpy()]       # in the table's round order
+    k_i = t["K_i_counts_per_deg"].to_numpy(dtype=float)
+    return nonlinearity_tilt_bias(sf, protocol, 0.0 if lat is None else lat,
+                                  float(budget.parameters["tilt_deg"]),
+                                  int(np.argmax(k_i)), int(np.argmin(k_i)))
+
+
 def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
@@ -675,7 +693,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                                      tilt_bias_arcsec_per_deg=k_tilt)
         if results.scale_factor_nonlinearity.measured:
             out["scale_factor_nonlinearity"] = iu.nonlinearity_budget(
-                t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed)
+                t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
+                tilt_bias_arcsec_per_deg=_nonlinearity_tilt(results, readings, protocol, budget))
     zs = results.zero_stability
     if zs.measured:
         rd = zs.tables["readings"]

@@ -2,7 +2,8 @@
 line registers them through the registry, :func:`gonio.specs.commands`): the tools around its
 calibration that no other specification uses.
 
-``gonio reduce``: stream → readings file (find the table's rests, match the protocol's
+Its own ``gonio calibrate`` options (``--budget``, ``--tilt``: :func:`add_calibrate_options`,
+``SPEC.calibrate_arguments``). ``gonio reduce``: stream → readings file (find the table's rests, match the protocol's
 rounds; :func:`gonio.reduce.reduce_stream`). ``gonio tilt``: the extreme tilt error over
 0–360° (draft Annex A.4.2; :mod:`gonio.physics.tilt`). ``gonio tilt-estimate``: ψ and α from
 the static multi-position rows of a readings file
@@ -22,6 +23,20 @@ import math
 from gonio.atomic import check_output_file
 from gonio.cli.checks import LARGE, float_range, int_range, json_safe, positive_magnitude
 from gonio.errors import GonioError, check_input_file
+
+
+# --------------------------------------------------------------------------- gonio calibrate
+
+def add_calibrate_options(group) -> None:
+    """The draft's own ``gonio calibrate`` options (``SPEC.calibrate_arguments``): E's budget
+    and a measured tilt bound."""
+    group.add_argument("--budget", choices=("physical", "draft"), default=None,
+                       help="E's budget: physical (default: Annex A plus the lines beyond the "
+                            "draft the validation showed to matter) or draft (the annex's four "
+                            "lines)")
+    group.add_argument("--tilt", default=None, metavar="FILE",
+                       help="a 'gonio tilt-estimate --json' result: bounds the tilt by psi + "
+                            "U95 instead of the protocol's tilt bound")
 
 
 # --------------------------------------------------------------------------- gonio reduce

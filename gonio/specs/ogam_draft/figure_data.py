@@ -1,5 +1,5 @@
 """The series each figure of the optical certificate draws, computed once at calibration time
-and sealed in ``results.json`` (``extra.figures``): the renderer (``gonio.report.figures``)
+and sealed in ``results.json`` (``extra.figures``): the renderer (``gonio.specs.ogam_draft.figures``)
 draws them and computes nothing, so a certificate can be drawn again from the stored file.
 
 One entry per figure key (``deviation``, ``repeatability``, ``tilt``, ``scale_factor``,

@@ -369,7 +369,8 @@ def _as_dist(q, name: str):
 
 
 def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
-                        k: float | None = None) -> ItemUncertainty:
+                        k: float | None = None,
+                        tilt_bias_arcsec_per_deg: float = 0.0) -> ItemUncertainty:
     """u(K_l) of K_l = (max K_i − min K_i)/K · 100 % (draft 7.2), in %.
 
     Components: u(K_max) and u(K_min) of single rounds (table angle at the stop,
@@ -377,6 +378,13 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     that noise alone gives n values, d₂(n)·ū(K_i) (Tippett; :func:`uncertainty.stdev.
     expected_range_factor`), taken as a rectangular half-width: a range is biased
     upwards by noise, so the true K_l lies below the measured one by up to about that.
+
+    ``tilt_bias_arcsec_per_deg`` (A_l of :func:`gonio.budget.extra.nonlinearity_tilt_bias`
+    for the largest and smallest round, at the A.1 tilt bound): the tilt × Earth-rate
+    coupling moves each round's K_i by its own amount (it grows with the time from zeroing
+    to reading), so it enters K_l where it does not cancel between the two extreme rounds:
+    the ``K_tilt`` line, arcsine (unknown azimuth) with half-width 100·A_l/3600 %. Beyond
+    the draft's budget, like K's.
 
     Examples
     --------
@@ -412,6 +420,13 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                      source=f"spread noise alone gives {n} values, d2({n})·mean u(K_i)"),
               "range inflation by noise", True, "7.2"),
     ]
+    if tilt_bias_arcsec_per_deg:
+        a_l = float(tilt_bias_arcsec_per_deg)
+        lines.append(_Line(type_b("K_tilt", 0.0, 100.0 * a_l / ARCSEC_PER_DEG, "arcsine",
+                                  source=f"tilt x Earth-rate coupling of the rounds at "
+                                         f"{th[i_max]:g}° and {th[i_min]:g}°, A_l = "
+                                         f"{a_l:.3g}″/° at the A.1 bound, worst azimuth"),
+                           "tilt bias of the spread of K_i", True, "A.1 applied to 7.2"))
     value = float((k_i.max() - k_i.min()) / kbar * 100.0)
     return _budget("scale_factor_nonlinearity", "%", value, lines, k=k)
 

@@ -15,8 +15,8 @@ from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
 from gonio.atomic import output_dir, output_set, write_text
 from gonio.bench import load_bench, run_session, write_session
 from gonio.protocol import load_protocol
-from gonio.report.certificate import write_certificate
-from gonio.report.stated import summary_text
+from gonio.specs.ogam_draft.certificate_pages import write_certificate
+from gonio.specs.ogam_draft.stated import summary_text
 from gonio.result.model import Result
 from gonio.result.tables import results_json_text, write_tables
 from gonio.result.text import virtual_line
@@ -57,7 +57,7 @@ def write(result: Result, out, *, truth: dict | None = None, lab=None,
 
 def summary(result: Result | dict, lab: dict | None = None) -> str:
     """The seven items, U (k, coverage probability) and any conformity statements as a
-    fixed-width text table, rounded as the certificate (:func:`gonio.report.stated.summary_text`),
+    fixed-width text table, rounded as the certificate (:func:`gonio.specs.ogam_draft.stated.summary_text`),
     then the budget's notes (an item stated by its interval, B_s and R, has that one
     statement in the table); from the result or its results.json."""
     result = result if isinstance(result, Result) else Result.from_json(result)

@@ -42,6 +42,7 @@ SPEC = Specification(
     budget=lazy("gonio.specs.triad_alignment.calibration:article_budget"),
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
+    calibrate_arguments="gonio.specs.triad_alignment.commands:add_calibrate_options",
     readings_format=FORMAT,
     named_inputs=lazy("gonio.formats.triad:named_inputs"),
     certificate_content="gonio.specs.triad_alignment.certificate",

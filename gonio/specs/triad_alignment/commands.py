@@ -6,6 +6,8 @@ layer over :func:`gonio.specs.triad_alignment.analysis.estimate_alignment` (form
 docs/formats-triad.md; method: docs/alignment.md). ``gonio thermal-model``: identify
 K(ϑ, U), b(ϑ, U) and ARW(ϑ) from a triad thermal readings file (docs/thermal-model.md), a
 thin layer over :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`.
+Its own ``gonio calibrate`` options (``--thermal``, ``--robust``): :func:`add_calibrate_options`
+(``SPEC.calibrate_arguments``).
 
 This module sits on the command line's layer (it imports ``gonio.cli.checks``); nothing
 imports it but the command line, when it builds its parser.
@@ -17,6 +19,17 @@ import json
 
 from gonio.cli.checks import int_range, seed
 from gonio.errors import GonioError
+
+
+def add_calibrate_options(group) -> None:
+    """The triad's own ``gonio calibrate`` options (``SPEC.calibrate_arguments``): the
+    thermal-programme readings and the robust fit."""
+    group.add_argument("--thermal", default=None, metavar="FILE",
+                       help="the thermal-programme readings (default: the file the readings' "
+                            "'# thermal_readings:' metadata names, or their own thermal rows)")
+    group.add_argument("--robust", action="store_true",
+                       help="robust alignment fit (IRLS), outlying dwells down-weighted and "
+                            "listed")
 
 
 def add_align(sub) -> None:

@@ -2,7 +2,7 @@
 temperature-model page, as one self-contained HTML file (figures inline as SVG).
 
 These are the pages the certificate would carry for the ``triad-alignment``
-specification; the certificate renderer of :mod:`gonio.report.certificate` is built around
+specification; the optical draft's certificate renderer (its own package) is built around
 the draft's items, so the pages are written as their own document (``--report FILE`` of
 ``gonio align`` and ``gonio thermal-model``). Every value is shown with its expanded
 uncertainty U (coverage probability 95.45 %, k stated), U to two significant digits and the

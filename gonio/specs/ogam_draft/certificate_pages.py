@@ -1,5 +1,5 @@
-"""The calibration certificate: HTML (self-contained) and PDF, from a calibration's
-``results.json`` (a pure function of it, the laboratory file and the truth of a virtual run).
+"""The optical draft's calibration certificate: HTML (self-contained) and PDF, from a
+calibration's ``results.json`` (a pure function of it, the laboratory file and the truth of a virtual run).
 
 Contents
 ========
@@ -32,7 +32,7 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
-from gonio.report.figures import FIGURES, figure_svg
+from gonio.report.figures import figure_svg
 from gonio.report.header import (certificate_id, decision_rule_blocks, meta_text,
                                  opening_blocks, signature_blocks)
 from gonio.report.i18n import (budget_source, coverage_text, display, finding_text, labels,
@@ -40,11 +40,12 @@ from gonio.report.i18n import (budget_source, coverage_text, display, finding_te
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText as NoBreak
-from gonio.report.stated import (ANNEX_A_COVERAGE, Num, conformity_for, conformity_texts,
-                                 detail, e_budget, followed, item_names, item_path,
-                                 interval_cell, method_rows, num, segments, stated_item,
-                                 u_cell)
+from gonio.report.stated import Num, conformity_texts, num
 from gonio.report.text import clean_tree
+from gonio.specs.ogam_draft.figures import FIGURES
+from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, conformity_for, detail, e_budget,
+                                           followed, interval_cell, item_names, item_path,
+                                           method_rows, segments, stated_item, u_cell)
 
 
 # --------------------------------------------------------------------------- content blocks
@@ -365,7 +366,7 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
                       lab: str | Path | dict | None = None, lang: str = "en",
                       dcc: bool = False) -> dict[str, Path]:
     """Write ``certificate.html`` and ``certificate.pdf`` (and with ``dcc`` the PTB DCC
-    3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.report.dcc`) of ``results`` into ``out``:
+    3.3.0 XML ``certificate.dcc.xml``, :mod:`gonio.specs.ogam_draft.dcc`) of ``results`` into ``out``:
     a pure function of its arguments, so the stored results.json gives the same files again.
 
     Parameters
@@ -406,8 +407,9 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
-            from gonio.report.dcc import bilingual, dcc_bytes, label_translator, method_text
+            from gonio.report.dcc import bilingual, label_translator
             from gonio.report.i18n import READING_NOTES_ZH
+            from gonio.specs.ogam_draft.dcc import dcc_bytes, method_text
 
             doc = dcc_bytes(results, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English

@@ -1,0 +1,215 @@
+"""The checks a new calibration passes before anything is queued (docs/records.md#submission):
+what the web form calls, so that a calibration that cannot give a certificate fit for
+accredited work is refused at upload, in the form's own words, not by a failed run later.
+
+:func:`submit_calibration` checks, in this order, then creates the calibration
+(:func:`gonio.records.services.create_calibration`, which checks the dates, the instrument
+and each standard's due date on the day of the calibration):
+
+* at least one registered reference standard is named (ISO/IEC 17025 6.5: the result's
+  traceability; a certificate naming none states nothing it is traceable to);
+* the environment is entered: room temperature and relative humidity (17025 7.8.4.1 a);
+* the readings file is readings: a Parquet stream, or UTF-8 text whose first line after
+  the ``# key: value`` metadata is a CSV header (a JSON file, a spreadsheet or an image is
+  refused naming what it looks like) — :func:`readings_facts`;
+* the readings are of this specification: their ``# spec:`` (or ``# format:``, or a
+  ``# protocol:`` that names a registered specification) must be the calibration's;
+* the readings are of this instrument in these conditions: their ``# serial:``, ``# model:``,
+  ``# manufacturer:`` against the instrument's record, their temperature and humidity
+  against what was entered, compared as the pipeline compares them with a laboratory file
+  (:func:`gonio.pipeline.identity.contradictions`, the same tolerances): the run would be
+  refused on the same grounds, later and in command-line words;
+* the same readings (the same SHA-256) are not already the readings of another
+  calibration that stands (any state but rejected or void): the same measurement certified
+  twice is refused unless the person says why it is used again (``reuse_reason``), which is
+  written to the audit trail with the calibrations that used it before.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import tempfile
+from pathlib import Path
+from typing import Iterable
+
+from sqlalchemy import select
+
+from gonio.errors import GonioError
+from gonio.records import services
+from gonio.records.models import Calibration, Instrument, User
+
+#: the states in which a calibration no longer stands for its readings (they may be used again)
+CLOSED = ("rejected", "void")
+#: bytes of a text readings file read to recognise it (its metadata and header line)
+SNIFF_BYTES = 256 * 1024
+#: the audit key of a reused readings file
+REUSE_KEY = "readings used before"
+
+
+def readings_facts(store, sha256: str) -> dict:
+    """What a stored readings file is: ``{"format": "parquet" | "csv", "metadata": {...},
+    "spec": key or None, "spec_from": the metadata line that named it}``; a file that is no
+    readings file is a GonioError (key ``readings``) saying what it looks like."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.pipeline.dispatch import readings_spec
+    from gonio.records.compute import readings_suffix
+    from gonio.records.blobs import blob_path
+
+    src = blob_path(store.blob_root, sha256)
+    if not src.is_file():
+        raise GonioError("no such stored file", key="readings")
+    with open(src, "rb") as fh:
+        head = fh.read(SNIFF_BYTES)
+    suffix = readings_suffix(head)
+    if suffix == ".csv":
+        _looks_like_csv(head)
+    with tempfile.TemporaryDirectory(prefix="gonio-upload-") as tmp:
+        path = Path(tmp) / ("readings" + suffix)
+        path.symlink_to(src)
+        try:
+            md = readings_metadata(path)
+            spec = readings_spec(path)
+        except GonioError as exc:
+            raise GonioError(f"the readings file cannot be read: {exc.message}",
+                             key="readings") from None
+    spec_from = "# spec" if md.get("spec") else "# format" if spec else ""
+    if spec is None:
+        from gonio.specs import available
+
+        if str(md.get("protocol", "")).strip() in available():
+            spec, spec_from = str(md["protocol"]).strip(), "# protocol"
+    return {"format": suffix[1:], "metadata": md, "spec": spec, "spec_from": spec_from}
+
+
+def _looks_like_csv(head: bytes) -> None:
+    """A text readings file: UTF-8, and its first line after the metadata a CSV header."""
+    if head[:2] in (b"PK", b"\xd0\xcf") or head[:4] == b"%PDF" or head[:8] == b"\x89PNG\r\n\x1a\n":
+        raise GonioError("the readings file is a binary document (a spreadsheet, PDF or "
+                         "image), not readings: export the readings as CSV", key="readings")
+    try:
+        text = head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        if len(head) - exc.start > 4:       # not just a character cut at the sniff's end
+            raise GonioError("the readings file is not UTF-8 text (CSV) nor a Parquet "
+                             "stream", key="readings") from None
+        text = head[:exc.start].decode("utf-8-sig")
+    for line in text.splitlines():
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        if line[:1] in ("{", "["):
+            raise GonioError("the readings file is JSON (a results.json?), not readings: "
+                             "upload the readings CSV or Parquet stream", key="readings")
+        if line[:1] == "<":
+            raise GonioError("the readings file is XML or HTML (a certificate?), not "
+                             "readings: upload the readings CSV or Parquet stream",
+                             key="readings")
+        if "," not in line:
+            raise GonioError(f"the readings file's first line after the metadata "
+                             f"('{line[:40]}') is no CSV header", key="readings")
+        return
+    raise GonioError("the readings file holds no readings (metadata lines only, or empty)",
+                     key="readings")
+
+
+def check_readings(facts: dict, inst: Instrument, spec_key: str, temperature_c=None,
+                   humidity_pct=None) -> None:
+    """The readings (:func:`readings_facts`) against the calibration: their specification,
+    the instrument's serial, model and manufacturer, the environment entered; a GonioError
+    (key ``readings``) in the form's words for the first that does not match."""
+    from gonio.pipeline.identity import contradictions
+
+    named = facts["spec"]
+    if named and named != spec_key:
+        raise GonioError(f"the readings are {named} readings ({facts['spec_from']}: {named}); "
+                         f"this calibration is per {spec_key} (the instrument "
+                         f"{inst.serial}'s specification): choose the readings of this "
+                         "instrument, or the instrument these readings are of",
+                         key="readings")
+    record = {"instrument": {"serial": inst.serial, "model": inst.model,
+                             "manufacturer": inst.manufacturer},
+              "environment": {"temperature_c": temperature_c, "humidity_pct": humidity_pct}}
+    found = contradictions(facts["metadata"], record)
+    if found:
+        c = found[0]
+        where = ("the instrument's record" if c["lab_key"].startswith("instrument")
+                 else "what was entered")
+        tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
+        more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+        raise GonioError(f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
+                         f"{where} {c['lab']}{tol}{more}: these readings are not of this "
+                         "instrument or these conditions", key="readings")
+
+
+def reused_by(store, sha256: str) -> list[dict]:
+    """The calibrations that stand (not rejected nor void) whose readings are this file:
+    ``[{"id", "serial", "performed_on", "status"}]``, oldest first."""
+    with store.session() as s:
+        rows = s.execute(select(Calibration.id, Instrument.serial, Calibration.performed_on,
+                                Calibration.status)
+                         .join(Instrument, Calibration.instrument_id == Instrument.id)
+                         .where(Calibration.readings_sha256 == sha256,
+                                Calibration.status.not_in(CLOSED))
+                         .order_by(Calibration.id)).all()
+    return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3]} for r in rows]
+
+
+def check_form(performed_on, received_on, standard_ids, temperature_c, humidity_pct):
+    """The form's own fields: the dates, at least one standard, the environment entered;
+    (day, received, standard ids, temperature, humidity)."""
+    day = services.date_value(performed_on, "performed_on") or _dt.date.today()
+    received = services.date_value(received_on, "received_on")
+    services.plausible_dates(day, received)
+    ids = sorted({int(i) for i in standard_ids})
+    if not ids:
+        raise GonioError("tick the reference standard(s) used: a calibration names at least "
+                         "one registered standard (its traceability)", key="standards")
+    temp = services.number_value(temperature_c, "temperature_c", -50, 100)
+    hum = services.number_value(humidity_pct, "humidity_pct", 0, 100)
+    for value, what in ((temp, "room temperature (°C)"), (hum, "relative humidity (%)")):
+        if value is None:
+            raise GonioError(f"enter the {what} of the calibration", key="environment")
+    return day, received, ids, temp, hum
+
+
+def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
+                       standard_ids: Iterable[int] = (), temperature_c=None,
+                       humidity_pct=None, spec_key: str | None = None,
+                       performed_on=None, received_on=None, lab_sha256: str | None = None,
+                       lab_name: str = "", reuse_reason: str = "", **details):
+    """A new calibration after the submission checks (module docstring), queued for the
+    worker (technician): the form's fields first (dates, standards, environment), then the
+    laboratory file, then the readings. ``details``: the other arguments of
+    :func:`gonio.records.services.create_calibration`. ``reuse_reason``: why readings
+    already used by another calibration are used again (empty: such readings are refused)."""
+    services.require(actor, "technician")
+    day, received, ids, temp, hum = check_form(performed_on, received_on, standard_ids,
+                                               temperature_c, humidity_pct)
+    with store.session() as s:
+        inst = s.get(Instrument, int(instrument_id))
+        if inst is None:
+            raise GonioError("no such instrument", key="instrument")
+        s.expunge(inst)
+    key = services.text(spec_key, "spec", max_len=64) or inst.spec_key
+    if lab_sha256 is not None:
+        services.lab_file(store, lab_sha256, lab_name, key)
+    check_readings(readings_facts(store, readings_sha256), inst, key, temp, hum)
+    reason = services.text(reuse_reason, "reuse_reason", max_len=services.MAX_TEXT,
+                           multiline=True)
+    before = reused_by(store, readings_sha256)
+    if before and not reason:
+        first = before[0]
+        raise GonioError(f"these readings (SHA-256 {readings_sha256[:12]}…) are already those "
+                         f"of calibration {first['id']} ({first['serial']}, "
+                         f"{first['performed_on']}, {first['status']})"
+                         + (f" and {len(before) - 1} more" if len(before) > 1 else "")
+                         + ": the same measurement is not calibrated twice; say why they are "
+                         "used again to go on", key=REUSE_KEY)
+    note = {"readings_sha256": readings_sha256, "used_by": [c["id"] for c in before],
+            "reason": reason} if before else None
+    return services.create_calibration(store, actor, instrument_id=inst.id,
+                                       readings_sha256=readings_sha256, spec_key=key,
+                                       standard_ids=ids, temperature_c=temp,
+                                       humidity_pct=hum, performed_on=day, received_on=received,
+                                       lab_sha256=lab_sha256, lab_name=lab_name,
+                                       reuse_note=note, **details)

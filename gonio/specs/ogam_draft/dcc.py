@@ -1,0 +1,199 @@
+"""The optical draft's Digital Calibration Certificate: PTB DCC 3.3.0 XML from a
+calibration's results.json, built on the shared parts of :mod:`gonio.report.dcc`.
+
+Contents
+========
+=========================  ==============================================================
+:func:`method_text`        the method statement on one line (the DCC's method description)
+:func:`dcc_tree`           the DCC document as an lxml element tree
+:func:`dcc_bytes`          the same as UTF-8 bytes (deterministic)
+:func:`write_dcc`          ``certificate.dcc.xml`` into a folder, atomically
+=========================  ==============================================================
+
+Besides what every DCC holds (:mod:`gonio.report.dcc`), E is stated as ± max|E_i| with the
+signed extreme and its position, and each item's per-point table as dcc:list columns. Every
+number is the one the printed certificate shows (:mod:`gonio.specs.ogam_draft.stated`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from gonio.atomic import write_bytes
+from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, element,
+                              influence_conditions, list_quantity, measurement_result,
+                              new_document, not_measured_quantity, quantity, text_element,
+                              tree_bytes)
+from gonio.report.i18n import display, labels, reading_note, specification_text
+from gonio.report.stated import Num, conformity_texts, num
+from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
+                                           item_path, item_uncertainty, method_rows,
+                                           stated_item)
+
+
+def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
+    """The method statement (:func:`gonio.specs.ogam_draft.stated.method_rows`) of results.json ``res``
+    on one line, as the optical DCC's method description (``lang`` "zh": its Chinese,
+    written beside it)."""
+    rows = method_rows(res, labels(lang), lab, lang)
+    if lang == "zh":
+        return "；".join(f"{k}：{v}" for k, v in rows)
+    return "; ".join(f"{k}: {v}" for k, v in rows)
+
+
+def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
+    """The DCC 3.3.0 document of one calibration's results.json ``res`` (see the module
+    docstring for its content)."""
+    L = labels("en")
+    md = res.get("metadata", {})
+    lab_ = lab or {}
+    root = new_document()
+    norm = specification_text(followed(res) or "not stated", "en")
+    sts = administrative_data(
+        root, md, lab, cert_id=cert_id, norm=norm, provenance=res.get("provenance"),
+        clauses=[res["items"][n]["clause"] for n in item_names(res)
+                 if res["items"][n]["measured"]],
+        readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
+    conf = conformity_for(res, lab)
+    if conf:
+        rule = conf[0]["rule"]
+        st = element(sts, "dcc:statement", id="decision-rule")
+        text_element(st, "dcc:name", "Decision rule")
+        element(st, "dcc:norm", "ILAC-G8:09/2019")
+        element(st, "dcc:norm", "JCGM 106:2012")
+        agreed = (lab_.get("decision_rule") or {}).get("agreed")
+        text_element(st, "dcc:declaration", L[f"rule_{rule.kind}"].format(
+            r=display("k", rule.guard_factor)) + (f" Agreed: {agreed}." if agreed else ""))
+        for e in conf:
+            c = e["conformity"]
+            st = element(sts, "dcc:statement", id=f"conformity-{e['item']}",
+                    refId=f"result-{e['item']}")
+            text_element(st, "dcc:name", f"Statement of conformity: {L[e['item']]}")
+            if c is None:
+                text_element(st, "dcc:declaration", L[e["reason"]])
+                continue
+            t = conformity_texts(c, res, L)
+            text_element(st, "dcc:declaration",
+                  f"{t['outcome']}; limits {t['limits']}; acceptance interval {t['acceptance']}; "
+                  f"specific false-accept probability {t['pfa']}"
+                  + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}")
+            element(st, "dcc:conformity", DCC_CONFORMITY[c.outcome])
+            data = element(st, "dcc:data")
+            unit = res["items"][e["item"]]["unit"]
+            for nm, v in (("lower specification limit", c.lower),
+                          ("upper specification limit", c.upper)):
+                if v is not None:
+                    quantity(data, nm, display(_limit_rule(c), v), unit)
+            if c.false_accept_probability is not None:
+                quantity(data, "specific false-accept probability",
+                          display("sig2", c.false_accept_probability), "one")
+            else:
+                quantity(data, "specific false-reject probability",
+                          display("sig2", c.false_reject_probability), "one")
+
+    stds = lab_.get("standards") or [{"name": str(md.get("table") or "rotary table"),
+                                      "identifier": "", "accuracy": (
+                                          f"MPE ±{md['table_mpe_arcsec']}″"
+                                          if md.get("table_mpe_arcsec") else ""),
+                                      "certificate": "", "traceability": ""}]
+    mr = measurement_result(
+        root, "Calibration of an optical-gyroscope angle measuring instrument",
+        method=method_text(res, lab, "en"),
+        norm=norm, standards=stds)
+    env = lab_.get("environment") or {}
+    conds = []
+    if env.get("temperature_c") is not None:
+        conds.append(("temperature", display("sig4", env["temperature_c"]), "degC"))
+    elif md.get("temperature_c"):
+        conds.append(("temperature", display("sig4", float(md["temperature_c"])), "degC"))
+    if env.get("humidity_pct") is not None:
+        conds.append(("relative humidity", display("sig3", env["humidity_pct"]), "%"))
+    influence_conditions(mr, conds)
+
+    results = element(mr, "dcc:results")
+    for name in item_names(res):
+        item = res["items"][name]
+        r = element(results, "dcc:result", id=f"result-{name}")
+        text_element(r, "dcc:name", f"{L[name]} ({item['clause']})")
+        data = element(r, "dcc:data")
+        s = stated_item(res, name)
+        if not s["measured"]:
+            not_measured_quantity(data, L[name], item["reason"])
+            continue
+        unc = item_uncertainty(res, name)
+        kw = {}
+        if unc and s["U"] is not None and s["k"] is not None and unc["p"] is not None:
+            kw = {"U": s["U"], "k": s["k"], "p": float(unc["p"])}
+        elif unc and s["interval"] is not None and s["interval"]["interval"]["u"] \
+                and unc["p"] is not None:          # stated by its coverage interval alone
+            kw = {"interval": s["interval"]["interval"]["ends"],
+                  "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
+        if name == "angle_deviation" and s["signed"] is not None:
+            quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"], **kw)
+            quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
+            if isinstance(s["position"], Num):
+                quantity(data, "position of the extreme", s["position"], "deg")
+        else:
+            quantity(data, L[name], s["value"], item["unit"], **kw)
+        _detail_lists(data, res, name)
+    return root
+
+
+def _limit_rule(c) -> str:
+    from gonio.report.i18n import rule_at_U
+    return rule_at_U(c.U, 3)
+
+
+def _detail_lists(data, res: dict, name: str) -> None:
+    """The per-point tables of one item as dcc:list of columns, displayed as the certificate."""
+    U = e_budget(res).get("U_arcsec")
+    tab = res["items"][name]["details"].get("table") or []
+    if not tab:
+        return
+    cols: list[tuple[str, str, str, str]] = []
+    if name == "scale_factor":
+        cols = [("round angle θ_i", "table_deg", "pos", "deg"),
+                ("K_i", "K_i_counts_per_deg", "sig8", "counts/deg")]
+    elif name == "angle_deviation":
+        cols = [("position", "position_deg", "pos", "deg"), ("E_i", "E_arcsec", "atU", "arcsec")]
+    elif name == "repeatability":
+        cols = [("position", "position_deg", "pos", "deg"), ("R_i", "R_arcsec", "atU", "arcsec")]
+    elif name == "rate_consistency":
+        cols = [("table rate", "rate_dps", "pos", "deg/s"), ("E", "E_arcsec", "atU", "arcsec"),
+                ("max |E_i|", "max_abs_arcsec", "atU", "arcsec")]
+    elif name == "pointing_consistency":
+        cols = [("E", "E_arcsec", "atU", "arcsec"),
+                ("max |E_i|", "max_abs_arcsec", "atU", "arcsec")]
+    elif name == "zero_stability":
+        cols = [("B_s per series", "B_s_deg_per_h", "sig3", "deg/h"),
+                ("linear drift per series", "drift_deg_per_h", "sig3", "deg/h")]
+    if not cols:
+        return
+    lst = element(data, "dcc:list")
+    text_element(lst, "dcc:name", "per-point table")
+    if name == "pointing_consistency":
+        lq = element(lst, "dcc:quantity")
+        text_element(lq, "dcc:name", "axis direction")
+        element(lq, "dcc:charsXMLList", " ".join(str(r["orientation"]) for r in tab))
+    for label, key, rule, unit in cols:
+        if key not in tab[0]:
+            continue
+        list_quantity(lst, label, [num(res, item_path(name, f"table.{i}.{key}"), rule, U)
+                                    for i in range(len(tab))], unit)
+
+
+def dcc_bytes(res: dict, *, lab: dict | None = None, cert_id: str) -> bytes:
+    """The DCC of results.json ``res`` as UTF-8 XML bytes, with declaration, pretty-printed,
+    deterministic."""
+    return tree_bytes(dcc_tree(res, lab=lab, cert_id=cert_id))
+
+
+def write_dcc(res: dict, out: str | Path, *, lab: dict | None = None,
+              cert_id: str) -> dict[str, Path]:
+    """Write ``certificate.dcc.xml`` of results.json ``res`` into ``out`` atomically;
+    returns ``{name: path}``."""
+    path = Path(out) / "certificate.dcc.xml"
+    write_bytes(path, dcc_bytes(res, lab=lab, cert_id=cert_id))
+    return {"certificate.dcc.xml": path}
+

@@ -1,0 +1,333 @@
+"""The optical draft's results as every output states them: one rounding rule, one form.
+
+Contents
+========
+===========================  ================================================================
+:func:`item_names`           the items of a results dict, in its order
+:func:`item_uncertainty`     U, k and coverage probability of one item (or None)
+:func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
+                             position, U, k, p, or its one coverage interval
+:func:`interval_cell`        that interval as a table cell ("≤ 0.022 (p ≈ 95 %)")
+:func:`conformity_for`       the conformity statements the laboratory's limits call for
+:func:`method_rows`          the method statement (rates, rounds, series, delays, Earth rate,
+                             latitude, axes, tilt, temperature, clauses)
+:func:`summary_text`         ``summary.txt`` and the CLI's table, from the same Num texts
+===========================  ================================================================
+
+The optical certificate (HTML, PDF), ``summary.txt``, the CLI and the DCC XML all take their
+numbers from here, so they cannot disagree. The rule is JCGM 100 7.2.6: U to two
+significant digits, the value to the same decimal place (:func:`gonio.report.i18n.rule_at_U`);
+an item without an uncertainty keeps the significant digits of
+:data:`gonio.report.i18n.ITEM_SIG_DIGITS`; an item with its own U goes through the shared
+statement rule (:func:`gonio.report.stated.item_nums`). E is stated in the draft's form (7.4)
+E = ± max|E_i|, with the signed extreme and its position beside it.
+
+The per-item uncertainty is read from ``results[item]["uncertainty"]`` (``U``, ``k``,
+``coverage_probability``) when the calibration computed it; for E the Annex A budget's
+``uncertainty.U_arcsec`` and ``k`` are used otherwise, with coverage probability
+approximately 95 % (Annex A.7, k = 2). Nothing is computed here beyond rounding.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
+from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display,
+                               labels, rule_at_U)
+from gonio.report.stated import conformity_texts, item_nums, num
+from gonio.result.statement import p_text
+
+
+def item_names(res: dict) -> list[str]:
+    """The items of a results.json, in its own order (the specification's); the renderer
+    lists what the result holds and names no specification's items itself.
+
+    >>> item_names({"items": {"b": {"clause": "7.2"}, "a": {"clause": "7.1"}}})
+    ['b', 'a']
+    """
+    return list(res["items"])
+
+
+#: The fields a results.json item holds itself; every other field is under its ``details``.
+ITEM_FIELDS = ("key", "title", "clause", "unit", "value", "measured", "reason", "uncertainty",
+               "conformity", "nonnegative", "upper_bound", "details")
+
+
+def item_path(name: str, field: str) -> str:
+    """The path in results.json of ``field`` of item ``name`` (an item's own field, else one
+    of its details).
+
+    >>> item_path("angle_deviation", "value"), item_path("angle_deviation", "table.0.E_arcsec")
+    ('items.angle_deviation.value', 'items.angle_deviation.details.table.0.E_arcsec')
+    """
+    head = field.partition(".")[0]
+    return f"items.{name}.{field}" if head in ITEM_FIELDS else f"items.{name}.details.{field}"
+
+
+def detail(res: dict, name: str, field: str, default: Any = None) -> Any:
+    """Detail ``field`` of item ``name`` (``default`` when it has none)."""
+    return (res["items"][name].get("details") or {}).get(field, default)
+
+
+def followed(res: dict) -> str:
+    """The specification the calibration followed, as its protocol names it (results.json
+    ``extra.method.specification``; empty when the protocol names none)."""
+    return (res["extra"].get("method") or {}).get("specification") or ""
+
+
+def e_budget(res: dict) -> dict:
+    """E's Annex A budget (results.json ``extra.uncertainty``; empty when there is none)."""
+    return (res.get("extra") or {}).get("uncertainty") or {}
+
+
+#: Coverage probability of the Annex A budget's U (k = 2, normal; Annex A.7).
+ANNEX_A_COVERAGE: float = 0.95
+
+
+def item_uncertainty(res: dict, name: str) -> dict | None:
+    """U, k, coverage probability of item ``name`` and their paths, or None.
+
+    Returns ``{"U", "k", "p", "src_U", "src_k", "src_p"}``; ``src_p`` is None when the
+    probability is the Annex A convention rather than a number in results.json.
+    """
+    item = res["items"].get(name) or {}
+    iu = item.get("uncertainty") if isinstance(item, dict) else None
+    if isinstance(iu, dict) and iu.get("U") is not None and iu["U"] > 0:
+        return {"U": float(iu["U"]), "k": iu.get("k"), "p": iu.get("coverage_probability"),
+                "src_U": f"items.{name}.uncertainty.U", "src_k": f"items.{name}.uncertainty.k",
+                "src_p": f"items.{name}.uncertainty.coverage_probability"
+                if iu.get("coverage_probability") is not None else None}
+    if name == "angle_deviation" and e_budget(res).get("U_arcsec"):
+        u = e_budget(res)
+        return {"U": float(u["U_arcsec"]), "k": u.get("k"), "p": ANNEX_A_COVERAGE,
+                "src_U": "extra.uncertainty.U_arcsec", "src_k": "extra.uncertainty.k",
+                "src_p": None}
+    return None
+
+
+def stated_item(res: dict, name: str) -> dict:
+    """Item ``name`` as every output states it.
+
+    Keys: ``measured``, ``reason``, ``clause``, ``unit``, ``value`` (Num; E as ± max|E_i|),
+    ``signed`` and ``position`` (E only, Num), ``U``, ``k`` (Num or None), ``p`` (text such
+    as "95", or None), ``U_raw`` (float or None), ``interval`` (the item's
+    :func:`~gonio.report.stated.item_nums` when it is stated by its coverage interval alone —
+    a dispersion such as B_s and R, or a non-negative item whose U exceeds its value —, then
+    ``U`` and ``k`` are None: one statement), ``upper`` (its upper bound's text when that
+    interval starts at 0, else None).
+    """
+    item = res["items"][name]
+    out = {"measured": bool(item["measured"]), "reason": item.get("reason", ""),
+           "clause": item["clause"], "unit": item["unit"], "value": "—", "signed": None,
+           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None,
+           "interval": None}
+    if not item["measured"]:
+        return out
+    unc = item_uncertainty(res, name)
+    U = unc["U"] if unc else None
+    sig = ITEM_SIG_DIGITS.get(name, 3)
+    own = None                      # the item stated by its own U (item_nums)
+    max_abs = detail(res, name, "max_abs_arcsec")
+    if name == "angle_deviation" and max_abs is not None:
+        out["value"] = num(res, item_path(name, "max_abs_arcsec"),
+                           rule_at_U(U, sig, max_abs, "pmdec"))
+        out["signed"] = num(res, item_path(name, "value"),
+                            rule_at_U(U, sig, item["value"], "sdec"))
+        if detail(res, name, "position_deg") is not None:
+            out["position"] = num(res, item_path(name, "position_deg"), "pos")
+    elif U is None and name in ITEMS_AT_U_PLACE and item_uncertainty(res, "angle_deviation"):
+        # R has no uncertainty of its own in the draft; it is stated to the decimal place of
+        # E's U, as the per-position table beside E (JCGM 100 7.2.6 applied to the pair)
+        out["value"] = num(res, item_path(name, "value"),
+                           rule_at_U(item_uncertainty(res, "angle_deviation")["U"], sig))
+    else:                           # the item's own U: the one statement rule, power of ten
+        own = (item_nums(item, f"items.{name}", sig=sig)
+               if unc and unc["src_U"].startswith(f"items.{name}.") else None)
+        out["value"] = own["value"] if own else num(res, item_path(name, "value"),
+                                                    rule_at_U(U, sig))
+    if unc:
+        out["U_raw"] = U
+        if unc["p"] is not None:
+            out["p"] = p_text(float(unc["p"]))
+        if own is not None and own["statement"].interval is not None:
+            out["interval"] = own         # its one statement: no U, no k beside it
+            out["upper"] = own["statement"].upper_text
+            return out
+        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
+        out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
+    return out
+
+
+def interval_cell(st: dict, lang: str) -> str:
+    """The coverage interval of an item stated by it (:func:`stated_item` ``interval``), in
+    the short form of a table cell whose unit is in another column: "≤ 0.021 (p ≈ 95 %)" or
+    "[0.066, 0.204] (p ≈ 95 %)"; "" for an item stated by U."""
+    if st.get("interval") is None:
+        return ""
+    return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
+
+
+def segments(template: str, **nums) -> list:
+    """Split a label template "... {x} ..." into text and Num segments.
+
+    >>> segments("U = {U}″", U=Num("0.34", "uncertainty.U_arcsec", "U"))
+    ['U = ', Num(text='0.34', src='uncertainty.U_arcsec', rule='U'), '″']
+    """
+    out: list = []
+    rest = template
+    while "{" in rest:
+        pre, _, tail = rest.partition("{")
+        key, _, rest = tail.partition("}")
+        if pre:
+            out.append(pre)
+        out.append(nums[key])
+    if rest:
+        out.append(rest)
+    return out
+
+
+def u_cell(st: dict, L: dict) -> list | str:
+    """The "U (k = 2, p ≈ 95 %)" cell of one item, as text and Num segments."""
+    if st["U"] is None:
+        return "—"
+    return segments(L["U_cell"], U=st["U"], k=st["k"] or "—", p=st["p"] or "—")
+
+
+def conformity_for(res: dict, lab: dict | None) -> list[dict]:
+    """The conformity statements the pipeline decided, as the certificate, the DCC and
+    summary.txt list them (none without limits); the report decides nothing.
+
+    The decisions are those the pipeline stored in the result (results.json
+    ``items.<key>.conformity``). One entry per limit of the laboratory file ``lab``, in its order, then
+    any item decided against a specification's own tolerance: ``{"item", "limits", "rule",
+    "conformity"}`` where ``conformity`` is the decision, or None with ``reason`` (not
+    measured, or no uncertainty to decide with). A lab limit the pipeline did not decide, or
+    decided under other limits, is a programming error (ValueError), never a missing or
+    stale statement.
+    """
+    decided = {k: Conformity.from_json(it["conformity"]) for k, it in res["items"].items()
+               if it.get("conformity")}
+    lab_limits = list((lab or {}).get("specification_limits") or [])
+    rule = rule_of((lab or {}).get("decision_rule"))
+    named = [lim["item"] for lim in lab_limits]
+    out = []
+    for name in named + [k for k, c in decided.items()
+                         if k not in named and c.limits_from != "lab file"]:
+        c = decided.get(name)
+        if c is None:
+            raise ValueError(f"the conformity of {name!r} was not decided: the pipeline decides "
+                             "it (decide_result) before the report renders it")
+        if name in named:
+            want = limits_of(lab_limits[named.index(name)])
+            if (c.lower, c.upper) != (want.lower, want.upper):
+                raise ValueError(f"the conformity of {name!r} was decided under other limits "
+                                 f"({c.lower}, {c.upper}) than the laboratory file's")
+        entry: dict = {"item": name, "limits": Limits(c.lower, c.upper, c.source or ""),
+                       "rule": rule, "conformity": c if c.outcome else None, "reason": ""}
+        if not c.outcome:
+            item = res["items"][name]
+            entry["reason"] = ("c_not_measured" if not item["measured"] or item["value"] is None
+                               else "c_no_U")
+        out.append(entry)
+    return out
+
+
+def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
+                cjk: bool = True) -> list[tuple[str, str]]:
+    """The method statement: what was done, with which settings (JJF 1535 8 g/h).
+
+    From the protocol's settings the calibration stored (results.json ``extra.method``:
+    rates, rounds, series, read delay, time to reading, Earth-rate compensation and its
+    duration, axis directions), the readings file's metadata (site latitude, tilt bound,
+    temperature) and the laboratory file.
+    """
+    from gonio.report.i18n import specification_text
+
+    m = res["extra"]["method"]
+    md = res.get("metadata", {})
+    ns = L["not_stated"]
+    measured = [res["items"][n]["clause"].split(" ")[0] for n in item_names(res)
+                if res["items"][n]["measured"]]
+    spec = specification_text(followed(res) or ns, lang, cjk)
+    rows = [(L["m_spec"], f"{spec}; " + L["m_clauses"].format(c=", ".join(measured)))]
+    ad_rate = m["angle_deviation_rate_dps"]
+    rows.append((L["m_rates"], ", ".join(display("pos", r) for r in m["rates_dps"]) + " °/s"
+                 + f" (7.1, 7.4: {display('pos', ad_rate)} °/s)"
+                 if ad_rate is not None else ""))
+    zi = m["zero_stability_interval_s"]
+    rows.append((L["m_rounds"], L["m_rounds_v"].format(
+        sf=m["scale_factor_rounds"], ad=m["angle_deviation_rounds"], s=m["series"],
+        zn=m["zero_stability_readings"], zi=display("pos", zi) if zi is not None else "—")))
+    if m["read_delay_s"] is not None:
+        rows.append((L["m_delay"], L["m_delay_v"].format(
+            d=display("pos", m["read_delay_s"]),
+            t=display("pos", m["max_time_to_reading_s"]) if m["max_time_to_reading_s"] else "—")))
+    ec = m["earth_compensation"]
+    rows.append((L["m_earth"], L.get(f"m_earth_{ec}", ec).format(
+        s=display("pos", m["static_s"]))))
+    lat = md.get("latitude_deg") or m["compensation_latitude_deg"]
+    rows.append((L["m_latitude"], f"{lat}°" if lat not in (None, "") else ns))
+    rows.append((L["m_axes"], ", ".join(L.get(a, a) for a in m["axes"])))
+    tilt = md.get("tilt_bound_deg") or (e_budget(res).get("parameters", {}) or {}).get("tilt_deg")
+    rows.append((L["m_tilt"], L["m_tilt_v"].format(t=tilt) if tilt not in (None, "") else ns))
+    env = (lab or {}).get("environment") or {}
+    t_meas = env.get("temperature_c")
+    if t_meas is None and md.get("temperature_c"):
+        t_meas = md["temperature_c"]
+    rows.append((L["m_temp"], L["m_temp_v"].format(
+        t=display("pos", m["temperature_c"]), tol=display("pos", m["temperature_tolerance_c"]),
+        m=f"{t_meas} °C" if t_meas not in (None, "") else ns)))
+    return rows
+
+
+def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
+    """``summary.txt`` and what the CLI prints, from results.json: the seven items as the
+    certificate states them (same rounding, E as ± max|E_i| with its signed extreme and
+    position, U with k and coverage probability), then the Annex A line and the conformity
+    statements the pipeline decided (:func:`conformity_for`).
+    """
+    L = labels(lang)
+    head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
+    rows, notes = [], []
+    for i, name in enumerate(item_names(res), 1):
+        st = stated_item(res, name)
+        title = res["items"][name].get("title") or name
+        if not st["measured"]:
+            rows.append([str(i), title, st["clause"], "not measured", "", ""])
+            notes.append(f"{i}. {title}: {st['reason']}")
+            continue
+        val = str(st["value"])
+        if st["signed"] is not None:
+            val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
+        if st["interval"] is not None:      # stated by its interval alone
+            val += "; " + interval_cell(st, "en").replace("\u00a0", " ")
+        U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
+                                         f"p ≈ {st['p'] or '—'} %)"
+        rows.append([str(i), title, st["clause"], val, U, st["unit"]])
+    widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
+    fmt = lambda r: "  ".join(s.ljust(w) for s, w in zip(r, widths)).rstrip()  # noqa: E731
+    lines = [fmt(head), "  ".join("-" * w for w in widths)] + [fmt(r) for r in rows]
+    if notes:
+        lines += ["", "not measured:"] + ["  " + n for n in notes]
+    u = e_budget(res)
+    if u.get("U_arcsec") is None:
+        lines += ["", L["no_E_U"]]
+    else:
+        kind = f"{u['budget_kind']} budget" if u.get("budget_kind") else "Annex A"
+        lines += ["", f"Uncertainty of the angle-position deviation ({kind}): "
+                      f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
+                      f"U = {num(res, 'extra.uncertainty.U_arcsec', 'U')}″ "
+                      f"(k = {num(res, 'extra.uncertainty.k', 'k')}, coverage probability "
+                      f"{coverage_text(ANNEX_A_COVERAGE, lang)})"]
+    for e in conformity_for(res, lab):
+        c = e["conformity"]
+        if c is None:
+            lines.append(f"conformity {e['item']}: {L[e['reason']]}")
+            continue
+        t = conformity_texts(c, res, L)
+        lines.append(f"conformity {e['item']}: {t['outcome']} (limits {t['limits']}, "
+                     f"rule {c.rule}, acceptance {t['acceptance']}, specific false-accept "
+                     f"probability {t['pfa']})")
+    return "\n".join(lines) + "\n"
+

@@ -1,0 +1,178 @@
+"""The due list (paged, searchable, per customer, CSV), the printable recall notices and a
+reference standard's history page, through HTTP (Starlette's TestClient). The issued
+calibrations are written as rows (a certificate row with a stored file), so that a long list
+costs nothing to build; the due dates are checked against dates computed here with
+``calendar`` (the last issued calibration plus the interval)."""
+
+from __future__ import annotations
+
+import calendar
+import csv
+import datetime as dt
+import io
+import re
+
+from gonio.records import queries, services
+from gonio.records.models import Calibration, CalibrationStandard, Certificate
+
+from .test_web_security import app, login  # noqa: F401  (the app fixture)
+
+
+def plus_months(day: dt.date, months: int) -> dt.date:
+    y, m = divmod(day.month - 1 + months, 12)
+    return dt.date(day.year + y, m + 1, min(day.day, calendar.monthrange(day.year + y,
+                                                                           m + 1)[1]))
+
+
+def issued(store, inst_id: int, day: dt.date, number: str, std_id: int | None = None) -> int:
+    """An issued calibration of the instrument on ``day`` (rows only)."""
+    sha, _ = services.store_file(store, io.BytesIO(number.encode()))
+    with store.writing() as s:
+        cal = Calibration(instrument_id=inst_id, spec_key="ogam-draft", readings_sha256=sha,
+                          performed_on=day, status="issued", results_sha256=sha)
+        s.add(cal)
+        s.flush()
+        s.add(Certificate(number=number, calibration_id=cal.id, html_sha256=sha,
+                          pdf_sha256=sha, results_sha256=sha))
+        if std_id is not None:
+            s.add(CalibrationStandard(calibration_id=cal.id, standard_id=std_id,
+                                      due_on_at_use=dt.date(2099, 1, 1)))
+        s.commit()
+        return cal.id
+
+
+def fleet(store, n: int, today: dt.date):
+    """``n`` instruments of two customers (even i: the first), each issued once, the i-th
+    12 months before ``today`` + (i − 30) days: due about i − 30 days from today."""
+    tech = services.user(store, "tech")
+    custs = [services.add_customer(store, tech, name, f"{name} Road 1\nTown")
+             for name in ("Alpha Gyro Ltd", "Beta Nav Co")]
+    out = []
+    for i in range(n):
+        inst = services.register_instrument(store, tech, customer_id=custs[i % 2].id,
+                                            serial=f"SN-{i:03d}", spec_key="ogam-draft",
+                                            model="RLG-GM-1", interval_months=12)
+        day = plus_months(today, -12) + dt.timedelta(days=i - 30)
+        issued(store, inst.id, day, f"GC-2025-{i + 1:04d}")
+        out.append((inst, day))
+    return custs, out
+
+
+def recalibrated_standard(store, name: str, first: tuple, second: tuple):
+    """A standard registered with ``first`` (its certificate, calibrated on, due on) and
+    recalibrated with ``second``."""
+    tech = services.user(store, "tech")
+    std = services.add_standard(store, tech, name=name, identifier="RT-07",
+                                **dict(zip(("certificate", "calibrated_on", "due_on"), first)))
+    services.update_standard(store, tech, std.id,
+                             **dict(zip(("certificate", "calibrated_on", "due_on"), second)))
+    return std
+
+
+def rows_of(html: str) -> list[str]:
+    return re.findall(r'<a href="/instruments/\d+">RLG-GM-1 (SN-\d+)</a>', html)
+
+
+def test_due_list_paged_searched_and_exported(app, sqlite_store):  # noqa: F811
+    today = dt.date.today()
+    custs, made = fleet(sqlite_store, 80, today)
+    web = login(app, "tech")
+    due = sorted(((plus_months(day, 12), inst.serial) for inst, day in made))
+    want = [serial for d, serial in due if (d - today).days <= 30]
+    assert 50 < len(want) < 80      # about 61: two pages, and some not due yet
+    r = web.get("/due")
+    assert r.status_code == 200 and f"{len(want)} in all · page 1 of 2" in r.text
+    assert rows_of(r.text) == want[:50]
+    assert rows_of(web.get("/due?page=2").text) == want[50:]
+    r = web.get("/due?q=sn-00")                         # any case: serials SN-000 … SN-009
+    assert sorted(rows_of(r.text)) == [f"SN-{i:03d}" for i in range(10)]
+    r = web.get("/due?within_days=365")
+    assert "80 in all" in r.text
+    r = web.get("/due?customer=Beta+Nav+Co")
+    assert rows_of(r.text) == [s for s in want if int(s[3:]) % 2 == 1]
+    got = list(csv.reader(io.StringIO(web.get("/export/due.csv?customer=Beta+Nav+Co&q=SN-01")
+                                      .text)))
+    assert got[0][:3] == ["customer", "instrument", "model"]
+    assert [row[3] for row in got[1:]] == [s for s in want if int(s[3:]) % 2 == 1
+                                          and s.startswith("SN-01")]
+    # a retired instrument is not recalled
+    services.update_instrument(sqlite_store, services.user(sqlite_store, "tech"),
+                               made[0][0].id, retire=True)
+    assert "SN-000" not in rows_of(web.get("/due?q=SN-000").text)
+    # the dashboard shows the first 20 and links to all
+    assert f'all {len(want) - 1} due' in web.get("/").text
+
+
+def test_recall_notices_one_per_customer(app, sqlite_store):  # noqa: F811
+    today = dt.date.today()
+    services.set_settings(sqlite_store, None, lab_name="Example Angle Laboratory",
+                          lab_address="9 Lab Lane\nXi'an")
+    custs, made = fleet(sqlite_store, 6, today)
+    web = login(app, "tech")
+    r = web.get("/due/recall")
+    sections = r.text.split('<section class="recall">')[1:]
+    assert len(sections) == 2                       # one notice per customer
+    assert "Alpha Gyro Ltd" in sections[0] and "Beta Nav Co" in sections[1]
+    assert "Example Angle Laboratory" in sections[0] and "Alpha Gyro Ltd Road 1\nTown" in \
+        sections[0]
+    for inst, day in made:
+        sec = sections[0 if int(inst.serial[3:]) % 2 == 0 else 1]
+        assert f"<td>{inst.serial}</td><td>GC-2025-{int(inst.serial[3:]) + 1:04d}</td>" \
+               f"<td>{day}</td><td>{plus_months(day, 12)}" in sec
+    one = web.get("/due/recall?customer=Beta+Nav+Co").text
+    assert one.count('<section class="recall">') == 1 and "Alpha Gyro Ltd" not in one
+    assert "Nothing is due for Nobody" in web.get("/due/recall?customer=Nobody").text
+    css = web.get("/static/style.css").text
+    assert "@media print" in css and "break-after: page" in css
+
+
+def test_standard_history_page(app, sqlite_store):  # noqa: F811
+    today = dt.date.today()
+    std = recalibrated_standard(sqlite_store, "rotary table",
+                                ("NIM-2024-1", "2024-01-05", "2025-01-05"),
+                                ("NIM-2025-7", "2025-01-03", "2026-01-03"))
+    custs, made = fleet(sqlite_store, 2, today)
+    for inst, day in made:
+        issued(sqlite_store, inst.id, day - dt.timedelta(days=400), f"GC-2024-{inst.id:04d}",
+               std.id)
+    web = login(app, "tech")
+    assert f'<a href="/standards/{std.id}">rotary table</a>' in web.get("/standards").text
+    r = web.get(f"/standards/{std.id}")
+    assert r.status_code == 200
+    text = re.sub(r"\s+", " ", r.text)
+    text = text[text.index("due dates over time"):]
+    # both certificates of the standard and their due dates, oldest first
+    assert text.index("NIM-2024-1") < text.index("NIM-2025-7")
+    assert "<td>2024-01-05</td><td>2025-01-05</td>" in text
+    assert "<td>2025-01-03</td><td>2026-01-03</td>" in text
+    assert "Used in 2 calibrations" in text
+    for inst, _ in made:
+        assert f"GC-2024-{inst.id:04d}" in text and inst.serial in text
+    d = queries.standard_history(sqlite_store, std.id, 1, 1)
+    assert d["total"] == 2 and len(d["uses"]) == 1
+    assert web.get("/standards/999999").status_code == 404
+
+
+def test_due_and_standard_history_queries(store):
+    """The due list's and a standard's history queries on SQLite and PostgreSQL."""
+    from .conftest import make_people
+
+    make_people(store)
+    today = dt.date.today()
+    std = recalibrated_standard(store, "rotary table", ("A-1", "2024-01-05", "2025-01-05"),
+                                ("A-2", "2025-01-03", "2026-01-03"))
+    _, made = fleet(store, 40, today)
+    for inst, day in made[:3]:
+        issued(store, inst.id, day - dt.timedelta(days=400), f"GC-2024-{inst.id:04d}", std.id)
+    want = sorted((plus_months(day, 12), inst.serial) for inst, day in made)
+    due_serials = [serial for d, serial in want if (d - today).days <= 30]
+    rows, total = queries.due(store, 2, 10, "sn-0")
+    assert total == len([s for s in due_serials if s.startswith("SN-0")])
+    assert [r["serial"] for r in rows] == [s for s in due_serials if s.startswith("SN-0")][10:20]
+    notices = queries.recall(store, "Beta Nav Co")
+    assert [n["customer"] for n in notices] == ["Beta Nav Co"]
+    assert [r["serial"] for r in notices[0]["rows"]] == [s for s in due_serials
+                                                        if int(s[3:]) % 2 == 1]
+    d = queries.standard_history(store, std.id, 1, 2)
+    assert [c["certificate"] for c in d["changes"]] == ["A-1", "A-2"]
+    assert d["total"] == 3 and len(d["uses"]) == 2
