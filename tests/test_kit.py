@@ -167,10 +167,12 @@ def test_dcc_units_of_a_specification():
     from gonio.report.item_dcc import compose_dsi
     from gonio.report.rate_dcc import dsi_unit
 
-    assert dsi_unit("ppm", "mV", extra={"ppm": r"\ppm"}) == (r"\ppm", 1.0)
+    # the one unit table (ppm included), then a specification's own units
+    assert dsi_unit("ppm", "mV") == (r"\ppm", 1.0)
+    assert dsi_unit("mm", "mV", extra={"mm": r"\milli\metre"}) == (r"\milli\metre", 1.0)
     assert dsi_unit("°/h", "mV", extra={"°/h": r"\one"}) == (r"\degree\hour\tothe{-1}", 1.0)
-    with pytest.raises(GonioError, match="unit 'ppm' has no D-SI form .*dcc_units"):
-        dsi_unit("ppm", "mV")
+    with pytest.raises(GonioError, match="unit 'mm' has no D-SI form .*dcc_units"):
+        dsi_unit("mm", "mV")
     assert compose_dsi("furlong", {"furlong": r"\metre"}) == r"\metre"
     with pytest.raises(GonioError, match="unit 'furlong' has no D-SI form"):
         compose_dsi("furlong")

@@ -243,8 +243,8 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
-    # what defines an item's measurand (a module's own field until CONTENT_FIELDS lists it)
-    for key, text in getattr(data, "ITEM_CONDITIONS", {}).items():
+    # what defines an item's measurand
+    for key, text in content_field(data, "ITEM_CONDITIONS").items():
         it = res["items"].get(key) or {}
         if it.get("measured"):
             add("p", [text[1 if lang == "zh" else 0].format(**it["details"])])

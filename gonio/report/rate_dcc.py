@@ -4,7 +4,6 @@
 Contents
 ========
 =========================  ==============================================================
-:data:`RATE_DSI`           results.json unit of a rate item → (D-SI unit, factor)
 :data:`OUTPUT_DSI`         the readings' ``output_unit`` → D-SI of the scale factor
 :func:`dsi_unit`           the (D-SI unit, factor) of an item's unit
 :func:`clause_ref_type`    the refType naming an item's clause
@@ -52,27 +51,9 @@ from gonio.report.dcc import (administrative_data, conformity_statements,
 from gonio.report.i18n import display, labels
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.stated import item_nums
+from gonio.result.statement import DSI_UNITS
 from gonio.specs import get
 from gonio.units import STANDARD_GRAVITY_M_S2
-
-_PER_G = 1.0 / STANDARD_GRAVITY_M_S2
-
-#: results.json units of the rate items → (D-SI 2.2 unit, factor on value and U).
-RATE_DSI: dict[str, tuple[str, float]] = {
-    "°/s": (r"\degree\second\tothe{-1}", 1.0),
-    "°/h": (r"\degree\hour\tothe{-1}", 1.0),
-    "°/√h": (r"\degree\hour\tothe{-0.5}", 1.0),
-    "(°/h)/°C": (r"\degree\hour\tothe{-1}\kelvin\tothe{-1}", 1.0),
-    "(°/s)/°C": (r"\degree\second\tothe{-1}\kelvin\tothe{-1}", 1.0),
-    "1/°C": (r"\kelvin\tothe{-1}", 1.0),
-    "%/°C": (r"\percent\kelvin\tothe{-1}", 1.0),
-    "(°/h)/g": (r"\degree\hour\tothe{-1}\metre\tothe{-1}\second\tothe{2}", _PER_G),
-    "(°/s)/g": (r"\degree\metre\tothe{-1}\second", _PER_G),
-    "Hz": (r"\hertz", 1.0),
-    "s": (r"\second", 1.0),
-    "%": (r"\percent", 1.0),
-    "1": (r"\one", 1.0),
-}
 
 #: The readings' ``output_unit`` → the D-SI unit of the scale factor (output per °/s).
 OUTPUT_DSI: dict[str, str] = {
@@ -101,7 +82,8 @@ SETTINGS = (
 
 
 def dsi_unit(unit: str, output_unit: str, file=None, extra=None) -> tuple[str, float]:
-    """(D-SI unit, factor) of a rate item's results.json ``unit``; the scale factor's
+    """(D-SI unit, factor) of a rate item's results.json ``unit``: the one unit table
+    (:data:`gonio.result.statement.DSI_UNITS`); the scale factor's
     ``<output>/(°/s)`` through :data:`OUTPUT_DSI`; a unit of the specification's own
     (``extra``: its ``Specification.dcc_units``, {unit: D-SI}) with factor 1. An unknown unit
     is a GonioError naming it.
@@ -117,8 +99,8 @@ def dsi_unit(unit: str, output_unit: str, file=None, extra=None) -> tuple[str, f
                              f"(known: {', '.join(OUTPUT_DSI)}); calibrate without --dcc",
                              file=file, key="output_unit")
         return OUTPUT_DSI[output_unit], 1.0
-    if unit in RATE_DSI:
-        return RATE_DSI[unit]
+    if unit in DSI_UNITS:
+        return DSI_UNITS[unit]
     if extra and unit in extra:
         return extra[unit], 1.0
     raise GonioError(f"unit {unit!r} has no D-SI form for the DCC (a specification states "

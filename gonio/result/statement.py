@@ -94,6 +94,7 @@ from dataclasses import asdict, dataclass
 from decimal import ROUND_CEILING, ROUND_FLOOR, ROUND_HALF_UP, Decimal, localcontext
 
 from gonio.errors import GonioError
+from gonio.units import STANDARD_GRAVITY_M_S2
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -278,7 +279,7 @@ UNIT_TEXT: dict[str, str] = {
 
 #: results.json unit → (D-SI 2.2 unit, factor applied to value and U). D-SI has no unit for
 #: the standard acceleration of gravity, so per-g units are written per m s⁻² (÷ g_n).
-_PER_G = 1.0 / 9.80665
+_PER_G = 1.0 / STANDARD_GRAVITY_M_S2
 DSI_UNITS: dict[str, tuple[str, float]] = {
     "arcsec": (r"\arcsecond", 1.0), "″": (r"\arcsecond", 1.0),
     "deg": (r"\degree", 1.0), "°": (r"\degree", 1.0),
