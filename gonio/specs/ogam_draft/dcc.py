@@ -21,15 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from gonio.atomic import write_bytes
-from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, element,
-                              influence_conditions, list_quantity, measurement_result,
-                              new_document, not_measured_quantity, quantity, text_element,
-                              tree_bytes)
-from gonio.report.i18n import display, labels, reading_note, specification_text
-from gonio.report.stated import Num, conformity_texts, num
+from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
+                              conformity_texts, display, element, influence_conditions, labels,
+                              list_quantity, measurement_result, new_document,
+                              not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
                                            item_path, item_uncertainty, method_rows,
-                                           stated_item)
+                                           reading_note, specification_text, stated_item)
 
 
 def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
@@ -141,7 +139,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
 
 
 def _limit_rule(c) -> str:
-    from gonio.report.i18n import rule_at_U
+    from gonio.kit.render import rule_at_U
     return rule_at_U(c.U, 3)
 
 
