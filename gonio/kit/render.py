@@ -30,7 +30,7 @@ Figures                         :func:`figure_svg`, :func:`mpl_style`,
 The DCC (PTB DCC 3.3.0)         :func:`new_document`, :func:`administrative_data`,
                                 :func:`measurement_result`, :func:`influence_conditions`,
                                 :func:`element`, :func:`text_element`, :func:`quantity`,
-                                :func:`list_quantity`, :func:`bound_quantity`,
+                                :func:`list_quantity`,
                                 :func:`not_measured_quantity`, :func:`tree_bytes`,
                                 :func:`bilingual`, :func:`label_translator`,
                                 :data:`DCC_CONFORMITY`
@@ -42,7 +42,7 @@ not, so a specification's calibrating modules stay light.
 
 from __future__ import annotations
 
-from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual, bound_quantity,
+from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual,
                               element, influence_conditions, label_translator, list_quantity,
                               measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
@@ -60,7 +60,7 @@ from gonio.report.text import clean_tree
 
 __all__ = [
     "Block", "DCC_CONFORMITY", "HTML_FIGSIZE", "NoBreakText", "Num", "administrative_data",
-    "bilingual", "bound_quantity", "certificate_id", "clause_text", "clean_tree",
+    "bilingual", "certificate_id", "clause_text", "clean_tree",
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
