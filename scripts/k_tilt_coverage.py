@@ -3,11 +3,12 @@ the draft's A.1 bound (0.1°) at the worst azimuth, on the ``rlg`` bench otherwi
 
     python scripts/k_tilt_coverage.py [--seeds 1001-1016] [--tilt 0.1] [--azimuth worst]
 
-The truth is the bench's own K through the mount (``truth.json``
-``scale_factor_through_mount_counts_per_deg``: the bench file's scale factor and tilt), never
-gonio's calibration; the tilt × Earth-rate coupling of the 7.1 rounds is an error of the
-measurement, not part of the measurand. ``--azimuth worst`` takes the azimuth at which that
-coupling biases the noise-free 7.1 K most (:func:`worst_azimuth`). For each
+The truth is the instrument's own K at the 7.1 rounds from the bench file
+(``gonio.specs.ogam_draft.item_coverage.scale_factor_truth``: K through the mount and the
+instrument's angle-position error), never gonio's calibration; the tilt × Earth-rate coupling
+of the 7.1 rounds is an error of the measurement, not part of the measurand. ``--azimuth
+worst`` takes the azimuth at which that coupling biases the noise-free 7.1 K most
+(``gonio.specs.ogam_draft.study.worst_azimuth``). For each
 fresh seed the whole optical programme is simulated and calibrated; the script prints K − K_true,
 U(K), z = (K − K_true)/u_c(K) and whether |K − K_true| ≤ U, then the count, the Clopper–Pearson
 95 % interval of the coverage, and the mean and sd of z.
@@ -16,7 +17,6 @@ U(K), z = (K − K_true)/u_c(K) and whether |K − K_true| ≤ U, then the count
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import tempfile
 from dataclasses import replace
@@ -33,45 +33,25 @@ def seeds_arg(text: str) -> list[int]:
 
 def bench_at(tilt_deg: float, azimuth_deg: float):
     from gonio.bench import load_bench
-    b = load_bench("rlg")
-    return replace(b, instrument=replace(b.instrument, tilt_deg=tilt_deg,
-                                         tilt_azimuth_deg=azimuth_deg))
-
-
-def session_truth(bench, protocol, seed: int = 0):
-    from gonio.bench import run_session
-    return run_session(protocol, bench, seed=seed)
-
-
-def coupling_bias(bench, protocol) -> float:
-    """K of the noise-free rerun's own 7.1 rounds minus K through the mount (the bench's): the
-    tilt × Earth-rate coupling's bias of K, noise-free."""
-    tr = session_truth(bench, protocol).truth
-    return float(tr["scale_factor_noise_free_calibrated_counts_per_deg"]
-                 - tr["scale_factor_through_mount_counts_per_deg"])
-
-
-def worst_azimuth(tilt_deg: float, protocol) -> float:
-    """The azimuth α at which the coupling's bias of K is largest: it is a·cos α + b·sin α
-    (gonio.budget.extra.scale_factor_tilt_bias), so the noise-free biases at α = 0° and 90°
-    give a, b and the worst α = atan2(b, a)."""
-    a = coupling_bias(bench_at(tilt_deg, 0.0), protocol)
-    b = coupling_bias(bench_at(tilt_deg, 90.0), protocol)
-    return math.degrees(math.atan2(b, a)) % 360.0
+    from gonio.specs.ogam_draft.study import tilted
+    return tilted(load_bench("rlg"), tilt_deg, azimuth_deg)
 
 
 def trial(bench, protocol, seed: int, work: Path) -> tuple[float, float, float]:
-    """(K − K_true, u_c(K), U(K)) of one simulated calibration."""
+    """(K − K_true, u_c(K), U(K)) of one simulated calibration (the readings written to and
+    read back from a CSV, as ``gonio calibrate`` reads them)."""
     from gonio.bench import run_session, write_session
-    from gonio.specs.ogam_draft.calibration import calibrate
+    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.calibration import analyse
+    from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
     session = run_session(protocol, bench, seed=seed)
     d = work / f"s{seed}"
     write_session(session, d)
-    rep = calibrate(d / "readings.csv", protocol, static_record=session.static_record)
-    k = float(rep.results.scale_factor.value)
+    rep = analyse(read_readings(d / "readings.csv"), protocol,
+                  static_record=session.static_record)
     iu = rep.item_uncertainty["scale_factor"]
-    kt = float(session.truth["scale_factor_through_mount_counts_per_deg"])
-    return k - kt, float(iu.u_c), float(iu.k * iu.u_c)
+    kt = scale_factor_truth(session.truth)[0]
+    return float(rep.results.scale_factor.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)
 
 
 def main(argv=None) -> int:
@@ -83,7 +63,10 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     from gonio.protocol import load_protocol
     proto = load_protocol(a.protocol)
-    az = worst_azimuth(a.tilt, proto) if a.azimuth == "worst" else float(a.azimuth)
+    from gonio.bench import load_bench
+    from gonio.specs.ogam_draft.study import worst_azimuth
+    az = worst_azimuth(load_bench("rlg"), proto, a.tilt) if a.azimuth == "worst" \
+        else float(a.azimuth)
     bench = bench_at(a.tilt, az)
     print(f"rlg bench, tilt {a.tilt:g}°, azimuth {az:g}°, protocol {a.protocol}")
     rows = []

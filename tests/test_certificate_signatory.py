@@ -134,8 +134,6 @@ def test_rendered_again_from_the_stored_results_is_byte_identical(calibrated):
     results.json and the laboratory file."""
     from gonio.result.model import Result
     from gonio.specs import get
-    if calibrated["key"] == "triad-alignment":
-        pytest.skip("the triad's figures still draw its in-memory analysis objects")
     for lang in ("en", "zh"):
         out, *_ = _render(calibrated, lang, "lab-recal.toml")
         stored = Result.from_json(json.loads((out / "results.json").read_text(encoding="utf-8")))

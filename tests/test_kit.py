@@ -67,6 +67,19 @@ def test_every_kit_name_is_documented():
     assert (kit.__doc__ or "").count(":func:") >= 20
 
 
+def test_every_rendering_kit_name_is_documented():
+    from gonio.kit import render
+
+    doc = (ROOT / "docs" / "kit.md").read_text(encoding="utf-8")
+    section = doc.partition("## The rendering kit")[2].partition("\n## ")[0]
+    for name in render.__all__:
+        assert f"`{name}`" in section, name
+        assert name in (render.__doc__ or ""), name
+        obj = getattr(render, name)
+        if callable(obj):
+            assert (obj.__doc__ or "").strip(), name
+
+
 def test_the_kit_loads_neither_the_bench_nor_the_report():
     code = ("import sys, gonio.kit\n"
             "bad = sorted(m for m in sys.modules if m.startswith(('gonio.bench', "
@@ -167,10 +180,12 @@ def test_dcc_units_of_a_specification():
     from gonio.report.item_dcc import compose_dsi
     from gonio.report.rate_dcc import dsi_unit
 
-    assert dsi_unit("ppm", "mV", extra={"ppm": r"\ppm"}) == (r"\ppm", 1.0)
+    # the one unit table (ppm included), then a specification's own units
+    assert dsi_unit("ppm", "mV") == (r"\ppm", 1.0)
+    assert dsi_unit("mm", "mV", extra={"mm": r"\milli\metre"}) == (r"\milli\metre", 1.0)
     assert dsi_unit("°/h", "mV", extra={"°/h": r"\one"}) == (r"\degree\hour\tothe{-1}", 1.0)
-    with pytest.raises(GonioError, match="unit 'ppm' has no D-SI form .*dcc_units"):
-        dsi_unit("ppm", "mV")
+    with pytest.raises(GonioError, match="unit 'mm' has no D-SI form .*dcc_units"):
+        dsi_unit("mm", "mV")
     assert compose_dsi("furlong", {"furlong": r"\metre"}) == r"\metre"
     with pytest.raises(GonioError, match="unit 'furlong' has no D-SI form"):
         compose_dsi("furlong")

@@ -169,6 +169,12 @@ def test_certificate_content_is_checked(tmp_path, monkeypatch):
              "cc_typo": ("FIGURE_ITEM = {'allan': 'noise'}\n", "FIGURE_ITEM is not a content "
                          "field; did you mean FIGURE_ITEMS?"),
              "cc_shape": ("HEADING = 'Results'\n", "field HEADING must be an (English, Chinese)"),
+             # the measurand conditions the per-item certificate prints are a content field
+             # (a misspelt name was read by getattr and silently printed nothing)
+             "cc_cond": ("ITEM_CONDITION = {'bias': ('a', 'b')}\n", "ITEM_CONDITION is not a "
+                         "content field; did you mean ITEM_CONDITIONS?"),
+             "cc_cond_shape": ("ITEM_CONDITIONS = {'bias': 'window W'}\n",
+                               "field ITEM_CONDITIONS must be"),
              "cc_fine": ("FIGURE_ITEMS = {'allan': 'noise'}\nOWN_TABLE = 1\n", None)}
     for name, (body, says) in cases.items():
         (tmp_path / f"{name}.py").write_text(body, encoding="utf-8")
@@ -182,6 +188,8 @@ def test_certificate_content_is_checked(tmp_path, monkeypatch):
         assert says in str(exc.value) and repr(s.key) in str(exc.value)
     with pytest.raises(KeyError):
         s.content_value("FIGURE_ITEM")
+    with pytest.raises(KeyError):                 # a document's clause no renderer prints
+        s.content_value("RECAL")
 
 
 def test_the_records_read_the_typed_interval(monkeypatch):

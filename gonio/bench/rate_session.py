@@ -97,21 +97,32 @@ def _chamber_track(st: _State, target: float, ramp_c_per_min: float, duration_s:
     st.chamber_set = target
 
 
-def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *,
-                     room_temperature_c: float = 20.0, metadata: dict | None = None,
-                     noise: bool = True) -> RateSessionResult:
-    """Execute ``segments`` in order on ``bench``; same seed → same numbers."""
-    if not segments:
-        raise GonioError("the programme has no segments")
-    check_rate_session_size(segments, where=f"the programme on bench {bench.name}")
-    rng = np.random.default_rng(seed)
-    g, eq = bench.gyro, bench.equipment
-    st = _State(bench, rng, room_temperature_c)
-    omega_enu = np.degrees(earth_rate_enu(bench.latitude_deg))         # °/s in ENU
-    cols: dict[str, list] = {c: [] for c in RATE_COLUMNS}
-    seg_truth = []
-    runs = {}
-    for seg in segments:
+class RateSession:
+    """The virtual rate bench as a stateful recorder: :meth:`record` runs one segment after
+    the other on the same physical state (power cycles, noise processes, the gyro's
+    temperature, the table angle), as :func:`run_rate_session` does for a whole programme;
+    the served bench (:mod:`gonio.instruments.served_rate`) records each segment when its
+    instruments are told to, so that a live session and a batch one share every formula.
+    """
+
+    def __init__(self, bench: RateBench, seed: int = 0, *, room_temperature_c: float = 20.0,
+                 noise: bool = True):
+        self.bench, self.noise, self.room = bench, noise, room_temperature_c
+        self.rng = np.random.default_rng(seed)
+        self.st = _State(bench, self.rng, room_temperature_c)
+        self.omega_enu = np.degrees(earth_rate_enu(bench.latitude_deg))      # °/s in ENU
+        self.runs: dict = {}
+
+    @property
+    def time_since_power_on_s(self) -> float:
+        return self.st.t
+
+    def record(self, seg: Segment) -> tuple[dict, dict]:
+        """Run ``seg`` (its power cycle, delay, then its samples): (its readings columns,
+        :data:`RATE_COLUMNS` → lists, and its truth entry)."""
+        st, rng, noise = self.st, self.rng, self.noise
+        g, eq = self.bench.gyro, self.bench.equipment
+        omega_enu = self.omega_enu
         if seg.samples < 1 or not seg.interval_s > 0:
             raise GonioError(f"segment {seg.test}/{seg.run}/{seg.step}: needs ≥ 1 sample and "
                              f"interval > 0")
@@ -123,8 +134,9 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
             st.b_run = g.bias_scatter_dps * float(rng.standard_normal()) if noise else 0.0
             st.t = 0.0
             st.run += 1
-            runs[st.run] = {"scale_factor_scatter_rel": st.k_run - 1.0, "bias_scatter_dps": st.b_run,
-                            "first_segment": f"{seg.test}/{seg.run}/{seg.step}"}
+            self.runs[st.run] = {"scale_factor_scatter_rel": st.k_run - 1.0,
+                                 "bias_scatter_dps": st.b_run,
+                                 "first_segment": f"{seg.test}/{seg.run}/{seg.step}"}
         target = st.room if seg.temperature_c is None else float(seg.temperature_c)
         _chamber_track(st, target, seg.ramp_c_per_min, seg.delay_s, eq)
         st.noise.skip(seg.delay_s)
@@ -145,23 +157,8 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
         v_set = g.supply_nominal_v if seg.supply_v is None else float(seg.supply_v)
         v = v_set + eq.supply.error_v                       # actual terminal voltage
         K = g.scale_factor_at(temp_g, v) * st.k_run
-        null = float(g.null_at(v))
         bias = g.bias_at(temp_g, v) + st.b_run
-        # warm-up transient, mean over each interval (exact)
-        if g.warmup_bias_dps:
-            tau = g.warmup_tau_s
-            warm = g.warmup_bias_dps * tau / dt * (np.exp(-t / tau) - np.exp(-(t + dt) / tau)) \
-                if seg.vib_amplitude_dps == 0 else g.warmup_bias_dps * np.exp(-t / tau)
-        else:
-            warm = 0.0
-        R0 = mount_matrix(seg.up_axis, seg.north_axis)
-        if seg.stand_deg:
-            R0 = R0 @ body_rotation(seg.stand_axis, seg.stand_deg)
-        R0 = R0 @ eq.fixture.matrix()                 # the gyro's misalignment in its fixture
-        R0 = _small_rotation(rng, math.radians(eq.position_table.position_error_arcsec / ARCSEC_PER_DEG)
-                             if noise and seg.rate_dps == 0 and seg.vib_amplitude_dps == 0
-                             and ((seg.up_axis, seg.north_axis) != ("+z", "+x") or seg.stand_deg)
-                             else 0.0) @ R0
+        R0 = _mounting(seg, eq, rng, noise)
         tilt = math.radians(eq.rate_table.tilt_deg)
         table_axis = np.array([math.sin(tilt), 0.0, math.cos(tilt)])
         if seg.vib_amplitude_dps > 0:
@@ -171,27 +168,72 @@ def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *
             ref = np.full(n, np.nan)
             det, mean_in = _table_input(seg, g, eq, t, st, R0, table_axis, omega_enu, dt)
         err = st.noise.samples(n, dt, temp_g)
-        out = null + K * (det + bias + warm + err)
+        out = float(g.null_at(v)) + K * (det + bias + _warm_up(g, seg, t, dt) + err)
         out = out * (1 + eq.acquisition.gain_error_rel)
         lsb = max(g.output_lsb, eq.acquisition.resolution)
         if lsb > 0:
             out = np.round(out / lsb) * lsb
         st.t += n * dt
-        _append_columns(cols, seg, t, v, v_set, ref, out, room_temperature_c, eq)
-        seg_truth.append({"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
-                          "temperature_c": target,
-                          "power_cycle": st.run,
-                          "gyro_temperature_c": float(np.mean(temp_g)),
-                          "scale_factor": float(np.mean(K)) * (1 + eq.acquisition.gain_error_rel),
-                          "bias_dps": float(np.mean(bias)),
-                          "input_rate_dps": mean_in, "supply_v": v,
-                          "earth_rate_on_input_dps": float(omega_enu @ (R0 @ np.array([0, 0, 1.0])))
-                          if seg.rate_dps == 0 else None})
+        cols: dict[str, list] = {c: [] for c in RATE_COLUMNS}
+        _append_columns(cols, seg, t, v, v_set, ref, out, self.room, eq)
+        truth = {"test": seg.test, "run": seg.run, "step": seg.step, "role": seg.role,
+                 "temperature_c": target, "power_cycle": st.run,
+                 "gyro_temperature_c": float(np.mean(temp_g)),
+                 "scale_factor": float(np.mean(K)) * (1 + eq.acquisition.gain_error_rel),
+                 "bias_dps": float(np.mean(bias)), "input_rate_dps": mean_in, "supply_v": v,
+                 "earth_rate_on_input_dps": float(omega_enu @ (R0 @ np.array([0, 0, 1.0])))
+                 if seg.rate_dps == 0 else None}
+        return cols, truth
+
+    def truth(self, seed: int, seg_truth: list) -> dict:
+        """The session's truth: the bench, the power cycles drawn and every segment's."""
+        b = self.bench
+        return {"gyro": b.gyro.to_dict(), "equipment": b.equipment.to_dict(),
+                "latitude_deg": b.latitude_deg, "seed": seed, "noise": self.noise,
+                "power_cycles": self.runs, "segments": seg_truth}
+
+
+def _warm_up(g, seg: Segment, t: np.ndarray, dt: float):
+    """The warm-up transient: its mean over each interval (exact), or its instantaneous value
+    for a vibration segment's instantaneous samples."""
+    if not g.warmup_bias_dps:
+        return 0.0
+    tau = g.warmup_tau_s
+    if seg.vib_amplitude_dps == 0:
+        return g.warmup_bias_dps * tau / dt * (np.exp(-t / tau) - np.exp(-(t + dt) / tau))
+    return g.warmup_bias_dps * np.exp(-t / tau)
+
+
+def _mounting(seg: Segment, eq, rng, noise: bool) -> np.ndarray:
+    """The gyro's attitude of a segment: its mounting, stand, fixture misalignment and, in a
+    position other than the reference, the position table's random error."""
+    R0 = mount_matrix(seg.up_axis, seg.north_axis)
+    if seg.stand_deg:
+        R0 = R0 @ body_rotation(seg.stand_axis, seg.stand_deg)
+    R0 = R0 @ eq.fixture.matrix()                 # the gyro's misalignment in its fixture
+    return _small_rotation(rng, math.radians(eq.position_table.position_error_arcsec / ARCSEC_PER_DEG)
+                           if noise and seg.rate_dps == 0 and seg.vib_amplitude_dps == 0
+                           and ((seg.up_axis, seg.north_axis) != ("+z", "+x") or seg.stand_deg)
+                           else 0.0) @ R0
+
+
+def run_rate_session(segments: list[Segment], bench: RateBench, seed: int = 0, *,
+                     room_temperature_c: float = 20.0, metadata: dict | None = None,
+                     noise: bool = True) -> RateSessionResult:
+    """Execute ``segments`` in order on ``bench``; same seed → same numbers."""
+    if not segments:
+        raise GonioError("the programme has no segments")
+    check_rate_session_size(segments, where=f"the programme on bench {bench.name}")
+    session = RateSession(bench, seed, room_temperature_c=room_temperature_c, noise=noise)
+    cols: dict[str, list] = {c: [] for c in RATE_COLUMNS}
+    seg_truth = []
+    for seg in segments:
+        part, tr = session.record(seg)
+        for c in RATE_COLUMNS:
+            cols[c] += part[c]
+        seg_truth.append(tr)
     df = pd.DataFrame(cols, columns=list(RATE_COLUMNS))
-    md = dict(metadata or {})
-    truth = {"gyro": g.to_dict(), "equipment": eq.to_dict(), "latitude_deg": bench.latitude_deg,
-             "seed": seed, "noise": noise, "power_cycles": runs, "segments": seg_truth}
-    return RateSessionResult(df, md, truth)
+    return RateSessionResult(df, dict(metadata or {}), session.truth(seed, seg_truth))
 
 
 def _vibration_input(seg: Segment, g, eq, t: np.ndarray, R0: np.ndarray,

@@ -35,7 +35,8 @@ from gonio.units import dps_to_arcsec_s
 
 __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "session_coupling",
            "coupling_budget_component", "tilt_coupling_coefficients", "budget_extra_components",
-           "scale_factor_tilt_bias",
+           "scale_factor_tilt_bias", "scale_factor_round_coupling",
+           "nonlinearity_tilt_bias",
            "EXTRA_SYMBOLS"]
 
 #: Symbols of :func:`budget_extra_components`.
@@ -241,15 +242,67 @@ def scale_factor_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
     >>> 0 < a * 360 / 1296000 < 1e-6, scale_factor_tilt_bias(sf, p, 40.0, 0.0)
     (True, 0.0)
     """
+    a_k, b_k = scale_factor_round_coupling(scale_factor_rows, protocol, latitude_deg, tilt_deg,
+                                           accel_dps2)
+    if a_k.size == 0:
+        return 0.0
+    return float(math.hypot(float(np.mean(a_k)), float(np.mean(b_k))))
+
+
+def scale_factor_round_coupling(scale_factor_rows: pd.DataFrame, protocol: Protocol,
+                                latitude_deg: float, tilt_deg: float,
+                                accel_dps2: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per 7.1 round k, (a_k, b_k), arcsec per degree: the tilt × Earth-rate coupling moves
+    round k's reading by e_k(α) = Ω_⊥ sin ψ (C_k cos α − S_k sin α)
+    (:func:`tilt_coupling_coefficients`), so its K_i = C_i/θ_i by the relative error
+    e_k/(3600 θ_k) = (a_k cos α − b_k sin α)/3600 with a_k = Ω_⊥ sin ψ C_k/θ_k,
+    b_k = Ω_⊥ sin ψ S_k/θ_k. Empty arrays when the protocol has no 7.1.
+
+    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
+    >>> sf = pd.DataFrame({"table_deg": [60.0, 360.0], "time_s": [11.0, 16.0]})
+    >>> a, b = scale_factor_round_coupling(sf, p, 40.0, 0.1)
+    >>> a.shape, bool(abs(a[1]) < abs(a[0]))
+    ((2,), True)
+    """
     th_k = np.abs(scale_factor_rows["table_deg"].to_numpy(dtype=float))
     t_k = scale_factor_rows["time_s"].to_numpy(dtype=float)
     sfi = protocol.scale_factor
     if sfi is None or th_k.size == 0:
-        return 0.0
+        return np.zeros(0), np.zeros(0)
     omega = dps_to_arcsec_s(earth_rate_split(latitude_deg, sfi.orientation).perpendicular_dps) \
         * math.sin(math.radians(tilt_deg))
     ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s, accel_dps2)
-    return float(abs(omega) * math.hypot(float(np.mean(ck / th_k)), float(np.mean(sk / th_k))))
+    return omega * ck / th_k, omega * sk / th_k
+
+
+def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
+                           latitude_deg: float, tilt_deg: float, i_max: int, i_min: int,
+                           accel_dps2: float = 60.0) -> float:
+    """Worst case over the tilt azimuth of the error the tilt × Earth-rate coupling gives the
+    spread K_i(max) − K_i(min) of the 7.1 rounds (draft 7.2), arcsec per degree: rounds
+    ``i_max`` and ``i_min`` (positions in ``scale_factor_rows``) are off by
+    (a_k cos α − b_k sin α)/3600 relative (:func:`scale_factor_round_coupling`), their
+    difference by (Δa cos α − Δb sin α)/3600, whose amplitude over α is |(Δa, Δb)|. The
+    coupling differs between rounds (it grows with the time from zeroing to reading, not
+    with the angle), so unlike the common factor cos ψ it does not cancel in K_l.
+
+    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
+    >>> sf = pd.DataFrame({"table_deg": [60.0, 360.0], "time_s": [11.0, 16.0]})
+    >>> a, b = scale_factor_round_coupling(sf, p, 40.0, 0.1)
+    >>> nonlinearity_tilt_bias(sf, p, 40.0, 0.1, 0, 1) == math.hypot(a[0] - a[1], b[0] - b[1])
+    True
+    >>> nonlinearity_tilt_bias(sf, p, 40.0, 0.1, 1, 1)
+    0.0
+    """
+    a_k, b_k = scale_factor_round_coupling(scale_factor_rows, protocol, latitude_deg, tilt_deg,
+                                           accel_dps2)
+    if a_k.size == 0:
+        return 0.0
+    return float(math.hypot(float(a_k[i_max] - a_k[i_min]), float(b_k[i_max] - b_k[i_min])))
 
 
 def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,

@@ -1,5 +1,6 @@
-"""``gonio acquire``: run a protocol's programme on a rotary table and an acquisition module
-through VISA (:func:`gonio.instruments.acquire.acquire`)."""
+"""``gonio acquire``: run a protocol's programme on a rotary table and an acquisition module,
+or a rate specification's on a rate table, gyro output reader, chamber and supply, through
+VISA (:func:`gonio.pipeline.acquire.acquire`)."""
 
 from __future__ import annotations
 
@@ -14,12 +15,19 @@ def register(sub) -> None:
                                    "readings come (for gonio calibrate) and io.log (every "
                                    "command and answer). Ctrl-C, SIGTERM, a lost link or an "
                                    "instrument error stop the table and keep the readings, "
-                                   "marked incomplete; --resume continues them.")
+                                   "marked incomplete; --resume continues them. A rate "
+                                   "specification's protocol runs its "
+                                   "programme on a rate table, a gyro output reader, a chamber "
+                                   "and a supply (--chamber, --supply).")
     p.add_argument("--protocol", required=True, help="protocol file or built-in name")
     p.add_argument("--table", required=True,
                    help="VISA resource of the table controller, e.g. TCPIP0::host::5025::SOCKET")
     p.add_argument("--gyro", required=True,
                    help="VISA resource of the acquisition module, e.g. ASRL/dev/ttyUSB0::INSTR")
+    p.add_argument("--chamber", help="VISA resource of the temperature chamber (a rate "
+                                     "specification's programme with temperature points)")
+    p.add_argument("--supply", help="VISA resource of the gyro's power supply (a rate "
+                                    "specification's programme: power cycles)")
     p.add_argument("--out", required=True, help="output folder (readings.csv, io.log)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted acquisition in --out from its last complete "
@@ -42,11 +50,12 @@ def _meta(items: list[str]) -> dict:
 
 
 def run(args) -> int:
-    from gonio.instruments.acquire import acquire
-    from gonio.protocol import load_protocol
+    from gonio.pipeline.acquire import acquire
 
-    res = acquire(load_protocol(args.protocol), args.table, args.gyro, args.out,
-                  resume=args.resume, metadata=_meta(args.meta), timeout_s=args.timeout)
+    res = acquire(args.protocol, {"table": args.table, "gyro": args.gyro,
+                                  "chamber": args.chamber, "supply": args.supply},
+                  args.out, metadata=_meta(args.meta), resume=args.resume,
+                  timeout_s=args.timeout)
     print(res.readings)
     print(res.io_log)
     return 0

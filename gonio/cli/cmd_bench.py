@@ -20,12 +20,18 @@ def register(sub) -> None:
                                     "acquisition module on 127.0.0.1 over line-terminated SCPI "
                                     "sockets (the command sets of docs/instruments.md), with "
                                     "simulated time --speed times faster than real time, until "
-                                    "interrupted. Prints their VISA resource strings.")
+                                    "interrupted. Prints their VISA resource strings. A rate "
+                                    "bench (a [gyro] section, e.g. mems-adxrs610) serves its rate "
+                                    "table, gyro output reader, chamber and supply instead.")
     s.add_argument("--bench", default="rlg", help="bench file or built-in name (default rlg)")
     s.add_argument("--table-port", type=int, required=True,
                    help="TCP port of the table (0: a free one, printed)")
     s.add_argument("--gyro-port", type=int, required=True,
                    help="TCP port of the acquisition module (0: a free one, printed)")
+    s.add_argument("--chamber-port", type=int, default=0,
+                   help="a rate bench: TCP port of the temperature chamber (0: a free one)")
+    s.add_argument("--supply-port", type=int, default=0,
+                   help="a rate bench: TCP port of the gyro's power supply (0: a free one)")
     s.add_argument("--speed", type=float, default=1.0,
                    help="simulated seconds per real second (default 1)")
     s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
@@ -40,10 +46,41 @@ def register(sub) -> None:
     s.set_defaults(func=run)
 
 
+def is_rate_bench(name: str) -> bool:
+    """Whether a bench file describes a rate gyro (a ``[gyro]`` section)."""
+    from gonio.formats.toml import read_toml
+    from gonio.resources import resolve
+
+    return "gyro" in read_toml(resolve(name, kind="bench"))
+
+
+def _serve_rate(args):
+    from gonio.bench.rate_gyro import load_rate_bench
+    from gonio.errors import GonioError
+    from gonio.instruments.served_rate import serve_rate_bench
+
+    if args.fault:
+        raise GonioError("--fault: the served rate bench has no injected faults yet")
+    served = serve_rate_bench(load_rate_bench(args.bench),
+                              {"table": args.table_port, "gyro": args.gyro_port,
+                               "chamber": args.chamber_port, "supply": args.supply_port},
+                              speed=args.speed, seed=args.seed)
+    for name, res in served.resources.items():
+        print(f"{name}: {res}", flush=True)
+    return served
+
+
 def run(args) -> int:
     from gonio.bench import load_bench
     from gonio.instruments.served import Faults, serve_bench
 
+    if is_rate_bench(args.bench):
+        served = _serve_rate(args)
+        try:
+            while True:
+                time.sleep(60.0)
+        finally:
+            served.close()
     served = serve_bench(load_bench(args.bench), args.table_port, args.gyro_port,
                          speed=args.speed, seed=args.seed, range_deg=args.range_deg,
                          warm_up_s=args.warm_up, faults=Faults.parse(args.fault))

@@ -194,8 +194,9 @@ class ReadingsFile:
     reading, appended, flushed and synced. ``acquisition: incomplete`` until :meth:`finish`
     rewrites the metadata (atomically) to ``complete``."""
 
-    def __init__(self, path: Path, metadata: dict, rows: list[str]):
+    def __init__(self, path: Path, metadata: dict, rows: list[str], columns=COLUMNS):
         self.path, self.metadata, self.rows = path, dict(metadata), list(rows)
+        self.columns = tuple(columns)
         self._rewrite("incomplete")
         self._fh = open(self.path, "a", encoding="utf-8", newline="\n")
 
@@ -204,12 +205,13 @@ class ReadingsFile:
         if reason:
             md["acquisition_stopped"] = " ".join(reason.split())[:300]
         head = "".join(f"# {k}: {v}\n" for k, v in md.items())
-        return head + ",".join(COLUMNS) + "\n" + "".join(self.rows)
+        return head + ",".join(self.columns) + "\n" + "".join(self.rows)
 
     def _rewrite(self, state: str, reason: str = "") -> None:
         write_text(self.path, self._text(state, reason))
 
     def append(self, line: str) -> None:
+        """One row (or several: a record's rows at once)."""
         self.rows.append(line)          # first: a rewrite after an interrupt keeps it
         self._fh.write(line)
         self._fh.flush()
@@ -467,7 +469,7 @@ class _StopRequested(BaseException):
     """SIGTERM during an acquisition run outside the command line (which has its own)."""
 
 
-def _raise_stop(signum, frame):
+def raise_stop(signum, frame):
     raise _StopRequested()
 
 
@@ -498,7 +500,7 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
     old_term = None
     if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
         try:
-            old_term = signal.signal(signal.SIGTERM, _raise_stop)
+            old_term = signal.signal(signal.SIGTERM, raise_stop)
         except ValueError:               # not the main thread
             pass
     t_start = time.monotonic()
@@ -518,7 +520,7 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         writer = ReadingsFile(path, md, rows)
         return _run(protocol, blocks, table, gyro, writer, keys, prompt, md, log, t_start)
     except BaseException as exc:
-        reason = _reason(exc)
+        reason = stop_reason(exc)
         if writer is not None:
             writer.finish(False, reason)
         status("")
@@ -579,7 +581,7 @@ def _run(protocol, blocks, table, gyro, writer, keys, prompt, md, log, t_start):
                              time.monotonic() - t_start)
 
 
-def _reason(exc: BaseException) -> str:
+def stop_reason(exc: BaseException) -> str:
     if isinstance(exc, KeyboardInterrupt):
         return "interrupted (SIGINT)"
     if isinstance(exc, GonioError):

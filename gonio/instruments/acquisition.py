@@ -142,15 +142,6 @@ class AcquisitionModule(Driver):
         """The module's temperature, °C."""
         return self.number("temperature")
 
-    def clock_s(self) -> float:
-        """The module's clock, s (no error check: it is polled while waiting)."""
-        ans = self.send("clock", check=False)
-        try:
-            return float(ans)
-        except ValueError:
-            raise InstrumentError(f"acquisition module {self.link.name}: clock: expected a "
-                                  f"number, got {ans!r}") from None
-
     def scale_factor_counts_per_deg(self) -> float | None:
         """Its nominal scale factor, when it states one."""
         return self.number("scale_factor") if self.has("scale_factor") else None

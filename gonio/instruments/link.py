@@ -203,6 +203,16 @@ class Driver:
         """``*CLS``: empty the error queue and status."""
         self.send("clear", check=False)
 
+    def clock_s(self) -> float:
+        """The instrument's clock (operation ``clock``), s; no error check: it is polled
+        while waiting."""
+        ans = self.send("clock", check=False)
+        try:
+            return float(ans)
+        except ValueError:
+            raise InstrumentError(f"{self.KIND} {self.link.name}: clock: expected a number, "
+                                  f"got {ans!r}") from None
+
     def number(self, op: str, **values) -> float:
         """A query whose answer is one number."""
         answer = self.send(op, **values)

@@ -393,7 +393,7 @@ class ServedBench:
         return float(w[0])
 
 
-def _parse_float(arg: str) -> float:
+def parse_float(arg: str) -> float:
     try:
         v = float(arg)
     except ValueError:
@@ -404,7 +404,7 @@ def _parse_float(arg: str) -> float:
 
 
 @dataclass
-class _Instrument:
+class Instrument:
     """One served instrument: its command table (mnemonic → handler) and error queue."""
 
     name: str
@@ -442,7 +442,7 @@ class _Drop(Exception):
     """Close the connection (an injected fault)."""
 
 
-def table_instrument(sb: ServedBench) -> _Instrument:
+def table_instrument(sb: ServedBench) -> Instrument:
     """The served rotary table: :class:`~gonio.instruments.table.RotaryTable`'s commands."""
     b = sb.bench
 
@@ -459,7 +459,7 @@ def table_instrument(sb: ServedBench) -> _Instrument:
         sb.faults.moves += 1
         if sb.faults.table_error_at_move == sb.faults.moves:
             raise ScpiError(-310, "System error; axis fault (injected)")
-        sb.move(_parse_float(parts[0]), _parse_float(parts[1]))
+        sb.move(parse_float(parts[0]), parse_float(parts[1]))
 
     def opc(_):
         while True:
@@ -469,14 +469,14 @@ def table_instrument(sb: ServedBench) -> _Instrument:
                     return "1"
             time.sleep(min(left / sb.speed, 0.05))
 
-    inst = _Instrument("table", f"gonio,virtual rotary table ({b.table.name}),"
+    inst = Instrument("table", f"gonio,virtual rotary table ({b.table.name}),"
                                 f"{b.name}-table,gonio {__version__}")
     inst.commands = [
         ("*IDN?", lambda a: inst.idn), ("*RST", locked(lambda a: sb.stop())),
         ("*CLS", lambda a: inst.errors.clear()), ("*OPC?", opc),
         ("SYSTem:ERRor?", inst.next_error),
         ("MOVE:ABSolute", locked(move)),
-        ("ROTate", locked(lambda a: sb.rotate(_parse_float(a)))),
+        ("ROTate", locked(lambda a: sb.rotate(parse_float(a)))),
         ("STOP", locked(lambda a: sb.stop())),
         ("POSition?", locked(lambda a: repr(sb.position_deg()))),
         ("STATe?", locked(lambda a: sb.state())),
@@ -489,7 +489,7 @@ def table_instrument(sb: ServedBench) -> _Instrument:
     return inst
 
 
-def gyro_instrument(sb: ServedBench) -> _Instrument:
+def gyro_instrument(sb: ServedBench) -> Instrument:
     """The served acquisition module: :class:`~gonio.instruments.acquisition.AcquisitionModule`'s."""
     b, inst_cfg = sb.bench, sb.bench.instrument
 
@@ -516,7 +516,7 @@ def gyro_instrument(sb: ServedBench) -> _Instrument:
         sb.trigger.source = arg.upper()[:3]
 
     def delay(arg):
-        d = _parse_float(arg)
+        d = parse_float(arg)
         if d < 0:
             raise ScpiError(-222, f"Data out of range; delay {d:g}")
         sb.trigger.delay_s = d
@@ -535,7 +535,7 @@ def gyro_instrument(sb: ServedBench) -> _Instrument:
                 return f(arg)
         return g
 
-    inst = _Instrument("gyro", f"{inst_cfg.manufacturer or 'gonio'},{inst_cfg.name},"
+    inst = Instrument("gyro", f"{inst_cfg.manufacturer or 'gonio'},{inst_cfg.name},"
                                f"{inst_cfg.serial or b.name},gonio {__version__}")
     inst.commands = [
         ("*IDN?", lambda a: inst.idn), ("*RST", lambda a: None),
@@ -555,7 +555,7 @@ def gyro_instrument(sb: ServedBench) -> _Instrument:
     return inst
 
 
-def _handler(inst: _Instrument):
+def scpi_handler(inst: Instrument):
     class Handler(socketserver.StreamRequestHandler):
         def handle(self):
             for raw in self.rfile:
@@ -572,7 +572,7 @@ def _handler(inst: _Instrument):
     return Handler
 
 
-class _Server(socketserver.ThreadingTCPServer):
+class ScpiServer(socketserver.ThreadingTCPServer):
     allow_reuse_address = True
     daemon_threads = True
 
@@ -624,7 +624,7 @@ def serve_bench(bench: Bench, table_port: int = 0, gyro_port: int = 0, *, speed:
     servers, threads = [], []
     for port, inst in ((table_port, table_instrument(sb)), (gyro_port, gyro_instrument(sb))):
         try:
-            srv = _Server(("127.0.0.1", port), _handler(inst))
+            srv = ScpiServer(("127.0.0.1", port), scpi_handler(inst))
         except OSError as exc:
             for s in servers:
                 s.server_close()

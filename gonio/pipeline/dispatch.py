@@ -16,7 +16,11 @@ from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.formats.metadata import header_lines
 from gonio.formats.provenance import readings_provenance
 from gonio.pipeline.identity import check_identity
-from gonio.specs import Specification, get
+from gonio.specs import Specification, decide_conformity, get
+
+__all__ = ["spec_of", "refuse_options", "readings_spec", "simulate", "load_lab_file",
+           "screen_and_calibrate", "decide_conformity", "mark_provenance", "calibrate", "demo",
+           "budget"]
 
 #: Options every ``calibrate`` hook takes (the others are in ``SPEC.calibrate_options``).
 COMMON_CALIBRATE = frozenset({"monte_carlo_trials"})
@@ -117,18 +121,6 @@ def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
     findings = spec.screen(readings, protocol, **options)
     return spec.calibrate(readings, protocol, monte_carlo_trials=monte_carlo_trials,
                           findings=findings, **options)
-
-
-def decide_conformity(result, lab: dict | None):
-    """Conformity of every item the laboratory file ``lab`` limits, or the specification's
-    own tolerances (``SPEC.default_limits``) limit, decided once, in the result's items
-    (:func:`gonio.analysis.conformity.decide_result`), before anything is written: every
-    output renders these decisions. Returns ``result``."""
-    from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
-    from gonio.specs import default_limits
-
-    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
-    return result
 
 
 def mark_provenance(result, readings) -> None:

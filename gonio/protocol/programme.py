@@ -47,6 +47,18 @@ class Segment:
     stand_axis: str = "+x"
 
 
+@dataclass(frozen=True)
+class Programme:
+    """What a rate specification's acquisition hook (``Specification.acquisition``) gives
+    ``gonio acquire``: the segments to run in order, the readings' metadata lines (the
+    specification, the protocol's name, what its calibration reads from the metadata), and
+    the room temperature (the ``temperature_c`` of a record with the chamber off)."""
+
+    segments: list
+    metadata: dict
+    room_temperature_c: float = 20.0
+
+
 def check_rate_session_size(segments: list[Segment], *, where: str = "the programme") -> int:
     """Refuse a rate-gyro programme beyond the stated limits before simulating it.
 

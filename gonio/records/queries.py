@@ -262,9 +262,8 @@ def audit_events(store, page: int = 1, size: int = 100, entity: str = "",
 #: The lists ``gonio serve`` exports as CSV: name → (header, rows(store, params)).
 def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] | None:
     """A whole list as (header, rows) for its CSV export, or None for an unknown list;
-    ``params``: the list's filters (audit: entity, entity_id, username; due: customer)."""
-    from gonio.records import services
-
+    ``params``: the list's filters (audit: entity, entity_id, username; due: q,
+    within_days, customer as :func:`due` takes them)."""
     big = 10**7
     if name == "customers":
         return (["id", "name", "address", "retired_on"],

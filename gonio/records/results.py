@@ -1,17 +1,11 @@
-"""One adapter from a ``results.json`` to the records' items: the only place that knows the
-shapes results.json has had, so the rest of the records never cares.
+"""The records' items of a ``results.json``, read through the one reader of the stored result
+(:meth:`gonio.result.model.Result.from_json`): a document that reader refuses (another
+version, a malformed shape) is refused here too, with its message.
 
-Shapes read:
-
-* the unified result (``{"version": …, "items": [{key, title, clause, value, unit, measured,
-  U, k, …}]}``);
-* the per-item specifications' (rate gyros, triads): ``{"items": {key: {value, unit, clause,
-  title, measured, uncertainty: {U, k, …}}}}``;
-* the optical draft's: one top-level object per item (``{"scale_factor": {"item", "value",
-  "unit", "clause", "measured", "uncertainty": {"U", "k"}}, …}``).
-
->>> items = result_items({"items": [{"key": "K", "title": "scale factor", "clause": "7.1",
-...     "value": 2.0, "unit": "counts/deg", "measured": True, "U": 0.1, "k": 2.0}]})
+>>> from gonio.result.model import RESULTS_VERSION
+>>> items = result_items({"version": RESULTS_VERSION, "spec": "x", "items": {"K": {
+...     "title": "scale factor", "clause": "7.1", "value": 2.0, "unit": "counts/deg",
+...     "measured": True, "uncertainty": {"u_c": 0.05, "U": 0.1, "k": 2.0}}}})
 >>> [(i.key, i.value, i.U) for i in items]
 [('K', 2.0, 0.1)]
 """
@@ -22,6 +16,7 @@ import math
 from dataclasses import dataclass
 
 from gonio.errors import GonioError
+from gonio.result.model import Result
 
 
 @dataclass(frozen=True)
@@ -48,53 +43,25 @@ def _num(x) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def _limits(d: dict):
-    c = d.get("conformity")
-    if not isinstance(c, dict):
-        return None
-    lim = c.get("limits") if isinstance(c.get("limits"), dict) else c
-    lo, hi = _num(lim.get("lower")), _num(lim.get("upper"))
-    return None if lo is None and hi is None else (lo, hi)
-
-
-def _decision(d: dict) -> tuple[str | None, str | None]:
-    c = d.get("conformity")
-    if not isinstance(c, dict):
-        return None, None
-    return (None if c.get("outcome") is None else str(c["outcome"]),
-            None if c.get("rule") is None else str(c["rule"]))
-
-
-def _item(key: str, d: dict, unc: dict | None) -> Item:
-    unc = unc if isinstance(unc, dict) else {}
-    outcome, rule = _decision(d)
-    return Item(key=str(key), title=str(d.get("title") or d.get("item") or key),
-                clause=str(d.get("clause") or ""), unit=str(d.get("unit") or ""),
-                measured=bool(d.get("measured", d.get("value") is not None)),
-                value=_num(d.get("value")), U=_num(d.get("U", unc.get("U"))),
-                k=_num(d.get("k", unc.get("k"))), limits=_limits(d), outcome=outcome,
-                rule=rule)
+def _item(it) -> Item:
+    """The records' view of a :class:`gonio.result.model.Item`."""
+    c = it.conformity
+    limits = None
+    if c is not None and (_num(c.lower) is not None or _num(c.upper) is not None):
+        limits = (_num(c.lower), _num(c.upper))
+    return Item(key=str(it.key), title=str(it.title or it.key), clause=str(it.clause or ""),
+                unit=str(it.unit or ""), measured=bool(it.measured), value=_num(it.value),
+                U=_num(it.U), k=_num(it.k), limits=limits,
+                outcome=None if c is None or c.outcome is None else str(c.outcome),
+                rule=None if c is None or c.rule is None else str(c.rule))
 
 
 def result_items(results: dict) -> list[Item]:
-    """The items of a results.json (any shape gonio has written), in its order."""
+    """The items of a results.json, in its order (:meth:`Result.from_json`); a document
+    with no items is refused."""
     if not isinstance(results, dict):
         raise GonioError("results.json is not a JSON object", key="results")
-    items = results.get("items")
-    out = []
-    if isinstance(items, list):
-        out = [_item(d.get("key", f"item{i}"), d, d.get("uncertainty"))
-               for i, d in enumerate(items) if isinstance(d, dict)]
-    elif isinstance(items, dict):
-        out = [_item(k, d, d.get("uncertainty")) for k, d in items.items()
-               if isinstance(d, dict)]
-    if items is not None:
-        if not out:                      # an empty or damaged list of items: nothing to record
-            raise GonioError("results.json holds no items", key="items")
-        return out
-    for k, d in results.items():
-        if isinstance(d, dict) and "value" in d and "unit" in d and "clause" in d:
-            out.append(_item(k, d, d.get("uncertainty")))
-    if not out:
-        raise GonioError("results.json holds no items", key="results")
-    return out
+    items = [_item(it) for it in Result.from_json(results).items.values()]
+    if not items:                        # an empty list of items: nothing to record
+        raise GonioError("results.json holds no items", key="items")
+    return items

@@ -154,17 +154,9 @@ def reused_by(store, sha256: str) -> list[dict]:
     return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3]} for r in rows]
 
 
-def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
-                       standard_ids: Iterable[int] = (), temperature_c=None,
-                       humidity_pct=None, spec_key: str | None = None,
-                       performed_on=None, received_on=None, lab_sha256: str | None = None,
-                       lab_name: str = "", reuse_reason: str = "", **details):
-    """A new calibration after the submission checks (module docstring), queued for the
-    worker (technician): the form's fields first (dates, standards, environment), then the
-    laboratory file, then the readings. ``details``: the other arguments of
-    :func:`gonio.records.services.create_calibration`. ``reuse_reason``: why readings
-    already used by another calibration are used again (empty: such readings are refused)."""
-    services.require(actor, "technician")
+def check_form(performed_on, received_on, standard_ids, temperature_c, humidity_pct):
+    """The form's own fields: the dates, at least one standard, the environment entered;
+    (day, received, standard ids, temperature, humidity)."""
     day = services.date_value(performed_on, "performed_on") or _dt.date.today()
     received = services.date_value(received_on, "received_on")
     services.plausible_dates(day, received)
@@ -177,6 +169,22 @@ def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     for value, what in ((temp, "room temperature (°C)"), (hum, "relative humidity (%)")):
         if value is None:
             raise GonioError(f"enter the {what} of the calibration", key="environment")
+    return day, received, ids, temp, hum
+
+
+def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
+                       standard_ids: Iterable[int] = (), temperature_c=None,
+                       humidity_pct=None, spec_key: str | None = None,
+                       performed_on=None, received_on=None, lab_sha256: str | None = None,
+                       lab_name: str = "", reuse_reason: str = "", **details):
+    """A new calibration after the submission checks (module docstring), queued for the
+    worker (technician): the form's fields first (dates, standards, environment), then the
+    laboratory file, then the readings. ``details``: the other arguments of
+    :func:`gonio.records.services.create_calibration`. ``reuse_reason``: why readings
+    already used by another calibration are used again (empty: such readings are refused)."""
+    services.require(actor, "technician")
+    day, received, ids, temp, hum = check_form(performed_on, received_on, standard_ids,
+                                               temperature_c, humidity_pct)
     with store.session() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:

@@ -24,7 +24,7 @@ import sys
 import threading
 
 from gonio.errors import GonioError
-from gonio.records import services
+from gonio.records import bench, services
 from gonio.records.compute import calibrate_folder, readings_suffix, write_lab_toml
 
 
@@ -44,6 +44,9 @@ def execute(store, cal_id: int) -> bool:
         if cal.protocol_sha256:
             protocol = str(work / "protocol.toml")
             (work / "protocol.toml").write_bytes(services.file_bytes(store, cal.protocol_sha256))
+        request = bench.pending_request(store, cal)
+        if request is not None:          # started from a connected bench: acquire first
+            readings = bench.acquire_for(store, cal, request, work, protocol)
         lab = write_lab_toml(services.lab_details(store, cal_id, final=final), work / "lab.toml")
         services.set_progress(store, cal_id, "computing the items and their uncertainties, "
                                              "rendering the " + ("final" if final else "draft")

@@ -4,7 +4,6 @@
 Contents
 ========
 =========================  ==============================================================
-:data:`RATE_DSI`           results.json unit of a rate item → (D-SI unit, factor)
 :data:`OUTPUT_DSI`         the readings' ``output_unit`` → D-SI of the scale factor
 :func:`dsi_unit`           the (D-SI unit, factor) of an item's unit
 :func:`clause_ref_type`    the refType naming an item's clause
@@ -46,33 +45,15 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.stated import Num
-from gonio.report.dcc import (administrative_data, bound_quantity, conformity_statements,
+from gonio.report.dcc import (administrative_data, conformity_statements,
                               element, influence_conditions, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
 from gonio.report.i18n import display, labels
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.stated import item_nums
+from gonio.result.statement import DSI_UNITS
 from gonio.specs import get
 from gonio.units import STANDARD_GRAVITY_M_S2
-
-_PER_G = 1.0 / STANDARD_GRAVITY_M_S2
-
-#: results.json units of the rate items → (D-SI 2.2 unit, factor on value and U).
-RATE_DSI: dict[str, tuple[str, float]] = {
-    "°/s": (r"\degree\second\tothe{-1}", 1.0),
-    "°/h": (r"\degree\hour\tothe{-1}", 1.0),
-    "°/√h": (r"\degree\hour\tothe{-0.5}", 1.0),
-    "(°/h)/°C": (r"\degree\hour\tothe{-1}\kelvin\tothe{-1}", 1.0),
-    "(°/s)/°C": (r"\degree\second\tothe{-1}\kelvin\tothe{-1}", 1.0),
-    "1/°C": (r"\kelvin\tothe{-1}", 1.0),
-    "%/°C": (r"\percent\kelvin\tothe{-1}", 1.0),
-    "(°/h)/g": (r"\degree\hour\tothe{-1}\metre\tothe{-1}\second\tothe{2}", _PER_G),
-    "(°/s)/g": (r"\degree\metre\tothe{-1}\second", _PER_G),
-    "Hz": (r"\hertz", 1.0),
-    "s": (r"\second", 1.0),
-    "%": (r"\percent", 1.0),
-    "1": (r"\one", 1.0),
-}
 
 #: The readings' ``output_unit`` → the D-SI unit of the scale factor (output per °/s).
 OUTPUT_DSI: dict[str, str] = {
@@ -101,7 +82,8 @@ SETTINGS = (
 
 
 def dsi_unit(unit: str, output_unit: str, file=None, extra=None) -> tuple[str, float]:
-    """(D-SI unit, factor) of a rate item's results.json ``unit``; the scale factor's
+    """(D-SI unit, factor) of a rate item's results.json ``unit``: the one unit table
+    (:data:`gonio.result.statement.DSI_UNITS`); the scale factor's
     ``<output>/(°/s)`` through :data:`OUTPUT_DSI`; a unit of the specification's own
     (``extra``: its ``Specification.dcc_units``, {unit: D-SI}) with factor 1. An unknown unit
     is a GonioError naming it.
@@ -117,8 +99,8 @@ def dsi_unit(unit: str, output_unit: str, file=None, extra=None) -> tuple[str, f
                              f"(known: {', '.join(OUTPUT_DSI)}); calibrate without --dcc",
                              file=file, key="output_unit")
         return OUTPUT_DSI[output_unit], 1.0
-    if unit in RATE_DSI:
-        return RATE_DSI[unit]
+    if unit in DSI_UNITS:
+        return DSI_UNITS[unit]
     if extra and unit in extra:
         return extra[unit], 1.0
     raise GonioError(f"unit {unit!r} has no D-SI form for the DCC (a specification states "
@@ -224,8 +206,6 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                      description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
                                   f"results.json, written per m s⁻² (g_n = "
                                   f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv else None, **kw)
-            if n["upper"] is not None and n["interval"] is None:   # not an interval item
-                bound_quantity(data, n["statement"].upper_text, dsi=dsi)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),

@@ -72,7 +72,7 @@ _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
                   "outputs", "readings_format", "certificate_content", "calibrate_arguments")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs")
+          "named_inputs", "acquisition")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -205,6 +205,12 @@ class Specification:
     run_trial : callable or None
         ``run_trial(bench, protocol, seed)`` → (readings, truth dict): one simulated
         calibration held in memory, for the coverage study.
+    acquisition : callable or None
+        ``acquisition(protocol=None, metadata=None)`` →
+        :class:`gonio.protocol.programme.Programme`: the segments ``gonio acquire`` runs on
+        a laboratory's rate bench (:mod:`gonio.instruments.rate_acquire`) and the readings'
+        metadata; ``metadata`` holds the laboratory's ``--meta`` values. None: the
+        specification is not acquired through gonio's rate instruments.
     budget : callable or None
         ``budget(**options)`` → the specification's own uncertainty annex, reproduced (an
         object with ``to_dict()`` and ``to_text()``).
@@ -279,6 +285,7 @@ class Specification:
     simulate: Callable[..., dict] | None = None
     truth: Callable[..., dict] | None = None
     run_trial: Callable[..., tuple] | None = None
+    acquisition: Callable[..., Any] | None = None
     budget: Callable[..., Any] | None = None
     coverage: Coverage | None = None
     outputs: str = ""
@@ -462,9 +469,12 @@ CONTENT_FIELDS: dict[str, tuple[str, Callable[[Any], bool], Any]] = {
                  lambda v: _strs(v, 2), ("JCGM 100:2008", "JCGM 100:2008")),
     "NORM": ("a tuple of str: the norm as the certificate names it",
              lambda v: _strs(v) and len(v) > 0, None),
-    "RECAL": ("an (English, Chinese) pair: the document's recalibration clause",
-              lambda v: _strs(v, 2), None),
     "READINGS_ZH": ("a dict {clause prefix of a reading taken: its Chinese}", _str_dict, {}),
+    "ITEM_CONDITIONS": ("a dict {item key: (English, Chinese) templates filled from the "
+                        "item's details}: what defines the item's measurand, stated under "
+                        "the results table where the item was measured",
+                        lambda v: isinstance(v, dict) and all(
+                            isinstance(k, str) and _strs(t, 2) for k, t in v.items()), {}),
     "PHRASES_ZH": ("a tuple of (English regular expression, Chinese) pairs",
                    lambda v: isinstance(v, tuple) and all(_strs(x, 2) for x in v), ()),
     "FIGURE_ITEMS": (f"a dict {{figure role ({', '.join(FIGURE_ROLES)}): item key}}",
@@ -573,6 +583,19 @@ def default_limits(key: str) -> list[dict]:
     except GonioError:
         return []
     return [dict(d) for d in spec.default_limits]
+
+
+def decide_conformity(result, lab: dict | None):
+    """Conformity of every item the laboratory file ``lab`` limits, or the specification's
+    own tolerances (:func:`default_limits`) limit, decided once, in the result's items
+    (:func:`gonio.analysis.conformity.decide_result`), before anything is written: every
+    output renders these decisions and none makes one. The pipeline's step
+    (:func:`gonio.pipeline.dispatch.decide_conformity`); a specification's own ``demo``
+    calls it as the pipeline would. Returns ``result``."""
+    from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
+
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    return result
 
 
 def _entry_points() -> dict[str, str]:

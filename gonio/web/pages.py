@@ -356,7 +356,8 @@ def calibrations_page(request: Request):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place", "reuse_reason")
+              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
+              "metadata")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
              ("lab_file", services.MAX_LAB_BYTES))
@@ -462,6 +463,33 @@ async def calibration_create(request: Request, inst_id: int):
                 if sha is not None}
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data, kept,
                          reuse=exc.key == submission.REUSE_KEY)
+    wake(request)
+    return _back(f"/calibrations/{cal.id}")
+
+
+@router.post("/instruments/{inst_id}/acquire")
+async def calibration_acquire(request: Request, inst_id: int):
+    """A calibration started from a connected bench: the worker takes the readings through
+    the instruments (:mod:`gonio.records.bench`), then calibrates them."""
+    from gonio.records import bench
+
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    store = _store(request)
+    try:
+        services.require(user, "technician")
+        proto_sha, _ = _upload(store, data, "protocol_file", 2**20)
+        cal = bench.create_bench_calibration(
+            store, user, instrument_id=inst_id,
+            resources={r: data.get(r) for r in bench.ROLES},
+            metadata=bench.parse_metadata_lines(data.get("metadata")),
+            spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
+            protocol_sha256=proto_sha, place=data.get("place"),
+            standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
+            temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
+            performed_on=data.get("performed_on"))
+    except GonioError as exc:
+        return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
     return _back(f"/calibrations/{cal.id}")
 

@@ -190,8 +190,11 @@ def _k_changed(it):
 
 
 def _decision_appears(it):       # a limit edited after review: a decision nobody reviewed
-    it["conformity"] = {"item": "scale_factor", "rule": "simple", "lower": None,
-                        "upper": 1e9, "outcome": "pass"}
+    from gonio.analysis.conformity import DecisionRule, Limits, decide
+
+    U, k = it["uncertainty"]["U"], it["uncertainty"]["k"]
+    it["conformity"] = decide("scale_factor", it["value"], U, k, Limits(None, 1e9),
+                              DecisionRule("simple")).to_json()
 
 
 @pytest.mark.parametrize("change", (_value_moved, _k_changed, _decision_appears))

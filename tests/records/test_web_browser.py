@@ -54,14 +54,17 @@ def browser():
 
 
 class Shots:
-    def __init__(self):
-        shutil.rmtree(SHOTS, ignore_errors=True)
-        SHOTS.mkdir(parents=True)
+    """Full-page screenshots, numbered, into ``root`` (emptied first)."""
+
+    def __init__(self, root: Path = SHOTS):
+        self.root = root
+        shutil.rmtree(root, ignore_errors=True)
+        root.mkdir(parents=True)
         self.n = 0
 
     def __call__(self, page, name: str) -> None:
         self.n += 1
-        page.screenshot(path=str(SHOTS / f"{self.n:02d}-{name}.png"), full_page=True)
+        page.screenshot(path=str(self.root / f"{self.n:02d}-{name}.png"), full_page=True)
 
 
 def log_in(page, base: str, name: str) -> None:

@@ -58,6 +58,17 @@ def fleet(store, n: int, today: dt.date):
     return custs, out
 
 
+def recalibrated_standard(store, name: str, first: tuple, second: tuple):
+    """A standard registered with ``first`` (its certificate, calibrated on, due on) and
+    recalibrated with ``second``."""
+    tech = services.user(store, "tech")
+    std = services.add_standard(store, tech, name=name, identifier="RT-07",
+                                **dict(zip(("certificate", "calibrated_on", "due_on"), first)))
+    services.update_standard(store, tech, std.id,
+                             **dict(zip(("certificate", "calibrated_on", "due_on"), second)))
+    return std
+
+
 def rows_of(html: str) -> list[str]:
     return re.findall(r'<a href="/instruments/\d+">RLG-GM-1 (SN-\d+)</a>', html)
 
@@ -117,12 +128,9 @@ def test_recall_notices_one_per_customer(app, sqlite_store):  # noqa: F811
 
 def test_standard_history_page(app, sqlite_store):  # noqa: F811
     today = dt.date.today()
-    tech = services.user(sqlite_store, "tech")
-    std = services.add_standard(sqlite_store, tech, name="rotary table", identifier="RT-07",
-                                certificate="NIM-2024-1", calibrated_on="2024-01-05",
-                                due_on="2025-01-05")
-    services.update_standard(sqlite_store, tech, std.id, certificate="NIM-2025-7",
-                             calibrated_on="2025-01-03", due_on="2026-01-03")
+    std = recalibrated_standard(sqlite_store, "rotary table",
+                                ("NIM-2024-1", "2024-01-05", "2025-01-05"),
+                                ("NIM-2025-7", "2025-01-03", "2026-01-03"))
     custs, made = fleet(sqlite_store, 2, today)
     for inst, day in made:
         issued(sqlite_store, inst.id, day - dt.timedelta(days=400), f"GC-2024-{inst.id:04d}",
@@ -143,3 +151,28 @@ def test_standard_history_page(app, sqlite_store):  # noqa: F811
     d = queries.standard_history(sqlite_store, std.id, 1, 1)
     assert d["total"] == 2 and len(d["uses"]) == 1
     assert web.get("/standards/999999").status_code == 404
+
+
+def test_due_and_standard_history_queries(store):
+    """The due list's and a standard's history queries on SQLite and PostgreSQL."""
+    from .conftest import make_people
+
+    make_people(store)
+    today = dt.date.today()
+    std = recalibrated_standard(store, "rotary table", ("A-1", "2024-01-05", "2025-01-05"),
+                                ("A-2", "2025-01-03", "2026-01-03"))
+    _, made = fleet(store, 40, today)
+    for inst, day in made[:3]:
+        issued(store, inst.id, day - dt.timedelta(days=400), f"GC-2024-{inst.id:04d}", std.id)
+    want = sorted((plus_months(day, 12), inst.serial) for inst, day in made)
+    due_serials = [serial for d, serial in want if (d - today).days <= 30]
+    rows, total = queries.due(store, 2, 10, "sn-0")
+    assert total == len([s for s in due_serials if s.startswith("SN-0")])
+    assert [r["serial"] for r in rows] == [s for s in due_serials if s.startswith("SN-0")][10:20]
+    notices = queries.recall(store, "Beta Nav Co")
+    assert [n["customer"] for n in notices] == ["Beta Nav Co"]
+    assert [r["serial"] for r in notices[0]["rows"]] == [s for s in due_serials
+                                                        if int(s[3:]) % 2 == 1]
+    d = queries.standard_history(store, std.id, 1, 2)
+    assert [c["certificate"] for c in d["changes"]] == ["A-1", "A-2"]
+    assert d["total"] == 3 and len(d["uses"]) == 2

@@ -1,7 +1,8 @@
 """The per-item specifications' rendering side (``SPEC.outputs`` of the rate specifications,
 reused by the triad and by plug-ins whose result is a :class:`gonio.result.model.Result`):
-conformity decided for every item a laboratory file limits, results.json, summary.txt,
-tables, the certificate (HTML, PDF) and its DCC XML.
+results.json, summary.txt, tables, the certificate (HTML, PDF) and its DCC XML, a function
+of the stored result (the conformity decisions in it are the pipeline's,
+:func:`gonio.pipeline.dispatch.decide_conformity`; nothing here decides).
 
 Imported by the pipeline through the registry (it may import the report); the calibration
 path never imports it.
@@ -11,8 +12,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
-from gonio.specs import default_limits
 from gonio.report.rate_certificate import write_rate_certificate
 from gonio.result.tables import write_results
 
@@ -33,10 +32,9 @@ def summary(result, lab: dict | None = None) -> str:
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
           dcc: bool = False) -> dict[str, Path]:
-    """Conformity decided (:func:`gonio.analysis.conformity.decide_result`), then
-    results.json, summary.txt, tables (:func:`gonio.result.tables.write_results`) and the
-    certificate (``dcc``: its DCC XML) into ``out``."""
-    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    """results.json, summary.txt, tables (:func:`gonio.result.tables.write_results`) and
+    the certificate (``dcc``: its DCC XML) of the stored ``result`` into ``out``: its
+    conformity decisions rendered as the pipeline made them."""
     out = Path(out)
     paths = write_results(result, out)
     paths.update(write_rate_certificate(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc))

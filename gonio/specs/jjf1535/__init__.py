@@ -126,4 +126,5 @@ SPEC = rate_specification(
     default_protocol=KEY, load_protocol=lazy("gonio.specs.jjf1535.protocol:load_protocol"),
     calibrate=calibrate, screen=lazy("gonio.specs.jjf1535.screen:screen"),
     budget=lazy("gonio.specs.jjf1535.budget:annex_a"),
+    acquisition=lazy("gonio.specs.jjf1535.acquisition:programme"),
     stream=0, reduced=STUDY_PROGRAMME)

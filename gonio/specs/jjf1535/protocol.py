@@ -109,17 +109,23 @@ def sf_rates(proto: JJFProtocol) -> list[float]:
     return rate_series(sf["rates_dps"], sf["highest_rate_dps"], sf["lowest_rate_dps"])
 
 
-def bandwidth_frequencies(proto: JJFProtocol, bench) -> list[float]:
-    """7.2.15.1 b) grid from f_est (the protocol's, else the gyro's datasheet value)."""
-    f_est = proto["bandwidth"]["estimated_bandwidth_hz"] or bench.gyro.datasheet_bandwidth_hz
+def bandwidth_frequencies(proto: JJFProtocol, bench=None, *,
+                          datasheet_bandwidth_hz: float | None = None) -> list[float]:
+    """7.2.15.1 b) grid from f_est (the protocol's, else the gyro's datasheet value: the
+    bench's, or ``datasheet_bandwidth_hz`` where there is no bench)."""
+    f_est = proto["bandwidth"]["estimated_bandwidth_hz"] or (
+        bench.gyro.datasheet_bandwidth_hz if bench is not None else datasheet_bandwidth_hz) or 0.0
     if not f_est > 0:
         raise GonioError("no estimated bandwidth: set bandwidth.estimated_bandwidth_hz",
                          key="bandwidth.estimated_bandwidth_hz")
     return bandwidth_grid(f_est)
 
 
-def plan(proto: JJFProtocol, bench) -> list[Segment]:
-    """The whole programme as bench segments (see module docstring for the order)."""
+def plan(proto: JJFProtocol, bench=None, *,
+         datasheet_bandwidth_hz: float | None = None) -> list[Segment]:
+    """The whole programme as bench segments (see module docstring for the order); the
+    bench (or ``datasheet_bandwidth_hz``) only for the bandwidth's grid when the protocol
+    sets no ``estimated_bandwidth_hz``."""
     P = proto.sections
     dt = P["protocol"]["sample_interval_s"]
     warm = P["protocol"]["warmup_s"]
@@ -171,7 +177,8 @@ def plan(proto: JJFProtocol, bench) -> list[Segment]:
     segs.append(Segment("static", 0, 0, "record", a["samples"], a["sample_interval_s"],
                         delay_s=warm, power_on=True, off_time_s=600.0))
     bw = P["bandwidth"]                                              # 7.2.15
-    for j, f in enumerate(bandwidth_frequencies(proto, bench)):
+    for j, f in enumerate(bandwidth_frequencies(proto, bench,
+                                                datasheet_bandwidth_hz=datasheet_bandwidth_hz)):
         fs = bw["samples_per_cycle"] * f
         segs.append(Segment("vibration", 0, j, "vibration", bw["cycles"] * bw["samples_per_cycle"],
                             1.0 / fs, freq_hz=f, vib_amplitude_dps=bw["rate_amplitude_dps"],

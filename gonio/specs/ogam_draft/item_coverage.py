@@ -11,8 +11,12 @@ items, whose 95 % interval holds the truth). ``gonio validate`` calls both.
 Truths (from the bench's noise-free rerun, ``truth.json``):
 
 ========================  ===============================================================
-K                         mean over the 7.1 rounds of noise-free counts / true angle
-K_l                       (max − min)/mean of those noise-free K_i, %
+K                         the instrument's own K at the 7.1 rounds, from the bench file
+                          (:func:`scale_factor_truth`): K through the mount, K(1+ε(ω cos ψ))
+                          cos ψ, times the mean over the rounds of 1 + g(θ_k)/(3600 θ_k)
+                          (g the instrument's angle-position error); no set-up error (the
+                          tilt × Earth-rate coupling, the table's errors) is part of it
+K_l                       (max − min)/mean of those K_i, %
 B_s                       population value √E[s²(M)]/T of the draft's statistic for this
                           instrument's noise (:func:`zero_stability_truth`: the bench's own
                           ARW, Gauss–Markov bias, RRW and quantisation through the readings'
@@ -32,9 +36,11 @@ import numpy as np
 import pandas as pd
 
 from gonio.analysis.coverage import two_sided, within
+from gonio.units import ARCSEC_PER_DEG
 from gonio.specs.ogam_draft.items import RECORD_KEYS
 
-__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS",
+__all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS", "scale_factor_truth",
+           "disc_model_u",
            "zero_stability_truth", "item_monte_carlo", "PRESCRIBED"]
 
 #: Items whose U is a standard's prescribed annex budget (stated as prescribed: not flagged
@@ -43,8 +49,13 @@ PRESCRIBED = ("angle_deviation_draft",)
 
 
 ITEM_TRUTHS = {
-    "scale_factor": "mean of noise-free counts / true angle over the 7.1 rounds",
-    "scale_factor_nonlinearity": "(max - min)/mean of the noise-free K_i, %",
+    "scale_factor": "the instrument's K at the 7.1 rounds from the bench file: K through the "
+                    "mount times mean(1 + g(theta_k)/(3600 theta_k)), no set-up error",
+    "scale_factor_disc": "as scale_factor; U with the tilt coupling's line for a tilt uniform "
+                         "over the A.1 disc (semicircle, u = A/2) instead of the bound's "
+                         "arcsine (u = A/sqrt 2)",
+    "scale_factor_nonlinearity": "(max - min)/mean of the instrument's own K_i at the 7.1 "
+                                 "rounds (as scale_factor), %",
     "zero_stability": "population: sqrt(E[s(M)^2])/T from the bench's noise parameters "
                       "(gonio.analysis.noise.readings) and the noise-free readings",
     "zero_stability_draft": "as zero_stability; the draft's s(M)/T from the 15 readings",
@@ -120,6 +131,49 @@ def zero_stability_truth(truth: dict, compensation_time_s: float | None) -> floa
     return math.sqrt(S) / float(t.max() - t.min())
 
 
+def scale_factor_truth(truth: dict) -> tuple[float, np.ndarray]:
+    """(K, K_i) of the instrument itself at the session's 7.1 rounds, counts/°, from the
+    bench's parameters (never from a reading): the true K through the mount
+    (``scale_factor_through_mount_counts_per_deg``, K(1+ε(ω cos ψ)) cos ψ) and the
+    instrument's angle-position error g (its ``position_harmonics``, the error of the
+    indicated angle after turning θ from the zeroing, draft 4.2): an instrument on an ideal
+    set-up counts K(θ + (g(θ) − g(0))/3600) for θ turned, so K_i = K(1 + (g(θ_k) −
+    g(0))/(3600 θ_k)) and K = mean K_i (draft 7.1). The tilt × Earth-rate coupling, the
+    table's errors and the zero's drift are errors of the calibration, not of the instrument.
+    """
+    inst = truth["bench"]["instrument"]
+    th = np.array([float(r["table_deg"]) for r in truth["readings"]
+                   if r["test"] == "scale_factor"])
+
+    def g(x_deg):     # Σ a_h sin(h·x + p_h), arcsec (the bench file's definition)
+        return sum(float(h["amplitude_arcsec"]) * np.sin(int(h["order"]) * np.radians(x_deg)
+                                                         + math.radians(float(h["phase_deg"])))
+                   for h in inst.get("position_harmonics") or ()) + 0.0 * x_deg
+
+    g = g(th) - g(np.zeros(1))[0]
+    k_i = float(truth["scale_factor_through_mount_counts_per_deg"]) * (1.0 + g / (ARCSEC_PER_DEG * th))
+    return float(np.mean(k_i)) if k_i.size else math.nan, k_i
+
+
+def disc_model_u(b) -> float:
+    """u_c of a :func:`~gonio.specs.ogam_draft.item_uncertainty.scale_factor_budget` with its
+    ``K_tilt`` line (arcsine, half-width A: u = A/√2, the bound ψ_max at the worst azimuth)
+    replaced by the distribution of the coupling over the mountings A.1 allows: the tilt
+    vector uniform over the disc ψ ≤ ψ_max (azimuth uniform), so the coupling A·(ψ/ψ_max)·
+    cos(α − α₀) is the projection of a uniform disc of radius A on one axis — the
+    semicircle (Wigner) density 2√(A² − x²)/(πA²), variance A²/4 (the second moment of a
+    uniform disc of radius A about a diameter per unit area, πA⁴/4 / πA²), u = A/2.
+
+    >>> from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget
+    >>> b = scale_factor_budget([3600.0, 3600.0], [180.0, 360.0], 0.0,
+    ...                         tilt_bias_arcsec_per_deg=36.0)   # A = 3600·36/3600 counts/°
+    >>> round(b.u_c * math.sqrt(2.0) / 36.0, 4), round(disc_model_u(b) * 2.0 / 36.0, 4)
+    (1.0, 1.0)
+    """
+    tilt2 = sum(c.u ** 2 for c in b.components if c.symbol == "K_tilt")
+    return math.sqrt(max(b.u_c ** 2 - tilt2 / 2.0, 0.0))
+
+
 def item_record(report, truth: dict) -> dict:
     """Per measured item: value, U, interval, truth (None for ensemble truths) and the
     per-trial data the ensemble truths need.
@@ -132,6 +186,7 @@ def item_record(report, truth: dict) -> dict:
     out: dict = {}
     for name, iu in report.item_uncertainty.items():
         out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U), "k": float(iu.k),
+                     "u_c": float(iu.u_c),
                      "interval": list(iu.interval) if iu.interval is not None else None,
                      "truth": None}
     zr = getattr(report, "zero_stability_readings", None) or {}
@@ -147,12 +202,14 @@ def item_record(report, truth: dict) -> dict:
         if d is not None:
             out[f"zero_stability_{other}"] = {
                 "value": float(d.value), "U": float(d.U), "k": float(d.k),
-                "interval": list(d.interval) if d.interval is not None else None,
+                "u_c": float(d.u_c), "interval": list(d.interval) if d.interval is not None else None,
                 "truth": t_bs, "stated": other}
     if "scale_factor" in out:
-        sf = tr[tr["test"] == "scale_factor"]
-        k_i = sf["noise_free_counts"].to_numpy(dtype=float) / sf["true_table_deg"].to_numpy(float)
-        out["scale_factor"]["truth"] = float(k_i.mean())
+        k_true, k_i = scale_factor_truth(truth)
+        out["scale_factor"]["truth"] = k_true
+        b = report.item_uncertainty["scale_factor"]
+        u_disc = disc_model_u(b)
+        out["scale_factor_disc"] = dict(out["scale_factor"], U=float(b.k) * u_disc)
         if "scale_factor_nonlinearity" in out:
             out["scale_factor_nonlinearity"]["truth"] = float((k_i.max() - k_i.min())
                                                               / k_i.mean() * 100.0)
@@ -195,7 +252,8 @@ def trial_items(report, truth: dict) -> dict:
     return rec
 
 
-def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
+def item_coverage(records: list[dict], intrinsic_points=None,
+                  judge_spread: bool = True) -> dict:
     """Per item, over the trials: coverage of |result − truth| ≤ U (k as stated), and for
     B_s and R of the truth by the 95 % interval; ``two_sided`` (:func:`two_sided`): the
     coverage with its Clopper–Pearson interval, the spread of z = (result − truth)/u_c and
@@ -220,7 +278,9 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
         rs = [r[name] for r in records if name in r]
         vals = np.array([r["value"] for r in rs])
         U = np.array([r["U"] for r in rs])
-        u_c = U / np.array([r.get("k") or math.nan for r in rs], dtype=float)
+        # z on u_c (an item stated by its interval has U = distance to the upper limit)
+        u_c = np.array([r["u_c"] if r.get("u_c") else U_i / (r.get("k") or math.nan)
+                        for r, U_i in zip(rs, U)], dtype=float)
         item = {"trials": len(rs), "truth": ITEM_TRUTHS[name], "mean_U": float(U.mean())}
         own = name not in PRESCRIBED
         if name.startswith("angle_deviation"):
@@ -254,6 +314,10 @@ def item_coverage(records: list[dict], intrinsic_points=None) -> dict:
                 st = sorted({r.get("stated", "draft") for r in rs})
                 if st:
                     item["stated"] = st
+        if not judge_spread:
+            ts = item["two_sided"]
+            ts["flags"] = [f for f in ts["flags"] if f != "over-wide"]
+            ts["spread_judged"] = False
         out[name] = item
     return out
 

@@ -44,8 +44,10 @@ from gonio.specs.ogam_draft.keys import ITEM_KEYS  # noqa: F401  (the seven, in 
 POSITION_DECIMALS: int = 2
 
 #: The keys of the validation records: the seven, with the draft's and the model's readings
-#: of the zero stability and the angle deviation beside them.
-RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_nonlinearity", "zero_stability",
+#: of the zero stability and the angle deviation beside them, and K's U under the
+#: distribution of the tilt coupling over the allowed mountings (``scale_factor_disc``).
+RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_disc",
+                                "scale_factor_nonlinearity", "zero_stability",
                                 "zero_stability_draft", "zero_stability_model", "angle_deviation",
                                 "angle_deviation_draft", "repeatability", "rate_consistency",
                                 "pointing_consistency")

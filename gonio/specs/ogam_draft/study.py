@@ -73,7 +73,8 @@ from gonio.units import PPM, deg_to_arcsec
 __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench", "run_trial",
            "TrialResult", "budget_extra_components", "plan_study", "OpticalStudy",
            "ValidationReport", "trial_seeds", "trial_seed", "TrialJob", "trial_bench",
-           "pack_trials", "unpack_trials", "EXTRA_SYMBOLS"]
+           "pack_trials", "unpack_trials", "EXTRA_SYMBOLS", "draw_type_b", "worst_azimuth",
+           "coupling_bias", "tilted", "TABLE_RATE_ERROR_BOUND"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -87,7 +88,22 @@ CASES = {
     "mounted": "each trial's tilt drawn uniformly over the disc psi <= annex_a.tilt_bound_deg "
                "(azimuth uniform): a tilt the laboratory bounds but does not know, so the "
                "budget's tilt terms are exercised, not held at one value",
+    "typeb": "every Type B effect of the set-up drawn per trial from what the laboratory "
+             "knows of it: the tilt over the A.1 disc (azimuth uniform), the table's periodic "
+             "positioning errors with their amplitudes (sum within the MPE) at uniform "
+             "phases, its wobble phase and axis set-up azimuth uniform, its rate error "
+             "uniform within Table 1's 1e-5",
+    "worst": "the worst condition the draft allows for K: tilt at the A.1 bound, at the "
+             "azimuth where the tilt x Earth-rate coupling biases the 7.1 K most "
+             "(worst_azimuth, from noise-free sessions of the bench)",
 }
+
+#: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
+#: (a Type B line is one fixed offset there; :func:`item_coverage`'s ``judge_spread``).
+FIXED_CONDITION_CASES = ("worst",)
+
+#: Table 1's bound on the rate table's relative rate error (the ``typeb`` case draws within it).
+TABLE_RATE_ERROR_BOUND = 1e-5
 
 
 #: Truth definitions (see the module docstring).
@@ -172,9 +188,71 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         b = ideal_bench(bench)
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
-    if case == "mounted":
-        return bench                      # the tilt is drawn per trial (:func:`trial_bench`)
+    if case in ("mounted", "typeb"):
+        return bench                      # drawn per trial (:func:`trial_bench`)
+    if case == "worst":
+        psi = float(protocol.annex_a.tilt_bound_deg)
+        return tilted(bench, psi, worst_azimuth(bench, protocol, psi))
     raise GonioError(f"unknown case {case!r} (known: {', '.join(CASES)})", key="cases")
+
+
+def tilted(bench: Bench, tilt_deg: float, azimuth_deg: float) -> Bench:
+    """``bench`` with its sensing plane tilted by ``tilt_deg`` at ``azimuth_deg``."""
+    return replace(bench, instrument=replace(bench.instrument, tilt_deg=float(tilt_deg),
+                                             tilt_azimuth_deg=float(azimuth_deg)))
+
+
+def coupling_bias(bench: Bench, protocol: Protocol) -> float:
+    """K of the noise-free rerun's own 7.1 rounds minus K through the mount (counts/°): what
+    the set-up (tilt × Earth-rate coupling, angle-position error) does to the 7.1 K without
+    noise, from the bench's simulation alone (no budget formula)."""
+    tr = run_session(protocol, bench, seed=0).truth
+    return float(tr["scale_factor_noise_free_calibrated_counts_per_deg"]
+                 - tr["scale_factor_through_mount_counts_per_deg"])
+
+
+def worst_azimuth(bench: Bench, protocol: Protocol, tilt_deg: float) -> float:
+    """The tilt azimuth α (°) at which the coupling biases the 7.1 K most: the noise-free
+    bias is c₀ + a cos α + b sin α (c₀ the part that does not depend on the tilt's
+    direction, :func:`gonio.budget.extra.scale_factor_tilt_bias` for the sinusoid), so
+    the biases at α = 0°, 90° and 180° give c₀ = (B₀ + B₁₈₀)/2, a = (B₀ − B₁₈₀)/2,
+    b = B₉₀ − c₀; |c₀ + R cos(α − φ)| with R = |(a, b)|, φ = atan2(b, a) is largest at
+    α = φ where c₀ ≥ 0 and at φ + 180° where c₀ < 0."""
+    b0, b90, b180 = (coupling_bias(tilted(bench, tilt_deg, a), protocol) for a in (0, 90, 180))
+    c0 = (b0 + b180) / 2.0
+    phi = math.degrees(math.atan2(b90 - c0, (b0 - b180) / 2.0))
+    return (phi + (180.0 if c0 < 0 else 0.0)) % 360.0
+
+
+def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
+    """``bench`` with its set-up's Type B effects drawn from the trial's seed, each from what
+    a laboratory knows of it (a bound, not the value): the tilt uniform over the disc ψ ≤
+    the A.1 bound (ψ = bound·√u, azimuth uniform); the table's periodic positioning errors
+    with the bench's amplitudes (their sum and 3σ of the scatter within the MPE, A.4.1) at
+    uniform phases; the wobble's phase and the axis set-up error's azimuth uniform; the
+    table's relative rate error uniform within Table 1's ±1e-5
+    (:data:`TABLE_RATE_ERROR_BOUND`). The instrument's own parameters (its K, its
+    angle-position error, its noise) are the measurands' and are kept.
+
+    >>> p = validation_protocol(); b = load_bench("rlg")
+    >>> d = draw_type_b(b, p, 4)
+    >>> d == draw_type_b(b, p, 4), d.instrument.tilt_deg <= 0.1, d.table.mpe_arcsec
+    (True, True, 0.1)
+    >>> abs(d.table.rate_error_rel) <= TABLE_RATE_ERROR_BOUND
+    True
+    """
+    rng = np.random.default_rng([int(seed), 0x7B])
+    psi = float(protocol.annex_a.tilt_bound_deg) * math.sqrt(float(rng.uniform()))
+    az = float(rng.uniform(0.0, 360.0))
+    t = bench.table
+    hs = tuple(replace(h, phase_deg=float(rng.uniform(0.0, 360.0)))
+               for h in t.positioning_harmonics)
+    table = replace(t, positioning_harmonics=hs,
+                    wobble_phase_deg=float(rng.uniform(0.0, 360.0)),
+                    axis_setup_azimuth_deg=float(rng.uniform(0.0, 360.0)),
+                    rate_error_rel=float(rng.uniform(-TABLE_RATE_ERROR_BOUND,
+                                                     TABLE_RATE_ERROR_BOUND)))
+    return replace(tilted(bench, psi, az), table=table)
 
 
 def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench:
@@ -190,7 +268,11 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     (True, 200)
     >>> trial_bench("default", b, p, 3) is b
     True
+
+    In the ``typeb`` case every Type B effect of the set-up is drawn (:func:`draw_type_b`).
     """
+    if case == "typeb":
+        return draw_type_b(bench, protocol, seed)
     if case != "mounted":
         return bench
     rng = np.random.default_rng([int(seed), 0x7117])
@@ -428,7 +510,8 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
         "mean_u_r_arcsec": float(np.mean([t.u_r_arcsec for t in tr])),
         "annex_a": block(U),
         "items": item_coverage([t.items for t in tr],
-                               np.asarray(case.truth_intrinsic).mean(axis=0)),
+                               np.asarray(case.truth_intrinsic).mean(axis=0),
+                               judge_spread=case.name not in FIXED_CONDITION_CASES),
         "diagnosis": diag,
         "primary": {"truth": truth},
     }
@@ -468,6 +551,8 @@ def two_sided_text(t: dict) -> str:
     """``CP [lo, hi] %, z mean/sd, flags`` of :func:`gonio.analysis.coverage.two_sided`."""
     z = ("z —" if t["z_sd"] is None else
          f"z mean {t['z_mean']:+.2f} sd {t['z_sd']:.2f}")
+    if t.get("spread_judged") is False:
+        z += " (fixed condition: spread not judged)"
     flags = f"  FLAG: {', '.join(t['flags'])}" if t["flags"] else ""
     return f"CP95 [{100 * t['cp_low']:.0f}, {100 * t['cp_high']:.0f}] %, {z}{flags}"
 

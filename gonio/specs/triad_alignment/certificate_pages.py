@@ -243,31 +243,46 @@ def certified_point_blocks(res: dict, ch: str, c: dict, T) -> list[Block]:
     return out
 
 
+def _figure_series(result) -> dict:
+    """``extra.figures`` of a stored triad result (what every figure draws)."""
+    return result.extra.get("figures") or {}
+
+
+def _channel_figure(result, ch: str) -> dict:
+    """Gyro ``ch``'s thermal figures' data as stored: its fitted-model series
+    (``extra.figures.thermal``) with its ramp analysis and compensation
+    (``extra.thermal_model.channels``)."""
+    tm = result.extra["thermal_model"]["channels"][ch]
+    return {**_figure_series(result)["thermal"][ch], "ramp": tm.get("ramp"),
+            "compensation": tm.get("compensation")}
+
+
 def _draw_alignment(fig, spec, result, L, truth=None) -> None:
     language(L.get("_lang", "en"))
-    if result.alignment is None:
+    data = _figure_series(result).get("alignment")
+    if data is None:
         ax = fig.add_subplot(spec)
         ax.text(0.5, 0.5, L["not_measured"], ha="center", va="center",
                 transform=ax.transAxes)
         return
-    alignment_panels(fig, spec, result.alignment, (truth or {}).get("system_matrix"))
+    alignment_panels(fig, spec, data, (truth or {}).get("system_matrix"))
 
 
 def triad_figures(result) -> list[tuple]:
     """(key, caption en, caption zh, draw) of the certificate's figures: the alignment figure,
-    and per modelled gyro its model and its ramp / compensation figure."""
+    and per modelled gyro its model and its ramp / compensation figure, all drawn from the
+    stored series (``extra.figures``, :mod:`gonio.specs.triad_alignment.figure_data`)."""
     text = content.TEXT
     figs = [("alignment", text["fig_alignment"][0], text["fig_alignment"][1], _draw_alignment)]
-    for ch, m in (result.thermal.channels.items() if result.thermal else ()):
-        comp = result.compensation.get(ch)
+    for ch in (_figure_series(result).get("thermal") or {}):
 
-        def model(fig, spec, r, L, truth=None, m=m):
+        def model(fig, spec, r, L, truth=None, ch=ch):
             language(L.get("_lang", "en"))
-            thermal_model_panels(fig, spec, m)
+            thermal_model_panels(fig, spec, _channel_figure(r, ch))
 
-        def check(fig, spec, r, L, truth=None, m=m, comp=comp):
+        def check(fig, spec, r, L, truth=None, ch=ch):
             language(L.get("_lang", "en"))
-            thermal_check_panels(fig, spec, m, comp)
+            thermal_check_panels(fig, spec, _channel_figure(r, ch))
         figs.append((f"thermal-model-{ch}", text["fig_model"][0].format(ch=ch),
                      text["fig_model"][1].format(ch=ch), model))
         figs.append((f"thermal-check-{ch}", text["fig_check"][0].format(ch=ch),

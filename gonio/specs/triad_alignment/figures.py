@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from gonio.specs.triad_alignment.certificate import lag_phrase
 from gonio.specs.triad_alignment.thermal_model import ChannelModel, Compensation
 from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult
+from gonio.specs.triad_alignment.figure_data import alignment_series, channel_figure
 from gonio.units import dps_to_dph
 
 #: Figure text, (English, Chinese); the language is set per drawing by :func:`language`.
@@ -63,29 +64,42 @@ def _t(key: str, **kw) -> str:
     return FIG_TEXT[key][1 if _LANG["lang"] == "zh" else 0].format(**kw)
 
 
+def _arr(values) -> np.ndarray:
+    """A stored series as floats (null → NaN)."""
+    return np.asarray([np.nan if v is None else v for v in values], dtype=float)
+
+
+def _num(v) -> float:
+    return np.nan if v is None else float(v)
+
+
 def alignment_figure(result: AlignmentResult, true_system_matrix=None) -> Figure:
     """Two panels: cross-axis sensitivity / leakage (‰) and the Allan deviation with the
     averaging-time choice (:func:`alignment_panels` on a new Figure)."""
     fig = Figure(figsize=(9.0, 3.6))
-    alignment_panels(fig, fig.add_gridspec(1, 1)[0], result, true_system_matrix)
+    alignment_panels(fig, fig.add_gridspec(1, 1)[0], alignment_series(result),
+                     true_system_matrix)
     fig.tight_layout()
     return fig
 
 
-def alignment_panels(fig, spec, result: AlignmentResult, true_system_matrix=None) -> None:
+def alignment_panels(fig, spec, data: dict, true_system_matrix=None) -> None:
     """The two panels of :func:`alignment_figure` drawn into ``spec`` (a SubplotSpec) of
-    ``fig`` — the form the certificate uses."""
+    ``fig`` from the stored series ``data`` (``extra.figures.alignment``,
+    :func:`~gonio.specs.triad_alignment.figure_data.alignment_series`) — the form the
+    certificate uses. With the known ``true_system_matrix`` (the bench's truth) the leakage
+    M̂⁻¹ M_true − I is drawn, else 0."""
     gs = spec.subgridspec(1, 2, wspace=0.3)
     ax1, ax2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
     x = np.arange(6)
-    s = np.asarray(result.derived["cross_axis"]) * 1e3
-    u = np.asarray(result.u_derived["cross_axis"]) * 1e3
-    k = float(np.max(result.coverage_factor))
+    s = _arr(data["cross_axis"]) * 1e3
+    u = _arr(data["u_cross_axis"]) * 1e3
+    k = float(data["k"])
     ax1.bar(x - 0.2, s, 0.4, yerr=k * u, label=_t("before_S"), color="tab:blue")
-    lu = np.array([result.leakage_u[int("xyz".index(n[0])), int("xyz".index(n[1]))]
-                   for n in OFFDIAG]) * 1e3
+    lu = _arr(data["leakage_u"]) * 1e3
     if true_system_matrix is not None:
-        lk = result.leakage_against(true_system_matrix)
+        lk = np.asarray(data["alignment_matrix"], dtype=float) \
+            @ np.asarray(true_system_matrix) - np.eye(3)
         lv = np.array([lk["xyz".index(n[0]), "xyz".index(n[1])] for n in OFFDIAG]) * 1e3
         ax1.bar(x + 0.2, lv, 0.4, yerr=k * lu, color="tab:orange",
                 label=_t("after_true"))
@@ -96,16 +110,17 @@ def alignment_panels(fig, spec, result: AlignmentResult, true_system_matrix=None
     ax1.set_ylabel(_t("cross"))
     ax1.set_title(_t("cross_title"))
     ax1.legend(fontsize=7)
-    avg = result.averaging
+    avg = data["averaging"]
     if avg is None:
         ax2.text(0.5, 0.5, _t("no_static"), ha="center", transform=ax2.transAxes)
     else:
-        for i, a in enumerate(avg.adev_dph):
-            ax2.loglog(avg.tau_s, a, marker=".", label=_t("gyro", ch="xyz"[i]))
-        lim = dps_to_dph(avg.noise_limit_dps)
+        tau = _arr(avg["tau_s"])
+        for i, a in enumerate(avg["adev_dph"]):
+            ax2.loglog(tau, _arr(a), marker=".", label=_t("gyro", ch="xyz"[i]))
+        lim = dps_to_dph(float(avg["noise_limit_dps"]))
         ax2.axhline(lim, color="k", ls="--", lw=0.8,
                     label=_t("limit", v=f"{lim:.1f}"))
-        need = [t for t in avg.tau_needed_s if np.isfinite(t)]
+        need = [t for t in _arr(avg["tau_needed_s"]) if np.isfinite(t)]
         if need:
             ax2.axvline(max(need), color="tab:red", ls=":", label=f"τ ≥ {max(need):g} s")
         ax2.set_xlabel("τ (s)")
@@ -119,77 +134,80 @@ def thermal_figure(model: ChannelModel, compensation: Compensation | None = None
     at the reference supply; ramp blocks and residuals; compensation before/after."""
     fig = Figure(figsize=(10.0, 6.4))
     gs = fig.add_gridspec(2, 1)
-    thermal_model_panels(fig, gs[0], model)
-    thermal_check_panels(fig, gs[1], model, compensation)
+    data = channel_figure(model, compensation)
+    thermal_model_panels(fig, gs[0], data)
+    thermal_check_panels(fig, gs[1], data)
     fig.tight_layout()
     return fig
 
 
-def thermal_model_panels(fig, spec, model: ChannelModel) -> None:
-    """The top row of :func:`thermal_figure` in ``spec``: b(ϑ, U) and K(ϑ, U) with the fitted
-    polynomials and their 2u prediction bands."""
+def thermal_model_panels(fig, spec, data: dict) -> None:
+    """The top row of :func:`thermal_figure` in ``spec`` from one gyro's stored series
+    (:func:`~gonio.specs.triad_alignment.figure_data.channel_figure`):
+    b(ϑ, U) and K(ϑ, U) with the fitted polynomials and their 2u prediction bands."""
     g = spec.subgridspec(1, 2, wspace=0.3)
     axs = np.array([[fig.add_subplot(g[0]), fig.add_subplot(g[1])], [None, None]])
-    pts = model.points
-    grid = np.linspace(model.theta_range[0], model.theta_range[1], 100)
+    pts = {c: _arr(v) for c, v in data["points"].items()}
+    grid = _arr(data["grid_c"])
+    bo, so = data["bias"], data["scale"]
     ax = axs[0, 0]
-    for uv in sorted(pts["u_v"].unique()):
+    for lv in data["levels"]:
+        uv = lv["u_v"]
         sel = pts["u_v"] == uv
-        ax.plot(pts.loc[sel, "theta_c"], pts.loc[sel, "bias_dps"], "o", ms=3,
+        ax.plot(pts["theta_c"][sel], pts["bias_dps"][sel], "o", ms=3,
                 label=f"U {uv:+.2f} V")
-        b = model.bias.predict(grid, uv)
-        ub = model.bias.u_predict(grid, uv)
+        b, ub = _arr(lv["bias"]), _arr(lv["u_bias"])
         ax.plot(grid, b, lw=0.8)
         ax.fill_between(grid, b - 2 * ub, b + 2 * ub, alpha=0.2)
     ax.set_xlabel(_t("theta_ref"))
     ax.set_ylabel(_t("bias"))
-    ax.set_title(_t("b_title", ch=model.channel, nt=model.bias.n_t, nu=model.bias.n_u) + " "
-                 f"({model.bias.criterion})")
+    ax.set_title(_t("b_title", ch=data["channel"], nt=bo["n_t"], nu=bo["n_u"]) + " "
+                 f"({bo['criterion']})")
     ax.legend(fontsize=6)
     ax = axs[0, 1]
-    k0 = float(model.scale.predict(0.0, 0.0)[0])
-    for uv in sorted(pts["u_v"].unique()):
-        sel = pts["u_v"] == uv
-        ax.plot(pts.loc[sel, "theta_c"], (pts.loc[sel, "scale"] / k0 - 1) * 1e6, "o", ms=3)
-        kk = model.scale.predict(grid, uv)
-        uk = model.scale.u_predict(grid, uv)
+    k0 = float(data["k0"])
+    for lv in data["levels"]:
+        sel = pts["u_v"] == lv["u_v"]
+        ax.plot(pts["theta_c"][sel], (pts["scale"][sel] / k0 - 1) * 1e6, "o", ms=3)
+        kk, uk = _arr(lv["scale"]), _arr(lv["u_scale"])
         ax.plot(grid, (kk / k0 - 1) * 1e6, lw=0.8)
         ax.fill_between(grid, (kk - 2 * uk) / k0 * 1e6 - 1e6, (kk + 2 * uk) / k0 * 1e6 - 1e6,
                         alpha=0.2)
     ax.set_xlabel("ϑ (°C)")
     ax.set_ylabel("K/k0 − 1 (ppm)")
-    ax.set_title(_t("k_title", nt=model.scale.n_t, nu=model.scale.n_u))
+    ax.set_title(_t("k_title", nt=so["n_t"], nu=so["n_u"]))
 
 
-def thermal_check_panels(fig, spec, model: ChannelModel,
-                         compensation: Compensation | None = None) -> None:
-    """The bottom row of :func:`thermal_figure` in ``spec``: the ramp blocks against the
-    static-soak model, and the before/after compensation residuals (or ARW(ϑ))."""
+def thermal_check_panels(fig, spec, data: dict) -> None:
+    """The bottom row of :func:`thermal_figure` in ``spec`` from one gyro's stored series
+    (:func:`~gonio.specs.triad_alignment.figure_data.channel_figure`): the ramp blocks
+    against the static-soak model, and the before/after compensation residuals (or ARW(ϑ))."""
     g = spec.subgridspec(1, 2, wspace=0.45)
     axs = np.array([[None, None], [fig.add_subplot(g[0]), fig.add_subplot(g[1])]])
-    pts = model.points
-    grid = np.linspace(model.theta_range[0], model.theta_range[1], 100)
+    grid = _arr(data["grid_c"])
     ax = axs[1, 0]
-    if model.ramp is not None:
-        r = model.ramp
-        ax.plot(r.theta_c, r.bias_dps, ".", ms=2, label=_t("ramp_obs"))
-        ax.plot(r.theta_c, np.asarray(r.bias_dps) - np.asarray(r.residual_dps), lw=0.8,
-                label=_t("soak", v=f"{r.rms_static_model_dps:.2g}"))
-        ax.set_title(_t("ramp_title", lag=lag_phrase(r.to_json(), _LANG["lang"]),
-                        h=f"{r.hysteresis_dps:.2g}"),
+    r = data["ramp"]
+    if r is not None:
+        bias = _arr(r["bias_dps"])
+        ax.plot(_arr(r["theta_c"]), bias, ".", ms=2, label=_t("ramp_obs"))
+        ax.plot(_arr(r["theta_c"]), bias - _arr(r["residual_dps"]), lw=0.8,
+                label=_t("soak", v=f"{_num(r['rms_static_model_dps']):.2g}"))
+        ax.set_title(_t("ramp_title", lag=lag_phrase(r, _LANG["lang"]),
+                        h=f"{_num(r['hysteresis_dps']):.2g}"),
                      fontsize=8)
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel(_t("bias"))
         ax.legend(fontsize=6)
-    elif model.arw is not None:
+    elif data["arw"] is not None:
         ax.set_title(_t("no_ramp"))
     ax = axs[1, 1]
-    if compensation is not None:
-        c = compensation.points
+    comp = data["compensation"]
+    if comp is not None:
+        c = {k: _arr(v) for k, v in comp["points"].items()}
         ax.plot(c["theta_c"], c["bias_before_dps"], "o", ms=3,
-                label=_t("b_before", v=f"{compensation.rms_bias_before_dps:.2g}"))
+                label=_t("b_before", v=f"{_num(comp['rms_bias_before_dps']):.2g}"))
         ax.plot(c["theta_c"], c["bias_after_dps"], "s", ms=3,
-                label=_t("b_after", v=f"{compensation.rms_bias_after_dps:.2g}"))
+                label=_t("b_after", v=f"{_num(comp['rms_bias_after_dps']):.2g}"))
         ax2 = ax.twinx()
         ax2.plot(c["theta_c"], c["scale_before_rel"] * 1e6, "^", ms=3, color="tab:green",
                  label=_t("k_before"))
@@ -201,13 +219,13 @@ def thermal_check_panels(fig, spec, model: ChannelModel,
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel(_t("resid"))
         ax.legend(fontsize=6, loc="upper left")
-    elif model.arw is not None:
-        ap = pts.dropna(subset=["arw_deg_sqrt_h"])
-        ax.plot(ap["theta_c"], ap["arw_deg_sqrt_h"], "o", ms=3)
-        a = model.arw.predict(grid)
-        ua = model.arw.u_predict(grid)
+    elif data["arw"] is not None:
+        ap = {c: _arr(v) for c, v in data["points"].items()}
+        keep = ~np.isnan(ap["arw_deg_sqrt_h"])
+        ax.plot(ap["theta_c"][keep], ap["arw_deg_sqrt_h"][keep], "o", ms=3)
+        a, ua = _arr(data["arw_curve"]["arw"]), _arr(data["arw_curve"]["u_arw"])
         ax.plot(grid, a, lw=0.8)
         ax.fill_between(grid, a - 2 * ua, a + 2 * ua, alpha=0.2)
         ax.set_xlabel("ϑ (°C)")
         ax.set_ylabel("ARW (°/√h)")
-        ax.set_title(_t("arw_title", nt=model.arw.n_t))
+        ax.set_title(_t("arw_title", nt=data["arw"]["n_t"]))

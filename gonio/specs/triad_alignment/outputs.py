@@ -8,11 +8,10 @@ the calibration path never imports it.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
-from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
-from gonio.specs import default_limits
 from gonio.atomic import output_set
 from gonio.specs.triad_alignment.certificate_pages import write_triad_certificate
 from gonio.result.tables import write_results
@@ -21,10 +20,15 @@ from gonio.specs._rate_family.outputs import results_json, summary  # noqa: F401
 
 def write(result, out, *, truth: dict | None = None, lab=None, lang: str = "en",
           dcc: bool = False) -> dict[str, Path]:
-    """Conformity decided for every item the lab file limits, then ``results.json``,
-    ``summary.txt``, ``tables/*.csv`` (:func:`gonio.result.tables.write_results`), the
-    certificate (HTML, PDF; ``dcc``: its DCC XML) into ``out`` (the caller stages the set)."""
-    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    """``results.json``, ``summary.txt``, ``tables/*.csv``
+    (:func:`gonio.result.tables.write_results`; the thermal prediction bands from the stored
+    ``extra.thermal_model``), the certificate (HTML, PDF; ``dcc``: its DCC XML) into ``out``
+    (the caller stages the set): a function of the stored result, whose conformity decisions
+    the pipeline made (:func:`gonio.pipeline.dispatch.decide_conformity`) and this renders."""
+    from gonio.specs.triad_alignment.calibration import prediction_tables
+
+    result = dataclasses.replace(result, tables=prediction_tables(
+        result.extra.get("thermal_model")))
     out = Path(out)
     paths = write_results(result, out)
     paths.update(write_triad_certificate(result, out, truth=truth, lab=lab, lang=lang,
@@ -44,6 +48,7 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
     ``monte_carlo_trials`` Monte Carlo draws, the whole set staged and swapped into ``out``
     together (:func:`gonio.atomic.output_set`). ``lab``: a loaded laboratory dict."""
     from gonio.specs.triad_alignment import SPEC
+    from gonio.specs import decide_conformity
     from gonio.specs.triad_alignment.simulate import simulate
 
     inputs = [x for x in inputs if Path(x).exists()]
@@ -51,5 +56,6 @@ def demo(out, *, bench: str | None = None, seed: int = 0, lab=None, lang: str = 
         sim = simulate(SPEC.default_protocol, bench or SPEC.default_bench, seed, out)
         truth = json.loads((stage / "truth.json").read_text(encoding="utf-8"))
         result = SPEC.calibrate(stage / "readings.csv", monte_carlo_trials=monte_carlo_trials)
+        decide_conformity(result, lab)
         paths = write(result, out, truth=truth, lab=lab, lang=lang, dcc=dcc)
     return result, {**sim, **paths}

@@ -1,0 +1,112 @@
+"""The optical draft's whole programme taken through the instruments, interrupted and resumed.
+
+``gonio bench serve --bench rlg`` and ``gonio acquire --protocol ogam-draft`` run as
+processes; ``gonio acquire`` is sent SIGINT once it has written ``--stop-after`` readings,
+then continued with ``--resume``; the readings calibrate (``gonio calibrate``) to items that
+are compared with an uninterrupted ``gonio simulate`` of the same bench and seed, each
+within the two results' U (root sum of squares). Prints the timings and the table.
+
+    python benchmarks/acquire_resume_draft.py [--speed 200] [--seed 1] [--stop-after 120]
+
+Too long for the test suite (the draft's programme is about 8 h; at ``--speed 200`` some
+2–3 min per pass on a loaded 2-core machine); tests/test_instruments.py runs the same path
+on the small programme.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PROTOCOL = ROOT / "protocols" / "ogam-draft.toml"
+
+
+def gonio(*args: str, **kw) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.Popen([sys.executable, "-m", "gonio", *args], env=env, **kw)
+
+
+def run(*args: str) -> None:
+    p = gonio(*args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    _, err = p.communicate()
+    if p.returncode:
+        sys.exit(f"gonio {' '.join(args[:1])} failed ({p.returncode}): {err.strip()}")
+
+
+def rows(path: Path) -> int:
+    if not path.exists():
+        return 0
+    lines = [ln for ln in path.read_text(encoding="utf-8").splitlines()
+             if ln and not ln.startswith("#")]
+    return max(len(lines) - 1, 0)
+
+
+def items(folder: Path) -> dict:
+    return json.loads((folder / "results.json").read_text(encoding="utf-8"))["items"]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--speed", type=float, default=200.0)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--stop-after", type=int, default=120)
+    ap.add_argument("--latitude", default="40.2")
+    a = ap.parse_args()
+    d = Path(tempfile.mkdtemp(prefix="acq-draft-"))
+    srv = gonio("bench", "serve", "--bench", "rlg", "--table-port", "0", "--gyro-port", "0",
+                "--speed", str(a.speed), "--seed", str(a.seed), stdout=subprocess.PIPE, text=True)
+    try:
+        res = dict(srv.stdout.readline().strip().split(": ", 1) for _ in range(2))
+        args = ["acquire", "--protocol", str(PROTOCOL), "--table", res["table"], "--gyro",
+                res["gyro"], "--out", str(d / "acq"), "--meta", f"latitude_deg={a.latitude}"]
+        t0 = time.monotonic()
+        p = gonio(*args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        while rows(d / "acq" / "readings.csv") < a.stop_after and p.poll() is None:
+            time.sleep(0.2)
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+        t1 = time.monotonic()
+        head = (d / "acq" / "readings.csv").read_text(encoding="utf-8").splitlines()[0]
+        kept = rows(d / "acq" / "readings.csv")
+        print(f"first pass: exit {p.returncode} after {t1 - t0:.1f} s, {kept} readings kept, "
+              f"header '{head}'")
+        said = [ln for ln in err.splitlines() if "stopped" in ln]
+        print(f"  it said: {said[-1] if said else err.strip()}")
+        run(*args, "--resume")
+        t2 = time.monotonic()
+        print(f"resume: {t2 - t1:.1f} s, {rows(d / 'acq' / 'readings.csv')} readings in all, "
+              f"header '{(d / 'acq' / 'readings.csv').read_text().splitlines()[0]}'")
+    finally:
+        srv.send_signal(signal.SIGINT)
+        srv.wait(timeout=10)
+    run("simulate", "--protocol", str(PROTOCOL), "--bench", "rlg", "--seed", str(a.seed),
+        "--out", str(d / "sim"))
+    print(f"simulated: {rows(d / 'sim' / 'readings.csv')} readings")
+    for name in ("acq", "sim"):
+        run("calibrate", str(d / name / "readings.csv"), "--protocol", str(PROTOCOL), "--out",
+            str(d / f"cal-{name}"))
+    ia, isim = items(d / "cal-acq"), items(d / "cal-sim")
+    bad = 0
+    print(f"{'item':34s} {'acquired':>14s} {'simulated':>14s} {'|diff|':>10s} {'U (rss)':>10s}")
+    for key in isim:
+        va, vs = ia[key]["value"], isim[key]["value"]
+        u = math.hypot(ia[key]["uncertainty"]["U"], isim[key]["uncertainty"]["U"])
+        ok = va is not None and vs is not None and abs(va - vs) <= u
+        bad += not ok
+        print(f"{key:34s} {va:14.6g} {vs:14.6g} {abs(va - vs):10.3g} {u:10.3g} "
+              f"{'ok' if ok else 'OUTSIDE U'}")
+    print(f"{len(isim) - bad} of {len(isim)} items within U; files in {d}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

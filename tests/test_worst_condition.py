@@ -1,0 +1,150 @@
+"""The optical scale factor's and nonlinearity's uncertainties at the worst condition the
+draft allows (tilt at the A.1 bound, the azimuth where the tilt × Earth-rate coupling
+biases the 7.1 K most), against the instrument's truth from the bench file; and the pieces
+the studies rest on, each against a second calculation: the truth's closed form against an
+ideal-set-up session, the worst azimuth against a brute search, the disc model's u against
+a Monte Carlo of the mountings, the Type B draws against their stated distributions."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gonio.analysis.coverage import clopper_pearson
+from gonio.bench import load_bench, run_session
+from gonio.formats.readings import Readings
+from gonio.specs.ogam_draft.calibration import analyse
+from gonio.specs.ogam_draft.item_coverage import disc_model_u, scale_factor_truth
+from gonio.specs.ogam_draft.study import (TABLE_RATE_ERROR_BOUND, case_bench, coupling_bias,
+                                          draw_type_b, ideal_bench, tilted, validation_protocol,
+                                          worst_azimuth)
+
+TRIALS = 40
+
+
+@pytest.fixture(scope="module")
+def proto():
+    return validation_protocol()          # 7.1 and 7.4: K and K_l are measured
+
+
+@pytest.fixture(scope="module")
+def base():
+    return replace(load_bench("rlg"), sample_rate_hz=5.0)
+
+
+@pytest.fixture(scope="module")
+def worst(proto, base):
+    return case_bench("worst", base, proto)
+
+
+def _errors(proto, bench, seeds):
+    """Per trial, for K and K_l: (value − truth, U, U less its K_tilt line, U disc model)."""
+    out = {"K": [], "K_l": []}
+    for s in seeds:
+        res = run_session(proto, bench, seed=s)
+        df = res.readings.copy()
+        df["line"] = np.arange(2, len(df) + 2)
+        rep = analyse(Readings(df, dict(res.metadata)), proto, budget="draft")
+        k_true, k_i = scale_factor_truth(res.truth)
+        kl_true = (k_i.max() - k_i.min()) / k_i.mean() * 100.0
+        for key, name, truth in (("K", "scale_factor", k_true),
+                                 ("K_l", "scale_factor_nonlinearity", kl_true)):
+            b = rep.item_uncertainty[name]
+            tilt2 = sum(c.u ** 2 for c in b.components if c.symbol == "K_tilt")
+            assert tilt2 > 0, name                       # the line is there
+            out[key].append((b.value - truth, b.U, b.k * math.sqrt(b.u_c ** 2 - tilt2),
+                             b.k * disc_model_u(b) if key == "K" else math.nan))
+    return {k: np.array(v) for k, v in out.items()}
+
+
+@pytest.fixture(scope="module")
+def at_worst(proto, worst):
+    return _errors(proto, worst, range(900, 900 + TRIALS))
+
+
+def _cp(err, U):
+    hits = int(np.count_nonzero(np.abs(err) <= U))
+    return hits, clopper_pearson(hits, err.size)
+
+
+def test_scale_factor_covers_at_the_worst_condition(at_worst):
+    """U(K) with the coupling at the bound (arcsine, worst azimuth) covers there (the
+    Clopper–Pearson interval reaches 95 %); without the line, and with the disc model's
+    narrower line, it does not: the bound is what the worst mounting needs (40, 1 and 32
+    of 40 trials)."""
+    d, U, U_no, U_disc = at_worst["K"].T
+    hits, (lo, hi) = _cp(d, U)
+    assert hi >= 0.95, (hits, lo, hi)
+    assert _cp(d, U_no)[1][1] < 0.95 and _cp(d, U_disc)[1][1] < 0.95
+    assert np.mean(d) > 0.5 * np.mean(U - U_no)        # the bias is really there
+
+
+def test_nonlinearity_covers_at_the_worst_condition(at_worst):
+    """U(K_l) with its K_tilt line covers the instrument's own K_l at the worst condition
+    (38 of 40 trials); less the line, 16 of 40."""
+    d, U, U_no, _ = at_worst["K_l"].T
+    hits, (lo, hi) = _cp(d, U)
+    assert hi >= 0.95, (hits, lo, hi)
+    assert _cp(d, U_no)[1][1] < 0.95               # without the line it would not cover
+
+
+def test_truth_closed_form_matches_an_ideal_session(proto, base):
+    """scale_factor_truth's closed form against the noise-free counts of the same
+    instrument, mounted with the same tilt, on a set-up with no Earth rate, bias, drift or
+    table error (a second calculation: the bench's counter integrated over the session)."""
+    b = ideal_bench(base)
+    b = replace(tilted(b, 0.1, 77.0), earth_rate=False)
+    res = run_session(proto, b, seed=0)
+    tr = pd.DataFrame(res.truth["readings"])
+    sf = tr[tr["test"] == "scale_factor"]
+    k_sim = sf["noise_free_counts"].to_numpy(float) / sf["true_table_deg"].to_numpy(float)
+    k, k_i = scale_factor_truth(res.truth)
+    assert np.max(np.abs(k_i / k_sim - 1.0)) < 2e-9          # count floor: 1/K/θ ≲ 2e-7
+    assert abs(k / np.mean(k_sim) - 1.0) < 1e-9
+    # the angle-position error is in it (the instrument's), the tilt's cos ψ too
+    assert np.ptp(k_i) > 0 and k < base.instrument.true_scale_factor_counts_per_deg
+
+
+def test_worst_azimuth_beats_a_brute_search(proto, base):
+    """The three-session formula's azimuth gives a noise-free bias of K at least as large
+    as any of 12 azimuths tried one by one."""
+    az = worst_azimuth(base, proto, 0.1)
+    top = abs(coupling_bias(tilted(base, 0.1, az), proto))
+    tried = [abs(coupling_bias(tilted(base, 0.1, a), proto)) for a in range(0, 360, 30)]
+    assert top >= max(tried) * (1 - 1e-9) and top > 2 * min(tried)
+
+
+def test_disc_model_u_is_the_projection_of_a_uniform_disc():
+    """u = A/2 of the coupling A·(ψ/ψ_max)·cos(α − α₀) over tilts uniform on the disc,
+    against a Monte Carlo of the mountings (and the bound's arcsine, A/√2, beside it)."""
+    rng = np.random.default_rng(1)
+    psi = np.sqrt(rng.uniform(size=400_000))
+    x = psi * np.cos(rng.uniform(0, 2 * math.pi, psi.size) - 0.7)
+    assert np.std(x) == pytest.approx(0.5, rel=0.01)
+    assert np.std(np.cos(rng.uniform(0, 2 * math.pi, psi.size))) == \
+        pytest.approx(1 / math.sqrt(2), rel=0.01)
+
+
+def test_type_b_draws_follow_their_stated_distributions(proto):
+    """draw_type_b: tilt uniform over the disc, azimuths and phases uniform, amplitudes
+    (so the table's bound) kept, the rate error uniform within Table 1's bound."""
+    b = load_bench("rlg")
+    d = [draw_type_b(b, proto, s) for s in range(3000)]
+    bound = proto.annex_a.tilt_bound_deg
+    psi = np.array([x.instrument.tilt_deg for x in d])
+    assert psi.max() <= bound and np.mean(psi ** 2) / bound ** 2 == pytest.approx(0.5, abs=0.02)
+    for vals in ([x.instrument.tilt_azimuth_deg for x in d],
+                 [x.table.positioning_harmonics[0].phase_deg for x in d],
+                 [x.table.wobble_phase_deg for x in d],
+                 [x.table.axis_setup_azimuth_deg for x in d]):
+        a = np.radians(vals)
+        assert abs(np.mean(np.cos(a))) < 0.05 and abs(np.mean(np.sin(a))) < 0.05
+    assert all(x.table.error_bound_arcsec() == pytest.approx(b.table.error_bound_arcsec())
+               for x in d[:50])
+    r = np.array([x.table.rate_error_rel for x in d])
+    assert np.abs(r).max() <= TABLE_RATE_ERROR_BOUND
+    assert np.var(r) == pytest.approx(TABLE_RATE_ERROR_BOUND ** 2 / 3, rel=0.08)
