@@ -40,7 +40,8 @@ import numpy as np
 from gonio import __version__
 from gonio.bench.rate_session import RateSession
 from gonio.errors import GonioError
-from gonio.instruments.served import ScpiError, scpi_handler, Instrument, parse_float, ScpiServer
+from gonio.instruments.served import (DropLink, Faults, Instrument, ScpiError, ScpiServer,
+                                      parse_float, scpi_handler)
 from gonio.protocol.programme import Segment
 
 #: The served rate table's stated top rate (°/s), acceleration (°/s²) and sine frequency (Hz).
@@ -95,6 +96,10 @@ class ServedRateBench:
     room_c: float = 20.0
     clock: object = time.monotonic
     lock: threading.RLock = field(default_factory=threading.RLock)
+    #: injected faults: ``table-error:N`` (the N-th ``ROT`` or ``OSC`` answers an axis fault,
+    #: −310, and is not made), ``gyro-drop:N`` (the reader closes its link at its N-th
+    #: ``ACQ:DATA?``)
+    faults: Faults = field(default_factory=Faults)
 
     def __post_init__(self):
         if not (self.speed > 0 and math.isfinite(self.speed)):
@@ -227,7 +232,19 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
                 return f(arg)
         return run
 
+    def motion_fault():
+        sb.faults.moves += 1
+        if sb.faults.table_error_at_move == sb.faults.moves:
+            raise ScpiError(-310, "System error; axis fault (injected)")
+
+    def data(arg):
+        sb.faults.reads += 1
+        if sb.faults.gyro_drop_at_read == sb.faults.reads:
+            raise DropLink()
+        return sb.data(*_ints(arg, 2))
+
     def rotate(arg):
+        motion_fault()
         w = parse_float(arg)
         if abs(w) > TOP_RATE_DPS:
             raise ScpiError(-222, f"Data out of range; rate {w:g} beyond {TOP_RATE_DPS:g}")
@@ -237,6 +254,7 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         parts = arg.split(",")
         if len(parts) != 2:
             raise ScpiError(-109, "Missing parameter; OSC freq,amplitude")
+        motion_fault()
         f, a = (parse_float(x) for x in parts)
         if not 0 < f <= TOP_FREQ_HZ or not 0 < a <= TOP_RATE_DPS:
             raise ScpiError(-222, f"Data out of range; OSC {f:g},{a:g}")
@@ -278,7 +296,7 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("ACQuire:CONFigure", locked(configure)),
         ("ACQuire:STARt", locked(lambda a: sb.start(parse_float(a)))),
         ("ACQuire:COUNt?", locked(lambda a: str(sb.record.ready(sb.now_s()) if sb.record else 0))),
-        ("ACQuire:DATA?", locked(lambda a: sb.data(*_ints(a, 2)))),
+        ("ACQuire:DATA?", locked(data)),
         ("MEASure:TEMPerature?", locked(lambda a: repr(sb.session.st.temp))),
         ("CONFigure:UNIT?", lambda a: g.output_unit),
         ("CONFigure:SCALe?", lambda a: repr(g.scale_factor)),
@@ -350,10 +368,13 @@ class ServedRate:
 
 
 def serve_rate_bench(bench, ports: dict[str, int] | None = None, *, speed: float = 1.0,
-                     seed: int = 0, room_temperature_c: float = 20.0) -> ServedRate:
+                     seed: int = 0, room_temperature_c: float = 20.0,
+                     faults: Faults | None = None) -> ServedRate:
     """Serve the rate ``bench``'s four instruments on 127.0.0.1 (``ports`` by name; 0 or
-    absent: a free one) in background threads; ``close()`` stops them."""
-    sb = ServedRateBench(bench, seed=seed, speed=speed, room_c=room_temperature_c)
+    absent: a free one) in background threads; ``close()`` stops them. ``faults``: see
+    :class:`ServedRateBench`."""
+    sb = ServedRateBench(bench, seed=seed, speed=speed, room_c=room_temperature_c,
+                         faults=faults or Faults())
     servers, threads = {}, []
     for inst in rate_instruments(sb):
         port = int((ports or {}).get(inst.name) or 0)
