@@ -118,11 +118,19 @@ class ServedRateBench:
         return (self.clock() - self.wall0) * self.speed
 
     # ---------------------------------------------------------------- conditions
-    def change(self, **values) -> None:
-        """Change conditions (refused while a record is pending or running)."""
+    def change(self, *, abort: bool = False, **values) -> None:
+        """Change conditions: refused while a record is pending or running, unless
+        ``abort`` (a stop, switching the supply or the chamber off: always obeyed), which
+        ends the record at the samples taken so far."""
         now = self.now_s()
-        if self.record is not None and self.record.ready(now) < self.record.t_s.size:
-            raise ScpiError(-221, "Settings conflict; a record is running")
+        r = self.record
+        if r is not None and r.ready(now) < r.t_s.size:
+            if not abort:
+                raise ScpiError(-221, "Settings conflict; a record is running")
+            k = r.ready(now)
+            self.record = _Record(r.start_s, r.interval_s, r.t_s[:k], r.output[:k],
+                                  r.reference[:k])
+            self.last_end = max(now, r.start_s)
         if all(getattr(self.cond, k) == v for k, v in values.items()):
             return
         if "rate_dps" in values or "freq_hz" in values:
@@ -267,7 +275,7 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         sb.change(up_axis=parts[0], north_axis=parts[1])
 
     table = Instrument("table", f"gonio,virtual rate table,{b.name}-table,gonio {__version__}")
-    stop = locked(lambda a: sb.change(rate_dps=0.0, freq_hz=0.0, amplitude_dps=0.0))
+    stop = locked(lambda a: sb.change(abort=True, rate_dps=0.0, freq_hz=0.0, amplitude_dps=0.0))
     table.commands = _common(table, stop) + [
         ("ROTate", locked(rotate)), ("STOP", stop), ("OSCillate", locked(oscillate)),
         ("MOUNT", locked(mount)),
@@ -317,10 +325,11 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
 
     ch = b.equipment.chamber
     chamber = Instrument("chamber", f"gonio,virtual chamber,{b.name}-chamber,gonio {__version__}")
-    chamber.commands = _common(chamber, locked(lambda a: sb.change(chamber_on=False))) + [
+    chamber.commands = _common(chamber, locked(lambda a: sb.change(abort=True,
+                                                                    chamber_on=False))) + [
         ("TEMPerature", locked(set_point)), ("TEMPerature?", lambda a: repr(sb.cond.set_point_c)),
         ("RAMP", locked(ramp)), ("RAMP?", lambda a: repr(sb.cond.ramp_c_per_min)),
-        ("OUTPut", locked(lambda a: sb.change(chamber_on=_on_off(a)))),
+        ("OUTPut", locked(lambda a: sb.change(abort=not _on_off(a), chamber_on=_on_off(a)))),
         ("OUTPut?", lambda a: "1" if sb.cond.chamber_on else "0"),
         ("MEASure:TEMPerature?", locked(lambda a: repr(sb.air_c(sb.now_s())))),
         ("LIMit:TEMPerature?", lambda a: f"{CHAMBER_RANGE_C[0]!r},{CHAMBER_RANGE_C[1]!r}"),
@@ -334,9 +343,10 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         sb.change(supply_v=v)
 
     supply = Instrument("supply", f"gonio,virtual supply,{b.name}-supply,gonio {__version__}")
-    supply.commands = _common(supply, locked(lambda a: sb.change(supply_on=False))) + [
+    supply.commands = _common(supply, locked(lambda a: sb.change(abort=True,
+                                                                  supply_on=False))) + [
         ("VOLTage", locked(volt)), ("VOLTage?", lambda a: repr(sb.cond.supply_v)),
-        ("OUTPut", locked(lambda a: sb.change(supply_on=_on_off(a)))),
+        ("OUTPut", locked(lambda a: sb.change(abort=not _on_off(a), supply_on=_on_off(a)))),
         ("OUTPut?", lambda a: "1" if sb.cond.supply_on else "0"),
         ("MEASure:VOLTage?", locked(lambda a: repr(sb.supply_measured_v()))),
     ]
