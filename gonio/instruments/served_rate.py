@@ -232,24 +232,27 @@ def _common(inst: Instrument, reset) -> list:
 
 def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
     """The four served instruments (:data:`NAMES`), sharing ``sb``."""
-    b, g = sb.bench, sb.bench.gyro
+    return [_table(sb), _gyro(sb), _chamber(sb), _supply(sb)]
+
+
+def _locked(sb: ServedRateBench, f):
+    def run(arg):
+        with sb.lock:
+            return f(arg)
+    return run
+
+
+def _table(sb: ServedRateBench) -> Instrument:
+    """The rate table: :class:`gonio.instruments.rate.RateTable`'s commands."""
+    b = sb.bench
 
     def locked(f):
-        def run(arg):
-            with sb.lock:
-                return f(arg)
-        return run
+        return _locked(sb, f)
 
     def motion_fault():
         sb.faults.moves += 1
         if sb.faults.table_error_at_move == sb.faults.moves:
             raise ScpiError(-310, "System error; axis fault (injected)")
-
-    def data(arg):
-        sb.faults.reads += 1
-        if sb.faults.gyro_drop_at_read == sb.faults.reads:
-            raise DropLink()
-        return sb.data(*_ints(arg, 2))
 
     def rotate(arg):
         motion_fault()
@@ -287,6 +290,21 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("LIMit:RATE?", lambda a: repr(TOP_RATE_DPS)), ("LIMit:ACCeleration?", lambda a: repr(ACCEL_DPS2)),
         ("LIMit:FREQuency?", lambda a: repr(TOP_FREQ_HZ)),
     ]
+    return table
+
+
+def _gyro(sb: ServedRateBench) -> Instrument:
+    """The gyro output reader: :class:`gonio.instruments.rate.GyroOutput`'s commands."""
+    b, g = sb.bench, sb.bench.gyro
+
+    def locked(f):
+        return _locked(sb, f)
+
+    def data(arg):
+        sb.faults.reads += 1
+        if sb.faults.gyro_drop_at_read == sb.faults.reads:
+            raise DropLink()
+        return sb.data(*_ints(arg, 2))
 
     def configure(arg):
         parts = arg.split(",")
@@ -310,6 +328,15 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("CONFigure:SCALe?", lambda a: repr(g.scale_factor)),
         ("CONFigure:NULL?", lambda a: repr(g.null_output)),
     ]
+    return gyro
+
+
+def _chamber(sb: ServedRateBench) -> Instrument:
+    """The chamber: :class:`gonio.instruments.rate.Chamber`'s commands."""
+    b = sb.bench
+
+    def locked(f):
+        return _locked(sb, f)
 
     def set_point(arg):
         c = parse_float(arg)
@@ -335,6 +362,15 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("LIMit:TEMPerature?", lambda a: f"{CHAMBER_RANGE_C[0]!r},{CHAMBER_RANGE_C[1]!r}"),
         ("LIMit:RAMP?", lambda a: repr(ch.max_ramp_c_per_min)),
     ]
+    return chamber
+
+
+def _supply(sb: ServedRateBench) -> Instrument:
+    """The supply: :class:`gonio.instruments.rate.Supply`'s commands."""
+    b = sb.bench
+
+    def locked(f):
+        return _locked(sb, f)
 
     def volt(arg):
         v = parse_float(arg)
@@ -350,7 +386,7 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("OUTPut?", lambda a: "1" if sb.cond.supply_on else "0"),
         ("MEASure:VOLTage?", locked(lambda a: repr(sb.supply_measured_v()))),
     ]
-    return [table, gyro, chamber, supply]
+    return supply
 
 
 @dataclass
