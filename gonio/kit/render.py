@@ -14,7 +14,7 @@ Layout (HTML and A4 PDF)        :class:`Block`, :func:`render_html`, :func:`rend
 The content every certificate   :func:`certificate_id`, :func:`opening_blocks`,
 shares (ISO/IEC 17025 7.8)      :func:`decision_rule_blocks`, :func:`signature_blocks`,
                                 :func:`conformity_section`, :func:`meta_text`,
-                                :func:`is_virtual`, :func:`clean_tree`
+                                :func:`is_virtual`, :func:`is_draft`, :func:`clean_tree`
 Labels and numbers              :func:`labels`, :func:`display`, :func:`display_number`,
                                 :func:`display_uncertainty`, :func:`rule_at_U`,
                                 :func:`coverage_text`, :func:`finding_text`,
@@ -30,7 +30,7 @@ Figures                         :func:`figure_svg`, :func:`mpl_style`,
 The DCC (PTB DCC 3.3.0)         :func:`new_document`, :func:`administrative_data`,
                                 :func:`measurement_result`, :func:`influence_conditions`,
                                 :func:`element`, :func:`text_element`, :func:`quantity`,
-                                :func:`list_quantity`, :func:`bound_quantity`,
+                                :func:`list_quantity`,
                                 :func:`not_measured_quantity`, :func:`tree_bytes`,
                                 :func:`bilingual`, :func:`label_translator`,
                                 :data:`DCC_CONFORMITY`
@@ -42,14 +42,14 @@ not, so a specification's calibrating modules stay light.
 
 from __future__ import annotations
 
-from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual, bound_quantity,
+from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual,
                               element, influence_conditions, label_translator, list_quantity,
                               measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.figures import (HTML_FIGSIZE, empty_panel, figure_svg, legend_above,
                                   mpl_style, plain_axes, plain_log_ticks)
 from gonio.report.header import (certificate_id, conformity_section, decision_rule_blocks,
-                                 meta_text, opening_blocks, signature_blocks)
+                                 is_draft, meta_text, opening_blocks, signature_blocks)
 from gonio.report.i18n import (clause_text, coverage_text, display, display_number,
                                display_uncertainty, finding_text, labels, parse_display,
                                reason_text, rule_at_U)
@@ -60,10 +60,11 @@ from gonio.report.text import clean_tree
 
 __all__ = [
     "Block", "DCC_CONFORMITY", "HTML_FIGSIZE", "NoBreakText", "Num", "administrative_data",
-    "bilingual", "bound_quantity", "certificate_id", "clause_text", "clean_tree",
+    "bilingual", "certificate_id", "clause_text", "clean_tree",
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
-    "figure_svg", "finding_text", "font_families", "influence_conditions", "is_virtual",
+    "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
+    "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",
     "measurement_result", "meta_text", "mpl_style", "new_document", "not_measured_quantity",
     "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks", "quantity",

@@ -135,6 +135,23 @@ LABELS: dict[str, dict[str, str]] = {
     "calibrated_by": {"en": "Calibrated by", "zh": "校准员"},
     "checked_by": {"en": "Checked by", "zh": "核验员"},
     "approved_by": {"en": "Approved by", "zh": "批准人"},
+    "amendment_asked_by": {"en": "Amendment asked for by", "zh": "修订申请人"},
+    "seal": {"en": "Seal of the result (SHA-256)", "zh": "结果封印（SHA-256）"},
+    "seal_value": {"en": "{short}… (the whole value is in the DCC; the laboratory's record "
+                         "of this result is verified against it)",
+                   "zh": "{short}…（完整值见数字校准证书；本机构的结果记录据此核验）"},
+    "people_required": {"en": "People required", "zh": "所需人员"},
+    "people_3": {"en": "3: calibration, review and approval each by a different person",
+                 "zh": "3 人：校准、核验、批准各由不同人员完成"},
+    "people_2": {"en": "2: the calibration by one person, its review and approval by another",
+                 "zh": "2 人：校准由一人完成，核验与批准由另一人完成"},
+    "amendment": {"en": "This certificate amends and replaces certificate {old}, which is "
+                        "withdrawn. Reason for the amendment: {reason}",
+                  "zh": "本证书修订并取代证书 {old}，原证书作废。修订原因：{reason}"},
+    "amendment_title": {"en": "Amendment", "zh": "修订"},
+    "draft_short": {"en": "DRAFT", "zh": "草稿"},
+    "draft": {"en": "DRAFT FOR REVIEW — NOT AN ISSUED CERTIFICATE",
+              "zh": "审核用草稿 — 非正式签发的证书"},
     "statement_item": {"en": "The results relate only to the item calibrated.",
                        "zh": "本证书的校准结果仅对所校准的仪器有效。"},
     "statement_copy": {"en": "This certificate shall not be reproduced except in full without "
@@ -173,16 +190,8 @@ LABELS: dict[str, dict[str, str]] = {
     "u_ppm": {"en": "ppm", "zh": "ppm"},
     # item notes
     "note_zero_range": {"en": "range/T (definition 3.3): {v} °/h", "zh": "极差/T（定义3.3）：{v} (°)/h"},
-    "note_zero_interval": {"en": "95 % interval (χ², ν_eff = {n}): [{lo}, {hi}] °/h; U at k = "
-                                 "t₉₅(ν_eff)",
-                           "zh": "95 % 区间（χ²，ν_eff = {n}）：[{lo}, {hi}] (°)/h；U 取 k = "
-                                 "t₉₅(ν_eff)"},
     "note_zero_model": {"en": "noise model of the 7.3 record (beside, not stated): {v} °/h",
                         "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
-    # a non-negative quantity whose U exceeds its value (gonio.result.statement.state)
-    "note_upper": {"en": "upper bound: ≤\u00a0{b} {u} (interval [0, {b}])",
-                   "zh": "上限：≤\u00a0{b} {u}（区间 [0, {b}]）"},
-    "note_upper_short": {"en": "; upper bound ≤\u00a0{b}", "zh": "；上限 ≤\u00a0{b}"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
@@ -239,14 +248,20 @@ LABELS: dict[str, dict[str, str]] = {
                           "degrees of freedom (shown per item in the budgets below); {clause}.",
                     "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
                           "不确定度分量）；{clause}。"},
-    "k_chi_square": {"en": "A standard deviation of a few repeats (the repeatabilities) or a "
-                           "half range is stated by one interval, its one-sided 95 % upper "
-                           "limit (σ's χ² distribution, JCGM 100 E.4.3; the range of normal "
-                           "values for a half range), shown in the result with its probability; "
-                           "such an item has no U and no k.",
-                     "zh": "少数重复测量的标准偏差（重复性各项）或半极差以一个区间表述，即其单侧 95 % "
-                           "上限（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），"
-                           "在结果栏中连同包含概率给出；此类项目无 U，无 k。"},
+    "k_chi_square": {"en": "An item stated by an interval has that one statement, shown in the "
+                           "result with its probability, and no U and no k: a standard "
+                           "deviation of a few repeats (a repeatability, a stability) or a half "
+                           "range by its one-sided 95 % upper limit (σ's χ² distribution, "
+                           "JCGM 100 E.4.3; the range of normal values for a half range), on "
+                           "which any conformity decision is made; a quantity that cannot be "
+                           "negative whose U exceeds its value by its upper bound, value + U "
+                           "(the interval value ± U without its impossible negative part, "
+                           "JCGM 100 4.3.9).",
+                     "zh": "以区间表述的项目只有这一个表述，在结果栏中连同包含概率给出，无 U，无 k："
+                           "少数重复测量的标准偏差（重复性、稳定性）或半极差给出其单侧 95 % 上限"
+                           "（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），对上限的判定"
+                           "亦以此为据；不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U "
+                           "去掉不可能的负值部分，JCGM 100 4.3.9）。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "

@@ -34,14 +34,14 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
 from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tree,
                               conformity_texts, coverage_text, decision_rule_blocks, display,
-                              figure_svg, finding_text, font_families, is_virtual, labels,
-                              meta_text, num, opening_blocks, reason_text, render_html,
+                              figure_svg, finding_text, font_families, is_draft, is_virtual,
+                              labels, meta_text, num, opening_blocks, reason_text, render_html,
                               render_pdf, rule_at_U, signature_blocks)
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
-                                           detail, e_budget, followed, item_names, item_path,
-                                           method_rows, reading_note, segments,
+                                           detail, e_budget, followed, interval_cell, item_names,
+                                           item_path, method_rows, reading_note, segments,
                                            specification_text, stated_item, u_cell)
 
 
@@ -114,7 +114,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
 
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
-    rrows = _result_rows(res, L, U)
+    rrows = _result_rows(res, L, U, lang)
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
@@ -127,6 +127,8 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
+    if any(stated_item(res, n)["interval"] is not None for n in item_names(res)):
+        add("p", [L["k_chi_square"]])          # B_s, R: stated by their χ² interval alone
     screening_notes(res, L, add)
     if detail(res, "scale_factor", "measurand"):
         sf = res["items"]["scale_factor"]["details"]
@@ -159,7 +161,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
     add("h", L["figures"])
     for key, cap, draw in FIGURES:
         add("fig", (key, L[cap], draw))
-    return {"id": certificate_id(res, lab), "virtual": virtual,
+    return {"id": certificate_id(res, lab), "virtual": virtual, "draft": is_draft(lab),
             "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
             "blocks": blocks, "results": res}
 
@@ -178,9 +180,10 @@ def _admin_blocks(add, res: dict, lab: dict | None, L: dict, *, lang: str, cjk: 
         add(b.kind, b.data, b.extra)
 
 
-def _result_rows(res: dict, L: dict, U: float | None) -> list:
+def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
     """The results table's rows (Annex B): each item with its U, k and coverage
-    probability, or the reason it was not measured."""
+    probability (an item stated by its coverage interval: that interval beside the value and
+    no U), or the reason it was not measured."""
     rrows = []
     for i, name in enumerate(item_names(res), 1):
         item = res["items"][name]
@@ -198,13 +201,6 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
         elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
             cell += [L["semi"], *segments(L["note_zero_range"],
                                      v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]
-            iu = item.get("uncertainty") or {}
-            if iu.get("interval") and iu.get("nu_eff"):
-                cell += [L["semi"], *segments(
-                    L["note_zero_interval"],
-                    n=_num(res, item_path(name, "uncertainty.nu_eff"), "k", U),
-                    lo=_num(res, item_path(name, "uncertainty.interval.0"), "sig3", U),
-                    hi=_num(res, item_path(name, "uncertainty.interval.1"), "sig3", U))]
             if detail(res, name, "stated") == "draft" and \
                     (detail(res, name, "estimates") or {}).get("model"):
                 cell += [L["semi"], *segments(L["note_zero_model"], v=_num(
@@ -217,8 +213,8 @@ def _result_rows(res: dict, L: dict, U: float | None) -> list:
             cell += [opening, *segments(L["note_at"],
                                         p=_num(res, item_path(name, "position_deg"), "pos", U)),
                      closing]
-        if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
-            cell += [L["semi"], *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
+        if st["interval"] is not None:    # B_s, R: the one statement, its χ² interval
+            cell[1:1] = [L["semi"] + interval_cell(st, lang)]
         rrows.append([str(i), L[name], clause_text(item["clause"], L), cell, u_cell(st, L), unit])
     return rrows
 

@@ -6,7 +6,8 @@ Contents
 :func:`item_names`           the items of a results dict, in its order
 :func:`item_uncertainty`     U, k and coverage probability of one item (or None)
 :func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
-                             position, U, k, p
+                             position, U, k, p, or its one coverage interval
+:func:`interval_cell`        that interval as a table cell ("≤ 0.022 (p ≈ 95 %)")
 :func:`conformity_for`       the conformity statements the laboratory's limits call for
 :func:`method_rows`          the method statement (rates, rounds, series, delays, Earth rate,
                              latitude, axes, tilt, temperature, clauses)
@@ -37,7 +38,7 @@ from typing import Any
 from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
 import math
 
-from gonio.kit.render import (Num, conformity_texts, coverage_text, display, display_number,
+from gonio.kit.render import (conformity_texts, coverage_text, display, display_number,
                               item_nums, labels, num, parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_ZH, ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
@@ -116,12 +117,17 @@ def stated_item(res: dict, name: str) -> dict:
 
     Keys: ``measured``, ``reason``, ``clause``, ``unit``, ``value`` (Num; E as ± max|E_i|),
     ``signed`` and ``position`` (E only, Num), ``U``, ``k`` (Num or None), ``p`` (text such
-    as "95", or None), ``U_raw`` (float or None).
+    as "95", or None), ``U_raw`` (float or None), ``interval`` (the item's
+    :func:`~gonio.report.stated.item_nums` when it is stated by its coverage interval alone —
+    a dispersion such as B_s and R, or a non-negative item whose U exceeds its value —, then
+    ``U`` and ``k`` are None: one statement), ``upper`` (its upper bound's text when that
+    interval starts at 0, else None).
     """
     item = res["items"][name]
     out = {"measured": bool(item["measured"]), "reason": item.get("reason", ""),
            "clause": item["clause"], "unit": item["unit"], "value": "—", "signed": None,
-           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None}
+           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None,
+           "interval": None}
     if not item["measured"]:
         return out
     unc = item_uncertainty(res, name)
@@ -148,29 +154,24 @@ def stated_item(res: dict, name: str) -> dict:
                                                     rule_at_U(U, sig))
     if unc:
         out["U_raw"] = U
-        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
-        out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
         if unc["p"] is not None:
             out["p"] = p_text(float(unc["p"]))
-        out["upper"] = upper_bound(res, name, out["value"])
+        if own is not None and own["statement"].interval is not None:
+            out["interval"] = own         # its one statement: no U, no k beside it
+            out["upper"] = own["statement"].upper_text
+            return out
+        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
+        out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
     return out
 
 
-def upper_bound(res: dict, name: str, value: Num | str) -> Num | None:
-    """The upper bound of a non-negative item whose U exceeds its value (the item's
-    uncertainty says ``nonnegative``; B_s), as :func:`gonio.result.statement.state` states
-    it, at the value's decimal place; None otherwise."""
-    from gonio.result.statement import state
-
-    it = res["items"][name]
-    iu = it.get("uncertainty") or {}
-    if not it.get("nonnegative") or not isinstance(value, Num) or iu.get("U") is None:
-        return None
-    st = state(it["value"], iu["U"], k=iu.get("k"), nonnegative=True)
-    if st.upper is None:
-        return None
-    return Num(st.upper_text, f"items.{name}.upper_bound",
-               f"sci{st.exponent}.{st.decimals + st.exponent}" if st.exponent else value.rule)
+def interval_cell(st: dict, lang: str) -> str:
+    """The coverage interval of an item stated by it (:func:`stated_item` ``interval``), in
+    the short form of a table cell whose unit is in another column: "≤ 0.021 (p ≈ 95 %)" or
+    "[0.066, 0.204] (p ≈ 95 %)"; "" for an item stated by U."""
+    if st.get("interval") is None:
+        return ""
+    return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
 
 
 def segments(template: str, **nums) -> list:
@@ -295,7 +296,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     """
     L = labels(lang)
     head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
-    rows, notes, notes_b = [], [], []
+    rows, notes = [], []
     for i, name in enumerate(item_names(res), 1):
         st = stated_item(res, name)
         title = res["items"][name].get("title") or name
@@ -306,17 +307,14 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         val = str(st["value"])
         if st["signed"] is not None:
             val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
+        if st["interval"] is not None:      # stated by its interval alone
+            val += "; " + interval_cell(st, "en").replace("\u00a0", " ")
         U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
                                          f"p ≈ {st['p'] or '—'} %)"
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
-        if st["upper"] is not None:
-            notes_b.append(f"{i}. {title}: " + L["note_upper"].format(
-                b=st["upper"], u=L.get("u_" + st["unit"], st["unit"])).replace("\u00a0", " "))
     widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
     fmt = lambda r: "  ".join(s.ljust(w) for s, w in zip(r, widths)).rstrip()  # noqa: E731
     lines = [fmt(head), "  ".join("-" * w for w in widths)] + [fmt(r) for r in rows]
-    if notes_b:          # a non-negative quantity whose U exceeds it: its upper bound
-        lines += [""] + notes_b
     if notes:
         lines += ["", "not measured:"] + ["  " + n for n in notes]
     u = e_budget(res)
