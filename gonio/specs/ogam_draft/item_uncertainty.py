@@ -102,7 +102,8 @@ class ItemUncertainty:
     #: ``model`` (B_s: the χ² relation, the noise model's square root): f(rng, M) → array.
     sampler: object = field(default=None, repr=False, compare=False)
     model_kind: str = "linear"
-    #: A quantity that cannot be negative (B_s, R): results.json marks the item
+    #: A quantity that cannot be negative (B_s, R, the ranges K_l, C_v, C_g): results.json
+    #: marks the item
     #: ``nonnegative`` (its statement is then never an interval reaching below zero).
     nonnegative: bool = False
     #: The item is stated by ``interval`` alone (a dispersion: the one-sided χ² interval
@@ -428,7 +429,9 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                          f"{a_l:.3g}″/° at the A.1 bound, worst azimuth"),
                            "tilt bias of the spread of K_i", True, "A.1 applied to 7.2"))
     value = float((k_i.max() - k_i.min()) / kbar * 100.0)
-    return _budget("scale_factor_nonlinearity", "%", value, lines, k=k)
+    # a range: it cannot be negative, so a U above it is stated as its upper bound alone
+    return replace(_budget("scale_factor_nonlinearity", "%", value, lines, k=k),
+                   nonnegative=value >= 0)
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5
@@ -798,7 +801,10 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
         corr[2, 3] = corr[3, 2] = 1.0
     coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0][:len(lines)]
     value = (a.e_arcsec - b.e_arcsec) * f
-    return _budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs)
+    # a spread (max − min): it cannot be negative, so a U above it is stated as its upper
+    # bound alone (gonio.result.statement.state)
+    return replace(_budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs),
+                   nonnegative=value >= 0)
 
 
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
