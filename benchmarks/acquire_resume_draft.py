@@ -79,7 +79,8 @@ def main() -> int:
         kept = rows(d / "acq" / "readings.csv")
         print(f"first pass: exit {p.returncode} after {t1 - t0:.1f} s, {kept} readings kept, "
               f"header '{head}'")
-        print(f"  stderr: {err.strip().splitlines()[-1] if err.strip() else ''}")
+        said = [ln for ln in err.splitlines() if "stopped" in ln]
+        print(f"  it said: {said[-1] if said else err.strip()}")
         run(*args, "--resume")
         t2 = time.monotonic()
         print(f"resume: {t2 - t1:.1f} s, {rows(d / 'acq' / 'readings.csv')} readings in all, "

@@ -34,7 +34,8 @@ from gonio.protocol import parse_protocol
 from gonio.report.figures import HTML_FIGSIZE, mpl_style
 from gonio.specs.ogam_draft import certificate_pages as cert
 from gonio.specs.ogam_draft import figures as figs
-from gonio.report.i18n import (BUDGET_SOURCES_ZH, READING_NOTES_ZH, LABELS, labels)
+from gonio.report.i18n import LABELS, labels
+from gonio.specs.ogam_draft.phrases import BUDGET_SOURCES_ZH, READING_NOTES_ZH
 from gonio.specs.ogam_draft.stated import stated_item, summary_text
 from gonio.resources import builtin_names, protocols_dir
 
@@ -242,7 +243,7 @@ def test_chinese_is_complete(run):
                     "7.3: the protocol", "Annex A.4.4: u(r)",
                     "signed extreme", "approximately"):
         assert english not in page, english
-    assert re.search(r"\d+ 行\)", page)
+    assert re.search(r"\d+ 行）", page)                  # full-width (the bracket rule)
 
 
 def test_units_never_wrap(run):
@@ -528,3 +529,39 @@ def test_zh_says_where_k_comes_from_in_chinese(run):
     if ks:
         zh = labels("zh")
         assert (zh["k_fixed"] if ks == "fixed by laboratory" else zh["k_welch"]) in page
+
+
+# --------------------------------------------------------------------------- zh brackets
+
+#: ASCII brackets a Chinese page must not carry (docs/certificate.md#brackets-on-a-chinese-page):
+#: brackets holding Chinese, brackets right after a Chinese character, a clause or definition
+#: reference in brackets, and a unit in brackets after a Chinese name ("位置 (°)"; "(°)/h",
+#: the unit symbol, is mathematics and stays).
+ZH_ASCII_BRACKETS = (
+    re.compile(r"\([^()]*[\u4e00-\u9fff][^()]*\)"),
+    re.compile(r"[\u4e00-\u9fff]\("),
+    re.compile(r"\((?:[A-Z]\.)?\d+(?:\.\d+)*(?:(?:, |、)(?:[A-Z]\.)?\d+(?:\.\d+)*)*\)"),
+    re.compile(r"[\u4e00-\u9fff] \((?:°|″|min|s|%)\)(?!/)"),
+)
+
+
+def zh_bracket_problems(text: str) -> list[str]:
+    """The pieces of ``text`` that break the bracket rule of a Chinese page."""
+    return [m.group(0) for rx in ZH_ASCII_BRACKETS for m in rx.finditer(text)]
+
+
+def test_the_bracket_check_can_fail_and_passes_mathematics():
+    bad = ["readings.csv (SHA-256 ab…, 249 行)", "标度因数 K (7.1)", "位置 (°)", "微机电(MEMS)",
+           "7.3 (3.3)", "角位置偏差 (7.4, 7.5)"]
+    assert all(zh_bracket_problems(b) for b in bad), [b for b in bad if not zh_bracket_problems(b)]
+    good = ["u(P)", "B_s = s(M)/T，并同时给出 (max M − min M)/T", "要求 (20 ± 1) °C（表2）",
+            "(°)/h", "脉冲数/(°)", "速率（(°)/s）", "k = t₉₅(ν_eff)", "E_i (″)", "7.3（3.3）",
+            "K_i（脉冲数/(°)）", "readings.csv（SHA-256 ab…，249 行）"]
+    assert [g for g in good if zh_bracket_problems(g)] == []
+
+
+def test_zh_certificate_uses_full_width_brackets_in_chinese_text(run):
+    page = visible_text((run["dir"] / "zh" / "certificate.html").read_text(encoding="utf-8"))
+    assert zh_bracket_problems(page) == []
+    shown = [v["zh"] for v in LABELS.values()]           # the figures' text is drawn as paths
+    assert [s for s in shown if zh_bracket_problems(s)] == []

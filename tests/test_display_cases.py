@@ -10,7 +10,8 @@ import math
 
 import pytest
 
-from gonio.report.i18n import display_item, display_number, display_uncertainty
+from gonio.report.i18n import display_number, display_uncertainty
+from gonio.specs.ogam_draft.stated import display_item
 
 ITEM_CASES = [
     # (item, value, U, expected text)

@@ -67,6 +67,19 @@ def test_every_kit_name_is_documented():
     assert (kit.__doc__ or "").count(":func:") >= 20
 
 
+def test_every_rendering_kit_name_is_documented():
+    from gonio.kit import render
+
+    doc = (ROOT / "docs" / "kit.md").read_text(encoding="utf-8")
+    section = doc.partition("## The rendering kit")[2].partition("\n## ")[0]
+    for name in render.__all__:
+        assert f"`{name}`" in section, name
+        assert name in (render.__doc__ or ""), name
+        obj = getattr(render, name)
+        if callable(obj):
+            assert (obj.__doc__ or "").strip(), name
+
+
 def test_the_kit_loads_neither_the_bench_nor_the_report():
     code = ("import sys, gonio.kit\n"
             "bad = sorted(m for m in sys.modules if m.startswith(('gonio.bench', "

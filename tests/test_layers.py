@@ -37,6 +37,7 @@ LAYERS: dict[str, int] = {
     "gonio.budget": 5,
     "gonio.specs": 6,
     "gonio.kit": 6.5,            # the public plug-in kit: re-exports, above the specifications
+    "gonio.kit.render": 7.25,    # its rendering part: re-exports of the report, above it
     "gonio.report": 7,
     "gonio.pipeline": 8,
     "gonio.records": 9,

@@ -110,11 +110,16 @@ def test_every_item_value_and_uncertainty_equal_results_json(run):
             last_digit_unit(_as_display(text))       # dec-1: rounded to tens
         assert abs(x - v) <= 0.5 * step + 1e-12 * abs(v), src
         unc = res["items"][key]["uncertainty"]
-        if unc["k"] is None:       # stated by its coverage interval (σ's χ², a half range)
+        it = res["items"][key]
+        # a non-negative item whose U exceeds its value: one interval, [0, value + U]
+        bound = it["nonnegative"] and unc["k"] is not None and unc["U"] > it["value"]
+        if unc["k"] is None or bound:   # stated by its coverage interval (σ's χ², a range)
+            iv = unc["interval"] if not bound else [0.0, it["value"] + unc["U"]]
             ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
             lo, hi = (float(ci.find(f"si:interval{e}", NS).text) for e in ("Min", "Max"))
-            assert lo <= unc["interval"][0] * factor and hi >= unc["interval"][1] * factor
-            assert hi == pytest.approx(unc["interval"][1] * factor, rel=0.05)
+            assert lo <= iv[0] * factor and hi >= iv[1] * factor
+            assert hi == pytest.approx(iv[1] * factor, rel=0.05)
+            assert not bound or lo == 0.0
             assert float(ci.find("si:coverageProbability", NS).text) == 0.95
             assert real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS) is None
             continue

@@ -325,3 +325,20 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
     assert "95.45 %" not in text and "approximately 95 %" in text
     summary = (run["dir"] / "cal" / "summary.txt").read_text(encoding="utf-8")
     assert "95.45" not in summary and "p ≈ 95 %" in summary
+
+
+def test_bias_monte_carlo_is_of_the_same_long_term_quantity_as_the_gum(run):
+    """b's GUM u is long-term (the fit plus the bias instability over a day); its Monte Carlo
+    column refits this record only. The certified Monte Carlo u is the refits' u with the
+    same bias-instability term in quadrature, so the two columns state the same quantity:
+    the refits agree with the fit's own line, and the totals agree with each other."""
+    for a in AX:
+        unc = run["res"]["items"][f"b_{a}"]["uncertainty"]
+        mc = unc["monte_carlo"]
+        comp = {c["symbol"]: c["u"] for c in unc["components"]}
+        assert mc["u_long_term"] == pytest.approx(comp[f"b_{a}_BI"], rel=1e-12)
+        assert mc["u_long_term"] > 2 * mc["u_fit"]            # the term the refits lack
+        fit_gum = np.sqrt(unc["u_c"] ** 2 - comp[f"b_{a}_BI"] ** 2)
+        assert 0.75 < mc["u_fit"] / fit_gum < 1.33              # 300 refits vs the fit's u
+        assert 0.9 < mc["u"] / unc["u_c"] < 1.1
+        assert mc["u"] == pytest.approx(np.hypot(mc["u_fit"], mc["u_long_term"]), rel=1e-12)

@@ -1,9 +1,10 @@
-"""Issue 25: a non-negative quantity whose U exceeds its value is stated with its upper bound
-(gonio.result.statement.state) in every output. The optical draft's zero stability B_s of
-a short 7.3 programme (four readings: ν_eff ≈ 1, k ≈ 12, U several times B_s) is such a
-quantity: results.json carries ``nonnegative`` and ``upper_bound``, and the certificate
-(HTML and PDF), summary.txt, the CLI's output and the DCC all print the same bound, which is
-value + U rounded up at U's decimal place (never below the unrounded value + U)."""
+"""A non-negative quantity is never stated by an interval reaching below zero, and has one
+statement in every output. The optical draft's zero stability B_s of a short 7.3 programme
+(four readings: ν_eff ≈ 1, U several times B_s) is a dispersion: it is stated by its
+one-sided χ² interval [0, s·√(ν/χ²_0.05,ν)] alone (no "± U", no k), results.json carries
+``nonnegative`` and ``upper_bound`` (the interval's upper end, rounded up), and the
+certificate (HTML and PDF), summary.txt, the CLI's output and the DCC all print the same
+bound, computed here independently with scipy's χ² quantile."""
 
 from __future__ import annotations
 
@@ -49,36 +50,48 @@ def cal(tmp_path_factory):
 
 
 def test_upper_bound_in_every_output(cal):
+    from scipy.stats import chi2
     o = cal["en"]["dir"]
     it = json.loads((o / "results.json").read_text())["items"]["zero_stability"]
-    v, U = it["value"], it["uncertainty"]["U"]
-    assert it["nonnegative"] is True and U > v       # the case of the rule
+    unc = it["uncertainty"]
+    v, U = it["value"], unc["U"]
+    assert it["nonnegative"] is True and unc["k"] is None and unc["k_source"] == "chi-square"
+    # the χ² limit of the stated ν (its integer part), independently of gonio
+    nu = max(1, math.floor(unc["nu_eff"]))
+    hi = v * math.sqrt(nu / chi2.ppf(0.05, nu))
+    assert unc["interval"] == [0.0, pytest.approx(hi, rel=1e-12)]
+    assert v + U == pytest.approx(hi, rel=1e-12)      # U: the guard band to the limit
     b = it["upper_bound"]
-    # the bound: value + U rounded up at U's decimal place (two significant digits of U)
-    place = Decimal(repr(U)).adjusted() - 1
+    # the bound: the limit rounded up at the place giving (limit − value) two digits
+    place = Decimal(repr(hi - v)).adjusted() - 1
     step = 10.0 ** place
-    assert v + U <= b + 1e-15 and b - (v + U) < step * 1.0001
+    assert hi <= b + 1e-15 and b - hi < step * 1.0001
     text = (f"{b:.{max(-place, 0)}f}")
     for where, t in (("summary.txt", (o / "summary.txt").read_text(encoding="utf-8")),
                      ("CLI", cal["en"]["cli"]),
                      ("HTML", (o / "certificate.html").read_text(encoding="utf-8"))):
         t = re.sub(r"<[^>]+>", "", t.replace("&nbsp;", " "))      # the HTML's number spans
-        assert f"≤ {text}" in re.sub(r"\s+", " ", t), where
+        t = re.sub(r"\s+", " ", t)
+        assert f"≤ {text}" in t, where
+        assert "interval [0.000" not in t and "k = 12" not in t, where   # no second statement
     if shutil.which("pdftotext"):
         pdf = subprocess.run(["pdftotext", str(o / "certificate.pdf"), "-"],
                              capture_output=True, text=True, check=True).stdout
         assert f"≤ {text}" in re.sub(r"\s+", " ", pdf)
     root = etree.parse(str(o / "certificate.dcc.xml")).getroot()
-    q = root.find(".//dcc:result[@id='result-zero_stability']//dcc:quantity"
-                  "[@refType='gonio_upperBound']", NS)
-    assert q is not None and q.find("si:real/si:value", NS).text == text
-    # the Chinese certificate states it in Chinese
+    res = root.find(".//dcc:result[@id='result-zero_stability']", NS)
+    assert res.find(".//dcc:quantity[@refType='gonio_upperBound']", NS) is None
+    ci = res.find(".//si:coverageIntervalMU", NS)
+    assert ci.find("si:intervalMax", NS).text == text
+    assert float(ci.find("si:intervalMin", NS).text) == 0.0
+    assert res.find(".//si:expandedMU", NS) is None
+    # the Chinese certificate states it too
     zh = (cal["zh"]["dir"] / "certificate.html").read_text(encoding="utf-8")
-    assert "上限：≤\u00a0" in zh and not math.isnan(b)
+    assert "≤\u00a0" in zh and not math.isnan(b)
 
 
 def test_no_bound_where_U_is_below_the_value(cal):
     items = json.loads((cal["en"]["dir"] / "results.json").read_text())["items"]
     for key, it in items.items():
-        if key != "zero_stability":
+        if key not in ("zero_stability", "repeatability"):    # R: a dispersion, too
             assert "upper_bound" not in it or it["upper_bound"] is None, key

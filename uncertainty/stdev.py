@@ -4,6 +4,9 @@
   deviation σ from a sample standard deviation s with ν = n − 1 degrees of
   freedom (normal population): ν s²/σ² ~ χ²(ν). The distribution of s is skewed,
   so the interval is stated, not only a standard uncertainty.
+- :func:`stdev_upper` — the one-sided χ² upper confidence limit of σ,
+  s·√(ν/χ²_{1−p}(ν)): P(σ ≤ limit) = p, the interval [0, limit] of a dispersion
+  whose conformity is judged against an upper tolerance.
 - :func:`stdev_u` — the standard uncertainty of s as an estimate of σ,
   u(s) ≈ s/√(2ν) (JCGM 100 E.4.3, Table E.1: relative uncertainty of an
   experimental standard deviation).
@@ -28,7 +31,7 @@ import math
 import numpy as np
 from scipy import integrate, stats
 
-__all__ = ["stdev_interval", "stdev_u", "max_stdev_interval", "expected_range_factor",
+__all__ = ["stdev_interval", "stdev_upper", "stdev_u", "max_stdev_interval", "expected_range_factor",
            "random_walk_stdev_dof", "correlated_stdev_dof"]
 
 
@@ -57,6 +60,23 @@ def stdev_interval(s: float, dof: float, p: float = 0.95) -> tuple[float, float]
     a = (1.0 - p) / 2.0
     return (s * math.sqrt(dof / stats.chi2.ppf(1.0 - a, dof)),
             s * math.sqrt(dof / stats.chi2.ppf(a, dof)))
+
+
+def stdev_upper(s: float, dof: float, p: float = 0.95) -> float:
+    """One-sided χ² upper confidence limit of σ from s with ν degrees of freedom (normal
+    population; ν s²/σ² ~ χ²(ν)): s·√(ν/χ²_{1−p}(ν)), so that P(σ ≤ limit) = p and
+    [0, limit] is a p coverage interval of σ.
+
+    Examples
+    --------
+    s = 1, ν = 9, 95 %: χ²_{0.05}(9) = 3.325, √(9/3.325) = 1.645; ν = 2: χ²_{0.05}(2) =
+    −2 ln 0.95 = 0.1026, √(2/0.1026) = 4.415.
+
+    >>> round(stdev_upper(1.0, 9), 3), round(stdev_upper(1.0, 2), 3)
+    (1.645, 4.415)
+    """
+    _check(s, dof)
+    return s * math.sqrt(dof / stats.chi2.ppf(1.0 - p, dof))
 
 
 def stdev_u(s: float, dof: float) -> float:

@@ -53,6 +53,7 @@ from dataclasses import dataclass, replace
 from gonio.errors import GonioError
 from gonio.formats.lab import DECISION_RULES, check_interval, check_one_limit_per_item
 from gonio.result.model import Conformity
+from gonio.result.statement import stated_nu
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
@@ -314,8 +315,11 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
               or (unc.k is None and unc.interval is None)):
             c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
         else:
-            chi2_nu = (float(unc.nu_eff) if unc.interval is not None and unc.nu_eff is not None
-                       and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
+            # ν as stated (integer part, gonio.result.statement.stated_nu): the ν the χ²
+            # interval of the statement was computed from, so interval and decision agree
+            chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None
+                       and unc.nu_eff is not None and math.isfinite(unc.nu_eff)
+                       and unc.nu_eff > 0
                        and (unc.k is not None or unc.k_source == "chi-square") else None)
         u_normal = (float(unc.u_c) if c is None and unc.k is None and unc.u_c is not None
                     and unc.u_c > 0 else None)

@@ -1,5 +1,6 @@
-"""``gonio acquire``: run a protocol's programme on a rotary table and an acquisition module
-through VISA (:func:`gonio.instruments.acquire.acquire`)."""
+"""``gonio acquire``: run a protocol's programme on a rotary table and an acquisition module,
+or a rate specification's on a rate table, gyro output reader, chamber and supply, through
+VISA (:func:`gonio.pipeline.acquire.acquire`)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,10 @@ def register(sub) -> None:
                                    "readings come (for gonio calibrate) and io.log (every "
                                    "command and answer). Ctrl-C, SIGTERM, a lost link or an "
                                    "instrument error stop the table and keep the readings, "
-                                   "marked incomplete; --resume continues them.")
+                                   "marked incomplete; --resume continues them. A rate "
+                                   "specification's protocol runs its "
+                                   "programme on a rate table, a gyro output reader, a chamber "
+                                   "and a supply (--chamber, --supply).")
     p.add_argument("--protocol", required=True, help="protocol file or built-in name")
     p.add_argument("--table", required=True,
                    help="VISA resource of the table controller, e.g. TCPIP0::host::5025::SOCKET")

@@ -491,7 +491,7 @@ def check_upload_size(declared_bytes, limit_bytes: float = MAX_UPLOAD) -> None:
     except (TypeError, ValueError):
         return                        # not declared: the store counts while it reads
     if n > limit_bytes + FORM_OVERHEAD_BYTES:
-        raise GonioError(f"the upload ({blobs.size_text(n)}) is larger than the limit of "
+        raise GonioError(f"the upload, {blobs.size_text(n)}, is larger than the limit of "
                          f"{blobs.size_text(limit_bytes)} for a readings file; nothing was "
                          "stored", key="upload")
 

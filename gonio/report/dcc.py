@@ -10,8 +10,8 @@ Contents
 :func:`not_measured_quantity`  the shared builders (also used by :mod:`gonio.report.rate_dcc`)
 :func:`new_document`, :func:`administrative_data`, :func:`measurement_result`,
 :func:`influence_conditions`, :func:`tree_bytes`  the shared document parts
-:func:`conformity_statements`, :func:`bound_quantity`, :func:`bilingual`,
-:func:`label_translator`   statements of conformity, an upper bound, the Chinese beside
+:func:`conformity_statements`, :func:`bilingual`,
+:func:`label_translator`   statements of conformity, the Chinese beside
                            the English
 =========================  ==============================================================
 
@@ -164,15 +164,6 @@ def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None
         text_element(q, "dcc:description", description)
     real(q, value, unit, **kw)
     return q
-
-
-def bound_quantity(data, upper, unit: str = "", dsi: str | None = None) -> "etree.Element":
-    """The upper bound of a non-negative quantity whose U exceeds its value, as the
-    statement rule states it (:func:`gonio.result.statement.state`): a results.json
-    ``unit`` or the D-SI ``dsi``."""
-    return quantity(data, "upper bound (coverage interval [0, upper bound]: a non-negative "
-                          "quantity whose U exceeds its value)", upper, unit,
-                    ref_type="gonio_upperBound", dsi=dsi)
 
 
 def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:

@@ -96,8 +96,9 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str) -> list
         (L["place"], cert.get("place") or (L["virtual_place"] if lab is None else ns)),
         (L["specification"], specification),
         *([(L["procedure"], cert["procedure"])] if cert.get("procedure") else []),
-        (L["source_file"], f"{src['file']} (SHA-256 {src['sha256'][:16]}…, "
-                           + L["rows_word"].format(n=src['rows']) + ")"),
+        (L["source_file"], src["file"] + L["paren"].format(
+            x=f"SHA-256 {src['sha256'][:16]}…" + L["comma"] + L["rows_word"].format(
+                n=src["rows"]))),
     ]
     return rows
 

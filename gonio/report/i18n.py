@@ -8,7 +8,6 @@ Contents
 :func:`cjk_font`           name of an installed CJK font for matplotlib (or GonioError)
 :func:`round_half_up`      a number to a given decimal place, half up, as text
 :func:`display_number`     a number to ``sig`` significant digits, half up, as text
-:func:`display_item`       how the certificate shows one of the seven items
 :func:`display_uncertainty`  U to 2 significant digits (JCGM 100 7.2.6)
 :func:`parse_display`      a displayed number back to a float (for checks)
 =========================  ==========================================================
@@ -33,21 +32,14 @@ from gonio.result.statement import (decimals_at_U, decimals_for_sig, k_text, nu_
 #: Languages the certificate can be written in.
 LANGUAGES: tuple[str, ...] = ("en", "zh")
 
-#: Significant digits shown for each item without its own uncertainty.
-#: K is stable to ~1e-7 (its nonlinearity), so 8 digits carry information.
-ITEM_SIG_DIGITS: dict[str, int] = {
-    "scale_factor": 8, "scale_factor_nonlinearity": 3, "zero_stability": 3,
-    "angle_deviation": 3, "repeatability": 3, "rate_consistency": 3,
-    "pointing_consistency": 3,
-}
-#: Items shown to the decimal place of the expanded uncertainty U (JCGM 100 7.2.6).
-ITEMS_AT_U_PLACE: tuple[str, ...] = ("angle_deviation", "repeatability")
 
 LABELS: dict[str, dict[str, str]] = {
     "title": {"en": "Calibration Certificate", "zh": "校准证书"},
     "certificate_no": {"en": "Certificate No.", "zh": "证书编号"},
     "colon": {"en": ": ", "zh": "："},
     "paren": {"en": " ({x})", "zh": "（{x}）"},
+    "semi": {"en": "; ", "zh": "；"},
+    "comma": {"en": ", ", "zh": "，"},
     "page_of": {"en": "Page {x} of {y}", "zh": "第 {x} 页 共 {y} 页"},
     "virtual": {"en": "VIRTUAL BENCH EXAMPLE — NOT A CALIBRATION CERTIFICATE",
                 "zh": "虚拟台架示例 — 非校准证书"},
@@ -133,10 +125,10 @@ LABELS: dict[str, dict[str, str]] = {
                  "zh": "起始位置 {n} 个，每周 {m} 点，重复 {r} 次；转台误差为示值减真值，Σt = 0；"
                        "测角仪误差为转角的函数；标准不确定度由残差求得（{noise} 读数误差模型）。"
                        "阶次为 n 倍数的转台谐波不可观测。"},
-    "eda_position": {"en": "table position (°)", "zh": "转台位置 (°)"},
-    "eda_table": {"en": "table error (″)", "zh": "转台误差 (″)"},
-    "eda_turned": {"en": "angle turned (°)", "zh": "转角 (°)"},
-    "eda_gonio": {"en": "goniometer error (″)", "zh": "测角仪误差 (″)"},
+    "eda_position": {"en": "table position (°)", "zh": "转台位置（°）"},
+    "eda_table": {"en": "table error (″)", "zh": "转台误差（″）"},
+    "eda_turned": {"en": "angle turned (°)", "zh": "转角（°）"},
+    "eda_gonio": {"en": "goniometer error (″)", "zh": "测角仪误差（″）"},
     "eda_closure": {"en": "Full-circle closure: goniometer error at 360° = {v}″ ± {u}″",
                     "zh": "整周闭合：测角仪 360° 误差 = {v}″ ± {u}″"},
     "signatory": {"en": "Signatures", "zh": "签字"},
@@ -176,20 +168,13 @@ LABELS: dict[str, dict[str, str]] = {
     "u_counts/deg": {"en": "counts/°", "zh": "脉冲数/(°)"},
     "u_%": {"en": "%", "zh": "%"},
     "u_deg/h": {"en": "°/h", "zh": "(°)/h"},
+    "u_deg/s": {"en": "°/s", "zh": "(°)/s"},
     "u_arcsec": {"en": "″", "zh": "″"},
     "u_ppm": {"en": "ppm", "zh": "ppm"},
     # item notes
     "note_zero_range": {"en": "range/T (definition 3.3): {v} °/h", "zh": "极差/T（定义3.3）：{v} (°)/h"},
-    "note_zero_interval": {"en": "95 % interval (χ², ν_eff = {n}): [{lo}, {hi}] °/h; U at k = "
-                                 "t₉₅(ν_eff)",
-                           "zh": "95 % 区间（χ²，ν_eff = {n}）：[{lo}, {hi}] (°)/h；U 取 k = "
-                                 "t₉₅(ν_eff)"},
     "note_zero_model": {"en": "noise model of the 7.3 record (beside, not stated): {v} °/h",
                         "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
-    # a non-negative quantity whose U exceeds its value (gonio.result.statement.state)
-    "note_upper": {"en": "upper bound: ≤\u00a0{b} {u} (interval [0, {b}])",
-                   "zh": "上限：≤\u00a0{b} {u}（区间 [0, {b}]）"},
-    "note_upper_short": {"en": "; upper bound ≤\u00a0{b}", "zh": "；上限 ≤\u00a0{b}"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
@@ -208,19 +193,19 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "图7 不同指向下的角位置偏差（7.7）"},
     "fig_budget": {"en": "Fig. 8 Uncertainty budget: contributions |c_i|·u_i (Annex A)",
                    "zh": "图8 不确定度分量 |c_i|·u_i（附录A）"},
-    "ax_position": {"en": "table position (°)", "zh": "转台位置 (°)"},
-    "ax_deviation": {"en": "deviation E (″)", "zh": "偏差 E (″)"},
-    "ax_std": {"en": "standard deviation s (″)", "zh": "标准偏差 s (″)"},
-    "ax_tilt": {"en": "error Δ (″)", "zh": "误差 Δ (″)"},
-    "ax_round_angle": {"en": "round angle θ_i (°)", "zh": "测回角度 θ_i (°)"},
-    "ax_K": {"en": "K_i (counts/°)", "zh": "K_i (脉冲数/(°))"},
-    "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间 (min)"},
-    "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M (″)"},
-    "ax_contribution": {"en": "contribution (″)", "zh": "分量 (″)"},
+    "ax_position": {"en": "table position (°)", "zh": "转台位置（°）"},
+    "ax_deviation": {"en": "deviation E (″)", "zh": "偏差 E（″）"},
+    "ax_std": {"en": "standard deviation s (″)", "zh": "标准偏差 s（″）"},
+    "ax_tilt": {"en": "error Δ (″)", "zh": "误差 Δ（″）"},
+    "ax_round_angle": {"en": "round angle θ_i (°)", "zh": "测回角度 θ_i（°）"},
+    "ax_K": {"en": "K_i (counts/°)", "zh": "K_i（脉冲数/(°)）"},
+    "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间（min）"},
+    "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M（″）"},
+    "ax_contribution": {"en": "contribution (″)", "zh": "分量（″）"},
     "lg_series": {"en": "series", "zh": "组"},
     "lg_mean": {"en": "mean E_i", "zh": "平均 E_i"},
     "lg_elliptic": {"en": "elliptic model, ψ = {psi}°", "zh": "椭圆模型, ψ = {psi}°"},
-    "lg_rigid": {"en": "rigid body, after 7.1 (≡ 0)", "zh": "刚体模型, 经7.1标定后 (≡ 0)"},
+    "lg_rigid": {"en": "rigid body, after 7.1 (≡ 0)", "zh": "刚体模型，经7.1标定后（≡ 0）"},
     "lg_rigid_uncal": {"en": "rigid body, uncalibrated", "zh": "刚体模型, 未标定"},
     "lg_mean_K": {"en": "K (mean)", "zh": "K（平均）"},
     "lg_drift": {"en": "linear drift {v} °/h", "zh": "线性漂移 {v} (°)/h"},
@@ -246,14 +231,20 @@ LABELS: dict[str, dict[str, str]] = {
                           "degrees of freedom (shown per item in the budgets below); {clause}.",
                     "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
                           "不确定度分量）；{clause}。"},
-    "k_chi_square": {"en": "A standard deviation of a few repeats (the repeatabilities) or a "
-                           "half range is stated by one interval, its one-sided 95 % upper "
-                           "limit (σ's χ² distribution, JCGM 100 E.4.3; the range of normal "
-                           "values for a half range), shown in the result with its probability; "
-                           "such an item has no U and no k.",
-                     "zh": "少数重复测量的标准偏差（重复性各项）或半极差以一个区间表述，即其单侧 95 % "
-                           "上限（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），"
-                           "在结果栏中连同包含概率给出；此类项目无 U，无 k。"},
+    "k_chi_square": {"en": "An item stated by an interval has that one statement, shown in the "
+                           "result with its probability, and no U and no k: a standard "
+                           "deviation of a few repeats (a repeatability, a stability) or a half "
+                           "range by its one-sided 95 % upper limit (σ's χ² distribution, "
+                           "JCGM 100 E.4.3; the range of normal values for a half range), on "
+                           "which any conformity decision is made; a quantity that cannot be "
+                           "negative whose U exceeds its value by its upper bound, value + U "
+                           "(the interval value ± U without its impossible negative part, "
+                           "JCGM 100 4.3.9).",
+                     "zh": "以区间表述的项目只有这一个表述，在结果栏中连同包含概率给出，无 U，无 k："
+                           "少数重复测量的标准偏差（重复性、稳定性）或半极差给出其单侧 95 % 上限"
+                           "（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），对上限的判定"
+                           "亦以此为据；不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U "
+                           "去掉不可能的负值部分，JCGM 100 4.3.9）。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "
@@ -364,11 +355,11 @@ LABELS: dict[str, dict[str, str]] = {
                        "{column} (range {min} … {max}); every row is in tables/{name}_table.csv.",
                  "zh": "共 {rows} 行，列出 {listed} 行：{column} 偏离中位数最远者（范围 {min} … "
                        "{max}）；全部数据见 tables/{name}_table.csv。"},
-    "d_position": {"en": "position (°)", "zh": "位置 (°)"},
+    "d_position": {"en": "position (°)", "zh": "位置（°）"},
     "d_E": {"en": "E_i (″)", "zh": "E_i (″)"},
     "d_R": {"en": "R_i (″)", "zh": "R_i (″)"},
     "d_n": {"en": "series n", "zh": "组数 n"},
-    "d_rate": {"en": "rate (°/s)", "zh": "速率 ((°)/s)"},
+    "d_rate": {"en": "rate (°/s)", "zh": "速率（(°)/s）"},
     "d_axis": {"en": "axis direction", "zh": "轴向"},
     "d_role": {"en": "role", "zh": "作用"},
     "d_reference": {"en": "reference condition", "zh": "参考条件"},
@@ -387,77 +378,19 @@ LABELS: dict[str, dict[str, str]] = {
     "lg_u_bar": {"en": "error bars: standard uncertainty u", "zh": "误差棒：标准不确定度 u"},
 }
 
-#: Chinese form of each "reading taken" note (by its clause prefix) and of the budget's sources
-#: (by symbol). A note or source without an entry is a test failure (tests/test_certificate.py).
-READING_NOTES_ZH: dict[str, str] = {
-    "7.3:": "7.3：零位稳定性读数的个数和间隔由校准方案规定（默认 15 个，间隔 5 min）；结果为 "
-            "B_s = s(M)/T，并同时给出 (max M − min M)/T（定义3.3）；T 为首末读数的时间间隔。",
-    "7.4:": "7.4：每个测回自 0° 起，两读数同时清零；到位后固定延时读数，自起动起 0.5 min 内完成"
-            "（附录A.1）；E_i 为各组的平均值，E = ± max|E_i| 并给出其符号。",
-    "7.6/7.7:": "7.6/7.7：公式中不清楚的分母理解为参考状态（60 (°)/s，轴向朝上）整周 360° 测回的"
-                "测得角度；总是同时给出以 ″ 表示的极差 max E − min E。",
-    "Annex A.4.4:": "附录A.4.4：u(r) 取本次校准自身重复测量（7.5）各校准点贝塞尔标准偏差的最大值。",
-    "Annex A.4.2:": "附录A.4.2：u(φ_e) 采用草案的椭圆投影倾斜模型；同时给出刚体模型（倾斜为 cos ψ "
-                    "因子，被标度因数吸收）。",
-    "Annex A.4.4 (not applied):": "附录A.4.4（未采用）：本次校准没有自身的重复测量系列；u(r) 取"
-                                  "校准方案 annex_a.repeatability_arcsec 的给定值（B类）。",
-    "Annex A.4.3:": "附录A.4.3：u(B_E) 按本次实际采用的 7.4 读数中自清零至读数的最长时间计算"
-                    "（而非 0.5 min 的上限）。",
-}
-BUDGET_SOURCES_ZH: dict[str, str] = {
-    "P": "标准转台定位误差（A.4.1）",
-    "phi_e": "敏感平面与台面不平行（A.4.2）",
-    "B_E": "零位漂移（A.4.3）",
-    "r": "重复性（A.4.4）",
-    "K_P": "7.1 各停位转台误差经标度因数传入 E",
-    "K_r": "7.1 读数分散性经标度因数传入 E",
-    "tilt_E": "倾斜与地速耦合（第7章前言地速补偿与A.1倾斜限）",
-}
-#: English form of Chinese titles, used when no CJK font is installed (the en certificate).
-TITLES_EN: dict[str, str] = {
-    "光学陀螺测角仪校准规范": "Calibration Specification for Optical Gyroscope Angle "
-                              "Measuring Instrument",
-}
+
+_CLAUSE_REMARK = re.compile(r"^(\S+) \(([^()]+)\)$")
 
 
-def reading_note(note: str, lang: str) -> str:
-    """A "reading taken" note in ``lang`` (the English text is the one in results.json).
+def clause_text(clause: str, L: dict) -> str:
+    """A clause with its bracketed reference ("7.3 (3.3)": clause 7.3, definition 3.3) in the
+    page's brackets (``L["paren"]``: full-width on a Chinese page).
 
-    >>> reading_note("7.3: x", "en"), reading_note("7.3: x", "zh")[:4]
-    ('7.3: x', '7.3：')
+    >>> clause_text("7.3 (3.3)", {"paren": "（{x}）"}), clause_text("7.1", {"paren": "（{x}）"})
+    ('7.3（3.3）', '7.1')
     """
-    if lang != "zh":
-        return note
-    for prefix, zh in READING_NOTES_ZH.items():
-        if note.startswith(prefix):
-            return zh
-    return note
-
-
-def budget_source(symbol: str, source: str, lang: str) -> str:
-    """The budget's source column in ``lang`` (English from results.json when no zh form)."""
-    if lang == "zh" and symbol in BUDGET_SOURCES_ZH:
-        return BUDGET_SOURCES_ZH[symbol]
-    return source
-
-
-def specification_text(spec: str, lang: str, cjk: bool = True) -> str:
-    """The specification's name as shown: "(draft for comment)" in ``lang``; without a CJK
-    font (``cjk`` False) a known Chinese title is replaced by its English form so nothing
-    prints as boxes.
-
-    >>> specification_text("JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)", "zh")
-    'JJF xxxx 光学陀螺测角仪校准规范（征求意见稿）'
-    >>> specification_text("JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)", "en", cjk=False)
-    'JJF xxxx Calibration Specification for Optical Gyroscope Angle Measuring Instrument (draft for comment)'
-    """
-    out = spec
-    if lang == "zh":
-        out = out.replace(" (draft for comment)", LABELS["draft_for_comment"]["zh"])
-    if not cjk:
-        for zh, en in TITLES_EN.items():
-            out = out.replace(zh, en)
-    return out
+    m = _CLAUSE_REMARK.match(clause or "")
+    return m.group(1) + L["paren"].format(x=m.group(2)) if m else clause
 
 
 def labels(lang: str = "en") -> dict[str, str]:
@@ -549,33 +482,6 @@ def display_uncertainty(U: float) -> str:
     return round_half_up(U, decimals_at_U(U))
 
 
-def display_item(name: str, value: float | None, U: float | None = None) -> str:
-    """The certificate's text for item ``name``.
-
-    E and R are shown to the decimal place of U (JCGM 100 7.2.6) when U is given;
-    every other item (and E, R without U) to :data:`ITEM_SIG_DIGITS` significant
-    digits. E is shown with its sign, as "± max |E_i|" of 7.4 with the sign found.
-
-    >>> display_item("angle_deviation", -0.11879399, U=0.35896)
-    '-0.12'
-    >>> display_item("repeatability", 0.13901059, U=0.35896)
-    '0.14'
-    >>> display_item("scale_factor", 76434.8425925926)
-    '76434.843'
-    >>> display_item("angle_deviation", 0.873, U=0.46)
-    '+0.87'
-    """
-    if value is None or not math.isfinite(value):
-        return "—"
-    if name in ITEMS_AT_U_PLACE and U is not None and U > 0:
-        s = round_half_up(value, decimals_for_sig(U, 2))
-    else:
-        s = display_number(value, ITEM_SIG_DIGITS.get(name, 3))
-    if name == "angle_deviation" and not s.startswith("-") and parse_display(s) != 0:
-        s = "+" + s            # a sign only where the rounded value has one (−0.004 → 0.00)
-    return s
-
-
 _NUM = re.compile(r"^([+-]?\d+(?:\.\d+)?)(?:×10([⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+))?$")
 _UNSUP = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
 
@@ -630,13 +536,12 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     (ν_eff: its integer part, GUM G.6.4), ``"sci<E>.<N>"`` (the mantissa at N decimals ×
     10^E: a statement's common power of ten),
     ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
-    ``"item:<name>"`` (:func:`display_item`), ``"pos"`` (:func:`display_position`),
-    ``"int"`` (nearest integer).
+    ``"pos"`` (:func:`display_position`), ``"int"`` (nearest integer).
 
     >>> display("U", 0.3589), display("atU", 0.0434, U=0.3589), display("sig3", 1296000.003)
     ('0.36', '0.04', '1296000')
-    >>> display("item:angle_deviation", -0.1188, U=0.3589), display("int", 4586091.0)
-    ('-0.12', '4586091')
+    >>> display("int", 4586091.0)
+    '4586091'
     """
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "—"
@@ -649,8 +554,6 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
         return round_half_up(value, decimals_for_sig(U, 2))
     if rule.startswith("sig"):
         return display_number(value, int(rule[3:]))
-    if rule.startswith("item:"):
-        return display_item(rule[5:], value, U)
     if rule == "pos":
         return display_position(value)
     if rule == "int":

@@ -25,7 +25,7 @@ import math
 import re
 
 from gonio.errors import GonioError
-from gonio.report.dcc import (administrative_data, bound_quantity, conformity_statements,
+from gonio.report.dcc import (administrative_data, conformity_statements,
                               element, measurement_result, new_document, not_measured_quantity,
                               quantity, text_element, tree_bytes)
 from gonio.report.i18n import labels
@@ -120,9 +120,6 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
                   "p": float(p)}                       # stated by its coverage interval
         quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
                  ref_type="basic_measuredValue", **kw)
-        if n["upper"] is not None and n["interval"] is None:   # not an interval item
-            bound_quantity(d, n["statement"].upper_text,
-                           dsi=compose_dsi(it["unit"], spec.dcc_units))
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

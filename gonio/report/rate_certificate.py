@@ -203,10 +203,9 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
             if n["statement"].interval is not None:     # stated by its interval, with p
+                # (also a non-negative item whose U exceeds its value: its upper bound)
                 val = [val, ("；" if lang == "zh" else "; ")
                        + n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")]
-            elif n["upper"] is not None:    # non-negative, U exceeds the value (statement rule)
-                val = [val, L["note_upper_short"].format(b=n["statement"].upper_text)]
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]
@@ -251,9 +250,9 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
             add("p", [text[1 if lang == "zh" else 0].format(**it["details"])])
     u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
-    chi2 = [k for k, it in res["items"].items()
-            if ((it.get("uncertainty") or {}).get("k_source") == "chi-square")]
-    if chi2:                  # a standard deviation of a few repeats: U to the χ² limit
+    if any(it.get("measured") and it.get("value") is not None
+           and item_nums(it, f"items.{k}")["statement"].interval is not None
+           for k, it in res["items"].items()):       # stated by an interval: say what it is
         add("p", [L["k_chi_square"]])
     blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
     blocks += conformity_section(

@@ -45,7 +45,7 @@ from lxml import etree
 
 from gonio.errors import GonioError
 from gonio.report.stated import Num
-from gonio.report.dcc import (administrative_data, bound_quantity, conformity_statements,
+from gonio.report.dcc import (administrative_data, conformity_statements,
                               element, influence_conditions, measurement_result, new_document,
                               not_measured_quantity, quantity, text_element, tree_bytes)
 from gonio.report.i18n import display, labels
@@ -206,8 +206,6 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                      description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
                                   f"results.json, written per m s⁻² (g_n = "
                                   f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv else None, **kw)
-            if n["upper"] is not None and n["interval"] is None:   # not an interval item
-                bound_quantity(data, n["statement"].upper_text, dsi=dsi)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),

@@ -95,7 +95,7 @@ class Uncertainty:
     chosen and an interval (e.g. χ²). With ``k`` None the interval *is* the statement (a
     dispersion, range or extreme: :func:`gonio.result.statement.state_interval`), U is then
     the distance from the value to the interval's upper end, used by the decision rule's
-    guard band; otherwise the interval is stated beside U (the optical draft's items)."""
+    guard band; otherwise no interval is stated beside U."""
 
     components: list[dict]
     u_c: float

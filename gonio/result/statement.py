@@ -50,13 +50,17 @@ The rule (JCGM 100:2008 (GUM) 7.2.6, 7.2.2; JCGM 101 and EA-4/02 the same):
   D-SI form of :func:`dsi_unit`.
 
 **A non-negative quantity whose U exceeds its value** (a noise level, a threshold, a
-start-up time, a bias instability: the interval value ± U reaches below zero, which the
-quantity cannot take). Following GUM 4.3.9 / JCGM 101 (a coverage interval contains only
-possible values) and the ISO 80000-1 way of stating a bound, the statement keeps
-"value ± U" (the numbers every output compares) and adds the coverage interval truncated
-at zero, stated as an **upper bound**: ``upper`` = value + U rounded *up* at U's decimal
-place (so the bound is never understated) and printed "≤ upper". Its coverage probability
-is at least the stated p (the part cut away holds no possible value). **A non-negative
+start-up time, a hysteresis, a bias instability: the interval value ± U reaches below zero,
+which the quantity cannot take). Following GUM 4.3.9 / JCGM 101 7.7 (a coverage interval
+contains only possible values) and the ISO 80000-1 way of stating a bound, the statement is
+**one** coverage interval, the interval value ± U truncated at zero, stated as an **upper
+bound**: ``upper`` = value + U rounded *up* at U's decimal place (so the bound is never
+understated), printed "≤ upper (interval [0, upper], p ≈ 95 %)"; "± U" and k are not
+printed beside it (two statements of one item, one of them holding impossible values).
+Its coverage probability is at least the stated p (the part cut away holds no possible
+value). The value keeps U's decimal place; ``Statement.U`` and ``k`` are None and
+``interval`` is ("0", upper), so every output states it as it states an item stated by its
+interval (:func:`state_interval`). **A non-negative
 quantity whose whole interval lies at or below zero** (value + U ≤ 0: an estimate below
 zero by more than its U) has no coverage interval of possible values at all; the rule
 refuses to state it (:class:`~gonio.errors.GonioError`), and a specification reports such
@@ -64,8 +68,8 @@ an item as not measured with that reason; it is never printed as a negative boun
 ("≤ -4.0 s"). An empty acceptance interval of such a quantity (guard band wider than the
 limit) is likewise said in words, never as a negative limit
 (:func:`gonio.report.stated.conformity_texts`). Wording used by
-every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098])", zh "上限：≤ 0.098
-°/s（区间 [0, 0.098]）". The issue-24 coverage studies check such items one-sidedly: the
+every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098], p ≈ 95 %)", zh "上限：≤
+0.098 °/s（区间 [0, 0.098]，p ≈ 95 %）". The issue-24 coverage studies check such items one-sidedly: the
 truth must lie below ``upper``. A quantity that may be negative (a bias, an offset, a
 signed deviation) is declared ``nonnegative=False`` and is never given a bound.
 
@@ -75,8 +79,8 @@ signed deviation) is declared ``nonnegative=False`` and is never given a bound.
 >>> state(786.5, 160.0, k=2.0, unit="°/h").text()
 '790 ± 160 °/h (k = 2)'
 >>> t = state(0.01, 0.088, k=2.0, p=0.95, unit="°/s", nonnegative=True)
->>> t.value, t.U, t.upper, t.text()
-('0.010', '0.088', '0.098', '0.010 ± 0.088 °/s (k = 2, p ≈ 95 %); upper bound: ≤ 0.098 °/s (interval [0, 0.098])')
+>>> t.value, t.U, t.k, t.upper, t.text()
+('0.010', None, None, '0.098', '0.010 °/s; upper bound: ≤ 0.098 °/s (interval [0, 0.098], p ≈ 95 %)')
 >>> state(2.1805064e-05, 1.3e-06, k=2).text()
 '2.18×10⁻⁵ ± 0.13×10⁻⁵ (k = 2)'
 >>> state(76434.8425925926, None, sig=8, unit="1").text()
@@ -322,7 +326,8 @@ class Statement:
 
     ``value`` and ``U`` share a decimal place (or, with ``exponent``, a power of ten);
     ``k``, ``nu_eff``, ``p`` (per cent) are None where unknown; ``upper`` is the upper
-    bound of a non-negative quantity whose U exceeds its value (else None); ``decimals``
+    bound of a non-negative quantity whose U exceeds its value (else None; with it ``U`` and
+    ``k`` are None and ``interval`` is ("0", upper): one statement); ``decimals``
     is the decimal place the value was rounded at (None without U: ``sig`` digits).
     """
 
@@ -373,14 +378,9 @@ class Statement:
         return ", ".join(parts)
 
     def bound_text(self, lang: str = "en") -> str:
-        """The upper-bound wording of a non-negative quantity (see module docstring), or ""."""
-        if self.upper is None:
-            return ""
-        u = f" {self.unit}" if self.unit else ""
-        b = self._x(self.upper)
-        if lang == "zh":
-            return f"上限：≤ {b}{u}（区间 [0, {b}]）"
-        return f"upper bound: ≤ {b}{u} (interval [0, {b}])"
+        """The upper-bound wording of a non-negative quantity (see module docstring), with its
+        probability, or "" (the same as :meth:`interval_text` of such a statement)."""
+        return self.interval_text(lang) if self.upper is not None else ""
 
     def interval_text(self, lang: str = "en", short: bool = False) -> str:
         """The coverage interval of an item stated by its interval (see :func:`state`), with
@@ -416,8 +416,6 @@ class Statement:
         s = f"{self.value_text} ± {self.U_text}{u}"
         if self.factors():
             s += f" ({self.factors()})"
-        if self.upper is not None:
-            s += ("；" if lang == "zh" else "; ") + self.bound_text(lang)
         return s
 
     def to_json(self) -> dict:
@@ -507,10 +505,10 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     ('5.9991', '0.0000', '—')
     >>> state(0.01, 0.088, nonnegative=False).upper is None
     True
-    >>> state(175.0, 1200.0, k=2, nonnegative=True, unit="s").text()
-    '200 ± 1200 s (k = 2); upper bound: ≤ 1400 s (interval [0, 1400])'
+    >>> state(175.0, 1200.0, k=2, p=0.95, nonnegative=True, unit="s").text()
+    '200 s; upper bound: ≤ 1400 s (interval [0, 1400], p ≈ 95 %)'
     >>> state(-3.0, 4.0, nonnegative=True, unit="s").text()
-    '-3.0 ± 4.0 s; upper bound: ≤ 1.0 s (interval [0, 1.0])'
+    '-3.0 s; upper bound: ≤ 1.0 s (interval [0, 1.0])'
     >>> state(-5.0, 1.0, nonnegative=True, unit="s")
     Traceback (most recent call last):
     gonio.errors.GonioError: -5 ± 1 s: a non-negative quantity whose interval lies wholly at or below zero has no coverage interval of possible values; not stated
@@ -553,9 +551,11 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
             exponent = max(vr.adjusted() if vr != 0 else Ur.adjusted(), Ur.adjusted())
     md = dec + exponent                        # the mantissas' decimal place (U keeps 2 digits)
     vt, Ut = _scaled(vr, exponent, md), _scaled(Ur, exponent, md)
-    upper = _scaled(ur, exponent, md) if ur is not None else None
-    return Statement(vt, Ut, kt, nt, pt, unit_s, upper=upper, exponent=exponent,
-                     decimals=dec)
+    if ur is not None:          # one statement: the interval [0, upper], no ± U and no k
+        upper = _scaled(ur, exponent, md)
+        return Statement(vt, None, None, nt, pt, unit_s, upper=upper, exponent=exponent,
+                         decimals=dec, interval=(_scaled(Decimal(0), exponent, md), upper))
+    return Statement(vt, Ut, kt, nt, pt, unit_s, exponent=exponent, decimals=dec)
 
 
 def _get(obj, key: str, default=None):

@@ -68,8 +68,8 @@ def create_app(store, dispatcher=None) -> FastAPI:
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException):
         # a form the parser refused (a part too large, too many fields) says what it was
-        said = html.escape(str(exc.detail)) if exc.status_code in (400, 413) and \
-            exc.detail else "not found or not allowed"
+        said = html.escape(str(exc.detail).rstrip(".")) if exc.status_code in (400, 413) \
+            and exc.detail else "not found or not allowed"
         return HTMLResponse(f"<!doctype html><title>{exc.status_code}</title>"
                             f"<p>{exc.status_code}: {said}. "
                             "<a href='/'>Back</a></p>", status_code=exc.status_code)

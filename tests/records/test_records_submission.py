@@ -227,8 +227,18 @@ def test_upload_over_the_limit_says_so(app, sqlite_store, monkeypatch):  # noqa:
     r = post_form(web, inst, {}, {"readings": ("big.csv", big)})
     assert r.status_code == 413
     text = html_module.unescape(re.sub(r"<[^>]+>", "", r.text))
-    assert "key upload: the upload (5 MiB" in text
+    assert "key upload: the upload, 5 MiB (5,2" in text
     assert "is larger than the limit of 1 MiB (1,048,576 bytes) for a readings file" in text
     with pytest.raises(GonioError, match=r"larger than the limit of 1 MiB \(1,048,576 bytes\)"):
         services.store_file(sqlite_store, io.BytesIO(b"x" * (2**20 + 1)), limit_bytes=2**20)
     assert n_calibrations(sqlite_store) == 0
+
+
+def test_a_form_the_parser_refuses_says_why(app):  # noqa: F811
+    """A text field over the parser's 2 MB: the 400 page names the reason (before: "not
+    found or not allowed")."""
+    web = login(app, "tech")
+    r = web.post("/customers", data={"csrf": csrf_of(web), "name": "x" * (3 * 2**20)})
+    assert r.status_code == 400
+    assert "400: Field exceeded maximum size of 2048KB. <a" in r.text
+    assert "not found or not allowed" not in r.text

@@ -26,7 +26,8 @@ from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.analysis.noise.stream import value_range
 from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
-                                     sf_calibration_means, std_dev_uncertainty, Uncertainty)
+                                     sf_calibration_means, std_dev_uncertainty, Uncertainty,
+                                     dispersion_uncertainty)
 from gonio.units import S_PER_H
 from gonio.specs.jjf1535.keys import ITEM_ROWS
 from uncertainty import from_u, type_b
@@ -417,7 +418,10 @@ def bias_stability(ctx: Context) -> Item:
     """JJF 1535 7.2.10 eqs (18), (19): B_s = mean over m of s(P-sample block means)/K, °/h.
 
     Uncertainty: the spread of B_s,m over the records (type A, ν = Q − 1) and, for one
-    record, the sampling of a standard deviation of N/P blocks."""
+    record, the sampling of a standard deviation of N/P blocks. B_s is a dispersion and is
+    stated as one, by its one-sided χ² 95 % interval alone with ν = ½(B_s/u_c)²
+    (:func:`gonio.specs._rate_family.rate_records.dispersion_uncertainty`), as K_r and B_r
+    are: no k, no "± U"."""
     title, clause, unit = "bias stability B_s", "7.2.10", "°/h"
     miss = _need(ctx, "bias", "bias_stability", title, clause, unit)
     if miss:
@@ -434,6 +438,7 @@ def bias_stability(ctx: Context) -> Item:
                      source="sampling of a standard deviation of N/P blocks")
     u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", float(bs.mean()), 0.0), u_a,
                                                 from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
+    u = dispersion_uncertainty(float(bs.mean()), u)
     return Item("bias_stability", title, clause, unit, float(bs.mean()), uncertainty=u,
                 details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk})
 

@@ -64,8 +64,9 @@ BUDGET_KINDS = ("physical", "draft")
 
 #: Labels of the two readings of B_s (results.json ``zero_stability.estimates``).
 ZERO_STABILITY_READINGS = {
-    "draft": "the draft's reading (7.3): B_s = s(M)/T of the 15 readings, 95 % chi-square "
-             "interval with the readings' effective degrees of freedom, k = t_95(nu_eff)",
+    "draft": "the draft's reading (7.3): B_s = s(M)/T of the 15 readings, stated by its "
+             "one-sided 95 % chi-square interval with the readings' effective degrees of "
+             "freedom",
     "model": "physical model: the expected B_s of these readings (sqrt(E[s(M)^2])/T) from the "
              "five-term noise fit of the instrument's continuous record over the 7.3 rest",
 }
@@ -951,9 +952,9 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
                             protocol: Protocol, stated: str = ZERO_STABILITY_STATED) -> dict:
     """Both readings of B_s and which one is stated (docs/draft-readings.md, 7.3).
 
-    The draft's s(M)/T with its χ² interval and k = t_95(ν_eff) is always evaluated and
-    is stated by default: on the virtual bench it covers the population value (the χ²
-    interval in ≈ 97 % of trials, U at the t-factor in ≈ 93 %). With the continuous
+    The draft's s(M)/T with its one-sided 95 % χ² interval [0, upper limit] (its one
+    statement, :func:`gonio.specs.ogam_draft.item_uncertainty.chi_square_statement`) is
+    always evaluated and is stated by default. With the continuous
     record of the 7.3 rest analysed (``noise``) and a measured Earth-rate compensation,
     the expected B_s of the same readings from the fitted noise model
     (:func:`gonio.analysis.noise.readings.expected_zero_stability`) is given beside it,
@@ -978,9 +979,9 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
         return {}
     out = {"stated": "draft", "draft": draft, "model": None}
     if noise is None:
-        out["note"] = ("B_s is the draft's s(M)/T of the readings; its 95 % chi-square interval "
-                       "and k = t_95(nu_eff) cover the population value (no continuous record "
-                       "of the 7.3 rest: no noise model)")
+        out["note"] = ("B_s is the draft's s(M)/T of the readings, stated by its one-sided 95 % "
+                       "chi-square interval (no continuous record of the 7.3 rest: no noise "
+                       "model)")
         return out
     if protocol.session.earth_compensation != "measured":
         out["note"] = ("B_s is the draft's s(M)/T: the noise model's expected B_s needs the "
@@ -997,11 +998,11 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
         out.update(stated="model",
                    note=("B_s is the expected value of the draft's statistic from the noise "
                          "model of the 7.3 record (physical model, stated on request); the "
-                         "draft's s(M)/T of the 15 readings is given beside it with its "
-                         "chi-square interval"))
+                         "draft's s(M)/T of the 15 readings is given beside it, not "
+                         "stated"))
     else:
-        out["note"] = ("B_s is the draft's s(M)/T of the readings with its 95 % chi-square "
-                       "interval and k = t_95(nu_eff); the noise model's expected B_s is given "
+        out["note"] = ("B_s is the draft's s(M)/T of the readings, stated by its one-sided 95 % "
+                       "chi-square interval; the noise model's expected B_s is given "
                        "beside it (not stated: the five-term model cannot represent a "
                        "Gauss-Markov bias, see docs/draft-readings.md)")
     return out

@@ -32,20 +32,17 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
-from gonio.report.figures import figure_svg
-from gonio.report.header import (certificate_id, decision_rule_blocks, meta_text,
-                                 opening_blocks, signature_blocks)
-from gonio.report.i18n import (budget_source, coverage_text, display, finding_text, labels,
-                               reading_note, reason_text, rule_at_U, specification_text)
-from gonio.report.provenance import is_virtual
-from gonio.report.render import Block, font_families, render_html, render_pdf
-from gonio.report.stated import NoBreakText as NoBreak
-from gonio.report.stated import Num, conformity_texts, num
-from gonio.report.text import clean_tree
+from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tree,
+                              conformity_texts, coverage_text, decision_rule_blocks, display,
+                              figure_svg, finding_text, font_families, is_virtual, labels,
+                              meta_text, num, opening_blocks, reason_text, render_html,
+                              render_pdf, rule_at_U, signature_blocks)
+from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
-from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, conformity_for, detail, e_budget,
-                                           followed, item_names, item_path, method_rows,
-                                           segments, stated_item, u_cell)
+from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
+                                           detail, e_budget, followed, interval_cell, item_names,
+                                           item_path, method_rows, reading_note, segments,
+                                           specification_text, stated_item, u_cell)
 
 
 # --------------------------------------------------------------------------- content blocks
@@ -117,7 +114,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
 
     # results: Annex B, each item with its U, k and coverage probability
     add("h", L["results"])
-    rrows = _result_rows(res, L, U)
+    rrows = _result_rows(res, L, U, lang)
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
@@ -130,6 +127,8 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
+    if any(stated_item(res, n)["interval"] is not None for n in item_names(res)):
+        add("p", [L["k_chi_square"]])          # B_s, R: stated by their χ² interval alone
     screening_notes(res, L, add)
     if detail(res, "scale_factor", "measurand"):
         sf = res["items"]["scale_factor"]["details"]
@@ -181,47 +180,42 @@ def _admin_blocks(add, res: dict, lab: dict | None, L: dict, *, lang: str, cjk: 
         add(b.kind, b.data, b.extra)
 
 
-def _result_rows(res: dict, L: dict, U: float | None) -> list:
+def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
     """The results table's rows (Annex B): each item with its U, k and coverage
-    probability, or the reason it was not measured."""
+    probability (an item stated by its coverage interval: that interval beside the value and
+    no U), or the reason it was not measured."""
     rrows = []
     for i, name in enumerate(item_names(res), 1):
         item = res["items"][name]
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
         st = stated_item(res, name)
         if not st["measured"]:
-            rrows.append([str(i), L[name], item["clause"],
+            rrows.append([str(i), L[name], clause_text(item["clause"], L),
                           f"{L['not_measured']}: "
                           f"{reason_text(item['reason'], L, extra={k: L[k] for k in item_names(res) if k in L})}",
                           "—", ""])
             continue
         cell: list = [st["value"]]
         if st["signed"] is not None:
-            cell += ["; ", *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
+            cell += [L["semi"], *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
         elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
-            cell += ["; ", *segments(L["note_zero_range"],
+            cell += [L["semi"], *segments(L["note_zero_range"],
                                      v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]
-            iu = item.get("uncertainty") or {}
-            if iu.get("interval") and iu.get("nu_eff"):
-                cell += ["; ", *segments(
-                    L["note_zero_interval"],
-                    n=_num(res, item_path(name, "uncertainty.nu_eff"), "k", U),
-                    lo=_num(res, item_path(name, "uncertainty.interval.0"), "sig3", U),
-                    hi=_num(res, item_path(name, "uncertainty.interval.1"), "sig3", U))]
             if detail(res, name, "stated") == "draft" and \
                     (detail(res, name, "estimates") or {}).get("model"):
-                cell += ["; ", *segments(L["note_zero_model"], v=_num(
+                cell += [L["semi"], *segments(L["note_zero_model"], v=_num(
                     res, item_path(name, "estimates.model.value"), "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
-            cell += ["; ", *segments(L["note_spread"],
+            cell += [L["semi"], *segments(L["note_spread"],
                                      v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]
         elif name == "repeatability" and detail(res, name, "position_deg") is not None:
-            cell += [" (", *segments(L["note_at"],
-                                     p=_num(res, item_path(name, "position_deg"), "pos", U)),
-                     ")"]
-        if st["upper"] is not None:       # B_s: U exceeds the value (statement rule)
-            cell += ["; ", *segments(L["note_upper"].replace("{u}", str(unit)), b=st["upper"])]
-        rrows.append([str(i), L[name], item["clause"], cell, u_cell(st, L), unit])
+            opening, _, closing = L["paren"].partition("{x}")
+            cell += [opening, *segments(L["note_at"],
+                                        p=_num(res, item_path(name, "position_deg"), "pos", U)),
+                     closing]
+        if st["interval"] is not None:    # B_s, R: the one statement, its χ² interval
+            cell[1:1] = [L["semi"] + interval_cell(st, lang)]
+        rrows.append([str(i), L[name], clause_text(item["clause"], L), cell, u_cell(st, L), unit])
     return rrows
 
 
@@ -245,7 +239,7 @@ def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:
                 crow.append([L[e["item"]], "—", "—", L[e["reason"]], "—"])
                 continue
             t = conformity_texts(c, res, L)
-            out_txt = t["outcome"] + (f" ({t['pfr']})" if t["pfr"] else "")
+            out_txt = t["outcome"] + (L["paren"].format(x=t["pfr"]) if t["pfr"] else "")
             crow.append([L[e["item"]], NoBreak(f"{t['limits']} {unit}"),
                          NoBreak(t['acceptance'] if t['acceptance'] == L['c_acc_empty']
                                  else f"{t['acceptance']} {unit}"), out_txt, t["pfa"]])
@@ -317,7 +311,7 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
                  for col, rule in (("round", "int"), ("table_deg", "pos"),
                                    ("gyro_counts", "int"), ("K_i_counts_per_deg", "sig8"))]
                 for i in range(len(sf["details"]["table"]))]
-        add("sub", L["scale_factor"] + " (7.1)")
+        add("sub", L["scale_factor"] + L["paren"].format(x="7.1"))
         add("table", ([L["d_round"], L["d_theta"], L["d_counts"], L["d_K"]], rows),
             (0.15, 0.25, 0.30, 0.30))
         sm = sf["details"].get("table_summary")
@@ -340,7 +334,8 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
                          if j is not None else "—",
                          _num(res, item_path("angle_deviation", f"table.{i}.n_series"), "int",
                               U)])
-        add("sub", L["angle_deviation"] + " / " + L["repeatability"] + " (7.4, 7.5)")
+        add("sub", L["angle_deviation"] + " / " + L["repeatability"]
+            + L["paren"].format(x="7.4" + L["list_sep"] + "7.5"))
         add("table", ([L["d_position"], L["d_E"], L["d_R"], L["d_n"]], rows),
             (0.25, 0.25, 0.25, 0.25))
     for name, col, fmt in (("rate_consistency", "rate_dps", "pos"),
@@ -358,7 +353,7 @@ def _detail_tables(res: dict, L: dict, U: float, add) -> None:
             rows.append([cond, L["d_reference"] if r.get("reference") else L["d_compared"],
                          _num(res, item_path(name, f"table.{i}.E_arcsec"), "atU", U),
                          _num(res, item_path(name, f"table.{i}.max_abs_arcsec"), "atU", U)])
-        add("sub", L[name] + f" ({c['clause']})")
+        add("sub", L[name] + L["paren"].format(x=c["clause"]))
         head = L["d_rate"] if col == "rate_dps" else L["d_axis"]
         add("table", ([head, L["d_role"], L["d_Ev"], L["d_maxabs"]], rows),
             {"widths": (0.25, 0.25, 0.25, 0.25), "id": f"table-{name}"})
@@ -411,8 +406,8 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
-            from gonio.report.dcc import bilingual, label_translator
-            from gonio.report.i18n import READING_NOTES_ZH
+            from gonio.kit.render import bilingual, label_translator
+            from gonio.specs.ogam_draft.phrases import READING_NOTES_ZH
             from gonio.specs.ogam_draft.dcc import dcc_bytes, method_text
 
             doc = dcc_bytes(results, lab=lab_d, cert_id=content["id"])

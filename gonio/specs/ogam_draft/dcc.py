@@ -21,15 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from gonio.atomic import write_bytes
-from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bound_quantity, element,
-                              influence_conditions, list_quantity, measurement_result,
-                              new_document, not_measured_quantity, quantity, text_element,
-                              tree_bytes)
-from gonio.report.i18n import display, labels, reading_note, specification_text
-from gonio.report.stated import Num, conformity_texts, num
+from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
+                              conformity_texts, display, element, influence_conditions, labels,
+                              list_quantity, measurement_result, new_document,
+                              not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
                                            item_path, item_uncertainty, method_rows,
-                                           stated_item)
+                                           reading_note, specification_text, stated_item)
 
 
 def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
@@ -125,6 +123,10 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         kw = {}
         if unc and s["U"] is not None and s["k"] is not None and unc["p"] is not None:
             kw = {"U": s["U"], "k": s["k"], "p": float(unc["p"])}
+        elif unc and s["interval"] is not None and s["interval"]["interval"]["u"] \
+                and unc["p"] is not None:          # stated by its coverage interval alone
+            kw = {"interval": s["interval"]["interval"]["ends"],
+                  "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
         if name == "angle_deviation" and s["signed"] is not None:
             quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"], **kw)
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
@@ -132,14 +134,12 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                 quantity(data, "position of the extreme", s["position"], "deg")
         else:
             quantity(data, L[name], s["value"], item["unit"], **kw)
-        if s["upper"] is not None:
-            bound_quantity(data, s["upper"], item["unit"])
         _detail_lists(data, res, name)
     return root
 
 
 def _limit_rule(c) -> str:
-    from gonio.report.i18n import rule_at_U
+    from gonio.kit.render import rule_at_U
     return rule_at_U(c.U, 3)
 
 

@@ -30,8 +30,8 @@ from typing import Callable
 
 import numpy as np
 
-from gonio.report.figures import empty_panel, legend_above, plain_axes
-from gonio.report.i18n import display, display_number, display_uncertainty
+from gonio.kit.render import (display, display_number, display_uncertainty, empty_panel,
+                              legend_above, plain_axes)
 
 
 def _truth_by_position(truth: dict | None, test: str) -> tuple[np.ndarray, np.ndarray] | None:

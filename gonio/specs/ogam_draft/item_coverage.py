@@ -186,6 +186,7 @@ def item_record(report, truth: dict) -> dict:
     out: dict = {}
     for name, iu in report.item_uncertainty.items():
         out[name] = {"value": float(getattr(res, name).value), "U": float(iu.U), "k": float(iu.k),
+                     "u_c": float(iu.u_c),
                      "interval": list(iu.interval) if iu.interval is not None else None,
                      "truth": None}
     zr = getattr(report, "zero_stability_readings", None) or {}
@@ -201,7 +202,7 @@ def item_record(report, truth: dict) -> dict:
         if d is not None:
             out[f"zero_stability_{other}"] = {
                 "value": float(d.value), "U": float(d.U), "k": float(d.k),
-                "interval": list(d.interval) if d.interval is not None else None,
+                "u_c": float(d.u_c), "interval": list(d.interval) if d.interval is not None else None,
                 "truth": t_bs, "stated": other}
     if "scale_factor" in out:
         k_true, k_i = scale_factor_truth(truth)
@@ -277,7 +278,9 @@ def item_coverage(records: list[dict], intrinsic_points=None,
         rs = [r[name] for r in records if name in r]
         vals = np.array([r["value"] for r in rs])
         U = np.array([r["U"] for r in rs])
-        u_c = U / np.array([r.get("k") or math.nan for r in rs], dtype=float)
+        # z on u_c (an item stated by its interval has U = distance to the upper limit)
+        u_c = np.array([r["u_c"] if r.get("u_c") else U_i / (r.get("k") or math.nan)
+                        for r, U_i in zip(rs, U)], dtype=float)
         item = {"trials": len(rs), "truth": ITEM_TRUTHS[name], "mean_U": float(U.mean())}
         own = name not in PRESCRIBED
         if name.startswith("angle_deviation"):

@@ -9,12 +9,13 @@ budget to each of the seven items, one documented function each:
                                         count quantisation (7.1)
 :func:`nonlinearity_budget`     K_l     u of the largest and smallest K_i, and the spread noise
                                         alone gives n values (7.2)
-:func:`zero_stability_budget`   B_s     the draft's s(M)/T (7.3): χ² interval with the readings'
-                                        ν_eff, k = t_95(ν_eff)
+:func:`zero_stability_budget`   B_s     the draft's s(M)/T (7.3): the one-sided χ² interval with
+                                        the readings' ν_eff (stated alone, no k)
 :func:`zero_stability_model_budget`  B_s  the expected B_s of the fitted noise model of the 7.3
                                         record (the physically founded estimate)
 :func:`angle_deviation_budget`  E       the Annex A budget (draft, or physical) as an item budget
-:func:`repeatability_budget`    R       χ² of the largest of m standard deviations (7.5)
+:func:`repeatability_budget`    R       the one-sided χ² interval of the largest of m standard
+                                        deviations (7.5; stated alone, no k)
 :func:`consistency_budget`      C_v/C_g the two extreme conditions' deviations with their
                                         correlations (7.6, 7.7)
 ==============================  ======  ===================================================
@@ -43,8 +44,7 @@ from uncertainty import (GumResult, MonteCarloResult, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
 from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
-                               max_stdev_interval, random_walk_stdev_dof, stdev_interval,
-                               stdev_u)
+                               random_walk_stdev_dof, stdev_u)
 
 __all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
            "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
@@ -102,30 +102,35 @@ class ItemUncertainty:
     #: ``model`` (B_s: the χ² relation, the noise model's square root): f(rng, M) → array.
     sampler: object = field(default=None, repr=False, compare=False)
     model_kind: str = "linear"
-    #: A quantity that cannot be negative (B_s): when U exceeds the value, results.json
-    #: carries the upper bound of :func:`gonio.result.statement.state` beside it.
+    #: A quantity that cannot be negative (B_s, R): results.json marks the item
+    #: ``nonnegative`` (its statement is then never an interval reaching below zero).
     nonnegative: bool = False
+    #: The item is stated by ``interval`` alone (a dispersion: the one-sided χ² interval
+    #: [0, upper limit], :func:`chi_square_statement`): no coverage factor exists for it, so
+    #: results.json has ``k`` null, ``U`` the distance from the value to the upper limit
+    #: (the guard band of a decision against an upper tolerance) and ``k_source``
+    #: "chi-square"; ``k`` here stays the GUM's t-factor of the budget (JCGM 101 validation).
+    stated_by_interval: bool = False
 
     @property
     def U(self) -> float:
+        if self.stated_by_interval:
+            return float(self.interval[1]) - self.value
         return self.k * self.u_c
 
     def to_dict(self) -> dict:
         """The ``results.json`` form (see the module docstring)."""
+        by_iv = self.stated_by_interval
         d = {"components": [c.to_dict() for c in self.components],
-             "u_c": float(self.u_c), "U": float(self.U), "k": float(self.k),
+             "u_c": float(self.u_c), "U": float(self.U),
+             "k": None if by_iv else float(self.k),
              "nu_eff": None if not math.isfinite(self.nu_eff) else float(self.nu_eff),
              "coverage_probability": COVERAGE_PROBABILITY, "unit": self.unit,
-             "k_source": self.k_source}
+             "k_source": "chi-square" if by_iv else self.k_source}
         if self.interval is not None:
             d["interval"] = [float(self.interval[0]), float(self.interval[1])]
         if self.nonnegative:
-            from gonio.result.statement import state
-
-            st = state(self.value, self.U, k=self.k, unit=self.unit, nonnegative=True)
             d["nonnegative"] = True
-            d["upper_bound"] = None if st.upper is None else float(st.upper) * \
-                10.0 ** st.exponent
         return d
 
 
@@ -456,8 +461,10 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
                           resolution_deg: float | None = None) -> ItemUncertainty:
     """u(B_s) of B_s = s(M)/T (draft 7.3), °/h: a standard deviation of n readings.
 
-    Type A, u = B_s/√(2ν) (JCGM 100 E.4.3), interval from χ²(ν) (stated, because s is
-    skewed: :func:`uncertainty.stdev.stdev_interval`). ν depends on how the readings
+    Type A, u = B_s/√(2ν) (JCGM 100 E.4.3). B_s is stated by its one-sided χ² interval
+    [0, s·√(ν/χ²_0.05,ν)] alone (:func:`chi_square_statement`: s is skewed, no coverage
+    factor exists for it; results.json ``k`` null, ``U`` the distance to the upper limit; a
+    fixed k of the laboratory is not applied). ν depends on how the readings
     relate. The 7.3 readings are angles of an integrating gyro taken without
     re-zeroing, so they are a random walk, not independent samples: the default
     ``readings="random_walk"`` takes ν = ν_eff of the sample variance of a random walk
@@ -471,14 +478,16 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
     Examples
     --------
     15 readings (the draft's 7.3), B_s = 0.002 °/h, independent: u = 0.002/√28 =
-    3.78e-4 °/h, k = t_95(14) = 2.145; interval 0.002·[√(14/26.119), √(14/5.629)] =
-    [0.00146, 0.00315]. As a random walk, ν = 2.451: u = 0.002/√4.902 = 9.03e-4 °/h.
+    3.78e-4 °/h; interval [0, 0.002·√(14/6.571)] = [0, 0.00292] °/h (χ²_0.05(14) = 6.571),
+    U = 0.00092 °/h. As a random walk, ν = 2.451: u = 0.002/√4.902 = 9.03e-4 °/h, stated
+    ν 2: [0, 0.002·4.415] = [0, 0.00883] °/h.
 
     >>> b = zero_stability_budget(0.002, 15, readings="independent")
-    >>> round(b.u_c * 1e4, 2), round(b.k, 3), [round(x, 5) for x in b.interval]
-    (3.78, 2.145, [0.00146, 0.00315])
-    >>> round(zero_stability_budget(0.002, 15).u_c * 1e4, 2)
-    9.03
+    >>> round(b.u_c * 1e4, 2), [round(x, 5) for x in b.interval], round(b.U, 5)
+    (3.78, [0.0, 0.00292], 0.00092)
+    >>> b = zero_stability_budget(0.002, 15)
+    >>> round(b.u_c * 1e4, 2), round(b.interval[1], 5), b.to_dict()["k"]
+    (9.03, 0.00883, None)
     """
     if readings == "random_walk" and time_s is not None:
         t = np.asarray(time_s, dtype=float)
@@ -517,16 +526,34 @@ def zero_stability_budget(b_s_deg_per_h: float, n_readings: int, *,
                                  f"({how}){floor_txt}"),
                    "sampling of s(M)", True, "7.3")]
     b = _budget("zero_stability", "deg/h", b_s_deg_per_h, lines, k=None,
-                interval=stdev_interval(s_int, nu, COVERAGE_PROBABILITY))
-    b = replace(b, model_kind="nonlinear", nonnegative=True,
-                sampler=lambda rng, m: s_int * np.sqrt(nu / rng.chisquare(nu, m)))
-    if k is not None and abs(float(k) - b.k) > 1e-9:
-        # A fixed k presumes many degrees of freedom; with ν_eff ≈ 1–2.5 a k = 2 covers
-        # about 75 % (gonio validate --all-items): the t-factor is kept and this says so.
-        b = replace(b, k_source=f"welch-satterthwaite (the laboratory's fixed k = {float(k):g} "
-                                f"is not applied to B_s: nu_eff = {b.nu_eff:.3g} is too few "
-                                "degrees of freedom for it to give 95 %)")
-    return b
+                interval=chi_square_statement(s_int, nu))
+    # a fixed k of the laboratory is not applied: B_s is stated by its χ² interval
+    return replace(b, model_kind="nonlinear", nonnegative=True, stated_by_interval=True,
+                   sampler=lambda rng, m: s_int * np.sqrt(nu / rng.chisquare(nu, m)))
+
+
+def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
+    """The one 95 % statement of a dispersion (B_s, R): the one-sided χ² interval of σ,
+    [0, s·√(ν/χ²_0.05,ν)] (JCGM 100 E.4.3: ν s²/σ² ~ χ²(ν); :func:`uncertainty.stdev.
+    stdev_upper`), with ν as stated (:func:`gonio.result.statement.stated_nu`: the integer
+    part, so a reader recomputes the limit from the printed ν, never a narrower one).
+
+    One-sided because the draft's tolerances of B_s and R are upper limits and conformity is
+    decided on the same model (:func:`gonio.analysis.conformity.conformance_probability_chi2`,
+    JCGM 106 7.3 with this distribution of σ): with a guard band of U = limit − s the guarded
+    upper limit is passed exactly when the stated limit is below the tolerance. The same
+    statement as the rate specifications' repeatabilities
+    (:func:`gonio.specs._rate_family.rate_records.std_dev_uncertainty`).
+
+    >>> [round(x, 3) for x in chi_square_statement(1.0, 9)]       # χ²_0.05(9) = 3.325
+    [0.0, 1.645]
+    >>> round(chi_square_statement(1.0, 2.45)[1], 3)              # ν stated 2: √(2/0.1026)
+    4.415
+    """
+    from gonio.result.statement import stated_nu
+    from uncertainty.stdev import stdev_upper
+
+    return 0.0, stdev_upper(s, stated_nu(nu), COVERAGE_PROBABILITY)
 
 
 def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUncertainty:
@@ -570,31 +597,30 @@ def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
                          k: float | None = None) -> ItemUncertainty:
     """u(R) of R = max_i s_i over m points, s_i from n series (draft 7.5), ″.
 
-    Type A, u = R/√(2ν), ν = n − 1; the interval is that of the largest of m
-    standard deviations (:func:`uncertainty.stdev.max_stdev_interval`), which
-    accounts for picking the largest (R over-estimates max σ_i when the σ_i are alike).
-    Its lower end is that of the largest of m (valid whatever the σ_i, since every σ_i ≤
-    max σ_i); its upper end is the single-χ² one (R ≥ the s of the point with the largest
-    σ_i), so the interval holds for unequal σ_i too.
+    Type A, u = R/√(2ν), ν = n − 1. R is stated by its one-sided χ² interval
+    [0, R·√(ν/χ²_0.05,ν)] alone (:func:`chi_square_statement`; a fixed k of the
+    laboratory is not applied). It holds max σ_i with at least 95 % whatever the σ_i: R is
+    at least the s of the point with the largest σ_i, whose own limit holds that σ_i with
+    95 %. (Picking the largest of m biases R upwards when the σ_i are alike,
+    :func:`uncertainty.stdev.max_stdev_interval`; that bias only widens the interval.)
 
     Examples
     --------
     The draft's 10 series and 12 points, R = 0.096″ (A.4.4): u = 0.096/√18 = 0.0226″;
-    interval 0.096·[0.589, 1.826] = [0.0566, 0.1753]″ (see
-    :func:`uncertainty.stdev.max_stdev_interval`).
+    interval [0, 0.096·√(9/3.325)] = [0, 0.1579]″.
 
     >>> b = repeatability_budget(0.096, 10, 12)
-    >>> round(b.u_c, 4), [round(x, 4) for x in b.interval]
-    (0.0226, [0.0566, 0.1753])
+    >>> round(b.u_c, 4), [round(x, 4) for x in b.interval], round(b.U, 4)
+    (0.0226, [0.0, 0.1579], 0.0619)
     """
     nu = int(n_series) - 1
     lines = [_Line(from_u("s_R", 0.0, stdev_u(r_arcsec, nu), dof=nu, type="A",
                           source=f"largest of {n_points} standard deviations of {n_series} "
                                  f"series, chi-square with nu = {nu}"),
                    "sampling of s_i", True, "7.5")]
-    lo = max_stdev_interval(r_arcsec, nu, int(n_points), COVERAGE_PROBABILITY)[0]
-    hi = stdev_interval(r_arcsec, nu, COVERAGE_PROBABILITY)[1]
-    return _budget("repeatability", "arcsec", r_arcsec, lines, k=k, interval=(lo, hi))
+    b = _budget("repeatability", "arcsec", r_arcsec, lines, k=k,
+                interval=chi_square_statement(r_arcsec, nu))
+    return replace(b, nonnegative=True, stated_by_interval=True)
 
 
 # --------------------------------------------------------------------------- 7.4

@@ -58,23 +58,18 @@ def write(result: Result, out, *, truth: dict | None = None, lab=None,
 def summary(result: Result | dict, lab: dict | None = None) -> str:
     """The seven items, U (k, coverage probability) and any conformity statements as a
     fixed-width text table, rounded as the certificate (:func:`gonio.specs.ogam_draft.stated.summary_text`),
-    then the 95 % intervals of the standard-deviation items and the budget's notes; from the
-    result or its results.json."""
+    then the budget's notes (an item stated by its interval, B_s and R, has that one
+    statement in the table); from the result or its results.json."""
     result = result if isinstance(result, Result) else Result.from_json(result)
     d = result.to_json()
     lines = virtual_line(d) + [summary_text(d, "en", lab).rstrip("\n")]
-    for name, it in d["items"].items():
-        iv = (it.get("uncertainty") or {}).get("interval")
-        if iv is not None:
-            lines.append(f"{name}: 95 % interval [{iv[0]:.3g}, {iv[1]:.3g}] {it['unit']} "
-                         "(chi-square)")
     zs = d["items"]["zero_stability"]["details"]
     est = zs.get("estimates")
     if est:
         if zs["stated"] == "model":
             dr, iv = est["draft"], est["draft"]["uncertainty"]["interval"]
-            lines.append(f"zero_stability: the draft's s(M)/T = {dr['value']:.3g} deg/h, 95 % "
-                         f"interval [{iv[0]:.3g}, {iv[1]:.3g}] deg/h (chi-square)")
+            lines.append(f"zero_stability (the draft's s(M)/T, not stated): {dr['value']:.3g} "
+                         f"deg/h, one-sided 95 % chi-square upper limit {iv[1]:.3g} deg/h")
         elif est["model"] is not None:
             m = est["model"]
             lines.append(f"zero_stability (noise model, not stated): {m['value']:.3g} deg/h, "

@@ -6,18 +6,22 @@ Contents
 :func:`item_names`           the items of a results dict, in its order
 :func:`item_uncertainty`     U, k and coverage probability of one item (or None)
 :func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
-                             position, U, k, p
+                             position, U, k, p, or its one coverage interval
+:func:`interval_cell`        that interval as a table cell ("≤ 0.022 (p ≈ 95 %)")
 :func:`conformity_for`       the conformity statements the laboratory's limits call for
 :func:`method_rows`          the method statement (rates, rounds, series, delays, Earth rate,
                              latitude, axes, tilt, temperature, clauses)
 :func:`summary_text`         ``summary.txt`` and the CLI's table, from the same Num texts
+:func:`display_item`         how the certificate shows one of the seven items alone
+:func:`reading_note`, :func:`budget_source`, :func:`specification_text`  a reading taken, a
+                             budget source and the specification's name in a language
 ===========================  ================================================================
 
 The optical certificate (HTML, PDF), ``summary.txt``, the CLI and the DCC XML all take their
 numbers from here, so they cannot disagree. The rule is JCGM 100 7.2.6: U to two
 significant digits, the value to the same decimal place (:func:`gonio.report.i18n.rule_at_U`);
 an item without an uncertainty keeps the significant digits of
-:data:`gonio.report.i18n.ITEM_SIG_DIGITS`; an item with its own U goes through the shared
+:data:`gonio.specs.ogam_draft.phrases.ITEM_SIG_DIGITS`; an item with its own U goes through the shared
 statement rule (:func:`gonio.report.stated.item_nums`). E is stated in the draft's form (7.4)
 E = ± max|E_i|, with the signed extreme and its position beside it.
 
@@ -32,10 +36,13 @@ from __future__ import annotations
 from typing import Any
 
 from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
-from gonio.report.i18n import (ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE, coverage_text, display,
-                               labels, rule_at_U)
-from gonio.report.stated import Num, conformity_texts, item_nums, num
-from gonio.result.statement import p_text
+import math
+
+from gonio.kit.render import (conformity_texts, coverage_text, display, display_number,
+                              item_nums, labels, num, parse_display, rule_at_U)
+from gonio.result.statement import decimals_for_sig, p_text, round_half_up
+from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_ZH, ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
+                                            READING_NOTES_ZH, TITLES_EN)
 
 
 def item_names(res: dict) -> list[str]:
@@ -110,12 +117,17 @@ def stated_item(res: dict, name: str) -> dict:
 
     Keys: ``measured``, ``reason``, ``clause``, ``unit``, ``value`` (Num; E as ± max|E_i|),
     ``signed`` and ``position`` (E only, Num), ``U``, ``k`` (Num or None), ``p`` (text such
-    as "95", or None), ``U_raw`` (float or None).
+    as "95", or None), ``U_raw`` (float or None), ``interval`` (the item's
+    :func:`~gonio.report.stated.item_nums` when it is stated by its coverage interval alone —
+    a dispersion such as B_s and R, or a non-negative item whose U exceeds its value —, then
+    ``U`` and ``k`` are None: one statement), ``upper`` (its upper bound's text when that
+    interval starts at 0, else None).
     """
     item = res["items"][name]
     out = {"measured": bool(item["measured"]), "reason": item.get("reason", ""),
            "clause": item["clause"], "unit": item["unit"], "value": "—", "signed": None,
-           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None}
+           "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None,
+           "interval": None}
     if not item["measured"]:
         return out
     unc = item_uncertainty(res, name)
@@ -142,29 +154,24 @@ def stated_item(res: dict, name: str) -> dict:
                                                     rule_at_U(U, sig))
     if unc:
         out["U_raw"] = U
-        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
-        out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
         if unc["p"] is not None:
             out["p"] = p_text(float(unc["p"]))
-        out["upper"] = upper_bound(res, name, out["value"])
+        if own is not None and own["statement"].interval is not None:
+            out["interval"] = own         # its one statement: no U, no k beside it
+            out["upper"] = own["statement"].upper_text
+            return out
+        out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
+        out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
     return out
 
 
-def upper_bound(res: dict, name: str, value: Num | str) -> Num | None:
-    """The upper bound of a non-negative item whose U exceeds its value (the item's
-    uncertainty says ``nonnegative``; B_s), as :func:`gonio.result.statement.state` states
-    it, at the value's decimal place; None otherwise."""
-    from gonio.result.statement import state
-
-    it = res["items"][name]
-    iu = it.get("uncertainty") or {}
-    if not it.get("nonnegative") or not isinstance(value, Num) or iu.get("U") is None:
-        return None
-    st = state(it["value"], iu["U"], k=iu.get("k"), nonnegative=True)
-    if st.upper is None:
-        return None
-    return Num(st.upper_text, f"items.{name}.upper_bound",
-               f"sci{st.exponent}.{st.decimals + st.exponent}" if st.exponent else value.rule)
+def interval_cell(st: dict, lang: str) -> str:
+    """The coverage interval of an item stated by it (:func:`stated_item` ``interval``), in
+    the short form of a table cell whose unit is in another column: "≤ 0.021 (p ≈ 95 %)" or
+    "[0.066, 0.204] (p ≈ 95 %)"; "" for an item stated by U."""
+    if st.get("interval") is None:
+        return ""
+    return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
 
 
 def segments(template: str, **nums) -> list:
@@ -241,18 +248,19 @@ def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
     duration, axis directions), the readings file's metadata (site latitude, tilt bound,
     temperature) and the laboratory file.
     """
-    from gonio.report.i18n import specification_text
-
     m = res["extra"]["method"]
     md = res.get("metadata", {})
     ns = L["not_stated"]
     measured = [res["items"][n]["clause"].split(" ")[0] for n in item_names(res)
                 if res["items"][n]["measured"]]
     spec = specification_text(followed(res) or ns, lang, cjk)
-    rows = [(L["m_spec"], f"{spec}; " + L["m_clauses"].format(c=", ".join(measured)))]
+    rows = [(L["m_spec"],
+             spec + L["semi"] + L["m_clauses"].format(c=L["list_sep"].join(measured)))]
     ad_rate = m["angle_deviation_rate_dps"]
-    rows.append((L["m_rates"], ", ".join(display("pos", r) for r in m["rates_dps"]) + " °/s"
-                 + f" (7.1, 7.4: {display('pos', ad_rate)} °/s)"
+    dps = L["u_deg/s"]
+    rows.append((L["m_rates"], ", ".join(display("pos", r) for r in m["rates_dps"]) + f" {dps}"
+                 + L["paren"].format(x="7.1" + L["list_sep"] + "7.4" + L["colon"]
+                                     + f"{display('pos', ad_rate)} {dps}")
                  if ad_rate is not None else ""))
     zi = m["zero_stability_interval_s"]
     rows.append((L["m_rounds"], L["m_rounds_v"].format(
@@ -288,7 +296,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     """
     L = labels(lang)
     head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
-    rows, notes, notes_b = [], [], []
+    rows, notes = [], []
     for i, name in enumerate(item_names(res), 1):
         st = stated_item(res, name)
         title = res["items"][name].get("title") or name
@@ -299,17 +307,14 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         val = str(st["value"])
         if st["signed"] is not None:
             val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
+        if st["interval"] is not None:      # stated by its interval alone
+            val += "; " + interval_cell(st, "en").replace("\u00a0", " ")
         U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
                                          f"p ≈ {st['p'] or '—'} %)"
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
-        if st["upper"] is not None:
-            notes_b.append(f"{i}. {title}: " + L["note_upper"].format(
-                b=st["upper"], u=L.get("u_" + st["unit"], st["unit"])).replace("\u00a0", " "))
     widths = [max(len(r[j]) for r in rows + [head]) for j in range(len(head))]
     fmt = lambda r: "  ".join(s.ljust(w) for s, w in zip(r, widths)).rstrip()  # noqa: E731
     lines = [fmt(head), "  ".join("-" * w for w in widths)] + [fmt(r) for r in rows]
-    if notes_b:          # a non-negative quantity whose U exceeds it: its upper bound
-        lines += [""] + notes_b
     if notes:
         lines += ["", "not measured:"] + ["  " + n for n in notes]
     u = e_budget(res)
@@ -332,4 +337,73 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
                      f"rule {c.rule}, acceptance {t['acceptance']}, specific false-accept "
                      f"probability {t['pfa']})")
     return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- phrases
+
+def reading_note(note: str, lang: str) -> str:
+    """A "reading taken" note in ``lang`` (the English text is the one in results.json).
+
+    >>> reading_note("7.3: x", "en"), reading_note("7.3: x", "zh")[:4]
+    ('7.3: x', '7.3：')
+    """
+    if lang != "zh":
+        return note
+    for prefix, zh in READING_NOTES_ZH.items():
+        if note.startswith(prefix):
+            return zh
+    return note
+
+
+def budget_source(symbol: str, source: str, lang: str) -> str:
+    """The budget's source column in ``lang`` (English from results.json when no zh form)."""
+    if lang == "zh" and symbol in BUDGET_SOURCES_ZH:
+        return BUDGET_SOURCES_ZH[symbol]
+    return source
+
+
+def specification_text(spec: str, lang: str, cjk: bool = True) -> str:
+    """The specification's name as shown: "(draft for comment)" in ``lang``; without a CJK
+    font (``cjk`` False) a known Chinese title is replaced by its English form so nothing
+    prints as boxes.
+
+    >>> specification_text("JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)", "zh")
+    'JJF xxxx 光学陀螺测角仪校准规范（征求意见稿）'
+    >>> specification_text("JJF xxxx 光学陀螺测角仪校准规范 (draft for comment)", "en", cjk=False)
+    'JJF xxxx Calibration Specification for Optical Gyroscope Angle Measuring Instrument (draft for comment)'
+    """
+    out = spec
+    if lang == "zh":
+        out = out.replace(" (draft for comment)", labels("zh")["draft_for_comment"])
+    if not cjk:
+        for zh, en in TITLES_EN.items():
+            out = out.replace(zh, en)
+    return out
+
+
+def display_item(name: str, value: float | None, U: float | None = None) -> str:
+    """The certificate's text for item ``name``.
+
+    E and R are shown to the decimal place of U (JCGM 100 7.2.6) when U is given;
+    every other item (and E, R without U) to :data:`ITEM_SIG_DIGITS` significant
+    digits. E is shown with its sign, as "± max |E_i|" of 7.4 with the sign found.
+
+    >>> display_item("angle_deviation", -0.11879399, U=0.35896)
+    '-0.12'
+    >>> display_item("repeatability", 0.13901059, U=0.35896)
+    '0.14'
+    >>> display_item("scale_factor", 76434.8425925926)
+    '76434.843'
+    >>> display_item("angle_deviation", 0.873, U=0.46)
+    '+0.87'
+    """
+    if value is None or not math.isfinite(value):
+        return "—"
+    if name in ITEMS_AT_U_PLACE and U is not None and U > 0:
+        s = round_half_up(value, decimals_for_sig(U, 2))
+    else:
+        s = display_number(value, ITEM_SIG_DIGITS.get(name, 3))
+    if name == "angle_deviation" and not s.startswith("-") and parse_display(s) != 0:
+        s = "+" + s            # a sign only where the rounded value has one (−0.004 → 0.00)
+    return s
 

@@ -1,0 +1,136 @@
+"""One 95 % statement per item, in every output of every specification's demo.
+
+For each specification ``gonio demo --spec KEY --seed 3`` writes results.json, summary.txt,
+the certificate's HTML and the DCC. Every measured item must carry exactly one statement:
+
+- either value ± U with its k (results.json ``k`` set, U not above the value when the
+  item cannot be negative), shown once as U in the certificate and once as an expanded
+  uncertainty in the DCC;
+- or one coverage interval (a dispersion stated by its χ² interval — ``k`` null, ``U`` the
+  distance to the upper end —, or a non-negative item whose U exceeds its value, stated by
+  [0, value + U]): no U span in the certificate, no "±" beside it in summary.txt, one
+  si:coverageIntervalMU in the DCC, no expanded uncertainty and no separate upper-bound
+  quantity anywhere.
+
+The expected statement is worked out here from results.json's numbers (not from the
+statement rule), so a second statement written anywhere, or the wrong one, fails.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import pytest
+from lxml import etree
+
+from gonio.cli import main
+from gonio.report.dcc import DCC_NS, SI_NS
+
+NS = {"dcc": DCC_NS, "si": SI_NS}
+SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
+
+
+@pytest.fixture(scope="module", params=SPECS)
+def demo(request, tmp_path_factory):
+    d = tmp_path_factory.mktemp(request.param) / "demo"
+    assert main(["demo", "--spec", request.param, "--seed", "3", "--out", str(d)]) == 0
+    return {"spec": request.param,
+            "res": json.loads((d / "results.json").read_text(encoding="utf-8")),
+            "summary": (d / "summary.txt").read_text(encoding="utf-8"),
+            "html": (d / "certificate.html").read_text(encoding="utf-8"),
+            "dcc": etree.parse(str(d / "certificate.dcc.xml")).getroot()}
+
+
+def by_interval(it: dict) -> bool:
+    """Whether the item must be stated by one interval (worked out from its numbers)."""
+    u = it["uncertainty"]
+    if u["k"] is None:
+        return True
+    return bool(it.get("nonnegative")) and u["U"] > it["value"]
+
+
+def measured(res: dict) -> dict:
+    return {k: it for k, it in res["items"].items()
+            if it["measured"] and it["value"] is not None and it.get("uncertainty")
+            and it["uncertainty"].get("U")}
+
+
+def test_results_json_holds_one_statement_per_item(demo):
+    items = measured(demo["res"])
+    assert items
+    for key, it in items.items():
+        u = it["uncertainty"]
+        if u["k"] is None:           # the interval is the statement; U reaches its upper end
+            lo, hi = u["interval"]
+            assert lo == 0.0 or lo <= it["value"], key
+            assert it["value"] + u["U"] == pytest.approx(hi, rel=1e-9), key
+        if by_interval(it):
+            assert it.get("upper_bound") is None or it["upper_bound"] >= it["value"] + u["U"] \
+                - 1e-12 * abs(it["value"] + u["U"]), key
+        else:
+            assert it.get("upper_bound") is None, key     # no bound beside ± U
+            assert u["U"] > 0 and u["k"] > 0, key
+
+
+def test_certificate_html_states_each_item_once(demo):
+    html = demo["html"]
+    for key, it in measured(demo["res"]).items():
+        spans = set(re.findall(r'data-src="items\.' + re.escape(key) + r'\.uncertainty\.U"'
+                               r' data-rule="[^"]+">([^<]*)<', html))
+        if by_interval(it):
+            assert spans == set(), key        # no U beside the interval
+        else:
+            assert len(spans) <= 1, (key, spans)
+
+
+def test_summary_has_no_second_statement(demo):
+    res, lines = demo["res"], demo["summary"].splitlines()
+    for key, it in measured(res).items():
+        title = it.get("title") or key
+        rows = [ln for ln in lines if title + ":" in ln or (title in ln and it["clause"] in ln)]
+        for ln in rows:
+            assert ln.count("p ≈") <= 1, (key, ln)
+            if by_interval(it):
+                assert " ± " not in ln and "k = " not in ln, (key, ln)
+                assert "≤ " in ln, (key, ln)
+    # the optical draft's extra lines: no second interval of B_s or R
+    assert not re.search(r"^(zero_stability|repeatability): 95 % interval", demo["summary"],
+                         re.M)
+
+
+def _real_uncertainties(root) -> dict:
+    """item key → list of (kind, si:real) for every si:real whose value is the item's."""
+    out: dict = {}
+    for real in root.iter(f"{{{SI_NS}}}real"):
+        prev = real.getprevious()
+        if not isinstance(prev, etree._Comment):
+            continue
+        m = re.search(r"src=items\.([A-Za-z0-9_]+)\.value\b", prev.text or "")
+        if not m:
+            continue
+        mu = real.find("si:measurementUncertaintyUnivariate", NS)
+        kinds = [] if mu is None else [etree.QName(c).localname for c in mu]
+        out.setdefault(m.group(1), []).append((kinds, real))
+    return out
+
+
+def test_dcc_states_each_item_once(demo):
+    root = demo["dcc"]
+    assert root.find(".//dcc:quantity[@refType='gonio_upperBound']", NS) is None
+    reals = _real_uncertainties(root)
+    for key, it in measured(demo["res"]).items():
+        if key not in reals:
+            continue                 # an item the DCC writes in a matrix of its own form
+        for kinds, real in reals[key]:
+            assert len(kinds) <= 1, (key, kinds)
+            if by_interval(it):
+                assert kinds == ["coverageIntervalMU"], (key, kinds)
+                ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+                hi = float(ci.find("si:intervalMax", NS).text)
+                want = it["value"] + it["uncertainty"]["U"]
+                assert hi >= want * (1 - 1e-12) and math.isclose(hi, want, rel_tol=0.06), key
+                assert float(ci.find("si:intervalMin", NS).text) <= it["value"], key
+            elif kinds:
+                assert kinds == ["expandedMU"], (key, kinds)
