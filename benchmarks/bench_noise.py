@@ -120,6 +120,7 @@ def octave_against_allantools(y: np.ndarray, tau0: float) -> None:
 
 
 def main() -> None:
+    import allantools
 
     rng = np.random.default_rng(2024)
     tau0 = 0.001

@@ -29,7 +29,8 @@ from gonio.errors import GonioError
 from gonio.formats.rate_readings import read_rate_readings
 from gonio.instruments.rate import Chamber, GyroOutput, RateTable, Supply
 from gonio.instruments.rate_acquire import acquire_rate, resume_point
-from gonio.instruments.served import scpi_match
+from gonio.instruments.link import InstrumentError, LinkLost
+from gonio.instruments.served import Faults, scpi_match
 from gonio.instruments.served_rate import ServedRateBench, rate_instruments, serve_rate_bench
 from gonio.protocol.programme import Segment
 from gonio.specs.jjf1535.acquisition import programme
@@ -196,3 +197,41 @@ def test_programme_beyond_the_table_or_without_a_chamber_is_refused(bench, proto
         served.close()
     with pytest.raises(GonioError, match="datasheet_bandwidth_hz|estimated_bandwidth_hz"):
         programme(str(proto), {})
+
+
+def _short_programme() -> list[Segment]:
+    """A rest from power-on, ±10 °/s (the second at a chamber set point), a rest."""
+    return [Segment("scale_factor", 0, 0, "rest", 5, 1.0, delay_s=5.0, power_on=True),
+            Segment("scale_factor", 0, 1, "rate", 5, 1.0, 10.0, delay_s=2.0),
+            Segment("scale_factor", 0, 2, "rate", 5, 1.0, -10.0, delay_s=2.0,
+                    temperature_c=30.0),
+            Segment("scale_factor", 0, 3, "rest", 5, 1.0, delay_s=2.0)]
+
+
+@pytest.mark.parametrize("fault, error, words", [
+    ("gyro-drop:3", LinkLost, "connection lost"),         # the third record's data
+    ("table-error:2", InstrumentError, "axis fault"),     # the second rate: -310
+])
+def test_a_lost_link_or_an_instrument_error_stops_everything_and_keeps_the_records(
+        bench, tmp_path, fault, error, words):
+    served = serve_rate_bench(bench, speed=SPEED, seed=SEED, faults=Faults.parse([fault]))
+    try:
+        with pytest.raises(error, match=words):
+            acquire_rate(_short_programme(), {"spec": "jjf1535-2015", "protocol": "short"},
+                         served.resources, tmp_path / "a", timeout_s=3.0)
+        c = served.bench.cond          # the stop and the switching off are written last
+        deadline = time.monotonic() + 5.0
+        while (c.rate_dps, c.supply_on, c.chamber_on) != (0.0, False, False) and \
+                time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert (c.rate_dps, c.freq_hz, c.supply_on, c.chamber_on) == (0.0, 0.0, False, False)
+    finally:
+        served.close()
+    kept = read_rate_readings(tmp_path / "a" / "readings.csv")
+    assert kept.metadata["acquisition"] == "incomplete" and words in \
+        kept.metadata["acquisition_stopped"]
+    assert _keys(tmp_path / "a" / "readings.csv") == sorted(
+        [("scale_factor", 0, 0, "rest")] * 5 + [("scale_factor", 0, 1, "rate")] * 5)
+    log = (tmp_path / "a" / "io.log").read_text(encoding="utf-8").splitlines()
+    assert [ln.split(" ", 1)[1] for ln in log[-3:]] == [
+        "table > STOP", "supply > OUTP OFF", "chamber > OUTP OFF"]

@@ -42,7 +42,8 @@ def register(sub) -> None:
                         "hour, the draft's 7.3 warm-up)")
     s.add_argument("--fault", action="append", default=[],
                    help="inject a fault for testing: table-error:N (the N-th move fails with an "
-                        "axis fault), gyro-drop:N (the module drops its link at its N-th READ? or FETC?)")
+                        "axis fault; a rate bench: its N-th ROT or OSC), gyro-drop:N (the module "
+                        "drops its link at its N-th READ? or FETC?; a rate bench: ACQ:DATA?)")
     s.set_defaults(func=run)
 
 
@@ -56,15 +57,13 @@ def is_rate_bench(name: str) -> bool:
 
 def _serve_rate(args):
     from gonio.bench.rate_gyro import load_rate_bench
-    from gonio.errors import GonioError
+    from gonio.instruments.served import Faults
     from gonio.instruments.served_rate import serve_rate_bench
 
-    if args.fault:
-        raise GonioError("--fault: the served rate bench has no injected faults yet")
     served = serve_rate_bench(load_rate_bench(args.bench),
                               {"table": args.table_port, "gyro": args.gyro_port,
                                "chamber": args.chamber_port, "supply": args.supply_port},
-                              speed=args.speed, seed=args.seed)
+                              speed=args.speed, seed=args.seed, faults=Faults.parse(args.fault))
     for name, res in served.resources.items():
         print(f"{name}: {res}", flush=True)
     return served

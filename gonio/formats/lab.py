@@ -27,12 +27,21 @@ from gonio.errors import GonioError
 from gonio.formats.toml import (Field, check_text_fields, non_negative, positive, read_toml,
                                 validate_table)
 
-__all__ = ["LAB_SCHEMA", "DECISION_RULES", "load_lab", "naming_lab_file",
+__all__ = ["LAB_SCHEMA", "DECISION_RULES", "RECORD_STATUSES", "load_lab", "naming_lab_file",
            "check_one_limit_per_item", "check_interval"]
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``; ILAC-G8:09/2019
 #: clause 4, :mod:`gonio.analysis.conformity`).
 DECISION_RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
+
+
+#: How a certificate stands in the records (``[record] status``): a draft rendered for
+#: review (watermarked DRAFT on every page), or issued.
+RECORD_STATUSES: tuple[str, ...] = ("draft", "issued")
+
+
+def _is_sha256(x: str) -> bool:
+    return len(x) == 64 and all(c in "0123456789abcdef" for c in x)
 
 
 def _iso_date(x: str) -> bool:
@@ -92,6 +101,17 @@ LAB_SCHEMA: dict[str, Field] = {
         "interval_months": Field("int", check=positive, expect="> 0"),
         "agreed": Field("str", check=lambda s: s.strip() != "",
                         expect="how and when it was agreed with the customer")}),
+    # how the certificate stands in the laboratory's records (written by ``gonio serve``'s
+    # records for every certificate they render): a draft for review, or the issue of a
+    # sealed result with the people it required and, for an amendment (ISO/IEC 17025 7.8.8),
+    # the certificate it replaces and why
+    "record": Field("table", default=None, schema={
+        "status": Field("str", default="issued", choices=RECORD_STATUSES),
+        "seal_sha256": Field("str", default="", check=lambda s: s == "" or _is_sha256(s),
+                             expect="64 lower-case hexadecimal digits (SHA-256)"),
+        "min_people": Field("int", default=None, check=lambda n: n in (2, 3),
+                            expect="2 or 3"),
+        "amendment_asked_by": _S, "replaces": _S, "amendment_reason": _S}),
 }
 
 

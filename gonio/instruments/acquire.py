@@ -510,9 +510,9 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         table = table_cls(links[-1])
         links.append(Link(gyro_resource, name="gyro", log=log, timeout_s=timeout_s))
         gyro = gyro_cls(links[-1])
-        md = _identity_metadata(table.identify(), gyro.identify())
-        table.clear()
+        table.clear()                    # first: an error left by an earlier session
         gyro.clear()
+        md = _identity_metadata(table.identify(), gyro.identify())
         lim = table.limits()
         check_programme(blocks, protocol, lim)
         md.update(_instrument_metadata(protocol, gyro, lim))

@@ -7,7 +7,8 @@ The programme is the specification's own list of
 :func:`gonio.specs.jjf1535.acquisition.programme`), the same list ``gonio simulate`` runs
 on the virtual bench. :func:`acquire_rate` takes it segment by segment:
 
-1. a segment that starts a power cycle (``power_on``): the supply off, the time off
+1. a segment that starts a power cycle (``power_on``, and the first one run): the supply
+   off (a gyro left on is restarted), the time off
    (``off_time_s``, counted from the end of the last record) waited out, then the bench
    set (below) and the supply on — last, so that nothing changes after the power-on;
 2. the bench set to the segment's conditions, only what changes: the chamber (set point
@@ -190,9 +191,8 @@ class RateAcquisition:
     def run_segment(self, seg: Segment) -> None:
         d, clock = self.d, self.clock
         if seg.power_on or not self.powered:
-            if self.powered:
-                d["supply"].off()
-                self.powered = False
+            d["supply"].off()            # also the first time: a gyro left on is restarted
+            self.powered = False
             if self.t_end is not None:
                 clock.wait_until(self.t_end + seg.off_time_s)
             self.set_conditions(seg)
@@ -266,8 +266,8 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
         d = _open(resources, drivers or {}, log, timeout_s, needs(segments))
         md = {}
         for role, drv in d.items():
+            drv.clear()                  # first: an error left by an earlier session
             md[f"{role}_idn"] = drv.identify()
-            drv.clear()
         check_rate_programme(segments, d["table"])
         md.update(_stated(d["gyro"], metadata))
         md.update({"date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d"),

@@ -438,7 +438,7 @@ class Instrument:
         return self.errors.popleft() if self.errors else '0,"No error"'
 
 
-class _Drop(Exception):
+class DropLink(Exception):
     """Close the connection (an injected fault)."""
 
 
@@ -497,7 +497,7 @@ def gyro_instrument(sb: ServedBench) -> Instrument:
         with sb.lock:
             sb.faults.reads += 1
             if sb.faults.gyro_drop_at_read == sb.faults.reads:
-                raise _Drop()
+                raise DropLink()
 
     def read(_):
         count_read()
@@ -564,7 +564,7 @@ def scpi_handler(inst: Instrument):
                     continue
                 try:
                     answer = inst.execute(line)
-                except _Drop:
+                except DropLink:
                     return
                 if answer is not None:
                     self.wfile.write((answer + "\n").encode("ascii", "replace"))

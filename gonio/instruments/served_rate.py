@@ -40,7 +40,8 @@ import numpy as np
 from gonio import __version__
 from gonio.bench.rate_session import RateSession
 from gonio.errors import GonioError
-from gonio.instruments.served import ScpiError, scpi_handler, Instrument, parse_float, ScpiServer
+from gonio.instruments.served import (DropLink, Faults, Instrument, ScpiError, ScpiServer,
+                                      parse_float, scpi_handler)
 from gonio.protocol.programme import Segment
 
 #: The served rate table's stated top rate (°/s), acceleration (°/s²) and sine frequency (Hz).
@@ -95,6 +96,10 @@ class ServedRateBench:
     room_c: float = 20.0
     clock: object = time.monotonic
     lock: threading.RLock = field(default_factory=threading.RLock)
+    #: injected faults: ``table-error:N`` (the N-th ``ROT`` or ``OSC`` answers an axis fault,
+    #: −310, and is not made), ``gyro-drop:N`` (the reader closes its link at its N-th
+    #: ``ACQ:DATA?``)
+    faults: Faults = field(default_factory=Faults)
 
     def __post_init__(self):
         if not (self.speed > 0 and math.isfinite(self.speed)):
@@ -113,11 +118,19 @@ class ServedRateBench:
         return (self.clock() - self.wall0) * self.speed
 
     # ---------------------------------------------------------------- conditions
-    def change(self, **values) -> None:
-        """Change conditions (refused while a record is pending or running)."""
+    def change(self, *, abort: bool = False, **values) -> None:
+        """Change conditions: refused while a record is pending or running, unless
+        ``abort`` (a stop, switching the supply or the chamber off: always obeyed), which
+        ends the record at the samples taken so far."""
         now = self.now_s()
-        if self.record is not None and self.record.ready(now) < self.record.t_s.size:
-            raise ScpiError(-221, "Settings conflict; a record is running")
+        r = self.record
+        if r is not None and r.ready(now) < r.t_s.size:
+            if not abort:
+                raise ScpiError(-221, "Settings conflict; a record is running")
+            k = r.ready(now)
+            self.record = _Record(r.start_s, r.interval_s, r.t_s[:k], r.output[:k],
+                                  r.reference[:k])
+            self.last_end = max(now, r.start_s)
         if all(getattr(self.cond, k) == v for k, v in values.items()):
             return
         if "rate_dps" in values or "freq_hz" in values:
@@ -219,15 +232,30 @@ def _common(inst: Instrument, reset) -> list:
 
 def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
     """The four served instruments (:data:`NAMES`), sharing ``sb``."""
-    b, g = sb.bench, sb.bench.gyro
+    return [_table(sb), _gyro(sb), _chamber(sb), _supply(sb)]
+
+
+def _locked(sb: ServedRateBench, f):
+    def run(arg):
+        with sb.lock:
+            return f(arg)
+    return run
+
+
+def _table(sb: ServedRateBench) -> Instrument:
+    """The rate table: :class:`gonio.instruments.rate.RateTable`'s commands."""
+    b = sb.bench
 
     def locked(f):
-        def run(arg):
-            with sb.lock:
-                return f(arg)
-        return run
+        return _locked(sb, f)
+
+    def motion_fault():
+        sb.faults.moves += 1
+        if sb.faults.table_error_at_move == sb.faults.moves:
+            raise ScpiError(-310, "System error; axis fault (injected)")
 
     def rotate(arg):
+        motion_fault()
         w = parse_float(arg)
         if abs(w) > TOP_RATE_DPS:
             raise ScpiError(-222, f"Data out of range; rate {w:g} beyond {TOP_RATE_DPS:g}")
@@ -237,6 +265,7 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         parts = arg.split(",")
         if len(parts) != 2:
             raise ScpiError(-109, "Missing parameter; OSC freq,amplitude")
+        motion_fault()
         f, a = (parse_float(x) for x in parts)
         if not 0 < f <= TOP_FREQ_HZ or not 0 < a <= TOP_RATE_DPS:
             raise ScpiError(-222, f"Data out of range; OSC {f:g},{a:g}")
@@ -249,7 +278,7 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         sb.change(up_axis=parts[0], north_axis=parts[1])
 
     table = Instrument("table", f"gonio,virtual rate table,{b.name}-table,gonio {__version__}")
-    stop = locked(lambda a: sb.change(rate_dps=0.0, freq_hz=0.0, amplitude_dps=0.0))
+    stop = locked(lambda a: sb.change(abort=True, rate_dps=0.0, freq_hz=0.0, amplitude_dps=0.0))
     table.commands = _common(table, stop) + [
         ("ROTate", locked(rotate)), ("STOP", stop), ("OSCillate", locked(oscillate)),
         ("MOUNT", locked(mount)),
@@ -261,6 +290,21 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("LIMit:RATE?", lambda a: repr(TOP_RATE_DPS)), ("LIMit:ACCeleration?", lambda a: repr(ACCEL_DPS2)),
         ("LIMit:FREQuency?", lambda a: repr(TOP_FREQ_HZ)),
     ]
+    return table
+
+
+def _gyro(sb: ServedRateBench) -> Instrument:
+    """The gyro output reader: :class:`gonio.instruments.rate.GyroOutput`'s commands."""
+    b, g = sb.bench, sb.bench.gyro
+
+    def locked(f):
+        return _locked(sb, f)
+
+    def data(arg):
+        sb.faults.reads += 1
+        if sb.faults.gyro_drop_at_read == sb.faults.reads:
+            raise DropLink()
+        return sb.data(*_ints(arg, 2))
 
     def configure(arg):
         parts = arg.split(",")
@@ -278,12 +322,21 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         ("ACQuire:CONFigure", locked(configure)),
         ("ACQuire:STARt", locked(lambda a: sb.start(parse_float(a)))),
         ("ACQuire:COUNt?", locked(lambda a: str(sb.record.ready(sb.now_s()) if sb.record else 0))),
-        ("ACQuire:DATA?", locked(lambda a: sb.data(*_ints(a, 2)))),
+        ("ACQuire:DATA?", locked(data)),
         ("MEASure:TEMPerature?", locked(lambda a: repr(sb.session.st.temp))),
         ("CONFigure:UNIT?", lambda a: g.output_unit),
         ("CONFigure:SCALe?", lambda a: repr(g.scale_factor)),
         ("CONFigure:NULL?", lambda a: repr(g.null_output)),
     ]
+    return gyro
+
+
+def _chamber(sb: ServedRateBench) -> Instrument:
+    """The chamber: :class:`gonio.instruments.rate.Chamber`'s commands."""
+    b = sb.bench
+
+    def locked(f):
+        return _locked(sb, f)
 
     def set_point(arg):
         c = parse_float(arg)
@@ -299,15 +352,25 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
 
     ch = b.equipment.chamber
     chamber = Instrument("chamber", f"gonio,virtual chamber,{b.name}-chamber,gonio {__version__}")
-    chamber.commands = _common(chamber, locked(lambda a: sb.change(chamber_on=False))) + [
+    chamber.commands = _common(chamber, locked(lambda a: sb.change(abort=True,
+                                                                    chamber_on=False))) + [
         ("TEMPerature", locked(set_point)), ("TEMPerature?", lambda a: repr(sb.cond.set_point_c)),
         ("RAMP", locked(ramp)), ("RAMP?", lambda a: repr(sb.cond.ramp_c_per_min)),
-        ("OUTPut", locked(lambda a: sb.change(chamber_on=_on_off(a)))),
+        ("OUTPut", locked(lambda a: sb.change(abort=not _on_off(a), chamber_on=_on_off(a)))),
         ("OUTPut?", lambda a: "1" if sb.cond.chamber_on else "0"),
         ("MEASure:TEMPerature?", locked(lambda a: repr(sb.air_c(sb.now_s())))),
         ("LIMit:TEMPerature?", lambda a: f"{CHAMBER_RANGE_C[0]!r},{CHAMBER_RANGE_C[1]!r}"),
         ("LIMit:RAMP?", lambda a: repr(ch.max_ramp_c_per_min)),
     ]
+    return chamber
+
+
+def _supply(sb: ServedRateBench) -> Instrument:
+    """The supply: :class:`gonio.instruments.rate.Supply`'s commands."""
+    b = sb.bench
+
+    def locked(f):
+        return _locked(sb, f)
 
     def volt(arg):
         v = parse_float(arg)
@@ -316,13 +379,14 @@ def rate_instruments(sb: ServedRateBench) -> list[Instrument]:
         sb.change(supply_v=v)
 
     supply = Instrument("supply", f"gonio,virtual supply,{b.name}-supply,gonio {__version__}")
-    supply.commands = _common(supply, locked(lambda a: sb.change(supply_on=False))) + [
+    supply.commands = _common(supply, locked(lambda a: sb.change(abort=True,
+                                                                  supply_on=False))) + [
         ("VOLTage", locked(volt)), ("VOLTage?", lambda a: repr(sb.cond.supply_v)),
-        ("OUTPut", locked(lambda a: sb.change(supply_on=_on_off(a)))),
+        ("OUTPut", locked(lambda a: sb.change(abort=not _on_off(a), supply_on=_on_off(a)))),
         ("OUTPut?", lambda a: "1" if sb.cond.supply_on else "0"),
         ("MEASure:VOLTage?", locked(lambda a: repr(sb.supply_measured_v()))),
     ]
-    return [table, gyro, chamber, supply]
+    return supply
 
 
 @dataclass
@@ -350,10 +414,13 @@ class ServedRate:
 
 
 def serve_rate_bench(bench, ports: dict[str, int] | None = None, *, speed: float = 1.0,
-                     seed: int = 0, room_temperature_c: float = 20.0) -> ServedRate:
+                     seed: int = 0, room_temperature_c: float = 20.0,
+                     faults: Faults | None = None) -> ServedRate:
     """Serve the rate ``bench``'s four instruments on 127.0.0.1 (``ports`` by name; 0 or
-    absent: a free one) in background threads; ``close()`` stops them."""
-    sb = ServedRateBench(bench, seed=seed, speed=speed, room_c=room_temperature_c)
+    absent: a free one) in background threads; ``close()`` stops them. ``faults``: see
+    :class:`ServedRateBench`."""
+    sb = ServedRateBench(bench, seed=seed, speed=speed, room_c=room_temperature_c,
+                         faults=faults or Faults())
     servers, threads = {}, []
     for inst in rate_instruments(sb):
         port = int((ports or {}).get(inst.name) or 0)

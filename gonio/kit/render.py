@@ -14,7 +14,7 @@ Layout (HTML and A4 PDF)        :class:`Block`, :func:`render_html`, :func:`rend
 The content every certificate   :func:`certificate_id`, :func:`opening_blocks`,
 shares (ISO/IEC 17025 7.8)      :func:`decision_rule_blocks`, :func:`signature_blocks`,
                                 :func:`conformity_section`, :func:`meta_text`,
-                                :func:`is_virtual`, :func:`clean_tree`
+                                :func:`is_virtual`, :func:`is_draft`, :func:`clean_tree`
 Labels and numbers              :func:`labels`, :func:`display`, :func:`display_number`,
                                 :func:`display_uncertainty`, :func:`rule_at_U`,
                                 :func:`coverage_text`, :func:`finding_text`,
@@ -49,7 +49,7 @@ from gonio.report.dcc import (DCC_CONFORMITY, administrative_data, bilingual,
 from gonio.report.figures import (HTML_FIGSIZE, empty_panel, figure_svg, legend_above,
                                   mpl_style, plain_axes, plain_log_ticks)
 from gonio.report.header import (certificate_id, conformity_section, decision_rule_blocks,
-                                 meta_text, opening_blocks, signature_blocks)
+                                 is_draft, meta_text, opening_blocks, signature_blocks)
 from gonio.report.i18n import (clause_text, coverage_text, display, display_number,
                                display_uncertainty, finding_text, labels, parse_display,
                                reason_text, rule_at_U)
@@ -63,7 +63,8 @@ __all__ = [
     "bilingual", "certificate_id", "clause_text", "clean_tree",
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
-    "figure_svg", "finding_text", "font_families", "influence_conditions", "is_virtual",
+    "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
+    "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",
     "measurement_result", "meta_text", "mpl_style", "new_document", "not_measured_quantity",
     "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks", "quantity",

@@ -1,9 +1,11 @@
-"""The one place the records call gonio's calibration pipeline.
+"""The one place the records call gonio's calibration pipeline and its renderers.
 
 :func:`calibrate_folder` turns a readings file into gonio's output set (results.json,
 summary.txt, certificate.html/.pdf and, where the specification has one, the DCC) in a
-folder, for any specification, with a laboratory details file; the worker
-(:mod:`gonio.records.worker`) runs it in its own process. :func:`write_lab_toml` writes the
+folder, for any specification, with a laboratory details file; :func:`render_folder` renders
+the certificate of a stored results.json again, with the final laboratory details, and
+computes nothing (the issue of a reviewed, sealed result). The worker
+(:mod:`gonio.records.worker`) runs both in its own process. :func:`write_lab_toml` writes the
 laboratory details the records assemble (``gonio.formats.lab.LAB_SCHEMA``) as the
 TOML file the pipeline reads, so the certificate is validated exactly as on the command line.
 """
@@ -14,6 +16,7 @@ import json
 from pathlib import Path
 
 from gonio.atomic import write_text
+from gonio.errors import GonioError
 
 #: a readings file whose first bytes are these is a Parquet stream
 PARQUET_MAGIC = b"PAR1"
@@ -81,3 +84,28 @@ def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
               protocol=protocol if "protocol" in takes else None,
               inputs=[readings, protocol, lab])
     return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+
+
+def render_folder(results: bytes, out: str | Path, *, spec_key: str, lab: str | Path,
+                  lang: str = "en") -> list[str]:
+    """The certificate (HTML, PDF and, where the specification writes one, the DCC) of a
+    stored results.json ``results`` (its bytes), rendered into ``out`` by the
+    specification's renderer (``SPEC.outputs`` ``write``) with the laboratory details file
+    ``lab``, in ``lang``: a pure function of these, nothing recomputed — the conformity decisions,
+    provenance and findings are the stored result's own. Returns the file names written."""
+    from gonio.pipeline.dispatch import load_lab_file
+    from gonio.result.model import Result
+    from gonio.specs import get
+
+    spec = get(spec_key)
+    lab_d = load_lab_file(lab, spec)
+    try:
+        doc = json.loads(results)
+    except ValueError as exc:
+        raise GonioError(f"the stored results.json is not JSON ({exc})", key="results") from None
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    spec.renderer().write(Result.from_json(doc), out, lab=lab_d, lang=lang,
+                          dcc="dcc" in spec.calibrate_options)
+    return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+

@@ -15,9 +15,10 @@ ISO/IEC 17025 7.8 as states of a calibration::
   worker runs it; the draft certificate is marked DRAFT;
 * a reviewer who did not create it reviews it (accept or reject, with a comment);
 * a reviewer who did not create it approves it, and issuing starts: the certificate number
-  is reserved (GC-YYYY-NNNN), the calibration is recomputed from the stored readings with
-  the final details (number, signatories, date of issue) and the result is checked to be
-  the one reviewed; only then, in one transaction, the frozen certificate row is written;
+  is reserved (GC-YYYY-NNNN), the stored result is checked against the seal the reviewer
+  and the approver signed and rendered with the final details (number, signatories, date
+  of issue, the seal); nothing is computed again; then, in one transaction, the frozen
+  certificate row is written;
 * an issued certificate is amended by a new certificate (new number) that names the one it
   replaces and why; nothing issued is ever updated or deleted (database triggers refuse it).
 """
@@ -941,7 +942,10 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
     """The laboratory details file (``LAB_SCHEMA``) for a calibration's certificate: the
     draft (number DRAFT-<id>, not approved) or the final one (reserved number, signatories,
     date of issue). The decision rule and limits are the calibration's laboratory file's
-    (:func:`lab_file`) if it has one, else the instrument's under the laboratory's rule."""
+    (:func:`lab_file`) if it has one, else the instrument's under the laboratory's rule; the
+    final one takes them from the details the draft was computed with (stored as lab.toml
+    with the run and sealed with it), so that a limit edited after the review never reaches
+    the certificate."""
     cfg = settings(store)
     with store.session() as s:
         cal = s.get(Calibration, cal_id)
@@ -950,11 +954,16 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
             CalibrationStandard.calibration_id == cal.id))]
         limits = json.loads(inst.limits_json or "[]")
         number = cal.pending_number if final else f"DRAFT-{cal.id}"
-        if final and cal.pending_replaces_id:
-            old = s.get(Certificate, cal.pending_replaces_id)
-            number = f"{number} (replaces {old.number})"
-        who = {k: (getattr(cal, k).full_name or getattr(cal, k).username)
-               if getattr(cal, k) else "" for k in ("created_by", "reviewed_by", "approved_by")}
+        who = {k: _name(getattr(cal, k)) for k in ("created_by", "reviewed_by", "approved_by")}
+        record = {"status": "draft"}
+        if final:
+            record = {"status": "issued", "seal_sha256": cal.approved_seal,
+                      "min_people": min_people(s)}
+            if cal.pending_replaces_id:      # ISO/IEC 17025 7.8.8: what it replaces and why
+                record.update(replaces=s.get(Certificate, cal.pending_replaces_id).number,
+                              amendment_reason=cal.pending_reason,
+                              amendment_asked_by=_name(s.get(User,
+                                                             cal.amend_requested_by_id)))
         lab = {
             "laboratory": {"name": cfg["lab_name"], "address": _lines(cfg["lab_address"]),
                            "accreditation": cfg["lab_accreditation"],
@@ -976,8 +985,14 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
             "signatory": {"calibrated_by": who["created_by"], "checked_by": who["reviewed_by"],
                           "approved_by": who["approved_by"] if final
                           else "(not approved: draft for review)"},
+            "record": record,
         }
-        if cal.lab_sha256:             # the calibration's own laboratory file
+        drafted = s.get(CalibrationFile, (cal.id, "lab.toml")) if final else None
+        if drafted is not None:        # the basis the reviewed decisions were made on
+            import tomllib
+            basis = tomllib.loads(file_bytes(store, drafted.sha256).decode("utf-8"))
+            lab.update({k: basis[k] for k in DECISION_BASIS if k in basis})
+        elif cal.lab_sha256:           # the calibration's own laboratory file
             lab.update(lab_file(store, cal.lab_sha256, cal.lab_name, cal.spec_key))
         elif limits:
             lab["decision_rule"] = {"rule": cfg["decision_rule"],
@@ -987,14 +1002,23 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
     return lab
 
 
+def _name(u: User | None) -> str:
+    """A person as the certificate names them: the full name, else the user name."""
+    return (u.full_name or u.username) if u is not None else ""
+
+
 def _lines(value: str) -> str:
     """Multi-line text with its line ends as LF (a value stored before CR was normalised)."""
     return (value or "").replace("\r\n", "\n").replace("\r", "\n")
 
 
-#: The files of a run kept in the store (tables stay in the worker's folder only).
+#: The files of a run kept in the store (tables stay in the worker's folder only); lab.toml:
+#: the laboratory details the draft was computed with (its decision rule and limits are the
+#: issue's, whatever was edited since).
 KEPT = ("results.json", "summary.txt", "certificate.html", "certificate.pdf",
-        "certificate.dcc.xml")
+        "certificate.dcc.xml", "lab.toml")
+#: The sections of the laboratory details the result's conformity was decided with.
+DECISION_BASIS = ("decision_rule", "specification_limits")
 
 
 def store_run(store, cal_id: int, out: Path) -> None:
@@ -1025,31 +1049,37 @@ def store_run(store, cal_id: int, out: Path) -> None:
         s.commit()
 
 
-def _same_items(a, b) -> bool:
-    """The issued result is the reviewed one: every item's value, U, k, measured, limits and
-    conformity decision (a limit edited after review must not reach a certificate unreviewed)."""
-    return list(a) == list(b)
+def _approved(signed: str, approved: str, what: str) -> None:
+    """The seal of the stored result now is the one the approver signed."""
+    if not approved or signed != approved:
+        raise GonioError("the stored result no longer matches the one reviewed and approved "
+                         f"(seal {signed[:12]}…, signed {approved[:12] or '(none)'}…): "
+                         f"nothing {what}", key="issue")
+
+
+def sealed_result(store, cal_id: int) -> bytes:
+    """The stored results.json of a calibration being issued, after checking every stored
+    file and row against it (:func:`seal`) and the seal against the one approved: what the
+    certificate is rendered from."""
+    signed = seal(store, cal_id)
+    cal = calibration(store, cal_id)
+    _approved(signed, cal.approved_seal, "issued")
+    return file_bytes(store, cal.results_sha256)
+
+
+#: The files of an issue kept with its certificate row (the results.json is the stored one).
+ISSUED = ("certificate.html", "certificate.pdf", "certificate.dcc.xml")
 
 
 def store_issue(store, cal_id: int, out: Path) -> Certificate:
-    """Record an issued certificate: the final run's files, checked to carry the reviewed
-    result, and the frozen certificate row, in one transaction."""
-    files = {n: blobs.put_file(store.blob_root, out / n) for n in KEPT if (out / n).is_file()}
-    new_items = result_items(json.loads((out / "results.json").read_text(encoding="utf-8")))
-    reviewed = result_items(json.loads(file_bytes(store, calibration(store, cal_id)
-                                                  .results_sha256)))
-    if not _same_items(new_items, reviewed):
-        raise GonioError("the recomputed result differs from the reviewed one: nothing "
-                         "issued", key="issue")
+    """Record an issued certificate: the files rendered from the sealed result and the
+    frozen certificate row, in one transaction (the seal checked again in it)."""
+    files = {n: blobs.put_file(store.blob_root, out / n) for n in ISSUED if (out / n).is_file()}
     signed = seal(store, cal_id)
     with store.writing() as s:
         cal = s.get(Calibration, cal_id)
         before = state(cal)
-        if not cal.approved_seal or signed != cal.approved_seal:
-            raise GonioError("the stored result no longer matches the one reviewed and "
-                             f"approved (seal {signed[:12]}…, signed "
-                             f"{cal.approved_seal[:12] or '(none)'}…): nothing issued",
-                             key="issue")
+        _approved(signed, cal.approved_seal, "issued")
         for sha, size in files.values():
             if s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
@@ -1059,7 +1089,7 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
                            reason=cal.pending_reason, html_sha256=files["certificate.html"][0],
                            pdf_sha256=files["certificate.pdf"][0],
                            dcc_sha256=files.get("certificate.dcc.xml", (None,))[0],
-                           results_sha256=files["results.json"][0], seal_sha256=signed,
+                           results_sha256=cal.results_sha256, seal_sha256=signed,
                            reviewed_by_id=cal.amend_requested_by_id if cal.pending_replaces_id
                            else cal.reviewed_by_id, min_people=min_people(s))
         s.add(cert)

@@ -1,10 +1,12 @@
 """Running calibrations for the records, each in its own process.
 
-:func:`execute` runs one claimed calibration to its end: the stored readings (and protocol)
-are copied into a private work folder under names gonio chooses (``readings.csv`` or
-``readings.parquet`` by content), the laboratory details are written as a TOML file, the
+:func:`execute` runs one claimed calibration to its end. A draft: the stored readings (and
+protocol) are copied into a private work folder under names gonio chooses (``readings.csv``
+or ``readings.parquet`` by content), the laboratory details are written as a TOML file, the
 pipeline runs (:func:`gonio.records.compute.calibrate_folder`), and the outputs go into the
-content-addressed store and the database in one transaction. Any failure marks the
+content-addressed store and the database in one transaction. An issue: the stored
+results.json that was reviewed and approved is checked against its seal and rendered with
+the final details (:func:`gonio.records.compute.render_folder`); nothing is computed again. Any failure marks the
 calibration failed with the one-line reason; a killed process leaves it running with a
 dead worker, which :func:`gonio.records.services.recover` marks failed.
 
@@ -25,39 +27,20 @@ import threading
 
 from gonio.errors import GonioError
 from gonio.records import bench, services
-from gonio.records.compute import calibrate_folder, readings_suffix, write_lab_toml
+from gonio.records.compute import (calibrate_folder, readings_suffix, render_folder,
+                                   write_lab_toml)
 
 
 def execute(store, cal_id: int) -> bool:
     """Run calibration ``cal_id`` (claimed: running or issuing). True when it succeeded."""
     cal = services.calibration(store, cal_id)
-    final = cal.status == "issuing"
     work = store.data / "work" / f"cal-{cal_id}-{secrets.token_hex(6)}"
     try:
         work.mkdir(parents=True, mode=0o700)
-        services.set_progress(store, cal_id, "preparing the readings")
-        data = services.file_bytes(store, cal.readings_sha256)
-        readings = work / ("readings" + readings_suffix(data[:4]))
-        readings.write_bytes(data)
-        del data
-        protocol = cal.protocol or None
-        if cal.protocol_sha256:
-            protocol = str(work / "protocol.toml")
-            (work / "protocol.toml").write_bytes(services.file_bytes(store, cal.protocol_sha256))
-        request = bench.pending_request(store, cal)
-        if request is not None:          # started from a connected bench: acquire first
-            readings = bench.acquire_for(store, cal, request, work, protocol)
-        lab = write_lab_toml(services.lab_details(store, cal_id, final=final), work / "lab.toml")
-        services.set_progress(store, cal_id, "computing the items and their uncertainties, "
-                                             "rendering the " + ("final" if final else "draft")
-                              + " certificate")
-        calibrate_folder(readings, work / "out", spec_key=cal.spec_key, protocol=protocol,
-                         lab=lab)
-        services.set_progress(store, cal_id, "storing the files")
-        if final:
-            services.store_issue(store, cal_id, work / "out")
+        if cal.status == "issuing":
+            _issue(store, cal, work)
         else:
-            services.store_run(store, cal_id, work / "out")
+            _compute(store, cal, work)
         return True
     except GonioError as exc:
         services.fail(store, cal_id, str(exc))
@@ -66,6 +49,43 @@ def execute(store, cal_id: int) -> bool:
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return False
+
+
+def _compute(store, cal, work) -> None:
+    """The draft: the stored readings (and protocol) through the pipeline, its outputs
+    stored (computed, ready for review)."""
+    services.set_progress(store, cal.id, "preparing the readings")
+    data = services.file_bytes(store, cal.readings_sha256)
+    readings = work / ("readings" + readings_suffix(data[:4]))
+    readings.write_bytes(data)
+    del data
+    protocol = cal.protocol or None
+    if cal.protocol_sha256:
+        protocol = str(work / "protocol.toml")
+        (work / "protocol.toml").write_bytes(services.file_bytes(store, cal.protocol_sha256))
+    request = bench.pending_request(store, cal)
+    if request is not None:              # started from a connected bench: acquire first
+        readings = bench.acquire_for(store, cal, request, work, protocol)
+    lab = write_lab_toml(services.lab_details(store, cal.id, final=False), work / "lab.toml")
+    services.set_progress(store, cal.id, "computing the items and their uncertainties, "
+                                         "rendering the draft certificate")
+    calibrate_folder(readings, work / "out", spec_key=cal.spec_key, protocol=protocol, lab=lab)
+    # the details the result was decided with, sealed with it: the issue's decision basis
+    shutil.copyfile(lab, work / "out" / "lab.toml")
+    services.set_progress(store, cal.id, "storing the files")
+    services.store_run(store, cal.id, work / "out")
+
+
+def _issue(store, cal, work) -> None:
+    """The issue: the stored results.json that was reviewed and approved (its seal checked
+    first), rendered with the final details; nothing is computed again."""
+    services.set_progress(store, cal.id, "checking the sealed result")
+    results = services.sealed_result(store, cal.id)
+    lab = write_lab_toml(services.lab_details(store, cal.id, final=True), work / "lab.toml")
+    services.set_progress(store, cal.id, "rendering the certificate from the sealed result")
+    render_folder(results, work / "out", spec_key=cal.spec_key, lab=lab)
+    services.set_progress(store, cal.id, "storing the files")
+    services.store_issue(store, cal.id, work / "out")
 
 
 class Dispatcher:

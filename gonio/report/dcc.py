@@ -51,6 +51,7 @@ import re
 
 from lxml import etree
 
+from gonio.report.header import is_draft, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels
 from gonio.report.stated import Num, conformity_texts
@@ -313,6 +314,11 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     element(core, "dcc:performanceLocation", "other" if virtual else "laboratory")
     if cert.get("date_of_issue"):
         element(core, "dcc:issueDate", cert["date_of_issue"])
+    rec = record_of(lab)
+    if rec.get("replaces"):             # ISO/IEC 17025 7.8.8.3: the report it replaces
+        ras = element(core, "dcc:reportAmendedSubstituted")
+        element(ras, "dcc:typeOfChange", "amended")
+        element(ras, "dcc:replacedUniqueIdentifier", rec["replaces"])
 
     inst = lab_.get("instrument") or {}
     items = element(adm, "dcc:items")
@@ -337,6 +343,7 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     persons = element(adm, "dcc:respPersons")
     people = [(sig.get("calibrated_by"), "calibrated by", False),
               (sig.get("checked_by"), "checked by", False),
+              (rec.get("amendment_asked_by"), "amendment asked for by", False),
               (sig.get("approved_by"), "approved by" + (f", {sig['approved_title']}"
                                                         if sig.get("approved_title") else ""),
                True)]
@@ -369,11 +376,37 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
             st = element(sts, "dcc:statement", id=f"virtual-bench-readings-{i}")
             text_element(st, "dcc:name", L["virtual"])
             text_element(st, "dcc:declaration", line)
+    record_statements(sts, lab, L)
     for i, note in enumerate(readings_taken, 1):
         st = element(sts, "dcc:statement", id=f"reading-taken-{i}")
         text_element(st, "dcc:name", readings_name or L["readings_taken"])
         text_element(st, "dcc:declaration", note)
     return sts
+
+
+def record_statements(sts, lab: dict | None, L: dict) -> None:
+    """The statements of the laboratory file's ``[record]``: a draft for review, the
+    amendment's reason, the whole SHA-256 seal of the result the signatories signed, and the
+    number of different people the laboratory requires."""
+    rec = record_of(lab)
+    made = []
+    if is_draft(lab):
+        made.append(("record-draft", L["draft"], L["draft"] + "."))
+    if rec.get("replaces"):
+        made.append(("record-amendment", L["amendment_title"],
+                     L["amendment"].format(old=rec["replaces"], reason=rec.get(
+                         "amendment_reason") or L["not_stated"])))
+    if rec.get("seal_sha256"):
+        made.append(("record-seal", L["seal"], "The result these signatories signed has the "
+                     f"SHA-256 seal {rec['seal_sha256']}; the laboratory's record of it is "
+                     "verified against this value."))
+    if rec.get("min_people"):
+        made.append(("record-people", L["people_required"], L[f"people_{rec['min_people']}"]
+                     + "."))
+    for ident, name, text in made:
+        st = element(sts, "dcc:statement", id=ident)
+        text_element(st, "dcc:name", name)
+        text_element(st, "dcc:declaration", text)
 
 
 def measurement_result(root, name: str, *, method: str, norm: str,

@@ -17,6 +17,9 @@ Contents
 :func:`signature_blocks`      signatories with the approver's title, the statements, and a
                               recalibration interval only where one was agreed (7.8.4.3)
 :func:`meta_text`             a readings metadata value in the page's language
+:func:`record_notices`        a draft's notice; an amendment's: what it replaces and why (7.8.8)
+:func:`record_rows`           the seal signed (short form) and the people required
+:func:`is_draft`              a draft for review (watermarked DRAFT on every page)
 ============================  ================================================================
 
 "Page x of y" on every page and the end-of-certificate mark are the renderer's
@@ -31,7 +34,8 @@ from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import conformity_blocks
 
 __all__ = ["certificate_id", "opening_blocks", "decision_rule_blocks", "conformity_section",
-           "signature_blocks", "meta_text"]
+           "signature_blocks", "meta_text", "record_of", "is_draft", "record_notices",
+           "record_rows"]
 
 
 def certificate_id(result, lab: dict | None = None) -> str:
@@ -133,6 +137,7 @@ def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
         out.append(Block(kind, summarise(kind, data) if summarise else data, extra))
     if is_virtual(res, lab):            # the readings' provenance, not the lab file's absence
         add("notice", " ".join(virtual_lines(res, L)))
+    out += record_notices(lab, L)
     add("kv", _laboratory_rows(lab, L))
     add("kv", _item_rows(res, lab, L, specification))
     add("h", L["standards"])
@@ -199,13 +204,54 @@ def signature_blocks(lab: dict | None, L: dict) -> list[Block]:
     approved = sig.get("approved_by") or "—"
     if sig.get("approved_title"):
         approved += f", {sig['approved_title']}"
+    rec = record_of(lab)
+    asked = [(L["amendment_asked_by"], rec["amendment_asked_by"])] if rec.get(
+        "amendment_asked_by") else []
     out = [Block("h", L["signatory"]),
            Block("kv", [(L["calibrated_by"], sig.get("calibrated_by") or "—"),
-                        (L["checked_by"], sig.get("checked_by") or "—"),
-                        (L["approved_by"], approved)]),
+                        (L["checked_by"], sig.get("checked_by") or "—"), *asked,
+                        (L["approved_by"], approved), *record_rows(rec, L)]),
            Block("p", [L["statement_item"]]), Block("p", [L["statement_copy"]])]
     recal = (lab or {}).get("recalibration")
     if recal:
         out.append(Block("p", [L["statement_recal_agreed"].format(
             n=recal["interval_months"], a=recal["agreed"])]))
     return [Block("keep", out)]                  # one page, printed or PDF
+
+
+def record_of(lab: dict | None) -> dict:
+    """The laboratory file's ``[record]`` (how the certificate stands in the records), or
+    ``{}`` when it has none."""
+    return (lab or {}).get("record") or {}
+
+
+def is_draft(lab: dict | None) -> bool:
+    """A draft rendered for review before issue: watermarked DRAFT on every page."""
+    return record_of(lab).get("status") == "draft"
+
+
+def record_notices(lab: dict | None, L: dict) -> list[Block]:
+    """The notices at the head of a certificate from its ``[record]``: a draft for review
+    says so; an amendment names the certificate it replaces and why (ISO/IEC 17025 7.8.8.2,
+    7.8.8.3)."""
+    rec = record_of(lab)
+    out = []
+    if is_draft(lab):
+        out.append(Block("notice", L["draft"]))
+    if rec.get("replaces"):
+        out.append(Block("notice", L["amendment"].format(
+            old=rec["replaces"], reason=rec.get("amendment_reason") or L["not_stated"])))
+    return out
+
+
+def record_rows(rec: dict, L: dict) -> list[tuple]:
+    """The signature block's rows of an issued record: the seal of the result the
+    signatories signed (its first 16 hexadecimal digits; the DCC carries all 64) and the
+    number of different people the laboratory requires."""
+    rows = []
+    if rec.get("seal_sha256"):
+        rows.append((L["seal"], L["seal_value"].format(short=rec["seal_sha256"][:16])))
+    if rec.get("min_people"):
+        rows.append((L["people_required"], L[f"people_{rec['min_people']}"]))
+    return rows
+

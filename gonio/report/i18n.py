@@ -135,6 +135,23 @@ LABELS: dict[str, dict[str, str]] = {
     "calibrated_by": {"en": "Calibrated by", "zh": "校准员"},
     "checked_by": {"en": "Checked by", "zh": "核验员"},
     "approved_by": {"en": "Approved by", "zh": "批准人"},
+    "amendment_asked_by": {"en": "Amendment asked for by", "zh": "修订申请人"},
+    "seal": {"en": "Seal of the result (SHA-256)", "zh": "结果封印（SHA-256）"},
+    "seal_value": {"en": "{short}… (the whole value is in the DCC; the laboratory's record "
+                         "of this result is verified against it)",
+                   "zh": "{short}…（完整值见数字校准证书；本机构的结果记录据此核验）"},
+    "people_required": {"en": "People required", "zh": "所需人员"},
+    "people_3": {"en": "3: calibration, review and approval each by a different person",
+                 "zh": "3 人：校准、核验、批准各由不同人员完成"},
+    "people_2": {"en": "2: the calibration by one person, its review and approval by another",
+                 "zh": "2 人：校准由一人完成，核验与批准由另一人完成"},
+    "amendment": {"en": "This certificate amends and replaces certificate {old}, which is "
+                        "withdrawn. Reason for the amendment: {reason}",
+                  "zh": "本证书修订并取代证书 {old}，原证书作废。修订原因：{reason}"},
+    "amendment_title": {"en": "Amendment", "zh": "修订"},
+    "draft_short": {"en": "DRAFT", "zh": "草稿"},
+    "draft": {"en": "DRAFT FOR REVIEW — NOT AN ISSUED CERTIFICATE",
+              "zh": "审核用草稿 — 非正式签发的证书"},
     "statement_item": {"en": "The results relate only to the item calibrated.",
                        "zh": "本证书的校准结果仅对所校准的仪器有效。"},
     "statement_copy": {"en": "This certificate shall not be reproduced except in full without "

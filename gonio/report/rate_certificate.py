@@ -19,7 +19,7 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
 from gonio.report.dcc import bilingual
 from gonio.report.figures import figure_svg
-from gonio.report.header import (certificate_id, conformity_section, opening_blocks,
+from gonio.report.header import (certificate_id, is_draft, conformity_section, opening_blocks,
                                  signature_blocks)
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
 from gonio.report.provenance import is_virtual
@@ -268,6 +268,7 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     blocks += closing_blocks(res, L, lab, reading_title=L["readings_taken_std"], notes=notes)
     blocks += figure_blocks(figures_of(result), L, lang)
     return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
+            "draft": is_draft(lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

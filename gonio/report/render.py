@@ -67,6 +67,7 @@ th{background:#eee}
 table.kv td:first-child{width:32%%;background:#f6f6f6}
 .banner{background:#b00020;color:#fff;font-weight:bold;text-align:center;padding:8px;font-size:18px;letter-spacing:1px;margin:6px 0}
 .watermark{position:fixed;top:45%%;left:0;width:100%%;text-align:center;transform:rotate(-30deg);font-size:64px;font-weight:bold;color:rgba(176,0,32,0.10);pointer-events:none;z-index:10}
+.watermark.draft{top:22%%;font-size:110px;color:rgba(0,0,0,0.10);z-index:11}
 .notice{border:2px solid #b00020;padding:6px;color:#b00020}
 figure{margin:10px 0;break-inside:avoid;page-break-inside:avoid}
 figure svg{width:100%%;height:auto}
@@ -197,6 +198,9 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
     if content["virtual"]:
         out.append(f'<div class="watermark" aria-hidden="true">{html.escape(L["virtual_short"])}</div>')
         out.append(f'<div class="banner" id="virtual-banner">{html.escape(L["virtual"])}</div>')
+    if content.get("draft"):           # every printed page (position: fixed repeats)
+        out.append(f'<div class="watermark draft" id="draft-watermark" aria-hidden="true">'
+                   f'{html.escape(L["draft_short"])}</div>')
     out.append(f'<header class="page"><span>{html.escape(content["lab_name"])}</span>'
                f'<span id="cert-id" class="nb">{html.escape(L["certificate_no"] + L["colon"])}'
                f'{html.escape(cid)}</span></header>')
@@ -665,6 +669,9 @@ def _page_frame(fig, content, L, p, n) -> None:
     fig.add_artist(_hline(fig, 0.055, 0.6))
     fig.text(_LEFT, 0.04, f"{cid}   {page}", fontsize=7.5, va="baseline")
     fig.text(_LEFT, 0.027, L["statement_copy"], fontsize=6.5, va="baseline", color="0.3")
+    if content.get("draft"):
+        fig.text(0.5, 0.62, L["draft_short"], ha="center", va="center", fontsize=96,
+                 weight="bold", color="black", alpha=0.10, rotation=35, zorder=-5)
     if content["virtual"]:
         fig.text(0.5, 0.915, L["virtual"], ha="center", va="baseline", fontsize=11,
                  weight="bold", color="white",

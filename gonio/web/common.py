@@ -21,7 +21,7 @@ PAGE = 50
 #: calibration files a browser may download, with their media types
 FILE_TYPES = {"certificate.pdf": "application/pdf", "certificate.html": "text/html",
               "certificate.dcc.xml": "application/xml", "results.json": "application/json",
-              "summary.txt": "text/plain", "io.log": "text/plain",
+              "summary.txt": "text/plain", "io.log": "text/plain", "lab.toml": "text/plain",
               "bench-request.json": "application/json"}
 
 

@@ -88,7 +88,8 @@ def test_calibration_from_a_connected_bench(app, sqlite_store, served_bench):  #
     rows = [ln for ln in readings.splitlines() if ln and not ln.startswith("#")]
     assert len(rows) == 1 + 27                          # header + the small programme
     log = _file(store, cal_id, "io.log").decode("utf-8").splitlines()
-    assert re.search(r"Z table > \*IDN\?$", log[0]) and log[-1].endswith("table > STOP")
+    assert re.search(r"Z table > \*CLS$", log[0]) and log[-1].endswith("table > STOP")
+    assert any(re.search(r"Z gyro < gonio virtual bench,RLG goniometer", ln) for ln in log)
     request = _file(store, cal_id, "bench-request.json").decode("utf-8")
     assert served_bench["table"] in request
     with store.session() as s:

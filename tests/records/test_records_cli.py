@@ -63,9 +63,9 @@ def test_calibrate_record_puts_the_run_into_the_records(tmp_path, bench_readings
 
 def test_calibrate_record_keeps_the_lab_file_for_the_issue(tmp_path, bench_readings):
     """``gonio calibrate --lab FILE --record``: the laboratory file is stored with the
-    calibration, so that the issue's recomputation (the records' details written as the lab
-    file, the same pipeline) decides with the file's limits and rule and carries the reviewed
-    result item for item (before: the instrument's limits, none, and the issue was refused)."""
+    calibration, so that the records' details (written as the lab file, the same pipeline)
+    decide with the file's limits and rule and carry the recorded result item for item
+    (before: the instrument's limits, none)."""
     import json
 
     from gonio.records.compute import calibrate_folder, write_lab_toml

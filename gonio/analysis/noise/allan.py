@@ -233,8 +233,11 @@ def _phase(arr: np.ndarray, input_type: str, tau0_s: float, scale: float,
     description: for rate/increment the prefix count of NaN samples (length N+1,
     x zero-filled across gaps), for angle the boolean mask of NaN points.
     ``overwrite``: an angle record (float64) is detrended in its own memory."""
-    finite = np.isfinite(arr)
-    gaps = not finite.all()
+    # a finite sum means every sample is finite (a NaN or ±inf makes it NaN or inf): the
+    # element-wise mask only when it is not
+    gaps = not math.isfinite(float(np.add.reduce(arr, dtype=np.float64)))
+    finite = np.isfinite(arr) if gaps else None
+    gaps = gaps and not finite.all()
     if gaps and np.isinf(arr).any():
         bad = int(np.flatnonzero(np.isinf(arr))[0])
         raise GonioError(f"data contains an infinite value at index {bad}", key="data")

@@ -34,8 +34,8 @@ from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
 from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tree,
                               conformity_texts, coverage_text, decision_rule_blocks, display,
-                              figure_svg, finding_text, font_families, is_virtual, labels,
-                              meta_text, num, opening_blocks, reason_text, render_html,
+                              figure_svg, finding_text, font_families, is_draft, is_virtual,
+                              labels, meta_text, num, opening_blocks, reason_text, render_html,
                               render_pdf, rule_at_U, signature_blocks)
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
@@ -161,7 +161,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
     add("h", L["figures"])
     for key, cap, draw in FIGURES:
         add("fig", (key, L[cap], draw))
-    return {"id": certificate_id(res, lab), "virtual": virtual,
+    return {"id": certificate_id(res, lab), "virtual": virtual, "draft": is_draft(lab),
             "lab_name": (lab_["laboratory"]["name"] if lab else L["virtual_lab"]),
             "blocks": blocks, "results": res}
 

@@ -705,7 +705,9 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
 
     ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, as ``conditions``) adds the
     *choice of the extreme* (``C_sel``, :func:`extreme_selection_u`): noise can pick a
-    curve's other excursion, which no linear line holds.
+    curve's other excursion, which no linear line holds. Its bias
+    (:func:`extreme_selection`) is not subtracted: measured, the plug-in correction moved the
+    studies' z the wrong way (see there).
 
     Examples
     --------
@@ -804,7 +806,21 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
                         drift_half_width_arcsec: float, scale_factor_u_rel: float = 0.0,
                         draws: int = 4000) -> float:
-    """u (arcsec) of the spread max E_v − min E_v from the *choice* of each E_v (7.6, 7.7).
+    """u (arcsec) of :func:`extreme_selection` (the first of its pair).
+
+    >>> far = [([30.0, 60.0], [0.9, 0.1]), ([30.0, 60.0], [-0.8, 0.0])]
+    >>> extreme_selection_u(far, [0.05, 0.05], 0.1, 0.0)
+    0.0
+    """
+    return extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec, drift_half_width_arcsec,
+                             scale_factor_u_rel, draws)[0]
+
+
+def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
+                      drift_half_width_arcsec: float, scale_factor_u_rel: float = 0.0,
+                      draws: int = 4000) -> tuple[float, float]:
+    """(u, bias), arcsec, of the spread max E_v − min E_v from the *choice* of each E_v
+    (7.6, 7.7).
 
     E_v is the signed value of largest magnitude of condition v's curve (the draft's
     "E = ± max |E_i|", :func:`gonio.specs.ogam_draft.items.signed_extreme`). Each draw
@@ -816,40 +832,59 @@ def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
     afresh (the draft's functional) and once at the estimate's own extreme points (the
     linear model of the other lines), both between the estimate's largest and smallest
     condition (which condition is largest is the range's part, the ``C_rng`` line); u² is
-    the first variance minus the second, 0 when noise never changes a choice. Fixed seed:
-    the same curves give the same u.
+    the first variance minus the second, 0 when noise never changes a choice. The choice is
+    not only a spread: taking the larger of two excursions is biased away from zero, so the
+    draft's functional's expectation differs from the linear one. Propagating the readings'
+    noise through the functional itself (JCGM 101 5.1, 7.2: the model is the draft's, with
+    its choice) gives that difference as ``bias`` = mean(free) − mean(held) over draws of
+    the noise alone (the means' u; the table, drift and K lines are one offset per
+    calibration, shared by the truth as mounted, so they make no selection bias of the
+    estimator). It is the plug-in (bootstrap) estimate at the measured curves, and
+    :func:`consistency_budget` does not subtract it: on the optical study (``gonio validate
+    --all-items --cases typeb,worst --trials 40 --seed 20261129 --sample-rate-hz 5``)
+    subtracting it moved z = (C − truth)/u_c away from 0 for both items — C_v drawn
+    +0.45 → +0.50, C_g drawn −0.20 → −0.34 (sd 0.82 → 1.02), C_g at the worst condition
+    covering 39 → 37 of 40 — because at curves where noise has already flipped the choice
+    the plug-in corrects the other way (a discontinuous functional's bootstrap bias). The
+    choice's spread stays in u. Fixed seed: the same curves give the same (u, bias).
 
     >>> far = [([30.0, 60.0], [0.9, 0.1]), ([30.0, 60.0], [-0.8, 0.0])]
-    >>> extreme_selection_u(far, [0.05, 0.05], 0.1, 0.0)
-    0.0
+    >>> extreme_selection(far, [0.05, 0.05], 0.1, 0.0)
+    (0.0, 0.0)
     >>> tie = [([30.0, 60.0], [0.4, -0.38]), ([30.0, 60.0], [-0.8, 0.0])]
-    >>> 0.3 < extreme_selection_u(tie, [0.05, 0.05], 0.1, 0.0) < 0.5
-    True
+    >>> u, bias = extreme_selection(tie, [0.05, 0.05], 0.1, 0.0)
+    >>> 0.3 < u < 0.5, bias < -0.1
+    (True, True)
     """
     rng = np.random.default_rng(20240607)
     pos_all = np.unique(np.concatenate([np.asarray(p, dtype=float) for p, _ in curves]))
     table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec, (draws, pos_all.size))
     dk = rng.normal(0.0, scale_factor_u_rel, draws) if scale_factor_u_rel > 0 \
         else np.zeros(draws)
-    free, held = [], []
+    free, held, free_n, held_n = [], [], [], []
+    rows = np.arange(draws)
     for (pos, e), u in zip(curves, u_mean_arcsec):
         pos = np.asarray(pos, dtype=float)
         e = np.asarray(e, dtype=float)
         ok = ~np.isnan(e)
         pos, e = pos[ok], e[ok]
         ramp = np.arange(1, e.size + 1) / e.size
-        sim = (e + rng.normal(0.0, u, (draws, e.size))
-               + table[:, np.searchsorted(pos_all, pos)]
+        noisy = e + rng.normal(0.0, u, (draws, e.size))
+        sim = (noisy + table[:, np.searchsorted(pos_all, pos)]
                + dk[:, None] * pos * ARCSEC_PER_DEG
                + rng.uniform(-drift_half_width_arcsec, drift_half_width_arcsec,
                              draws)[:, None] * ramp)
         j = int(np.argmax(np.abs(e)))
-        free.append(sim[np.arange(draws), np.argmax(np.abs(sim), axis=1)])
+        free.append(sim[rows, np.argmax(np.abs(sim), axis=1)])
         held.append(sim[:, j])
+        free_n.append(noisy[rows, np.argmax(np.abs(noisy), axis=1)])
+        held_n.append(noisy[:, j])
     e_hat = np.array([float(np.asarray(e, dtype=float)[~np.isnan(e)][
         int(np.argmax(np.abs(np.asarray(e, dtype=float)[~np.isnan(e)])))]) for _, e in curves])
     a, b = int(np.argmax(e_hat)), int(np.argmin(e_hat))
     free, held = np.array(free), np.array(held)
     c_free = free[a] - free[b]        # which condition is max/min: the C_rng line's part
     c_held = held[a] - held[b]
-    return float(math.sqrt(max(0.0, c_free.var() - c_held.var())))
+    free_n, held_n = np.array(free_n), np.array(held_n)
+    bias = (free_n[a] - free_n[b]).mean() - (held_n[a] - held_n[b]).mean()
+    return (float(math.sqrt(max(0.0, c_free.var() - c_held.var()))), float(bias))

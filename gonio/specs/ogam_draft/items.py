@@ -224,7 +224,7 @@ def _rows(df: pd.DataFrame, test: str) -> pd.DataFrame:
 
 
 def _lines(rows: pd.DataFrame) -> frozenset:
-    return frozenset(int(l) for l in rows["line"])
+    return frozenset(rows["line"].to_numpy().astype(np.int64).tolist())
 
 
 # --------------------------------------------------------------------------- 7.1, 7.2

@@ -104,6 +104,19 @@ def _action(item) -> str:
     return "refused" if item is not None and item.on_bad_reading == "error" else "set_aside"
 
 
+def _complete_series(se: np.ndarray, rnd: np.ndarray, n: int) -> set:
+    """The series numbers among ``se`` whose rounds, sorted, are exactly 1…n (each round
+    read once), by one sort instead of a pass over the rows per series."""
+    if not se.size:
+        return set()
+    order = np.lexsort((rnd, se))
+    se, rnd = se[order], rnd[order]
+    nums, first, count = np.unique(se, return_index=True, return_counts=True)
+    place = np.arange(se.size) - np.repeat(first, count)     # position within its series
+    wrong = np.unique(se[rnd != place + 1])
+    return set(nums[(count == n) & ~np.isin(nums, wrong)].tolist())
+
+
 def _series_outside(g: pd.DataFrame, it, test: str, clause, name: str, file,
                     aside_lines: set) -> tuple[list[Finding], set]:
     """Readings of a condition whose series number is outside 1…series, one finding per
@@ -121,9 +134,7 @@ def _series_outside(g: pd.DataFrame, it, test: str, clause, name: str, file,
     se = g["series"].astype(int).to_numpy()
     rnd = g["round"].astype(int).to_numpy()
     n = len(it.rounds)
-    beyond = sorted(set(se[(se > it.series)].tolist()))
-    kept = {k for k in beyond
-            if sorted(rnd[se == k].tolist()) == list(range(1, n + 1))}
+    kept = _complete_series(se[se > it.series], rnd[se > it.series], n)
     bad = ((se < 1) | (se > it.series)) & ~np.isin(se, list(kept))
     out = []
     for mask, code, action, what in (
@@ -132,7 +143,7 @@ def _series_outside(g: pd.DataFrame, it, test: str, clause, name: str, file,
             (bad, "series-not-in-programme", _action(it), "all set aside")):
         if not mask.any():
             continue
-        lines = sorted(int(x) for x in g["line"].to_numpy()[mask])
+        lines = np.sort(g["line"].to_numpy()[mask].astype(np.int64)).tolist()
         nums = sorted(set(se[mask].tolist()))
         which = (f"series {nums[0]}" if len(nums) == 1 else
                  f"series {', '.join(map(str, nums[:5]))}{', …' if len(nums) > 5 else ''}")
@@ -146,6 +157,20 @@ def _series_outside(g: pd.DataFrame, it, test: str, clause, name: str, file,
                            column="series", test=test, clause=clause,
                            rule=f"1 ≤ series ≤ {it.series}, or a complete series beyond"))
     return out, kept
+
+
+def _rows_to_check(cols, it, n: int, want: np.ndarray, limit, kept: set) -> np.ndarray:
+    """Indices of the rows of a condition that break a round, angle or time rule (the
+    rules of :func:`_protocol_rules`, element-wise), in file order: only those are looked
+    at one by one."""
+    _, se, rnd, tab, t = cols
+    se, rnd = se.astype(np.int64), rnd.astype(np.int64)
+    tab, t = tab.astype(np.float64), t.astype(np.float64)
+    used = ((se >= 1) & (se <= it.series)) | np.isin(se, list(kept))
+    round_bad = (rnd < 1) | (rnd > n)
+    off = ~(np.abs(tab - want[np.clip(rnd - 1, 0, n - 1)]) <= it.position_tolerance_deg)
+    late = (t > limit + 1e-9) if limit is not None else np.zeros(t.size, dtype=bool)
+    return np.flatnonzero(used & (round_bad | off | late))
 
 
 def _protocol_rules(df: pd.DataFrame, protocol, file, aside_lines: set) -> list[Finding]:
@@ -179,8 +204,9 @@ def _protocol_rules(df: pd.DataFrame, protocol, file, aside_lines: set) -> list[
             found_s, kept = _series_outside(g, it, test, clause, protocol.name, file,
                                             aside_lines)
             out += found_s
-            for line, se, rnd, tab, t in zip(g["line"], g["series"], g["round"], g["table_deg"],
-                                             g["time_s"]):
+            cols = [g[c].to_numpy() for c in ("line", "series", "round", "table_deg", "time_s")]
+            for i in _rows_to_check(cols, it, n, want, limit, kept):
+                line, se, rnd, tab, t = (c[i] for c in cols)
                 rnd, tab, t = int(rnd), float(tab), float(t)
                 f = dict(file=file, line=int(line), test=test, clause=clause)
                 if not 1 <= int(se) <= it.series and int(se) not in kept:
@@ -295,7 +321,7 @@ def _incomplete(df: pd.DataFrame, protocol, file, present, df_all: pd.DataFrame
                                    "has no reading", "flagged", file=file, test=test,
                                    clause=CLAUSES[test], rule="every programme condition read"))
                 continue
-            have = set(int(x) for x in g["round"])
+            have = set(g["round"].to_numpy().astype(np.int64).tolist())
             missing = [i for i in range(1, len(it.rounds) + 1) if i not in have]
             whole = df_all[(df_all["test"] == test)
                            & np.isclose(df_all["rate_dps"].to_numpy(float), it.rate_dps)

@@ -17,7 +17,7 @@ side (it imports the report), called by :mod:`gonio.specs.triad_alignment.output
 from __future__ import annotations
 
 
-from gonio.report.header import certificate_id, conformity_section
+from gonio.report.header import certificate_id, conformity_section, is_draft
 from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_at_U,
                                translator)
 from gonio.report.rate_certificate import (closing_blocks, figure_blocks, header_blocks,
@@ -312,6 +312,7 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
     blocks += closing_blocks(res, L, lab, T("readings_taken"), notes)
     blocks += figure_blocks(triad_figures(result), L, lang)
     return {"id": certificate_id(result, lab), "virtual": is_virtual(res, lab),
+            "draft": is_draft(lab),
             "lab_name": lab["laboratory"]["name"] if lab else L["virtual_lab"],
             "blocks": blocks, "results": res}
 

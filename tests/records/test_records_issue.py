@@ -1,0 +1,234 @@
+"""The issue renders the stored result that was reviewed and sealed, computing nothing again:
+the certificate (HTML, PDF) and the DCC carry the seal, the number of people required and
+who did which step; an amendment states the certificate it replaces and why, names its own
+approver and leaves the original's approval as it was; a draft is watermarked DRAFT on every
+page, an issued certificate never."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+
+import pytest
+from lxml import etree
+
+from gonio.errors import GonioError
+from gonio.records import services, worker
+from gonio.records.compute import render_folder, write_lab_toml
+
+from .test_records_sealed import certificates, computed
+
+NS = {"dcc": "https://ptb.de/dcc"}
+
+
+def pdf_pages(data: bytes, tmp_path) -> list[str]:
+    pdf = tmp_path / "c.pdf"
+    pdf.write_bytes(data)
+    text = subprocess.run(["pdftotext", "-layout", str(pdf), "-"], capture_output=True,
+                          text=True, check=True).stdout
+    return [p for p in text.split("\f") if p.strip()]
+
+
+def kv_row(page: str, label: str) -> str:
+    """The value of a key–value row of a certificate's HTML."""
+    return re.search(rf"<tr><td>{re.escape(label)}</td><td>(.*?)</td></tr>", page).group(1)
+
+
+def no_pipeline(*args, **kwargs):
+    raise AssertionError("the issue ran the calibration pipeline")
+
+
+def run_issue(store, monkeypatch):
+    """Issue what is approved with the pipeline taken away: the issue must not compute."""
+    monkeypatch.setattr(worker, "calibrate_folder", no_pipeline)
+    cal = services.claim_next(store)
+    assert worker.execute(store, cal.id), services.calibration(store, cal.id).error
+    return certificates(store)[-1]
+
+
+def approved(store, people, computed_folder, bench_readings, monkeypatch):
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev2"], cal.id)
+    return cal
+
+
+def measurement_results(dcc: bytes) -> bytes:
+    """The DCC's results (the influence conditions aside: they are the laboratory's)."""
+    return etree.tostring(etree.fromstring(dcc).find(".//dcc:measurementResult/dcc:results",
+                                                     NS))
+
+
+def validate(dcc_schema, data: bytes, tmp_path):
+    path = tmp_path / "c.dcc.xml"
+    path.write_bytes(data)
+    dcc_schema.validate(str(path))
+
+
+def test_issue_renders_the_sealed_result_without_computing(store, people, computed_folder,
+                                                           bench_readings, monkeypatch,
+                                                           dcc_schema, tmp_path):
+    cal = approved(store, people, computed_folder, bench_readings, monkeypatch)
+    signed = services.seal(store, cal.id)
+    cert = run_issue(store, monkeypatch)
+    assert cert.results_sha256 == cal.results_sha256 and cert.seal_sha256 == signed
+    dcc = services.file_bytes(store, cert.dcc_sha256)
+    validate(dcc_schema, dcc, tmp_path)
+    # the results the pipeline wrote at the draft (the real run of the session fixture),
+    # element for element: the stored result rendered, not another computation
+    assert measurement_results(dcc) == measurement_results(
+        (computed_folder / "certificate.dcc.xml").read_bytes())
+    root = etree.fromstring(dcc)
+    assert root.findtext(".//dcc:coreData/dcc:uniqueIdentifier", namespaces=NS) == cert.number
+    seal_text = root.find(".//dcc:statement[@id='record-seal']", NS)
+    assert signed in "".join(seal_text.itertext())
+    people_text = "".join(root.find(".//dcc:statement[@id='record-people']", NS).itertext())
+    assert "3: calibration, review and approval each by a different person" in people_text
+    roles = {"".join(rp.find("dcc:person", NS).itertext()).strip(): rp.findtext("dcc:role", "",
+                                                                               NS)
+             for rp in root.iterfind(".//dcc:respPerson", NS)}
+    assert roles == {"tech": "calibrated by", "rev": "checked by", "rev2": "approved by"}
+    assert root.find(".//dcc:statement[@id='record-draft']", NS) is None
+    page = services.file_bytes(store, cert.html_sha256).decode("utf-8")
+    assert (kv_row(page, "Calibrated by"), kv_row(page, "Checked by"),
+            kv_row(page, "Approved by")) == ("tech", "rev", "rev2")
+    assert kv_row(page, "Seal of the result (SHA-256)").startswith(signed[:16] + "…")
+    assert signed[:17] not in page                      # the short form only
+    assert kv_row(page, "People required").startswith("3: ")
+    assert "draft-watermark" not in page and "DRAFT" not in page
+    pages = pdf_pages(services.file_bytes(store, cert.pdf_sha256), tmp_path)
+    assert not any("DRAFT" in p for p in pages)
+    assert any(signed[:16] + "…" in p for p in pages)
+
+
+def test_results_file_changed_after_approval_refused_at_issue(store, people, computed_folder,
+                                                              bench_readings, monkeypatch):
+    from gonio.records import blobs
+
+    cal = approved(store, people, computed_folder, bench_readings, monkeypatch)
+    path = blobs.blob_path(store.blob_root, cal.results_sha256)
+    path.chmod(0o644)
+    path.write_bytes(path.read_bytes().replace(b"scale_factor", b"scale_fact0r", 1))
+    monkeypatch.setattr(worker, "calibrate_folder", no_pipeline)
+    services.claim_next(store)
+    assert not worker.execute(store, cal.id)
+    cal = services.calibration(store, cal.id)
+    assert cal.status == "failed" and "results.json is missing or does not match" in cal.error
+    assert certificates(store) == []
+
+
+def test_two_people_stated_where_the_laboratory_needs_two(store, people, computed_folder,
+                                                          bench_readings, monkeypatch):
+    services.set_settings(store, people["admin"], min_people="2")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    cert = run_issue(store, monkeypatch)
+    page = services.file_bytes(store, cert.html_sha256).decode("utf-8")
+    assert kv_row(page, "People required") == ("2: the calibration by one person, its review "
+                                               "and approval by another")
+    assert (kv_row(page, "Checked by"), kv_row(page, "Approved by")) == ("rev", "rev")
+
+
+def test_amendment_states_what_it_replaces_and_why(store, people, computed_folder,
+                                                   bench_readings, monkeypatch, dcc_schema,
+                                                   tmp_path):
+    approved(store, people, computed_folder, bench_readings, monkeypatch)
+    first = run_issue(store, monkeypatch)
+    first_html = services.file_bytes(store, first.html_sha256)
+    reason = "customer's address corrected\n(second line)"
+    services.amend(store, people["admin"], first.id, reason)
+    services.approve(store, people["rev"], first.calibration_id)
+    second = run_issue(store, monkeypatch)
+    assert second.replaces_id == first.id and second.number != first.number
+    # the original keeps its own approval, its files untouched
+    assert services.file_bytes(store, first.html_sha256) == first_html
+    assert kv_row(first_html.decode("utf-8"), "Approved by") == "rev2"
+    page = services.file_bytes(store, second.html_sha256).decode("utf-8")
+    assert (kv_row(page, "Amendment asked for by"), kv_row(page, "Approved by")) == (
+        "admin", "rev")
+    notice = (f"This certificate amends and replaces certificate {first.number}, which is "
+              "withdrawn. Reason for the amendment: customer&#x27;s address corrected "
+              "(second line)")       # its lines joined in the one notice
+    assert notice in page, re.findall(r"<p class=\"notice\">.*?</p>", page, re.S)
+    pages = pdf_pages(services.file_bytes(store, second.pdf_sha256), tmp_path)
+    assert f"replaces certificate {first.number}" in pages[0]
+    dcc = services.file_bytes(store, second.dcc_sha256)
+    validate(dcc_schema, dcc, tmp_path)
+    root = etree.fromstring(dcc)
+    assert root.findtext(".//dcc:reportAmendedSubstituted/dcc:replacedUniqueIdentifier",
+                         namespaces=NS) == first.number
+    assert root.findtext(".//dcc:reportAmendedSubstituted/dcc:typeOfChange",
+                         namespaces=NS) == "amended"
+    said = "".join(root.find(".//dcc:statement[@id='record-amendment']", NS).itertext())
+    assert "customer's address corrected" in said and first.number in said
+    roles = [rp.findtext("dcc:role", "", NS) for rp in root.iterfind(".//dcc:respPerson", NS)]
+    assert roles == ["calibrated by", "checked by", "amendment asked for by", "approved by"]
+
+
+def test_draft_watermarked_on_every_page(sqlite_store, computed_folder, bench_readings,
+                                         monkeypatch, dcc_schema, tmp_path):
+    """The draft's details say so; its certificate (HTML, every PDF page) and DCC say DRAFT,
+    in English and in Chinese."""
+    from .conftest import make_people
+
+    people = make_people(sqlite_store)
+    cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
+    details = services.lab_details(sqlite_store, cal.id, final=False)
+    assert details["record"] == {"status": "draft"}
+    lab = write_lab_toml(details, tmp_path / "lab.toml")
+    stored = services.file_bytes(sqlite_store, cal.results_sha256)
+    for lang, mark in (("en", "DRAFT"), ("zh", "草稿")):
+        out = tmp_path / lang
+        render_folder(stored, out, spec_key=cal.spec_key, lab=lab, lang=lang)
+        page = (out / "certificate.html").read_text(encoding="utf-8")
+        assert re.search(rf'<div class="watermark draft" id="draft-watermark"[^>]*>{mark}</div>',
+                         page)
+        pages = pdf_pages((out / "certificate.pdf").read_bytes(), tmp_path)
+        # a rotated mark: pdftotext gives its characters apart (and 稿 is on no other page)
+        assert len(pages) > 3 and all(all(ch in p for ch in mark) for p in pages), lang
+    dcc = (tmp_path / "en" / "certificate.dcc.xml").read_bytes()
+    validate(dcc_schema, dcc, tmp_path)
+    assert etree.fromstring(dcc).find(".//dcc:statement[@id='record-draft']", NS) is not None
+
+
+def test_issued_record_in_chinese(sqlite_store, computed_folder, bench_readings, monkeypatch,
+                                  tmp_path):
+    """The seal, the people required, the amendment and its reason on the Chinese page."""
+    from .conftest import make_people
+
+    people = make_people(sqlite_store)
+    cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
+    details = services.lab_details(sqlite_store, cal.id, final=False)
+    seal = services.seal(sqlite_store, cal.id)
+    details["record"] = {"status": "issued", "seal_sha256": seal, "min_people": 3,
+                         "replaces": "GC-2026-0001", "amendment_reason": "地址更正",
+                         "amendment_asked_by": "王五"}
+    lab = write_lab_toml(details, tmp_path / "lab.toml")
+    out = tmp_path / "zh"
+    render_folder(services.file_bytes(sqlite_store, cal.results_sha256), out,
+                  spec_key=cal.spec_key, lab=lab, lang="zh")
+    page = (out / "certificate.html").read_text(encoding="utf-8")
+    assert kv_row(page, "结果封印（SHA-256）").startswith(seal[:16] + "…（")
+    assert kv_row(page, "所需人员") == "3 人：校准、核验、批准各由不同人员完成"
+    assert kv_row(page, "修订申请人") == "王五"
+    assert "本证书修订并取代证书 GC-2026-0001，原证书作废。修订原因：地址更正" in page
+    assert "草稿" not in page
+    pages = pdf_pages((out / "certificate.pdf").read_bytes(), tmp_path)
+    assert "GC-2026-0001" in pages[0] and not any("稿" in p for p in pages)
+
+
+def test_record_table_checked_like_the_rest_of_the_file(tmp_path):
+    from gonio.formats.lab import load_lab
+
+    base = ('[laboratory]\nname = "L"\naddress = "A"\n[certificate]\nnumber = "N"\n'
+            '[customer]\nname = "C"\n[signatory]\napproved_by = "Q"\n')
+    for bad, key in (('[record]\nstatus = "final"\n', "record.status"),
+                     ('[record]\nseal_sha256 = "abc"\n', "record.seal_sha256"),
+                     ('[record]\nmin_people = 1\n', "record.min_people")):
+        (tmp_path / "lab.toml").write_text(base + bad, encoding="utf-8")
+        with pytest.raises(GonioError, match=re.escape(key)):
+            load_lab(tmp_path / "lab.toml")
+    (tmp_path / "lab.toml").write_text(base, encoding="utf-8")
+    assert load_lab(tmp_path / "lab.toml")["record"] is None
