@@ -803,10 +803,8 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
         corr[2, 3] = corr[3, 2] = 1.0
     coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0][:len(lines)]
     value = (a.e_arcsec - b.e_arcsec) * f
-    # a spread (max − min): it cannot be negative, so a U above it is stated as its upper
-    # bound alone (gonio.result.statement.state)
     return replace(_budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs),
-                   nonnegative=value >= 0)
+                   nonnegative=value >= 0)      # a spread: U above it → its upper bound
 
 
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
