@@ -797,9 +797,8 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
         lines.append(_Line(from_u("C_sel", 0.0, u_sel, type="B",
                                   source="Monte Carlo of the signed extremes (JCGM 101)"),
                            "choice of each condition's extreme", True, clause))
-    same = abs(a.position_deg - b.position_deg) < 1e-6
     corr = np.eye(len(lines))
-    if same:
+    if abs(a.position_deg - b.position_deg) < 1e-6:        # the same table error: ρ = 1
         corr[2, 3] = corr[3, 2] = 1.0
     coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0][:len(lines)]
     value = (a.e_arcsec - b.e_arcsec) * f
