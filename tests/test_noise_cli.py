@@ -85,3 +85,15 @@ def test_readings_file_is_refused(tmp_path, capsys):
     assert main(["noise", str(p)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "readings file" in err and "stream" in err
+
+
+def test_default_uncertainties_are_the_bounded_covariance(tmp_path, capsys):
+    """The defaults stay bounded: the fit's covariance, the bootstrap only on request (its
+    records are synthesised at the window's length, B of them)."""
+    s = _stream(tmp_path / "d.csv")
+    assert main(["noise", str(s), "--json"]) == 0
+    fit = json.loads(capsys.readouterr().out)["fit"]
+    assert (fit["uncertainty_method"], fit["n_bootstrap"]) == ("covariance", 0)
+    assert main(["noise", str(s), "--json", "--bootstrap", "3"]) == 0
+    fit = json.loads(capsys.readouterr().out)["fit"]
+    assert (fit["uncertainty_method"], fit["n_bootstrap"]) == ("bootstrap", 3)

@@ -83,7 +83,8 @@ def test_every_item_covers_its_truth(records, intrinsic):
 @pytest.mark.slow
 def test_over_wide_check_can_fail(records, intrinsic):
     """The same records with every U ×20: each item with gonio's own budget is flagged."""
-    wide = [{n: dict(it, U=it["U"] * 20.0) for n, it in r.items()} for r in records]
+    wide = [{n: dict(it, U=it["U"] * 20.0, u_c=(it.get("u_c") or 0.0) * 20.0)
+             for n, it in r.items()} for r in records]
     cov = item_coverage(wide, intrinsic)
     flagged = {n for n, c in cov.items() if "over-wide" in c["two_sided"]["flags"]}
     assert flagged == {n for n, c in cov.items() if c["two_sided"]["own_budget"]}, cov

@@ -56,7 +56,7 @@ FIG_TEXT: dict[str, tuple[str, str]] = {
                  "N/√τ，证书所给 ARW {v} °/√h（{c}，其自身估计方法）"),
     "bi_cert": ("certified bias instability {v} °/h ({c}, its own estimator)",
                 "证书所给零偏不稳定性 {v} °/h（{c}，其自身估计方法）"),
-    "eq24": ("eq (24) as printed (not the Allan variance)", "按原文式(24)（非 Allan 方差）"),
+    "eq24": ("eq (24) as printed (not the Allan variance)", "按原文式（24）（非 Allan 方差）"),
     "gain": ("gain (dB)", "增益 (dB)"),
     "m3db": ("−3 dB at {f} Hz", "−3 dB 点 {f} Hz"),
     "p90": ("; 90° lag at {f} Hz", "；相位滞后 90° 点 {f} Hz"),

@@ -209,7 +209,8 @@ def item_record(report, truth: dict) -> dict:
         out["scale_factor"]["truth"] = k_true
         b = report.item_uncertainty["scale_factor"]
         u_disc = disc_model_u(b)
-        out["scale_factor_disc"] = dict(out["scale_factor"], U=float(b.k) * u_disc)
+        out["scale_factor_disc"] = dict(out["scale_factor"], U=float(b.k) * u_disc,
+                                        u_c=float(u_disc))
         if "scale_factor_nonlinearity" in out:
             out["scale_factor_nonlinearity"]["truth"] = float((k_i.max() - k_i.min())
                                                               / k_i.mean() * 100.0)
