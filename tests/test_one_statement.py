@@ -72,6 +72,8 @@ def test_results_json_holds_one_statement_per_item(demo):
         else:
             assert it.get("upper_bound") is None, key     # no bound beside ± U
             assert u["U"] > 0 and u["k"] > 0, key
+        if u["k"] is not None:
+            assert u.get("interval") is None, key         # no interval beside ± U
 
 
 def test_certificate_html_states_each_item_once(demo):

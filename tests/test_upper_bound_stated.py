@@ -93,5 +93,9 @@ def test_upper_bound_in_every_output(cal):
 def test_no_bound_where_U_is_below_the_value(cal):
     items = json.loads((cal["en"]["dir"] / "results.json").read_text())["items"]
     for key, it in items.items():
-        if key not in ("zero_stability", "repeatability"):    # R: a dispersion, too
+        u = it.get("uncertainty") or {}
+        if key not in ("zero_stability", "repeatability") and not (   # R: a dispersion too
+                it.get("nonnegative") and u.get("U") and u["U"] > it["value"]):
             assert "upper_bound" not in it or it["upper_bound"] is None, key
+        if it.get("upper_bound") is not None and u.get("k") is not None:  # a range: [0, v + U]
+            assert it["upper_bound"] >= it["value"] + u["U"] - 1e-12, key

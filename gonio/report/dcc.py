@@ -4,7 +4,7 @@ Contents
 ========
 =========================  ==============================================================
 :data:`DCC_NS`, :data:`SI_NS`  the DCC and D-SI namespaces
-:data:`DSI_UNITS`          results.json unit → D-SI unit string (D-SI 2.2 syntax)
+:func:`unit_dsi`           results.json unit → D-SI unit string (the one unit table)
 :func:`dsi_decimal`        a displayed number ("4.36×10⁻⁵", "±0.15") → an si:decimal ("4.36e-5")
 :func:`element`, :func:`text_element`, :func:`real`, :func:`quantity`, :func:`list_quantity`,
 :func:`not_measured_quantity`  the shared builders (also used by :mod:`gonio.report.rate_dcc`)
@@ -55,6 +55,7 @@ from gonio.report.header import is_draft, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels
 from gonio.report.stated import Num, conformity_texts
+from gonio.result.statement import DSI_UNITS
 
 DCC_NS = "https://ptb.de/dcc"
 SI_NS = "https://ptb.de/si"
@@ -63,19 +64,20 @@ SCHEMA_VERSION = "3.3.0"
 #: Performance date of a virtual-bench example whose readings carry no date.
 PLACEHOLDER_DATE = "1970-01-01"
 
-#: results.json units → D-SI (D-SI 2.2: \\arcsecond, \\degree, \\hour, \\tothe{-1}, \\percent, \\ppm).
-DSI_UNITS: dict[str, str] = {
-    "arcsec": r"\arcsecond",
-    "deg": r"\degree",
-    "deg/h": r"\degree\hour\tothe{-1}",
-    "deg/s": r"\degree\second\tothe{-1}",
-    "counts/deg": r"\one\degree\tothe{-1}",
-    "%": r"\percent",
-    "ppm": r"\ppm",
-    "degC": r"\degreecelsius",
-    "s": r"\second",
-    "one": r"\one",
-}
+def unit_dsi(unit: str) -> str:
+    """The D-SI 2.2 form of a results.json ``unit`` whose numbers are written as they are,
+    from the one unit table (:data:`gonio.result.statement.DSI_UNITS`); a unit the table
+    lacks, or one whose numbers need a factor (per g), is a KeyError: the caller gives the
+    D-SI string (and scales) itself.
+
+    >>> unit_dsi("arcsec"), unit_dsi("deg/h")
+    ('\\\\arcsecond', '\\\\degree\\\\hour\\\\tothe{-1}')
+    """
+    dsi, factor = DSI_UNITS[unit]
+    if factor != 1.0:
+        raise KeyError(f"{unit!r} needs the factor {factor:g}: give its D-SI form")
+    return dsi
+
 
 #: Conformity outcomes → the DCC's stringConformityStatementStatusType.
 DCC_CONFORMITY: dict[str, str] = {"pass": "pass", "fail": "fail",
@@ -126,9 +128,9 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
          interval: tuple[str, str] | None = None, u_std: str | None = None) -> "etree.Element":
     """si:real with the stated value, its D-SI unit and (when given) the expanded uncertainty.
 
-    ``unit`` is a results.json unit of :data:`DSI_UNITS`, or ``dsi`` gives the D-SI string
-    itself. Each si:value / si:valueExpandedMU carries ``refId``-free text; the path in
-    results.json is recorded in an XML comment before the si:real (for the number checks),
+    ``unit`` is a results.json unit of the one table (:func:`unit_dsi`), or ``dsi`` gives
+    the D-SI string itself. Each si:value / si:valueExpandedMU carries ``refId``-free text;
+    the path in results.json is recorded in an XML comment before the si:real (for the number checks),
     with ``note`` (e.g. ``factor=…`` of a unit conversion) appended. An item stated by its
     coverage interval (``interval`` the stated ends, ``u_std`` its standard uncertainty,
     ``p``) is written as si:coverageIntervalMU instead of an expanded uncertainty."""
@@ -138,7 +140,7 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
     if label:
         element(r, "si:label", label)
     element(r, "si:value", dsi_decimal(str(value)))
-    element(r, "si:unit", dsi or DSI_UNITS[unit])
+    element(r, "si:unit", dsi or unit_dsi(unit))
     if U is not None and k is not None and p is not None:
         mu = element(element(r, "si:measurementUncertaintyUnivariate"), "si:expandedMU")
         element(mu, "si:valueExpandedMU", dsi_decimal(str(U)))
@@ -247,7 +249,7 @@ def _decimal_or_nan(v) -> str:
 def list_quantity(parent, name: str, values: list, unit: str, dsi: str | None = None) -> None:
     """A column of a per-point table as si:realListXMLList (values as displayed, Num or
     plain decimal text; a missing one is NaN; ``dsi`` gives the D-SI unit instead of
-    :data:`DSI_UNITS` [``unit``])."""
+    :func:`unit_dsi` (``unit``))."""
     q = element(parent, "dcc:quantity")
     text_element(q, "dcc:name", name)
     if any(isinstance(v, Num) for v in values):
@@ -256,7 +258,7 @@ def list_quantity(parent, name: str, values: list, unit: str, dsi: str | None = 
         q.append(etree.Comment(f" src-list={srcs} rule={rule} "))
     rl = element(q, "si:realListXMLList")
     element(rl, "si:valueXMLList", " ".join(_decimal_or_nan(v) for v in values))
-    element(rl, "si:unitXMLList", dsi or DSI_UNITS[unit])
+    element(rl, "si:unitXMLList", dsi or unit_dsi(unit))
 
 
 def _contact(parent, tag: str, name: str, address: str | None, email: str | None = None):

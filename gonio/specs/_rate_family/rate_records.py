@@ -14,6 +14,7 @@ import hashlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -216,32 +217,87 @@ def load_readings(readings) -> RateReadings:
     return read_rate_readings(readings)
 
 
+@dataclass(frozen=True)
+class ItemDef:
+    """One item of a specification (the kit's ``gonio.kit.ItemDef``).
+
+    Attributes
+    ----------
+    key, title, clause, unit : str
+        As the :class:`~gonio.kit.Item` it computes states them (the title, clause and unit
+        are those of the "not measured" item when it cannot be computed).
+    compute : callable
+        ``compute(*args, **needed)`` → :class:`~gonio.kit.Item`: ``args`` are those given
+        to :func:`gonio.kit.calibrate_items` (the readings, a fit, …), ``needed`` the items
+        it needs, by key.
+    needs : tuple of str
+        The keys of the items it needs (computed first; one not measured makes this one not
+        measured, with the reason).
+    nonnegative : bool
+        A quantity that cannot be negative (a noise level, a time): stated with an upper
+        bound where U exceeds the value (:func:`gonio.kit.state`).
+    """
+
+    key: str
+    title: str
+    clause: str
+    compute: Callable[..., Item]
+    needs: tuple[str, ...] = ()
+    unit: str = ""
+    nonnegative: bool = False
+
+
+def run_items(defs, compute, *, monte_carlo_trials: int = 0, monte_carlo_seed: int = 0,
+              needs_measured: bool = True) -> dict[str, Item]:
+    """The one item loop (the kit's :func:`gonio.kit.calibrate_items` and the rate
+    specifications' :func:`calibrate_items`): every :class:`ItemDef` of ``defs`` computed by
+    ``compute(item_def, done)`` (``done``: the items computed so far, by key), each after
+    the items it needs (:func:`gonio.specs.item_order`), each inside
+    :func:`monte_carlo_validation` with ``monte_carlo_trials`` draws. An item whose
+    computation refuses the data (a :class:`GonioError`), or which the statement rule cannot
+    state (:func:`stateable`), is reported not measured with the reason; with
+    ``needs_measured`` so is an item one of whose needs is not measured (without it the item
+    is computed and says itself what it lacks); any other exception is a bug and propagates.
+    Returned in the order of ``defs``."""
+    from gonio.specs import item_order
+
+    defs = {d.key: d for d in defs}
+    done: dict[str, Item] = {}
+    for key in item_order(defs, {k: d.needs for k, d in defs.items()}):
+        d = defs[key]
+        missing = [n for n in d.needs if not done[n].measured] if needs_measured else []
+        if missing:
+            done[key] = not_measured(key, d.title, d.clause, d.unit,
+                                     f"needs {', '.join(missing)}, not measured")
+            continue
+        try:
+            with monte_carlo_validation(monte_carlo_trials, monte_carlo_seed):
+                item = compute(d, done)
+        except GonioError as exc:
+            item = not_measured(key, d.title, d.clause, d.unit,
+                                f"the data were refused: {exc.message}")
+        if not isinstance(item, Item) or item.key != key:
+            raise TypeError(f"item {key!r}: compute returned {item!r}, not Item {key!r}")
+        done[key] = stateable(item, nonnegative=d.nonnegative)
+    return {k: done[k] for k in defs}
+
+
 def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str, Item]:
-    """Every item of a rate specification's ``items_module`` computed on ``ctx``: each after
-    the items it needs (``NEEDS``, :func:`gonio.specs.item_order`), each inside
+    """Every item of a rate specification's ``items_module`` computed on ``ctx`` by the one
+    item loop (:func:`run_items`): each after the items it needs (``NEEDS``), each inside
     :func:`monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
     refuses the data (a :class:`GonioError`) is reported not measured with the refusal as
     its reason, nothing dropped; the items returned in ``ITEMS`` order, those in
     ``NONNEGATIVE`` marked non-negative (one the statement rule refuses, value + U ≤ 0, is
-    reported not measured with the refusal). ``items_module`` has ``ITEMS`` (rows key, title,
-    clause, function of the context), ``NEEDS``, ``NONNEGATIVE`` and ``with_needs(ctx, done)``
-    (the context an item sees, given the items done so far)."""
-    from gonio.specs import item_order
-
-    items: dict[str, Item] = {}
-    rows = {r[0]: r for r in items_module.ITEMS}
-    for key in item_order(rows, items_module.NEEDS):       # each after the items it needs
-        _, title, clause, fn = rows[key]
-        try:
-            with monte_carlo_validation(monte_carlo_trials):
-                items[key] = fn(items_module.with_needs(ctx, items))
-        except GonioError as exc:
-            items[key] = not_measured(key, title, clause, "",
-                                      f"the data were refused: {exc.message}")
-    items = {k: items[k] for k in rows}
-    for key in items_module.NONNEGATIVE & items.keys():
-        items[key] = stateable(items[key], nonnegative=True)
-    return items
+    reported not measured with the refusal). An item is computed whether or not its needs
+    were measured: its function says what it lacks. ``items_module`` has ``ITEMS`` (rows
+    key, title, clause, function of the context), ``NEEDS``, ``NONNEGATIVE`` and
+    ``with_needs(ctx, done)`` (the context an item sees, given the items done so far)."""
+    defs = [ItemDef(key, title, clause, fn, tuple(items_module.NEEDS.get(key, ())),
+                    nonnegative=key in items_module.NONNEGATIVE)
+            for key, title, clause, fn in items_module.ITEMS]
+    return run_items(defs, lambda d, done: d.compute(items_module.with_needs(ctx, done)),
+                     monte_carlo_trials=monte_carlo_trials, needs_measured=False)
 
 
 def stateable(item: Item, *, nonnegative: bool = False) -> Item:

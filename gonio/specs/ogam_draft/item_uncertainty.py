@@ -102,7 +102,8 @@ class ItemUncertainty:
     #: ``model`` (B_s: the χ² relation, the noise model's square root): f(rng, M) → array.
     sampler: object = field(default=None, repr=False, compare=False)
     model_kind: str = "linear"
-    #: A quantity that cannot be negative (B_s, R): results.json marks the item
+    #: A quantity that cannot be negative (B_s, R, the ranges K_l, C_v, C_g): results.json
+    #: marks the item
     #: ``nonnegative`` (its statement is then never an interval reaching below zero).
     nonnegative: bool = False
     #: The item is stated by ``interval`` alone (a dispersion: the one-sided χ² interval
@@ -428,7 +429,9 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                          f"{a_l:.3g}″/° at the A.1 bound, worst azimuth"),
                            "tilt bias of the spread of K_i", True, "A.1 applied to 7.2"))
     value = float((k_i.max() - k_i.min()) / kbar * 100.0)
-    return _budget("scale_factor_nonlinearity", "%", value, lines, k=k)
+    # a range: it cannot be negative, so a U above it is stated as its upper bound alone
+    return replace(_budget("scale_factor_nonlinearity", "%", value, lines, k=k),
+                   nonnegative=value >= 0)
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5
@@ -794,13 +797,13 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
         lines.append(_Line(from_u("C_sel", 0.0, u_sel, type="B",
                                   source="Monte Carlo of the signed extremes (JCGM 101)"),
                            "choice of each condition's extreme", True, clause))
-    same = abs(a.position_deg - b.position_deg) < 1e-6
     corr = np.eye(len(lines))
-    if same:
+    if abs(a.position_deg - b.position_deg) < 1e-6:        # the same table error: ρ = 1
         corr[2, 3] = corr[3, 2] = 1.0
     coeffs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0][:len(lines)]
     value = (a.e_arcsec - b.e_arcsec) * f
-    return _budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs)
+    return replace(_budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs),
+                   nonnegative=value >= 0)      # a spread: U above it → its upper bound
 
 
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
