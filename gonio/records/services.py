@@ -882,9 +882,12 @@ def set_progress(store, cal_id: int, message: str) -> None:
 def fail(store, cal_id: int, error: str) -> None:
     """A run ended without a result: running or issuing → failed, with the error. Nothing
     was issued (the certificate row is written only by :func:`store_issue`); a failed issue
-    keeps its reserved number for :func:`retry`."""
+    keeps its reserved number for :func:`retry`. A calibration no longer running or issuing
+    (another worker finished it) is left as it is."""
     with store.writing() as s:
-        cal = s.get(Calibration, cal_id)
+        cal = s.get(Calibration, cal_id, with_for_update=True)
+        if cal.status not in ("running", "issuing"):    # finished meanwhile (another worker)
+            return
         before = state(cal)
         cal.status = "failed"
         cal.error = error[:MAX_TEXT]
@@ -1077,7 +1080,12 @@ def store_issue(store, cal_id: int, out: Path) -> Certificate:
     files = {n: blobs.put_file(store.blob_root, out / n) for n in ISSUED if (out / n).is_file()}
     signed = seal(store, cal_id)
     with store.writing() as s:
-        cal = s.get(Calibration, cal_id)
+        # the row locked until commit: of two issues of one calibration at once (two workers,
+        # two hosts), the second sees the first one's state and issues nothing
+        cal = s.get(Calibration, cal_id, with_for_update=True)
+        if cal.status != "issuing" or not cal.pending_number:
+            raise GonioError(f"calibration {cal_id} is {cal.status}, not being issued: "
+                             "nothing issued twice", key="issue")
         before = state(cal)
         _approved(signed, cal.approved_seal, "issued")
         for sha, size in files.values():

@@ -232,3 +232,55 @@ def test_record_table_checked_like_the_rest_of_the_file(tmp_path):
             load_lab(tmp_path / "lab.toml")
     (tmp_path / "lab.toml").write_text(base, encoding="utf-8")
     assert load_lab(tmp_path / "lab.toml")["record"] is None
+
+
+def test_two_concurrent_issues_give_one_certificate(store, people, computed_folder,
+                                                    bench_readings, monkeypatch, tmp_path):
+    """Two approvals of one calibration at once reserve one number; two workers storing its
+    issue at once (two hosts, a retry raced) write one certificate: the row is locked
+    (SELECT … FOR UPDATE on PostgreSQL) and the second sees the first one's state; the
+    loser's failure does not undo the issue."""
+    import threading
+
+    from sqlalchemy import select
+
+    from gonio.records.models import CertificateCounter
+
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+
+    def race(calls):
+        gate, out = threading.Barrier(len(calls)), []
+
+        def run(call):
+            gate.wait(timeout=60)
+            try:
+                out.append(call())
+            except GonioError as exc:
+                out.append(exc)
+        threads = [threading.Thread(target=run, args=(c,)) for c in calls]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(120)
+        return out
+
+    got = race([lambda: services.approve(store, people["rev2"], cal.id),
+                lambda: services.approve(store, people["admin"], cal.id)])
+    refused = [g for g in got if isinstance(g, GonioError)]
+    assert len(refused) == 1 and "that is issuing" in str(refused[0])
+    number = services.calibration(store, cal.id).pending_number
+    out = tmp_path / "out"
+    render_folder(services.sealed_result(store, cal.id), out, spec_key=cal.spec_key,
+                  lab=write_lab_toml(services.lab_details(store, cal.id, final=True),
+                                     tmp_path / "lab.toml"))
+    got = race([lambda: services.store_issue(store, cal.id, out)] * 2)
+    refused = [g for g in got if isinstance(g, GonioError)]
+    assert len(refused) == 1 and "nothing issued twice" in str(refused[0])
+    services.fail(store, cal.id, str(refused[0]))        # the losing worker's ending
+    assert [c.number for c in certificates(store)] == [number]
+    assert services.calibration(store, cal.id).status == "issued"
+    with store.session() as s:
+        year = int(number.split("-")[1])
+        assert s.scalar(select(CertificateCounter.last).where(
+            CertificateCounter.year == year)) == 1
