@@ -147,7 +147,8 @@ def test_jjf_results_json_shape(jjf_noise_off):
             assert set(it["uncertainty"]) - {"interval"} == {
                 "components", "u_c", "U", "k", "nu_eff", "coverage_probability", "k_source"}
             assert ("interval" in it["uncertainty"]) == (key in ("sf_repeatability",
-                                                                 "bias_repeatability")), key
+                                                                 "bias_repeatability",
+                                                                 "bias_stability")), key
             assert it["uncertainty"]["coverage_probability"] == 0.95
     json.dumps(js, allow_nan=False)
     lit = js["items"]["g_sensitivity"]["details"]["literal_per_axis_dph_per_g"]["z"]
