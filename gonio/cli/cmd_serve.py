@@ -88,7 +88,7 @@ def run(args) -> int:
     from gonio.errors import GonioError
     from gonio.records.db import open_store
     from gonio.records.worker import Dispatcher
-    from gonio.web.app import create_app
+    from gonio.web.app import create_app, warm_up
 
     if not 0 < args.port < 65536:
         raise GonioError("not a port number", key="--port")
@@ -99,6 +99,7 @@ def run(args) -> int:
         sys.stderr.write(f"gonio: first start: user 'admin', password '{password}' "
                          "(change it: create your users and deactivate this one)\n")
     dispatcher = Dispatcher(store, workers=workers).start()
+    warm_up()                     # the first dashboard and history plot without the imports
     app = create_app(store, dispatcher)
     sys.stderr.write(f"gonio: serving the records at http://{args.host}:{args.port}/ "
                      f"(database {store.engine.url.render_as_string(hide_password=True)})\n")

@@ -1,0 +1,104 @@
+"""Benchmark: the web's first answers after ``gonio serve`` starts.
+
+A fresh SQLite database is filled with one instrument and ``--calibrations`` calibrations
+(7 items each, half issued; :func:`bench_records.fill`), ``gonio serve`` is started, and the
+wall seconds are printed of: the start until the login page answers, that first login page,
+the login (one Argon2id verification, by design about half a second), the first dashboard,
+the instrument's page, and its history plot at its first drawing and again. Targets: each
+page under 0.5 s. Prints the machine and its load: on a loaded machine the wall time measures
+the queue. Not part of the test run.
+
+    python benchmarks/bench_web_first.py [--calibrations 100] [--pause 3]
+
+``gonio serve`` imports SciPy and Matplotlib in the background when it starts
+(:func:`gonio.web.app.warm_up`); ``--pause`` (a person typing the password) lets it finish.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import socket
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import httpx
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_records import PASSWORD, fill  # noqa: E402
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def timed(rows: list, name: str, call):
+    t0 = time.perf_counter()
+    r = call()
+    rows.append((name, time.perf_counter() - t0, r.status_code))
+    return r
+
+
+def main(argv=None) -> int:
+    import re
+    import subprocess
+
+    from gonio.records.db import open_store
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--calibrations", type=int, default=100)
+    ap.add_argument("--pause", type=float, default=0.0,
+                    help="seconds between the login page and the login (a person typing)")
+    args = ap.parse_args(argv)
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load "
+          f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    with tempfile.TemporaryDirectory(prefix="bench-web-") as tmp:
+        data = Path(tmp) / "data"
+        store = open_store(None, data)
+        fill(store, 1, args.calibrations)
+        store.close()
+        port = _port()
+        base = f"http://127.0.0.1:{port}"
+        t0 = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data", str(data),
+                                 "--port", str(port), "--workers", "1"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        rows: list = []
+        try:
+            c = httpx.Client(base_url=base, timeout=120)
+            while True:
+                try:
+                    t1 = time.perf_counter()
+                    page = c.get("/login")
+                    rows.append(("start → login page answered", time.perf_counter() - t0,
+                                 page.status_code))
+                    rows.append(("first login page", time.perf_counter() - t1,
+                                 page.status_code))
+                    break
+                except httpx.HTTPError:
+                    time.sleep(0.05)
+            token = re.search(r'name="csrf" value="([^"]+)"', page.text).group(1)
+            time.sleep(args.pause)
+            timed(rows, "login (Argon2id)", lambda: c.post("/login", data={
+                "username": "tech", "password": PASSWORD, "csrf": token}))
+            timed(rows, "first dashboard /", lambda: c.get("/"))
+            timed(rows, "instrument page", lambda: c.get("/instruments/1"))
+            timed(rows, "history plot, first drawing",
+                  lambda: c.get("/instruments/1/history.svg"))
+            timed(rows, "history plot, again", lambda: c.get("/instruments/1/history.svg"))
+        finally:
+            proc.terminate()
+            proc.wait(30)
+    for name, wall, code in rows:
+        print(f"{name:<32} {wall:7.3f} s  (HTTP {code})")
+    print(f"load after: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
