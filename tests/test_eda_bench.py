@@ -154,3 +154,12 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
         for part in src.split("."):
             v = v[int(part)] if isinstance(v, list) else v[part]
         assert html.unescape(text) == display(rule, v, U), src
+    # the coupling's sentence: the analysis' own words on the English page, the page's
+    # language on the Chinese one (by the stored reason, never the English note)
+    from gonio.specs.ogam_draft.phrases import COUPLING_TEXT
+    reason = e["coupling"]["reason"]
+    assert reason == direct.coupling.reason and reason in COUPLING_TEXT
+    assert html.escape(direct.coupling.note) in page
+    zh = write_certificate(res, tmp_path / "zh", lang="zh")["certificate.html"].read_text()
+    assert html.escape(direct.coupling.note) not in zh
+    assert COUPLING_TEXT[reason]["zh"].split("（")[0].split("：")[0] in zh

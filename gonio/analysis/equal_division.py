@@ -254,7 +254,14 @@ class CouplingFit:
     max_effect_arcsec : float
         Largest |a P + b Q| over the readings (fitted), or at the bound.
     note : str
-        What was done, in words.
+        What was done, in words (English; the certificate states it from ``reason`` and
+        the numbers in the page's language).
+    reason : str
+        ``"estimated"`` (fitted and removed), ``"not_separable"`` (the joint design's
+        ``condition_number`` is above :data:`COUPLING_COND_LIMIT`) or ``"no_times"``
+        (the readings carry no ``time_s``).
+    condition_number : float
+        Of the scaled joint normal matrix where it made the coupling not separable.
     """
 
     separable: bool
@@ -266,6 +273,8 @@ class CouplingFit:
     u_amplitude_arcsec_s: float
     max_effect_arcsec: float
     note: str
+    reason: str = "estimated"
+    condition_number: float = math.nan
 
     def to_dict(self) -> dict:
         def f(x):
@@ -276,7 +285,8 @@ class CouplingFit:
                 "u_b_arcsec_s": f(self.u_b_arcsec_s),
                 "amplitude_arcsec_s": f(self.amplitude_arcsec_s),
                 "u_amplitude_arcsec_s": f(self.u_amplitude_arcsec_s),
-                "max_effect_arcsec": f(self.max_effect_arcsec), "note": self.note}
+                "max_effect_arcsec": f(self.max_effect_arcsec), "note": self.note,
+                "reason": self.reason, "condition_number": f(self.condition_number)}
 
 
 #: Condition number of the joint normal matrix above which the coupling is reported
@@ -848,7 +858,8 @@ def _with_coupling(A, Z, N1, R: int, Wn, coupling, n: int, m: int, bound_arcsec_
         False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, size,
         "the coupling cannot be separated from the table and goniometer errors (condition "
         f"number {cond:.2g}); it is not in the result"
-        + (f": up to {size:.3g}″ at the tilt bound" if math.isfinite(size) else ""))
+        + (f": up to {size:.3g}″ at the tilt bound" if math.isfinite(size) else ""),
+        reason="not_separable", condition_number=float(cond))
 
 
 def _coupling_estimate(ab: np.ndarray, cab: np.ndarray, coupling) -> CouplingFit:
@@ -1309,7 +1320,8 @@ def analyse_eda_readings(df: pd.DataFrame, protocol: "EdaProtocol | None" = None
                 "it is not in the result" + (f" (up to about {size:.3g}″ at the tilt bound)"
                                              if math.isfinite(size) else ""))
         from dataclasses import replace as _replace
-        return _replace(res, coupling=CouplingFit(False, *([math.nan] * 6), size, note))
+        return _replace(res, coupling=CouplingFit(False, *([math.nan] * 6), size, note,
+                                                  reason="no_times"))
     p = protocol or load_eda_protocol()
     C = coupling_design(T, start, step, p.read_delay_s, p.rate_dps, table_accel_dps2)
     return equal_division_analysis(D, start, step, gauge=gauge, noise=noise, coupling=C,

@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import hashlib
 import hmac
 import secrets
@@ -31,8 +32,14 @@ SESSION_LIFETIME = _dt.timedelta(hours=12)
 MIN_PASSWORD = 8
 
 _HASHER = PasswordHasher()
-#: a hash verified when the user does not exist, so both cases take the same time
-_DUMMY = _HASHER.hash("not a password of anyone")
+
+
+@functools.cache
+def _dummy_hash() -> str:
+    """A hash verified when the user does not exist, so both cases take the same time; made
+    at the first such login, not at import (every worker process imports this module, and
+    one Argon2id hash is half a second)."""
+    return _HASHER.hash("not a password of anyone")
 
 
 def hash_password(password: str) -> str:
@@ -74,7 +81,7 @@ def authenticate(store, username: str, password: str, address: str = "") -> User
         user = s.scalar(select(User).where(User.username == username))
         ok = False
         try:
-            ok = _HASHER.verify(user.password_hash if user else _DUMMY, password or "")
+            ok = _HASHER.verify(user.password_hash if user else _dummy_hash(), password or "")
         except (VerifyMismatchError, VerificationError, InvalidHashError):
             ok = False
         if not ok or user is None or not user.active:

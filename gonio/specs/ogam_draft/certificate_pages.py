@@ -155,7 +155,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
 
     # table calibration by equal-division averaging, when the readings hold it
     if res["extra"].get("equal_division"):
-        _eda_section(res, L, U, add)
+        _eda_section(res, L, U, add, lang)
 
     # figures
     add("h", L["figures"])
@@ -271,7 +271,7 @@ def _budget_blocks(add, res: dict, U: float | None, L: dict, lang: str) -> None:
 
 
 
-def _eda_section(res: dict, L: dict, U: float, add) -> None:
+def _eda_section(res: dict, L: dict, U: float, add, lang: str = "en") -> None:
     """The table-calibration page: table and goniometer errors with their uncertainties;
     each error to the decimal place of its own u (JCGM 100 7.2.6)."""
     e = res["extra"]["equal_division"]
@@ -297,11 +297,31 @@ def _eda_section(res: dict, L: dict, U: float, add) -> None:
                       u=_num(res, "extra.equal_division.closure.u_full_turn_arcsec", "U", U)))
     cp = e.get("coupling")                   # tilt × Earth-rate coupling
     if cp:
-        txt = cp["note"]
-        if cp.get("separable"):
-            txt += (f" (Ω⊥ tan ψ = {cp['amplitude_arcsec_s']:.2g}″/s, largest effect on a "
-                    f"reading {cp['max_effect_arcsec']:.2g}″)")
-        add("p", [txt])
+        add("p", [coupling_text(cp, lang)])
+
+
+def coupling_text(cp: dict, lang: str = "en") -> str:
+    """The tilt × Earth-rate coupling's sentence in the page's language, from the stored
+    coupling (``extra.equal_division.coupling``: its ``reason`` and numbers; a results.json
+    written before ``reason`` was stored falls back to the analysis' English ``note``).
+
+    >>> coupling_text({"separable": False, "reason": "no_times", "max_effect_arcsec": 0.0123,
+    ...                "note": ""}, "zh")
+    '倾斜×地球自转耦合无法估计：等分平均法读数没有 time_s 列，未计入结果（在倾斜限值下最大约 0.0123″）'
+    """
+    from gonio.specs.ogam_draft.phrases import COUPLING_TEXT as T
+    reason = cp.get("reason") or ("estimated" if cp.get("separable") else None)
+    if reason is None:
+        return cp["note"]
+    if reason == "estimated":
+        return T[reason][lang].format(amp=f"{cp['amplitude_arcsec_s']:.2g}",
+                                      eff=f"{cp['max_effect_arcsec']:.2g}")
+    size = cp.get("max_effect_arcsec")
+    txt = T[reason][lang].format(cond=f"{cp.get('condition_number') or float('nan'):.2g}")
+    if size is not None and size == size:
+        key = "size_no_times" if reason == "no_times" else "size"
+        txt += T[key][lang].format(size=f"{size:.3g}")
+    return txt
 
 
 def _detail_tables(res: dict, L: dict, U: float, add) -> None:

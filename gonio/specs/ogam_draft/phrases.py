@@ -55,3 +55,30 @@ TITLES_EN: dict[str, str] = {
                               "Measuring Instrument",
 }
 
+
+
+#: The tilt × Earth-rate coupling's sentence under the equal-division table, by the analysis'
+#: ``reason`` (gonio.analysis.equal_division.CouplingFit), English and Chinese; ``{amp}`` its
+#: amplitude Ω⊥ tan ψ (″/s), ``{eff}`` its largest effect on a reading (″), ``{cond}`` the
+#: condition number, ``{size}`` its size at the tilt bound (″; the bracketed part only where
+#: that size is known).
+COUPLING_TEXT: dict[str, dict[str, str]] = {
+    "estimated": {
+        "en": "tilt × Earth-rate coupling estimated jointly with the table and goniometer "
+              "errors (nuisance, first harmonic of the absolute position growing with the time "
+              "since zeroing) and removed (Ω⊥ tan ψ = {amp}″/s, largest effect on a reading "
+              "{eff}″)",
+        "zh": "倾斜×地球自转耦合与转台误差、测角仪误差联合估计（作为干扰参数：随清零后时间增长的"
+              "绝对位置一次谐波）并已扣除（Ω⊥ tan ψ = {amp}″/s，对单个读数的最大影响 {eff}″）"},
+    "not_separable": {
+        "en": "the coupling cannot be separated from the table and goniometer errors "
+              "(condition number {cond}); it is not in the result",
+        "zh": "倾斜×地球自转耦合无法与转台误差、测角仪误差分离（条件数 {cond}），未计入结果"},
+    "no_times": {
+        "en": "the coupling cannot be estimated: the equal_division rows have no time_s; "
+              "it is not in the result",
+        "zh": "倾斜×地球自转耦合无法估计：等分平均法读数没有 time_s 列，未计入结果"},
+    "size": {"en": ": up to {size}″ at the tilt bound", "zh": "；在倾斜限值下最大约 {size}″"},
+    "size_no_times": {"en": " (up to about {size}″ at the tilt bound)",
+                      "zh": "（在倾斜限值下最大约 {size}″）"},
+}
