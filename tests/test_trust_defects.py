@@ -332,9 +332,12 @@ def test_every_measured_item_has_the_results_json_shape(tmp_path):
         u = res["items"][item]["uncertainty"]
         assert keys <= set(u) and u["coverage_probability"] == 0.95, item
         assert all(ckeys == set(c) for c in u["components"]), item
-        assert u["U"] == pytest.approx(u["k"] * u["u_c"])
+        if u["k"] is None:       # stated by its χ² interval: U reaches its upper end
+            assert u["U"] == pytest.approx(u["interval"][1] - res["items"][item]["value"])
+        else:
+            assert u["U"] == pytest.approx(u["k"] * u["u_c"])
     rep_ = res["items"]["repeatability"]
-    assert rep_["uncertainty"]["interval"][0] < rep_["value"]
+    assert rep_["uncertainty"]["interval"][0] == 0.0 < rep_["value"]
     for item in ("zero_stability", "rate_consistency", "pointing_consistency"):
         assert res["items"][item]["uncertainty"] is None
 
