@@ -87,10 +87,11 @@ def dashboard(request: Request):
     review, _ = queries.calibrations(store, 1, 20, "computed")
     approve, _ = queries.calibrations(store, 1, 20, "reviewed")
     active, _ = queries.calibrations(store, 1, 20, "running")
+    failed, _ = queries.calibrations(store, 1, 20, "failed")
     due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
                   due=due, n_due=n_due, review=review, approve=approve,
-                  active=active, today=_dt.date.today())
+                  active=active, failed=failed, today=_dt.date.today())
 
 
 # --------------------------------------------------------------------------- customers

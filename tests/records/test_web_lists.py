@@ -176,3 +176,43 @@ def test_due_and_standard_history_queries(store):
     d = queries.standard_history(store, std.id, 1, 2)
     assert [c["certificate"] for c in d["changes"]] == ["A-1", "A-2"]
     assert d["total"] == 3 and len(d["uses"]) == 2
+
+
+def test_dashboard_links_every_waiting_and_lists_the_failed(app, sqlite_store):  # noqa: F811
+    """More than 20 awaiting review: the overview shows 20 and links the whole list (paged
+    by 50); failed calibrations are listed, not only counted (void ones are not)."""
+    tech = services.user(sqlite_store, "tech")
+    cust = services.add_customer(sqlite_store, tech, "Alpha Gyro Ltd", "Road 1\nTown")
+    inst = services.register_instrument(sqlite_store, tech, customer_id=cust.id,
+                                        serial="SN-1", spec_key="ogam-draft",
+                                        model="RLG-GM-1", interval_months=12)
+    sha, _ = services.store_file(sqlite_store, io.BytesIO(b"readings"))
+    ids = {"computed": [], "failed": [], "void": []}
+    with sqlite_store.writing() as s:
+        for state, n in (("computed", 55), ("failed", 3), ("void", 2)):
+            for _ in range(n):
+                cal = Calibration(instrument_id=inst.id, spec_key="ogam-draft",
+                                  readings_sha256=sha, performed_on=dt.date(2025, 3, 1),
+                                  status=state, error="" if state == "computed" else "x")
+                s.add(cal)
+                s.flush()
+                ids[state].append(cal.id)
+        s.commit()
+    web = login(app, "tech")
+    page = web.get("/").text
+    sections = dict(re.findall(r"<h2>([^<]+)</h2>(.*?)(?=<h2>|$)", page, re.S))
+
+    def listed(html: str) -> set[int]:
+        return {int(i) for i in re.findall(r'<td><a href="/calibrations/(\d+)">', html)}
+
+    review = sections["Awaiting review"]
+    assert '<a href="/calibrations?status=computed">all 55 awaiting review</a>' in review
+    assert len(listed(review)) == 20 and listed(review) <= set(ids["computed"])
+    failed = sections["Failed"]
+    assert '<a href="/calibrations?status=failed">all 3 failed</a>' in failed
+    assert listed(failed) == set(ids["failed"])
+    whole = set()
+    for p in (1, 2):
+        whole |= listed(web.get(f"/calibrations?status=computed&page={p}").text)
+    assert whole == set(ids["computed"])
+    assert listed(web.get("/calibrations?status=failed").text) == set(ids["failed"])
