@@ -70,9 +70,10 @@ def calibrations(store, page: int = 1, size: int = 50, status: str = ""):
 
 
 def calibration_page(store, cal_id: int) -> dict | None:
-    """Everything the calibration page shows."""
+    """Everything the calibration page shows; ``place`` is the place of calibration as the
+    certificate states it (the one entered, else the laboratory's)."""
     from gonio.errors import GonioError
-    from gonio.records.services import calibration, seal
+    from gonio.records.services import calibration, seal, settings
 
     try:
         cal = calibration(store, cal_id)
@@ -95,6 +96,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
         sealed, broken = "", str(exc) if cal.results_sha256 else ""
     return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
             "seal": sealed, "seal_error": broken,
+            "place": cal.place or settings(store)["lab_place"],
             "stated": stated_items(store, cal.results_sha256) if sealed else {}}
 
 

@@ -283,8 +283,8 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
                         provenance: dict | None = None) -> "etree.Element":
     """dcc:administrativeData shared by every specification's DCC: the software, core data
     (identifier, dates, place), the item, laboratory, responsible persons, customer and the
-    statements: the specification followed (``norm``, the ``clauses`` calibrated), the
-    virtual-bench notice and one statement per reading taken (already in English; named
+    statements: the specification followed (``norm``, the ``clauses`` calibrated), the place
+    of calibration as the laboratory file gives it, the virtual-bench notice and one statement per reading taken (already in English; named
     ``readings_name``, default the optical certificate's heading). The virtual-bench statement
     is made where the readings' ``provenance`` (or ``md``) say virtual, whatever ``lab`` holds.
     Returns the dcc:statements element (a specification adds its own statements)."""
@@ -366,6 +366,10 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     element(st, "dcc:norm", norm)
     text_element(st, "dcc:declaration", "The calibration follows the specification's clauses "
           + ", ".join(clauses) + ".")
+    if cert.get("place"):       # dcc:performanceLocation is only a category: the place itself
+        st = element(sts, "dcc:statement", id="place")
+        text_element(st, "dcc:name", L["place"])
+        text_element(st, "dcc:declaration", cert["place"])
     if virtual:
         st = element(sts, "dcc:statement", id="virtual-bench")
         text_element(st, "dcc:name", L["virtual"])

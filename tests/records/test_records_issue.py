@@ -17,7 +17,9 @@ from gonio.errors import GonioError
 from gonio.records import services, worker
 from gonio.records.compute import render_folder, write_lab_toml
 
+from .conftest import PASSWORD
 from .test_records_sealed import certificates, computed
+from .test_web_security import app, login  # noqa: F401  (the app fixture)
 
 NS = {"dcc": "https://ptb.de/dcc"}
 
@@ -284,3 +286,44 @@ def test_two_concurrent_issues_give_one_certificate(store, people, computed_fold
         year = int(number.split("-")[1])
         assert s.scalar(select(CertificateCounter.last).where(
             CertificateCounter.year == year)) == 1
+
+
+def test_place_and_receipt_on_the_certificate_dcc_and_issued_page(
+        app, sqlite_store, computed_folder, bench_readings, monkeypatch, dcc_schema,
+        tmp_path):  # noqa: F811
+    """The place and receipt date entered reach the certificate and the DCC (the place as
+    text, since dcc:performanceLocation is only a category), and the calibration page of an
+    issued calibration no longer calls its files the draft awaiting approval."""
+    from html import unescape
+
+    from sqlalchemy import text
+
+    people = {n: services.user(sqlite_store, n) for n in ("tech", "rev")}
+    people["rev2"] = services.create_user(sqlite_store, None, "rev2", PASSWORD, "reviewer")
+    cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
+    place, received = "Room 2, customer's site at Wuxi", cal.performed_on
+    with sqlite_store.writing() as s:
+        s.execute(text("UPDATE calibrations SET place = :p, received_on = :r WHERE id = :c"),
+                  {"p": place, "r": received, "c": cal.id})
+        s.commit()
+    tech = login(app, "tech")
+    page = tech.get(f"/calibrations/{cal.id}").text
+    assert "until the calibration is approved" in page
+    assert "Place</dt><dd>Room 2, customer&#39;s site at Wuxi<" in page
+    assert f"Received</dt><dd>{received.isoformat()}<" in page
+    services.review(sqlite_store, people["rev"], cal.id, accept=True)
+    services.approve(sqlite_store, people["rev2"], cal.id)
+    cert = run_issue(sqlite_store, monkeypatch)
+    html = services.file_bytes(sqlite_store, cert.html_sha256).decode("utf-8")
+    assert unescape(kv_row(html, "Place of calibration")) == place
+    assert kv_row(html, "Date of receipt") == received.isoformat()
+    dcc = services.file_bytes(sqlite_store, cert.dcc_sha256)
+    validate(dcc_schema, dcc, tmp_path)
+    root = etree.fromstring(dcc)
+    assert root.findtext(".//dcc:coreData/dcc:receiptDate", namespaces=NS) == received.isoformat()
+    st = root.find(".//dcc:statement[@id='place']", NS)
+    assert "".join(st.find("dcc:declaration", NS).itertext()).strip() == place
+    page = tech.get(f"/calibrations/{cal.id}").text
+    assert "until the calibration is approved" not in page
+    assert "the issued certificate is listed below" in page
+    assert f'href="/certificates/{cert.id}">{cert.number}<' in page
