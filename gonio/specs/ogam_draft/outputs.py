@@ -4,35 +4,25 @@ certificate and its DCC from the one sealed :class:`~gonio.result.model.Result` 
 
 This module is ``SPEC.outputs``: the pipeline imports it through the registry (it may import
 the report and the bench; the calibration path never imports it). Conformity is decided by
-the pipeline before anything is written (:func:`decide`); everything here renders it.
+the pipeline before anything is written (:func:`gonio.specs.decide_conformity`; the demo
+and :func:`write_outputs`, which do not go through the pipeline, call it as the pipeline
+would); everything here renders it.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
 from gonio.atomic import output_dir, output_set, write_text
 from gonio.bench import load_bench, run_session, write_session
 from gonio.protocol import load_protocol
+from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text
 from gonio.result.model import Result
 from gonio.result.tables import results_json_text, write_tables
 from gonio.result.text import virtual_line
 from gonio.specs.ogam_draft.calibration import calibrate
-
-
-def decide(result: Result, lab: dict | None = None) -> Result:
-    """Conformity of every item the laboratory file limits (or the specification's default
-    tolerances, ``SPEC.default_limits``: the draft gives none) decided in ``result``
-    (:func:`gonio.analysis.conformity.decide_result`), as the pipeline decides it
-    (``gonio.pipeline.dispatch.decide_conformity``) for the demo and the Python API, which
-    do not go through it; returns ``result``."""
-    from gonio.specs import default_limits
-
-    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
-    return result
 
 
 def results_json(result: Result, lab: dict | None = None) -> dict:
@@ -89,7 +79,8 @@ def write_outputs(result: Result, out: str | Path, *, truth: dict | None = None,
                   force: bool = False, dcc: bool = False) -> dict[str, Path]:
     """One run's whole output set into ``out``: results, summary, tables, certificate (and
     readings + truth of a simulated ``session``), swapped in together; conformity decided
-    on ``lab``'s limits first (:func:`decide`), as the pipeline does.
+    on ``lab``'s limits first by the one decision
+    (:func:`gonio.specs.decide_conformity`), as the pipeline does.
 
     Through :func:`gonio.atomic.output_set`: every part is written into a staging
     folder and the folder replaces ``out`` only when all are written, with
@@ -100,7 +91,7 @@ def write_outputs(result: Result, out: str | Path, *, truth: dict | None = None,
     if isinstance(lab, (str, Path)):
         from gonio.formats.lab import load_lab
         lab = load_lab(lab)
-    decide(result, lab)
+    decide_conformity(result, lab)
     with output_set(out, inputs=inputs, force=force, source_sha256=result.source_sha256) as st:
         if session is not None:
             write_session(session, out)
@@ -153,7 +144,7 @@ def demo(out: str | Path, *, bench: str = "rlg", seed: int = 0, lab=None, lang: 
         session = run_session(proto, bench_cfg, seed=seed)
         write_session(session, out)
         say("demo: calibrating")
-        result = decide(calibrate(stage / "readings.csv", proto,
+        result = decide_conformity(calibrate(stage / "readings.csv", proto,
                                   static_record=session.static_record), lab)
         write_calibration(result, out, lab=lab)
         say("demo: writing the certificate")
