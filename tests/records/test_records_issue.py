@@ -140,6 +140,8 @@ def test_amendment_states_what_it_replaces_and_why(store, people, computed_folde
     first = run_issue(store, monkeypatch)
     first_html = services.file_bytes(store, first.html_sha256)
     reason = "customer's address corrected\n(second line)"
+    cust = services.calibration(store, first.calibration_id).instrument.customer
+    services.update_customer(store, people["tech"], cust.id, address="3 Sample Street\nTown")
     services.amend(store, people["admin"], first.id, reason)
     services.approve(store, people["rev"], first.calibration_id)
     second = run_issue(store, monkeypatch)
@@ -150,6 +152,9 @@ def test_amendment_states_what_it_replaces_and_why(store, people, computed_folde
     page = services.file_bytes(store, second.html_sha256).decode("utf-8")
     assert (kv_row(page, "Amendment asked for by"), kv_row(page, "Approved by")) == (
         "admin", "rev")
+    # what the amendment corrects reaches it; the original keeps what it said
+    assert "3 Sample Street" in kv_row(page, "Customer address")
+    assert kv_row(first_html.decode("utf-8"), "Customer address") == "2 Sample Street"
     notice = (f"This certificate amends and replaces certificate {first.number}, which is "
               "withdrawn. Reason for the amendment: customer&#x27;s address corrected "
               "(second line)")       # its lines joined in the one notice
