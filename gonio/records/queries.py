@@ -261,6 +261,30 @@ def audit_events(store, page: int = 1, size: int = 100, entity: str = "",
         return _page(s, stmt, page, size)
 
 
+def audit_changes(before_json: str, after_json: str) -> list[tuple[str, str, str]]:
+    """What an audit event changed, to be read: (field, before, after) for every field whose
+    value differs between the event's two recorded states, by field name; a field one state
+    lacks is "" there, a value that is not text is written as JSON. A state that is not a
+    JSON object is given whole as the one field "(state)"."""
+    import json
+
+    def load(doc: str):
+        try:
+            got = json.loads(doc or "{}")
+        except ValueError:
+            return None
+        return got if isinstance(got, dict) else None
+
+    def shown(v) -> str:
+        return "" if v is None else v if isinstance(v, str) else json.dumps(v, sort_keys=True)
+
+    before, after = load(before_json), load(after_json)
+    if before is None or after is None:
+        return [("(state)", before_json, after_json)]
+    return [(k, shown(before.get(k)), shown(after.get(k)))
+            for k in sorted(set(before) | set(after)) if before.get(k) != after.get(k)]
+
+
 #: The lists ``gonio serve`` exports as CSV: name → (header, rows(store, params)).
 def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] | None:
     """A whole list as (header, rows) for its CSV export, or None for an unknown list;

@@ -638,8 +638,9 @@ def audit_page(request: Request):
     filters = _filters(request, AUDIT_FILTERS)
     rows, total = queries.audit_events(_store(request), page, 100, **filters)
     query = urlencode({k: v for k, v in filters.items() if v})
+    changes = {e.id: queries.audit_changes(e.before_json, e.after_json) for e in rows}
     return render(request, "audit.html", user, csrf, events=rows, total=total, page=page,
-                  size=100, filters=filters, extra="&" + query if query else "", query=query)
+                  changes=changes, size=100, filters=filters, extra="&" + query if query else "", query=query)
 
 
 def csv_text(header: list[str], rows: list[list]) -> str:

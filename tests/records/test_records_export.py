@@ -6,7 +6,7 @@ from __future__ import annotations
 import csv
 import io
 
-from gonio.records import services
+from gonio.records import queries, services
 
 from .test_web_security import app, login  # noqa: F401  (the app fixture)
 
@@ -52,3 +52,8 @@ def test_audit_filtered_and_exported(app, sqlite_store):  # noqa: F811
     page = web.get("/audit?username=tech&entity=customer").text
     assert page.count("<td>tech</td>") == 2 and "<td>admin</td>" not in page
     assert 'href="/export/audit.csv?entity=customer&amp;username=tech"' in page
+    # readable: the field the update changed, from what to what (not only the raw JSON)
+    assert '<div class="change"><b>address</b>: — → 2 Road</div>' in page
+    assert queries.audit_changes('{"a": 1, "b": "x"}', '{"a": 1, "b": "y", "c": [2]}') == [
+        ("b", "x", "y"), ("c", "", "[2]")]
+    assert queries.audit_changes("[1]", "{}") == [("(state)", "[1]", "{}")]
