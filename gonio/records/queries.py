@@ -263,8 +263,9 @@ def audit_events(store, page: int = 1, size: int = 100, entity: str = "",
 
 def audit_changes(before_json: str, after_json: str) -> list[tuple[str, str, str]]:
     """What an audit event changed, to be read: (field, before, after) for every field whose
-    value differs between the event's two recorded states, by field name; a field one state
-    lacks is "" there, a value that is not text is written as JSON. A state that is not a
+    value, as written here, differs between the event's two recorded states, by field name;
+    a field one state lacks (or has as null) is "" there, a value that is not text is written
+    as JSON. A state that is not a
     JSON object is given whole as the one field "(state)"."""
     import json
 
@@ -281,8 +282,9 @@ def audit_changes(before_json: str, after_json: str) -> list[tuple[str, str, str
     before, after = load(before_json), load(after_json)
     if before is None or after is None:
         return [("(state)", before_json, after_json)]
-    return [(k, shown(before.get(k)), shown(after.get(k)))
-            for k in sorted(set(before) | set(after)) if before.get(k) != after.get(k)]
+    pairs = [(k, shown(before.get(k)), shown(after.get(k)))
+             for k in sorted(set(before) | set(after))]
+    return [(k, was, now) for k, was, now in pairs if was != now]
 
 
 #: The lists ``gonio serve`` exports as CSV: name → (header, rows(store, params)).

@@ -54,6 +54,7 @@ def test_audit_filtered_and_exported(app, sqlite_store):  # noqa: F811
     assert 'href="/export/audit.csv?entity=customer&amp;username=tech"' in page
     # readable: the field the update changed, from what to what (not only the raw JSON)
     assert '<div class="change"><b>address</b>: — → 2 Road</div>' in page
-    assert queries.audit_changes('{"a": 1, "b": "x"}', '{"a": 1, "b": "y", "c": [2]}') == [
+    assert queries.audit_changes('{"a": 1, "b": "x", "d": null}',
+                                 '{"a": 1, "b": "y", "c": [2], "d": ""}') == [
         ("b", "x", "y"), ("c", "", "[2]")]
     assert queries.audit_changes("[1]", "{}") == [("(state)", "[1]", "{}")]
