@@ -1268,8 +1268,13 @@ def due_instruments(store, today: _dt.date | None = None, within_days: int = 30)
 
 
 def _add_months(day: _dt.date, months: int) -> _dt.date:
+    """``day`` plus ``months`` calendar months (the day clipped to the month's last); a date
+    past the calendar's end (a record dated near 9999-12-31, refused at entry but possible in
+    an old database) is the last date there is, so that lists built on it still answer."""
     import calendar
 
     y, m = divmod(day.month - 1 + int(months), 12)
     year, month = day.year + y, m + 1
+    if year > _dt.MAXYEAR:
+        return _dt.date.max
     return _dt.date(year, month, min(day.day, calendar.monthrange(year, month)[1]))
