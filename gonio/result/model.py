@@ -271,6 +271,46 @@ class Covariance:
         return cls(list(d["items"]), [list(r) for r in d["matrix"]], d.get("source", ""))
 
 
+#: The top-level keys of results.json and the JSON type each must have (docs/formats.md);
+#: ``spec`` and ``items`` are required.
+_RESULT_SHAPE = {"spec": (str, "a string"), "items": (dict, "an object of items"),
+                 "metadata": (dict, "an object"), "source": (dict, "an object"),
+                 "extra": (dict, "an object"), "settings": (dict, "an object"),
+                 "provenance": (dict, "an object"), "readings_taken": (list, "a list"),
+                 "findings": (list, "a list"), "unused_readings": (list, "a list"),
+                 "covariances": (list, "a list")}
+
+
+def _json_type(x) -> str:
+    return {dict: "an object", list: "a list", str: "a string", bool: "true/false",
+            type(None): "null"}.get(type(x), "a number")
+
+
+def _check_shape(d: dict) -> None:
+    """Refuse a results.json whose top-level keys have the wrong JSON type, naming the key
+    (GonioError ``key KEY: malformed results.json: must be …``), before anything reads them.
+
+    >>> _check_shape({"spec": "x", "items": []})
+    Traceback (most recent call last):
+    gonio.errors.GonioError: key items: malformed results.json: must be an object of items, not a list
+    """
+    for key, (typ, what) in _RESULT_SHAPE.items():
+        if key not in d:
+            if key in ("spec", "items"):
+                raise GonioError("malformed results.json: required key is missing", key=key)
+            continue
+        v = d[key]
+        if v is None and key not in ("spec", "items"):
+            continue
+        if not isinstance(v, typ):
+            raise GonioError(f"malformed results.json: must be {what}, not {_json_type(v)}",
+                             key=key)
+    for k, it in d["items"].items():
+        if not isinstance(it, dict):
+            raise GonioError(f"malformed results.json: must be an object, not "
+                             f"{_json_type(it)}", key=f"items.{k}")
+
+
 @dataclass
 class Result:
     """A calibration's result (see the module docstring).
@@ -337,6 +377,7 @@ class Result:
         if v != RESULTS_VERSION:
             raise GonioError(f"results.json version {v!r} is not the one this gonio reads "
                              f"({RESULTS_VERSION})", key="version")
+        _check_shape(d)
         fnames = {f.name for f in fields(Finding)}
         try:
             return cls(d["spec"], d.get("specification", ""),
