@@ -177,6 +177,7 @@ def interval_cell(st: dict, lang: str) -> str:
 def segments(template: str, **nums) -> list:
     """Split a label template "... {x} ..." into text and Num segments.
 
+    >>> from gonio.kit.render import Num
     >>> segments("U = {U}″", U=Num("0.34", "uncertainty.U_arcsec", "U"))
     ['U = ', Num(text='0.34', src='uncertainty.U_arcsec', rule='U'), '″']
     """
