@@ -14,26 +14,8 @@ from gonio.formats.lab import load_lab
 from gonio.report.i18n import display
 from gonio.result.model import Result
 
-LAB = """
-[laboratory]
-name = "Lab Render"
-address = "1 Stored Row"
-[certificate]
-number = "C-R-1"
-procedure = "LP-1 rev. 1"
-[customer]
-name = "Customer One"
-[signatory]
-calibrated_by = "A. Calibrator"
-approved_by = "Q. Approver"
-[decision_rule]
-rule = "simple"
-[[specification_limits]]
-item = "{item}"
-mpe = {mpe}
-"""
-ITEM = {"jjf1535-2015": ("bias", "1.0e-5"), "iec62047-20": ("bias", "1.0e6"),
-        "triad-alignment": ("S_xy", "1.0")}
+# the signatory test's laboratory file, limiting one item of each specification
+from tests.test_certificate_signatory import ITEM, LAB  # noqa: E402
 
 
 @pytest.fixture(scope="module", params=tuple(ITEM))

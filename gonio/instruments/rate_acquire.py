@@ -3,8 +3,8 @@ a supply (``gonio acquire`` with a rate specification's protocol).
 
 The programme is the specification's own list of
 :class:`~gonio.protocol.programme.Segment` (its acquisition hook,
-``Specification.acquisition``: JJF 1535-2015's is
-:func:`gonio.specs.jjf1535.acquisition.programme`), the same list ``gonio simulate`` runs
+``Specification.acquisition``, looked up through the registry: this module names no
+specification), the same list ``gonio simulate`` runs
 on the virtual bench. :func:`acquire_rate` takes it segment by segment:
 
 1. a segment that starts a power cycle (``power_on``, and the first one run): the supply
