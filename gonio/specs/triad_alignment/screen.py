@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError
-from gonio.formats.triad import OUT
+from gonio.specs.triad_alignment.readings import OUT
 from gonio.result.findings import Finding
 
 #: A rotating dwell's output must stand this many sample deviations from the static median
@@ -160,7 +160,7 @@ def _no_static_record(df: pd.DataFrame, file) -> list[Finding]:
 
 
 def screen(readings, protocol=None) -> list[Finding]:
-    """Every finding on a triad readings file (:class:`gonio.formats.triad.TriadReadings`)."""
+    """Every finding on a triad readings file (:class:`gonio.specs.triad_alignment.readings.TriadReadings`)."""
     df = readings.data
     file = None if readings.path is None else str(readings.path)
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)
