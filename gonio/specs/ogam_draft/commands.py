@@ -6,13 +6,14 @@ Its own options of gonio's commands (``SPEC.arguments``): ``gonio calibrate --bu
 (:func:`add_calibrate_options`), ``gonio simulate --table|--stream|--stream-format``
 (:func:`add_simulate_options`), the Annex A inputs of ``gonio budget``
 (:func:`add_budget_options`) and the settings of its ``gonio validate`` study
-(:func:`add_validate_options`). ``gonio reduce``: stream → readings file (find the table's rests, match the protocol's
-rounds; :func:`gonio.reduce.reduce_stream`). ``gonio tilt``: the extreme tilt error over
+(:func:`add_validate_options`). ``gonio reduce``: stream → readings file (find the table's
+rests, match the protocol's rounds; :func:`gonio.specs.ogam_draft.reduce.reduce_stream`).
+``gonio tilt``: the extreme tilt error over
 0–360° (draft Annex A.4.2; :mod:`gonio.physics.tilt`). ``gonio tilt-estimate``: ψ and α from
 the static multi-position rows of a readings file
-(:func:`gonio.analysis.tilt_estimate.tilt_estimate_from_readings`). ``gonio eda``:
+(:func:`gonio.specs.ogam_draft.tilt_estimate.tilt_estimate_from_readings`). ``gonio eda``:
 equal-division averaging of a readings file's ``equal_division`` rows (IEC 62047-20 Annex A.3;
-:func:`gonio.analysis.equal_division.equal_division_from_readings`).
+:func:`gonio.specs.ogam_draft.equal_division.equal_division_from_readings`).
 
 This module sits on the command line's layer (it imports ``gonio.cli.checks``); nothing
 imports it but the command line, when it builds its parser.
@@ -140,12 +141,12 @@ def run_reduce(args) -> int:
     check_input_file(args.stream, "stream file")
     check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
                       force=args.force, protected=True)
-    from gonio.formats.override import read_override
+    from gonio.specs.ogam_draft.override import read_override
     from gonio.formats.readings import write_readings
     from gonio.formats.streams import StreamFile
     from gonio.progress import status
     from gonio.protocol import load_protocol
-    from gonio.reduce import reduce_stream
+    from gonio.specs.ogam_draft.reduce import reduce_stream
     from gonio.specs.ogam_draft import SPEC
 
     proto = load_protocol(args.protocol or SPEC.default_protocol)
@@ -233,7 +234,7 @@ def add_tilt_estimate(subparsers) -> None:
 
 def run_tilt_estimate(args) -> int:
     """Read the file, estimate, print."""
-    from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
+    from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
     from gonio.formats.readings import read_readings
 
     r = read_readings(args.file)
@@ -282,7 +283,7 @@ def add_eda(subparsers) -> None:
 
 def eda_text(res) -> str:
     """The printed form of an equal-division result (an
-    :class:`~gonio.analysis.equal_division.EdaResult`: tables, closure, coupling)."""
+    :class:`~gonio.specs.ogam_draft.equal_division.EdaResult`: tables, closure, coupling)."""
     out = [f"equal-division averaging (IEC 62047-20 Annex A.3): n = {res.n_starts} starts, "
            f"m = {res.m_points} points ({res.step_deg:g}° step), {res.repeats} repeat(s)",
            f"residual std {res.residual_std_arcsec:.4f}″, dof {res.dof}, gauge {res.gauge}, "
@@ -314,7 +315,7 @@ def eda_text(res) -> str:
 
 def run_eda(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
-    from gonio.analysis.equal_division import equal_division_from_readings
+    from gonio.specs.ogam_draft.equal_division import equal_division_from_readings
     from gonio.atomic import check_output_files
     from gonio.formats.readings import read_readings
     from gonio.protocol import load_protocol
@@ -330,7 +331,7 @@ def run_eda(args) -> int:
         protocol=proto.equal_division, coupling=not args.no_coupling,
         compensation_time_s=sess.static_s if sess.earth_compensation == "measured" else None)
     if args.plot:
-        from gonio.report.eda_figure import equal_division_figure
+        from gonio.specs.ogam_draft.pages import equal_division_figure
         from gonio.report.figure_files import save_figure
         save_figure(equal_division_figure(res), args.plot)
     if args.json:
