@@ -19,7 +19,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from sqlalchemy import Date, DateTime, func, select, text
+from sqlalchemy import Date, DateTime, Integer, func, select, text
 
 from gonio.errors import GonioError
 from gonio.records import blobs
@@ -239,7 +239,8 @@ def restore(store, path: str | os.PathLike) -> dict:
         if store.engine.dialect.name == "postgresql":
             for table in _tables():
                 pk = list(table.primary_key.columns)
-                if [c.name for c in pk] == ["id"]:
+                # an integer id has a sequence (a web session's text id has none)
+                if [c.name for c in pk] == ["id"] and isinstance(pk[0].type, Integer):
                     s.execute(text(f"SELECT setval(pg_get_serial_sequence('{table.name}', "
                                    f"'{pk[0].name}'), COALESCE((SELECT MAX({pk[0].name}) "
                                    f"FROM {table.name}), 0) + 1, false)"))

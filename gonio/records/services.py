@@ -747,16 +747,17 @@ def standard_names(s: Session, cal_id: int) -> list[str]:
 def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool):
     """(temperature, humidity, environment_from) to record, or None: taken from the readings'
     metadata, or as entered after comparing it with what the readings state."""
-    from gonio.records import bench, submission
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.compute import readings_file
 
     if not from_readings and temp is None:
         return None
-    if bench.pending_request(store, cal) is not None:
-        if from_readings:
-            raise GonioError("the readings are not acquired yet: enter the environment",
-                             key="environment")
-        return temp, hum, ""
-    md = submission.readings_facts(store, cal.readings_sha256)["metadata"]
+    src = blobs.blob_path(store.blob_root, cal.readings_sha256)
+    if not src.is_file():
+        raise GonioError("the calibration's readings are not in the store", key="readings")
+    # a bench calibration's readings not acquired yet (its request): no metadata lines
+    with readings_file(src) as path:
+        md = readings_metadata(path)
     if not from_readings:
         from gonio.pipeline.identity import contradictions
         found = contradictions(md, {"environment": {"temperature_c": temp,

@@ -28,8 +28,6 @@ every path: the web form, a bench, the Python API):
 
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
 from typing import Iterable
 
 from sqlalchemy import select
@@ -52,7 +50,7 @@ def readings_facts(store, sha256: str) -> dict:
     readings file is a GonioError (key ``readings``) saying what it looks like."""
     from gonio.formats.provenance import readings_metadata
     from gonio.pipeline.dispatch import readings_spec
-    from gonio.records.compute import readings_suffix
+    from gonio.records.compute import readings_file, readings_suffix
     from gonio.records.blobs import blob_path
 
     src = blob_path(store.blob_root, sha256)
@@ -63,9 +61,7 @@ def readings_facts(store, sha256: str) -> dict:
     suffix = readings_suffix(head)
     if suffix == ".csv":
         _looks_like_csv(head)
-    with tempfile.TemporaryDirectory(prefix="gonio-upload-") as tmp:
-        path = Path(tmp) / ("readings" + suffix)
-        path.symlink_to(src)
+    with readings_file(src) as path:
         try:
             md = readings_metadata(path)
             spec = readings_spec(path)

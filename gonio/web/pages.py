@@ -745,16 +745,22 @@ def backup_page(request: Request):
     return render(request, "backup.html", user, csrf)
 
 
+async def _admin_post(request: Request):
+    """An admin's form sent (CSRF checked): (user, csrf, data), else the 403 Response."""
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _may_read(user, "admin") or (user, csrf, data)
+
+
 @router.post("/backup/verify")
 async def backup_verify(request: Request):
     """The live records checked as ``gonio db verify`` checks them."""
     from gonio.records.backup import verify
 
-    user, csrf = current(request)
-    await form(request, csrf)
-    refused = _may_read(user, "admin")
-    if refused:
-        return refused
+    got = await _admin_post(request)
+    if isinstance(got, Response):
+        return got
+    user, csrf, _ = got
     counts, problems = verify(_store(request))
     return render(request, "backup.html", user, csrf, live=counts, problems=problems)
 
@@ -766,11 +772,10 @@ async def backup_download(request: Request):
 
     from gonio.records.backup import backup
 
-    user, csrf = current(request)
-    await form(request, csrf)
-    refused = _may_read(user, "admin")
-    if refused:
-        return refused
+    got = await _admin_post(request)
+    if isinstance(got, Response):
+        return got
+    user, csrf, _ = got
     with tempfile.TemporaryDirectory(prefix="gonio-backup-", dir=_store(request).data) as tmp:
         path = Path(tmp) / "records.zip"
         try:
@@ -790,11 +795,10 @@ async def backup_check(request: Request):
     writes anything (complete, intact, every row and reference); nothing is written."""
     from gonio.records.backup import check_archive
 
-    user, csrf = current(request)
-    data = await form(request, csrf)
-    refused = _may_read(user, "admin")
-    if refused:
-        return refused
+    got = await _admin_post(request)
+    if isinstance(got, Response):
+        return got
+    user, csrf, data = got
     f = data.get("archive")
     if f is None or not hasattr(f, "read") or not f.filename:
         return render(request, "backup.html", user, csrf, status_code=400,

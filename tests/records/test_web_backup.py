@@ -9,7 +9,7 @@ import re
 import zipfile
 
 from gonio.records import services
-from gonio.records.backup import check_archive, restore
+from gonio.records.backup import backup, check_archive, restore
 from gonio.records.db import open_store
 
 from .test_records_backup import damage, first_pdf, records  # noqa: F401  (the fixture)
@@ -65,3 +65,25 @@ def test_backup_page_verifies_downloads_and_checks_an_archive(records, tmp_path)
     assert f"<li>stored file {sha} (damaged)</li>" in page
     r = web.post("/backup/download", data={"csrf": csrf_of(web)})
     assert r.status_code == 409 and "1 stored file(s) missing or damaged" in r.text
+
+
+def test_an_archive_with_web_sessions_restores_into_postgresql(pg_server, tmp_path):
+    """A backup taken while people are logged in holds web sessions (a text id, no
+    sequence): its restore into PostgreSQL moved every id sequence, that table's too, and
+    failed ("COALESCE types text and integer cannot be matched")."""
+    from gonio.records import auth
+
+    from .conftest import new_pg_database
+
+    src = open_store(new_pg_database(pg_server), tmp_path / "a")
+    dst = open_store(new_pg_database(pg_server), tmp_path / "b")
+    try:
+        qm = services.create_user(src, None, "qm", PASSWORD, "admin")
+        auth.open_session(src, qm)
+        backup(src, tmp_path / "b.zip")
+        assert restore(dst, tmp_path / "b.zip")["web_sessions"] == 1
+        # the ids go on after the restored ones
+        assert services.create_user(dst, None, "next", PASSWORD, "technician").id == qm.id + 1
+    finally:
+        src.close()
+        dst.close()

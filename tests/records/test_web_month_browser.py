@@ -63,6 +63,15 @@ def edit_row(page, row_text: str, **fields) -> None:
         row.locator("button:has-text('Save')").click()
 
 
+def act(page, base: str, who: str, cal_url: str, button: str, want: str) -> None:
+    """``who`` logs in, presses ``button`` on the calibration's page and waits for ``want``."""
+    log_in(page, base, who)
+    page.goto(cal_url)
+    with page.expect_navigation():
+        page.click(button)
+    wait_status(page, want)
+
+
 def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  # noqa: F811
                                                serve, tmp_path):
     base, data, url, other_db, kind = month
@@ -118,17 +127,9 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     cal_url = upload(page, base, inst_url, bench_readings[0], day.isoformat())
     wait_status(page, "computed")
     log_out(page)
-    log_in(page, base, "rev")
-    page.goto(cal_url)
-    with page.expect_navigation():
-        page.click("button[value=accept]")
-    wait_status(page, "reviewed")
+    act(page, base, "rev", cal_url, "button[value=accept]", "reviewed")
     log_out(page)
-    log_in(page, base, "qm")
-    page.goto(cal_url)
-    with page.expect_navigation():
-        page.click("button:has-text('Approve and issue')")
-    wait_status(page, "issued")
+    act(page, base, "qm", cal_url, "button:has-text('Approve and issue')", "issued")
     number = f"GC-{time.gmtime().tm_year}-0001"
     assert number in page.content()
 
@@ -163,9 +164,8 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     page.goto(cal_url)
     assert "customer's address corrected\nserial confirmed" in page.locator(
         "p.pre").inner_text()
-    with page.expect_navigation():
-        page.click("button:has-text('Approve and issue')")
-    wait_status(page, "issued")
+    log_out(page)
+    act(page, base, "rev", cal_url, "button:has-text('Approve and issue')", "issued")
     amended = f"GC-{time.gmtime().tm_year}-0002"
     page.click(f"text={amended}")
     assert number in page.locator("dd.pre").inner_text()
