@@ -7,7 +7,7 @@ docs/formats-triad.md; method: docs/alignment.md). ``gonio thermal-model``: iden
 K(ϑ, U), b(ϑ, U) and ARW(ϑ) from a triad thermal readings file (docs/thermal-model.md), a
 thin layer over :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`.
 Its own ``gonio calibrate`` options (``--thermal``, ``--robust``): :func:`add_calibrate_options`
-(``SPEC.calibrate_arguments``).
+(``SPEC.arguments["calibrate"]``).
 
 This module sits on the command line's layer (it imports ``gonio.cli.checks``); nothing
 imports it but the command line, when it builds its parser.
@@ -22,7 +22,7 @@ from gonio.errors import GonioError
 
 
 def add_calibrate_options(group) -> None:
-    """The triad's own ``gonio calibrate`` options (``SPEC.calibrate_arguments``): the
+    """The triad's own ``gonio calibrate`` options (``SPEC.arguments["calibrate"]``): the
     thermal-programme readings and the robust fit."""
     group.add_argument("--thermal", default=None, metavar="FILE",
                        help="the thermal-programme readings (default: the file the readings' "
