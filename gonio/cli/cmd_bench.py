@@ -39,7 +39,7 @@ def register(sub) -> None:
                    help="the table's stated range, ±degrees (default 360)")
     s.add_argument("--warm-up", type=float, default=S_PER_H,
                    help="seconds the instrument has been on when serving starts (default: an "
-                        "hour, the draft's 7.3 warm-up)")
+                        "hour)")
     s.add_argument("--fault", action="append", default=[],
                    help="inject a fault for testing: table-error:N (the N-th move fails with an "
                         "axis fault; a rate bench: its N-th ROT or OSC), gyro-drop:N (the module "

@@ -133,7 +133,7 @@ class Analysis:
     repeatability_source: str
     noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
-    eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
+    eda: object | None = None            # gonio.specs.ogam_draft.equal_division.EdaResult of the equal_division rows
     item_uncertainty: dict = field(default_factory=dict)
     budget_kind: str = "physical"
     conflicts: list = field(default_factory=list)
@@ -787,7 +787,7 @@ def _read(path: str | Path, protocol: Protocol):
     if sniff_kind(path) == "readings":
         return read_readings(path), None
     from gonio.formats.readings import format_readings, parse_readings
-    from gonio.reduce import reduce_stream
+    from gonio.specs.ogam_draft.reduce import reduce_stream
 
     stream = StreamFile(path)               # read in blocks: bounded memory
     red = reduce_stream(stream, protocol)
@@ -1042,7 +1042,7 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings,
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.analysis.equal_division import equal_division_from_readings
+    from gonio.specs.ogam_draft.equal_division import equal_division_from_readings
 
     rows = readings.data[readings.data["test"] == "equal_division"]
     if not len(rows):
