@@ -32,7 +32,7 @@ def seeds_arg(text: str) -> list[int]:
 
 
 def bench_at(tilt_deg: float, azimuth_deg: float):
-    from gonio.bench import load_bench
+    from gonio.specs.ogam_draft.bench import load_bench
     from gonio.specs.ogam_draft.study import tilted
     return tilted(load_bench("rlg"), tilt_deg, azimuth_deg)
 
@@ -40,8 +40,8 @@ def bench_at(tilt_deg: float, azimuth_deg: float):
 def trial(bench, protocol, seed: int, work: Path) -> tuple[float, float, float]:
     """(K − K_true, u_c(K), U(K)) of one simulated calibration (the readings written to and
     read back from a CSV, as ``gonio calibrate`` reads them)."""
-    from gonio.bench import run_session, write_session
-    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.bench import run_session, write_session
+    from gonio.specs.ogam_draft.readings import read_readings
     from gonio.specs.ogam_draft.calibration import analyse
     from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
     session = run_session(protocol, bench, seed=seed)
@@ -61,9 +61,9 @@ def main(argv=None) -> int:
     ap.add_argument("--azimuth", default="worst")
     ap.add_argument("--protocol", default="ogam-draft")
     a = ap.parse_args(argv)
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.protocol import load_protocol
     proto = load_protocol(a.protocol)
-    from gonio.bench import load_bench
+    from gonio.specs.ogam_draft.bench import load_bench
     from gonio.specs.ogam_draft.study import worst_azimuth
     az = worst_azimuth(load_bench("rlg"), proto, a.tilt) if a.azimuth == "worst" \
         else float(a.azimuth)
