@@ -43,9 +43,9 @@ def trial(index: int, seed: int, rate_hz: float, methods: tuple) -> dict:
 
     from gonio.analysis.noise import analyse_static
     from gonio.analysis.noise.readings import expected_zero_stability
-    from gonio.bench import load_bench, run_session
-    from gonio.formats.readings import Readings
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.bench import load_bench, run_session
+    from gonio.specs.ogam_draft.readings import Readings
+    from gonio.specs.ogam_draft.protocol import load_protocol
     from gonio.specs.ogam_draft.calibration import analyse
     from gonio.specs.ogam_draft.item_coverage import zero_stability_truth
     from gonio.specs.ogam_draft.item_uncertainty import zero_stability_model_budget

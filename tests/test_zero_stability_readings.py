@@ -226,7 +226,7 @@ def test_cli_validate_refuses_one_monte_carlo_trial(tmp_path):
 
 def test_validate_monte_carlo_reports_every_item():
     from dataclasses import replace
-    from gonio.bench import load_bench
+    from gonio.specs.ogam_draft.bench import load_bench
     from gonio.pipeline.validate import validate
     from gonio.specs.ogam_draft.study import validation_protocol
 

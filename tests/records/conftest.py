@@ -144,8 +144,8 @@ def people(store):
 def bench_readings(tmp_path_factory):
     """Two readings files of the small optical protocol (seeds 1 and 2) from the virtual
     bench."""
-    from gonio.bench import load_bench, run_session, write_session
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+    from gonio.specs.ogam_draft.protocol import load_protocol
 
     root = tmp_path_factory.mktemp("bench")
     out = []
