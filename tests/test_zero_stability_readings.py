@@ -20,8 +20,9 @@ import pytest
 from scipy import stats
 
 from gonio.analysis.noise.fit import design_matrix
-from gonio.analysis.noise.readings import (expected_sample_variance, expected_zero_stability,
-                                           generalised_covariance, reading_weights)
+from gonio.specs.ogam_draft.zero_stability_noise import (expected_sample_variance,
+                                                         expected_zero_stability,
+                                                         generalised_covariance, reading_weights)
 from gonio.specs.ogam_draft.item_uncertainty import (ConditionDeviation, consistency_budget,
                                                      monte_carlo_item, zero_stability_budget,
                                                      zero_stability_model_budget)

@@ -982,7 +982,8 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
     always evaluated and is stated by default. With the continuous
     record of the 7.3 rest analysed (``noise``) and a measured Earth-rate compensation,
     the expected B_s of the same readings from the fitted noise model
-    (:func:`gonio.analysis.noise.readings.expected_zero_stability`) is given beside it,
+    (:func:`gonio.specs.ogam_draft.zero_stability_noise.expected_zero_stability`) is given
+    beside it,
     labelled; ``stated="model"`` states it instead (``items["zero_stability"]`` then
     becomes its budget). It is not the default because the five-term model cannot
     represent a Gauss–Markov bias whose correlation time lies inside the record, and on
@@ -995,7 +996,7 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
         raise GonioError(f"zero-stability reading must be one of "
                          f"{', '.join(ZERO_STABILITY_READINGS)}, got {stated!r}",
                          key="zero_stability")
-    from gonio.analysis.noise.readings import expected_zero_stability
+    from gonio.specs.ogam_draft.zero_stability_noise import expected_zero_stability
     from gonio.specs.ogam_draft.item_uncertainty import zero_stability_model_budget
 
     zs = results.zero_stability

@@ -562,7 +562,7 @@ def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
 def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUncertainty:
     """u(B_s,pop) of the expected zero stability from the fitted noise model, °/h.
 
-    ``expected`` is a :class:`gonio.analysis.noise.readings.ExpectedZeroStability`:
+    ``expected`` is a :class:`gonio.specs.ogam_draft.zero_stability_noise.ExpectedZeroStability`:
     B_s,pop = √E[s²(M)]/T of the draft's 7.3 readings computed from the five-term fit
     of the instrument's continuous record over the 7.3 rest (the readings' covariance at
     their own times, with the measured compensation's static phase). One Type A line,
@@ -579,7 +579,7 @@ def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUnce
     √9.979/4200 = 7.52e-4 °/h; u = B_s,pop·u(N)/N = 8.4e-6 °/h, ν = 20 − 1 = 19:
 
     >>> from types import SimpleNamespace as NS
-    >>> from gonio.analysis.noise.readings import expected_zero_stability
+    >>> from gonio.specs.ogam_draft.zero_stability_noise import expected_zero_stability
     >>> fit = NS(Q=0.0, N=0.018, B=0.0, K=0.0, R=0.0, u_Q=0.0, u_N=0.0002, u_B=0.0,
     ...          u_K=0.0, u_R=0.0, n_bootstrap=20, kind="adev",
     ...          uncertainty_method="bootstrap")
