@@ -25,17 +25,27 @@ import pytest
 from matplotlib.figure import Figure
 from scipy.stats import norm
 
-from gonio.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.report.figures import HTML_FIGSIZE, mpl_style
 from gonio.specs.ogam_draft import certificate_pages as cert
 from gonio.specs.ogam_draft import figures as figs
-from gonio.report.i18n import LABELS, labels
+from gonio.report.i18n import LABELS as SHARED_LABELS
+from gonio.report.i18n import labels as shared_labels
 from gonio.specs.ogam_draft.phrases import BUDGET_SOURCES_ZH, READING_NOTES_ZH
+from gonio.specs.ogam_draft.phrases import LABELS as OWN_LABELS
+
+#: Every label the optical certificate shows: the shared ones and the draft's own.
+LABELS = SHARED_LABELS | OWN_LABELS
+
+
+def labels(lang):
+    """The optical certificate's labels (the shared ones and the draft's own)."""
+    return shared_labels(lang, OWN_LABELS)
 from gonio.specs.ogam_draft.stated import stated_item, summary_text
 from gonio.resources import builtin_names, protocols_dir
 

@@ -10,11 +10,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.bench import load_bench, run_session
-from gonio.bench.config import Harmonic, TableConfig
-from gonio.bench.instrument import harmonic_sum_arcsec
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import Harmonic, TableConfig
+from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
 from gonio.specs.ogam_draft.equal_division import eda_matrix_from_readings, equal_division_analysis
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 
 
 def eda_protocol(n, m, repeats=2):
@@ -119,12 +119,13 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     import json
     import re
 
-    from gonio.bench import write_session
-    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.bench import write_session
+    from gonio.specs.ogam_draft.readings import read_readings
     from gonio.specs.ogam_draft.calibration import calibrate
     from gonio.specs.ogam_draft.outputs import write_calibration
     from gonio.specs.ogam_draft.certificate_pages import write_certificate
     from gonio.report.i18n import display, labels
+    from gonio.specs.ogam_draft.phrases import LABELS
 
     proto = eda_protocol(4, 8, repeats=2)
     write_session(run_session(proto, bench_for(np.random.default_rng(0)), seed=1), tmp_path)
@@ -144,7 +145,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     assert e["coupling"]["note"] == direct.coupling.note
     assert np.allclose(e["table"]["error_arcsec"], direct.table_error_arcsec, atol=1e-6)
     page = write_certificate(res, tmp_path)["certificate.html"].read_text()
-    assert html.escape(labels("en")["eda"]) in page
+    assert html.escape(labels("en", LABELS)["eda"]) in page
     nums = re.findall(r'data-src="(extra\.equal_division[^"]+)" data-rule="([^"]+)"[^>]*>([^<]*)<',
                       page)
     assert len(nums) == 6 * 8 + 2

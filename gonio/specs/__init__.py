@@ -72,7 +72,7 @@ _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
                   "outputs", "readings_format", "certificate_content")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs", "acquisition")
+          "named_inputs", "acquisition", "acquire", "serve")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -216,6 +216,18 @@ class Specification:
         a laboratory's rate bench (:mod:`gonio.instruments.rate_acquire`) and the readings'
         metadata; ``metadata`` holds the laboratory's ``--meta`` values. None: the
         specification is not acquired through gonio's rate instruments.
+    acquire : callable or None
+        ``acquire(protocol, resources, out, *, metadata, resume, timeout_s, prompt)`` →
+        :class:`gonio.instruments.run.AcquisitionResult`: runs the specification's own
+        programme on its own instruments (``resources``: VISA resource strings by role),
+        writing ``out``/``readings.csv`` and ``out``/``io.log``; used by ``gonio acquire``
+        when the specification has no ``acquisition`` programme (the optical draft's
+        goniometer: a rotary table and an acquisition module).
+    serve : callable or None
+        ``serve(bench, ports, *, speed, seed, faults, **options)`` → an object with
+        ``resources`` (VISA resource strings by role) and ``close()``: its virtual bench
+        (file or built-in name) served as instruments on 127.0.0.1 (``gonio bench serve``
+        of a bench that is not a rate bench); ``ports``: TCP ports by role (0: a free one).
     budget : callable or None
         ``budget(**options)`` → the specification's own uncertainty annex, reproduced (an
         object with ``to_dict()`` and ``to_text()``).
@@ -293,6 +305,8 @@ class Specification:
     truth: Callable[..., dict] | None = None
     run_trial: Callable[..., tuple] | None = None
     acquisition: Callable[..., Any] | None = None
+    acquire: Callable[..., Any] | None = None
+    serve: Callable[..., Any] | None = None
     budget: Callable[..., Any] | None = None
     coverage: Coverage | None = None
     outputs: str = ""

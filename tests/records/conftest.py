@@ -4,6 +4,7 @@ from the virtual bench and one real pipeline run shared by the service tests."""
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import os
 import pwd
@@ -43,17 +44,17 @@ def _as_pg_user(cmd: list[str]) -> list[str]:
     return cmd
 
 
-@pytest.fixture(scope="session")
-def pg_server(tmp_path_factory):
-    """A PostgreSQL server on 127.0.0.1 (trust authentication) in a temporary folder, for
-    this test session; its URL without a database name. Skipped only when the server
-    binaries are absent (scripts/install-test-system-deps.sh installs them)."""
-    bindir = pg_bindir()
-    if bindir is None:
-        pytest.skip("PostgreSQL server binaries not installed "
-                    "(bash scripts/install-test-system-deps.sh)")
+@contextlib.contextmanager
+def throwaway_postgresql():
+    """A PostgreSQL server on 127.0.0.1 (trust authentication) in a temporary folder; yields
+    its URL without a database name and removes it afterwards (also used by
+    benchmarks/bench_records.py --postgresql)."""
     import tempfile
 
+    bindir = pg_bindir()
+    if bindir is None:
+        raise RuntimeError("PostgreSQL server binaries not installed "
+                           "(bash scripts/install-test-system-deps.sh)")
     # not under pytest's base folder: that is private to root, and the server runs as postgres
     root = Path(tempfile.mkdtemp(prefix="gonio-pg-"))
     data = root / "cluster"
@@ -76,6 +77,18 @@ def pg_server(tmp_path_factory):
         subprocess.run(_as_pg_user([str(bindir / "pg_ctl"), "-D", str(data), "-m", "immediate",
                                     "stop"]), capture_output=True)
         shutil.rmtree(root, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def pg_server():
+    """A throwaway PostgreSQL server (:func:`throwaway_postgresql`) for this test session;
+    its URL without a database name. Skipped only when the server binaries are absent
+    (scripts/install-test-system-deps.sh installs them)."""
+    if pg_bindir() is None:
+        pytest.skip("PostgreSQL server binaries not installed "
+                    "(bash scripts/install-test-system-deps.sh)")
+    with throwaway_postgresql() as url:
+        yield url
 
 
 _counter = iter(range(10**6))
@@ -131,8 +144,8 @@ def people(store):
 def bench_readings(tmp_path_factory):
     """Two readings files of the small optical protocol (seeds 1 and 2) from the virtual
     bench."""
-    from gonio.bench import load_bench, run_session, write_session
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+    from gonio.specs.ogam_draft.protocol import load_protocol
 
     root = tmp_path_factory.mktemp("bench")
     out = []
@@ -162,13 +175,14 @@ class Server:
     def __init__(self):
         self.procs = []
 
-    def start(self, data: Path, workers: int = 2):
+    def start(self, data: Path, workers: int = 2, database: str | None = None):
         import sys
         import urllib.request
 
         port = free_port()
+        url = ["--database", database] if database else []
         proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data", str(data),
-                                 "--port", str(port), "--workers", str(workers)],
+                                 "--port", str(port), "--workers", str(workers), *url],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                 start_new_session=True)
         self.procs.append(proc)
@@ -202,3 +216,23 @@ def serve():
     yield srv
     for p in srv.procs:
         srv.stop(p)
+
+
+def conditions(store, actor) -> dict:
+    """What every new calibration names (the submission checks of
+    :func:`gonio.records.services.create_calibration`): one registered standard in date
+    (registered on the first call) and the environment, as keyword arguments."""
+    import datetime as dt
+
+    from sqlalchemy import select
+
+    from gonio.records import services
+    from gonio.records.models import Standard
+
+    with store.session() as s:
+        sid = s.scalar(select(Standard.id).where(Standard.identifier == "ENV-STD-1"))
+    if sid is None:
+        sid = services.add_standard(store, actor, name="reference rotary table",
+                                    identifier="ENV-STD-1",
+                                    due_on=dt.date.today() + dt.timedelta(days=400)).id
+    return {"standard_ids": [sid], "temperature_c": 20.0, "humidity_pct": 45.0}

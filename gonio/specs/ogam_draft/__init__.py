@@ -8,7 +8,9 @@ readings or stream → items, Annex A budget, item uncertainties);
 study of ``gonio validate`` (its trial, truths and bench cases) and :mod:`.item_coverage`
 what each item's coverage is checked against; :mod:`.outputs` the rendering (results,
 tables, certificate, DCC, demo); :mod:`.commands` its own ``gonio`` sub-commands (``reduce``,
-``tilt``, ``tilt-estimate``, ``eda``). The clause-by-clause
+``tilt``, ``tilt-estimate``, ``eda``); :mod:`.acquisition` its programme on a laboratory's
+table and acquisition module (``SPEC.acquire``, ``gonio acquire``) and :mod:`.served` its
+virtual bench served as those instruments (``SPEC.serve``, ``gonio bench serve``). The clause-by-clause
 reading is ``docs/draft-readings.md``.
 """
 
@@ -25,12 +27,14 @@ SPEC = Specification(
     item_keys=tuple(ITEM_KEYS),
     default_protocol="ogam-draft",
     default_bench="rlg",
-    load_protocol=lazy("gonio.protocol:load_protocol"),
+    load_protocol=lazy("gonio.specs.ogam_draft.protocol:load_protocol"),
     calibrate=lazy("gonio.specs.ogam_draft.calibration:calibrate"),
     screen=lazy("gonio.specs.ogam_draft.calibration:screen"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
     budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),
+    acquire=lazy("gonio.specs.ogam_draft.acquisition:acquire_programme"),
+    serve=lazy("gonio.specs.ogam_draft.served:serve"),
     coverage=Coverage(engine="cases", stream=0,
                       study=lazy("gonio.specs.ogam_draft.study:plan_study"),
                       options=frozenset({"cases", "truth", "extra_components", "u_scale",
