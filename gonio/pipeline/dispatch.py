@@ -43,12 +43,13 @@ def refuse_options(spec: Specification, given: dict, accepted: frozenset, comman
     command-line form in ``flags`` ({keyword: "--option"}, the command line's), else
     ``--keyword`` with dashes.
 
-    >>> from gonio.specs import get
-    >>> refuse_options(get("jjf1535-2015"), {"monte_carlo_trials": 9}, frozenset(), "budget",
+    >>> s = Specification(key="s", title_en="S", title_zh="S", clause_doc="",
+    ...                   default_protocol="", default_bench="", calibrate=print)
+    >>> refuse_options(s, {"monte_carlo_trials": 9, "seed": None}, frozenset(), "budget",
     ...                {"monte_carlo_trials": "--monte-carlo"})
     Traceback (most recent call last):
     ...
-    gonio.errors.GonioError: --monte-carlo does not apply to 'gonio budget --spec jjf1535-2015'
+    gonio.errors.GonioError: --monte-carlo does not apply to 'gonio budget --spec s'
     """
     out = {k: v for k, v in given.items() if v not in (None, False)}
     bad = sorted(k for k in out if k not in accepted)
