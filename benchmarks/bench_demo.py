@@ -2,7 +2,8 @@
 
 Target: under 10 s of CPU time and under 1 GB peak memory. Runs the demo in a child
 process per seed (as a user would) and prints that child's CPU time (user + system), wall
-time, peak resident memory and the load average. Not part of the test run.
+time, peak resident memory, the load average (1 min, before and after) and the machine's
+cores. Not part of the test run.
 
     python benchmarks/bench_demo.py [--repeat 3]
 """
@@ -34,7 +35,7 @@ def main() -> None:
         print(f"gonio demo --seed {i} (1 kHz, whole draft protocol): CPU "
               f"{ru.ru_utime + ru.ru_stime:.1f} s, wall {wall:.1f} s, peak RSS "
               f"{ru.ru_maxrss / 1024.0:.0f} MB, load {load:.1f} to {os.getloadavg()[0]:.1f} "
-              "(targets: < 10 s CPU, < 1024 MB)", flush=True)
+              f"on {os.cpu_count()} cores (targets: < 10 s CPU, < 1024 MB)", flush=True)
 
 
 if __name__ == "__main__":

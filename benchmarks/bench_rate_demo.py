@@ -37,7 +37,7 @@ def main(argv=None) -> int:
     measured = sum(1 for it in result.items.values() if it.measured)
     print(f"{a.spec} demo ({a.bench or 'default bench'}, seed {a.seed}): CPU {cpu:.1f} s, "
           f"{wall:.1f} s wall, peak RSS {peak_mb:.0f} MB, load {load:.1f} to "
-          f"{os.getloadavg()[0]:.1f}; {rows} readings rows, {measured}/{len(result.items)} "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; {rows} readings rows, {measured}/{len(result.items)} "
           "items measured")
     ok = wall < 60.0 and peak_mb < 1024.0
     print("within limits (< 60 s, < 1 GB):", "yes" if ok else "NO")

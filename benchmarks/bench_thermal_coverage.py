@@ -5,7 +5,7 @@ For ``--trials`` fresh seeds the built-in programme (protocol ``triad-alignment`
 simulated and identified as ``gonio calibrate`` does (sensor temperature, BIC orders); every
 certified value — K and b at each set point and supply level (``K_z_t1_v2``, ``b_z_t3_v1``
 …), ARW at each set point — is compared with ``SPEC.truth`` (the bench's polynomials in
-closed form at the soaked set point, :func:`gonio.bench.triad.true_thermal_coefficients`;
+closed form at the soaked set point, :func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`;
 no estimator). Prints per item the coverage of U with its 95 % Clopper–Pearson interval, the
 mean and sd of z = (value − truth)/u_c, and the time per trial; with ``--jsonl`` each trial's
 records are appended as it ends and ``--summarise`` prints the table from such files.

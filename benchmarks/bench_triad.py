@@ -25,9 +25,9 @@ import numpy as np  # noqa: E402
 from gonio.specs.triad_alignment.thermal_model import (compensate_record,  # noqa: E402
                                                       identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import estimate_alignment  # noqa: E402
-from gonio.bench.triad import (load_triad_bench, load_triad_protocol,  # noqa: E402
+from gonio.specs.triad_alignment.bench import (load_triad_bench, load_triad_protocol,  # noqa: E402
                                run_alignment_session, run_thermal_session)
-from gonio.formats.triad import TriadReadings  # noqa: E402
+from gonio.specs.triad_alignment.readings import TriadReadings  # noqa: E402
 
 
 def _readings(s) -> TriadReadings:

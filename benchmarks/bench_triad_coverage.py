@@ -38,7 +38,7 @@ def triad_trial(seed: int, protocol: str = "triad-alignment", bench: str = "mems
                 ) -> tuple[dict[str, dict], list[str]]:
     """One simulated + calibrated triad programme: ({item: {clause, value, truth, U, u_c}},
     [items without a truth])."""
-    from gonio.bench.triad import load_triad_bench, load_triad_protocol
+    from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol
 
     spec = get("triad-alignment")
     truth = spec.truth(load_triad_bench(bench), load_triad_protocol(protocol))

@@ -11,7 +11,7 @@ Contents (one module per piece of physics or procedure):
 ``gonio.specs``            the registry: every procedure (items, budget, certificate) a plug-in
 ``gonio.physics.tilt``             Annex A.4.2 elliptic projection; rigid-body tilt
 ``gonio.analysis.noise``            Allan deviation and the gyro noise model
-``gonio.analysis.equal_division``              equal-division averaging, rotary-table comparison
+``gonio.specs.ogam_draft.equal_division``              equal-division averaging, rotary-table comparison
 ``gonio.report``           certificate and figures
 ``gonio.cli``              the ``gonio`` command (thin layer over the above)
 =========================  ===================================================

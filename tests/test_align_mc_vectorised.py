@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_alignment_session
-from gonio.formats.triad import format_triad_readings, parse_triad_readings
+from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol, run_alignment_session
+from gonio.specs.triad_alignment.readings import format_triad_readings, parse_triad_readings
 from gonio.physics.alignment import decompose_system_matrix
 from gonio.specs.triad_alignment import analysis as an
 

@@ -452,10 +452,10 @@ def test_demo_cli_help_and_wrote_list(run, tmp_path, monkeypatch, capsys):
 
 
 def test_eda_error_bars_say_they_are_u():
-    from gonio.analysis.equal_division import equal_division_analysis, simulate_eda_matrix
+    from gonio.specs.ogam_draft.equal_division import equal_division_analysis, simulate_eda_matrix
 
     sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
-    from gonio.report.eda_figure import equal_division_figure
+    from gonio.specs.ogam_draft.pages import equal_division_figure
 
     fig = equal_division_figure(equal_division_analysis(sim.D_arcsec, sim.start_deg,
                                                         sim.step_deg))

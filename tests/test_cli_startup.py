@@ -56,7 +56,7 @@ def test_the_probe_sees_a_heavy_import():
 
 def test_light_constants_agree_with_the_modules_that_use_them():
     """The constants written where loading SPEC reads them are those the analysis uses."""
-    from gonio.formats.triad import FORMAT
+    from gonio.specs.triad_alignment.readings import FORMAT
     from gonio.specs import get
     from gonio.specs.iec62047_20 import items as iec_items
     from gonio.specs.jjf1535 import items as jjf_items

@@ -1,4 +1,4 @@
-"""Tests of gonio.analysis.equal_division (equal-division averaging, IEC 62047-20 Annex A.3).
+"""Tests of gonio.specs.ogam_draft.equal_division (equal-division averaging, IEC 62047-20 Annex A.3).
 
 Independent references used here:
 * the truth of the synthetic data, evaluated in this file from the harmonic
@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 
 from gonio.cli import main
-from gonio.analysis.equal_division import (compare_tables, eda_matrix_from_readings, equal_division_analysis,
+from gonio.specs.ogam_draft.equal_division import (compare_tables, eda_matrix_from_readings, equal_division_analysis,
                        harmonic_transfer, load_eda_protocol, simulate_eda_matrix)
 from gonio.errors import GonioError
 

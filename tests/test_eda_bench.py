@@ -13,7 +13,7 @@ import pytest
 from gonio.bench import load_bench, run_session
 from gonio.bench.config import Harmonic, TableConfig
 from gonio.bench.instrument import harmonic_sum_arcsec
-from gonio.analysis.equal_division import eda_matrix_from_readings, equal_division_analysis
+from gonio.specs.ogam_draft.equal_division import eda_matrix_from_readings, equal_division_analysis
 from gonio.protocol import parse_protocol
 
 
@@ -134,7 +134,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     assert res["unused_readings"] == []
     e = res["extra"]["equal_division"]
     assert (e["n_starts"], e["m_points"], e["repeats"], e["noise"]) == (4, 8, 2, "random_walk")
-    from gonio.analysis.equal_division import analyse_eda_readings
+    from gonio.specs.ogam_draft.equal_division import analyse_eda_readings
 
     rd = read_readings(tmp_path / "readings.csv")
     direct = analyse_eda_readings(rd.data, proto.extra["equal_division"],

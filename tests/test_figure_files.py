@@ -38,14 +38,14 @@ def test_unknown_suffix_is_one_line_error(tmp_path):
 
 def test_importing_the_report_leaves_the_backend_alone():
     code = ("import matplotlib; matplotlib.use('svg'); import gonio.report.figure_files, "
-            "gonio.report.eda_figure; print(matplotlib.get_backend())")
+            "gonio.specs.ogam_draft.pages; print(matplotlib.get_backend())")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "svg"
 
 
 def test_eda_plot_is_byte_stable(tmp_path):
     from gonio.cli import main
-    from gonio.analysis.equal_division import simulate_eda_matrix
+    from gonio.specs.ogam_draft.equal_division import simulate_eda_matrix
     sim = simulate_eda_matrix({1: 1.0, 3: 0.4}, {2: 0.2}, 8, 8, 1, 0.05, 0)
     lines = ["test,series,round,start_deg,table_deg,time_s,gyro_deg"]
     for k, x0 in enumerate(sim.start_deg):

@@ -21,7 +21,7 @@ from gonio.errors import GonioError
 from gonio.formats.readings import read_readings
 from gonio.physics.kinematics import Timeline
 from gonio.protocol import load_protocol, parse_protocol
-from gonio.reduce import reduce_stream
+from gonio.specs.ogam_draft.reduce import reduce_stream
 from gonio.formats.streams import read_stream, write_stream
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -27,7 +27,7 @@ from gonio.atomic import MANIFEST, read_manifest, sha256_file
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import parse_rate_readings
-from gonio.formats.triad import parse_triad_readings
+from gonio.specs.triad_alignment.readings import parse_triad_readings
 
 CASES: list[str] = []          # every generated case, counted for the README
 
@@ -762,7 +762,7 @@ def test_monte_carlo_in_chunks_equals_the_whole(monkeypatch, sims):
     chunk of 7 the uncertainties equal those of all 20 trials held at once (before: every
     trial was kept, and 1e7 ran out of memory)."""
     import gonio.specs.triad_alignment.analysis as A
-    from gonio.formats.triad import read_triad_readings
+    from gonio.specs.triad_alignment.readings import read_triad_readings
 
     r = read_triad_readings(sims["TRI"] / "readings.csv")
     whole = A.estimate_alignment(r, monte_carlo=20, seed=2)

@@ -956,12 +956,12 @@ def test_user_text_rendered_literally(tmp_path):
 
 def test_plots_and_truth_are_byte_stable(tmp_path):
     from gonio.bench import run_session, write_session
-    from gonio.report.eda_figure import equal_division_figure
+    from gonio.specs.ogam_draft.pages import equal_division_figure
     from gonio.report.figure_files import save_figure
 
     def plot_eda(res, path):
         return save_figure(equal_division_figure(res), path)
-    from gonio.analysis.equal_division import equal_division_analysis, simulate_eda_matrix
+    from gonio.specs.ogam_draft.equal_division import equal_division_analysis, simulate_eda_matrix
 
     sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
     res = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)

@@ -27,14 +27,14 @@ from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.counters import wrap_counter
 from gonio.formats.readings import read_readings
-from gonio.instruments.acquire import (Block, Step, acquire, plan_programme, read_previous,
-                                       resume_plan)
 from gonio.instruments.acquisition import AcquisitionModule, unwrap_near
 from gonio.instruments.link import InstrumentError, IOLog, Link, LinkLost
-from gonio.instruments.served import (Faults, ServedBench, gyro_instrument, scpi_match,
-                                      serve_bench, table_instrument)
+from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.table import RotaryTable
 from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.acquisition import (Block, Step, acquire, plan_programme,
+                                                read_previous, resume_plan)
+from gonio.specs.ogam_draft.served import ServedBench, gyro_instrument, serve_bench, table_instrument
 from gonio.units import deg_to_arcsec
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -30,7 +30,7 @@ from gonio.formats.rate_readings import read_rate_readings
 from gonio.instruments.rate import Chamber, GyroOutput, RateTable, Supply
 from gonio.instruments.rate_acquire import acquire_rate, resume_point
 from gonio.instruments.link import InstrumentError, LinkLost
-from gonio.instruments.served import Faults, scpi_match
+from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.served_rate import ServedRateBench, rate_instruments, serve_rate_bench
 from gonio.protocol.programme import Segment
 from gonio.specs.jjf1535.acquisition import programme

@@ -150,8 +150,13 @@ def layer_violations(files: list[Path]) -> list[str]:
 SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.result",
                    "gonio.reduce", "gonio.analysis", "gonio.budget", "uncertainty")
 #: A specification's modules that run the virtual bench: the only ones that may import it
-#: (``study``: its coverage study of ``gonio validate``, which simulates every trial).
-SIMULATION_MODULES = ("simulate", "plan", "truth", "study")
+#: (``study``: its coverage study of ``gonio validate``, which simulates every trial;
+#: ``served``: its virtual bench served as instruments, ``SPEC.serve``).
+SIMULATION_MODULES = ("simulate", "plan", "truth", "study", "served")
+#: A specification's modules that drive instruments: the only ones that may import
+#: ``gonio.instruments`` (``acquisition``: its programme on a laboratory's instruments,
+#: ``SPEC.acquire``; ``served``: its virtual bench served as those instruments).
+INSTRUMENT_MODULES = ("acquisition", "served")
 
 
 def spec_import_violations(files: list[Path]) -> list[str]:
@@ -168,13 +173,14 @@ def spec_import_violations(files: list[Path]) -> list[str]:
         if is_rendering(mod) or is_command(mod):
             continue                     # checked by layer_violations (report, bench allowed)
         sim = len(parts) > 3 and parts[3] in SIMULATION_MODULES
+        drives = len(parts) > 3 and parts[3] in INSTRUMENT_MODULES
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for target, names, line in imports_of(tree, mod, path.name == "__init__.py"):
             top = target.split(".")[0]
             if top not in ("gonio", "uncertainty"):
                 continue
             tg = group(target) if top == "gonio" else "uncertainty"
-            if tg == "gonio.bench" and sim:
+            if (tg == "gonio.bench" and sim) or (tg == "gonio.instruments" and drives):
                 continue
             if tg == "gonio.specs" or LAYERS.get(tg, -1) == 0 or tg in SPEC_MAY_IMPORT:
                 continue
@@ -410,6 +416,11 @@ def test_rules_fire_on_bad_examples(fake_root):
                    "import uncertainty\nfrom gonio.units import S_PER_H\n")
     sim = _write(fake_root, "gonio/specs/a/simulate.py", "from gonio.bench.rate_gyro import x\n")
     assert len(spec_import_violations([items, sim])) == 2     # the bench and the report
+    drives = _write(fake_root, "gonio/specs/a/acquisition.py", "from gonio.instruments.link import L\n")
+    served = _write(fake_root, "gonio/specs/a/served.py", "from gonio.instruments.scpi import S\n"
+                    "from gonio.bench import b\n")
+    not_driving = _write(fake_root, "gonio/specs/a/screen.py", "from gonio.instruments.link import L\n")
+    assert len(spec_import_violations([drives, served, not_driving])) == 1   # the screen's
     render = _write(fake_root, "gonio/specs/a/outputs.py", "from gonio.report.x import y\n"
                     "from gonio.bench import z\nfrom gonio.pipeline.dispatch import w\n")
     report_in_items = _write(fake_root, "gonio/specs/a/certificate.py", "from gonio.report import y\n")

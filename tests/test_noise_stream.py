@@ -20,8 +20,8 @@ import pandas as pd
 import pytest
 
 from gonio.analysis.noise import allan_deviation, stream
-from gonio.bench.triad import TriadBench, TriadProtocol, ThermalModel, run_alignment_session
-from gonio.formats.triad import format_triad_readings, parse_triad_readings
+from gonio.specs.triad_alignment.bench import TriadBench, TriadProtocol, ThermalModel, run_alignment_session
+from gonio.specs.triad_alignment.readings import format_triad_readings, parse_triad_readings
 from gonio.specs.iec62047_20 import items as I
 from gonio.specs.iec62047_20.protocol import load_protocol as load_iec
 from gonio.specs.jjf1535 import items as J

@@ -14,8 +14,9 @@ import pytest
 from gonio.bench import load_bench, run_session
 from gonio.errors import GonioError
 from gonio.protocol import parse_protocol
-from gonio.formats.override import read_override
-from gonio.reduce import RestFinder, find_rests, reduce_stream
+from gonio.specs.ogam_draft.override import read_override
+from gonio.reduce import RestFinder, find_rests
+from gonio.specs.ogam_draft.reduce import reduce_stream
 from gonio.formats.streams import Stream
 
 PROTO = parse_protocol({

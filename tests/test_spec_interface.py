@@ -60,7 +60,7 @@ def test_options_a_specification_does_not_take_are_refused():
 
 
 def test_readings_name_their_specification(tmp_path):
-    from gonio.formats.triad import FORMAT
+    from gonio.specs.triad_alignment.readings import FORMAT
     from gonio.pipeline.dispatch import readings_spec
     a = tmp_path / "a.csv"
     a.write_text("# spec: jjf1535-2015\n# x: 1\ntest,run\n", encoding="utf-8")

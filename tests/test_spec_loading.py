@@ -47,6 +47,9 @@ BROKEN = {
     "brk_cmdfn": ("SPEC = Specification(key='brk-cmdfn', commands=(('x', 'brk_cmdfn.cli:ad'),),"
                   " **BASE)\n", "field commands['x'] names 'brk_cmdfn.cli:ad', and "
                   "brk_cmdfn.cli defines no ad"),
+    "brk_args": ("SPEC = Specification(key='brk-args', arguments={'simulate': 'brk_args.cli:ad'},"
+                 " **BASE)\n", "field arguments['simulate'] names 'brk_args.cli:ad', and "
+                 "brk_args.cli defines no ad"),
 }
 
 

@@ -66,8 +66,8 @@ def test_ogam_truth_is_what_a_noise_free_calibration_finds(monkeypatch):
 
 
 def _triad_noise_free():
-    from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_alignment_session
-    from gonio.formats.triad import TriadReadings
+    from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol, run_alignment_session
+    from gonio.specs.triad_alignment.readings import TriadReadings
 
     b = load_triad_bench("mems-triad")
     b = replace(b, arw_deg_sqrt_h=(0.0,) * 3, bias_instability_dph=(0.0,) * 3,
@@ -104,13 +104,13 @@ def test_triad_truth_is_what_a_noise_free_calibration_finds(monkeypatch):
 def test_triad_thermal_truth_is_what_a_noise_free_identification_finds(monkeypatch):
     """SPEC.truth holds K and b at the programme's set points and supply levels (closed form
     from the bench's polynomials in the die's temperature,
-    :func:`gonio.bench.triad.true_thermal_coefficients`); the built-in chamber programme with
+    :func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`); the built-in chamber programme with
     settled soaks on a noise-free bench, identified with the bench's orders or with the
     orders BIC chooses, finds every one to 1e-9 (the model, fed with the sensor's reading,
     evaluated where the sensor reads the soaked set point); a noise-free record has no white
     noise, so ARW is checked on the noisy bench in the coverage study."""
-    from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_thermal_session
-    from gonio.formats.triad import TriadReadings
+    from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol, run_thermal_session
+    from gonio.specs.triad_alignment.readings import TriadReadings
     from gonio.specs.triad_alignment.calibration import thermal_items
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 

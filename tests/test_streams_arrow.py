@@ -17,7 +17,7 @@ from gonio.bench import load_bench, run_session
 from gonio.errors import GonioError
 from gonio.formats.streams import StreamFile, read_stream, write_stream
 from gonio.protocol import parse_protocol
-from gonio.reduce import reduce_stream
+from gonio.specs.ogam_draft.reduce import reduce_stream
 
 MD = {"counter_bits": "16", "counter_signed": "true", "serial": "X-1",
       "nominal_scale_factor_counts_per_deg": "100000.0"}
@@ -203,7 +203,7 @@ def test_check_pieces_and_feed_pieces_change_nothing(tmp_path, monkeypatch):
     # The reader checks CHECK_PIECE_ROWS rows at a time and the rest finder works FEED_PIECE
     # samples at a time (for the cache): tiny pieces must give the bench's own readings and
     # the same rests, levels and unwrapped counts as the defaults.
-    import gonio.reduce.stream as R
+    import gonio.reduce.rests as R
     monkeypatch.setattr(S, "PARQUET_ROW_GROUP", 4000)
     for fmt in ("csv", "parquet"):
         path, res, true, _ = _bench_stream(tmp_path, "s", 32, fmt)
@@ -267,7 +267,7 @@ def test_read_ahead_keeps_file_order_and_stops_its_thread(tmp_path):
 
 def test_long_rest_level_is_a_strided_median(monkeypatch):
     # Beyond LEVEL_MAX_SAMPLES the level is the median of evenly strided samples.
-    import gonio.reduce.stream as R
+    import gonio.reduce.rests as R
     monkeypatch.setattr(R, "LEVEL_MAX_SAMPLES", 100)
     monkeypatch.setattr(R, "_LEVEL_PIECE", 64)
     t = np.arange(0, 60, 0.01)

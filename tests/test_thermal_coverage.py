@@ -2,7 +2,7 @@
 levels, ARW at the set points) cover the bench's truth, on both sides, on the built-in
 chamber programme.
 
-Truth: ``SPEC.truth`` (:func:`gonio.bench.triad.true_thermal_coefficients`, the bench's
+Truth: ``SPEC.truth`` (:func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`, the bench's
 polynomials in closed form, evaluated at the soaked set points), never an estimate. The
 uncertainty terms are checked against independent computations: the soak-components
 covariance against the ordinary fit of the soak means (the split-plot identity of a
@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from gonio.bench.triad import load_triad_bench, true_thermal_coefficients
+from gonio.specs.triad_alignment.bench import load_triad_bench, true_thermal_coefficients
 from gonio.pipeline.coverage import coverage_table_from
 from gonio.specs.triad_alignment.thermal_model import (design, order_uncertainty,
                                                        soak_covariance)
@@ -225,8 +225,8 @@ def test_certified_points_of_a_set_point_measured_once():
     """A set point with one soak point has no Type A spread of its (sensor − chamber): its
     temperature-reading term is 0 with ν 0 (no NaN, no budget line), the values stay finite;
     the others keep u_theta_c from their three points, (sd/√n of sensor − chamber)."""
-    from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_thermal_session
-    from gonio.formats.triad import TriadReadings
+    from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol, run_thermal_session
+    from gonio.specs.triad_alignment.readings import TriadReadings
     from gonio.specs.triad_alignment.calibration import thermal_items
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 

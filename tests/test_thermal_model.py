@@ -20,11 +20,11 @@ from scipy import stats
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.specs.triad_alignment.thermal_model import (compensate_record, fit_polynomial,
                                                       identify_thermal_model)
-from gonio.bench.triad import (ThermalModel, TriadBench, TriadNoise, TriadProtocol,
+from gonio.specs.triad_alignment.bench import (ThermalModel, TriadBench, TriadNoise, TriadProtocol,
                                _alternating, run_thermal_session)
 from gonio.cli import main
 from gonio.formats.jsonsafe import json_safe
-from gonio.formats.triad import TriadReadings, format_triad_readings
+from gonio.specs.triad_alignment.readings import TriadReadings, format_triad_readings
 from gonio.units import deg_sqrt_s_from_deg_sqrt_h, dps_to_dph
 
 K0, B0 = 49.7, 0.08
@@ -293,7 +293,7 @@ def test_lag_interval_on_the_built_in_programme_covers_and_never_states_a_bound(
     biased τ̂ by +30 s, half a 60 s block, outside every interval); fed with the internal
     sensor (no lag on the bench) the lag is stated 'not resolved' with its upper bound,
     never as the search's bound τ̂ = 0 (seed 3 printed 'lag τ fit 0 s')."""
-    from gonio.bench.triad import load_triad_bench, load_triad_protocol
+    from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol
     from gonio.specs.triad_alignment.certificate import lag_phrase
 
     p, b = load_triad_protocol("triad-alignment"), load_triad_bench("mems-triad")

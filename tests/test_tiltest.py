@@ -17,7 +17,7 @@ from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.protocol import load_protocol, parse_protocol
 from gonio.protocol.sections import TiltEstimatePlan
-from gonio.analysis.tilt_estimate import (estimate_tilt, fit_first_harmonic,
+from gonio.specs.ogam_draft.tilt_estimate import (estimate_tilt, fit_first_harmonic,
                            tilt_estimate_from_readings)
 
 K_NOM = 76434.87

@@ -22,11 +22,11 @@ from scipy import stats
 from gonio.specs.triad_alignment.analysis import (COVERAGE, cross_axis_sensitivity_iec,
                                             cross_axis_sensitivity_pm, cross_axis_table,
                                             estimate_alignment, gum_propagate)
-from gonio.bench.triad import (TriadBench, TriadProtocol, ThermalModel, load_triad_bench,
+from gonio.specs.triad_alignment.bench import (TriadBench, TriadProtocol, ThermalModel, load_triad_bench,
                                load_triad_protocol, run_alignment_session, write_triad_session)
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.formats.triad import (TriadReadings, format_triad_readings, parse_triad_readings,
+from gonio.specs.triad_alignment.readings import (TriadReadings, format_triad_readings, parse_triad_readings,
                                  read_triad_readings)
 from gonio.physics import alignment as al
 from gonio.physics.earth import earth_rate_enu, earth_rate_on_axis_dps

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.bench.triad import load_triad_bench, load_triad_protocol, run_alignment_session
-from gonio.formats.triad import TriadReadings
+from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol, run_alignment_session
+from gonio.specs.triad_alignment.readings import TriadReadings
 from gonio.specs.triad_alignment.analysis import estimate_alignment
 from gonio.specs.triad_alignment.calibration import alignment_items
 

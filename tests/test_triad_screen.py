@@ -12,7 +12,7 @@ import pytest
 
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.formats.triad import read_triad_readings
+from gonio.specs.triad_alignment.readings import read_triad_readings
 from gonio.specs import get
 from gonio.specs.triad_alignment.screen import screen
 

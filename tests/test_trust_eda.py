@@ -16,7 +16,7 @@ from scipy import stats
 
 from gonio.bench import load_bench, run_session
 from gonio.bench.instrument import harmonic_sum_arcsec
-from gonio.analysis.equal_division import (analyse_eda_readings, coupling_design,
+from gonio.specs.ogam_draft.equal_division import (analyse_eda_readings, coupling_design,
                                            load_eda_protocol)
 from gonio.protocol import load_protocol
 

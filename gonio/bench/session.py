@@ -12,7 +12,7 @@ same session with every random term off to give, for each reading, the
 instrument's noise-free systematic deviation (``truth.json``).
 
 Order of the items: 7.3 (right after the warm-up, as 7.3 asks), the optional
-in-situ tilt estimate (:mod:`gonio.analysis.tilt_estimate`, uncompensated rests), 7.1, 7.4/7.5,
+in-situ tilt estimate (``[tilt_estimate]``, uncompensated rests), 7.1, 7.4/7.5,
 7.6, 7.7. The table is re-pointed between blocks instantly (no time passes).
 """
 
@@ -142,7 +142,7 @@ class _Planner:
         self._close(blk, tl)
 
     def tilt_estimate(self, plan) -> None:
-        """Static multi-position block (:mod:`gonio.analysis.tilt_estimate`): rest at N equally spaced
+        """Static multi-position block (``[tilt_estimate]``): rest at N equally spaced
         positions; each reading is the uncompensated count over one dwell."""
         tab = self.b.table
         tl = Timeline(start_angle_deg=self.true_position(0.0), t0_s=self.k * self.dt)

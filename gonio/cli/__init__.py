@@ -63,21 +63,22 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     commands registered. ``argv`` (the arguments about to be parsed) naming one of gonio's
     own commands first leaves the specifications' commands out: loading every
     specification costs about a second, and that command does not need them. The options
-    the specifications add to one of gonio's commands (``gonio calibrate``'s,
-    ``Specification.calibrate_arguments``) are added when that command runs or the whole
-    parser is built."""
+    the specifications add to one of gonio's commands (``Specification.arguments``:
+    ``gonio calibrate``, ``simulate``, ``budget``, ``validate``) are added when that command
+    runs or the whole parser is built."""
     from gonio import __version__
 
     parser = _Parser(prog="gonio", description=(
-        "Calibrate optical-gyro goniometers per the draft JJF specification "
-        "(virtual bench, seven characteristics, Annex A uncertainty)."))
+        "Calibrate gyros and goniometers per a calibration specification (a plug-in: "
+        "gonio.specs.available()): virtual bench, readings to items with their "
+        "uncertainties, certificates."))
     parser.add_argument("--version", action="version", version=f"gonio {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for _, register in sorted(_commands(argv).items()):
         register(sub)
     for name, add_spec_options in _spec_option_hooks().items():
-        # the options the specifications add to a command (gonio calibrate's) load every
+        # the options the specifications add to a command (Specification.arguments) load every
         # specification: only for that command, or when the whole parser is built
         if not argv or argv[0] == name:
             add_spec_options(sub.choices[name])
@@ -86,7 +87,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 
 def _spec_option_hooks() -> dict:
     """{command name: add_spec_options(parser)} of the ``cmd_*`` modules whose command takes
-    options the specifications add (``gonio calibrate``: ``Specification.calibrate_arguments``)."""
+    options the specifications add (``Specification.arguments``, :mod:`.spec_options`)."""
     import gonio.cli as pkg
 
     found = {}

@@ -1,5 +1,7 @@
-"""``gonio bench serve``: the virtual bench's table and acquisition module served as
-instruments on 127.0.0.1 (:func:`gonio.instruments.served.serve_bench`)."""
+"""``gonio bench serve``: a virtual bench served as instruments on 127.0.0.1: a rate bench by
+:func:`gonio.instruments.served_rate.serve_rate_bench`, any other by the ``serve`` hook of
+the specification ``--spec`` names (by default :data:`gonio.specs.DEFAULT_KEY`'s: the
+goniometer's table and acquisition module)."""
 
 from __future__ import annotations
 
@@ -23,7 +25,12 @@ def register(sub) -> None:
                                     "interrupted. Prints their VISA resource strings. A rate "
                                     "bench (a [gyro] section, e.g. mems-adxrs610) serves its rate "
                                     "table, gyro output reader, chamber and supply instead.")
-    s.add_argument("--bench", default="rlg", help="bench file or built-in name (default rlg)")
+    s.add_argument("--bench", default=None,
+                   help="bench file or built-in name (default: the specification's)")
+    s.add_argument("--spec", default=None,
+                   help="the specification whose virtual bench is served (gonio.specs."
+                        "available(); default: gonio.specs.DEFAULT_KEY); a rate bench is "
+                        "served the same for every rate specification")
     s.add_argument("--table-port", type=int, required=True,
                    help="TCP port of the table (0: a free one, printed)")
     s.add_argument("--gyro-port", type=int, required=True,
@@ -39,7 +46,7 @@ def register(sub) -> None:
                    help="the table's stated range, ±degrees (default 360)")
     s.add_argument("--warm-up", type=float, default=S_PER_H,
                    help="seconds the instrument has been on when serving starts (default: an "
-                        "hour, the draft's 7.3 warm-up)")
+                        "hour)")
     s.add_argument("--fault", action="append", default=[],
                    help="inject a fault for testing: table-error:N (the N-th move fails with an "
                         "axis fault; a rate bench: its N-th ROT or OSC), gyro-drop:N (the module "
@@ -57,7 +64,7 @@ def is_rate_bench(name: str) -> bool:
 
 def _serve_rate(args):
     from gonio.bench.rate_gyro import load_rate_bench
-    from gonio.instruments.served import Faults
+    from gonio.instruments.scpi import Faults
     from gonio.instruments.served_rate import serve_rate_bench
 
     served = serve_rate_bench(load_rate_bench(args.bench),
@@ -70,21 +77,24 @@ def _serve_rate(args):
 
 
 def run(args) -> int:
-    from gonio.bench import load_bench
-    from gonio.instruments.served import Faults, serve_bench
+    from gonio.errors import GonioError
+    from gonio.instruments.scpi import Faults
+    from gonio.specs import DEFAULT_KEY, get
 
+    spec = get(args.spec or DEFAULT_KEY)
+    if args.bench is None:
+        args.bench = spec.default_bench
     if is_rate_bench(args.bench):
         served = _serve_rate(args)
-        try:
-            while True:
-                time.sleep(60.0)
-        finally:
-            served.close()
-    served = serve_bench(load_bench(args.bench), args.table_port, args.gyro_port,
-                         speed=args.speed, seed=args.seed, range_deg=args.range_deg,
-                         warm_up_s=args.warm_up, faults=Faults.parse(args.fault))
-    print(f"table: {served.table_resource}")
-    print(f"gyro: {served.gyro_resource}", flush=True)
+    elif spec.serve is None:
+        raise GonioError(f"gonio bench serve: {spec.key} serves no virtual bench as "
+                         "instruments (the specification has no serve hook)")
+    else:
+        served = spec.serve(args.bench, {"table": args.table_port, "gyro": args.gyro_port},
+                            speed=args.speed, seed=args.seed, faults=Faults.parse(args.fault),
+                            range_deg=args.range_deg, warm_up_s=args.warm_up)
+        for name, res in served.resources.items():
+            print(f"{name}: {res}", flush=True)
     try:
         while True:
             time.sleep(60.0)

@@ -2,16 +2,16 @@
 specification the readings name (:func:`gonio.pipeline.dispatch.calibrate`).
 
 The options every specification takes are here; a specification adds its own through its
-``calibrate_arguments`` hook (:func:`add_spec_options`, one argument group per specification),
-and an option of another specification is refused naming it (exit 2)."""
+``arguments["calibrate"]`` hook (:mod:`gonio.cli.spec_options`, one argument group per
+specification), and an option of another specification is refused naming it (exit 2)."""
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
 from gonio.cli.checks import int_range
+from gonio.cli.spec_options import given as spec_given, inputs as spec_inputs, no_spec_options
 
 
 def register(sub) -> None:
@@ -34,67 +34,16 @@ def register(sub) -> None:
                         "Certificate (DCC 3.3.0 XML)")
     p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
                    help="also propagate the budget by JCGM 101 Monte Carlo with N trials")
-    p.set_defaults(func=run, spec_options=(), spec_inputs=())
-
-
-class _Group:
-    """An argparse argument group as a specification's ``calibrate_arguments`` hook sees it:
-    ``add_argument`` records each option's dest; an option string another specification
-    already added with the same dest is shared, not added twice."""
-
-    def __init__(self, group, spec, taken: dict):
-        self.group, self.spec, self.taken = group, spec, taken
-        self.dests: list[str] = []
-        self.inputs: list[str] = []
-
-    def add_argument(self, *flags, **kwargs):
-        dest = kwargs.get("dest") or next(
-            (f.lstrip("-").replace("-", "_") for f in flags if f.startswith("--")), None)
-        where = f"the calibrate option {flags[0]} of specification {self.spec.key!r}"
-        if dest not in self.spec.calibrate_options:
-            raise ValueError(f"{where} has dest {dest!r}, which its calibrate_options does "
-                             "not list")
-        if kwargs.get("default", False if kwargs.get("action") == "store_true" else None) \
-                not in (None, False):
-            raise ValueError(f"{where} has a default; the default is its calibrate's (None: "
-                             "not given)")
-        owner = {self.taken.get(f) for f in flags}
-        if owner == {dest}:                      # another specification's, the same option
-            self.dests.append(dest)
-            return None
-        if owner != {None}:
-            raise ValueError(f"{where} is taken by another option")
-        try:
-            action = self.group.add_argument(*flags, **kwargs)
-        except argparse.ArgumentError as exc:    # one of gonio calibrate's own options
-            raise ValueError(f"{where}: {exc}") from None
-        self.taken.update({f: action.dest for f in flags})
-        self.dests.append(action.dest)
-        if action.metavar == "FILE":
-            self.inputs.append(action.dest)
-        return action
+    p.set_defaults(func=run)
+    no_spec_options(p)
 
 
 def add_spec_options(p) -> None:
-    """Add every registered specification's own ``gonio calibrate`` options to the parser
-    ``p`` (:func:`gonio.specs.calibrate_arguments`), one argument group each. A hook that
-    fails adds nothing of its specification's, with a warning naming it."""
-    import warnings
+    """Every registered specification's own ``gonio calibrate`` options
+    (:func:`gonio.cli.spec_options.add_spec_options`)."""
+    from gonio.cli import spec_options
 
-    from gonio.specs import calibrate_arguments
-
-    taken: dict[str, str] = {}          # option string → dest, over the specifications
-    dests, inputs = [], []
-    for spec, add in calibrate_arguments():
-        group = _Group(p.add_argument_group(f"options of --spec {spec.key}"), spec, taken)
-        try:
-            add(group)
-        except Exception as exc:        # a plug-in's bug costs only its own options
-            warnings.warn(f"the calibrate options of specification {spec.key!r} are not all "
-                          f"available ({type(exc).__name__}: {exc})")
-        dests += [d for d in group.dests if d not in dests]
-        inputs += [d for d in group.inputs if d not in inputs]
-    p.set_defaults(spec_options=tuple(dests), spec_inputs=tuple(inputs))
+    spec_options.add_spec_options(p, "calibrate")
 
 
 def add_certificate_options(p) -> None:
@@ -138,8 +87,8 @@ def run(args) -> int:
     from gonio.specs import DEFAULT_KEY, get
 
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
-    given = {d: getattr(args, d) for d in args.spec_options}   # refused by dispatch if foreign
-    inputs = [args.readings, args.protocol, args.lab] + [given[d] for d in args.spec_inputs]
+    given = spec_given(args)                         # refused by dispatch if foreign
+    inputs = [args.readings, args.protocol, args.lab] + spec_inputs(args)
     check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
     spec = get(args.spec or readings_spec(args.readings) or DEFAULT_KEY)
     if spec.named_inputs is not None:                # never replaced or removed

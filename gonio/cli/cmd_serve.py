@@ -83,29 +83,70 @@ def check_workers(workers: int | None) -> int:
 
 
 def run(args) -> int:
+    """Listen first, answer the login page at once (:class:`gonio.web.front.Front`), and
+    build the application (imports, database, workers) in a background thread; the line
+    "serving the records" says when every page answers."""
+    import threading
+
     import uvicorn
 
     from gonio.errors import GonioError
-    from gonio.records.db import open_store
-    from gonio.records.worker import Dispatcher
-    from gonio.web.app import create_app, warm_up
+    from gonio.web.front import Front
 
     if not 0 < args.port < 65536:
         raise GonioError("not a port number", key="--port")
     workers = check_workers(args.workers)
-    store = open_store(args.database, args.data)
-    password = first_admin(store)
-    if password:
-        sys.stderr.write(f"gonio: first start: user 'admin', password '{password}' "
-                         "(change it: create your users and deactivate this one)\n")
-    dispatcher = Dispatcher(store, workers=workers).start()
-    warm_up()                     # the first dashboard and history plot without the imports
-    app = create_app(store, dispatcher)
+    front = Front().prepare()
+    config = uvicorn.Config(front, host=args.host, port=args.port, log_level="warning",
+                            lifespan="off")
+    server = uvicorn.Server(config)
+    sock = config.bind_socket()
+    sock.listen(config.backlog)         # a browser's first request waits, never refused
+    built: dict = {}
+    builder = threading.Thread(target=_build, args=(args, workers, front, server, built),
+                               name="gonio-start", daemon=True)
+    builder.start()
+    try:
+        server.run(sockets=[sock])
+    finally:
+        builder.join()
+        if "dispatcher" in built:
+            built["dispatcher"].stop(wait=False)
+        if "store" in built:
+            built["store"].close()
+    if "error" in built:
+        raise built["error"]
+    return 0
+
+
+def _build(args, workers: int, front, server, built: dict) -> None:
+    """The application behind ``front``: the records opened (and migrated), the first
+    administrator, the workers, the pages; then the ready line once the server listens. A
+    failure stops the server and is raised by :func:`run` (a database problem: exit 2)."""
+    import time
+
+    while not server.started and not server.should_exit:
+        time.sleep(0.01)      # the login page answers first; then the imports take the CPU
+    try:
+        from gonio.records.db import open_store
+        from gonio.records.worker import Dispatcher
+        from gonio.web.app import create_app, warm_up
+        from gonio.web.front import warm
+
+        store = built["store"] = open_store(args.database, args.data)
+        password = first_admin(store)
+        if password:
+            sys.stderr.write(f"gonio: first start: user 'admin', password '{password}' "
+                             "(change it: create your users and deactivate this one)\n")
+        built["dispatcher"] = Dispatcher(store, workers=workers).start()
+        warm_up()                 # the first dashboard without the SciPy import
+        app = create_app(store, built["dispatcher"])
+        warm(app)                 # its middleware, routes and templates, before a person
+        front.serve(app)
+    except BaseException as exc:  # noqa: BLE001 - handed to the main thread, raised there
+        built["error"] = exc
+        front.fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+        server.should_exit = True
+        return
     sys.stderr.write(f"gonio: serving the records at http://{args.host}:{args.port}/ "
                      f"(database {store.engine.url.render_as_string(hide_password=True)})\n")
-    try:
-        uvicorn.run(app, host=args.host, port=args.port, log_level="warning")
-    finally:
-        dispatcher.stop(wait=False)
-        store.close()
-    return 0

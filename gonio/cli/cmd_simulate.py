@@ -1,9 +1,14 @@
 """``gonio simulate``: run a specification's protocol on its virtual bench → the readings a
-laboratory would record and truth.json (:func:`gonio.pipeline.dispatch.simulate`)."""
+laboratory would record and truth.json (:func:`gonio.pipeline.dispatch.simulate`).
+
+The options every specification takes are here; a specification adds its own through its
+``arguments["simulate"]`` hook (:mod:`gonio.cli.spec_options`), and an option of another
+specification is refused naming it (exit 2)."""
 
 from __future__ import annotations
 
 from gonio.cli.checks import seed
+from gonio.cli.spec_options import given, inputs as spec_inputs, no_spec_options
 from gonio.specs import DEFAULT_KEY
 
 
@@ -18,32 +23,30 @@ def register(sub) -> None:
                    help="protocol file or built-in name (default: the specification's)")
     p.add_argument("--bench", default=None,
                    help="bench file or built-in name (default: the specification's)")
-    p.add_argument("--table", default=None,
-                   help="table file overriding the bench's (specifications on a precision "
-                        "table)")
     p.add_argument("--seed", type=seed, default=0, help="random seed (same seed → same bytes)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--force", action="store_true",
-                   help="replace an --out folder that holds readings.csv or stream.csv")
-    p.add_argument("--stream", action="store_true",
-                   help="also write the stream (every sample: time, wrapped counter, table "
-                        "angle; docs/formats.md#stream-file), chunk by chunk, with progress on a "
-                        "terminal (specifications whose instrument gives one)")
-    p.add_argument("--stream-format", choices=("parquet", "csv"), default=None,
-                   help="stream.parquet (default; pyarrow, the metadata as Parquet key-value "
-                        "metadata) or stream.csv")
+                   help="replace an --out folder that holds a readings or stream file")
     p.set_defaults(func=run)
+    no_spec_options(p)
+
+
+def add_spec_options(p) -> None:
+    """Every registered specification's own ``gonio simulate`` options
+    (:func:`gonio.cli.spec_options.add_spec_options`)."""
+    from gonio.cli import spec_options
+
+    spec_options.add_spec_options(p, "simulate")
 
 
 def run(args) -> int:
     from gonio.atomic import check_output_dir
     from gonio.pipeline.dispatch import simulate
 
-    inputs = [args.protocol, args.bench, args.table]
+    inputs = [args.protocol, args.bench] + spec_inputs(args)
     check_output_dir(args.out, inputs=inputs, force=args.force)
     paths = simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
-                     seed=args.seed, inputs=inputs, force=args.force, table=args.table,
-                     stream=args.stream, stream_format=args.stream_format)
+                     seed=args.seed, inputs=inputs, force=args.force, **given(args))
     for p in paths.values():
         print(p)
     return 0

@@ -1,7 +1,8 @@
 """``gonio validate``: the coverage of a specification's uncertainties over many virtual
 calibrations (``SPEC.coverage``, run by :func:`gonio.pipeline.validate.validate`: the generic
-item study of :mod:`gonio.pipeline.coverage`, or a study the specification describes, such as
-the default specification's Annex A study over bench cases)."""
+item study of :mod:`gonio.pipeline.coverage`, or a study the specification describes itself,
+whose settings are options the specification adds: ``arguments["validate"]``,
+:mod:`gonio.cli.spec_options`)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ from pathlib import Path
 
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
-from gonio.cli.checks import float_range, int_range, seed
+from gonio.cli.checks import int_range, seed
+from gonio.cli.spec_options import given as spec_given, no_spec_options
 from gonio.specs import DEFAULT_KEY
 
 
@@ -21,33 +23,19 @@ def register(sub) -> None:
                                         "calibrations",
                        description="Run N virtual calibrations and report how often |value - "
                                    "truth| <= U, U the calibration's own expanded uncertainty: "
-                                   "per item, or (the default specification) per bench case for "
-                                   "the Annex A budget of E (7.1 + 7.4 with 10 series).")
+                                   "per item (the generic item study), or as the "
+                                   "specification's own study describes (its options below).")
     p.add_argument("--trials", type=int_range(2), required=True, help="calibrations per case (>= 2)")
     p.add_argument("--seed", type=seed, default=0, help="master seed (same seed -> same JSON)")
     p.add_argument("--spec", default=DEFAULT_KEY,
-                   help=f"specification key (default {DEFAULT_KEY}: the Annex A budget of E "
-                        "over bench cases; a specification with an item study: the coverage of "
-                        "every item's U, printed per item)")
+                   help=f"specification key (default {DEFAULT_KEY}; a specification with an "
+                        "item study: the coverage of every item's U, printed per item)")
     p.add_argument("--bench", default=None,
                    help="bench file or built-in name (default: the specification's, as a study "
                         "bench)")
     p.add_argument("--protocol", default=None,
                    help="protocol (default: the specification's, restricted or reduced to the "
                         "study's programme)")
-    p.add_argument("--cases", default=None,
-                   help="comma-separated cases of a study over bench cases, or 'all' (an "
-                        "unknown case is refused naming the known ones)")
-    p.add_argument("--truth", default=None,
-                   help="truth of the printed table of a study over bench cases (all are in "
-                        "the JSON; an unknown one is refused naming the known ones)")
-    p.add_argument("--extra-components", nargs="?", const="all", default=None, metavar="NAMES",
-                   help="also evaluate the budget with the components the annex lacks: all, or "
-                        "a comma-separated subset of their symbols")
-    p.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=None,
-                   help="multiply U (default 1; < 1 deliberately breaks the budget)")
-    p.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=None,
-                   help="simulation rate (default 100 Hz; the RLG counter is exact at any rate)")
     p.add_argument("--workers", type=int, default=None,
                    help="local processes (default min(2, cores), at most the machine's cores; "
                         "results do not depend on it)")
@@ -64,21 +52,18 @@ def register(sub) -> None:
                         "OUT/.validate-partial until the study completes")
     p.add_argument("--resume", action="store_true",
                    help="continue the interrupted study in --out (same settings): run only the "
-                        "trials it has not finished")
-    p.add_argument("--all-items", action="store_true",
-                   help="keep 7.3, 7.6 and 7.7 so that every item's coverage is measured")
-    p.add_argument("--monte-carlo", type=int_range(0), default=0, metavar="N",
-                   help="also run the JCGM 101 Monte Carlo (N trials) of every item budget of "
-                        "each case's first calibration and validate its GUM result (JCGM 101 "
-                        "8.2: pass/fail, d_low, d_high); 0 (default) off")
+                        "trials it has not finished (a study the specification describes)")
     p.add_argument("--json", action="store_true", help="print validation.json on stdout")
     p.set_defaults(func=run)
+    no_spec_options(p)
 
 
-#: Options of a study the specification describes (``SPEC.coverage.options`` says which it
-#: takes; the study's own defaults apply where not given).
-STUDY_OPTIONS = ("cases", "truth", "extra_components", "u_scale", "sample_rate_hz",
-                 "all_items", "resume", "monte_carlo")
+def add_spec_options(p) -> None:
+    """Every registered specification's own ``gonio validate`` options, the settings of its
+    study (:func:`gonio.cli.spec_options.add_spec_options`)."""
+    from gonio.cli import spec_options
+
+    spec_options.add_spec_options(p, "validate")
 
 
 def run(args) -> int:
@@ -89,7 +74,6 @@ def run(args) -> int:
     from gonio.specs import get
 
     check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
-    check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
     if args.workers is not None and args.workers < 1:
         raise GonioError(f"--workers must be >= 1, got {args.workers}")
     if args.resume and not args.out:
@@ -98,7 +82,7 @@ def run(args) -> int:
     if spec.coverage is None:
         raise GonioError(f"{spec.key} has no coverage study (SPEC.coverage is None)",
                          key="--spec")
-    given = refuse_options(spec, {k: getattr(args, k) for k in STUDY_OPTIONS},
+    given = refuse_options(spec, {"resume": args.resume, **spec_given(args)},
                            spec.coverage.options, "validate")
     if args.out is not None:
         from gonio.atomic import check_output_folder_place

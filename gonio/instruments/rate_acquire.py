@@ -21,7 +21,7 @@ on the virtual bench. :func:`acquire_rate` takes it segment by segment:
    rate, the set rate/frequency, the chamber's set point (room when off), the voltage the
    supply measures.
 
-Every wait is timed on the reader's clock (:class:`gonio.instruments.acquire.ModuleClock`),
+Every wait is timed on the reader's clock (:class:`gonio.instruments.run.ModuleClock`),
 so a bench served N× faster runs N× faster. Every exit path stops the table and switches
 the chamber and the supply off (``finally``, signals held off); the rows taken stay, marked
 ``acquisition: incomplete``; ``resume`` keeps every power cycle complete in the file and
@@ -43,7 +43,7 @@ import numpy as np
 from gonio import __version__
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import COLUMNS as RATE_COLUMNS
-from gonio.instruments.acquire import ModuleClock, ReadingsFile, raise_stop, stop_reason
+from gonio.instruments.run import ModuleClock, ReadingsFile, raise_stop, stop_reason
 from gonio.instruments.link import IOLog, Link
 from gonio.instruments.rate import Chamber, GyroOutput, RateTable, Supply
 from gonio.progress import format_duration, status
@@ -239,8 +239,8 @@ def acquire_rate(segments: list[Segment], metadata: dict, resources: dict[str, s
     rate readings format, record by record) and ``out``/``io.log``. ``metadata``: the
     readings' ``# key: value`` lines the specification's hook gave (``protocol`` among
     them); the instruments' identities are added. ``drivers``: a laboratory's driver
-    classes by role. Returns an :class:`~gonio.instruments.acquire.AcquisitionResult`."""
-    from gonio.instruments.acquire import AcquisitionResult
+    classes by role. Returns an :class:`~gonio.instruments.run.AcquisitionResult`."""
+    from gonio.instruments.run import AcquisitionResult
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

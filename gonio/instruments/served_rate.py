@@ -40,8 +40,8 @@ import numpy as np
 from gonio import __version__
 from gonio.bench.rate_session import RateSession
 from gonio.errors import GonioError
-from gonio.instruments.served import (DropLink, Faults, Instrument, ScpiError, ScpiServer,
-                                      parse_float, scpi_handler)
+from gonio.instruments.scpi import (DropLink, Faults, Instrument, ScpiError, ScpiServer,
+                                   parse_float, scpi_handler)
 from gonio.protocol.programme import Segment
 
 #: The served rate table's stated top rate (°/s), acceleration (°/s²) and sine frequency (Hz).

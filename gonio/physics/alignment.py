@@ -1,7 +1,7 @@
 """Rotations, misalignment matrices and the mechanical misalignment budget of a gyro triad.
 
-Conventions (used by :mod:`gonio.bench.triad` and the triad specification's analysis)
----------------------------------------------------------------------------------------
+Conventions (used by the triad specification's virtual bench and analysis)
+--------------------------------------------------------------------------
 * The *reference frame* is the fixture's (rate table's) frame, axes x, y, z. A triad's
   outputs obey G = M ω + b ([Looney-alignment] eq. 14, docs/references.md): ω the rate vector in
   the reference frame, M the 3×3 system matrix, b the bias vector.

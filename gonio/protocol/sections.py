@@ -1,8 +1,7 @@
 """Optional protocol sections beyond the draft's own: ``[equal_division]`` and ``[tilt_estimate]``.
 
-They live here, in the protocol layer, so that the analyses that use them
-(:mod:`gonio.analysis.equal_division`, :mod:`gonio.analysis.tilt_estimate`)
-import the protocol and never the other way round. Each section is registered
+They live here, in the protocol layer, so that the analyses that use them (the equal-division
+averaging and the in-situ tilt estimate) import the protocol and never the other way round. Each section is registered
 with :func:`gonio.protocol.model.register_section` when this module is imported
 (``gonio.protocol`` imports it).
 """

@@ -1,8 +1,10 @@
-"""Reduction: a continuous stream → readings (finding the table's rests, matching the protocol).
+"""Rests of a continuous stream: where the table (or, without its encoder, the gyro) dwells;
+shared by a specification's reduction of a stream to readings and the noise analysis of a
+stream's static record.
 
->>> from gonio.reduce import reduce_stream, find_rests
+>>> from gonio.reduce import find_rests
 """
 
-from gonio.reduce.stream import Reduction, Rest, RestFinder, find_rests, reduce_stream
+from gonio.reduce.rests import MemorySamples, Rest, RestFinder, find_rests, rests_of
 
-__all__ = ["Reduction", "Rest", "RestFinder", "find_rests", "reduce_stream"]
+__all__ = ["MemorySamples", "Rest", "RestFinder", "find_rests", "rests_of"]

@@ -40,8 +40,8 @@ from typing import Any, Callable
 
 from gonio.errors import GonioError
 
-__all__ = ["Coverage", "Specification", "available", "calibrate_arguments", "commands", "get",
-           "item_order", "lazy",
+__all__ = ["Coverage", "Specification", "available", "command_arguments", "commands", "get",
+           "item_order", "lazy", "ARGUMENT_COMMANDS",
            "CONTENT_FIELDS", "FIGURE_ROLES", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
            "DEFAULT_KEY"]
 
@@ -70,9 +70,9 @@ _REF = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*"
 _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 #: The fields of a :class:`Specification` that are strings, and its optional hooks.
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
-                  "outputs", "readings_format", "certificate_content", "calibrate_arguments")
+                  "outputs", "readings_format", "certificate_content")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs", "acquisition")
+          "named_inputs", "acquisition", "acquire", "serve")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -80,6 +80,11 @@ _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
 #: :data:`CONTENT_FIELDS` the certificate content must define for it.
 OUTPUTS_REQUIRED = ("write", "results_json", "summary")
 OUTPUTS_OPTIONAL = ("demo", "warnings")
+#: The ``gonio`` commands a specification may add options to (``Specification.arguments``),
+#: each with the field naming the keywords its hook takes beyond the common ones
+#: (:meth:`Specification.accepted_options`).
+ARGUMENT_COMMANDS = {"budget": "budget_options", "calibrate": "calibrate_options",
+                     "simulate": "simulate_options", "validate": "coverage.options"}
 
 
 @functools.lru_cache(maxsize=1)
@@ -211,6 +216,18 @@ class Specification:
         a laboratory's rate bench (:mod:`gonio.instruments.rate_acquire`) and the readings'
         metadata; ``metadata`` holds the laboratory's ``--meta`` values. None: the
         specification is not acquired through gonio's rate instruments.
+    acquire : callable or None
+        ``acquire(protocol, resources, out, *, metadata, resume, timeout_s, prompt)`` →
+        :class:`gonio.instruments.run.AcquisitionResult`: runs the specification's own
+        programme on its own instruments (``resources``: VISA resource strings by role),
+        writing ``out``/``readings.csv`` and ``out``/``io.log``; used by ``gonio acquire``
+        when the specification has no ``acquisition`` programme (the optical draft's
+        goniometer: a rotary table and an acquisition module).
+    serve : callable or None
+        ``serve(bench, ports, *, speed, seed, faults, **options)`` → an object with
+        ``resources`` (VISA resource strings by role) and ``close()``: its virtual bench
+        (file or built-in name) served as instruments on 127.0.0.1 (``gonio bench serve``
+        of a bench that is not a rate bench); ``ports``: TCP ports by role (0: a free one).
     budget : callable or None
         ``budget(**options)`` → the specification's own uncertainty annex, reproduced (an
         object with ``to_dict()`` and ``to_text()``).
@@ -222,18 +239,20 @@ class Specification:
         ``results_json(result)``, ``summary(result, lab)``; optionally ``demo(...)`` and
         ``warnings(result)``.
     simulate_options, calibrate_options, budget_options : frozenset
-        The command-line options of ``gonio simulate|calibrate|budget`` the hooks take
-        beyond the common ones (``protocol`` and ``dcc`` among them where they apply); any
-        other is refused naming the specification.
-    calibrate_arguments : str
-        ``"module:function"``: the ``gonio calibrate`` options of the specification's own
-        (those of ``calibrate_options`` beyond ``protocol`` and ``dcc``, such as the optical
-        draft's ``--budget``). ``function(group)`` adds them with ``group.add_argument`` as
-        argparse does; each option's ``dest`` is the keyword its ``calibrate`` takes, its
-        default None (False for a flag: not given), and an option whose ``metavar`` is
-        ``"FILE"`` names an input file (never replaced by an output). The command line
-        imports the module only when it builds ``gonio calibrate``'s parser, so it imports
-        argparse-level modules only (as a ``commands`` module does); empty: none.
+        The keywords the hooks ``simulate``, ``calibrate`` and ``budget`` take beyond the
+        common ones (``protocol`` and ``dcc`` among them where they apply); any other is
+        refused naming the specification (:func:`gonio.pipeline.dispatch.refuse_options`).
+    arguments : dict of str to str
+        ``{command: "module:function"}``: the command-line options of the specification's
+        own for the ``gonio`` commands of :data:`ARGUMENT_COMMANDS` (``calibrate``,
+        ``simulate``, ``budget``, ``validate``), such as the optical draft's ``gonio
+        calibrate --budget``. ``function(group)`` adds them with ``group.add_argument`` as
+        argparse does; each option's ``dest`` is a keyword the command's hook takes
+        (:meth:`accepted_options`), its default None (False for a flag: not given), and an
+        option whose ``metavar`` is ``"FILE"`` names an input file (never replaced by an
+        output). The command line imports the module only when it builds that command's
+        parser, so it imports argparse-level modules only (as a ``commands`` module does);
+        gonio's command line itself holds no specification's option. Empty: none.
     readings_format : str
         The ``# format:`` line its readings files carry, when that alone names it (a file
         without ``# spec:``); empty: none.
@@ -286,6 +305,8 @@ class Specification:
     truth: Callable[..., dict] | None = None
     run_trial: Callable[..., tuple] | None = None
     acquisition: Callable[..., Any] | None = None
+    acquire: Callable[..., Any] | None = None
+    serve: Callable[..., Any] | None = None
     budget: Callable[..., Any] | None = None
     coverage: Coverage | None = None
     outputs: str = ""
@@ -297,7 +318,7 @@ class Specification:
     default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()
-    calibrate_arguments: str = ""
+    arguments: dict[str, str] = field(default_factory=dict)
     item_keys: tuple[str, ...] = ()
     dcc_units: dict[str, str] = field(default_factory=dict)
     recalibration_interval_months: int | None = None
@@ -345,9 +366,12 @@ class Specification:
             raise _field_error(where, "commands", "a tuple of (name, 'module:function') pairs",
                                cmds)
         object.__setattr__(self, "commands", tuple(tuple(c) for c in cmds))
-        if self.calibrate_arguments and not _REF.fullmatch(self.calibrate_arguments):
-            raise _field_error(where, "calibrate_arguments", "a 'module:function' reference",
-                               self.calibrate_arguments)
+        args = self.arguments
+        if not isinstance(args, dict) or not all(
+                k in ARGUMENT_COMMANDS and isinstance(v, str) and _REF.fullmatch(v)
+                for k, v in args.items()):
+            raise _field_error(where, "arguments", "a dict {command (" + ", ".join(
+                ARGUMENT_COMMANDS) + "): 'module:function'}", args)
         units = self.dcc_units
         if not isinstance(units, dict) or not all(isinstance(k, str) and k for k in units):
             raise _field_error(where, "dcc_units", "a dict {unit: D-SI unit}", units)
@@ -360,6 +384,18 @@ class Specification:
                                    or months <= 0):
             raise _field_error(where, "recalibration_interval_months",
                                "a positive int or None", months)
+
+    def accepted_options(self, command: str) -> frozenset:
+        """The keywords the hook of ``gonio command`` takes beyond the common ones
+        (:data:`ARGUMENT_COMMANDS`: ``calibrate_options``, ``simulate_options``,
+        ``budget_options``, the coverage study's ``options``).
+
+        >>> sorted(get("ogam-draft").accepted_options("simulate"))
+        ['stream', 'stream_format', 'table']
+        """
+        if command == "validate":
+            return self.coverage.options if self.coverage is not None else frozenset()
+        return getattr(self, ARGUMENT_COMMANDS[command])
 
     def knows_item(self, key) -> bool:
         """Whether ``key`` is one of :attr:`item_keys` or matches one of its patterns
@@ -634,8 +670,7 @@ def _load(name: str, ref: str) -> Specification:
             raise GonioError(f"{head} is invalid: field {field_name} names module {module!r}, "
                              "which does not exist", key="--spec")
     refs = [(f"commands[{name!r}]", ref) for name, ref in obj.commands]
-    if obj.calibrate_arguments:
-        refs.append(("calibrate_arguments", obj.calibrate_arguments))
+    refs += [(f"arguments[{cmd!r}]", ref) for cmd, ref in obj.arguments.items()]
     for field_name, ref in refs:
         module, _, function = ref.partition(":")
         if not _defines(module, function):
@@ -648,11 +683,20 @@ def _defines(module: str, name: str) -> bool:
     """Whether the source of ``module`` binds ``name`` at its top level (read, not imported:
     a command module sits on the command line's layer). True where there is no source to
     read (the import then decides)."""
-    import ast
+    from pathlib import Path
 
     origin = importlib.util.find_spec(module).origin
     if not origin or not origin.endswith(".py"):
         return True
+    st = Path(origin).stat()
+    return name in _bound_names(origin, st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=64)
+def _bound_names(origin: str, mtime_ns: int, size: int) -> frozenset:
+    """The names a module's source file binds at its top level (parsed once per version of
+    the file: a specification's command module is named by several of its fields)."""
+    import ast
     from pathlib import Path
 
     tree = ast.parse(Path(origin).read_text(encoding="utf-8"))
@@ -665,14 +709,13 @@ def _defines(module: str, name: str) -> bool:
         elif isinstance(node, (ast.Assign, ast.AnnAssign)):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
             bound |= {t.id for t in targets if isinstance(t, ast.Name)}
-    return name in bound
+    return frozenset(bound)
 
 
 def _named_modules(spec: Specification) -> list[tuple[str, str]]:
     """(field, module) of every module a specification names by string."""
     out = [(n, getattr(spec, n)) for n in ("outputs", "certificate_content") if getattr(spec, n)]
-    if spec.calibrate_arguments:
-        out.append(("calibrate_arguments", spec.calibrate_arguments.partition(":")[0]))
+    out += [(f"arguments[{cmd!r}]", ref.partition(":")[0]) for cmd, ref in spec.arguments.items()]
     return out + [(f"commands[{name!r}]", ref.partition(":")[0]) for name, ref in spec.commands]
 
 
@@ -725,33 +768,36 @@ def get(key: str) -> Specification:
     return _load(key, eps[key])
 
 
-def calibrate_arguments() -> list[tuple[Specification, Callable[..., None]]]:
-    """``(specification, add)`` of every registered specification with its own ``gonio
-    calibrate`` options (``Specification.calibrate_arguments``), in key order: ``add(group)``
-    adds them to an argparse argument group. A specification, or a module, that cannot be
-    loaded adds none, with a warning naming it (its own ``--spec`` still fails with the error).
+def command_arguments(command: str) -> list[tuple[Specification, Callable[..., None]]]:
+    """``(specification, add)`` of every registered specification with its own options for
+    ``gonio command`` (``Specification.arguments``; ``command`` one of
+    :data:`ARGUMENT_COMMANDS`), in key order: ``add(group)`` adds them to an argparse
+    argument group. A specification, or a module, that cannot be loaded adds none, with a
+    warning naming it (its own ``--spec`` still fails with the error).
 
-    >>> [s.key for s, _ in calibrate_arguments() if s.key == "ogam-draft"]
+    >>> [s.key for s, _ in command_arguments("simulate") if s.key == "ogam-draft"]
     ['ogam-draft']
     """
     import warnings
 
+    if command not in ARGUMENT_COMMANDS:
+        raise KeyError(f"{command!r} takes no options of a specification (ARGUMENT_COMMANDS)")
     out = []
     for key, ref in sorted(_entry_points().items()):
         try:
             spec = _load(key, ref)
         except GonioError as exc:
-            warnings.warn(f"{exc.message}; its calibrate options are not available",
+            warnings.warn(f"{exc.message}; its {command} options are not available",
                           stacklevel=2)
             continue
-        if not spec.calibrate_arguments:
+        if command not in spec.arguments:
             continue
-        mod, _, attr = spec.calibrate_arguments.partition(":")
+        mod, _, attr = spec.arguments[command].partition(":")
         try:
             out.append((spec, getattr(importlib.import_module(mod), attr)))
         except Exception as exc:     # the plug-in's own bug costs only its own options
-            warnings.warn(f"the calibrate options of specification {key!r} "
-                          f"({spec.calibrate_arguments!r}) cannot be loaded "
+            warnings.warn(f"the {command} options of specification {key!r} "
+                          f"({spec.arguments[command]!r}) cannot be loaded "
                           f"({type(exc).__name__}: {exc})", stacklevel=2)
     return out
 

@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
-import datetime as _dt
-import math
 import re
-import secrets
 
 from fastapi import Request
 from fastapi.responses import HTMLResponse, Response
 
 from gonio.records import auth, services
 from gonio.records.models import User
-from gonio.units import S_PER_H
+from gonio.web.front import (COOKIE, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S,  # noqa: F401  (the pages')
+                             fmt, fresh_token)
 
-COOKIE, LOGIN_COOKIE = "gonio_session", "gonio_login"
-#: lifetime of the login form's CSRF cookie
-LOGIN_COOKIE_AGE_S = int(S_PER_H)
 PAGE = 50
 #: calibration files a browser may download, with their media types
 FILE_TYPES = {"certificate.pdf": "application/pdf", "certificate.html": "text/html",
@@ -32,20 +27,6 @@ class Redirect(Exception):
 
 class Forbidden(Exception):
     pass
-
-
-def fmt(x, digits: int = 6) -> str:
-    """A number for a table cell (6 significant digits), '—' for None."""
-    if x is None:
-        return "—"
-    if isinstance(x, float):
-        if not math.isfinite(x):
-            return "—"
-        return f"{x:.{digits}g}"
-    if isinstance(x, _dt.datetime):
-        return x.strftime("%Y-%m-%d %H:%M")
-    return str(x)
-
 
 
 def current(request: Request) -> tuple[User, str]:
@@ -98,8 +79,4 @@ def file_response(store, sha: str, name: str, disposition: str = "inline",
         headers["Content-Security-Policy"] = "sandbox; default-src 'none'; img-src data:; " \
                                              "style-src 'unsafe-inline'"
     return Response(services.file_bytes(store, sha), media_type=media, headers=headers)
-
-
-def fresh_token() -> str:
-    return secrets.token_urlsafe(32)
 

@@ -13,9 +13,9 @@ from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, blobs, queries, services, submission
-from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, LOGIN_COOKIE_AGE_S, PAGE,
-                              Forbidden, current, file_response, form, fresh_token, page_of,
-                              render, wake)
+from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, current,
+                              file_response, form, page_of, render, wake)
+from gonio.web.front import login_response
 
 router = APIRouter()
 
@@ -37,10 +37,7 @@ def _store(request: Request):
 
 @router.get("/login")
 def login_page(request: Request):
-    token = fresh_token()
-    r = render(request, "login.html", None, token)
-    r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
-    return r
+    return login_response(request.app.state.templates, request)
 
 
 @router.post("/login")
@@ -53,12 +50,9 @@ async def login(request: Request):
         user = auth.authenticate(_store(request), str(data.get("username", ""))[:200],
                                  str(data.get("password", ""))[:2000], address)
     except GonioError as exc:
-        token = fresh_token()
         code = 429 if isinstance(exc, TooManyAttemptsError) else 401
-        r = render(request, "login.html", None, token, status_code=code,
-                   error=str(exc).split(": ", 1)[-1])
-        r.set_cookie(LOGIN_COOKIE, token, httponly=True, samesite="strict", max_age=LOGIN_COOKIE_AGE_S)
-        return r
+        return login_response(request.app.state.templates, request, status_code=code,
+                              error=str(exc).split(": ", 1)[-1])
     token, _ = auth.open_session(_store(request), user)
     r = _back("/")
     r.set_cookie(COOKIE, token, httponly=True, samesite="strict",
@@ -251,7 +245,7 @@ def instrument_history(request: Request, inst_id: int):
     key = hashlib.sha256(repr((sorted(hist.items()), sorted(limits.items()))).encode()
                          ).hexdigest()
     svg = _SVG_CACHE.get(key)
-    if svg is None:                  # drawn once per state of the history (~1 s of CPU)
+    if svg is None:                  # drawn once per state of the history
         svg = _SVG_CACHE[key] = history_svg(hist, limits)
         while len(_SVG_CACHE) > 256:
             _SVG_CACHE.pop(next(iter(_SVG_CACHE)))

@@ -40,7 +40,7 @@ __all__ = ["StaticNoiseResult", "StaticWindow", "analyse_record", "analyse_stati
            "window_record", "MEMMAP_SAMPLES"]
 
 #: Table rate above which a sample counts as motion, °/s (the reducer's default rest
-#: threshold on the encoder, gonio.reduce.TABLE_RATE_THRESHOLD_DPS).
+#: threshold on the encoder, gonio.reduce.rests.TABLE_RATE_THRESHOLD_DPS).
 MOTION_THRESHOLD_DPS = 0.01
 
 
@@ -288,10 +288,10 @@ def _window_by_option(src, window) -> StaticWindow:
 def source_windows(src, *, scale_factor_counts_per_deg: float | None = None,
                    min_duration_s: float = 1.0, window=None) -> list[StaticWindow]:
     """:func:`static_windows` of a sample source (:class:`gonio.formats.streams.StreamFile`)
-    in bounded memory: the same rests (the reducer's :func:`gonio.reduce.stream.rests_of`
+    in bounded memory: the same rests (the reducer's :func:`gonio.reduce.rests.rests_of`
     on the same samples, read once in blocks) and the same edge clipping, so the same
     windows as :func:`static_windows` on the whole arrays."""
-    from gonio.reduce.stream import rests_of
+    from gonio.reduce.rests import rests_of
 
     if window is not None:
         return [_window_by_option(src, window)]

@@ -8,7 +8,9 @@ readings or stream → items, Annex A budget, item uncertainties);
 study of ``gonio validate`` (its trial, truths and bench cases) and :mod:`.item_coverage`
 what each item's coverage is checked against; :mod:`.outputs` the rendering (results,
 tables, certificate, DCC, demo); :mod:`.commands` its own ``gonio`` sub-commands (``reduce``,
-``tilt``, ``tilt-estimate``, ``eda``). The clause-by-clause
+``tilt``, ``tilt-estimate``, ``eda``); :mod:`.acquisition` its programme on a laboratory's
+table and acquisition module (``SPEC.acquire``, ``gonio acquire``) and :mod:`.served` its
+virtual bench served as those instruments (``SPEC.serve``, ``gonio bench serve``). The clause-by-clause
 reading is ``docs/draft-readings.md``.
 """
 
@@ -31,6 +33,8 @@ SPEC = Specification(
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
     budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),
+    acquire=lazy("gonio.specs.ogam_draft.acquisition:acquire_programme"),
+    serve=lazy("gonio.specs.ogam_draft.served:serve"),
     coverage=Coverage(engine="cases", stream=0,
                       study=lazy("gonio.specs.ogam_draft.study:plan_study"),
                       options=frozenset({"cases", "truth", "extra_components", "u_scale",
@@ -39,10 +43,13 @@ SPEC = Specification(
     outputs="gonio.specs.ogam_draft.outputs",
     simulate_options=frozenset({"table", "stream", "stream_format"}),
     calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt"}),
-    calibrate_arguments="gonio.specs.ogam_draft.commands:add_calibrate_options",
     budget_options=frozenset({"table_mpe_arcsec", "tilt_deg", "zero_stability_dph",
                               "duration_min", "repeatability_arcsec", "k",
                               "monte_carlo_trials", "seed"}),
+    arguments={"calibrate": "gonio.specs.ogam_draft.commands:add_calibrate_options",
+               "simulate": "gonio.specs.ogam_draft.commands:add_simulate_options",
+               "budget": "gonio.specs.ogam_draft.commands:add_budget_options",
+               "validate": "gonio.specs.ogam_draft.commands:add_validate_options"},
     commands=(("eda", "gonio.specs.ogam_draft.commands:add_eda"),
               ("reduce", "gonio.specs.ogam_draft.commands:add_reduce"),
               ("tilt", "gonio.specs.ogam_draft.commands:add_tilt"),

@@ -143,7 +143,7 @@ class Analysis:
     repeatability_source: str
     noise: object | None = None          # gonio.analysis.noise.StaticNoiseResult of the 7.3 record
     noise_source: str = ""
-    eda: object | None = None            # gonio.analysis.equal_division.EdaResult of the equal_division rows
+    eda: object | None = None            # gonio.specs.ogam_draft.equal_division.EdaResult of the equal_division rows
     item_uncertainty: dict = field(default_factory=dict)
     budget_kind: str = "physical"
     conflicts: list = field(default_factory=list)
@@ -827,7 +827,7 @@ def _read(path: str | Path, protocol: Protocol):
     if sniff_kind(path) == "readings":
         return read_readings(path), None
     from gonio.formats.readings import format_readings, parse_readings
-    from gonio.reduce import reduce_stream
+    from gonio.specs.ogam_draft.reduce import reduce_stream
 
     stream = StreamFile(path)               # read in blocks: bounded memory
     red = reduce_stream(stream, protocol)
@@ -869,14 +869,39 @@ def static_record_from_stream(stream, reduced) -> StaticRecord | None:
     return StaticRecord(t, angle, source="stream, 7.3 rest")
 
 
-def analyse_zero_stability(record: StaticRecord | None):
-    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`), or why not."""
+#: Most samples of the 7.3 record the noise analysis uses. A longer record is decimated
+#: to every d-th angle (d the smallest that fits): the angle is the cumulative counter, so
+#: that is an exact record at d·τ0 and the Allan deviation starts at τ = d·τ0. The fit and
+#: its parametric bootstrap (20 synthesised records of the same length) then cost the same
+#: for any sample rate and rest length.
+ZERO_STABILITY_NOISE_SAMPLES = 1 << 18
+
+
+def analyse_zero_stability(record: StaticRecord | None,
+                           max_samples: int = ZERO_STABILITY_NOISE_SAMPLES):
+    """Allan analysis of the 7.3 static record (:func:`gonio.analysis.noise.analyse_static`,
+    uncertainties by its parametric bootstrap of 20 records) on at most ``max_samples``
+    samples (every d-th, :data:`ZERO_STABILITY_NOISE_SAMPLES`), or why not. Returns
+    ``(result or None, source)``; the source names the decimation when there is one.
+
+    >>> import numpy as np
+    >>> t = np.arange(1001) * 0.01
+    >>> rng = np.random.default_rng(0)
+    >>> rec = StaticRecord(t, np.cumsum(rng.standard_normal(1001)) * 1e-6, source="test")
+    >>> r, src = analyse_zero_stability(rec, max_samples=300)
+    >>> round(r.tau0_s, 3), src
+    (0.04, 'test; one sample in 4 analysed (at most 300)')
+    """
     from gonio.analysis.noise import analyse_static
 
     if record is None:
         return None, ""
+    n = int(np.size(record.time_s))
+    d = max(1, -(-n // int(max_samples)))
+    source = record.source if d == 1 else \
+        f"{record.source}; one sample in {d} analysed (at most {int(max_samples)})"
     try:
-        return analyse_static(record.time_s, record.angle_deg), record.source
+        return analyse_static(record.time_s[::d], record.angle_deg[::d]), source
     except GonioError as exc:
         return None, f"not analysed: {exc}"
 
@@ -1057,7 +1082,7 @@ def equal_division_for(unused: pd.DataFrame, readings: Readings,
     not form a complete measurement the analysis is skipped and the rows stay
     unused, with the reason.
     """
-    from gonio.analysis.equal_division import equal_division_from_readings
+    from gonio.specs.ogam_draft.equal_division import equal_division_from_readings
 
     rows = readings.data[readings.data["test"] == "equal_division"]
     if not len(rows):

@@ -2,14 +2,18 @@
 line registers them through the registry, :func:`gonio.specs.commands`): the tools around its
 calibration that no other specification uses.
 
-Its own ``gonio calibrate`` options (``--budget``, ``--tilt``: :func:`add_calibrate_options`,
-``SPEC.calibrate_arguments``). ``gonio reduce``: stream → readings file (find the table's rests, match the protocol's
-rounds; :func:`gonio.reduce.reduce_stream`). ``gonio tilt``: the extreme tilt error over
+Its own options of gonio's commands (``SPEC.arguments``): ``gonio calibrate --budget|--tilt``
+(:func:`add_calibrate_options`), ``gonio simulate --table|--stream|--stream-format``
+(:func:`add_simulate_options`), the Annex A inputs of ``gonio budget``
+(:func:`add_budget_options`) and the settings of its ``gonio validate`` study
+(:func:`add_validate_options`). ``gonio reduce``: stream → readings file (find the table's
+rests, match the protocol's rounds; :func:`gonio.specs.ogam_draft.reduce.reduce_stream`).
+``gonio tilt``: the extreme tilt error over
 0–360° (draft Annex A.4.2; :mod:`gonio.physics.tilt`). ``gonio tilt-estimate``: ψ and α from
 the static multi-position rows of a readings file
-(:func:`gonio.analysis.tilt_estimate.tilt_estimate_from_readings`). ``gonio eda``:
+(:func:`gonio.specs.ogam_draft.tilt_estimate.tilt_estimate_from_readings`). ``gonio eda``:
 equal-division averaging of a readings file's ``equal_division`` rows (IEC 62047-20 Annex A.3;
-:func:`gonio.analysis.equal_division.equal_division_from_readings`).
+:func:`gonio.specs.ogam_draft.equal_division.equal_division_from_readings`).
 
 This module sits on the command line's layer (it imports ``gonio.cli.checks``); nothing
 imports it but the command line, when it builds its parser.
@@ -23,12 +27,13 @@ import math
 from gonio.atomic import check_output_file
 from gonio.cli.checks import LARGE, float_range, int_range, json_safe, positive_magnitude
 from gonio.errors import GonioError, check_input_file
+from gonio.units import ARCSEC_PER_DEG
 
 
 # --------------------------------------------------------------------------- gonio calibrate
 
 def add_calibrate_options(group) -> None:
-    """The draft's own ``gonio calibrate`` options (``SPEC.calibrate_arguments``): E's budget
+    """The draft's own ``gonio calibrate`` options (``SPEC.arguments["calibrate"]``): E's budget
     and a measured tilt bound."""
     group.add_argument("--budget", choices=("physical", "draft"), default=None,
                        help="E's budget: physical (default: Annex A plus the lines beyond the "
@@ -37,6 +42,72 @@ def add_calibrate_options(group) -> None:
     group.add_argument("--tilt", default=None, metavar="FILE",
                        help="a 'gonio tilt-estimate --json' result: bounds the tilt by psi + "
                             "U95 instead of the protocol's tilt bound")
+
+
+# --------------------------------------------------------------------------- gonio simulate
+
+def add_simulate_options(group) -> None:
+    """The draft's own ``gonio simulate`` options (``SPEC.arguments["simulate"]``): a table
+    file overriding the bench's, and the stream of every sample."""
+    group.add_argument("--table", default=None, metavar="FILE",
+                       help="table file overriding the bench's (the precision table the draft's "
+                            "items are measured against)")
+    group.add_argument("--stream", action="store_true",
+                       help="also write the stream (every sample: time, wrapped counter, table "
+                            "angle; docs/formats.md#stream-file), chunk by chunk, with progress "
+                            "on a terminal")
+    group.add_argument("--stream-format", choices=("parquet", "csv"), default=None,
+                       help="stream.parquet (default; pyarrow, the metadata as Parquet "
+                            "key-value metadata) or stream.csv")
+
+
+# --------------------------------------------------------------------------- gonio budget
+
+def add_budget_options(group) -> None:
+    """The draft's own ``gonio budget`` options (``SPEC.arguments["budget"]``): the inputs
+    of its Annex A budget of E (u(P), u(φ_e), u(B_E), u(r), U = k·u_c; defaults: the annex's)."""
+    group.add_argument("--table-mpe-arcsec", type=float_range(0, ARCSEC_PER_DEG), default=None,
+                       metavar="A", help="standard table MPE in arc-seconds (A.4.1; default 0.1)")
+    group.add_argument("--tilt-deg", type=float_range(0, 45), default=None, metavar="PSI",
+                       help="sensing-plane tilt in degrees (A.4.2; default 0.1)")
+    group.add_argument("--zero-stability-dph", type=float_range(0, 1e4), default=None,
+                       metavar="B", help="zero stability in °/h (A.4.3; default 0.005)")
+    group.add_argument("--duration-min", type=float_range(0, 1e4), default=None, metavar="T",
+                       help="time from start to reading in minutes (A.4.3; default 0.5)")
+    group.add_argument("--repeatability-arcsec", type=float_range(0, ARCSEC_PER_DEG),
+                       default=None, metavar="S",
+                       help="repeatability u(r) in arc-seconds (A.4.4; default 0.096)")
+    group.add_argument("--k", type=float_range(0, 10, lo_open=True), default=None,
+                       help="coverage factor (A.7; default 2)")
+
+
+# --------------------------------------------------------------------------- gonio validate
+
+def add_validate_options(group) -> None:
+    """The draft's own ``gonio validate`` options (``SPEC.arguments["validate"]``): the
+    settings of its study of the Annex A budget of E over bench cases (7.1 + 7.4 with 10
+    series; :func:`gonio.specs.ogam_draft.study.plan_study`)."""
+    group.add_argument("--cases", default=None,
+                       help="comma-separated bench cases, or 'all' (an unknown case is refused "
+                            "naming the known ones)")
+    group.add_argument("--truth", default=None,
+                       help="truth of the printed table (all are in the JSON; an unknown one "
+                            "is refused naming the known ones)")
+    group.add_argument("--extra-components", nargs="?", const="all", default=None,
+                       metavar="NAMES",
+                       help="also evaluate the budget with the components the annex lacks: "
+                            "all, or a comma-separated subset of their symbols")
+    group.add_argument("--u-scale", type=float_range(0, 100, lo_open=True), default=None,
+                       help="multiply U (default 1; < 1 deliberately breaks the budget)")
+    group.add_argument("--sample-rate-hz", type=float_range(1, 1e5), default=None,
+                       help="simulation rate (default 100 Hz; the RLG counter is exact at any "
+                            "rate)")
+    group.add_argument("--all-items", action="store_true",
+                       help="keep 7.3, 7.6 and 7.7 so that every item's coverage is measured")
+    group.add_argument("--monte-carlo", type=int_range(0), default=None, metavar="N",
+                       help="also run the JCGM 101 Monte Carlo (N trials) of every item budget "
+                            "of each case's first calibration and validate its GUM result "
+                            "(JCGM 101 8.2: pass/fail, d_low, d_high); 0 (default) off")
 
 
 # --------------------------------------------------------------------------- gonio reduce
@@ -70,12 +141,12 @@ def run_reduce(args) -> int:
     check_input_file(args.stream, "stream file")
     check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
                       force=args.force, protected=True)
-    from gonio.formats.override import read_override
+    from gonio.specs.ogam_draft.override import read_override
     from gonio.formats.readings import write_readings
     from gonio.formats.streams import StreamFile
     from gonio.progress import status
     from gonio.protocol import load_protocol
-    from gonio.reduce import reduce_stream
+    from gonio.specs.ogam_draft.reduce import reduce_stream
     from gonio.specs.ogam_draft import SPEC
 
     proto = load_protocol(args.protocol or SPEC.default_protocol)
@@ -163,7 +234,7 @@ def add_tilt_estimate(subparsers) -> None:
 
 def run_tilt_estimate(args) -> int:
     """Read the file, estimate, print."""
-    from gonio.analysis.tilt_estimate import tilt_estimate_from_readings
+    from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
     from gonio.formats.readings import read_readings
 
     r = read_readings(args.file)
@@ -212,7 +283,7 @@ def add_eda(subparsers) -> None:
 
 def eda_text(res) -> str:
     """The printed form of an equal-division result (an
-    :class:`~gonio.analysis.equal_division.EdaResult`: tables, closure, coupling)."""
+    :class:`~gonio.specs.ogam_draft.equal_division.EdaResult`: tables, closure, coupling)."""
     out = [f"equal-division averaging (IEC 62047-20 Annex A.3): n = {res.n_starts} starts, "
            f"m = {res.m_points} points ({res.step_deg:g}° step), {res.repeats} repeat(s)",
            f"residual std {res.residual_std_arcsec:.4f}″, dof {res.dof}, gauge {res.gauge}, "
@@ -244,7 +315,7 @@ def eda_text(res) -> str:
 
 def run_eda(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
-    from gonio.analysis.equal_division import equal_division_from_readings
+    from gonio.specs.ogam_draft.equal_division import equal_division_from_readings
     from gonio.atomic import check_output_files
     from gonio.formats.readings import read_readings
     from gonio.protocol import load_protocol
@@ -260,7 +331,7 @@ def run_eda(args) -> int:
         protocol=proto.equal_division, coupling=not args.no_coupling,
         compensation_time_s=sess.static_s if sess.earth_compensation == "measured" else None)
     if args.plot:
-        from gonio.report.eda_figure import equal_division_figure
+        from gonio.specs.ogam_draft.pages import equal_division_figure
         from gonio.report.figure_files import save_figure
         save_figure(equal_division_figure(res), args.plot)
     if args.json:

@@ -58,7 +58,7 @@ TITLES_EN: dict[str, str] = {
 
 
 #: The tilt × Earth-rate coupling's sentence under the equal-division table, by the analysis'
-#: ``reason`` (gonio.analysis.equal_division.CouplingFit), English and Chinese; ``{amp}`` its
+#: ``reason`` (gonio.specs.ogam_draft.equal_division.CouplingFit), English and Chinese; ``{amp}`` its
 #: amplitude Ω⊥ tan ψ (″/s), ``{eff}`` its largest effect on a reading (″), ``{cond}`` the
 #: condition number, ``{size}`` its size at the tilt bound (″; the bracketed part only where
 #: that size is known).

@@ -63,6 +63,7 @@ from gonio.budget.extra import EXTRA_SYMBOLS, budget_extra_components
 from gonio.errors import GonioError
 from gonio.formats.readings import Readings
 from gonio.formats.toml import read_toml
+from gonio.limits import check
 from gonio.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
 from gonio.specs.ogam_draft.budget import annex_a_budget
@@ -656,6 +657,7 @@ def _check_options(truth: str, u_scale: float, sample_rate_hz: float, monte_carl
     if int(monte_carlo) != monte_carlo or monte_carlo < 0 or monte_carlo == 1:
         raise GonioError(f"--monte-carlo must be 0 or an integer >= 2, got {monte_carlo}",
                          key="monte_carlo")
+    check("GONIO_MAX_MONTE_CARLO", monte_carlo, "--monte-carlo", unit="trials")
 
 
 def study_protocol(protocol: str | Protocol, all_items: bool) -> Protocol:

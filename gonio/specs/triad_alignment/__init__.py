@@ -12,7 +12,7 @@ reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.m
 from gonio.specs import Specification, lazy
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, THERMAL_POINT_KEYS
 
-#: ``gonio.formats.triad.FORMAT``, written here so that loading ``SPEC`` imports no reader
+#: ``gonio.specs.triad_alignment.readings.FORMAT``, written here so that loading ``SPEC`` imports no reader
 #: (tests/test_cli_startup.py checks that the two agree).
 FORMAT = "gonio-triad-readings/1"
 
@@ -42,9 +42,9 @@ SPEC = Specification(
     budget=lazy("gonio.specs.triad_alignment.calibration:article_budget"),
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
-    calibrate_arguments="gonio.specs.triad_alignment.commands:add_calibrate_options",
+    arguments={"calibrate": "gonio.specs.triad_alignment.commands:add_calibrate_options"},
     readings_format=FORMAT,
-    named_inputs=lazy("gonio.formats.triad:named_inputs"),
+    named_inputs=lazy("gonio.specs.triad_alignment.readings:named_inputs"),
     certificate_content="gonio.specs.triad_alignment.certificate",
     item_keys=tuple(ALIGNMENT_KEYS) + THERMAL_POINT_KEYS,
     commands=(("align", "gonio.specs.triad_alignment.commands:add_align"),

@@ -46,7 +46,7 @@ from gonio.physics.earth import earth_rate_enu
 from gonio.units import S_PER_DAY, dph_to_dps, dps_to_dph
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.keys import OFFDIAG  # noqa: F401  (the off-diagonal pairs)
-from gonio.formats.triad import OUT, TriadReadings
+from gonio.specs.triad_alignment.readings import OUT, TriadReadings
 from gonio.analysis.noise import allan_deviation
 from gonio.analysis.noise.stream import Record, frame_column, rows_where
 from gonio.physics.alignment import (alignment_noise_limit_dps, decompose_system_matrices,

@@ -38,7 +38,7 @@ from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFD
                                                  AlignmentResult, bias_instability_u_dps,
                                                  cross_axis_table, estimate_alignment)
 from gonio.errors import GonioError
-from gonio.formats.triad import OUT, TriadReadings, read_triad_readings
+from gonio.specs.triad_alignment.readings import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
 from gonio.result.model import Covariance
 from gonio.specs.triad_alignment.figure_data import figure_series

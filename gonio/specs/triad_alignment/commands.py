@@ -7,7 +7,7 @@ docs/formats-triad.md; method: docs/alignment.md). ``gonio thermal-model``: iden
 K(ϑ, U), b(ϑ, U) and ARW(ϑ) from a triad thermal readings file (docs/thermal-model.md), a
 thin layer over :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`.
 Its own ``gonio calibrate`` options (``--thermal``, ``--robust``): :func:`add_calibrate_options`
-(``SPEC.calibrate_arguments``).
+(``SPEC.arguments["calibrate"]``).
 
 This module sits on the command line's layer (it imports ``gonio.cli.checks``); nothing
 imports it but the command line, when it builds its parser.
@@ -22,7 +22,7 @@ from gonio.errors import GonioError
 
 
 def add_calibrate_options(group) -> None:
-    """The triad's own ``gonio calibrate`` options (``SPEC.calibrate_arguments``): the
+    """The triad's own ``gonio calibrate`` options (``SPEC.arguments["calibrate"]``): the
     thermal-programme readings and the robust fit."""
     group.add_argument("--thermal", default=None, metavar="FILE",
                        help="the thermal-programme readings (default: the file the readings' "
@@ -68,14 +68,15 @@ def run_align(args) -> int:
     import numpy as np
 
     from gonio.specs.triad_alignment.analysis import cross_axis_table, estimate_alignment
-    from gonio.formats.triad import json_safe, read_triad_readings
+    from gonio.formats.jsonsafe import json_safe
+    from gonio.specs.triad_alignment.readings import read_triad_readings
 
     if args.monte_carlo < 0:
         raise GonioError(f"--monte-carlo must be ≥ 0, got {args.monte_carlo}")
     if not 0 < args.target_deg < 90:
         raise GonioError(f"--target-deg must be in (0, 90), got {args.target_deg}")
     from gonio.atomic import check_output_files
-    from gonio.formats.triad import named_inputs
+    from gonio.specs.triad_alignment.readings import named_inputs
     from gonio.limits import check
     from gonio.specs.triad_alignment.calibration import consistency_check
 
@@ -165,7 +166,8 @@ def run_thermal_model(args) -> int:
     (``--plot``), page (``--report``) and compensation of a second record; exit code 0."""
     from gonio.specs.triad_alignment.thermal_model import compensate_record, identify_thermal_model
     from gonio.atomic import check_output_files
-    from gonio.formats.triad import json_safe, named_inputs, read_triad_readings
+    from gonio.formats.jsonsafe import json_safe
+    from gonio.specs.triad_alignment.readings import named_inputs, read_triad_readings
 
     inputs = [args.readings, args.compensate]
     from gonio.report.figure_files import FIGURE_FORMATS

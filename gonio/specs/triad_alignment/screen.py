@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError
-from gonio.formats.triad import OUT
+from gonio.specs.triad_alignment.readings import OUT
 from gonio.result.findings import Finding
 
 #: A rotating dwell's output must stand this many sample deviations from the static median
@@ -146,8 +146,9 @@ def _step_gaps(df: pd.DataFrame, file) -> list[Finding]:
 
 
 def _no_static_record(df: pd.DataFrame, file) -> list[Finding]:
-    """``static-record-missing`` (flagged): alignment rows and no ``static`` row (hostile
-    round 3: the bias U fell 0.36 → 0.056 with no finding, the change only in a detail)."""
+    """``static-record-missing`` (flagged): alignment rows and no ``static`` row (without the
+    static record the bias U falls silently by a factor of about six, the change only in a
+    detail, so the absence is stated)."""
     tests = set(df["test"].astype(str))
     if "alignment" not in tests or "static" in tests:
         return []
@@ -160,7 +161,7 @@ def _no_static_record(df: pd.DataFrame, file) -> list[Finding]:
 
 
 def screen(readings, protocol=None) -> list[Finding]:
-    """Every finding on a triad readings file (:class:`gonio.formats.triad.TriadReadings`)."""
+    """Every finding on a triad readings file (:class:`gonio.specs.triad_alignment.readings.TriadReadings`)."""
     df = readings.data
     file = None if readings.path is None else str(readings.path)
     return (_duplicates(df, file) + _rate_signs(df, readings.metadata, file)

@@ -8,9 +8,9 @@ from pathlib import Path
 from gonio.atomic import output_dir
 import numpy as np
 
-from gonio.bench.triad import (load_triad_bench, load_triad_protocol, run_alignment_session,
+from gonio.specs.triad_alignment.bench import (load_triad_bench, load_triad_protocol, run_alignment_session,
                                run_thermal_session)
-from gonio.formats.triad import TriadReadings, format_triad_readings
+from gonio.specs.triad_alignment.readings import TriadReadings, format_triad_readings
 from gonio.specs.triad_alignment.calibration import KEY
 
 
@@ -43,7 +43,7 @@ def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = 
     alignment session) identified as ``calibrate`` does, every certified thermal value
     (``K_z_t1_v2``, ``b_z_t3_v1``, ``ARW_z_t2`` …) against the bench's closed-form truth
     (``SPEC.truth``, :mod:`gonio.specs.triad_alignment.truth`, from
-    :func:`gonio.bench.triad.true_thermal_coefficients`): {key: {clause, value, truth, U,
+    :func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`): {key: {clause, value, truth, U,
     u_c}}, the records of :func:`gonio.pipeline.coverage.coverage_table_from`."""
     from gonio.specs.triad_alignment.analysis import estimate_alignment
     from gonio.specs.triad_alignment.calibration import thermal_items, thermal_long_term

@@ -50,7 +50,7 @@ from scipy import optimize, stats
 from gonio.physics.earth import earth_rate_enu
 from gonio.units import deg_sqrt_s_from_deg_sqrt_h
 from gonio.errors import GonioError
-from gonio.formats.triad import OUT, TriadReadings
+from gonio.specs.triad_alignment.readings import OUT, TriadReadings
 from gonio.physics.alignment import AXES, mean_earth_rate_ref, signed_axis
 
 CRITERIA = ("bic", "aic", "ftest")

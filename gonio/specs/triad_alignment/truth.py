@@ -1,5 +1,5 @@
 """``SPEC.truth`` of the triad alignment: the true value of every alignment item from the
-virtual triad's physical parameters (:class:`gonio.bench.triad.TriadBench`), never from the
+virtual triad's physical parameters (:class:`gonio.specs.triad_alignment.bench.TriadBench`), never from the
 estimator (:mod:`gonio.specs.triad_alignment.analysis`).
 
 The bench's output is y = M ω + b (at the reference temperature and supply), with
@@ -19,7 +19,7 @@ and the temperature/supply model's certified values (thesis eq. 6.17–6.20):
 ``K_<ch>_t<i>_v<j>``, ``b_<ch>_t<i>_v<j>``, ``ARW_<ch>_t<i>`` — the bench's K, b, ARW of the
 gyro soaked at the programme's i-th chamber set point (ascending; soaked, the die is at the
 set point) and j-th supply level (ascending), from the bench's polynomials in the die's
-temperature (:func:`gonio.bench.triad.true_thermal_coefficients` with ``chamber``
+temperature (:func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients` with ``chamber``
 coordinates), for every gyro the programme puts on the table axis. The set points and
 supply levels are the protocol's; the truth never sees an estimate or the data.
 
@@ -29,7 +29,7 @@ parameter.
 
 from __future__ import annotations
 
-from gonio.bench.triad import (TriadBench, TriadProtocol, load_triad_bench, load_triad_protocol,
+from gonio.specs.triad_alignment.bench import (TriadBench, TriadProtocol, load_triad_bench, load_triad_protocol,
                                true_thermal_coefficients)
 
 #: Off-diagonal pairs (gyro, about) in the items' order.

@@ -1,16 +1,17 @@
-"""Figure of an equal-division analysis: the table's and the goniometer's error curves."""
+"""The optical draft's standalone pages: the figure of an equal-division analysis (the table's
+and the goniometer's error curves) that ``gonio eda --plot`` writes."""
 
 from __future__ import annotations
 
 from matplotlib.figure import Figure
 
-from gonio.analysis.equal_division import EdaResult
+from gonio.specs.ogam_draft.equal_division import EdaResult
 
 
 def equal_division_figure(res: EdaResult) -> Figure:
     """Table error against position and goniometer error against angle turned, with ±u bars.
 
-    >>> from gonio.analysis.equal_division import simulate_eda_matrix, equal_division_analysis
+    >>> from gonio.specs.ogam_draft.equal_division import simulate_eda_matrix, equal_division_analysis
     >>> sim = simulate_eda_matrix({1: 1.0}, {2: 0.2}, 8, 8, 1, 0.05, 0)
     >>> fig = equal_division_figure(equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg))
     >>> len(fig.axes)

@@ -1,4 +1,5 @@
-"""Run a protocol's programme on a rotary table and an acquisition module (``gonio acquire``).
+"""Run a protocol's programme on a rotary table and an acquisition module (``gonio acquire``;
+the optical draft's ``acquire`` hook, :func:`acquire_programme`).
 
 :func:`plan_programme` turns a :class:`~gonio.protocol.Protocol` into blocks of readings in
 the order the virtual bench runs them (:mod:`gonio.bench.session`): the zero-stability rest
@@ -28,7 +29,6 @@ from __future__ import annotations
 import csv
 import datetime as _dt
 import math
-import os
 import signal
 import sys
 import time
@@ -36,9 +36,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gonio import __version__
-from gonio.atomic import write_text
 from gonio.errors import GonioError
 from gonio.instruments.acquisition import AcquisitionModule
+from gonio.instruments.run import (AcquisitionResult, ModuleClock, ReadingsFile, raise_stop,
+                                  stop_reason)
 from gonio.instruments.link import IOLog, Link
 from gonio.instruments.table import RotaryTable, TableLimits
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
@@ -189,39 +190,6 @@ def _row_key(row: dict) -> tuple:
     return (row["test"], int(row["series"]), int(row["round"]), rate, row.get("orientation") or "up")
 
 
-class ReadingsFile:
-    """readings.csv written as the readings come: metadata and header first, then one row per
-    reading, appended, flushed and synced. ``acquisition: incomplete`` until :meth:`finish`
-    rewrites the metadata (atomically) to ``complete``."""
-
-    def __init__(self, path: Path, metadata: dict, rows: list[str], columns=COLUMNS):
-        self.path, self.metadata, self.rows = path, dict(metadata), list(rows)
-        self.columns = tuple(columns)
-        self._rewrite("incomplete")
-        self._fh = open(self.path, "a", encoding="utf-8", newline="\n")
-
-    def _text(self, state: str, reason: str = "") -> str:
-        md = {"acquisition": state, **self.metadata}
-        if reason:
-            md["acquisition_stopped"] = " ".join(reason.split())[:300]
-        head = "".join(f"# {k}: {v}\n" for k, v in md.items())
-        return head + ",".join(self.columns) + "\n" + "".join(self.rows)
-
-    def _rewrite(self, state: str, reason: str = "") -> None:
-        write_text(self.path, self._text(state, reason))
-
-    def append(self, line: str) -> None:
-        """One row (or several: a record's rows at once)."""
-        self.rows.append(line)          # first: a rewrite after an interrupt keeps it
-        self._fh.write(line)
-        self._fh.flush()
-        os.fsync(self._fh.fileno())
-
-    def finish(self, complete: bool, reason: str = "") -> None:
-        self._fh.close()
-        self._rewrite("complete" if complete else "incomplete", reason)
-
-
 def read_previous(path: Path, protocol: Protocol) -> tuple[list[str], set]:
     """The complete rows of an interrupted readings.csv (a last line cut short is dropped)
     and their keys; refuses a file of another protocol or an already complete one."""
@@ -249,49 +217,7 @@ def read_previous(path: Path, protocol: Protocol) -> tuple[list[str], set]:
     return rows, keys
 
 
-# ---------------------------------------------------------------------- clock
-class ModuleClock:
-    """Waits timed on the acquisition module's clock (``SYST:TIME?``): the wall-clock sleep
-    is the time left divided by the module's measured speed against the wall clock (1 on a
-    real bench; N on a bench served N× faster), then the clock is asked again."""
-
-    def __init__(self, gyro: AcquisitionModule, wall=time.monotonic, sleep=time.sleep):
-        self.gyro, self.wall, self.sleep = gyro, wall, sleep
-        self.first = (wall(), gyro.clock_s())
-        self.last = self.first
-
-    def now(self) -> float:
-        t = self.gyro.clock_s()
-        self.last = (self.wall(), t)
-        return t
-
-    def speed(self) -> float | None:
-        dw, dm = self.last[0] - self.first[0], self.last[1] - self.first[1]
-        return dm / dw if dw > 0.02 and dm > 0 else None
-
-    def wait_until(self, t_s: float) -> float:
-        """Return the module's time once it is at or past ``t_s``."""
-        while True:
-            now = self.now()
-            if now >= t_s:
-                return now
-            sp = self.speed()
-            self.sleep(0.005 if sp is None else min(max(0.9 * (t_s - now) / sp, 2e-4), 1.0))
-
-
 # ---------------------------------------------------------------------- the run
-@dataclass
-class AcquisitionResult:
-    """What an acquisition left: the files, the readings taken (this run) and in all."""
-
-    readings: Path
-    io_log: Path
-    taken: int
-    total: int
-    complete: bool
-    seconds: float = 0.0
-
-
 @dataclass
 class Acquisition:
     """The engine behind ``gonio acquire`` (see the module's docstring)."""
@@ -465,14 +391,6 @@ def _identity_metadata(table_idn: str, gyro_idn: str) -> dict:
             "gyro_idn": gyro_idn, "table_idn": table_idn}
 
 
-class _StopRequested(BaseException):
-    """SIGTERM during an acquisition run outside the command line (which has its own)."""
-
-
-def raise_stop(signum, frame):
-    raise _StopRequested()
-
-
 def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: str | Path, *,
             resume: bool = False, metadata: dict | None = None, table_cls=RotaryTable,
             gyro_cls=AcquisitionModule, prompt=input, timeout_s: float = 10.0) -> AcquisitionResult:
@@ -517,7 +435,7 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
         check_programme(blocks, protocol, lim)
         md.update(_instrument_metadata(protocol, gyro, lim))
         md.update(metadata or {})
-        writer = ReadingsFile(path, md, rows)
+        writer = ReadingsFile(path, md, rows, COLUMNS)
         return _run(protocol, blocks, table, gyro, writer, keys, prompt, md, log, t_start)
     except BaseException as exc:
         reason = stop_reason(exc)
@@ -581,16 +499,6 @@ def _run(protocol, blocks, table, gyro, writer, keys, prompt, md, log, t_start):
                              time.monotonic() - t_start)
 
 
-def stop_reason(exc: BaseException) -> str:
-    if isinstance(exc, KeyboardInterrupt):
-        return "interrupted (SIGINT)"
-    if isinstance(exc, GonioError):
-        return str(exc)
-    if type(exc).__name__ in ("Terminated", "_StopRequested"):
-        return "terminated (SIGTERM)"
-    return f"{type(exc).__name__}: {exc}"
-
-
 def _safe_stop(table: RotaryTable | None, log: IOLog) -> None:
     """Send the table a stop, signals held off meanwhile; a lost link is logged, not raised."""
     if table is None:
@@ -608,3 +516,18 @@ def _safe_stop(table: RotaryTable | None, log: IOLog) -> None:
     finally:
         for sig, h in held.items():
             signal.signal(sig, h)
+
+
+def acquire_programme(protocol, resources: dict, out: str | Path, *, metadata: dict | None = None,
+                      resume: bool = False, timeout_s: float = 10.0, prompt=input) -> AcquisitionResult:
+    """The ``acquire`` hook (:func:`gonio.pipeline.acquire.acquire`): :func:`acquire` of the
+    protocol (file or built-in name) on the table and the acquisition module of
+    ``resources`` (VISA resource strings by role)."""
+    from gonio.protocol import load_protocol
+
+    for role in ("table", "gyro"):
+        if not resources.get(role):
+            raise GonioError(f"the programme needs the {role}: give its VISA resource")
+    return acquire(load_protocol(protocol), resources["table"], resources["gyro"], out,
+                   resume=resume, metadata=dict(metadata or {}), timeout_s=timeout_s,
+                   prompt=prompt)

@@ -3,7 +3,7 @@
 ``test,series,round,t_zero_s,t_read_s`` (+ optional ``rate_dps``,
 ``orientation``): the stream times of the zeroing and the reading of each
 listed round (``docs/formats.md#override-file``). Read by
-:func:`gonio.reduce.reduce_stream`'s caller and passed in as records.
+:func:`gonio.specs.ogam_draft.reduce.reduce_stream`'s caller and passed in as records.
 """
 
 from __future__ import annotations

@@ -51,7 +51,7 @@ from scipy import signal
 from gonio.atomic import output_dir
 from gonio.physics.earth import earth_rate_enu
 from gonio.errors import GonioError
-from gonio.formats.triad import COLUMNS, RANGES, format_triad_readings
+from gonio.specs.triad_alignment.readings import COLUMNS, RANGES, format_triad_readings
 from gonio.physics.alignment import (mean_earth_rate_ref, ref_to_enu, sensing_axis_matrix,
                                      system_matrix)
 from gonio.resources import resolve

@@ -1,6 +1,6 @@
 """The virtual bench served as instruments: a rotary table and an acquisition module on TCP.
 
-``gonio bench serve`` (:func:`serve_bench`) serves, on 127.0.0.1 only, the simulated table and
+``gonio bench serve`` (the optical draft's ``serve`` hook, :func:`serve`; :func:`serve_bench`) serves, on 127.0.0.1 only, the simulated table and
 the goniometer's acquisition module of a bench file over line-terminated SCPI sockets, in
 exactly the command sets of the default drivers (:class:`~gonio.instruments.table.RotaryTable`,
 :class:`~gonio.instruments.acquisition.AcquisitionModule`), with their errors in the SCPI
@@ -27,11 +27,8 @@ its connection at its N-th reading request, ``READ?`` or ``FETC?``).
 from __future__ import annotations
 
 import math
-import socket
-import socketserver
 import threading
 import time
-from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,6 +37,8 @@ from gonio import __version__
 from gonio.bench.config import Bench
 from gonio.bench.instrument import Integrator, counts_from_angle, geometry, harmonic_sum_arcsec
 from gonio.errors import GonioError
+from gonio.instruments.scpi import (DropLink, Faults, Instrument, ScpiError, ScpiServer, parse_float,
+                                   scpi_handler)
 from gonio.formats.counters import wrap_counter
 from gonio.physics.earth import NAMED_AXES
 from gonio.physics.kinematics import Timeline
@@ -54,60 +53,6 @@ ROOM_C = 20.0
 KEEP_UP_SAMPLES = 1 << 14
 #: Wall seconds a ``FETC?`` waits for its trigger before answering −230 (the host asks again).
 FETCH_WAIT_S = 1.0
-
-
-def scpi_match(header: str, mnemonic: str) -> bool:
-    """Whether a received header matches a mnemonic in SCPI's short/long forms
-    (``SYST:ERR?`` and ``:system:error?`` both match ``SYSTem:ERRor?``).
-
-    >>> scpi_match(":syst:err?", "SYSTem:ERRor?"), scpi_match("SYSTEM:ERROR?", "SYSTem:ERRor?")
-    (True, True)
-    >>> scpi_match("SYSTE:ERR?", "SYSTem:ERRor?"), scpi_match("SYST:ERR", "SYSTem:ERRor?")
-    (False, False)
-    """
-    h, m = header.lstrip(":"), mnemonic
-    if h.endswith("?") != m.endswith("?"):
-        return False
-    hp, mp = h.rstrip("?").split(":"), m.rstrip("?").split(":")
-    if len(hp) != len(mp):
-        return False
-    for tok, mn in zip(hp, mp):
-        short = "".join(c for c in mn if not c.islower())
-        if tok.upper() not in (short.upper(), mn.upper()):
-            return False
-    return True
-
-
-class ScpiError(Exception):
-    """An error the served instrument puts in its queue: ``code,"message"``."""
-
-    def __init__(self, code: int, message: str):
-        super().__init__(f'{code},"{message}"')
-        self.code = code
-
-
-@dataclass
-class Faults:
-    """Injected faults (see the module's docstring)."""
-
-    table_error_at_move: int | None = None
-    gyro_drop_at_read: int | None = None
-    moves: int = 0
-    reads: int = 0
-
-    @classmethod
-    def parse(cls, specs: list[str] | None) -> "Faults":
-        f = cls()
-        for spec in specs or []:
-            name, _, n = spec.partition(":")
-            if not n.isdigit() or int(n) < 1 or name not in ("table-error", "gyro-drop"):
-                raise GonioError(f"--fault {spec!r}: expected table-error:N or gyro-drop:N "
-                                 "(N ≥ 1)")
-            if name == "table-error":
-                f.table_error_at_move = int(n)
-            else:
-                f.gyro_drop_at_read = int(n)
-        return f
 
 
 @dataclass
@@ -393,55 +338,6 @@ class ServedBench:
         return float(w[0])
 
 
-def parse_float(arg: str) -> float:
-    try:
-        v = float(arg)
-    except ValueError:
-        raise ScpiError(-104, f"Data type error; {arg!r}") from None
-    if not math.isfinite(v):
-        raise ScpiError(-224, f"Illegal parameter value; {arg!r}")
-    return v
-
-
-@dataclass
-class Instrument:
-    """One served instrument: its command table (mnemonic → handler) and error queue."""
-
-    name: str
-    idn: str
-    commands: list = field(default_factory=list)
-    errors: deque = field(default_factory=lambda: deque(maxlen=16))
-
-    def execute(self, line: str) -> str | None:
-        """Run one line: commands separated by ``;`` (SCPI's compound form); the answers
-        of its queries joined by ``;`` (None when it has none)."""
-        answers = [a for a in (self.execute_one(c) for c in line.split(";") if c.strip())
-                   if a is not None]
-        return ";".join(answers) if answers else None
-
-    def execute_one(self, command: str) -> str | None:
-        """Run one command; the answer of a query (None for a command)."""
-        header, _, arg = command.strip().partition(" ")
-        for mnemonic, handler in self.commands:
-            if scpi_match(header, mnemonic):
-                try:
-                    return handler(arg.strip())
-                except ScpiError as exc:
-                    self.errors.append(str(exc))
-                except (ArithmeticError, ValueError, GonioError) as exc:
-                    self.errors.append(f'-300,"Device-specific error; {type(exc).__name__}"')
-                return "9.91E+37" if header.endswith("?") else None
-        self.errors.append(f'-113,"Undefined header; {header}"')
-        return "9.91E+37" if header.endswith("?") else None
-
-    def next_error(self, _arg: str = "") -> str:
-        return self.errors.popleft() if self.errors else '0,"No error"'
-
-
-class DropLink(Exception):
-    """Close the connection (an injected fault)."""
-
-
 def table_instrument(sb: ServedBench) -> Instrument:
     """The served rotary table: :class:`~gonio.instruments.table.RotaryTable`'s commands."""
     b = sb.bench
@@ -555,33 +451,6 @@ def gyro_instrument(sb: ServedBench) -> Instrument:
     return inst
 
 
-def scpi_handler(inst: Instrument):
-    class Handler(socketserver.StreamRequestHandler):
-        def handle(self):
-            for raw in self.rfile:
-                line = raw.decode("ascii", "replace").strip()
-                if not line:
-                    continue
-                try:
-                    answer = inst.execute(line)
-                except DropLink:
-                    return
-                if answer is not None:
-                    self.wfile.write((answer + "\n").encode("ascii", "replace"))
-                    self.wfile.flush()
-    return Handler
-
-
-class ScpiServer(socketserver.ThreadingTCPServer):
-    allow_reuse_address = True
-    daemon_threads = True
-
-    def get_request(self):
-        conn, addr = super().get_request()
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        return conn, addr
-
-
 @dataclass
 class Served:
     """The running servers: their ports, VISA resource strings and ``close``."""
@@ -606,6 +475,11 @@ class Served:
     @property
     def gyro_resource(self) -> str:
         return f"TCPIP0::127.0.0.1::{self.gyro_port}::SOCKET"
+
+    @property
+    def resources(self) -> dict[str, str]:
+        """The VISA resource strings by role (``table``, ``gyro``)."""
+        return {"table": self.table_resource, "gyro": self.gyro_resource}
 
     def close(self) -> None:
         self.stop.set()
@@ -640,3 +514,16 @@ def serve_bench(bench: Bench, table_port: int = 0, gyro_port: int = 0, *, speed:
     th.start()
     threads.append(th)
     return served
+
+
+def serve(bench: str, ports: dict, *, speed: float = 1.0, seed: int = 0,
+          faults: Faults | None = None, range_deg: float = 360.0,
+          warm_up_s: float = S_PER_H) -> Served:
+    """The ``serve`` hook (``gonio bench serve``): the bench file or built-in name ``bench``
+    served by :func:`serve_bench` on the TCP ports of ``ports`` (by role, ``table`` and
+    ``gyro``; 0 or absent: a free one)."""
+    from gonio.bench import load_bench
+
+    return serve_bench(load_bench(bench), ports.get("table") or 0, ports.get("gyro") or 0,
+                       speed=speed, seed=seed, range_deg=range_deg, warm_up_s=warm_up_s,
+                       faults=faults)

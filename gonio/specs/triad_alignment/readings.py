@@ -33,7 +33,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio.errors import GonioError, check_header, read_utf8
 
 FORMAT = "gonio-triad-readings/1"

@@ -1,0 +1,111 @@
+"""What every acquisition through the instruments shares: the readings file written as the
+readings come (:class:`ReadingsFile`), waits timed on the instrument's own clock
+(:class:`ModuleClock`), what a run left (:class:`AcquisitionResult`) and how a stop is told
+(:func:`raise_stop`, :func:`stop_reason`).
+
+Used by :mod:`gonio.instruments.rate_acquire` (a rate specification's segment programme) and
+by a specification that runs its own programme through its ``acquire`` hook (the goniometer's
+table and acquisition module).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from gonio.atomic import write_text
+from gonio.errors import GonioError
+
+
+class ReadingsFile:
+    """readings.csv written as the readings come: metadata and header first, then one row per
+    reading, appended, flushed and synced. ``acquisition: incomplete`` until :meth:`finish`
+    rewrites the metadata (atomically) to ``complete``."""
+
+    def __init__(self, path: Path, metadata: dict, rows: list[str], columns):
+        self.path, self.metadata, self.rows = path, dict(metadata), list(rows)
+        self.columns = tuple(columns)
+        self._rewrite("incomplete")
+        self._fh = open(self.path, "a", encoding="utf-8", newline="\n")
+
+    def _text(self, state: str, reason: str = "") -> str:
+        md = {"acquisition": state, **self.metadata}
+        if reason:
+            md["acquisition_stopped"] = " ".join(reason.split())[:300]
+        head = "".join(f"# {k}: {v}\n" for k, v in md.items())
+        return head + ",".join(self.columns) + "\n" + "".join(self.rows)
+
+    def _rewrite(self, state: str, reason: str = "") -> None:
+        write_text(self.path, self._text(state, reason))
+
+    def append(self, line: str) -> None:
+        """One row (or several: a record's rows at once)."""
+        self.rows.append(line)          # first: a rewrite after an interrupt keeps it
+        self._fh.write(line)
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+
+    def finish(self, complete: bool, reason: str = "") -> None:
+        self._fh.close()
+        self._rewrite("complete" if complete else "incomplete", reason)
+
+
+class ModuleClock:
+    """Waits timed on the acquisition module's clock (``SYST:TIME?``): the wall-clock sleep
+    is the time left divided by the module's measured speed against the wall clock (1 on a
+    real bench; N on a bench served N× faster), then the clock is asked again."""
+
+    def __init__(self, gyro, wall=time.monotonic, sleep=time.sleep):
+        self.gyro, self.wall, self.sleep = gyro, wall, sleep
+        self.first = (wall(), gyro.clock_s())
+        self.last = self.first
+
+    def now(self) -> float:
+        t = self.gyro.clock_s()
+        self.last = (self.wall(), t)
+        return t
+
+    def speed(self) -> float | None:
+        dw, dm = self.last[0] - self.first[0], self.last[1] - self.first[1]
+        return dm / dw if dw > 0.02 and dm > 0 else None
+
+    def wait_until(self, t_s: float) -> float:
+        """Return the module's time once it is at or past ``t_s``."""
+        while True:
+            now = self.now()
+            if now >= t_s:
+                return now
+            sp = self.speed()
+            self.sleep(0.005 if sp is None else min(max(0.9 * (t_s - now) / sp, 2e-4), 1.0))
+
+
+@dataclass
+class AcquisitionResult:
+    """What an acquisition left: the files, the readings taken (this run) and in all."""
+
+    readings: Path
+    io_log: Path
+    taken: int
+    total: int
+    complete: bool
+    seconds: float = 0.0
+
+
+class _StopRequested(BaseException):
+    """SIGTERM during an acquisition run outside the command line (which has its own)."""
+
+
+def raise_stop(signum, frame):
+    raise _StopRequested()
+
+
+def stop_reason(exc: BaseException) -> str:
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted (SIGINT)"
+    if isinstance(exc, GonioError):
+        return str(exc)
+    if type(exc).__name__ in ("Terminated", "_StopRequested"):
+        return "terminated (SIGTERM)"
+    return f"{type(exc).__name__}: {exc}"
