@@ -97,6 +97,11 @@ def octave_against_allantools(y: np.ndarray, tau0: float) -> None:
 
     import allantools
 
+    import platform
+
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}, numpy {np.__version__}, allantools "
+          f"{getattr(allantools, '__version__', '?')}", flush=True)
     peers = {"adev": allantools.oadev, "mdev": allantools.mdev, "hdev": allantools.ohdev}
     for kind, peer in peers.items():
         best = {"ours": [math.inf, math.inf], "allantools": [math.inf, math.inf]}

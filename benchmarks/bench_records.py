@@ -9,7 +9,11 @@
 3. Uploads 8 readings files at once (8 client threads, small optical protocol) and waits
    until all 8 are computed: prints the time and checks every one has its items.
 
-    python benchmarks/bench_records.py [--database postgresql://…] [--requests 200]
+    python benchmarks/bench_records.py [--database postgresql://… | --postgresql]
+                                       [--requests 200] [--pages-only]
+
+``--postgresql`` starts a throwaway PostgreSQL server for the run (as the tests do, from
+Debian's server binaries); ``--pages-only`` skips the uploads (3.).
 
 Prints the machine (cores, load) with the figures: page times depend on it.
 """
@@ -186,11 +190,26 @@ def main() -> int:
     ap.add_argument("--calibrations", type=int, default=10000)
     ap.add_argument("--requests", type=int, default=200)
     ap.add_argument("--port", type=int, default=8791)
+    ap.add_argument("--postgresql", action="store_true",
+                    help="a throwaway PostgreSQL server for this run")
+    ap.add_argument("--pages-only", action="store_true", help="no uploads (step 3)")
     args = ap.parse_args()
+    if args.postgresql:
+        sys.path.insert(0, str(REPO / "tests" / "records"))
+        from conftest import new_pg_database, throwaway_postgresql
+
+        with throwaway_postgresql() as server:
+            args.database = new_pg_database(server)
+            return run(args)
+    return run(args)
+
+
+def run(args) -> int:
     from gonio.records.db import open_store
 
     print(f"machine: {os.cpu_count()} cores, load average "
-          f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+          f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}; database "
+          f"{'PostgreSQL' if args.database else 'SQLite'}")
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
         store = open_store(args.database, data)
@@ -204,7 +223,10 @@ def main() -> int:
         try:
             base = f"http://127.0.0.1:{args.port}"
             time_pages(login(base), args.requests, args.instruments, args.calibrations)
-            uploads(base, Path(tmp) / "run" / "readings.csv")
+            print(f"load average after the pages: "
+                  f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+            if not args.pages_only:
+                uploads(base, Path(tmp) / "run" / "readings.csv")
         finally:
             proc.terminate()
             try:

@@ -9,7 +9,9 @@ instrument's angle-position error), never gonio's calibration; the tilt × Earth
 of the 7.1 rounds is an error of the measurement, not part of the measurand. ``--azimuth
 worst`` takes the azimuth at which that coupling biases the noise-free 7.1 K most
 (``gonio.specs.ogam_draft.study.worst_azimuth``). For each
-fresh seed the whole optical programme is simulated and calibrated; the script prints K − K_true,
+fresh seed the whole optical programme is simulated and calibrated
+(``gonio.specs.ogam_draft.study.k_tilt_trial``: the script uses the public functions of the
+optical study module and the registry only); it prints K − K_true,
 U(K), z = (K − K_true)/u_c(K) and whether |K − K_true| ≤ U, then the count, the Clopper–Pearson
 95 % interval of the coverage, and the mean and sd of z.
 """
@@ -19,7 +21,6 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -31,29 +32,6 @@ def seeds_arg(text: str) -> list[int]:
     return list(range(int(a), int(b or a) + 1))
 
 
-def bench_at(tilt_deg: float, azimuth_deg: float):
-    from gonio.bench import load_bench
-    from gonio.specs.ogam_draft.study import tilted
-    return tilted(load_bench("rlg"), tilt_deg, azimuth_deg)
-
-
-def trial(bench, protocol, seed: int, work: Path) -> tuple[float, float, float]:
-    """(K − K_true, u_c(K), U(K)) of one simulated calibration (the readings written to and
-    read back from a CSV, as ``gonio calibrate`` reads them)."""
-    from gonio.bench import run_session, write_session
-    from gonio.formats.readings import read_readings
-    from gonio.specs.ogam_draft.calibration import analyse
-    from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
-    session = run_session(protocol, bench, seed=seed)
-    d = work / f"s{seed}"
-    write_session(session, d)
-    rep = analyse(read_readings(d / "readings.csv"), protocol,
-                  static_record=session.static_record)
-    iu = rep.item_uncertainty["scale_factor"]
-    kt = scale_factor_truth(session.truth)[0]
-    return float(rep.results.scale_factor.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=seeds_arg, default=seeds_arg("1001-1016"))
@@ -61,18 +39,19 @@ def main(argv=None) -> int:
     ap.add_argument("--azimuth", default="worst")
     ap.add_argument("--protocol", default="ogam-draft")
     a = ap.parse_args(argv)
-    from gonio.protocol import load_protocol
-    proto = load_protocol(a.protocol)
     from gonio.bench import load_bench
-    from gonio.specs.ogam_draft.study import worst_azimuth
+    from gonio.specs import get
+    from gonio.specs.ogam_draft.study import k_tilt_trial, tilted, worst_azimuth
+
+    proto = get("ogam-draft").load_protocol(a.protocol)
     az = worst_azimuth(load_bench("rlg"), proto, a.tilt) if a.azimuth == "worst" \
         else float(a.azimuth)
-    bench = bench_at(a.tilt, az)
+    bench = tilted(load_bench("rlg"), a.tilt, az)
     print(f"rlg bench, tilt {a.tilt:g}°, azimuth {az:g}°, protocol {a.protocol}")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for s in a.seeds:
-            d, u, U = trial(bench, proto, s, Path(tmp))
+            d, u, U = k_tilt_trial(bench, proto, s, Path(tmp))
             rows.append((s, d, u, U))
             print(f"seed {s}: K - K_true = {d:+.4g} counts/deg, u = {u:.3g}, U = {U:.3g}, "
                   f"z = {d / u:+.2f}, {'covered' if abs(d) <= U else 'NOT covered'}",

@@ -28,6 +28,7 @@ from gonio.protocol import parse_protocol
 from gonio.specs.ogam_draft import certificate_pages as cert
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.report.i18n import display, labels
+from gonio.specs.ogam_draft.phrases import LABELS as OWN_LABELS
 from gonio.resources import protocols_dir
 
 HINT = "run scripts/install-test-system-deps.sh (chromium, poppler-utils, fonts-noto-cjk)"
@@ -128,7 +129,7 @@ def test_html_in_chromium_items_u_and_figures_visible(run, tmp_path):
     assert m, "the page did not load in chromium"
     figs = json.loads(html.unescape(m.group(1)))
     assert len(figs) == len(FIGURES) and all(figs), figs
-    L = labels("en")
+    L = labels("en", OWN_LABELS)
     text = re.sub(r"\s+", " ", html.unescape(re.sub(r"<[^>]+>", " ", dom)))
     for item in ITEMS:
         assert L[item] in text, item

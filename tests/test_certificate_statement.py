@@ -34,8 +34,18 @@ from gonio.protocol import parse_protocol
 from gonio.report.figures import HTML_FIGSIZE, mpl_style
 from gonio.specs.ogam_draft import certificate_pages as cert
 from gonio.specs.ogam_draft import figures as figs
-from gonio.report.i18n import LABELS, labels
+from gonio.report.i18n import LABELS as SHARED_LABELS
+from gonio.report.i18n import labels as shared_labels
 from gonio.specs.ogam_draft.phrases import BUDGET_SOURCES_ZH, READING_NOTES_ZH
+from gonio.specs.ogam_draft.phrases import LABELS as OWN_LABELS
+
+#: Every label the optical certificate shows: the shared ones and the draft's own.
+LABELS = SHARED_LABELS | OWN_LABELS
+
+
+def labels(lang):
+    """The optical certificate's labels (the shared ones and the draft's own)."""
+    return shared_labels(lang, OWN_LABELS)
 from gonio.specs.ogam_draft.stated import stated_item, summary_text
 from gonio.resources import builtin_names, protocols_dir
 

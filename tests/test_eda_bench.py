@@ -125,6 +125,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     from gonio.specs.ogam_draft.outputs import write_calibration
     from gonio.specs.ogam_draft.certificate_pages import write_certificate
     from gonio.report.i18n import display, labels
+    from gonio.specs.ogam_draft.phrases import LABELS
 
     proto = eda_protocol(4, 8, repeats=2)
     write_session(run_session(proto, bench_for(np.random.default_rng(0)), seed=1), tmp_path)
@@ -144,7 +145,7 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     assert e["coupling"]["note"] == direct.coupling.note
     assert np.allclose(e["table"]["error_arcsec"], direct.table_error_arcsec, atol=1e-6)
     page = write_certificate(res, tmp_path)["certificate.html"].read_text()
-    assert html.escape(labels("en")["eda"]) in page
+    assert html.escape(labels("en", LABELS)["eda"]) in page
     nums = re.findall(r'data-src="(extra\.equal_division[^"]+)" data-rule="([^"]+)"[^>]*>([^<]*)<',
                       page)
     assert len(nums) == 6 * 8 + 2

@@ -356,8 +356,9 @@ def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
     phi = res["extra"]["uncertainty"]["components"][1]
     assert phi["half_width_arcsec"] == pytest.approx(elliptic_extreme(0.03).extreme_arcsec)
     from gonio.report.i18n import labels
+    from gonio.specs.ogam_draft.phrases import LABELS
 
     import html
 
     page = html.unescape((tmp_path / "o" / "certificate.html").read_text())
-    assert labels("en")["budget_kind_draft"] in page
+    assert labels("en", LABELS)["budget_kind_draft"] in page

@@ -21,6 +21,7 @@ import secrets
 from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError, VerifyMismatchError
 from sqlalchemy import delete, func, select
+from sqlalchemy.orm import joinedload
 
 from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records.models import ROLES, LoginFailure, User, WebSession, utcnow
@@ -116,8 +117,8 @@ def session_user(store, token: str | None) -> tuple[User, str] | None:
     """(user, CSRF token) of a live session, or None."""
     if not token or len(token) > 200:
         return None
-    with store.session() as s:
-        ws = s.get(WebSession, _digest(token))
+    with store.session() as s:          # the session and its user in one query
+        ws = s.get(WebSession, _digest(token), options=[joinedload(WebSession.user)])
         if ws is None or ws.expires_at < utcnow() or not ws.user.active:
             return None
         user = ws.user

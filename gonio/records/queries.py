@@ -7,7 +7,7 @@ Each function returns plain dicts or detached records and the total count.
 from __future__ import annotations
 
 from sqlalchemy import func, or_, select
-from sqlalchemy.orm import selectinload
+from sqlalchemy.orm import joinedload, selectinload
 
 from gonio.records.models import (AuditEvent, Calibration, CalibrationFile, CalibrationStandard,
                                   Certificate, Customer, Instrument, ResultItem, Standard, User)
@@ -28,7 +28,7 @@ def customers(store) -> list[Customer]:
 def instruments(store, page: int = 1, size: int = 50, search: str = ""):
     """(instruments of the page with their customer, total); ``search`` matches serial,
     model or manufacturer (substring)."""
-    stmt = select(Instrument).options(selectinload(Instrument.customer)).order_by(
+    stmt = select(Instrument).options(joinedload(Instrument.customer)).order_by(
         Instrument.id.desc())
     if search:
         like = f"%{search.replace('%', '').replace('_', '')}%"
@@ -41,11 +41,11 @@ def instruments(store, page: int = 1, size: int = 50, search: str = ""):
 def instrument(store, inst_id: int):
     """(instrument with customer, its calibrations newest first with certificates)."""
     with store.session() as s:
-        inst = s.scalar(select(Instrument).options(selectinload(Instrument.customer))
+        inst = s.scalar(select(Instrument).options(joinedload(Instrument.customer))
                         .where(Instrument.id == inst_id))
         if inst is None:
             return None, []
-        cals = s.scalars(select(Calibration).options(selectinload(Calibration.created_by))
+        cals = s.scalars(select(Calibration).options(joinedload(Calibration.created_by))
                          .where(Calibration.instrument_id == inst_id)
                          .order_by(Calibration.performed_on.desc(), Calibration.id.desc())
                          .limit(200)).all()
@@ -60,9 +60,9 @@ def instrument(store, inst_id: int):
 
 def calibrations(store, page: int = 1, size: int = 50, status: str = ""):
     """(calibrations of the page, newest first, with instrument and customer, total)."""
-    stmt = select(Calibration).options(
-        selectinload(Calibration.instrument).selectinload(Instrument.customer),
-        selectinload(Calibration.created_by)).order_by(Calibration.id.desc())
+    stmt = select(Calibration).options(                  # many-to-one: one query
+        joinedload(Calibration.instrument).joinedload(Instrument.customer),
+        joinedload(Calibration.created_by)).order_by(Calibration.id.desc())
     if status:
         stmt = stmt.where(Calibration.status == status)
     with store.session() as s:

@@ -231,11 +231,12 @@ def bilingual(doc: bytes, translate) -> bytes:
     return tree_bytes(root)
 
 
-def label_translator(extra: dict | None = None, tables=()):
-    """``translate(text)`` for :func:`bilingual` (:func:`gonio.report.i18n.translator`)."""
+def label_translator(extra: dict | None = None, tables=(), own: dict | None = None):
+    """``translate(text)`` for :func:`bilingual` (:func:`gonio.report.i18n.translator`;
+    ``own``: the specification's own labels)."""
     from gonio.report.i18n import translator
 
-    return translator(extra, tables)
+    return translator(extra, tables, own)
 
 
 def _decimal_or_nan(v) -> str:
@@ -285,7 +286,7 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     (identifier, dates, place), the item, laboratory, responsible persons, customer and the
     statements: the specification followed (``norm``, the ``clauses`` calibrated), the place
     of calibration as the laboratory file gives it, the virtual-bench notice and one statement per reading taken (already in English; named
-    ``readings_name``, default the optical certificate's heading). The virtual-bench statement
+    ``readings_name``, default "Readings taken of the specification's text"). The virtual-bench statement
     is made where the readings' ``provenance`` (or ``md``) say virtual, whatever ``lab`` holds.
     Returns the dcc:statements element (a specification adds its own statements)."""
     from gonio import __version__
@@ -383,7 +384,7 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     record_statements(sts, lab, L)
     for i, note in enumerate(readings_taken, 1):
         st = element(sts, "dcc:statement", id=f"reading-taken-{i}")
-        text_element(st, "dcc:name", readings_name or L["readings_taken"])
+        text_element(st, "dcc:name", readings_name or L["readings_taken_std"])
         text_element(st, "dcc:declaration", note)
     return sts
 

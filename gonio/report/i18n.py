@@ -3,7 +3,7 @@
 Contents
 ========
 =========================  ==========================================================
-:data:`LABELS`             label key → {"en": ..., "zh": ...}; the Chinese terms are the draft's
+:data:`LABELS`             label key → {"en": ..., "zh": ...}: the labels every certificate shares
 :func:`labels`             the label mapping of one language
 :func:`cjk_font`           name of an installed CJK font for matplotlib (or GonioError)
 :func:`round_half_up`      a number to a given decimal place, half up, as text
@@ -72,7 +72,6 @@ LABELS: dict[str, dict[str, str]] = {
     "chamber_profile": {"en": "Temperature chamber points", "zh": "温度试验箱温度点"},
     "chamber_bound": {"en": " (deviation within ±{b} °C)", "zh": "（偏差不超过 ±{b} °C）"},
     "not_stated": {"en": "not stated", "zh": "未说明"},
-    "results": {"en": "Results of calibration (Annex B)", "zh": "校准结果（附录B）"},
     "no": {"en": "No.", "zh": "序号"},
     "item": {"en": "Item", "zh": "校准项目"},
     "clause": {"en": "Clause", "zh": "条款"},
@@ -80,16 +79,6 @@ LABELS: dict[str, dict[str, str]] = {
     "unit": {"en": "Unit", "zh": "单位"},
     "not_measured": {"en": "not measured", "zh": "未测"},
     "uncertainty": {"en": "Measurement uncertainty", "zh": "测量不确定度"},
-    "U_line": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}",
-               "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}"},
-    "K_as_mounted": {"en": "The scale factor K is stated as mounted: sensing plane within {psi}° "
-                           "of the table plane (Annex A.1). The instrument's own K (sensing axis "
-                           "along the rotation axis) is larger by up to {ppm} ppm (1/cos ψ − 1); "
-                           "this is not included in U.",
-                     "zh": "标度因数 K 为安装状态下的值：敏感平面与转台台面的夹角不超过 {psi}°"
-                           "（附录A.1）。仪器自身的 K（敏感轴沿转轴）最多大 {ppm} ppm"
-                           "（1/cos ψ − 1），未计入 U。"},
-    "std_mpe": {"en": "MPE ±{v}″", "zh": "最大允许误差 ±{v}″"},
     "screening_h": {"en": "Screening of the readings", "zh": "读数筛查"},
     "more_findings": {"en": "… {n} more in results.json (findings)",
                       "zh": "……另有 {n} 条，见 results.json"},
@@ -99,9 +88,6 @@ LABELS: dict[str, dict[str, str]] = {
                              "on the remaining data.",
                        "zh": "读数筛查：{n} 个读数被剔除（未使用，行号与原因见 results.json），"
                              "{m} 项关于校准程序完整性的提示；以上结果基于其余数据。"},
-    "u_c_line": {"en": "combined standard uncertainty u_c = {u}″ (Annex A.6)",
-                 "zh": "合成标准不确定度 u_c = {u}″（附录A.6）"},
-    "budget": {"en": "Uncertainty budget (Annex A)", "zh": "不确定度分量（附录A）"},
     "component": {"en": "Component", "zh": "分量"},
     "source": {"en": "Source", "zh": "来源"},
     "type": {"en": "Type", "zh": "类别"},
@@ -110,27 +96,10 @@ LABELS: dict[str, dict[str, str]] = {
     "budget_items": {"en": "Uncertainty budget of each item (from this calibration's data)",
                      "zh": "各校准项目的不确定度分量（依据本次校准数据）"},
     "u_i_item": {"en": "u_i (input's unit)", "zh": "u_i（输入量单位）"},
-    "readings_taken": {"en": "Readings taken of the draft's ambiguities",
-                       "zh": "对规范草案中不明确之处的理解"},
     "readings_taken_std": {"en": "Readings taken of the specification's text",
                            "zh": "对规范条文的理解"},
     "details": {"en": "Details of the measurements", "zh": "测量详细数据"},
     "figures": {"en": "Figures", "zh": "图"},
-    "eda": {"en": "Rotary-table calibration by equal-division averaging (IEC 62047-20 Annex A.3)",
-            "zh": "等分平均法转台校准（IEC 62047-20 附录 A.3）"},
-    "eda_note": {"en": "{n} starts, {m} points per revolution, {r} repeat(s); table error "
-                       "indicated − true with Σt = 0; goniometer error as a function of the angle "
-                       "turned; standard uncertainties from the residuals ({noise} reading-error "
-                       "model). Table harmonics whose order is a multiple of n are unobservable.",
-                 "zh": "起始位置 {n} 个，每周 {m} 点，重复 {r} 次；转台误差为示值减真值，Σt = 0；"
-                       "测角仪误差为转角的函数；标准不确定度由残差求得（{noise} 读数误差模型）。"
-                       "阶次为 n 倍数的转台谐波不可观测。"},
-    "eda_position": {"en": "table position (°)", "zh": "转台位置（°）"},
-    "eda_table": {"en": "table error (″)", "zh": "转台误差（″）"},
-    "eda_turned": {"en": "angle turned (°)", "zh": "转角（°）"},
-    "eda_gonio": {"en": "goniometer error (″)", "zh": "测角仪误差（″）"},
-    "eda_closure": {"en": "Full-circle closure: goniometer error at 360° = {v}″ ± {u}″",
-                    "zh": "整周闭合：测角仪 360° 误差 = {v}″ ± {u}″"},
     "signatory": {"en": "Signatures", "zh": "签字"},
     "calibrated_by": {"en": "Calibrated by", "zh": "校准员"},
     "checked_by": {"en": "Checked by", "zh": "核验员"},
@@ -172,15 +141,6 @@ LABELS: dict[str, dict[str, str]] = {
                              "文件如何填写，所有输出均如此标明。"},
     "source_file": {"en": "Readings file", "zh": "读数文件"},
     "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
-    # the seven items (Annex B order) — the draft's own Chinese terms
-    "scale_factor": {"en": "Scale factor K", "zh": "标度因数 K"},
-    "scale_factor_nonlinearity": {"en": "Scale-factor nonlinearity K_l",
-                                  "zh": "标度因数非线性度 K_l"},
-    "zero_stability": {"en": "Zero stability B_s", "zh": "零位稳定性 B_s"},
-    "angle_deviation": {"en": "Angle-position deviation E", "zh": "角位置偏差 E"},
-    "repeatability": {"en": "Angle-position repeatability R", "zh": "角位置重复性 R"},
-    "rate_consistency": {"en": "Rate consistency C_v", "zh": "速率一致性 C_v"},
-    "pointing_consistency": {"en": "Pointing consistency C_g", "zh": "指向一致性 C_g"},
     # units as shown
     "u_counts/deg": {"en": "counts/°", "zh": "脉冲数/(°)"},
     "u_%": {"en": "%", "zh": "%"},
@@ -188,64 +148,15 @@ LABELS: dict[str, dict[str, str]] = {
     "u_deg/s": {"en": "°/s", "zh": "(°)/s"},
     "u_arcsec": {"en": "″", "zh": "″"},
     "u_ppm": {"en": "ppm", "zh": "ppm"},
-    # item notes
-    "note_zero_range": {"en": "range/T (definition 3.3): {v} °/h", "zh": "极差/T（定义3.3）：{v} (°)/h"},
-    "note_zero_model": {"en": "noise model of the 7.3 record (beside, not stated): {v} °/h",
-                        "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
-    "note_kl_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",
-                      "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} %"},
-    "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
-    "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     # figures
-    "fig_deviation": {"en": "Fig. 1 Angle-position deviation of every series (cf. Annex Fig. A.4)",
-                      "zh": "图1 各组角位置偏差曲线（参见附录图A.4）"},
-    "fig_repeat": {"en": "Fig. 2 Repeatability per position (cf. Annex Fig. A.5)",
-                   "zh": "图2 各位置的角位置重复性（参见附录图A.5）"},
-    "fig_tilt": {"en": "Fig. 3 Tilt error at the tilt bound: elliptic model (Annex A.4.2, Fig. A.3) "
-                       "and rigid-body model",
-                 "zh": "图3 倾斜误差：椭圆投影模型（附录A.4.2，图A.3）与刚体模型"},
-    "fig_sf": {"en": "Fig. 4 Scale factor per round (7.1)", "zh": "图4 各测回标度因数（7.1）"},
-    "fig_zero": {"en": "Fig. 5 Zero-stability readings and drift (7.3)",
-                 "zh": "图5 零位稳定性读数及漂移（7.3）"},
-    "fig_rate": {"en": "Fig. 6 Deviation per rate (7.6)", "zh": "图6 不同速率下的角位置偏差（7.6）"},
-    "fig_pointing": {"en": "Fig. 7 Deviation per axis direction (7.7)",
-                     "zh": "图7 不同指向下的角位置偏差（7.7）"},
-    "fig_budget": {"en": "Fig. 8 Uncertainty budget: contributions |c_i|·u_i (Annex A)",
-                   "zh": "图8 不确定度分量 |c_i|·u_i（附录A）"},
-    "ax_position": {"en": "table position (°)", "zh": "转台位置（°）"},
-    "ax_deviation": {"en": "deviation E (″)", "zh": "偏差 E（″）"},
-    "ax_std": {"en": "standard deviation s (″)", "zh": "标准偏差 s（″）"},
-    "ax_tilt": {"en": "error Δ (″)", "zh": "误差 Δ（″）"},
-    "ax_round_angle": {"en": "round angle θ_i (°)", "zh": "测回角度 θ_i（°）"},
-    "ax_K": {"en": "K_i (counts/°)", "zh": "K_i（脉冲数/(°)）"},
-    "ax_time_min": {"en": "time since first reading (min)", "zh": "距首次读数时间（min）"},
-    "ax_angle_arcsec": {"en": "reading M (″)", "zh": "读数 M（″）"},
-    "ax_contribution": {"en": "contribution (″)", "zh": "分量（″）"},
-    "lg_series": {"en": "series", "zh": "组"},
-    "lg_mean": {"en": "mean E_i", "zh": "平均 E_i"},
-    "lg_elliptic": {"en": "elliptic model, ψ = {psi}°", "zh": "椭圆模型, ψ = {psi}°"},
-    "lg_rigid": {"en": "rigid body, after 7.1 (≡ 0)", "zh": "刚体模型，经7.1标定后（≡ 0）"},
-    "lg_rigid_uncal": {"en": "rigid body, uncalibrated", "zh": "刚体模型, 未标定"},
-    "lg_mean_K": {"en": "K (mean)", "zh": "K（平均）"},
-    "lg_drift": {"en": "linear drift {v} °/h", "zh": "线性漂移 {v} (°)/h"},
     "lg_U": {"en": "U", "zh": "U"},
-    "lg_R": {"en": "R = max", "zh": "R = 最大值"},
-    "lg_reference": {"en": "(reference)", "zh": "（参考）"},
     "no_data": {"en": "not measured", "zh": "未测"},
     "up": {"en": "up", "zh": "竖直向上"}, "north": {"en": "north", "zh": "正北"},
     "south": {"en": "south", "zh": "正南"}, "east": {"en": "east", "zh": "正东"},
     "west": {"en": "west", "zh": "正西"},
-    # results table, uncertainty and the ± form (7.4)
-    "U_col": {"en": "Expanded uncertainty U", "zh": "扩展不确定度 U"},
+    # the expanded uncertainty with its k and p (a DCC text of every specification)
     "U_cell": {"en": "{U} (k = {k}, p ≈ {p} %)", "zh": "{U}（k = {k}，p ≈ {p} %）"},
-    "E_note": {"en": "signed extreme {s}″ at {p}°", "zh": "带符号极值 {s}″，位于 {p}°"},
-    "U_line_p": {"en": "Uncertainty of the angle-position deviation: U = {U}″, k = {k}, "
-                       "coverage probability {p}",
-                 "zh": "角位置偏差的测量不确定度：U = {U}″，k = {k}，包含概率{p}"},
     # where the coverage factor k comes from
-    "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
-    "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
-                "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
     "k_each_item": {"en": "U: expanded uncertainty, k = t95(ν_eff) of each item's effective "
                           "degrees of freedom (shown per item in the budgets below); {clause}.",
                     "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
@@ -264,48 +175,13 @@ LABELS: dict[str, dict[str, str]] = {
                            "（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），对上限的判定"
                            "亦以此为据；不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U "
                            "去掉不可能的负值部分，JCGM 100 4.3.9）。"},
-    "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
-                          "zh": "按规范草案附录A的不确定度评定。"},
-    "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "
-                                   "\"beyond the draft\" are not in Annex A.",
-                             "zh": "按本次校准的物理模型评定；标“超出草案”的分量不在附录A中。"},
-    "beyond_draft": {"en": "beyond the draft", "zh": "超出草案"},
     "u_c_word": {"en": "combined standard uncertainty", "zh": "合成标准不确定度"},
     "src_own_A": {"en": "scatter of the item's own readings (Type A)",
                   "zh": "本项目读数的分散性（A类）"},
     "src_own_B": {"en": "bound from the specification's procedure (Type B)",
                   "zh": "按规范程序给出的界限（B类）"},
-    "no_E_U": {"en": "Angle-position deviation not measured: no uncertainty stated.",
-               "zh": "未测角位置偏差：不给出测量不确定度。"},
     # method
     "method": {"en": "Method", "zh": "校准方法"},
-    "m_spec": {"en": "Specification and clauses followed", "zh": "校准依据及所用条款"},
-    "m_clauses": {"en": "clauses {c} (items measured)", "zh": "第 {c} 条（已测项目）"},
-    "m_rates": {"en": "Table rates", "zh": "转台速率"},
-    "m_rounds": {"en": "Rounds and series", "zh": "测回与组数"},
-    "m_rounds_v": {"en": "7.1: {sf} rounds; 7.4: {ad} rounds × {s} series (7.5 from the same "
-                         "series); 7.3: {zn} readings {zi} s apart",
-                   "zh": "7.1：{sf} 个测回；7.4：{ad} 个测回 × {s} 组（7.5 用同一数据）；"
-                         "7.3：{zn} 个读数，间隔 {zi} s"},
-    "m_delay": {"en": "Reading", "zh": "读数"},
-    "m_delay_v": {"en": "read {d} s after arrival; time from start to reading ≤ {t} s "
-                        "(Annex A.1)",
-                  "zh": "到位后 {d} s 读数；自起动至读数 ≤ {t} s（附录A.1）"},
-    "m_earth": {"en": "Earth-rate compensation", "zh": "地速补偿"},
-    "m_earth_measured": {"en": "measured: static phase of {s} s before each series",
-                         "zh": "实测：每组前静态测量 {s} s"},
-    "m_earth_computed": {"en": "computed from the latitude and the axis direction",
-                         "zh": "由纬度和轴向计算"},
-    "m_earth_none": {"en": "none", "zh": "无"},
-    "m_latitude": {"en": "Site latitude", "zh": "测量地点纬度"},
-    "m_axes": {"en": "Axis orientations", "zh": "轴向"},
-    "m_tilt": {"en": "Tilt of the sensing plane", "zh": "敏感平面倾斜"},
-    "m_tilt_v": {"en": "bound ψ ≤ {t}° (Annex A.4.2)", "zh": "上限 ψ ≤ {t}°（附录A.4.2）"},
-    "m_temp": {"en": "Temperature", "zh": "温度"},
-    "m_temp_v": {"en": "required ({t} ± {tol}) °C (Table 2); during calibration {m}",
-                 "zh": "要求 ({t} ± {tol}) °C（表2）；校准时 {m}"},
-    "m_readings": {"en": "Readings taken of the draft's ambiguities: see the section below.",
-                   "zh": "对草案不明确之处的理解：见下节。"},
     # conformity
     "conformity": {"en": "Statement of conformity (ISO/IEC 17025 7.8.6)",
                    "zh": "符合性声明（ISO/IEC 17025 7.8.6）"},
@@ -356,41 +232,14 @@ LABELS: dict[str, dict[str, str]] = {
     "c_acc_empty": {"en": "none (guard bands wider than the tolerance)",
                     "zh": "无（保护带宽于允差区间）"},
     "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
-    "c_no_U": {"en": "no statement: the item has no stated uncertainty",
-               "zh": "不作声明：该项目无测量不确定度"},
-    "c_not_measured": {"en": "no statement: not measured", "zh": "不作声明：未测"},
     "pass": {"en": "pass", "zh": "合格"},
     "fail": {"en": "fail", "zh": "不合格"},
     "conditional pass": {"en": "conditional pass", "zh": "有条件合格"},
     "conditional fail": {"en": "conditional fail", "zh": "有条件不合格"},
-    # detail tables
-    "d_round": {"en": "round", "zh": "测回"},
-    "d_theta": {"en": "θ_i (°)", "zh": "θ_i (°)"},
-    "d_counts": {"en": "C_i (counts)", "zh": "C_i（脉冲数）"},
-    "d_K": {"en": "K_i (counts/°)", "zh": "K_i（脉冲数/(°)）"},
-    "lg_all_series": {"en": "range of all {n} series", "zh": "全部 {n} 组的范围"},
-    "lg_all_rounds": {"en": "range of all {n} rounds", "zh": "全部 {n} 次的范围"},
-    "d_listed": {"en": "{listed} of {rows} rows listed: those farthest from the median of "
-                       "{column} (range {min} … {max}); every row is in tables/{name}_table.csv.",
-                 "zh": "共 {rows} 行，列出 {listed} 行：{column} 偏离中位数最远者（范围 {min} … "
-                       "{max}）；全部数据见 tables/{name}_table.csv。"},
-    "d_position": {"en": "position (°)", "zh": "位置（°）"},
-    "d_E": {"en": "E_i (″)", "zh": "E_i (″)"},
-    "d_R": {"en": "R_i (″)", "zh": "R_i (″)"},
-    "d_n": {"en": "series n", "zh": "组数 n"},
-    "d_rate": {"en": "rate (°/s)", "zh": "速率（(°)/s）"},
-    "d_axis": {"en": "axis direction", "zh": "轴向"},
-    "d_role": {"en": "role", "zh": "作用"},
-    "d_reference": {"en": "reference condition", "zh": "参考条件"},
-    "d_compared": {"en": "compared", "zh": "比较条件"},
-    "d_Ev": {"en": "E (″)", "zh": "E (″)"},
-    "d_maxabs": {"en": "max |E_i| (″)", "zh": "max |E_i| (″)"},
-    "d_contrib": {"en": "|c_i|·u_i (″)", "zh": "|c_i|·u_i (″)"},
     "rows_word": {"en": "{n} rows", "zh": "{n} 行"},
     "virtual_lab": {"en": "gonio virtual bench", "zh": "gonio 虚拟台架"},
     "virtual_place": {"en": "virtual bench", "zh": "虚拟台架"},
     "virtual_trace": {"en": "none (virtual bench)", "zh": "无（虚拟台架）"},
-    "draft_for_comment": {"en": "(draft for comment)", "zh": "（征求意见稿）"},
     "cjk_missing": {"en": "no CJK font installed: the specification's Chinese title is written in "
                           "English; install fonts-noto-cjk for the Chinese form",
                     "zh": "未安装中文字体"},
@@ -412,11 +261,15 @@ def clause_text(clause: str, L: dict) -> str:
     return m.group(1) + L["paren"].format(x=m.group(2)) if m else clause
 
 
-def labels(lang: str = "en") -> dict[str, str]:
-    """The labels of ``lang`` ("en" or "zh") as a flat mapping.
+def labels(lang: str = "en", own: dict | None = None) -> dict[str, str]:
+    """The labels of ``lang`` ("en" or "zh") as a flat mapping: the shared :data:`LABELS` and
+    a specification's ``own`` ({key: {"en": …, "zh": …}}, its certificate's own labels; they
+    take a shared key's place).
 
-    >>> labels("zh")["scale_factor_nonlinearity"]
-    '标度因数非线性度 K_l'
+    >>> labels("zh")["not_measured"]
+    '未测'
+    >>> labels("zh", {"bias": {"en": "Bias B_0", "zh": "零偏 B_0"}})["bias"]
+    '零偏 B_0'
     >>> labels("fr")
     Traceback (most recent call last):
     ...
@@ -424,7 +277,7 @@ def labels(lang: str = "en") -> dict[str, str]:
     """
     if lang not in LANGUAGES:
         raise GonioError(f"expected one of {', '.join(LANGUAGES)}, got {lang!r}", key="lang")
-    return {k: v[lang] for k, v in LABELS.items()} | {"_lang": lang}
+    return {k: v[lang] for k, v in (LABELS | (own or {})).items()} | {"_lang": lang}
 
 
 #: Family names of CJK fonts looked for, best first.
@@ -644,27 +497,23 @@ def phrase_zh(text: str, table=()) -> str | None:
 
 def source_text(src: str, L: dict, table=()) -> str:
     """A budget component's source in the certificate's language (by the specification's
-    phrase ``table``, see :func:`phrase_zh`); the optical budget's "[beyond the draft: …]"
-    note is shown once, as the label ``beyond_draft``.
+    phrase ``table``, see :func:`phrase_zh`; a source no phrase knows stays as written).
 
     >>> source_text("zero drift (A.4.3)", labels("en"))
     'zero drift (A.4.3)'
-    >>> source_text("x -> dK [beyond the draft: 7.1 (y)]", labels("en"))
-    'x -> dK (beyond the draft)'
+    >>> source_text("zero drift", labels("zh"), [(r"zero drift", "零位漂移")])
+    '零位漂移'
     """
-    base, _, note = src.partition(" [beyond the draft")
-    out = (phrase_zh(base, table) or base) if L.get("_lang") == "zh" else base
-    if not note:
-        return out
-    return out + (f"（{L['beyond_draft']}）" if L.get("_lang") == "zh" else f" ({L['beyond_draft']})")
+    return (phrase_zh(src, table) or src) if L.get("_lang") == "zh" else src
 
 
-def reason_text(reason: str, L: dict, table=(), extra: dict | None = None) -> str:
+def reason_text(reason: str, L: dict, table=(), extra: dict | None = None,
+                own: dict | None = None) -> str:
     """Why an item was not measured, in the certificate's language: in Chinese through the
-    specification's ``table`` and the shared ones (:func:`translator`, :data:`REASONS_ZH`);
-    a reason no table knows stays as written."""
+    specification's ``table`` and own labels and the shared ones (:func:`translator`); a
+    reason no table knows stays as written."""
     if L.get("_lang") == "zh":
-        return translator(extra, tuple(table) + REASONS_ZH)(reason) or reason
+        return translator(extra, tuple(table), own)(reason) or reason
     return reason
 
 
@@ -676,7 +525,6 @@ DCC_ZH: dict[str, str] = {
     "serial number": "出厂编号",
     "Reading taken of the specification's text": "对规范条文的理解",
     "Reading taken of the sources": "对参考文献的理解",
-    "Reading taken of the draft's text": "对规范草案条文的理解",
     "Uncertainty of measurement": "测量不确定度",
     "Each item's expanded uncertainty U = k·u_c is computed from the calibration's own data "
     "(JCGM 100), with k = t95(ν_eff) (Welch–Satterthwaite), coverage probability 95 %; the "
@@ -704,18 +552,11 @@ DCC_ZH: dict[str, str] = {
     "traceable to none (virtual bench)": "无溯源（虚拟台架）",
     "none (virtual bench)": "无（虚拟台架）",
     "per-point table": "逐点数据表",
-    "round angle θ_i": "测回角 θ_i",
-    "B_s per series": "各组 B_s",
-    "linear drift per series": "各组线性漂移",
-    "E = ± max|E_i| (draft 7.4)": "E = ± max|E_i|（规范草案 7.4）",
-    "signed extreme of E_i": "E_i 的带符号极值",
-    "position of the extreme": "极值所在位置",
     "position": "位置",
     "table rate": "转台角速度",
     "axis direction": "轴向",
     "upper bound (coverage interval [0, upper bound]: a non-negative quantity whose U exceeds "
     "its value)": "上限（包含区间 [0, 上限]：非负量，U 大于其值）",
-    "Calibration of an optical-gyroscope angle measuring instrument": "光学陀螺测角仪校准",
     "MEMS rate gyro (virtual)": "微机电速率陀螺（虚拟）",
     "MEMS gyro triad (virtual)": "微机电三轴陀螺组件（虚拟）",
     "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
@@ -758,12 +599,18 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
 
 @functools.lru_cache(maxsize=1)
 def label_templates() -> tuple[tuple["re.Pattern", str], ...]:
-    """The certificate labels with fields ("Agreed: {a}") as (regular expression, Chinese
-    template): a DCC text formatted from a label is translated with its fields."""
+    """The shared certificate labels with fields ("Agreed: {a}") as (regular expression,
+    Chinese template): a DCC text formatted from a label is translated with its fields."""
+    return templates_of(LABELS)
+
+
+def templates_of(table: dict) -> tuple[tuple["re.Pattern", str], ...]:
+    """The labels of ``table`` ({key: {"en": …, "zh": …}}) with fields, as (regular
+    expression, Chinese template) (:func:`label_templates`)."""
     import string
 
     out = []
-    for v in LABELS.values():
+    for v in table.values():
         en, zh = v.get("en"), v.get("zh")
         if not isinstance(en, str) or not isinstance(zh, str) or "{" not in en:
             continue
@@ -786,18 +633,20 @@ def label_templates() -> tuple[tuple["re.Pattern", str], ...]:
 _BRACKETED = re.compile(r"(.+?) \(([^()]*(?:\([^()]*\)[^()]*)*)\)", re.S)
 
 
-def translator(extra: dict | None = None, tables=()):
+def translator(extra: dict | None = None, tables=(), own: dict | None = None):
     """``translate(text)`` → its Chinese, or None (a zh DCC's texts beside the English,
     :func:`gonio.report.dcc.bilingual`; screening findings): the certificate labels' English
     → Chinese, the DCC's own texts (:data:`DCC_ZH`), ``extra`` (English → Chinese; a
     key may be the opening words of a longer text, e.g. a note's "7.2.1:"), the phrase
     ``tables`` (:func:`phrase_zh`); then texts built from parts: the DCC
     phrases (:data:`DCC_PHRASES_ZH`) and the labels with fields, each part
-    translated in turn, and "name (clause)" with its name translated. None: no Chinese."""
-    table = {v["en"]: v["zh"] for v in LABELS.values()}
+    translated in turn, and "name (clause)" with its name translated. ``own``: the
+    specification's own labels (:func:`labels`), translated as the shared ones are. None: no
+    Chinese."""
+    table = {v["en"]: v["zh"] for v in (LABELS | (own or {})).values()}
     table.update(DCC_ZH)
     table.update(extra or {})
-    templates = label_templates()
+    templates = label_templates() + (templates_of(own) if own else ())
 
     def translate(text: str, depth: int = 0) -> str | None:
         if text in table:
@@ -811,7 +660,7 @@ def translator(extra: dict | None = None, tables=()):
 
         def part(g):
             return (translate(g, depth + 1) or g) if g else g
-        for pat, zh in (*tables, *DCC_PHRASES_ZH, *REASONS_ZH):
+        for pat, zh in (*tables, *DCC_PHRASES_ZH):
             m = re.fullmatch(pat, text, flags=re.S)
             if m:
                 return zh.format(None, *(part(g) or "" for g in m.groups()))
@@ -843,86 +692,22 @@ def translator(extra: dict | None = None, tables=()):
 FINDING_ACTIONS = {"set_aside": ("set aside", "剔除"), "flagged": ("flagged", "标记"),
                    "refused": ("refused", "拒收")}
 
-#: The optical draft's screening messages (its screen module) in Chinese; each
-#: group is itself translated where it can be (an axis "up", a test's item name).
-FINDINGS_ZH: tuple[tuple[str, str], ...] = (
-    (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\); "
-     r"(\d+) readings, lines (\d+)–(\d+), all set aside",
-     "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件；第 {6}–{7} 行共 {5} 个读数均剔除"),
-    (r"(\w+) at (\S+) °/s, axis (\w+): not a condition of the protocol's programme \((.+?)\)",
-     "{1}，{2} °/s，{3}轴：不是校准方案（{4}）规定的测量条件"),
-    (r"(\w+) series (.+?) (?:is not one of|are not among) the protocol's (\d+) series \((.+?)\); "
-     r"(\d+) readings, lines (\d+)–(\d+), complete, measured beyond the programme: used",
-     "{1} 第 {2} 系列超出校准方案（{4}）的 {3} 个系列，测回完整，予以采用；第 {6}–{7} 行共 {5} 个读数"),
-    (r"(\w+) series (.+?) (?:is not one of|are not among) the protocol's (\d+) series \((.+?)\); "
-     r"(\d+) readings, lines (\d+)–(\d+), all set aside",
-     "{1} 第 {2} 系列不属于校准方案（{4}）的 {3} 个系列；第 {6}–{7} 行共 {5} 个读数均剔除"),
-    (r"(\w+) series (.+?) (?:is not one of|are not among) the protocol's (\d+) series \((.+?)\)$",
-     "{1} 第 {2} 系列不属于校准方案（{4}）的 {3} 个系列"),
-    (r"(\w+) round (\d+) is not one of the protocol's (\d+) rounds \((.+)\)",
-     "{1} 第 {2} 测回不属于校准方案（{4}）的 {3} 个测回"),
-    (r"(\w+) round (\d+): table_deg (\S+) differs from the protocol's (\S+)° \(tolerance (\S+)°\)",
-     "{1} 第 {2} 测回：转台角 {3}° 与校准方案的 {4}° 不符（允差 {5}°）"),
-    (r"(\w+) round (\d+): read (\S+) s after zeroing, beyond the protocol's "
-     r"max_time_to_reading_s = (\S+) s \(Annex A\.1\)",
-     "{1} 第 {2} 测回：清零后 {3} s 才读数，超过校准方案规定的 {4} s（附录A.1）"),
-    (r"(\w+) round (\d+): read (\S+) s after zeroing, beyond Annex A\.1's 0\.5 min \((\S+) s; "
-     r"the protocol sets no max_time_to_reading_s, only an explicit one widens it\) "
-     r"\(Annex A\.1\)",
-     "{1} 第 {2} 测回：清零后 {3} s 才读数，超过附录A.1 的 0.5 min（{4} s；校准方案未另行规定）"),
-    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the condition's median "
-     r"(\S+)″ by (\S+)″ \(> (\S+)″\) \(K_ref = (\S+) counts/° from the other readings\)",
-     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件的中位数 {4}″ 达 {5}″（> {6}″；"
-     "K_ref = {7} 脉冲数/(°)，由其余读数求得）"),
-    (r"(.+) round (\d+): indicated − table angle (\S+)″ departs from the condition's median "
-     r"(\S+)″ by (\S+)″ \(> (\S+)″\)",
-     "{1}，第 {2} 测回：示值 − 转台角 = {3}″，偏离该条件的中位数 {4}″ 达 {5}″（> {6}″）"),
-    (r"(\w+) at (\S+) °/s, axis (\w+)", "{1}，{2} °/s，{3}轴"),
-    (r"zero_stability series (\d+)", "零位稳定性第 {1} 组"),
-    (r"(\w+) \((\S+)\): the programme's condition (\S+) °/s, axis (\w+) has no reading",
-     "{1}（{2}）：校准方案的测量条件 {3} °/s、{4}轴没有读数"),
-    (r"(\w+) \((\S+)\) at (\S+) °/s, axis (\w+): round (\d+) \((\S+)°\) is missing from every "
-     r"series; the item rests on (\d+) of the programme's (\d+) rounds",
-     "{1}（{2}），{3} °/s，{4}轴：第 {5} 测回（{6}°）在各组中均缺失；该项目仅依据校准方案 {8} "
-     "个测回中的 {7} 个"),
-)
-
-
-#: Why an optical item was not measured (the draft's items module), in Chinese.
-REASONS_ZH: tuple[tuple[str, str], ...] = (
-    (r"no (\w+) rows in file", "文件中没有 {1} 数据行"),
-    (r"scale factor not measured: (.+)", "标度因数未测：{1}"),
-    (r"needs at least 2 scale_factor rounds, file has 1", "至少需要 2 个标度因数测回，文件只有 1 个"),
-    (r"zero_stability needs at least 2 readings in a series", "零位稳定性每组至少需要 2 个读数"),
-    (r"no angle_deviation rows at the 7\.4 condition \((.+)\)", "没有 7.4 测量条件（{1}）下的 "
-     "angle_deviation 数据行"),
-    (r"repeatability needs at least 2 angle_deviation series, file has 1",
-     "重复性至少需要 2 组 angle_deviation 数据，文件只有 1 组"),
-    (r"no (\w+) rows at (.+)", "没有 {2} 下的 {1} 数据行"),
-    (r"no reference condition \((.+)\): neither (\w+) nor angle_deviation rows there",
-     "没有参考条件（{1}）：该条件下既无 {2} 也无 angle_deviation 数据行"),
-    (r"(\S+) needs at least 2 conditions, file has only (.+)", "{1} 至少需要 2 个测量条件，文件只有 {2}"),
-    (r"(\S+) needs at least 2 complete conditions", "{1} 至少需要 2 个完整的测量条件"),
-    (r"no calibration position common to every condition", "各测量条件没有共同的校准位置"),
-    (r"(\S+) deg/s, axis (\w+)", "{1} °/s，{2}轴"),
-    (r"(\S+) deg/s", "{1} °/s"),
-)
-
-
-def finding_text(f: dict, L: dict, table=(), extra: dict | None = None) -> str:
+def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
+                 own: dict | None = None) -> str:
     """One screening finding (results.json ``findings``) as a certificate line in L's
-    language: "[set aside] 7.4, column gyro_counts, line 12: message". In Chinese the action,
+    language: "[set aside] 6.2, column gyro_counts, line 12: message". In Chinese the action,
     line and column are named in Chinese and the message goes through the translation tables
-    (the specification's ``table`` of (regular expression, Chinese), :data:`FINDINGS_ZH`,
-    ``extra`` English → Chinese); a message no table knows stays as written (data).
+    (the specification's ``table`` of (regular expression, Chinese), ``extra`` English →
+    Chinese, its ``own`` labels: :func:`translator`); a message no table knows stays as
+    written (data).
 
-    >>> f = {"action": "flagged", "clause": "7.4", "line": None, "column": "round",
-    ...      "message": "angle_deviation (7.4) at 60 °/s, axis up: round 3 (270°) is missing "
-    ...                 "from every series; the item rests on 3 of the programme's 4 rounds"}
-    >>> finding_text(f, labels("en"))[:42]
-    '[flagged] 7.4, column round: angle_deviati'
-    >>> finding_text(f, labels("zh"), extra={"angle_deviation": "角位置偏差 E"})[:62]
-    '[标记] 7.4，round 列：角位置偏差 E（7.4），60 °/s，竖直向上轴：第 3 测回（270°）在各组中均缺失'
+    >>> f = {"action": "flagged", "clause": "6.2", "line": None, "column": "round",
+    ...      "message": "bias round 3 is missing"}
+    >>> finding_text(f, labels("en"))
+    '[flagged] 6.2, column round: bias round 3 is missing'
+    >>> table = [(r"(\\w+) round (\\d+) is missing", "{1} 第 {2} 测回缺失")]
+    >>> finding_text(f, labels("zh"), table, extra={"bias": "零偏"})
+    '[标记] 6.2，round 列：零偏 第 3 测回缺失'
     """
     zh = L.get("_lang") == "zh"
     act = FINDING_ACTIONS.get(f.get("action"), (f.get("action"),) * 2)[1 if zh else 0]
@@ -933,6 +718,6 @@ def finding_text(f: dict, L: dict, table=(), extra: dict | None = None) -> str:
         parts.append(f"第 {f['line']} 行" if zh else f"line {f['line']}")
     msg = f.get("message") or ""
     if zh:
-        msg = translator(extra, tuple(table) + FINDINGS_ZH)(msg) or msg
+        msg = translator(extra, tuple(table), own)(msg) or msg
     where = ("，" if zh else ", ").join(p for p in parts if p)
     return f"[{act}] {where}{'：' if zh else ': '}{msg}"

@@ -171,7 +171,7 @@ def closing_blocks(res: dict, L: dict, lab: dict | None, reading_title: str | No
                    notes: list | tuple | None = None) -> list[Block]:
     """The readings taken (``notes``, default results.json's), then the signatures and the
     statements (:func:`gonio.report.header.signature_blocks`)."""
-    blocks = [Block("h", reading_title or L["readings_taken"])]
+    blocks = [Block("h", reading_title or L["readings_taken_std"])]
     blocks += [Block("p", ["• " + note])
                for note in (notes if notes is not None else res.get("readings_taken", []))]
     return blocks + signature_blocks(lab, L)

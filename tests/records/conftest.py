@@ -4,6 +4,7 @@ from the virtual bench and one real pipeline run shared by the service tests."""
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import os
 import pwd
@@ -43,17 +44,17 @@ def _as_pg_user(cmd: list[str]) -> list[str]:
     return cmd
 
 
-@pytest.fixture(scope="session")
-def pg_server(tmp_path_factory):
-    """A PostgreSQL server on 127.0.0.1 (trust authentication) in a temporary folder, for
-    this test session; its URL without a database name. Skipped only when the server
-    binaries are absent (scripts/install-test-system-deps.sh installs them)."""
-    bindir = pg_bindir()
-    if bindir is None:
-        pytest.skip("PostgreSQL server binaries not installed "
-                    "(bash scripts/install-test-system-deps.sh)")
+@contextlib.contextmanager
+def throwaway_postgresql():
+    """A PostgreSQL server on 127.0.0.1 (trust authentication) in a temporary folder; yields
+    its URL without a database name and removes it afterwards (also used by
+    benchmarks/bench_records.py --postgresql)."""
     import tempfile
 
+    bindir = pg_bindir()
+    if bindir is None:
+        raise RuntimeError("PostgreSQL server binaries not installed "
+                           "(bash scripts/install-test-system-deps.sh)")
     # not under pytest's base folder: that is private to root, and the server runs as postgres
     root = Path(tempfile.mkdtemp(prefix="gonio-pg-"))
     data = root / "cluster"
@@ -76,6 +77,18 @@ def pg_server(tmp_path_factory):
         subprocess.run(_as_pg_user([str(bindir / "pg_ctl"), "-D", str(data), "-m", "immediate",
                                     "stop"]), capture_output=True)
         shutil.rmtree(root, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def pg_server():
+    """A throwaway PostgreSQL server (:func:`throwaway_postgresql`) for this test session;
+    its URL without a database name. Skipped only when the server binaries are absent
+    (scripts/install-test-system-deps.sh installs them)."""
+    if pg_bindir() is None:
+        pytest.skip("PostgreSQL server binaries not installed "
+                    "(bash scripts/install-test-system-deps.sh)")
+    with throwaway_postgresql() as url:
+        yield url
 
 
 _counter = iter(range(10**6))

@@ -39,6 +39,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
                               render_pdf, rule_at_U, signature_blocks)
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
+from gonio.specs.ogam_draft.phrases import FINDINGS_ZH, LABELS, REASONS_ZH
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
                                            detail, e_budget, followed, interval_cell, item_names,
                                            item_path, method_rows, reading_note, segments,
@@ -81,7 +82,7 @@ def screening_notes(res: dict, L: dict, add) -> None:
     add("notice", L["screening_note"].format(n=aside, m=flagged))
     names = {k: L[k] for k in item_names(res) if k in L}   # a test named by its item
     for f in found[:MAX_FINDING_LINES]:
-        add("p", [finding_text(f, L, extra=names)])
+        add("p", [finding_text(f, L, FINDINGS_ZH + REASONS_ZH, extra=names, own=LABELS)])
     if len(found) > MAX_FINDING_LINES:
         add("p", [L["more_findings"].format(n=len(found) - MAX_FINDING_LINES)])
 
@@ -190,9 +191,10 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         unit = NoBreak(L.get("u_" + item["unit"], item["unit"]))
         st = stated_item(res, name)
         if not st["measured"]:
+            names = {k: L[k] for k in item_names(res) if k in L}
             rrows.append([str(i), L[name], clause_text(item["clause"], L),
                           f"{L['not_measured']}: "
-                          f"{reason_text(item['reason'], L, extra={k: L[k] for k in item_names(res) if k in L})}",
+                          f"{reason_text(item['reason'], L, REASONS_ZH, names, LABELS)}",
                           "—", ""])
             continue
         cell: list = [st["value"]]
@@ -416,7 +418,7 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
     dict of str to Path
         ``{"certificate.html": ..., "certificate.pdf": ...}`` (and ``certificate.dcc.xml``).
     """
-    L = labels(lang)
+    L = labels(lang, LABELS)
     fonts = font_families(lang)
     font = fonts[0] if lang == "zh" else None
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
@@ -438,7 +440,7 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
                 extra = {**READING_NOTES_ZH,
                          **{k: L[k] for k in item_names(results) if k in L},
                          method_text(results, lab_d, "en"): method_text(results, lab_d, "zh")}
-                doc = bilingual(doc, label_translator(extra))
+                doc = bilingual(doc, label_translator(extra, REASONS_ZH, LABELS))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])
     return {n: out / n for n in names}

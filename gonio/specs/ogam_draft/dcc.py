@@ -25,6 +25,7 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               conformity_texts, display, element, influence_conditions, labels,
                               list_quantity, measurement_result, new_document,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
+from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
                                            item_path, item_uncertainty, method_rows,
                                            reading_note, specification_text, stated_item)
@@ -34,7 +35,7 @@ def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
     """The method statement (:func:`gonio.specs.ogam_draft.stated.method_rows`) of results.json ``res``
     on one line, as the optical DCC's method description (``lang`` "zh": its Chinese,
     written beside it)."""
-    rows = method_rows(res, labels(lang), lab, lang)
+    rows = method_rows(res, labels(lang, LABELS), lab, lang)
     if lang == "zh":
         return "；".join(f"{k}：{v}" for k, v in rows)
     return "; ".join(f"{k}: {v}" for k, v in rows)
@@ -43,7 +44,7 @@ def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
 def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
     """The DCC 3.3.0 document of one calibration's results.json ``res`` (see the module
     docstring for its content)."""
-    L = labels("en")
+    L = labels("en", LABELS)
     md = res.get("metadata", {})
     lab_ = lab or {}
     root = new_document()
@@ -52,7 +53,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         root, md, lab, cert_id=cert_id, norm=norm, provenance=res.get("provenance"),
         clauses=[res["items"][n]["clause"] for n in item_names(res)
                  if res["items"][n]["measured"]],
-        readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])])
+        readings_taken=[reading_note(n, "en") for n in res.get("readings_taken", [])],
+        readings_name=L["readings_taken"])
     conf = conformity_for(res, lab)
     if conf:
         rule = conf[0]["rule"]

@@ -42,7 +42,7 @@ from gonio.kit.render import (conformity_texts, coverage_text, display, display_
                               item_nums, labels, num, parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_ZH, ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
-                                            READING_NOTES_ZH, TITLES_EN)
+                                            LABELS, READING_NOTES_ZH, TITLES_EN)
 
 
 def item_names(res: dict) -> list[str]:
@@ -295,7 +295,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     position, U with k and coverage probability), then the Annex A line and the conformity
     statements the pipeline decided (:func:`conformity_for`).
     """
-    L = labels(lang)
+    L = labels(lang, LABELS)
     head = ["#", "item", "clause", "result", "U (k, p)", "unit"]
     rows, notes = [], []
     for i, name in enumerate(item_names(res), 1):
@@ -375,7 +375,7 @@ def specification_text(spec: str, lang: str, cjk: bool = True) -> str:
     """
     out = spec
     if lang == "zh":
-        out = out.replace(" (draft for comment)", labels("zh")["draft_for_comment"])
+        out = out.replace(" (draft for comment)", labels("zh", LABELS)["draft_for_comment"])
     if not cjk:
         for zh, en in TITLES_EN.items():
             out = out.replace(zh, en)

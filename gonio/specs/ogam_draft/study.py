@@ -50,6 +50,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -223,6 +224,27 @@ def worst_azimuth(bench: Bench, protocol: Protocol, tilt_deg: float) -> float:
     c0 = (b0 + b180) / 2.0
     phi = math.degrees(math.atan2(b90 - c0, (b0 - b180) / 2.0))
     return (phi + (180.0 if c0 < 0 else 0.0)) % 360.0
+
+
+def k_tilt_trial(bench: Bench, protocol: Protocol, seed: int,
+                 work: Path) -> tuple[float, float, float]:
+    """(K − K_true, u_c(K), U(K)) of one simulated calibration on ``bench`` (a tilted mount,
+    :func:`tilted`), the readings written into the folder ``work`` and read back from the
+    CSV as ``gonio calibrate`` reads them; K_true is the instrument's own K at the 7.1
+    rounds through the mount (:func:`gonio.specs.ogam_draft.item_coverage.scale_factor_truth`),
+    never gonio's calibration. The trial of ``scripts/k_tilt_coverage.py``."""
+    from gonio.bench import write_session
+    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
+
+    session = run_session(protocol, bench, seed=seed)
+    d = Path(work) / f"s{seed}"
+    write_session(session, d)
+    rep = analyse(read_readings(d / "readings.csv"), protocol,
+                  static_record=session.static_record)
+    iu = rep.item_uncertainty["scale_factor"]
+    kt = scale_factor_truth(session.truth)[0]
+    return float(rep.results.scale_factor.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)
 
 
 def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
