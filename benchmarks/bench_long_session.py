@@ -17,9 +17,9 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from gonio.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse_zero_stability
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol
 
 PROTOCOL = """
 [protocol]

@@ -215,8 +215,8 @@ def run(args) -> int:
         store = open_store(args.database, data)
         fill(store, args.instruments, args.calibrations)
         store.close()
-        from gonio.bench import load_bench, run_session, write_session
-        from gonio.protocol import load_protocol
+        from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+        from gonio.specs.ogam_draft.protocol import load_protocol
         write_session(run_session(load_protocol(PROTOCOL), load_bench("rlg"), seed=3),
                       Path(tmp) / "run")
         proc = start(data, args.database, args.port)

@@ -58,7 +58,7 @@ except ImportError:
         from gonio.pipeline.validate import validation_protocol, run_trial
     except ImportError:
         from gonio.validate import validation_protocol, run_trial
-from gonio.bench import load_bench
+from gonio.specs.ogam_draft.bench import load_bench
 p = validation_protocol(); b = replace(load_bench("rlg"), sample_rate_hz=100.0)
 run_trial(p, b, 12345)                         # warm-up (imports, caches)
 n = int(sys.argv[1])
@@ -83,7 +83,7 @@ STARTUP = r"""
 import sys, time
 t0, c0 = time.perf_counter(), time.process_time()
 from dataclasses import replace
-from gonio.bench import load_bench
+from gonio.specs.ogam_draft.bench import load_bench
 from gonio.specs.ogam_draft.study import run_trial, validation_protocol
 t1, c1 = time.perf_counter(), time.process_time()
 p = validation_protocol(); b = replace(load_bench("rlg"), sample_rate_hz=100.0)

@@ -6,7 +6,7 @@ covariance, on the same sessions.
 Each trial simulates the whole draft protocol on the study bench (``gonio validate``'s
 ``default`` case and trial seeds) at ``--sample-rate-hz``, calibrates the readings, fits
 the five-term model to the continuous 7.3 record once and states the model's expected B_s
-with each uncertainty method (:func:`gonio.analysis.noise.readings.expected_zero_stability`,
+with each uncertainty method (:func:`gonio.specs.ogam_draft.zero_stability_noise.expected_zero_stability`,
 :func:`gonio.specs.ogam_draft.item_uncertainty.zero_stability_model_budget`, k as the
 protocol fixes it, else t_95(ν_eff)); the truth is the population value from the bench's
 noise parameters (:func:`gonio.specs.ogam_draft.item_coverage.zero_stability_truth`).
@@ -42,10 +42,10 @@ def trial(index: int, seed: int, rate_hz: float, methods: tuple) -> dict:
     import numpy as np
 
     from gonio.analysis.noise import analyse_static
-    from gonio.analysis.noise.readings import expected_zero_stability
-    from gonio.bench import load_bench, run_session
-    from gonio.formats.readings import Readings
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.zero_stability_noise import expected_zero_stability
+    from gonio.specs.ogam_draft.bench import load_bench, run_session
+    from gonio.specs.ogam_draft.readings import Readings
+    from gonio.specs.ogam_draft.protocol import load_protocol
     from gonio.specs.ogam_draft.calibration import analyse
     from gonio.specs.ogam_draft.item_coverage import zero_stability_truth
     from gonio.specs.ogam_draft.item_uncertainty import zero_stability_model_budget

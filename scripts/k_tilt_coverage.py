@@ -39,8 +39,8 @@ def main(argv=None) -> int:
     ap.add_argument("--azimuth", default="worst")
     ap.add_argument("--protocol", default="ogam-draft")
     a = ap.parse_args(argv)
-    from gonio.bench import load_bench
     from gonio.specs import get
+    from gonio.specs.ogam_draft.bench import load_bench
     from gonio.specs.ogam_draft.study import k_tilt_trial, tilted, worst_azimuth
 
     proto = get("ogam-draft").load_protocol(a.protocol)

@@ -10,13 +10,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.bench import load_bench, run_session
-from gonio.bench.config import Bench, Harmonic, InstrumentConfig, TableConfig
-from gonio.bench.session import mount_scale_factor_counts_per_deg
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import Bench, Harmonic, InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.bench.session import mount_scale_factor_counts_per_deg
 from gonio.specs.ogam_draft.items import compute_characteristics
 from gonio.errors import GonioError
-from gonio.formats.readings import parse_readings, write_readings
-from gonio.protocol import load_protocol, parse_protocol
+from gonio.specs.ogam_draft.readings import parse_readings, write_readings
+from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
 
 K_NOM = 76434.87
 
@@ -130,7 +130,7 @@ def test_noise_scatter_matches_prediction():
 
 
 def test_same_seed_same_bytes(tmp_path):
-    from gonio.bench import write_session
+    from gonio.specs.ogam_draft.bench import write_session
 
     bench = load_bench("rlg")
     proto = small_protocol(series=1)
@@ -146,7 +146,7 @@ def test_same_seed_same_bytes(tmp_path):
 def test_write_session_refuses_to_replace_readings_as_the_cli_does(tmp_path):
     """The Python API refuses what ``gonio simulate --out`` refuses: an existing readings or
     truth file (a laboratory's, or an earlier run's) is replaced only with ``force``."""
-    from gonio.bench import write_session
+    from gonio.specs.ogam_draft.bench import write_session
 
     bench = replace(load_bench("rlg"), sample_rate_hz=100.0)
     s7 = run_session(small_protocol(series=1), bench, seed=7)

@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from gonio.bench import load_bench
-from gonio.bench.session import _Variant, _motion, _simulate_many, plan_session
+from gonio.specs.ogam_draft.bench import load_bench
+from gonio.specs.ogam_draft.bench.session import _Variant, _motion, _simulate_many, plan_session
 from gonio.specs.ogam_draft.study import validation_protocol
 
 

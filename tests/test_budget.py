@@ -7,7 +7,7 @@ import statistics
 import numpy as np
 import pytest
 
-from gonio.budget.extra import ExtraComponent
+from gonio.specs.ogam_draft.budget_extra import ExtraComponent
 from gonio.specs.ogam_draft.budget import (annex_a5_rounding, annex_a_budget,
                           repeatability_from_deviations)
 from gonio.cli import main

@@ -25,12 +25,12 @@ import pytest
 from matplotlib.figure import Figure
 from scipy.stats import norm
 
-from gonio.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
 from gonio.errors import GonioError
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.report.figures import HTML_FIGSIZE, mpl_style
 from gonio.specs.ogam_draft import certificate_pages as cert
 from gonio.specs.ogam_draft import figures as figs

@@ -21,7 +21,7 @@ from gonio.specs.ogam_draft.items import (
     summary_table, zero_stability,
 )
 from gonio.errors import GonioError
-from gonio.formats.readings import parse_readings, read_readings
+from gonio.specs.ogam_draft.readings import parse_readings, read_readings
 
 DATA = Path(__file__).parent / "data"
 AS = 3600.0  # arcsec per degree

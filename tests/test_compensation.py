@@ -8,15 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from gonio.budget.extra import compensation_component
-from gonio.bench import run_session
-from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.budget_extra import compensation_component
+from gonio.specs.ogam_draft.bench import run_session
+from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.specs.ogam_draft.budget import annex_a_budget
 from gonio.physics.compensation import (computed_compensation, computed_residual_dps,
                                 measured_compensation)
 from gonio.physics.earth import OMEGA_E_ARCSEC_S
 from gonio.errors import GonioError
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 
 D = 0.01     # degrees: small enough for the linearisation to hold to ~1e-4
 

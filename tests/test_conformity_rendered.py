@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from gonio.bench import load_bench, run_session, write_session
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.formats.lab import load_lab
 from gonio.report.i18n import display
 from gonio.specs.ogam_draft.stated import conformity_for

@@ -10,17 +10,17 @@ import pandas as pd
 import pytest
 from scipy.integrate import quad
 
-from gonio.bench import run_session
-from gonio.bench.config import Bench, InstrumentConfig, TableConfig
-from gonio.bench.session import plan_session
+from gonio.specs.ogam_draft.bench import run_session
+from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.bench.session import plan_session
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.budget.extra import coupling_budget_component, session_coupling
+from gonio.specs.ogam_draft.budget_extra import coupling_budget_component, session_coupling
 from gonio.physics.coupling import (coupling_error_arcsec, coupling_terms,
                             coupling_worst_case_arcsec,
                             trig_integrals)
 from gonio.physics.earth import OMEGA_E_ARCSEC_S, earth_rate_split
 from gonio.physics.kinematics import Timeline
-from gonio.protocol import load_protocol, parse_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
 
 K_NOM = 76434.87
 

@@ -19,11 +19,11 @@ import pytest
 from lxml import etree
 from scipy.stats import norm
 
-from gonio.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.calibration import calibrate
 from gonio.pipeline.dispatch import decide_conformity
 from gonio.specs.ogam_draft.outputs import write_calibration
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.formats.lab import load_lab
 from gonio.report.header import certificate_id
 from gonio.report.dcc import DCC_NS, SI_NS

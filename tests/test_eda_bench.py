@@ -10,11 +10,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.bench import load_bench, run_session
-from gonio.bench.config import Harmonic, TableConfig
-from gonio.bench.instrument import harmonic_sum_arcsec
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import Harmonic, TableConfig
+from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
 from gonio.specs.ogam_draft.equal_division import eda_matrix_from_readings, equal_division_analysis
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 
 
 def eda_protocol(n, m, repeats=2):
@@ -119,8 +119,8 @@ def test_calibrate_analyses_eda_rows_and_certificate_carries_the_page(tmp_path):
     import json
     import re
 
-    from gonio.bench import write_session
-    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.bench import write_session
+    from gonio.specs.ogam_draft.readings import read_readings
     from gonio.specs.ogam_draft.calibration import calibrate
     from gonio.specs.ogam_draft.outputs import write_calibration
     from gonio.specs.ogam_draft.certificate_pages import write_certificate

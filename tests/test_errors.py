@@ -11,7 +11,7 @@ import pytest
 
 from gonio.errors import (GonioError, MissingColumnError, NotFoundError, TooManyAttemptsError,
                           check_header)
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol
 
 ROOT = Path(__file__).resolve().parents[1]
 #: ``"…" in exc.message``, ``"…" in str(exc)``, ``exc.message.startswith(…)``: a decision

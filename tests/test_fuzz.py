@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from gonio.bench import load_bench
+from gonio.specs.ogam_draft.bench import load_bench
 from gonio.specs.ogam_draft.items import compute_characteristics
 from gonio.errors import GonioError
-from gonio.formats.readings import read_readings
+from gonio.specs.ogam_draft.readings import read_readings
 from gonio.physics.kinematics import Timeline
-from gonio.protocol import load_protocol, parse_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
 from gonio.specs.ogam_draft.reduce import reduce_stream
 from gonio.formats.streams import read_stream, write_stream
 

@@ -31,11 +31,11 @@ import numpy as np
 import pytest
 
 from gonio.atomic import MANIFEST, output_set, read_manifest, sha256_file, write_text
-from gonio.bench import load_bench
+from gonio.specs.ogam_draft.bench import load_bench
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.formats.readings import read_readings
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.readings import read_readings
+from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.report.i18n import display_number, round_half_up
 from gonio.formats.toml import read_toml
 
@@ -807,7 +807,7 @@ def test_empty_protocol_names_the_protocol(tmp_path, capsys):
 
 
 def test_bench_sizes_beyond_limits(tmp_path):
-    from gonio.bench import run_session
+    from gonio.specs.ogam_draft.bench import run_session
 
     shutil.copy(ROOT / "protocols/benches/table-precision.toml", tmp_path)
     p = tmp_path / "b.toml"
@@ -831,7 +831,7 @@ def test_bench_sizes_beyond_limits(tmp_path):
 def test_session_time_and_reading_rows_beyond_limits(tmp_path, monkeypatch, capsys):
     """The estimated simulation time (GONIO_MAX_RUN_S) and the readings row limit
     (GONIO_MAX_READING_ROWS), each set low: exit 2 naming the variable, nothing written."""
-    from gonio.bench import run_session
+    from gonio.specs.ogam_draft.bench import run_session
 
     (tmp_path / "m.toml").write_text(MINI_PROTO)
     for lim in ("0.01", "0.2"):
@@ -955,7 +955,7 @@ def test_user_text_rendered_literally(tmp_path):
 # ----------------------------------------------------------------------------- determinism
 
 def test_plots_and_truth_are_byte_stable(tmp_path):
-    from gonio.bench import run_session, write_session
+    from gonio.specs.ogam_draft.bench import run_session, write_session
     from gonio.specs.ogam_draft.pages import equal_division_figure
     from gonio.report.figure_files import save_figure
 

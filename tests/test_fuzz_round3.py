@@ -19,8 +19,8 @@ import pytest
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.rate_readings import parse_rate_readings
-from gonio.formats.readings import read_readings
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.readings import read_readings
+from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.resources import builtin_names, protocols_dir, resolve
 from gonio.specs.ogam_draft.screen import screen
 

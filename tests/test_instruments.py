@@ -22,16 +22,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.bench import load_bench
+from gonio.specs.ogam_draft.bench import load_bench
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.counters import wrap_counter
-from gonio.formats.readings import read_readings
+from gonio.specs.ogam_draft.readings import read_readings
 from gonio.instruments.acquisition import AcquisitionModule, unwrap_near
 from gonio.instruments.link import InstrumentError, IOLog, Link, LinkLost
 from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.table import RotaryTable
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs.ogam_draft.acquisition import (Block, Step, acquire, plan_programme,
                                                 read_previous, resume_plan)
 from gonio.specs.ogam_draft.served import ServedBench, gyro_instrument, serve_bench, table_instrument

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from gonio.errors import GonioError
-from gonio.formats.readings import ORIENTATIONS, TEST_NAMES, parse_readings, read_readings, write_readings
+from gonio.specs.ogam_draft.readings import ORIENTATIONS, TEST_NAMES, parse_readings, read_readings, write_readings
 
 DATA = Path(__file__).parent / "data"
 HEADER = "test,series,round,rate_dps,orientation,time_s,table_deg,gyro_counts,gyro_deg"

@@ -16,8 +16,8 @@ import pytest
 
 from gonio.cli import main
 from gonio.errors import GonioError, check_header
-from gonio.formats import readings as R
-from gonio.formats.readings import parse_readings
+from gonio.specs.ogam_draft import readings as R
+from gonio.specs.ogam_draft.readings import parse_readings
 
 from pathlib import Path
 
@@ -153,9 +153,9 @@ def test_session_time_estimate_is_enforced(tmp_path, monkeypatch, capsys):
     """GONIO_MAX_RUN_S refuses a session whose estimated computing time exceeds it, before
     any sample is simulated, naming the section that drives it and the bench key; from the
     CLI: exit 2, one line, no output folder."""
-    import gonio.bench.session as S
-    from gonio.bench import load_bench
-    from gonio.protocol import load_protocol
+    import gonio.specs.ogam_draft.bench.session as S
+    from gonio.specs.ogam_draft.bench import load_bench
+    from gonio.specs.ogam_draft.protocol import load_protocol
 
     long = (Path(load_protocol("ogam-draft").path).read_text(encoding="utf-8")
             .replace("readings = 15", "readings = 500"))        # a 42 h 7.3 record
@@ -187,9 +187,9 @@ def test_session_time_estimate_is_calibrated():
     """The estimate against the CPU time of a real (short) simulation: within a factor 2."""
     import time
 
-    from gonio.bench import load_bench
-    from gonio.bench.session import estimate_session, plan_session, run_session
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.bench import load_bench
+    from gonio.specs.ogam_draft.bench.session import estimate_session, plan_session, run_session
+    from gonio.specs.ogam_draft.protocol import load_protocol
 
     text = Path(load_protocol("ogam-draft").path).read_text(encoding="utf-8")
     proto = load_protocol("ogam-draft")

@@ -34,7 +34,6 @@ LAYERS: dict[str, int] = {
     "gonio.protocol": 2, "gonio.result": 2,
     "gonio.bench": 3, "gonio.reduce": 3,
     "gonio.analysis": 4, "gonio.instruments": 4,
-    "gonio.budget": 5,
     "gonio.specs": 6,
     "gonio.kit": 6.5,            # the public plug-in kit: re-exports, above the specifications
     "gonio.kit.render": 7.25,    # its rendering part: re-exports of the report, above it
@@ -148,7 +147,7 @@ def layer_violations(files: list[Path]) -> list[str]:
 #: What a specification may import (docs/architecture.md#layers), besides itself, a
 #: family package (``gonio.specs._rate_family``), the registry and the layer-0 modules.
 SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.result",
-                   "gonio.reduce", "gonio.analysis", "gonio.budget", "uncertainty")
+                   "gonio.reduce", "gonio.analysis", "uncertainty")
 #: A specification's modules that run the virtual bench: the only ones that may import it
 #: (``study``: its coverage study of ``gonio validate``, which simulates every trial;
 #: ``served``: its virtual bench served as instruments, ``SPEC.serve``).

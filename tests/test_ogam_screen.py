@@ -13,9 +13,9 @@ import pytest
 
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.formats.readings import Readings, read_readings
+from gonio.specs.ogam_draft.readings import Readings, read_readings
 from gonio.specs.ogam_draft.calibration import calibrate
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs.ogam_draft.screen import ANGLE_FLOOR_ARCSEC, apply_findings, screen
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import calibrate
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget
 from gonio.specs.ogam_draft.items import scale_factor
 

@@ -67,6 +67,30 @@ def test_simulate_calibrate_certificate(plugin, tmp_path, capsys):
         capsys.readouterr().err
 
 
+def test_its_own_simulate_option(plugin, tmp_path, capsys):
+    """``--samples`` comes from the plug-in's ``arguments["simulate"]`` hook (gonio's command
+    line holds no such option): it reaches the plug-in's ``simulate``, shows under its group
+    in ``--help``, and another specification refuses it in one line."""
+    from gonio.cli import build_parser
+
+    for samples, sim in ((None, tmp_path / "a"), (5, tmp_path / "b")):
+        extra = [] if samples is None else ["--samples", str(samples)]
+        assert main(["simulate", "--spec", "acme-rate-check", "--out", str(sim)] + extra) == 0
+        rows = [ln for ln in (sim / "readings.csv").read_text().splitlines()
+                if ln and not ln.startswith("#")][1:]
+        assert len(rows) == 3 * 2 * (samples or 20)      # 3 rates, both ways (clause 4.1)
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        build_parser(["simulate"]).parse_args(["simulate", "--help"])
+    shown = capsys.readouterr().out
+    assert "options of --spec acme-rate-check:" in shown and "--samples" in shown
+    assert main(["simulate", "--spec", "jjf1535-2015", "--samples", "5",
+                 "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--samples does not apply to 'gonio simulate --spec " \
+                                     "jjf1535-2015'" in err, err
+
+
 def test_the_procedures_tolerance_is_the_default_limit(plugin, tmp_path, capsys):
     """``SPEC.default_limits`` (ACME RC-1 clause 6: |B| ≤ 1 °/s) is decided where the lab
     file gives no limit for the bias, labelled as the specification's default in

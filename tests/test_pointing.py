@@ -11,12 +11,12 @@ import tempfile
 import numpy as np
 import pytest
 
-from gonio.bench import run_session
-from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.bench import run_session
+from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.specs.ogam_draft.items import compute_characteristics
 from gonio.physics.compensation import measured_compensation, pointing_consistency_prediction
-from gonio.formats.readings import parse_readings, write_readings
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.readings import parse_readings, write_readings
+from gonio.specs.ogam_draft.protocol import parse_protocol
 
 K_NOM = 76434.87
 LAT = 40.0

@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from gonio.errors import GonioError
-from gonio.protocol import load_protocol, parse_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
 from gonio.formats.toml import read_toml
 
 

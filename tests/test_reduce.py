@@ -11,9 +11,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.errors import GonioError
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.specs.ogam_draft.override import read_override
 from gonio.reduce import RestFinder, find_rests
 from gonio.specs.ogam_draft.reduce import reduce_stream

@@ -60,8 +60,8 @@ def test_the_pipeline_hands_the_findings_to_calibrate(triad):
 def test_a_readings_file_is_read_once_for_screen_and_calibrate(tmp_path, monkeypatch):
     """The optical draft's screen keeps the file it read for the calibration that follows
     (a stream is reduced once); a changed file is read again."""
-    from gonio.bench import Bench, InstrumentConfig, TableConfig, run_session, write_session
-    from gonio.protocol import parse_protocol
+    from gonio.specs.ogam_draft.bench import Bench, InstrumentConfig, TableConfig, run_session, write_session
+    from gonio.specs.ogam_draft.protocol import parse_protocol
     import gonio.specs.ogam_draft.calibration as cal
 
     proto = parse_protocol({

@@ -14,9 +14,9 @@ from gonio.units import deg_to_arcsec
 
 
 def _ogam_noise_free():
-    from gonio.bench import load_bench, run_session
-    from gonio.formats.readings import Readings
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.bench import load_bench, run_session
+    from gonio.specs.ogam_draft.readings import Readings
+    from gonio.specs.ogam_draft.protocol import load_protocol
     from gonio.specs.ogam_draft.study import ideal_bench
 
     bench = replace(ideal_bench(load_bench("rlg")), sample_rate_hz=20.0)

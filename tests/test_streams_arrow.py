@@ -13,10 +13,10 @@ import pyarrow.parquet as pq
 import pytest
 
 import gonio.formats.streams as S
-from gonio.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.errors import GonioError
 from gonio.formats.streams import StreamFile, read_stream, write_stream
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.specs.ogam_draft.reduce import reduce_stream
 
 MD = {"counter_bits": "16", "counter_signed": "true", "serial": "X-1",
@@ -165,9 +165,9 @@ def test_counter_overflow_between_samples_is_caught_at_its_line(tmp_path, monkey
     # The case: the RLG bench with a 16-bit counter at 100 Hz moves ~45 860 counts per
     # sample at 60 °/s (> 2^15): unwrapping cannot be right; the first sample where the true
     # step exceeds half the range is the line named. The bench itself refuses such a counter
-    # (gonio.bench.config.check_counter); a laboratory's acquisition may not, so the bench's
+    # (gonio.specs.ogam_draft.bench.config.check_counter); a laboratory's acquisition may not, so the bench's
     # check is lifted here to produce the faulty stream the reader must catch.
-    import gonio.bench.session as session
+    import gonio.specs.ogam_draft.bench.session as session
     monkeypatch.setattr(session, "check_counter", lambda bench: None)
     path, _, true, b = _bench_stream(tmp_path, "s16", 16, "csv")
     monkeypatch.undo()
@@ -281,7 +281,7 @@ def test_long_rest_level_is_a_strided_median(monkeypatch):
 
 
 def test_calibrate_stream_writes_no_temporary_readings_file(tmp_path, monkeypatch):
-    import gonio.formats.readings as RD
+    import gonio.specs.ogam_draft.readings as RD
     from gonio.specs.ogam_draft.calibration import analyse
     path, res, _, _ = _bench_stream(tmp_path, "c", 32, "parquet")
 

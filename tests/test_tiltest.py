@@ -11,12 +11,12 @@ import pytest
 from scipy import stats
 from scipy.optimize import curve_fit
 
-from gonio.bench import run_session, write_session
-from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.bench import run_session, write_session
+from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.protocol import load_protocol, parse_protocol
-from gonio.protocol.sections import TiltEstimatePlan
+from gonio.specs.ogam_draft.protocol import load_protocol, parse_protocol
+from gonio.specs.ogam_draft.protocol import TiltEstimatePlan
 from gonio.specs.ogam_draft.tilt_estimate import (estimate_tilt, fit_first_harmonic,
                            tilt_estimate_from_readings)
 

@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gonio.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse
-from gonio.formats.readings import Readings
+from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
 from gonio.specs.ogam_draft.study import ideal_bench, trial_bench, validation_protocol
 

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from gonio.bench import load_bench, run_session
-from gonio.bench.instrument import harmonic_sum_arcsec
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
 from gonio.specs.ogam_draft.equal_division import (analyse_eda_readings, coupling_design,
                                            load_eda_protocol)
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol
 
 
 def _truth(bench, res):
@@ -117,7 +117,7 @@ def test_gonio_eda_on_the_default_example(tmp_path, capsys):
     estimated and the table error agrees with the bench's truth within U."""
     import json
 
-    from gonio.bench import write_session
+    from gonio.specs.ogam_draft.bench import write_session
     from gonio.cli import main
 
     proto = load_protocol("eda")

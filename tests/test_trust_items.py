@@ -8,10 +8,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.bench import load_bench, run_session
-from gonio.formats.readings import Readings
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.calibration import analyse, calibrate
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs.ogam_draft.item_uncertainty import monte_carlo_check
 
 

@@ -21,8 +21,8 @@ from decimal import Decimal
 import pytest
 from lxml import etree
 
-from gonio.bench import load_bench, run_session, write_session
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.report.dcc import DCC_NS, SI_NS
 
 NS = {"dcc": DCC_NS, "si": SI_NS}

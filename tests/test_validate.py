@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from gonio.bench import Bench, InstrumentConfig, TableConfig, run_session
-from gonio.bench.instrument import geometry
+from gonio.specs.ogam_draft.bench import Bench, InstrumentConfig, TableConfig, run_session
+from gonio.specs.ogam_draft.bench.instrument import geometry
 from gonio.cli import main
-from gonio.protocol import parse_protocol
-from gonio.budget.extra import tilt_coupling_coefficients
+from gonio.specs.ogam_draft.protocol import parse_protocol
+from gonio.specs.ogam_draft.budget_extra import tilt_coupling_coefficients
 from gonio.physics.earth import earth_rate_split
 from gonio.pipeline.validate import binomial_u, coverage, validate
 from gonio.specs.ogam_draft.study import trial_seeds
@@ -76,7 +76,7 @@ def test_ideal_noise_free_bench_every_error_vanishes():
         assert s[truth]["coverage_E_ij"]["fraction"] == 1.0
     # U is then the annex's Type B part alone: 2·√(0.1²/3 + 0.0785²/3 + b²/3) (A.4.1–A.4.3),
     # b = 0.005 °/h × 60 ″/min × the longest time to reading actually used (issue 12, defect 4).
-    from gonio.bench import run_session
+    from gonio.specs.ogam_draft.bench import run_session
     ses = run_session(tiny_protocol(), b, seed=0)
     t_max = ses.readings.loc[ses.readings["test"] == "angle_deviation", "time_s"].max()
     expected = 2 * math.sqrt((0.1 ** 2 + 0.078539 ** 2 + (0.005 * t_max) ** 2) / 3)
@@ -172,7 +172,7 @@ def test_tilt_coupling_predicts_the_bench_truth():
     diff = np.array([a["systematic_deviation_arcsec"] - b["systematic_deviation_arcsec"]
                      for a, b in zip(t1, t0)])
     # α in the closed form is the tilt azimuth relative to the direction β of Ω_⊥ in the
-    # table frame (gonio.bench.instrument.Geometry).
+    # table frame (gonio.specs.ogam_draft.bench.instrument.Geometry).
     g = geometry(tilted, "up")
     a = math.radians(alpha) - math.atan2(g.omega_e2_dps, g.omega_e1_dps)
     assert np.max(np.abs(diff)) > 0.05

@@ -11,10 +11,10 @@ import pytest
 
 import gonio.pipeline.validate as V
 import gonio.specs.ogam_draft.study as S
-from gonio.bench import Bench, InstrumentConfig, TableConfig
+from gonio.specs.ogam_draft.bench import Bench, InstrumentConfig, TableConfig
 from gonio.cli import main
 from gonio.progress import Progress
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 
 
 def tiny_protocol():

@@ -22,7 +22,7 @@ def test_a_study_trial_does_not_import_sympy(tmp_path):
     code = textwrap.dedent("""
         import sys
         from dataclasses import replace
-        from gonio.bench import load_bench
+        from gonio.specs.ogam_draft.bench import load_bench
         from gonio.specs.ogam_draft.study import run_trial, validation_protocol
         import gonio.pipeline.validate
         assert "sympy" not in sys.modules, "importing the study code imported sympy"

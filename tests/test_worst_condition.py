@@ -15,8 +15,8 @@ import pandas as pd
 import pytest
 
 from gonio.analysis.coverage import clopper_pearson
-from gonio.bench import load_bench, run_session
-from gonio.formats.readings import Readings
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import disc_model_u, scale_factor_truth
 from gonio.specs.ogam_draft.item_uncertainty import nonlinearity_corrected_budget

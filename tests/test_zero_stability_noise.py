@@ -8,11 +8,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.bench import load_bench, run_session
-from gonio.bench.instrument import uniform_hash
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench.instrument import uniform_hash
 from gonio.specs.ogam_draft.calibration import (ZERO_STABILITY_NOISE_SAMPLES,
                                                analyse_zero_stability, calibrate)
-from gonio.protocol import parse_protocol
+from gonio.specs.ogam_draft.protocol import parse_protocol
 
 ZS = parse_protocol({"protocol": {"name": "zs"},
                      "zero_stability": {"readings": 15, "interval_s": 300.0}})
@@ -52,7 +52,7 @@ def test_arw_and_quantisation_recovered_within_uncertainty(seed):
 
 def test_readings_file_alone_says_why_there_is_no_allan(tmp_path):
     bench = replace(load_bench("rlg"), sample_rate_hz=50.0)
-    from gonio.bench import write_session
+    from gonio.specs.ogam_draft.bench import write_session
 
     write_session(run_session(ZS, bench, seed=0), tmp_path)
     d = calibrate(tmp_path / "readings.csv", ZS).to_json()["items"]["zero_stability"]["details"]

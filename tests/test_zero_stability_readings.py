@@ -20,8 +20,9 @@ import pytest
 from scipy import stats
 
 from gonio.analysis.noise.fit import design_matrix
-from gonio.analysis.noise.readings import (expected_sample_variance, expected_zero_stability,
-                                           generalised_covariance, reading_weights)
+from gonio.specs.ogam_draft.zero_stability_noise import (expected_sample_variance,
+                                                         expected_zero_stability,
+                                                         generalised_covariance, reading_weights)
 from gonio.specs.ogam_draft.item_uncertainty import (ConditionDeviation, consistency_budget,
                                                      monte_carlo_item, zero_stability_budget,
                                                      zero_stability_model_budget)
@@ -226,7 +227,7 @@ def test_cli_validate_refuses_one_monte_carlo_trial(tmp_path):
 
 def test_validate_monte_carlo_reports_every_item():
     from dataclasses import replace
-    from gonio.bench import load_bench
+    from gonio.specs.ogam_draft.bench import load_bench
     from gonio.pipeline.validate import validate
     from gonio.specs.ogam_draft.study import validation_protocol
 

@@ -1,14 +1,11 @@
-"""The virtual bench: a simulated RLG/FOG goniometer on a simulated precision rotary table.
+"""The virtual rate-gyro bench shared by the rate specifications (JJF 1535-2015 and
+IEC 62047-20 through their family package, and plug-ins through the kit).
 
-``config``      bench, table and instrument parameters from TOML (``protocols/benches``)
-``table``       the table's positioning error and axis geometry
-``instrument``  the goniometer: Sagnac rate on a tilted axis, scale factor and its
-                nonlinearity, bias, noise, quantisation, counter
-``session``     runs a protocol on a bench → readings file, truth, optional stream
+``rate_gyro``     the virtual rate gyro (scale factor, bias, noise, temperature and supply)
+``equipment``     the laboratory's equipment: rate and position tables, chamber, supply
+``rate_session``  runs a programme of segments on them → readings, truth
+``rate_truth``    closed forms of the gyro's noise-free responses (the truths)
+
+A specification's own virtual bench lives in its package (the optical draft's goniometer on
+a precision rotary table, the triad's gyros on a rate table and in a chamber).
 """
-
-from gonio.bench.config import Bench, InstrumentConfig, TableConfig, load_bench
-from gonio.bench.session import SessionResult, run_session, write_session
-
-__all__ = ["Bench", "InstrumentConfig", "TableConfig", "load_bench", "SessionResult",
-           "run_session", "write_session"]

@@ -13,7 +13,7 @@ from gonio.errors import GonioError
 
 
 def register(sub) -> None:
-    p = sub.add_parser("db", help="the records database: init, users, import, backup, restore",
+    p = sub.add_parser("db", help="the records database: init, users, import, attach, backup, restore",
                        description="Manage the laboratory's records database.")
     dsub = p.add_subparsers(dest="db_command", metavar="ACTION")
     dsub.required = True
@@ -57,7 +57,17 @@ def register(sub) -> None:
                    help="the records user importing (recorded as the calibrations' creator, "
                         "who may then neither review nor approve them; default $GONIO_USER). "
                         "A calibration imported without one cannot be reviewed")
+    add_attach_options(q)
     q.set_defaults(func=run_import)
+    q = dsub.add_parser("attach", help="attach the registered standards used and the "
+                                       "environment to a calibration not yet reviewed")
+    add_store_options(q)
+    q.add_argument("calibration", type=int, help="the calibration's number (its id)")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user attaching them (technician or reviewer; default "
+                        "$GONIO_USER)")
+    add_attach_options(q)
+    q.set_defaults(func=run_attach)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database")):
         q = dsub.add_parser(name, help=helptext)
@@ -109,10 +119,71 @@ def hook_calibrate(sub) -> None:
                                            actor=importing_user(store, args.record_user))
             finally:
                 store.close()
-            sys.stderr.write(f"gonio: recorded as calibration {cid}\n")
+            sys.stderr.write(f"gonio: recorded as calibration {cid}; attach the "
+                             "registered standards and the environment before its review "
+                             f"(gonio db attach {cid} --standard ID --temperature T "
+                             "--humidity H)\n")
         return rc
 
     p.set_defaults(func=run_recorded)
+
+
+def add_attach_options(q) -> None:
+    """The options naming what a calibration is attached (``db import``, ``db attach``)."""
+    q.add_argument("--standard", action="append", default=[], metavar="IDENTIFIER",
+                   help="a registered standard used (its identifier), valid on the "
+                        "calibration date; repeat for several")
+    q.add_argument("--temperature", default=None, metavar="DEG_C",
+                   help="the room temperature of the calibration (°C)")
+    q.add_argument("--humidity", default=None, metavar="PCT",
+                   help="the relative humidity of the calibration (%%)")
+    q.add_argument("--environment-from-readings", action="store_true",
+                   help="take the temperature and humidity from the readings' metadata "
+                        "(stated so on the certificate)")
+
+
+def attach_of(args) -> dict:
+    """The attach options given, as :func:`gonio.records.services.attach_conditions`'s
+    keyword arguments ({} when none)."""
+    out = {}
+    if args.standard:
+        out["standard_identifiers"] = list(args.standard)
+    if args.temperature is not None or args.humidity is not None:
+        out.update(temperature_c=args.temperature, humidity_pct=args.humidity)
+    if args.environment_from_readings:
+        out["environment_from_readings"] = True
+    return out
+
+
+def run_attach(args) -> int:
+    from gonio.records import services
+
+    store = _store(args)
+    try:
+        actor = services.user(store, args.user or os.environ.get("GONIO_USER") or "")
+        if actor is None or not actor.active:
+            raise GonioError("give the active records user attaching them (--user or "
+                             "$GONIO_USER)", key="--user")
+        cal = services.attach_by_identifiers(store, actor, args.calibration, **attach_of(args))
+        print(attach_line(store, cal))
+    finally:
+        store.close()
+    return 0
+
+
+def attach_line(store, cal) -> str:
+    """One line: what a calibration names now, and what it still lacks for its review."""
+    from gonio.records import services
+
+    with store.session() as s:
+        missing = services.missing_for_review(s, cal)
+        names = services.standard_names(s, cal.id)
+    env = ("not entered" if cal.temperature_c is None else
+           f"{cal.temperature_c:g} °C, {cal.humidity_pct:g} %"
+           + (" (from the readings)" if cal.environment_from == "readings" else ""))
+    return (f"calibration {cal.id}: standards {', '.join(names) or 'none'}; environment "
+            f"{env}" + (f"; before its review it needs {' and '.join(missing)}"
+                        if missing else ""))
 
 
 def importing_user(store, name: str | None):
@@ -190,6 +261,7 @@ def run_set_user(args) -> int:
 
 
 def run_import(args) -> int:
+    from gonio.records import services
     from gonio.records.importer import import_output_folder
 
     store = _store(args)
@@ -197,11 +269,17 @@ def run_import(args) -> int:
         actor = importing_user(store, args.user)
         if args.readings and len(args.folders) > 1:
             raise GonioError("give --readings with one folder only", key="--readings")
+        attach = attach_of(args)
+        if attach and actor is None:
+            raise GonioError("give --user to attach standards or the environment",
+                             key="--user")
         for folder in args.folders:
             cid = import_output_folder(store, folder, customer=args.customer,
                                        protocol=args.protocol, lab=args.lab, actor=actor,
                                        readings=args.readings)
-            print(f"{folder}: calibration {cid}")
+            if attach:
+                services.attach_by_identifiers(store, actor, cid, **attach)
+            print(f"{folder}: {attach_line(store, services.calibration(store, cid))}")
     finally:
         store.close()
     return 0

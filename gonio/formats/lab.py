@@ -72,7 +72,9 @@ LAB_SCHEMA: dict[str, Field] = {
     "environment": Field("table", default=None, schema={
         "temperature_c": Field("float", default=None),
         "humidity_pct": Field("float", default=None, check=lambda h: 0 <= h <= 100,
-                              expect="0–100 %")}),
+                              expect="0–100 %"),
+        # "readings": the values were taken from the readings' metadata (stated so)
+        "source": Field("str", default="entered", choices=("entered", "readings"))}),
     # the readings' identity and conditions against [instrument] and [environment]
     # (gonio.pipeline.identity): a contradiction is refused unless on_mismatch = "proceed"
     "identity": Field("table", default=None, schema={

@@ -30,7 +30,7 @@ pointing east (Ω cos φ u_A)² + u_b².
 *measured*: average the instrument's own rate over a static phase of length T
 just before the series, at the zero position; this removes the Earth rate *and*
 the bias. Residual 0 on average; standard uncertainty (IEEE 952 Annex C; the
-noise terms as in :mod:`gonio.bench.instrument`)
+noise terms as in :mod:`gonio.specs.ogam_draft.bench.instrument`)
 
     u² = (N/√T)² + B² + 2(q/√12)²/T²
 
@@ -39,8 +39,8 @@ standard uncertainty of the bias change between the static phase and the
 reading, q = 1/K the counter's quantum (two counter readings, each floored).
 
 Either residual rate r becomes an angle error r·t at a reading taken t after
-zeroing (Annex A.1: t ≤ 0.5 min). :func:`gonio.budget.extra.compensation_component`
-turns its standard uncertainty into an :class:`~gonio.budget.extra.ExtraComponent`
+zeroing (Annex A.1: t ≤ 0.5 min). :func:`gonio.specs.ogam_draft.budget_extra.compensation_component`
+turns its standard uncertainty into an :class:`~gonio.specs.ogam_draft.budget_extra.ExtraComponent`
 (normal, half-width = u) for a specification's Annex A budget — off by
 default, so the draft's budget stays reproducible. A tilted sensing axis adds a
 further, position-dependent residual (:mod:`gonio.physics.coupling`).

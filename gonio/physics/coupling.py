@@ -7,7 +7,7 @@ Contents
 :func:`coupling_error_arcsec`     the angle error of readings, for a tilt azimuth α
 :func:`coupling_worst_case_arcsec` its largest magnitude over α
 
-Per reading of a planned session, and as a budget line: :mod:`gonio.budget.extra`.
+Per reading of a planned session, and as a budget line: :mod:`gonio.specs.ogam_draft.budget_extra`.
 
 Physics (``docs/draft-readings.md#tilt-and-earth-rate-coupling``; :mod:`gonio.physics.kinematics`).
 A rate gyro senses ω·n; with the sensing axis n tilted by ψ from the table axis a,

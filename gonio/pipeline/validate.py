@@ -306,18 +306,8 @@ def validate(trials: int, *, spec: str | Specification = DEFAULT_KEY, seed: int 
         The study's own options (``SPEC.coverage.options``: for the optical draft's study
         cases, truth, sample_rate_hz, …), passed to ``SPEC.coverage.study``.
 
-    Examples
-    --------
-    >>> from gonio.bench import Bench, InstrumentConfig, TableConfig
-    >>> from gonio.protocol import parse_protocol
-    >>> p = parse_protocol({"protocol": {"name": "tiny"},
-    ...     "scale_factor": {"rounds": [{"stop_deg": 90.0}, {"stop_deg": 180.0}], "rest_s": 1.0},
-    ...     "angle_deviation": {"series": 2, "rest_s": 1.0,
-    ...                         "rounds": [{"stop_deg": 90.0}, {"stop_deg": 180.0}]}})
-    >>> b = Bench("ideal", InstrumentConfig(), TableConfig(), sample_rate_hz=20.0)
-    >>> r = validate(2, bench=b, protocol=p, cases=["ideal"], sample_rate_hz=20.0, workers=1)
-    >>> r.cases[0].summary["annex_a"]["systematic"]["coverage_E_ij"]["fraction"]
-    1.0
+    An example, the optical draft's study of two trials on an ideal bench, is in
+    ``SPEC.coverage.study``'s docstring.
     """
     s = get(spec) if isinstance(spec, str) else spec
     if s.coverage is None:

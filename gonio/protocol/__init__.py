@@ -1,15 +1,6 @@
-"""Protocols: the specifications' procedures as validated data (TOML → dataclasses).
-
-:mod:`gonio.protocol.model` holds the draft's sections and the loader;
-:mod:`gonio.protocol.sections` the optional sections (equal division, tilt
-estimate), registered on import. This layer sits below the bench and the
-reduction, which both read a protocol; it imports only physics and formats.
+"""Protocols shared by several specifications: the rate-gyro programme a specification plans
+(:mod:`gonio.protocol.programme`: ``Segment``, ``Programme``) and the rate protocol both rate
+specifications read (:mod:`gonio.protocol.rate`). This layer sits below the bench and the
+instruments, which both run a programme; it imports only physics and formats. A
+specification's own protocol lives in its package (the optical draft's rounds and series).
 """
-
-from gonio.protocol.model import (ORIENTATIONS, AnnexA, Conditions, Protocol, RotationItem, Round,
-                                  Session, ZeroStability, load_protocol, parse_protocol,
-                                  register_section)
-from gonio.protocol import sections  # noqa: F401  (registers the optional sections)
-
-__all__ = ["ORIENTATIONS", "AnnexA", "Conditions", "Protocol", "RotationItem", "Round", "Session", "ZeroStability",
-           "load_protocol", "parse_protocol", "register_section", "sections"]

@@ -19,7 +19,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from sqlalchemy import Date, DateTime, func, select, text
+from sqlalchemy import Date, DateTime, Integer, func, select, text
 
 from gonio.errors import GonioError
 from gonio.records import blobs
@@ -149,42 +149,72 @@ def _rows(doc, path) -> dict:
     return out
 
 
-def restore(store, path: str | os.PathLike) -> dict:
-    """Restore the archive at ``path`` into the (empty) database of ``store``; returns the
-    counts restored. Everything is checked before anything is written: records.json's
-    tables, rows and references, every file listed in ``blobs`` present in the archive
-    (complete) and matching its SHA-256 (intact), no file the records do not list."""
-    path = Path(path)
+def _open(source, path: Path) -> zipfile.ZipFile:
     try:
-        zf = zipfile.ZipFile(path)
+        return zipfile.ZipFile(source)
     except (OSError, zipfile.BadZipFile) as exc:
         raise GonioError(f"not a gonio backup archive ({exc})", file=path) from None
-    with zf:
+
+
+def _checked(zf: zipfile.ZipFile, path: Path) -> tuple[dict, set, dict]:
+    """An open archive checked whole, nothing written: (rows per table, the stored files'
+    digests, records.json). records.json's tables, rows and references
+    (:func:`_rows`); every file listed in ``blobs`` present in the archive (complete) and
+    matching its SHA-256 (intact); no file the records do not list."""
+    try:
+        doc = json.loads(zf.read("records.json"))
+    except (KeyError, ValueError, RecursionError) as exc:   # RecursionError: too deep
+        raise GonioError(f"no readable records.json ({str(exc)[:120] or 'nested too deeply'})",
+                         file=path) from None
+    rows = _rows(doc, path)
+    names = {n[len("blobs/"):] for n in zf.namelist() if n.startswith("blobs/")}
+    listed = {r["sha256"] for r in rows["blobs"]}
+    missing, unlisted = sorted(listed - names), sorted(names - listed)
+    if missing:
+        raise GonioError(f"incomplete: {len(missing)} stored file(s) of the records are "
+                         f"not in the archive, first {str(missing[0])[:64]}: nothing "
+                         "restored", file=path)
+    if unlisted:
+        raise GonioError(f"{len(unlisted)} file(s) in the archive are not in its records, "
+                         f"first {unlisted[0][:64]}: nothing restored", file=path)
+    for sha in sorted(names):                         # every file checked first
         try:
-            doc = json.loads(zf.read("records.json"))
-        except (KeyError, ValueError, RecursionError) as exc:   # RecursionError: too deep
-            raise GonioError(f"no readable records.json ({str(exc)[:120] or 'nested too deeply'})",
+            data = zf.read(f"blobs/{sha}")
+        except (zipfile.BadZipFile, OSError) as exc:
+            raise GonioError(f"stored file {sha[:12]}… unreadable ({exc})",
                              file=path) from None
-        rows = _rows(doc, path)
-        names = {n[len("blobs/"):] for n in zf.namelist() if n.startswith("blobs/")}
-        listed = {r["sha256"] for r in rows["blobs"]}
-        missing, unlisted = sorted(listed - names), sorted(names - listed)
-        if missing:
-            raise GonioError(f"incomplete: {len(missing)} stored file(s) of the records are "
-                             f"not in the archive, first {str(missing[0])[:64]}: nothing "
-                             "restored", file=path)
-        if unlisted:
-            raise GonioError(f"{len(unlisted)} file(s) in the archive are not in its records, "
-                             f"first {unlisted[0][:64]}: nothing restored", file=path)
-        for sha in sorted(names):                         # every file checked first
-            try:
-                data = zf.read(f"blobs/{sha}")
-            except (zipfile.BadZipFile, OSError) as exc:
-                raise GonioError(f"stored file {sha[:12]}… unreadable ({exc})",
-                                 file=path) from None
-            if hashlib.sha256(data).hexdigest() != sha:
-                raise GonioError(f"stored file {sha[:12]}… does not match its SHA-256",
-                                 file=path)
+        if hashlib.sha256(data).hexdigest() != sha:
+            raise GonioError(f"stored file {sha[:12]}… does not match its SHA-256",
+                             file=path)
+    return rows, names, doc
+
+
+def check_archive(path: str | os.PathLike, stream=None) -> dict:
+    """Check a backup archive as :func:`restore` does before it writes anything, and write
+    nothing (``stream``: the archive as an open binary file, ``path`` then only its name):
+    a GonioError names the first problem; else ``{"gonio_version", "rows": {table:
+    count}, "files": count, "calibrations", "certificates", "newest": the latest time
+    recorded in it (the audit trail's last event, UTC, "YYYY-MM-DD HH:MM") or ""}``."""
+    path = Path(path)
+    with _open(path if stream is None else stream, path) as zf:
+        rows, names, doc = _checked(zf, path)
+    stamps = [r["at"] for r in rows.get("audit_events", []) if r.get("at") is not None]
+    return {"gonio_version": str(doc.get("gonio_version", ""))[:40],
+            "rows": {k: len(v) for k, v in rows.items()}, "files": len(names),
+            "calibrations": len(rows.get("calibrations", [])),
+            "certificates": len(rows.get("certificates", [])),
+            "newest": max(stamps).isoformat(sep=" ", timespec="minutes") if stamps else ""}
+
+
+def restore(store, path: str | os.PathLike) -> dict:
+    """Restore the archive at ``path`` into the (empty) database of ``store``; returns the
+    counts restored. Everything is checked before anything is written (:func:`_checked`:
+    records.json's tables, rows and references, every file listed in ``blobs`` present in
+    the archive (complete) and matching its SHA-256 (intact), no file the records do not
+    list)."""
+    path = Path(path)
+    with _open(path, path) as zf:
+        rows, names, _ = _checked(zf, path)
         with store.session() as s:
             if s.scalar(select(func.count()).select_from(User)):
                 raise GonioError("the database holds records already; restore into an "
@@ -209,7 +239,8 @@ def restore(store, path: str | os.PathLike) -> dict:
         if store.engine.dialect.name == "postgresql":
             for table in _tables():
                 pk = list(table.primary_key.columns)
-                if [c.name for c in pk] == ["id"]:
+                # an integer id has a sequence (a web session's text id has none)
+                if [c.name for c in pk] == ["id"] and isinstance(pk[0].type, Integer):
                     s.execute(text(f"SELECT setval(pg_get_serial_sequence('{table.name}', "
                                    f"'{pk[0].name}'), COALESCE((SELECT MAX({pk[0].name}) "
                                    f"FROM {table.name}), 0) + 1, false)"))

@@ -12,7 +12,9 @@ TOML file the pipeline reads, so the certificate is validated exactly as on the 
 
 from __future__ import annotations
 
+import contextlib
 import json
+import tempfile
 from pathlib import Path
 
 from gonio.atomic import write_text
@@ -30,6 +32,19 @@ def readings_suffix(head: bytes) -> str:
     ('.parquet', '.csv')
     """
     return ".parquet" if head[:4] == PARQUET_MAGIC else ".csv"
+
+
+@contextlib.contextmanager
+def readings_file(src: str | Path):
+    """A stored readings file ``src`` under the name the pipeline reads it by
+    (``readings`` + :func:`readings_suffix` of its content) in a temporary folder, for as
+    long as the ``with`` block runs (a link: nothing is copied)."""
+    with open(src, "rb") as fh:
+        suffix = readings_suffix(fh.read(4))
+    with tempfile.TemporaryDirectory(prefix="gonio-readings-") as tmp:
+        path = Path(tmp) / ("readings" + suffix)
+        path.symlink_to(Path(src).resolve())
+        yield path
 
 
 def _toml_value(v) -> str:

@@ -155,6 +155,9 @@ class Calibration(Base):
     lab_name: Mapped[str] = mapped_column(String(255), default="")
     temperature_c: Mapped[float | None] = mapped_column(Float, nullable=True)
     humidity_pct: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: where the environment came from: "" entered by a person, "readings" taken from the
+    #: readings file's metadata (and stated so on the page and the certificate)
+    environment_from: Mapped[str] = mapped_column(String(16), default="", server_default="")
     place: Mapped[str] = mapped_column(String(200), default="")
     received_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
     performed_on: Mapped[_dt.date] = mapped_column(Date, index=True)

@@ -71,7 +71,10 @@ def calibrations(store, page: int = 1, size: int = 50, status: str = ""):
 
 def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows; ``place`` is the place of calibration as the
-    certificate states it (the one entered, else the laboratory's)."""
+    certificate states it (the one entered, else the laboratory's); ``missing``: what it
+    lacks for its review (:func:`gonio.records.services.missing_for_review`) while
+    ``attachable`` (standards and environment may still be attached; ``all_standards`` to
+    choose from)."""
     from gonio.errors import GonioError
     from gonio.records.services import calibration, seal, settings
 
@@ -90,13 +93,19 @@ def calibration_page(store, cal_id: int) -> dict | None:
                          .where(CalibrationStandard.calibration_id == cal_id)).all()
         certs = s.scalars(select(Certificate).where(Certificate.calibration_id == cal_id)
                           .order_by(Certificate.id)).all()
+    from gonio.records.services import ATTACHABLE, missing_for_review
+
+    with store.session() as s:
+        missing = missing_for_review(s, cal) if cal.status in ATTACHABLE else []
     try:
         sealed, broken = seal(store, cal_id), ""
     except GonioError as exc:                 # no result yet, or one that no longer matches
         sealed, broken = "", str(exc) if cal.results_sha256 else ""
     return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
             "seal": sealed, "seal_error": broken,
-            "place": cal.place or settings(store)["lab_place"],
+            "place": cal.place or settings(store)["lab_place"], "missing": missing,
+            "attachable": cal.status in ATTACHABLE,
+            "all_standards": standards(store) if cal.status in ATTACHABLE else [],
             "stated": stated_items(store, cal.results_sha256) if sealed else {}}
 
 

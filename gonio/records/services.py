@@ -330,7 +330,7 @@ def check_limits(limits) -> list[dict]:
 def register_instrument(store, actor: User, *, customer_id: int, serial: str, spec_key: str,
                         kind: str = "", manufacturer: str = "", model: str = "",
                         interval_months=None, limits=()) -> Instrument:
-    """A new instrument of a customer (technician)."""
+    """A new instrument of a customer in use (technician)."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -344,8 +344,12 @@ def register_instrument(store, actor: User, *, customer_id: int, serial: str, sp
                       limits_json=json.dumps(check_limits(list(limits) if not isinstance(
                           limits, str) else limits)))
     with store.writing() as s:
-        if s.get(Customer, inst.customer_id) is None:
+        cust = s.get(Customer, inst.customer_id)
+        if cust is None:
             raise GonioError("no such customer", key="customer")
+        if cust.retired_on is not None:
+            raise GonioError(f"customer {cust.name} was retired on {cust.retired_on}",
+                             key="customer")
         if s.scalar(select(Instrument).where(Instrument.manufacturer == inst.manufacturer,
                                              Instrument.model == inst.model,
                                              Instrument.serial == inst.serial)):
@@ -544,6 +548,32 @@ def lab_file(store, sha256: str, name: str, spec_key: str) -> dict:
             "specification_limits": lab["specification_limits"]}
 
 
+def submission_fields(performed_on, received_on, standard_ids, temperature_c, humidity_pct):
+    """The submission checks of a calibration's own fields, which every path that creates
+    one passes (:func:`create_calibration`): the dates plausible, at least one standard
+    (ISO/IEC 17025 6.5: the result's traceability), the environment entered (7.8.4.1 a);
+    returns (day, received, standard ids, temperature, humidity).
+
+    >>> submission_fields("2026-01-05", "", [], 20, 45)
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key standards: tick the reference standard(s) used: a calibration names at least one registered standard (its traceability)
+    """
+    day = date_value(performed_on, "performed_on") or _dt.date.today()
+    received = date_value(received_on, "received_on")
+    plausible_dates(day, received)
+    ids = sorted({int(i) for i in standard_ids})
+    if not ids:
+        raise GonioError("tick the reference standard(s) used: a calibration names at least "
+                         "one registered standard (its traceability)", key="standards")
+    temp = number_value(temperature_c, "temperature_c", -50, 100)
+    hum = number_value(humidity_pct, "humidity_pct", 0, 100)
+    for value, what in ((temp, "room temperature (°C)"), (hum, "relative humidity (%)")):
+        if value is None:
+            raise GonioError(f"enter the {what} of the calibration", key="environment")
+    return day, received, ids, temp, hum
+
+
 def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
                        readings_name: str = "", spec_key: str | None = None,
                        protocol: str | None = None, protocol_sha256: str | None = None,
@@ -551,20 +581,21 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        standard_ids: Iterable[int] = (), temperature_c=None,
                        humidity_pct=None, performed_on=None, received_on=None,
                        place: str = "", reuse_note: dict | None = None) -> Calibration:
-    """A new calibration, queued for the worker (technician). Standards past their due
-    date on the day of the calibration are refused (ISO/IEC 17025 6.4.7). ``lab_sha256``:
-    a stored laboratory file whose decision rule and limits decide this calibration,
-    validated here (:func:`lab_file`) before anything is queued. The submission checks
-    (a standard, the environment, the readings against the instrument, readings used
-    before) are :func:`gonio.records.submission.submit_calibration`'s, which the web form
+    """A new calibration, queued for the worker (technician), after the submission checks
+    of its fields (:func:`submission_fields`: plausible dates, at least one standard, the
+    environment); standards past their due date on the day of the calibration are refused
+    (ISO/IEC 17025 6.4.7). ``lab_sha256``: a stored laboratory file whose decision rule
+    and limits decide this calibration, validated here (:func:`lab_file`) before anything
+    is queued. The checks of the readings against the instrument and of readings used
+    before are :func:`gonio.records.submission.submit_calibration`'s, which the web form
     calls; ``reuse_note``: its record of readings used again (who, why, used by which
     calibrations), audited with the creation."""
     from gonio.specs import get
 
     require(actor, "technician")
-    day = date_value(performed_on, "performed_on") or _dt.date.today()
-    received = date_value(received_on, "received_on")
-    plausible_dates(day, received)
+    day, received, ids, temp, hum = submission_fields(performed_on, received_on,
+                                                      standard_ids, temperature_c,
+                                                      humidity_pct)
     with store.writing() as s:
         inst = s.get(Instrument, int(instrument_id))
         if inst is None:
@@ -586,31 +617,186 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           lab_sha256=lab_sha256,
                           lab_name=text(lab_name, "laboratory file name", max_len=255)
                           if lab_sha256 else "",
-                          temperature_c=number_value(temperature_c, "temperature_c", -50, 100),
-                          humidity_pct=number_value(humidity_pct, "humidity_pct", 0, 100),
+                          temperature_c=temp, humidity_pct=hum, environment_from="",
                           place=text(place, "place"), performed_on=day,
                           received_on=received, status="queued", progress="waiting for a worker",
                           created_by_id=actor.id)
         s.add(cal)
         s.flush()
-        for sid in sorted(set(int(i) for i in standard_ids)):
-            st = s.get(Standard, sid)
-            if st is None:
-                raise GonioError("no such standard", key="standards")
-            if st.retired_on is not None:
-                raise GonioError(f"standard {st.identifier} was retired on {st.retired_on}",
-                                 key="standards")
-            if st.due_on < day:
-                raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
-                                 f"the calibration date {day}): calibrate it first",
-                                 key="standards")
-            s.add(CalibrationStandard(calibration_id=cal.id, standard_id=sid,
-                                      due_on_at_use=st.due_on))
+        _use_standards(s, cal, ids)
         audit(s, actor, "create", "calibration", cal.id, None, state(cal))
         if reuse_note:
             audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
         s.commit()
     return cal
+
+
+def _use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str]:
+    """The standards ``ids`` as the ones used by ``cal`` (those it had are replaced); each
+    registered, not retired on or before the calibration date and not past its due date on
+    it (ISO/IEC 17025 6.4.7); returns their identifiers."""
+    day = cal.performed_on
+    s.query(CalibrationStandard).filter(CalibrationStandard.calibration_id == cal.id).delete()
+    names = []
+    for sid in sorted(set(int(i) for i in ids)):
+        st = s.get(Standard, sid)
+        if st is None:
+            raise GonioError("no such standard", key="standards")
+        if st.retired_on is not None and st.retired_on <= day:
+            raise GonioError(f"standard {st.identifier} was retired on {st.retired_on} (the "
+                             f"calibration date is {day})", key="standards")
+        if st.due_on < day:
+            raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
+                             f"the calibration date {day}): calibrate it first",
+                             key="standards")
+        s.add(CalibrationStandard(calibration_id=cal.id, standard_id=sid,
+                                  due_on_at_use=st.due_on))
+        names.append(st.identifier)
+    return names
+
+
+#: The states in which the standards and the environment of a calibration may still be
+#: attached: not yet approved (a reviewed one goes back to its review), or an amendment not
+#: yet approved.
+ATTACHABLE = ("queued", "computed", "failed", "reviewed", "amending")
+
+
+def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
+                      temperature_c=None, humidity_pct=None,
+                      environment_from_readings: bool = False) -> Calibration:
+    """Attach the reference standards used and the environment to a calibration that is not
+    yet approved (:data:`ATTACHABLE`; a reviewed one goes back to its review), or to an
+    amendment not yet approved, e.g. one put in with ``gonio db import`` or ``gonio
+    calibrate --record``, which carries neither; technician or reviewer, audited
+    (``attach``, the record and its standards before and after).
+
+    ``standard_ids``: the registered standards used (they replace those recorded), each
+    valid on the calibration date (:func:`_use_standards`); None or none leaves them. The
+    environment: ``temperature_c`` and ``humidity_pct`` as entered (compared with what the
+    readings state, as at upload), or ``environment_from_readings``: both taken from the
+    readings file's metadata (``# temperature_c`` or ``# room_temperature_c``, and
+    ``# humidity_pct``), stated so on the page and the certificate; neither leaves it.
+    Review and approval require both (:func:`missing_for_review`)."""
+    if not (actor is not None and actor.active and (actor.has("technician")
+                                                   or actor.has("reviewer"))):
+        raise GonioError("this needs the technician or reviewer role", key="role")
+    entered = [v for v in (temperature_c, humidity_pct)
+               if v is not None and not (isinstance(v, str) and not v.strip())]
+    if environment_from_readings and entered:
+        raise GonioError("enter the environment or take it from the readings, not both",
+                         key="environment")
+    temp = number_value(temperature_c, "temperature_c", -50, 100)
+    hum = number_value(humidity_pct, "humidity_pct", 0, 100)
+    if entered and (temp is None or hum is None):
+        raise GonioError("enter both the room temperature (°C) and the relative humidity "
+                         "(%)", key="environment")
+    if standard_ids is not None:
+        standard_ids = list(standard_ids) or None      # none ticked: those named stay
+    cal = calibration(store, cal_id)
+    env = _environment_of(store, cal, temp, hum, environment_from_readings)
+    if standard_ids is None and env is None:
+        raise GonioError("nothing to attach: name the standard(s) used or the environment",
+                         key="attach")
+    with store.writing() as s:
+        cal = s.get(Calibration, int(cal_id), with_for_update=True)
+        if cal.status not in ATTACHABLE:
+            raise GonioError(f"cannot attach standards or the environment to a calibration "
+                             f"that is {cal.status} (only before its approval, or to an "
+                             "amendment before its approval)", key="status")
+        before = state(cal)
+        before["standards"] = standard_names(s, cal.id)
+        if standard_ids is not None:
+            _use_standards(s, cal, standard_ids)
+        if env is not None:
+            cal.temperature_c, cal.humidity_pct, cal.environment_from = env
+        if cal.status == "reviewed":     # what was reviewed changed: reviewed again
+            cal.status, cal.reviewed_by_id, cal.reviewed_at = "computed", None, None
+            cal.reviewed_seal, cal.review_comment = "", ""
+        s.flush()
+        after = dict(state(cal), standards=standard_names(s, cal.id))
+        audit(s, actor, "attach", "calibration", cal.id, before, after)
+        s.commit()
+    return calibration(store, cal_id)
+
+
+def attach_by_identifiers(store, actor: User, cal_id: int, *,
+                          standard_identifiers: Iterable[str] | None = None,
+                          **environment) -> Calibration:
+    """:func:`attach_conditions` with the standards named by their identifiers (the command
+    line's ``--standard``); an identifier not registered is a GonioError naming it."""
+    ids = None
+    if standard_identifiers is not None:
+        with store.session() as s:
+            ids = []
+            for ident in standard_identifiers:
+                sid = s.scalar(select(Standard.id).where(Standard.identifier == str(ident)))
+                if sid is None:
+                    raise GonioError(f"no registered standard {str(ident)[:80]!r}",
+                                     key="--standard")
+                ids.append(sid)
+    return attach_conditions(store, actor, cal_id, standard_ids=ids, **environment)
+
+
+def standard_names(s: Session, cal_id: int) -> list[str]:
+    """The identifiers of the standards a calibration names, sorted."""
+    return list(s.scalars(select(Standard.identifier).join(
+        CalibrationStandard, CalibrationStandard.standard_id == Standard.id)
+        .where(CalibrationStandard.calibration_id == cal_id).order_by(Standard.identifier)))
+
+
+def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool):
+    """(temperature, humidity, environment_from) to record, or None: taken from the readings'
+    metadata, or as entered after comparing it with what the readings state."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.compute import readings_file
+
+    if not from_readings and temp is None:
+        return None
+    src = blobs.blob_path(store.blob_root, cal.readings_sha256)
+    if not src.is_file():
+        raise GonioError("the calibration's readings are not in the store", key="readings")
+    # a bench calibration's readings not acquired yet (its request): no metadata lines
+    with readings_file(src) as path:
+        md = readings_metadata(path)
+    if not from_readings:
+        from gonio.pipeline.identity import contradictions
+        found = contradictions(md, {"environment": {"temperature_c": temp,
+                                                    "humidity_pct": hum}})
+        if found:
+            c = found[0]
+            raise GonioError(f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
+                             f"entered {c['lab']}: enter the conditions of these readings",
+                             key="environment")
+        return temp, hum, ""
+    got = []
+    for keys, what, lo, hi in ((("temperature_c", "room_temperature_c"), "temperature", -50,
+                                100), (("humidity_pct",), "humidity", 0, 100)):
+        v = next((md[k] for k in keys if str(md.get(k, "")).strip()), None)
+        if v is None:
+            raise GonioError(f"the readings state no {what} (# {keys[0]}): enter the "
+                             "environment", key="environment")
+        got.append(number_value(str(v), f"readings' # {keys[0]}", lo, hi))
+    return got[0], got[1], "readings"
+
+
+def missing_for_review(s: Session, cal: Calibration) -> list[str]:
+    """What a calibration lacks to be reviewed or approved (empty: nothing): a registered
+    standard valid on its date (not retired on or before it, not past its due date on it;
+    ISO/IEC 17025 6.4.7, 6.5) and the environment (7.8.4.1 a), each as the words of the
+    one line that refuses it."""
+    day = cal.performed_on
+    rows = s.execute(select(Standard, CalibrationStandard.due_on_at_use).join(
+        CalibrationStandard, CalibrationStandard.standard_id == Standard.id)
+        .where(CalibrationStandard.calibration_id == cal.id)).all()
+    valid = [st for st, due in rows if due >= day
+             and (st.retired_on is None or st.retired_on > day)]
+    out = []
+    if not valid:
+        out.append(f"registered standard valid on {day}" + (
+            f" ({', '.join(st.identifier for st, _ in rows)} not)" if rows else ""))
+    if cal.temperature_c is None or cal.humidity_pct is None:
+        out.append("environment (temperature, humidity)")
+    return out
 
 
 def plausible_dates(performed: _dt.date, received: _dt.date | None,
@@ -643,7 +829,19 @@ def _check(s: Session, actor: User, cal_id: int, action: str,
         raise GonioError(f"cannot {action} a calibration that is {cal.status}", key="status")
     if action in ("review", "approve", "amend"):
         check_duties(s, cal, actor, action)
+    if action in ("review", "approve"):
+        _complete(s, cal, action)
     return cal
+
+
+def _complete(s: Session, cal: Calibration, action: str) -> None:
+    """The submission checks at review and approval, on every path: a GonioError naming
+    what is missing (:func:`missing_for_review`) and how to attach it."""
+    missing = missing_for_review(s, cal)
+    if missing:
+        raise GonioError(f"cannot {action} calibration {cal.id}: it names no "
+                         + " and no ".join(missing) + "; attach them first (the calibration "
+                         "page, or gonio db attach)", key="submission")
 
 
 def min_people(s: Session) -> int:
@@ -984,7 +1182,8 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
                            "accuracy": st.accuracy, "certificate": st.certificate,
                            "traceability": st.traceability} for st in stds],
             "environment": {"temperature_c": cal.temperature_c,
-                            "humidity_pct": cal.humidity_pct},
+                            "humidity_pct": cal.humidity_pct,
+                            "source": cal.environment_from or "entered"},
             "signatory": {"calibrated_by": who["created_by"], "checked_by": who["reviewed_by"],
                           "approved_by": who["approved_by"] if final
                           else "(not approved: draft for review)"},

@@ -3,8 +3,9 @@ what the web form calls, so that a calibration that cannot give a certificate fi
 accredited work is refused at upload, in the form's own words, not by a failed run later.
 
 :func:`submit_calibration` checks, in this order, then creates the calibration
-(:func:`gonio.records.services.create_calibration`, which checks the dates, the instrument
-and each standard's due date on the day of the calibration):
+(:func:`gonio.records.services.create_calibration`, which checks the dates, a standard, the
+environment, the instrument and each standard's due date on the day of the calibration, on
+every path: the web form, a bench, the Python API):
 
 * at least one registered reference standard is named (ISO/IEC 17025 6.5: the result's
   traceability; a certificate naming none states nothing it is traceable to);
@@ -27,9 +28,6 @@ and each standard's due date on the day of the calibration):
 
 from __future__ import annotations
 
-import datetime as _dt
-import tempfile
-from pathlib import Path
 from typing import Iterable
 
 from sqlalchemy import select
@@ -52,7 +50,7 @@ def readings_facts(store, sha256: str) -> dict:
     readings file is a GonioError (key ``readings``) saying what it looks like."""
     from gonio.formats.provenance import readings_metadata
     from gonio.pipeline.dispatch import readings_spec
-    from gonio.records.compute import readings_suffix
+    from gonio.records.compute import readings_file, readings_suffix
     from gonio.records.blobs import blob_path
 
     src = blob_path(store.blob_root, sha256)
@@ -63,9 +61,7 @@ def readings_facts(store, sha256: str) -> dict:
     suffix = readings_suffix(head)
     if suffix == ".csv":
         _looks_like_csv(head)
-    with tempfile.TemporaryDirectory(prefix="gonio-upload-") as tmp:
-        path = Path(tmp) / ("readings" + suffix)
-        path.symlink_to(src)
+    with readings_file(src) as path:
         try:
             md = readings_metadata(path)
             spec = readings_spec(path)
@@ -154,22 +150,9 @@ def reused_by(store, sha256: str) -> list[dict]:
     return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3]} for r in rows]
 
 
-def check_form(performed_on, received_on, standard_ids, temperature_c, humidity_pct):
-    """The form's own fields: the dates, at least one standard, the environment entered;
-    (day, received, standard ids, temperature, humidity)."""
-    day = services.date_value(performed_on, "performed_on") or _dt.date.today()
-    received = services.date_value(received_on, "received_on")
-    services.plausible_dates(day, received)
-    ids = sorted({int(i) for i in standard_ids})
-    if not ids:
-        raise GonioError("tick the reference standard(s) used: a calibration names at least "
-                         "one registered standard (its traceability)", key="standards")
-    temp = services.number_value(temperature_c, "temperature_c", -50, 100)
-    hum = services.number_value(humidity_pct, "humidity_pct", 0, 100)
-    for value, what in ((temp, "room temperature (°C)"), (hum, "relative humidity (%)")):
-        if value is None:
-            raise GonioError(f"enter the {what} of the calibration", key="environment")
-    return day, received, ids, temp, hum
+#: the form's own fields: the dates, at least one standard, the environment entered; the
+#: same checks :func:`gonio.records.services.create_calibration` makes on every path
+check_form = services.submission_fields
 
 
 def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,

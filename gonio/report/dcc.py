@@ -396,7 +396,7 @@ def record_statements(sts, lab: dict | None, L: dict) -> None:
     rec = record_of(lab)
     made = []
     if is_draft(lab):
-        made.append(("record-draft", L["draft"], L["draft"] + "."))
+        made.append(("record-draft", L["draft_title"], L["draft"] + "."))
     if rec.get("replaces"):
         made.append(("record-amendment", L["amendment_title"],
                      L["amendment"].format(old=rec["replaces"], reason=rec.get(

@@ -108,14 +108,18 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str) -> list
 
 
 def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
-    """Temperature and humidity: the lab file's, else the readings file's."""
+    """Temperature and humidity: the lab file's, else the readings file's. With a lab file,
+    a value taken from the readings (none in ``[environment]``, or its ``source =
+    "readings"``) is stated as such."""
     ns = L["not_stated"]
     env = (lab or {}).get("environment") or {}
+    tagged = L["paren"].format(x=L["from_readings"]) if lab is not None else ""
+    said = tagged if env.get("source") == "readings" else ""
     t, h = env.get("temperature_c"), env.get("humidity_pct")
     t_md = md.get("temperature_c") or md.get("room_temperature_c")
-    t_txt = f"{t:g} °C" if t is not None else (f"{t_md} °C" if t_md else ns)
-    h_txt = f"{h:g} %" if h is not None else (f"{md['humidity_pct']} %"
-                                             if md.get("humidity_pct") else ns)
+    t_txt = f"{t:g} °C{said}" if t is not None else (f"{t_md} °C{tagged}" if t_md else ns)
+    h_txt = f"{h:g} %{said}" if h is not None else (f"{md['humidity_pct']} %{tagged}"
+                                                   if md.get("humidity_pct") else ns)
     return [(L["temperature"], t_txt), (L["humidity"], h_txt)]
 
 

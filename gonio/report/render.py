@@ -144,6 +144,16 @@ def figure_captions(blocks, L: dict) -> dict[str, str]:
     return out
 
 
+def title_of(content: dict, L: dict) -> str:
+    """The title at the head of a certificate: "Calibration Certificate", or for a draft
+    rendered for review (``content["draft"]``) one that says it is none.
+
+    >>> title_of({"draft": True}, {"title": "Calibration Certificate", "draft_title": "Draft"})
+    'Draft'
+    """
+    return L["draft_title"] if content.get("draft") else L["title"]
+
+
 def _block_html(b: Block, svgs: dict[str, str], caps: dict[str, str]) -> str:
     """One block as HTML; a "keep" block (its data: blocks) is kept on one printed page."""
     if b.kind == "keep":
@@ -153,8 +163,8 @@ def _block_html(b: Block, svgs: dict[str, str], caps: dict[str, str]) -> str:
         return f"<h2>{html.escape(b.data)}</h2>"
     if b.kind == "sub":
         return f"<h3>{html.escape(b.data)}</h3>"
-    if b.kind == "notice":
-        return f'<p class="notice">{html.escape(b.data)}</p>'
+    if b.kind == "notice":           # its line breaks kept (an amendment's reason)
+        return '<p class="notice">' + html.escape(b.data).replace("\n", "<br>") + "</p>"
     if b.kind == "p":
         cls = ' class="u" id="U-line"' if b.extra == "U" else ""
         return f"<p{cls}>{_h(b.data)}</p>"
@@ -193,7 +203,7 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
     css = _CSS % {"font": ff, "pageword": pageword, "lab": css_string(content["lab_name"]),
                   "cid": css_string(f"{L['certificate_no']}{L['colon']}{cid}")}
     out = ["<!DOCTYPE html>", f'<html lang="{"zh-CN" if lang == "zh" else "en"}">', "<head>",
-           '<meta charset="utf-8">', f"<title>{html.escape(L['title'])} {html.escape(cid)}</title>",
+           '<meta charset="utf-8">', f"<title>{html.escape(title_of(content, L))} {html.escape(cid)}</title>",
            f"<style>{css}</style>", "</head>", "<body>"]
     if content["virtual"]:
         out.append(f'<div class="watermark" aria-hidden="true">{html.escape(L["virtual_short"])}</div>')
@@ -204,7 +214,7 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
     out.append(f'<header class="page"><span>{html.escape(content["lab_name"])}</span>'
                f'<span id="cert-id" class="nb">{html.escape(L["certificate_no"] + L["colon"])}'
                f'{html.escape(cid)}</span></header>')
-    out.append(f"<h1>{html.escape(L['title'])}</h1>")
+    out.append(f"<h1>{html.escape(title_of(content, L))}</h1>")
     caps = figure_captions(content["blocks"], L)
     out += [_block_html(b, svgs, caps) for b in content["blocks"]]
     # the end mark, footer and closing banner travel together and stay with the last block,
@@ -493,7 +503,7 @@ def layout_pages(content: dict, L: dict) -> list[list]:
     title_h = 30 * _PT
 
     def title(fig, y):
-        fig.text(0.5, y - 20 * _PT, L["title"], ha="center", va="baseline", fontsize=18,
+        fig.text(0.5, y - 20 * _PT, title_of(content, L), ha="center", va="baseline", fontsize=18,
                  weight="bold")
     lay.put(title_h, title)
 
@@ -645,7 +655,8 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
         pages = layout_pages(content, L)
         n = len(pages)
         with PdfPages(buf, metadata={"CreationDate": None, "ModDate": None,
-                                     "Creator": "gonio", "Title": f"{L['title']} {content['id']}"}
+                                     "Creator": "gonio",
+                                     "Title": f"{title_of(content, L)} {content['id']}"}
                       ) as pdf:
             for p, ops in enumerate(pages, 1):
                 fig = Figure(figsize=A4_IN)

@@ -50,10 +50,29 @@ def clean_text(text, limit: int = MAX_FIELD_CHARS) -> str:
     return s
 
 
+#: The keys whose text keeps its line breaks on a certificate (each line cleaned): an
+#: amendment's reason, printed as it was written.
+KEEP_LINES = frozenset({"amendment_reason"})
+
+
+def clean_lines(text, limit: int = MAX_FIELD_CHARS) -> str:
+    r""":func:`clean_text` of each line of ``text``, its line breaks (LF) kept; at most
+    ``limit`` characters in all.
+
+    >>> clean_lines("address corrected\r\nserial\x07 confirmed")
+    'address corrected\nserial  confirmed'
+    """
+    lines = str(text).replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    out = "\n".join(clean_text(ln, limit) for ln in lines)
+    return out if len(out) <= limit else out[:limit - 1] + "…"
+
+
 def clean_tree(x):
-    """:func:`clean_text` applied to every string (keys too) of nested dicts and lists."""
+    """:func:`clean_text` applied to every string (keys too) of nested dicts and lists; the
+    text of a key in :data:`KEEP_LINES` keeps its line breaks (:func:`clean_lines`)."""
     if isinstance(x, dict):
-        return {clean_text(k, 200) if isinstance(k, str) else k: clean_tree(v)
+        return {clean_text(k, 200) if isinstance(k, str) else k:
+                clean_lines(v) if k in KEEP_LINES and isinstance(v, str) else clean_tree(v)
                 for k, v in x.items()}
     if isinstance(x, list):
         return [clean_tree(v) for v in x]

@@ -7,6 +7,7 @@ import hashlib
 import hmac
 import html
 import re
+from pathlib import Path
 
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
@@ -531,6 +532,19 @@ async def calibration_approve(request: Request, cal_id: int):
         _store(request), u, cal_id, shown_seal=d.get("seal") or None))
 
 
+@router.post("/calibrations/{cal_id}/attach")
+async def calibration_attach(request: Request, cal_id: int):
+    def do(u, d):
+        from_readings = bool(d.get("environment_from_readings"))
+        services.attach_conditions(
+            _store(request), u, cal_id,
+            standard_ids=[_int(v, "standards") for v in d.getlist("standards")],
+            temperature_c=None if from_readings else d.get("temperature_c"),
+            humidity_pct=None if from_readings else d.get("humidity_pct"),
+            environment_from_readings=from_readings)
+    return await _act(request, cal_id, do)
+
+
 @router.post("/calibrations/{cal_id}/void")
 async def calibration_void(request: Request, cal_id: int):
     return await _act(request, cal_id, lambda u, d: services.void(
@@ -718,6 +732,84 @@ def _users_form(request, user, csrf, do):
                       users=queries.users(_store(request)),
                       settings=services.settings(_store(request)))
     return _back("/users")
+
+
+@router.get("/backup")
+def backup_page(request: Request):
+    """Backups (admin): verify the live records, download a backup, verify an archive
+    before restoring it; the restore itself is the command line's (docs/records.md#backup)."""
+    user, csrf = current(request)
+    refused = _may_read(user, "admin")
+    if refused:
+        return refused
+    return render(request, "backup.html", user, csrf)
+
+
+async def _admin_post(request: Request):
+    """An admin's form sent (CSRF checked): (user, csrf, data), else the 403 Response."""
+    user, csrf = current(request)
+    data = await form(request, csrf)
+    return _may_read(user, "admin") or (user, csrf, data)
+
+
+@router.post("/backup/verify")
+async def backup_verify(request: Request):
+    """The live records checked as ``gonio db verify`` checks them."""
+    from gonio.records.backup import verify
+
+    got = await _admin_post(request)
+    if isinstance(got, Response):
+        return got
+    user, csrf, _ = got
+    counts, problems = verify(_store(request))
+    return render(request, "backup.html", user, csrf, live=counts, problems=problems)
+
+
+@router.post("/backup/download")
+async def backup_download(request: Request):
+    """A backup archive of the records now (``gonio db backup``), as a download."""
+    import tempfile
+
+    from gonio.records.backup import backup
+
+    got = await _admin_post(request)
+    if isinstance(got, Response):
+        return got
+    user, csrf, _ = got
+    with tempfile.TemporaryDirectory(prefix="gonio-backup-", dir=_store(request).data) as tmp:
+        path = Path(tmp) / "records.zip"
+        try:
+            backup(_store(request), path)
+        except GonioError as exc:
+            return render(request, "backup.html", user, csrf, status_code=409,
+                          error=str(exc))
+        data = path.read_bytes()
+    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d-%H%M")
+    return Response(data, media_type="application/zip", headers={
+        "Content-Disposition": f'attachment; filename="gonio-records-{stamp}.zip"'})
+
+
+@router.post("/backup/check")
+async def backup_check(request: Request):
+    """A backup archive uploaded and checked as ``gonio db restore`` checks it before it
+    writes anything (complete, intact, every row and reference); nothing is written."""
+    from gonio.records.backup import check_archive
+
+    got = await _admin_post(request)
+    if isinstance(got, Response):
+        return got
+    user, csrf, data = got
+    f = data.get("archive")
+    if f is None or not hasattr(f, "read") or not f.filename:
+        return render(request, "backup.html", user, csrf, status_code=400,
+                      error="choose a backup archive (.zip)")
+    name = clean_name(f.filename)
+    try:
+        checked = check_archive(name, f.file)
+    except GonioError as exc:
+        return render(request, "backup.html", user, csrf, status_code=400, archive=name,
+                      error=str(exc))
+    return render(request, "backup.html", user, csrf, archive=name, checked=checked)
 
 
 @router.post("/settings")

@@ -144,8 +144,8 @@ def people(store):
 def bench_readings(tmp_path_factory):
     """Two readings files of the small optical protocol (seeds 1 and 2) from the virtual
     bench."""
-    from gonio.bench import load_bench, run_session, write_session
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+    from gonio.specs.ogam_draft.protocol import load_protocol
 
     root = tmp_path_factory.mktemp("bench")
     out = []
@@ -175,13 +175,14 @@ class Server:
     def __init__(self):
         self.procs = []
 
-    def start(self, data: Path, workers: int = 2):
+    def start(self, data: Path, workers: int = 2, database: str | None = None):
         import sys
         import urllib.request
 
         port = free_port()
+        url = ["--database", database] if database else []
         proc = subprocess.Popen([sys.executable, "-m", "gonio", "serve", "--data", str(data),
-                                 "--port", str(port), "--workers", str(workers)],
+                                 "--port", str(port), "--workers", str(workers), *url],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                 start_new_session=True)
         self.procs.append(proc)
@@ -215,3 +216,23 @@ def serve():
     yield srv
     for p in srv.procs:
         srv.stop(p)
+
+
+def conditions(store, actor) -> dict:
+    """What every new calibration names (the submission checks of
+    :func:`gonio.records.services.create_calibration`): one registered standard in date
+    (registered on the first call) and the environment, as keyword arguments."""
+    import datetime as dt
+
+    from sqlalchemy import select
+
+    from gonio.records import services
+    from gonio.records.models import Standard
+
+    with store.session() as s:
+        sid = s.scalar(select(Standard.id).where(Standard.identifier == "ENV-STD-1"))
+    if sid is None:
+        sid = services.add_standard(store, actor, name="reference rotary table",
+                                    identifier="ENV-STD-1",
+                                    due_on=dt.date.today() + dt.timedelta(days=400)).id
+    return {"standard_ids": [sid], "temperature_c": 20.0, "humidity_pct": 45.0}

@@ -186,18 +186,56 @@ def test_draft_watermarked_on_every_page(sqlite_store, computed_folder, bench_re
     assert details["record"] == {"status": "draft"}
     lab = write_lab_toml(details, tmp_path / "lab.toml")
     stored = services.file_bytes(sqlite_store, cal.results_sha256)
-    for lang, mark in (("en", "DRAFT"), ("zh", "草稿")):
+    for lang, mark, title, not_title in (
+            ("en", "DRAFT", "Draft — not a calibration certificate", "Calibration Certificate"),
+            ("zh", "草稿", "草稿 — 非校准证书", "<h1>校准证书")):
         out = tmp_path / lang
         render_folder(stored, out, spec_key=cal.spec_key, lab=lab, lang=lang)
         page = (out / "certificate.html").read_text(encoding="utf-8")
         assert re.search(rf'<div class="watermark draft" id="draft-watermark"[^>]*>{mark}</div>',
                          page)
+        # the draft is not titled as a certificate (page title, heading, PDF title)
+        assert f"<h1>{title}</h1>" in page and f"<title>{title} DRAFT-{cal.id}</title>" in page
+        assert not_title not in page
         pages = pdf_pages((out / "certificate.pdf").read_bytes(), tmp_path)
         # a rotated mark: pdftotext gives its characters apart (and 稿 is on no other page)
         assert len(pages) > 3 and all(all(ch in p for ch in mark) for p in pages), lang
+        assert title in pages[0] and "Calibration Certificate" not in pages[0], lang
     dcc = (tmp_path / "en" / "certificate.dcc.xml").read_bytes()
     validate(dcc_schema, dcc, tmp_path)
-    assert etree.fromstring(dcc).find(".//dcc:statement[@id='record-draft']", NS) is not None
+    said = etree.fromstring(dcc).find(".//dcc:statement[@id='record-draft']", NS)
+    assert said.findtext("dcc:name/dcc:content", None, NS) == \
+        "Draft — not a calibration certificate"
+
+
+def test_multi_line_amendment_reason_keeps_its_lines(sqlite_store, computed_folder,
+                                                     bench_readings, monkeypatch, tmp_path):
+    """An amendment's reason of several lines is printed with its line breaks: the HTML
+    (escaped, each line break a <br>), every PDF line, the DCC's declaration."""
+    from .conftest import make_people
+
+    people = make_people(sqlite_store)
+    cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
+    details = services.lab_details(sqlite_store, cal.id, final=False)
+    details["record"] = {"status": "issued", "seal_sha256": services.seal(sqlite_store, cal.id),
+                         "min_people": 3, "replaces": "GC-2026-0001",
+                         "amendment_reason": "customer's address corrected\n"
+                                             "serial <RLG-0001> confirmed",
+                         "amendment_asked_by": "REV2"}
+    out = tmp_path / "en"
+    render_folder(services.file_bytes(sqlite_store, cal.results_sha256), out,
+                  spec_key=cal.spec_key, lab=write_lab_toml(details, tmp_path / "lab.toml"))
+    page = (out / "certificate.html").read_text(encoding="utf-8")
+    assert ("Reason for the amendment: customer&#x27;s address corrected<br>"
+            "serial &lt;RLG-0001&gt; confirmed</p>") in page
+    first = pdf_pages((out / "certificate.pdf").read_bytes(), tmp_path)[0]
+    lines = [ln.strip() for ln in first.splitlines()]
+    at = next(i for i, ln in enumerate(lines) if ln.endswith("customer's address corrected"))
+    assert lines[at + 1] == "serial <RLG-0001> confirmed"
+    root = etree.fromstring((out / "certificate.dcc.xml").read_bytes())
+    said = "".join(root.find(".//dcc:statement[@id='record-amendment']/dcc:declaration",
+                            NS).itertext())
+    assert said.strip().endswith("customer's address corrected\nserial <RLG-0001> confirmed")
 
 
 def test_issued_record_in_chinese(sqlite_store, computed_folder, bench_readings, monkeypatch,

@@ -16,6 +16,8 @@ from gonio.records import services
 from gonio.records.db import open_store
 from gonio.records.models import Certificate, CertificateCounter
 
+from .conftest import conditions
+
 PASSWORD = "correct horse battery"
 
 
@@ -28,7 +30,8 @@ def prepare(data, readings, protocol):
                                         spec_key="ogam-draft")
     sha, _ = services.store_file(st, open(readings, "rb"))
     psha, _ = services.store_file(st, open(protocol, "rb"))
-    args = dict(instrument_id=inst.id, readings_sha256=sha, protocol_sha256=psha)
+    args = dict(instrument_id=inst.id, readings_sha256=sha, protocol_sha256=psha,
+                **conditions(st, tech))
     return st, tech, rev, args
 
 

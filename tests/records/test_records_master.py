@@ -15,7 +15,7 @@ from gonio.errors import GonioError
 from gonio.records import services
 from gonio.records.models import AuditEvent
 
-from .conftest import make_people
+from .conftest import conditions, make_people
 from .test_records_services import setup_instrument
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 
@@ -51,10 +51,11 @@ def test_standard_recalibrated_and_retired(store):
     sha, _ = services.store_file(store, io.BytesIO(b"x"))
     with pytest.raises(GonioError, match="RT-07 was retired on"):
         services.create_calibration(store, tech, instrument_id=inst.id, readings_sha256=sha,
-                                    standard_ids=[std.id])
+                                    **dict(conditions(store, tech), standard_ids=[std.id]))
     services.update_standard(store, tech, std.id, retire=False)
     assert services.create_calibration(store, tech, instrument_id=inst.id,
-                                       readings_sha256=sha, standard_ids=[std.id])
+                                       readings_sha256=sha,
+                                       **dict(conditions(store, tech), standard_ids=[std.id]))
 
 
 def test_instrument_transferred_edited_and_retired(store):
@@ -77,7 +78,8 @@ def test_instrument_transferred_edited_and_retired(store):
     services.update_instrument(store, tech, inst.id, retire=True)
     sha, _ = services.store_file(store, io.BytesIO(b"x"))
     with pytest.raises(GonioError, match="the instrument was retired on"):
-        services.create_calibration(store, tech, instrument_id=inst.id, readings_sha256=sha)
+        services.create_calibration(store, tech, instrument_id=inst.id, readings_sha256=sha,
+                                    **conditions(store, tech))
     assert [a["customer_id"] for _, a in trail(store, "instrument", inst.id)][0] == other.id
 
 
@@ -106,3 +108,13 @@ def test_customer_edited_on_the_web(app, sqlite_store):  # noqa: F811
     r = tech.post(f"/standards/{std.id}/edit", data={"csrf": csrf_of(tech),
                                                     "due_on": "2028-01-01"})
     assert r.status_code == 303 and "2028-01-01" in tech.get("/standards").text
+
+
+def test_no_instrument_registered_for_a_retired_customer(sqlite_store):
+    people = make_people(sqlite_store)
+    tech = people["tech"]
+    cust = services.add_customer(sqlite_store, tech, "Closed Ltd")
+    services.update_customer(sqlite_store, tech, cust.id, retire=True)
+    with pytest.raises(GonioError, match=f"customer Closed Ltd was retired on {dt.date.today()}"):
+        services.register_instrument(sqlite_store, tech, customer_id=cust.id, serial="S-1",
+                                     spec_key="ogam-draft")

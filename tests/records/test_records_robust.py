@@ -16,7 +16,7 @@ from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.records import services
 
-from .conftest import SMALL_PROTOCOL, make_people
+from .conftest import SMALL_PROTOCOL, conditions, make_people
 from .test_records_services import setup_instrument
 from .test_web_security import app, login  # noqa: F401  (the app fixture)
 
@@ -74,10 +74,12 @@ def test_implausible_dates_refused(sqlite_store):
                      "received on 2025-03-02, after the calibration date 2025-03-01")):
         with pytest.raises(GonioError, match=msg):
             services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
-                                        readings_sha256=sha, **kw)
+                                        readings_sha256=sha, **kw,
+                                        **conditions(sqlite_store, people["tech"]))
     ok = services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
                                      readings_sha256=sha, performed_on="2025-03-02",
-                                     received_on="2025-03-01")
+                                     received_on="2025-03-01",
+                                     **conditions(sqlite_store, people["tech"]))
     assert ok.status == "queued"
 
 
@@ -125,7 +127,8 @@ def test_killed_workers_folder_removed(sqlite_store):
     inst, std = setup_instrument(sqlite_store, people)
     sha, _ = services.store_file(sqlite_store, io.BytesIO(b"readings"))
     cal = services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
-                                      readings_sha256=sha)
+                                      readings_sha256=sha,
+                                      **conditions(sqlite_store, people["tech"]))
     services.claim_next(sqlite_store)
     services.attach(sqlite_store, cal.id, 999_999_999)
     work = sqlite_store.data / "work" / f"cal-{cal.id}-0123456789ab"
@@ -144,7 +147,7 @@ def test_a_failed_run_is_voided_with_a_reason(app, sqlite_store):  # noqa: F811
                                         spec_key="ogam-draft")
     sha, _ = services.store_file(sqlite_store, io.BytesIO(b"not readings"))
     cal = services.create_calibration(sqlite_store, tech, instrument_id=inst.id,
-                                      readings_sha256=sha)
+                                      readings_sha256=sha, **conditions(sqlite_store, tech))
     with pytest.raises(GonioError, match="cannot void a calibration that is queued"):
         services.void(sqlite_store, tech, cal.id, "wrong file")
     services.claim_next(sqlite_store)

@@ -16,7 +16,7 @@ from gonio.errors import GonioError
 from gonio.records import services, worker
 from gonio.records.models import Certificate, ResultItem
 
-from .conftest import PASSWORD
+from .conftest import PASSWORD, conditions
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 from .test_records_services import fake_pipeline, new_calibration, run_worker, setup_instrument
 
@@ -164,6 +164,9 @@ def test_import_without_creator_cannot_be_reviewed(store, people, computed_folde
     assert services.calibration(store, cid2).created_by_id == people["rev"].id
     with pytest.raises(GonioError, match="second person"):
         services.review(store, people["rev"], cid2, accept=True)
+    services.attach_conditions(store, people["rev"], cid2, temperature_c=20, humidity_pct=45,
+                               **{k: v for k, v in conditions(store, people["tech"]).items()
+                                  if k == "standard_ids"})
     services.review(store, people["rev2"], cid2, accept=True)
     with pytest.raises(GonioError, match="may not approve"):
         services.approve(store, people["rev2"], cid2)

@@ -137,7 +137,8 @@ def test_creator_may_not_review_own_calibration(store, people, computed_folder,
     inst, std = setup_instrument(store, people)
     sha, _ = services.store_file(store, open(bench_readings[0], "rb"))
     cal = services.create_calibration(store, people["admin"], instrument_id=inst.id,
-                                      readings_sha256=sha)
+                                      readings_sha256=sha, standard_ids=[std.id],
+                                      temperature_c=20, humidity_pct=45)
     run_worker(store, monkeypatch, computed_folder)
     with pytest.raises(GonioError, match="second person"):
         services.review(store, people["admin"], cal.id, accept=True)
@@ -154,7 +155,8 @@ def test_overdue_standard_refused(store, people, bench_readings):
     sha, _ = services.store_file(store, open(bench_readings[0], "rb"))
     with pytest.raises(GonioError, match="AC-1 was due"):
         services.create_calibration(store, people["tech"], instrument_id=inst.id,
-                                    readings_sha256=sha, standard_ids=[old.id])
+                                    readings_sha256=sha, standard_ids=[old.id],
+                                    temperature_c=20, humidity_pct=45)
     with store.session() as s:
         assert s.scalar(select(func.count()).select_from(Calibration)) == 0
 

@@ -12,7 +12,7 @@ from gonio.errors import GonioError
 from gonio.records import auth, services
 from gonio.records.models import AuditEvent
 
-from .conftest import PASSWORD, make_people
+from .conftest import PASSWORD, conditions, make_people
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 
 
@@ -106,7 +106,8 @@ def test_two_line_customer_address_reaches_the_laboratory_file(sqlite_store, tmp
                                         spec_key="ogam-draft")
     sha, _ = services.store_file(sqlite_store, __import__("io").BytesIO(b"x"))
     cal = services.create_calibration(sqlite_store, tech, instrument_id=inst.id,
-                                      readings_sha256=sha, performed_on=dt.date.today())
+                                      readings_sha256=sha, performed_on=dt.date.today(),
+                                      **conditions(sqlite_store, tech))
     with sqlite_store.writing() as s:                # stored before the normalisation
         s.get(Calibration, cal.id).instrument.customer.address = "1 Road\r\nOld Town"
         s.commit()

@@ -1,8 +1,8 @@
 """Run a protocol's programme on a rotary table and an acquisition module (``gonio acquire``;
 the optical draft's ``acquire`` hook, :func:`acquire_programme`).
 
-:func:`plan_programme` turns a :class:`~gonio.protocol.Protocol` into blocks of readings in
-the order the virtual bench runs them (:mod:`gonio.bench.session`): the zero-stability rest
+:func:`plan_programme` turns a :class:`~gonio.specs.ogam_draft.protocol.Protocol` into blocks of readings in
+the order the virtual bench runs them (:mod:`gonio.specs.ogam_draft.bench.session`): the zero-stability rest
 (7.3), then every series of every rotation item (7.1, 7.4/7.5, 7.6, 7.7), each block in one
 axis orientation and beginning with its static phase when the Earth-rate compensation is
 measured (clause 7 preamble). :func:`check_programme` refuses, before the table moves at
@@ -45,7 +45,7 @@ from gonio.instruments.table import RotaryTable, TableLimits
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.physics.kinematics import trapezoid_duration_s
 from gonio.progress import format_duration, status
-from gonio.protocol import Protocol
+from gonio.specs.ogam_draft.protocol import Protocol
 from gonio.units import S_PER_MIN
 
 #: The readings file's columns, in the contract's order (docs/formats.md#readings-file).
@@ -179,7 +179,7 @@ def _cell(v) -> str:
 
 
 def format_row(step: Step, time_s: float, table_deg: float | None, counts: int) -> str:
-    """One line of readings.csv, as :func:`gonio.formats.readings.write_readings` writes it."""
+    """One line of readings.csv, as :func:`gonio.specs.ogam_draft.readings.write_readings` writes it."""
     return ",".join([step.test, str(step.series), str(step.round), _cell(step.rate_dps),
                      step.orientation, _cell(round(time_s, 9)), _cell(table_deg), str(int(counts)),
                      ""]) + "\n"
@@ -523,7 +523,7 @@ def acquire_programme(protocol, resources: dict, out: str | Path, *, metadata: d
     """The ``acquire`` hook (:func:`gonio.pipeline.acquire.acquire`): :func:`acquire` of the
     protocol (file or built-in name) on the table and the acquisition module of
     ``resources`` (VISA resource strings by role)."""
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.protocol import load_protocol
 
     for role in ("table", "gyro"):
         if not resources.get(role):

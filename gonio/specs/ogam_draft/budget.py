@@ -32,7 +32,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 import pandas as pd
 
-from gonio.budget.extra import ExtraComponent
+from gonio.specs.ogam_draft.budget_extra import ExtraComponent
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, MIN_PER_H
 from gonio.physics.tilt import elliptic_extreme

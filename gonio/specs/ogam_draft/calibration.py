@@ -30,11 +30,11 @@ from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
-from gonio.formats.readings import Readings, metadata_float, read_readings
+from gonio.specs.ogam_draft.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
 from gonio.formats.records import StaticRecord
 from gonio.result import Finding
-from gonio.protocol import Protocol, load_protocol
+from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.result.model import Item, Result, Uncertainty
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
 
@@ -420,7 +420,7 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
     the equipment actually used and wins over the protocol's ``annex_a`` values; a
     difference is a :class:`Conflict`, never silent.
 
-    >>> from gonio.formats.readings import Readings
+    >>> from gonio.specs.ogam_draft.readings import Readings
     >>> import pandas as pd
     >>> s, c = session_settings(Readings(pd.DataFrame(), {"table_mpe_arcsec": "0.2"}),
     ...                         load_protocol("ogam-draft"))
@@ -604,10 +604,10 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
 
 
 def _scale_factor_tilt(results, readings, protocol, budget) -> float:
-    """A_K of :func:`gonio.budget.extra.scale_factor_tilt_bias` for this calibration's 7.1
+    """A_K of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias` for this calibration's 7.1
     rounds, at the budget's tilt bound and the file's latitude (the equator's, the worst
     case, when not stated); 0 when K does not come from 7.1."""
-    from gonio.budget.extra import scale_factor_tilt_bias
+    from gonio.specs.ogam_draft.budget_extra import scale_factor_tilt_bias
 
     if not results.scale_factor.measured or protocol.scale_factor is None:
         return 0.0
@@ -619,10 +619,10 @@ def _scale_factor_tilt(results, readings, protocol, budget) -> float:
 
 
 def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
-    """A_l of :func:`gonio.budget.extra.nonlinearity_tilt_bias` for the largest and smallest
+    """A_l of :func:`gonio.specs.ogam_draft.budget_extra.nonlinearity_tilt_bias` for the largest and smallest
     of this calibration's 7.1 rounds, at the budget's tilt bound and the file's latitude
     (the equator's when not stated, as :func:`_scale_factor_tilt`)."""
-    from gonio.budget.extra import nonlinearity_tilt_bias
+    from gonio.specs.ogam_draft.budget_extra import nonlinearity_tilt_bias
 
     if not results.scale_factor.measured or protocol.scale_factor is None:
         return 0.0
@@ -637,10 +637,10 @@ def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
 
 
 def _round_coupling(results, readings, protocol, budget):
-    """(a_k, b_k) of :func:`gonio.budget.extra.scale_factor_round_coupling` for this
+    """(a_k, b_k) of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling` for this
     calibration's 7.1 rounds in the table's order, at the budget's tilt bound and the file's
     latitude (the equator's when not stated, as :func:`_scale_factor_tilt`); None without 7.1."""
-    from gonio.budget.extra import scale_factor_round_coupling
+    from gonio.specs.ogam_draft.budget_extra import scale_factor_round_coupling
 
     if not results.scale_factor.measured or protocol.scale_factor is None:
         return None
@@ -654,7 +654,7 @@ def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
 
-    from gonio.budget.extra import (ExtraComponent, budget_extra_components,
+    from gonio.specs.ogam_draft.budget_extra import (ExtraComponent, budget_extra_components,
                                     tilt_coupling_coefficients)
     from gonio.physics.earth import earth_rate_split
     from gonio.units import dps_to_arcsec_s
@@ -826,7 +826,7 @@ def _read(path: str | Path, protocol: Protocol):
 
     if sniff_kind(path) == "readings":
         return read_readings(path), None
-    from gonio.formats.readings import format_readings, parse_readings
+    from gonio.specs.ogam_draft.readings import format_readings, parse_readings
     from gonio.specs.ogam_draft.reduce import reduce_stream
 
     stream = StreamFile(path)               # read in blocks: bounded memory
@@ -1022,7 +1022,8 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
     always evaluated and is stated by default. With the continuous
     record of the 7.3 rest analysed (``noise``) and a measured Earth-rate compensation,
     the expected B_s of the same readings from the fitted noise model
-    (:func:`gonio.analysis.noise.readings.expected_zero_stability`) is given beside it,
+    (:func:`gonio.specs.ogam_draft.zero_stability_noise.expected_zero_stability`) is given
+    beside it,
     labelled; ``stated="model"`` states it instead (``items["zero_stability"]`` then
     becomes its budget). It is not the default because the five-term model cannot
     represent a Gauss–Markov bias whose correlation time lies inside the record, and on
@@ -1035,7 +1036,7 @@ def zero_stability_readings(results: CalibrationResults, items: dict, noise,
         raise GonioError(f"zero-stability reading must be one of "
                          f"{', '.join(ZERO_STABILITY_READINGS)}, got {stated!r}",
                          key="zero_stability")
-    from gonio.analysis.noise.readings import expected_zero_stability
+    from gonio.specs.ogam_draft.zero_stability_noise import expected_zero_stability
     from gonio.specs.ogam_draft.item_uncertainty import zero_stability_model_budget
 
     zs = results.zero_stability

@@ -142,10 +142,10 @@ def run_reduce(args) -> int:
     check_output_file(args.out, inputs=[args.stream, args.protocol, args.override],
                       force=args.force, protected=True)
     from gonio.specs.ogam_draft.override import read_override
-    from gonio.formats.readings import write_readings
+    from gonio.specs.ogam_draft.readings import write_readings
     from gonio.formats.streams import StreamFile
     from gonio.progress import status
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.protocol import load_protocol
     from gonio.specs.ogam_draft.reduce import reduce_stream
     from gonio.specs.ogam_draft import SPEC
 
@@ -235,7 +235,7 @@ def add_tilt_estimate(subparsers) -> None:
 def run_tilt_estimate(args) -> int:
     """Read the file, estimate, print."""
     from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
-    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.readings import read_readings
 
     r = read_readings(args.file)
     e = tilt_estimate_from_readings(r, args.scale_factor, args.latitude_deg, args.u_latitude_deg)
@@ -317,8 +317,8 @@ def run_eda(args) -> int:
     """Run ``gonio eda``; returns the exit code."""
     from gonio.specs.ogam_draft.equal_division import equal_division_from_readings
     from gonio.atomic import check_output_files
-    from gonio.formats.readings import read_readings
-    from gonio.protocol import load_protocol
+    from gonio.specs.ogam_draft.readings import read_readings
+    from gonio.specs.ogam_draft.protocol import load_protocol
     from gonio.report.figure_files import FIGURE_FORMATS
 
     if args.plot is not None:      # before the work: place, suffix, data file, another set's

@@ -75,10 +75,10 @@ import scipy.sparse as sp
 
 from gonio.physics.kinematics import trapezoid_duration_s
 from gonio.errors import GonioError
-from gonio.formats.readings import Readings
+from gonio.specs.ogam_draft.readings import Readings
 from gonio.units import ARCSEC_PER_DEG
-from gonio.protocol import load_protocol
-from gonio.protocol.sections import EdaProtocol
+from gonio.specs.ogam_draft.protocol import load_protocol
+from gonio.specs.ogam_draft.protocol import EdaProtocol
 
 #: Tolerance for "a start lies on the step grid", in units of the step (–).
 GRID_TOL_STEPS = 1e-6
@@ -1366,7 +1366,7 @@ def equal_division_from_readings(readings: Readings, *, starts: int | None = Non
 
     The one path from a readings file to an :class:`EdaResult`, used by
     ``gonio eda`` and by the calibration pipeline: the file is read by
-    :func:`gonio.formats.readings.read_readings` (its checks apply), the rows
+    :func:`gonio.specs.ogam_draft.readings.read_readings` (its checks apply), the rows
     indexed by their line numbers so that errors name the line. The tilt × Earth-rate
     coupling is estimated as a nuisance (:func:`analyse_eda_readings`; the file's
     ``table_accel_dps2`` times the moves, its ``latitude_deg`` and ``tilt_bound_deg``

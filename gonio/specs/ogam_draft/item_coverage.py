@@ -59,7 +59,7 @@ ITEM_TRUTHS = {
     "scale_factor_nonlinearity_draft": "as scale_factor_nonlinearity; result the draft's range "
                                        "as measured, U widened for its bias (not stated)",
     "zero_stability": "population: sqrt(E[s(M)^2])/T from the bench's noise parameters "
-                      "(gonio.analysis.noise.readings) and the noise-free readings",
+                      "(gonio.specs.ogam_draft.zero_stability_noise) and the noise-free readings",
     "zero_stability_draft": "as zero_stability; the draft's s(M)/T from the 15 readings",
     "zero_stability_model": "as zero_stability; the noise model's expected B_s (not stated)",
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
@@ -105,14 +105,14 @@ def _consistency_truth(tr: pd.DataFrame, c, col: str, scale: float) -> float:
 def zero_stability_truth(truth: dict, compensation_time_s: float | None) -> float | None:
     """B_s,pop = √E[s²(M)]/T (°/h) of the session's 7.3 readings on the bench it ran on.
 
-    E[s²] (:func:`gonio.analysis.noise.readings.expected_sample_variance`) from the
+    E[s²] (:func:`gonio.specs.ogam_draft.zero_stability_noise.expected_sample_variance`) from the
     bench's true noise parameters in ``truth["bench"]`` — angle random walk, the
     Gauss–Markov bias instability (σ, τ_c), rate random walk and the counter's dithered
     quantisation (1/12 count² per counter sample) — at the readings' times with the
     measured compensation's static phase, plus the spread of the noise-free readings
     (warm-up drift and whatever else the noise-free rerun holds). ``None`` without 7.3.
     """
-    from gonio.analysis.noise.readings import expected_sample_variance
+    from gonio.specs.ogam_draft.zero_stability_noise import expected_sample_variance
     from gonio.units import S_PER_H, deg_sqrt_h_from_dph_sqrt_hz, \
         dph_per_sqrt_h_from_dph_sqrt_hz_per_s
 

@@ -308,7 +308,7 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     triangular ±1 count (two floored counter readings): u = (1/n)√Σ(u_C/θ_i)². The
     Type A scatter also holds the random part of the other two (conservative).
 
-    ``tilt_bias_arcsec_per_deg`` (A_K of :func:`gonio.budget.extra.scale_factor_tilt_bias`,
+    ``tilt_bias_arcsec_per_deg`` (A_K of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`,
     at the tilt bound of A.1): the sensing plane tilted by ψ against the table couples the
     Earth rate into every 7.1 round, a bias of K that is the same in every round (the Type A
     scatter does not see it) and whose sign depends on the tilt's unknown azimuth: the
@@ -387,7 +387,7 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     expected_range_factor`), taken as a rectangular half-width: a range is biased
     upwards by noise, so the true K_l lies below the measured one by up to about that.
 
-    ``tilt_bias_arcsec_per_deg`` (A_l of :func:`gonio.budget.extra.nonlinearity_tilt_bias`
+    ``tilt_bias_arcsec_per_deg`` (A_l of :func:`gonio.specs.ogam_draft.budget_extra.nonlinearity_tilt_bias`
     for the largest and smallest round, at the A.1 tilt bound): the tilt × Earth-rate
     coupling moves each round's K_i by its own amount (it grows with the time from zeroing
     to reading), so it enters K_l where it does not cancel between the two extreme rounds:
@@ -460,7 +460,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     its table angle error at the stop (rectangular ±MPE, A.4.1, independent stops) and its
     count quantisation (triangular ±1 count), and — when ``tilt_round_coupling`` gives the
     rounds' coupling at the A.1 bound ((a_k, b_k), arcsec per degree,
-    :func:`gonio.budget.extra.scale_factor_round_coupling`) — the tilt × Earth-rate coupling,
+    :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling`) — the tilt × Earth-rate coupling,
     the same tilt for every round: relative error (a_k cos α − b_k sin α)/3600 with the
     azimuth α uniform (the bound at an unknown azimuth, as K's ``K_tilt`` line). K_l is the
     range whose expected measured range equals the one measured; u is the spread of the
@@ -646,7 +646,7 @@ def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
 def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUncertainty:
     """u(B_s,pop) of the expected zero stability from the fitted noise model, °/h.
 
-    ``expected`` is a :class:`gonio.analysis.noise.readings.ExpectedZeroStability`:
+    ``expected`` is a :class:`gonio.specs.ogam_draft.zero_stability_noise.ExpectedZeroStability`:
     B_s,pop = √E[s²(M)]/T of the draft's 7.3 readings computed from the five-term fit
     of the instrument's continuous record over the 7.3 rest (the readings' covariance at
     their own times, with the measured compensation's static phase). One Type A line,
@@ -663,7 +663,7 @@ def zero_stability_model_budget(expected, *, k: float | None = None) -> ItemUnce
     √9.979/4200 = 7.52e-4 °/h; u = B_s,pop·u(N)/N = 8.4e-6 °/h, ν = 20 − 1 = 19:
 
     >>> from types import SimpleNamespace as NS
-    >>> from gonio.analysis.noise.readings import expected_zero_stability
+    >>> from gonio.specs.ogam_draft.zero_stability_noise import expected_zero_stability
     >>> fit = NS(Q=0.0, N=0.018, B=0.0, K=0.0, R=0.0, u_Q=0.0, u_N=0.0002, u_B=0.0,
     ...          u_K=0.0, u_R=0.0, n_bootstrap=20, kind="adev",
     ...          uncertainty_method="bootstrap")
@@ -787,7 +787,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     δ·(θ_a − θ_b), normal with ``scale_factor_u_rel`` = u(K)/K (0 when a and b are at the
     same position: the term cancels like the table's). On a mount tilted within the A.1
     bound the coupling of the 7.1 rounds biases K too: ``scale_factor_tilt`` (A_K,
-    arcsec per degree, :func:`gonio.budget.extra.scale_factor_tilt_bias`) gives the
+    arcsec per degree, :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`) gives the
     ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|.
 
     ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, as ``conditions``) adds the

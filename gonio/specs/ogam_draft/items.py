@@ -17,7 +17,7 @@ Contents
 :func:`summary_table`                fixed-width text table (Annex B order)
 ===================================  =============================================
 
-Each function takes the normalised readings DataFrame of :mod:`gonio.formats.readings` and
+Each function takes the normalised readings DataFrame of :mod:`gonio.specs.ogam_draft.readings` and
 returns a :class:`Characteristic` (value, unit, clause, measured, reason, detail
 tables, and which input lines it used). A characteristic whose readings are
 absent is *not measured* (value None, with the reason), never invented.
@@ -37,7 +37,7 @@ import pandas as pd
 
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, S_PER_H  # noqa: F401
-from gonio.formats.readings import Readings, metadata_float
+from gonio.specs.ogam_draft.readings import Readings, metadata_float
 from gonio.specs.ogam_draft.keys import ITEM_KEYS  # noqa: F401  (the seven, in Annex B order)
 
 #: Positions of different conditions (7.6, 7.7) are matched on table_deg rounded to this many decimals.
@@ -241,7 +241,7 @@ def scale_factor(df: pd.DataFrame) -> Characteristic:
     Parameters
     ----------
     df : pandas.DataFrame
-        Normalised readings (:mod:`gonio.formats.readings`); rows of other tests are ignored.
+        Normalised readings (:mod:`gonio.specs.ogam_draft.readings`); rows of other tests are ignored.
 
     Returns
     -------

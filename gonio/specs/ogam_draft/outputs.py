@@ -14,8 +14,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from gonio.atomic import output_dir, output_set, write_text
-from gonio.bench import load_bench, run_session, write_session
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text

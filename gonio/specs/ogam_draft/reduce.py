@@ -46,7 +46,7 @@ import pandas as pd
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_bool, metadata_float
 from gonio.formats.streams import Stream, StreamFile
-from gonio.protocol import Protocol, RotationItem
+from gonio.specs.ogam_draft.protocol import Protocol, RotationItem
 from gonio.reduce.rests import MemorySamples, Rest, check_scale_factor, rests_of
 
 
@@ -59,7 +59,7 @@ class Reduction:
     readings : pandas.DataFrame
         Readings-file columns (docs/formats.md#columns), plus ``t_zero_s`` and ``t_read_s``
         (stream times of the zeroing and reading samples; not written by
-        :func:`gonio.formats.readings.write_readings` unless kept as extra columns).
+        :func:`gonio.specs.ogam_draft.readings.write_readings` unless kept as extra columns).
     unmatched : list of dict
         Rounds that could not be read and rests no round used, each with ``reason``.
     log : list of str
@@ -223,7 +223,7 @@ def _wrap_deg(x: float) -> float:
 def _tilt_estimate(ctx: _Ctx) -> None:
     """The static multi-position test (``[tilt_estimate]``): N rests 360°/N apart.
 
-    As the bench takes it (gonio.bench.session ``tilt_estimate``): at each position the
+    As the bench takes it (gonio.specs.ogam_draft.bench.session ``tilt_estimate``): at each position the
     zeroing sample ``settle_s`` after arrival, the reading ``dwell_s`` later; the counts are
     not Earth-rate compensated (the Earth rate is the signal); ``table_deg`` is the nominal
     position 360°·(i−1)/N. The first position is the first rest long enough from the cursor;
@@ -434,7 +434,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
     --------
     A 30° round at 10 Hz: 5 s static, 1 s move, reading 2 s after arrival.
 
-    >>> from gonio.protocol import parse_protocol
+    >>> from gonio.specs.ogam_draft.protocol import parse_protocol
     >>> p = parse_protocol({"protocol": {"name": "x"}, "session": {"static_s": 5.0},
     ...     "scale_factor": {"rest_s": 3.0, "read_delay_s": 2.0, "return_to_zero": False,
     ...                      "rounds": [{"stop_deg": 30.0}]}})

@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError
-from gonio.formats.readings import Readings, metadata_float
+from gonio.specs.ogam_draft.readings import Readings, metadata_float
 from gonio.result.findings import Finding
 from gonio.units import S_PER_MIN, deg_to_arcsec
 

@@ -11,10 +11,10 @@ The physics is the virtual bench's own, not a copy: the table's motion is a
 :class:`gonio.physics.kinematics.Timeline` built as the commands arrive (a stop mid-move
 replays it with the move cut to its stopping distance, so the motion already integrated is
 unchanged), its positioning error the bench's harmonics and scatter; the instrument is the
-bench's :class:`gonio.bench.instrument.Integrator` on its sample grid, its counter
-:func:`gonio.bench.instrument.counts_from_angle` with the same dither and the
+bench's :class:`gonio.specs.ogam_draft.bench.instrument.Integrator` on its sample grid, its counter
+:func:`gonio.specs.ogam_draft.bench.instrument.counts_from_angle` with the same dither and the
 angle-position error of the angle since the zeroing (draft 4.2), its random streams seeded
-as :func:`gonio.bench.session.run_session` seeds them. Simulated time runs ``speed`` times
+as :func:`gonio.specs.ogam_draft.bench.session.run_session` seeds them. Simulated time runs ``speed`` times
 faster than the wall clock; the instrument is integrated lazily up to the instant of each
 query. The readings therefore agree with ``gonio simulate`` on the same bench within the
 noise (not bit for bit: the timing of a served session is the host's).
@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gonio import __version__
-from gonio.bench.config import Bench
-from gonio.bench.instrument import Integrator, counts_from_angle, geometry, harmonic_sum_arcsec
+from gonio.specs.ogam_draft.bench.config import Bench
+from gonio.specs.ogam_draft.bench.instrument import Integrator, counts_from_angle, geometry, harmonic_sum_arcsec
 from gonio.errors import GonioError
 from gonio.instruments.scpi import (DropLink, Faults, Instrument, ScpiError, ScpiServer, parse_float,
                                    scpi_handler)
@@ -522,7 +522,7 @@ def serve(bench: str, ports: dict, *, speed: float = 1.0, seed: int = 0,
     """The ``serve`` hook (``gonio bench serve``): the bench file or built-in name ``bench``
     served by :func:`serve_bench` on the TCP ports of ``ports`` (by role, ``table`` and
     ``gyro``; 0 or absent: a free one)."""
-    from gonio.bench import load_bench
+    from gonio.specs.ogam_draft.bench import load_bench
 
     return serve_bench(load_bench(bench), ports.get("table") or 0, ports.get("gyro") or 0,
                        speed=speed, seed=seed, range_deg=range_deg, warm_up_s=warm_up_s,

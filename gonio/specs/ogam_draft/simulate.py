@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gonio.bench import load_bench, run_session, write_session
-from gonio.bench.session import plan_session, session_metadata
-from gonio.protocol import load_protocol
+from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+from gonio.specs.ogam_draft.bench.session import plan_session, session_metadata
+from gonio.specs.ogam_draft.protocol import load_protocol
 
 
 def stream_metadata(protocol, bench, seed: int) -> dict:

@@ -12,7 +12,7 @@ Contents
 :func:`validation_protocol`   the draft's protocol restricted to what E and U need (7.1, 7.4/7.5)
 :data:`CASES`, :func:`case_bench`   the default bench and the named stress cases
 :func:`run_trial`             one virtual calibration: E_ij, E_i, truth, U (Annex A)
-:func:`gonio.budget.extra.budget_extra_components` (used here) extra budget lines the annex lacks (off by default)
+:func:`gonio.specs.ogam_draft.budget_extra.budget_extra_components` (used here) extra budget lines the annex lacks (off by default)
 :func:`plan_study`            the study's settings and jobs; :class:`ValidationReport` its report
 :func:`gonio.analysis.coverage.coverage`, :func:`~gonio.analysis.coverage.binomial_u` coverage
                               fraction and its uncertainty
@@ -24,7 +24,7 @@ calibration point i, E_i (mean over the 10 series of 7.4/7.5, as
 Also for each single series E_ij, which is what the Annex A budget (u(r) of a single
 reading) actually describes. A budget that holds covers ≈ 95 % or more.
 
-Truth definitions (all from the bench's noise-free rerun, :func:`gonio.bench.run_session`):
+Truth definitions (all from the bench's noise-free rerun, :func:`gonio.specs.ogam_draft.bench.run_session`):
 
 ``systematic`` (default)
     ``systematic_deviation_arcsec``: noise-free indicated angle through the mount's true
@@ -58,14 +58,14 @@ import pandas as pd
 
 from gonio import __version__
 from gonio.analysis.coverage import coverage, spawn_seed
-from gonio.bench import Bench, TableConfig, load_bench, run_session
-from gonio.bench.config import Harmonic
-from gonio.budget.extra import EXTRA_SYMBOLS, budget_extra_components
+from gonio.specs.ogam_draft.bench import Bench, TableConfig, load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import Harmonic
+from gonio.specs.ogam_draft.budget_extra import EXTRA_SYMBOLS, budget_extra_components
 from gonio.errors import GonioError
-from gonio.formats.readings import Readings
+from gonio.specs.ogam_draft.readings import Readings
 from gonio.formats.toml import read_toml
 from gonio.limits import check
-from gonio.protocol import Protocol, parse_protocol
+from gonio.specs.ogam_draft.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
 from gonio.specs.ogam_draft.budget import annex_a_budget
 from gonio.specs.ogam_draft.calibration import analyse
@@ -216,7 +216,7 @@ def coupling_bias(bench: Bench, protocol: Protocol) -> float:
 def worst_azimuth(bench: Bench, protocol: Protocol, tilt_deg: float) -> float:
     """The tilt azimuth α (°) at which the coupling biases the 7.1 K most: the noise-free
     bias is c₀ + a cos α + b sin α (c₀ the part that does not depend on the tilt's
-    direction, :func:`gonio.budget.extra.scale_factor_tilt_bias` for the sinusoid), so
+    direction, :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias` for the sinusoid), so
     the biases at α = 0°, 90° and 180° give c₀ = (B₀ + B₁₈₀)/2, a = (B₀ − B₁₈₀)/2,
     b = B₉₀ − c₀; |c₀ + R cos(α − φ)| with R = |(a, b)|, φ = atan2(b, a) is largest at
     α = φ where c₀ ≥ 0 and at φ + 180° where c₀ < 0."""
@@ -233,8 +233,8 @@ def k_tilt_trial(bench: Bench, protocol: Protocol, seed: int,
     CSV as ``gonio calibrate`` reads them; K_true is the instrument's own K at the 7.1
     rounds through the mount (:func:`gonio.specs.ogam_draft.item_coverage.scale_factor_truth`),
     never gonio's calibration. The trial of ``scripts/k_tilt_coverage.py``."""
-    from gonio.bench import write_session
-    from gonio.formats.readings import read_readings
+    from gonio.specs.ogam_draft.bench import write_session
+    from gonio.specs.ogam_draft.readings import read_readings
     from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
 
     session = run_session(protocol, bench, seed=seed)
@@ -709,7 +709,7 @@ def plan_study(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
     trials, seed : int
         Calibrations per case; master seed (trial seeds from :func:`trial_seeds`).
     bench : str or Bench
-        Bench file / built-in name, or a :class:`~gonio.bench.Bench`.
+        Bench file / built-in name, or a :class:`~gonio.specs.ogam_draft.bench.Bench`.
     protocol : str or Protocol
         A protocol name/path (restricted by :func:`validation_protocol`) or a Protocol
         used as given.
@@ -730,6 +730,20 @@ def plan_study(trials: int, *, seed: int = 0, bench: str | Bench = "rlg",
         When > 0, the JCGM 101 Monte Carlo (this many trials, fixed M) of every item
         budget of each case's first calibration, compared with its GUM result (JCGM 101
         8.2; summary ``monte_carlo``, :func:`gonio.specs.ogam_draft.item_coverage.item_monte_carlo`).
+
+    Examples
+    --------
+    >>> from gonio.pipeline.validate import validate
+    >>> from gonio.specs.ogam_draft.bench import Bench, InstrumentConfig, TableConfig
+    >>> from gonio.specs.ogam_draft.protocol import parse_protocol
+    >>> p = parse_protocol({"protocol": {"name": "tiny"},
+    ...     "scale_factor": {"rounds": [{"stop_deg": 90.0}, {"stop_deg": 180.0}], "rest_s": 1.0},
+    ...     "angle_deviation": {"series": 2, "rest_s": 1.0,
+    ...                         "rounds": [{"stop_deg": 90.0}, {"stop_deg": 180.0}]}})
+    >>> b = Bench("ideal", InstrumentConfig(), TableConfig(), sample_rate_hz=20.0)
+    >>> r = validate(2, bench=b, protocol=p, cases=["ideal"], sample_rate_hz=20.0, workers=1)
+    >>> r.cases[0].summary["annex_a"]["systematic"]["coverage_E_ij"]["fraction"]
+    1.0
     """
     _check_options(truth, u_scale, sample_rate_hz, monte_carlo)
     cases = study_cases(cases)

@@ -2,7 +2,7 @@
 
 Contents
 --------
-:class:`~gonio.protocol.sections.TiltEstimatePlan` the ``[tilt_estimate]`` protocol section (defined in the protocol layer)
+:class:`~gonio.specs.ogam_draft.protocol.TiltEstimatePlan` the ``[tilt_estimate]`` protocol section (defined in the protocol layer)
 :func:`fit_first_harmonic`         LS fit c0 + a cos θ + b sin θ with its residual-based covariance
 :func:`estimate_tilt`              ψ, α and their standard uncertainties from rates at positions
 :func:`tilt_estimate_from_readings` the same from ``tilt_estimate`` rows of a readings file
@@ -224,7 +224,7 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
 
     Parameters
     ----------
-    readings : gonio.formats.readings.Readings or pandas.DataFrame
+    readings : gonio.specs.ogam_draft.readings.Readings or pandas.DataFrame
     scale_factor_counts_per_deg, latitude_deg, u_latitude_deg : float, optional
 
     Examples
@@ -237,7 +237,7 @@ def tilt_estimate_from_readings(readings, scale_factor_counts_per_deg: float | N
     >>> round(e.amplitude_arcsec_s, 9), round(e.tilt_deg, 4)
     (0.4, 1.9895)
     """
-    from gonio.formats.readings import Readings, metadata_float
+    from gonio.specs.ogam_draft.readings import Readings, metadata_float
 
     if isinstance(readings, Readings):
         df, md, file = readings.data, readings.metadata, readings.path

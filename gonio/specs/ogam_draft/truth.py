@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from gonio.bench import Bench, load_bench, run_session
-from gonio.protocol import Protocol, load_protocol
+from gonio.specs.ogam_draft.bench import Bench, load_bench, run_session
+from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.specs.ogam_draft.item_coverage import zero_stability_truth
 from gonio.specs.ogam_draft.items import signed_extreme
 

@@ -42,4 +42,7 @@ SPEC = Specification(
     default_limits=({"item": "bias", "mpe": 1.0, "source": "ACME RC-1 clause 6"},),
     # its own sub-command, added to gonio's command line through the registry
     commands=(("acme-programme", "acme_rate_check.commands:add_programme"),),
+    # its own option of gonio simulate: the keyword its simulate takes, and the hook adding it
+    simulate_options=frozenset({"samples"}),
+    arguments={"simulate": "acme_rate_check.commands:add_simulate_options"},
 )

@@ -1,6 +1,7 @@
 """ACME RC-1's own ``gonio`` sub-command (``Specification.commands``): ``gonio acme-programme``
 prints the rate-table programme of clause 4.1, the settings a technician keys in before
-recording. gonio's command line finds it through the registry; nothing in gonio names it."""
+recording; and its own ``gonio simulate --samples`` (``Specification.arguments``). gonio's
+command line finds both through the registry; nothing in gonio names them."""
 
 from __future__ import annotations
 
@@ -28,3 +29,9 @@ def run_programme(args) -> int:
         for sign in (1, -1):
             print(f"{sign * rate:+g} °/s  {protocol['samples']} samples")
     return 0
+
+
+def add_simulate_options(group) -> None:
+    """ACME RC-1's own ``gonio simulate`` option (``SPEC.arguments["simulate"]``)."""
+    group.add_argument("--samples", type=int, default=None,
+                       help="samples per rate of the virtual run (default: the protocol's)")

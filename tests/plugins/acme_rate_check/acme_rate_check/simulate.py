@@ -58,8 +58,12 @@ def run_trial(bench, protocol, seed: int):
     return Readings(with_lines(pd.DataFrame({"rate_dps": x, "output": y}), len(md)), md), t
 
 
-def simulate(out, *, protocol=KEY, bench="acme-bench", seed: int = 0) -> dict[str, Path]:
-    """Write ``readings.csv`` and ``truth.json`` of one run into ``out``."""
+def simulate(out, *, protocol=KEY, bench="acme-bench", seed: int = 0,
+             samples: int | None = None) -> dict[str, Path]:
+    """Write ``readings.csv`` and ``truth.json`` of one run into ``out`` (``samples``: per
+    rate, overriding the protocol's; ``gonio simulate --samples``)."""
+    if samples is not None:
+        protocol = {**load_protocol(protocol), "samples": samples}
     rd, t = run_trial(bench, protocol, seed)
     head = "".join(f"# {k}: {v}\n" for k, v in rd.metadata.items())
     out = Path(out)

@@ -30,7 +30,7 @@ from gonio.physics.compensation import CompensationResidual
 from gonio.physics.coupling import coupling_terms
 from gonio.physics.earth import earth_rate_split
 from gonio.physics.kinematics import Timeline
-from gonio.protocol import Protocol
+from gonio.specs.ogam_draft.protocol import Protocol
 from gonio.units import dps_to_arcsec_s
 
 __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "session_coupling",
@@ -87,7 +87,7 @@ def session_coupling(protocol, bench, tilt_deg: float | None = None,
     """Coupling error of every reading the bench would take for ``protocol``.
 
     The motion and the zeroing/reading instants come from
-    :func:`gonio.bench.session.plan_session` (no random table scatter); the
+    :func:`gonio.specs.ogam_draft.bench.session.plan_session` (no random table scatter); the
     compensation is the protocol's (measured in the static phase at the start of
     each block, or computed). ψ and α default to the bench instrument's.
 
@@ -99,8 +99,8 @@ def session_coupling(protocol, bench, tilt_deg: float | None = None,
     (cos 30° − cos 150°)/(π/3 rad/s) + 2∫₀¹ sin(π t²/6) dt = 1.654 + 0.342 = 1.996 s;
     worst case = Ω_⊥ tan ψ · hypot(P, Q) = 0.020110″/s × 24.083 s = 0.484″.
 
-    >>> from gonio.protocol import parse_protocol
-    >>> from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+    >>> from gonio.specs.ogam_draft.protocol import parse_protocol
+    >>> from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
     >>> p = parse_protocol({"protocol": {"name": "x"}, "angle_deviation": {
     ...     "rest_s": 15.0, "rounds": [{"stop_deg": 180.0}]}})
     >>> b = Bench("b", InstrumentConfig(tilt_deg=0.1), TableConfig(), latitude_deg=40.0,
@@ -111,7 +111,7 @@ def session_coupling(protocol, bench, tilt_deg: float | None = None,
     psi = bench.instrument.tilt_deg if tilt_deg is None else tilt_deg
     az = bench.instrument.tilt_azimuth_deg if tilt_azimuth_table_deg is None \
         else tilt_azimuth_table_deg
-    from gonio.bench.session import plan_session      # only for this optional component
+    from gonio.specs.ogam_draft.bench.session import plan_session      # only for this optional component
 
     blocks = plan_session(protocol, bench, None)
     dt = 1.0 / bench.sample_rate_hz
@@ -161,13 +161,13 @@ def coupling_budget_component(protocol, latitude_deg: float, tilt_deg: float, *,
     180° point, as in :func:`session_coupling`'s example; the draft's budget, 0.30″
     expanded, has no line for it):
 
-    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
     >>> from gonio.specs import DEFAULT_KEY, get
     >>> c = coupling_budget_component(load_protocol(get(DEFAULT_KEY).default_protocol), 40.0, 0.1)
     >>> c.symbol, c.distribution, round(c.half_width_arcsec, 2)
     ('C_te', 'arcsine', 0.48)
     """
-    from gonio.bench.config import Bench, InstrumentConfig, TableConfig
+    from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
 
     bench = Bench("coupling", InstrumentConfig(tilt_deg=tilt_deg),
                   TableConfig(accel_dps2=accel_dps2), latitude_deg=latitude_deg,
@@ -233,7 +233,7 @@ def scale_factor_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
     :func:`budget_extra_components`'s ``tilt_E`` that enters through K; a difference of
     two angles θ_a, θ_b read with the same K carries A_K·|θ_a − θ_b|.
 
-    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
     >>> from gonio.specs import DEFAULT_KEY, get
     >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
     >>> sf = pd.DataFrame({"table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0],
@@ -258,7 +258,7 @@ def scale_factor_round_coupling(scale_factor_rows: pd.DataFrame, protocol: Proto
     e_k/(3600 θ_k) = (a_k cos α − b_k sin α)/3600 with a_k = Ω_⊥ sin ψ C_k/θ_k,
     b_k = Ω_⊥ sin ψ S_k/θ_k. Empty arrays when the protocol has no 7.1.
 
-    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
     >>> from gonio.specs import DEFAULT_KEY, get
     >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
     >>> sf = pd.DataFrame({"table_deg": [60.0, 360.0], "time_s": [11.0, 16.0]})
@@ -288,7 +288,7 @@ def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
     coupling differs between rounds (it grows with the time from zeroing to reading, not
     with the angle), so unlike the common factor cos ψ it does not cancel in K_l.
 
-    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
     >>> from gonio.specs import DEFAULT_KEY, get
     >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
     >>> sf = pd.DataFrame({"table_deg": [60.0, 360.0], "time_s": [11.0, 16.0]})
@@ -332,7 +332,7 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
 
     Examples
     --------
-    >>> from gonio.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
     >>> from gonio.specs import DEFAULT_KEY, get
     >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
     >>> df = pd.DataFrame({"test": ["scale_factor"] * 6 + ["angle_deviation"] * 2,

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.units import S_PER_H, arcsec_to_deg, deg_sqrt_s_from_deg_sqrt_h, dph_to_dps
-from gonio.bench.config import Bench, Harmonic, InstrumentConfig
+from gonio.specs.ogam_draft.bench.config import Bench, Harmonic, InstrumentConfig
 from gonio.physics.earth import axis_enu, earth_rate_table_frame_dps
 from gonio.physics.kinematics import sensing_axis_basis
 

@@ -1,6 +1,6 @@
 """Run a protocol on a virtual bench: readings file, truth, optional stream.
 
-:func:`plan_session` turns a :class:`~gonio.protocol.Protocol` into blocks of
+:func:`plan_session` turns a :class:`~gonio.specs.ogam_draft.protocol.Protocol` into blocks of
 table motion (one block per series and condition; the zero-stability test is
 one block), with the zeroing and reading instants of each round. :func:`run_session`
 simulates the instrument through every block on a uniform grid
@@ -28,16 +28,16 @@ import pandas as pd
 
 from gonio import __version__
 from gonio.atomic import active_stage, check_output_dir, output_dir, write_text
-from gonio.bench.config import Bench
-from gonio.bench.instrument import (Integrator, counts_from_angle, deterministic_signature,
+from gonio.specs.ogam_draft.bench.config import Bench
+from gonio.specs.ogam_draft.bench.instrument import (Integrator, counts_from_angle, deterministic_signature,
                                     geometry, harmonic_sum_arcsec, rate_nonlinearity)
 from gonio.formats.records import StaticRecord
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
-from gonio.bench.config import check_counter
+from gonio.specs.ogam_draft.bench.config import check_counter
 from gonio.errors import GonioError
 from gonio.units import arcsec_to_deg, deg_to_arcsec
 from gonio.physics.kinematics import Timeline
-from gonio.protocol import Protocol, RotationItem
+from gonio.specs.ogam_draft.protocol import Protocol, RotationItem
 
 CHUNK = 1 << 20
 #: Most samples kept of a captured record (the 7.3 rest for the Allan analysis): longer
@@ -642,7 +642,7 @@ def write_session(result: SessionResult, out: str | Path, *,
     ...     print(e.message)
     readings.csv exists in the output folder; give force=True to replace it
     """
-    from gonio.formats.readings import write_readings
+    from gonio.specs.ogam_draft.readings import write_readings
 
     out = Path(out)
     if active_stage(out) is None:

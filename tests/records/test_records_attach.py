@@ -1,0 +1,228 @@
+"""Standards and environment attached to a calibration put in without them (``gonio db
+import``, ``gonio calibrate --record``), and the submission checks enforced at review and
+approval on every path: a calibration without a registered standard valid on its date, or
+without its environment, is neither reviewed nor approved (one line naming what is missing)."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from sqlalchemy import delete, select
+
+from gonio.cli import main
+from gonio.errors import GonioError
+from gonio.records import services
+from gonio.records.db import open_store
+from gonio.records.importer import import_output_folder
+from gonio.records.models import AuditEvent, CalibrationStandard
+
+from .conftest import SMALL_PROTOCOL, conditions, make_people
+from .test_records_services import new_calibration, run_worker, setup_instrument
+from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
+
+
+def imported(store, people, computed_folder, bench_readings):
+    return import_output_folder(store, computed_folder, readings=bench_readings[0],
+                                protocol=SMALL_PROTOCOL, actor=people["tech"])
+
+
+def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
+        store, people, computed_folder, bench_readings):
+    inst, std = setup_instrument(store, people)
+    cid = imported(store, people, computed_folder, bench_readings)
+    day = services.calibration(store, cid).performed_on
+    with pytest.raises(GonioError) as exc:
+        services.review(store, people["rev"], cid, accept=True)
+    assert str(exc.value) == (
+        f"key submission: cannot review calibration {cid}: it names no registered standard "
+        f"valid on {day} and no environment (temperature, humidity); attach them first (the "
+        "calibration page, or gonio db attach)")
+    # a standard past its due date on the calibration date, one retired: refused by name
+    old = services.add_standard(store, people["tech"], name="autocollimator",
+                                identifier="AC-OLD", due_on=day - dt.timedelta(days=1),
+                                calibrated_on=day - dt.timedelta(days=400))
+    with pytest.raises(GonioError, match=f"AC-OLD was due on {day - dt.timedelta(days=1)}"):
+        services.attach_conditions(store, people["tech"], cid, standard_ids=[old.id])
+    # an environment the readings contradict (they say 20.0 °C)
+    with pytest.raises(GonioError, match=r"temperature: the readings say 20 °C \(# "
+                                         r"temperature_c\), entered 26.5 °C"):
+        services.attach_conditions(store, people["tech"], cid, temperature_c="26.5",
+                                   humidity_pct="40")
+    # the readings state no humidity: it cannot be taken from them
+    with pytest.raises(GonioError, match=r"the readings state no humidity \(# humidity_pct\)"):
+        services.attach_conditions(store, people["tech"], cid, environment_from_readings=True)
+    with pytest.raises(GonioError, match="technician or reviewer"):
+        services.attach_conditions(store, None, cid, standard_ids=[std.id])
+    services.attach_conditions(store, people["tech"], cid, standard_ids=[std.id])
+    with pytest.raises(GonioError, match="names no environment"):
+        services.review(store, people["rev"], cid, accept=True)
+    got = services.attach_conditions(store, people["tech"], cid, temperature_c="20.4",
+                                     humidity_pct="41")
+    assert (got.temperature_c, got.humidity_pct, got.environment_from) == (20.4, 41.0, "")
+    with store.session() as s:
+        ev = s.scalars(select(AuditEvent).where(AuditEvent.action == "attach")
+                       .order_by(AuditEvent.id)).all()
+    (b1, a1), (b2, a2) = ((json.loads(e.before_json), json.loads(e.after_json)) for e in ev)
+    assert (b1["standards"], a1["standards"]) == ([], ["RT-07"])
+    assert (b2["temperature_c"], a2["temperature_c"]) == (None, 20.4)
+    assert all(e.username == "tech" for e in ev)
+    assert services.review(store, people["rev"], cid, accept=True).status == "reviewed"
+    lab = services.lab_details(store, cid, final=True)
+    assert lab["standards"][0]["identifier"] == "RT-07"
+    assert lab["environment"] == {"temperature_c": 20.4, "humidity_pct": 41.0,
+                                  "source": "entered"}
+
+
+def test_approval_refused_without_them_and_attaching_sends_it_back_to_review(
+        store, people, computed_folder, bench_readings, monkeypatch):
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    run_worker(store, monkeypatch, computed_folder)
+    services.review(store, people["rev"], cal.id, accept=True)
+    with store.writing() as s:             # a record from before the checks: no standard
+        s.execute(delete(CalibrationStandard).where(
+            CalibrationStandard.calibration_id == cal.id))
+        s.commit()
+    with pytest.raises(GonioError, match=f"cannot approve calibration {cal.id}: it names no "
+                                         "registered standard valid on"):
+        services.approve(store, people["rev2"], cal.id)
+    got = services.attach_conditions(store, people["tech"], cal.id, standard_ids=[std.id])
+    assert (got.status, got.reviewed_by_id, got.reviewed_seal) == ("computed", None, "")
+    services.review(store, people["rev"], cal.id, accept=True)
+    assert services.approve(store, people["rev2"], cal.id).status == "issuing"
+    with pytest.raises(GonioError, match="cannot attach standards or the environment to a "
+                                         "calibration that is issuing"):
+        services.attach_conditions(store, people["tech"], cal.id, standard_ids=[std.id])
+
+
+def test_environment_taken_from_the_readings_is_stated_so(sqlite_store, bench_readings,
+                                                         tmp_path):
+    from gonio.report.header import _environment_rows
+    from gonio.report.i18n import labels
+
+    people = make_people(sqlite_store)
+    inst, std = setup_instrument(sqlite_store, people)
+    text = bench_readings[0].read_text(encoding="utf-8")
+    wet = tmp_path / "readings.csv"
+    wet.write_text("# humidity_pct: 44\n" + text, encoding="utf-8")
+    sha, _ = services.store_file(sqlite_store, open(wet, "rb"))
+    cal = services.create_calibration(sqlite_store, people["tech"], instrument_id=inst.id,
+                                      readings_sha256=sha, standard_ids=[std.id],
+                                      temperature_c=20.2, humidity_pct=50)
+    with pytest.raises(GonioError, match="not both"):
+        services.attach_conditions(sqlite_store, people["tech"], cal.id, temperature_c=20,
+                                   environment_from_readings=True)
+    got = services.attach_conditions(sqlite_store, people["tech"], cal.id,
+                                     environment_from_readings=True)
+    assert (got.temperature_c, got.humidity_pct, got.environment_from) == (20.0, 44.0,
+                                                                           "readings")
+    lab = services.lab_details(sqlite_store, cal.id, final=False)
+    assert lab["environment"]["source"] == "readings"
+    assert _environment_rows({}, lab, labels("en")) == [
+        ("Temperature", "20 °C (taken from the readings' metadata)"),
+        ("Relative humidity", "44 % (taken from the readings' metadata)")]
+    assert _environment_rows({}, lab, labels("zh"))[1] == ("相对湿度", "44 %（取自读数文件的元数据）")
+    # entered values are stated plainly; with a lab file but none entered, the readings'
+    # value is stated as taken from them
+    plain = dict(lab, environment={"temperature_c": 21.0, "humidity_pct": 40.0})
+    assert _environment_rows({}, plain, labels("en"))[0] == ("Temperature", "21 °C")
+    assert _environment_rows({"temperature_c": "20.0"}, dict(lab, environment=None),
+                             labels("en"))[0] == (
+        "Temperature", "20.0 °C (taken from the readings' metadata)")
+
+
+def test_every_new_calibration_names_a_standard_and_its_environment(sqlite_store,
+                                                                   bench_readings):
+    people = make_people(sqlite_store)
+    inst, std = setup_instrument(sqlite_store, people)
+    sha, _ = services.store_file(sqlite_store, open(bench_readings[0], "rb"))
+    base = dict(instrument_id=inst.id, readings_sha256=sha)
+    with pytest.raises(GonioError, match="tick the reference standard"):
+        services.create_calibration(sqlite_store, people["tech"], **base)
+    with pytest.raises(GonioError, match=r"enter the relative humidity \(%\)"):
+        services.create_calibration(sqlite_store, people["tech"], **base,
+                                    standard_ids=[std.id], temperature_c=20)
+    assert services.create_calibration(sqlite_store, people["tech"], **base,
+                                       **conditions(sqlite_store, people["tech"]))
+
+
+def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, bench_readings,
+                                                  monkeypatch, capsys):
+    data = tmp_path / "data"
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
+                 str(data)]) == 0
+    st = open_store(None, data)
+    try:
+        services.add_standard(st, services.user(st, "alice"), name="rotary table",
+                              identifier="RT-07", due_on=dt.date.today() + dt.timedelta(300))
+    finally:
+        st.close()
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    shutil.copy(bench_readings[0], folder / "readings.csv")
+    capsys.readouterr()
+    assert main(["db", "import", str(folder), "--data", str(data), "--protocol",
+                 str(SMALL_PROTOCOL), "--user", "alice"]) == 0
+    out = capsys.readouterr().out
+    assert out.endswith("calibration 1: standards none; environment not entered; before "
+                        "its review it needs registered standard valid on "
+                        f"{dt.date.today()} and environment (temperature, humidity)\n"), out
+    for argv, msg in ((["db", "attach", "1", "--standard", "RT-07"], "give the active records "
+                                                                      "user"),
+                      (["db", "attach", "1", "--user", "alice", "--standard", "NOPE"],
+                       "no registered standard 'NOPE'"),
+                      (["db", "attach", "1", "--user", "alice"], "nothing to attach"),
+                      (["db", "attach", "1", "--user", "alice", "--temperature", "20"],
+                       "enter both")):
+        assert main(argv + ["--data", str(data)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("gonio: error: ") and err.count("\n") == 1 and msg in err, err
+    monkeypatch.setenv("GONIO_USER", "alice")
+    assert main(["db", "attach", "1", "--standard", "RT-07", "--temperature", "20.1",
+                 "--humidity", "45", "--data", str(data)]) == 0
+    assert capsys.readouterr().out == ("calibration 1: standards RT-07; environment "
+                                       "20.1 °C, 45 %\n")
+    # an import that attaches them at once
+    assert main(["db", "import", str(folder), "--data", str(data), "--protocol",
+                 str(SMALL_PROTOCOL), "--standard", "RT-07", "--temperature", "20",
+                 "--humidity", "44"]) == 0
+    assert capsys.readouterr().out.endswith("calibration 2: standards RT-07; environment "
+                                            "20 °C, 44 %\n")
+
+
+def test_attach_on_the_calibration_page(app, sqlite_store, computed_folder,  # noqa: F811
+                                        bench_readings):
+    tech = services.user(sqlite_store, "tech")
+    people = {"tech": tech}
+    inst, std = setup_instrument(sqlite_store, people)
+    cid = imported(sqlite_store, people, computed_folder, bench_readings)
+    web = login(app, "tech")
+    page = web.get(f"/calibrations/{cid}").text
+    assert "Before its review and approval this calibration needs: registered standard" in page
+    assert 'action="/calibrations/%d/attach"' % cid in page
+    r = web.post(f"/calibrations/{cid}/attach", data={
+        "csrf": csrf_of(web), "standards": str(std.id), "temperature_c": "20.3",
+        "humidity_pct": "47"})
+    assert r.status_code == 303 and "error" not in r.headers["location"]
+    page = web.get(f"/calibrations/{cid}").text
+    assert "20.3 °C, 47 %" in page and "RT-07" in page and 'id="missing"' not in page
+    r = web.post(f"/calibrations/{cid}/attach", data={
+        "csrf": csrf_of(web), "environment_from_readings": "1"})
+    assert "the%20readings%20state%20no%20humidity" in r.headers["location"]
+    rev = login(app, "rev")
+    r = rev.post(f"/calibrations/{cid}/review", data={"csrf": csrf_of(rev),
+                                                     "decision": "accept"})
+    assert r.status_code == 303 and "error" not in r.headers["location"]
+    assert services.calibration(sqlite_store, cid).status == "reviewed"
+
+
+def test_the_fixture_readings_have_no_humidity(bench_readings):
+    """The tests above rely on the virtual bench writing a temperature and no humidity."""
+    head = [ln for ln in Path(bench_readings[0]).read_text("utf-8").splitlines()
+            if ln.startswith("#")]
+    assert "# temperature_c: 20.0" in head and not any("humidity" in ln for ln in head)
