@@ -21,7 +21,10 @@
 3. Start-up (this tree): a fresh process imports the study code and runs its first trial;
    the start-up is the import plus the first trial's excess over a warm trial (what every
    new worker pays once), best of ``--startup-runs``; and whether SymPy was imported (the
-   trial path must not need it).
+   trial path must not need it). Then the fixed cost of a whole ``gonio validate`` as a user
+   runs it (the default optical study at 5 Hz, one worker): the command with 2 and with 4
+   trials, CPU (the command and its worker processes) and wall, and the fixed cost
+   2·T(2) − T(4) (the study's cost extrapolated to no trials; target < 3 s).
 
 The worker counts are 1, 2, 4, 8, 16 up to the machine's cores (on 2 cores: 1 and 2); the
 efficiency of n workers is rate(n) / (n · rate(1)). The Dask LocalCluster has the largest
@@ -39,6 +42,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -117,6 +121,31 @@ def startup(runs: int) -> None:
           f"{'yes' if sym else 'no'} (load {os.getloadavg()[0]:.1f})", flush=True)
 
 
+def study_fixed_cost(runs: int) -> None:
+    """The fixed cost of ``gonio validate`` (item 3 of the module docstring), best of
+    ``runs`` for each trial count."""
+    best = {}
+    for trials in (2, 4):
+        for _ in range(runs):
+            with tempfile.TemporaryDirectory(prefix="gonio-bench-study-") as tmp:
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                w0 = time.perf_counter()
+                subprocess.run([sys.executable, "-m", "gonio", "validate", "--trials",
+                                str(trials), "--workers", "1", "--sample-rate-hz", "5",
+                                "--out", str(Path(tmp) / "out")], check=True, cwd=tmp,
+                               capture_output=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+                wall = time.perf_counter() - w0
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            old = best.get(trials, (float("inf"), float("inf")))
+            best[trials] = (min(old[0], cpu), min(old[1], wall))
+    (c2, w2), (c4, w4) = best[2], best[4]
+    print(f"gonio validate, optical study at 5 Hz, 1 worker (best of {runs}): 2 trials "
+          f"{c2:.2f} s CPU / {w2:.2f} s wall, 4 trials {c4:.2f} s CPU / {w4:.2f} s wall; "
+          f"fixed cost 2*T(2) - T(4): {2 * c2 - c4:.2f} s CPU, {2 * w2 - w4:.2f} s wall "
+          f"(target < 3 s; load {os.getloadavg()[0]:.1f})", flush=True)
+
+
 def tree_cpu_s() -> float:
     """CPU seconds (user + system) used so far by this process and every live process
     descended from it (the joblib pool, the Dask cluster's nannies and workers): a study's
@@ -181,6 +210,7 @@ def main() -> int:
               f"{'OK' if min(r_cpu, r_wall) >= 2 else 'MISSED'}", flush=True)
 
     startup(a.startup_runs)
+    study_fixed_cost(max(1, a.startup_runs - 1))
     if a.startup_only:
         return
     sys.path.insert(0, str(ROOT))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 
 from gonio.cli.checks import int_range, json_safe, seed
-from gonio.cli.spec_options import flag_of, given as spec_given, no_spec_options
+from gonio.cli.spec_options import flag_of, given as spec_given, no_spec_options, refuse
 from gonio.errors import GonioError
 from gonio.specs import DEFAULT_KEY
 
@@ -55,10 +55,12 @@ def run(args) -> int:
     """Compute and print the specification's budget."""
     from gonio.limits import check
     from gonio.pipeline.dispatch import budget
+    from gonio.specs import get
 
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
     given = {**spec_given(args), "seed": args.seed,
              "monte_carlo_trials": args.monte_carlo or None}
+    refuse(get(args.spec), "budget", given, args, _OPTIONS)     # named as typed
     try:
         b = budget(args.spec, **given)
     except GonioError as exc:

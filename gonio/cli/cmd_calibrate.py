@@ -11,7 +11,8 @@ import json
 import sys
 
 from gonio.cli.checks import int_range
-from gonio.cli.spec_options import given as spec_given, inputs as spec_inputs, no_spec_options
+from gonio.cli.spec_options import (given as spec_given, inputs as spec_inputs,
+                                    no_spec_options, refuse)
 
 
 def register(sub) -> None:
@@ -91,6 +92,7 @@ def run(args) -> int:
     inputs = [args.readings, args.protocol, args.lab] + spec_inputs(args)
     check_output_dir(args.out, inputs=inputs, force=args.force)   # before the work
     spec = get(args.spec or readings_spec(args.readings) or DEFAULT_KEY)
+    refuse(spec, "calibrate", given, args)                           # named as typed
     if spec.named_inputs is not None:                # never replaced or removed
         inputs += list(spec.named_inputs(args.readings))
         check_output_dir(args.out, inputs=inputs, force=args.force)

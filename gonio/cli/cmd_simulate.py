@@ -8,7 +8,7 @@ specification is refused naming it (exit 2)."""
 from __future__ import annotations
 
 from gonio.cli.checks import seed
-from gonio.cli.spec_options import given, inputs as spec_inputs, no_spec_options
+from gonio.cli.spec_options import given, inputs as spec_inputs, no_spec_options, refuse
 from gonio.specs import DEFAULT_KEY
 
 
@@ -42,11 +42,13 @@ def add_spec_options(p) -> None:
 def run(args) -> int:
     from gonio.atomic import check_output_dir
     from gonio.pipeline.dispatch import simulate
+    from gonio.specs import get
 
+    opts = refuse(get(args.spec), "simulate", given(args), args)     # named as typed
     inputs = [args.protocol, args.bench] + spec_inputs(args)
     check_output_dir(args.out, inputs=inputs, force=args.force)
     paths = simulate(args.spec, args.out, bench=args.bench, protocol=args.protocol,
-                     seed=args.seed, inputs=inputs, force=args.force, **given(args))
+                     seed=args.seed, inputs=inputs, force=args.force, **opts)
     for p in paths.values():
         print(p)
     return 0

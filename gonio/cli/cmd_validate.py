@@ -14,7 +14,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_text
 from gonio.errors import GonioError
 from gonio.cli.checks import int_range, seed
-from gonio.cli.spec_options import given as spec_given, no_spec_options
+from gonio.cli.spec_options import given as spec_given, no_spec_options, refuse
 from gonio.specs import DEFAULT_KEY
 
 
@@ -70,7 +70,6 @@ def run(args) -> int:
     if args.trials < 2:
         raise GonioError(f"--trials must be an integer >= 2, got {args.trials}")
     from gonio.limits import check
-    from gonio.pipeline.dispatch import refuse_options
     from gonio.specs import get
 
     check("GONIO_MAX_TRIALS", args.trials, "--trials", unit="calibrations per case")
@@ -82,8 +81,7 @@ def run(args) -> int:
     if spec.coverage is None:
         raise GonioError(f"{spec.key} has no coverage study (SPEC.coverage is None)",
                          key="--spec")
-    given = refuse_options(spec, {"resume": args.resume, **spec_given(args)},
-                           spec.coverage.options, "validate")
+    given = refuse(spec, "validate", {"resume": args.resume, **spec_given(args)}, args)
     if args.out is not None:
         from gonio.atomic import check_output_folder_place
         check_output_folder_place(args.out)          # before any batch is written there

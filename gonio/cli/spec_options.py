@@ -100,6 +100,16 @@ def inputs(args) -> list:
     return [getattr(args, d) for d in args.spec_inputs]
 
 
+def refuse(spec, command: str, given_: dict, args, flags: dict | None = None) -> dict:
+    """``given_`` less the options not given, refused as the pipeline does
+    (:func:`gonio.pipeline.dispatch.refuse_options`) but naming each option as it was typed
+    (``flags`` {keyword: option} of the command's own, and the specifications' options)."""
+    from gonio.pipeline.dispatch import refuse_options
+
+    return refuse_options(spec, given_, spec.accepted_options(command), command,
+                          {**(flags or {}), **args.spec_flags})
+
+
 def flag_of(args, key: str | None) -> str | None:
     """The option string of the specification option whose dest is ``key`` (a GonioError's
     key), or None."""

@@ -36,15 +36,27 @@ def spec_of(spec_key: str | None, readings=None) -> Specification:
     return get(key)
 
 
-def refuse_options(spec: Specification, given: dict, accepted: frozenset, command: str) -> dict:
+def refuse_options(spec: Specification, given: dict, accepted: frozenset, command: str,
+                   flags: dict | None = None) -> dict:
     """``given`` ({option: value}, None or False meaning not given) less the options not
-    given; an option the specification's hook does not take is a GonioError naming it."""
+    given; an option the specification's hook does not take is a GonioError naming it: by its
+    command-line form in ``flags`` ({keyword: "--option"}, the command line's), else
+    ``--keyword`` with dashes.
+
+    >>> s = Specification(key="s", title_en="S", title_zh="S", clause_doc="",
+    ...                   default_protocol="", default_bench="", calibrate=print)
+    >>> refuse_options(s, {"monte_carlo_trials": 9, "seed": None}, frozenset(), "budget",
+    ...                {"monte_carlo_trials": "--monte-carlo"})
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: --monte-carlo does not apply to 'gonio budget --spec s'
+    """
     out = {k: v for k, v in given.items() if v not in (None, False)}
     bad = sorted(k for k in out if k not in accepted)
     if bad:
-        flags = ", ".join("--" + k.replace("_", "-") for k in bad)
-        raise GonioError(f"{flags} {'does' if len(bad) == 1 else 'do'} not apply to "
-                         f"'gonio {command} --spec {spec.key}'", key="--" + bad[0].replace("_", "-"))
+        names = ", ".join((flags or {}).get(k) or "--" + k.replace("_", "-") for k in bad)
+        raise GonioError(f"{names} {'does' if len(bad) == 1 else 'do'} not apply to "
+                         f"'gonio {command} --spec {spec.key}'")
     return out
 
 

@@ -1,9 +1,11 @@
 """A month of a laboratory in Chromium, run by its quality manager (Playwright, Debian's
 Chromium, a real ``gonio serve`` with its worker processes), on SQLite and on PostgreSQL:
 register and retire master data, calibrate, review, approve and issue, see and export what is
-due, take last night's backup, amend with a reason of two lines, deactivate a user, verify the
-records and the backup in the browser, then restore the backup (the command line's
-operation: it writes a whole database) and find the records in a server started on it.
+due, take last night's backup, amend with a reason of two lines, attach the standards and
+environment a command-line import lacks (its review refused until then), deactivate a user,
+verify the records and the backup in the browser, then restore the backup (the command
+line's operation: it writes a whole database) and find the records in a server started on
+it.
 Screenshots go to $GONIO_SCREENSHOTS/month-<database> (default /tmp/gonio-web-shots)."""
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from __future__ import annotations
 import csv
 import datetime as dt
 import io
-import re
+import shutil
 import time
 
 import pytest
@@ -21,8 +23,8 @@ from gonio.records import services
 from gonio.records.db import open_store
 
 from .conftest import new_pg_database
-from .test_web_browser import (PASSWORD, SHOTS, Shots, browser, log_in,  # noqa: F401
-                               log_out, upload, wait_status)
+from .test_web_browser import (PASSWORD, PROTOCOL, SHOTS, Shots, browser,  # noqa: F401
+                               log_in, log_out, upload, wait_status)
 
 
 @pytest.fixture(params=["sqlite", "postgresql"])
@@ -73,7 +75,7 @@ def act(page, base: str, who: str, cal_url: str, button: str, want: str) -> None
 
 
 def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  # noqa: F811
-                                               serve, tmp_path):
+                                               computed_folder, serve, tmp_path):
     base, data, url, other_db, kind = month
     shot = Shots(SHOTS / f"month-{kind}")
     today = dt.date.today()
@@ -173,6 +175,39 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     assert "Reason for the amendment: customer&#x27;s address corrected<br>serial confirmed" \
         in html
     shot(page, "amended-certificate")
+    log_out(page)
+
+    # command-line work put in without standards nor environment (gonio db import): its
+    # review is refused, naming what is missing, until they are attached on its page
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    shutil.copy(bench_readings[0], folder / "readings.csv")
+    db = ["--data", str(data)] + (["--database", url] if url else [])
+    assert main(["db", "import", str(folder), "--protocol", str(PROTOCOL), "--user", "tech",
+                 *db]) == 0
+    log_in(page, base, "rev")
+    page.goto(base + "/calibrations?status=computed")
+    with page.expect_navigation():
+        page.locator("table a[href^='/calibrations/']").first.click()
+    imported = page.url
+    assert page.locator("#missing").inner_text().startswith(
+        "Before its review and approval this calibration needs: registered standard valid on")
+    with page.expect_navigation():
+        page.click("button[value=accept]")
+    assert "it names no registered standard valid on" in page.locator(
+        "p.error[role=alert]").inner_text()
+    attach = page.locator("form#attach")
+    attach.locator("label", has_text="RT-07").locator("input").check()
+    attach.locator("input[name=temperature_c]").fill("20.1")
+    attach.locator("input[name=humidity_pct]").fill("45")
+    shot(page, "attach")
+    with page.expect_navigation():
+        attach.locator("button:has-text('Attach')").click()
+    assert page.locator("#missing").count() == 0 and "20.1 °C, 45 %" in page.content()
+    with page.expect_navigation():
+        page.click("button[value=accept]")
+    wait_status(page, "reviewed")
+    assert page.url.startswith(imported)
     log_out(page)
 
     # a user deactivated: tech can no longer log in

@@ -218,7 +218,7 @@ def test_new_flows_on_a_phone(lab, browser, bench_readings, tmp_path):  # noqa: 
         shot(page, path.strip("/").replace("/", "-") or "overview")
     page.click("form.logout button")
     log_in(page, base, "admin")
-    for path in ("/users", "/audit", "/certificates/1"):
+    for path in ("/users", "/audit", "/certificates/1", "/backup"):
         page.goto(base + path)
         assert page.locator("h1").count() == 1, path
         no_sideways(page)
