@@ -27,7 +27,7 @@ from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.counters import wrap_counter
 from gonio.specs.ogam_draft.readings import read_readings
-from gonio.instruments.acquisition import AcquisitionModule, unwrap_near
+from gonio.specs.ogam_draft.acquisition_module import AcquisitionModule, unwrap_near
 from gonio.instruments.link import InstrumentError, IOLog, Link, LinkLost
 from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.table import RotaryTable

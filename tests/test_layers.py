@@ -154,8 +154,9 @@ SPEC_MAY_IMPORT = ("gonio.physics", "gonio.formats", "gonio.protocol", "gonio.re
 SIMULATION_MODULES = ("simulate", "plan", "truth", "study", "served")
 #: A specification's modules that drive instruments: the only ones that may import
 #: ``gonio.instruments`` (``acquisition``: its programme on a laboratory's instruments,
-#: ``SPEC.acquire``; ``served``: its virtual bench served as those instruments).
-INSTRUMENT_MODULES = ("acquisition", "served")
+#: ``SPEC.acquire``; ``acquisition_module``: the driver of an instrument of its own;
+#: ``served``: its virtual bench served as those instruments).
+INSTRUMENT_MODULES = ("acquisition", "acquisition_module", "served")
 
 
 def spec_import_violations(files: list[Path]) -> list[str]:

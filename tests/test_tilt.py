@@ -7,7 +7,7 @@ import pytest
 import sympy
 from scipy import integrate
 
-from gonio.physics.tilt import (ARCSEC_PER_RAD, elliptic_error_arcsec, elliptic_extreme,
+from gonio.specs.ogam_draft.tilt import (ARCSEC_PER_RAD, elliptic_error_arcsec, elliptic_extreme,
                         elliptic_series, rigid_error_arcsec, rigid_extreme)
 
 THETA = np.linspace(0.0, 360.0, 97)

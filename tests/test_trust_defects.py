@@ -352,7 +352,7 @@ def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
     assert code == 0 and res["extra"]["uncertainty"]["budget_kind"] == "draft"
     assert len(res["extra"]["uncertainty"]["components"]) == 4
     # the measured tilt bounds φ_e too: elliptic extreme at 0.03° instead of 0.1° (A.4.2)
-    from gonio.physics.tilt import elliptic_extreme
+    from gonio.specs.ogam_draft.tilt import elliptic_extreme
     phi = res["extra"]["uncertainty"]["components"][1]
     assert phi["half_width_arcsec"] == pytest.approx(elliptic_extreme(0.03).extreme_arcsec)
     from gonio.report.i18n import labels

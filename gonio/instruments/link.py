@@ -7,8 +7,9 @@ answer to an :class:`IOLog` with its UTC time. Its failures are :class:`LinkLost
 connection closed or timed out) and :class:`InstrumentError` (the instrument reported an
 error): both :class:`~gonio.errors.GonioError`, so the command line prints one line.
 
-:class:`Driver` is what the two interfaces (:mod:`gonio.instruments.table`,
-:mod:`gonio.instruments.acquisition`) share: ``COMMANDS``, a table of command templates by
+:class:`Driver` is what every instrument interface (:mod:`gonio.instruments.table`,
+:mod:`gonio.instruments.rate`, a specification's own, such as the goniometer's acquisition
+module) shares: ``COMMANDS``, a table of command templates by
 operation (``None``: the instrument has no such command), formatted with Python's
 ``str.format`` and sent as a query when the template ends in ``?``; ``after_command``
 checks the instrument's error queue (IEEE 488.2 / SCPI ``SYSTem:ERRor?``, drained until

@@ -1,4 +1,5 @@
-"""Physics: Earth rate, Sagnac scale factors, table kinematics, tilt, coupling, compensation.
+"""Physics: Earth rate, Sagnac scale factors, table kinematics, tilt × Earth-rate coupling,
+Earth-rate compensation, triad alignment.
 
 Pure functions on numbers and numpy arrays (numpy, scipy, sympy only); nothing
 here reads a file or knows a protocol, a bench or a certificate.

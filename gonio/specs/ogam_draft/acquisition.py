@@ -37,7 +37,7 @@ from pathlib import Path
 
 from gonio import __version__
 from gonio.errors import GonioError
-from gonio.instruments.acquisition import AcquisitionModule
+from gonio.specs.ogam_draft.acquisition_module import AcquisitionModule
 from gonio.instruments.run import (AcquisitionResult, ModuleClock, ReadingsFile, raise_stop,
                                   stop_reason)
 from gonio.instruments.link import IOLog, Link

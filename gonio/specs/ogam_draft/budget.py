@@ -35,7 +35,7 @@ import pandas as pd
 from gonio.specs.ogam_draft.budget_extra import ExtraComponent
 from gonio.errors import GonioError
 from gonio.units import ARCSEC_PER_DEG, MIN_PER_H
-from gonio.physics.tilt import elliptic_extreme
+from gonio.specs.ogam_draft.tilt import elliptic_extreme
 from gonio.result.statement import rounded as rounded_sig, stated_gum
 from uncertainty.propagation import LinearModel
 from uncertainty import (GumResult, MonteCarloResult, ValidationResult, budget_table,

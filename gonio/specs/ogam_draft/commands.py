@@ -9,7 +9,7 @@ Its own options of gonio's commands (``SPEC.arguments``): ``gonio calibrate --bu
 (:func:`add_validate_options`). ``gonio reduce``: stream → readings file (find the table's
 rests, match the protocol's rounds; :func:`gonio.specs.ogam_draft.reduce.reduce_stream`).
 ``gonio tilt``: the extreme tilt error over
-0–360° (draft Annex A.4.2; :mod:`gonio.physics.tilt`). ``gonio tilt-estimate``: ψ and α from
+0–360° (draft Annex A.4.2; :mod:`gonio.specs.ogam_draft.tilt`). ``gonio tilt-estimate``: ψ and α from
 the static multi-position rows of a readings file
 (:func:`gonio.specs.ogam_draft.tilt_estimate.tilt_estimate_from_readings`). ``gonio eda``:
 equal-division averaging of a readings file's ``equal_division`` rows (IEC 62047-20 Annex A.3;
@@ -193,7 +193,7 @@ def add_tilt(subparsers) -> None:
 
 def run_tilt(args) -> int:
     """Compute and print the extreme tilt error."""
-    from gonio.physics.tilt import elliptic_extreme, rigid_extreme
+    from gonio.specs.ogam_draft.tilt import elliptic_extreme, rigid_extreme
 
     t = args.tilt_deg
     if not (math.isfinite(t) and 0.0 <= t < 90.0):

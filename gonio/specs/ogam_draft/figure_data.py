@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from gonio.physics.tilt import elliptic_error_arcsec, rigid_error_arcsec
+from gonio.specs.ogam_draft.tilt import elliptic_error_arcsec, rigid_error_arcsec
 from gonio.units import S_PER_MIN, deg_to_arcsec, s_to_h
 
 #: Series drawn one by one in a figure; more are drawn as their range and mean.
@@ -75,7 +75,7 @@ def repeatability(c) -> dict:
 def tilt(psi_deg: float) -> dict:
     """The tilt error at the budget's tilt bound ψ: the elliptic model (Annex A.4.2), the
     rigid model after the scale factor's calibration and before it
-    (:mod:`gonio.physics.tilt`)."""
+    (:mod:`gonio.specs.ogam_draft.tilt`)."""
     theta = np.linspace(0.0, 360.0, TILT_POINTS)
     return {"psi_deg": float(psi_deg), "theta_deg": _floats(theta),
             "elliptic_arcsec": _floats(elliptic_error_arcsec(theta, psi_deg)),

@@ -115,7 +115,7 @@ def draw_repeatability(fig, spec, res, L, truth=None) -> None:
 
 def draw_tilt(fig, spec, res, L, truth=None) -> None:
     """Tilt error at the budget's tilt bound: elliptic model (Annex A.4.2) and rigid model
-    (the curves :mod:`gonio.physics.tilt` gave when the calibration ran)."""
+    (the curves :mod:`gonio.specs.ogam_draft.tilt` gave when the calibration ran)."""
     f = _series(res, "tilt")
     sub = spec.subgridspec(1, 2, wspace=0.35)
     theta = f["theta_deg"]

@@ -874,7 +874,7 @@ def _unused_reason_default(test: str) -> str:
     if test == "equal_division":
         return "equal_division is not one of the seven clause-7 items (see gonio.specs.ogam_draft.equal_division)"
     if test == "tilt_estimate":
-        return "tilt_estimate is not one of the seven clause-7 items (see gonio.physics.tilt)"
+        return "tilt_estimate is not one of the seven clause-7 items (see gonio.specs.ogam_draft.tilt)"
     return "not used by any characteristic"
 
 

@@ -3,7 +3,8 @@
 ``gonio bench serve`` (the optical draft's ``serve`` hook, :func:`serve`; :func:`serve_bench`) serves, on 127.0.0.1 only, the simulated table and
 the goniometer's acquisition module of a bench file over line-terminated SCPI sockets, in
 exactly the command sets of the default drivers (:class:`~gonio.instruments.table.RotaryTable`,
-:class:`~gonio.instruments.acquisition.AcquisitionModule`), with their errors in the SCPI
+:class:`~gonio.specs.ogam_draft.acquisition_module.AcquisitionModule`), with their errors in
+the SCPI
 error queue (``SYST:ERR?``): a move beyond the range or the top rate (−222), a move while
 moving or a read before zeroing (−221), an unknown header (−113), a bad parameter (−224).
 
@@ -386,7 +387,8 @@ def table_instrument(sb: ServedBench) -> Instrument:
 
 
 def gyro_instrument(sb: ServedBench) -> Instrument:
-    """The served acquisition module: :class:`~gonio.instruments.acquisition.AcquisitionModule`'s."""
+    """The served acquisition module: the command set of
+    :class:`~gonio.specs.ogam_draft.acquisition_module.AcquisitionModule`."""
     b, inst_cfg = sb.bench, sb.bench.instrument
 
     def count_read():
