@@ -125,14 +125,18 @@ def _plain(v: float) -> str:
 def _conditions(res: dict, lab: dict | None) -> list[tuple]:
     md = res.get("metadata", {})
     env = (lab or {}).get("environment") or {}
+    # the records' environment taken from the readings' metadata is stated as such
+    tag = " (taken from the readings' metadata)" if env.get("source") == "readings" else ""
     out: list[tuple] = []
     t = env.get("temperature_c")
     if t is None:
-        t = md.get("room_temperature_c")
+        t, tag_t = md.get("room_temperature_c"), ""
+    else:
+        tag_t = tag
     if t not in (None, ""):
-        out.append(("room temperature", display("sig4", float(t)), "degC"))
+        out.append(("room temperature" + tag_t, display("sig4", float(t)), "degC"))
     if env.get("humidity_pct") is not None:
-        out.append(("relative humidity", display("sig3", env["humidity_pct"]), "%"))
+        out.append(("relative humidity" + tag, display("sig3", env["humidity_pct"]), "%"))
     if md.get("supply_nominal_v") not in (None, ""):
         out.append(("nominal supply voltage", _plain(md["supply_nominal_v"]), "",
                     r"\volt"))

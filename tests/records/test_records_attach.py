@@ -126,6 +126,10 @@ def test_environment_taken_from_the_readings_is_stated_so(sqlite_store, bench_re
         ("Temperature", "20 °C (taken from the readings' metadata)"),
         ("Relative humidity", "44 % (taken from the readings' metadata)")]
     assert _environment_rows({}, lab, labels("zh"))[1] == ("相对湿度", "44 %（取自读数文件的元数据）")
+    from gonio.report.rate_dcc import _conditions
+    names = [c[0] for c in _conditions({"metadata": {}, "items": {}}, lab)]
+    assert names == ["room temperature (taken from the readings' metadata)",
+                     "relative humidity (taken from the readings' metadata)"]
     # entered values are stated plainly; with a lab file but none entered, the readings'
     # value is stated as taken from them
     plain = dict(lab, environment={"temperature_c": 21.0, "humidity_pct": 40.0})

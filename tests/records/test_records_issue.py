@@ -222,6 +222,7 @@ def test_multi_line_amendment_reason_keeps_its_lines(sqlite_store, computed_fold
                          "amendment_reason": "customer's address corrected\n"
                                              "serial <RLG-0001> confirmed",
                          "amendment_asked_by": "REV2"}
+    details["environment"] = {"temperature_c": 20.0, "humidity_pct": 44.0, "source": "readings"}
     out = tmp_path / "en"
     render_folder(services.file_bytes(sqlite_store, cal.results_sha256), out,
                   spec_key=cal.spec_key, lab=write_lab_toml(details, tmp_path / "lab.toml"))
@@ -236,6 +237,12 @@ def test_multi_line_amendment_reason_keeps_its_lines(sqlite_store, computed_fold
     said = "".join(root.find(".//dcc:statement[@id='record-amendment']/dcc:declaration",
                             NS).itertext())
     assert said.strip().endswith("customer's address corrected\nserial <RLG-0001> confirmed")
+    # an environment taken from the readings is stated so, on the page and in the DCC
+    assert kv_row(page, "Temperature") == "20 °C (taken from the readings&#x27; metadata)"
+    names = [n.strip() for n in root.xpath(".//dcc:influenceCondition/dcc:name/dcc:content/"
+                                           "text()", namespaces=NS)]
+    assert names[:2] == ["temperature (taken from the readings' metadata)",
+                         "relative humidity (taken from the readings' metadata)"]
 
 
 def test_issued_record_in_chinese(sqlite_store, computed_folder, bench_readings, monkeypatch,

@@ -102,13 +102,15 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         method=method_text(res, lab, "en"),
         norm=norm, standards=stds)
     env = lab_.get("environment") or {}
+    # the records' environment taken from the readings' metadata is stated as such
+    tag = " (taken from the readings' metadata)" if env.get("source") == "readings" else ""
     conds = []
     if env.get("temperature_c") is not None:
-        conds.append(("temperature", display("sig4", env["temperature_c"]), "degC"))
+        conds.append(("temperature" + tag, display("sig4", env["temperature_c"]), "degC"))
     elif md.get("temperature_c"):
         conds.append(("temperature", display("sig4", float(md["temperature_c"])), "degC"))
     if env.get("humidity_pct") is not None:
-        conds.append(("relative humidity", display("sig3", env["humidity_pct"]), "%"))
+        conds.append(("relative humidity" + tag, display("sig3", env["humidity_pct"]), "%"))
     influence_conditions(mr, conds)
 
     results = element(mr, "dcc:results")
