@@ -3,7 +3,7 @@
 Contents (one folder per stage of the data flow, docs/architecture.md):
 
 =================================  ==================================================
-``gonio.physics``                  Earth rate, Sagnac, kinematics, coupling, compensation, alignment
+``gonio.physics``                  Earth rate, Sagnac, kinematics, alignment
 ``gonio.formats``                  streams, metadata, rate readings, the laboratory file
 ``gonio.protocol``                 the rate programme the rate specifications share
 ``gonio.bench``                    the virtual rate-gyro bench

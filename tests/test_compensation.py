@@ -12,7 +12,7 @@ from gonio.specs.ogam_draft.budget_extra import compensation_component
 from gonio.specs.ogam_draft.bench import run_session
 from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.physics.compensation import (computed_compensation, computed_residual_dps,
+from gonio.specs.ogam_draft.compensation import (computed_compensation, computed_residual_dps,
                                 measured_compensation)
 from gonio.physics.earth import OMEGA_E_ARCSEC_S
 from gonio.errors import GonioError

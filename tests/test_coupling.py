@@ -1,4 +1,4 @@
-"""Tilt × Earth-rate coupling: the analytic error (gonio.physics.coupling) against the virtual bench,
+"""Tilt × Earth-rate coupling: the analytic error (gonio.specs.ogam_draft.coupling) against the virtual bench,
 the quadrature against adaptive quadrature, the worst case against a brute-force search."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableCo
 from gonio.specs.ogam_draft.bench.session import plan_session
 from gonio.specs.ogam_draft.budget import annex_a_budget
 from gonio.specs.ogam_draft.budget_extra import coupling_budget_component, session_coupling
-from gonio.physics.coupling import (coupling_error_arcsec, coupling_terms,
+from gonio.specs.ogam_draft.coupling import (coupling_error_arcsec, coupling_terms,
                             coupling_worst_case_arcsec,
                             trig_integrals)
 from gonio.physics.earth import OMEGA_E_ARCSEC_S, earth_rate_split

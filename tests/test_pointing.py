@@ -1,6 +1,6 @@
 """Pointing consistency (draft 7.7) on the virtual bench: zero within noise with a correct
 compensation; with a wrong latitude or azimuth in the computed compensation, the spread that
-the closed-form residual (gonio.physics.compensation) predicts."""
+the closed-form residual (gonio.specs.ogam_draft.compensation) predicts."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 from gonio.specs.ogam_draft.bench import run_session
 from gonio.specs.ogam_draft.bench.config import Bench, InstrumentConfig, TableConfig
 from gonio.specs.ogam_draft.items import compute_characteristics
-from gonio.physics.compensation import measured_compensation, pointing_consistency_prediction
+from gonio.specs.ogam_draft.compensation import measured_compensation, pointing_consistency_prediction
 from gonio.specs.ogam_draft.readings import parse_readings, write_readings
 from gonio.specs.ogam_draft.protocol import parse_protocol
 

@@ -1,5 +1,4 @@
-"""Physics: Earth rate, Sagnac scale factors, table kinematics, tilt × Earth-rate coupling,
-Earth-rate compensation, triad alignment.
+"""Physics: Earth rate, Sagnac scale factors, table kinematics, triad alignment.
 
 Pure functions on numbers and numpy arrays (numpy, scipy, sympy only); nothing
 here reads a file or knows a protocol, a bench or a certificate.

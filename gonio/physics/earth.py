@@ -220,7 +220,7 @@ def earth_rate(latitude_deg: float, axis="up", omega_rad_s: float = OMEGA_E_RAD_
     north towards east) and elevation E that is Ω_E (cos φ cos E cos A + sin φ sin E)
     (IEC 62047-20 5.3.3.1 with its cos/sin erratum corrected). The part across
     the axis, Ω_⊥ = Ω_E·sqrt(1 − (Ω̂·a)²), is what a tilted sensing axis picks up
-    as the table turns (the tilt × Earth-rate coupling, :mod:`gonio.physics.coupling`).
+    as the table turns (the tilt × Earth-rate coupling of a reading).
 
     Examples
     --------

@@ -10,8 +10,13 @@ what each item's coverage is checked against; :mod:`.outputs` the rendering (res
 tables, certificate, DCC, demo); :mod:`.commands` its own ``gonio`` sub-commands (``reduce``,
 ``tilt``, ``tilt-estimate``, ``eda``); :mod:`.acquisition` its programme on a laboratory's
 table and acquisition module (``SPEC.acquire``, ``gonio acquire``) and :mod:`.served` its
-virtual bench served as those instruments (``SPEC.serve``, ``gonio bench serve``). The clause-by-clause
-reading is ``docs/draft-readings.md``.
+virtual bench served as those instruments (``SPEC.serve``, ``gonio bench serve``).
+What only this draft uses lives here too: :mod:`.protocol` (its protocol model and loader,
+``SPEC.load_protocol``), :mod:`.readings` (its readings file), :mod:`.bench` (the goniometer
+on a precision rotary table), :mod:`.reduce` and :mod:`.override` (stream → readings),
+:mod:`.tilt`, :mod:`.coupling` and :mod:`.compensation` (its physics), :mod:`.budget_extra`,
+:mod:`.equal_division`, :mod:`.tilt_estimate` and :mod:`.zero_stability_noise`. The
+clause-by-clause reading is ``docs/draft-readings.md``.
 """
 
 from gonio.specs import Coverage, Specification, lazy

@@ -13,8 +13,8 @@ pipeline and the validation use these functions:
 :func:`budget_extra_components`    ``K_P``, ``K_r`` (scale-factor error carried from 7.1
                                    into E) and ``tilt_E`` from a calibration's own readings
 
-The physics is in :mod:`gonio.physics.coupling` and
-:mod:`gonio.physics.compensation`; see ``docs/draft-readings.md#what-the-draft-leaves-out``.
+The physics is in :mod:`gonio.specs.ogam_draft.coupling` and
+:mod:`gonio.specs.ogam_draft.compensation`; see ``docs/draft-readings.md#what-the-draft-leaves-out``.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from gonio.errors import GonioError
-from gonio.physics.compensation import CompensationResidual
-from gonio.physics.coupling import coupling_terms
+from gonio.specs.ogam_draft.compensation import CompensationResidual
+from gonio.specs.ogam_draft.coupling import coupling_terms
 from gonio.physics.earth import earth_rate_split
 from gonio.physics.kinematics import Timeline
 from gonio.specs.ogam_draft.protocol import Protocol
@@ -60,7 +60,7 @@ class ExtraComponent:
 def compensation_component(residual: CompensationResidual, symbol: str = "E_c") -> ExtraComponent:
     """An additive component for an Earth-rate compensation residual: normal, half-width = u(angle).
 
-    >>> from gonio.physics.compensation import measured_compensation
+    >>> from gonio.specs.ogam_draft.compensation import measured_compensation
     >>> c = compensation_component(measured_compensation(60.0, arw_dpsh=0.001))
     >>> c.symbol, c.distribution, round(c.half_width_arcsec, 4)
     ('E_c', 'normal', 0.2324)
@@ -187,12 +187,12 @@ def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s:
 
     The residual rate of the tilt × Earth-rate coupling after the compensation
     measured at the zero position is Ω_⊥ sin ψ [cos(θ+α) − cos α]
-    (:mod:`gonio.physics.coupling`); integrated from the zeroing to the reading it
+    (:mod:`gonio.specs.ogam_draft.coupling`); integrated from the zeroing to the reading it
     is Ω_⊥ sin ψ (C cos α − S sin α). Each reading is modelled as a trapezoidal
     move from 0 to θ at ``rate_dps`` and ``accel_dps2`` followed by a rest until
     ``time_s`` after zeroing (``read_delay_s`` is kept for the call signature of
     the readings model: the rest is whatever the time to reading leaves). The
-    integrals are :func:`gonio.physics.coupling.coupling_terms`' (one implementation).
+    integrals are :func:`gonio.specs.ogam_draft.coupling.coupling_terms`' (one implementation).
 
     A half turn at 60 °/s with a near-instant start, read 13 s after zeroing:
     C = sin θ/ω − T_r + (cos θ − 1)(t − T_r) = −23 s, S = (1 − cos θ)/ω + sin θ (t − T_r) = 1.91 s.

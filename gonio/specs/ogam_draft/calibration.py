@@ -72,6 +72,16 @@ ZERO_STABILITY_READINGS = {
 }
 
 
+#: Labels of the two readings of K_l (results.json ``scale_factor_nonlinearity.estimates``).
+NONLINEARITY_READINGS = {
+    "draft": "the draft's reading (7.2): K_l = (max K_i - min K_i)/K of the rounds as measured, "
+             "biased upwards by the rounds' errors; U widened for that bias (line K_rng)",
+    "corrected": "stated: the range corrected for its bias by the rounds' errors (table, "
+                 "quantisation, tilt coupling at the A.1 bound; JCGM 101 Monte Carlo), "
+                 "u the spread of the measured range",
+}
+
+
 #: Which reading of B_s is stated unless the caller asks otherwise (docs/draft-readings.md).
 ZERO_STABILITY_STATED = "draft"
 
@@ -175,6 +185,15 @@ class Analysis:
         if c.name == "scale_factor" and c.measured:
             d.update(scale_factor_as_mounted(
                 float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
+        if c.name == "scale_factor_nonlinearity" and c.measured:
+            iu = self.item_uncertainty.get(c.name)
+            if iu is not None and iu.beside is not None:
+                d["stated"] = "corrected"
+                d["estimates"] = {
+                    "draft": {"label": NONLINEARITY_READINGS["draft"], "value": _plain_value(c),
+                              "uncertainty": iu.beside.to_dict()},
+                    "corrected": {"label": NONLINEARITY_READINGS["corrected"],
+                                  "value": float(iu.value)}}
         if c.name != "zero_stability":
             return d
         zr = self.zero_stability_readings
@@ -202,6 +221,8 @@ class Analysis:
         value = c.value
         if c.name == "zero_stability" and self.zero_stability_readings:
             value = float(iu.value)               # the stated reading of B_s
+        if c.name == "scale_factor_nonlinearity" and iu is not None:
+            value = float(iu.value)               # the bias-corrected range
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
                     None if unc is None else Uncertainty(
@@ -615,6 +636,20 @@ def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
                                   int(np.argmax(k_i)), int(np.argmin(k_i)))
 
 
+def _round_coupling(results, readings, protocol, budget):
+    """(a_k, b_k) of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling` for this
+    calibration's 7.1 rounds in the table's order, at the budget's tilt bound and the file's
+    latitude (the equator's when not stated, as :func:`_scale_factor_tilt`); None without 7.1."""
+    from gonio.specs.ogam_draft.budget_extra import scale_factor_round_coupling
+
+    if not results.scale_factor.measured or protocol.scale_factor is None:
+        return None
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    sf = readings.data.set_index("line").loc[results.scale_factor.table["line"].to_numpy()]
+    return scale_factor_round_coupling(sf, protocol, 0.0 if lat is None else lat,
+                                       float(budget.parameters["tilt_deg"]))
+
+
 def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
@@ -692,9 +727,14 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                                      mpe, k=k_fixed,
                                                      tilt_bias_arcsec_per_deg=k_tilt)
         if results.scale_factor_nonlinearity.measured:
-            out["scale_factor_nonlinearity"] = iu.nonlinearity_budget(
+            draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
                 tilt_bias_arcsec_per_deg=_nonlinearity_tilt(results, readings, protocol, budget))
+            out["scale_factor_nonlinearity"] = dataclasses.replace(
+                iu.nonlinearity_corrected_budget(
+                    t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
+                    tilt_round_coupling=_round_coupling(results, readings, protocol, budget)),
+                beside=draft)
     zs = results.zero_stability
     if zs.measured:
         rd = zs.tables["readings"]

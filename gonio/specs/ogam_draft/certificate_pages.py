@@ -207,6 +207,9 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
                     (detail(res, name, "estimates") or {}).get("model"):
                 cell += [L["semi"], *segments(L["note_zero_model"], v=_num(
                     res, item_path(name, "estimates.model.value"), "sig3", U))]
+        elif name == "scale_factor_nonlinearity" and detail(res, name, "estimates"):
+            cell += [L["semi"], *segments(L["note_kl_draft"], v=_num(
+                res, item_path(name, "estimates.draft.value"), "sig3", U))]
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += [L["semi"], *segments(L["note_spread"],
                                      v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]

@@ -55,7 +55,9 @@ ITEM_TRUTHS = {
                          "over the A.1 disc (semicircle, u = A/2) instead of the bound's "
                          "arcsine (u = A/sqrt 2)",
     "scale_factor_nonlinearity": "(max - min)/mean of the instrument's own K_i at the 7.1 "
-                                 "rounds (as scale_factor), %",
+                                 "rounds (as scale_factor), %; result the bias-corrected range",
+    "scale_factor_nonlinearity_draft": "as scale_factor_nonlinearity; result the draft's range "
+                                       "as measured, U widened for its bias (not stated)",
     "zero_stability": "population: sqrt(E[s(M)^2])/T from the bench's noise parameters "
                       "(gonio.specs.ogam_draft.zero_stability_noise) and the noise-free readings",
     "zero_stability_draft": "as zero_stability; the draft's s(M)/T from the 15 readings",
@@ -212,8 +214,13 @@ def item_record(report, truth: dict) -> dict:
         out["scale_factor_disc"] = dict(out["scale_factor"], U=float(b.k) * u_disc,
                                         u_c=float(u_disc))
         if "scale_factor_nonlinearity" in out:
-            out["scale_factor_nonlinearity"]["truth"] = float((k_i.max() - k_i.min())
-                                                              / k_i.mean() * 100.0)
+            kl = out["scale_factor_nonlinearity"]
+            kl["truth"] = float((k_i.max() - k_i.min()) / k_i.mean() * 100.0)
+            d = report.item_uncertainty["scale_factor_nonlinearity"].beside
+            if d is not None:       # the draft's range as measured, kept beside the stated one
+                out["scale_factor_nonlinearity_draft"] = dict(
+                    kl, value=float(d.value), U=float(d.U), k=float(d.k), u_c=float(d.u_c))
+            kl["value"] = float(report.item_uncertainty["scale_factor_nonlinearity"].value)
     if "angle_deviation" in out:
         e = res.angle_deviation.table
         ad = tr[(tr["test"] == "angle_deviation")

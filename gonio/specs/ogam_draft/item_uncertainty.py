@@ -7,8 +7,11 @@ budget to each of the seven items, one documented function each:
 ==============================  ======  ===================================================
 :func:`scale_factor_budget`     K       Type A scatter of K_i, table angle error at the stops,
                                         count quantisation (7.1)
-:func:`nonlinearity_budget`     K_l     u of the largest and smallest K_i, and the spread noise
-                                        alone gives n values (7.2)
+:func:`nonlinearity_corrected_budget`  K_l  the range corrected for its bias by noise and tilt
+                                        (JCGM 101 Monte Carlo of the K_i's errors; stated)
+:func:`nonlinearity_budget`     K_l     the draft's range as measured: u of the largest and
+                                        smallest K_i, and the spread noise alone gives n values
+                                        (7.2; kept beside the stated value)
 :func:`zero_stability_budget`   B_s     the draft's s(M)/T (7.3): the one-sided χ² interval with
                                         the readings' ν_eff (stated alone, no k)
 :func:`zero_stability_model_budget`  B_s  the expected B_s of the fitted noise model of the 7.3
@@ -47,6 +50,7 @@ from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                random_walk_stdev_dof, stdev_u)
 
 __all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
+           "nonlinearity_corrected_budget",
            "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
            "consistency_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
            "COUNT_QUANTUM_U"]
@@ -112,6 +116,9 @@ class ItemUncertainty:
     #: (the guard band of a decision against an upper tolerance) and ``k_source``
     #: "chi-square"; ``k`` here stays the GUM's t-factor of the budget (JCGM 101 validation).
     stated_by_interval: bool = False
+    #: Another reading of the same item kept beside the stated one (K_l: the draft's range as
+    #: measured, :func:`nonlinearity_budget`, beside the bias-corrected range).
+    beside: object = field(default=None, repr=False, compare=False)
 
     @property
     def U(self) -> float:
@@ -432,6 +439,83 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     # a range: it cannot be negative, so a U above it is stated as its upper bound alone
     return replace(_budget("scale_factor_nonlinearity", "%", value, lines, k=k),
                    nonnegative=value >= 0)
+
+
+#: Draws of the JCGM 101 Monte Carlo of K_l's range (:func:`nonlinearity_corrected_budget`)
+#: and its fixed seed (the same 7.1 data give the same K_l and u).
+RANGE_DRAWS = 4000
+RANGE_SEED = 20261129
+
+
+def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
+                                  k: float | None = None, tilt_round_coupling=None,
+                                  draws: int = RANGE_DRAWS) -> ItemUncertainty:
+    """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
+
+    The draft's K_l = (max K_i − min K_i)/K · 100 % is a range of measured values, and a
+    range of noisy values is biased upwards (order statistics: n equal values with errors of
+    σ spread by d₂(n)·σ on average, Tippett 1925). :func:`nonlinearity_budget` widens U for it
+    (the ``K_rng`` line); here the bias is corrected (:func:`uncertainty.stdev.corrected_range`):
+    the errors of the K_i are drawn from the measurement model (JCGM 101 5.1, 7.2), each round
+    its table angle error at the stop (rectangular ±MPE, A.4.1, independent stops) and its
+    count quantisation (triangular ±1 count), and — when ``tilt_round_coupling`` gives the
+    rounds' coupling at the A.1 bound ((a_k, b_k), arcsec per degree,
+    :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling`) — the tilt × Earth-rate coupling,
+    the same tilt for every round: relative error (a_k cos α − b_k sin α)/3600 with the
+    azimuth α uniform (the bound at an unknown azimuth, as K's ``K_tilt`` line). K_l is the
+    range whose expected measured range equals the one measured; u is the spread of the
+    measured range there (one line, ``K_rng``, normal). The value is negative when the
+    measured range is smaller than the errors alone would give (it is then stated by its
+    interval [0, K_l + U], the rule of every non-negative item); when even K_l + U ≤ 0 the
+    value is taken as 0, the least a range can be, so the statement is [0, U].
+    Beyond the draft (its own reading, the range as measured, is kept beside it).
+
+    Examples
+    --------
+    Six rounds with equal K_i (3600 counts/°), table MPE 0.1″, no tilt: the measured range is 0,
+    the errors alone (±1 count over 60° dominates) spread six values by 2.38·10⁻⁴ % on average,
+    so the corrected range −2.38·10⁻⁴ % lies more than U = 2u below 0 and K_l is taken as 0;
+    one round 0.5 counts/° above five equal ones keeps nearly its measured range, less the
+    excess by which the lowest of the five equal ones falls below their true value:
+
+    >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
+    >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
+    >>> b.value, round(b.u_c * 1e4, 2), b.nonnegative
+    (0.0, 1.08, True)
+    >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
+    >>> measured = 0.5 / 3600.0833 * 100
+    >>> round(measured, 5), round(b.value, 5), measured - 2.4e-4 < b.value < measured
+    (0.01389, 0.01377, True)
+    """
+    from uncertainty.stdev import corrected_range
+
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    n = k_i.size
+    if n < 2:
+        raise ValueError("K_l needs at least two rounds")
+    kbar = float(np.mean(k_i))
+    to_pct = 100.0 / kbar
+    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    rng = np.random.default_rng(RANGE_SEED)
+    err = (rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
+           + rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))) * to_pct
+    src = "table angle at the stops (rectangular ±MPE), count quantisation (triangular ±1 count)"
+    if tilt_round_coupling is not None:
+        a, b = (np.asarray(v, dtype=float) * 100.0 / ARCSEC_PER_DEG for v in tilt_round_coupling)
+        alpha = rng.uniform(0.0, 2.0 * math.pi, (draws, 1))
+        err = err + a * np.cos(alpha) - b * np.sin(alpha)
+        src += ", tilt x Earth-rate coupling at the A.1 bound (azimuth uniform)"
+    c = corrected_range(k_i * to_pct, err)
+    kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
+    value = c.value if c.value + kk * c.u > 0 else 0.0
+    line = _Line(from_u("K_rng", 0.0, c.u, type="B",
+                        source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
+                               f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
+                               f"alone {c.noise_range:.4g} %, corrected {c.value:.4g} %"),
+                 "range of the K_i, bias corrected", True, "7.2 (A.4.1, A.1 applied to 7.1)")
+    return replace(_budget("scale_factor_nonlinearity", "%", value, [line], k=k),
+                   nonnegative=True)
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5

@@ -47,7 +47,8 @@ POSITION_DECIMALS: int = 2
 #: of the zero stability and the angle deviation beside them, and K's U under the
 #: distribution of the tilt coupling over the allowed mountings (``scale_factor_disc``).
 RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_disc",
-                                "scale_factor_nonlinearity", "zero_stability",
+                                "scale_factor_nonlinearity", "scale_factor_nonlinearity_draft",
+                                "zero_stability",
                                 "zero_stability_draft", "zero_stability_model", "angle_deviation",
                                 "angle_deviation_draft", "repeatability", "rate_consistency",
                                 "pointing_consistency")

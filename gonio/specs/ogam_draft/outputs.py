@@ -53,6 +53,10 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     result = result if isinstance(result, Result) else Result.from_json(result)
     d = result.to_json()
     lines = virtual_line(d) + [summary_text(d, "en", lab).rstrip("\n")]
+    kl = (d["items"].get("scale_factor_nonlinearity") or {}).get("details") or {}
+    if kl.get("estimates"):
+        lines.append("scale_factor_nonlinearity (the draft's range as measured, not stated): "
+                     f"{kl['estimates']['draft']['value']:.3g} %")
     zs = d["items"]["zero_stability"]["details"]
     est = zs.get("estimates")
     if est:

@@ -26,7 +26,7 @@ and their standard uncertainties by the law of propagation (JCGM 100 5.1.2), wit
 ν = N − 3 degrees of freedom (use the Student-t factor ``k95`` for a 95 %
 interval). The laboratory can then replace the draft's assumed tilt bound of 0.1°
 (Annex A.1, A.4.2) with a measured ψ and u(ψ), and the coupling analysis of
-:mod:`gonio.physics.coupling` with a measured α.
+:mod:`gonio.specs.ogam_draft.coupling` with a measured α.
 
 Caveats: the estimate sees the tilt of the sensing axis relative to the axis about
 which the table actually turns; a table-axis wobble with the same period adds a

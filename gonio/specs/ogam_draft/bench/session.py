@@ -351,7 +351,7 @@ def _simulate_many(blocks: list[Block], protocol: Protocol, variants: list[_Vari
         comp = [0.0] * nv
         if protocol.session.earth_compensation == "computed" and blk.compensate:
             # The operator's computed compensation, possibly with a wrong latitude or
-            # azimuth (protocol session.compensation_*; :mod:`gonio.physics.compensation`).
+            # azimuth (protocol session.compensation_*; :mod:`gonio.specs.ogam_draft.compensation`).
             ss = protocol.session
             lat = (bench0.latitude_deg if ss.compensation_latitude_deg is None
                    else ss.compensation_latitude_deg)

@@ -43,7 +43,7 @@ zeroing (Annex A.1: t ≤ 0.5 min). :func:`gonio.specs.ogam_draft.budget_extra.c
 turns its standard uncertainty into an :class:`~gonio.specs.ogam_draft.budget_extra.ExtraComponent`
 (normal, half-width = u) for a specification's Annex A budget — off by
 default, so the draft's budget stays reproducible. A tilted sensing axis adds a
-further, position-dependent residual (:mod:`gonio.physics.coupling`).
+further, position-dependent residual (:mod:`gonio.specs.ogam_draft.coupling`).
 """
 
 from __future__ import annotations
