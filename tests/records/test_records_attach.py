@@ -99,6 +99,29 @@ def test_approval_refused_without_them_and_attaching_sends_it_back_to_review(
         services.attach_conditions(store, people["tech"], cal.id, standard_ids=[std.id])
 
 
+def test_an_amendment_is_approved_only_with_them(sqlite_store, computed_folder,
+                                                 bench_readings, monkeypatch):
+    people = make_people(sqlite_store)
+    inst, std = setup_instrument(sqlite_store, people)
+    cal = new_calibration(sqlite_store, people, inst, std, bench_readings[0])
+    run_worker(sqlite_store, monkeypatch, computed_folder)
+    services.review(sqlite_store, people["rev"], cal.id, accept=True)
+    services.approve(sqlite_store, people["rev2"], cal.id)
+    cert = services.store_issue(sqlite_store, cal.id, computed_folder)
+    services.amend(sqlite_store, people["rev2"], cert.id, "environment corrected")
+    with sqlite_store.writing() as s:       # issued before the checks: no environment
+        from gonio.records.models import Calibration
+        s.get(Calibration, cal.id).humidity_pct = None
+        s.commit()
+    with pytest.raises(GonioError, match=f"cannot approve calibration {cal.id}: it names no "
+                                         r"environment \(temperature, humidity\)"):
+        services.approve(sqlite_store, people["rev"], cal.id)
+    got = services.attach_conditions(sqlite_store, people["tech"], cal.id,
+                                     temperature_c=20.1, humidity_pct=46)
+    assert got.status == "amending" and got.humidity_pct == 46.0
+    assert services.approve(sqlite_store, people["rev"], cal.id).status == "issuing"
+
+
 def test_environment_taken_from_the_readings_is_stated_so(sqlite_store, bench_readings,
                                                          tmp_path):
     from gonio.report.header import _environment_rows
