@@ -81,8 +81,9 @@ def test_certificate_states_k_as_mounted(tmp_path):
         rep["items"]["scale_factor"]["value"] / math.cos(math.radians(0.1)), rel=1e-12)
     from gonio.specs.ogam_draft.certificate_pages import certificate_blocks
     from gonio.report.i18n import labels
+    from gonio.specs.ogam_draft.phrases import LABELS     # the draft's own labels
     for lang, text in (("en", "stated as mounted"), ("zh", "安装状态下的值")):
-        blocks = certificate_blocks(rep, labels(lang), lab=None, truth=None,
+        blocks = certificate_blocks(rep, labels(lang, LABELS), lab=None, truth=None,
                                     lang=lang)["blocks"]
         page = " ".join(str(b.data) for b in blocks)
         assert text in page and "1.5 ppm" in page
