@@ -40,6 +40,7 @@ from gonio.units import ARCSEC_PER_DEG
 from gonio.specs.ogam_draft.items import RECORD_KEYS
 
 __all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS", "scale_factor_truth",
+           "chi_square_z",
            "disc_model_u",
            "zero_stability_truth", "item_monte_carlo", "PRESCRIBED"]
 
@@ -191,6 +192,8 @@ def item_record(report, truth: dict) -> dict:
                      "u_c": float(iu.u_c),
                      "interval": list(iu.interval) if iu.interval is not None else None,
                      "truth": None}
+        if iu.stated_by_interval:       # ν of its χ² interval (the Type A line of s)
+            out[name]["nu"] = float(iu.components[0].dof)
     zr = getattr(report, "zero_stability_readings", None) or {}
     if "zero_stability" in out:
         comp = report.protocol.session.static_s \
@@ -260,6 +263,24 @@ def trial_items(report, truth: dict) -> dict:
     return rec
 
 
+def chi_square_z(s, sigma, nu):
+    """z of a standard deviation against its χ² model: Φ⁻¹(F_χ²(ν s²/σ²; ν)), N(0, 1) when
+    ν s²/σ² ~ χ²(ν) (JCGM 100 E.4.3, the model a one-sided χ² interval is stated by); the
+    spread of z = (s − σ)/u_c, u_c = s/√(2ν), is that of a ratio with s in the denominator,
+    unbounded for small ν, and not a measure of the interval's width.
+
+    >>> rng = np.random.default_rng(0)
+    >>> s = np.sqrt(rng.chisquare(2, 20000) / 2)            # σ = 1, ν = 2
+    >>> z = chi_square_z(s, 1.0, 2.0)
+    >>> abs(float(z.mean())) < 0.03, round(float(z.std()), 1)
+    (True, 1.0)
+    """
+    from scipy.stats import chi2, norm
+
+    s, sigma, nu = (np.asarray(x, dtype=float) for x in (s, sigma, nu))
+    return norm.ppf(chi2.cdf(nu * (s / sigma) ** 2, nu))
+
+
 def item_coverage(records: list[dict], intrinsic_points=None,
                   judge_spread: bool = True) -> dict:
     """Per item, over the trials: coverage of |result − truth| ≤ U (k as stated), and for
@@ -309,6 +330,7 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             item["two_sided"] = two_sided(vals - truth, U, u_c, own)
             iv = np.array([r["interval"] for r in rs])
             item["interval_holds_truth"] = within((iv[:, 0] <= truth) & (truth <= iv[:, 1]))
+            _chi_square_spread(item, rs, vals, truth)
         else:
             t = np.array([r["truth"] for r in rs])
             item["within_U"] = within(np.abs(vals - t) <= U)
@@ -319,6 +341,7 @@ def item_coverage(records: list[dict], intrinsic_points=None,
                 if all(r.get("interval") is not None for r in rs):
                     iv = np.array([r["interval"] for r in rs])
                     item["interval_holds_truth"] = within((iv[:, 0] <= t) & (t <= iv[:, 1]))
+                    _chi_square_spread(item, rs, vals, t)
                 st = sorted({r.get("stated", "draft") for r in rs})
                 if st:
                     item["stated"] = st
@@ -328,6 +351,15 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             ts["spread_judged"] = False
         out[name] = item
     return out
+
+
+def _chi_square_spread(item: dict, rs: list, vals, truth) -> None:
+    """``z_chi2`` (mean, sd) of :func:`chi_square_z` for an item stated by its χ² interval."""
+    if rs and all(r.get("nu") for r in rs):
+        z = chi_square_z(vals, truth, [r["nu"] for r in rs])
+        z = z[np.isfinite(z)]
+        if z.size > 1:
+            item["z_chi2"] = {"mean": float(z.mean()), "sd": float(z.std(ddof=1))}
 
 
 def item_monte_carlo(report, trials: int, seed: int = 0) -> dict:

@@ -561,6 +561,9 @@ def item_coverage_lines(cases) -> list[str]:
                    f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
             if "interval_holds_truth" in it:
                 txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+            if "z_chi2" in it:
+                txt += (f"   chi2 z mean {it['z_chi2']['mean']:+.2f} "
+                        f"sd {it['z_chi2']['sd']:.2f}")
             if "within_U_intrinsic" in it:
                 txt += (f"   vs intrinsic truth "
                         f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
