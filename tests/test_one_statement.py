@@ -102,6 +102,28 @@ def test_summary_has_no_second_statement(demo):
                          re.M)
 
 
+def _beside_estimates(res: dict):
+    """(item, name, estimate) of every estimate given beside an item's stated value."""
+    for key, it in res["items"].items():
+        details = it.get("details") or {}
+        stated = details.get("stated")
+        for name, est in (details.get("estimates") or {}).items():
+            if est is not None and name != stated:
+                yield key, name, est
+
+
+def test_an_estimate_beside_the_statement_claims_no_coverage(demo):
+    """An estimate given beside the stated value (the optical draft's noise-model B_s)
+    carries its standard uncertainty only: no U, k, interval or 95 % anywhere."""
+    for key, name, est in _beside_estimates(demo["res"]):
+        u = est.get("uncertainty") or {}
+        for field in ("U", "k", "interval", "coverage_probability"):
+            assert u.get(field) is None, (key, name, field)
+    for ln in demo["summary"].splitlines():
+        if "not stated)" in ln and not ln.startswith("note:"):   # an estimate's own line
+            assert "95" not in ln and "k = " not in ln and "U = " not in ln, ln
+
+
 def _real_uncertainties(root) -> dict:
     """item key → list of (kind, si:real) for every si:real whose value is the item's."""
     out: dict = {}

@@ -184,7 +184,9 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         s.commit()
         cal_id = cal.id
     try:
-        services.store_run(store, cal_id, folder)   # files and items as a worker's run stores
+        # the result and its items as a worker's run stores them; not the command line's
+        # certificate files (its number and title, no DRAFT mark: not the records' draft)
+        services.store_run(store, cal_id, folder, kept=services.KEPT_IMPORTED)
     except Exception as exc:
         services.fail(store, cal_id, f"import failed: {exc}")
         raise

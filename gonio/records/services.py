@@ -1223,9 +1223,16 @@ KEPT = ("results.json", "summary.txt", "certificate.html", "certificate.pdf",
 DECISION_BASIS = ("decision_rule", "specification_limits")
 
 
-def store_run(store, cal_id: int, out: Path) -> None:
-    """Record a finished draft run: its files into the blob store, its items, computed."""
-    files = {n: blobs.put_file(store.blob_root, out / n) for n in KEPT if (out / n).is_file()}
+#: The files kept of an imported command-line folder: its certificate files carry the command
+#: line's number and title and no DRAFT mark, so they are not kept as the records' draft (the
+#: certificate is rendered at issue from the stored result).
+KEPT_IMPORTED = ("results.json", "summary.txt")
+
+
+def store_run(store, cal_id: int, out: Path, kept: tuple[str, ...] = KEPT) -> None:
+    """Record a finished draft run: its files (``kept`` of them) into the blob store, its
+    items, computed."""
+    files = {n: blobs.put_file(store.blob_root, out / n) for n in kept if (out / n).is_file()}
     items = result_items(json.loads((out / "results.json").read_text(encoding="utf-8")))
     with store.writing() as s:
         cal = s.get(Calibration, cal_id)

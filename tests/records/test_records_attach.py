@@ -35,6 +35,10 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
     inst, std = setup_instrument(store, people)
     cid = imported(store, people, computed_folder, bench_readings)
     day = services.calibration(store, cid).performed_on
+    # the command line's certificate (its number, "Calibration Certificate", no DRAFT mark)
+    # is not kept as the records' draft
+    from gonio.records import queries
+    assert queries.calibration_page(store, cid)["files"] == ["results.json", "summary.txt"]
     with pytest.raises(GonioError) as exc:
         services.review(store, people["rev"], cid, accept=True)
     assert str(exc.value) == (
@@ -75,6 +79,19 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
     assert lab["standards"][0]["identifier"] == "RT-07"
     assert lab["environment"] == {"temperature_c": 20.4, "humidity_pct": 41.0,
                                   "source": "entered"}
+    # approved and issued: the certificate, rendered from the stored result at issue,
+    # names the standard attached and the environment
+    from gonio.records import worker
+    services.approve(store, people["rev2"], cid)
+    assert worker.execute(store, services.claim_next(store).id), \
+        services.calibration(store, cid).error
+    with store.session() as s:
+        from gonio.records.models import Certificate
+        html_sha = s.scalar(select(Certificate.html_sha256).where(
+            Certificate.calibration_id == cid))
+    page = services.file_bytes(store, html_sha).decode("utf-8")
+    assert '<span class="nb">RT-07</span>' in page and "<td>20.4 °C</td>" in page
+    assert "<td>41 %</td>" in page
 
 
 def test_approval_refused_without_them_and_attaching_sends_it_back_to_review(
@@ -232,6 +249,7 @@ def test_attach_on_the_calibration_page(app, sqlite_store, computed_folder,  # n
     page = web.get(f"/calibrations/{cid}").text
     assert "Before its review and approval this calibration needs: registered standard" in page
     assert 'action="/calibrations/%d/attach"' % cid in page
+    assert "No draft certificate: this calibration was put in from the command line" in page
     r = web.post(f"/calibrations/{cid}/attach", data={
         "csrf": csrf_of(web), "standards": str(std.id), "temperature_c": "20.3",
         "humidity_pct": "47"})

@@ -75,7 +75,7 @@ ZERO_STABILITY_READINGS = {
 #: Labels of the two readings of K_l (results.json ``scale_factor_nonlinearity.estimates``).
 NONLINEARITY_READINGS = {
     "draft": "the draft's reading (7.2): K_l = (max K_i - min K_i)/K of the rounds as measured, "
-             "biased upwards by the rounds' errors; U widened for that bias (line K_rng)",
+             "biased upwards by the rounds' errors; its u includes that bias (line K_rng)",
     "corrected": "stated: the range corrected for its bias by the rounds' errors (table, "
                  "quantisation, tilt coupling at the A.1 bound; JCGM 101 Monte Carlo), "
                  "u the spread of the measured range",
@@ -191,7 +191,7 @@ class Analysis:
                 d["stated"] = "corrected"
                 d["estimates"] = {
                     "draft": {"label": NONLINEARITY_READINGS["draft"], "value": _plain_value(c),
-                              "uncertainty": iu.beside.to_dict()},
+                              "uncertainty": beside_uncertainty(iu.beside.to_dict())},
                     "corrected": {"label": NONLINEARITY_READINGS["corrected"],
                                   "value": float(iu.value)}}
         if c.name != "zero_stability":
@@ -204,7 +204,8 @@ class Analysis:
                           "uncertainty": zr["draft"].to_dict()},
                 "model": None if zr["model"] is None else
                 {"label": ZERO_STABILITY_READINGS["model"], "value": float(zr["model"].value),
-                 "uncertainty": zr["model"].to_dict(),
+                 "uncertainty": (zr["model"].to_dict() if zr["stated"] == "model" else
+                                 beside_uncertainty(zr["model"].to_dict())),
                  "variance_shares": zr["expected"].to_dict()["variance_shares"]}}
         if self.noise is not None:
             d["noise"] = {"source": self.noise_source, **self.noise.to_dict()}
@@ -1011,6 +1012,26 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                     item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                     budget_notes=notes, excluded=excluded,
                     zero_stability_readings=zs_readings, findings=findings)
+
+
+def beside_uncertainty(unc: dict) -> dict:
+    """The stored uncertainty of an estimate given *beside* the stated one (not stated):
+    its standard uncertainty, ν and components, without any coverage statement.
+
+    The item keeps one 95 % statement (its stated interval); an estimate beside it is a
+    reading with its standard uncertainty. Given beside B_s, the noise model's expected
+    value has intervals that under-cover on the study bench (the five-term fit has no
+    Gauss-Markov term; ``benchmarks/zero_stability_model_coverage.py``,
+    docs/draft-readings.md), so no U, k, interval or coverage probability is kept for it.
+
+    >>> beside_uncertainty({"u_c": 1e-5, "U": 2e-5, "k": 2.0, "nu_eff": 19.0,
+    ...                     "coverage_probability": 0.95, "k_source": "t", "unit": "deg/h"})
+    {'u_c': 1e-05, 'nu_eff': 19.0, 'unit': 'deg/h', 'coverage': 'none claimed (given beside the stated value)'}
+    """
+    out = {k: v for k, v in unc.items()
+           if k not in ("U", "k", "k_source", "interval", "coverage_probability")}
+    out["coverage"] = "none claimed (given beside the stated value)"
+    return out
 
 
 def zero_stability_readings(results: CalibrationResults, items: dict, noise,

@@ -67,8 +67,9 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
         elif est["model"] is not None:
             m = est["model"]
             lines.append(f"zero_stability (noise model, not stated): {m['value']:.3g} deg/h, "
-                         f"U = {m['uncertainty']['U']:.2g} deg/h (k = "
-                         f"{m['uncertainty']['k']:.3g}, coverage probability approximately 95 %)")
+                         f"standard uncertainty u = {m['uncertainty']['u_c']:.2g} deg/h (no "
+                         "coverage interval claimed: the five-term model's intervals "
+                         "under-cover, docs/draft-readings.md)")
         lines.append(f"note: {zs['stated_note']}")
     unc = d["extra"]["uncertainty"]
     if unc.get("measured"):
