@@ -156,8 +156,8 @@ def test_amendment_states_what_it_replaces_and_why(store, people, computed_folde
     assert "3 Sample Street" in kv_row(page, "Customer address")
     assert kv_row(first_html.decode("utf-8"), "Customer address") == "2 Sample Street"
     notice = (f"This certificate amends and replaces certificate {first.number}, which is "
-              "withdrawn. Reason for the amendment: customer&#x27;s address corrected "
-              "(second line)")       # its lines joined in the one notice
+              "withdrawn. Reason for the amendment: customer&#x27;s address corrected<br>"
+              "(second line)")       # its line break kept (escaped text, then <br>)
     assert notice in page, re.findall(r"<p class=\"notice\">.*?</p>", page, re.S)
     pages = pdf_pages(services.file_bytes(store, second.pdf_sha256), tmp_path)
     assert f"replaces certificate {first.number}" in pages[0]
