@@ -66,7 +66,8 @@ def test_every_item_covers_its_truth(records, intrinsic):
     assert set(cov) == {"scale_factor", "scale_factor_disc", "scale_factor_nonlinearity",
                         "scale_factor_nonlinearity_draft", "zero_stability",
                         "angle_deviation", "angle_deviation_draft", "repeatability",
-                        "rate_consistency", "pointing_consistency"}
+                        "rate_consistency", "rate_consistency_draft",
+                        "pointing_consistency"}
     for name, c in cov.items():
         assert c["trials"] == SEEDS
         if name in ("zero_stability", "repeatability"):

@@ -18,13 +18,14 @@ from gonio.analysis.coverage import clopper_pearson
 from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.calibration import analyse
-from gonio.specs.ogam_draft.item_coverage import disc_model_u, scale_factor_truth
+from gonio.specs.ogam_draft.item_coverage import disc_model_u, item_record, scale_factor_truth
 from gonio.specs.ogam_draft.item_uncertainty import nonlinearity_corrected_budget
 from gonio.specs.ogam_draft.study import (TABLE_RATE_ERROR_BOUND, case_bench, coupling_bias,
                                           draw_type_b, ideal_bench, tilted, validation_protocol,
                                           worst_azimuth)
 
 TRIALS = 40
+CV_TRIALS = 30
 
 
 @pytest.fixture(scope="module")
@@ -180,3 +181,26 @@ def test_type_b_draws_follow_their_stated_distributions(proto):
     r = np.array([x.table.rate_error_rel for x in d])
     assert np.abs(r).max() <= TABLE_RATE_ERROR_BOUND
     assert np.var(r) == pytest.approx(TABLE_RATE_ERROR_BOUND ** 2 / 3, rel=0.08)
+
+
+def test_rate_consistency_z_on_drawn_type_b_effects(base):
+    """C_v (7.6) corrected for the range's bias, on the ``typeb`` case (every Type B effect
+    drawn per trial): z = (C_v − truth)/u_c has sd within 0.7–1.3 and |mean| < 0.7, and U
+    covers (Clopper–Pearson reaching 95 %); the draft's range as measured, with U widened for
+    its bias (``C_rng``), has sd z below 0.7 (over-wide) — the stated C_v of the old budget."""
+    proto = validation_protocol(all_items=True)
+    z, z_draft, hits = [], [], 0
+    for s in range(700, 700 + CV_TRIALS):
+        res = run_session(proto, draw_type_b(base, proto, s), seed=s)
+        df = res.readings.copy()
+        df["line"] = np.arange(2, len(df) + 2)
+        rep = analyse(Readings(df, dict(res.metadata)), proto, budget="draft")
+        rec = item_record(rep, res.truth)
+        c, d = rec["rate_consistency"], rec["rate_consistency_draft"]
+        z.append((c["value"] - c["truth"]) / c["u_c"])
+        z_draft.append((d["value"] - d["truth"]) / d["u_c"])
+        hits += abs(c["value"] - c["truth"]) <= c["U"]
+    z, z_draft = np.array(z), np.array(z_draft)
+    assert abs(z.mean()) < 0.7 and 0.7 <= z.std(ddof=1) <= 1.3, (z.mean(), z.std(ddof=1))
+    assert clopper_pearson(hits, CV_TRIALS)[1] >= 0.95, hits
+    assert z_draft.std(ddof=1) < 0.7, z_draft.std(ddof=1)

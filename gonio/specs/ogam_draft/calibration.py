@@ -72,13 +72,23 @@ ZERO_STABILITY_READINGS = {
 }
 
 
-#: Labels of the two readings of K_l (results.json ``scale_factor_nonlinearity.estimates``).
-NONLINEARITY_READINGS = {
-    "draft": "the draft's reading (7.2): K_l = (max K_i - min K_i)/K of the rounds as measured, "
-             "biased upwards by the rounds' errors; its u includes that bias (line K_rng)",
-    "corrected": "stated: the range corrected for its bias by the rounds' errors (table, "
-                 "quantisation, tilt coupling at the A.1 bound; JCGM 101 Monte Carlo), "
-                 "u the spread of the measured range",
+#: Labels of the two readings of each range item stated corrected for its bias (results.json
+#: ``<item>.details.estimates``): K_l (7.2) and C_v (7.6).
+RANGE_READINGS = {
+    "scale_factor_nonlinearity": {
+        "draft": "the draft's reading (7.2): K_l = (max K_i - min K_i)/K of the rounds as "
+                 "measured, biased upwards by the rounds' errors; its u includes that bias "
+                 "(line K_rng)",
+        "corrected": "stated: the range corrected for its bias by the rounds' errors (table, "
+                     "quantisation, tilt coupling at the A.1 bound; JCGM 101 Monte Carlo), "
+                     "u the spread of the measured range"},
+    "rate_consistency": {
+        "draft": "the draft's reading (7.6): C_v = (max E_v - min E_v)/reference of the rates "
+                 "as measured, biased upwards by the E_v's errors; its u includes that bias "
+                 "(line C_rng)",
+        "corrected": "stated: the range corrected for its bias by the E_v's errors (means, "
+                     "table, zero drift, K and its tilt bias; JCGM 101 Monte Carlo), u the "
+                     "spread of the measured range and the choice of each extreme"},
 }
 
 
@@ -185,14 +195,14 @@ class Analysis:
         if c.name == "scale_factor" and c.measured:
             d.update(scale_factor_as_mounted(
                 float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
-        if c.name == "scale_factor_nonlinearity" and c.measured:
+        if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
             if iu is not None and iu.beside is not None:
                 d["stated"] = "corrected"
                 d["estimates"] = {
-                    "draft": {"label": NONLINEARITY_READINGS["draft"], "value": _plain_value(c),
+                    "draft": {"label": RANGE_READINGS[c.name]["draft"], "value": _plain_value(c),
                               "uncertainty": beside_uncertainty(iu.beside.to_dict())},
-                    "corrected": {"label": NONLINEARITY_READINGS["corrected"],
+                    "corrected": {"label": RANGE_READINGS[c.name]["corrected"],
                                   "value": float(iu.value)}}
         if c.name != "zero_stability":
             return d
@@ -222,7 +232,7 @@ class Analysis:
         value = c.value
         if c.name == "zero_stability" and self.zero_stability_readings:
             value = float(iu.value)               # the stated reading of B_s
-        if c.name == "scale_factor_nonlinearity" and iu is not None:
+        if c.name in RANGE_READINGS and iu is not None and iu.beside is not None:
             value = float(iu.value)               # the bias-corrected range
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
@@ -785,11 +795,13 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                                                float(at), u_r, int(row.n_series)))
         t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
         t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
-        out[name] = iu.consistency_budget(name, conds, float(c.details["reference_angle_arcsec"]),
-                                          scale, table_mpe_arcsec=mpe,
-                                          drift_half_width_arcsec=drift * t_min,
-                                          scale_factor_u_rel=k_u_rel,
-                                          scale_factor_tilt=k_tilt, curves=curves, k=k_fixed)
+        args = (name, conds, float(c.details["reference_angle_arcsec"]), scale)
+        kw = dict(table_mpe_arcsec=mpe, drift_half_width_arcsec=drift * t_min,
+                  scale_factor_u_rel=k_u_rel, scale_factor_tilt=k_tilt, curves=curves, k=k_fixed)
+        out[name] = iu.consistency_budget(*args, **kw)
+        if name == "rate_consistency":          # stated corrected, the draft's range beside
+            out[name] = dataclasses.replace(iu.consistency_corrected_budget(*args, **kw),
+                                            beside=out[name])
     return out
 
 

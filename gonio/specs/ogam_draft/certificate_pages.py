@@ -213,6 +213,9 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += [L["semi"], *segments(L["note_spread"],
                                      v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]
+            if name == "rate_consistency" and detail(res, name, "estimates"):
+                cell += [L["semi"], *segments(L["note_cv_draft"], v=_num(
+                    res, item_path(name, "estimates.draft.value"), "sig3", U))]
         elif name == "repeatability" and detail(res, name, "position_deg") is not None:
             opening, _, closing = L["paren"].partition("{x}")
             cell += [opening, *segments(L["note_at"],

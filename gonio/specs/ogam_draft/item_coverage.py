@@ -66,7 +66,10 @@ ITEM_TRUTHS = {
     "angle_deviation": "per point: mean over series of systematic_deviation_arcsec",
     "angle_deviation_draft": "as angle_deviation; U of the draft's four Annex A lines",
     "repeatability": "ensemble: max over points of sqrt(mean over trials of s_i^2)",
-    "rate_consistency": "spread of the noise-free E_v over the reference angle, ppm",
+    "rate_consistency": "spread of the noise-free E_v over the reference angle, ppm; result "
+                        "the bias-corrected range",
+    "rate_consistency_draft": "as rate_consistency; result the draft's range as measured, U "
+                              "widened for its bias (not stated)",
     "pointing_consistency": "spread of the noise-free E_g over the reference angle, %",
 }
 
@@ -237,6 +240,11 @@ def item_record(report, truth: dict) -> dict:
                              ("pointing_consistency", "orientation", 100.0)):
         if name in out:
             out[name]["truth"] = _consistency_truth(tr, getattr(res, name), col, scale)
+            d = report.item_uncertainty[name].beside
+            if d is not None:       # the draft's range as measured, kept beside the stated one
+                out[name + "_draft"] = dict(out[name], value=float(d.value), U=float(d.U),
+                                            k=float(d.k), u_c=float(d.u_c))
+                out[name]["value"] = float(report.item_uncertainty[name].value)
     return out
 
 

@@ -117,7 +117,7 @@ class ItemUncertainty:
     #: "chi-square"; ``k`` here stays the GUM's t-factor of the budget (JCGM 101 validation).
     stated_by_interval: bool = False
     #: Another reading of the same item kept beside the stated one (K_l: the draft's range as
-    #: measured, :func:`nonlinearity_budget`, beside the bias-corrected range).
+    #: measured, :func:`nonlinearity_budget`, beside the bias-corrected range; C_v likewise).
     beside: object = field(default=None, repr=False, compare=False)
 
     @property
@@ -888,6 +888,91 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     value = (a.e_arcsec - b.e_arcsec) * f
     return replace(_budget(item, unit, value, lines, k=k, correlation=corr, coeffs=coeffs),
                    nonnegative=value >= 0)      # a spread: U above it → its upper bound
+
+
+def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviation],
+                                 reference_angle_arcsec: float, scale: float, *,
+                                 table_mpe_arcsec: float, drift_half_width_arcsec: float,
+                                 scale_factor_u_rel: float = 0.0, scale_factor_tilt: float = 0.0,
+                                 curves=None, k: float | None = None,
+                                 draws: int = RANGE_DRAWS) -> ItemUncertainty:
+    """C (draft 7.6: ppm, 7.7: %) corrected for the range's bias, and its u: the stated C.
+
+    The draft's C = (max E_v − min E_v)/reference is a range of measured values, biased
+    upwards by their errors; :func:`consistency_budget` widens U for it (the ``C_rng`` line).
+    Here the bias is corrected (:func:`uncertainty.stdev.corrected_range`): the errors of the
+    E_v are drawn from the measurement model of :func:`consistency_budget`'s lines (JCGM 101
+    5.1, 7.2): each condition's mean (normal, u_single/√n_series, A.4.4), the table at its
+    position (rectangular ±MPE, A.4.1, the same draw for conditions at the same position),
+    its zero drift (rectangular, A.4.3, independent; a ramp over the turn as in
+    :func:`extreme_selection`: the drift accumulated from the zeroing at 0° to the extreme's
+    position θ_v, the bound's half-width times θ_v/360°), K's error δ·θ_v (normal, u(K)/K, the
+    same δ for all, 7.1) and the tilt bias of K A_K·θ_v (arcsine, the same phase for all, A.1).
+    C is the range whose expected measured range equals the one measured; u is the spread of
+    the measured range there (line ``C_rng``, normal), with the choice of each condition's
+    extreme (``C_sel``) beside it as in :func:`consistency_budget`. The value is negative when
+    the measured range is smaller than the errors alone would give (stated by its interval
+    [0, C + U]); when even C + U ≤ 0 it is taken as 0, as
+    :func:`nonlinearity_corrected_budget`. Beyond the draft (its own reading, the range as
+    measured, is kept beside it).
+
+    Examples
+    --------
+    Three rates with equal E_v (one series each, u = 0.096″) at one position: the measured
+    range 0 is below what the errors alone give (means and drifts, the table cancels), so C is
+    negative, their expected range with the opposite sign; with two rates 1″ apart C keeps
+    nearly the measured 0.7716 ppm:
+
+    >>> cs = [ConditionDeviation(f"{v}", 0.0, 360.0, 0.096, 1) for v in (10, 30, 60)]
+    >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
+    ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
+    >>> round(b.value, 3), b.nonnegative
+    (-0.169, True)
+    >>> cs = [ConditionDeviation("60", 0.5, 360.0, 0.096, 1),
+    ...       ConditionDeviation("10", -0.5, 360.0, 0.096, 1)]
+    >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
+    ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
+    >>> 0.70 < b.value < 0.7716
+    True
+    """
+    from uncertainty.stdev import corrected_range
+
+    cs = list(conditions)
+    if len(cs) < 2:
+        raise ValueError("a consistency needs at least two conditions")
+    f = scale / reference_angle_arcsec
+    unit = "ppm" if item == "rate_consistency" else "%"
+    clause = "7.6" if item == "rate_consistency" else "7.7"
+    n = len(cs)
+    x = np.array([c.e_arcsec for c in cs])
+    pos = np.array([c.position_deg for c in cs])
+    u_mean = np.array([c.u_single_arcsec / math.sqrt(max(c.n_series, 1)) for c in cs])
+    rng = np.random.default_rng(RANGE_SEED)
+    _, at = np.unique(np.round(pos, 6), return_inverse=True)
+    table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec, (draws, int(at.max()) + 1))[:, at]
+    ramp = np.clip(pos / 360.0, 0.0, 1.0)          # drift since the zeroing at 0°
+    err = (rng.normal(0.0, 1.0, (draws, n)) * u_mean + table
+           + rng.uniform(-drift_half_width_arcsec, drift_half_width_arcsec, (draws, n)) * ramp
+           + rng.normal(0.0, scale_factor_u_rel, (draws, 1)) * pos * ARCSEC_PER_DEG
+           + np.sin(rng.uniform(0.0, 2.0 * math.pi, (draws, 1))) * scale_factor_tilt * pos)
+    c = corrected_range(x * f, err * f)
+    kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
+    lines = [_Line(from_u("C_rng", 0.0, c.u, type="B",
+                          source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the "
+                                 f"{n} E_v: means, table, zero drift, K and its tilt bias; "
+                                 f"measured range {c.measured:.4g} {unit}, of the errors alone "
+                                 f"{c.noise_range:.4g} {unit}, corrected {c.value:.4g} {unit}"),
+                   "range of the E_v, bias corrected", True,
+                   clause + " (A.4.1, A.4.3, A.4.4, 7.1)")]
+    if curves is not None:
+        u_sel = extreme_selection_u(curves, list(u_mean), table_mpe_arcsec,
+                                    drift_half_width_arcsec, scale_factor_u_rel) * f
+        lines.append(_Line(from_u("C_sel", 0.0, u_sel, type="B",
+                                  source="Monte Carlo of the signed extremes (JCGM 101)"),
+                           "choice of each condition's extreme", True, clause))
+    u_c = math.hypot(*(ln.q.u for ln in lines))
+    value = c.value if c.value + kk * u_c > 0 else 0.0
+    return replace(_budget(item, unit, value, lines, k=k), nonnegative=True)
 
 
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,

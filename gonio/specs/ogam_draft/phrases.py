@@ -202,6 +202,8 @@ LABELS: dict[str, dict[str, str]] = {
                         "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
     "note_kl_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} %"},
+    "note_cv_draft": {"en": "the draft's range as measured (beside, not stated): {v} ppm",
+                      "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} ppm"},
     "note_at": {"en": "at {p}°", "zh": "位于 {p}°"},
     "note_spread": {"en": "spread max E − min E = {v}″", "zh": "极差 max E − min E = {v}″"},
     "fig_deviation": {"en": "Fig. 1 Angle-position deviation of every series (cf. Annex Fig. A.4)",
