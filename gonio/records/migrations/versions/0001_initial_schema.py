@@ -16,6 +16,14 @@ depends_on = None
 
 
 def upgrade() -> None:
+    _people_and_master_tables()
+    _calibration_tables()
+    _freeze_triggers()
+
+
+def _people_and_master_tables() -> None:
+    """Blobs, counters, customers, login failures, settings, standards, users, the audit
+    trail, instruments and web sessions."""
     op.create_table('blobs',
     sa.Column('sha256', sa.String(length=64), nullable=False),
     sa.Column('size', sa.BigInteger(), nullable=False),
@@ -119,6 +127,10 @@ def upgrade() -> None:
     sa.ForeignKeyConstraint(['user_id'], ['users.id'], ),
     sa.PrimaryKeyConstraint('id')
     )
+
+
+def _calibration_tables() -> None:
+    """Calibrations, their files and standards, certificates and result items."""
     op.create_table('calibrations',
     sa.Column('id', sa.Integer(), nullable=False),
     sa.Column('instrument_id', sa.Integer(), nullable=False),
@@ -221,8 +233,6 @@ def upgrade() -> None:
     )
     with op.batch_alter_table('result_items', schema=None) as batch_op:
         batch_op.create_index(batch_op.f('ix_result_items_calibration_id'), ['calibration_id'], unique=False)
-
-    _freeze_triggers()
 
 
 #: tables whose rows may be inserted but never updated or deleted
