@@ -275,3 +275,55 @@ def test_the_help_of_each_command_shows_the_plugins_group(plug_opts, capsys):
             build_parser([command]).parse_args([command, "--help"])
         out = capsys.readouterr().out
         assert "options of --spec plug-opts:" in out and flag in out
+
+
+# ------------------------------------------------------------------ gonio bench serve
+
+def _serve(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    return _command(_command(parser, "bench"), "serve")
+
+
+def test_bench_serve_names_no_specification_option():
+    """gonio's own ``bench serve`` holds none of the goniometer's options; the optical
+    draft adds them through ``arguments["bench"]``."""
+    import importlib
+
+    parser = argparse.ArgumentParser()
+    importlib.import_module("gonio.cli.cmd_bench").register(parser.add_subparsers())
+    own = _options(_serve(parser))
+    assert not own & {"--range-deg", "--warm-up"}
+    p = _serve(build_parser(["bench", "serve"]))
+    groups = {g.title: {o for a in g._group_actions for o in a.option_strings}
+              for g in p._action_groups}
+    assert groups["options of --spec ogam-draft"] == {"--range-deg", "--warm-up"}
+
+
+class _Served(Exception):
+    pass
+
+
+def test_bench_serve_options_reach_the_specifications_hook(monkeypatch):
+    """Given options reach the ``serve`` hook by keyword; those not given are left to the
+    hook's defaults (not passed)."""
+    import gonio.specs.ogam_draft.served as served
+
+    calls = []
+
+    def fake(bench, ports, **kwargs):
+        calls.append((bench, ports, kwargs))
+        raise _Served("stop before serving")    # the command reports it; nothing is served
+
+    monkeypatch.setattr(served, "serve", fake)
+    assert main(["bench", "serve", "--table-port", "0", "--gyro-port", "0",
+                 "--range-deg", "10"]) != 0
+    [(bench, ports, kwargs)] = calls
+    assert bench == "rlg" and ports == {"table": 0, "gyro": 0}
+    assert kwargs["range_deg"] == 10.0 and "warm_up_s" not in kwargs
+
+
+def test_a_rate_bench_refuses_the_goniometers_serve_options(capsys):
+    rc = main(["bench", "serve", "--bench", "mems-adxrs610", "--table-port", "0",
+               "--gyro-port", "0", "--warm-up", "5"])
+    assert rc == 2
+    assert capsys.readouterr().err == ("gonio: error: gonio bench serve: --warm-up does not "
+                                       "apply to a rate bench (mems-adxrs610)\n")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import time
 
 from gonio.cli.checks import seed
-from gonio.units import S_PER_H
+from gonio.cli.spec_options import given, no_spec_options, refuse
 
 
 def register(sub) -> None:
@@ -42,16 +42,21 @@ def register(sub) -> None:
     s.add_argument("--speed", type=float, default=1.0,
                    help="simulated seconds per real second (default 1)")
     s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
-    s.add_argument("--range-deg", type=float, default=360.0,
-                   help="the table's stated range, ±degrees (default 360)")
-    s.add_argument("--warm-up", type=float, default=S_PER_H,
-                   help="seconds the instrument has been on when serving starts (default: an "
-                        "hour)")
     s.add_argument("--fault", action="append", default=[],
                    help="inject a fault for testing: table-error:N (the N-th move fails with an "
                         "axis fault; a rate bench: its N-th ROT or OSC), gyro-drop:N (the module "
                         "drops its link at its N-th READ? or FETC?; a rate bench: ACQ:DATA?)")
     s.set_defaults(func=run)
+    no_spec_options(s)
+    p.serve_parser = s          # where the specifications' serve options go
+
+
+def add_spec_options(p) -> None:
+    """Every registered specification's own ``gonio bench serve`` options (``arguments
+    ["bench"]``, :func:`gonio.cli.spec_options.add_spec_options`), on the serve sub-parser."""
+    from gonio.cli import spec_options
+
+    spec_options.add_spec_options(p.serve_parser, "bench")
 
 
 def is_rate_bench(name: str) -> bool:
@@ -85,14 +90,19 @@ def run(args) -> int:
     if args.bench is None:
         args.bench = spec.default_bench
     if is_rate_bench(args.bench):
+        extra = [args.spec_flags[d] for d, v in given(args).items() if v not in (None, False)]
+        if extra:
+            raise GonioError(f"gonio bench serve: {', '.join(extra)} does not apply to a rate "
+                             f"bench ({args.bench})")
         served = _serve_rate(args)
     elif spec.serve is None:
         raise GonioError(f"gonio bench serve: {spec.key} serves no virtual bench as "
                          "instruments (the specification has no serve hook)")
     else:
+        opts = refuse(spec, "bench", given(args), args)
         served = spec.serve(args.bench, {"table": args.table_port, "gyro": args.gyro_port},
                             speed=args.speed, seed=args.seed, faults=Faults.parse(args.fault),
-                            range_deg=args.range_deg, warm_up_s=args.warm_up)
+                            **opts)
         for name, res in served.resources.items():
             print(f"{name}: {res}", flush=True)
     try:

@@ -83,8 +83,9 @@ OUTPUTS_OPTIONAL = ("demo", "warnings")
 #: The ``gonio`` commands a specification may add options to (``Specification.arguments``),
 #: each with the field naming the keywords its hook takes beyond the common ones
 #: (:meth:`Specification.accepted_options`).
-ARGUMENT_COMMANDS = {"budget": "budget_options", "calibrate": "calibrate_options",
-                     "simulate": "simulate_options", "validate": "coverage.options"}
+ARGUMENT_COMMANDS = {"bench": "serve_options", "budget": "budget_options",
+                     "calibrate": "calibrate_options", "simulate": "simulate_options",
+                     "validate": "coverage.options"}
 
 
 @functools.lru_cache(maxsize=1)
@@ -238,14 +239,15 @@ class Specification:
         ``write(result, out, *, truth, lab, lang, dcc)`` → {name: path},
         ``results_json(result)``, ``summary(result, lab)``; optionally ``demo(...)`` and
         ``warnings(result)``.
-    simulate_options, calibrate_options, budget_options : frozenset
-        The keywords the hooks ``simulate``, ``calibrate`` and ``budget`` take beyond the
-        common ones (``protocol`` and ``dcc`` among them where they apply); any other is
+    simulate_options, calibrate_options, budget_options, serve_options : frozenset
+        The keywords the hooks ``simulate``, ``calibrate``, ``budget`` and ``serve`` (``gonio
+        bench serve``) take beyond the common ones (``protocol`` and ``dcc`` among them where they apply); any other is
         refused naming the specification (:func:`gonio.pipeline.dispatch.refuse_options`).
     arguments : dict of str to str
         ``{command: "module:function"}``: the command-line options of the specification's
         own for the ``gonio`` commands of :data:`ARGUMENT_COMMANDS` (``calibrate``,
-        ``simulate``, ``budget``, ``validate``), such as the optical draft's ``gonio
+        ``simulate``, ``budget``, ``validate``, and ``bench`` for ``gonio bench serve``),
+        such as the optical draft's ``gonio
         calibrate --budget``. ``function(group)`` adds them with ``group.add_argument`` as
         argparse does; each option's ``dest`` is a keyword the command's hook takes
         (:meth:`accepted_options`), its default None (False for a flag: not given), and an
@@ -313,6 +315,7 @@ class Specification:
     simulate_options: frozenset = frozenset()
     calibrate_options: frozenset = frozenset()
     budget_options: frozenset = frozenset()
+    serve_options: frozenset = frozenset()
     readings_format: str = ""
     named_inputs: Callable[..., list] | None = None
     default_limits: tuple = ()
@@ -346,7 +349,8 @@ class Specification:
             raise _field_error(where, "coverage.reduced", "empty unless default_protocol is "
                                "a TOML file (the study's programme is written over it)",
                                self.coverage.reduced)
-        for name in ("simulate_options", "calibrate_options", "budget_options"):
+        for name in ("simulate_options", "calibrate_options", "budget_options",
+                     "serve_options"):
             _set_strings(self, where, name, frozenset)
         for name in ("clauses", "item_keys"):
             _set_strings(self, where, name, tuple)
@@ -388,7 +392,8 @@ class Specification:
     def accepted_options(self, command: str) -> frozenset:
         """The keywords the hook of ``gonio command`` takes beyond the common ones
         (:data:`ARGUMENT_COMMANDS`: ``calibrate_options``, ``simulate_options``,
-        ``budget_options``, the coverage study's ``options``).
+        ``budget_options``, ``serve_options`` for ``bench``, the coverage study's
+        ``options``).
 
         >>> sorted(get("ogam-draft").accepted_options("simulate"))
         ['stream', 'stream_format', 'table']

@@ -61,6 +61,19 @@ def add_simulate_options(group) -> None:
                             "key-value metadata) or stream.csv")
 
 
+# --------------------------------------------------------------------------- gonio bench serve
+
+def add_serve_options(group) -> None:
+    """The draft's own ``gonio bench serve`` options (``SPEC.arguments["bench"]``): the
+    served table's stated range and how long the goniometer has been on (the hook's
+    defaults, ±360° and an hour, when not given)."""
+    group.add_argument("--range-deg", dest="range_deg", type=positive_magnitude, default=None,
+                       help="the served table's stated range, ±degrees (default 360)")
+    group.add_argument("--warm-up", dest="warm_up_s", type=float_range(0, LARGE), default=None,
+                       metavar="S", help="seconds the goniometer has been on when serving "
+                                         "starts (default: an hour)")
+
+
 # --------------------------------------------------------------------------- gonio budget
 
 def add_budget_options(group) -> None:
