@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import re
+from typing import Annotated
 
-from fastapi import Request
+from fastapi import Depends, Request
 from fastapi.responses import HTMLResponse, Response
 
 from gonio.records import auth, services
@@ -35,6 +36,11 @@ def current(request: Request) -> tuple[User, str]:
     if got is None:
         raise Redirect("/login")
     return got
+
+
+#: A page's ``session: Session`` parameter: (user, CSRF token) of the request's session, resolved
+#: by FastAPI before the page's code runs (:func:`current`; without a session: the login page).
+Session = Annotated[tuple[User, str], Depends(current)]
 
 
 async def form(request: Request, csrf: str) -> dict:

@@ -14,7 +14,7 @@ from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, blobs, queries, services, submission
-from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, current,
+from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, Session,
                               file_response, form, page_of, render, wake)
 from gonio.web.front import login_response
 
@@ -63,8 +63,8 @@ async def login(request: Request):
 
 
 @router.post("/logout")
-async def logout(request: Request):
-    user, csrf = current(request)
+async def logout(request: Request, session: Session):
+    user, csrf = session
     await form(request, csrf)
     auth.close_session(_store(request), request.cookies.get(COOKIE))
     r = _back("/login")
@@ -76,8 +76,8 @@ async def logout(request: Request):
 
 
 @router.get("/")
-def dashboard(request: Request):
-    user, csrf = current(request)
+def dashboard(request: Request, session: Session):
+    user, csrf = session
     store = _store(request)
     review, _ = queries.calibrations(store, 1, 20, "computed")
     approve, _ = queries.calibrations(store, 1, 20, "reviewed")
@@ -93,16 +93,16 @@ def dashboard(request: Request):
 
 
 @router.get("/customers")
-def customers_page(request: Request):
-    user, csrf = current(request)
+def customers_page(request: Request, session: Session):
+    user, csrf = session
     return render(request, "customers.html", user, csrf,
                   customers=queries.customers(_store(request)),
                   error=request.query_params.get("error", "")[:300])
 
 
 @router.post("/customers")
-async def customers_add(request: Request):
-    user, csrf = current(request)
+async def customers_add(request: Request, session: Session):
+    user, csrf = session
     data = await form(request, csrf)
     try:
         services.add_customer(_store(request), user, data.get("name"), data.get("address"))
@@ -118,11 +118,11 @@ def _retire_of(data) -> bool | None:
     return None if v is None else v == "retired"
 
 
-async def _edit(request: Request, back: str, do) -> Response:
+async def _edit(request: Request, session: tuple, back: str, do) -> Response:
     """An edit form: ``do(user, data)``, then back to ``back`` (with the error if refused)."""
     from urllib.parse import quote
 
-    user, csrf = current(request)
+    user, csrf = session
     data = await form(request, csrf)
     try:
         do(user, data)
@@ -132,27 +132,29 @@ async def _edit(request: Request, back: str, do) -> Response:
 
 
 @router.post("/customers/{cust_id}/edit")
-async def customer_edit(request: Request, cust_id: int):
-    return await _edit(request, "/customers", lambda u, d: services.update_customer(
+async def customer_edit(request: Request, session: Session, cust_id: int):
+    return await _edit(request, session, "/customers", lambda u, d: services.update_customer(
         _store(request), u, cust_id, name=d.get("name"), address=d.get("address"),
         retire=_retire_of(d)))
 
 
 @router.post("/standards/{std_id}/edit")
-async def standard_edit(request: Request, std_id: int):
-    return await _edit(request, "/standards", lambda u, d: services.update_standard(
+async def standard_edit(request: Request, session: Session, std_id: int):
+    return await _edit(request, session, "/standards", lambda u, d: services.update_standard(
         _store(request), u, std_id, **{k: d.get(k) for k in (
             "name", "accuracy", "certificate", "traceability", "calibrated_on", "due_on")},
         retire=_retire_of(d)))
 
 
 @router.post("/instruments/{inst_id}/edit")
-async def instrument_edit(request: Request, inst_id: int):
-    return await _edit(request, f"/instruments/{inst_id}", lambda u, d: services.update_instrument(
-        _store(request), u, inst_id, customer_id=d.get("customer_id") and _int(
-            d.get("customer_id"), "customer"),
-        **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial")},
-        interval_months=d.get("interval_months", ""), retire=_retire_of(d)))
+async def instrument_edit(request: Request, session: Session, inst_id: int):
+    def do(u, d):
+        return services.update_instrument(
+            _store(request), u, inst_id, customer_id=d.get("customer_id") and _int(
+                d.get("customer_id"), "customer"),
+            **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial")},
+            interval_months=d.get("interval_months", ""), retire=_retire_of(d))
+    return await _edit(request, session, f"/instruments/{inst_id}", do)
 
 
 # --------------------------------------------------------------------------- instruments
@@ -170,14 +172,14 @@ def _instruments(request, user, csrf, status_code=200, error=""):
 
 
 @router.get("/instruments")
-def instruments_page(request: Request):
-    user, csrf = current(request)
+def instruments_page(request: Request, session: Session):
+    user, csrf = session
     return _instruments(request, user, csrf)
 
 
 @router.post("/instruments")
-async def instruments_add(request: Request):
-    user, csrf = current(request)
+async def instruments_add(request: Request, session: Session):
+    user, csrf = session
     data = await form(request, csrf)
     try:
         inst = services.register_instrument(
@@ -217,8 +219,8 @@ def _limits_from(data) -> list[dict]:
 
 
 @router.get("/instruments/{inst_id}")
-def instrument_page(request: Request, inst_id: int):
-    user, csrf = current(request)
+def instrument_page(request: Request, session: Session, inst_id: int):
+    user, csrf = session
     store = _store(request)
     inst, cals = queries.instrument(store, inst_id)
     if inst is None:
@@ -234,8 +236,7 @@ def instrument_page(request: Request, inst_id: int):
 
 
 @router.get("/instruments/{inst_id}/history.svg")
-def instrument_history(request: Request, inst_id: int):
-    current(request)
+def instrument_history(request: Request, session: Session, inst_id: int):
     from gonio.report.history_figure import history_svg
 
     store = _store(request)
@@ -275,8 +276,8 @@ def _due_filters(request: Request) -> dict:
 
 
 @router.get("/due")
-def due_page(request: Request):
-    user, csrf = current(request)
+def due_page(request: Request, session: Session):
+    user, csrf = session
     from urllib.parse import urlencode
 
     page, filters = page_of(request), _due_filters(request)
@@ -289,9 +290,9 @@ def due_page(request: Request):
 
 
 @router.get("/due/recall")
-def recall_page(request: Request):
+def recall_page(request: Request, session: Session):
     """The recall notices, one printed page per customer (the print stylesheet)."""
-    user, csrf = current(request)
+    user, csrf = session
     filters = _due_filters(request)
     return render(request, "recall.html", user, csrf, today=_dt.date.today(),
                   notices=queries.recall(_store(request), filters["customer"],
@@ -303,8 +304,8 @@ def recall_page(request: Request):
 
 
 @router.get("/standards/{std_id}")
-def standard_page(request: Request, std_id: int):
-    user, csrf = current(request)
+def standard_page(request: Request, session: Session, std_id: int):
+    user, csrf = session
     page = page_of(request)
     d = queries.standard_history(_store(request), std_id, page, PAGE)
     if d is None:
@@ -314,16 +315,16 @@ def standard_page(request: Request, std_id: int):
 
 
 @router.get("/standards")
-def standards_page(request: Request):
-    user, csrf = current(request)
+def standards_page(request: Request, session: Session):
+    user, csrf = session
     return render(request, "standards.html", user, csrf, standards=queries.standards(
         _store(request)), today=_dt.date.today(),
         error=request.query_params.get("error", "")[:300])
 
 
 @router.post("/standards")
-async def standards_add(request: Request):
-    user, csrf = current(request)
+async def standards_add(request: Request, session: Session):
+    user, csrf = session
     data = await form(request, csrf)
     try:
         services.add_standard(_store(request), user, **{k: data.get(k) for k in (
@@ -339,8 +340,8 @@ async def standards_add(request: Request):
 
 
 @router.get("/calibrations")
-def calibrations_page(request: Request):
-    user, csrf = current(request)
+def calibrations_page(request: Request, session: Session):
+    user, csrf = session
     page = page_of(request)
     status = request.query_params.get("status", "")
     status = status if status in ("queued", "running", "failed", "computed", "reviewed",
@@ -398,8 +399,8 @@ def _kept(data, field: str, csrf: str) -> tuple[str | None, str]:
 
 
 @router.get("/instruments/{inst_id}/calibrate")
-def calibration_new(request: Request, inst_id: int):
-    user, csrf = current(request)
+def calibration_new(request: Request, session: Session, inst_id: int):
+    user, csrf = session
     return _new_form(request, user, csrf, inst_id)
 
 
@@ -424,8 +425,8 @@ def _upload(store, data, field: str, limit_bytes: float) -> tuple[str | None, st
 
 
 @router.post("/instruments/{inst_id}/calibrate")
-async def calibration_create(request: Request, inst_id: int):
-    user, csrf = current(request)
+async def calibration_create(request: Request, session: Session, inst_id: int):
+    user, csrf = session
     try:
         services.check_upload_size(request.headers.get("content-length"),
                                    services.MAX_UPLOAD)
@@ -464,12 +465,12 @@ async def calibration_create(request: Request, inst_id: int):
 
 
 @router.post("/instruments/{inst_id}/acquire")
-async def calibration_acquire(request: Request, inst_id: int):
+async def calibration_acquire(request: Request, session: Session, inst_id: int):
     """A calibration started from a connected bench: the worker takes the readings through
     the instruments (:mod:`gonio.records.bench`), then calibrates them."""
     from gonio.records import bench
 
-    user, csrf = current(request)
+    user, csrf = session
     data = await form(request, csrf)
     store = _store(request)
     try:
@@ -491,8 +492,8 @@ async def calibration_acquire(request: Request, inst_id: int):
 
 
 @router.get("/calibrations/{cal_id}")
-def calibration_page(request: Request, cal_id: int):
-    user, csrf = current(request)
+def calibration_page(request: Request, session: Session, cal_id: int):
+    user, csrf = session
     d = queries.calibration_page(_store(request), cal_id)
     if d is None:
         return Response("no such calibration", status_code=404)
@@ -502,9 +503,8 @@ def calibration_page(request: Request, cal_id: int):
 
 
 @router.get("/calibrations/{cal_id}/progress")
-def calibration_progress(request: Request, cal_id: int):
+def calibration_progress(request: Request, session: Session, cal_id: int):
     """The state as JSON, for a script or a test polling the run."""
-    current(request)
     try:
         cal = services.calibration(_store(request), cal_id)
     except GonioError:
@@ -512,28 +512,28 @@ def calibration_progress(request: Request, cal_id: int):
     return {"id": cal.id, "status": cal.status, "progress": cal.progress, "error": cal.error}
 
 
-async def _act(request: Request, cal_id: int, do) -> Response:
+async def _act(request: Request, session: tuple, cal_id: int, do) -> Response:
     """A calibration's action (:func:`_edit` back to its page), and the dispatcher woken."""
-    r = await _edit(request, f"/calibrations/{cal_id}", do)
+    r = await _edit(request, session, f"/calibrations/{cal_id}", do)
     wake(request)
     return r
 
 
 @router.post("/calibrations/{cal_id}/review")
-async def calibration_review(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.review(
+async def calibration_review(request: Request, session: Session, cal_id: int):
+    return await _act(request, session, cal_id, lambda u, d: services.review(
         _store(request), u, cal_id, accept=d.get("decision") == "accept",
         comment=d.get("comment"), shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/approve")
-async def calibration_approve(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.approve(
+async def calibration_approve(request: Request, session: Session, cal_id: int):
+    return await _act(request, session, cal_id, lambda u, d: services.approve(
         _store(request), u, cal_id, shown_seal=d.get("seal") or None))
 
 
 @router.post("/calibrations/{cal_id}/attach")
-async def calibration_attach(request: Request, cal_id: int):
+async def calibration_attach(request: Request, session: Session, cal_id: int):
     def do(u, d):
         from_readings = bool(d.get("environment_from_readings"))
         services.attach_conditions(
@@ -542,23 +542,23 @@ async def calibration_attach(request: Request, cal_id: int):
             temperature_c=None if from_readings else d.get("temperature_c"),
             humidity_pct=None if from_readings else d.get("humidity_pct"),
             environment_from_readings=from_readings)
-    return await _act(request, cal_id, do)
+    return await _act(request, session, cal_id, do)
 
 
 @router.post("/calibrations/{cal_id}/void")
-async def calibration_void(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.void(
+async def calibration_void(request: Request, session: Session, cal_id: int):
+    return await _act(request, session, cal_id, lambda u, d: services.void(
         _store(request), u, cal_id, d.get("reason")))
 
 
 @router.post("/calibrations/{cal_id}/retry")
-async def calibration_retry(request: Request, cal_id: int):
-    return await _act(request, cal_id, lambda u, d: services.retry(_store(request), u, cal_id))
+async def calibration_retry(request: Request, session: Session, cal_id: int):
+    return await _act(request, session, cal_id,
+                      lambda u, d: services.retry(_store(request), u, cal_id))
 
 
 @router.get("/calibrations/{cal_id}/files/{name}")
-def calibration_file(request: Request, cal_id: int, name: str):
-    current(request)
+def calibration_file(request: Request, session: Session, cal_id: int, name: str):
     d = queries.calibration_page(_store(request), cal_id)
     if d is None or name not in FILE_TYPES or name not in d["files"]:
         return Response("no such file", status_code=404)
@@ -572,8 +572,8 @@ def calibration_file(request: Request, cal_id: int, name: str):
 
 
 @router.get("/certificates")
-def certificates_page(request: Request):
-    user, csrf = current(request)
+def certificates_page(request: Request, session: Session):
+    user, csrf = session
     page = page_of(request)
     rows, total = queries.certificates(_store(request), page, PAGE)
     return render(request, "certificates.html", user, csrf, certs=rows, total=total, page=page,
@@ -581,8 +581,8 @@ def certificates_page(request: Request):
 
 
 @router.get("/certificates/{cert_id}")
-def certificate_page(request: Request, cert_id: int):
-    user, csrf = current(request)
+def certificate_page(request: Request, session: Session, cert_id: int):
+    user, csrf = session
     cert, newer = queries.certificate(_store(request), cert_id)
     if cert is None:
         return Response("no such certificate", status_code=404)
@@ -591,8 +591,7 @@ def certificate_page(request: Request, cert_id: int):
 
 
 @router.get("/certificates/{cert_id}/{name}")
-def certificate_file(request: Request, cert_id: int, name: str):
-    current(request)
+def certificate_file(request: Request, session: Session, cert_id: int, name: str):
     cert, _ = queries.certificate(_store(request), cert_id)
     sha = None if cert is None else {"certificate.pdf": cert.pdf_sha256,
                                      "certificate.html": cert.html_sha256,
@@ -604,8 +603,8 @@ def certificate_file(request: Request, cert_id: int, name: str):
 
 
 @router.post("/certificates/{cert_id}/amend")
-async def certificate_amend(request: Request, cert_id: int):
-    user, csrf = current(request)
+async def certificate_amend(request: Request, session: Session, cert_id: int):
+    user, csrf = session
     data = await form(request, csrf)
     try:
         cal = services.amend(_store(request), user, cert_id, data.get("reason"))
@@ -635,8 +634,8 @@ def _filters(request: Request, names) -> dict:
 
 
 @router.get("/audit")
-def audit_page(request: Request):
-    user, csrf = current(request)
+def audit_page(request: Request, session: Session):
+    user, csrf = session
     refused = _may_read(user, "reviewer", "admin")
     if refused:
         return refused
@@ -677,9 +676,9 @@ def csv_text(header: list[str], rows: list[list]) -> str:
 
 
 @router.get("/export/{name}.csv")
-def export_csv(request: Request, name: str):
+def export_csv(request: Request, session: Session, name: str):
     """A whole list as CSV (the audit trail for reviewers and admins, filtered as its page)."""
-    user, _ = current(request)
+    user, _ = session
     if name == "audit":
         refused = _may_read(user, "reviewer", "admin")
         if refused:
@@ -695,8 +694,8 @@ def export_csv(request: Request, name: str):
 
 
 @router.get("/users")
-def users_page(request: Request):
-    user, csrf = current(request)
+def users_page(request: Request, session: Session):
+    user, csrf = session
     refused = _may_read(user, "admin")
     if refused:
         return refused
@@ -705,8 +704,8 @@ def users_page(request: Request):
 
 
 @router.post("/users")
-async def users_add(request: Request):
-    user, csrf = current(request)
+async def users_add(request: Request, session: Session):
+    user, csrf = session
     data = await form(request, csrf)
     return _users_form(request, user, csrf, lambda: services.create_user(
         _store(request), user, data.get("username"), data.get("password"),
@@ -714,9 +713,9 @@ async def users_add(request: Request):
 
 
 @router.post("/users/{username}")
-async def users_update(request: Request, username: str):
+async def users_update(request: Request, session: Session, username: str):
     """Change a user: roles, active, a new password (admin)."""
-    user, csrf = current(request)
+    user, csrf = session
     data = await form(request, csrf)
     return _users_form(request, user, csrf, lambda: services.update_user(
         _store(request), user, username, active=data.get("active") == "yes",
@@ -735,29 +734,29 @@ def _users_form(request, user, csrf, do):
 
 
 @router.get("/backup")
-def backup_page(request: Request):
+def backup_page(request: Request, session: Session):
     """Backups (admin): verify the live records, download a backup, verify an archive
     before restoring it; the restore itself is the command line's (docs/records.md#backup)."""
-    user, csrf = current(request)
+    user, csrf = session
     refused = _may_read(user, "admin")
     if refused:
         return refused
     return render(request, "backup.html", user, csrf)
 
 
-async def _admin_post(request: Request):
+async def _admin_post(request: Request, session: tuple):
     """An admin's form sent (CSRF checked): (user, csrf, data), else the 403 Response."""
-    user, csrf = current(request)
+    user, csrf = session
     data = await form(request, csrf)
     return _may_read(user, "admin") or (user, csrf, data)
 
 
 @router.post("/backup/verify")
-async def backup_verify(request: Request):
+async def backup_verify(request: Request, session: Session):
     """The live records checked as ``gonio db verify`` checks them."""
     from gonio.records.backup import verify
 
-    got = await _admin_post(request)
+    got = await _admin_post(request, session)
     if isinstance(got, Response):
         return got
     user, csrf, _ = got
@@ -766,13 +765,13 @@ async def backup_verify(request: Request):
 
 
 @router.post("/backup/download")
-async def backup_download(request: Request):
+async def backup_download(request: Request, session: Session):
     """A backup archive of the records now (``gonio db backup``), as a download."""
     import tempfile
 
     from gonio.records.backup import backup
 
-    got = await _admin_post(request)
+    got = await _admin_post(request, session)
     if isinstance(got, Response):
         return got
     user, csrf, _ = got
@@ -790,12 +789,12 @@ async def backup_download(request: Request):
 
 
 @router.post("/backup/check")
-async def backup_check(request: Request):
+async def backup_check(request: Request, session: Session):
     """A backup archive uploaded and checked as ``gonio db restore`` checks it before it
     writes anything (complete, intact, every row and reference); nothing is written."""
     from gonio.records.backup import check_archive
 
-    got = await _admin_post(request)
+    got = await _admin_post(request, session)
     if isinstance(got, Response):
         return got
     user, csrf, data = got
@@ -813,8 +812,8 @@ async def backup_check(request: Request):
 
 
 @router.post("/settings")
-async def settings_save(request: Request):
-    user, csrf = current(request)
+async def settings_save(request: Request, session: Session):
+    user, csrf = session
     data = await form(request, csrf)
     return _users_form(request, user, csrf, lambda: services.set_settings(
         _store(request), user, **{k: data.get(k) for k in services.SETTINGS
