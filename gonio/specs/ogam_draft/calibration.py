@@ -32,7 +32,7 @@ from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
 from gonio.formats.metadata import header_lines
 from gonio.specs.ogam_draft.readings import Readings, metadata_float, read_readings
 from gonio.errors import GonioError
-from gonio.formats.records import StaticRecord
+from gonio.specs.ogam_draft.static_record import StaticRecord
 from gonio.result import Finding
 from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.result.model import Item, Result, Uncertainty

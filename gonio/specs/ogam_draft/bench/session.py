@@ -31,7 +31,7 @@ from gonio.atomic import active_stage, check_output_dir, output_dir, write_text
 from gonio.specs.ogam_draft.bench.config import Bench
 from gonio.specs.ogam_draft.bench.instrument import (Integrator, counts_from_angle, deterministic_signature,
                                     geometry, harmonic_sum_arcsec, rate_nonlinearity)
-from gonio.formats.records import StaticRecord
+from gonio.specs.ogam_draft.static_record import StaticRecord
 from gonio.physics.earth import NAMED_AXES, axis_enu, earth_rate_enu
 from gonio.specs.ogam_draft.bench.config import check_counter
 from gonio.errors import GonioError

@@ -1,9 +1,10 @@
-"""Records of continuous instrument output cut from a stream or captured on the bench.
+"""The optical draft's record of continuous instrument output over the 7.3 rest, cut from a
+laboratory's stream or captured by the virtual bench.
 
-A :class:`StaticRecord` is the instrument's output over a phase at rest (the
-7.3 zero-stability phase), the input of the noise analysis. It is plain data:
-the calibration pipeline builds one from a laboratory's stream, the virtual
-bench from its own simulation, and neither needs the other.
+A :class:`StaticRecord` is the instrument's output over a phase at rest (the 7.3
+zero-stability phase), the input of the draft's noise analysis. It is plain data: the
+calibration builds one from a laboratory's stream, the virtual bench from its own
+simulation, and neither needs the other.
 """
 
 from __future__ import annotations
