@@ -826,10 +826,12 @@ def _stage(store, upload) -> tuple[str, Path]:
     import shutil
     import time
 
+    from gonio.units import S_PER_DAY
+
     root = _staging(store)
     root.mkdir(mode=0o700, exist_ok=True)
     for old in root.glob("*.zip"):
-        if old.stat().st_mtime < time.time() - 86400:
+        if old.stat().st_mtime < time.time() - S_PER_DAY:
             old.unlink(missing_ok=True)
     h = hashlib.sha256()
     tmp = root / f".upload-{_dt.datetime.now().timestamp():.6f}"

@@ -8,6 +8,7 @@ were."""
 from __future__ import annotations
 
 import json
+import zipfile
 
 import pytest
 from sqlalchemy import func, select
@@ -18,20 +19,15 @@ from gonio.records.backup import archive_sha256, backup, restore, summary
 from gonio.records.models import AuditEvent, Base, Certificate, WebSession
 
 from .conftest import PASSWORD
-from .test_records_backup import archive_without, damage
-from .test_records_services import new_calibration, run_worker, setup_instrument
+from .test_records_backup import archive_without, damage, one_issued
+from .test_records_services import new_calibration, run_worker
 
 
 @pytest.fixture
 def nightly(store, people, computed_folder, bench_readings, monkeypatch, tmp_path):
     """The live records (one issued certificate) and last night's backup of them, taken
     before a second calibration was computed and somebody logged in: (store, archive)."""
-    inst, std = setup_instrument(store, people)
-    cal = new_calibration(store, people, inst, std, bench_readings[0])
-    run_worker(store, monkeypatch, computed_folder)
-    services.review(store, people["rev"], cal.id, accept=True)
-    services.approve(store, people["rev2"], cal.id)
-    run_worker(store, monkeypatch, computed_folder)
+    inst, std = one_issued(store, people, computed_folder, bench_readings, monkeypatch)
     auth.open_session(store, people["admin"])
     archive = tmp_path / "nightly.zip"
     backup(store, archive)
@@ -56,7 +52,6 @@ def test_restore_replaces_the_live_records(nightly, people, tmp_path):
     before = summary(store)
     assert before["calibrations"] == 2 and before["rows"]["web_sessions"] == 2
     # the archive's own rows, read independently of restore: records.json
-    import zipfile
     with zipfile.ZipFile(archive) as zf:
         doc = json.loads(zf.read("records.json"))
     counts = restore(store, archive, replace=True, actor=people["admin"],
@@ -77,13 +72,11 @@ def test_restore_replaces_the_live_records(nightly, people, tmp_path):
     assert said["replaced"]["calibrations"] == 2
     # the records work on: verified whole, the next id after the restored ones
     assert backup_mod.verify(store)[1] == []
-    inst = services.add_customer(store, people["tech"], "After the restore Ltd")
-    assert inst.id == 2
+    assert services.add_customer(store, people["tech"], "After the restore Ltd").id == 2
     assert auth.authenticate(store, "admin", PASSWORD).username == "admin"
-    if store.engine.dialect.name == "sqlite":
-        live = store.engine.url.database
+    if store.engine.dialect.name == "sqlite":    # the replaced file kept, no file left over
         assert len(list(store.data.glob("records.sqlite3.replaced-*"))) == 1
-        assert not list(store.data.glob(".records.sqlite3.restoring-*")), live
+        assert not list(store.data.glob(".records.sqlite3.restoring-*"))
 
 
 def test_restore_repairs_a_damaged_stored_file(nightly, people):
@@ -120,7 +113,7 @@ def test_only_an_admin_restores_the_confirmed_archive(nightly, people, tmp_path)
     assert snapshot(store) == before
 
 
-def test_a_failure_part_way_leaves_the_live_records(nightly, people, tmp_path):
+def test_a_failure_part_way_leaves_the_live_records(nightly, people, tmp_path, monkeypatch):
     store, archive = nightly
     before = snapshot(store)
 
@@ -137,16 +130,11 @@ def test_a_failure_part_way_leaves_the_live_records(nightly, people, tmp_path):
     assert services.add_customer(store, people["tech"], "Next Ltd").id == 2
     before = snapshot(store)
     if store.engine.dialect.name == "sqlite":    # the swap itself fails
-        import os
-
         def fail(*a, **k):
             raise OSError(28, "No space left on device")
-        real = os.replace
-        os.replace = fail
-        try:
-            with pytest.raises(OSError):
+        with monkeypatch.context() as m:
+            m.setattr(backup_mod.os, "replace", fail)
+            with pytest.raises(OSError, match="No space left"):
                 restore(store, archive, replace=True, actor=people["admin"])
-        finally:
-            os.replace = real
         assert snapshot(store) == before
         assert not list(store.data.glob(".records.sqlite3.restoring-*"))
