@@ -155,3 +155,64 @@ def test_restore_in_the_browser(records, tmp_path, monkeypatch):  # noqa: F811
     again = login(app, "boss")
     audit = again.get("/audit").text
     assert "restore" in audit and sha in audit
+
+
+def test_the_gate_waits_for_requests_in_flight_and_answers_the_rest():
+    """gonio.web.common.Gate: closing waits until the closing request is the only one in
+    flight; meanwhile and afterwards every new request is turned away with the reason."""
+    import threading
+    import time
+
+    from gonio.web.common import Gate
+
+    gate = Gate()
+    assert gate.enter() == ""                      # a page being answered
+    assert gate.enter() == ""                      # the restore's own request
+    closed = []
+    t = threading.Thread(target=lambda: closed.append(gate.close("restoring", 10)))
+    t.start()
+    time.sleep(0.3)
+    assert not closed and gate.enter() == "restoring"   # waiting, new requests refused
+    gate.leave()                                   # the page ends: the restore may run
+    t.join(5)
+    assert closed == [True] and gate.close("again", 0.1) is False
+    gate.open()
+    gate.leave()
+    assert gate.enter() == "" and gate.busy == 1
+    # others that do not end in time: the gate opens again and says so
+    gate.enter()
+    assert gate.enter() == "" and gate.close("restoring", 0.2) is False
+    assert gate.enter() == ""
+
+
+def test_no_restore_while_a_worker_runs(records, tmp_path):  # noqa: F811
+    """A calibration being computed: the restore is refused and nothing replaced; the
+    dispatcher claims again afterwards."""
+    import subprocess
+    import sys
+
+    from gonio.records.backup import summary
+    from gonio.records.worker import Dispatcher
+    from gonio.web.app import create_app
+
+    services.create_user(records, None, "boss", PASSWORD, "admin")
+    backup(records, tmp_path / "nightly.zip")
+    services.add_customer(records, services.user(records, "tech"), "After the backup Ltd")
+    dispatcher = Dispatcher(records)
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    dispatcher.children[99] = child
+    try:
+        app = create_app(records, dispatcher)
+        web = login(app, "boss")
+        page = web.post("/backup/check", data={"csrf": csrf_of(web)}, files={
+            "archive": ("nightly.zip", (tmp_path / "nightly.zip").read_bytes(),
+                        "application/zip")}).text
+        r = web.post("/backup/restore", data=dict(_confirm(page), csrf=csrf_of(web),
+                                                  confirm="RESTORE", password=PASSWORD))
+        assert r.status_code == 409
+        assert "1 calibration(s) are being computed or issued now" in r.text
+        assert summary(records)["rows"]["customers"] == 2 and not dispatcher._paused
+        assert web.get("/backup").status_code == 200        # the server is open again
+    finally:
+        child.kill()
+        child.wait()
