@@ -644,7 +644,7 @@ def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
     JCGM 106 7.3 with this distribution of σ): with a guard band of U = limit − s the guarded
     upper limit is passed exactly when the stated limit is below the tolerance. The same
     statement as the rate specifications' repeatabilities
-    (:func:`gonio.specs._rate_family.rate_records.std_dev_uncertainty`).
+    (:func:`gonio.result.gum.std_dev_uncertainty`).
 
     >>> [round(x, 3) for x in chi_square_statement(1.0, 9)]       # χ²_0.05(9) = 3.325
     [0.0, 1.645]
