@@ -137,3 +137,45 @@ def test_study_draws_the_chamber_within_its_tolerance_and_worst_at_its_bound(pro
     bias = coupling_bias(replace(w, chamber_deviation_c=0.0), proto)
     alpha = w.instrument.sf_temperature_coeff_ppm_per_c
     assert np.sign(bias) == np.sign(alpha * w.chamber_deviation_c)
+
+
+def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):
+    """A bench whose chamber is 0.6 °C off writes the stream's optional temperature_c column
+    (the reference plus the deviation on every sample) and the readings metadata likewise;
+    the stream reduces to the readings the session wrote (the column does not disturb it).
+    At the reference the stream has no such column (the default bench's stream unchanged)."""
+    from pathlib import Path
+
+    from gonio.formats.streams import read_stream
+    from gonio.specs.ogam_draft.protocol import load_protocol
+    from gonio.specs.ogam_draft.readings import read_readings
+    from gonio.specs.ogam_draft.reduce import reduce_stream
+    from gonio.specs.ogam_draft.simulate import simulate
+
+    proto_file = Path(__file__).parent / "data" / "pins" / "ogam-draft-small.toml"
+    rlg = (Path(__file__).parents[1] / "protocols" / "benches" / "rlg.toml").read_text("utf-8")
+    assert "deviation_c = 0.0" in rlg
+    for dev, name in ((0.6, "warm"), (0.0, "ref")):
+        bench = tmp_path / f"{name}.toml"
+        bench.write_text(rlg.replace('table = "table-precision"', 'table = "table-precision"\n'
+                                     'sample_rate_hz = 20.0', 1)
+                         .replace("sample_rate_hz = 1000.0", "", 1)
+                         .replace("deviation_c = 0.0", f"deviation_c = {dev!r}"), "utf-8")
+        out = tmp_path / name
+        simulate(out, protocol=str(proto_file), bench=str(bench), seed=2, stream=True,
+                 stream_format="csv")
+        s = read_stream(out / "stream.csv")
+        rd = read_readings(out / "readings.csv")
+        assert rd.metadata["temperature_c"] == repr(20.0 + dev)
+        if not dev:
+            assert s.temperature_c is None
+            continue
+        assert np.all(s.temperature_c == 20.0 + dev)
+        red = reduce_stream(s, load_protocol(str(proto_file)))
+        assert not [u for u in red.unmatched if u["kind"] == "round"]
+        key = ["test", "series", "round", "orientation"]
+        m = rd.data.merge(red.readings, on=key + ["rate_dps"], how="outer", indicator=True,
+                          suffixes=("_ref", "_got"))
+        m = m[m["test"] != "zero_stability"]
+        assert (m["_merge"] == "both").all()
+        assert np.abs(m["gyro_counts_got"] - m["gyro_counts_ref"]).max() <= 1.0
