@@ -117,34 +117,26 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
 
 def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
     """A dispersion whose standard uncertainty comes from its own budget ``u`` (JJF 7.2.10
-    bias stability: the mean of Q records' standard deviations of block means, u_c from
-    the records' spread with ν_eff = Q − 1), stated as a standard deviation is: by its
-    one-sided χ² 95 % interval [0, s·√(ν/χ²_0.05,ν)] alone, as :func:`std_dev_uncertainty`
-    states one. ν is that of the standard deviation whose χ² spread is the budget's u_c
-    widened by t_0.95(ν_eff)/z_0.95 (the allowance of JCGM 100 G.3 for a u_c estimated
-    from ν_eff degrees of freedom, one-sided as the statement): ν = ½ (s/u₉₅)²,
-    u₉₅ = u_c·t_0.95(ν_eff)/z_0.95 (JCGM 100 E.4.3, u(s)/s = 1/√(2ν), read backwards).
-    Without the widening (ν from u_c itself) the limit held the bench's B_s in 93 % of
-    trials: the spread of three records understates u_c too often
-    (docs/jjf1535-readings.md). ν is stated as its integer part (∞ above 1000, the limit
-    then keeps the computed ν). No k; U is the distance to the upper limit (the guard band
-    of the decision, :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ²
-    distribution with that ν). The budget's rows and u_c are kept.
+    bias stability: the mean of Q records' standard deviations of block means, its sampling
+    term with the records' effective ν, and the scale factor), stated as a standard deviation
+    is: by its one-sided χ² 95 % interval [0, s·√(ν/χ²_0.05,ν)] alone, as
+    :func:`std_dev_uncertainty` states one, with ν = ½ (s/u_c)² (JCGM 100 E.4.3,
+    u(s)/s = 1/√(2ν), read backwards: the ν of a standard deviation whose χ² spread is u_c).
+    ν is stated as its integer part (∞ above 1000, the limit then keeps the computed ν). No
+    k; U is the distance to the upper limit (the guard band of the decision,
+    :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ² distribution with that
+    ν). The budget's rows and u_c are kept.
 
     >>> u = dispersion_uncertainty(48.0, Uncertainty([], 3.1, 13.3, 4.3, 2.0, None, 0.95))
     >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
-    (38.0, None, [0.0, 59.32], 'chi-square')
+    (119.9, None, [0.0, 53.78], 'chi-square')
     """
-    from scipy.stats import norm, t
-
     from gonio.result.statement import stated_nu
     from gonio.specs._rate_family.formulas import std_upper_half_width
 
     if not (s > 0 and u.u_c > 0):
         return u
-    nu_b = stated_nu(u.nu_eff)
-    widen = 1.0 if nu_b is None or math.isinf(nu_b) else float(t.ppf(0.95, nu_b) / norm.ppf(0.95))
-    nu = 0.5 * (s / (widen * u.u_c)) ** 2
+    nu = 0.5 * (s / u.u_c) ** 2
     nu_s = stated_nu(nu)
     U = std_upper_half_width(s, nu if math.isinf(nu_s) else max(nu_s, 1.0))
     return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",

@@ -417,11 +417,14 @@ def bias(ctx: Context) -> Item:
 def bias_stability(ctx: Context) -> Item:
     """JJF 1535 7.2.10 eqs (18), (19): B_s = mean over m of s(P-sample block means)/K, °/h.
 
-    Uncertainty: the spread of B_s,m over the records (type A, ν = Q − 1) and, for one
-    record, the sampling of a standard deviation of N/P blocks. B_s is a dispersion and is
-    stated as one, by its one-sided χ² 95 % interval alone with ν = ½(B_s/u_c)²
-    (:func:`gonio.specs._rate_family.rate_records.dispersion_uncertainty`), as K_r and B_r
-    are: no k, no "± U"."""
+    Uncertainty: the sampling of B_s, a mean of Q standard deviations of correlated block
+    means, u = B_s/√(2ν) with the effective ν of its own records
+    (:func:`gonio.specs._rate_family.formulas.bias_stability_dof`: the block means'
+    variogram fitted by white, flicker and random-walk noise; Satterthwaite), and the scale
+    factor. B_s is a dispersion and is stated as one, by its one-sided χ² 95 % interval alone
+    with ν = ½(B_s/u_c)² (:func:`gonio.specs._rate_family.rate_records.dispersion_uncertainty`),
+    as K_r and B_r are: no k, no "± U". The spread of the Q = 3 values (ν = 2) is kept in the
+    details; it does not set the interval."""
     title, clause, unit = "bias stability B_s", "7.2.10", "°/h"
     miss = _need(ctx, "bias", "bias_stability", title, clause, unit)
     if miss:
@@ -430,17 +433,19 @@ def bias_stability(ctx: Context) -> Item:
     recs = bias_records(ctx)
     bs = np.array([rg.block_mean_stability(r["samples"], ctx.K, P) * S_PER_H for r in recs])
     nblk = recs[0]["samples"].size // P
-    if bs.size > 1:
-        u_a = from_u("s_Bs", 0.0, float(bs.std(ddof=1) / math.sqrt(bs.size)), dof=bs.size - 1,
-                     source="spread of B_s,m over the records")
-    else:
-        u_a = from_u("s_Bs", 0.0, float(bs[0] / math.sqrt(2 * (nblk - 1))), dof=nblk - 1,
-                     source="sampling of a standard deviation of N/P blocks")
-    u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", float(bs.mean()), 0.0), u_a,
+    value = float(bs.mean())
+    nu_b = rg.bias_stability_dof([r["samples"] for r in recs], P)
+    u_a = from_u("s_Bs", 0.0, value / math.sqrt(2.0 * nu_b) if math.isfinite(nu_b) else 0.0,
+                 dof=nu_b, source="sampling of B_s: effective ν of the records' correlated "
+                                  "block means (variogram: white, flicker, random walk)")
+    u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", value, 0.0), u_a,
                                                 from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
-    u = dispersion_uncertainty(float(bs.mean()), u)
-    return Item("bias_stability", title, clause, unit, float(bs.mean()), uncertainty=u,
-                details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk})
+    u = dispersion_uncertainty(value, u)
+    return Item("bias_stability", title, clause, unit, value, uncertainty=u,
+                details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk,
+                         "nu_records": nu_b,
+                         "spread_of_records_dph": float(bs.std(ddof=1)) if bs.size > 1
+                         else None})
 
 
 def bias_repeatability(ctx: Context) -> Item:
