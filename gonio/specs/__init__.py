@@ -34,15 +34,14 @@ import importlib.util
 import re
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
-from graphlib import CycleError, TopologicalSorter
 from importlib.metadata import entry_points
 from typing import Any, Callable
 
 from gonio.errors import GonioError
 
 __all__ = ["Coverage", "Specification", "available", "command_arguments", "commands", "get",
-           "item_order", "lazy", "ARGUMENT_COMMANDS",
-           "CONTENT_FIELDS", "FIGURE_ROLES", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
+           "lazy", "ARGUMENT_COMMANDS",
+           "CONTENT_FIELDS", "FIGURE_ROLES", "ITEM_RENDERER", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
            "DEFAULT_KEY"]
 
 #: The entry-point group a specification package registers under.
@@ -481,6 +480,14 @@ class Specification:
 FIGURE_ROLES = ("bias_temperature", "sf_temperature", "allan", "arw", "bias_instability",
                 "bandwidth")
 
+#: The ``outputs`` module that renders a per-item :class:`~gonio.result.model.Result`
+#: (``gonio.kit.ITEM_RENDERER``): ``results.json``, ``summary.txt``, the tables, the
+#: certificate (HTML, PDF, en/zh) with the figures its content's roles name, and the DCC
+#: 3.3.0 XML of the result as the pipeline decided it. A specification whose ``calibrate``
+#: returns a Result of Items sets
+#: ``Specification(outputs=ITEM_RENDERER, certificate_content="pkg.certificate", …)``.
+ITEM_RENDERER = "gonio.report.item_outputs"
+
 
 def _strs(v, n=None) -> bool:
     return isinstance(v, tuple) and all(isinstance(x, str) for x in v) and (
@@ -583,33 +590,6 @@ class lazy:
 
     def __repr__(self) -> str:
         return f"lazy({self.ref!r})"
-
-
-def item_order(keys, needs) -> list[str]:
-    """The items ``keys`` (in the specification's order) ordered so that each comes after the
-    items it needs (``needs``: {key: keys it needs}, e.g. the JJF scale factor before the
-    items that divide by it): :class:`graphlib.TopologicalSorter`, ties kept in the declared
-    order, so that the order is written down, never implied. A cycle or a need that is no
-    item is a GonioError.
-
-    >>> item_order(["bias", "scale_factor", "noise"], {"bias": ["scale_factor"]})
-    ['scale_factor', 'noise', 'bias']
-    """
-    keys = list(keys)
-    unknown = sorted({n for k in keys for n in needs.get(k, ()) if n not in keys})
-    if unknown:
-        raise GonioError(f"an item needs {', '.join(unknown)}, which is no item")
-    ts = TopologicalSorter({k: tuple(needs.get(k, ())) for k in keys})
-    try:
-        ts.prepare()
-    except CycleError as exc:
-        raise GonioError(f"the items' needs form a cycle: {' -> '.join(exc.args[1])}") from None
-    out: list[str] = []
-    while ts.is_active():
-        ready = sorted(ts.get_ready(), key=keys.index)
-        out += ready
-        ts.done(*ready)
-    return out
 
 
 def default_limits(key: str) -> list[dict]:
