@@ -38,7 +38,7 @@ class Base(DeclarativeBase):
 ROLES = ("technician", "reviewer", "admin")
 
 #: A calibration's states, in workflow order (docs/records.md#workflow).
-STATES = ("queued", "running", "failed", "computed", "reviewed", "rejected", "approved",
+STATES = ("queued", "running", "failed", "computed", "drafting", "reviewed", "rejected", "approved",
           "issuing", "issued", "amending", "void")
 
 

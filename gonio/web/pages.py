@@ -16,7 +16,7 @@ from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, blobs, queries, services, submission
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, Session,
                               file_response, form, page_of, render, wake)
-from gonio.web.front import login_response
+from gonio.web.front import STATES, login_response
 
 router = APIRouter()
 
@@ -344,8 +344,7 @@ def calibrations_page(request: Request, session: Session):
     user, csrf = session
     page = page_of(request)
     status = request.query_params.get("status", "")
-    status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued", "amending", "void") else ""
+    status = status if status in STATES else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -498,7 +497,7 @@ def calibration_page(request: Request, session: Session, cal_id: int):
     if d is None:
         return Response("no such calibration", status_code=404)
     return render(request, "calibration.html", user, csrf, **d,
-                  refresh=d["cal"].status in ("queued", "running", "issuing"),
+                  refresh=d["cal"].status in ("queued",) + services.WORKING,
                   error=request.query_params.get("error", "")[:300])
 
 
