@@ -126,7 +126,7 @@ def hook_calibrate(sub) -> None:
                 line = attach_line(store, services.calibration(store, cid))
             finally:
                 store.close()
-            sys.stderr.write(f"gonio: recorded: {line}"
+            sys.stderr.write(f"gonio: recorded as {line}"
                              + (f" (gonio db attach {cid} --standard ID --temperature T "
                                 "--humidity H)" if "needs" in line else "") + "\n")
         return rc

@@ -94,14 +94,17 @@ def _protocol_file(results: dict, given: str | Path | None, folder: Path) -> Pat
 
 def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int, dict]:
     """(sha256, size) of the laboratory file stored, or (None, 0): none given, or one that
-    gives no limits (it decides nothing the records keep); and the environment it carries
-    (:func:`lab_environment`)."""
+    gives no limits (it decides nothing the records keep); and the calibration's columns it
+    gives: the environment (:func:`lab_environment`), the place and its DCC category
+    (``[certificate] place``, ``location``)."""
     if lab is None:
         return None, 0, {}
     from gonio.pipeline.dispatch import load_lab_file
     from gonio.specs import get
     details = load_lab_file(lab, get(spec_key))
-    env = lab_environment(details)
+    cert = details.get("certificate") or {}
+    env = dict(lab_environment(details), place=services.text(cert.get("place"), "place"),
+               location=services.location_value(cert.get("location")))
     if not details.get("specification_limits"):
         return None, 0, env
     return (*blobs.put_file(store.blob_root, Path(lab)), env)
@@ -142,7 +145,8 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     limits it is stored as the calibration's laboratory file
     (:func:`gonio.records.services.lab_file`), so that the issue decides with the same limits
     and rule as the run reviewed; its ``[environment]`` is recorded as the calibration's,
-    stated as from the laboratory file (:func:`lab_environment`)."""
+    stated as from the laboratory file (:func:`lab_environment`), and its place with the
+    place's DCC category (``[certificate] place``, ``location``)."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:

@@ -580,7 +580,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        lab_sha256: str | None = None, lab_name: str = "",
                        standard_ids: Iterable[int] = (), temperature_c=None,
                        humidity_pct=None, performed_on=None, received_on=None,
-                       place: str = "", reuse_note: dict | None = None) -> Calibration:
+                       place: str = "", location: str | None = None,
+                       reuse_note: dict | None = None) -> Calibration:
     """A new calibration, queued for the worker (technician), after the submission checks
     of its fields (:func:`submission_fields`: plausible dates, at least one standard, the
     environment); standards past their due date on the day of the calibration are refused
@@ -618,7 +619,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           lab_name=text(lab_name, "laboratory file name", max_len=255)
                           if lab_sha256 else "",
                           temperature_c=temp, humidity_pct=hum, environment_from="",
-                          place=text(place, "place"), performed_on=day,
+                          place=text(place, "place"), location=location_value(location),
+                          performed_on=day,
                           received_on=received, status="queued", progress="waiting for a worker",
                           created_by_id=actor.id)
         s.add(cal)
@@ -629,6 +631,18 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
         s.commit()
     return cal
+
+
+def location_value(value) -> str:
+    """Where a calibration was performed, as the DCC's category (``LOCATIONS``; empty or
+    None: the laboratory); anything else is a GonioError listing them."""
+    from gonio.formats.lab import LOCATIONS
+
+    value = (value or "").strip() or "laboratory"
+    if value not in LOCATIONS:
+        raise GonioError(f"location: {value[:40]!r} is not one of {', '.join(LOCATIONS)}",
+                         key="location")
+    return value
 
 
 def _use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str]:
@@ -1210,7 +1224,8 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
                             "date_of_receipt": cal.received_on.isoformat()
                             if cal.received_on else "",
                             "date_of_calibration": cal.performed_on.isoformat(),
-                            "place": cal.place or cfg["lab_place"]},
+                            "place": cal.place or cfg["lab_place"],
+                            "location": cal.location or "laboratory"},
             "customer": {"name": cust.name, "address": _lines(cust.address)},
             "instrument": {"description": inst.kind, "model": inst.model,
                            "serial": inst.serial, "manufacturer": inst.manufacturer},

@@ -352,8 +352,8 @@ def calibrations_page(request: Request, session: Session):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
-              "metadata")
+              "humidity_pct", "place", "location", "reuse_reason", "table", "gyro", "chamber",
+              "supply", "metadata")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
              ("lab_file", services.MAX_LAB_BYTES))
@@ -453,7 +453,8 @@ async def calibration_create(request: Request, session: Session, inst_id: int):
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),
-            place=data.get("place"), reuse_reason=data.get("reuse_reason"))
+            place=data.get("place"), location=data.get("location"),
+            reuse_reason=data.get("reuse_reason"))
     except GonioError as exc:
         kept = {f: (kept_token(csrf, sha, name), name) for f, (sha, name) in files.items()
                 if sha is not None}
@@ -481,6 +482,7 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
             metadata=bench.parse_metadata_lines(data.get("metadata")),
             spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
             protocol_sha256=proto_sha, place=data.get("place"),
+            location=data.get("location"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"))

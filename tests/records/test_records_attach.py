@@ -20,7 +20,7 @@ from gonio.records.db import open_store
 from gonio.records.importer import import_output_folder
 from gonio.records.models import AuditEvent, CalibrationFile, CalibrationStandard
 
-from .conftest import SMALL_PROTOCOL, conditions, make_people
+from .conftest import REPO, SMALL_PROTOCOL, conditions, make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 
@@ -325,3 +325,48 @@ def test_the_fixture_readings_have_no_humidity(bench_readings):
     head = [ln for ln in Path(bench_readings[0]).read_text("utf-8").splitlines()
             if ln.startswith("#")]
     assert "# temperature_c: 20.0" in head and not any("humidity" in ln for ln in head)
+
+
+def test_calibrate_record_attaches_and_carries_the_lab_environment(
+        tmp_path, bench_readings, monkeypatch, capsys):
+    """gonio calibrate --record: the laboratory file's [environment] is the record's (stated
+    as from the laboratory file); --standard/--temperature/--humidity attach as with gonio
+    db import and the draft is rendered with them; the options need --record."""
+    data = tmp_path / "data"
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
+                 str(data)]) == 0
+    st = open_store(None, data)
+    try:
+        services.add_standard(st, services.user(st, "alice"), name="rotary table",
+                              identifier="RT-07", due_on=dt.date.today() + dt.timedelta(300))
+    finally:
+        st.close()
+    lab = REPO / "protocols" / "lab-example.toml"
+    run = ["calibrate", str(bench_readings[0]), "--protocol", str(SMALL_PROTOCOL), "--lab",
+           str(lab), "--data", str(data), "--record-user", "alice"]
+    capsys.readouterr()
+    assert main(run + ["--out", str(tmp_path / "a"), "--record"]) == 0
+    err = capsys.readouterr().err
+    assert ("gonio: recorded as calibration 1: standards none; environment 20.1 °C, 45 % (from "
+            "the laboratory file); before its review it needs registered standard valid on"
+            ) in err and "(gonio db attach 1 --standard ID" in err, err
+    assert main(run + ["--out", str(tmp_path / "b"), "--record", "--standard", "RT-07",
+                       "--temperature", "20", "--humidity", "44"]) == 0
+    assert capsys.readouterr().err.endswith(
+        "gonio: recorded as calibration 2: standards RT-07; environment 20 °C, 44 %\n")
+    assert main(run + ["--out", str(tmp_path / "c"), "--standard", "RT-07"]) == 2
+    assert "go with --record" in capsys.readouterr().err
+    st = open_store(None, data)
+    try:
+        one, two = services.calibration(st, 1), services.calibration(st, 2)
+        assert (one.temperature_c, one.humidity_pct, one.environment_from) == (20.1, 45.0,
+                                                                               "lab file")
+        assert (two.temperature_c, two.humidity_pct, two.environment_from, two.status) == (
+            20.0, 44.0, "", "computed")
+        draft = draft_html(st, 2)          # rendered at once with what was attached
+        assert "DRAFT-2" in draft and '<span class="nb">RT-07</span>' in draft
+        assert "<td>20 °C</td>" in draft and "<td>44 %</td>" in draft
+        assert services.lab_details(st, 1, final=False)["environment"]["source"] == "entered"
+    finally:
+        st.close()

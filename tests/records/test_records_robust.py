@@ -179,10 +179,12 @@ def test_a_form_with_an_error_keeps_what_was_entered(app, sqlite_store):  # noqa
     r = web.post(f"/instruments/{inst.id}/calibrate", data={
         "csrf": csrf_of(web), "performed_on": "9999-12-31", "received_on": "2025-01-02",
         "temperature_c": "20.5", "humidity_pct": "41", "place": "Room 2",
-        "standards": [str(std.id)]}, files={"readings": ("r.csv", b"x\n")})
+        "location": "customer", "standards": [str(std.id)]},
+        files={"readings": ("r.csv", b"x\n")})
     assert r.status_code == 400 and "9999-12-31 is in the future" in r.text
     for kept in ('value="9999-12-31"', 'value="2025-01-02"', 'value="20.5"', 'value="41"',
-                 'value="Room 2"', f'value="{std.id}"  checked'):
+                 'value="Room 2"', f'value="{std.id}"  checked',
+                 '<option value="customer" selected>'):
         assert kept in r.text, kept
 
 
