@@ -97,7 +97,7 @@ def test_std_dev_uncertainty_covers_95_percent(nu):
     side is below 0) against scipy's binomial test. The two-sided χ² limit it had covered
     97.5 %."""
     from scipy.stats import binomtest
-    from gonio.specs._rate_family.rate_records import std_dev_uncertainty
+    from gonio.kit import std_dev_uncertainty
     rng = np.random.default_rng(nu)
     n = 20000
     s = rng.standard_normal((n, nu + 1)).std(axis=1, ddof=1)

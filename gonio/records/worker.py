@@ -133,6 +133,8 @@ class Dispatcher:
         self._stop = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
+        self._claiming = threading.Lock()     # held while the loop touches the records
+        self._paused = False
 
     def start(self) -> "Dispatcher":
         services.recover(self.store)
@@ -144,6 +146,26 @@ class Dispatcher:
     def wake(self) -> None:
         """New work was queued: look now instead of at the next poll."""
         self._wake.set()
+
+    def pause(self) -> int:
+        """Stop claiming and reaping (the records are about to be replaced); returns how
+        many worker processes are still running (a restore waits for none). Workers that
+        ended are forgotten when none runs: each recorded its own end in the records that
+        are replaced."""
+        with self._claiming:
+            self._paused = True
+            running = sum(p.poll() is None for p in self.children.values())
+            if not running:
+                self.children.clear()
+            return running
+
+    def resume(self) -> None:
+        """Claim again after :meth:`pause`; calibrations left running by a worker that is
+        gone (as a restored archive may hold them) are marked failed first."""
+        with self._claiming:
+            self._paused = False
+            services.recover(self.store)
+        self.wake()
 
     def stop(self, wait: bool = True, timeout_s: float = 600) -> None:
         """Stop claiming; with ``wait`` let the running workers finish."""
@@ -176,15 +198,20 @@ class Dispatcher:
         self.children[cal_id] = p
         services.attach(self.store, cal_id, p.pid)
 
+    def _claim(self) -> None:
+        self._reap()
+        while len(self.children) < self.workers and not self._stop.is_set():
+            cal = services.claim_next(self.store)
+            if cal is None:
+                break
+            self._spawn(cal.id)
+
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
-                self._reap()
-                while len(self.children) < self.workers and not self._stop.is_set():
-                    cal = services.claim_next(self.store)
-                    if cal is None:
-                        break
-                    self._spawn(cal.id)
+                with self._claiming:
+                    if not self._paused:
+                        self._claim()
             except Exception as exc:  # the database went away a moment: try again later
                 sys.stderr.write(f"gonio: dispatcher: {type(exc).__name__}: {exc}\n")
             self._wake.wait(self.poll_s)

@@ -279,6 +279,9 @@ def test_backup_restore_round_trip(store, people, computed_folder, bench_reading
             with store.session() as a, target.session() as b:
                 got = [[tuple(map(plain, r)) for r in x.execute(select(table).order_by(
                     *table.primary_key))] for x in (a, b)]
+            if table.name == "audit_events":     # the restore is the restored trail's last
+                assert got[1][-1][4:6] == ("restore", "records"), got[1][-1]
+                got[1] = got[1][:-1]
             assert got[0] == got[1], table.name
         cal = services.calibration(target, 1)
         assert services.file_bytes(target, cal.readings_sha256) == bench_readings[0].read_bytes()

@@ -24,7 +24,6 @@ Contents
 :func:`minus3db_frequency`      −3 dB crossing (JJF 7.2.15.2, IEC 5.5.3)
 :func:`phase90_frequency`       90° lag crossing (IEC 5.5.3)
 :func:`second_order_response`   |H|, ∠H of a second-order sensor (bench truth, checks)
-:func:`std_upper_half_width`    U of a standard deviation: s to its one-sided χ² upper limit
 ==============================  ==================================================
 
 Unit note: seconds per hour come from :mod:`gonio.units` (``S_PER_H``).
@@ -124,24 +123,6 @@ def earth_rate_projection_dps(latitude_deg: float, axis_enu) -> float:
     if a.shape != (3,) or not n > 0:
         raise GonioError("an axis must be a non-zero 3-vector in ENU")
     return float(math.degrees(earth_rate_enu(latitude_deg) @ (a / n)))
-
-
-def std_upper_half_width(s: float, nu: int, p: float = 0.95) -> float:
-    """Expanded uncertainty of a standard deviation ``s`` with ν degrees of freedom (the
-    repeatabilities JJF 7.2.4 K_r and 7.2.11 B_r; IEC 5.6 Noise,RMS): the distance from s to
-    the one-sided χ² upper limit s·√(ν/χ²_{1−p,ν}) of σ, so that P(σ ≤ s + U) = p exactly for
-    normal data. For ν ≤ 5 (p = 0.95) s − U < 0: the item is non-negative, the interval
-    [0, s + U] is the statement and its coverage is p; above, s ± U covers p less
-    P(σ < s − U), below 4·10⁻⁴ up to ν = 20 (ν = 6: s − U = 0.08·s, P ≈ 10⁻¹⁷⁷).
-
-    Not the upper end of the two-sided interval, s·√(ν/χ²_0.025,ν): there
-    P(σ ≤ s + U) = 0.975 under a label of 95 %.
-
-    >>> round(std_upper_half_width(1.0, 2), 3)       # √(2/χ²_0.05,2) − 1 = √(2/0.1026) − 1
-    3.415
-    """
-    from scipy.stats import chi2
-    return float(s * (math.sqrt(nu / chi2.ppf(1.0 - p, nu)) - 1.0))
 
 
 def last_exceedance_time(time_s, stat, level: float) -> float:

@@ -2,7 +2,7 @@
 and, when the readings include a thermal programme, the extended temperature / supply model.
 
 The items have the shape of every other specification's (value, unit, clause, measured,
-reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.specs._rate_family.rate_records.Item`):
+reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.result.model.Item`):
 
 * ``M_ij`` — the nine elements of the system matrix M (output per °/s), alignment §4;
 * ``b_i`` — the bias vector (output units), the ± rates cancelling it (article eq. 28–30a);
@@ -30,8 +30,9 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
-                                         not_measured, source_info)
+from gonio.formats.jsonsafe import json_safe
+from gonio.result.model import (Covariance, Item, Result, Uncertainty, not_measured,
+                                source_info)
 from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
                                                       compensate_record, identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
@@ -40,7 +41,6 @@ from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFD
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.readings import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
-from gonio.result.model import Covariance
 from gonio.specs.triad_alignment.figure_data import figure_series
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
 
@@ -71,7 +71,7 @@ READINGS_TAKEN = (
 
 
 @dataclass
-class TriadCalibration(RateCalibrationResult):
+class TriadCalibration(Result):
     """The items and the analysis objects they came from (for the certificate's pages)."""
 
     alignment: AlignmentResult | None = None
