@@ -1473,8 +1473,9 @@ def calibration(store, cal_id: int) -> Calibration:
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
     k, unit, title, status, certificate number), oldest first; failed, rejected and
-    unfinished calibrations are left out."""
-    done = ("computed", "reviewed", "approved", "issuing", "issued")
+    unfinished calibrations are left out (one whose draft is being rendered again, or whose
+    amendment is asked for, has its result: it stays)."""
+    done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
         rows = s.execute(
             select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id)
@@ -1534,8 +1535,9 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
             raise GonioError("no such instrument", key="instrument")
     limits = instrument_limits(inst)
     hist = history(store, instrument_id) if hist is None else hist
-    # only what was issued: a calibration not (yet) reviewed and approved is no evidence
-    hist = {k: [r for r in rows if r["status"] == "issued"] for k, rows in hist.items()}
+    # only what was issued (a certificate, also while an amendment of it is asked for or
+    # issued): a calibration not (yet) reviewed and approved is no evidence
+    hist = {k: [r for r in rows if r["certificate"]] for k, rows in hist.items()}
     hist = {k: rows for k, rows in hist.items() if rows}
     dates = [r["date"] for rows in hist.values() for r in rows]
     t0 = min(dates) if dates else None

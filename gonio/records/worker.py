@@ -9,8 +9,9 @@ results.json that was reviewed and approved is checked against its seal and rend
 the final details (:func:`gonio.records.compute.render_folder`); nothing is computed again.
 A draft rendered again after standards or the environment were attached (drafting): the
 stored result, checked against its seal, rendered the same way with the draft details
-recorded now. Any failure marks the calibration failed with the one-line reason; a killed process leaves it running with a
-dead worker, which :func:`gonio.records.services.recover` marks failed.
+recorded now (:func:`run_now`: the same in the calling process, for the command line). Any
+failure marks the calibration failed with the one-line reason; a killed process leaves it
+running with a dead worker, which :func:`gonio.records.services.recover` marks failed.
 
 :class:`Dispatcher` is the server's side: a thread that claims queued work and starts
 ``python -m gonio.records.worker ID`` processes (at most ``workers`` at a time; the

@@ -242,8 +242,9 @@ def test_every_new_calibration_names_a_standard_and_its_environment(sqlite_store
                                        **conditions(sqlite_store, people["tech"]))
 
 
-def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, bench_readings,
-                                                  monkeypatch, capsys):
+def records_of_alice(tmp_path, monkeypatch):
+    """A records data folder made on the command line: technician alice and the registered
+    standard RT-07 (due in 300 days)."""
     data = tmp_path / "data"
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
     assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
@@ -254,6 +255,12 @@ def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, ben
                               identifier="RT-07", due_on=dt.date.today() + dt.timedelta(300))
     finally:
         st.close()
+    return data
+
+
+def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, bench_readings,
+                                                  monkeypatch, capsys):
+    data = records_of_alice(tmp_path, monkeypatch)
     folder = tmp_path / "run"
     shutil.copytree(computed_folder, folder)
     shutil.copy(bench_readings[0], folder / "readings.csv")
@@ -332,16 +339,7 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
     """gonio calibrate --record: the laboratory file's [environment] is the record's (stated
     as from the laboratory file); --standard/--temperature/--humidity attach as with gonio
     db import and the draft is rendered with them; the options need --record."""
-    data = tmp_path / "data"
-    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
-    assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
-                 str(data)]) == 0
-    st = open_store(None, data)
-    try:
-        services.add_standard(st, services.user(st, "alice"), name="rotary table",
-                              identifier="RT-07", due_on=dt.date.today() + dt.timedelta(300))
-    finally:
-        st.close()
+    data = records_of_alice(tmp_path, monkeypatch)
     lab = REPO / "protocols" / "lab-example.toml"
     run = ["calibrate", str(bench_readings[0]), "--protocol", str(SMALL_PROTOCOL), "--lab",
            str(lab), "--data", str(data), "--record-user", "alice"]

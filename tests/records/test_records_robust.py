@@ -205,8 +205,8 @@ def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, comput
 
 def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # noqa: F811
     """A calibration dated 9999-12-31 (refused at entry, but possible in an old database) no
-    longer makes the overview and the due lists answer 500: its due date is the last date
-    there is, so the instrument is simply not due."""
+    longer makes the overview, the due lists and the history plot answer 500: its due date
+    is the last date there is, so the instrument is simply not due."""
     from .test_web_lists import issued
 
     tech = services.user(sqlite_store, "tech")
@@ -216,7 +216,7 @@ def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # n
     issued(sqlite_store, inst.id, dt.date(9999, 12, 31), "GC-9999-0001")
     web = login(app, "tech")
     for url in ("/", "/due", "/due?within_days=100000", "/export/due.csv", "/due/recall",
-                f"/instruments/{inst.id}"):
+                f"/instruments/{inst.id}", f"/instruments/{inst.id}/history.svg"):
         assert web.get(url).status_code == 200, url
     assert services.due_instruments(sqlite_store, within_days=10**7) == [
         {"instrument_id": inst.id, "serial": "F-1", "model": "M", "customer": "Far Ltd",
