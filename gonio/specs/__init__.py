@@ -81,8 +81,9 @@ OUTPUTS_REQUIRED = ("write", "results_json", "summary")
 OUTPUTS_OPTIONAL = ("demo", "warnings")
 #: The ``gonio`` commands a specification may add options to (``Specification.arguments``),
 #: each with the field naming the keywords its hook takes beyond the common ones
-#: (:meth:`Specification.accepted_options`).
-ARGUMENT_COMMANDS = {"bench": "serve_options", "budget": "budget_options",
+#: (:meth:`Specification.accepted_options`). A nested command is named by its words, as typed
+#: (``"bench serve"``: the options of ``gonio bench serve``, which its ``serve`` hook takes).
+ARGUMENT_COMMANDS = {"bench serve": "serve_options", "budget": "budget_options",
                      "calibrate": "calibrate_options", "simulate": "simulate_options",
                      "validate": "coverage.options"}
 
@@ -245,7 +246,8 @@ class Specification:
     arguments : dict of str to str
         ``{command: "module:function"}``: the command-line options of the specification's
         own for the ``gonio`` commands of :data:`ARGUMENT_COMMANDS` (``calibrate``,
-        ``simulate``, ``budget``, ``validate``, and ``bench`` for ``gonio bench serve``),
+        ``simulate``, ``budget``, ``validate``, and the nested command ``"bench serve"``,
+        named by its words as typed, whose options go to the ``serve`` hook),
         such as the optical draft's ``gonio
         calibrate --budget``. ``function(group)`` adds them with ``group.add_argument`` as
         argparse does; each option's ``dest`` is a keyword the command's hook takes
@@ -391,7 +393,7 @@ class Specification:
     def accepted_options(self, command: str) -> frozenset:
         """The keywords the hook of ``gonio command`` takes beyond the common ones
         (:data:`ARGUMENT_COMMANDS`: ``calibrate_options``, ``simulate_options``,
-        ``budget_options``, ``serve_options`` for ``bench``, the coverage study's
+        ``budget_options``, ``serve_options`` for ``bench serve``, the coverage study's
         ``options``).
 
         >>> sorted(get("ogam-draft").accepted_options("simulate"))
