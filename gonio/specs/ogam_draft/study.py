@@ -572,6 +572,24 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
     return s
 
 
+def fixed_condition(bench: Bench) -> dict:
+    """The set-up of a fixed-condition case (validation.json ``condition``): the tilt, its
+    azimuth and the chamber's deviation from the reference temperature."""
+    return {"tilt_deg": bench.instrument.tilt_deg,
+            "tilt_azimuth_deg": bench.instrument.tilt_azimuth_deg,
+            "chamber_deviation_c": bench.chamber_deviation_c}
+
+
+def condition_text(c: dict) -> str:
+    """One line for :func:`fixed_condition`.
+
+    >>> condition_text({"tilt_deg": 0.1, "tilt_azimuth_deg": 123.45, "chamber_deviation_c": -1.0})
+    'tilt 0.1 deg at azimuth 123.5 deg, chamber -1 degC from the reference'
+    """
+    return (f"tilt {c['tilt_deg']:g} deg at azimuth {c['tilt_azimuth_deg']:.1f} deg, "
+            f"chamber {c['chamber_deviation_c']:+g} degC from the reference")
+
+
 def item_coverage_lines(cases) -> list[str]:
     """Per case, the coverage of every measured item (|result − truth| ≤ U; interval)."""
     out = ["", "coverage per item (|result - truth| <= U as stated; for B_s and R also the "
@@ -641,6 +659,8 @@ class ValidationReport:
                     f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += [f"{c.name}: {condition_text(c.summary['condition'])}" for c in self.cases
+                  if "condition" in c.summary]
         lines += item_coverage_lines(self.cases)
         lines += monte_carlo_lines(self.cases)
         return "\n".join(lines) + "\n"
@@ -817,6 +837,8 @@ class OpticalStudy:
             t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
             cr = CaseResult(name, CASES[name], list(res), t_int)
             cr.summary = _summarise(cr, s["truth"], bool(s["extra_components"]))
+            if name in FIXED_CONDITION_CASES:
+                cr.summary["condition"] = fixed_condition(b)
             if s["monte_carlo_trials"]:
                 t0 = trial_seed(s["seed"], name, 0)
                 cr.summary["monte_carlo"] = _monte_carlo_case(
