@@ -16,7 +16,7 @@ from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, blobs, queries, services, submission
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, Session,
                               file_response, form, page_of, render, wake)
-from gonio.web.front import login_response
+from gonio.web.front import STATES, login_response
 
 router = APIRouter()
 
@@ -344,8 +344,7 @@ def calibrations_page(request: Request, session: Session):
     user, csrf = session
     page = page_of(request)
     status = request.query_params.get("status", "")
-    status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued", "amending", "void") else ""
+    status = status if status in STATES else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -353,8 +352,8 @@ def calibrations_page(request: Request, session: Session):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
-              "metadata")
+              "humidity_pct", "place", "location", "reuse_reason", "table", "gyro", "chamber",
+              "supply", "metadata")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
              ("lab_file", services.MAX_LAB_BYTES))
@@ -454,7 +453,8 @@ async def calibration_create(request: Request, session: Session, inst_id: int):
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),
-            place=data.get("place"), reuse_reason=data.get("reuse_reason"))
+            place=data.get("place"), location=data.get("location"),
+            reuse_reason=data.get("reuse_reason"))
     except GonioError as exc:
         kept = {f: (kept_token(csrf, sha, name), name) for f, (sha, name) in files.items()
                 if sha is not None}
@@ -482,6 +482,7 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
             metadata=bench.parse_metadata_lines(data.get("metadata")),
             spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
             protocol_sha256=proto_sha, place=data.get("place"),
+            location=data.get("location"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"))
@@ -498,7 +499,7 @@ def calibration_page(request: Request, session: Session, cal_id: int):
     if d is None:
         return Response("no such calibration", status_code=404)
     return render(request, "calibration.html", user, csrf, **d,
-                  refresh=d["cal"].status in ("queued", "running", "issuing"),
+                  refresh=d["cal"].status in ("queued",) + services.WORKING,
                   error=request.query_params.get("error", "")[:300])
 
 
