@@ -529,3 +529,41 @@ def test_a_value_of_the_wrong_kind_is_refused(small, tmp_path, column, value, sa
     bad = archive_without(archive, tmp_path / "wrong.zip", records_json=wrong)
     with pytest.raises(GonioError, match=f"users row 1: {column} is not {said}"):
         check_archive(bad)
+
+
+def test_a_deactivated_admin_cannot_restore(small, tmp_path):
+    """An admin deactivated after the archive was verified on their page: the confirmation
+    sent afterwards meets the login page and nothing is restored."""
+    from .test_web_security import csrf_of, login
+
+    st, archive = small
+    services.create_user(st, None, "boss2", PASSWORD, "admin")
+    web = login(_page_app(st), "boss2")
+    page = web.post("/backup/check", data={"csrf": csrf_of(web)}, files={
+        "archive": ("a.zip", archive.read_bytes(), "application/zip")}).text
+    send = dict(_confirm(page), csrf=csrf_of(web), confirm="RESTORE", password=PASSWORD)
+    services.add_customer(st, services.user(st, "tech"), "After the backup Ltd")
+    services.update_user(st, services.user(st, "boss"), "boss2", active=False, roles=["admin"])
+    r = web.post("/backup/restore", data=send, follow_redirects=False)
+    assert r.status_code == 303 and r.headers["location"] == "/login"
+    assert summary(st)["rows"]["customers"] == 2
+
+
+def test_a_stored_file_the_disk_refuses_is_one_line(tmp_path, monkeypatch):
+    """The disk fills while the archive's stored files are written (an OSError before):
+    one line, no records written."""
+    from gonio.records import blobs
+
+    archive = archive_of(tmp_path, "a", blob=b"readings " * 100)
+    target = open_store(None, tmp_path / "target")
+    try:
+        def full(*a, **k):
+            raise OSError(28, "No space left on device")
+        monkeypatch.setattr(blobs, "put_stream", full)
+        with pytest.raises(GonioError, match=r"cannot write the stored file [0-9a-f]{12}… \(No "
+                                             r"space left on device\): the records are "
+                                             "unchanged; nothing restored"):
+            restore(target, archive)
+        assert summary(target)["rows"]["users"] == 0
+    finally:
+        target.close()
