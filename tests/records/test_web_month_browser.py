@@ -199,6 +199,10 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     with page.expect_navigation():
         attach.locator("button:has-text('Attach')").click()
     assert page.locator("#missing").count() == 0 and "20.1 °C, 45 %" in page.content()
+    # its draft is rendered from the stored result with them, by the server's worker
+    wait_status(page, "computed")
+    draft = page.request.get(imported + "/files/certificate.html").text()
+    assert "<td>20.1 °C</td>" in draft and '<span class="nb">RT-07</span>' in draft
     with page.expect_navigation():
         page.click("button[value=accept]")
     wait_status(page, "reviewed")

@@ -50,8 +50,12 @@ class RateContext:
     cache: dict = field(default_factory=dict)
 
     def has(self, test: str) -> bool:
-        """Whether the readings hold records of ``test``."""
-        return bool((self.df["test"] == test).any())
+        """Whether the readings hold records of ``test`` (found once per test and context:
+        the budgets ask at every rate and temperature, and each look scanned the readings)."""
+        key = ("has", test)
+        if key not in self.cache:
+            self.cache[key] = bool((self.df["test"] == test).any())
+        return self.cache[key]
 
 
 def metadata_number(md: dict, key: str, default, path) -> float:

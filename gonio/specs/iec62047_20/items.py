@@ -577,10 +577,19 @@ def _static(ctx: Context):
     return ctx.cache["allan"]
 
 
+def _static_extent(ctx: Context) -> tuple[int, bool]:
+    """(samples, whether it varies) of the static record, found once per calibration (the
+    budgets ask for every rate and temperature: each look was a scan of the readings)."""
+    if "static_extent" not in ctx.cache:
+        y = static_output(ctx.df)
+        ctx.cache["static_extent"] = (int(y.size), bool(y.size) and value_range(y) != 0)
+    return ctx.cache["static_extent"]
+
+
 def _quiet(ctx: Context, key: str, title: str, clause: str, unit: str) -> Item | None:
     """A static record without any variation (noise-free bench): the noise terms are 0."""
-    y = static_output(ctx.df)
-    if y.size and value_range(y) == 0:
+    size, varies = _static_extent(ctx)
+    if size and not varies:
         return Item(key, title, clause, unit, 0.0, uncertainty=gum(lambda v: v, [from_u(key, 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
     return None
@@ -858,10 +867,10 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
         raise GonioError(f"{why}; the readings have none")
     if ctx.a_base is None:
         raise GonioError(f"{why} and the scale factor of 5.1.3.1")
-    y = static_output(ctx.df)
-    if y.size < 100:
-        raise GonioError(f"{why}; it has {y.size} samples")
-    if value_range(y) == 0:
+    size, varies = _static_extent(ctx)
+    if size < 100:
+        raise GonioError(f"{why}; it has {size} samples")
+    if not varies:
         return 0.0              # a noise-free bench (the reader refuses a stuck record)
     fit = _noise_fit(ctx)
     allan = _static(ctx)[0]
