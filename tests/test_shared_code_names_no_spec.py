@@ -135,6 +135,24 @@ def test_the_shared_tables_hold_no_optical_label_or_phrase():
     assert not [en for en in i18n.DCC_ZH if "draft" in en or "optical" in en]
 
 
+def test_the_shared_dcc_table_holds_no_specifications_virtual_bench():
+    """The names of the specifications' virtual instruments and equipment (the bench files'
+    ``name`` of each section but ``[bench]``, "… (virtual)") are translated by the package of
+    the specification that simulates on them (its phrases), not by the shared DCC table."""
+    import tomllib
+
+    from gonio.report.i18n import DCC_ZH
+
+    names = set()
+    for path in (ROOT / "protocols" / "benches").glob("*.toml"):
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        names |= {v["name"] for k, v in data.items()
+                  if k != "bench" and isinstance(v, dict) and isinstance(v.get("name"), str)}
+    assert "MEMS rate gyro (virtual)" in names and "RLG goniometer (virtual)" in names
+    assert not names & set(DCC_ZH)
+    assert not [en for en in DCC_ZH if "(virtual)" in en]
+
+
 @pytest.mark.parametrize("lang", ["en", "zh"])
 def test_the_optical_labels_reach_its_pages_through_own(lang):
     from gonio.report.i18n import labels

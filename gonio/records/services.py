@@ -1472,9 +1472,11 @@ def calibration(store, cal_id: int) -> Calibration:
 
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
-    k, unit, title, status, certificate number), oldest first; failed, rejected and
-    unfinished calibrations are left out (one whose draft is being rendered again, or whose
-    amendment is asked for, has its result: it stays)."""
+    k, unit, title, status, certificate number, issued, amended), oldest first; failed,
+    rejected and unfinished calibrations are left out (one whose draft is being rendered
+    again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
+    certificate, whatever its state now; ``amended``: issued, and a certificate of it has
+    been replaced by an amendment or an amendment of it is under way (not 'issued' now)."""
     done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
         rows = s.execute(
@@ -1483,17 +1485,20 @@ def history(store, instrument_id: int) -> dict:
             .where(Calibration.instrument_id == int(instrument_id),
                    Calibration.status.in_(done))
             .order_by(Calibration.performed_on, Calibration.id)).all()
-        numbers = dict(s.execute(
-            select(Certificate.calibration_id, func.max(Certificate.number))
+        certs = {cid: (number, n) for cid, number, n in s.execute(
+            select(Certificate.calibration_id, func.max(Certificate.number),
+                   func.count(Certificate.id))
             .join(Calibration, Certificate.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id))
-            .group_by(Certificate.calibration_id)).all())
+            .group_by(Certificate.calibration_id)).all()}
     out: dict[str, list] = {}
     for it, day, status, cid in rows:
+        number, n = certs.get(cid, ("", 0))
         out.setdefault(it.key, []).append(
             {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
              "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
-             "certificate": numbers.get(cid, "")})
+             "certificate": number, "issued": n > 0,
+             "amended": n > 1 or (n > 0 and status != "issued")})
     return out
 
 
