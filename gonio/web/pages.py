@@ -81,12 +81,12 @@ def dashboard(request: Request, session: Session):
     store = _store(request)
     review, _ = queries.calibrations(store, 1, 20, "computed")
     approve, _ = queries.calibrations(store, 1, 20, "reviewed")
-    active, _ = queries.calibrations(store, 1, 20, "running")
+    active, n_active = queries.active_work(store)
     failed, _ = queries.calibrations(store, 1, 20, "failed")
     due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
                   due=due, n_due=n_due, review=review, approve=approve,
-                  active=active, failed=failed, today=_dt.date.today())
+                  active=active, n_active=n_active, failed=failed, today=_dt.date.today())
 
 
 # --------------------------------------------------------------------------- customers
