@@ -10,6 +10,7 @@ RLG's bound and holds with the FOG's."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from dataclasses import replace
 
 import numpy as np
@@ -228,3 +229,28 @@ def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):
         m = m[m["test"] != "zero_stability"]
         assert (m["_merge"] == "both").all()
         assert np.abs(m["gyro_counts_got"] - m["gyro_counts_ref"]).max() <= 1.0
+
+
+def test_the_laboratory_files_gyro_type_is_checked_against_the_readings(tmp_path):
+    """The laboratory file may state the instrument's type ([instrument] gyro_type); readings
+    of another type are a contradiction (refused, or a finding), compared like the serial
+    (case ignored); a type that is neither is refused when the file is read."""
+    from gonio.formats.lab import load_lab
+    from gonio.pipeline.identity import contradictions
+
+    src = (Path(__file__).parents[1] / "protocols" / "lab-example.toml").read_text("utf-8")
+
+    def lab(v):
+        f = tmp_path / f"lab-{v}.toml"
+        f.write_text(src.replace("[instrument]", f'[instrument]\ngyro_type = "{v}"', 1)
+                     if "[instrument]" in src else src + f'\n[instrument]\ngyro_type = "{v}"\n',
+                     encoding="utf-8")
+        return load_lab(f)
+
+    (c,) = contradictions({"gyro_type": "fog"}, lab("RLG"))
+    assert (c["what"], c["readings"], c["lab"], c["lab_key"]) == \
+        ("gyro type", "'fog'", "'RLG'", "instrument.gyro_type")
+    assert contradictions({"gyro_type": "fog"}, lab("FOG")) == []
+    assert contradictions({}, lab("fog")) == []              # the readings silent: nothing
+    with pytest.raises(GonioError, match="gyro_type"):
+        lab("mems")
