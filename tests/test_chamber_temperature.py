@@ -20,6 +20,7 @@ from gonio.errors import GonioError
 from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
+from gonio.specs.ogam_draft.outputs import summary
 from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget, without_tilt_u_rel
 from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.study import (case_bench, draw_type_b, trial_bench,
@@ -124,6 +125,8 @@ def test_the_stated_bound_and_tolerance_reach_the_certified_k(base):
     d = _bound(rep)
     assert (d["bound_ppm_per_c"], d["source"], d["gyro_type"], d["temperature_tolerance_c"]) \
         == (0.4, "metadata", "rlg", 2.5)
+    assert "+-2.5 degC of the reference and |alpha_K| <= 0.4 ppm/degC: stated by the " \
+        "readings" in summary(rep.result())
 
 
 def test_the_bound_follows_the_gyro_type_never_the_bench(proto, base):

@@ -97,6 +97,19 @@ def damaged_files(store, shas) -> list[str]:
     return out
 
 
+#: what a value of records.json may be for each column type (a string where a number or a
+#: true/false belongs would be stored by SQLite as it is and break every later read)
+#: (text columns take numbers too: SQLite keeps a number written there as a number, and a
+#: backup of such a database restores)
+_KINDS = {"Boolean": (bool,), "Integer": (int,), "BigInteger": (int,), "Float": (int, float),
+          "String": (str, int, float), "Text": (str, int, float), "Date": (_dt.date,),
+          "DateTime": (_dt.datetime,)}
+_KIND_NAMES = {"Boolean": "true or false", "Integer": "a whole number",
+               "BigInteger": "a whole number", "Float": "a number", "String": "text",
+               "Text": "text", "Date": "a date", "DateTime": "a date and time"}
+_PLAIN = (str, int, float, bool, _dt.date)
+
+
 def _convert(table, cols: list[str], row: list, where: str):
     if not isinstance(row, list) or len(row) != len(cols):
         raise GonioError(f"{where}: a row is a list of {len(cols)} values", key=table.name)
@@ -111,8 +124,11 @@ def _convert(table, cols: list[str], row: list, where: str):
         except (TypeError, ValueError):
             raise GonioError(f"{where}: {name} is not a date: {str(v)[:40]!r}",
                              key=table.name) from None
-        if v is not None and not isinstance(v, (str, int, float, bool, _dt.date)):
-            raise GonioError(f"{where}: {name} is not a plain value", key=table.name)
+        kind = type(col.type).__name__
+        if v is not None and (not isinstance(v, _KINDS.get(kind, _PLAIN))
+                              or (isinstance(v, bool) and kind != "Boolean")):
+            raise GonioError(f"{where}: {name} is not {_KIND_NAMES.get(kind, 'a plain value')}"
+                             f": {str(v)[:40]!r}", key=table.name)
         out[name] = v
     return out
 

@@ -1029,13 +1029,23 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
                        progress="waiting for a worker", error="")
 
 
+def failed_redraft(cal: Calibration) -> bool:
+    """A failed calibration whose failure was the rendering of its draft again
+    (:data:`DRAFTING`): it has its stored result and no reserved certificate number (a
+    failed run has no result yet, a failed issue its number)."""
+    return cal.status == "failed" and bool(cal.results_sha256) and not cal.pending_number
+
+
 def retry(store, actor: User, cal_id: int) -> Calibration:
     """Run a failed calibration again (technician): a failed run is queued again, a failed
-    issue (its number reserved) goes back to issuing."""
+    issue (its number reserved) goes back to issuing, a failed redraft
+    (:func:`failed_redraft`) back to :data:`DRAFTING` — its draft rendered again from the
+    stored, sealed result, nothing computed again."""
     require(actor, "technician")
     cal = calibration(store, cal_id)
-    return _transition(store, actor, cal_id, "retry", ("failed",),
-                       status="issuing" if cal.pending_number else "queued",
+    status = ("issuing" if cal.pending_number else DRAFTING if failed_redraft(cal)
+              else "queued")
+    return _transition(store, actor, cal_id, "retry", ("failed",), status=status,
                        progress="waiting for a worker", error="", worker_pid=None,
                        worker_host="")
 
@@ -1129,17 +1139,21 @@ def set_progress(store, cal_id: int, message: str) -> None:
 def fail(store, cal_id: int, error: str) -> None:
     """A run ended without a result: running, issuing or drafting → failed, with the error.
     Nothing was issued (the certificate row is written only by :func:`store_issue`); a
-    failed issue keeps its reserved number for :func:`retry`; a failed draft is run again
-    whole by :func:`retry`. A calibration no longer running (another worker finished it) is
+    failed issue keeps its reserved number for :func:`retry`; a failed redraft keeps its
+    stored result, its error says so, and :func:`retry` renders the draft again. A calibration no longer running (another worker finished it) is
     left as it is."""
     with store.writing() as s:
         cal = s.get(Calibration, cal_id, with_for_update=True)
         if cal.status not in WORKING:                   # finished meanwhile (another worker)
             return
         before = state(cal)
+        if cal.status == DRAFTING:
+            error = (f"rendering the draft certificate again failed: {error} (run again: "
+                     "rendered again from the stored result, nothing computed)")
+        cal.progress = ("issuing failed" if cal.pending_number else "drafting failed"
+                        if cal.status == DRAFTING else "failed")
         cal.status = "failed"
         cal.error = error[:MAX_TEXT]
-        cal.progress = "issuing failed" if cal.pending_number else "failed"
         cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
         audit(s, None, "fail", "calibration", cal.id, before, state(cal))
         s.commit()

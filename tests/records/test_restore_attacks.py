@@ -351,6 +351,10 @@ def test_an_upload_over_the_limit_is_refused_in_one_line(small, monkeypatch):
     r = tech.post("/backup/check", data={"csrf": csrf_of(tech)},
                   files={"archive": ("huge.zip", big, "application/zip")})
     assert r.status_code == 403
+    # an admin's upload without the form's CSRF token: refused, nothing staged
+    r = web.post("/backup/check", files={"archive": ("a.zip", archive.read_bytes(),
+                                                     "application/zip")})
+    assert r.status_code == 403 and (not staged.exists() or not list(staged.iterdir()))
 
 
 def test_the_staging_folder_keeps_few_uploads(small, tmp_path):
@@ -455,3 +459,111 @@ def restored_event(store) -> dict:
         event = s.scalar(select(AuditEvent).where(AuditEvent.action == "restore")
                          .order_by(AuditEvent.id.desc()).limit(1))
     return json.loads(event.after_json)
+
+
+def test_two_admins_restoring_at_once(small, tmp_path, monkeypatch):
+    """A second admin's restore sent while the first runs is answered 503 (Retry-After) and
+    restores nothing; the first's restore is the only one in the audit; the same form sent
+    again afterwards meets the login page (every session ended)."""
+    import threading
+
+    from .test_web_security import csrf_of, login
+
+    st, archive = small
+    services.create_user(st, None, "boss2", PASSWORD, "admin")
+    folder = tmp_path / "backups"
+    folder.mkdir()
+    (folder / "a.zip").write_bytes(archive.read_bytes())
+    monkeypatch.setenv("GONIO_BACKUP_FOLDER", str(folder))
+    app = _page_app(st)
+    sends = []
+    for who in ("boss", "boss2"):
+        web = login(app, who)
+        page = web.post("/backup/check", data={"csrf": csrf_of(web), "choose": "a.zip"}).text
+        sends.append((web, dict(_confirm(page), csrf=csrf_of(web), confirm="RESTORE",
+                                password=PASSWORD)))
+    started, go_on = threading.Event(), threading.Event()
+    real = backup_mod._check_space
+
+    def held(*a, **k):                       # the first restore, the server closed
+        started.set()
+        go_on.wait(30)
+        return real(*a, **k)
+    monkeypatch.setattr(backup_mod, "_check_space", held)
+    answers = {}
+    first = threading.Thread(target=lambda: answers.setdefault(
+        "boss", sends[0][0].post("/backup/restore", data=sends[0][1])))
+    first.start()
+    assert started.wait(30)
+    second = sends[1][0].post("/backup/restore", data=sends[1][1])
+    assert second.status_code == 503 and second.headers["retry-after"] == "30"
+    assert "restored from a backup (by boss" in second.text
+    go_on.set()
+    first.join(30)
+    assert answers["boss"].status_code == 200
+    again = sends[0][0].post("/backup/restore", data=sends[0][1], follow_redirects=False)
+    assert again.status_code == 303 and again.headers["location"] == "/login"
+    from sqlalchemy import func, select
+
+    from gonio.records.models import AuditEvent
+    with st.session() as s:
+        assert s.scalar(select(func.count()).where(AuditEvent.action == "restore")) == 1
+
+
+@pytest.mark.parametrize("column, value, said", [
+    ("active", "no", "true or false"), ("id", "1", "a whole number"),
+    ("id", True, "a whole number"), ("username", True, "text"),
+    ("username", ["x"], "text")])
+def test_a_value_of_the_wrong_kind_is_refused(small, tmp_path, column, value, said):
+    """records.json's users row with ``active: "no"``: SQLite stored the text as it was,
+    the restore succeeded (the check took "no" for an active admin) and every later read
+    of the users failed; each value is checked against its column's type."""
+    from .test_records_backup import archive_without
+
+    st, archive = small
+
+    def wrong(doc):
+        t = doc["tables"]["users"]
+        t["rows"][0][t["columns"].index(column)] = value
+        return doc
+    bad = archive_without(archive, tmp_path / "wrong.zip", records_json=wrong)
+    with pytest.raises(GonioError, match=f"users row 1: {column} is not {said}"):
+        check_archive(bad)
+
+
+def test_a_deactivated_admin_cannot_restore(small, tmp_path):
+    """An admin deactivated after the archive was verified on their page: the confirmation
+    sent afterwards meets the login page and nothing is restored."""
+    from .test_web_security import csrf_of, login
+
+    st, archive = small
+    services.create_user(st, None, "boss2", PASSWORD, "admin")
+    web = login(_page_app(st), "boss2")
+    page = web.post("/backup/check", data={"csrf": csrf_of(web)}, files={
+        "archive": ("a.zip", archive.read_bytes(), "application/zip")}).text
+    send = dict(_confirm(page), csrf=csrf_of(web), confirm="RESTORE", password=PASSWORD)
+    services.add_customer(st, services.user(st, "tech"), "After the backup Ltd")
+    services.update_user(st, services.user(st, "boss"), "boss2", active=False, roles=["admin"])
+    r = web.post("/backup/restore", data=send, follow_redirects=False)
+    assert r.status_code == 303 and r.headers["location"] == "/login"
+    assert summary(st)["rows"]["customers"] == 2
+
+
+def test_a_stored_file_the_disk_refuses_is_one_line(tmp_path, monkeypatch):
+    """The disk fills while the archive's stored files are written (an OSError before):
+    one line, no records written."""
+    from gonio.records import blobs
+
+    archive = archive_of(tmp_path, "a", blob=b"readings " * 100)
+    target = open_store(None, tmp_path / "target")
+    try:
+        def full(*a, **k):
+            raise OSError(28, "No space left on device")
+        monkeypatch.setattr(blobs, "put_stream", full)
+        with pytest.raises(GonioError, match=r"cannot write the stored file [0-9a-f]{12}… \(No "
+                                             r"space left on device\): the records are "
+                                             "unchanged; nothing restored"):
+            restore(target, archive)
+        assert summary(target)["rows"]["users"] == 0
+    finally:
+        target.close()
