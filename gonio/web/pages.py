@@ -843,21 +843,30 @@ async def backup_verify(request: Request, user, csrf, data):
 
 @_admin_form("/backup/download")
 async def backup_download(request: Request, user, csrf, data):
-    """A backup archive of the records now (``gonio db backup``), as a download."""
+    """A backup archive of the records now (``gonio db backup``), as a download: written in
+    a worker thread (the server answers others meanwhile) into a temporary folder of the
+    data folder, sent from the file (never whole in memory) and removed once sent."""
+    import shutil
     import tempfile
+
+    from fastapi.responses import FileResponse
+    from starlette.background import BackgroundTask
+    from starlette.concurrency import run_in_threadpool
 
     from gonio.records.backup import backup
 
-    with tempfile.TemporaryDirectory(prefix="gonio-backup-", dir=_store(request).data) as tmp:
-        path = Path(tmp) / "records.zip"
-        try:
-            backup(_store(request), path)
-        except GonioError as exc:
-            return _backup(request, user, csrf, status_code=409, error=str(exc))
-        data = path.read_bytes()
+    tmp = Path(tempfile.mkdtemp(prefix="gonio-backup-", dir=_store(request).data))
+    try:
+        await run_in_threadpool(backup, _store(request), tmp / "records.zip")
+    except BaseException as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if not isinstance(exc, GonioError):
+            raise
+        return _backup(request, user, csrf, status_code=409, error=exc.message)
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d-%H%M")
-    return Response(data, media_type="application/zip", headers={
-        "Content-Disposition": f'attachment; filename="gonio-records-{stamp}.zip"'})
+    return FileResponse(tmp / "records.zip", media_type="application/zip",
+                        filename=f"gonio-records-{stamp}.zip",
+                        background=BackgroundTask(shutil.rmtree, tmp, ignore_errors=True))
 
 
 def _staging(store) -> Path:

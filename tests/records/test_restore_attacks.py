@@ -589,3 +589,33 @@ def test_a_limit_that_is_no_number_is_said_on_the_page(small, monkeypatch):
         "archive": ("a.zip", archive.read_bytes(), "application/zip")})
     assert r.status_code == 500 and r.text.count(
         "environment variable GONIO_MAX_BACKUP_BYTES must be a number, got &#39;8 GB&#39;") == 1
+
+
+def test_a_download_names_no_server_path_and_leaves_nothing(tmp_path):
+    """/backup/download: a damaged stored file is said once without the server's temporary
+    path (before, the page named data/gonio-backup-…/records.zip, and twice); the archive is
+    sent from its file and its temporary folder removed once sent."""
+    from gonio.records import blobs
+
+    from .test_web_security import csrf_of, login
+
+    st = open_store(None, tmp_path / "live")
+    try:
+        small_records(st, blob=b"readings " * 100)
+        web = login(_page_app(st), "boss")
+        r = web.post("/backup/download", data={"csrf": csrf_of(web)})
+        assert r.status_code == 200 and r.headers["content-type"] == "application/zip"
+        (tmp_path / "got.zip").write_bytes(r.content)
+        assert check_archive(tmp_path / "got.zip")["files"] == 1
+        assert not list(st.data.glob("gonio-backup-*"))
+        sha = archive_sha256(io.BytesIO(b"readings " * 100))
+        path = blobs.blob_path(st.blob_root, sha)
+        os.chmod(path, 0o644)
+        path.write_bytes(b"changed on disk")
+        r = web.post("/backup/download", data={"csrf": csrf_of(web)})
+        said = re.search(r'<p class="error" role="alert">([^<]*)</p>', r.text).group(1)
+        assert r.status_code == 409 and said.startswith("1 stored file(s) missing or damaged")
+        assert str(st.data) not in said and r.text.count("missing or damaged") == 1
+        assert not list(st.data.glob("gonio-backup-*"))
+    finally:
+        st.close()
