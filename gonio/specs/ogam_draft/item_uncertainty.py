@@ -297,6 +297,18 @@ def _single_round_u(k_i: np.ndarray, theta_deg: np.ndarray, table_mpe_arcsec: fl
     return u_tab, u_q
 
 
+def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
+    """The 7.1 rounds as K_l's budgets take them (draft 7.2): (K_i, θ_k, n, mean K_i, u_tab,
+    u_q) with the single rounds' table and count-quantum u (:func:`_single_round_u`);
+    fewer than two rounds have no range (ValueError)."""
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    if k_i.size < 2:
+        raise ValueError("K_l needs at least two rounds")
+    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    return k_i, th, int(k_i.size), float(np.mean(k_i)), u_tab, u_q
+
+
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
                         tilt_bias_arcsec_per_deg: float = 0.0) -> ItemUncertainty:
@@ -406,13 +418,7 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> [round(c.u * 1e4, 3) for c in b.components]
     [0.573, 1.145, 0.56]
     """
-    k_i = np.asarray(k_i, dtype=float)
-    th = np.asarray(theta_deg, dtype=float)
-    n = k_i.size
-    if n < 2:
-        raise ValueError("K_l needs at least two rounds")
-    kbar = float(np.mean(k_i))
-    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     u_i = np.sqrt(u_tab ** 2 + u_q ** 2)
     i_max, i_min = int(np.argmax(k_i)), int(np.argmin(k_i))
     to_pct = 100.0 / kbar
@@ -489,14 +495,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     """
     from uncertainty.stdev import corrected_range
 
-    k_i = np.asarray(k_i, dtype=float)
-    th = np.asarray(theta_deg, dtype=float)
-    n = k_i.size
-    if n < 2:
-        raise ValueError("K_l needs at least two rounds")
-    kbar = float(np.mean(k_i))
+    k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     to_pct = 100.0 / kbar
-    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
     rng = np.random.default_rng(RANGE_SEED)
     err = (rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
            + rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))) * to_pct
