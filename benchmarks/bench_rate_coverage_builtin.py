@@ -6,8 +6,8 @@ an over-wide U, coverage < 0.90 a narrow one).
     PYTHONPATH=$PWD python benchmarks/bench_rate_coverage_builtin.py --spec iec62047-20 \
         --seeds 100 --first 910000 [--fixed-equipment] [--records out.jsonl]
 
-Bench: the default bench (mems-adxrs610) as gonio.specs._rate_family.simulate.study_bench makes it
-(thermal lag and cross-axis coupling of a turning Earth rate off: history effects the truths
+Bench: the default bench (mems-adxrs610) as the specification's study bench makes it
+(``SPEC.coverage.study_bench``: thermal lag and cross-axis coupling of a turning Earth rate off: history effects the truths
 leave out) but WITH the power-on transient, so the warm-up and start-up items are measured.
 Equipment: by default (as in the tests and ``gonio validate``) each trial draws every
 type-B equipment error from its seed — rate-table rate error and voltmeter gain (normal,
@@ -29,13 +29,13 @@ from dataclasses import replace
 import numpy as np
 
 
-def bench_for(draw: bool = True):
-    """The study bench with the power-on transient back on; ``draw``: equipment drawn per
-    trial (from the trial's seed, in SPEC.run_trial)."""
+def bench_for(spec: str, draw: bool = True):
+    """The study bench of ``spec`` (``SPEC.coverage.study_bench``) with the power-on transient
+    back on; ``draw``: equipment drawn per trial (from the trial's seed, in SPEC.run_trial)."""
     from gonio.bench.rate_gyro import load_rate_bench
-    from gonio.specs._rate_family.simulate import study_bench
+    from gonio.kit import get
 
-    b = study_bench("mems-adxrs610", draw_equipment=draw)
+    b = get(spec).coverage.study_bench("mems-adxrs610", draw_equipment=draw)
     return replace(b, gyro=replace(b.gyro, warmup_bias_dps=load_rate_bench("mems-adxrs610")
                                    .gyro.warmup_bias_dps))
 
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
 
     recs = []
     t0 = time.perf_counter()
-    bench = bench_for(not a.fixed_equipment)
+    bench = bench_for(a.spec, not a.fixed_equipment)
     for s in range(a.first, a.first + a.seeds):
         r = {"seed": s, "r": trial_records(a.spec, bench, a.spec, s)}
         recs.append(r)

@@ -8,9 +8,10 @@ Contents (one folder per stage of the data flow, docs/architecture.md):
 ``gonio.protocol``                 the rate programme the rate specifications share
 ``gonio.bench``                    the virtual rate-gyro bench
 ``gonio.analysis.noise``           Allan deviation and the gyro noise model
-``gonio.specs``                    the registry: every procedure (items, budget, certificate) a plug-in
-``gonio.specs.ogam_draft``         the optical draft: its protocol, readings, bench, reduction, items
-``gonio.kit``                      the public plug-in kit
+``gonio.result``                   the one result, its items, GUM budget and item loop
+``gonio.specs``                    the registry: every procedure (items, budget, certificate) a plug-in,
+                                   each in its own package beside it (what only it uses inside)
+``gonio.kit``                      the public plug-in kit every procedure uses
 ``gonio.report``                   certificate and figures
 ``gonio.cli``                      the ``gonio`` command (thin layer over the above)
 =================================  ==================================================

@@ -1,5 +1,5 @@
-"""A specification's own options of ``gonio calibrate``, ``simulate``, ``budget`` and
-``validate`` come through its ``arguments`` hooks (docs/kit.md#command-line-options-of-its-own):
+"""A specification's own options of ``gonio calibrate``, ``simulate``, ``budget``,
+``validate`` and the nested ``bench serve`` come through its ``arguments`` hooks (docs/kit.md#command-line-options-of-its-own):
 the command line holds none of them, another specification's option is refused in one line
 (exit 2), a plug-in's own option reaches its hook, and a broken hook costs only its own
 options."""
@@ -166,7 +166,8 @@ def test_a_broken_hook_costs_only_its_own_options(monkeypatch):
 
 
 @pytest.mark.parametrize("arguments", [{"calibrate": "no reference"},
-                                       {"acquire": "mod:fn"}, "mod:fn"])
+                                       {"acquire": "mod:fn"}, "mod:fn",
+                                       {"bench": "mod:fn"}])    # a nested command: its words
 def test_the_field_maps_commands_to_module_function_references(arguments):
     with pytest.raises(GonioError, match="field arguments must be a dict"):
         Specification(key="s", title_en="S", title_zh="S", clause_doc="", default_protocol="",
@@ -205,11 +206,17 @@ def budget(window=None, monte_carlo_trials=None, seed=None):
     return Budget(window)
 
 
+def serve(bench, ports, *, speed=1.0, seed=0, faults=None, tone=None):
+    raise GonioError(f"serving {bench} with tone {tone}")       # what reached the hook
+
+
 SPEC = Specification(
     key="plug-opts", title_en="P", title_zh="P", clause_doc="", default_protocol="",
-    default_bench="", calibrate=print, simulate=simulate, budget=budget,
+    default_bench="", calibrate=print, simulate=simulate, budget=budget, serve=serve,
     simulate_options=frozenset({"gain"}), budget_options=frozenset({"window"}),
-    arguments={"simulate": "plug_opts.cli:add_simulate", "budget": "plug_opts.cli:add_budget"})
+    serve_options=frozenset({"tone"}),
+    arguments={"simulate": "plug_opts.cli:add_simulate", "budget": "plug_opts.cli:add_budget",
+               "bench serve": "plug_opts.cli:add_serve"})
 '''
 
 PLUGIN_CLI = '''\
@@ -220,6 +227,10 @@ def add_simulate(group):
 def add_budget(group):
     group.add_argument("--window", "--win", dest="window", type=float, default=None,
                        help="the plug-in's window")
+
+
+def add_serve(group):
+    group.add_argument("--tone", type=float, default=None, help="the plug-in's served tone")
 '''
 
 
@@ -285,7 +296,7 @@ def _serve(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
 
 def test_bench_serve_names_no_specification_option():
     """gonio's own ``bench serve`` holds none of the goniometer's options; the optical
-    draft adds them through ``arguments["bench"]``."""
+    draft adds them through ``arguments["bench serve"]`` (a nested command, by its words)."""
     import importlib
 
     parser = argparse.ArgumentParser()
@@ -327,3 +338,25 @@ def test_a_rate_bench_refuses_the_goniometers_serve_options(capsys):
     assert rc == 2
     assert capsys.readouterr().err == ("gonio: error: gonio bench serve: --warm-up does not "
                                        "apply to a rate bench (mems-adxrs610)\n")
+
+
+def test_a_plugins_own_serve_option_reaches_its_hook_and_is_refused_elsewhere(plug_opts,
+                                                                             capsys):
+    """The nested command's hook (``arguments["bench serve"]``): the plug-in's option is in
+    ``gonio bench serve``'s help under its group and reaches its ``serve`` hook; given with
+    another specification, or another's given with it, it is refused in one line, exit 2."""
+    p = _serve(build_parser(["bench", "serve"]))
+    groups = {g.title: {o for a in g._group_actions for o in a.option_strings}
+              for g in p._action_groups}
+    assert groups["options of --spec plug-opts"] == {"--tone"}
+    assert groups["options of --spec ogam-draft"] == {"--range-deg", "--warm-up"}
+    ports = ["--table-port", "0", "--gyro-port", "0"]
+    assert main(["bench", "serve", "--spec", "plug-opts", "--bench", "rlg", *ports,
+                 "--tone", "3"]) == 2
+    assert capsys.readouterr().err == "gonio: error: serving rlg with tone 3.0\n"
+    for argv, flag, key in ((["--spec", "plug-opts", "--bench", "rlg", "--warm-up", "5"],
+                             "--warm-up", "plug-opts"),
+                            (["--tone", "3"], "--tone", "ogam-draft")):
+        assert main(["bench", "serve", *ports, *argv]) == 2
+        assert capsys.readouterr().err == (f"gonio: error: {flag} does not apply to "
+                                           f"'gonio bench serve --spec {key}'\n")

@@ -195,6 +195,46 @@ def test_administrative_data_and_conformity(run):
     assert virtual.find(".//dcc:statement[@id='virtual-bench']", NS) is not None
 
 
+def test_performance_location_is_the_category_of_the_place_entered(run, schema, tmp_path):
+    """dcc:performanceLocation takes one of the schema's categories: the one the laboratory
+    file states (``[certificate] location``), valid against the schema for each, with the
+    place itself as the statement 'place'; a virtual-bench example says 'other'; a category
+    the schema does not know is refused when the laboratory file is read."""
+    from gonio.errors import GonioError
+    from gonio.formats.lab import LOCATIONS
+
+    lab = run["lab"]
+    # the same result as measured readings would give it (no virtual-bench metadata)
+    res = dict(run["res"], provenance={"virtual": False, "bench": None, "seed": None,
+                                       "generator": None, "evidence": []},
+               metadata={k: v for k, v in run["res"]["metadata"].items()
+                         if k not in ("bench", "seed", "generator")})
+    enum = [e.get("value") for e in etree.parse(str(Path(__file__).parent / "data" / "dcc-3.3.0"
+                                                    / "dcc.xsd")).iterfind(
+        ".//{http://www.w3.org/2001/XMLSchema}simpleType[@name='stringPerformanceLocationType']"
+        "//{http://www.w3.org/2001/XMLSchema}enumeration")]
+    assert list(LOCATIONS) == enum
+    for where in LOCATIONS:
+        here = dict(lab, certificate=dict(lab["certificate"], location=where))
+        doc = dcc_bytes(res, lab=here, cert_id="X-1")
+        assert not list(schema.iter_errors(doc.decode("utf-8"))), where
+        root = etree.fromstring(doc)
+        assert root.find(".//dcc:coreData/dcc:performanceLocation", NS).text == where
+        place = root.find(".//dcc:statement[@id='place']/dcc:declaration", NS)
+        assert "".join(place.itertext()).strip() == lab["certificate"]["place"]
+    assert etree.fromstring(dcc_bytes(res, lab=lab, cert_id="X-1")).find(
+        ".//dcc:coreData/dcc:performanceLocation", NS).text == "laboratory"   # the default
+    assert etree.fromstring(run["docs"]["lab"]).find(
+        ".//dcc:coreData/dcc:performanceLocation", NS).text == "other"
+    text = (protocols_dir() / "lab-example.toml").read_text(encoding="utf-8")
+    bad = tmp_path / "lab.toml"
+    bad.write_text(text.replace('place = "Angle laboratory, room 101"',
+                                'place = "Angle laboratory, room 101"\nlocation = "Wuxi"'),
+                   encoding="utf-8")
+    with pytest.raises(GonioError, match="certificate.location"):
+        load_lab(bad)
+
+
 def test_same_inputs_same_bytes(run):
     r = run["res"]
     assert dcc_bytes(r, lab=run["lab"], cert_id="X-1") == dcc_bytes(r, lab=run["lab"],

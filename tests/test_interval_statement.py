@@ -15,7 +15,7 @@ from scipy import stats
 
 from gonio.errors import GonioError
 from gonio.result.statement import item_statement, state_interval
-from gonio.specs._rate_family.rate_records import std_dev_uncertainty
+from gonio.kit import std_dev_uncertainty
 
 pos = st.floats(min_value=1e-9, max_value=1e9, allow_nan=False)
 

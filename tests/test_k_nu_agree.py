@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy import stats
 
 from gonio.result.statement import NU_INFINITE, coverage_k, nu_text, state, stated_nu
-from gonio.specs._rate_family.rate_records import gum
+from gonio.kit import gum
 from uncertainty import from_u, type_b
 
 

@@ -161,3 +161,72 @@ def test_dcc_states_each_item_once(demo):
                 assert lo <= it["value"] or (it.get("nonnegative") and lo == 0.0), key
             elif kinds:
                 assert kinds == ["expandedMU"], (key, kinds)
+
+
+_NUM_SPAN = re.compile(r'<span class="num" data-src="items\.([A-Za-z0-9_]+)\.'
+                       r'(value|uncertainty\.U|uncertainty\.k|uncertainty\.nu_eff)"'
+                       r' data-rule="[^"]+">([^<]*)</span>')
+
+
+def test_numbers_agree_across_outputs(demo):
+    """The same numbers of every measured item in results.json, the certificate (its spans
+    carrying data-src), summary.txt and the DCC: value, U, k and ν as the statement rule
+    states them from results.json; the interval's ends; one coverage probability. k is
+    t_p of the ν it states (the integer part of ν_eff, GUM G.6.4), checked with scipy."""
+    from scipy.stats import norm, t
+
+    from gonio.report.dcc import dsi_decimal
+    from gonio.result.statement import item_statement, k_text, nu_text, p_text, stated_nu
+
+    res, summary = demo["res"], demo["summary"]
+    html = demo["html"].replace("\xa0", " ")
+    spans: dict = {}
+    for key, what, text in _NUM_SPAN.findall(html):
+        spans.setdefault((key, what), set()).add(text)
+    reals = _real_uncertainties(demo["dcc"])
+    lines = summary.splitlines()
+    for key, it in measured(res).items():
+        st, u = item_statement(it), it["uncertainty"]
+        p = u.get("coverage_probability")
+        assert p is not None, f"{key}: no coverage probability in results.json"
+        assert st.p == p_text(p), key
+        if st.k is not None and u.get("k_source") != "fixed":
+            nu = stated_nu(u["nu_eff"])
+            q = 0.5 + p / 2
+            want = norm.ppf(q) if nu is None or math.isinf(nu) else t.ppf(q, nu)
+            assert u["k"] == pytest.approx(want, rel=1e-9), (key, u["k"], u["nu_eff"], want)
+            assert u["U"] == pytest.approx(u["k"] * u["u_c"], rel=1e-9), key
+        # the certificate
+        assert spans.get((key, "value"), {st.value_text}) == {st.value_text}, key
+        if st.U is not None:
+            assert spans.get((key, "uncertainty.U"), {st.U_text}) == {st.U_text}, key
+        if st.k is not None:
+            assert spans.get((key, "uncertainty.k"), {st.k}) == {st.k}, key
+        if st.nu_eff is not None:
+            assert spans.get((key, "uncertainty.nu_eff"), {st.nu_eff}) == {st.nu_eff}, key
+        if st.interval is not None and (key, "value") in spans:
+            assert (f"≤ {st.interval_ends[1]}" if st.upper is not None else
+                    f"[{st.interval_ends[0]}, {st.interval_ends[1]}]") in html, key
+        # summary.txt: one line holds the value with its U and k, or with its interval
+        want = [st.value_text] + ([st.U_text, f"k = {st.k}"] if st.U is not None else
+                                  [st.interval_ends[1]] if st.interval is not None else [])
+        assert any(all(w in ln for w in want) for ln in lines), (key, want)
+        for ln in lines:
+            if st.value_text in ln and (st.U_text or "≤") in ln:
+                for m in re.finditer(r"ν_eff = (\S+?)[,)]", ln):
+                    assert m.group(1) == nu_text(u["nu_eff"]), (key, ln)
+                for m in re.finditer(r"p ≈ (\S+) %", ln):
+                    assert m.group(1) == st.p, (key, ln)
+        # the DCC (a per-g item is written per m s⁻² there: tests/test_rate_dcc.py)
+        for kinds, real in ([] if it["unit"].endswith("/g") else reals.get(key, [])):
+            assert real.find("si:value", NS).text == dsi_decimal(st.value_text), key
+            mu = real.find("si:measurementUncertaintyUnivariate/*", NS)
+            if mu is None:
+                continue
+            assert float(mu.find("si:coverageProbability", NS).text) == p, key
+            if kinds == ["expandedMU"]:
+                assert mu.find("si:valueExpandedMU", NS).text == dsi_decimal(st.U_text), key
+                assert k_text(float(mu.find("si:coverageFactor", NS).text)) == st.k, key
+            elif kinds == ["coverageIntervalMU"]:
+                assert (mu.find("si:intervalMin", NS).text, mu.find("si:intervalMax", NS).text) \
+                    == tuple(dsi_decimal(x) for x in st.interval_ends), key

@@ -76,7 +76,7 @@ def test_calibrate_into_the_demo_folder_is_refused_and_deletes_nothing(first_set
 
 def test_failure_after_results_leaves_previous_set(first_set, tmp_path, monkeypatch, capsys):
     prev = tree(first_set)
-    import gonio.specs._rate_family.outputs as rc        # the rate specifications' renderer
+    import gonio.report.item_outputs as rc        # the per-item renderer (ITEM_RENDERER)
     seen = {}
 
     def broken(result, out, **kw):

@@ -97,7 +97,7 @@ def test_std_dev_uncertainty_covers_95_percent(nu):
     side is below 0) against scipy's binomial test. The two-sided χ² limit it had covered
     97.5 %."""
     from scipy.stats import binomtest
-    from gonio.specs._rate_family.rate_records import std_dev_uncertainty
+    from gonio.kit import std_dev_uncertainty
     rng = np.random.default_rng(nu)
     n = 20000
     s = rng.standard_normal((n, nu + 1)).std(axis=1, ddof=1)
@@ -154,7 +154,20 @@ def test_jjf_bias_repeatability_and_stability_by_hand(jjf):
         rec_s.append(y[: n * P].reshape(n, P).mean(1).std(ddof=1) / K * 3600)
     br = np.std(np.array(rec_b) / K * 3600, ddof=1)
     _std_dev_budget(r.items["bias_repeatability"], br, len(rec_b))
-    assert r.items["bias_stability"].value == pytest.approx(np.mean(rec_s), rel=1e-9)
+    bs = r.items["bias_stability"]
+    assert bs.value == pytest.approx(np.mean(rec_s), rel=1e-9)
+    # one interval, from the records' effective ν (not the spread of the Q = 3 values):
+    # u_c² = B_s²/(2ν_rec) + (B_s·u(K)/K)², ν = ½(B_s/u_c)², [0, B_s·√(ν/χ²_0.05,ν)]
+    from scipy.stats import chi2
+    from gonio.specs._rate_family.formulas import bias_stability_dof
+    nu_rec = bias_stability_dof([g["output"].to_numpy() for _, g in d.groupby("run")], P)
+    u_c = bs.value * math.sqrt(1 / (2 * nu_rec) + r.items["scale_factor"].uncertainty.u_c ** 2
+                               / K ** 2)
+    assert bs.uncertainty.u_c == pytest.approx(u_c, rel=1e-6)
+    nu = int(0.5 * (bs.value / u_c) ** 2)
+    assert bs.uncertainty.k is None and bs.uncertainty.interval[0] == 0.0
+    assert bs.uncertainty.interval[1] == pytest.approx(
+        bs.value * math.sqrt(nu / chi2.ppf(0.05, nu)), rel=1e-6)
 
 
 LIM = Limits(-0.5, 0.5)

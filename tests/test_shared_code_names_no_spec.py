@@ -2,7 +2,12 @@
 records, the web, the pipeline, the result and the kit name none of the optical draft's own
 items or clauses in their string literals (docstrings aside: an example there is prose), and
 the shared label and phrase tables hold none of its labels or phrases (its package does:
-``gonio/specs/ogam_draft/phrases.py``, passed as ``own``/``table`` by its renderer)."""
+``gonio/specs/ogam_draft/phrases.py``, passed as ``own``/``table`` by its renderer).
+
+No module of gonio outside ``gonio/specs/`` (the kit included) names a specification's
+package or a family package (``gonio.specs.<package>``), in code or docstring: what a
+specification uses from shared code is shared code's, and the registry's names
+(``gonio.specs.get``, ``gonio.specs.ITEM_RENDERER`` …) are no package."""
 
 from __future__ import annotations
 
@@ -59,6 +64,52 @@ def offending_literals(root: Path, items: set[str]) -> list[str]:
     return bad
 
 
+def spec_packages(root: Path) -> set[str]:
+    """The packages under ``gonio/specs/`` of ``root``: every specification's and family's."""
+    return {p.parent.name for p in (root / "gonio" / "specs").glob("*/__init__.py")}
+
+
+def modules_naming_a_spec_package(root: Path) -> list[str]:
+    """``path:line: text`` of every line of a module of ``root``'s gonio outside
+    ``gonio/specs/`` that names a package under it, as a dotted or a path name."""
+    pkgs = sorted(spec_packages(root))
+    if not pkgs:
+        return []
+    name = re.compile(r"\bgonio[./]specs[./](" + "|".join(map(re.escape, pkgs)) + r")\b")
+    bad = []
+    for path in sorted((root / "gonio").rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        if rel.startswith("gonio/specs/"):
+            continue
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            if name.search(line):
+                bad.append(f"{rel}:{i}: {line.strip()[:80]}")
+    return bad
+
+
+def test_the_package_check_fires(tmp_path):
+    for pkg in ("_family", "acme"):
+        (tmp_path / "gonio" / "specs" / pkg).mkdir(parents=True)
+        (tmp_path / "gonio" / "specs" / pkg / "__init__.py").write_text("", encoding="utf-8")
+    kit = tmp_path / "gonio" / "kit"
+    kit.mkdir()
+    (kit / "__init__.py").write_text(
+        '"""Re-exports (:mod:`gonio.specs._family.records`)."""\n'
+        "from gonio.specs._family.records import gum\n"
+        'RENDERER = "gonio.specs._family.outputs"\n'
+        "from gonio.specs import get, lazy\n"
+        "KEY = gonio.specs.DEFAULT_KEY\n"
+        "# see gonio/specs/acme/items.py\n", encoding="utf-8")
+    (tmp_path / "gonio" / "specs" / "acme" / "items.py").write_text(
+        "from gonio.specs._family.records import gum\n", encoding="utf-8")
+    bad = modules_naming_a_spec_package(tmp_path)
+    assert [b.split(": ")[0] for b in bad] == [f"gonio/kit/__init__.py:{n}" for n in (1, 2, 3, 6)]
+
+
+def test_no_module_outside_the_specifications_names_one_of_their_packages():
+    assert modules_naming_a_spec_package(ROOT) == []
+
+
 def test_the_check_fires(tmp_path):
     pkg = tmp_path / "gonio" / "report"
     pkg.mkdir(parents=True)
@@ -82,6 +133,24 @@ def test_the_shared_tables_hold_no_optical_label_or_phrase():
     assert not set(i18n.LABELS) & set(available()["ogam-draft"].item_keys)
     assert not set(i18n.LABELS) & set(phrases.LABELS)
     assert not [en for en in i18n.DCC_ZH if "draft" in en or "optical" in en]
+
+
+def test_the_shared_dcc_table_holds_no_specifications_virtual_bench():
+    """The names of the specifications' virtual instruments and equipment (the bench files'
+    ``name`` of each section but ``[bench]``, "… (virtual)") are translated by the package of
+    the specification that simulates on them (its phrases), not by the shared DCC table."""
+    import tomllib
+
+    from gonio.report.i18n import DCC_ZH
+
+    names = set()
+    for path in (ROOT / "protocols" / "benches").glob("*.toml"):
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        names |= {v["name"] for k, v in data.items()
+                  if k != "bench" and isinstance(v, dict) and isinstance(v.get("name"), str)}
+    assert "MEMS rate gyro (virtual)" in names and "RLG goniometer (virtual)" in names
+    assert not names & set(DCC_ZH)
+    assert not [en for en in DCC_ZH if "(virtual)" in en]
 
 
 @pytest.mark.parametrize("lang", ["en", "zh"])

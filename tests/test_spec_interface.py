@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from gonio.errors import GonioError
-from gonio.specs import get, item_order, lazy
+from gonio.kit import item_order
+from gonio.specs import get, lazy
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,6 +1,6 @@
 """Closed forms of the virtual rate gyro's noise-free responses (the truths of JJF 1535 and
 IEC 62047-20 items), written from the model's parameters (:class:`.rate_gyro.RateGyroConfig`)
-and never through the estimators of :mod:`gonio.specs._rate_family.formulas`: a formula mutated in
+and never through the estimators the rate specifications calibrate with: a formula mutated in
 an estimator changes the estimate, not the truth, so the noise-off tests see it.
 
 The response of the model to a steady input ω (°/s equivalent, before the scale factor) is

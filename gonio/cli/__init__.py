@@ -38,7 +38,23 @@ from gonio.errors import GonioError
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line and exit code 2."""
+    """argparse, but a usage error is one line and exit code 2; a nested command's parser is
+    found by its words (:meth:`command_parser`)."""
+
+    subcommands = None
+
+    def add_subparsers(self, **kwargs):
+        """argparse's, the action kept as :attr:`subcommands`."""
+        self.subcommands = super().add_subparsers(**kwargs)
+        return self.subcommands
+
+    def command_parser(self, words) -> argparse.ArgumentParser:
+        """The parser of the (nested) command ``words`` (``["bench", "serve"]``: the parser of
+        ``gonio bench serve``)."""
+        p = self
+        for w in words:
+            p = p.subcommands.choices[w]
+        return p
 
     def error(self, message: str) -> None:  # pragma: no cover - exercised via CLI tests
         sys.stderr.write(f"{self.prog}: error: {_short(message)}\n")
@@ -64,8 +80,8 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     own commands first leaves the specifications' commands out: loading every
     specification costs about a second, and that command does not need them. The options
     the specifications add to one of gonio's commands (``Specification.arguments``:
-    ``gonio calibrate``, ``simulate``, ``budget``, ``validate``) are added when that command
-    runs or the whole parser is built."""
+    ``gonio calibrate``, ``simulate``, ``budget``, ``validate``, ``bench serve``) are added
+    when that command runs or the whole parser is built."""
     from gonio import __version__
 
     parser = _Parser(prog="gonio", description=(
@@ -77,26 +93,17 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     sub.required = True
     for _, register in sorted(_commands(argv).items()):
         register(sub)
-    for name, add_spec_options in _spec_option_hooks().items():
-        # the options the specifications add to a command (Specification.arguments) load every
-        # specification: only for that command, or when the whole parser is built
-        if not argv or argv[0] == name:
-            add_spec_options(sub.choices[name])
+    from gonio.cli.spec_options import add_spec_options
+    from gonio.specs import ARGUMENT_COMMANDS
+
+    for command in ARGUMENT_COMMANDS:
+        # the options the specifications add to a command (Specification.arguments, a nested
+        # command by its words) load every specification: only for that command, or when the
+        # whole parser is built
+        words = command.split()
+        if not argv or argv[0] == words[0]:
+            add_spec_options(parser.command_parser(words), command)
     return parser
-
-
-def _spec_option_hooks() -> dict:
-    """{command name: add_spec_options(parser)} of the ``cmd_*`` modules whose command takes
-    options the specifications add (``Specification.arguments``, :mod:`.spec_options`)."""
-    import gonio.cli as pkg
-
-    found = {}
-    for info in pkgutil.iter_modules(pkg.__path__):
-        if info.name.startswith("cmd_"):
-            mod = importlib.import_module(f"gonio.cli.{info.name}")
-            if hasattr(mod, "add_spec_options"):
-                found[info.name[4:].replace("_", "-")] = mod.add_spec_options
-    return found
 
 
 def _commands(argv: list[str] | None = None) -> dict:

@@ -47,16 +47,7 @@ def register(sub) -> None:
                         "axis fault; a rate bench: its N-th ROT or OSC), gyro-drop:N (the module "
                         "drops its link at its N-th READ? or FETC?; a rate bench: ACQ:DATA?)")
     s.set_defaults(func=run)
-    no_spec_options(s)
-    p.serve_parser = s          # where the specifications' serve options go
-
-
-def add_spec_options(p) -> None:
-    """Every registered specification's own ``gonio bench serve`` options (``arguments
-    ["bench"]``, :func:`gonio.cli.spec_options.add_spec_options`), on the serve sub-parser."""
-    from gonio.cli import spec_options
-
-    spec_options.add_spec_options(p.serve_parser, "bench")
+    no_spec_options(s)          # the specifications' own: arguments["bench serve"]
 
 
 def is_rate_bench(name: str) -> bool:
@@ -99,7 +90,7 @@ def run(args) -> int:
         raise GonioError(f"gonio bench serve: {spec.key} serves no virtual bench as "
                          "instruments (the specification has no serve hook)")
     else:
-        opts = refuse(spec, "bench", given(args), args)
+        opts = refuse(spec, "bench serve", given(args), args)
         served = spec.serve(args.bench, {"table": args.table_port, "gyro": args.gyro_port},
                             speed=args.speed, seed=args.seed, faults=Faults.parse(args.fault),
                             **opts)

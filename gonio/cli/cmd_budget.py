@@ -43,14 +43,6 @@ def register(subparsers) -> None:
     no_spec_options(p)
 
 
-def add_spec_options(p) -> None:
-    """Every registered specification's own ``gonio budget`` options, the inputs of its annex
-    (:func:`gonio.cli.spec_options.add_spec_options`)."""
-    from gonio.cli import spec_options
-
-    spec_options.add_spec_options(p, "budget")
-
-
 def run(args) -> int:
     """Compute and print the specification's budget."""
     from gonio.limits import check

@@ -39,14 +39,6 @@ def register(sub) -> None:
     no_spec_options(p)
 
 
-def add_spec_options(p) -> None:
-    """Every registered specification's own ``gonio calibrate`` options
-    (:func:`gonio.cli.spec_options.add_spec_options`)."""
-    from gonio.cli import spec_options
-
-    spec_options.add_spec_options(p, "calibrate")
-
-
 def add_certificate_options(p) -> None:
     """``--lab FILE`` and ``--lang en|zh`` (shared by calibrate and demo)."""
     p.add_argument("--lab", default=None, metavar="FILE",

@@ -102,44 +102,52 @@ def hook_calibrate(sub) -> None:
                        help="with --record: the records user recording it (its creator; "
                             "default $GONIO_USER)")
         add_store_options(p)
+        add_attach_options(p, prefix="with --record: ")
     except argparse.ArgumentError:           # calibrate has grown its own --record
         return
     inner = p.get_default("func")
 
     def run_recorded(args) -> int:
+        if attach_of(args) and not args.record:
+            raise GonioError("--standard, --temperature, --humidity and "
+                             "--environment-from-readings go with --record", key="--record")
         rc = inner(args)
         if rc == 0 and args.record:
-            from gonio.records.importer import import_output_folder
+            from gonio.records import services
+            from gonio.records.importer import record_output_folder
             store = _store(args)
             try:
-                cid = import_output_folder(store, args.out, readings=args.readings,
+                cid = record_output_folder(store, args.out, readings=args.readings,
                                            spec_key=args.spec,
                                            protocol=getattr(args, "protocol", None),
                                            lab=getattr(args, "lab", None),
-                                           actor=importing_user(store, args.record_user))
+                                           actor=importing_user(store, args.record_user),
+                                           **attach_of(args))
+                line = attach_line(store, services.calibration(store, cid))
             finally:
                 store.close()
-            sys.stderr.write(f"gonio: recorded as calibration {cid}; attach the "
-                             "registered standards and the environment before its review "
-                             f"(gonio db attach {cid} --standard ID --temperature T "
-                             "--humidity H)\n")
+            sys.stderr.write(f"gonio: recorded as {line}"
+                             + (f" (gonio db attach {cid} --standard ID --temperature T "
+                                "--humidity H)" if "needs" in line else "") + "\n")
         return rc
 
     p.set_defaults(func=run_recorded)
 
 
-def add_attach_options(q) -> None:
-    """The options naming what a calibration is attached (``db import``, ``db attach``)."""
+def add_attach_options(q, prefix: str = "") -> None:
+    """The options naming what a calibration is attached (``db import``, ``db attach``,
+    ``calibrate --record``; ``prefix`` starts each help text)."""
     q.add_argument("--standard", action="append", default=[], metavar="IDENTIFIER",
-                   help="a registered standard used (its identifier), valid on the "
+                   help=prefix + "a registered standard used (its identifier), valid on the "
                         "calibration date; repeat for several")
     q.add_argument("--temperature", default=None, metavar="DEG_C",
-                   help="the room temperature of the calibration (°C)")
+                   help=prefix + "the room temperature of the calibration (°C; with "
+                                 "--humidity, instead of the laboratory file's)")
     q.add_argument("--humidity", default=None, metavar="PCT",
-                   help="the relative humidity of the calibration (%%)")
+                   help=prefix + "the relative humidity of the calibration (%%)")
     q.add_argument("--environment-from-readings", action="store_true",
-                   help="take the temperature and humidity from the readings' metadata "
-                        "(stated so on the certificate)")
+                   help=prefix + "take the temperature and humidity from the readings' "
+                                 "metadata (stated so on the certificate)")
 
 
 def attach_of(args) -> dict:
@@ -164,8 +172,10 @@ def run_attach(args) -> int:
         if actor is None or not actor.active:
             raise GonioError("give the active records user attaching them (--user or "
                              "$GONIO_USER)", key="--user")
-        cal = services.attach_by_identifiers(store, actor, args.calibration, **attach_of(args))
-        print(attach_line(store, cal))
+        services.attach_by_identifiers(store, actor, args.calibration, **attach_of(args))
+        from gonio.records.worker import run_now
+        run_now(store, args.calibration)        # its draft rendered with them, at once
+        print(attach_line(store, services.calibration(store, args.calibration)))
     finally:
         store.close()
     return 0
@@ -180,7 +190,8 @@ def attach_line(store, cal) -> str:
         names = services.standard_names(s, cal.id)
     env = ("not entered" if cal.temperature_c is None else
            f"{cal.temperature_c:g} °C, {cal.humidity_pct:g} %"
-           + (" (from the readings)" if cal.environment_from == "readings" else ""))
+           + {"readings": " (from the readings)", "lab file": " (from the laboratory file)"}
+           .get(cal.environment_from, ""))
     return (f"calibration {cal.id}: standards {', '.join(names) or 'none'}; environment "
             f"{env}" + (f"; before its review it needs {' and '.join(missing)}"
                         if missing else ""))
@@ -262,23 +273,17 @@ def run_set_user(args) -> int:
 
 def run_import(args) -> int:
     from gonio.records import services
-    from gonio.records.importer import import_output_folder
+    from gonio.records.importer import record_output_folder
 
     store = _store(args)
     try:
         actor = importing_user(store, args.user)
         if args.readings and len(args.folders) > 1:
             raise GonioError("give --readings with one folder only", key="--readings")
-        attach = attach_of(args)
-        if attach and actor is None:
-            raise GonioError("give --user to attach standards or the environment",
-                             key="--user")
         for folder in args.folders:
-            cid = import_output_folder(store, folder, customer=args.customer,
+            cid = record_output_folder(store, folder, customer=args.customer,
                                        protocol=args.protocol, lab=args.lab, actor=actor,
-                                       readings=args.readings)
-            if attach:
-                services.attach_by_identifiers(store, actor, cid, **attach)
+                                       readings=args.readings, **attach_of(args))
             print(f"{folder}: {attach_line(store, services.calibration(store, cid))}")
     finally:
         store.close()

@@ -31,14 +31,6 @@ def register(sub) -> None:
     no_spec_options(p)
 
 
-def add_spec_options(p) -> None:
-    """Every registered specification's own ``gonio simulate`` options
-    (:func:`gonio.cli.spec_options.add_spec_options`)."""
-    from gonio.cli import spec_options
-
-    spec_options.add_spec_options(p, "simulate")
-
-
 def run(args) -> int:
     from gonio.atomic import check_output_dir
     from gonio.pipeline.dispatch import simulate

@@ -58,14 +58,6 @@ def register(sub) -> None:
     no_spec_options(p)
 
 
-def add_spec_options(p) -> None:
-    """Every registered specification's own ``gonio validate`` options, the settings of its
-    study (:func:`gonio.cli.spec_options.add_spec_options`)."""
-    from gonio.cli import spec_options
-
-    spec_options.add_spec_options(p, "validate")
-
-
 def run(args) -> int:
     if args.trials < 2:
         raise GonioError(f"--trials must be an integer >= 2, got {args.trials}")

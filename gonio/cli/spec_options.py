@@ -1,12 +1,14 @@
 """The options a specification adds to one of gonio's commands (``Specification.arguments``:
-``gonio calibrate``, ``simulate``, ``budget``, ``validate``): one argument group per
-specification, titled ``options of --spec KEY``.
+``gonio calibrate``, ``simulate``, ``budget``, ``validate``, ``bench serve``): one argument
+group per specification, titled ``options of --spec KEY``.
 
-gonio's command line holds none of them. A command module whose command takes them defines
-``add_spec_options(parser)`` (calling :func:`add_spec_options` with its name); the parser
-builder calls it only for that command, or when the whole parser is built (it loads every
-specification). The command reads the options given with :func:`given`; the pipeline refuses
-one the ``--spec`` in use does not take, naming it (one line, exit 2).
+gonio's command line holds none of them. The parser builder (:func:`gonio.cli.build_parser`)
+calls :func:`add_spec_options` on the parser of each command of
+:data:`gonio.specs.ARGUMENT_COMMANDS` (a nested one found by its words), only for the command
+about to run, or when the whole parser is built (it loads every specification); the command's
+module sets :func:`no_spec_options` for a parser built without them. The command reads the
+options given with :func:`given`; the pipeline refuses one the ``--spec`` in use does not
+take, naming it (one line, exit 2).
 """
 
 from __future__ import annotations

@@ -27,8 +27,8 @@ from gonio.errors import GonioError
 from gonio.formats.toml import (Field, check_text_fields, non_negative, positive, read_toml,
                                 validate_table)
 
-__all__ = ["LAB_SCHEMA", "DECISION_RULES", "RECORD_STATUSES", "load_lab", "naming_lab_file",
-           "check_one_limit_per_item", "check_interval"]
+__all__ = ["LAB_SCHEMA", "DECISION_RULES", "RECORD_STATUSES", "LOCATIONS", "load_lab",
+           "naming_lab_file", "check_one_limit_per_item", "check_interval"]
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``; ILAC-G8:09/2019
 #: clause 4, :mod:`gonio.analysis.conformity`).
@@ -38,6 +38,11 @@ DECISION_RULES: tuple[str, ...] = ("simple", "guarded", "non-binary")
 #: How a certificate stands in the records (``[record] status``): a draft rendered for
 #: review (watermarked DRAFT on every page), or issued.
 RECORD_STATUSES: tuple[str, ...] = ("draft", "issued")
+#: Where a calibration was performed (``[certificate] location``), the categories of the DCC's
+#: dcc:performanceLocation (DCC 3.3.0 stringPerformanceLocationType); the place itself is
+#: ``[certificate] place``, as text.
+LOCATIONS: tuple[str, ...] = ("laboratory", "customer", "laboratoryBranch", "customerBranch",
+                              "other")
 
 
 def _is_sha256(x: str) -> bool:
@@ -62,7 +67,8 @@ LAB_SCHEMA: dict[str, Field] = {
         "name": Field("str"), "address": Field("str"), "accreditation": _S, "contact": _S}),
     "certificate": Field("table", schema={
         "number": Field("str"), "date_of_issue": _DATE, "date_of_receipt": _DATE,
-        "date_of_calibration": _DATE, "place": _S, "procedure": _S}),
+        "date_of_calibration": _DATE, "place": _S, "procedure": _S,
+        "location": Field("str", default="laboratory", choices=LOCATIONS)}),
     "customer": Field("table", schema={"name": Field("str"), "address": _S}),
     "instrument": Field("table", default=None, schema={
         "description": _S, "model": _S, "serial": _S, "manufacturer": _S}),

@@ -133,8 +133,26 @@ def read_rate_readings(path: str | Path) -> RateReadings:
     >>> r.metadata["spec"], float(r.data["output"][0]), r.data["up_axis"][0]
     ('a-rate-spec', 2500.06, '+z')
     """
+    global _LAST_READ
     path = Path(path)
-    return parse_rate_readings(read_utf8(path, "readings file"), path=path)
+    text = read_utf8(path, "readings file")
+    last = _LAST_READ
+    if last is not None and last[0] == str(path) and last[1] == text:
+        return _copy(last[2])       # the same file with the same text: the same readings
+    rd = parse_rate_readings(text, path=path)
+    _LAST_READ = (str(path), text, _copy(rd)) if len(text) <= _MEMO_CHARS else None
+    return rd
+
+
+#: Text size up to which the last file read is kept (path, text, its readings): a
+#: specification's screening and its calibration read the same file one after the other.
+_MEMO_CHARS = 1 << 25
+_LAST_READ: tuple[str, str, RateReadings] | None = None
+
+
+def _copy(rd: RateReadings) -> RateReadings:
+    """A copy the caller may change without changing the kept readings."""
+    return RateReadings(rd.data.copy(), dict(rd.metadata), rd.path)
 
 
 def parse_rate_readings(text: str, *, path: str | Path | None = None) -> RateReadings:
@@ -354,6 +372,18 @@ def write_rate_readings(data: pd.DataFrame, metadata: dict, path: str | Path) ->
     if missing:
         raise GonioError(f"cannot write rate readings without column(s) {', '.join(missing)}")
     head = "".join(f"# {k}: {str(v).replace(chr(10), ' ')}\n" for k, v in metadata.items())
-    body = data[list(COLUMNS)].to_csv(index=False, float_format="%.12g", lineterminator="\n",
-                                      na_rep="")
+    frame = data[list(COLUMNS)]
+    cells = pd.DataFrame({c: _float_cells(frame[c], "%.12g") if frame[c].dtype.kind == "f"
+                          else frame[c] for c in COLUMNS}, index=frame.index)
+    body = cells.to_csv(index=False, float_format="%.12g", lineterminator="\n", na_rep="")
     return write_text(path, head + body)
+
+
+def _float_cells(col: pd.Series, fmt: str) -> np.ndarray:
+    """A float column's CSV cells: ``fmt % value``, NaN empty — what ``to_csv`` writes with
+    ``float_format=fmt, na_rep=""``, formed in one list comprehension instead of pandas'
+    formatter call per value (most of the time a readings file took to write)."""
+    vals = col.to_numpy()
+    out = np.array([fmt % v for v in vals.tolist()], dtype=object)
+    out[np.isnan(vals)] = ""
+    return out

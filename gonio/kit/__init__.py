@@ -47,21 +47,14 @@ from gonio.analysis.noise import (AllanResult, allan_deviation, averaging_factor
 from gonio.errors import GonioError
 from gonio.kit.items import ItemDef, calibrate_items
 from gonio.result.findings import ACTIONS, Finding, set_aside
+from gonio.result.gum import gum, monte_carlo_validation, std_dev_uncertainty
+from gonio.result.items import item_order
 from gonio.result.model import (Covariance, Item, Result, Uncertainty, budget_row,
                                 not_measured)
 from gonio.result.statement import Statement, item_statement, state
-from gonio.specs import (CONTENT_FIELDS, FIGURE_ROLES, Coverage, Specification, available,
-                         get, item_order, lazy)
-from gonio.specs._rate_family.rate_records import (gum, monte_carlo_validation,
-                                std_dev_uncertainty)
+from gonio.specs import (CONTENT_FIELDS, FIGURE_ROLES, ITEM_RENDERER, Coverage,
+                         Specification, available, get, lazy)
 from uncertainty import InputQuantity, from_u, type_a, type_b
-
-#: The ``outputs`` module that renders a per-item :class:`Result`: conformity decided once,
-#: ``results.json``, ``summary.txt``, the tables, the certificate (HTML, PDF, en/zh) with the
-#: figures its content's roles name, and the DCC 3.3.0 XML. A specification whose
-#: ``calibrate`` returns a :class:`Result` of :class:`Item` s sets
-#: ``Specification(outputs=ITEM_RENDERER, certificate_content="pkg.certificate", …)``.
-ITEM_RENDERER = "gonio.specs._rate_family.outputs"
 
 __all__ = [
     "ACTIONS", "AllanResult", "CONTENT_FIELDS", "Coverage", "Covariance", "FIGURE_ROLES",

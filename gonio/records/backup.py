@@ -1,12 +1,13 @@
 """Backup and restore of the whole records: every table and every stored file in one ZIP
-archive that restores into an empty database of either kind (SQLite or PostgreSQL).
+archive that restores into a database of either kind (SQLite or PostgreSQL).
 
 Archive layout: ``records.json`` (format version, gonio version, per table its columns and
 rows, values as JSON: dates and times ISO 8601) and ``blobs/<sha256>`` for every stored file.
-:func:`restore` checks every file against its digest before anything is written, refuses
-a database that holds records already, inserts the rows in dependency order in one
-transaction (so a failed restore leaves the database empty), and moves the ids' sequences
-past the restored rows on PostgreSQL.
+:func:`restore` checks every file against its digest and every row and reference before
+anything is written, then either fills an empty database in one transaction (``gonio db
+restore``) or replaces the live records atomically (the browser's restore: a new SQLite file
+swapped in, or one PostgreSQL transaction), moving the ids' sequences past the restored rows
+on PostgreSQL; a failure leaves the database as it was.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import datetime as _dt
 import hashlib
 import json
 import os
+import re
 import tempfile
 import zipfile
 from pathlib import Path
@@ -198,45 +200,171 @@ def check_archive(path: str | os.PathLike, stream=None) -> dict:
     path = Path(path)
     with _open(path if stream is None else stream, path) as zf:
         rows, names, doc = _checked(zf, path)
+    return {"gonio_version": str(doc.get("gonio_version", ""))[:40], "files": len(names),
+            **check_summary(rows)}
+
+
+#: an archive name the backup folder may offer (never a path)
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,120}\.zip")
+
+
+def backup_folder(store) -> Path:
+    """Where the nightly backups lie (``gonio db backup`` run by a scheduled job):
+    ``$GONIO_BACKUP_FOLDER``, else ``backups`` in the data folder."""
+    return Path(os.path.expanduser(os.environ.get("GONIO_BACKUP_FOLDER", "").strip()
+                                   or str(store.data / "backups")))
+
+
+def archives_in(folder: Path, limit: int = 50) -> list[dict]:
+    """The backup archives in ``folder`` (plain ``*.zip`` files with plain names), newest
+    first: ``[{"name", "bytes", "modified": "YYYY-MM-DD HH:MM" UTC}]``; none when the folder
+    does not exist."""
+    try:
+        found = [p for p in Path(folder).iterdir() if _NAME.fullmatch(p.name) and p.is_file()
+                 and not p.is_symlink()]
+    except OSError:
+        return []
+    found.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    return [{"name": p.name, "bytes": p.stat().st_size,
+             "modified": _dt.datetime.fromtimestamp(p.stat().st_mtime, _dt.timezone.utc)
+             .strftime("%Y-%m-%d %H:%M")} for p in found[:limit]]
+
+
+def archive_sha256(path: str | os.PathLike) -> str:
+    """The SHA-256 of the archive file at ``path`` (what a confirmation names)."""
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            for piece in iter(lambda: fh.read(1 << 20), b""):
+                h.update(piece)
+    except OSError as exc:
+        raise GonioError(f"cannot read the archive: {exc.strerror}", file=path) from None
+    return h.hexdigest()
+
+
+def summary(store) -> dict:
+    """The live records counted as :func:`check_archive` counts an archive: ``{"rows":
+    {table: count}, "files", "calibrations", "certificates", "newest"}`` (what a restore
+    would replace)."""
+    from gonio.records.models import AuditEvent
+
+    with store.session() as s:
+        rows = {t.name: s.scalar(select(func.count()).select_from(t)) for t in _tables()}
+        newest = s.scalar(select(func.max(AuditEvent.at)))
+    return {"rows": rows, "files": rows["blobs"], "calibrations": rows["calibrations"],
+            "certificates": rows["certificates"],
+            "newest": newest.isoformat(sep=" ", timespec="minutes") if newest else ""}
+
+
+#: rows a restore never writes: last night's browser sessions would be live again
+NOT_RESTORED = ("web_sessions",)
+
+
+def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: User | None = None,
+            expect_sha256: str | None = None) -> dict:
+    """Restore the archive at ``path`` into the records of ``store``; returns the counts of
+    rows restored per table and of files.
+
+    Everything is checked before anything is written (:func:`_checked`: records.json's
+    tables, rows and references, every file listed in ``blobs`` present in the archive
+    (complete) and matching its SHA-256 (intact), no file the records do not list): an
+    archive a restore would lose anything of is refused whole. ``expect_sha256``: the digest
+    of the archive that was verified and confirmed; a different file is refused.
+
+    Without ``replace`` the database must be empty (``gonio db restore``). With ``replace``
+    (an admin ``actor``, the browser's restore) the live records are replaced atomically:
+    SQLite — the archive is written into a new database file next to the live one, which is
+    swapped in by one rename once complete (the replaced file is kept beside it as
+    ``records.sqlite3.replaced-YYYYmmddTHHMMSS``) and the engine's connections are renewed;
+    PostgreSQL — every table emptied and refilled in one transaction. A failure at any step
+    leaves the live records as they were. The caller keeps other requests and the workers
+    out meanwhile (gonio serve's maintenance state); on SQLite a database another process
+    has open is refused. The archive must hold an active administrator (else nobody could
+    manage the restored records).
+
+    Either way the stored files are added to the blob store (a damaged copy there is
+    replaced by the archive's), no browser session is restored (everyone logs in again), and
+    the restore itself is the newest event of the restored audit trail (action ``restore``:
+    the archive's name and SHA-256, its last recorded change, the counts, and with
+    ``replace`` the counts replaced)."""
+    path = Path(path)
+    if replace:
+        from gonio.records.services import require
+
+        require(actor, "admin")
+    sha = archive_sha256(path)
+    if expect_sha256 is not None and sha != expect_sha256:
+        raise GonioError("the archive is not the one verified and confirmed (its SHA-256 "
+                         "changed): verify it again; nothing restored", file=path)
+    with _open(path, path) as zf:
+        rows, names, doc = _checked(zf, path)
+        if replace and not any(r.get("active") and "admin" in str(r.get("roles", "")).split()
+                               for r in rows["users"]):
+            raise GonioError("the archive has no active administrator: nobody could manage "
+                             "the restored records; nothing restored", file=path)
+        if not replace:
+            with store.session() as s:
+                if s.scalar(select(func.count()).select_from(User)):
+                    raise GonioError("the database holds records already; restore into an "
+                                     "empty one (gonio db init on a new data folder or "
+                                     "database)", file=path)
+        for name in NOT_RESTORED:
+            rows[name] = []
+        event = {"archive": path.name, "sha256": sha, "newest": check_summary(rows)["newest"],
+                 "gonio_version": str(doc.get("gonio_version", ""))[:40],
+                 "rows": {k: len(v) for k, v in rows.items() if v}, "files": len(names)}
+        if replace:
+            event["replaced"] = summary(store)["rows"]
+        for sha_file in names:
+            _put_blob(store.blob_root, sha_file, zf.read(f"blobs/{sha_file}"))
+    who = actor.username if actor is not None else "(command line)"
+    if not replace:
+        with store.writing() as s:
+            _write(s, rows, path, event, who)
+            s.commit()
+    elif store.engine.dialect.name == "sqlite":
+        _swap_sqlite(store, rows, path, event, who)
+    else:
+        _replace_postgresql(store, rows, path, event, who)
+    counts = {k: len(v) for k, v in rows.items() if v}
+    counts["files"] = len(names)
+    return counts
+
+
+def check_summary(rows: dict) -> dict:
+    """An archive's checked rows counted (see :func:`check_archive`)."""
     stamps = [r["at"] for r in rows.get("audit_events", []) if r.get("at") is not None]
-    return {"gonio_version": str(doc.get("gonio_version", ""))[:40],
-            "rows": {k: len(v) for k, v in rows.items()}, "files": len(names),
+    return {"rows": {k: len(v) for k, v in rows.items()},
             "calibrations": len(rows.get("calibrations", [])),
             "certificates": len(rows.get("certificates", [])),
             "newest": max(stamps).isoformat(sep=" ", timespec="minutes") if stamps else ""}
 
 
-def restore(store, path: str | os.PathLike) -> dict:
-    """Restore the archive at ``path`` into the (empty) database of ``store``; returns the
-    counts restored. Everything is checked before anything is written (:func:`_checked`:
-    records.json's tables, rows and references, every file listed in ``blobs`` present in
-    the archive (complete) and matching its SHA-256 (intact), no file the records do not
-    list)."""
-    path = Path(path)
-    with _open(path, path) as zf:
-        rows, names, _ = _checked(zf, path)
-        with store.session() as s:
-            if s.scalar(select(func.count()).select_from(User)):
-                raise GonioError("the database holds records already; restore into an "
-                                 "empty one (gonio db init on a new data folder or database)",
-                                 file=path)
-        for sha in names:
-            blobs.put_bytes(store.blob_root, zf.read(f"blobs/{sha}"))
-    counts = {}
+def _put_blob(root: Path, sha: str, data: bytes) -> None:
+    """A stored file from the archive (checked against ``sha`` already) into the store; a
+    missing or damaged copy there is replaced."""
+    path = blobs.blob_path(root, sha)
+    if path.is_file() and blobs.verify(root, sha):
+        return
+    if path.exists():
+        path.unlink()
+    blobs.put_bytes(root, data)
+
+
+def _write(s, rows: dict, path: Path, event: dict, who: str) -> None:
+    """Insert the checked ``rows`` in dependency order in the session's transaction, move
+    PostgreSQL's id sequences past them, and append the restore's audit event (its user the
+    restored account of ``who``, if there is one). A row the database refuses is a
+    GonioError (the transaction rolled back)."""
     from sqlalchemy.exc import SQLAlchemyError
 
-    with store.writing() as s:
-        try:
-            for table in _tables():
-                if rows[table.name]:
-                    s.execute(table.insert(), rows[table.name])
-                    counts[table.name] = len(rows[table.name])
-        except SQLAlchemyError as exc:
-            s.rollback()
-            msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
-            raise GonioError(f"records.json refused by the database ({msg}): nothing "
-                             "restored", file=path) from None
-        if store.engine.dialect.name == "postgresql":
+    from gonio.records.models import AuditEvent
+
+    try:
+        for table in _tables():
+            if rows[table.name]:
+                s.execute(table.insert(), rows[table.name])
+        if s.get_bind().dialect.name == "postgresql":
             for table in _tables():
                 pk = list(table.primary_key.columns)
                 # an integer id has a sequence (a web session's text id has none)
@@ -244,9 +372,89 @@ def restore(store, path: str | os.PathLike) -> dict:
                     s.execute(text(f"SELECT setval(pg_get_serial_sequence('{table.name}', "
                                    f"'{pk[0].name}'), COALESCE((SELECT MAX({pk[0].name}) "
                                    f"FROM {table.name}), 0) + 1, false)"))
+        uid = s.scalar(select(User.id).where(User.username == who))
+        s.add(AuditEvent(user_id=uid, username=who[:64], action="restore", entity="records",
+                         entity_id=event["sha256"][:64],
+                         after_json=json.dumps(event, sort_keys=True, default=str)))
+        s.flush()
+    except SQLAlchemyError as exc:
+        s.rollback()
+        msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
+        raise GonioError(f"records.json refused by the database ({msg}): nothing "
+                         "restored", file=path) from None
+
+
+def _swap_sqlite(store, rows: dict, path: Path, event: dict, who: str) -> None:
+    """SQLite: the restored records written into a new file beside the live one (migrated,
+    filled, checkpointed), then swapped in by one rename; the live engine's connections are
+    closed first and renewed by its next use."""
+    import sqlite3
+
+    from sqlalchemy.orm import Session as OrmSession
+
+    from gonio.records.db import make_engine, migrate
+
+    live = Path(store.engine.url.database)
+    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%S")
+    fd, new = tempfile.mkstemp(prefix=f".{live.name}.restoring-", dir=live.parent)
+    os.close(fd)
+    engine = make_engine(f"sqlite:///{new}")
+    try:
+        migrate(engine)
+        with OrmSession(engine.execution_options(gonio_write=True)) as s:
+            _write(s, rows, path, event, who)
+            s.commit()
+        engine.dispose()
+        store.engine.dispose()
+        if _one_file(new) != "delete":
+            raise GonioError("the restored database could not be written as one file: "
+                             "nothing restored", file=new)
+        # refused while another connection has the live file open: nobody else writes
+        raw = sqlite3.connect(live, timeout=5, isolation_level=None)
+        try:
+            if _one_file(live, raw) != "delete":
+                raise GonioError("another process has the records database open (a worker, "
+                                 "a gonio command): nothing restored", file=live)
+            for extra in ("-wal", "-shm"):
+                Path(f"{live}{extra}").unlink(missing_ok=True)
+            os.link(live, live.with_name(f"{live.name}.replaced-{stamp}"))
+            os.replace(new, live)
+        finally:
+            raw.close()
+    finally:
+        engine.dispose()
+        for leftover in (new, f"{new}-wal", f"{new}-shm", f"{new}-journal"):
+            Path(leftover).unlink(missing_ok=True)
+    store.engine.dispose()
+
+
+def _one_file(path, conn=None) -> str:
+    """Switch the SQLite database at ``path`` out of WAL (its log folded in and removed):
+    the journal mode it has then ("delete"; another mode or "" when another connection
+    holds it open)."""
+    import sqlite3
+
+    own = conn is None
+    conn = conn or sqlite3.connect(path, timeout=5, isolation_level=None)
+    try:
+        return str(conn.execute("PRAGMA journal_mode=DELETE").fetchone()[0]).lower()
+    except sqlite3.OperationalError:
+        return ""
+    finally:
+        if own:
+            conn.close()
+
+
+def _replace_postgresql(store, rows: dict, path: Path, event: dict, who: str) -> None:
+    """PostgreSQL: every table emptied (TRUNCATE: no row triggers, its identity resets
+    transactional) and refilled in one transaction; a failure rolls all of it back."""
+    names = ", ".join(t.name for t in _tables())
+    with store.writing() as s:
+        s.execute(text("SET LOCAL lock_timeout = '30s'"))
+        s.execute(text(f"TRUNCATE {names} RESTART IDENTITY"))
+        _write(s, rows, path, event, who)
         s.commit()
-    counts["files"] = len(names)
-    return counts
+    store.engine.dispose()
 
 
 def verify(store) -> tuple[dict, list[str]]:

@@ -92,16 +92,42 @@ def _protocol_file(results: dict, given: str | Path | None, folder: Path) -> Pat
     return path
 
 
-def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int]:
+def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int, dict]:
     """(sha256, size) of the laboratory file stored, or (None, 0): none given, or one that
-    gives no limits (it decides nothing the records keep)."""
+    gives no limits (it decides nothing the records keep); and the calibration's columns it
+    gives: the environment (:func:`lab_environment`), the place and its DCC category
+    (``[certificate] place``, ``location``)."""
     if lab is None:
-        return None, 0
+        return None, 0, {}
     from gonio.pipeline.dispatch import load_lab_file
     from gonio.specs import get
-    if not load_lab_file(lab, get(spec_key)).get("specification_limits"):
-        return None, 0
-    return blobs.put_file(store.blob_root, Path(lab))
+    details = load_lab_file(lab, get(spec_key))
+    cert = details.get("certificate") or {}
+    env = dict(lab_environment(details), place=services.text(cert.get("place"), "place"),
+               location=services.location_value(cert.get("location")))
+    if not details.get("specification_limits"):
+        return None, 0, env
+    return (*blobs.put_file(store.blob_root, Path(lab)), env)
+
+
+def lab_environment(details: dict) -> dict:
+    """The environment a laboratory file's ``[environment]`` gives, as a calibration's
+    columns: ``{"temperature_c", "humidity_pct", "environment_from"}`` with the source
+    stated (``"lab file"``; ``"readings"`` where the file says ``source = "readings"``), or
+    {} when it gives not both values (review needs both: nothing half is recorded).
+
+    >>> lab_environment({"environment": {"temperature_c": 20.5, "humidity_pct": 41.0,
+    ...                                  "source": "entered"}})
+    {'temperature_c': 20.5, 'humidity_pct': 41.0, 'environment_from': 'lab file'}
+    >>> lab_environment({"environment": {"temperature_c": 20.5}}), lab_environment({})
+    ({}, {})
+    """
+    env = details.get("environment") or {}
+    temp, hum = env.get("temperature_c"), env.get("humidity_pct")
+    if temp is None or hum is None:
+        return {}
+    return {"temperature_c": float(temp), "humidity_pct": float(hum),
+            "environment_from": "readings" if env.get("source") == "readings" else "lab file"}
 
 
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
@@ -118,7 +144,9 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     folder was computed with (``--lab``), validated as on the command line; when it gives
     limits it is stored as the calibration's laboratory file
     (:func:`gonio.records.services.lab_file`), so that the issue decides with the same limits
-    and rule as the run reviewed."""
+    and rule as the run reviewed; its ``[environment]`` is recorded as the calibration's,
+    stated as from the laboratory file (:func:`lab_environment`), and its place with the
+    place's DCC category (``[certificate] place``, ``location``)."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:
@@ -155,7 +183,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     psha = None
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
-    lsha, lsize = _lab_file(store, lab, key)
+    lsha, lsize, env = _lab_file(store, lab, key)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
         for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize)):
@@ -176,7 +204,8 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                           lab_name=services.text(Path(lab).name if lsha else "",
                                                  "laboratory file name", max_len=255),
                           performed_on=day, status="running", created_by_id=actor.id
-                          if actor else None, progress=f"imported from {folder.name} by {who}")
+                          if actor else None, progress=f"imported from {folder.name} by {who}",
+                          **env)
         s.add(cal)
         s.flush()
         services.audit(s, actor, "import", "calibration", cal.id, None,
@@ -191,3 +220,40 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         services.fail(store, cal_id, f"import failed: {exc}")
         raise
     return cal_id
+
+
+def record_output_folder(store, folder: str | Path, *, actor: User | None = None,
+                         standard_identifiers=(), temperature_c=None, humidity_pct=None,
+                         environment_from_readings: bool = False, **import_options) -> int:
+    """Put one output folder into the records with what the command line names (``gonio
+    calibrate --record``, ``gonio db import``); returns the calibration's id.
+
+    The folder is imported (:func:`import_output_folder` with ``import_options``: readings,
+    spec_key, customer, protocol, lab; the laboratory file's ``[environment]`` carried, its
+    source stated); then the registered standards named by their identifiers and the
+    environment given (entered, or ``environment_from_readings``; either replaces the
+    laboratory file's) are attached by ``actor``
+    (:func:`gonio.records.services.attach_by_identifiers`), and the draft certificate is
+    rendered at once from the stored result with them (:func:`gonio.records.worker.run_now`:
+    nothing computed again). Attaching needs ``actor``; the import is kept when an attach
+    is refused (the GonioError names the calibration)."""
+    environment = {}
+    if temperature_c is not None or humidity_pct is not None:
+        environment = {"temperature_c": temperature_c, "humidity_pct": humidity_pct}
+    if environment_from_readings:
+        environment["environment_from_readings"] = True
+    standards = list(standard_identifiers or ())
+    if (standards or environment) and actor is None:
+        raise GonioError("give the records user attaching standards or the environment "
+                         "(--user or --record-user, or $GONIO_USER)", key="user")
+    cid = import_output_folder(store, folder, actor=actor, **import_options)
+    if standards or environment:
+        try:
+            services.attach_by_identifiers(store, actor, cid, standard_identifiers=standards
+                                           or None, **environment)
+        except GonioError as exc:
+            raise GonioError(f"calibration {cid} recorded, nothing attached: {exc.message}",
+                             key=exc.key) from None
+        from gonio.records.worker import run_now
+        run_now(store, cid)
+    return cid

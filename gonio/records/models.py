@@ -38,7 +38,7 @@ class Base(DeclarativeBase):
 ROLES = ("technician", "reviewer", "admin")
 
 #: A calibration's states, in workflow order (docs/records.md#workflow).
-STATES = ("queued", "running", "failed", "computed", "reviewed", "rejected", "approved",
+STATES = ("queued", "running", "failed", "computed", "drafting", "reviewed", "rejected", "approved",
           "issuing", "issued", "amending", "void")
 
 
@@ -156,9 +156,13 @@ class Calibration(Base):
     temperature_c: Mapped[float | None] = mapped_column(Float, nullable=True)
     humidity_pct: Mapped[float | None] = mapped_column(Float, nullable=True)
     #: where the environment came from: "" entered by a person, "readings" taken from the
-    #: readings file's metadata (and stated so on the page and the certificate)
+    #: readings file's metadata (and stated so on the page and the certificate), "lab file"
+    #: the laboratory file's [environment] it was computed with
     environment_from: Mapped[str] = mapped_column(String(16), default="", server_default="")
     place: Mapped[str] = mapped_column(String(200), default="")
+    #: where it was performed, as the DCC's category (``gonio.formats.lab.LOCATIONS``)
+    location: Mapped[str] = mapped_column(String(16), default="laboratory",
+                                          server_default="laboratory")
     received_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
     performed_on: Mapped[_dt.date] = mapped_column(Date, index=True)
     status: Mapped[str] = mapped_column(String(16), index=True, default="queued")

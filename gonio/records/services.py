@@ -580,7 +580,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        lab_sha256: str | None = None, lab_name: str = "",
                        standard_ids: Iterable[int] = (), temperature_c=None,
                        humidity_pct=None, performed_on=None, received_on=None,
-                       place: str = "", reuse_note: dict | None = None) -> Calibration:
+                       place: str = "", location: str | None = None,
+                       reuse_note: dict | None = None) -> Calibration:
     """A new calibration, queued for the worker (technician), after the submission checks
     of its fields (:func:`submission_fields`: plausible dates, at least one standard, the
     environment); standards past their due date on the day of the calibration are refused
@@ -618,7 +619,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           lab_name=text(lab_name, "laboratory file name", max_len=255)
                           if lab_sha256 else "",
                           temperature_c=temp, humidity_pct=hum, environment_from="",
-                          place=text(place, "place"), performed_on=day,
+                          place=text(place, "place"), location=location_value(location),
+                          performed_on=day,
                           received_on=received, status="queued", progress="waiting for a worker",
                           created_by_id=actor.id)
         s.add(cal)
@@ -629,6 +631,18 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
         s.commit()
     return cal
+
+
+def location_value(value) -> str:
+    """Where a calibration was performed, as the DCC's category (``LOCATIONS``; empty or
+    None: the laboratory); anything else is a GonioError listing them."""
+    from gonio.formats.lab import LOCATIONS
+
+    value = (value or "").strip() or "laboratory"
+    if value not in LOCATIONS:
+        raise GonioError(f"location: {value[:40]!r} is not one of {', '.join(LOCATIONS)}",
+                         key="location")
+    return value
 
 
 def _use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str]:
@@ -658,12 +672,22 @@ def _use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str
 #: The states in which the standards and the environment of a calibration may still be
 #: attached: not yet approved (a reviewed one goes back to its review), or an amendment not
 #: yet approved.
-ATTACHABLE = ("queued", "computed", "failed", "reviewed", "amending")
+#: Where an entered environment was written (``calibrations.environment_from``; "readings":
+#: taken from the readings' metadata): on the page or the command line, or in the laboratory
+#: file the calibration was computed with.
+ENTERED_IN = ("", "lab file")
+#: The state of a calibration whose draft certificate is being rendered again from its
+#: stored result with what was attached (a worker claims it; then computed again).
+DRAFTING = "drafting"
+ATTACHABLE = ("queued", "computed", "failed", "reviewed", DRAFTING, "amending")
+#: The states whose draft certificate is rendered again after an attach (:data:`DRAFTING`).
+REDRAFTED = ("computed", "reviewed")
 
 
 def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
                       temperature_c=None, humidity_pct=None,
-                      environment_from_readings: bool = False) -> Calibration:
+                      environment_from_readings: bool = False,
+                      entered_in: str = "") -> Calibration:
     """Attach the reference standards used and the environment to a calibration that is not
     yet approved (:data:`ATTACHABLE`; a reviewed one goes back to its review), or to an
     amendment not yet approved, e.g. one put in with ``gonio db import`` or ``gonio
@@ -676,12 +700,23 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
     readings state, as at upload), or ``environment_from_readings``: both taken from the
     readings file's metadata (``# temperature_c`` or ``# room_temperature_c``, and
     ``# humidity_pct``), stated so on the page and the certificate; neither leaves it.
-    Review and approval require both (:func:`missing_for_review`)."""
+    ``entered_in``: where the entered values were written, recorded with them
+    (:data:`ENTERED_IN`: '' on the page or the command line, ``"lab file"`` the laboratory
+    file's ``[environment]``).
+    Review and approval require both (:func:`missing_for_review`).
+
+    A calibration with a stored result (computed, or reviewed: it goes back to its review)
+    becomes :data:`DRAFTING`: a worker renders its draft certificate again from the stored,
+    sealed result with the details recorded now (:func:`gonio.records.worker.execute`),
+    nothing computed again; ``gonio db attach`` renders it at once. A failed issue (approved,
+    its number reserved) is attached nothing: what was approved is issued."""
     if not (actor is not None and actor.active and (actor.has("technician")
                                                    or actor.has("reviewer"))):
         raise GonioError("this needs the technician or reviewer role", key="role")
     entered = [v for v in (temperature_c, humidity_pct)
                if v is not None and not (isinstance(v, str) and not v.strip())]
+    if entered_in not in ENTERED_IN:
+        raise GonioError(f"unknown source of the environment {entered_in!r}", key="attach")
     if environment_from_readings and entered:
         raise GonioError("enter the environment or take it from the readings, not both",
                          key="environment")
@@ -693,13 +728,13 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
     if standard_ids is not None:
         standard_ids = list(standard_ids) or None      # none ticked: those named stay
     cal = calibration(store, cal_id)
-    env = _environment_of(store, cal, temp, hum, environment_from_readings)
+    env = _environment_of(store, cal, temp, hum, environment_from_readings, entered_in)
     if standard_ids is None and env is None:
         raise GonioError("nothing to attach: name the standard(s) used or the environment",
                          key="attach")
     with store.writing() as s:
         cal = s.get(Calibration, int(cal_id), with_for_update=True)
-        if cal.status not in ATTACHABLE:
+        if cal.status not in ATTACHABLE or cal.pending_number:
             raise GonioError(f"cannot attach standards or the environment to a calibration "
                              f"that is {cal.status} (only before its approval, or to an "
                              "amendment before its approval)", key="status")
@@ -712,6 +747,10 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
         if cal.status == "reviewed":     # what was reviewed changed: reviewed again
             cal.status, cal.reviewed_by_id, cal.reviewed_at = "computed", None, None
             cal.reviewed_seal, cal.review_comment = "", ""
+        if cal.status in REDRAFTED and cal.results_sha256:   # its draft shows what is attached
+            cal.status, cal.progress = DRAFTING, "waiting for a worker to render the draft " \
+                                                 "certificate with what was attached"
+            cal.worker_pid, cal.worker_host, cal.error = None, "", ""
         s.flush()
         after = dict(state(cal), standards=standard_names(s, cal.id))
         audit(s, actor, "attach", "calibration", cal.id, before, after)
@@ -744,7 +783,8 @@ def standard_names(s: Session, cal_id: int) -> list[str]:
         .where(CalibrationStandard.calibration_id == cal_id).order_by(Standard.identifier)))
 
 
-def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool):
+def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool,
+                    entered_in: str = ""):
     """(temperature, humidity, environment_from) to record, or None: taken from the readings'
     metadata, or as entered after comparing it with what the readings state."""
     from gonio.formats.provenance import readings_metadata
@@ -767,7 +807,7 @@ def _environment_of(store, cal: Calibration, temp, hum, from_readings: bool):
             raise GonioError(f"{c['what']}: the readings say {c['readings']} (# {c['key']}), "
                              f"entered {c['lab']}: enter the conditions of these readings",
                              key="environment")
-        return temp, hum, ""
+        return temp, hum, entered_in
     got = []
     for keys, what, lo, hi in ((("temperature_c", "room_temperature_c"), "temperature", -50,
                                 100), (("humidity_pct",), "humidity", 0, 100)):
@@ -1040,16 +1080,25 @@ def amend(store, actor: User, certificate_id: int, reason: str) -> Calibration:
 # --------------------------------------------------------------------------- the worker's side
 
 
-def claim_next(store, host: str | None = None) -> Calibration | None:
-    """Claim the oldest queued calibration, or one waiting to be issued, for a worker on
-    ``host`` (atomically: two dispatchers never claim the same one). Queued → running;
-    issuing stays issuing. The worker's process id is set by :func:`attach`."""
+#: The states in which a worker process runs a calibration.
+WORKING = ("running", "issuing", DRAFTING)
+
+
+def claim_next(store, host: str | None = None,
+               cal_id: int | None = None) -> Calibration | None:
+    """Claim the oldest queued calibration, or one waiting to be issued or to have its draft
+    rendered again (:data:`DRAFTING`), for a worker on ``host`` (atomically: two dispatchers
+    never claim the same one); with ``cal_id`` that one only (None when it waits for
+    nothing or another worker has it). Queued → running; issuing and drafting stay so. The
+    worker's process id is set by :func:`attach`."""
     host = host or socket.gethostname()
     with store.writing() as s:
-        cal = s.scalar(select(Calibration).where(
-            (Calibration.status == "queued")
-            | ((Calibration.status == "issuing") & (Calibration.worker_host == "")))
-            .order_by(Calibration.id).limit(1).with_for_update(skip_locked=True))
+        waiting = (Calibration.status == "queued") | (
+            Calibration.status.in_(("issuing", DRAFTING)) & (Calibration.worker_host == ""))
+        if cal_id is not None:
+            waiting = waiting & (Calibration.id == int(cal_id))
+        cal = s.scalar(select(Calibration).where(waiting)
+                       .order_by(Calibration.id).limit(1).with_for_update(skip_locked=True))
         if cal is None:
             return None
         before = state(cal)
@@ -1078,13 +1127,14 @@ def set_progress(store, cal_id: int, message: str) -> None:
 
 
 def fail(store, cal_id: int, error: str) -> None:
-    """A run ended without a result: running or issuing → failed, with the error. Nothing
-    was issued (the certificate row is written only by :func:`store_issue`); a failed issue
-    keeps its reserved number for :func:`retry`. A calibration no longer running or issuing
-    (another worker finished it) is left as it is."""
+    """A run ended without a result: running, issuing or drafting → failed, with the error.
+    Nothing was issued (the certificate row is written only by :func:`store_issue`); a
+    failed issue keeps its reserved number for :func:`retry`; a failed draft is run again
+    whole by :func:`retry`. A calibration no longer running (another worker finished it) is
+    left as it is."""
     with store.writing() as s:
         cal = s.get(Calibration, cal_id, with_for_update=True)
-        if cal.status not in ("running", "issuing"):    # finished meanwhile (another worker)
+        if cal.status not in WORKING:                   # finished meanwhile (another worker)
             return
         before = state(cal)
         cal.status = "failed"
@@ -1103,7 +1153,7 @@ def recover(store, host: str | None = None, alive=None) -> list[int]:
     alive = alive or _pid_alive
     with store.session() as s:
         rows = s.scalars(select(Calibration).where(
-            Calibration.status.in_(("running", "issuing")),
+            Calibration.status.in_(WORKING),
             Calibration.worker_host == host)).all()
     dead = [c.id for c in rows if c.worker_pid is None or not alive(c.worker_pid)]
     for cid in dead:
@@ -1139,14 +1189,14 @@ def _pid_alive(pid: int) -> bool:
         return True
 
 
-def lab_details(store, cal_id: int, *, final: bool) -> dict:
+def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> dict:
     """The laboratory details file (``LAB_SCHEMA``) for a calibration's certificate: the
     draft (number DRAFT-<id>, not approved) or the final one (reserved number, signatories,
     date of issue). The decision rule and limits are the calibration's laboratory file's
     (:func:`lab_file`) if it has one, else the instrument's under the laboratory's rule; the
-    final one takes them from the details the draft was computed with (stored as lab.toml
-    with the run and sealed with it), so that a limit edited after the review never reaches
-    the certificate."""
+    final one, and a draft rendered again (``redraft``: after an attach), take them from the
+    details the draft was computed with (stored as lab.toml with the run and sealed with
+    it), so that a limit edited after the run never reaches the certificate."""
     cfg = settings(store)
     with store.session() as s:
         cal = s.get(Calibration, cal_id)
@@ -1174,7 +1224,8 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
                             "date_of_receipt": cal.received_on.isoformat()
                             if cal.received_on else "",
                             "date_of_calibration": cal.performed_on.isoformat(),
-                            "place": cal.place or cfg["lab_place"]},
+                            "place": cal.place or cfg["lab_place"],
+                            "location": cal.location or "laboratory"},
             "customer": {"name": cust.name, "address": _lines(cust.address)},
             "instrument": {"description": inst.kind, "model": inst.model,
                            "serial": inst.serial, "manufacturer": inst.manufacturer},
@@ -1183,13 +1234,15 @@ def lab_details(store, cal_id: int, *, final: bool) -> dict:
                            "traceability": st.traceability} for st in stds],
             "environment": {"temperature_c": cal.temperature_c,
                             "humidity_pct": cal.humidity_pct,
-                            "source": cal.environment_from or "entered"},
+                            # one from the laboratory file was entered there
+                            "source": "readings" if cal.environment_from == "readings"
+                            else "entered"},
             "signatory": {"calibrated_by": who["created_by"], "checked_by": who["reviewed_by"],
                           "approved_by": who["approved_by"] if final
                           else "(not approved: draft for review)"},
             "record": record,
         }
-        drafted = s.get(CalibrationFile, (cal.id, "lab.toml")) if final else None
+        drafted = s.get(CalibrationFile, (cal.id, "lab.toml")) if final or redraft else None
         if drafted is not None:        # the basis the reviewed decisions were made on
             import tomllib
             basis = tomllib.loads(file_bytes(store, drafted.sha256).decode("utf-8"))
@@ -1229,6 +1282,19 @@ DECISION_BASIS = ("decision_rule", "specification_limits")
 KEPT_IMPORTED = ("results.json", "summary.txt")
 
 
+def _put_files(s: Session, cal_id: int, files: dict) -> None:
+    """The files ``{name: (sha256, size)}`` (in the blob store) as the calibration's."""
+    for name, (sha, size) in files.items():
+        if s.get(Blob, sha) is None:
+            s.add(Blob(sha256=sha, size=size))
+        s.flush()
+        old = s.get(CalibrationFile, (cal_id, name))
+        if old is None:
+            s.add(CalibrationFile(calibration_id=cal_id, name=name, sha256=sha))
+        else:
+            old.sha256 = sha
+
+
 def store_run(store, cal_id: int, out: Path, kept: tuple[str, ...] = KEPT) -> None:
     """Record a finished draft run: its files (``kept`` of them) into the blob store, its
     items, computed."""
@@ -1237,15 +1303,7 @@ def store_run(store, cal_id: int, out: Path, kept: tuple[str, ...] = KEPT) -> No
     with store.writing() as s:
         cal = s.get(Calibration, cal_id)
         before = state(cal)
-        for name, (sha, size) in files.items():
-            if s.get(Blob, sha) is None:
-                s.add(Blob(sha256=sha, size=size))
-            s.flush()
-            old = s.get(CalibrationFile, (cal_id, name))
-            if old is None:
-                s.add(CalibrationFile(calibration_id=cal_id, name=name, sha256=sha))
-            else:
-                old.sha256 = sha
+        _put_files(s, cal_id, files)
         s.query(ResultItem).filter(ResultItem.calibration_id == cal_id).delete()
         for it in items:
             s.add(ResultItem(calibration_id=cal_id, key=it.key, title=it.title[:200],
@@ -1256,6 +1314,48 @@ def store_run(store, cal_id: int, out: Path, kept: tuple[str, ...] = KEPT) -> No
         cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
         audit(s, None, "computed", "calibration", cal.id, before, state(cal))
         s.commit()
+
+
+#: The files of a draft rendered again (:func:`store_draft`): the certificate and the
+#: details it was rendered with; the result and its summary stay the stored ones.
+REDRAWN = ("certificate.html", "certificate.pdf", "certificate.dcc.xml", "lab.toml")
+
+
+def store_draft(store, cal_id: int, out: Path, signed: str) -> None:
+    """Record a draft certificate rendered again from the stored result (:data:`REDRAWN`
+    from ``out``): drafting → computed, once the result's seal is checked again against
+    ``signed`` (the one it was rendered from). The seal changes with the draft's files:
+    the review signs the draft rendered last."""
+    files = {n: blobs.put_file(store.blob_root, out / n) for n in REDRAWN
+             if (out / n).is_file()}
+    if seal(store, cal_id) != signed:
+        raise GonioError("the stored result changed while its draft was rendered: nothing "
+                         "stored", key=f"calibration {cal_id}")
+    from gonio.records.compute import lab_toml
+
+    with store.writing() as s:
+        cal = s.get(Calibration, cal_id, with_for_update=True)
+        if cal.status != DRAFTING:
+            raise GonioError(f"calibration {cal_id} is {cal.status}, no longer waiting for "
+                             "its draft: nothing stored", key="status")
+        before = dict(state(cal), files=_file_digests(s, cal_id))
+        _put_files(s, cal_id, files)
+        # attached again while it was rendered: stored, and rendered once more
+        again = (out / "lab.toml").read_text(encoding="utf-8") != lab_toml(
+            lab_details(store, cal_id, final=False, redraft=True))
+        cal.status, cal.progress, cal.error = (
+            (DRAFTING, "waiting for a worker to render the draft certificate with what was "
+                       "attached since", "") if again else ("computed", "done", ""))
+        cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
+        s.flush()
+        audit(s, None, "redraft", "calibration", cal.id, before,
+              dict(state(cal), files=_file_digests(s, cal_id)))
+        s.commit()
+
+
+def _file_digests(s: Session, cal_id: int) -> dict:
+    return dict(s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
+        CalibrationFile.calibration_id == cal_id)).all())
 
 
 def _approved(signed: str, approved: str, what: str) -> None:
@@ -1373,8 +1473,9 @@ def calibration(store, cal_id: int) -> Calibration:
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
     k, unit, title, status, certificate number), oldest first; failed, rejected and
-    unfinished calibrations are left out."""
-    done = ("computed", "reviewed", "approved", "issuing", "issued")
+    unfinished calibrations are left out (one whose draft is being rendered again, or whose
+    amendment is asked for, has its result: it stays)."""
+    done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
         rows = s.execute(
             select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id)
@@ -1434,8 +1535,9 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
             raise GonioError("no such instrument", key="instrument")
     limits = instrument_limits(inst)
     hist = history(store, instrument_id) if hist is None else hist
-    # only what was issued: a calibration not (yet) reviewed and approved is no evidence
-    hist = {k: [r for r in rows if r["status"] == "issued"] for k, rows in hist.items()}
+    # only what was issued (a certificate, also while an amendment of it is asked for or
+    # issued): a calibration not (yet) reviewed and approved is no evidence
+    hist = {k: [r for r in rows if r["certificate"]] for k, rows in hist.items()}
     hist = {k: rows for k, rows in hist.items() if rows}
     dates = [r["date"] for rows in hist.values() for r in rows]
     t0 = min(dates) if dates else None

@@ -6,9 +6,12 @@ or ``readings.parquet`` by content), the laboratory details are written as a TOM
 pipeline runs (:func:`gonio.records.compute.calibrate_folder`), and the outputs go into the
 content-addressed store and the database in one transaction. An issue: the stored
 results.json that was reviewed and approved is checked against its seal and rendered with
-the final details (:func:`gonio.records.compute.render_folder`); nothing is computed again. Any failure marks the
-calibration failed with the one-line reason; a killed process leaves it running with a
-dead worker, which :func:`gonio.records.services.recover` marks failed.
+the final details (:func:`gonio.records.compute.render_folder`); nothing is computed again.
+A draft rendered again after standards or the environment were attached (drafting): the
+stored result, checked against its seal, rendered the same way with the draft details
+recorded now (:func:`run_now`: the same in the calling process, for the command line). Any
+failure marks the calibration failed with the one-line reason; a killed process leaves it
+running with a dead worker, which :func:`gonio.records.services.recover` marks failed.
 
 :class:`Dispatcher` is the server's side: a thread that claims queued work and starts
 ``python -m gonio.records.worker ID`` processes (at most ``workers`` at a time; the
@@ -39,6 +42,8 @@ def execute(store, cal_id: int) -> bool:
         work.mkdir(parents=True, mode=0o700)
         if cal.status == "issuing":
             _issue(store, cal, work)
+        elif cal.status == services.DRAFTING:
+            _redraft(store, cal, work)
         else:
             _compute(store, cal, work)
         return True
@@ -88,6 +93,36 @@ def _issue(store, cal, work) -> None:
     services.store_issue(store, cal.id, work / "out")
 
 
+def _redraft(store, cal, work) -> None:
+    """The draft certificate again, after an attach: the stored result (its stored files and
+    rows checked against it first) rendered with the details recorded now; nothing is
+    computed again."""
+    services.set_progress(store, cal.id, "checking the stored result")
+    signed = services.seal(store, cal.id)
+    results = services.file_bytes(store, cal.results_sha256)
+    lab = write_lab_toml(services.lab_details(store, cal.id, final=False, redraft=True),
+                         work / "lab.toml")
+    services.set_progress(store, cal.id, "rendering the draft certificate with what was "
+                                         "attached")
+    render_folder(results, work / "out", spec_key=cal.spec_key, lab=lab)
+    shutil.copyfile(lab, work / "out" / "lab.toml")
+    services.set_progress(store, cal.id, "storing the files")
+    services.store_draft(store, cal.id, work / "out", signed)
+
+
+def run_now(store, cal_id: int) -> None:
+    """Claim calibration ``cal_id`` and run it in this process, the command line's way
+    without a server (``gonio db attach`` renders the draft at once); nothing when it waits
+    for no worker or another worker has it. A failed run is a GonioError naming the
+    calibration and why (it is marked failed, as by a worker)."""
+    if services.claim_next(store, cal_id=cal_id) is None:
+        return
+    services.attach(store, cal_id, os.getpid())
+    if not execute(store, cal_id):
+        raise GonioError(f"calibration {cal_id} failed: "
+                         f"{services.calibration(store, cal_id).error}", key="worker")
+
+
 class Dispatcher:
     """Claims queued calibrations and runs each in a worker process, ``workers`` at a time.
 
@@ -99,6 +134,8 @@ class Dispatcher:
         self._stop = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
+        self._claiming = threading.Lock()     # held while the loop touches the records
+        self._paused = False
 
     def start(self) -> "Dispatcher":
         services.recover(self.store)
@@ -110,6 +147,26 @@ class Dispatcher:
     def wake(self) -> None:
         """New work was queued: look now instead of at the next poll."""
         self._wake.set()
+
+    def pause(self) -> int:
+        """Stop claiming and reaping (the records are about to be replaced); returns how
+        many worker processes are still running (a restore waits for none). Workers that
+        ended are forgotten when none runs: each recorded its own end in the records that
+        are replaced."""
+        with self._claiming:
+            self._paused = True
+            running = sum(p.poll() is None for p in self.children.values())
+            if not running:
+                self.children.clear()
+            return running
+
+    def resume(self) -> None:
+        """Claim again after :meth:`pause`; calibrations left running by a worker that is
+        gone (as a restored archive may hold them) are marked failed first."""
+        with self._claiming:
+            self._paused = False
+            services.recover(self.store)
+        self.wake()
 
     def stop(self, wait: bool = True, timeout_s: float = 600) -> None:
         """Stop claiming; with ``wait`` let the running workers finish."""
@@ -129,7 +186,7 @@ class Dispatcher:
                 continue
             del self.children[cid]
             cal = services.calibration(self.store, cid)
-            if cal.status in ("running", "issuing") and cal.worker_pid == p.pid:
+            if cal.status in services.WORKING and cal.worker_pid == p.pid:
                 services.fail(self.store, cid, f"the worker process ended with code {rc}")
             services.remove_work(self.store, cid)
 
@@ -142,15 +199,20 @@ class Dispatcher:
         self.children[cal_id] = p
         services.attach(self.store, cal_id, p.pid)
 
+    def _claim(self) -> None:
+        self._reap()
+        while len(self.children) < self.workers and not self._stop.is_set():
+            cal = services.claim_next(self.store)
+            if cal is None:
+                break
+            self._spawn(cal.id)
+
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
-                self._reap()
-                while len(self.children) < self.workers and not self._stop.is_set():
-                    cal = services.claim_next(self.store)
-                    if cal is None:
-                        break
-                    self._spawn(cal.id)
+                with self._claiming:
+                    if not self._paused:
+                        self._claim()
             except Exception as exc:  # the database went away a moment: try again later
                 sys.stderr.write(f"gonio: dispatcher: {type(exc).__name__}: {exc}\n")
             self._wake.wait(self.poll_s)

@@ -312,7 +312,9 @@ def administrative_data(root, md: dict, lab: dict | None, *, cert_id: str, norm:
     date = cert.get("date_of_calibration") or str(md.get("date") or "")[:10] or PLACEHOLDER_DATE
     element(core, "dcc:beginPerformanceDate", date)
     element(core, "dcc:endPerformanceDate", date)
-    element(core, "dcc:performanceLocation", "other" if virtual else "laboratory")
+    # only a category (the schema's enumeration); the place entered is the statement "place"
+    element(core, "dcc:performanceLocation",
+            "other" if virtual else cert.get("location") or "laboratory")
     if cert.get("date_of_issue"):
         element(core, "dcc:issueDate", cert["date_of_issue"])
     rec = record_of(lab)

@@ -53,15 +53,20 @@ def certificate_id(result, lab: dict | None = None) -> str:
     return "VB-" + sha[:10].upper()
 
 
-def meta_text(md: dict, key: str, L: dict) -> str:
+def meta_text(md: dict, key: str, L: dict, translate=None) -> str:
     """A readings metadata value as shown: the virtual bench's own descriptions in the page's
-    language where the tables know them, data otherwise; "not stated" when absent."""
+    language where the tables know them, data otherwise; "not stated" when absent.
+    ``translate``: text → its Chinese or None, the specification's (its own phrases: the names
+    of its virtual instruments; :func:`gonio.report.i18n.translator`); default: the shared
+    tables alone."""
     v = md.get(key)
     if v in (None, ""):
         return L["not_stated"]
     if L.get("_lang") == "zh":
-        from gonio.report.i18n import translator
-        return translator()(str(v)) or str(v)
+        if translate is None:
+            from gonio.report.i18n import translator
+            translate = translator()
+        return translate(str(v)) or str(v)
     return str(v)
 
 
@@ -77,8 +82,10 @@ def _laboratory_rows(lab: dict | None, L: dict) -> list:
     return rows
 
 
-def _item_rows(res: dict, lab: dict | None, L: dict, specification: str) -> list:
-    """Customer and address, instrument, dates, place, specification and readings file."""
+def _item_rows(res: dict, lab: dict | None, L: dict, specification: str,
+               translate=None) -> list:
+    """Customer and address, instrument, dates, place, specification and readings file
+    (``translate``: :func:`meta_text`'s)."""
     md = res.get("metadata", {})
     lab_ = lab or {}
     ns = L["not_stated"]
@@ -90,12 +97,15 @@ def _item_rows(res: dict, lab: dict | None, L: dict, specification: str) -> list
         rows.append((L["customer_address"], cust["address"]))
     src = res["source"]
     rows += [
-        (L["description"], inst.get("description") or meta_text(md, "instrument", L)),
-        (L["model"], NoBreak(inst.get("model") or meta_text(md, "model", L))),
-        (L["serial"], NoBreak(inst.get("serial") or meta_text(md, "serial", L))),
-        (L["manufacturer"], inst.get("manufacturer") or meta_text(md, "manufacturer", L)),
+        (L["description"], inst.get("description")
+         or meta_text(md, "instrument", L, translate)),
+        (L["model"], NoBreak(inst.get("model") or meta_text(md, "model", L, translate))),
+        (L["serial"], NoBreak(inst.get("serial") or meta_text(md, "serial", L, translate))),
+        (L["manufacturer"], inst.get("manufacturer")
+         or meta_text(md, "manufacturer", L, translate)),
         (L["date_receipt"], cert.get("date_of_receipt") or ns),
-        (L["date_calibration"], cert.get("date_of_calibration") or meta_text(md, "date", L)),
+        (L["date_calibration"], cert.get("date_of_calibration")
+         or meta_text(md, "date", L, translate)),
         (L["date_issue"], cert.get("date_of_issue") or ns),
         (L["place"], cert.get("place") or (L["virtual_place"] if lab is None else ns)),
         (L["specification"], specification),
@@ -124,7 +134,8 @@ def _environment_rows(md: dict, lab: dict | None, L: dict) -> list:
 
 
 def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
-                   standard_row: list, environment=(), summarise=None) -> list[Block]:
+                   standard_row: list, environment=(), summarise=None,
+                   translate=None) -> list[Block]:
     """The certificate's opening (ISO/IEC 17025 7.8.2.1 a–h; JJF 1535 clause 8 a–j): the
     virtual-bench notice when the readings come from the virtual bench or there is no
     laboratory file (:func:`gonio.report.provenance.is_virtual`), the laboratory with its
@@ -133,7 +144,8 @@ def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
     readings file, the standards with their traceability (``standard_row``, four cells in
     the page's language, when the lab file names none), and the environment (then
     ``environment``: more (label, value) rows, e.g. a chamber's profile).
-    ``summarise(kind, data)`` shortens a long table (default: none)."""
+    ``summarise(kind, data)`` shortens a long table (default: none); ``translate``: the
+    specification's translator of the readings' descriptions (:func:`meta_text`)."""
     md = res.get("metadata", {})
     out: list[Block] = []
 
@@ -143,7 +155,7 @@ def opening_blocks(res: dict, lab: dict | None, L: dict, *, specification: str,
         add("notice", " ".join(virtual_lines(res, L)))
     out += record_notices(lab, L)
     add("kv", _laboratory_rows(lab, L))
-    add("kv", _item_rows(res, lab, L, specification))
+    add("kv", _item_rows(res, lab, L, specification, translate))
     add("h", L["standards"])
     std_rows = [[s["name"], NoBreak(s["identifier"] or "—"), s["accuracy"] or "—",
                  NoBreak(s["certificate"] or "—"), s["traceability"] or "—"]

@@ -577,20 +577,11 @@ DCC_ZH: dict[str, str] = {
     "angular vibration frequencies": "角振动频率",
     "traceable to none (virtual bench)": "无溯源（虚拟台架）",
     "none (virtual bench)": "无（虚拟台架）",
-    "per-point table": "逐点数据表",
     "position": "位置",
-    "table rate": "转台角速度",
     "axis direction": "轴向",
     "upper bound (coverage interval [0, upper bound]: a non-negative quantity whose U exceeds "
     "its value)": "上限（包含区间 [0, 上限]：非负量，U 大于其值）",
-    "MEMS rate gyro (virtual)": "微机电速率陀螺（虚拟）",
-    "MEMS gyro triad (virtual)": "微机电三轴陀螺组件（虚拟）",
-    "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
-    "FOG goniometer (virtual)": "光纤陀螺测角仪（虚拟）",
-    "precision low-speed rotary table (virtual)": "精密低速转台（虚拟）",
     "gonio virtual bench": "gonio 虚拟台架",
-    "rate table, two-axis position table, angular vibration table, chamber (virtual)":
-        "速率转台、双轴位置转台、角振动台、温箱（虚拟）",
 }
 
 #: DCC texts built from parts: (regular expression, Chinese template with the groups as {1},

@@ -37,13 +37,23 @@ def _num(value, src: str, rule: str, U=None):
     return Num(display(rule, value, U), src, rule)
 
 
-def _zh(text, L: dict):
+def _zh(text, L: dict, translate):
     """A text the virtual bench or gonio wrote (an instrument's or a table's description, a
-    standard's accuracy) in the page's language where a table knows it (data otherwise)."""
+    standard's accuracy) in the page's language where ``translate`` (the specification's
+    translator) knows it (data otherwise)."""
     if not text or L.get("_lang") != "zh":
         return text
+    return translate(str(text)) or text
+
+
+def spec_translator(spec):
+    """``translate(text)`` of the readings' descriptions on a per-item certificate: the shared
+    tables and the specification's own phrases (its certificate content's ``PHRASES_ZH``:
+    the names of the virtual instruments and equipment it simulates on, among them)."""
     from gonio.report.i18n import translator
-    return translator()(str(text)) or text
+
+    data = spec.content() if spec.certificate_content else None
+    return translator(tables=tuple(content_field(data, "PHRASES_ZH")))
 
 
 def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
@@ -59,8 +69,10 @@ def header_blocks(res: dict, spec, L: dict, lang: str, lab: dict | None,
         bound = md.get("chamber_deviation_bound_c")
         more.append((L["chamber_profile"], ", ".join(f"{x:g}" for x in temps) + " °C"
                      + (L["chamber_bound"].format(b=bound) if bound not in (None, "") else "")))
+    translate = spec_translator(spec)
     return opening_blocks(res, lab, L, specification=norm_text(spec, lang),
-                          standard_row=[_zh(c, L) for c in standard_row], environment=more)
+                          standard_row=[_zh(c, L, translate) for c in standard_row],
+                          environment=more, translate=translate)
 
 
 def chamber_points(res: dict) -> list[float]:

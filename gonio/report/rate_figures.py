@@ -9,8 +9,8 @@
 =========================  ===========================================================
 
 Each ``draw_*`` takes ``(fig, spec, result, L, truth)`` like the optical certificate's
-figures (a Figure, a SubplotSpec, a :class:`~gonio.specs._rate_family.rate_records.RateCalibrationResult`,
-labels, the bench truth or None); an item not measured gives a panel saying so.
+figures (a Figure, a SubplotSpec, a :class:`~gonio.kit.Result`, labels, the bench truth or
+None); an item not measured gives a panel saying so.
 :data:`FIGURES` lists them for the certificate.
 """
 

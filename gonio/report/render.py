@@ -168,9 +168,10 @@ def _block_html(b: Block, svgs: dict[str, str], caps: dict[str, str]) -> str:
     if b.kind == "p":
         cls = ' class="u" id="U-line"' if b.extra == "U" else ""
         return f"<p{cls}>{_h(b.data)}</p>"
-    if b.kind == "kv":
+    if b.kind == "kv":               # a value's line breaks kept (an address), as in the PDF
         return ('<table class="kv">' + "".join(
-            f"<tr><td>{_h(k)}</td><td>{_h(v)}</td></tr>" for k, v in b.data) + "</table>")
+            f"<tr><td>{_h(k)}</td><td>{_h(v).replace(chr(10), '<br>')}</td></tr>"
+            for k, v in b.data) + "</table>")
     if b.kind == "table":
         head, rows = b.data
         tid = f' id="{b.extra["id"]}"' if isinstance(b.extra, dict) else ""

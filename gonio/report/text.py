@@ -51,8 +51,8 @@ def clean_text(text, limit: int = MAX_FIELD_CHARS) -> str:
 
 
 #: The keys whose text keeps its line breaks on a certificate (each line cleaned): an
-#: amendment's reason, printed as it was written.
-KEEP_LINES = frozenset({"amendment_reason"})
+#: amendment's reason and the laboratory's and customer's addresses, printed as written.
+KEEP_LINES = frozenset({"amendment_reason", "address"})
 
 
 def clean_lines(text, limit: int = MAX_FIELD_CHARS) -> str:

@@ -253,6 +253,28 @@ def not_measured(key: str, title: str, clause: str, unit: str, reason: str) -> I
     return Item(key, title, clause, unit, None, False, reason)
 
 
+def source_info(readings) -> dict:
+    """The ``source`` of a result calibrated from ``readings`` (an object with ``path``, the
+    file it was read from or None, and ``data``, its table as a DataFrame): the file's name,
+    SHA-256 and row count; held in memory, ``<memory>`` and the SHA-256 of the table's
+    values (:func:`pandas.util.hash_pandas_object`)."""
+    import hashlib
+    from pathlib import Path
+
+    import pandas as pd
+
+    from gonio.atomic import sha256_file
+
+    if readings.path is not None and Path(readings.path).is_file():
+        sha = sha256_file(readings.path)
+        name = Path(readings.path).name
+    else:
+        sha = hashlib.sha256(pd.util.hash_pandas_object(readings.data, index=False)
+                             .values.tobytes()).hexdigest()
+        name = "<memory>"
+    return {"file": name, "sha256": sha, "rows": int(len(readings.data))}
+
+
 @dataclass
 class Covariance:
     """Covariance matrix (in the items' units) between the values of ``items``, e.g. the

@@ -34,15 +34,14 @@ import importlib.util
 import re
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
-from graphlib import CycleError, TopologicalSorter
 from importlib.metadata import entry_points
 from typing import Any, Callable
 
 from gonio.errors import GonioError
 
 __all__ = ["Coverage", "Specification", "available", "command_arguments", "commands", "get",
-           "item_order", "lazy", "ARGUMENT_COMMANDS",
-           "CONTENT_FIELDS", "FIGURE_ROLES", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
+           "lazy", "ARGUMENT_COMMANDS",
+           "CONTENT_FIELDS", "FIGURE_ROLES", "ITEM_RENDERER", "content_field", "ENTRY_POINT_GROUP", "BUILT_IN",
            "DEFAULT_KEY"]
 
 #: The entry-point group a specification package registers under.
@@ -82,8 +81,9 @@ OUTPUTS_REQUIRED = ("write", "results_json", "summary")
 OUTPUTS_OPTIONAL = ("demo", "warnings")
 #: The ``gonio`` commands a specification may add options to (``Specification.arguments``),
 #: each with the field naming the keywords its hook takes beyond the common ones
-#: (:meth:`Specification.accepted_options`).
-ARGUMENT_COMMANDS = {"bench": "serve_options", "budget": "budget_options",
+#: (:meth:`Specification.accepted_options`). A nested command is named by its words, as typed
+#: (``"bench serve"``: the options of ``gonio bench serve``, which its ``serve`` hook takes).
+ARGUMENT_COMMANDS = {"bench serve": "serve_options", "budget": "budget_options",
                      "calibrate": "calibrate_options", "simulate": "simulate_options",
                      "validate": "coverage.options"}
 
@@ -246,7 +246,8 @@ class Specification:
     arguments : dict of str to str
         ``{command: "module:function"}``: the command-line options of the specification's
         own for the ``gonio`` commands of :data:`ARGUMENT_COMMANDS` (``calibrate``,
-        ``simulate``, ``budget``, ``validate``, and ``bench`` for ``gonio bench serve``),
+        ``simulate``, ``budget``, ``validate``, and the nested command ``"bench serve"``,
+        named by its words as typed, whose options go to the ``serve`` hook),
         such as the optical draft's ``gonio
         calibrate --budget``. ``function(group)`` adds them with ``group.add_argument`` as
         argparse does; each option's ``dest`` is a keyword the command's hook takes
@@ -392,7 +393,7 @@ class Specification:
     def accepted_options(self, command: str) -> frozenset:
         """The keywords the hook of ``gonio command`` takes beyond the common ones
         (:data:`ARGUMENT_COMMANDS`: ``calibrate_options``, ``simulate_options``,
-        ``budget_options``, ``serve_options`` for ``bench``, the coverage study's
+        ``budget_options``, ``serve_options`` for ``bench serve``, the coverage study's
         ``options``).
 
         >>> sorted(get("ogam-draft").accepted_options("simulate"))
@@ -480,6 +481,14 @@ class Specification:
 #: per-item renderer from the item named; docs/kit.md lists the data each reads).
 FIGURE_ROLES = ("bias_temperature", "sf_temperature", "allan", "arw", "bias_instability",
                 "bandwidth")
+
+#: The ``outputs`` module that renders a per-item :class:`~gonio.result.model.Result`
+#: (``gonio.kit.ITEM_RENDERER``): ``results.json``, ``summary.txt``, the tables, the
+#: certificate (HTML, PDF, en/zh) with the figures its content's roles name, and the DCC
+#: 3.3.0 XML of the result as the pipeline decided it. A specification whose ``calibrate``
+#: returns a Result of Items sets
+#: ``Specification(outputs=ITEM_RENDERER, certificate_content="pkg.certificate", …)``.
+ITEM_RENDERER = "gonio.report.item_outputs"
 
 
 def _strs(v, n=None) -> bool:
@@ -583,33 +592,6 @@ class lazy:
 
     def __repr__(self) -> str:
         return f"lazy({self.ref!r})"
-
-
-def item_order(keys, needs) -> list[str]:
-    """The items ``keys`` (in the specification's order) ordered so that each comes after the
-    items it needs (``needs``: {key: keys it needs}, e.g. the JJF scale factor before the
-    items that divide by it): :class:`graphlib.TopologicalSorter`, ties kept in the declared
-    order, so that the order is written down, never implied. A cycle or a need that is no
-    item is a GonioError.
-
-    >>> item_order(["bias", "scale_factor", "noise"], {"bias": ["scale_factor"]})
-    ['scale_factor', 'noise', 'bias']
-    """
-    keys = list(keys)
-    unknown = sorted({n for k in keys for n in needs.get(k, ()) if n not in keys})
-    if unknown:
-        raise GonioError(f"an item needs {', '.join(unknown)}, which is no item")
-    ts = TopologicalSorter({k: tuple(needs.get(k, ())) for k in keys})
-    try:
-        ts.prepare()
-    except CycleError as exc:
-        raise GonioError(f"the items' needs form a cycle: {' -> '.join(exc.args[1])}") from None
-    out: list[str] = []
-    while ts.is_active():
-        ready = sorted(ts.get_ready(), key=keys.index)
-        out += ready
-        ts.done(*ready)
-    return out
 
 
 def default_limits(key: str) -> list[dict]:

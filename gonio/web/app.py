@@ -24,7 +24,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from gonio.web import pages
-from gonio.web.common import Forbidden, Redirect
+from gonio.web.common import Forbidden, Gate, Redirect
 from gonio.web.front import HEADERS, HERE, templates
 
 def warm_up():
@@ -53,9 +53,23 @@ def create_app(store, dispatcher=None) -> FastAPI:
     app.state.templates = templates()
     app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
 
+    gate = app.state.gate = Gate()
+
     @app.middleware("http")
     async def headers(request: Request, call_next):
-        response = await call_next(request)
+        counted = not request.url.path.startswith("/static/")
+        reason = gate.enter() if counted else ""
+        if reason:
+            response = HTMLResponse("<!doctype html><title>503 Restoring</title><p>503: "
+                                    f"{html.escape(reason)}. Every session ends with it: "
+                                    "log in again in a minute. <a href='/login'>Log in</a>"
+                                    "</p>", status_code=503, headers={"Retry-After": "30"})
+        else:
+            try:
+                response = await call_next(request)
+            finally:
+                if counted:
+                    gate.leave()
         for k, v in HEADERS.items():
             response.headers.setdefault(k, v)
         return response

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import threading
 from typing import Annotated
 
 from fastapi import Depends, Request
@@ -86,3 +87,47 @@ def file_response(store, sha: str, name: str, disposition: str = "inline",
                                              "style-src 'unsafe-inline'"
     return Response(services.file_bytes(store, sha), media_type=media, headers=headers)
 
+
+
+class Gate:
+    """The server's maintenance state. Every request but the static files passes it
+    (:meth:`enter` … :meth:`leave`, counted); while it is closed (a restore replacing the
+    records) every other request is answered 503 with the reason, and the request that
+    closed it waits for those in flight to end first, so nobody sees the records half
+    replaced."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self.busy = 0
+        self.reason = ""
+
+    def enter(self) -> str:
+        """Count a request in; the reason when the gate is closed (the request is not
+        counted then)."""
+        with self._cond:
+            if self.reason:
+                return self.reason
+            self.busy += 1
+            return ""
+
+    def leave(self) -> None:
+        with self._cond:
+            self.busy -= 1
+            self._cond.notify_all()
+
+    def close(self, reason: str, timeout_s: float = 30) -> bool:
+        """Close the gate from inside a request (itself counted): wait until it is the only
+        one in flight. False (and the gate open again) when it was closed already or the
+        others did not end within ``timeout_s``."""
+        with self._cond:
+            if self.reason:
+                return False
+            self.reason = reason
+            if self._cond.wait_for(lambda: self.busy <= 1, timeout_s):
+                return True
+            self.reason = ""
+            return False
+
+    def open(self) -> None:
+        with self._cond:
+            self.reason = ""

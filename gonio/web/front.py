@@ -36,7 +36,7 @@ COOKIE, LOGIN_COOKIE = "gonio_session", "gonio_login"
 #: lifetime of the login form's CSRF cookie
 LOGIN_COOKIE_AGE_S = int(S_PER_H)
 #: the states a calibration passes through, in the pages' order
-STATES = ("queued", "running", "failed", "computed", "reviewed", "rejected", "amending",
+STATES = ("queued", "running", "failed", "computed", "drafting", "reviewed", "rejected", "amending",
           "issuing", "issued", "void")
 
 

@@ -16,7 +16,7 @@ from gonio.errors import GonioError, TooManyAttemptsError
 from gonio.records import auth, blobs, queries, services, submission
 from gonio.web.common import (COOKIE, FILE_TYPES, LOGIN_COOKIE, PAGE, Forbidden, Session,
                               file_response, form, page_of, render, wake)
-from gonio.web.front import login_response
+from gonio.web.front import STATES, login_response
 
 router = APIRouter()
 
@@ -344,8 +344,7 @@ def calibrations_page(request: Request, session: Session):
     user, csrf = session
     page = page_of(request)
     status = request.query_params.get("status", "")
-    status = status if status in ("queued", "running", "failed", "computed", "reviewed",
-                                  "rejected", "issuing", "issued", "amending", "void") else ""
+    status = status if status in STATES else ""
     rows, total = queries.calibrations(_store(request), page, PAGE, status)
     return render(request, "calibrations.html", user, csrf, cals=rows, total=total, page=page,
                   size=PAGE, status=status)
@@ -353,8 +352,8 @@ def calibrations_page(request: Request, session: Session):
 
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
-              "humidity_pct", "place", "reuse_reason", "table", "gyro", "chamber", "supply",
-              "metadata")
+              "humidity_pct", "place", "location", "reuse_reason", "table", "gyro", "chamber",
+              "supply", "metadata")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
              ("lab_file", services.MAX_LAB_BYTES))
@@ -454,7 +453,8 @@ async def calibration_create(request: Request, session: Session, inst_id: int):
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),
-            place=data.get("place"), reuse_reason=data.get("reuse_reason"))
+            place=data.get("place"), location=data.get("location"),
+            reuse_reason=data.get("reuse_reason"))
     except GonioError as exc:
         kept = {f: (kept_token(csrf, sha, name), name) for f, (sha, name) in files.items()
                 if sha is not None}
@@ -482,6 +482,7 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
             metadata=bench.parse_metadata_lines(data.get("metadata")),
             spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
             protocol_sha256=proto_sha, place=data.get("place"),
+            location=data.get("location"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"))
@@ -498,7 +499,7 @@ def calibration_page(request: Request, session: Session, cal_id: int):
     if d is None:
         return Response("no such calibration", status_code=404)
     return render(request, "calibration.html", user, csrf, **d,
-                  refresh=d["cal"].status in ("queued", "running", "issuing"),
+                  refresh=d["cal"].status in ("queued",) + services.WORKING,
                   error=request.query_params.get("error", "")[:300])
 
 
@@ -736,12 +737,20 @@ def _users_form(request, user, csrf, do):
 @router.get("/backup")
 def backup_page(request: Request, session: Session):
     """Backups (admin): verify the live records, download a backup, verify an archive
-    before restoring it; the restore itself is the command line's (docs/records.md#backup)."""
+    (uploaded, or from the backup folder) and restore it (docs/records.md#backup)."""
     user, csrf = session
     refused = _may_read(user, "admin")
     if refused:
         return refused
-    return render(request, "backup.html", user, csrf)
+    return _backup(request, user, csrf)
+
+
+def _backup(request: Request, user, csrf, status_code: int = 200, **ctx):
+    from gonio.records.backup import archives_in, backup_folder
+
+    folder = backup_folder(_store(request))
+    return render(request, "backup.html", user, csrf, status_code=status_code,
+                  folder=folder, folder_archives=archives_in(folder), **ctx)
 
 
 async def _admin_post(request: Request, session: tuple):
@@ -751,64 +760,199 @@ async def _admin_post(request: Request, session: tuple):
     return _may_read(user, "admin") or (user, csrf, data)
 
 
-@router.post("/backup/verify")
-async def backup_verify(request: Request, session: Session):
+def _admin_form(path: str):
+    """An admin's POST form at ``path``: the decorated ``async def f(request, user, csrf,
+    data)`` runs once the CSRF token and the admin role are checked (else 403)."""
+    def wrap(fn):
+        async def route(request: Request, session: Session):
+            got = await _admin_post(request, session)
+            return got if isinstance(got, Response) else await fn(request, *got)
+        route.__name__, route.__doc__ = fn.__name__, fn.__doc__
+        router.post(path)(route)
+        return fn
+    return wrap
+
+
+@_admin_form("/backup/verify")
+async def backup_verify(request: Request, user, csrf, data):
     """The live records checked as ``gonio db verify`` checks them."""
     from gonio.records.backup import verify
 
-    got = await _admin_post(request, session)
-    if isinstance(got, Response):
-        return got
-    user, csrf, _ = got
     counts, problems = verify(_store(request))
-    return render(request, "backup.html", user, csrf, live=counts, problems=problems)
+    return _backup(request, user, csrf, live=counts, problems=problems)
 
 
-@router.post("/backup/download")
-async def backup_download(request: Request, session: Session):
+@_admin_form("/backup/download")
+async def backup_download(request: Request, user, csrf, data):
     """A backup archive of the records now (``gonio db backup``), as a download."""
     import tempfile
 
     from gonio.records.backup import backup
 
-    got = await _admin_post(request, session)
-    if isinstance(got, Response):
-        return got
-    user, csrf, _ = got
     with tempfile.TemporaryDirectory(prefix="gonio-backup-", dir=_store(request).data) as tmp:
         path = Path(tmp) / "records.zip"
         try:
             backup(_store(request), path)
         except GonioError as exc:
-            return render(request, "backup.html", user, csrf, status_code=409,
-                          error=str(exc))
+            return _backup(request, user, csrf, status_code=409, error=str(exc))
         data = path.read_bytes()
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d-%H%M")
     return Response(data, media_type="application/zip", headers={
         "Content-Disposition": f'attachment; filename="gonio-records-{stamp}.zip"'})
 
 
-@router.post("/backup/check")
-async def backup_check(request: Request, session: Session):
-    """A backup archive uploaded and checked as ``gonio db restore`` checks it before it
-    writes anything (complete, intact, every row and reference); nothing is written."""
-    from gonio.records.backup import check_archive
+def _staging(store) -> Path:
+    """Where an uploaded archive waits between its check and its restore."""
+    return store.data / "restore"
 
-    got = await _admin_post(request, session)
-    if isinstance(got, Response):
-        return got
-    user, csrf, data = got
-    f = data.get("archive")
-    if f is None or not hasattr(f, "read") or not f.filename:
-        return render(request, "backup.html", user, csrf, status_code=400,
-                      error="choose a backup archive (.zip)")
-    name = clean_name(f.filename)
+
+def _archive_path(store, token: str) -> Path | None:
+    """The archive a form names: ``upload:<sha256>`` (staged by its check) or
+    ``folder:<name>`` (one the backup folder lists); None for anything else."""
+    from gonio.records.backup import archives_in, backup_folder
+
+    kind, _, rest = str(token or "").partition(":")
+    if kind == "upload" and re.fullmatch(r"[0-9a-f]{64}", rest):
+        path = _staging(store) / f"{rest}.zip"
+        return path if path.is_file() else None
+    folder = backup_folder(store)
+    if kind == "folder" and rest in {a["name"] for a in archives_in(folder)}:
+        return folder / rest
+    return None
+
+
+def _stage(store, upload) -> tuple[str, Path]:
+    """An uploaded archive kept under its SHA-256 until it is restored (staged files older
+    than a day are removed): (token, path)."""
+    import shutil
+    import time
+
+    from gonio.units import S_PER_DAY
+
+    root = _staging(store)
+    root.mkdir(mode=0o700, exist_ok=True)
+    for old in root.glob("*.zip"):
+        if old.stat().st_mtime < time.time() - S_PER_DAY:
+            old.unlink(missing_ok=True)
+    h = hashlib.sha256()
+    tmp = root / f".upload-{_dt.datetime.now().timestamp():.6f}"
+    with open(tmp, "wb") as fh:
+        for piece in iter(lambda: upload.read(1 << 20), b""):
+            h.update(piece)
+            fh.write(piece)
+    path = root / f"{h.hexdigest()}.zip"
+    shutil.move(tmp, path)
+    return f"upload:{h.hexdigest()}", path
+
+
+def _restore_page(request: Request, user, csrf, token: str, path: Path, name: str,
+                  status_code: int = 200, **ctx):
+    """The archive checked (``gonio db restore``'s checks, nothing written) and, when it
+    passes, what a restore of it would replace, with the confirmation form."""
+    from gonio.records.backup import archive_sha256, check_archive, summary
+
     try:
-        checked = check_archive(name, f.file)
+        checked = check_archive(path)
     except GonioError as exc:
-        return render(request, "backup.html", user, csrf, status_code=400, archive=name,
-                      error=str(exc))
-    return render(request, "backup.html", user, csrf, archive=name, checked=checked)
+        if token.startswith("upload:"):
+            path.unlink(missing_ok=True)
+        return _backup(request, user, csrf, status_code=400, archive=name,
+                       error=str(exc).replace(str(path), name))
+    return _backup(request, user, csrf, status_code=status_code, archive=name,
+                   checked=checked, token=token, sha256=archive_sha256(path),
+                   current=summary(_store(request)), **ctx)
+
+
+@_admin_form("/backup/check")
+async def backup_check(request: Request, user, csrf, data):
+    """A backup archive, uploaded or chosen from the backup folder, checked as ``gonio db
+    restore`` checks it before it writes anything (complete, intact, every row and
+    reference); nothing is written to the records. A passing archive is offered for
+    restoring."""
+    from starlette.concurrency import run_in_threadpool
+
+    store = _store(request)
+    f, chosen = data.get("archive"), str(data.get("choose") or "")
+    if chosen:
+        path = _archive_path(store, f"folder:{chosen}")
+        if path is None:
+            return _backup(request, user, csrf, status_code=400,
+                           error="choose an archive the backup folder lists")
+        token, name = f"folder:{chosen}", chosen
+    elif f is not None and hasattr(f, "read") and f.filename:
+        name = clean_name(f.filename)
+        token, path = await run_in_threadpool(_stage, store, f.file)
+    else:
+        return _backup(request, user, csrf, status_code=400,
+                       error="choose a backup archive (.zip)")
+    return await run_in_threadpool(_restore_page, request, user, csrf, token, path, name)
+
+
+#: what the person restoring types to confirm
+CONFIRM_WORD = "RESTORE"
+
+
+@_admin_form("/backup/restore")
+async def backup_restore(request: Request, user, csrf, data):
+    """Restore a verified archive over the live records (admin; the word typed and the
+    password given again): the server answers every other request 503 meanwhile and the
+    workers claim nothing; :func:`gonio.records.backup.restore` replaces the records
+    atomically; every session ends (everyone logs in again)."""
+    from starlette.concurrency import run_in_threadpool
+
+    store = _store(request)
+    token, name = str(data.get("archive") or ""), clean_name(str(data.get("name") or ""))
+    path = _archive_path(store, token)
+    if path is None:
+        return _backup(request, user, csrf, status_code=400,
+                       error="that archive is no longer here: verify it again")
+    again = dict(request=request, user=user, csrf=csrf, token=token, path=path, name=name,
+                 status_code=400)
+    if str(data.get("confirm") or "").strip() != CONFIRM_WORD:
+        return _restore_page(**again, restore_error=f"type {CONFIRM_WORD} to confirm")
+    try:
+        auth.authenticate(store, user.username, str(data.get("password") or "")[:2000],
+                          request.client.host if request.client else "")
+    except GonioError as exc:
+        return _restore_page(**again, restore_error="wrong password: nothing restored"
+                             if not isinstance(exc, TooManyAttemptsError) else str(exc))
+    try:
+        counts = await run_in_threadpool(_restore_closed, request, user, path,
+                                         str(data.get("sha256") or ""))
+    except GonioError as exc:
+        return _restore_page(**dict(again, status_code=409), restore_error=str(exc))
+    if token.startswith("upload:"):
+        path.unlink(missing_ok=True)
+    r = render(request, "restored.html", None, None, archive=name, counts=counts,
+               sha256=str(data.get("sha256") or ""))
+    r.delete_cookie(COOKIE)
+    return r
+
+
+def _restore_closed(request: Request, user, path: Path, sha256: str) -> dict:
+    """The restore run with the server closed (503 for every other request, no worker
+    claiming); opened again whatever happens."""
+    from gonio.records.backup import restore
+
+    dispatcher, gate = request.app.state.dispatcher, request.app.state.gate
+    running = dispatcher.pause() if dispatcher is not None else 0
+    try:
+        if running:
+            raise GonioError(f"{running} calibration(s) are being computed or issued now: "
+                             "restore when they are done; nothing restored", key="restore")
+        stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%H:%M")
+        if not gate.close(f"the records are being restored from a backup (by "
+                          f"{user.username}, started {stamp} UTC)"):
+            raise GonioError("other requests did not end within 30 s (or another restore "
+                             "runs): try again; nothing restored", key="restore")
+        try:
+            return restore(_store(request), path, replace=True, actor=user,
+                           expect_sha256=sha256)
+        finally:
+            gate.open()
+    finally:
+        if dispatcher is not None:
+            dispatcher.resume()
 
 
 @router.post("/settings")

@@ -15,14 +15,21 @@ from sqlalchemy import delete, select
 
 from gonio.cli import main
 from gonio.errors import GonioError
-from gonio.records import services
+from gonio.records import queries, services, worker
 from gonio.records.db import open_store
 from gonio.records.importer import import_output_folder
-from gonio.records.models import AuditEvent, CalibrationStandard
+from gonio.records.models import AuditEvent, CalibrationFile, CalibrationStandard
 
-from .conftest import SMALL_PROTOCOL, conditions, make_people
+from .conftest import REPO, SMALL_PROTOCOL, conditions, make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
+
+
+def draft_html(store, cid) -> str:
+    """The stored draft certificate (HTML) of a calibration."""
+    with store.session() as s:
+        sha = s.get(CalibrationFile, (cid, "certificate.html")).sha256
+    return services.file_bytes(store, sha).decode("utf-8")
 
 
 def imported(store, people, computed_folder, bench_readings):
@@ -37,7 +44,6 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
     day = services.calibration(store, cid).performed_on
     # the command line's certificate (its number, "Calibration Certificate", no DRAFT mark)
     # is not kept as the records' draft
-    from gonio.records import queries
     assert queries.calibration_page(store, cid)["files"] == ["results.json", "summary.txt"]
     with pytest.raises(GonioError) as exc:
         services.review(store, people["rev"], cid, accept=True)
@@ -61,12 +67,34 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
         services.attach_conditions(store, people["tech"], cid, environment_from_readings=True)
     with pytest.raises(GonioError, match="technician or reviewer"):
         services.attach_conditions(store, None, cid, standard_ids=[std.id])
-    services.attach_conditions(store, people["tech"], cid, standard_ids=[std.id])
+    got = services.attach_conditions(store, people["tech"], cid, standard_ids=[std.id])
+    # its draft is rendered from the stored result with what is attached (a worker's turn;
+    # review waits for it)
+    assert got.status == "drafting"
+    with pytest.raises(GonioError, match="cannot review a calibration that is drafting"):
+        services.review(store, people["rev"], cid, accept=True)
+    seal_before = services.seal(store, cid)
+    results_before = services.calibration(store, cid).results_sha256
+    worker.run_now(store, cid)
+    assert services.calibration(store, cid).status == "computed"
+    assert queries.calibration_page(store, cid)["files"] == [
+        "certificate.dcc.xml", "certificate.html", "certificate.pdf", "lab.toml",
+        "results.json", "summary.txt"]
+    draft = draft_html(store, cid)
+    assert "DRAFT-%d" % cid in draft and '<span class="nb">RT-07</span>' in draft
+    assert "20.4 °C" not in draft
     with pytest.raises(GonioError, match="names no environment"):
         services.review(store, people["rev"], cid, accept=True)
     got = services.attach_conditions(store, people["tech"], cid, temperature_c="20.4",
                                      humidity_pct="41")
     assert (got.temperature_c, got.humidity_pct, got.environment_from) == (20.4, 41.0, "")
+    worker.run_now(store, cid)
+    draft = draft_html(store, cid)
+    assert "<td>20.4 °C</td>" in draft and "<td>41 %</td>" in draft and "RT-07" in draft
+    # the stored result itself is the one imported: nothing was computed again; the seal
+    # changed with the draft's files (the review signs the draft rendered last)
+    assert services.calibration(store, cid).results_sha256 == results_before
+    assert services.seal(store, cid) != seal_before
     with store.session() as s:
         ev = s.scalars(select(AuditEvent).where(AuditEvent.action == "attach")
                        .order_by(AuditEvent.id)).all()
@@ -81,7 +109,6 @@ def test_imported_calibration_is_reviewed_only_with_standards_and_environment(
                                   "source": "entered"}
     # approved and issued: the certificate, rendered from the stored result at issue,
     # names the standard attached and the environment
-    from gonio.records import worker
     services.approve(store, people["rev2"], cid)
     assert worker.execute(store, services.claim_next(store).id), \
         services.calibration(store, cid).error
@@ -108,7 +135,28 @@ def test_approval_refused_without_them_and_attaching_sends_it_back_to_review(
                                          "registered standard valid on"):
         services.approve(store, people["rev2"], cal.id)
     got = services.attach_conditions(store, people["tech"], cal.id, standard_ids=[std.id])
-    assert (got.status, got.reviewed_by_id, got.reviewed_seal) == ("computed", None, "")
+    assert (got.status, got.reviewed_by_id, got.reviewed_seal) == ("drafting", None, "")
+    # while its draft is rendered again, what is attached meanwhile is rendered too
+    services.attach_conditions(store, people["tech"], cal.id, temperature_c=20.0,
+                               humidity_pct=47)
+    assert services.claim_next(store).id == cal.id
+    render = worker.render_folder
+
+    def attached_while_rendering(*args, **kwargs):
+        services.attach_conditions(store, people["tech"], cal.id, temperature_c=20.0,
+                                   humidity_pct=48)
+        return render(*args, **kwargs)
+    monkeypatch.setattr(worker, "render_folder", attached_while_rendering)
+    assert worker.execute(store, cal.id)
+    monkeypatch.setattr(worker, "render_folder", render)
+    got = services.calibration(store, cal.id)
+    assert (got.status, got.worker_host) == ("drafting", "")   # once more: 48 % since
+    worker.run_now(store, cal.id)
+    assert services.calibration(store, cal.id).status == "computed"
+    assert "<td>48 %</td>" in draft_html(store, cal.id)
+    with store.session() as s:
+        redrafts = s.scalars(select(AuditEvent).where(AuditEvent.action == "redraft")).all()
+    assert len(redrafts) == 2 and all(e.username == "(system)" for e in redrafts)
     services.review(store, people["rev"], cal.id, accept=True)
     assert services.approve(store, people["rev2"], cal.id).status == "issuing"
     with pytest.raises(GonioError, match="cannot attach standards or the environment to a "
@@ -194,8 +242,9 @@ def test_every_new_calibration_names_a_standard_and_its_environment(sqlite_store
                                        **conditions(sqlite_store, people["tech"]))
 
 
-def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, bench_readings,
-                                                  monkeypatch, capsys):
+def records_of_alice(tmp_path, monkeypatch):
+    """A records data folder made on the command line: technician alice and the registered
+    standard RT-07 (due in 300 days)."""
     data = tmp_path / "data"
     monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
     assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
@@ -206,6 +255,12 @@ def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, ben
                               identifier="RT-07", due_on=dt.date.today() + dt.timedelta(300))
     finally:
         st.close()
+    return data
+
+
+def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, bench_readings,
+                                                  monkeypatch, capsys):
+    data = records_of_alice(tmp_path, monkeypatch)
     folder = tmp_path / "run"
     shutil.copytree(computed_folder, folder)
     shutil.copy(bench_readings[0], folder / "readings.csv")
@@ -256,6 +311,12 @@ def test_attach_on_the_calibration_page(app, sqlite_store, computed_folder,  # n
     assert r.status_code == 303 and "error" not in r.headers["location"]
     page = web.get(f"/calibrations/{cid}").text
     assert "20.3 °C, 47 %" in page and "RT-07" in page and 'id="missing"' not in page
+    assert "The draft certificate is being rendered again from the stored result" in page
+    worker.run_now(sqlite_store, cid)           # the server's worker
+    page = web.get(f"/calibrations/{cid}").text
+    assert f"The certificate files above are the draft (number DRAFT-{cid})" in page
+    draft = web.get(f"/calibrations/{cid}/files/certificate.html").text
+    assert "<td>20.3 °C</td>" in draft and '<span class="nb">RT-07</span>' in draft
     r = web.post(f"/calibrations/{cid}/attach", data={
         "csrf": csrf_of(web), "environment_from_readings": "1"})
     assert "the%20readings%20state%20no%20humidity" in r.headers["location"]
@@ -271,3 +332,39 @@ def test_the_fixture_readings_have_no_humidity(bench_readings):
     head = [ln for ln in Path(bench_readings[0]).read_text("utf-8").splitlines()
             if ln.startswith("#")]
     assert "# temperature_c: 20.0" in head and not any("humidity" in ln for ln in head)
+
+
+def test_calibrate_record_attaches_and_carries_the_lab_environment(
+        tmp_path, bench_readings, monkeypatch, capsys):
+    """gonio calibrate --record: the laboratory file's [environment] is the record's (stated
+    as from the laboratory file); --standard/--temperature/--humidity attach as with gonio
+    db import and the draft is rendered with them; the options need --record."""
+    data = records_of_alice(tmp_path, monkeypatch)
+    lab = REPO / "protocols" / "lab-example.toml"
+    run = ["calibrate", str(bench_readings[0]), "--protocol", str(SMALL_PROTOCOL), "--lab",
+           str(lab), "--data", str(data), "--record-user", "alice"]
+    capsys.readouterr()
+    assert main(run + ["--out", str(tmp_path / "a"), "--record"]) == 0
+    err = capsys.readouterr().err
+    assert ("gonio: recorded as calibration 1: standards none; environment 20.1 °C, 45 % (from "
+            "the laboratory file); before its review it needs registered standard valid on"
+            ) in err and "(gonio db attach 1 --standard ID" in err, err
+    assert main(run + ["--out", str(tmp_path / "b"), "--record", "--standard", "RT-07",
+                       "--temperature", "20", "--humidity", "44"]) == 0
+    assert capsys.readouterr().err.endswith(
+        "gonio: recorded as calibration 2: standards RT-07; environment 20 °C, 44 %\n")
+    assert main(run + ["--out", str(tmp_path / "c"), "--standard", "RT-07"]) == 2
+    assert "go with --record" in capsys.readouterr().err
+    st = open_store(None, data)
+    try:
+        one, two = services.calibration(st, 1), services.calibration(st, 2)
+        assert (one.temperature_c, one.humidity_pct, one.environment_from) == (20.1, 45.0,
+                                                                               "lab file")
+        assert (two.temperature_c, two.humidity_pct, two.environment_from, two.status) == (
+            20.0, 44.0, "", "computed")
+        draft = draft_html(st, 2)          # rendered at once with what was attached
+        assert "DRAFT-2" in draft and '<span class="nb">RT-07</span>' in draft
+        assert "<td>20 °C</td>" in draft and "<td>44 %</td>" in draft
+        assert services.lab_details(st, 1, final=False)["environment"]["source"] == "entered"
+    finally:
+        st.close()

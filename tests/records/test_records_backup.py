@@ -26,15 +26,22 @@ from .test_records_services import new_calibration, run_worker, setup_instrument
 def records(sqlite_store, computed_folder, bench_readings, monkeypatch):
     """A SQLite records store with one issued certificate and one computed calibration."""
     people = make_people(sqlite_store)
-    inst, std = setup_instrument(sqlite_store, people)
-    cal = new_calibration(sqlite_store, people, inst, std, bench_readings[0])
-    run_worker(sqlite_store, monkeypatch, computed_folder)
-    services.review(sqlite_store, people["rev"], cal.id, accept=True)
-    services.approve(sqlite_store, people["rev2"], cal.id)
-    run_worker(sqlite_store, monkeypatch, computed_folder)
+    inst, std = one_issued(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
     new_calibration(sqlite_store, people, inst, std, bench_readings[1])
     run_worker(sqlite_store, monkeypatch, computed_folder)
     return sqlite_store
+
+
+def one_issued(store, people, computed_folder, bench_readings, monkeypatch):
+    """One calibration computed, reviewed, approved and issued in ``store``: (instrument,
+    standard)."""
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    run_worker(store, monkeypatch, computed_folder)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev2"], cal.id)
+    run_worker(store, monkeypatch, computed_folder)
+    return inst, std
 
 
 def cli(argv, capsys, rc):

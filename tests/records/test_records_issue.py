@@ -208,6 +208,43 @@ def test_draft_watermarked_on_every_page(sqlite_store, computed_folder, bench_re
         "Draft — not a calibration certificate"
 
 
+@pytest.mark.parametrize("lang", ["en", "zh"])
+def test_multi_line_addresses_keep_their_lines(sqlite_store, computed_folder, bench_readings,
+                                               monkeypatch, tmp_path, lang):
+    """The laboratory's and the customer's addresses of several lines (as the records keep
+    them) are printed with their line breaks on the optical certificate: the HTML (escaped,
+    each line break a <br>), the PDF (line under line), the DCC (its text as entered)."""
+    from .conftest import make_people
+
+    people = make_people(sqlite_store)
+    cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
+    services.set_settings(sqlite_store, people["admin"], lab_address="1 Example Road\r\n"
+                                                                     "Beijing <100000>")
+    cust = services.calibration(sqlite_store, cal.id).instrument.customer
+    services.update_customer(sqlite_store, people["tech"], cust.id,
+                             address="2 Sample Street\nXi'an 710000")
+    details = services.lab_details(sqlite_store, cal.id, final=False)
+    out = tmp_path / lang
+    render_folder(services.file_bytes(sqlite_store, cal.results_sha256), out, lang=lang,
+                  spec_key=cal.spec_key, lab=write_lab_toml(details, tmp_path / "lab.toml"))
+    page = (out / "certificate.html").read_text(encoding="utf-8")
+    label = {"en": ("Address", "Customer address"), "zh": ("地址", "委托方地址")}[lang]
+    assert kv_row(page, label[0]) == "1 Example Road<br>Beijing &lt;100000&gt;"
+    assert kv_row(page, label[1]) == "2 Sample Street<br>Xi&#x27;an 710000"
+    # the lines of page 1, without the rotated watermark's letters (one or two a line)
+    lines = [ln.strip() for ln in pdf_pages((out / "certificate.pdf").read_bytes(),
+                                            tmp_path)[0].splitlines() if len(ln.strip()) > 2]
+    for first, second in (("1 Example Road", "Beijing <100000>"),
+                          ("2 Sample Street", "Xi'an 710000")):
+        at = next(i for i, ln in enumerate(lines) if ln.endswith(first))
+        assert lines[at + 1] == second, lines[at - 1:at + 3]
+    if lang == "en":
+        root = etree.fromstring((out / "certificate.dcc.xml").read_bytes())
+        further = [" ".join(e.itertext()).strip() for e in root.iterfind(
+            ".//dcc:location/dcc:further", NS)]
+        assert "1 Example Road\nBeijing <100000>" in further, further
+
+
 def test_multi_line_amendment_reason_keeps_its_lines(sqlite_store, computed_folder,
                                                      bench_readings, monkeypatch, tmp_path):
     """An amendment's reason of several lines is printed with its line breaks: the HTML
@@ -353,13 +390,18 @@ def test_place_and_receipt_on_the_certificate_dcc_and_issued_page(
     cal = computed(sqlite_store, people, computed_folder, bench_readings, monkeypatch)
     place, received = "Room 2, customer's site at Wuxi", cal.performed_on
     with sqlite_store.writing() as s:
-        s.execute(text("UPDATE calibrations SET place = :p, received_on = :r WHERE id = :c"),
+        s.execute(text("UPDATE calibrations SET place = :p, received_on = :r, "
+                       "location = 'customer' WHERE id = :c"),
                   {"p": place, "r": received, "c": cal.id})
         s.commit()
     tech = login(app, "tech")
     page = tech.get(f"/calibrations/{cal.id}").text
     assert "until the calibration is approved" in page
-    assert "Place</dt><dd>Room 2, customer&#39;s site at Wuxi<" in page
+    assert "Place</dt><dd>Room 2, customer&#39;s site at Wuxi (the customer&#39;s site)<" in page
+    # its category, for the DCC's dcc:performanceLocation (tests/test_dcc.py: the DCC of
+    # measured readings says it; these are the virtual bench's, whose DCC says "other")
+    assert services.lab_details(sqlite_store, cal.id, final=False)["certificate"][
+        "location"] == "customer"
     assert f"Received</dt><dd>{received.isoformat()}<" in page
     services.review(sqlite_store, people["rev"], cal.id, accept=True)
     services.approve(sqlite_store, people["rev2"], cal.id)

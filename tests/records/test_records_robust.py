@@ -179,10 +179,12 @@ def test_a_form_with_an_error_keeps_what_was_entered(app, sqlite_store):  # noqa
     r = web.post(f"/instruments/{inst.id}/calibrate", data={
         "csrf": csrf_of(web), "performed_on": "9999-12-31", "received_on": "2025-01-02",
         "temperature_c": "20.5", "humidity_pct": "41", "place": "Room 2",
-        "standards": [str(std.id)]}, files={"readings": ("r.csv", b"x\n")})
+        "location": "customer", "standards": [str(std.id)]},
+        files={"readings": ("r.csv", b"x\n")})
     assert r.status_code == 400 and "9999-12-31 is in the future" in r.text
     for kept in ('value="9999-12-31"', 'value="2025-01-02"', 'value="20.5"', 'value="41"',
-                 'value="Room 2"', f'value="{std.id}"  checked'):
+                 'value="Room 2"', f'value="{std.id}"  checked',
+                 '<option value="customer" selected>'):
         assert kept in r.text, kept
 
 
@@ -203,8 +205,8 @@ def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, comput
 
 def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # noqa: F811
     """A calibration dated 9999-12-31 (refused at entry, but possible in an old database) no
-    longer makes the overview and the due lists answer 500: its due date is the last date
-    there is, so the instrument is simply not due."""
+    longer makes the overview, the due lists and the history plot answer 500: its due date
+    is the last date there is, so the instrument is simply not due."""
     from .test_web_lists import issued
 
     tech = services.user(sqlite_store, "tech")
@@ -214,7 +216,7 @@ def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # n
     issued(sqlite_store, inst.id, dt.date(9999, 12, 31), "GC-9999-0001")
     web = login(app, "tech")
     for url in ("/", "/due", "/due?within_days=100000", "/export/due.csv", "/due/recall",
-                f"/instruments/{inst.id}"):
+                f"/instruments/{inst.id}", f"/instruments/{inst.id}/history.svg"):
         assert web.get(url).status_code == 200, url
     assert services.due_instruments(sqlite_store, within_days=10**7) == [
         {"instrument_id": inst.id, "serial": "F-1", "model": "M", "customer": "Far Ltd",

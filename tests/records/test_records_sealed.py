@@ -167,6 +167,8 @@ def test_import_without_creator_cannot_be_reviewed(store, people, computed_folde
     services.attach_conditions(store, people["rev"], cid2, temperature_c=20, humidity_pct=45,
                                **{k: v for k, v in conditions(store, people["tech"]).items()
                                   if k == "standard_ids"})
+    from gonio.records.worker import run_now
+    run_now(store, cid2)                   # its draft rendered with them
     services.review(store, people["rev2"], cid2, accept=True)
     with pytest.raises(GonioError, match="may not approve"):
         services.approve(store, people["rev2"], cid2)

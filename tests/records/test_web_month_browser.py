@@ -3,9 +3,8 @@ Chromium, a real ``gonio serve`` with its worker processes), on SQLite and on Po
 register and retire master data, calibrate, review, approve and issue, see and export what is
 due, take last night's backup, amend with a reason of two lines, attach the standards and
 environment a command-line import lacks (its review refused until then), deactivate a user,
-verify the records and the backup in the browser, then restore the backup (the command
-line's operation: it writes a whole database) and find the records in a server started on
-it.
+verify the records and last night's backup in the browser, restore it there (confirmed
+with the password; the records replaced, every session ended) and find last night's records.
 Screenshots go to $GONIO_SCREENSHOTS/month-<database> (default /tmp/gonio-web-shots)."""
 
 from __future__ import annotations
@@ -31,13 +30,9 @@ from .test_web_browser import (PASSWORD, PROTOCOL, SHOTS, Shots, browser,  # noq
 def month(request, tmp_path, serve):
     """A running gonio serve on a new database (SQLite in the data folder, or PostgreSQL)
     with its people: qm (the quality manager: admin, technician, reviewer), tech, rev,
-    rev2; yields (base URL, data folder, database URL or None, a URL maker for another
-    database of the same kind)."""
-    def other():
-        return (new_pg_database(request.getfixturevalue("pg_server"))
-                if request.param == "postgresql" else None)
-
-    url = other()
+    rev2; yields (base URL, data folder, database URL or None, the database's kind)."""
+    url = (new_pg_database(request.getfixturevalue("pg_server"))
+           if request.param == "postgresql" else None)
     data = tmp_path / "data"
     st = open_store(url, data)
     for name, roles in (("qm", "admin technician reviewer"), ("tech", "technician"),
@@ -47,7 +42,7 @@ def month(request, tmp_path, serve):
                           lab_address="1 Example Road\nXi'an")
     st.close()
     proc, base = serve.start(data, database=url)
-    yield base, data, url, other, request.param
+    yield base, data, url, request.param
     serve.stop(proc)
 
 
@@ -76,7 +71,7 @@ def act(page, base: str, who: str, cal_url: str, button: str, want: str) -> None
 
 def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  # noqa: F811
                                                computed_folder, serve, tmp_path):
-    base, data, url, other_db, kind = month
+    base, data, url, kind = month
     shot = Shots(SHOTS / f"month-{kind}")
     today = dt.date.today()
     page = browser.new_page(viewport={"width": 1280, "height": 900}, accept_downloads=True)
@@ -204,6 +199,10 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     with page.expect_navigation():
         attach.locator("button:has-text('Attach')").click()
     assert page.locator("#missing").count() == 0 and "20.1 °C, 45 %" in page.content()
+    # its draft is rendered from the stored result with them, by the server's worker
+    wait_status(page, "computed")
+    draft = page.request.get(imported + "/files/certificate.html").text()
+    assert "<td>20.1 °C</td>" in draft and '<span class="nb">RT-07</span>' in draft
     with page.expect_navigation():
         page.click("button[value=accept]")
     wait_status(page, "reviewed")
@@ -238,13 +237,35 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     assert page.locator("#archive-ok").inner_text().startswith(
         "nightly.zip: complete and intact — 1 calibrations, 1 certificates")
     shot(page, "backup-verified")
-    restored, restored_url = tmp_path / "restored", other_db()
-    db = ["--data", str(restored)] + (["--database", restored_url] if restored_url else [])
-    assert main(["db", "restore", str(nightly), *db]) == 0
-    assert main(["db", "verify", *db]) == 0
-    proc, base2 = serve.start(restored, database=restored_url)
-    log_in(page, base2, "qm")
-    page.goto(base2 + "/certificates")
+    # restored in the browser: what is replaced shown, confirmed with the word and the password
+    form = page.locator("form#restore-form")
+    assert "<td>Certificates</td><td>2</td><td>1</td>" in form.inner_html()
+    form.locator("input[name=confirm]").fill("RESTORE")
+    form.locator("input[name=password]").fill("not the password")
+    with page.expect_navigation():
+        form.locator("button:has-text('Restore this archive')").click()
+    assert page.locator("#restore-error").inner_text() == "wrong password: nothing restored"
+    form = page.locator("form#restore-form")
+    form.locator("input[name=confirm]").fill("RESTORE")
+    form.locator("input[name=password]").fill(PASSWORD)
+    shot(page, "restore-confirm")
+    with page.expect_navigation():
+        form.locator("button:has-text('Restore this archive')").click()
+    assert page.locator("#restored").inner_text().startswith(
+        "Restored from nightly.zip: 1 calibrations, 1 certificates")
+    shot(page, "restored")
+    page.goto(base + "/certificates")            # the session ended with the restore
+    assert page.url.startswith(base + "/login")
+    log_in(page, base, "tech")                   # deactivated after last night: active again
+    log_out(page)
+    log_in(page, base, "qm")
+    page.goto(base + "/certificates")
     assert number in page.content() and amended not in page.content()
     shot(page, "restored-certificates")
-    serve.stop(proc)
+    page.goto(base + "/backup")
+    with page.expect_navigation():
+        page.click("text=Verify the records now")
+    assert page.locator("#verified").inner_text().startswith("Records verified: ")
+    page.goto(base + "/audit?entity=records")
+    assert "restore" in page.locator("table").inner_text()
+    assert main(["db", "verify", *db]) == 0

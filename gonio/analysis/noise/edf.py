@@ -30,6 +30,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -406,6 +407,28 @@ def _detrend(z: np.ndarray, deg: int) -> np.ndarray:
     return out
 
 
+def _quadratic_t(n: int, a: int, step: int) -> np.ndarray:
+    """The points a … a + step − 1 of t = −1 + 2k/(n − 1) (linspace's own values for a
+    record of one piece)."""
+    return np.linspace(-1.0, 1.0, n)[a: a + step] if n <= step else \
+        -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
+
+
+@functools.lru_cache(maxsize=64)
+def _quadratic_gram(n: int, step: int) -> np.ndarray:
+    """Σ t^(i+j), i, j ≤ 2, over the n points of t (:func:`remove_quadratic`), accumulated
+    piece by piece; it depends on n alone, so it is formed once per length."""
+    gram = np.zeros((3, 3))
+    for a in range(0, n, step):
+        t = _quadratic_t(n, a, step)
+        tk = [np.ones_like(t), t, t * t]
+        for i in range(3):
+            for j in range(3):
+                gram[i, j] += float(np.einsum("i,i->", tk[i], tk[j]))
+    gram.flags.writeable = False
+    return gram
+
+
 def remove_quadratic(z: np.ndarray) -> None:
     """Subtract from z (in place) its least-squares quadratic in t ∈ [−1, 1], from the
     moments Σ t^k z and Σ t^k (k ≤ 4) accumulated in chunks (no N×3 design matrix)."""
@@ -414,19 +437,19 @@ def remove_quadratic(z: np.ndarray) -> None:
         return
     step = 1 << 16
     mom = np.zeros(3)
-    gram = np.zeros((3, 3))
     for a in range(0, n, step):
-        t = np.linspace(-1.0, 1.0, n)[a: a + step] if n <= step else \
-            -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
-        tk = [np.ones_like(t), t, t * t]
+        t = _quadratic_t(n, a, step)
+        tk = (np.ones_like(t), t, t * t)
         for i in range(3):
             mom[i] += float(np.einsum("i,i->", tk[i], z[a: a + step]))
-            for j in range(3):
-                gram[i, j] += float(np.einsum("i,i->", tk[i], tk[j]))
-    c = np.linalg.solve(gram, mom)
+    c = np.linalg.solve(_quadratic_gram(n, step), mom)
     for a in range(0, n, step):
         t = -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
-        z[a: a + step] -= c[0] + t * (c[1] + t * c[2])
+        fit = t * c[2]           # c0 + t·(c1 + t·c2), in place
+        fit += c[1]
+        fit *= t
+        fit += c[0]
+        z[a: a + step] -= fit
 
 
 def noise_id_lag1(x: np.ndarray, m: int, *, d_max: int = 2) -> tuple[int, float] | None:

@@ -18,6 +18,8 @@ COMMON_PHRASES_ZH = (
      r"T_c,SF/a", "陀螺在温箱容积内的位置（± 均匀度之半，JJF 表2）× T_c,SF/a"),
     (r"the gyro's place in the chamber's volume \(± half its uniformity, JJF Table 2\) × "
      r"the bias temperature coefficient", "陀螺在温箱容积内的位置（± 均匀度之半，JJF 表2）× 零偏温度系数"),
+    # the virtual rate bench both simulate on (protocols/benches/mems-adxrs610.toml), in the DCC
+    (r"MEMS rate gyro \(virtual\)", "微机电速率陀螺（虚拟）"),
     (r"the two slopes' noise of the point means and bias drift",
      "两条斜率的各点均值噪声与零偏漂移"),
     (r"chamber fluctuation \(± amplitude, period\) × T_c,SF between the CW and CCW points",

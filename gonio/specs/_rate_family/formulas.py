@@ -19,12 +19,15 @@ Contents
 :func:`least_squares_line`      y = a x + b, JJF (5) / IEC (1), (2), (5), (6)
 :func:`r5_rates`                the R5 rate series of JJF 7.2.1.1 c)
 :func:`block_mean_stability`    JJF (18): std of P-sample block means / K
+:func:`block_mean_variogram`    E[(ȳ_(i+k) − ȳ_i)²] of block means, pooled over records
+:func:`block_variogram_model`   that variogram fitted by white + flicker + random walk
+:func:`block_std_dof`           effective ν of a standard deviation of correlated means
+:func:`bias_stability_dof`      effective ν of JJF (19)'s B_s from its own records
 :func:`earth_rate_projection_dps`  Ω_E on a gyro axis, any orientation
 :func:`sine_fit`                amplitude and phase at a known frequency (IEC 5.5 reading)
 :func:`minus3db_frequency`      −3 dB crossing (JJF 7.2.15.2, IEC 5.5.3)
 :func:`phase90_frequency`       90° lag crossing (IEC 5.5.3)
 :func:`second_order_response`   |H|, ∠H of a second-order sensor (bench truth, checks)
-:func:`std_upper_half_width`    U of a standard deviation: s to its one-sided χ² upper limit
 ==============================  ==================================================
 
 Unit note: seconds per hour come from :mod:`gonio.units` (``S_PER_H``).
@@ -107,6 +110,147 @@ def block_mean_stability(samples, K: float, block: int) -> float:
     return float(means.std(ddof=1) / abs(K))
 
 
+def block_mean_variogram(records) -> tuple[np.ndarray, np.ndarray]:
+    """The empirical variogram of block means pooled over records: D̂(k) = mean of
+    (ȳ_(i+k) − ȳ_i)² over every pair k blocks apart in every record (k = 0 … n_max − 1,
+    D̂(0) = 0), and the number of pairs behind each lag. It needs no mean, so a drift (a
+    rate random walk) does not bias it (Cressie, Statistics for Spatial Data, 2.4.1). The
+    lag products come from an FFT (O(n log n) per record).
+
+    >>> d, m = block_mean_variogram([[0.0, 1.0, 0.0, 1.0]])
+    >>> d.tolist(), m.tolist()
+    ([0.0, 1.0, 0.0, 1.0], [0, 3, 2, 1])
+    """
+    xs = [as_array(r, "block means") for r in records]
+    n_max = max(x.size for x in xs)
+    num, pairs = np.zeros(n_max), np.zeros(n_max, dtype=int)
+    for x in xs:
+        n = x.size
+        f = np.fft.rfft(x, 2 * n)
+        cross = np.fft.irfft(f * np.conj(f), 2 * n)[:n]       # Σ_i x_i x_(i+k)
+        c2 = np.concatenate([[0.0], np.cumsum(x * x)])
+        k = np.arange(n)
+        # Σ_(i<n−k) x_(i+k)² + x_i²  =  (Σ_(j≥k) x_j²) + (Σ_(i<n−k) x_i²)
+        num[:n] += (c2[n] - c2[k]) + c2[n - k] - 2.0 * cross
+        pairs[:n] += n - k
+    out = np.zeros(n_max)
+    ok = pairs > 0
+    out[ok] = np.maximum(num[ok], 0.0) / pairs[ok]
+    out[0] = 0.0
+    pairs[0] = 0
+    return out, pairs
+
+
+def _h_log(x: np.ndarray) -> np.ndarray:
+    """x²·ln|x|/2 − 3x²/4 (0 at x = 0): the second antiderivative of ln|x|."""
+    x = np.asarray(x, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = 0.5 * x * x * np.log(np.abs(x)) - 0.75 * x * x
+    return np.where(x == 0.0, 0.0, v)
+
+
+def block_variogram_basis(lags) -> np.ndarray:
+    """Columns of the block-mean variogram of the three rate-noise types of IEEE 952 C.1
+    that matter beyond one block, per unit of each (lag k ≥ 1 in blocks; 0 at k = 0):
+    white rate noise, a constant (2σ²/P); flicker (bias instability), whose structure
+    function is logarithmic, ∫(1 − |w|)ln|k + w|dw over w ∈ [−1, 1] less its k = 0 value,
+    = H(k + 1) − 2H(k) + H(k − 1) + 3/2 with H(x) = x²ln|x|/2 − 3x²/4; rate random walk,
+    k − 1/3 (q²·P·t₀ per unit; at k = 1, 2/3, twice the Allan variance q²τ/3).
+
+    >>> [round(float(v), 4) for v in block_variogram_basis([1, 2])[:, 1]]
+    [1.3863, 2.1712]
+    """
+    k = np.asarray(lags, float)
+    flick = _h_log(k + 1.0) - 2.0 * _h_log(k) + _h_log(k - 1.0) + 1.5
+    cols = np.column_stack([np.ones_like(k), flick, k - 1.0 / 3.0])
+    cols[k == 0] = 0.0
+    return cols
+
+
+def block_variogram_model(variogram, pairs, iterations: int = 4) -> np.ndarray:
+    """The block-mean variogram D(k) fitted to the empirical one
+    (:func:`block_mean_variogram`) by non-negative least squares on the white, flicker and
+    random-walk columns (:func:`block_variogram_basis`), each lag weighted by its pairs over
+    the model's variance (iteratively reweighted, starting from the empirical values; a
+    squared difference has variance ∝ D(k)²). The raw variogram's long lags rest on a few
+    pairs; their noise would enter ν as extra spread. Returns D at every lag (D(0) = 0)."""
+    from scipy.optimize import nnls
+
+    d = np.asarray(variogram, float)
+    m = np.asarray(pairs, float)
+    lag = np.arange(d.size)
+    use = (lag > 0) & (m > 0)
+    if not np.any(use) or not np.any(d[use] > 0):
+        return np.zeros_like(d)
+    X = block_variogram_basis(lag[use])
+    y = d[use]
+    scale = np.where(y > 0, y, np.max(y))
+    for _ in range(iterations):
+        w = np.sqrt(m[use]) / scale
+        coef, _ = nnls(X * w[:, None], y * w)
+        fit = X @ coef
+        if not np.all(fit > 0):
+            break
+        scale = fit
+    return block_variogram_basis(lag) @ coef
+
+
+def block_std_dof(variogram, n: int) -> float:
+    """Effective degrees of freedom of the sample variance s² of n block means whose
+    variogram is D(k) (k = 0 … n − 1): s² = x'Mx/(n − 1), M the centring matrix, and
+    M·Σ·M = −½·M·D·M for any covariance with that variogram (stationary or with stationary
+    increments, a random walk included), so s² is Σλ_i·χ²₁ over the eigenvalues λ of
+    A = −½MDM/(n − 1) and its Satterthwaite ν = (tr A)²/tr(A²) (Satterthwaite 1946; for
+    independent means, D constant, ν = n − 1 exactly). O(n): tr(MDM) = −(1/n)·1'D1 and
+    ‖MDM‖² = ‖D‖² − 2‖D1‖²/n + (1'D1)²/n², D Toeplitz.
+
+    >>> block_std_dof([0.0, 2.0, 2.0, 2.0, 2.0], 5)
+    4.0
+    """
+    d = np.asarray(variogram, float)[:n]
+    if n < 2 or d.size < n:
+        raise GonioError(f"the effective ν of a standard deviation needs ≥ 2 means and a "
+                         f"variogram to lag {n - 1}")
+    k = np.arange(n)
+    total = 2.0 * float(np.sum((n - k[1:]) * d[1:]))            # 1'D1
+    frob = 2.0 * float(np.sum((n - k[1:]) * d[1:] ** 2))        # ‖D‖²
+    c = np.concatenate([[0.0], np.cumsum(d[1:])])               # C(m) = Σ_(1..m) D(j)
+    rows = c[k] + c[n - 1 - k]                                  # (D1)_i
+    tr = total / (2.0 * n)
+    tr2 = 0.25 * (frob - 2.0 * float(rows @ rows) / n + total ** 2 / n ** 2)
+    if not tr2 > 0:
+        return math.inf
+    return tr * tr / tr2
+
+
+def bias_stability_dof(records, block: int) -> float:
+    """Effective degrees of freedom of JJF 1535 7.2.10's B_s, the mean over the Q records of
+    s(block means) (eq (19)), from the records themselves: the block means' variogram pooled
+    over the records (:func:`block_mean_variogram`), fitted by the noise types of
+    IEEE 952 (:func:`block_variogram_model`), gives each record's ν_m
+    (:func:`block_std_dof`); a mean of Q standard deviations of relative variance 1/(2ν_m)
+    has ν = Q²/Σ(1/ν_m). Correlated block means (bias instability, rate random walk) give
+    ν well below Q(n − 1); independent ones give Q(n − 1). Blocks of ``block`` samples,
+    an incomplete last block dropped, as eq (18) forms them.
+
+    >>> rng = np.random.default_rng(1)
+    >>> round(bias_stability_dof([rng.normal(size=600) for _ in range(3)], 10))
+    177
+    """
+    P = int(block)
+    means = []
+    for r in records:
+        x = as_array(r, "bias record")
+        n = x.size // P
+        if P < 1 or n < 2:
+            raise GonioError(f"bias stability needs ≥ 2 blocks of {P} samples, got {x.size}")
+        means.append(x[: n * P].reshape(n, P).mean(axis=1))
+    d, pairs = block_mean_variogram(means)
+    model = block_variogram_model(d, pairs)
+    inv = sum(1.0 / block_std_dof(model, m.size) for m in means)
+    return math.inf if inv == 0 else len(means) ** 2 / inv
+
+
 def earth_rate_projection_dps(latitude_deg: float, axis_enu) -> float:
     """Earth-rate component on a gyro axis (unit vector in ENU), °/s.
 
@@ -124,24 +268,6 @@ def earth_rate_projection_dps(latitude_deg: float, axis_enu) -> float:
     if a.shape != (3,) or not n > 0:
         raise GonioError("an axis must be a non-zero 3-vector in ENU")
     return float(math.degrees(earth_rate_enu(latitude_deg) @ (a / n)))
-
-
-def std_upper_half_width(s: float, nu: int, p: float = 0.95) -> float:
-    """Expanded uncertainty of a standard deviation ``s`` with ν degrees of freedom (the
-    repeatabilities JJF 7.2.4 K_r and 7.2.11 B_r; IEC 5.6 Noise,RMS): the distance from s to
-    the one-sided χ² upper limit s·√(ν/χ²_{1−p,ν}) of σ, so that P(σ ≤ s + U) = p exactly for
-    normal data. For ν ≤ 5 (p = 0.95) s − U < 0: the item is non-negative, the interval
-    [0, s + U] is the statement and its coverage is p; above, s ± U covers p less
-    P(σ < s − U), below 4·10⁻⁴ up to ν = 20 (ν = 6: s − U = 0.08·s, P ≈ 10⁻¹⁷⁷).
-
-    Not the upper end of the two-sided interval, s·√(ν/χ²_0.025,ν): there
-    P(σ ≤ s + U) = 0.975 under a label of 95 %.
-
-    >>> round(std_upper_half_width(1.0, 2), 3)       # √(2/χ²_0.05,2) − 1 = √(2/0.1026) − 1
-    3.415
-    """
-    from scipy.stats import chi2
-    return float(s * (math.sqrt(nu / chi2.ppf(1.0 - p, nu)) - 1.0))
 
 
 def last_exceedance_time(time_s, stat, level: float) -> float:

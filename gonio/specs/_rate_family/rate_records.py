@@ -1,166 +1,33 @@
-"""Records and readings helpers shared by the rate-gyro specifications (JJF 1535-2015,
-IEC 62047-20): the item and result dataclasses (results.json shape), the per-item GUM
-wrapper, segment means of a rate readings file.
+"""Readings helpers shared by the rate-gyro specifications (JJF 1535-2015, IEC 62047-20):
+the context their item functions see, their item modules run through the one item loop
+(:func:`gonio.result.items.run_items`), metadata and protocol of a rate readings file,
+segment means, the static record.
 
 Used by :mod:`gonio.specs.jjf1535` and :mod:`gonio.specs.iec62047_20` (one specification
-never imports another, so what they share lives here and in :mod:`gonio.specs._rate_family.formulas`).
+never imports another, so what they share lives here and in :mod:`gonio.specs._rate_family.formulas`);
+the item types, the GUM budget and the item loop they use are the shared ones of
+:mod:`gonio.result` (re-exported by the kit).
 """
 
 from __future__ import annotations
 
-import contextlib
-import contextvars
-import hashlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import pandas as pd
 
-from gonio.formats.jsonsafe import json_safe  # noqa: F401  (re-exported)
 from gonio.analysis.noise import stream
-from gonio.atomic import sha256_file
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_float
 from gonio.formats.rate_readings import RateReadings, read_rate_readings
-from gonio.result.model import Item, Result, Uncertainty, not_measured  # noqa: F401
-from gonio.result.statement import item_statement, stated_gum
+from gonio.result.items import ItemDef, run_items
+from gonio.result.model import Item
 from gonio.units import S_PER_H
-from uncertainty import monte_carlo, propagate, validate_gum
-
-
-# --------------------------------------------------------------------------- results
-#
-# The items and the result are the one result model's (gonio.result.model): a rate
-# specification's calibrate() returns a Result of Items, written as the one results.json shape.
-
-#: A rate-gyro calibration result is the one :class:`~gonio.result.model.Result`.
-RateCalibrationResult = Result
-
-
-def _f(x):
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None
-
-
-_MC = contextvars.ContextVar("rate_gyro_monte_carlo", default=(0, 0))
-
-
-@contextlib.contextmanager
-def monte_carlo_validation(trials: int, seed: int = 0):
-    """Within this block every :func:`gum` budget is also propagated by JCGM 101 Monte Carlo
-    with ``trials`` draws and the GUM interval validated against it (JCGM 101 8)."""
-    token = _MC.set((int(trials), int(seed)))
-    try:
-        yield
-    finally:
-        _MC.reset(token)
-
-
-def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
-    """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
-    the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
-    k = t_95(ν_eff) (Welch–Satterthwaite), since several items rest on Q = 3 repeats, of the
-    ν_eff as stated (:func:`gonio.result.statement.coverage_k`: its integer part, ∞ above
-    1000); ``p=None`` uses the fixed ``k``."""
-    r = stated_gum(propagate(value_fn, inputs, k=None if p is not None else k, p=p))
-    comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
-              "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
-             for c in r.contributions]
-    mc = None
-    trials, seed = _MC.get()
-    if trials > 0 and r.u_c > 0:
-        m = monte_carlo(value_fn, inputs, trials, seed=seed, p=p or 0.95)
-        v = validate_gum(r, m)
-        mc = {"trials": trials, "u": m.u, "low": m.low, "high": m.high,
-              "gum_low": v.gum_interval[0], "gum_high": v.gum_interval[1],
-              "d_low": v.d_low, "d_high": v.d_high, "delta": v.delta, "validated": v.passed}
-    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc, p,
-                       "welch-satterthwaite" if p is not None else "fixed")
 
 
 # --------------------------------------------------------------------------- readings
-
-def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
-    """Uncertainty of a standard deviation ``s`` of ν + 1 values (JJF 7.2.4 K_r,
-    7.2.11 B_r; IEC 5.6 Noise,RMS of the resolution): u_c = s/√(2ν), the GUM's standard
-    uncertainty of an experimental standard deviation (JCGM 100 E.4.3; type A, ν degrees of
-    freedom), and the one-sided χ² 95 % interval of σ, [0, s·√(ν/χ²_0.05,ν)]
-    (P(σ ≤ upper end) = 95 %), which is the item's statement
-    (:func:`gonio.result.statement.state_interval`): no k (σ's distribution is not symmetric
-    about s, so no coverage factor exists; k = U/u_c, 6.83 for ν = 2, was one). U is the
-    distance from s to the upper end (:func:`gonio.specs._rate_family.formulas.std_upper_half_width`),
-    the guard band of the decision rule, so a guarded upper limit is the upper end.
-
-    Two readings this rule replaces: the χ² half-width entered as a normal type-B term with
-    k = 2 and expanded again by t₉₅ (u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2; the coverage
-    study's sd z 0.17), and U reaching the two-sided limit s·√(ν/χ²_0.025,ν), which σ stays
-    below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s → 3.415·s).
-
-    >>> u = std_dev_uncertainty(1.0, 2, "K_r")
-    >>> round(u.u_c, 3), round(u.U, 3), u.k, [round(x, 3) for x in u.interval]
-    (0.5, 3.415, None, [0.0, 4.415])
-    """
-    u_c = float(s / math.sqrt(2.0 * nu))
-    from gonio.specs._rate_family.formulas import std_upper_half_width
-    U = std_upper_half_width(s, nu)
-    row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
-           f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the one-sided χ² 95 % upper limit",
-           "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
-    return Uncertainty([row], u_c, U, None, float(nu), None, 0.95,
-                       "chi-square", interval=(0.0, s + U))
-
-
-def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
-    """A dispersion whose standard uncertainty comes from its own budget ``u`` (JJF 7.2.10
-    bias stability: the mean of Q records' standard deviations of block means, u_c from
-    the records' spread with ν_eff = Q − 1), stated as a standard deviation is: by its
-    one-sided χ² 95 % interval [0, s·√(ν/χ²_0.05,ν)] alone, as :func:`std_dev_uncertainty`
-    states one. ν is that of the standard deviation whose χ² spread is the budget's u_c
-    widened by t_0.95(ν_eff)/z_0.95 (the allowance of JCGM 100 G.3 for a u_c estimated
-    from ν_eff degrees of freedom, one-sided as the statement): ν = ½ (s/u₉₅)²,
-    u₉₅ = u_c·t_0.95(ν_eff)/z_0.95 (JCGM 100 E.4.3, u(s)/s = 1/√(2ν), read backwards).
-    Without the widening (ν from u_c itself) the limit held the bench's B_s in 93 % of
-    trials: the spread of three records understates u_c too often
-    (docs/jjf1535-readings.md). ν is stated as its integer part (∞ above 1000, the limit
-    then keeps the computed ν). No k; U is the distance to the upper limit (the guard band
-    of the decision, :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ²
-    distribution with that ν). The budget's rows and u_c are kept.
-
-    >>> u = dispersion_uncertainty(48.0, Uncertainty([], 3.1, 13.3, 4.3, 2.0, None, 0.95))
-    >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
-    (38.0, None, [0.0, 59.32], 'chi-square')
-    """
-    from scipy.stats import norm, t
-
-    from gonio.result.statement import stated_nu
-    from gonio.specs._rate_family.formulas import std_upper_half_width
-
-    if not (s > 0 and u.u_c > 0):
-        return u
-    nu_b = stated_nu(u.nu_eff)
-    widen = 1.0 if nu_b is None or math.isinf(nu_b) else float(t.ppf(0.95, nu_b) / norm.ppf(0.95))
-    nu = 0.5 * (s / (widen * u.u_c)) ** 2
-    nu_s = stated_nu(nu)
-    U = std_upper_half_width(s, nu if math.isinf(nu_s) else max(nu_s, 1.0))
-    return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",
-                       interval=(0.0, s + U))
-
-
-def source_info(rd: RateReadings) -> dict:
-    """File name, SHA-256 and row count of the readings."""
-    if rd.path is not None and Path(rd.path).is_file():
-        sha = sha256_file(rd.path)
-        name = Path(rd.path).name
-    else:
-        sha = hashlib.sha256(pd.util.hash_pandas_object(rd.data, index=False).values.tobytes()).hexdigest()
-        name = "<memory>"
-    return {"file": name, "sha256": sha, "rows": int(len(rd.data))}
-
 
 @dataclass(kw_only=True)
 class RateContext:
@@ -183,8 +50,12 @@ class RateContext:
     cache: dict = field(default_factory=dict)
 
     def has(self, test: str) -> bool:
-        """Whether the readings hold records of ``test``."""
-        return bool((self.df["test"] == test).any())
+        """Whether the readings hold records of ``test`` (found once per test and context:
+        the budgets ask at every rate and temperature, and each look scanned the readings)."""
+        key = ("has", test)
+        if key not in self.cache:
+            self.cache[key] = bool((self.df["test"] == test).any())
+        return self.cache[key]
 
 
 def metadata_number(md: dict, key: str, default, path) -> float:
@@ -217,75 +88,10 @@ def load_readings(readings) -> RateReadings:
     return read_rate_readings(readings)
 
 
-@dataclass(frozen=True)
-class ItemDef:
-    """One item of a specification (the kit's ``gonio.kit.ItemDef``).
-
-    Attributes
-    ----------
-    key, title, clause, unit : str
-        As the :class:`~gonio.kit.Item` it computes states them (the title, clause and unit
-        are those of the "not measured" item when it cannot be computed).
-    compute : callable
-        ``compute(*args, **needed)`` → :class:`~gonio.kit.Item`: ``args`` are those given
-        to :func:`gonio.kit.calibrate_items` (the readings, a fit, …), ``needed`` the items
-        it needs, by key.
-    needs : tuple of str
-        The keys of the items it needs (computed first; one not measured makes this one not
-        measured, with the reason).
-    nonnegative : bool
-        A quantity that cannot be negative (a noise level, a time): stated with an upper
-        bound where U exceeds the value (:func:`gonio.kit.state`).
-    """
-
-    key: str
-    title: str
-    clause: str
-    compute: Callable[..., Item]
-    needs: tuple[str, ...] = ()
-    unit: str = ""
-    nonnegative: bool = False
-
-
-def run_items(defs, compute, *, monte_carlo_trials: int = 0, monte_carlo_seed: int = 0,
-              needs_measured: bool = True) -> dict[str, Item]:
-    """The one item loop (the kit's :func:`gonio.kit.calibrate_items` and the rate
-    specifications' :func:`calibrate_items`): every :class:`ItemDef` of ``defs`` computed by
-    ``compute(item_def, done)`` (``done``: the items computed so far, by key), each after
-    the items it needs (:func:`gonio.specs.item_order`), each inside
-    :func:`monte_carlo_validation` with ``monte_carlo_trials`` draws. An item whose
-    computation refuses the data (a :class:`GonioError`), or which the statement rule cannot
-    state (:func:`stateable`), is reported not measured with the reason; with
-    ``needs_measured`` so is an item one of whose needs is not measured (without it the item
-    is computed and says itself what it lacks); any other exception is a bug and propagates.
-    Returned in the order of ``defs``."""
-    from gonio.specs import item_order
-
-    defs = {d.key: d for d in defs}
-    done: dict[str, Item] = {}
-    for key in item_order(defs, {k: d.needs for k, d in defs.items()}):
-        d = defs[key]
-        missing = [n for n in d.needs if not done[n].measured] if needs_measured else []
-        if missing:
-            done[key] = not_measured(key, d.title, d.clause, d.unit,
-                                     f"needs {', '.join(missing)}, not measured")
-            continue
-        try:
-            with monte_carlo_validation(monte_carlo_trials, monte_carlo_seed):
-                item = compute(d, done)
-        except GonioError as exc:
-            item = not_measured(key, d.title, d.clause, d.unit,
-                                f"the data were refused: {exc.message}")
-        if not isinstance(item, Item) or item.key != key:
-            raise TypeError(f"item {key!r}: compute returned {item!r}, not Item {key!r}")
-        done[key] = stateable(item, nonnegative=d.nonnegative)
-    return {k: done[k] for k in defs}
-
-
 def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str, Item]:
     """Every item of a rate specification's ``items_module`` computed on ``ctx`` by the one
     item loop (:func:`run_items`): each after the items it needs (``NEEDS``), each inside
-    :func:`monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
+    :func:`~gonio.result.gum.monte_carlo_validation` with ``monte_carlo_trials``; an item whose computation
     refuses the data (a :class:`GonioError`) is reported not measured with the refusal as
     its reason, nothing dropped; the items returned in ``ITEMS`` order, those in
     ``NONNEGATIVE`` marked non-negative (one the statement rule refuses, value + U ≤ 0, is
@@ -298,23 +104,6 @@ def calibrate_items(ctx, items_module, monte_carlo_trials: int = 0) -> dict[str,
             for key, title, clause, fn in items_module.ITEMS]
     return run_items(defs, lambda d, done: d.compute(items_module.with_needs(ctx, done)),
                      monte_carlo_trials=monte_carlo_trials, needs_measured=False)
-
-
-def stateable(item: Item, *, nonnegative: bool = False) -> Item:
-    """``item`` as the item loop keeps it: marked non-negative where declared, and reported
-    not measured, with the refusal as its reason, where the statement rule can state no
-    interval for it (a non-negative quantity with value + U ≤ 0)."""
-    item.nonnegative = item.nonnegative or nonnegative
-    if not item.measured:
-        return item
-    try:
-        item_statement(item, nonnegative=item.nonnegative)
-    except GonioError as exc:
-        out = not_measured(item.key, item.title, item.clause, item.unit,
-                           f"no statement possible: {exc.message}")
-        out.nonnegative = item.nonnegative
-        return out
-    return item
 
 
 @dataclass(frozen=True)

@@ -271,8 +271,9 @@ SPARSE_REGULAR_SHARE = 0.9
 def _sparse_logged(df, present: pd.Series, col: str, file, clauses) -> list[Finding]:
     """One flagged ``measured-sparse`` finding per test whose ``col`` (MEASURED) is logged on
     every n-th row (a slow chamber logger, blank between): the blank rows take the value
-    interpolated in time within their segment (:func:`gonio.specs._rate_family.rate_records.
-    fill_measured`), instead of one finding per row."""
+    interpolated in time within their segment
+    (:func:`gonio.specs._rate_family.rate_records.fill_measured`), instead of one finding per
+    row."""
     out = []
     for test, idx in df.groupby("test", sort=False).indices.items():
         p = present.to_numpy()[idx]

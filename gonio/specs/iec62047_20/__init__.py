@@ -10,12 +10,16 @@ JJF kind (its Annex A is about the accuracy of the angle and rate references), s
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
 from gonio.specs import lazy
 from gonio.specs._rate_family import rate_specification
 from gonio.specs.iec62047_20.keys import ITEM_ROWS, KEY
+
+if TYPE_CHECKING:
+    from gonio.result.model import Result
 
 TITLE_EN = "IEC 62047-20:2014 Semiconductor devices — MEMS — Part 20: Gyroscopes (measuring methods)"
 TITLE_ZH = "IEC 62047-20:2014 半导体器件 微机电器件 第20部分：陀螺仪（测量方法）"
@@ -53,11 +57,11 @@ READINGS_TAKEN = (
 
 def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
               monte_carlo_trials: int = 0, findings: list | None = None,
-              **options) -> RateCalibrationResult:
+              **options) -> Result:
     """IEC 62047-20 characteristics from a rate readings file (path or RateReadings)."""
-    from gonio.specs._rate_family.rate_records import (RateCalibrationResult, calibrate_items,
-                                                       load_readings, metadata_number,
-                                                       protocol_named, source_info)
+    from gonio.result.model import Result, source_info
+    from gonio.specs._rate_family.rate_records import (calibrate_items, load_readings,
+                                                       metadata_number, protocol_named)
     from gonio.specs._rate_family.screening import screened, screening_extra
     from gonio.specs.iec62047_20 import items as _items
     from gonio.specs.iec62047_20.protocol import IECProtocol, load_protocol, t_base
@@ -89,13 +93,13 @@ def calibrate(readings, protocol: str | Path | IECProtocol | None = None,
         chamber_fluctuation_period_s=metadata_number(md, "chamber_fluctuation_period_s", 0.0,
                                                      rd.path) or None)
     items = calibrate_items(ctx, _items, monte_carlo_trials)
-    return RateCalibrationResult(KEY, TITLE_EN, items, dict(md), source_info(rd),
-                                 list(READINGS_TAKEN),
-                                 extra={"supply_correction_eq18": {
-                                     "ratiometric": ratiometric, "rows_corrected": n_corr},
-                                     **screening_extra(findings)},
-                                 findings=findings,
-                                 settings=protocol_provenance(proto.path))
+    return Result(KEY, TITLE_EN, items, dict(md), source_info(rd),
+                  list(READINGS_TAKEN),
+                  extra={"supply_correction_eq18": {
+                      "ratiometric": ratiometric, "rows_corrected": n_corr},
+                      **screening_extra(findings)},
+                  findings=findings,
+                  settings=protocol_provenance(proto.path))
 
 
 #: The coverage study's programme over the built-in protocol (gonio validate --spec): small

@@ -22,8 +22,10 @@ from gonio.analysis.noise.psd import welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.specs._rate_family.rate_records import (Item, RateContext, std_dev_uncertainty, static_output, static_rate_dph, gum, not_measured, segment_means,
-                                         segment_samples, Uncertainty)
+from gonio.result.gum import gum, std_dev_uncertainty
+from gonio.result.model import Item, Uncertainty, not_measured
+from gonio.specs._rate_family.rate_records import (RateContext, static_output, static_rate_dph,
+                                                   segment_means, segment_samples)
 from gonio.units import S_PER_H
 from gonio.specs.iec62047_20.keys import ITEM_ROWS
 from uncertainty import from_u, type_b, welch_satterthwaite
@@ -575,10 +577,19 @@ def _static(ctx: Context):
     return ctx.cache["allan"]
 
 
+def _static_extent(ctx: Context) -> tuple[int, bool]:
+    """(samples, whether it varies) of the static record, found once per calibration (the
+    budgets ask for every rate and temperature: each look was a scan of the readings)."""
+    if "static_extent" not in ctx.cache:
+        y = static_output(ctx.df)
+        ctx.cache["static_extent"] = (int(y.size), bool(y.size) and value_range(y) != 0)
+    return ctx.cache["static_extent"]
+
+
 def _quiet(ctx: Context, key: str, title: str, clause: str, unit: str) -> Item | None:
     """A static record without any variation (noise-free bench): the noise terms are 0."""
-    y = static_output(ctx.df)
-    if y.size and value_range(y) == 0:
+    size, varies = _static_extent(ctx)
+    if size and not varies:
         return Item(key, title, clause, unit, 0.0, uncertainty=gum(lambda v: v, [from_u(key, 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
     return None
@@ -856,10 +867,10 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
         raise GonioError(f"{why}; the readings have none")
     if ctx.a_base is None:
         raise GonioError(f"{why} and the scale factor of 5.1.3.1")
-    y = static_output(ctx.df)
-    if y.size < 100:
-        raise GonioError(f"{why}; it has {y.size} samples")
-    if value_range(y) == 0:
+    size, varies = _static_extent(ctx)
+    if size < 100:
+        raise GonioError(f"{why}; it has {size} samples")
+    if not varies:
         return 0.0              # a noise-free bench (the reader refuses a stuck record)
     fit = _noise_fit(ctx)
     allan = _static(ctx)[0]
@@ -1064,7 +1075,7 @@ def resolution(ctx: Context) -> Item:
     Uncertainty: for Out,resolution the step to the next tested value (rectangular) and the
     95 % range of the rule's outcome under the data's noise; for Noise,RMS, a standard
     deviation of the block means, u_c = s/√(2ν) and U to the one-sided χ² 95 % upper limit
-    (:func:`gonio.specs._rate_family.rate_records.std_dev_uncertainty`); the larger of the two budgets is
+    (:func:`gonio.result.gum.std_dev_uncertainty`); the larger of the two budgets is
     reported (it covers the maximum of the two)."""
     t, cl, un = "resolution", "5.6", "°/s"
     m = _miss(ctx, "resolution", "resolution", t, cl, un)
@@ -1152,7 +1163,7 @@ _FUNCTION_OF = {"sf_temperature_coefficient": sf_temperature, "ratiometric_error
 ITEMS = tuple((key, title, clause, _FUNCTION_OF.get(key) or globals()[key])
               for key, title, clause in ITEM_ROWS)
 
-#: What each item needs computed before it (gonio.specs.item_order orders them): every
+#: What each item needs computed before it (gonio.result.items.item_order orders them): every
 #: characteristic in °/s or relative to a_BASE needs the scale factor (5.1.3.1).
 NEEDS = {row[0]: ("scale_factor",) for row in ITEMS if row[0] != "scale_factor"}
 

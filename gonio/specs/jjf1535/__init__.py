@@ -10,12 +10,16 @@ virtual bench; :mod:`.truth` gives the bench's true value of every item;
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gonio.errors import GonioError
 from gonio.resources import protocol_provenance
 from gonio.specs import lazy
 from gonio.specs._rate_family import rate_specification
 from gonio.specs.jjf1535.keys import ITEM_ROWS, KEY
+
+if TYPE_CHECKING:
+    from gonio.result.model import Result
 
 TITLE_EN = "JJF 1535-2015 Calibration Specification for MEMS Gyroscopes"
 TITLE_ZH = "JJF 1535-2015 微机电(MEMS)陀螺仪校准规范"
@@ -67,7 +71,7 @@ def make_context(rd, proto: JJFProtocol):
 
 def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
               monte_carlo_trials: int = 0, findings: list | None = None,
-              **options) -> RateCalibrationResult:
+              **options) -> Result:
     """Every JJF 1535 Table 3 item from a rate readings file (path or RateReadings).
 
     ``protocol``: file, built-in name or loaded protocol; default the readings' metadata
@@ -76,9 +80,9 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     with the reason; nothing is dropped silently. ``monte_carlo_trials`` > 0 also propagates
     every item's budget by JCGM 101 Monte Carlo and validates the GUM interval against it.
     """
-    from gonio.specs._rate_family.rate_records import (RateCalibrationResult, calibrate_items,
-                                                       load_readings, protocol_named,
-                                                       source_info)
+    from gonio.result.model import Result, source_info
+    from gonio.specs._rate_family.rate_records import (calibrate_items, load_readings,
+                                                       protocol_named)
     from gonio.specs._rate_family.screening import screened, screening_extra
     from gonio.specs.jjf1535 import items as _items_mod
     from gonio.specs.jjf1535.budget import annex_a
@@ -96,12 +100,12 @@ def calibrate(readings, protocol: str | Path | JJFProtocol | None = None,
     rd, findings = screened(rd, screen(rd, proto) if findings is None else list(findings))
     ctx = make_context(rd, proto)
     items = calibrate_items(ctx, _items_mod, monte_carlo_trials)
-    return RateCalibrationResult(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
-                                 list(READINGS_TAKEN),
-                                 extra={"annex_a": annex_a().to_dict(),
-                                        **screening_extra(findings)},
-                                 findings=findings,
-                                 settings=protocol_provenance(proto.path))
+    return Result(KEY, TITLE_EN, items, dict(rd.metadata), source_info(rd),
+                  list(READINGS_TAKEN),
+                  extra={"annex_a": annex_a().to_dict(),
+                         **screening_extra(findings)},
+                  findings=findings,
+                  settings=protocol_provenance(proto.path))
 
 
 #: The coverage study's programme over the built-in protocol (gonio validate --spec): small

@@ -89,6 +89,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"\+axis up mean", "输入轴向上的平均值"), (r"−axis up mean", "输入轴向下的平均值"),
     (r"least-squares slope", "最小二乘斜率"),
     (r"noise of the bracketing gains", "相邻增益点的噪声"),
+    # the equipment its virtual programme names (simulate.py's '# table:'), in the DCC
+    (r"rate table, two-axis position table, angular vibration table, chamber \(virtual\)",
+     "速率转台、双轴位置转台、角振动台、温箱（虚拟）"),
 )
 
 #: Where the specification asks for the uncertainty statement, (English, Chinese).

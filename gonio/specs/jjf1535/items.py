@@ -2,7 +2,7 @@
 
 Each function takes a :class:`Context` (the readings and what the calibration already
 knows: K, null output, latitude, protocol values) and returns an
-:class:`~gonio.specs._rate_family.rate_records.Item` with its value, unit, clause, and an uncertainty
+:class:`~gonio.result.model.Item` with its value, unit, clause, and an uncertainty
 computed from the calibration's own data with the GUM engine (:mod:`uncertainty`),
 k = t₉₅(ν_eff). The formulas are in :mod:`gonio.specs.jjf1535.formulas` (JJF alone) and
 :mod:`gonio.specs._rate_family.formulas` (shared with IEC 62047-20); the readings taken
@@ -25,9 +25,10 @@ from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_noise_model
 from gonio.analysis.noise.stream import value_range
-from gonio.specs._rate_family.rate_records import (Item, RateContext, static_rate_dph, gum, not_measured, segment_means, segment_samples,
-                                     sf_calibration_means, std_dev_uncertainty, Uncertainty,
-                                     dispersion_uncertainty)
+from gonio.result.gum import gum, std_dev_uncertainty
+from gonio.result.model import Item, Uncertainty, not_measured
+from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph, segment_means,
+                                                   segment_samples, sf_calibration_means)
 from gonio.units import S_PER_H
 from gonio.specs.jjf1535.keys import ITEM_ROWS
 from uncertainty import from_u, type_b
@@ -414,14 +415,45 @@ def bias(ctx: Context) -> Item:
         "null_output": ctx.null_output})
 
 
+def dispersion_uncertainty(s: float, u: Uncertainty) -> Uncertainty:
+    """A dispersion whose standard uncertainty comes from its own budget ``u`` (JJF 7.2.10
+    bias stability: the mean of Q records' standard deviations of block means, its sampling
+    term with the records' effective ν, and the scale factor), stated as a standard deviation
+    is: by its one-sided χ² 95 % interval [0, s·√(ν/χ²_0.05,ν)] alone, as
+    :func:`gonio.result.gum.std_dev_uncertainty` states one, with ν = ½ (s/u_c)²
+    (JCGM 100 E.4.3, u(s)/s = 1/√(2ν), read backwards: the ν of a standard deviation whose
+    χ² spread is u_c). ν is stated as its integer part (∞ above 1000, the limit then keeps
+    the computed ν). No k; U is the distance to the upper limit (the guard band of the
+    decision, :func:`gonio.analysis.conformity.decide_items`, which takes σ's χ² distribution
+    with that ν). The budget's rows and u_c are kept.
+
+    >>> u = dispersion_uncertainty(48.0, Uncertainty([], 3.1, 13.3, 4.3, 2.0, None, 0.95))
+    >>> round(u.nu_eff, 1), u.k, [round(x, 2) for x in u.interval], u.k_source
+    (119.9, None, [0.0, 53.78], 'chi-square')
+    """
+    from gonio.result.gum import std_upper_half_width
+    from gonio.result.statement import stated_nu
+
+    if not (s > 0 and u.u_c > 0):
+        return u
+    nu = 0.5 * (s / u.u_c) ** 2
+    nu_s = stated_nu(nu)
+    U = std_upper_half_width(s, nu if math.isinf(nu_s) else max(nu_s, 1.0))
+    return Uncertainty(u.components, u.u_c, U, None, nu, None, 0.95, "chi-square",
+                       interval=(0.0, s + U))
+
+
 def bias_stability(ctx: Context) -> Item:
     """JJF 1535 7.2.10 eqs (18), (19): B_s = mean over m of s(P-sample block means)/K, °/h.
 
-    Uncertainty: the spread of B_s,m over the records (type A, ν = Q − 1) and, for one
-    record, the sampling of a standard deviation of N/P blocks. B_s is a dispersion and is
-    stated as one, by its one-sided χ² 95 % interval alone with ν = ½(B_s/u_c)²
-    (:func:`gonio.specs._rate_family.rate_records.dispersion_uncertainty`), as K_r and B_r
-    are: no k, no "± U"."""
+    Uncertainty: the sampling of B_s, a mean of Q standard deviations of correlated block
+    means, u = B_s/√(2ν) with the effective ν of its own records
+    (:func:`gonio.specs._rate_family.formulas.bias_stability_dof`: the block means'
+    variogram fitted by white, flicker and random-walk noise; Satterthwaite), and the scale
+    factor. B_s is a dispersion and is stated as one, by its one-sided χ² 95 % interval alone
+    with ν = ½(B_s/u_c)² (:func:`dispersion_uncertainty`), as K_r and B_r are: no k, no
+    "± U". The spread of the Q = 3 values (ν = 2) is kept in the details; it does not set the
+    interval."""
     title, clause, unit = "bias stability B_s", "7.2.10", "°/h"
     miss = _need(ctx, "bias", "bias_stability", title, clause, unit)
     if miss:
@@ -430,17 +462,19 @@ def bias_stability(ctx: Context) -> Item:
     recs = bias_records(ctx)
     bs = np.array([rg.block_mean_stability(r["samples"], ctx.K, P) * S_PER_H for r in recs])
     nblk = recs[0]["samples"].size // P
-    if bs.size > 1:
-        u_a = from_u("s_Bs", 0.0, float(bs.std(ddof=1) / math.sqrt(bs.size)), dof=bs.size - 1,
-                     source="spread of B_s,m over the records")
-    else:
-        u_a = from_u("s_Bs", 0.0, float(bs[0] / math.sqrt(2 * (nblk - 1))), dof=nblk - 1,
-                     source="sampling of a standard deviation of N/P blocks")
-    u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", float(bs.mean()), 0.0), u_a,
+    value = float(bs.mean())
+    nu_b = rg.bias_stability_dof([r["samples"] for r in recs], P)
+    u_a = from_u("s_Bs", 0.0, value / math.sqrt(2.0 * nu_b) if math.isfinite(nu_b) else 0.0,
+                 dof=nu_b, source="sampling of B_s: effective ν of the records' correlated "
+                                  "block means (variogram: white, flicker, random walk)")
+    u = gum(lambda a, b, e: (a + b) * (1 + e), [from_u("B_s", value, 0.0), u_a,
                                                 from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
-    u = dispersion_uncertainty(float(bs.mean()), u)
-    return Item("bias_stability", title, clause, unit, float(bs.mean()), uncertainty=u,
-                details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk})
+    u = dispersion_uncertainty(value, u)
+    return Item("bias_stability", title, clause, unit, value, uncertainty=u,
+                details={"B_s_m_dph": bs, "P_samples": P, "blocks": nblk,
+                         "nu_records": nu_b,
+                         "spread_of_records_dph": float(bs.std(ddof=1)) if bs.size > 1
+                         else None})
 
 
 def bias_repeatability(ctx: Context) -> Item:
@@ -715,7 +749,7 @@ def bandwidth(ctx: Context) -> Item:
         "phase90_hz_iec": f90, "reference": "lowest test frequency (0 dB)"})
 
 
-#: What each item needs computed before it (gonio.specs.item_order orders them): every item
+#: What each item needs computed before it (gonio.result.items.item_order orders them): every item
 #: that divides by K (7.2.1) needs the scale factor; the others need nothing.
 NEEDS = {key: ("scale_factor",) for key in (
     "nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold",

@@ -56,7 +56,7 @@ SPEC = Specification(
                "simulate": "gonio.specs.ogam_draft.commands:add_simulate_options",
                "budget": "gonio.specs.ogam_draft.commands:add_budget_options",
                "validate": "gonio.specs.ogam_draft.commands:add_validate_options",
-               "bench": "gonio.specs.ogam_draft.commands:add_serve_options"},
+               "bench serve": "gonio.specs.ogam_draft.commands:add_serve_options"},
     commands=(("eda", "gonio.specs.ogam_draft.commands:add_eda"),
               ("reduce", "gonio.specs.ogam_draft.commands:add_reduce"),
               ("tilt", "gonio.specs.ogam_draft.commands:add_tilt"),

@@ -742,9 +742,11 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
     if sf.measured:
         t = sf.table
-        out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
-                                                     mpe, k=k_fixed,
-                                                     tilt_bias_arcsec_per_deg=k_tilt)
+        out["scale_factor"] = iu.scale_factor_budget(
+            t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
+            tilt_bias_arcsec_per_deg=k_tilt,
+            temperature_rel_bound=1e-6 * protocol.annex_a.sf_temperature_coeff_bound_ppm_per_c
+            * protocol.conditions.temperature_tolerance_c)
         if results.scale_factor_nonlinearity.measured:
             draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,

@@ -35,11 +35,12 @@ from gonio.formats.lab import load_lab
 from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tree,
                               conformity_texts, coverage_text, decision_rule_blocks, display,
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
-                              labels, meta_text, num, opening_blocks, reason_text, render_html,
+                              label_translator, labels, meta_text, num, opening_blocks,
+                              reason_text, render_html,
                               render_pdf, rule_at_U, signature_blocks)
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
-from gonio.specs.ogam_draft.phrases import FINDINGS_ZH, LABELS, REASONS_ZH
+from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
                                            detail, e_budget, followed, interval_cell, item_names,
                                            item_path, method_rows, reading_note, segments,
@@ -173,11 +174,13 @@ def _admin_blocks(add, res: dict, lab: dict | None, L: dict, *, lang: str, cjk: 
     md = res.get("metadata", {})
     ns = L["not_stated"]
     mpe = md.get("table_mpe_arcsec")
+    translate = label_translator(BENCH_NAMES_ZH)       # its virtual instruments' names
     for b in opening_blocks(
             res, lab, L, specification=specification_text(followed(res) or ns,
                                                           lang, cjk),
-            standard_row=[meta_text(md, "table", L), "—",
-                          L["std_mpe"].format(v=mpe) if mpe else ns, "—"]):
+            standard_row=[meta_text(md, "table", L, translate), "—",
+                          L["std_mpe"].format(v=mpe) if mpe else ns, "—"],
+            translate=translate):
         add(b.kind, b.data, b.extra)
 
 
@@ -438,13 +441,13 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
         write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
         if dcc:
-            from gonio.kit.render import bilingual, label_translator
-            from gonio.specs.ogam_draft.phrases import READING_NOTES_ZH
+            from gonio.kit.render import bilingual
+            from gonio.specs.ogam_draft.phrases import DCC_NAMES_ZH, READING_NOTES_ZH
             from gonio.specs.ogam_draft.dcc import dcc_bytes, method_text
 
             doc = dcc_bytes(results, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English
-                extra = {**READING_NOTES_ZH,
+                extra = {**READING_NOTES_ZH, **BENCH_NAMES_ZH, **DCC_NAMES_ZH,
                          **{k: L[k] for k in item_names(results) if k in L},
                          method_text(results, lab_d, "en"): method_text(results, lab_d, "zh")}
                 doc = bilingual(doc, label_translator(extra, REASONS_ZH, LABELS))

@@ -64,7 +64,7 @@ def add_simulate_options(group) -> None:
 # --------------------------------------------------------------------------- gonio bench serve
 
 def add_serve_options(group) -> None:
-    """The draft's own ``gonio bench serve`` options (``SPEC.arguments["bench"]``): the
+    """The draft's own ``gonio bench serve`` options (``SPEC.arguments["bench serve"]``): the
     served table's stated range and how long the goniometer has been on (the hook's
     defaults, ±360° and an hour, when not given)."""
     group.add_argument("--range-deg", dest="range_deg", type=positive_magnitude, default=None,

@@ -311,7 +311,8 @@ def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
 
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
-                        tilt_bias_arcsec_per_deg: float = 0.0) -> ItemUncertainty:
+                        tilt_bias_arcsec_per_deg: float = 0.0,
+                        temperature_rel_bound: float = 0.0) -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
@@ -326,6 +327,11 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     scatter does not see it) and whose sign depends on the tilt's unknown azimuth: the
     ``K_tilt`` line, arcsine with half-width |K|·A_K/3600 (A_K″ per degree of angle is a
     relative error A_K/3600 of K). It is not in the draft's budget (``beyond_standard``).
+
+    ``temperature_rel_bound`` (|α_K|·ΔT_max, relative): K is stated at the reference
+    temperature of Table 2 and measured anywhere within its tolerance; the instrument's K
+    moves by α_K ΔT, the same in every round: the ``K_T`` line, rectangular with half-width
+    |K|·|α_K|·ΔT_max (the coefficient's bound times the tolerance). Not in the draft's budget.
 
     Examples
     --------
@@ -368,13 +374,21 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
                                          f"{a_k:.3g}″/° at the A.1 bound, worst azimuth"),
                            "tilt bias of K", True, "A.1 applied to 7.1"))
+    if temperature_rel_bound:
+        lines.append(_Line(type_b("K_T", 0.0, abs(float(np.mean(k_i))) * float(temperature_rel_bound),
+                                  "rectangular",
+                                  source=f"chamber temperature within its tolerance, "
+                                         f"|alpha_K| dT_max = {temperature_rel_bound:.3g}"),
+                           "chamber temperature", True, "Table 2 applied to 7.1"))
     return _budget("scale_factor", "counts/deg", float(np.mean(k_i)), lines, k=k)
 
 
 def without_tilt_u_rel(b: ItemUncertainty) -> float:
-    """u(K)/K of a :func:`scale_factor_budget` less its ``K_tilt`` line: the part of u(K) an
-    item that carries the tilt bias of K by its own ``K_tilt`` line takes as normal."""
-    u2 = b.u_c ** 2 - sum(c.u ** 2 for c in b.components if c.symbol == "K_tilt")
+    """u(K)/K of a :func:`scale_factor_budget` less its ``K_tilt`` and ``K_T`` lines: the
+    part of u(K) an item that carries the tilt bias of K by its own ``K_tilt`` line takes as
+    normal (the chamber's temperature moves K and the counts it divides alike, so it does not
+    enter an angle read with that K in the same chamber)."""
+    u2 = b.u_c ** 2 - sum(c.u ** 2 for c in b.components if c.symbol in ("K_tilt", "K_T"))
     return math.sqrt(max(u2, 0.0)) / abs(b.value) if b.value else 0.0
 
 
@@ -630,7 +644,7 @@ def chi_square_statement(s: float, nu: float) -> tuple[float, float]:
     JCGM 106 7.3 with this distribution of σ): with a guard band of U = limit − s the guarded
     upper limit is passed exactly when the stated limit is below the tolerance. The same
     statement as the rate specifications' repeatabilities
-    (:func:`gonio.specs._rate_family.rate_records.std_dev_uncertainty`).
+    (:func:`gonio.result.gum.std_dev_uncertainty`).
 
     >>> [round(x, 3) for x in chi_square_statement(1.0, 9)]       # χ²_0.05(9) = 3.325
     [0.0, 1.645]

@@ -37,6 +37,20 @@ READING_NOTES_ZH: dict[str, str] = {
                     "（而非 0.5 min 的上限）。",
 }
 
+#: The draft's virtual instruments and table (protocols/benches: rlg, fog, table-precision) in
+#: Chinese, for its DCC's zh texts.
+BENCH_NAMES_ZH: dict[str, str] = {
+    "RLG goniometer (virtual)": "激光陀螺测角仪（虚拟）",
+    "FOG goniometer (virtual)": "光纤陀螺测角仪（虚拟）",
+    "precision low-speed rotary table (virtual)": "精密低速转台（虚拟）",
+}
+
+#: The names its DCC gives its per-point tables (:mod:`.dcc`), in Chinese.
+DCC_NAMES_ZH: dict[str, str] = {
+    "per-point table": "逐点数据表",
+    "table rate": "转台角速度",
+}
+
 
 BUDGET_SOURCES_ZH: dict[str, str] = {
     "P": "标准转台定位误差（A.4.1）",

@@ -121,6 +121,10 @@ class AnnexA:
     repeatability_arcsec: float = 0.096
     #: None: k = t_95(ν_eff) (Welch–Satterthwaite); a number: k fixed by the laboratory.
     coverage_factor: float | None = None
+    #: The bound the laboratory takes for the instrument's scale-factor temperature
+    #: coefficient |α_K| (its specification), ppm/°C: with Table 2's tolerance it gives K's
+    #: chamber-temperature line (not in the draft's budget).
+    sf_temperature_coeff_bound_ppm_per_c: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -236,6 +240,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "repeatability_arcsec": Field("float", 0.096, non_negative, "≥ 0"),
         # absent: k = t_95(ν_eff) (Welch–Satterthwaite); set: k fixed by the laboratory
         "coverage_factor": Field("float", None, positive, "> 0"),
+        "sf_temperature_coeff_bound_ppm_per_c": Field("float", 0.1, non_negative, "≥ 0"),
     },
 }
 _EXTRA: dict[str, tuple[dict[str, Field], Callable[[dict], Any] | None]] = {}

@@ -47,8 +47,8 @@ from gonio.units import S_PER_H, arcsec_to_deg
 
 #: Samples integrated per call of the instrument model (bounded memory for long waits).
 CHUNK = 1 << 18
-#: The module's temperature: the bench's optical instrument has no thermal model, so the
-#: module reports the draft's Table 2 reference room.
+#: The draft's Table 2 reference room, °C: the module reports it plus the bench's chamber
+#: deviation (``[chamber] deviation_c``), at which the instrument's K and bias are taken.
 ROOM_C = 20.0
 #: Samples the background integration takes per hold of the lock.
 KEEP_UP_SAMPLES = 1 << 14
@@ -89,6 +89,7 @@ class ServedBench:
                  faults: Faults | None = None):
         if not (speed > 0 and math.isfinite(speed)):
             raise GonioError(f"--speed must be a positive number, got {speed}")
+        bench = bench.at_chamber_temperature()        # the instrument in the chamber
         self.bench, self.speed, self.warm_up_s, self.range_deg = bench, speed, warm_up_s, range_deg
         self.clock, self.faults = clock, faults or Faults()
         ss = np.random.SeedSequence(seed)
@@ -443,7 +444,7 @@ def gyro_instrument(sb: ServedBench) -> Instrument:
         ("ZERO", locked(lambda a: sb.do_zero())),
         ("READ?", read), ("READ:ANGle?", read_angle),
         ("MEASure:RATE?", locked(lambda a: repr(sb.rate_dps()))),
-        ("MEASure:TEMPerature?", lambda a: repr(ROOM_C)),
+        ("MEASure:TEMPerature?", lambda a: repr(ROOM_C + b.chamber_deviation_c)),
         ("CONFigure:COUNter:BITS?", lambda a: str(inst_cfg.counter_bits)),
         ("CONFigure:COUNter:SIGN?", lambda a: "1" if inst_cfg.counter_signed else "0"),
         ("CONFigure:SCALe?", lambda a: repr(inst_cfg.nominal_scale_factor_counts_per_deg)),

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
 from gonio.specs.ogam_draft.bench.session import plan_session, session_metadata
 from gonio.specs.ogam_draft.protocol import load_protocol
@@ -28,7 +30,8 @@ def simulate(out, *, protocol="ogam-draft", bench="rlg", seed: int = 0, table=No
              stream: bool = False, stream_format: str = "parquet") -> dict[str, Path]:
     """Run ``protocol`` on ``bench`` (``table``: a table file overriding the bench's) and write
     ``readings.csv`` and ``truth.json`` into ``out``; with ``stream`` also every sample (time,
-    wrapped counter, table angle; docs/formats.md#stream-file) as ``stream.parquet`` or
+    wrapped counter, table angle, and the chamber's temperature when the bench's chamber is
+    off the protocol's reference; docs/formats.md#stream-file) as ``stream.parquet`` or
     ``stream.csv``, chunk by chunk, with progress on a terminal."""
     from gonio.formats.streams import StreamWriter
     from gonio.progress import Progress, status
@@ -39,13 +42,17 @@ def simulate(out, *, protocol="ogam-draft", bench="rlg", seed: int = 0, table=No
     if stream:
         name = "stream.parquet" if stream_format == "parquet" else "stream.csv"
         from gonio.atomic import active_stage
+        # a chamber off the reference is logged with the samples (docs/formats.md#stream-file);
+        # at the reference the metadata's temperature_c says it
+        temp_c = proto.conditions.temperature_c + b.chamber_deviation_c \
+            if b.chamber_deviation_c else None
         writer = StreamWriter((active_stage(out) or Path(out)) / name, stream_metadata(proto, b, seed),
-                              table=True, fmt=stream_format)
+                              table=True, temperature=temp_c is not None, fmt=stream_format)
         total = sum(k.k_end - k.k_start for k in plan_session(proto, b, None))
         prog = Progress(total, label=f"simulate: {name}", unit="samples")
 
         def write_chunk(t, c, th):
-            writer.write(t, c, th)
+            writer.write(t, c, th, None if temp_c is None else np.full(len(t), temp_c))
             prog.update(len(t))
         sink = write_chunk
     else:

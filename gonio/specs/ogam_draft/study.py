@@ -76,6 +76,7 @@ __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench"
            "TrialResult", "budget_extra_components", "plan_study", "OpticalStudy",
            "ValidationReport", "trial_seeds", "trial_seed", "TrialJob", "trial_bench",
            "pack_trials", "unpack_trials", "EXTRA_SYMBOLS", "draw_type_b", "worst_azimuth",
+           "worst_condition",
            "coupling_bias", "tilted", "TABLE_RATE_ERROR_BOUND"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
@@ -94,10 +95,12 @@ CASES = {
              "knows of it: the tilt over the A.1 disc (azimuth uniform), the table's periodic "
              "positioning errors with their amplitudes (sum within the MPE) at uniform "
              "phases, its wobble phase and axis set-up azimuth uniform, its rate error "
-             "uniform within Table 1's 1e-5",
+             "uniform within Table 1's 1e-5, the chamber's deviation from the reference "
+             "temperature uniform within Table 2's tolerance",
     "worst": "the worst condition the draft allows for K: tilt at the A.1 bound, at the "
              "azimuth where the tilt x Earth-rate coupling biases the 7.1 K most "
-             "(worst_azimuth, from noise-free sessions of the bench)",
+             "(worst_azimuth, from noise-free sessions of the bench), the chamber at Table "
+             "2's temperature bound on the side that adds to that bias",
 }
 
 #: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
@@ -194,7 +197,10 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         return bench                      # drawn per trial (:func:`trial_bench`)
     if case == "worst":
         psi = float(protocol.annex_a.tilt_bound_deg)
-        return tilted(bench, psi, worst_azimuth(bench, protocol, psi))
+        az, side = worst_condition(bench, protocol, psi)
+        alpha = bench.instrument.sf_temperature_coeff_ppm_per_c
+        dev = side * (-1.0 if alpha < 0 else 1.0) * protocol.conditions.temperature_tolerance_c
+        return replace(tilted(bench, psi, az), chamber_deviation_c=float(dev))
     raise GonioError(f"unknown case {case!r} (known: {', '.join(CASES)})", key="cases")
 
 
@@ -210,20 +216,27 @@ def coupling_bias(bench: Bench, protocol: Protocol) -> float:
     noise, from the bench's simulation alone (no budget formula)."""
     tr = run_session(protocol, bench, seed=0).truth
     return float(tr["scale_factor_noise_free_calibrated_counts_per_deg"]
-                 - tr["scale_factor_through_mount_counts_per_deg"])
+                 - tr["scale_factor_through_mount_at_chamber_counts_per_deg"])
 
 
 def worst_azimuth(bench: Bench, protocol: Protocol, tilt_deg: float) -> float:
-    """The tilt azimuth α (°) at which the coupling biases the 7.1 K most: the noise-free
-    bias is c₀ + a cos α + b sin α (c₀ the part that does not depend on the tilt's
-    direction, :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias` for the sinusoid), so
+    """The tilt azimuth α (°) at which the coupling biases the 7.1 K most
+    (:func:`worst_condition`)."""
+    return worst_condition(bench, protocol, tilt_deg)[0]
+
+
+def worst_condition(bench: Bench, protocol: Protocol, tilt_deg: float) -> tuple[float, float]:
+    """(α, sign): the tilt azimuth α (°) at which the coupling biases the 7.1 K most, and
+    the sign (±1) of that bias. The noise-free bias is c₀ + a cos α + b sin α (c₀ the part
+    that does not depend on the tilt's direction,
+    :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias` for the sinusoid), so
     the biases at α = 0°, 90° and 180° give c₀ = (B₀ + B₁₈₀)/2, a = (B₀ − B₁₈₀)/2,
     b = B₉₀ − c₀; |c₀ + R cos(α − φ)| with R = |(a, b)|, φ = atan2(b, a) is largest at
-    α = φ where c₀ ≥ 0 and at φ + 180° where c₀ < 0."""
+    α = φ where c₀ ≥ 0 (bias c₀ + R > 0) and at φ + 180° where c₀ < 0 (bias c₀ − R < 0)."""
     b0, b90, b180 = (coupling_bias(tilted(bench, tilt_deg, a), protocol) for a in (0, 90, 180))
     c0 = (b0 + b180) / 2.0
     phi = math.degrees(math.atan2(b90 - c0, (b0 - b180) / 2.0))
-    return (phi + (180.0 if c0 < 0 else 0.0)) % 360.0
+    return (phi + (180.0 if c0 < 0 else 0.0)) % 360.0, (-1.0 if c0 < 0 else 1.0)
 
 
 def k_tilt_trial(bench: Bench, protocol: Protocol, seed: int,
@@ -254,14 +267,20 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     with the bench's amplitudes (their sum and 3σ of the scatter within the MPE, A.4.1) at
     uniform phases; the wobble's phase and the axis set-up error's azimuth uniform; the
     table's relative rate error uniform within Table 1's ±1e-5
-    (:data:`TABLE_RATE_ERROR_BOUND`). The instrument's own parameters (its K, its
-    angle-position error, its noise) are the measurands' and are kept.
+    (:data:`TABLE_RATE_ERROR_BOUND`); the chamber's deviation from the reference temperature
+    uniform within Table 2's tolerance (``conditions.temperature_tolerance_c``, ±1 °C), which
+    moves the instrument's K and bias by its temperature coefficients (drawn last, so the
+    other draws are those of a bench without it). The instrument's own parameters (its K, its
+    angle-position error, its noise, its temperature coefficients) are the measurands' and
+    are kept.
 
     >>> p = validation_protocol(); b = load_bench("rlg")
     >>> d = draw_type_b(b, p, 4)
     >>> d == draw_type_b(b, p, 4), d.instrument.tilt_deg <= 0.1, d.table.mpe_arcsec
     (True, True, 0.1)
     >>> abs(d.table.rate_error_rel) <= TABLE_RATE_ERROR_BOUND
+    True
+    >>> abs(d.chamber_deviation_c) <= p.conditions.temperature_tolerance_c
     True
     """
     rng = np.random.default_rng([int(seed), 0x7B])
@@ -275,7 +294,9 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
                     axis_setup_azimuth_deg=float(rng.uniform(0.0, 360.0)),
                     rate_error_rel=float(rng.uniform(-TABLE_RATE_ERROR_BOUND,
                                                      TABLE_RATE_ERROR_BOUND)))
-    return replace(tilted(bench, psi, az), table=table)
+    tol = float(protocol.conditions.temperature_tolerance_c)
+    return replace(tilted(bench, psi, az), table=table,
+                   chamber_deviation_c=float(rng.uniform(-tol, tol)))
 
 
 def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench:
@@ -376,7 +397,8 @@ def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
                        U_arcsec=float(rep.uncertainty.U_arcsec) * u_scale,
                        U_extended_arcsec=float(ext.U_arcsec) * u_scale, u_r_arcsec=u_r,
                        k_cal=float(rep.results.scale_factor.value),
-                       k_mount=float(res.truth["scale_factor_through_mount_counts_per_deg"]),
+                       k_mount=float(res.truth[
+                           "scale_factor_through_mount_at_chamber_counts_per_deg"]),
                        extras=[(c.symbol, c.half_width_arcsec, c.distribution) for c in extras],
                        items=trial_items(rep, res.truth))
 
@@ -550,6 +572,24 @@ def _summarise(case: CaseResult, truth: str, extended: bool) -> dict:
     return s
 
 
+def fixed_condition(bench: Bench) -> dict:
+    """The set-up of a fixed-condition case (validation.json ``condition``): the tilt, its
+    azimuth and the chamber's deviation from the reference temperature."""
+    return {"tilt_deg": bench.instrument.tilt_deg,
+            "tilt_azimuth_deg": bench.instrument.tilt_azimuth_deg,
+            "chamber_deviation_c": bench.chamber_deviation_c}
+
+
+def condition_text(c: dict) -> str:
+    """One line for :func:`fixed_condition`.
+
+    >>> condition_text({"tilt_deg": 0.1, "tilt_azimuth_deg": 123.45, "chamber_deviation_c": -1.0})
+    'tilt 0.1 deg at azimuth 123.5 deg, chamber -1 degC from the reference'
+    """
+    return (f"tilt {c['tilt_deg']:g} deg at azimuth {c['tilt_azimuth_deg']:.1f} deg, "
+            f"chamber {c['chamber_deviation_c']:+g} degC from the reference")
+
+
 def item_coverage_lines(cases) -> list[str]:
     """Per case, the coverage of every measured item (|result − truth| ≤ U; interval)."""
     out = ["", "coverage per item (|result - truth| <= U as stated; for B_s and R also the "
@@ -619,6 +659,8 @@ class ValidationReport:
                     f"{b['mean_abs_error_E_i_arcsec']:>9.3f}{b['mean_abs_error_E_ij_arcsec']:>9.3f}"
                     f"{mu:>8.3f}")
         lines.append("± : standard error over trials (u_trials); binomial u in the JSON")
+        lines += [f"{c.name}: {condition_text(c.summary['condition'])}" for c in self.cases
+                  if "condition" in c.summary]
         lines += item_coverage_lines(self.cases)
         lines += monte_carlo_lines(self.cases)
         return "\n".join(lines) + "\n"
@@ -795,6 +837,8 @@ class OpticalStudy:
             t_int = _matrix(intr[intr["test"] == "angle_deviation"], "systematic_deviation_arcsec")
             cr = CaseResult(name, CASES[name], list(res), t_int)
             cr.summary = _summarise(cr, s["truth"], bool(s["extra_components"]))
+            if name in FIXED_CONDITION_CASES:
+                cr.summary["condition"] = fixed_condition(b)
             if s["monte_carlo_trials"]:
                 t0 = trial_seed(s["seed"], name, 0)
                 cr.summary["monte_carlo"] = _monte_carlo_case(

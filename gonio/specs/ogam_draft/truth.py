@@ -5,11 +5,14 @@ physical parameters (:mod:`gonio.bench`), never from the estimators of
 The bench's session carries its own noise-free rerun (``truth["readings"]``: the counts the
 instrument would give without noise and the true table angle of every reading, from the
 instrument's scale factor, nonlinearity, position harmonics, tilt, Earth rate and the table's
-positioning errors), and the noise parameters it drew the noise with (``truth["bench"]``).
+positioning errors, with the instrument at the chamber's temperature), and the noise and
+temperature parameters it was run with (``truth["bench"]``).
 From those alone:
 
 ===============================  ===========================================================
-``scale_factor``                 mean over the 7.1 rounds of noise-free counts / true angle
+``scale_factor``                 mean over the 7.1 rounds of noise-free counts / true angle,
+                                 at the protocol's reference temperature (the chamber's
+                                 1 + α_K ΔT divided out, :func:`chamber_scale_factor_ratio`)
 ``scale_factor_nonlinearity``    (max − min)/mean of those K_i, %
 ``zero_stability``               √E[s²(M)]/T of the draft's statistic for this instrument's
                                  noise (:func:`~gonio.specs.ogam_draft.item_coverage.zero_stability_truth`)
@@ -35,6 +38,19 @@ from gonio.specs.ogam_draft.item_coverage import zero_stability_truth
 from gonio.specs.ogam_draft.items import signed_extreme
 
 
+def chamber_scale_factor_ratio(bench: dict) -> float:
+    """K in the chamber over K at the reference temperature, 1 + α_K ΔT, from the bench's
+    parameters (``truth["bench"]``: the instrument's ``sf_temperature_coeff_ppm_per_c``,
+    the chamber's ``chamber_deviation_c``; 1 for a bench file without them).
+
+    >>> chamber_scale_factor_ratio({"chamber_deviation_c": -0.5,
+    ...                             "instrument": {"sf_temperature_coeff_ppm_per_c": 2.0}})
+    0.999999
+    """
+    alpha = float(bench.get("instrument", {}).get("sf_temperature_coeff_ppm_per_c", 0.0))
+    return 1.0 + 1e-6 * alpha * float(bench.get("chamber_deviation_c", 0.0))
+
+
 def truth_from_session(session_truth: dict, protocol: Protocol) -> dict:
     """{item: {"value", "how"}} from a session's truth dict (``run_session(...).truth``)."""
     tr = pd.DataFrame(session_truth["readings"])
@@ -43,10 +59,12 @@ def truth_from_session(session_truth: dict, protocol: Protocol) -> dict:
         return out
     sf = tr[tr["test"] == "scale_factor"]
     if len(sf):
-        k_i = sf["noise_free_counts"].to_numpy(float) / sf["true_table_deg"].to_numpy(float)
+        k_i = sf["noise_free_counts"].to_numpy(float) / sf["true_table_deg"].to_numpy(float) \
+            / chamber_scale_factor_ratio(session_truth["bench"])
         out["scale_factor"] = {"value": float(k_i.mean()),
                                "how": "mean over the 7.1 rounds of noise-free counts / true "
-                                      "table angle"}
+                                      "table angle, at the reference temperature (divided by "
+                                      "the chamber's 1 + alpha_K dT)"}
         out["scale_factor_nonlinearity"] = {
             "value": float((k_i.max() - k_i.min()) / k_i.mean() * 100.0),
             "how": "(max - min)/mean of the noise-free K_i, %"}

@@ -2,7 +2,7 @@
 and, when the readings include a thermal programme, the extended temperature / supply model.
 
 The items have the shape of every other specification's (value, unit, clause, measured,
-reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.specs._rate_family.rate_records.Item`):
+reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.result.model.Item`):
 
 * ``M_ij`` — the nine elements of the system matrix M (output per °/s), alignment §4;
 * ``b_i`` — the bias vector (output units), the ± rates cancelling it (article eq. 28–30a);
@@ -30,8 +30,9 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from gonio.specs._rate_family.rate_records import (Item, RateCalibrationResult, Uncertainty, json_safe,
-                                         not_measured, source_info)
+from gonio.formats.jsonsafe import json_safe
+from gonio.result.model import (Covariance, Item, Result, Uncertainty, not_measured,
+                                source_info)
 from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
                                                       compensate_record, identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
@@ -40,9 +41,13 @@ from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFD
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.readings import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
-from gonio.result.model import Covariance
+from gonio.result.statement import coverage_k
 from gonio.specs.triad_alignment.figure_data import figure_series
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
+
+#: Where k of a Welch–Satterthwaite combination comes from: t_0.9545 of ν_eff as stated (its
+#: integer part, GUM G.6.4), so the k a statement prints is the one of the ν it prints.
+K_SOURCE_WS = "Student's t for 95.45 % at the Welch–Satterthwaite ν_eff (integer part)"
 
 KEY = "triad-alignment"
 TITLE_EN = ("Gyro triad: mechanical misalignment budget, electrical alignment and extended "
@@ -71,7 +76,7 @@ READINGS_TAKEN = (
 
 
 @dataclass
-class TriadCalibration(RateCalibrationResult):
+class TriadCalibration(Result):
     """The items and the analysis objects they came from (for the certificate's pages)."""
 
     alignment: AlignmentResult | None = None
@@ -90,8 +95,9 @@ def _as_readings(readings) -> TriadReadings:
 
 def _type_a(symbol: str, source: str, u: float, nu: float, u_mc: float | None = None,
             trials: int = 0) -> Uncertainty:
-    """A one-component Type A uncertainty with k = t_0.9545(ν) (JCGM 100 4.2, G.3)."""
-    k = float(stats.t.ppf(0.5 + COVERAGE / 2, nu)) if nu > 0 else math.nan
+    """A one-component Type A uncertainty with k = t_0.9545(ν) (JCGM 100 4.2, G.3), ν as
+    stated (:func:`gonio.result.statement.coverage_k`)."""
+    k = coverage_k(nu, COVERAGE) if nu > 0 else math.nan
     comp = [{"symbol": symbol, "source": source, "type": "A", "u": float(u), "c": 1.0,
              "contribution": float(u), "dof": float(nu)}]
     mc = None if u_mc is None or not math.isfinite(u_mc) else {"trials": trials, "u": float(u_mc)}
@@ -111,9 +117,9 @@ def _with_bias_instability(unc: Uncertainty, key: str, u_long: float, nu_long: f
                   "static record's Allan floor (IEEE 952 Annex C)"}]
     u_c = math.hypot(unc.u_c, u_long)
     nu = u_c ** 4 / (unc.u_c ** 4 / unc.nu_eff + u_long ** 4 / nu_long)
-    k = float(stats.t.ppf(0.5 + COVERAGE / 2, nu))
+    k = coverage_k(nu, COVERAGE)
     return Uncertainty(comp, u_c, k * u_c, k, float(nu), long_term_monte_carlo(
-        unc.monte_carlo, u_long))
+        unc.monte_carlo, u_long), COVERAGE, K_SOURCE_WS)
 
 
 def long_term_monte_carlo(mc: dict | None, u_long: float) -> dict | None:
@@ -296,9 +302,8 @@ def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None) -> Un
     u_c = math.sqrt(sum(c["u"] ** 2 for c in comp))
     den = sum(c["u"] ** 4 / c["dof"] for c in comp if c["u"] > 0)
     nu_eff = u_c ** 4 / den if den > 0 else math.inf
-    k = float(stats.t.ppf(0.5 + COVERAGE / 2, nu_eff))
-    return Uncertainty(comp, u_c, k * u_c, k, float(nu_eff), None, COVERAGE,
-                       "Student's t for 95.45 % at the Welch–Satterthwaite ν_eff")
+    k = coverage_k(nu_eff, COVERAGE)
+    return Uncertainty(comp, u_c, k * u_c, k, float(nu_eff), None, COVERAGE, K_SOURCE_WS)
 
 
 def thermal_long_term(al: AlignmentResult | None, readings: TriadReadings,

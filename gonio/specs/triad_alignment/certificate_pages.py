@@ -80,7 +80,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
         rows.append([f"{T('gyro')} {a}"] + [_pm(res, f"M_{a}{b}") for b in AXES]
                     + [_pm(res, f"b_{a}", with_k=True),
                        [num(res, f"items.M_{a}x.uncertainty.k", "k"), " (",
-                        num(res, f"items.M_{a}x.uncertainty.nu_eff", "int"), ")"]])
+                        num(res, f"items.M_{a}x.uncertainty.nu_eff", "nu"), ")"]])
     out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})", T("k_nu")], rows),
                      {"widths": (0.09, 0.19, 0.19, 0.19, 0.2, 0.14), "id": "alignment-matrix"}))
     minv, uminv = al["derived"]["alignment_matrix"], al["u_derived"]["alignment_matrix"]
@@ -128,7 +128,7 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
         m = unc.get("monte_carlo")
         urows.append([key, num(res, f"items.{key}.uncertainty.u_c", "sig2"),
                       num(res, f"items.{key}.uncertainty.monte_carlo.u", "sig2") if m else "—",
-                      num(res, f"items.{key}.uncertainty.nu_eff", "int"),
+                      num(res, f"items.{key}.uncertainty.nu_eff", "nu"),
                       num(res, f"items.{key}.uncertainty.k", "k"),
                       num(res, f"items.{key}.uncertainty.U", "U"), items[key]["unit"]])
     out.append(Block("table", (["", T("u_gum"), T("u_mc"), T("nu"), "k", "U", L["unit"]], urows),

@@ -1,9 +1,10 @@
 """Bench, table and instrument parameters, loaded from TOML and validated.
 
 A bench file (``protocols/benches/rlg.toml``, ``fog.toml``) has sections
-``bench`` (name, table file, simulation rate), ``site`` (latitude) and
-``instrument``; it names a table file (``table-precision.toml``) holding the
-``table`` section. Every key is checked: unknown keys, wrong types and
+``bench`` (name, table file, simulation rate), ``site`` (latitude), ``chamber``
+(its temperature's deviation from the protocol's reference, draft Table 2) and
+``instrument`` (with its scale-factor and bias temperature coefficients); it names a
+table file (``table-precision.toml``) holding the ``table`` section. Every key is checked: unknown keys, wrong types and
 impossible values are a :class:`~gonio.errors.GonioError` naming file and key.
 """
 
@@ -77,11 +78,36 @@ class InstrumentConfig:
     counter_bits: int = 64
     counter_signed: bool = True
     integration: str = "exact"
+    sf_temperature_coeff_ppm_per_c: float = 0.0
+    bias_temperature_coeff_dph_per_c: float = 0.0
 
     @property
     def true_scale_factor_counts_per_deg(self) -> float:
         """The instrument's true scale factor at zero rate: nominal·(1 + error)."""
         return self.nominal_scale_factor_counts_per_deg * (1.0 + 1e-6 * self.scale_factor_error_ppm)
+
+    def at_temperature_deviation(self, deviation_c: float) -> "InstrumentConfig":
+        """The same instrument ``deviation_c`` °C away from the reference temperature (the
+        protocol's, draft Table 2): K·(1 + α_K ΔT) and bias + β ΔT, α_K
+        (``sf_temperature_coeff_ppm_per_c``) and β (``bias_temperature_coeff_dph_per_c``)
+        the first-order temperature coefficients of IEEE Std 647/952's gyro models; itself
+        when ΔT = 0 (the reference instrument, bit for bit).
+
+        >>> i = InstrumentConfig(nominal_scale_factor_counts_per_deg=1e6,
+        ...                      sf_temperature_coeff_ppm_per_c=2.0, bias_dph=0.01,
+        ...                      bias_temperature_coeff_dph_per_c=0.005)
+        >>> j = i.at_temperature_deviation(-0.5)
+        >>> round(j.true_scale_factor_counts_per_deg, 6), round(j.bias_dph, 6)
+        (999999.0, 0.0075)
+        >>> i.at_temperature_deviation(0.0) is i
+        True
+        """
+        if not deviation_c:
+            return self
+        k_t = (1.0 + 1e-6 * self.scale_factor_error_ppm) \
+            * (1.0 + 1e-6 * self.sf_temperature_coeff_ppm_per_c * deviation_c)
+        return replace(self, scale_factor_error_ppm=(k_t - 1.0) * 1e6,
+                       bias_dph=self.bias_dph + self.bias_temperature_coeff_dph_per_c * deviation_c)
 
 
 @dataclass(frozen=True)
@@ -97,6 +123,14 @@ class Bench:
     earth_rate: bool = True
     path: str = ""
     table_path: str = ""
+    #: The chamber's temperature minus the protocol's reference (draft Table 2: (20 ± 1) °C).
+    chamber_deviation_c: float = 0.0
+
+    def at_chamber_temperature(self) -> "Bench":
+        """The bench with its instrument at the chamber's temperature
+        (:meth:`InstrumentConfig.at_temperature_deviation`); itself at the reference."""
+        inst = self.instrument.at_temperature_deviation(self.chamber_deviation_c)
+        return self if inst is self.instrument else replace(self, instrument=inst)
 
     def random_off(self) -> "Bench":
         """The same bench with every random term off (for truth's systematic deviations).
@@ -205,6 +239,10 @@ INSTRUMENT_SCHEMA = {
     "counter_bits": Field("int", 64, choices=(16, 24, 32, 64)),
     "counter_signed": Field("bool", True),
     "integration": Field("str", "exact", choices=("exact", "rectangle")),
+    "sf_temperature_coeff_ppm_per_c": Field("float", 0.0, _within(-1e4, 1e4),
+                                            "within ±1e4 ppm/°C"),
+    "bias_temperature_coeff_dph_per_c": Field("float", 0.0, _within(-1e3, 1e3),
+                                              "within ±1e3 °/h/°C"),
 }
 BENCH_SCHEMA = {
     "bench": Field("table", schema={
@@ -216,6 +254,9 @@ BENCH_SCHEMA = {
     "site": Field("table", {}, schema={
         "latitude_deg": Field("float", 40.2, lambda x: abs(x) <= 90, "within ±90"),
         "longitude_deg": Field("float", 0.0, lambda x: abs(x) <= 180, "within ±180"),
+    }),
+    "chamber": Field("table", {}, schema={
+        "deviation_c": Field("float", 0.0, lambda x: abs(x) <= 50, "within ±50 °C"),
     }),
     "instrument": Field("table", schema=INSTRUMENT_SCHEMA),
     "table": Field("table", None, schema=TABLE_SCHEMA),
@@ -272,6 +313,7 @@ def load_bench(path: str | Path = "rlg", table: str | Path | None = None) -> Ben
                   latitude_deg=raw["site"]["latitude_deg"],
                   longitude_deg=raw["site"]["longitude_deg"],
                   sample_rate_hz=raw["bench"]["sample_rate_hz"],
-                  earth_rate=raw["bench"]["earth_rate"], path=str(file), table_path=str(tfile))
+                  earth_rate=raw["bench"]["earth_rate"], path=str(file), table_path=str(tfile),
+                  chamber_deviation_c=float(raw["chamber"].get("deviation_c", 0.0)))
     check_counter(bench, file)
     return bench

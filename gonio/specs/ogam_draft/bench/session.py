@@ -449,7 +449,8 @@ def session_metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
         "manufacturer": inst.manufacturer,
         "nominal_scale_factor_counts_per_deg": repr(inst.nominal_scale_factor_counts_per_deg),
         "latitude_deg": repr(bench.latitude_deg),
-        "temperature_c": repr(protocol.conditions.temperature_c),
+        # the chamber's temperature as logged: the reference plus the bench's deviation
+        "temperature_c": repr(protocol.conditions.temperature_c + bench.chamber_deviation_c),
         "table": bench.table.name,
         "table_mpe_arcsec": repr(bench.table.mpe_arcsec),
         "table_accel_dps2": repr(bench.table.accel_dps2),
@@ -540,11 +541,13 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
     check_counter(bench)
     blocks = plan_session(protocol, bench, rng_table)
     estimate_session(blocks, bench, protocol)      # refuse what exceeds the stated limits
+    # The instrument at the chamber's temperature (the bench itself at the reference).
+    bench_t = bench.at_chamber_temperature()
     # The noisy run and its noise-free rerun (truth) in one pass over the session.
     run, nf = _simulate_many(blocks, protocol, [
-        _Variant(bench, rng_inst, stream, frozenset({"zero_stability"}),
+        _Variant(bench_t, rng_inst, stream, frozenset({"zero_stability"}),
                  int(ss.generate_state(1, np.uint64)[0])),
-        _Variant(bench.random_off(), None)])
+        _Variant(bench_t.random_off(), None)])
     rows = [r for b in blocks for r in b.readings]
     dt = 1.0 / bench.sample_rate_hz
     df = pd.DataFrame({
@@ -566,11 +569,15 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
         df["start_deg"] = [r.start_deg for r in rows]
         df.loc[eda_rows, "gyro_deg"] = run.counts[eda_rows] / bench.instrument.nominal_scale_factor_counts_per_deg
         df.loc[eda_rows, "gyro_counts"] = np.nan
-    k_mount = mount_scale_factor_counts_per_deg(bench, protocol.scale_factor.rate_dps
-                                                if protocol.scale_factor else 60.0)
+    sf_rate = protocol.scale_factor.rate_dps if protocol.scale_factor else 60.0
+    k_mount = mount_scale_factor_counts_per_deg(bench, sf_rate)        # at the reference
+    k_mount_t = mount_scale_factor_counts_per_deg(bench_t, sf_rate)    # in the chamber
     sf = df["test"].to_numpy() == "scale_factor"
-    k_cal_nf = float(np.mean(nf.counts[sf] / df["table_deg"].to_numpy()[sf])) if sf.any() else k_mount
-    sys_mount = deg_to_arcsec(nf.counts / k_mount - run.true_deg)
+    k_cal_nf = float(np.mean(nf.counts[sf] / df["table_deg"].to_numpy()[sf])) if sf.any() \
+        else k_mount_t
+    # E's angles come from counts through a K taken in the same chamber: its temperature
+    # factor divides out, so the deviation as mounted uses the chamber's K.
+    sys_mount = deg_to_arcsec(nf.counts / k_mount_t - run.true_deg)
     sys_cal = deg_to_arcsec(nf.counts / k_cal_nf - run.true_deg)
     per = []
     for i, r in enumerate(rows):
@@ -594,11 +601,16 @@ def run_session(protocol: Protocol, bench: Bench, seed: int = 0, stream=None) ->
         "protocol": protocol.name,
         "bench": bench.to_dict(),
         "scale_factor_through_mount_counts_per_deg": k_mount,
+        "scale_factor_through_mount_at_chamber_counts_per_deg": k_mount_t,
         "scale_factor_noise_free_calibrated_counts_per_deg": k_cal_nf,
         "definitions": {
+            "scale_factor_through_mount_counts_per_deg": "K(1+eps(w cos psi)) cos psi of the "
+            "instrument at the protocol's reference temperature (the measurand)",
+            "scale_factor_through_mount_at_chamber_counts_per_deg": "the same at the chamber's "
+            "temperature: K(1 + alpha_K dT), dT = bench.chamber_deviation_c",
             "systematic_deviation_arcsec": "noise-free indicated angle (compensated counts of a rerun "
-            "with every random term off, divided by the scale factor through the mount) minus the "
-            "true table angle turned since zeroing",
+            "with every random term off, divided by the scale factor through the mount at the "
+            "chamber's temperature) minus the true table angle turned since zeroing",
             "systematic_deviation_calibrated_arcsec": "the same with the scale factor the noise-free "
             "rerun's own 7.1 rounds give (what the draft's procedure finds without noise)",
         },

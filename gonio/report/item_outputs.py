@@ -1,11 +1,12 @@
-"""The per-item specifications' rendering side (``SPEC.outputs`` of the rate specifications,
-reused by the triad and by plug-ins whose result is a :class:`gonio.result.model.Result`):
+"""The rendering side of a per-item result (``SPEC.outputs`` of every specification whose
+``calibrate`` returns a :class:`gonio.result.model.Result` of items, built in or a plug-in:
+the kit's ``gonio.kit.ITEM_RENDERER``):
 results.json, summary.txt, tables, the certificate (HTML, PDF) and its DCC XML, a function
 of the stored result (the conformity decisions in it are the pipeline's,
 :func:`gonio.pipeline.dispatch.decide_conformity`; nothing here decides).
 
-Imported by the pipeline through the registry (it may import the report); the calibration
-path never imports it.
+Loaded by the pipeline through the registry (``SPEC.outputs``), never by name; the
+calibration path never imports it.
 """
 
 from __future__ import annotations

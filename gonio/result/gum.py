@@ -1,0 +1,109 @@
+"""An item's uncertainty from its budget: the GUM propagation of a budget into the one
+:class:`~gonio.result.model.Uncertainty` an item states (JCGM 100, with k from ν_eff), its
+JCGM 101 Monte Carlo validation when a calibration asks for it, and the uncertainty of a
+standard deviation (a repeatability, a noise level) stated by its one-sided χ² interval.
+
+The kit re-exports :func:`gum`, :func:`monte_carlo_validation` and
+:func:`std_dev_uncertainty` (``gonio.kit``; docs/kit.md#uncertainty-the-gum-model-contract);
+every specification whose items carry such budgets, built in or a plug-in, calls these.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import math
+
+from gonio.result.model import Uncertainty
+from gonio.result.statement import stated_gum
+from uncertainty import monte_carlo, propagate, validate_gum
+
+
+def _f(x):
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+_MC = contextvars.ContextVar("item_monte_carlo", default=(0, 0))
+
+
+@contextlib.contextmanager
+def monte_carlo_validation(trials: int, seed: int = 0):
+    """Within this block every :func:`gum` budget is also propagated by JCGM 101 Monte Carlo
+    with ``trials`` draws and the GUM interval validated against it (JCGM 101 8)."""
+    token = _MC.set((int(trials), int(seed)))
+    try:
+        yield
+    finally:
+        _MC.reset(token)
+
+
+def gum(value_fn, inputs, *, p: float | None = 0.95, k: float = 2.0) -> Uncertainty:
+    """Propagate ``inputs`` (uncertainty.InputQuantity) through ``value_fn`` (a callable of
+    the inputs in order, or a sympy expression) with the GUM engine (JCGM 100): by default
+    k = t_95(ν_eff) (Welch–Satterthwaite), since an item may rest on as few as 3 repeats, of
+    the ν_eff as stated (:func:`gonio.result.statement.coverage_k`: its integer part, ∞ above
+    1000); ``p=None`` uses the fixed ``k``."""
+    r = stated_gum(propagate(value_fn, inputs, k=None if p is not None else k, p=p))
+    comps = [{"symbol": c.symbol, "source": c.source, "type": c.type, "u": _f(c.u_xi),
+              "c": _f(c.c_i), "contribution": _f(c.contribution), "dof": _f(c.dof)}
+             for c in r.contributions]
+    mc = None
+    trials, seed = _MC.get()
+    if trials > 0 and r.u_c > 0:
+        m = monte_carlo(value_fn, inputs, trials, seed=seed, p=p or 0.95)
+        v = validate_gum(r, m)
+        mc = {"trials": trials, "u": m.u, "low": m.low, "high": m.high,
+              "gum_low": v.gum_interval[0], "gum_high": v.gum_interval[1],
+              "d_low": v.d_low, "d_high": v.d_high, "delta": v.delta, "validated": v.passed}
+    return Uncertainty(comps, r.u_c, r.U, r.k, r.dof, mc, p,
+                       "welch-satterthwaite" if p is not None else "fixed")
+
+
+def std_upper_half_width(s: float, nu: int, p: float = 0.95) -> float:
+    """Expanded uncertainty of a standard deviation ``s`` with ν degrees of freedom (a
+    repeatability, the RMS of a noise): the distance from s to the one-sided χ² upper limit
+    s·√(ν/χ²_{1−p,ν}) of σ, so that P(σ ≤ s + U) = p exactly for normal data. For ν ≤ 5
+    (p = 0.95) s − U < 0: the item is non-negative, the interval [0, s + U] is the statement
+    and its coverage is p; above, s ± U covers p less P(σ < s − U), below 4·10⁻⁴ up to
+    ν = 20 (ν = 6: s − U = 0.08·s, P ≈ 10⁻¹⁷⁷).
+
+    Not the upper end of the two-sided interval, s·√(ν/χ²_0.025,ν): there
+    P(σ ≤ s + U) = 0.975 under a label of 95 %.
+
+    >>> round(std_upper_half_width(1.0, 2), 3)       # √(2/χ²_0.05,2) − 1 = √(2/0.1026) − 1
+    3.415
+    """
+    from scipy.stats import chi2
+    return float(s * (math.sqrt(nu / chi2.ppf(1.0 - p, nu)) - 1.0))
+
+
+def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
+    """Uncertainty of a standard deviation ``s`` of ν + 1 values (a repeatability, the
+    standard deviation of a resolution's readings): u_c = s/√(2ν), the GUM's standard
+    uncertainty of an experimental standard deviation (JCGM 100 E.4.3; type A, ν degrees of
+    freedom), and the one-sided χ² 95 % interval of σ, [0, s·√(ν/χ²_0.05,ν)]
+    (P(σ ≤ upper end) = 95 %), which is the item's statement
+    (:func:`gonio.result.statement.state_interval`): no k (σ's distribution is not symmetric
+    about s, so no coverage factor exists; k = U/u_c, 6.83 for ν = 2, was one). U is the
+    distance from s to the upper end (:func:`std_upper_half_width`), the guard band of the
+    decision rule, so a guarded upper limit is the upper end.
+
+    Two readings this rule replaces: the χ² half-width entered as a normal type-B term with
+    k = 2 and expanded again by t₉₅ (u_c = 2.64·s for ν = 2, 5.3× the GUM's s/2; the coverage
+    study's sd z 0.17), and U reaching the two-sided limit s·√(ν/χ²_0.025,ν), which σ stays
+    below 97.5 % of the time, under a label of 95 % (for ν = 2, U 5.285·s → 3.415·s).
+
+    >>> u = std_dev_uncertainty(1.0, 2, "K_r")
+    >>> round(u.u_c, 3), round(u.U, 3), u.k, [round(x, 3) for x in u.interval]
+    (0.5, 3.415, None, [0.0, 4.415])
+    """
+    u_c = float(s / math.sqrt(2.0 * nu))
+    U = std_upper_half_width(s, nu)
+    row = {"symbol": f"s({what})", "source": f"sampling of a standard deviation of "
+           f"{nu + 1} values, s/√(2ν) (GUM E.4.3); U to the one-sided χ² 95 % upper limit",
+           "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
+    return Uncertainty([row], u_c, U, None, float(nu), None, 0.95,
+                       "chi-square", interval=(0.0, s + U))

@@ -1,0 +1,181 @@
+"""The optical bench's temperature model and K's chamber-temperature line, each against a
+second calculation: the simulated K at a chamber deviation against the closed form
+K·(1 + α_K ΔT), E's independence of it against a session at the reference, the budget's
+``K_T`` line against its half-width by hand, the study's draws against their stated
+distributions; and coverage of K at the chamber's bound, which fails without the line at the
+instrument's coefficient and holds with it."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gonio.analysis.coverage import clopper_pearson
+from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.calibration import analyse
+from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
+from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget, without_tilt_u_rel
+from gonio.specs.ogam_draft.readings import Readings
+from gonio.specs.ogam_draft.study import (case_bench, coupling_bias, draw_type_b,
+                                          validation_protocol)
+from gonio.specs.ogam_draft.truth import truth_from_session
+
+
+@pytest.fixture(scope="module")
+def proto():
+    return validation_protocol()          # 7.1 and 7.4 (10 series)
+
+
+@pytest.fixture(scope="module")
+def base():
+    return replace(load_bench("rlg"), sample_rate_hz=5.0)
+
+
+def _warm(bench, dev_c, alpha_ppm, beta_dph):
+    inst = replace(bench.instrument, sf_temperature_coeff_ppm_per_c=alpha_ppm,
+                   bias_temperature_coeff_dph_per_c=beta_dph)
+    return replace(bench, instrument=inst, chamber_deviation_c=dev_c)
+
+
+def _calibrate(proto, res):
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    return analyse(Readings(df, dict(res.metadata)), proto, budget="draft")
+
+
+def test_k_moves_by_its_coefficient_and_e_does_not(proto, base):
+    """Noise-free sessions at the reference and 1.5 °C off with α_K = 40 ppm/°C and
+    β = 0.5 °/h/°C: the 7.1 counts grow by exactly 1 + α_K ΔT (closed form), the deviation
+    E of 7.4 (counts through the K of the same chamber) and its truth do not move (the
+    factor divides out, the constant bias goes with the measured Earth-rate compensation),
+    and the truth of K stays the reference's."""
+    cold = base.random_off()
+    warm = _warm(cold, 1.5, 40.0, 0.5)
+    r0, r1 = run_session(proto, cold, seed=3), run_session(proto, warm, seed=3)
+    sf = (r0.readings["test"] == "scale_factor").to_numpy()
+    ratio = r1.readings["gyro_counts"].to_numpy()[sf] / r0.readings["gyro_counts"].to_numpy()[sf]
+    assert ratio == pytest.approx(np.full(sf.sum(), 1.0 + 40e-6 * 1.5), rel=1e-10)
+    c0, c1 = _calibrate(proto, r0), _calibrate(proto, r1)
+    assert c1.results.scale_factor.value / c0.results.scale_factor.value == \
+        pytest.approx(1.0 + 40e-6 * 1.5, rel=1e-10)
+    e0 = c0.results.angle_deviation.tables["readings"]["E_arcsec"].to_numpy()
+    e1 = c1.results.angle_deviation.tables["readings"]["E_arcsec"].to_numpy()
+    assert np.abs(e1 - e0).max() < 1e-6
+    s0 = [r["systematic_deviation_arcsec"] for r in r0.truth["readings"]]
+    s1 = [r["systematic_deviation_arcsec"] for r in r1.truth["readings"]]
+    assert np.abs(np.subtract(s1, s0)).max() < 1e-6
+    assert scale_factor_truth(r1.truth)[0] == scale_factor_truth(r0.truth)[0]
+    t0 = truth_from_session(r0.truth, proto)["scale_factor"]["value"]
+    t1 = truth_from_session(r1.truth, proto)["scale_factor"]["value"]
+    assert t1 == pytest.approx(t0, rel=1e-12)
+    assert r1.metadata["temperature_c"] == repr(proto.conditions.temperature_c + 1.5)
+
+
+def test_coefficients_change_nothing_at_the_reference(proto, base):
+    """At ΔT = 0 the temperature coefficients leave the session bit for bit as a bench
+    without them (the default bench's outputs)."""
+    a = run_session(proto, _warm(base, 0.0, 0.0, 0.0), seed=5)
+    b = run_session(proto, _warm(base, 0.0, 7.0, 0.3), seed=5)
+    assert a.readings.equals(b.readings) and a.metadata == b.metadata
+
+
+def test_budget_line_is_the_coefficient_bound_times_the_tolerance():
+    """K_T: rectangular, half-width |K|·|α_K|max·ΔT_max; the part of u(K) other items carry
+    (:func:`without_tilt_u_rel`) leaves it out with the tilt line."""
+    k_i, th = [3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3], [60, 120, 180, 240, 300, 360]
+    plain = scale_factor_budget(k_i, th, 0.1)
+    b = scale_factor_budget(k_i, th, 0.1, temperature_rel_bound=2e-6)
+    line = [c for c in b.components if c.symbol == "K_T"]
+    assert len(line) == 1 and line[0].distribution == "rectangular"
+    assert line[0].u == pytest.approx(3600.2 * 2e-6 / math.sqrt(3.0), rel=1e-12)
+    assert b.u_c == pytest.approx(math.hypot(plain.u_c, line[0].u), rel=1e-12)
+    assert without_tilt_u_rel(b) == pytest.approx(without_tilt_u_rel(plain), rel=1e-12)
+
+
+def test_the_protocol_bound_and_tolerance_reach_the_certified_k(base):
+    """calibrate's K budget takes the protocol's coefficient bound and Table 2 tolerance."""
+    proto = validation_protocol()
+    proto = replace(proto, annex_a=replace(proto.annex_a, sf_temperature_coeff_bound_ppm_per_c=0.4),
+                    conditions=replace(proto.conditions, temperature_tolerance_c=2.5))
+    rep = _calibrate(proto, run_session(proto, base, seed=1))
+    b = rep.item_uncertainty["scale_factor"]
+    (line,) = [c for c in b.components if c.symbol == "K_T"]
+    assert line.u * math.sqrt(3.0) == pytest.approx(abs(b.value) * 0.4e-6 * 2.5, rel=1e-12)
+
+
+def test_k_covers_at_the_chamber_bound_only_with_the_line(proto, base):
+    """An instrument with α_K = 1 ppm/°C (a FOG's) in a chamber at Table 2's +1 °C bound:
+    with the protocol's RLG bound (0.1 ppm/°C) U(K) misses K at the reference in every
+    trial; with the laboratory stating 1 ppm/°C it covers (Clopper–Pearson reaching 95 %)."""
+    bench = _warm(base, proto.conditions.temperature_tolerance_c, 1.0, 0.005)
+    stated = replace(proto, annex_a=replace(proto.annex_a, sf_temperature_coeff_bound_ppm_per_c=1.0))
+    hits = {"rlg": 0, "stated": 0}
+    n = 12
+    for s in range(400, 400 + n):
+        res = run_session(proto, bench, seed=s)
+        k_true = scale_factor_truth(res.truth)[0]
+        for key, p in (("rlg", proto), ("stated", stated)):
+            b = _calibrate(p, res).item_uncertainty["scale_factor"]
+            hits[key] += abs(b.value - k_true) <= b.U
+    assert clopper_pearson(hits["rlg"], n)[1] < 0.95, hits
+    assert clopper_pearson(hits["stated"], n)[1] >= 0.95, hits
+
+
+def test_study_draws_the_chamber_within_its_tolerance_and_worst_at_its_bound(proto, base):
+    """typeb: ΔT uniform within ±tolerance (variance tol²/3), drawn after the other effects
+    (those are the draws without it); worst: ΔT at the bound on the side whose K error adds
+    to the coupling bias of the worst azimuth."""
+    tol = proto.conditions.temperature_tolerance_c
+    d = np.array([draw_type_b(base, proto, s).chamber_deviation_c for s in range(3000)])
+    assert np.abs(d).max() <= tol and abs(d.mean()) < 0.03
+    assert np.var(d) == pytest.approx(tol ** 2 / 3.0, rel=0.08)
+    w = case_bench("worst", base, proto)
+    assert abs(w.chamber_deviation_c) == tol
+    bias = coupling_bias(replace(w, chamber_deviation_c=0.0), proto)
+    alpha = w.instrument.sf_temperature_coeff_ppm_per_c
+    assert np.sign(bias) == np.sign(alpha * w.chamber_deviation_c)
+
+
+def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):
+    """A bench whose chamber is 0.6 °C off writes the stream's optional temperature_c column
+    (the reference plus the deviation on every sample) and the readings metadata likewise;
+    the stream reduces to the readings the session wrote (the column does not disturb it).
+    At the reference the stream has no such column (the default bench's stream unchanged)."""
+    from pathlib import Path
+
+    from gonio.formats.streams import read_stream
+    from gonio.specs.ogam_draft.protocol import load_protocol
+    from gonio.specs.ogam_draft.readings import read_readings
+    from gonio.specs.ogam_draft.reduce import reduce_stream
+    from gonio.specs.ogam_draft.simulate import simulate
+
+    proto_file = Path(__file__).parent / "data" / "pins" / "ogam-draft-small.toml"
+    rlg = (Path(__file__).parents[1] / "protocols" / "benches" / "rlg.toml").read_text("utf-8")
+    assert "deviation_c = 0.0" in rlg
+    for dev, name in ((0.6, "warm"), (0.0, "ref")):
+        bench = tmp_path / f"{name}.toml"
+        bench.write_text(rlg.replace('table = "table-precision"', 'table = "table-precision"\n'
+                                     'sample_rate_hz = 20.0', 1)
+                         .replace("sample_rate_hz = 1000.0", "", 1)
+                         .replace("deviation_c = 0.0", f"deviation_c = {dev!r}"), "utf-8")
+        out = tmp_path / name
+        simulate(out, protocol=str(proto_file), bench=str(bench), seed=2, stream=True,
+                 stream_format="csv")
+        s = read_stream(out / "stream.csv")
+        rd = read_readings(out / "readings.csv")
+        assert rd.metadata["temperature_c"] == repr(20.0 + dev)
+        if not dev:
+            assert s.temperature_c is None
+            continue
+        assert np.all(s.temperature_c == 20.0 + dev)
+        red = reduce_stream(s, load_protocol(str(proto_file)))
+        assert not [u for u in red.unmatched if u["kind"] == "round"]
+        key = ["test", "series", "round", "orientation"]
+        m = rd.data.merge(red.readings, on=key + ["rate_dps"], how="outer", indicator=True,
+                          suffixes=("_ref", "_got"))
+        m = m[m["test"] != "zero_stability"]
+        assert (m["_merge"] == "both").all()
+        assert np.abs(m["gyro_counts_got"] - m["gyro_counts_ref"]).max() <= 1.0

@@ -1,0 +1,127 @@
+"""JJF 1535 7.2.10 bias stability: its interval from the distribution of B_s with the
+records' effective ν (gonio.specs._rate_family.formulas.bias_stability_dof), each piece
+checked against a second algorithm (direct sums, explicit matrices, numerical quadrature)
+and the statement's coverage checked on records drawn from an exact covariance (Cholesky,
+not gonio's noise generator) of the JJF study bench's noise (white + a Gauss–Markov sum +
+rate random walk)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.stats import binomtest, chi2
+
+from gonio.specs._rate_family import formulas as rg
+
+
+def test_variogram_against_direct_sums():
+    rng = np.random.default_rng(4)
+    recs = [rng.normal(size=n).cumsum() for n in (37, 50, 12)]
+    d, pairs = rg.block_mean_variogram(recs)
+    for k in range(1, 50):
+        sq = [float(np.sum((x[k:] - x[:-k]) ** 2)) for x in recs if x.size > k]
+        m = sum(x.size - k for x in recs if x.size > k)
+        assert pairs[k] == m
+        assert d[k] == pytest.approx(sum(sq) / m, rel=1e-9)
+    assert d[0] == 0.0 and pairs[0] == 0
+
+
+def test_basis_against_quadrature():
+    # block-mean variogram = ∫(1 − |w|) D_c(k + w) dw − ∫(1 − |w|) D_c(w) dw over [−1, 1]
+    def block(dc, k):
+        tri = lambda w, f: (1 - abs(w)) * f(w)
+        return (quad(tri, -1, 1, args=(lambda w: dc(k + w),), points=[0, -k] if k <= 1 else [0])[0]
+                - quad(tri, -1, 1, args=(dc,), points=[0])[0])
+    basis = rg.block_variogram_basis(np.arange(0, 8))
+    assert np.all(basis[0] == 0.0)
+    for k in range(1, 8):
+        assert basis[k, 1] == pytest.approx(block(lambda t: math.log(abs(t)) if t else 0.0, k),
+                                            rel=1e-7)
+        assert basis[k, 2] == pytest.approx(block(abs, k), rel=1e-9)
+    # flicker at one block: twice the Allan variance of unit-log noise, 2·ln 2
+    assert basis[1, 1] == pytest.approx(2 * math.log(2))
+
+
+def _satterthwaite(cov):
+    n = cov.shape[0]
+    M = np.eye(n) - 1.0 / n
+    A = M @ cov @ M
+    return np.trace(A) ** 2 / np.sum(A * A)
+
+
+def test_std_dof_against_matrices():
+    rng = np.random.default_rng(2)
+    n = 40
+    lag = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])
+    for _ in range(5):
+        d = np.concatenate([[0.0], rng.uniform(0.5, 2.0) + rng.uniform(0, 1) * np.log1p(
+            np.arange(1, n)) + rng.uniform(0, 0.2) * np.arange(1, n)])
+        assert rg.block_std_dof(d, n) == pytest.approx(_satterthwaite(-0.5 * d[lag]), rel=1e-10)
+    # a random walk plus white: M Σ M = −½ M D M, with Σ the explicit covariance
+    t = np.arange(1, n + 1, dtype=float)
+    cov = 0.3 * np.minimum.outer(t, t) + np.eye(n)
+    d = np.array([0.0] + [0.3 * k + 2.0 for k in range(1, n)])
+    assert rg.block_std_dof(d, n) == pytest.approx(_satterthwaite(cov), rel=1e-10)
+    assert rg.block_std_dof(np.r_[0.0, np.full(n - 1, 3.0)], n) == pytest.approx(n - 1)
+
+
+def _study_covariance(samples=600, P=10, start_s=600.0):
+    """The exact covariance of the block means of one bias record on the JJF study bench
+    (white ARW, each Gauss–Markov term of the bias-instability sum, rate random walk from
+    power-on), written as matrices."""
+    from gonio.bench.rate_gyro import NoiseState
+    from gonio.specs._rate_family.simulate import study_bench
+    from gonio.units import S_PER_H
+
+    g = study_bench("mems-adxrs610").gyro
+    ns = NoiseState(g, np.random.default_rng(0), enabled=True)
+    i = np.arange(samples)
+    lag = np.abs(i[:, None] - i[None, :])
+    cov = np.eye(samples) * (g.arw_deg_sqrt_h / math.sqrt(S_PER_H)) ** 2
+    for tau, s in zip(ns.taus, ns.sig):
+        cov += s ** 2 * math.exp(-1.0 / tau) ** lag
+    t = start_s + i + 1.0
+    cov += (g.rrw_dph_sqrt_h / S_PER_H / math.sqrt(S_PER_H)) ** 2 * np.minimum.outer(t, t)
+    B = np.kron(np.eye(samples // P), np.ones((1, P)) / P)
+    return cov, B @ cov @ B.T
+
+
+@pytest.fixture(scope="module")
+def study_records():
+    """400 sets of Q = 3 records of 600 samples at 1 s drawn from the exact covariance."""
+    cov, cov_b = _study_covariance()
+    L = np.linalg.cholesky(cov)
+    rng = np.random.default_rng(20261129)
+    sets = [[L @ rng.standard_normal(cov.shape[0]) for _ in range(3)] for _ in range(400)]
+    n = cov_b.shape[0]
+    M = np.eye(n) - 1.0 / n
+    sigma = math.sqrt(np.trace(M @ cov_b @ M) / (n - 1))          # √E[s²], the truth
+    return sets, sigma, 3 * _satterthwaite(cov_b)
+
+
+def test_effective_dof_matches_the_exact_covariance(study_records):
+    sets, _, nu_true = study_records
+    assert 100 < nu_true < 140            # correlated: well below Q(n − 1) = 177
+    nus = np.array([rg.bias_stability_dof(s, 10) for s in sets[:100]])
+    assert np.median(nus) == pytest.approx(nu_true, rel=0.15)
+    # white noise alone: Q(n − 1)
+    rng = np.random.default_rng(3)
+    white = [rg.bias_stability_dof([rng.normal(size=600) for _ in range(3)], 10)
+             for _ in range(20)]
+    assert np.median(white) == pytest.approx(177, rel=0.05)
+
+
+def test_stated_limit_covers_95_percent(study_records):
+    sets, sigma, _ = study_records
+    hits, z = 0, []
+    for s in sets:
+        bs = float(np.mean([rg.block_mean_stability(x, 1.0, 10) for x in s]))
+        nu = rg.bias_stability_dof(s, 10)
+        hits += sigma <= bs * math.sqrt(nu / chi2.ppf(0.05, nu))
+        z.append((bs - sigma) / (bs / math.sqrt(2 * nu)))
+    ci = binomtest(hits, len(sets)).proportion_ci(method="exact")
+    assert ci.low <= 0.95 <= ci.high, (hits, ci)
+    assert 0.7 <= np.std(z, ddof=1) <= 1.3 and abs(np.mean(z)) < 0.4
