@@ -1047,8 +1047,10 @@ def selection_corrected_budget(draft: ItemUncertainty, curves, u_mean_arcsec, *,
     kk = float(k) if k is not None else draft.k
     value = draft.value - bias * f
     value = value if value + kk * draft.u_c > 0 else 0.0
+    # the same additive model about the corrected value (its JCGM 101 draws centre there)
     return replace(draft, value=float(value), components=comps, nonnegative=True,
-                   beside=draft)
+                   model=replace(draft.model, value=float(value)),
+                   gum=replace(draft.gum, value=float(value)), beside=draft)
 
 
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
