@@ -5,20 +5,22 @@ GonioError naming the key or option, the estimate and the variable that raises
 the limit. The values and the physically plausible ranges of every numeric
 input are listed in docs/formats.md ("Plausible ranges").
 
-=========================  ==========================  =====================
-limit                      environment variable        default
-=========================  ==========================  =====================
-readings / stream file     GONIO_MAX_INPUT_BYTES       2 GiB
-TOML file (protocol...)    GONIO_MAX_TOML_BYTES        1 MiB
-simulated samples/session  GONIO_MAX_SAMPLES           4e8
-simulated session time     GONIO_MAX_SESSION_S         2 days (172 800 s)
-estimated simulation time  GONIO_MAX_RUN_S             300 s of computing
-items (rounds x series..)  GONIO_MAX_READINGS          1e6 readings
-rows of a readings file    GONIO_MAX_READING_ROWS      1e6 rows (memory: ~0.9 GB)
-Monte Carlo trials         GONIO_MAX_MONTE_CARLO       1e7
-validate trials per case   GONIO_MAX_TRIALS            1e5
-worker processes           GONIO_MAX_WORKERS           the machine's cores
-=========================  ==========================  =====================
+=========================  ============================  =====================
+limit                      environment variable          default
+=========================  ============================  =====================
+readings / stream file     GONIO_MAX_INPUT_BYTES         2 GiB
+TOML file (protocol...)    GONIO_MAX_TOML_BYTES          1 MiB
+simulated samples/session  GONIO_MAX_SAMPLES             4e8
+simulated session time     GONIO_MAX_SESSION_S           2 days (172 800 s)
+estimated simulation time  GONIO_MAX_RUN_S               300 s of computing
+items (rounds x series..)  GONIO_MAX_READINGS            1e6 readings
+rows of a readings file    GONIO_MAX_READING_ROWS        1e6 rows (memory: ~0.9 GB)
+Monte Carlo trials         GONIO_MAX_MONTE_CARLO         1e7
+validate trials per case   GONIO_MAX_TRIALS              1e5
+worker processes           GONIO_MAX_WORKERS             the machine's cores
+backup archive (expanded)  GONIO_MAX_BACKUP_BYTES        8 GiB (an upload and all members)
+records.json of a backup   GONIO_MAX_RECORDS_JSON_BYTES  1 GiB (read into memory)
+=========================  ============================  =====================
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ _DEFAULTS: dict[str, float] = {
     "GONIO_MAX_READING_ROWS": 1e6,
     "GONIO_MAX_MONTE_CARLO": 1e7,
     "GONIO_MAX_TRIALS": 1e5,
+    "GONIO_MAX_BACKUP_BYTES": 8 * 1024 ** 3,
+    "GONIO_MAX_RECORDS_JSON_BYTES": 1024 ** 3,
 }
 
 

@@ -2,8 +2,10 @@
 second calculation: the simulated K at a chamber deviation against the closed form
 K·(1 + α_K ΔT), E's independence of it against a session at the reference, the budget's
 ``K_T`` line against its half-width by hand, the study's draws against their stated
-distributions; and coverage of K at the chamber's bound, which fails without the line at the
-instrument's coefficient and holds with it."""
+distributions; where K's coefficient bound comes from (the readings' statement, else the
+protocol's default for the gyro type the readings state, never the bench's coefficient); and
+coverage of a FOG's K at the chamber's bound with the built-in protocol, which fails with an
+RLG's bound and holds with the FOG's."""
 
 from __future__ import annotations
 
@@ -14,12 +16,13 @@ import numpy as np
 import pytest
 
 from gonio.analysis.coverage import clopper_pearson
+from gonio.errors import GonioError
 from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
 from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget, without_tilt_u_rel
 from gonio.specs.ogam_draft.readings import Readings
-from gonio.specs.ogam_draft.study import (case_bench, coupling_bias, draw_type_b,
+from gonio.specs.ogam_draft.study import (case_bench, draw_type_b, trial_bench,
                                           validation_protocol)
 from gonio.specs.ogam_draft.truth import truth_from_session
 
@@ -95,48 +98,91 @@ def test_budget_line_is_the_coefficient_bound_times_the_tolerance():
     assert without_tilt_u_rel(b) == pytest.approx(without_tilt_u_rel(plain), rel=1e-12)
 
 
-def test_the_protocol_bound_and_tolerance_reach_the_certified_k(base):
-    """calibrate's K budget takes the protocol's coefficient bound and Table 2 tolerance."""
-    proto = validation_protocol()
-    proto = replace(proto, annex_a=replace(proto.annex_a, sf_temperature_coeff_bound_ppm_per_c=0.4),
-                    conditions=replace(proto.conditions, temperature_tolerance_c=2.5))
-    rep = _calibrate(proto, run_session(proto, base, seed=1))
+def _fog(bench, dev_c, alpha_ppm=1.0):
+    """``bench`` (5 Hz, exact counter) whose instrument is a FOG by type with α_K =
+    ``alpha_ppm`` in a chamber ``dev_c`` off the reference."""
+    b = _warm(bench, dev_c, alpha_ppm, 0.005)
+    return replace(b, instrument=replace(b.instrument, type="fog"))
+
+
+def _bound(rep):
+    return rep.item_details(rep.results.scale_factor)["temperature_coeff_bound"]
+
+
+def test_the_stated_bound_and_tolerance_reach_the_certified_k(base):
+    """calibrate's K budget takes the bound the readings state for the instrument and Table
+    2's tolerance, and results.json says which bound and where it came from."""
+    proto = replace(validation_protocol(),
+                    conditions=replace(validation_protocol().conditions,
+                                       temperature_tolerance_c=2.5))
+    res = run_session(proto, base, seed=1)
+    res.metadata["sf_temperature_coeff_bound_ppm_per_c"] = "0.4"
+    rep = _calibrate(proto, res)
     b = rep.item_uncertainty["scale_factor"]
     (line,) = [c for c in b.components if c.symbol == "K_T"]
     assert line.u * math.sqrt(3.0) == pytest.approx(abs(b.value) * 0.4e-6 * 2.5, rel=1e-12)
+    d = _bound(rep)
+    assert (d["bound_ppm_per_c"], d["source"], d["gyro_type"], d["temperature_tolerance_c"]) \
+        == (0.4, "metadata", "rlg", 2.5)
 
 
-def test_k_covers_at_the_chamber_bound_only_with_the_line(proto, base):
-    """An instrument with α_K = 1 ppm/°C (a FOG's) in a chamber at Table 2's +1 °C bound:
-    with the protocol's RLG bound (0.1 ppm/°C) U(K) misses K at the reference in every
-    trial; with the laboratory stating 1 ppm/°C it covers (Clopper–Pearson reaching 95 %)."""
-    bench = _warm(base, proto.conditions.temperature_tolerance_c, 1.0, 0.005)
-    stated = replace(proto, annex_a=replace(proto.annex_a, sf_temperature_coeff_bound_ppm_per_c=1.0))
-    hits = {"rlg": 0, "stated": 0}
+def test_the_bound_follows_the_gyro_type_never_the_bench(proto, base):
+    """Without a stated bound the protocol's default for the gyro type the readings state is
+    taken (the bench writes ``gyro_type``, never its coefficients): a FOG gets the FOG
+    default even when its true α_K is 50 times larger, an RLG the RLG default; readings
+    stating no type get the larger default; a type that is neither is refused."""
+    a = proto.annex_a
+    fog = run_session(proto, _fog(base, 0.3, alpha_ppm=50.0), seed=2)
+    assert fog.metadata["gyro_type"] == "fog"
+    assert not any("coeff" in k for k in fog.metadata)
+    d = _bound(_calibrate(proto, fog))
+    assert (d["bound_ppm_per_c"], d["source"]) == (a.sf_temperature_coeff_bound_fog_ppm_per_c,
+                                                   "protocol-fog")
+    rlg = run_session(proto, base, seed=2)
+    assert _bound(_calibrate(proto, rlg))["source"] == "protocol-rlg"
+    md = {k: v for k, v in rlg.metadata.items() if k != "gyro_type"}
+    untyped = _calibrate(proto, replace(rlg, metadata=md))
+    d = _bound(untyped)
+    assert d["source"] == "protocol-larger" and d["bound_ppm_per_c"] == max(
+        a.sf_temperature_coeff_bound_rlg_ppm_per_c, a.sf_temperature_coeff_bound_fog_ppm_per_c)
+    with pytest.raises(GonioError, match="gyro_type"):
+        _calibrate(proto, replace(rlg, metadata={**rlg.metadata, "gyro_type": "mems"}))
+
+
+def test_fog_k_covers_at_the_chamber_bound_with_the_default_protocol(proto, base):
+    """An instrument of type FOG with α_K = 1 ppm/°C in a chamber at Table 2's +1 °C bound,
+    calibrated with the built-in protocol and no bound stated: U(K) covers K at the
+    reference (Clopper–Pearson reaching 95 %), since the FOG default is taken; the same
+    readings labelled RLG (its 0.1 ppm/°C bound) miss in most trials."""
+    bench = _fog(base, proto.conditions.temperature_tolerance_c)
+    hits = {"fog": 0, "as rlg": 0}
     n = 12
     for s in range(400, 400 + n):
         res = run_session(proto, bench, seed=s)
         k_true = scale_factor_truth(res.truth)[0]
-        for key, p in (("rlg", proto), ("stated", stated)):
-            b = _calibrate(p, res).item_uncertainty["scale_factor"]
+        for key, md in (("fog", res.metadata), ("as rlg", {**res.metadata, "gyro_type": "rlg"})):
+            b = _calibrate(proto, replace(res, metadata=md)).item_uncertainty["scale_factor"]
             hits[key] += abs(b.value - k_true) <= b.U
-    assert clopper_pearson(hits["rlg"], n)[1] < 0.95, hits
-    assert clopper_pearson(hits["stated"], n)[1] >= 0.95, hits
+    assert clopper_pearson(hits["fog"], n)[1] >= 0.95, hits
+    assert clopper_pearson(hits["as rlg"], n)[1] < 0.95, hits
 
 
-def test_study_draws_the_chamber_within_its_tolerance_and_worst_at_its_bound(proto, base):
+def test_study_draws_the_chamber_within_its_tolerance_in_typeb_and_worst(proto, base):
     """typeb: ΔT uniform within ±tolerance (variance tol²/3), drawn after the other effects
-    (those are the draws without it); worst: ΔT at the bound on the side whose K error adds
-    to the coupling bias of the worst azimuth."""
+    (those are the draws without it); worst: the tilt at the A.1 bound and the worst
+    azimuth in every trial, the chamber and the table drawn as in typeb (the same draws for
+    the same seed), never read from the instrument's coefficient."""
     tol = proto.conditions.temperature_tolerance_c
     d = np.array([draw_type_b(base, proto, s).chamber_deviation_c for s in range(3000)])
     assert np.abs(d).max() <= tol and abs(d.mean()) < 0.03
     assert np.var(d) == pytest.approx(tol ** 2 / 3.0, rel=0.08)
     w = case_bench("worst", base, proto)
-    assert abs(w.chamber_deviation_c) == tol
-    bias = coupling_bias(replace(w, chamber_deviation_c=0.0), proto)
-    alpha = w.instrument.sf_temperature_coeff_ppm_per_c
-    assert np.sign(bias) == np.sign(alpha * w.chamber_deviation_c)
+    assert w.chamber_deviation_c == 0.0 and w.instrument.tilt_deg == proto.annex_a.tilt_bound_deg
+    for s in range(5):
+        t, ref = trial_bench("worst", w, proto, s), draw_type_b(base, proto, s)
+        assert (t.instrument.tilt_deg, t.instrument.tilt_azimuth_deg) == \
+            (w.instrument.tilt_deg, w.instrument.tilt_azimuth_deg)
+        assert (t.chamber_deviation_c, t.table) == (ref.chamber_deviation_c, ref.table)
 
 
 def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):

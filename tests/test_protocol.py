@@ -27,7 +27,10 @@ def test_draft_protocol_holds_the_draft():
     assert sorted({i.orientation for i in p.pointing_consistency} | {"up"}) == ["east", "north", "up"]
     assert dataclasses.asdict(p.annex_a) == {
         "table_mpe_arcsec": 0.1, "tilt_bound_deg": 0.1, "zero_stability_dph": 0.005,
-        "duration_min": 0.5, "repeatability_arcsec": 0.096, "coverage_factor": None}
+        "duration_min": 0.5, "repeatability_arcsec": 0.096, "coverage_factor": None,
+        # beyond the draft: K's chamber-temperature line, the per-type default bounds
+        "sf_temperature_coeff_bound_rlg_ppm_per_c": 0.1,
+        "sf_temperature_coeff_bound_fog_ppm_per_c": 1.0}
     assert p.conditions.table_axis_wobble_max_arcsec == 0.3
 
 

@@ -183,3 +183,21 @@ def test_provenance_rules(tmp_path):
     f.write_text("# serial: X\n# bench: rlg\nangle\n# seed: 9\n", encoding="utf-8")
     p = readings_provenance(f)                 # only the lines above the header count
     assert p["virtual"] and p["bench"] == "rlg" and p["seed"] is None
+
+
+def test_virtual_readings_marked_on_every_chinese_page(run):
+    """The Chinese certificate of the same readings and laboratory file: the mark on every
+    PDF page and in the HTML, as the English one (the language changes no rule)."""
+    spec, seed, cal = run
+    work = cal.parent
+    proto = [a for r in RUNS if r[0] == spec and r[1] for a in ("--protocol", PINS / r[1])]
+    zh = work / "cal-zh"
+    gonio("calibrate", work / "sim" / "readings.csv", "--spec", spec, *proto, "--lab",
+          lab_file(work, 'on_mismatch = "proceed"', name="lab-zh.toml"), "--lang", "zh",
+          "--out", zh, cwd=work)
+    mark = labels("zh")["virtual_short"]
+    pages = pdf_pages(zh / "certificate.pdf")
+    assert len(pages) >= 2
+    for i, text in enumerate(pages, 1):
+        assert mark in re.sub(r"\s+", "", text), f"{spec}: zh PDF page {i} of {len(pages)} lacks the mark"
+    assert labels("zh")["virtual"] in (zh / "certificate.html").read_text(encoding="utf-8")

@@ -19,6 +19,7 @@ KNOWN_METADATA: tuple[str, ...] = (
     "instrument", "serial", "manufacturer", "nominal_scale_factor_counts_per_deg",
     "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
     "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised", "table_accel_dps2",
+    "gyro_type", "sf_temperature_coeff_bound_ppm_per_c",
 )
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
 # from physics (absolute zero, a percentage, a latitude, half a turn) and representability
@@ -32,6 +33,7 @@ NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
     "table_mpe_arcsec": (0.0, True, 180 * ARCSEC_PER_DEG, "a number in [0, 648000]"),
     "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
     "table_accel_dps2": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
+    "sf_temperature_coeff_bound_ppm_per_c": (0.0, True, 1e4, "a number in [0, 1e4]"),
 }
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")
@@ -103,6 +105,27 @@ def metadata_float(metadata: Mapping[str, str], key: str, *,
     if value < lo or (value == lo and not lo_incl) or value > hi:
         raise GonioError(f"expected {expected}, got {show_value(text)}", file=file, key=key)
     return value
+
+
+#: Gyro types a readings file may state (metadata ``gyro_type``): ring-laser, fibre-optic.
+GYRO_TYPES: tuple[str, ...] = ("rlg", "fog")
+
+
+def metadata_gyro_type(metadata: Mapping[str, str], *,
+                       file: str | Path | None = None) -> str | None:
+    """The instrument's gyro type stated by the metadata (``gyro_type``: ``rlg`` or ``fog``,
+    case ignored), or None when absent; any other value is a GonioError naming the key.
+
+    >>> metadata_gyro_type({"gyro_type": " FOG"}), metadata_gyro_type({}) is None
+    ('fog', True)
+    """
+    if "gyro_type" not in metadata:
+        return None
+    v = str(metadata["gyro_type"]).strip().lower()
+    if v not in GYRO_TYPES:
+        raise GonioError(f"expected one of {', '.join(GYRO_TYPES)}, got "
+                         f"{show_value(str(metadata['gyro_type']))}", file=file, key="gyro_type")
+    return v
 
 
 def metadata_bool(metadata: Mapping[str, str], key: str, default: bool, *,

@@ -15,14 +15,19 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
+import lzma
 import os
 import re
+import shutil
+import stat
 import tempfile
 import zipfile
+import zlib
 from pathlib import Path
 
 from sqlalchemy import Date, DateTime, Integer, func, select, text
 
+from gonio import limits
 from gonio.errors import GonioError
 from gonio.records import blobs
 from gonio.records.models import Base, Blob, User
@@ -92,6 +97,19 @@ def damaged_files(store, shas) -> list[str]:
     return out
 
 
+#: what a value of records.json may be for each column type (a string where a number or a
+#: true/false belongs would be stored by SQLite as it is and break every later read)
+#: (text columns take numbers too: SQLite keeps a number written there as a number, and a
+#: backup of such a database restores)
+_KINDS = {"Boolean": (bool,), "Integer": (int,), "BigInteger": (int,), "Float": (int, float),
+          "String": (str, int, float), "Text": (str, int, float), "Date": (_dt.date,),
+          "DateTime": (_dt.datetime,)}
+_KIND_NAMES = {"Boolean": "true or false", "Integer": "a whole number",
+               "BigInteger": "a whole number", "Float": "a number", "String": "text",
+               "Text": "text", "Date": "a date", "DateTime": "a date and time"}
+_PLAIN = (str, int, float, bool, _dt.date)
+
+
 def _convert(table, cols: list[str], row: list, where: str):
     if not isinstance(row, list) or len(row) != len(cols):
         raise GonioError(f"{where}: a row is a list of {len(cols)} values", key=table.name)
@@ -106,8 +124,11 @@ def _convert(table, cols: list[str], row: list, where: str):
         except (TypeError, ValueError):
             raise GonioError(f"{where}: {name} is not a date: {str(v)[:40]!r}",
                              key=table.name) from None
-        if v is not None and not isinstance(v, (str, int, float, bool, _dt.date)):
-            raise GonioError(f"{where}: {name} is not a plain value", key=table.name)
+        kind = type(col.type).__name__
+        if v is not None and (not isinstance(v, _KINDS.get(kind, _PLAIN))
+                              or (isinstance(v, bool) and kind != "Boolean")):
+            raise GonioError(f"{where}: {name} is not {_KIND_NAMES.get(kind, 'a plain value')}"
+                             f": {str(v)[:40]!r}", key=table.name)
         out[name] = v
     return out
 
@@ -151,25 +172,104 @@ def _rows(doc, path) -> dict:
     return out
 
 
+def open_archive(path: str | os.PathLike, follow_links: bool = True):
+    """The archive file at ``path`` opened for reading (binary): a regular file, else a
+    GonioError (a FIFO, a device or a folder is refused before a byte is read: it is
+    opened non-blocking); ``follow_links=False``: a symbolic link is refused too."""
+    flags = os.O_RDONLY | os.O_NONBLOCK | (0 if follow_links else os.O_NOFOLLOW)
+    try:
+        fd = os.open(path, flags)
+    except OSError as exc:
+        raise GonioError(f"cannot open the archive: {exc.strerror}", file=path) from None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise GonioError("the archive is not a regular file", file=path)
+    os.set_blocking(fd, True)
+    return os.fdopen(fd, "rb")
+
+
 def _open(source, path: Path) -> zipfile.ZipFile:
     try:
         return zipfile.ZipFile(source)
-    except (OSError, zipfile.BadZipFile) as exc:
+    except (OSError, zipfile.BadZipFile, ValueError) as exc:
         raise GonioError(f"not a gonio backup archive ({exc})", file=path) from None
+
+
+#: the members of a backup archive: records.json and one blobs/<sha256> per stored file
+_MEMBER = re.compile(r"records\.json|blobs/[0-9a-f]{64}")
+#: what zipfile expands (an archive of another method is refused before it is read)
+_METHODS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_BZIP2, zipfile.ZIP_LZMA)
+#: what reading a damaged member raises
+_READ_ERRORS = (zipfile.BadZipFile, zlib.error, lzma.LZMAError, EOFError, OSError,
+                RuntimeError, NotImplementedError, ValueError)
+
+
+def _members(zf: zipfile.ZipFile, path: Path) -> dict[str, zipfile.ZipInfo]:
+    """The archive's members by name, checked before a byte of any is expanded: records.json
+    and ``blobs/<sha256>`` only (no other name: no folder, no ``..``, no absolute path),
+    each once, none a symbolic link or encrypted, each of a method zipfile reads; their
+    expanded sizes as the archive declares them (zipfile never expands a member past its
+    declared size, and a member that expands to other bytes fails its CRC) within
+    ``GONIO_MAX_BACKUP_BYTES`` together and records.json (read into memory) within
+    ``GONIO_MAX_RECORDS_JSON_BYTES``: an archive that would expand past them (a zip bomb)
+    is refused before it is read."""
+    out: dict[str, zipfile.ZipInfo] = {}
+    for info in zf.infolist():
+        name, why = info.filename, ""
+        if not _MEMBER.fullmatch(name):
+            why = "is neither records.json nor blobs/<sha256>"
+        elif name in out:
+            why = "is in it twice"
+        elif stat.S_ISLNK(info.external_attr >> 16):
+            why = "is a symbolic link"
+        elif info.flag_bits & 0x1:
+            why = "is encrypted"
+        elif info.compress_type not in _METHODS:
+            why = f"is compressed by method {info.compress_type}, which gonio does not read"
+        if why:
+            raise GonioError(f"the archive's member {name[:80]!r} {why}: not a gonio backup; "
+                             "nothing restored", file=path)
+        out[name] = info
+    total, most = sum(i.file_size for i in out.values()), limits.limit("GONIO_MAX_BACKUP_BYTES")
+    if total > most:
+        raise GonioError(f"the archive expands to {blobs.size_text(total)}, more than the limit "
+                         f"of {blobs.size_text(most)} (GONIO_MAX_BACKUP_BYTES): nothing "
+                         "restored", file=path)
+    doc, most = out.get("records.json"), limits.limit("GONIO_MAX_RECORDS_JSON_BYTES")
+    if doc is not None and doc.file_size > most:
+        raise GonioError(f"records.json expands to {blobs.size_text(doc.file_size)}, more "
+                         f"than the limit of {blobs.size_text(most)} "
+                         "(GONIO_MAX_RECORDS_JSON_BYTES): nothing restored", file=path)
+    return out
+
+
+def _digest(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> str:
+    """The SHA-256 of a member's bytes, read piece by piece."""
+    h = hashlib.sha256()
+    try:
+        with zf.open(info) as fh:
+            for piece in iter(lambda: fh.read(1 << 20), b""):
+                h.update(piece)
+    except _READ_ERRORS as exc:
+        raise GonioError(f"stored file {info.filename[6:18]}… unreadable ({str(exc)[:120]})",
+                         file=path) from None
+    return h.hexdigest()
 
 
 def _checked(zf: zipfile.ZipFile, path: Path) -> tuple[dict, set, dict]:
     """An open archive checked whole, nothing written: (rows per table, the stored files'
-    digests, records.json). records.json's tables, rows and references
-    (:func:`_rows`); every file listed in ``blobs`` present in the archive (complete) and
-    matching its SHA-256 (intact); no file the records do not list."""
+    digests, records.json). Its members (:func:`_members`: names, links, sizes);
+    records.json's tables, rows and references (:func:`_rows`); every file listed in
+    ``blobs`` present in the archive (complete) and matching its SHA-256 (intact); no file
+    the records do not list."""
+    members = _members(zf, path)
     try:
-        doc = json.loads(zf.read("records.json"))
-    except (KeyError, ValueError, RecursionError) as exc:   # RecursionError: too deep
+        doc = json.loads(zf.read(members["records.json"]))
+    except (KeyError, RecursionError, *_READ_ERRORS) as exc:   # RecursionError: too deep
         raise GonioError(f"no readable records.json ({str(exc)[:120] or 'nested too deeply'})",
                          file=path) from None
     rows = _rows(doc, path)
-    names = {n[len("blobs/"):] for n in zf.namelist() if n.startswith("blobs/")}
+    names = {n[len("blobs/"):] for n in members if n.startswith("blobs/")}
     listed = {r["sha256"] for r in rows["blobs"]}
     missing, unlisted = sorted(listed - names), sorted(names - listed)
     if missing:
@@ -180,12 +280,7 @@ def _checked(zf: zipfile.ZipFile, path: Path) -> tuple[dict, set, dict]:
         raise GonioError(f"{len(unlisted)} file(s) in the archive are not in its records, "
                          f"first {unlisted[0][:64]}: nothing restored", file=path)
     for sha in sorted(names):                         # every file checked first
-        try:
-            data = zf.read(f"blobs/{sha}")
-        except (zipfile.BadZipFile, OSError) as exc:
-            raise GonioError(f"stored file {sha[:12]}… unreadable ({exc})",
-                             file=path) from None
-        if hashlib.sha256(data).hexdigest() != sha:
+        if _digest(zf, members[f"blobs/{sha}"], path) != sha:
             raise GonioError(f"stored file {sha[:12]}… does not match its SHA-256",
                              file=path)
     return rows, names, doc
@@ -194,14 +289,24 @@ def _checked(zf: zipfile.ZipFile, path: Path) -> tuple[dict, set, dict]:
 def check_archive(path: str | os.PathLike, stream=None) -> dict:
     """Check a backup archive as :func:`restore` does before it writes anything, and write
     nothing (``stream``: the archive as an open binary file, ``path`` then only its name):
-    a GonioError names the first problem; else ``{"gonio_version", "rows": {table:
-    count}, "files": count, "calibrations", "certificates", "newest": the latest time
-    recorded in it (the audit trail's last event, UTC, "YYYY-MM-DD HH:MM") or ""}``."""
+    a GonioError names the first problem; else ``{"gonio_version", "sha256": the SHA-256
+    of the bytes checked, "rows": {table: count}, "files": count, "calibrations",
+    "certificates", "newest": the latest time recorded in it (the audit trail's last
+    event, UTC, "YYYY-MM-DD HH:MM") or ""}``."""
     path = Path(path)
-    with _open(path if stream is None else stream, path) as zf:
-        rows, names, doc = _checked(zf, path)
+    with (open_archive(path) if stream is None else _kept_open(stream)) as fh:
+        sha = archive_sha256(fh)
+        with _open(fh, path) as zf:
+            rows, names, doc = _checked(zf, path)
     return {"gonio_version": str(doc.get("gonio_version", ""))[:40], "files": len(names),
-            **check_summary(rows)}
+            "sha256": sha, **check_summary(rows)}
+
+
+def _kept_open(stream):
+    """A caller's open file as a context that leaves it open."""
+    import contextlib
+
+    return contextlib.nullcontext(stream)
 
 
 #: an archive name the backup folder may offer (never a path)
@@ -230,15 +335,21 @@ def archives_in(folder: Path, limit: int = 50) -> list[dict]:
              .strftime("%Y-%m-%d %H:%M")} for p in found[:limit]]
 
 
-def archive_sha256(path: str | os.PathLike) -> str:
-    """The SHA-256 of the archive file at ``path`` (what a confirmation names)."""
+def archive_sha256(source) -> str:
+    """The SHA-256 of the archive (what a confirmation names): the file at a path, or an
+    open binary file read from its start (and left at its start: what is checked and
+    restored afterwards are the bytes hashed, whatever the path names by then)."""
+    if not hasattr(source, "read"):
+        with open_archive(source) as fh:
+            return archive_sha256(fh)
     h = hashlib.sha256()
     try:
-        with open(path, "rb") as fh:
-            for piece in iter(lambda: fh.read(1 << 20), b""):
-                h.update(piece)
+        source.seek(0)
+        for piece in iter(lambda: source.read(1 << 20), b""):
+            h.update(piece)
+        source.seek(0)
     except OSError as exc:
-        raise GonioError(f"cannot read the archive: {exc.strerror}", file=path) from None
+        raise GonioError(f"cannot read the archive: {exc.strerror}") from None
     return h.hexdigest()
 
 
@@ -261,7 +372,7 @@ NOT_RESTORED = ("web_sessions",)
 
 
 def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: User | None = None,
-            expect_sha256: str | None = None) -> dict:
+            expect_sha256: str | None = None, stream=None, name: str | None = None) -> dict:
     """Restore the archive at ``path`` into the records of ``store``; returns the counts of
     rows restored per table and of files.
 
@@ -269,7 +380,10 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
     tables, rows and references, every file listed in ``blobs`` present in the archive
     (complete) and matching its SHA-256 (intact), no file the records do not list): an
     archive a restore would lose anything of is refused whole. ``expect_sha256``: the digest
-    of the archive that was verified and confirmed; a different file is refused.
+    of the archive that was verified and confirmed; a different file is refused (the file is
+    opened once: the bytes hashed are the bytes restored). ``stream``: the archive as an
+    open binary file (``path`` then only names it); ``name``: the archive's name for the
+    audit event (an upload's own name), else the file's.
 
     Without ``replace`` the database must be empty (``gonio db restore``). With ``replace``
     (an admin ``actor``, the browser's restore) the live records are replaced atomically:
@@ -292,11 +406,19 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
         from gonio.records.services import require
 
         require(actor, "admin")
-    sha = archive_sha256(path)
+    with (open_archive(path) if stream is None else _kept_open(stream)) as fh:
+        return _restore_open(store, fh, path, replace=replace, actor=actor,
+                             expect_sha256=expect_sha256, label=name or path.name)
+
+
+def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
+                  label: str) -> dict:
+    """:func:`restore` from the archive open as ``fh``."""
+    sha = archive_sha256(fh)
     if expect_sha256 is not None and sha != expect_sha256:
         raise GonioError("the archive is not the one verified and confirmed (its SHA-256 "
                          "changed): verify it again; nothing restored", file=path)
-    with _open(path, path) as zf:
+    with _open(fh, path) as zf:
         rows, names, doc = _checked(zf, path)
         if replace and not any(r.get("active") and "admin" in str(r.get("roles", "")).split()
                                for r in rows["users"]):
@@ -310,13 +432,14 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
                                      "database)", file=path)
         for name in NOT_RESTORED:
             rows[name] = []
-        event = {"archive": path.name, "sha256": sha, "newest": check_summary(rows)["newest"],
+        event = {"archive": label[:200], "sha256": sha, "newest": check_summary(rows)["newest"],
                  "gonio_version": str(doc.get("gonio_version", ""))[:40],
                  "rows": {k: len(v) for k, v in rows.items() if v}, "files": len(names)}
         if replace:
             event["replaced"] = summary(store)["rows"]
-        for sha_file in names:
-            _put_blob(store.blob_root, sha_file, zf.read(f"blobs/{sha_file}"))
+        _check_space(store, zf, names, path)
+        for sha_file in sorted(names):
+            _put_blob(store.blob_root, sha_file, zf, path)
     who = actor.username if actor is not None else "(command line)"
     if not replace:
         with store.writing() as s:
@@ -340,15 +463,39 @@ def check_summary(rows: dict) -> dict:
             "newest": max(stamps).isoformat(sep=" ", timespec="minutes") if stamps else ""}
 
 
-def _put_blob(root: Path, sha: str, data: bytes) -> None:
-    """A stored file from the archive (checked against ``sha`` already) into the store; a
-    missing or damaged copy there is replaced."""
-    path = blobs.blob_path(root, sha)
-    if path.is_file() and blobs.verify(root, sha):
+#: room a restore leaves free on the data folder's disk beyond what it writes (bytes)
+SPARE_BYTES = 64 * 2**20
+
+
+def _check_space(store, zf: zipfile.ZipFile, names, path: Path) -> None:
+    """GonioError unless the data folder's disk has room for what the restore writes there:
+    the stored files the store lacks (their expanded sizes) and, on SQLite, the new records
+    file (taken as twice records.json) — checked before a byte is written."""
+    need = sum(zf.getinfo(f"blobs/{sha}").file_size for sha in names
+               if not blobs.blob_path(store.blob_root, sha).is_file())
+    if store.engine.dialect.name == "sqlite":
+        need += 2 * zf.getinfo("records.json").file_size
+    store.blob_root.mkdir(parents=True, exist_ok=True)
+    free = shutil.disk_usage(store.blob_root).free
+    if need + SPARE_BYTES > free:
+        raise GonioError(f"the restore needs {blobs.size_text(need)} on the data folder's disk "
+                         f"and {blobs.size_text(free)} is free: nothing restored", file=path)
+
+
+def _put_blob(root: Path, sha: str, zf: zipfile.ZipFile, path: Path) -> None:
+    """A stored file from the archive (checked against ``sha`` already) into the store,
+    read piece by piece; a missing or damaged copy there is replaced."""
+    target = blobs.blob_path(root, sha)
+    if target.is_file() and blobs.verify(root, sha):
         return
-    if path.exists():
-        path.unlink()
-    blobs.put_bytes(root, data)
+    try:
+        if target.exists():
+            target.unlink()
+        with zf.open(f"blobs/{sha}") as fh:
+            blobs.put_stream(root, fh)
+    except OSError as exc:
+        raise GonioError(f"cannot write the stored file {sha[:12]}… ({exc.strerror}): the "
+                         "records are unchanged; nothing restored", file=root) from None
 
 
 def _write(s, rows: dict, path: Path, event: dict, who: str) -> None:
@@ -390,42 +537,70 @@ def _swap_sqlite(store, rows: dict, path: Path, event: dict, who: str) -> None:
     closed first and renewed by its next use."""
     import sqlite3
 
+    from sqlalchemy.exc import SQLAlchemyError
     from sqlalchemy.orm import Session as OrmSession
 
     from gonio.records.db import make_engine, migrate
 
     live = Path(store.engine.url.database)
-    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%S")
-    fd, new = tempfile.mkstemp(prefix=f".{live.name}.restoring-", dir=live.parent)
+    try:
+        fd, new = tempfile.mkstemp(prefix=f".{live.name}.restoring-", dir=live.parent)
+    except OSError as exc:
+        raise GonioError(f"cannot write beside the records database ({exc.strerror}): "
+                         "nothing restored", file=live) from None
     os.close(fd)
     engine = make_engine(f"sqlite:///{new}")
     try:
-        migrate(engine)
-        with OrmSession(engine.execution_options(gonio_write=True)) as s:
-            _write(s, rows, path, event, who)
-            s.commit()
+        try:
+            migrate(engine)
+            with OrmSession(engine.execution_options(gonio_write=True)) as s:
+                _write(s, rows, path, event, who)
+                s.commit()
+        except (SQLAlchemyError, sqlite3.Error, OSError) as exc:   # a disk full, say
+            msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
+            raise GonioError(f"the restored records could not be written ({msg}): the live "
+                             "records are unchanged; nothing restored", file=new) from None
         engine.dispose()
         store.engine.dispose()
         if _one_file(new) != "delete":
             raise GonioError("the restored database could not be written as one file: "
                              "nothing restored", file=new)
-        # refused while another connection has the live file open: nobody else writes
-        raw = sqlite3.connect(live, timeout=5, isolation_level=None)
-        try:
-            if _one_file(live, raw) != "delete":
-                raise GonioError("another process has the records database open (a worker, "
-                                 "a gonio command): nothing restored", file=live)
-            for extra in ("-wal", "-shm"):
-                Path(f"{live}{extra}").unlink(missing_ok=True)
-            os.link(live, live.with_name(f"{live.name}.replaced-{stamp}"))
-            os.replace(new, live)
-        finally:
-            raw.close()
+        _swap_in(live, Path(new))
     finally:
         engine.dispose()
         for leftover in (new, f"{new}-wal", f"{new}-shm", f"{new}-journal"):
             Path(leftover).unlink(missing_ok=True)
     store.engine.dispose()
+
+
+def _swap_in(live: Path, new: Path) -> None:
+    """The new SQLite file renamed over the live one, the live one kept beside it as
+    ``records.sqlite3.replaced-STAMP``; refused while another connection has the live file
+    open (nobody else writes). A failing rename is a GonioError, the live file unchanged."""
+    import sqlite3
+
+    raw = sqlite3.connect(live, timeout=5, isolation_level=None)
+    kept = None
+    try:
+        if _one_file(live, raw) != "delete":
+            raise GonioError("another process has the records database open (a worker, "
+                             "a gonio command): nothing restored", file=live)
+        for extra in ("-wal", "-shm"):
+            Path(f"{live}{extra}").unlink(missing_ok=True)
+        stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%S")
+        for n in range(1, 100):                     # two restores within one second
+            kept = live.with_name(f"{live.name}.replaced-{stamp}" + (f"-{n}" if n > 1 else ""))
+            if not kept.exists():
+                break
+        os.link(live, kept)
+        os.replace(new, live)
+    except OSError as exc:
+        if kept is not None and kept.exists() and os.path.samefile(kept, live):
+            kept.unlink()                           # the live file stays the only name
+        raise GonioError(f"the restored records could not be swapped in ({exc.strerror}): "
+                         "the live records are unchanged; nothing restored", file=live) from None
+    finally:
+        raw.close()
 
 
 def _one_file(path, conn=None) -> str:
@@ -445,13 +620,25 @@ def _one_file(path, conn=None) -> str:
             conn.close()
 
 
+#: how long a PostgreSQL restore waits for another connection's hold on a table
+LOCK_TIMEOUT_S = 30
+
+
 def _replace_postgresql(store, rows: dict, path: Path, event: dict, who: str) -> None:
     """PostgreSQL: every table emptied (TRUNCATE: no row triggers, its identity resets
     transactional) and refilled in one transaction; a failure rolls all of it back."""
+    from sqlalchemy.exc import SQLAlchemyError
+
     names = ", ".join(t.name for t in _tables())
     with store.writing() as s:
-        s.execute(text("SET LOCAL lock_timeout = '30s'"))
-        s.execute(text(f"TRUNCATE {names} RESTART IDENTITY"))
+        try:
+            s.execute(text(f"SET LOCAL lock_timeout = '{int(LOCK_TIMEOUT_S)}s'"))
+            s.execute(text(f"TRUNCATE {names} RESTART IDENTITY"))
+        except SQLAlchemyError as exc:   # another connection holds a table past the timeout
+            s.rollback()
+            msg = str(getattr(exc, "orig", exc)).strip().splitlines()[0][:200]
+            raise GonioError(f"the live records could not be emptied for the restore ({msg}): "
+                             "they are unchanged; nothing restored", file=path) from None
         _write(s, rows, path, event, who)
         s.commit()
     store.engine.dispose()

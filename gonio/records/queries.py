@@ -69,6 +69,20 @@ def calibrations(store, page: int = 1, size: int = 50, status: str = ""):
         return _page(s, stmt, page, size)
 
 
+def active_work(store, size: int = 20):
+    """(the calibrations a worker is working on now, newest first, at most ``size``, total):
+    being computed (``running``), issued (``issuing``) or having their draft rendered
+    again (``drafting``) — :data:`gonio.records.services.WORKING`."""
+    from gonio.records.services import WORKING
+
+    stmt = select(Calibration).options(
+        joinedload(Calibration.instrument).joinedload(Instrument.customer),
+        joinedload(Calibration.created_by)).where(Calibration.status.in_(WORKING)
+                                                  ).order_by(Calibration.id.desc())
+    with store.session() as s:
+        return _page(s, stmt, 1, size)
+
+
 def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows; ``place`` is the place of calibration as the
     certificate states it (the one entered, else the laboratory's); ``missing``: what it

@@ -1029,13 +1029,23 @@ def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> C
                        progress="waiting for a worker", error="")
 
 
+def failed_redraft(cal: Calibration) -> bool:
+    """A failed calibration whose failure was the rendering of its draft again
+    (:data:`DRAFTING`): it has its stored result and no reserved certificate number (a
+    failed run has no result yet, a failed issue its number)."""
+    return cal.status == "failed" and bool(cal.results_sha256) and not cal.pending_number
+
+
 def retry(store, actor: User, cal_id: int) -> Calibration:
     """Run a failed calibration again (technician): a failed run is queued again, a failed
-    issue (its number reserved) goes back to issuing."""
+    issue (its number reserved) goes back to issuing, a failed redraft
+    (:func:`failed_redraft`) back to :data:`DRAFTING` — its draft rendered again from the
+    stored, sealed result, nothing computed again."""
     require(actor, "technician")
     cal = calibration(store, cal_id)
-    return _transition(store, actor, cal_id, "retry", ("failed",),
-                       status="issuing" if cal.pending_number else "queued",
+    status = ("issuing" if cal.pending_number else DRAFTING if failed_redraft(cal)
+              else "queued")
+    return _transition(store, actor, cal_id, "retry", ("failed",), status=status,
                        progress="waiting for a worker", error="", worker_pid=None,
                        worker_host="")
 
@@ -1129,17 +1139,21 @@ def set_progress(store, cal_id: int, message: str) -> None:
 def fail(store, cal_id: int, error: str) -> None:
     """A run ended without a result: running, issuing or drafting → failed, with the error.
     Nothing was issued (the certificate row is written only by :func:`store_issue`); a
-    failed issue keeps its reserved number for :func:`retry`; a failed draft is run again
-    whole by :func:`retry`. A calibration no longer running (another worker finished it) is
+    failed issue keeps its reserved number for :func:`retry`; a failed redraft keeps its
+    stored result, its error says so, and :func:`retry` renders the draft again. A calibration no longer running (another worker finished it) is
     left as it is."""
     with store.writing() as s:
         cal = s.get(Calibration, cal_id, with_for_update=True)
         if cal.status not in WORKING:                   # finished meanwhile (another worker)
             return
         before = state(cal)
+        if cal.status == DRAFTING:
+            error = (f"rendering the draft certificate again failed: {error} (run again: "
+                     "rendered again from the stored result, nothing computed)")
+        cal.progress = ("issuing failed" if cal.pending_number else "drafting failed"
+                        if cal.status == DRAFTING else "failed")
         cal.status = "failed"
         cal.error = error[:MAX_TEXT]
-        cal.progress = "issuing failed" if cal.pending_number else "failed"
         cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
         audit(s, None, "fail", "calibration", cal.id, before, state(cal))
         s.commit()
@@ -1472,9 +1486,11 @@ def calibration(store, cal_id: int) -> Calibration:
 
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
-    k, unit, title, status, certificate number), oldest first; failed, rejected and
-    unfinished calibrations are left out (one whose draft is being rendered again, or whose
-    amendment is asked for, has its result: it stays)."""
+    k, unit, title, status, certificate number, issued, amended), oldest first; failed,
+    rejected and unfinished calibrations are left out (one whose draft is being rendered
+    again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
+    certificate, whatever its state now; ``amended``: issued, and a certificate of it has
+    been replaced by an amendment or an amendment of it is under way (not 'issued' now)."""
     done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
         rows = s.execute(
@@ -1483,17 +1499,20 @@ def history(store, instrument_id: int) -> dict:
             .where(Calibration.instrument_id == int(instrument_id),
                    Calibration.status.in_(done))
             .order_by(Calibration.performed_on, Calibration.id)).all()
-        numbers = dict(s.execute(
-            select(Certificate.calibration_id, func.max(Certificate.number))
+        certs = {cid: (number, n) for cid, number, n in s.execute(
+            select(Certificate.calibration_id, func.max(Certificate.number),
+                   func.count(Certificate.id))
             .join(Calibration, Certificate.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id))
-            .group_by(Certificate.calibration_id)).all())
+            .group_by(Certificate.calibration_id)).all()}
     out: dict[str, list] = {}
     for it, day, status, cid in rows:
+        number, n = certs.get(cid, ("", 0))
         out.setdefault(it.key, []).append(
             {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
              "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
-             "certificate": numbers.get(cid, "")})
+             "certificate": number, "issued": n > 0,
+             "amended": n > 1 or (n > 0 and status != "issued")})
     return out
 
 

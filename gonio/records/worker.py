@@ -135,7 +135,7 @@ class Dispatcher:
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
         self._claiming = threading.Lock()     # held while the loop touches the records
-        self._paused = False
+        self._paused = 0                      # pauses not yet resumed (two restores at once)
 
     def start(self) -> "Dispatcher":
         services.recover(self.store)
@@ -152,9 +152,10 @@ class Dispatcher:
         """Stop claiming and reaping (the records are about to be replaced); returns how
         many worker processes are still running (a restore waits for none). Workers that
         ended are forgotten when none runs: each recorded its own end in the records that
-        are replaced."""
+        are replaced. Pauses nest: the dispatcher claims again once each has been
+        resumed."""
         with self._claiming:
-            self._paused = True
+            self._paused += 1
             running = sum(p.poll() is None for p in self.children.values())
             if not running:
                 self.children.clear()
@@ -162,9 +163,12 @@ class Dispatcher:
 
     def resume(self) -> None:
         """Claim again after :meth:`pause`; calibrations left running by a worker that is
-        gone (as a restored archive may hold them) are marked failed first."""
+        gone (as a restored archive may hold them) are marked failed first. While another
+        pause holds (a second restore that was turned away ends first) it only counts down."""
         with self._claiming:
-            self._paused = False
+            self._paused = max(0, self._paused - 1)
+            if self._paused:
+                return
             services.recover(self.store)
         self.wake()
 

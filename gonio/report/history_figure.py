@@ -24,6 +24,8 @@ PANEL_W, PANEL_H = 520, 230
 LEFT, RIGHT, TOP, BOTTOM = 64, 12, 26, 30
 #: the colours of issued points, other points and limits (Matplotlib's C0, C1, C3)
 ISSUED, OTHER, LIMIT = "#1f77b4", "#ff7f0e", "#d62728"
+#: the ring around an amended point (issued, then replaced or being amended)
+AMENDED_RING = "#000"
 _CAP = 3.0                                   # half the width of an error bar's cap (px)
 
 
@@ -123,34 +125,64 @@ def _panel(key: str, pts: list[dict], lo_hi, ox: float, oy: float) -> list[str]:
                        f'x2="{ox + LEFT + w}" y2="{y:.2f}" stroke="{LIMIT}" '
                        'stroke-dasharray="5 3"/>')
     for r in pts:
-        issued = r.get("status") == "issued"
+        drawn = drawn_as(r)
         x, y, u = x_of(r["date"]), y_of(r["value"]), r["U"] or 0.0
         top, bot = y_of(r["value"] + u), y_of(r["value"] - u)
-        colour = ISSUED if issued else OTHER
+        colour = OTHER if drawn == "other" else ISSUED
         out.append(f'<path class="bar" d="M{x:.2f} {top:.2f}V{bot:.2f}M{x - _CAP:.2f} '
                    f'{top:.2f}h{2 * _CAP}M{x - _CAP:.2f} {bot:.2f}h{2 * _CAP}" '
                    f'stroke="{colour}"/>')
-        out.append(f'<circle class="{"issued" if issued else "other"}" cx="{x:.2f}" '
-                   f'cy="{y:.2f}" r="3" fill="{colour if issued else "#fff"}" '
-                   f'stroke="{colour}"/>')
-    out += _legend(pts, lo_hi, ox + PANEL_W - RIGHT, oy + 17)
+        out.append(f'<circle class="{drawn}" cx="{x:.2f}" cy="{y:.2f}" r="3" '
+                   f'{_MARKER[drawn]}/>')
+    title = f'{pts[0].get("title") or key} [{unit}]'
+    out += _legend(pts, lo_hi, ox + PANEL_W - RIGHT, oy + 17,
+                   left=ox + LEFT + _BOLD_CHAR_PX * len(title) + 8)
     out.append("</g>")
     return out
 
 
-def _legend(pts: list[dict], lo_hi, right: float, y: float) -> list[str]:
+#: a point's marker (fill and stroke) by how it is drawn (:func:`drawn_as`)
+_MARKER = {"issued": f'fill="{ISSUED}" stroke="{ISSUED}"',
+           "amended": f'fill="{ISSUED}" stroke="{AMENDED_RING}" stroke-width="1.5"',
+           "other": f'fill="#fff" stroke="{OTHER}"'}
+
+
+def drawn_as(row: dict) -> str:
+    """How a history row is drawn: 'issued' (it has a certificate), 'amended' (it has one,
+    and one was replaced by an amendment or an amendment is under way) or 'other' (never
+    issued). Rows without the ``issued`` key count as issued in the state 'issued' only.
+
+    >>> drawn_as({"status": "amending", "issued": True, "amended": True})
+    'amended'
+    >>> drawn_as({"status": "computed"})
+    'other'
+    """
+    if not row.get("issued", row.get("status") == "issued"):
+        return "other"
+    return "amended" if row.get("amended") else "issued"
+
+
+#: about how wide a character of the 10 px text is, plain and bold (px)
+_CHAR_PX, _BOLD_CHAR_PX = 6.0, 6.6
+
+
+def _legend(pts: list[dict], lo_hi, right: float, y: float, left: float = 0.0) -> list[str]:
     """The panel's legend in its header, right-aligned at ``right`` (never over the data):
-    only what the panel shows."""
+    only what the panel shows; where it would reach left of ``left`` (the title's end),
+    the limit's label is shortened."""
     entries = []
-    if any(r.get("status") == "issued" for r in pts):
-        entries.append(("issued", f'fill="{ISSUED}" stroke="{ISSUED}"'))
-    if any(r.get("status") != "issued" for r in pts):
-        entries.append(("not issued", f'fill="#fff" stroke="{OTHER}"'))
+    drawn = {drawn_as(r) for r in pts}
+    for kind, label in (("issued", "issued"), ("amended", "amended"),
+                        ("other", "not issued")):
+        if kind in drawn:
+            entries.append((label, _MARKER[kind]))
     if any(v is not None for v in lo_hi):
         entries.append(("specification limit", None))
+        if right - sum(_CHAR_PX * len(e[0]) + 28 for e in entries) < left:
+            entries[-1] = ("limit", None)
     out, x = [], right
     for label, style in reversed(entries):
-        x -= 5.6 * len(label) + 22            # about 5.6 px per character at 10 px
+        x -= _CHAR_PX * len(label) + 28
         if style:
             out.append(f'<circle cx="{x + 6}" cy="{y - 3.5}" r="3" {style}/>')
         else:
@@ -162,7 +194,8 @@ def _legend(pts: list[dict], lo_hi, right: float, y: float) -> list[str]:
 
 def history_svg(history: dict, limits: dict | None = None, *, columns: int = 2) -> str:
     """The figure as SVG text (no XML prolog: it can be served or inlined): ``history`` maps
-    item key → rows {date, value, U, unit, title, status} (oldest first); ``limits`` maps
+    item key → rows {date, value, U, unit, title, status, issued, amended} (oldest first;
+    :func:`drawn_as`); ``limits`` maps
     key → (lower, upper) (either None)."""
     limits = limits or {}
     keys = [k for k, rows in history.items() if any(r["value"] is not None for r in rows)]

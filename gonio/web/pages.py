@@ -81,12 +81,12 @@ def dashboard(request: Request, session: Session):
     store = _store(request)
     review, _ = queries.calibrations(store, 1, 20, "computed")
     approve, _ = queries.calibrations(store, 1, 20, "reviewed")
-    active, _ = queries.calibrations(store, 1, 20, "running")
+    active, n_active = queries.active_work(store)
     failed, _ = queries.calibrations(store, 1, 20, "failed")
     due, n_due = queries.due(store, 1, 20)
     return render(request, "dashboard.html", user, csrf, counts=queries.counts_by_status(store),
                   due=due, n_due=n_due, review=review, approve=approve,
-                  active=active, failed=failed, today=_dt.date.today())
+                  active=active, n_active=n_active, failed=failed, today=_dt.date.today())
 
 
 # --------------------------------------------------------------------------- customers
@@ -753,19 +753,75 @@ def _backup(request: Request, user, csrf, status_code: int = 200, **ctx):
                   folder=folder, folder_archives=archives_in(folder), **ctx)
 
 
-async def _admin_post(request: Request, session: tuple):
-    """An admin's form sent (CSRF checked): (user, csrf, data), else the 403 Response."""
+class _TooLarge(Exception):
+    """A request body read past its limit."""
+
+
+#: what a backup upload's form carries beside the archive (boundaries, the CSRF field), bytes
+FORM_SLACK_BYTES = 64 * 2**10
+
+
+def _backup_limit() -> float:
+    """The largest backup archive (bytes): ``GONIO_MAX_BACKUP_BYTES`` (gonio.limits)."""
+    from gonio.limits import limit
+
+    return limit("GONIO_MAX_BACKUP_BYTES")
+
+
+def _too_large(request: Request, user, csrf, size_bytes: float | None = None):
+    """The backup page saying, in one line, that an upload is over the limit (HTTP 413)."""
+    most = blobs.size_text(_backup_limit())
+    said = f", {blobs.size_text(size_bytes)}," if size_bytes else ""
+    return _backup(request, user, csrf, status_code=413, error=(
+        f"the upload{said} is larger than the limit of {most} for a backup archive "
+        "(GONIO_MAX_BACKUP_BYTES): nothing was stored"))
+
+
+def _counted(request: Request, limit_bytes: float) -> Request:
+    """``request`` whose body raises :class:`_TooLarge` once more than ``limit_bytes`` are
+    read (a body sent without a Content-Length is counted as it arrives)."""
+    receive, seen = request.receive, [0]
+
+    async def counted():
+        message = await receive()
+        seen[0] += len(message.get("body", b""))
+        if seen[0] > limit_bytes:
+            raise _TooLarge()
+        return message
+    return Request(request.scope, counted)
+
+
+async def _admin_post(request: Request, session: tuple, upload: bool = False):
+    """An admin's form sent (the role checked before the body is read, then the CSRF
+    token): (user, csrf, data), else the 403 Response. ``upload``: the form may carry a
+    backup archive, refused (413, the backup page saying so) past ``GONIO_MAX_BACKUP_BYTES``
+    as declared by the request's Content-Length or as read."""
     user, csrf = session
-    data = await form(request, csrf)
-    return _may_read(user, "admin") or (user, csrf, data)
+    refused = _may_read(user, "admin")
+    if refused:
+        return refused
+    if not upload:
+        return user, csrf, await form(request, csrf)
+    most = _backup_limit() + FORM_SLACK_BYTES
+    try:
+        declared = int(request.headers.get("content-length") or 0)
+    except ValueError:
+        declared = 0
+    if declared > most:
+        return _too_large(request, user, csrf, declared)
+    try:
+        return user, csrf, await form(_counted(request, most), csrf)
+    except _TooLarge:
+        return _too_large(request, user, csrf)
 
 
-def _admin_form(path: str):
+def _admin_form(path: str, upload: bool = False):
     """An admin's POST form at ``path``: the decorated ``async def f(request, user, csrf,
-    data)`` runs once the CSRF token and the admin role are checked (else 403)."""
+    data)`` runs once the admin role and the CSRF token are checked (else 403);
+    ``upload``: the form may carry a backup archive (:func:`_admin_post`)."""
     def wrap(fn):
         async def route(request: Request, session: Session):
-            got = await _admin_post(request, session)
+            got = await _admin_post(request, session, upload)
             return got if isinstance(got, Response) else await fn(request, *got)
         route.__name__, route.__doc__ = fn.__name__, fn.__doc__
         router.post(path)(route)
@@ -821,49 +877,92 @@ def _archive_path(store, token: str) -> Path | None:
     return None
 
 
-def _stage(store, upload) -> tuple[str, Path]:
-    """An uploaded archive kept under its SHA-256 until it is restored (staged files older
-    than a day are removed): (token, path)."""
-    import shutil
+#: uploaded archives kept waiting for their confirmation at most (the newest; older ones
+#: and any older than a day are removed when another is uploaded)
+STAGED_KEEP = 3
+
+
+def _tidy_staging(root: Path, keep: int) -> None:
+    """The staging folder pruned: archives older than a day or beyond the newest ``keep``,
+    and uploads cut off part-way (``.upload-*``) older than an hour."""
     import time
 
     from gonio.units import S_PER_DAY
 
+    def age_s(q: Path) -> float:        # one removed meanwhile (another upload): old
+        try:
+            return now - q.stat().st_mtime
+        except FileNotFoundError:
+            return float("inf")
+    now = time.time()
+    for part in root.glob(".upload-*"):
+        if age_s(part) > S_PER_DAY / 24:
+            part.unlink(missing_ok=True)
+    staged = sorted(root.glob("*.zip"), key=age_s)
+    for i, old in enumerate(staged):
+        if i >= keep or age_s(old) > S_PER_DAY:
+            old.unlink(missing_ok=True)
+
+
+def _stage(store, upload) -> tuple[str, Path]:
+    """An uploaded archive kept under its SHA-256 until it is restored: (token, path). Over
+    ``GONIO_MAX_BACKUP_BYTES`` it is a GonioError and nothing is kept; the staging folder
+    keeps the newest :data:`STAGED_KEEP` uploads at most, none older than a day."""
+    import os
+    import tempfile
+
     root = _staging(store)
     root.mkdir(mode=0o700, exist_ok=True)
-    for old in root.glob("*.zip"):
-        if old.stat().st_mtime < time.time() - S_PER_DAY:
-            old.unlink(missing_ok=True)
-    h = hashlib.sha256()
-    tmp = root / f".upload-{_dt.datetime.now().timestamp():.6f}"
-    with open(tmp, "wb") as fh:
-        for piece in iter(lambda: upload.read(1 << 20), b""):
-            h.update(piece)
-            fh.write(piece)
-    path = root / f"{h.hexdigest()}.zip"
-    shutil.move(tmp, path)
+    _tidy_staging(root, STAGED_KEEP - 1)
+    h, size, most = hashlib.sha256(), 0, _backup_limit()
+    fd, tmp = tempfile.mkstemp(prefix=".upload-", dir=root)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            for piece in iter(lambda: upload.read(1 << 20), b""):
+                size += len(piece)
+                if size > most:
+                    raise GonioError(f"the upload is larger than the limit of "
+                                     f"{blobs.size_text(most)} for a backup archive "
+                                     "(GONIO_MAX_BACKUP_BYTES): nothing was stored",
+                                     key="upload")
+                h.update(piece)
+                fh.write(piece)
+        path = root / f"{h.hexdigest()}.zip"
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
     return f"upload:{h.hexdigest()}", path
+
+
+def _open_chosen(path: Path):
+    """An archive the form names, opened without following a symbolic link (one put in
+    its place after it was listed or staged is refused)."""
+    from gonio.records.backup import open_archive
+
+    return open_archive(path, follow_links=False)
 
 
 def _restore_page(request: Request, user, csrf, token: str, path: Path, name: str,
                   status_code: int = 200, **ctx):
     """The archive checked (``gonio db restore``'s checks, nothing written) and, when it
     passes, what a restore of it would replace, with the confirmation form."""
-    from gonio.records.backup import archive_sha256, check_archive, summary
+    from gonio.records.backup import check_archive, summary
 
     try:
-        checked = check_archive(path)
+        with _open_chosen(path) as fh:
+            checked = check_archive(path, fh)
     except GonioError as exc:
         if token.startswith("upload:"):
             path.unlink(missing_ok=True)
         return _backup(request, user, csrf, status_code=400, archive=name,
                        error=str(exc).replace(str(path), name))
     return _backup(request, user, csrf, status_code=status_code, archive=name,
-                   checked=checked, token=token, sha256=archive_sha256(path),
+                   checked=checked, token=token, sha256=checked["sha256"],
                    current=summary(_store(request)), **ctx)
 
 
-@_admin_form("/backup/check")
+@_admin_form("/backup/check", upload=True)
 async def backup_check(request: Request, user, csrf, data):
     """A backup archive, uploaded or chosen from the backup folder, checked as ``gonio db
     restore`` checks it before it writes anything (complete, intact, every row and
@@ -881,7 +980,12 @@ async def backup_check(request: Request, user, csrf, data):
         token, name = f"folder:{chosen}", chosen
     elif f is not None and hasattr(f, "read") and f.filename:
         name = clean_name(f.filename)
-        token, path = await run_in_threadpool(_stage, store, f.file)
+        try:
+            token, path = await run_in_threadpool(_stage, store, f.file)
+        except GonioError as exc:
+            if exc.key != "upload":
+                raise
+            return _too_large(request, user, csrf)
     else:
         return _backup(request, user, csrf, status_code=400,
                        error="choose a backup archive (.zip)")
@@ -902,6 +1006,8 @@ async def backup_restore(request: Request, user, csrf, data):
 
     store = _store(request)
     token, name = str(data.get("archive") or ""), clean_name(str(data.get("name") or ""))
+    if token.startswith("folder:"):      # the folder's own name; an upload's as it was sent
+        name = token[len("folder:"):]
     path = _archive_path(store, token)
     if path is None:
         return _backup(request, user, csrf, status_code=400,
@@ -918,9 +1024,9 @@ async def backup_restore(request: Request, user, csrf, data):
                              if not isinstance(exc, TooManyAttemptsError) else str(exc))
     try:
         counts = await run_in_threadpool(_restore_closed, request, user, path,
-                                         str(data.get("sha256") or ""))
+                                         str(data.get("sha256") or ""), name)
     except GonioError as exc:
-        return _restore_page(**dict(again, status_code=409), restore_error=str(exc))
+        return _restore_page(**dict(again, status_code=409), restore_error=exc.message)
     if token.startswith("upload:"):
         path.unlink(missing_ok=True)
     r = render(request, "restored.html", None, None, archive=name, counts=counts,
@@ -929,7 +1035,7 @@ async def backup_restore(request: Request, user, csrf, data):
     return r
 
 
-def _restore_closed(request: Request, user, path: Path, sha256: str) -> dict:
+def _restore_closed(request: Request, user, path: Path, sha256: str, name: str) -> dict:
     """The restore run with the server closed (503 for every other request, no worker
     claiming); opened again whatever happens."""
     from gonio.records.backup import restore
@@ -946,8 +1052,9 @@ def _restore_closed(request: Request, user, path: Path, sha256: str) -> dict:
             raise GonioError("other requests did not end within 30 s (or another restore "
                              "runs): try again; nothing restored", key="restore")
         try:
-            return restore(_store(request), path, replace=True, actor=user,
-                           expect_sha256=sha256)
+            with _open_chosen(path) as fh:
+                return restore(_store(request), path, replace=True, actor=user,
+                               expect_sha256=sha256, stream=fh, name=name)
         finally:
             gate.open()
     finally:

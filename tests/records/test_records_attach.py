@@ -368,3 +368,44 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
         assert services.lab_details(st, 1, final=False)["environment"]["source"] == "entered"
     finally:
         st.close()
+
+
+def test_a_failed_redraft_is_rendered_again_not_computed_again(store, people, computed_folder,
+                                                               bench_readings, monkeypatch):
+    """A draft rendered again after an attach that fails: the calibration is failed with
+    the reason (said to be the redraft's); run again, its draft is rendered again from the
+    stored result — nothing computed (before: queued, computed again from the readings)."""
+    inst, std = setup_instrument(store, people)
+    cal = new_calibration(store, people, inst, std, bench_readings[0])
+    run_worker(store, monkeypatch, computed_folder)
+    results_before = services.calibration(store, cal.id).results_sha256
+    services.attach_conditions(store, people["tech"], cal.id, temperature_c=20.0,
+                               humidity_pct=47)
+
+    render = worker.render_folder
+
+    def broken(*args, **kwargs):
+        raise GonioError("the renderer ran out of paper", key="render")
+    monkeypatch.setattr(worker, "render_folder", broken)
+    with pytest.raises(GonioError, match="ran out of paper"):
+        worker.run_now(store, cal.id)
+    got = services.calibration(store, cal.id)
+    assert (got.status, got.progress) == ("failed", "drafting failed")
+    assert got.error.startswith("rendering the draft certificate again failed: key render: "
+                                "the renderer ran out of paper")
+    assert queries.calibration_page(store, cal.id)["cal"].error == got.error
+
+    def no_computing(*args, **kwargs):
+        raise AssertionError("computed again")
+    monkeypatch.setattr(worker, "render_folder", render)
+    monkeypatch.setattr(worker, "calibrate_folder", no_computing)
+    assert services.retry(store, people["tech"], cal.id).status == "drafting"
+    worker.run_now(store, cal.id)
+    got = services.calibration(store, cal.id)
+    assert (got.status, got.error, got.results_sha256) == ("computed", "", results_before)
+    assert "<td>47 %</td>" in draft_html(store, cal.id)
+    with store.session() as s:
+        actions = [a for (a,) in s.execute(select(AuditEvent.action).where(
+            AuditEvent.entity == "calibration", AuditEvent.entity_id == str(cal.id)).order_by(AuditEvent.id))]
+    assert actions[actions.index("attach"):] == ["attach", "claim", "fail", "retry", "claim",
+                                                 "redraft"]

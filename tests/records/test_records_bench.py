@@ -137,3 +137,37 @@ def test_a_request_is_checked_before_anything_is_queued():
     ok = bench.check_request({"table": "GPIB0::12::INSTR", "gyro": "ASRL/dev/ttyUSB0::INSTR",
                               "chamber": ""}, {"k": "v"})
     assert ok["resources"] == {"table": "GPIB0::12::INSTR", "gyro": "ASRL/dev/ttyUSB0::INSTR"}
+
+
+def test_bench_form_has_place_and_performed_at(app, sqlite_store):  # noqa: F811
+    """The form that starts a calibration from a connected bench offers the place and
+    "Performed at" with the very choices of the upload form, and the choice is recorded
+    (before: the bench form had neither; the route passed them)."""
+    store = sqlite_store
+    tech = login(app, "tech")
+    inst, std = _registered(store, services.user(store, "tech"), "RLG-0002")
+    page = tech.get(f"/instruments/{inst.id}/calibrate").text
+    upload, acquire = page.split('action="/instruments/%d/acquire"' % inst.id)
+
+    def choices(html: str) -> list[tuple[str, str]]:
+        select = re.search(r'<select name="location">(.*?)</select>', html, re.S)
+        assert select is not None
+        return re.findall(r'<option value="([^"]+)"[^>]*>([^<]+)</option>', select.group(1))
+
+    assert choices(acquire) == choices(upload)
+    assert [k for k, _ in choices(acquire)] == ["laboratory", "customer", "laboratoryBranch",
+                                               "customerBranch", "other"]
+    assert 'name="place"' in acquire
+    form = {"csrf": csrf_of(tech), "performed_on": str(dt.date.today()),
+            "standards": str(std.id), "temperature_c": "20.0", "humidity_pct": "45",
+            "table": "TCPIP0::127.0.0.1::5025::SOCKET",
+            "gyro": "TCPIP0::127.0.0.1::5026::SOCKET", "location": "customer",
+            "place": "Hangar 4, Example Field"}
+    bad = tech.post(f"/instruments/{inst.id}/acquire", data={**form, "standards": ""})
+    assert bad.status_code == 400            # the form comes back with the choice kept
+    kept = bad.text.split('action="/instruments/%d/acquire"' % inst.id)[1]
+    assert '<option value="customer" selected>' in kept
+    r = tech.post(f"/instruments/{inst.id}/acquire", data=form)
+    assert r.status_code == 303, r.text[:2000]
+    cal = services.calibration(store, int(r.headers["location"].rsplit("/", 1)[1]))
+    assert (cal.location, cal.place) == ("customer", "Hangar 4, Example Field")

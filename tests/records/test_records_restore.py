@@ -134,7 +134,7 @@ def test_a_failure_part_way_leaves_the_live_records(nightly, people, tmp_path, m
             raise OSError(28, "No space left on device")
         with monkeypatch.context() as m:
             m.setattr(backup_mod.os, "replace", fail)
-            with pytest.raises(OSError, match="No space left"):
+            with pytest.raises(GonioError, match="could not be swapped in .No space left"):
                 restore(store, archive, replace=True, actor=people["admin"])
         assert snapshot(store) == before
         assert not list(store.data.glob(".records.sqlite3.restoring-*"))

@@ -258,6 +258,49 @@ def test_history_and_interval_with_limits(store, people, computed_folder, bench_
         "angle_deviation": (-0.5, 0.5)}
 
 
+def test_history_figure_draws_every_issued_calibration_as_issued(store, people, computed_folder,
+                                                                 bench_readings, monkeypatch):
+    """Every calibration with a certificate is drawn as issued, an amended one (its
+    certificate replaced by an amendment, or an amendment asked for) marked as amended;
+    the figure's classes are checked against the certificates table (before: only the
+    state 'issued' was drawn as issued, an amendment asked for as 'not issued')."""
+    import xml.etree.ElementTree as ET
+
+    from gonio.report.history_figure import history_svg
+
+    inst, std = setup_instrument(store, people)
+    for day in ("2024-01-10", "2024-07-10", "2025-01-10", "2025-06-10"):
+        cal = new_calibration(store, people, inst, std, bench_readings[0], day=day)
+        run_worker(store, monkeypatch, computed_folder)
+        if day != "2025-06-10":                  # the last is computed, never issued
+            services.review(store, people["rev"], cal.id, accept=True)
+            services.approve(store, people["rev2"], cal.id)
+            run_worker(store, monkeypatch, computed_folder)
+    with store.session() as s:
+        first, _, third = s.scalars(select(Certificate).order_by(Certificate.id)).all()
+    services.amend(store, people["rev"], first.id, "customer address corrected")
+    services.approve(store, people["rev2"], first.calibration_id)
+    run_worker(store, monkeypatch, computed_folder)         # its amendment issued
+    services.amend(store, people["rev"], third.id, "typo")  # its amendment asked for
+    with store.session() as s:
+        certs = {cid: n for cid, n in s.execute(
+            select(Certificate.calibration_id, func.count(Certificate.id))
+            .group_by(Certificate.calibration_id))}
+    assert certs == {1: 2, 2: 1, 3: 1}
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    root = ET.fromstring(history_svg(services.history(store, inst.id)))
+    panel = root.find("s:g[@class='panel']", ns)
+    got = [c.get("class") for c in panel.findall("s:circle[@cx]", ns)
+           if c.get("class") in ("issued", "amended", "other")]
+    status = {c: services.calibration(store, c).status for c in (1, 2, 3, 4)}
+    assert status == {1: "issued", 2: "issued", 3: "amending", 4: "computed"}
+    want = ["amended" if certs.get(c, 0) > 1 or (c in certs and status[c] != "issued")
+            else "issued" if c in certs else "other" for c in (1, 2, 3, 4)]
+    assert got == want == ["amended", "issued", "amended", "other"]
+    legend = [t.text for t in panel.findall("s:text[@class='legend']", ns)]
+    assert sorted(legend) == ["amended", "issued", "not issued"]
+
+
 def plain(v):
     """A value as text, so that each database's own return types compare."""
     if isinstance(v, bool):

@@ -216,3 +216,54 @@ def test_dashboard_links_every_waiting_and_lists_the_failed(app, sqlite_store): 
         whole |= listed(web.get(f"/calibrations?status=computed&page={p}").text)
     assert whole == set(ids["computed"])
     assert listed(web.get("/calibrations?status=failed").text) == set(ids["failed"])
+
+
+def calibrations_in_states(store, states: dict) -> dict:
+    """Calibration rows of one instrument in the given states (state → how many): state →
+    their ids."""
+    tech = services.user(store, "tech")
+    cust = services.add_customer(store, tech, "Gamma Gyro Ltd", "Road 3")
+    inst = services.register_instrument(store, tech, customer_id=cust.id, serial="SN-W",
+                                        spec_key="ogam-draft", model="RLG-GM-1")
+    sha, _ = services.store_file(store, io.BytesIO(b"readings"))
+    ids: dict = {state: [] for state in states}
+    with store.writing() as s:
+        for state, n in states.items():
+            for _ in range(n):
+                cal = Calibration(instrument_id=inst.id, spec_key="ogam-draft",
+                                  readings_sha256=sha, performed_on=dt.date(2025, 3, 1),
+                                  status=state)
+                s.add(cal)
+                s.flush()
+                ids[state].append(cal.id)
+        s.commit()
+    return ids
+
+
+WORK = {"queued": 2, "running": 2, "issuing": 1, "drafting": 3, "computed": 1, "failed": 1}
+
+
+def test_active_work_query(store):
+    """The work under way: running, issuing and drafting, on SQLite and PostgreSQL (before:
+    the overview listed only 'running')."""
+    from .conftest import make_people
+
+    make_people(store)
+    ids = calibrations_in_states(store, WORK)
+    want = sorted(ids["running"] + ids["issuing"] + ids["drafting"], reverse=True)
+    rows, total = queries.active_work(store)
+    assert [c.id for c in rows] == want and total == 6
+    rows, total = queries.active_work(store, size=4)
+    assert [c.id for c in rows] == want[:4] and total == 6
+
+
+def test_dashboard_lists_every_calibration_being_worked_on(app, sqlite_store):  # noqa: F811
+    """The overview's section of work under way lists those being computed, issued or having
+    their draft rendered again, and none other."""
+    ids = calibrations_in_states(sqlite_store, WORK)
+    page = login(app, "tech").get("/").text
+    sections = dict(re.findall(r"<h2>([^<]+)</h2>(.*?)(?=<h2>|$)", page, re.S))
+    active = sections["Being worked on"]
+    listed = {int(i) for i in re.findall(r'<td><a href="/calibrations/(\d+)">', active)}
+    assert listed == set(ids["running"] + ids["issuing"] + ids["drafting"])
+    assert "6 being computed, issued or having their draft rendered again" in active

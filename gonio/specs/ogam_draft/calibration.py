@@ -30,7 +30,8 @@ from gonio.units import S_PER_MIN
 from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
-from gonio.specs.ogam_draft.readings import Readings, metadata_float, read_readings
+from gonio.specs.ogam_draft.readings import (Readings, metadata_float, metadata_gyro_type,
+                                             read_readings)
 from gonio.errors import GonioError
 from gonio.specs.ogam_draft.static_record import StaticRecord
 from gonio.result import Finding
@@ -203,6 +204,7 @@ class Analysis:
         if c.name == "scale_factor" and c.measured:
             d.update(scale_factor_as_mounted(
                 float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
+            d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol)
         if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
             if iu is not None and iu.beside is not None:
@@ -459,6 +461,51 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
             conflicts.append(Conflict(key, v, getattr(a, key), v,
                                       "readings-file metadata over protocol annex_a"))
     return out, conflicts
+
+
+def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
+    """The bound |α_K|max (ppm/°C) on the instrument's scale-factor temperature coefficient
+    that K's chamber-temperature line ``K_T`` takes, and where it comes from (results.json
+    ``items.scale_factor.details.temperature_coeff_bound``; the certificate says it).
+
+    The bound belongs to the instrument under calibration (its specification), never to the
+    bench that made the readings. The rule, in this order:
+
+    1. ``metadata``: the readings state it (``sf_temperature_coeff_bound_ppm_per_c``);
+    2. ``protocol-rlg`` / ``protocol-fog``: the readings state the gyro type (``gyro_type``)
+       and the protocol's default for that type is taken
+       (``annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c`` or ``…_fog_…``);
+    3. ``protocol-larger``: neither is stated; the larger of the two defaults is taken, so a
+       FOG is never given an RLG's bound without a word.
+
+    >>> from gonio.specs.ogam_draft.readings import Readings
+    >>> import pandas as pd
+    >>> p = load_protocol("ogam-draft")
+    >>> b = lambda md: temperature_coeff_bound(Readings(pd.DataFrame(), md), p)
+    >>> [(d["bound_ppm_per_c"], d["source"]) for d in (b({"gyro_type": "rlg"}),
+    ...  b({"gyro_type": "fog"}), b({}), b({"gyro_type": "fog",
+    ...                                   "sf_temperature_coeff_bound_ppm_per_c": "0.4"}))]
+    [(0.1, 'protocol-rlg'), (1.0, 'protocol-fog'), (1.0, 'protocol-larger'), (0.4, 'metadata')]
+    """
+    a = protocol.annex_a
+    md, file = readings.metadata, readings.path
+    gyro = metadata_gyro_type(md, file=file)
+    stated = metadata_float(md, "sf_temperature_coeff_bound_ppm_per_c", file=file)
+    defaults = {"rlg": a.sf_temperature_coeff_bound_rlg_ppm_per_c,
+                "fog": a.sf_temperature_coeff_bound_fog_ppm_per_c}
+    if stated is not None:
+        bound, source, how = stated, "metadata", "stated by the readings (the instrument's " \
+            "specification)"
+    elif gyro is not None:
+        bound, source = defaults[gyro], f"protocol-{gyro}"
+        how = f"the protocol's default for a{'n' if gyro == 'rlg' else ''} {gyro.upper()} " \
+              f"(annex_a.sf_temperature_coeff_bound_{gyro}_ppm_per_c)"
+    else:
+        bound, source = max(defaults.values()), "protocol-larger"
+        how = "gyro type not stated: the larger of the protocol's RLG and FOG defaults"
+    return {"bound_ppm_per_c": float(bound), "source": source, "gyro_type": gyro,
+            "temperature_tolerance_c": float(protocol.conditions.temperature_tolerance_c),
+            "how": how}
 
 
 # --------------------------------------------------------------------------- checks
@@ -745,8 +792,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         out["scale_factor"] = iu.scale_factor_budget(
             t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
             tilt_bias_arcsec_per_deg=k_tilt,
-            temperature_rel_bound=1e-6 * protocol.annex_a.sf_temperature_coeff_bound_ppm_per_c
-            * protocol.conditions.temperature_tolerance_c)
+            temperature_rel_bound=1e-6 * temperature_coeff_bound(readings, protocol)[
+                "bound_ppm_per_c"] * protocol.conditions.temperature_tolerance_c)
         if results.scale_factor_nonlinearity.measured:
             draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,

@@ -138,6 +138,11 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
                - 1) * 1e6
         add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
                                            ppm=f"{ppm:.2g}")])
+        tb = sf.get("temperature_coeff_bound")
+        if tb:                                  # K's chamber-temperature line: which bound
+            add("p", [L["K_temperature_bound"].format(
+                tol=f"{tb['temperature_tolerance_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
+                src=L["K_T_source_" + tb["source"]])])
 
     _conformity_blocks(add, res, lab, L)
 

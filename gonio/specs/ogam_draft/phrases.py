@@ -184,6 +184,20 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "标度因数 K 为安装状态下的值：敏感平面与转台台面的夹角不超过 {psi}°"
                            "（附录A.1）。仪器自身的 K（敏感轴沿转轴）最多大 {ppm} ppm"
                            "（1/cos ψ − 1），未计入 U。"},
+    "K_temperature_bound": {
+        "en": "U(K) holds for a chamber within ±{tol} °C of the reference temperature (Table 2) "
+              "and a scale-factor temperature coefficient |α_K| ≤ {b} ppm/°C: {src}.",
+        "zh": "U(K) 适用于温度偏离参考温度不超过 ±{tol} °C 的环境（表2），标度因数温度系数 "
+              "|α_K| ≤ {b} ppm/°C：{src}。"},
+    "K_T_source_metadata": {"en": "the instrument's bound stated in the readings",
+                            "zh": "读数文件给出的仪器自身限值"},
+    "K_T_source_protocol-rlg": {"en": "the protocol's default for an RLG",
+                                "zh": "规程对激光陀螺的默认值"},
+    "K_T_source_protocol-fog": {"en": "the protocol's default for a FOG",
+                                "zh": "规程对光纤陀螺的默认值"},
+    "K_T_source_protocol-larger": {"en": "gyro type not stated, the larger of the protocol's "
+                                         "RLG and FOG defaults",
+                                   "zh": "未给出陀螺类型，取规程激光陀螺与光纤陀螺默认值中的较大者"},
     "std_mpe": {"en": "MPE ±{v}″", "zh": "最大允许误差 ±{v}″"},
     "u_c_line": {"en": "combined standard uncertainty u_c = {u}″ (Annex A.6)",
                  "zh": "合成标准不确定度 u_c = {u}″（附录A.6）"},

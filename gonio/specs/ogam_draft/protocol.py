@@ -121,10 +121,12 @@ class AnnexA:
     repeatability_arcsec: float = 0.096
     #: None: k = t_95(ν_eff) (Welch–Satterthwaite); a number: k fixed by the laboratory.
     coverage_factor: float | None = None
-    #: The bound the laboratory takes for the instrument's scale-factor temperature
-    #: coefficient |α_K| (its specification), ppm/°C: with Table 2's tolerance it gives K's
-    #: chamber-temperature line (not in the draft's budget).
-    sf_temperature_coeff_bound_ppm_per_c: float = 0.1
+    #: The defaults, per gyro type, of the bound on the instrument's scale-factor temperature
+    #: coefficient |α_K|, ppm/°C, used when the readings do not state the instrument's own
+    #: (``gonio.specs.ogam_draft.calibration.temperature_coeff_bound``): with Table 2's
+    #: tolerance it gives K's chamber-temperature line (not in the draft's budget).
+    sf_temperature_coeff_bound_rlg_ppm_per_c: float = 0.1
+    sf_temperature_coeff_bound_fog_ppm_per_c: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -240,7 +242,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "repeatability_arcsec": Field("float", 0.096, non_negative, "≥ 0"),
         # absent: k = t_95(ν_eff) (Welch–Satterthwaite); set: k fixed by the laboratory
         "coverage_factor": Field("float", None, positive, "> 0"),
-        "sf_temperature_coeff_bound_ppm_per_c": Field("float", 0.1, non_negative, "≥ 0"),
+        "sf_temperature_coeff_bound_rlg_ppm_per_c": Field("float", 0.1, non_negative, "≥ 0"),
+        "sf_temperature_coeff_bound_fog_ppm_per_c": Field("float", 1.0, non_negative, "≥ 0"),
     },
 }
 _EXTRA: dict[str, tuple[dict[str, Field], Callable[[dict], Any] | None]] = {}

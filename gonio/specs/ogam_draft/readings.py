@@ -45,7 +45,7 @@ from gonio.atomic import write_text
 from gonio.errors import (GonioError, MissingColumnError, check_header, check_near_miss,
                           read_utf8)
 from gonio.formats.metadata import (KNOWN_METADATA, NUMERIC_METADATA, metadata_bool,  # noqa: F401
-                                    metadata_float, parse_number)
+                                    metadata_float, metadata_gyro_type, parse_number)
 from gonio.formats.metadata import show_value as _show
 
 #: The ``test`` names of the draft's clause 7 (the first five) and of later features.
@@ -197,6 +197,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
         if key in NUMERIC_METADATA:
             metadata_float(metadata, key, file=fname)
     check_near_miss(metadata, KNOWN_METADATA, what="metadata key", file=fname)
+    metadata_gyro_type(metadata, file=fname)
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
     seen = check_header(header, REQUIRED_COLUMNS, file=fname, line=header_line)

@@ -447,6 +447,9 @@ def session_metadata(protocol: Protocol, bench: Bench, seed: int) -> dict:
         "instrument": inst.name,
         "serial": inst.serial,
         "manufacturer": inst.manufacturer,
+        # the instrument's type (identity, docs/formats.md#metadata-keys); never its
+        # temperature coefficients, which are the bench's truth
+        "gyro_type": inst.type,
         "nominal_scale_factor_counts_per_deg": repr(inst.nominal_scale_factor_counts_per_deg),
         "latitude_deg": repr(bench.latitude_deg),
         # the chamber's temperature as logged: the reference plus the bench's deviation
