@@ -10,6 +10,7 @@ RLG's bound and holds with the FOG's."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from dataclasses import replace
 
 import numpy as np
@@ -20,6 +21,7 @@ from gonio.errors import GonioError
 from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
+from gonio.specs.ogam_draft.outputs import summary
 from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget, without_tilt_u_rel
 from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.study import (case_bench, draw_type_b, trial_bench,
@@ -124,6 +126,8 @@ def test_the_stated_bound_and_tolerance_reach_the_certified_k(base):
     d = _bound(rep)
     assert (d["bound_ppm_per_c"], d["source"], d["gyro_type"], d["temperature_tolerance_c"]) \
         == (0.4, "metadata", "rlg", 2.5)
+    assert "+-2.5 degC of the reference and |alpha_K| <= 0.4 ppm/degC: stated by the " \
+        "readings" in summary(rep.result())
 
 
 def test_the_bound_follows_the_gyro_type_never_the_bench(proto, base):
@@ -225,3 +229,28 @@ def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):
         m = m[m["test"] != "zero_stability"]
         assert (m["_merge"] == "both").all()
         assert np.abs(m["gyro_counts_got"] - m["gyro_counts_ref"]).max() <= 1.0
+
+
+def test_the_laboratory_files_gyro_type_is_checked_against_the_readings(tmp_path):
+    """The laboratory file may state the instrument's type ([instrument] gyro_type); readings
+    of another type are a contradiction (refused, or a finding), compared like the serial
+    (case ignored); a type that is neither is refused when the file is read."""
+    from gonio.formats.lab import load_lab
+    from gonio.pipeline.identity import contradictions
+
+    src = (Path(__file__).parents[1] / "protocols" / "lab-example.toml").read_text("utf-8")
+
+    def lab(v):
+        f = tmp_path / f"lab-{v}.toml"
+        f.write_text(src.replace("[instrument]", f'[instrument]\ngyro_type = "{v}"', 1)
+                     if "[instrument]" in src else src + f'\n[instrument]\ngyro_type = "{v}"\n',
+                     encoding="utf-8")
+        return load_lab(f)
+
+    (c,) = contradictions({"gyro_type": "fog"}, lab("RLG"))
+    assert (c["what"], c["readings"], c["lab"], c["lab_key"]) == \
+        ("gyro type", "'fog'", "'RLG'", "instrument.gyro_type")
+    assert contradictions({"gyro_type": "fog"}, lab("FOG")) == []
+    assert contradictions({}, lab("fog")) == []              # the readings silent: nothing
+    with pytest.raises(GonioError, match="gyro_type"):
+        lab("mems")

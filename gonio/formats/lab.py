@@ -71,7 +71,10 @@ LAB_SCHEMA: dict[str, Field] = {
         "location": Field("str", default="laboratory", choices=LOCATIONS)}),
     "customer": Field("table", schema={"name": Field("str"), "address": _S}),
     "instrument": Field("table", default=None, schema={
-        "description": _S, "model": _S, "serial": _S, "manufacturer": _S}),
+        "description": _S, "model": _S, "serial": _S, "manufacturer": _S,
+        # an optical gyro's type, compared with the readings' gyro_type (identity)
+        "gyro_type": Field("str", default="", check=lambda v: v.strip().lower() in
+                           ("", "rlg", "fog"), expect="rlg or fog")}),
     "standards": Field("table_list", default=None, schema={
         "name": Field("str"), "identifier": _S, "accuracy": _S, "certificate": _S,
         "traceability": _S}),

@@ -1,7 +1,8 @@
 """The instrument's identity and the conditions of the readings against the laboratory file
 (docs/formats.md#identity-and-conditions).
 
-The readings' own metadata (``# serial:``, ``# model:``, ``# manufacturer:``, the
+The readings' own metadata (``# serial:``, ``# model:``, ``# manufacturer:``, an optical
+gyro's ``# gyro_type:``, the
 temperature ``# temperature_c:`` or ``# room_temperature_c:``, ``# humidity_pct:``) are
 compared with the laboratory file's ``[instrument]`` and ``[environment]``: a text that
 differs (compared without regard to case and runs of white space) or a temperature or
@@ -32,7 +33,8 @@ HUMIDITY_TOLERANCE_PCT = 10.0
 #: (what, laboratory file section and key, the readings' metadata keys in order of preference)
 TEXT_FIELDS = (("serial", "instrument", "serial", ("serial",)),
                ("model", "instrument", "model", ("model",)),
-               ("manufacturer", "instrument", "manufacturer", ("manufacturer",)))
+               ("manufacturer", "instrument", "manufacturer", ("manufacturer",)),
+               ("gyro type", "instrument", "gyro_type", ("gyro_type",)))
 NUMBER_FIELDS = (("temperature", "environment", "temperature_c",
                   ("temperature_c", "room_temperature_c"), "temperature_tolerance_c", "°C"),
                  ("humidity", "environment", "humidity_pct", ("humidity_pct",),
@@ -62,6 +64,9 @@ def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
     ['serial', 'temperature']
     >>> contradictions({"serial": " sn-0001 ", "temperature_c": "20.9"}, lab)
     []
+    >>> [c["lab_key"] for c in contradictions({"gyro_type": "fog"},
+    ...                                       {"instrument": {"gyro_type": "RLG"}})]
+    ['instrument.gyro_type']
     """
     if not lab:
         return []

@@ -391,7 +391,8 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
     swapped in by one rename once complete (the replaced file is kept beside it as
     ``records.sqlite3.replaced-YYYYmmddTHHMMSS``) and the engine's connections are renewed;
     PostgreSQL — every table emptied and refilled in one transaction. A failure at any step
-    leaves the live records as they were. The caller keeps other requests and the workers
+    leaves the live records as they were (their audit trail then records the refusal:
+    action ``restore-refused``, the archive's name and the reason). The caller keeps other requests and the workers
     out meanwhile (gonio serve's maintenance state); on SQLite a database another process
     has open is refused. The archive must hold an active administrator (else nobody could
     manage the restored records).
@@ -406,9 +407,34 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
         from gonio.records.services import require
 
         require(actor, "admin")
-    with (open_archive(path) if stream is None else _kept_open(stream)) as fh:
-        return _restore_open(store, fh, path, replace=replace, actor=actor,
-                             expect_sha256=expect_sha256, label=name or path.name)
+    try:
+        with (open_archive(path) if stream is None else _kept_open(stream)) as fh:
+            return _restore_open(store, fh, path, replace=replace, actor=actor,
+                                 expect_sha256=expect_sha256, label=name or path.name)
+    except GonioError as exc:
+        if replace:
+            _audit_refusal(store, actor, name or path.name, expect_sha256, exc)
+        raise
+
+
+def _audit_refusal(store, actor, label: str, sha256: str | None, exc: GonioError) -> None:
+    """A restore over the live records that was refused or failed, appended to their audit
+    trail, which it left as it was (action ``restore-refused``: the archive's name and the
+    reason). A database that cannot take the event now (the failure's own cause, say) is
+    left alone: the caller reports the failure either way."""
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from gonio.records.services import audit
+
+    try:
+        with store.writing() as s:
+            if store.engine.dialect.name == "postgresql":
+                s.execute(text(f"SET LOCAL lock_timeout = '{int(LOCK_TIMEOUT_S)}s'"))
+            audit(s, actor, "restore-refused", "records", (sha256 or "")[:64],
+                  after={"archive": label[:200], "reason": exc.message[:500]})
+            s.commit()
+    except SQLAlchemyError:
+        pass
 
 
 def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,

@@ -802,7 +802,10 @@ async def _admin_post(request: Request, session: tuple, upload: bool = False):
         return refused
     if not upload:
         return user, csrf, await form(request, csrf)
-    most = _backup_limit() + FORM_SLACK_BYTES
+    try:
+        most = _backup_limit() + FORM_SLACK_BYTES
+    except GonioError as exc:            # GONIO_MAX_BACKUP_BYTES set to no number
+        return _backup(request, user, csrf, status_code=500, error=exc.message)
     try:
         declared = int(request.headers.get("content-length") or 0)
     except ValueError:

@@ -27,6 +27,7 @@ from gonio.records.backup import archive_sha256, backup, check_archive, restore,
 from gonio.records.db import open_store
 
 from .conftest import PASSWORD
+from .test_records_restore import refusals
 from .test_web_backup import _confirm
 
 ZEROS_BYTES = 3 * 2**20          # a stored file of zeros: deflates to a few KiB
@@ -235,7 +236,11 @@ def test_a_sqlite_restore_failing_half_way_leaves_the_live_records(small, tmp_pa
         with pytest.raises(GonioError, match=r"could not be swapped in \(Permission denied\): "
                                              "the live records are unchanged"):
             restore(st, archive, replace=True, actor=boss)
-    assert summary(st)["rows"] == before
+    after = summary(st)["rows"]
+    assert after == dict(before, audit_events=before["audit_events"] + 2)
+    assert [r.split(" (")[0] for r in refusals(st)] == [
+        "the restored records could not be written", "the restored records could not be "
+        "swapped in"]
     left = [p.name for p in st.data.iterdir() if "restoring" in p.name or "replaced" in p.name]
     assert left == [], left
     # two restores in the same second: the second keeps its replaced file under another name
@@ -282,6 +287,7 @@ def test_a_postgresql_table_held_by_another_connection(pg_server, tmp_path, monk
                                                  "unchanged; nothing restored"):
                 restore(st, tmp_path / "pg.zip", replace=True, actor=services.user(st, "boss"))
         assert summary(st)["rows"]["customers"] == 2
+        assert "could not be emptied for the restore" in refusals(st)[0]
     finally:
         st.close()
 
@@ -408,6 +414,8 @@ def test_the_page_shows_an_error_once_and_no_server_path(small, tmp_path, monkey
         "the restored records could not be swapped in (No space left on device): the live "
         "records are unchanged; nothing restored"), r.text[-1500:]
     assert web.get("/backup").status_code == 200                # open again
+    assert refusals(st) == ["the restored records could not be swapped in (No space left on "
+                            "device): the live records are unchanged; nothing restored"]
     r = web.post("/backup/restore", data=send)
     assert r.status_code == 200 and "Restored from last-night.zip" in r.text
     assert restored_event(st)["archive"] == "last-night.zip"
@@ -567,3 +575,17 @@ def test_a_stored_file_the_disk_refuses_is_one_line(tmp_path, monkeypatch):
         assert summary(target)["rows"]["users"] == 0
     finally:
         target.close()
+
+
+def test_a_limit_that_is_no_number_is_said_on_the_page(small, monkeypatch):
+    """GONIO_MAX_BACKUP_BYTES set to no number: the upload is refused with the variable
+    named on the backup page (before, no limit applied at all)."""
+    from .test_web_security import csrf_of, login
+
+    st, archive = small
+    web = login(_page_app(st), "boss")
+    monkeypatch.setenv("GONIO_MAX_BACKUP_BYTES", "8 GB")
+    r = web.post("/backup/check", data={"csrf": csrf_of(web)}, files={
+        "archive": ("a.zip", archive.read_bytes(), "application/zip")})
+    assert r.status_code == 500 and r.text.count(
+        "environment variable GONIO_MAX_BACKUP_BYTES must be a number, got &#39;8 GB&#39;") == 1
