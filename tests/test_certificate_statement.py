@@ -129,7 +129,8 @@ def test_E_in_plus_minus_form_identical_in_every_output(run):
     signed = half_up(E[j], dec)
     signed = signed if signed.startswith("-") else "+" + signed
     pos = f"{res['items']['angle_deviation']['details']['table'][j]['position_deg']:g}"
-    expect = f"{pm}; signed extreme {signed}″ at {pos}°"
+    # the certificate prints the minus sign U+2212; summary.txt and the DCC the hyphen-minus
+    expect = f"{pm}; signed extreme {signed.replace('-', chr(0x2212))}″ at {pos}°"
     page = visible_text((run["dir"] / "en" / "certificate.html").read_text())
     assert re.sub(r"\s+", " ", expect) in re.sub(r"\s+", " ", page)
     summary = summary_text(res)
@@ -222,7 +223,7 @@ def test_conformity_only_with_limits_and_outcome_from_closed_form(run, tmp_path)
     table = table[:table.index("</table>")]
     cells = [visible_text(c).strip() for c in re.findall(r"<td>(.*?)</td>", table)]
     row = cells[cells.index("Angle-position deviation E"):][:5]
-    assert row[1] == "[-0.5, 0.5] ″", row      # the limits as the laboratory gave them
+    assert row[1] == "[\u22120.5, 0.5] ″", row      # the limits as given, with the minus sign
     assert row[3].startswith(outcome), (row, outcome)
     if outcome in ("pass", "conditional pass"):
         assert float(row[4].rstrip(" %")) == pytest.approx(100 * (1 - p_c), rel=0.05, abs=0.051)

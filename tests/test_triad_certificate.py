@@ -28,7 +28,9 @@ SPANS = re.compile(r'<span class="num" data-src="([^"]+)" data-rule="([^"]+)">([
 
 
 def half_up(x: float, dec: int) -> str:
-    return f"{Decimal(repr(x)).quantize(Decimal(1).scaleb(-dec), rounding=ROUND_HALF_UP):f}"
+    """``x`` half up at ``dec`` places as the certificate prints it (minus sign U+2212)."""
+    s = f"{Decimal(repr(x)).quantize(Decimal(1).scaleb(-dec), rounding=ROUND_HALF_UP):f}"
+    return s.replace("-", "\u2212")
 
 
 def two_sig(U: float) -> tuple[str, int]:
@@ -300,7 +302,7 @@ def test_environment_states_the_chamber_profile(run):
     th = pd.read_csv(run["dir"] / "sim" / "thermal.csv", comment="#")
     points = list(dict.fromkeys(round(float(x), 1) for x in th[th["phase"] == "soak"]["chamber_c"]))
     assert len(points) >= 3
-    want = ", ".join(f"{x:g}" for x in points) + " °C"
+    want = (", ".join(f"{x:g}" for x in points) + " °C").replace("-", "\u2212")
     assert run["res"]["extra"]["chamber_profile_c"] == points
     L = labels("en")
     row = re.search(rf"<td>{re.escape(html.escape(L['chamber_profile']))}</td><td>([^<]*)</td>",

@@ -19,7 +19,7 @@ from sqlalchemy import select
 
 from gonio.errors import GonioError
 from gonio.records import blobs, services
-from gonio.records.models import Blob, Calibration, Customer, Instrument, User
+from gonio.records.models import Blob, Calibration, Customer, Instrument, Standard, User
 from gonio.records.results import result_items
 
 #: readings file names looked for in a folder when none is given
@@ -92,22 +92,48 @@ def _protocol_file(results: dict, given: str | Path | None, folder: Path) -> Pat
     return path
 
 
-def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int, dict]:
+def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int, dict, list]:
     """(sha256, size) of the laboratory file stored, or (None, 0): none given, or one that
-    gives no limits (it decides nothing the records keep); and the calibration's columns it
+    gives no limits (it decides nothing the records keep); the calibration's columns it
     gives: the environment (:func:`lab_environment`), the place and its DCC category
-    (``[certificate] place``, ``location``)."""
+    (``[certificate] place``, ``location``); and its ``[[standards]]`` (dicts)."""
     if lab is None:
-        return None, 0, {}
+        return None, 0, {}, []
     from gonio.pipeline.dispatch import load_lab_file
     from gonio.specs import get
     details = load_lab_file(lab, get(spec_key))
     cert = details.get("certificate") or {}
     env = dict(lab_environment(details), place=services.text(cert.get("place"), "place"),
                location=services.location_value(cert.get("location")))
+    stds = list(details.get("standards") or [])
     if not details.get("specification_limits"):
-        return None, 0, env
-    return (*blobs.put_file(store.blob_root, Path(lab)), env)
+        return None, 0, env, stds
+    return (*blobs.put_file(store.blob_root, Path(lab)), env, stds)
+
+
+def lab_standard_ids(s, standards: list, day: _dt.date, lab) -> list[int]:
+    """The registered standards a laboratory file's ``[[standards]]`` name, matched by
+    ``identifier``, each valid on the calibration date ``day``
+    (:func:`gonio.records.services.unusable_standard`); a standard of the file without an
+    identifier, not registered, retired or past its due date is a GonioError naming it
+    (one line; the import records nothing)."""
+    ids = []
+    for i, std in enumerate(standards, 1):
+        ident = str(std.get("identifier") or "").strip()
+        name = str(std.get("name") or "")[:80]
+        if not ident:
+            raise GonioError(f"[[standards]] {i} ({name!r}) has no identifier to match a "
+                             "registered standard", file=lab, key="standards")
+        st = s.scalar(select(Standard).where(Standard.identifier == ident))
+        if st is None:
+            raise GonioError(f"[[standards]] {i}: {ident[:80]!r} is not a registered standard "
+                             "(register it in the records first, or leave it out)", file=lab,
+                             key="standards")
+        why = services.unusable_standard(st, day)
+        if why:
+            raise GonioError(f"[[standards]] {i}: {why}", file=lab, key="standards")
+        ids.append(st.id)
+    return ids
 
 
 def lab_environment(details: dict) -> dict:
@@ -145,8 +171,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     limits it is stored as the calibration's laboratory file
     (:func:`gonio.records.services.lab_file`), so that the issue decides with the same limits
     and rule as the run reviewed; its ``[environment]`` is recorded as the calibration's,
-    stated as from the laboratory file (:func:`lab_environment`), and its place with the
-    place's DCC category (``[certificate] place``, ``location``)."""
+    stated as from the laboratory file (:func:`lab_environment`), its place with the
+    place's DCC category (``[certificate] place``, ``location``), and its ``[[standards]]``
+    as the standards used (:func:`lab_standard_ids`: each registered and valid on the
+    calibration date, else a GonioError and nothing is recorded)."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:
@@ -183,7 +211,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     psha = None
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
-    lsha, lsize, env = _lab_file(store, lab, key)
+    lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
         for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize)):
@@ -208,8 +236,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                           **env)
         s.add(cal)
         s.flush()
+        services.use_standards(s, cal, lab_standard_ids(s, lab_stds, day, lab))
         services.audit(s, actor, "import", "calibration", cal.id, None,
-                       dict(services.state(cal), folder=str(folder)))
+                       dict(services.state(cal), folder=str(folder),
+                            standards=services.standard_names(s, cal.id)))
         s.commit()
         cal_id = cal.id
     try:
@@ -230,13 +260,16 @@ def record_output_folder(store, folder: str | Path, *, actor: User | None = None
 
     The folder is imported (:func:`import_output_folder` with ``import_options``: readings,
     spec_key, customer, protocol, lab; the laboratory file's ``[environment]`` carried, its
-    source stated); then the registered standards named by their identifiers and the
-    environment given (entered, or ``environment_from_readings``; either replaces the
-    laboratory file's) are attached by ``actor``
-    (:func:`gonio.records.services.attach_by_identifiers`), and the draft certificate is
-    rendered at once from the stored result with them (:func:`gonio.records.worker.run_now`:
-    nothing computed again). Attaching needs ``actor``; the import is kept when an attach
-    is refused (the GonioError names the calibration)."""
+    source stated, and its ``[[standards]]`` matched by identifier to registered standards
+    valid on the calibration date, :func:`lab_standard_ids` — one that is not refuses the
+    whole import); then the registered standards named by their identifiers (besides the
+    laboratory file's) and the environment given (entered, or
+    ``environment_from_readings``; either replaces the laboratory file's) are attached by
+    ``actor`` (:func:`gonio.records.services.attach_by_identifiers`), and the draft
+    certificate is rendered at once from the stored result with them
+    (:func:`gonio.records.worker.run_now`: nothing computed again) — also when only the
+    laboratory file names standards. Attaching needs ``actor``; the import is kept when an
+    attach is refused (the GonioError names the calibration)."""
     environment = {}
     if temperature_c is not None or humidity_pct is not None:
         environment = {"temperature_c": temperature_c, "humidity_pct": humidity_pct}
@@ -247,9 +280,12 @@ def record_output_folder(store, folder: str | Path, *, actor: User | None = None
         raise GonioError("give the records user attaching standards or the environment "
                          "(--user or --record-user, or $GONIO_USER)", key="user")
     cid = import_output_folder(store, folder, actor=actor, **import_options)
-    if standards or environment:
+    with store.session() as s:
+        from_lab = services.standard_names(s, cid)      # the lab file's, matched at import
+    if standards or environment or (from_lab and actor is not None):
+        named = sorted(set(from_lab) | set(standards))
         try:
-            services.attach_by_identifiers(store, actor, cid, standard_identifiers=standards
+            services.attach_by_identifiers(store, actor, cid, standard_identifiers=named
                                            or None, **environment)
         except GonioError as exc:
             raise GonioError(f"calibration {cid} recorded, nothing attached: {exc.message}",

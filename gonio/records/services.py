@@ -625,7 +625,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           created_by_id=actor.id)
         s.add(cal)
         s.flush()
-        _use_standards(s, cal, ids)
+        use_standards(s, cal, ids)
         audit(s, actor, "create", "calibration", cal.id, None, state(cal))
         if reuse_note:
             audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
@@ -645,7 +645,19 @@ def location_value(value) -> str:
     return value
 
 
-def _use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str]:
+def unusable_standard(st: Standard, day: _dt.date) -> str:
+    """Why the registered standard ``st`` cannot be used on a calibration dated ``day``
+    (retired on or before it, or past its due date on it: ISO/IEC 17025 6.4.7), or ''."""
+    if st.retired_on is not None and st.retired_on <= day:
+        return f"standard {st.identifier} was retired on {st.retired_on} (the calibration " \
+               f"date is {day})"
+    if st.due_on < day:
+        return f"standard {st.identifier} was due on {st.due_on} (before the calibration " \
+               f"date {day}): calibrate it first"
+    return ""
+
+
+def use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str]:
     """The standards ``ids`` as the ones used by ``cal`` (those it had are replaced); each
     registered, not retired on or before the calibration date and not past its due date on
     it (ISO/IEC 17025 6.4.7); returns their identifiers."""
@@ -656,13 +668,9 @@ def _use_standards(s: Session, cal: Calibration, ids: Iterable[int]) -> list[str
         st = s.get(Standard, sid)
         if st is None:
             raise GonioError("no such standard", key="standards")
-        if st.retired_on is not None and st.retired_on <= day:
-            raise GonioError(f"standard {st.identifier} was retired on {st.retired_on} (the "
-                             f"calibration date is {day})", key="standards")
-        if st.due_on < day:
-            raise GonioError(f"standard {st.identifier} was due on {st.due_on} (before "
-                             f"the calibration date {day}): calibrate it first",
-                             key="standards")
+        why = unusable_standard(st, day)
+        if why:
+            raise GonioError(why, key="standards")
         s.add(CalibrationStandard(calibration_id=cal.id, standard_id=sid,
                                   due_on_at_use=st.due_on))
         names.append(st.identifier)
@@ -695,7 +703,7 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
     (``attach``, the record and its standards before and after).
 
     ``standard_ids``: the registered standards used (they replace those recorded), each
-    valid on the calibration date (:func:`_use_standards`); None or none leaves them. The
+    valid on the calibration date (:func:`use_standards`); None or none leaves them. The
     environment: ``temperature_c`` and ``humidity_pct`` as entered (compared with what the
     readings state, as at upload), or ``environment_from_readings``: both taken from the
     readings file's metadata (``# temperature_c`` or ``# room_temperature_c``, and
@@ -741,7 +749,7 @@ def attach_conditions(store, actor: User, cal_id: int, *, standard_ids=None,
         before = state(cal)
         before["standards"] = standard_names(s, cal.id)
         if standard_ids is not None:
-            _use_standards(s, cal, standard_ids)
+            use_standards(s, cal, standard_ids)
         if env is not None:
             cal.temperature_c, cal.humidity_pct, cal.environment_from = env
         if cal.status == "reviewed":     # what was reviewed changed: reviewed again

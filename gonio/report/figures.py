@@ -41,11 +41,13 @@ HTML_FIGSIZE: tuple[float, float] = (7.0, 3.4)
 @contextlib.contextmanager
 def mpl_style(fonts: tuple[str, ...] = ("DejaVu Sans",)) -> Iterator[None]:
     """rc settings of every certificate figure: deterministic SVG, the font families in
-    order (matplotlib falls back along the list glyph by glyph, e.g. a CJK font)."""
+    order (matplotlib falls back along the list glyph by glyph, e.g. a CJK font); negative
+    tick labels with the minus sign U+2212, as the certificate's text
+    (:func:`gonio.report.i18n.minus_sign`)."""
     only_ttf = tuple(fonts) == ("DejaVu Sans",)
     rc = {"svg.hashsalt": SVG_HASHSALT, "svg.fonttype": "path", "font.family": list(fonts),
           "font.size": 8.5, "axes.titlesize": 9,
-          "axes.unicode_minus": False, "pdf.fonttype": 42 if only_ttf else 3,
+          "axes.unicode_minus": True, "pdf.fonttype": 42 if only_ttf else 3,
           "axes.grid": True, "grid.alpha": 0.3, "legend.fontsize": 7,
           "path.simplify": False,
           "text.parse_math": False, "text.usetex": False}   # user text literally (no TeX)
@@ -92,6 +94,20 @@ def plain_log_ticks(fig) -> None:
                                                       minor_thresholds=(1, 0.4)))
 
 
+def minus_signs(fig) -> None:
+    """Every text a specification drew on ``fig`` (legend entries, labels, notes) with the
+    minus sign of its negative numbers (:func:`gonio.report.i18n.minus_sign`), as the
+    certificate's text; tick labels get it from ``axes.unicode_minus`` (:func:`mpl_style`)."""
+    from matplotlib.text import Text
+
+    from gonio.report.i18n import minus_sign
+
+    for t in fig.findobj(Text):
+        s = t.get_text()
+        if s and "-" in s:
+            t.set_text(minus_sign(s))
+
+
 def figure_svg(draw: Callable, res: dict, L: dict, truth=None,
                fonts: tuple[str, ...] = ("DejaVu Sans",),
                figsize: tuple[float, float] = HTML_FIGSIZE) -> str:
@@ -110,6 +126,7 @@ def figure_svg(draw: Callable, res: dict, L: dict, truth=None,
         spec = fig.add_gridspec(1, 1)[0]
         draw(fig, spec, res, L, truth)
         plain_log_ticks(fig)
+        minus_signs(fig)
         fig.tight_layout()
         buf = io.StringIO()
         fig.savefig(buf, format="svg", metadata={"Date": None}, bbox_inches="tight",

@@ -356,6 +356,28 @@ def display_uncertainty(U: float) -> str:
     return round_half_up(U, decimals_at_U(U))
 
 
+#: U+2212 MINUS SIGN, the sign of a negative number as printed (ISO 80000-1 7.2 / SI Brochure
+#: 5.4.1: the minus sign, not the hyphen).
+MINUS = "\u2212"
+#: An ASCII hyphen-minus that is a number's sign: before a digit (or ".5"), not after a Latin
+#: letter, digit, point or dash (so "IEC 62047-20", "SN-0001" and "2026-11-29" keep theirs).
+_SIGN = re.compile(r"(?<![0-9A-Za-z_.\-\u2212])-(?=\.?\d)")
+
+
+def minus_sign(text: str) -> str:
+    """``text`` as a certificate prints it: each negative number's sign as U+2212 MINUS SIGN
+    (ISO 80000-1 7.2; SI Brochure 5.4.1), never the hyphen. Only what a certificate displays
+    (HTML, PDF) goes through it: results.json, the DCC XML and summary.txt keep the ASCII
+    hyphen-minus a program reads back.
+
+    >>> minus_sign("-0.18″ at 270°; [-0.5, 0.5]; 10⁻⁵"), minus_sign("JJF 1535-2015, SN-0001")
+    ('−0.18″ at 270°; [−0.5, 0.5]; 10⁻⁵', 'JJF 1535-2015, SN-0001')
+    >>> minus_sign("（-3.0 s）"), minus_sign("bias-corrected"), minus_sign("-.5")
+    ('（−3.0 s）', 'bias-corrected', '−.5')
+    """
+    return _SIGN.sub(MINUS, text)
+
+
 _NUM = re.compile(r"^([+-]?\d+(?:\.\d+)?)(?:×10([⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+))?$")
 _UNSUP = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
 
@@ -365,8 +387,10 @@ def parse_display(text: str) -> float:
 
     >>> parse_display("2.18×10⁻⁵"), parse_display("+0.87"), parse_display("76434.843")
     (2.18e-05, 0.87, 76434.843)
+    >>> parse_display("\u22120.12")       # a certificate's minus sign (minus_sign)
+    -0.12
     """
-    m = _NUM.match(text.strip())
+    m = _NUM.match(text.strip().replace(MINUS, "-"))
     if not m:
         raise ValueError(f"not a displayed number: {text!r}")
     v = float(m.group(1))
@@ -381,7 +405,7 @@ def last_digit_unit(text: str) -> float:
     >>> last_digit_unit("0.36"), last_digit_unit("2.18×10⁻⁵"), last_digit_unit("1200")
     (0.01, 1e-07, 1.0)
     """
-    m = _NUM.match(text.strip())
+    m = _NUM.match(text.strip().replace(MINUS, "-"))
     if not m:
         raise ValueError(f"not a displayed number: {text!r}")
     mant = m.group(1)

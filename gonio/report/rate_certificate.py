@@ -215,9 +215,12 @@ def results_table(res: dict, data, L: dict, lang: str) -> tuple[list, list]:
             n = item_nums(it, f"items.{key}")
             val = n["value"] or "—"
             if n["statement"].interval is not None:     # stated by its interval, with p
-                # (also a non-negative item whose U exceeds its value: its upper bound)
-                val = [val, ("；" if lang == "zh" else "; ")
-                       + n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")]
+                # (also a non-negative item whose U exceeds its value: its upper bound;
+                # one whose estimate fell below zero: that bound alone, and why)
+                sep = "；" if lang == "zh" else "; "
+                cell = n["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
+                val = ([cell + sep + n["statement"].below_zero_note(lang)]
+                       if n["statement"].below_zero else [val, sep + cell])
             rows.append(["", name, NoBreakText(it["clause"]), val, n["U"] or "—",
                          n["k"] or "—", n["nu"] or "—", unit_text(it["unit"])])
     head = [L["no"], L["item"], L["clause"], L["result"], "U", "k", "ν_eff", L["unit"]]

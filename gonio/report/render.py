@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from gonio.errors import GonioError
-from gonio.report.figures import mpl_style, plain_log_ticks
-from gonio.report.i18n import cjk_font, labels
+from gonio.report.figures import minus_signs, mpl_style, plain_log_ticks
+from gonio.report.i18n import cjk_font, labels, minus_sign
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import Num
 from gonio.report.text import fit_header
@@ -112,12 +112,12 @@ def _h(x, cell: bool = False) -> str:
     list of them; ``cell``: a table cell's text, relations bound (:data:`_BIND`)."""
     if isinstance(x, Num):
         return (f'<span class="num" data-src="{html.escape(x.src)}" '
-                f'data-rule="{html.escape(x.rule)}">{html.escape(x.text)}</span>')
+                f'data-rule="{html.escape(x.rule)}">{html.escape(minus_sign(x.text))}</span>')
     if isinstance(x, NoBreak):
-        return f'<span class="nb">{html.escape(str(x))}</span>'
+        return f'<span class="nb">{html.escape(minus_sign(str(x)))}</span>'
     if isinstance(x, list):
         return "".join(_h(s, cell) for s in x)
-    s = html.escape(str(x))
+    s = html.escape(minus_sign(str(x)))
     if cell:
         s = _BIND.sub(lambda m: f"\u00a0{m[1]}\u00a0", s)
         if s.startswith(" %"):                  # "95 %" whose number is the segment before
@@ -330,17 +330,18 @@ def _wrap(text: str, width: int) -> list[str]:
 
 
 def _text(x) -> str:
+    """A block's text as the PDF prints it (numbers with the minus sign, :func:`minus_sign`)."""
     if isinstance(x, Num):
-        return x.text
+        return minus_sign(x.text)
     if isinstance(x, list):
         return "".join(_text(s) for s in x)
-    return str(x)
+    return minus_sign(str(x))
 
 
 def _cell_lines(c, cols: int) -> list[str]:
     """A table cell's lines: a NoBreak cell (identifier, unit) is never split."""
     if isinstance(c, NoBreak):
-        return [str(c)]
+        return [minus_sign(str(c))]
     return _wrap(_text(c), cols)
 
 
@@ -628,6 +629,7 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
                                   top=y - 0.05, bottom=y - _FIG_H + 0.035)
             draw(fig, gs[0], content["_report"], L, content["_truth"])
             plain_log_ticks(fig)
+            minus_signs(fig)
             for i, t in enumerate(cap_lines):
                 fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,
                          va="baseline")

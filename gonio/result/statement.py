@@ -12,6 +12,8 @@ Contents
 :func:`state_interval`     value and its coverage interval (a dispersion, range, extreme)
                            → a :class:`Statement` with one interval, no ± U and no k
 :func:`item_statement`     the statement of one results.json item (or model ``Item``)
+:func:`below_zero_bound`   a non-negative quantity whose estimate fell below zero: stated by
+                           its upper bound alone, with a note (the estimate stays in results.json)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
 :func:`k_text`             a coverage factor as stated (3 significant digits)
@@ -65,7 +67,15 @@ quantity whose whole interval lies at or below zero** (value + U ≤ 0: an estim
 zero by more than its U) has no coverage interval of possible values at all; the rule
 refuses to state it (:class:`~gonio.errors.GonioError`), and a specification reports such
 an item as not measured with that reason; it is never printed as a negative bound
-("≤ -4.0 s"). An empty acceptance interval of such a quantity (guard band wider than the
+("≤ -4.0 s"). **A non-negative quantity whose estimate fell below zero while its interval
+does not** (a range or spread corrected for its bias, K_l, C_v, C_g: the correction can take
+the estimate below zero when the errors alone would spread the values more than they were
+measured to spread) is stated by its **upper bound alone**, "≤ upper (p ≈ 95 %)", with the
+note that the estimate fell below zero (:func:`below_zero_bound`, ``Statement.below_zero``):
+a negative value printed beside its [0, upper] interval would state a value the quantity
+cannot take. results.json keeps the signed estimate (a later correction or a pooled
+analysis needs it); every printed output (certificate, summary.txt, the web, the DCC's
+description) says the bound and the note. An empty acceptance interval of such a quantity (guard band wider than the
 limit) is likewise said in words, never as a negative limit
 (:func:`gonio.report.stated.conformity_texts`). Wording used by
 every output: en "upper bound: ≤ 0.098 °/s (interval [0, 0.098], p ≈ 95 %)", zh "上限：≤
@@ -328,7 +338,9 @@ class Statement:
     ``k``, ``nu_eff``, ``p`` (per cent) are None where unknown; ``upper`` is the upper
     bound of a non-negative quantity whose U exceeds its value (else None; with it ``U`` and
     ``k`` are None and ``interval`` is ("0", upper): one statement); ``decimals``
-    is the decimal place the value was rounded at (None without U: ``sig`` digits).
+    is the decimal place the value was rounded at (None without U: ``sig`` digits);
+    ``below_zero``: a non-negative quantity whose estimate fell below zero, stated by its
+    upper bound alone (:func:`below_zero_bound`; ``value`` keeps the rounded estimate).
     """
 
     value: str
@@ -341,6 +353,7 @@ class Statement:
     exponent: int = 0
     decimals: int | None = None
     interval: tuple[str, str] | None = None
+    below_zero: bool = False
 
     def _x(self, s: str) -> str:
         return f"{s}×10{str(self.exponent).translate(_SUP)}" if self.exponent else s
@@ -404,10 +417,19 @@ class Statement:
             return f"区间 [{lo}, {hi}]{u}" + (f"（{p}）" if p else "")
         return f"interval [{lo}, {hi}]{u}" + (f" ({p})" if p else "")
 
+    def below_zero_note(self, lang: str = "en") -> str:
+        """The note beside the upper bound of a quantity whose estimate fell below zero
+        (:func:`below_zero_bound`), or ""."""
+        return BELOW_ZERO_NOTE.get(lang, BELOW_ZERO_NOTE["en"]) if self.below_zero else ""
+
     def text(self, lang: str = "en") -> str:
         """The whole statement in one line: "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, …)", or for
-        an item stated by its interval "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)"."""
+        an item stated by its interval "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)"; a
+        non-negative quantity whose estimate fell below zero: its upper bound and the note."""
         u = f" {self.unit}" if self.unit else ""
+        sep = "；" if lang == "zh" else "; "
+        if self.below_zero:
+            return self.interval_text(lang) + sep + self.below_zero_note(lang)
         if self.interval is not None:
             return f"{self.value_text}{u}" + ("；" if lang == "zh" else "; ") + \
                 self.interval_text(lang)
@@ -421,6 +443,35 @@ class Statement:
     def to_json(self) -> dict:
         """The fields as a JSON object (all texts; for summary files and checks)."""
         return asdict(self)
+
+
+#: The note beside the upper bound of a non-negative quantity whose estimate fell below zero.
+BELOW_ZERO_NOTE = {"en": "the estimate fell below zero",
+                   "zh": "估计值低于零"}
+
+
+def below_zero_bound(st: Statement, value: float, nonnegative: bool) -> Statement:
+    """The statement of a non-negative quantity whose estimate ``value`` fell below zero
+    while its coverage interval [0, upper] reaches above it: its upper bound alone, "≤ upper
+    (p ≈ 95 %)", marked ``below_zero`` (every output then prints the bound and
+    :data:`BELOW_ZERO_NOTE`, never the negative value beside an interval that starts at 0:
+    GUM 4.3.9 / JCGM 101 7.7, a coverage interval and an estimate hold only possible values,
+    and the estimate, unbiased or not, is not one). Any other statement is returned as it is.
+    The signed estimate stays in results.json (``value``) and in ``Statement.value``.
+
+    >>> st = below_zero_bound(state(-3.0, 4.0, nonnegative=True, unit="s"), -3.0, True)
+    >>> st.below_zero, st.upper, st.interval_text(short=True)
+    (True, '1.0', '≤ 1.0')
+    >>> below_zero_bound(state(0.01, 0.088, nonnegative=True), 0.01, True).below_zero
+    False
+    >>> below_zero_bound(state(-0.2, 0.1), -0.2, False).below_zero     # may be negative
+    False
+    """
+    from dataclasses import replace
+
+    if nonnegative and st.upper is not None and math.isfinite(float(value)) and float(value) < 0:
+        return replace(st, below_zero=True)
+    return st
 
 
 def _scaled(d: Decimal, exponent: int, decimals: int) -> str:
@@ -483,9 +534,10 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
             if dec > 6 or abs(hr) >= Decimal("1e15") else 0
     md = dec + exponent
     ht = _scaled(hr, exponent, md)
-    return Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff), p_text(p), unit_s,
-                     upper=ht if one_sided else None, exponent=exponent, decimals=dec,
-                     interval=(_scaled(lr, exponent, md), ht))
+    return below_zero_bound(
+        Statement(_scaled(vr, exponent, md), None, None, nu_text(nu_eff), p_text(p), unit_s,
+                  upper=ht if one_sided else None, exponent=exponent, decimals=dec,
+                  interval=(_scaled(lr, exponent, md), ht)), value, nonnegative)
 
 
 def state(value: float | None, U: float | None = None, *, k: float | None = None,
@@ -508,7 +560,7 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     >>> state(175.0, 1200.0, k=2, p=0.95, nonnegative=True, unit="s").text()
     '200 s; upper bound: ≤ 1400 s (interval [0, 1400], p ≈ 95 %)'
     >>> state(-3.0, 4.0, nonnegative=True, unit="s").text()
-    '-3.0 s; upper bound: ≤ 1.0 s (interval [0, 1.0])'
+    'upper bound: ≤ 1.0 s (interval [0, 1.0]); the estimate fell below zero'
     >>> state(-5.0, 1.0, nonnegative=True, unit="s")
     Traceback (most recent call last):
     gonio.errors.GonioError: -5 ± 1 s: a non-negative quantity whose interval lies wholly at or below zero has no coverage interval of possible values; not stated
@@ -553,8 +605,10 @@ def state(value: float | None, U: float | None = None, *, k: float | None = None
     vt, Ut = _scaled(vr, exponent, md), _scaled(Ur, exponent, md)
     if ur is not None:          # one statement: the interval [0, upper], no ± U and no k
         upper = _scaled(ur, exponent, md)
-        return Statement(vt, None, None, nt, pt, unit_s, upper=upper, exponent=exponent,
-                         decimals=dec, interval=(_scaled(Decimal(0), exponent, md), upper))
+        return below_zero_bound(
+            Statement(vt, None, None, nt, pt, unit_s, upper=upper, exponent=exponent,
+                      decimals=dec, interval=(_scaled(Decimal(0), exponent, md), upper)),
+            value, nonnegative)
     return Statement(vt, Ut, kt, nt, pt, unit_s, exponent=exponent, decimals=dec)
 
 

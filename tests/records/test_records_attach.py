@@ -346,15 +346,24 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
     capsys.readouterr()
     assert main(run + ["--out", str(tmp_path / "a"), "--record"]) == 0
     err = capsys.readouterr().err
-    assert ("gonio: recorded as calibration 1: standards none; environment 20.1 °C, 45 % (from "
-            "the laboratory file); before its review it needs registered standard valid on"
-            ) in err and "(gonio db attach 1 --standard ID" in err, err
+    # the laboratory file's [[standards]] RT-07 is the registered RT-07 (before: none)
+    assert err.endswith("gonio: recorded as calibration 1: standards RT-07; environment "
+                        "20.1 °C, 45 % (from the laboratory file)\n"), err
     assert main(run + ["--out", str(tmp_path / "b"), "--record", "--standard", "RT-07",
                        "--temperature", "20", "--humidity", "44"]) == 0
     assert capsys.readouterr().err.endswith(
         "gonio: recorded as calibration 2: standards RT-07; environment 20 °C, 44 %\n")
     assert main(run + ["--out", str(tmp_path / "c"), "--standard", "RT-07"]) == 2
     assert "go with --record" in capsys.readouterr().err
+    # a laboratory file naming a standard not registered: one line, nothing recorded
+    other = tmp_path / "lab-other.toml"
+    other.write_text(lab.read_text("utf-8").replace('identifier = "RT-07"',
+                                                    'identifier = "AC-99"'), "utf-8")
+    run[run.index(str(lab))] = str(other)
+    assert main(run + ["--out", str(tmp_path / "d"), "--record"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gonio: error: ") and err.count("\n") == 1, err
+    assert "[[standards]] 1: 'AC-99' is not a registered standard" in err, err
     st = open_store(None, data)
     try:
         one, two = services.calibration(st, 1), services.calibration(st, 2)
@@ -366,6 +375,81 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
         assert "DRAFT-2" in draft and '<span class="nb">RT-07</span>' in draft
         assert "<td>20 °C</td>" in draft and "<td>44 %</td>" in draft
         assert services.lab_details(st, 1, final=False)["environment"]["source"] == "entered"
+        assert queries.calibrations(st)[1] == 2                # the refused one: not recorded
+        assert one.status == "computed"   # rendered at once with the lab file's standard
+        assert '<span class="nb">RT-07</span>' in draft_html(st, 1)
+    finally:
+        st.close()
+
+
+def lab_with_standards(tmp_path: Path, name: str, block: str) -> Path:
+    """The example laboratory file with its [[standards]] replaced by ``block``, without
+    its decision rule and limits (the computed folder was decided without them)."""
+    text = (REPO / "protocols" / "lab-example.toml").read_text("utf-8")
+    text = text[:text.index("\n# Statement of conformity") + 1]
+    start = text.index("[[standards]]")
+    end = text.index("\n[environment]") + 1
+    path = tmp_path / name
+    path.write_text(text[:start] + block + "\n" + text[end:], "utf-8")
+    return path
+
+
+def test_db_import_matches_the_lab_files_standards(tmp_path, computed_folder, bench_readings,
+                                                   monkeypatch, capsys):
+    """gonio db import --lab (gonio calibrate --record's function): each of the laboratory
+    file's [[standards]] must be a registered standard, by identifier, valid on the
+    calibration date; else one line, exit 2, and nothing is recorded (before: the file's
+    standards were ignored, the calibration recorded with none)."""
+    data = records_of_alice(tmp_path, monkeypatch)
+    st = open_store(None, data)
+    try:
+        services.add_standard(st, services.user(st, "alice"), name="autocollimator",
+                              identifier="AC-OLD", calibrated_on=dt.date(2019, 1, 1),
+                              due_on=dt.date(2020, 1, 1))
+    finally:
+        st.close()
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    shutil.copy(bench_readings[0], folder / "readings.csv")
+    rt07 = 'name = "rotary table"\nidentifier = "RT-07"\n'
+    cases = (("unknown.toml", '[[standards]]\n' + rt07 + '[[standards]]\nname = "level"\n'
+              'identifier = "LV-3"\n', "[[standards]] 2: 'LV-3' is not a registered standard"),
+             ("blank.toml", '[[standards]]\nname = "level"\n',
+              "[[standards]] 1 ('level') has no identifier to match a registered standard"),
+             ("old.toml", '[[standards]]\n' + rt07 + '[[standards]]\nname = "ac"\n'
+              'identifier = "AC-OLD"\n', "[[standards]] 2: standard AC-OLD was due on "
+              f"2020-01-01 (before the calibration date {dt.date.today()})"))
+    argv = ["db", "import", str(folder), "--data", str(data), "--protocol",
+            str(SMALL_PROTOCOL), "--user", "alice"]
+    capsys.readouterr()
+    for name, block, msg in cases:
+        assert main(argv + ["--lab", str(lab_with_standards(tmp_path, name, block))]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("gonio: error: ") and err.count("\n") == 1 and msg in err, err
+    st = open_store(None, data)
+    try:
+        assert queries.calibrations(st)[1] == 0
+        with st.session() as s:
+            assert not s.scalars(select(AuditEvent).where(AuditEvent.action == "import")).all()
+    finally:
+        st.close()
+    # both registered and valid: recorded with them and --standard's, its draft rendered
+    good = lab_with_standards(tmp_path, "good.toml", '[[standards]]\n' + rt07)
+    st = open_store(None, data)
+    try:
+        services.add_standard(st, services.user(st, "alice"), name="level", identifier="LV-3",
+                              due_on=dt.date.today() + dt.timedelta(days=30))
+    finally:
+        st.close()
+    assert main(argv + ["--lab", str(good), "--standard", "LV-3"]) == 0
+    assert capsys.readouterr().out.endswith(
+        "calibration 1: standards LV-3, RT-07; environment 20.1 °C, 45 % (from the "
+        "laboratory file)\n")
+    st = open_store(None, data)
+    try:
+        assert services.calibration(st, 1).status == "computed"
+        draft = draft_html(st, 1)
+        assert '<span class="nb">RT-07</span>' in draft and '<span class="nb">LV-3</span>' in draft
     finally:
         st.close()
 

@@ -61,19 +61,22 @@ def test_calibrate_record_puts_the_run_into_the_records(tmp_path, bench_readings
         st.close()
 
 
-def test_calibrate_record_keeps_the_lab_file_for_the_issue(tmp_path, bench_readings):
+def test_calibrate_record_keeps_the_lab_file_for_the_issue(tmp_path, bench_readings,
+                                                           monkeypatch):
     """``gonio calibrate --lab FILE --record``: the laboratory file is stored with the
     calibration, so that the records' details (written as the lab file, the same pipeline)
     decide with the file's limits and rule and carry the recorded result item for item
-    (before: the instrument's limits, none)."""
+    (before: the instrument's limits, none). Its standard RT-07 is a registered one."""
     import json
 
     from gonio.records.compute import calibrate_folder, write_lab_toml
     from gonio.records.results import result_items
 
+    from .test_records_attach import records_of_alice
+
     repo = Path(__file__).resolve().parents[2]
     lab = repo / "protocols" / "lab-example.toml"
-    data, out = tmp_path / "data", tmp_path / "cal"
+    data, out = records_of_alice(tmp_path, monkeypatch), tmp_path / "cal"
     protocol = str(repo / "tests" / "data" / "small-protocol.toml")
     assert main(["calibrate", str(bench_readings[1]), "--protocol", protocol, "--out", str(out),
                  "--lab", str(lab), "--record", "--data", str(data)]) == 0

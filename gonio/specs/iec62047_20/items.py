@@ -569,12 +569,15 @@ def bias_temperature(ctx: Context) -> Item:
 
 
 def _static(ctx: Context):
-    if "allan" in ctx.cache:
-        return ctx.cache["allan"]
-    rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.a_base)
-    allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
-    ctx.cache["allan"] = (allan, rate_dph, dt)
-    return ctx.cache["allan"]
+    """(Allan deviation, rate °/h, Δt s) of the static record (5.4), cached per scale factor
+    and null output: a context copied with a provisional a_BASE (while a_BASE itself is being
+    fitted) shares the cache dict and must not hand its record to the final one."""
+    key = ("allan", ctx.a_base, ctx.null_output)
+    if key not in ctx.cache:
+        rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.a_base)
+        allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
+        ctx.cache[key] = (allan, rate_dph, dt)
+    return ctx.cache[key]
 
 
 def _static_extent(ctx: Context) -> tuple[int, bool]:
@@ -597,9 +600,10 @@ def _quiet(ctx: Context, key: str, title: str, clause: str, unit: str) -> Item |
 
 def _noise_fit(ctx: Context):
     """The five-term Allan fit of the static record (cached; IEEE 952 Annex C)."""
-    if "noise_fit" not in ctx.cache:
-        ctx.cache["noise_fit"] = fit_noise_model(_static(ctx)[0])
-    return ctx.cache["noise_fit"]
+    key = ("noise_fit", ctx.a_base, ctx.null_output)
+    if key not in ctx.cache:
+        ctx.cache[key] = fit_noise_model(_static(ctx)[0])
+    return ctx.cache[key]
 
 
 def arw(ctx: Context) -> Item:
@@ -880,8 +884,9 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
 
 def _bias_temperature_points(ctx: Context):
     """(T, B °/s, u(B) °/s, ν, mid-time s) of every bias_temperature visit, in visit order."""
-    if "bt" in ctx.cache:
-        return ctx.cache["bt"]
+    key = ("bt", ctx.a_base, ctx.null_output)
+    if key in ctx.cache:
+        return ctx.cache[key]
     kmap = {round(c["T"], 6): c["a"] for c in _sf_runs(ctx, "sf_temperature")} \
         if ctx.has("sf_temperature") else {}
     out = []
@@ -896,7 +901,7 @@ def _bias_temperature_points(ctx: Context):
             um, nu = s.std / math.sqrt(s.n), max(s.n - 1, 1)
         out.append((s.temperature_c, (s.mean - ctx.null_output) / a - earth, um / abs(a), nu,
                     s.time_s + 0.5 * s.n))
-    ctx.cache["bt"] = out
+    ctx.cache[key] = out
     return out
 
 

@@ -74,7 +74,7 @@ ZERO_STABILITY_READINGS = {
 
 
 #: Labels of the two readings of each range item stated corrected for its bias (results.json
-#: ``<item>.details.estimates``): K_l (7.2) and C_v (7.6).
+#: ``<item>.details.estimates``): K_l (7.2), C_v (7.6) and C_g (7.7).
 RANGE_READINGS = {
     "scale_factor_nonlinearity": {
         "draft": "the draft's reading (7.2): K_l = (max K_i - min K_i)/K of the rounds as "
@@ -88,8 +88,16 @@ RANGE_READINGS = {
                  "as measured, biased upwards by the E_v's errors; its u includes that bias "
                  "(line C_rng)",
         "corrected": "stated: the range corrected for its bias by the E_v's errors (means, "
-                     "table, zero drift, K and its tilt bias; JCGM 101 Monte Carlo), u the "
-                     "spread of the measured range and the choice of each extreme"},
+                     "table, zero drift, K and its tilt bias; JCGM 101 Monte Carlo) and for "
+                     "the choice of each extreme (line C_sel), u the spread of the measured "
+                     "range and the choice of each extreme"},
+    "pointing_consistency": {
+        "draft": "the draft's reading (7.7): C_g = (max E_g - min E_g)/reference of the "
+                 "orientations as measured, each E_g the signed extreme of its curve, biased "
+                 "by that choice; its u includes the choice's spread (line C_sel)",
+        "corrected": "stated: the draft's reading less the expected shift of the choice of "
+                     "each extreme (JCGM 101 Monte Carlo of the readings' noise through the "
+                     "draft's functional), with the draft's u"},
 }
 
 
@@ -851,6 +859,13 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         if name == "rate_consistency":          # stated corrected, the draft's range beside
             out[name] = dataclasses.replace(iu.consistency_corrected_budget(*args, **kw),
                                             beside=out[name])
+        else:                 # C_g: stated corrected for the choice of its extremes
+            out[name] = iu.selection_corrected_budget(
+                out[name], curves, [c.u_single_arcsec / math.sqrt(max(c.n_series, 1))
+                                    for c in conds],
+                reference_angle_arcsec=args[2], scale=scale, table_mpe_arcsec=mpe,
+                drift_half_width_arcsec=kw["drift_half_width_arcsec"],
+                scale_factor_u_rel=k_u_rel, k=k_fixed)
     return out
 
 

@@ -221,15 +221,19 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += [L["semi"], *segments(L["note_spread"],
                                      v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]
-            if name == "rate_consistency" and detail(res, name, "estimates"):
-                cell += [L["semi"], *segments(L["note_cv_draft"], v=_num(
+            if detail(res, name, "estimates"):
+                note = "note_cv_draft" if name == "rate_consistency" else "note_cg_draft"
+                cell += [L["semi"], *segments(L[note], v=_num(
                     res, item_path(name, "estimates.draft.value"), "sig3", U))]
         elif name == "repeatability" and detail(res, name, "position_deg") is not None:
             opening, _, closing = L["paren"].partition("{x}")
             cell += [opening, *segments(L["note_at"],
                                         p=_num(res, item_path(name, "position_deg"), "pos", U)),
                      closing]
-        if st["interval"] is not None:    # B_s, R: the one statement, its χ² interval
+        if st["below_zero"]:    # a corrected range below zero: its upper bound alone, and why
+            pre, _, post = interval_cell(st, lang).partition(st["upper"])
+            cell[0:1] = [pre, st["bound"], post + L["semi"] + L["below_zero"]]
+        elif st["interval"] is not None:    # B_s, R: the one statement, its χ² interval
             cell[1:1] = [L["semi"] + interval_cell(st, lang)]
         rrows.append([str(i), L[name], clause_text(item["clause"], L), cell, u_cell(st, L), unit])
     return rrows

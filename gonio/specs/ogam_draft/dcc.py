@@ -136,6 +136,9 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
+        elif s["below_zero"]:     # the signed estimate as results.json has it, and why
+            quantity(data, L[name], s["value"], item["unit"],
+                     description=LABELS["below_zero"]["en"], **kw)
         else:
             quantity(data, L[name], s["value"], item["unit"], **kw)
         _detail_lists(data, res, name)

@@ -25,6 +25,7 @@ E                         per point: mean over the series of the noise-free devi
                           (``systematic_deviation_arcsec``); every point counts
 R                         ensemble value: max over points of √(mean over trials of s_i²)
 C_v, C_g                  the same formula as the result, on the noise-free deviations
+                          (results: the stated, bias-corrected readings; the draft's beside)
 ========================  ===============================================================
 """
 
@@ -70,7 +71,10 @@ ITEM_TRUTHS = {
                         "the bias-corrected range",
     "rate_consistency_draft": "as rate_consistency; result the draft's range as measured, U "
                               "widened for its bias (not stated)",
-    "pointing_consistency": "spread of the noise-free E_g over the reference angle, %",
+    "pointing_consistency": "spread of the noise-free E_g over the reference angle, %; result "
+                            "corrected for the choice of each extreme",
+    "pointing_consistency_draft": "as pointing_consistency; result the draft's range as "
+                                  "measured (not stated)",
 }
 
 

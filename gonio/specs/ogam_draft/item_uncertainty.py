@@ -52,7 +52,7 @@ from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
 __all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
            "nonlinearity_corrected_budget",
            "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
-           "consistency_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
+           "consistency_budget", "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
            "COUNT_QUANTUM_U"]
 
 #: Coverage probability of every stated U (JCGM 100 6.2.2, 95 %).
@@ -297,6 +297,18 @@ def _single_round_u(k_i: np.ndarray, theta_deg: np.ndarray, table_mpe_arcsec: fl
     return u_tab, u_q
 
 
+def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
+    """The 7.1 rounds as K_l's budgets take them (draft 7.2): (K_i, θ_k, n, mean K_i, u_tab,
+    u_q) with the single rounds' table and count-quantum u (:func:`_single_round_u`);
+    fewer than two rounds have no range (ValueError)."""
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    if k_i.size < 2:
+        raise ValueError("K_l needs at least two rounds")
+    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    return k_i, th, int(k_i.size), float(np.mean(k_i)), u_tab, u_q
+
+
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
                         tilt_bias_arcsec_per_deg: float = 0.0,
@@ -420,13 +432,7 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> [round(c.u * 1e4, 3) for c in b.components]
     [0.573, 1.145, 0.56]
     """
-    k_i = np.asarray(k_i, dtype=float)
-    th = np.asarray(theta_deg, dtype=float)
-    n = k_i.size
-    if n < 2:
-        raise ValueError("K_l needs at least two rounds")
-    kbar = float(np.mean(k_i))
-    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     u_i = np.sqrt(u_tab ** 2 + u_q ** 2)
     i_max, i_min = int(np.argmax(k_i)), int(np.argmin(k_i))
     to_pct = 100.0 / kbar
@@ -503,14 +509,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     """
     from uncertainty.stdev import corrected_range
 
-    k_i = np.asarray(k_i, dtype=float)
-    th = np.asarray(theta_deg, dtype=float)
-    n = k_i.size
-    if n < 2:
-        raise ValueError("K_l needs at least two rounds")
-    kbar = float(np.mean(k_i))
+    k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     to_pct = 100.0 / kbar
-    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
     rng = np.random.default_rng(RANGE_SEED)
     err = (rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
            + rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))) * to_pct
@@ -702,8 +702,13 @@ def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
     [0, R·√(ν/χ²_0.05,ν)] alone (:func:`chi_square_statement`; a fixed k of the
     laboratory is not applied). It holds max σ_i with at least 95 % whatever the σ_i: R is
     at least the s of the point with the largest σ_i, whose own limit holds that σ_i with
-    95 %. (Picking the largest of m biases R upwards when the σ_i are alike,
-    :func:`uncertainty.stdev.max_stdev_interval`; that bias only widens the interval.)
+    95 %. R's distribution, P(R ≤ r) = Π_i F_χ²(ν r²/σ_i²; ν), depends on the unknown pattern
+    of the σ_i: this interval is exact at the least favourable one (one σ_i at the maximum,
+    the others far below) and the only one valid for every pattern; where the σ_i are alike
+    picking the largest of m biases R upwards and the interval is wider than needed. The
+    interval of the maximum of m equal ones (:func:`uncertainty.stdev.max_stdev_interval`)
+    or of the measured pattern would be narrower there, but covers about 20 % (73 %) of the
+    time with one position poorer than the rest (tests/test_repeatability_interval.py).
 
     Examples
     --------
@@ -806,9 +811,9 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
 
     ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, as ``conditions``) adds the
     *choice of the extreme* (``C_sel``, :func:`extreme_selection_u`): noise can pick a
-    curve's other excursion, which no linear line holds. Its bias
-    (:func:`extreme_selection`) is not subtracted: measured, the plug-in correction moved the
-    studies' z the wrong way (see there).
+    curve's other excursion, which no linear line holds. This is the draft's reading, as
+    measured; its selection bias (:func:`extreme_selection`) is subtracted in the stated
+    reading (:func:`selection_corrected_budget`, :func:`consistency_corrected_budget`).
 
     Examples
     --------
@@ -924,7 +929,9 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     same δ for all, 7.1) and the tilt bias of K A_K·θ_v (arcsine, the same phase for all, A.1).
     C is the range whose expected measured range equals the one measured; u is the spread of
     the measured range there (line ``C_rng``, normal), with the choice of each condition's
-    extreme (``C_sel``) beside it as in :func:`consistency_budget`. The value is negative when
+    extreme (``C_sel``) beside it as in :func:`consistency_budget`; with ``curves`` the
+    choice's expected-value shift (:func:`extreme_selection`'s ``bias``, JCGM 101 7.2 through
+    the draft's functional) is subtracted too. The value is negative when
     the measured range is smaller than the errors alone would give (stated by its interval
     [0, C + U]); when even C + U ≤ 0 it is taken as 0, as
     :func:`nonlinearity_corrected_budget`. Beyond the draft (its own reading, the range as
@@ -978,15 +985,72 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
                                  f"{c.noise_range:.4g} {unit}, corrected {c.value:.4g} {unit}"),
                    "range of the E_v, bias corrected", True,
                    clause + " (A.4.1, A.4.3, A.4.4, 7.1)")]
+    value = c.value
     if curves is not None:
-        u_sel = extreme_selection_u(curves, list(u_mean), table_mpe_arcsec,
-                                    drift_half_width_arcsec, scale_factor_u_rel) * f
-        lines.append(_Line(from_u("C_sel", 0.0, u_sel, type="B",
-                                  source="Monte Carlo of the signed extremes (JCGM 101)"),
-                           "choice of each condition's extreme", True, clause))
+        u_sel, bias = extreme_selection(curves, list(u_mean), table_mpe_arcsec,
+                                        drift_half_width_arcsec, scale_factor_u_rel)
+        lines.append(_selection_line(u_sel * f, bias * f, unit, clause))
+        value -= bias * f
     u_c = math.hypot(*(ln.q.u for ln in lines))
-    value = c.value if c.value + kk * u_c > 0 else 0.0
+    value = value if value + kk * u_c > 0 else 0.0
     return replace(_budget(item, unit, value, lines, k=k), nonnegative=True)
+
+
+def _selection_line(u_sel: float, bias: float, unit: str, clause: str) -> _Line:
+    """The ``C_sel`` line (the choice of each condition's extreme, item's unit) and the bias
+    subtracted for it, named in its source."""
+    return _Line(from_u("C_sel", 0.0, u_sel, type="B",
+                        source=f"Monte Carlo of the signed extremes (JCGM 101); selection "
+                               f"bias {bias:.4g} {unit} subtracted"),
+                 "choice of each condition's extreme, bias corrected", True, clause)
+
+
+def selection_corrected_budget(draft: ItemUncertainty, curves, u_mean_arcsec, *,
+                               reference_angle_arcsec: float, scale: float,
+                               table_mpe_arcsec: float, drift_half_width_arcsec: float,
+                               scale_factor_u_rel: float = 0.0,
+                               k: float | None = None) -> ItemUncertainty:
+    """The draft's consistency (:func:`consistency_budget`, C_g of 7.7) corrected for the
+    *choice* of each condition's extreme: C − bias, ``bias`` the expected-value shift of the
+    draft's functional "E = ± max|E_i|" at the measured curves (:func:`extreme_selection`:
+    JCGM 101 7.2, the readings' noise drawn through the functional itself, the mean with the
+    extremes chosen afresh less the mean at the estimate's own extreme points), with the
+    draft's lines and u (the ``C_sel`` line now names the bias subtracted). A correction below
+    zero is a non-negative quantity's estimate below zero (stated by its upper bound alone,
+    :func:`gonio.result.statement.below_zero_bound`); when even C − bias + U ≤ 0 it is taken
+    as 0, as :func:`consistency_corrected_budget`. The draft's reading is kept ``beside``.
+
+    Examples
+    --------
+    Two orientations whose first curve has two excursions of nearly one size (+0.40″ at 30°,
+    −0.38″ at 60°): noise picks either, and where it picks −0.38″ the spread to the other
+    curve's −0.8″ shrinks, so the draft's C is low on average; the corrected C lies above it:
+
+    >>> tie = [([30.0, 60.0], [0.4, -0.38]), ([30.0, 60.0], [-0.8, 0.0])]
+    >>> cs = [ConditionDeviation("a", 0.4, 30.0, 0.05, 1),
+    ...       ConditionDeviation("b", -0.8, 30.0, 0.05, 1)]
+    >>> kw = dict(table_mpe_arcsec=0.1, drift_half_width_arcsec=0.0)
+    >>> d = consistency_budget("pointing_consistency", cs, 1296000.0, 100.0, curves=tie, **kw)
+    >>> c = selection_corrected_budget(d, tie, [0.05, 0.05], reference_angle_arcsec=1296000.0,
+    ...                                scale=100.0, **kw)
+    >>> bias = extreme_selection(tie, [0.05, 0.05], 0.1, 0.0)[1] * 100 / 1296000
+    >>> math.isclose(c.value, d.value - bias), c.value > d.value, c.u_c == d.u_c
+    (True, True, True)
+    """
+    f = scale / reference_angle_arcsec
+    u_sel, bias = extreme_selection(curves, list(u_mean_arcsec), table_mpe_arcsec,
+                                    drift_half_width_arcsec, scale_factor_u_rel)
+    clause = "7.6" if draft.item == "rate_consistency" else "7.7"
+    ln = _selection_line(u_sel * f, bias * f, draft.unit, clause)
+    comps = tuple(replace(c, name=ln.name, source=ln.q.source) if c.symbol == "C_sel" else c
+                  for c in draft.components)
+    kk = float(k) if k is not None else draft.k
+    value = draft.value - bias * f
+    value = value if value + kk * draft.u_c > 0 else 0.0
+    # the same additive model about the corrected value (its JCGM 101 draws centre there)
+    return replace(draft, value=float(value), components=comps, nonnegative=True,
+                   model=replace(draft.model, value=float(value)),
+                   gum=replace(draft.gum, value=float(value)), beside=draft)
 
 
 def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
@@ -1025,14 +1089,12 @@ def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
     its choice) gives that difference as ``bias`` = mean(free) − mean(held) over draws of
     the noise alone (the means' u; the table, drift and K lines are one offset per
     calibration, shared by the truth as mounted, so they make no selection bias of the
-    estimator). It is the plug-in (bootstrap) estimate at the measured curves, and
-    :func:`consistency_budget` does not subtract it: on the optical study (``gonio validate
-    --all-items --cases typeb,worst --trials 40 --seed 20261129 --sample-rate-hz 5``)
-    subtracting it moved z = (C − truth)/u_c away from 0 for both items — C_v drawn
-    +0.45 → +0.50, C_g drawn −0.20 → −0.34 (sd 0.82 → 1.02), C_g at the worst condition
-    covering 39 → 37 of 40 — because at curves where noise has already flipped the choice
-    the plug-in corrects the other way (a discontinuous functional's bootstrap bias). The
-    choice's spread stays in u. Fixed seed: the same curves give the same (u, bias).
+    estimator). It is the plug-in (bootstrap) estimate at the measured curves; the stated
+    readings subtract it (:func:`consistency_corrected_budget` for C_v,
+    :func:`selection_corrected_budget` for C_g) and the draft's reading, as measured, is kept
+    beside them. At curves where noise has already flipped the choice the plug-in corrects
+    the other way (a discontinuous functional's bootstrap bias), which the choice's spread in
+    u (``C_sel``) allows for. Fixed seed: the same curves give the same (u, bias).
 
     >>> far = [([30.0, 60.0], [0.9, 0.1]), ([30.0, 60.0], [-0.8, 0.0])]
     >>> extreme_selection(far, [0.05, 0.05], 0.1, 0.0)

@@ -51,7 +51,8 @@ RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_disc",
                                 "zero_stability",
                                 "zero_stability_draft", "zero_stability_model", "angle_deviation",
                                 "angle_deviation_draft", "repeatability", "rate_consistency",
-                                "rate_consistency_draft", "pointing_consistency")
+                                "rate_consistency_draft", "pointing_consistency",
+                                "pointing_consistency_draft")
 _TITLES = {
     "scale_factor": "scale factor K",
     "scale_factor_nonlinearity": "scale-factor nonlinearity K_l",

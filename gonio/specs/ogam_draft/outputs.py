@@ -57,10 +57,11 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     if kl.get("estimates"):
         lines.append("scale_factor_nonlinearity (the draft's range as measured, not stated): "
                      f"{kl['estimates']['draft']['value']:.3g} %")
-    cv = (d["items"].get("rate_consistency") or {}).get("details") or {}
-    if cv.get("estimates"):
-        lines.append("rate_consistency (the draft's range as measured, not stated): "
-                     f"{cv['estimates']['draft']['value']:.3g} ppm")
+    for name, unit in (("rate_consistency", "ppm"), ("pointing_consistency", "%")):
+        cv = (d["items"].get(name) or {}).get("details") or {}
+        if cv.get("estimates"):
+            lines.append(f"{name} (the draft's range as measured, not stated): "
+                         f"{cv['estimates']['draft']['value']:.3g} {unit}")
     tb = ((d["items"].get("scale_factor") or {}).get("details") or {}).get(
         "temperature_coeff_bound")
     if tb:                                   # which bound K's chamber line took, and whence

@@ -38,7 +38,7 @@ from typing import Any
 from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
 import math
 
-from gonio.kit.render import (conformity_texts, coverage_text, display, display_number,
+from gonio.kit.render import (Num, conformity_texts, coverage_text, display, display_number,
                               item_nums, labels, num, parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_ZH, ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
@@ -121,13 +121,16 @@ def stated_item(res: dict, name: str) -> dict:
     :func:`~gonio.report.stated.item_nums` when it is stated by its coverage interval alone —
     a dispersion such as B_s and R, or a non-negative item whose U exceeds its value —, then
     ``U`` and ``k`` are None: one statement), ``upper`` (its upper bound's text when that
-    interval starts at 0, else None).
+    interval starts at 0, else None), ``below_zero`` (a non-negative item whose estimate fell
+    below zero: stated by that upper bound alone, with a note,
+    :func:`gonio.result.statement.below_zero_bound`; ``bound`` is then that bound as a Num of
+    ``upper_bound``).
     """
     item = res["items"][name]
     out = {"measured": bool(item["measured"]), "reason": item.get("reason", ""),
            "clause": item["clause"], "unit": item["unit"], "value": "—", "signed": None,
            "position": None, "U": None, "k": None, "p": None, "U_raw": None, "upper": None,
-           "interval": None}
+           "interval": None, "below_zero": False}
     if not item["measured"]:
         return out
     unc = item_uncertainty(res, name)
@@ -159,6 +162,10 @@ def stated_item(res: dict, name: str) -> dict:
         if own is not None and own["statement"].interval is not None:
             out["interval"] = own         # its one statement: no U, no k beside it
             out["upper"] = own["statement"].upper_text
+            out["below_zero"] = own["statement"].below_zero
+            if out["below_zero"]:   # the bound, shown as a number of results.json
+                out["bound"] = Num(out["upper"], item_path(name, "upper_bound"),
+                                   own["value"].rule)
             return out
         out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
         out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
@@ -306,9 +313,11 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
             notes.append(f"{i}. {title}: {st['reason']}")
             continue
         val = str(st["value"])
-        if st["signed"] is not None:
+        if st["below_zero"]:                # its upper bound alone, and why
+            val = interval_cell(st, "en").replace("\u00a0", " ") + "; " + L["below_zero"]
+        elif st["signed"] is not None:
             val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
-        if st["interval"] is not None:      # stated by its interval alone
+        if st["interval"] is not None and not st["below_zero"]:    # stated by its interval
             val += "; " + interval_cell(st, "en").replace("\u00a0", " ")
         U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
                                          f"p ≈ {st['p'] or '—'} %)"
