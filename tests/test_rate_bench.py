@@ -308,11 +308,11 @@ def test_simulate_deterministic_and_cli(tmp_path, capsys):
     html = (tmp_path / "a" / "certificate.html").read_text()
     # every number shown carries its path in results.json
     import re
-    from gonio.report.i18n import display
+    from gonio.report.i18n import display, minus_sign
     srcs = re.findall(r'data-src="items\.([a-z_]+)\.value" data-rule="([a-z0-9-]+)">([^<]+)<', html)
     assert len(srcs) >= 8
     for key, rule, text in srcs:             # the value at U's decimal place (GUM 7.2.6)
-        assert text == display(rule, res["items"][key]["value"]), key
+        assert text == minus_sign(display(rule, res["items"][key]["value"])), key
     assert (tmp_path / "a" / "certificate.pdf").read_bytes()[:4] == b"%PDF"
     # no recalibration interval recommended without one agreed (ISO/IEC 17025 7.8.4.3)
     assert "Recalibration interval" not in html and "one year recommended" not in html
