@@ -176,6 +176,7 @@ def test_numbers_agree_across_outputs(demo):
     from scipy.stats import norm, t
 
     from gonio.report.dcc import dsi_decimal
+    from gonio.report.i18n import minus_sign
     from gonio.result.statement import item_statement, k_text, nu_text, p_text, stated_nu
 
     res, summary = demo["res"], demo["summary"]
@@ -196,8 +197,9 @@ def test_numbers_agree_across_outputs(demo):
             want = norm.ppf(q) if nu is None or math.isinf(nu) else t.ppf(q, nu)
             assert u["k"] == pytest.approx(want, rel=1e-9), (key, u["k"], u["nu_eff"], want)
             assert u["U"] == pytest.approx(u["k"] * u["u_c"], rel=1e-9), key
-        # the certificate
-        assert spans.get((key, "value"), {st.value_text}) == {st.value_text}, key
+        # the certificate (a negative number printed with U+2212, as the pages print it)
+        shown = minus_sign(st.value_text)
+        assert spans.get((key, "value"), {shown}) == {shown}, key
         if st.U is not None:
             assert spans.get((key, "uncertainty.U"), {st.U_text}) == {st.U_text}, key
         if st.k is not None:
@@ -208,8 +210,10 @@ def test_numbers_agree_across_outputs(demo):
             assert (f"≤ {st.interval_ends[1]}" if st.upper is not None else
                     f"[{st.interval_ends[0]}, {st.interval_ends[1]}]") in html, key
         # summary.txt: one line holds the value with its U and k, or with its interval
-        want = [st.value_text] + ([st.U_text, f"k = {st.k}"] if st.U is not None else
-                                  [st.interval_ends[1]] if st.interval is not None else [])
+        # (a non-negative item whose estimate fell below zero: its upper bound alone)
+        want = [f"≤ {st.interval_ends[1]}"] if st.below_zero else \
+            [st.value_text] + ([st.U_text, f"k = {st.k}"] if st.U is not None else
+                               [st.interval_ends[1]] if st.interval is not None else [])
         assert any(all(w in ln for w in want) for ln in lines), (key, want)
         for ln in lines:
             if st.value_text in ln and (st.U_text or "≤") in ln:
