@@ -70,6 +70,9 @@ READINGS_ZH = {
 #: Budget sources and reasons (the analyses' English phrases) in Chinese: (regular expression,
 #: Chinese template with the groups as {1}, {2}…); see gonio.report.i18n.phrase_zh.
 PHRASES_ZH = COMMON_PHRASES_ZH + (
+    (r"sampling of B_s: effective ν of the records' correlated block means \(variogram: white, "
+     r"flicker, random walk\)", "B_s 的抽样：各段记录相关分块均值的有效自由度 ν（变差图：白噪声、"
+                                 "闪烁噪声、随机游走）"),
     (r"mean of K_m", "K_m 的平均值"),
     (r"rate table, relative(?: \(u1\))?", "速率转台（相对）"),
     (r"data acquisition, relative(?: \(u2\))?", "数据采集（相对）"),
