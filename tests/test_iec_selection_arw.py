@@ -5,7 +5,7 @@ of its own estimator, with truths set outside gonio's formulas.
   rectangular) must make U cover on both limiting benches — one temperature's hysteresis far
   above the noise, and none at all — while z = (value − truth)/u_c keeps a spread of
   0.7–1.3 where the maximum is not a selection (a 95 % bound divided by 2, the earlier term,
-  gave 0.64).
+  gave 0.63).
 - 5.4.5.2 on the ADXRS610 bench's own noise generator: the certified value (midpoint of the
   −½ line reading and its five-term-model correction) must be unbiased against the bench's
   ARW parameter within 0.3 of its u_c (mean z); the fully corrected value was 0.36–0.6 u_c
