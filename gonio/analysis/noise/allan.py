@@ -379,7 +379,7 @@ def _piece_dots(v: np.ndarray, row: np.ndarray) -> None:
 
 #: Points per pass of the in-memory sums (a multiple of :data:`_DOT_PIECE`): the work of
 #: a pass; the sums' order is that of chunks of :data:`_BLOCK_SHARED` whatever it is.
-_PASS = 1 << 16
+_PASS = 1 << 17
 
 
 def _pass_layout(x, bsz: int, n_m: int, longest: int):
