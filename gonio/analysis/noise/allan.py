@@ -63,8 +63,8 @@ import pandas as pd
 from scipy import fft as sfft
 
 from gonio.analysis.noise.edf import (
-    _rn_ratio, chi2_interval, edf_for, noise_id_b1, noise_id_lag1, release_quadratic_basis,
-    remove_quadratic,
+    chi2_interval, edf_for, noise_id_b1, noise_id_lag1, release_quadratic_basis,
+    remove_quadratic, rn_ratio_of_phase,
 )
 from gonio.analysis.noise.stream import CumulativeSum, Record
 from gonio.errors import GonioError
@@ -1303,7 +1303,7 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
             dec = prev[::2].copy() if whole and prev_m * 2 == m else sub[::m].copy()
             prev, prev_m = (dec, m) if whole else (None, 0)
             r = noise_id_lag1(dec, 1, d_max=d_max, keep_basis=True)
-            b = noise_id_b1(dec, m, rn_ratio=lambda: _rn_ratio(sub, m))
+            b = noise_id_b1(dec, m, rn_ratio=lambda: rn_ratio_of_phase(sub, m))
         if r is not None:
             last, reliable = _settled(r[0], reliable, (seg.size - 1) // m)
         a_lag[i] = last

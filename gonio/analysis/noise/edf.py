@@ -9,6 +9,7 @@ Contents
 :func:`edf_totdev`              total variance, SP 1065 Table 7
 :func:`noise_id_lag1`           noise type by the lag-1 autocorrelation
 :func:`noise_id_b1`             noise type by the B1 and R(n) ratios (cross-check)
+:func:`rn_ratio_of_phase`       R(n) = MVAR/AVAR of a phase series at m
 :func:`chi2_interval`           χ² interval of a variance with a given edf
 ==============================  ===============================================
 
@@ -41,7 +42,8 @@ from gonio.errors import GonioError
 
 __all__ = [
     "KINDS", "edf_greenhall", "edf_for", "edf_simple", "edf_totdev",
-    "noise_id_lag1", "noise_id_b1", "b1_expected", "rn_expected", "chi2_interval",
+    "noise_id_lag1", "noise_id_b1", "b1_expected", "rn_expected", "rn_ratio_of_phase",
+    "chi2_interval",
     "GR_TABLE1", "GR_TABLE2", "GR_TABLE3", "J_MAX",
 ]
 
@@ -584,14 +586,14 @@ def noise_id_b1(x: np.ndarray, m: int, *, rn_ratio=None) -> int | None:
                                                  / b1_expected(nav, c[0]))))
     if best[0] != -2 or m < 2:
         return best[1]
-    rn = _rn_ratio(x, m) if rn_ratio is None else rn_ratio()
+    rn = rn_ratio_of_phase(x, m) if rn_ratio is None else rn_ratio()
     if rn is None:
         return 2
     bound = math.sqrt(rn_expected(m, 2) * rn_expected(m, 1))
     return 2 if rn < bound else 1
 
 
-def _rn_ratio(x: np.ndarray, m: int) -> float | None:
+def rn_ratio_of_phase(x: np.ndarray, m: int) -> float | None:
     """R(n) = MVAR/AVAR at m of the phase ``x``; None when too short or AVAR is 0."""
     n = x.size
     if n - 3 * m + 1 < 1:
