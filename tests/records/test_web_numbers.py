@@ -149,7 +149,7 @@ def files_say_virtual(web, base: str, spec: str, tmp) -> None:
 def page_mark(web, url: str) -> str:
     """The virtual-bench mark of a web page, or ""."""
     page = html_module.unescape(web.get(url).text)
-    m = re.search(r'<p class="error" id="virtual-bench">([^<]*)</p>', page)
+    m = re.search(r'<p class="virtual" id="virtual-bench">([^<]*)</p>', page)
     return m.group(1) if m else ""
 
 
