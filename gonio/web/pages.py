@@ -152,7 +152,7 @@ async def instrument_edit(request: Request, session: Session, inst_id: int):
         return services.update_instrument(
             _store(request), u, inst_id, customer_id=d.get("customer_id") and _int(
                 d.get("customer_id"), "customer"),
-            **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial")},
+            **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial", "gyro_type")},
             interval_months=d.get("interval_months", ""), retire=_retire_of(d))
     return await _edit(request, session, f"/instruments/{inst_id}", do)
 
@@ -186,6 +186,7 @@ async def instruments_add(request: Request, session: Session):
             _store(request), user, customer_id=_int(data.get("customer_id"), "customer"),
             serial=data.get("serial"), spec_key=data.get("spec_key"), kind=data.get("kind"),
             manufacturer=data.get("manufacturer"), model=data.get("model"),
+            gyro_type=data.get("gyro_type"),
             interval_months=data.get("interval_months"), limits=_limits_from(data))
     except GonioError as exc:
         return _instruments(request, user, csrf, 400, str(exc))

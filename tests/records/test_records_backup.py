@@ -16,7 +16,7 @@ from gonio.errors import GonioError
 from gonio.records import blobs, services
 from gonio.records.backup import backup, restore
 from gonio.records.db import open_store
-from gonio.records.models import Certificate, User
+from gonio.records.models import AuditEvent, Certificate, User
 
 from .conftest import make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
@@ -171,3 +171,60 @@ def test_restore_refuses_a_hostile_archive_with_one_line(records, tmp_path, caps
 
 
 
+
+
+def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys):
+    """``gonio db restore --replace`` replaces a populated SQLite database with the archive's
+    records through the browser's function (an active admin named, the archive confirmed by
+    its SHA-256, the replaced file kept); without the confirmation, by a non-admin, or with an
+    archive that fails its checks, one line and the live records as they were."""
+    import hashlib
+
+    from gonio.records.backup import summary
+
+    people = {u: services.user(records, u) for u in ("tech", "admin")}
+    archive = tmp_path / "nightly.zip"
+    backup(records, archive)
+    digest = hashlib.sha256(archive.read_bytes()).hexdigest()     # independently of gonio
+    services.add_customer(records, people["tech"], "After the backup Ltd")
+    live = summary(records)["rows"]
+    records.engine.dispose()          # the command line opens the database itself
+    data = ["--data", records.data]
+
+    err = cli(["db", "restore", archive, "--replace", "--user", "admin", *data], capsys, 2).err
+    assert f"--sha256 {digest}" in err and "nothing restored" in err
+    cli(["db", "restore", archive, "--replace", "--user", "tech", "--sha256", digest, *data],
+        capsys, 2)
+    cli(["db", "restore", archive, "--replace", "--sha256", digest, *data], capsys, 2)
+    cli(["db", "restore", archive, "--user", "admin", *data], capsys, 2)   # no --replace
+    err = cli(["db", "restore", archive, "--replace", "--user", "admin", "--sha256", "0" * 64,
+               *data], capsys, 2).err
+    assert "not the one verified and confirmed" in err
+    part = archive_without(archive, tmp_path / "part.zip", drop=f"blobs/{first_pdf(records)}")
+    err = cli(["db", "restore", part, "--replace", "--user", "admin", "--sha256",
+               hashlib.sha256(part.read_bytes()).hexdigest(), *data], capsys, 2).err
+    assert "incomplete: 1 stored file" in err
+    now = summary(records)["rows"]    # the admin's two refusals audited, nothing else
+    assert now.pop("audit_events") == live["audit_events"] + 2
+    assert now == {k: v for k, v in live.items() if k != "audit_events"}
+    assert not list(records.data.glob("records.sqlite3.replaced-*"))
+    records.engine.dispose()
+
+    out = cli(["db", "restore", archive, "--replace", "--user", "admin", "--sha256",
+               digest.upper(), *data], capsys, 0).out
+    assert out.startswith("restored: ")
+    after = open_store(None, records.data)
+    try:
+        with zipfile.ZipFile(archive) as zf:
+            doc = json.loads(zf.read("records.json"))
+        rows = summary(after)["rows"]
+        assert rows["customers"] == len(doc["tables"]["customers"]["rows"]) == \
+            live["customers"] - 1
+        with after.session() as s:
+            event = s.scalar(select(AuditEvent).order_by(
+                AuditEvent.id.desc()).limit(1))
+        assert (event.action, event.username) == ("restore", "admin")
+        assert json.loads(event.after_json)["sha256"] == digest
+    finally:
+        after.close()
+    assert len(list(records.data.glob("records.sqlite3.replaced-*"))) == 1

@@ -170,6 +170,7 @@ class Analysis:
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
+    gyro_type: str | None = None         # the laboratory file's [instrument] gyro_type
 
     @property
     def e_measured(self) -> bool:
@@ -204,7 +205,8 @@ class Analysis:
         if c.name == "scale_factor" and c.measured:
             d.update(scale_factor_as_mounted(
                 float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
-            d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol)
+            d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol,
+                                                                   self.gyro_type)
         if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
             if iu is not None and iu.beside is not None:
@@ -463,7 +465,8 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
     return out, conflicts
 
 
-def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
+def temperature_coeff_bound(readings: Readings, protocol: Protocol,
+                            gyro_type: str | None = None) -> dict:
     """The bound |α_K|max (ppm/°C) on the instrument's scale-factor temperature coefficient
     that K's chamber-temperature line ``K_T`` takes, and where it comes from (results.json
     ``items.scale_factor.details.temperature_coeff_bound``; the certificate says it).
@@ -472,9 +475,11 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
     bench that made the readings. The rule, in this order:
 
     1. ``metadata``: the readings state it (``sf_temperature_coeff_bound_ppm_per_c``);
-    2. ``protocol-rlg`` / ``protocol-fog``: the readings state the gyro type (``gyro_type``)
-       and the protocol's default for that type is taken
-       (``annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c`` or ``…_fog_…``);
+    2. ``protocol-rlg`` / ``protocol-fog``: the readings state the gyro type (``gyro_type``),
+       else ``gyro_type`` (the laboratory file's ``[instrument] gyro_type``: the instrument
+       registered in the records) states it, and the protocol's default for that type is
+       taken (``annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c`` or ``…_fog_…``); ``how``
+       says which of the two stated the type;
     3. ``protocol-larger``: neither is stated; the larger of the two defaults is taken, so a
        FOG is never given an RLG's bound without a word.
 
@@ -486,10 +491,16 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
     ...  b({"gyro_type": "fog"}), b({}), b({"gyro_type": "fog",
     ...                                   "sf_temperature_coeff_bound_ppm_per_c": "0.4"}))]
     [(0.1, 'protocol-rlg'), (1.0, 'protocol-fog'), (1.0, 'protocol-larger'), (0.4, 'metadata')]
+    >>> d = temperature_coeff_bound(Readings(pd.DataFrame(), {}), p, "RLG")
+    >>> d["bound_ppm_per_c"], d["source"], d["how"].endswith("file's [instrument] gyro_type)")
+    (0.1, 'protocol-rlg', True)
     """
     a = protocol.annex_a
     md, file = readings.metadata, readings.path
     gyro = metadata_gyro_type(md, file=file)
+    from_lab = gyro is None and bool(gyro_type)
+    if from_lab:
+        gyro = metadata_gyro_type({"gyro_type": gyro_type}, file="the laboratory file")
     stated = metadata_float(md, "sf_temperature_coeff_bound_ppm_per_c", file=file)
     defaults = {"rlg": a.sf_temperature_coeff_bound_rlg_ppm_per_c,
                 "fog": a.sf_temperature_coeff_bound_fog_ppm_per_c}
@@ -499,7 +510,9 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
     elif gyro is not None:
         bound, source = defaults[gyro], f"protocol-{gyro}"
         how = f"the protocol's default for a{'n' if gyro == 'rlg' else ''} {gyro.upper()} " \
-              f"(annex_a.sf_temperature_coeff_bound_{gyro}_ppm_per_c)"
+              f"(annex_a.sf_temperature_coeff_bound_{gyro}_ppm_per_c" + (
+                  "; the type stated by the laboratory file's [instrument] gyro_type)"
+                  if from_lab else ")")
     else:
         bound, source = max(defaults.values()), "protocol-larger"
         how = "gyro type not stated: the larger of the protocol's RLG and FOG defaults"
@@ -777,7 +790,7 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
 # --------------------------------------------------------------------------- items
 
 def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protocol: Protocol,
-                       settings: dict, readings: Readings) -> dict:
+                       settings: dict, readings: Readings, gyro_type: str | None = None) -> dict:
     """The uncertainty of every measured item (clause 8), by
     :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
@@ -792,7 +805,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         out["scale_factor"] = iu.scale_factor_budget(
             t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
             tilt_bias_arcsec_per_deg=k_tilt,
-            temperature_rel_bound=1e-6 * temperature_coeff_bound(readings, protocol)[
+            temperature_rel_bound=1e-6 * temperature_coeff_bound(readings, protocol, gyro_type)[
                 "bound_ppm_per_c"] * protocol.conditions.temperature_tolerance_c)
         if results.scale_factor_nonlinearity.measured:
             draft = iu.nonlinearity_budget(
@@ -1025,21 +1038,22 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
               tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-              findings: list | None = None) -> Result:
+              findings: list | None = None, gyro_type: str | None = None) -> Result:
     """``SPEC.calibrate``: the seven characteristics and their uncertainties from a readings
     file or stream, as the one sealed :class:`~gonio.result.model.Result` (:func:`analyse`,
     then :meth:`Analysis.result`; the arguments are :func:`analyse`'s). Conformity is not
     decided here: the pipeline decides it once, on the laboratory file's limits."""
     return analyse(readings, protocol, monte_carlo_trials=monte_carlo_trials, seed=seed,
                    static_record=static_record, budget=budget, tilt=tilt,
-                   zero_stability=zero_stability, findings=findings).result()
+                   zero_stability=zero_stability, findings=findings,
+                   gyro_type=gyro_type).result()
 
 
 def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
             *, monte_carlo_trials: int = 0, seed: int = 0,
             static_record: StaticRecord | None = None, budget: str = "physical",
             tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-            findings: list | None = None) -> Analysis:
+            findings: list | None = None, gyro_type: str | None = None) -> Analysis:
     """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
     ``protocol``: explicit (the command line's ``--protocol``), else the file's
@@ -1055,7 +1069,10 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     ``static_record`` (the virtual bench's). ``zero_stability``: which reading of B_s is
     stated, ``"draft"`` (default) or ``"model"`` (:func:`zero_stability_readings`).
     ``findings``: the screening of these readings already made (``SPEC.screen``, the
-    pipeline's first step), applied as given; None: screened here.
+    pipeline's first step), applied as given; None: screened here. ``gyro_type``: the
+    instrument's type as the laboratory file states it (``[instrument] gyro_type``, passed by
+    the pipeline), taken for K's temperature-coefficient bound when the readings state none
+    (:func:`temperature_coeff_bound`).
     """
     if isinstance(readings, Readings):
         proto, conflicts = resolve_protocol(readings.path, readings.metadata.get("protocol"),
@@ -1080,14 +1097,14 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
     noise, noise_src = analyse_zero_stability(static_record)
-    items = item_uncertainties(res, e_budget, proto, settings, kept)
+    items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type)
     zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
     return Analysis(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                     item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                     budget_notes=notes, excluded=excluded,
-                    zero_stability_readings=zs_readings, findings=findings)
+                    zero_stability_readings=zs_readings, findings=findings, gyro_type=gyro_type)
 
 
 def beside_uncertainty(unc: dict) -> dict:
