@@ -119,6 +119,18 @@ def readings_taken(repeatability_source: str) -> list[str]:
                 f"{repeatability_source}.")
     return list(READINGS_TAKEN[:3]) + [note] + list(READINGS_TAKEN[3:])
 
+#: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
+#: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
+TILT_CORRECTED = {
+    "note": "beyond the draft: K is corrected for the tilt x Earth-rate coupling of the 7.1 "
+            "rounds at the tilt psi and azimuth alpha measured by the in-situ tilt estimate "
+            "([tilt_estimate]); U(K) carries the correction's uncertainty (line K_te: u(psi), "
+            "u(alpha) and their correlation) instead of the coupling at the A.1 bound (K_tilt)",
+    "draft": "the draft's reading (7.1): K = mean K_i of the rounds as measured, U with the "
+             "coupling at the A.1 tilt bound, arcsine (line K_tilt)",
+    "corrected": "stated: K corrected by the measured tilt, U with the correction's "
+                 "uncertainty (line K_te)"}
+
 
 @dataclass(frozen=True)
 class Conflict:
@@ -203,10 +215,21 @@ class Analysis:
         tables listed, the 7.1 measurand, the two readings of B_s and the noise analysis)."""
         d = {k: v for k, v in c.to_dict().items() if k not in ITEM_FIELDS}
         if c.name == "scale_factor" and c.measured:
+            iu = self.item_uncertainty.get(c.name)
+            tc = None if iu is None else iu.correction
             d.update(scale_factor_as_mounted(
-                float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
+                float(c.value if tc is None else iu.value),
+                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
             d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol,
                                                                    self.gyro_type)
+            if tc is not None:
+                d["stated"] = "tilt_corrected"
+                d["tilt_correction"] = {"label": TILT_CORRECTED["note"], **tc.to_dict()}
+                d["estimates"] = {
+                    "draft": {"label": TILT_CORRECTED["draft"], "value": _plain_value(c),
+                              "uncertainty": beside_uncertainty(iu.beside.to_dict())},
+                    "corrected": {"label": TILT_CORRECTED["corrected"],
+                                  "value": float(iu.value)}}
         if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
             if iu is not None and iu.beside is not None:
@@ -246,6 +269,8 @@ class Analysis:
             value = float(iu.value)               # the stated reading of B_s
         if c.name in RANGE_READINGS and iu is not None and iu.beside is not None:
             value = float(iu.value)               # the bias-corrected range
+        if c.name == "scale_factor" and iu is not None and iu.correction is not None:
+            value = float(iu.value)               # K corrected by the measured tilt
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
                     None if unc is None else Uncertainty(
@@ -697,6 +722,37 @@ def _scale_factor_tilt(results, readings, protocol, budget) -> float:
                                   float(budget.parameters["tilt_deg"]))
 
 
+def tilt_correction(results, readings, protocol):
+    """(correction, why): K's tilt correction from the in-situ tilt estimate
+    (:func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_correction`) when the protocol
+    has ``[tilt_estimate]``, the readings hold its rows, K comes from 7.1 and the file states
+    ``latitude_deg`` (the estimate's Ω_⊥); else (None, the reason, or "" when the protocol
+    has no tilt estimate). Counts of the estimate are converted with the 7.1 K."""
+    from gonio.errors import GonioError
+    from gonio.specs.ogam_draft.budget_extra import scale_factor_tilt_correction
+    from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
+
+    if protocol.tilt_estimate is None:
+        return None, ""
+    df = readings.data
+    if not results.scale_factor.measured or protocol.scale_factor is None:
+        return None, "K not measured by 7.1: no tilt correction"
+    if not (df["test"] == "tilt_estimate").any():
+        return None, ("the protocol has [tilt_estimate] but the readings hold no tilt_estimate "
+                      "rows: K carries the coupling at the A.1 bound (K_tilt)")
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    if lat is None:
+        return None, ("the readings do not state latitude_deg: the tilt estimate needs it, "
+                      "K carries the coupling at the A.1 bound (K_tilt)")
+    sf = df[df["line"].isin(list(results.scale_factor.used_lines))]
+    try:
+        est = tilt_estimate_from_readings(readings, float(results.scale_factor.value), lat)
+        return scale_factor_tilt_correction(sf, protocol, lat, est), ""
+    except GonioError as exc:
+        return None, (f"the tilt estimate could not correct K ({exc.args[0] if exc.args else exc}):"
+                      " K carries the coupling at the A.1 bound (K_tilt)")
+
+
 def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
     """A_l of :func:`gonio.specs.ogam_draft.budget_extra.nonlinearity_tilt_bias` for the largest and smallest
     of this calibration's 7.1 rounds, at the budget's tilt bound and the file's latitude
@@ -802,11 +858,18 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
     if sf.measured:
         t = sf.table
-        out["scale_factor"] = iu.scale_factor_budget(
-            t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
-            tilt_bias_arcsec_per_deg=k_tilt,
-            temperature_rel_bound=1e-6 * temperature_coeff_bound(readings, protocol, gyro_type)[
-                "bound_ppm_per_c"] * protocol.conditions.temperature_tolerance_c)
+        kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
+                  temperature_rel_bound=1e-6 * temperature_coeff_bound(
+                      readings, protocol, gyro_type)["bound_ppm_per_c"]
+                  * protocol.conditions.temperature_tolerance_c)
+        out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
+                                                     mpe, **kw)
+        tc, _ = tilt_correction(results, readings, protocol)
+        if tc is not None:       # stated corrected by the measured tilt, the bound's K beside
+            out["scale_factor"] = dataclasses.replace(
+                iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
+                                       tilt_correction=tc, **kw),
+                beside=out["scale_factor"], correction=tc)
         if results.scale_factor_nonlinearity.measured:
             draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
@@ -1098,6 +1161,12 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
     noise, noise_src = analyse_zero_stability(static_record)
     items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type)
+    if proto.tilt_estimate is not None and "scale_factor" in items:
+        tc = items["scale_factor"].correction
+        notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
+            f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
+            f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
+            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"))
     zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
