@@ -486,7 +486,7 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
             location=data.get("location"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
-            performed_on=data.get("performed_on"))
+            performed_on=data.get("performed_on"), received_on=data.get("received_on"))
     except GonioError as exc:
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
