@@ -254,3 +254,41 @@ def test_the_laboratory_files_gyro_type_is_checked_against_the_readings(tmp_path
     assert contradictions({}, lab("fog")) == []              # the readings silent: nothing
     with pytest.raises(GonioError, match="gyro_type"):
         lab("mems")
+
+
+@pytest.mark.parametrize("value", ["0", "-0.1", "nan", "inf", "-inf", "1e5"])
+def test_a_bound_that_is_not_positive_and_finite_is_refused(tmp_path, capsys, value):
+    """The readings' ``sf_temperature_coeff_bound_ppm_per_c`` must be a positive finite
+    number (zero would claim an instrument without temperature coefficient): anything else is
+    one line naming the key and the file, exit 2 on the command line, nothing written; the
+    protocol's defaults likewise."""
+    from gonio.cli import main
+    from gonio.specs.ogam_draft.protocol import load_protocol
+    from gonio.specs.ogam_draft.readings import read_readings
+
+    src = Path(__file__).parent / "data" / "full.csv"
+    text = src.read_text("utf-8")
+    f = tmp_path / "readings.csv"
+    f.write_text(f"# sf_temperature_coeff_bound_ppm_per_c: {value}\n" + text, "utf-8")
+    with pytest.raises(GonioError) as exc:
+        read_readings(f)
+    msg = str(exc.value)
+    assert "sf_temperature_coeff_bound_ppm_per_c" in msg and "readings.csv" in msg
+    assert "(0, 1e4]" in msg and "\n" not in msg
+    out = tmp_path / "out"
+    assert main(["calibrate", str(f), "--spec", "ogam-draft", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "sf_temperature_coeff_bound_ppm_per_c" in err
+    assert not out.exists()
+    if value == "1e5":
+        return
+    for kind in ("rlg", "fog"):
+        p = tmp_path / f"protocol-{kind}.toml"
+        small = (Path(__file__).parent / "data" / "small-protocol.toml").read_text("utf-8")
+        p.write_text(small + f"\n[annex_a]\nsf_temperature_coeff_bound_{kind}_ppm_per_c = "
+                     f"{value}\n", "utf-8")
+        with pytest.raises(GonioError) as exc:
+            load_protocol(p)
+        msg = str(exc.value)
+        assert f"sf_temperature_coeff_bound_{kind}_ppm_per_c" in msg and p.name in msg, msg
+        assert "\n" not in msg

@@ -73,6 +73,7 @@ class Chamber:
     deviation_c: float = 0.0             # constant offset of the chamber from the set point
     fluctuation_c: float = 0.0           # amplitude of the periodic fluctuation
     fluctuation_period_s: float = 600.0
+    fluctuation_phase_deg: float = 0.0   # phase of the fluctuation at the session's t = 0
     uniformity_c: float = 0.0            # gyro position offset within the volume (±half)
     max_ramp_c_per_min: float = 5.0
     point_deviation_c: float = 0.0       # > 0: per-set-point deviation, uniform in ±this
@@ -180,6 +181,7 @@ _SCHEMAS = {
     "chamber": (Chamber, {"deviation_c": _F, "fluctuation_c": _NN,
                           "fluctuation_period_s": Field("float", default=600.0,
                                                         check=lambda x: x > 0, expect="> 0"),
+                          "fluctuation_phase_deg": _F,
                           "uniformity_c": _NN,
                           "max_ramp_c_per_min": Field("float", default=5.0,
                                                       check=lambda x: x > 0, expect="> 0")}),

@@ -148,7 +148,8 @@ class RateSession:
         # gyro temperature along the record (chamber holding, with fluctuation)
         ch = target + (0.0 if seg.temperature_c is None else
                        eq.chamber.deviation_at(target) + eq.chamber.fluctuation_c
-                       * np.sin(2 * math.pi * t / eq.chamber.fluctuation_period_s))
+                       * np.sin(2 * math.pi * t / eq.chamber.fluctuation_period_s
+                                + math.radians(eq.chamber.fluctuation_phase_deg)))
         a = math.exp(-dt / g.thermal_tau_s)
         temp, _ = signal.lfilter([1 - a], [1, -a], np.broadcast_to(ch, (n,)).astype(float),
                                  zi=[a * st.temp])

@@ -69,11 +69,13 @@ def register(sub) -> None:
     add_attach_options(q)
     q.set_defaults(func=run_attach)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
-                           ("restore", "restore an archive into an empty database")):
+                           ("restore", "restore an archive into an empty database (or, "
+                                       "with --replace, over the live records)")):
         q = dsub.add_parser(name, help=helptext)
         add_store_options(q)
         q.add_argument("archive")
         q.set_defaults(func=run_backup if name == "backup" else run_restore)
+    add_replace_options(q)
     q = dsub.add_parser("verify", help="check every stored file, result and signed seal of "
                                        "the live records (or find a certificate file's record)")
     add_store_options(q)
@@ -331,12 +333,51 @@ def run_verify(args) -> int:
     return 0
 
 
-def run_restore(args) -> int:
-    from gonio.records.backup import restore
+def add_replace_options(q) -> None:
+    """``gonio db restore``'s ``--replace`` with the administrator and the confirmation."""
+    q.add_argument("--replace", action="store_true",
+                   help="replace the live records with the archive's (what the browser's "
+                        "restore does; stop gonio serve first); needs --user ADMIN and "
+                        "--sha256 DIGEST")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="with --replace: the active administrator restoring (default "
+                        "$GONIO_USER)")
+    q.add_argument("--sha256", default=None, metavar="DIGEST",
+                   help="with --replace: the archive's SHA-256, confirming the archive that "
+                        "replaces the records (without it the refusal names the digest)")
 
+
+def _replacing_admin(store, args):
+    """The active administrator ``--user`` (else ``$GONIO_USER``) names, for --replace."""
+    from gonio.records import services
+
+    name = args.user or os.environ.get("GONIO_USER") or ""
+    u = services.user(store, name) if name else None
+    if u is None or not u.active:
+        raise GonioError("--replace needs the active administrator restoring (--user NAME or "
+                         "$GONIO_USER)" + (f": no active records user {name!r}" if name
+                                           else ""), key="--user")
+    return services.require(u, "admin")
+
+
+def run_restore(args) -> int:
+    from gonio.records.backup import archive_sha256, restore
+
+    if not args.replace and (args.user or args.sha256):
+        raise GonioError("--user and --sha256 go with --replace", key="--replace")
     store = _store(args)
     try:
-        counts = restore(store, args.archive)
+        if not args.replace:
+            counts = restore(store, args.archive)
+        else:
+            actor = _replacing_admin(store, args)
+            want = (args.sha256 or "").strip().lower()
+            if not want:
+                raise GonioError("--replace replaces the live records: confirm this archive "
+                                 f"with --sha256 {archive_sha256(args.archive)} (its SHA-256); "
+                                 "nothing restored", key="--sha256")
+            counts = restore(store, args.archive, replace=True, actor=actor,
+                             expect_sha256=want)
     finally:
         store.close()
     print("restored: " + ", ".join(f"{k} {v}" for k, v in counts.items() if v))

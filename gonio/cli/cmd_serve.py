@@ -82,6 +82,18 @@ def check_workers(workers: int | None) -> int:
     return workers
 
 
+def check_backup_limits() -> None:
+    """``GONIO_MAX_BACKUP_BYTES`` and ``GONIO_MAX_RECORDS_JSON_BYTES`` read at start
+    (:func:`gonio.limits.limit`), and ``GONIO_KEEP_REPLACED``
+    (:func:`gonio.limits.keep_replaced`): a bad value is one line before anything is
+    opened, not a surprise at the first backup upload or restore."""
+    from gonio.limits import keep_replaced, limit
+
+    for name in ("GONIO_MAX_BACKUP_BYTES", "GONIO_MAX_RECORDS_JSON_BYTES"):
+        limit(name)
+    keep_replaced()                     # GONIO_KEEP_REPLACED, the restores' replaced files
+
+
 def run(args) -> int:
     """Listen first, answer the login page at once (:class:`gonio.web.front.Front`), and
     build the application (imports, database, workers) in a background thread; the line
@@ -93,6 +105,7 @@ def run(args) -> int:
     from gonio.errors import GonioError
     from gonio.web.front import Front
 
+    check_backup_limits()
     if not 0 < args.port < 65536:
         raise GonioError("not a port number", key="--port")
     workers = check_workers(args.workers)

@@ -33,7 +33,8 @@ NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
     "table_mpe_arcsec": (0.0, True, 180 * ARCSEC_PER_DEG, "a number in [0, 648000]"),
     "tilt_bound_deg": (0.0, True, 45.0, "a number in [0, 45]"),
     "table_accel_dps2": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
-    "sf_temperature_coeff_bound_ppm_per_c": (0.0, True, 1e4, "a number in [0, 1e4]"),
+    # a bound of K's temperature coefficient: zero would claim a perfect instrument
+    "sf_temperature_coeff_bound_ppm_per_c": (0.0, False, 1e4, "a number in (0, 1e4]"),
 }
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")

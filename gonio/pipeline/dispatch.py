@@ -158,6 +158,9 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
     identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
                               else None)       # refused here, before the work
+    gyro = ((lab_d or {}).get("instrument") or {}).get("gyro_type")
+    if gyro and "gyro_type" in spec.calibrate_options:
+        opts.setdefault("gyro_type", gyro)     # the instrument's type (the records' registered)
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
     mark_provenance(result, readings)

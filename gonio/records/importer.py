@@ -58,6 +58,7 @@ def _instrument(s, meta: dict, spec_key: str, customer: str, actor) -> Instrumen
         s.flush()
         services.audit(s, actor, "create", "customer", cust.id, None, services.state(cust))
     inst = Instrument(customer_id=cust.id, kind=field("instrument"), manufacturer=manufacturer,
+                      gyro_type=services.gyro_type_value(field("gyro_type")),
                       model=model, serial=serial, spec_key=spec_key, limits_json="[]")
     s.add(inst)
     s.flush()

@@ -108,6 +108,10 @@ class Instrument(Base):
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     customer_id: Mapped[int] = mapped_column(ForeignKey("customers.id"), index=True)
     kind: Mapped[str] = mapped_column(String(200), default="")
+    #: an optical gyro's type, "rlg" or "fog" ("" not stated): the laboratory file's
+    #: ``[instrument] gyro_type`` its calibrations are computed with (the bound of K's
+    #: temperature coefficient, and the identity check against the readings)
+    gyro_type: Mapped[str] = mapped_column(String(8), default="", server_default="")
     manufacturer: Mapped[str] = mapped_column(String(200), default="")
     model: Mapped[str] = mapped_column(String(200), default="")
     serial: Mapped[str] = mapped_column(String(200))

@@ -329,8 +329,10 @@ def check_limits(limits) -> list[dict]:
 
 def register_instrument(store, actor: User, *, customer_id: int, serial: str, spec_key: str,
                         kind: str = "", manufacturer: str = "", model: str = "",
-                        interval_months=None, limits=()) -> Instrument:
-    """A new instrument of a customer in use (technician)."""
+                        interval_months=None, limits=(), gyro_type: str = "") -> Instrument:
+    """A new instrument of a customer in use (technician); ``gyro_type``: an optical gyro's
+    type (:func:`gyro_type_value`), written into the laboratory file its calibrations are
+    computed with."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -338,6 +340,7 @@ def register_instrument(store, actor: User, *, customer_id: int, serial: str, sp
     months = number_value(interval_months, "interval_months", 1, 120)
     inst = Instrument(customer_id=int(customer_id), serial=text(serial, "serial", required=True),
                       spec_key=spec_key.strip(), kind=text(kind, "type"),
+                      gyro_type=gyro_type_value(gyro_type),
                       manufacturer=text(manufacturer, "manufacturer"),
                       model=text(model, "model"),
                       interval_months=None if months is None else int(months),
@@ -425,13 +428,15 @@ def update_customer(store, actor: User, customer_id: int, *, name=None, address=
 
 def update_instrument(store, actor: User, instrument_id: int, *, customer_id=None, kind=None,
                       manufacturer=None, model=None, serial=None, interval_months="",
-                      limits=None, retire: bool | None = None) -> Instrument:
+                      limits=None, retire: bool | None = None, gyro_type=None) -> Instrument:
     """Edit an instrument: transfer it to another customer, correct its description, set its
     interval (None or blank: the specification's default; ``""`` by default: unchanged) or
     limits, retire it or bring it back (technician)."""
     require(actor, "technician")
     values = _given(kind=kind, manufacturer=manufacturer, model=model, serial=serial)
     values = {k: text(v, k, required=k == "serial") for k, v in values.items()}
+    if gyro_type is not None:
+        values["gyro_type"] = gyro_type_value(gyro_type)
     if customer_id is not None:
         with store.session() as s:
             if s.get(Customer, int(customer_id)) is None:
@@ -642,6 +647,22 @@ def location_value(value) -> str:
     if value not in LOCATIONS:
         raise GonioError(f"location: {value[:40]!r} is not one of {', '.join(LOCATIONS)}",
                          key="location")
+    return value
+
+
+def gyro_type_value(value) -> str:
+    """An instrument's optical-gyro type: ``rlg``, ``fog`` (case ignored) or ``""`` (not
+    stated; None or blank); anything else is a GonioError listing them.
+
+    >>> gyro_type_value(" RLG"), gyro_type_value(None)
+    ('rlg', '')
+    """
+    from gonio.formats.metadata import GYRO_TYPES
+
+    value = text(value, "gyro_type").lower()
+    if value and value not in GYRO_TYPES:
+        raise GonioError(f"gyro_type: {value[:40]!r} is not one of {', '.join(GYRO_TYPES)} "
+                         "(or empty: not stated)", key="gyro_type")
     return value
 
 
@@ -1250,7 +1271,8 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
                             "location": cal.location or "laboratory"},
             "customer": {"name": cust.name, "address": _lines(cust.address)},
             "instrument": {"description": inst.kind, "model": inst.model,
-                           "serial": inst.serial, "manufacturer": inst.manufacturer},
+                           "serial": inst.serial, "manufacturer": inst.manufacturer,
+                           "gyro_type": inst.gyro_type or None},
             "standards": [{"name": st.name, "identifier": st.identifier,
                            "accuracy": st.accuracy, "certificate": st.certificate,
                            "traceability": st.traceability} for st in stds],

@@ -111,7 +111,8 @@ def _looks_like_csv(head: bytes) -> None:
 def check_readings(facts: dict, inst: Instrument, spec_key: str, temperature_c=None,
                    humidity_pct=None) -> None:
     """The readings (:func:`readings_facts`) against the calibration: their specification,
-    the instrument's serial, model and manufacturer, the environment entered; a GonioError
+    the instrument's serial, model, manufacturer and optical-gyro type, the environment
+    entered; a GonioError
     (key ``readings``) in the form's words for the first that does not match."""
     from gonio.pipeline.identity import contradictions
 
@@ -123,7 +124,7 @@ def check_readings(facts: dict, inst: Instrument, spec_key: str, temperature_c=N
                          "instrument, or the instrument these readings are of",
                          key="readings")
     record = {"instrument": {"serial": inst.serial, "model": inst.model,
-                             "manufacturer": inst.manufacturer},
+                             "manufacturer": inst.manufacturer, "gyro_type": inst.gyro_type},
               "environment": {"temperature_c": temperature_c, "humidity_pct": humidity_pct}}
     found = contradictions(facts["metadata"], record)
     if found:

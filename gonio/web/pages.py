@@ -152,7 +152,7 @@ async def instrument_edit(request: Request, session: Session, inst_id: int):
         return services.update_instrument(
             _store(request), u, inst_id, customer_id=d.get("customer_id") and _int(
                 d.get("customer_id"), "customer"),
-            **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial")},
+            **{k: d.get(k) for k in ("kind", "manufacturer", "model", "serial", "gyro_type")},
             interval_months=d.get("interval_months", ""), retire=_retire_of(d))
     return await _edit(request, session, f"/instruments/{inst_id}", do)
 
@@ -186,6 +186,7 @@ async def instruments_add(request: Request, session: Session):
             _store(request), user, customer_id=_int(data.get("customer_id"), "customer"),
             serial=data.get("serial"), spec_key=data.get("spec_key"), kind=data.get("kind"),
             manufacturer=data.get("manufacturer"), model=data.get("model"),
+            gyro_type=data.get("gyro_type"),
             interval_months=data.get("interval_months"), limits=_limits_from(data))
     except GonioError as exc:
         return _instruments(request, user, csrf, 400, str(exc))
@@ -485,7 +486,7 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
             location=data.get("location"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
-            performed_on=data.get("performed_on"))
+            performed_on=data.get("performed_on"), received_on=data.get("received_on"))
     except GonioError as exc:
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
@@ -588,6 +589,7 @@ def certificate_page(request: Request, session: Session, cert_id: int):
     if cert is None:
         return Response("no such certificate", status_code=404)
     return render(request, "certificate.html", user, csrf, cert=cert, newer=newer,
+                  virtual=queries.virtual_mark(_store(request), cert.results_sha256),
                   error=request.query_params.get("error", "")[:300])
 
 

@@ -6,6 +6,7 @@ records (files, result rows, signed seals) and finds a certificate file's record
 from __future__ import annotations
 
 import json
+import os
 import zipfile
 
 import pytest
@@ -16,7 +17,7 @@ from gonio.errors import GonioError
 from gonio.records import blobs, services
 from gonio.records.backup import backup, restore
 from gonio.records.db import open_store
-from gonio.records.models import Certificate, User
+from gonio.records.models import AuditEvent, Certificate, User
 
 from .conftest import make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
@@ -171,3 +172,107 @@ def test_restore_refuses_a_hostile_archive_with_one_line(records, tmp_path, caps
 
 
 
+
+
+def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys):
+    """``gonio db restore --replace`` replaces a populated SQLite database with the archive's
+    records through the browser's function (an active admin named, the archive confirmed by
+    its SHA-256, the replaced file kept); without the confirmation, by a non-admin, or with an
+    archive that fails its checks, one line and the live records as they were."""
+    import hashlib
+
+    from gonio.records.backup import summary
+
+    people = {u: services.user(records, u) for u in ("tech", "admin")}
+    archive = tmp_path / "nightly.zip"
+    backup(records, archive)
+    digest = hashlib.sha256(archive.read_bytes()).hexdigest()     # independently of gonio
+    services.add_customer(records, people["tech"], "After the backup Ltd")
+    live = summary(records)["rows"]
+    records.engine.dispose()          # the command line opens the database itself
+    data = ["--data", records.data]
+
+    err = cli(["db", "restore", archive, "--replace", "--user", "admin", *data], capsys, 2).err
+    assert f"--sha256 {digest}" in err and "nothing restored" in err
+    cli(["db", "restore", archive, "--replace", "--user", "tech", "--sha256", digest, *data],
+        capsys, 2)
+    cli(["db", "restore", archive, "--replace", "--sha256", digest, *data], capsys, 2)
+    cli(["db", "restore", archive, "--user", "admin", *data], capsys, 2)   # no --replace
+    err = cli(["db", "restore", archive, "--replace", "--user", "admin", "--sha256", "0" * 64,
+               *data], capsys, 2).err
+    assert "not the one verified and confirmed" in err
+    part = archive_without(archive, tmp_path / "part.zip", drop=f"blobs/{first_pdf(records)}")
+    err = cli(["db", "restore", part, "--replace", "--user", "admin", "--sha256",
+               hashlib.sha256(part.read_bytes()).hexdigest(), *data], capsys, 2).err
+    assert "incomplete: 1 stored file" in err
+    now = summary(records)["rows"]    # the admin's two refusals audited, nothing else
+    assert now.pop("audit_events") == live["audit_events"] + 2
+    assert now == {k: v for k, v in live.items() if k != "audit_events"}
+    assert not list(records.data.glob("records.sqlite3.replaced-*"))
+    records.engine.dispose()
+
+    out = cli(["db", "restore", archive, "--replace", "--user", "admin", "--sha256",
+               digest.upper(), *data], capsys, 0).out
+    assert out.startswith("restored: ")
+    after = open_store(None, records.data)
+    try:
+        with zipfile.ZipFile(archive) as zf:
+            doc = json.loads(zf.read("records.json"))
+        rows = summary(after)["rows"]
+        assert rows["customers"] == len(doc["tables"]["customers"]["rows"]) == \
+            live["customers"] - 1
+        with after.session() as s:
+            event = s.scalar(select(AuditEvent).order_by(
+                AuditEvent.id.desc()).limit(1))
+        assert (event.action, event.username) == ("restore", "admin")
+        assert json.loads(event.after_json)["sha256"] == digest
+    finally:
+        after.close()
+    assert len(list(records.data.glob("records.sqlite3.replaced-*"))) == 1
+
+
+def test_a_restore_keeps_the_newest_replaced_files(records, tmp_path, monkeypatch):
+    """After a successful restore over SQLite the replaced files beyond the newest
+    ``GONIO_KEEP_REPLACED`` (default 3) are removed, newest by their names' stamps (not the
+    files' times); other files are left. A bad value refuses the restore before any work,
+    the live records and every replaced file as they were."""
+    from gonio.limits import KEEP_REPLACED
+    from gonio.records.backup import archive_sha256, summary
+
+    admin = services.user(records, "admin")
+    archive = tmp_path / "nightly.zip"
+    backup(records, archive)
+    folder = records.data
+    names = ["records.sqlite3.replaced-20240101T000000", "records.sqlite3.replaced-20240101T"
+             "000000-2", "records.sqlite3.replaced-20230505T101010",
+             "records.sqlite3.replaced-20250101T000000"]
+    for i, n in enumerate(names):                # file times the reverse of the stamps
+        (folder / n).write_bytes(b"old")
+        os.utime(folder / n, (2e9 - i * 1e6, 2e9 - i * 1e6))
+    others = ["records.sqlite3.replaced-notes.txt", "other.sqlite3.replaced-20200101T000000"]
+    for n in others:
+        (folder / n).write_bytes(b"keep")
+    live = summary(records)["rows"]
+    for bad in ("0", "x", "-1"):
+        monkeypatch.setenv("GONIO_KEEP_REPLACED", bad)
+        with pytest.raises(GonioError, match="GONIO_KEEP_REPLACED must be a whole number"):
+            restore(records, archive, replace=True, actor=admin,
+                    expect_sha256=archive_sha256(archive))
+    now = summary(records)["rows"]
+    assert now.pop("audit_events") == live.pop("audit_events") + 3 and now == live
+    assert all((folder / n).exists() for n in names + others)
+
+    monkeypatch.setenv("GONIO_KEEP_REPLACED", "2")
+    restore(records, archive, replace=True, actor=admin, expect_sha256=archive_sha256(archive))
+    left = sorted(p.name for p in folder.glob("records.sqlite3.replaced-2*"))
+    assert len(left) == 2 and "records.sqlite3.replaced-20250101T000000" in left
+    assert left[-1] > "records.sqlite3.replaced-2025"        # the one this restore kept
+    assert all((folder / n).exists() for n in others)
+
+    monkeypatch.delenv("GONIO_KEEP_REPLACED")
+    assert KEEP_REPLACED == 3
+    for _ in range(3):
+        restore(records, archive, replace=True, actor=admin,
+                expect_sha256=archive_sha256(archive))
+    left = sorted(p.name for p in folder.glob("records.sqlite3.replaced-2*"))
+    assert len(left) == 3 and "records.sqlite3.replaced-20250101T000000" not in left

@@ -221,3 +221,18 @@ def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # n
     assert services.due_instruments(sqlite_store, within_days=10**7) == [
         {"instrument_id": inst.id, "serial": "F-1", "model": "M", "customer": "Far Ltd",
          "last": dt.date(9999, 12, 31), "due": dt.date.max, "overdue": False}]
+
+
+@pytest.mark.parametrize("name", ["GONIO_MAX_BACKUP_BYTES", "GONIO_MAX_RECORDS_JSON_BYTES"])
+@pytest.mark.parametrize("value,msg", [("8 GiB", "must be a number"), ("0", "must be > 0"),
+                                       ("-1", "must be > 0"), ("nan", "must be > 0")])
+def test_backup_limits_checked_when_serve_starts(tmp_path, capsys, monkeypatch, name, value,
+                                                 msg):
+    """A backup limit that is no positive number stops ``gonio serve`` at start with one
+    line naming the variable (exit 2), before the data folder is made or a port is bound;
+    not at the first upload."""
+    monkeypatch.setenv(name, value)
+    # port 0 is refused too, later: the server never starts in this test
+    err = cli(["serve", "--data", tmp_path / "data", "--port", "0"], capsys)
+    assert f"environment variable {name} {msg}" in err, err
+    assert not (tmp_path / "data").exists()

@@ -24,6 +24,8 @@ COMMON_PHRASES_ZH = (
      "两条斜率的各点均值噪声与零偏漂移"),
     (r"chamber fluctuation \(± amplitude, period\) × T_c,SF between the CW and CCW points",
      "顺时针与逆时针各点之间的温箱温度波动（± 幅值、周期）× T_c,SF"),
+    (r"chamber fluctuation \(± amplitude, period\) × T_c,SF between the supply runs",
+     "各电源电压测量之间的温箱温度波动（± 幅值、周期）× T_c,SF"),
     (r"input-axis alignment × horizontal Earth rate", "输入轴对准 × 地球自转角速度水平分量"),
     (r"scale factor, relative", "标度因数（相对）"),
     (r"spread over the power-ups", "各次上电之间的分散性"),

@@ -312,32 +312,76 @@ def symmetry(ctx: Context) -> Item:
         "a_CW": aw, "b_CW": bw, "a_CCW": ac, "b_CCW": bc})
 
 
+def _fluctuation_phasor(x: np.ndarray, t: np.ndarray, period_s: float | None) -> tuple[complex, float]:
+    """(Z, B) of one least-squares slope through the points (x_i, t_i) under a periodic
+    fluctuation of K, K(t) = K̄(1 + A sin(2πt/P + φ)): the slope is K̄(1 + A·Im(e^{iφ}Z))
+    with Z = Σ v_i e^{iωt_i}, v_i = (x_i − x̄)x_i/Sxx (Σ v_i = 1), ω = 2π/P; B = Σ|v_i|
+    bounds |Z| over any period (Z = 0 when ``period_s`` is None). NaN when fewer than two
+    points.
+
+    >>> z, b = _fluctuation_phasor(np.array([1.0, 2.0]), np.array([0.0, 1.0]), None)
+    >>> z, b
+    (0j, 3.0)
+    """
+    if x.size < 2:
+        return complex(math.nan, math.nan), math.nan
+    v = (x - x.mean()) * x / float(((x - x.mean()) ** 2).sum())
+    z = complex(np.sum(v * np.exp(2j * math.pi * t / period_s))) if period_s else 0j
+    return z, float(np.abs(v).sum())
+
+
+def _fluctuation_u(parts: list[tuple[complex, float]], amp_rel: float,
+                   period_s: float | None) -> float:
+    """A|Σ ± Z|/√2 of slopes combined with signs (their Z already signed), φ uniform
+    (Im(e^{iφ}Z) has standard deviation |Z|/√2); A·Σ B/√2 when the period is not stated."""
+    mag = abs(sum(z for z, _ in parts)) if period_s else sum(b for _, b in parts)
+    return abs(amp_rel) * mag / math.sqrt(2.0)
+
+
 def fluctuation_u_rel(x: np.ndarray, t: np.ndarray, amp_rel: float,
                       period_s: float | None) -> float:
     """Relative standard uncertainty of a_CW − a_CCW (5.1.3.8) from a periodic fluctuation
     of K, K(t) = K̄(1 + A sin(2πt/P + φ)), φ unknown (uniform): each half's slope is
     K̄(1 + Σ v_i A sin(ωt_i + φ)) with v_i = (x_i − x̄)x_i/Sxx (Σ v_i = 1, the points of
-    that half), so the difference is A·Im(e^{iφ} Z), Z = Σ_CW v_i e^{iωt_i} −
-    Σ_CCW v_j e^{iωt_j}, of standard deviation A|Z|/√2. ``amp_rel`` = A (T_c,SF/a times
-    the chamber's fluctuation amplitude); ``period_s`` None: the period is not stated and
-    |Z| is bounded by Σ|v_CW| + Σ|v_CCW|.
+    that half; :func:`_fluctuation_phasor`), so the difference is A·Im(e^{iφ} Z), Z =
+    Σ_CW v_i e^{iωt_i} − Σ_CCW v_j e^{iωt_j}, of standard deviation A|Z|/√2. ``amp_rel`` = A
+    (T_c,SF/a times the chamber's fluctuation amplitude); ``period_s`` None: the period is
+    not stated and |Z| is bounded by Σ|v_CW| + Σ|v_CCW|.
 
     >>> round(fluctuation_u_rel(np.array([-2.0, -1.0, 1.0, 2.0]), np.array([0.0, 1.0, 2.0, 3.0]),
     ...                         1e-4, None), 9)
     0.000424264
     """
-    z, bound = 0j, 0.0
-    for half in (x > 0, x < 0):
-        xs, ts = x[half], t[half]
-        if xs.size < 2:
+    parts = []
+    for half, sign in ((x > 0, 1.0), (x < 0, -1.0)):
+        z, b = _fluctuation_phasor(x[half], t[half], period_s)
+        if not math.isfinite(b):
             return math.nan
-        v = (xs - xs.mean()) * xs / float(((xs - xs.mean()) ** 2).sum())
-        sign = 1.0 if xs[0] > 0 else -1.0
-        bound += float(np.abs(v).sum())
-        if period_s:
-            z += sign * complex(np.sum(v * np.exp(2j * math.pi * ts / period_s)))
-    mag = abs(z) if period_s else bound
-    return abs(amp_rel) * mag / math.sqrt(2.0)
+        parts.append((sign * z, b))
+    return _fluctuation_u(parts, amp_rel, period_s)
+
+
+def fluctuation_ratio_u_rel(x_i: np.ndarray, t_i: np.ndarray, x_b: np.ndarray,
+                            t_b: np.ndarray, amp_rel: float, period_s: float | None) -> float:
+    """Relative standard uncertainty of the ratio a_i/a_b of two scale-factor runs made one
+    after the other at the same set temperature (5.1.3.5: a_Vi over a_BASE) from the
+    chamber's periodic fluctuation moving K by T_c,SF during each: a_i/a_b = (K̄_i/K̄_b)·
+    (1 + A·Im(e^{iφ}(Z_i − Z_b))) to first order in A (:func:`_fluctuation_phasor` for each
+    run's Z), φ unknown (uniform), so the standard deviation is A|Z_i − Z_b|/√2; without a
+    stated period the bound A(B_i + B_b)/√2. The readings log the set point, not the
+    chamber's temperature, so the fluctuation cannot be corrected: it is budgeted.
+
+    >>> x = np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
+    >>> round(fluctuation_ratio_u_rel(x, np.arange(5.0), x, np.arange(5.0) + 5, 1e-4, None), 9)
+    0.000141421
+    >>> fluctuation_ratio_u_rel(x, np.arange(5.0), x, np.arange(5.0) + 900, 1e-4, 900.0) < 1e-18
+    True
+    """
+    zi, bi = _fluctuation_phasor(x_i, t_i, period_s)
+    zb, bb = _fluctuation_phasor(x_b, t_b, period_s)
+    if not (math.isfinite(bi) and math.isfinite(bb)):
+        return math.nan
+    return _fluctuation_u([(zi, bi), (-zb, bb)], amp_rel, period_s)
 
 
 def sf_stability(ctx: Context) -> Item:
@@ -395,7 +439,12 @@ def sf_temperature(ctx: Context) -> Item:
 def ratiometric(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.5 eq (7): R_Vi = [a_Vi − a_BASE·V_i/V_BASE]/a_BASE with a_BASE the
     fit at V_BASE of the supply runs; the largest |R_Vi| in % (the plain supply sensitivity
-    (a_Vi − a_BASE)/a_BASE kept in the details, for a regulated gyro)."""
+    (a_Vi − a_BASE)/a_BASE kept in the details, for a regulated gyro). Budget: the two
+    slopes' noise and drift, and the chamber's temperature fluctuation moving K by T_c,SF
+    between the supply runs, which follow one another at the one set point T_BASE
+    (:func:`fluctuation_ratio_u_rel`; amplitude and period from the readings' metadata,
+    JJF Table 2's ±1 °C and a bound over any period when absent; none without the
+    5.1.3.4 runs, T_c,SF then unknown)."""
     t, cl, un = "scale-factor ratiometric error (max |R|)", "5.1.3.5", "%"
     m = _miss(ctx, "ratiometric", "ratiometric_error", t, cl, un)
     if m:
@@ -406,9 +455,15 @@ def ratiometric(ctx: Context) -> Item:
     ib = int(np.argmin(np.abs(V - ctx.v_base)))
     R = np.array([ief.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
     i = int(np.argmax(np.abs(R)))
-    u = gum(lambda ai, ab: 100 * abs(ief.ratiometric_error_iec(ai, ab, V[i], V[ib])),
+    u_fl = 0.0 if i == ib else fluctuation_ratio_u_rel(
+        runs[i]["x"], runs[i]["t"], runs[ib]["x"], runs[ib]["t"],
+        sf_tc_rel(ctx) * ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s)
+    u = gum(lambda ai, ab, f: 100 * abs(ief.ratiometric_error_iec(ai * (1 + f), ab, V[i], V[ib])),
             [from_u("a_Vi", a[i], runs[i]["u_a"], dof=runs[i]["nu_a"]),
-             from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"])])
+             from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"]),
+             from_u("fluct", 0.0, u_fl, type="B",
+                    source="chamber fluctuation (± amplitude, period) × T_c,SF between the "
+                           "supply runs")])
     return Item("ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
                 details={"V": V, "a_V": a, "R_pct": 100 * R,
                          "supply_sensitivity_pct": 100 * (a - a[ib]) / a[ib]})

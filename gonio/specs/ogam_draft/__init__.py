@@ -47,7 +47,7 @@ SPEC = Specification(
                                          "monte_carlo"})),
     outputs="gonio.specs.ogam_draft.outputs",
     simulate_options=frozenset({"table", "stream", "stream_format"}),
-    calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt"}),
+    calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt", "gyro_type"}),
     budget_options=frozenset({"table_mpe_arcsec", "tilt_deg", "zero_stability_dph",
                               "duration_min", "repeatability_arcsec", "k",
                               "monte_carlo_trials", "seed"}),

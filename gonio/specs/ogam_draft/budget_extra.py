@@ -31,12 +31,12 @@ from gonio.specs.ogam_draft.coupling import coupling_terms
 from gonio.physics.earth import earth_rate_split
 from gonio.physics.kinematics import Timeline
 from gonio.specs.ogam_draft.protocol import Protocol
-from gonio.units import dps_to_arcsec_s
+from gonio.units import ARCSEC_PER_DEG, dps_to_arcsec_s
 
 __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "session_coupling",
            "coupling_budget_component", "tilt_coupling_coefficients", "budget_extra_components",
            "scale_factor_tilt_bias", "scale_factor_round_coupling",
-           "nonlinearity_tilt_bias",
+           "nonlinearity_tilt_bias", "TiltCorrection", "scale_factor_tilt_correction",
            "EXTRA_SYMBOLS"]
 
 #: Symbols of :func:`budget_extra_components`.
@@ -275,6 +275,106 @@ def scale_factor_round_coupling(scale_factor_rows: pd.DataFrame, protocol: Proto
         * math.sin(math.radians(tilt_deg))
     ck, sk = tilt_coupling_coefficients(th_k, t_k, sfi.rate_dps, sfi.read_delay_s, accel_dps2)
     return omega * ck / th_k, omega * sk / th_k
+
+
+@dataclass(frozen=True)
+class TiltCorrection:
+    """The tilt × Earth-rate coupling of the 7.1 rounds at a *measured* tilt (the in-situ
+    tilt estimate, :mod:`gonio.specs.ogam_draft.tilt_estimate`): K's relative bias δ and its
+    standard uncertainty, with the estimate it comes from (see
+    :func:`scale_factor_tilt_correction`)."""
+
+    delta_rel: float            # δ: K(7.1) = K·(1 + δ)
+    u_delta_rel: float          # u(δ), from the fit's covariance (ν = dof)
+    dof: int                    # N − 3 of the tilt estimate's fit
+    tilt_deg: float             # ψ
+    u_tilt_deg: float
+    azimuth_deg: float          # α, the tilt's azimuth in the table frame
+    u_azimuth_deg: float
+    r_tilt_azimuth: float       # correlation coefficient r(ψ, α)
+    k95: float                  # Student-t factor for 95 % with ν = dof
+    n_positions: int
+    orientation: str            # the tilt estimate's table axis
+
+    def to_dict(self) -> dict:
+        """Plain dict (results.json); the 95 % expanded uncertainties of ψ and α beside u."""
+        d = dict(self.__dict__)
+        d.update(U95_tilt_deg=self.k95 * self.u_tilt_deg,
+                 U95_azimuth_deg=self.k95 * self.u_azimuth_deg)
+        return d
+
+
+def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Protocol,
+                                 latitude_deg: float, estimate,
+                                 accel_dps2: float = 60.0) -> TiltCorrection:
+    """K's relative bias δ from the tilt × Earth-rate coupling of the 7.1 rounds at the
+    tilt ψ and azimuth α the in-situ estimate measured, and u(δ) (beyond the draft).
+
+    Round k's K_i is off by (a_k cos γ − b_k sin γ)/3600 (:func:`scale_factor_round_coupling`,
+    a_k, b_k ∝ sin ψ; γ = α − β the azimuth from Ω_⊥'s direction β of 7.1's orientation), so
+    K = mean K_i is off by δ(ψ, γ) = sin ψ·D(γ), D(γ) = mean(a¹_k cos γ − b¹_k sin γ)/3600
+    (a¹, b¹ at sin ψ = 1). The estimate's fit c0 + a cos θ + b sin θ
+    (:func:`gonio.specs.ogam_draft.tilt_estimate.fit_first_harmonic`, covariance Σ_ab) gives
+    ψ = asin(hypot(a, b)/Ω_⊥) and α = atan2(−b, a) + β_te; their covariance J Σ_ab Jᵀ and
+    δ's gradient (cos ψ·D, sin ψ·D′) give u²(δ) by the law of propagation with the
+    correlation of ψ and α (JCGM 100 5.2). With the estimate taken in 7.1's orientation δ is
+    linear in (a, b) (sin ψ cos γ = a/Ω_⊥, sin ψ sin γ = −b/Ω_⊥), so the first-order u is
+    exact; ν = N − 3 (the fit's).
+
+    Examples
+    --------
+    A noise-free estimate in 7.1's orientation: δ equals the coupling of the rounds at the
+    estimate's ψ and phase (the worst-case amplitude of :func:`scale_factor_tilt_bias` at
+    the phase where it is largest), u(δ) = 0:
+
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.tilt_estimate import estimate_tilt
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
+    >>> sf = pd.DataFrame({"table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0],
+    ...                    "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0]})
+    >>> a, b = scale_factor_round_coupling(sf, p, 40.0, 0.1)
+    >>> g = math.atan2(-b.mean(), a.mean())               # the phase of the largest bias
+    >>> th = np.arange(12) * 30.0
+    >>> amp = 11.522126 * math.sin(math.radians(0.1))
+    >>> e = estimate_tilt(th, 9.7 + amp * np.cos(np.radians(th) + g), 40.0, "up")
+    >>> c = scale_factor_tilt_correction(sf, p, 40.0, e)
+    >>> A = scale_factor_tilt_bias(sf, p, 40.0, e.tilt_deg)
+    >>> bool(abs(c.delta_rel - A / 3600) < 1e-12 * A), c.u_delta_rel < 1e-15, c.dof
+    (True, True, 9)
+    """
+    from gonio.specs.ogam_draft.tilt_estimate import fit_first_harmonic
+
+    sfi = protocol.scale_factor
+    if sfi is None or len(scale_factor_rows) == 0:
+        raise GonioError("the tilt correction of K needs the 7.1 rounds")
+    fit = fit_first_harmonic(estimate.table["table_deg"].to_numpy(dtype=float),
+                             estimate.table["rate_arcsec_s"].to_numpy(dtype=float))
+    _, fa, fb = fit.coef
+    amp = math.hypot(fa, fb)
+    if not amp > 0:
+        raise GonioError("the tilt estimate's first harmonic is zero: no azimuth to correct at")
+    perp = estimate.perpendicular_arcsec_s
+    psi = math.radians(estimate.tilt_deg)
+    # J: (ψ, α) by (a, b): ψ = asin(A/Ω_⊥), α = atan2(−b, a) + β
+    jac = np.array([[fa, fb], [fb, -fa]]) / np.array([[amp * perp * math.cos(psi)], [amp ** 2]])
+    cov = jac @ fit.cov[1:, 1:] @ jac.T
+    a1, b1 = scale_factor_round_coupling(scale_factor_rows, protocol, latitude_deg, 90.0,
+                                         accel_dps2)
+    beta = math.radians(earth_rate_split(latitude_deg, sfi.orientation)
+                        .perpendicular_direction_deg)
+    gam = math.radians(estimate.tilt_azimuth_table_deg) - beta
+    d_g = float(np.mean(a1 * math.cos(gam) - b1 * math.sin(gam))) / ARCSEC_PER_DEG
+    dd_g = -float(np.mean(a1 * math.sin(gam) + b1 * math.cos(gam))) / ARCSEC_PER_DEG
+    grad = np.array([math.cos(psi) * d_g, math.sin(psi) * dd_g])
+    u_psi, u_al = (math.sqrt(max(float(cov[i, i]), 0.0)) for i in (0, 1))
+    r = float(cov[0, 1] / (u_psi * u_al)) if u_psi > 0 and u_al > 0 else 0.0
+    return TiltCorrection(
+        delta_rel=math.sin(psi) * d_g, u_delta_rel=math.sqrt(max(float(grad @ cov @ grad), 0.0)),
+        dof=int(fit.dof), tilt_deg=float(estimate.tilt_deg), u_tilt_deg=math.degrees(u_psi),
+        azimuth_deg=float(estimate.tilt_azimuth_table_deg), u_azimuth_deg=math.degrees(u_al),
+        r_tilt_azimuth=r, k95=float(estimate.k95), n_positions=int(estimate.n_positions),
+        orientation=str(estimate.orientation))
 
 
 def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,

@@ -119,6 +119,18 @@ def readings_taken(repeatability_source: str) -> list[str]:
                 f"{repeatability_source}.")
     return list(READINGS_TAKEN[:3]) + [note] + list(READINGS_TAKEN[3:])
 
+#: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
+#: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
+TILT_CORRECTED = {
+    "note": "beyond the draft: K is corrected for the tilt x Earth-rate coupling of the 7.1 "
+            "rounds at the tilt psi and azimuth alpha measured by the in-situ tilt estimate "
+            "([tilt_estimate]); U(K) carries the correction's uncertainty (line K_te: u(psi), "
+            "u(alpha) and their correlation) instead of the coupling at the A.1 bound (K_tilt)",
+    "draft": "the draft's reading (7.1): K = mean K_i of the rounds as measured, U with the "
+             "coupling at the A.1 tilt bound, arcsine (line K_tilt)",
+    "corrected": "stated: K corrected by the measured tilt, U with the correction's "
+                 "uncertainty (line K_te)"}
+
 
 @dataclass(frozen=True)
 class Conflict:
@@ -170,6 +182,7 @@ class Analysis:
     excluded: object = None              # DataFrame of readings excluded by the checks
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
+    gyro_type: str | None = None         # the laboratory file's [instrument] gyro_type
 
     @property
     def e_measured(self) -> bool:
@@ -202,9 +215,21 @@ class Analysis:
         tables listed, the 7.1 measurand, the two readings of B_s and the noise analysis)."""
         d = {k: v for k, v in c.to_dict().items() if k not in ITEM_FIELDS}
         if c.name == "scale_factor" and c.measured:
+            iu = self.item_uncertainty.get(c.name)
+            tc = None if iu is None else iu.correction
             d.update(scale_factor_as_mounted(
-                float(c.value), session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
-            d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol)
+                float(c.value if tc is None else iu.value),
+                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
+            d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol,
+                                                                   self.gyro_type)
+            if tc is not None:
+                d["stated"] = "tilt_corrected"
+                d["tilt_correction"] = {"label": TILT_CORRECTED["note"], **tc.to_dict()}
+                d["estimates"] = {
+                    "draft": {"label": TILT_CORRECTED["draft"], "value": _plain_value(c),
+                              "uncertainty": beside_uncertainty(iu.beside.to_dict())},
+                    "corrected": {"label": TILT_CORRECTED["corrected"],
+                                  "value": float(iu.value)}}
         if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
             if iu is not None and iu.beside is not None:
@@ -244,6 +269,8 @@ class Analysis:
             value = float(iu.value)               # the stated reading of B_s
         if c.name in RANGE_READINGS and iu is not None and iu.beside is not None:
             value = float(iu.value)               # the bias-corrected range
+        if c.name == "scale_factor" and iu is not None and iu.correction is not None:
+            value = float(iu.value)               # K corrected by the measured tilt
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
                     None if unc is None else Uncertainty(
@@ -463,7 +490,8 @@ def session_settings(readings: Readings, protocol: Protocol) -> tuple[dict, list
     return out, conflicts
 
 
-def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
+def temperature_coeff_bound(readings: Readings, protocol: Protocol,
+                            gyro_type: str | None = None) -> dict:
     """The bound |α_K|max (ppm/°C) on the instrument's scale-factor temperature coefficient
     that K's chamber-temperature line ``K_T`` takes, and where it comes from (results.json
     ``items.scale_factor.details.temperature_coeff_bound``; the certificate says it).
@@ -472,9 +500,11 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
     bench that made the readings. The rule, in this order:
 
     1. ``metadata``: the readings state it (``sf_temperature_coeff_bound_ppm_per_c``);
-    2. ``protocol-rlg`` / ``protocol-fog``: the readings state the gyro type (``gyro_type``)
-       and the protocol's default for that type is taken
-       (``annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c`` or ``…_fog_…``);
+    2. ``protocol-rlg`` / ``protocol-fog``: the readings state the gyro type (``gyro_type``),
+       else ``gyro_type`` (the laboratory file's ``[instrument] gyro_type``: the instrument
+       registered in the records) states it, and the protocol's default for that type is
+       taken (``annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c`` or ``…_fog_…``); ``how``
+       says which of the two stated the type;
     3. ``protocol-larger``: neither is stated; the larger of the two defaults is taken, so a
        FOG is never given an RLG's bound without a word.
 
@@ -486,10 +516,16 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
     ...  b({"gyro_type": "fog"}), b({}), b({"gyro_type": "fog",
     ...                                   "sf_temperature_coeff_bound_ppm_per_c": "0.4"}))]
     [(0.1, 'protocol-rlg'), (1.0, 'protocol-fog'), (1.0, 'protocol-larger'), (0.4, 'metadata')]
+    >>> d = temperature_coeff_bound(Readings(pd.DataFrame(), {}), p, "RLG")
+    >>> d["bound_ppm_per_c"], d["source"], d["how"].endswith("file's [instrument] gyro_type)")
+    (0.1, 'protocol-rlg', True)
     """
     a = protocol.annex_a
     md, file = readings.metadata, readings.path
     gyro = metadata_gyro_type(md, file=file)
+    from_lab = gyro is None and bool(gyro_type)
+    if from_lab:
+        gyro = metadata_gyro_type({"gyro_type": gyro_type}, file="the laboratory file")
     stated = metadata_float(md, "sf_temperature_coeff_bound_ppm_per_c", file=file)
     defaults = {"rlg": a.sf_temperature_coeff_bound_rlg_ppm_per_c,
                 "fog": a.sf_temperature_coeff_bound_fog_ppm_per_c}
@@ -499,7 +535,9 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol) -> dict:
     elif gyro is not None:
         bound, source = defaults[gyro], f"protocol-{gyro}"
         how = f"the protocol's default for a{'n' if gyro == 'rlg' else ''} {gyro.upper()} " \
-              f"(annex_a.sf_temperature_coeff_bound_{gyro}_ppm_per_c)"
+              f"(annex_a.sf_temperature_coeff_bound_{gyro}_ppm_per_c" + (
+                  "; the type stated by the laboratory file's [instrument] gyro_type)"
+                  if from_lab else ")")
     else:
         bound, source = max(defaults.values()), "protocol-larger"
         how = "gyro type not stated: the larger of the protocol's RLG and FOG defaults"
@@ -684,6 +722,37 @@ def _scale_factor_tilt(results, readings, protocol, budget) -> float:
                                   float(budget.parameters["tilt_deg"]))
 
 
+def tilt_correction(results, readings, protocol):
+    """(correction, why): K's tilt correction from the in-situ tilt estimate
+    (:func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_correction`) when the protocol
+    has ``[tilt_estimate]``, the readings hold its rows, K comes from 7.1 and the file states
+    ``latitude_deg`` (the estimate's Ω_⊥); else (None, the reason, or "" when the protocol
+    has no tilt estimate). Counts of the estimate are converted with the 7.1 K."""
+    from gonio.errors import GonioError
+    from gonio.specs.ogam_draft.budget_extra import scale_factor_tilt_correction
+    from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
+
+    if protocol.tilt_estimate is None:
+        return None, ""
+    df = readings.data
+    if not results.scale_factor.measured or protocol.scale_factor is None:
+        return None, "K not measured by 7.1: no tilt correction"
+    if not (df["test"] == "tilt_estimate").any():
+        return None, ("the protocol has [tilt_estimate] but the readings hold no tilt_estimate "
+                      "rows: K carries the coupling at the A.1 bound (K_tilt)")
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    if lat is None:
+        return None, ("the readings do not state latitude_deg: the tilt estimate needs it, "
+                      "K carries the coupling at the A.1 bound (K_tilt)")
+    sf = df[df["line"].isin(list(results.scale_factor.used_lines))]
+    try:
+        est = tilt_estimate_from_readings(readings, float(results.scale_factor.value), lat)
+        return scale_factor_tilt_correction(sf, protocol, lat, est), ""
+    except GonioError as exc:
+        return None, (f"the tilt estimate could not correct K ({exc.args[0] if exc.args else exc}):"
+                      " K carries the coupling at the A.1 bound (K_tilt)")
+
+
 def _nonlinearity_tilt(results, readings, protocol, budget) -> float:
     """A_l of :func:`gonio.specs.ogam_draft.budget_extra.nonlinearity_tilt_bias` for the largest and smallest
     of this calibration's 7.1 rounds, at the budget's tilt bound and the file's latitude
@@ -777,7 +846,7 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
 # --------------------------------------------------------------------------- items
 
 def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protocol: Protocol,
-                       settings: dict, readings: Readings) -> dict:
+                       settings: dict, readings: Readings, gyro_type: str | None = None) -> dict:
     """The uncertainty of every measured item (clause 8), by
     :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
@@ -789,11 +858,18 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
     if sf.measured:
         t = sf.table
-        out["scale_factor"] = iu.scale_factor_budget(
-            t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
-            tilt_bias_arcsec_per_deg=k_tilt,
-            temperature_rel_bound=1e-6 * temperature_coeff_bound(readings, protocol)[
-                "bound_ppm_per_c"] * protocol.conditions.temperature_tolerance_c)
+        kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
+                  temperature_rel_bound=1e-6 * temperature_coeff_bound(
+                      readings, protocol, gyro_type)["bound_ppm_per_c"]
+                  * protocol.conditions.temperature_tolerance_c)
+        out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
+                                                     mpe, **kw)
+        tc, _ = tilt_correction(results, readings, protocol)
+        if tc is not None:       # stated corrected by the measured tilt, the bound's K beside
+            out["scale_factor"] = dataclasses.replace(
+                iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
+                                       tilt_correction=tc, **kw),
+                beside=out["scale_factor"], correction=tc)
         if results.scale_factor_nonlinearity.measured:
             draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
@@ -1025,21 +1101,22 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
               tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-              findings: list | None = None) -> Result:
+              findings: list | None = None, gyro_type: str | None = None) -> Result:
     """``SPEC.calibrate``: the seven characteristics and their uncertainties from a readings
     file or stream, as the one sealed :class:`~gonio.result.model.Result` (:func:`analyse`,
     then :meth:`Analysis.result`; the arguments are :func:`analyse`'s). Conformity is not
     decided here: the pipeline decides it once, on the laboratory file's limits."""
     return analyse(readings, protocol, monte_carlo_trials=monte_carlo_trials, seed=seed,
                    static_record=static_record, budget=budget, tilt=tilt,
-                   zero_stability=zero_stability, findings=findings).result()
+                   zero_stability=zero_stability, findings=findings,
+                   gyro_type=gyro_type).result()
 
 
 def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
             *, monte_carlo_trials: int = 0, seed: int = 0,
             static_record: StaticRecord | None = None, budget: str = "physical",
             tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-            findings: list | None = None) -> Analysis:
+            findings: list | None = None, gyro_type: str | None = None) -> Analysis:
     """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
     ``protocol``: explicit (the command line's ``--protocol``), else the file's
@@ -1055,7 +1132,10 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     ``static_record`` (the virtual bench's). ``zero_stability``: which reading of B_s is
     stated, ``"draft"`` (default) or ``"model"`` (:func:`zero_stability_readings`).
     ``findings``: the screening of these readings already made (``SPEC.screen``, the
-    pipeline's first step), applied as given; None: screened here.
+    pipeline's first step), applied as given; None: screened here. ``gyro_type``: the
+    instrument's type as the laboratory file states it (``[instrument] gyro_type``, passed by
+    the pipeline), taken for K's temperature-coefficient bound when the readings state none
+    (:func:`temperature_coeff_bound`).
     """
     if isinstance(readings, Readings):
         proto, conflicts = resolve_protocol(readings.path, readings.metadata.get("protocol"),
@@ -1080,14 +1160,20 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
                                             monte_carlo_trials=monte_carlo_trials, seed=seed)
     noise, noise_src = analyse_zero_stability(static_record)
-    items = item_uncertainties(res, e_budget, proto, settings, kept)
+    items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type)
+    if proto.tilt_estimate is not None and "scale_factor" in items:
+        tc = items["scale_factor"].correction
+        notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
+            f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
+            f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
+            f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"))
     zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
     return Analysis(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                     item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                     budget_notes=notes, excluded=excluded,
-                    zero_stability_readings=zs_readings, findings=findings)
+                    zero_stability_readings=zs_readings, findings=findings, gyro_type=gyro_type)
 
 
 def beside_uncertainty(unc: dict) -> dict:

@@ -56,6 +56,9 @@ ITEM_TRUTHS = {
     "scale_factor_disc": "as scale_factor; U with the tilt coupling's line for a tilt uniform "
                          "over the A.1 disc (semicircle, u = A/2) instead of the bound's "
                          "arcsine (u = A/sqrt 2)",
+    "scale_factor_bound": "as scale_factor; result the 7.1 mean uncorrected, U with the "
+                          "coupling at the A.1 bound (not stated when the tilt estimate "
+                          "corrects K)",
     "scale_factor_nonlinearity": "(max - min)/mean of the instrument's own K_i at the 7.1 "
                                  "rounds (as scale_factor), %; result the bias-corrected range",
     "scale_factor_nonlinearity_draft": "as scale_factor_nonlinearity; result the draft's range "
@@ -220,9 +223,14 @@ def item_record(report, truth: dict) -> dict:
         k_true, k_i = scale_factor_truth(truth)
         out["scale_factor"]["truth"] = k_true
         b = report.item_uncertainty["scale_factor"]
-        u_disc = disc_model_u(b)
-        out["scale_factor_disc"] = dict(out["scale_factor"], U=float(b.k) * u_disc,
+        bound = b.beside if b.correction is not None else b   # K_tilt at the A.1 bound
+        u_disc = disc_model_u(bound)
+        out["scale_factor_disc"] = dict(out["scale_factor"], U=float(bound.k) * u_disc,
                                         u_c=float(u_disc))
+        if b.correction is not None:    # stated: K corrected by the measured tilt
+            out["scale_factor_bound"] = dict(out["scale_factor"], U=float(bound.U),
+                                             k=float(bound.k), u_c=float(bound.u_c))
+            out["scale_factor"]["value"] = float(b.value)
         if "scale_factor_nonlinearity" in out:
             kl = out["scale_factor_nonlinearity"]
             kl["truth"] = float((k_i.max() - k_i.min()) / k_i.mean() * 100.0)

@@ -42,7 +42,7 @@ from typing import Sequence
 import numpy as np
 
 from gonio.result.statement import coverage_k
-from gonio.units import ARCSEC_PER_DEG, S_PER_H
+from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
 from uncertainty.propagation import LinearModel
@@ -119,6 +119,9 @@ class ItemUncertainty:
     #: Another reading of the same item kept beside the stated one (K_l: the draft's range as
     #: measured, :func:`nonlinearity_budget`, beside the bias-corrected range; C_v likewise).
     beside: object = field(default=None, repr=False, compare=False)
+    #: The measured correction the value carries (K: the tilt estimate's
+    #: :class:`gonio.specs.ogam_draft.budget_extra.TiltCorrection`), or None.
+    correction: object = field(default=None, repr=False, compare=False)
 
     @property
     def U(self) -> float:
@@ -312,7 +315,8 @@ def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
                         tilt_bias_arcsec_per_deg: float = 0.0,
-                        temperature_rel_bound: float = 0.0) -> ItemUncertainty:
+                        temperature_rel_bound: float = 0.0,
+                        tilt_correction=None) -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
@@ -332,6 +336,12 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     temperature of Table 2 and measured anywhere within its tolerance; the instrument's K
     moves by α_K ΔT, the same in every round: the ``K_T`` line, rectangular with half-width
     |K|·|α_K|·ΔT_max (the coefficient's bound times the tolerance). Not in the draft's budget.
+
+    ``tilt_correction`` (a :class:`gonio.specs.ogam_draft.budget_extra.TiltCorrection`: the
+    coupling's relative bias δ at the tilt ψ and azimuth α the in-situ tilt estimate
+    measured, and u(δ)): K is corrected, K = mean K_i/(1 + δ), and the ``K_tilt`` line at
+    the bound is replaced by the correction's own, ``K_te``, normal with u = |K|·u(δ) and
+    ν = N − 3 of the estimate's fit (Type A: the estimate's scatter). Beyond the draft.
 
     Examples
     --------
@@ -367,7 +377,20 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     # from_u marks distribution "normal"; the table and quantisation lines are not normal
     lines[-2] = _Line(_as_dist(lines[-2].q, "rectangular"), *_rest(lines[-2]))
     lines[-1] = _Line(_as_dist(lines[-1].q, "triangular"), *_rest(lines[-1]))
-    if tilt_bias_arcsec_per_deg:
+    value = float(np.mean(k_i))
+    if tilt_correction is not None:
+        tc = tilt_correction
+        value /= 1.0 + tc.delta_rel
+        corr_ppm = -tc.delta_rel / (1.0 + tc.delta_rel) / PPM
+        lines.append(_Line(from_u("K_te", 0.0, abs(value) * tc.u_delta_rel, dof=tc.dof, type="A",
+                                  source=f"K corrected by {corr_ppm:+.3g} "
+                                         f"ppm for the tilt x Earth-rate coupling of the 7.1 "
+                                         f"rounds at the measured tilt psi = {tc.tilt_deg:.3g} deg "
+                                         f"(u {tc.u_tilt_deg:.2g}), azimuth {tc.azimuth_deg:.1f} "
+                                         f"deg (u {tc.u_azimuth_deg:.2g}), r = "
+                                         f"{tc.r_tilt_azimuth:.2f}; u of the correction"),
+                           "tilt correction of K", True, "A.1 applied to 7.1"))
+    elif tilt_bias_arcsec_per_deg:
         a_k = float(tilt_bias_arcsec_per_deg)
         lines.append(_Line(type_b("K_tilt", 0.0, abs(float(np.mean(k_i))) * a_k / ARCSEC_PER_DEG,
                                   "arcsine",
@@ -380,15 +403,16 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   source=f"chamber temperature within its tolerance, "
                                          f"|alpha_K| dT_max = {temperature_rel_bound:.3g}"),
                            "chamber temperature", True, "Table 2 applied to 7.1"))
-    return _budget("scale_factor", "counts/deg", float(np.mean(k_i)), lines, k=k)
+    return _budget("scale_factor", "counts/deg", value, lines, k=k)
 
 
 def without_tilt_u_rel(b: ItemUncertainty) -> float:
-    """u(K)/K of a :func:`scale_factor_budget` less its ``K_tilt`` and ``K_T`` lines: the
+    """u(K)/K of a :func:`scale_factor_budget` less its ``K_tilt`` (or ``K_te``) and ``K_T`` lines: the
     part of u(K) an item that carries the tilt bias of K by its own ``K_tilt`` line takes as
     normal (the chamber's temperature moves K and the counts it divides alike, so it does not
     enter an angle read with that K in the same chamber)."""
-    u2 = b.u_c ** 2 - sum(c.u ** 2 for c in b.components if c.symbol in ("K_tilt", "K_T"))
+    u2 = b.u_c ** 2 - sum(c.u ** 2 for c in b.components
+                          if c.symbol in ("K_tilt", "K_te", "K_T"))
     return math.sqrt(max(u2, 0.0)) / abs(b.value) if b.value else 0.0
 
 

@@ -45,8 +45,9 @@ POSITION_DECIMALS: int = 2
 
 #: The keys of the validation records: the seven, with the draft's and the model's readings
 #: of the zero stability and the angle deviation beside them, and K's U under the
-#: distribution of the tilt coupling over the allowed mountings (``scale_factor_disc``).
-RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_disc",
+#: distribution of the tilt coupling over the allowed mountings (``scale_factor_disc``), and,
+#: when the in-situ tilt estimate corrects K, the uncorrected K with the bound's U (``scale_factor_bound``).
+RECORD_KEYS: tuple[str, ...] = ("scale_factor", "scale_factor_disc", "scale_factor_bound",
                                 "scale_factor_nonlinearity", "scale_factor_nonlinearity_draft",
                                 "zero_stability",
                                 "zero_stability_draft", "zero_stability_model", "angle_deviation",

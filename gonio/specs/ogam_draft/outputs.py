@@ -62,8 +62,15 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
         if cv.get("estimates"):
             lines.append(f"{name} (the draft's range as measured, not stated): "
                          f"{cv['estimates']['draft']['value']:.3g} {unit}")
-    tb = ((d["items"].get("scale_factor") or {}).get("details") or {}).get(
-        "temperature_coeff_bound")
+    kd = (d["items"].get("scale_factor") or {}).get("details") or {}
+    if kd.get("tilt_correction"):
+        tc = kd["tilt_correction"]
+        lines.append(f"scale_factor (the draft's 7.1 mean, uncorrected, not stated): "
+                     f"{kd['estimates']['draft']['value']:.10g} counts/deg; stated K is corrected "
+                     f"by the measured tilt psi = {tc['tilt_deg']:.2g} deg (U95 "
+                     f"{tc['U95_tilt_deg']:.2g} deg) at azimuth {tc['azimuth_deg']:.1f} deg (U95 "
+                     f"{tc['U95_azimuth_deg']:.2g} deg), beyond the draft")
+    tb = kd.get("temperature_coeff_bound")
     if tb:                                   # which bound K's chamber line took, and whence
         lines.append(f"note: U(K) holds for a chamber within +-{tb['temperature_tolerance_c']:g} "
                      f"degC of the reference and |alpha_K| <= {tb['bound_ppm_per_c']:g} ppm/degC:"

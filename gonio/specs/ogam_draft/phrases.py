@@ -230,6 +230,10 @@ LABELS: dict[str, dict[str, str]] = {
                         "zh": "7.3 连续记录的噪声模型估计（并列给出，不作结果）：{v} (°)/h"},
     "note_kl_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} %"},
+    "note_k_tilt": {"en": "corrected for the measured tilt ψ = {p}° (U = {up}°) at azimuth {a}° "
+                          "(U = {ua}°), beyond the draft; the 7.1 mean uncorrected: {v}",
+                    "zh": "已按实测倾斜修正（草案以外）：ψ = {p}°（U = {up}°），方位角 {a}°"
+                          "（U = {ua}°）；未修正的 7.1 平均值：{v}"},
     "note_cv_draft": {"en": "the draft's range as measured (beside, not stated): {v} ppm",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} ppm"},
     "note_cg_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",

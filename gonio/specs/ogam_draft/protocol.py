@@ -242,8 +242,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "repeatability_arcsec": Field("float", 0.096, non_negative, "≥ 0"),
         # absent: k = t_95(ν_eff) (Welch–Satterthwaite); set: k fixed by the laboratory
         "coverage_factor": Field("float", None, positive, "> 0"),
-        "sf_temperature_coeff_bound_rlg_ppm_per_c": Field("float", 0.1, non_negative, "≥ 0"),
-        "sf_temperature_coeff_bound_fog_ppm_per_c": Field("float", 1.0, non_negative, "≥ 0"),
+        "sf_temperature_coeff_bound_rlg_ppm_per_c": Field("float", 0.1, positive, "> 0"),
+        "sf_temperature_coeff_bound_fog_ppm_per_c": Field("float", 1.0, positive, "> 0"),
     },
 }
 _EXTRA: dict[str, tuple[dict[str, Field], Callable[[dict], Any] | None]] = {}

@@ -255,7 +255,7 @@ def k_tilt_trial(bench: Bench, protocol: Protocol, seed: int,
                   static_record=session.static_record)
     iu = rep.item_uncertainty["scale_factor"]
     kt = scale_factor_truth(session.truth)[0]
-    return float(rep.results.scale_factor.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)
+    return float(iu.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)   # K as stated
 
 
 def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
