@@ -104,3 +104,38 @@ def test_the_type_is_checked_and_edited(sqlite_store):
     assert services.update_instrument(sqlite_store, tech, inst.id,
                                       gyro_type="FOG").gyro_type == "fog"
     assert services.update_instrument(sqlite_store, tech, inst.id, gyro_type="").gyro_type == ""
+
+
+def test_calibrate_record_takes_the_registered_type(tmp_path, bench_readings, capsys):
+    """``gonio calibrate --record``: the instrument registered under the readings' identity
+    states RLG, the readings and the command line state no type: the run takes the RLG bound
+    (the same readings without --record take the larger default)."""
+    from gonio.cli import main
+    from gonio.records.db import open_store
+
+    readings = _without_gyro_type(bench_readings[0], tmp_path / "readings.csv")
+    data = tmp_path / "data"
+    st = open_store(None, data)
+    try:
+        people = make_people(st)
+        cust = services.add_customer(st, people["tech"], "Owner")
+        services.register_instrument(st, people["tech"], customer_id=cust.id,
+                                     serial="RLG-0001", spec_key="ogam-draft",
+                                     manufacturer="gonio virtual bench",
+                                     model="RLG goniometer (virtual)", gyro_type="rlg")
+    finally:
+        st.close()
+    run = ["calibrate", str(readings), "--protocol", str(SMALL_PROTOCOL)]
+
+    def bound(out):
+        res = json.loads((out / "results.json").read_text())
+        return res["items"]["scale_factor"]["details"]["temperature_coeff_bound"]
+
+    assert main(run + ["--out", str(tmp_path / "plain")]) == 0
+    assert bound(tmp_path / "plain")["source"] == "protocol-larger"
+    assert main(run + ["--out", str(tmp_path / "rec"), "--record", "--data", str(data)]) == 0
+    assert "recorded as calibration 1" in capsys.readouterr().err
+    tb = bound(tmp_path / "rec")
+    assert (tb["source"], tb["bound_ppm_per_c"]) == (
+        "protocol-rlg",
+        load_protocol(SMALL_PROTOCOL).annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c)
