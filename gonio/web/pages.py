@@ -589,6 +589,7 @@ def certificate_page(request: Request, session: Session, cert_id: int):
     if cert is None:
         return Response("no such certificate", status_code=404)
     return render(request, "certificate.html", user, csrf, cert=cert, newer=newer,
+                  virtual=queries.virtual_mark(_store(request), cert.results_sha256),
                   error=request.query_params.get("error", "")[:300])
 
 
