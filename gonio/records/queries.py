@@ -195,6 +195,32 @@ def stated_items(store, results_sha256: str) -> dict:
     return out
 
 
+def stated_intervals(store, results_sha256: str) -> dict:
+    """Item key → (low, high) of each item the stored result states by one coverage interval
+    (:func:`stated_items`: the statement rule's interval, its rounded ends as numbers), for
+    the history figure's bars; read once per stored result (a stored file never changes)."""
+    from decimal import Decimal
+
+    from gonio.errors import GonioError
+
+    at = (str(store.blob_root), results_sha256)
+    got = _INTERVALS.get(at)
+    if got is None:
+        try:
+            stated = stated_items(store, results_sha256)
+        except (GonioError, ValueError, RecursionError):
+            stated = {}
+        got = _INTERVALS[at] = {
+            key: tuple(float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
+            for key, st in stated.items() if st.interval is not None}
+        while len(_INTERVALS) > 1024:
+            _INTERVALS.pop(next(iter(_INTERVALS)))
+    return got
+
+
+_INTERVALS: dict[tuple[str, str], dict] = {}
+
+
 def certificates(store, page: int = 1, size: int = 50):
     """(issued certificates, newest first, total)."""
     stmt = select(Certificate).options(

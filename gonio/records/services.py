@@ -1516,7 +1516,9 @@ def calibration(store, cal_id: int) -> Calibration:
 
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
-    k, unit, title, status, certificate number, issued, amended), oldest first; failed,
+    k, ``interval`` (the (low, high) of an item stated by one coverage interval, as its
+    certificate states it: :func:`gonio.records.queries.stated_intervals`; else None), unit,
+    title, status, certificate number, issued, amended), oldest first; failed,
     rejected and unfinished calibrations are left out (one whose draft is being rendered
     again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
     certificate, whatever its state now; ``amended``: issued, and a certificate of it has
@@ -1524,7 +1526,8 @@ def history(store, instrument_id: int) -> dict:
     done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
         rows = s.execute(
-            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id)
+            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id,
+                   Calibration.results_sha256)
             .join(Calibration, ResultItem.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id),
                    Calibration.status.in_(done))
@@ -1535,11 +1538,14 @@ def history(store, instrument_id: int) -> dict:
             .join(Calibration, Certificate.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id))
             .group_by(Certificate.calibration_id)).all()}
+    from gonio.records.queries import stated_intervals
+
     out: dict[str, list] = {}
-    for it, day, status, cid in rows:
+    for it, day, status, cid, rsha in rows:
         number, n = certs.get(cid, ("", 0))
         out.setdefault(it.key, []).append(
             {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
+             "interval": stated_intervals(store, rsha).get(it.key) if rsha else None,
              "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
              "certificate": number, "issued": n > 0,
              "amended": n > 1 or (n > 0 and status != "issued")})

@@ -165,6 +165,26 @@ def test_web_page_and_draft_say_virtual(recorded, tmp_path):
     assert summary.text.startswith("VIRTUAL BENCH EXAMPLE"), spec
 
 
+def test_history_bars_are_the_stated_intervals(recorded):
+    """The instrument's history (its figure's bars): an item the certificate states by one
+    interval carries that interval, the page's ends as numbers; an item stated by ± U none."""
+    from gonio.report.dcc import dsi_decimal
+
+    store, cid = recorded["store"], recorded["id"]
+    inst_id = services.calibration(store, cid).instrument_id
+    hist = services.history(store, inst_id)
+    for key, it in measured(recorded["res"]).items():
+        want = expected_cell(it).get("interval")
+        (row,) = [r for r in hist[key] if r["calibration_id"] == cid]
+        if want is None:
+            assert row["interval"] is None, key
+        else:
+            ends = [float(dsi_decimal(x.replace("\u2212", "-"))) for x in want]
+            assert list(row["interval"]) == pytest.approx(ends, rel=1e-12), key
+    r = recorded["web"].get(f"/instruments/{inst_id}/history.svg")
+    assert r.status_code == 200 and r.text.count('class="bar"') >= len(measured(recorded["res"]))
+
+
 def _readings(d):
     return (d / "readings.csv").read_bytes()
 
