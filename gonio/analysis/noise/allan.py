@@ -384,11 +384,12 @@ _PASS = 1 << 17
 
 def _pass_layout(x, bsz: int, n_m: int, longest: int):
     """(points per pass, pieces per chunk, zeroed piece products m × piece) of the shared
-    sums: passes of :data:`_PASS` points for an in-memory phase whose chunks are whole
-    pieces, else of one chunk (a streamed phase rebuilds its pieces chunk by chunk)."""
+    sums: passes of :data:`_PASS` points for an in-memory phase longer than a pass whose
+    chunks are whole pieces, else of one chunk (a streamed phase rebuilds its pieces chunk
+    by chunk; a shorter record keeps the chunk's work buffers)."""
     per = -(-bsz // _DOT_PIECE)
     step = _PASS if (type(x) is np.ndarray and bsz % _DOT_PIECE == 0
-                     and bsz == _BLOCK_SHARED) else bsz
+                     and bsz == _BLOCK_SHARED and longest > _PASS) else bsz
     return step, per, np.zeros((n_m, max(0, -(-longest // bsz)) * per))
 
 
