@@ -18,6 +18,7 @@ rows of a readings file    GONIO_MAX_READING_ROWS        1e6 rows (memory: ~0.9 
 Monte Carlo trials         GONIO_MAX_MONTE_CARLO         1e7
 validate trials per case   GONIO_MAX_TRIALS              1e5
 worker processes           GONIO_MAX_WORKERS             the machine's cores
+readings upload (web)      GONIO_MAX_UPLOAD_BYTES        256 MiB (plus 3 MiB for the form)
 backup archive (expanded)  GONIO_MAX_BACKUP_BYTES        8 GiB (an upload and all members)
 records.json of a backup   GONIO_MAX_RECORDS_JSON_BYTES  1 GiB (read into memory)
 replaced SQLite files kept GONIO_KEEP_REPLACED           3 (the newest; a whole number ≥ 1)
@@ -40,6 +41,7 @@ _DEFAULTS: dict[str, float] = {
     "GONIO_MAX_READING_ROWS": 1e6,
     "GONIO_MAX_MONTE_CARLO": 1e7,
     "GONIO_MAX_TRIALS": 1e5,
+    "GONIO_MAX_UPLOAD_BYTES": 256 * 1024 ** 2,
     "GONIO_MAX_BACKUP_BYTES": 8 * 1024 ** 3,
     "GONIO_MAX_RECORDS_JSON_BYTES": 1024 ** 3,
 }

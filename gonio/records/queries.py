@@ -87,7 +87,9 @@ def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows; ``stated``: each item's statement
     (:func:`stated_items`, from the sealed result only), ``shown``: its one line as the page
     prints it (each negative number with U+2212, as the certificate), ``virtual``: the
-    virtual-bench mark (:func:`virtual_mark`) or ""; ``place`` is the place of calibration as the
+    virtual-bench mark (:func:`virtual_mark`) or "", ``identity``: the contradictions between
+    the readings and the laboratory file the run proceeded with (:func:`identity_findings`);
+    ``place`` is the place of calibration as the
     certificate states it (the one entered, else the laboratory's); ``missing``: what it
     lacks for its review (:func:`gonio.records.services.missing_for_review`) while
     ``attachable`` (standards and environment may still be attached; ``all_standards`` to
@@ -126,7 +128,8 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "attachable": cal.status in ATTACHABLE,
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
             "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
-            "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256)}
+            "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256),
+            "identity": identity_findings(store, cal.results_sha256) if sealed else []}
 
 
 def stored_result(store, results_sha256: str):
@@ -136,6 +139,23 @@ def stored_result(store, results_sha256: str):
     from gonio.records.services import file_bytes
 
     return json.loads(file_bytes(store, results_sha256))
+
+
+def identity_findings(store, results_sha256: str) -> list[str]:
+    """The messages of the stored result's identity findings: a contradiction between the
+    readings' metadata and the laboratory file (serial, model, temperature …) that the
+    laboratory chose to proceed with (:func:`gonio.pipeline.identity.check_identity`), which
+    its certificate states as a finding."""
+    from gonio.errors import GonioError
+    from gonio.pipeline.identity import MISMATCH_CODE
+
+    try:
+        doc = stored_result(store, results_sha256)
+    except (GonioError, ValueError, RecursionError):
+        return []
+    found = doc.get("findings") if isinstance(doc, dict) else None
+    return [str(f.get("message", "")) for f in found or []
+            if isinstance(f, dict) and f.get("code") == MISMATCH_CODE]
 
 
 def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None = None) -> str:

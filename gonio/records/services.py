@@ -38,6 +38,7 @@ from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from gonio.errors import GonioError
+from gonio.limits import limit
 from gonio.records import blobs
 from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
@@ -50,7 +51,7 @@ NUMBER_PREFIX = "GC"
 #: Longest one-line text field (names, serials) and multi-line field (addresses, comments).
 MAX_LINE, MAX_TEXT = 200, 4000
 #: Largest readings or protocol file accepted through the records (bytes).
-MAX_UPLOAD = float(os.environ.get("GONIO_MAX_UPLOAD_BYTES", 256 * 2**20))
+MAX_UPLOAD = limit("GONIO_MAX_UPLOAD_BYTES")
 
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f\u2028\u2029\ufeff]")
 _CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")

@@ -281,3 +281,32 @@ def test_issued_certificate_page_and_files_say_virtual(recorded, tmp_path):
     rows = page_rows(web.get(f"/calibrations/{cid}").text)
     for key, it in measured(recorded["res"]).items():
         assert [cell_numbers(c) for c in rows[key]] == [expected_cell(it)], key
+
+
+@pytest.mark.parametrize("spec, protocol, seed", [r for r in __import__(
+    "tests.test_provenance", fromlist=["RUNS"]).RUNS], ids=SPECS)
+def test_a_contradiction_the_lab_proceeded_with_is_flagged_on_the_page(spec, protocol, seed,
+                                                                       tmp_path):
+    """Simulated readings calibrated on the command line with a laboratory file naming another
+    serial and proceeding, then put into the records (gonio db import --lab): the calibration
+    page states the contradiction, naming both serials, and says virtual."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.db import open_store
+    from gonio.records.importer import import_output_folder
+    from tests.test_provenance import LAB_SERIAL, PINS, lab_file, simulate_calibrate
+
+    lab = lab_file(tmp_path, 'on_mismatch = "proceed"')
+    cal = simulate_calibrate(spec, protocol, seed, tmp_path, lab)
+    readings = tmp_path / "sim" / "readings.csv"
+    serial = readings_metadata(readings)["serial"]
+    store = open_store(None, tmp_path / "data")
+    services.add_standard(store, make_people(store)["tech"], name="rotary table",
+                          identifier="RT-07", due_on="2099-01-01")    # the lab file's
+    cid = import_output_folder(store, cal, readings=readings, lab=lab,
+                               protocol=PINS / protocol if protocol else None)
+    page = html_module.unescape(web_client(store).get(f"/calibrations/{cid}").text)
+    flagged = re.search(r'<div class="virtual" id="identity">(.*?)</div>', page, re.S)
+    assert flagged, spec
+    assert serial in flagged.group(1) and LAB_SERIAL in flagged.group(1), (spec, flagged.group(1))
+    assert 'id="virtual-bench"' in page, spec
+    store.close()
