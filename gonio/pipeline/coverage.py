@@ -106,8 +106,8 @@ def _stated(u) -> dict:
     """An item stated by its interval alone (k None: a dispersion, range or extreme,
     :func:`gonio.result.statement.state_interval`): {"interval": [lo, hi], "nu": ν}, ν the
     degrees of freedom its one-sided χ² limit was computed with (:func:`gonio.result.gum.
-    std_dev_uncertainty`: ν; :func:`gonio.specs.jjf1535.items.dispersion_uncertainty`: the
-    stated ν, :func:`gonio.result.statement.stated_nu`, or ν itself above the ∞ threshold),
+    std_dev_uncertainty`: ν; a specification's dispersion of few values: the stated ν,
+    :func:`gonio.result.statement.stated_nu`, or ν itself above the ∞ threshold),
     None for an interval of another model (the half range's); {} for a value ± U."""
     from gonio.result.statement import stated_nu
 
