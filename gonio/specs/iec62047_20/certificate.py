@@ -99,8 +99,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"selection excess of the largest of the noisy differences over the temperatures "
      r"visited twice \(± c_n·σ_max\)",
      "两次到达的各温度上含噪差值取最大者的选择超出量（± c_n·σ_max）"),
-    (r"95 % bound of the largest noise excursion over the record .*",
-     "记录中最大噪声偏移的 95 % 界限"),
+    (r"selection excess of the largest of the noisy smoothed values \(midpoint ± c_m·σ/2 "
+     r"removed\)", "含噪平滑值取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
 )
 
 #: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 5.1.3.8's symmetry
