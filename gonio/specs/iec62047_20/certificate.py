@@ -101,6 +101,7 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "两次到达的各温度上含噪差值取最大者的选择超出量（± c_n·σ_max）"),
     (r"selection excess of the largest of the noisy smoothed values \(midpoint ± c_m·σ/2 "
      r"removed\)", "含噪平滑值取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
+    (r"bias drift over the record \(Allan fit: RRW, BI\)", "记录期间的零偏漂移（Allan 拟合：RRW、BI）"),
 )
 
 #: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 5.1.3.8's symmetry

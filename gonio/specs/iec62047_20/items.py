@@ -870,30 +870,33 @@ def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertai
     values within 2√2·σ of the maximum (closer than twice the σ of a difference of two, so
     either could hold the largest true distance). The excess is known only within
     [0, c_m·σ]: the value is the reading less the midpoint c_m·σ/2, the term rectangular
-    ± c_m·σ/2 (JCGM 100 4.3.7). σ (a smoothed value minus the reference) is read from
-    second differences, which a smooth power-on transient does not enter (first
-    differences and the reference part's spread carry its slope): √(var Δ²ȳ/6) of the
-    smoothed values and √(var Δ²y/6/nr) of the reference part's samples, with the bias
-    drift over the record."""
+    ± c_m·σ/2 (JCGM 100 4.3.7); one contender (m = 1) has no selection excess. σ (a
+    smoothed value of P samples minus the reference of nr) is σ_y·√(1/P + 1/nr), σ_y from
+    the samples' second differences, √(var Δ²y/6), which a power-on transient smooth on
+    the sample interval does not enter (the smoothed values' differences and the reference
+    part's spread carry its slope and curvature); the slower noise is the bias drift over
+    the record, a term of its own (a slow wander moves the smoothed values together: no
+    selection)."""
     vals, dists, sds = [], [], []
     for tt, ys, y in recs:
         ref = float(y[:nr].mean())
         d = np.abs(ys - ref)
-        s_blk = float(np.std(np.diff(ys, 2), ddof=1) / math.sqrt(6)) if ys.size > 3 else 0.0
-        s_ref = float(np.std(np.diff(y[:nr], 2), ddof=1) / math.sqrt(6 * nr)) if nr > 3 else 0.0
+        s_y = float(np.std(np.diff(y, 2), ddof=1) / math.sqrt(6)) if y.size > 3 else 0.0
         vals.append(float(d.max()))
         dists.append(d)
-        sds.append((math.hypot(s_blk, s_ref), float(tt[-1] - tt[0]) if tt.size > 1 else 0.0))
+        sds.append((s_y * math.sqrt(1.0 / max(y.size // max(ys.size, 1), 1) + 1.0 / nr),
+                    float(tt[-1] - tt[0]) if tt.size > 1 else 0.0))
     i = int(np.argmax(vals))
     noise = sds[i][0]
-    sd = math.hypot(noise, drift_u(sds[i][1]))
     m_sel = int(sum(np.sum(d >= vals[i] - 2 * math.sqrt(2) * s) for d, (s, _) in zip(dists, sds)))
-    excess = min(ief.max_abs_normal_mean(max(m_sel, 1)) * sd / 2, vals[i])
-    u = gum(lambda v, m: v + m,
+    excess = min(ief.max_abs_normal_mean(m_sel) * noise / 2, vals[i]) if m_sel > 1 else 0.0
+    u = gum(lambda v, m, w: v + m + w,
             [from_u("drift", vals[i], noise, dof=50, source="noise of the smoothed output"),
              type_b("noise_max", -excess, excess, "rectangular",
                     source="selection excess of the largest of the noisy smoothed values "
-                           "(midpoint ± c_m·σ/2 removed)")])
+                           "(midpoint ± c_m·σ/2 removed)"),
+             from_u("wander", 0.0, drift_u(sds[i][1]), dof=50,
+                    source="bias drift over the record (Allan fit: RRW, BI)")])
     return vals[i] - excess, vals, u, m_sel
 
 
