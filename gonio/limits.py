@@ -18,8 +18,10 @@ rows of a readings file    GONIO_MAX_READING_ROWS        1e6 rows (memory: ~0.9 
 Monte Carlo trials         GONIO_MAX_MONTE_CARLO         1e7
 validate trials per case   GONIO_MAX_TRIALS              1e5
 worker processes           GONIO_MAX_WORKERS             the machine's cores
+readings upload (web)      GONIO_MAX_UPLOAD_BYTES        256 MiB (plus 3 MiB for the form)
 backup archive (expanded)  GONIO_MAX_BACKUP_BYTES        8 GiB (an upload and all members)
 records.json of a backup   GONIO_MAX_RECORDS_JSON_BYTES  1 GiB (read into memory)
+replaced SQLite files kept GONIO_KEEP_REPLACED           3 (the newest; a whole number ≥ 1)
 =========================  ============================  =====================
 """
 
@@ -39,6 +41,7 @@ _DEFAULTS: dict[str, float] = {
     "GONIO_MAX_READING_ROWS": 1e6,
     "GONIO_MAX_MONTE_CARLO": 1e7,
     "GONIO_MAX_TRIALS": 1e5,
+    "GONIO_MAX_UPLOAD_BYTES": 256 * 1024 ** 2,
     "GONIO_MAX_BACKUP_BYTES": 8 * 1024 ** 3,
     "GONIO_MAX_RECORDS_JSON_BYTES": 1024 ** 3,
 }
@@ -74,3 +77,26 @@ def check(name: str, value: float, what: str, *, unit: str = "") -> None:
         u = f" {unit}" if unit else ""
         raise GonioError(f"{what}: {value:.4g}{u} exceeds the limit of {lim:.4g}{u} "
                          f"(set {name} to raise it)")
+
+
+#: How many replaced SQLite files (``records.sqlite3.replaced-STAMP``) a restore over the
+#: live records keeps, the newest, unless ``GONIO_KEEP_REPLACED`` says otherwise.
+KEEP_REPLACED = 3
+
+
+def keep_replaced() -> int:
+    """How many replaced SQLite files a restore keeps: ``GONIO_KEEP_REPLACED`` (a whole number
+    ≥ 1), else :data:`KEEP_REPLACED`; another value is a GonioError naming the variable.
+
+    >>> keep_replaced() if not os.environ.get("GONIO_KEEP_REPLACED") else 3
+    3
+    """
+    import re
+
+    value = os.environ.get("GONIO_KEEP_REPLACED", "").strip()
+    if not value:
+        return KEEP_REPLACED
+    if not re.fullmatch(r"[0-9]{1,6}", value) or int(value) < 1:
+        raise GonioError("environment variable GONIO_KEEP_REPLACED must be a whole number "
+                         f"≥ 1, got {value[:40]!r}")
+    return int(value)

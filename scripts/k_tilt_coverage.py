@@ -2,6 +2,7 @@
 the draft's A.1 bound (0.1°) at the worst azimuth, on the ``rlg`` bench otherwise as it is.
 
     python scripts/k_tilt_coverage.py [--seeds 1001-1016] [--tilt 0.1] [--azimuth worst]
+                                      [--tilt-estimate]
 
 The truth is the instrument's own K at the 7.1 rounds from the bench file
 (``gonio.specs.ogam_draft.item_coverage.scale_factor_truth``: K through the mount and the
@@ -13,7 +14,10 @@ fresh seed the whole optical programme is simulated and calibrated
 (``gonio.specs.ogam_draft.study.k_tilt_trial``: the script uses the public functions of the
 optical study module and the registry only); it prints K − K_true,
 U(K), z = (K − K_true)/u_c(K) and whether |K − K_true| ≤ U, then the count, the Clopper–Pearson
-95 % interval of the coverage, and the mean and sd of z.
+95 % interval of the coverage, and the mean and sd of z. ``--tilt-estimate`` appends the
+``[tilt_estimate]`` section of the built-in ``tilt-estimate`` protocol to the protocol, so the
+session runs the in-situ tilt estimate and K is stated corrected by the measured tilt (K as
+stated is what the script compares).
 """
 
 from __future__ import annotations
@@ -38,16 +42,26 @@ def main(argv=None) -> int:
     ap.add_argument("--tilt", type=float, default=0.1)
     ap.add_argument("--azimuth", default="worst")
     ap.add_argument("--protocol", default="ogam-draft")
+    ap.add_argument("--tilt-estimate", action="store_true",
+                    help="append the built-in tilt-estimate protocol's [tilt_estimate] section")
     a = ap.parse_args(argv)
+    from gonio.formats.toml import read_toml
+    from gonio.resources import resolve
     from gonio.specs import get
     from gonio.specs.ogam_draft.bench import load_bench
+    from gonio.specs.ogam_draft.protocol import parse_protocol
     from gonio.specs.ogam_draft.study import k_tilt_trial, tilted, worst_azimuth
 
     proto = get("ogam-draft").load_protocol(a.protocol)
+    if a.tilt_estimate:
+        raw = read_toml(resolve(a.protocol, "protocol"))
+        raw["tilt_estimate"] = read_toml(resolve("tilt-estimate", "protocol"))["tilt_estimate"]
+        proto = parse_protocol(raw, resolve(a.protocol, "protocol"))
     az = worst_azimuth(load_bench("rlg"), proto, a.tilt) if a.azimuth == "worst" \
         else float(a.azimuth)
     bench = tilted(load_bench("rlg"), a.tilt, az)
-    print(f"rlg bench, tilt {a.tilt:g}°, azimuth {az:g}°, protocol {a.protocol}")
+    print(f"rlg bench, tilt {a.tilt:g}°, azimuth {az:g}°, protocol {a.protocol}"
+          + (" with [tilt_estimate]" if a.tilt_estimate else ""))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for s in a.seeds:

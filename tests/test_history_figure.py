@@ -87,3 +87,26 @@ def test_drawn_without_matplotlib():
             "print('matplotlib' in sys.modules)")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True).stdout.split() == ["False"]
+
+
+def test_an_item_stated_by_its_interval_is_drawn_with_that_interval():
+    """A dispersion stated by its χ² interval [lo, hi] (asymmetric about the value), and a
+    non-negative item stated by [0, value + U]: each bar spans that interval, not value ± U
+    (which would be a second, different statement of the item)."""
+    days = [dt.date(2024, 1, 10), dt.date(2024, 7, 3), dt.date(2025, 2, 1)]
+    rows = [{"date": d, "value": v, "U": hi - v, "interval": (lo, hi), "unit": "″",
+             "title": "repeatability R", "status": "issued"}
+            for d, v, lo, hi in zip(days, (0.112, 0.130, 0.101), (0.066, 0.080, 0.058),
+                                    (0.204, 0.230, 0.190))]
+    rows.append({"date": dt.date(2025, 8, 1), "value": 0.02, "U": 0.05, "interval": (0.0, 0.07),
+                 "unit": "″", "title": "repeatability R", "status": "computed"})
+    root = ET.fromstring(history_svg({"R": rows}, {}))
+    panel = root.find("s:g[@class='panel']", NS)
+    ay, by = _fit(panel.findall("s:text[@class='ytick']", NS), "y", float)
+    bars = panel.findall("s:path[@class='bar']", NS)
+    assert len(bars) == len(rows)
+    for bar, r in zip(bars, rows):
+        v = bar.get("d").split("M")[1]
+        y_top, y_bot = float(v.split()[1].split("V")[0]), float(v.split("V")[1])
+        got = sorted(((y_top + 3.5 - by) / ay, (y_bot + 3.5 - by) / ay))  # tick text: +3.5 px
+        assert got == [pytest.approx(x, abs=0.002) for x in r["interval"]], r

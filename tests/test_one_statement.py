@@ -27,6 +27,7 @@ from lxml import etree
 
 from gonio.cli import main
 from gonio.report.dcc import DCC_NS, SI_NS
+from tests.statement_numbers import by_interval, certificate_spans, check_k, measured
 
 NS = {"dcc": DCC_NS, "si": SI_NS}
 SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
@@ -41,20 +42,6 @@ def demo(request, tmp_path_factory):
             "summary": (d / "summary.txt").read_text(encoding="utf-8"),
             "html": (d / "certificate.html").read_text(encoding="utf-8"),
             "dcc": etree.parse(str(d / "certificate.dcc.xml")).getroot()}
-
-
-def by_interval(it: dict) -> bool:
-    """Whether the item must be stated by one interval (worked out from its numbers)."""
-    u = it["uncertainty"]
-    if u["k"] is None:
-        return True
-    return bool(it.get("nonnegative")) and u["U"] > it["value"]
-
-
-def measured(res: dict) -> dict:
-    return {k: it for k, it in res["items"].items()
-            if it["measured"] and it["value"] is not None and it.get("uncertainty")
-            and it["uncertainty"].get("U")}
 
 
 def test_results_json_holds_one_statement_per_item(demo):
@@ -163,40 +150,25 @@ def test_dcc_states_each_item_once(demo):
                 assert kinds == ["expandedMU"], (key, kinds)
 
 
-_NUM_SPAN = re.compile(r'<span class="num" data-src="items\.([A-Za-z0-9_]+)\.'
-                       r'(value|uncertainty\.U|uncertainty\.k|uncertainty\.nu_eff)"'
-                       r' data-rule="[^"]+">([^<]*)</span>')
-
-
 def test_numbers_agree_across_outputs(demo):
     """The same numbers of every measured item in results.json, the certificate (its spans
     carrying data-src), summary.txt and the DCC: value, U, k and ν as the statement rule
     states them from results.json; the interval's ends; one coverage probability. k is
     t_p of the ν it states (the integer part of ν_eff, GUM G.6.4), checked with scipy."""
-    from scipy.stats import norm, t
-
     from gonio.report.dcc import dsi_decimal
     from gonio.report.i18n import minus_sign
-    from gonio.result.statement import item_statement, k_text, nu_text, p_text, stated_nu
+    from gonio.result.statement import item_statement, k_text, nu_text, p_text
 
     res, summary = demo["res"], demo["summary"]
     html = demo["html"].replace("\xa0", " ")
-    spans: dict = {}
-    for key, what, text in _NUM_SPAN.findall(html):
-        spans.setdefault((key, what), set()).add(text)
+    spans = certificate_spans(html)
     reals = _real_uncertainties(demo["dcc"])
     lines = summary.splitlines()
     for key, it in measured(res).items():
         st, u = item_statement(it), it["uncertainty"]
-        p = u.get("coverage_probability")
-        assert p is not None, f"{key}: no coverage probability in results.json"
+        check_k(key, it)
+        p = u["coverage_probability"]
         assert st.p == p_text(p), key
-        if st.k is not None and u.get("k_source") != "fixed":
-            nu = stated_nu(u["nu_eff"])
-            q = 0.5 + p / 2
-            want = norm.ppf(q) if nu is None or math.isinf(nu) else t.ppf(q, nu)
-            assert u["k"] == pytest.approx(want, rel=1e-9), (key, u["k"], u["nu_eff"], want)
-            assert u["U"] == pytest.approx(u["k"] * u["u_c"], rel=1e-9), key
         # the certificate (a negative number printed with U+2212, as the pages print it)
         shown = minus_sign(st.value_text)
         assert spans.get((key, "value"), {shown}) == {shown}, key

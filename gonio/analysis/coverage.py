@@ -22,7 +22,7 @@ from gonio.errors import GonioError
 
 __all__ = ["MIN_COVERAGE", "MIN_SD_Z", "clopper_pearson", "coverage_flags", "two_sided",
            "within", "binomial_u", "coverage", "wilson_interval", "ItemCoverage",
-           "item_coverage", "spawn_seed"]
+           "item_coverage", "spawn_seed", "chi_square_z"]
 
 #: Wilson-interval coverage factor (95 %).
 _Z95 = 1.959963984540054
@@ -95,6 +95,25 @@ def two_sided(errors, U, u_c, own_budget: bool = True) -> dict:
     return {"n": n, "hits": hits, "coverage": cov, "cp_low": lo, "cp_high": hi,
             "z_mean": z_mean, "z_sd": z_sd, "own_budget": bool(own_budget),
             "flags": coverage_flags(cov, z_sd, own_budget)}
+
+
+def chi_square_z(s, sigma, nu):
+    """z of a standard deviation against its χ² model: Φ⁻¹(F_χ²(ν s²/σ²; ν)), N(0, 1) when
+    ν s²/σ² ~ χ²(ν) (JCGM 100 E.4.3, the model a one-sided χ² interval is stated by); the
+    spread of z = (s − σ)/u_c, u_c = s/√(2ν), is that of a ratio with s in the denominator,
+    unbounded for small ν, and not a measure of the interval's width. The one-sided 95 %
+    interval [0, s·√(ν/χ²_0.05,ν)] holds σ exactly when this z ≥ −z₀.₉₅ = −1.645.
+
+    >>> rng = np.random.default_rng(0)
+    >>> s = np.sqrt(rng.chisquare(2, 20000) / 2)            # σ = 1, ν = 2
+    >>> z = chi_square_z(s, 1.0, 2.0)
+    >>> abs(float(z.mean())) < 0.03, round(float(z.std()), 1)
+    (True, 1.0)
+    """
+    from scipy.stats import chi2, norm
+
+    s, sigma, nu = (np.asarray(x, dtype=float) for x in (s, sigma, nu))
+    return norm.ppf(chi2.cdf(nu * (s / sigma) ** 2, nu))
 
 
 def within(hits) -> dict:
@@ -177,7 +196,12 @@ def wilson_interval(hits: int, n: int, z: float = _Z95) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class ItemCoverage:
-    """One item's coverage over the seeds."""
+    """One item's coverage over the seeds. ``statistic``: what ``coverage`` and z are of —
+    ``"u_c"``: |value − truth| ≤ U and z = (value − truth)/u_c; ``"chi-square"``: an item
+    stated by its one-sided χ² interval alone (a standard deviation: no k), the truth inside
+    that interval and z its χ² z (:func:`chi_square_z`), with z on u_c kept beside it
+    (``z_uc_mean``, ``z_uc_sd``, ``max_norm_error_uc``); ``"interval"``: stated by another
+    interval (a range), the truth inside it, z on u_c; ``"mixed"``: trials of both kinds."""
 
     key: str
     clause: str
@@ -194,27 +218,68 @@ class ItemCoverage:
     z_mean: float | None = None
     z_sd: float | None = None
     flags: tuple = ()
+    statistic: str = "u_c"
+    z_uc_mean: float | None = None
+    z_uc_sd: float | None = None
+    max_norm_error_uc: float | None = None
+
+
+def _trial_judged(v: float, t: float, U: float, u: float, stated: dict | None):
+    """(hit, z, z on u_c, |normalised error|, kind) of one trial: by its stated interval (``stated``:
+    {"interval": [lo, hi], "nu": ν of its χ² model or None}) or by |v − t| ≤ U."""
+    z_uc = (v - t) / u if u > 0 else math.nan        # no z where u_c is 0 (two_sided)
+    ne = abs(v - t) / u if u > 0 else (0.0 if v == t else math.inf)
+    iv = (stated or {}).get("interval")
+    if iv is None:
+        return abs(v - t) <= U, z_uc, z_uc, ne, "u_c"
+    hit = iv[0] <= t <= iv[1]
+    nu = stated.get("nu")
+    if nu and t > 0:
+        z = float(chi_square_z(v, t, nu))
+        return hit, z, z_uc, abs(z), "chi-square"
+    return hit, z_uc, z_uc, ne, "interval"
+
+
+def _spread(z) -> tuple[float | None, float | None]:
+    z = np.asarray([x for x in z if math.isfinite(x)], dtype=float)
+    return (float(z.mean()) if z.size else None), (float(z.std(ddof=1)) if z.size > 1 else None)
 
 
 def item_coverage(records: list[tuple[float, float, float, float]], key: str = "",
-                  clause: str = "") -> ItemCoverage:
-    """Coverage of one item from (value, truth, U, u_c) per seed.
+                  clause: str = "", stated: list | None = None) -> ItemCoverage:
+    """Coverage of one item from (value, truth, U, u_c) per seed; ``stated`` (one entry per
+    record, None for a value ± U) the interval a trial's item was stated by alone and the ν
+    of its χ² model (:func:`_trial_judged`): the interval must hold the truth, and the
+    spread is that of the χ² z (:func:`chi_square_z`), the statistic that interval's 95 %
+    is a probability of; z on u_c (s in its denominator, unbounded for few degrees of
+    freedom) is kept beside it.
 
     >>> c = item_coverage([(1.0, 1.1, 0.2, 0.1), (1.0, 1.3, 0.2, 0.1)])
     >>> c.hits, c.coverage, round(c.u_coverage, 4)
     (1, 0.5, 0.3536)
+    >>> c = item_coverage([(0.1, 1.0, 0.34, 0.05)], stated=[{"interval": [0.0, 0.44], "nu": 2}])
+    >>> c.hits, c.statistic, round(c.max_norm_error, 2), round(c.max_norm_error_uc, 1)
+    (0, 'chi-square', 2.33, 18.0)
     """
     n = len(records)
     if n == 0:
         raise GonioError(f"item {key!r}: no seed gave a measured value with a truth")
-    hits = sum(abs(v - t) <= U for v, t, U, _ in records)
+    judged = [_trial_judged(*r, st) for r, st in zip(records, stated or [None] * n)]
+    hits = sum(bool(j[0]) for j in judged)
     c = hits / n
     lo, hi = wilson_interval(hits, n)
-    ne = sorted(abs(v - t) / u if u > 0 else (0.0 if v == t else math.inf)
-                for v, t, _, u in records)
-    both = two_sided([v - t for v, t, _, _ in records], [U for _, _, U, _ in records],
-                     [u for _, _, _, u in records])
+    ne = sorted(j[3] for j in judged)
+    kinds = {j[4] for j in judged}
+    statistic = kinds.pop() if len(kinds) == 1 else "mixed"
+    z_mean, z_sd = _spread(j[1] for j in judged)
+    cp_lo, cp_hi = clopper_pearson(hits, n)
+    uc = {}
+    if statistic != "u_c":
+        m, sd = _spread(j[2] for j in judged)
+        uc = {"z_uc_mean": m, "z_uc_sd": sd,
+              "max_norm_error_uc": max(abs(v - t) / u if u > 0 else math.inf
+                                       for v, t, _, u in records)}
     return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
-                        both["cp_low"], both["cp_high"], both["z_mean"], both["z_sd"],
-                        tuple(both["flags"]))
+                        cp_lo, cp_hi, z_mean, z_sd, tuple(coverage_flags(c, z_sd)),
+                        statistic, **uc)

@@ -89,6 +89,10 @@ def run(args) -> int:
         inputs += list(spec.named_inputs(args.readings))
         check_output_dir(args.out, inputs=inputs, force=args.force)
     lab_d = load_lab_file(args.lab, spec)                               # validated before the work
+    registered = getattr(args, "registered_gyro_type", None)        # calibrate --record
+    if registered and "gyro_type" in spec.calibrate_options and not (
+            (lab_d or {}).get("instrument") or {}).get("gyro_type"):
+        given["gyro_type"] = registered
     status("calibrating")
     from gonio.formats.lab import naming_lab_file
     with naming_lab_file(args.lab):

@@ -113,6 +113,8 @@ def hook_calibrate(sub) -> None:
         if attach_of(args) and not args.record:
             raise GonioError("--standard, --temperature, --humidity and "
                              "--environment-from-readings go with --record", key="--record")
+        if args.record:              # the registered instrument's type, for K's bound
+            args.registered_gyro_type = registered_gyro_type(args)
         rc = inner(args)
         if rc == 0 and args.record:
             from gonio.records import services
@@ -134,6 +136,39 @@ def hook_calibrate(sub) -> None:
         return rc
 
     p.set_defaults(func=run_recorded)
+
+
+def registered_gyro_type(args) -> str | None:
+    """``calibrate --record``: the optical-gyro type of the instrument registered in the
+    records under the identity the readings state (manufacturer, model, serial), which the
+    calibration takes for K's temperature-coefficient bound when neither the readings nor the
+    laboratory file state a type; None when none is registered or it states none, when the
+    readings cannot be read (the calibration says why), or when the SQLite records do not
+    exist yet (nothing is created before the run)."""
+    from pathlib import Path
+
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.db import DEFAULT_DATA
+    from gonio.records.importer import registered_instrument
+
+    if not args.database:
+        folder = Path(os.path.expanduser(str(args.data or os.environ.get("GONIO_DATA")
+                                              or DEFAULT_DATA)))
+        if not (folder / "records.sqlite3").is_file():
+            return None
+    try:
+        if not Path(args.readings).is_file():
+            return None
+        meta = readings_metadata(args.readings)
+    except (GonioError, OSError):
+        return None
+    store = _store(args)
+    try:
+        with store.session() as s:
+            inst = registered_instrument(s, meta)
+            return (inst.gyro_type or None) if inst is not None else None
+    finally:
+        store.close()
 
 
 def add_attach_options(q, prefix: str = "") -> None:

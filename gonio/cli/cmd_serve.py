@@ -83,13 +83,17 @@ def check_workers(workers: int | None) -> int:
 
 
 def check_backup_limits() -> None:
-    """``GONIO_MAX_BACKUP_BYTES`` and ``GONIO_MAX_RECORDS_JSON_BYTES`` read at start
-    (:func:`gonio.limits.limit`): a value that is no positive number is one line before
-    anything is opened, not a surprise at the first backup upload or restore."""
-    from gonio.limits import limit
+    """``GONIO_MAX_UPLOAD_BYTES``, ``GONIO_MAX_BACKUP_BYTES`` and
+    ``GONIO_MAX_RECORDS_JSON_BYTES`` read at start
+    (:func:`gonio.limits.limit`), and ``GONIO_KEEP_REPLACED``
+    (:func:`gonio.limits.keep_replaced`): a bad value is one line before anything is
+    opened, not a surprise at the first backup upload or restore."""
+    from gonio.limits import keep_replaced, limit
 
-    for name in ("GONIO_MAX_BACKUP_BYTES", "GONIO_MAX_RECORDS_JSON_BYTES"):
+    for name in ("GONIO_MAX_UPLOAD_BYTES", "GONIO_MAX_BACKUP_BYTES",
+                 "GONIO_MAX_RECORDS_JSON_BYTES"):
         limit(name)
+    keep_replaced()                     # GONIO_KEEP_REPLACED, the restores' replaced files
 
 
 def run(args) -> int:

@@ -82,8 +82,9 @@ def _studied(spec_key: str) -> Specification:
 
 
 def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
-    """One virtual calibration (noise on): per item {clause, value, truth, U, u_c}; value
-    etc. None when the item was not measured or has no truth in this trial."""
+    """One virtual calibration (noise on): per item {clause, value, truth, U, u_c} and, for
+    an item stated by its interval alone, {interval, nu} (:func:`_stated`); value etc. None
+    when the item was not measured or has no truth in this trial."""
     spec = _studied(spec_key)
     readings, truth_d = spec.run_trial(bench, protocol, int(seed))
     result = screen_and_calibrate(spec, readings, protocol)
@@ -95,14 +96,34 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
               and math.isfinite(t) and it.uncertainty.U is not None)
         out[key] = {"clause": it.clause,
                     **({"value": float(it.value), "truth": float(t),
-                        "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}
+                        "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
+                        **_stated(it.uncertainty)}
                        if ok else {"value": None, "truth": None, "U": None, "u_c": None})}
     return out
+
+
+def _stated(u) -> dict:
+    """An item stated by its interval alone (k None: a dispersion, range or extreme,
+    :func:`gonio.result.statement.state_interval`): {"interval": [lo, hi], "nu": ν}, ν the
+    degrees of freedom its one-sided χ² limit was computed with (:func:`gonio.result.gum.
+    std_dev_uncertainty`: ν; a specification's dispersion of few values: the stated ν,
+    :func:`gonio.result.statement.stated_nu`, or ν itself above the ∞ threshold),
+    None for an interval of another model (the half range's); {} for a value ± U."""
+    from gonio.result.statement import stated_nu
+
+    if u.k is not None or u.interval is None:
+        return {}
+    nu = None
+    if u.k_source == "chi-square" and u.nu_eff is not None and math.isfinite(u.nu_eff):
+        ns = stated_nu(u.nu_eff)
+        nu = float(u.nu_eff) if math.isinf(ns) else ns
+    return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu}
 
 
 def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None) -> pd.DataFrame:
     """Per item over the trials (in order): :class:`ItemCoverage` rows."""
     recs: dict[str, list] = {}
+    stated: dict[str, list] = {}
     clauses: dict[str, str] = {}
     for tr in trials:
         for key, r in tr.items():
@@ -111,7 +132,10 @@ def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None
             clauses[key] = r["clause"]
             if r["value"] is not None:
                 recs.setdefault(key, []).append((r["value"], r["truth"], r["U"], r["u_c"]))
-    rows = [item_coverage(v, k, clauses[k]).__dict__ for k, v in recs.items()]
+                stated.setdefault(key, []).append(
+                    {"interval": r["interval"], "nu": r.get("nu")} if r.get("interval")
+                    else None)
+    rows = [item_coverage(v, k, clauses[k], stated[k]).__dict__ for k, v in recs.items()]
     return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
 
 
@@ -135,12 +159,19 @@ def format_coverage(df: pd.DataFrame, title: str) -> str:
         flag = f"  FLAG: {', '.join(r.flags)}" if len(r.flags) else ""
         zm = "—" if r.z_mean is None or r.z_mean != r.z_mean else f"{r.z_mean:+.2f}"
         zs = "—" if r.z_sd is None or r.z_sd != r.z_sd else f"{r.z_sd:.2f}"
+        st = getattr(r, "statistic", "u_c")
+        on_uc = "" if st in ("u_c", None) or st != st else (
+            f"  [{'chi2 z' if st == 'chi-square' else st}; z on u_c: mean "
+            f"{r.z_uc_mean:+.2f}, sd {r.z_uc_sd:.2f}, max|z| {r.max_norm_error_uc:.2f}]")
         lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
                      f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
-                     f"{r.max_norm_error:7.2f}{flag}")
-    lines.append("cover: fraction of trials with |value - truth| <= U (95 % Clopper-Pearson "
-                 "interval); z = (value - truth)/u_c; flagged: coverage < 90 % (under-covers), "
-                 "sd z < 0.3 (over-wide U)")
+                     f"{r.max_norm_error:7.2f}{on_uc}{flag}")
+    lines.append("cover: fraction of trials with |value - truth| <= U, or with the truth inside "
+                 "the stated interval for an item stated by its interval alone (95 % "
+                 "Clopper-Pearson interval); z = (value - truth)/u_c, or for a standard "
+                 "deviation stated by its chi-square interval [chi2 z] Phi^-1(F_chi2(nu "
+                 "value^2/truth^2; nu)) with z on u_c beside it; flagged: coverage < 90 % "
+                 "(under-covers), sd z < 0.3 (over-wide U)")
     return "\n".join(lines) + "\n"
 
 
@@ -191,8 +222,13 @@ class CoverageReport:
         from gonio import __version__
         return {"gonio_version": __version__, "settings": self.settings,
                 "criterion": "|value - truth| <= U, U the item's own expanded uncertainty "
-                             "(k = t95(nu_eff)); per item coverage >= 0.90 required and "
-                             "sd of z = (value - truth)/u_c >= 0.3 (U not over-wide); "
+                             "(k = t95(nu_eff)), or for an item stated by its interval alone "
+                             "(k none) the truth inside that interval; per item coverage >= "
+                             "0.90 required and sd of z >= 0.3 (U not over-wide), z = (value "
+                             "- truth)/u_c or, for a standard deviation stated by its "
+                             "chi-square interval (statistic 'chi-square'), "
+                             "Phi^-1(F_chi2(nu value^2/truth^2; nu)) with z on u_c kept as "
+                             "z_uc_mean, z_uc_sd, max_norm_error_uc; "
                              "95 % Clopper-Pearson interval of the coverage",
                 "items": json.loads(self.coverage.to_json(orient="records", double_precision=15))}
 

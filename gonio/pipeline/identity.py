@@ -100,6 +100,10 @@ def _message(c: dict) -> str:
             f"file {c['lab']} ({c['lab_key']}){tol}")
 
 
+#: the code of the finding that states a contradiction the laboratory file proceeded with
+MISMATCH_CODE = "identity-mismatch"
+
+
 def check_identity(readings, lab: dict | None, *, lab_file=None) -> list[Finding]:
     """Compare the readings' identity and conditions with ``lab`` (module docstring): no
     contradiction gives ``[]``; one refuses (GonioError naming the readings and the key)
@@ -119,7 +123,7 @@ def check_identity(readings, lab: dict | None, *, lab_file=None) -> list[Finding
                          "or set [identity] on_mismatch = \"proceed\" to state it on the "
                          "certificate", file=Path(readings).name)
     name = Path(readings).name
-    return [Finding("identity-mismatch", _message(c) + "; the laboratory file chose to proceed "
+    return [Finding(MISMATCH_CODE, _message(c) + "; the laboratory file chose to proceed "
                     "([identity] on_mismatch = \"proceed\"): the certificate's identity and "
                     "conditions are the laboratory file's", "flagged", file=name,
                     rule="identity and conditions of the readings = the laboratory file's")

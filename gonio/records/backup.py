@@ -408,6 +408,8 @@ def restore(store, path: str | os.PathLike, *, replace: bool = False, actor: Use
 
         require(actor, "admin")
     try:
+        if replace and store.engine.dialect.name == "sqlite":
+            limits.keep_replaced()             # a bad GONIO_KEEP_REPLACED: before any work
         with (open_archive(path) if stream is None else _kept_open(stream)) as fh:
             return _restore_open(store, fh, path, replace=replace, actor=actor,
                                  expect_sha256=expect_sha256, label=name or path.name)
@@ -597,6 +599,30 @@ def _swap_sqlite(store, rows: dict, path: Path, event: dict, who: str) -> None:
         for leftover in (new, f"{new}-wal", f"{new}-shm", f"{new}-journal"):
             Path(leftover).unlink(missing_ok=True)
     store.engine.dispose()
+    prune_replaced(live, limits.keep_replaced())
+
+
+def prune_replaced(live: Path, keep: int) -> list[Path]:
+    """Remove all but the newest ``keep`` replaced files of the SQLite database ``live``
+    (``NAME.replaced-YYYYmmddTHHMMSS``, ``-N`` for a later one within the same second; newest
+    by that stamp, never by the file's times, which are those of the replaced records' last
+    write); returns the files removed. Only regular files of that exact form are touched;
+    one that cannot be removed is left (the restore has succeeded)."""
+    form = re.compile(re.escape(live.name)
+                      + r"\.replaced-([0-9]{8}T[0-9]{6})(?:-([0-9]{1,3}))?")
+    found = []
+    for p in live.parent.iterdir():
+        m = form.fullmatch(p.name)
+        if m and p.is_file() and not p.is_symlink():
+            found.append(((m[1], int(m[2] or 1)), p))
+    gone = []
+    for _, p in sorted(found, reverse=True)[keep:]:
+        try:
+            p.unlink()
+        except OSError:
+            continue
+        gone.append(p)
+    return gone
 
 
 def _swap_in(live: Path, new: Path) -> None:

@@ -40,17 +40,32 @@ def blobs_sha(path: Path) -> str:
     return sha256_file(path)
 
 
+def _identity(meta: dict) -> tuple[str, str, str]:
+    """(manufacturer, model, serial) the readings' metadata name an instrument by (the model,
+    else the instrument's description; an unknown serial said so)."""
+    def field(k):
+        return services.text(str(meta.get(k, "") or ""), k)
+
+    return (field("manufacturer"), field("model") or field("instrument"),
+            field("serial") or "(unknown serial)")
+
+
+def registered_instrument(s, meta: dict) -> Instrument | None:
+    """The registered instrument the readings' metadata ``meta`` name, or None."""
+    manufacturer, model, serial = _identity(meta)
+    return s.scalar(select(Instrument).where(Instrument.manufacturer == manufacturer,
+                                             Instrument.model == model,
+                                             Instrument.serial == serial))
+
+
 def _instrument(s, meta: dict, spec_key: str, customer: str, actor) -> Instrument:
     def field(k):
         return services.text(str(meta.get(k, "") or ""), k)
 
-    serial = field("serial") or "(unknown serial)"
-    manufacturer, model = field("manufacturer"), field("model") or field("instrument")
-    inst = s.scalar(select(Instrument).where(Instrument.manufacturer == manufacturer,
-                                             Instrument.model == model,
-                                             Instrument.serial == serial))
+    inst = registered_instrument(s, meta)
     if inst is not None:
         return inst
+    manufacturer, model, serial = _identity(meta)
     cust = s.scalar(select(Customer).where(Customer.name == customer))
     if cust is None:
         cust = Customer(name=customer, address="")

@@ -84,13 +84,19 @@ def active_work(store, size: int = 20):
 
 
 def calibration_page(store, cal_id: int) -> dict | None:
-    """Everything the calibration page shows; ``place`` is the place of calibration as the
+    """Everything the calibration page shows; ``stated``: each item's statement
+    (:func:`stated_items`, from the sealed result only), ``shown``: its one line as the page
+    prints it (each negative number with U+2212, as the certificate), ``virtual``: the
+    virtual-bench mark (:func:`virtual_mark`) or "", ``identity``: the contradictions between
+    the readings and the laboratory file the run proceeded with (:func:`identity_findings`);
+    ``place`` is the place of calibration as the
     certificate states it (the one entered, else the laboratory's); ``missing``: what it
     lacks for its review (:func:`gonio.records.services.missing_for_review`) while
     ``attachable`` (standards and environment may still be attached; ``all_standards`` to
     choose from)."""
     from gonio.errors import GonioError
     from gonio.records.services import calibration, seal, settings
+    from gonio.report.i18n import minus_sign
 
     try:
         cal = calibration(store, cal_id)
@@ -115,12 +121,70 @@ def calibration_page(store, cal_id: int) -> dict | None:
         sealed, broken = seal(store, cal_id), ""
     except GonioError as exc:                 # no result yet, or one that no longer matches
         sealed, broken = "", str(exc) if cal.results_sha256 else ""
+    stated = stated_items(store, cal.results_sha256) if sealed else {}
     return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
             "seal": sealed, "seal_error": broken,
             "place": cal.place or settings(store)["lab_place"], "missing": missing,
             "attachable": cal.status in ATTACHABLE,
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
-            "stated": stated_items(store, cal.results_sha256) if sealed else {}}
+            "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
+            "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256),
+            "identity": identity_findings(store, cal.results_sha256) if sealed else []}
+
+
+def stored_result(store, results_sha256: str):
+    """The stored results.json (the sealed result) as read from its blob."""
+    import json
+
+    from gonio.records.services import file_bytes
+
+    return json.loads(file_bytes(store, results_sha256))
+
+
+def identity_findings(store, results_sha256: str) -> list[str]:
+    """The messages of the stored result's identity findings: a contradiction between the
+    readings' metadata and the laboratory file (serial, model, temperature …) that the
+    laboratory chose to proceed with (:func:`gonio.pipeline.identity.check_identity`), which
+    its certificate states as a finding."""
+    from gonio.errors import GonioError
+    from gonio.pipeline.identity import MISMATCH_CODE
+
+    try:
+        doc = stored_result(store, results_sha256)
+    except (GonioError, ValueError, RecursionError):
+        return []
+    found = doc.get("findings") if isinstance(doc, dict) else None
+    return [str(f.get("message", "")) for f in found or []
+            if isinstance(f, dict) and f.get("code") == MISMATCH_CODE]
+
+
+def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None = None) -> str:
+    """The virtual-bench mark of a calibration's or a certificate's page, as the certificate
+    words it (:func:`gonio.report.provenance.virtual_lines`: banner, notice, bench and seed),
+    or "": from the provenance of the stored result
+    (:func:`gonio.formats.provenance.result_provenance`), else, before there is one, of the
+    readings' own metadata. Nothing switches it off."""
+    from gonio.errors import GonioError
+    from gonio.formats.provenance import result_provenance
+    from gonio.report.i18n import labels
+    from gonio.report.provenance import virtual_lines
+
+    res = None
+    if results_sha256:
+        try:
+            res = stored_result(store, results_sha256)
+        except (GonioError, ValueError, RecursionError):
+            res = None
+    if not isinstance(res, dict) and readings_sha256:
+        from gonio.records.submission import readings_facts
+        try:
+            res = {"metadata": readings_facts(store, readings_sha256)["metadata"]}
+        except GonioError:
+            return ""
+    if not isinstance(res, dict) or not result_provenance(res)["virtual"]:
+        return ""
+    L = labels("en")
+    return " ".join([L["virtual"] + "."] + virtual_lines(res, L))
 
 
 def stated_items(store, results_sha256: str) -> dict:
@@ -128,13 +192,10 @@ def stated_items(store, results_sha256: str) -> dict:
     (:func:`gonio.result.statement.item_statement`), from the stored results.json itself
     (the sealed result), as every certificate states it; an item the rule refuses to state
     is left out (the page then says "not stated")."""
-    import json
-
     from gonio.errors import GonioError
-    from gonio.records.services import file_bytes
     from gonio.result.statement import item_statement
 
-    doc = json.loads(file_bytes(store, results_sha256))
+    doc = stored_result(store, results_sha256)
     items = doc.get("items") if isinstance(doc, dict) else None
     if isinstance(items, list):
         items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
@@ -152,6 +213,32 @@ def stated_items(store, results_sha256: str) -> dict:
         except (GonioError, TypeError, ValueError):
             continue
     return out
+
+
+def stated_intervals(store, results_sha256: str) -> dict:
+    """Item key → (low, high) of each item the stored result states by one coverage interval
+    (:func:`stated_items`: the statement rule's interval, its rounded ends as numbers), for
+    the history figure's bars; read once per stored result (a stored file never changes)."""
+    from decimal import Decimal
+
+    from gonio.errors import GonioError
+
+    at = (str(store.blob_root), results_sha256)
+    got = _INTERVALS.get(at)
+    if got is None:
+        try:
+            stated = stated_items(store, results_sha256)
+        except (GonioError, ValueError, RecursionError):
+            stated = {}
+        got = _INTERVALS[at] = {
+            key: tuple(float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
+            for key, st in stated.items() if st.interval is not None}
+        while len(_INTERVALS) > 1024:
+            _INTERVALS.pop(next(iter(_INTERVALS)))
+    return got
+
+
+_INTERVALS: dict[tuple[str, str], dict] = {}
 
 
 def certificates(store, page: int = 1, size: int = 50):

@@ -38,6 +38,7 @@ from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from gonio.errors import GonioError
+from gonio.limits import limit
 from gonio.records import blobs
 from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
@@ -50,7 +51,7 @@ NUMBER_PREFIX = "GC"
 #: Longest one-line text field (names, serials) and multi-line field (addresses, comments).
 MAX_LINE, MAX_TEXT = 200, 4000
 #: Largest readings or protocol file accepted through the records (bytes).
-MAX_UPLOAD = float(os.environ.get("GONIO_MAX_UPLOAD_BYTES", 256 * 2**20))
+MAX_UPLOAD = limit("GONIO_MAX_UPLOAD_BYTES")
 
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f\u2028\u2029\ufeff]")
 _CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")
@@ -1516,7 +1517,9 @@ def calibration(store, cal_id: int) -> Calibration:
 
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
-    k, unit, title, status, certificate number, issued, amended), oldest first; failed,
+    k, ``interval`` (the (low, high) of an item stated by one coverage interval, as its
+    certificate states it: :func:`gonio.records.queries.stated_intervals`; else None), unit,
+    title, status, certificate number, issued, amended), oldest first; failed,
     rejected and unfinished calibrations are left out (one whose draft is being rendered
     again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
     certificate, whatever its state now; ``amended``: issued, and a certificate of it has
@@ -1524,7 +1527,8 @@ def history(store, instrument_id: int) -> dict:
     done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
         rows = s.execute(
-            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id)
+            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id,
+                   Calibration.results_sha256)
             .join(Calibration, ResultItem.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id),
                    Calibration.status.in_(done))
@@ -1535,11 +1539,14 @@ def history(store, instrument_id: int) -> dict:
             .join(Calibration, Certificate.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id))
             .group_by(Certificate.calibration_id)).all()}
+    from gonio.records.queries import stated_intervals
+
     out: dict[str, list] = {}
-    for it, day, status, cid in rows:
+    for it, day, status, cid, rsha in rows:
         number, n = certs.get(cid, ("", 0))
         out.setdefault(it.key, []).append(
             {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
+             "interval": stated_intervals(store, rsha).get(it.key) if rsha else None,
              "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
              "certificate": number, "issued": n > 0,
              "amended": n > 1 or (n > 0 and status != "issued")})

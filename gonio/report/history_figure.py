@@ -1,5 +1,6 @@
 """An instrument's calibration history as an SVG figure: one panel per item, value ± U at
-each calibration date, the specification limits as dashed horizontal lines (gonio serve's
+each calibration date (an item stated by one coverage interval: that interval), the
+specification limits as dashed horizontal lines (gonio serve's
 instrument page; the data come from :func:`gonio.records.services.history`).
 
 Written directly as SVG text (no Matplotlib): a hundred calibrations of seven items take a
@@ -78,10 +79,20 @@ def date_ticks(lo: dt.date, hi: dt.date) -> tuple[list[dt.date], str]:
     return [lo + dt.timedelta(days=i) for i in range(0, days + 1, step)], "%Y-%m-%d"
 
 
+def bar_ends(r: dict) -> tuple[float, float]:
+    """(low, high) of a point's error bar: the coverage interval of an item its certificate
+    states by one interval (the row's ``interval``, as the statement rule gives it), else
+    value ± U."""
+    iv = r.get("interval")
+    if iv is not None:
+        return float(iv[0]), float(iv[1])
+    u = r["U"] or 0.0
+    return r["value"] - u, r["value"] + u
+
+
 def _ranges(pts: list[dict], lo_hi) -> tuple[float, float, dt.date, dt.date]:
     """(y low, y high, first date, last date) of a panel, with margins (x: 15 %)."""
-    ys = [r["value"] - (r["U"] or 0.0) for r in pts] + [r["value"] + (r["U"] or 0.0)
-                                                          for r in pts]
+    ys = [v for r in pts for v in bar_ends(r)] + [r["value"] for r in pts]
     ys += [v for v in lo_hi if v is not None]
     y0, y1 = min(ys), max(ys)
     pad = (y1 - y0) * 0.05 or max(abs(y0) * 0.01, 1e-12)
@@ -126,8 +137,9 @@ def _panel(key: str, pts: list[dict], lo_hi, ox: float, oy: float) -> list[str]:
                        'stroke-dasharray="5 3"/>')
     for r in pts:
         drawn = drawn_as(r)
-        x, y, u = x_of(r["date"]), y_of(r["value"]), r["U"] or 0.0
-        top, bot = y_of(r["value"] + u), y_of(r["value"] - u)
+        x, y = x_of(r["date"]), y_of(r["value"])
+        low, high = bar_ends(r)
+        top, bot = y_of(high), y_of(low)
         colour = OTHER if drawn == "other" else ISSUED
         out.append(f'<path class="bar" d="M{x:.2f} {top:.2f}V{bot:.2f}M{x - _CAP:.2f} '
                    f'{top:.2f}h{2 * _CAP}M{x - _CAP:.2f} {bot:.2f}h{2 * _CAP}" '

@@ -486,7 +486,7 @@ async def calibration_acquire(request: Request, session: Session, inst_id: int):
             location=data.get("location"),
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
-            performed_on=data.get("performed_on"))
+            performed_on=data.get("performed_on"), received_on=data.get("received_on"))
     except GonioError as exc:
         return _new_form(request, user, csrf, inst_id, 400, str(exc), data)
     wake(request)
@@ -589,6 +589,7 @@ def certificate_page(request: Request, session: Session, cert_id: int):
     if cert is None:
         return Response("no such certificate", status_code=404)
     return render(request, "certificate.html", user, csrf, cert=cert, newer=newer,
+                  virtual=queries.virtual_mark(_store(request), cert.results_sha256),
                   error=request.query_params.get("error", "")[:300])
 
 

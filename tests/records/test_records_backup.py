@@ -6,6 +6,7 @@ records (files, result rows, signed seals) and finds a certificate file's record
 from __future__ import annotations
 
 import json
+import os
 import zipfile
 
 import pytest
@@ -228,3 +229,50 @@ def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys):
     finally:
         after.close()
     assert len(list(records.data.glob("records.sqlite3.replaced-*"))) == 1
+
+
+def test_a_restore_keeps_the_newest_replaced_files(records, tmp_path, monkeypatch):
+    """After a successful restore over SQLite the replaced files beyond the newest
+    ``GONIO_KEEP_REPLACED`` (default 3) are removed, newest by their names' stamps (not the
+    files' times); other files are left. A bad value refuses the restore before any work,
+    the live records and every replaced file as they were."""
+    from gonio.limits import KEEP_REPLACED
+    from gonio.records.backup import archive_sha256, summary
+
+    admin = services.user(records, "admin")
+    archive = tmp_path / "nightly.zip"
+    backup(records, archive)
+    folder = records.data
+    names = ["records.sqlite3.replaced-20240101T000000", "records.sqlite3.replaced-20240101T"
+             "000000-2", "records.sqlite3.replaced-20230505T101010",
+             "records.sqlite3.replaced-20250101T000000"]
+    for i, n in enumerate(names):                # file times the reverse of the stamps
+        (folder / n).write_bytes(b"old")
+        os.utime(folder / n, (2e9 - i * 1e6, 2e9 - i * 1e6))
+    others = ["records.sqlite3.replaced-notes.txt", "other.sqlite3.replaced-20200101T000000"]
+    for n in others:
+        (folder / n).write_bytes(b"keep")
+    live = summary(records)["rows"]
+    for bad in ("0", "x", "-1"):
+        monkeypatch.setenv("GONIO_KEEP_REPLACED", bad)
+        with pytest.raises(GonioError, match="GONIO_KEEP_REPLACED must be a whole number"):
+            restore(records, archive, replace=True, actor=admin,
+                    expect_sha256=archive_sha256(archive))
+    now = summary(records)["rows"]
+    assert now.pop("audit_events") == live.pop("audit_events") + 3 and now == live
+    assert all((folder / n).exists() for n in names + others)
+
+    monkeypatch.setenv("GONIO_KEEP_REPLACED", "2")
+    restore(records, archive, replace=True, actor=admin, expect_sha256=archive_sha256(archive))
+    left = sorted(p.name for p in folder.glob("records.sqlite3.replaced-2*"))
+    assert len(left) == 2 and "records.sqlite3.replaced-20250101T000000" in left
+    assert left[-1] > "records.sqlite3.replaced-2025"        # the one this restore kept
+    assert all((folder / n).exists() for n in others)
+
+    monkeypatch.delenv("GONIO_KEEP_REPLACED")
+    assert KEEP_REPLACED == 3
+    for _ in range(3):
+        restore(records, archive, replace=True, actor=admin,
+                expect_sha256=archive_sha256(archive))
+    left = sorted(p.name for p in folder.glob("records.sqlite3.replaced-2*"))
+    assert len(left) == 3 and "records.sqlite3.replaced-20250101T000000" not in left

@@ -171,3 +171,35 @@ def test_bench_form_has_place_and_performed_at(app, sqlite_store):  # noqa: F811
     assert r.status_code == 303, r.text[:2000]
     cal = services.calibration(store, int(r.headers["location"].rsplit("/", 1)[1]))
     assert (cal.location, cal.place) == ("customer", "Hangar 4, Example Field")
+
+
+def test_bench_form_has_the_date_of_receipt(app, sqlite_store):  # noqa: F811
+    """The bench form offers the date of receipt as the upload form does; the date given is
+    recorded on the calibration (and so on its certificate), kept when the form comes back
+    with an error, and a date after the calibration's is refused as on the upload form."""
+    store = sqlite_store
+    tech = login(app, "tech")
+    inst, std = _registered(store, services.user(store, "tech"), "RLG-0003")
+    page = tech.get(f"/instruments/{inst.id}/calibrate").text
+    upload, acquire = page.split('action="/instruments/%d/acquire"' % inst.id)
+    field = re.compile(r'<label>Date of receipt <input name="received_on" type="date"[^>]*>')
+    assert field.search(upload) and field.search(acquire)
+    day = dt.date.today()
+    form = {"csrf": csrf_of(tech), "performed_on": str(day), "standards": str(std.id),
+            "temperature_c": "20.0", "humidity_pct": "45",
+            "table": "TCPIP0::127.0.0.1::5025::SOCKET",
+            "gyro": "TCPIP0::127.0.0.1::5026::SOCKET",
+            "received_on": str(day - dt.timedelta(days=3))}
+    bad = tech.post(f"/instruments/{inst.id}/acquire", data={**form, "standards": ""})
+    assert bad.status_code == 400
+    kept = bad.text.split('action="/instruments/%d/acquire"' % inst.id)[1]
+    assert f'name="received_on" type="date" value="{day - dt.timedelta(days=3)}"' in kept
+    late = tech.post(f"/instruments/{inst.id}/acquire", data={
+        **form, "performed_on": str(day - dt.timedelta(days=5))})
+    assert late.status_code == 400
+    r = tech.post(f"/instruments/{inst.id}/acquire", data=form)
+    assert r.status_code == 303, r.text[:2000]
+    cal = services.calibration(store, int(r.headers["location"].rsplit("/", 1)[1]))
+    assert cal.received_on == day - dt.timedelta(days=3)
+    details = services.lab_details(store, cal.id, final=False)
+    assert details["certificate"]["date_of_receipt"] == str(day - dt.timedelta(days=3))

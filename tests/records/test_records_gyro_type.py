@@ -8,6 +8,7 @@ from __future__ import annotations
 import datetime as dt
 import html
 import json
+import re
 
 import pytest
 
@@ -17,6 +18,7 @@ from gonio.records.models import CalibrationFile, Instrument
 from gonio.specs.ogam_draft.protocol import load_protocol
 
 from .conftest import SMALL_PROTOCOL, make_people
+from .test_web_security import app  # noqa: F401  (the app fixture)
 
 
 def _without_gyro_type(src, dst):
@@ -104,3 +106,69 @@ def test_the_type_is_checked_and_edited(sqlite_store):
     assert services.update_instrument(sqlite_store, tech, inst.id,
                                       gyro_type="FOG").gyro_type == "fog"
     assert services.update_instrument(sqlite_store, tech, inst.id, gyro_type="").gyro_type == ""
+
+
+def test_calibrate_record_takes_the_registered_type(tmp_path, bench_readings, capsys):
+    """``gonio calibrate --record``: the instrument registered under the readings' identity
+    states RLG, the readings and the command line state no type: the run takes the RLG bound
+    (the same readings without --record take the larger default)."""
+    from gonio.cli import main
+    from gonio.records.db import open_store
+
+    readings = _without_gyro_type(bench_readings[0], tmp_path / "readings.csv")
+    data = tmp_path / "data"
+    st = open_store(None, data)
+    try:
+        people = make_people(st)
+        cust = services.add_customer(st, people["tech"], "Owner")
+        services.register_instrument(st, people["tech"], customer_id=cust.id,
+                                     serial="RLG-0001", spec_key="ogam-draft",
+                                     manufacturer="gonio virtual bench",
+                                     model="RLG goniometer (virtual)", gyro_type="rlg")
+    finally:
+        st.close()
+    run = ["calibrate", str(readings), "--protocol", str(SMALL_PROTOCOL)]
+
+    def bound(out):
+        res = json.loads((out / "results.json").read_text())
+        return res["items"]["scale_factor"]["details"]["temperature_coeff_bound"]
+
+    assert main(run + ["--out", str(tmp_path / "plain")]) == 0
+    assert bound(tmp_path / "plain")["source"] == "protocol-larger"
+    assert main(run + ["--out", str(tmp_path / "rec"), "--record", "--data", str(data)]) == 0
+    assert "recorded as calibration 1" in capsys.readouterr().err
+    tb = bound(tmp_path / "rec")
+    assert (tb["source"], tb["bound_ppm_per_c"]) == (
+        "protocol-rlg",
+        load_protocol(SMALL_PROTOCOL).annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c)
+
+
+def test_the_web_forms_register_and_edit_the_type(app, sqlite_store):  # noqa: F811
+    """The register form and the instrument's edit form offer the optical-gyro type; what is
+    chosen is recorded, shown on the instrument's page, and a type that is neither is said
+    on the form (400), nothing registered."""
+    from .test_web_security import csrf_of, login
+
+    tech = login(app, "tech")
+    cust = services.add_customer(sqlite_store, services.user(sqlite_store, "tech"), "C")
+    page = tech.get("/instruments").text
+    assert re.search(r'<select name="gyro_type"><option value="">not stated</option>'
+                     r'<option value="rlg">RLG</option><option value="fog">FOG</option>', page)
+    form = {"csrf": csrf_of(tech), "customer_id": str(cust.id), "serial": "W-1",
+            "spec_key": "ogam-draft"}
+    bad = tech.post("/instruments", data={**form, "gyro_type": "mems"})
+    assert bad.status_code == 400 and "is not one of rlg, fog" in html.unescape(bad.text)
+    r = tech.post("/instruments", data={**form, "gyro_type": "rlg"})
+    assert r.status_code == 303, r.text[:500]
+    inst_id = int(r.headers["location"].rsplit("/", 1)[1])
+    with sqlite_store.session() as s:
+        assert s.get(Instrument, inst_id).gyro_type == "rlg"
+    page = tech.get(f"/instruments/{inst_id}").text
+    assert "<dt>Optical gyro type</dt><dd>RLG</dd>" in page
+    assert '<option value="rlg" selected>RLG</option>' in page
+    r = tech.post(f"/instruments/{inst_id}/edit", data={
+        "csrf": csrf_of(tech), "customer_id": str(cust.id), "serial": "W-1",
+        "gyro_type": "fog", "interval_months": ""})
+    assert r.status_code == 303 and "error" not in r.headers["location"], r.headers
+    with sqlite_store.session() as s:
+        assert s.get(Instrument, inst_id).gyro_type == "fog"

@@ -223,7 +223,8 @@ def test_a_far_future_record_leaves_the_pages_answering(app, sqlite_store):  # n
          "last": dt.date(9999, 12, 31), "due": dt.date.max, "overdue": False}]
 
 
-@pytest.mark.parametrize("name", ["GONIO_MAX_BACKUP_BYTES", "GONIO_MAX_RECORDS_JSON_BYTES"])
+@pytest.mark.parametrize("name", ["GONIO_MAX_UPLOAD_BYTES", "GONIO_MAX_BACKUP_BYTES",
+                                  "GONIO_MAX_RECORDS_JSON_BYTES"])
 @pytest.mark.parametrize("value,msg", [("8 GiB", "must be a number"), ("0", "must be > 0"),
                                        ("-1", "must be > 0"), ("nan", "must be > 0")])
 def test_backup_limits_checked_when_serve_starts(tmp_path, capsys, monkeypatch, name, value,
@@ -235,4 +236,21 @@ def test_backup_limits_checked_when_serve_starts(tmp_path, capsys, monkeypatch, 
     # port 0 is refused too, later: the server never starts in this test
     err = cli(["serve", "--data", tmp_path / "data", "--port", "0"], capsys)
     assert f"environment variable {name} {msg}" in err, err
+    assert not (tmp_path / "data").exists()
+
+
+def test_upload_limit_read_through_limits_by_every_db_command(tmp_path):
+    """``GONIO_MAX_UPLOAD_BYTES`` is read with the other limits (:func:`gonio.limits.limit`):
+    a value that is no number stops a ``gonio db`` command (which imports the records'
+    services) with one line naming the variable, exit 2, no traceback, nothing made."""
+    import subprocess
+    import sys
+
+    env = dict(os.environ, GONIO_MAX_UPLOAD_BYTES="256 MiB")
+    out = subprocess.run([sys.executable, "-m", "gonio", "db", "verify", "--data",
+                          str(tmp_path / "data")], capture_output=True, text=True, env=env,
+                         timeout=300)
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "GONIO_MAX_UPLOAD_BYTES must be a number" in lines[0], lines
     assert not (tmp_path / "data").exists()

@@ -63,7 +63,8 @@ import pandas as pd
 from scipy import fft as sfft
 
 from gonio.analysis.noise.edf import (
-    chi2_interval, edf_for, noise_id_b1, noise_id_lag1, remove_quadratic,
+    chi2_interval, edf_for, noise_id_b1, noise_id_lag1, release_quadratic_basis,
+    remove_quadratic, rn_ratio_of_phase,
 )
 from gonio.analysis.noise.stream import CumulativeSum, Record
 from gonio.errors import GonioError
@@ -363,6 +364,43 @@ def _ssq(v: np.ndarray) -> float:
     return float(total)
 
 
+def _piece_dots(v: np.ndarray, row: np.ndarray) -> None:
+    """The :data:`_DOT_PIECE`-point dot products of v with itself into ``row`` (the ddot
+    of each piece, as :func:`_ssq` forms them), the whole pieces in one call."""
+    q = v.size // _DOT_PIECE
+    full = q * _DOT_PIECE
+    if q:
+        r = v[:full].reshape(q, 1, _DOT_PIECE)
+        np.matmul(r, r.reshape(q, _DOT_PIECE, 1), out=row[:q].reshape(q, 1, 1))
+    if full < v.size:
+        w = v[full:]
+        row[q] = w.dot(w)
+
+
+#: Points per pass of the in-memory sums (a multiple of :data:`_DOT_PIECE`): the work of
+#: a pass; the sums' order is that of chunks of :data:`_BLOCK_SHARED` whatever it is.
+_PASS = 1 << 17
+
+
+def _pass_layout(x, bsz: int, n_m: int, longest: int):
+    """(points per pass, pieces per chunk, zeroed piece products m × piece) of the shared
+    sums: passes of :data:`_PASS` points for an in-memory phase longer than a pass whose
+    chunks are whole pieces, else of one chunk (a streamed phase rebuilds its pieces chunk
+    by chunk; a shorter record keeps the chunk's work buffers)."""
+    per = -(-bsz // _DOT_PIECE)
+    step = _PASS if (type(x) is np.ndarray and bsz % _DOT_PIECE == 0
+                     and bsz == _BLOCK_SHARED and longest > _PASS) else bsz
+    return step, per, np.zeros((n_m, max(0, -(-longest // bsz)) * per))
+
+
+def _chunk_totals(dots: np.ndarray) -> np.ndarray:
+    """Σ over chunks of Σ over each chunk's pieces of ``dots`` (m × chunk × piece, unused
+    places 0), both in order: :func:`_ssq` of each chunk summed chunk by chunk, to the bit."""
+    if dots.shape[1] == 0:
+        return np.zeros(dots.shape[0])
+    return np.cumsum(np.cumsum(dots, axis=2)[:, :, -1], axis=1)[:, -1].copy()
+
+
 def _sum_sq_diff(z: np.ndarray, m: int, coef, buf: np.ndarray) -> float:
     """Σ_n (Σ_p coef[p]·z[n + p·m])², n = 0 … len(z) − (P−1)m − 1, in chunks."""
     n = z.size
@@ -401,20 +439,21 @@ def _sums_direct_shared(x: np.ndarray, ms, order: int = 2) -> np.ndarray:
         # move along the blocks together and stay cached; all m at once would evict them);
         # every m's chunks are summed in the same order, so the sums are the same
         return _split_sums(x, ms, bsz)
-    buf = np.empty(3 * bsz)
-    total = np.zeros(len(ms))
     lengths = [n - 2 * m for m in ms]
     order = sorted(range(len(ms)), key=lambda i: ms[i])
     sub, add = np.subtract, np.add
     reach = 2 * max((m for m in ms if m <= bsz), default=0)
-    for s in range(0, max(lengths), bsz):
+    step, per, dots = _pass_layout(x, bsz, len(ms), max(lengths))
+    buf = np.empty(2 * step + bsz)
+    for s in range(0, max(lengths), step):
         # one slice of x for every m within a chunk (a streamed phase: one copy per chunk)
-        near = x[s: min(n, s + bsz + reach)] if reach else None
+        near = x[s: min(n, s + step + reach)] if reach else None
+        at = (s // bsz) * per + (s % bsz) // _DOT_PIECE     # the chunk's first piece
         for i in order:
             m, length = ms[i], lengths[i]
             if s >= length:
                 break
-            e = min(length, s + bsz)
+            e = min(length, s + step)
             k = e - s
             if m <= bsz:
                 d1 = buf[: k + m]
@@ -428,8 +467,8 @@ def _sums_direct_shared(x: np.ndarray, ms, order: int = 2) -> np.ndarray:
                 sub(x[s + 2 * m: e + 2 * m], mid, out=v)
                 sub(v, mid, out=v)
                 add(v, x[s:e], out=v)
-            total[i] += _ssq(v)
-    return total
+            _piece_dots(v, dots[i, at:])
+    return _chunk_totals(dots.reshape(len(ms), -1, per))
 
 
 def _sums_shared_third(x: np.ndarray, ms: list[int], bsz: int) -> np.ndarray:
@@ -439,21 +478,22 @@ def _sums_shared_third(x: np.ndarray, ms: list[int], bsz: int) -> np.ndarray:
     cheaper once m exceeds k/3; measured fastest from k/8), with two work buffers and no
     temporaries."""
     n = x.size
-    buf = np.empty(6 * bsz)
-    tmp = np.empty(bsz)
-    total = np.zeros(len(ms))
     lengths = [n - 3 * m for m in ms]
     order = sorted(range(len(ms)), key=lambda i: ms[i])
     sub, add = np.subtract, np.add
     near_max = bsz // 8
     reach = 3 * max((m for m in ms if m <= near_max), default=0)
-    for s in range(0, max(lengths), bsz):
-        near = x[s: min(n, s + bsz + reach)] if reach else None
+    step, per, dots = _pass_layout(x, bsz, len(ms), max(lengths))
+    buf = np.empty(3 * step + reach)
+    tmp = np.empty(step)
+    for s in range(0, max(lengths), step):
+        near = x[s: min(n, s + step + reach)] if reach else None
+        at = (s // bsz) * per + (s % bsz) // _DOT_PIECE
         for i in order:
             m, length = ms[i], lengths[i]
             if s >= length:
                 break
-            e = min(length, s + bsz)
+            e = min(length, s + step)
             k = e - s
             if m <= near_max:
                 xs = near[: k + 3 * m]          # x[s: e + 3m]
@@ -469,8 +509,8 @@ def _sums_shared_third(x: np.ndarray, ms: list[int], bsz: int) -> np.ndarray:
                 sub(x[s + m: e + m], x[s + 2 * m: e + 2 * m], out=t)
                 t *= 3.0
                 add(v, t, out=v)
-            total[i] += _ssq(v)
-    return total
+            _piece_dots(v, dots[i, at:])
+    return _chunk_totals(dots.reshape(len(ms), -1, per))
 
 
 def _split_sums(x, ms: list[int], bsz: int) -> np.ndarray:
@@ -1233,6 +1273,7 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
     a_b1 = np.full(probe.size, np.nan)
     last, reliable = 0, None
     decs: dict[int, np.ndarray] = {}
+    prev, prev_m = None, 0
     for i, m in enumerate(probe):
         if isinstance(seg, CumulativeSum) and int(m) not in decs:
             # the decimated sub-records of the next τ in one pass over the phase, as many
@@ -1256,14 +1297,20 @@ def _identify(kind: str, x: np.ndarray, bad, angle: bool, ms: np.ndarray, all_ta
             r = noise_id_lag1(dec, 1, d_max=d_max)
             b = noise_id_b1(dec, m, rn_ratio=lambda: _rn_streamed(seg, c0, span, m))
         else:
+            # the decimated points gathered once for both methods; where the sub-record
+            # is the whole stretch at m and at m/2, every other point of the last ones
             sub = seg[c0: c0 + span] if seg.size > span else seg
-            r = noise_id_lag1(sub, m, d_max=d_max)
-            b = noise_id_b1(sub, m)
+            whole = sub is seg
+            dec = prev[::2].copy() if whole and prev_m * 2 == m else sub[::m].copy()
+            prev, prev_m = (dec, m) if whole else (None, 0)
+            r = noise_id_lag1(dec, 1, d_max=d_max, keep_basis=True)
+            b = noise_id_b1(dec, m, rn_ratio=lambda: rn_ratio_of_phase(sub, m))
         if r is not None:
             last, reliable = _settled(r[0], reliable, (seg.size - 1) // m)
         a_lag[i] = last
         if b is not None:
             a_b1[i] = b
+    release_quadratic_basis()
     if probe is ms:
         return a_lag, a_b1
     out_a = np.empty(ms.size, dtype=np.int8)

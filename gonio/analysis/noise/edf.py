@@ -9,6 +9,7 @@ Contents
 :func:`edf_totdev`              total variance, SP 1065 Table 7
 :func:`noise_id_lag1`           noise type by the lag-1 autocorrelation
 :func:`noise_id_b1`             noise type by the B1 and R(n) ratios (cross-check)
+:func:`rn_ratio_of_phase`       R(n) = MVAR/AVAR of a phase series at m
 :func:`chi2_interval`           χ² interval of a variance with a given edf
 ==============================  ===============================================
 
@@ -41,7 +42,8 @@ from gonio.errors import GonioError
 
 __all__ = [
     "KINDS", "edf_greenhall", "edf_for", "edf_simple", "edf_totdev",
-    "noise_id_lag1", "noise_id_b1", "b1_expected", "rn_expected", "chi2_interval",
+    "noise_id_lag1", "noise_id_b1", "b1_expected", "rn_expected", "rn_ratio_of_phase",
+    "chi2_interval",
     "GR_TABLE1", "GR_TABLE2", "GR_TABLE3", "J_MAX",
 ]
 
@@ -399,11 +401,11 @@ def _lag1(z: np.ndarray) -> float:
     return float(np.einsum("i,i->", c[:-1], c[1:]) / den) if den > 0 else 0.0
 
 
-def _detrend(z: np.ndarray, deg: int) -> np.ndarray:
+def _detrend(z: np.ndarray, deg: int, keep_basis: bool = False) -> np.ndarray:
     """z minus its least-squares quadratic (deg 2; the only degree used)."""
     assert deg == 2
     out = np.array(z, dtype=np.float64, copy=True)
-    remove_quadratic(out)
+    remove_quadratic(out, keep_basis=keep_basis)
     return out
 
 
@@ -429,22 +431,49 @@ def _quadratic_gram(n: int, step: int) -> np.ndarray:
     return gram
 
 
-def remove_quadratic(z: np.ndarray) -> None:
+def _fit_t(n: int, a: int, step: int) -> np.ndarray:
+    """The points a … a + step − 1 of t = −1 + 2k/(n − 1) as the fit evaluates them."""
+    return -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
+
+
+@functools.lru_cache(maxsize=1)
+def _quadratic_piece(n: int) -> tuple[np.ndarray, ...]:
+    """(1, t, t², t as the fit evaluates it) of a record of one piece of n points: the
+    noise identification detrends many series of the same length (read-only arrays)."""
+    t = _quadratic_t(n, 0, n)
+    out = (np.ones_like(t), t, t * t, _fit_t(n, 0, n))
+    for v in out:
+        v.flags.writeable = False
+    return out
+
+
+def release_quadratic_basis() -> None:
+    """Free the arrays :func:`remove_quadratic` keeps for the last length it saw."""
+    _quadratic_piece.cache_clear()
+
+
+def remove_quadratic(z: np.ndarray, *, keep_basis: bool = False) -> None:
     """Subtract from z (in place) its least-squares quadratic in t ∈ [−1, 1], from the
-    moments Σ t^k z and Σ t^k (k ≤ 4) accumulated in chunks (no N×3 design matrix)."""
+    moments Σ t^k z and Σ t^k (k ≤ 4) accumulated in chunks (no N×3 design matrix).
+    ``keep_basis``: keep 1, t, t² of a record of one piece for the next record of its
+    length (4 arrays of its size, until :func:`release_quadratic_basis`; the same values)."""
     n = z.size
     if n < 3:
         return
     step = 1 << 16
     mom = np.zeros(3)
+    one = _quadratic_piece(n) if keep_basis and n <= step else None
     for a in range(0, n, step):
-        t = _quadratic_t(n, a, step)
-        tk = (np.ones_like(t), t, t * t)
+        if one is None:
+            t = _quadratic_t(n, a, step)
+            tk = (np.ones_like(t), t, t * t)
+        else:
+            tk = one[:3]
         for i in range(3):
             mom[i] += float(np.einsum("i,i->", tk[i], z[a: a + step]))
     c = np.linalg.solve(_quadratic_gram(n, step), mom)
     for a in range(0, n, step):
-        t = -1.0 + 2.0 * np.arange(a, min(n, a + step)) / (n - 1)
+        t = one[3] if one is not None else _fit_t(n, a, step)
         fit = t * c[2]           # c0 + t·(c1 + t·c2), in place
         fit += c[1]
         fit *= t
@@ -452,7 +481,8 @@ def remove_quadratic(z: np.ndarray) -> None:
         z[a: a + step] -= fit
 
 
-def noise_id_lag1(x: np.ndarray, m: int, *, d_max: int = 2) -> tuple[int, float] | None:
+def noise_id_lag1(x: np.ndarray, m: int, *, d_max: int = 2,
+                  keep_basis: bool = False) -> tuple[int, float] | None:
     """Noise type α at averaging factor m by the lag-1 autocorrelation ([RG2004];
     SP 1065 §5.6.1), from the phase series ``x`` (NaN-free).
 
@@ -461,7 +491,8 @@ def noise_id_lag1(x: np.ndarray, m: int, *, d_max: int = 2) -> tuple[int, float]
     or d = ``d_max`` (2 for the Allan variances, 3 for Hadamard); then
     p = −2(δ + d) and α = p + 2 (phase data), rounded: α = 2 − 2d − round(2δ).
     Returns (α rounded to 2 … 2 − 2·d_max, α unrounded), or None when the
-    decimated series has fewer than :data:`LAG1_MIN_POINTS` points.
+    decimated series has fewer than :data:`LAG1_MIN_POINTS` points. ``keep_basis``: see
+    :func:`remove_quadratic`.
 
     >>> rng = np.random.default_rng(0)
     >>> noise_id_lag1(np.cumsum(rng.standard_normal(5000)), 4)[0]   # white rate
@@ -470,7 +501,7 @@ def noise_id_lag1(x: np.ndarray, m: int, *, d_max: int = 2) -> tuple[int, float]
     z = np.asarray(x, dtype=np.float64)[:: int(m)]
     if z.size < LAG1_MIN_POINTS:
         return None
-    z = _detrend(z, 2)
+    z = _detrend(z, 2, keep_basis)
     d = 0
     while True:
         r1 = _lag1(z)
@@ -555,14 +586,14 @@ def noise_id_b1(x: np.ndarray, m: int, *, rn_ratio=None) -> int | None:
                                                  / b1_expected(nav, c[0]))))
     if best[0] != -2 or m < 2:
         return best[1]
-    rn = _rn_ratio(x, m) if rn_ratio is None else rn_ratio()
+    rn = rn_ratio_of_phase(x, m) if rn_ratio is None else rn_ratio()
     if rn is None:
         return 2
     bound = math.sqrt(rn_expected(m, 2) * rn_expected(m, 1))
     return 2 if rn < bound else 1
 
 
-def _rn_ratio(x: np.ndarray, m: int) -> float | None:
+def rn_ratio_of_phase(x: np.ndarray, m: int) -> float | None:
     """R(n) = MVAR/AVAR at m of the phase ``x``; None when too short or AVAR is 0."""
     n = x.size
     if n - 3 * m + 1 < 1:

@@ -90,14 +90,15 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"Welch estimate", "Welch 谱估计"),
     (r"Welch estimate over the broadband lines", "宽带谱线上的 Welch 谱估计"),
     (r"χ² interval at the floor", "底值处的 χ² 区间"),
-    (r"bias correction of the −½ line under the fitted five-term model \(half its size\)",
-     "拟合五项模型下 −½ 斜率直线的偏差修正（取其一半）"),
+    (r"bias correction of the −½ line under the fitted five-term model \(half the full "
+     r"correction\)", "拟合五项模型下 −½ 斜率直线的偏差修正（取全修正的一半）"),
     (r"detection: back to the last excursion beyond band \+ zσ \(not noise alone\)",
      "判定：回溯至最后一次超出 带宽 + zσ 的偏移（非仅噪声）"),
     (r"least-squares slope \((\w+)\)", "最小二乘斜率（{1}）"),
     (r"χ² intervals of the fit points", "拟合点的 χ² 区间"),
-    (r"95 % bound of the largest noise difference over the temperatures visited twice",
-     "两次到达的各温度上最大噪声差的 95 % 界限"),
+    (r"selection excess of the largest of the noisy differences over the temperatures "
+     r"visited twice \(± c_n·σ_max\)",
+     "两次到达的各温度上含噪差值取最大者的选择超出量（± c_n·σ_max）"),
     (r"95 % bound of the largest noise excursion over the record .*",
      "记录中最大噪声偏移的 95 % 界限"),
 )

@@ -665,36 +665,46 @@ def arw(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.2: the −½ line through the short-τ part of the Allan deviation read
     at τ = 1 h (°/√h); (29): 1 °/√h = 60 (°/h)/√Hz.
 
-    The line's τ also carry bias instability and quantisation, so the reading is biased
-    high (≈ 1.5 % on the ADXRS610 bench, more for a shorter record, whose line reaches
-    longer τ relative to its clusters). Physically right value beside the reading taken:
-    the reading is corrected by the bias the same line has on the five-term model fitted to
-    the same record (IEEE 952 Annex C), evaluated at the same τ — N_line·N_fit/N_line(model);
-    the uncorrected reading stays in the details. Uncertainty: the χ² intervals of the
-    points used, and the correction (half its size, normal)."""
+    The line's τ may also carry bias instability and quantisation, which lift the reading.
+    The five-term model fitted to the same record (IEEE 952 Annex C) gives that lift at the
+    same τ, the factor N_line(model)/N_fit, but as an upper estimate: its non-negative terms
+    take up noise (a quantisation term on pure white noise) and its flicker floor holds at
+    every τ, while a gyro's bias instability may fade at the line's short τ. The
+    uncorrected reading is the lower end (the lift is not negative), the fully corrected
+    one the upper: the value certified is their midpoint, N_line·(1 + N_fit/N_line(model))/2
+    (JCGM 100 4.3.7: a quantity known only within bounds is taken at their middle); the
+    uncorrected reading and the factor stay in the details. Uncertainty: the χ² intervals
+    of the points used, and the correction (half the full correction, normal)."""
     t, cl, un = "angular random walk", "5.4.5.2", "°/√h"
     m = _miss(ctx, "static", "arw", t, cl, un) or _quiet(ctx, "arw", t, cl, un)
     if m:
         return m
     allan, _, _ = _static(ctx)
-    val, mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
-    rel = np.abs(np.log(allan.ci_high[mask] / allan.adev[mask]))
-    u_rel = float(np.sqrt(np.mean(rel ** 2)) / math.sqrt(mask.sum())) * 2.0   # correlated τ
     fit = _noise_fit(ctx)
-    model = fit.adev(allan.tau_s)
-    line_model = math.exp(float(np.mean(np.log(model[mask]) + 0.5 * np.log(allan.tau_s[mask])))) \
-        / math.sqrt(S_PER_H)
-    ratio = line_model / (fit.N / math.sqrt(S_PER_H)) if fit.N > 0 and line_model > 0 else 1.0
-    value = val / ratio
+    value, val, ratio, u_rel, mask = arw_reading(allan, fit)
     u = gum(lambda n, c: n * (1 + c),
             [from_u("N", value, value * u_rel, dof=50, source="χ² intervals of the fit points"),
              from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=50,
                     source="bias correction of the −½ line under the fitted five-term model "
-                           "(half its size)")])
+                           "(half the full correction)")])
     return Item("arw", t, cl, un, value, uncertainty=u, details={
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
         "line_reading_uncorrected": val, "line_bias_factor_model": ratio,
         "five_term_fit_arw": fit.N / math.sqrt(S_PER_H)})
+
+
+def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
+    """The ARW of :func:`arw` from an Allan deviation (°/h) and its five-term fit:
+    (value °/√h, uncorrected −½ line reading, the model's lift factor N_line(model)/N_fit,
+    relative u of the line's points, mask of the τ used)."""
+    val, mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
+    rel = np.abs(np.log(allan.ci_high[mask] / allan.adev[mask]))
+    u_rel = float(np.sqrt(np.mean(rel ** 2)) / math.sqrt(mask.sum())) * 2.0   # correlated τ
+    model = fit.adev(allan.tau_s)
+    line_model = math.exp(float(np.mean(np.log(model[mask]) + 0.5 * np.log(allan.tau_s[mask])))) \
+        / math.sqrt(S_PER_H)
+    ratio = line_model / (fit.N / math.sqrt(S_PER_H)) if fit.N > 0 and line_model > 0 else 1.0
+    return val * (1.0 + 1.0 / ratio) / 2.0, val, ratio, u_rel, mask
 
 
 def bias_instability(ctx: Context) -> Item:
@@ -965,38 +975,48 @@ def bias_hysteresis(ctx: Context) -> Item:
     the rising and the falling pass (:func:`gonio.specs.iec62047_20.formulas.hysteresis_iec`: a
     visit is "up" when reached from below, "down" from above), °/s.
 
-    Uncertainty: the two record means (block type A) and the bias drift between the two
-    visits (RRW and bias instability from the static record's Allan fit)."""
+    Uncertainty: the two record means (block type A), the bias drift between the two
+    visits (RRW and bias instability from the static record's Allan fit), and the selection
+    excess of a maximum over n noisy differences (JCGM 100 4.3.7: a rectangular between
+    the two limiting cases, 0 when one temperature's true difference dominates and
+    c_n·σ_max when all are 0, c_n = E[max|Z_i|] of
+    :func:`gonio.specs.iec62047_20.formulas.max_abs_normal_mean`), taken as ± c_n·σ_max
+    since which case holds is not known."""
     t, cl, un = "bias hysteresis", "5.3.3.7", "°/s"
     m = _miss(ctx, "bias_temperature", "bias_hysteresis", t, cl, un)
     if m:
         return m
     pts = _bias_temperature_points(ctx)
-    T = [p[0] for p in pts]
-    B = [p[1] for p in pts]
-    val, diffs = ief.hysteresis_iec(T, B)
-    Tm = max(diffs, key=lambda k: abs(diffs[k]))
-    iu = max(i for i in range(1, len(T)) if T[i] == Tm and T[i] > T[i - 1])
-    idn = max(i for i in range(1, len(T)) if T[i] == Tm and T[i] < T[i - 1])
-    pu, pd_ = pts[iu], pts[idn]
-    inputs = [from_u("B_up", pu[1], pu[2], dof=pu[3], source=f"rising visit at {Tm:g} °C"),
-              from_u("B_down", pd_[1], pd_[2], dof=pd_[3], source=f"falling visit at {Tm:g} °C"),
-              from_u("drift", 0.0, drift_u_dps(ctx, pu[4] - pd_[4]), dof=50,
-                     source="bias drift between the visits (Allan fit: RRW, BI)")]
-    # the value is a maximum over the temperatures visited twice: noise inflates it
-    from scipy.stats import norm
-    sds = []
-    for Tv in diffs:
-        ju = max(i for i in range(1, len(T)) if T[i] == Tv and T[i] > T[i - 1])
-        jd = max(i for i in range(1, len(T)) if T[i] == Tv and T[i] < T[i - 1])
-        sds.append(math.sqrt(pts[ju][2] ** 2 + pts[jd][2] ** 2
-                             + drift_u_dps(ctx, pts[ju][4] - pts[jd][4]) ** 2))
-    inputs.append(type_b("noise_max", 0.0, max(sds) * float(norm.ppf(1 - 0.025 / len(sds))),
-                         "normal", k=2, source="95 % bound of the largest noise difference "
-                                               "over the temperatures visited twice"))
-    u = gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
+    val, diffs, Tm, u = hysteresis_budget(pts, lambda sep: drift_u_dps(ctx, sep))
     return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
         "up_minus_down_dps": diffs, "temperature_c": Tm})
+
+
+def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
+    """5.3.3.7 from the visits ``pts`` ((T °C, B °/s, u(B) °/s, ν, mid-time s) in visit
+    order) and ``drift_u`` (separation s → standard uncertainty °/s of the bias drift):
+    (value, {T: B_up − B_down}, the temperature of the largest, its Uncertainty)."""
+    T = [p[0] for p in pts]
+    val, diffs = ief.hysteresis_iec(T, [p[1] for p in pts])
+
+    def visits(Tv):
+        return (max(i for i in range(1, len(T)) if T[i] == Tv and T[i] > T[i - 1]),
+                max(i for i in range(1, len(T)) if T[i] == Tv and T[i] < T[i - 1]))
+
+    Tm = max(diffs, key=lambda k: abs(diffs[k]))
+    pu, pd_ = (pts[i] for i in visits(Tm))
+    inputs = [from_u("B_up", pu[1], pu[2], dof=pu[3], source=f"rising visit at {Tm:g} °C"),
+              from_u("B_down", pd_[1], pd_[2], dof=pd_[3], source=f"falling visit at {Tm:g} °C"),
+              from_u("drift", 0.0, drift_u(pu[4] - pd_[4]), dof=50,
+                     source="bias drift between the visits (Allan fit: RRW, BI)")]
+    # the value is a maximum over the temperatures visited twice: noise inflates it
+    sds = [math.sqrt(pts[ju][2] ** 2 + pts[jd][2] ** 2 + drift_u(pts[ju][4] - pts[jd][4]) ** 2)
+           for ju, jd in map(visits, diffs)]
+    inputs.append(type_b("noise_max", 0.0, max(sds) * ief.max_abs_normal_mean(len(sds)),
+                         "rectangular", source="selection excess of the largest of the noisy "
+                                               "differences over the temperatures visited "
+                                               "twice (± c_n·σ_max)"))
+    return val, diffs, Tm, gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
 
 
 def bias_ratiometric(ctx: Context) -> Item:

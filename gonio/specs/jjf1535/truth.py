@@ -102,6 +102,62 @@ def record_mean_variance(bench: RateBench, dt: float, n_samples: int, t_start_s:
     return total / (n_samples // P) ** 2
 
 
+def sample_noise_covariance(bench: RateBench, t_s: np.ndarray, dt_s: np.ndarray,
+                            temp_c: float) -> np.ndarray:
+    """Covariance (°/s)² of the rate-noise samples taken at ``t_s`` (each sample's start,
+    s after power-on, one power-up) with intervals ``dt_s``: white N²/dt on the diagonal
+    (interval means), each Gauss–Markov term of the bias-instability sum s²·e^(−|t_i − t_j|/τ),
+    the rate random walk q²·min(t_i + dt_i, t_j + dt_j) (its steps up to the end of each
+    interval, from zero at power-on) and the output quantisation LSB²/12 per sample — the
+    noise model's parameters as :func:`block_mean_moments` takes them, for samples with gaps."""
+    g = bench.gyro
+    ns = NoiseState(g, np.random.default_rng(0), enabled=True)   # only for taus and sigmas
+    t, d = np.asarray(t_s, float), np.asarray(dt_s, float)
+    N = g.arw_deg_sqrt_h / math.sqrt(S_PER_H) * (1 + g.arw_tc1_per_c * float(g.delta_t(temp_c)))
+    lsb = max(g.output_lsb, bench.equipment.acquisition.resolution) / abs(g.scale_factor)
+    C = np.diag(N ** 2 / d + lsb ** 2 / 12.0)
+    lag = np.abs(t[:, None] - t[None, :])
+    for tau, s in zip(ns.taus, ns.sig):
+        C += s ** 2 * np.exp(-lag / tau)
+    q2 = (g.rrw_dph_sqrt_h / S_PER_H / math.sqrt(S_PER_H)) ** 2
+    if q2 > 0:
+        C += q2 * np.minimum((t + d)[:, None], (t + d)[None, :])
+    return C
+
+
+def sf_fit_noise_rel(bench: RateBench, proto) -> float:
+    """Standard deviation of the relative error that the gyro's rate noise gives one
+    calibration's least-squares K_m (7.2.1.2 eqs (4), (5)): with c_j = (Ω_j − Ω̄)/Σ(Ω − Ω̄)²
+    over the rate points, K_m/K − 1 = Σ_j c_j r̄_j, r̄_j the noise mean of point j (the rest
+    level F_r is common to every point and Σ c_j = 0, so it drops out); its variance is
+    wᵀCw, w = c_j/N_j on point j's samples, C their covariance
+    (:func:`sample_noise_covariance`) along the first calibration's segments of the plan
+    (times from its power-on; 7.2.4 powers the gyro off between calibrations)."""
+    from gonio.specs.jjf1535.protocol import plan
+
+    segs = [s for s in plan(proto, bench) if s.test == "scale_factor"]
+    if not segs:
+        return 0.0
+    t, times, dts, rates, idx = 0.0, [], [], [], []
+    for s in (s for s in segs if s.run == segs[0].run):
+        t += s.delay_s
+        if s.role == "rate":
+            times.append(t + s.interval_s * np.arange(s.samples))
+            dts.append(np.full(s.samples, float(s.interval_s)))
+            rates.append(float(s.rate_dps))
+            idx.append(np.full(s.samples, len(rates) - 1))
+        t += s.samples * s.interval_s
+    if len(rates) < 2:
+        return 0.0
+    om = np.array(rates)
+    c = (om - om.mean()) / float(np.sum((om - om.mean()) ** 2))
+    j = np.concatenate(idx)
+    w = c[j] / np.bincount(j)[j]
+    C = sample_noise_covariance(bench, np.concatenate(times), np.concatenate(dts),
+                                proto["protocol"]["room_temperature_c"])
+    return math.sqrt(max(float(w @ C @ w), 0.0))
+
+
 def _scale_factor_truths(g, K0: float, rates: np.ndarray, ez: float) -> dict:
     """7.2.1–7.2.3 from the model's closed forms (:mod:`gonio.bench.rate_truth`): K, the
     residuals of eq (5) written out, K± of each direction."""
@@ -194,7 +250,14 @@ def truth(bench: RateBench, proto) -> dict:
     rates = np.array(sf_rates(proto), float)
     out = _scale_factor_truths(g, K0, rates, ez)
     K = out["scale_factor"]["value"]
-    out["sf_repeatability"] = {"value": g.sf_scatter_rel, "how": "power-cycle scatter σ of K"}
+    fit_rel = sf_fit_noise_rel(bench, proto)
+    out["sf_repeatability"] = {
+        "value": math.sqrt(g.sf_scatter_rel ** 2 + fit_rel ** 2),
+        "power_cycle_scatter_rel": g.sf_scatter_rel, "fit_noise_rel": fit_rel,
+        "how": "√(σ_K,run² + var(K_m from the rate noise)/K²): each K_m of eq (10) is one "
+               "calibration's least-squares fit, so it carries the noise of its rate points "
+               "(sf_fit_noise_rel) beside the power-cycle scatter, as B_r's records carry "
+               "their means' noise"}
     temps = [room] + list(P["temperature"]["points_c"])
     dT = np.array([g.delta_t(t) for t in temps], float)
     poly = 1 + g.sf_tc1_per_c * dT + g.sf_tc2_per_c2 * dT ** 2      # K(T)/K(T_ref)

@@ -501,8 +501,8 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol,
 
     1. ``metadata``: the readings state it (``sf_temperature_coeff_bound_ppm_per_c``);
     2. ``protocol-rlg`` / ``protocol-fog``: the readings state the gyro type (``gyro_type``),
-       else ``gyro_type`` (the laboratory file's ``[instrument] gyro_type``: the instrument
-       registered in the records) states it, and the protocol's default for that type is
+       else ``gyro_type`` (the laboratory file's ``[instrument] gyro_type``, or the type of
+       the instrument registered in the records for ``calibrate --record``) states it, and the protocol's default for that type is
        taken (``annex_a.sf_temperature_coeff_bound_rlg_ppm_per_c`` or ``…_fog_…``); ``how``
        says which of the two stated the type;
     3. ``protocol-larger``: neither is stated; the larger of the two defaults is taken, so a
@@ -517,7 +517,7 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol,
     ...                                   "sf_temperature_coeff_bound_ppm_per_c": "0.4"}))]
     [(0.1, 'protocol-rlg'), (1.0, 'protocol-fog'), (1.0, 'protocol-larger'), (0.4, 'metadata')]
     >>> d = temperature_coeff_bound(Readings(pd.DataFrame(), {}), p, "RLG")
-    >>> d["bound_ppm_per_c"], d["source"], d["how"].endswith("file's [instrument] gyro_type)")
+    >>> d["bound_ppm_per_c"], d["source"], "[instrument] gyro_type" in d["how"]
     (0.1, 'protocol-rlg', True)
     """
     a = protocol.annex_a
@@ -536,7 +536,8 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol,
         bound, source = defaults[gyro], f"protocol-{gyro}"
         how = f"the protocol's default for a{'n' if gyro == 'rlg' else ''} {gyro.upper()} " \
               f"(annex_a.sf_temperature_coeff_bound_{gyro}_ppm_per_c" + (
-                  "; the type stated by the laboratory file's [instrument] gyro_type)"
+                  "; the readings state no type: the instrument's as the laboratory file's "
+                  "[instrument] gyro_type or the records' registered instrument states it)"
                   if from_lab else ")")
     else:
         bound, source = max(defaults.values()), "protocol-larger"

@@ -36,7 +36,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from gonio.analysis.coverage import two_sided, within
+from gonio.analysis.coverage import chi_square_z, two_sided, within
 from gonio.units import ARCSEC_PER_DEG
 from gonio.specs.ogam_draft.items import RECORD_KEYS
 
@@ -281,24 +281,6 @@ def trial_items(report, truth: dict) -> dict:
     rec["angle_deviation"], rec["angle_deviation_draft"] = (alt, mine) if other == "physical" \
         else (mine, alt)
     return rec
-
-
-def chi_square_z(s, sigma, nu):
-    """z of a standard deviation against its χ² model: Φ⁻¹(F_χ²(ν s²/σ²; ν)), N(0, 1) when
-    ν s²/σ² ~ χ²(ν) (JCGM 100 E.4.3, the model a one-sided χ² interval is stated by); the
-    spread of z = (s − σ)/u_c, u_c = s/√(2ν), is that of a ratio with s in the denominator,
-    unbounded for small ν, and not a measure of the interval's width.
-
-    >>> rng = np.random.default_rng(0)
-    >>> s = np.sqrt(rng.chisquare(2, 20000) / 2)            # σ = 1, ν = 2
-    >>> z = chi_square_z(s, 1.0, 2.0)
-    >>> abs(float(z.mean())) < 0.03, round(float(z.std()), 1)
-    (True, 1.0)
-    """
-    from scipy.stats import chi2, norm
-
-    s, sigma, nu = (np.asarray(x, dtype=float) for x in (s, sigma, nu))
-    return norm.ppf(chi2.cdf(nu * (s / sigma) ** 2, nu))
 
 
 def item_coverage(records: list[dict], intrinsic_points=None,

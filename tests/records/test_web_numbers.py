@@ -1,0 +1,312 @@
+"""The records' web pages state every item as the certificate does, and mark virtual readings.
+
+For each specification ``gonio demo --spec KEY --seed 3`` is put into a records store as the
+command line puts it (``gonio calibrate --record``: imported, its standard and environment
+attached, its draft rendered from the stored result) and its calibration page read through
+the application (Starlette's TestClient):
+
+- every measured item of results.json has one row, and that row's value, U, k, ν_eff, interval
+  ends and p are the ones the statement rule gives from results.json's numbers, each negative
+  number with U+2212, and the same as the demo certificate's own number spans (k checked
+  against scipy's t quantile of the stated ν: tests/statement_numbers.py, shared with
+  tests/test_one_statement.py);
+- the page and the draft certificate it serves (every PDF page, the HTML, the DCC) say
+  virtual; readings whose metadata are stripped of the bench's lines give no mark;
+- readings whose serial contradicts the registered instrument are refused by the web form,
+  naming both serials, and nothing is queued; with the right serial they are queued and the
+  queued calibration's page says virtual already (from the readings' own metadata).
+"""
+
+from __future__ import annotations
+
+import html as html_module
+import json
+import re
+
+import pytest
+from lxml import etree
+
+from gonio.cli import main
+from gonio.records import services
+from gonio.report.i18n import labels
+from tests.statement_numbers import (certificate_spans, cell_numbers, check_k, expected_cell,
+                                     measured)
+
+from .conftest import PASSWORD, make_people
+
+SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
+_ROW = re.compile(r'<td class="num" data-src="items\.([A-Za-z0-9_]+)">([^<]*)</td>')
+
+
+def environment(d) -> dict:
+    """The room temperature and humidity the readings in folder ``d`` state (their own
+    metadata: the ones the identity check compares), else 20 °C and 45 %."""
+    from gonio.formats.provenance import readings_metadata
+
+    md = readings_metadata(d / "readings.csv")
+    t = md.get("temperature_c", md.get("room_temperature_c", "20.0"))
+    return {"temperature_c": float(t), "humidity_pct": float(md.get("humidity_pct", "45"))}
+
+
+def web_client(store, name: str = "tech"):
+    from fastapi.testclient import TestClient
+
+    from gonio.web.app import create_app
+
+    c = TestClient(create_app(store), follow_redirects=False)
+    token = re.search(r'name="csrf" value="([^"]+)"', c.get("/login").text).group(1)
+    r = c.post("/login", data={"username": name, "password": PASSWORD, "csrf": token})
+    assert r.status_code == 303, r.text
+    return c
+
+
+@pytest.fixture(scope="module", params=SPECS)
+def recorded(request, tmp_path_factory):
+    """The demo of one specification, recorded with a standard and the readings' environment
+    (its draft certificate rendered from the stored result): the folder, results.json, the
+    store, the calibration's id and a logged-in client."""
+    from gonio.records.db import open_store
+    from gonio.records.importer import record_output_folder
+
+    root = tmp_path_factory.mktemp(request.param)
+    d = root / "demo"
+    assert main(["demo", "--spec", request.param, "--seed", "3", "--out", str(d)]) == 0
+    store = open_store(None, root / "data")
+    tech = make_people(store)["tech"]
+    services.add_standard(store, tech, name="reference rotary table", identifier="ENV-STD-1",
+                          due_on="2099-01-01")
+    cid = record_output_folder(store, d, actor=tech, standard_identifiers=["ENV-STD-1"],
+                               **environment(d))
+    yield {"spec": request.param, "dir": d, "store": store, "id": cid, "web": web_client(store),
+           "res": json.loads((d / "results.json").read_text(encoding="utf-8"))}
+    store.close()
+
+
+def page_rows(text: str) -> dict:
+    """item key → the list of its statement cells on a calibration page (unescaped)."""
+    rows: dict = {}
+    for key, cell in _ROW.findall(text):
+        rows.setdefault(key, []).append(html_module.unescape(cell).replace("\xa0", " "))
+    return rows
+
+
+def test_web_states_every_item_as_the_certificate(recorded):
+    """One row per measured item; its numbers are results.json's by the statement rule and
+    the certificate's."""
+    from gonio.report.i18n import minus_sign
+    from gonio.result.statement import item_statement
+
+    r = recorded["web"].get(f"/calibrations/{recorded['id']}")
+    assert r.status_code == 200
+    rows = page_rows(r.text)
+    spans = certificate_spans((recorded["dir"] / "certificate.html").read_text(encoding="utf-8"))
+    items = measured(recorded["res"])
+    assert items
+    for key, it in items.items():
+        check_k(key, it)
+        assert len(rows.get(key, [])) == 1, (key, rows.get(key))
+        got, want = cell_numbers(rows[key][0]), expected_cell(it)
+        assert got == want, (key, rows[key][0])
+        st = item_statement(it)
+        for field, text in (("value", minus_sign(st.value_text)), ("uncertainty.U", st.U_text),
+                            ("uncertainty.k", st.k), ("uncertainty.nu_eff", st.nu_eff)):
+            if text is not None and (key, field) in spans and not st.below_zero:
+                assert spans[(key, field)] == {text}, (key, field, spans[(key, field)])
+    # a row the page has for an item results.json does not hold as measured says so
+    for key, cells in rows.items():
+        if key not in items:
+            assert cells[0] in ("not measured", "not stated") or \
+                recorded["res"]["items"][key]["measured"], (key, cells)
+
+
+def test_results_json_served_is_the_stored_result(recorded):
+    r = recorded["web"].get(f"/calibrations/{recorded['id']}/files/results.json")
+    assert r.status_code == 200
+    assert json.loads(r.content) == recorded["res"]
+
+
+def files_say_virtual(web, base: str, spec: str, tmp) -> None:
+    """The certificate files the web serves under ``base`` (every PDF page, the HTML, the
+    DCC) carry the virtual-bench mark."""
+    from gonio.report.dcc import DCC_NS
+    from tests.test_provenance import pdf_pages
+
+    files = {name: web.get(f"{base}/{name}") for name in
+             ("certificate.pdf", "certificate.html", "certificate.dcc.xml")}
+    assert all(f.status_code == 200 for f in files.values()), \
+        {n: f.status_code for n, f in files.items()}
+    pdf = tmp / "served.pdf"
+    pdf.write_bytes(files["certificate.pdf"].content)
+    pages = pdf_pages(pdf)
+    assert len(pages) >= 2, spec
+    for i, text in enumerate(pages, 1):
+        assert labels("en")["virtual_short"] in text, f"{spec}: {base} PDF page {i} unmarked"
+    assert labels("en")["virtual"] in files["certificate.html"].text, spec
+    dcc = etree.fromstring(files["certificate.dcc.xml"].content)
+    assert dcc.find(f".//{{{DCC_NS}}}*[@id='virtual-bench']") is not None, spec
+
+
+def page_mark(web, url: str) -> str:
+    """The virtual-bench mark of a web page, or ""."""
+    page = html_module.unescape(web.get(url).text)
+    m = re.search(r'<p class="virtual" id="virtual-bench">([^<]*)</p>', page)
+    return m.group(1) if m else ""
+
+
+def test_web_page_and_draft_say_virtual(recorded, tmp_path):
+    web, cid, spec = recorded["web"], recorded["id"], recorded["spec"]
+    prov = recorded["res"]["provenance"]
+    assert prov["virtual"] is True
+    mark = page_mark(web, f"/calibrations/{cid}")
+    assert mark.startswith(labels("en")["virtual"]), spec
+    assert f"virtual bench {prov['bench']}, seed {prov['seed']}" in mark, spec
+    files_say_virtual(web, f"/calibrations/{cid}/files", spec, tmp_path)
+    summary = web.get(f"/calibrations/{cid}/files/summary.txt")
+    assert summary.text.startswith("VIRTUAL BENCH EXAMPLE"), spec
+
+
+def test_history_bars_are_the_stated_intervals(recorded):
+    """The instrument's history (its figure's bars): an item the certificate states by one
+    interval carries that interval, the page's ends as numbers; an item stated by ± U none."""
+    from gonio.report.dcc import dsi_decimal
+
+    store, cid = recorded["store"], recorded["id"]
+    inst_id = services.calibration(store, cid).instrument_id
+    hist = services.history(store, inst_id)
+    for key, it in measured(recorded["res"]).items():
+        want = expected_cell(it).get("interval")
+        (row,) = [r for r in hist[key] if r["calibration_id"] == cid]
+        if want is None:
+            assert row["interval"] is None, key
+        else:
+            ends = [float(dsi_decimal(x.replace("\u2212", "-"))) for x in want]
+            assert list(row["interval"]) == pytest.approx(ends, rel=1e-12), key
+    r = recorded["web"].get(f"/instruments/{inst_id}/history.svg")
+    assert r.status_code == 200 and r.text.count('class="bar"') >= len(measured(recorded["res"]))
+
+
+def _readings(d):
+    return (d / "readings.csv").read_bytes()
+
+
+def test_web_form_refuses_another_serial_and_marks_the_queued_run(recorded, tmp_path):
+    """The readings' # serial against the registered instrument, on the web form (the path a
+    person takes): refused naming both, nothing queued; the right serial is queued and its
+    page marked virtual from the readings' metadata before any result exists."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.db import open_store
+
+    spec, d = recorded["spec"], recorded["dir"]
+    serial = readings_metadata(d / "readings.csv")["serial"]
+    store = open_store(None, tmp_path / "data")
+    tech = make_people(store)["tech"]
+    cust = services.add_customer(store, tech, "C", "1 Road")
+    inst = services.register_instrument(store, tech, customer_id=cust.id, serial="SN-0001",
+                                        spec_key=spec, model="")
+    std = services.add_standard(store, tech, name="table", identifier="T-1", due_on="2099-01-01")
+    web = web_client(store)
+    csrf = re.search(r'name="csrf" value="([^"]+)"', web.get("/").text).group(1)
+    form = {"performed_on": "2025-11-20", "standards": [str(std.id)], "csrf": csrf,
+            **{k: str(v) for k, v in environment(d).items()}}
+    r = web.post(f"/instruments/{inst.id}/calibrate", data=form,
+                 files={"readings": ("readings.csv", _readings(d))})
+    assert r.status_code == 400, spec
+    said = html_module.unescape(re.search(r'<p class="error" role="alert">(.*?)</p>', r.text,
+                                          re.S).group(1))
+    assert f"the readings say '{serial}'" in said and "'SN-0001'" in said, (spec, said)
+    with store.session() as s:
+        from sqlalchemy import func, select
+
+        from gonio.records.models import Calibration
+        assert s.scalar(select(func.count()).select_from(Calibration)) == 0
+    services.update_instrument(store, tech, inst.id, serial=serial)
+    r = web.post(f"/instruments/{inst.id}/calibrate", data=form,
+                 files={"readings": ("readings.csv", _readings(d))})
+    assert r.status_code == 303, (spec, r.text[:2000])
+    page = html_module.unescape(web.get(r.headers["location"]).text)
+    assert 'id="virtual-bench"' in page and labels("en")["virtual"] in page, spec
+    store.close()
+
+
+def test_laboratory_readings_give_no_mark(recorded, tmp_path):
+    """The same readings without the bench's metadata lines (a laboratory's own file): the
+    queued calibration's page has no virtual mark (the check can fail)."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.db import open_store
+    from gonio.records.models import Calibration
+
+    if recorded["spec"] != "ogam-draft":
+        pytest.skip("one specification suffices: the mark's rule is the same for all")
+    d = recorded["dir"]
+    lines = _readings(d).decode("utf-8").splitlines(keepends=True)
+    stripped = "".join(x for x in lines if not re.match(r"# (bench|seed|generator):", x))
+    md = readings_metadata(d / "readings.csv")
+    store = open_store(None, tmp_path / "data")
+    tech = make_people(store)["tech"]
+    cust = services.add_customer(store, tech, "C", "1 Road")
+    inst = services.register_instrument(store, tech, customer_id=cust.id, serial=md["serial"],
+                                        spec_key="ogam-draft", model="")
+    std = services.add_standard(store, tech, name="table", identifier="T-1", due_on="2099-01-01")
+    sha, _ = services.store_file(store, __import__("io").BytesIO(stripped.encode("utf-8")))
+    from gonio.records import submission
+    cal = submission.submit_calibration(
+        store, tech, instrument_id=inst.id, readings_sha256=sha, standard_ids=[std.id],
+        performed_on="2025-11-20", **environment(d))
+    assert isinstance(cal, Calibration)
+    page = web_client(store).get(f"/calibrations/{cal.id}").text
+    assert 'id="virtual-bench"' not in page and labels("en")["virtual"] not in page
+    store.close()
+
+
+def test_issued_certificate_page_and_files_say_virtual(recorded, tmp_path):
+    """Reviewed, approved and issued (rendered from the stored result at issue): the
+    certificate's page and its files say virtual (last: it issues the module's calibration)."""
+    from sqlalchemy import select
+
+    from gonio.records import worker
+    from gonio.records.models import Certificate
+
+    store, cid, spec = recorded["store"], recorded["id"], recorded["spec"]
+    people = {u: services.user(store, u) for u in ("rev", "rev2")}
+    services.review(store, people["rev"], cid, accept=True)
+    services.approve(store, people["rev2"], cid)
+    assert worker.execute(store, services.claim_next(store).id), \
+        services.calibration(store, cid).error
+    with store.session() as s:
+        cert_id = s.scalar(select(Certificate.id).where(Certificate.calibration_id == cid))
+    web = recorded["web"]
+    assert page_mark(web, f"/certificates/{cert_id}").startswith(labels("en")["virtual"]), spec
+    files_say_virtual(web, f"/certificates/{cert_id}", spec, tmp_path)
+    # the calibration's page of the issued calibration: its numbers unchanged
+    rows = page_rows(web.get(f"/calibrations/{cid}").text)
+    for key, it in measured(recorded["res"]).items():
+        assert [cell_numbers(c) for c in rows[key]] == [expected_cell(it)], key
+
+
+@pytest.mark.parametrize("spec, protocol, seed", [r for r in __import__(
+    "tests.test_provenance", fromlist=["RUNS"]).RUNS], ids=SPECS)
+def test_a_contradiction_the_lab_proceeded_with_is_flagged_on_the_page(spec, protocol, seed,
+                                                                       tmp_path):
+    """Simulated readings calibrated on the command line with a laboratory file naming another
+    serial and proceeding, then put into the records (gonio db import --lab): the calibration
+    page states the contradiction, naming both serials, and says virtual."""
+    from gonio.formats.provenance import readings_metadata
+    from gonio.records.db import open_store
+    from gonio.records.importer import import_output_folder
+    from tests.test_provenance import LAB_SERIAL, PINS, lab_file, simulate_calibrate
+
+    lab = lab_file(tmp_path, 'on_mismatch = "proceed"')
+    cal = simulate_calibrate(spec, protocol, seed, tmp_path, lab)
+    readings = tmp_path / "sim" / "readings.csv"
+    serial = readings_metadata(readings)["serial"]
+    store = open_store(None, tmp_path / "data")
+    services.add_standard(store, make_people(store)["tech"], name="rotary table",
+                          identifier="RT-07", due_on="2099-01-01")    # the lab file's
+    cid = import_output_folder(store, cal, readings=readings, lab=lab,
+                               protocol=PINS / protocol if protocol else None)
+    page = html_module.unescape(web_client(store).get(f"/calibrations/{cid}").text)
+    flagged = re.search(r'<div class="virtual" id="identity">(.*?)</div>', page, re.S)
+    assert flagged, spec
+    assert serial in flagged.group(1) and LAB_SERIAL in flagged.group(1), (spec, flagged.group(1))
+    assert 'id="virtual-bench"' in page, spec
+    store.close()

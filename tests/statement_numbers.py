@@ -1,0 +1,107 @@
+"""What the tests comparing one item's numbers across outputs share (tests/test_one_statement.py:
+results.json, the certificate, summary.txt, the DCC; tests/records/test_web_numbers.py: the
+records' web pages): which items are measured, which are stated by one interval (worked out
+from results.json's numbers, not from the statement rule), the certificate's number spans,
+k checked against scipy's t quantile of the stated ν, and one statement cell's numbers parsed
+back from its text."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+
+def by_interval(it: dict) -> bool:
+    """Whether the item must be stated by one interval (worked out from its numbers)."""
+    u = it["uncertainty"]
+    if u["k"] is None:
+        return True
+    return bool(it.get("nonnegative")) and u["U"] > it["value"]
+
+
+def measured(res: dict) -> dict:
+    """The items of results.json ``res`` measured with a value and a U."""
+    return {k: it for k, it in res["items"].items()
+            if it["measured"] and it["value"] is not None and it.get("uncertainty")
+            and it["uncertainty"].get("U")}
+
+
+_NUM_SPAN = re.compile(r'<span class="num" data-src="items\.([A-Za-z0-9_]+)\.'
+                       r'(value|uncertainty\.U|uncertainty\.k|uncertainty\.nu_eff)"'
+                       r' data-rule="[^"]+">([^<]*)</span>')
+
+
+def certificate_spans(html: str) -> dict:
+    """(item key, "value" | "uncertainty.U" | "uncertainty.k" | "uncertainty.nu_eff") → the set
+    of texts the certificate's HTML prints in its number spans (no-break spaces as spaces)."""
+    spans: dict = {}
+    for key, what, text in _NUM_SPAN.findall(html.replace("\xa0", " ")):
+        spans.setdefault((key, what), set()).add(text)
+    return spans
+
+
+def check_k(key: str, it: dict) -> None:
+    """results.json's k is t_p of the ν it states (the integer part of ν_eff, GUM G.6.4; the
+    normal quantile for ν_eff ∞), checked with scipy, and U = k u_c; p is stated."""
+    from scipy.stats import norm, t
+
+    from gonio.result.statement import stated_nu
+
+    u = it["uncertainty"]
+    p = u.get("coverage_probability")
+    assert p is not None, f"{key}: no coverage probability in results.json"
+    if u["k"] is None or u.get("k_source") == "fixed":
+        return
+    nu = stated_nu(u["nu_eff"])
+    q = 0.5 + p / 2
+    want = norm.ppf(q) if nu is None or math.isinf(nu) else t.ppf(q, nu)
+    assert u["k"] == pytest.approx(want, rel=1e-9), (key, u["k"], u["nu_eff"], want)
+    assert u["U"] == pytest.approx(u["k"] * u["u_c"], rel=1e-9), key
+
+
+_CELL_FIELDS = {"U": r" ± (\S+)", "k": r"\bk = ([^,)\s]+)", "nu_eff": r"ν_eff = ([^,)\s]+)",
+                "p": r"p ≈ (\S+) %", "interval": r"\[(\S+), (\S+)\]", "upper": r"≤ (\S+)"}
+
+
+def cell_numbers(text: str) -> dict:
+    """The numbers of one statement written on one line ("−0.7224 ± 0.0020 lsb/(°/s) (k = 2.2,
+    ν_eff = 14, p ≈ 95 %)", "0.112 ″; interval [0.066, 0.204] ″ (p ≈ 95 %)", "upper bound: ≤
+    0.53 °/h (interval [0, 0.53], p ≈ 95 %); …"): field → its text, or the list of its texts
+    where the line holds it more than once (a second statement); ``value`` is the first word
+    unless the line opens with an upper bound."""
+    out: dict = {}
+    first = text.split(" ", 1)[0]
+    if not text.startswith(("upper bound", "上限")):
+        out["value"] = first.rstrip(";；")
+    for field, pat in _CELL_FIELDS.items():
+        found = re.findall(pat, text)
+        if found:
+            out[field] = found[0] if len(found) == 1 else found
+    return out
+
+
+def expected_cell(it: dict) -> dict:
+    """The fields :func:`cell_numbers` must find in a page's statement of results.json item
+    ``it``: the statement rule's texts (:func:`gonio.result.statement.item_statement`), each
+    negative number with U+2212 as the pages print it."""
+    from gonio.report.i18n import minus_sign
+    from gonio.result.statement import item_statement
+
+    st = item_statement(it)
+    want: dict = {} if st.below_zero else {"value": minus_sign(st.value_text)}
+    if st.U is not None:
+        want["U"] = st.U_text
+    if st.k is not None:
+        want["k"] = st.k
+    if st.nu_eff is not None and st.interval is None:
+        want["nu_eff"] = st.nu_eff
+    if st.p is not None:
+        want["p"] = st.p
+    if st.interval is not None:
+        ends = tuple(minus_sign(x) for x in st.interval_ends)
+        if st.upper is not None or st.below_zero:      # one-sided from the natural bound 0
+            want["upper"], ends = ends[1], ("0", ends[1])
+        want["interval"] = ends
+    return want
