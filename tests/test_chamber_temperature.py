@@ -187,6 +187,49 @@ def test_study_draws_the_chamber_within_its_tolerance_in_typeb_and_worst(proto, 
         assert (t.instrument.tilt_deg, t.instrument.tilt_azimuth_deg) == \
             (w.instrument.tilt_deg, w.instrument.tilt_azimuth_deg)
         assert (t.chamber_deviation_c, t.table) == (ref.chamber_deviation_c, ref.table)
+        assert t.instrument.sf_temperature_coeff_ppm_per_c == \
+            ref.instrument.sf_temperature_coeff_ppm_per_c
+
+
+@pytest.mark.parametrize("name, key", [("rlg", "sf_temperature_coeff_bound_rlg_ppm_per_c"),
+                                       ("fog", "sf_temperature_coeff_bound_fog_ppm_per_c")])
+def test_study_draws_alpha_k_within_the_bound_k_t_takes(proto, base, name, key):
+    """typeb and worst draw the gyro's α_K per trial, uniform within ± the bound the
+    calibration's K_T line takes for that gyro type (the protocol's default for the type the
+    bench's readings state; never the bench file's own coefficient): the draws span the
+    bound, their variance is bound²/3 (uniform), their mean ≈ 0; the chamber's draw is the
+    one before α_K was drawn (appended last), and the truth of K divides by the trial's own
+    1 + α_K ΔT."""
+    bench = replace(load_bench(name), sample_rate_hz=5.0)
+    bound = getattr(proto.annex_a, key)
+    assert bench.instrument.sf_temperature_coeff_ppm_per_c != 0.0     # the file's value
+    d = [draw_type_b(bench, proto, s) for s in range(3000)]
+    a = np.array([b.instrument.sf_temperature_coeff_ppm_per_c for b in d])
+    assert np.abs(a).max() <= bound and np.abs(a).max() > 0.99 * bound
+    assert abs(a.mean()) < 0.03 * bound
+    assert np.var(a) == pytest.approx(bound ** 2 / 3.0, rel=0.08)
+    # appended after the other draws: the chamber's deviation is the same uniform as before
+    tol = proto.conditions.temperature_tolerance_c
+    for s in range(3):
+        rng = np.random.default_rng([s, 0x7B])
+        u = rng.uniform(size=5 + len(bench.table.positioning_harmonics) + 2)
+        assert d[s].chamber_deviation_c == pytest.approx(-tol + 2 * tol * u[-2], rel=1e-12)
+        assert a[s] == pytest.approx(-bound + 2 * bound * u[-1], rel=1e-12)
+    if name != "rlg":
+        return
+    # the truth: K at the reference from the trial's drawn α_K (noise-free, against a session
+    # of the same bench at the reference); the file's α_K would leave 1e-8 and more
+    s = max(range(50), key=lambda i: abs((a[i] - bench.instrument.sf_temperature_coeff_ppm_per_c)
+                                         * d[i].chamber_deviation_c))
+    t = d[s].random_off()
+    res = run_session(proto, t, seed=0)
+    assert res.truth["bench"]["instrument"]["sf_temperature_coeff_ppm_per_c"] == a[s]
+    k_ref = truth_from_session(res.truth, proto)["scale_factor"]["value"]
+    k0 = truth_from_session(run_session(proto, replace(t, chamber_deviation_c=0.0), seed=0
+                                        ).truth, proto)["scale_factor"]["value"]
+    assert k_ref == pytest.approx(k0, rel=1e-11)
+    off = 1e-6 * (a[s] - bench.instrument.sf_temperature_coeff_ppm_per_c) * t.chamber_deviation_c
+    assert abs(off) > 1e-8
 
 
 def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):

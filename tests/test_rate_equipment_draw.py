@@ -31,6 +31,13 @@ def test_draws_follow_the_stated_distributions():
         v = np.array(vals)
         assert np.all(np.abs(v) <= hw)
         assert stats.kstest(v, "uniform", args=(-hw, 2 * hw)).pvalue > 1e-3
+    # the chamber's fluctuation: its phase uniform over the period (the IEC symmetry and
+    # ratiometric budgets take it as unknown), amplitude and period as the bench states
+    ph = np.array([e.chamber.fluctuation_phase_deg for e in d])
+    assert np.all((ph >= 0.0) & (ph < 360.0))
+    assert stats.kstest(ph, "uniform", args=(0.0, 360.0)).pvalue > 1e-3
+    assert d[3].chamber.fluctuation_c == eq.chamber.fluctuation_c
+    assert d[3].chamber.fluctuation_period_s == eq.chamber.fluctuation_period_s
     # each set point its own deviation (independent), the same on a second visit
     dev = np.array([[e.chamber.deviation_at(t) for t in (-40.0, 22.5, 85.0)] for e in d])
     assert abs(np.corrcoef(dev.T)[0, 1]) < 0.2 and abs(np.corrcoef(dev.T)[1, 2]) < 0.2

@@ -206,12 +206,15 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     - the gyro's misalignment in its fixture about body x and y: each uniform in
       ±``axis_alignment_bound_deg``;
     - the gyro's place in the chamber's volume: its temperature offset uniform in
-      ±``uniformity_c``/2 (drawn last, so the draws above are as before).
+      ±``uniformity_c``/2 (drawn after the above, so they are as before);
+    - the phase of the chamber's periodic fluctuation: uniform in [0°, 360°) (drawn last;
+      the IEC 62047-20 symmetry and ratiometric budgets carry the fluctuation with its
+      phase unknown, so a phase held fixed would be a constant error in every trial).
 
     What stays as the bench sets it: the table's ripple and axis tilt, the position table's
     error (already drawn per position by the session), the vibration table, the chamber's
-    fluctuation, the supply error — no budget carries them as a type-B term
-    of the equipment. Same seed → same equipment.
+    fluctuation amplitude and period, the supply error — no budget carries them as a
+    type-B term of the equipment. Same seed → same equipment.
 
     >>> e = draw_equipment(Equipment(), 3)
     >>> e == draw_equipment(Equipment(), 3) and e.rate_table.rate_error_rel != 0.0
@@ -227,11 +230,13 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     ch_seed = int(rng.integers(0, 2 ** 31))
     h = 0.5 * eq.chamber.uniformity_c
     pos = float(rng.uniform(-h, h)) if h > 0 else 0.0
+    phase = float(rng.uniform(0.0, 360.0))
     return replace(
         eq, rate_table=replace(eq.rate_table, rate_error_rel=rate_err),
         acquisition=replace(eq.acquisition, gain_error_rel=gain_err),
         chamber=replace(eq.chamber, point_deviation_c=eq.chamber_deviation_bound_c,
-                        deviation_seed=ch_seed, position_offset_c=pos),
+                        deviation_seed=ch_seed, position_offset_c=pos,
+                        fluctuation_phase_deg=phase),
         fixture=Fixture(mis_x, mis_y))
 
 

@@ -11,6 +11,7 @@ from sqlalchemy.orm import joinedload, selectinload
 
 from gonio.records.models import (AuditEvent, Calibration, CalibrationFile, CalibrationStandard,
                                   Certificate, Customer, Instrument, ResultItem, Standard, User)
+from gonio.records.results import stated_items, stored_result
 
 
 def _page(s, stmt, page: int, size: int):
@@ -85,7 +86,7 @@ def active_work(store, size: int = 20):
 
 def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows; ``stated``: each item's statement
-    (:func:`stated_items`, from the sealed result only), ``shown``: its one line as the page
+    (:func:`gonio.records.results.stated_items`, from the sealed result only), ``shown``: its one line as the page
     prints it (each negative number with U+2212, as the certificate), ``virtual``: the
     virtual-bench mark (:func:`virtual_mark`) or "", ``identity``: the contradictions between
     the readings and the laboratory file the run proceeded with (:func:`identity_findings`);
@@ -132,15 +133,6 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "identity": identity_findings(store, cal.results_sha256) if sealed else []}
 
 
-def stored_result(store, results_sha256: str):
-    """The stored results.json (the sealed result) as read from its blob."""
-    import json
-
-    from gonio.records.services import file_bytes
-
-    return json.loads(file_bytes(store, results_sha256))
-
-
 def identity_findings(store, results_sha256: str) -> list[str]:
     """The messages of the stored result's identity findings: a contradiction between the
     readings' metadata and the laboratory file (serial, model, temperature …) that the
@@ -185,60 +177,6 @@ def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None 
         return ""
     L = labels("en")
     return " ".join([L["virtual"] + "."] + virtual_lines(res, L))
-
-
-def stated_items(store, results_sha256: str) -> dict:
-    """Item key → its statement by the one statement rule
-    (:func:`gonio.result.statement.item_statement`), from the stored results.json itself
-    (the sealed result), as every certificate states it; an item the rule refuses to state
-    is left out (the page then says "not stated")."""
-    from gonio.errors import GonioError
-    from gonio.result.statement import item_statement
-
-    doc = stored_result(store, results_sha256)
-    items = doc.get("items") if isinstance(doc, dict) else None
-    if isinstance(items, list):
-        items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
-    if not isinstance(items, dict):        # the optical draft's older shape: one per key
-        items = {k: v for k, v in (doc or {}).items()
-                 if isinstance(v, dict) and "value" in v and "unit" in v}
-    out = {}
-    for key, it in items.items():
-        if not isinstance(it, dict):
-            continue
-        if "uncertainty" not in it:          # the unified list's U and k beside the value
-            it = dict(it, uncertainty={"U": it.get("U"), "k": it.get("k")})
-        try:
-            out[key] = item_statement(it)
-        except (GonioError, TypeError, ValueError):
-            continue
-    return out
-
-
-def stated_intervals(store, results_sha256: str) -> dict:
-    """Item key → (low, high) of each item the stored result states by one coverage interval
-    (:func:`stated_items`: the statement rule's interval, its rounded ends as numbers), for
-    the history figure's bars; read once per stored result (a stored file never changes)."""
-    from decimal import Decimal
-
-    from gonio.errors import GonioError
-
-    at = (str(store.blob_root), results_sha256)
-    got = _INTERVALS.get(at)
-    if got is None:
-        try:
-            stated = stated_items(store, results_sha256)
-        except (GonioError, ValueError, RecursionError):
-            stated = {}
-        got = _INTERVALS[at] = {
-            key: tuple(float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
-            for key, st in stated.items() if st.interval is not None}
-        while len(_INTERVALS) > 1024:
-            _INTERVALS.pop(next(iter(_INTERVALS)))
-    return got
-
-
-_INTERVALS: dict[tuple[str, str], dict] = {}
 
 
 def certificates(store, page: int = 1, size: int = 50):

@@ -65,3 +65,69 @@ def result_items(results: dict) -> list[Item]:
     if not items:                        # an empty list of items: nothing to record
         raise GonioError("results.json holds no items", key="items")
     return items
+
+
+# ------------------------------------------------ the stored result as the pages state it
+
+
+def stored_result(store, results_sha256: str):
+    """The stored results.json (the sealed result) as read from its blob."""
+    import json
+
+    from gonio.records.blobs import get_bytes
+
+    return json.loads(get_bytes(store.blob_root, results_sha256))
+
+
+def stated_items(store, results_sha256: str) -> dict:
+    """Item key → its statement by the one statement rule
+    (:func:`gonio.result.statement.item_statement`), from the stored results.json itself
+    (the sealed result), as every certificate states it; an item the rule refuses to state
+    is left out (the page then says "not stated")."""
+    from gonio.errors import GonioError
+    from gonio.result.statement import item_statement
+
+    doc = stored_result(store, results_sha256)
+    items = doc.get("items") if isinstance(doc, dict) else None
+    if isinstance(items, list):
+        items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
+    if not isinstance(items, dict):        # the optical draft's older shape: one per key
+        items = {k: v for k, v in (doc or {}).items()
+                 if isinstance(v, dict) and "value" in v and "unit" in v}
+    out = {}
+    for key, it in items.items():
+        if not isinstance(it, dict):
+            continue
+        if "uncertainty" not in it:          # the unified list's U and k beside the value
+            it = dict(it, uncertainty={"U": it.get("U"), "k": it.get("k")})
+        try:
+            out[key] = item_statement(it)
+        except (GonioError, TypeError, ValueError):
+            continue
+    return out
+
+
+def stated_intervals(store, results_sha256: str) -> dict:
+    """Item key → (low, high) of each item the stored result states by one coverage interval
+    (:func:`stated_items`: the statement rule's interval, its rounded ends as numbers), for
+    the history figure's bars; read once per stored result (a stored file never changes)."""
+    from decimal import Decimal
+
+    from gonio.errors import GonioError
+
+    at = (str(store.blob_root), results_sha256)
+    got = _INTERVALS.get(at)
+    if got is None:
+        try:
+            stated = stated_items(store, results_sha256)
+        except (GonioError, ValueError, RecursionError):
+            stated = {}
+        got = _INTERVALS[at] = {
+            key: tuple(float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
+            for key, st in stated.items() if st.interval is not None}
+        while len(_INTERVALS) > 1024:
+            _INTERVALS.pop(next(iter(_INTERVALS)))
+    return got
+
+
+_INTERVALS: dict[tuple[str, str], dict] = {}

@@ -1518,7 +1518,7 @@ def calibration(store, cal_id: int) -> Calibration:
 def history(store, instrument_id: int) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
     k, ``interval`` (the (low, high) of an item stated by one coverage interval, as its
-    certificate states it: :func:`gonio.records.queries.stated_intervals`; else None), unit,
+    certificate states it: :func:`gonio.records.results.stated_intervals`; else None), unit,
     title, status, certificate number, issued, amended), oldest first; failed,
     rejected and unfinished calibrations are left out (one whose draft is being rendered
     again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
@@ -1539,7 +1539,7 @@ def history(store, instrument_id: int) -> dict:
             .join(Calibration, Certificate.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id))
             .group_by(Certificate.calibration_id)).all()}
-    from gonio.records.queries import stated_intervals
+    from gonio.records.results import stated_intervals
 
     out: dict[str, list] = {}
     for it, day, status, cid, rsha in rows:

@@ -60,6 +60,7 @@ from gonio import __version__
 from gonio.analysis.coverage import coverage, spawn_seed
 from gonio.specs.ogam_draft.bench import Bench, TableConfig, load_bench, run_session
 from gonio.specs.ogam_draft.bench.config import Harmonic
+from gonio.specs.ogam_draft.bench.session import session_metadata
 from gonio.specs.ogam_draft.budget_extra import EXTRA_SYMBOLS, budget_extra_components
 from gonio.errors import GonioError
 from gonio.specs.ogam_draft.readings import Readings
@@ -68,7 +69,7 @@ from gonio.limits import check
 from gonio.specs.ogam_draft.protocol import Protocol, parse_protocol
 from gonio.resources import resolve
 from gonio.specs.ogam_draft.budget import annex_a_budget
-from gonio.specs.ogam_draft.calibration import analyse
+from gonio.specs.ogam_draft.calibration import analyse, temperature_coeff_bound
 from gonio.specs.ogam_draft.item_coverage import item_coverage, trial_items
 from gonio.units import PPM, deg_to_arcsec
 
@@ -96,12 +97,13 @@ CASES = {
              "positioning errors with their amplitudes (sum within the MPE) at uniform "
              "phases, its wobble phase and axis set-up azimuth uniform, its rate error "
              "uniform within Table 1's 1e-5, the chamber's deviation from the reference "
-             "temperature uniform within Table 2's tolerance",
+             "temperature uniform within Table 2's tolerance, the gyro's scale-factor "
+             "temperature coefficient uniform within the bound K's chamber line takes",
     "worst": "the worst condition the draft allows for K: tilt at the A.1 bound, at the "
              "azimuth where the tilt x Earth-rate coupling biases the 7.1 K most "
              "(worst_azimuth, from noise-free sessions of the bench); the other Type B "
-             "effects (table errors, table rate error, chamber temperature) drawn per trial "
-             "as in typeb",
+             "effects (table errors, table rate error, chamber temperature, alpha_K) drawn "
+             "per trial as in typeb",
 }
 
 #: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
@@ -267,10 +269,15 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     table's relative rate error uniform within Table 1's ±1e-5
     (:data:`TABLE_RATE_ERROR_BOUND`); the chamber's deviation from the reference temperature
     uniform within Table 2's tolerance (``conditions.temperature_tolerance_c``, ±1 °C), which
-    moves the instrument's K and bias by its temperature coefficients (drawn last, so the
-    other draws are those of a bench without it). The instrument's own parameters (its K, its
-    angle-position error, its noise, its temperature coefficients) are the measurands' and
-    are kept.
+    moves the instrument's K and bias by its temperature coefficients (drawn after the table,
+    so the other draws are those of a bench without it); the scale factor's temperature
+    coefficient α_K uniform within ± the bound K's chamber line ``K_T`` takes for the
+    instrument (:func:`~gonio.specs.ogam_draft.calibration.temperature_coeff_bound` of the
+    readings the trial's session writes: 0.1 ppm/°C for an RLG, 1.0 for a FOG by default;
+    drawn last, so every other draw keeps its value). The instrument's own parameters (its
+    K at the reference temperature, its angle-position error, its noise, its bias
+    temperature coefficient) are the measurands' and are kept; the truth is K at the
+    reference, from the trial bench's drawn α_K and chamber deviation.
 
     >>> p = validation_protocol(); b = load_bench("rlg")
     >>> d = draw_type_b(b, p, 4)
@@ -279,6 +286,8 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     >>> abs(d.table.rate_error_rel) <= TABLE_RATE_ERROR_BOUND
     True
     >>> abs(d.chamber_deviation_c) <= p.conditions.temperature_tolerance_c
+    True
+    >>> abs(d.instrument.sf_temperature_coeff_ppm_per_c) <= 0.1      # the RLG's bound
     True
     """
     rng = np.random.default_rng([int(seed), 0x7B])
@@ -293,8 +302,26 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
                     rate_error_rel=float(rng.uniform(-TABLE_RATE_ERROR_BOUND,
                                                      TABLE_RATE_ERROR_BOUND)))
     tol = float(protocol.conditions.temperature_tolerance_c)
-    return replace(tilted(bench, psi, az), table=table,
-                   chamber_deviation_c=float(rng.uniform(-tol, tol)))
+    dev_c = float(rng.uniform(-tol, tol))
+    bound = sf_temperature_coeff_bound_ppm_per_c(bench, protocol)
+    out = tilted(bench, psi, az)
+    inst = replace(out.instrument, sf_temperature_coeff_ppm_per_c=float(rng.uniform(-bound, bound)))
+    return replace(out, instrument=inst, table=table, chamber_deviation_c=dev_c)
+
+
+def sf_temperature_coeff_bound_ppm_per_c(bench: Bench, protocol: Protocol) -> float:
+    """The bound |α_K|max (ppm/°C) the calibration of a session of ``bench`` takes for K's
+    chamber line: :func:`~gonio.specs.ogam_draft.calibration.temperature_coeff_bound` of the
+    metadata that session writes (its ``gyro_type``), so the study draws within the bound
+    the certificate states.
+
+    >>> p = validation_protocol()
+    >>> [sf_temperature_coeff_bound_ppm_per_c(load_bench(b), p) for b in ("rlg", "fog")]
+    [0.1, 1.0]
+    """
+    md = session_metadata(protocol, bench, 0)
+    return float(temperature_coeff_bound(Readings(pd.DataFrame(), md), protocol)[
+        "bound_ppm_per_c"])
 
 
 def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench:
@@ -594,7 +621,7 @@ def fixed_condition(bench: Bench, protocol: Protocol) -> dict:
             "tilt_azimuth_deg": bench.instrument.tilt_azimuth_deg,
             "chamber_tolerance_c": float(protocol.conditions.temperature_tolerance_c),
             "drawn_per_trial": "as in typeb: table errors, table rate error, chamber "
-                               "deviation"}
+                               "deviation, alpha_K within its bound"}
 
 
 def condition_text(c: dict) -> str:
