@@ -11,10 +11,16 @@ wall seconds are printed of:
 * the login (one Argon2id verification, by design about half a second), the first
   dashboard, the instrument's page, and its history plot at its first drawing and again.
 
+With ``--results FILE`` (a ``results.json``, e.g. of ``gonio demo --spec triad-alignment``)
+every calibration gets its own stored copy of it (one field changed, so each has its own
+digest), as real calibrations do: the history plot's first drawing then reads and states
+each stored result once (the bars of items stated by an interval); without it every
+calibration points to one synthetic blob that is no results.json.
+
 Targets: each page under 0.5 s. Prints the machine and its load: on a loaded machine the
 wall time measures the queue. Not part of the test run.
 
-    python benchmarks/bench_web_first.py [--calibrations 100] [--pause 3]
+    python benchmarks/bench_web_first.py [--calibrations 100] [--pause 3] [--results FILE]
 
 ``gonio serve`` answers the login page before its application is built
 (:mod:`gonio.web.front`), then imports SciPy in the background
@@ -58,6 +64,25 @@ def timed(rows: list, name: str, call):
     return r
 
 
+def give_results(store, results: Path) -> None:
+    """Every calibration its own stored copy of ``results`` (its "source" field numbered)."""
+    import json
+
+    from sqlalchemy import select
+
+    from gonio.records import blobs
+    from gonio.records.models import Blob, Calibration
+
+    doc = json.loads(results.read_bytes())
+    with store.writing() as s:
+        for cal in s.scalars(select(Calibration)).all():
+            body = json.dumps(dict(doc, source=f"{doc.get('source', '')} #{cal.id}")).encode()
+            sha = blobs.put_bytes(store.blob_root, body)
+            s.add(Blob(sha256=sha, size=len(body)))
+            cal.results_sha256 = sha
+        s.commit()
+
+
 def main(argv=None) -> int:
     import re
     import subprocess
@@ -68,6 +93,8 @@ def main(argv=None) -> int:
     ap.add_argument("--calibrations", type=int, default=100)
     ap.add_argument("--pause", type=float, default=0.0,
                     help="seconds between the login page and the login (a person typing)")
+    ap.add_argument("--results", type=Path, default=None,
+                    help="a results.json stored (one copy each) for every calibration")
     args = ap.parse_args(argv)
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
@@ -75,6 +102,10 @@ def main(argv=None) -> int:
         data = Path(tmp) / "data"
         store = open_store(None, data)
         fill(store, 1, args.calibrations)
+        if args.results is not None:
+            give_results(store, args.results)
+            print(f"results: each calibration its own copy of {args.results} "
+                  f"({args.results.stat().st_size // 1024} KB)")
         store.close()
         port = _port()
         base = f"http://127.0.0.1:{port}"

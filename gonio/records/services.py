@@ -1515,10 +1515,12 @@ def calibration(store, cal_id: int) -> Calibration:
         return cal
 
 
-def history(store, instrument_id: int) -> dict:
+def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
     k, ``interval`` (the (low, high) of an item stated by one coverage interval, as its
-    certificate states it: :func:`gonio.records.results.stated_intervals`; else None), unit,
+    certificate states it: :func:`gonio.records.results.stated_intervals`, which reads each
+    stored result once; None for the other items, and for every item with
+    ``intervals=False``, for a caller that does not draw them), unit,
     title, status, certificate number, issued, amended), oldest first; failed,
     rejected and unfinished calibrations are left out (one whose draft is being rendered
     again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
@@ -1546,7 +1548,8 @@ def history(store, instrument_id: int) -> dict:
         number, n = certs.get(cid, ("", 0))
         out.setdefault(it.key, []).append(
             {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
-             "interval": stated_intervals(store, rsha).get(it.key) if rsha else None,
+             "interval": (stated_intervals(store, rsha).get(it.key)
+                          if rsha and intervals else None),
              "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
              "certificate": number, "issued": n > 0,
              "amended": n > 1 or (n > 0 and status != "issued")})

@@ -226,7 +226,7 @@ def instrument_page(request: Request, session: Session, inst_id: int):
     inst, cals = queries.instrument(store, inst_id)
     if inst is None:
         return Response("no such instrument", status_code=404)
-    hist = services.history(store, inst_id)
+    hist = services.history(store, inst_id, intervals=False)   # the plot draws them
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
                   customers=queries.customers(store),
                   error=request.query_params.get("error", "")[:300],

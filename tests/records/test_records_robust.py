@@ -254,3 +254,30 @@ def test_upload_limit_read_through_limits_by_every_db_command(tmp_path):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "GONIO_MAX_UPLOAD_BYTES must be a number" in lines[0], lines
     assert not (tmp_path / "data").exists()
+
+
+def test_history_reads_the_stored_results_only_for_the_plot(sqlite_store, monkeypatch):
+    """The instrument page asks the history without intervals (it shows counts and the
+    interval proposal, not bars): no stored results.json is read for it, so the page's time
+    does not grow with the stored results' size; the plot's history reads them."""
+    from gonio.records import results
+    from gonio.records.models import ResultItem
+
+    from .test_web_lists import issued
+
+    tech = make_people(sqlite_store)["tech"]
+    cust = services.add_customer(sqlite_store, tech, "Near Ltd", "1 Road")
+    inst = services.register_instrument(sqlite_store, tech, customer_id=cust.id, serial="H-1",
+                                        spec_key="ogam-draft", model="M")
+    cal_id = issued(sqlite_store, inst.id, dt.date(2025, 1, 2), "GC-2025-0001")
+    with sqlite_store.writing() as s:
+        s.add(ResultItem(calibration_id=cal_id, key="zero_stability", title="B_s",
+                         clause="7.3", unit="deg/h", value=1e-3, U=None, k=None))
+        s.commit()
+    reads = []
+    monkeypatch.setattr(results, "stated_intervals",
+                        lambda store, sha: reads.append(sha) or {"zero_stability": (0, 2e-3)})
+    quiet = services.history(sqlite_store, inst.id, intervals=False)
+    assert reads == [] and quiet["zero_stability"][0]["interval"] is None
+    drawn = services.history(sqlite_store, inst.id)
+    assert len(reads) == 1 and drawn["zero_stability"][0]["interval"] == (0, 2e-3)
