@@ -11,7 +11,7 @@ from sqlalchemy.orm import joinedload, selectinload
 
 from gonio.records.models import (AuditEvent, Calibration, CalibrationFile, CalibrationStandard,
                                   Certificate, Customer, Instrument, ResultItem, Standard, User)
-from gonio.records.results import stated_items, stored_result
+from gonio.records.results import statements_of, stored_result
 
 
 def _page(s, stmt, page: int, size: int):
@@ -86,12 +86,12 @@ def active_work(store, size: int = 20):
 
 def calibration_page(store, cal_id: int) -> dict | None:
     """Everything the calibration page shows; ``stated``: each item's statement
-    (:func:`gonio.records.results.stated_items`, from the sealed result only), ``shown``: its one line as the page
-    prints it (each negative number with U+2212, as the certificate), ``virtual``: the
-    virtual-bench mark (:func:`virtual_mark`) or "", ``identity``: the contradictions between
-    the readings and the laboratory file the run proceeded with (:func:`identity_findings`);
-    ``place`` is the place of calibration as the
-    certificate states it (the one entered, else the laboratory's); ``missing``: what it
+    (:func:`gonio.records.results.stated_items`, from the sealed result only, which is read
+    once for the page), ``shown``: its one line as the page prints it (each negative number
+    with U+2212, as the certificate), ``virtual``: the virtual-bench mark
+    (:func:`virtual_mark`) or "", ``identity``: the contradictions between the readings and
+    the laboratory file the run proceeded with (:func:`identity_findings`); ``place`` is the
+    place of calibration as the certificate states it (the one entered, else the laboratory's); ``missing``: what it
     lacks for its review (:func:`gonio.records.services.missing_for_review`) while
     ``attachable`` (standards and environment may still be attached; ``all_standards`` to
     choose from)."""
@@ -122,47 +122,51 @@ def calibration_page(store, cal_id: int) -> dict | None:
         sealed, broken = seal(store, cal_id), ""
     except GonioError as exc:                 # no result yet, or one that no longer matches
         sealed, broken = "", str(exc) if cal.results_sha256 else ""
-    stated = stated_items(store, cal.results_sha256) if sealed else {}
+    doc = stored_result(store, cal.results_sha256) if sealed else None   # read once
+    stated = statements_of(doc) if sealed else {}
     return {"cal": cal, "items": items, "files": files, "standards": stds, "certs": certs,
             "seal": sealed, "seal_error": broken,
             "place": cal.place or settings(store)["lab_place"], "missing": missing,
             "attachable": cal.status in ATTACHABLE,
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
             "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
-            "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256),
-            "identity": identity_findings(store, cal.results_sha256) if sealed else []}
+            "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
+            "identity": identity_findings(store, cal.results_sha256, doc=doc) if sealed else []}
 
 
-def identity_findings(store, results_sha256: str) -> list[str]:
+def identity_findings(store, results_sha256: str, doc: dict | None = None) -> list[str]:
     """The messages of the stored result's identity findings: a contradiction between the
     readings' metadata and the laboratory file (serial, model, temperature …) that the
     laboratory chose to proceed with (:func:`gonio.pipeline.identity.check_identity`), which
-    its certificate states as a finding."""
+    its certificate states as a finding; ``doc``: the stored result already read."""
     from gonio.errors import GonioError
     from gonio.pipeline.identity import MISMATCH_CODE
 
-    try:
-        doc = stored_result(store, results_sha256)
-    except (GonioError, ValueError, RecursionError):
-        return []
+    if doc is None:
+        try:
+            doc = stored_result(store, results_sha256)
+        except (GonioError, ValueError, RecursionError):
+            return []
     found = doc.get("findings") if isinstance(doc, dict) else None
     return [str(f.get("message", "")) for f in found or []
             if isinstance(f, dict) and f.get("code") == MISMATCH_CODE]
 
 
-def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None = None) -> str:
+def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None = None,
+                 doc: dict | None = None) -> str:
     """The virtual-bench mark of a calibration's or a certificate's page, as the certificate
     words it (:func:`gonio.report.provenance.virtual_lines`: banner, notice, bench and seed),
     or "": from the provenance of the stored result
     (:func:`gonio.formats.provenance.result_provenance`), else, before there is one, of the
-    readings' own metadata. Nothing switches it off."""
+    readings' own metadata (``doc``: the stored result already read). Nothing switches it
+    off."""
     from gonio.errors import GonioError
     from gonio.formats.provenance import result_provenance
     from gonio.report.i18n import labels
     from gonio.report.provenance import virtual_lines
 
-    res = None
-    if results_sha256:
+    res = doc
+    if res is None and results_sha256:
         try:
             res = stored_result(store, results_sha256)
         except (GonioError, ValueError, RecursionError):

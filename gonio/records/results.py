@@ -84,10 +84,14 @@ def stated_items(store, results_sha256: str) -> dict:
     (:func:`gonio.result.statement.item_statement`), from the stored results.json itself
     (the sealed result), as every certificate states it; an item the rule refuses to state
     is left out (the page then says "not stated")."""
+    return statements_of(stored_result(store, results_sha256))
+
+
+def statements_of(doc) -> dict:
+    """:func:`stated_items` of a results.json already read (a dict; anything else: none)."""
     from gonio.errors import GonioError
     from gonio.result.statement import item_statement
 
-    doc = stored_result(store, results_sha256)
     items = doc.get("items") if isinstance(doc, dict) else None
     if isinstance(items, list):
         items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
