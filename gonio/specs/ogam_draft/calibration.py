@@ -556,17 +556,17 @@ def chamber_temperature(readings: Readings, protocol: Protocol, gyro_type: str |
 
     Where the readings log the chamber's temperature (metadata ``temperature_c``; a stream's
     metadata carries it into its reduced readings) ΔT is the logged value minus the
-    protocol's reference (``conditions.temperature_c``, Table 2's 20 °C), ``basis``
-    ``logged``; else ΔT is known only within ± ``conditions.temperature_tolerance_c``,
-    ``basis`` ``tolerance``.
+    protocol's reference (``conditions.temperature_c``, Table 2's 20 °C; the difference
+    rounded to 10⁻⁹ °C, so that 19.4 − 20 reads −0.6), ``basis`` ``logged``; else ΔT is
+    known only within ± ``conditions.temperature_tolerance_c``, ``basis`` ``tolerance``.
 
     >>> import pandas as pd
     >>> from gonio.specs.ogam_draft.readings import Readings
     >>> p = load_protocol("ogam-draft")
     >>> line, d = chamber_temperature(Readings(pd.DataFrame(), {"gyro_type": "fog",
-    ...                                                         "temperature_c": "20.6"}), p)
-    >>> d["basis"], round(d["deviation_c"], 6), round(d["u_ppm"], 4), d["distribution"]
-    ('logged', 0.6, 0.3464, 'rectangular')
+    ...                                                         "temperature_c": "19.4"}), p)
+    >>> d["basis"], d["deviation_c"], round(d["u_ppm"], 4), d["distribution"]
+    ('logged', -0.6, 0.3464, 'rectangular')
     >>> d = chamber_temperature(Readings(pd.DataFrame(), {"gyro_type": "fog"}), p)[1]
     >>> d["basis"], d["logged_temperature_c"], round(d["u_ppm"], 4), d["distribution"]
     ('tolerance', None, 0.3333, 'rectangular-product')
@@ -575,7 +575,7 @@ def chamber_temperature(readings: Readings, protocol: Protocol, gyro_type: str |
     logged = metadata_float(readings.metadata, "temperature_c", file=readings.path)
     ref = float(protocol.conditions.temperature_c)
     line = chamber_temperature_line(bound["bound_ppm_per_c"], bound["temperature_tolerance_c"],
-                                    None if logged is None else logged - ref)
+                                    None if logged is None else round(logged - ref, 9))
     return line, {**bound, "reference_temperature_c": ref, "logged_temperature_c": logged,
                   **line.to_dict()}
 

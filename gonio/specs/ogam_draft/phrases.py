@@ -193,7 +193,7 @@ LABELS: dict[str, dict[str, str]] = {
         "en": "U(K) holds for the chamber temperature the readings log, {t} °C ({dt} °C from the "
               "reference {ref} °C, Table 2), and a scale-factor temperature coefficient "
               "|α_K| ≤ {b} ppm/°C: {src}.",
-        "zh": "U(K) 适用于读数文件记录的环境温度 {t} °C（偏离参考温度 {ref} °C {dt} °C，表2），"
+        "zh": "U(K) 适用于读数文件记录的环境温度 {t} °C（与参考温度 {ref} °C 相差 {dt} °C，表2），"
               "标度因数温度系数 |α_K| ≤ {b} ppm/°C：{src}。"},
     "K_T_source_metadata": {"en": "the instrument's bound stated in the readings",
                             "zh": "读数文件给出的仪器自身限值"},
