@@ -13,7 +13,7 @@ wall seconds are printed of:
 
 With ``--results FILE`` (a ``results.json``, e.g. of ``gonio demo --spec triad-alignment``)
 every calibration gets its own stored copy of it (one field changed, so each has its own
-digest) and its result rows as the records write them when a result is stored (its items,
+digest: the source file's name numbered) and its result rows as the records write them when a result is stored (its items,
 each keeping how it is stated: the history plot draws from the rows alone); ``--unkept``
 keeps the synthetic rows without their statement, as a database written before rows kept it
 (the plot's first drawing then reads and states each stored result once); without
@@ -67,7 +67,7 @@ def timed(rows: list, name: str, call):
 
 
 def give_results(store, results: Path, rows: bool = True) -> None:
-    """Every calibration its own stored copy of ``results`` (its "source" field numbered)
+    """Every calibration its own stored copy of ``results`` (its source file's name numbered)
     and, with ``rows``, the result rows the records write when a result is stored
     (:func:`gonio.records.results.result_rows`: its items, each with its statement) in place
     of the synthetic ones; without, the synthetic rows keep no statement (a database
@@ -83,7 +83,8 @@ def give_results(store, results: Path, rows: bool = True) -> None:
     doc = json.loads(results.read_bytes())
     with store.writing() as s:
         for cal in s.scalars(select(Calibration)).all():
-            mine = dict(doc, source=f"{doc.get('source', '')} #{cal.id}")
+            source = doc.get("source") if isinstance(doc.get("source"), dict) else {}
+            mine = dict(doc, source=dict(source, file=f"{source.get('file', '')} #{cal.id}"))
             body = json.dumps(mine).encode()
             sha = blobs.put_bytes(store.blob_root, body)
             s.add(Blob(sha256=sha, size=len(body)))

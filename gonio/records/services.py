@@ -1533,8 +1533,11 @@ def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
     been replaced by an amendment or an amendment of it is under way (not 'issued' now)."""
     done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
-        rows = s.execute(
-            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id,
+        rows = s.execute(      # the columns, not the rows as objects (thousands of them)
+            select(ResultItem.key, ResultItem.value, ResultItem.U, ResultItem.k,
+                   ResultItem.unit, ResultItem.title, ResultItem.clause, ResultItem.stated,
+                   ResultItem.interval_low, ResultItem.interval_high,
+                   Calibration.performed_on, Calibration.status, Calibration.id,
                    Calibration.results_sha256)
             .join(Calibration, ResultItem.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id),
@@ -1547,26 +1550,28 @@ def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
             .where(Calibration.instrument_id == int(instrument_id))
             .group_by(Certificate.calibration_id)).all()}
     out: dict[str, list] = {}
-    for it, day, status, cid, rsha in rows:
+    for key, value, U, k, unit, title, clause, *stated, day, status, cid, rsha in rows:
         number, n = certs.get(cid, ("", 0))
-        out.setdefault(it.key, []).append(
-            {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
-             "interval": _interval(store, it, rsha) if intervals else None,
-             "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
+        out.setdefault(key, []).append(
+            {"calibration_id": cid, "date": day, "value": value, "U": U, "k": k,
+             "interval": _interval(store, key, stated, rsha) if intervals else None,
+             "unit": unit, "title": title, "clause": clause, "status": status,
              "certificate": number, "issued": n > 0,
              "amended": n > 1 or (n > 0 and status != "issued")})
     return out
 
 
-def _interval(store, row: ResultItem, results_sha256: str | None):
+def _interval(store, key: str, stated: list, results_sha256: str | None):
     """(low, high) of a result row stated by one coverage interval, else None: the row's
-    kept statement, or for a row without one (``stated`` None: not read when it was written)
-    its stored result's (:func:`gonio.records.results.stated_intervals`)."""
-    if row.stated is None:
+    kept statement ``stated`` (its stated, interval_low, interval_high), or for a row without
+    one (stated None: not read when it was written) its stored result's
+    (:func:`gonio.records.results.stated_intervals`)."""
+    how, low, high = stated
+    if how is None:
         from gonio.records.results import stated_intervals
 
-        return stated_intervals(store, results_sha256).get(row.key) if results_sha256 else None
-    return (row.interval_low, row.interval_high) if row.stated == "interval" else None
+        return stated_intervals(store, results_sha256).get(key) if results_sha256 else None
+    return (low, high) if how == "interval" else None
 
 
 def instrument_limits(inst: Instrument) -> dict:
