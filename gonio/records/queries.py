@@ -351,9 +351,9 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
     if name == "instruments":
         rows, _ = instruments(store, 1, big)
         return (["id", "customer", "type", "manufacturer", "model", "serial", "specification",
-                 "interval_months", "retired_on"],
+                 "interval_months", "retired_on", "gyro_type"],
                 [[i.id, i.customer.name, i.kind, i.manufacturer, i.model, i.serial, i.spec_key,
-                  i.interval_months, i.retired_on] for i in rows])
+                  i.interval_months, i.retired_on, i.gyro_type] for i in rows])
     if name == "standards":
         return (["id", "name", "identifier", "accuracy", "certificate", "traceability",
                  "calibrated_on", "due_on", "retired_on"],
