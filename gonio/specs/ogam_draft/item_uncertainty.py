@@ -881,6 +881,60 @@ class ConditionDeviation:
     n_series: int
 
 
+def _mean_u(c: ConditionDeviation) -> float:
+    """u of a condition's mean E_v: one series' u over √(number of series)."""
+    return c.u_single_arcsec / math.sqrt(max(c.n_series, 1))
+
+
+def _series_dof(c: ConditionDeviation) -> float:
+    """ν of a condition's mean: n_series − 1, or ∞ with one series (u from 7.5)."""
+    return c.n_series - 1 if c.n_series >= 2 else math.inf
+
+
+def _consistency_lines(a: ConditionDeviation, b: ConditionDeviation, n_conditions: int,
+                       mean_u_arcsec: float, f: float, clause: str, table_mpe_arcsec: float,
+                       drift_half_width_arcsec: float, scale_factor_u_rel: float,
+                       scale_factor_tilt: float) -> list:
+    """The budget lines of :func:`consistency_budget` for the extremes a (max E_v) and b
+    (min E_v), in the order its sensitivity coefficients and correlation assume: r_a, r_b,
+    P_a, P_b, B_a, B_b, C_rng, K_ab, K_tilt; ``f`` converts arcsec to the item's unit,
+    ``mean_u_arcsec`` is the conditions' mean u(E_v)."""
+    return [
+        _Line(from_u("r_a", 0.0, _mean_u(a) * f, dof=_series_dof(a), type="A",
+                     source=f"mean of {a.n_series} series at {a.label}"),
+              f"repeatability, {a.label}", True, clause + " (A.4.4)"),
+        _Line(from_u("r_b", 0.0, _mean_u(b) * f, dof=_series_dof(b), type="A",
+                     source=f"mean of {b.n_series} series at {b.label}"),
+              f"repeatability, {b.label}", True, clause + " (A.4.4)"),
+        _Line(type_b("P_a", 0.0, table_mpe_arcsec * f, "rectangular",
+                     source=f"table at {a.position_deg:g}° ({a.label})"),
+              f"table positioning, {a.label}", True, clause + " (A.4.1)"),
+        _Line(type_b("P_b", 0.0, table_mpe_arcsec * f, "rectangular",
+                     source=f"table at {b.position_deg:g}° ({b.label})"),
+              f"table positioning, {b.label}", True, clause + " (A.4.1)"),
+        _Line(type_b("B_a", 0.0, drift_half_width_arcsec * f, "rectangular",
+                     source=f"zero drift ({a.label})"),
+              f"zero drift, {a.label}", True, clause + " (A.4.3)"),
+        _Line(type_b("B_b", 0.0, drift_half_width_arcsec * f, "rectangular",
+                     source=f"zero drift ({b.label})"),
+              f"zero drift, {b.label}", True, clause + " (A.4.3)"),
+        _Line(type_b("C_rng", 0.0, expected_range_factor(n_conditions) * mean_u_arcsec * f,
+                     "rectangular",
+                     source=f"spread noise alone gives {n_conditions} conditions"),
+              "range inflation by noise", True, clause),
+        _Line(from_u("K_ab", 0.0, scale_factor_u_rel * abs(a.position_deg - b.position_deg)
+                     * ARCSEC_PER_DEG * f, type="B",
+                     source=f"u(K)/K = {scale_factor_u_rel:.3g} over "
+                            f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
+              "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
+        _Line(type_b("K_tilt", 0.0, scale_factor_tilt * abs(a.position_deg - b.position_deg)
+                     * f, "arcsine",
+                     source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
+                            f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
+              "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)"),
+    ]
+
+
 def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                        reference_angle_arcsec: float, scale: float, *,
                        table_mpe_arcsec: float, drift_half_width_arcsec: float,
@@ -948,48 +1002,11 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     unit = "ppm" if item == "rate_consistency" else "%"
     clause = "7.6" if item == "rate_consistency" else "7.7"
 
-    def mean_u(c):
-        return c.u_single_arcsec / math.sqrt(max(c.n_series, 1))
-
-    def dof(c):
-        return c.n_series - 1 if c.n_series >= 2 else math.inf
-
-    lines = [
-        _Line(from_u("r_a", 0.0, mean_u(a) * f, dof=dof(a), type="A",
-                     source=f"mean of {a.n_series} series at {a.label}"),
-              f"repeatability, {a.label}", True, clause + " (A.4.4)"),
-        _Line(from_u("r_b", 0.0, mean_u(b) * f, dof=dof(b), type="A",
-                     source=f"mean of {b.n_series} series at {b.label}"),
-              f"repeatability, {b.label}", True, clause + " (A.4.4)"),
-        _Line(type_b("P_a", 0.0, table_mpe_arcsec * f, "rectangular",
-                     source=f"table at {a.position_deg:g}° ({a.label})"),
-              f"table positioning, {a.label}", True, clause + " (A.4.1)"),
-        _Line(type_b("P_b", 0.0, table_mpe_arcsec * f, "rectangular",
-                     source=f"table at {b.position_deg:g}° ({b.label})"),
-              f"table positioning, {b.label}", True, clause + " (A.4.1)"),
-        _Line(type_b("B_a", 0.0, drift_half_width_arcsec * f, "rectangular",
-                     source=f"zero drift ({a.label})"),
-              f"zero drift, {a.label}", True, clause + " (A.4.3)"),
-        _Line(type_b("B_b", 0.0, drift_half_width_arcsec * f, "rectangular",
-                     source=f"zero drift ({b.label})"),
-              f"zero drift, {b.label}", True, clause + " (A.4.3)"),
-        _Line(type_b("C_rng", 0.0, expected_range_factor(len(cs))
-                     * float(np.mean([mean_u(c) for c in cs])) * f, "rectangular",
-                     source=f"spread noise alone gives {len(cs)} conditions"),
-              "range inflation by noise", True, clause),
-        _Line(from_u("K_ab", 0.0, scale_factor_u_rel * abs(a.position_deg - b.position_deg)
-                     * ARCSEC_PER_DEG * f, type="B",
-                     source=f"u(K)/K = {scale_factor_u_rel:.3g} over "
-                            f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
-              "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
-        _Line(type_b("K_tilt", 0.0, scale_factor_tilt * abs(a.position_deg - b.position_deg)
-                     * f, "arcsine",
-                     source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
-                            f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
-              "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)"),
-    ]
+    lines = _consistency_lines(a, b, len(cs), float(np.mean([_mean_u(c) for c in cs])), f,
+                               clause, table_mpe_arcsec, drift_half_width_arcsec,
+                               scale_factor_u_rel, scale_factor_tilt)
     if curves is not None:
-        u_sel = extreme_selection_u(curves, [mean_u(c) for c in cs], table_mpe_arcsec,
+        u_sel = extreme_selection_u(curves, [_mean_u(c) for c in cs], table_mpe_arcsec,
                                     drift_half_width_arcsec, scale_factor_u_rel) * f
         lines.append(_Line(from_u("C_sel", 0.0, u_sel, type="B",
                                   source="Monte Carlo of the signed extremes (JCGM 101)"),
