@@ -26,7 +26,7 @@ from gonio import __version__
 from gonio.atomic import sha256_file
 from gonio.resources import protocol_provenance
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
-from gonio.units import S_PER_MIN
+from gonio.units import ARCSEC_PER_DEG, S_PER_MIN
 from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
@@ -819,6 +819,33 @@ def _round_coupling(results, readings, protocol, budget):
                                        float(budget.parameters["tilt_deg"]))
 
 
+def _round_noise(results, readings, protocol) -> dict:
+    """The gyro's noise over the 7.1 rounds for K_l's Monte Carlo: ``noise``
+    (:func:`gonio.specs.ogam_draft.item_uncertainty.round_noise` from the 7.4 series that 7.5
+    uses, the quantum of one count through K, the static phase when the Earth-rate
+    compensation is measured) and ``time_s`` (each round's time from zeroing to reading);
+    empty without repeated 7.4 series or without the rounds' times."""
+    from gonio.specs.ogam_draft.item_uncertainty import COUNT_QUANTUM_U, round_noise
+
+    rp = results.repeatability
+    if not rp.measured or not results.angle_deviation.measured \
+            or "time_s" not in readings.data.columns:
+        return {}
+    df = readings.data.set_index("line")
+    t_sf = df.loc[results.scale_factor.table["line"].to_numpy(), "time_s"].to_numpy(dtype=float)
+    ad = results.angle_deviation.tables["readings"]
+    ad = ad[ad["line"].isin(list(rp.used_lines))]
+    t_ad = df.loc[ad["line"].to_numpy(), "time_s"].to_numpy(dtype=float)
+    if not np.isfinite(t_sf).all() or not np.isfinite(t_ad).any():
+        return {}
+    k = abs(float(np.mean(results.scale_factor.table["K_i_counts_per_deg"])))
+    static = protocol.session.static_s if protocol.session.earth_compensation == "measured" \
+        else None
+    noise = round_noise(ad["E_arcsec"], ad["round"], t_ad, COUNT_QUANTUM_U / k * ARCSEC_PER_DEG,
+                        static)
+    return {"noise": noise, "time_s": t_sf}
+
+
 def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
@@ -909,7 +936,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
             out["scale_factor_nonlinearity"] = dataclasses.replace(
                 iu.nonlinearity_corrected_budget(
                     t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
-                    tilt_round_coupling=_round_coupling(results, readings, protocol, budget)),
+                    tilt_round_coupling=_round_coupling(results, readings, protocol, budget),
+                    **_round_noise(results, readings, protocol)),
                 beside=draft)
     zs = results.zero_stability
     if zs.measured:

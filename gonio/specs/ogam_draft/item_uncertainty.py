@@ -51,7 +51,7 @@ from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
 
 __all__ = ["Component", "ItemUncertainty", "ChamberLine", "chamber_temperature_line",
            "scale_factor_budget", "nonlinearity_budget",
-           "nonlinearity_corrected_budget",
+           "nonlinearity_corrected_budget", "round_noise", "RoundNoise",
            "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
            "consistency_budget", "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
            "COUNT_QUANTUM_U"]
@@ -541,6 +541,60 @@ def nonlinearity_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                    nonnegative=value >= 0)
 
 
+@dataclass(frozen=True)
+class RoundNoise:
+    """The gyro's own angle noise over a zero-to-reading round, from the 7.4 repeats
+    (:func:`round_noise`): ``n2_arcsec2_per_s`` the angle random walk's N² (″²/s),
+    ``static_s`` the static phase whose mean rate compensates the Earth rate (None when the
+    compensation is not measured), ``dof`` the pooled degrees of freedom of the repeats."""
+    n2_arcsec2_per_s: float
+    static_s: float | None
+    dof: int
+
+
+def round_noise(e_arcsec, position, time_s, quantum_u_arcsec: float,
+                static_s: float | None = None) -> RoundNoise:
+    """N² of the gyro's angle noise over a round, ″²/s, from the series of 7.4 (draft 7.5).
+
+    A round (7.1 or 7.4) zeroes the counter at rest, turns and reads after its delay; the
+    gyro's angle random walk adds N²t to the reading's variance (t from zeroing to reading,
+    IEEE Std 952 angle random walk), the rate error of a compensation measured over a static
+    phase of T_s (the mean of the same walk over T_s, u = N/√T_s, one per series) adds
+    N²t²/T_s, and the count quantisation u_q² (triangular ±1 count). The 7.4 series repeat
+    the same rounds, so the variance of E_ij over the series j at position i is
+    u_q² + N²(t_i + t_i²/T_s), and N² is their pooled moment estimate:
+    N² = Σ ν_i (s_i² − u_q²) / Σ ν_i (t_i + t_i²/T_s), ν_i = n_i − 1 (0 where the
+    quantisation alone explains the spread). Beyond the draft (its Annex A takes u(r) as is).
+
+    Two positions read at 10 s and 20 s with T_s = 60 s, each s² = u_q² + N²(t + t²/60) at
+    N² = 4e-4 ″²/s, u_q = 0.02″: the estimate gives N² back.
+
+    >>> q, n2 = 0.02, 4e-4
+    >>> s = [math.sqrt(q * q + n2 * (t + t * t / 60)) for t in (10.0, 20.0)]
+    >>> e = [v * x / math.sqrt(2) for v in s for x in (-1.0, 1.0)]   # two series each
+    >>> r = round_noise(e, [1, 1, 2, 2], [10.0, 10.0, 20.0, 20.0], q, 60.0)
+    >>> round(r.n2_arcsec2_per_s, 10), r.dof
+    (0.0004, 2)
+    """
+    import pandas as pd
+
+    d = pd.DataFrame({"e": np.asarray(e_arcsec, dtype=float), "p": list(position),
+                      "t": np.asarray(time_s, dtype=float)})
+    d = d[np.isfinite(d["e"]) & np.isfinite(d["t"])]
+    g = d.groupby("p")
+    nu = (g["e"].count() - 1).clip(lower=0)
+    s2 = g["e"].var(ddof=1).fillna(0.0)
+    t = g["t"].mean()
+    ok = nu > 0
+    if not ok.any():
+        raise ValueError("round_noise needs a position read in at least two series")
+    grow = t + (t * t / float(static_s) if static_s else 0.0)
+    num = float((nu[ok] * (s2[ok] - quantum_u_arcsec ** 2)).sum())
+    den = float((nu[ok] * grow[ok]).sum())
+    return RoundNoise(max(num, 0.0) / den if den > 0 else 0.0,
+                      float(static_s) if static_s else None, int(nu[ok].sum()))
+
+
 #: Draws of the JCGM 101 Monte Carlo of K_l's range (:func:`nonlinearity_corrected_budget`)
 #: and its fixed seed (the same 7.1 data give the same K_l and u).
 RANGE_DRAWS = 4000
@@ -549,6 +603,7 @@ RANGE_SEED = 20261129
 
 def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   k: float | None = None, tilt_round_coupling=None,
+                                  noise: RoundNoise | None = None, time_s=None,
                                   draws: int = RANGE_DRAWS) -> ItemUncertainty:
     """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
 
@@ -562,7 +617,12 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     rounds' coupling at the A.1 bound ((a_k, b_k), arcsec per degree,
     :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_round_coupling`) — the tilt × Earth-rate coupling,
     the same tilt for every round: relative error (a_k cos α − b_k sin α)/3600 with the
-    azimuth α uniform (the bound at an unknown azimuth, as K's ``K_tilt`` line). K_l is the
+    azimuth α uniform (the bound at an unknown azimuth, as K's ``K_tilt`` line) — and, when
+    ``noise`` (:func:`round_noise`, from the 7.4 series) and the rounds' times from zeroing
+    to reading ``time_s`` are given, the gyro's own angle noise over each round: its angle
+    random walk, normal with u = N√t_k, independent between rounds, and the measured Earth-rate
+    compensation's rate error, normal with u = N/√T_s, the same for every round, times t_k
+    (relative errors: the angle over θ_k). K_l is the
     range whose expected measured range equals the one measured; u is the spread of the
     measured range there (one line, ``K_rng``, normal). The value is negative when the
     measured range is smaller than the errors alone would give (it is then stated by its
@@ -600,6 +660,16 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
         alpha = rng.uniform(0.0, 2.0 * math.pi, (draws, 1))
         err = err + a * np.cos(alpha) - b * np.sin(alpha)
         src += ", tilt x Earth-rate coupling at the A.1 bound (azimuth uniform)"
+    if noise is not None and time_s is not None and noise.n2_arcsec2_per_s > 0:
+        t = np.asarray(time_s, dtype=float)
+        n_arw = math.sqrt(noise.n2_arcsec2_per_s)
+        ang = rng.standard_normal((draws, t.size)) * (n_arw * np.sqrt(t))
+        src += (f", the gyro's angle random walk over each round (N = {n_arw:.3g}″/√s from the "
+                f"7.4 series, ν = {noise.dof})")
+        if noise.static_s:
+            ang = ang + rng.standard_normal((draws, 1)) * (n_arw / math.sqrt(noise.static_s)) * t
+            src += f" and the compensation's rate error over its {noise.static_s:g} s static phase"
+        err = err + ang / (th * ARCSEC_PER_DEG) * 100.0
     c = corrected_range(k_i * to_pct, err)
     kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
     value = c.value if c.value + kk * c.u > 0 else 0.0
