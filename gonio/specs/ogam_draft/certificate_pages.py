@@ -140,7 +140,12 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
                                            ppm=f"{ppm:.2g}")])
         tb = sf.get("temperature_coeff_bound")
-        if tb:                                  # K's chamber-temperature line: which bound
+        if tb and tb.get("basis") == "logged":  # K's chamber line at the logged temperature
+            add("p", [L["K_temperature_logged"].format(
+                t=f"{tb['logged_temperature_c']:g}", dt=f"{tb['deviation_c']:+.2g}",
+                ref=f"{tb['reference_temperature_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
+                src=L["K_T_source_" + tb["source"]])])
+        elif tb:                                # K's chamber-temperature line: which bound
             add("p", [L["K_temperature_bound"].format(
                 tol=f"{tb['temperature_tolerance_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
                 src=L["K_T_source_" + tb["source"]])])

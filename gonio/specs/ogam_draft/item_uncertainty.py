@@ -49,7 +49,8 @@ from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                random_walk_stdev_dof, stdev_u)
 
-__all__ = ["Component", "ItemUncertainty", "scale_factor_budget", "nonlinearity_budget",
+__all__ = ["Component", "ItemUncertainty", "ChamberLine", "chamber_temperature_line",
+           "scale_factor_budget", "nonlinearity_budget",
            "nonlinearity_corrected_budget", "round_noise", "RoundNoise",
            "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
            "consistency_budget", "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
@@ -312,10 +313,60 @@ def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
     return k_i, th, int(k_i.size), float(np.mean(k_i)), u_tab, u_q
 
 
+@dataclass(frozen=True)
+class ChamberLine:
+    """K's chamber-temperature line ``K_T`` (relative to K): its half-width, distribution and
+    u, and which reading gave it (:func:`chamber_temperature_line`)."""
+
+    half_width_rel: float
+    distribution: str
+    u_rel: float
+    basis: str                 # "logged" or "tolerance"
+    deviation_c: float | None  # the logged ΔT, °C (None: not logged)
+
+    def to_dict(self) -> dict:
+        return {"basis": self.basis, "deviation_c": self.deviation_c,
+                "half_width_ppm": self.half_width_rel / PPM, "distribution": self.distribution,
+                "u_ppm": self.u_rel / PPM}
+
+
+def chamber_temperature_line(coeff_bound_ppm_per_c: float, tolerance_c: float,
+                             deviation_c: float | None = None) -> ChamberLine:
+    """K's chamber line ``K_T``: the relative change α_K ΔT of K between the chamber's
+    temperature and the reference at which K is stated (draft Table 2), with α_K known only
+    by its bound |α_K| ≤ α_max (``coeff_bound_ppm_per_c``), uniform within it.
+
+    The draft allows ΔT within ± ``tolerance_c`` and says nothing about its effect on K; two
+    readings (docs/draft-readings.md, "Table 2, environment"):
+
+    - ``deviation_c`` given (the readings log the chamber's temperature; ΔT = logged minus the
+      protocol's reference): ΔT is known, α_K ΔT is rectangular with half-width
+      α_max·|ΔT|, u = α_max·|ΔT|/√3 (JCGM 100 4.3.7);
+    - not logged: ΔT is itself uniform within ± the tolerance, independent of α_K, and the
+      product of the two zero-mean rectangulars has u = α_max·ΔT_max/3 (JCGM 100 5.1.2 NOTE:
+      u²(x₁x₂) = u²(x₁)u²(x₂) when both estimates are zero; distribution
+      ``rectangular-product``, whose Monte Carlo draws the product). Taking α_K ΔT as one
+      rectangular of half-width α_max·ΔT_max instead (u = α_max·ΔT_max/√3) overstates u by
+      √3 (a FOG's K: z spread 0.60 where 1 is right).
+
+    >>> [round(x, 4) for x in (chamber_temperature_line(1.0, 1.0).u_rel / PPM,
+    ...  chamber_temperature_line(1.0, 1.0, -0.6).u_rel / PPM)]
+    [0.3333, 0.3464]
+    >>> chamber_temperature_line(0.1, 1.0, 0.0).half_width_rel
+    0.0
+    """
+    a = float(coeff_bound_ppm_per_c) * PPM
+    if deviation_c is not None:
+        hw = a * abs(float(deviation_c))
+        return ChamberLine(hw, "rectangular", hw / math.sqrt(3.0), "logged", float(deviation_c))
+    hw = a * float(tolerance_c)
+    return ChamberLine(hw, "rectangular-product", hw / 3.0, "tolerance", None)
+
+
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
                         tilt_bias_arcsec_per_deg: float = 0.0,
-                        temperature_rel_bound: float = 0.0,
+                        chamber: ChamberLine | None = None,
                         tilt_correction=None) -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
@@ -332,10 +383,12 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     ``K_tilt`` line, arcsine with half-width |K|·A_K/3600 (A_K″ per degree of angle is a
     relative error A_K/3600 of K). It is not in the draft's budget (``beyond_standard``).
 
-    ``temperature_rel_bound`` (|α_K|·ΔT_max, relative): K is stated at the reference
-    temperature of Table 2 and measured anywhere within its tolerance; the instrument's K
-    moves by α_K ΔT, the same in every round: the ``K_T`` line, rectangular with half-width
-    |K|·|α_K|·ΔT_max (the coefficient's bound times the tolerance). Not in the draft's budget.
+    ``chamber`` (a :class:`ChamberLine` of :func:`chamber_temperature_line`): K is stated at
+    the reference temperature of Table 2 and measured in a chamber ΔT away; the instrument's
+    K moves by α_K ΔT, the same in every round: the ``K_T`` line, half-width |K| times the
+    line's relative half-width, in its distribution (rectangular at a logged ΔT, the product
+    of two rectangulars where ΔT is known only by the tolerance). Not in the draft's budget;
+    absent where its half-width is zero (a logged ΔT of 0).
 
     ``tilt_correction`` (a :class:`gonio.specs.ogam_draft.budget_extra.TiltCorrection`: the
     coupling's relative bias δ at the tilt ψ and azimuth α the in-situ tilt estimate
@@ -397,11 +450,14 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
                                          f"{a_k:.3g}″/° at the A.1 bound, worst azimuth"),
                            "tilt bias of K", True, "A.1 applied to 7.1"))
-    if temperature_rel_bound:
-        lines.append(_Line(type_b("K_T", 0.0, abs(float(np.mean(k_i))) * float(temperature_rel_bound),
-                                  "rectangular",
-                                  source=f"chamber temperature within its tolerance, "
-                                         f"|alpha_K| dT_max = {temperature_rel_bound:.3g}"),
+    if chamber is not None and chamber.half_width_rel > 0.0:
+        src = (f"chamber temperature logged {chamber.deviation_c:+.3g} degC from the reference, "
+               f"alpha_K uniform within its bound: |alpha_K|max |dT| = "
+               if chamber.basis == "logged" else
+               "chamber temperature within its tolerance, alpha_K and dT independent uniforms "
+               "(product): |alpha_K|max dT_max = ") + f"{chamber.half_width_rel:.3g}"
+        lines.append(_Line(type_b("K_T", 0.0, abs(float(np.mean(k_i))) * chamber.half_width_rel,
+                                  chamber.distribution, source=src),
                            "chamber temperature", True, "Table 2 applied to 7.1"))
     return _budget("scale_factor", "counts/deg", value, lines, k=k)
 
@@ -899,25 +955,17 @@ def _consistency_lines(a: ConditionDeviation, b: ConditionDeviation, n_condition
     (min E_v), in the order its sensitivity coefficients and correlation assume: r_a, r_b,
     P_a, P_b, B_a, B_b, C_rng, K_ab, K_tilt; ``f`` converts arcsec to the item's unit,
     ``mean_u_arcsec`` is the conditions' mean u(E_v)."""
+    ends = (("a", a), ("b", b))
     return [
-        _Line(from_u("r_a", 0.0, _mean_u(a) * f, dof=_series_dof(a), type="A",
-                     source=f"mean of {a.n_series} series at {a.label}"),
-              f"repeatability, {a.label}", True, clause + " (A.4.4)"),
-        _Line(from_u("r_b", 0.0, _mean_u(b) * f, dof=_series_dof(b), type="A",
-                     source=f"mean of {b.n_series} series at {b.label}"),
-              f"repeatability, {b.label}", True, clause + " (A.4.4)"),
-        _Line(type_b("P_a", 0.0, table_mpe_arcsec * f, "rectangular",
-                     source=f"table at {a.position_deg:g}° ({a.label})"),
-              f"table positioning, {a.label}", True, clause + " (A.4.1)"),
-        _Line(type_b("P_b", 0.0, table_mpe_arcsec * f, "rectangular",
-                     source=f"table at {b.position_deg:g}° ({b.label})"),
-              f"table positioning, {b.label}", True, clause + " (A.4.1)"),
-        _Line(type_b("B_a", 0.0, drift_half_width_arcsec * f, "rectangular",
-                     source=f"zero drift ({a.label})"),
-              f"zero drift, {a.label}", True, clause + " (A.4.3)"),
-        _Line(type_b("B_b", 0.0, drift_half_width_arcsec * f, "rectangular",
-                     source=f"zero drift ({b.label})"),
-              f"zero drift, {b.label}", True, clause + " (A.4.3)"),
+        *(_Line(from_u(f"r_{s}", 0.0, _mean_u(c) * f, dof=_series_dof(c), type="A",
+                       source=f"mean of {c.n_series} series at {c.label}"),
+                f"repeatability, {c.label}", True, clause + " (A.4.4)") for s, c in ends),
+        *(_Line(type_b(f"P_{s}", 0.0, table_mpe_arcsec * f, "rectangular",
+                       source=f"table at {c.position_deg:g}° ({c.label})"),
+                f"table positioning, {c.label}", True, clause + " (A.4.1)") for s, c in ends),
+        *(_Line(type_b(f"B_{s}", 0.0, drift_half_width_arcsec * f, "rectangular",
+                       source=f"zero drift ({c.label})"),
+                f"zero drift, {c.label}", True, clause + " (A.4.3)") for s, c in ends),
         _Line(type_b("C_rng", 0.0, expected_range_factor(n_conditions) * mean_u_arcsec * f,
                      "rectangular",
                      source=f"spread noise alone gives {n_conditions} conditions"),
