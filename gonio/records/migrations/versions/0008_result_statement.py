@@ -35,10 +35,10 @@ def backfill(bind, root) -> int:
                      sa.column('calibration_id'), sa.column('stated'),
                      sa.column('interval_low'), sa.column('interval_high'))
     cals = sa.table('calibrations', sa.column('id'), sa.column('results_sha256'))
-    rows = [dict(r._mapping) for r in bind.execute(
+    rows = [dict(r) for r in bind.execute(
         sa.select(items.c.id, items.c.key, cals.c.results_sha256)
         .join(cals, items.c.calibration_id == cals.c.id)
-        .where(cals.c.results_sha256.is_not(None)).order_by(items.c.id))]
+        .where(cals.c.results_sha256.is_not(None)).order_by(items.c.id)).mappings()]
     filled = fill_stated(root, rows, lambda r: r["results_sha256"])
     done = [{"row_id": r["id"], "s": r["stated"], "lo": r["interval_low"],
              "hi": r["interval_high"]} for r in rows if r["stated"] is not None]
