@@ -145,6 +145,14 @@ def long_term_monte_carlo(mc: dict | None, u_long: float) -> dict | None:
                      "quadrature (independent of the record)"}
 
 
+def _nu(al: AlignmentResult, i: int, j: int) -> float:
+    """ν of M_ij (j < 3) or b_i (j = 3): the Welch–Satterthwaite ν of the fit's two noise
+    components (:func:`gonio.specs.triad_alignment.analysis.variance_components`), rounded
+    down (the ν that k is computed from and the certificate prints, JCGM 100 G.6.4)."""
+    nu = float(al.dof[i] if al.dof_theta is None else al.dof_theta[i, j])
+    return float(math.floor(nu + 1e-9)) if math.isfinite(nu) else nu
+
+
 def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
                     ) -> dict[str, Item]:
     """The alignment items (module docstring) from an :class:`AlignmentResult`."""
@@ -153,18 +161,21 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
     um = al.u_system_matrix
     ub = al.u_bias_output
     mc_m = None if al.u_mc_theta is None else al.u_mc_theta.reshape(3, 4)
-    fit = "weighted least-squares fit of all dwells, s²(XᵀWX)⁻¹"
+    fit = ("weighted least-squares fit of all dwells; dwell noise white (σ_w² from the "
+           "scatter about each orientation's own bias) plus a bias offset per orientation "
+           "block and static dwell (σ_B²): σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ")
     for i in range(3):
         for j in range(3):
             key = f"M_{AXES[i]}{AXES[j]}"
             items[key] = Item(key, f"system matrix {key}", "§4 eq. 14", f"{unit}/(°/s)",
                               float(al.system_matrix[i, j]), uncertainty=_type_a(
-                                  key, fit, um[i, j], al.dof[i],
+                                  key, fit, um[i, j], _nu(al, i, j),
                                   None if mc_m is None else mc_m[i, j], trials))
     u_bi, nu_bi = bias_instability_u_dps(al.averaging, static_s)
     for i in range(3):
         key = f"b_{AXES[i]}"
-        unc = _type_a(key, fit, ub[i], al.dof[i], None if mc_m is None else mc_m[i, 3], trials)
+        unc = _type_a(key, fit, ub[i], _nu(al, i, 3), None if mc_m is None else mc_m[i, 3],
+                      trials)
         u_long = float(u_bi[i] * abs(al.system_matrix[i, i]))
         if u_long > 0:
             unc = _with_bias_instability(unc, key, u_long, float(nu_bi[i]))
