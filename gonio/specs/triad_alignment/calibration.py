@@ -15,8 +15,9 @@ reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.result.model
   supply levels, the model order's effect inside U (the polynomial coefficients, whose
   order the criterion chooses, are information in ``thermal_model``).
 
-Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: s²(XᵀWX)⁻¹, ν = n − p,
-k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
+Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: white dwell noise plus a bias
+offset per orientation block, σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ,
+:func:`gonio.specs.triad_alignment.analysis.variance_components`; k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
 is given beside it. A readings file without alignment (or thermal) rows, or one whose dwells
 do not determine M and b, gives those items not measured with the reason.
 """
@@ -543,7 +544,8 @@ def chamber_set_points(readings: TriadReadings) -> list[float]:
 
 def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:
     """Per gyro, the covariance of its row of M and its bias (one fit: M_i·, b_i),
-    s²(XᵀWX)⁻¹ in the items' units (the fits of the three gyros are independent)."""
+    σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ in the items' units (the fits of the three gyros are
+    independent)."""
     if al is None:
         return []
     out = []
@@ -551,7 +553,7 @@ def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:
         keys = [f"M_{AXES[i]}{AXES[j]}" for j in range(3)] + [f"b_{AXES[i]}"]
         block = np.asarray(al.cov_theta)[4 * i:4 * i + 4, 4 * i:4 * i + 4]
         out.append(Covariance(keys, block.tolist(), f"gyro {AXES[i]}: weighted least-squares "
-                              "fit of all dwells, s²(XᵀWX)⁻¹ (JCGM 100 4.2)"))
+                              "fit of all dwells, σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ (JCGM 100 4.2)"))
     return out
 
 
