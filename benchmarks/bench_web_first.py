@@ -13,14 +13,16 @@ wall seconds are printed of:
 
 With ``--results FILE`` (a ``results.json``, e.g. of ``gonio demo --spec triad-alignment``)
 every calibration gets its own stored copy of it (one field changed, so each has its own
-digest), as real calibrations do: the history plot's first drawing then reads and states
-each stored result once (the bars of items stated by an interval); without it every
-calibration points to one synthetic blob that is no results.json.
+digest: the source file's name numbered) and its result rows as the records write them when a result is stored (its items,
+each keeping how it is stated: the history plot draws from the rows alone); ``--unkept``
+keeps the synthetic rows without their statement, as a database written before rows kept it
+(the plot's first drawing then reads and states each stored result once); without
+``--results`` every calibration points to one synthetic blob that is no results.json.
 
 Targets: each page under 0.5 s. Prints the machine and its load: on a loaded machine the
 wall time measures the queue. Not part of the test run.
 
-    python benchmarks/bench_web_first.py [--calibrations 100] [--pause 3] [--results FILE]
+    python benchmarks/bench_web_first.py [--calibrations 100] [--pause 3] [--results FILE [--unkept]]
 
 ``gonio serve`` answers the login page before its application is built
 (:mod:`gonio.web.front`), then imports SciPy in the background
@@ -64,22 +66,32 @@ def timed(rows: list, name: str, call):
     return r
 
 
-def give_results(store, results: Path) -> None:
-    """Every calibration its own stored copy of ``results`` (its "source" field numbered)."""
+def give_results(store, results: Path, rows: bool = True) -> None:
+    """Every calibration its own stored copy of ``results`` (its source file's name numbered)
+    and, with ``rows``, the result rows the records write when a result is stored
+    (:func:`gonio.records.results.result_rows`: its items, each with its statement) in place
+    of the synthetic ones; without, the synthetic rows keep no statement (a database
+    written before rows kept it: the plot then reads every stored result)."""
     import json
 
-    from sqlalchemy import select
+    from sqlalchemy import delete, insert, select
 
     from gonio.records import blobs
-    from gonio.records.models import Blob, Calibration
+    from gonio.records.models import Blob, Calibration, ResultItem
+    from gonio.records.results import result_rows
 
     doc = json.loads(results.read_bytes())
     with store.writing() as s:
         for cal in s.scalars(select(Calibration)).all():
-            body = json.dumps(dict(doc, source=f"{doc.get('source', '')} #{cal.id}")).encode()
+            source = doc.get("source") if isinstance(doc.get("source"), dict) else {}
+            mine = dict(doc, source=dict(source, file=f"{source.get('file', '')} #{cal.id}"))
+            body = json.dumps(mine).encode()
             sha = blobs.put_bytes(store.blob_root, body)
             s.add(Blob(sha256=sha, size=len(body)))
             cal.results_sha256 = sha
+            if rows:
+                s.execute(delete(ResultItem).where(ResultItem.calibration_id == cal.id))
+                s.execute(insert(ResultItem), result_rows(cal.id, mine))
         s.commit()
 
 
@@ -94,7 +106,11 @@ def main(argv=None) -> int:
     ap.add_argument("--pause", type=float, default=0.0,
                     help="seconds between the login page and the login (a person typing)")
     ap.add_argument("--results", type=Path, default=None,
-                    help="a results.json stored (one copy each) for every calibration")
+                    help="a results.json stored (one copy each) for every calibration, with "
+                         "its result rows as the records write them")
+    ap.add_argument("--unkept", action="store_true",
+                    help="with --results: the synthetic rows, keeping no statement (as "
+                         "before the rows kept it: the plot reads every stored result)")
     args = ap.parse_args(argv)
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
@@ -103,9 +119,11 @@ def main(argv=None) -> int:
         store = open_store(None, data)
         fill(store, 1, args.calibrations)
         if args.results is not None:
-            give_results(store, args.results)
+            give_results(store, args.results, rows=not args.unkept)
             print(f"results: each calibration its own copy of {args.results} "
-                  f"({args.results.stat().st_size // 1024} KB)")
+                  f"({args.results.stat().st_size // 1024} KB), "
+                  + ("the synthetic rows (no statement kept)" if args.unkept
+                     else "its result rows with their statements"))
         store.close()
         port = _port()
         base = f"http://127.0.0.1:{port}"

@@ -99,7 +99,8 @@ def run(args) -> int:
         result, _ = calibrate(args.readings, args.out, spec_key=spec.key, protocol=args.protocol,
                               lab=lab_d, lang=args.lang, dcc=args.dcc,
                               monte_carlo_trials=args.monte_carlo, inputs=inputs,
-                              force=args.force, **given)
+                              force=args.force,
+                              record={"gyro_type": registered} if registered else None, **given)
     status("")
     show(spec, result, args.json, lab_d, args.lang)
     return 0

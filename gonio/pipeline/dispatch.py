@@ -145,10 +145,13 @@ def mark_provenance(result, readings) -> None:
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
               dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
-              **options):
+              record: dict | None = None, **options):
     """Calibrate a readings file with its specification (``spec_key`` or the file's
     ``# spec:``): results.json, summary.txt, tables and the certificate (HTML, PDF; with
-    ``dcc`` the DCC XML) in ``out``, written as one set. Returns (result, paths)."""
+    ``dcc`` the DCC XML) in ``out``, written as one set. ``record``: the records' registered
+    instrument's texts the readings and the laboratory file must not contradict
+    (``calibrate --record``; :func:`gonio.pipeline.identity.record_contradictions`).
+    Returns (result, paths)."""
     spec = spec_of(spec_key, readings)
     opts = refuse_options(spec, {"protocol": protocol, "dcc": dcc, **options},
                           spec.calibrate_options, "calibrate")
@@ -157,7 +160,7 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     dcc = opts.pop("dcc", False)
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
     identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
-                              else None)       # refused here, before the work
+                              else None, record=record)     # refused here, before the work
     gyro = ((lab_d or {}).get("instrument") or {}).get("gyro_type")
     if gyro and "gyro_type" in spec.calibrate_options:
         opts.setdefault("gyro_type", gyro)     # the instrument's type (the records' registered)

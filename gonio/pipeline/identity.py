@@ -94,32 +94,71 @@ def contradictions(metadata: dict, lab: dict | None) -> list[dict]:
     return out
 
 
+#: where the records' registered instrument is named in a message (``calibrate --record``)
+RECORD = "the instrument's record"
+
+
+def record_contradictions(metadata: dict, lab: dict | None, record: dict | None) -> list[dict]:
+    """``calibrate --record``: each contradiction of the readings' ``metadata`` and of the
+    laboratory file ``lab`` with ``record``, the registered instrument's texts by the
+    laboratory file's ``[instrument]`` key (e.g. ``{"gyro_type": "rlg"}``; an empty value is
+    silent), as :func:`contradictions` gives them, with ``by`` naming who says the first
+    value and ``lab`` the record's.
+
+    >>> [(c["by"], c["readings"]) for c in record_contradictions(
+    ...     {"gyro_type": "FOG"}, {"instrument": {"gyro_type": "fog"}}, {"gyro_type": "rlg"})]
+    [('the readings say', "'FOG'"), ('the laboratory file says', "'fog'")]
+    >>> record_contradictions({"gyro_type": " RLG "}, None, {"gyro_type": "rlg"})
+    []
+    """
+    out = []
+    inst = (lab or {}).get("instrument") or {}
+    for what, section, key, md_keys in TEXT_FIELDS:
+        theirs = str((record or {}).get(key) or "").strip()
+        if section != "instrument" or not theirs:
+            continue
+        k, ours = _first(metadata, md_keys)
+        said = [("the readings say", f"# {k}", ours)] if ours is not None else []
+        lab_says = str(inst.get(key) or "").strip()
+        if lab_says:
+            said.append(("the laboratory file says", f"[{section}] {key}", lab_says))
+        out += [{"what": what, "key": where, "readings": f"'{v}'", "lab": f"'{theirs}'",
+                 "lab_key": f"{section}s.{key}", "tolerance": None, "by": by, "of": RECORD}
+                for by, where, v in said if _norm(v) != _norm(theirs)]
+    return out
+
+
 def _message(c: dict) -> str:
     tol = f" (more than {c['tolerance']} apart)" if c["tolerance"] else ""
-    return (f"{c['what']}: the readings say {c['readings']} (# {c['key']}), the laboratory "
-            f"file {c['lab']} ({c['lab_key']}){tol}")
+    where = c["key"] if "by" in c else f"# {c['key']}"
+    return (f"{c['what']}: {c.get('by', 'the readings say')} {c['readings']} ({where}), "
+            f"{c.get('of', 'the laboratory file')} {c['lab']} ({c['lab_key']}){tol}")
 
 
 #: the code of the finding that states a contradiction the laboratory file proceeded with
 MISMATCH_CODE = "identity-mismatch"
 
 
-def check_identity(readings, lab: dict | None, *, lab_file=None) -> list[Finding]:
-    """Compare the readings' identity and conditions with ``lab`` (module docstring): no
+def check_identity(readings, lab: dict | None, *, lab_file=None,
+                   record: dict | None = None) -> list[Finding]:
+    """Compare the readings' identity and conditions with ``lab`` (module docstring), and,
+    with ``record`` (``calibrate --record``: the registered instrument's texts, see
+    :func:`record_contradictions`), the readings and the laboratory file with the records: no
     contradiction gives ``[]``; one refuses (GonioError naming the readings and the key)
     unless ``lab["identity"]["on_mismatch"] == "proceed"``, where the flagged findings are
     returned for the result."""
-    if not lab:
-        return []
-    found = contradictions(readings_metadata(readings), lab)
+    md = readings_metadata(readings) if lab or record else {}
+    found = contradictions(md, lab) + record_contradictions(md, lab, record)
     if not found:
         return []
-    if ((lab.get("identity") or {}).get("on_mismatch") or "refuse") != "proceed":
+    if (((lab or {}).get("identity") or {}).get("on_mismatch") or "refuse") != "proceed":
         c = found[0]
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         where = f" ({lab_file})" if lab_file else ""
+        named = f"the records and the laboratory file{where} name" if "by" in c else \
+            f"the laboratory file{where} names"
         raise GonioError(f"{_message(c)}{more}: the readings are not of the instrument or "
-                         f"conditions the laboratory file{where} names; correct one of them, "
+                         f"conditions {named}; correct one of them, "
                          "or set [identity] on_mismatch = \"proceed\" to state it on the "
                          "certificate", file=Path(readings).name)
     name = Path(readings).name

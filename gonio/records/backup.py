@@ -468,6 +468,7 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
         _check_space(store, zf, names, path)
         for sha_file in sorted(names):
             _put_blob(store.blob_root, sha_file, zf, path)
+    _fill_stated(store, rows)
     who = actor.username if actor is not None else "(command line)"
     if not replace:
         with store.writing() as s:
@@ -480,6 +481,17 @@ def _restore_open(store, fh, path: Path, *, replace: bool, actor, expect_sha256,
     counts = {k: len(v) for k, v in rows.items() if v}
     counts["files"] = len(names)
     return counts
+
+
+def _fill_stated(store, rows: dict) -> None:
+    """The result rows of an archive written before rows kept their statement (no
+    ``stated`` column, or None) get it from their calibration's stored results.json (in the
+    blob store by now), as the migration fills a database's
+    (:func:`gonio.records.results.fill_stated`)."""
+    from gonio.records.results import fill_stated
+
+    sha = {c.get("id"): c.get("results_sha256") for c in rows["calibrations"]}
+    fill_stated(store.blob_root, rows["result_items"], lambda r: sha.get(r.get("calibration_id")))
 
 
 def check_summary(rows: dict) -> dict:

@@ -93,8 +93,10 @@ def make_engine(url: str) -> Engine:
     return create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
 
 
-def migrate(engine: Engine, revision: str = "head") -> None:
-    """Bring the schema to ``revision`` with the shipped Alembic migrations."""
+def migrate(engine: Engine, revision: str = "head", blob_root: Path | None = None) -> None:
+    """Bring the schema to ``revision`` with the shipped Alembic migrations; ``blob_root``:
+    the records' blob store, from which a migration that derives columns from the stored
+    files fills the existing rows (without it they are left unfilled)."""
     from alembic import command
     from alembic.config import Config
 
@@ -102,6 +104,7 @@ def migrate(engine: Engine, revision: str = "head") -> None:
     cfg.set_main_option("script_location", str(MIGRATIONS))
     with engine.begin() as conn:
         cfg.attributes["connection"] = conn
+        cfg.attributes["blob_root"] = blob_root
         command.upgrade(cfg, revision)
 
 
@@ -201,7 +204,7 @@ def open_store(database: str | None = None, data: str | os.PathLike | None = Non
     if upgrade:
         try:
             if not at_head(engine):   # Alembic's import (~0.2 s) only when there is work
-                migrate(engine)
+                migrate(engine, blob_root=folder / "blobs")
         except Exception as exc:
             engine.dispose()
             problem = database_problem(exc)

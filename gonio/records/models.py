@@ -225,6 +225,14 @@ class ResultItem(Base):
     value: Mapped[float | None] = mapped_column(Float, nullable=True)
     U: Mapped[float | None] = mapped_column(Float, nullable=True)
     k: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: how the stored results.json states the item, kept when the row is written (the
+    #: history figure's bars then need no stored result read):
+    #: ``gonio.records.results.stated_columns`` — "interval" (one coverage interval, its
+    #: rounded ends ``interval_low``/``interval_high``), "value" (value ± U) or "none" (not
+    #: stated); None: not read (the history reads the stored result for it)
+    stated: Mapped[str | None] = mapped_column(String(8), nullable=True)
+    interval_low: Mapped[float | None] = mapped_column(Float, nullable=True)
+    interval_high: Mapped[float | None] = mapped_column(Float, nullable=True)
 
 
 class CalibrationFile(Base):

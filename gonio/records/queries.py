@@ -183,6 +183,37 @@ def virtual_mark(store, results_sha256: str | None, readings_sha256: str | None 
     return " ".join([L["virtual"] + "."] + virtual_lines(res, L))
 
 
+#: readings SHA-256 → whether the readings name the virtual bench, per blob folder: a stored
+#: file never changes under its SHA-256, so its answer is read once (one metadata header)
+_VIRTUAL_READINGS: dict[tuple[str, str], bool] = {}
+
+
+def virtual_readings(store, readings_sha256: str | None) -> bool:
+    """Whether a calibration's stored readings are the virtual bench's, from their own
+    metadata (:func:`gonio.formats.provenance.provenance`: ``# bench:``, ``# seed:``,
+    ``# generator: gonio``), as the lists mark each calibration; read once per stored file
+    and kept (the answer of a content-addressed file cannot change). A file that is missing
+    or unreadable is not marked (and not kept: its calibration's own page says why)."""
+    from gonio.errors import GonioError
+    from gonio.formats.provenance import readings_provenance
+    from gonio.records.blobs import blob_path
+    from gonio.records.compute import readings_file
+
+    if not readings_sha256:
+        return False
+    key = (str(store.blob_root), readings_sha256)
+    got = _VIRTUAL_READINGS.get(key)
+    if got is None:
+        src = blob_path(store.blob_root, readings_sha256)
+        try:
+            with readings_file(src) as path:
+                got = bool(readings_provenance(path)["virtual"])
+        except (GonioError, OSError, ValueError, UnicodeDecodeError):
+            return False
+        _VIRTUAL_READINGS[key] = got
+    return got
+
+
 def certificates(store, page: int = 1, size: int = 50):
     """(issued certificates, newest first, total)."""
     stmt = select(Certificate).options(
@@ -231,7 +262,7 @@ def standard_history(store, std_id: int, page: int = 1, size: int = 50) -> dict 
                            .order_by(AuditEvent.id)).all()
         stmt = (select(CalibrationStandard.calibration_id, Calibration.performed_on,
                        Calibration.status, Instrument.serial, Instrument.model, Customer.name,
-                       CalibrationStandard.due_on_at_use)
+                       CalibrationStandard.due_on_at_use, Calibration.readings_sha256)
                 .join(Calibration, CalibrationStandard.calibration_id == Calibration.id)
                 .join(Instrument, Calibration.instrument_id == Instrument.id)
                 .join(Customer, Instrument.customer_id == Customer.id)
@@ -252,7 +283,7 @@ def standard_history(store, std_id: int, page: int = 1, size: int = 50) -> dict 
         changes.append({"at": e.at, "username": e.username, "action": e.action,
                         **{k: after.get(k) for k in keys}})
     uses = [{"calibration_id": r[0], "performed_on": r[1], "status": r[2], "serial": r[3],
-             "model": r[4], "customer": r[5], "due_on_at_use": r[6],
+             "model": r[4], "customer": r[5], "due_on_at_use": r[6], "readings_sha256": r[7],
              "certificates": numbers.get(r[0], [])} for r in rows]
     return {"standard": std, "changes": changes, "uses": uses, "total": total}
 
@@ -351,9 +382,9 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
     if name == "instruments":
         rows, _ = instruments(store, 1, big)
         return (["id", "customer", "type", "manufacturer", "model", "serial", "specification",
-                 "interval_months", "retired_on"],
+                 "interval_months", "retired_on", "gyro_type"],
                 [[i.id, i.customer.name, i.kind, i.manufacturer, i.model, i.serial, i.spec_key,
-                  i.interval_months, i.retired_on] for i in rows])
+                  i.interval_months, i.retired_on, i.gyro_type] for i in rows])
     if name == "standards":
         return (["id", "name", "identifier", "accuracy", "certificate", "traceability",
                  "calibrated_on", "due_on", "retired_on"],
@@ -362,17 +393,20 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
     if name == "calibrations":
         rows, _ = calibrations(store, 1, big, params.get("status", ""))
         return (["id", "customer", "instrument_serial", "specification", "performed_on",
-                 "status", "created_by", "error"],
+                 "status", "created_by", "error", "virtual_bench"],
                 [[c.id, c.instrument.customer.name, c.instrument.serial, c.spec_key,
                   c.performed_on, c.status, c.created_by.username if c.created_by else "",
-                  c.error] for c in rows])
+                  c.error, "yes" if virtual_readings(store, c.readings_sha256) else ""]
+                 for c in rows])
     if name == "certificates":
         rows, _ = certificates(store, 1, big)
         return (["number", "issued_at", "calibration", "customer", "instrument_serial",
-                 "replaces", "reason", "seal_sha256", "pdf_sha256"],
+                 "replaces", "reason", "seal_sha256", "pdf_sha256", "virtual_bench"],
                 [[c.number, c.issued_at, c.calibration_id, c.calibration.instrument.customer
                   .name, c.calibration.instrument.serial, c.replaces.number if c.replaces
-                  else "", c.reason, c.seal_sha256, c.pdf_sha256] for c in rows])
+                  else "", c.reason, c.seal_sha256, c.pdf_sha256,
+                  "yes" if virtual_readings(store, c.calibration.readings_sha256) else ""]
+                 for c in rows])
     if name == "due":
         rows, _ = due(store, 1, big, params.get("q", ""), params.get("within_days", 30),
                       params.get("customer", ""))

@@ -111,24 +111,86 @@ def statements_of(doc) -> dict:
     return out
 
 
-def stated_intervals(store, results_sha256: str) -> dict:
-    """Item key → (low, high) of each item the stored result states by one coverage interval
-    (:func:`stated_items`: the statement rule's interval, its rounded ends as numbers), for
-    the history figure's bars; read once per stored result (a stored file never changes)."""
+#: The statement columns of a result row whose item the stored result does not state (the
+#: statement rule refuses it, or the stored result has no such item).
+NOT_STATED = {"stated": "none", "interval_low": None, "interval_high": None}
+
+
+def stated_columns(doc) -> dict:
+    """Item key → the columns a result row keeps of its statement (:func:`statements_of` of
+    the results.json ``doc``): ``stated`` "interval" (stated by one coverage interval, whose
+    rounded ends as numbers are ``interval_low`` and ``interval_high``, the history figure's
+    bar) or "value" (value ± U, or the value alone); an item the rule refuses to state is
+    left out (its row: :data:`NOT_STATED`)."""
     from decimal import Decimal
 
-    from gonio.errors import GonioError
+    out = {}
+    for key, st in statements_of(doc).items():
+        if st.interval is None:
+            out[key] = {"stated": "value", "interval_low": None, "interval_high": None}
+        else:
+            lo, hi = (float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
+            out[key] = {"stated": "interval", "interval_low": lo, "interval_high": hi}
+    return out
 
+
+def result_rows(cal_id: int, doc: dict) -> list[dict]:
+    """The result rows of calibration ``cal_id`` from its results.json ``doc``: each item
+    (:func:`result_items`, text cut to its column) with its statement (:func:`stated_columns`),
+    as the records write them when a result is stored."""
+    stated = stated_columns(doc)
+    return [{"calibration_id": cal_id, "key": it.key, "title": it.title[:200],
+             "clause": it.clause[:64], "unit": it.unit[:32], "measured": it.measured,
+             "value": it.value, "U": it.U, "k": it.k, **stated.get(it.key, NOT_STATED)}
+            for it in result_items(doc)]
+
+
+def stored_columns(blob_root, results_sha256: str) -> dict | None:
+    """:func:`stated_columns` of a stored results.json, None when it cannot be read (missing,
+    changed on disk, not JSON)."""
+    import json
+
+    from gonio.records.blobs import get_bytes
+
+    try:
+        return stated_columns(json.loads(get_bytes(blob_root, results_sha256)))
+    except (GonioError, ValueError, RecursionError):
+        return None
+
+
+def fill_stated(blob_root, rows: list[dict], sha_of) -> int:
+    """Give every result row (a dict with ``key``) whose ``stated`` is missing or None its
+    statement columns from its calibration's stored results.json (``sha_of(row)``: its
+    SHA-256, or None), each stored result read once; a row whose result cannot be read keeps
+    None (the history then reads the stored result itself). Every row ends with the three
+    statement keys. Returns how many rows were filled (a database, or a backup, written before
+    the rows kept their statements)."""
+    read: dict[str, dict | None] = {}
+    filled = 0
+    for row in rows:
+        for name in NOT_STATED:
+            row.setdefault(name, None)
+        sha = sha_of(row) if row["stated"] is None else None
+        if not sha:
+            continue
+        if sha not in read:
+            read[sha] = stored_columns(blob_root, sha)
+        if read[sha] is not None:
+            row.update(read[sha].get(row.get("key"), NOT_STATED))
+            filled += 1
+    return filled
+
+
+def stated_intervals(store, results_sha256: str) -> dict:
+    """Item key → (low, high) of each item the stored result states by one coverage interval
+    (:func:`stated_columns`), for the history figure's bars of a row that does not keep its
+    statement (``stated`` None); read once per stored result (a stored file never changes)."""
     at = (str(store.blob_root), results_sha256)
     got = _INTERVALS.get(at)
     if got is None:
-        try:
-            stated = stated_items(store, results_sha256)
-        except (GonioError, ValueError, RecursionError):
-            stated = {}
-        got = _INTERVALS[at] = {
-            key: tuple(float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
-            for key, st in stated.items() if st.interval is not None}
+        cols = stored_columns(store.blob_root, results_sha256) or {}
+        got = _INTERVALS[at] = {key: (c["interval_low"], c["interval_high"])
+                                for key, c in cols.items() if c["stated"] == "interval"}
         while len(_INTERVALS) > 1024:
             _INTERVALS.pop(next(iter(_INTERVALS)))
     return got

@@ -44,7 +44,7 @@ from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
                                   CalibrationStandard, Certificate, CertificateCounter, Customer,
                                   Instrument, ResultItem, Setting, Standard, User, utcnow)
-from gonio.records.results import result_items
+from gonio.records.results import NOT_STATED, result_rows
 
 #: The certificate numbering scheme: prefix, year, four-digit sequence per year.
 NUMBER_PREFIX = "GC"
@@ -981,13 +981,21 @@ def _signs(signed: str, shown: str | None) -> None:
                          "the result again", key="seal")
 
 
+#: The columns of a result row its seal hashes (:func:`seal`).
+_ROW_SEALED = ("key", "title", "clause", "unit", "measured", "value", "U", "k")
+
+
 def seal(store, cal_id: int) -> str:
     """The content hash of a calibration's stored result, which the reviewer and the
     approver sign and the issue checks: SHA-256 of the canonical JSON of the stored files'
     digests (results.json, summary, draft certificate) and every result row (key, title,
     clause, unit, measured, value, U, k). Every stored file is checked against its digest
-    and every row against the stored results.json first: a GonioError names what no longer
-    matches (a row changed in the database, a file changed on disk)."""
+    and every row against the stored results.json first, its kept statement too (stated,
+    interval ends: :func:`gonio.records.results.result_rows`; a row that keeps none, None,
+    is drawn from the stored result itself): a GonioError names what no longer matches (a
+    row changed in the database, a file changed on disk). The kept statement is not hashed:
+    it follows from results.json, whose digest is, so a seal signed before rows kept it
+    stays the seal."""
     import hashlib
 
     with store.session() as s:
@@ -999,22 +1007,22 @@ def seal(store, cal_id: int) -> str:
         files = dict(s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
             CalibrationFile.calibration_id == cal.id)).all())
         files["results.json"] = cal.results_sha256
-        rows = [(r.key, r.title, r.clause, r.unit, bool(r.measured), r.value, r.U, r.k)
-                for r in s.scalars(select(ResultItem).where(
-                    ResultItem.calibration_id == cal.id).order_by(ResultItem.id))]
+        kept = s.scalars(select(ResultItem).where(
+            ResultItem.calibration_id == cal.id).order_by(ResultItem.id)).all()
     for name, sha in sorted(files.items()):
         if not blobs.verify(store.blob_root, sha):
             raise GonioError(f"the stored {name} is missing or does not match its SHA-256",
                              key=f"calibration {cal_id}")
-    items = result_items(json.loads(file_bytes(store, cal.results_sha256)))
-    expect = [(it.key, it.title[:200], it.clause[:64], it.unit[:32], it.measured, it.value,
-               it.U, it.k) for it in items]
-    if len(expect) != len(rows):
-        raise GonioError(f"{len(rows)} stored result rows, results.json has {len(expect)}",
+    expect = result_rows(cal.id, json.loads(file_bytes(store, cal.results_sha256)))
+    if len(expect) != len(kept):
+        raise GonioError(f"{len(kept)} stored result rows, results.json has {len(expect)}",
                          key=f"calibration {cal_id}")
-    for row, want in zip(rows, expect):
-        if row != want:
-            raise GonioError(f"the stored result row {row[0]} differs from the stored "
+    rows = [(r.key, r.title, r.clause, r.unit, bool(r.measured), r.value, r.U, r.k)
+            for r in kept]                                    # :data:`_ROW_SEALED`
+    for r, want in zip(kept, expect):
+        names = _ROW_SEALED + (tuple(NOT_STATED) if r.stated is not None else ())
+        if any(getattr(r, name) != want[name] for name in names):
+            raise GonioError(f"the stored result row {r.key} differs from the stored "
                              "results.json (changed in the database)", key=f"calibration {cal_id}")
     doc = json.dumps({"files": files, "items": rows}, sort_keys=True, separators=(",", ":"),
                      allow_nan=False)
@@ -1344,16 +1352,14 @@ def store_run(store, cal_id: int, out: Path, kept: tuple[str, ...] = KEPT) -> No
     """Record a finished draft run: its files (``kept`` of them) into the blob store, its
     items, computed."""
     files = {n: blobs.put_file(store.blob_root, out / n) for n in kept if (out / n).is_file()}
-    items = result_items(json.loads((out / "results.json").read_text(encoding="utf-8")))
+    rows = result_rows(cal_id, json.loads((out / "results.json").read_text(encoding="utf-8")))
     with store.writing() as s:
         cal = s.get(Calibration, cal_id)
         before = state(cal)
         _put_files(s, cal_id, files)
         s.query(ResultItem).filter(ResultItem.calibration_id == cal_id).delete()
-        for it in items:
-            s.add(ResultItem(calibration_id=cal_id, key=it.key, title=it.title[:200],
-                             clause=it.clause[:64], unit=it.unit[:32], measured=it.measured,
-                             value=it.value, U=it.U, k=it.k))
+        for row in rows:
+            s.add(ResultItem(**row))
         cal.results_sha256 = files["results.json"][0]
         cal.status, cal.progress, cal.error = "computed", "done", ""
         cal.worker_pid, cal.worker_host, cal.finished_at = None, "", utcnow()
@@ -1518,9 +1524,8 @@ def calibration(store, cal_id: int) -> Calibration:
 def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
     k, ``interval`` (the (low, high) of an item stated by one coverage interval, as its
-    certificate states it: :func:`gonio.records.results.stated_intervals`, which reads each
-    stored result once; None for the other items, and for every item with
-    ``intervals=False``, for a caller that does not draw them), unit,
+    certificate states it: the row's kept statement, written with the row from the stored
+    result; None for the other items, and for every item with ``intervals=False``), unit,
     title, status, certificate number, issued, amended), oldest first; failed,
     rejected and unfinished calibrations are left out (one whose draft is being rendered
     again, or whose amendment is asked for, has its result: it stays). ``issued``: it has a
@@ -1528,8 +1533,11 @@ def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
     been replaced by an amendment or an amendment of it is under way (not 'issued' now)."""
     done = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issued", "amending")
     with store.session() as s:
-        rows = s.execute(
-            select(ResultItem, Calibration.performed_on, Calibration.status, Calibration.id,
+        rows = s.execute(      # the columns, not the rows as objects (thousands of them)
+            select(ResultItem.key, ResultItem.value, ResultItem.U, ResultItem.k,
+                   ResultItem.unit, ResultItem.title, ResultItem.clause, ResultItem.stated,
+                   ResultItem.interval_low, ResultItem.interval_high,
+                   Calibration.performed_on, Calibration.status, Calibration.id,
                    Calibration.results_sha256)
             .join(Calibration, ResultItem.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id),
@@ -1541,19 +1549,29 @@ def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
             .join(Calibration, Certificate.calibration_id == Calibration.id)
             .where(Calibration.instrument_id == int(instrument_id))
             .group_by(Certificate.calibration_id)).all()}
-    from gonio.records.results import stated_intervals
-
     out: dict[str, list] = {}
-    for it, day, status, cid, rsha in rows:
+    for key, value, U, k, unit, title, clause, *stated, day, status, cid, rsha in rows:
         number, n = certs.get(cid, ("", 0))
-        out.setdefault(it.key, []).append(
-            {"calibration_id": cid, "date": day, "value": it.value, "U": it.U, "k": it.k,
-             "interval": (stated_intervals(store, rsha).get(it.key)
-                          if rsha and intervals else None),
-             "unit": it.unit, "title": it.title, "clause": it.clause, "status": status,
+        out.setdefault(key, []).append(
+            {"calibration_id": cid, "date": day, "value": value, "U": U, "k": k,
+             "interval": _interval(store, key, stated, rsha) if intervals else None,
+             "unit": unit, "title": title, "clause": clause, "status": status,
              "certificate": number, "issued": n > 0,
              "amended": n > 1 or (n > 0 and status != "issued")})
     return out
+
+
+def _interval(store, key: str, stated: list, results_sha256: str | None):
+    """(low, high) of a result row stated by one coverage interval, else None: the row's
+    kept statement ``stated`` (its stated, interval_low, interval_high), or for a row without
+    one (stated None: not read when it was written) its stored result's
+    (:func:`gonio.records.results.stated_intervals`)."""
+    how, low, high = stated
+    if how is None:
+        from gonio.records.results import stated_intervals
+
+        return stated_intervals(store, results_sha256).get(key) if results_sha256 else None
+    return (low, high) if how == "interval" else None
 
 
 def instrument_limits(inst: Instrument) -> dict:

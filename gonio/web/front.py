@@ -20,6 +20,7 @@ import math
 import secrets
 from pathlib import Path
 
+from jinja2 import pass_context
 from starlette.requests import Request
 from starlette.responses import HTMLResponse
 from starlette.templating import Jinja2Templates
@@ -57,10 +58,25 @@ def fmt(x, digits: int = 6) -> str:
     return str(x)
 
 
+@pass_context
+def virtual_tag(ctx, readings_sha256: str | None) -> str:
+    """A list's mark for a calibration whose readings are the virtual bench's
+    (:func:`gonio.records.queries.virtual_readings`), in the certificate banner's words; ""
+    otherwise."""
+    from gonio.records.queries import virtual_readings
+    from gonio.report.i18n import labels
+
+    request = ctx.get("request")
+    store = getattr(getattr(getattr(request, "app", None), "state", None), "store", None)
+    if store is None or not virtual_readings(store, readings_sha256):
+        return ""
+    return labels("en")["virtual"]
+
+
 def templates() -> Jinja2Templates:
     """The pages' template environment (autoescaped), with the globals every page uses."""
     t = Jinja2Templates(directory=str(HERE / "templates"))
-    t.env.globals.update(fmt=fmt, STATES=STATES)
+    t.env.globals.update(fmt=fmt, STATES=STATES, virtual_tag=virtual_tag)
     return t
 
 

@@ -22,13 +22,17 @@ def test_lists_exported_as_csv(app, sqlite_store):  # noqa: F811
     c2 = services.add_customer(sqlite_store, tech, "Plain Co")
     services.register_instrument(sqlite_store, tech, customer_id=c2.id, serial="S-1",
                                  spec_key="ogam-draft")
+    services.register_instrument(sqlite_store, tech, customer_id=c2.id, serial="S-2",
+                                 spec_key="ogam-draft", gyro_type="fog")
     services.add_standard(sqlite_store, tech, name="table", identifier="T-1",
                           due_on="2030-01-01")
     web = login(app, "tech")
     got = rows_of(web.get("/export/customers.csv"))
     assert got[0] == ["id", "name", "address", "retired_on"]
     assert ["'=HYPERLINK(\"http://x\")", "1 Road\nTown"] == got[1][1:3]
-    assert rows_of(web.get("/export/instruments.csv"))[1][5] == "S-1"
+    inst = rows_of(web.get("/export/instruments.csv"))
+    assert inst[0][-1] == "gyro_type"                # appended: earlier columns keep their place
+    assert {r[5]: r[-1] for r in inst[1:]} == {"S-1": "", "S-2": "fog"}
     assert rows_of(web.get("/export/standards.csv"))[1][7] == "2030-01-01"
     for name in ("calibrations", "certificates", "due"):
         assert len(rows_of(web.get(f"/export/{name}.csv"))) == 1, name    # the header

@@ -9,6 +9,7 @@ import datetime as dt
 import html
 import json
 import re
+from pathlib import Path
 
 import pytest
 
@@ -113,20 +114,9 @@ def test_calibrate_record_takes_the_registered_type(tmp_path, bench_readings, ca
     states RLG, the readings and the command line state no type: the run takes the RLG bound
     (the same readings without --record take the larger default)."""
     from gonio.cli import main
-    from gonio.records.db import open_store
 
     readings = _without_gyro_type(bench_readings[0], tmp_path / "readings.csv")
-    data = tmp_path / "data"
-    st = open_store(None, data)
-    try:
-        people = make_people(st)
-        cust = services.add_customer(st, people["tech"], "Owner")
-        services.register_instrument(st, people["tech"], customer_id=cust.id,
-                                     serial="RLG-0001", spec_key="ogam-draft",
-                                     manufacturer="gonio virtual bench",
-                                     model="RLG goniometer (virtual)", gyro_type="rlg")
-    finally:
-        st.close()
+    data = _registered(tmp_path, "rlg")
     run = ["calibrate", str(readings), "--protocol", str(SMALL_PROTOCOL)]
 
     def bound(out):
@@ -172,3 +162,106 @@ def test_the_web_forms_register_and_edit_the_type(app, sqlite_store):  # noqa: F
     assert r.status_code == 303 and "error" not in r.headers["location"], r.headers
     with sqlite_store.session() as s:
         assert s.get(Instrument, inst_id).gyro_type == "fog"
+
+
+def _registered(tmp_path, gyro_type):
+    """SQLite records under tmp_path/data with the bench's RLG-0001 registered as
+    ``gyro_type``."""
+    from gonio.records.db import open_store
+
+    data = tmp_path / "data"
+    st = open_store(None, data)
+    try:
+        people = make_people(st)
+        cust = services.add_customer(st, people["tech"], "Owner")
+        services.register_instrument(st, people["tech"], customer_id=cust.id,
+                                     serial="RLG-0001", spec_key="ogam-draft",
+                                     manufacturer="gonio virtual bench",
+                                     model="RLG goniometer (virtual)", gyro_type=gyro_type)
+        services.add_standard(st, people["tech"], name="rotary table", identifier="RT-07",
+                              due_on=dt.date.today() + dt.timedelta(days=300))
+    finally:
+        st.close()
+    return data
+
+
+def _calibrations(data) -> int:
+    from gonio.records.db import open_store
+    from gonio.records.models import Calibration
+
+    st = open_store(None, data)
+    try:
+        with st.session() as s:
+            return len(s.query(Calibration).all())
+    finally:
+        st.close()
+
+
+def _lab(tmp_path, gyro_type="", proceed=False):
+    """The example laboratory file naming the bench's instrument as its readings do, with
+    ``[instrument] gyro_type`` and ``[identity] on_mismatch = "proceed"`` as asked."""
+    src = (Path(__file__).parents[2] / "protocols" / "lab-example.toml").read_text("utf-8")
+    src = src.replace('model = "RLG-GM-1"', 'model = "RLG goniometer (virtual)"', 1)
+    if gyro_type:
+        src = src.replace("[instrument]\n", f'[instrument]\ngyro_type = "{gyro_type}"\n', 1)
+    if proceed:
+        src += '\n[identity]\non_mismatch = "proceed"\n'
+    f = tmp_path / f"lab-{gyro_type or 'none'}-{proceed}.toml"
+    f.write_text(src, encoding="utf-8")
+    return f
+
+
+@pytest.mark.parametrize("case", ["readings", "lab file"])
+def test_calibrate_record_refuses_a_type_the_record_contradicts(tmp_path, bench_readings,
+                                                                 capsys, case):
+    """``gonio calibrate --record``: the readings (the bench states ``gyro_type: rlg``) or the
+    laboratory file (readings silent) say another type than the instrument registered under
+    the readings' identity: one line naming both values and the record, exit 2, nothing
+    written nor recorded; without --record the same run calibrates (the record is what
+    contradicts)."""
+    from gonio.cli import main
+
+    if case == "readings":
+        readings, lab, said = bench_readings[0], _lab(tmp_path), "the readings say 'rlg'"
+    else:
+        readings = _without_gyro_type(bench_readings[0], tmp_path / "readings.csv")
+        lab, said = _lab(tmp_path, "rlg"), "the laboratory file says 'rlg'"
+    data = _registered(tmp_path, "fog")
+    run = ["calibrate", str(readings), "--protocol", str(SMALL_PROTOCOL), "--lab", str(lab)]
+    out = tmp_path / "rec"
+    capsys.readouterr()
+    assert main(run + ["--out", str(out), "--record", "--data", str(data)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert f"gyro type: {said}" in err and "the instrument's record 'fog' " \
+        "(instruments.gyro_type)" in err, err
+    assert not out.exists() and _calibrations(data) == 0
+    assert main(run + ["--out", str(tmp_path / "plain")]) == 0
+
+
+def test_calibrate_record_flags_the_contradiction_when_the_lab_proceeds(tmp_path,
+                                                                       bench_readings):
+    """With ``[identity] on_mismatch = "proceed"`` the contradiction with the record is a
+    flagged identity finding: in results.json, on the certificate and on the recorded
+    calibration's page (the documented rule, docs/formats.md#identity-and-conditions)."""
+    from gonio.cli import main
+    from gonio.records.db import open_store
+    from gonio.records.queries import calibration_page
+
+    data = _registered(tmp_path, "fog")
+    out = tmp_path / "rec"
+    assert main(["calibrate", str(bench_readings[0]), "--protocol", str(SMALL_PROTOCOL),
+                 "--lab", str(_lab(tmp_path, proceed=True)), "--out", str(out),
+                 "--record", "--data", str(data)]) == 0
+    res = json.loads((out / "results.json").read_text("utf-8"))
+    (f,) = [f for f in res["findings"] if f["code"] == "identity-mismatch"]
+    assert f["message"].startswith("gyro type: the readings say 'rlg' (# gyro_type), the "
+                                   "instrument's record 'fog' (instruments.gyro_type)"), f
+    page = html.unescape((out / "certificate.html").read_text("utf-8"))
+    assert "the instrument's record 'fog'" in page
+    st = open_store(None, data)
+    try:
+        got = calibration_page(st, 1)
+        assert any("the instrument's record 'fog'" in m for m in got["identity"])
+    finally:
+        st.close()

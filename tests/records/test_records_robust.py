@@ -259,7 +259,8 @@ def test_upload_limit_read_through_limits_by_every_db_command(tmp_path):
 def test_history_reads_the_stored_results_only_for_the_plot(sqlite_store, monkeypatch):
     """The instrument page asks the history without intervals (it shows counts and the
     interval proposal, not bars): no stored results.json is read for it, so the page's time
-    does not grow with the stored results' size; the plot's history reads them."""
+    does not grow with the stored results' size; the plot's history reads them for a row
+    that keeps no statement (``stated`` None: written before rows kept it)."""
     from gonio.records import results
     from gonio.records.models import ResultItem
 

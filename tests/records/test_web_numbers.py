@@ -185,6 +185,36 @@ def test_history_bars_are_the_stated_intervals(recorded):
     assert r.status_code == 200 and r.text.count('class="bar"') >= len(measured(recorded["res"]))
 
 
+def test_history_from_rows_is_the_history_from_the_stored_results(recorded, monkeypatch):
+    """The plot's data read from the result rows alone (their kept statements) equals the
+    data worked out from each stored results.json (what the plot read before rows kept
+    them, :func:`gonio.records.results.stated_items`), and so does the figure."""
+    from decimal import Decimal
+
+    from gonio.records import results
+    from gonio.report.history_figure import history_svg
+
+    store, cid = recorded["store"], recorded["id"]
+    inst_id = services.calibration(store, cid).instrument_id
+    sha = {c: services.calibration(store, c).results_sha256 for c in
+           {r["calibration_id"] for rows in services.history(store, inst_id).values()
+            for r in rows}}
+
+    def intervals(cal_id):          # each statement's interval, its ends as numbers
+        return {k: tuple(float(Decimal(x).scaleb(st.exponent)) for x in st.interval)
+                for k, st in results.stated_items(store, sha[cal_id]).items()
+                if st.interval is not None}
+
+    from_json = {key: [dict(r, interval=intervals(r["calibration_id"]).get(key)) for r in rows]
+                 for key, rows in services.history(store, inst_id).items()}
+    assert any(r["interval"] for rows in from_json.values() for r in rows) \
+        or recorded["spec"] == "triad-alignment"             # it states every item by ± U
+    monkeypatch.setattr(results, "stored_columns", lambda *a: pytest.fail("read a result"))
+    from_rows = services.history(store, inst_id)
+    assert from_rows == from_json
+    assert history_svg(from_rows) == history_svg(from_json)
+
+
 def _readings(d):
     return (d / "readings.csv").read_bytes()
 
