@@ -1,7 +1,8 @@
 """The optical bench's temperature model and K's chamber-temperature line, each against a
 second calculation: the simulated K at a chamber deviation against the closed form
 K·(1 + α_K ΔT), E's independence of it against a session at the reference, the budget's
-``K_T`` line against its half-width by hand, the study's draws against their stated
+``K_T`` line against its half-width by hand and a Monte Carlo of the gyro's coefficient and
+the chamber, the study's draws against their stated
 distributions; where K's coefficient bound comes from (the readings' statement, else the
 protocol's default for the gyro type the readings state, never the bench's coefficient); and
 coverage of a FOG's K at the chamber's bound with the built-in protocol, which fails with an
@@ -22,7 +23,8 @@ from gonio.specs.ogam_draft.bench import load_bench, run_session
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
 from gonio.specs.ogam_draft.outputs import summary
-from gonio.specs.ogam_draft.item_uncertainty import scale_factor_budget, without_tilt_u_rel
+from gonio.specs.ogam_draft.item_uncertainty import (chamber_temperature_line,
+                                                      scale_factor_budget, without_tilt_u_rel)
 from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.study import (case_bench, draw_type_b, trial_bench,
                                           validation_protocol)
@@ -87,17 +89,53 @@ def test_coefficients_change_nothing_at_the_reference(proto, base):
     assert a.readings.equals(b.readings) and a.metadata == b.metadata
 
 
-def test_budget_line_is_the_coefficient_bound_times_the_tolerance():
-    """K_T: rectangular, half-width |K|·|α_K|max·ΔT_max; the part of u(K) other items carry
-    (:func:`without_tilt_u_rel`) leaves it out with the tilt line."""
+def test_budget_line_is_the_chamber_line_in_its_distribution():
+    """K_T: half-width |K| times the chamber line's, in its distribution (rectangular at a
+    logged ΔT, the product of two rectangulars at the tolerance); no line at a logged ΔT of
+    0; the part of u(K) other items carry (:func:`without_tilt_u_rel`) leaves it out with the
+    tilt line."""
     k_i, th = [3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3], [60, 120, 180, 240, 300, 360]
     plain = scale_factor_budget(k_i, th, 0.1)
-    b = scale_factor_budget(k_i, th, 0.1, temperature_rel_bound=2e-6)
-    line = [c for c in b.components if c.symbol == "K_T"]
-    assert len(line) == 1 and line[0].distribution == "rectangular"
-    assert line[0].u == pytest.approx(3600.2 * 2e-6 / math.sqrt(3.0), rel=1e-12)
-    assert b.u_c == pytest.approx(math.hypot(plain.u_c, line[0].u), rel=1e-12)
-    assert without_tilt_u_rel(b) == pytest.approx(without_tilt_u_rel(plain), rel=1e-12)
+    for ch, dist, div in ((chamber_temperature_line(2.0, 1.0), "rectangular-product", 3.0),
+                          (chamber_temperature_line(2.0, 1.0, -0.7), "rectangular",
+                           math.sqrt(3.0))):
+        b = scale_factor_budget(k_i, th, 0.1, chamber=ch)
+        (line,) = [c for c in b.components if c.symbol == "K_T"]
+        assert line.distribution == dist
+        assert line.u == pytest.approx(3600.2 * 2e-6 * (1.0 if div == 3.0 else 0.7) / div,
+                                       rel=1e-12)
+        assert b.u_c == pytest.approx(math.hypot(plain.u_c, line.u), rel=1e-12)
+        assert without_tilt_u_rel(b) == pytest.approx(without_tilt_u_rel(plain), rel=1e-12)
+    b = scale_factor_budget(k_i, th, 0.1, chamber=chamber_temperature_line(2.0, 1.0, 0.0))
+    assert not [c for c in b.components if c.symbol == "K_T"] and b.u_c == plain.u_c
+
+
+def test_chamber_line_against_a_monte_carlo_of_the_gyro_and_the_chamber():
+    """The chamber line's u against a Monte Carlo of what it models (JCGM 101): α_K uniform
+    within ±α_max and, where the temperature is not logged, ΔT uniform within ±ΔT_max,
+    independent: std(α_K ΔT) = α_max ΔT_max/3 (not /√3, the single rectangular's); at a
+    logged ΔT, α_max |ΔT|/√3. The ``rectangular-product`` sampler of the budget's Monte Carlo
+    against the closed-form distribution of |U₁U₂|, P(|U₁U₂| ≤ x) = x(1 − ln x), by a
+    Kolmogorov–Smirnov test."""
+    from scipy import stats
+
+    from uncertainty import distribution
+
+    rng = np.random.default_rng(20261129)
+    n, a_ppm, t_c = 1_000_000, 1.0, 1.0
+    alpha = rng.uniform(-a_ppm, a_ppm, n)
+    prod = alpha * rng.uniform(-t_c, t_c, n)
+    line = chamber_temperature_line(a_ppm, t_c)
+    assert line.u_rel / 1e-6 == pytest.approx(np.std(prod), rel=4e-3)
+    assert np.std(prod) < 0.6 * a_ppm * t_c / math.sqrt(3.0)     # the single rectangular's u
+    logged = chamber_temperature_line(a_ppm, t_c, 0.6)
+    assert logged.u_rel / 1e-6 == pytest.approx(np.std(alpha * 0.6), rel=4e-3)
+    x = distribution("rectangular-product").sample(np.random.default_rng(7), 2.0, 200_000) / 2.0
+    assert np.abs(x).max() <= 1.0 and abs(x.mean()) < 3e-3
+    ks = stats.kstest(np.abs(x), lambda v: np.clip(v, 1e-300, 1.0) * (1.0 - np.log(
+        np.clip(v, 1e-300, 1.0))))
+    assert ks.pvalue > 1e-3, ks
+    assert np.std(x) == pytest.approx(1.0 / 3.0, rel=5e-3)
 
 
 def _fog(bench, dev_c, alpha_ppm=1.0):
@@ -111,23 +149,44 @@ def _bound(rep):
     return rep.item_details(rep.results.scale_factor)["temperature_coeff_bound"]
 
 
-def test_the_stated_bound_and_tolerance_reach_the_certified_k(base):
-    """calibrate's K budget takes the bound the readings state for the instrument and Table
-    2's tolerance, and results.json says which bound and where it came from."""
+def test_the_stated_bound_tolerance_and_logged_temperature_reach_the_certified_k(base):
+    """calibrate's K budget takes the bound the readings state for the instrument; with the
+    chamber's temperature logged (metadata ``temperature_c``) the logged deviation from the
+    protocol's reference, else Table 2's tolerance with ΔT uniform; results.json says which
+    bound, which reading and where they came from, summary.txt says it."""
     proto = replace(validation_protocol(),
                     conditions=replace(validation_protocol().conditions,
                                        temperature_tolerance_c=2.5))
     res = run_session(proto, base, seed=1)
+    assert res.metadata["temperature_c"] == "20.0"
     res.metadata["sf_temperature_coeff_bound_ppm_per_c"] = "0.4"
-    rep = _calibrate(proto, res)
-    b = rep.item_uncertainty["scale_factor"]
-    (line,) = [c for c in b.components if c.symbol == "K_T"]
-    assert line.u * math.sqrt(3.0) == pytest.approx(abs(b.value) * 0.4e-6 * 2.5, rel=1e-12)
-    d = _bound(rep)
-    assert (d["bound_ppm_per_c"], d["source"], d["gyro_type"], d["temperature_tolerance_c"]) \
-        == (0.4, "metadata", "rlg", 2.5)
-    assert "+-2.5 degC of the reference and |alpha_K| <= 0.4 ppm/degC: stated by the " \
-        "readings" in summary(rep.result())
+    for logged, div, dev in (("20.6", math.sqrt(3.0), 0.6), (None, 3.0, 2.5)):
+        md = {k: v for k, v in res.metadata.items() if k != "temperature_c"}
+        if logged is not None:
+            md["temperature_c"] = logged
+        rep = _calibrate(proto, replace(res, metadata=md))
+        b = rep.item_uncertainty["scale_factor"]
+        (line,) = [c for c in b.components if c.symbol == "K_T"]
+        assert line.u * div == pytest.approx(abs(b.value) * 0.4e-6 * dev, rel=1e-9)
+        d = _bound(rep)
+        assert (d["bound_ppm_per_c"], d["source"], d["gyro_type"], d["temperature_tolerance_c"],
+                d["reference_temperature_c"]) == (0.4, "metadata", "rlg", 2.5, 20.0)
+        assert d["u_ppm"] * 1e-6 * abs(b.value) == pytest.approx(line.u, rel=1e-9)
+        text = summary(rep.result())
+        if logged is not None:
+            assert (d["basis"], d["logged_temperature_c"]) == ("logged", 20.6)
+            assert d["deviation_c"] == pytest.approx(0.6, rel=1e-12)
+            assert "the chamber temperature the readings log, 20.6 degC (+0.6 degC from the " \
+                "reference 20 degC), and |alpha_K| <= 0.4 ppm/degC: stated by the readings" in text
+        else:
+            assert (d["basis"], d["logged_temperature_c"], d["deviation_c"]) == \
+                ("tolerance", None, None)
+            assert "+-2.5 degC of the reference and |alpha_K| <= 0.4 ppm/degC: stated by the " \
+                "readings" in text
+    at_ref = _calibrate(proto, res)             # logged at the reference: no K_T line
+    assert not [c for c in at_ref.item_uncertainty["scale_factor"].components
+                if c.symbol == "K_T"]
+    assert _bound(at_ref)["u_ppm"] == 0.0
 
 
 def test_the_bound_follows_the_gyro_type_never_the_bench(proto, base):

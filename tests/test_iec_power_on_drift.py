@@ -56,3 +56,18 @@ def test_power_on_drift_budget_without_transient():
     z, hits = _study(0.0, 30.0, 300, seed=7)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert z.mean() < 1.5
+
+
+@pytest.mark.parametrize("a_dps", [0.0, 0.12])
+def test_power_on_drift_budget_at_the_study_signal_to_noise(a_dps):
+    """The reduced study's power-on records: white noise σ_y = 0.095 °/s per 0.1-s sample
+    (the ADXRS610 bench's 1.8 °/√h), with the bench file's transient (0.12 °/s, τ 150 s,
+    about 1.7 σ of a smoothed value over the 90-s record) and without it. U covers in both;
+    the value reads high (z mean about +0.55 and +1.1) with z sd about 0.45 and 0.35: at this
+    signal-to-noise ratio most of the 180 smoothed values contend for the maximum, whose
+    spread is far below σ (docs/iec62047-20-readings.md#over-wide-budgets-left). The z sd
+    check pins that documented limitation: it fails when the estimator improves, and the
+    docs and README tables must then follow."""
+    z, hits = _study(a_dps, 150.0, 300, seed=1, sigma_dps=0.095)
+    assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
+    assert 0.0 < z.mean() < 1.5 and z.std() < 0.7, (z.mean(), z.std())

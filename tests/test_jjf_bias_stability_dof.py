@@ -118,10 +118,27 @@ def test_stated_limit_covers_95_percent(study_records):
     sets, sigma, _ = study_records
     hits, z = 0, []
     for s in sets:
-        bs = float(np.mean([rg.block_mean_stability(x, 1.0, 10) for x in s]))
+        bs = math.sqrt(np.mean([rg.block_mean_stability(x, 1.0, 10) ** 2 for x in s]))
         nu = rg.bias_stability_dof(s, 10)
         hits += sigma <= bs * math.sqrt(nu / chi2.ppf(0.05, nu))
         z.append((bs - sigma) / (bs / math.sqrt(2 * nu)))
     ci = binomtest(hits, len(sets)).proportion_ci(method="exact")
     assert ci.low <= 0.95 <= ci.high, (hits, ci)
     assert 0.7 <= np.std(z, ddof=1) <= 1.3 and abs(np.mean(z)) < 0.4
+
+
+def test_root_mean_square_removes_the_mean_of_standard_deviations_bias(study_records):
+    """Eq (19) as printed averages the records' standard deviations: E[s] < σ by about
+    σ/(4ν_m) (ν_m the Satterthwaite ν of one record, from the exact covariance). The item
+    takes their root mean square, whose square is unbiased for σ² = E[s²]."""
+    sets, sigma, nu_true = study_records
+    s = np.array([[rg.block_mean_stability(x, 1.0, 10) for x in q] for q in sets])
+    rms2 = np.mean(s ** 2, axis=1)
+    se = np.std(rms2, ddof=1) / math.sqrt(rms2.size)
+    assert abs(np.mean(rms2) - sigma ** 2) <= 3 * se              # unbiased in σ²
+    nu_m = nu_true / 3
+    low = np.mean(s) / sigma - 1                                   # eq (19)'s relative bias
+    se_low = np.std(s.mean(axis=1), ddof=1) / math.sqrt(len(sets)) / sigma
+    assert abs(low + 1 / (4 * nu_m)) <= 3 * se_low, (low, -1 / (4 * nu_m), se_low)
+    rms_low = np.mean(np.sqrt(rms2)) / sigma - 1                   # ≈ −1/(4ν), ν = Qν_m
+    assert abs(rms_low + 1 / (4 * nu_true)) <= 3 * se_low, (rms_low, se_low)

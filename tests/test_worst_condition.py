@@ -120,22 +120,22 @@ def drawn_k_l(proto, base):
 
 def test_nonlinearity_z_on_drawn_type_b_effects(drawn_k_l):
     """With every Type B effect of the set-up drawn per trial (the ``typeb`` case), the
-    corrected K_l's z = (K_l − truth)/u_c has sd within 0.7–1.3; its mean is within ±1
-    (−0.6 here: the correction takes the tilt at the bound, while these mountings are drawn
-    over the disc inside it); the draft's range as measured, with U widened for its bias,
+    corrected K_l's z = (K_l − truth)/u_c has sd within 0.7–1.3 (0.85 here); its mean is
+    within ±1 (−0.93 here: the correction takes the tilt at the bound, while these mountings
+    are drawn over the disc inside it, and the table's errors at their MPE, while this table's
+    lie inside it; with the round noise the errors' expected range grew and so did this
+    over-correction, −0.6 before); the draft's range as measured, with U widened for its bias,
     has z mean ≈ +1 and sd below 0.7 (over-wide and biased)."""
     z, z_draft, _ = drawn_k_l
     assert abs(z.mean()) < 1.0 and 0.7 <= z.std(ddof=1) <= 1.3, (z.mean(), z.std(ddof=1))
     assert z_draft.mean() > 0.8 and z_draft.std(ddof=1) < 0.7
 
 
-@pytest.mark.xfail(strict=True, reason="K_l under-covers on drawn Type B effects: 34 of 40 "
-                   "with alpha_K drawn within its bound (36 with the bench file's alpha_K, the "
-                   "same noise: K_l's error at these seeds moves by up to 0.5 U with a 1e-8 "
-                   "change of K through the counts' quantisation); the rounds' error model "
-                   "lacks the gyro's noise over a round (README, K_l)")
 def test_nonlinearity_covers_on_drawn_type_b_effects(drawn_k_l):
-    """The corrected K_l's U covers on drawn Type B effects (Clopper–Pearson reaching 95 %)."""
+    """The corrected K_l's U covers on drawn Type B effects (Clopper–Pearson reaching 95 %):
+    its rounds' error model carries the gyro's angle noise over each round (the angle random
+    walk estimated from the 7.4 series, and the measured compensation's rate error); without
+    it 34 of 40 covered."""
     hits = drawn_k_l[2]
     assert clopper_pearson(hits, TRIALS)[1] >= 0.95, hits
 

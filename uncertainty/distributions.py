@@ -12,6 +12,8 @@ rectangular    √3                        JCGM 100 4.3.7; JCGM 101 6.4.2
 triangular     √6                        JCGM 100 4.3.9; JCGM 101 6.4.5
 arcsine        √2                        JCGM 101 6.4.6 (U-shaped)
 trapezoidal    √(6 / (1 + β²))           JCGM 100 4.3.9; JCGM 101 6.4.4
+rectangular-   3                         product X₁X₂ of two independent zero-mean
+product                                  rectangulars: JCGM 100 5.1.2 NOTE (second order)
 =============  =======================  ==========================================
 
 Aliases: ``uniform`` → rectangular, ``u-shaped`` / ``u_shaped`` → arcsine,
@@ -26,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Normal", "Rectangular", "Triangular", "Arcsine", "Trapezoidal",
-           "DISTRIBUTIONS", "distribution"]
+           "RectangularProduct", "DISTRIBUTIONS", "distribution"]
 
 
 @dataclass(frozen=True)
@@ -137,6 +139,31 @@ class Trapezoidal:
         return rng.uniform(-h1, h1, size) + rng.uniform(-h2, h2, size)
 
 
+@dataclass(frozen=True)
+class RectangularProduct:
+    """The product X₁X₂ of two independent zero-mean rectangulars on [−a₁, a₁] and [−a₂, a₂],
+    given by a = a₁a₂: density ln(a/|x|)/(2a) on [−a, a], u = a/3.
+
+    A product whose factors both have zero estimate has no first-order term; JCGM 100 5.1.2
+    NOTE's second-order term gives u²(x₁x₂) = u²(x₁)u²(x₂) = (a₁²/3)(a₂²/3), exact for
+    independent factors. Monte Carlo samples: the product of the two draws (JCGM 101 6.4.2.4
+    for each factor).
+
+    >>> RectangularProduct().divisor
+    3.0
+    """
+
+    name = "rectangular-product"
+
+    @property
+    def divisor(self) -> float:
+        return 3.0
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples a·U₁U₂, U₁ and U₂ independent and uniform on [−1, 1]."""
+        return half_width * rng.uniform(-1.0, 1.0, size) * rng.uniform(-1.0, 1.0, size)
+
+
 #: The one mapping from a distribution's name to its class.
 DISTRIBUTIONS = {
     "normal": Normal,
@@ -148,6 +175,7 @@ DISTRIBUTIONS = {
     "u-shaped": Arcsine,
     "u_shaped": Arcsine,
     "trapezoidal": Trapezoidal,
+    "rectangular-product": RectangularProduct,
 }
 
 

@@ -401,10 +401,12 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
     if name == "certificates":
         rows, _ = certificates(store, 1, big)
         return (["number", "issued_at", "calibration", "customer", "instrument_serial",
-                 "replaces", "reason", "seal_sha256", "pdf_sha256"],
+                 "replaces", "reason", "seal_sha256", "pdf_sha256", "virtual_bench"],
                 [[c.number, c.issued_at, c.calibration_id, c.calibration.instrument.customer
                   .name, c.calibration.instrument.serial, c.replaces.number if c.replaces
-                  else "", c.reason, c.seal_sha256, c.pdf_sha256] for c in rows])
+                  else "", c.reason, c.seal_sha256, c.pdf_sha256,
+                  "yes" if virtual_readings(store, c.calibration.readings_sha256) else ""]
+                 for c in rows])
     if name == "due":
         rows, _ = due(store, 1, big, params.get("q", ""), params.get("within_days", 30),
                       params.get("customer", ""))

@@ -114,20 +114,9 @@ def test_calibrate_record_takes_the_registered_type(tmp_path, bench_readings, ca
     states RLG, the readings and the command line state no type: the run takes the RLG bound
     (the same readings without --record take the larger default)."""
     from gonio.cli import main
-    from gonio.records.db import open_store
 
     readings = _without_gyro_type(bench_readings[0], tmp_path / "readings.csv")
-    data = tmp_path / "data"
-    st = open_store(None, data)
-    try:
-        people = make_people(st)
-        cust = services.add_customer(st, people["tech"], "Owner")
-        services.register_instrument(st, people["tech"], customer_id=cust.id,
-                                     serial="RLG-0001", spec_key="ogam-draft",
-                                     manufacturer="gonio virtual bench",
-                                     model="RLG goniometer (virtual)", gyro_type="rlg")
-    finally:
-        st.close()
+    data = _registered(tmp_path, "rlg")
     run = ["calibrate", str(readings), "--protocol", str(SMALL_PROTOCOL)]
 
     def bound(out):

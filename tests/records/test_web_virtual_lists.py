@@ -76,4 +76,6 @@ def test_lists_mark_the_virtual_bench(sqlite_store, bench_readings, computed_fol
         services.calibration(store, virt).error
     assert services.calibration(store, virt).status == "issued"
     assert web.get("/certificates").text.count(TAG) == 1
+    got = list(csv.reader(io.StringIO(web.get("/export/certificates.csv").text)))
+    assert got[0][-1] == "virtual_bench" and [r[-1] for r in got[1:]] == ["yes"]
     assert len(reads) == 2

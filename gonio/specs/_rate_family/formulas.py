@@ -24,6 +24,8 @@ Contents
 :func:`block_std_dof`           effective ν of a standard deviation of correlated means
 :func:`bias_stability_dof`      effective ν of JJF (19)'s B_s from its own records
 :func:`earth_rate_projection_dps`  Ω_E on a gyro axis, any orientation
+:func:`max_abs_normal_mean`     c_n = E[max |Z_i|] of n normal values
+:func:`selection_excess`        midpoint and half-width of a noisy maximum's excess
 :func:`sine_fit`                amplitude and phase at a known frequency (IEC 5.5 reading)
 :func:`minus3db_frequency`      −3 dB crossing (JJF 7.2.15.2, IEC 5.5.3)
 :func:`phase90_frequency`       90° lag crossing (IEC 5.5.3)
@@ -287,6 +289,49 @@ def last_exceedance_time(time_s, stat, level: float) -> float:
 
 
 # --------------------------------------------------------------------------- frequency response
+
+
+def max_abs_normal_mean(n: int) -> float:
+    """c_n = E[max_i |Z_i|] of ``n`` independent standard normal values: the mean excess of
+    the largest of n noisy values (or differences) whose true values are all equal, read as
+    magnitudes (IEC 5.3.3.7's maximum over the temperatures visited twice, 5.3.3.5's largest
+    smoothed value, JJF 7.2.2's largest residual): ∫₀^∞ 1 − (2Φ(x) − 1)ⁿ dx.
+
+    >>> round(max_abs_normal_mean(1), 6), round(math.sqrt(2 / math.pi), 6)   # E|Z| = √(2/π)
+    (0.797885, 0.797885)
+    """
+    from scipy import integrate, special
+
+    if n < 1:
+        raise GonioError(f"max_abs_normal_mean: n must be ≥ 1, got {n!r}")
+    f = lambda x: 1.0 - special.erf(x / math.sqrt(2.0)) ** n  # noqa: E731   (2Φ − 1 = erf(x/√2))
+    return float(integrate.quad(f, 0.0, 12.0, limit=200)[0])
+
+
+def selection_excess(values, sds) -> tuple[float, int]:
+    """The selection excess of the largest of noisy non-negative ``values`` (magnitudes, each
+    with the standard deviation ``sds`` of its noise), as a midpoint and half-width
+    (JCGM 100 4.3.7): (c_m·σ/2, m), σ the largest value's, m the contenders — the values
+    within 2√2·σ_j of the largest (closer than twice the σ of a difference of two, so
+    either could hold the largest true value). Noise raises a maximum by between 0 (one
+    value stands clear of the others) and c_m·σ (m values share the largest true value,
+    c_m = :func:`max_abs_normal_mean`); which holds is not known, so the reading less the
+    midpoint c_m·σ/2 is the estimate and ± c_m·σ/2 its rectangular term. One contender
+    (m = 1): no excess. The midpoint never exceeds the largest value.
+
+    >>> half, m = selection_excess([5.0, 5.0], [1.0, 1.0])   # two equal: c_2·σ/2
+    >>> m, round(half, 4), round(max_abs_normal_mean(2) / 2, 4)
+    (2, 0.5642, 0.5642)
+    >>> selection_excess([5.0, 1.0], [1.0, 1.0])              # one clear of the other
+    (0.0, 1)
+    """
+    v, s = as_array(values, "values"), as_array(sds, "sds")
+    if v.shape != s.shape or v.size == 0:
+        raise GonioError(f"selection_excess: {v.size} values and {s.size} standard deviations")
+    i = int(np.argmax(v))
+    m = int(np.sum(v >= v[i] - 2 * math.sqrt(2) * s))
+    half = min(max_abs_normal_mean(m) * float(s[i]) / 2, float(v[i])) if m > 1 else 0.0
+    return half, m
 
 
 def sine_fit(time_s, y, freq_hz: float) -> tuple[float, float, float]:

@@ -22,7 +22,7 @@ Contents
 :func:`normal_range_cdf`        P(R/σ ≤ w), range of n normal values (Tippett)
 :func:`normal_range_mean`       d_n = E[R/σ] of n normal values
 :func:`half_range_upper`        IEC 5.3.3.4: one-sided upper limit of the expected half range
-:func:`max_abs_normal_mean`     c_n = E[max |Z_i|] of n normal values (5.3.3.7's selection excess)
+:func:`max_abs_normal_mean`     c_n = E[max |Z_i|] (5.3.3.7's selection excess; shared, re-exported)
 ==============================  ==================================================
 """
 
@@ -33,7 +33,8 @@ import math
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.specs._rate_family.formulas import FLICKER_FLOOR_EXACT, as_array, least_squares_line
+from gonio.specs._rate_family.formulas import (FLICKER_FLOOR_EXACT, as_array,  # noqa: F401
+                                               least_squares_line, max_abs_normal_mean)
 from gonio.units import S_PER_H
 
 
@@ -296,20 +297,3 @@ def half_range_upper(half_range: float, n: int, p: float = 0.95) -> float:
     q = 1.0 - p
     w = optimize.brentq(lambda x: normal_range_cdf(x, n) - q, 1e-9, 40.0, xtol=1e-12)
     return float(half_range * normal_range_mean(n) / w)
-
-
-
-def max_abs_normal_mean(n: int) -> float:
-    """c_n = E[max_i |Z_i|] of ``n`` independent standard normal values: the mean excess of
-    the largest of n noisy differences whose true values are all 0 (IEC 5.3.3.7's maximum
-    over the temperatures visited twice): ∫₀^∞ 1 − (2Φ(x) − 1)ⁿ dx.
-
-    >>> round(max_abs_normal_mean(1), 6), round(math.sqrt(2 / math.pi), 6)   # E|Z| = √(2/π)
-    (0.797885, 0.797885)
-    """
-    from scipy import integrate, special
-
-    if n < 1:
-        raise GonioError(f"max_abs_normal_mean: n must be ≥ 1, got {n!r}")
-    f = lambda x: 1.0 - special.erf(x / math.sqrt(2.0)) ** n  # noqa: E731   (2Φ − 1 = erf(x/√2))
-    return float(integrate.quad(f, 0.0, 12.0, limit=200)[0])

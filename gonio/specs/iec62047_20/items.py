@@ -865,12 +865,9 @@ def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertai
 
     The reading is a maximum of |smoothed value − reference| over all records, so noise
     raises it by a selection excess between 0 (one value stands clear of the others) and
-    c_m·σ (m values share the largest true distance, c_m = E[max|Z_i|] of
-    :func:`gonio.specs.iec62047_20.formulas.max_abs_normal_mean`). The contenders are the m
-    values within 2√2·σ of the maximum (closer than twice the σ of a difference of two, so
-    either could hold the largest true distance). The excess is known only within
-    [0, c_m·σ]: the value is the reading less the midpoint c_m·σ/2, the term rectangular
-    ± c_m·σ/2 (JCGM 100 4.3.7); one contender (m = 1) has no selection excess. σ (a
+    c_m·σ (m values share the largest true distance): the value is the reading less the
+    midpoint c_m·σ/2, the term rectangular ± c_m·σ/2, the m contenders those within 2√2·σ
+    of the maximum (:func:`gonio.specs._rate_family.formulas.selection_excess`). σ (a
     smoothed value of P samples minus the reference of nr) is σ_y·√(1/P + 1/nr), σ_y from
     the samples' second differences, √(var Δ²y/6), which a power-on transient smooth on
     the sample interval does not enter (the smoothed values' differences and the reference
@@ -888,8 +885,8 @@ def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertai
                     float(tt[-1] - tt[0]) if tt.size > 1 else 0.0))
     i = int(np.argmax(vals))
     noise = sds[i][0]
-    m_sel = int(sum(np.sum(d >= vals[i] - 2 * math.sqrt(2) * s) for d, (s, _) in zip(dists, sds)))
-    excess = min(ief.max_abs_normal_mean(m_sel) * noise / 2, vals[i]) if m_sel > 1 else 0.0
+    excess, m_sel = rg.selection_excess(np.concatenate(dists), np.concatenate(
+        [np.full(d.size, s) for d, (s, _) in zip(dists, sds)]))
     u = gum(lambda v, m, w: v + m + w,
             [from_u("drift", vals[i], noise, dof=50, source="noise of the smoothed output"),
              type_b("noise_max", -excess, excess, "rectangular",

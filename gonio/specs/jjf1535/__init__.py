@@ -28,12 +28,16 @@ TITLE_ZH = "JJF 1535-2015 微机电(MEMS)陀螺仪校准规范"
 READINGS_TAKEN = (
     "7.2.1: K is the mean of the Q least-squares K_m; the mean of the rests before and after "
     "each calibration is subtracted; rests are not fit points.",
-    "7.2.2: the denominator of eq (6) is the fitted span K(Ω_max+ − Ω_max−) with Ω_max− signed.",
+    "7.2.2: the denominator of eq (6) is the fitted span K(Ω_max+ − Ω_max−) with Ω_max− signed; "
+    "the noise's selection excess of the largest residual is removed at its midpoint, eq (6)'s "
+    "reading is stated beside the value.",
     "7.2.3: K̄_m = (K+ + K−)/2, magnitude reported.",
     "7.2.6/7.2.7: the relation sign of eqs (13)/(14) is read two-sided, |…|/|F*| ≤ 50 %.",
     "7.2.8/7.2.12: the Earth-rate projection on the input axis is removed (the specification "
     "does not; at 40° N a true 5 (°/h)/g would read 14.7 (°/h)/g).",
     "7.2.9: warm-up time = earliest time after which every window meets the nominal stability.",
+    "7.2.10: B_s is the root mean square of the records' standard deviations (eq (19)'s mean of "
+    "standard deviations reads low; stated beside the value).",
     "7.2.13: eqs (22)-(24) as printed difference means one sample apart and fall as 2/k²; the "
     "ARW is taken from the overlapping Allan variance (IEEE 952), the printed statistic is "
     "reported alongside, labelled.",

@@ -36,6 +36,19 @@ TITLES_ZH = {
 #: Chinese templates filled from the item's details): the warm-up time (7.2.9) depends on the
 #: window W, the block P and the nominal stability the reading taken compares with.
 ITEM_CONDITIONS = {
+    "nonlinearity": (
+        "Nonlinearity (7.2.2): eq (6) as printed, the mean of the Q largest residuals, reads "
+        "{reading:#.3g}; the value certified is that reading less the midpoint of the noise's "
+        "selection excess (the largest of noisy residuals reads high).",
+        "非线性度（7.2.2）：按原文式（6），Q 次最大残差的平均值为 {reading:#.3g}；所给校准值为该值减去"
+        "噪声选择超出量的中点（含噪残差的最大值偏大）。"),
+    "bias_stability": (
+        "Bias stability (7.2.10): eq (19) as printed, the mean of the Q records' standard "
+        "deviations, reads {reading_eq19_dph:#.3g} °/h (a mean of standard deviations reads low); "
+        "the value certified is their root mean square, whose square is unbiased for the block "
+        "means' variance.",
+        "零偏稳定性（7.2.10）：按原文式（19），Q 段记录标准偏差的平均值为 {reading_eq19_dph:#.3g} °/h"
+        "（标准偏差的平均值偏小）；所给校准值为其均方根，其平方是分块均值方差的无偏估计。"),
     "warmup_time": (
         "Warm-up time (7.2.9): the earliest time after power-on from which every window of "
         "W = {window_samples} samples ({window_s:g} s) has a stability of P-sample block means "
@@ -53,7 +66,9 @@ HEADING = ("MEMS gyroscope calibration results", "微机电(MEMS)陀螺仪校准
 #: The readings taken (results.json's English notes) in Chinese, by the note's clause prefix.
 READINGS_ZH = {
     "7.2.1:": "7.2.1：K 取 Q 次最小二乘 K_m 的平均值；每次校准前后静止输出的平均值被扣除；静止点不作拟合点。",
-    "7.2.2:": "7.2.2：式（6）的分母取拟合量程 K(Ω_max+ − Ω_max−)，Ω_max− 带符号。",
+    "7.2.2:": "7.2.2：式（6）的分母取拟合量程 K(Ω_max+ − Ω_max−)，Ω_max− 带符号；最大残差的噪声选择超出量"
+              "按其中点扣除，式（6）的原值并列给出。",
+    "7.2.10:": "7.2.10：B_s 取各段记录标准偏差的均方根（式（19）的标准偏差平均值偏小；并列给出）。",
     "7.2.3:": "7.2.3：K̄_m = (K+ + K−)/2，报告其绝对值。",
     "7.2.6/7.2.7:": "7.2.6/7.2.7：式（13）/（14）的关系按双侧理解，|…|/|F*| ≤ 50 %。",
     "7.2.8/7.2.12:": "7.2.8/7.2.12：扣除地球自转角速度在输入轴上的投影（规范未扣除；在北纬 40° 处，"
@@ -78,6 +93,10 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"data acquisition, relative(?: \(u2\))?", "数据采集（相对）"),
     (r"repeatability of the mean of Q calibrations, s\(K_m\)/√Q", "Q 次校准平均值的重复性 s(K_m)/√Q"),
     (r"mean of K_n,m", "K_n,m 的平均值"),
+    (r"noise of the largest residual \(rate-point means, leverage\)",
+     "最大残差的噪声（各速率点平均值，杠杆值）"),
+    (r"selection excess of the largest of the noisy residuals \(midpoint ± c_m·σ/2 removed\)",
+     "含噪残差取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
     (r"noise of the rate-point means", "各速率点平均值的噪声"),
     (r"spread of K_n,m", "K_n,m 的分散性"),
     (r"spread of K_a,m", "K_a,m 的分散性"),

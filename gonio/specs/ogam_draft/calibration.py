@@ -26,7 +26,7 @@ from gonio import __version__
 from gonio.atomic import sha256_file
 from gonio.resources import protocol_provenance
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
-from gonio.units import S_PER_MIN
+from gonio.units import ARCSEC_PER_DEG, S_PER_MIN
 from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
@@ -37,7 +37,7 @@ from gonio.specs.ogam_draft.static_record import StaticRecord
 from gonio.result import Finding
 from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.result.model import Item, Result, Uncertainty
-from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES
+from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES, chamber_temperature_line
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate). The
 #: u(r) sentence is not here: it follows the source actually used (:func:`readings_taken`).
@@ -220,8 +220,8 @@ class Analysis:
             d.update(scale_factor_as_mounted(
                 float(c.value if tc is None else iu.value),
                 session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
-            d["temperature_coeff_bound"] = temperature_coeff_bound(self.readings, self.protocol,
-                                                                   self.gyro_type)
+            d["temperature_coeff_bound"] = chamber_temperature(self.readings, self.protocol,
+                                                               self.gyro_type)[1]
             if tc is not None:
                 d["stated"] = "tilt_corrected"
                 d["tilt_correction"] = {"label": TILT_CORRECTED["note"], **tc.to_dict()}
@@ -547,6 +547,39 @@ def temperature_coeff_bound(readings: Readings, protocol: Protocol,
             "how": how}
 
 
+def chamber_temperature(readings: Readings, protocol: Protocol, gyro_type: str | None = None):
+    """K's chamber line ``K_T`` for these readings: the
+    :class:`~gonio.specs.ogam_draft.item_uncertainty.ChamberLine` of
+    :func:`~gonio.specs.ogam_draft.item_uncertainty.chamber_temperature_line` at the bound of
+    :func:`temperature_coeff_bound`, and that function's dict with what the line took
+    (results.json ``items.scale_factor.details.temperature_coeff_bound``).
+
+    Where the readings log the chamber's temperature (metadata ``temperature_c``; a stream's
+    metadata carries it into its reduced readings) ΔT is the logged value minus the
+    protocol's reference (``conditions.temperature_c``, Table 2's 20 °C; the difference
+    rounded to 10⁻⁹ °C, so that 19.4 − 20 reads −0.6), ``basis`` ``logged``; else ΔT is
+    known only within ± ``conditions.temperature_tolerance_c``, ``basis`` ``tolerance``.
+
+    >>> import pandas as pd
+    >>> from gonio.specs.ogam_draft.readings import Readings
+    >>> p = load_protocol("ogam-draft")
+    >>> line, d = chamber_temperature(Readings(pd.DataFrame(), {"gyro_type": "fog",
+    ...                                                         "temperature_c": "19.4"}), p)
+    >>> d["basis"], d["deviation_c"], round(d["u_ppm"], 4), d["distribution"]
+    ('logged', -0.6, 0.3464, 'rectangular')
+    >>> d = chamber_temperature(Readings(pd.DataFrame(), {"gyro_type": "fog"}), p)[1]
+    >>> d["basis"], d["logged_temperature_c"], round(d["u_ppm"], 4), d["distribution"]
+    ('tolerance', None, 0.3333, 'rectangular-product')
+    """
+    bound = temperature_coeff_bound(readings, protocol, gyro_type)
+    logged = metadata_float(readings.metadata, "temperature_c", file=readings.path)
+    ref = float(protocol.conditions.temperature_c)
+    line = chamber_temperature_line(bound["bound_ppm_per_c"], bound["temperature_tolerance_c"],
+                                    None if logged is None else round(logged - ref, 9))
+    return line, {**bound, "reference_temperature_c": ref, "logged_temperature_c": logged,
+                  **line.to_dict()}
+
+
 # --------------------------------------------------------------------------- checks
 
 def screen_readings(readings: Readings, protocol: Protocol, findings: list | None = None
@@ -786,6 +819,33 @@ def _round_coupling(results, readings, protocol, budget):
                                        float(budget.parameters["tilt_deg"]))
 
 
+def _round_noise(results, readings, protocol) -> dict:
+    """The gyro's noise over the 7.1 rounds for K_l's Monte Carlo: ``noise``
+    (:func:`gonio.specs.ogam_draft.item_uncertainty.round_noise` from the 7.4 series that 7.5
+    uses, the quantum of one count through K, the static phase when the Earth-rate
+    compensation is measured) and ``time_s`` (each round's time from zeroing to reading);
+    empty without repeated 7.4 series or without the rounds' times."""
+    from gonio.specs.ogam_draft.item_uncertainty import COUNT_QUANTUM_U, round_noise
+
+    rp = results.repeatability
+    if not rp.measured or not results.angle_deviation.measured \
+            or "time_s" not in readings.data.columns:
+        return {}
+    df = readings.data.set_index("line")
+    t_sf = df.loc[results.scale_factor.table["line"].to_numpy(), "time_s"].to_numpy(dtype=float)
+    ad = results.angle_deviation.tables["readings"]
+    ad = ad[ad["line"].isin(list(rp.used_lines))]
+    t_ad = df.loc[ad["line"].to_numpy(), "time_s"].to_numpy(dtype=float)
+    if not np.isfinite(t_sf).all() or not np.isfinite(t_ad).any():
+        return {}
+    k = abs(float(np.mean(results.scale_factor.table["K_i_counts_per_deg"])))
+    static = protocol.session.static_s if protocol.session.earth_compensation == "measured" \
+        else None
+    noise = round_noise(ad["E_arcsec"], ad["round"], t_ad, COUNT_QUANTUM_U / k * ARCSEC_PER_DEG,
+                        static)
+    return {"noise": noise, "time_s": t_sf}
+
+
 def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
@@ -860,9 +920,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     if sf.measured:
         t = sf.table
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
-                  temperature_rel_bound=1e-6 * temperature_coeff_bound(
-                      readings, protocol, gyro_type)["bound_ppm_per_c"]
-                  * protocol.conditions.temperature_tolerance_c)
+                  chamber=chamber_temperature(readings, protocol, gyro_type)[0])
         out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
                                                      mpe, **kw)
         tc, _ = tilt_correction(results, readings, protocol)
@@ -878,7 +936,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
             out["scale_factor_nonlinearity"] = dataclasses.replace(
                 iu.nonlinearity_corrected_budget(
                     t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
-                    tilt_round_coupling=_round_coupling(results, readings, protocol, budget)),
+                    tilt_round_coupling=_round_coupling(results, readings, protocol, budget),
+                    **_round_noise(results, readings, protocol)),
                 beside=draft)
     zs = results.zero_stability
     if zs.measured:

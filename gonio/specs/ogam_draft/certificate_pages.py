@@ -43,7 +43,8 @@ from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
                                            detail, e_budget, followed, interval_cell, item_names,
-                                           item_path, method_rows, reading_note, segments,
+                                           item_path, k_tilt_note, method_rows, reading_note,
+                                           segments,
                                            specification_text, stated_item, u_cell)
 
 
@@ -139,7 +140,12 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
                                            ppm=f"{ppm:.2g}")])
         tb = sf.get("temperature_coeff_bound")
-        if tb:                                  # K's chamber-temperature line: which bound
+        if tb and tb.get("basis") == "logged":  # K's chamber line at the logged temperature
+            add("p", [L["K_temperature_logged"].format(
+                t=f"{tb['logged_temperature_c']:g}", dt=f"{tb['deviation_c']:+.2g}",
+                ref=f"{tb['reference_temperature_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
+                src=L["K_T_source_" + tb["source"]])])
+        elif tb:                                # K's chamber-temperature line: which bound
             add("p", [L["K_temperature_bound"].format(
                 tol=f"{tb['temperature_tolerance_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
                 src=L["K_T_source_" + tb["source"]])])
@@ -216,7 +222,7 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
                 cell += [L["semi"], *segments(L["note_zero_model"], v=_num(
                     res, item_path(name, "estimates.model.value"), "sig3", U))]
         elif name == "scale_factor" and detail(res, name, "tilt_correction"):
-            cell += [L["semi"], *_k_tilt_note(res, L)]
+            cell += [L["semi"], *k_tilt_note(res, L)]
         elif name == "scale_factor_nonlinearity" and detail(res, name, "estimates"):
             cell += [L["semi"], *segments(L["note_kl_draft"], v=_num(
                 res, item_path(name, "estimates.draft.value"), "sig3", U))]
@@ -239,18 +245,6 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
             cell[1:1] = [L["semi"] + interval_cell(st, lang)]
         rrows.append([str(i), L[name], clause_text(item["clause"], L), cell, u_cell(st, L), unit])
     return rrows
-
-
-def _k_tilt_note(res: dict, L: dict) -> list:
-    """K's note when the in-situ tilt estimate corrected it: ψ and α with their U95 and the
-    7.1 mean uncorrected (results.json ``details.tilt_correction``, ``details.estimates``)."""
-    def tc(field: str, rule: str):
-        return _num(res, item_path("scale_factor", f"tilt_correction.{field}"), rule, None)
-
-    return segments(L["note_k_tilt"], p=tc("tilt_deg", "sig2"), up=tc("U95_tilt_deg", "sig2"),
-                    a=tc("azimuth_deg", "sig3"), ua=tc("U95_azimuth_deg", "sig2"),
-                    v=_num(res, item_path("scale_factor", "estimates.draft.value"), "atU",
-                           res["items"]["scale_factor"]["uncertainty"]["U"]))
 
 
 def _conformity_blocks(add, res: dict, lab: dict | None, L: dict) -> None:

@@ -27,8 +27,9 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
-                                           item_path, item_uncertainty, method_rows,
-                                           reading_note, specification_text, stated_item)
+                                           item_path, item_uncertainty, k_tilt_note,
+                                           method_rows, reading_note, specification_text,
+                                           stated_item)
 
 
 def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
@@ -140,9 +141,24 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, L[name], s["value"], item["unit"],
                      description=LABELS["below_zero"]["en"], **kw)
         else:
-            quantity(data, L[name], s["value"], item["unit"], **kw)
+            quantity(data, L[name], s["value"], item["unit"],
+                     description=_k_tilt_text(res, L) if name == "scale_factor" else None, **kw)
         _detail_lists(data, res, name)
     return root
+
+
+def _k_tilt_text(res: dict, L: dict) -> str | None:
+    """K's description when the in-situ tilt estimate ([tilt_estimate]) corrected it: the
+    certificate's note (ψ, α with their U95, the 7.1 mean uncorrected) and how U(K) holds the
+    correction (line K_te in place of K_tilt), from results.json; None otherwise."""
+    if not (res["items"]["scale_factor"].get("details") or {}).get("tilt_correction"):
+        return None
+    lines = {c.get("symbol") for c in res["items"]["scale_factor"]["uncertainty"].get(
+        "components") or []}
+    held = ("; U(K) carries the correction's uncertainty (budget line K_te: u(ψ), u(α) and "
+            "their correlation) in place of the tilt coupling at the A.1 bound (K_tilt)"
+            if "K_te" in lines else "")
+    return "K " + "".join(str(x) for x in k_tilt_note(res, L)) + held
 
 
 def _limit_rule(c) -> str:

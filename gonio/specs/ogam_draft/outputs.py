@@ -71,7 +71,12 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
                      f"{tc['U95_tilt_deg']:.2g} deg) at azimuth {tc['azimuth_deg']:.1f} deg (U95 "
                      f"{tc['U95_azimuth_deg']:.2g} deg), beyond the draft")
     tb = kd.get("temperature_coeff_bound")
-    if tb:                                   # which bound K's chamber line took, and whence
+    if tb and tb.get("basis") == "logged":   # K's chamber line at the logged temperature
+        lines.append(f"note: U(K) holds for the chamber temperature the readings log, "
+                     f"{tb['logged_temperature_c']:g} degC ({tb['deviation_c']:+.2g} degC from the "
+                     f"reference {tb['reference_temperature_c']:g} degC), and |alpha_K| <= "
+                     f"{tb['bound_ppm_per_c']:g} ppm/degC: {tb['how']}")
+    elif tb:                                 # which bound K's chamber line took, and whence
         lines.append(f"note: U(K) holds for a chamber within +-{tb['temperature_tolerance_c']:g} "
                      f"degC of the reference and |alpha_K| <= {tb['bound_ppm_per_c']:g} ppm/degC:"
                      f" {tb['how']}")

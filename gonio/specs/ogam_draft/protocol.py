@@ -123,8 +123,9 @@ class AnnexA:
     coverage_factor: float | None = None
     #: The defaults, per gyro type, of the bound on the instrument's scale-factor temperature
     #: coefficient |α_K|, ppm/°C, used when the readings do not state the instrument's own
-    #: (``gonio.specs.ogam_draft.calibration.temperature_coeff_bound``): with Table 2's
-    #: tolerance it gives K's chamber-temperature line (not in the draft's budget).
+    #: (``gonio.specs.ogam_draft.calibration.temperature_coeff_bound``): with the logged
+    #: chamber deviation, or Table 2's tolerance, it gives K's chamber-temperature line
+    #: (``item_uncertainty.chamber_temperature_line``; not in the draft's budget).
     sf_temperature_coeff_bound_rlg_ppm_per_c: float = 0.1
     sf_temperature_coeff_bound_fog_ppm_per_c: float = 1.0
 

@@ -181,6 +181,19 @@ def interval_cell(st: dict, lang: str) -> str:
     return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
 
 
+def k_tilt_note(res: dict, L: dict) -> list:
+    """K's note when the in-situ tilt estimate corrected it, as :func:`segments`: ψ and α with
+    their U95 and the 7.1 mean uncorrected (results.json ``details.tilt_correction``,
+    ``details.estimates``); the certificate's K cell and the DCC's K quantity state it."""
+    def tc(field: str, rule: str):
+        return num(res, item_path("scale_factor", f"tilt_correction.{field}"), rule, None)
+
+    return segments(L["note_k_tilt"], p=tc("tilt_deg", "sig2"), up=tc("U95_tilt_deg", "sig2"),
+                    a=tc("azimuth_deg", "sig3"), ua=tc("U95_azimuth_deg", "sig2"),
+                    v=num(res, item_path("scale_factor", "estimates.draft.value"), "atU",
+                          res["items"]["scale_factor"]["uncertainty"]["U"]))
+
+
 def segments(template: str, **nums) -> list:
     """Split a label template "... {x} ..." into text and Num segments.
 

@@ -1,0 +1,61 @@
+"""The optical DCC states K's tilt correction where the certificate and summary.txt do: a
+protocol with [tilt_estimate] gives the scale factor's dcc:quantity a description with the
+measured ψ and α (their U95), the 7.1 mean uncorrected and the K_te line; the document stays
+valid against the DCC 3.3.0 schema; without [tilt_estimate] K has no such description."""
+
+from __future__ import annotations
+
+import html
+import re
+from pathlib import Path
+
+import pytest
+from lxml import etree
+
+from gonio.cli import main
+
+SMALL = Path(__file__).parent / "data" / "small-protocol.toml"
+TILT_ESTIMATE = ('[tilt_estimate]\npositions = 8\ndwell_s = 30.0\nsettle_s = 5.0\n'
+                 'orientation = "up"\nrate_dps = 60.0\n')
+NS = {"dcc": "https://ptb.de/dcc"}
+
+
+def _run(tmp: Path, tilt: bool) -> Path:
+    proto = tmp / "protocol.toml"
+    proto.write_text(SMALL.read_text("utf-8") + ("\n" + TILT_ESTIMATE if tilt else ""), "utf-8")
+    assert main(["simulate", "--protocol", str(proto), "--seed", "3", "--out",
+                 str(tmp / "sim")]) == 0
+    assert main(["calibrate", str(tmp / "sim" / "readings.csv"), "--protocol", str(proto),
+                 "--dcc", "--out", str(tmp / "cal")]) == 0
+    return tmp / "cal"
+
+
+def _k_description(cal: Path) -> list[str]:
+    doc = etree.parse(str(cal / "certificate.dcc.xml"))
+    return [t for t in doc.xpath("//dcc:result[@id='result-scale_factor']/dcc:data/"
+                                 "dcc:quantity/dcc:description/dcc:content/text()",
+                                 namespaces=NS)]
+
+
+def test_the_dcc_states_the_tilt_correction(tmp_path, dcc_schema):
+    cal = _run(tmp_path, tilt=True)
+    xml = (cal / "certificate.dcc.xml").read_text("utf-8")
+    errors = list(dcc_schema.iter_errors(xml))
+    assert not errors, str(errors[0])[:500]
+    (text,) = _k_description(cal)
+    # the same ψ, α and U95 as summary.txt prints them (its own formatting, in degrees)
+    summary = (cal / "summary.txt").read_text("utf-8")
+    m = re.search(r"corrected by the measured tilt psi = (\S+) deg \(U95 (\S+) deg\) at azimuth "
+                  r"(\S+) deg \(U95 (\S+) deg\)", summary)
+    assert m, summary
+    psi, u_psi, az, u_az = m.groups()
+    assert f"ψ = {psi}° (U = {u_psi}°)" in text and f"azimuth {az}° (U = {u_az}°)" in text, text
+    assert "K_te" in text and "7.1 mean uncorrected" in text
+    # the certificate's K cell says the same sentence
+    page = html.unescape(re.sub(r"<[^>]+>", "", (cal / "certificate.html").read_text("utf-8")))
+    page = page.replace("\xa0", " ")                   # the page binds "ψ = 0.05" together
+    assert text.removeprefix("K ").split("; U(K)")[0] in page
+
+
+def test_without_tilt_estimate_k_has_no_description(tmp_path):
+    assert _k_description(_run(tmp_path, tilt=False)) == []
