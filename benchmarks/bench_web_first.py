@@ -12,7 +12,9 @@ wall seconds are printed of:
   machine hides least), and from the process start until the line "serving the records"
   (every page answers from then on); then the first page asked after that line;
 * the login (one Argon2id verification, by design about half a second), the first
-  dashboard, the instrument's page, and its history plot at its first drawing and again.
+  dashboard, the instrument's page (which marks its virtual-bench calibrations: the first
+  time it reads each stored readings file's header) and again, and its history plot at its
+  first drawing and again.
 
 With ``--results FILE`` (a ``results.json``, e.g. of ``gonio demo --spec triad-alignment``)
 every calibration gets its own stored copy of it (one field changed, so each has its own
@@ -180,6 +182,7 @@ def main(argv=None) -> int:
                 "username": "tech", "password": PASSWORD, "csrf": token}))
             timed(rows, "first dashboard /", lambda: c.get("/"))
             timed(rows, "instrument page", lambda: c.get("/instruments/1"))
+            timed(rows, "instrument page, again", lambda: c.get("/instruments/1"))
             timed(rows, "history plot, first drawing",
                   lambda: c.get("/instruments/1/history.svg"))
             timed(rows, "history plot, again", lambda: c.get("/instruments/1/history.svg"))
