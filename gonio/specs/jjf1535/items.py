@@ -244,10 +244,12 @@ def asymmetry(ctx: Context) -> Item:
     stated bound (``rate_table_ripple_rel``, Table 2's rate smoothness 0.05 % where the
     readings state none), each point's share attenuated by the turn its samples cover —
     not over √Q: a programme whose forward and reverse turns cancel brings the table back
-    to its starting angle, so every calibration meets the ripple at the same phases. The spread of the
-    Q values K_a,m and the two-direction fit's standard error are kept in the details: the
-    fit's residuals are mostly the nonlinearity's shape, and with it the study's z had
-    sd 0.43."""
+    to its starting angle, so every calibration meets the ripple at the same phases. With
+    Q ≥ 2 the spread of the Q values K_a,m, s/√Q (ν = Q − 1), as well: the points' standard
+    errors miss the slow noise, a drift along the ascending rates that tilts K+ and K− in
+    opposite senses (the study's errors spread 1.1–1.2× the noise term). The two-direction
+    fit's standard error is kept in the details: its residuals are mostly the
+    nonlinearity's shape, and with it the study's z had sd 0.43."""
     title, clause, unit = "scale-factor asymmetry K_a", "7.2.3", "1"
     miss = _need(ctx, "scale_factor", "asymmetry", title, clause, unit)
     if miss:
@@ -266,12 +268,14 @@ def asymmetry(ctx: Context) -> Item:
               from_u("ripple", 0.0, float(u_ripple), type="B",
                      source=f"rate-table ripple ≤ {ctx.rate_table_ripple_rel:.2g}·|Ω| "
                             "(once per revolution, unknown phase) through K+ and K−")]
-    u = gum(lambda a, b, c: a + b + c, inputs)
+    if Q > 1:       # the rates' slow noise (drift along a direction's ascending rates)
+        inputs.append(from_u("s_Ka", 0.0, float(ka.std(ddof=1) / math.sqrt(Q)), dof=Q - 1,
+                             source="spread of K_a,m"))
+    u = gum(lambda a, *d: a + sum(d), inputs)
     se = float(np.mean([c["se_K"] for c in cals])) * 2.0 / abs(ctx.K) / math.sqrt(Q)
     return Item("asymmetry", title, clause, unit, float(ka.mean()), uncertainty=u, details={
         "K_a_m": ka, "signed_m": [c["asym"].signed for c in cals],
         "K_pos_m": [c["asym"].K_pos for c in cals], "K_neg_m": [c["asym"].K_neg for c in cals],
-        "spread_of_K_a_m": float(ka.std(ddof=1) / math.sqrt(Q)) if Q > 1 else None,
         "fit_standard_error": se})
 
 
