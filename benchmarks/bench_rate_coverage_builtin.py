@@ -7,8 +7,8 @@ an over-wide U, coverage < 0.90 a narrow one).
         --seeds 100 --first 910000 [--fixed-equipment] [--records out.jsonl]
 
 Bench: the default bench (mems-adxrs610) as the specification's study bench makes it
-(``SPEC.coverage.study_bench``: thermal lag and cross-axis coupling of a turning Earth rate off: history effects the truths
-leave out) but WITH the power-on transient, so the warm-up and start-up items are measured.
+(``SPEC.coverage.study_bench``: thermal lag off, and for JJF 1535 the cross-axis coupling of a turning
+Earth rate: history effects the truths leave out; IEC 62047-20's truths carry the cross-axis) but WITH the power-on transient, so the warm-up and start-up items are measured.
 Equipment: by default (as in the tests and ``gonio validate``) each trial draws every
 type-B equipment error from its seed — rate-table rate error and voltmeter gain (normal,
 their certificates' u), chamber deviation per set point (uniform ±2 °C), the gyro's

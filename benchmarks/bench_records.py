@@ -1,7 +1,9 @@
 """Load benchmark of the records and gonio serve (issue 27).
 
 1. Fills a fresh database with 1 000 instruments and 10 000 calibrations (7 result items
-   each, half of them issued with a certificate) by bulk inserts.
+   each, half of them issued with a certificate) by bulk inserts; each calibration stores
+   its own readings file (half of them the virtual bench's: the lists read each shown
+   calibration's metadata to mark it), or with ``--one-blob`` all point to one synthetic blob.
 2. Starts ``gonio serve`` on it and times pages over HTTP from one client: the instrument
    list, the calibration list (random pages), the instrument page (random instruments) and
    its history plot; prints p50 / p95 per page (target: p95 < 200 ms for lists and
@@ -10,7 +12,7 @@
    until all 8 are computed: prints the time and checks every one has its items.
 
     python benchmarks/bench_records.py [--database postgresql://… | --postgresql]
-                                       [--requests 200] [--pages-only]
+                                       [--requests 200] [--pages-only] [--one-blob]
 
 ``--postgresql`` starts a throwaway PostgreSQL server for the run (as the tests do, from
 Debian's server binaries); ``--pages-only`` skips the uploads (3.).
@@ -41,13 +43,46 @@ PROTOCOL = REPO / "tests" / "data" / "small-protocol.toml"
 PASSWORD = "benchmark password"
 
 
-def fill(store, n_instruments: int, n_calibrations: int) -> None:
+def readings_copies(readings: Path, n_calibrations: int, n_instruments: int):
+    """Each calibration its own stored readings file (a list of bytes, calibration 1 first),
+    made from the virtual bench's ``readings``: its serial the instrument's and its operator
+    line numbered (each file has its own SHA-256); every second file keeps the virtual
+    bench's own lines (``# bench:``, ``# seed:``, ``# generator:``: the lists mark it
+    virtual), the others have them removed (a laboratory's file: not marked)."""
+    lines = readings.read_text().splitlines(keepends=True)
+    out = []
+    for c in range(n_calibrations):
+        virtual = c % 2 == 0
+        mine = []
+        for line in lines:
+            key = line[2:].split(":", 1)[0] if line.startswith("# ") else None
+            if key == "serial":
+                line = f"# serial: S-{c % n_instruments + 1:05d}\n"
+            elif key == "operator":
+                line = f"# operator: technician {c + 1}\n"
+            elif key in ("bench", "seed", "generator") and not virtual:
+                continue
+            mine.append(line)
+        out.append("".join(mine).encode())
+    return out
+
+
+def fill(store, n_instruments: int, n_calibrations: int, readings: Path | None = None) -> None:
+    """``n_calibrations`` calibrations of ``n_instruments`` instruments (7 result items each,
+    every second one issued). With ``readings`` (a virtual bench's readings file) each
+    calibration stores its own copy (:func:`readings_copies`: half of them virtual), so
+    the lists read each one's metadata as they mark virtual-bench calibrations; without,
+    every calibration points to one synthetic blob that is no readings file."""
     from gonio.records import blobs, services
     from gonio.records.models import (Blob, Calibration, Certificate, Customer, Instrument,
                                       ResultItem)
 
     services.create_user(store, None, "tech", PASSWORD, "technician reviewer admin")
     sha = blobs.put_bytes(store.blob_root, b"synthetic readings")
+    own = []
+    if readings is not None:
+        for body in readings_copies(readings, n_calibrations, n_instruments):
+            own.append((blobs.put_bytes(store.blob_root, body), len(body)))
     keys = [("scale_factor", "scale factor K", "7.1", "counts/deg", 76434.8, 0.025),
             ("scale_factor_nonlinearity", "scale-factor nonlinearity K_l", "7.2", "%", 3e-5,
              2e-5), ("zero_stability", "zero stability B_s", "7.3", "deg/h", 8e-4, 3e-3),
@@ -59,6 +94,8 @@ def fill(store, n_instruments: int, n_calibrations: int) -> None:
     t0 = time.perf_counter()
     with store.writing() as s:
         s.add(Blob(sha256=sha, size=18))
+        if own:
+            s.execute(insert(Blob), [{"sha256": h, "size": n} for h, n in own])
         s.execute(insert(Customer), [{"id": i + 1, "name": f"Customer {i + 1}", "address": ""}
                                      for i in range(50)])
         s.execute(insert(Instrument), [
@@ -74,7 +111,8 @@ def fill(store, n_instruments: int, n_calibrations: int) -> None:
                                                       + rng.randrange(60))
             issued = c % 2 == 0
             cals.append({"id": c + 1, "instrument_id": inst, "spec_key": "ogam-draft",
-                         "readings_sha256": sha, "readings_name": "readings.csv",
+                         "readings_sha256": own[c][0] if own else sha,
+                         "readings_name": "readings.csv",
                          "performed_on": day, "status": "issued" if issued else "computed",
                          "created_by_id": 1, "results_sha256": sha})
             for k, title, clause, unit, v, U in keys:
@@ -98,7 +136,9 @@ def fill(store, n_instruments: int, n_calibrations: int) -> None:
                                f"(SELECT MAX(id) FROM {t}))"))
             s.commit()
     print(f"filled: {n_instruments} instruments, {n_calibrations} calibrations, "
-          f"{len(items)} result items, {len(certs)} certificates in "
+          f"{len(items)} result items, {len(certs)} certificates, "
+          + (f"{len(own)} stored readings files (half virtual)" if own
+             else "one synthetic readings blob") + " in "
           f"{time.perf_counter() - t0:.1f} s")
 
 
@@ -133,6 +173,9 @@ def time_pages(c: httpx.Client, n: int, n_instruments: int, n_calibrations: int)
         "history plot (SVG)": lambda: f"/instruments/{rng.randrange(1, n_instruments + 1)}"
                                       "/history.svg",
     }
+    page = c.get(f"/calibrations?page={n_calibrations // 50}").text
+    marks, shown = page.count('class="virtual-tag"'), page.count('<tr><td><a href="/calibr')
+    print(f"virtual-bench marks on a calibration list page: {marks} of {shown} rows")
     print(f"{'page':22s} {'n':>5s} {'p50 ms':>8s} {'p95 ms':>8s} {'max ms':>8s}")
     for name, url in pages.items():
         c.get(url())                                 # warm
@@ -193,6 +236,9 @@ def main() -> int:
     ap.add_argument("--postgresql", action="store_true",
                     help="a throwaway PostgreSQL server for this run")
     ap.add_argument("--pages-only", action="store_true", help="no uploads (step 3)")
+    ap.add_argument("--one-blob", action="store_true",
+                    help="every calibration points to one synthetic blob (no readings file "
+                         "for the lists' virtual-bench mark to read)")
     args = ap.parse_args()
     if args.postgresql:
         sys.path.insert(0, str(REPO / "tests" / "records"))
@@ -212,13 +258,14 @@ def run(args) -> int:
           f"{'PostgreSQL' if args.database else 'SQLite'}")
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
-        store = open_store(args.database, data)
-        fill(store, args.instruments, args.calibrations)
-        store.close()
         from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
         from gonio.specs.ogam_draft.protocol import load_protocol
         write_session(run_session(load_protocol(PROTOCOL), load_bench("rlg"), seed=3),
                       Path(tmp) / "run")
+        store = open_store(args.database, data)
+        fill(store, args.instruments, args.calibrations,
+             None if args.one_blob else Path(tmp) / "run" / "readings.csv")
+        store.close()
         proc = start(data, args.database, args.port)
         try:
             base = f"http://127.0.0.1:{args.port}"

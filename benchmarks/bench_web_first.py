@@ -1,7 +1,10 @@
 """Benchmark: the web's first answers after ``gonio serve`` starts.
 
 A fresh SQLite database is filled with one instrument and ``--calibrations`` calibrations
-(7 items each, half issued; :func:`bench_records.fill`), ``gonio serve`` is started, and the
+(7 items each, half issued; each its own stored readings file, half of them the virtual
+bench's, whose metadata the pages read as they mark virtual-bench calibrations — ``--one-blob``
+points them all to one synthetic blob instead; :func:`bench_records.fill`), ``gonio serve``
+is started, and the
 wall seconds are printed of:
 
 * "after start" measured two ways: from the process start (``Popen``) until the login page
@@ -9,7 +12,9 @@ wall seconds are printed of:
   machine hides least), and from the process start until the line "serving the records"
   (every page answers from then on); then the first page asked after that line;
 * the login (one Argon2id verification, by design about half a second), the first
-  dashboard, the instrument's page, and its history plot at its first drawing and again.
+  dashboard, the instrument's page (which marks its virtual-bench calibrations: the first
+  time it reads each stored readings file's header) and again, and its history plot at its
+  first drawing and again.
 
 With ``--results FILE`` (a ``results.json``, e.g. of ``gonio demo --spec triad-alignment``)
 every calibration gets its own stored copy of it (one field changed, so each has its own
@@ -23,6 +28,7 @@ Targets: each page under 0.5 s. Prints the machine and its load: on a loaded mac
 wall time measures the queue. Not part of the test run.
 
     python benchmarks/bench_web_first.py [--calibrations 100] [--pause 3] [--results FILE [--unkept]]
+                                           [--one-blob]
 
 ``gonio serve`` answers the login page before its application is built
 (:mod:`gonio.web.front`), then imports SciPy in the background
@@ -44,7 +50,7 @@ from pathlib import Path
 import httpx
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_records import PASSWORD, fill  # noqa: E402
+from bench_records import PASSWORD, PROTOCOL, fill  # noqa: E402
 
 
 def _port() -> int:
@@ -111,13 +117,23 @@ def main(argv=None) -> int:
     ap.add_argument("--unkept", action="store_true",
                     help="with --results: the synthetic rows, keeping no statement (as "
                          "before the rows kept it: the plot reads every stored result)")
+    ap.add_argument("--one-blob", action="store_true",
+                    help="every calibration points to one synthetic blob (no readings file "
+                         "for the lists' virtual-bench mark to read)")
     args = ap.parse_args(argv)
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     with tempfile.TemporaryDirectory(prefix="bench-web-") as tmp:
         data = Path(tmp) / "data"
+        readings = None
+        if not args.one_blob:
+            from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+            from gonio.specs.ogam_draft.protocol import load_protocol
+            write_session(run_session(load_protocol(PROTOCOL), load_bench("rlg"), seed=3),
+                          Path(tmp) / "run")
+            readings = Path(tmp) / "run" / "readings.csv"
         store = open_store(None, data)
-        fill(store, 1, args.calibrations)
+        fill(store, 1, args.calibrations, readings)
         if args.results is not None:
             give_results(store, args.results, rows=not args.unkept)
             print(f"results: each calibration its own copy of {args.results} "
@@ -166,6 +182,7 @@ def main(argv=None) -> int:
                 "username": "tech", "password": PASSWORD, "csrf": token}))
             timed(rows, "first dashboard /", lambda: c.get("/"))
             timed(rows, "instrument page", lambda: c.get("/instruments/1"))
+            timed(rows, "instrument page, again", lambda: c.get("/instruments/1"))
             timed(rows, "history plot, first drawing",
                   lambda: c.get("/instruments/1/history.svg"))
             timed(rows, "history plot, again", lambda: c.get("/instruments/1/history.svg"))

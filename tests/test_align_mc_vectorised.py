@@ -35,24 +35,37 @@ def derived_one(t):
                            [s[i, j] for i, j in off], minv @ b])
 
 
-def loop_reference(readings, n, seed):
-    """The per-trial Monte Carlo as before the change (one draw, three fits per trial)."""
+def loop_reference(readings, n, seed, sigma_components):
+    """The per-trial Monte Carlo as before the change (one draw, three fits per trial), with
+    the estimate's noise model: white σ_w/√w per dwell plus one N(0, σ_B²) offset per block
+    (each orientation's rotating dwells, each static dwell), drawn after the dwells."""
     rows = readings.rows("alignment")
     x = np.column_stack([an.dwell_regressors(rows, readings.latitude_deg), np.ones(len(rows))])
     w = rows["n_samples"].to_numpy(float)
     w = w / w.max()
-    sig, mbs = [], []
+    mbs = []
     for c in an.OUT:
-        th, _, s, _, _ = an._fit_channel(x, rows[c].to_numpy(float), w, False)
-        sig.append(s)
+        th, _, _, _, _ = an._fit_channel(x, rows[c].to_numpy(float), w, False)
         mbs.append(th)
     fitted = x @ np.array(mbs).T
-    sd = np.array(sig)[None, :] / np.sqrt(w)[:, None]
+    sd = np.asarray(sigma_components)[:, 0][None, :] / np.sqrt(w)[:, None]
+    sd_b = np.asarray(sigma_components)[:, 1]
+    rot = rows["rate_dps"].to_numpy() != 0
+    ups = list(dict.fromkeys(rows["up"][rot]))
+    block = [ups.index(u) if r else None for u, r in zip(rows["up"], rot)]
+    nxt = len(ups)
+    for k, b in enumerate(block):
+        if b is None:
+            block[k], nxt = nxt, nxt + 1
+    zb = np.zeros((len(rows), nxt))
+    zb[np.arange(len(rows)), block] = 1.0
+    assert np.any(sd_b > 0)                 # the packaged bench's bias wander is seen
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))
     sw = np.sqrt(w)
     T, D = [], []
     for _ in range(n):
-        ys = fitted + sd * rng.standard_normal(fitted.shape)
+        g = rng.standard_normal((len(rows) + nxt, 3))
+        ys = fitted + sd * g[:len(rows)] + zb @ (sd_b[None, :] * g[len(rows):])
         t = np.concatenate([np.linalg.lstsq(x * sw[:, None], ys[:, i] * sw, rcond=None)[0]
                             for i in range(3)])
         T.append(t)
@@ -62,7 +75,7 @@ def loop_reference(readings, n, seed):
 
 def test_vectorised_trials_equal_the_loop(readings):
     res = an.estimate_alignment(readings, monte_carlo=3000, seed=11)
-    u_t, u_d = loop_reference(readings, 3000, 11)
+    u_t, u_d = loop_reference(readings, 3000, 11, res.sigma_components)
     np.testing.assert_allclose(res.u_mc_theta, u_t, rtol=1e-10)
     for k, sl in an._DERIVED_SLICES.items():
         np.testing.assert_allclose(res.u_mc[k], u_d[sl], rtol=1e-10, err_msg=k)

@@ -160,7 +160,10 @@ def test_the_stated_bound_tolerance_and_logged_temperature_reach_the_certified_k
     res = run_session(proto, base, seed=1)
     assert res.metadata["temperature_c"] == "20.0"
     res.metadata["sf_temperature_coeff_bound_ppm_per_c"] = "0.4"
-    for logged, div, dev in (("20.6", math.sqrt(3.0), 0.6), (None, 3.0, 2.5)):
+    # logged: alpha_K (dT + delta), delta within the protocol's thermometer MPE 0.2 degC:
+    # u^2 = (a^2/3)(dT^2 + m^2/3) (closed form); else a dT_max/3
+    for logged, div, dev in (("20.6", math.sqrt(3.0 / (1.0 + 0.2 ** 2 / 3.0 / 0.6 ** 2)), 0.6),
+                             (None, 3.0, 2.5)):
         md = {k: v for k, v in res.metadata.items() if k != "temperature_c"}
         if logged is not None:
             md["temperature_c"] = logged
@@ -176,17 +179,28 @@ def test_the_stated_bound_tolerance_and_logged_temperature_reach_the_certified_k
         if logged is not None:
             assert (d["basis"], d["logged_temperature_c"]) == ("logged", 20.6)
             assert d["deviation_c"] == pytest.approx(0.6, rel=1e-12)
+            assert (d["logged_from"], d["thermometer_mpe_c"], d["thermometer_from"]) == \
+                ("metadata", 0.2, "protocol")
+            assert d["distribution"] == "rectangular-shifted-product"
             assert "the chamber temperature the readings log, 20.6 degC (+0.6 degC from the " \
-                "reference 20 degC), and |alpha_K| <= 0.4 ppm/degC: stated by the readings" in text
+                "reference 20 degC; thermometer MPE +-0.2 degC), and |alpha_K| <= 0.4 " \
+                "ppm/degC: stated by the readings" in text
         else:
             assert (d["basis"], d["logged_temperature_c"], d["deviation_c"]) == \
                 ("tolerance", None, None)
             assert "+-2.5 degC of the reference and |alpha_K| <= 0.4 ppm/degC: stated by the " \
                 "readings" in text
-    at_ref = _calibrate(proto, res)             # logged at the reference: no K_T line
-    assert not [c for c in at_ref.item_uncertainty["scale_factor"].components
+    # logged at the reference: the thermometer's part alone, alpha_K delta (product of two
+    # zero-mean rectangulars, u = a m/3); with a thermometer stated exact, no K_T line
+    at_ref = _calibrate(proto, res)
+    b = at_ref.item_uncertainty["scale_factor"]
+    (line,) = [c for c in b.components if c.symbol == "K_T"]
+    assert line.u == pytest.approx(abs(b.value) * 0.4e-6 * 0.2 / 3.0, rel=1e-9)
+    assert _bound(at_ref)["distribution"] == "rectangular-product"
+    exact = _calibrate(proto, replace(res, metadata={**res.metadata, "thermometer_mpe_c": "0"}))
+    assert not [c for c in exact.item_uncertainty["scale_factor"].components
                 if c.symbol == "K_T"]
-    assert _bound(at_ref)["u_ppm"] == 0.0
+    assert (_bound(exact)["u_ppm"], _bound(exact)["thermometer_from"]) == (0.0, "metadata")
 
 
 def test_the_bound_follows_the_gyro_type_never_the_bench(proto, base):
@@ -291,6 +305,25 @@ def test_study_draws_alpha_k_within_the_bound_k_t_takes(proto, base, name, key):
     assert abs(off) > 1e-8
 
 
+def _simulated_stream(tmp_path, dev, name):
+    """A 20 Hz virtual RLG session of the small protocol with the chamber ``dev`` °C off
+    the reference, written with its stream (CSV); the output folder."""
+    from gonio.specs.ogam_draft.simulate import simulate
+
+    proto_file = Path(__file__).parent / "data" / "pins" / "ogam-draft-small.toml"
+    rlg = (Path(__file__).parents[1] / "protocols" / "benches" / "rlg.toml").read_text("utf-8")
+    assert "deviation_c = 0.0" in rlg
+    bench = tmp_path / f"{name}.toml"
+    bench.write_text(rlg.replace('table = "table-precision"', 'table = "table-precision"\n'
+                                 'sample_rate_hz = 20.0', 1)
+                     .replace("sample_rate_hz = 1000.0", "", 1)
+                     .replace("deviation_c = 0.0", f"deviation_c = {dev!r}"), "utf-8")
+    out = tmp_path / name
+    simulate(out, protocol=str(proto_file), bench=str(bench), seed=2, stream=True,
+             stream_format="csv")
+    return out
+
+
 def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):
     """A bench whose chamber is 0.6 °C off writes the stream's optional temperature_c column
     (the reference plus the deviation on every sample) and the readings metadata likewise;
@@ -302,20 +335,10 @@ def test_stream_logs_the_chamber_and_reduces_to_the_same_readings(tmp_path):
     from gonio.specs.ogam_draft.protocol import load_protocol
     from gonio.specs.ogam_draft.readings import read_readings
     from gonio.specs.ogam_draft.reduce import reduce_stream
-    from gonio.specs.ogam_draft.simulate import simulate
 
     proto_file = Path(__file__).parent / "data" / "pins" / "ogam-draft-small.toml"
-    rlg = (Path(__file__).parents[1] / "protocols" / "benches" / "rlg.toml").read_text("utf-8")
-    assert "deviation_c = 0.0" in rlg
     for dev, name in ((0.6, "warm"), (0.0, "ref")):
-        bench = tmp_path / f"{name}.toml"
-        bench.write_text(rlg.replace('table = "table-precision"', 'table = "table-precision"\n'
-                                     'sample_rate_hz = 20.0', 1)
-                         .replace("sample_rate_hz = 1000.0", "", 1)
-                         .replace("deviation_c = 0.0", f"deviation_c = {dev!r}"), "utf-8")
-        out = tmp_path / name
-        simulate(out, protocol=str(proto_file), bench=str(bench), seed=2, stream=True,
-                 stream_format="csv")
+        out = _simulated_stream(tmp_path, dev, name)
         s = read_stream(out / "stream.csv")
         rd = read_readings(out / "readings.csv")
         assert rd.metadata["temperature_c"] == repr(20.0 + dev)
@@ -394,3 +417,167 @@ def test_a_bound_that_is_not_positive_and_finite_is_refused(tmp_path, capsys, va
         msg = str(exc.value)
         assert f"sf_temperature_coeff_bound_{kind}_ppm_per_c" in msg and p.name in msg, msg
         assert "\n" not in msg
+
+
+def test_shifted_product_line_against_a_monte_carlo_of_the_gyro_and_the_thermometer():
+    """The logged line α_K (ΔT + δ), δ the thermometer's error within ± its MPE m: its u by
+    the closed form (α_max²/3)(ΔT² + m²/3) against a Monte Carlo drawing α_K and δ (JCGM 101),
+    and the budget's ``rectangular-shifted-product`` sampler against those direct draws
+    (two-sample Kolmogorov–Smirnov); at ΔT = 0 the product of two zero-mean rectangulars."""
+    from scipy import stats
+
+    from uncertainty import distribution
+
+    rng = np.random.default_rng(20261130)
+    n, a_ppm = 400_000, 1.0
+    for dev, m in ((0.6, 0.2), (-0.1, 0.3), (0.0, 0.2), (0.45, 0.0)):
+        direct = rng.uniform(-a_ppm, a_ppm, n) * (dev + rng.uniform(-m, m, n))
+        line = chamber_temperature_line(a_ppm, 1.0, dev, m)
+        assert line.u_rel / 1e-6 == pytest.approx(np.std(direct), rel=6e-3), (dev, m)
+        assert line.half_width_rel / 1e-6 == pytest.approx(abs(dev) + m, rel=1e-12)
+        assert line.half_width_rel / 1e-6 >= np.abs(direct).max()
+        drawn = distribution(line.distribution, beta=line.beta).sample(
+            np.random.default_rng(11), line.half_width_rel / 1e-6, n)
+        assert stats.ks_2samp(drawn, direct).pvalue > 1e-3, (dev, m)
+        assert np.std(drawn) == pytest.approx(line.u_rel / 1e-6, rel=6e-3)
+    assert chamber_temperature_line(1.0, 1.0, 0.0, 0.2).distribution == "rectangular-product"
+
+
+def _cli_readings(tmp_path, name, column=None, metadata=None):
+    """tests/data/chamber-readings.csv (a virtual RLG session of the small protocol, its
+    gyro type and temperature removed: four zero-stability rows, then the three
+    7.1 rows) with a ``temperature_c`` column (``column``: {row index: cell}, the rest
+    blank) and/or metadata ``temperature_c``."""
+    lines = (Path(__file__).parent / "data" / "chamber-readings.csv").read_text(
+        "utf-8").splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    body = [ln for ln in lines if not ln.startswith("#")]
+    if metadata is not None:
+        head.append(f"# temperature_c: {metadata}")
+    if column is not None:
+        body = [body[0] + ",temperature_c"] + [
+            row + "," + column.get(i, "") for i, row in enumerate(body[1:])]
+    f = tmp_path / f"{name}.csv"
+    f.write_text("\n".join(head + body) + "\n", "utf-8")
+    return f
+
+
+def _cli(f, out):
+    from gonio.cli import main
+
+    small = Path(__file__).parent / "data" / "pins" / "ogam-draft-small.toml"
+    return main(["calibrate", str(f), "--spec", "ogam-draft", "--protocol", str(small),
+                 "--out", str(out)])
+
+
+def _cli_k_t(tmp_path, capsys, f):
+    import json
+
+    out = tmp_path / (f.stem + "-out")
+    rc = _cli(f, out)
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    res = json.loads((out / "results.json").read_text("utf-8"))
+    sf = res["items"]["scale_factor"]
+    return sf["details"]["temperature_coeff_bound"], sf["value"], (out / "summary.txt").read_text(
+        "utf-8")
+
+
+def test_calibrate_reads_the_key_the_column_a_sparse_column_or_neither(tmp_path, capsys):
+    """From the outside (``gonio calibrate``): the metadata key; a column (its mean over the
+    three 7.1 rows, over the key); a sparse column (a slow logger, a value on every third
+    row: 19.8, 20.1, 20.7, 21.0 on rows 0, 3, 6, 9; the 7.1 rows 4, 5, 6 interpolated in
+    file order to 20.3, 20.5, 20.7: mean 20.5); neither (the tolerance reading). Each line's u is
+    checked against the closed form u = |K| α_max √((ΔT² + m²/3)/3), m = 0.2 °C, α_max =
+    1 ppm/°C (no gyro type: the larger default)."""
+    cases = {
+        "key": (None, "20.4", 20.4, "metadata"),
+        "column": ({4: "20.3", 5: "20.5", 6: "20.7", 0: "25"}, "19.0", 20.5, "column"),
+        "sparse": ({0: "19.8", 3: "20.1", 6: "20.7", 9: "21.0"}, None, 20.5, "column"),
+        "neither": (None, None, None, None),
+    }
+    for name, (col, md, want, src) in cases.items():
+        d, k, text = _cli_k_t(tmp_path, capsys, _cli_readings(tmp_path, name, col, md))
+        assert (d["logged_temperature_c"], d["logged_from"]) == (want, src), name
+        assert d["bound_ppm_per_c"] == 1.0
+        if want is None:
+            assert d["basis"] == "tolerance" and d["u_ppm"] == pytest.approx(1.0 / 3.0)
+            continue
+        dev = want - 20.0
+        assert d["deviation_c"] == pytest.approx(dev, abs=1e-9)
+        assert d["u_ppm"] == pytest.approx(math.sqrt((dev ** 2 + 0.2 ** 2 / 3.0) / 3.0),
+                                           rel=1e-9), name
+        assert ("(mean over the 7.1 rounds)" in text) == (src == "column"), name
+        assert "thermometer MPE +-0.2 degC" in text
+
+
+@pytest.mark.parametrize("cell", ["warm", "nan", "-300", "1e9"])
+def test_a_damaged_temperature_cell_is_one_line_naming_column_and_row(tmp_path, capsys, cell):
+    """A ``temperature_c`` cell that is not a temperature: one line naming the column and
+    the row's line, exit 2, nothing written."""
+    f = _cli_readings(tmp_path, "bad", {4: "20.1", 5: cell, 6: "20.2"})
+    line = f.read_text("utf-8").splitlines().index(
+        [ln for ln in f.read_text("utf-8").splitlines() if ln.endswith("," + cell)][0]) + 1
+    out = tmp_path / "out"
+    assert _cli(f, out) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "temperature_c" in err and f"bad.csv:{line}" in err, err
+    assert not out.exists()
+
+
+def test_a_stated_thermometer_mpe_reaches_the_line(tmp_path, capsys):
+    """The readings' ``thermometer_mpe_c`` over the protocol's default; a negative one is
+    refused naming the key."""
+    f = _cli_readings(tmp_path, "mpe", None, "20.4")
+    f.write_text("# thermometer_mpe_c: 0.05\n" + f.read_text("utf-8"), "utf-8")
+    d = _cli_k_t(tmp_path, capsys, f)[0]
+    assert (d["thermometer_mpe_c"], d["thermometer_from"]) == (0.05, "metadata")
+    assert d["u_ppm"] == pytest.approx(math.sqrt((0.4 ** 2 + 0.05 ** 2 / 3.0) / 3.0), rel=1e-9)
+    f.write_text("# thermometer_mpe_c: -1\n" + f.read_text("utf-8"), "utf-8")
+    assert _cli(f, tmp_path / "o") == 2
+    assert "thermometer_mpe_c" in capsys.readouterr().err
+
+
+def test_a_sparse_stream_column_reaches_k_as_the_mean_over_the_rounds(tmp_path, capsys):
+    """A stream whose logger writes ``temperature_c`` on every 40th sample only (blank
+    cells between), a ramp T(t) = 20.3 + 0.002 °C/s·t, and no metadata temperature:
+    ``gonio calibrate`` on the stream gives each 7.1 reading the ramp's mean over its round
+    (linear interpolation of a linear ramp is exact: T at the midpoint of zeroing and
+    reading) and K's line the mean over the rounds, against the closed form; the reduced
+    readings carry the column."""
+    import json
+
+    from gonio.formats.streams import read_stream
+    from gonio.specs.ogam_draft.protocol import load_protocol
+    from gonio.specs.ogam_draft.reduce import reduce_stream
+
+    out = _simulated_stream(tmp_path, 0.6, "warm")
+    lines = (out / "stream.csv").read_text("utf-8").splitlines()
+    head = [ln for ln in lines if ln.startswith("#") and "temperature_c:" not in ln]
+    body = [ln for ln in lines if not ln.startswith("#")]
+    cols = body[0].split(",")
+    ti, ki = cols.index("time_s"), cols.index("temperature_c")
+    rows = []
+    for i, ln in enumerate(body[1:]):
+        c = ln.split(",")
+        c[ki] = repr(20.3 + 0.002 * float(c[ti])) if i % 40 == 0 else ""
+        rows.append(",".join(c))
+    f = tmp_path / "sparse-stream.csv"
+    f.write_text("\n".join(head + [body[0]] + rows) + "\n", "utf-8")
+    small = Path(__file__).parent / "data" / "pins" / "ogam-draft-small.toml"
+    red = reduce_stream(read_stream(f), load_protocol(str(small)))
+    sf = red.readings[red.readings["test"] == "scale_factor"]
+    want = 20.3 + 0.002 * 0.5 * (sf["t_zero_s"] + sf["t_read_s"]).to_numpy()
+    assert np.abs(sf["temperature_c"].to_numpy() - want).max() < 1e-9
+    from gonio.cli import main
+    o = tmp_path / "cal"
+    assert main(["calibrate", str(f), "--spec", "ogam-draft", "--protocol", str(small),
+                 "--out", str(o)]) == 0, capsys.readouterr().err
+    d = json.loads((o / "results.json").read_text("utf-8"))["items"]["scale_factor"][
+        "details"]["temperature_coeff_bound"]
+    assert (d["basis"], d["logged_from"]) == ("logged", "column")
+    assert d["logged_temperature_c"] == pytest.approx(want.mean(), abs=1e-8)
+    dev = want.mean() - 20.0
+    assert d["u_ppm"] == pytest.approx(d["bound_ppm_per_c"] * math.sqrt(
+        (dev ** 2 + 0.2 ** 2 / 3.0) / 3.0), rel=1e-7)

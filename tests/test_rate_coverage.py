@@ -86,11 +86,10 @@ def with_power_on_transient(bench):
 @pytest.mark.parametrize("spec", ("jjf1535-2015", "iec62047-20"))
 def test_coverage_per_item(spec, tmp_path):
     from gonio.pipeline.coverage import coverage_table_from, trial_records
-    from gonio.specs._rate_family.simulate import study_bench
     from gonio.specs import get
 
     proto = reduced_protocol(spec, tmp_path / "reduced.toml")
-    bench = study_bench(get(spec).default_bench)
+    bench = get(spec).coverage.study_bench(get(spec).default_bench)   # IEC: cross-axis on
     if spec == "jjf1535-2015":
         bench = with_power_on_transient(bench)
     trials = [trial_records(spec, bench, str(proto), s) for s in range(500, 500 + SEEDS)]

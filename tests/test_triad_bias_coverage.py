@@ -43,5 +43,6 @@ def test_bias_u_covers_the_bench_bias_on_the_built_in_programme():
            f"{np.std(z, ddof=1):.2f}")
     assert hits.mean() >= 0.90, msg
     assert np.std(z, ddof=1) >= 0.3, msg
-    # the in-run u alone is what failed (33 % in the issue): the long-term term is needed
-    assert np.mean(hits_in_run) < 0.6, msg
+    # the in-run u alone is what failed (33 % in the issue; 61 % since the in-run u holds
+    # the bias offsets between the orientation blocks): the long-term term is needed
+    assert np.mean(hits_in_run) < 0.75, msg

@@ -8,7 +8,8 @@ Input quantities (:mod:`uncertainty.quantities`, :mod:`uncertainty.distributions
     :func:`type_a`            Type A from readings: mean, s or s/√n, ν = n − 1 (JCGM 100 4.2)
     :func:`from_u`            a quantity given by x, u(x), ν
     :data:`DISTRIBUTIONS`     the one name → distribution mapping (normal, rectangular,
-                              triangular, arcsine, trapezoidal, rectangular-product)
+                              triangular, arcsine, trapezoidal, rectangular-product,
+                              rectangular-shifted-product)
 
 Law of propagation (:mod:`uncertainty.propagation`)
     :func:`propagate`                 y, u_c, ν_eff, k, U → :class:`GumResult` (JCGM 100 5)

@@ -14,6 +14,9 @@ arcsine        √2                        JCGM 101 6.4.6 (U-shaped)
 trapezoidal    √(6 / (1 + β²))           JCGM 100 4.3.9; JCGM 101 6.4.4
 rectangular-   3                         product X₁X₂ of two independent zero-mean
 product                                  rectangulars: JCGM 100 5.1.2 NOTE (second order)
+rectangular-   √(3 / ((1 − β)² + β²/3))  product of a zero-mean rectangular and a
+shifted-                                 rectangular on [1 − 2β, 1] (scaled): JCGM 100
+product                                  5.1.2 NOTE, exact; JCGM 101 6.4.2.4 per factor
 =============  =======================  ==========================================
 
 Aliases: ``uniform`` → rectangular, ``u-shaped`` / ``u_shaped`` → arcsine,
@@ -28,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Normal", "Rectangular", "Triangular", "Arcsine", "Trapezoidal",
-           "RectangularProduct", "DISTRIBUTIONS", "distribution"]
+           "RectangularProduct", "RectangularShiftedProduct", "DISTRIBUTIONS", "distribution"]
 
 
 @dataclass(frozen=True)
@@ -164,6 +167,42 @@ class RectangularProduct:
         return half_width * rng.uniform(-1.0, 1.0, size) * rng.uniform(-1.0, 1.0, size)
 
 
+@dataclass(frozen=True)
+class RectangularShiftedProduct:
+    """The product X₁X₂ of a zero-mean rectangular X₁ on [−a₁, a₁] and an independent
+    rectangular X₂ on [c − m, c + m] (c ≥ 0, m ≥ 0, not both 0), given by its half-width
+    a = a₁(c + m) (the largest |X₁X₂|) and β = m/(c + m) ∈ [0, 1]: X₁X₂ = a·U·W, U uniform
+    on [−1, 1], W uniform on [1 − 2β, 1].
+
+    Its mean is 0 (E X₁ = 0) and, X₁ and X₂ independent, u² = E[X₁²]E[X₂²] =
+    (a₁²/3)(c² + m²/3) exactly (JCGM 100 5.1.2 NOTE: the first-order term u²(x₁)x₂² plus the
+    second-order u²(x₁)u²(x₂); the one with x₁ = 0 vanishes), so u = a·√(((1 − β)² + β²/3)/3).
+    β = 0 is the rectangular (X₂ exactly c), β = 1 the ``rectangular-product`` (c = 0).
+    Monte Carlo samples: the product of the two draws (JCGM 101 6.4.2.4 for each factor).
+
+    >>> [round(RectangularShiftedProduct(beta=b).divisor ** 2, 12) for b in (0.0, 1.0)]
+    [3.0, 9.0]
+    """
+
+    beta: float = 0.5
+    name = "rectangular-shifted-product"
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.beta <= 1.0:
+            raise ValueError(f"rectangular-shifted-product beta must be in [0, 1], "
+                             f"got {self.beta}")
+
+    @property
+    def divisor(self) -> float:
+        b = self.beta
+        return math.sqrt(3.0 / ((1.0 - b) ** 2 + b * b / 3.0))
+
+    def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
+        """Zero-mean samples a·U·W, U uniform on [−1, 1], W on [1 − 2β, 1], independent."""
+        return (half_width * rng.uniform(-1.0, 1.0, size)
+                * rng.uniform(1.0 - 2.0 * self.beta, 1.0, size))
+
+
 #: The one mapping from a distribution's name to its class.
 DISTRIBUTIONS = {
     "normal": Normal,
@@ -176,6 +215,7 @@ DISTRIBUTIONS = {
     "u_shaped": Arcsine,
     "trapezoidal": Trapezoidal,
     "rectangular-product": RectangularProduct,
+    "rectangular-shifted-product": RectangularShiftedProduct,
 }
 
 
@@ -183,7 +223,7 @@ def distribution(name: str, *, k: float | None = None, beta: float | None = None
     """The distribution called ``name`` (see :data:`DISTRIBUTIONS`).
 
     ``k`` is the coverage factor of a normal half-width, ``beta`` the top/base
-    ratio of a trapezoid.
+    ratio of a trapezoid or the shifted factor's share of a ``rectangular-shifted-product``.
 
     >>> distribution("uniform").name
     'rectangular'
@@ -199,4 +239,6 @@ def distribution(name: str, *, k: float | None = None, beta: float | None = None
         return Normal(k=1.0 if k is None else float(k))
     if cls is Trapezoidal:
         return Trapezoidal(beta=0.5 if beta is None else float(beta))
+    if cls is RectangularShiftedProduct:
+        return RectangularShiftedProduct(beta=0.5 if beta is None else float(beta))
     return cls()

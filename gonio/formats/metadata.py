@@ -19,7 +19,7 @@ KNOWN_METADATA: tuple[str, ...] = (
     "instrument", "serial", "manufacturer", "nominal_scale_factor_counts_per_deg",
     "latitude_deg", "temperature_c", "humidity_pct", "operator", "date", "table",
     "table_mpe_arcsec", "tilt_bound_deg", "counts_quantised", "table_accel_dps2",
-    "gyro_type", "sf_temperature_coeff_bound_ppm_per_c",
+    "gyro_type", "sf_temperature_coeff_bound_ppm_per_c", "thermometer_mpe_c",
 )
 # numeric metadata: key -> (lower bound, lower inclusive, upper bound, description). Bounds come
 # from physics (absolute zero, a percentage, a latitude, half a turn) and representability
@@ -35,6 +35,8 @@ NUMERIC_METADATA: dict[str, tuple[float, bool, float, str]] = {
     "table_accel_dps2": (1e-50, True, 1e50, "a number in [1e-50, 1e50]"),
     # a bound of K's temperature coefficient: zero would claim a perfect instrument
     "sf_temperature_coeff_bound_ppm_per_c": (0.0, False, 1e4, "a number in (0, 1e4]"),
+    # the chamber thermometer's maximum permissible error, °C (0: taken as exact)
+    "thermometer_mpe_c": (0.0, True, 100.0, "a number in [0, 100]"),
 }
 _TRUE = ("true", "yes", "1")
 _FALSE = ("false", "no", "0")

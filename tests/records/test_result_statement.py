@@ -21,6 +21,7 @@ from tests.statement_numbers import expected_cell, measured
 from .conftest import make_people
 from .test_records_backup import archive_without
 from .test_records_services import new_calibration, run_worker, setup_instrument
+from .test_web_security import app, login  # noqa: F401  (the app fixture)
 
 STATEMENT = ("stated", "interval_low", "interval_high")
 
@@ -171,3 +172,27 @@ def test_fill_stated_reads_each_result_once_and_keeps_what_it_cannot_read(tmp_pa
     assert [{c: r[c] for c in STATEMENT} for r in rows[:len(want)]] == list(want.values())
     assert rows[-3]["stated"] == "none" and rows[-2]["stated"] == "value"
     assert {c: rows[-1][c] for c in STATEMENT} == dict.fromkeys(STATEMENT)
+
+
+def test_the_figure_is_drawn_again_when_a_kept_statement_changes(
+        app, sqlite_store, computed_folder, bench_readings, monkeypatch):  # noqa: F811
+    """The web figure is kept per content of the history (its cache key): a changed row's
+    bar is drawn, the old figure is served again for the old content."""
+    people = {n: services.user(sqlite_store, n) for n in ("tech", "rev", "admin")}
+    inst, std = setup_instrument(sqlite_store, people)
+    new_calibration(sqlite_store, people, inst, std, bench_readings[0])
+    cal = run_worker(sqlite_store, monkeypatch, computed_folder)
+    key = next(k for k, v in kept(sqlite_store, cal.id).items() if v[0] == "interval")
+    web, url = login(app, "tech"), f"/instruments/{inst.id}/history.svg"
+
+    def scale(f):
+        with sqlite_store.writing() as s:
+            s.execute(text(f"UPDATE result_items SET interval_high = interval_high * {f} "
+                           "WHERE key = :k"), {"k": key})
+            s.commit()
+
+    before = web.get(url).text
+    scale(4)
+    after = web.get(url).text
+    scale(0.25)
+    assert after != before and web.get(url).text == before

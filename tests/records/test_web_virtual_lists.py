@@ -79,3 +79,35 @@ def test_lists_mark_the_virtual_bench(sqlite_store, bench_readings, computed_fol
     got = list(csv.reader(io.StringIO(web.get("/export/certificates.csv").text)))
     assert got[0][-1] == "virtual_bench" and [r[-1] for r in got[1:]] == ["yes"]
     assert len(reads) == 2
+
+
+def test_virtual_readings_of_stored_csv_and_parquet_files(tmp_path):
+    """The mark is read from a stored file under its SHA-256 (no suffix): a CSV file's
+    header in place, a Parquet stream's key-value metadata told by its first bytes; each
+    answer kept per blob folder; a missing file is not marked and not kept."""
+    import hashlib
+    import types
+
+    from gonio.formats.streams import write_stream
+    from gonio.records import blobs
+
+    store = types.SimpleNamespace(blob_root=tmp_path / "blobs")
+    queries._VIRTUAL_READINGS.clear()
+    csv_lab = b"# serial: X-1\n# generator: LabVIEW 2021\ntest,series\nscale_factor,1\n"
+    csv_virt = b"# serial: X-1\n# generator: gonio 0.1.0\ntest,series\nscale_factor,1\n"
+    got = {}
+    for name, body in (("csv lab", csv_lab), ("csv virtual", csv_virt)):
+        got[name] = queries.virtual_readings(store, blobs.put_bytes(store.blob_root, body))
+    for name, md in (("parquet lab", {"serial": "X-1"}),
+                     ("parquet virtual", {"serial": "X-1", "bench": "rlg-typical"})):
+        path = write_stream(tmp_path / f"{name.replace(' ', '-')}.parquet", [0.0, 0.01],
+                            [0, 5], metadata=md)
+        assert path.read_bytes()[:4] == b"PAR1"
+        sha, _ = blobs.put_file(store.blob_root, path)
+        got[name] = queries.virtual_readings(store, sha)
+    missing = hashlib.sha256(csv_virt + b"x").hexdigest()          # never stored
+    got["missing"] = queries.virtual_readings(store, missing)
+    assert got == {"csv lab": False, "csv virtual": True, "parquet lab": False,
+                   "parquet virtual": True, "missing": False}
+    assert len(queries._VIRTUAL_READINGS) == 4                     # the missing one not kept
+    assert queries.virtual_readings(store, None) is False

@@ -19,13 +19,15 @@ def rate_specification(package: str, **fields):
     (:data:`gonio.specs.ITEM_RENDERER`), its ``certificate`` module (the certificate's
     content) — plus
     ``fields`` (key, titles, clauses, protocol, calibrate, budget, the coverage stream and
-    programme ``stream=``/``reduced=``)."""
+    programme ``stream=``/``reduced=``, and ``study_bench_options=``, keywords of the study
+    bench, :func:`.simulate.study_bench`)."""
     from gonio.specs import ITEM_RENDERER, Coverage, Specification, lazy
 
     run = lazy(f"{package}.simulate:simulate")
     coverage = Coverage(engine="items", stream=fields.pop("stream"),
                         reduced=fields.pop("reduced"),
-                        study_bench=lazy("gonio.specs._rate_family.simulate:study_bench"))
+                        study_bench=lazy("gonio.specs._rate_family.simulate:study_bench",
+                                         **fields.pop("study_bench_options", {})))
     return Specification(
         simulate=lazy("gonio.specs._rate_family.simulate:write_simulation", run),
         run_trial=lazy("gonio.specs._rate_family.simulate:run_trial", run),

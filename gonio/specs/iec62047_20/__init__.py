@@ -119,4 +119,4 @@ SPEC = rate_specification(
     default_protocol=KEY, load_protocol=lazy("gonio.specs.iec62047_20.protocol:load_protocol"),
     calibrate=calibrate, screen=lazy("gonio.specs.iec62047_20.screen:screen"),
     budget=None,
-    stream=1, reduced=STUDY_PROGRAMME)
+    stream=1, reduced=STUDY_PROGRAMME, study_bench_options={"cross_axis": True})

@@ -37,6 +37,7 @@ from gonio.specs.ogam_draft.static_record import StaticRecord
 from gonio.result import Finding
 from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.result.model import Item, Result, Uncertainty
+from gonio.specs.ogam_draft.chamber import logged_chamber_temperature
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES, chamber_temperature_line
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate). The
@@ -554,11 +555,17 @@ def chamber_temperature(readings: Readings, protocol: Protocol, gyro_type: str |
     :func:`temperature_coeff_bound`, and that function's dict with what the line took
     (results.json ``items.scale_factor.details.temperature_coeff_bound``).
 
-    Where the readings log the chamber's temperature (metadata ``temperature_c``; a stream's
-    metadata carries it into its reduced readings) ΔT is the logged value minus the
-    protocol's reference (``conditions.temperature_c``, Table 2's 20 °C; the difference
-    rounded to 10⁻⁹ °C, so that 19.4 − 20 reads −0.6), ``basis`` ``logged``; else ΔT is
-    known only within ± ``conditions.temperature_tolerance_c``, ``basis`` ``tolerance``.
+    Where the readings log the chamber's temperature
+    (:func:`~gonio.specs.ogam_draft.chamber.logged_chamber_temperature`: the mean of a
+    ``temperature_c`` column over the 7.1 rounds, interpolated in time where a slow logger
+    left cells blank; else the metadata ``temperature_c``; a stream's column and metadata
+    are carried into its reduced readings) ΔT is the logged value minus the protocol's
+    reference (``conditions.temperature_c``, Table 2's 20 °C; the difference rounded to
+    10⁻⁹ °C, so that 19.4 − 20 reads −0.6), ``basis`` ``logged``, ``logged_from`` ``column``
+    or ``metadata``, and the thermometer's error δ within ± its MPE (the readings'
+    ``thermometer_mpe_c``, else the protocol's ``conditions.thermometer_mpe_c``;
+    ``thermometer_from`` says which) enters the line; else ΔT is known only within
+    ± ``conditions.temperature_tolerance_c``, ``basis`` ``tolerance``.
 
     >>> import pandas as pd
     >>> from gonio.specs.ogam_draft.readings import Readings
@@ -566,17 +573,24 @@ def chamber_temperature(readings: Readings, protocol: Protocol, gyro_type: str |
     >>> line, d = chamber_temperature(Readings(pd.DataFrame(), {"gyro_type": "fog",
     ...                                                         "temperature_c": "19.4"}), p)
     >>> d["basis"], d["deviation_c"], round(d["u_ppm"], 4), d["distribution"]
-    ('logged', -0.6, 0.3464, 'rectangular')
+    ('logged', -0.6, 0.3528, 'rectangular-shifted-product')
+    >>> d["thermometer_mpe_c"], d["thermometer_from"], d["logged_from"]
+    (0.2, 'protocol', 'metadata')
     >>> d = chamber_temperature(Readings(pd.DataFrame(), {"gyro_type": "fog"}), p)[1]
     >>> d["basis"], d["logged_temperature_c"], round(d["u_ppm"], 4), d["distribution"]
     ('tolerance', None, 0.3333, 'rectangular-product')
     """
     bound = temperature_coeff_bound(readings, protocol, gyro_type)
-    logged = metadata_float(readings.metadata, "temperature_c", file=readings.path)
+    logged, logged_from = logged_chamber_temperature(readings)
+    stated = metadata_float(readings.metadata, "thermometer_mpe_c", file=readings.path)
+    mpe = float(protocol.conditions.thermometer_mpe_c) if stated is None else stated
     ref = float(protocol.conditions.temperature_c)
     line = chamber_temperature_line(bound["bound_ppm_per_c"], bound["temperature_tolerance_c"],
-                                    None if logged is None else round(logged - ref, 9))
+                                    None if logged is None else round(logged - ref, 9), mpe)
     return line, {**bound, "reference_temperature_c": ref, "logged_temperature_c": logged,
+                  "logged_from": logged_from,
+                  "thermometer_from": None if logged is None else (
+                      "protocol" if stated is None else "metadata"),
                   **line.to_dict()}
 
 

@@ -144,6 +144,8 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["K_temperature_logged"].format(
                 t=f"{tb['logged_temperature_c']:g}", dt=f"{tb['deviation_c']:+.2g}",
                 ref=f"{tb['reference_temperature_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
+                m=f"{tb.get('thermometer_mpe_c') or 0:g}",
+                over=L["K_T_over_column"] if tb.get("logged_from") == "column" else "",
                 src=L["K_T_source_" + tb["source"]])])
         elif tb:                                # K's chamber-temperature line: which bound
             add("p", [L["K_temperature_bound"].format(

@@ -315,23 +315,28 @@ def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
 
 @dataclass(frozen=True)
 class ChamberLine:
-    """K's chamber-temperature line ``K_T`` (relative to K): its half-width, distribution and
-    u, and which reading gave it (:func:`chamber_temperature_line`)."""
+    """K's chamber-temperature line ``K_T`` (relative to K): its half-width, distribution
+    (with its shape ``beta`` for ``rectangular-shifted-product``) and u, which reading gave
+    it and the thermometer's MPE it took (:func:`chamber_temperature_line`)."""
 
     half_width_rel: float
     distribution: str
     u_rel: float
     basis: str                 # "logged" or "tolerance"
     deviation_c: float | None  # the logged ΔT, °C (None: not logged)
+    beta: float | None = None
+    thermometer_mpe_c: float | None = None
 
     def to_dict(self) -> dict:
         return {"basis": self.basis, "deviation_c": self.deviation_c,
+                "thermometer_mpe_c": self.thermometer_mpe_c,
                 "half_width_ppm": self.half_width_rel / PPM, "distribution": self.distribution,
                 "u_ppm": self.u_rel / PPM}
 
 
 def chamber_temperature_line(coeff_bound_ppm_per_c: float, tolerance_c: float,
-                             deviation_c: float | None = None) -> ChamberLine:
+                             deviation_c: float | None = None,
+                             thermometer_mpe_c: float = 0.0) -> ChamberLine:
     """K's chamber line ``K_T``: the relative change α_K ΔT of K between the chamber's
     temperature and the reference at which K is stated (draft Table 2), with α_K known only
     by its bound |α_K| ≤ α_max (``coeff_bound_ppm_per_c``), uniform within it.
@@ -340,8 +345,15 @@ def chamber_temperature_line(coeff_bound_ppm_per_c: float, tolerance_c: float,
     readings (docs/draft-readings.md, "Table 2, environment"):
 
     - ``deviation_c`` given (the readings log the chamber's temperature; ΔT = logged minus the
-      protocol's reference): ΔT is known, α_K ΔT is rectangular with half-width
-      α_max·|ΔT|, u = α_max·|ΔT|/√3 (JCGM 100 4.3.7);
+      protocol's reference): the true deviation is ΔT + δ, δ the thermometer's error,
+      rectangular within ± ``thermometer_mpe_c`` (m), independent of α_K. The line is
+      α_K (ΔT + δ), the product of a zero-mean rectangular and a rectangular on
+      [ΔT − m, ΔT + m]: mean 0 and u² = (α_max²/3)(ΔT² + m²/3) exactly (JCGM 100 5.1.2
+      NOTE; with x₁ = α_K's estimate 0 only the terms in u²(x₁) remain), distribution
+      ``rectangular-shifted-product`` with half-width α_max (|ΔT| + m) and β = m/(|ΔT| + m)
+      (its Monte Carlo draws the product, JCGM 101). A logged ΔT of 0 leaves the
+      thermometer's part, α_max·m/3 (β = 1, the ``rectangular-product``); m = 0 (a
+      thermometer taken as exact) is the rectangular of half-width α_max|ΔT|, none at ΔT = 0;
     - not logged: ΔT is itself uniform within ± the tolerance, independent of α_K, and the
       product of the two zero-mean rectangulars has u = α_max·ΔT_max/3 (JCGM 100 5.1.2 NOTE:
       u²(x₁x₂) = u²(x₁)u²(x₂) when both estimates are zero; distribution
@@ -350,15 +362,25 @@ def chamber_temperature_line(coeff_bound_ppm_per_c: float, tolerance_c: float,
       √3 (a FOG's K: z spread 0.60 where 1 is right).
 
     >>> [round(x, 4) for x in (chamber_temperature_line(1.0, 1.0).u_rel / PPM,
-    ...  chamber_temperature_line(1.0, 1.0, -0.6).u_rel / PPM)]
-    [0.3333, 0.3464]
+    ...  chamber_temperature_line(1.0, 1.0, -0.6).u_rel / PPM,
+    ...  chamber_temperature_line(1.0, 1.0, -0.6, 0.2).u_rel / PPM,
+    ...  chamber_temperature_line(1.0, 1.0, 0.0, 0.2).u_rel / PPM)]
+    [0.3333, 0.3464, 0.3528, 0.0667]
     >>> chamber_temperature_line(0.1, 1.0, 0.0).half_width_rel
     0.0
     """
     a = float(coeff_bound_ppm_per_c) * PPM
     if deviation_c is not None:
-        hw = a * abs(float(deviation_c))
-        return ChamberLine(hw, "rectangular", hw / math.sqrt(3.0), "logged", float(deviation_c))
+        dev, m = abs(float(deviation_c)), float(thermometer_mpe_c)
+        hw = a * (dev + m)
+        if m == 0.0:
+            return ChamberLine(hw, "rectangular", hw / math.sqrt(3.0), "logged",
+                               float(deviation_c), None, 0.0)
+        u = a * math.sqrt((dev * dev + m * m / 3.0) / 3.0)
+        if dev == 0.0:                     # β = 1: the product of two zero-mean rectangulars
+            return ChamberLine(hw, "rectangular-product", u, "logged", 0.0, None, m)
+        return ChamberLine(hw, "rectangular-shifted-product", u, "logged", float(deviation_c),
+                           m / (dev + m), m)
     hw = a * float(tolerance_c)
     return ChamberLine(hw, "rectangular-product", hw / 3.0, "tolerance", None)
 
@@ -451,13 +473,16 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                          f"{a_k:.3g}″/° at the A.1 bound, worst azimuth"),
                            "tilt bias of K", True, "A.1 applied to 7.1"))
     if chamber is not None and chamber.half_width_rel > 0.0:
-        src = (f"chamber temperature logged {chamber.deviation_c:+.3g} degC from the reference, "
-               f"alpha_K uniform within its bound: |alpha_K|max |dT| = "
+        m = chamber.thermometer_mpe_c
+        src = (f"chamber temperature logged {chamber.deviation_c:+.3g} degC from the reference"
+               + (f", thermometer MPE +-{m:g} degC rectangular" if m else "")
+               + ", alpha_K uniform within its bound"
+               + (" (product): |alpha_K|max (|dT| + MPE) = " if m else ": |alpha_K|max |dT| = ")
                if chamber.basis == "logged" else
                "chamber temperature within its tolerance, alpha_K and dT independent uniforms "
                "(product): |alpha_K|max dT_max = ") + f"{chamber.half_width_rel:.3g}"
         lines.append(_Line(type_b("K_T", 0.0, abs(float(np.mean(k_i))) * chamber.half_width_rel,
-                                  chamber.distribution, source=src),
+                                  chamber.distribution, beta=chamber.beta, source=src),
                            "chamber temperature", True, "Table 2 applied to 7.1"))
     return _budget("scale_factor", "counts/deg", value, lines, k=k)
 

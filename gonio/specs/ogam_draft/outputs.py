@@ -73,8 +73,11 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     tb = kd.get("temperature_coeff_bound")
     if tb and tb.get("basis") == "logged":   # K's chamber line at the logged temperature
         lines.append(f"note: U(K) holds for the chamber temperature the readings log, "
-                     f"{tb['logged_temperature_c']:g} degC ({tb['deviation_c']:+.2g} degC from the "
-                     f"reference {tb['reference_temperature_c']:g} degC), and |alpha_K| <= "
+                     f"{tb['logged_temperature_c']:g} degC"
+                     + (" (mean over the 7.1 rounds)" if tb.get("logged_from") == "column" else "")
+                     + f" ({tb['deviation_c']:+.2g} degC from the reference "
+                     f"{tb['reference_temperature_c']:g} degC; thermometer MPE "
+                     f"+-{tb.get('thermometer_mpe_c') or 0:g} degC), and |alpha_K| <= "
                      f"{tb['bound_ppm_per_c']:g} ppm/degC: {tb['how']}")
     elif tb:                                 # which bound K's chamber line took, and whence
         lines.append(f"note: U(K) holds for a chamber within +-{tb['temperature_tolerance_c']:g} "

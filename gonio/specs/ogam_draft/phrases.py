@@ -190,11 +190,12 @@ LABELS: dict[str, dict[str, str]] = {
         "zh": "U(K) 适用于温度偏离参考温度不超过 ±{tol} °C 的环境（表2），标度因数温度系数 "
               "|α_K| ≤ {b} ppm/°C：{src}。"},
     "K_temperature_logged": {
-        "en": "U(K) holds for the chamber temperature the readings log, {t} °C ({dt} °C from the "
-              "reference {ref} °C, Table 2), and a scale-factor temperature coefficient "
-              "|α_K| ≤ {b} ppm/°C: {src}.",
-        "zh": "U(K) 适用于读数文件记录的环境温度 {t} °C（与参考温度 {ref} °C 相差 {dt} °C，表2），"
-              "标度因数温度系数 |α_K| ≤ {b} ppm/°C：{src}。"},
+        "en": "U(K) holds for the chamber temperature the readings log, {t} °C{over} ({dt} °C "
+              "from the reference {ref} °C, Table 2; thermometer MPE ±{m} °C), and a "
+              "scale-factor temperature coefficient |α_K| ≤ {b} ppm/°C: {src}.",
+        "zh": "U(K) 适用于读数文件记录的环境温度 {t} °C{over}（与参考温度 {ref} °C 相差 {dt} °C，"
+              "表2；测温仪最大允许误差 ±{m} °C），标度因数温度系数 |α_K| ≤ {b} ppm/°C：{src}。"},
+    "K_T_over_column": {"en": " (mean over the 7.1 rounds)", "zh": "（7.1 各轮平均值）"},
     "K_T_source_metadata": {"en": "the instrument's bound stated in the readings",
                             "zh": "读数文件给出的仪器自身限值"},
     "K_T_source_protocol-rlg": {"en": "the protocol's default for an RLG",

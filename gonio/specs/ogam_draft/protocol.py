@@ -105,6 +105,7 @@ class Conditions:
     table_orientations: tuple[str, ...] = ORIENTATIONS
     temperature_c: float = 20.0
     temperature_tolerance_c: float = 1.0
+    thermometer_mpe_c: float = 0.2
     soak_h: float = 4.0
     humidity_min_pct: float = 30.0
     humidity_max_pct: float = 75.0
@@ -200,6 +201,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "table_orientations": Field("str_list", list(ORIENTATIONS), choices=ORIENTATIONS),
         "temperature_c": Field("float", 20.0),
         "temperature_tolerance_c": Field("float", 1.0, non_negative, "≥ 0"),
+        "thermometer_mpe_c": Field("float", 0.2, non_negative, "≥ 0"),
         "soak_h": Field("float", 4.0, non_negative, "≥ 0"),
         "humidity_min_pct": Field("float", 30.0, lambda x: 0 <= x <= 100, "0–100"),
         "humidity_max_pct": Field("float", 75.0, lambda x: 0 <= x <= 100, "0–100"),

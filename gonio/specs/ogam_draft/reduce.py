@@ -46,6 +46,7 @@ import pandas as pd
 from gonio.errors import GonioError
 from gonio.formats.metadata import metadata_bool, metadata_float
 from gonio.formats.streams import Stream, StreamFile
+from gonio.specs.ogam_draft.chamber import stream_temperature_at
 from gonio.specs.ogam_draft.protocol import Protocol, RotationItem
 from gonio.reduce.rests import MemorySamples, Rest, check_scale_factor, rests_of
 
@@ -400,6 +401,26 @@ def _plan_keys(proto: Protocol) -> dict:
     return plan
 
 
+def _chamber_column(st, df: pd.DataFrame) -> None:
+    """A stream that logs the chamber's temperature (its ``temperature_c`` column, blank
+    cells allowed) gives each reduced reading the logged temperature at its ``time_s``
+    (:func:`gonio.specs.ogam_draft.chamber.stream_temperature_at`) as the mean of the
+    logged temperature at its zeroing and at its reading (the stream's clock; the round's
+    trapezoid mean): the readings' ``temperature_c`` column K's chamber line reads; nothing
+    where it logs none."""
+    has = (st.st.temperature_c is not None) if isinstance(st, MemorySamples) else \
+        "temperature_c" in st.columns
+    if not has or not len(df):
+        return
+    t = np.concatenate([df["t_zero_s"].to_numpy(dtype=float),
+                        df["t_read_s"].to_numpy(dtype=float)])
+    if not np.isfinite(t).any():
+        return
+    at = stream_temperature_at(st, np.where(np.isfinite(t), t, np.nanmax(t)))
+    if at is not None:
+        df["temperature_c"] = np.round(0.5 * (at[:len(df)] + at[len(df):]), 9)
+
+
 def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol, *, override: Iterable[dict] | None = None,
                   pos_tol_deg: float | None = None, min_rest_s: float = 0.5,
                   rate_threshold_dps: float | None = None,
@@ -505,6 +526,7 @@ def reduce_stream(stream: "Stream | StreamFile | str | Path", protocol: Protocol
         df = df.iloc[np.argsort(key, kind="stable")].reset_index(drop=True)
         df["series"] = df["series"].astype(np.int64)
         df["round"] = df["round"].astype(np.int64)
+    _chamber_column(st, df)
     md = {k: v for k, v in st.metadata.items() if k not in ("counter_bits", "counter_signed")}
     if st.path is not None:
         md["source_stream"] = Path(st.path).name

@@ -125,6 +125,67 @@ def _fit_channel(x, y, w, robust: bool, max_iter: int = 100):
     return theta, s2 * xtwx_inv, math.sqrt(s2), rw, dof
 
 
+def dwell_blocks(rows: pd.DataFrame) -> np.ndarray:
+    """Block number of every dwell for the bias wander: the rotating dwells (rate ≠ 0) of
+    one orientation (``up``) share a block — recorded one after the other, their ± pairs see
+    the same slowly wandering bias — and every static dwell is a block of its own."""
+    rot = rows["rate_dps"].to_numpy(float) != 0.0
+    ups = rows["up"].astype(str).to_numpy()
+    names = {u: k for k, u in enumerate(dict.fromkeys(ups[rot]))}
+    out = np.empty(len(rows), dtype=int)
+    nxt = len(names)
+    for k in range(len(rows)):
+        if rot[k]:
+            out[k] = names[ups[k]]
+        else:
+            out[k], nxt = nxt, nxt + 1
+    return out
+
+
+def variance_components(x, y, w, theta, blocks, dof_full: float):
+    """The noise of the dwell means in two parts (JCGM 100 4.2, a random-effects model): a
+    white part σ_w²/w_k per dwell and a bias offset per block of σ_B² (the bias instability
+    wanders between the orientations and the static positions, recorded minutes apart).
+
+    σ_w² comes from the weighted fit with one bias per block (M plus the block biases): its
+    residuals are the dwells' scatter about their own block's bias, ν_w = n − rank. σ_B² by
+    the method of moments from the weighted residual sum of squares of the model's fit
+    (one bias b): E[RSS] = σ_w²(n − p) + σ_B² tr(R W^½ Z Zᵀ W^½), R the residual maker,
+    clipped at 0, ν_B = (n − p) − ν_w. The covariance of θ̂ = P y, P = (XᵀWX)⁻¹XᵀW, is
+    σ_w²(XᵀWX)⁻¹ + σ_B² (PZ)(PZ)ᵀ; a parameter's ν by Welch–Satterthwaite (JCGM 100 G.4).
+    The ± pairs of a block cancel its offset, so M sees σ_w; b sees both. Where the blocks
+    leave fewer than 2 degrees of freedom (e.g. one rate per axis) the single s² of the fit
+    is used (σ_B = 0, ν the fit's).
+
+    Returns (cov (p, p), ν per parameter (p,), σ_w, σ_B, PZ (p, blocks))."""
+    n, p = x.shape
+    z = (blocks[:, None] == np.arange(int(blocks.max()) + 1)[None, :]).astype(float)
+    sw = np.sqrt(w)
+    xtwx_inv = np.linalg.inv(x.T @ (x * w[:, None]))
+    pz = xtwx_inv @ (x * w[:, None]).T @ z
+    r = y - x @ theta
+    rss = float(np.sum(w * r * r))
+    xb = np.column_stack([x[:, :p - 1], z]) * sw[:, None]
+    rank = int(np.linalg.matrix_rank(xb))
+    nu_w = float(np.sum(w > 0) - rank)
+    if nu_w < 2 or dof_full - nu_w < 1:
+        s2 = rss / dof_full
+        return s2 * xtwx_inv, np.full(p, dof_full), math.sqrt(s2), 0.0, pz
+    fit_b, *_ = np.linalg.lstsq(xb, y * sw, rcond=None)
+    s2_w = float(np.sum((y * sw - xb @ fit_b) ** 2) / nu_w)
+    xs = x * sw[:, None]
+    resid_maker = np.eye(n) - xs @ xtwx_inv @ xs.T
+    zs = z * sw[:, None]
+    tr = float(np.trace(resid_maker @ zs @ zs.T))
+    s2_b = max(0.0, (rss - s2_w * dof_full) / tr) if tr > 0 else 0.0
+    a = s2_w * np.diag(xtwx_inv)
+    c = s2_b * np.sum(pz * pz, axis=1)
+    nu_b = dof_full - nu_w
+    with np.errstate(divide="ignore", invalid="ignore"):
+        nu = (a + c) ** 2 / (a * a / nu_w + c * c / nu_b)
+    return s2_w * xtwx_inv + s2_b * pz @ pz.T, nu, math.sqrt(s2_w), math.sqrt(s2_b), pz
+
+
 #: Off-diagonal (i, j) in the order of :data:`OFFDIAG`.
 _OFF = ((0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1))
 
@@ -252,6 +313,15 @@ class AlignmentResult:
     output_unit: str = ""
     lines: list = field(default_factory=list)
     residuals: np.ndarray | None = None
+    dof_theta: np.ndarray | None = None   # (3, 4): ν of each M_ij and b_i (Welch–Satterthwaite)
+    sigma_components: np.ndarray | None = None   # (3, 2): σ_w (white, unit weight), σ_B (block)
+
+    @property
+    def coverage_factor_theta(self) -> np.ndarray:
+        """k = t_{0.9545, ν} of each M_ij and b_i, (3, 4)."""
+        nu = np.column_stack([np.repeat(self.dof[:, None], 3, 1), self.dof]) \
+            if self.dof_theta is None else self.dof_theta
+        return stats.t.ppf(0.5 + COVERAGE / 2, nu)
 
     @property
     def u_system_matrix(self) -> np.ndarray:
@@ -287,6 +357,9 @@ class AlignmentResult:
             "bias_output": mat(self.bias_output), "u_bias_output": mat(self.u_bias_output),
             "dof": mat(self.dof), "coverage_factor": mat(self.coverage_factor),
             "sigma_output": mat(self.sigma_output),
+            "dof_bias": None if self.dof_theta is None else mat(self.dof_theta[:, 3]),
+            "sigma_white_block": None if self.sigma_components is None
+            else mat(self.sigma_components),
             "derived": {k: mat(v) for k, v in self.derived.items()},
             "u_derived": {k: mat(v) for k, v in self.u_derived.items()},
             "u_monte_carlo": None if self.u_mc is None else {k: mat(v) for k, v in self.u_mc.items()},
@@ -451,7 +524,8 @@ def chunked_std(batch, n: int, chunk: int = MC_CHUNK) -> tuple[np.ndarray, np.nd
     return tuple(np.sqrt(sq / (cnt - 1)) for cnt, _, sq in acc)
 
 
-def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray, rng):
+def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray, rng,
+               zb: np.ndarray | None = None, sd_b: np.ndarray | None = None):
     """The Monte Carlo trials of :func:`estimate_alignment`, vectorised: ``trials(k)`` draws
     k synthetic outputs (fitted + sd·N(0, 1), the draws in the order of one trial after the
     other), refits each channel by weighted least squares and returns (θ, derived) with k
@@ -463,22 +537,31 @@ def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray,
     weights, the solve the per-trial fit made) and a piece of trials is three small products,
     θ̂_i = θ_i + (P sd_i) z_i: the same estimates as refitting every trial, to rounding
     (tested against a per-trial ``lstsq`` loop), without a least-squares solve per piece.
-    The normal draws go into one reused buffer (the same numbers as a fresh array)."""
+    The normal draws go into one reused buffer (the same numbers as a fresh array).
+
+    With block offsets (``zb`` the (rows, blocks) indicator, ``sd_b`` σ_B per channel, any
+    > 0; :func:`variance_components`) each trial's outputs also get one N(0, σ_B²) offset
+    per block, drawn after the trial's dwell draws (a trial draws (rows + blocks, 3))."""
     sw = np.sqrt(w)
     proj, *_ = np.linalg.lstsq(x * sw[:, None], np.diag(sw), rcond=None)   # P, (4, rows)
     # channel i's fit applied to its draws: P with sd[:, i] folded in, (3, 4, rows)
     proj_sd = np.ascontiguousarray(proj[None, :, :] * sd.T[:, None, :])
+    if zb is not None and sd_b is not None and np.any(np.asarray(sd_b) > 0):
+        pz = proj @ zb                                                      # (4, blocks)
+        proj_sd = np.ascontiguousarray(np.concatenate(
+            [proj_sd, pz[None, :, :] * np.asarray(sd_b, float)[:, None, None]], axis=2))
+    rows_drawn = proj_sd.shape[2]
     theta0 = (proj @ fitted).T.reshape(12)         # the fit's θ (P X θ = θ)
-    per = max(1, MC_DRAWS // fitted.size)
-    z_buf = np.empty((min(per, MC_CHUNK),) + fitted.shape)
+    per = max(1, MC_DRAWS // (rows_drawn * 3))
+    z_buf = np.empty((min(per, MC_CHUNK), rows_drawn, 3))
 
     def trials(k: int):
         th = np.empty((k, 12))
         der = np.empty((k, max(sl.stop for sl in _DERIVED_SLICES.values())))
         for a in range(0, k, per):
             kk = min(per, k - a)
-            z = z_buf[:kk] if kk <= z_buf.shape[0] else np.empty((kk,) + fitted.shape)
-            rng.standard_normal(out=z)                               # (kk, rows, 3)
+            z = z_buf[:kk] if kk <= z_buf.shape[0] else np.empty((kk,) + z_buf.shape[1:])
+            rng.standard_normal(out=z)                    # (kk, rows [+ blocks], 3)
             t = th[a:a + kk]
             for i in range(3):        # einsum: no BLAS threads spinning on a shared machine
                 np.einsum("kr,pr->kp", z[:, :, i], proj_sd[i], out=t[:, 4 * i: 4 * i + 4])
@@ -505,15 +588,18 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
                          "about all three axes are needed)")
     w = rows["n_samples"].to_numpy(float)
     w = w / w.max()
-    thetas, covs, sig, dof, outl = [], [], [], [], []
+    thetas, covs, sig, dof, outl, comps = [], [], [], [], [], []
+    blocks = dwell_blocks(rows)
     resid = np.empty((len(rows), 3))
     for i, c in enumerate(OUT):
         y = rows[c].to_numpy(float)
-        th, cv, s, rw, nu = _fit_channel(x, y, w, robust)
+        th, _, s, rw, nu = _fit_channel(x, y, w, robust)
+        cv, nu_p, s_w, s_b, pz = variance_components(x, y, w * rw, th, blocks, nu)
         thetas.append(th)
         covs.append(cv)
         sig.append(s)
-        dof.append(nu)
+        dof.append(nu_p)
+        comps.append((s_w, s_b, pz))
         resid[:, i] = y - x @ th
         if robust:
             for k in np.nonzero(rw < 0.5)[0]:
@@ -538,10 +624,14 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
     if monte_carlo > 0:
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))
         fitted = x @ mb.T
-        sd = np.array(sig)[None, :] / np.sqrt(w)[:, None]
-        u_mc_theta, u_der_mc = chunked_std(_mc_trials(x, w, fitted, sd, rng), int(monte_carlo))
+        sd = np.array([cp[0] for cp in comps])[None, :] / np.sqrt(w)[:, None]
+        sd_b = np.array([cp[1] for cp in comps])
+        zb = (blocks[:, None] == np.arange(int(blocks.max()) + 1)[None, :]).astype(float)
+        u_mc_theta, u_der_mc = chunked_std(_mc_trials(x, w, fitted, sd, rng, zb, sd_b),
+                                           int(monte_carlo))
         u_mc = _split(u_der_mc)
-    dofa = np.array(dof)
+    dof_theta = np.array(dof)                        # (3, 4): ν of M_i1..M_i3, b_i
+    dofa = dof_theta[:, :3].min(axis=1)
     k = stats.t.ppf(0.5 + COVERAGE / 2, dofa)
     rates = rows["rate_dps"].abs()
     shortest = float(rows.loc[rates > 0, "duration_s"].min()) if (rates > 0).any() else math.nan
@@ -549,7 +639,8 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
     return AlignmentResult(m, b, cov, np.array(sig), dofa, k, _split(der), _split(u_der),
                            u_mc, u_mc_theta, robust, outl, leak_u, avg, len(rows),
                            readings.metadata.get("output_unit", ""),
-                           rows["line"].tolist(), resid)
+                           rows["line"].tolist(), resid, dof_theta,
+                           np.array([[cp[0], cp[1]] for cp in comps]))
 
 
 # ------------------------------------------------------------ IEC 62047-20 5.2

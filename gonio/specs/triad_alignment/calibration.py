@@ -15,8 +15,9 @@ reason, uncertainty {components, u_c, U, k, nu_eff}; :class:`~gonio.result.model
   supply levels, the model order's effect inside U (the polynomial coefficients, whose
   order the criterion chooses, are information in ``thermal_model``).
 
-Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: s²(XᵀWX)⁻¹, ν = n − p,
-k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
+Each uncertainty is the fit's Type A evaluation (JCGM 100 4.2: white dwell noise plus a bias
+offset per orientation block, σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ,
+:func:`gonio.specs.triad_alignment.analysis.variance_components`; k = t_0.9545(ν)); with Monte Carlo trials (JCGM 101 7) the Monte Carlo standard uncertainty
 is given beside it. A readings file without alignment (or thermal) rows, or one whose dwells
 do not determine M and b, gives those items not measured with the reason.
 """
@@ -145,6 +146,14 @@ def long_term_monte_carlo(mc: dict | None, u_long: float) -> dict | None:
                      "quadrature (independent of the record)"}
 
 
+def _nu(al: AlignmentResult, i: int, j: int) -> float:
+    """ν of M_ij (j < 3) or b_i (j = 3): the Welch–Satterthwaite ν of the fit's two noise
+    components (:func:`gonio.specs.triad_alignment.analysis.variance_components`), rounded
+    down (the ν that k is computed from and the certificate prints, JCGM 100 G.6.4)."""
+    nu = float(al.dof[i] if al.dof_theta is None else al.dof_theta[i, j])
+    return float(math.floor(nu + 1e-9)) if math.isfinite(nu) else nu
+
+
 def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
                     ) -> dict[str, Item]:
     """The alignment items (module docstring) from an :class:`AlignmentResult`."""
@@ -153,18 +162,21 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
     um = al.u_system_matrix
     ub = al.u_bias_output
     mc_m = None if al.u_mc_theta is None else al.u_mc_theta.reshape(3, 4)
-    fit = "weighted least-squares fit of all dwells, s²(XᵀWX)⁻¹"
+    fit = ("weighted least-squares fit of all dwells; dwell noise white (σ_w² from the "
+           "scatter about each orientation's own bias) plus a bias offset per orientation "
+           "block and static dwell (σ_B²): σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ")
     for i in range(3):
         for j in range(3):
             key = f"M_{AXES[i]}{AXES[j]}"
             items[key] = Item(key, f"system matrix {key}", "§4 eq. 14", f"{unit}/(°/s)",
                               float(al.system_matrix[i, j]), uncertainty=_type_a(
-                                  key, fit, um[i, j], al.dof[i],
+                                  key, fit, um[i, j], _nu(al, i, j),
                                   None if mc_m is None else mc_m[i, j], trials))
     u_bi, nu_bi = bias_instability_u_dps(al.averaging, static_s)
     for i in range(3):
         key = f"b_{AXES[i]}"
-        unc = _type_a(key, fit, ub[i], al.dof[i], None if mc_m is None else mc_m[i, 3], trials)
+        unc = _type_a(key, fit, ub[i], _nu(al, i, 3), None if mc_m is None else mc_m[i, 3],
+                      trials)
         u_long = float(u_bi[i] * abs(al.system_matrix[i, i]))
         if u_long > 0:
             unc = _with_bias_instability(unc, key, u_long, float(nu_bi[i]))
@@ -532,7 +544,8 @@ def chamber_set_points(readings: TriadReadings) -> list[float]:
 
 def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:
     """Per gyro, the covariance of its row of M and its bias (one fit: M_i·, b_i),
-    s²(XᵀWX)⁻¹ in the items' units (the fits of the three gyros are independent)."""
+    σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ in the items' units (the fits of the three gyros are
+    independent)."""
     if al is None:
         return []
     out = []
@@ -540,7 +553,7 @@ def alignment_covariances(al: AlignmentResult | None) -> list[Covariance]:
         keys = [f"M_{AXES[i]}{AXES[j]}" for j in range(3)] + [f"b_{AXES[i]}"]
         block = np.asarray(al.cov_theta)[4 * i:4 * i + 4, 4 * i:4 * i + 4]
         out.append(Covariance(keys, block.tolist(), f"gyro {AXES[i]}: weighted least-squares "
-                              "fit of all dwells, s²(XᵀWX)⁻¹ (JCGM 100 4.2)"))
+                              "fit of all dwells, σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ (JCGM 100 4.2)"))
     return out
 
 

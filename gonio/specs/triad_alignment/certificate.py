@@ -60,9 +60,14 @@ TEXT = {
     "insufficient": ("NOT sufficient", "不满足"),
     "outliers": ("Down-weighted readings (robust fit): {list}", "稳健拟合降权的读数：{list}"),
     "h_unc": ("Uncertainty of M and b", "M 与 b 的不确定度"),
-    "unc_note": ("Type A from the weighted least-squares residuals, cov = s²(XᵀWX)⁻¹ "
-                 "(JCGM 100 4.2); Monte Carlo (JCGM 101) standard uncertainty beside it{mc}.",
-                 "A 类评定，由加权最小二乘残差求得，cov = s²(XᵀWX)⁻¹（JCGM 100 4.2）；"
+    "unc_note": ("Type A from the weighted least-squares residuals (JCGM 100 4.2), the dwell "
+                 "noise in two parts: white, σ_w² from the scatter about each orientation's own "
+                 "bias, and a bias offset per orientation and static dwell, σ_B²: cov = "
+                 "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ, ν by Welch–Satterthwaite; Monte Carlo "
+                 "(JCGM 101) standard uncertainty beside it{mc}.",
+                 "A 类评定，由加权最小二乘残差求得（JCGM 100 4.2），驻留噪声分两部分：白噪声 σ_w²"
+                 "（各方位相对其自身零偏的离散）与每个方位及每个静态驻留的零偏偏移 σ_B²：cov = "
+                 "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ，ν 按 Welch–Satterthwaite 公式；"
                  "旁列蒙特卡洛法（JCGM 101）标准不确定度{mc}。"),
     "mc_trials": (" ({n} trials)", "（{n} 次试验）"),
     "mc_none": (" (not run: --monte-carlo N)", "（未运行：--monte-carlo N）"),

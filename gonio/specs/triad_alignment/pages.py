@@ -62,12 +62,14 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
     k = res.coverage_factor
     unit = res.output_unit or "output"
     m, um = res.system_matrix, res.u_system_matrix
-    out = [f"<h2>Alignment matrix (k = {k[0]:.2f} for ν = {res.dof[0]:.0f}, p ≈ 95 %)</h2>",
+    kb = res.coverage_factor_theta[:, 3]
+    out = [f"<h2>Alignment matrix (k = {k[0]:.2f} for ν = {res.dof[0]:.0f}, p ≈ 95 %; "
+           f"b with its own k)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
            f"{' (robust fit)' if res.robust else ''}.</p>"]
     rows = [[f"gyro {a}"] + [value_with_u(m[i, j], k[i] * um[i, j]) for j in range(3)]
-            + [value_with_u(res.bias_output[i], k[i] * res.u_bias_output[i])]
+            + [value_with_u(res.bias_output[i], kb[i] * res.u_bias_output[i])]
             for i, a in enumerate("xyz")]
     out.append(_table(["", "ω_x", "ω_y", "ω_z", "b"], rows))
     a = res.alignment_matrix
