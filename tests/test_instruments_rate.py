@@ -59,6 +59,7 @@ def _meta(b) -> list[str]:
     return [f"datasheet_bandwidth_hz={b.gyro.datasheet_bandwidth_hz!r}",
             f"latitude_deg={b.latitude_deg!r}", f"supply_nominal_v={b.gyro.supply_nominal_v!r}",
             f"rate_table_u_rel={eq.rate_table_u_rel!r}",
+            f"rate_table_ripple_rel={eq.rate_table.ripple_rel!r}",
             f"acquisition_u_rel={eq.acquisition_u_rel!r}"]
 
 

@@ -245,3 +245,26 @@ def test_eda_equal_division_numbers():
     for n, expect in ((4, 0.5 * np.sin(8 * th)), (8, 0.5 * np.sin(8 * th)), (3, 0 * th)):
         avg = np.mean([e(th + 2 * np.pi * j / n) for j in range(n)], axis=0)
         assert avg == pytest.approx(expect, abs=1e-12)
+
+
+def test_asymmetry_slope_u_against_monte_carlo():
+    """JJF 7.2.3's two terms against the signed K_a of eq (8) computed by asymmetry_jjf on
+    simulated means: white noise of the means, and a once-per-revolution table ripple of
+    random phase averaged (numerically, on a fine grid) over each point's sampled turn."""
+    rng = np.random.default_rng(11)
+    om = np.array([1, 2.5, 6.3, 16, 40, 100, -1, -2.5, -6.3, -16, -40, -100], float)
+    spans, K, r, sigma = np.full(om.size, 5.0), 2.0, 1e-3, 0.01
+    u_n, u_r = jf.asymmetry_slope_u(om, sigma, spans, r, K)
+    n = 4000
+    noisy = [jf.asymmetry_jjf(om, K * om + sigma * rng.standard_normal(om.size)).signed
+             for _ in range(n)]
+    frac = (np.arange(2000) + 0.5) / 2000
+    turn = np.radians(np.abs(om) * spans)[:, None] * frac[None, :]
+    rippled = []
+    for _ in range(n):
+        psi = rng.uniform(0, 2 * np.pi, om.size)
+        e = r * np.sin(psi[:, None] + turn).mean(axis=1)          # mean relative rate error
+        rippled.append(jf.asymmetry_jjf(om, K * (om + np.abs(om) * e)).signed)
+    assert np.std(noisy) == pytest.approx(u_n, rel=0.05)
+    assert np.std(rippled) == pytest.approx(u_r, rel=0.05)
+    assert u_r > 0.1 * r          # not attenuated to nothing: the low rates keep the ripple

@@ -30,7 +30,7 @@ from gonio.report.dcc import DCC_NS
 WHITELIST = set("""
 JJF IEC GUM JCGM ILAC ISO CNAS IEEE MEMS Allan Welch Satterthwaite SHA VB gonio csv dB Hz mV lsb ppm
 sin cos max min ln rms RMS ARW RRW BI BIC bic SF Out FullScale Noise CW CCW band_hz
-broadband_high dec resolution rest cov WX monte carlo ADXRS dt results json
+broadband_high dec resolution rest cov WX PZ monte carlo ADXRS dt results json
 """.split())
 WORD = re.compile(r"(?<![A-Za-z0-9_\\])[A-Za-z][A-Za-z]+(?:_[A-Za-z0-9,]+)?")
 

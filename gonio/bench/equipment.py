@@ -214,7 +214,9 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     What stays as the bench sets it: the table's ripple and axis tilt, the position table's
     error (already drawn per position by the session), the vibration table, the chamber's
     fluctuation amplitude and period, the supply error — no budget carries them as a
-    type-B term of the equipment. Same seed → same equipment.
+    type-B term of the equipment drawn here (JJF 1535 7.2.3 carries the ripple at its
+    stated amplitude with its phase unknown; the phase stays as the bench sets it).
+    Same seed → same equipment.
 
     >>> e = draw_equipment(Equipment(), 3)
     >>> e == draw_equipment(Equipment(), 3) and e.rate_table.rate_error_rel != 0.0

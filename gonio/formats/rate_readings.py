@@ -71,6 +71,7 @@ META_RANGES: dict[str, tuple[float, float, str]] = {
     "room_temperature_c": (-100.0, 200.0, "a temperature in [-100, 200] °C"),
     "supply_nominal_v": (1e-3, 1e3, "a voltage in [0.001, 1000] V"),
     "rate_table_u_rel": (0.0, 0.5, "a relative standard uncertainty in [0, 0.5]"),
+    "rate_table_ripple_rel": (0.0, 0.5, "a relative ripple amplitude in [0, 0.5]"),
     "acquisition_u_rel": (0.0, 0.5, "a relative standard uncertainty in [0, 0.5]"),
     "chamber_deviation_bound_c": (0.0, 50.0, "a temperature bound in [0, 50] °C"),
     "chamber_fluctuation_c": (0.0, 50.0, "a temperature amplitude in [0, 50] °C"),

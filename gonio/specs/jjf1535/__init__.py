@@ -69,6 +69,7 @@ def make_context(rd, proto: JJFProtocol):
                                        p["protocol"]["room_temperature_c"], rd.path),
         protocol=p,
         rate_table_u_rel=metadata_number(md, "rate_table_u_rel", 2.5e-4, rd.path),
+        rate_table_ripple_rel=metadata_number(md, "rate_table_ripple_rel", 5.0e-4, rd.path),
         acquisition_u_rel=metadata_number(md, "acquisition_u_rel", 3.0e-5, rd.path),
         chamber_deviation_c=metadata_number(md, "chamber_deviation_bound_c", 2.0, rd.path))
 

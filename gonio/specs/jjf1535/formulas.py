@@ -11,6 +11,7 @@ Contents
 :func:`fit_scale_factor`        JJF (4), (5): rest-removed means, K, F_0, residuals
 :func:`nonlinearity_jjf`        JJF (6): max |residual| / fitted span
 :func:`asymmetry_jjf`           JJF (8): |K+ − K−| / mean
+:func:`asymmetry_slope_u`       JJF (8): noise and table ripple through K+ and K−
 :func:`relative_std`            JJF (10): s(K_m)/K̄
 :func:`temperature_sensitivity` JJF (11) and (27): largest slope to room temperature
 :func:`fifty_percent_candidate` JJF (13), (14), IEC 5.6.3: the 50 % rule
@@ -129,6 +130,49 @@ def asymmetry_jjf(rates_dps, means, *, mean_of: str = "directions",
         raise GonioError(f"mean_of must be 'directions' or 'all', got {mean_of!r}")
     s = (kp - kn) / kbar
     return Asymmetry(kp, bp, kn, bn, float(s), float(abs(s)))
+
+
+def asymmetry_slope_u(rates_dps, u_noise, spans_s, ripple_rel: float,
+                      scale_factor: float) -> tuple[float, float]:
+    """Standard uncertainties of one calibration's signed K_a = (K+ − K−)/K̄ (JJF 1535
+    7.2.3 eq (8)) from the rate points' means, through each direction's least-squares
+    slope K± = Σ c_j·F_j, c_j = (Ω_j − Ω̄±)/S±, S± = Σ(Ω_j − Ω̄±)²:
+
+    - noise: σ·√(1/S+ + 1/S−)/|K|, σ = ``u_noise`` the rate-point means' pooled standard
+      error (output units);
+    - table ripple: the table's once-per-revolution ripple, amplitude ``ripple_rel``·|Ω|,
+      averaged over the point's sampled span T_j (``spans_s``): its mean is
+      ripple_rel·|Ω_j|·sinc(Δ_j/2)·sin(ψ_j), Δ_j = Ω_j·T_j the turn sampled, ψ_j a phase
+      the table's angle history sets (not in the readings: uniform, independent between
+      points, an arcsine variable of variance ½); its share of K± is
+      Σ c_j·Ω_j·e_j, so u² = ½·ripple_rel²·Σ_j (c_j·Ω_j·sinc(Δ_j/2))² over both directions.
+
+    Returns (u_noise_rel, u_ripple_rel), relative (dimensionless, as K_a).
+
+    A full revolution averages the ripple out (Δ = 360°: sinc(π) = 0):
+
+    >>> un, ur = asymmetry_slope_u([1, 2, -1, -2], 0.0, [360, 180, 360, 180], 1e-3, 1.0)
+    >>> un, round(ur, 12)
+    (0.0, 0.0)
+    >>> un, ur = asymmetry_slope_u([1, 2, -1, -2], 0.1, [1e-9] * 4, 1e-3, 2.0)
+    >>> round(un, 6), round(ur, 8)   # σ·√(2 + 2)/2; c·Ω = (−1, 2) each way: √(½·1e-6·10)
+    (0.1, 0.00223607)
+    """
+    r = as_array(rates_dps, "rate_dps")
+    T = as_array(spans_s, "span_s")
+    u_n2, u_r2 = 0.0, 0.0
+    for sel in (r > 0, r < 0):
+        x = r[sel]
+        dx = x - x.mean()
+        S = float((dx ** 2).sum())
+        if x.size < 2 or S <= 0:
+            raise GonioError("JJF 1535 7.2.3 needs ≥ 2 different rates in each direction")
+        half_turn = 0.5 * np.radians(np.abs(x) * T[sel])
+        sinc = np.sinc(half_turn / math.pi)                      # sin(Δ/2)/(Δ/2)
+        u_n2 += u_noise ** 2 / S
+        u_r2 += 0.5 * ripple_rel ** 2 * float(((dx / S * x * sinc) ** 2).sum())
+    k = abs(float(scale_factor))
+    return math.sqrt(u_n2) / k, math.sqrt(u_r2)
 
 
 def relative_std(values) -> tuple[float, float, float]:

@@ -43,6 +43,7 @@ class Context(RateContext):
     cross_axis_bound: float = 0.03            # assumed |cross-axis sensitivity| bound (7.2.12)
     K: float | None = None                    # K̄ of 7.2.1 once computed
     u_K_rel: float | None = None
+    rate_table_ripple_rel: float = 5.0e-4     # Table 2's rate smoothness 0.05 % (7.2.3)
 
 
 def _need(ctx: Context, test: str, key: str, title: str, clause: str, unit: str):
@@ -109,6 +110,7 @@ def calibrations(ctx: Context, test: str = "scale_factor") -> list[dict]:
     if ("cal", test) in ctx.cache:
         return ctx.cache[("cal", test)]
     means = segment_means(ctx.df, test)
+    spans = _sampled_spans_s(ctx, test)
     out = []
     for run in sorted({m.run for m in means}):
         first, last, rates, ys, _ = sf_calibration_means(means, run)
@@ -120,13 +122,28 @@ def calibrations(ctx: Context, test: str = "scale_factor") -> list[dict]:
                        / float(((rates - rates.mean()) ** 2).sum())) if n > 2 else math.nan
         seg = [m for m in means if m.run == run]
         u_mean = np.array([m.std / math.sqrt(m.n) for m in seg[1:-1] if m.role == "rate"])
+        n_means = [m.n for m in seg[1:-1] if m.role == "rate"]
         out.append({"run": run, "rest": fr, "fit": fit, "asym": asym, "se_K": se,
-                    "u_means": u_mean, "temperature_c": first.temperature_c,
-                    "supply_v": first.supply_v, "rates": rates})
+                    "u_means": u_mean, "n_means": n_means, "temperature_c": first.temperature_c,
+                    "supply_v": first.supply_v, "rates": rates,
+                    "spans_s": np.array([spans[(run, m.step)] for m in seg[1:-1]
+                                         if m.role == "rate"])})
     if not out:
         raise GonioError(f"no calibrations in '{test}'")
     ctx.cache[("cal", test)] = out
     return out
+
+
+def _sampled_spans_s(ctx: Context, test: str) -> dict[tuple[int, int], float]:
+    """{(run, step): the time a segment's samples cover}, n·Δt with Δt the spacing of its
+    samples' times (each sample a mean over its interval); for a segment of one sample the
+    protocol's sampling period."""
+    d = ctx.df[ctx.df["test"] == test]
+    g = d.groupby(["run", "step"], sort=True)["time_s"].agg(["min", "max", "size"])
+    dt0 = float(ctx.protocol.get("protocol", {}).get("sample_interval_s", 1.0))
+    return {(int(r), int(st)): (float(row["max"] - row["min"]) * row["size"] / (row["size"] - 1)
+                                if row["size"] > 1 else dt0)
+            for (r, st), row in g.iterrows()}
 
 
 def scale_factor(ctx: Context) -> Item:
@@ -218,23 +235,48 @@ def nonlinearity_selection(cal: dict) -> tuple[float, int, float]:
 
 
 def asymmetry(ctx: Context) -> Item:
-    """JJF 1535 7.2.3 eqs (8), (9): K_a = mean of |K+,m − K−,m| / ((K+,m + K−,m)/2)."""
+    """JJF 1535 7.2.3 eqs (8), (9): K_a = mean of |K+,m − K−,m| / ((K+,m + K−,m)/2).
+
+    Uncertainty (:func:`gonio.specs.jjf1535.formulas.asymmetry_slope_u`, per calibration,
+    root mean square over the Q calibrations): the rate-point means' noise through the two
+    slopes (σ pooled from their standard errors, ν = Σ(n_j − 1); independent between
+    calibrations, over √Q) and the rate table's once-per-revolution ripple within its
+    stated bound (``rate_table_ripple_rel``, Table 2's rate smoothness 0.05 % where the
+    readings state none), each point's share attenuated by the turn its samples cover —
+    not over √Q: a programme whose forward and reverse turns cancel brings the table back
+    to its starting angle, so every calibration meets the ripple at the same phases. With
+    Q ≥ 2 the spread of the Q values K_a,m, s/√Q (ν = Q − 1), as well: the points' standard
+    errors miss the slow noise, a drift along the ascending rates that tilts K+ and K− in
+    opposite senses (the study's errors spread 1.1–1.2× the noise term). The two-direction
+    fit's standard error is kept in the details: its residuals are mostly the
+    nonlinearity's shape, and with it the study's z had sd 0.43."""
     title, clause, unit = "scale-factor asymmetry K_a", "7.2.3", "1"
     miss = _need(ctx, "scale_factor", "asymmetry", title, clause, unit)
     if miss:
         return miss
     cals = calibrations(ctx)
+    Q = len(cals)
     ka = np.array([c["asym"].value for c in cals])
-    # slope standard errors of each direction's fit (√2·se of the two-direction fit, roughly)
-    se = float(np.mean([c["se_K"] for c in cals])) * 2.0 / abs(ctx.K) / math.sqrt(len(cals))
+    terms = np.array([jf.asymmetry_slope_u(c["rates"], float(np.sqrt(np.mean(c["u_means"] ** 2))),
+                                           c["spans_s"], ctx.rate_table_ripple_rel, ctx.K)
+                      for c in cals])
+    u_noise, u_ripple = np.sqrt(np.mean(terms ** 2, axis=0)) / np.array([math.sqrt(Q), 1.0])
+    nu = sum(int(m) - 1 for c in cals for m in c["n_means"]) or math.inf
     inputs = [from_u("K_a", float(ka.mean()), 0.0),
-              from_u("s_Ka", 0.0, float(ka.std(ddof=1) / math.sqrt(ka.size)) if ka.size > 1 else 0.0,
-                     dof=max(ka.size - 1, 1), source="spread of K_a,m"),
-              from_u("fit", 0.0, se, source="standard errors of K+ and K−")]
-    u = gum(lambda a, b, c: a + b + c, inputs)
+              from_u("noise", 0.0, float(u_noise), dof=nu,
+                     source="rate-point means' noise through K+ and K−"),
+              from_u("ripple", 0.0, float(u_ripple), type="B",
+                     source=f"rate-table ripple ≤ {ctx.rate_table_ripple_rel:.2g}·|Ω| "
+                            "(once per revolution, unknown phase) through K+ and K−")]
+    if Q > 1:       # the rates' slow noise (drift along a direction's ascending rates)
+        inputs.append(from_u("s_Ka", 0.0, float(ka.std(ddof=1) / math.sqrt(Q)), dof=Q - 1,
+                             source="spread of K_a,m"))
+    u = gum(lambda a, *d: a + sum(d), inputs)
+    se = float(np.mean([c["se_K"] for c in cals])) * 2.0 / abs(ctx.K) / math.sqrt(Q)
     return Item("asymmetry", title, clause, unit, float(ka.mean()), uncertainty=u, details={
         "K_a_m": ka, "signed_m": [c["asym"].signed for c in cals],
-        "K_pos_m": [c["asym"].K_pos for c in cals], "K_neg_m": [c["asym"].K_neg for c in cals]})
+        "K_pos_m": [c["asym"].K_pos for c in cals], "K_neg_m": [c["asym"].K_neg for c in cals],
+        "fit_standard_error": se})
 
 
 def sf_repeatability(ctx: Context) -> Item:

@@ -24,6 +24,7 @@ def simulate(bench, protocol=None, seed: int = 0, *, noise: bool = True):
           "room_temperature_c": repr(proto["protocol"]["room_temperature_c"]),
           "supply_nominal_v": repr(g.supply_nominal_v),
           "rate_table_u_rel": repr(eq.rate_table_u_rel),
+          "rate_table_ripple_rel": repr(eq.rate_table.ripple_rel),
           "acquisition_u_rel": repr(eq.acquisition_u_rel), "chamber_deviation_bound_c": "2.0",
           "table": "rate table, two-axis position table, angular vibration table, chamber "
                    "(virtual)"}
