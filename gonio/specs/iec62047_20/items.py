@@ -18,7 +18,7 @@ import pandas as pd
 from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
 from gonio.analysis.noise import allan_deviation, fit_noise_model
-from gonio.analysis.noise.psd import welch_psd
+from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
@@ -266,13 +266,33 @@ def linearity(ctx: Context) -> Item:
         return m
     c = _sf_runs(ctx, "scale_factor")[0]
     L, a, b, fs = ief.linearity_errors_iec(c["x"], c["y"])
+    u_pool = np.full(c["x"].size, float(np.sqrt(np.mean(c["u_y"] ** 2))))   # ν ≈ Σ ν_i
+    sd = 100 * linearity_noise_sd(c["x"], L, fs, u_pool)
     i = int(np.argmax(np.abs(L)))
-    u_noise = float(np.sqrt(np.mean(c["u_y"] ** 2))) * math.sqrt(2.0) / fs * 100
-    u = gum(lambda v, n: v + n, [from_u("L", 100 * abs(L[i]), 0.0),
-                                 from_u("noise", 0.0, u_noise, dof=50,
-                                        source="noise of the point means / FullScale")])
-    return Item("linearity", t, cl, un, 100 * abs(float(L[i])), uncertainty=u, details={
-        "L_i_pct": 100 * L, "x_dps": c["x"], "full_scale": fs, "at_dps": float(c["x"][i])})
+    excess, m_sel = rg.selection_excess(100 * np.abs(L), sd)
+    u = gum(lambda v, n, m: v + n + m,
+            [from_u("L", 100 * abs(L[i]), 0.0),
+             from_u("noise", 0.0, float(sd[i]), dof=50,
+                    source="pooled noise of the point means through the line's residual / FullScale"),
+             type_b("noise_max", -excess, excess, "rectangular",
+                    source="selection excess of the largest |L_i| (midpoint ± c_m·σ/2 removed)")])
+    return Item("linearity", t, cl, un, 100 * abs(float(L[i])) - excess, uncertainty=u, details={
+        "L_i_pct": 100 * L, "x_dps": c["x"], "full_scale": fs, "at_dps": float(c["x"][i]),
+        "selection_contenders": m_sel, "max_abs_L_i_pct": 100 * abs(float(L[i]))})
+
+
+def linearity_noise_sd(x: np.ndarray, L: np.ndarray, fs: float, u_y: np.ndarray) -> np.ndarray:
+    """Standard deviation of each L_i = r_i/FullScale of 5.1.3.6 eq (8) from the point means'
+    independent noise u_y: r = (I − H)y with H the straight line's hat matrix and FullScale =
+    y(CW max) − y(CCW max), so ∂L_i/∂y_j = [(I − H)_ij − L_i(δ_j,CW − δ_j,CCW)]/FullScale and
+    sd_i = √(Σ_j (∂L_i/∂y_j)² u_j²). A residual moves by √(1 − h_ii)·u, less than u."""
+    X = np.column_stack([np.ones_like(x), x])
+    M = np.eye(x.size) - X @ np.linalg.solve(X.T @ X, X.T)
+    G = M.copy()
+    hi, lo = int(np.argmax(x)), int(np.argmin(x))
+    G[:, hi] -= L * np.sign(fs)
+    G[:, lo] += L * np.sign(fs)
+    return np.sqrt((G / fs) ** 2 @ (np.asarray(u_y, float) ** 2))
 
 
 def symmetry(ctx: Context) -> Item:
@@ -751,14 +771,19 @@ def inband_noise(ctx: Context) -> Item:
     if m:
         return m
     _, x, dt = _static(ctx)                  # °/h; the density in °/s, in bounded pieces
-    f, p = welch_psd(x, 1.0 / dt, min(4096, x.size), divisor=S_PER_H)
+    nper = min(4096, x.size)
+    f, p = welch_psd(x, 1.0 / dt, nper, divisor=S_PER_H)
     band = ctx.protocol["noise"]["band_hz"]
     sel = (f > 0) & (f <= band)
     rms = math.sqrt(float(np.trapezoid(p[sel], f[sel])))
     dens = {str(fq): float(np.sqrt(np.interp(fq, f, p))) for fq in ctx.protocol["noise"]["density_at_hz"]}
-    nseg = max(1, x.size // 2048)
-    u = gum(lambda r: r, [from_u("rms", rms, rms / math.sqrt(2 * nseg * max(sel.sum(), 1)) * 2,
-                                 dof=50, source="Welch estimate")])
+    u_rel = welch_band_rms_u_rel(x.size, nper, p[sel], float(f[1] - f[0])) if sel.sum() > 1 \
+        else math.nan
+    u_rel = u_rel if math.isfinite(u_rel) else 0.0           # no noise in the band
+    nu = max(1.0, 0.5 / u_rel ** 2) if u_rel > 0 else 50     # Welch: ν = 2/var_rel(rms²)
+    u = gum(lambda r: r, [from_u("rms", rms, rms * u_rel, dof=nu,
+                                 source="Welch estimate: correlated Hann lines and "
+                                        "overlapping segments")])
     return Item("inband_noise", t, cl, un, rms, uncertainty=u,
                 details={"density_dps_per_sqrt_hz": dens, "band_hz": band})
 
@@ -792,24 +817,43 @@ def frequency_band(ctx: Context) -> Item:
     band = min(cands)
     db = 20 * np.log10(K / K[0])
     ip = int(np.argmax(db))
-    grid = float(np.min(np.diff(np.log(f)))) if f.size > 1 else 0.0
     j = min(max(int(np.searchsorted(f, band)), 1), f.size - 1)
+    # the crossing f* = f_{j−1}^(1−w)·f_j^w, w = (target − p_{j−1})/(p_j − p_{j−1}), moves with
+    # the two bracketing points' errors weighted (1 − w) and w (not by their root sum square)
+    w = math.log(band / f[j - 1]) / math.log(f[j] / f[j - 1])
     if band == f90:
-        slope = abs((ph[j] - ph[j - 1]) / (f[j] - f[j - 1]))            # ° per Hz
-        u_f = math.hypot(uph[j], uph[j - 1]) / slope if slope > 0 else 0.0
-    else:
-        slope = abs((db[j] - db[j - 1]) / (f[j] - f[j - 1]))
-        u_f = 20 / math.log(10) * math.hypot(uph[j], uph[j - 1]) * math.pi / 180 / slope \
-            if slope > 0 else 0.0
+        dp, up = ph[j] - ph[j - 1], (uph[j - 1], uph[j])                # degrees
+    else:                                               # gain error σ_A/A = phase error in rad
+        dp = db[j] - db[j - 1]
+        up = tuple(20 / math.log(10) * math.radians(v) for v in (uph[j - 1], uph[j]))
+    h = math.log(f[j] / f[j - 1])
+    u_f = band * h / abs(dp) * math.hypot((1 - w) * up[0], w * up[1]) if dp != 0 else 0.0
+    half_interp = band * h / abs(dp) * interpolation_remainder(
+        np.log(f), ph if band == f90 else db, j) if dp != 0 else 0.0
     u = gum(lambda b, n, i: b + n + i,
             [from_u("f", band, 0.0), from_u("noise", 0.0, u_f, dof=50,
                                             source="phase/gain noise of the bracketing points"),
-             type_b("interp", 0.0, band * grid * 0.05, "rectangular",
-                    source="interpolation between grid points")])
+             type_b("interp", 0.0, half_interp, "rectangular",
+                    source="linear interpolation in ln f: h²/8·|p''| from the neighbouring "
+                           "point's second difference")])
     return Item("frequency_band", t, cl, un, band, uncertainty=u, details={
         "freq_hz": f, "gain_db": db, "phase_deg": ph, "minus3db_hz": f3, "phase90_hz": f90,
         "phase90_hz_iec": f90, "criterion": "-3 dB" if band == f3 else "90 deg lag",
         "gain_peak_db": float(db[ip]), "gain_peak_hz": float(f[ip])})
+
+
+def interpolation_remainder(lnf: np.ndarray, p: np.ndarray, j: int) -> float:
+    """Bound of linear interpolation's error between points j − 1 and j of p(ln f):
+    h²/8·|p''| (the remainder of linear interpolation, h = ln f_j − ln f_{j−1}), p'' from the
+    second divided difference over j − 1, j and the next point (j + 1, or j − 2 at the
+    grid's end); 0 with fewer than three points."""
+    if lnf.size < 3:
+        return 0.0
+    k = (j - 1, j, j + 1) if j + 1 < lnf.size else (j - 2, j - 1, j)
+    a, b, c = (float(lnf[i]) for i in k)
+    d2 = 2 * ((p[k[2]] - p[k[1]]) / (c - b) - (p[k[1]] - p[k[0]]) / (b - a)) / (c - a)
+    h = float(lnf[j] - lnf[j - 1])
+    return h * h / 8 * abs(float(d2))
 
 
 def _power_on_records(ctx: Context):
