@@ -110,3 +110,46 @@ def test_drawn_errors_reach_the_readings():
     s1 = run_rate_session(seg, replace(b, equipment=eq), 1, noise=False)
     d = (s1.truth["segments"][0]["input_rate_dps"] - s0.truth["segments"][0]["input_rate_dps"])
     assert abs(d) == pytest.approx(10.0 * math.sin(math.radians(0.05)), rel=1e-3)
+
+
+def test_ripple_phase_drawn_uniform_amplitude_kept():
+    """The table's once-per-revolution ripple: its phase uniform in [0°, 360°) per trial
+    (the JJF 7.2.3 budget takes it as unknown), drawn after every other error so those are
+    as before; its amplitude the bench's, which the readings state as
+    ``rate_table_ripple_rel``."""
+    eq = load_rate_bench("mems-adxrs610").equipment
+    d = [draw_equipment(eq, s) for s in range(400)]
+    ph = np.array([e.rate_table.ripple_phase_deg for e in d])
+    assert np.all((ph >= 0.0) & (ph < 360.0))
+    assert stats.kstest(ph, "uniform", args=(0.0, 360.0)).pvalue > 1e-3
+    assert all(e.rate_table.ripple_rel == eq.rate_table.ripple_rel for e in d)
+    # the draw order: the ripple phase is the generator's last number, the chamber's
+    # fluctuation phase the one before it (6 numbers of the stream before both)
+    rng = np.random.default_rng([9, 24])
+    rng.normal(), rng.normal(), rng.uniform(size=2), rng.integers(0, 2 ** 31), rng.uniform()
+    fl, rp = rng.uniform(0.0, 360.0), rng.uniform(0.0, 360.0)
+    e = draw_equipment(eq, 9)
+    assert (e.chamber.fluctuation_phase_deg, e.rate_table.ripple_phase_deg) == (fl, rp)
+
+
+def test_drawn_ripple_phase_reaches_the_readings():
+    """Noise-free: a segment turning less than a revolution reads the ripple's mean,
+    r·|Ω|·(cos φ − cos(φ + Δ))/Δ over the turn Δ from angle 0 (closed form), so the
+    trials' phases give different readings."""
+    from gonio.bench.rate_session import run_rate_session
+    from gonio.protocol.programme import Segment
+
+    b = load_rate_bench("mems-adxrs610").without_noise()
+    b = replace(b, gyro=replace(b.gyro, cross_axis_x=0.0, cross_axis_y=0.0, thermal_tau_s=1.0))
+    seg = [Segment("r", 0, 0, "rate", 10, 1.0, 20.0)]          # 10 s at 20 °/s: 200°
+    ideal = b.equipment.ideal()
+    base = run_rate_session(seg, replace(b, equipment=ideal), 1, noise=False)
+    r, w, delta = 2e-4, 20.0, math.radians(200.0)
+    for s in (3, 4):
+        phi = math.radians(draw_equipment(b.equipment, s).rate_table.ripple_phase_deg)
+        rt = replace(ideal.rate_table, ripple_rel=r, ripple_phase_deg=math.degrees(phi))
+        got = run_rate_session(seg, replace(b, equipment=replace(ideal, rate_table=rt)), 1,
+                               noise=False)
+        d = got.truth["segments"][0]["input_rate_dps"] - base.truth["segments"][0]["input_rate_dps"]
+        assert d == pytest.approx(r * w * (math.cos(phi) - math.cos(phi + delta)) / delta,
+                                  rel=2e-3, abs=1e-9)

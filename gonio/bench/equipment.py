@@ -209,13 +209,19 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
       ±``uniformity_c``/2 (drawn after the above, so they are as before);
     - the phase of the chamber's periodic fluctuation: uniform in [0°, 360°) (drawn last;
       the IEC 62047-20 symmetry and ratiometric budgets carry the fluctuation with its
-      phase unknown, so a phase held fixed would be a constant error in every trial).
+      phase unknown, so a phase held fixed would be a constant error in every trial);
+    - the phase of the rate table's once-per-revolution ripple: uniform in [0°, 360°)
+      (drawn after the chamber's phase, so every draw above is as before). JJF 1535 7.2.3
+      carries the ripple at the amplitude the readings state (``rate_table_ripple_rel``,
+      the bench's own ``ripple_rel``) with its phase unknown; the session starts the
+      table at angle 0, so a phase held at the bench's value would put the same ripple
+      error into every trial.
 
-    What stays as the bench sets it: the table's ripple and axis tilt, the position table's
-    error (already drawn per position by the session), the vibration table, the chamber's
-    fluctuation amplitude and period, the supply error — no budget carries them as a
-    type-B term of the equipment drawn here (JJF 1535 7.2.3 carries the ripple at its
-    stated amplitude with its phase unknown; the phase stays as the bench sets it).
+    What stays as the bench sets it: the ripple's amplitude (the readings state the
+    bench's value, and the budget takes it as the amplitude, not as a bound) and the
+    table's axis tilt, the position table's error (already drawn per position by the
+    session), the vibration table, the chamber's fluctuation amplitude and period, the
+    supply error — no budget carries them as a type-B term of the equipment drawn here.
     Same seed → same equipment.
 
     >>> e = draw_equipment(Equipment(), 3)
@@ -233,8 +239,10 @@ def draw_equipment(eq: Equipment, seed: int) -> Equipment:
     h = 0.5 * eq.chamber.uniformity_c
     pos = float(rng.uniform(-h, h)) if h > 0 else 0.0
     phase = float(rng.uniform(0.0, 360.0))
+    ripple_phase = float(rng.uniform(0.0, 360.0))
     return replace(
-        eq, rate_table=replace(eq.rate_table, rate_error_rel=rate_err),
+        eq, rate_table=replace(eq.rate_table, rate_error_rel=rate_err,
+                               ripple_phase_deg=ripple_phase),
         acquisition=replace(eq.acquisition, gain_error_rel=gain_err),
         chamber=replace(eq.chamber, point_deviation_c=eq.chamber_deviation_bound_c,
                         deviation_seed=ch_seed, position_offset_c=pos,

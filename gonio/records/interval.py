@@ -169,11 +169,14 @@ def _within(value, U, lower, upper) -> bool:
 
 
 def propose(history: dict, default_months: int = DEFAULT_MONTHS,
-            limited_items=()) -> Proposal:
+            limited_items=(), counts: dict | None = None) -> Proposal:
     """The interval for an instrument from ``history``: item key → list of (t_days,
     value, U, k, lower, upper) in calibration order (limits may be None);
     ``limited_items``: the keys the instrument has limits for (what the detail says when no
-    history can be judged against them)."""
+    history can be judged against them); ``counts``: item key → its calibrations, of every
+    item, where ``history`` holds only the items with limits (the others are only counted:
+    whether any item has enough points for a drift); None: the lengths of ``history``'s
+    lists."""
     cap = MAX_FACTOR * default_months
     per_item: dict[str, float] = {}
     findings: dict[float, bool] = {}
@@ -205,7 +208,8 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
                        f"{MIN_GAP_FRACTION:g} of the interval after the one before: not "
                        "counted")
         if max(spans, default=0) < MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH \
-                and any(len(r) >= MIN_POINTS for r in history.values()):
+                and any(n >= MIN_POINTS for n in (
+                    counts.values() if counts is not None else map(len, history.values()))):
             detail += (f"; drift not extrapolated: the history spans less than "
                        f"{MIN_SPAN_FRACTION * default_months:g} months")
         return Proposal(int(math.floor(months)), "simple response / staircase (ILAC-G24 "

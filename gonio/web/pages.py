@@ -226,14 +226,15 @@ def instrument_page(request: Request, session: Session, inst_id: int):
     inst, cals = queries.instrument(store, inst_id)
     if inst is None:
         return Response("no such instrument", status_code=404)
-    hist = services.history(store, inst_id, intervals=False)   # the plot draws them
+    # what the page shows of the history (the plot draws the rest): how many calibrations,
+    # and the interval proposed from the issued ones, both selected in the database
     return render(request, "instrument.html", user, csrf, inst=inst, cals=cals,
                   customers=queries.customers(store),
                   error=request.query_params.get("error", "")[:300],
-                  proposal=services.propose_interval(store, inst_id, hist),
+                  proposal=services.propose_interval(store, inst_id),
                   default=services.default_interval(inst.spec_key),
-                  limits=services.instrument_limits(inst), n_points=max(
-                      (len(v) for v in hist.values()), default=0))
+                  limits=services.instrument_limits(inst),
+                  n_points=services.history_points(store, inst_id))
 
 
 @router.get("/instruments/{inst_id}/history.svg")

@@ -378,3 +378,70 @@ def test_blob_store_checks_digest(sqlite_store):
     with pytest.raises(GonioError, match="larger than the limit"):
         services.store_file(sqlite_store, io.BytesIO(b"x" * 2000), limit_bytes=1000)
 
+
+
+def _drawn_history(store, user_id: int, limits: list, n: int, step_days: int, seed: int) -> int:
+    """One instrument with ``n`` calibrations of three items drawn at random (states drawn
+    too: issued, computed, amending, failed; some issued rows without a value), written as
+    rows; its id."""
+    import random
+
+    from sqlalchemy import insert
+
+    from gonio.records import blobs
+    from gonio.records.models import Blob, Customer, Instrument
+
+    rng = random.Random(seed)
+    sha = blobs.put_bytes(store.blob_root, b"drawn")
+    with store.writing() as s:
+        if s.get(Blob, sha) is None:
+            s.add(Blob(sha256=sha, size=5))
+        cust = Customer(name=f"C{seed}", address="")
+        s.add(cust)
+        s.flush()
+        inst = Instrument(customer_id=cust.id, kind="gyro", manufacturer="W", model="M",
+                          serial=f"S{seed}", spec_key="ogam-draft",
+                          limits_json=json.dumps(limits))
+        s.add(inst)
+        s.flush()
+        for c in range(n):
+            status = rng.choice(["issued", "issued", "computed", "amending", "failed"])
+            cal = Calibration(instrument_id=inst.id, spec_key="ogam-draft",
+                              readings_sha256=sha, readings_name="r.csv", status=status,
+                              performed_on=dt.date(2016, 1, 1) + dt.timedelta(
+                                  days=step_days * c + rng.randrange(20)),
+                              created_by_id=user_id, results_sha256=sha)
+            s.add(cal)
+            s.flush()
+            s.execute(insert(ResultItem), [
+                {"calibration_id": cal.id, "key": key, "title": key, "clause": "7",
+                 "unit": "arcsec", "measured": True, "k": 2.0, "U": 0.05,
+                 "value": None if rng.random() < 0.1 else rng.gauss(0.1 * c, 0.2)}
+                for key in ("angle_deviation", "repeatability", "zero_stability")])
+            if status in ("issued", "amending"):
+                s.add(Certificate(number=f"N-{seed}-{c}", calibration_id=cal.id,
+                                  issued_by_id=user_id, html_sha256=sha, pdf_sha256=sha,
+                                  results_sha256=sha))
+        s.commit()
+        return inst.id
+
+
+@pytest.mark.parametrize("limits, n, step_days", [
+    ([{"item": "angle_deviation", "mpe": 3.0}, {"item": "repeatability", "upper": 2.5}], 12,
+     200),                                                     # drift to the limit
+    ([{"item": "angle_deviation", "mpe": 0.3}], 6, 20),        # staircase, short span
+    ([{"item": "nothing_measured", "mpe": 1.0}], 5, 300),      # default: no limited item
+    ([], 4, 300)])                                             # default: no limits
+def test_instrument_page_proposal_selected_in_the_database(store, people, limits, n,
+                                                           step_days):
+    """The instrument page's proposal and count, selected in the database, equal those
+    computed in Python from the whole history (:func:`services.history`) for the same rows."""
+    inst_id = _drawn_history(store, people["tech"].id, limits, n, step_days, seed=n)
+    hist = services.history(store, inst_id)
+    got = services.propose_interval(store, inst_id)
+    assert got == services.propose_interval(store, inst_id, hist)
+    assert services.history_points(store, inst_id) == max(map(len, hist.values()))
+    assert got.method.split()[0] == {12: "drift-to-limit", 6: "simple", 5: "specification",
+                                     4: "specification"}[n]
+    if n == 6:      # the unlimited items' counts reach the staircase's note
+        assert "drift not extrapolated" in got.detail

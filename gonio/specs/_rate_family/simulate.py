@@ -59,8 +59,9 @@ def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True,
     ``draw_equipment`` (the default): each trial draws every equipment error a budget
     carries as type B from its seed — the rate table's rate error and the voltmeter's gain
     (normal, their certificates' u), the chamber's deviation per set point (uniform,
-    ±2 °C) and the gyro's misalignment in its fixture (uniform, ±0.05° about body x and
-    y); :func:`gonio.bench.equipment.draw_equipment`. Held at one value instead, a type-B
+    ±2 °C), the gyro's misalignment in its fixture (uniform, ±0.05° about body x and
+    y) and the phases of the chamber's fluctuation and of the table's once-per-revolution
+    ripple (uniform); :func:`gonio.bench.equipment.draw_equipment`. Held at one value instead, a type-B
     error cannot spread z, and a U made of it always looks over-wide.
     ``draw_equipment=False``: the bench file's one realisation in every trial."""
     b = load_rate_bench(name)
