@@ -89,7 +89,7 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"slope standard errors of the two fits", "两次拟合斜率的标准误差"),
     (r"Welch estimate", "Welch 谱估计"),
     (r"Welch estimate: correlated Hann lines and overlapping segments",
-     "Welch 谱估计：Hann 窗谱线相关、分段重叠"),
+     "Welch 谱估计：汉宁窗谱线相关、分段重叠"),
     (r"pooled noise of the point means through the line's residual / FullScale",
      "各点平均值的合并噪声经直线残差传递 / FullScale"),
     (r"selection excess of the largest \|L_i\| \(midpoint ± c_m·σ/2 removed\)",
