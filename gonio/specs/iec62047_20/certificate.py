@@ -88,6 +88,14 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"slope from the K_i's noise u\(a_i\)", "由 K_i 的噪声 u(a_i) 得到的斜率"),
     (r"slope standard errors of the two fits", "两次拟合斜率的标准误差"),
     (r"Welch estimate", "Welch 谱估计"),
+    (r"Welch estimate: correlated Hann lines and overlapping segments",
+     "Welch 谱估计：汉宁窗谱线相关、分段重叠"),
+    (r"pooled noise of the point means through the line's residual / FullScale",
+     "各点平均值的合并噪声经直线残差传递 / FullScale"),
+    (r"selection excess of the largest \|L_i\| \(midpoint ± c_m·σ/2 removed\)",
+     "|L_i| 取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
+    (r"linear interpolation in ln f: h²/8·\|p''\| from the neighbouring point's second "
+     r"difference", "ln f 中线性插值：h²/8·|p''|，p'' 由相邻点的二阶差分求得"),
     (r"Welch estimate over the broadband lines", "宽带谱线上的 Welch 谱估计"),
     (r"χ² interval at the floor", "底值处的 χ² 区间"),
     (r"bias correction of the −½ line under the fitted five-term model \(half the full "
