@@ -205,7 +205,7 @@ def nonlinearity(ctx: Context) -> Item:
     value = max(float(kn.mean()) - half, 0.0)
     u_noise = float(np.sqrt(np.mean([(s_r / sp) ** 2 for (_, _, s_r), sp in zip(sel, span)]))
                     / math.sqrt(len(cals)))
-    inputs = [from_u("K_n", value, 0.0, source="mean of K_n,m"),
+    inputs = [from_u("K_n", float(kn.mean()), 0.0, source="mean of K_n,m"),
               from_u("noise", 0.0, u_noise, dof=math.inf,
                      source="noise of the largest residual (rate-point means, leverage)"),
               type_b("selection", -half, half, "rectangular",
