@@ -41,14 +41,16 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy import signal
+from scipy.spatial.transform import Rotation
 
 from gonio.atomic import output_dir
+from gonio.bench.equipment import EQUIPMENT_STREAM, Equipment, draw_equipment, equipment_from_dict
 from gonio.physics.earth import earth_rate_enu
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.readings import COLUMNS, RANGES, format_triad_readings
@@ -169,6 +171,13 @@ class TriadBench:
     bi_tau_min_s: float = 1.0
     bi_tau_max_s: float = 1.0e4
     thermal: ThermalModel = field(default_factory=ThermalModel)
+    #: the rate table and fixture (:class:`gonio.bench.equipment.Equipment`): its rate error
+    #: (``rate_table.rate_error_rel``), its certificate's ``rate_table_u_rel`` and the
+    #: fixture's bound ``axis_alignment_bound_deg``, stated in the readings
+    equipment: Equipment = field(default_factory=Equipment)
+    #: 3×3, row a: the table's spin axis in the reference frame when axis a is up, minus
+    #: e_a (rad; [a, a] = 0): the fixture's face on the table top and the top's squareness
+    orientation_error_rad: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
 
     @property
     def axes(self) -> np.ndarray:
@@ -179,6 +188,39 @@ class TriadBench:
     def system_matrix(self) -> np.ndarray:
         """M at the reference temperature and supply (output per °/s)."""
         return system_matrix(self.scale_per_dps, self.axes, self.cross_coupling)
+
+    def table_axis(self, up: str) -> np.ndarray:
+        """Rotation (3×3) from the ideal orientation's reference frame to the one the table
+        really has with ``up`` up: the small rotation taking e_a to e_a + δ_a
+        (δ_a = ``orientation_error_rad[a]``, normalised; Rodrigues' formula), identity
+        without an error. The ± sign of ``up`` shares the axis's δ (the static positions
+        see only the Earth rate, where δ is far below the noise)."""
+        a = "xyz".index(up[-1])
+        e = np.eye(3)[a]
+        d = np.asarray(self.orientation_error_rad, dtype=float)[a]
+        if not np.any(d):
+            return np.eye(3)
+        return Rotation.from_rotvec(np.cross(e, d)).as_matrix()
+
+    def for_trial(self, seed: int) -> "TriadBench":
+        """The bench one coverage trial runs on: the equipment's Type B errors drawn from
+        ``seed`` (:func:`gonio.bench.equipment.draw_equipment`: the table's rate error,
+        normal with its certificate's u) and the table axis at each of the three
+        orientations, each component of δ_a uniform in ±``axis_alignment_bound_deg`` (the
+        fixture's bound, as the rate benches draw the gyro in its fixture), from a stream of
+        its own. The triad itself (the measurand) is unchanged, and so is its truth.
+
+        >>> b = load_triad_bench("mems-triad").for_trial(5)
+        >>> b.equipment.rate_table.rate_error_rel != 0, float(np.max(np.abs(b.orientation_error_rad))) <= math.radians(0.05)
+        (True, True)
+        >>> float(np.max(np.abs(np.diag(b.orientation_error_rad))))
+        0.0
+        """
+        eq = draw_equipment(self.equipment, int(seed))
+        rng = np.random.default_rng([int(seed), EQUIPMENT_STREAM, 3])
+        bound = math.radians(eq.axis_alignment_bound_deg)
+        d = rng.uniform(-bound, bound, (3, 3)) * (1.0 - np.eye(3))
+        return replace(self, equipment=eq, orientation_error_rad=d)
 
     @property
     def bias_output(self) -> np.ndarray:
@@ -198,9 +240,14 @@ def _offdiag(six, what: str, file) -> np.ndarray:
 
 
 def load_triad_bench(name_or_path) -> TriadBench:
-    """Read and validate a triad bench file (``protocols/benches/mems-triad.toml``)."""
+    """Read and validate a triad bench file (``protocols/benches/mems-triad.toml``); its
+    optional ``[equipment]`` table is the rate-gyro benches' (:func:`gonio.bench.equipment.equipment_from_dict`).
+    A :class:`TriadBench` is returned as it is (a coverage trial's drawn bench)."""
+    if isinstance(name_or_path, TriadBench):
+        return name_or_path
     path = resolve(name_or_path, kind="bench")
-    raw = read_toml(path)
+    raw = dict(read_toml(path))
+    eq = equipment_from_dict(raw.pop("equipment", {}), path)
     cfg = validate_table(raw, _BENCH_SCHEMA, file=path)
     t = cfg["triad"]
     for key in ("scale_per_dps", "bias_dps", "arw_deg_sqrt_h", "bias_instability_dph",
@@ -233,7 +280,8 @@ def load_triad_bench(name_or_path) -> TriadBench:
         bias_dps=tuple(t["bias_dps"]), arw_deg_sqrt_h=tuple(t["arw_deg_sqrt_h"]),
         bias_instability_dph=tuple(t["bias_instability_dph"]),
         rate_random_walk_dph_sqrt_h=tuple(t["rate_random_walk_dph_sqrt_h"]),
-        bi_tau_min_s=t["bi_tau_min_s"], bi_tau_max_s=t["bi_tau_max_s"], thermal=thermal)
+        bi_tau_min_s=t["bi_tau_min_s"], bi_tau_max_s=t["bi_tau_max_s"], thermal=thermal,
+        equipment=eq)
 
 
 # ------------------------------------------------------------------------------ noise
@@ -448,6 +496,7 @@ class _Runner:
         v = th.reference_v if supply_v is None else supply_v
         ch, die = self._temps(n, self.chamber_c if chamber_end is None else chamber_end)
         tk = np.arange(n) / self.fs
+        rate_dps = rate_dps * (1.0 + b.equipment.rate_table.rate_error_rel)   # the table's
         theta = np.radians(table_deg + rate_dps * tk)
         c0 = ref_to_enu(up, north0, 0.0)
         w = self.earth
@@ -456,6 +505,8 @@ class _Runner:
                                       np.full(n, w[2])])
         from gonio.physics.alignment import signed_axis
         omega = earth_ref + rate_dps * signed_axis(up)[:, None]
+        if np.any(b.orientation_error_rad):
+            omega = b.table_axis(up) @ omega
         sensed = self.mix @ omega
         wf = np.vstack([th.arw_factor(i, die) for i in range(3)])
         nz = self.noise.block(n, white_factor=wf)
@@ -520,6 +571,8 @@ def _metadata(bench: TriadBench, protocol: TriadProtocol, seed: int, kind: str) 
             "nominal_scale_per_dps": " ".join(repr(float(k)) for k in bench.scale_per_dps),
             "reference_c": repr(float(bench.thermal.reference_c)),
             "reference_v": repr(float(bench.thermal.reference_v)),
+            "rate_table_u_rel": repr(float(bench.equipment.rate_table_u_rel)),
+            "orientation_bound_deg": repr(float(bench.equipment.axis_alignment_bound_deg)),
             "bench": bench.name, "protocol": protocol.name, "seed": str(int(seed))}
 
 
