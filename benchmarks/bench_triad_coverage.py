@@ -38,14 +38,14 @@ def triad_trial(seed: int, protocol: str = "triad-alignment", bench: str = "mems
                 draw: bool = True) -> tuple[dict[str, dict], list[str]]:
     """One simulated + calibrated triad programme: ({item: {clause, value, truth, U, u_c}},
     [items without a truth]). ``draw``: the bench's laboratory Type B effects drawn from
-    the seed (``TriadBench.for_trial``: the table's rate error, its axis at each
+    the seed (``simulate.for_trial``: the table's rate error, its axis at each
     orientation); the truth is the drawn bench's (the triad's own parameters, which the
     draw leaves as they are)."""
     from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol
+    from gonio.specs.triad_alignment.simulate import for_trial
 
     spec = get("triad-alignment")
-    b = load_triad_bench(bench)
-    b = b.for_trial(int(seed)) if draw else b
+    b = for_trial(bench, int(seed)) if draw else load_triad_bench(bench)
     truth = spec.truth(b, load_triad_protocol(protocol))
     with tempfile.TemporaryDirectory() as d:
         files = spec.simulate(d, protocol=protocol, bench=b, seed=int(seed))

@@ -2,7 +2,7 @@
 the reference frame at each orientation.
 
 Independent references: a Monte Carlo of the virtual bench (noise off, the table's errors
-drawn per trial by ``TriadBench.for_trial``, every trial refitted by ``estimate_alignment``
+drawn per trial by ``simulate.for_trial``, every trial refitted by ``estimate_alignment``
 with no Type B term) against the closed-form covariance ``table_type_b_cov``; and, through
 ``calibrate``, the Type B line of an item against the same first-order formula written out
 for that entry.
@@ -16,12 +16,12 @@ import math
 import numpy as np
 import pytest
 
-from gonio.bench.equipment import Equipment
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.analysis import estimate_alignment, table_type_b_cov
 from gonio.specs.triad_alignment.bench import (TriadProtocol, load_triad_bench,
                                                run_alignment_session)
 from gonio.specs.triad_alignment.calibration import calibrate
+from gonio.specs.triad_alignment.simulate import for_trial
 from gonio.specs.triad_alignment.readings import (format_triad_readings, parse_triad_readings)
 
 
@@ -29,7 +29,7 @@ def _quiet_bench(rate_u_rel: float, bound_deg: float):
     b = load_triad_bench("mems-triad")
     return dataclasses.replace(
         b, arw_deg_sqrt_h=(0.0,) * 3, bias_instability_dph=(0.0,) * 3,
-        equipment=Equipment(rate_table_u_rel=rate_u_rel, axis_alignment_bound_deg=bound_deg))
+        rate_table_u_rel=rate_u_rel, orientation_bound_deg=bound_deg)
 
 
 def _protocol() -> TriadProtocol:
@@ -51,7 +51,7 @@ def test_closed_form_covariance_matches_monte_carlo_of_the_bench():
     p = _protocol()
     errs = []
     for seed in range(300):
-        b = base.for_trial(seed)
+        b = for_trial(base, seed)
         res = estimate_alignment(_readings(run_alignment_session(p, b, seed=seed)))
         errs.append((res.system_matrix - base.system_matrix).ravel())
     errs = np.array(errs)

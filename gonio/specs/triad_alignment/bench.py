@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +50,6 @@ from scipy import signal
 from scipy.spatial.transform import Rotation
 
 from gonio.atomic import output_dir
-from gonio.bench.equipment import EQUIPMENT_STREAM, Equipment, draw_equipment, equipment_from_dict
 from gonio.physics.earth import earth_rate_enu
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.readings import COLUMNS, RANGES, format_triad_readings
@@ -83,6 +82,14 @@ _BENCH_SCHEMA = {
                                              check=non_negative, expect=">= 0"),
         "bi_tau_min_s": Field("float", default=1.0, check=positive, expect="> 0"),
         "bi_tau_max_s": Field("float", default=1.0e4, check=positive, expect="> 0"),
+    }),
+    "table": Field("table", default={}, schema={
+        "rate_error_rel": Field("float", default=0.0, check=lambda v: abs(v) < 0.5,
+                                expect="a relative error in (-0.5, 0.5)"),
+        "rate_table_u_rel": Field("float", default=2.5e-4, check=lambda v: 0 <= v <= 0.5,
+                                  expect="in [0, 0.5]"),
+        "orientation_bound_deg": Field("float", default=0.05, check=lambda v: 0 <= v <= 10,
+                                       expect="in [0, 10] degrees"),
     }),
     "thermal": Field("table", default={}, schema={
         "reference_c": Field("float", default=25.0),
@@ -171,10 +178,14 @@ class TriadBench:
     bi_tau_min_s: float = 1.0
     bi_tau_max_s: float = 1.0e4
     thermal: ThermalModel = field(default_factory=ThermalModel)
-    #: the rate table and fixture (:class:`gonio.bench.equipment.Equipment`): its rate error
-    #: (``rate_table.rate_error_rel``), its certificate's ``rate_table_u_rel`` and the
-    #: fixture's bound ``axis_alignment_bound_deg``, stated in the readings
-    equipment: Equipment = field(default_factory=Equipment)
+    #: the rate table (``[table]`` of the bench file): its relative rate error, and what the
+    #: readings state of it — its certificate's relative standard uncertainty and the bound of
+    #: its spin axis in the reference frame at each orientation (the fixture's face on the
+    #: table top, the top's squareness), the same defaults as the rate benches' equipment
+    #: (:class:`gonio.bench.equipment.Equipment`: 2.5×10⁻⁴, ±0.05°)
+    rate_error_rel: float = 0.0
+    rate_table_u_rel: float = 2.5e-4
+    orientation_bound_deg: float = 0.05
     #: 3×3, row a: the table's spin axis in the reference frame when axis a is up, minus
     #: e_a (rad; [a, a] = 0): the fixture's face on the table top and the top's squareness
     orientation_error_rad: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
@@ -202,26 +213,6 @@ class TriadBench:
             return np.eye(3)
         return Rotation.from_rotvec(np.cross(e, d)).as_matrix()
 
-    def for_trial(self, seed: int) -> "TriadBench":
-        """The bench one coverage trial runs on: the equipment's Type B errors drawn from
-        ``seed`` (:func:`gonio.bench.equipment.draw_equipment`: the table's rate error,
-        normal with its certificate's u) and the table axis at each of the three
-        orientations, each component of δ_a uniform in ±``axis_alignment_bound_deg`` (the
-        fixture's bound, as the rate benches draw the gyro in its fixture), from a stream of
-        its own. The triad itself (the measurand) is unchanged, and so is its truth.
-
-        >>> b = load_triad_bench("mems-triad").for_trial(5)
-        >>> b.equipment.rate_table.rate_error_rel != 0, float(np.max(np.abs(b.orientation_error_rad))) <= math.radians(0.05)
-        (True, True)
-        >>> float(np.max(np.abs(np.diag(b.orientation_error_rad))))
-        0.0
-        """
-        eq = draw_equipment(self.equipment, int(seed))
-        rng = np.random.default_rng([int(seed), EQUIPMENT_STREAM, 3])
-        bound = math.radians(eq.axis_alignment_bound_deg)
-        d = rng.uniform(-bound, bound, (3, 3)) * (1.0 - np.eye(3))
-        return replace(self, equipment=eq, orientation_error_rad=d)
-
     @property
     def bias_output(self) -> np.ndarray:
         """Bias vector at reference conditions in output units: K_i b_i."""
@@ -240,14 +231,14 @@ def _offdiag(six, what: str, file) -> np.ndarray:
 
 
 def load_triad_bench(name_or_path) -> TriadBench:
-    """Read and validate a triad bench file (``protocols/benches/mems-triad.toml``); its
-    optional ``[equipment]`` table is the rate-gyro benches' (:func:`gonio.bench.equipment.equipment_from_dict`).
-    A :class:`TriadBench` is returned as it is (a coverage trial's drawn bench)."""
+    """Read and validate a triad bench file (``protocols/benches/mems-triad.toml``, with an
+    optional ``[table]``: the rate table's ``rate_error_rel``, ``rate_table_u_rel``,
+    ``orientation_bound_deg``). A :class:`TriadBench` is returned as it is (a coverage
+    trial's drawn bench, :func:`gonio.specs.triad_alignment.simulate.for_trial`)."""
     if isinstance(name_or_path, TriadBench):
         return name_or_path
     path = resolve(name_or_path, kind="bench")
-    raw = dict(read_toml(path))
-    eq = equipment_from_dict(raw.pop("equipment", {}), path)
+    raw = read_toml(path)
     cfg = validate_table(raw, _BENCH_SCHEMA, file=path)
     t = cfg["triad"]
     for key in ("scale_per_dps", "bias_dps", "arw_deg_sqrt_h", "bias_instability_dph",
@@ -281,7 +272,7 @@ def load_triad_bench(name_or_path) -> TriadBench:
         bias_instability_dph=tuple(t["bias_instability_dph"]),
         rate_random_walk_dph_sqrt_h=tuple(t["rate_random_walk_dph_sqrt_h"]),
         bi_tau_min_s=t["bi_tau_min_s"], bi_tau_max_s=t["bi_tau_max_s"], thermal=thermal,
-        equipment=eq)
+        **(cfg["table"] or {}))
 
 
 # ------------------------------------------------------------------------------ noise
@@ -496,7 +487,7 @@ class _Runner:
         v = th.reference_v if supply_v is None else supply_v
         ch, die = self._temps(n, self.chamber_c if chamber_end is None else chamber_end)
         tk = np.arange(n) / self.fs
-        rate_dps = rate_dps * (1.0 + b.equipment.rate_table.rate_error_rel)   # the table's
+        rate_dps = rate_dps * (1.0 + b.rate_error_rel)        # the table's actual rate
         theta = np.radians(table_deg + rate_dps * tk)
         c0 = ref_to_enu(up, north0, 0.0)
         w = self.earth
@@ -571,8 +562,8 @@ def _metadata(bench: TriadBench, protocol: TriadProtocol, seed: int, kind: str) 
             "nominal_scale_per_dps": " ".join(repr(float(k)) for k in bench.scale_per_dps),
             "reference_c": repr(float(bench.thermal.reference_c)),
             "reference_v": repr(float(bench.thermal.reference_v)),
-            "rate_table_u_rel": repr(float(bench.equipment.rate_table_u_rel)),
-            "orientation_bound_deg": repr(float(bench.equipment.axis_alignment_bound_deg)),
+            "rate_table_u_rel": repr(float(bench.rate_table_u_rel)),
+            "orientation_bound_deg": repr(float(bench.orientation_bound_deg)),
             "bench": bench.name, "protocol": protocol.name, "seed": str(int(seed))}
 
 
