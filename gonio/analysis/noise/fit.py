@@ -1,5 +1,6 @@
 """The five-term gyro noise model, fitted to each Allan-family variance with its own
-response, parameter uncertainties by parametric bootstrap, and the sinusoid check.
+response, parameter uncertainties by parametric bootstrap or from the covariance of the
+estimates across τ (:mod:`.covariance`), and the sinusoid check.
 
 Contents
 --------
