@@ -141,6 +141,11 @@ LABELS: dict[str, dict[str, str]] = {
                              "file says.",
                        "zh": "读数文件的元数据表明其来自虚拟台架 {bench}（种子 {seed}）：无论实验室"
                              "文件如何填写，所有输出均如此标明。"},
+    "virtual_evidence": {"en": "The readings' own metadata ({keys}) say they come from the "
+                               "virtual bench: every output says so, whatever the laboratory "
+                               "file says.",
+                         "zh": "读数文件的元数据（{keys}）表明其来自虚拟台架：无论实验室文件如何"
+                               "填写，所有输出均如此标明。"},
     "source_file": {"en": "Readings file", "zh": "读数文件"},
     "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
     # units as shown
