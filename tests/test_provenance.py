@@ -24,6 +24,7 @@ import pytest
 
 from gonio.formats.provenance import provenance, readings_provenance
 from gonio.report.i18n import labels
+from tests.own_readings import BENCH_KEYS, own_text
 
 HERE = Path(__file__).resolve().parent
 PINS = HERE / "data" / "pins"
@@ -78,13 +79,13 @@ def pdf_pages(pdf: Path) -> list[str]:
 
 
 #: The metadata lines a laboratory's own file lacks (``strip`` of :func:`simulate_calibrate`).
-LAB_OWN = "bench|seed|generator|noise"
+LAB_OWN = "|".join(BENCH_KEYS)
 
 
 def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "") -> Path:
     """``gonio simulate`` then ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
     expression of metadata keys whose lines are deleted from the readings first
-    (:data:`LAB_OWN`: also the bench's names of the instrument and table replaced)."""
+    (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`)."""
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, cal = work / "sim", work / "cal"
     gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
@@ -92,12 +93,8 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str =
     if strip:                        # a laboratory's own file: no bench, seed or generator
         lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)
         readings = work / "lab-readings.csv"
-        readings.write_text("".join(
-            x for x in lines if not re.match(r"# (%s):" % strip, x)), encoding="utf-8")
-        if strip == LAB_OWN:         # and its own instrument's names, not the bench's
-            readings.write_text(re.sub(r"(?m)^# (instrument|manufacturer|table|operator): .*$",
-                                       r"# \1: Laboratory unit 7", readings.read_text(
-                                           encoding="utf-8")), encoding="utf-8")
+        text = "".join(x for x in lines if not re.match(r"# (%s):" % strip, x))
+        readings.write_text(own_text(text) if strip == LAB_OWN else text, encoding="utf-8")
         for extra in ("thermal.csv",):
             if (sim / extra).exists():
                 shutil.copy(sim / extra, work / extra)
