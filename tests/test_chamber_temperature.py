@@ -197,6 +197,9 @@ def test_the_stated_bound_tolerance_and_logged_temperature_reach_the_certified_k
     (line,) = [c for c in b.components if c.symbol == "K_T"]
     assert line.u == pytest.approx(abs(b.value) * 0.4e-6 * 0.2 / 3.0, rel=1e-9)
     assert _bound(at_ref)["distribution"] == "rectangular-product"
+    # a zero difference is printed unsigned to the thermometer's 0.01 °C, never "+0"
+    assert "(0.00 °C from the reference 20 °C;" in summary(at_ref.result())
+    assert "chamber temperature logged 0.00 °C from the reference" in line.source
     exact = _calibrate(proto, replace(res, metadata={**res.metadata, "thermometer_mpe_c": "0"}))
     assert not [c for c in exact.item_uncertainty["scale_factor"].components
                 if c.symbol == "K_T"]
