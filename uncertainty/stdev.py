@@ -29,11 +29,12 @@ This module never imports ``gonio``.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, stats
+from scipy import integrate, special, stats
 
 __all__ = ["stdev_interval", "stdev_upper", "stdev_u", "max_stdev_interval", "expected_range_factor",
            "random_walk_stdev_dof", "correlated_stdev_dof", "corrected_range", "RangeCorrection"]
@@ -122,6 +123,7 @@ def max_stdev_interval(s_max: float, dof: float, m: int, p: float = 0.95) -> tup
             s_max * math.sqrt(dof / stats.chi2.ppf(q_lo, dof)))
 
 
+@functools.lru_cache(maxsize=64)
 def expected_range_factor(n: int) -> float:
     """d₂(n): the expected range of n independent standard normal values.
 
@@ -135,7 +137,10 @@ def expected_range_factor(n: int) -> float:
         raise ValueError(f"n must be an integer >= 1, got {n}")
     if n == 1:
         return 0.0
-    f = lambda x: 1.0 - (1.0 - stats.norm.cdf(x)) ** n - stats.norm.cdf(x) ** n  # noqa: E731
+    def f(x: float) -> float:
+        phi = special.ndtr(x)        # Φ(x): what stats.norm.cdf evaluates, without its wrapper
+        return 1.0 - (1.0 - phi) ** n - phi ** n
+
     val, _ = integrate.quad(f, -np.inf, np.inf)
     return float(val)
 

@@ -27,6 +27,7 @@ command quietly (exit 0: every output file was already written).
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import os
 import pkgutil
@@ -147,8 +148,18 @@ def _error(msg: str) -> int:
     return 2
 
 
+#: The cyclic garbage collector's thresholds of a command run as its own process: a command
+#: allocates most of its objects once (the imports, a figure's artists) and keeps them, and
+#: at Python's default (700, 10, 10) a demo spends about 0.4 s of CPU re-examining them
+#: (0.2 s at these). Memory is held by arrays, which the collector does not free.
+GC_THRESHOLDS = (10_000, 10, 10)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``gonio`` console script; returns the exit code."""
+    """Entry point of the ``gonio`` console script; returns the exit code. Called without
+    ``argv`` (its own process) it sets :data:`GC_THRESHOLDS`."""
+    if argv is None:
+        gc.set_threshold(*GC_THRESHOLDS)
     try:
         if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
             signal.signal(signal.SIGTERM, _on_sigterm)

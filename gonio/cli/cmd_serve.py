@@ -142,6 +142,7 @@ def _build(args, workers: int, front, server, built: dict) -> None:
 
     while not server.started and not server.should_exit:
         time.sleep(0.01)      # the login page answers first; then the imports take the CPU
+    front.first_page.wait(front.FIRST_PAGE_GRACE_S)     # a browser already asking: its page
     try:
         from gonio.records.db import open_store
         from gonio.records.worker import Dispatcher

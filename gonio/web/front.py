@@ -18,6 +18,7 @@ import datetime as _dt
 import html
 import math
 import secrets
+import threading
 from pathlib import Path
 
 from jinja2 import pass_context
@@ -118,11 +119,15 @@ class Front:
 
     #: how often a held request looks whether the application is there (s)
     POLL_S = 0.02
+    #: how long the build waits for the first login page to be answered (s): a browser's
+    #: first request then does not share the CPU (and the GIL) with the build's imports
+    FIRST_PAGE_GRACE_S = 0.3
 
     def __init__(self):
         self.app = None
         self.failed: str | None = None
         self._templates: Jinja2Templates | None = None
+        self.first_page = threading.Event()     # set once a login page has been sent
 
     def prepare(self) -> Front:
         """Load and compile the login page's templates now (before the first request)."""
@@ -144,7 +149,11 @@ class Front:
             r = login_response(self._templates, Request(scope, receive))
             for k, v in HEADERS.items():
                 r.headers.setdefault(k, v)
-            return await r(scope, receive, send)
+            try:
+                return await r(scope, receive, send)
+            finally:
+                self.first_page.set()
+        self.first_page.set()           # any other request: the build goes ahead at once
         while self.app is None and self.failed is None:
             await asyncio.sleep(self.POLL_S)
         if self.app is None:

@@ -387,11 +387,18 @@ def _simulate_many(blocks: list[Block], protocol: Protocol, variants: list[_Vari
                                         phi_at[m], comp[m], dt, v.dither_key)
                                @ np.array([-1.0, 1.0])) / ((k1 - k0) * dt)
                 if v.stream is not None or blk.label in v.capture:
-                    c = _counter(k, phi, inst, zeros, phi_at[m], comp[m], dt, v.dither_key)
+                    keep = None
                     if blk.label in v.capture:
                         dec = -(-(blk.k_end - blk.k_start) // MAX_RECORD_SAMPLES)
-                        keep = ((k - blk.k_start) % dec) == 0
-                        captured[m].setdefault(blk.label, []).append((t[keep], c[keep]))
+                        keep = slice((blk.k_start - a) % dec, None, dec)
+                    # the counter is element-wise in (k, φ): without a stream only the
+                    # kept samples are counted (the same values, a fraction of the work)
+                    at = keep if v.stream is None and keep is not None else slice(None)
+                    c = _counter(k[at], phi[at], inst, zeros, phi_at[m], comp[m], dt,
+                                 v.dither_key)
+                    if keep is not None:
+                        captured[m].setdefault(blk.label, []).append(
+                            (t[keep], c if at is keep else c[keep]))
                     if v.stream is not None:
                         if table_out is None:
                             table_out = np.repeat(theta_u + arcsec_to_deg(harmonic_sum_arcsec(
