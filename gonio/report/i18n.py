@@ -714,6 +714,14 @@ def translator(extra: dict | None = None, tables=(), own: dict | None = None):
 FINDING_ACTIONS = {"set_aside": ("set aside", "剔除"), "flagged": ("flagged", "标记"),
                    "refused": ("refused", "拒收")}
 
+#: Chinese of the findings every specification can give (before the specification's table).
+COMMON_FINDINGS_ZH: tuple[tuple[str, str], ...] = (
+    (r"column '(.+?)' is not one (\S+) reads: its cells are kept with the readings but no item "
+     r"uses them \(a misspelt column\? the columns read: (.+)\)",
+     "{1} 列不是 {2} 读取的列：其数据随读数保留，但不用于任何项目（列名拼写有误？读取的列：{3}）"),
+)
+
+
 def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
                  own: dict | None = None) -> str:
     """One screening finding (results.json ``findings``) as a certificate line in L's
@@ -740,6 +748,6 @@ def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
         parts.append(f"第 {f['line']} 行" if zh else f"line {f['line']}")
     msg = f.get("message") or ""
     if zh:
-        msg = translator(extra, tuple(table), own)(msg) or msg
+        msg = translator(extra, COMMON_FINDINGS_ZH + tuple(table), own)(msg) or msg
     where = ("，" if zh else ", ").join(p for p in parts if p)
     return f"[{act}] {where}{'：' if zh else ': '}{msg}"

@@ -18,6 +18,10 @@ from dataclasses import asdict, dataclass
 
 from gonio.errors import GonioError
 
+#: The code of the flagged finding that states a readings column the specification does not
+#: read (:func:`gonio.pipeline.dispatch.unread_columns`).
+UNREAD_CODE = "unread-column"
+
 #: What was done with a reading a rule fired on.
 ACTIONS: tuple[str, ...] = ("refused", "set_aside", "flagged")
 

@@ -19,6 +19,7 @@ from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text
+from gonio.result.findings import UNREAD_CODE
 from gonio.result.model import Result
 from gonio.result.statement import signed_text
 from gonio.result.tables import results_json_text, write_tables
@@ -102,7 +103,7 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     if unc.get("measured"):
         lines += [f"note: {n}" for n in unc.get("notes") or []]
     lines += [f"flagged: {f.location()}: {f.message}" for f in result.findings
-              if f.code == "identity-mismatch"]       # the readings against the lab file
+              if f.code in ("identity-mismatch", UNREAD_CODE)]  # against the lab file; unread
     return "\n".join(lines) + "\n"
 
 
