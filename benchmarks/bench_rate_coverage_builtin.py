@@ -1,7 +1,9 @@
 """Coverage of every JJF 1535 / IEC 62047-20 item on the BUILT-IN programme (issue 24), on
 fresh seeds no test uses: per item the coverage of U with its Clopper–Pearson 95 %
 interval, and the mean and spread of z = (value − truth)/u_c (two-sided: sd z < 0.3 flags
-an over-wide U, coverage < 0.90 a narrow one).
+an over-wide U, coverage < 0.90 a narrow one) — the table of ``gonio validate --spec``
+(``format_coverage``): a standard deviation stated by its one-sided χ² interval (K_r, B_r,
+B_s; Noise,RMS) is judged by that interval and its z is the χ² z, with z on u_c beside it.
 
     PYTHONPATH=$PWD python benchmarks/bench_rate_coverage_builtin.py --spec iec62047-20 \
         --seeds 100 --first 910000 [--fixed-equipment] [--records out.jsonl]
@@ -21,12 +23,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from dataclasses import replace
 
-import numpy as np
 
 
 def bench_for(spec: str, draw: bool = True):
@@ -40,30 +40,15 @@ def bench_for(spec: str, draw: bool = True):
                                    .gyro.warmup_bias_dps))
 
 
-def clopper_pearson(k: int, n: int) -> tuple[float, float]:
-    from scipy.stats import binomtest
-    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="exact")
-    return ci.low, ci.high
+def table(records: list[dict], title: str = "") -> str:
+    """The per-item table of ``gonio validate --spec`` (:func:`gonio.pipeline.coverage.
+    format_coverage`): an item stated by its interval alone is judged by that interval, and a
+    standard deviation stated by its one-sided χ² interval (JJF K_r, B_r, B_s; IEC Noise,RMS)
+    by its χ² z, Φ⁻¹(F_χ²(ν s²/σ²; ν)), the interval's own scale, with z on u_c beside it
+    (for ν = 2, z on u_c = 2(1 − σ/s) is unbounded below and says nothing of the interval)."""
+    from gonio.pipeline.coverage import coverage_table_from, format_coverage
 
-
-def table(records: list[dict]) -> str:
-    per: dict[str, list] = {}
-    for r in records:
-        for k, v in r["r"].items():
-            if v["value"] is not None:
-                per.setdefault(k, []).append(v)
-    lines = [f"{'item':30s} {'n':>4s} {'cover':>6s} {'Clopper-Pearson 95 %':>21s} "
-             f"{'z mean':>7s} {'z sd':>6s}"]
-    for k, vs in per.items():
-        n = len(vs)
-        hits = sum(abs(v["value"] - v["truth"]) <= v["U"] for v in vs)
-        z = np.array([(v["value"] - v["truth"]) / v["u_c"] for v in vs if v["u_c"] > 0])
-        lo, hi = clopper_pearson(hits, n)
-        zm, zs = (float(z.mean()), float(z.std(ddof=1))) if z.size > 1 else (math.nan, math.nan)
-        flag = ("  < 90 %" if hits / n < 0.9 else "") + ("  sd z < 0.3" if zs < 0.3 else "")
-        lines.append(f"{k:30s} {n:4d} {hits / n:6.3f}   [{lo:.3f}, {hi:.3f}]      "
-                     f"{zm:7.2f} {zs:6.2f}{flag}")
-    return "\n".join(lines) + "\n"
+    return format_coverage(coverage_table_from([r["r"] for r in records]), title)
 
 
 def main(argv=None) -> int:
@@ -79,7 +64,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     if a.table_only:
         recs = [json.loads(x) for x in open(a.table_only, encoding="utf-8")]
-        print(table(recs), end="")
+        print(table(recs, f"records {a.table_only}"), end="")
         return 0
     from gonio.pipeline.coverage import trial_records
 
@@ -92,10 +77,9 @@ def main(argv=None) -> int:
         if a.records:
             with open(a.records, "a", encoding="utf-8") as f:
                 f.write(json.dumps(r) + "\n")
-    print(f"{a.spec}: built-in programme, {a.seeds} seeds from {a.first}, "
-          f"{'fixed equipment' if a.fixed_equipment else 'equipment drawn per trial'}, "
-          f"{time.perf_counter() - t0:.0f} s")
-    print(table(recs), end="")
+    print(table(recs, f"{a.spec}: built-in programme, {a.seeds} seeds from {a.first}, "
+                f"{'fixed equipment' if a.fixed_equipment else 'equipment drawn per trial'}, "
+                f"{time.perf_counter() - t0:.0f} s"), end="")
     return 0
 
 

@@ -34,16 +34,21 @@ from gonio.pipeline.dispatch import screen_and_calibrate  # noqa: E402
 from gonio.specs import get  # noqa: E402
 
 
-def triad_trial(seed: int, protocol: str = "triad-alignment", bench: str = "mems-triad"
-                ) -> tuple[dict[str, dict], list[str]]:
+def triad_trial(seed: int, protocol: str = "triad-alignment", bench: str = "mems-triad",
+                draw: bool = True) -> tuple[dict[str, dict], list[str]]:
     """One simulated + calibrated triad programme: ({item: {clause, value, truth, U, u_c}},
-    [items without a truth])."""
+    [items without a truth]). ``draw``: the bench's laboratory Type B effects drawn from
+    the seed (``simulate.for_trial``: the table's rate error, its axis at each
+    orientation); the truth is the drawn bench's (the triad's own parameters, which the
+    draw leaves as they are)."""
     from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol
+    from gonio.specs.triad_alignment.simulate import for_trial
 
     spec = get("triad-alignment")
-    truth = spec.truth(load_triad_bench(bench), load_triad_protocol(protocol))
+    b = for_trial(bench, int(seed)) if draw else load_triad_bench(bench)
+    truth = spec.truth(b, load_triad_protocol(protocol))
     with tempfile.TemporaryDirectory() as d:
-        files = spec.simulate(d, protocol=protocol, bench=bench, seed=int(seed))
+        files = spec.simulate(d, protocol=protocol, bench=b, seed=int(seed))
         res = screen_and_calibrate(spec, files["readings"], protocol)
     out, no_truth = {}, []
     leak = realised_leakage(res, truth)
@@ -80,6 +85,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2_500_000, help="first seed (fresh: no test uses it)")
     ap.add_argument("--jsonl", help="append each trial's records to this file as it ends "
                                     "(a long study can be summarised before it finishes)")
+    ap.add_argument("--fixed-equipment", action="store_true",
+                    help="the bench file's exact table in every trial (no Type B draw)")
     ap.add_argument("--summarise", nargs="+", metavar="JSONL",
                     help="print the table from trial files written by --jsonl; no new trials")
     a = ap.parse_args()
@@ -96,7 +103,7 @@ def main() -> None:
     trials, no_truth = [], set()
     for k, s in enumerate(range(a.seed, a.seed + a.trials)):
         t1 = time.perf_counter()
-        rec, nt = triad_trial(s)
+        rec, nt = triad_trial(s, draw=not a.fixed_equipment)
         trials.append(rec)
         no_truth.update(nt)
         if a.jsonl:

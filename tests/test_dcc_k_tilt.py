@@ -55,7 +55,11 @@ def test_the_dcc_states_the_tilt_correction(tmp_path, dcc_schema):
     page = html.unescape(re.sub(r"<[^>]+>", "", (cal / "certificate.html").read_text("utf-8")))
     page = page.replace("\xa0", " ")                   # the page binds "ψ = 0.05" together
     assert text.removeprefix("K ").split("; U(K)")[0] in page
+    # the method's tilt row says the tilt was measured (8 positions here) and K corrected
+    assert "measured in situ at 8 rest positions" in page
 
 
 def test_without_tilt_estimate_k_has_no_description(tmp_path):
-    assert _k_description(_run(tmp_path, tilt=False)) == []
+    cal = _run(tmp_path, tilt=False)
+    assert _k_description(cal) == []
+    assert "measured in situ" not in (cal / "certificate.html").read_text("utf-8")

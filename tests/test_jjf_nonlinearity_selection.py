@@ -26,9 +26,12 @@ OMEGA = np.concatenate([RATES, -RATES])
 def _ctx(means_q, u_q):
     cals = []
     for means, u in zip(means_q, u_q):
-        cals.append({"rates": OMEGA, "fit": jf.fit_scale_factor(OMEGA, means), "u_means": u})
+        cals.append({"rates": OMEGA, "fit": jf.fit_scale_factor(OMEGA, means), "u_means": u,
+                     "spans_s": np.full(OMEGA.size, 5.0)})
+    # no table ripple in these calibrations (their outputs are written out here): bound 0
     ctx = I.Context(df=pd.DataFrame({"test": []}), output_unit="mV", null_output=0.0,
-                    latitude_deg=40.0, protocol={}, room_temperature_c=20.0, K=1.0)
+                    latitude_deg=40.0, protocol={}, room_temperature_c=20.0, K=1.0,
+                    rate_table_ripple_rel=0.0)
     ctx.cache[("has", "scale_factor")] = True
     ctx.cache[("cal", "scale_factor")] = cals
     return ctx

@@ -37,6 +37,7 @@ def _protocol(tilt_estimate: bool):
     for key in ("zero_stability", "rate_consistency", "pointing_consistency"):
         raw.pop(key, None)
     raw["annex_a"]["coverage_factor"] = 2.0
+    raw.pop("tilt_estimate", None)      # the built-in protocol has it: set it here
     if tilt_estimate:
         raw["tilt_estimate"] = dict(TILT_ESTIMATE)
     return parse_protocol(raw, resolve("ogam-draft", "protocol"))

@@ -32,6 +32,8 @@ def test_draft_protocol_holds_the_draft():
         "sf_temperature_coeff_bound_rlg_ppm_per_c": 0.1,
         "sf_temperature_coeff_bound_fog_ppm_per_c": 1.0}
     assert p.conditions.table_axis_wobble_max_arcsec == 0.3
+    te = p.tilt_estimate            # beyond the draft: the in-situ tilt estimate K is corrected by
+    assert (te.positions, te.dwell_s, te.settle_s, te.orientation) == (12, 120.0, 5.0, "up")
 
 
 def test_laboratory_protocol_24_points_5_repeats():

@@ -53,12 +53,6 @@ KNOWN_OVER_WIDE = {
                                          "±excess (sd z 0.29); not over-wide on the built-in "
                                          "programme (docs/iec62047-20-readings.md"
                                          "#over-wide-budgets-left)",
-    ("jjf1535-2015", "warmup_time"): "the power-on transient is on (with_power_on_transient), "
-                                     "but on the reduced programme (window 100 samples, 10-s "
-                                     "block grid) the crossing falls on the truth's block "
-                                     "boundary in 9 of 10 trials (z = 0, sd z 0.03): the "
-                                     "measurand is discrete; on the built-in programme sd z "
-                                     "is 0.6 (benchmarks/bench_rate_coverage_builtin.py, README)",
 }
 
 
@@ -70,18 +64,6 @@ def two_sided_failures(df, spec) -> dict:
     return {"under": low, "over-wide": wide - {k for s, k in KNOWN_OVER_WIDE if s == spec}}
 
 
-def with_power_on_transient(bench):
-    """The study bench with the gyro's power-on transient back on (as
-    benchmarks/bench_rate_coverage_builtin.py runs it): without it the warm-up time is found
-    exactly (z ≡ 0) and the JJF 7.2.9 item's coverage is not measured at all (issue 24)."""
-    from dataclasses import replace
-
-    from gonio.bench.rate_gyro import load_rate_bench
-    w = load_rate_bench(bench.name)
-    assert w.gyro.warmup_bias_dps != 0.0
-    return replace(bench, gyro=replace(bench.gyro, warmup_bias_dps=w.gyro.warmup_bias_dps))
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("spec", ("jjf1535-2015", "iec62047-20"))
 def test_coverage_per_item(spec, tmp_path):
@@ -89,9 +71,10 @@ def test_coverage_per_item(spec, tmp_path):
     from gonio.specs import get
 
     proto = reduced_protocol(spec, tmp_path / "reduced.toml")
-    bench = get(spec).coverage.study_bench(get(spec).default_bench)   # IEC: cross-axis on
+    # IEC: cross-axis on; JJF: the power-on transient on (its warm-up time is measured)
+    bench = get(spec).coverage.study_bench(get(spec).default_bench)
     if spec == "jjf1535-2015":
-        bench = with_power_on_transient(bench)
+        assert bench.gyro.warmup_bias_dps != 0.0
     trials = [trial_records(spec, bench, str(proto), s) for s in range(500, 500 + SEEDS)]
     df = coverage_table_from(trials)
     assert len(df) >= (15 if spec == "jjf1535-2015" else 20)

@@ -9,6 +9,8 @@ digits, value to U's decimal place, JCGM 100 7.2.6); the estimate against the be
 
 from __future__ import annotations
 
+import math
+
 import html
 import json
 import re
@@ -72,9 +74,16 @@ def test_results_json_per_item_shape(run):
     u = res["items"]["M_xy"]["uncertainty"]
     assert {"components", "u_c", "U", "k", "nu_eff"} <= set(u)
     assert u["monte_carlo"]["trials"] == 300
-    # k is Student's t for 95.45 % at the fit's ν, not a fixed 2
+    # k is Student's t for 95.45 % at the stated ν_eff (the fit's ν and the table's Type B
+    # line, ν = ∞, by Welch–Satterthwaite; its integer part, ∞ above NU_INFINITE)
     from scipy import stats
-    assert u["k"] == pytest.approx(stats.t.ppf(0.5 + 0.9545 / 2, u["nu_eff"]), rel=1e-9)
+    from gonio.result.statement import NU_INFINITE
+    fit, table = u["components"]
+    assert table["symbol"] == "M_xy_table" and table["type"] == "B" and fit["type"] == "A"
+    nu = u["nu_eff"] if u["nu_eff"] is not None else math.inf
+    assert nu == pytest.approx(u["u_c"] ** 4 / (fit["u"] ** 4 / fit["dof"]), rel=1e-9)
+    nu_s = math.floor(nu) if nu <= NU_INFINITE else math.inf
+    assert u["k"] == pytest.approx(stats.t.ppf(0.5 + 0.9545 / 2, nu_s), rel=1e-9)
     # the thermal programme (named by the readings' metadata) gives the model's items
     assert res["items"]["K_z_t1_v1"]["measured"] and res["items"]["b_z_t1_v1"]["measured"]
     assert res["extra"]["thermal_model"]["channels"]["z"]["scale"]["criterion"] == "bic"

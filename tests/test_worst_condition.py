@@ -44,9 +44,11 @@ def worst(proto, base):
 
 
 def _errors(proto, bench, seeds):
-    """Per trial, for K: (value − truth, U, U less its K_tilt line, U disc model); for K_l:
-    (corrected value − truth, U, u_c, the same corrected without the tilt coupling − truth,
-    its U, the draft's range as measured − truth, its u_c)."""
+    """Per trial, for K: (stated value − truth, U, u_c — K corrected by the built-in
+    protocol's tilt estimate —, the draft's 7.1 mean − truth, its U with the K_tilt line at
+    the bound, its u_c, that U less its K_tilt line, U disc model); for K_l: (corrected
+    value − truth, U, u_c, the same corrected without the tilt coupling − truth, its U, the
+    draft's range as measured − truth, its u_c)."""
     out = {"K": [], "K_l": []}
     for s in seeds:
         res = run_session(proto, bench, seed=s)
@@ -56,10 +58,12 @@ def _errors(proto, bench, seeds):
         k_true, k_i = scale_factor_truth(res.truth)
         kl_true = (k_i.max() - k_i.min()) / k_i.mean() * 100.0
         b = rep.item_uncertainty["scale_factor"]
-        tilt2 = sum(c.u ** 2 for c in b.components if c.symbol == "K_tilt")
+        assert b.correction is not None                  # corrected by the measured tilt
+        d = b.beside                                     # the draft's 7.1 mean, K_tilt line
+        tilt2 = sum(c.u ** 2 for c in d.components if c.symbol == "K_tilt")
         assert tilt2 > 0                                 # the line is there
-        out["K"].append((b.value - k_true, b.U, b.k * math.sqrt(b.u_c ** 2 - tilt2),
-                         b.k * disc_model_u(b)))
+        out["K"].append((b.value - k_true, b.U, b.u_c, d.value - k_true, d.U, d.u_c,
+                         d.k * math.sqrt(d.u_c ** 2 - tilt2), d.k * disc_model_u(d)))
         b = rep.item_uncertainty["scale_factor_nonlinearity"]
         t = rep.results.scale_factor.table
         no_tilt = nonlinearity_corrected_budget(t["K_i_counts_per_deg"], t["table_deg"],
@@ -81,15 +85,23 @@ def _cp(err, U):
 
 
 def test_scale_factor_covers_at_the_worst_condition(at_worst):
-    """U(K) with the coupling at the bound (arcsine, worst azimuth) covers there (the
-    Clopper–Pearson interval reaches 95 %); without the line, and with the disc model's
-    narrower line, it does not: the bound is what the worst mounting needs (40, 1 and 32
-    of 40 trials)."""
-    d, U, U_no, U_disc = at_worst["K"].T
+    """K as the built-in protocol states it (corrected by the measured tilt, line K_te)
+    covers at the worst condition with z = (K − truth)/u_c centred (|mean| < 0.5; 40 of 40,
+    z +0.34, sd 0.55 on this one set-up, whose table errors are fixed inside their MPE: the
+    spread is judged where they are drawn, tests/test_k_tilt_correction.py). The draft's 7.1 mean beside it, U with the coupling at the
+    bound (arcsine, worst azimuth), covers too but is biased by the coupling (z mean > 0.8,
+    sd < 0.7: a deterministic bias that a bound line widens for and cannot centre); without
+    that line, and with the disc model's narrower line, it does not cover."""
+    d, U, u_c, d_draft, U_draft, u_draft, U_no, U_disc = at_worst["K"].T
     hits, (lo, hi) = _cp(d, U)
     assert hi >= 0.95, (hits, lo, hi)
-    assert _cp(d, U_no)[1][1] < 0.95 and _cp(d, U_disc)[1][1] < 0.95
-    assert np.mean(d) > 0.5 * np.mean(U - U_no)        # the bias is really there
+    z = d / u_c
+    assert abs(np.mean(z)) < 0.5, np.mean(z)
+    assert _cp(d_draft, U_draft)[1][1] >= 0.95
+    z_draft = d_draft / u_draft
+    assert np.mean(z_draft) > 0.8 and np.std(z_draft, ddof=1) < 0.7
+    assert _cp(d_draft, U_no)[1][1] < 0.95 and _cp(d_draft, U_disc)[1][1] < 0.95
+    assert np.mean(d_draft) > 0.5 * np.mean(U_draft - U_no)   # the bias is really there
 
 
 def test_nonlinearity_covers_at_the_worst_condition(at_worst):

@@ -103,6 +103,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"rate-point means' noise through K\+ and K−", "各速率点平均值的噪声（经 K+ 与 K−）"),
     (r"rate-table ripple ≤ (\S+)·\|Ω\| \(once per revolution, unknown phase\) through K\+ and K−",
      "速率转台每转一次的速率波动 ≤ {1}·|Ω|（相位未知），经 K+ 与 K−"),
+    (r"rate-table ripple ≤ (\S+)·\|Ω\| \(once per revolution, unknown phase\) in the largest "
+     r"residual", "速率转台每转一次的速率波动 ≤ {1}·|Ω|（相位未知），在最大残差中"),
     (r"K at (\S+) °C \(fit standard error\)", "{1} °C 时的 K（拟合标准误差）"),
     (r"K at room temperature (\S+) °C", "室温 {1} °C 时的 K"),
     (r"bias at (\S+) °C", "{1} °C 时的零偏"),

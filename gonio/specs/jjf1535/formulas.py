@@ -10,6 +10,7 @@ Contents
 ==============================  ==================================================
 :func:`fit_scale_factor`        JJF (4), (5): rest-removed means, K, F_0, residuals
 :func:`nonlinearity_jjf`        JJF (6): max |residual| / fitted span
+:func:`ripple_residual_sd`      JJF (6): table ripple in each residual of the line (5)
 :func:`asymmetry_jjf`           JJF (8): |K+ − K−| / mean
 :func:`asymmetry_slope_u`       JJF (8): noise and table ripple through K+ and K−
 :func:`relative_std`            JJF (10): s(K_m)/K̄
@@ -93,6 +94,54 @@ def nonlinearity_jjf(fit: ScaleFactorFit) -> float:
     if not (hi > 0 > lo):
         raise GonioError("JJF 1535 7.2.2 needs forward and reverse rates")
     return float(np.max(np.abs(fit.residuals)) / abs(fit.K * (hi - lo)))
+
+
+def ripple_mean_sd(rates_dps, spans_s, ripple_rel: float) -> np.ndarray:
+    """Standard deviation (°/s) of the error that the rate table's once-per-revolution ripple
+    gives each rate point's mean: amplitude ``ripple_rel``·|Ω_j|, averaged over the turn
+    Δ_j = Ω_j·T_j the point's samples cover (``spans_s``), so the mean's error is
+    ripple_rel·|Ω_j|·sinc(Δ_j/2)·sin(ψ_j) with ψ_j a phase the table's angle history sets
+    (uniform, an arcsine variable of variance ½): ripple_rel·|Ω_j|·|sinc(Δ_j/2)|/√2.
+
+    >>> [round(float(v), 9) for v in ripple_mean_sd([10, 1], [36, 1e-9], 1e-3)]   # a full turn
+    [0.0, 0.000707107]
+    """
+    r, T = as_array(rates_dps, "rate_dps"), as_array(spans_s, "span_s")
+    if r.shape != T.shape:
+        raise GonioError(f"ripple_mean_sd: {r.size} rates and {T.size} spans")
+    sinc = np.sinc(0.5 * np.radians(np.abs(r) * T) / math.pi)     # sin(Δ/2)/(Δ/2)
+    return ripple_rel * np.abs(r * sinc) / math.sqrt(2.0)
+
+
+def ripple_residual_sd(rates_dps, spans_s, ripple_rel: float,
+                       scale_factor: float) -> np.ndarray:
+    """Standard deviation (output units) of the rate-table ripple's share of each residual
+    v_j of the two-direction line (JJF 1535 7.2.1.2 eq (5)), the residuals whose largest
+    |v_j| eq (6) of 7.2.2 takes: the points' means carry K·e_k (e_k the ripple's error of
+    point k, :func:`ripple_mean_sd`, phases independent between points), and the residuals
+    are (I − H)·K·e, H the hat matrix of the least-squares line over the rate points, so
+    Var(v_j) = K²·Σ_k (I − H)_jk²·sd(e_k)².
+
+    To first order the largest |residual| moves by the ripple of its own residual, so this
+    sd at its index is the ripple's standard uncertainty of eq (6)'s numerator.
+
+    With no turn averaging, two points ±1 °/s: the line fits them exactly (no residual):
+
+    >>> [round(float(v), 12) for v in ripple_residual_sd([1, -1], [1e-9, 1e-9], 1e-3, 2.0)]
+    [0.0, 0.0]
+
+    Rates (1, 2, −1, −2): H = 11ᵀ/4 + ΩΩᵀ/10, so row 1 of I − H is (0.65, −0.45, −0.15,
+    −0.05) and row 2 (−0.45, 0.35, −0.05, 0.15); with sd(e) = 10⁻³·|Ω|/√2:
+
+    >>> v = ripple_residual_sd([1, 2, -1, -2], [1e-9] * 4, 1e-3, 1.0)
+    >>> [round(float(x), 9) for x in v[:2]], round(1e-3 * math.sqrt(1.265 / 2), 9)
+    ([0.000795299, 0.000626498], 0.000795299)
+    """
+    r = as_array(rates_dps, "rate_dps")
+    sd = ripple_mean_sd(r, spans_s, ripple_rel)
+    X = np.column_stack([r, np.ones_like(r)])
+    M = np.eye(r.size) - X @ np.linalg.pinv(X)                      # I − H
+    return abs(float(scale_factor)) * np.sqrt((M ** 2) @ sd ** 2)
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,8 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     if kd.get("tilt_correction"):
         tc = kd["tilt_correction"]
         lines.append(f"scale_factor (the draft's 7.1 mean, uncorrected, not stated): "
-                     f"{kd['estimates']['draft']['value']:.10g} counts/deg; stated K is corrected "
+                     f"{kd['estimates']['draft']['value']:.10g} counts/deg")
+        lines.append(f"note: the stated K is corrected "      # the estimate's line has no U
                      f"by the measured tilt psi = {tc['tilt_deg']:.2g} deg (U95 "
                      f"{tc['U95_tilt_deg']:.2g} deg) at azimuth {tc['azimuth_deg']:.1f} deg (U95 "
                      f"{tc['U95_azimuth_deg']:.2g} deg), beyond the draft")

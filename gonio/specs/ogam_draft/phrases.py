@@ -319,6 +319,10 @@ LABELS: dict[str, dict[str, str]] = {
     "m_axes": {"en": "Axis orientations", "zh": "轴向"},
     "m_tilt": {"en": "Tilt of the sensing plane", "zh": "敏感平面倾斜"},
     "m_tilt_v": {"en": "bound ψ ≤ {t}° (Annex A.4.2)", "zh": "上限 ψ ≤ {t}°（附录A.4.2）"},
+    "m_tilt_measured": {"en": "measured in situ at {n} rest positions (Earth rate, beyond the "
+                              "draft); the scale factor K is corrected for it",
+                        "zh": "在 {n} 个静止位置上利用地球自转角速度现场实测（草案以外）；"
+                              "标度因数 K 已按其修正"},
     "m_temp": {"en": "Temperature", "zh": "温度"},
     "m_temp_v": {"en": "required ({t} ± {tol}) °C (Table 2); during calibration {m}",
                  "zh": "要求 ({t} ± {tol}) °C（表2）；校准时 {m}"},

@@ -298,7 +298,11 @@ def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
     rows.append((L["m_latitude"], f"{lat}°" if lat not in (None, "") else ns))
     rows.append((L["m_axes"], ", ".join(L.get(a, a) for a in m["axes"])))
     tilt = md.get("tilt_bound_deg") or (e_budget(res).get("parameters", {}) or {}).get("tilt_deg")
-    rows.append((L["m_tilt"], L["m_tilt_v"].format(t=tilt) if tilt not in (None, "") else ns))
+    tilt_v = L["m_tilt_v"].format(t=tilt) if tilt not in (None, "") else ns
+    tc = ((res["items"].get("scale_factor") or {}).get("details") or {}).get("tilt_correction")
+    if tc:                  # the in-situ tilt estimate measured it and K is corrected
+        tilt_v += L["semi"] + L["m_tilt_measured"].format(n=tc["n_positions"])
+    rows.append((L["m_tilt"], tilt_v))
     env = (lab or {}).get("environment") or {}
     t_meas = env.get("temperature_c")
     if t_meas is None and md.get("temperature_c"):

@@ -315,6 +315,10 @@ class AlignmentResult:
     residuals: np.ndarray | None = None
     dof_theta: np.ndarray | None = None   # (3, 4): ν of each M_ij and b_i (Welch–Satterthwaite)
     sigma_components: np.ndarray | None = None   # (3, 2): σ_w (white, unit weight), σ_B (block)
+    #: the rate table's Type B part (:func:`table_type_b_cov`), included in ``cov_theta``,
+    #: ``u_derived`` and ``leakage_u``: its inputs and its own u_theta (12,), u_derived,
+    #: leakage_u; None when the table is taken as exact
+    type_b: dict | None = None
 
     @property
     def coverage_factor_theta(self) -> np.ndarray:
@@ -371,6 +375,12 @@ class AlignmentResult:
             "outliers": self.outliers,
             "averaging_time": None if self.averaging is None else self.averaging.to_json(),
             "offdiagonal_order": list(OFFDIAG),
+            "type_b": None if self.type_b is None else {
+                "rate_u_rel": self.type_b["rate_u_rel"],
+                "orientation_u_rad": self.type_b["orientation_u_rad"],
+                "u_system_matrix": mat(self.type_b["u_theta"].reshape(3, 4)[:, :3]),
+                "u_derived": {k: mat(v) for k, v in self.type_b["u_derived"].items()},
+                "residual_leakage_u": mat(self.type_b["leakage_u"])},
         }
         return out
 
@@ -413,6 +423,49 @@ def bias_instability_u_dps(averaging: "AveragingTime | None", static_s: float,
     u = b * math.sqrt(max(math.log(horizon_s / tau_d), 0.0) / math.pi)
     nu = np.maximum(static_s / np.asarray(averaging.tau_min_adev_s, dtype=float) - 1.0, 1.0)
     return u, nu
+
+
+def table_type_b_cov(m: np.ndarray, rate_u_rel: float, orientation_u_rad: float) -> np.ndarray:
+    """Covariance (12 × 12, θ = rows of [M | b] stacked) that the rate table's errors give
+    the fitted θ (JCGM 100 5.1.2 with the sensitivities of the model below; JCGM 100
+    4.3.7 for a rectangular bound). The fit takes the table's set rate r about reference
+    axis a as the applied rate vector r e_a; the table turns at r(1 + ε) (ε its relative
+    rate error, standard uncertainty ``rate_u_rel`` from its certificate) about an axis
+    that, in the fixture's reference frame, is e_a + δ_a (δ_a ⊥ e_a: the fixture's face on
+    the table top, the table top's squareness to its spin axis; each of δ_a's two
+    components rectangular within the fixture's stated bound, standard uncertainty
+    ``orientation_u_rad``, independent between the three orientations). The ± rate
+    dwells then read M r(1 + ε)(e_a + δ_a), so to first order the fitted column a is
+
+        M̂_·a = M_·a (1 + ε) + Σ_{j ≠ a} M_·j δ_aj,
+
+    and the bias b (the ± pairs' mean and the static dwells, at the Earth rate only) is
+    unchanged. ε is common to every entry: u² vec(M) vec(M)ᵀ; each δ_aj adds
+    u_δ² v vᵀ with v the column M_·j placed in column a. The Earth rate's part of the
+    same errors (≤ 7.3×10⁻⁵ rad/s × δ) is below the dwells' noise and left out.
+    Checked against a Monte Carlo of the bench with drawn table errors
+    (tests/test_triad_type_b.py).
+
+    >>> c = table_type_b_cov(np.diag([50.0, 50.0, 50.0]), 1e-3, 0.0)
+    >>> round(float(np.sqrt(c[0, 0])), 6), round(float(c[0, 5] / c[0, 0]), 6), float(c[3, 3])
+    (0.05, 1.0, 0.0)
+    >>> c = table_type_b_cov(np.diag([50.0, 50.0, 50.0]), 0.0, 1e-3)
+    >>> round(float(np.sqrt(c[1, 1])), 6), float(c[0, 0])   # M_xy gets M_xx δ_yx
+    (0.05, 0.0)
+    """
+    m = np.asarray(m, dtype=float)
+    cov = np.zeros((12, 12))
+    idx = np.array([[4 * i + j for j in range(3)] for i in range(3)])
+    v = np.zeros(12)
+    v[idx] = m
+    cov += rate_u_rel ** 2 * np.outer(v, v)
+    for a in range(3):
+        for j in range(3):
+            if j != a:
+                v = np.zeros(12)
+                v[idx[:, a]] = m[:, j]
+                cov += orientation_u_rad ** 2 * np.outer(v, v)
+    return cov
 
 
 def _split(vec: np.ndarray) -> dict:
@@ -573,11 +626,16 @@ def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray,
 
 def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
                        monte_carlo: int = 0, seed: int = 0, target_deg: float = 0.1,
+                       rate_u_rel: float = 0.0, orientation_u_rad: float = 0.0,
                        ) -> AlignmentResult:
     """Estimate M and b from the ``alignment`` rows (see the module docstring).
 
     ``monte_carlo`` > 0 adds Monte Carlo uncertainties from that many trials (seeded,
-    so the result is reproducible).
+    so the result is reproducible). ``rate_u_rel`` and ``orientation_u_rad`` (the rate
+    table's relative rate uncertainty and the standard uncertainty of each component of
+    its axis in the reference frame) add the table's Type B covariance
+    (:func:`table_type_b_cov`) to the fit's; ``type_b`` keeps that part on its own (the
+    Monte Carlo redraws the noise only).
     """
     rows = readings.rows("alignment")
     if len(rows) < 5:
@@ -612,6 +670,8 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
     mb = theta.reshape(3, 4)
     m, b = mb[:, :3], mb[:, 3]
     der = _derived(theta)
+    cov_b = table_type_b_cov(m, rate_u_rel, orientation_u_rad)
+    cov = cov + cov_b
     u_der = np.sqrt(np.clip(np.diag(gum_propagate(_derived, theta, cov)), 0, None))
     # leakage after alignment: δL = −M⁻¹ δM (first order)
     minv = np.linalg.inv(m)
@@ -620,6 +680,14 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
         mm = t.reshape(3, 4)[:, :3]
         return (minv @ mm - np.eye(3)).ravel()
     leak_u = np.sqrt(np.clip(np.diag(gum_propagate(leak, theta, cov)), 0, None)).reshape(3, 3)
+    type_b = None
+    if np.any(cov_b):
+        type_b = {"rate_u_rel": float(rate_u_rel), "orientation_u_rad": float(orientation_u_rad),
+                  "u_theta": np.sqrt(np.diag(cov_b)),
+                  "u_derived": _split(np.sqrt(np.clip(np.diag(
+                      gum_propagate(_derived, theta, cov_b)), 0, None))),
+                  "leakage_u": np.sqrt(np.clip(np.diag(gum_propagate(leak, theta, cov_b)),
+                                               0, None)).reshape(3, 3)}
     u_mc = u_mc_theta = None
     if monte_carlo > 0:
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))
@@ -640,7 +708,7 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
                            u_mc, u_mc_theta, robust, outl, leak_u, avg, len(rows),
                            readings.metadata.get("output_unit", ""),
                            rows["line"].tolist(), resid, dof_theta,
-                           np.array([[cp[0], cp[1]] for cp in comps]))
+                           np.array([[cp[0], cp[1]] for cp in comps]), type_b)
 
 
 # ------------------------------------------------------------ IEC 62047-20 5.2

@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from scipy import signal
+from scipy.spatial.transform import Rotation
 
 from gonio.atomic import output_dir
 from gonio.physics.earth import earth_rate_enu
@@ -81,6 +82,14 @@ _BENCH_SCHEMA = {
                                              check=non_negative, expect=">= 0"),
         "bi_tau_min_s": Field("float", default=1.0, check=positive, expect="> 0"),
         "bi_tau_max_s": Field("float", default=1.0e4, check=positive, expect="> 0"),
+    }),
+    "table": Field("table", default={}, schema={
+        "rate_error_rel": Field("float", default=0.0, check=lambda v: abs(v) < 0.5,
+                                expect="a relative error in (-0.5, 0.5)"),
+        "rate_table_u_rel": Field("float", default=2.5e-4, check=lambda v: 0 <= v <= 0.5,
+                                  expect="in [0, 0.5]"),
+        "orientation_bound_deg": Field("float", default=0.05, check=lambda v: 0 <= v <= 10,
+                                       expect="in [0, 10] degrees"),
     }),
     "thermal": Field("table", default={}, schema={
         "reference_c": Field("float", default=25.0),
@@ -169,6 +178,17 @@ class TriadBench:
     bi_tau_min_s: float = 1.0
     bi_tau_max_s: float = 1.0e4
     thermal: ThermalModel = field(default_factory=ThermalModel)
+    #: the rate table (``[table]`` of the bench file): its relative rate error, and what the
+    #: readings state of it — its certificate's relative standard uncertainty and the bound of
+    #: its spin axis in the reference frame at each orientation (the fixture's face on the
+    #: table top, the top's squareness), the same defaults as the rate benches' equipment
+    #: (:class:`gonio.bench.equipment.Equipment`: 2.5×10⁻⁴, ±0.05°)
+    rate_error_rel: float = 0.0
+    rate_table_u_rel: float = 2.5e-4
+    orientation_bound_deg: float = 0.05
+    #: 3×3, row a: the table's spin axis in the reference frame when axis a is up, minus
+    #: e_a (rad; [a, a] = 0): the fixture's face on the table top and the top's squareness
+    orientation_error_rad: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
 
     @property
     def axes(self) -> np.ndarray:
@@ -179,6 +199,19 @@ class TriadBench:
     def system_matrix(self) -> np.ndarray:
         """M at the reference temperature and supply (output per °/s)."""
         return system_matrix(self.scale_per_dps, self.axes, self.cross_coupling)
+
+    def table_axis(self, up: str) -> np.ndarray:
+        """Rotation (3×3) from the ideal orientation's reference frame to the one the table
+        really has with ``up`` up: the small rotation taking e_a to e_a + δ_a
+        (δ_a = ``orientation_error_rad[a]``, normalised; Rodrigues' formula), identity
+        without an error. The ± sign of ``up`` shares the axis's δ (the static positions
+        see only the Earth rate, where δ is far below the noise)."""
+        a = "xyz".index(up[-1])
+        e = np.eye(3)[a]
+        d = np.asarray(self.orientation_error_rad, dtype=float)[a]
+        if not np.any(d):
+            return np.eye(3)
+        return Rotation.from_rotvec(np.cross(e, d)).as_matrix()
 
     @property
     def bias_output(self) -> np.ndarray:
@@ -198,7 +231,12 @@ def _offdiag(six, what: str, file) -> np.ndarray:
 
 
 def load_triad_bench(name_or_path) -> TriadBench:
-    """Read and validate a triad bench file (``protocols/benches/mems-triad.toml``)."""
+    """Read and validate a triad bench file (``protocols/benches/mems-triad.toml``, with an
+    optional ``[table]``: the rate table's ``rate_error_rel``, ``rate_table_u_rel``,
+    ``orientation_bound_deg``). A :class:`TriadBench` is returned as it is (a coverage
+    trial's drawn bench, :func:`gonio.specs.triad_alignment.simulate.for_trial`)."""
+    if isinstance(name_or_path, TriadBench):
+        return name_or_path
     path = resolve(name_or_path, kind="bench")
     raw = read_toml(path)
     cfg = validate_table(raw, _BENCH_SCHEMA, file=path)
@@ -233,7 +271,8 @@ def load_triad_bench(name_or_path) -> TriadBench:
         bias_dps=tuple(t["bias_dps"]), arw_deg_sqrt_h=tuple(t["arw_deg_sqrt_h"]),
         bias_instability_dph=tuple(t["bias_instability_dph"]),
         rate_random_walk_dph_sqrt_h=tuple(t["rate_random_walk_dph_sqrt_h"]),
-        bi_tau_min_s=t["bi_tau_min_s"], bi_tau_max_s=t["bi_tau_max_s"], thermal=thermal)
+        bi_tau_min_s=t["bi_tau_min_s"], bi_tau_max_s=t["bi_tau_max_s"], thermal=thermal,
+        **(cfg["table"] or {}))
 
 
 # ------------------------------------------------------------------------------ noise
@@ -448,6 +487,7 @@ class _Runner:
         v = th.reference_v if supply_v is None else supply_v
         ch, die = self._temps(n, self.chamber_c if chamber_end is None else chamber_end)
         tk = np.arange(n) / self.fs
+        rate_dps = rate_dps * (1.0 + b.rate_error_rel)        # the table's actual rate
         theta = np.radians(table_deg + rate_dps * tk)
         c0 = ref_to_enu(up, north0, 0.0)
         w = self.earth
@@ -456,6 +496,8 @@ class _Runner:
                                       np.full(n, w[2])])
         from gonio.physics.alignment import signed_axis
         omega = earth_ref + rate_dps * signed_axis(up)[:, None]
+        if np.any(b.orientation_error_rad):
+            omega = b.table_axis(up) @ omega
         sensed = self.mix @ omega
         wf = np.vstack([th.arw_factor(i, die) for i in range(3)])
         nz = self.noise.block(n, white_factor=wf)
@@ -520,6 +562,8 @@ def _metadata(bench: TriadBench, protocol: TriadProtocol, seed: int, kind: str) 
             "nominal_scale_per_dps": " ".join(repr(float(k)) for k in bench.scale_per_dps),
             "reference_c": repr(float(bench.thermal.reference_c)),
             "reference_v": repr(float(bench.thermal.reference_v)),
+            "rate_table_u_rel": repr(float(bench.rate_table_u_rel)),
+            "orientation_bound_deg": repr(float(bench.orientation_bound_deg)),
             "bench": bench.name, "protocol": protocol.name, "seed": str(int(seed))}
 
 

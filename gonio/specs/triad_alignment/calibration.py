@@ -123,6 +123,46 @@ def _with_bias_instability(unc: Uncertainty, key: str, u_long: float, nu_long: f
         unc.monte_carlo, u_long), COVERAGE, K_SOURCE_WS)
 
 
+#: What the table's Type B line of an alignment item stands for.
+TABLE_SOURCE = ("rate table: its rate error (certificate, relative u {rate:.3g}) and its axis "
+                "in the reference frame at each orientation (fixture face, table-top squareness; "
+                "each component rectangular within ±{bound:.3g}°), first order "
+                "(table_type_b_cov, JCGM 100 5.1.2, 4.3.7)")
+
+
+def with_table_type_b(unc: Uncertainty, key: str, u_b: float, al: AlignmentResult
+                      ) -> Uncertainty:
+    """``unc`` (the fit's Type A line, its u the fit's part alone) plus the rate table's Type
+    B line of standard uncertainty ``u_b`` (:func:`gonio.specs.triad_alignment.analysis.table_type_b_cov`
+    propagated to the item; ν = ∞: a certificate's u and a stated bound, JCGM 100 G.4.2);
+    k = t_0.9545 of the Welch–Satterthwaite ν_eff (JCGM 100 G.4). Unchanged when u_b = 0.
+
+    >>> a = Uncertainty([{"symbol": "M", "type": "A", "u": 3.0, "c": 1.0, "contribution": 3.0,
+    ...                   "dof": 6.0}], 3.0, 3.0 * 2.52, 2.52, 6.0, None, 0.9545, "t")
+    >>> u = with_table_type_b(a, "M", 4.0, AlignmentResult.__new__(AlignmentResult))
+    >>> u.u_c, round(u.nu_eff, 3)                 # 5² = 3² + 4²; ν = 5⁴/(3⁴/6)
+    (5.0, 46.296)
+    """
+    if not u_b > 0:
+        return unc
+    tb = getattr(al, "type_b", None) or {"rate_u_rel": math.nan, "orientation_u_rad": math.nan}
+    src = TABLE_SOURCE.format(rate=tb["rate_u_rel"],
+                              bound=math.degrees(tb["orientation_u_rad"]) * math.sqrt(3.0))
+    comp = list(unc.components) + [{"symbol": f"{key}_table", "type": "B", "u": float(u_b),
+                                    "c": 1.0, "contribution": float(u_b), "dof": math.inf,
+                                    "source": src}]
+    u_c = math.hypot(unc.u_c, u_b)
+    nu = u_c ** 4 / (unc.u_c ** 4 / unc.nu_eff) if unc.u_c > 0 else math.inf
+    k = coverage_k(nu, COVERAGE)
+    return Uncertainty(comp, u_c, k * u_c, k, float(nu), unc.monte_carlo, COVERAGE, K_SOURCE_WS)
+
+
+def _fit_part(u_total: float, u_b: float) -> float:
+    """The fit's part of a total standard uncertainty whose table part is ``u_b`` (the two
+    covariances add, so do the variances of any first-order propagation)."""
+    return math.sqrt(max(u_total ** 2 - u_b ** 2, 0.0))
+
+
 def long_term_monte_carlo(mc: dict | None, u_long: float) -> dict | None:
     """The Monte Carlo record of a long-term bias: the fit's Monte Carlo refits the record's
     outputs, so its u is the in-run u(b) only (``u_fit``); the long-term bias adds the bias
@@ -165,13 +205,18 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
     fit = ("weighted least-squares fit of all dwells; dwell noise white (σ_w² from the "
            "scatter about each orientation's own bias) plus a bias offset per orientation "
            "block and static dwell (σ_B²): σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ")
+    tb = al.type_b or {}
+    ub_m = tb["u_theta"].reshape(3, 4)[:, :3] if tb else np.zeros((3, 3))
+    ub_s = tb["u_derived"]["cross_axis"] if tb else np.zeros(6)
+    ub_l = tb["leakage_u"] if tb else np.zeros((3, 3))
     for i in range(3):
         for j in range(3):
             key = f"M_{AXES[i]}{AXES[j]}"
             items[key] = Item(key, f"system matrix {key}", "§4 eq. 14", f"{unit}/(°/s)",
-                              float(al.system_matrix[i, j]), uncertainty=_type_a(
-                                  key, fit, um[i, j], _nu(al, i, j),
-                                  None if mc_m is None else mc_m[i, j], trials))
+                              float(al.system_matrix[i, j]), uncertainty=with_table_type_b(
+                                  _type_a(key, fit, _fit_part(um[i, j], ub_m[i, j]),
+                                          _nu(al, i, j), None if mc_m is None else mc_m[i, j],
+                                          trials), key, float(ub_m[i, j]), al))
     u_bi, nu_bi = bias_instability_u_dps(al.averaging, static_s)
     for i in range(3):
         key = f"b_{AXES[i]}"
@@ -199,14 +244,18 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
         key = f"S_{r.gyro}{r.about}"
         items[key] = Item(key, f"cross-axis sensitivity {key} = M_{r.gyro}{r.about}/M_{r.gyro}"
                           f"{r.gyro}", "IEC 62047-20 5.2", "1", float(r.sensitivity),
-                          uncertainty=_type_a(key, "first-order propagation of the fit (JCGM 100 "
-                                              "5.1.2)", r.u_gum, al.dof[i], r.u_mc, trials))
+                          uncertainty=with_table_type_b(_type_a(
+                              key, "first-order propagation of the fit (JCGM 100 5.1.2)",
+                              _fit_part(r.u_gum, float(ub_s[n])), al.dof[i], r.u_mc, trials),
+                              key, float(ub_s[n]), al))
     for name in OFFDIAG:
         i, j = AXES.index(name[0]), AXES.index(name[1])
         key = f"L_{name}"
         items[key] = Item(key, f"residual leakage after alignment {key} (M̂⁻¹M − I)",
-                          "§4 M̂⁻¹M − I", "1", 0.0, uncertainty=_type_a(
-                              key, "δL = −M̂⁻¹ δM, first order", al.leakage_u[i, j], nu_min))
+                          "§4 M̂⁻¹M − I", "1", 0.0, uncertainty=with_table_type_b(_type_a(
+                              key, "δL = −M̂⁻¹ δM, first order",
+                              _fit_part(al.leakage_u[i, j], ub_l[i, j]), nu_min),
+                              key, float(ub_l[i, j]), al))
     av = al.averaging
     if av is None:
         items["averaging_time"] = not_measured(
@@ -280,7 +329,8 @@ def consistency_check(al: AlignmentResult, readings: TriadReadings) -> None:
                 file=readings.path, line=int(rows["line"].iloc[k]))
 
 
-def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None) -> Uncertainty:
+def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None,
+                  rate_u_rel: float = 0.0) -> Uncertainty:
     """A certified point value's budget: the fit at the point (Type A, soak-components
     variance of xᵀĉ, :func:`gonio.specs.triad_alignment.thermal_model.linear_variance`), the
     model order (the criterion-weighted spread of the candidate orders' values at the point;
@@ -291,7 +341,9 @@ def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None) -> Un
     hour, and the wander common to several soaks is invisible in the fit's residuals (the
     alignment's b_i carry the same term). k = t_0.9545 of the
     Welch–Satterthwaite ν_eff (JCGM 100 G.4); the order term is given the fit's ν (it is
-    estimated from the same points)."""
+    estimated from the same points). ``rate_u_rel`` > 0 (a scale factor: the ± rate dwells
+    read K(1 + ε) with ε the rate table's relative rate error) adds |K|·``rate_u_rel``,
+    Type B from the table's certificate, ν = ∞ (JCGM 100 G.4.2)."""
     lines = [(f"{key}_fit", "A", pt["u_fit"], pt["nu"],
               f"least-squares fit of the soak points at this point, order ϑ {fit.n_t} / U "
               f"{fit.n_u} by {fit.criterion} ({fit.cov_method})")]
@@ -309,6 +361,10 @@ def _point_budget(key: str, fit, pt: dict, long_term: tuple | None = None) -> Un
         lines.append((f"{key}_T", "A", abs(pt["slope"]) * pt["u_theta_c"], pt["nu_theta"],
                       "temperature reading of the soaked set point: slope × u of the soak's "
                       "mean (sensor − chamber)"))
+    if rate_u_rel > 0:
+        lines.append((f"{key}_table", "B", abs(pt["value"]) * rate_u_rel, math.inf,
+                      f"rate table's rate error: |K| × its certificate's relative u "
+                      f"{rate_u_rel:.3g}"))
     comp = [{"symbol": sym, "type": typ, "u": float(u), "c": 1.0, "contribution": float(u),
              "dof": float(nu), "source": src} for sym, typ, u, nu, src in lines]
     u_c = math.sqrt(sum(c["u"] ** 2 for c in comp))
@@ -344,13 +400,15 @@ def thermal_long_term(al: AlignmentResult | None, readings: TriadReadings,
     return out
 
 
-def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None
-                  ) -> dict[str, Item]:
+def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None,
+                  rate_u_rel: float = 0.0) -> dict[str, Item]:
     """The certified values of the identified K(ϑ, U), b(ϑ, U), ARW(ϑ) at the programme's
     set points and supply levels (:meth:`ChannelModel.certified_points`), in physical units:
     a fixed measurand per item, whatever orders the criterion chose (the coefficients are
     information in ``thermal_model``). ``long_term`` ({gyro: (u, ν)}, :func:`thermal_long_term`)
-    makes the bias values long-term; without it they are in-run (details ``bias``)."""
+    makes the bias values long-term; without it they are in-run (details ``bias``).
+    ``rate_u_rel``: the rate table's relative standard uncertainty, a Type B line of every
+    K value (:func:`_point_budget`)."""
     long_term = long_term or {}
     items: dict[str, Item] = {}
     units = {"K": f"{unit}/(°/s)", "b": "°/s", "ARW": "°/√h"}
@@ -369,7 +427,8 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
             items[key] = Item(key, f"{names[name]} {name}_{ch} at {at}", clauses[name],
                               units[name], pt["value"],
                               uncertainty=_point_budget(
-                                  key, fit, pt, long_term.get(ch) if name == "b" else None),
+                                  key, fit, pt, long_term.get(ch) if name == "b" else None,
+                                  rate_u_rel if name == "K" else 0.0),
                               details={"setpoint_c": pt["setpoint_c"],
                                        "supply_v": pt["supply_v"],
                                        "theta_c": pt["theta_c"], "u_v": pt["u_v"],
@@ -466,8 +525,11 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     al = None
     if (r.data["test"] == "alignment").any():
         try:
-            al = estimate_alignment(r, robust=robust, monte_carlo=monte_carlo_trials, seed=seed,
-                                    target_deg=target_deg)
+            al = estimate_alignment(
+                r, robust=robust, monte_carlo=monte_carlo_trials, seed=seed,
+                target_deg=target_deg, rate_u_rel=r.table_metadata("rate_table_u_rel"),
+                orientation_u_rad=math.radians(r.table_metadata("orientation_bound_deg"))
+                / math.sqrt(3.0))
             if not robust:
                 consistency_check(al, r)
         except GonioError as exc:
@@ -501,7 +563,8 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
                 "thermal_model", "temperature / supply model K(ϑ, U), b(ϑ, U)",
                 "thesis eq. 6.14", "", f"the data were refused: {exc.message}")
         else:
-            items.update(thermal_items(th, unit, thermal_long_term(al, r, th)))
+            items.update(thermal_items(th, unit, thermal_long_term(al, r, th),
+                                       tr.table_metadata("rate_table_u_rel")))
             tj = th.to_json()
             for ch, c in comp.items():
                 tj["channels"][ch]["compensation"] = c.to_json()

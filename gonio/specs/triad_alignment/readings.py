@@ -51,6 +51,15 @@ _OPTIONAL_FLOATS = ("chamber_c", "sensor_c", "supply_v") + SD
 #: metadata keys that must be numbers, with their check
 NUMERIC_METADATA = {"latitude_deg": (lambda v: -90 <= v <= 90, "a number in [-90, 90]"),
                     "sample_rate_hz": (lambda v: v > 0, "a number > 0")}
+#: optional metadata: the rate table's certificate and the fixture's bound (the alignment's
+#: Type B terms, :func:`gonio.specs.triad_alignment.analysis.table_type_b_cov`), with the
+#: value taken when a file does not state it — the rate-gyro specifications' table
+#: (JJF 1535 Table 2: rate accuracy 0.05 %, read as a standard uncertainty of 2.5×10⁻⁴)
+#: and the fixture bound the virtual bench states for a gyro in its fixture (±0.05°)
+TABLE_METADATA = {"rate_table_u_rel": (2.5e-4, lambda v: 0 <= v <= 0.5,
+                                       "a relative standard uncertainty in [0, 0.5]"),
+                  "orientation_bound_deg": (0.05, lambda v: 0 <= v <= 10,
+                                            "a bound in [0, 10] degrees")}
 REQUIRED_METADATA = ("format", "latitude_deg", "sample_rate_hz", "output_unit")
 #: Plausible range of each numeric column (docs/formats-triad.md): a value outside is a
 #: unit or transcription error, refused with its line before any arithmetic can overflow.
@@ -78,6 +87,11 @@ class TriadReadings:
     def rows(self, test: str) -> pd.DataFrame:
         """The rows of one kind (``alignment``, ``static``, ``thermal``), in file order."""
         return self.data[self.data["test"] == test].reset_index(drop=True)
+
+    def table_metadata(self, key: str) -> float:
+        """A :data:`TABLE_METADATA` value: the file's (checked when read), or the default."""
+        v = str(self.metadata.get(key, "")).strip()
+        return float(v) if v else float(TABLE_METADATA[key][0])
 
     @property
     def latitude_deg(self) -> float:
@@ -136,6 +150,14 @@ def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReading
             raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k) from None
         if not (math.isfinite(v) and ok(v)):
             raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k)
+    for k, (_, ok, expect) in TABLE_METADATA.items():
+        if str(meta.get(k, "")).strip():
+            try:
+                v = float(meta[k])
+            except ValueError:
+                raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k) from None
+            if not (math.isfinite(v) and ok(v)):
+                raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k)
     header_line = i + 1
     reader = csv.reader(lines[i:])
     header = [h.strip() for h in next(reader)]

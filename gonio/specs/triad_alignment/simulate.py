@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 from gonio.atomic import output_dir
@@ -14,7 +15,7 @@ from gonio.specs.triad_alignment.readings import TriadReadings, format_triad_rea
 from gonio.specs.triad_alignment.calibration import KEY
 
 
-def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed: int = 0,
+def simulate(protocol: str = "triad-alignment", bench="mems-triad", seed: int = 0,
              out: str | Path = ".") -> dict:
     """Run the alignment session (→ ``readings.csv``) and, when the protocol's [thermal]
     table is enabled, the chamber programme (→ ``thermal.csv``, named by the readings'
@@ -35,6 +36,34 @@ def simulate(protocol: str = "triad-alignment", bench: str = "mems-triad", seed:
         for name, text in files.items():
             (stage / name).write_text(text, encoding="utf-8")
     return {name: Path(out) / name for name in files}
+
+
+def for_trial(bench, seed: int):
+    """The triad bench (a name, path or :class:`~gonio.specs.triad_alignment.bench.TriadBench`)
+    one coverage trial runs on: the rate table's Type B errors drawn from ``seed`` — its rate
+    error by :func:`gonio.bench.equipment.draw_equipment` (normal with the certificate's u,
+    as the rate benches draw it) and its spin axis at each of the three orientations, each
+    component of δ_a uniform in ±``orientation_bound_deg`` (the fixture's bound, as the rate
+    benches draw a gyro in its fixture) from a stream of its own. The triad itself (the
+    measurand) is unchanged, and so is its truth.
+
+    >>> b = for_trial("mems-triad", 5)
+    >>> b.rate_error_rel != 0, float(np.max(np.abs(b.orientation_error_rad))) <= math.radians(b.orientation_bound_deg)
+    (True, True)
+    >>> float(np.max(np.abs(np.diag(b.orientation_error_rad)))), for_trial(b, 5).rate_error_rel == b.rate_error_rel
+    (0.0, True)
+    """
+    from dataclasses import replace
+
+    from gonio.bench.equipment import EQUIPMENT_STREAM, Equipment, draw_equipment
+
+    b = load_triad_bench(bench)
+    eq = draw_equipment(Equipment(rate_table_u_rel=b.rate_table_u_rel,
+                                  axis_alignment_bound_deg=b.orientation_bound_deg), int(seed))
+    rng = np.random.default_rng([int(seed), EQUIPMENT_STREAM, 3])
+    bound = math.radians(b.orientation_bound_deg)
+    d = rng.uniform(-bound, bound, (3, 3)) * (1.0 - np.eye(3))
+    return replace(b, rate_error_rel=eq.rate_table.rate_error_rel, orientation_error_rad=d)
 
 
 def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = "mems-triad",
