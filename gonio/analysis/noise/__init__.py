@@ -5,6 +5,7 @@
                            (gap-aware; every τ in O(N log² N))
 :mod:`.edf`                Greenhall edf, noise identification, χ² intervals
 :mod:`.fit`                five-term model per variance, bootstrap, sinusoid
+:mod:`.covariance`         covariance of the estimates across τ (the fit's u)
 :mod:`.record`             whole-record analysis and static-window selection
 =========================  =====================================================
 

@@ -1,5 +1,6 @@
 """The five-term gyro noise model, fitted to each Allan-family variance with its own
-response, parameter uncertainties by parametric bootstrap, and the sinusoid check.
+response, parameter uncertainties by parametric bootstrap or from the covariance of the
+estimates across τ (:mod:`.covariance`), and the sinusoid check.
 
 Contents
 --------
@@ -53,6 +54,7 @@ from scipy import optimize
 from scipy.fft import next_fast_len
 
 from gonio.analysis.noise.allan import AllanResult, allan_deviation
+from gonio.analysis.noise.covariance import variance_covariance
 from gonio.analysis.noise.edf import edf_for
 from gonio.errors import GonioError
 from gonio.units import (
@@ -256,20 +258,13 @@ def model_adev(tau_s, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------- the fit
-#: Assumed correlation of overlapping estimates one octave apart (covariance method).
-RHO_OCTAVE = 0.6
-
-
-def _correlation_inflation(tau: np.ndarray) -> float:
-    """Variance factor (1+ρ)/(1−ρ) for correlated neighbouring τ estimates (the quick
-    covariance method only): an AR(1) correlation along log₂τ with
-    ρ = RHO_OCTAVE^(Δlog₂τ) (Δ the median spacing; ρ ≈ 0.6 one octave apart — an
-    empirical reading, not a derivation; the bootstrap replaces it)."""
-    if tau.size < 2:
-        return 1.0
-    step = float(np.median(np.diff(np.log2(tau))))
-    rho = RHO_OCTAVE ** max(step, 1e-6)
-    return (1.0 + rho) / (1.0 - rho)
+def _sandwich_covariance(a: np.ndarray, sd: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """Covariance of the weighted least-squares coefficients when the observations have
+    the full covariance ``sigma`` but were weighted by 1/sd² as if independent:
+    (AᵀWA)⁻¹ AᵀWΣWA (AᵀWA)⁻¹ (the "sandwich"; Seber & Wild, Nonlinear Regression, 2.1.4)."""
+    aw = a / sd[:, None] ** 2
+    bread = np.linalg.inv(a.T @ aw)
+    return bread @ (aw.T @ sigma @ aw) @ bread
 
 
 def _dominant_alpha(a: np.ndarray, coef: np.ndarray) -> np.ndarray:
@@ -317,7 +312,7 @@ def _fit_core(kind, tau, var, m, n_phase, tau0, cols, iterations):
 
 def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
                     tau_max_s: float | None = None, iterations: int = 4,
-                    bootstrap: int = 0, seed: int = 0) -> NoiseFit:
+                    bootstrap: int = 0, seed: int = 0, covariance: bool = True) -> NoiseFit:
     """Weighted non-negative least-squares fit of the five-term model to the variance
     of ``allan`` with that variance's own responses (:func:`design_matrix`:
     AVAR for overlapping and total, MVAR for modified, HVAR for Hadamard).
@@ -331,10 +326,13 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
     the fitted model (:func:`simulate_noise`, same τ0, length and input), each
     analysed and refitted the same way; u is the standard deviation of the refitted
     coefficients (it carries the correlation of the estimates across τ and the
-    non-negativity bound). Otherwise the weighted LS covariance (AᵀWA)⁻¹ of the
-    active terms scaled by max(1, χ²_red) and by an empirical factor for the
-    correlation of neighbouring τ (:func:`_correlation_inflation`) — a quick
-    indication only (``uncertainty_method`` says which was used). Only the ``terms`` named are fitted.
+    non-negativity bound). Otherwise the covariance of the weighted LS coefficients of
+    the active terms with the full covariance Σ of the variance estimates across τ
+    under the fitted model (:func:`gonio.analysis.noise.covariance.variance_covariance`:
+    neighbouring τ share most of their data), (AᵀWA)⁻¹AᵀWΣWA(AᵀWA)⁻¹, scaled by
+    max(1, χ²_red) for a model that does not fit; u of a coefficient is u(p)/(2√p)
+    (``uncertainty_method`` says which was used; ``covariance=False`` skips it: u = 0,
+    for refits that only need the values). Only the ``terms`` named are fitted.
 
     Examples
     --------
@@ -381,11 +379,13 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
         u_vals = bootstrap_uncertainty(allan, values, terms=terms, tau_max_s=tau_max_s,
                                        n_boot=bootstrap, seed=seed, iterations=iterations)
         method = "bootstrap"
-    elif active:
-        aw = a_full[:, active] / sd[:, None]
+    elif active and covariance:
         try:
-            cov = (np.linalg.inv(aw.T @ aw) * max(1.0, chi2_red)
-                   * _correlation_inflation(tau))
+            rows = _covariance_rows(tau)
+            sigma = _estimate_covariance(allan, np.flatnonzero(sel)[rows], kind, m[rows],
+                                         tau0, coef, sd[rows])
+            cov = (_sandwich_covariance(a_full[np.ix_(rows, active)], sd[rows], sigma)
+                   * max(1.0, chi2_red))
             u_coef = np.sqrt(np.clip(np.diag(cov), 0, None))
             u_vals[active] = u_coef / (2.0 * values[active])
         except np.linalg.LinAlgError:
@@ -401,6 +401,35 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
                     tau_s=tau, residuals=np.sqrt(var) / np.sqrt(model) - 1.0,
                     chi2_red=chi2_red, active=tuple(TERMS[i] for i in active),
                     kind=kind, uncertainty_method=method, n_bootstrap=int(bootstrap))
+
+
+#: At most this many τ enter the covariance of the fit's uncertainties (a log-spaced subset
+#: of a denser set, e.g. every τ: neighbouring estimates then carry almost the same data).
+_COV_MAX_TAUS = 64
+
+
+def _covariance_rows(tau: np.ndarray) -> np.ndarray:
+    """Indices of the τ whose estimates enter the covariance (all, or a log-spaced subset
+    of :data:`_COV_MAX_TAUS`)."""
+    if tau.size <= _COV_MAX_TAUS:
+        return np.arange(tau.size)
+    grid = np.geomspace(tau[0], tau[-1], _COV_MAX_TAUS)
+    return np.unique(np.clip(np.searchsorted(tau, grid), 0, tau.size - 1))
+
+
+def _estimate_covariance(allan: AllanResult, sel, kind: str, m, tau0: float, coef,
+                         sd: np.ndarray) -> np.ndarray:
+    """Σ of the fitted variance estimates under the model ``coef`` (module
+    :mod:`.covariance`); for the total and the modified variance the overlapping Allan
+    variance's correlation (the modified variance's dense terms make its own cost grow as
+    m²; its correlations are the smaller) scaled to the Greenhall variances ``sd``² of the
+    fit's weights."""
+    n_terms = np.asarray(allan.n_pairs[sel], dtype=np.int64)
+    sigma = variance_covariance("hdev" if kind == "hdev" else "adev", m, n_terms, tau0, coef)
+    if kind in ("totdev", "mdev"):
+        d = np.sqrt(np.clip(np.diag(sigma), np.finfo(float).tiny, None))
+        sigma = sigma / np.outer(d, d) * np.outer(sd, sd)
+    return sigma
 
 
 # ---------------------------------------------------------------- simulation
@@ -561,7 +590,8 @@ def bootstrap_uncertainty(allan: AllanResult, values, *, terms: Sequence[str] = 
                             alpha=0, unit=allan.unit, overwrite_data=True)
         del x
         r.alpha = allan.alpha
-        f = fit_noise_model(r, terms=terms, tau_max_s=tau_max_s, iterations=iterations)
+        f = fit_noise_model(r, terms=terms, tau_max_s=tau_max_s, iterations=iterations,
+                            covariance=False)
         out[b] = np.nan_to_num([f.Q, f.N, f.B, f.K, f.R])
     u = out.std(axis=0, ddof=1)
     return u

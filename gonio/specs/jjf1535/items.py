@@ -697,8 +697,9 @@ def angle_random_walk(ctx: Context) -> Item:
     variance of the static record (reading taken), in °/√h; the printed statistic of
     eqs (22)–(24) is computed too, labelled, with its ratio to the AVAR (it falls as 2/k²).
 
-    Uncertainty: the fit's standard uncertainty of N (covariance inflated for the correlation
-    of overlapping estimates, :func:`gonio.analysis.noise.fit_noise_model`) and the scale factor."""
+    Uncertainty: the fit's standard uncertainty of N (the least-squares covariance with the
+    full covariance of the Allan estimates across τ, which share their data,
+    :func:`gonio.analysis.noise.fit_noise_model`) and the scale factor."""
     title, clause, unit = "angle random walk ARW", "7.2.13", "°/√h"
     miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
     if miss:

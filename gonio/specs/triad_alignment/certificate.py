@@ -26,14 +26,18 @@ def lag_phrase(ramp: dict, lang: str, fmt=lambda v: f"{v:.0f}") -> str:
 #: label key → (English, Chinese)
 TEXT = {
     "std_table": ("rate table with temperature chamber", "速率转台及温度试验箱"),
+    "std_accuracy": ("rate: relative u {rate}; axis: ±{bound}° per orientation",
+                     "速率：相对标准不确定度 {rate}；转轴：各方位 ±{bound}°"),
     "h_alignment": ("Alignment matrix", "对准矩阵"),
     "alignment_note": ("System matrix M ({unit} per °/s) and bias vector b ({unit}) of G = M ω + b, "
                        "from {n} dwells{robust}; each cell value ± U, U = k·u for a coverage "
-                       "probability of approximately 95 %, k = t(ν) of the element's own fit: "
-                       "the last column gives k and ν of the row's M, the b cell its own k.",
+                       "probability of approximately 95 %, k = t(ν) of the element's own budget "
+                       "(the fit and the rate table, ν by Welch–Satterthwaite): the last column "
+                       "gives k and ν of the row's M, the b cell its own k.",
                        "系统矩阵 M（{unit}/(°/s)）与零偏向量 b（{unit}），模型 G = M ω + b，"
                        "由 {n} 个测量段{robust}求得；各格为 值 ± U，U = k·u，包含概率约 95 %，"
-                       "k 按各元素自身拟合的自由度 ν 取 t 分布因子：末列为该行 M 的 k 与 ν，"
+                       "k 按各元素自身预算（拟合与转台，ν 按 Welch–Satterthwaite 公式）的自由度 ν "
+                       "取 t 分布因子：末列为该行 M 的 k 与 ν，"
                        "b 格内注明其自身的 k。"),
     "robust": (" (robust fit, IRLS)", "（稳健拟合，IRLS）"),
     "gyro": ("gyro", "陀螺"),
@@ -63,12 +67,17 @@ TEXT = {
     "unc_note": ("Type A from the weighted least-squares residuals (JCGM 100 4.2), the dwell "
                  "noise in two parts: white, σ_w² from the scatter about each orientation's own "
                  "bias, and a bias offset per orientation and static dwell, σ_B²: cov = "
-                 "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ, ν by Welch–Satterthwaite; Monte Carlo "
-                 "(JCGM 101) standard uncertainty beside it{mc}.",
+                 "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ, ν by Welch–Satterthwaite; Type B, the rate "
+                 "table: its rate error (relative u {rate}) and its spin axis at each "
+                 "orientation (each component within ±{bound}°), first order, ν = ∞. Monte "
+                 "Carlo (JCGM 101) standard uncertainty of the fit beside it{mc}: it redraws "
+                 "the noise, not the table.",
                  "A 类评定，由加权最小二乘残差求得（JCGM 100 4.2），驻留噪声分两部分：白噪声 σ_w²"
                  "（各方位相对其自身零偏的离散）与每个方位及每个静态驻留的零偏偏移 σ_B²：cov = "
-                 "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ，ν 按 Welch–Satterthwaite 公式；"
-                 "旁列蒙特卡洛法（JCGM 101）标准不确定度{mc}。"),
+                 "σ_w²(XᵀWX)⁻¹ + σ_B²(PZ)(PZ)ᵀ，ν 按 Welch–Satterthwaite 公式；B 类评定为速率转台："
+                 "其速率误差（相对标准不确定度 {rate}）及各方位下转轴方向（各分量在 ±{bound}° 内），"
+                 "一阶传播，ν = ∞。旁列拟合的蒙特卡洛法（JCGM 101）标准不确定度{mc}：仅重抽噪声，"
+                 "不含转台。"),
     "mc_trials": (" ({n} trials)", "（{n} 次试验）"),
     "mc_none": (" (not run: --monte-carlo N)", "（未运行：--monte-carlo N）"),
     "u_gum": ("u (GUM)", "u（GUM）"),

@@ -16,6 +16,8 @@ side (it imports the report), called by :mod:`gonio.specs.triad_alignment.output
 
 from __future__ import annotations
 
+import math
+
 
 from gonio.report.header import certificate_id, conformity_section, is_draft
 from gonio.report.i18n import (display, display_uncertainty, reason_text, rule_at_U,
@@ -121,7 +123,11 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     # uncertainty of M and b: GUM and Monte Carlo
     out.append(Block("sub", T("h_unc")))
     trials = (items["M_xx"]["uncertainty"].get("monte_carlo") or {}).get("trials")
-    out.append(Block("p", [T("unc_note", mc=T("mc_trials", n=trials) if trials else T("mc_none"))]))
+    tb = al.get("type_b") or {"rate_u_rel": 0.0, "orientation_u_rad": 0.0}
+    out.append(Block("p", [T("unc_note", mc=T("mc_trials", n=trials) if trials else T("mc_none"),
+                             rate=display("sig3", tb["rate_u_rel"]),
+                             bound=display("sig3", math.degrees(tb["orientation_u_rad"])
+                                           * math.sqrt(3.0)))]))
     urows = []
     for key in [f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in AXES]:
         unc = items[key]["uncertainty"]
@@ -296,8 +302,12 @@ def triad_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) ->
     readings taken, signatures, statements, figures."""
     res = result.to_json()
     T = _t(lang)
+    tb = (res["extra"].get("alignment") or {}).get("type_b")
+    acc = "—" if not tb else T("std_accuracy", rate=display("sig3", tb["rate_u_rel"]),
+                                bound=display("sig3", math.degrees(tb["orientation_u_rad"])
+                                              * math.sqrt(3.0)))
     blocks = header_blocks(res, get(result.spec_key), L, lang, lab,
-                           [T("std_table"), "—", "—", "—"])
+                           [T("std_table"), "—", acc, "—"])
     blocks += alignment_blocks(res, T, L)
     blocks += screening_blocks(res, L, content.PHRASES_ZH)
     name = translator(tables=content.PHRASES_ZH) if lang == "zh" else (lambda t: None)

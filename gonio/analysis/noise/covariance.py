@@ -1,0 +1,205 @@
+"""Covariance of Allan-family variance estimates at several τ of one record, under the
+five-term noise model — the weight of the five-term fit's uncertainties.
+
+Estimates of one record at neighbouring τ share most of their data: treated as independent,
+the least-squares covariance of the fitted coefficients is several times too small, and
+any fixed inflation factor is a guess. Here the full covariance is computed.
+
+Each term of an estimator is a linear combination of the angle (phase) samples,
+d_k = Σ_a c_a x_{k+a} / τ, whose coefficients annihilate constants and lines (second
+differences for the Allan variances, third for the Hadamard). For such combinations the
+covariance of the noise model is that of its *generalised covariance* K(t) (Matheron's
+intrinsic random functions of order 1: K is defined up to an even polynomial of degree 2,
+which the coefficients annihilate):
+
+=====================  =============================  =========================
+term                   generalised covariance K(t)    checks (AVAR of the model)
+=====================  =============================  =========================
+Q white phase          Q²·[t = 0]                     3Q²/τ²
+N white rate           −N²|t|/2                       N²/τ
+B flicker rate         B²·t² ln|t| / (2π)             (2 ln 2/π) B²
+K rate random walk     K²|t|³/12                      K²τ/3
+R rate ramp            (deterministic: no variance)
+=====================  =============================  =========================
+
+(each row gives the module table of :mod:`.fit` through Var d = Σ c_a c_b K(t_a − t_b)/τ²).
+Then Cov(d_k(m), d_l(m')) = Σ_a Σ_b c_a c'_b K((a − b − L)τ0)/(τ τ'), L = l − k, and for
+Gaussian noise (Isserlis) the estimates σ̂²(m) = Σ_k d_k²/(c n_m) have
+
+    Cov(σ̂²(m), σ̂²(m')) = 2 Σ_L cnt(L) Cov(d_k(m), d_{k+L}(m'))² / (c² n_m n_m'),
+
+cnt(L) the number of term pairs at lag L. White, quantisation and rate-random-walk parts
+vanish once the two terms' spans no longer overlap; the flicker part falls as L⁻² and is
+summed to 16 spans beyond the overlap (the rest is below 10⁻⁴ of the sum).
+
+The diagonal reproduces Greenhall's edf for the overlapping estimators (2σ⁴/edf), which
+the tests check, with the Monte Carlo covariance of simulated records and ``allantools``.
+The total variance has no stationary term structure (its reflected extension): its
+estimates are given the overlapping Allan variance's correlation with their own
+Greenhall variances on the diagonal.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import signal
+
+__all__ = ["generalised_covariance", "estimator_taps", "variance_covariance"]
+
+#: Flicker tail summed beyond the overlap of two terms' spans, in spans.
+_FLICKER_TAIL_SPANS = 4
+#: Lag weights summed term by term up to this many (beyond: an FFT correlation).
+_DIRECT_TAPS = 32
+
+
+def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float) -> np.ndarray:
+    """K(t) of the five-term model (module table) at t = ``t_samples``·τ0 (integers ≥ 0),
+    ``coef`` = [Q², N², B², K², R²] (the ramp carries no variance). The flicker term is
+    written t² ln(t/τ0): it differs from t² ln t by an even quadratic, which the
+    estimators' coefficients annihilate."""
+    q2, n2, b2, k2 = (float(c) for c in np.asarray(coef, dtype=np.float64)[:4])
+    t = np.asarray(t_samples, dtype=np.float64)
+    ts = t * tau0_s
+    out = -0.5 * n2 * ts
+    if k2:
+        out += k2 * ts ** 3 / 12.0
+    if b2:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fl = ts ** 2 * np.log(t)
+        out += b2 / (2.0 * math.pi) * np.where(t > 0, fl, 0.0)
+    if q2:
+        out = out + q2 * (t == 0)
+    return out
+
+
+def estimator_taps(kind: str, m: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """(offsets, coefficients, c) of one term of the estimator ``kind`` at averaging
+    factor m: d_k = Σ coef·x_{k+offset}/τ and σ̂² = Σ_k d_k²/(c·n) (SP 1065 eqs 11, 14,
+    20; the total variance uses the overlapping Allan terms)."""
+    m = int(m)
+    if kind in ("adev", "totdev"):
+        return np.array([0, m, 2 * m]), np.array([1.0, -2.0, 1.0]), 2.0
+    if kind == "hdev":
+        return np.array([0, m, 2 * m, 3 * m]), np.array([1.0, -3.0, 3.0, -1.0]), 6.0
+    if kind == "mdev":
+        # (1/m) Σ_{i<m} (x_{k+i+2m} − 2x_{k+i+m} + x_{k+i}): the second difference
+        # convolved with a box of m ones
+        c = np.zeros(3 * m)
+        for a, w in ((0, 1.0), (m, -2.0), (2 * m, 1.0)):
+            c[a: a + m] += w / m
+        nz = np.flatnonzero(c)
+        return nz, c[nz], 2.0
+    raise ValueError(f"kind must be adev, mdev, hdev or totdev, not {kind!r}")
+
+
+def _pair_lag_weights(offs_i, c_i, offs_j, c_j) -> tuple[np.ndarray, np.ndarray]:
+    """g(s) = Σ_{a − b = s} c_a c'_b: the cross-correlation of two tap sets (s, g)."""
+    s = (offs_i[:, None] - offs_j[None, :]).ravel()
+    g = (c_i[:, None] * c_j[None, :]).ravel()
+    if s.size <= _DIRECT_TAPS:      # equal lags kept apart (C sums them; the Q part merges)
+        order = np.argsort(s, kind="stable")
+        return s[order], g[order]
+    us, inv = np.unique(s, return_inverse=True)
+    return us, np.bincount(inv, weights=g)
+
+
+def _lag_grid(lo: int, hi: int, s: np.ndarray, span_small: int) -> tuple[np.ndarray, np.ndarray]:
+    """Integer lags in [lo, hi] and their weights for Σ_L f(L) ≈ Σ w·f: every lag near
+    the kinks of C (L = s, within the smaller span) at a step of 1/32 of that span,
+    elsewhere (where C is one smooth piece) at most 512 steps; trapezoid weights, which
+    are all 1 where the step is 1."""
+    fine = max(1, span_small // 32)
+    coarse = max(fine, (hi - lo) // 512)
+    parts = [np.arange(lo, hi + 1, coarse), np.array([hi])]
+    for sv in s:
+        a, b = max(lo, int(sv) - span_small - fine), min(hi, int(sv) + span_small + fine)
+        if a <= b:
+            parts.append(np.arange(a, b + 1, fine))
+    lag = np.concatenate(parts)
+    lag.sort()
+    lag = lag[np.r_[True, lag[1:] != lag[:-1]]]
+    if lag.size == 1:
+        return lag, np.ones(1)
+    d = np.diff(lag).astype(np.float64)
+    w = np.empty(lag.size)
+    w[1:-1] = (d[:-1] + d[1:]) / 2.0
+    w[0], w[-1] = d[0] / 2.0 + 0.5, d[-1] / 2.0 + 0.5
+    return lag, w
+
+
+def _pair_covariance(ti, tj, n_i, n_j, kgrid, flicker: bool, q2: float) -> float:
+    """Σ_L cnt(L)·C(L)² for one pair of τ (``ti``/``tj``: (offsets, coefs, c, τ));
+    ``kgrid`` the generalised covariance without the quantisation, whose white-phase
+    part ``q2``·[t = 0] reaches C only at the lags L = s and is added there exactly."""
+    (oi, ci, _, tau_i), (oj, cj, _, tau_j) = ti, tj
+    s, g = _pair_lag_weights(oi, ci, oj, cj)
+    span_i, span_j = int(oi[-1]), int(oj[-1])
+    # C(L) = Σ_s g(s) K(s − L) vanishes (but for flicker) once the spans [k, k + span_i]
+    # and [k + L, k + L + span_j] no longer overlap
+    lo, hi = -span_j, span_i
+    if flicker:
+        extra = _FLICKER_TAIL_SPANS * max(span_i, span_j)
+        lo, hi = lo - extra, hi + extra
+    lo, hi = max(lo, -(n_i - 1)), min(hi, n_j - 1)
+    if hi < lo:
+        return 0.0
+
+    def count(lag):
+        return np.clip(np.minimum(n_i, n_j - lag) - np.maximum(0, -lag), 0, None)
+
+    def cov_at(lag):
+        c = np.zeros(lag.size)
+        for sv, gv in zip(s, g):
+            c += gv * kgrid[np.abs(sv - lag)]
+        return c / (tau_i * tau_j)
+
+    if s.size <= _DIRECT_TAPS:
+        lag, w = _lag_grid(lo, hi, s, min(span_i, span_j))
+        c = cov_at(lag)
+        total = float(np.sum(w * count(lag) * c * c))
+    else:                   # the modified variance's dense taps: one FFT correlation
+        lag, w = np.arange(lo, hi + 1), None
+        dense = np.zeros(int(s[-1] - s[0]) + 1)
+        dense[s - s[0]] = g
+        kfull = kgrid[np.abs(np.arange(s[0] - hi, s[-1] - lo + 1))]
+        c = signal.correlate(kfull, dense, mode="valid", method="fft")[::-1] / (tau_i * tau_j)
+        total = float(np.sum(count(lag) * c * c))
+    if q2:
+        at = (s >= lo) & (s <= hi)
+        ls, inv = np.unique(s[at], return_inverse=True)     # equal lags merged
+        c0 = cov_at(ls)
+        cq = q2 * np.bincount(inv, weights=g[at]) / (tau_i * tau_j)
+        total += float(np.sum(count(ls) * ((c0 + cq) ** 2 - c0 ** 2)))
+    return total
+
+
+def variance_covariance(kind: str, m, n_terms, tau0_s: float, coef) -> np.ndarray:
+    """Covariance matrix of the variance estimates σ̂²(m_i) (``kind``: adev, mdev, hdev,
+    totdev) of one gap-free record with ``n_terms`` terms at each m, under the five-term
+    model ``coef`` = [Q², N², B², K², R²] (module docstring; Gaussian noise).
+
+    >>> cov = variance_covariance("adev", [1], [10**6], 1.0, [0, 1.0, 0, 0, 0])
+    >>> round(float(cov[0, 0]) * 10**6, 3)   # white rate noise, m = 1: 2σ⁴·(3/2)/n
+    3.0
+    """
+    m = np.asarray(m, dtype=np.int64)
+    n = np.asarray(n_terms, dtype=np.int64)
+    coef = np.asarray(coef, dtype=np.float64)
+    taps = []
+    for mi in m:
+        o, c, cn, = estimator_taps(kind, int(mi))
+        taps.append((o, c, cn, float(mi) * tau0_s))
+    span = max(int(t[0][-1]) for t in taps)
+    flicker = bool(coef[2] > 0)
+    # |s − L| ≤ span + (1 + tail)·span (lags are limited by the spans, not the record)
+    kmax = min(int(n.max()) + 2 * span, (_FLICKER_TAIL_SPANS + 2) * span) + 2
+    q2 = float(coef[0])
+    kgrid = generalised_covariance(np.arange(kmax + 1), np.r_[0.0, coef[1:]], tau0_s)
+    out = np.empty((m.size, m.size))
+    for i in range(m.size):
+        for j in range(i, m.size):
+            v = _pair_covariance(taps[i], taps[j], int(n[i]), int(n[j]), kgrid, flicker, q2)
+            out[i, j] = out[j, i] = 2.0 * v / (taps[i][2] * taps[j][2] * float(n[i]) * float(n[j]))
+    return out
