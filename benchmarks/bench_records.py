@@ -48,7 +48,8 @@ def readings_copies(readings: Path, n_calibrations: int, n_instruments: int):
     made from the virtual bench's ``readings``: its serial the instrument's and its operator
     line numbered (each file has its own SHA-256); every second file keeps the virtual
     bench's own lines (``# bench:``, ``# seed:``, ``# generator:``: the lists mark it
-    virtual), the others have them removed (a laboratory's file: not marked)."""
+    virtual), the others have them removed and the instrument, manufacturer and table named
+    as a laboratory's (a laboratory's file: not marked)."""
     lines = readings.read_text().splitlines(keepends=True)
     out = []
     for c in range(n_calibrations):
@@ -60,8 +61,10 @@ def readings_copies(readings: Path, n_calibrations: int, n_instruments: int):
                 line = f"# serial: S-{c % n_instruments + 1:05d}\n"
             elif key == "operator":
                 line = f"# operator: technician {c + 1}\n"
-            elif key in ("bench", "seed", "generator") and not virtual:
+            elif key in ("bench", "seed", "generator", "noise") and not virtual:
                 continue
+            elif key in ("instrument", "manufacturer", "table") and not virtual:
+                line = f"# {key}: laboratory {key}\n"      # the bench's names say "virtual"
             mine.append(line)
         out.append("".join(mine).encode())
     return out

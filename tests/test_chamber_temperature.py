@@ -186,13 +186,13 @@ def test_the_stated_bound_tolerance_and_logged_temperature_reach_the_certified_k
             assert (d["logged_from"], d["thermometer_mpe_c"], d["thermometer_from"]) == \
                 ("metadata", 0.2, "protocol")
             assert d["distribution"] == "rectangular-shifted-product"
-            assert "the chamber temperature the readings log, 20.6 degC (+0.6 degC from the " \
-                "reference 20 degC; thermometer MPE +-0.2 degC), and |alpha_K| <= 0.4 " \
-                "ppm/degC: stated by the readings" in text
+            assert "the chamber temperature the readings log, 20.6 °C (+0.60 °C from the " \
+                "reference 20 °C; thermometer MPE ±0.2 °C), and |α_K| ≤ 0.4 " \
+                "ppm/°C: stated by the readings" in text
         else:
             assert (d["basis"], d["logged_temperature_c"], d["deviation_c"]) == \
                 ("tolerance", None, None)
-            assert "+-2.5 degC of the reference and |alpha_K| <= 0.4 ppm/degC: stated by the " \
+            assert "±2.5 °C of the reference and |α_K| ≤ 0.4 ppm/°C: stated by the " \
                 "readings" in text
     # logged at the reference: the thermometer's part alone, alpha_K delta (product of two
     # zero-mean rectangulars, u = a m/3); with a thermometer stated exact, no K_T line
@@ -202,6 +202,9 @@ def test_the_stated_bound_tolerance_and_logged_temperature_reach_the_certified_k
     assert line.u == pytest.approx(abs(float(at_ref.results.scale_factor.value)) * 0.4e-6
                                    * 0.2 / 3.0, rel=1e-9)
     assert _bound(at_ref)["distribution"] == "rectangular-product"
+    # a zero difference is printed unsigned to the thermometer's 0.01 °C, never "+0"
+    assert "(0.00 °C from the reference 20 °C;" in summary(at_ref.result())
+    assert "chamber temperature logged 0.00 °C from the reference" in line.source
     exact = _calibrate(proto, replace(res, metadata={**res.metadata, "thermometer_mpe_c": "0"}))
     assert not [c for c in exact.item_uncertainty["scale_factor"].components
                 if c.symbol == "K_T"]
@@ -513,7 +516,7 @@ def test_calibrate_reads_the_key_the_column_a_sparse_column_or_neither(tmp_path,
         assert d["u_ppm"] == pytest.approx(math.sqrt((dev ** 2 + 0.2 ** 2 / 3.0) / 3.0),
                                            rel=1e-9), name
         assert ("(mean over the 7.1 rounds)" in text) == (src == "column"), name
-        assert "thermometer MPE +-0.2 degC" in text
+        assert "thermometer MPE ±0.2 °C" in text
 
 
 @pytest.mark.parametrize("cell", ["warm", "nan", "-300", "1e9"])

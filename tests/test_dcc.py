@@ -30,6 +30,7 @@ from gonio.report.dcc import DCC_NS, SI_NS
 from gonio.specs.ogam_draft.dcc import dcc_bytes
 from gonio.report.i18n import display, last_digit_unit, parse_display
 from gonio.resources import protocols_dir
+from tests.own_readings import own_metadata
 
 NS = {"dcc": DCC_NS, "si": SI_NS}
 SMALL = {
@@ -207,8 +208,7 @@ def test_performance_location_is_the_category_of_the_place_entered(run, schema, 
     # the same result as measured readings would give it (no virtual-bench metadata)
     res = dict(run["res"], provenance={"virtual": False, "bench": None, "seed": None,
                                        "generator": None, "evidence": []},
-               metadata={k: v for k, v in run["res"]["metadata"].items()
-                         if k not in ("bench", "seed", "generator")})
+               metadata=own_metadata(run["res"]["metadata"]))
     enum = [e.get("value") for e in etree.parse(str(Path(__file__).parent / "data" / "dcc-3.3.0"
                                                     / "dcc.xsd")).iterfind(
         ".//{http://www.w3.org/2001/XMLSchema}simpleType[@name='stringPerformanceLocationType']"

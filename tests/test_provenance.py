@@ -24,6 +24,7 @@ import pytest
 
 from gonio.formats.provenance import provenance, readings_provenance
 from gonio.report.i18n import labels
+from tests.own_readings import BENCH_KEYS, own_text
 
 HERE = Path(__file__).resolve().parent
 PINS = HERE / "data" / "pins"
@@ -77,7 +78,14 @@ def pdf_pages(pdf: Path) -> list[str]:
             for i in range(1, n + 1)]
 
 
-def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip=False) -> Path:
+#: The metadata lines a laboratory's own file lacks (``strip`` of :func:`simulate_calibrate`).
+LAB_OWN = "|".join(BENCH_KEYS)
+
+
+def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip: str = "") -> Path:
+    """``gonio simulate`` then ``gonio calibrate --lab lab --dcc``; ``strip``: a regular
+    expression of metadata keys whose lines are deleted from the readings first
+    (:data:`LAB_OWN`: a laboratory's own file, :func:`tests.own_readings.own_text`)."""
     proto = [] if protocol is None else ["--protocol", PINS / protocol]
     sim, cal = work / "sim", work / "cal"
     gonio("simulate", "--spec", spec, *proto, "--seed", seed, "--out", sim, cwd=work)
@@ -85,8 +93,8 @@ def simulate_calibrate(spec, protocol, seed, work: Path, lab: Path, strip=False)
     if strip:                        # a laboratory's own file: no bench, seed or generator
         lines = readings.read_text(encoding="utf-8").splitlines(keepends=True)
         readings = work / "lab-readings.csv"
-        readings.write_text("".join(
-            x for x in lines if not re.match(r"# (bench|seed|generator):", x)), encoding="utf-8")
+        text = "".join(x for x in lines if not re.match(r"# (%s):" % strip, x))
+        readings.write_text(own_text(text) if strip == LAB_OWN else text, encoding="utf-8")
         for extra in ("thermal.csv",):
             if (sim / extra).exists():
                 shutil.copy(sim / extra, work / extra)
@@ -163,9 +171,9 @@ def test_virtual_readings_marked_everywhere_with_a_lab_file(run):
 
 
 def test_laboratory_readings_are_not_marked(tmp_path):
-    """The same simulated readings less the bench's metadata lines: no mark anywhere."""
+    """The same simulated readings less the bench's metadata lines and names: no mark anywhere."""
     cal = simulate_calibrate("jjf1535-2015", "jjf1535-2015-small.toml", 3, tmp_path,
-                             lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=True)
+                             lab_file(tmp_path, 'on_mismatch = "proceed"'), strip=LAB_OWN)
     res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
     assert res["provenance"]["virtual"] is False
     assert not any(BANNER in t for t in pdf_pages(cal / "certificate.pdf"))
@@ -174,9 +182,38 @@ def test_laboratory_readings_are_not_marked(tmp_path):
     assert 'id="virtual-bench"' not in (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
 
 
+@pytest.mark.parametrize("spec, protocol", [("jjf1535-2015", "jjf1535-2015-small.toml"),
+                                            ("triad-alignment", None)])
+def test_deleting_bench_and_seed_lines_keeps_the_mark(spec, protocol, tmp_path):
+    """Simulated readings whose ``# bench:``, ``# seed:`` (and ``# generator:``) lines were
+    deleted still name the virtual bench in their other metadata (the instrument "… (virtual)"):
+    marked on every PDF page, in the HTML, summary.txt, results.json and the DCC, naming the
+    keys that said so."""
+    cal = simulate_calibrate(spec, protocol, 3, tmp_path,
+                             lab_file(tmp_path, 'on_mismatch = "proceed"'),
+                             strip="bench|seed|generator")
+    prov = json.loads((cal / "results.json").read_text(encoding="utf-8"))["provenance"]
+    assert prov["virtual"] is True and prov["bench"] is None and "instrument" in prov["evidence"]
+    pages = pdf_pages(cal / "certificate.pdf")
+    for i, text in enumerate(pages, 1):
+        assert BANNER in text, f"{spec}: PDF page {i} of {len(pages)} lacks the mark"
+    assert "# instrument" in " ".join(pages[0].split())
+    assert labels("en")["virtual"] in (cal / "certificate.html").read_text(encoding="utf-8")
+    first = (cal / "summary.txt").read_text(encoding="utf-8").splitlines()[0]
+    assert first.startswith("VIRTUAL BENCH EXAMPLE") and "# instrument" in first and "-," not in first
+    dcc = (cal / "certificate.dcc.xml").read_text(encoding="utf-8")
+    assert 'id="virtual-bench"' in dcc and "# instrument" in dcc
+
+
 def test_provenance_rules(tmp_path):
     assert provenance({"seed": "0"})["evidence"] == ["seed"]
     assert provenance({"generator": "gonio 0.1.0"})["virtual"] is True
+    # gonio's acquisition from instruments is not the virtual bench; its identification can be
+    assert provenance({"generator": "gonio 0.1.0 acquire"})["virtual"] is False
+    assert provenance({"generator": "gonio 0.1.0 acquire",
+                       "table_idn": "gonio,virtual rotary table,0,1"})["evidence"] == ["table_idn"]
+    assert provenance({"manufacturer": "gonio virtual bench"})["virtual"] is True
+    assert provenance({"instrument": "Virtually-free FOG"})["virtual"] is False
     assert provenance({"generator": "gonioscope 2"})["virtual"] is False
     assert provenance({"bench": ""})["virtual"] is False
     f = tmp_path / "r.csv"

@@ -1,9 +1,11 @@
 """Where readings come from (docs/formats.md#provenance): the virtual bench's readings and
-streams say so in their own metadata (``# bench:``, ``# seed:``, ``# generator: gonio …``);
+streams say so in their own metadata (``# bench:``, ``# seed:``, ``# generator: gonio …``,
+the instrument "… (virtual)");
 :func:`provenance` reads it, :func:`result_provenance` gives it for a results.json."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -11,20 +13,33 @@ from gonio.formats.metadata import header_lines
 
 #: Metadata keys only gonio's virtual bench writes (``gonio simulate``, ``gonio demo``, a
 #: stream from the bench): their presence marks the readings virtual (docs/formats.md#provenance).
-VIRTUAL_BENCH_KEYS: tuple[str, ...] = ("bench", "seed")
+VIRTUAL_BENCH_KEYS: tuple[str, ...] = ("bench", "seed", "noise")
+
+#: Identity and equipment keys whose value names the virtual bench ("gonio virtual bench",
+#: "RLG goniometer (virtual)", an instrument's ``*_idn`` "gonio,virtual rotary table"): the
+#: bench writes them too, so readings keep the mark when its bench and seed lines are deleted.
+VIRTUAL_NAME_KEYS: tuple[str, ...] = ("instrument", "manufacturer", "model", "table", "operator")
+_VIRTUAL_WORD = re.compile(r"\bvirtual\b", re.IGNORECASE)
 
 
 def provenance(metadata: Mapping[str, object] | None) -> dict:
     """Where readings come from, from their metadata: ``{"virtual": bool, "bench", "seed",
     "generator", "evidence"}``. Readings are virtual when their metadata name the virtual
-    bench (``# bench:``), its seed (``# seed:``) or gonio as their generator
-    (``# generator: gonio …``); ``evidence`` lists the keys that said so. Nothing else (a
-    laboratory file, an option) can make readings that say so non-virtual.
+    bench (``# bench:``), its seed (``# seed:``) or noise switch (``# noise:``), gonio's
+    simulator as their generator (``# generator: gonio …``; not ``gonio … acquire``, gonio's
+    acquisition from instruments), or the virtual bench as the instrument, its manufacturer,
+    model, table or operator, or as an instrument's identification (a ``*_idn`` key), by the
+    word "virtual"; ``evidence`` lists the keys that said so. Nothing else (a laboratory file,
+    an option) can make readings that say so non-virtual.
 
     >>> provenance({"bench": "rlg-typical", "seed": "3", "serial": "X"})["virtual"]
     True
     >>> provenance({"serial": "X", "generator": "LabVIEW 2021"})
     {'virtual': False, 'bench': None, 'seed': None, 'generator': 'LabVIEW 2021', 'evidence': []}
+    >>> provenance({"instrument": "MEMS rate gyro (virtual)"})["evidence"]
+    ['instrument']
+    >>> provenance({"generator": "gonio 0.1.0 acquire", "gyro_idn": "ACME,G1,7,2"})["virtual"]
+    False
     """
     md = {str(k).strip().lower(): v for k, v in (metadata or {}).items()}
 
@@ -34,8 +49,11 @@ def provenance(metadata: Mapping[str, object] | None) -> dict:
 
     generator = text("generator")
     evidence = [k for k in VIRTUAL_BENCH_KEYS if text(k) is not None]
-    if generator is not None and generator.lower().split()[0] == "gonio":
+    words = [] if generator is None else generator.lower().split()
+    if words and words[0] == "gonio" and "acquire" not in words:
         evidence.append("generator")
+    evidence += [k for k in md if (k in VIRTUAL_NAME_KEYS or k.endswith("_idn"))
+                 and _VIRTUAL_WORD.search(text(k) or "")]
     return {"virtual": bool(evidence), "bench": text("bench"), "seed": text("seed"),
             "generator": generator, "evidence": evidence}
 

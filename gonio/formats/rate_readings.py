@@ -123,6 +123,12 @@ def _meta_number(key: str, v: str, path) -> float:
     return x
 
 
+def read_columns() -> tuple[str, ...]:
+    """The columns a rate readings file is read by (:data:`COLUMNS`); another column of a
+    file is stated as unread (docs/formats.md#rate-gyro-columns)."""
+    return COLUMNS
+
+
 def read_rate_readings(path: str | Path) -> RateReadings:
     """Read and validate a rate readings file.
 

@@ -1351,14 +1351,16 @@ def sniff_kind(path: str | Path) -> str:
     try:
         h = _parse_header(path)
     except MissingColumnError:
-        cols = _first_header(path)
+        cols = first_header(path)
         return "readings" if "test" in cols or "time_s" not in cols else "stream"
     except GonioError:
         return "readings"         # let the readings reader report what is wrong with this file
     return "readings" if "test" in h.columns else "stream"
 
 
-def _first_header(path: Path) -> list[str]:
+def first_header(path: str | Path) -> list[str]:
+    """The column names of a CSV file's header row (the first line that is neither blank nor
+    a ``#`` metadata line); [] when there is none."""
     with open(path, "rb") as fh:
         for raw in fh:
             line = raw.decode("utf-8", "replace").lstrip("\ufeff").strip()

@@ -17,6 +17,7 @@ from gonio.formats.metadata import header_lines
 from gonio.formats.provenance import readings_provenance
 from gonio.pipeline.identity import check_identity
 from gonio.specs import Specification, decide_conformity, get
+from gonio.result.findings import UNREAD_CODE, Finding
 
 __all__ = ["spec_of", "refuse_options", "readings_spec", "simulate", "load_lab_file",
            "screen_and_calibrate", "decide_conformity", "mark_provenance", "calibrate", "demo",
@@ -135,6 +136,27 @@ def screen_and_calibrate(spec: Specification, readings, protocol=None, *,
                           findings=findings, **options)
 
 
+def unread_columns(spec: Specification, readings) -> list[Finding]:
+    """A flagged finding (:data:`UNREAD_CODE`) for each column of a readings file's header that
+    ``spec`` does not read (``spec.readings_columns``): its cells are carried but no item uses
+    them, and the certificate says so (a column misspelt past the readers' near-miss check,
+    e.g. ``temp_c``, is never kept silently). A stream (Parquet, or a header without
+    ``test``) and a specification without ``readings_columns`` give []."""
+    from gonio.formats.streams import first_header
+    if spec.readings_columns is None or Path(readings).suffix.lower() == ".parquet":
+        return []
+    header = first_header(readings)
+    if "test" not in header:
+        return []
+    known = tuple(spec.readings_columns())
+    return [Finding(UNREAD_CODE, f"column {name!r} is not one {spec.key} reads: its cells are "
+                    "kept with the readings but no item uses them (a misspelt column? the "
+                    f"columns read: {', '.join(known)})", "flagged",
+                    file=Path(readings).name, column=name,
+                    rule="every column of the header is one the specification reads")
+            for name in header if name not in known and name != "line"]
+
+
 def mark_provenance(result, readings) -> None:
     """Set ``result.provenance`` from the readings' own metadata
     (:func:`gonio.formats.provenance.readings_provenance`): readings from the virtual bench are
@@ -167,7 +189,8 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     result = screen_and_calibrate(spec, readings, proto, monte_carlo_trials=monte_carlo_trials,
                                   **opts)
     mark_provenance(result, readings)
-    result.findings = list(result.findings) + identity    # proceeding: stated as findings
+    result.findings = (list(result.findings) + identity       # proceeding: stated as findings
+                       + unread_columns(spec, readings))
     decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
                     source_sha256=getattr(result, "source_sha256", None)):

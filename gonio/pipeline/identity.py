@@ -24,7 +24,7 @@ from pathlib import Path
 from gonio.errors import GonioError
 from gonio.formats.metadata import parse_number
 from gonio.formats.provenance import readings_metadata
-from gonio.result.findings import Finding
+from gonio.result.findings import IDENTITY_CODE, Finding
 
 #: Default largest difference, °C, between the readings' and the laboratory file's temperature.
 TEMPERATURE_TOLERANCE_C = 1.0
@@ -136,7 +136,7 @@ def _message(c: dict) -> str:
 
 
 #: the code of the finding that states a contradiction the laboratory file proceeded with
-MISMATCH_CODE = "identity-mismatch"
+MISMATCH_CODE = IDENTITY_CODE
 
 
 def check_identity(readings, lab: dict | None, *, lab_file=None,

@@ -172,6 +172,30 @@ def lab_environment(details: dict) -> dict:
             "environment_from": "readings" if env.get("source") == "readings" else "lab file"}
 
 
+def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | None,
+                    res_path: Path) -> None:
+    """The readings ``rd`` against the laboratory file ``lab`` and the registered instrument's
+    ``record`` as ``gonio calibrate`` compares them
+    (:func:`gonio.pipeline.identity.check_identity`): a contradiction is refused (one line)
+    unless the laboratory file proceeds, and then results.json must state it (a folder computed
+    without this laboratory file, or before the instrument's record said otherwise, states
+    none: calibrate it again)."""
+    if lab is None and record is None:
+        return
+    from gonio.pipeline.dispatch import load_lab_file
+    from gonio.pipeline.identity import MISMATCH_CODE, check_identity
+    from gonio.specs import get
+    details = load_lab_file(lab, get(spec_key)) if lab is not None else None
+    found = check_identity(rd, details, lab_file=lab, record=record)
+    stated = {str(f.get("message")) for f in results.get("findings") or []
+              if isinstance(f, dict) and f.get("code") == MISMATCH_CODE}
+    missing = [f.message for f in found if f.message not in stated]
+    if missing:
+        raise GonioError(f"{missing[0].split(';')[0]}: results.json does not state this "
+                         "contradiction (computed without this laboratory file or record); "
+                         "calibrate the readings again with it", file=res_path, key="identity")
+
+
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
                          spec_key: str | None = None, customer: str = "(imported)",
                          actor: User | None = None,
@@ -222,6 +246,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     from gonio.specs import get
     get(key)
     rd = _readings_in(folder, str(source.get("sha256", "")), Path(readings) if readings else None)
+    with store.session() as s:
+        inst = registered_instrument(s, meta)
+        record = {"gyro_type": inst.gyro_type} if inst is not None and inst.gyro_type else None
+    _check_identity(rd, lab, key, results, record, res_path)
     rsha, rsize = blobs.put_file(store.blob_root, rd)
     proto = _protocol_file(results, protocol, folder)
     psha = None

@@ -141,6 +141,11 @@ LABELS: dict[str, dict[str, str]] = {
                              "file says.",
                        "zh": "读数文件的元数据表明其来自虚拟台架 {bench}（种子 {seed}）：无论实验室"
                              "文件如何填写，所有输出均如此标明。"},
+    "virtual_evidence": {"en": "The readings' own metadata ({keys}) say they come from the "
+                               "virtual bench: every output says so, whatever the laboratory "
+                               "file says.",
+                         "zh": "读数文件的元数据（{keys}）表明其来自虚拟台架：无论实验室文件如何"
+                               "填写，所有输出均如此标明。"},
     "source_file": {"en": "Readings file", "zh": "读数文件"},
     "truth": {"en": "virtual-bench truth (systematic part)", "zh": "虚拟台架真值（系统部分）"},
     # units as shown
@@ -709,6 +714,14 @@ def translator(extra: dict | None = None, tables=(), own: dict | None = None):
 FINDING_ACTIONS = {"set_aside": ("set aside", "剔除"), "flagged": ("flagged", "标记"),
                    "refused": ("refused", "拒收")}
 
+#: Chinese of the findings every specification can give (before the specification's table).
+COMMON_FINDINGS_ZH: tuple[tuple[str, str], ...] = (
+    (r"column '(.+?)' is not one (\S+) reads: its cells are kept with the readings but no item "
+     r"uses them \(a misspelt column\? the columns read: (.+)\)",
+     "{1} 列不是 {2} 读取的列：其数据随读数保留，但不用于任何项目（列名拼写有误？读取的列：{3}）"),
+)
+
+
 def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
                  own: dict | None = None) -> str:
     """One screening finding (results.json ``findings``) as a certificate line in L's
@@ -735,6 +748,6 @@ def finding_text(f: dict, L: dict, table=(), extra: dict | None = None,
         parts.append(f"第 {f['line']} 行" if zh else f"line {f['line']}")
     msg = f.get("message") or ""
     if zh:
-        msg = translator(extra, tuple(table), own)(msg) or msg
+        msg = translator(extra, COMMON_FINDINGS_ZH + tuple(table), own)(msg) or msg
     where = ("，" if zh else ", ").join(p for p in parts if p)
     return f"[{act}] {where}{'：' if zh else ': '}{msg}"

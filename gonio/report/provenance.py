@@ -23,9 +23,11 @@ def virtual_lines(res: Mapping, L: dict) -> list[str]:
     so, which bench and seed made them (``L``: the page's labels)."""
     prov = result_provenance(res)
     out = [L["virtual_note"]]
-    if prov["virtual"]:
-        out.append(L["virtual_source"].format(bench=prov["bench"] or "—",
-                                              seed=prov["seed"] or "—"))
+    if prov["virtual"] and prov["bench"] and prov["seed"]:
+        out.append(L["virtual_source"].format(bench=prov["bench"], seed=prov["seed"]))
+    elif prov["virtual"]:                      # the bench's or the seed's line was deleted
+        keys = ", ".join(f"# {k}" for k in prov["evidence"])
+        out.append(L["virtual_evidence"].format(keys=keys))
     return out
 
 

@@ -25,6 +25,7 @@ from gonio.report.i18n import display, finding_text, labels, reason_text, source
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf
 from gonio.report.stated import NoBreakText, Num, item_nums
+from gonio.result.findings import WHOLE_FILE_CODES
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
 from gonio.report.rate_figures import figures_of
@@ -231,9 +232,11 @@ def screening_blocks(res: dict, L: dict, phrases=(), extra: dict | None = None,
                      limit: int = 20) -> list[Block]:
     """The screening's findings (readings set aside, planned points missing): the
     count, then one line each with its place in the file, in the certificate's language
-    (:func:`gonio.report.i18n.finding_text`; ``phrases`` the specification's table);
+    (:func:`gonio.report.i18n.finding_text`; ``phrases`` the specification's table), those
+    about the whole file (the identity, unread columns) first;
     nothing when the screening found nothing."""
-    found = [f for f in res.get("findings") or () if f["action"] != "refused"]
+    found = sorted((f for f in res.get("findings") or () if f["action"] != "refused"),
+                   key=lambda f: f.get("code") not in WHOLE_FILE_CODES)   # whole-file first
     if not found:
         return []
     aside = sum(f["action"] == "set_aside" for f in found)

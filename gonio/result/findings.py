@@ -18,6 +18,16 @@ from dataclasses import asdict, dataclass
 
 from gonio.errors import GonioError
 
+#: The code of the flagged finding that states a readings column the specification does not
+#: read (:func:`gonio.pipeline.dispatch.unread_columns`).
+UNREAD_CODE = "unread-column"
+#: The code of the flagged finding that states a contradiction between the readings and the
+#: laboratory file the laboratory proceeded with (:mod:`gonio.pipeline.identity`).
+IDENTITY_CODE = "identity-mismatch"
+#: Findings about the whole file, stated before the findings of single readings wherever a
+#: certificate lists only the first few.
+WHOLE_FILE_CODES: tuple[str, ...] = (IDENTITY_CODE, UNREAD_CODE)
+
 #: What was done with a reading a rule fired on.
 ACTIONS: tuple[str, ...] = ("refused", "set_aside", "flagged")
 

@@ -321,6 +321,17 @@ def unit_text(unit: str | None) -> str:
     return UNIT_TEXT.get(unit, unit)
 
 
+def signed_text(x: float, decimals: int = 2) -> str:
+    """A difference as printed (a temperature's from its reference): signed, to ``decimals``
+    places, half up; one that rounds to zero unsigned (never "+0", never "-0").
+
+    >>> signed_text(0.6), signed_text(-0.2), signed_text(0.0), signed_text(-0.001)
+    ('+0.60', '-0.20', '0.00', '0.00')
+    """
+    text = round_half_up(float(x), decimals)
+    return text.lstrip("+-") if float(text) == 0.0 else ("" if text.startswith("-") else "+") + text
+
+
 def dsi_unit(unit: str | None) -> tuple[str, float] | None:
     """(D-SI unit, factor on value and U) of a results.json unit, or None if it has none.
 

@@ -12,6 +12,9 @@ from gonio.result.statement import item_statement
 #: summary.txt's first line for readings from the virtual bench (their own metadata say so).
 VIRTUAL_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings name the "
                 "virtual bench {bench}, seed {seed}, in their own metadata")
+#: ... where the bench's or the seed's line is missing: the metadata keys that say so.
+VIRTUAL_EVIDENCE_LINE = ("VIRTUAL BENCH EXAMPLE - NOT A CALIBRATION CERTIFICATE: the readings' "
+                         "own metadata ({keys}) name the virtual bench")
 
 
 def virtual_line(res: dict) -> list[str]:
@@ -20,7 +23,10 @@ def virtual_line(res: dict) -> list[str]:
     prov = result_provenance(res)
     if not prov["virtual"]:
         return []
-    return [VIRTUAL_LINE.format(bench=prov["bench"] or "-", seed=prov["seed"] or "-")]
+    if prov["bench"] and prov["seed"]:
+        return [VIRTUAL_LINE.format(bench=prov["bench"], seed=prov["seed"])]
+    keys = ", ".join(f"# {k}" for k in prov["evidence"])     # the bench's or seed's line deleted
+    return [VIRTUAL_EVIDENCE_LINE.format(keys=keys)]
 
 
 def item_text(it) -> str:

@@ -70,7 +70,7 @@ _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
                   "outputs", "readings_format", "certificate_content")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs", "acquisition", "acquire", "serve")
+          "named_inputs", "acquisition", "acquire", "serve", "readings_columns")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -258,6 +258,11 @@ class Specification:
     readings_format : str
         The ``# format:`` line its readings files carry, when that alone names it (a file
         without ``# spec:``); empty: none.
+    readings_columns : callable or None
+        () → the columns its readings file reads; any other column of a readings file's
+        header (a stream's excepted) is stated as a flagged finding, ``unread-column``
+        (:func:`gonio.pipeline.dispatch.unread_columns`), never kept silently. None: its
+        reader refuses an unknown column itself.
     named_inputs : callable or None
         (readings path) → the other files the readings name as part of their data (inputs
         no output may replace).
@@ -317,6 +322,7 @@ class Specification:
     budget_options: frozenset = frozenset()
     serve_options: frozenset = frozenset()
     readings_format: str = ""
+    readings_columns: Callable[[], tuple] | None = None
     named_inputs: Callable[..., list] | None = None
     default_limits: tuple = ()
     certificate_content: str = ""

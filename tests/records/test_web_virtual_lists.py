@@ -13,6 +13,7 @@ import re
 from gonio.records import queries, services, worker
 from gonio.records.importer import record_output_folder
 from gonio.report.i18n import labels
+from tests.own_readings import own_text
 
 from .conftest import SMALL_PROTOCOL, make_people
 from .test_web_numbers import web_client
@@ -40,8 +41,7 @@ def test_lists_mark_the_virtual_bench(sqlite_store, bench_readings, computed_fol
     inst_id = services.calibration(store, virt).instrument_id
     # a laboratory's own file: the same readings without the bench's metadata lines
     text = bench_readings[1].read_text("utf-8")
-    own = "".join(x for x in text.splitlines(keepends=True)
-                  if not re.match(r"# (bench|seed|generator):", x))
+    own = own_text(text)
     assert own != text
     sha, _ = services.store_file(store, io.BytesIO(own.encode("utf-8")))
     lab = services.create_calibration(store, tech, instrument_id=inst_id, readings_sha256=sha,

@@ -34,4 +34,5 @@ def rate_specification(package: str, **fields):
         truth=lazy(f"{package}.truth:truth"), coverage=coverage,
         outputs=ITEM_RENDERER, default_bench="mems-adxrs610",
         certificate_content=f"{package}.certificate",
+        readings_columns=lazy("gonio.formats.rate_readings:read_columns"),
         calibrate_options=frozenset({"protocol", "dcc"}), **fields)

@@ -35,6 +35,7 @@ SPEC = Specification(
     load_protocol=lazy("gonio.specs.ogam_draft.protocol:load_protocol"),
     calibrate=lazy("gonio.specs.ogam_draft.calibration:calibrate"),
     screen=lazy("gonio.specs.ogam_draft.calibration:screen"),
+    readings_columns=lazy("gonio.specs.ogam_draft.readings:read_columns"),
     simulate=lazy("gonio.specs.ogam_draft.simulate:simulate"),
     truth=lazy("gonio.specs.ogam_draft.truth:truth"),
     budget=lazy("gonio.specs.ogam_draft.budget:annex_a_budget"),

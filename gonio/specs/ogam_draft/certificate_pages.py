@@ -41,6 +41,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
+from gonio.result.statement import signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
                                            detail, e_budget, followed, interval_cell, item_names,
                                            item_path, k_tilt_note, method_rows, reading_note,
@@ -142,7 +143,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         tb = sf.get("temperature_coeff_bound")
         if tb and tb.get("basis") == "logged":  # K's chamber line at the logged temperature
             add("p", [L["K_temperature_logged"].format(
-                t=f"{tb['logged_temperature_c']:g}", dt=f"{tb['deviation_c']:+.2g}",
+                t=f"{tb['logged_temperature_c']:g}", dt=signed_text(tb["deviation_c"]),
                 ref=f"{tb['reference_temperature_c']:g}", b=f"{tb['bound_ppm_per_c']:g}",
                 m=f"{tb.get('thermometer_mpe_c') or 0:g}",
                 over=L["K_T_over_column"] if tb.get("logged_from") == "column" else "",

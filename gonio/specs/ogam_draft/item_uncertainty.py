@@ -41,7 +41,7 @@ from typing import Sequence
 
 import numpy as np
 
-from gonio.result.statement import coverage_k
+from gonio.result.statement import coverage_k, signed_text
 from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
@@ -474,8 +474,8 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                            "tilt bias of K", True, "A.1 applied to 7.1"))
     if chamber is not None and chamber.half_width_rel > 0.0:
         m = chamber.thermometer_mpe_c
-        src = (f"chamber temperature logged {chamber.deviation_c:+.3g} degC from the reference"
-               + (f", thermometer MPE +-{m:g} degC rectangular" if m else "")
+        src = (f"chamber temperature logged {signed_text(chamber.deviation_c)} °C from the "
+               "reference" + (f", thermometer MPE ±{m:g} °C rectangular" if m else "")
                + ", alpha_K uniform within its bound"
                + (" (product): |alpha_K|max (|dT| + MPE) = " if m else ": |alpha_K|max |dT| = ")
                if chamber.basis == "logged" else

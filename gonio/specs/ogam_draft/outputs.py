@@ -19,7 +19,9 @@ from gonio.specs.ogam_draft.protocol import load_protocol
 from gonio.specs import decide_conformity
 from gonio.specs.ogam_draft.certificate_pages import write_certificate
 from gonio.specs.ogam_draft.stated import summary_text
+from gonio.result.findings import UNREAD_CODE
 from gonio.result.model import Result
+from gonio.result.statement import signed_text
 from gonio.result.tables import results_json_text, write_tables
 from gonio.result.text import virtual_line
 from gonio.specs.ogam_draft.calibration import calibrate
@@ -74,15 +76,15 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     tb = kd.get("temperature_coeff_bound")
     if tb and tb.get("basis") == "logged":   # K's chamber line at the logged temperature
         lines.append(f"note: U(K) holds for the chamber temperature the readings log, "
-                     f"{tb['logged_temperature_c']:g} degC"
+                     f"{tb['logged_temperature_c']:g} °C"
                      + (" (mean over the 7.1 rounds)" if tb.get("logged_from") == "column" else "")
-                     + f" ({tb['deviation_c']:+.2g} degC from the reference "
-                     f"{tb['reference_temperature_c']:g} degC; thermometer MPE "
-                     f"+-{tb.get('thermometer_mpe_c') or 0:g} degC), and |alpha_K| <= "
-                     f"{tb['bound_ppm_per_c']:g} ppm/degC: {tb['how']}")
+                     + f" ({signed_text(tb['deviation_c'])} °C from the reference "
+                     f"{tb['reference_temperature_c']:g} °C; thermometer MPE "
+                     f"±{tb.get('thermometer_mpe_c') or 0:g} °C), and |α_K| ≤ "
+                     f"{tb['bound_ppm_per_c']:g} ppm/°C: {tb['how']}")
     elif tb:                                 # which bound K's chamber line took, and whence
-        lines.append(f"note: U(K) holds for a chamber within +-{tb['temperature_tolerance_c']:g} "
-                     f"degC of the reference and |alpha_K| <= {tb['bound_ppm_per_c']:g} ppm/degC:"
+        lines.append(f"note: U(K) holds for a chamber within ±{tb['temperature_tolerance_c']:g} "
+                     f"°C of the reference and |α_K| ≤ {tb['bound_ppm_per_c']:g} ppm/°C:"
                      f" {tb['how']}")
     zs = d["items"]["zero_stability"]["details"]
     est = zs.get("estimates")
@@ -102,7 +104,7 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     if unc.get("measured"):
         lines += [f"note: {n}" for n in unc.get("notes") or []]
     lines += [f"flagged: {f.location()}: {f.message}" for f in result.findings
-              if f.code == "identity-mismatch"]       # the readings against the lab file
+              if f.code in ("identity-mismatch", UNREAD_CODE)]  # against the lab file; unread
     return "\n".join(lines) + "\n"
 
 

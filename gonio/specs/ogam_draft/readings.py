@@ -60,6 +60,17 @@ COLUMNS: tuple[str, ...] = (
     "test", "series", "round", "rate_dps", "orientation", "time_s",
     "table_deg", "gyro_counts", "gyro_deg",
 )
+#: Extra columns with a meaning (docs/formats.md#columns): the table's position at the zeroing
+#: of an equal-division row, the chamber's logged temperature.
+MEANINGFUL_EXTRAS: tuple[str, ...] = ("start_deg", "temperature_c")
+
+
+def read_columns() -> tuple[str, ...]:
+    """The columns a readings file is read by; another is carried as text and stated as unread
+    (docs/formats.md#columns)."""
+    return COLUMNS + MEANINGFUL_EXTRAS
+
+
 #: Columns a file must have in its header.
 REQUIRED_COLUMNS: tuple[str, ...] = ("test", "series", "round", "time_s", "table_deg")
 #: Default table rate, °/s (docs/formats.md#columns; draft 7.1 and 7.4 run at 60 °/s).
@@ -201,6 +212,7 @@ def parse_readings(text: str, *, path: str | Path | None = None) -> Readings:
     quantised = metadata_bool(metadata, "counts_quantised", True, file=fname)
 
     seen = check_header(header, REQUIRED_COLUMNS, file=fname, line=header_line)
+    check_near_miss(header, read_columns(), what="column", file=fname, line=header_line)
     if "line" in seen:
         raise GonioError("column name 'line' is reserved (it holds each row's line number)",
                          file=fname, line=header_line, column="line")

@@ -1,0 +1,36 @@
+"""A laboratory's own readings made from the virtual bench's, for tests of the virtual-bench
+mark (docs/formats.md#provenance): every metadata line the bench writes that says where the
+readings come from (bench, seed, generator, noise) deleted, and its names of the instrument,
+manufacturer, table and operator ("… (virtual)", "gonio virtual bench") replaced by a
+laboratory's."""
+
+from __future__ import annotations
+
+import re
+
+#: the metadata keys only the virtual bench writes
+BENCH_KEYS = ("bench", "seed", "generator", "noise")
+#: the keys whose value names the virtual bench, and the laboratory's name put in its place
+NAME_KEYS = ("instrument", "manufacturer", "model", "table", "operator")
+OWN_NAME = "Laboratory unit 7"
+
+
+def own_metadata(md: dict) -> dict:
+    """``md`` (a results.json's metadata) as a laboratory's own readings would state it."""
+    return {k: (OWN_NAME if k in NAME_KEYS and re.search(r"(?i)\bvirtual\b", str(v)) else v)
+            for k, v in md.items() if k not in BENCH_KEYS}
+
+
+def own_text(text: str) -> str:
+    """A readings file's text as a laboratory's own file (the metadata lines above the
+    header only)."""
+    out, head = [], True
+    for line in text.splitlines(keepends=True):
+        m = re.match(r"#\s*([A-Za-z_]\w*)\s*:", line) if head else None
+        head = head and line.startswith("#")
+        if m and m.group(1).lower() in BENCH_KEYS:
+            continue
+        if m and m.group(1).lower() in NAME_KEYS and re.search(r"(?i)\bvirtual\b", line):
+            line = f"# {m.group(1)}: {OWN_NAME}\n"
+        out.append(line)
+    return "".join(out)
