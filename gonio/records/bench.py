@@ -98,7 +98,8 @@ def create_bench_calibration(store, actor, *, instrument_id: int, resources: dic
     cal = services.create_calibration(store, actor, instrument_id=instrument_id,
                                       readings_sha256=sha, readings_name=PENDING_NAME,
                                       standard_ids=ids, temperature_c=temp, humidity_pct=hum,
-                                      performed_on=day, received_on=received, **fields)
+                                      performed_on=day, received_on=received,
+                                      check_reuse=False, **fields)
     with store.writing() as s:
         s.add(CalibrationFile(calibration_id=cal.id, name=REQUEST, sha256=sha))
         s.commit()
@@ -141,8 +142,9 @@ def store_acquisition(store, cal: Calibration, readings: Path, io_log: Path) -> 
     """The raw I/O log becomes the calibration's file ``io.log``; the readings taken, once
     they pass the submission's readings checks against the calibration
     (:func:`gonio.records.submission.check_readings`: specification, the instrument's
-    serial, model and manufacturer, the environment entered), its readings; one audit
-    event. Readings that fail are kept in the store, the calibration keeps its request (run
+    serial, model and manufacturer, the environment entered) and are no other standing
+    calibration's (:func:`gonio.records.services.check_readings_unused`), its readings; one
+    audit event. Readings that fail are kept in the store, the calibration keeps its request (run
     again, it acquires again) and fails with the reason."""
     from gonio.records.submission import check_readings, readings_facts
 
@@ -163,6 +165,7 @@ def store_acquisition(store, cal: Calibration, readings: Path, io_log: Path) -> 
                    cal.temperature_c, cal.humidity_pct)
     with store.writing() as s:
         row = s.get(Calibration, cal.id)
+        services.check_readings_unused(s, r_sha, other_than=row.id)
         before = services.state(row)
         row.readings_sha256, row.readings_name = r_sha, "readings.csv"
         services.audit(s, None, "acquired", "calibration", row.id, before, services.state(row))

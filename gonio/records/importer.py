@@ -258,6 +258,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
+        try:                                # one measurement, one calibration: nothing recorded
+            services.check_readings_unused(s, rsha)
+        except GonioError as exc:
+            raise GonioError(exc.message, file=rd, key=exc.key) from None
         for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize)):
             if sha and s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))

@@ -580,6 +580,50 @@ def submission_fields(performed_on, received_on, standard_ids, temperature_c, hu
     return day, received, ids, temp, hum
 
 
+#: the states in which a calibration no longer stands for its readings (they may be used again)
+CLOSED = ("rejected", "void")
+#: the GonioError key of readings already used by another calibration
+REUSE_KEY = "readings used before"
+
+
+def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None) -> list[dict]:
+    """The calibrations that stand (any state but rejected or void) whose readings are the
+    file ``sha256``, less ``other_than``: ``[{"id", "serial", "performed_on", "status"}]``,
+    oldest first."""
+    q = (select(Calibration.id, Instrument.serial, Calibration.performed_on, Calibration.status)
+         .join(Instrument, Calibration.instrument_id == Instrument.id)
+         .where(Calibration.readings_sha256 == sha256, Calibration.status.not_in(CLOSED)))
+    if other_than is not None:
+        q = q.where(Calibration.id != other_than)
+    return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3]}
+            for r in s.execute(q.order_by(Calibration.id)).all()]
+
+
+def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = None,
+                          reason: str = "") -> list[dict]:
+    """The one check, on every path that records readings for a calibration (the web form
+    and :func:`create_calibration`, ``gonio db import`` and ``gonio calibrate --record``,
+    a bench's acquired readings), that one measurement is not certified as several: readings
+    whose SHA-256 are already those of another calibration that stands
+    (:func:`readings_used_by`) are refused, a one-line GonioError (key :data:`REUSE_KEY`)
+    naming that calibration (id, instrument serial, date, state) — unless ``reason`` says
+    why they are used again (the web form asks it; the caller audits it). The lineage of one
+    calibration is one row: a review, a re-computation, a redraft or an amendment of it
+    (:func:`amend`) never records its readings again, and a rejected or void calibration's
+    readings may be used by a new one. ``other_than``: the calibration the readings are
+    being recorded for. Call it inside the writing session that records them, so nothing
+    is recorded when it refuses. Returns the other calibrations (empty when none)."""
+    before = readings_used_by(s, sha256, other_than=other_than)
+    if before and not reason:
+        first = before[0]
+        raise GonioError(f"these readings (SHA-256 {sha256[:12]}…) are already those of "
+                         f"calibration {first['id']} ({first['serial']}, "
+                         f"{first['performed_on']}, {first['status']})"
+                         + (f" and {len(before) - 1} more" if len(before) > 1 else "")
+                         + ": the same measurement is not calibrated twice", key=REUSE_KEY)
+    return before
+
+
 def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
                        readings_name: str = "", spec_key: str | None = None,
                        protocol: str | None = None, protocol_sha256: str | None = None,
@@ -587,7 +631,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        standard_ids: Iterable[int] = (), temperature_c=None,
                        humidity_pct=None, performed_on=None, received_on=None,
                        place: str = "", location: str | None = None,
-                       reuse_note: dict | None = None) -> Calibration:
+                       reuse_note: dict | None = None,
+                       check_reuse: bool = True) -> Calibration:
     """A new calibration, queued for the worker (technician), after the submission checks
     of its fields (:func:`submission_fields`: plausible dates, at least one standard, the
     environment); standards past their due date on the day of the calibration are refused
@@ -595,8 +640,11 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     and limits decide this calibration, validated here (:func:`lab_file`) before anything
     is queued. The checks of the readings against the instrument and of readings used
     before are :func:`gonio.records.submission.submit_calibration`'s, which the web form
-    calls; ``reuse_note``: its record of readings used again (who, why, used by which
-    calibrations), audited with the creation."""
+    calls; readings used by another calibration that stands are refused here on every path
+    (:func:`check_readings_unused`) unless ``reuse_note`` (the form's record of readings used
+    again: why, used by which calibrations) gives the reason, audited with the creation.
+    ``check_reuse`` False: only for a bench's request, which stands in for readings still
+    to be taken (they are checked when taken, :func:`gonio.records.bench.store_acquisition`)."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -617,6 +665,9 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                 raise GonioError("no such stored file", key="sha256")
         if lab_sha256 is not None:
             lab_file(store, lab_sha256, lab_name, key)
+        if check_reuse:
+            check_readings_unused(s, readings_sha256,
+                                  reason=(reuse_note or {}).get("reason", ""))
         cal = Calibration(instrument_id=inst.id, spec_key=key,
                           protocol=text(protocol, "protocol", max_len=64),
                           protocol_sha256=protocol_sha256, readings_sha256=readings_sha256,

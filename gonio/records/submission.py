@@ -22,7 +22,8 @@ every path: the web form, a bench, the Python API):
   refused on the same grounds, later and in command-line words;
 * the same readings (the same SHA-256) are not already the readings of another
   calibration that stands (any state but rejected or void): the same measurement certified
-  twice is refused unless the person says why it is used again (``reuse_reason``), which is
+  twice is refused (:func:`gonio.records.services.check_readings_unused`, the check every
+  path makes) unless the person says why it is used again (``reuse_reason``), which is
   written to the audit trail with the calibrations that used it before.
 """
 
@@ -37,11 +38,11 @@ from gonio.records import services
 from gonio.records.models import Calibration, Instrument, User
 
 #: the states in which a calibration no longer stands for its readings (they may be used again)
-CLOSED = ("rejected", "void")
+CLOSED = services.CLOSED
 #: bytes of a text readings file read to recognise it (its metadata and header line)
 SNIFF_BYTES = 256 * 1024
-#: the audit key of a reused readings file
-REUSE_KEY = "readings used before"
+#: the GonioError key of a reused readings file (the form then asks why)
+REUSE_KEY = services.REUSE_KEY
 
 
 def readings_facts(store, sha256: str) -> dict:
@@ -139,16 +140,10 @@ def check_readings(facts: dict, inst: Instrument, spec_key: str, temperature_c=N
 
 
 def reused_by(store, sha256: str) -> list[dict]:
-    """The calibrations that stand (not rejected nor void) whose readings are this file:
-    ``[{"id", "serial", "performed_on", "status"}]``, oldest first."""
+    """The calibrations that stand (not rejected nor void) whose readings are this file
+    (:func:`gonio.records.services.readings_used_by`), oldest first."""
     with store.session() as s:
-        rows = s.execute(select(Calibration.id, Instrument.serial, Calibration.performed_on,
-                                Calibration.status)
-                         .join(Instrument, Calibration.instrument_id == Instrument.id)
-                         .where(Calibration.readings_sha256 == sha256,
-                                Calibration.status.not_in(CLOSED))
-                         .order_by(Calibration.id)).all()
-    return [{"id": r[0], "serial": r[1], "performed_on": r[2], "status": r[3]} for r in rows]
+        return services.readings_used_by(s, sha256)
 
 
 #: the form's own fields: the dates, at least one standard, the environment entered; the
@@ -180,15 +175,12 @@ def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     check_readings(readings_facts(store, readings_sha256), inst, key, temp, hum)
     reason = services.text(reuse_reason, "reuse_reason", max_len=services.MAX_TEXT,
                            multiline=True)
-    before = reused_by(store, readings_sha256)
-    if before and not reason:
-        first = before[0]
-        raise GonioError(f"these readings (SHA-256 {readings_sha256[:12]}…) are already those "
-                         f"of calibration {first['id']} ({first['serial']}, "
-                         f"{first['performed_on']}, {first['status']})"
-                         + (f" and {len(before) - 1} more" if len(before) > 1 else "")
-                         + ": the same measurement is not calibrated twice; say why they are "
-                         "used again to go on", key=REUSE_KEY)
+    with store.session() as s:          # checked again where it is recorded
+        try:
+            before = services.check_readings_unused(s, readings_sha256, reason=reason)
+        except GonioError as exc:
+            raise GonioError(f"{exc.message}; say why they are used again to go on",
+                             key=exc.key) from None
     note = {"readings_sha256": readings_sha256, "used_by": [c["id"] for c in before],
             "reason": reason} if before else None
     return services.create_calibration(store, actor, instrument_id=inst.id,

@@ -9,6 +9,7 @@ import io
 import json
 import shutil
 import threading
+from pathlib import Path
 
 import pytest
 from sqlalchemy import func, select, text
@@ -60,7 +61,12 @@ def setup_instrument(store, people, limits=()):
 
 
 def new_calibration(store, people, inst, std, readings, day=None):
-    sha, _ = services.store_file(store, open(readings, "rb"))
+    """A queued calibration of ``readings``; given a ``day``, of that day's measurement (the
+    file with a ``# note:`` line naming the day: one readings file is one calibration)."""
+    data = Path(readings).read_bytes()
+    if day is not None:
+        data = f"# note: measured on {day}\n".encode("utf-8") + data
+    sha, _ = services.store_file(store, io.BytesIO(data))
     psha, _ = services.store_file(store, open(SMALL_PROTOCOL, "rb"))
     return services.create_calibration(store, people["tech"], instrument_id=inst.id,
                                        readings_sha256=sha, readings_name="readings.csv",
