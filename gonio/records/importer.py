@@ -258,10 +258,6 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
-        try:                                # one measurement, one calibration: nothing recorded
-            services.check_readings_unused(s, rsha)
-        except GonioError as exc:
-            raise GonioError(exc.message, file=rd, key=exc.key) from None
         for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize)):
             if sha and s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
@@ -285,6 +281,10 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         s.add(cal)
         s.flush()
         services.use_standards(s, cal, lab_standard_ids(s, lab_stds, day, lab))
+        try:                       # one measurement, one calibration: else nothing committed
+            services.check_readings_unused(s, rsha, other_than=cal.id)
+        except GonioError as exc:
+            raise GonioError(exc.message, file=rd, key=exc.key) from None
         services.audit(s, actor, "import", "calibration", cal.id, None,
                        dict(services.state(cal), folder=str(folder),
                             standards=services.standard_names(s, cal.id)))

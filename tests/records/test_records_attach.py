@@ -11,18 +11,31 @@ import shutil
 from pathlib import Path
 
 import pytest
-from sqlalchemy import delete, select
+from sqlalchemy import delete, select, update
 
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.records import queries, services, worker
 from gonio.records.db import open_store
 from gonio.records.importer import import_output_folder
-from gonio.records.models import AuditEvent, CalibrationFile, CalibrationStandard
+from gonio.records.models import (AuditEvent, Calibration, CalibrationFile,
+                                  CalibrationStandard)
 
 from .conftest import REPO, SMALL_PROTOCOL, conditions, make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
+
+
+def void_all(data: Path) -> None:
+    """Set every calibration of the records in ``data`` aside (void), so that their readings
+    may be recorded again."""
+    st = open_store(None, data)
+    try:
+        with st.writing() as s:
+            s.execute(update(Calibration).values(status="void"))
+            s.commit()
+    finally:
+        st.close()
 
 
 def draft_html(store, cid) -> str:
@@ -286,7 +299,9 @@ def test_db_import_and_attach_on_the_command_line(tmp_path, computed_folder, ben
                  "--humidity", "45", "--data", str(data)]) == 0
     assert capsys.readouterr().out == ("calibration 1: standards RT-07; environment "
                                        "20.1 °C, 45 %\n")
-    # an import that attaches them at once
+    # an import that attaches them at once (the same readings: the first one set aside,
+    # as one readings file is one calibration that stands)
+    void_all(data)
     assert main(["db", "import", str(folder), "--data", str(data), "--protocol",
                  str(SMALL_PROTOCOL), "--standard", "RT-07", "--temperature", "20",
                  "--humidity", "44"]) == 0
@@ -349,6 +364,7 @@ def test_calibrate_record_attaches_and_carries_the_lab_environment(
     # the laboratory file's [[standards]] RT-07 is the registered RT-07 (before: none)
     assert err.endswith("gonio: recorded as calibration 1: standards RT-07; environment "
                         "20.1 °C, 45 % (from the laboratory file)\n"), err
+    run[1] = str(bench_readings[1])         # another run: one readings file, one calibration
     assert main(run + ["--out", str(tmp_path / "b"), "--record", "--standard", "RT-07",
                        "--temperature", "20", "--humidity", "44"]) == 0
     assert capsys.readouterr().err.endswith(

@@ -56,7 +56,8 @@ def test_kill_during_run_and_during_issue(tmp_path, serve, bench_readings, compu
         serve.stop(proc)
 
         # 2. killed while issuing: the number is reserved, no certificate row exists
-        cal2 = services.create_calibration(st, tech, **args)
+        other, _ = services.store_file(st, open(bench_readings[1], "rb"))  # another run
+        cal2 = services.create_calibration(st, tech, **dict(args, readings_sha256=other))
         services.claim_next(st)
         services.store_run(st, cal2.id, computed_folder)
         services.review(st, rev, cal2.id, accept=True)
