@@ -30,6 +30,7 @@ from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.report.i18n import display, labels, minus_sign
 from gonio.specs.ogam_draft.phrases import LABELS as OWN_LABELS
 from gonio.resources import protocols_dir
+from tests.own_readings import own_text
 
 HINT = "run scripts/install-test-system-deps.sh (chromium, poppler-utils, fonts-noto-cjk)"
 ITEMS = ("scale_factor", "scale_factor_nonlinearity", "zero_stability", "angle_deviation",
@@ -62,9 +63,7 @@ def run(tmp_path_factory):
     lab = cert.load_lab(protocols_dir() / "lab-example.toml")
     # a laboratory's own readings: the bench's metadata lines out (else marked virtual)
     lab_readings = d / "lab-readings.csv"
-    lab_readings.write_text("".join(
-        x for x in (d / "readings.csv").read_text().splitlines(keepends=True)
-        if not re.match(r"# (bench|seed|generator):", x)))
+    lab_readings.write_text(own_text((d / "readings.csv").read_text()))
     lab_result = calibrate(lab_readings, proto, static_record=session.static_record)
     decide_conformity(lab_result, lab)   # the pipeline decides; the certificate renders
     cert.write_certificate(lab_result.to_json(), lab_dir, lab=lab)

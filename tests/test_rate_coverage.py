@@ -48,11 +48,6 @@ KNOWN_OVER_WIDE = {
                                      "start-up time is 0 and found 0 in most trials (z ≡ 0); "
                                      "observed on the built-in benchmark, transient on "
                                      "(docs/iec62047-20-readings.md#over-wide-budgets-left)",
-    ("iec62047-20", "bias_instability"): "the reduced 600-s record puts the Allan floor where "
-                                         "ARW/RRW lift it: a one-sided offset entered as "
-                                         "±excess (sd z 0.29); not over-wide on the built-in "
-                                         "programme (docs/iec62047-20-readings.md"
-                                         "#over-wide-budgets-left)",
 }
 
 

@@ -372,10 +372,13 @@ def test_cli_simulate_align_and_errors(tmp_path, capsys):
         pages.append((tmp_path / name).read_bytes())
     page = pages[0]
     assert pages[0] == pages[1] and b"<svg" in page
-    # the page shows M with U = k·u, U to 2 significant digits, value to U's decimal place
+    # the page shows M with the certified item's U (k = t(ν_eff) of the fit and the table),
+    # U to 2 significant digits, value to U's decimal place
+    from gonio.specs.triad_alignment.calibration import calibrate
     from gonio.specs.triad_alignment.pages import value_with_u
-    kk = res["coverage_factor"][0]
-    cell = value_with_u(m[0][0], kk * u[0][0])
+    item = calibrate(out / "readings.csv").items["M_xx"]
+    assert item.uncertainty.u_c == pytest.approx(u[0][0], rel=1e-9)
+    cell = value_with_u(m[0][0], item.uncertainty.U)
     assert cell.encode() in page
     assert value_with_u(49.99371, 0.0028) == "49.9937 ± 0.0028"
     bad = tmp_path / "bad.csv"

@@ -105,3 +105,50 @@ def test_a_bad_table_statement_is_refused_naming_it(key, value):
     text = format_triad_readings(s.readings, {**s.metadata, key: value})
     with pytest.raises(GonioError, match=key):
         parse_triad_readings(text, "r.csv")
+
+
+def _noisy_text(seed: int = 4) -> str:
+    b = dataclasses.replace(_quiet_bench(2.5e-4, 0.005), arw_deg_sqrt_h=(0.3,) * 3)
+    s = run_alignment_session(_protocol(), b, seed=seed)
+    return format_triad_readings(s.readings, s.metadata)
+
+
+def test_report_page_shows_the_certified_items_U():
+    """``gonio align --report``'s page: every M_ij, S_ij and L_ij is printed with the U of
+    the certified item (the fit and the table's Type B line, k = t(ν_eff)), not the fit's
+    k times the total u; the fit-only k gives a different U for M_xx (the table dominates,
+    ν_eff ≫ ν of the fit), so the check can fail."""
+    from gonio.specs.triad_alignment.pages import alignment_page, value_with_u
+
+    cal = calibrate(parse_triad_readings(_noisy_text(), "r.csv"))
+    al, items = cal.alignment, cal.items
+    page = alignment_page(al)
+    for key in [f"M_{a}{c}" for a in "xyz" for c in "xyz"]:
+        assert value_with_u(items[key].value, items[key].uncertainty.U) in page, key
+    for key in [k for k in items if k[:2] in ("S_", "L_")]:
+        u_txt = value_with_u(items[key].value * 1e3, items[key].uncertainty.U * 1e3)
+        assert (u_txt if key.startswith("S_") else u_txt.split(" ± ")[1]) in page, key
+    k_fit = al.coverage_factor[0]
+    u_xx = items["M_xx"].uncertainty
+    assert abs(u_xx.k - k_fit) > 0.05
+    assert value_with_u(items["M_xx"].value, k_fit * u_xx.u_c) not in page
+
+
+def test_align_command_includes_the_table_term(tmp_path, capsys):
+    """``gonio align --json``: the same u(M) as ``calibrate``'s alignment (the table's
+    Type B part in it), larger than the fit's alone."""
+    from gonio.cli import main
+
+    text = _noisy_text(seed=5)
+    path = tmp_path / "r.csv"
+    path.write_text(text, encoding="utf-8")
+    assert main(["align", str(path), "--json", "--monte-carlo", "0"]) == 0
+    import json
+    got = json.loads(capsys.readouterr().out)
+    r = parse_triad_readings(text, "r.csv")
+    cal = calibrate(r).alignment
+    assert got["type_b"] is not None
+    um = np.array(got["u_system_matrix"])
+    assert np.allclose(um, cal.u_system_matrix, rtol=1e-9)
+    fit_only = estimate_alignment(r).u_system_matrix
+    assert np.all(um > fit_only) and np.max(um / fit_only) > 2

@@ -55,6 +55,10 @@ MINUS_3DB_RATIO = 10.0 ** (-3.0 / 20.0)
 FLICKER_FLOOR_EXACT = math.sqrt(2.0 * math.log(2.0) / math.pi)
 #: Standard gravity, m/s² (the "g" of JJF 7.2.12 and IEC 5.3.3.8).
 G_STANDARD = 9.80665
+#: rms of the largest excursion of a standard Wiener process over [0, 1],
+#: √E[max_t |W(t)|²] = √E[1/τ₁] = √(2G) ≈ 1.3535 (τ₁ the exit time of [−1, 1], whose
+#: Laplace transform is sech √(2s), so E[1/τ₁] = ∫₀^∞ v·sech v dv = 2G, G Catalan's constant).
+WALK_MAX_RMS = math.sqrt(2.0 * 0.915965594177219015)
 
 
 def as_array(x, name: str) -> np.ndarray:
@@ -495,18 +499,32 @@ def bias_drift_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,
     """Standard uncertainty of the difference of two bias records ``separation_s`` apart, from
     the static record's noise analysis (same rate unit as ``adev_high``): rate random walk
     K√Δt and bias instability √2·0.664·B, each coefficient's square increased by its fit
-    uncertainty. A rate random walk the record is too short to resolve (fit at K = 0) is
-    bounded by the upper confidence limit of the Allan deviation at the longest τ,
-    K ≤ σ_hi(τ_max)·√(3/τ_max), taken as rectangular on [0, bound] (K² ≥ bound²/3).
+    uncertainty (E[K²] = K² + u_K²).
+
+    The Allan deviation bounds the rate random walk at every τ, σ_RRW(τ)² = K²τ/3 ≤ σ(τ)², so
+    K ≤ min over τ of σ_hi(τ)·√(3/τ), σ_hi the upper confidence limit (the longest τ alone,
+    with its one or two degrees of freedom, gave bounds 1–5× the tighter one on a 2-h record).
+    A rate random walk the fit resolves (K > u_K: its interval does not reach 0) counts as
+    K² + u_K², at most that bound squared (a fit coefficient whose uncertainty runs past the
+    bound says no more than the bound); one it does not resolve (K = 0, or u_K ≥ K) is taken
+    as rectangular on [0, bound] (K² = bound²/3, JCGM 100 4.3.7).
 
     >>> round(bias_drift_u(0.0, 0.0, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)   # √(1/3·3600)
+    34.641016
+    >>> round(bias_drift_u(0.0, 0.0, 0.0, 0.0, [10.0, 300.0], [1.0, 10.0], 3600.0), 6)   # τ = 10 s
+    18.973666
+    >>> round(bias_drift_u(0.5, 0.1, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)   # √(0.26·3600)
+    30.594117
+    >>> round(bias_drift_u(1.0, 0.5, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)   # bound 1
+    60.0
+    >>> round(bias_drift_u(5.0, 9.0, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)   # unresolved
     34.641016
     """
     t, s = as_array(tau_s, "tau_s"), as_array(adev_high, "adev")
     def ok(x):
         return x if math.isfinite(x) else 0.0
-    k2 = ok(K) ** 2 + ok(u_K) ** 2
-    i = int(np.argmax(t))
-    k2 = max(k2, (s[i] * math.sqrt(3.0 / t[i])) ** 2 / 3.0)
+    bound2 = float(np.min(s ** 2 * 3.0 / t))
+    k, u_k = abs(ok(K)), ok(u_K)
+    k2 = min(k ** 2 + u_k ** 2, bound2) if k > u_k else bound2 / 3.0
     b2 = ok(B) ** 2 + ok(u_B) ** 2
     return math.sqrt(k2 * abs(separation_s) + 2 * FLICKER_FLOOR_EXACT ** 2 * b2)

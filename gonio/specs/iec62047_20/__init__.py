@@ -110,7 +110,7 @@ STUDY_PROGRAMME = {
     "temperature": {"soak_s": 1800.0, "bias_samples": 60},
     "stability": {"samples": 50}, "bias": {"samples": 300, "off_time_s": 60.0},
     "power_on": {"samples": 900, "off_time_s": 60.0},
-    "noise": {"samples": 6000}, "frequency": {"cycles": 8}}
+    "noise": {"samples": 72000}, "frequency": {"cycles": 8}}
 
 SPEC = rate_specification(
     "gonio.specs.iec62047_20", key=KEY, title_en=TITLE_EN, title_zh=TITLE_ZH,

@@ -105,10 +105,13 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"least-squares slope \((\w+)\)", "最小二乘斜率（{1}）"),
     (r"χ² intervals of the fit points", "拟合点的 χ² 区间"),
     (r"selection excess of the largest of the noisy differences over the temperatures "
-     r"visited twice \(± c_n·σ_max\)",
-     "两次到达的各温度上含噪差值取最大者的选择超出量（± c_n·σ_max）"),
+     r"visited twice \(midpoint ± c_m·σ/2 removed\)",
+     "两次到达的各温度上含噪差值取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
     (r"selection excess of the largest of the noisy smoothed values \(midpoint ± c_m·σ/2 "
      r"removed\)", "含噪平滑值取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
+    (r"bias drift over the record \(Allan fit: RRW, BI\): the rms of its largest excursion, "
+     r"√\(2G\)·u_drift\(record\)",
+     "记录期间的零偏漂移（Allan 拟合：RRW、BI）：其最大偏移的均方根，√(2G)·u_drift(记录)"),
     (r"bias drift over the record \(Allan fit: RRW, BI\)", "记录期间的零偏漂移（Allan 拟合：RRW、BI）"),
 )
 

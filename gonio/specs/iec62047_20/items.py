@@ -917,7 +917,13 @@ def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertai
     the sample interval does not enter (the smoothed values' differences and the reference
     part's spread carry its slope and curvature); the slower noise is the bias drift over
     the record, a term of its own (a slow wander moves the smoothed values together: no
-    selection)."""
+    selection in the noise term). The reading is a maximum over the record, so the wander
+    enters through its largest excursion from the reference, not its end-point difference
+    (|max(a + w) − max(a)| ≤ max|w|): for a walk of end-point standard deviation σ_T =
+    u_drift(record) (the static record's fit) the rms of max_t |w(t)| is √(2G)·σ_T ≈ 1.35·σ_T
+    (:data:`gonio.specs._rate_family.formulas.WALK_MAX_RMS`), the term's u; and the wander
+    spreads the smoothed values as the noise does, so the selection's contenders and
+    excess are counted with σ and σ_T together."""
     vals, dists, sds = [], [], []
     for tt, ys, y in recs:
         ref = float(y[:nr].mean())
@@ -929,15 +935,17 @@ def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertai
                     float(tt[-1] - tt[0]) if tt.size > 1 else 0.0))
     i = int(np.argmax(vals))
     noise = sds[i][0]
+    s_T = drift_u(sds[i][1])
     excess, m_sel = rg.selection_excess(np.concatenate(dists), np.concatenate(
-        [np.full(d.size, s) for d, (s, _) in zip(dists, sds)]))
+        [np.full(d.size, math.hypot(s, drift_u(T))) for d, (s, T) in zip(dists, sds)]))
     u = gum(lambda v, m, w: v + m + w,
             [from_u("drift", vals[i], noise, dof=50, source="noise of the smoothed output"),
              type_b("noise_max", -excess, excess, "rectangular",
                     source="selection excess of the largest of the noisy smoothed values "
                            "(midpoint ± c_m·σ/2 removed)"),
-             from_u("wander", 0.0, drift_u(sds[i][1]), dof=50,
-                    source="bias drift over the record (Allan fit: RRW, BI)")])
+             from_u("wander", 0.0, rg.WALK_MAX_RMS * s_T, dof=50,
+                    source="bias drift over the record (Allan fit: RRW, BI): the rms of "
+                           "its largest excursion, √(2G)·u_drift(record)")])
     return vals[i] - excess, vals, u, m_sel
 
 
@@ -1045,11 +1053,10 @@ def bias_hysteresis(ctx: Context) -> Item:
 
     Uncertainty: the two record means (block type A), the bias drift between the two
     visits (RRW and bias instability from the static record's Allan fit), and the selection
-    excess of a maximum over n noisy differences (JCGM 100 4.3.7: a rectangular between
-    the two limiting cases, 0 when one temperature's true difference dominates and
-    c_n·σ_max when all are 0, c_n = E[max|Z_i|] of
-    :func:`gonio.specs.iec62047_20.formulas.max_abs_normal_mean`), taken as ± c_n·σ_max
-    since which case holds is not known."""
+    excess of a maximum over n noisy differences (JCGM 100 4.3.7: between the two limiting
+    cases, 0 when one temperature's true difference stands clear and c_m·σ when m share
+    the largest; :func:`gonio.specs._rate_family.formulas.selection_excess`): the value is
+    the reading less the midpoint c_m·σ/2, the term rectangular ± c_m·σ/2."""
     t, cl, un = "bias hysteresis", "5.3.3.7", "°/s"
     m = _miss(ctx, "bias_temperature", "bias_hysteresis", t, cl, un)
     if m:
@@ -1080,11 +1087,12 @@ def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
     # the value is a maximum over the temperatures visited twice: noise inflates it
     sds = [math.sqrt(pts[ju][2] ** 2 + pts[jd][2] ** 2 + drift_u(pts[ju][4] - pts[jd][4]) ** 2)
            for ju, jd in map(visits, diffs)]
-    inputs.append(type_b("noise_max", 0.0, max(sds) * ief.max_abs_normal_mean(len(sds)),
-                         "rectangular", source="selection excess of the largest of the noisy "
-                                               "differences over the temperatures visited "
-                                               "twice (± c_n·σ_max)"))
-    return val, diffs, Tm, gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
+    excess, _ = rg.selection_excess(np.abs(np.array(list(diffs.values()))), np.array(sds))
+    inputs.append(type_b("noise_max", -excess, excess, "rectangular",
+                         source="selection excess of the largest of the noisy differences "
+                                "over the temperatures visited twice (midpoint ± c_m·σ/2 "
+                                "removed)"))
+    return val - excess, diffs, Tm, gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
 
 
 def bias_ratiometric(ctx: Context) -> Item:

@@ -152,9 +152,46 @@ def with_table_type_b(unc: Uncertainty, key: str, u_b: float, al: AlignmentResul
                                     "c": 1.0, "contribution": float(u_b), "dof": math.inf,
                                     "source": src}]
     u_c = math.hypot(unc.u_c, u_b)
-    nu = u_c ** 4 / (unc.u_c ** 4 / unc.nu_eff) if unc.u_c > 0 else math.inf
+    nu = nu_with_table(unc.u_c, unc.nu_eff, u_b)
     k = coverage_k(nu, COVERAGE)
     return Uncertainty(comp, u_c, k * u_c, k, float(nu), unc.monte_carlo, COVERAGE, K_SOURCE_WS)
+
+
+def nu_with_table(u_fit: float, nu_fit: float, u_b: float) -> float:
+    """The Welch–Satterthwaite ν_eff (JCGM 100 G.4.1) of the fit's part (u, ν) plus the
+    table's Type B part ``u_b`` (ν = ∞): (u_fit² + u_b²)² / (u_fit⁴/ν_fit).
+
+    >>> round(nu_with_table(3.0, 6.0, 4.0), 3), nu_with_table(0.0, 6.0, 1.0)
+    (46.296, inf)
+    """
+    u_c2 = u_fit ** 2 + u_b ** 2
+    return u_c2 ** 2 / (u_fit ** 4 / nu_fit) if u_fit > 0 else math.inf
+
+
+def total_coverage_factor(u_total: float, u_b: float, nu_fit: float) -> float:
+    """k = t_0.9545(ν_eff) of a total standard uncertainty ``u_total`` whose table part is
+    ``u_b`` and whose fit part has ν = ``nu_fit`` (the k an item's budget gives,
+    :func:`with_table_type_b`), for the values that are not items (the report page's M⁻¹,
+    scale factors, angles)."""
+    return coverage_k(nu_with_table(_fit_part(u_total, u_b), nu_fit, u_b), COVERAGE)
+
+
+def table_inputs(readings: TriadReadings) -> dict:
+    """The rate table's Type B inputs that the readings state (or their defaults,
+    :data:`gonio.specs.triad_alignment.readings.TABLE_METADATA`), as
+    :func:`gonio.specs.triad_alignment.analysis.estimate_alignment` takes them: the rate's
+    relative u and the standard uncertainty of each axis component, the stated bound over √3
+    (rectangular, JCGM 100 4.3.7)."""
+    return {"rate_u_rel": readings.table_metadata("rate_table_u_rel"),
+            "orientation_u_rad": math.radians(readings.table_metadata("orientation_bound_deg"))
+            / math.sqrt(3.0)}
+
+
+def fit_alignment(readings: TriadReadings, **options) -> AlignmentResult:
+    """The alignment estimate with the rate table's Type B part (:func:`table_inputs`): the
+    one call of ``gonio calibrate`` and ``gonio align``; ``options`` go to
+    :func:`gonio.specs.triad_alignment.analysis.estimate_alignment`."""
+    return estimate_alignment(readings, **options, **table_inputs(readings))
 
 
 def _fit_part(u_total: float, u_b: float) -> float:
@@ -525,11 +562,8 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     al = None
     if (r.data["test"] == "alignment").any():
         try:
-            al = estimate_alignment(
-                r, robust=robust, monte_carlo=monte_carlo_trials, seed=seed,
-                target_deg=target_deg, rate_u_rel=r.table_metadata("rate_table_u_rel"),
-                orientation_u_rad=math.radians(r.table_metadata("orientation_bound_deg"))
-                / math.sqrt(3.0))
+            al = fit_alignment(r, robust=robust, monte_carlo=monte_carlo_trials, seed=seed,
+                               target_deg=target_deg)
             if not robust:
                 consistency_check(al, r)
         except GonioError as exc:

@@ -67,7 +67,7 @@ def run_align(args) -> int:
     figure (``--plot``) and page (``--report``); exit code 0."""
     import numpy as np
 
-    from gonio.specs.triad_alignment.analysis import cross_axis_table, estimate_alignment
+    from gonio.specs.triad_alignment.analysis import cross_axis_table
     from gonio.formats.jsonsafe import json_safe
     from gonio.specs.triad_alignment.readings import read_triad_readings
 
@@ -78,7 +78,7 @@ def run_align(args) -> int:
     from gonio.atomic import check_output_files
     from gonio.specs.triad_alignment.readings import named_inputs
     from gonio.limits import check
-    from gonio.specs.triad_alignment.calibration import consistency_check
+    from gonio.specs.triad_alignment.calibration import consistency_check, fit_alignment
 
     check("GONIO_MAX_MONTE_CARLO", args.monte_carlo, "--monte-carlo", unit="trials")
     from gonio.report.figure_files import FIGURE_FORMATS
@@ -87,8 +87,8 @@ def run_align(args) -> int:
                        formats={"--plot": FIGURE_FORMATS},
                        inputs=[args.readings, *named_inputs(args.readings)])
     r = read_triad_readings(args.readings)
-    res = estimate_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,
-                             seed=args.seed, target_deg=args.target_deg)
+    res = fit_alignment(r, robust=args.robust, monte_carlo=args.monte_carlo,
+                        seed=args.seed, target_deg=args.target_deg)   # calibrate's call
     if not args.robust:
         consistency_check(res, r)              # the check calibrate makes, the same function
     if args.plot or args.report:

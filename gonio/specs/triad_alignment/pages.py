@@ -20,6 +20,7 @@ from scipy import stats
 
 from gonio.specs.triad_alignment.thermal_model import Compensation, ThermalModelResult
 from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult, cross_axis_table
+from gonio.specs.triad_alignment.calibration import alignment_items, total_coverage_factor
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
 from gonio.report.i18n import decimals_for_sig, display_uncertainty, round_half_up
@@ -58,44 +59,57 @@ def _table(header, rows) -> str:
 
 def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
     """HTML section: M, b, M⁻¹, scale factors, misalignment angles, cross-axis
-    sensitivities (IEC 62047-20 5.2), residual leakage and averaging time."""
-    k = res.coverage_factor
+    sensitivities (IEC 62047-20 5.2), residual leakage and averaging time. M, S and L are
+    shown with the U of the certified items (:func:`alignment_items`: the fit and the rate
+    table's Type B line, k from the Welch–Satterthwaite ν_eff), so the page agrees with the
+    certificate; M⁻¹, the scale factors, angles and biases in °/s with the k of their own
+    total (:func:`total_coverage_factor`, the smallest ν of the fit); b with the fit's k."""
+    items = alignment_items(res, 0)
     unit = res.output_unit or "output"
-    m, um = res.system_matrix, res.u_system_matrix
+    m = res.system_matrix
     kb = res.coverage_factor_theta[:, 3]
-    out = [f"<h2>Alignment matrix (k = {k[0]:.2f} for ν = {res.dof[0]:.0f}, p ≈ 95 %; "
-           f"b with its own k)</h2>",
+    tb = res.type_b or {}
+    nu_min = float(np.min(res.dof))
+
+    def derived_u(name: str, n: int) -> float:
+        """Expanded U of element n of derived quantity ``name``."""
+        u = float(np.ravel(res.u_derived[name])[n])
+        u_b = float(np.ravel(tb["u_derived"][name])[n]) if tb else 0.0
+        return total_coverage_factor(u, u_b, nu_min) * u
+
+    out = ["<h2>Alignment matrix (U for p ≈ 95 %, k = t(ν_eff) of each value's budget: the "
+           "fit and the rate table; b with its own k)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
            f"{' (robust fit)' if res.robust else ''}.</p>"]
-    rows = [[f"gyro {a}"] + [value_with_u(m[i, j], k[i] * um[i, j]) for j in range(3)]
+    rows = [[f"gyro {a}"] + [value_with_u(m[i, j], items[f"M_{a}{b}"].uncertainty.U)
+                             for j, b in enumerate("xyz")]
             + [value_with_u(res.bias_output[i], kb[i] * res.u_bias_output[i])]
             for i, a in enumerate("xyz")]
     out.append(_table(["", "ω_x", "ω_y", "ω_z", "b"], rows))
     a = res.alignment_matrix
-    ua = np.asarray(res.u_derived["alignment_matrix"]).reshape(3, 3)
-    kk = float(np.max(k))
     out.append("<p>Alignment matrix M⁻¹ (°/s per unit output): ω̂ = M⁻¹ (G − b).</p>")
     out.append(_table(["", "G_x", "G_y", "G_z"],
-                      [[f"ω_{r}"] + [value_with_u(a[i, j], kk * ua[i, j]) for j in range(3)]
-                       for i, r in enumerate("xyz")]))
-    sc, us = res.derived["scale"], res.u_derived["scale"]
-    ps, ups = res.derived["psi_rad"], res.u_derived["psi_rad"]
-    bd, ubd = res.derived["bias_dps"], res.u_derived["bias_dps"]
+                      [[f"ω_{r}"] + [value_with_u(a[i, j], derived_u("alignment_matrix", 3 * i + j))
+                                     for j in range(3)] for i, r in enumerate("xyz")]))
+    sc, ps, bd = res.derived["scale"], res.derived["psi_rad"], res.derived["bias_dps"]
     out.append(_table(["gyro", f"scale factor ({unit}/(°/s))", "misalignment ψ (mrad)",
                        "bias (°/s)"],
-                      [[a_, value_with_u(sc[i], kk * us[i]),
-                        value_with_u(ps[i] * 1e3, kk * ups[i] * 1e3),
-                        value_with_u(bd[i], kk * ubd[i])] for i, a_ in enumerate("xyz")]))
+                      [[a_, value_with_u(sc[i], derived_u("scale", i)),
+                        value_with_u(ps[i] * 1e3, derived_u("psi_rad", i) * 1e3),
+                        value_with_u(bd[i], derived_u("bias_dps", i))]
+                       for i, a_ in enumerate("xyz")]))
     tab = cross_axis_table(res)
     out.append("<p>Cross-axis sensitivity S_ij = M_ij/M_ii (IEC 62047-20 5.2), in ‰; "
                "residual leakage after M⁻¹: expanded uncertainty in ‰.</p>")
     rows = []
-    for n, r in enumerate(tab.itertuples(index=False)):
-        i, j = "xyz".index(r.gyro), "xyz".index(r.about)
-        rows.append([f"gyro {r.gyro} ← ω_{r.about}", value_with_u(r.sensitivity * 1e3, kk * r.u_gum * 1e3),
-                     "—" if not math.isfinite(r.u_mc) else display_uncertainty(kk * r.u_mc * 1e3),
-                     display_uncertainty(kk * res.leakage_u[i, j] * 1e3)])
+    for r in tab.itertuples(index=False):
+        s_item = items[f"S_{r.gyro}{r.about}"].uncertainty
+        rows.append([f"gyro {r.gyro} ← ω_{r.about}",
+                     value_with_u(r.sensitivity * 1e3, s_item.U * 1e3),
+                     "—" if not math.isfinite(r.u_mc) else display_uncertainty(
+                         s_item.k * r.u_mc * 1e3),
+                     display_uncertainty(items[f"L_{r.gyro}{r.about}"].uncertainty.U * 1e3)])
     out.append(_table(["", "S (GUM)", "U (Monte Carlo)", "leakage after, U"], rows))
     if res.averaging is not None:
         av = res.averaging
