@@ -2,7 +2,10 @@
 
 For ``--trials`` fresh seeds the built-in programme (protocol ``triad-alignment``, bench
 ``mems-triad``: the chamber programme, and the alignment session for its static record) is
-simulated and identified as ``gonio calibrate`` does (sensor temperature, BIC orders); every
+simulated on the bench with the rate table's errors drawn from the seed
+(``simulate.for_trial``; ``--fixed-equipment``: the bench file's table) and identified as
+``gonio calibrate`` does (sensor temperature, BIC orders, the K values with the table's Type B
+line); every
 certified value — K and b at each set point and supply level (``K_z_t1_v2``, ``b_z_t3_v1``
 …), ARW at each set point — is compared with ``SPEC.truth`` (the bench's polynomials in
 closed form at the soaked set point, :func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`;
@@ -34,6 +37,9 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--seed", type=int, default=2_400_000, help="first seed (fresh: no test uses it)")
     ap.add_argument("--criterion", default="bic")
+    ap.add_argument("--fixed-equipment", action="store_true",
+                    help="the bench file's rate table in every trial (default: its errors "
+                         "drawn per trial, simulate.for_trial)")
     ap.add_argument("--jsonl", help="append each trial's records to this file as it ends")
     ap.add_argument("--summarise", nargs="+", metavar="JSONL",
                     help="print the table from trial files written by --jsonl; no new trials")
@@ -50,7 +56,7 @@ def main() -> None:
     trials = []
     for s in range(a.seed, a.seed + a.trials):
         t1 = time.perf_counter()
-        trials.append(thermal_trial(s, criterion=a.criterion))
+        trials.append(thermal_trial(s, criterion=a.criterion, draw=not a.fixed_equipment))
         if a.jsonl:
             with open(a.jsonl, "a", encoding="utf-8") as f:
                 f.write(json.dumps({"seed": s, "items": trials[-1],

@@ -27,7 +27,7 @@ def _ctx(means_q, u_q):
     cals = []
     for means, u in zip(means_q, u_q):
         cals.append({"rates": OMEGA, "fit": jf.fit_scale_factor(OMEGA, means), "u_means": u,
-                     "spans_s": np.full(OMEGA.size, 5.0)})
+                     "n_means": [5] * OMEGA.size, "spans_s": np.full(OMEGA.size, 5.0)})
     # no table ripple in these calibrations (their outputs are written out here): bound 0
     ctx = I.Context(df=pd.DataFrame({"test": []}), output_unit="mV", null_output=0.0,
                     latitude_deg=40.0, protocol={}, room_temperature_c=20.0, K=1.0,
@@ -37,15 +37,18 @@ def _ctx(means_q, u_q):
     return ctx
 
 
-def _study(cubic: float, sigma: float, trials: int, seed: int):
+def _study(cubic: float, sigma: float, trials: int, seed: int, slow: float = 0.0):
     """z of the item and of eq (6)'s reading, and the hits of U, over ``trials`` sets of
-    Q = 3 calibrations (5 samples per rate point, each of standard deviation σ√5)."""
+    Q = 3 calibrations (5 samples per rate point, each of standard deviation σ√5; with
+    ``slow``, each point's mean also carries a slow-noise offset of standard deviation
+    slow·σ, common to its samples, which their standard deviation does not show)."""
     true = OMEGA + cubic * OMEGA ** 3 / 100 ** 2
     truth = jf.nonlinearity_jjf(jf.fit_scale_factor(OMEGA, true))
     rng = np.random.default_rng(seed)
     z, z_read, hits = [], [], 0
     for _ in range(trials):
         x = true[None, :, None] + sigma * math.sqrt(5) * rng.standard_normal((3, OMEGA.size, 5))
+        x = x + slow * sigma * rng.standard_normal((3, OMEGA.size, 1))
         it = I.nonlinearity(_ctx(x.mean(axis=2), x.std(axis=2, ddof=1) / math.sqrt(5)))
         u = it.uncertainty
         z.append((it.value - truth) / u.u_c)
@@ -80,3 +83,45 @@ def test_nonlinearity_covers_with_no_nonlinearity():
     z, _, hits, truth = _study(cubic=0.0, sigma=0.004, trials=200, seed=8)
     assert truth == pytest.approx(0.0, abs=1e-12)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
+
+
+def test_nonlinearity_noise_from_the_calibrations_spread_under_slow_noise():
+    """Slow noise (bias instability over a point's samples) that the points' standard errors
+    s/√n miss: each point's mean carries a further offset 2.5× its standard error. With the
+    means' standard errors alone the item covered 97/300 here (z mean +2.9, sd 1.72); the
+    residuals' spread over the Q calibrations restores coverage (300/300, z mean −0.08,
+    sd 0.46: wide, the selection term's rectangle c_m·σ with the nonlinearity now only
+    about 2σ above the noise)."""
+    z, _, hits, _ = _study(cubic=0.0009, sigma=0.004, trials=300, seed=9, slow=2.5)
+    assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
+    assert abs(np.mean(z)) < 0.3 and np.std(z, ddof=1) <= 1.3, (np.mean(z), np.std(z, ddof=1))
+
+
+def test_nonlinearity_noise_is_the_larger_of_model_and_spread():
+    rng = np.random.default_rng(3)
+    true = OMEGA + 0.0009 * OMEGA ** 3 / 100 ** 2
+    means = true[None, :] + 0.01 * rng.standard_normal((3, OMEGA.size))
+    u = np.full(OMEGA.size, 1e-3)
+    ctx = _ctx(means, [u] * 3)
+    cals = ctx.cache[("cal", "scale_factor")]
+    span = np.array([abs(c["fit"].K * 200.0) for c in cals])
+    u_n, nu, f, u_model = I.nonlinearity_noise(cals, span)
+    v = np.array([c["fit"].residuals for c in cals]) / span[:, None]
+    lev = 1 / OMEGA.size + OMEGA ** 2 / float((OMEGA ** 2).sum())
+    j = [int(np.argmax(np.abs(c["fit"].residuals))) for c in cals]
+    assert u_model == pytest.approx(1e-3 * math.sqrt(1 - np.mean(lev[j])) / span.mean()
+                                    / math.sqrt(3), rel=2e-2)
+    # the observed spread, pooled over the points, against the means' noise (σ·√(1 − h))
+    f_obs = math.sqrt(sum(np.var(v[:, k], ddof=1) for k in range(OMEGA.size))
+                      / sum((1e-3 / span.mean()) ** 2 * (1 - lev)))
+    assert f == pytest.approx(f_obs, rel=2e-2) and f > 5
+    assert u_n == pytest.approx(f * u_model) and nu == 2 * (OMEGA.size - 2)
+    it = I.nonlinearity(ctx)
+    assert it.details["noise_scale"] == f
+    # the selection excess uses the same σ: f times the means' one
+    h0 = np.mean([I.nonlinearity_selection(c)[0] / sp for c, sp in zip(cals, span)])
+    assert it.details["selection_excess"] > h0
+    # the means' standard errors larger than the spread: they stay the term (ν = ∞)
+    wide = _ctx(means, [u * 100] * 3).cache[("cal", "scale_factor")]
+    u_n2, nu2, f2, _ = I.nonlinearity_noise(wide, span)
+    assert nu2 == math.inf and f2 == 1.0 and u_n2 > u_n

@@ -93,6 +93,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"data acquisition, relative(?: \(u2\))?", "数据采集（相对）"),
     (r"repeatability of the mean of Q calibrations, s\(K_m\)/√Q", "Q 次校准平均值的重复性 s(K_m)/√Q"),
     (r"mean of K_n,m", "K_n,m 的平均值"),
+    (r"noise of the largest residual \(rate-point means, leverage\) scaled to the residuals' "
+     r"spread over the Q calibrations",
+     "最大残差的噪声（各速率点平均值，杠杆值），按 Q 次校准残差的分散性放大"),
     (r"noise of the largest residual \(rate-point means, leverage\)",
      "最大残差的噪声（各速率点平均值，杠杆值）"),
     (r"selection excess of the largest of the noisy residuals \(midpoint ± c_m·σ/2 removed\)",

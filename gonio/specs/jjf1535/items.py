@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import stats
 
 from gonio.specs._rate_family import formulas as rg
 from gonio.specs.jjf1535 import formulas as jf
@@ -190,7 +191,8 @@ def nonlinearity(ctx: Context) -> Item:
 
     Uncertainty: the noise of the largest residual, σ·√(1 − h_jj)/[K(Ω+ − Ω−)] per
     calibration over √Q (σ pooled from the rate-point means' standard errors, h_jj the
-    leverage), the selection excess (rectangular), and the rate table's once-per-revolution
+    leverage; scaled up to the residuals' spread over the Q calibrations where that is
+    larger beyond chance, :func:`nonlinearity_noise`), the selection excess (rectangular), and the rate table's once-per-revolution
     ripple within its stated bound (``rate_table_ripple_rel``, as 7.2.3) in the largest
     residual (:func:`gonio.specs.jjf1535.formulas.ripple_residual_sd`; root mean square over
     the calibrations, not over √Q: every calibration meets the ripple at the same phases,
@@ -205,17 +207,18 @@ def nonlinearity(ctx: Context) -> Item:
     cals = calibrations(ctx)
     kn = np.array([jf.nonlinearity_jjf(c["fit"]) for c in cals])
     span = np.array([abs(c["fit"].K * (c["rates"].max() - c["rates"].min())) for c in cals])
-    sel = [nonlinearity_selection(c) for c in cals]
+    u_noise, nu, scale, u_model = nonlinearity_noise(cals, span)
+    sel = [nonlinearity_selection(c, scale) for c in cals]
     half = float(np.mean([h / sp for (h, _, _), sp in zip(sel, span)]))
     value = max(float(kn.mean()) - half, 0.0)
-    u_noise = float(np.sqrt(np.mean([(s_r / sp) ** 2 for (_, _, s_r), sp in zip(sel, span)]))
-                    / math.sqrt(len(cals)))
     rip = [jf.ripple_residual_sd(c["rates"], c["spans_s"], ctx.rate_table_ripple_rel, c["fit"].K)
            [int(np.argmax(np.abs(c["fit"].residuals)))] / sp for c, sp in zip(cals, span)]
     u_ripple = float(np.sqrt(np.mean(np.square(rip))))
     inputs = [from_u("K_n", float(kn.mean()), 0.0, source="mean of K_n,m"),
-              from_u("noise", 0.0, u_noise, dof=math.inf,
-                     source="noise of the largest residual (rate-point means, leverage)"),
+              from_u("noise", 0.0, u_noise, dof=nu,
+                     source="noise of the largest residual (rate-point means, leverage)"
+                     if scale == 1.0 else "noise of the largest residual (rate-point means, "
+                     "leverage) scaled to the residuals' spread over the Q calibrations"),
               type_b("selection", -half, half, "rectangular",
                      source="selection excess of the largest of the noisy residuals "
                             "(midpoint ± c_m·σ/2 removed)"),
@@ -226,20 +229,62 @@ def nonlinearity(ctx: Context) -> Item:
     return Item("nonlinearity", title, clause, unit, value, uncertainty=u,
                 details={"K_n_m": kn, "span_m": span, "reading": float(kn.mean()),
                          "selection_excess": half, "contending_residuals_m": [m for _, m, _ in sel],
-                         "spread_of_K_n_m": float(kn.std(ddof=1)) if kn.size > 1 else None})
+                         "spread_of_K_n_m": float(kn.std(ddof=1)) if kn.size > 1 else None,
+                         "noise_from_means": u_model, "noise_scale": scale})
 
 
-def nonlinearity_selection(cal: dict) -> tuple[float, int, float]:
-    """The selection excess of eq (6)'s largest |residual| of one calibration ``cal``, in
-    output units (:func:`gonio.specs._rate_family.formulas.selection_excess`: midpoint
-    c_m·σ/2, m contenders), and the largest residual's noise: (c_m·σ/2, m, σ_j). Residual
-    j's noise is σ_j = σ·√(1 − h_jj), σ the root mean square of the rate-point means'
-    standard errors (their pooled noise) and h_jj the leverage of rate j in the
-    least-squares line (5)."""
+def nonlinearity_noise(cals: list, span) -> tuple[float, float, float, float]:
+    """JJF 1535 7.2.2: the noise of eq (6)'s largest residual, relative to the fitted span
+    K_m(Ω_max+ − Ω_max−), as (u, ν, f, u_means), u the noise term of the mean of the Q
+    values (over √Q).
+
+    u_means is the rate-point means' noise, σ_j,m = σ_m·√(1 − h_jj) at each calibration's
+    largest residual (:func:`residual_noise_sd`), root mean square over the calibrations,
+    over √Q, ν = ∞. Those standard errors s/√n miss the slow noise (bias instability, rate
+    random walk) of a point's n correlated samples; the Q repeated calibrations show it, as
+    7.2.3 carries the spread of K_a,m (:func:`asymmetry`): with Q ≥ 2 calibrations of one
+    rate series, the residuals v_j,m/span_m spread over m about their mean (the
+    nonlinearity's shape) by s_j, and f² = Σ_j s_j² / Σ_j mean_m σ_j,m² (pooled over the
+    rate points, ν = (Q − 1)(n − 2), the residuals' n − 2 degrees of freedom per
+    calibration; one point's spread, ν = Q − 1, would put an overwide term on every
+    calibration without slow noise). Where f² exceeds the F distribution's 95 % point
+    F(ν, Σ(n_j − 1)) — the spread larger than the means' noise beyond chance; otherwise the
+    spread's own scatter, taken whenever f > 1, lowered the study's z spread from 0.66 to
+    0.58 — the term is f·u_means; f also scales the σ_j of the selection excess
+    (:func:`nonlinearity_selection`), so that the excess and the noise term use the same
+    σ."""
+    Q = len(cals)
+    sds = [residual_noise_sd(c) / sp for c, sp in zip(cals, span)]
+    at = [sd[int(np.argmax(np.abs(c["fit"].residuals)))] for c, sd in zip(cals, sds)]
+    u_means = float(np.sqrt(np.mean(np.square(at))) / math.sqrt(Q))
+    if Q < 2 or len({c["rates"].tobytes() for c in cals}) != 1 or not u_means > 0:
+        return u_means, math.inf, 1.0, u_means
+    v = np.array([c["fit"].residuals for c in cals]) / np.asarray(span)[:, None]
+    f = math.sqrt(float(v.var(axis=0, ddof=1).sum() / np.mean(np.square(sds), axis=0).sum()))
+    nu = (Q - 1) * (v.shape[1] - 2)
+    nu_means = sum(int(m) - 1 for c in cals for m in c["n_means"])
+    if nu < 1 or f * f <= (stats.f.ppf(0.95, nu, nu_means) if nu_means > 0 else 1.0):
+        return u_means, math.inf, 1.0, u_means
+    return f * u_means, float(nu), f, u_means
+
+
+def residual_noise_sd(cal: dict) -> np.ndarray:
+    """JJF 1535 7.2.2: each residual's noise of the line (5) in one calibration ``cal``,
+    σ_j = σ·√(1 − h_jj) in output units, σ the root mean square of the rate-point means'
+    standard errors (their pooled noise) and h_jj the leverage of rate j."""
     x = cal["rates"]
     dx = x - x.mean()
     h = 1.0 / x.size + dx ** 2 / float((dx ** 2).sum())
-    sd = float(np.sqrt(np.mean(cal["u_means"] ** 2))) * np.sqrt(1.0 - h)
+    return float(np.sqrt(np.mean(cal["u_means"] ** 2))) * np.sqrt(1.0 - h)
+
+
+def nonlinearity_selection(cal: dict, scale: float = 1.0) -> tuple[float, int, float]:
+    """The selection excess of eq (6)'s largest |residual| of one calibration ``cal``, in
+    output units (:func:`gonio.specs._rate_family.formulas.selection_excess`: midpoint
+    c_m·σ/2, m contenders), and the largest residual's noise: (c_m·σ/2, m, σ_j), σ_j the
+    residuals' noise (:func:`residual_noise_sd`) times ``scale`` (:func:`nonlinearity_noise`'s
+    f, where the calibrations' spread shows more noise than the means' standard errors)."""
+    sd = scale * residual_noise_sd(cal)
     r = np.abs(cal["fit"].residuals)
     half, m = rg.selection_excess(r, sd)
     return half, m, float(sd[int(np.argmax(r))])

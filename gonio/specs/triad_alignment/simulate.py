@@ -67,29 +67,34 @@ def for_trial(bench, seed: int):
 
 
 def thermal_trial(seed: int, *, protocol: str = "triad-alignment", bench: str = "mems-triad",
-                  criterion: str = "bic") -> dict[str, dict]:
+                  criterion: str = "bic", draw: bool = True) -> dict[str, dict]:
     """One simulated programme (the chamber programme and, for its static record, the
     alignment session) identified as ``calibrate`` does, every certified thermal value
     (``K_z_t1_v2``, ``b_z_t3_v1``, ``ARW_z_t2`` …) against the bench's closed-form truth
     (``SPEC.truth``, :mod:`gonio.specs.triad_alignment.truth`, from
     :func:`gonio.specs.triad_alignment.bench.true_thermal_coefficients`): {key: {clause, value, truth, U,
-    u_c}}, the records of :func:`gonio.pipeline.coverage.coverage_table_from`."""
-    from gonio.specs.triad_alignment.analysis import estimate_alignment
-    from gonio.specs.triad_alignment.calibration import thermal_items, thermal_long_term
+    u_c}}, the records of :func:`gonio.pipeline.coverage.coverage_table_from`. ``draw``: the
+    rate table's errors drawn from the seed (:func:`for_trial`; its rate error scales every
+    K) and the K values carry the table's Type B line as ``calibrate`` gives it; False: the
+    bench file's table in every trial."""
+    from gonio.specs.triad_alignment.calibration import (fit_alignment, thermal_items,
+                                                         thermal_long_term)
     from gonio.specs.triad_alignment.thermal_model import identify_thermal_model
 
     from gonio.specs.triad_alignment.truth import truth
 
-    p, b = load_triad_protocol(protocol, KEY), load_triad_bench(bench)
+    p = load_triad_protocol(protocol, KEY)
+    b = for_trial(bench, int(seed)) if draw else load_triad_bench(bench)
     s = run_thermal_session(p, b, int(seed))
     r = TriadReadings(s.readings.assign(line=np.arange(len(s.readings)) + 1), s.metadata, None)
     th = identify_thermal_model(r, criterion=criterion, ramps=False)
     a = run_alignment_session(p, b, int(seed))       # its static record: the long-term term
     ra = TriadReadings(a.readings.assign(line=np.arange(len(a.readings)) + 1), a.metadata, None)
-    al = estimate_alignment(ra)
+    al = fit_alignment(ra)                      # calibrate's call
     true = truth(b, p)                          # SPEC.truth: one truth hook
     out = {}
-    for key, it in thermal_items(th, "", thermal_long_term(al, ra, th)).items():
+    for key, it in thermal_items(th, "", thermal_long_term(al, ra, th),
+                                 r.table_metadata("rate_table_u_rel")).items():
         out[key] = {"clause": it.clause, "value": float(it.value),
                     "truth": float(true[key]["value"]),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}
