@@ -117,6 +117,16 @@ def _num(text: str, *, file, line, column, allow_empty: bool) -> float:
     return v
 
 
+def _check_number(meta: dict, key: str, ok, expect: str, file) -> None:
+    """A numeric metadata value: finite and accepted by ``ok``, else a one-line error."""
+    try:
+        v = float(meta[key])
+    except ValueError:
+        raise GonioError(f"expected {expect}, got {meta[key]!r}", file=file, key=key) from None
+    if not (math.isfinite(v) and ok(v)):
+        raise GonioError(f"expected {expect}, got {meta[key]!r}", file=file, key=key)
+
+
 def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReadings:
     """Parse and validate the text of a triad readings file (see the module docstring)."""
     file = str(path)
@@ -144,20 +154,10 @@ def parse_triad_readings(text: str, path: str | Path = "<text>") -> TriadReading
     if meta["format"] != FORMAT:
         raise GonioError(f"format must be {FORMAT!r}, got {meta['format']!r}", file=file, key="format")
     for k, (ok, expect) in NUMERIC_METADATA.items():
-        try:
-            v = float(meta[k])
-        except ValueError:
-            raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k) from None
-        if not (math.isfinite(v) and ok(v)):
-            raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k)
+        _check_number(meta, k, ok, expect, file)
     for k, (_, ok, expect) in TABLE_METADATA.items():
         if str(meta.get(k, "")).strip():
-            try:
-                v = float(meta[k])
-            except ValueError:
-                raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k) from None
-            if not (math.isfinite(v) and ok(v)):
-                raise GonioError(f"expected {expect}, got {meta[k]!r}", file=file, key=k)
+            _check_number(meta, k, ok, expect, file)
     header_line = i + 1
     reader = csv.reader(lines[i:])
     header = [h.strip() for h in next(reader)]
