@@ -121,7 +121,9 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     page.goto(inst_url)
     page.click("text=New calibration")
     assert page.locator("label", has_text="AC-1").first.locator("input").is_disabled()
-    cal_url = upload(page, base, inst_url, bench_readings[0], day.isoformat())
+    # the second bench run: the first is imported below, and one measurement is never
+    # calibrated twice
+    cal_url = upload(page, base, inst_url, bench_readings[1], day.isoformat())
     wait_status(page, "computed")
     log_out(page)
     act(page, base, "rev", cal_url, "button[value=accept]", "reviewed")
