@@ -254,8 +254,17 @@ def test_iec_power_on_items_noise_off(tmp_path):
     r = calibrate(RateReadings(res.data, {k: str(v) for k, v in res.metadata.items()}), str(proto))
     t = res.truth["items"]
     assert t["bias_drift_after_power_on"]["value"] > 0.05 and t["startup_time"]["value"] > 100
-    for key in ("bias_drift_after_power_on", "startup_time"):
-        assert r.items[key].value == pytest.approx(t[key]["value"], rel=1e-5, abs=1e-9), key
+    assert r.items["startup_time"].value == pytest.approx(t["startup_time"]["value"], rel=1e-5)
+    # 5.3.3.5: the reading (the largest smoothed excursion) is the closed form; the value
+    # certified is the reading less the selection excess's midpoint, whose σ holds the
+    # static record's bias-drift term, which a noise-free record does not make exactly 0:
+    # the value stays within that term's half-width (its rectangular u·√3) of the truth
+    d = r.items["bias_drift_after_power_on"]
+    truth = t["bias_drift_after_power_on"]["value"]
+    assert d.details["reading_dps"] == pytest.approx(truth, rel=1e-5)
+    half = math.sqrt(3) * next(abs(c["contribution"]) for c in d.uncertainty.components
+                                if c["symbol"] == "noise_max")
+    assert half < 1e-3 * truth and abs(d.value - truth) <= half * (1 + 1e-9) + 1e-12
 
 
 def test_iec_bias_erratum_detail(iec_noise_off):
