@@ -85,6 +85,8 @@ def main() -> int:
               f"header '{head}'")
         said = [ln for ln in err.splitlines() if "stopped" in ln]
         print(f"  it said: {said[-1] if said else err.strip()}")
+        for ln in (ln for ln in err.splitlines() if "[tilt_estimate]" in ln):
+            print(f"  it noted: {ln}")
         run(*args, "--resume")
         t2 = time.monotonic()
         print(f"resume: {t2 - t1:.1f} s, {rows(d / 'acq' / 'readings.csv')} readings in all, "

@@ -94,9 +94,11 @@ class Block:
 
 def plan_programme(protocol: Protocol) -> list[Block]:
     """The programme's blocks, in the virtual bench's order (zero stability, then the
-    rotation items' series); tests the bench knows but the acquisition does not run yet
-    (the tilt estimate's and equal division's rests) are refused by name."""
-    for name in ("tilt_estimate", "equal_division"):
+    rotation items' series); equal division's rests, which the acquisition does not run
+    yet, are refused by name. The in-situ tilt estimate (beyond the draft) is not run
+    either: :func:`acquire` says so, and the calibration states K with the coupling at the
+    A.1 bound (the readings hold no tilt_estimate rows)."""
+    for name in ("equal_division",):
         if getattr(protocol, name, None) is not None:
             raise GonioError(f"gonio acquire does not run [{name}] yet: take it out of the "
                              "protocol, or record it as a stream", key=name,
@@ -402,6 +404,10 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
     gets a stop; an unfinished file stays ``acquisition: incomplete`` (``resume`` continues it).
     """
     blocks = plan_programme(protocol)
+    if getattr(protocol, "tilt_estimate", None) is not None:
+        sys.stderr.write("gonio acquire: the protocol's [tilt_estimate] (beyond the draft) is not "
+                         "run by the acquisition yet: K will carry the tilt coupling at the A.1 "
+                         "bound, as the certificate states\n")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "readings.csv"
