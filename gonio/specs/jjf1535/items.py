@@ -459,6 +459,18 @@ def _candidate_item(key, title, clause, cands, details, pmfs) -> Item:
     return Item(key, title, clause, "°/s", value, uncertainty=u, details=details)
 
 
+def _rule_run(steps, meas, exp, sig, cands: list, pmfs: list):
+    """One run of 7.2.6 / 7.2.7: its candidate by the 50 % rule (eqs (13), (14)) appended to
+    ``cands`` and its outcome distribution under the data's noise (``sig``: (σ, ν) of each
+    referred mean, :func:`referred_mean_u`) to ``pmfs``; returns (candidate, deviations)."""
+    c, dev = jf.fifty_percent_candidate(steps, meas, exp)
+    cands.append(c)
+    pmfs.append(rg.fifty_percent_outcome_pmf(
+        steps, rg.fifty_percent_pass_probability(meas, [x for x, _ in sig], exp,
+                                                dof=[n for _, n in sig])))
+    return c, dev
+
+
 def threshold(ctx: Context) -> Item:
     """JJF 1535 7.2.6 eqs (12), (13): forward and reverse candidates by the two-sided 50 % rule
     on the rest-referred output (F̄_0,j: mean of the rests just before and after the point);
@@ -486,11 +498,7 @@ def threshold(ctx: Context) -> Item:
             meas.append(m.mean - f0)
             exp.append(ctx.K * m.rate_dps)
             sig.append(referred_mean_u([(1.0, m.n, m.std)] + rests))
-        c, dev = jf.fifty_percent_candidate(rates, meas, exp)
-        cands.append(c)
-        pmfs.append(rg.fifty_percent_outcome_pmf(
-            rates, rg.fifty_percent_pass_probability(meas, [x for x, _ in sig], exp,
-                                                    dof=[n for _, n in sig])))
+        c, dev = _rule_run(rates, meas, exp, sig, cands, pmfs)
         dets[f"run{run}"] = {"rates_dps": rates, "steps_dps": rates, "deviation": dev,
                              "candidate_dps": c,
                              "samples": int(next(m.n for m in seg if m.role == "rate"))}
@@ -521,11 +529,7 @@ def resolution(ctx: Context) -> Item:
             meas.append(m.mean - base.mean)
             exp.append(ctx.K * d)
             sig.append(referred_mean_u([(1.0, m.n, m.std), (1.0, base.n, base.std)]))
-        c, dev = jf.fifty_percent_candidate(steps, meas, exp)
-        cands.append(c)
-        pmfs.append(rg.fifty_percent_outcome_pmf(
-            steps, rg.fifty_percent_pass_probability(meas, [x for x, _ in sig], exp,
-                                                    dof=[n for _, n in sig])))
+        c, dev = _rule_run(steps, meas, exp, sig, cands, pmfs)
         dets[f"run{run}"] = {"increments_dps": steps, "steps_dps": steps, "deviation": dev,
                              "candidate_dps": c,
                              "samples": int(next(m.n for m in seg if m.role == "increment"))}
