@@ -421,9 +421,14 @@ def rule_outcome_uncertainty(pmfs: list[dict], value: float) -> tuple[Uncertaint
     response meets the criterion; :func:`gonio.specs._rate_family.formulas.max_outcome_pmf`
     of the directions) gives u_c, its standard deviation (None, "above the grid", counted
     as the largest tested step), and the statement: the central 95 % range of the outcome,
-    widened to hold the value — a discrete, skewed distribution, stated by its interval
-    (JCGM 101 7.7), no k (U: the distance to the upper end). A distribution of one outcome
-    (noise-free readings) has u_c = U = 0 and no interval.
+    widened to hold the value (where that range is one outcome, to the neighbouring outcomes
+    that can occur) — a discrete, skewed distribution, stated by its interval (JCGM 101 7.7),
+    no k (U: the distance to the upper end). A distribution of one outcome (noise-free
+    readings) has u_c = U = 0 and no interval.
+
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.01, 0.05: 0.98, 0.02: 0.01}], 0.05)
+    >>> u.interval
+    (0.02, 0.1)
 
     >>> u, _ = rule_outcome_uncertainty([{0.1: 0.25, 0.05: 0.5, 0.02: 0.25}], 0.05)   # mean 0.055
     >>> round(u.u_c, 6), u.interval, round(u.U, 6), u.k
@@ -437,11 +442,14 @@ def rule_outcome_uncertainty(pmfs: list[dict], value: float) -> tuple[Uncertaint
     u_c = math.sqrt(max(float(w @ (x - w @ x) ** 2), 0.0))
     lo, hi = (rg.outcome_quantile(pmf, q) for q in (0.025, 0.975))
     lo, hi = min(top if lo is None else lo, value), max(top if hi is None else hi, value)
+    if hi == lo:             # ≥ 95 % on one outcome: reach the neighbouring possible outcomes
+        lo = max((float(k) for k, p in zip(x, w) if k < lo and p > 1e-9), default=lo)
+        hi = min((float(k) for k, p in zip(x, w) if k > hi and p > 1e-9), default=hi)
     row = {"symbol": "rule_outcome", "source": "spread of the 50 % rule's outcome under the "
            "data's noise (its 95 % range is the interval)", "type": "A", "u": u_c, "c": 1.0,
            "contribution": u_c, "dof": None}
-    if hi == lo:
-        return Uncertainty([row], 0.0, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
+    if hi == lo:             # one possible outcome (noise-free readings)
+        return Uncertainty([row], u_c, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
     return Uncertainty([row], u_c, hi - value, None, None, None, 0.95, "outcome distribution",
                        interval=(lo, hi)), pmf
 
