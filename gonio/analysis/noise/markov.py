@@ -49,7 +49,7 @@ import numpy as np
 from gonio.analysis.noise.allan import AllanResult
 from gonio.analysis.noise.covariance import variance_covariance
 from gonio.analysis.noise.fit import (
-    FLICKER_COEFF, TERMS, _covariance_rows, _edf, _sandwich_covariance, _TERM_ALPHA, _wnnls,
+    FLICKER_COEFF, TERMS, covariance_rows, edf_memo, sandwich_covariance, TERM_ALPHA, wnnls,
     design_matrix,
 )
 from gonio.errors import GonioError
@@ -151,13 +151,13 @@ class MarkovFit:
 def _fit(var, a, m, n_phase, iterations):
     """IRLS non-negative fit (as :func:`.fit._fit_core`): coefficients, model, edf."""
     model = var.copy()
-    edf = _edf("adev", n_phase, m, np.zeros(m.size, dtype=np.int64))
+    edf = edf_memo("adev", n_phase, m, np.zeros(m.size, dtype=np.int64))
     p = np.zeros(a.shape[1])
     for _ in range(max(1, iterations)):
         sd = np.maximum(model, np.finfo(float).tiny) * np.sqrt(2.0 / edf)
-        p = _wnnls(a, var, sd)
+        p = wnnls(a, var, sd)
         model = np.maximum(a @ p, np.finfo(float).tiny)
-        edf = _edf("adev", n_phase, m, _TERM_ALPHA[np.argmax(a * p[None, :], axis=1)])
+        edf = edf_memo("adev", n_phase, m, TERM_ALPHA[np.argmax(a * p[None, :], axis=1)])
     sd = model * np.sqrt(2.0 / edf)
     return p, model, sd
 
@@ -203,7 +203,7 @@ def fit_markov_model(allan: AllanResult, *, iterations: int = 4) -> MarkovFit:
     u_n = 0.0
     n_col = TERMS.index("N")
     if p[n_col] > 0:
-        rows = _covariance_rows(tau)
+        rows = covariance_rows(tau)
         coef, markov = p.copy(), []
         if t_lo > 0:
             coef[2] = 0.0
@@ -219,7 +219,7 @@ def fit_markov_model(allan: AllanResult, *, iterations: int = 4) -> MarkovFit:
             d = (band_flicker_avar(tau, t_lo * BAND_RATIO, record)
                  - band_flicker_avar(tau, t_lo / BAND_RATIO, record)) / (2.0 * h)
             jac = np.column_stack([jac, p[2] * d])
-        cov = _sandwich_covariance(jac[rows], sd[rows], sigma) * max(1.0, chi2_red)
+        cov = sandwich_covariance(jac[rows], sd[rows], sigma) * max(1.0, chi2_red)
         k = int(np.flatnonzero(active == n_col)[0])
         u_n = math.sqrt(max(cov[k, k], 0.0)) / (2.0 * math.sqrt(p[n_col]))
     v = np.sqrt(p)
