@@ -1,0 +1,182 @@
+"""The in-situ tilt estimate (``[tilt_estimate]``, beyond the draft) taken through the
+instruments: ``gonio acquire`` on the served virtual bench writes the rests as ``gonio
+simulate`` does (same rows, same columns), the tilt it gives agrees with the simulation's of
+the same bench and seed and with the bench file's own tilt within the estimate's
+uncertainty, the calibration then states K corrected by the measured tilt (line K_te), and an
+acquisition interrupted in the middle of the rests continues at the next position.
+
+The served bench and ``gonio simulate`` share the bench's physics and seeding but not the
+timing (a served session's instants are the host's), so the two files agree within the
+noise, not bit for bit: the comparisons are within the uncertainties."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gonio.cli import main
+from gonio.physics.kinematics import trapezoid_duration_s
+from gonio.specs.ogam_draft.acquisition import acquire, plan_programme, programme_duration_s
+from gonio.specs.ogam_draft.acquisition_module import AcquisitionModule
+from gonio.specs.ogam_draft.bench import load_bench
+from gonio.specs.ogam_draft.protocol import load_protocol
+from gonio.specs.ogam_draft.readings import read_readings
+from gonio.specs.ogam_draft.served import serve_bench
+from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
+
+ROOT = Path(__file__).resolve().parents[1]
+PROTOCOL = ROOT / "tests" / "data" / "small-tilt-protocol.toml"
+SEED = 3
+SPEED = 200.0          # simulated seconds per real second: the programme in ~7 s
+META = {"latitude_deg": "40.2"}
+N_TOTAL = 3 + 8 + 3    # 7.3's readings, the 8 rests, 7.1's rounds
+
+
+@pytest.fixture(scope="module")
+def rlg():
+    return load_bench("rlg")
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """``gonio simulate`` + ``gonio calibrate`` of the protocol on the same bench and seed."""
+    d = tmp_path_factory.mktemp("sim")
+    assert main(["simulate", "--protocol", str(PROTOCOL), "--bench", "rlg", "--seed", str(SEED),
+                 "--out", str(d / "sim")]) == 0
+    return d / "sim" / "readings.csv", _calibrate(d / "sim" / "readings.csv", d / "cal")
+
+
+def _calibrate(readings: Path, out: Path) -> dict:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["calibrate", str(readings), "--protocol", str(PROTOCOL), "--out", str(out)])
+    assert rc == 0, err.getvalue()
+    return json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
+
+
+def _rows(path: Path):
+    df = read_readings(path).data
+    return df[["test", "series", "round", "rate_dps", "orientation", "table_deg"]] \
+        .fillna(-1.0).to_records(index=False).tolist()
+
+
+def _assert_tilt_agrees(acq: Path, sim: Path, bench) -> None:
+    """ψ and α of the two files agree within k95·√(u_a² + u_s²) (ν = N − 3 each; the
+    smaller ν's Student factor), and each holds the bench file's ψ and α within its own
+    k95·u (the bench's truth, independent of the estimator)."""
+    a, s = (tilt_estimate_from_readings(read_readings(p)) for p in (acq, sim))
+    k = max(a.k95, s.k95)
+    assert abs(a.tilt_deg - s.tilt_deg) <= k * math.hypot(a.u_tilt_deg, s.u_tilt_deg), (a, s)
+    d_az = (a.tilt_azimuth_table_deg - s.tilt_azimuth_table_deg + 180.0) % 360.0 - 180.0
+    assert abs(d_az) <= k * math.hypot(a.u_phase_deg, s.u_phase_deg), (a, s)
+    inst = bench.instrument
+    for e in (a, s):
+        assert abs(e.tilt_deg - inst.tilt_deg) <= e.k95 * e.u_tilt_deg, e
+        d = (e.tilt_azimuth_table_deg - inst.tilt_azimuth_deg + 180.0) % 360.0 - 180.0
+        assert abs(d) <= e.k95 * e.u_phase_deg, e
+        assert e.n_positions == 8 and e.dof == 5
+
+
+def _assert_k_corrected(acq_items: dict, sim_items: dict) -> None:
+    """Both calibrations state K corrected by the measured tilt (budget line K_te, not
+    K_tilt) and the two K agree within their U (root sum of squares)."""
+    for it in (acq_items, sim_items):
+        sf = it["scale_factor"]
+        assert sf["details"]["stated"] == "tilt_corrected"
+        syms = [c["symbol"] for c in sf["uncertainty"]["components"]]
+        assert "K_te" in syms and "K_tilt" not in syms
+    a, s = acq_items["scale_factor"], sim_items["scale_factor"]
+    assert abs(a["value"] - s["value"]) <= math.hypot(a["uncertainty"]["U"],
+                                                      s["uncertainty"]["U"])
+
+
+# ------------------------------------------------------------------ the plan
+def test_plan_takes_the_rests_after_zero_stability_uncompensated():
+    proto = load_protocol(PROTOCOL)
+    blocks = plan_programme(proto)
+    assert [b.label for b in blocks][:3] == ["zero_stability", "tilt_estimate up",
+                                            "scale_factor up 60 dps series 1"]
+    te = blocks[1]
+    assert te.positions and not te.at_rest and te.rezero
+    assert [st.stop_deg for st in te.steps] == [45.0 * i for i in range(8)]
+    assert {(st.test, st.series, st.rate_dps, st.read_delay_s, st.rest_s) for st in te.steps} \
+        == {("tilt_estimate", 1, 60.0, 60.0, 5.0)}
+    # each rest: the 45° move at 60 °/s (none for the first), the settling, the dwell; no
+    # static phase (the Earth rate is the signal)
+    accel = 200.0
+    per = programme_duration_s(blocks, proto, accel)[3:11]
+    move = trapezoid_duration_s(45.0, 60.0, accel)
+    assert move == pytest.approx(45.0 / 60.0 + 60.0 / accel)      # trapezoid: d/v + v/a
+    assert per == pytest.approx([65.0] + [move + 65.0] * 7)
+
+
+# ------------------------------------------------------------------ against the simulation
+def test_acquired_rests_give_the_simulations_tilt_and_correct_k(rlg, simulated, tmp_path):
+    s = serve_bench(rlg, speed=SPEED, seed=SEED)
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            rc = main(["acquire", "--protocol", str(PROTOCOL), "--table", s.table_resource,
+                       "--gyro", s.gyro_resource, "--out", str(tmp_path / "acq"),
+                       "--meta", "latitude_deg=40.2"])
+    finally:
+        s.close()
+    assert rc == 0, err.getvalue()
+    assert "tilt_estimate" not in err.getvalue()           # no note: the rests are taken
+    acq = tmp_path / "acq" / "readings.csv"
+    assert _rows(acq) == _rows(simulated[0])                # same rows, same positions
+    df = read_readings(acq).data
+    te = df[df["test"] == "tilt_estimate"]
+    # each dwell is the protocol's 60 s plus the host's latency on the module's clock
+    assert np.all((te["time_s"] >= 60.0) & (te["time_s"] < 66.0))
+    _assert_tilt_agrees(acq, simulated[0], rlg)
+    _assert_k_corrected(_calibrate(acq, tmp_path / "cal"), simulated[1])
+
+
+class InterruptedModule(AcquisitionModule):
+    """A module whose ``stop_at``-th ``READ?`` is interrupted (the operator's Ctrl-C)."""
+
+    stop_at = 0
+    reads = 0
+
+    def read(self, expected_counts: float = 0.0):
+        type(self).reads += 1
+        if type(self).reads == self.stop_at:
+            raise KeyboardInterrupt
+        return super().read(expected_counts)
+
+
+def test_resume_in_the_middle_of_the_rests(rlg, simulated, tmp_path):
+    """Stopped at the 5th rest's reading: 7.3's readings and 4 rests stand (each rest has
+    its own zeroing); the resume takes the 4 other rests and 7.1 only, every reading once."""
+    out = tmp_path / "acq"
+    # READ? calls: 7.3's static phase (measured compensation) and its 3 readings, then one
+    # per rest: the 9th is the 5th rest's
+    InterruptedModule.stop_at, InterruptedModule.reads = 1 + 3 + 5, 0
+    s = serve_bench(rlg, speed=SPEED, seed=SEED)
+    try:
+        with pytest.raises(KeyboardInterrupt), contextlib.redirect_stderr(io.StringIO()):
+            acquire(load_protocol(PROTOCOL), s.table_resource, s.gyro_resource, out,
+                    metadata=META, gyro_cls=InterruptedModule)
+        kept = read_readings(out / "readings.csv")
+        assert kept.metadata["acquisition"] == "incomplete"
+        assert (kept.data["test"] == "tilt_estimate").sum() == 4 and len(kept.data) == 7
+        before = (out / "readings.csv").read_text(encoding="utf-8")
+        with contextlib.redirect_stderr(io.StringIO()):
+            res = acquire(load_protocol(PROTOCOL), s.table_resource, s.gyro_resource, out,
+                          resume=True, metadata=META)
+    finally:
+        s.close()
+    assert res.complete and res.taken == N_TOTAL - 7 and res.total == N_TOTAL
+    after = (out / "readings.csv").read_text(encoding="utf-8")
+    body = [ln for ln in before.splitlines() if ln and not ln.startswith("#")]
+    assert after.splitlines()[-N_TOTAL - 1:][:len(body)] == body    # the kept rows stand
+    assert _rows(out / "readings.csv") == _rows(simulated[0])       # every reading once
+    _assert_tilt_agrees(out / "readings.csv", simulated[0], rlg)
+    _assert_k_corrected(_calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
