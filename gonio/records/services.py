@@ -1685,9 +1685,13 @@ def propose_interval(store, instrument_id: int, hist: dict | None = None):
 def _issued_history(instrument_id: int):
     """The result rows of an instrument's issued calibrations (those :func:`history` shows
     with a certificate number), as a WHERE clause over ResultItem joined to Calibration."""
-    issued = select(Certificate.calibration_id).where(Certificate.number != "")
+    # correlated (EXISTS), so that each of the instrument's calibrations looks its
+    # certificate up by ix_certificates_calibration_id: ``id IN (SELECT calibration_id FROM
+    # certificates …)`` read the whole certificates table on every instrument page
+    issued = select(Certificate.id).where(Certificate.calibration_id == Calibration.id,
+                                          Certificate.number != "").exists()
     return (Calibration.instrument_id == int(instrument_id),
-            Calibration.status.in_(_HISTORY_DONE), Calibration.id.in_(issued))
+            Calibration.status.in_(_HISTORY_DONE), issued)
 
 
 def _issued_table(store, instrument_id: int, limits: dict) -> tuple[dict, dict]:
