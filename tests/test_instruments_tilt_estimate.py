@@ -169,6 +169,13 @@ def test_acquired_rests_give_the_simulations_tilt_and_correct_k(rlg, simulated, 
     _assert_k_corrected(_calibrate(acq, tmp_path / "cal"), simulated[1])
 
 
+class Terminal(io.StringIO):
+    """stderr as an interactive terminal (the status lines are written only to one)."""
+
+    def isatty(self) -> bool:
+        return True
+
+
 class InterruptedModule(AcquisitionModule):
     """A module whose ``stop_at``-th ``READ?`` is interrupted (the operator's Ctrl-C)."""
 
@@ -198,12 +205,19 @@ def test_resume_in_the_middle_of_the_rests(rlg, simulated, tmp_path):
         assert kept.metadata["acquisition"] == "incomplete"
         assert (kept.data["test"] == "tilt_estimate").sum() == 4 and len(kept.data) == 7
         before = (out / "readings.csv").read_text(encoding="utf-8")
-        with contextlib.redirect_stderr(io.StringIO()):
+        term = Terminal()
+        with contextlib.redirect_stderr(term):
             res = acquire(load_protocol(PROTOCOL), s.table_resource, s.gyro_resource, out,
                           resume=True, metadata=META)
     finally:
         s.close()
     assert res.complete and res.taken == N_TOTAL - 7 and res.total == N_TOTAL
+    # on a terminal: the rest under way, then the point count (7.3 and 4 rests kept: the
+    # resume's first reading is point 8 of 18)
+    shown = term.getvalue()
+    assert "acquire: tilt estimate rest 5/12 at 120°, 2 min 00 s dwell" in shown, shown
+    assert "rest 4/12" not in shown
+    assert f"acquire: point 8/{N_TOTAL}  tilt_estimate series 1 round 5  about" in shown, shown
     after = (out / "readings.csv").read_text(encoding="utf-8")
     body = [ln for ln in before.splitlines() if ln and not ln.startswith("#")]
     assert after.splitlines()[-N_TOTAL - 1:][:len(body)] == body    # the kept rows stand
