@@ -13,6 +13,9 @@ the mean and sd of z = (value − truth)/u_c, flags (< 90 %, sd z < 0.3) and the
 trial; the items without a truth are named. Figures: README (triad section),
 docs/alignment.md §Coverage, docs/thermal-model.md §7.
 
+The trial is the one of ``gonio validate --spec triad-alignment`` (its ``typeb`` case draws the
+table the same way; :mod:`gonio.specs.triad_alignment.study`, which also has the worst case).
+
 Run: ``python benchmarks/bench_triad_coverage.py [--trials 100] [--seed 2500000]``
 """
 
@@ -21,62 +24,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout
 
-import numpy as np  # noqa: E402
-
 from gonio.pipeline.coverage import coverage_table_from, format_coverage  # noqa: E402
-from gonio.pipeline.dispatch import screen_and_calibrate  # noqa: E402
-from gonio.specs import get  # noqa: E402
-
-
-def triad_trial(seed: int, protocol: str = "triad-alignment", bench: str = "mems-triad",
-                draw: bool = True) -> tuple[dict[str, dict], list[str]]:
-    """One simulated + calibrated triad programme: ({item: {clause, value, truth, U, u_c}},
-    [items without a truth]). ``draw``: the bench's laboratory Type B effects drawn from
-    the seed (``simulate.for_trial``: the table's rate error, its axis at each
-    orientation); the truth is the drawn bench's (the triad's own parameters, which the
-    draw leaves as they are)."""
-    from gonio.specs.triad_alignment.bench import load_triad_bench, load_triad_protocol
-    from gonio.specs.triad_alignment.simulate import for_trial
-
-    spec = get("triad-alignment")
-    b = for_trial(bench, int(seed)) if draw else load_triad_bench(bench)
-    truth = spec.truth(b, load_triad_protocol(protocol))
-    with tempfile.TemporaryDirectory() as d:
-        files = spec.simulate(d, protocol=protocol, bench=b, seed=int(seed))
-        res = screen_and_calibrate(spec, files["readings"], protocol)
-    out, no_truth = {}, []
-    leak = realised_leakage(res, truth)
-    for key, it in res.items.items():
-        if key not in truth:
-            no_truth.append(key)
-            continue
-        if not it.measured or it.uncertainty is None:
-            continue
-        out[key] = {"clause": it.clause, "value": float(it.value),
-                    "truth": float(leak.get(key, truth[key]["value"])),
-                    "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c)}
-    return out, no_truth
-
-
-def realised_leakage(res, truth: dict) -> dict[str, float]:
-    """The leakage this trial's alignment leaves: (M̂⁻¹M − I)_ij with the certified M̂ and the
-    bench's true M. The item L_ij states 0 ± U (zero for the estimate by construction;
-    ``SPEC.truth`` gives the expectation 0), so its U is checked against what the alignment
-    actually leaves, not against a constant that every trial matches."""
-    ax = "xyz"
-    if not all(res.items[f"M_{a}{b}"].measured for a in ax for b in ax):
-        return {}
-    m_hat = np.array([[res.items[f"M_{a}{b}"].value for b in ax] for a in ax], float)
-    m = np.array([[truth[f"M_{a}{b}"]["value"] for b in ax] for a in ax], float)
-    left = np.linalg.solve(m_hat, m) - np.eye(3)
-    return {f"L_{a}{b}": float(left[i, j]) for i, a in enumerate(ax)
-            for j, b in enumerate(ax) if i != j}
+from gonio.specs.triad_alignment.study import triad_trial  # noqa: E402
 
 
 def main() -> None:

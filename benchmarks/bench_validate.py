@@ -2,10 +2,13 @@
 
 1. Per-trial cost: one virtual calibration of the validation (the RLG bench at 100 Hz,
    7.1 + 7.4 with its 10 series), N trials in one process, with
-     a. the code of the start commit (a git worktree of it on PYTHONPATH, in a subprocess),
+     a. the code of ``--before REV`` (a git worktree of it on PYTHONPATH, in a subprocess),
      b. this tree,
    alternated (a, b, a, b) so both see the same machine load; trials per second (CPU time
-   and wall) and the ratio b/a (target ≥ 2).
+   and wall) and the ratio b/a (target ≥ 2). The comparison needs REV to hold what the
+   timing imports (:data:`BEFORE_NEEDS`); a revision without it (the default, the start
+   commit, predates the package layout) is not checked out: this tree is timed alone and
+   the reason printed.
 2. The execution engine (this tree): trials per second of ``validate`` on 1 and 2 local
    joblib workers and on a 2-worker ``distributed.LocalCluster`` (started here; the study
    connects to it by its tcp:// address, with the Dask settings the engine gives the
@@ -22,16 +25,19 @@
    the start-up is the import plus the first trial's excess over a warm trial (what every
    new worker pays once), best of ``--startup-runs``; and whether SymPy was imported (the
    trial path must not need it). Then the fixed cost of a whole ``gonio validate`` as a user
-   runs it (the default optical study at 5 Hz, one worker): the command with 2 and with 4
-   trials, CPU (the command and its worker processes) and wall, and the fixed cost
-   2·T(2) − T(4) (the study's cost extrapolated to no trials; target < 3 s).
+   runs it, for every specification with a coverage study (the optical draft's default
+   study at 5 Hz; the rate specifications' item studies with their defaults), one worker:
+   the command with 2 and with 4 trials, CPU (the command and its worker processes) and
+   wall, and the fixed cost 2·T(2) − T(4) (the study's cost extrapolated to no trials;
+   target < 3 s). ``--startup-only`` prints item 3 alone (no checkout, no engine study).
 
 The worker counts are 1, 2, 4, 8, 16 up to the machine's cores (on 2 cores: 1 and 2); the
 efficiency of n workers is rate(n) / (n · rate(1)). The Dask LocalCluster has the largest
 count. On a 16-core machine: ``--trials 3200`` (the issue's figure).
 
 Usage: python benchmarks/bench_validate.py [--trials-per-cost 8] [--trials 48] [--batch N]
-       [--rounds 2] [--skip-cost] [--startup-runs 3] [--startup-only]
+       [--rounds 2] [--skip-cost] [--before REV] [--startup-runs 3] [--startup-only]
+       [--specs KEY,KEY]
 The load average is printed beside every figure: on a shared machine (load above the
 number of cores) the second worker shares a core with other processes and the scaling
 figure measures that, not gonio.
@@ -51,6 +57,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 START_COMMIT = "477f910"       # main before issue 16
+# what the per-trial timing (COST) imports from the "before" tree, besides the study code
+BEFORE_NEEDS = ("gonio/specs/ogam_draft/bench",)
 
 COST = r"""
 import sys, time
@@ -71,6 +79,54 @@ for s in range(n):
     run_trial(p, b, s)
 print(n / (time.process_time() - c0), n / (time.perf_counter() - w0))
 """
+
+
+def before_missing(rev: str) -> str | None:
+    """Why ``rev`` cannot be timed against this tree (None when it can): an unknown
+    revision, or one without a path of :data:`BEFORE_NEEDS` (a module or a package)."""
+    def has(path: str) -> bool:
+        return any(subprocess.run(["git", "-C", str(ROOT), "cat-file", "-e", f"{rev}:{p}"],
+                                  capture_output=True).returncode == 0
+                   for p in (path, path + ".py"))
+    if subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet",
+                       f"{rev}^{{commit}}"], capture_output=True).returncode:
+        return f"{rev} is not a commit of this repository"
+    missing = [p for p in BEFORE_NEEDS if not has(p)]
+    return f"{rev} has no {', '.join(missing)}" if missing else None
+
+
+def per_trial_cost(before: str, n: int) -> None:
+    """Item 1 of the module docstring: ``before`` against this tree, or this tree alone
+    (with the reason) when ``before`` lacks what the timing imports."""
+    why = before_missing(before)
+    if why is not None:
+        cpu, wall = max(cost(ROOT, n) for _ in range(2))
+        print(f"one trial (this tree): {cpu:.2f} trials/s CPU, {wall:.2f} trials/s wall (best "
+              f"of 2 x {n}; load {os.getloadavg()[0]:.1f}); no before/after ratio: {why} "
+              "(--before REV: a revision that has it)", flush=True)
+        return
+    with tempfile.TemporaryDirectory(prefix="gonio-bench-validate-") as tmp:
+        wt = Path(tmp) / "before"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt),
+                        before], check=True, capture_output=True)
+        try:
+            runs = {"before": [], "after": []}
+            for _ in range(2):
+                runs["before"].append(cost(wt, n))
+                runs["after"].append(cost(ROOT, n))
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(wt)],
+                           capture_output=True)
+    best = {k: (max(x[0] for x in v), max(x[1] for x in v)) for k, v in runs.items()}
+    for k in ("before", "after"):
+        print(f"one trial ({k:<6}, {before if k == 'before' else 'this tree'}"
+              f"): {best[k][0]:.2f} trials/s CPU, {best[k][1]:.2f} trials/s wall "
+              f"(best of 2 x {n})", flush=True)
+    r_cpu = best["after"][0] / best["before"][0]
+    r_wall = best["after"][1] / best["before"][1]
+    print(f"per-trial speed-up: {r_cpu:.2f}x CPU, {r_wall:.2f}x wall (target >= 2x): "
+          f"{'OK' if min(r_cpu, r_wall) >= 2 else 'MISSED'} (load {os.getloadavg()[0]:.1f})",
+          flush=True)
 
 
 def cost(pythonpath: Path, n: int) -> tuple[float, float]:
@@ -121,17 +177,27 @@ def startup(runs: int) -> None:
           f"{'yes' if sym else 'no'} (load {os.getloadavg()[0]:.1f})", flush=True)
 
 
-def study_fixed_cost(runs: int) -> None:
-    """The fixed cost of ``gonio validate`` (item 3 of the module docstring), best of
-    ``runs`` for each trial count."""
-    best = {}
+def study_specs() -> list[str]:
+    """Keys of the specifications with a coverage study (``gonio validate --spec KEY``)."""
+    r = subprocess.run([sys.executable, "-c", "from gonio.specs import available; print(' '.join("
+                        "k for k, s in available().items() if s.coverage is not None))"],
+                       cwd=ROOT, capture_output=True, text=True, check=True,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    return r.stdout.split()
+
+
+def study_fixed_cost(runs: int, spec: str) -> None:
+    """The fixed cost of ``gonio validate --spec spec`` (item 3 of the module docstring),
+    best of ``runs`` for each trial count."""
+    extra = ["--sample-rate-hz", "5"] if spec == "ogam-draft" else []
+    best, load0 = {}, os.getloadavg()[0]
     for trials in (2, 4):
         for _ in range(runs):
             with tempfile.TemporaryDirectory(prefix="gonio-bench-study-") as tmp:
                 before = resource.getrusage(resource.RUSAGE_CHILDREN)
                 w0 = time.perf_counter()
-                subprocess.run([sys.executable, "-m", "gonio", "validate", "--trials",
-                                str(trials), "--workers", "1", "--sample-rate-hz", "5",
+                subprocess.run([sys.executable, "-m", "gonio", "validate", "--spec", spec,
+                                "--trials", str(trials), "--workers", "1", *extra,
                                 "--out", str(Path(tmp) / "out")], check=True, cwd=tmp,
                                capture_output=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
                 wall = time.perf_counter() - w0
@@ -140,10 +206,12 @@ def study_fixed_cost(runs: int) -> None:
             old = best.get(trials, (float("inf"), float("inf")))
             best[trials] = (min(old[0], cpu), min(old[1], wall))
     (c2, w2), (c4, w4) = best[2], best[4]
-    print(f"gonio validate, optical study at 5 Hz, 1 worker (best of {runs}): 2 trials "
-          f"{c2:.2f} s CPU / {w2:.2f} s wall, 4 trials {c4:.2f} s CPU / {w4:.2f} s wall; "
-          f"fixed cost 2*T(2) - T(4): {2 * c2 - c4:.2f} s CPU, {2 * w2 - w4:.2f} s wall "
-          f"(target < 3 s; load {os.getloadavg()[0]:.1f})", flush=True)
+    fixed = 2 * c2 - c4
+    print(f"gonio validate --spec {spec}{' ' + ' '.join(extra) if extra else ''}, 1 worker "
+          f"(best of {runs}): 2 trials {c2:.2f} s CPU / {w2:.2f} s wall, 4 trials {c4:.2f} s "
+          f"CPU / {w4:.2f} s wall; fixed cost 2*T(2) - T(4): {fixed:.2f} s CPU, "
+          f"{2 * w2 - w4:.2f} s wall (target < 3 s of CPU: {'OK' if fixed < 3 else 'MISSED'}; "
+          f"load {load0:.1f} -> {os.getloadavg()[0]:.1f})", flush=True)
 
 
 def tree_cpu_s() -> float:
@@ -181,38 +249,25 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=2,
                     help="interleaved rounds of the three studies (the best of each is kept)")
     ap.add_argument("--skip-cost", action="store_true")
+    ap.add_argument("--before", default=START_COMMIT,
+                    help="revision the per-trial cost is compared with (item 1; only when it "
+                         f"has {', '.join(BEFORE_NEEDS)}; default {START_COMMIT})")
     ap.add_argument("--startup-runs", type=int, default=3)
     ap.add_argument("--startup-only", action="store_true",
-                    help="print the start-up of a fresh worker process only (item 3)")
+                    help="item 3 only: the start-up of a fresh worker process and the "
+                         "fixed cost of gonio validate per specification")
+    ap.add_argument("--specs", default=None,
+                    help="comma-separated specification keys for the fixed cost (default: "
+                         "every one with a coverage study)")
     a = ap.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores", flush=True)
-    if not a.skip_cost:
-        with tempfile.TemporaryDirectory(prefix="gonio-bench-validate-") as tmp:
-            wt = Path(tmp) / "before"
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt),
-                            START_COMMIT], check=True, capture_output=True)
-            try:
-                runs = {"before": [], "after": []}
-                for _ in range(2):
-                    runs["before"].append(cost(wt, a.trials_per_cost))
-                    runs["after"].append(cost(ROOT, a.trials_per_cost))
-            finally:
-                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(wt)],
-                               capture_output=True)
-        best = {k: (max(x[0] for x in v), max(x[1] for x in v)) for k, v in runs.items()}
-        for k in ("before", "after"):
-            print(f"one trial ({k:<6}, {'start commit ' + START_COMMIT if k == 'before' else 'this tree'}"
-                  f"): {best[k][0]:.2f} trials/s CPU, {best[k][1]:.2f} trials/s wall "
-                  f"(best of 2 x {a.trials_per_cost})", flush=True)
-        r_cpu = best["after"][0] / best["before"][0]
-        r_wall = best["after"][1] / best["before"][1]
-        print(f"per-trial speed-up: {r_cpu:.2f}x CPU, {r_wall:.2f}x wall (target >= 2x): "
-              f"{'OK' if min(r_cpu, r_wall) >= 2 else 'MISSED'}", flush=True)
-
+    if not (a.skip_cost or a.startup_only):
+        per_trial_cost(a.before, a.trials_per_cost)
     startup(a.startup_runs)
-    study_fixed_cost(max(1, a.startup_runs - 1))
+    for spec in a.specs.split(",") if a.specs else study_specs():
+        study_fixed_cost(max(1, a.startup_runs - 1), spec)
     if a.startup_only:
-        return
+        return 0
     sys.path.insert(0, str(ROOT))
     from joblib import Parallel, delayed
 

@@ -43,12 +43,7 @@ def test_wilson_and_item_coverage_by_hand():
 
 #: Items whose U the coverage study finds over-wide today (sd z < 0.3), each with the
 #: issue that fixes it; the test fails if the list is wrong either way.
-KNOWN_OVER_WIDE = {
-    ("iec62047-20", "startup_time"): "the study bench has no power-on transient: the true "
-                                     "start-up time is 0 and found 0 in most trials (z ≡ 0); "
-                                     "observed on the built-in benchmark, transient on "
-                                     "(docs/iec62047-20-readings.md#over-wide-budgets-left)",
-}
+KNOWN_OVER_WIDE: dict[tuple[str, str], str] = {}
 
 
 def two_sided_failures(df, spec) -> dict:

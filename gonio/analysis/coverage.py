@@ -22,7 +22,8 @@ from gonio.errors import GonioError
 
 __all__ = ["MIN_COVERAGE", "MIN_SD_Z", "clopper_pearson", "coverage_flags", "two_sided",
            "within", "binomial_u", "coverage", "wilson_interval", "ItemCoverage",
-           "item_coverage", "spawn_seed", "chi_square_z"]
+           "item_coverage", "spawn_seed", "chi_square_z", "stated_record",
+           "coverage_table_from", "format_coverage"]
 
 #: Wilson-interval coverage factor (95 %).
 _Z95 = 1.959963984540054
@@ -283,3 +284,69 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
                         cp_lo, cp_hi, z_mean, z_sd, tuple(coverage_flags(c, z_sd)),
                         statistic, **uc)
+
+
+def stated_record(u) -> dict:
+    """An item stated by its interval alone (k None: a dispersion, range or extreme,
+    :func:`gonio.result.statement.state_interval`): {"interval": [lo, hi], "nu": ν}, ν the
+    degrees of freedom its one-sided χ² limit was computed with (:func:`gonio.result.gum.
+    std_dev_uncertainty`: ν; a specification's dispersion of few values: the stated ν,
+    :func:`gonio.result.statement.stated_nu`, or ν itself above the ∞ threshold),
+    None for an interval of another model (the half range's); {} for a value ± U."""
+    from gonio.result.statement import stated_nu
+
+    if u.k is not None or u.interval is None:
+        return {}
+    nu = None
+    if u.k_source == "chi-square" and u.nu_eff is not None and math.isfinite(u.nu_eff):
+        ns = stated_nu(u.nu_eff)
+        nu = float(u.nu_eff) if math.isinf(ns) else ns
+    return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu}
+
+
+def coverage_table_from(trials: list[dict],
+                        items: tuple[str, ...] | None = None) -> "pd.DataFrame":
+    """Per item over the trials (in order): :class:`ItemCoverage` rows. A trial is {item:
+    {clause, value, truth, U, u_c}} with, for an item stated by its interval alone, {interval,
+    nu} (:func:`stated_record`); value None: not measured or no truth in that trial."""
+    import pandas as pd
+
+    recs: dict[str, list] = {}
+    stated: dict[str, list] = {}
+    clauses: dict[str, str] = {}
+    for tr in trials:
+        for key, r in tr.items():
+            if items is not None and key not in items:
+                continue
+            clauses[key] = r["clause"]
+            if r["value"] is not None:
+                recs.setdefault(key, []).append((r["value"], r["truth"], r["U"], r["u_c"]))
+                stated.setdefault(key, []).append(
+                    {"interval": r["interval"], "nu": r.get("nu")} if r.get("interval")
+                    else None)
+    rows = [item_coverage(v, k, clauses[k], stated[k]).__dict__ for k, v in recs.items()]
+    return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
+
+
+def format_coverage(df, title: str) -> str:
+    """The per-item coverage table as printed by ``gonio validate --spec`` and the benchmark."""
+    lines = [title, f"{'item':32s} {'clause':10s} {'n':>4s} {'cover':>6s} "
+             f"{'Clopper-Pearson 95 %':>20s} {'z mean':>7s} {'z sd':>6s} {'max|z|':>7s}"]
+    for r in df.itertuples():
+        flag = f"  FLAG: {', '.join(r.flags)}" if len(r.flags) else ""
+        zm = "—" if r.z_mean is None or r.z_mean != r.z_mean else f"{r.z_mean:+.2f}"
+        zs = "—" if r.z_sd is None or r.z_sd != r.z_sd else f"{r.z_sd:.2f}"
+        st = getattr(r, "statistic", "u_c")
+        on_uc = "" if st in ("u_c", None) or st != st else (
+            f"  [{'chi2 z' if st == 'chi-square' else st}; z on u_c: mean "
+            f"{r.z_uc_mean:+.2f}, sd {r.z_uc_sd:.2f}, max|z| {r.max_norm_error_uc:.2f}]")
+        lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
+                     f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
+                     f"{r.max_norm_error:7.2f}{on_uc}{flag}")
+    lines.append("cover: fraction of trials with |value - truth| <= U, or with the truth inside "
+                 "the stated interval for an item stated by its interval alone (95 % "
+                 "Clopper-Pearson interval); z = (value - truth)/u_c, or for a standard "
+                 "deviation stated by its chi-square interval [chi2 z] Phi^-1(F_chi2(nu "
+                 "value^2/truth^2; nu)) with z on u_c beside it; flagged: coverage < 90 % "
+                 "(under-covers), sd z < 0.3 (over-wide U)")
+    return "\n".join(lines) + "\n"

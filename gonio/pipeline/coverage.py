@@ -26,7 +26,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from gonio.analysis.coverage import ItemCoverage, item_coverage, spawn_seed, wilson_interval
+from gonio.analysis.coverage import (ItemCoverage, coverage_table_from, format_coverage,
+                                     item_coverage, spawn_seed, stated_record, wilson_interval)
 from gonio.atomic import write_text
 from gonio.errors import GonioError
 from gonio.pipeline.dispatch import screen_and_calibrate
@@ -83,7 +84,8 @@ def _studied(spec_key: str) -> Specification:
 
 def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
     """One virtual calibration (noise on): per item {clause, value, truth, U, u_c} and, for
-    an item stated by its interval alone, {interval, nu} (:func:`_stated`); value etc. None
+    an item stated by its interval alone, {interval, nu}
+    (:func:`gonio.analysis.coverage.stated_record`); value etc. None
     when the item was not measured or has no truth in this trial."""
     spec = _studied(spec_key)
     readings, truth_d = spec.run_trial(bench, protocol, int(seed))
@@ -97,46 +99,9 @@ def trial_records(spec_key: str, bench, protocol, seed: int) -> dict[str, dict]:
         out[key] = {"clause": it.clause,
                     **({"value": float(it.value), "truth": float(t),
                         "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
-                        **_stated(it.uncertainty)}
+                        **stated_record(it.uncertainty)}
                        if ok else {"value": None, "truth": None, "U": None, "u_c": None})}
     return out
-
-
-def _stated(u) -> dict:
-    """An item stated by its interval alone (k None: a dispersion, range or extreme,
-    :func:`gonio.result.statement.state_interval`): {"interval": [lo, hi], "nu": ν}, ν the
-    degrees of freedom its one-sided χ² limit was computed with (:func:`gonio.result.gum.
-    std_dev_uncertainty`: ν; a specification's dispersion of few values: the stated ν,
-    :func:`gonio.result.statement.stated_nu`, or ν itself above the ∞ threshold),
-    None for an interval of another model (the half range's); {} for a value ± U."""
-    from gonio.result.statement import stated_nu
-
-    if u.k is not None or u.interval is None:
-        return {}
-    nu = None
-    if u.k_source == "chi-square" and u.nu_eff is not None and math.isfinite(u.nu_eff):
-        ns = stated_nu(u.nu_eff)
-        nu = float(u.nu_eff) if math.isinf(ns) else ns
-    return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu}
-
-
-def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None) -> pd.DataFrame:
-    """Per item over the trials (in order): :class:`ItemCoverage` rows."""
-    recs: dict[str, list] = {}
-    stated: dict[str, list] = {}
-    clauses: dict[str, str] = {}
-    for tr in trials:
-        for key, r in tr.items():
-            if items is not None and key not in items:
-                continue
-            clauses[key] = r["clause"]
-            if r["value"] is not None:
-                recs.setdefault(key, []).append((r["value"], r["truth"], r["U"], r["u_c"]))
-                stated.setdefault(key, []).append(
-                    {"interval": r["interval"], "nu": r.get("nu")} if r.get("interval")
-                    else None)
-    rows = [item_coverage(v, k, clauses[k], stated[k]).__dict__ for k, v in recs.items()]
-    return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
 
 
 def coverage_study(spec_key: str, seeds, *, bench=None, protocol=None,
@@ -149,30 +114,6 @@ def coverage_study(spec_key: str, seeds, *, bench=None, protocol=None,
     b = bench if bench is not None else study_bench(spec)
     proto = protocol or spec.default_protocol
     return coverage_table_from([trial_records(spec.key, b, proto, s) for s in seeds], items)
-
-
-def format_coverage(df: pd.DataFrame, title: str) -> str:
-    """The per-item coverage table as printed by ``gonio validate --spec`` and the benchmark."""
-    lines = [title, f"{'item':32s} {'clause':10s} {'n':>4s} {'cover':>6s} "
-             f"{'Clopper-Pearson 95 %':>20s} {'z mean':>7s} {'z sd':>6s} {'max|z|':>7s}"]
-    for r in df.itertuples():
-        flag = f"  FLAG: {', '.join(r.flags)}" if len(r.flags) else ""
-        zm = "—" if r.z_mean is None or r.z_mean != r.z_mean else f"{r.z_mean:+.2f}"
-        zs = "—" if r.z_sd is None or r.z_sd != r.z_sd else f"{r.z_sd:.2f}"
-        st = getattr(r, "statistic", "u_c")
-        on_uc = "" if st in ("u_c", None) or st != st else (
-            f"  [{'chi2 z' if st == 'chi-square' else st}; z on u_c: mean "
-            f"{r.z_uc_mean:+.2f}, sd {r.z_uc_sd:.2f}, max|z| {r.max_norm_error_uc:.2f}]")
-        lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
-                     f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
-                     f"{r.max_norm_error:7.2f}{on_uc}{flag}")
-    lines.append("cover: fraction of trials with |value - truth| <= U, or with the truth inside "
-                 "the stated interval for an item stated by its interval alone (95 % "
-                 "Clopper-Pearson interval); z = (value - truth)/u_c, or for a standard "
-                 "deviation stated by its chi-square interval [chi2 z] Phi^-1(F_chi2(nu "
-                 "value^2/truth^2; nu)) with z on u_c beside it; flagged: coverage < 90 % "
-                 "(under-covers), sd z < 0.3 (over-wide U)")
-    return "\n".join(lines) + "\n"
 
 
 # ----------------------------------------------------------------------------- the study

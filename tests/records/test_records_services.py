@@ -451,3 +451,38 @@ def test_instrument_page_proposal_selected_in_the_database(store, people, limits
                                      4: "specification"}[n]
     if n == 6:      # the unlimited items' counts reach the staircase's note
         assert "drift not extrapolated" in got.detail
+
+
+def test_instrument_page_proposal_looks_certificates_up_by_index(sqlite_store):
+    """The proposal's queries (every instrument page) find each calibration's certificate
+    through ix_certificates_calibration_id: SQLite's own query plan (EXPLAIN QUERY PLAN) of
+    every statement they send names no full scan of ``certificates``, whose size grows with
+    the records (``id IN (SELECT calibration_id FROM certificates)`` scanned all of it),
+    and each one that reads certificates searches it by that index."""
+    from sqlalchemy import event
+
+    from tests.records.conftest import make_people
+
+    people = make_people(sqlite_store)
+    for seed in (1, 2, 3):            # other instruments' certificates in the table too
+        inst_id = _drawn_history(sqlite_store, people["tech"].id, [
+            {"item": "angle_deviation", "mpe": 3.0}], 12, 200, seed=seed)
+    sent = []
+
+    def keep(conn, cursor, statement, params, context, many):
+        if statement.lstrip().upper().startswith("SELECT"):
+            sent.append((statement, params))
+    event.listen(sqlite_store.engine, "before_cursor_execute", keep)
+    try:
+        services.propose_interval(sqlite_store, inst_id)
+    finally:
+        event.remove(sqlite_store.engine, "before_cursor_execute", keep)
+    with_certs = [(q, p) for q, p in sent if "FROM certificates" in q]
+    assert len(with_certs) >= 2, sent                # the count, the first date, the rows
+    with sqlite_store.engine.connect() as conn:
+        for statement, params in with_certs:
+            plan = [row[-1] for row in conn.exec_driver_sql("EXPLAIN QUERY PLAN " + statement,
+                                                            params).all()]
+            assert not [d for d in plan if d.startswith("SCAN certificates")], plan
+            assert any(d.startswith("SEARCH certificates USING")
+                       and "ix_certificates_calibration_id" in d for d in plan), plan

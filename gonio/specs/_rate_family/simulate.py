@@ -52,9 +52,11 @@ def study_bench(name: str = "mems-adxrs610", *, draw_equipment: bool = True,
 
     ``power_on_transient=True`` keeps the bench's own power-on transient (its
     ``warmup_bias_dps`` and ``warmup_tau_s``): JJF 1535's study, whose warm-up truth (7.2.9)
-    is computed from them and whose programme waits long enough after every other power-on
-    for the transient to have died away (``warmup_s``). With it off the warm-up time is 0 and
-    found 0: value = truth in every trial, its coverage not measured at all.
+    is computed from them, and IEC 62047-20's, whose 5.3.3.5 drift and 5.3.3.9 start-up
+    truths are; both programmes wait long enough after every other power-on for the
+    transient to have died away (``warmup_s``). With it off the warm-up and start-up times
+    are 0 and found 0 (value = truth in every trial, the coverage not measured at all) and
+    the 5.3.3.5 drift is 0, a truth at the bound of a non-negative maximum.
 
     ``cross_axis=True`` keeps the gyro's own cross-axis sensitivity (IEC 62047-20's study,
     whose truths carry it: 5.2, the bias and 5.3.3.8 with cross-axis × Earth rate). With it

@@ -100,8 +100,18 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"χ² interval at the floor", "底值处的 χ² 区间"),
     (r"bias correction of the −½ line under the fitted five-term model \(half the full "
      r"correction\)", "拟合五项模型下 −½ 斜率直线的偏差修正（取全修正的一半）"),
-    (r"detection: back to the last excursion beyond band \+ zσ \(not noise alone\)",
-     "判定：回溯至最后一次超出 带宽 + zσ 的偏移（非仅噪声）"),
+    (r"time outside the band: the count's spread and the reference's error \(noise, bias "
+     r"drift\) through the local slope",
+     "带外时间：计数的分散性及参考值误差（噪声、零偏漂移）经局部斜率传递"),
+    (r"noise of the visits' bias means", "各次到达零偏平均值的噪声"),
+    (r"bias drift over the session \(Allan fit: RRW, BI\), variogram form",
+     "整个过程中的零偏漂移（Allan 拟合：RRW、BI），变差函数形式"),
+    (r"chamber deviation at each set point \(rectangular, shared by its visits\)",
+     "各设定点的温箱偏差（矩形分布，同一设定点的各次到达共用）"),
+    (r"chamber's periodic fluctuation", "温箱的周期性波动"),
+    (r"the gyro's place in the volume", "陀螺在温箱容积中的位置"),
+    (r"selection excess of the largest \|R\| over the supplies \(midpoint ± c_m·σ/2 removed\)",
+     "各供电下 |R| 取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
     (r"least-squares slope \((\w+)\)", "最小二乘斜率（{1}）"),
     (r"χ² intervals of the fit points", "拟合点的 χ² 区间"),
     (r"selection excess of the largest of the noisy differences over the temperatures "

@@ -17,7 +17,7 @@ import pandas as pd
 
 from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
-from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
@@ -610,21 +610,15 @@ def bias_temperature(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.6 b): bias temperature coefficient, the least-squares slope of bias
     against temperature through every visit (up and down passes), (°/s)/°C; a) the largest
     departures from the base-temperature bias and 5.3.3.7 the hysteresis (largest
-    |B_up(T) − B_down(T)|) in the details. Input axis horizontal east: zero Earth input."""
+    |B_up(T) − B_down(T)|) in the details. Input axis horizontal east: zero Earth input.
+    Uncertainty: :func:`bias_tc_budget` (the residual scatter about the line is in the
+    details: it holds the curvature of b(T), which moves the residuals and not the slope)."""
     t, cl, un = "bias temperature coefficient", "5.3.3.6", "(°/s)/°C"
     m = _miss(ctx, "bias_temperature", "bias_temperature_coefficient", t, cl, un)
     if m:
         return m
-    kmap = {round(c["T"], 6): c["a"] for c in _sf_runs(ctx, "sf_temperature")} \
-        if ctx.has("sf_temperature") else {}
-    T, B, us = [], [], []
-    for s in segment_means(ctx.df, "bias_temperature"):
-        a = kmap.get(round(s.temperature_c, 6), ctx.a_base)
-        earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(s.up_axis, s.north_axis))
-        T.append(s.temperature_c)
-        B.append((s.mean - ctx.null_output) / a - earth)
-        us.append(s.std / math.sqrt(s.n) / abs(a))
-    T, B = np.array(T), np.array(B)
+    pts = _bias_temperature_points(ctx)
+    T, B = np.array([p[0] for p in pts]), np.array([p[1] for p in pts])
     slope, c0 = rg.least_squares_line(T, B)
     r = B - (slope * T + c0)
     se = math.sqrt(float(r @ r) / (T.size - 2) / float(((T - T.mean()) ** 2).sum())) if T.size > 2 else 0.0
@@ -635,12 +629,66 @@ def bias_temperature(ctx: Context) -> Item:
         b = B[T == Tv]
         if b.size >= 2:
             hyst = max(hyst, float(b.max() - b.min()))
-    u = gum(lambda s: s, [from_u("slope", slope, se, dof=max(T.size - 2, 1),
-                                 source="least-squares slope (residual scatter)")])
+    u = bias_tc_budget(pts, lambda sep: drift_u_dps(ctx, sep), ctx.chamber_deviation_c,
+                       ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s,
+                       ctx.chamber_uniformity_c)
     return Item("bias_temperature_coefficient", t, cl, un, slope, uncertainty=u, details={
         "temperatures_c": T, "bias_dps": B, "bias_dph": B * S_PER_H,
+        "residual_scatter_u": se,
         "variation_max_dps": float((B - base.mean()).max()),
         "variation_min_dps": float((B - base.mean()).min()), "hysteresis_dps": hyst})
+
+
+def bias_tc_budget(pts, drift_u, deviation_bound_c: float, fluctuation_c: float,
+                   period_s: float | None, uniformity_c: float) -> Uncertainty:
+    """Budget of the 5.3.3.6 slope β = Σ w_i B_i, w_i = (T_i − T̄)/S_TT over the visits
+    ``pts`` ((T set point °C, B °/s, u(B) °/s, ν, mid-time s) in visit order), from the
+    physics of each visit's bias error e_i (β − β_true = Σ w_i e_i):
+
+    - the noise of the visit means: Σ w_i² u(B_i)² (type A, ν Welch–Satterthwaite);
+    - the bias drift over the session, a process of stationary increments with
+      D(s) = ``drift_u``(s)² (the static record's Allan fit): with Σ w_i = 0 its variance is
+      −½ Σ_ij w_i w_j D(|t_i − t_j|), exact for any such process (variogram form);
+    - the chamber's deviation at each set point (uniform ± ``deviation_bound_c``, one per set
+      point, shared by the visits to it: the readings log the set point): Σ_T (b′(T)·Σ_{i∈T}
+      w_i)²·bound²/3, b′(T) = c₁ + 2c₂T from a quadratic fit of the visits' biases;
+    - the chamber's periodic fluctuation (amplitude ``fluctuation_c``, period ``period_s``,
+      phase unknown, uniform): A·|Σ w_i b′(T_i) e^{2πi t_i/P}|/√2 (the record's mean of
+      the sinusoid bounded by its mid-time value); A·Σ|w_i b′(T_i)|/√2 without a period;
+    - the gyro's place in the volume (uniform ± ``uniformity_c``/2, common to every visit):
+      |Σ w_i b′(T_i)|·(uniformity_c/2)/√3 (0 for a linear b(T)).
+    The residual scatter about the line is not used: a curved b(T) spreads the residuals by
+    b₂(T − T̄)² and leaves the slope through points symmetric about T_BASE unbiased."""
+    T = np.array([p[0] for p in pts], float)
+    B = np.array([p[1] for p in pts], float)
+    uB = np.array([p[2] for p in pts], float)
+    tm = np.array([p[4] for p in pts], float)
+    if T.size < 3 or np.ptp(T) <= 0:
+        raise GonioError(f"5.3.3.6: {T.size} visits at {np.unique(T).size} temperatures; "
+                         "the slope's budget needs at least 3 visits at 2 temperatures")
+    slope, _ = rg.least_squares_line(T, B)
+    w = (T - T.mean()) / float(((T - T.mean()) ** 2).sum())
+    c = np.polyfit(T, B, 2) if np.unique(T).size >= 3 else np.array([0.0, slope, 0.0])
+    db = c[1] + 2 * c[0] * T                                     # b′(T_i), (°/s)/°C
+    parts = w * uB
+    D = np.array([[drift_u(abs(ti - tj)) ** 2 if ti != tj else 0.0 for tj in tm] for ti in tm])
+    u_drift = math.sqrt(max(-0.5 * float(w @ D @ w), 0.0))
+    dev = [db[T == Tv][0] * float(w[T == Tv].sum()) for Tv in np.unique(T)]
+    u_dev = deviation_bound_c / math.sqrt(3) * math.sqrt(float(np.sum(np.square(dev))))
+    wd = w * db
+    mag = abs(complex(np.sum(wd * np.exp(2j * math.pi * tm / period_s)))) if period_s \
+        else float(np.abs(wd).sum())
+    u_fl = abs(fluctuation_c) * mag / math.sqrt(2.0)
+    u_pos = abs(float(wd.sum())) * 0.5 * uniformity_c / math.sqrt(3)
+    return gum(lambda s, d, dv, fl, ps: s + d + dv + fl + ps, [
+        from_u("slope", slope, math.sqrt(float(parts @ parts)),
+               dof=_ws(parts, [p[3] for p in pts]), source="noise of the visits' bias means"),
+        from_u("drift", 0.0, u_drift, dof=50,
+               source="bias drift over the session (Allan fit: RRW, BI), variogram form"),
+        from_u("dT_set", 0.0, u_dev, type="B",
+               source="chamber deviation at each set point (rectangular, shared by its visits)"),
+        from_u("dT_fluct", 0.0, u_fl, type="B", source="chamber's periodic fluctuation"),
+        from_u("dT_place", 0.0, u_pos, type="B", source="the gyro's place in the volume")])
 
 
 def _static(ctx: Context):
@@ -681,42 +729,57 @@ def _noise_fit(ctx: Context):
     return ctx.cache[key]
 
 
+def _noise_fit_shaped(ctx: Context):
+    """The fit with band-limited flicker of the static record (cached; the ARW's lift)."""
+    key = ("noise_fit_shaped", ctx.a_base, ctx.null_output)
+    if key not in ctx.cache:
+        ctx.cache[key] = fit_markov_model(_static(ctx)[0])
+    return ctx.cache[key]
+
+
 def arw(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.2: the −½ line through the short-τ part of the Allan deviation read
     at τ = 1 h (°/√h); (29): 1 °/√h = 60 (°/h)/√Hz.
 
     The line's τ may also carry bias instability and quantisation, which lift the reading.
-    The five-term model fitted to the same record (IEEE 952 Annex C) gives that lift at the
-    same τ, the factor N_line(model)/N_fit, but as an upper estimate: its non-negative terms
-    take up noise (a quantisation term on pure white noise) and its flicker floor holds at
-    every τ, while a gyro's bias instability may fade at the line's short τ. The
-    uncorrected reading is the lower end (the lift is not negative), the fully corrected
-    one the upper: the value certified is their midpoint, N_line·(1 + N_fit/N_line(model))/2
-    (JCGM 100 4.3.7: a quantity known only within bounds is taken at their middle); the
-    uncorrected reading and the factor stay in the details. Uncertainty: the χ² intervals
-    of the points used, and the correction (half the full correction, normal)."""
+    The noise model fitted to the same record gives that lift at the same τ, the factor
+    N_line(model)/N_fit, and the value certified is the line reading divided by it. The
+    model is the five-term model with its flicker band-limited below a fitted correlation
+    time (:func:`gonio.analysis.noise.fit_markov_model`): the five-term flat flicker holds
+    its floor down to the line's shortest τ, where a gyro's bias instability fades, and
+    overstates the lift (it was therefore applied only halfway, the midpoint of the
+    uncorrected and the corrected reading; the five-term factor and that midpoint stay in
+    the details). Uncertainty: the χ² intervals of the points used, and the correction
+    (half its size, normal)."""
     t, cl, un = "angular random walk", "5.4.5.2", "°/√h"
     m = _miss(ctx, "static", "arw", t, cl, un) or _quiet(ctx, "arw", t, cl, un)
     if m:
         return m
     allan, _, _ = _static(ctx)
     fit = _noise_fit(ctx)
-    value, val, ratio, u_rel, mask = arw_reading(allan, fit)
+    shaped = _noise_fit_shaped(ctx)
+    value, val, ratio, u_rel, mask = arw_reading(allan, shaped)
+    midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
     u = gum(lambda n, c: n * (1 + c),
             [from_u("N", value, value * u_rel, dof=50, source="χ² intervals of the fit points"),
              from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=50,
-                    source="bias correction of the −½ line under the fitted five-term model "
-                           "(half the full correction)")])
+                    source="bias correction of the −½ line under the fitted model with "
+                           "band-limited flicker (half the correction)")])
     return Item("arw", t, cl, un, value, uncertainty=u, details={
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
         "line_reading_uncorrected": val, "line_bias_factor_model": ratio,
-        "five_term_fit_arw": fit.N / math.sqrt(S_PER_H)})
+        "flicker_band_t_lo_s": shaped.t_lo_s,
+        "five_term_line_bias_factor": ratio_five,
+        "five_term_midpoint_reading": midpoint_five_term,
+        "five_term_fit_arw": fit.N / math.sqrt(S_PER_H),
+        "band_limited_fit_arw": shaped.N / math.sqrt(S_PER_H)})
 
 
 def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
-    """The ARW of :func:`arw` from an Allan deviation (°/h) and its five-term fit:
-    (value °/√h, uncorrected −½ line reading, the model's lift factor N_line(model)/N_fit,
-    relative u of the line's points, mask of the τ used)."""
+    """The ARW of :func:`arw` from an Allan deviation (°/h) and a fitted model (anything with
+    ``N`` and ``adev(tau)``): (value °/√h = the −½ line reading / the model's lift factor,
+    uncorrected −½ line reading, the lift factor N_line(model)/N_fit, relative u of the
+    line's points, mask of the τ used)."""
     val, mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
     rel = np.abs(np.log(allan.ci_high[mask] / allan.adev[mask]))
     u_rel = float(np.sqrt(np.mean(rel ** 2)) / math.sqrt(mask.sum())) * 2.0   # correlated τ
@@ -724,7 +787,15 @@ def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
     line_model = math.exp(float(np.mean(np.log(model[mask]) + 0.5 * np.log(allan.tau_s[mask])))) \
         / math.sqrt(S_PER_H)
     ratio = line_model / (fit.N / math.sqrt(S_PER_H)) if fit.N > 0 and line_model > 0 else 1.0
-    return val * (1.0 + 1.0 / ratio) / 2.0, val, ratio, u_rel, mask
+    return val / ratio, val, ratio, u_rel, mask
+
+
+def arw_reading_midpoint(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
+    """The former reading under the five-term (flat-flicker) fit, kept in the details: the
+    midpoint of the uncorrected and the fully corrected −½ line reading (the same tuple as
+    :func:`arw_reading`)."""
+    full, val, ratio, u_rel, mask = arw_reading(allan, fit)
+    return (val + full) / 2.0, val, ratio, u_rel, mask
 
 
 def bias_instability(ctx: Context) -> Item:
@@ -952,48 +1023,87 @@ def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertai
 def startup_time(ctx: Context) -> Item:
     """IEC 62047-20 5.3.3.9, reading taken: the first time after power-on after which the
     smoothed output stays within ± ``startup_band_dps`` of the reference output (the settled
-    bias: mean of the last fifth of the record); the mean over the records, s.
+    bias: mean of the last fifth of the record); per record, the mean over the records, s.
 
-    Uncertainty: spread over the records, the smoothing step, and the detection. The rule
-    reads the LAST excursion beyond the band, and the noise of the smoothed output makes late
-    excursions (a one-sided, late bias). With σ the noise of a smoothed value minus the
-    reference and z the two-sided 95 % point for the record's n_b smoothed values, an
-    excursion beyond band + zσ is not noise alone: the last one is an earliest bound of the
-    noise-free crossing (:func:`gonio.specs._rate_family.formulas.last_exceedance_time`). The
-    distance from the record's time down to it is the record's 95 % half-width,
-    independent between records (u = rms(half-width/2)/√N)."""
-    from scipy.stats import norm
+    The literal rule reads the LAST excursion beyond the band, and the noise of the smoothed
+    output adds late excursions while the transient is still within a few σ of the band: a
+    one-sided, late bias (tests/test_iec_startup_tc_ratio.py measures it on the bench's
+    transient). Its reading is kept per record in the details (``last_exceedance_s``); the
+    value is :func:`startup_time_by_count` of each record, the time spent outside the band
+    (the number of smoothed values beyond it × their step), which for a transient that
+    settles monotonically is the same time without noise and, with noise, misses as many
+    values before the crossing as it adds after it (for a deviation locally linear in t). A
+    transient that leaves the band again after settling (an overshoot) is not what this
+    estimate is for: the details keep both, and where they differ by more than the
+    uncertainty the literal reading is the one to look at.
+
+    Uncertainty: per record (:func:`startup_time_by_count`) the count's binomial spread and
+    the reference's error (its noise and the bias drift between the crossing and the
+    last fifth, from the static record's Allan fit) through the local slope; independent
+    between records (u = rms/√N); the smoothing step (rectangular ± step/2). The spread
+    of the records' times evaluates the same noise and is kept in the details
+    (``spread_s``)."""
     t, cl, un = "start-up time", "5.3.3.9", "s"
     m = _miss(ctx, "warmup", "startup_time", t, cl, un)
     if m:
         return m
     band = ctx.protocol["power_on"]["startup_band_dps"]
-    times, halves = [], []
+    times, lit, us = [], [], []
     for run, tt, ys, y in _power_on_records(ctx):
-        tail = ys[-max(ys.size // 5, 1):]
-        ref = float(y[-max(y.size // 5, 1):].mean())
-        sd = math.hypot(float(np.std(np.diff(ys), ddof=1)) / math.sqrt(2),
-                        float(np.std(tail, ddof=1)) / math.sqrt(tail.size) if tail.size > 1 else 0.0)
-        dev = np.abs(ys - ref)
-        t_r = rg.last_exceedance_time(tt, dev, band)
-        z = float(norm.ppf(1 - 0.025 / max(ys.size, 1)))
-        times.append(t_r)
-        if math.isfinite(t_r):
-            halves.append(max(t_r - rg.last_exceedance_time(tt, dev, band + z * sd), 0.0))
+        t_c, t_l, u_r = startup_time_by_count(tt, ys, y, band, lambda sep: drift_u_dps(ctx, sep))
+        times.append(t_c)
+        lit.append(t_l)
+        us.append(u_r)
     v = np.array(times)
-    if np.any(~np.isfinite(v)):
+    if np.any(~np.isfinite(np.array(lit))):
         return not_measured("startup_time", t, cl, un, "the output never settled within the band")
     step = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
-    u = gum(lambda a, b, c, d: a + b + c + d,
+    u = gum(lambda a, b, c: a + b + c,
             [from_u("t", float(v.mean()), 0.0),
-             from_u("s_t", 0.0, float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else 0.0,
-                    dof=max(v.size - 1, 1), source="spread over the power-ups"),
              type_b("step", 0.0, step / 2, "rectangular", source="smoothing step"),
-             type_b("detect", 0.0, float(np.sqrt(np.mean(np.square(halves)) / v.size)),
-                    "normal", k=2, source="detection: back to the last excursion beyond "
-                                          "band + zσ (not noise alone)")])
+             from_u("count", 0.0, float(np.sqrt(np.mean(np.square(us)) / v.size)), dof=50,
+                    source="time outside the band: the count's spread and the reference's "
+                           "error (noise, bias drift) through the local slope")])
     return Item("startup_time", t, cl, un, float(v.mean()), uncertainty=u,
-                details={"per_record_s": v, "band_dps": band, "detection_half_width_s": halves})
+                details={"per_record_s": v, "band_dps": band, "last_exceedance_s": np.array(lit),
+                         "u_per_record_s": np.array(us),
+                         "spread_s": float(v.std(ddof=1)) if v.size > 1 else None})
+
+
+def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: float,
+                          drift_u) -> tuple[float, float, float]:
+    """One power-on record's start-up time (5.3.3.9): (time outside the band s, the literal
+    last-exceedance reading s, standard uncertainty of the first s) from the smoothed values
+    ``ys`` at times ``tt``, the raw samples ``y`` (°/s) and ``drift_u`` (separation s →
+    standard uncertainty of a bias difference °/s).
+
+    With d_j = |ys_j − ref| (ref the mean of the last fifth), P the step, σ_b the noise of one
+    smoothed value (√(var Δ²ys/6): a transient smooth on the step does not enter it) and
+    N(L) the number of d_j > L: the estimate is P·N(band). Near the crossing the deviation
+    falls with slope s, so each value is beyond the band with probability Φ((t* − t_j)s/σ_b)
+    and var N = Σ p(1 − p) = σ_b/(sP)·∫Φ(1 − Φ) = σ_b/(sP√π). The reference's error e (its
+    own noise u_ref, and the bias drift u_drift over the time from the crossing to the last
+    fifth's middle) moves the crossing by e/s. 1/s is read from the data as the time
+    between the crossings of band ± h, Δt = P·(N(band − h) − N(band + h)) ≈ 2h/s, with
+    h = 2√(σ_b² + u_ref² + u_drift²) (the deviation's whole spread, so that Δt spans
+    several steps). u² = P·σ_b/(s√π) + (u_ref² + u_drift²)/s²."""
+    n5 = max(y.size // 5, 1)
+    ref = float(y[-n5:].mean())
+    d = np.abs(ys - ref)
+    t_lit = rg.last_exceedance_time(tt, d, band)
+    step = float(np.median(np.diff(tt))) if tt.size > 1 else 0.0
+    s_b = float(np.std(np.diff(ys, 2), ddof=1) / math.sqrt(6)) if ys.size > 3 else 0.0
+    t_c = step * float(np.count_nonzero(d > band))
+    tail = ys[-max(ys.size // 5, 1):]
+    u_ref = s_b / math.sqrt(tail.size)
+    u_dr = drift_u(max(float(tt[-tail.size:].mean() - tt[0]) - t_c, 0.0))
+    h = 2 * math.sqrt(s_b ** 2 + u_ref ** 2 + u_dr ** 2)
+    if h == 0:
+        return t_c, t_lit, 0.0
+    dt_c = step * float(np.count_nonzero(d > band - h) - np.count_nonzero(d > band + h))
+    slope_t = dt_c / (2 * h)                          # s per °/s: 1/slope near the crossing
+    return t_c, t_lit, math.sqrt(step * s_b * slope_t / math.sqrt(math.pi)
+                                 + slope_t ** 2 * (u_ref ** 2 + u_dr ** 2))
 
 
 # --------------------------------------------------------------------------- added items
@@ -1101,36 +1211,54 @@ def bias_ratiometric(ctx: Context) -> Item:
     largest |R_Vi| in %, and (reading taken: Table 4's unit V) the absolute departure
     a_Vi − a_BASE·V_i/V_BASE in output units in the details. Analog ratiometric outputs only.
 
-    Uncertainty: the noise of the two rest means (block type A) and the bias drift between
-    them (RRW, bias instability from the static record)."""
+    Uncertainty: the noise of the two rest means (block type A), the bias drift between
+    them (RRW, bias instability from the static record), and the selection excess of the
+    largest |R_Vi| over the supplies (JCGM 100 4.3.7, the rule of 5.3.3.5 and 5.3.3.7,
+    :func:`gonio.specs._rate_family.formulas.selection_excess`): a supply below and one above
+    V_BASE usually carry departures of equal size and opposite sign (a bias linear in V), so
+    noise raises the larger |R| by up to c_m·σ; the value is the reading less the midpoint
+    c_m·σ/2, the term rectangular ± c_m·σ/2."""
     t, cl, un = "bias ratiometric error (max |R|)", "5.3.3.3", "%"
     m = _miss(ctx, "ratiometric", "bias_ratiometric_error", t, cl, un)
     if m:
         return m
     runs = _sf_runs(ctx, "ratiometric")
     V = np.array([c["V"] for c in runs])
-    a, ua = [], []
+    a, ua, t_rest = [], [], []
     for c in runs:
         k = np.flatnonzero(c["x"] == 0)
         if k.size != 1:
             raise GonioError(f"ratiometric run {c['run']}: needs exactly one rest point (0 °/s)")
         a.append(float(c["y"][k[0]]))
         ua.append(float(c["u_y"][k[0]]))
+        t_rest.append(float(c["t"][k[0]]))
     a = np.array(a)
     ib = int(np.argmin(np.abs(V - ctx.v_base)))
     R = np.array([ief.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
-    i = int(np.argmax(np.abs(R)))
-    if i == ib:
-        i = int(np.argsort(np.abs(R))[-2]) if V.size > 1 else i
-    t_rest = [float(c["t"][np.flatnonzero(c["x"] == 0)[0]]) for c in runs]
-    u_dr = drift_u_dps(ctx, t_rest[i] - t_rest[ib]) * abs(ctx.a_base)      # output units
-    u = gum(lambda ai, ab, d: 100 * abs(ief.ratiometric_error_iec(ai + d, ab, V[i], V[ib])),
-            [from_u("a_Vi", a[i], ua[i], dof=50, source=f"rest output at {V[i]:g} V"),
-             from_u("a_Vb", a[ib], ua[ib], dof=50, source=f"rest output at {V[ib]:g} V"),
-             from_u("drift", 0.0, u_dr, dof=50,
-                    source="bias drift between the two rest points (Allan fit: RRW, BI)")])
-    return Item("bias_ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
-                details={"V": V, "rest_output": a, "R_pct": 100 * R,
+
+    def inputs(i):
+        u_dr = drift_u_dps(ctx, t_rest[i] - t_rest[ib]) * abs(ctx.a_base)      # output units
+        return [from_u("a_Vi", a[i], ua[i], dof=50, source=f"rest output at {V[i]:g} V"),
+                from_u("a_Vb", a[ib], ua[ib], dof=50, source=f"rest output at {V[ib]:g} V"),
+                from_u("drift", 0.0, u_dr, dof=50,
+                       source="bias drift between the two rest points (Allan fit: RRW, BI)")]
+
+    def model(i):
+        return lambda ai, ab, d: 100 * ief.ratiometric_error_iec(ai + d, ab, V[i], V[ib])
+
+    others = [j for j in range(V.size) if j != ib] or [ib]
+    sds = [gum(model(j), inputs(j)).u_c for j in others]
+    pct = np.abs(100 * R[others])
+    i = others[int(np.argmax(pct))]
+    excess, m_sel = rg.selection_excess(pct, np.array(sds))
+    u = gum(lambda ai, ab, d, mx: abs(model(i)(ai, ab, d)) + mx,
+            inputs(i) + [type_b("noise_max", -excess, excess, "rectangular",
+                                source="selection excess of the largest |R| over the supplies "
+                                       "(midpoint ± c_m·σ/2 removed)")])
+    return Item("bias_ratiometric_error", t, cl, un, 100 * abs(float(R[i])) - excess,
+                uncertainty=u,
+                details={"V": V, "rest_output": a, "R_pct": 100 * R, "reading_pct": float(pct.max()),
+                         "contending_values": m_sel,
                          "departure_output_units": a - a[ib] * V / V[ib]})
 
 

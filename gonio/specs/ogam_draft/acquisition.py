@@ -3,9 +3,11 @@ the optical draft's ``acquire`` hook, :func:`acquire_programme`).
 
 :func:`plan_programme` turns a :class:`~gonio.specs.ogam_draft.protocol.Protocol` into blocks of readings in
 the order the virtual bench runs them (:mod:`gonio.specs.ogam_draft.bench.session`): the zero-stability rest
-(7.3), then every series of every rotation item (7.1, 7.4/7.5, 7.6, 7.7), each block in one
+(7.3), the in-situ tilt estimate's rests when the protocol has ``[tilt_estimate]`` (beyond the
+draft), then every series of every rotation item (7.1, 7.4/7.5, 7.6, 7.7), each block in one
 axis orientation and beginning with its static phase when the Earth-rate compensation is
-measured (clause 7 preamble). :func:`check_programme` refuses, before the table moves at
+measured (clause 7 preamble; the tilt estimate's rests are not compensated: the Earth rate
+is their signal). :func:`check_programme` refuses, before the table moves at
 all, any move outside the table's stated range or the protocol's Table 1 range, any rate
 above the table's or the protocol's top rate, a rotation longer than the round's
 ``max_rotation_s`` at the table's acceleration, and a reading planned later than
@@ -17,11 +19,15 @@ above the table's or the protocol's top rate, a rotation longer than the round's
 table at the round's rate, fetches the reading (counts since the zeroing, roll-over undone), subtracts the
 compensation × time since zeroing, writes the row to ``readings.csv`` at once (append,
 flush, fsync) and rests out ``rest_s``; a reading later than the Annex A.1 limit is
-retaken. Every wait is timed on the module's clock, so a served bench running N× faster
+retaken. At each of the tilt estimate's positions it moves the table there at the section's
+``rate_dps``, waits ``settle_s``, zeroes, and reads the raw counts ``dwell_s`` later (one
+row per position, as ``gonio simulate`` writes it: ``table_deg`` the position, ``time_s`` the
+dwell, ``gyro_counts`` uncompensated). Every wait is timed on the module's clock, so a served bench running N× faster
 than real time is driven N× faster. Every exit path sends the table a stop; an interrupted
 file stays marked ``acquisition: incomplete`` and ``resume`` continues it from the last
 complete round (a block whose rounds share a zeroing — 7.3's rest, ``rezero = false`` —
-is taken again whole; any block re-measures its compensation).
+is taken again whole; any block re-measures its compensation; each of the tilt estimate's
+rests has its own zeroing, so an interrupted estimate continues at its next position).
 """
 
 from __future__ import annotations
@@ -70,8 +76,10 @@ class Step:
     orientation: str
     start_deg: float = 0.0
     stop_deg: float = 0.0
-    read_delay_s: float = 0.0      # after arrival; for 7.3, the reading's time after zeroing
-    rest_s: float = 0.0
+    read_delay_s: float = 0.0      # after arrival; for 7.3 and the tilt estimate's rests, the
+                                   # reading's time after zeroing (the dwell)
+    rest_s: float = 0.0            # after the reading; for the tilt estimate's rests, the
+                                   # settling before the zeroing
     max_rotation_s: float | None = None
     max_time_to_reading_s: float | None = None
 
@@ -90,14 +98,14 @@ class Block:
     at_rest: bool = False          # 7.3: one zeroing, readings at set times
     rezero: bool = True
     return_to_zero: bool = True
+    positions: bool = False        # the tilt estimate: a rest at each step's stop_deg, each
+                                   # with its own zeroing, counts not compensated
 
 
 def plan_programme(protocol: Protocol) -> list[Block]:
-    """The programme's blocks, in the virtual bench's order (zero stability, then the
-    rotation items' series); equal division's rests, which the acquisition does not run
-    yet, are refused by name. The in-situ tilt estimate (beyond the draft) is not run
-    either: :func:`acquire` says so, and the calibration states K with the coupling at the
-    A.1 bound (the readings hold no tilt_estimate rows)."""
+    """The programme's blocks, in the virtual bench's order (zero stability, the in-situ
+    tilt estimate's rests, then the rotation items' series); equal division's rests, which
+    the acquisition does not run yet, are refused by name."""
     for name in ("equal_division",):
         if getattr(protocol, name, None) is not None:
             raise GonioError(f"gonio acquire does not run [{name}] yet: take it out of the "
@@ -109,6 +117,8 @@ def plan_programme(protocol: Protocol) -> list[Block]:
         blocks.append(Block("zero_stability", z.orientation, [
             Step("zero_stability", 1, n + 1, None, z.orientation, read_delay_s=n * z.interval_s)
             for n in range(z.readings)], at_rest=True, rezero=False, return_to_zero=False))
+    if protocol.tilt_estimate is not None:
+        blocks.append(tilt_estimate_block(protocol.tilt_estimate))
     for item in protocol.items():
         limit = item.max_time_to_reading_s
         if limit is None and item.test in A1_TESTS:
@@ -124,6 +134,21 @@ def plan_programme(protocol: Protocol) -> list[Block]:
         raise GonioError("the protocol plans no reading (no test section)", key="protocol",
                          file=protocol.path or None)
     return blocks
+
+
+def tilt_estimate_block(plan) -> Block:
+    """The ``[tilt_estimate]`` rests (:class:`~gonio.specs.ogam_draft.protocol.TiltEstimatePlan`)
+    as the virtual bench takes them: position i (1…N) at 360°·(i−1)/N, reached from the one
+    before at ``rate_dps``; after ``settle_s`` a zeroing and, ``dwell_s`` later, a reading of
+    the counts (test ``tilt_estimate``, series 1, round i, ``rate_dps`` the section's)."""
+    steps = []
+    for i in range(plan.positions):
+        x = 360.0 * i / plan.positions
+        steps.append(Step("tilt_estimate", 1, i + 1, plan.rate_dps, plan.orientation,
+                          start_deg=360.0 * (i - 1) / plan.positions if i else 0.0, stop_deg=x,
+                          read_delay_s=plan.dwell_s, rest_s=plan.settle_s))
+    return Block(f"tilt_estimate {plan.orientation}", plan.orientation, steps,
+                 return_to_zero=False, positions=True)
 
 
 def check_programme(blocks: list[Block], protocol: Protocol, limits: TableLimits) -> None:
@@ -165,6 +190,10 @@ def programme_duration_s(blocks: list[Block], protocol: Protocol, accel_dps2: fl
             if st.rate_dps is None:
                 out.append(st.read_delay_s - prev + (static if i == 0 else 0.0))
                 prev = st.read_delay_s
+                continue
+            if b.positions:              # move there, settle, dwell (no static phase)
+                out.append(trapezoid_duration_s(st.stop_deg - st.start_deg, st.rate_dps,
+                                                accel_dps2) + st.rest_s + st.read_delay_s)
                 continue
             d = trapezoid_duration_s(st.stop_deg - st.start_deg, st.rate_dps, accel_dps2)
             back = trapezoid_duration_s(st.stop_deg - st.start_deg, s.return_rate_dps, accel_dps2)
@@ -314,6 +343,26 @@ class Acquisition:
             r = self.gyro.read(0.0)
             on_row(st, format_row(st, r.time_s, None, round(r.counts - comp * r.time_s)))
 
+    def position_rest(self, st: Step, n_steps: int) -> str:
+        """One of the tilt estimate's rests (see the module's docstring); returns its row.
+        The counts are not compensated; their roll-over is undone near the Earth rate's
+        count over the dwell when the latitude is known (else near 0)."""
+        self.move(st.stop_deg, st.rate_dps)
+        self.dwell(st.rest_s)
+        status(f"acquire: tilt estimate rest {st.round}/{n_steps} at {st.stop_deg:g}°, "
+               f"{format_duration(st.read_delay_s)} dwell")
+        self.gyro.zero()
+        self.clock.wait_until(self.clock.now() + st.read_delay_s)
+        r = self.gyro.read(self.earth_counts_per_s(st.orientation) * st.read_delay_s)
+        return format_row(st, r.time_s, st.stop_deg, r.counts)
+
+    def earth_counts_per_s(self, orientation: str) -> float:
+        """The Earth rate along the nominal axis, counts/s (0 without the latitude or K)."""
+        if self.latitude_deg is None or not self.K:
+            return 0.0
+        return self.K * math.degrees(float(earth_rate_enu(self.latitude_deg)
+                                           @ axis_enu(NAMED_AXES[orientation])))
+
     def rotation_step(self, b: Block, st: Step, comp: float, zero_x: list) -> str:
         """Take one round; returns its readings row."""
         for attempt in range(RETAKES + 1):
@@ -355,6 +404,10 @@ class Acquisition:
         if not todo:
             return
         self.set_axis(b.orientation)
+        if b.positions:
+            for st in todo:
+                on_row(st, self.position_rest(st, len(b.steps)))
+            return
         first = 0.0 if b.at_rest else b.steps[0].start_deg
         self.move(first, self.s.return_rate_dps)
         comp = self.compensation(b.orientation)
@@ -404,10 +457,6 @@ def acquire(protocol: Protocol, table_resource: str, gyro_resource: str, out: st
     gets a stop; an unfinished file stays ``acquisition: incomplete`` (``resume`` continues it).
     """
     blocks = plan_programme(protocol)
-    if getattr(protocol, "tilt_estimate", None) is not None:
-        sys.stderr.write("gonio acquire: the protocol's [tilt_estimate] (beyond the draft) is not "
-                         "run by the acquisition yet: K will carry the tilt coupling at the A.1 "
-                         "bound, as the certificate states\n")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "readings.csv"

@@ -5,11 +5,12 @@ misalignment budget, electrical alignment with M⁻¹) and the MEMS-gyro thesis 
 K(ϑ, U), b(ϑ, U), ARW(ϑ)), with the cross-axis sensitivity of IEC 62047-20 5.2.
 :mod:`~gonio.specs.triad_alignment.calibration` computes the results;
 :mod:`~gonio.specs.triad_alignment.simulate` simulates them on the virtual bench;
+:mod:`~gonio.specs.triad_alignment.study` is the coverage study of ``gonio validate``;
 :mod:`~gonio.specs.triad_alignment.commands` adds ``gonio align`` and ``gonio thermal-model``. The
 reading taken of the sources is ``docs/alignment.md`` and ``docs/thermal-model.md``.
 """
 
-from gonio.specs import Specification, lazy
+from gonio.specs import Coverage, Specification, lazy
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, THERMAL_POINT_KEYS
 
 #: ``gonio.specs.triad_alignment.readings.FORMAT``, written here so that loading ``SPEC`` imports no reader
@@ -42,7 +43,11 @@ SPEC = Specification(
     budget=lazy("gonio.specs.triad_alignment.calibration:article_budget"),
     outputs="gonio.specs.triad_alignment.outputs",
     calibrate_options=frozenset({"thermal", "robust", "dcc"}),
-    arguments={"calibrate": "gonio.specs.triad_alignment.commands:add_calibrate_options"},
+    coverage=Coverage(engine="cases", stream=2,
+                      study=lazy("gonio.specs.triad_alignment.study:plan_study"),
+                      options=frozenset({"cases", "resume"})),
+    arguments={"calibrate": "gonio.specs.triad_alignment.commands:add_calibrate_options",
+               "validate": "gonio.specs.triad_alignment.commands:add_validate_options"},
     readings_format=FORMAT,
     named_inputs=lazy("gonio.specs.triad_alignment.readings:named_inputs"),
     certificate_content="gonio.specs.triad_alignment.certificate",

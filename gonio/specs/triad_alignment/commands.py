@@ -7,7 +7,8 @@ docs/formats-triad.md; method: docs/alignment.md). ``gonio thermal-model``: iden
 K(ϑ, U), b(ϑ, U) and ARW(ϑ) from a triad thermal readings file (docs/thermal-model.md), a
 thin layer over :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`.
 Its own ``gonio calibrate`` options (``--thermal``, ``--robust``): :func:`add_calibrate_options`
-(``SPEC.arguments["calibrate"]``).
+(``SPEC.arguments["calibrate"]``); its ``gonio validate`` option (``--cases``):
+:func:`add_validate_options`.
 
 This module sits on the command line's layer (it imports ``gonio.cli.checks``); nothing
 imports it but the command line, when it builds its parser.
@@ -30,6 +31,14 @@ def add_calibrate_options(group) -> None:
     group.add_argument("--robust", action="store_true",
                        help="robust alignment fit (IRLS), outlying dwells down-weighted and "
                             "listed")
+
+
+def add_validate_options(group) -> None:
+    """The triad's own ``gonio validate`` option (``SPEC.arguments["validate"]``): the cases
+    of its study (:data:`gonio.specs.triad_alignment.study.CASES`: ``typeb``, ``worst``)."""
+    group.add_argument("--cases", default=None,
+                       help="comma-separated cases, or 'all' (an unknown case is refused "
+                            "naming the known ones)")
 
 
 def add_align(sub) -> None:
@@ -99,9 +108,10 @@ def run_align(args) -> int:
         if args.plot:
             save_figure(fig, args.plot)
         if args.report:
+            from gonio.specs.triad_alignment.calibration import static_record_s
             from gonio.specs.triad_alignment.pages import alignment_page, write_report
 
-            write_report(args.report, [alignment_page(res, fig)],
+            write_report(args.report, [alignment_page(res, fig, static_record_s(r))],
                          f"Gyro-triad alignment — {r.metadata.get('instrument', '')} "
                          f"{r.metadata.get('serial', '')}".strip())
     if args.json:

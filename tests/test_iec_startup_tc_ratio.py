@@ -1,0 +1,138 @@
+"""IEC 62047-20 5.3.3.9 start-up time, 5.3.3.6 bias temperature coefficient and 5.3.3.3 bias
+ratiometric error against Monte Carlo of the bench's model of each: a first-order power-on
+transient under white noise and a bias random walk (5.3.3.9); the visit schedule base → max
+→ base → min → base with a quadratic b(T), a chamber deviation per set point, a periodic
+fluctuation, the gyro's place in the volume, visit noise and a bias random walk (5.3.3.6);
+rest outputs of a ratiometric gyro whose bias is linear in the supply (5.3.3.3). Each
+checks both sides (mean z near 0, sd z near 1) and that the rule it replaces fails."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gonio.specs._rate_family import formulas as rg
+from gonio.specs.iec62047_20 import formulas as ief
+from gonio.specs.iec62047_20.items import bias_tc_budget, startup_time_by_count
+from gonio.specs.iec62047_20.protocol import load_protocol, temperature_visits
+
+A_DPS, TAU_S, BAND_DPS, P, N = 0.12, 150.0, 0.05, 10, 900     # the bench and the programme
+
+
+def _startup_records(rng, n_rec, sigma, q):
+    """Block means of A·e^(−t/τ) (exact interval means), white noise σ per sample and a
+    random walk of q °/s/√s; the truth from the noise-free blocks by the clause's rule."""
+    t = np.arange(N, dtype=float)
+    tr = A_DPS * TAU_S * (np.exp(-t / TAU_S) - np.exp(-(t + 1) / TAU_S))
+    blocks = tr.reshape(-1, P).mean(1)
+    settled = tr[-N // 5:].mean()
+    out = np.flatnonzero(np.abs(blocks - settled) > BAND_DPS)
+    truth = (out[-1] + 1) * P
+    recs = []
+    for _ in range(n_rec):
+        y = tr + sigma * rng.standard_normal(N) + q * np.cumsum(rng.standard_normal(N))
+        recs.append((t.reshape(-1, P).mean(1), y.reshape(-1, P).mean(1), y))
+    return truth, recs
+
+
+def test_startup_count_covers_and_the_last_exceedance_is_late():
+    rng = np.random.default_rng(20261130)
+    sigma, q = 0.03, 0.0102 / 60.0                  # ARW-like 0.03 °/s per s; RRW 36.7 °/h/√h
+    truth, recs = _startup_records(rng, 600, sigma, q)
+    assert truth == 130
+    z, lit = [], []
+    for tt, ys, y in recs:
+        t_c, t_l, u = startup_time_by_count(tt, ys, y, BAND_DPS, lambda s: q * math.sqrt(s))
+        z.append((t_c - truth) / math.hypot(u, P / 2 / math.sqrt(3)))
+        lit.append(t_l - truth)
+    z, lit = np.array(z), np.array(lit)
+    assert abs(z.mean()) < 0.15 and 0.8 < z.std(ddof=1) < 1.2, (z.mean(), z.std(ddof=1))
+    assert np.mean(np.abs(z) <= 1.96) > 0.93
+    # the clause's literal reading, last excursion beyond the band, is late by tens of seconds
+    assert lit.mean() > 20 and lit.mean() > 5 * lit.std(ddof=1) / math.sqrt(lit.size)
+
+
+def test_startup_count_is_the_clause_without_noise():
+    _, recs = _startup_records(np.random.default_rng(1), 1, 0.0, 0.0)
+    tt, ys, y = recs[0]
+    t_c, t_l, u = startup_time_by_count(tt, ys, y, BAND_DPS, lambda s: 0.0)
+    assert t_c == t_l == 130 and u == 0.0
+
+
+def test_bias_tc_budget_against_the_bench_model(tmp_path):
+    proto = load_protocol("iec62047-20")
+    T = np.array(temperature_visits(proto), float)
+    b1, b2, T0 = 0.004, 2.0e-5, 20.0                # the bench's bias_tc1, bias_tc2, 20 °C
+    u_vis, q = 0.004, 0.0102 / 60.0                  # visit noise °/s; walk °/s/√s
+    dev_c, fl_c, per_s, unif_c = 2.0, 0.3, 900.0, 0.4
+    tm = np.cumsum(np.r_[0.0, np.full(T.size - 1, 2700.0)]) + np.arange(T.size) * 37.0
+    rng = np.random.default_rng(7)
+    w = (T - T.mean()) / ((T - T.mean()) ** 2).sum()
+    truth = float(w @ (b1 * (T - T0) + b2 * (T - T0) ** 2))      # LS slope of the model
+    z, z_old = [], []
+    for _ in range(1500):
+        dev = {Tv: rng.uniform(-dev_c, dev_c) for Tv in np.unique(T)}
+        phase = rng.uniform(0, 2 * math.pi)
+        pos = rng.uniform(-unif_c / 2, unif_c / 2)
+        Ta = T + np.array([dev[Tv] for Tv in T]) + fl_c * np.sin(2 * math.pi * tm / per_s + phase) + pos
+        walk = np.cumsum(np.r_[0.0, q * np.sqrt(np.diff(tm)) * rng.standard_normal(T.size - 1)])
+        B = b1 * (Ta - T0) + b2 * (Ta - T0) ** 2 + walk + u_vis * rng.standard_normal(T.size)
+        pts = [(T[i], B[i], u_vis, 5.0, tm[i]) for i in range(T.size)]
+        slope = rg.least_squares_line(T, B)[0]
+        u = bias_tc_budget(pts, lambda s: q * math.sqrt(s), dev_c, fl_c, per_s, unif_c)
+        z.append((slope - truth) / u.u_c)
+        r = B - (slope * T + rg.least_squares_line(T, B)[1])
+        z_old.append((slope - truth) / math.sqrt(float(r @ r) / (T.size - 2) / ((T - T.mean()) ** 2).sum()))
+    z, z_old = np.array(z), np.array(z_old)
+    assert abs(z.mean()) < 0.1 and 0.85 < z.std(ddof=1) < 1.15, (z.mean(), z.std(ddof=1))
+    assert np.mean(np.abs(z) <= 1.96) > 0.93
+    # the residual scatter about the line holds b₂'s curvature: over-wide on this bench
+    assert z_old.std(ddof=1) < 0.7
+
+
+def test_bias_tc_budget_terms_by_hand():
+    # three visits at −10, 0, +10 °C, b′ = 0.01 everywhere, only the chamber deviation:
+    # w = (−1/20, 0, 1/20), u = 0.01·(2/√3)·√(2·(1/20)²)
+    pts = [(-10.0, -0.1, 0.0, 5, 0.0), (0.0, 0.0, 0.0, 5, 1.0), (10.0, 0.1, 0.0, 5, 2.0)]
+    u = bias_tc_budget(pts, lambda s: 0.0, 2.0, 0.0, None, 0.0)
+    assert u.u_c == pytest.approx(0.01 * 2 / math.sqrt(3) * math.sqrt(2) / 20, rel=1e-9)
+    # a walk alone: variance −½ wᵀDw with D = q²|Δt| = q²·(w₁w₃·2·2)/(−2)... by hand 1/200·q²
+    q = 0.3
+    u = bias_tc_budget(pts, lambda s: q * math.sqrt(s), 0.0, 0.0, None, 0.0)
+    # −½ Σ w_i w_j q²|t_i − t_j| = −½·2·(−1/20)(1/20)·q²·2 = q²/200
+    assert u.u_c == pytest.approx(q / math.sqrt(200), rel=1e-9)
+
+
+def test_ratiometric_selection_excess_against_the_bench_model():
+    # rest outputs of a ratiometric gyro, N and K ∝ V, bias 0.05 (°/s)/V linear in V:
+    # R(4.5) ≈ −R(5.5); noise σ per rest mean (the base shared by both R)
+    rng = np.random.default_rng(3)
+    V, Vb = np.array([4.5, 5.5]), 5.0
+    a_true = lambda v: 500.0 * v + 1.2 * v * (0.15 + 0.05 * (v - Vb))      # mV
+    for sig in (0.04, 0.12, 0.4):               # mV; truth/σ_R ≈ 3, 1 (the study bench), 0.3
+        truth = max(abs(100 * ief.ratiometric_error_iec(a_true(v), a_true(Vb), v, Vb)) for v in V)
+        z_new, z_old, hit = [], [], []
+        for _ in range(3000):
+            ab = a_true(Vb) + sig * rng.standard_normal()
+            ai = a_true(V) + sig * rng.standard_normal(2)
+            R = np.abs(100 * np.array([ief.ratiometric_error_iec(ai[j], ab, V[j], Vb)
+                                       for j in range(2)]))
+            sds = 100 * sig * np.sqrt(1 + (V / Vb) ** 2) / ab
+            i = int(np.argmax(R))
+            ex, _ = rg.selection_excess(R, sds)
+            u = math.hypot(sds[i], ex / math.sqrt(3))
+            z_new.append((R[i] - ex - truth) / u)
+            z_old.append((R[i] - truth) / sds[i])
+            hit.append(abs(R[i] - ex - truth) <= 2 * u)
+        z_new, z_old = np.array(z_new), np.array(z_old)
+        assert np.mean(hit) >= 0.93, (sig, np.mean(hit))
+        assert abs(z_new.mean()) < 0.35, (sig, z_new.mean())
+        # truth ≈ 3σ_R: z spreads as a normal (sd 0.84 on this seed); ≈ σ_R: the folding of
+        # |R| near 0 and the rule's rectangular term narrow it (0.66); ≪ σ_R: a folded value
+        # at its bound 0, z cannot spread
+        lo, hi = {0.04: (0.75, 1.2), 0.12: (0.6, 1.2), 0.4: (0.0, 0.8)}[sig]
+        assert lo < z_new.std(ddof=1) < hi, (sig, z_new.std(ddof=1))
+        if sig < 0.2:                                        # the old rule reads high
+            assert z_old.mean() > 0.4, (sig, z_old.mean())
