@@ -1,8 +1,9 @@
 """Readings from the virtual bench are marked virtual on every output, whatever the laboratory
 file says (docs/formats.md#provenance): ``gonio simulate`` then ``gonio calibrate --lab`` for
 every specification gives the mark on every PDF page (poppler's text of each page), in the
-HTML, summary.txt, results.json (``provenance``) and the DCC. The same readings with the
-bench's metadata lines taken out give no mark (the check can fail).
+HTML (Chromium's print of it: the mark in the text of every printed page, not only in the
+watermark's picture), summary.txt, results.json (``provenance``) and the DCC. The same readings
+with the bench's metadata lines taken out give no mark (the check can fail).
 
 The instrument's identity and the conditions (docs/formats.md#identity-and-conditions): a
 laboratory file whose serial or temperature contradicts the readings' metadata is refused with
@@ -76,6 +77,20 @@ def pdf_pages(pdf: Path) -> list[str]:
     return [subprocess.run([tool, "-f", str(i), "-l", str(i), str(pdf), "-"],
                            capture_output=True, text=True, check=True).stdout
             for i in range(1, n + 1)]
+
+
+def printed_pages(page: Path) -> list[str]:
+    """The text of every page of Chromium's print of the HTML certificate ``page`` (Debian's
+    chromium, as tests/test_certificate_render.py), page by page (poppler)."""
+    tool = shutil.which("chromium")
+    if not tool:
+        pytest.skip("chromium is missing: run scripts/install-test-system-deps.sh")
+    pdf = page.parent / (page.stem + "-printed.pdf")
+    subprocess.run([tool, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                    "--no-first-run", f"--user-data-dir={page.parent / 'chromium-profile'}",
+                    f"--print-to-pdf={pdf}", page.as_uri()], capture_output=True, timeout=180,
+                   check=True)
+    return pdf_pages(pdf)
 
 
 #: The metadata lines a laboratory's own file lacks (``strip`` of :func:`simulate_calibrate`).
@@ -161,6 +176,10 @@ def test_virtual_readings_marked_everywhere_with_a_lab_file(run):
     assert len(pages) >= 2
     for i, text in enumerate(pages, 1):
         assert BANNER in text, f"{spec}: PDF page {i} of {len(pages)} lacks the mark"
+    printed = printed_pages(cal / "certificate.html")
+    assert len(printed) >= 2
+    for i, text in enumerate(printed, 1):
+        assert BANNER in text, f"{spec}: printed HTML page {i} of {len(printed)} lacks the mark"
     page = (cal / "certificate.html").read_text(encoding="utf-8")
     assert labels("en")["virtual"] in page and prov["bench"] in page
     assert "Example Angle Metrology Laboratory" in page          # the lab file is still used
@@ -237,4 +256,9 @@ def test_virtual_readings_marked_on_every_chinese_page(run):
     assert len(pages) >= 2
     for i, text in enumerate(pages, 1):
         assert mark in re.sub(r"\s+", "", text), f"{spec}: zh PDF page {i} of {len(pages)} lacks the mark"
+    printed = printed_pages(zh / "certificate.html")
+    assert len(printed) >= 2
+    for i, text in enumerate(printed, 1):
+        assert mark in re.sub(r"\s+", "", text), \
+            f"{spec}: zh printed HTML page {i} of {len(printed)} lacks the mark"
     assert labels("zh")["virtual"] in (zh / "certificate.html").read_text(encoding="utf-8")

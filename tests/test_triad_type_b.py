@@ -152,3 +152,43 @@ def test_align_command_includes_the_table_term(tmp_path, capsys):
     assert np.allclose(um, cal.u_system_matrix, rtol=1e-9)
     fit_only = estimate_alignment(r).u_system_matrix
     assert np.all(um > fit_only) and np.max(um / fit_only) > 2
+
+
+def test_align_page_states_the_certified_b(tmp_path):
+    """``gonio align --report`` on simulated readings with a static record: the page's b
+    column is the certificate's b_i (the long-term bias: the in-run fit plus the bias
+    instability), value, U and its own k as results.json and the certificate's HTML state
+    them; the in-run statement (the fit's k times the fit's u) is not on the page (it is
+    smaller, so the check can fail)."""
+    import html as html_mod
+    import json
+    import re
+
+    from scipy import stats
+
+    from gonio.cli import main
+    from gonio.specs.triad_alignment.pages import value_with_u
+
+    sim, cal, page = tmp_path / "s", tmp_path / "c", tmp_path / "page.html"
+    assert main(["simulate", "--spec", "triad-alignment", "--seed", "3", "--out", str(sim)]) == 0
+    readings = sim / "readings.csv"
+    assert main(["align", str(readings), "--report", str(page), "--monte-carlo", "0"]) == 0
+    assert main(["calibrate", str(readings), "--out", str(cal), "--monte-carlo", "0"]) == 0
+    res = json.loads((cal / "results.json").read_text(encoding="utf-8"))
+    shown = html_mod.unescape(page.read_text(encoding="utf-8"))
+    cert = (cal / "certificate.html").read_text(encoding="utf-8")
+    al = res["extra"]["alignment"]
+    for i, a in enumerate("xyz"):
+        it = res["items"][f"b_{a}"]
+        unc = it["uncertainty"]
+        assert any(c["symbol"] == f"b_{a}_BI" for c in unc["components"])   # long-term
+        text = f"{value_with_u(it['value'], unc['U'])} (k = {unc['k']:.2f})"
+        row = re.search(rf"<td>gyro {a}</td>(.*?)</tr>", shown).group(1)
+        assert row.endswith(f"<td>{text}</td>"), (a, row, text)
+        for part in ("value", "uncertainty.U", "uncertainty.k"):      # the certificate's cell
+            m = re.search(rf'data-src="items\.b_{a}\.{re.escape(part)}"[^>]*>([^<]*)<', cert)
+            assert m.group(1).replace("\u2212", "-") in text, (a, part)
+        fit = unc["components"][0]                       # the in-run fit's line, its ν
+        k_fit = stats.t.ppf(0.5 + 0.9545 / 2, fit["dof"])
+        assert math.isclose(fit["u"], al["u_bias_output"][i])
+        assert value_with_u(it["value"], k_fit * fit["u"]) not in row

@@ -580,10 +580,16 @@ def submission_fields(performed_on, received_on, standard_ids, temperature_c, hu
     return day, received, ids, temp, hum
 
 
-#: the states in which a calibration no longer stands for its readings (they may be used again)
+#: the states in which a calibration no longer stands for its readings (they may be used again).
+#: A failed calibration stands: its run, redraft or issue stopped, and it can be run again
+#: (:func:`retry`) on the same readings, so it would certify them; void it (:func:`void`) when
+#: it will not be run again, and its readings are free (docs/records.md).
 CLOSED = ("rejected", "void")
 #: the GonioError key of readings already used by another calibration
 REUSE_KEY = "readings used before"
+#: what the refusal adds when the calibration that holds the readings failed
+FAILED_HINT = (" (it failed and can be run again; void it if it will not be, and its readings "
+               "are free)")
 
 
 def readings_used_by(s: Session, sha256: str, *, other_than: int | None = None) -> list[dict]:
@@ -610,8 +616,9 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
     why they are used again (the web form asks it; the caller audits it). The lineage of one
     calibration is one row: a review, a re-computation, a redraft or an amendment of it
     (:func:`amend`) never records its readings again, and a rejected or void calibration's
-    readings may be used by a new one. ``other_than``: the calibration the readings are
-    being recorded for. Call it inside the writing session that records them, so nothing
+    readings may be used by a new one; a failed one's may not (:data:`CLOSED`: it can be
+    run again), the refusal says to void it first. ``other_than``: the calibration the
+    readings are being recorded for. Call it inside the writing session that records them, so nothing
     is recorded when it refuses. Returns the other calibrations (empty when none)."""
     before = readings_used_by(s, sha256, other_than=other_than)
     if before and not reason:
@@ -620,7 +627,8 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
                          f"calibration {first['id']} ({first['serial']}, "
                          f"{first['performed_on']}, {first['status']})"
                          + (f" and {len(before) - 1} more" if len(before) > 1 else "")
-                         + ": the same measurement is not calibrated twice", key=REUSE_KEY)
+                         + ": the same measurement is not calibrated twice"
+                         + (FAILED_HINT if first["status"] == "failed" else ""), key=REUSE_KEY)
     return before
 
 

@@ -80,7 +80,7 @@ footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
  @top-left{content:%(lab)s;font-family:%(font)s;font-size:9pt}
  @top-right{content:%(cid)s;font-family:%(font)s;font-size:9pt}
  @bottom-left{content:%(cid)s;font-family:%(font)s;font-size:8pt}
- @bottom-right{content:%(pageword)s;font-family:%(font)s;font-size:8pt}}
+ @bottom-right{content:%(pageword)s;font-family:%(font)s;font-size:8pt}%(mark)s}
 @media print{header.page,footer{display:none}body{max-width:none;padding:0;font-size:12px}
  figure svg{width:92%%}}
 """
@@ -201,8 +201,12 @@ def render_html(content: dict, svgs: dict[str, str], L: dict, lang: str, font: s
         css_string(part) if i % 2 == 0 else part for i, part in enumerate(
             L["page_of"].replace("{x}", "\0counter(page)\0").replace(
                 "{y}", "\0counter(pages)\0").split("\0")) if part)
+    # a virtual bench's certificate says so in every printed page's own text, not only in the
+    # watermark's picture (a PDF reader's text layer drops rotated text): a margin box
+    mark = ("\n @bottom-center{content:%s;font-family:%s;font-size:9pt;font-weight:bold;"
+            "color:#b00020}" % (css_string(L["virtual_short"]), ff)) if content["virtual"] else ""
     css = _CSS % {"font": ff, "pageword": pageword, "lab": css_string(content["lab_name"]),
-                  "cid": css_string(f"{L['certificate_no']}{L['colon']}{cid}")}
+                  "cid": css_string(f"{L['certificate_no']}{L['colon']}{cid}"), "mark": mark}
     out = ["<!DOCTYPE html>", f'<html lang="{"zh-CN" if lang == "zh" else "en"}">', "<head>",
            '<meta charset="utf-8">', f"<title>{html.escape(title_of(content, L))} {html.escape(cid)}</title>",
            f"<style>{css}</style>", "</head>", "<body>"]

@@ -101,3 +101,49 @@ def test_an_amendment_of_the_same_calibration_goes_on(tmp_path, computed_folder,
     finally:
         store.close()
 
+
+
+def test_a_failed_calibration_holds_its_readings_until_voided(tmp_path, computed_folder,
+                                                              bench_readings, monkeypatch):
+    """A failed calibration stands for its readings (docs/records.md): it can be run again
+    on them (``retry``), so a new calibration of the same readings is refused, naming it and
+    saying to void it; its own retry goes on; once voided, the readings are free and a new
+    calibration of them is recorded (a rejected one's too: the other closed state)."""
+    store = open_store(None, tmp_path / "data")
+    try:
+        people = make_people(store)
+        inst, std = setup_instrument(store, people)
+        cal = new_calibration(store, people, inst, std, bench_readings[0])
+        services.claim_next(store)
+        services.fail(store, cal.id, "worker stopped")
+        assert services.calibration(store, cal.id).status == "failed"
+        with pytest.raises(GonioError, match=rf"already those of calibration {cal.id} "
+                                             rf"\({inst.serial}, .*, failed\).*void it") as got:
+            new_calibration(store, people, inst, std, bench_readings[0])
+        assert got.value.key == services.REUSE_KEY
+        with store.session() as s:                    # its own run again is not a re-use
+            assert services.check_readings_unused(s, cal.readings_sha256,
+                                                  other_than=cal.id) == []
+        services.void(store, people["tech"], cal.id, "the chamber log was lost; run again")
+        again = new_calibration(store, people, inst, std, bench_readings[0])
+        assert again.status == "queued" and again.readings_sha256 == cal.readings_sha256
+        with store.session() as s:                    # one standing calibration: the new one
+            assert [r["id"] for r in services.readings_used_by(s, cal.readings_sha256)] == [
+                again.id]
+    finally:
+        store.close()
+
+
+def test_the_refusal_of_a_standing_calibration_has_no_void_hint(tmp_path, bench_readings):
+    """The hint to void is said only of a failed calibration: a queued one (it will run)
+    is refused with the plain message."""
+    store = open_store(None, tmp_path / "data")
+    try:
+        people = make_people(store)
+        inst, std = setup_instrument(store, people)
+        cal = new_calibration(store, people, inst, std, bench_readings[0])
+        with pytest.raises(GonioError, match=rf"calibration {cal.id} .*, queued\): the same "
+                                             r"measurement is not calibrated twice$"):
+            new_calibration(store, people, inst, std, bench_readings[0])
+    finally:
+        store.close()

@@ -24,7 +24,7 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.specs.jjf1535 import formulas as jf
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.stream import value_range
 from gonio.result.gum import gum, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
@@ -91,16 +91,18 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
 
 
 def static_noise(ctx: Context) -> dict | None:
-    """The static record (7.2.13) in °/h with its overlapping Allan deviation and five-term
-    fit, computed once per calibration (a pure function of the readings and K, kept in
-    ``ctx.cache``); None when the record does not vary."""
+    """The static record (7.2.13) in °/h with its overlapping Allan deviation, five-term
+    fit and the fit with the Gauss–Markov set (the ARW's), computed once per calibration (a
+    pure function of the readings and K, kept in ``ctx.cache``); None when the record does
+    not vary."""
     if "static_noise" in ctx.cache:
         return ctx.cache["static_noise"]
     rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.K)
     out = None
     if value_range(rate_dph) != 0:
         allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
-        out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan)}
+        out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan),
+               "fit_markov": fit_markov_model(allan)}
     ctx.cache["static_noise"] = out
     return out
 
@@ -738,13 +740,19 @@ def g_sensitivity(ctx: Context) -> Item:
 
 
 def angle_random_walk(ctx: Context) -> Item:
-    """JJF 1535 7.2.13: ARW from the five-term fit (25), (26) of the **overlapping** Allan
-    variance of the static record (reading taken), in °/√h; the printed statistic of
-    eqs (22)–(24) is computed too, labelled, with its ratio to the AVAR (it falls as 2/k²).
+    """JJF 1535 7.2.13: ARW N in °/√h from the **overlapping** Allan variance of the static
+    record (reading taken). The value certified is N of the five-term model whose bias
+    instability has a realistic shape — the flat (2 ln 2/π)B² of formula (25) plus
+    first-order Gauss–Markov terms at fixed correlation times
+    (:func:`gonio.analysis.noise.fit_markov_model`): formula (25)'s flat B, fitted to a
+    band-limited bias instability, reads N low. The standard's reading (formula (25),
+    (26): the five-term fit) stays beside it in the details (``formula_25_reading``). The
+    printed statistic of eqs (22)–(24) is computed too, labelled, with its ratio to the
+    AVAR (it falls as 2/k²).
 
     Uncertainty: the fit's standard uncertainty of N (the least-squares covariance with the
-    full covariance of the Allan estimates across τ, which share their data,
-    :func:`gonio.analysis.noise.fit_noise_model`) and the scale factor."""
+    full covariance of the Allan estimates across τ under the fitted model, which share
+    their data) and the scale factor."""
     title, clause, unit = "angle random walk ARW", "7.2.13", "°/√h"
     miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
     if miss:
@@ -755,15 +763,16 @@ def angle_random_walk(ctx: Context) -> Item:
                     uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
     rate_dph, allan, fit = noise["rate_dph"], noise["allan"], noise["fit"]
-    if not (fit.N > 0 and fit.u_N > 0):
+    shaped = noise["fit_markov"]
+    if not (fit.N > 0 and fit.u_N > 0 and shaped.N > 0 and shaped.u_N > 0):
         # a record that varies but whose fit holds no white rate noise (spikes, a periodic
         # disturbance): never certified as 0 ± 0
         raise GonioError("the five-term Allan fit of the static record (7.2.13) finds no "
                          "angle random walk although the record varies (N = 0 with u(N) = 0): "
                          "the record is not gyro noise (spikes, a periodic disturbance?)",
                          key="static")
-    arw = fit.N / math.sqrt(S_PER_H)
-    u_arw = fit.u_N / math.sqrt(S_PER_H)
+    arw = shaped.N / math.sqrt(S_PER_H)
+    u_arw = shaped.u_N / math.sqrt(S_PER_H)
     printed = {}
     if ctx.protocol.get("arw", {}).get("print_standard_statistic", True):
         ks = [k for k in (1, 2, 4, 8, 16) if rate_dph.size >= 2 * k + 3]
@@ -771,10 +780,18 @@ def angle_random_walk(ctx: Context) -> Item:
             printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
                                "ratio": pv / av if av > 0 else None}
     u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
-                                              source="five-term AVAR fit, u(N)"),
+                                              source="AVAR fit (five terms + Gauss-Markov "
+                                                     "set), u(N)"),
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
     return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
-        "fit": fit.to_dict(), "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev,
+        "fit": fit.to_dict(), "fit_markov": shaped.to_dict(),
+        "formula_25_reading": {
+            "arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
+            "u_arw_deg_sqrt_h": fit.u_N / math.sqrt(S_PER_H),
+            "note": "JJF 1535 formulas (25), (26): the five-term fit with a flat bias "
+                    "instability; not certified (a band-limited bias instability makes it "
+                    "read N low)"},
+        "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev,
                                         "ci_low": allan.ci_low, "ci_high": allan.ci_high},
         "bias_instability_dph": fit.B, "rate_random_walk_dph_sqrt_h": fit.K * math.sqrt(S_PER_H),
         "quantisation": fit.Q, "rate_ramp_dph_per_h": fit.R * S_PER_H,

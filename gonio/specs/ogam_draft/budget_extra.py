@@ -37,7 +37,7 @@ __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "sessi
            "coupling_budget_component", "tilt_coupling_coefficients", "budget_extra_components",
            "scale_factor_tilt_bias", "scale_factor_round_coupling",
            "nonlinearity_tilt_bias", "TiltCorrection", "scale_factor_tilt_correction",
-           "EXTRA_SYMBOLS"]
+           "MeasuredRoundTilt", "measured_round_tilt", "EXTRA_SYMBOLS"]
 
 #: Symbols of :func:`budget_extra_components`.
 EXTRA_SYMBOLS: tuple[str, ...] = ("K_P", "K_r", "tilt_E")
@@ -375,6 +375,63 @@ def scale_factor_tilt_correction(scale_factor_rows: pd.DataFrame, protocol: Prot
         azimuth_deg=float(estimate.tilt_azimuth_table_deg), u_azimuth_deg=math.degrees(u_al),
         r_tilt_azimuth=r, k95=float(estimate.k95), n_positions=int(estimate.n_positions),
         orientation=str(estimate.orientation))
+
+
+@dataclass(frozen=True)
+class MeasuredRoundTilt:
+    """The tilt × Earth-rate coupling of each 7.1 round at the tilt the in-situ estimate
+    measured (see :func:`measured_round_tilt`): per round the relative error of K_i is
+    sin ψ·(a¹_k cos γ − b¹_k sin γ)/3600 (a¹, b¹ of :func:`scale_factor_round_coupling` at
+    sin ψ = 1, ″/°; γ = α − β), with the estimate's (ψ, γ), their covariance (rad²) and ν."""
+
+    a1: np.ndarray
+    b1: np.ndarray
+    psi_rad: float
+    gamma_rad: float
+    cov_rad2: np.ndarray        # 2×2 covariance of (ψ, γ)
+    dof: int
+
+    def rel_error(self, psi_rad=None, gamma_rad=None) -> np.ndarray:
+        """Relative error of each round's K_i at (ψ, γ) (default the estimate's); arrays of
+        shape (draws, 1) give (draws, n)."""
+        psi = self.psi_rad if psi_rad is None else psi_rad
+        gam = self.gamma_rad if gamma_rad is None else gamma_rad
+        return np.sin(psi) * (self.a1 * np.cos(gam) - self.b1 * np.sin(gam)) / ARCSEC_PER_DEG
+
+
+def measured_round_tilt(scale_factor_rows: pd.DataFrame, protocol: Protocol,
+                        latitude_deg: float, correction: TiltCorrection,
+                        accel_dps2: float = 60.0) -> MeasuredRoundTilt:
+    """Each 7.1 round's coupling at the measured tilt (a :class:`TiltCorrection`): what K_l
+    corrects round by round instead of allowing for the A.1 bound at an unknown azimuth
+    (beyond the draft; JCGM 100 3.2.4: a known systematic effect is corrected). Rows in the
+    order of the K_i they go with. The mean of the rounds' errors is K's δ
+    (:func:`scale_factor_tilt_correction`):
+
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.tilt_estimate import estimate_tilt
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
+    >>> sf = pd.DataFrame({"table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0],
+    ...                    "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0]})
+    >>> th = np.arange(12) * 30.0
+    >>> amp = 11.522126 * math.sin(math.radians(0.08))
+    >>> y = 9.7 + amp * np.cos(np.radians(th + 40.0)) + 1e-4 * np.cos(np.radians(3 * th))
+    >>> c = scale_factor_tilt_correction(sf, p, 40.0, estimate_tilt(th, y, 40.0, "up"))
+    >>> m = measured_round_tilt(sf, p, 40.0, c)
+    >>> bool(abs(m.rel_error().mean() - c.delta_rel) < 1e-12 * abs(c.delta_rel)), m.dof
+    (True, 9)
+    """
+    a1, b1 = scale_factor_round_coupling(scale_factor_rows, protocol, latitude_deg, 90.0,
+                                         accel_dps2)
+    beta = earth_rate_split(latitude_deg, protocol.scale_factor.orientation) \
+        .perpendicular_direction_deg
+    u = np.radians([correction.u_tilt_deg, correction.u_azimuth_deg])
+    r = correction.r_tilt_azimuth
+    cov = np.array([[u[0] ** 2, r * u[0] * u[1]], [r * u[0] * u[1], u[1] ** 2]])
+    return MeasuredRoundTilt(a1, b1, math.radians(correction.tilt_deg),
+                             math.radians(correction.azimuth_deg - beta), cov,
+                             int(correction.dof))
 
 
 def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,

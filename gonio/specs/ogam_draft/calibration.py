@@ -26,7 +26,7 @@ from gonio import __version__
 from gonio.atomic import sha256_file
 from gonio.resources import protocol_provenance
 from gonio.specs.ogam_draft.budget import ARCSEC_PER_MIN_PER_DPH, AnnexABudget, annex_a_budget
-from gonio.units import ARCSEC_PER_DEG, S_PER_MIN
+from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_MIN
 from gonio.specs.ogam_draft.items import (LISTED_ROWS, CalibrationResults,
                                           compute_characteristics)
 from gonio.formats.metadata import header_lines
@@ -102,6 +102,13 @@ RANGE_READINGS = {
 }
 
 
+#: What E's U under the draft's own Annex A budget is when the physical budget is certified.
+DRAFT_E_READING = ("the draft's reading: U of Annex A's four lines alone (A.4.1-A.4.4), given "
+                   "beside and not certified; it leaves out the lines marked beyond the draft "
+                   "(the tilt x Earth-rate coupling, the errors of the 7.1 K), which the "
+                   "conditions the draft allows contain (docs/draft-readings.md)")
+
+
 #: Which reading of B_s is stated unless the caller asks otherwise (docs/draft-readings.md).
 ZERO_STABILITY_STATED = "draft"
 
@@ -130,7 +137,10 @@ TILT_CORRECTED = {
     "draft": "the draft's reading (7.1): K = mean K_i of the rounds as measured, U with the "
              "coupling at the A.1 tilt bound, arcsine (line K_tilt)",
     "corrected": "stated: K corrected by the measured tilt, U with the correction's "
-                 "uncertainty (line K_te)"}
+                 "uncertainty (line K_te)",
+    "ranges": "; beyond the draft: the tilt x Earth-rate coupling taken at the tilt the "
+              "in-situ estimate measured (each K_i, or each E read with the 7.1 K, corrected), "
+              "with the correction's uncertainty (K_te), not at the A.1 bound"}
 
 
 @dataclass(frozen=True)
@@ -209,6 +219,12 @@ class Analysis:
                     "notes": list(self.budget_notes)})
         for c, ic in zip(unc["components"], ia.components if ia else ()):
             c["beyond_draft"], c["clause"] = ic.beyond_draft, ic.clause
+        if self.budget_kind == "physical":       # the draft's Annex A reading, beside
+            settings, _ = session_settings(self.readings, self.protocol)
+            d = deviation_budget(self.results, self.readings, self.protocol, settings,
+                                 kind="draft")[0].to_dict()
+            unc["draft_reading"] = {"label": DRAFT_E_READING, "U_arcsec": d["U_arcsec"],
+                                    "k": d["k"], "u_c_arcsec": d["u_c_arcsec"]}
         return unc
 
     def item_details(self, c) -> dict:
@@ -220,7 +236,7 @@ class Analysis:
             tc = None if iu is None else iu.correction
             d.update(scale_factor_as_mounted(
                 float(c.value if tc is None else iu.value),
-                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"]))
+                session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"], tc))
             d["temperature_coeff_bound"] = chamber_temperature(self.readings, self.protocol,
                                                                self.gyro_type)[1]
             if tc is not None:
@@ -233,12 +249,15 @@ class Analysis:
                                   "value": float(iu.value)}}
         if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
+            sf_iu = self.item_uncertainty.get("scale_factor")
+            tilt = sf_iu is not None and sf_iu.correction is not None
             if iu is not None and iu.beside is not None:
                 d["stated"] = "corrected"
                 d["estimates"] = {
                     "draft": {"label": RANGE_READINGS[c.name]["draft"], "value": _plain_value(c),
                               "uncertainty": beside_uncertainty(iu.beside.to_dict())},
-                    "corrected": {"label": RANGE_READINGS[c.name]["corrected"],
+                    "corrected": {"label": RANGE_READINGS[c.name]["corrected"]
+                                  + (TILT_CORRECTED["ranges"] if tilt else ""),
                                   "value": float(iu.value)}}
         if c.name != "zero_stability":
             return d
@@ -393,25 +412,53 @@ def method_settings(protocol: Protocol) -> dict:
             "temperature_tolerance_c": cget("temperature_tolerance_c", 1.0)}
 
 
-def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float) -> dict:
+def scale_factor_as_mounted(k_counts_per_deg: float, tilt_bound_deg: float,
+                            tilt_correction=None) -> dict:
     """What K of 7.1 is (docs/draft-readings.md, 7.1): the scale factor *as mounted*.
 
     Tilted by ψ the instrument senses θ̇ cos ψ, so 7.1 measures K_own cos ψ; the draft
     bounds ψ (A.1) and lets the calibration on the mount fix k (A.4.2), so K is stated as
     mounted and the instrument's own K as the one-sided bound K ≤ K_own ≤ K / cos ψ_max.
 
+    Where the in-situ tilt estimate measured ψ (``tilt_correction``, a
+    :class:`gonio.specs.ogam_draft.budget_extra.TiltCorrection`; beyond the draft), the
+    ratio is stated at the measured tilt: K_own/K − 1 = 1/cos ψ − 1, with the 95 % interval
+    its monotone image of ψ's interval ψ ± U(ψ) (ψ ≥ 0; JCGM 101 5.3.3's propagation of an
+    interval through a monotone function), under ``tilt_measured``. The bound stays beside.
+
     >>> d = scale_factor_as_mounted(76434.84, 0.1)
     >>> round((d["instrument_own_upper_counts_per_deg"] / 76434.84 - 1) * 1e6, 2)
     1.52
+    >>> from types import SimpleNamespace
+    >>> tc = SimpleNamespace(tilt_deg=0.05, u_tilt_deg=0.002, k95=2.5)
+    >>> m = scale_factor_as_mounted(76434.84, 0.1, tc)["tilt_measured"]
+    >>> round(m["own_rel_ppm"], 4), [round(x, 4) for x in m["own_rel_interval_ppm"]]
+    (0.3808, [0.3084, 0.4607])
     """
     c = math.cos(math.radians(tilt_bound_deg))
-    return {"measurand": (f"K as mounted: the instrument on the table with its sensing plane "
-                          f"within {tilt_bound_deg:g}° of the table plane (Annex A.1); the "
-                          "instrument's own K (sensing axis along the rotation axis) lies "
-                          f"between K and K/cos ψ, up to {(1 / c - 1) * 1e6:.2g} ppm above K, "
-                          "not included in U"),
-            "tilt_bound_deg": float(tilt_bound_deg),
-            "instrument_own_upper_counts_per_deg": float(k_counts_per_deg / c)}
+    out = {"measurand": (f"K as mounted: the instrument on the table with its sensing plane "
+                         f"within {tilt_bound_deg:g}° of the table plane (Annex A.1); the "
+                         "instrument's own K (sensing axis along the rotation axis) lies "
+                         f"between K and K/cos ψ, up to {(1 / c - 1) * 1e6:.2g} ppm above K, "
+                         "not included in U"),
+           "tilt_bound_deg": float(tilt_bound_deg),
+           "instrument_own_upper_counts_per_deg": float(k_counts_per_deg / c)}
+    if tilt_correction is None:
+        return out
+    psi = float(tilt_correction.tilt_deg)
+    big_u = float(tilt_correction.k95) * float(tilt_correction.u_tilt_deg)
+    rel = lambda x: (1.0 / math.cos(math.radians(x)) - 1.0) / PPM  # noqa: E731
+    lo, hi = rel(max(psi - big_u, 0.0)), rel(psi + big_u)
+    out["tilt_measured"] = {"tilt_deg": psi, "U95_tilt_deg": big_u,
+                            "k95": float(tilt_correction.k95), "own_rel_ppm": rel(psi),
+                            "own_rel_interval_ppm": [lo, hi]}
+    out["measurand"] = (f"K as mounted: the tilt of the sensing axis from the rotation axis "
+                        f"measured in situ (beyond the draft), psi = {psi:.3g}° (U95 "
+                        f"{big_u:.2g}°); the instrument's own K (sensing axis along the "
+                        f"rotation axis) is K/cos psi, {rel(psi):.2g} ppm above K (95 % "
+                        f"interval [{lo:.2g}, {hi:.2g}] ppm), not included in U; A.1's bound "
+                        f"{tilt_bound_deg:g}° would allow up to {(1 / c - 1) * 1e6:.2g} ppm")
+    return out
 
 
 
@@ -833,6 +880,20 @@ def _round_coupling(results, readings, protocol, budget):
                                        float(budget.parameters["tilt_deg"]))
 
 
+def _measured_round_tilt(results, readings, protocol, correction):
+    """Each 7.1 round's tilt coupling at the measured tilt
+    (:func:`gonio.specs.ogam_draft.budget_extra.measured_round_tilt`), rounds in the table's
+    order, at the file's latitude (the tilt estimate needs it stated); None without a
+    correction (K_l then allows for the A.1 bound, :func:`_round_coupling`)."""
+    from gonio.specs.ogam_draft.budget_extra import measured_round_tilt
+
+    if correction is None:
+        return None
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    sf = readings.data.set_index("line").loc[results.scale_factor.table["line"].to_numpy()]
+    return measured_round_tilt(sf, protocol, lat, correction)
+
+
 def _round_noise(results, readings, protocol) -> dict:
     """The gyro's noise over the 7.1 rounds for K_l's Monte Carlo: ``noise``
     (:func:`gonio.specs.ogam_draft.item_uncertainty.round_noise` from the 7.4 series that 7.5
@@ -931,6 +992,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     out = {}
     sf = results.scale_factor
     k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
+    tc = None               # K's correction by the measured tilt (the in-situ estimate)
     if sf.measured:
         t = sf.table
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
@@ -951,6 +1013,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
                 iu.nonlinearity_corrected_budget(
                     t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
                     tilt_round_coupling=_round_coupling(results, readings, protocol, budget),
+                    tilt_measured=_measured_round_tilt(results, readings, protocol, tc),
                     **_round_noise(results, readings, protocol)),
                 beside=draft)
     zs = results.zero_stability
@@ -988,35 +1051,58 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         c = getattr(results, name)
         if not c.measured:
             continue
-        col = "rate_dps" if name == "rate_consistency" else "orientation"
-        pts = c.tables["points"]
-        conds, curves = [], []
-        for row in c.table.itertuples(index=False):
-            v = getattr(row, col)
-            p = pts[pts[col] == v]
-            curves.append((p["position_deg"].to_numpy(dtype=float),
-                           p["E_arcsec"].to_numpy(dtype=float)))
-            at = p.loc[(p["E_arcsec"] - row.E_arcsec).abs().idxmin(), "position_deg"]
-            conds.append(iu.ConditionDeviation(f"{v:g} deg/s" if col == "rate_dps"
-                                               else f"axis {v}", float(row.E_arcsec),
-                                               float(at), u_r, int(row.n_series)))
+        conds, curves = _consistency_conditions(c, name, u_r)
         t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
         t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
-        args = (name, conds, float(c.details["reference_angle_arcsec"]), scale)
+        ref = float(c.details["reference_angle_arcsec"])
         kw = dict(table_mpe_arcsec=mpe, drift_half_width_arcsec=drift * t_min,
                   scale_factor_u_rel=k_u_rel, scale_factor_tilt=k_tilt, curves=curves, k=k_fixed)
-        out[name] = iu.consistency_budget(*args, **kw)
+        draft = iu.consistency_budget(name, conds, ref, scale, **kw)   # as measured, A.1 bound
+        if tc is not None:        # the E_v corrected for K's tilt bias at the measured tilt
+            conds, curves = _consistency_conditions(c, name, u_r, tc.delta_rel)
+            kw.update(curves=curves, tilt_te=(tc.u_delta_rel, tc.dof))
         if name == "rate_consistency":          # stated corrected, the draft's range beside
-            out[name] = dataclasses.replace(iu.consistency_corrected_budget(*args, **kw),
-                                            beside=out[name])
+            out[name] = dataclasses.replace(
+                iu.consistency_corrected_budget(name, conds, ref, scale, **kw), beside=draft)
         else:                 # C_g: stated corrected for the choice of its extremes
-            out[name] = iu.selection_corrected_budget(
-                out[name], curves, [c.u_single_arcsec / math.sqrt(max(c.n_series, 1))
-                                    for c in conds],
-                reference_angle_arcsec=args[2], scale=scale, table_mpe_arcsec=mpe,
+            base = iu.consistency_budget(name, conds, ref, scale, **kw) if tc is not None \
+                else draft
+            out[name] = dataclasses.replace(iu.selection_corrected_budget(
+                base, curves, [x.u_single_arcsec / math.sqrt(max(x.n_series, 1)) for x in conds],
+                reference_angle_arcsec=ref, scale=scale, table_mpe_arcsec=mpe,
                 drift_half_width_arcsec=kw["drift_half_width_arcsec"],
-                scale_factor_u_rel=k_u_rel, k=k_fixed)
+                scale_factor_u_rel=k_u_rel, k=k_fixed), beside=draft)
     return out
+
+
+def _consistency_conditions(c, name: str, u_r: float, delta_rel: float | None = None):
+    """(conditions, curves) of a consistency item (7.6 by rate, 7.7 by orientation) for
+    :func:`gonio.specs.ogam_draft.item_uncertainty.consistency_budget`: per condition its
+    curve (positions, E) and its signed extreme E_v where it lies. ``delta_rel``: K's relative
+    bias δ by the tilt × Earth-rate coupling at the measured tilt; every E read with the 7.1
+    K is then corrected by +δ·θ (K(1 + δ) reads θ(1 − δ); JCGM 100 3.2.4) and E_v taken on
+    the corrected curve (the correction may move the extreme)."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    col = "rate_dps" if name == "rate_consistency" else "orientation"
+    pts = c.tables["points"]
+    conds, curves = [], []
+    for row in c.table.itertuples(index=False):
+        v = getattr(row, col)
+        p = pts[pts[col] == v]
+        pos = p["position_deg"].to_numpy(dtype=float)
+        e = p["E_arcsec"].to_numpy(dtype=float)
+        if delta_rel is None:
+            e_v = float(row.E_arcsec)
+            at = p.loc[(p["E_arcsec"] - row.E_arcsec).abs().idxmin(), "position_deg"]
+        else:
+            e = e + delta_rel * pos * ARCSEC_PER_DEG
+            j = int(np.nanargmax(np.abs(e)))
+            e_v, at = float(e[j]), pos[j]
+        curves.append((pos, e))
+        conds.append(iu.ConditionDeviation(f"{v:g} deg/s" if col == "rate_dps" else f"axis {v}",
+                                           e_v, float(at), u_r, int(row.n_series)))
+    return conds, curves
 
 
 #: The last file :func:`screen` read, for the :func:`calibrate` that follows it in the pipeline

@@ -126,6 +126,12 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
                           k=_num(res, "extra.uncertainty.k", "k", U),
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
         add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
+        dr = unc.get("draft_reading")
+        if unc.get("budget_kind") == "physical" and dr:      # which budget is certified
+            add("p", [L["U_certified_physical"].format(U=display("U", dr["U_arcsec"]),
+                                                       k=display("k", dr["k"]))])
+        elif unc.get("budget_kind") == "draft":
+            add("p", [L["U_certified_draft"]])
         ks = unc.get("k_source")                 # say where k comes from
         if ks:
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
@@ -138,8 +144,18 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         sf = res["items"]["scale_factor"]["details"]
         ppm = (sf["instrument_own_upper_counts_per_deg"] / res["items"]["scale_factor"]["value"]
                - 1) * 1e6
-        add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
-                                           ppm=f"{ppm:.2g}")])
+        tm = sf.get("tilt_measured")
+        if tm:                                  # ψ measured in situ: stated at the measured ψ
+            add("p", [L["K_as_mounted_measured"].format(
+                psi=display("atU", tm["tilt_deg"], U=tm["U95_tilt_deg"]),
+                U=display("U", tm["U95_tilt_deg"]), k=display("k", tm["k95"]),
+                ppm=display("dec2", tm["own_rel_ppm"]),
+                lo=display("dec2", tm["own_rel_interval_ppm"][0]),
+                hi=display("dec2", tm["own_rel_interval_ppm"][1]),
+                bound=display("pos", sf["tilt_bound_deg"]), bppm=f"{ppm:.2g}")])
+        else:
+            add("p", [L["K_as_mounted"].format(psi=display("pos", sf["tilt_bound_deg"]),
+                                               ppm=f"{ppm:.2g}")])
         tb = sf.get("temperature_coeff_bound")
         if tb and tb.get("basis") == "logged":  # K's chamber line at the logged temperature
             add("p", [L["K_temperature_logged"].format(

@@ -629,7 +629,8 @@ RANGE_SEED = 20261129
 def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   k: float | None = None, tilt_round_coupling=None,
                                   noise: RoundNoise | None = None, time_s=None,
-                                  draws: int = RANGE_DRAWS) -> ItemUncertainty:
+                                  draws: int = RANGE_DRAWS,
+                                  tilt_measured=None) -> ItemUncertainty:
     """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
 
     The draft's K_l = (max K_i − min K_i)/K · 100 % is a range of measured values, and a
@@ -647,7 +648,12 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     to reading ``time_s`` are given, the gyro's own angle noise over each round: its angle
     random walk, normal with u = N√t_k, independent between rounds, and the measured Earth-rate
     compensation's rate error, normal with u = N/√T_s, the same for every round, times t_k
-    (relative errors: the angle over θ_k). K_l is the
+    (relative errors: the angle over θ_k). Where the in-situ tilt estimate measured ψ and
+    its azimuth, ``tilt_measured`` (a :class:`gonio.specs.ogam_draft.budget_extra.MeasuredRoundTilt`)
+    replaces ``tilt_round_coupling``: each K_i is corrected for its own coupling at the
+    measured tilt, K_i/(1 + e_k(ψ, γ)) (JCGM 100 3.2.4), and the draws carry the correction's
+    error e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance
+    (JCGM 101 6.4.8). K_l is the
     range whose expected measured range equals the one measured; u is the spread of the
     measured range there (one line, ``K_rng``, normal). The value is negative when the
     measured range is smaller than the errors alone would give (it is then stated by its
@@ -680,7 +686,15 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     err = (rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
            + rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))) * to_pct
     src = "table angle at the stops (rectangular ±MPE), count quantisation (triangular ±1 count)"
-    if tilt_round_coupling is not None:
+    if tilt_measured is not None:
+        tm = tilt_measured
+        k_i = k_i / (1.0 + tm.rel_error())
+        d = rng.multivariate_normal([tm.psi_rad, tm.gamma_rad], tm.cov_rad2, draws)
+        err = err + (tm.rel_error(d[:, :1], d[:, 1:]) - tm.rel_error()) * 100.0
+        src += (f", corrected for the tilt x Earth-rate coupling of each round at the measured "
+                f"tilt psi = {math.degrees(tm.psi_rad):.3g} deg (the correction's error from "
+                f"the estimate's covariance, nu = {tm.dof})")
+    elif tilt_round_coupling is not None:
         a, b = (np.asarray(v, dtype=float) * 100.0 / ARCSEC_PER_DEG for v in tilt_round_coupling)
         alpha = rng.uniform(0.0, 2.0 * math.pi, (draws, 1))
         err = err + a * np.cos(alpha) - b * np.sin(alpha)
@@ -975,12 +989,26 @@ def _series_dof(c: ConditionDeviation) -> float:
 def _consistency_lines(a: ConditionDeviation, b: ConditionDeviation, n_conditions: int,
                        mean_u_arcsec: float, f: float, clause: str, table_mpe_arcsec: float,
                        drift_half_width_arcsec: float, scale_factor_u_rel: float,
-                       scale_factor_tilt: float) -> list:
+                       scale_factor_tilt: float, tilt_te=None) -> list:
     """The budget lines of :func:`consistency_budget` for the extremes a (max E_v) and b
     (min E_v), in the order its sensitivity coefficients and correlation assume: r_a, r_b,
-    P_a, P_b, B_a, B_b, C_rng, K_ab, K_tilt; ``f`` converts arcsec to the item's unit,
-    ``mean_u_arcsec`` is the conditions' mean u(E_v)."""
+    P_a, P_b, B_a, B_b, C_rng, K_ab, K_tilt (``K_te`` where ``tilt_te`` is given); ``f``
+    converts arcsec to the item's unit, ``mean_u_arcsec`` is the conditions' mean u(E_v)."""
     ends = (("a", a), ("b", b))
+    span_deg = abs(a.position_deg - b.position_deg)
+    if tilt_te is not None:            # E_v corrected by the measured tilt: u of the correction
+        u_rel, dof = tilt_te
+        tilt_line = _Line(
+            from_u("K_te", 0.0, u_rel * span_deg * ARCSEC_PER_DEG * f, dof=dof, type="A",
+                   source=f"E_v corrected for the tilt x Earth-rate bias of K at the measured "
+                          f"tilt; u(delta) = {u_rel:.3g} over {span_deg:g}° between the extremes"),
+            "tilt correction of K carried into the spread", True, clause + " (A.1, 7.1)")
+    else:
+        tilt_line = _Line(
+            type_b("K_tilt", 0.0, scale_factor_tilt * span_deg * f, "arcsine",
+                   source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
+                          f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
+            "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)")
     return [
         *(_Line(from_u(f"r_{s}", 0.0, _mean_u(c) * f, dof=_series_dof(c), type="A",
                        source=f"mean of {c.n_series} series at {c.label}"),
@@ -1000,11 +1028,7 @@ def _consistency_lines(a: ConditionDeviation, b: ConditionDeviation, n_condition
                      source=f"u(K)/K = {scale_factor_u_rel:.3g} over "
                             f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
               "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
-        _Line(type_b("K_tilt", 0.0, scale_factor_tilt * abs(a.position_deg - b.position_deg)
-                     * f, "arcsine",
-                     source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
-                            f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
-              "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)"),
+        tilt_line,
     ]
 
 
@@ -1012,7 +1036,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                        reference_angle_arcsec: float, scale: float, *,
                        table_mpe_arcsec: float, drift_half_width_arcsec: float,
                        scale_factor_u_rel: float = 0.0, scale_factor_tilt: float = 0.0,
-                       curves=None, k: float | None = None) -> ItemUncertainty:
+                       curves=None, k: float | None = None, tilt_te=None) -> ItemUncertainty:
     """u(C) of C = (max E_v − min E_v)/reference · scale (draft 7.6: ppm, 7.7: %).
 
     Inputs, for the conditions a (max E_v) and b (min E_v): their Type A means
@@ -1028,7 +1052,10 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     same position: the term cancels like the table's). On a mount tilted within the A.1
     bound the coupling of the 7.1 rounds biases K too: ``scale_factor_tilt`` (A_K,
     arcsec per degree, :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`) gives the
-    ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|.
+    ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|. Where the in-situ tilt
+    estimate measured the tilt, the caller corrects the E_v for K's bias δ (E_v + δ·θ_v,
+    JCGM 100 3.2.4) and gives ``tilt_te`` = (u(δ), ν): the ``K_te`` line, normal with
+    u(δ)·|θ_a − θ_b| and ν of the estimate's fit, in place of ``K_tilt`` (beyond the draft).
 
     ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, as ``conditions``) adds the
     *choice of the extreme* (``C_sel``, :func:`extreme_selection_u`): noise can pick a
@@ -1077,7 +1104,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
 
     lines = _consistency_lines(a, b, len(cs), float(np.mean([_mean_u(c) for c in cs])), f,
                                clause, table_mpe_arcsec, drift_half_width_arcsec,
-                               scale_factor_u_rel, scale_factor_tilt)
+                               scale_factor_u_rel, scale_factor_tilt, tilt_te)
     if curves is not None:
         u_sel = extreme_selection_u(curves, [_mean_u(c) for c in cs], table_mpe_arcsec,
                                     drift_half_width_arcsec, scale_factor_u_rel) * f
@@ -1098,7 +1125,7 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
                                  table_mpe_arcsec: float, drift_half_width_arcsec: float,
                                  scale_factor_u_rel: float = 0.0, scale_factor_tilt: float = 0.0,
                                  curves=None, k: float | None = None,
-                                 draws: int = RANGE_DRAWS) -> ItemUncertainty:
+                                 draws: int = RANGE_DRAWS, tilt_te=None) -> ItemUncertainty:
     """C (draft 7.6: ppm, 7.7: %) corrected for the range's bias, and its u: the stated C.
 
     The draft's C = (max E_v − min E_v)/reference is a range of measured values, biased
@@ -1110,7 +1137,9 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     its zero drift (rectangular, A.4.3, independent; a ramp over the turn as in
     :func:`extreme_selection`: the drift accumulated from the zeroing at 0° to the extreme's
     position θ_v, the bound's half-width times θ_v/360°), K's error δ·θ_v (normal, u(K)/K, the
-    same δ for all, 7.1) and the tilt bias of K A_K·θ_v (arcsine, the same phase for all, A.1).
+    same δ for all, 7.1) and the tilt bias of K A_K·θ_v (arcsine, the same phase for all, A.1)
+    — or, where the E_v were corrected by the measured tilt (``tilt_te`` = (u(δ), ν), as
+    :func:`consistency_budget`), the correction's error, normal u(δ)·θ_v, the same for all.
     C is the range whose expected measured range equals the one measured; u is the spread of
     the measured range there (line ``C_rng``, normal), with the choice of each condition's
     extreme (``C_sel``) beside it as in :func:`consistency_budget`; with ``curves`` the
@@ -1159,12 +1188,15 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     err = (rng.normal(0.0, 1.0, (draws, n)) * u_mean + table
            + rng.uniform(-drift_half_width_arcsec, drift_half_width_arcsec, (draws, n)) * ramp
            + rng.normal(0.0, scale_factor_u_rel, (draws, 1)) * pos * ARCSEC_PER_DEG
-           + np.sin(rng.uniform(0.0, 2.0 * math.pi, (draws, 1))) * scale_factor_tilt * pos)
+           + (rng.normal(0.0, tilt_te[0], (draws, 1)) * pos * ARCSEC_PER_DEG
+              if tilt_te is not None else
+              np.sin(rng.uniform(0.0, 2.0 * math.pi, (draws, 1))) * scale_factor_tilt * pos))
     c = corrected_range(x * f, err * f)
     kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
     lines = [_Line(from_u("C_rng", 0.0, c.u, type="B",
                           source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the "
-                                 f"{n} E_v: means, table, zero drift, K and its tilt bias; "
+                                 f"{n} E_v: means, table, zero drift, K and its tilt "
+                                 f"{'correction' if tilt_te is not None else 'bias'}; "
                                  f"measured range {c.measured:.4g} {unit}, of the errors alone "
                                  f"{c.noise_range:.4g} {unit}, corrected {c.value:.4g} {unit}"),
                    "range of the E_v, bias corrected", True,

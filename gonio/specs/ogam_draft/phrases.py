@@ -184,6 +184,16 @@ LABELS: dict[str, dict[str, str]] = {
                      "zh": "标度因数 K 为安装状态下的值：敏感平面与转台台面的夹角不超过 {psi}°"
                            "（附录A.1）。仪器自身的 K（敏感轴沿转轴）最多大 {ppm} ppm"
                            "（1/cos ψ − 1），未计入 U。"},
+    "K_as_mounted_measured": {
+        "en": "The scale factor K is stated as mounted. The tilt of the sensing axis from the "
+              "rotation axis was measured in situ (beyond the draft): ψ = {psi}° (U = {U}°, "
+              "k = {k}). The instrument's own K (sensing axis along the rotation axis) is larger "
+              "by 1/cos ψ − 1 = {ppm} ppm (95 % interval [{lo}, {hi}] ppm; the A.1 bound of "
+              "{bound}° would allow up to {bppm} ppm); this is not included in U.",
+        "zh": "标度因数 K 为安装状态下的值。敏感轴相对转轴的倾角经现场测量（超出草案）："
+              "ψ = {psi}°（U = {U}°，k = {k}）。仪器自身的 K（敏感轴沿转轴）大 "
+              "1/cos ψ − 1 = {ppm} ppm（95 % 区间 [{lo}, {hi}] ppm；按附录A.1 的限值 {bound}° "
+              "最多大 {bppm} ppm），未计入 U。"},
     "K_temperature_bound": {
         "en": "U(K) holds for a chamber within ±{tol} °C of the reference temperature (Table 2) "
               "and a scale-factor temperature coefficient |α_K| ≤ {b} ppm/°C: {src}.",
@@ -290,6 +300,19 @@ LABELS: dict[str, dict[str, str]] = {
     "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
     "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
                 "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
+    "U_certified_physical": {
+        "en": "Certified: U of this calibration's physical budget (the draft's Annex A lines and "
+              "the lines marked \"beyond the draft\", budget below). The draft's reading, its "
+              "Annex A budget alone, gives U = {U}″ (k = {k}); it is given beside and not "
+              "certified: it leaves out the tilt × Earth-rate coupling and the errors of the "
+              "7.1 K, which conditions the draft allows contain.",
+        "zh": "所给 U 按本次校准的物理模型评定（附录A各分量及标“超出草案”的分量，见下方不确定度分量表）。"
+              "按规范草案的理解，仅用附录A评定得 U = {U}″（k = {k}），仅供参考，不作为校准结果："
+              "它未计入倾斜与地球自转角速度的耦合及 7.1 标度因数的误差，而草案允许的条件下这些影响存在。"},
+    "U_certified_draft": {
+        "en": "Certified: U of the draft's Annex A budget as the draft states it (the draft's "
+              "reading); the lines beyond the draft are not applied.",
+        "zh": "所给 U 按规范草案附录A评定（草案的理解），未计入超出草案的分量。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "

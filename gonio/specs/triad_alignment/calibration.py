@@ -231,6 +231,13 @@ def _nu(al: AlignmentResult, i: int, j: int) -> float:
     return float(math.floor(nu + 1e-9)) if math.isfinite(nu) else nu
 
 
+def static_record_s(r: TriadReadings) -> float:
+    """Length of the readings' static record (rows ``test = static``), in s; 0 without one:
+    the T of the bias-instability term of b_i (:func:`alignment_items`)."""
+    st = r.rows("static")
+    return float(st["duration_s"].sum()) if len(st) else 0.0
+
+
 def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
                     ) -> dict[str, Item]:
     """The alignment items (module docstring) from an :class:`AlignmentResult`."""
@@ -570,9 +577,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
             al = None
             items.update(_alignment_not_measured(f"the data were refused: {exc.message}", unit))
         else:
-            st = r.rows("static")
-            items.update(alignment_items(al, monte_carlo_trials,
-                                         float(st["duration_s"].sum()) if len(st) else 0.0))
+            items.update(alignment_items(al, monte_carlo_trials, static_record_s(r)))
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)

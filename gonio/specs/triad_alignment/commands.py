@@ -108,9 +108,10 @@ def run_align(args) -> int:
         if args.plot:
             save_figure(fig, args.plot)
         if args.report:
+            from gonio.specs.triad_alignment.calibration import static_record_s
             from gonio.specs.triad_alignment.pages import alignment_page, write_report
 
-            write_report(args.report, [alignment_page(res, fig)],
+            write_report(args.report, [alignment_page(res, fig, static_record_s(r))],
                          f"Gyro-triad alignment — {r.metadata.get('instrument', '')} "
                          f"{r.metadata.get('serial', '')}".strip())
     if args.json:

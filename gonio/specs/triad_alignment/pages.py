@@ -24,6 +24,7 @@ from gonio.specs.triad_alignment.calibration import alignment_items, total_cover
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
 from gonio.report.i18n import decimals_for_sig, display_uncertainty, round_half_up
+from gonio.report.stated import item_nums
 
 _CSS = ("body{font-family:'DejaVu Sans',sans-serif;font-size:10pt;margin:2em}"
         "table{border-collapse:collapse;margin:0.5em 0 1em}"
@@ -57,17 +58,29 @@ def _table(header, rows) -> str:
     return f"<table><tr>{h}</tr>{body}</table>"
 
 
-def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
+def certified_b(item) -> str:
+    """The certificate's cell of a bias item b_i: "value ± U (k = …)" by the one statement
+    rule (:func:`gonio.report.stated.item_nums`, as the certificate's matrix table states it
+    with the item's own k)."""
+    n = item_nums(item.to_json(), f"items.{item.key}", sig=6)
+    if n["U"] is None:
+        return str(n["value"] or "—")
+    return f"{n['value']} ± {n['U']} (k = {n['k']})"
+
+
+def alignment_page(res: AlignmentResult, figure: Figure | None = None,
+                   static_s: float = 0.0) -> str:
     """HTML section: M, b, M⁻¹, scale factors, misalignment angles, cross-axis
-    sensitivities (IEC 62047-20 5.2), residual leakage and averaging time. M, S and L are
-    shown with the U of the certified items (:func:`alignment_items`: the fit and the rate
-    table's Type B line, k from the Welch–Satterthwaite ν_eff), so the page agrees with the
-    certificate; M⁻¹, the scale factors, angles and biases in °/s with the k of their own
-    total (:func:`total_coverage_factor`, the smallest ν of the fit); b with the fit's k."""
-    items = alignment_items(res, 0)
+    sensitivities (IEC 62047-20 5.2), residual leakage and averaging time. M, S, L and b
+    are shown with the U of the certified items (:func:`alignment_items`: the fit and the rate
+    table's Type B line, k from the Welch–Satterthwaite ν_eff; b the long-term bias, the
+    in-run fit plus the bias instability of a static record of ``static_s`` seconds, with its
+    own k), so the page agrees with the certificate; M⁻¹, the scale factors, angles and the
+    in-run biases in °/s with the k of their own total (:func:`total_coverage_factor`, the
+    smallest ν of the fit)."""
+    items = alignment_items(res, 0, static_s)
     unit = res.output_unit or "output"
     m = res.system_matrix
-    kb = res.coverage_factor_theta[:, 3]
     tb = res.type_b or {}
     nu_min = float(np.min(res.dof))
 
@@ -77,14 +90,15 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
         u_b = float(np.ravel(tb["u_derived"][name])[n]) if tb else 0.0
         return total_coverage_factor(u, u_b, nu_min) * u
 
-    out = ["<h2>Alignment matrix (U for p ≈ 95 %, k = t(ν_eff) of each value's budget: the "
+    out = ["<h2>Alignment matrix (U for p = 95.45 %, k = t(ν_eff) of each value's budget: the "
            "fit and the rate table; b with its own k)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
-           f"{' (robust fit)' if res.robust else ''}.</p>"]
+           f"{' (robust fit)' if res.robust else ''}; b as the certificate states b_i: "
+           f"{html.escape(items['b_x'].details['stated'])}.</p>"]
     rows = [[f"gyro {a}"] + [value_with_u(m[i, j], items[f"M_{a}{b}"].uncertainty.U)
                              for j, b in enumerate("xyz")]
-            + [value_with_u(res.bias_output[i], kb[i] * res.u_bias_output[i])]
+            + [certified_b(items[f"b_{a}"])]
             for i, a in enumerate("xyz")]
     out.append(_table(["", "ω_x", "ω_y", "ω_z", "b"], rows))
     a = res.alignment_matrix
@@ -94,7 +108,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None) -> str:
                                      for j in range(3)] for i, r in enumerate("xyz")]))
     sc, ps, bd = res.derived["scale"], res.derived["psi_rad"], res.derived["bias_dps"]
     out.append(_table(["gyro", f"scale factor ({unit}/(°/s))", "misalignment ψ (mrad)",
-                       "bias (°/s)"],
+                       "in-run bias (°/s), this record's fit"],
                       [[a_, value_with_u(sc[i], derived_u("scale", i)),
                         value_with_u(ps[i] * 1e3, derived_u("psi_rad", i) * 1e3),
                         value_with_u(bd[i], derived_u("bias_dps", i))]
