@@ -785,6 +785,8 @@ def angle_random_walk(ctx: Context) -> Item:
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
     return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
         "fit": fit.to_dict(), "fit_markov": shaped.to_dict(),
+        "formula_25_arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
+        "flicker_band_t_lo_s": shaped.t_lo_s,
         "formula_25_reading": {
             "arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
             "u_arw_deg_sqrt_h": fit.u_N / math.sqrt(S_PER_H),
