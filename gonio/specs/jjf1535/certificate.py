@@ -49,14 +49,24 @@ ITEM_CONDITIONS = {
         "means' variance.",
         "零偏稳定性（7.2.10）：按原文式（19），Q 段记录标准偏差的平均值为 {reading_eq19_dph:#.3g} °/h"
         "（标准偏差的平均值偏小）；所给校准值为其均方根，其平方是分块均值方差的无偏估计。"),
-    "angle_random_walk": (
-        "Angle random walk (7.2.13): formula (25)'s five-term fit, whose bias instability is "
-        "flat at every τ, reads {formula_25_arw_deg_sqrt_h:#.4g} °/√h; the value certified is N "
-        "of the same fit with the bias instability band-limited below a fitted correlation time "
-        "(T_lo = {flicker_band_t_lo_s:#.3g} s; 0: flat), as a gyro's fades at short τ.",
-        "角度随机游走系数（7.2.13）：按式（25）的五项拟合（零偏不稳定性在各 τ 均为常数）为 "
-        "{formula_25_arw_deg_sqrt_h:#.4g} °/√h；所给校准值为同一拟合中零偏不稳定性在拟合的最短相关时间"
-        "（T_lo = {flicker_band_t_lo_s:#.3g} s；0 为常数）以下按带限衰减时的 N（陀螺的零偏不稳定性在短 τ 处减弱）。"),
+    "threshold": (
+        "Threshold (7.2.6): the value is the tested rate of the programme's grid ({grid_dps} "
+        "°/s, means of {samples} samples referred to the rests around each point) at which "
+        "the 50 % rule stops; its interval is the 95 % range of the rule's outcome under the "
+        "readings' own noise. Where the noise decides the rule, another grid or averaging is "
+        "another measurand.",
+        "阈值（7.2.6）：校准值为方案速率序列（{grid_dps} °/s，各点取 {samples} 个采样的平均值，"
+        "以其前后静止输出为参考）中 50 % 判据终止时的试验速率；区间为按本次数据噪声 50 % 判据"
+        "结果的 95 % 范围。噪声决定判据时，速率序列或平均采样数不同即为不同的被测量。"),
+    "resolution": (
+        "Resolution (7.2.7): the value is the tested increment of the programme's grid "
+        "({grid_dps} °/s, means of {samples} samples, the base rate re-measured before each "
+        "increment) at which the 50 % rule stops; its interval is the 95 % range of the "
+        "rule's outcome under the readings' own noise. Where the noise decides the rule, "
+        "another grid or averaging is another measurand.",
+        "分辨率（7.2.7）：校准值为方案增量序列（{grid_dps} °/s，各点取 {samples} 个采样的平均值，"
+        "每个增量前重测基准速率）中 50 % 判据终止时的试验增量；区间为按本次数据噪声 50 % 判据"
+        "结果的 95 % 范围。噪声决定判据时，增量序列或平均采样数不同即为不同的被测量。"),
     "warmup_time": (
         "Warm-up time (7.2.9): the earliest time after power-on from which every window of "
         "W = {window_samples} samples ({window_s:g} s) has a stability of P-sample block means "
@@ -66,6 +76,14 @@ ITEM_CONDITIONS = {
         "准备时间（7.2.9）：自通电起，此后每个 W = {window_samples} 个采样（{window_s:g} s）的窗口内，"
         "P 个采样平均值（P = {block_samples} 个采样，{block_s:g} s；式（18））的稳定性均不超过标称值 "
         "{nominal_stability_dph:g} °/h 的最早时刻；取 {records} 次通电的平均值，窗口起点步长为 P 个采样。"),
+    "angle_random_walk": (
+        "Angle random walk (7.2.13): formula (25)'s five-term fit, whose bias instability is "
+        "flat at every τ, reads {formula_25_arw_deg_sqrt_h:#.4g} °/√h; the value certified is N "
+        "of the same fit with the bias instability band-limited below a fitted correlation time "
+        "(T_lo = {flicker_band_t_lo_s:#.3g} s; 0: flat), as a gyro's fades at short τ.",
+        "角度随机游走系数（7.2.13）：按式（25）的五项拟合（零偏不稳定性在各 τ 均为常数）为 "
+        "{formula_25_arw_deg_sqrt_h:#.4g} °/√h；所给校准值为同一拟合中零偏不稳定性在拟合的最短相关时间"
+        "（T_lo = {flicker_band_t_lo_s:#.3g} s；0 为常数）以下按带限衰减时的 N（陀螺的零偏不稳定性在短 τ 处减弱）。"),
 }
 
 #: Page title.
