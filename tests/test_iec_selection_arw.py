@@ -67,7 +67,7 @@ def test_hysteresis_budget_monte_carlo(h_over_sigma):
 
 
 def test_arw_unbiased_on_the_bench_noise():
-    from gonio.analysis.noise import allan_deviation, fit_noise_model
+    from gonio.analysis.noise import allan_deviation, fit_markov_model
     from gonio.bench.rate_gyro import NoiseState, load_rate_bench
 
     g = load_rate_bench("mems-adxrs610").gyro
@@ -75,7 +75,7 @@ def test_arw_unbiased_on_the_bench_noise():
     for s in range(60):
         x = NoiseState(g, np.random.default_rng(1000 + s)).samples(6000, 0.1, g.reference_temperature_c)
         a = allan_deviation(x * 3600.0, 0.1, "rate", "decade:10", unit="deg/h")
-        value, line, ratio, u_rel, _ = I.arw_reading(a, fit_noise_model(a))
+        value, line, ratio, u_rel, _ = I.arw_reading(a, fit_markov_model(a))
         u_c = math.hypot(value * u_rel, abs(1.0 / ratio - 1.0) / 2.0 * value)
         z.append((value - g.arw_deg_sqrt_h) / u_c)
     z = np.array(z)

@@ -162,7 +162,7 @@ def spec_items(df):
             "iec_bi": jsonable(I.bias_instability(ci)),
             "iec_inband": jsonable(I.inband_noise(ci)),
             "iec_broadband": jsonable(I.broadband_noise(ci)),
-            "jjf_drift_u": J.drift_u_dph(cj, 3600.0), "iec_drift_u": I.drift_u_dps(ci, 3600.0)}
+            "jjf_drift_u": J.drift_u_dph(cj, (0.0, 100.0), (3600.0, 100.0)), "iec_drift_u": I.drift_u_dps(ci, 3600.0)}
 
 
 def test_spec_noise_items_streamed_equal_the_array_path(monkeypatch):

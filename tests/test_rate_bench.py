@@ -352,10 +352,10 @@ def test_optical_bench_as_rate_sensor():
 def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
     """JCGM 101: with ``monte_carlo_trials`` every item's budget is also propagated by Monte
     Carlo and the GUM interval checked against it (JCGM 101 8). Gaussian-dominated budgets
-    (ARW, bandwidth) validate; the threshold's budget (grid step, rectangular, and the 50 %
-    rule's outcome spread, normal) has the closed-form standard deviation √(u₁² + u₂²); a
-    lone rectangular component has the 95 % interval ±0.95·a, narrower than the GUM's
-    ±1.96·a/√3, and is then reported as not validated. 10⁶ trials: the Monte Carlo's own
+    (ARW, bandwidth) validate; the threshold is stated by the 95 % range of its outcome
+    distribution (a discrete distribution, no GUM propagation, so no Monte Carlo of a GUM
+    interval): u_c is that distribution's standard deviation, recomputed here from the
+    outcome probabilities in the item's details, and the interval holds the value. 10⁶ trials: the Monte Carlo's own
     error of a 95 % end, ≈ 0.0025·u at 10⁶ (0.006·u at 2·10⁵), stays below the tolerance δ
     (half a unit in the second digit of u: u/190 to u/20) for ARW's u of 0.0057 °/√h."""
     from gonio.specs.jjf1535 import calibrate
@@ -368,14 +368,16 @@ def test_monte_carlo_validation_of_the_budgets(jjf_noise_on):
         # a t_50 input has standard deviation √(50/48) = 1.02 of its u
         assert mc["u"] == pytest.approx(r2.items[key].uncertainty.u_c * math.sqrt(50 / 48), rel=0.02)
     th = r2.items["threshold"]
-    comps = {c["symbol"]: c["u"] for c in th.uncertainty.components}
-    mc = th.uncertainty.monte_carlo
-    # a rectangular (grid step) plus a normal (outcome spread) component: the Monte Carlo
-    # standard deviation is √(u_grid² + u_noise²) (closed form of the sum's variance)
-    assert mc["u"] == pytest.approx(math.hypot(comps["grid"], comps["rule_noise"]), rel=0.01)
-    if comps["rule_noise"] == 0:      # a lone rectangular: 95 % interval ±0.95·a, not the GUM's
-        assert mc["high"] - th.value == pytest.approx(0.95 * comps["grid"] * math.sqrt(3), rel=0.01)
-        assert not mc["validated"]
+    assert th.uncertainty.monte_carlo is None and th.uncertainty.k is None
+    pmf = th.details["outcome_pmf"]
+    top = max(float(k) for k in pmf if k != "none")
+    x = np.array([top if k == "none" else float(k) for k in pmf])
+    w = np.array(list(pmf.values()))
+    assert th.uncertainty.u_c == pytest.approx(math.sqrt(w @ (x - w @ x) ** 2), rel=1e-9)
+    if th.uncertainty.interval is not None:
+        lo, hi = th.uncertainty.interval
+        assert lo <= th.value <= hi and th.uncertainty.U == pytest.approx(hi - th.value)
+        assert {lo, hi} <= set(x) | {th.value}          # the ends are tested rates
     assert r2.to_json()["items"]["bias"]["uncertainty"]["monte_carlo"]["trials"] == 1_000_000
 
 

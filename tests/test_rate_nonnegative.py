@@ -40,10 +40,14 @@ def test_declared_items_exist_and_are_non_negative(calibrated):
 
 def test_upper_bound_where_U_exceeds_the_value(calibrated):
     spec, js = calibrated
-    # U above the value, or a dispersion stated by its χ² interval [0, value + U] (k null)
+    # U above the value, or a dispersion stated by its χ² interval [0, value + U] (k null);
+    # an interval above 0 (JJF 7.2.6/7.2.7: the 50 % rule's outcome range) is two-sided
+    def from_zero(u):
+        return u["k"] is None and (u.get("interval") is None or u["interval"][0] == 0)
     wide = [(k, it) for k, it in js["items"].items() if it["nonnegative"] and it["measured"]
-            and it["uncertainty"] and (it["uncertainty"]["U"] > it["value"]
-                                       or it["uncertainty"]["k"] is None)]
+            and it["uncertainty"] and ((it["uncertainty"]["U"] > it["value"]
+                                        and it["uncertainty"]["k"] is not None)
+                                       or from_zero(it["uncertainty"]))]
     for key, it in js["items"].items():
         if (key, it) not in wide:
             assert it.get("upper_bound") in (None, {}) or not it["upper_bound"].get("upper"), key

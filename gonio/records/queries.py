@@ -15,8 +15,15 @@ from gonio.records.results import statements_of, stored_result
 
 
 def _page(s, stmt, page: int, size: int):
+    """(the page's rows of ``stmt``, the total). The page is chosen on the ids alone (the
+    same filter and order, LIMIT/OFFSET in a subquery) and only its rows are read whole with
+    their joined rows: PostgreSQL, without fresh statistics (after a bulk load or a
+    restore), otherwise joined and sorted every row of the table, wide rows spilling to
+    disk (100 ms for a calibrations page at 10 000 calibrations)."""
     total = s.scalar(select(func.count()).select_from(stmt.order_by(None).subquery()))
-    rows = s.scalars(stmt.limit(size).offset((page - 1) * size)).all()
+    model = stmt.column_descriptions[0]["entity"]
+    ids = stmt.with_only_columns(model.id).limit(size).offset((page - 1) * size)
+    rows = s.scalars(stmt.where(model.id.in_(ids))).all()
     return rows, total
 
 

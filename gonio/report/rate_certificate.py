@@ -135,6 +135,7 @@ WORD_SYMBOLS: dict[str, str] = {
     "detect": "δ_det", "interp": "δ_int", "fit": "δ_fit", "floor": "δ_fl", "fluct": "δ_ϑ",
     "slope": "δ_a", "corr": "δ_c", "delta": "δ_σ", "align": "δ_al", "rms": "δ_rms",
     "res": "δ_res", "resolution": "δ_res", "threshold": "δ_thr", "rule_noise": "δ_rule",
+    "rule_outcome": "δ_rule",
     "other_terms": "δ_oth"}
 
 

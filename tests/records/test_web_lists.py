@@ -267,3 +267,70 @@ def test_dashboard_lists_every_calibration_being_worked_on(app, sqlite_store):  
     listed = {int(i) for i in re.findall(r'<td><a href="/calibrations/(\d+)">', active)}
     assert listed == set(ids["running"] + ids["issuing"] + ids["drafting"])
     assert "6 being computed, issued or having their draft rendered again" in active
+
+
+def test_list_pages_sort_only_ids_beyond_the_page(store):
+    """A list page is chosen on the ids (LIMIT/OFFSET over the ids alone) and only its own
+    rows are read whole: every page equals the slice of all ids in the list's order (read
+    here with a plain query), and on PostgreSQL no plan node sorts wide rows (whole
+    calibrations joined to their instrument, customer and author) beyond the page's own —
+    before, without fresh statistics, all of them were joined and sorted for every page."""
+    import json
+
+    from sqlalchemy import insert, select
+
+    from gonio.records import blobs
+    from gonio.records.models import Blob, Customer, Instrument
+    from tests.records.conftest import make_people
+
+    user = make_people(store)["tech"]
+    sha = blobs.put_bytes(store.blob_root, b"page")
+    with store.writing() as s:
+        s.add(Blob(sha256=sha, size=4))
+        s.add(Customer(id=1, name="C", address=""))
+        s.add(Instrument(id=1, customer_id=1, kind="gyro", manufacturer="W", model="M",
+                         serial="S", spec_key="ogam-draft", limits_json="[]"))
+        s.flush()
+        s.execute(insert(Calibration), [
+            {"instrument_id": 1, "spec_key": "ogam-draft", "readings_sha256": sha,
+             "readings_name": "r.csv", "status": ("issued", "computed")[c % 2],
+             "review_comment": f"{c} " + "x" * 2000,                 # wide rows
+             "performed_on": dt.date(2020, 1, 1) + dt.timedelta(days=c),
+             "created_by_id": user.id, "results_sha256": sha} for c in range(120)])
+        s.commit()
+        every = s.scalars(select(Calibration.id).order_by(Calibration.id.desc())).all()
+        computed = s.scalars(select(Calibration.id).where(Calibration.status == "computed")
+                             .order_by(Calibration.id.desc())).all()
+    for page in (1, 2, 5, 9):
+        rows, total = queries.calibrations(store, page, 14)
+        assert ([c.id for c in rows], total) == (every[(page - 1) * 14:page * 14], 120)
+        assert all(c.instrument.customer.name == "C" for c in rows)
+    rows, total = queries.calibrations(store, 3, 7, status="computed")
+    assert ([c.id for c in rows], total) == (computed[14:21], 60)
+    if store.engine.dialect.name != "postgresql":
+        return
+    from sqlalchemy import event
+    sent = []
+
+    def keep(conn, cursor, statement, params, context, many):
+        if "LIMIT" in statement:
+            sent.append((statement, params))
+    event.listen(store.engine, "before_cursor_execute", keep)
+    try:
+        queries.calibrations(store, 6, 10)
+    finally:
+        event.remove(store.engine, "before_cursor_execute", keep)
+    assert len(sent) == 1, sent
+
+    def sorts(node):
+        if node["Node Type"] in ("Sort", "Incremental Sort"):
+            yield node
+        for child in node.get("Plans", []):
+            yield from sorts(child)
+    with store.engine.connect() as conn:
+        plan = conn.exec_driver_sql("EXPLAIN (ANALYZE, FORMAT JSON) " + sent[0][0],
+                                    sent[0][1]).scalar()
+    plan = plan if isinstance(plan, list) else json.loads(plan)
+    wide = [(n["Plan Width"], n["Actual Rows"]) for n in sorts(plan[0]["Plan"])
+            if n["Plan Width"] > 64]
+    assert all(rows <= 10 for _, rows in wide), (wide, plan)

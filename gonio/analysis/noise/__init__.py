@@ -6,6 +6,7 @@
 :mod:`.edf`                Greenhall edf, noise identification, χ² intervals
 :mod:`.fit`                five-term model per variance, bootstrap, sinusoid
 :mod:`.covariance`         covariance of the estimates across τ (the fit's u)
+:mod:`.markov`             five terms, flicker band-limited below a fitted T_lo (the ARW's)
 :mod:`.record`             whole-record analysis and static-window selection
 =========================  =====================================================
 
@@ -27,6 +28,9 @@ from gonio.analysis.noise.fit import (  # noqa: F401
     SinusoidDetection, bootstrap_uncertainty, design_matrix, detect_sinusoid,
     fit_noise_model, model_adev, model_deviation, simulate_noise, sinusoid_adev,
 )
+from gonio.analysis.noise.markov import (  # noqa: F401
+    MarkovFit, band_flicker_avar, fit_markov_model, markov_avar,
+)
 from gonio.analysis.noise.record import (  # noqa: F401
     StaticNoiseResult, StaticWindow, analyse_record, analyse_static, select_window,
     static_windows,
@@ -42,5 +46,6 @@ __all__ = [
     "SinusoidDetection", "bootstrap_uncertainty", "design_matrix", "detect_sinusoid",
     "fit_noise_model", "model_adev", "model_deviation", "simulate_noise", "sinusoid_adev",
     "StaticNoiseResult", "StaticWindow", "analyse_record", "analyse_static",
-    "select_window", "static_windows",
+    "select_window", "static_windows", "MarkovFit", "fit_markov_model", "markov_avar",
+    "band_flicker_avar",
 ]

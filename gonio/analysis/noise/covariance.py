@@ -54,11 +54,14 @@ _FLICKER_TAIL_SPANS = 4
 _DIRECT_TAPS = 32
 
 
-def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float) -> np.ndarray:
+def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float,
+                           markov=()) -> np.ndarray:
     """K(t) of the five-term model (module table) at t = ``t_samples``·τ0 (integers ≥ 0),
     ``coef`` = [Q², N², B², K², R²] (the ramp carries no variance). The flicker term is
     written t² ln(t/τ0): it differs from t² ln t by an even quadratic, which the
-    estimators' coefficients annihilate."""
+    estimators' coefficients annihilate. ``markov``: first-order Gauss–Markov rate terms
+    (s², T_c) of variance s² and correlation time T_c, each −s²T_c²(|t|/T_c − 1 + e^{−|t|/T_c})
+    (−∫₀^|t| (|t| − u) s² e^{−u/T_c} du, the angle's structure under the rate's covariance)."""
     q2, n2, b2, k2 = (float(c) for c in np.asarray(coef, dtype=np.float64)[:4])
     t = np.asarray(t_samples, dtype=np.float64)
     ts = t * tau0_s
@@ -69,6 +72,9 @@ def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float) -> np.nda
         with np.errstate(divide="ignore", invalid="ignore"):
             fl = ts ** 2 * np.log(t)
         out += b2 / (2.0 * math.pi) * np.where(t > 0, fl, 0.0)
+    for s2, tc in markov:
+        x = ts / float(tc)
+        out -= float(s2) * float(tc) ** 2 * (x - 1.0 + np.exp(-x))
     if q2:
         out = out + q2 * (t == 0)
     return out
@@ -175,10 +181,12 @@ def _pair_covariance(ti, tj, n_i, n_j, kgrid, flicker: bool, q2: float) -> float
     return total
 
 
-def variance_covariance(kind: str, m, n_terms, tau0_s: float, coef) -> np.ndarray:
+def variance_covariance(kind: str, m, n_terms, tau0_s: float, coef, markov=()) -> np.ndarray:
     """Covariance matrix of the variance estimates σ̂²(m_i) (``kind``: adev, mdev, hdev,
     totdev) of one gap-free record with ``n_terms`` terms at each m, under the five-term
-    model ``coef`` = [Q², N², B², K², R²] (module docstring; Gaussian noise).
+    model ``coef`` = [Q², N², B², K², R²] (module docstring; Gaussian noise), plus the
+    Gauss–Markov terms ``markov`` ((s², T_c) pairs, :func:`generalised_covariance`; their
+    correlation beyond the spans' overlap is summed over the flicker tail's spans).
 
     >>> cov = variance_covariance("adev", [1], [10**6], 1.0, [0, 1.0, 0, 0, 0])
     >>> round(float(cov[0, 0]) * 10**6, 3)   # white rate noise, m = 1: 2σ⁴·(3/2)/n
@@ -192,11 +200,12 @@ def variance_covariance(kind: str, m, n_terms, tau0_s: float, coef) -> np.ndarra
         o, c, cn, = estimator_taps(kind, int(mi))
         taps.append((o, c, cn, float(mi) * tau0_s))
     span = max(int(t[0][-1]) for t in taps)
-    flicker = bool(coef[2] > 0)
+    markov = [(float(s2), float(tc)) for s2, tc in markov if s2 > 0]
+    flicker = bool(coef[2] > 0) or bool(markov)
     # |s − L| ≤ span + (1 + tail)·span (lags are limited by the spans, not the record)
     kmax = min(int(n.max()) + 2 * span, (_FLICKER_TAIL_SPANS + 2) * span) + 2
     q2 = float(coef[0])
-    kgrid = generalised_covariance(np.arange(kmax + 1), np.r_[0.0, coef[1:]], tau0_s)
+    kgrid = generalised_covariance(np.arange(kmax + 1), np.r_[0.0, coef[1:]], tau0_s, markov)
     out = np.empty((m.size, m.size))
     for i in range(m.size):
         for j in range(i, m.size):

@@ -90,7 +90,7 @@ SINE_TAU_PER_PERIOD = 0.371
 SINE_PEAK_PER_AMPLITUDE = 0.725
 
 #: Noise type of each term (for the edf of model-based weights).
-_TERM_ALPHA = np.array([2, 0, -1, -2, -2])
+TERM_ALPHA = np.array([2, 0, -1, -2, -2])
 
 
 # --------------------------------------------------------------------- dataclasses
@@ -258,7 +258,7 @@ def model_adev(tau_s, Q=0.0, N=0.0, B=0.0, K=0.0, R=0.0) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------- the fit
-def _sandwich_covariance(a: np.ndarray, sd: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+def sandwich_covariance(a: np.ndarray, sd: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """Covariance of the weighted least-squares coefficients when the observations have
     the full covariance ``sigma`` but were weighted by 1/sd² as if independent:
     (AᵀWA)⁻¹ AᵀWΣWA (AᵀWA)⁻¹ (the "sandwich"; Seber & Wild, Nonlinear Regression, 2.1.4)."""
@@ -269,10 +269,12 @@ def _sandwich_covariance(a: np.ndarray, sd: np.ndarray, sigma: np.ndarray) -> np
 
 def _dominant_alpha(a: np.ndarray, coef: np.ndarray) -> np.ndarray:
     """Noise type α of the largest model term at each τ."""
-    return _TERM_ALPHA[np.argmax(a * coef[None, :], axis=1)]
+    return TERM_ALPHA[np.argmax(a * coef[None, :], axis=1)]
 
 
-def _wnnls(a: np.ndarray, var: np.ndarray, sd: np.ndarray) -> np.ndarray:
+def wnnls(a: np.ndarray, var: np.ndarray, sd: np.ndarray) -> np.ndarray:
+    """Non-negative least squares of ``var`` ≈ ``a``·p with rows weighted by 1/``sd``
+    (columns scaled to unit norm for the solver)."""
     aw = a / sd[:, None]
     cs = np.linalg.norm(aw, axis=0)
     cs[cs == 0] = 1.0
@@ -288,7 +290,8 @@ def _edf_cached(kind: str, n_phase: int, m: tuple, alpha: tuple) -> np.ndarray:
     return out
 
 
-def _edf(kind, n_phase, m, alpha):
+def edf_memo(kind, n_phase, m, alpha):
+    """Greenhall's edf at averaging factors ``m`` for noise types ``alpha`` (memoised)."""
     return _edf_cached(kind, int(n_phase), tuple(int(v) for v in m),
                        tuple(int(v) for v in alpha))
 
@@ -298,15 +301,15 @@ def _fit_core(kind, tau, var, m, n_phase, tau0, cols, iterations):
     a_full = design_matrix(tau, kind, tau0)
     a = a_full[:, cols]
     model = var.copy()
-    edf = _edf(kind, n_phase, m, np.zeros(m.size, dtype=np.int64))
+    edf = edf_memo(kind, n_phase, m, np.zeros(m.size, dtype=np.int64))
     coef = np.zeros(5)
     for _ in range(max(1, iterations)):
         sd = np.maximum(model, np.finfo(float).tiny) * np.sqrt(2.0 / edf)
-        p = _wnnls(a, var, sd)
+        p = wnnls(a, var, sd)
         coef = np.zeros(5)
         coef[cols] = p
         model = np.maximum(a_full @ coef, np.finfo(float).tiny)
-        edf = _edf(kind, n_phase, m, _dominant_alpha(a_full, coef))
+        edf = edf_memo(kind, n_phase, m, _dominant_alpha(a_full, coef))
     return coef, model, edf
 
 
@@ -381,10 +384,10 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
         method = "bootstrap"
     elif active and covariance:
         try:
-            rows = _covariance_rows(tau)
+            rows = covariance_rows(tau)
             sigma = _estimate_covariance(allan, np.flatnonzero(sel)[rows], kind, m[rows],
                                          tau0, coef, sd[rows])
-            cov = (_sandwich_covariance(a_full[np.ix_(rows, active)], sd[rows], sigma)
+            cov = (sandwich_covariance(a_full[np.ix_(rows, active)], sd[rows], sigma)
                    * max(1.0, chi2_red))
             u_coef = np.sqrt(np.clip(np.diag(cov), 0, None))
             u_vals[active] = u_coef / (2.0 * values[active])
@@ -408,7 +411,7 @@ def fit_noise_model(allan: AllanResult, *, terms: Sequence[str] = TERMS,
 _COV_MAX_TAUS = 64
 
 
-def _covariance_rows(tau: np.ndarray) -> np.ndarray:
+def covariance_rows(tau: np.ndarray) -> np.ndarray:
     """Indices of the τ whose estimates enter the covariance (all, or a log-spaced subset
     of :data:`_COV_MAX_TAUS`)."""
     if tau.size <= _COV_MAX_TAUS:
@@ -647,7 +650,7 @@ def detect_sinusoid(allan: AllanResult, fit: NoiseFit | None = None, *,
     # type of its dominant term at each τ (not the identification, which a sinusoid
     # itself disturbs)
     n_phase = allan.n_phase or (allan.n_samples + (0 if allan.input_type == "angle" else 1))
-    edf = _edf(allan.kind, n_phase, np.asarray(allan.m[sel]),
+    edf = edf_memo(allan.kind, n_phase, np.asarray(allan.m[sel]),
                _dominant_alpha(design_matrix(tau, allan.kind, allan.tau0_s),
                                fit.coefficients()))
     model = np.maximum(fit.adev(tau), np.finfo(float).tiny)

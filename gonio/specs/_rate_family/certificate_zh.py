@@ -36,6 +36,8 @@ COMMON_PHRASES_ZH = (
     (r"interpolation \(linear vs quadratic in log f\)", "插值（对数频率下线性与二次之差）"),
     (r"between the result and the next step", "结果与下一步长之间"),
     (r"step between the candidate and the next tested value", "候选值与下一试验值之间的步长"),
+    (r"spread of the 50 % rule's outcome under the data's noise \(its 95 % range is the "
+     r"interval\)", "按本次数据噪声 50 % 判据结果的分散性（其 95 % 范围即为所给区间）"),
     (r"95 % range of the 50 % rule's outcome under the data's noise",
      "数据噪声下 50 % 判据结果的 95 % 范围"),
     (r"smoothing step", "平滑步长"),

@@ -30,6 +30,8 @@ Contents
 :func:`minus3db_frequency`      −3 dB crossing (JJF 7.2.15.2, IEC 5.5.3)
 :func:`phase90_frequency`       90° lag crossing (IEC 5.5.3)
 :func:`second_order_response`   |H|, ∠H of a second-order sensor (bench truth, checks)
+:func:`bias_drift_u`            drift of a bias difference, Allan floor + K√Δt
+:func:`record_difference_u`     the same for two records' means, exact for their spans
 ==============================  ==================================================
 
 Unit note: seconds per hour come from :mod:`gonio.units` (``S_PER_H``).
@@ -413,28 +415,39 @@ def _phi(x):
 
 
 def fifty_percent_pass_probability(mean, sigma, expected, *, limit: float = 0.5,
-                                   two_sided: bool = True) -> np.ndarray:
+                                   two_sided: bool = True, dof=None) -> np.ndarray:
     """Probability that a step passes the 50 % rule when its measured response is normal with
     ``mean`` and standard deviation ``sigma``: two-sided (JJF 1535 eqs (13), (14) reading)
     P(|X − e| ≤ limit·|e|), one-sided (IEC 62047-20 5.6.3) P(X/e ≥ limit). σ = 0 gives 0 or 1.
+    With ``dof`` (per step) X is the scaled and shifted t of a mean whose σ was estimated
+    with those degrees of freedom (JCGM 101 6.4.9), not normal.
 
     >>> [round(float(v), 6) for v in fifty_percent_pass_probability([1.0, 1.0], [0.0, 0.5], [1.0, 1.0])]
     [1.0, 0.682689]
+    >>> round(float(fifty_percent_pass_probability([1.0], [0.5], [1.0], dof=[4])[0]), 6)  # t₄(1)
+    0.626099
     """
+    from scipy import stats
+
     m, s, e = (np.asarray(v, float) for v in (mean, sigma, expected))
     m, s, e = np.broadcast_arrays(m, s, e)
     ae = np.abs(e)
     sg = np.sign(e)
     out = np.empty(m.shape)
     z = s == 0
+    nz = ~z
+    if dof is None:
+        cdf = _phi
+    else:
+        nu = np.broadcast_to(np.asarray(dof, float), m.shape)[nz]
+        def cdf(x):                                        # noqa: E306
+            return stats.t.cdf(x, nu)
     if two_sided:
         out[z] = (np.abs(m[z] - e[z]) <= limit * ae[z] * (1 + 1e-12)).astype(float)
-        nz = ~z
-        out[nz] = _phi((e[nz] + limit * ae[nz] - m[nz]) / s[nz]) - _phi((e[nz] - limit * ae[nz] - m[nz]) / s[nz])
+        out[nz] = cdf((e[nz] + limit * ae[nz] - m[nz]) / s[nz]) - cdf((e[nz] - limit * ae[nz] - m[nz]) / s[nz])
     else:
         out[z] = (sg[z] * m[z] >= limit * ae[z] * (1 - 1e-12)).astype(float)
-        nz = ~z
-        out[nz] = 1.0 - _phi((limit * ae[nz] - sg[nz] * m[nz]) / s[nz])
+        out[nz] = 1.0 - cdf((limit * ae[nz] - sg[nz] * m[nz]) / s[nz])
     return out
 
 
@@ -520,11 +533,58 @@ def bias_drift_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,
     >>> round(bias_drift_u(5.0, 9.0, 0.0, 0.0, [10.0, 300.0], [50.0, 10.0], 3600.0), 6)   # unresolved
     34.641016
     """
+    k2, b2 = drift_coefficients(K, u_K, B, u_B, tau_s, adev_high)
+    return math.sqrt(k2 * abs(separation_s) + 2 * FLICKER_FLOOR_EXACT ** 2 * b2)
+
+
+def drift_coefficients(K: float, u_K: float, B: float, u_B: float, tau_s,
+                       adev_high) -> tuple[float, float]:
+    """(E[K²], E[B²]) of the rate random walk and the bias instability for a drift term, by
+    the rules of :func:`bias_drift_u` (K bounded by min over τ of σ_hi(τ)·√(3/τ); a K the
+    fit resolves as K² + u_K² up to that bound, one it does not as rectangular on [0,
+    bound]; B² + u_B²).
+
+    >>> [round(x, 6) for x in drift_coefficients(0.0, 0.0, 2.0, 1.0, [10.0, 300.0], [50.0, 10.0])]
+    [0.333333, 5.0]
+    """
     t, s = as_array(tau_s, "tau_s"), as_array(adev_high, "adev")
     def ok(x):
         return x if math.isfinite(x) else 0.0
     bound2 = float(np.min(s ** 2 * 3.0 / t))
     k, u_k = abs(ok(K)), ok(u_K)
     k2 = min(k ** 2 + u_k ** 2, bound2) if k > u_k else bound2 / 3.0
-    b2 = ok(B) ** 2 + ok(u_B) ** 2
-    return math.sqrt(k2 * abs(separation_s) + 2 * FLICKER_FLOOR_EXACT ** 2 * b2)
+    return k2, ok(B) ** 2 + ok(u_B) ** 2
+
+
+def record_difference_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,
+                        first: tuple[float, float], second: tuple[float, float]) -> float:
+    """Standard uncertainty that the rate random walk and the bias instability give the
+    difference of the means of two records, ``first`` and ``second`` = (start, duration) in
+    s on one time line (the white noise is in each mean's own u), with E[K²] and E[B²] of
+    :func:`drift_coefficients`.
+
+    Each record's mean is (θ(t + d) − θ(t))/d of the angle θ, so the difference is a
+    combination of four angle values whose coefficients sum to zero and have zero first
+    moment; its variance is Σ c_a c_b G(t_a − t_b) with the five-term model's generalised
+    covariance G (:func:`gonio.analysis.noise.covariance.generalised_covariance`: flicker
+    B²t² ln|t|/(2π), rate random walk K²|t|³/12). For adjacent records of length τ this is
+    twice the Allan variance, 2·(2 ln 2/π)B² + 2K²τ/3 (the flicker floor :func:`bias_drift_u`
+    takes at every separation); further apart the flicker part grows as ln of the separation
+    (IEEE 952 C.1: a 1/f spectrum) and the walk's as K²·(separation − d/3).
+
+    >>> round(record_difference_u(0.0, 0.0, 1.0, 0.0, [1e3], [0.0], (0.0, 60.0), (60.0, 60.0)), 6)
+    0.939437
+    >>> round(math.sqrt(2) * FLICKER_FLOOR_EXACT, 6)                      # adjacent: the floor
+    0.939437
+    """
+    from gonio.analysis.noise.covariance import generalised_covariance
+
+    k2, b2 = drift_coefficients(K, u_K, B, u_B, tau_s, adev_high)
+    (t1, d1), (t2, d2) = ((float(a), float(b)) for a, b in (first, second))
+    if d1 <= 0 or d2 <= 0:
+        raise GonioError(f"record durations {d1:g} s and {d2:g} s: both must be positive")
+    pts = np.array([t1, t1 + d1, t2, t2 + d2])
+    c = np.array([1 / d1, -1 / d1, -1 / d2, 1 / d2])
+    lag = np.abs(pts[:, None] - pts[None, :])
+    var = float(c @ generalised_covariance(lag, [0.0, 0.0, b2, k2], 1.0) @ c)
+    return math.sqrt(max(var, 0.0))

@@ -17,7 +17,7 @@ import pandas as pd
 
 from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
-from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
@@ -729,42 +729,57 @@ def _noise_fit(ctx: Context):
     return ctx.cache[key]
 
 
+def _noise_fit_shaped(ctx: Context):
+    """The fit with band-limited flicker of the static record (cached; the ARW's lift)."""
+    key = ("noise_fit_shaped", ctx.a_base, ctx.null_output)
+    if key not in ctx.cache:
+        ctx.cache[key] = fit_markov_model(_static(ctx)[0])
+    return ctx.cache[key]
+
+
 def arw(ctx: Context) -> Item:
     """IEC 62047-20 5.4.5.2: the −½ line through the short-τ part of the Allan deviation read
     at τ = 1 h (°/√h); (29): 1 °/√h = 60 (°/h)/√Hz.
 
     The line's τ may also carry bias instability and quantisation, which lift the reading.
-    The five-term model fitted to the same record (IEEE 952 Annex C) gives that lift at the
-    same τ, the factor N_line(model)/N_fit, but as an upper estimate: its non-negative terms
-    take up noise (a quantisation term on pure white noise) and its flicker floor holds at
-    every τ, while a gyro's bias instability may fade at the line's short τ. The
-    uncorrected reading is the lower end (the lift is not negative), the fully corrected
-    one the upper: the value certified is their midpoint, N_line·(1 + N_fit/N_line(model))/2
-    (JCGM 100 4.3.7: a quantity known only within bounds is taken at their middle); the
-    uncorrected reading and the factor stay in the details. Uncertainty: the χ² intervals
-    of the points used, and the correction (half the full correction, normal)."""
+    The noise model fitted to the same record gives that lift at the same τ, the factor
+    N_line(model)/N_fit, and the value certified is the line reading divided by it. The
+    model is the five-term model with its flicker band-limited below a fitted correlation
+    time (:func:`gonio.analysis.noise.fit_markov_model`): the five-term flat flicker holds
+    its floor down to the line's shortest τ, where a gyro's bias instability fades, and
+    overstates the lift (it was therefore applied only halfway, the midpoint of the
+    uncorrected and the corrected reading; the five-term factor and that midpoint stay in
+    the details). Uncertainty: the χ² intervals of the points used, and the correction
+    (half its size, normal)."""
     t, cl, un = "angular random walk", "5.4.5.2", "°/√h"
     m = _miss(ctx, "static", "arw", t, cl, un) or _quiet(ctx, "arw", t, cl, un)
     if m:
         return m
     allan, _, _ = _static(ctx)
     fit = _noise_fit(ctx)
-    value, val, ratio, u_rel, mask = arw_reading(allan, fit)
+    shaped = _noise_fit_shaped(ctx)
+    value, val, ratio, u_rel, mask = arw_reading(allan, shaped)
+    midpoint_five_term, _, ratio_five, _, _ = arw_reading_midpoint(allan, fit)
     u = gum(lambda n, c: n * (1 + c),
             [from_u("N", value, value * u_rel, dof=50, source="χ² intervals of the fit points"),
              from_u("corr", 0.0, abs(1.0 / ratio - 1.0) / 2.0, dof=50,
-                    source="bias correction of the −½ line under the fitted five-term model "
-                           "(half the full correction)")])
+                    source="bias correction of the −½ line under the fitted model with "
+                           "band-limited flicker (half the correction)")])
     return Item("arw", t, cl, un, value, uncertainty=u, details={
         "dph_per_sqrt_hz": value * math.sqrt(S_PER_H), "tau_used_s": allan.tau_s[mask],
         "line_reading_uncorrected": val, "line_bias_factor_model": ratio,
-        "five_term_fit_arw": fit.N / math.sqrt(S_PER_H)})
+        "flicker_band_t_lo_s": shaped.t_lo_s,
+        "five_term_line_bias_factor": ratio_five,
+        "five_term_midpoint_reading": midpoint_five_term,
+        "five_term_fit_arw": fit.N / math.sqrt(S_PER_H),
+        "band_limited_fit_arw": shaped.N / math.sqrt(S_PER_H)})
 
 
 def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
-    """The ARW of :func:`arw` from an Allan deviation (°/h) and its five-term fit:
-    (value °/√h, uncorrected −½ line reading, the model's lift factor N_line(model)/N_fit,
-    relative u of the line's points, mask of the τ used)."""
+    """The ARW of :func:`arw` from an Allan deviation (°/h) and a fitted model (anything with
+    ``N`` and ``adev(tau)``): (value °/√h = the −½ line reading / the model's lift factor,
+    uncorrected −½ line reading, the lift factor N_line(model)/N_fit, relative u of the
+    line's points, mask of the τ used)."""
     val, mask = ief.arw_minus_half_line(allan.tau_s, allan.adev)
     rel = np.abs(np.log(allan.ci_high[mask] / allan.adev[mask]))
     u_rel = float(np.sqrt(np.mean(rel ** 2)) / math.sqrt(mask.sum())) * 2.0   # correlated τ
@@ -772,7 +787,15 @@ def arw_reading(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
     line_model = math.exp(float(np.mean(np.log(model[mask]) + 0.5 * np.log(allan.tau_s[mask])))) \
         / math.sqrt(S_PER_H)
     ratio = line_model / (fit.N / math.sqrt(S_PER_H)) if fit.N > 0 and line_model > 0 else 1.0
-    return val * (1.0 + 1.0 / ratio) / 2.0, val, ratio, u_rel, mask
+    return val / ratio, val, ratio, u_rel, mask
+
+
+def arw_reading_midpoint(allan, fit) -> tuple[float, float, float, float, np.ndarray]:
+    """The former reading under the five-term (flat-flicker) fit, kept in the details: the
+    midpoint of the uncorrected and the fully corrected −½ line reading (the same tuple as
+    :func:`arw_reading`)."""
+    full, val, ratio, u_rel, mask = arw_reading(allan, fit)
+    return (val + full) / 2.0, val, ratio, u_rel, mask
 
 
 def bias_instability(ctx: Context) -> Item:

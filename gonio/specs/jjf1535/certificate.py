@@ -49,6 +49,24 @@ ITEM_CONDITIONS = {
         "means' variance.",
         "零偏稳定性（7.2.10）：按原文式（19），Q 段记录标准偏差的平均值为 {reading_eq19_dph:#.3g} °/h"
         "（标准偏差的平均值偏小）；所给校准值为其均方根，其平方是分块均值方差的无偏估计。"),
+    "threshold": (
+        "Threshold (7.2.6): the value is the tested rate of the programme's grid ({grid_dps} "
+        "°/s, means of {samples} samples referred to the rests around each point) at which "
+        "the 50 % rule stops; its interval is the 95 % range of the rule's outcome under the "
+        "readings' own noise. Where the noise decides the rule, another grid or averaging is "
+        "another measurand.",
+        "阈值（7.2.6）：校准值为方案速率序列（{grid_dps} °/s，各点取 {samples} 个采样的平均值，"
+        "以其前后静止输出为参考）中 50 % 判据终止时的试验速率；区间为按本次数据噪声 50 % 判据"
+        "结果的 95 % 范围。噪声决定判据时，速率序列或平均采样数不同即为不同的被测量。"),
+    "resolution": (
+        "Resolution (7.2.7): the value is the tested increment of the programme's grid "
+        "({grid_dps} °/s, means of {samples} samples, the base rate re-measured before each "
+        "increment) at which the 50 % rule stops; its interval is the 95 % range of the "
+        "rule's outcome under the readings' own noise. Where the noise decides the rule, "
+        "another grid or averaging is another measurand.",
+        "分辨率（7.2.7）：校准值为方案增量序列（{grid_dps} °/s，各点取 {samples} 个采样的平均值，"
+        "每个增量前重测基准速率）中 50 % 判据终止时的试验增量；区间为按本次数据噪声 50 % 判据"
+        "结果的 95 % 范围。噪声决定判据时，增量序列或平均采样数不同即为不同的被测量。"),
     "warmup_time": (
         "Warm-up time (7.2.9): the earliest time after power-on from which every window of "
         "W = {window_samples} samples ({window_s:g} s) has a stability of P-sample block means "

@@ -24,7 +24,7 @@ from gonio.specs._rate_family import formulas as rg
 from gonio.specs.jjf1535 import formulas as jf
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.analysis.noise import allan_deviation, fit_noise_model
+from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.stream import value_range
 from gonio.result.gum import gum, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
@@ -66,12 +66,16 @@ def _block_std_of_mean(y: np.ndarray, block: int = 10) -> tuple[float, float]:
     return float(m.std(ddof=1) / math.sqrt(n)), n - 1
 
 
-def drift_u_dph(ctx: Context, separation_s: float) -> float:
-    """Standard uncertainty (°/h) of a bias difference between two records ``separation_s``
-    apart, from the calibration's own Allan fit (7.2.13): rate random walk K√Δt and the bias
-    instability (√2·0.664·B as the flicker floor of a difference), K² and B² each increased
-    by the square of its fit uncertainty, an unresolved RRW bounded by the longest τ
-    (:func:`gonio.specs._rate_family.formulas.bias_drift_u`). Without a static record the term is
+def drift_u_dph(ctx: Context, first: tuple[float, float], second: tuple[float, float]) -> float:
+    """Standard uncertainty (°/h) that the bias drift gives the difference of the means of two
+    records, ``first`` and ``second`` = (start, duration) in s, from the calibration's own
+    Allan fit (7.2.13): the rate random walk and the bias instability of the fitted model,
+    exactly for the two records' spans (:func:`gonio.specs._rate_family.formulas.
+    record_difference_u`: the flicker part grows with the separation, where the Allan floor
+    √2·0.664·B held at every separation read it low by half at 7.2.14's hour between
+    records), K² and B² each increased by the square of its fit uncertainty, an unresolved
+    RRW bounded by the Allan deviation's upper limits (:func:`gonio.specs._rate_family.
+    formulas.drift_coefficients`). Without a static record the term is
     not known, never 0: a GonioError, so the item is "not measured" with the reason; 0 for a
     static record that does not vary (a noise-free bench)."""
     noise, found = None, False
@@ -86,21 +90,31 @@ def drift_u_dph(ctx: Context, separation_s: float) -> float:
         raise GonioError("the budget's bias-drift term needs the static Allan record "
                          "(7.2.13), which the readings lack or which could not be analysed")
     allan, fit = noise["allan"], noise["fit"]
-    return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
-                           separation_s)
+    return rg.record_difference_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
+                                  first, second)
+
+
+def record_span_s(time_s: np.ndarray) -> tuple[float, float]:
+    """(start, duration) in s of a record of samples at ``time_s`` (each sample's start;
+    duration n·Δt with Δt the mean interval, one sample: 1 s)."""
+    t = np.asarray(time_s, float)
+    dt = float((t[-1] - t[0]) / (t.size - 1)) if t.size > 1 else 1.0
+    return float(t[0]), t.size * dt
 
 
 def static_noise(ctx: Context) -> dict | None:
-    """The static record (7.2.13) in °/h with its overlapping Allan deviation and five-term
-    fit, computed once per calibration (a pure function of the readings and K, kept in
-    ``ctx.cache``); None when the record does not vary."""
+    """The static record (7.2.13) in °/h with its overlapping Allan deviation, five-term
+    fit and the fit with the Gauss–Markov set (the ARW's), computed once per calibration (a
+    pure function of the readings and K, kept in ``ctx.cache``); None when the record does
+    not vary."""
     if "static_noise" in ctx.cache:
         return ctx.cache["static_noise"]
     rate_dph, dt = static_rate_dph(ctx.df, ctx.null_output, ctx.K)
     out = None
     if value_range(rate_dph) != 0:
         allan = allan_deviation(rate_dph, dt, "rate", "decade:10", unit="deg/h")
-        out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan)}
+        out = {"rate_dph": rate_dph, "allan": allan, "fit": fit_noise_model(allan),
+               "fit_markov": fit_markov_model(allan)}
     ctx.cache["static_noise"] = out
     return out
 
@@ -382,34 +396,89 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
 
 
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
-def rule_noise_half_width(pmfs: list[dict], value: float) -> tuple[float, dict]:
-    """Half-width of the 95 % range of the 50 % rule's outcome under the noise of the data
-    (:func:`gonio.specs._rate_family.formulas.max_outcome_pmf` of the directions), measured from
-    ``value``: the distance to the farther of the 2.5 % and 97.5 % outcomes (None, "above
-    the grid", counts as the largest tested step)."""
+def referred_mean_u(terms: list[tuple[float, int, float]]) -> tuple[float, float]:
+    """(σ, ν) of a referred mean Σ w_i·ȳ_i from (weight w_i, samples n_i, standard deviation
+    s_i) of its segments: σ² = Σ w_i² s_i²/n_i, ν by Welch–Satterthwaite (JCGM 100 G.4.1)
+    with n_i − 1 each (∞ for a segment whose s_i is 0).
+
+    >>> [round(x, 4) for x in referred_mean_u([(1.0, 5, 1.0), (0.5, 5, 1.0), (0.5, 5, 1.0)])]
+    [0.5477, 8.0]
+    """
+    v = [(w * w * sd * sd / n, n - 1) for w, n, sd in terms]
+    var = sum(x for x, _ in v)
+    den = sum(x * x / d for x, d in v if d > 0)
+    return math.sqrt(var), (var * var / den if den > 0 else math.inf)
+
+
+def rule_outcome_uncertainty(pmfs: list[dict], value: float) -> tuple[Uncertainty, dict]:
+    """The uncertainty of 7.2.6 / 7.2.7 for the measurand taken (docs/jjf1535-readings.md,
+    "7.2.6 Threshold and 7.2.7 Resolution"): **the tested rate of the programme's grid at
+    which the 50 % rule stops, with the programme's averaging** — its true value the median
+    outcome under the instrument's noise. A grid value is a grid value: the grid belongs to
+    the measurand's definition (stated on the certificate), so no rectangular step term.
+
+    The outcome distribution propagated from the data (JCGM 101: each step's response known
+    as its measured referred mean with a scaled and shifted t of the Welch–Satterthwaite ν of
+    its segments, :func:`referred_mean_u`; a step passes with the probability that the
+    response meets the criterion; :func:`gonio.specs._rate_family.formulas.max_outcome_pmf`
+    of the directions) gives u_c, its standard deviation (None, "above the grid", counted
+    as the largest tested step), and the statement: the central 95 % range of the outcome,
+    widened to hold the value (where that range is one outcome, to the neighbouring outcomes
+    that can occur) — a discrete, skewed distribution, stated by its interval (JCGM 101 7.7),
+    no k (U: the distance to the upper end). A distribution of one outcome (noise-free
+    readings) has u_c = U = 0 and no interval.
+
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.01, 0.05: 0.98, 0.02: 0.01}], 0.05)
+    >>> u.interval
+    (0.02, 0.1)
+
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.25, 0.05: 0.5, 0.02: 0.25}], 0.05)   # mean 0.055
+    >>> round(u.u_c, 6), u.interval, round(u.U, 6), u.k
+    (0.028723, (0.02, 0.1), 0.05, None)
+    """
     pmf = rg.max_outcome_pmf(*pmfs)
     top = max(k for p in pmfs for k in p if k is not None)
+    x = np.array([top if k is None else k for k in pmf], float)
+    w = np.array(list(pmf.values()), float)
+    w = w / w.sum()
+    u_c = math.sqrt(max(float(w @ (x - w @ x) ** 2), 0.0))
     lo, hi = (rg.outcome_quantile(pmf, q) for q in (0.025, 0.975))
-    lo, hi = (top if lo is None else lo), (top if hi is None else hi)
-    return max(abs(value - lo), abs(hi - value)), pmf
+    lo, hi = min(top if lo is None else lo, value), max(top if hi is None else hi, value)
+    if hi == lo:             # ≥ 95 % on one outcome: reach the neighbouring possible outcomes
+        lo = max((float(k) for k, p in zip(x, w) if k < lo and p > 1e-9), default=lo)
+        hi = min((float(k) for k, p in zip(x, w) if k > hi and p > 1e-9), default=hi)
+    row = {"symbol": "rule_outcome", "source": "spread of the 50 % rule's outcome under the "
+           "data's noise (its 95 % range is the interval)", "type": "A", "u": u_c, "c": 1.0,
+           "contribution": u_c, "dof": None}
+    if hi == lo:             # one possible outcome (noise-free readings)
+        return Uncertainty([row], u_c, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
+    return Uncertainty([row], u_c, hi - value, None, None, None, 0.95, "outcome distribution",
+                       interval=(lo, hi)), pmf
 
 
-def _candidate_item(key, title, clause, cands, grid_next, details, pmfs=None) -> Item:
+def _candidate_item(key, title, clause, cands, details, pmfs) -> Item:
     if any(c is None for c in cands):
         return not_measured(key, title, clause, "°/s",
                             "the largest step already fails the 50 % criterion; start higher")
     value = max(cands)
-    hw = max(value - grid_next.get(value, 0.0), 0.0)
-    half, pmf = rule_noise_half_width(pmfs, value) if pmfs else (0.0, {})
-    u = gum(lambda a, b, c: a + b + c,
-            [from_u(key, value, 0.0),
-             type_b("grid", 0.0, hw / 2.0, "rectangular",
-                    source="step between the candidate and the next tested value"),
-             type_b("rule_noise", 0.0, half, "normal", k=2,
-                    source="95 % range of the 50 % rule's outcome under the data's noise")])
-    details = {**details, "outcome_pmf": {("none" if k is None else repr(k)): v
-                                          for k, v in pmf.items()}}
+    u, pmf = rule_outcome_uncertainty(pmfs, value)
+    grid = sorted({abs(r) for d in details.values() for r in d["steps_dps"]}, reverse=True)
+    details = {**details, "grid_dps": ", ".join(f"{g:g}" for g in grid),
+               "samples": next(iter(details.values()))["samples"],
+               "outcome_pmf": {("none" if k is None else repr(k)): v for k, v in pmf.items()}}
     return Item(key, title, clause, "°/s", value, uncertainty=u, details=details)
+
+
+def _rule_run(steps, meas, exp, sig, cands: list, pmfs: list):
+    """One run of 7.2.6 / 7.2.7: its candidate by the 50 % rule (eqs (13), (14)) appended to
+    ``cands`` and its outcome distribution under the data's noise (``sig``: (σ, ν) of each
+    referred mean, :func:`referred_mean_u`) to ``pmfs``; returns (candidate, deviations)."""
+    c, dev = jf.fifty_percent_candidate(steps, meas, exp)
+    cands.append(c)
+    pmfs.append(rg.fifty_percent_outcome_pmf(
+        steps, rg.fifty_percent_pass_probability(meas, [x for x, _ in sig], exp,
+                                                dof=[n for _, n in sig])))
+    return c, dev
 
 
 def threshold(ctx: Context) -> Item:
@@ -421,7 +490,7 @@ def threshold(ctx: Context) -> Item:
     if miss:
         return miss
     means = segment_means(ctx.df, "threshold")
-    cands, dets, nexts, pmfs = [], {}, {}, []
+    cands, dets, pmfs = [], {}, []
     for run in sorted({m.run for m in means}):
         seg = [m for m in means if m.run == run]
         rates, meas, exp, sig = [], [], [], []
@@ -433,21 +502,17 @@ def threshold(ctx: Context) -> Item:
             if before is None:
                 raise GonioError(f"threshold run {run} step {m.step}: no rest before the point")
             f0 = before.mean if after is None else 0.5 * (before.mean + after.mean)
-            v0 = before.std ** 2 / before.n if after is None else \
-                0.25 * (before.std ** 2 / before.n + after.std ** 2 / after.n)
+            rests = [(1.0, before.n, before.std)] if after is None else \
+                [(0.5, before.n, before.std), (0.5, after.n, after.std)]
             rates.append(m.rate_dps)
             meas.append(m.mean - f0)
             exp.append(ctx.K * m.rate_dps)
-            sig.append(math.sqrt(m.std ** 2 / m.n + v0))
-        c, dev = jf.fifty_percent_candidate(rates, meas, exp)
-        cands.append(c)
-        pmfs.append(rg.fifty_percent_outcome_pmf(
-            rates, rg.fifty_percent_pass_probability(meas, sig, exp)))
-        mags = [abs(r) for r in rates]
-        for a, b in zip(mags, mags[1:] + [0.0]):
-            nexts[a] = b
-        dets[f"run{run}"] = {"rates_dps": rates, "deviation": dev, "candidate_dps": c}
-    return _candidate_item("threshold", title, clause, cands, nexts, dets, pmfs)
+            sig.append(referred_mean_u([(1.0, m.n, m.std)] + rests))
+        c, dev = _rule_run(rates, meas, exp, sig, cands, pmfs)
+        dets[f"run{run}"] = {"rates_dps": rates, "steps_dps": rates, "deviation": dev,
+                             "candidate_dps": c,
+                             "samples": int(next(m.n for m in seg if m.role == "rate"))}
+    return _candidate_item("threshold", title, clause, cands, dets, pmfs)
 
 
 def resolution(ctx: Context) -> Item:
@@ -459,7 +524,7 @@ def resolution(ctx: Context) -> Item:
     if miss:
         return miss
     means = segment_means(ctx.df, "resolution")
-    cands, dets, nexts, pmfs = [], {}, {}, []
+    cands, dets, pmfs = [], {}, []
     for run in sorted({m.run for m in means}):
         seg = [m for m in means if m.run == run]
         steps, meas, exp, sig = [], [], [], []
@@ -469,20 +534,16 @@ def resolution(ctx: Context) -> Item:
             base = next((s for s in reversed(seg[:j]) if s.role == "base"), None)
             if base is None:
                 raise GonioError(f"resolution run {run} step {m.step}: no base rate before it")
-            d = m.rate_dps - base.rate_dps
+            d = float(f"{m.rate_dps - base.rate_dps:.12g}")     # the tested increment
             steps.append(d)
             meas.append(m.mean - base.mean)
             exp.append(ctx.K * d)
-            sig.append(math.sqrt(m.std ** 2 / m.n + base.std ** 2 / base.n))
-        c, dev = jf.fifty_percent_candidate(steps, meas, exp)
-        cands.append(c)
-        pmfs.append(rg.fifty_percent_outcome_pmf(
-            steps, rg.fifty_percent_pass_probability(meas, sig, exp)))
-        mags = [abs(r) for r in steps]
-        for a, b in zip(mags, mags[1:] + [0.0]):
-            nexts[a] = b
-        dets[f"run{run}"] = {"increments_dps": steps, "deviation": dev, "candidate_dps": c}
-    return _candidate_item("resolution", title, clause, cands, nexts, dets, pmfs)
+            sig.append(referred_mean_u([(1.0, m.n, m.std), (1.0, base.n, base.std)]))
+        c, dev = _rule_run(steps, meas, exp, sig, cands, pmfs)
+        dets[f"run{run}"] = {"increments_dps": steps, "steps_dps": steps, "deviation": dev,
+                             "candidate_dps": c,
+                             "samples": int(next(m.n for m in seg if m.role == "increment"))}
+    return _candidate_item("resolution", title, clause, cands, dets, pmfs)
 
 
 # --------------------------------------------------------------------------- bias family
@@ -703,11 +764,12 @@ def g_sensitivity(ctx: Context) -> Item:
         return miss
     pos = {}
     for m in segment_means(ctx.df, "g_sensitivity"):
-        y = segment_samples(ctx.df, "g_sensitivity", m.run, m.step)["output"].to_numpy()
+        seg = segment_samples(ctx.df, "g_sensitivity", m.run, m.step)
+        y, y_t = seg["output"].to_numpy(), seg["time_s"].to_numpy()
         um, nu = _block_std_of_mean(y)
         earth = rg.earth_rate_projection_dps(ctx.latitude_deg, input_axis_enu(m.up_axis, m.north_axis))
         pos[m.up_axis] = {"w": (m.mean - ctx.null_output) / ctx.K, "earth": earth,
-                          "u": um / abs(ctx.K), "nu": nu, "t": m.time_s + 0.5 * m.n}
+                          "u": um / abs(ctx.K), "nu": nu, "span": record_span_s(y_t)}
     res, lit, us = {}, {}, {}
     for ax in "xyz":
         p, n = pos.get("+" + ax), pos.get("-" + ax)
@@ -729,7 +791,7 @@ def g_sensitivity(ctx: Context) -> Item:
               type_b("x_E", 0.0, xbound, "rectangular",
                      source="cross-axis coupling of the Earth rate (bound)"),
               from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B", source="scale factor, relative"),
-              from_u("drift", 0.0, drift_u_dph(ctx, p["t"] - n["t"]), dof=50,
+              from_u("drift", 0.0, drift_u_dph(ctx, n["span"], p["span"]), dof=50,
                      source="bias drift between the two positions (Allan fit: RRW, BI)")]
     u = gum(lambda a, b, c, d, x, e, dr: abs(((a - c) - (b - d) + dr) / 2.0 + x) * (1 + e),
             inputs)
@@ -738,13 +800,19 @@ def g_sensitivity(ctx: Context) -> Item:
 
 
 def angle_random_walk(ctx: Context) -> Item:
-    """JJF 1535 7.2.13: ARW from the five-term fit (25), (26) of the **overlapping** Allan
-    variance of the static record (reading taken), in °/√h; the printed statistic of
-    eqs (22)–(24) is computed too, labelled, with its ratio to the AVAR (it falls as 2/k²).
+    """JJF 1535 7.2.13: ARW N in °/√h from the **overlapping** Allan variance of the static
+    record (reading taken). The value certified is N of the five-term model whose bias
+    instability has a realistic shape — the flat (2 ln 2/π)B² of formula (25) plus
+    first-order Gauss–Markov terms at fixed correlation times
+    (:func:`gonio.analysis.noise.fit_markov_model`): formula (25)'s flat B, fitted to a
+    band-limited bias instability, reads N low. The standard's reading (formula (25),
+    (26): the five-term fit) stays beside it in the details (``formula_25_reading``). The
+    printed statistic of eqs (22)–(24) is computed too, labelled, with its ratio to the
+    AVAR (it falls as 2/k²).
 
     Uncertainty: the fit's standard uncertainty of N (the least-squares covariance with the
-    full covariance of the Allan estimates across τ, which share their data,
-    :func:`gonio.analysis.noise.fit_noise_model`) and the scale factor."""
+    full covariance of the Allan estimates across τ under the fitted model, which share
+    their data) and the scale factor."""
     title, clause, unit = "angle random walk ARW", "7.2.13", "°/√h"
     miss = _need(ctx, "static", "angle_random_walk", title, clause, unit)
     if miss:
@@ -755,15 +823,16 @@ def angle_random_walk(ctx: Context) -> Item:
                     uncertainty=gum(lambda n: n, [from_u("N", 0.0, 0.0)]),
                     details={"note": "the static record does not vary: no noise to analyse"})
     rate_dph, allan, fit = noise["rate_dph"], noise["allan"], noise["fit"]
-    if not (fit.N > 0 and fit.u_N > 0):
+    shaped = noise["fit_markov"]
+    if not (fit.N > 0 and fit.u_N > 0 and shaped.N > 0 and shaped.u_N > 0):
         # a record that varies but whose fit holds no white rate noise (spikes, a periodic
         # disturbance): never certified as 0 ± 0
         raise GonioError("the five-term Allan fit of the static record (7.2.13) finds no "
                          "angle random walk although the record varies (N = 0 with u(N) = 0): "
                          "the record is not gyro noise (spikes, a periodic disturbance?)",
                          key="static")
-    arw = fit.N / math.sqrt(S_PER_H)
-    u_arw = fit.u_N / math.sqrt(S_PER_H)
+    arw = shaped.N / math.sqrt(S_PER_H)
+    u_arw = shaped.u_N / math.sqrt(S_PER_H)
     printed = {}
     if ctx.protocol.get("arw", {}).get("print_standard_statistic", True):
         ks = [k for k in (1, 2, 4, 8, 16) if rate_dph.size >= 2 * k + 3]
@@ -771,10 +840,18 @@ def angle_random_walk(ctx: Context) -> Item:
             printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
                                "ratio": pv / av if av > 0 else None}
     u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
-                                              source="five-term AVAR fit, u(N)"),
+                                              source="AVAR fit (five terms + Gauss-Markov "
+                                                     "set), u(N)"),
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
     return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
-        "fit": fit.to_dict(), "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev,
+        "fit": fit.to_dict(), "fit_markov": shaped.to_dict(),
+        "formula_25_reading": {
+            "arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
+            "u_arw_deg_sqrt_h": fit.u_N / math.sqrt(S_PER_H),
+            "note": "JJF 1535 formulas (25), (26): the five-term fit with a flat bias "
+                    "instability; not certified (a band-limited bias instability makes it "
+                    "read N low)"},
+        "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev,
                                         "ci_low": allan.ci_low, "ci_high": allan.ci_high},
         "bias_instability_dph": fit.B, "rate_random_walk_dph_sqrt_h": fit.K * math.sqrt(S_PER_H),
         "quantisation": fit.Q, "rate_ramp_dph_per_h": fit.R * S_PER_H,
@@ -799,8 +876,9 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
         kmap = {c["run"]: c["fit"].K for c in calibrations(ctx, "sf_temperature")}
     B, T, U, tm = [], [], [], []
     for m in segment_means(ctx.df, "bias_temperature"):
-        tm.append(m.time_s)
-        y = segment_samples(ctx.df, "bias_temperature", m.run, m.step)["output"].to_numpy()
+        seg = segment_samples(ctx.df, "bias_temperature", m.run, m.step)
+        y = seg["output"].to_numpy()
+        tm.append(record_span_s(seg["time_s"].to_numpy()))
         K = kmap.get(m.run, ctx.K)
         um, nu = _block_std_of_mean(y)
         B.append((m.mean - ctx.null_output) / K * S_PER_H)
@@ -813,7 +891,7 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
               from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),
               type_b("dT", T[i] - T[rt], ctx.chamber_deviation_c, "rectangular",
                      source="chamber temperature deviation (Table 2)"),
-              from_u("drift", 0.0, drift_u_dph(ctx, tm[i] - tm[rt]), dof=50,
+              from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[i]), dof=50,
                      source="bias drift between the two records (Allan fit: RRW, BI)")]
     u = gum(lambda a, b, d, dr: abs((a - b + dr) / d), inputs)
     return Item("bias_temperature_sensitivity", title, clause, unit, value, uncertainty=u,
