@@ -18,12 +18,13 @@ import math
 import numpy as np
 import pytest
 
-from gonio.analysis.coverage import spawn_seed
+from gonio.analysis.coverage import MIN_SD_Z, coverage_table_from, spawn_seed
 from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.analysis import table_type_b_cov
 from gonio.specs.triad_alignment.bench import load_triad_bench
-from gonio.specs.triad_alignment.study import (CASE_KEYS, CASES, RATE_ERROR_BOUND_K,
+from gonio.specs.triad_alignment.study import (CASE_KEYS, CASES, FIXED_CONDITION_CASES,
+                                               RATE_ERROR_BOUND_K,
                                                case_bench, plan_study, table_bias,
                                                worst_table)
 
@@ -113,6 +114,26 @@ def test_the_worst_case_is_offset_as_the_table_model_says(runs):
     w = d["cases"]["worst"]
     assert w["table"]["rate_error_rel"] == pytest.approx(2 * 2.5e-4)
     assert all(abs(w["table"]["table_offset_z"][f"M_{a}{a}"]) > 1.5 for a in "xyz")
+
+
+def test_the_spread_is_judged_only_where_the_condition_is_drawn(runs):
+    """At one fixed condition (worst, worst-axes) z's spread is the noise's: no over-wide flag
+    there; in typeb the flag follows sd z < MIN_SD_Z (recomputed here from the printed z sd)."""
+    assert set(FIXED_CONDITION_CASES) == {"worst", "worst-axes"}
+    d = json.loads(runs[1])
+    for case, c in d["cases"].items():
+        for r in c["items"]:
+            judged = case not in FIXED_CONDITION_CASES
+            assert ("over-wide" in r["flags"]) == (judged and r["z_sd"] < MIN_SD_Z), (case, r)
+
+
+def test_judge_spread_drops_only_the_over_wide_flag():
+    """Two trials with z = 0.10 and 0.11 (sd 0.007 < 0.3), one outside U: the judged table
+    flags both sides, the fixed-condition one keeps the coverage flag alone."""
+    tr = [{"a": {"clause": "c", "value": 1.0 + dz, "truth": 1.0, "U": 0.105, "u_c": 1.0}}
+          for dz in (0.10, 0.11)]
+    assert coverage_table_from(tr)["flags"][0] == ("under-covers", "over-wide")
+    assert coverage_table_from(tr, judge_spread=False)["flags"][0] == ("under-covers",)
 
 
 def test_typeb_draws_another_table_per_trial():

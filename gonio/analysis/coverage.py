@@ -247,13 +247,16 @@ def _spread(z) -> tuple[float | None, float | None]:
 
 
 def item_coverage(records: list[tuple[float, float, float, float]], key: str = "",
-                  clause: str = "", stated: list | None = None) -> ItemCoverage:
+                  clause: str = "", stated: list | None = None,
+                  judge_spread: bool = True) -> ItemCoverage:
     """Coverage of one item from (value, truth, U, u_c) per seed; ``stated`` (one entry per
     record, None for a value ± U) the interval a trial's item was stated by alone and the ν
     of its χ² model (:func:`_trial_judged`): the interval must hold the truth, and the
     spread is that of the χ² z (:func:`chi_square_z`), the statistic that interval's 95 %
     is a probability of; z on u_c (s in its denominator, unbounded for few degrees of
-    freedom) is kept beside it.
+    freedom) is kept beside it. ``judge_spread`` False: no ``over-wide`` flag (a study case
+    at one fixed condition, where a Type B line is one fixed offset and z's spread is the
+    noise's alone: coverage is the test there).
 
     >>> c = item_coverage([(1.0, 1.1, 0.2, 0.1), (1.0, 1.3, 0.2, 0.1)])
     >>> c.hits, c.coverage, round(c.u_coverage, 4)
@@ -282,7 +285,8 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
                                        for v, t, _, u in records)}
     return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
-                        cp_lo, cp_hi, z_mean, z_sd, tuple(coverage_flags(c, z_sd)),
+                        cp_lo, cp_hi, z_mean, z_sd,
+                        tuple(coverage_flags(c, z_sd, own_budget=judge_spread)),
                         statistic, **uc)
 
 
@@ -304,11 +308,12 @@ def stated_record(u) -> dict:
     return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu}
 
 
-def coverage_table_from(trials: list[dict],
-                        items: tuple[str, ...] | None = None) -> "pd.DataFrame":
+def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None,
+                        judge_spread: bool = True) -> "pd.DataFrame":
     """Per item over the trials (in order): :class:`ItemCoverage` rows. A trial is {item:
     {clause, value, truth, U, u_c}} with, for an item stated by its interval alone, {interval,
-    nu} (:func:`stated_record`); value None: not measured or no truth in that trial."""
+    nu} (:func:`stated_record`); value None: not measured or no truth in that trial.
+    ``judge_spread``: as in :func:`item_coverage`."""
     import pandas as pd
 
     recs: dict[str, list] = {}
@@ -324,7 +329,8 @@ def coverage_table_from(trials: list[dict],
                 stated.setdefault(key, []).append(
                     {"interval": r["interval"], "nu": r.get("nu")} if r.get("interval")
                     else None)
-    rows = [item_coverage(v, k, clauses[k], stated[k]).__dict__ for k, v in recs.items()]
+    rows = [item_coverage(v, k, clauses[k], stated[k], judge_spread).__dict__
+            for k, v in recs.items()]
     return pd.DataFrame(rows, columns=list(ItemCoverage.__dataclass_fields__))
 
 

@@ -45,6 +45,8 @@ COMMON_PHRASES_ZH = (
      r"window's stability", "判定：稳定性穿越 标称值·(1 ± z·r) 之处，r 为窗口稳定性的相对抽样偏差"),
     (r"noise of the smoothed output", "平滑后输出的噪声"),
     (r"five-term AVAR fit, u\(N\)", "五项 Allan 方差拟合，u(N)"),
+    (r"five-term AVAR fit with band-limited flicker, u\(N\)",
+     "五项 Allan 方差拟合（带限闪烁噪声），u(N)"),
     (r"chamber deviation \(independent per point\)", "温箱温度偏差（各点独立）"),
     (r"chamber temperature deviation \(Table 2\)", "温箱温度偏差（表2）"),
     (r"bias drift between the two positions \(Allan fit: RRW, BI\)",

@@ -98,8 +98,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      r"difference", "ln f 中线性插值：h²/8·|p''|，p'' 由相邻点的二阶差分求得"),
     (r"Welch estimate over the broadband lines", "宽带谱线上的 Welch 谱估计"),
     (r"χ² interval at the floor", "底值处的 χ² 区间"),
-    (r"bias correction of the −½ line under the fitted five-term model \(half the full "
-     r"correction\)", "拟合五项模型下 −½ 斜率直线的偏差修正（取全修正的一半）"),
+    (r"bias correction of the −½ line under the fitted model with band-limited flicker "
+     r"\(half the correction\)", "带限闪烁噪声拟合模型下 −½ 斜率直线的偏差修正（取修正量的一半）"),
     (r"time outside the band: the count's spread and the reference's error \(noise, bias "
      r"drift\) through the local slope",
      "带外时间：计数的分散性及参考值误差（噪声、零偏漂移）经局部斜率传递"),

@@ -39,8 +39,9 @@ READINGS_TAKEN = (
     "7.2.10: B_s is the root mean square of the records' standard deviations (eq (19)'s mean of "
     "standard deviations reads low; stated beside the value).",
     "7.2.13: eqs (22)-(24) as printed difference means one sample apart and fall as 2/k²; the "
-    "ARW is taken from the overlapping Allan variance (IEEE 952), the printed statistic is "
-    "reported alongside, labelled.",
+    "ARW is taken from the overlapping Allan variance (IEEE 952) fitted with a band-limited "
+    "bias instability (formula (25)'s flat-term reading stated beside it), the printed "
+    "statistic is reported alongside, labelled.",
     "7.2.14: each B_i uses the scale factor calibrated at the same temperature.",
     "7.2.15: 0 dB = the lowest test frequency; −3 dB = ratio 10^(−3/20); log-f interpolation.",
     "Uncertainties are computed from the calibration's own data (GUM, k = t95(ν_eff)); Annex A "

@@ -76,6 +76,14 @@ ITEM_CONDITIONS = {
         "准备时间（7.2.9）：自通电起，此后每个 W = {window_samples} 个采样（{window_s:g} s）的窗口内，"
         "P 个采样平均值（P = {block_samples} 个采样，{block_s:g} s；式（18））的稳定性均不超过标称值 "
         "{nominal_stability_dph:g} °/h 的最早时刻；取 {records} 次通电的平均值，窗口起点步长为 P 个采样。"),
+    "angle_random_walk": (
+        "Angle random walk (7.2.13): formula (25)'s five-term fit, whose bias instability is "
+        "flat at every τ, reads {formula_25_arw_deg_sqrt_h:#.4g} °/√h; the value certified is N "
+        "of the same fit with the bias instability band-limited below a fitted correlation time "
+        "(T_lo = {flicker_band_t_lo_s:#.3g} s; 0: flat), as a gyro's fades at short τ.",
+        "角度随机游走系数（7.2.13）：按式（25）的五项拟合（零偏不稳定性在各 τ 均为常数）为 "
+        "{formula_25_arw_deg_sqrt_h:#.4g} °/√h；所给校准值为同一拟合中零偏不稳定性在拟合的最短相关时间"
+        "（T_lo = {flicker_band_t_lo_s:#.3g} s；0 为常数）以下按带限衰减时的 N（陀螺的零偏不稳定性在短 τ 处减弱）。"),
 }
 
 #: Page title.
@@ -93,7 +101,8 @@ READINGS_ZH = {
                      "真值 5 (°/h)/g 会读成 14.7 (°/h)/g）。",
     "7.2.9:": "7.2.9：准备时间取此后每个窗口均满足标称稳定性的最早时刻。",
     "7.2.13:": "7.2.13：式（22）–（24）按原文相邻一个采样求差，随 2/k² 下降；角度随机游走取自重叠 "
-               "Allan 方差（IEEE 952），原文统计量并列给出并注明。",
+               "Allan 方差（IEEE 952），零偏不稳定性按带限闪烁噪声拟合（式（25）的常数项结果并列给出），"
+               "原文统计量并列给出并注明。",
     "7.2.14:": "7.2.14：各 B_i 使用同一温度下校准的标度因数。",
     "7.2.15:": "7.2.15：0 dB 取最低试验频率；−3 dB 即幅值比 10^(−3/20)；按对数频率插值。",
     "Uncertainties are computed": "不确定度由本次校准数据评定（GUM，k = t95(ν_eff)）；附录 A 另行复现"

@@ -840,11 +840,13 @@ def angle_random_walk(ctx: Context) -> Item:
             printed[str(k)] = {"printed_eq24_dph2": pv, "overlapping_avar_dph2": av,
                                "ratio": pv / av if av > 0 else None}
     u = gum(lambda n, e: n * (1 + e), [from_u("N", arw, u_arw, dof=50,
-                                              source="AVAR fit (five terms + Gauss-Markov "
-                                                     "set), u(N)"),
+                                              source="five-term AVAR fit with band-limited "
+                                                     "flicker, u(N)"),
                                        from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B")])
     return Item("angle_random_walk", title, clause, unit, arw, uncertainty=u, details={
         "fit": fit.to_dict(), "fit_markov": shaped.to_dict(),
+        "formula_25_arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
+        "flicker_band_t_lo_s": shaped.t_lo_s,
         "formula_25_reading": {
             "arw_deg_sqrt_h": fit.N / math.sqrt(S_PER_H),
             "u_arw_deg_sqrt_h": fit.u_N / math.sqrt(S_PER_H),

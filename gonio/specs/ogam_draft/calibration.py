@@ -140,7 +140,12 @@ TILT_CORRECTED = {
                  "uncertainty (line K_te)",
     "ranges": "; beyond the draft: the tilt x Earth-rate coupling taken at the tilt the "
               "in-situ estimate measured (each K_i, or each E read with the 7.1 K, corrected), "
-              "with the correction's uncertainty (K_te), not at the A.1 bound"}
+              "with the correction's uncertainty (K_te), not at the A.1 bound",
+    "pointing_consistency": "stated: the range of the E_g corrected, as C_v's, for its bias "
+                            "by the E_g's errors (means, table, zero drift, K and the tilt "
+                            "correction; JCGM 101 Monte Carlo) and for the choice of each "
+                            "extreme (line C_sel), u the spread of the measured range and the "
+                            "choice of each extreme"}
 
 
 @dataclass(frozen=True)
@@ -256,7 +261,9 @@ class Analysis:
                 d["estimates"] = {
                     "draft": {"label": RANGE_READINGS[c.name]["draft"], "value": _plain_value(c),
                               "uncertainty": beside_uncertainty(iu.beside.to_dict())},
-                    "corrected": {"label": RANGE_READINGS[c.name]["corrected"]
+                    "corrected": {"label": (TILT_CORRECTED["pointing_consistency"]
+                                            if tilt and c.name == "pointing_consistency"
+                                            else RANGE_READINGS[c.name]["corrected"])
                                   + (TILT_CORRECTED["ranges"] if tilt else ""),
                                   "value": float(iu.value)}}
         if c.name != "zero_stability":
@@ -1061,14 +1068,15 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         if tc is not None:        # the E_v corrected for K's tilt bias at the measured tilt
             conds, curves = _consistency_conditions(c, name, u_r, tc.delta_rel)
             kw.update(curves=curves, tilt_te=(tc.u_delta_rel, tc.dof))
-        if name == "rate_consistency":          # stated corrected, the draft's range beside
+        if name == "rate_consistency" or tc is not None:
+            # stated corrected for the range's bias and the choice of each extreme, the
+            # draft's range beside (C_g too where the tilt was measured: its draft's linear
+            # u, with no tilt error left to fill it, is over-wide)
             out[name] = dataclasses.replace(
                 iu.consistency_corrected_budget(name, conds, ref, scale, **kw), beside=draft)
         else:                 # C_g: stated corrected for the choice of its extremes
-            base = iu.consistency_budget(name, conds, ref, scale, **kw) if tc is not None \
-                else draft
             out[name] = dataclasses.replace(iu.selection_corrected_budget(
-                base, curves, [x.u_single_arcsec / math.sqrt(max(x.n_series, 1)) for x in conds],
+                draft, curves, [x.u_single_arcsec / math.sqrt(max(x.n_series, 1)) for x in conds],
                 reference_angle_arcsec=ref, scale=scale, table_mpe_arcsec=mpe,
                 drift_half_width_arcsec=kw["drift_half_width_arcsec"],
                 scale_factor_u_rel=k_u_rel, k=k_fixed), beside=draft)

@@ -989,26 +989,12 @@ def _series_dof(c: ConditionDeviation) -> float:
 def _consistency_lines(a: ConditionDeviation, b: ConditionDeviation, n_conditions: int,
                        mean_u_arcsec: float, f: float, clause: str, table_mpe_arcsec: float,
                        drift_half_width_arcsec: float, scale_factor_u_rel: float,
-                       scale_factor_tilt: float, tilt_te=None) -> list:
+                       scale_factor_tilt: float) -> list:
     """The budget lines of :func:`consistency_budget` for the extremes a (max E_v) and b
     (min E_v), in the order its sensitivity coefficients and correlation assume: r_a, r_b,
-    P_a, P_b, B_a, B_b, C_rng, K_ab, K_tilt (``K_te`` where ``tilt_te`` is given); ``f``
-    converts arcsec to the item's unit, ``mean_u_arcsec`` is the conditions' mean u(E_v)."""
+    P_a, P_b, B_a, B_b, C_rng, K_ab, K_tilt; ``f`` converts arcsec to the item's unit,
+    ``mean_u_arcsec`` is the conditions' mean u(E_v)."""
     ends = (("a", a), ("b", b))
-    span_deg = abs(a.position_deg - b.position_deg)
-    if tilt_te is not None:            # E_v corrected by the measured tilt: u of the correction
-        u_rel, dof = tilt_te
-        tilt_line = _Line(
-            from_u("K_te", 0.0, u_rel * span_deg * ARCSEC_PER_DEG * f, dof=dof, type="A",
-                   source=f"E_v corrected for the tilt x Earth-rate bias of K at the measured "
-                          f"tilt; u(delta) = {u_rel:.3g} over {span_deg:g}° between the extremes"),
-            "tilt correction of K carried into the spread", True, clause + " (A.1, 7.1)")
-    else:
-        tilt_line = _Line(
-            type_b("K_tilt", 0.0, scale_factor_tilt * span_deg * f, "arcsine",
-                   source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
-                          f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
-            "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)")
     return [
         *(_Line(from_u(f"r_{s}", 0.0, _mean_u(c) * f, dof=_series_dof(c), type="A",
                        source=f"mean of {c.n_series} series at {c.label}"),
@@ -1028,7 +1014,11 @@ def _consistency_lines(a: ConditionDeviation, b: ConditionDeviation, n_condition
                      source=f"u(K)/K = {scale_factor_u_rel:.3g} over "
                             f"{abs(a.position_deg - b.position_deg):g}° between the extremes"),
               "scale factor of 7.1 carried into the spread", True, clause + " (7.1)"),
-        tilt_line,
+        _Line(type_b("K_tilt", 0.0, scale_factor_tilt * abs(a.position_deg - b.position_deg)
+                     * f, "arcsine",
+                     source=f"tilt x Earth-rate coupling of the 7.1 rounds, A_K = "
+                            f"{scale_factor_tilt:.3g}″/° at the A.1 bound"),
+              "tilt bias of K carried into the spread", True, clause + " (A.1, 7.1)"),
     ]
 
 
@@ -1036,7 +1026,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
                        reference_angle_arcsec: float, scale: float, *,
                        table_mpe_arcsec: float, drift_half_width_arcsec: float,
                        scale_factor_u_rel: float = 0.0, scale_factor_tilt: float = 0.0,
-                       curves=None, k: float | None = None, tilt_te=None) -> ItemUncertainty:
+                       curves=None, k: float | None = None) -> ItemUncertainty:
     """u(C) of C = (max E_v − min E_v)/reference · scale (draft 7.6: ppm, 7.7: %).
 
     Inputs, for the conditions a (max E_v) and b (min E_v): their Type A means
@@ -1052,10 +1042,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
     same position: the term cancels like the table's). On a mount tilted within the A.1
     bound the coupling of the 7.1 rounds biases K too: ``scale_factor_tilt`` (A_K,
     arcsec per degree, :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`) gives the
-    ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|. Where the in-situ tilt
-    estimate measured the tilt, the caller corrects the E_v for K's bias δ (E_v + δ·θ_v,
-    JCGM 100 3.2.4) and gives ``tilt_te`` = (u(δ), ν): the ``K_te`` line, normal with
-    u(δ)·|θ_a − θ_b| and ν of the estimate's fit, in place of ``K_tilt`` (beyond the draft).
+    ``K_tilt`` line, arcsine with half-width A_K·|θ_a − θ_b|.
 
     ``curves`` (one ``(positions_deg, E_arcsec)`` per condition, as ``conditions``) adds the
     *choice of the extreme* (``C_sel``, :func:`extreme_selection_u`): noise can pick a
@@ -1104,7 +1091,7 @@ def consistency_budget(item: str, conditions: Sequence[ConditionDeviation],
 
     lines = _consistency_lines(a, b, len(cs), float(np.mean([_mean_u(c) for c in cs])), f,
                                clause, table_mpe_arcsec, drift_half_width_arcsec,
-                               scale_factor_u_rel, scale_factor_tilt, tilt_te)
+                               scale_factor_u_rel, scale_factor_tilt)
     if curves is not None:
         u_sel = extreme_selection_u(curves, [_mean_u(c) for c in cs], table_mpe_arcsec,
                                     drift_half_width_arcsec, scale_factor_u_rel) * f
@@ -1138,8 +1125,9 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     :func:`extreme_selection`: the drift accumulated from the zeroing at 0° to the extreme's
     position θ_v, the bound's half-width times θ_v/360°), K's error δ·θ_v (normal, u(K)/K, the
     same δ for all, 7.1) and the tilt bias of K A_K·θ_v (arcsine, the same phase for all, A.1)
-    — or, where the E_v were corrected by the measured tilt (``tilt_te`` = (u(δ), ν), as
-    :func:`consistency_budget`), the correction's error, normal u(δ)·θ_v, the same for all.
+    — or, where the caller corrected the E_v for K's bias δ at the tilt the in-situ estimate
+    measured (E_v + δ·θ_v, JCGM 100 3.2.4; ``tilt_te`` = (u(δ), ν of the estimate's fit)),
+    the correction's error, normal u(δ)·θ_v, the same for all (beyond the draft).
     C is the range whose expected measured range equals the one measured; u is the spread of
     the measured range there (line ``C_rng``, normal), with the choice of each condition's
     extreme (``C_sel``) beside it as in :func:`consistency_budget`; with ``curves`` the
