@@ -94,3 +94,27 @@ def test_white_noise_closed_form():
     cov = variance_covariance("adev", [1, 2], [n, n], 1.0, [0.0, 1.0, 0.0, 0.0, 0.0])
     assert cov[0, 0] * n == pytest.approx(3.0, rel=1e-5)
     assert cov[0, 1] * n == pytest.approx(0.75, rel=1e-5)
+
+
+def test_long_grids_are_computed_in_pieces_with_the_same_numbers(monkeypatch):
+    """K(t) on a grid longer than one piece, and the covariance built from it, are the
+    same numbers element by element as in one piece (the pieces only bound memory); and
+    the pieces really are used (a piece of 7 samples)."""
+    from gonio.analysis.noise import covariance as cov
+    coef = [0.3, 0.02, 1e-3, 1e-6, 0.0]
+    markov = [(1e-4, 50.0), (2e-4, 900.0)]
+    t = np.arange(1000)
+    whole = cov.generalised_covariance(t, coef, 0.01, markov)
+    args = ("mdev", [1, 4, 16, 64], [4000, 3990, 3950, 3800], 0.01, coef, markov)
+    v_whole = variance_covariance(*args)
+    calls = []
+    real = cov._generalised_covariance
+    monkeypatch.setattr(cov, "_PIECE", 7)
+    monkeypatch.setattr(cov, "_generalised_covariance",
+                        lambda *a: calls.append(1) or real(*a))
+    assert np.array_equal(cov.generalised_covariance(t, coef, 0.01, markov), whole)
+    assert len(calls) == math.ceil(t.size / 7)
+    assert np.array_equal(variance_covariance(*args), v_whole)
+    # and K itself against its closed form at a few points (white rate: −N²|t|/2)
+    k = cov.generalised_covariance(np.array([0, 3, 10]), [0, 0.02, 0, 0, 0], 0.01)
+    assert np.allclose(k, -0.5 * 0.02 * np.array([0, 3, 10]) * 0.01, rtol=0, atol=1e-15)

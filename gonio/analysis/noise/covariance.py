@@ -52,6 +52,8 @@ __all__ = ["generalised_covariance", "estimator_taps", "variance_covariance"]
 _FLICKER_TAIL_SPANS = 4
 #: Lag weights summed term by term up to this many (beyond: an FFT correlation).
 _DIRECT_TAPS = 32
+#: Grid samples of K(t) computed at a time (bounded temporaries on long records).
+_PIECE = 1 << 20
 
 
 def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float,
@@ -61,7 +63,24 @@ def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float,
     written t² ln(t/τ0): it differs from t² ln t by an even quadratic, which the
     estimators' coefficients annihilate. ``markov``: first-order Gauss–Markov rate terms
     (s², T_c) of variance s² and correlation time T_c, each −s²T_c²(|t|/T_c − 1 + e^{−|t|/T_c})
-    (−∫₀^|t| (|t| − u) s² e^{−u/T_c} du, the angle's structure under the rate's covariance)."""
+    (−∫₀^|t| (|t| − u) s² e^{−u/T_c} du, the angle's structure under the rate's covariance).
+
+    Long grids are computed piece by piece (``_PIECE`` samples at a time) into one output
+    array, so the temporaries stay bounded whatever the record's length; each element is
+    the same arithmetic either way.
+    """
+    t_all = np.asarray(t_samples)
+    if t_all.size <= _PIECE:
+        return _generalised_covariance(t_all, coef, tau0_s, markov)
+    flat = t_all.ravel()
+    out = np.empty(flat.size, dtype=np.float64)
+    for a in range(0, flat.size, _PIECE):
+        out[a: a + _PIECE] = _generalised_covariance(flat[a: a + _PIECE], coef, tau0_s, markov)
+    return out.reshape(t_all.shape)
+
+
+def _generalised_covariance(t_samples, coef, tau0_s: float, markov) -> np.ndarray:
+    """:func:`generalised_covariance` on one piece of the grid."""
     q2, n2, b2, k2 = (float(c) for c in np.asarray(coef, dtype=np.float64)[:4])
     t = np.asarray(t_samples, dtype=np.float64)
     ts = t * tau0_s
@@ -205,7 +224,12 @@ def variance_covariance(kind: str, m, n_terms, tau0_s: float, coef, markov=()) -
     # |s − L| ≤ span + (1 + tail)·span (lags are limited by the spans, not the record)
     kmax = min(int(n.max()) + 2 * span, (_FLICKER_TAIL_SPANS + 2) * span) + 2
     q2 = float(coef[0])
-    kgrid = generalised_covariance(np.arange(kmax + 1), np.r_[0.0, coef[1:]], tau0_s, markov)
+    # K(t) at t = 0 … kmax, piece by piece (no grid of indices as long as the record)
+    kgrid = np.empty(kmax + 1)
+    for a in range(0, kmax + 1, _PIECE):
+        b = min(a + _PIECE, kmax + 1)
+        kgrid[a:b] = _generalised_covariance(np.arange(a, b), np.r_[0.0, coef[1:]], tau0_s,
+                                             markov)
     out = np.empty((m.size, m.size))
     for i in range(m.size):
         for j in range(i, m.size):
