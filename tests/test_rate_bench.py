@@ -475,3 +475,23 @@ def test_jjf_warmup_states_its_window_block_and_nominal(jjf_noise_off):
         for word, v in zip(words, (d["window_samples"], d["block_samples"],
                                    d["nominal_stability_dph"])):
             assert word.format(v) in text, (lang, word.format(v))
+
+
+def test_item_conditions_stated_only_where_the_details_hold_their_fields(jjf_noise_off,
+                                                                        jjf_noise_on):
+    """The certificate states a measurand's condition sentence where the item was measured
+    and its details hold every field: the 7.2.13 sentence (formula (25)'s reading beside the
+    certified N) on a noisy record, in English and Chinese; not on a record without noise
+    (no fit to name), which still renders."""
+    from gonio.report.i18n import labels
+    from gonio.report.rate_certificate import rate_certificate_blocks
+
+    for result, stated in ((jjf_noise_on[0][0], True), (jjf_noise_off[0], False)):
+        d = result.items["angle_random_walk"].details
+        assert ("formula_25_arw_deg_sqrt_h" in d) is stated
+        for lang, word in (("en", "formula (25)'s five-term fit"), ("zh", "按式（25）的五项拟合")):
+            blocks = rate_certificate_blocks(result, labels(lang), lang, lab=None)["blocks"]
+            text = " ".join(str(b.data) for b in blocks)
+            assert (word in text) is stated, (lang, stated)
+            if stated:
+                assert f"{d['formula_25_arw_deg_sqrt_h']:#.4g} °/√h" in text

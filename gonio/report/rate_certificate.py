@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import re
+import string
 from pathlib import Path
 
 from gonio.atomic import output_dir, write_bytes, write_text
@@ -262,11 +263,15 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
     add("h", data.HEADING[1] if lang == "zh" else data.HEADING[0])
     add("table", results_table(res, data, L, lang), {
         "widths": (0.07, 0.26, 0.11, 0.15, 0.10, 0.07, 0.08, 0.16), "id": "results"})
-    # what defines an item's measurand
+    # what defines an item's measurand: stated where the item was measured and its details
+    # hold every field of the sentence (a record without noise has no fit to name; a result
+    # stored before a field existed is rendered without that sentence)
     for key, text in content_field(data, "ITEM_CONDITIONS").items():
         it = res["items"].get(key) or {}
-        if it.get("measured"):
-            add("p", [text[1 if lang == "zh" else 0].format(**it["details"])])
+        tmpl = text[1 if lang == "zh" else 0]
+        fields = {f for _, f, _, _ in string.Formatter().parse(tmpl) if f}
+        if it.get("measured") and fields <= set(it.get("details") or {}):
+            add("p", [tmpl.format(**it["details"])])
     u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
     if any(it.get("measured") and it.get("value") is not None

@@ -527,7 +527,8 @@ CONTENT_FIELDS: dict[str, tuple[str, Callable[[Any], bool], Any]] = {
     "READINGS_ZH": ("a dict {clause prefix of a reading taken: its Chinese}", _str_dict, {}),
     "ITEM_CONDITIONS": ("a dict {item key: (English, Chinese) templates filled from the "
                         "item's details}: what defines the item's measurand, stated under "
-                        "the results table where the item was measured",
+                        "the results table where the item was measured and its details hold "
+                        "every field of the sentence",
                         lambda v: isinstance(v, dict) and all(
                             isinstance(k, str) and _strs(t, 2) for k, t in v.items()), {}),
     "PHRASES_ZH": ("a tuple of (English regular expression, Chinese) pairs",
