@@ -270,15 +270,79 @@ def linearity(ctx: Context) -> Item:
     sd = 100 * linearity_noise_sd(c["x"], L, fs, u_pool)
     i = int(np.argmax(np.abs(L)))
     excess, m_sel = rg.selection_excess(100 * np.abs(L), sd)
-    u = gum(lambda v, n, m: v + n + m,
-            [from_u("L", 100 * abs(L[i]), 0.0),
+    terms = [from_u("L", 100 * abs(L[i]), 0.0),
              from_u("noise", 0.0, float(sd[i]), dof=50,
                     source="pooled noise of the point means through the line's residual / FullScale"),
              type_b("noise_max", -excess, excess, "rectangular",
-                    source="selection excess of the largest |L_i| (midpoint ± c_m·σ/2 removed)")])
+                    source="selection excess of the largest |L_i| (midpoint ± c_m·σ/2 removed)")]
+    extra = {}
+    try:        # the bias's drift between the points, from the static record's noise fit
+        u_dr = 100 * float(linearity_drift_sd(
+            c["x"], c["t"], fs, lambda dt: drift_u_dps(ctx, dt) * abs(ctx.a_base))[i])
+        terms.append(from_u("drift", 0.0, u_dr, type="B",
+                            source="bias drift between the points through the line's residual "
+                                   "/ FullScale (static record's noise fit)"))
+        extra["u_drift_pct"] = u_dr
+    except (GonioError, IndexError, KeyError):
+        pass                            # no static record: the drift is not known
+    if ctx.has("sf_temperature"):      # T_c,SF known: the chamber's fluctuation moves K
+        u_fl = 100 * float(linearity_fluctuation_sd(
+            c["x"], c["t"], fs, ctx.a_base, sf_tc_rel(ctx) * ctx.chamber_fluctuation_c,
+            ctx.chamber_fluctuation_period_s)[i])
+        terms.append(from_u("fluct", 0.0, u_fl, type="B",
+                            source="chamber fluctuation (± amplitude, period) × T_c,SF "
+                                   "through the line's residual / FullScale"))
+        extra["u_fluctuation_pct"] = u_fl
+    u = gum(lambda v, *e: v + sum(e), terms)
     return Item("linearity", t, cl, un, 100 * abs(float(L[i])) - excess, uncertainty=u, details={
         "L_i_pct": 100 * L, "x_dps": c["x"], "full_scale": fs, "at_dps": float(c["x"][i]),
-        "selection_contenders": m_sel, "max_abs_L_i_pct": 100 * abs(float(L[i]))})
+        "selection_contenders": m_sel, "max_abs_L_i_pct": 100 * abs(float(L[i])), **extra})
+
+
+def _residual_maker(x: np.ndarray) -> np.ndarray:
+    """I − H of the least-squares line y = a·x + b over the points x (H its hat matrix)."""
+    X = np.column_stack([np.ones_like(x), x])
+    return np.eye(x.size) - X @ np.linalg.solve(X.T @ X, X.T)
+
+
+def linearity_drift_sd(x: np.ndarray, t: np.ndarray, fs: float, u_diff) -> np.ndarray:
+    """Standard deviation of each L_i of 5.1.3.6 eq (8) from a drift d(t) of the bias while
+    the points are taken (point i at time t_i): r = (I − H)(y + d) and each row of I − H sums
+    to 0, so var(r_i) = −½ Σ_jk M_ij M_ik D(|t_j − t_k|), M = I − H, D(τ) = ``u_diff``(τ)²
+    the drift's structure function (as :func:`slope_drift_u`); sd_i = √var(r_i)/|FullScale|.
+    A drift constant in τ (D ≡ u²) acts as extra independent noise of variance u²/2 per point.
+
+    >>> x = np.array([-1.0, 0.0, 1.0])
+    >>> [round(float(v), 6) for v in linearity_drift_sd(x, np.arange(3.0), 1.0, lambda dt: 0.1)]
+    [0.028868, 0.057735, 0.028868]
+    """
+    M = _residual_maker(x)
+    dt = np.abs(t[:, None] - t[None, :])
+    d = np.vectorize(lambda v: u_diff(float(v)) ** 2 if v > 0 else 0.0)(dt)
+    var = -0.5 * np.einsum("ij,ik,jk->i", M, M, d)
+    return np.sqrt(np.maximum(var, 0.0)) / abs(fs)
+
+
+def linearity_fluctuation_sd(x: np.ndarray, t: np.ndarray, fs: float, a: float,
+                             amp_rel: float, period_s: float | None) -> np.ndarray:
+    """Standard deviation of each L_i of 5.1.3.6 eq (8) from the chamber's periodic
+    fluctuation moving K by T_c,SF while the points are taken: y_j gains a·x_j·A·sin(ωt_j + φ)
+    (A = ``amp_rel``, T_c,SF/a times the fluctuation's amplitude, ω = 2π/P), so r_i gains
+    a·A·Im(e^{iφ} Z_i), Z_i = Σ_j M_ij x_j e^{iωt_j} (M = I − H), of standard deviation
+    |a·A·Z_i|/√2 for φ unknown (uniform); sd_i = that /|FullScale|. The readings log the set
+    point, not the chamber's temperature, so it cannot be corrected. Period not stated: the
+    bound |Z_i| ≤ Σ_j |M_ij x_j|.
+
+    >>> x = np.array([-1.0, 0.0, 1.0])
+    >>> [round(float(v), 6) for v in linearity_fluctuation_sd(x, np.arange(3.0), 1.0, 1.0, 1e-3, None)]
+    [0.000236, 0.000471, 0.000236]
+    """
+    M = _residual_maker(x)
+    if period_s:
+        mag = np.abs(M @ (x * np.exp(2j * math.pi * t / period_s)))
+    else:
+        mag = np.abs(M) @ np.abs(x)
+    return abs(a * amp_rel) * mag / math.sqrt(2.0) / abs(fs)
 
 
 def linearity_noise_sd(x: np.ndarray, L: np.ndarray, fs: float, u_y: np.ndarray) -> np.ndarray:
