@@ -507,6 +507,52 @@ def outcome_quantile(pmf: dict, q: float):
     return keys[-1]
 
 
+def rule_outcome_uncertainty(pmfs: list[dict], value: float):
+    """The uncertainty of a 50 % rule's outcome on a tested grid (IEC 62047-20 5.6
+    Out,resolution; the same reading as JJF 1535 7.2.6/7.2.7, docs/jjf1535-readings.md):
+    the measurand is the tested value at which the rule stops, its true value the median
+    outcome under the instrument's noise. A grid value is a grid value (the grid belongs to
+    the measurand's definition), so no rectangular step term.
+
+    ``pmfs``: each direction's outcome distribution under the data's noise
+    (:func:`fifty_percent_outcome_pmf`), combined by :func:`max_outcome_pmf`. u_c is its
+    standard deviation (None, "above the grid", counted as the largest tested step); the
+    statement is the central 95 % range of the outcome, widened to hold the value (where
+    that range is one outcome, to the neighbouring outcomes that can occur) — a discrete,
+    skewed distribution, stated by its interval (JCGM 101 7.7), no k (U: the distance to the
+    upper end). One possible outcome (noise-free readings): u_c = U = 0 and no interval.
+    Returns (Uncertainty, the combined pmf).
+
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.01, 0.05: 0.98, 0.02: 0.01}], 0.05)
+    >>> u.interval
+    (0.02, 0.1)
+
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.25, 0.05: 0.5, 0.02: 0.25}], 0.05)   # mean 0.055
+    >>> round(u.u_c, 6), u.interval, round(u.U, 6), u.k
+    (0.028723, (0.02, 0.1), 0.05, None)
+    """
+    from gonio.result.model import Uncertainty
+
+    pmf = max_outcome_pmf(*pmfs)
+    top = max(k for p in pmfs for k in p if k is not None)
+    x = np.array([top if k is None else k for k in pmf], float)
+    w = np.array(list(pmf.values()), float)
+    w = w / w.sum()
+    u_c = math.sqrt(max(float(w @ (x - w @ x) ** 2), 0.0))
+    lo, hi = (outcome_quantile(pmf, q) for q in (0.025, 0.975))
+    lo, hi = min(top if lo is None else lo, value), max(top if hi is None else hi, value)
+    if hi == lo:             # ≥ 95 % on one outcome: reach the neighbouring possible outcomes
+        lo = max((float(k) for k, p in zip(x, w) if k < lo and p > 1e-9), default=lo)
+        hi = min((float(k) for k, p in zip(x, w) if k > hi and p > 1e-9), default=hi)
+    row = {"symbol": "rule_outcome", "source": "spread of the 50 % rule's outcome under the "
+           "data's noise (its 95 % range is the interval)", "type": "A", "u": u_c, "c": 1.0,
+           "contribution": u_c, "dof": None}
+    if hi == lo:             # one possible outcome (noise-free readings)
+        return Uncertainty([row], u_c, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
+    return Uncertainty([row], u_c, hi - value, None, None, None, 0.95, "outcome distribution",
+                       interval=(lo, hi)), pmf
+
+
 def bias_drift_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,
                  separation_s: float) -> float:
     """Standard uncertainty of the difference of two bias records ``separation_s`` apart, from

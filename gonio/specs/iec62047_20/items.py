@@ -1420,17 +1420,21 @@ def resolution(ctx: Context) -> Item:
     samples (T = samples × interval) and Noise,RMS the standard deviation of T-second means
     of the static record (5.4), i.e. the in-band noise seen through that filter.
 
-    Uncertainty: for Out,resolution the step to the next tested value (rectangular) and the
-    95 % range of the rule's outcome under the data's noise; for Noise,RMS, a standard
-    deviation of the block means, u_c = s/√(2ν) and U to the one-sided χ² 95 % upper limit
-    (:func:`gonio.result.gum.std_dev_uncertainty`); the larger of the two budgets is
-    reported (it covers the maximum of the two)."""
+    Uncertainty, each stated by its interval: Out,resolution is a value of the tested grid
+    (the grid belongs to the measurand: no step term), its true value the median outcome
+    under the gyro's noise, stated by the central 95 % range of the rule's outcome under the
+    data's noise (:func:`gonio.specs._rate_family.formulas.rule_outcome_uncertainty`, u_c its
+    standard deviation, no k); Noise,RMS, a standard deviation of the block means, u_c =
+    s/√(2ν), by its one-sided χ² 95 % interval (:func:`gonio.result.gum.std_dev_uncertainty`).
+    The maximum's interval is [max of the lower ends, max of the upper ends] (the true
+    maximum lies there when each true value lies in its own interval); u_c is the deciding
+    part's."""
     t, cl, un = "resolution", "5.6", "°/s"
     m = _miss(ctx, "resolution", "resolution", t, cl, un)
     if m:
         return m
     means = segment_means(ctx.df, "resolution")
-    cands, nexts, dets, T, pmfs = [], {}, {}, None, []
+    cands, dets, T, pmfs = [], {}, None, []
     for run in sorted({s.run for s in means}):
         seg = [s for s in means if s.run == run]
         steps, resp, sig = [], [], []
@@ -1452,8 +1456,6 @@ def resolution(ctx: Context) -> Item:
         cands.append(c)
         pmfs.append(rg.fifty_percent_outcome_pmf(steps, rg.fifty_percent_pass_probability(
             resp, sig, steps, two_sided=False)))
-        for a, b in zip(steps, steps[1:] + [0.0]):
-            nexts[a] = b
         dets[f"run{run}"] = {"steps_dps": steps, "ratio": ratio, "candidate_dps": c}
     if any(c is None for c in cands):
         return not_measured("resolution", t, cl, un, "the largest step already fails the 50 % rule")
@@ -1465,19 +1467,9 @@ def resolution(ctx: Context) -> Item:
         nb = rate_dph.size // P
         if nb >= 2:
             noise = rg.block_mean_stability(rate_dph / S_PER_H, 1.0, P)
-    step = out_res - nexts.get(out_res, 0.0)
-    half = 0.0
-    if pmfs:
-        pmf = rg.max_outcome_pmf(*pmfs)
-        top = max(k for p in pmfs for k in p if k is not None)
-        lo, hi = (rg.outcome_quantile(pmf, q) for q in (0.025, 0.975))
-        lo, hi = (top if lo is None else lo), (top if hi is None else hi)
-        half = max(abs(out_res - lo), abs(hi - out_res))
-    u_rule = gum(lambda a, b, c: a + b + c, [
-        from_u("res", out_res, 0.0),
-        type_b("step", 0.0, step / 2, "rectangular", source="between the result and the next step"),
-        type_b("rule_noise", 0.0, half, "normal", k=2,
-               source="95 % range of the 50 % rule's outcome under the data's noise")])
+    # Out,resolution: a grid value, stated by the central 95 % range of the rule's outcome
+    # under the data's noise (its standard deviation u_c, no k, no step term)
+    u_rule, pmf = rg.rule_outcome_uncertainty(pmfs, out_res)
     if math.isfinite(noise) and nb >= 2:     # one-sided χ² upper limit of a std (JJF's K_r)
         u_noise = std_dev_uncertainty(noise, nb - 1, "Noise,RMS")
     else:
@@ -1486,14 +1478,19 @@ def resolution(ctx: Context) -> Item:
         value, by = noise, "Noise,RMS"
     else:
         value, by = out_res, "Out,resolution"
-    # |max(a, b) − max(a_t, b_t)| ≤ max(|a − a_t|, |b − b_t|): the larger U covers the max
-    u = u_rule if u_noise is None or u_rule.U >= u_noise.U else u_noise
-    if u is u_noise:       # stated by σ's one-sided χ² interval, reaching the rule's U too
-        hi = max(u_noise.interval[1], out_res + u_rule.U)
-        u = replace(u_noise, U=hi - value, interval=(0.0, hi))
+    # max(a, b) with a_t ∈ [lo_a, hi_a], b_t ∈ [lo_b, hi_b] lies in [max lo, max hi]
+    lo_r, hi_r = u_rule.interval if u_rule.interval is not None else (out_res, out_res)
+    if u_noise is None:
+        u = u_rule
+    else:
+        lo = max(lo_r, u_noise.interval[0]) if by == "Out,resolution" else u_noise.interval[0]
+        hi = max(hi_r, u_noise.interval[1])
+        base = u_rule if by == "Out,resolution" else u_noise
+        u = replace(base, U=hi - value, interval=(min(lo, value), hi))
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
-        "decided_by": by})
+        "decided_by": by,
+        "outcome_pmf": {("none" if k is None else repr(k)): v for k, v in pmf.items()}})
 
 
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
