@@ -1486,7 +1486,8 @@ def resolution(ctx: Context) -> Item:
         lo = max(lo_r, u_noise.interval[0]) if by == "Out,resolution" else u_noise.interval[0]
         hi = max(hi_r, u_noise.interval[1])
         base = u_rule if by == "Out,resolution" else u_noise
-        u = replace(base, U=hi - value, interval=(min(lo, value), hi))
+        lo = min(lo, value)
+        u = replace(base, U=hi - value, interval=(lo, hi) if hi > lo else None)
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by,
