@@ -92,6 +92,10 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      "Welch 谱估计：汉宁窗谱线相关、分段重叠"),
     (r"pooled noise of the point means through the line's residual / FullScale",
      "各点平均值的合并噪声经直线残差传递 / FullScale"),
+    (r"bias drift between the points through the line's residual / FullScale \(static "
+     r"record's noise fit\)", "各点之间的零偏漂移经直线残差传递 / FullScale（静态记录的噪声拟合）"),
+    (r"chamber fluctuation \(± amplitude, period\) × T_c,SF through the line's residual / "
+     r"FullScale", "温箱波动（± 幅值、周期）× T_c,SF 经直线残差传递 / FullScale"),
     (r"selection excess of the largest \|L_i\| \(midpoint ± c_m·σ/2 removed\)",
      "|L_i| 取最大者的选择超出量（已减去中点，± c_m·σ/2）"),
     (r"linear interpolation in ln f: h²/8·\|p''\| from the neighbouring point's second "
