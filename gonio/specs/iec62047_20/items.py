@@ -693,7 +693,7 @@ def bias_temperature(ctx: Context) -> Item:
         b = B[T == Tv]
         if b.size >= 2:
             hyst = max(hyst, float(b.max() - b.min()))
-    u = bias_tc_budget(pts, lambda sep: drift_u_dps(ctx, sep), ctx.chamber_deviation_c,
+    u = bias_tc_budget(pts, lambda sep: visit_drift_u_dps(ctx, sep), ctx.chamber_deviation_c,
                        ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s,
                        ctx.chamber_uniformity_c)
     return Item("bias_temperature_coefficient", t, cl, un, slope, uncertainty=u, details={
@@ -711,7 +711,9 @@ def bias_tc_budget(pts, drift_u, deviation_bound_c: float, fluctuation_c: float,
 
     - the noise of the visit means: Σ w_i² u(B_i)² (type A, ν Welch–Satterthwaite);
     - the bias drift over the session, a process of stationary increments with
-      D(s) = ``drift_u``(s)² (the static record's Allan fit): with Σ w_i = 0 its variance is
+      D(s) = ``drift_u``(s)² (the variance of the difference of two visits' means s apart:
+      :func:`visit_drift_u_dps`, the static record's Allan fit through the generalised
+      covariance): with Σ w_i = 0 its variance is
       −½ Σ_ij w_i w_j D(|t_i − t_j|), exact for any such process (variogram form);
     - the chamber's deviation at each set point (uniform ± ``deviation_bound_c``, one per set
       point, shared by the visits to it: the readings log the set point): Σ_T (b′(T)·Σ_{i∈T}
@@ -1030,58 +1032,182 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
         return m
     recs = [(tt, ys, y) for _, tt, ys, y in _power_on_records(ctx)]
     val, vals, u, m_sel = power_on_drift_budget(recs, ctx.protocol["power_on"]["reference_samples"],
-                                                lambda sep: drift_u_dps(ctx, sep))
+                                                lambda sep: drift_u_dps(ctx, sep),
+                                                drift_coef_dps(ctx))
     return Item("bias_drift_after_power_on", t, cl, un, val, uncertainty=u,
                 details={"per_record_dps": vals, "reading_dps": max(vals),
                          "contending_values": m_sel})
 
 
-def power_on_drift_budget(recs, nr: int, drift_u) -> tuple[float, list, Uncertainty, int]:
+def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
+                          ) -> tuple[float, list, Uncertainty, int]:
     """5.3.3.5 from the power-on records ``recs`` ((block times s, smoothed output °/s, raw
     output °/s) each), the reference part's ``nr`` samples and ``drift_u`` (separation s →
     standard uncertainty °/s of the bias drift): (value, per-record readings, Uncertainty,
     number of contending smoothed values).
 
-    The reading is a maximum of |smoothed value − reference| over all records, so noise
-    raises it by a selection excess between 0 (one value stands clear of the others) and
-    c_m·σ (m values share the largest true distance): the value is the reading less the
-    midpoint c_m·σ/2, the term rectangular ± c_m·σ/2, the m contenders those within 2√2·σ
-    of the maximum (:func:`gonio.specs._rate_family.formulas.selection_excess`). σ (a
-    smoothed value of P samples minus the reference of nr) is σ_y·√(1/P + 1/nr), σ_y from
-    the samples' second differences, √(var Δ²y/6), which a power-on transient smooth on
-    the sample interval does not enter (the smoothed values' differences and the reference
-    part's spread carry its slope and curvature); the slower noise is the bias drift over
-    the record, a term of its own (a slow wander moves the smoothed values together: no
-    selection in the noise term). The reading is a maximum over the record, so the wander
-    enters through its largest excursion from the reference, not its end-point difference
-    (|max(a + w) − max(a)| ≤ max|w|): for a walk of end-point standard deviation σ_T =
-    u_drift(record) (the static record's fit) the rms of max_t |w(t)| is √(2G)·σ_T ≈ 1.35·σ_T
-    (:data:`gonio.specs._rate_family.formulas.WALK_MAX_RMS`), the term's u; and the wander
-    spreads the smoothed values as the noise does, so the selection's contenders and
-    excess are counted with σ and σ_T together."""
-    vals, dists, sds = [], [], []
+    The reading R = max over the records and their smoothed values of |Out(t) − Out,ave|
+    is an extreme of noisy values, so noise raises it by a selection excess that depends on
+    how many values share the largest true distance (up to the whole settled part of a
+    record). The excess and the estimate's spread are evaluated as JCGM 101 propagates a
+    distribution, by a parametric bootstrap of the fitted model: each record is fitted with
+    the power-on transient's usual form c + A·e^(−t/τ) (:func:`_transient_fits`: least
+    squares on the smoothed values, τ on a grid, A = 0 included), giving R̂, the reading of
+    the fitted records; :data:`POWER_ON_MC_TRIALS` seeded replicates of the fitted records
+    are drawn with the record's noise — white samples of σ_y = √(var Δ²y/6) (second
+    differences: a transient smooth on the sample interval does not enter them) and the
+    bias drift — with ``drift_coef`` = (E[K²] (°/s)²/s, E[B²] (°/s)²) of the static
+    record's Allan fit (:func:`gonio.specs._rate_family.formulas.drift_coefficients`) the
+    exact covariance of the smoothed values less the reference under the rate random walk
+    and the flicker (the five-term model's generalised covariance: flicker differences grow
+    as ln of the separation, IEEE 952 C.1), else a Gaussian process of stationary
+    increments with variogram D(s) = ``drift_u``(s)² — and each replicate is
+    read and fitted as the data are. The first estimate is V = R − (E*[R*] − R̂) (the
+    selection excess removed); its replicates V* = R* − (E*[R*] − R̂*) estimate V's
+    distribution about R̂: the value is V less the residual bias E*[V*] − R̂ (the fit's
+    own selection at small signals), u the standard deviation of V* (type A, ν = 50: its
+    noise figures come from the records and the static fit). A value below 0 (records
+    without a transient, whose reading is all excess) is stated as 0, the measurand's bound.
+    The truth this estimates is the transient's drift (the noise-free records); the bias
+    drift is noise to it. The contenders (details) are the smoothed values within 2√2·σ of
+    the largest (σ of one smoothed value less the reference)."""
+    P = max(recs[0][2].size // max(recs[0][1].size, 1), 1)
+    rng = np.random.default_rng(POWER_ON_MC_SEED)
+    n_mc = POWER_ON_MC_TRIALS
+    vals, dists, sig = [], [], []
+    r_hat, r_star, r_fit = 0.0, np.zeros(n_mc), np.zeros(n_mc)
     for tt, ys, y in recs:
         ref = float(y[:nr].mean())
         d = np.abs(ys - ref)
-        s_y = float(np.std(np.diff(y, 2), ddof=1) / math.sqrt(6)) if y.size > 3 else 0.0
         vals.append(float(d.max()))
         dists.append(d)
-        sds.append((s_y * math.sqrt(1.0 / max(y.size // max(ys.size, 1), 1) + 1.0 / nr),
-                    float(tt[-1] - tt[0]) if tt.size > 1 else 0.0))
+        s_y = float(np.std(np.diff(y, 2), ddof=1) / math.sqrt(6)) if y.size > 3 else 0.0
+        sig.append(s_y)
+        design = _transient_designs(tt, y.size, P, nr)
+        (mb, mr, rm), = _transient_fits(ys[None, :], design)
+        r_hat = max(r_hat, rm)
+        nb = ys.size
+        white = rng.standard_normal((n_mc, nb * P)) * s_y
+        ys_star = mb[None, :] + white.reshape(n_mc, nb, P).mean(2)
+        ref_star = mr + white[:, :nr].mean(1)
+        if drift_coef is not None:
+            ys_star += _drift_draws(rng, nb, P, nr, float(tt[1] - tt[0]) / P if nb > 1 else 1.0,
+                                    drift_coef, n_mc)
+        else:
+            w = _wander_draws(rng, tt - tt[0], drift_u, n_mc)               # (n_mc, nb)
+            ys_star += w
+            ref_star += w[:, :max(int(math.ceil(nr / P)), 1)].mean(1)
+        r_star = np.maximum(r_star, np.abs(ys_star - ref_star[:, None]).max(1))
+        r_fit = np.maximum(r_fit, np.array([f[2] for f in _transient_fits(ys_star, design)]))
+    excess = float(r_star.mean() - r_hat)
+    v_star = r_star - (r_star.mean() - r_fit)
+    resid = float(v_star.mean() - r_hat)
+    u_v = float(v_star.std(ddof=1))
     i = int(np.argmax(vals))
-    noise = sds[i][0]
-    s_T = drift_u(sds[i][1])
-    excess, m_sel = rg.selection_excess(np.concatenate(dists), np.concatenate(
-        [np.full(d.size, math.hypot(s, drift_u(T))) for d, (s, T) in zip(dists, sds)]))
-    u = gum(lambda v, m, w: v + m + w,
-            [from_u("drift", vals[i], noise, dof=50, source="noise of the smoothed output"),
-             type_b("noise_max", -excess, excess, "rectangular",
-                    source="selection excess of the largest of the noisy smoothed values "
-                           "(midpoint ± c_m·σ/2 removed)"),
-             from_u("wander", 0.0, rg.WALK_MAX_RMS * s_T, dof=50,
-                    source="bias drift over the record (Allan fit: RRW, BI): the rms of "
-                           "its largest excursion, √(2G)·u_drift(record)")])
-    return vals[i] - excess, vals, u, m_sel
+    sd_i = sig[i] * math.sqrt(1.0 / P + 1.0 / nr)
+    cont = np.concatenate(dists)
+    m_sel = int(np.sum(cont >= cont.max() - 2 * math.sqrt(2) * sd_i))
+    src = (f"{n_mc} seeded replicates of the fitted records (c + A·e^(−t/τ), white noise "
+           "σ_y, bias drift from the Allan fit)")
+    u = gum(lambda v, e, b: v - e - b,
+            [from_u("R", vals[i], u_v, dof=50,
+                    source="largest |Out(t) − Out,ave| over the records; u: the estimate's "
+                           "spread in " + src),
+             from_u("excess", excess, 0.0,
+                    source="selection excess of the largest smoothed value, E*[R*] − R̂, "
+                           "removed"),
+             from_u("fit_bias", resid, 0.0,
+                    source="residual bias of the corrected reading, E*[V*] − R̂, removed")])
+    return max(vals[i] - excess - resid, 0.0), vals, u, m_sel
+
+
+POWER_ON_MC_TRIALS = 400
+POWER_ON_MC_SEED = 6204720535           # fixed: the same records give the same value
+
+
+def _transient_designs(tt: np.ndarray, n: int, P: int, nr: int):
+    """Per τ on a log grid from the step to 20 record lengths: (the smoothed values of
+    e^(−t/τ) over the blocks at ``tt``, its mean over the first ``nr`` samples), the design
+    of :func:`_transient_fits` (block and reference means of the model, not its values at
+    the block centres)."""
+    nb = tt.size
+    dt = float(tt[1] - tt[0]) / P if nb > 1 else 1.0
+    t_raw = dt * np.arange(max(n, nb * P, nr)) - 0.5 * (P - 1) * dt
+    span = max(float(tt[-1] - tt[0]), dt * P)
+    out = []
+    for tau in np.geomspace(dt * P, 20 * span, 60):
+        e = np.exp(-t_raw / tau)
+        out.append((e[: nb * P].reshape(nb, P).mean(1), float(e[:nr].mean())))
+    return out
+
+
+def _transient_fits(Y: np.ndarray, design) -> list[tuple[np.ndarray, float, float]]:
+    """Least-squares c + A·e^(−t/τ) through each row of ``Y`` (smoothed values), τ from
+    ``design`` (:func:`_transient_designs`), A = 0 kept where no τ does better: per row
+    (the model's smoothed values, its reference mean, its reading max|model − reference|)."""
+    nrow, nb = Y.shape
+    c0 = Y.mean(1)
+    best = ((Y - c0[:, None]) ** 2).sum(1)
+    cb, ab, kb = c0.copy(), np.zeros(nrow), np.full(nrow, -1)
+    for k, (eb, _er) in enumerate(design):
+        A = np.column_stack([np.ones(nb), eb])
+        coef = Y @ np.linalg.pinv(A).T                                     # (nrow, 2)
+        sse = ((Y - coef @ A.T) ** 2).sum(1)
+        better = sse < best
+        best = np.where(better, sse, best)
+        cb, ab, kb = (np.where(better, coef[:, 0], cb), np.where(better, coef[:, 1], ab),
+                      np.where(better, k, kb))
+    out = []
+    for c, a, k in zip(cb, ab, kb):
+        if k < 0:
+            out.append((np.full(nb, c), float(c), 0.0))
+        else:
+            eb, er = design[k]
+            out.append((c + a * eb, float(c + a * er), float(abs(a) * np.max(np.abs(eb - er)))))
+    return out
+
+
+def _drift_draws(rng, nb: int, P: int, nr: int, dt: float, coef, n_mc: int) -> np.ndarray:
+    """``n_mc`` draws of the ``nb`` smoothed values (``P`` samples of ``dt`` s each) less the
+    mean of the first ``nr`` samples under the rate random walk and flicker of ``coef`` =
+    (E[K²], E[B²]): each is a combination of four angle values, (θ(s+d) − θ(s))/d −
+    (θ(r) − θ(0))/r, whose covariance is Σ c_a c_b G(|t_a − t_b|) with the five-term
+    model's generalised covariance G (:func:`gonio.analysis.noise.covariance.
+    generalised_covariance`)."""
+    from gonio.analysis.noise.covariance import generalised_covariance
+
+    k2, b2 = coef
+    if k2 <= 0 and b2 <= 0:
+        return np.zeros((n_mc, nb))
+    d, r = P * dt, nr * dt
+    pts = np.concatenate([d * np.arange(nb + 1), [r]])
+    M = np.zeros((nb, pts.size))
+    j = np.arange(nb)
+    M[j, j], M[j, j + 1] = -1.0 / d, 1.0 / d
+    M[:, 0] += 1.0 / r                                   # − (θ(r) − θ(0))/r
+    M[:, -1] -= 1.0 / r
+    lag = np.abs(pts[:, None] - pts[None, :]) / dt
+    G = generalised_covariance(lag, [0.0, 0.0, b2, k2], dt)
+    C = M @ G @ M.T
+    ev, V = np.linalg.eigh(0.5 * (C + C.T))
+    return rng.standard_normal((n_mc, nb)) @ (V * np.sqrt(np.clip(ev, 0.0, None))).T
+
+
+def _wander_draws(rng, x: np.ndarray, drift_u, n_mc: int) -> np.ndarray:
+    """``n_mc`` draws at times ``x`` (s from the record's start) of a Gaussian process of
+    stationary increments with variogram D(s) = ``drift_u``(s)², zero at x = 0:
+    cov(w_i, w_j) = ½[D(x_i) + D(x_j) − D(|x_i − x_j|)]."""
+    lag = np.abs(x[:, None] - x[None, :])
+    ul = np.unique(np.round(np.concatenate([lag.ravel(), x]), 9))
+    Dm = {float(s): (drift_u(float(s)) ** 2 if s > 0 else 0.0) for s in ul}
+    Dx = np.array([Dm[float(s)] for s in np.round(x, 9)])
+    Dl = np.vectorize(lambda s: Dm[float(s)])(np.round(lag, 9))
+    C = 0.5 * (Dx[:, None] + Dx[None, :] - Dl)
+    if not np.any(C):
+        return np.zeros((n_mc, x.size))
+    ev, V = np.linalg.eigh(C)
+    L = V * np.sqrt(np.clip(ev, 0.0, None))
+    return rng.standard_normal((n_mc, x.size)) @ L.T
 
 
 def startup_time(ctx: Context) -> Item:
@@ -1197,6 +1323,33 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
                            separation_s) / S_PER_H
 
 
+def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
+    """Standard uncertainty (°/s) of the difference of two bias_temperature visits' means
+    ``separation_s`` apart (mid-time to mid-time), each of the protocol's ``bias_samples``:
+    the rate random walk and the flicker of the static record's Allan fit
+    (:func:`drift_coef_dps`) through the five-term model's generalised covariance
+    (:func:`gonio.specs._rate_family.formulas.record_difference_u`): the flicker part grows
+    as ln of the separation (IEEE 952 C.1), where :func:`drift_u_dps` holds it at the
+    adjacent records' floor — hours apart, about twice too small."""
+    if drift_u_dps(ctx, 1.0) == 0.0:
+        return 0.0
+    d = ctx.protocol["temperature"]["bias_samples"] * ctx.protocol["protocol"]["sample_interval_s"]
+    fit, allan = _noise_fit(ctx), _static(ctx)[0]
+    sep = abs(float(separation_s))
+    return rg.record_difference_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
+                                  (0.0, d), (sep, d)) / S_PER_H
+
+
+def drift_coef_dps(ctx: Context) -> tuple[float, float]:
+    """(E[K²] (°/s)²/s, E[B²] (°/s)²) of the static record's Allan fit by the rules of
+    :func:`drift_u_dps` (the same refusals; a record that does not vary: (0, 0))."""
+    if drift_u_dps(ctx, 1.0) == 0.0:
+        return 0.0, 0.0
+    fit, allan = _noise_fit(ctx), _static(ctx)[0]
+    k2, b2 = rg.drift_coefficients(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high)
+    return k2 / S_PER_H ** 2, b2 / S_PER_H ** 2
+
+
 def _bias_temperature_points(ctx: Context):
     """(T, B °/s, u(B) °/s, ν, mid-time s) of every bias_temperature visit, in visit order."""
     key = ("bt", ctx.a_base, ctx.null_output)
@@ -1236,7 +1389,7 @@ def bias_hysteresis(ctx: Context) -> Item:
     if m:
         return m
     pts = _bias_temperature_points(ctx)
-    val, diffs, Tm, u = hysteresis_budget(pts, lambda sep: drift_u_dps(ctx, sep))
+    val, diffs, Tm, u = hysteresis_budget(pts, lambda sep: visit_drift_u_dps(ctx, sep))
     return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
         "up_minus_down_dps": diffs, "temperature_c": Tm})
 
