@@ -23,11 +23,13 @@ def database_errors(run):
 
     @functools.wraps(run)
     def wrapped(args) -> int:
-        from gonio.records.db import database_problem
-
         try:
             return run(args)
         except Exception as exc:
+            # imported here, not before the run: SQLAlchemy is most of a second of imports
+            # that gonio serve's login page, answered before the records open, does not need
+            from gonio.records.db import database_problem
+
             problem = database_problem(exc)
             if problem is None:
                 raise
