@@ -63,3 +63,42 @@ def plugin(tmp_path_factory):
     for m in [m for m in sys.modules if m.split(".")[0] == "acme_rate_check"]:
         del sys.modules[m]
     importlib.invalidate_caches()
+
+
+# ------------------------------------------- simulate + calibrate on the command line
+@pytest.fixture(scope="session")
+def calibrate_readings():
+    """``calibrate(readings, protocol, out)``: ``gonio calibrate`` of a readings file with a
+    protocol into ``out`` (exit 0 asserted, stderr shown otherwise); returns the items of its
+    ``results.json``."""
+    import contextlib
+    import io
+    import json
+
+    from gonio.cli import main
+
+    def calibrate(readings, protocol, out) -> dict:
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            rc = main(["calibrate", str(readings), "--protocol", str(protocol),
+                       "--out", str(out)])
+        assert rc == 0, err.getvalue()
+        return json.loads((Path(out) / "results.json").read_text(encoding="utf-8"))["items"]
+    return calibrate
+
+
+@pytest.fixture(scope="session")
+def simulate_calibrate(calibrate_readings):
+    """``run(folder, protocol, bench, seed)``: ``gonio simulate`` of ``protocol`` on ``bench``
+    (a name or file) with ``seed`` into ``folder/sim``, then ``gonio calibrate`` of its
+    readings into ``folder/cal``; returns (the readings file, the results' items). The
+    reference the instrument tests compare an acquisition against."""
+    from gonio.cli import main
+
+    def run(folder, protocol, bench, seed: int):
+        folder = Path(folder)
+        assert main(["simulate", "--protocol", str(protocol), "--bench", str(bench), "--seed",
+                     str(seed), "--out", str(folder / "sim")]) == 0
+        readings = folder / "sim" / "readings.csv"
+        return readings, calibrate_readings(readings, protocol, folder / "cal")
+    return run

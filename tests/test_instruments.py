@@ -9,9 +9,6 @@ error and a move beyond the range stop the table (or never move it).
 
 from __future__ import annotations
 
-import contextlib
-import io
-import json
 import os
 import signal
 import subprocess
@@ -23,7 +20,6 @@ import numpy as np
 import pytest
 
 from gonio.specs.ogam_draft.bench import load_bench
-from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.formats.counters import wrap_counter
 from gonio.specs.ogam_draft.readings import read_readings
@@ -57,20 +53,16 @@ def served(rlg):
 
 
 @pytest.fixture(scope="module")
-def simulated(tmp_path_factory):
-    """``gonio simulate`` + ``gonio calibrate`` of the small programme on the same bench."""
-    d = tmp_path_factory.mktemp("sim")
-    assert main(["simulate", "--protocol", str(SMALL), "--bench", "rlg", "--seed", str(SEED),
-                 "--out", str(d / "sim")]) == 0
-    return d / "sim" / "readings.csv", _calibrate(d / "sim" / "readings.csv", d / "cal")
+def simulated(tmp_path_factory, simulate_calibrate):
+    """``gonio simulate`` + ``gonio calibrate`` of the small programme on the same bench
+    (tests/conftest.py)."""
+    return simulate_calibrate(tmp_path_factory.mktemp("sim"), SMALL, "rlg", SEED)
 
 
-def _calibrate(readings: Path, out: Path) -> dict:
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        rc = main(["calibrate", str(readings), "--protocol", str(SMALL), "--out", str(out)])
-    assert rc == 0, err.getvalue()
-    return json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
+@pytest.fixture()
+def calibrate(calibrate_readings):
+    """``gonio calibrate`` of a readings file with :data:`SMALL` (tests/conftest.py)."""
+    return lambda readings, out: calibrate_readings(readings, SMALL, out)
 
 
 def _agree_within_u(a: dict, b: dict) -> None:
@@ -184,7 +176,7 @@ def test_driver_errors_come_from_the_served_error_queue(served):
 
 
 # ------------------------------------------------------------------ whole programme
-def test_small_programme_calibrates_like_simulate(served, simulated, tmp_path):
+def test_small_programme_calibrates_like_simulate(served, simulated, calibrate, tmp_path):
     sim_readings, sim_items = simulated
     res = acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource,
                   tmp_path / "acq", metadata=META)
@@ -199,7 +191,7 @@ def test_small_programme_calibrates_like_simulate(served, simulated, tmp_path):
         rot = data[data["test"] != "zero_stability"]
         dev = deg_to_arcsec(rot["gyro_counts"] / 76434.87 - rot["table_deg"])
         assert float(np.abs(dev).max()) < 2.0      # tilt, scale-factor error, harmonics, noise
-    _agree_within_u(_calibrate(res.readings, tmp_path / "cal"), sim_items)
+    _agree_within_u(calibrate(res.readings, tmp_path / "cal"), sim_items)
     log = res.io_log.read_text(encoding="utf-8")
     assert "table > *IDN?" in log and "gyro < gonio virtual bench,RLG goniometer" in log
     assert log.rstrip().splitlines()[-1].endswith("table > STOP")
@@ -259,7 +251,8 @@ def _interrupted_acquire(served, out: Path, rows: int, sig) -> tuple[int, bytes]
     return proc.returncode, err
 
 
-def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_path):
+def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, calibrate,
+                                                          tmp_path):
     out = tmp_path / "acq"
     rc, err = _interrupted_acquire(served, out, 10, signal.SIGINT)
     assert rc == 130, err
@@ -276,7 +269,7 @@ def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, tmp_p
                   resume=True, metadata=META)
     assert res.complete and res.taken <= 27 - n_kept + 4     # at most 7.3's block again
     assert _keys(out / "readings.csv") == _keys(simulated[0])   # every reading once
-    _agree_within_u(_calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
+    _agree_within_u(calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
 
 
 def test_sigterm_stops_the_table_and_keeps_the_readings(served, tmp_path):

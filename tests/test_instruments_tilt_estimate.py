@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import math
 from pathlib import Path
 
@@ -70,20 +69,16 @@ def rlg(bench_file):
 
 
 @pytest.fixture(scope="module")
-def simulated(tmp_path_factory, bench_file):
-    """``gonio simulate`` + ``gonio calibrate`` of the protocol on the same bench and seed."""
-    d = tmp_path_factory.mktemp("sim")
-    assert main(["simulate", "--protocol", str(PROTOCOL), "--bench", str(bench_file), "--seed",
-                 str(SEED), "--out", str(d / "sim")]) == 0
-    return d / "sim" / "readings.csv", _calibrate(d / "sim" / "readings.csv", d / "cal")
+def simulated(tmp_path_factory, bench_file, simulate_calibrate):
+    """``gonio simulate`` + ``gonio calibrate`` of the protocol on the same bench and seed
+    (tests/conftest.py)."""
+    return simulate_calibrate(tmp_path_factory.mktemp("sim"), PROTOCOL, bench_file, SEED)
 
 
-def _calibrate(readings: Path, out: Path) -> dict:
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        rc = main(["calibrate", str(readings), "--protocol", str(PROTOCOL), "--out", str(out)])
-    assert rc == 0, err.getvalue()
-    return json.loads((out / "results.json").read_text(encoding="utf-8"))["items"]
+@pytest.fixture()
+def calibrate(calibrate_readings):
+    """``gonio calibrate`` of a readings file with :data:`PROTOCOL` (tests/conftest.py)."""
+    return lambda readings, out: calibrate_readings(readings, PROTOCOL, out)
 
 
 def _rows(path: Path):
@@ -147,7 +142,8 @@ def test_plan_takes_the_rests_after_zero_stability_uncompensated():
 
 
 # ------------------------------------------------------------------ against the simulation
-def test_acquired_rests_give_the_simulations_tilt_and_correct_k(rlg, simulated, tmp_path):
+def test_acquired_rests_give_the_simulations_tilt_and_correct_k(rlg, simulated, calibrate,
+                                                                 tmp_path):
     s = serve_bench(rlg, speed=SPEED, seed=SEED)
     err = io.StringIO()
     try:
@@ -168,7 +164,7 @@ def test_acquired_rests_give_the_simulations_tilt_and_correct_k(rlg, simulated, 
     # upper bound only catches a dwell taken twice, not the host's load
     assert np.all((te["time_s"] >= 120.0) & (te["time_s"] < 180.0))
     _assert_tilt_agrees(acq, simulated[0], rlg)
-    _assert_k_corrected(_calibrate(acq, tmp_path / "cal"), simulated[1])
+    _assert_k_corrected(calibrate(acq, tmp_path / "cal"), simulated[1])
 
 
 class Terminal(io.StringIO):
@@ -191,7 +187,7 @@ class InterruptedModule(AcquisitionModule):
         return super().read(expected_counts)
 
 
-def test_resume_in_the_middle_of_the_rests(rlg, simulated, tmp_path):
+def test_resume_in_the_middle_of_the_rests(rlg, simulated, calibrate, tmp_path):
     """Stopped at the 5th rest's reading: 7.3's readings and 4 rests stand (each rest has
     its own zeroing); the resume takes the 4 other rests and 7.1 only, every reading once."""
     out = tmp_path / "acq"
@@ -225,4 +221,4 @@ def test_resume_in_the_middle_of_the_rests(rlg, simulated, tmp_path):
     assert after.splitlines()[-N_TOTAL - 1:][:len(body)] == body    # the kept rows stand
     assert _rows(out / "readings.csv") == _rows(simulated[0])       # every reading once
     _assert_tilt_agrees(out / "readings.csv", simulated[0], rlg)
-    _assert_k_corrected(_calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
+    _assert_k_corrected(calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
