@@ -114,7 +114,14 @@ def test_long_grids_are_computed_in_pieces_with_the_same_numbers(monkeypatch):
                         lambda *a: calls.append(1) or real(*a))
     assert np.array_equal(cov.generalised_covariance(t, coef, 0.01, markov), whole)
     assert len(calls) == math.ceil(t.size / 7)
+    calls.clear()
     assert np.array_equal(variance_covariance(*args), v_whole)
+    assert len(calls) > 1               # K's grid for the covariance: the same pieces
+    # the shared piece helper against K on the whole grid 0 … 1000 in one call
+    ref = real(np.arange(1001), np.r_[0.0, coef[1:]], 0.01, markov)
+    got = cov._in_pieces(1001, lambda a, b: real(np.arange(a, b), np.r_[0.0, coef[1:]],
+                                                 0.01, markov))
+    assert np.array_equal(got, ref)
     # and K itself against its closed form at a few points (white rate: −N²|t|/2)
     k = cov.generalised_covariance(np.array([0, 3, 10]), [0, 0.02, 0, 0, 0], 0.01)
     assert np.allclose(k, -0.5 * 0.02 * np.array([0, 3, 10]) * 0.01, rtol=0, atol=1e-15)

@@ -73,10 +73,18 @@ def generalised_covariance(t_samples: np.ndarray, coef, tau0_s: float,
     if t_all.size <= _PIECE:
         return _generalised_covariance(t_all, coef, tau0_s, markov)
     flat = t_all.ravel()
-    out = np.empty(flat.size, dtype=np.float64)
-    for a in range(0, flat.size, _PIECE):
-        out[a: a + _PIECE] = _generalised_covariance(flat[a: a + _PIECE], coef, tau0_s, markov)
-    return out.reshape(t_all.shape)
+    return _in_pieces(flat.size, lambda a, b: _generalised_covariance(
+        flat[a:b], coef, tau0_s, markov)).reshape(t_all.shape)
+
+
+def _in_pieces(size: int, piece) -> np.ndarray:
+    """An array of ``size`` float64 filled ``_PIECE`` elements at a time: out[a:b] =
+    ``piece(a, b)`` (bounded temporaries; each element the same arithmetic as in one piece)."""
+    out = np.empty(size, dtype=np.float64)
+    for a in range(0, size, _PIECE):
+        b = min(a + _PIECE, size)
+        out[a:b] = piece(a, b)
+    return out
 
 
 def _generalised_covariance(t_samples, coef, tau0_s: float, markov) -> np.ndarray:
@@ -225,11 +233,9 @@ def variance_covariance(kind: str, m, n_terms, tau0_s: float, coef, markov=()) -
     kmax = min(int(n.max()) + 2 * span, (_FLICKER_TAIL_SPANS + 2) * span) + 2
     q2 = float(coef[0])
     # K(t) at t = 0 … kmax, piece by piece (no grid of indices as long as the record)
-    kgrid = np.empty(kmax + 1)
-    for a in range(0, kmax + 1, _PIECE):
-        b = min(a + _PIECE, kmax + 1)
-        kgrid[a:b] = _generalised_covariance(np.arange(a, b), np.r_[0.0, coef[1:]], tau0_s,
-                                             markov)
+    no_q = np.r_[0.0, coef[1:]]
+    kgrid = _in_pieces(kmax + 1, lambda a, b: _generalised_covariance(
+        np.arange(a, b), no_q, tau0_s, markov))
     out = np.empty((m.size, m.size))
     for i in range(m.size):
         for j in range(i, m.size):
