@@ -25,18 +25,30 @@ variance (IEEE 952-1997 Annex C, exponentially correlated noise, q² = 2s²/T)
 
     (q²T²/τ)·[1 − (T/2τ)(3 − 4e^{−τ/T} + e^{−2τ/T})]                (:func:`markov_avar`).
 
-T_lo is profiled on a fixed grid (τ0·10^{j/4} up to a tenth of the record, and T_lo = 0,
-the flat floor: the five-term model is one candidate), each candidate fitted by the weighted
+T_lo is profiled on a grid (τ0·10^{j/4} up to a tenth of the record, and T_lo = 0, the
+flat floor: the five-term model is one candidate), each candidate fitted by the weighted
 non-negative least squares of :func:`.fit.fit_noise_model` (same weights and iteration),
-and the candidate of least weighted residual sum is taken. One amplitude and one band edge:
+and the candidate of least weighted residual sum is taken; a T_lo > 0 is then refined
+between its grid neighbours (bounded Brent search in ln T_lo, :data:`REFINE_XATOL`): N moves
+with T_lo where the bias instability dominates the short τ, and a grid-bound T_lo read N
+0.43 % low on the bench's exact curve with 4.5 times its bias instability (refined:
++0.05 %). One amplitude and one band edge:
 a free amplitude per correlation time would be degenerate with N (a Gauss–Markov term much
 shorter than τ is white) and, held ≥ 0, bias N low on noisy records.
 
-u(N) is the sandwich covariance of :func:`.fit.fit_noise_model` with the covariance of the
-Allan estimates under the fitted model (:func:`.covariance.variance_covariance` with its
-Gauss–Markov terms), scaled by max(1, χ²_red), with the band edge as one more parameter
-of the linearised fit (the model's derivative in ln T_lo as a column of the design): N and
-T_lo trade against each other, and u(N) carries it.
+u(N) (and u_Q, u_B, u_K, u_R) is the sandwich covariance of :func:`.fit.fit_noise_model`
+with the covariance Σ of the Allan estimates under the fitted model
+(:func:`.covariance.variance_covariance` with its Gauss–Markov terms; Σ computed on the lag
+grid can be slightly indefinite and is replaced by its nearest positive semi-definite
+matrix), scaled by max(1, χ²_red), with the band edge as one more parameter of the
+linearised fit (the model's derivative in ln T_lo as a column of the design): N and T_lo
+trade against each other, and u(N) carries it.
+
+The discrete choice of T_lo is also stated, not added: ``u_N_selection`` is the spread of N
+over the grid's candidates weighted by exp(−Δχ²/2) of their generalised residual sums
+under Σ (a model average, :func:`_selection_spread`). Added to u(N) it made the intervals
+over-wide on simulated bench records (docs/jjf1535-readings.md, 7.2.13): the linearised
+T_lo column already carries the band edge's uncertainty.
 """
 
 from __future__ import annotations
@@ -45,6 +57,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import optimize
 
 from gonio.analysis.noise.allan import AllanResult
 from gonio.analysis.noise.covariance import variance_covariance
@@ -111,11 +124,18 @@ def t_lo_grid(tau0_s: float, record_s: float) -> np.ndarray:
     return np.r_[0.0, float(tau0_s) * 10.0 ** (np.arange(n) / 4.0)]
 
 
+#: Tolerance of the refinement of T_lo between its grid neighbours, in ln T_lo.
+REFINE_XATOL = 1e-3
+
+
 @dataclass
 class MarkovFit:
     """The fitted model of this module: values [Q, N, B, K, R] (rate unit u, τ in s, as
     :class:`.fit.NoiseFit`; B the band-limited flicker's amplitude), ``u_N`` the standard
-    uncertainty of N, ``t_lo_s`` the band's lower correlation time (0: the flat floor)."""
+    uncertainty of N (``u_N_fit``, the same), ``u_Q``, ``u_B``, ``u_K``, ``u_R`` those of
+    the other amplitudes (0 for a term held at zero), ``u_N_selection`` the spread of N
+    over the T_lo candidates the data do not tell apart (stated, not in ``u_N``: module
+    docstring), ``t_lo_s`` the band's lower correlation time (0: the flat floor)."""
 
     Q: float
     N: float
@@ -130,6 +150,12 @@ class MarkovFit:
     residuals: np.ndarray
 
     record_s: float = math.inf
+    u_N_fit: float = 0.0
+    u_N_selection: float = 0.0
+    u_Q: float = 0.0
+    u_B: float = 0.0
+    u_K: float = 0.0
+    u_R: float = 0.0
 
     def adev(self, tau_s) -> np.ndarray:
         """The fitted model's Allan deviation at ``tau_s``."""
@@ -139,17 +165,28 @@ class MarkovFit:
         coef = np.nan_to_num(np.array([self.Q, self.N, self.B, self.K, self.R])) ** 2
         return np.sqrt(a @ coef).reshape(np.shape(tau_s))
 
+    def bias_instability_adev(self, tau_s) -> np.ndarray:
+        """The bias instability's share of the model's Allan deviation at ``tau_s``:
+        B·√b(τ; T_lo) (module docstring; √(2 ln 2/π)·B in the band, less below T_lo). With
+        ``B``/``u_B`` and ``K``/``u_K`` it is what a drift budget or the IEC 62047-20 5.4.5.3
+        floor reading takes from this model in place of the five-term fit's flat floor."""
+        t = np.asarray(tau_s, dtype=np.float64)
+        return float(np.nan_to_num(self.B)) * np.sqrt(band_flicker_avar(t, self.t_lo_s,
+                                                                        self.record_s))
+
     def to_dict(self) -> dict:
         """Plain dict (lists for the arrays)."""
         return {"model": "five terms, flicker band-limited below T_lo (Gauss-Markov sum)",
                 "rate_unit": self.rate_unit, "Q": self.Q, "N": self.N, "u_N": self.u_N,
-                "B": self.B, "K": self.K, "R": self.R, "t_lo_s": self.t_lo_s,
+                "u_N_fit": self.u_N_fit, "u_N_selection": self.u_N_selection,
+                "B": self.B, "u_B": self.u_B, "K": self.K, "u_K": self.u_K, "R": self.R,
+                "t_lo_s": self.t_lo_s,
                 "chi2_red": self.chi2_red, "tau_s": [float(v) for v in self.tau_s],
                 "residuals": [float(v) for v in self.residuals]}
 
 
 def _fit(var, a, m, n_phase, iterations):
-    """IRLS non-negative fit (as :func:`.fit._fit_core`): coefficients, model, edf."""
+    """IRLS non-negative fit (as :func:`.fit._fit_core`): coefficients, model, sd."""
     model = var.copy()
     edf = edf_memo("adev", n_phase, m, np.zeros(m.size, dtype=np.int64))
     p = np.zeros(a.shape[1])
@@ -164,7 +201,8 @@ def _fit(var, a, m, n_phase, iterations):
 
 def fit_markov_model(allan: AllanResult, *, iterations: int = 4) -> MarkovFit:
     """Fit the model of this module to an overlapping (or total) Allan deviation (T_lo
-    profiled, module docstring) and give N with its sandwich u(N).
+    profiled and refined, module docstring) and give its amplitudes with their sandwich
+    uncertainties (``u_N`` the ARW's).
 
     An exact white-noise curve returns its N:
 
@@ -189,20 +227,32 @@ def fit_markov_model(allan: AllanResult, *, iterations: int = 4) -> MarkovFit:
     record = allan.n_samples * tau0
     n_phase = allan.n_phase or (allan.n_samples + (0 if allan.input_type == "angle" else 1))
     base = design_matrix(tau, "adev")
-    best = None
-    for t_lo in t_lo_grid(tau0, record):
+
+    def candidate(t_lo):
         a = base.copy()
         a[:, 2] = band_flicker_avar(tau, t_lo, record)
         p, model, sd = _fit(var, a, m, n_phase, iterations)
-        rss = float(np.sum(((var - model) / sd) ** 2))
-        if best is None or rss < best[0]:
-            best = (rss, t_lo, a, p, model, sd)
+        return float(np.sum(((var - model) / sd) ** 2)), float(t_lo), a, p, model, sd
+
+    grid = [candidate(t_lo) for t_lo in t_lo_grid(tau0, record)]
+    best = min(grid, key=lambda c: c[0])
+    h = math.log(BAND_RATIO)
+    if best[1] > 0:
+        # the grid's step (a factor 10^{1/4}) is refined: a grid-bound T_lo biases N where
+        # the bias instability dominates the short τ (the model's own N moves with T_lo)
+        x0 = math.log(best[1])
+        res = optimize.minimize_scalar(lambda x: candidate(math.exp(x))[0],
+                                       bounds=(x0 - h, x0 + h), method="bounded",
+                                       options={"xatol": REFINE_XATOL})
+        refined = candidate(math.exp(float(res.x)))
+        if refined[0] < best[0]:
+            best = refined
     rss, t_lo, a, p, model, sd = best
     active = np.flatnonzero(p > 0)
     chi2_red = rss / max(tau.size - active.size - 1, 1)
-    u_n = 0.0
-    n_col = TERMS.index("N")
-    if p[n_col] > 0:
+    v = np.sqrt(p)
+    u_fit, u_sel = np.zeros(len(TERMS)), np.zeros(len(TERMS))
+    if active.size:
         rows = covariance_rows(tau)
         coef, markov = p.copy(), []
         if t_lo > 0:
@@ -215,14 +265,38 @@ def fit_markov_model(allan: AllanResult, *, iterations: int = 4) -> MarkovFit:
         if t_lo > 0 and p[2] > 0:
             # the band edge's own uncertainty: the model's derivative in ln T_lo, a column
             # of the linearised (Gauss–Newton) design
-            h = math.log(BAND_RATIO)
             d = (band_flicker_avar(tau, t_lo * BAND_RATIO, record)
                  - band_flicker_avar(tau, t_lo / BAND_RATIO, record)) / (2.0 * h)
             jac = np.column_stack([jac, p[2] * d])
-        cov = sandwich_covariance(jac[rows], sd[rows], sigma) * max(1.0, chi2_red)
-        k = int(np.flatnonzero(active == n_col)[0])
-        u_n = math.sqrt(max(cov[k, k], 0.0)) / (2.0 * math.sqrt(p[n_col]))
-    v = np.sqrt(p)
-    return MarkovFit(*v, u_N=u_n, t_lo_s=float(t_lo), chi2_red=chi2_red,
+        # Σ as computed on the lag grid can be slightly indefinite (a negative eigenvalue
+        # gave a negative variance of N, read as u = 0): its nearest positive
+        # semi-definite matrix (negative eigenvalues set to 0; Higham 1988) is used
+        lam, vec = np.linalg.eigh(sigma)
+        sigma = (vec * np.clip(lam, 0.0, None)) @ vec.T
+        infl = max(1.0, chi2_red)
+        cov = sandwich_covariance(jac[rows], sd[rows], sigma) * infl
+        u_fit[active] = np.sqrt(np.clip(np.diag(cov)[:active.size], 0.0, None)) / (2.0 * v[active])
+        u_sel = _selection_spread(grid, var, rows, sigma * infl, v)
+    u = u_fit
+    n_col = TERMS.index("N")
+    return MarkovFit(*v, u_N=float(u[n_col]), t_lo_s=float(t_lo), chi2_red=chi2_red,
                      rate_unit=allan.unit, tau_s=tau, residuals=np.sqrt(var / model) - 1.0,
-                     record_s=record)
+                     record_s=record, u_N_fit=float(u_fit[n_col]),
+                     u_N_selection=float(u_sel[n_col]), u_Q=float(u[0]), u_B=float(u[2]),
+                     u_K=float(u[3]), u_R=float(u[4]))
+
+
+def _selection_spread(grid, var, rows, sigma, values) -> np.ndarray:
+    """The spread of each amplitude over the T_lo candidates the data cannot tell apart:
+    a model average (Buckland, Burnham & Augustin 1997, Biometrics 53, 603) with weights
+    exp(−Δχ²/2) (equal prior weight per grid point: uniform in ln T_lo, and T_lo = 0),
+    χ² the generalised residual sum rᵀΣ⁻¹r of each candidate's fit under the estimates'
+    covariance Σ (every candidate weighed with the chosen model's Σ), taken about the
+    chosen values: √(Σ w_i (v_i − v)² / Σ w_i)."""
+    w_eig, v_eig = np.linalg.eigh(sigma)
+    keep = w_eig > w_eig.max() * 1e-9
+    proj = v_eig[:, keep] / np.sqrt(w_eig[keep])
+    chi2 = np.array([float(np.sum(((var[rows] - c[4][rows]) @ proj) ** 2)) for c in grid])
+    w = np.exp(-(chi2 - chi2.min()) / 2.0)
+    v_i = np.sqrt(np.array([c[3] for c in grid]))
+    return np.sqrt(w @ (v_i - values[None, :]) ** 2 / np.sum(w))
