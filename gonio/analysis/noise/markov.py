@@ -47,7 +47,7 @@ trade against each other, and u(N) carries it.
 The discrete choice of T_lo is also stated, not added: ``u_N_selection`` is the spread of N
 over the grid's candidates weighted by exp(−Δχ²/2) of their generalised residual sums
 under Σ (a model average, :func:`_selection_spread`). Added to u(N) it made the intervals
-over-wide on simulated bench records (docs/jjf1535-readings.md, 7.2.13): the linearised
+over-wide on simulated bench records (the docs' coverage study of N): the linearised
 T_lo column already carries the band edge's uncertainty.
 """
 
@@ -168,7 +168,7 @@ class MarkovFit:
     def bias_instability_adev(self, tau_s) -> np.ndarray:
         """The bias instability's share of the model's Allan deviation at ``tau_s``:
         B·√b(τ; T_lo) (module docstring; √(2 ln 2/π)·B in the band, less below T_lo). With
-        ``B``/``u_B`` and ``K``/``u_K`` it is what a drift budget or the IEC 62047-20 5.4.5.3
+        ``B``/``u_B`` and ``K``/``u_K`` it is what a drift budget or the Allan
         floor reading takes from this model in place of the five-term fit's flat floor."""
         t = np.asarray(tau_s, dtype=np.float64)
         return float(np.nan_to_num(self.B)) * np.sqrt(band_flicker_avar(t, self.t_lo_s,
