@@ -12,6 +12,7 @@ pipeline and the validation use these functions:
 :func:`tilt_coupling_coefficients` the coupling integrals of a reading at constant rate
 :func:`budget_extra_components`    ``K_P``, ``K_r`` (scale-factor error carried from 7.1
                                    into E) and ``tilt_E`` from a calibration's own readings
+:func:`angle_tilt_correction`      E's coupling at a *measured* tilt (the correction and its u)
 
 The physics is in :mod:`gonio.specs.ogam_draft.coupling` and
 :mod:`gonio.specs.ogam_draft.compensation`; see ``docs/draft-readings.md#what-the-draft-leaves-out``.
@@ -37,7 +38,8 @@ __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "sessi
            "coupling_budget_component", "tilt_coupling_coefficients", "budget_extra_components",
            "scale_factor_tilt_bias", "scale_factor_round_coupling",
            "nonlinearity_tilt_bias", "TiltCorrection", "scale_factor_tilt_correction",
-           "MeasuredRoundTilt", "measured_round_tilt", "EXTRA_SYMBOLS"]
+           "MeasuredRoundTilt", "measured_round_tilt", "AngleTiltCorrection",
+           "angle_tilt_correction", "EXTRA_SYMBOLS"]
 
 #: Symbols of :func:`budget_extra_components`.
 EXTRA_SYMBOLS: tuple[str, ...] = ("K_P", "K_r", "tilt_E")
@@ -432,6 +434,89 @@ def measured_round_tilt(scale_factor_rows: pd.DataFrame, protocol: Protocol,
     return MeasuredRoundTilt(a1, b1, math.radians(correction.tilt_deg),
                              math.radians(correction.azimuth_deg - beta), cov,
                              int(correction.dof))
+
+
+@dataclass(frozen=True)
+class AngleTiltCorrection:
+    """The tilt × Earth-rate coupling of each 7.4 reading at the tilt the in-situ estimate
+    measured (see :func:`angle_tilt_correction`): its error in E_ij (″, to subtract) and the
+    standard uncertainty of that error from the estimate's covariance of (ψ, α), ν = dof."""
+
+    error_arcsec: np.ndarray    # per 7.4 reading, in the order of the rows given
+    u_arcsec: np.ndarray        # u of each error (first order in (ψ, γ); exact, see below)
+    dof: int
+    tilt_deg: float
+    azimuth_deg: float
+
+
+def angle_tilt_correction(scale_factor_rows: pd.DataFrame, angle_rows: pd.DataFrame,
+                          protocol: Protocol, latitude_deg: float, correction: TiltCorrection,
+                          accel_dps2: float = 60.0) -> AngleTiltCorrection:
+    """E_ij's error from the tilt × Earth-rate coupling at the measured tilt (beyond the draft;
+    JCGM 100 3.2.4: a known systematic effect is corrected), and its u.
+
+    Reading i (7.4, angle θ_i, read t_i after zeroing) carries the coupling
+    e_i = Ω_⊥ sin ψ (C_i cos γ − S_i sin γ) (:func:`tilt_coupling_coefficients`, γ = α − β);
+    it is converted with the 7.1 K, which the rounds' coupling moves by δ = mean_k(e_k/θ_k)/3600
+    (:func:`scale_factor_tilt_correction`), so an angle θ reads θ(1 − δ). E_ij is off by
+    Ω_⊥ sin ψ [(C_i − θ_i m_C) cos γ − (S_i − θ_i m_S) sin γ], m_C = mean C_k/θ_k,
+    m_S = mean S_k/θ_k: the line ``tilt_E`` of :func:`budget_extra_components` (``intrinsic``)
+    at the measured (ψ, γ) instead of its worst case at the A.1 bound. u by the law of
+    propagation (JCGM 100 5.2) with the covariance of (ψ, α) of ``correction``; the error is
+    linear in (sin ψ cos γ, sin ψ sin γ), which the estimate's fit gives linearly when it is
+    taken in 7.4's orientation, so the first-order u is exact there. 7.1 and 7.4 must share
+    their orientation (the estimate's azimuth is in that frame).
+
+    Examples
+    --------
+    At the A.1 bound, the error's largest amplitude over the azimuth is ``tilt_E``'s
+    half-width; at the estimate's γ it is that sinusoid's value (here u = 0: a noise-free
+    estimate):
+
+    >>> from gonio.specs.ogam_draft.protocol import load_protocol
+    >>> from gonio.specs.ogam_draft.tilt_estimate import estimate_tilt
+    >>> from gonio.specs import DEFAULT_KEY, get
+    >>> p = load_protocol(get(DEFAULT_KEY).default_protocol)
+    >>> sf = pd.DataFrame({"table_deg": [60.0, 120.0, 180.0, 240.0, 300.0, 360.0],
+    ...                    "time_s": [11.0, 12.0, 13.0, 14.0, 15.0, 16.0]})
+    >>> ad = pd.DataFrame({"table_deg": [180.0, 360.0], "time_s": [13.0, 16.0]})
+    >>> th = np.arange(12) * 30.0
+    >>> amp = 11.522126 * math.sin(math.radians(0.1))
+    >>> e = estimate_tilt(th, 9.7 + amp * np.cos(np.radians(th + 70.0)), 40.0, "up")
+    >>> c = angle_tilt_correction(sf, ad, p, 40.0, scale_factor_tilt_correction(sf, p, 40.0, e))
+    >>> top = budget_extra_components(pd.concat([sf.assign(test="scale_factor"),
+    ...     ad.assign(test="angle_deviation")]), p, 40.0, 0.1, truth="intrinsic")[2]
+    >>> bool(np.abs(c.error_arcsec).max() <= top.half_width_arcsec * (1 + 1e-9)), c.dof
+    (True, 9)
+    >>> bool(c.u_arcsec.max() < 1e-9)
+    True
+    """
+    sfi, adi = protocol.scale_factor, protocol.angle_deviation
+    if sfi is None or adi is None or len(scale_factor_rows) == 0:
+        raise GonioError("E's tilt correction needs the 7.1 rounds and the 7.4 readings")
+    if adi.orientation != sfi.orientation:
+        raise GonioError(f"E's tilt correction needs 7.4 in 7.1's orientation "
+                         f"({adi.orientation} vs {sfi.orientation})", key="orientation")
+    th_k = np.abs(scale_factor_rows["table_deg"].to_numpy(dtype=float))
+    ck, sk = tilt_coupling_coefficients(th_k, scale_factor_rows["time_s"].to_numpy(dtype=float),
+                                        sfi.rate_dps, sfi.read_delay_s, accel_dps2)
+    th_i = np.abs(angle_rows["table_deg"].to_numpy(dtype=float))
+    ci, si = tilt_coupling_coefficients(th_i, angle_rows["time_s"].to_numpy(dtype=float),
+                                        adi.rate_dps, adi.read_delay_s, accel_dps2)
+    p_i = ci - th_i * float(np.mean(ck / th_k))
+    q_i = si - th_i * float(np.mean(sk / th_k))
+    split = earth_rate_split(latitude_deg, adi.orientation)
+    om = dps_to_arcsec_s(split.perpendicular_dps)
+    psi = math.radians(correction.tilt_deg)
+    gam = math.radians(correction.azimuth_deg - split.perpendicular_direction_deg)
+    err = om * math.sin(psi) * (p_i * math.cos(gam) - q_i * math.sin(gam))
+    g_psi = om * math.cos(psi) * (p_i * math.cos(gam) - q_i * math.sin(gam))
+    g_gam = -om * math.sin(psi) * (p_i * math.sin(gam) + q_i * math.cos(gam))
+    u_psi, u_gam = math.radians(correction.u_tilt_deg), math.radians(correction.u_azimuth_deg)
+    cov = correction.r_tilt_azimuth * u_psi * u_gam
+    var = g_psi ** 2 * u_psi ** 2 + 2.0 * g_psi * g_gam * cov + g_gam ** 2 * u_gam ** 2
+    return AngleTiltCorrection(err, np.sqrt(np.maximum(var, 0.0)), int(correction.dof),
+                               float(correction.tilt_deg), float(correction.azimuth_deg))
 
 
 def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,

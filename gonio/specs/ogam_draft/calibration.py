@@ -109,6 +109,21 @@ DRAFT_E_READING = ("the draft's reading: U of Annex A's four lines alone (A.4.1-
                    "conditions the draft allows contain (docs/draft-readings.md)")
 
 
+#: E's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
+#: "tilt_corrected", ``details.estimates``, ``details.tilt_correction`` of angle_deviation).
+E_TILT_CORRECTED = {
+    "note": "beyond the draft: every E_ij is corrected for the tilt x Earth-rate coupling at "
+            "the tilt psi and azimuth alpha measured by the in-situ tilt estimate "
+            "([tilt_estimate]): the coupling of the reading itself and of the 7.1 K it is "
+            "converted with (JCGM 100 3.2.4); the physical budget's line tilt_Em is the "
+            "correction's uncertainty from the estimate's covariance of (psi, alpha), in place "
+            "of tilt_E at the A.1 bound",
+    "draft": "the draft's reading (Annex A): E as measured, uncorrected, with U of Annex A's "
+             "four lines; given beside, not certified",
+    "corrected": "certified: E corrected at the measured tilt, with the physical budget",
+}
+
+
 #: Which reading of B_s is stated unless the caller asks otherwise (docs/draft-readings.md).
 ZERO_STABILITY_STATED = "draft"
 
@@ -230,6 +245,9 @@ class Analysis:
                                  kind="draft")[0].to_dict()
             unc["draft_reading"] = {"label": DRAFT_E_READING, "U_arcsec": d["U_arcsec"],
                                     "k": d["k"], "u_c_arcsec": d["u_c_arcsec"]}
+            est = (self.results.angle_deviation.details.get("estimates") or {}).get("draft")
+            if est:              # E itself corrected at the measured tilt: the draft's E beside
+                unc["draft_reading"]["E_arcsec"] = est["value"]
         return unc
 
     def item_details(self, c) -> dict:
@@ -753,7 +771,7 @@ def _load_tilt(tilt) -> tuple[float, str]:
 
 def deviation_budget(results: CalibrationResults, readings: Readings, protocol: Protocol,
                      settings: dict, *, kind: str = "physical", tilt=None,
-                     monte_carlo_trials: int = 0, seed: int = 0
+                     monte_carlo_trials: int = 0, seed: int = 0, tilt_measured=None
                      ) -> tuple[AnnexABudget, str, list[str]]:
     """E's budget: the draft's four Annex A lines, plus, for ``kind="physical"``, the lines
     the validation showed to matter:
@@ -769,6 +787,10 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     protocol's ``annex_a.repeatability_arcsec`` (Type B: not this calibration's data).
     u(B_E): the longest actual time from zeroing to reading. k: the protocol's
     ``annex_a.coverage_factor`` when set (fixed by the laboratory), else t_95(ν_eff).
+    ``tilt_measured`` (an :class:`gonio.specs.ogam_draft.budget_extra.AngleTiltCorrection`,
+    :func:`angle_deviation_at_measured_tilt`): E's readings were corrected at the measured
+    tilt, and the physical budget's ``tilt_E`` (the bound's worst case) is replaced by
+    ``tilt_Em``, the correction's u (normal; the largest over the readings).
     Returns the budget, the u(r) source sentence and notes.
     """
     from gonio.errors import GonioError
@@ -799,7 +821,8 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
         notes.append(f"{txt}: ψ + U95 = {tilt_deg:.4g}° bounds the tilt")
     extras = []
     if kind == "physical" and results.angle_deviation.measured:
-        extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes)
+        extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes,
+                                  tilt_measured)
     budget = annex_a_budget(table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
                             zero_stability_dph=a.zero_stability_dph, duration_min=dur_min,
                             repeatability_arcsec=u_r, k=a.coverage_factor,
@@ -928,7 +951,8 @@ def _round_noise(results, readings, protocol) -> dict:
     return {"noise": noise, "time_s": t_sf}
 
 
-def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes):
+def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes,
+                     tilt_measured=None):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
 
@@ -967,9 +991,86 @@ def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes
         if results.scale_factor_for_angles_source == "metadata":
             notes.append("E's angles use the nominal scale factor of the metadata, whose "
                          "error is not known to this calibration and is not in the budget")
+    if tilt_measured is not None:    # E corrected at the measured tilt: the correction's u
+        tm = tilt_measured
+        extras = [e if e.symbol != "tilt_E" else ExtraComponent(
+            "tilt_Em", f"tilt x Earth-rate coupling corrected at the measured tilt "
+            f"(psi = {tm.tilt_deg:.3g} deg, azimuth {tm.azimuth_deg:.1f} deg): the correction's "
+            f"u from the tilt estimate's covariance (nu = {tm.dof})",
+            float(np.max(tm.u_arcsec)) if tm.u_arcsec.size else 0.0, "normal")
+            for e in extras]
+        notes.append("E corrected for the tilt x Earth-rate coupling at the measured tilt "
+                     f"psi = {tm.tilt_deg:.3g} deg, azimuth {tm.azimuth_deg:.1f} deg (largest "
+                     f"correction {float(np.max(np.abs(tm.error_arcsec))):.3g} arcsec) "
+                     "[beyond the draft]")
     return [ExtraComponent(e.symbol, e.source.replace(" (validation)", "") +
                            f" [beyond the draft: {EXTRA_CLAUSES.get(e.symbol, '')}]",
                            e.half_width_arcsec, e.distribution) for e in extras]
+
+
+def angle_deviation_at_measured_tilt(results: CalibrationResults, readings: Readings,
+                                     protocol: Protocol):
+    """(results, correction): E's readings corrected for the tilt × Earth-rate coupling at
+    the tilt the in-situ estimate measured (beyond the draft;
+    :func:`gonio.specs.ogam_draft.budget_extra.angle_tilt_correction`), or
+    (``results`` unchanged, None) where no tilt was measured, E's angles do not come from
+    counts through the 7.1 K, or 7.4 is not in 7.1's orientation (E then keeps the bound's
+    line ``tilt_E``).
+
+    Every E_ij minus its coupling; E_i, E and the matrix recomputed from them as 7.4 does
+    (:func:`gonio.specs.ogam_draft.items.angle_deviation`); the draft's reading (as
+    measured) is kept in ``details.estimates.draft`` and the per-point column
+    ``E_draft_arcsec``."""
+    from gonio.specs.ogam_draft.budget_extra import angle_tilt_correction
+    from gonio.specs.ogam_draft.items import signed_extreme
+
+    e = results.angle_deviation
+    if protocol.tilt_estimate is None or not e.measured or \
+            results.scale_factor_for_angles_source != "7.1" or \
+            e.details.get("scale_factor_for_angles_counts_per_deg") is None or \
+            protocol.angle_deviation is None or protocol.scale_factor is None or \
+            protocol.angle_deviation.orientation != protocol.scale_factor.orientation:
+        return results, None
+    tc, _ = tilt_correction(results, readings, protocol)
+    if tc is None:
+        return results, None
+    df = readings.data
+    long = e.tables["readings"].copy()
+    t_by_line = df.set_index("line")["time_s"]
+    rows = pd.DataFrame({"table_deg": long["table_deg"].to_numpy(dtype=float),
+                         "time_s": t_by_line.loc[long["line"]].to_numpy(dtype=float)})
+    sf = df[df["line"].isin(list(results.scale_factor.used_lines))]
+    lat = metadata_float(readings.metadata, "latitude_deg", file=readings.path)
+    atc = angle_tilt_correction(sf, rows, protocol, float(lat), tc)
+    long["E_draft_arcsec"] = long["E_arcsec"]
+    long["tilt_error_arcsec"] = atc.error_arcsec
+    long["E_arcsec"] = long["E_draft_arcsec"] - atc.error_arcsec
+    g = long.groupby("round", sort=True)
+    points = e.table.copy()
+    points["E_draft_arcsec"] = points["E_arcsec"]
+    points["E_arcsec"] = g["E_arcsec"].mean().reindex(points["round"]).to_numpy()
+    points["s_arcsec"] = g["E_arcsec"].std(ddof=1).reindex(points["round"]).to_numpy()
+    value = signed_extreme(points["E_arcsec"])
+    at = int(np.argmax(np.abs(points["E_arcsec"].to_numpy()) == abs(value)))
+    matrix = long.pivot(index="round", columns="series", values="E_arcsec")
+    matrix.columns = [f"series_{c}" for c in matrix.columns]
+    matrix.insert(0, "position_deg", points.set_index("round")["position_deg"])
+    details = dict(e.details, max_abs_arcsec=abs(value),
+                   position_deg=float(points["position_deg"][at]), stated="tilt_corrected")
+    details["estimates"] = {
+        "draft": {"label": E_TILT_CORRECTED["draft"], "value": float(e.value),
+                  "max_abs_arcsec": float(e.details["max_abs_arcsec"]),
+                  "position_deg": float(e.details["position_deg"])},
+        "corrected": {"label": E_TILT_CORRECTED["corrected"], "value": float(value)}}
+    details["tilt_correction"] = {
+        "label": E_TILT_CORRECTED["note"], "tilt_deg": atc.tilt_deg,
+        "azimuth_deg": atc.azimuth_deg, "dof": atc.dof,
+        "max_abs_correction_arcsec": float(np.max(np.abs(atc.error_arcsec))),
+        "u_max_arcsec": float(np.max(atc.u_arcsec))}
+    e2 = dataclasses.replace(e, value=float(value), details=details, table=points,
+                             tables={**e.tables, "readings": long,
+                                     "matrix": matrix.reset_index()})
+    return dataclasses.replace(results, angle_deviation=e2), atc
 
 
 def pd_concat(*frames):
@@ -1325,8 +1426,12 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                   reference_orientation=proto.pointing_reference)
     _note_exclusions(res, excluded)
     check_counts_agree(kept, res)
+    e_tilt = None       # E corrected at the measured tilt: the physical reading only
+    if budget == "physical" and tilt is None:
+        res, e_tilt = angle_deviation_at_measured_tilt(res, kept, proto)
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
-                                            monte_carlo_trials=monte_carlo_trials, seed=seed)
+                                            monte_carlo_trials=monte_carlo_trials, seed=seed,
+                                            tilt_measured=e_tilt)
     noise, noise_src = analyse_zero_stability(static_record)
     items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type)
     if proto.tilt_estimate is not None and "scale_factor" in items:

@@ -233,6 +233,9 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         cell: list = [st["value"]]
         if st["signed"] is not None:
             cell += [L["semi"], *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
+            if name == "angle_deviation" and detail(res, name, "estimates"):
+                cell += [L["semi"], *segments(L["note_e_tilt"], v=_num(
+                    res, item_path(name, "estimates.draft.value"), "atU", U))]
         elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
             cell += [L["semi"], *segments(L["note_zero_range"],
                                      v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]

@@ -267,17 +267,27 @@ def trial_items(report, truth: dict) -> dict:
     ``report`` may have been made with either budget kind; the other is evaluated here
     from the same results (:func:`gonio.calibrate.deviation_budget`).
     """
-    from gonio.specs.ogam_draft.calibration import deviation_budget, session_settings
+    from gonio.specs.ogam_draft.calibration import (angle_deviation_at_measured_tilt,
+                                                    deviation_budget, session_settings)
 
     rec = item_record(report, truth)
     if "angle_deviation" not in rec:
         return rec
     settings, _ = session_settings(report.readings, report.protocol)
     other = "physical" if report.budget_kind == "draft" else "draft"
-    b, _, _ = deviation_budget(report.results, report.readings, report.protocol, settings,
-                               kind=other)
+    res, e_tilt = report.results, None
+    if other == "physical":     # the physical E: corrected where the tilt was measured
+        res, e_tilt = angle_deviation_at_measured_tilt(res, report.readings, report.protocol)
+    b, _, _ = deviation_budget(res, report.readings, report.protocol, settings,
+                               kind=other, tilt_measured=e_tilt)
     mine = dict(rec["angle_deviation"])
-    alt = {**mine, "U": float(b.U_arcsec)}
+    alt = {**mine, "U": float(b.U_arcsec), "u_c": float(b.u_c_arcsec), "k": float(b.k)}
+    e = res.angle_deviation
+    if "E_draft_arcsec" in e.table:    # E corrected at the measured tilt: the draft's as measured
+        pts = e.table["E_arcsec" if other == "physical" else "E_draft_arcsec"]
+        alt["points"] = [float(x) for x in pts]
+        alt["value"] = float(e.value if other == "physical"
+                             else e.details["estimates"]["draft"]["value"])
     rec["angle_deviation"], rec["angle_deviation_draft"] = (alt, mine) if other == "physical" \
         else (mine, alt)
     return rec

@@ -926,6 +926,8 @@ EXTRA_CLAUSES = {
     "K_r": "7.1 (scatter of the 7.1 readings carried into E through K)",
     "tilt_E": "clause 7 preamble (Earth-rate compensation) with the A.1 tilt bound",
     "C_te": "clause 7 preamble (Earth-rate compensation) with the A.1 tilt bound",
+    "tilt_Em": "clause 7 preamble (Earth-rate compensation), corrected at the tilt measured "
+               "in situ (JCGM 100 3.2.4, 5.2)",
 }
 _ANNEX_NAMES = {"P": ("table positioning", "A.4.1"), "phi_e": ("sensing-plane tilt", "A.4.2"),
                 "B_E": ("zero drift", "A.4.3"), "r": ("repeatability", "A.4.4")}

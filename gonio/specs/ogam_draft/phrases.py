@@ -251,6 +251,11 @@ LABELS: dict[str, dict[str, str]] = {
                           "(U = {ua}°), beyond the draft; the 7.1 mean uncorrected: {v}",
                     "zh": "已按实测倾斜修正（草案以外）：ψ = {p}°（U = {up}°），方位角 {a}°"
                           "（U = {ua}°）；未修正的 7.1 平均值：{v}"},
+    "note_e_tilt": {"en": "every E_ij corrected for the tilt × Earth-rate coupling at the "
+                          "measured tilt, beyond the draft; the draft's reading as measured "
+                          "(Annex A, beside, not stated): {v}″",
+                    "zh": "各 E_ij 已按实测倾斜修正倾斜与地球自转角速度的耦合（草案以外）；"
+                          "按草案（附录 A）的测得值（并列给出，不作结果）：{v}″"},
     "note_cv_draft": {"en": "the draft's range as measured (beside, not stated): {v} ppm",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} ppm"},
     "note_cg_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",
@@ -346,6 +351,8 @@ LABELS: dict[str, dict[str, str]] = {
                               "draft); the scale factor K is corrected for it",
                         "zh": "在 {n} 个静止位置上利用地球自转角速度现场实测（草案以外）；"
                               "标度因数 K 已按其修正"},
+    "m_tilt_measured_e": {"en": "; so is every E_ij (7.4), its Annex A reading given beside",
+                          "zh": "；各 E_ij（7.4）亦已修正，按附录 A 的测得值并列给出"},
     "m_temp": {"en": "Temperature", "zh": "温度"},
     "m_temp_v": {"en": "required ({t} ± {tol}) °C (Table 2); during calibration {m}",
                  "zh": "要求 ({t} ± {tol}) °C（表2）；校准时 {m}"},

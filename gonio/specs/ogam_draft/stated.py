@@ -302,6 +302,9 @@ def method_rows(res: dict, L: dict, lab: dict | None, lang: str = "en",
     tc = ((res["items"].get("scale_factor") or {}).get("details") or {}).get("tilt_correction")
     if tc:                  # the in-situ tilt estimate measured it and K is corrected
         tilt_v += L["semi"] + L["m_tilt_measured"].format(n=tc["n_positions"])
+        if ((res["items"].get("angle_deviation") or {}).get("details") or {}).get(
+                "tilt_correction"):          # and every E_ij too
+            tilt_v += L["m_tilt_measured_e"]
     rows.append((L["m_tilt"], tilt_v))
     env = (lab or {}).get("environment") or {}
     t_meas = env.get("temperature_c")
