@@ -52,21 +52,23 @@ ITEM_CONDITIONS = {
     "threshold": (
         "Threshold (7.2.6): the value is the tested rate of the programme's grid ({grid_dps} "
         "°/s, means of {samples} samples referred to the rests around each point) at which "
-        "the 50 % rule stops; its interval is the 95 % range of the rule's outcome under the "
-        "readings' own noise. Where the noise decides the rule, another grid or averaging is "
+        "the 50 % rule stops; its interval, whole grid steps around the value, holds at least "
+        "95 % of the rule's outcome under the readings' own noise, and p states its own "
+        "probability. Where the noise decides the rule, another grid or averaging is "
         "another measurand.",
         "阈值（7.2.6）：校准值为方案速率序列（{grid_dps} °/s，各点取 {samples} 个采样的平均值，"
         "以其前后静止输出为参考）中 50 % 判据终止时的试验速率；区间为按本次数据噪声 50 % 判据"
-        "结果的 95 % 范围。噪声决定判据时，速率序列或平均采样数不同即为不同的被测量。"),
+        "结果中包含校准值、由整数个序列步长构成且概率不小于 95 % 的范围，p 为该区间本身的概率。噪声决定判据时，速率序列或平均采样数不同即为不同的被测量。"),
     "resolution": (
         "Resolution (7.2.7): the value is the tested increment of the programme's grid "
         "({grid_dps} °/s, means of {samples} samples, the base rate re-measured before each "
-        "increment) at which the 50 % rule stops; its interval is the 95 % range of the "
-        "rule's outcome under the readings' own noise. Where the noise decides the rule, "
+        "increment) at which the 50 % rule stops; its interval, whole grid steps around the "
+        "value, holds at least 95 % of the rule's outcome under the readings' own noise, and "
+        "p states its own probability. Where the noise decides the rule, "
         "another grid or averaging is another measurand.",
         "分辨率（7.2.7）：校准值为方案增量序列（{grid_dps} °/s，各点取 {samples} 个采样的平均值，"
         "每个增量前重测基准速率）中 50 % 判据终止时的试验增量；区间为按本次数据噪声 50 % 判据"
-        "结果的 95 % 范围。噪声决定判据时，增量序列或平均采样数不同即为不同的被测量。"),
+        "结果中包含校准值、由整数个序列步长构成且概率不小于 95 % 的范围，p 为该区间本身的概率。噪声决定判据时，增量序列或平均采样数不同即为不同的被测量。"),
     "warmup_time": (
         "Warm-up time (7.2.9): the earliest time after power-on from which every window of "
         "W = {window_samples} samples ({window_s:g} s) has a stability of P-sample block means "
@@ -136,6 +138,7 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"rate-table ripple ≤ (\S+)·\|Ω\| \(once per revolution, unknown phase\) in the largest "
      r"residual", "速率转台每转一次的速率波动 ≤ {1}·|Ω|（相位未知），在最大残差中"),
     (r"K at (\S+) °C \(fit standard error\)", "{1} °C 时的 K（拟合标准误差）"),
+    (r"K at (\S+) °C \(noise of its rate points' means\)", "{1} °C 时的 K（各速率点平均值的噪声）"),
     (r"K at room temperature (\S+) °C", "室温 {1} °C 时的 K"),
     (r"bias at (\S+) °C", "{1} °C 时的零偏"),
     (r"mean of the Q records \(type A\)", "Q 段记录的平均值（A类）"),
@@ -144,6 +147,13 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"spread of B_s,m over the records", "各段记录 B_s,m 的分散性"),
     (r"\+axis up mean", "输入轴向上的平均值"), (r"−axis up mean", "输入轴向下的平均值"),
     (r"least-squares slope", "最小二乘斜率"),
+    (r"spread of the 50 % rule's outcome under the data's noise \(the interval: whole grid "
+     r"steps holding at least 95 % of it\)",
+     "按本次数据噪声 50 % 判据结果的分散性（所给区间：由整数个步长构成、包含其不少于 95 % 的范围）"),
+    (r"noise of the bracketing gains \(weighted by the interpolation\) and of the 0 dB gain",
+     "相邻增益点的噪声（按插值权重）及 0 dB 增益的噪声"),
+    (r"linear interpolation in ln f: h²/8·\|p''\| from a second difference over points at "
+     r"least h/2 apart", "ln f 中线性插值：h²/8·|p''|，由间距不小于 h/2 的点的二阶差分求得"),
     (r"noise of the bracketing gains", "相邻增益点的噪声"),
     # the equipment its virtual programme names (simulate.py's '# table:'), in the DCC
     (r"rate table, two-axis position table, angular vibration table, chamber \(virtual\)",

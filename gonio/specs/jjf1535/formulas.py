@@ -500,3 +500,37 @@ def bandwidth_grid(f_est_hz: float) -> list[float]:
         if not out or abs(f - out[-1]) > 1e-9 * f:
             out.append(round(f, 9))
     return out
+
+
+def interpolation_remainder(lnf: np.ndarray, p: np.ndarray, j: int) -> float:
+    """JJF 1535 7.2.15.2 (log-f interpolation of the −3 dB point): the bound of linear
+    interpolation's error between points j − 1 and j of p(ln f), h²/8·|p''| (the remainder
+    of linear interpolation, h = ln f_j − ln f_{j−1}), p'' the second divided difference
+    over j − 1, j and a third point at least h/2 away in ln f (the nearest such above j,
+    else below j − 1; the adjacent point where none is): 7.2.15.1 b)'s grid packs points 1 %
+    apart near f_est, and a second difference over those is the gains' noise over the
+    spacing squared, not the curve's curvature. 0 with fewer than three points.
+
+    >>> x = np.log([1.0, 2.0, 4.0]); round(interpolation_remainder(x, x ** 2, 1), 6)   # p'' = 2
+    0.120113
+    """
+    lnf, p = np.asarray(lnf, float), np.asarray(p, float)
+    if lnf.size < 3:
+        return 0.0
+    h = float(lnf[j] - lnf[j - 1])
+    a, b, c = curvature_points(lnf, j)
+    d2 = 2 * ((p[c] - p[b]) / (lnf[c] - lnf[b]) - (p[b] - p[a]) / (lnf[b] - lnf[a])) \
+        / (lnf[c] - lnf[a])
+    return h * h / 8 * abs(float(d2))
+
+
+def curvature_points(lnf: np.ndarray, j: int) -> tuple[int, int, int]:
+    """The three grid indices, ascending, of :func:`interpolation_remainder`'s second
+    difference around the interval (j − 1, j): those two and a third point at least h/2
+    away in ln f (the nearest above j, else below j − 1; the adjacent point where none is)."""
+    lnf = np.asarray(lnf, float)
+    h = float(lnf[j] - lnf[j - 1])
+    above = [m for m in range(j + 1, lnf.size) if lnf[m] - lnf[j] >= h / 2]
+    below = [m for m in range(j - 2, -1, -1) if lnf[j - 1] - lnf[m] >= h / 2]
+    third = above[0] if above else below[0] if below else (j + 1 if j + 1 < lnf.size else j - 2)
+    return tuple(sorted((j - 1, j, third)))

@@ -121,7 +121,10 @@ def static_noise(ctx: Context) -> dict | None:
 
 # --------------------------------------------------------------------------- 7.2.1 – 7.2.4
 def calibrations(ctx: Context, test: str = "scale_factor") -> list[dict]:
-    """Each calibration m of 7.2.1.2: F_r, fit (K_m, F_0,m, residuals), K±, standard error."""
+    """Each calibration m of 7.2.1.2: F_r, fit (K_m, F_0,m, residuals), K±, standard error
+    (``se_K``: from the line's residuals, which hold the gyro's nonlinearity; ``se_K_noise``:
+    the least-squares slope's noise from the rate points' means alone,
+    √(Σ (Ω_j − Ω̄)² u_j²)/Σ (Ω_j − Ω̄)², u_j = s_j/√n_j)."""
     if ("cal", test) in ctx.cache:
         return ctx.cache[("cal", test)]
     means = segment_means(ctx.df, test)
@@ -138,7 +141,11 @@ def calibrations(ctx: Context, test: str = "scale_factor") -> list[dict]:
         seg = [m for m in means if m.run == run]
         u_mean = np.array([m.std / math.sqrt(m.n) for m in seg[1:-1] if m.role == "rate"])
         n_means = [m.n for m in seg[1:-1] if m.role == "rate"]
+        dx = rates - rates.mean()
+        se_noise = (math.sqrt(float((dx ** 2 * u_mean ** 2).sum())) / float((dx ** 2).sum())
+                    if u_mean.size == rates.size and n > 1 else math.nan)
         out.append({"run": run, "rest": fr, "fit": fit, "asym": asym, "se_K": se,
+                    "se_K_noise": se_noise,
                     "u_means": u_mean, "n_means": n_means, "temperature_c": first.temperature_c,
                     "supply_v": first.supply_v, "rates": rates,
                     "spans_s": np.array([spans[(run, m.step)] for m in seg[1:-1]
@@ -371,8 +378,13 @@ def sf_repeatability(ctx: Context) -> Item:
 def sf_temperature_sensitivity(ctx: Context) -> Item:
     """JJF 1535 7.2.5 eq (11): K_t = max_i |(K_i − K_rt)/(K_rt (T_i − T_rt))|.
 
-    Uncertainty: the least-squares standard errors of K_i and K_rt (type A) and the chamber's
-    temperature deviation (Table 2, ±2 °C, rectangular) on T_i."""
+    Uncertainty: the noise of K_i and K_rt (type A) and the chamber's temperature deviation
+    (Table 2, ±2 °C, rectangular) on T_i. K_i's noise is the least-squares slope's noise from
+    its rate points' means (``se_K_noise`` of :func:`calibrations`), not the line's residual
+    standard error: the residuals hold the gyro's nonlinearity, the same at every
+    temperature of the model, which biases K_i and K_rt alike and cancels in their ratio —
+    with the residual standard error the budget was over-wide (z sd 0.62 in the study). The
+    residual standard error stays in the details."""
     title, clause, unit = "scale-factor temperature sensitivity K_t", "7.2.5", "1/°C"
     miss = _need(ctx, "sf_temperature", "sf_temperature_sensitivity", title, clause, unit)
     if miss:
@@ -384,15 +396,21 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
     value, slopes = jf.temperature_sensitivity(Ks, Ts, rt, relative=True)
     i = int(np.nanargmax(np.abs(slopes)))
     c_i, c_rt = cals[i], cals[rt]
-    inputs = [from_u("K_i", c_i["fit"].K, c_i["se_K"], dof=len(c_i["rates"]) - 2,
-                     source=f"K at {Ts[i]:g} °C (fit standard error)"),
-              from_u("K_rt", c_rt["fit"].K, c_rt["se_K"], dof=len(c_rt["rates"]) - 2,
+    def se(c):                                   # the points' noise; residuals without means
+        v = c["se_K_noise"]
+        return (v, sum(int(n) - 1 for n in c["n_means"])) if math.isfinite(v) else \
+            (c["se_K"], len(c["rates"]) - 2)
+    (u_i, nu_i), (u_rt, nu_rt) = se(c_i), se(c_rt)
+    inputs = [from_u("K_i", c_i["fit"].K, u_i, dof=nu_i,
+                     source=f"K at {Ts[i]:g} °C (noise of its rate points' means)"),
+              from_u("K_rt", c_rt["fit"].K, u_rt, dof=nu_rt,
                      source=f"K at room temperature {Ts[rt]:g} °C"),
               type_b("dT", Ts[i] - Ts[rt], ctx.chamber_deviation_c, "rectangular",
                      source="chamber temperature deviation (Table 2)")]
     u = gum(lambda a, b, d: abs((a - b) / (b * d)), inputs)
     return Item("sf_temperature_sensitivity", title, clause, unit, value, uncertainty=u, details={
-        "temperatures_c": Ts, "K_i": Ks, "slopes_per_c": slopes, "room_index": rt})
+        "temperatures_c": Ts, "K_i": Ks, "slopes_per_c": slopes, "room_index": rt,
+        "se_K_residual": [c["se_K"] for c in cals]})
 
 
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
@@ -425,12 +443,17 @@ def rule_outcome_uncertainty(pmfs: list[dict], value: float) -> tuple[Uncertaint
     as the largest tested step), and the statement: the central 95 % range of the outcome,
     widened to hold the value (where that range is one outcome, to the neighbouring outcomes
     that can occur) — a discrete, skewed distribution, stated by its interval (JCGM 101 7.7),
-    no k (U: the distance to the upper end). A distribution of one outcome (noise-free
+    no k (U: the distance to the upper end). Its coverage probability is the interval's own
+    probability under the outcome distribution (whole grid steps: at least 95 %, often
+    more), the one p every output states. A distribution of one outcome (noise-free
     readings) has u_c = U = 0 and no interval.
 
     >>> u, _ = rule_outcome_uncertainty([{0.1: 0.01, 0.05: 0.98, 0.02: 0.01}], 0.05)
-    >>> u.interval
-    (0.02, 0.1)
+    >>> u.interval, u.coverage_probability
+    ((0.02, 0.1), 1.0)
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.02, 0.05: 0.96, 0.02: 0.01, 0.01: 0.01}], 0.05)
+    >>> u.interval, round(u.coverage_probability, 4)
+    ((0.02, 0.1), 0.99)
 
     >>> u, _ = rule_outcome_uncertainty([{0.1: 0.25, 0.05: 0.5, 0.02: 0.25}], 0.05)   # mean 0.055
     >>> round(u.u_c, 6), u.interval, round(u.U, 6), u.k
@@ -448,12 +471,16 @@ def rule_outcome_uncertainty(pmfs: list[dict], value: float) -> tuple[Uncertaint
         lo = max((float(k) for k, p in zip(x, w) if k < lo and p > 1e-9), default=lo)
         hi = min((float(k) for k, p in zip(x, w) if k > hi and p > 1e-9), default=hi)
     row = {"symbol": "rule_outcome", "source": "spread of the 50 % rule's outcome under the "
-           "data's noise (its 95 % range is the interval)", "type": "A", "u": u_c, "c": 1.0,
+           "data's noise (the interval: whole grid steps holding at least 95 % of it)",
+           "type": "A", "u": u_c, "c": 1.0,
            "contribution": u_c, "dof": None}
     if hi == lo:             # one possible outcome (noise-free readings)
         return Uncertainty([row], u_c, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
-    return Uncertainty([row], u_c, hi - value, None, None, None, 0.95, "outcome distribution",
-                       interval=(lo, hi)), pmf
+    # the interval's own probability under the outcome distribution: whole grid steps, so at
+    # least 95 % and mostly more; stated as p in every output (certificate, summary, DCC)
+    p_iv = float(w[(x >= lo - 1e-12 * abs(lo)) & (x <= hi + 1e-12 * abs(hi))].sum())
+    return Uncertainty([row], u_c, hi - value, None, None, None, min(p_iv, 1.0),
+                       "outcome distribution", interval=(lo, hi)), pmf
 
 
 def _candidate_item(key, title, clause, cands, details, pmfs) -> Item:
@@ -933,8 +960,12 @@ def bandwidth(ctx: Context) -> Item:
     falls by 3 dB (ratio 10^(−3/20)), by linear interpolation of dB against log f (readings
     taken). The 90° phase-lag frequency (IEC 62047-20 5.5.3) is reported beside it.
 
-    Uncertainty: the noise of the bracketing gains through the local slope, and the
-    interpolation (difference to a quadratic through three points, rectangular)."""
+    Uncertainty: the noise of the bracketing gains through the local slope, weighted as
+    the interpolation weights them, and of the 0 dB gain; and the remainder of linear
+    interpolation in ln f, h²/8·|p''| (:func:`gonio.specs.jjf1535.formulas.
+    interpolation_remainder`, rectangular), p'' over points at least h/2 apart. The
+    difference to a quadratic through the three nearest points, taken before, was mostly the
+    gains' noise over the grid's 1 % spacing near f_est, not the curve's (z sd 0.38–0.43)."""
     title, clause, unit = "bandwidth B_w", "7.2.15", "Hz"
     if not ctx.has("vibration"):
         return not_measured("bandwidth", title, clause, unit, "no 'vibration' records in the readings")
@@ -949,22 +980,31 @@ def bandwidth(ctx: Context) -> Item:
     db = 20 * np.log10(K / K[0])
     i = int(np.searchsorted(-db, 3.0))            # first point at or below −3 dB
     i = min(max(i, 1), f.size - 1)
-    slope = (db[i] - db[i - 1]) / (math.log(f[i]) - math.log(f[i - 1]))   # dB per ln f
-    u_db = 20 / math.log(10) * math.sqrt(fr["u_rel"][i] ** 2 + fr["u_rel"][i - 1] ** 2
-                                         + fr["u_rel"][0] ** 2)
-    u_f_noise = fb * u_db / abs(slope)
-    j = [k for k in (i - 2, i - 1, i, i + 1) if 0 <= k < f.size][-3:]
-    if len(j) == 3:
-        c = np.polyfit(np.log(f[j]), db[j], 2)
-        roots = np.roots(c - np.array([0, 0, -3.0]))
-        roots = [math.exp(r.real) for r in roots if abs(r.imag) < 1e-12
-                 and f[j[0]] * 0.5 < math.exp(r.real) < f[j[-1]] * 2]
-        interp = min((abs(r - fb) for r in roots), default=0.0)
-    else:
-        interp = 0.0
-    inputs = [from_u("f_-3dB", fb, u_f_noise, dof=50, source="noise of the bracketing gains"),
-              type_b("interp", 0.0, interp, "rectangular",
-                     source="interpolation (linear vs quadratic in log f)")]
+    # the crossing ln f* = ln f_{i−1} + w·h, w = (−3 − p_{i−1})/(p_i − p_{i−1}): it moves with
+    # the bracketing points' gain errors weighted (1 − w) and w (not their root sum square),
+    # and with the 0 dB gain's error by the full step (it shifts every p_j alike)
+    h = math.log(f[i] / f[i - 1])
+    dp = db[i] - db[i - 1]
+    w = math.log(fb / f[i - 1]) / h
+    to_db = 20 / math.log(10)
+    u_db = to_db * math.sqrt(((1 - w) * fr["u_rel"][i - 1]) ** 2 + (w * fr["u_rel"][i]) ** 2
+                             + fr["u_rel"][0] ** 2)
+    # the slope the noise moves the crossing along: the secant over the bracketing pair, or
+    # over the curvature's wider points where that is flatter (7.2.15.1 b)'s grid packs points
+    # 1 % apart near f_est, and a secant over those is steepened by the gains' noise)
+    slope = abs(dp) / h
+    if f.size >= 3:
+        a3, _, c3 = jf.curvature_points(np.log(f), i)
+        slope = min(slope, abs(db[c3] - db[a3]) / math.log(f[c3] / f[a3]))
+    u_f_noise = fb * u_db / slope if slope > 0 else 0.0
+    half_interp = fb * h / abs(dp) * jf.interpolation_remainder(np.log(f), db, i) \
+        if dp != 0 else 0.0
+    inputs = [from_u("f_-3dB", fb, u_f_noise, dof=50,
+                     source="noise of the bracketing gains (weighted by the interpolation) "
+                            "and of the 0 dB gain"),
+              type_b("interp", 0.0, half_interp, "rectangular",
+                     source="linear interpolation in ln f: h²/8·|p''| from a second "
+                            "difference over points at least h/2 apart")]
     u = gum(lambda a, b: a + b, inputs)
     return Item("bandwidth", title, clause, unit, fb, uncertainty=u, details={
         "freq_hz": f, "gain_ratio": K / K[0], "gain_db": db, "phase_deg": fr["phase_deg"],

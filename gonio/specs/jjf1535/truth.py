@@ -192,10 +192,22 @@ def _rule_truth(g, K0: float, K: float, steps, base: float, ez: float, sigma: fl
         pmfs.append(rg.fifty_percent_outcome_pmf(
             inc, rg.fifty_percent_pass_probability(meas, sigma, exp)))
     free = None if None in cands else max(cands)
-    value = free if sigma == 0 else rg.outcome_quantile(rg.max_outcome_pmf(*pmfs), 0.5)
+    pmf = rg.max_outcome_pmf(*pmfs)
+    value = free if sigma == 0 else rg.outcome_quantile(pmf, 0.5)
+    top = float(np.max(np.abs(steps)))
+    x = np.array([top if k is None else abs(k) for k in pmf], float)
+    w = np.array(list(pmf.values()), float)
+    w = w / w.sum()
+    mean = float(w @ x)
+    sd = math.sqrt(max(float(w @ (x - mean) ** 2), 0.0))
     return {"value": value, "noise_free_dps": free, "noise_sigma_output": sigma,
+            "outcome_mean_dps": mean, "outcome_sd_dps": sd,
+            "outcome_skew_z": (mean - value) / sd if sd > 0 and value is not None else 0.0,
             "how": f"the {field} rule's walk on exact model responses (noise off); the median "
-                   "outcome under the model's noise of each referred mean (noise on)"}
+                   "outcome under the model's noise of each referred mean (noise on); "
+                   "outcome_skew_z = (mean − median)/sd of that outcome: the mean of "
+                   "z = (value − median)/u_c that an honest u_c gives (the outcome is "
+                   "discrete and skewed)"}
 
 
 def _warmup_truth(g, w: dict, dt: float, nominal: float, kr: float) -> float:
