@@ -9,6 +9,7 @@ the former budget (a rectangular half-step beside the range) had z sd below 0.7.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from gonio.specs._rate_family import formulas as rg
 from gonio.specs.iec62047_20 import formulas as ief
@@ -53,3 +54,17 @@ def test_outcome_statement_against_the_rules_monte_carlo():
         z.append((value - truth) / u.u_c)
     assert np.mean(hit) >= 0.93
     assert 0.7 <= np.std(z) <= 1.3
+
+
+def test_max_of_outcome_and_noise_sd_against_monte_carlo():
+    """resolution = max(Out,resolution, Noise,RMS): u_c is the standard deviation of the
+    maximum of the rule's discrete outcome and the normal Noise,RMS, by sampling both."""
+    from gonio.specs.iec62047_20.items import max_outcome_normal_sd
+
+    rng = np.random.default_rng(57)
+    pmf = {0.05: 0.15, 0.02: 0.35, 0.01: 0.3, 0.005: 0.15, 0.002: 0.05}
+    for m_b, s_b in ((0.0100, 0.0005), (0.012, 0.004), (0.03, 0.01), (0.001, 0.0)):
+        a = rng.choice(list(pmf), size=400_000, p=list(pmf.values()))
+        b = rng.normal(m_b, s_b, a.size)
+        mc = float(np.std(np.maximum(a, b)))
+        assert max_outcome_normal_sd(pmf, m_b, s_b) == pytest.approx(mc, rel=0.01)

@@ -1631,20 +1631,50 @@ def resolution(ctx: Context) -> Item:
         value, by = noise, "Noise,RMS"
     else:
         value, by = out_res, "Out,resolution"
-    # max(a, b) with a_t ∈ [lo_a, hi_a], b_t ∈ [lo_b, hi_b] lies in [max lo, max hi]
+    # max(a, b) with a_t ∈ [lo_a, hi_a], b_t ∈ [lo_b, hi_b] lies in [max lo, max hi]; u_c is
+    # the standard deviation of max(A, B), A the rule's outcome, B ~ N(Noise,RMS, u_c(B)²)
     lo_r, hi_r = u_rule.interval if u_rule.interval is not None else (out_res, out_res)
     if u_noise is None:
         u = u_rule
     else:
-        lo = max(lo_r, u_noise.interval[0]) if by == "Out,resolution" else u_noise.interval[0]
+        lo = min(max(lo_r, u_noise.interval[0]), value)
         hi = max(hi_r, u_noise.interval[1])
-        base = u_rule if by == "Out,resolution" else u_noise
-        lo = min(lo, value)
-        u = replace(base, U=hi - value, interval=(lo, hi) if hi > lo else None)
+        top = max(k for p in pmfs for k in p if k is not None)
+        u_c = max_outcome_normal_sd({top if k is None else k: w for k, w in pmf.items()},
+                                    noise, u_noise.u_c)
+        u = replace(u_rule, components=u_rule.components + u_noise.components, u_c=u_c,
+                    U=hi - value, interval=(lo, hi) if hi > lo else None)
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by,
         "outcome_pmf": {("none" if k is None else repr(k)): v for k, v in pmf.items()}})
+
+
+def max_outcome_normal_sd(pmf: dict, m_b: float, s_b: float) -> float:
+    """Standard deviation of max(A, B) for A discrete ({value: probability}) and B ~ N(m_b,
+    s_b²) independent (5.6: the rule's outcome and Noise,RMS): for each a, with α = (a −
+    m_b)/s_b, E[max] = aΦ(α) + m_b(1 − Φ(α)) + s_b·φ(α) and E[max²] = a²Φ(α) + (m_b² +
+    s_b²)(1 − Φ(α)) + s_b(a + m_b)φ(α), mixed over A's probabilities.
+
+    >>> round(max_outcome_normal_sd({0.0: 1.0}, 0.0, 1.0), 6)      # max(0, Z): √(1/2 − 1/(2π))
+    0.583819
+    >>> round(max_outcome_normal_sd({0.1: 0.5, 0.05: 0.5}, 0.0, 0.0), 6)
+    0.025
+    """
+    from scipy.stats import norm
+
+    w = np.array(list(pmf.values()), float)
+    w = w / w.sum()
+    a = np.array(list(pmf.keys()), float)
+    if s_b <= 0:
+        mx = np.maximum(a, m_b)
+        e1, e2 = float(w @ mx), float(w @ mx ** 2)
+    else:
+        al = (a - m_b) / s_b
+        P, f = norm.cdf(al), norm.pdf(al)
+        e1 = float(w @ (a * P + m_b * (1 - P) + s_b * f))
+        e2 = float(w @ (a * a * P + (m_b ** 2 + s_b ** 2) * (1 - P) + s_b * (a + m_b) * f))
+    return math.sqrt(max(e2 - e1 * e1, 0.0))
 
 
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
