@@ -18,8 +18,17 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
   ``gyro_counts`` / K_ref with K_ref the median of counts / table angle over every rotation
   reading of the file, so the other rounds predict it) less the table angle, against the
   other readings of its condition (test, rate, orientation): set aside when
-  ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``; 7.3 readings (at rest)
-  the same against the other 7.3 readings of their series.
+  ``|r − median| > max(ROBUST_Z · 1.4826 · MAD, ANGLE_FLOOR_ARCSEC)``.
+- **7.3 indicated angle** — a 7.3 reading (at rest) against its neighbours in time, not
+  against the median of its series: the accumulated angle of a clean rest drifts (bias,
+  warm-up, bias instability), so over the 70 min of 7.3 its readings spread beyond the
+  floor around their median while each stays on the path its neighbours draw. The
+  residual e_i is the reading less the line through its two neighbours (the two nearest,
+  extrapolated, for the first and last); set aside
+  when ``|e − median(e)| > max(ROBUST_Z · 1.4826 · MAD(e), ANGLE_FLOOR_ARCSEC)``: while a
+  residual breaks the rule, the reading without which the others' residuals are smallest is
+  set aside and the rule re-run on the rest (a typo moves its neighbours' residuals too);
+  a series of fewer than four readings, or with repeated times, uses the median rule.
 - **incomplete programme** — a round of 7.1, 7.4, 7.6 or 7.7 missing from every series of a
   condition present in the file, a programme condition (rate, orientation) absent, or a
   round read in some series and not in another series present, is flagged (the item is
@@ -274,9 +283,104 @@ def _indicated_rule(df: pd.DataFrame, protocol, file, k_ref, skip: set) -> list[
         else:
             out += _group_outliers(g, key[0], what, file, k_ref)
     for se, g in work[work["test"] == "zero_stability"].groupby("series", sort=False):
-        out += _group_outliers(g, "zero_stability", f"zero_stability series {int(se)}",
-                               file, k_ref)
+        what = f"zero_stability series {int(se)}"
+        if len(g) < ZS_NEIGHBOUR_MIN:
+            out += _group_outliers(g, "zero_stability", what, file, k_ref)
+        else:
+            out += _rest_outliers(g, what, file, k_ref)
     return out
+
+
+#: A 7.3 series of at least this many readings is screened against each reading's neighbours.
+ZS_NEIGHBOUR_MIN: int = 4
+
+_REST_RULE = (f"|e − median(e)| > max({ROBUST_Z:g} · 1.4826 · MAD(e), {ANGLE_FLOOR_ARCSEC:g}″), "
+              "e = indicated angle − the line through its two neighbours in time (the two "
+              "nearest at the ends); the reading without which the rest's e are smallest "
+              "first, then again on the rest")
+
+
+def rest_residuals(t_s: np.ndarray, r_arcsec: np.ndarray) -> np.ndarray:
+    """Each rest reading less the line through its neighbours in time (through the two
+    nearest, extrapolated, for the first and last), ″. A drift, linear or slowly curving,
+    leaves them near zero; a typo of d moves its own residual by d and its neighbours' by
+    about d/2 (2d at an end extrapolated through it). Where the spacing is uneven (a
+    reading set aside leaves a gap) a residual is divided by √(its prediction's
+    random-walk variance / that on an even grid of the median spacing): 1 on an even grid.
+
+    ``t_s`` strictly increasing, at least 3 readings.
+
+    >>> e = rest_residuals(np.array([0., 300, 600, 900, 1200]), np.array([0., 1, 2, 8, 4]))
+    >>> [round(float(x), 3) for x in e]
+    [0.0, 0.0, -2.5, 5.0, -10.0]
+    """
+    t, x = np.asarray(t_s, float), np.asarray(r_arcsec, float)
+    n = t.size
+    e, f = np.empty(n), np.empty(n)
+    a, b = t[1:-1] - t[:-2], t[2:] - t[1:-1]
+    e[1:-1] = x[1:-1] - (x[:-2] * b + x[2:] * a) / (a + b)
+    # an angle random walk's variance of the residual, per unit rate: ab/(a+b) inside,
+    # a + a²/b at an end (a the gap to the nearest, b between the two used)
+    h = float(np.median(np.diff(t)))
+    f[1:-1] = (a * b / (a + b)) / (h / 2.0)
+    for i, j, k in ((0, 1, 2), (n - 1, n - 2, n - 3)):
+        e[i] = x[i] - (x[j] + (x[j] - x[k]) * (t[i] - t[j]) / (t[j] - t[k]))
+        ga, gb = abs(t[i] - t[j]), abs(t[j] - t[k])
+        f[i] = (ga + ga * ga / gb) / (2.0 * h)
+    # relative to an even grid of the series' median spacing (1 there, at the ends too):
+    # a gap a reading set aside leaves widens its neighbours' predictions
+    return e / np.sqrt(f)
+
+
+def _rest_spread(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The residuals (:func:`rest_residuals`), their median and the rule's threshold."""
+    e = rest_residuals(t, x)
+    med = float(np.median(e))
+    return e, med, max(ROBUST_Z * 1.4826 * float(np.median(np.abs(e - med))),
+                       ANGLE_FLOOR_ARCSEC)
+
+
+def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
+    """7.3 readings of one series off the path their neighbours draw (module docstring).
+
+    While a residual breaks the rule, the reading set aside is the one without which the
+    others' residuals are smallest (a typo also moves its neighbours' residuals, and an
+    end's extrapolation doubles its neighbour's typo), and the rule runs again on the rest.
+    """
+    g = g.sort_values("time_s", kind="stable")
+    t, x = g["time_s"].to_numpy(float), g["_r"].to_numpy(float)
+    if np.any(np.diff(t) <= 0):              # repeated times: no neighbours to draw a line
+        return _group_outliers(g, "zero_stability", what, file, k_ref)
+    idx = np.arange(len(g))
+    out = []
+    while idx.size >= ZS_NEIGHBOUR_MIN:
+        e, med, thr = _rest_spread(t[idx], x[idx])
+        if not np.max(np.abs(e - med)) > thr:
+            break
+        score = []
+        for j in range(idx.size):
+            rest = np.delete(idx, j)
+            er, mr, _ = _rest_spread(t[rest], x[rest])
+            score.append(float(np.max(np.abs(er - mr))))
+        j = int(np.argmin(score))
+        rest = np.delete(idx, j)
+        # the reading against the line its nearest kept neighbours draw
+        near = rest[np.argsort(np.abs(t[rest] - t[idx[j]]), kind="stable")[:2]]
+        (ta, tb), (xa, xb) = t[near], x[near]
+        dev = x[idx[j]] - (xa + (xb - xa) * (t[idx[j]] - ta) / (tb - ta))
+        row = g.iloc[idx[j]]
+        idx = rest
+        col = str(row["_col"])
+        by = (f" (K_ref = {k_ref:.9g} counts/° from the other readings)"
+              if col == "gyro_counts" else "")
+        out.append(Finding(
+            "indicated-angle-outlier",
+            f"{what} round {int(row['round'])}: indicated angle {row['_r']:.4g}″ departs from "
+            f"the line through its neighbours in time by {dev:.4g}″ (the series' residuals: "
+            f"median {med:.3g}″, threshold {thr:.3g}″){by}", "set_aside", file=file,
+            line=int(row["line"]), column=col, test="zero_stability",
+            clause=CLAUSES["zero_stability"], rule=_REST_RULE))
+    return sorted(out, key=lambda f: f.line)
 
 
 def _group_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[Finding]:

@@ -78,6 +78,11 @@ class InstrumentConfig:
     counter_bits: int = 64
     counter_signed: bool = True
     integration: str = "exact"
+    #: The rate at which the instrument itself samples and integrates its rate (a FOG's
+    #: ``"rectangle"`` integration), Hz; 0: the simulation's rate. A simulation coarser
+    #: than it (a coverage study at 100 Hz of a 1 kHz FOG) does not coarsen the
+    #: instrument's integrator: it integrates the angle exactly (instrument.py).
+    integration_rate_hz: float = 0.0
     sf_temperature_coeff_ppm_per_c: float = 0.0
     bias_temperature_coeff_dph_per_c: float = 0.0
 

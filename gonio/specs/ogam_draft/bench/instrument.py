@@ -17,7 +17,12 @@ is the integral of ω_s·(1 + ε(|ω_s|)) plus its bias and noise:
 * RLG: the counter is the exact integral (trapezoid on the grid for the
   Earth-rate and nonlinearity terms, closed form for θ cos ψ); FOG: rate
   samples integrated by the rectangle rule at the sample rate (draft 4.4: a
-  source of the rate dependence that 7.6 measures);
+  source of the rate dependence that 7.6 measures). A FOG simulated at a rate
+  below its own integration rate (``integration_rate_hz``) outputs its
+  accumulated angle as the RLG's exact integral: the simulation's grid is the
+  record's sampling, not the instrument's integrator; the rectangle residual at
+  the instrument's own rate, at most a·h²/4 (0.054″ at 60 °/s² and 1 kHz), is
+  then left out (:func:`integration_mode`);
 * integer pulse counting (floor), optionally wrapping at ``counter_bits``.
 
 Everything is vectorised over samples; :class:`Integrator` carries the state
@@ -116,9 +121,24 @@ def geometry(bench: Bench, orientation: str) -> Geometry:
                     math.radians(tab.wobble_phase_deg))
 
 
+def integration_mode(inst: InstrumentConfig, sample_rate_hz: float) -> str:
+    """How the simulation integrates the instrument's rate at ``sample_rate_hz``:
+    ``"rectangle"`` (a FOG's left rectangle rule on the simulation's grid, when that grid
+    is the instrument's own: ``integration_rate_hz`` 0 or not above it) or ``"exact"``.
+
+    >>> fog = InstrumentConfig(integration="rectangle", integration_rate_hz=1000.0)
+    >>> integration_mode(fog, 1000.0), integration_mode(fog, 100.0)
+    ('rectangle', 'exact')
+    """
+    if inst.integration == "rectangle" and inst.integration_rate_hz \
+            and sample_rate_hz < inst.integration_rate_hz * (1.0 - 1e-12):
+        return "exact"
+    return inst.integration
+
+
 def deterministic_signature(inst: InstrumentConfig) -> tuple:
     """The parameters the deterministic rate terms depend on (not the random ones)."""
-    return (inst.integration, inst.bias_dph, inst.warmup_drift_dph, inst.warmup_tau_s,
+    return (inst.integration, inst.integration_rate_hz, inst.bias_dph, inst.warmup_drift_dph, inst.warmup_tau_s,
             inst.sf_rate_quadratic_ppm, inst.sf_lowrate_ppm, inst.sf_lowrate_scale_dps)
 
 
@@ -149,6 +169,7 @@ class Integrator:
                  rng: np.random.Generator | None):
         self.inst = inst
         self.dt = 1.0 / sample_rate_hz
+        self.integration = integration_mode(inst, sample_rate_hz)
         self.warm_up_s = warm_up_s
         self.rng = rng
         self.angle = 0.0          # accumulated angle, deg
@@ -223,11 +244,11 @@ class Integrator:
         eps = rate_nonlinearity(sensed, inst)
         t_on = t + self.warm_up_s
         bias = dph_to_dps(inst.bias_dph + inst.warmup_drift_dph * np.exp(-t_on / inst.warmup_tau_s))
-        if inst.integration == "rectangle":
+        if self.integration == "rectangle":
             det = np.repeat(sensed * (1.0 + eps), rep) + bias
         else:
             det = np.repeat(earth + sensed * eps, rep) + bias
-        return DeterministicRates(inst.integration, det, deterministic_signature(inst), geom.cos_psi)
+        return DeterministicRates(self.integration, det, deterministic_signature(inst), geom.cos_psi)
 
     def integrate(self, det: "DeterministicRates", theta_deg: np.ndarray) -> np.ndarray:
         """Instrument angle from :meth:`rates` (same instrument but for its random terms)
