@@ -25,10 +25,12 @@ aside what the findings say. The rules, their thresholds and why (docs/draft-rea
   floor around their median while each stays on the path its neighbours draw. The
   residual e_i is the reading less the line through its two neighbours (the two nearest,
   extrapolated, for the first and last); set aside
-  when ``|e − median(e)| > max(ROBUST_Z · 1.4826 · MAD(e), ANGLE_FLOOR_ARCSEC)``: while a
-  residual breaks the rule, the reading without which the others' residuals are smallest is
-  set aside and the rule re-run on the rest (a typo moves its neighbours' residuals too);
-  a series of fewer than four readings, or with repeated times, uses the median rule.
+  when ``|e − median(e)| > max(ROBUST_Z · 1.4826 · MAD(e), ANGLE_FLOOR_ARCSEC)``, e and the
+  threshold those of the other readings: the candidate is the reading without which the
+  others' residuals are smallest (a typo moves its neighbours' residuals and their MAD
+  too), e its departure from the line its neighbours among the others draw; the rule then
+  runs again on the others. A series of fewer than four readings, or with repeated
+  times, uses the median rule.
 - **incomplete programme** — a round of 7.1, 7.4, 7.6 or 7.7 missing from every series of a
   condition present in the file, a programme condition (rate, orientation) absent, or a
   round read in some series and not in another series present, is flagged (the item is
@@ -296,8 +298,8 @@ ZS_NEIGHBOUR_MIN: int = 4
 
 _REST_RULE = (f"|e − median(e)| > max({ROBUST_Z:g} · 1.4826 · MAD(e), {ANGLE_FLOOR_ARCSEC:g}″), "
               "e = indicated angle − the line through its two neighbours in time (the two "
-              "nearest at the ends); the reading without which the rest's e are smallest "
-              "first, then again on the rest")
+              "nearest at the ends), the reading without which the others' e are smallest "
+              "against the others' median and threshold; then again on the others")
 
 
 def rest_residuals(t_s: np.ndarray, r_arcsec: np.ndarray) -> np.ndarray:
@@ -340,12 +342,31 @@ def _rest_spread(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float, float
                        ANGLE_FLOOR_ARCSEC)
 
 
+def _off_line(t: np.ndarray, x: np.ndarray, tj: float, xj: float) -> tuple[float, float]:
+    """A reading at ``tj`` less the line through its neighbours among ``t`` (the two
+    nearest, extrapolated, beyond them), ″, and the same scaled as :func:`rest_residuals`
+    scales."""
+    h = float(np.median(np.diff(t)))
+    k = int(np.searchsorted(t, tj))
+    if 0 < k < t.size:
+        i, j = k - 1, k
+        a, b = tj - t[i], t[j] - tj
+        d = xj - (x[i] * b + x[j] * a) / (a + b)
+        return d, d / math.sqrt((a * b / (a + b)) / (h / 2.0))
+    i, j = (0, 1) if k == 0 else (t.size - 1, t.size - 2)
+    a, b = abs(tj - t[i]), abs(t[i] - t[j])
+    d = xj - (x[i] + (x[i] - x[j]) * (tj - t[i]) / (t[i] - t[j]))
+    return d, d / math.sqrt((a + a * a / b) / (2.0 * h))
+
+
 def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
     """7.3 readings of one series off the path their neighbours draw (module docstring).
 
-    While a residual breaks the rule, the reading set aside is the one without which the
-    others' residuals are smallest (a typo also moves its neighbours' residuals, and an
-    end's extrapolation doubles its neighbour's typo), and the rule runs again on the rest.
+    The candidate is the reading without which the others' residuals are smallest (a typo
+    also moves its neighbours' residuals and their MAD, and an end's extrapolation doubles
+    its neighbour's typo); it is set aside when it departs from the line its neighbours
+    among the others draw by more than the others' threshold, and the rule runs again on
+    the others.
     """
     g = g.sort_values("time_s", kind="stable")
     t, x = g["time_s"].to_numpy(float), g["_r"].to_numpy(float)
@@ -354,20 +375,17 @@ def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
     idx = np.arange(len(g))
     out = []
     while idx.size >= ZS_NEIGHBOUR_MIN:
-        e, med, thr = _rest_spread(t[idx], x[idx])
-        if not np.max(np.abs(e - med)) > thr:
-            break
-        score = []
+        best = None
         for j in range(idx.size):
             rest = np.delete(idx, j)
-            er, mr, _ = _rest_spread(t[rest], x[rest])
-            score.append(float(np.max(np.abs(er - mr))))
-        j = int(np.argmin(score))
-        rest = np.delete(idx, j)
-        # the reading against the line its nearest kept neighbours draw
-        near = rest[np.argsort(np.abs(t[rest] - t[idx[j]]), kind="stable")[:2]]
-        (ta, tb), (xa, xb) = t[near], x[near]
-        dev = x[idx[j]] - (xa + (xb - xa) * (t[idx[j]] - ta) / (tb - ta))
+            er, mr, tr = _rest_spread(t[rest], x[rest])
+            score = float(np.max(np.abs(er - mr)))
+            if best is None or score < best[0]:
+                best = (score, j, rest, mr, tr)
+        _, j, rest, med, thr = best
+        raw, dev = _off_line(t[rest], x[rest], t[idx[j]], x[idx[j]])
+        if not abs(dev - med) > thr:
+            break
         row = g.iloc[idx[j]]
         idx = rest
         col = str(row["_col"])
@@ -376,9 +394,10 @@ def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
         out.append(Finding(
             "indicated-angle-outlier",
             f"{what} round {int(row['round'])}: indicated angle {row['_r']:.4g}″ departs from "
-            f"the line through its neighbours in time by {dev:.4g}″ (the series' residuals: "
-            f"median {med:.3g}″, threshold {thr:.3g}″){by}", "set_aside", file=file,
-            line=int(row["line"]), column=col, test="zero_stability",
+            f"the line through its neighbours in time by {raw:.4g}″ ({dev:.4g}″ on an even "
+            f"grid's scale; the other readings' residuals: median {med:.3g}″, threshold "
+            f"{thr:.3g}″){by}", "set_aside",
+            file=file, line=int(row["line"]), column=col, test="zero_stability",
             clause=CLAUSES["zero_stability"], rule=_REST_RULE))
     return sorted(out, key=lambda f: f.line)
 
