@@ -27,7 +27,14 @@ SEEDS = 24
 #: holds the tilt × Earth-rate coupling that U(K)'s K_tilt line is there to cover; against
 #: the instrument's K from the bench file (item_coverage.scale_factor_truth) the line is
 #: part of the error, and on benches whose Type B effects are drawn per trial sd z ≈ 0.7.
-KNOWN_OVER_WIDE: dict = {}
+KNOWN_OVER_WIDE: dict = {
+    # E under the physical budget, on its own u_c (the study's record carried the draft
+    # budget's u_c before) and corrected at the measured tilt: sd z ≈ 0.25. Its lines K_P,
+    # K_r (the 7.1 scatter taken as u(r)) and u(r) of a single reading for E_i, a mean over
+    # the series, are wider than the errors they budget; the tilt line is no longer what
+    # hides it (README, docs/draft-readings.md#a1-method). Not fixed yet.
+    "angle_deviation": "physical budget's K_P, K_r and u(r) lines wider than the errors",
+}
 @pytest.fixture(scope="module")
 def proto():
     return validation_protocol(all_items=True)
