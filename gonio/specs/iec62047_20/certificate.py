@@ -127,6 +127,15 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
      r"√\(2G\)·u_drift\(record\)",
      "记录期间的零偏漂移（Allan 拟合：RRW、BI）：其最大偏移的均方根，√(2G)·u_drift(记录)"),
     (r"bias drift over the record \(Allan fit: RRW, BI\)", "记录期间的零偏漂移（Allan 拟合：RRW、BI）"),
+    (r"largest \|Out\(t\) − Out,ave\| over the records; u: the estimate's spread in (\d+) seeded "
+     r"replicates of the fitted records \(c \+ A·e\^\(−t/τ\), white noise σ_y, bias drift from "
+     r"the Allan fit\)",
+     "各记录中 |Out(t) − 参考段平均输出| 的最大值；u：拟合记录（c + A·e^(−t/τ)、白噪声 σ_y、由 Allan "
+     "拟合得到的零偏漂移）的 {1} 次定种子复现中该估计值的分散性"),
+    (r"selection excess of the largest smoothed value, E\*\[R\*\] − R̂, removed",
+     "平滑值取最大者的选择超出量 E*[R*] − R̂（已减去）"),
+    (r"residual bias of the corrected reading, E\*\[V\*\] − R̂, removed",
+     "修正后读数的剩余偏差 E*[V*] − R̂（已减去）"),
 )
 
 #: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 5.1.3.8's symmetry
