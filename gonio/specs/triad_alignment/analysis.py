@@ -380,7 +380,13 @@ class AlignmentResult:
                 "orientation_u_rad": self.type_b["orientation_u_rad"],
                 "u_system_matrix": mat(self.type_b["u_theta"].reshape(3, 4)[:, :3]),
                 "u_derived": {k: mat(v) for k, v in self.type_b["u_derived"].items()},
-                "residual_leakage_u": mat(self.type_b["leakage_u"])},
+                "residual_leakage_u": mat(self.type_b["leakage_u"]),
+                **({"rate_bound_rel": self.type_b["rate_bound_rel"],
+                    "orientation_bound_rad": self.type_b["orientation_bound_rad"],
+                    "a_system_matrix": mat(self.type_b["a_theta"].reshape(3, 4)[:, :3]),
+                    "a_derived": {k: mat(v) for k, v in self.type_b["a_derived"].items()},
+                    "residual_leakage_a": mat(self.type_b["a_leakage"])}
+                   if "a_theta" in self.type_b else {})},
         }
         return out
 
@@ -624,6 +630,57 @@ def _mc_trials(x: np.ndarray, w: np.ndarray, fitted: np.ndarray, sd: np.ndarray,
     return trials
 
 
+#: The rate error's bound in the bound-condition statement, in units of the table
+#: certificate's standard uncertainty: its expanded uncertainty at k = 2 (a normal error has
+#: no bound; the certificate's 95 % statement is taken as one, JCGM 100 4.3.4 read backwards).
+RATE_ERROR_BOUND_K = 2.0
+
+
+def table_bound_vectors(m: np.ndarray, rate_bound_rel: float, orientation_bound_rad: float
+                        ) -> list[np.ndarray]:
+    """The rate table's errors at their bounds as shifts of θ (12, rows of [M | b] stacked),
+    one per independent error, in the first-order model of :func:`table_type_b_cov`: the rate
+    error at ``rate_bound_rel`` shifts every M_ia by M_ia ε; each axis component δ_aj
+    (j ≠ a) at ``orientation_bound_rad`` shifts column a by M_·j δ_aj. The worst combination
+    of the errors within their bounds moves a linear function g(θ) by at most Σ_k |∇g · s_k|
+    (each error takes the sign that adds; JCGM 100 5.1.2's sensitivities, summed in absolute
+    value instead of in quadrature): :func:`table_bound`.
+
+    >>> v = table_bound_vectors(np.diag([50.0, 50.0, 50.0]), 1e-3, 2e-3)
+    >>> len(v), round(float(v[0][0]), 6), round(float(v[1][4]), 6)   # ε: M_xx; δ_xy: M_yx
+    (7, 0.05, 0.1)
+    """
+    m = np.asarray(m, dtype=float)
+    idx = np.array([[4 * i + j for j in range(3)] for i in range(3)])
+    out = []
+    v = np.zeros(12)
+    v[idx] = m * rate_bound_rel
+    out.append(v)
+    for a in range(3):
+        for j in range(3):
+            if j != a:
+                v = np.zeros(12)
+                v[idx[:, a]] = m[:, j] * orientation_bound_rad
+                out.append(v)
+    return out
+
+
+def table_bound(f, theta: np.ndarray, vectors: list[np.ndarray]) -> np.ndarray:
+    """The largest first-order change of f(θ) that the table's errors within their bounds
+    give (:func:`table_bound_vectors`): Σ_k |J s_k|, J the Jacobian of f at θ
+    (:func:`gum_propagate` of the rank-one covariance s_k s_kᵀ gives (J s_k)²).
+
+    >>> s = [np.array([1.0, 0.0]), np.array([0.0, 1.0])]
+    >>> table_bound(lambda t: np.array([t[0] - 2.0 * t[1]]), np.array([1.0, 1.0]), s)
+    array([3.])
+    """
+    total = 0.0
+    for v in vectors:
+        total = total + np.sqrt(np.clip(np.diag(gum_propagate(f, theta, np.outer(v, v))),
+                                        0, None))
+    return np.atleast_1d(total)
+
+
 def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
                        monte_carlo: int = 0, seed: int = 0, target_deg: float = 0.1,
                        rate_u_rel: float = 0.0, orientation_u_rad: float = 0.0,
@@ -687,7 +744,14 @@ def estimate_alignment(readings: TriadReadings, *, robust: bool = False,
                   "u_derived": _split(np.sqrt(np.clip(np.diag(
                       gum_propagate(_derived, theta, cov_b)), 0, None))),
                   "leakage_u": np.sqrt(np.clip(np.diag(gum_propagate(leak, theta, cov_b)),
-                                               0, None)).reshape(3, 3)}
+                                               0, None)).reshape(3, 3),
+                  # the bound condition: each error at its bound, the worst combination
+                  "rate_bound_rel": RATE_ERROR_BOUND_K * float(rate_u_rel),
+                  "orientation_bound_rad": float(orientation_u_rad) * math.sqrt(3.0)}
+        vecs = table_bound_vectors(m, type_b["rate_bound_rel"], type_b["orientation_bound_rad"])
+        type_b["a_theta"] = table_bound(lambda t: t, theta, vecs)
+        type_b["a_derived"] = _split(table_bound(_derived, theta, vecs))
+        type_b["a_leakage"] = table_bound(leak, theta, vecs).reshape(3, 3)
     u_mc = u_mc_theta = None
     if monte_carlo > 0:
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), 1801]))

@@ -345,6 +345,10 @@ _PROTOCOL_SCHEMA = {
         "settle_s": Field("float", default=2.0, check=non_negative, expect=">= 0"),
         "static_positions": Field("bool", default=True),
         "static_dwell_s": Field("float", default=60.0, check=positive, expect="> 0"),
+        # which statement of the table-dominated items the certificate certifies:
+        # "gum" (JCGM 100, the table's errors as distributions) or "bound" (the table's
+        # errors at their bounds, worst combination, plus k·u of the rest)
+        "uncertainty_statement": Field("str", default="gum", choices=("gum", "bound")),
         "north0": Field("table", default={}, schema={
             "x": Field("str", default="+y"), "y": Field("str", default="+z"),
             "z": Field("str", default="+x")}),
@@ -385,6 +389,7 @@ class TriadProtocol:
     static_duration_s: float
     thermal: dict
     path: str = ""
+    uncertainty_statement: str = "gum"
 
 
 def load_triad_protocol(name_or_path, spec_key: str | None = None) -> TriadProtocol:
@@ -411,7 +416,8 @@ def load_triad_protocol(name_or_path, spec_key: str | None = None) -> TriadProto
     return TriadProtocol(cfg["protocol"]["name"], cfg["protocol"]["spec"] or spec_key,
                          tuple(al["rates_dps"]),
                          al["revolutions"], al["settle_s"], al["static_positions"],
-                         al["static_dwell_s"], dict(north0), st["duration_s"], dict(th), str(path))
+                         al["static_dwell_s"], dict(north0), st["duration_s"], dict(th), str(path),
+                         al["uncertainty_statement"])
 
 
 # ---------------------------------------------------------------------------- session

@@ -37,6 +37,7 @@ from gonio.result.model import (Covariance, Item, Result, Uncertainty, not_measu
 from gonio.specs.triad_alignment.thermal_model import (Compensation, ThermalModelResult,
                                                       compensate_record, identify_thermal_model)
 from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFDIAG,
+                                                 RATE_ERROR_BOUND_K,
                                                  AlignmentResult, bias_instability_u_dps,
                                                  cross_axis_table, estimate_alignment)
 from gonio.errors import GonioError
@@ -63,7 +64,7 @@ READINGS_TAKEN = (
     "axis and the static positions), the Earth rate of every orientation averaged over the "
     "swept table angle; for one ± pair it reduces to the article's difference formula.",
     "Uncertainties: Type A from the fit residuals, k = t(ν), coverage probability "
-    "approximately 95 %; the Monte Carlo "
+    "95.45 %; the Monte Carlo "
     "(JCGM 101) standard uncertainty is given beside it when trials were run.",
     "Residual leakage after alignment: M̂⁻¹M − I is zero for the estimate itself; its "
     "uncertainty is what the alignment leaves.",
@@ -157,6 +158,59 @@ def with_table_type_b(unc: Uncertainty, key: str, u_b: float, al: AlignmentResul
     return Uncertainty(comp, u_c, k * u_c, k, float(nu), unc.monte_carlo, COVERAGE, K_SOURCE_WS)
 
 
+#: The two statements of a table-dominated item (M_ij, S_ij, L_ij, the thermal K values)
+#: and which the certificate certifies (the protocol's ``[alignment] uncertainty_statement``).
+STATEMENTS = {
+    "gum": "JCGM 100: the table's errors as distributions (rate error normal with its "
+           "certificate's u, axis components rectangular u = a/√3) in u_c, U = k·u_c; holds "
+           "95.45 % over the distribution of the table's errors",
+    "bound": "bound condition: the table's errors at their bounds (rate error at its "
+             "certificate's expanded uncertainty, k = 2; every axis component at the "
+             "fixture's bound), their worst combination propagated linearly, a = Σ|c_k|·a_k, "
+             "plus k·u of the other lines, U = a + t_0.9545(ν)·u_rest; holds at least 95.45 % "
+             "at every table error within its bounds",
+}
+
+
+def bound_condition(value: float, a_table: float, u_rest: float, nu_rest: float) -> dict:
+    """The bound-condition statement of an item whose table errors are bounded: the table's
+    errors at their bounds in their worst combination move the estimate by at most
+    ``a_table`` (first order, :func:`gonio.specs.triad_alignment.analysis.table_bound`); the
+    other lines (the fit's noise, ν = ``nu_rest``) give u_rest, so
+
+        U_bound = a_table + t_0.9545(ν_rest) · u_rest,
+
+    and P(|offset + e| ≤ U_bound) ≥ P(|e| ≤ t·u_rest) = 0.9545 for every offset |offset| ≤
+    a_table (JCGM 100 4.3.7 for the bounds, 6.2 for k; the bounds added linearly as in a
+    worst-case budget, not in quadrature). Stated by its interval value ± U_bound.
+
+    >>> b = bound_condition(1.0, 0.5, 0.1, math.inf)
+    >>> round(b["U"], 4), round(b["k_rest"], 4), [round(x, 4) for x in b["interval"]]
+    (0.7, 2.0, [0.3, 1.7])
+    """
+    k = coverage_k(nu_rest, COVERAGE) if u_rest > 0 else 0.0
+    big_u = float(a_table) + k * float(u_rest)
+    return {"U": big_u, "a_table": float(a_table), "u_rest": float(u_rest),
+            "nu_rest": float(nu_rest), "k_rest": float(k),
+            "interval": [float(value) - big_u, float(value) + big_u],
+            "coverage_probability": COVERAGE, "basis": STATEMENTS["bound"]}
+
+
+def certified(unc: Uncertainty, bc: dict, statement: str) -> Uncertainty:
+    """The uncertainty the certificate states: the GUM budget ``unc`` ("gum"), or ("bound")
+    the same budget stated by the bound-condition interval ``bc`` (:func:`bound_condition`):
+    no coverage factor (U_bound is no multiple of u_c), the interval is the statement with
+    probability at least 0.9545 at every table error within its bounds."""
+    if statement != "bound":
+        return unc
+    return Uncertainty(list(unc.components), unc.u_c, bc["U"], None, bc["nu_rest"],
+                       unc.monte_carlo, COVERAGE,
+                       f"bound condition: U = a_table + k·u_rest = {bc['a_table']:.4g} + "
+                       f"{bc['k_rest']:.3g} × {bc['u_rest']:.4g} (the table's errors at their "
+                       "bounds, worst combination; at least 95.45 % at every table error "
+                       "within them)", tuple(bc["interval"]))
+
+
 def nu_with_table(u_fit: float, nu_fit: float, u_b: float) -> float:
     """The Welch–Satterthwaite ν_eff (JCGM 100 G.4.1) of the fit's part (u, ν) plus the
     table's Type B part ``u_b`` (ν = ∞): (u_fit² + u_b²)² / (u_fit⁴/ν_fit).
@@ -238,9 +292,12 @@ def static_record_s(r: TriadReadings) -> float:
     return float(st["duration_s"].sum()) if len(st) else 0.0
 
 
-def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
-                    ) -> dict[str, Item]:
-    """The alignment items (module docstring) from an :class:`AlignmentResult`."""
+def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0,
+                    statement: str = "gum") -> dict[str, Item]:
+    """The alignment items (module docstring) from an :class:`AlignmentResult`. The items the
+    rate table enters (M, S, L) carry both statements in their details (``gum`` and
+    ``bound_condition``, :data:`STATEMENTS`); ``statement`` says which one the item's
+    uncertainty states (:func:`certified`)."""
     unit = al.output_unit or "output"
     items: dict[str, Item] = {}
     um = al.u_system_matrix
@@ -253,14 +310,26 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
     ub_m = tb["u_theta"].reshape(3, 4)[:, :3] if tb else np.zeros((3, 3))
     ub_s = tb["u_derived"]["cross_axis"] if tb else np.zeros(6)
     ub_l = tb["leakage_u"] if tb else np.zeros((3, 3))
+    a_m = tb["a_theta"].reshape(3, 4)[:, :3] if tb else np.zeros((3, 3))
+    a_s = tb["a_derived"]["cross_axis"] if tb else np.zeros(6)
+    a_l = tb["a_leakage"] if tb else np.zeros((3, 3))
+
+    def both(key, clause, name, unit_, value, fit_unc, u_b, a, details=None):
+        gum = with_table_type_b(fit_unc, key, u_b, al)
+        bc = bound_condition(value, a, fit_unc.u_c, fit_unc.nu_eff)
+        return Item(key, name, clause, unit_, value, uncertainty=certified(gum, bc, statement),
+                    details={**(details or {}), "statement": statement,
+                             "gum": {"U": gum.U, "k": gum.k, "u_c": gum.u_c,
+                                     "nu_eff": gum.nu_eff},
+                             "bound_condition": bc})
     for i in range(3):
         for j in range(3):
             key = f"M_{AXES[i]}{AXES[j]}"
-            items[key] = Item(key, f"system matrix {key}", "§4 eq. 14", f"{unit}/(°/s)",
-                              float(al.system_matrix[i, j]), uncertainty=with_table_type_b(
-                                  _type_a(key, fit, _fit_part(um[i, j], ub_m[i, j]),
-                                          _nu(al, i, j), None if mc_m is None else mc_m[i, j],
-                                          trials), key, float(ub_m[i, j]), al))
+            items[key] = both(key, "§4 eq. 14", f"system matrix {key}", f"{unit}/(°/s)",
+                              float(al.system_matrix[i, j]),
+                              _type_a(key, fit, _fit_part(um[i, j], ub_m[i, j]),
+                                      _nu(al, i, j), None if mc_m is None else mc_m[i, j],
+                                      trials), float(ub_m[i, j]), float(a_m[i, j]))
     u_bi, nu_bi = bias_instability_u_dps(al.averaging, static_s)
     for i in range(3):
         key = f"b_{AXES[i]}"
@@ -286,20 +355,19 @@ def alignment_items(al: AlignmentResult, trials: int, static_s: float = 0.0
     for n, r in enumerate(tab.itertuples(index=False)):
         i, j = AXES.index(r.gyro), AXES.index(r.about)
         key = f"S_{r.gyro}{r.about}"
-        items[key] = Item(key, f"cross-axis sensitivity {key} = M_{r.gyro}{r.about}/M_{r.gyro}"
-                          f"{r.gyro}", "IEC 62047-20 5.2", "1", float(r.sensitivity),
-                          uncertainty=with_table_type_b(_type_a(
-                              key, "first-order propagation of the fit (JCGM 100 5.1.2)",
-                              _fit_part(r.u_gum, float(ub_s[n])), al.dof[i], r.u_mc, trials),
-                              key, float(ub_s[n]), al))
+        items[key] = both(key, "IEC 62047-20 5.2", f"cross-axis sensitivity {key} = "
+                          f"M_{r.gyro}{r.about}/M_{r.gyro}{r.gyro}", "1", float(r.sensitivity),
+                          _type_a(key, "first-order propagation of the fit (JCGM 100 5.1.2)",
+                                  _fit_part(r.u_gum, float(ub_s[n])), al.dof[i], r.u_mc,
+                                  trials), float(ub_s[n]), float(a_s[n]))
     for name in OFFDIAG:
         i, j = AXES.index(name[0]), AXES.index(name[1])
         key = f"L_{name}"
-        items[key] = Item(key, f"residual leakage after alignment {key} (M̂⁻¹M − I)",
-                          "§4 M̂⁻¹M − I", "1", 0.0, uncertainty=with_table_type_b(_type_a(
-                              key, "δL = −M̂⁻¹ δM, first order",
-                              _fit_part(al.leakage_u[i, j], ub_l[i, j]), nu_min),
-                              key, float(ub_l[i, j]), al))
+        items[key] = both(key, "§4 M̂⁻¹M − I", f"residual leakage after alignment {key} "
+                          "(M̂⁻¹M − I)", "1", 0.0,
+                          _type_a(key, "δL = −M̂⁻¹ δM, first order",
+                                  _fit_part(al.leakage_u[i, j], ub_l[i, j]), nu_min),
+                          float(ub_l[i, j]), float(a_l[i, j]))
     av = al.averaging
     if av is None:
         items["averaging_time"] = not_measured(
@@ -444,15 +512,25 @@ def thermal_long_term(al: AlignmentResult | None, readings: TriadReadings,
     return out
 
 
+def _rest_of(unc: Uncertainty, drop: str) -> tuple[float, float]:
+    """u and Welch–Satterthwaite ν (JCGM 100 G.4.1) of a budget's lines other than ``drop``."""
+    rows = [c for c in unc.components if c["symbol"] != drop and c["u"] > 0]
+    u = math.sqrt(sum(c["u"] ** 2 for c in rows))
+    den = sum(c["u"] ** 4 / c["dof"] for c in rows)
+    return u, (u ** 4 / den if den > 0 else math.inf)
+
+
 def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = None,
-                  rate_u_rel: float = 0.0) -> dict[str, Item]:
+                  rate_u_rel: float = 0.0, statement: str = "gum") -> dict[str, Item]:
     """The certified values of the identified K(ϑ, U), b(ϑ, U), ARW(ϑ) at the programme's
     set points and supply levels (:meth:`ChannelModel.certified_points`), in physical units:
     a fixed measurand per item, whatever orders the criterion chose (the coefficients are
     information in ``thermal_model``). ``long_term`` ({gyro: (u, ν)}, :func:`thermal_long_term`)
     makes the bias values long-term; without it they are in-run (details ``bias``).
     ``rate_u_rel``: the rate table's relative standard uncertainty, a Type B line of every
-    K value (:func:`_point_budget`)."""
+    K value (:func:`_point_budget`); the K values also carry the bound-condition statement
+    (:func:`bound_condition`: |K| × the rate error at its bound, k = 2 × ``rate_u_rel``, plus
+    k·u of the other lines) and ``statement`` says which one is certified (:func:`certified`)."""
     long_term = long_term or {}
     items: dict[str, Item] = {}
     units = {"K": f"{unit}/(°/s)", "b": "°/s", "ARW": "°/√h"}
@@ -468,12 +546,19 @@ def thermal_items(th: ThermalModelResult, unit: str, long_term: dict | None = No
             else:
                 key = f"{name}_{ch}_t{pt['t']}_v{pt['v']}"
                 at += f", {pt['supply_v']:g} V"
+            unc = _point_budget(key, fit, pt, long_term.get(ch) if name == "b" else None,
+                                rate_u_rel if name == "K" else 0.0)
+            both = {}
+            if name == "K" and rate_u_rel > 0:
+                u_rest, nu_rest = _rest_of(unc, f"{key}_table")
+                bc = bound_condition(pt["value"], abs(pt["value"]) * RATE_ERROR_BOUND_K
+                                     * rate_u_rel, u_rest, nu_rest)
+                both = {"statement": statement, "bound_condition": bc,
+                        "gum": {"U": unc.U, "k": unc.k, "u_c": unc.u_c, "nu_eff": unc.nu_eff}}
+                unc = certified(unc, bc, statement)
             items[key] = Item(key, f"{names[name]} {name}_{ch} at {at}", clauses[name],
-                              units[name], pt["value"],
-                              uncertainty=_point_budget(
-                                  key, fit, pt, long_term.get(ch) if name == "b" else None,
-                                  rate_u_rel if name == "K" else 0.0),
-                              details={"setpoint_c": pt["setpoint_c"],
+                              units[name], pt["value"], uncertainty=unc,
+                              details={**both, "setpoint_c": pt["setpoint_c"],
                                        "supply_v": pt["supply_v"],
                                        "theta_c": pt["theta_c"], "u_v": pt["u_v"],
                                        "temperature_source": m.temperature,
@@ -552,14 +637,20 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
     (:func:`gonio.specs.triad_alignment.analysis.estimate_alignment`), Monte Carlo with
     ``monte_carlo_trials`` draws; the extended model from the thermal programme
     (:func:`_thermal_readings`; :func:`gonio.specs.triad_alignment.thermal_model.identify_thermal_model`),
-    applied back to the same record for the before/after comparison. ``protocol`` is
-    accepted for the plug-in interface: everything the analysis uses is in the file.
+    applied back to the same record for the before/after comparison. ``protocol`` (a name or
+    file; None: the JCGM 100 statement) gives the statement the table-dominated items
+    certify (``[alignment] uncertainty_statement``, :data:`STATEMENTS`); everything else
+    the analysis uses is in the readings file.
     ``findings``: the screening of both files already made (:func:`screen_files`, the
     pipeline's ``SPEC.screen``); None: screened here.
     """
 
+    from gonio.specs.triad_alignment.bench import load_triad_protocol
     from gonio.specs.triad_alignment.screen import check
 
+    # which statement the table-dominated items certify: the protocol's choice (STATEMENTS)
+    statement = load_triad_protocol(protocol, KEY).uncertainty_statement if protocol \
+        else "gum"
     r = _as_readings(readings)
     screened = findings is not None
     # refused readings stop here, naming the line
@@ -577,7 +668,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
             al = None
             items.update(_alignment_not_measured(f"the data were refused: {exc.message}", unit))
         else:
-            items.update(alignment_items(al, monte_carlo_trials, static_record_s(r)))
+            items.update(alignment_items(al, monte_carlo_trials, static_record_s(r), statement))
     else:
         items.update(_alignment_not_measured("the readings have no alignment rows", unit))
     tr = _thermal_readings(r, thermal)
@@ -603,7 +694,7 @@ def calibrate(readings, protocol=None, *, monte_carlo_trials: int = 0, robust: b
                 "thesis eq. 6.14", "", f"the data were refused: {exc.message}")
         else:
             items.update(thermal_items(th, unit, thermal_long_term(al, r, th),
-                                       tr.table_metadata("rate_table_u_rel")))
+                                       tr.table_metadata("rate_table_u_rel"), statement))
             tj = th.to_json()
             for ch, c in comp.items():
                 tj["channels"][ch]["compensation"] = c.to_json()

@@ -30,6 +30,7 @@ from gonio.report.stated import item_nums, num
 from gonio.result.statement import unit_text
 from gonio.specs import get
 from gonio.specs.triad_alignment import certificate as content
+from gonio.specs.triad_alignment.calibration import total_coverage_factor
 from gonio.specs.triad_alignment.figures import (alignment_panels, language,
                                                  thermal_check_panels, thermal_model_panels)
 
@@ -79,17 +80,22 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
                              robust=T("robust") if al["robust"] else "")]))
     rows = []
     for i, a in enumerate(AXES):
-        rows.append([f"{T('gyro')} {a}"] + [_pm(res, f"M_{a}{b}") for b in AXES]
-                    + [_pm(res, f"b_{a}", with_k=True),
-                       [num(res, f"items.M_{a}x.uncertainty.k", "k"), " (",
-                        num(res, f"items.M_{a}x.uncertainty.nu_eff", "nu"), ")"]])
-    out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})", T("k_nu")], rows),
-                     {"widths": (0.09, 0.19, 0.19, 0.19, 0.2, 0.14), "id": "alignment-matrix"}))
+        rows.append([f"{T('gyro')} {a}"] + [_pm(res, f"M_{a}{b}", with_k=True) for b in AXES]
+                    + [_pm(res, f"b_{a}", with_k=True)])
+    out.append(Block("table", (["", "ω_x", "ω_y", "ω_z", f"b ({unit})"], rows),
+                     {"widths": (0.08, 0.23, 0.23, 0.23, 0.23), "id": "alignment-matrix"}))
     minv, uminv = al["derived"]["alignment_matrix"], al["u_derived"]["alignment_matrix"]
-    kk = max(al["coverage_factor"])
+    tb_inv = ((al.get("type_b") or {}).get("u_derived") or {}).get("alignment_matrix")
+    nu_min = min(al["dof"])
+
+    def inv_cell(n: int) -> list:
+        """M⁻¹ element n ± U with the k of its own total (the fit's ν, the table's ∞)."""
+        u_b = float(tb_inv[n]) if tb_inv else 0.0
+        k = total_coverage_factor(float(uminv[n]), u_b, float(nu_min))
+        return [_pm_scaled(minv[n], k * uminv[n]), f" (k = {display('k', k)})"]
     out.append(Block("sub", T("sub_inverse", unit=unit)))
     out.append(Block("table", (["", "G_x", "G_y", "G_z"], [
-        [f"ω_{a}"] + [_pm_scaled(minv[3 * i + j], kk * uminv[3 * i + j]) for j in range(3)]
+        [f"ω_{a}"] + [inv_cell(3 * i + j) for j in range(3)]
         for i, a in enumerate(AXES)]), {"widths": (0.1, 0.3, 0.3, 0.3), "id": "alignment-inverse"}))
     out.append(Block("sub", T("sub_cross")))
     out.append(Block("p", [T("cross_note")]))
@@ -128,17 +134,31 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
                              rate=display("sig3", tb["rate_u_rel"]),
                              bound=display("sig3", math.degrees(tb["orientation_u_rad"])
                                            * math.sqrt(3.0)))]))
+    bc_xx = items["M_xx"].get("details", {}).get("bound_condition")
+    which = items["M_xx"].get("details", {}).get("statement", "gum")
+    if bc_xx:
+        out.append(Block("p", [T("bound_note", rate_bound=display(
+            "sig3", (al.get("type_b") or {}).get("rate_bound_rel", 0.0)),
+            bound=display("sig3", math.degrees(tb["orientation_u_rad"]) * math.sqrt(3.0)),
+            which=T("which_" + which))]))
     urows = []
     for key in [f"M_{a}{b}" for a in AXES for b in AXES] + [f"b_{a}" for a in AXES]:
         unc = items[key]["uncertainty"]
         m = unc.get("monte_carlo")
+        bc = items[key].get("details", {}).get("bound_condition")
+        gum = items[key].get("details", {}).get("gum")
         urows.append([key, num(res, f"items.{key}.uncertainty.u_c", "sig2"),
                       num(res, f"items.{key}.uncertainty.monte_carlo.u", "sig2") if m else "—",
                       num(res, f"items.{key}.uncertainty.nu_eff", "nu"),
-                      num(res, f"items.{key}.uncertainty.k", "k"),
-                      num(res, f"items.{key}.uncertainty.U", "U"), items[key]["unit"]])
-    out.append(Block("table", (["", T("u_gum"), T("u_mc"), T("nu"), "k", "U", L["unit"]], urows),
-                     {"widths": (0.1, 0.14, 0.16, 0.08, 0.1, 0.14, 0.28), "id": "uncertainty"}))
+                      num(res, f"items.{key}.uncertainty.k", "k") if unc.get("k") is not None
+                      else display("k", gum["k"]),
+                      num(res, f"items.{key}.uncertainty.U", "U") if unc.get("k") is not None
+                      else display_uncertainty(gum["U"]),
+                      display_uncertainty(bc["U"]) if bc else "—", items[key]["unit"]])
+    out.append(Block("table", (["", T("u_gum"), T("u_mc"), T("nu"), "k", "U", T("U_bound"),
+                                L["unit"]], urows),
+                     {"widths": (0.08, 0.12, 0.14, 0.07, 0.08, 0.12, 0.13, 0.26),
+                      "id": "uncertainty"}))
     return out
 
 

@@ -23,7 +23,7 @@ from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult, cross
 from gonio.specs.triad_alignment.calibration import alignment_items, total_coverage_factor
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
-from gonio.report.i18n import decimals_for_sig, display_uncertainty, round_half_up
+from gonio.report.i18n import decimals_for_sig, display, display_uncertainty, round_half_up
 from gonio.report.stated import item_nums
 
 _CSS = ("body{font-family:'DejaVu Sans',sans-serif;font-size:10pt;margin:2em}"
@@ -58,14 +58,50 @@ def _table(header, rows) -> str:
     return f"<table><tr>{h}</tr>{body}</table>"
 
 
-def certified_b(item) -> str:
-    """The certificate's cell of a bias item b_i: "value ± U (k = …)" by the one statement
-    rule (:func:`gonio.report.stated.item_nums`, as the certificate's matrix table states it
-    with the item's own k)."""
-    n = item_nums(item.to_json(), f"items.{item.key}", sig=6)
+def certified_cell(item, factor: float = 1.0) -> str:
+    """The certificate's cell of an item: "value ± U (k = …)" by the one statement rule
+    (:func:`gonio.report.stated.item_nums`, as the certificate's matrix table states it, with
+    the item's own k), or "[lo, hi]" for an item stated by its interval (a bound-condition
+    statement has no k). ``factor`` scales value and U (‰: 1e3).
+
+    >>> from gonio.result.model import Item, Uncertainty
+    >>> u = Uncertainty([], 0.01, 0.0252, 2.52, 6.0, None, 0.9545, "t")
+    >>> certified_cell(Item("M_xy", "m", "§4", "1", 0.88099, uncertainty=u))
+    '0.881 ± 0.025 (k = 2.52)'
+    """
+    n = item_nums(item.to_json(), f"items.{item.key}", sig=6, factor=factor)
+    if n["interval"] is not None:
+        lo, hi = n["interval"]["ends"]
+        return f"[{lo}, {hi}]"
     if n["U"] is None:
         return str(n["value"] or "—")
     return f"{n['value']} ± {n['U']} (k = {n['k']})"
+
+
+#: The bias cell keeps its name (the certificate's renderer and tests use it).
+certified_b = certified_cell
+
+
+def with_k(value: float, big_u: float, k: float) -> str:
+    """'value ± U (k = …)': :func:`value_with_u` with the coverage factor of this cell's own
+    budget (as the certificate prints k: 3 significant digits, ``display("k", …)``).
+
+    >>> with_k(49.99371, 0.0028, 2.0435)
+    '49.9937 ± 0.0028 (k = 2.04)'
+    """
+    txt = value_with_u(value, big_u)
+    return txt if "±" not in txt else f"{txt} (k = {display('k', k)})"
+
+
+def bound_cell(item, factor: float = 1.0) -> str:
+    """The bound-condition statement of an item beside its GUM one: "± U_bound (a + k·u)"
+    (:func:`gonio.specs.triad_alignment.calibration.bound_condition`), "—" for an item the
+    table does not enter."""
+    bc = (item.details or {}).get("bound_condition")
+    if not bc:
+        return "—"
+    return (f"± {display_uncertainty(bc['U'] * factor)} (a = "
+            f"{display_uncertainty(bc['a_table'] * factor)}, k = {display('k', bc['k_rest'])})")
 
 
 def alignment_page(res: AlignmentResult, figure: Figure | None = None,
@@ -84,47 +120,66 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
     tb = res.type_b or {}
     nu_min = float(np.min(res.dof))
 
-    def derived_u(name: str, n: int) -> float:
-        """Expanded U of element n of derived quantity ``name``."""
+    def derived_cell(name: str, n: int, value: float, factor: float = 1.0) -> str:
+        """value ± U (k = …) of element n of derived quantity ``name``, k its own."""
         u = float(np.ravel(res.u_derived[name])[n])
         u_b = float(np.ravel(tb["u_derived"][name])[n]) if tb else 0.0
-        return total_coverage_factor(u, u_b, nu_min) * u
+        k = total_coverage_factor(u, u_b, nu_min)
+        return with_k(value * factor, k * u * factor, k)
 
-    out = ["<h2>Alignment matrix (U for p = 95.45 %, k = t(ν_eff) of each value's budget: the "
-           "fit and the rate table; b with its own k)</h2>",
+    out = ["<h2>Alignment matrix (U for p = 95.45 %, every cell with the k of its own "
+           "budget, t(ν_eff): the fit and the rate table)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
            f"{' (robust fit)' if res.robust else ''}; b as the certificate states b_i: "
            f"{html.escape(items['b_x'].details['stated'])}.</p>"]
-    rows = [[f"gyro {a}"] + [value_with_u(m[i, j], items[f"M_{a}{b}"].uncertainty.U)
-                             for j, b in enumerate("xyz")]
-            + [certified_b(items[f"b_{a}"])]
-            for i, a in enumerate("xyz")]
+    rows = [[f"gyro {a}"] + [certified_cell(items[f"M_{a}{b}"]) for b in "xyz"]
+            + [certified_cell(items[f"b_{a}"])]
+            for a in "xyz"]
     out.append(_table(["", "ω_x", "ω_y", "ω_z", "b"], rows))
     a = res.alignment_matrix
     out.append("<p>Alignment matrix M⁻¹ (°/s per unit output): ω̂ = M⁻¹ (G − b).</p>")
     out.append(_table(["", "G_x", "G_y", "G_z"],
-                      [[f"ω_{r}"] + [value_with_u(a[i, j], derived_u("alignment_matrix", 3 * i + j))
+                      [[f"ω_{r}"] + [derived_cell("alignment_matrix", 3 * i + j, a[i, j])
                                      for j in range(3)] for i, r in enumerate("xyz")]))
     sc, ps, bd = res.derived["scale"], res.derived["psi_rad"], res.derived["bias_dps"]
     out.append(_table(["gyro", f"scale factor ({unit}/(°/s))", "misalignment ψ (mrad)",
                        "in-run bias (°/s), this record's fit"],
-                      [[a_, value_with_u(sc[i], derived_u("scale", i)),
-                        value_with_u(ps[i] * 1e3, derived_u("psi_rad", i) * 1e3),
-                        value_with_u(bd[i], derived_u("bias_dps", i))]
+                      [[a_, derived_cell("scale", i, sc[i]),
+                        derived_cell("psi_rad", i, ps[i], 1e3),
+                        derived_cell("bias_dps", i, bd[i])]
                        for i, a_ in enumerate("xyz")]))
     tab = cross_axis_table(res)
     out.append("<p>Cross-axis sensitivity S_ij = M_ij/M_ii (IEC 62047-20 5.2), in ‰; "
-               "residual leakage after M⁻¹: expanded uncertainty in ‰.</p>")
+               "residual leakage after M⁻¹ (stated 0): expanded uncertainty in ‰; every cell "
+               "with its own k.</p>")
     rows = []
     for r in tab.itertuples(index=False):
-        s_item = items[f"S_{r.gyro}{r.about}"].uncertainty
-        rows.append([f"gyro {r.gyro} ← ω_{r.about}",
-                     value_with_u(r.sensitivity * 1e3, s_item.U * 1e3),
-                     "—" if not math.isfinite(r.u_mc) else display_uncertainty(
-                         s_item.k * r.u_mc * 1e3),
-                     display_uncertainty(items[f"L_{r.gyro}{r.about}"].uncertainty.U * 1e3)])
-    out.append(_table(["", "S (GUM)", "U (Monte Carlo)", "leakage after, U"], rows))
+        s_item = items[f"S_{r.gyro}{r.about}"]
+        k_s = s_item.uncertainty.k
+        l_item = items[f"L_{r.gyro}{r.about}"]
+        rows.append([f"gyro {r.gyro} ← ω_{r.about}", certified_cell(s_item, 1e3),
+                     "—" if not math.isfinite(r.u_mc) or k_s is None else
+                     f"{display_uncertainty(k_s * r.u_mc * 1e3)} (k = {display('k', k_s)})",
+                     certified_cell(l_item, 1e3)])
+    out.append(_table(["", "S (GUM)", "U (Monte Carlo, the fit's noise only)",
+                       "leakage after"], rows))
+    out.append("<p>Bound-condition statement beside the GUM's (the rate table's errors at "
+               "their bounds — rate error at its certificate's expanded uncertainty, every "
+               "axis component at the fixture's bound — in their worst combination, a, plus "
+               "k·u of the fit: U = a + k·u; at least 95.45 % at every table error within the "
+               "bounds, where the GUM's U holds over their distribution). Which of the two a "
+               "certificate certifies is the protocol's <code>[alignment] "
+               "uncertainty_statement</code> (default gum); this page: "
+               f"{html.escape(items['M_xx'].details.get('statement', 'gum'))}.</p>")
+    out.append(_table(["", "M (bound)", "S ‰ (bound)", "leakage ‰ (bound)"],
+                      [[f"{r.gyro} ← ω_{r.about}",
+                        bound_cell(items[f"M_{r.gyro}{r.about}"]),
+                        bound_cell(items[f"S_{r.gyro}{r.about}"], 1e3),
+                        bound_cell(items[f"L_{r.gyro}{r.about}"], 1e3)]
+                       for r in tab.itertuples(index=False)]
+                      + [[f"{a_} ← ω_{a_}", bound_cell(items[f"M_{a_}{a_}"]), "—", "—"]
+                         for a_ in "xyz"]))
     if res.averaging is not None:
         av = res.averaging
         out.append(f"<p>Averaging time (Allan deviation): limit {av.noise_limit_dps:.4g} °/s "
@@ -158,14 +213,14 @@ def thermal_page(res: ThermalModelResult, compensation: dict | None = None,
             for key in c:
                 if key.startswith("u_"):
                     continue
-                rows.append([name, f"{f.n_t}/{f.n_u}", key, value_with_u(c[key], kf * c['u_' + key])])
+                rows.append([name, f"{f.n_t}/{f.n_u}", key, with_k(c[key], kf * c['u_' + key], kf)])
         out.append(_table(["model", "order ϑ/U", "term", "coefficient ± U"], rows))
         g = m.prediction_grid(6)
         kb = stats.t.ppf(0.5 + 0.9545 / 2, m.bias.dof)
         ks = stats.t.ppf(0.5 + 0.9545 / 2, m.scale.dof)
         out.append(_table(["ϑ (°C)", "U (V)", "K ± U", "b (°/s) ± U"],
-                          [[f"{r.theta_c:.1f}", f"{r.u_v:+.2f}", value_with_u(r.scale, ks * r.u_scale),
-                            value_with_u(r.bias_dps, kb * r.u_bias_dps)]
+                          [[f"{r.theta_c:.1f}", f"{r.u_v:+.2f}", with_k(r.scale, ks * r.u_scale, ks),
+                            with_k(r.bias_dps, kb * r.u_bias_dps, kb)]
                            for r in g.itertuples(index=False)]))
         if m.ramp is not None:
             ra = m.ramp
@@ -198,4 +253,5 @@ def write_report(path, sections: list[str], title: str) -> None:
     write_text(path, doc)
 
 
-__all__ = ["alignment_page", "thermal_page", "write_report", "value_with_u", "OFFDIAG"]
+__all__ = ["alignment_page", "thermal_page", "write_report", "value_with_u", "with_k",
+           "certified_cell", "bound_cell", "OFFDIAG"]

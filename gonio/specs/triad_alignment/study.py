@@ -53,11 +53,11 @@ import numpy as np
 from gonio.analysis.coverage import (coverage_table_from, format_coverage, spawn_seed,
                                      stated_record)
 from gonio.errors import GonioError
-from gonio.specs.triad_alignment.analysis import table_type_b_cov
+from gonio.specs.triad_alignment.analysis import RATE_ERROR_BOUND_K, table_type_b_cov
 from gonio.specs.triad_alignment.bench import TriadBench, load_triad_bench, load_triad_protocol
 from gonio.specs.triad_alignment.simulate import for_trial
 
-__all__ = ["CASES", "CASE_KEYS", "FIXED_CONDITION_CASES", "RATE_ERROR_BOUND_K", "worst_table",
+__all__ = ["CASES", "CASE_KEYS", "BOUND_SUFFIX", "bound_record", "FIXED_CONDITION_CASES", "RATE_ERROR_BOUND_K", "worst_table",
            "table_bias", "case_bench", "triad_trial", "realised_leakage", "TriadJob", "TriadStudy",
            "TriadReport", "plan_study"]
 
@@ -87,10 +87,6 @@ CASE_KEYS = {"typeb": 32, "worst": 33, "worst-axes": 34}
 #: not flagged (:func:`gonio.analysis.coverage.coverage_table_from`'s ``judge_spread``).
 FIXED_CONDITION_CASES = ("worst", "worst-axes")
 
-#: The rate error's bound in the ``worst`` case, in units of the certificate's standard
-#: uncertainty: its expanded uncertainty at k = 2 (the 95 % statement a calibration
-#: certificate gives; a normal error has no bound, so the certificate's U is taken as one).
-RATE_ERROR_BOUND_K = 2.0
 
 
 def table_bias(m: np.ndarray, rate_error_rel: float,
@@ -211,7 +207,33 @@ def triad_trial(seed: int, protocol: str = "triad-alignment", bench="mems-triad"
                     "truth": float(leak.get(key, truth[key]["value"])),
                     "U": float(it.uncertainty.U), "u_c": float(it.uncertainty.u_c),
                     **stated_record(it.uncertainty)}
+        bc = (it.details or {}).get("bound_condition")
+        if bc and bc["k_rest"] > 0:
+            out[f"{key} {BOUND_SUFFIX}"] = bound_record(out[key], bc)
     return out, no_truth
+
+
+#: The suffix of an item's bound-condition row in the study (the statement of
+#: :func:`gonio.specs.triad_alignment.calibration.bound_condition`, beside the GUM row).
+BOUND_SUFFIX = "[bound]"
+
+
+def bound_record(gum: dict, bc: dict) -> dict:
+    """The study's record of an item's bound-condition statement: covered when |value −
+    truth| ≤ U_bound; z = (value − truth)/(U_bound / k_GUM), the error in units of the bound
+    statement's width at the GUM statement's k (u_c × U_bound/U_GUM), so |z| ≤ k_GUM exactly
+    when it covers and its z is the GUM row's z × U_GUM/U_bound. Where the table's errors are
+    drawn (``typeb``) its z sd is expected below the GUM row's (conservative: the bound holds
+    at every table error within the bounds, so over their distribution it is wider than
+    needed).
+
+    >>> r = bound_record({"clause": "c", "value": 1.0, "truth": 0.9, "U": 0.2, "u_c": 0.1},
+    ...                  {"U": 0.5, "k_rest": 2.5})
+    >>> r["U"], r["u_c"], r["clause"]
+    (0.5, 0.25, 'c (bound)')
+    """
+    return {"clause": f"{gum['clause']} (bound)", "value": gum["value"], "truth": gum["truth"],
+            "U": float(bc["U"]), "u_c": float(gum["u_c"]) * float(bc["U"]) / float(gum["U"])}
 
 
 def realised_leakage(res, truth: dict) -> dict[str, float]:
