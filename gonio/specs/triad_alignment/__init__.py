@@ -42,7 +42,7 @@ SPEC = Specification(
     truth=lazy("gonio.specs.triad_alignment.truth:truth"),
     budget=lazy("gonio.specs.triad_alignment.calibration:article_budget"),
     outputs="gonio.specs.triad_alignment.outputs",
-    calibrate_options=frozenset({"thermal", "robust", "dcc"}),
+    calibrate_options=frozenset({"thermal", "robust", "dcc", "protocol"}),
     coverage=Coverage(engine="cases", stream=2,
                       study=lazy("gonio.specs.triad_alignment.study:plan_study"),
                       options=frozenset({"cases", "resume"})),

@@ -64,7 +64,7 @@ READINGS_TAKEN = (
     "axis and the static positions), the Earth rate of every orientation averaged over the "
     "swept table angle; for one ± pair it reduces to the article's difference formula.",
     "Uncertainties: Type A from the fit residuals, k = t(ν), coverage probability "
-    "95.45 %; the Monte Carlo "
+    "approximately 95 %; the Monte Carlo "
     "(JCGM 101) standard uncertainty is given beside it when trials were run.",
     "Residual leakage after alignment: M̂⁻¹M − I is zero for the estimate itself; its "
     "uncertainty is what the alignment leaves.",

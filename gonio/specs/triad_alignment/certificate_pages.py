@@ -55,6 +55,9 @@ def _pm(res: dict, key: str, with_k: bool = False) -> list | str:
     if not it["measured"]:
         return "—"
     n = item_nums(it, f"items.{key}", sig=6)          # the one statement rule
+    if n["interval"] is not None:                    # a bound-condition statement: no k
+        lo, hi = n["interval"]["ends"]
+        return [n["value"], " [", lo, ", ", hi, "]"]
     if n["U"] is None:
         return [n["value"] or "—"]
     return [n["value"], " ± ", n["U"]] + ([" (k = ", n["k"], ")"] if with_k and n["k"] else [])
@@ -101,17 +104,27 @@ def alignment_blocks(res: dict, T, L: dict) -> list[Block]:
     out.append(Block("p", [T("cross_note")]))
     mc = al.get("u_monte_carlo")
     crow = []
+    def cell(key: str) -> list:
+        """S or L in ‰: value ± U (k = …) of its own budget, or value ± U (bound)."""
+        it = items[key]
+        unc = it["uncertainty"]
+        if unc.get("k") is None:
+            return [_pm_scaled(it["value"], unc["U"], 1e3), f" ({T('bound_tag')})"]
+        return [_pm_scaled(it["value"], unc["U"], 1e3), " (k = ",
+                num(res, f"items.{key}.uncertainty.k", "k"), ")"]
+
+    def bound_u(key: str) -> str:
+        bc = (items[key].get("details") or {}).get("bound_condition")
+        return display_uncertainty(bc["U"] * 1e3) if bc else "—"
     for n, p in enumerate(OFFDIAG):
-        s, lk = items[f"S_{p}"], items[f"L_{p}"]
-        k = s["uncertainty"]["k"]
-        crow.append([f"{p[0]} ← ω_{p[1]}",
-                     [_pm_scaled(s["value"], s["uncertainty"]["U"], 1e3), " (k = ",
-                      num(res, f"items.S_{p}.uncertainty.k", "k"), ")"],
-                     display_uncertainty(k * mc["cross_axis"][n] * 1e3) if mc else "—",
-                     [_pm_scaled(lk["value"], lk["uncertainty"]["U"], 1e3), " (k = ",
-                      num(res, f"items.L_{p}.uncertainty.k", "k"), ")"]])
-    out.append(Block("table", ([T("pair"), T("S_col"), T("mc_col"), T("L_col")], crow),
-                     {"widths": (0.2, 0.28, 0.22, 0.3), "id": "cross-axis"}))
+        s = items[f"S_{p}"]
+        k = s["uncertainty"]["k"] or (s.get("details") or {}).get("gum", {}).get("k")
+        crow.append([f"{p[0]} ← ω_{p[1]}", cell(f"S_{p}"),
+                     display_uncertainty(k * mc["cross_axis"][n] * 1e3) if mc and k else "—",
+                     cell(f"L_{p}"), f"{bound_u(f'S_{p}')} / {bound_u(f'L_{p}')}"])
+    out.append(Block("table", ([T("pair"), T("S_col"), T("mc_col"), T("L_col"),
+                                T("SL_bound")], crow),
+                     {"widths": (0.16, 0.24, 0.18, 0.24, 0.18), "id": "cross-axis"}))
     av = items["averaging_time"]
     if av["measured"]:
         d = av["details"]

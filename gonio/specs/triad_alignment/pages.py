@@ -5,7 +5,7 @@ These are the pages the certificate would carry for the ``triad-alignment``
 specification; the optical draft's certificate renderer (its own package) is built around
 the draft's items, so the pages are written as their own document (``--report FILE`` of
 ``gonio align`` and ``gonio thermal-model``). Every value is shown with its expanded
-uncertainty U (coverage probability 95.45 %, k stated), U to two significant digits and the
+uncertainty U (coverage probability 0.9545, stated ≈ 95 % as on the certificate, k stated), U to two significant digits and the
 value to the same decimal place (JCGM 100 7.2.6, via :mod:`gonio.report.i18n`).
 """
 
@@ -127,7 +127,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
         k = total_coverage_factor(u, u_b, nu_min)
         return with_k(value * factor, k * u * factor, k)
 
-    out = ["<h2>Alignment matrix (U for p = 95.45 %, every cell with the k of its own "
+    out = ["<h2>Alignment matrix (U for p ≈ 95 % (0.9545), every cell with the k of its own "
            "budget, t(ν_eff): the fit and the rate table)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
@@ -167,8 +167,8 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
     out.append("<p>Bound-condition statement beside the GUM's (the rate table's errors at "
                "their bounds — rate error at its certificate's expanded uncertainty, every "
                "axis component at the fixture's bound — in their worst combination, a, plus "
-               "k·u of the fit: U = a + k·u; at least 95.45 % at every table error within the "
-               "bounds, where the GUM's U holds over their distribution). Which of the two a "
+               "k·u of the fit: U = a + k·u; at least the same p ≈ 95 % at every table error "
+               "within the bounds, where the GUM's U holds over their distribution). Which of the two a "
                "certificate certifies is the protocol's <code>[alignment] "
                "uncertainty_statement</code> (default gum); this page: "
                f"{html.escape(items['M_xx'].details.get('statement', 'gum'))}.</p>")
