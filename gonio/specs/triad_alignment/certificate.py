@@ -97,8 +97,7 @@ TEXT = {
                    "误差取其界限——速率误差取相对 {rate_bound}，即其证书的扩展不确定度，各转轴分量取 "
                    "±{bound}°——按最不利组合线性合成为 a，加上拟合的 k·u：U = a + k·u；在界限内任一"
                    "转台误差下包含概率均不低于此值；见本表及交叉轴表的“界限条件 U”列，K(ϑ, U) 的见 "
-                   "results.json）。本证书给出的是{which}（由规程的 "
-                   "uncertainty_statement 选定）。"),
+                   "results.json）。本证书给出的是{which}（由规程的不确定度表述选项选定）。"),
     "which_gum": ("the JCGM 100 U", "JCGM 100 的 U"),
     "which_bound": ("the bound-condition U (each cell the interval value ± U, no k)",
                     "界限条件 U（各格为区间 值 ± U，无 k）"),
