@@ -38,6 +38,9 @@ COMMON_PHRASES_ZH = (
     (r"step between the candidate and the next tested value", "候选值与下一试验值之间的步长"),
     (r"spread of the 50 % rule's outcome under the data's noise \(its 95 % range is the "
      r"interval\)", "按本次数据噪声 50 % 判据结果的分散性（其 95 % 范围即为所给区间）"),
+    (r"spread of the 50 % rule's outcome under the data's noise \(the interval: whole grid "
+     r"steps holding at least 95 % of it\)",
+     "按本次数据噪声 50 % 判据结果的分散性（所给区间：由整数个步长构成、包含其不少于 95 % 的范围）"),
     (r"95 % range of the 50 % rule's outcome under the data's noise",
      "数据噪声下 50 % 判据结果的 95 % 范围"),
     (r"smoothing step", "平滑步长"),

@@ -520,12 +520,17 @@ def rule_outcome_uncertainty(pmfs: list[dict], value: float):
     statement is the central 95 % range of the outcome, widened to hold the value (where
     that range is one outcome, to the neighbouring outcomes that can occur) — a discrete,
     skewed distribution, stated by its interval (JCGM 101 7.7), no k (U: the distance to the
-    upper end). One possible outcome (noise-free readings): u_c = U = 0 and no interval.
+    upper end). Its coverage probability is the interval's own probability under the outcome
+    distribution (whole grid steps: at least 95 %, often more), the one p every output
+    states. One possible outcome (noise-free readings): u_c = U = 0 and no interval.
     Returns (Uncertainty, the combined pmf).
 
     >>> u, _ = rule_outcome_uncertainty([{0.1: 0.01, 0.05: 0.98, 0.02: 0.01}], 0.05)
-    >>> u.interval
-    (0.02, 0.1)
+    >>> u.interval, u.coverage_probability
+    ((0.02, 0.1), 1.0)
+    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.02, 0.05: 0.96, 0.02: 0.01, 0.01: 0.01}], 0.05)
+    >>> u.interval, round(u.coverage_probability, 4)
+    ((0.02, 0.1), 0.99)
 
     >>> u, _ = rule_outcome_uncertainty([{0.1: 0.25, 0.05: 0.5, 0.02: 0.25}], 0.05)   # mean 0.055
     >>> round(u.u_c, 6), u.interval, round(u.U, 6), u.k
@@ -545,12 +550,15 @@ def rule_outcome_uncertainty(pmfs: list[dict], value: float):
         lo = max((float(k) for k, p in zip(x, w) if k < lo and p > 1e-9), default=lo)
         hi = min((float(k) for k, p in zip(x, w) if k > hi and p > 1e-9), default=hi)
     row = {"symbol": "rule_outcome", "source": "spread of the 50 % rule's outcome under the "
-           "data's noise (its 95 % range is the interval)", "type": "A", "u": u_c, "c": 1.0,
-           "contribution": u_c, "dof": None}
+           "data's noise (the interval: whole grid steps holding at least 95 % of it)",
+           "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": None}
     if hi == lo:             # one possible outcome (noise-free readings)
         return Uncertainty([row], u_c, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
-    return Uncertainty([row], u_c, hi - value, None, None, None, 0.95, "outcome distribution",
-                       interval=(lo, hi)), pmf
+    # the interval's own probability under the outcome distribution: whole grid steps, so at
+    # least 95 % and mostly more; stated as p in every output (certificate, summary, DCC)
+    p_iv = float(w[(x >= lo - 1e-12 * abs(lo)) & (x <= hi + 1e-12 * abs(hi))].sum())
+    return Uncertainty([row], u_c, hi - value, None, None, None, min(p_iv, 1.0),
+                       "outcome distribution", interval=(lo, hi)), pmf
 
 
 def bias_drift_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_high,

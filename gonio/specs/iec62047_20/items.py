@@ -1642,8 +1642,11 @@ def resolution(ctx: Context) -> Item:
         top = max(k for p in pmfs for k in p if k is not None)
         u_c = max_outcome_normal_sd({top if k is None else k: w for k, w in pmf.items()},
                                     noise, u_noise.u_c)
+        # p: the rule's own interval probability no longer applies to the combined interval;
+        # the 95 % of each part's statement is stated (as before the rule's p was its own)
         u = replace(u_rule, components=u_rule.components + u_noise.components, u_c=u_c,
-                    U=hi - value, interval=(lo, hi) if hi > lo else None)
+                    U=hi - value, interval=(lo, hi) if hi > lo else None,
+                    coverage_probability=0.95)
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by,

@@ -147,9 +147,6 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"spread of B_s,m over the records", "各段记录 B_s,m 的分散性"),
     (r"\+axis up mean", "输入轴向上的平均值"), (r"−axis up mean", "输入轴向下的平均值"),
     (r"least-squares slope", "最小二乘斜率"),
-    (r"spread of the 50 % rule's outcome under the data's noise \(the interval: whole grid "
-     r"steps holding at least 95 % of it\)",
-     "按本次数据噪声 50 % 判据结果的分散性（所给区间：由整数个步长构成、包含其不少于 95 % 的范围）"),
     (r"noise of the bracketing gains \(weighted by the interpolation\) and of the 0 dB gain",
      "相邻增益点的噪声（按插值权重）及 0 dB 增益的噪声"),
     (r"linear interpolation in ln f: h²/8·\|p''\| from a second difference over points at "

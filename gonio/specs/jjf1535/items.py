@@ -428,67 +428,12 @@ def referred_mean_u(terms: list[tuple[float, int, float]]) -> tuple[float, float
     return math.sqrt(var), (var * var / den if den > 0 else math.inf)
 
 
-def rule_outcome_uncertainty(pmfs: list[dict], value: float) -> tuple[Uncertainty, dict]:
-    """The uncertainty of 7.2.6 / 7.2.7 for the measurand taken (docs/jjf1535-readings.md,
-    "7.2.6 Threshold and 7.2.7 Resolution"): **the tested rate of the programme's grid at
-    which the 50 % rule stops, with the programme's averaging** — its true value the median
-    outcome under the instrument's noise. A grid value is a grid value: the grid belongs to
-    the measurand's definition (stated on the certificate), so no rectangular step term.
-
-    The outcome distribution propagated from the data (JCGM 101: each step's response known
-    as its measured referred mean with a scaled and shifted t of the Welch–Satterthwaite ν of
-    its segments, :func:`referred_mean_u`; a step passes with the probability that the
-    response meets the criterion; :func:`gonio.specs._rate_family.formulas.max_outcome_pmf`
-    of the directions) gives u_c, its standard deviation (None, "above the grid", counted
-    as the largest tested step), and the statement: the central 95 % range of the outcome,
-    widened to hold the value (where that range is one outcome, to the neighbouring outcomes
-    that can occur) — a discrete, skewed distribution, stated by its interval (JCGM 101 7.7),
-    no k (U: the distance to the upper end). Its coverage probability is the interval's own
-    probability under the outcome distribution (whole grid steps: at least 95 %, often
-    more), the one p every output states. A distribution of one outcome (noise-free
-    readings) has u_c = U = 0 and no interval.
-
-    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.01, 0.05: 0.98, 0.02: 0.01}], 0.05)
-    >>> u.interval, u.coverage_probability
-    ((0.02, 0.1), 1.0)
-    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.02, 0.05: 0.96, 0.02: 0.01, 0.01: 0.01}], 0.05)
-    >>> u.interval, round(u.coverage_probability, 4)
-    ((0.02, 0.1), 0.99)
-
-    >>> u, _ = rule_outcome_uncertainty([{0.1: 0.25, 0.05: 0.5, 0.02: 0.25}], 0.05)   # mean 0.055
-    >>> round(u.u_c, 6), u.interval, round(u.U, 6), u.k
-    (0.028723, (0.02, 0.1), 0.05, None)
-    """
-    pmf = rg.max_outcome_pmf(*pmfs)
-    top = max(k for p in pmfs for k in p if k is not None)
-    x = np.array([top if k is None else k for k in pmf], float)
-    w = np.array(list(pmf.values()), float)
-    w = w / w.sum()
-    u_c = math.sqrt(max(float(w @ (x - w @ x) ** 2), 0.0))
-    lo, hi = (rg.outcome_quantile(pmf, q) for q in (0.025, 0.975))
-    lo, hi = min(top if lo is None else lo, value), max(top if hi is None else hi, value)
-    if hi == lo:             # ≥ 95 % on one outcome: reach the neighbouring possible outcomes
-        lo = max((float(k) for k, p in zip(x, w) if k < lo and p > 1e-9), default=lo)
-        hi = min((float(k) for k, p in zip(x, w) if k > hi and p > 1e-9), default=hi)
-    row = {"symbol": "rule_outcome", "source": "spread of the 50 % rule's outcome under the "
-           "data's noise (the interval: whole grid steps holding at least 95 % of it)",
-           "type": "A", "u": u_c, "c": 1.0,
-           "contribution": u_c, "dof": None}
-    if hi == lo:             # one possible outcome (noise-free readings)
-        return Uncertainty([row], u_c, 0.0, None, None, None, 0.95, "outcome distribution"), pmf
-    # the interval's own probability under the outcome distribution: whole grid steps, so at
-    # least 95 % and mostly more; stated as p in every output (certificate, summary, DCC)
-    p_iv = float(w[(x >= lo - 1e-12 * abs(lo)) & (x <= hi + 1e-12 * abs(hi))].sum())
-    return Uncertainty([row], u_c, hi - value, None, None, None, min(p_iv, 1.0),
-                       "outcome distribution", interval=(lo, hi)), pmf
-
-
 def _candidate_item(key, title, clause, cands, details, pmfs) -> Item:
     if any(c is None for c in cands):
         return not_measured(key, title, clause, "°/s",
                             "the largest step already fails the 50 % criterion; start higher")
     value = max(cands)
-    u, pmf = rule_outcome_uncertainty(pmfs, value)
+    u, pmf = rg.rule_outcome_uncertainty(pmfs, value)
     grid = sorted({abs(r) for d in details.values() for r in d["steps_dps"]}, reverse=True)
     details = {**details, "grid_dps": ", ".join(f"{g:g}" for g in grid),
                "samples": next(iter(details.values()))["samples"],
