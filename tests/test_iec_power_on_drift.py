@@ -79,8 +79,9 @@ def test_power_on_drift_budget_with_a_rate_random_walk():
     the 90-s record, twice the white noise of a smoothed value) moves every smoothed value
     and the reference: the replicates draw it from its E[K²] (the exact covariance of the
     smoothed values less the reference). Without it the spread is the white noise's alone
-    and U misses. Measured (100 trials, seed 11): z mean +0.02, sd 0.63 — somewhat wide
-    where the walk dominates (docs/iec62047-20-readings.md); the bound below pins it."""
+    and U misses. With V* = R* − (E*[R*] − R̂*) the walk the fit absorbs counted twice
+    (100 trials, seed 11: z +0.02, sd 0.63); the replicates linearised in R̂ with the
+    excess's own slope: z +0.37, sd 1.05, 95/100."""
     z, hits = _study(1.0, 30.0, 100, seed=11, rrw_dps_sqrt_s=0.02)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
-    assert abs(z.mean()) < 0.4 and 0.55 <= z.std() <= 1.3, (z.mean(), z.std())
+    assert abs(z.mean()) < 0.4 and 0.7 <= z.std() <= 1.3, (z.mean(), z.std())

@@ -1033,7 +1033,7 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
     recs = [(tt, ys, y) for _, tt, ys, y in _power_on_records(ctx)]
     val, vals, u, m_sel = power_on_drift_budget(recs, ctx.protocol["power_on"]["reference_samples"],
                                                 lambda sep: drift_u_dps(ctx, sep),
-                                                drift_coef_dps(ctx))
+                                                drift_coef_fitted_dps(ctx))
     return Item("bias_drift_after_power_on", t, cl, un, val, uncertainty=u,
                 details={"per_record_dps": vals, "reading_dps": max(vals),
                          "contending_values": m_sel})
@@ -1056,17 +1056,22 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
     the fitted records; :data:`POWER_ON_MC_TRIALS` seeded replicates of the fitted records
     are drawn with the record's noise — white samples of σ_y = √(var Δ²y/6) (second
     differences: a transient smooth on the sample interval does not enter them) and the
-    bias drift — with ``drift_coef`` = (E[K²] (°/s)²/s, E[B²] (°/s)²) of the static
-    record's Allan fit (:func:`gonio.specs._rate_family.formulas.drift_coefficients`) the
+    bias drift — with ``drift_coef`` = (K² (°/s)²/s, B² (°/s)²) of the static record's
+    Allan fit at its fitted values (:func:`drift_coef_fitted_dps`) the
     exact covariance of the smoothed values less the reference under the rate random walk
     and the flicker (the five-term model's generalised covariance: flicker differences grow
     as ln of the separation, IEEE 952 C.1), else a Gaussian process of stationary
     increments with variogram D(s) = ``drift_u``(s)² — and each replicate is
-    read and fitted as the data are. The first estimate is V = R − (E*[R*] − R̂) (the
-    selection excess removed); its replicates V* = R* − (E*[R*] − R̂*) estimate V's
-    distribution about R̂: the value is V less the residual bias E*[V*] − R̂ (the fit's
-    own selection at small signals), u the standard deviation of V* (type A, ν = 50: its
-    noise figures come from the records and the static fit). A value below 0 (records
+    read and fitted as the data are. The first estimate is V = R − e(R̂), e(R̂) = E*[R*] − R̂
+    the selection excess; its replicates, linearised in the fitted reading (a double
+    bootstrap to first order), V* = R* − e(R̂) − g·(R̂* − R̂) estimate V's distribution
+    about R̂, with g = de/dR̂ at the reading less the fit's bias (:func:`_excess_slope`;
+    g = −1, the excess not following the signal, where that reading is not above
+    :data:`POWER_ON_RESOLVED` sd of R̂*): the value is V less the residual bias E*[V*] − R̂
+    (the fit's own selection at small signals), u the standard deviation of V* (type A,
+    ν = 50: its noise figures come from the records and the static fit). g = −1 throughout
+    counts the bias drift the fit absorbs twice (in R* and in R̂*): u over-wide where the
+    drift dominates. A value below 0 (records
     without a transient, whose reading is all excess) is stated as 0, the measurand's bound.
     The truth this estimates is the transient's drift (the noise-free records); the bias
     drift is noise to it. The contenders (details) are the smoothed values within 2√2·σ of
@@ -1076,6 +1081,7 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
     n_mc = POWER_ON_MC_TRIALS
     vals, dists, sig = [], [], []
     r_hat, r_star, r_fit = 0.0, np.zeros(n_mc), np.zeros(n_mc)
+    kept = []                           # (replicates less reference, fitted transient)
     for tt, ys, y in recs:
         ref = float(y[:nr].mean())
         d = np.abs(ys - ref)
@@ -1097,10 +1103,15 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
             w = _wander_draws(rng, tt - tt[0], drift_u, n_mc)               # (n_mc, nb)
             ys_star += w
             ref_star += w[:, :max(int(math.ceil(nr / P)), 1)].mean(1)
-        r_star = np.maximum(r_star, np.abs(ys_star - ref_star[:, None]).max(1))
+        dev = ys_star - ref_star[:, None]
+        r_star = np.maximum(r_star, np.abs(dev).max(1))
+        kept.append((dev, mb - mr))
         r_fit = np.maximum(r_fit, np.array([f[2] for f in _transient_fits(ys_star, design)]))
     excess = float(r_star.mean() - r_hat)
-    v_star = r_star - (r_star.mean() - r_fit)
+    r_at = r_hat - float(r_fit.mean() - r_hat)
+    g = (_excess_slope(kept, r_hat, r_at) if r_at > POWER_ON_RESOLVED * float(r_fit.std(ddof=1))
+         else -1.0)
+    v_star = r_star - excess - g * (r_fit - r_hat)
     resid = float(v_star.mean() - r_hat)
     u_v = float(v_star.std(ddof=1))
     i = int(np.argmax(vals))
@@ -1122,6 +1133,28 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
 
 
 POWER_ON_MC_TRIALS = 400
+POWER_ON_RESOLVED = 4.0                # a transient resolved: its reading > 4 sd of R̂*
+POWER_ON_SLOPE_STEP = 0.1              # δ of the excess's slope in R̂ (central difference)
+
+
+def _excess_slope(kept, r_hat: float, r_at: float) -> float:
+    """d(excess)/dR̂ of the selection excess E*[R*] − R̂ at the reading ``r_at`` (the fitted
+    reading ``r_hat`` less the fit's bias), by a central difference ± δ =
+    :data:`POWER_ON_SLOPE_STEP` with the same replicates (common random numbers): every
+    fitted transient scaled by r_at/r_hat·(1 ± δ). In [−1, 0]: −1 (the excess does not
+    follow the signal) where no transient is fitted or r_at ≤ 0; towards 0 where one value
+    stands out."""
+    if r_hat <= 0 or r_at <= 0:
+        return -1.0
+    s0, means = r_at / r_hat, []
+    for sgn in (1.0, -1.0):
+        s = s0 * (1.0 + sgn * POWER_ON_SLOPE_STEP)
+        r = np.zeros(kept[0][0].shape[0])
+        for dev, tr in kept:
+            r = np.maximum(r, np.abs(dev + (s - 1.0) * tr[None, :]).max(1))
+        means.append(float(r.mean()))
+    slope = (means[0] - means[1]) / (2.0 * POWER_ON_SLOPE_STEP * r_at)
+    return float(np.clip(slope - 1.0, -1.0, 0.0))
 POWER_ON_MC_SEED = 6204720535           # fixed: the same records give the same value
 
 
@@ -1348,6 +1381,27 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
     fit, allan = _noise_fit(ctx), _static(ctx)[0]
     k2, b2 = rg.drift_coefficients(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high)
     return k2 / S_PER_H ** 2, b2 / S_PER_H ** 2
+
+
+def drift_coef_fitted_dps(ctx: Context) -> tuple[float, float]:
+    """(K̂² (°/s)²/s, B̂² (°/s)²): the static record's Allan fit (IEEE 952 Annex C) at its
+    fitted values, the point the parametric bootstrap of 5.3.3.5 (JCGM 101 style, a plug-in
+    of the fitted model) draws its replicates from. Not E[K²] = K̂² + u_K² nor the
+    unresolved walk's bound²/3 (:func:`drift_coef_dps`, the rules of a drift term stated as
+    a standard uncertainty): the replicates' spread is u itself, so a coefficient inflated
+    by its own uncertainty widens u twice (z sd 0.55 on 40 built-in seeds). K̂ is held to
+    the longest τ's bound min σ_hi(τ)²·3/τ; an unresolved K̂ (K̂ ≤ u_K) is drawn as fitted.
+    The same refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
+    if drift_u_dps(ctx, 1.0) == 0.0:
+        return 0.0, 0.0
+    fit, allan = _noise_fit(ctx), _static(ctx)[0]
+
+    def ok(x):
+        return abs(float(x)) if math.isfinite(float(x)) else 0.0
+    bound2 = float(np.min(np.asarray(allan.ci_high, float) ** 2 * 3.0
+                          / np.asarray(allan.tau_s, float)))
+    k2 = min(ok(fit.K) ** 2, bound2)
+    return k2 / S_PER_H ** 2, ok(fit.B) ** 2 / S_PER_H ** 2
 
 
 def _bias_temperature_points(ctx: Context):
