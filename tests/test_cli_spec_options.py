@@ -110,6 +110,14 @@ def test_another_command_does_not_load_them():
     assert {"--budget", "--thermal"} <= _options(_calibrate(build_parser()))
 
 
+def test_calibrate_alone_keeps_the_options_another_command_adds():
+    # gonio calibrate run alone still takes gonio db's --record (and its store options):
+    # the command's parser is built with the modules that extend it
+    alone = _options(_calibrate(build_parser(["calibrate", "r.csv"])))
+    assert {"--record", "--record-user", "--data"} <= alone
+    assert alone == _options(_calibrate(build_parser()))
+
+
 def test_another_specifications_option_is_one_line_exit_2(tmp_path, capsys):
     readings = tmp_path / "r.csv"
     readings.write_text("# spec: jjf1535-2015\n")

@@ -108,6 +108,13 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+#: gonio's commands whose module adds options to another of gonio's commands, by the command
+#: they extend: ``gonio db`` adds ``--record`` (with ``--database``/``--data`` and the
+#: attachments) to ``gonio calibrate`` (:func:`gonio.cli.cmd_db.hook_calibrate`). Running
+#: the extended command alone imports these modules too (registered after it: sorted names).
+EXTENDED_BY = {"calibrate": ("db",)}
+
+
 def _commands(argv: list[str] | None = None) -> dict:
     """{command name: register(subparsers)}: gonio's ``cmd_*`` modules and the commands the
     registered specifications add (:func:`gonio.specs.commands`); when ``argv`` starts
@@ -120,9 +127,11 @@ def _commands(argv: list[str] | None = None) -> dict:
              for info in pkgutil.iter_modules(pkg.__path__) if info.name.startswith("cmd_")}
     if argv and argv[0] in names:
         # one of gonio's own commands: only its module is imported (the others' imports
-        # are start-up time the command does not need: a tenth of a second for serve)
-        mod = importlib.import_module(f"gonio.cli.{names[argv[0]]}")
-        return {argv[0]: mod.register}
+        # are start-up time the command does not need: a tenth of a second for serve),
+        # with the modules that add options to it (EXTENDED_BY)
+        wanted = (argv[0], *EXTENDED_BY.get(argv[0], ()))
+        return {name: importlib.import_module(f"gonio.cli.{names[name]}").register
+                for name in wanted if name in names}
     found = {name: importlib.import_module(f"gonio.cli.{module}").register
              for name, module in names.items()}
     for name, add_parser in commands():
