@@ -1039,6 +1039,23 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
                          "contending_values": m_sel})
 
 
+def _one_blas_thread(fn):
+    """``fn`` run with one BLAS/LAPACK thread (threadpoolctl): its eigendecompositions and
+    matrix products then sum in the same order in the calling process as in a validation
+    worker (which runs under the same limit), so a record's numbers are the same bytes
+    wherever it is computed."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapped(*args, **kwargs):
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1):
+            return fn(*args, **kwargs)
+    return wrapped
+
+
+@_one_blas_thread
 def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
                           ) -> tuple[float, list, Uncertainty, int]:
     """5.3.3.5 from the power-on records ``recs`` ((block times s, smoothed output °/s, raw
