@@ -388,18 +388,25 @@ def _rest_outliers(g: pd.DataFrame, what: str, file, k_ref) -> list[Finding]:
             break
         row = g.iloc[idx[j]]
         idx = rest
-        col = str(row["_col"])
-        by = (f" (K_ref = {k_ref:.9g} counts/° from the other readings)"
-              if col == "gyro_counts" else "")
-        out.append(Finding(
-            "indicated-angle-outlier",
-            f"{what} round {int(row['round'])}: indicated angle {row['_r']:.4g}″ departs from "
-            f"the line through its neighbours in time by {raw:.4g}″ ({dev:.4g}″ on an even "
-            f"grid's scale; the other readings' residuals: median {med:.3g}″, threshold "
-            f"{thr:.3g}″){by}", "set_aside",
-            file=file, line=int(row["line"]), column=col, test="zero_stability",
-            clause=CLAUSES["zero_stability"], rule=_REST_RULE))
+        out.append(_outlier_finding(
+            row, f"indicated angle {row['_r']:.4g}″ departs from the line through its "
+            f"neighbours in time by {raw:.4g}″ ({dev:.4g}″ on an even grid's scale; the other "
+            f"readings' residuals: median {med:.3g}″, threshold {thr:.3g}″)",
+            what, file, "zero_stability", _REST_RULE, k_ref))
     return sorted(out, key=lambda f: f.line)
+
+
+def _outlier_finding(row, message: str, what: str, file, test: str, rule: str,
+                     k_ref) -> Finding:
+    """One set-aside reading of ``what``'s round in ``row``: the finding names its file, line
+    and column, and the reference K used where the column is the gyro's counts."""
+    col = str(row["_col"])
+    by = (f" (K_ref = {k_ref:.9g} counts/° from the other readings)"
+          if col == "gyro_counts" else "")
+    return Finding(
+        "indicated-angle-outlier", f"{what} round {int(row['round'])}: {message}{by}",
+        "set_aside", file=file, line=int(row["line"]), column=col, test=test,
+        clause=CLAUSES[test], rule=rule)
 
 
 def _group_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[Finding]:
@@ -409,15 +416,10 @@ def _group_outliers(g: pd.DataFrame, test: str, what: str, file, k_ref) -> list[
     out = []
     for i in idx:
         row = g.iloc[i]
-        col = str(row["_col"])
-        by = (f" (K_ref = {k_ref:.9g} counts/° from the other readings)"
-              if col == "gyro_counts" else "")
-        out.append(Finding(
-            "indicated-angle-outlier",
-            f"{what} round {int(row['round'])}: indicated − table angle {row['_r']:.4g}″ departs "
-            f"from the condition's median {med:.3g}″ by {abs(row['_r'] - med):.4g}″ "
-            f"(> {thr:.3g}″){by}", "set_aside", file=file, line=int(row["line"]), column=col,
-            test=test, clause=CLAUSES[test], rule=_ANGLE_RULE))
+        out.append(_outlier_finding(
+            row, f"indicated − table angle {row['_r']:.4g}″ departs from the condition's "
+            f"median {med:.3g}″ by {abs(row['_r'] - med):.4g}″ (> {thr:.3g}″)",
+            what, file, test, _ANGLE_RULE, k_ref))
     return out
 
 
