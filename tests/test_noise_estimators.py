@@ -264,6 +264,88 @@ def test_octave_sums_match_allantools_to_1e12(kind, fn):
     np.testing.assert_allclose(r.adev[: dev.size], dev, rtol=1e-12)
 
 
+def _exact_sums(x, ms, coef):
+    """Σ_n (Σ_j coef[j]·x[n + j·m])² with each term from differences of the phase (ADEV:
+    (x[n+2m] − x[n+m]) − (x[n+m] − x[n]); HDEV: the third difference likewise) and the
+    squares summed exactly rounded (math.fsum): a second algorithm for the sums."""
+    out = []
+    for m in ms:
+        d = x[m:] - x[:-m]
+        d = d[m:] - d[:-m]
+        if len(coef) == 4:
+            d = -(d[m:] - d[:-m])
+        out.append(math.fsum((d * d).tolist()))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("order", [2, 3])
+def test_matrix_product_sums_against_exact_sums_and_allantools(monkeypatch, order):
+    """The in-memory sums by BLAS matrix products (band matrix × rows of the phase), with
+    products of 2¹² terms so that m up to beyond a product, the leftover rows and the last
+    partial row all occur: equal to the exactly rounded sums of the differences' squares
+    within the stated bound, and to allantools to 1e-12; the products path is used."""
+    from gonio.analysis.noise import allan
+    monkeypatch.setattr(allan, "_PRODUCT_BLOCK", 1 << 12)
+    monkeypatch.setattr(allan, "_PRODUCT_MIN_N", 0)
+    used = []
+    orig = allan._sum_sq_products
+    monkeypatch.setattr(allan, "_sum_sq_products",
+                        lambda x, m, c, b: used.append(m) or orig(x, m, c, b))
+    y = np.random.default_rng(11).standard_normal(100_003)
+    y -= y.mean()
+    x = np.r_[0.0, np.cumsum(y)]
+    ms = [16, 17, 63, 64, 100, 999, 1024, 5000, 12_345, 33_333 - order]
+    coef = allan._COEF["adev" if order == 2 else "hdev"]
+    got = allan._sums_by_products(x, ms, order)
+    assert used == ms
+    np.testing.assert_allclose(got, _exact_sums(x, ms, coef), rtol=allan.PRODUCT_RTOL, atol=0)
+    kind, fn = ("adev", allantools.oadev) if order == 2 else ("hdev", allantools.ohdev)
+    r = noise.allan_deviation(y, 0.01, "rate", ms, kind=kind, alpha=0)
+    _, dev, _, _ = fn(y, rate=100, data_type="freq", taus=r.tau_s)
+    np.testing.assert_allclose(r.adev, dev, rtol=1e-12, atol=0)
+
+
+def test_matrix_product_sums_refused_where_the_phase_dwarfs_its_differences(monkeypatch):
+    """Rate random walk: the phase is far larger than its second differences at short τ,
+    and the bound of the products' rounding exceeds PRODUCT_RTOL there: those m are summed
+    by differences (the same bytes as the differences path), the longer ones by products;
+    every m within the bound of the exact sums."""
+    from gonio.analysis.noise import allan
+    monkeypatch.setattr(allan, "_PRODUCT_MIN_N", 0)
+    rng = np.random.default_rng(4)
+    y = 0.05 * np.cumsum(rng.standard_normal(200_000)) + rng.standard_normal(200_000)
+    y -= y.mean()
+    x = np.r_[0.0, np.cumsum(y)]
+    ms = [16, 64, 256, 4096, 32_768]
+    got = allan._sums_by_products(x, ms)
+    diff = allan._sums_direct_shared(x, ms)
+    top = np.max(np.abs(x))
+    delta = 1.01 * 4 * 2.0 ** -53 * top            # ADEV: the one partial sum a − 2b
+    length = x.size - 2 * np.array(ms)
+    r = delta * np.sqrt(length / diff)
+    refused = 2 * r + r * r + 3 * 2.0 ** -53 > allan.PRODUCT_RTOL
+    assert refused[0] and not refused[-1]
+    assert np.array_equal(got[refused], diff[refused])
+    np.testing.assert_allclose(got, _exact_sums(x, ms, allan._COEF["adev"]),
+                               rtol=allan.PRODUCT_RTOL, atol=0)
+
+
+def test_matrix_product_sums_same_bytes_whatever_the_blas_threads():
+    """One BLAS thread inside: the sums are the same bytes whether the caller allows one
+    thread or two, and on a repeated run."""
+    from threadpoolctl import threadpool_limits
+
+    from gonio.analysis.noise import allan
+    y = np.random.default_rng(5).standard_normal(300_000)
+    with threadpool_limits(limits=2):
+        a = noise.allan_deviation(y, 0.01, "rate", "octave", kind="hdev")
+    with threadpool_limits(limits=1):
+        b = noise.allan_deviation(y, 0.01, "rate", "octave", kind="hdev")
+    c = noise.allan_deviation(y, 0.01, "rate", "octave", kind="hdev")
+    assert a.adev.tobytes() == b.adev.tobytes() == c.adev.tobytes()
+    assert (a.m >= allan._PRODUCT_MIN_M).sum() >= 10
+
+
 @pytest.mark.parametrize("kind", ["adev", "mdev", "hdev"])
 def test_all_taus_expansion_matches_direct_sums(kind):
     rng = np.random.default_rng(3)

@@ -41,7 +41,9 @@ end points; angle: its end points, and for ``mdev`` every point it averages), an
 each τ is normalised by its own number of valid terms (SP 1065 §5.15, gap-aware
 sums); ``n_pairs`` reports that number. Total deviation needs a gap-free record.
 
-Cost: per τ O(N) (chunked, vectorised); ``taus="all"`` for ``adev`` and ``hdev``
+Cost: per τ O(N) (chunked, vectorised; for an in-memory, gap-free record the ``adev`` and
+``hdev`` terms at m ≥ 16 are BLAS matrix products of the phase's rows, one pass each, with a
+stated rounding bound: :func:`_sums_by_products`); ``taus="all"`` for ``adev`` and ``hdev``
 uses the correlation expansion of :func:`_expanded_sums` — O(N log² N) for every τ at
 once — and for ``mdev`` the same expansion on short overlapping segments, octave by
 octave (:func:`_mdev_local_sums`, O(N log³ N), exact to 1e-9; see
@@ -513,6 +515,146 @@ def _sums_shared_third(x: np.ndarray, ms: list[int], bsz: int) -> np.ndarray:
     return _chunk_totals(dots.reshape(len(ms), -1, per))
 
 
+# ------------------------------------- in-memory sums by matrix products (BLAS)
+#: Smallest m whose in-memory sums (gap-free phase array) are formed by matrix products
+#: (:func:`_sums_by_products`); below, by differences (:func:`_sums_direct_shared`).
+_PRODUCT_MIN_M = 16
+#: Terms per matrix product (the output block: 512 KiB, it and its input stay in cache).
+_PRODUCT_BLOCK = 1 << 16
+#: Bound on the relative rounding error of a sum formed by matrix products (see
+#: :func:`_sums_by_products`); an m whose bound is larger is summed by differences.
+PRODUCT_RTOL = 1e-12
+#: Fewest phase points for the products (below, their set-up costs more than they save).
+_PRODUCT_MIN_N = 1 << 18
+_UNIT_ROUNDOFF = 2.0 ** -53
+#: Terms from which :func:`_sums_by_products` foresees its rounding bound.
+_PROBE = 4096
+
+
+def _band(coef, p: int) -> np.ndarray:
+    """p × (p + P − 1) matrix whose row r holds ``coef`` (P values) from column r."""
+    t = np.zeros((p, p + len(coef) - 1))
+    for r in range(p):
+        t[r, r: r + len(coef)] = coef
+    return t
+
+
+def _product_rows(x: np.ndarray, m: int, coef, q0: int, rows: int, p: int,
+                  buf: np.ndarray) -> float:
+    """Σ of the squared terms n ∈ [q0·m, (q0 + rows)·m) (``rows`` a multiple of ``p``), the
+    row q of terms (n = q·m … q·m + m − 1) being Σ_j coef[j]·X[q + j] with X[q] = x[q·m:
+    q·m + m]: ``p`` rows of terms are the band matrix :func:`_band` times p + P − 1 rows of
+    X (a strided view of ``x``, no copy), many such products in one ``np.matmul`` call
+    (m small) or the rows taken in column strips (m large)."""
+    width = len(coef) - 1 + p
+    t = _band(coef, p)
+    isz = x.itemsize
+    total = 0.0
+    nb = rows // p
+    # every product's rows of X at once: nb overlapping (width × m) windows, p rows apart
+    y = np.ndarray((nb, width, m), dtype=x.dtype, buffer=x, offset=q0 * m * isz,
+                   strides=(p * m * isz, m * isz, isz))
+    y.flags.writeable = False
+    if p * m <= _PRODUCT_BLOCK:
+        g_max = _PRODUCT_BLOCK // (p * m)
+        for b0 in range(0, nb, g_max):
+            g = min(g_max, nb - b0)
+            out = buf[: g * p * m]
+            np.matmul(t, y[b0: b0 + g], out=out.reshape(g, p, m))
+            total += _ssq(out)
+        return total
+    w = _PRODUCT_BLOCK // p
+    for b in range(nb):
+        for c0 in range(0, m, w):
+            ww = min(w, m - c0)
+            out = buf[: p * ww]
+            np.matmul(t, y[b, :, c0: c0 + ww], out=out.reshape(p, ww))
+            total += _ssq(out)
+    return total
+
+
+def _sum_sq_products(x: np.ndarray, m: int, coef, buf: np.ndarray) -> float:
+    """Σ_n (Σ_j coef[j]·x[n + j·m])², n = 0 … N − (P−1)m − 1, by matrix products
+    (:func:`_product_rows`: blocks of 8 rows of terms for m < 64, else 4), the rows
+    left over by fewer-row products and the last partial row by differences
+    (:func:`_sum_sq_diff`). The terms are summed in an order fixed by N and m."""
+    length = x.size - (len(coef) - 1) * m
+    full = length // m
+    p = 8 if m < 64 else 4
+    main = full - full % p
+    total = _product_rows(x, m, coef, 0, main, p, buf) if main else 0.0
+    if full > main:
+        total += _product_rows(x, m, coef, main, full - main, full - main, buf)
+    if length > full * m:
+        total += _sum_sq_diff(x[full * m:], m, coef, buf)
+    return total
+
+
+def _sums_by_products(x: np.ndarray, ms, order: int = 2) -> np.ndarray:
+    """The sums of :func:`_sums_direct_shared` (order 2: SP 1065 eq. 11; order 3: eq. 20)
+    of an in-memory, gap-free phase array: each m ≥ :data:`_PRODUCT_MIN_M` by BLAS matrix
+    products of a band matrix of the coefficients with rows of ``x``
+    (:func:`_sum_sq_products`: one pass that reads the phase and writes the terms, where
+    the differences take two or three), with one BLAS thread (the products and sums are
+    then the same bytes whatever the threads available, as in a validation worker); the
+    smaller m by differences.
+
+    Rounding: a term v = Σ_j c_j·x[n + j·m] formed from the phase itself (not from its
+    differences), in whatever order the BLAS kernel adds (the zero coefficients add
+    exactly), errs by at most δ + u·|v| with δ = u·max|x|·(Σ|c_j| over the c_j that are not
+    powers of two (rounded products) + (P − 2)·Σ|c_j| (the P − 2 partial sums before the
+    last)), P terms, unit roundoff u: ADEV (1, −2, 1) 4u·max|x|, HDEV (−1, 3, −3, 1)
+    22u·max|x|. The sum S of L squared terms then errs by at most (2r + r² + 3u)·S,
+    r = δ·√(L/S) (Cauchy–Schwarz; δ taken 1 % larger for the second-order terms).
+    An m where that bound exceeds :data:`PRODUCT_RTOL` (a phase far larger than its
+    differences: random-walk rate noise, a strong rate ramp) is summed by differences
+    instead (foreseen from :data:`_PROBE` terms, then checked on the sum itself). On white
+    rate noise of 10⁷ samples the bound falls as 1/√m and is under PRODUCT_RTOL from
+    m = 32 (ADEV) or m = 128 (HDEV); the errors being random, the sums differ from the
+    differences' by ~10⁻¹⁶. (Bounds of sums of products: N. J. Higham, *Accuracy and
+    Stability of Numerical Algorithms*, 2nd ed., §3.1, γ_n.)"""
+    from threadpoolctl import threadpool_limits
+
+    coef = _COEF["adev" if order == 2 else "hdev"]
+    ms = [int(m) for m in ms]
+    if x.size < _PRODUCT_MIN_N or not (x.flags.c_contiguous and x.dtype == np.float64):
+        return _sums_direct_shared(x, ms, order)
+    out = np.empty(len(ms))
+    big = [i for i, m in enumerate(ms) if m >= _PRODUCT_MIN_M]
+    small = [i for i, m in enumerate(ms) if m < _PRODUCT_MIN_M]
+    redo = small
+    if big:
+        top = max(float(np.max(x)), -float(np.min(x)))
+        inexact = sum(abs(c) for c in coef if math.frexp(abs(c))[0] != 0.5)
+        delta = 1.01 * _UNIT_ROUNDOFF * top * (inexact + (len(coef) - 2) * sum(map(abs, coef)))
+        buf = np.empty(_PRODUCT_BLOCK)
+
+        def bound(s, length):
+            r = delta * math.sqrt(length / s) if s > 0 else math.inf
+            return 2 * r + r * r + 3 * _UNIT_ROUNDOFF
+
+        with threadpool_limits(limits=1, user_api="blas"):
+            for i in big:
+                m = ms[i]
+                length = x.size - (len(coef) - 1) * m
+                # the bound foreseen from _PROBE terms at the middle (a phase where the
+                # products would be refused goes to the differences at once)
+                c = max(0, (length - _PROBE) // 2)
+                k = min(_PROBE, length)
+                probe = _sum_sq_diff(x[c: c + k + (len(coef) - 1) * m], m, coef, buf)
+                if bound(probe * length / k, length) > PRODUCT_RTOL:
+                    redo = redo + [i]
+                    continue
+                s = _sum_sq_products(x, m, coef, buf)
+                if bound(s, length) <= PRODUCT_RTOL:
+                    out[i] = s
+                else:
+                    redo = redo + [i]
+    if redo:
+        out[redo] = _sums_direct_shared(x, [ms[i] for i in redo], order)
+    return out
+
+
 def _split_sums(x, ms: list[int], bsz: int) -> np.ndarray:
     """:func:`_sums_direct_shared` of a streamed phase: the m within a chunk together,
     each larger m alone (:func:`_sums_far`)."""
@@ -655,6 +797,8 @@ def _sum_sq_mod_streamed(x, m: int, n_terms: int) -> float:
 
 def _direct_sums(kind: str, x: np.ndarray, ms) -> np.ndarray:
     """The sum of squared terms of ``kind`` at each m, O(N) per m."""
+    if kind in ("adev", "hdev") and isinstance(x, np.ndarray):
+        return _sums_by_products(x, ms, order=2 if kind == "adev" else 3)
     if kind == "adev":
         return _sums_direct_shared(x, ms)
     if kind == "mdev":
@@ -665,8 +809,6 @@ def _direct_sums(kind: str, x: np.ndarray, ms) -> np.ndarray:
             out[i] = _sum_sq_mod(x, int(ms[i]))
         return out
     if kind == "hdev":
-        if isinstance(x, np.ndarray):
-            return _sums_direct_shared(x, ms, order=3)
         buf = np.empty(min(_BLOCK, x.size))
         return np.array([_sum_sq_diff(x, int(m), _COEF["hdev"], buf) for m in ms])
     raise AssertionError(kind)
@@ -1521,8 +1663,6 @@ def _deviation_sums(kind: str, x, bad, angle: bool, ms, all_requested: bool,
         sums = _mdev_local_sums(x, ms, 1e-9 if rtol_all is None else rtol_all)
     elif all_requested and ms.size > 64:
         sums = _expanded_sums(kind, x, ms, 1e-6 if rtol_all is None else rtol_all)
-    elif kind == "adev":
-        sums = _sums_direct_shared(x, ms)
     else:
         sums = _direct_sums(kind, x, ms)
     return ms, sums, n - p_last * ms + (1 if kind == "mdev" else 0), None, 0
