@@ -281,9 +281,10 @@ def _exact_sums(x, ms, coef):
 @pytest.mark.parametrize("order", [2, 3])
 def test_matrix_product_sums_against_exact_sums_and_allantools(monkeypatch, order):
     """The in-memory sums by BLAS matrix products (band matrix × rows of the phase), with
-    products of 2¹² terms so that m up to beyond a product, the leftover rows and the last
-    partial row all occur: equal to the exactly rounded sums of the differences' squares
-    within the stated bound, and to allantools to 1e-12; the products path is used."""
+    products of 2¹² terms so that m up to beyond a product, the leftover rows and a last
+    partial row longer than a product all occur: equal to the exactly rounded sums of the
+    differences' squares within the stated bound, and to allantools to 1e-12; the products
+    path is used."""
     from gonio.analysis.noise import allan
     monkeypatch.setattr(allan, "_PRODUCT_BLOCK", 1 << 12)
     monkeypatch.setattr(allan, "_PRODUCT_MIN_N", 0)
@@ -294,7 +295,7 @@ def test_matrix_product_sums_against_exact_sums_and_allantools(monkeypatch, orde
     y = np.random.default_rng(11).standard_normal(100_003)
     y -= y.mean()
     x = np.r_[0.0, np.cumsum(y)]
-    ms = [16, 17, 63, 64, 100, 999, 1024, 5000, 12_345, 33_333 - order]
+    ms = [16, 17, 63, 64, 100, 999, 1024, 5000, 12_345, 30_000, 33_333 - order]
     coef = allan._COEF["adev" if order == 2 else "hdev"]
     got = allan._sums_by_products(x, ms, order)
     assert used == ms

@@ -627,7 +627,7 @@ def _sums_by_products(x: np.ndarray, ms, order: int = 2) -> np.ndarray:
         top = max(float(np.max(x)), -float(np.min(x)))
         inexact = sum(abs(c) for c in coef if math.frexp(abs(c))[0] != 0.5)
         delta = 1.01 * _UNIT_ROUNDOFF * top * (inexact + (len(coef) - 2) * sum(map(abs, coef)))
-        buf = np.empty(_PRODUCT_BLOCK)
+        buf = np.empty(max(_PRODUCT_BLOCK, _BLOCK))    # products, and _sum_sq_diff's chunks
 
         def bound(s, length):
             r = delta * math.sqrt(length / s) if s > 0 else math.inf
