@@ -68,3 +68,90 @@ def test_max_of_outcome_and_noise_sd_against_monte_carlo():
         b = rng.normal(m_b, s_b, a.size)
         mc = float(np.std(np.maximum(a, b)))
         assert max_outcome_normal_sd(pmf, m_b, s_b) == pytest.approx(mc, rel=0.01)
+
+
+def _max_sample(rng, pmf, m_b, s_b, n):
+    a = rng.choice(np.array(list(pmf), float), size=n, p=np.array(list(pmf.values())))
+    return np.maximum(a, rng.normal(m_b, s_b, n) if s_b > 0 else np.full(n, m_b))
+
+
+def test_max_interval_probability_against_sampling():
+    """The combined interval's own probability P(lo ≤ max(A, B) ≤ hi), and the upper end
+    raised to 95 %, against sampling A and B."""
+    from gonio.specs.iec62047_20.items import (max_outcome_interval_probability,
+                                               max_outcome_upper_end)
+
+    rng = np.random.default_rng(58)
+    pmf = {0.05: 0.12, 0.02: 0.5, 0.01: 0.06, 0.005: 0.27, 0.002: 0.05}
+    for m_b, s_b, lo, hi in ((0.009, 0.0004, 0.002, 0.05), (0.012, 0.004, 0.005, 0.02),
+                             (0.03, 0.01, 0.01, 0.05), (0.001, 0.0, 0.005, 0.02)):
+        m = _max_sample(rng, pmf, m_b, s_b, 400_000)
+        mc = float(np.mean((m >= lo) & (m <= hi)))
+        assert max_outcome_interval_probability(pmf, m_b, s_b, lo, hi) == pytest.approx(
+            mc, abs=0.003)
+        end = max_outcome_upper_end(pmf, m_b, s_b, lo, hi, 0.95)
+        assert end >= hi
+        assert float(np.mean((m >= lo) & (m <= end))) >= 0.95 - 0.003
+
+
+def _resolution_context(noise_dps: float, seed: int):
+    """Readings of the 5.6 test (steps from rest in both directions, 30-sample steps and
+    rests, 10 Hz) and a 2-h static record at 10 Hz, white rate noise ``noise_dps`` per
+    sample, a = 0.01 V/(°/s)."""
+    import pandas as pd
+
+    from gonio.specs.iec62047_20 import items as iec
+
+    rng = np.random.default_rng(seed)
+    a, null, dt = 0.01, 2.5, 0.1
+    rows, t = [], 0.0
+
+    def seg(test, run, step, role, rate, n):
+        nonlocal t
+        y = null + a * (rate + rng.normal(0.0, noise_dps, n))
+        rows.append(pd.DataFrame({"test": test, "run": run, "step": step, "role": role,
+                                  "rate_dps": rate, "output": y,
+                                  "time_s": t + dt * np.arange(n), "temperature_c": 25.0,
+                                  "supply_v": 5.0, "up_axis": "z", "north_axis": "x",
+                                  "freq_hz": 0.0}))
+        t += dt * n
+
+    seg("static", 0, 0, "static", 0.0, 72_000)
+    for run, sign in ((0, 1.0), (1, -1.0)):
+        step = 0
+        for s in STEPS:
+            seg("resolution", run, step, "rest", 0.0, 30)
+            seg("resolution", run, step + 1, "increment", sign * s, 30)
+            step += 2
+        seg("resolution", run, step, "rest", 0.0, 30)
+    df = pd.concat(rows, ignore_index=True)
+    return iec.Context(df=df, output_unit="V", null_output=null, latitude_deg=40.0,
+                       protocol={}, a_typ=a, t_base_c=25.0, v_base=5.0, a_base=a)
+
+
+def test_resolution_states_its_interval_own_probability():
+    """Where Noise,RMS joins the rule's outcome, the certified interval's p is its own
+    probability under max(rule's outcome, Noise,RMS) — by sampling the item's outcome
+    distribution and a normal Noise,RMS with its u_c — not a fixed 95 %."""
+    from gonio.specs.iec62047_20 import items as iec
+
+    rng = np.random.default_rng(59)
+    seen = 0
+    for seed in (1, 2, 3):
+        it = iec.resolution(_resolution_context(0.03 * np.sqrt(10.0), seed))
+        u = it.uncertainty
+        pmf: dict = {}                   # "above the grid" counts as the largest step
+        for k, v in it.details["outcome_pmf"].items():
+            kk = max(STEPS) if k == "none" else float(k)
+            pmf[kk] = pmf.get(kk, 0.0) + v
+        tot = sum(pmf.values())
+        pmf = {k: v / tot for k, v in pmf.items()}
+        noise = it.details["noise_rms_dps"]
+        s_b = next(c["u"] for c in u.components if c["symbol"].startswith("s(Noise"))
+        lo, hi = u.interval
+        m = _max_sample(rng, pmf, noise, s_b, 400_000)
+        mc = float(np.mean((m >= lo - 1e-12) & (m <= hi + 1e-12)))
+        assert u.coverage_probability == pytest.approx(mc, abs=0.003)
+        assert u.coverage_probability >= 0.95 - 0.003
+        seen += 1
+    assert seen == 3

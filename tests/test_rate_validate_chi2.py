@@ -77,3 +77,22 @@ def test_jjf_trial_records_carry_the_stated_interval_and_its_nu():
     assert math.isclose(bs["interval"][1], bs["value"] * math.sqrt(bs["nu"] / chi2.ppf(
         0.05, bs["nu"])), rel_tol=1e-9)
     assert "interval" not in r["scale_factor"] and "nu" not in r["bias"]
+
+
+def test_interval_item_judged_against_its_stated_p():
+    """An outcome range states its own probability (above 95 %): the study records it and
+    judges the coverage against it — 90 of 100 intervals holding the truth contradict a
+    stated p of 0.99 (Clopper–Pearson upper end 0.951), not a stated 0.90."""
+    from gonio.analysis.coverage import stated_record
+    from gonio.result.model import Uncertainty
+
+    u = Uncertainty([], 0.01, 0.03, None, None, None, 0.9997, "outcome distribution",
+                    interval=(0.002, 0.05))
+    assert stated_record(u) == {"interval": [0.002, 0.05], "nu": None, "p": 0.9997}
+    recs = [(0.02, 0.02 if i < 90 else 0.2, 0.03, 0.01) for i in range(100)]
+    for p, flagged in ((0.99, True), (0.90, False)):
+        c = item_coverage(recs, "resolution", "5.6",
+                          [{"interval": [0.002, 0.05], "nu": None, "p": p}] * 100)
+        assert c.statistic == "interval" and c.hits == 90 and abs(c.p_stated - p) < 1e-12
+        assert ("below its p" in c.flags) is flagged
+        assert f"stated p {p:.3f}" in format_coverage(pd.DataFrame([c.__dict__]), "t")

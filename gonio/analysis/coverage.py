@@ -202,7 +202,11 @@ class ItemCoverage:
     stated by its one-sided χ² interval alone (a standard deviation: no k), the truth inside
     that interval and z its χ² z (:func:`chi_square_z`), with z on u_c kept beside it
     (``z_uc_mean``, ``z_uc_sd``, ``max_norm_error_uc``); ``"interval"``: stated by another
-    interval (a range), the truth inside it, z on u_c; ``"mixed"``: trials of both kinds."""
+    interval (a range, a rule's outcome range), the truth inside it, z on u_c; ``"mixed"``:
+    trials of both kinds. ``p_stated``: the mean coverage probability the trials' intervals
+    state (an outcome range states its own, above 95 %): coverage is judged against it
+    (flag ``below its p`` where the Clopper–Pearson upper end is under it); for a
+    discrete, skewed outcome z on u_c is not normal and its spread is information only."""
 
     key: str
     clause: str
@@ -223,6 +227,7 @@ class ItemCoverage:
     z_uc_mean: float | None = None
     z_uc_sd: float | None = None
     max_norm_error_uc: float | None = None
+    p_stated: float | None = None
 
 
 def _trial_judged(v: float, t: float, U: float, u: float, stated: dict | None):
@@ -278,6 +283,11 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
     z_mean, z_sd = _spread(j[1] for j in judged)
     cp_lo, cp_hi = clopper_pearson(hits, n)
     uc = {}
+    ps = [st["p"] for st in (stated or []) if st and st.get("p") is not None]
+    p_stated = float(np.mean(ps)) if ps else None
+    flags = coverage_flags(c, z_sd, own_budget=judge_spread)
+    if p_stated is not None and cp_hi < p_stated:
+        flags.append("below its p")       # the intervals hold the truth less often than stated
     if statistic != "u_c":
         m, sd = _spread(j[2] for j in judged)
         uc = {"z_uc_mean": m, "z_uc_sd": sd,
@@ -286,8 +296,7 @@ def item_coverage(records: list[tuple[float, float, float, float]], key: str = "
     return ItemCoverage(key, clause, n, hits, c, math.sqrt(c * (1 - c) / n), lo, hi,
                         ne[n // 2] if n % 2 else 0.5 * (ne[n // 2 - 1] + ne[n // 2]), ne[-1],
                         cp_lo, cp_hi, z_mean, z_sd,
-                        tuple(coverage_flags(c, z_sd, own_budget=judge_spread)),
-                        statistic, **uc)
+                        tuple(flags), statistic, **uc, p_stated=p_stated)
 
 
 def stated_record(u) -> dict:
@@ -305,7 +314,9 @@ def stated_record(u) -> dict:
     if u.k_source == "chi-square" and u.nu_eff is not None and math.isfinite(u.nu_eff):
         ns = stated_nu(u.nu_eff)
         nu = float(u.nu_eff) if math.isinf(ns) else ns
-    return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu}
+    p = u.coverage_probability
+    return {"interval": [float(u.interval[0]), float(u.interval[1])], "nu": nu,
+            **({"p": float(p)} if p is not None and math.isfinite(float(p)) else {})}
 
 
 def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None,
@@ -327,7 +338,8 @@ def coverage_table_from(trials: list[dict], items: tuple[str, ...] | None = None
             if r["value"] is not None:
                 recs.setdefault(key, []).append((r["value"], r["truth"], r["U"], r["u_c"]))
                 stated.setdefault(key, []).append(
-                    {"interval": r["interval"], "nu": r.get("nu")} if r.get("interval")
+                    {"interval": r["interval"], "nu": r.get("nu"), "p": r.get("p")}
+                    if r.get("interval")
                     else None)
     rows = [item_coverage(v, k, clauses[k], stated[k], judge_spread).__dict__
             for k, v in recs.items()]
@@ -343,8 +355,10 @@ def format_coverage(df, title: str) -> str:
         zm = "—" if r.z_mean is None or r.z_mean != r.z_mean else f"{r.z_mean:+.2f}"
         zs = "—" if r.z_sd is None or r.z_sd != r.z_sd else f"{r.z_sd:.2f}"
         st = getattr(r, "statistic", "u_c")
+        ps = getattr(r, "p_stated", None)
+        p_txt = "" if ps is None or ps != ps else f", stated p {ps:.3f}"
         on_uc = "" if st in ("u_c", None) or st != st else (
-            f"  [{'chi2 z' if st == 'chi-square' else st}; z on u_c: mean "
+            f"  [{'chi2 z' if st == 'chi-square' else st}{p_txt}; z on u_c: mean "
             f"{r.z_uc_mean:+.2f}, sd {r.z_uc_sd:.2f}, max|z| {r.max_norm_error_uc:.2f}]")
         lines.append(f"{r.key:32s} {r.clause:10s} {r.n:4d} {r.coverage:6.3f} "
                      f"      [{r.cp_low:.3f}, {r.cp_high:.3f}] {zm:>7s} {zs:>6s} "
@@ -354,5 +368,6 @@ def format_coverage(df, title: str) -> str:
                  "Clopper-Pearson interval); z = (value - truth)/u_c, or for a standard "
                  "deviation stated by its chi-square interval [chi2 z] Phi^-1(F_chi2(nu "
                  "value^2/truth^2; nu)) with z on u_c beside it; flagged: coverage < 90 % "
-                 "(under-covers), sd z < 0.3 (over-wide U)")
+                 "(under-covers), sd z < 0.3 (over-wide U), the Clopper-Pearson upper end "
+                 "below the mean probability the intervals state (below its p)")
     return "\n".join(lines) + "\n"

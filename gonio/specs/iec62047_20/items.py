@@ -1656,8 +1656,11 @@ def resolution(ctx: Context) -> Item:
     standard deviation, no k); Noise,RMS, a standard deviation of the block means, u_c =
     s/√(2ν), by its one-sided χ² 95 % interval (:func:`gonio.result.gum.std_dev_uncertainty`).
     The maximum's interval is [max of the lower ends, max of the upper ends] (the true
-    maximum lies there when each true value lies in its own interval); u_c is the deciding
-    part's."""
+    maximum lies there when each true value lies in its own interval), u_c the standard
+    deviation of max(A, B) (:func:`max_outcome_normal_sd`), and its p the interval's own
+    probability under max(A, B), B normal about Noise,RMS with its u_c
+    (:func:`max_outcome_interval_probability`; the upper end raised where that falls below
+    95 %) — the one p every output states, as the rule's interval alone states its own."""
     t, cl, un = "resolution", "5.6", "°/s"
     m = _miss(ctx, "resolution", "resolution", t, cl, un)
     if m:
@@ -1716,13 +1719,21 @@ def resolution(ctx: Context) -> Item:
         lo = min(max(lo_r, u_noise.interval[0]), value)
         hi = max(hi_r, u_noise.interval[1])
         top = max(k for p in pmfs for k in p if k is not None)
-        u_c = max_outcome_normal_sd({top if k is None else k: w for k, w in pmf.items()},
-                                    noise, u_noise.u_c)
-        # p: the rule's own interval probability no longer applies to the combined interval;
-        # the 95 % of each part's statement is stated (as before the rule's p was its own)
+        pmf_top: dict = {}               # "above the grid" (None) counted as the largest step
+        for k, w in pmf.items():
+            kk = top if k is None else k
+            pmf_top[kk] = pmf_top.get(kk, 0.0) + w
+        u_c = max_outcome_normal_sd(pmf_top, noise, u_noise.u_c)
+        # p: the combined interval's own probability under the distribution of max(A, B)
+        # (as the rule's interval states its own, JCGM 101 7.7); where it falls below 95 %
+        # (each part's 95 % does not make the maximum's), the upper end is raised to 95 %
+        p_iv = max_outcome_interval_probability(pmf_top, noise, u_noise.u_c, lo, hi)
+        if p_iv < 0.95:
+            hi = max_outcome_upper_end(pmf_top, noise, u_noise.u_c, lo, hi, 0.95)
+            p_iv = max_outcome_interval_probability(pmf_top, noise, u_noise.u_c, lo, hi)
         u = replace(u_rule, components=u_rule.components + u_noise.components, u_c=u_c,
                     U=hi - value, interval=(lo, hi) if hi > lo else None,
-                    coverage_probability=0.95)
+                    coverage_probability=min(p_iv, 1.0))
     return Item("resolution", t, cl, un, value, uncertainty=u, details={
         **dets, "out_resolution_dps": out_res, "noise_rms_dps": noise, "filter_s": T,
         "decided_by": by,
@@ -1754,6 +1765,64 @@ def max_outcome_normal_sd(pmf: dict, m_b: float, s_b: float) -> float:
         e1 = float(w @ (a * P + m_b * (1 - P) + s_b * f))
         e2 = float(w @ (a * a * P + (m_b ** 2 + s_b ** 2) * (1 - P) + s_b * (a + m_b) * f))
     return math.sqrt(max(e2 - e1 * e1, 0.0))
+
+
+def max_outcome_interval_probability(pmf: dict, m_b: float, s_b: float, lo: float,
+                                     hi: float) -> float:
+    """P(lo ≤ max(A, B) ≤ hi) for A discrete ({value: probability}) and B ~ N(m_b, s_b²)
+    independent (5.6: the interval of the maximum of the rule's outcome and Noise,RMS, its
+    own probability): P(max ≤ x) = F_A(x)·Φ((x − m_b)/s_b), and B continuous, so
+    P(max < lo) = P(A < lo)·Φ((lo − m_b)/s_b).
+
+    >>> max_outcome_interval_probability({0.02: 0.5, 0.05: 0.5}, 0.0, 0.0, 0.02, 0.05)
+    1.0
+    >>> round(max_outcome_interval_probability({0.0: 1.0}, 0.0, 1.0, 0.0, 1.96), 4)  # Φ(1.96)
+    0.975
+    """
+    from scipy.stats import norm
+
+    w = np.array(list(pmf.values()), float)
+    w = w / w.sum()
+    a = np.array(list(pmf.keys()), float)
+
+    def phi(x):
+        return float(x >= m_b) if s_b <= 0 else float(norm.cdf((x - m_b) / s_b))
+
+    tol_lo, tol_hi = 1e-12 * abs(lo), 1e-12 * abs(hi)
+    below_hi = float(w[a <= hi + tol_hi].sum()) * phi(hi)
+    below_lo = float(w[a < lo - tol_lo].sum()) * (phi(lo) if s_b > 0 else float(lo > m_b))
+    return max(below_hi - below_lo, 0.0)
+
+
+def max_outcome_upper_end(pmf: dict, m_b: float, s_b: float, lo: float, hi: float,
+                          p: float) -> float:
+    """The smallest upper end ≥ ``hi`` at which [lo, end] holds probability ``p`` of max(A,
+    B) (:func:`max_outcome_interval_probability`; bisection, the tested values of A as
+    candidates first).
+
+    >>> round(max_outcome_upper_end({0.0: 1.0}, 0.0, 1.0, -10.0, 0.0, 0.95), 3)   # Φ⁻¹(0.95)
+    1.645
+    """
+    def prob(x):
+        return max_outcome_interval_probability(pmf, m_b, s_b, lo, x)
+
+    if prob(hi) >= p:
+        return hi
+    x0 = hi
+    for a in sorted(k for k in pmf if k > hi):
+        if prob(a) >= p:
+            below = a - 1e-9 * max(abs(a), 1e-300)
+            if prob(below) < p:          # reached at the tested value itself
+                return a
+            x1 = below
+            break
+        x0 = a
+    else:
+        x1 = max(max(pmf), m_b) + 10.0 * max(s_b, 0.0) + 1e-12
+    for _ in range(80):
+        xm = 0.5 * (x0 + x1)
+        x0, x1 = (x0, xm) if prob(xm) >= p else (xm, x1)
+    return x1
 
 
 def with_needs(ctx: Context, done: dict[str, Item]) -> Context:
