@@ -1719,10 +1719,7 @@ def resolution(ctx: Context) -> Item:
         lo = min(max(lo_r, u_noise.interval[0]), value)
         hi = max(hi_r, u_noise.interval[1])
         top = max(k for p in pmfs for k in p if k is not None)
-        pmf_top: dict = {}               # "above the grid" (None) counted as the largest step
-        for k, w in pmf.items():
-            kk = top if k is None else k
-            pmf_top[kk] = pmf_top.get(kk, 0.0) + w
+        pmf_top = outcome_pmf_topped(pmf, top)
         u_c = max_outcome_normal_sd(pmf_top, noise, u_noise.u_c)
         # p: the combined interval's own probability under the distribution of max(A, B)
         # (as the rule's interval states its own, JCGM 101 7.7); where it falls below 95 %
@@ -1765,6 +1762,20 @@ def max_outcome_normal_sd(pmf: dict, m_b: float, s_b: float) -> float:
         e1 = float(w @ (a * P + m_b * (1 - P) + s_b * f))
         e2 = float(w @ (a * a * P + (m_b ** 2 + s_b ** 2) * (1 - P) + s_b * (a + m_b) * f))
     return math.sqrt(max(e2 - e1 * e1, 0.0))
+
+
+def outcome_pmf_topped(pmf: dict, top: float) -> dict:
+    """The rule's outcome distribution with "above the grid" (None) counted as the largest
+    tested step ``top``: its probability added to that step's, not replacing it.
+
+    >>> outcome_pmf_topped({0.1: 0.2, 0.05: 0.7, None: 0.1}, 0.1)
+    {0.1: 0.30000000000000004, 0.05: 0.7}
+    """
+    out: dict = {}
+    for k, w in pmf.items():
+        kk = top if k is None else k
+        out[kk] = out.get(kk, 0.0) + w
+    return out
 
 
 def max_outcome_interval_probability(pmf: dict, m_b: float, s_b: float, lo: float,
