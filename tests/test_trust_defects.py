@@ -297,8 +297,11 @@ def test_draft_budget_has_the_annex_four_lines_physical_more(tmp_path):
     assert physc["items"]["angle_deviation"]["value"] == pytest.approx(e_i[np.argmax(np.abs(e_i))],
                                                               abs=1e-9)
     extra = [c for c in physc["extra"]["uncertainty"]["components"] if c["beyond_draft"]]
-    assert {c["symbol"] for c in extra} == {"K_P", "K_r", "tilt_E"}
+    # the table's errors at the stops (K_P) are in P, one line with the point's and the zero's
+    assert {c["symbol"] for c in extra} == {"K_r", "tilt_E"}
     assert all(c["clause"] for c in extra)
+    p_line = [c for c in physc["extra"]["uncertainty"]["components"] if c["symbol"] == "P"]
+    assert "7.1 stops" in p_line[0]["source"]
     assert phys["extra"]["uncertainty"]["U_arcsec"] > draft["extra"]["uncertainty"]["U_arcsec"]
 
 

@@ -129,6 +129,10 @@ class AnnexABudget:
     monte_carlo: MonteCarloResult | None = None
     validation: ValidationResult | None = None
     _rounded_components: tuple = field(default=(), repr=False)
+    #: The physical budget of E per 7.4 point (dicts: position_deg, u_c_arcsec, U_arcsec,
+    #: k); this budget itself is the one at the point of the extreme |E_i|. Empty for the
+    #: draft's reading (one budget for every point, Annex A).
+    points: tuple = ()
 
     @property
     def u_c_arcsec(self) -> float:
@@ -173,6 +177,7 @@ class AnnexABudget:
             "stated": {"u_c_arcsec": self.stated_u_c_arcsec, "U_arcsec": self.stated_U_arcsec},
             "annex_rounded": self.annex_rounded,
             "monte_carlo": mc,
+            **({"points": [dict(p) for p in self.points]} if self.points else {}),
         }
 
     def _summary(self) -> list[str]:
@@ -220,7 +225,12 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                    extra_components: Sequence = (), monte_carlo_trials: int = 0,
                    seed: int = 0, repeatability_dof: float = math.inf,
                    repeatability_type: str = "A",
-                   repeatability_source: str = "repeatability (A.4.4)") -> AnnexABudget:
+                   repeatability_source: str = "repeatability (A.4.4)",
+                   table_u_arcsec: float | None = None,
+                   table_source: str = "standard table positioning (A.4.1)",
+                   phi_e_arcsec: float | None = None,
+                   phi_e_source: str = "sensing plane not parallel to table plane (A.4.2)"
+                   ) -> AnnexABudget:
     """The draft's Annex A budget (A.2–A.7), optionally checked by JCGM 101 Monte Carlo.
 
     Parameters
@@ -246,6 +256,15 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     repeatability_type, repeatability_source : str
         "A" when u(r) comes from the calibration's own series, "B" when it is a stated
         value (e.g. the protocol's); the source sentence shown in the budget.
+    table_u_arcsec, table_source : float or None, str
+        u of P (normal) and its source sentence; None (the draft): rectangular of half-width
+        ``table_mpe_arcsec`` (A.4.1). The physical budget gives the table's errors at the
+        point, the zero and the 7.1 stops as one line
+        (:func:`gonio.specs.ogam_draft.budget_extra.table_line_u`).
+    phi_e_arcsec, phi_e_source : float or None, str
+        Half-width of φ_e and its source sentence; None (the draft): the elliptic extreme of
+        ``tilt_deg`` (A.4.2). The physical budget gives 0 where K of 7.1, measured on the same
+        mount, absorbs the scale error (its source then says so).
 
     Examples
     --------
@@ -290,12 +309,13 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
         names.add(e.symbol)
 
     drift_arcsec = zero_stability_dph * ARCSEC_PER_MIN_PER_DPH * duration_min
-    phi_half = elliptic_extreme(tilt_deg).extreme_arcsec
+    phi_half = elliptic_extreme(tilt_deg).extreme_arcsec if phi_e_arcsec is None \
+        else float(phi_e_arcsec)
     inputs = [
-        type_b("P", 0.0, table_mpe_arcsec, "rectangular",
-               source="standard table positioning (A.4.1)"),
-        type_b("phi_e", 0.0, phi_half, "rectangular",
-               source="sensing plane not parallel to table plane (A.4.2)"),
+        type_b("P", 0.0, table_mpe_arcsec, "rectangular", source=table_source)
+        if table_u_arcsec is None else
+        type_b("P", 0.0, float(table_u_arcsec), "normal", source=table_source),
+        type_b("phi_e", 0.0, phi_half, "rectangular", source=phi_e_source),
         type_b("B_E", 0.0, drift_arcsec, "rectangular", source="zero drift (A.4.3)"),
         from_u("r", 0.0, repeatability_arcsec, dof=repeatability_dof, type=repeatability_type,
                source=repeatability_source),

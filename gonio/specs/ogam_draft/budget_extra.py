@@ -547,10 +547,59 @@ def nonlinearity_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
     return float(math.hypot(float(a_k[i_max] - a_k[i_min]), float(b_k[i_max] - b_k[i_min])))
 
 
+def table_error_coefficients(theta_deg: float, stops_deg) -> dict:
+    """Sensitivities of E_i at the 7.4 point ``theta_deg`` to the table's positioning error
+    at each distinct table position (° mod 360, rounded to 1e-6°): {position: c}.
+
+    The table turns from its zero to θ with error P(θ) − P(0) (A.4.1); the 7.1 K is the mean
+    of C_k/θ_k over the stops θ_k (n of them), so K/K_true − 1 ≈ (1/n) Σ (P(θ_k) − P(0))/θ_k
+    (7.1), and E_i = C_i/K − θ_i ≈ (P(θ_i) − P(0)) − (θ_i/n) Σ (P(θ_k) − P(0))/θ_k. A position
+    the table reaches twice (a stop that is also the point, 360° that is 0°) has one error,
+    so its coefficients add (at 360° the point's own term cancels: P(360°) = P(0)).
+
+    >>> c = table_error_coefficients(360.0, [60.0, 120.0, 180.0, 240.0, 300.0, 360.0])
+    >>> [round(float(c[p]), 4) for p in (0.0, 60.0, 300.0)], 360.0 in c
+    ([2.2833, -1.0, -0.2], False)
+    """
+    theta = abs(float(theta_deg))
+    stops = np.abs(np.asarray(stops_deg, dtype=float))
+    n = stops.size
+    out: dict = {}
+
+    def add(pos: float, c: float) -> None:
+        key = round(float(pos) % 360.0, 6)
+        key = 0.0 if key == 360.0 else key
+        out[key] = out.get(key, 0.0) + c
+
+    add(theta, 1.0)
+    add(0.0, -1.0)
+    for th_k in stops:
+        add(th_k, -theta / (n * th_k))
+        add(0.0, theta / (n * th_k))
+    return out
+
+
+def table_line_u(theta_deg: float, stops_deg, u_position_arcsec: float) -> float:
+    """u of E_i from the table's positioning errors at the point, the common zero and the 7.1
+    stops together (:func:`table_error_coefficients`), each position's error independent of
+    the others' with u = ``u_position_arcsec`` (A.4.1: MPE/√3): u·√(Σ c²). One line in place
+    of Annex A's P (at every point the same) and the stops' ``K_P``, which treat P(0) in the
+    point and in K as unrelated and P(360°) as another position than P(0).
+
+    >>> round(table_line_u(360.0, [60.0, 120.0, 180.0, 240.0, 300.0, 360.0], 1.0), 4)
+    2.584
+    >>> round(table_line_u(30.0, [60.0, 120.0, 180.0, 240.0, 300.0, 360.0], 1.0), 4)
+    1.2907
+    """
+    c = np.array(list(table_error_coefficients(theta_deg, stops_deg).values()))
+    return float(u_position_arcsec * math.sqrt(float(np.sum(c * c))))
+
+
 def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,
                             repeatability_arcsec: float, *,
                             truth: str = "systematic",
-                            accel_dps2: float = 60.0) -> list[ExtraComponent]:
+                            accel_dps2: float = 60.0, theta_deg: float | None = None,
+                            sf_reading_u_arcsec=None) -> list[ExtraComponent]:
     """Budget lines the Annex A budget lacks, from the calibration's data and the annex's bounds.
 
     E_i uses the K of 7.1; an error δK of that K gives −θ·δK/K at point θ, the same in
@@ -584,6 +633,16 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
     ...  for c in budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic")]
     [('K_P', 0.158), ('K_r', 0.1221), ('tilt_E', 0.4915)]
 
+    ``theta_deg``: the point θ at which ``K_P`` and ``K_r`` are given (θ/n in place of
+    θ_max/n: an error δK shared by the points moves E_i by θ_i·δK/K, so the lines grow
+    with the point's angle); None: θ_max, the largest point. ``sf_reading_u_arcsec``: u of
+    each single 7.1 reading (an array in the rows' order, or one number) for ``K_r``; None:
+    u(r) for every reading. At θ = 90° the two lines are a quarter of θ_max's:
+
+    >>> [round(c.half_width_arcsec, 4) for c in
+    ...  budget_extra_components(df, p, 40.0, 0.1, theta_deg=90.0)[:2]]
+    [0.0395, 0.0305]
+
     With instant starts and stops (the constant-rate model) tilt_E is 5 % larger:
 
     >>> round(budget_extra_components(df, p, 40.0, 0.1, truth="intrinsic",
@@ -599,9 +658,11 @@ def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude
     t_i = ad["time_s"].to_numpy(dtype=float)
     theta_max = float(np.max(th_i))
     u_p = protocol.annex_a.table_mpe_arcsec / math.sqrt(3.0)
-    amp = theta_max / n
+    amp = (theta_max if theta_deg is None else abs(float(theta_deg))) / n
     u_kp = amp * u_p * math.sqrt(np.sum(1.0 / th_k ** 2) + np.sum(1.0 / th_k) ** 2)
-    u_kr = amp * repeatability_arcsec * math.sqrt(np.sum(1.0 / th_k ** 2))
+    u_read = np.broadcast_to(np.asarray(repeatability_arcsec if sf_reading_u_arcsec is None
+                                        else sf_reading_u_arcsec, dtype=float), th_k.shape)
+    u_kr = amp * math.sqrt(np.sum((u_read / th_k) ** 2))
     omega = dps_to_arcsec_s(earth_rate_split(latitude_deg, protocol.angle_deviation.orientation)
                             .perpendicular_dps) * math.sin(math.radians(protocol.annex_a.tilt_bound_deg))
     sfi, adi = protocol.scale_factor, protocol.angle_deviation

@@ -821,8 +821,9 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
         notes.append(f"{txt}: ψ + U95 = {tilt_deg:.4g}° bounds the tilt")
     extras = []
     if kind == "physical" and results.angle_deviation.measured:
-        extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes,
-                                  tilt_measured)
+        return _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r,
+                                       dof, typ, src, dur_min, notes, tilt_measured,
+                                       monte_carlo_trials, seed), src, notes
     budget = annex_a_budget(table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
                             zero_stability_dph=a.zero_stability_dph, duration_min=dur_min,
                             repeatability_arcsec=u_r, k=a.coverage_factor,
@@ -830,6 +831,123 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
                             seed=seed, repeatability_dof=dof, repeatability_type=typ,
                             repeatability_source=f"repeatability (A.4.4): {src}")
     return budget, src, notes
+
+
+def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r, dof, typ,
+                            src, dur_min, notes, tilt_measured, monte_carlo_trials, seed):
+    """E's physical budget per 7.4 point (beyond the draft; the draft's Annex A reading is
+    :func:`deviation_budget` with ``kind="draft"``, one budget for every point). Returned:
+    the budget at the point of the extreme |E_i| (what E = ± max|E_i| is stated with), the
+    per-point budgets in its ``points``. Against Annex A's one budget:
+
+    - ``r``: E_i is the mean over the n series present at the point (7.4, 7.5), so u/√n,
+      u of one reading at this point's time t from zeroing to reading, √(u_q² + N²(t +
+      t²/T_s)) with N² pooled from the 7.4 series
+      (:func:`~gonio.specs.ogam_draft.item_uncertainty.round_noise`; ν its pooled ν), not
+      the largest point's s (A.4.4); u(r)/√n where the noise cannot be estimated;
+    - ``B_E``: the drift bound over this point's own time from zeroing to reading (A.4.3),
+      not the longest;
+    - ``K_P``, ``K_r``: an error δK of the 7.1 K is shared by the points and moves E_i by
+      θ_i·δK/K (7.1, 7.4), so the lines are given at θ_i
+      (:func:`~gonio.specs.ogam_draft.budget_extra.budget_extra_components`);
+    - ``P`` and ``K_P`` as one line where E's angles come from counts through the 7.1 K: the
+      table's error at the point, at the common zero and at the 7.1 stops, one error per
+      table position (a stop that is also the point, 360° that is 0°), each u(P) = MPE/√3
+      (A.4.1, 7.1; :func:`~gonio.specs.ogam_draft.budget_extra.table_line_u`);
+    - ``K_r`` takes u of each 7.1 reading at its own time from zeroing to reading
+      (u_q² + N²(t + t²/T_s), :func:`~gonio.specs.ogam_draft.item_uncertainty.round_noise`
+      from the 7.4 series), not 7.4's u(r) at its longer read delay; u(r) where the round
+      noise cannot be estimated (one series);
+    - ``phi_e`` (A.4.2, a scale error θ(1 − cos) of the tilted sensing plane) is 0 where E's
+      angles come from counts through the 7.1 K measured on the same mount and axis
+      orientation: that K is the mount's and absorbs it.
+    """
+    import dataclasses
+
+    from gonio.specs.ogam_draft.item_uncertainty import COUNT_QUANTUM_U
+
+    e = results.angle_deviation
+    pts = e.table
+    pos = pts["position_deg"].to_numpy(dtype=float)
+    long = e.tables["readings"]
+    n_by_round = long.dropna(subset=["E_arcsec"]).groupby("round")["E_arcsec"].count()
+    n_i = n_by_round.reindex(pts["round"]).fillna(1).clip(lower=1).to_numpy(dtype=float)
+    from_counts = results.scale_factor_for_angles_source == "7.1" and \
+        e.details.get("scale_factor_for_angles_counts_per_deg") is not None
+    same_mount = from_counts and protocol.scale_factor is not None and \
+        protocol.angle_deviation is not None and \
+        protocol.angle_deviation.orientation == protocol.scale_factor.orientation
+    sf_u = None
+    rn = _round_noise(results, readings, protocol) if from_counts else {}
+    if rn:
+        k_cnt = abs(float(np.mean(results.scale_factor.table["K_i_counts_per_deg"])))
+        u_q = COUNT_QUANTUM_U / k_cnt * ARCSEC_PER_DEG
+        df = readings.data
+        t_k = df.loc[df["line"].isin(list(results.scale_factor.used_lines)),
+                     "time_s"].to_numpy(dtype=float)
+        nz = rn["noise"]
+        grow = t_k + (t_k * t_k / nz.static_s if nz.static_s else 0.0)
+        sf_u = np.sqrt(u_q * u_q + nz.n2_arcsec2_per_s * grow)
+        notes.append("K_r: u of each 7.1 reading at its own time from zeroing to reading, "
+                     f"from the angle noise of the 7.4 series (N^2 = {nz.n2_arcsec2_per_s:.3g} "
+                     f"arcsec^2/s, nu = {nz.dof}) [beyond the draft]")
+    notes[:] = [n for n in notes if not n.startswith("u(B_E) over the longest time")]
+    notes.append("u(B_E) over each point's own time from zeroing to reading (A.4.3)")
+    t_line = readings.data.set_index("line")["time_s"]
+    t_long = pd.Series(t_line.reindex(long["line"]).to_numpy(dtype=float), index=long.index)
+    t_i = t_long.groupby(long["round"]).max().reindex(pts["round"]).to_numpy(dtype=float)
+    phi_e = 0.0 if same_mount else None
+    phi_src = ("sensing plane not parallel to table plane (A.4.2): a scale error the 7.1 K, "
+               "measured on the same mount, absorbs (0) [physical budget]") if same_mount \
+        else "sensing plane not parallel to table plane (A.4.2)"
+    from gonio.specs.ogam_draft.budget_extra import table_line_u
+
+    df = readings.data
+    stops = np.abs(df.loc[df["line"].isin(list(results.scale_factor.used_lines)),
+                          "table_deg"].to_numpy(dtype=float)) if from_counts else np.array([])
+    table_src = ("table positioning at the point, the common zero and the 7.1 stops, one "
+                 "error per position, each MPE/sqrt(3) (A.4.1; through K, 7.1) "
+                 "[physical budget: P and K_P as one line]")
+    a = protocol.annex_a
+    at = int(np.argmin(np.abs(pos - float(e.details.get("position_deg", pos[-1])))))
+    sub = []
+    for i, theta in enumerate(pos):
+        extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r,
+                                  notes if i == at else [], tilt_measured, theta_deg=theta,
+                                  sf_reading_u_arcsec=sf_u)
+        if rn:          # the point's own reading noise at its time (the round-noise model)
+            r_one = math.sqrt(u_q * u_q + nz.n2_arcsec2_per_s * (
+                t_i[i] + (t_i[i] ** 2 / nz.static_s if nz.static_s else 0.0)))
+            r_dof, r_typ = max(int(nz.dof), 1), "A"
+            r_src = (f"reading noise at this point's time from zeroing to reading, "
+                     f"{t_i[i]:g} s: sqrt(u_q^2 + N^2 (t + t^2/T_s)), N^2 from the 7.4 series "
+                     f"(7.5; nu = {nz.dof}); E_i is the mean of {int(n_i[i])} series (7.4): "
+                     f"/sqrt({int(n_i[i])}) [physical budget; the draft's A.4.4 takes the "
+                     "largest s]")
+        else:
+            r_one, r_dof, r_typ = u_r, dof, typ
+            r_src = (f"repeatability (A.4.4): {src}; E_i is the mean of {int(n_i[i])} series "
+                     f"(7.4, 7.5): u(r)/sqrt({int(n_i[i])}) [physical budget]")
+        r_i = r_one / math.sqrt(n_i[i])
+        d_i = t_i[i] / S_PER_MIN if math.isfinite(t_i[i]) else dur_min
+        table_u = None
+        if from_counts and any(x.symbol == "K_P" for x in extras):
+            table_u = table_line_u(theta, stops, settings["table_mpe_arcsec"] / math.sqrt(3.0))
+            extras = [x for x in extras if x.symbol != "K_P"]
+        sub.append(annex_a_budget(
+            table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
+            zero_stability_dph=a.zero_stability_dph, duration_min=d_i,
+            repeatability_arcsec=r_i, k=a.coverage_factor, extra_components=extras,
+            monte_carlo_trials=monte_carlo_trials if i == at else 0, seed=seed,
+            repeatability_dof=r_dof, repeatability_type=r_typ, repeatability_source=r_src,
+            phi_e_arcsec=phi_e, phi_e_source=phi_src, table_u_arcsec=table_u,
+            table_source=table_src if table_u is not None else
+            "standard table positioning (A.4.1)"))
+    notes.append(f"physical budget per 7.4 point; E's U is the one at {pos[at]:g} deg, the "
+                 "point of the extreme |E_i| [beyond the draft]")
+    points = tuple({"position_deg": float(p), "u_c_arcsec": float(b.u_c_arcsec),
+                    "U_arcsec": float(b.U_arcsec), "k": float(b.k)} for p, b in zip(pos, sub))
+    return dataclasses.replace(sub[at], points=points)
 
 
 def _scale_factor_tilt(results, readings, protocol, budget) -> float:
@@ -952,7 +1070,7 @@ def _round_noise(results, readings, protocol) -> dict:
 
 
 def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes,
-                     tilt_measured=None):
+                     tilt_measured=None, theta_deg=None, sf_reading_u_arcsec=None):
     """The beyond-the-draft lines of the physical budget (see :func:`deviation_budget`)."""
     from dataclasses import replace
 
@@ -979,7 +1097,9 @@ def _physical_extras(results, readings, protocol, settings, tilt_deg, u_r, notes
     proto = replace(protocol, annex_a=replace(protocol.annex_a, tilt_bound_deg=tilt_deg,
                                               table_mpe_arcsec=settings["table_mpe_arcsec"]))
     if from_counts and len(sf) and protocol.scale_factor is not None:
-        extras = budget_extra_components(pd_concat(sf, ad), proto, lat, u_r, truth="intrinsic")
+        extras = budget_extra_components(pd_concat(sf, ad), proto, lat, u_r, truth="intrinsic",
+                                         theta_deg=theta_deg,
+                                         sf_reading_u_arcsec=sf_reading_u_arcsec)
     else:
         th = np.abs(ad["table_deg"].to_numpy(dtype=float))
         ci, si = tilt_coupling_coefficients(th, ad["time_s"].to_numpy(dtype=float),

@@ -282,6 +282,9 @@ def trial_items(report, truth: dict) -> dict:
                                kind=other, tilt_measured=e_tilt)
     mine = dict(rec["angle_deviation"])
     alt = {**mine, "U": float(b.U_arcsec), "u_c": float(b.u_c_arcsec), "k": float(b.k)}
+    if b.points:        # the physical budget per point: each E_i judged on its own U
+        alt["U_points"] = [float(p["U_arcsec"]) for p in b.points]
+        alt["u_c_points"] = [float(p["u_c_arcsec"]) for p in b.points]
     e = res.angle_deviation
     if "E_draft_arcsec" in e.table:    # E corrected at the measured tilt: the draft's as measured
         pts = e.table["E_arcsec" if other == "physical" else "E_draft_arcsec"]
@@ -326,13 +329,19 @@ def item_coverage(records: list[dict], intrinsic_points=None,
         own = name not in PRESCRIBED
         if name.startswith("angle_deviation"):
             d = np.array([np.subtract(r["points"], r["truth_points"]) for r in rs])
-            item["within_U"] = within(np.abs(d) <= U[:, None])
-            item["two_sided"] = two_sided(d, U[:, None], u_c[:, None], own)
+            if all("U_points" in r for r in rs):     # a U per point (the physical budget)
+                U = np.array([r["U_points"] for r in rs], dtype=float)
+                u_c = np.array([r["u_c_points"] for r in rs], dtype=float)
+                item["mean_U"] = float(U.mean())
+            else:
+                U, u_c = U[:, None], u_c[:, None]
+            item["within_U"] = within(np.abs(d) <= U)
+            item["two_sided"] = two_sided(d, U, u_c, own)
             if intrinsic_points is not None:
                 di = np.array([np.subtract(r["points"], intrinsic_points) for r in rs])
-                item["within_U_intrinsic"] = within(np.abs(di) <= U[:, None])
+                item["within_U_intrinsic"] = within(np.abs(di) <= U)
                 if own:      # the physical budget is about the instrument: judged on that
-                    item["two_sided"] = dict(two_sided(di, U[:, None], u_c[:, None], own),
+                    item["two_sided"] = dict(two_sided(di, U, u_c, own),
                                              truth="intrinsic")
         elif name == "repeatability":
             s2 = np.array([r["s_points"] for r in rs]) ** 2

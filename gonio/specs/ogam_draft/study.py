@@ -98,11 +98,13 @@ CASES = {
                "budget's tilt terms are exercised, not held at one value",
     "typeb": "every Type B effect of the set-up drawn per trial from what the laboratory "
              "knows of it: the tilt over the A.1 disc (azimuth uniform), the table's periodic "
-             "positioning errors with their amplitudes (sum within the MPE) at uniform "
-             "phases, its wobble phase and axis set-up azimuth uniform, its rate error "
+             "positioning errors at uniform phases with their sizes drawn (the amplitudes' "
+             "sum uniform within the MPE less the scatter's 3 sigma, A.4.1), its wobble "
+             "phase and axis set-up azimuth uniform, its rate error "
              "uniform within Table 1's 1e-5, the chamber's deviation from the reference "
              "temperature uniform within Table 2's tolerance, the gyro's scale-factor "
-             "temperature coefficient uniform within the bound K's chamber line takes",
+             "temperature coefficient uniform within the bound K's chamber line takes, its "
+             "bias instability uniform within the A.4.3 bound (RMS change <= 0.005 deg/h)",
     "worst": "the worst condition the draft allows for K: tilt at the A.1 bound, at the "
              "azimuth where the tilt x Earth-rate coupling biases the 7.1 K most "
              "(worst_azimuth, from noise-free sessions of the bench); the other Type B "
@@ -278,7 +280,12 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     coefficient α_K uniform within ± the bound K's chamber line ``K_T`` takes for the
     instrument (:func:`~gonio.specs.ogam_draft.calibration.temperature_coeff_bound` of the
     readings the trial's session writes: 0.1 ppm/°C for an RLG, 1.0 for a FOG by default;
-    drawn last, so every other draw keeps its value). The instrument's own parameters (its
+    drawn after the others, so every other draw keeps its value); then the sizes of the
+    table's periodic errors, their sum uniform within what the MPE leaves beside the
+    scatter's 3σ (:func:`_harmonic_sizes`, A.4.1), and the gyro's bias instability (the
+    Gauss–Markov σ, correlation time kept) uniform in [0, B/√2] with B the protocol's
+    ``annex_a.zero_stability_dph`` (A.4.3: the bias change since the compensation has an
+    RMS of σ√2 ≤ B; the ``drift`` case puts it at the bound). The instrument's own parameters (its
     K at the reference temperature, its angle-position error, its noise, its bias
     temperature coefficient) are the measurands' and are kept; the truth is K at the
     reference, from the trial bench's drawn α_K and chamber deviation.
@@ -292,6 +299,10 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     >>> abs(d.chamber_deviation_c) <= p.conditions.temperature_tolerance_c
     True
     >>> abs(d.instrument.sf_temperature_coeff_ppm_per_c) <= 0.1      # the RLG's bound
+    True
+    >>> sum(abs(h.amplitude_arcsec) for h in d.table.positioning_harmonics) <= 0.1 - 3 * 0.01
+    True
+    >>> 0.0 <= d.instrument.bias_instability_dph <= 0.005 / math.sqrt(2)
     True
     """
     rng = np.random.default_rng([int(seed), 0x7B])
@@ -310,7 +321,32 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     bound = sf_temperature_coeff_bound_ppm_per_c(bench, protocol)
     out = tilted(bench, psi, az)
     inst = replace(out.instrument, sf_temperature_coeff_ppm_per_c=float(rng.uniform(-bound, bound)))
+    # drawn after every draw above, which keep their values: the sizes a laboratory bounds
+    table = replace(table, positioning_harmonics=_harmonic_sizes(table, float(rng.uniform())))
+    sigma_dph = float(rng.uniform()) * float(protocol.annex_a.zero_stability_dph) / math.sqrt(2.0)
+    inst = replace(inst, bias_instability_dph=sigma_dph)
     return replace(out, instrument=inst, table=table, chamber_deviation_c=dev_c)
+
+
+def _harmonic_sizes(table, u: float) -> tuple:
+    """The table's positioning harmonics with their amplitudes scaled together so that their
+    sum is ``u`` (uniform in [0, 1)) times what the MPE leaves beside the scatter's 3σ
+    (A.4.1: |error| ≤ MPE; Σ|a_h| + 3σ ≤ MPE): a size the laboratory only bounds, each size
+    inside the bound equally likely. The ratios of the amplitudes (the table's error shape)
+    and the phases drawn before are kept.
+
+    >>> t = load_bench("rlg").table
+    >>> round(sum(abs(h.amplitude_arcsec) for h in _harmonic_sizes(t, 1.0)), 12)
+    0.07
+    >>> [h.phase_deg for h in _harmonic_sizes(t, 0.5)] == [h.phase_deg for h in t.positioning_harmonics]
+    True
+    """
+    hs = table.positioning_harmonics
+    total = sum(abs(h.amplitude_arcsec) for h in hs)
+    room = max(float(table.mpe_arcsec) - 3.0 * float(table.positioning_random_arcsec), 0.0)
+    if total <= 0.0:
+        return hs
+    return tuple(replace(h, amplitude_arcsec=h.amplitude_arcsec * u * room / total) for h in hs)
 
 
 def sf_temperature_coeff_bound_ppm_per_c(bench: Bench, protocol: Protocol) -> float:
