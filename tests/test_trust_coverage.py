@@ -28,12 +28,10 @@ SEEDS = 24
 #: the instrument's K from the bench file (item_coverage.scale_factor_truth) the line is
 #: part of the error, and on benches whose Type B effects are drawn per trial sd z ≈ 0.7.
 KNOWN_OVER_WIDE: dict = {
-    # E under the physical budget, on its own u_c (the study's record carried the draft
-    # budget's u_c before) and corrected at the measured tilt: sd z ≈ 0.25. Its lines K_P,
-    # K_r (the 7.1 scatter taken as u(r)) and u(r) of a single reading for E_i, a mean over
-    # the series, are wider than the errors they budget; the tilt line is no longer what
-    # hides it (README, docs/draft-readings.md#a1-method). Not fixed yet.
-    "angle_deviation": "physical budget's K_P, K_r and u(r) lines wider than the errors",
+    # None. E under the physical budget was listed (sd z ≈ 0.25: one u_c for every point)
+    # until the budget was given per point; on the drawn set-ups it now has sd z ≈ 0.6–0.7
+    # (README, docs/draft-readings.md): its table and drift lines are bounds the study's
+    # draws sit inside, not over-wide by this test's 0.3.
 }
 @pytest.fixture(scope="module")
 def proto():
@@ -81,6 +79,11 @@ def test_every_item_covers_its_truth(records, intrinsic):
         assert c["trials"] == SEEDS
         if name in ("zero_stability", "repeatability"):
             assert c["interval_holds_truth"]["fraction"] >= 0.90, (name, c)
+        elif name == "angle_deviation":
+            # the physical budget is about the instrument (E corrected at the measured tilt,
+            # per-point U): judged against the intrinsic truth, not the as-mounted one
+            assert c["two_sided"]["truth"] == "intrinsic"
+            assert c["within_U_intrinsic"]["fraction"] >= 0.90, (name, c)
         else:
             assert c["within_U"]["fraction"] >= 0.90, (name, c)
     # the other side: U not over-wide (sd z ≥ 0.3) where the budget is gonio's own; the items
@@ -99,8 +102,14 @@ def test_every_item_covers_its_truth(records, intrinsic):
 @pytest.mark.slow
 def test_over_wide_check_can_fail(records, intrinsic):
     """The same records with every U ×20: each item with gonio's own budget is flagged."""
-    wide = [{n: dict(it, U=it["U"] * 20.0, u_c=(it.get("u_c") or 0.0) * 20.0)
-             for n, it in r.items()} for r in records]
+    def times20(it):
+        out = dict(it, U=it["U"] * 20.0, u_c=(it.get("u_c") or 0.0) * 20.0)
+        for key in ("U_points", "u_c_points"):          # E's per-point budget
+            if key in it:
+                out[key] = [x * 20.0 for x in it[key]]
+        return out
+
+    wide = [{n: times20(it) for n, it in r.items()} for r in records]
     cov = item_coverage(wide, intrinsic)
     flagged = {n for n, c in cov.items() if "over-wide" in c["two_sided"]["flags"]}
     assert flagged == {n for n, c in cov.items() if c["two_sided"]["own_budget"]}, cov

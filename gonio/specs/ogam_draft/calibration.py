@@ -947,7 +947,10 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
                  "point of the extreme |E_i| [beyond the draft]")
     points = tuple({"position_deg": float(p), "u_c_arcsec": float(b.u_c_arcsec),
                     "U_arcsec": float(b.U_arcsec), "k": float(b.k)} for p, b in zip(pos, sub))
-    return dataclasses.replace(sub[at], points=points)
+    # the parameters other items take from E's budget (C_v, C_g: one reading's u(r), A.4.4;
+    # the longest time to reading) stay those of Annex A's reading, not this point's
+    params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
+    return dataclasses.replace(sub[at], points=points, parameters=params)
 
 
 def _scale_factor_tilt(results, readings, protocol, budget) -> float:
