@@ -64,6 +64,18 @@ BUDGET_SOURCES_ZH: dict[str, str] = {
 }
 
 
+#: The physical budget's per-point forms of the annex lines (their English source ends in
+#: "[physical budget…]"; the draft's reading keeps BUDGET_SOURCES_ZH).
+BUDGET_SOURCES_PHYSICAL_ZH: dict[str, str] = {
+    "P": "转台定位误差：该点、零位与 7.1 各停位，每一位置一个误差，各 MPE/√3"
+         "（A.4.1；经标度因数，7.1）［物理模型：P 与 K_P 合为一项］",
+    "phi_e": "敏感平面与台面不平行（A.4.2）：同一安装下 7.1 的标度因数已吸收该比例误差（0）"
+             "［物理模型］",
+    "r": "该点自清零至读数时刻的读数噪声（由 7.4 各组数据求得），E_i 为各组的平均值，除以 √n"
+         "［物理模型；草案 A.4.4 取最大标准偏差］",
+}
+
+
 #: English form of Chinese titles, used when no CJK font is installed (the en certificate).
 TITLES_EN: dict[str, str] = {
     "光学陀螺测角仪校准规范": "Calibration Specification for Optical Gyroscope Angle "

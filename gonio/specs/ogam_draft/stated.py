@@ -41,7 +41,8 @@ import math
 from gonio.kit.render import (Num, conformity_texts, coverage_text, display, display_number,
                               item_nums, labels, num, parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
-from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_ZH, ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
+from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_PHYSICAL_ZH, BUDGET_SOURCES_ZH,
+                                            ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
                                             LABELS, READING_NOTES_ZH, TITLES_EN)
 
 
@@ -387,6 +388,8 @@ def reading_note(note: str, lang: str) -> str:
 
 def budget_source(symbol: str, source: str, lang: str) -> str:
     """The budget's source column in ``lang`` (English from results.json when no zh form)."""
+    if lang == "zh" and "[physical budget" in source and symbol in BUDGET_SOURCES_PHYSICAL_ZH:
+        return BUDGET_SOURCES_PHYSICAL_ZH[symbol]
     if lang == "zh" and symbol in BUDGET_SOURCES_ZH:
         return BUDGET_SOURCES_ZH[symbol]
     return source
