@@ -191,8 +191,8 @@ def test_disc_model_u_is_the_projection_of_a_uniform_disc():
 
 
 def test_type_b_draws_follow_their_stated_distributions(proto):
-    """draw_type_b: tilt uniform over the disc, azimuths and phases uniform, amplitudes
-    (so the table's bound) kept, the rate error uniform within Table 1's bound."""
+    """draw_type_b: tilt uniform over the disc, azimuths and phases uniform, the amplitudes'
+    sizes drawn within the table's MPE, the rate error uniform within Table 1's bound."""
     b = load_bench("rlg")
     d = [draw_type_b(b, proto, s) for s in range(3000)]
     bound = proto.annex_a.tilt_bound_deg
@@ -204,8 +204,9 @@ def test_type_b_draws_follow_their_stated_distributions(proto):
                  [x.table.axis_setup_azimuth_deg for x in d]):
         a = np.radians(vals)
         assert abs(np.mean(np.cos(a))) < 0.05 and abs(np.mean(np.sin(a))) < 0.05
-    assert all(x.table.error_bound_arcsec() == pytest.approx(b.table.error_bound_arcsec())
-               for x in d[:50])
+    # the harmonics' sizes drawn within what the MPE leaves beside the scatter's 3σ (A.4.1)
+    assert all(x.table.error_bound_arcsec() <= b.table.mpe_arcsec + 1e-12 for x in d[:50])
+    assert len({round(x.table.error_bound_arcsec(), 9) for x in d[:50]}) == 50
     r = np.array([x.table.rate_error_rel for x in d])
     assert np.abs(r).max() <= TABLE_RATE_ERROR_BOUND
     assert np.var(r) == pytest.approx(TABLE_RATE_ERROR_BOUND ** 2 / 3, rel=0.08)

@@ -219,6 +219,10 @@ def _extra(e) -> ExtraComponent:
     return ExtraComponent(*e)
 
 
+_P_SOURCE = "standard table positioning (A.4.1)"
+_PHI_SOURCE = "sensing plane not parallel to table plane (A.4.2)"
+
+
 def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                    zero_stability_dph: float = 0.005, duration_min: float = 0.5,
                    repeatability_arcsec: float = 0.096, k: float | None = 2.0,
@@ -226,10 +230,8 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                    seed: int = 0, repeatability_dof: float = math.inf,
                    repeatability_type: str = "A",
                    repeatability_source: str = "repeatability (A.4.4)",
-                   table_u_arcsec: float | None = None,
-                   table_source: str = "standard table positioning (A.4.1)",
-                   phi_e_arcsec: float | None = None,
-                   phi_e_source: str = "sensing plane not parallel to table plane (A.4.2)"
+                   table_u_arcsec: float | None = None, table_source: str = _P_SOURCE,
+                   phi_e_arcsec: float | None = None, phi_e_source: str = _PHI_SOURCE
                    ) -> AnnexABudget:
     """The draft's Annex A budget (A.2–A.7), optionally checked by JCGM 101 Monte Carlo.
 
@@ -256,15 +258,8 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     repeatability_type, repeatability_source : str
         "A" when u(r) comes from the calibration's own series, "B" when it is a stated
         value (e.g. the protocol's); the source sentence shown in the budget.
-    table_u_arcsec, table_source : float or None, str
-        u of P (normal) and its source sentence; None (the draft): rectangular of half-width
-        ``table_mpe_arcsec`` (A.4.1). The physical budget gives the table's errors at the
-        point, the zero and the 7.1 stops as one line
-        (:func:`gonio.specs.ogam_draft.budget_extra.table_line_u`).
-    phi_e_arcsec, phi_e_source : float or None, str
-        Half-width of φ_e and its source sentence; None (the draft): the elliptic extreme of
-        ``tilt_deg`` (A.4.2). The physical budget gives 0 where K of 7.1, measured on the same
-        mount, absorbs the scale error (its source then says so).
+    table_u_arcsec, phi_e_arcsec, table_source, phi_e_source : float or None, str
+        Physical budget's P (normal u), φ_e; None: the draft's A.4.1 and A.4.2 lines.
 
     Examples
     --------
@@ -309,13 +304,11 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
         names.add(e.symbol)
 
     drift_arcsec = zero_stability_dph * ARCSEC_PER_MIN_PER_DPH * duration_min
-    phi_half = elliptic_extreme(tilt_deg).extreme_arcsec if phi_e_arcsec is None \
-        else float(phi_e_arcsec)
     inputs = [
-        type_b("P", 0.0, table_mpe_arcsec, "rectangular", source=table_source)
-        if table_u_arcsec is None else
-        type_b("P", 0.0, float(table_u_arcsec), "normal", source=table_source),
-        type_b("phi_e", 0.0, phi_half, "rectangular", source=phi_e_source),
+        type_b("P", 0.0, table_mpe_arcsec if table_u_arcsec is None else table_u_arcsec,
+               "rectangular" if table_u_arcsec is None else "normal", source=table_source),
+        type_b("phi_e", 0.0, elliptic_extreme(tilt_deg).extreme_arcsec if phi_e_arcsec is None
+               else phi_e_arcsec, "rectangular", source=phi_e_source),
         type_b("B_E", 0.0, drift_arcsec, "rectangular", source="zero drift (A.4.3)"),
         from_u("r", 0.0, repeatability_arcsec, dof=repeatability_dof, type=repeatability_type,
                source=repeatability_source),

@@ -67,7 +67,7 @@ BUDGET_SOURCES_ZH: dict[str, str] = {
 #: The physical budget's per-point forms of the annex lines (their English source ends in
 #: "[physical budget…]"; the draft's reading keeps BUDGET_SOURCES_ZH).
 BUDGET_SOURCES_PHYSICAL_ZH: dict[str, str] = {
-    "P": "转台定位误差：该点、零位与 7.1 各停位，每一位置一个误差，各 MPE/√3"
+    "P": "转台定位误差：该点、零位与 7.1 各停位，每一位置一个误差，各为最大允许误差/√3"
          "（A.4.1；经标度因数，7.1）［物理模型：P 与 K_P 合为一项］",
     "phi_e": "敏感平面与台面不平行（A.4.2）：同一安装下 7.1 的标度因数已吸收该比例误差（0）"
              "［物理模型］",
