@@ -182,7 +182,8 @@ def test_administrative_data_and_conformity(run):
     expect = ("pass" if abs(y) <= 0.5 - U else "conditionalPass" if abs(y) <= 0.5
               else "conditionalFail" if abs(y) <= 0.5 + U else "fail")
     assert st.find("dcc:conformity", NS).text == expect
-    p_c = norm.cdf((0.5 - y) / (U / 2)) - norm.cdf((-0.5 - y) / (U / 2))
+    u = res["extra"]["uncertainty"]["u_c_arcsec"]        # k = U/u_c (t95 of ν_eff, not always 2)
+    p_c = norm.cdf((0.5 - y) / u) - norm.cdf((-0.5 - y) / u)
     q = {q.find("dcc:name/dcc:content", NS).text: float(q.find("si:real/si:value", NS).text)
          for q in st.iterfind("dcc:data/dcc:quantity", NS)}
     key = "specific false-accept probability" if expect in ("pass", "conditionalPass") \
