@@ -13,6 +13,7 @@ Nothing here knows a specification: each says what its truth and its errors are.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -39,14 +40,24 @@ def clopper_pearson(hits: int, n: int, level: float = 0.95) -> tuple[float, floa
     """The exact (Clopper–Pearson) interval of a binomial proportion, through
     :func:`scipy.stats.binomtest` (``proportion_ci(method="exact")``).
 
+    A study's report asks for the same (hits, n) for many of its items (every item that
+    covered in all of its trials, say), and each answer is a root search over the binomial
+    distribution: the interval is computed once per (hits, n, level) and kept
+    (:func:`_clopper_pearson`; the same numbers, bit for bit).
+
     >>> [round(x, 4) for x in clopper_pearson(95, 100)]
     [0.8872, 0.9836]
     """
-    from scipy.stats import binomtest
-
     if n < 1:
         return (math.nan, math.nan)
-    ci = binomtest(int(hits), int(n)).proportion_ci(confidence_level=level, method="exact")
+    return _clopper_pearson(int(hits), int(n), float(level))
+
+
+@functools.lru_cache(maxsize=4096)
+def _clopper_pearson(hits: int, n: int, level: float) -> tuple[float, float]:
+    from scipy.stats import binomtest
+
+    ci = binomtest(hits, n).proportion_ci(confidence_level=level, method="exact")
     return float(ci.low), float(ci.high)
 
 

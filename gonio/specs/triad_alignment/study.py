@@ -45,7 +45,7 @@ import itertools
 import json
 import math
 import tempfile
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Mapping
 
 import numpy as np
@@ -286,10 +286,15 @@ class TriadReport:
 
     settings: dict
     done: dict
+    _tables: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def _table(self, case: str):
-        return coverage_table_from([t["items"] for t in self.done[case]],
-                                   judge_spread=case not in FIXED_CONDITION_CASES)
+        """The case's per-item table, computed once (``to_dict`` and ``table`` both show it)."""
+        if case not in self._tables:
+            self._tables[case] = coverage_table_from(
+                [t["items"] for t in self.done[case]],
+                judge_spread=case not in FIXED_CONDITION_CASES)
+        return self._tables[case]
 
     def to_dict(self) -> dict:
         """Plain dict for ``validation.json`` (deterministic)."""
