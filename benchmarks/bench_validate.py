@@ -38,7 +38,9 @@
    imports, bench and protocol set-up, the report) plus the first batch's excess over the
    same batch run again warm (imports and caches its first trial pulls in); printed with
    the CPU to the first trial. ``--startup-only`` prints item 3 alone (no checkout, no
-   engine study).
+   engine study). gonio's modules are byte-compiled first (``compileall``, as ``pip install``
+   does; ``--from-source`` times them as found): with no cached bytecode and
+   ``PYTHONDONTWRITEBYTECODE`` set, every fresh process would compile every module it imports.
 
 The worker counts are 1, 2, 4, 8, 16 up to the machine's cores (on 2 cores: 1 and 2); the
 efficiency of n workers is rate(n) / (n · rate(1)). The Dask LocalCluster has the largest
@@ -46,7 +48,7 @@ count. On a 16-core machine: ``--trials 3200`` (the issue's figure).
 
 Usage: python benchmarks/bench_validate.py [--trials-per-cost 8] [--trials 48] [--batch N]
        [--rounds 2] [--skip-cost] [--before REV] [--startup-runs 3] [--startup-only]
-       [--specs KEY,KEY]
+       [--specs KEY,KEY] [--from-source]
 The load average is printed beside every figure: on a shared machine (load above the
 number of cores) the second worker shares a core with other processes and the scaling
 figure measures that, not gonio.
@@ -318,6 +320,21 @@ def tree_cpu_s() -> float:
     return total
 
 
+def bytecode(compile_first: bool) -> str:
+    """Byte-compile this tree's gonio (``compile_first``; what ``pip install`` does) and say
+    how its modules are loaded: where no bytecode is cached and Python may not write it
+    (``PYTHONDONTWRITEBYTECODE``), every fresh process compiles every gonio module it
+    imports, a few tenths of a second of CPU that an installed gonio does not pay."""
+    import compileall
+
+    if compile_first:
+        compileall.compile_dir(str(ROOT / "gonio"), quiet=2)
+        return "gonio's modules: byte-compiled first (compileall), as an installed gonio's are"
+    cached = any((ROOT / "gonio" / "__pycache__").glob("__init__.*.pyc"))
+    return (f"gonio's modules: as found (bytecode cached: {'yes' if cached else 'no'}; "
+            f"PYTHONDONTWRITEBYTECODE={os.environ.get('PYTHONDONTWRITEBYTECODE', 'unset')})")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials-per-cost", type=int, default=8)
@@ -337,8 +354,12 @@ def main() -> int:
     ap.add_argument("--specs", default=None,
                     help="comma-separated specification keys for the fixed cost (default: "
                          "every one with a coverage study)")
+    ap.add_argument("--from-source", action="store_true",
+                    help="time gonio as found (by default its modules are byte-compiled "
+                         "first, as an installed gonio's are)")
     a = ap.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores", flush=True)
+    print(bytecode(compile_first=not a.from_source), flush=True)
     if not (a.skip_cost or a.startup_only):
         per_trial_cost(a.before, a.trials_per_cost)
     startup(a.startup_runs)
