@@ -50,11 +50,13 @@ def test_simulate_then_calibrate(small_run, capsys):
     # the physical budget (default): the annex's four lines, then those beyond the draft
     assert [c["symbol"] for c in u["components"]][:4] == ["P", "phi_e", "B_E", "r"]
     assert u["budget_kind"] == "physical"
-    assert [c["beyond_draft"] for c in u["components"]] == [False] * 4 + [True] * 3
+    # beyond the draft: K_r and the tilt line (the stops' table errors K_P are in P, per point)
+    assert [c["beyond_draft"] for c in u["components"]] == [False] * 4 + [True] * 2
     assert u["U_arcsec"] == pytest.approx(u["k"] * u["u_c_arcsec"])
-    # u(r) is this calibration's own repeatability (7.5).
-    assert u["components"][3]["u_arcsec"] == pytest.approx(
-        written["items"]["repeatability"]["value"])
+    # u(r) of the physical budget is E_i's, a mean over the series, at the extreme's point:
+    # under this calibration's own repeatability (7.5, one reading, the largest point's)
+    assert 0 < u["components"][3]["u_arcsec"] < written["items"]["repeatability"]["value"]
+    assert "mean of" in u["components"][3]["source"]
 
 
 def test_partial_file_reports_not_measured(small_run, tmp_path, capsys):
