@@ -54,7 +54,8 @@ READINGS_TAKEN = (
     "Annex A.4.2: the elliptic-projection tilt model of the draft is used for u(φ_e); the "
     "rigid-body model (tilt is a cos ψ factor absorbed by the scale factor) is shown beside it.",
     "Annex A.4.3: u(B_E) uses the longest time from zeroing to reading of the 7.4 readings "
-    "actually used (not the 0.5 min bound).",
+    "actually used (not the 0.5 min bound) in the draft's Annex A budget; the physical "
+    "budget takes each point's own time.",
 )
 
 #: The one precedence rule for settings given in more than one place (docs/formats.md).
@@ -136,7 +137,9 @@ def readings_taken(repeatability_source: str) -> list[str]:
     sentence that no translation of the first can stand for.
     """
     if "this calibration's own" in repeatability_source:
-        note = f"Annex A.4.4: u(r) is {repeatability_source}."
+        note = (f"Annex A.4.4: u(r) is {repeatability_source} in the draft's Annex A budget; "
+                "the physical budget takes each point's reading noise over its mean "
+                "of n series.")
     else:
         note = (f"Annex A.4.4 (not applied): this calibration has no repeated series; u(r) is "
                 f"{repeatability_source}.")
