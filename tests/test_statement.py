@@ -109,3 +109,15 @@ def test_random_values_against_independent_rounding():
         # same decimal place for value and U
         dec = lambda t: len(t.split(".")[1]) if "." in t else 0  # noqa: E731
         assert dec(s.value) == dec(s.U) == max(q, 0)
+
+
+def test_p_text_never_says_certainty_below_one():
+    """A stated interval's probability below 1 is never printed as 100 %: it keeps the
+    decimals that show it below 100 (rounded down at the last), and 1.0 is 100."""
+    import math as _m
+    for p in (0.9967, 0.99949, 0.99995, 0.99998, 0.9999999, 1 - 1e-12):
+        t = p_text(p)
+        assert float(t) < 100.0, (p, t)
+        assert float(t) <= 100.0 * p + 0.05 and abs(float(t) - 100.0 * p) < 0.06, (p, t)
+    assert p_text(1.0) == "100" and p_text(0.95) == "95"
+    assert _m.isclose(float(p_text(0.9967)), 99.7)

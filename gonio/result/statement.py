@@ -267,16 +267,32 @@ def nu_text(nu: float | None) -> str | None:
     return "∞" if math.isinf(nu_s) else str(int(nu_s))
 
 
+#: The most decimals of a per-cent coverage probability below 100 % (:func:`p_text`).
+P_TEXT_MAX_DECIMALS: int = 3
+
+
 def p_text(p: float | None) -> str | None:
-    """A coverage probability (a fraction) in per cent, 2 significant digits.
+    """A coverage probability (a fraction) in per cent, 2 significant digits; a probability
+    below 1 is never shown as 100 (an interval's stated probability is not certainty, JCGM
+    100 6.2.2): it takes the decimals that keep it below 100, up to
+    :data:`P_TEXT_MAX_DECIMALS`, and is rounded down at that many.
 
     >>> p_text(0.95), p_text(0.9545), p_text(0.99), p_text(None)
     ('95', '95', '99', None)
+    >>> p_text(0.9967), p_text(0.99998), p_text(0.9999999), p_text(1.0)
+    ('99.7', '99.998', '99.999', '100')
     """
     if p is None or not math.isfinite(float(p)):
         return None
     v = 100.0 * float(p)
-    s = round_half_up(v, max(decimals_for_sig(v, 2), 0))
+    d = max(decimals_for_sig(v, 2), 0)
+    s = round_half_up(v, d)
+    while v < 100.0 and float(s) >= 100.0:
+        d += 1
+        s = round_half_up(v, d) if d < P_TEXT_MAX_DECIMALS else \
+            round_half_up(v, P_TEXT_MAX_DECIMALS, rounding=ROUND_FLOOR)
+        if d >= P_TEXT_MAX_DECIMALS:
+            break
     return s.rstrip("0").rstrip(".") if "." in s else s
 
 
