@@ -365,3 +365,39 @@ def test_cli_budget_draft_and_tilt_file(tmp_path, capsys):
 
     page = html.unescape((tmp_path / "o" / "certificate.html").read_text())
     assert labels("en", LABELS)["budget_kind_draft"] in page
+
+
+def test_one_series_physical_r_source_says_what_it_takes(tmp_path, capsys):
+    """With one series the physical budget's r is the protocol's u(r) over √n, not the 7.4
+    series' noise model: its source says so in English, and the Chinese certificate's source
+    is the u(r)/√n sentence, not the noise-model one; the A.4.4 note names both forms."""
+    from gonio.specs.ogam_draft.phrases import BUDGET_SOURCES_PHYSICAL_ZH
+    from gonio.specs.ogam_draft.stated import budget_source
+
+    f, p, _ = write_case(tmp_path, series=1)
+    code, res, _ = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
+                             str(tmp_path / "o")], capsys)
+    assert code == 0
+    comps = {c["symbol"]: c for c in res["extra"]["uncertainty"]["components"]}
+    src = comps["r"]["source"]
+    assert "[physical budget: u(r)/sqrt(n)]" in src and "reading noise" not in src
+    zh = budget_source("r", src, "zh")
+    assert zh == BUDGET_SOURCES_PHYSICAL_ZH["r/sqrt(n)"] != BUDGET_SOURCES_PHYSICAL_ZH["r"]
+    noise_src = ("reading noise at this point's time from zeroing to reading, 17 s: ... "
+                 "[physical budget; the draft's A.4.4 takes the largest s]")
+    assert budget_source("r", noise_src, "zh") == BUDGET_SOURCES_PHYSICAL_ZH["r"]
+
+
+def test_negative_time_to_reading_is_refused_naming_the_line(tmp_path, capsys):
+    """A 7.4 reading whose time_s is negative (the time from zeroing to reading cannot be):
+    the physical budget refuses it in one line naming file, line and column, exit 2, where it
+    reached the square root of the reading noise (a math-domain error) before."""
+    f, p, lines = write_case(tmp_path, rows={(2, 3): (POS[2], -5.0)}, counts=True)
+    before = f.read_bytes()
+    code, res, err = cli_json(["calibrate", str(f), "--protocol", str(p), "--out",
+                               str(tmp_path / "o")], capsys)
+    assert code == 2, err
+    n = line_of(lines, 2, 3)
+    assert f"{f.name}:{n}" in err and "time_s" in err and "negative" in err, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert f.read_bytes() == before

@@ -604,8 +604,12 @@ def _sums_by_products(x: np.ndarray, ms, order: int = 2) -> np.ndarray:
     exactly), errs by at most δ + u·|v| with δ = u·max|x|·(Σ|c_j| over the c_j that are not
     powers of two (rounded products) + (P − 2)·Σ|c_j| (the P − 2 partial sums before the
     last)), P terms, unit roundoff u: ADEV (1, −2, 1) 4u·max|x|, HDEV (−1, 3, −3, 1)
-    22u·max|x|. The sum S of L squared terms then errs by at most (2r + r² + 3u)·S,
-    r = δ·√(L/S) (Cauchy–Schwarz; δ taken 1 % larger for the second-order terms).
+    22u·max|x|. The terms' errors then move the sum S of L squares by at most
+    (2r + r² + 3u)·S, r = δ·√(L/S) (Cauchy–Schwarz; δ taken 1 % larger for the
+    second-order terms): this is the error the products add beyond the summation of the L
+    squares, which both paths share (the same pieces and block totals; its own worst case,
+    γ of a few thousand, is not in the bound), so the bound decides between the two paths
+    and is not a bound on the sum's total error.
     An m where that bound exceeds :data:`PRODUCT_RTOL` (a phase far larger than its
     differences: random-walk rate noise, a strong rate ramp) is summed by differences
     instead (foreseen from :data:`_PROBE` terms, then checked on the sum itself). On white

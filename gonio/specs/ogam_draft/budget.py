@@ -130,7 +130,7 @@ class AnnexABudget:
     validation: ValidationResult | None = None
     _rounded_components: tuple = field(default=(), repr=False)
     #: The physical budget of E per 7.4 point (dicts: position_deg, u_c_arcsec, U_arcsec,
-    #: k); this budget itself is the one at the point of the extreme |E_i|. Empty for the
+    #: k); this budget itself is the one of the point with the largest U. Empty for the
     #: draft's reading (one budget for every point, Annex A).
     points: tuple = ()
 

@@ -138,8 +138,8 @@ def readings_taken(repeatability_source: str) -> list[str]:
     """
     if "this calibration's own" in repeatability_source:
         note = (f"Annex A.4.4: u(r) is {repeatability_source} in the draft's Annex A budget; "
-                "the physical budget takes each point's reading noise over its mean "
-                "of n series.")
+                "the physical budget takes the noise of each point's mean of n series (the "
+                "7.4 series' noise model at the point's time, or this u(r)/sqrt(n)).")
     else:
         note = (f"Annex A.4.4 (not applied): this calibration has no repeated series; u(r) is "
                 f"{repeatability_source}.")
@@ -836,12 +836,26 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     return budget, src, notes
 
 
+def _refuse_negative_times(readings, lines) -> None:
+    """The physical budget takes each 7.4 (and 7.1) reading's time from zeroing to reading
+    (docs/formats.md, "Time of a reading"): a negative ``time_s`` there is refused, naming
+    the file and line, rather than reaching the square root of the reading noise."""
+    df = readings.data
+    bad = df[df["line"].isin(list(lines)) & (df["time_s"] < 0)]
+    if len(bad):
+        row = bad.iloc[0]
+        raise GonioError(f"{float(row['time_s']):g} s is negative: on a rotation test time_s "
+                         "is the time from the zeroing to the reading",
+                         file=readings.path, line=int(row["line"]), column="time_s")
+
+
 def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r, dof, typ,
                             src, dur_min, notes, tilt_measured, monte_carlo_trials, seed):
     """E's physical budget per 7.4 point (beyond the draft; the draft's Annex A reading is
     :func:`deviation_budget` with ``kind="draft"``, one budget for every point). Returned:
-    the budget at the point of the extreme |E_i| (what E = ± max|E_i| is stated with), the
-    per-point budgets in its ``points``. Against Annex A's one budget:
+    the budget of the point with the largest U (what E = ± max|E_i| is stated with: every
+    point's interval |E_i| ± U_i then lies within max|E_i| ± U), the per-point budgets in its
+    ``points``. Against Annex A's one budget:
 
     - ``r``: E_i is the mean over the n series present at the point (7.4, 7.5), so u/√n,
       u of one reading at this point's time t from zeroing to reading, √(u_q² + N²(t +
@@ -881,6 +895,8 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
         protocol.angle_deviation is not None and \
         protocol.angle_deviation.orientation == protocol.scale_factor.orientation
     sf_u = None
+    _refuse_negative_times(readings, set(long["line"]) | (
+        set(results.scale_factor.used_lines) if from_counts else set()))
     rn = _round_noise(results, readings, protocol) if from_counts else {}
     if rn:
         k_cnt = abs(float(np.mean(results.scale_factor.table["K_i_counts_per_deg"])))
@@ -912,11 +928,10 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
                  "error per position, each MPE/sqrt(3) (A.4.1; through K, 7.1) "
                  "[physical budget: P and K_P as one line]")
     a = protocol.annex_a
-    at = int(np.argmin(np.abs(pos - float(e.details.get("position_deg", pos[-1])))))
-    sub = []
-    for i, theta in enumerate(pos):
+
+    def point_budget(i: int, theta: float, point_notes: list, mc_trials: int):
         extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r,
-                                  notes if i == at else [], tilt_measured, theta_deg=theta,
+                                  point_notes, tilt_measured, theta_deg=theta,
                                   sf_reading_u_arcsec=sf_u)
         if rn:          # the point's own reading noise at its time (the round-noise model)
             r_one = math.sqrt(u_q * u_q + nz.n2_arcsec2_per_s * (
@@ -930,24 +945,33 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
         else:
             r_one, r_dof, r_typ = u_r, dof, typ
             r_src = (f"repeatability (A.4.4): {src}; E_i is the mean of {int(n_i[i])} series "
-                     f"(7.4, 7.5): u(r)/sqrt({int(n_i[i])}) [physical budget]")
+                     f"(7.4, 7.5): u(r)/sqrt({int(n_i[i])}) [physical budget: u(r)/sqrt(n)]")
         r_i = r_one / math.sqrt(n_i[i])
         d_i = t_i[i] / S_PER_MIN if math.isfinite(t_i[i]) else dur_min
         table_u = None
         if from_counts and any(x.symbol == "K_P" for x in extras):
             table_u = table_line_u(theta, stops, settings["table_mpe_arcsec"] / math.sqrt(3.0))
             extras = [x for x in extras if x.symbol != "K_P"]
-        sub.append(annex_a_budget(
+        return annex_a_budget(
             table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
             zero_stability_dph=a.zero_stability_dph, duration_min=d_i,
             repeatability_arcsec=r_i, k=a.coverage_factor, extra_components=extras,
-            monte_carlo_trials=monte_carlo_trials if i == at else 0, seed=seed,
+            monte_carlo_trials=mc_trials, seed=seed,
             repeatability_dof=r_dof, repeatability_type=r_typ, repeatability_source=r_src,
             phi_e_arcsec=phi_e, phi_e_source=phi_src, table_u_arcsec=table_u,
             table_source=table_src if table_u is not None else
-            "standard table positioning (A.4.1)"))
-    notes.append(f"physical budget per 7.4 point; E's U is the one at {pos[at]:g} deg, the "
-                 "point of the extreme |E_i| [beyond the draft]")
+            "standard table positioning (A.4.1)")
+
+    sub = [point_budget(i, theta, [], 0) for i, theta in enumerate(pos)]
+    # E = ± max|E_i| is stated with the LARGEST of the points' U (its point's budget, notes
+    # and Monte Carlo): every point's |E_i| + U_i then lies within max|E_i| + U and every
+    # |E_i| − U_i above max|E_i| − U, whichever point is the extreme; the extreme point's
+    # own U could leave another point's interval outside the stated one (U grows with θ_i
+    # and the point's time)
+    at = int(np.argmax([b.U_arcsec for b in sub]))
+    sub[at] = point_budget(at, float(pos[at]), notes, monte_carlo_trials)
+    notes.append(f"physical budget per 7.4 point; E's U is the largest of the points' U, at "
+                 f"{pos[at]:g} deg [beyond the draft]")
     points = tuple({"position_deg": float(p), "u_c_arcsec": float(b.u_c_arcsec),
                     "U_arcsec": float(b.U_arcsec), "k": float(b.k)} for p, b in zip(pos, sub))
     # the parameters other items take from E's budget (C_v, C_g: one reading's u(r), A.4.4;

@@ -388,6 +388,8 @@ def reading_note(note: str, lang: str) -> str:
 
 def budget_source(symbol: str, source: str, lang: str) -> str:
     """The budget's source column in ``lang`` (English from results.json when no zh form)."""
+    if lang == "zh" and "[physical budget: u(r)/sqrt(n)]" in source:
+        return BUDGET_SOURCES_PHYSICAL_ZH["r/sqrt(n)"]
     if lang == "zh" and "[physical budget" in source and symbol in BUDGET_SOURCES_PHYSICAL_ZH:
         return BUDGET_SOURCES_PHYSICAL_ZH[symbol]
     if lang == "zh" and symbol in BUDGET_SOURCES_ZH:
