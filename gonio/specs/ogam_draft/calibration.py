@@ -836,6 +836,26 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     return budget, src, notes
 
 
+def _point_reading_noise(t_s: float, n: int, noise, u_r, dof, typ, src):
+    """(u, ν, type, source) of the r line of one 7.4 point whose E_i is the mean of ``n``
+    series (7.4, 7.5): with the round-noise model ``noise`` = (u_q, fit) of the 7.4 series,
+    one reading's noise at the point's time t from zeroing to reading,
+    √(u_q² + N²(t + t²/T_s)) (ν the fit's pooled ν, Type A); without it the draft's u(r)
+    (A.4.4; ``u_r``, ``dof``, ``typ``, ``src``); either over √n [physical budget]."""
+    if noise is not None:
+        u_q, nz = noise
+        r_one = math.sqrt(u_q * u_q + nz.n2_arcsec2_per_s * (
+            t_s + (t_s ** 2 / nz.static_s if nz.static_s else 0.0)))
+        r_src = (f"reading noise at this point's time from zeroing to reading, {t_s:g} s: "
+                 f"sqrt(u_q^2 + N^2 (t + t^2/T_s)), N^2 from the 7.4 series (7.5; nu = "
+                 f"{nz.dof}); E_i is the mean of {n} series (7.4): /sqrt({n}) [physical "
+                 "budget; the draft's A.4.4 takes the largest s]")
+        return r_one / math.sqrt(n), max(int(nz.dof), 1), "A", r_src
+    r_src = (f"repeatability (A.4.4): {src}; E_i is the mean of {n} series (7.4, 7.5): "
+             f"u(r)/sqrt({n}) [physical budget: u(r)/sqrt(n)]")
+    return u_r / math.sqrt(n), dof, typ, r_src
+
+
 def _refuse_negative_times(readings, lines) -> None:
     """The physical budget takes each 7.4 (and 7.1) reading's time from zeroing to reading
     (docs/formats.md, "Time of a reading"): a negative ``time_s`` there is refused, naming
@@ -933,20 +953,8 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
         extras = _physical_extras(results, readings, protocol, settings, tilt_deg, u_r,
                                   point_notes, tilt_measured, theta_deg=theta,
                                   sf_reading_u_arcsec=sf_u)
-        if rn:          # the point's own reading noise at its time (the round-noise model)
-            r_one = math.sqrt(u_q * u_q + nz.n2_arcsec2_per_s * (
-                t_i[i] + (t_i[i] ** 2 / nz.static_s if nz.static_s else 0.0)))
-            r_dof, r_typ = max(int(nz.dof), 1), "A"
-            r_src = (f"reading noise at this point's time from zeroing to reading, "
-                     f"{t_i[i]:g} s: sqrt(u_q^2 + N^2 (t + t^2/T_s)), N^2 from the 7.4 series "
-                     f"(7.5; nu = {nz.dof}); E_i is the mean of {int(n_i[i])} series (7.4): "
-                     f"/sqrt({int(n_i[i])}) [physical budget; the draft's A.4.4 takes the "
-                     "largest s]")
-        else:
-            r_one, r_dof, r_typ = u_r, dof, typ
-            r_src = (f"repeatability (A.4.4): {src}; E_i is the mean of {int(n_i[i])} series "
-                     f"(7.4, 7.5): u(r)/sqrt({int(n_i[i])}) [physical budget: u(r)/sqrt(n)]")
-        r_i = r_one / math.sqrt(n_i[i])
+        r_i, r_dof, r_typ, r_src = _point_reading_noise(
+            t_i[i], int(n_i[i]), (u_q, nz) if rn else None, u_r, dof, typ, src)
         d_i = t_i[i] / S_PER_MIN if math.isfinite(t_i[i]) else dur_min
         table_u = None
         if from_counts and any(x.symbol == "K_P" for x in extras):
