@@ -65,13 +65,20 @@ def calibrate(calibrate_readings):
     return lambda readings, out: calibrate_readings(readings, SMALL, out)
 
 
+#: E_n limit of the acquired-against-simulated comparison: |Δ| ≤ E_N_LIMIT·√(U_a² + U_b²).
+#: E_n ≤ 1 (ISO 13528) fails about 5 % of the time per item for two correct results with
+#: k ≈ 2, so over seven items a correct acquisition would fail a run in several; 1.5 (about
+#: 3σ of the difference, 0.3 % per item) keeps the check of agreement without that.
+E_N_LIMIT = 1.5
+
+
 def _agree_within_u(a: dict, b: dict) -> None:
     assert a.keys() == b.keys()
     for key in a:
         va, vb = a[key]["value"], b[key]["value"]
         ua, ub = a[key]["uncertainty"]["U"], b[key]["uncertainty"]["U"]
         assert va is not None and vb is not None, key
-        assert abs(va - vb) <= np.hypot(ua, ub), (key, va, vb, ua, ub)
+        assert abs(va - vb) <= E_N_LIMIT * np.hypot(ua, ub), (key, va, vb, ua, ub)
 
 
 def _drivers(s, log=None):
