@@ -32,6 +32,7 @@ Contents
 :func:`second_order_response`   |H|, ∠H of a second-order sensor (bench truth, checks)
 :func:`bias_drift_u`            drift of a bias difference, Allan floor + K√Δt
 :func:`record_difference_u`     the same for two records' means, exact for their spans
+:func:`record_difference_u_coef` the same with K² and B² given
 ==============================  ==================================================
 
 Unit note: seconds per hour come from :mod:`gonio.units` (``S_PER_H``).
@@ -631,9 +632,21 @@ def record_difference_u(K: float, u_K: float, B: float, u_B: float, tau_s, adev_
     >>> round(math.sqrt(2) * FLICKER_FLOOR_EXACT, 6)                      # adjacent: the floor
     0.939437
     """
+    return record_difference_u_coef(*drift_coefficients(K, u_K, B, u_B, tau_s, adev_high),
+                                    first, second)
+
+
+def record_difference_u_coef(k2: float, b2: float, first: tuple[float, float],
+                             second: tuple[float, float]) -> float:
+    """:func:`record_difference_u` with the rate random walk's K² and the flicker's B²
+    given (a specification's own rule for them, e.g. IEC 62047-20's
+    :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound`).
+
+    >>> round(record_difference_u_coef(0.0, 1.0, (0.0, 60.0), (60.0, 60.0)), 6)
+    0.939437
+    """
     from gonio.analysis.noise.covariance import generalised_covariance
 
-    k2, b2 = drift_coefficients(K, u_K, B, u_B, tau_s, adev_high)
     (t1, d1), (t2, d2) = ((float(a), float(b)) for a, b in (first, second))
     if d1 <= 0 or d2 <= 0:
         raise GonioError(f"record durations {d1:g} s and {d2:g} s: both must be positive")

@@ -1382,17 +1382,37 @@ def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/s) of the difference of two bias_temperature visits' means
     ``separation_s`` apart (mid-time to mid-time), each of the protocol's ``bias_samples``:
     the rate random walk and the flicker of the static record's Allan fit
-    (:func:`drift_coef_dps`) through the five-term model's generalised covariance
-    (:func:`gonio.specs._rate_family.formulas.record_difference_u`): the flicker part grows
-    as ln of the separation (IEEE 952 C.1), where :func:`drift_u_dps` holds it at the
+    (:func:`visit_drift_coef_dps`) through the five-term model's generalised covariance
+    (:func:`gonio.specs._rate_family.formulas.record_difference_u_coef`): the flicker part
+    grows as ln of the separation (IEEE 952 C.1), where :func:`drift_u_dps` holds it at the
     adjacent records' floor — hours apart, about twice too small."""
     if drift_u_dps(ctx, 1.0) == 0.0:
         return 0.0
     d = ctx.protocol["temperature"]["bias_samples"] * ctx.protocol["protocol"]["sample_interval_s"]
-    fit, allan = _noise_fit(ctx), _static(ctx)[0]
+    k2, b2 = visit_drift_coef_dps(ctx)
     sep = abs(float(separation_s))
-    return rg.record_difference_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
-                                  (0.0, d), (sep, d)) / S_PER_H
+    return rg.record_difference_u_coef(k2, b2, (0.0, d), (sep, d))
+
+
+def visit_drift_coef_dps(ctx: Context) -> tuple[float, float]:
+    """(E[K²] (°/s)²/s, E[B²] (°/s)²) of the drift between the 5.3.3.6/5.3.3.7 visits, hours
+    apart: the rate random walk by :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec`
+    with the largest K² the static record allows at 95 %
+    (:func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound`: a 2-h record resolves
+    the walk in about a third of the study's trials, and the 68 % limit :func:`drift_coef_dps`
+    bounds it by lay below the bench's K² in 5 of 40), the flicker as B² + u_B². The same
+    refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
+    if drift_u_dps(ctx, 1.0) == 0.0:
+        return 0.0, 0.0
+    key = ("visit_drift_coef", ctx.a_base, ctx.null_output)
+    if key not in ctx.cache:
+        fit, allan = _noise_fit(ctx), _static(ctx)[0]
+        bound = ief.walk_coefficient_bound(allan.tau_s, allan.adev, allan.edf)
+        b = float(fit.B) if math.isfinite(float(fit.B)) else 0.0
+        ub = float(fit.u_B) if math.isfinite(float(fit.u_B)) else 0.0
+        ctx.cache[key] = (ief.walk_k2_iec(fit.K, fit.u_K, bound) / S_PER_H ** 2,
+                          (b * b + ub * ub) / S_PER_H ** 2)
+    return ctx.cache[key]
 
 
 def drift_coef_dps(ctx: Context) -> tuple[float, float]:
@@ -1454,12 +1474,16 @@ def bias_hysteresis(ctx: Context) -> Item:
     the rising and the falling pass (:func:`gonio.specs.iec62047_20.formulas.hysteresis_iec`: a
     visit is "up" when reached from below, "down" from above), °/s.
 
-    Uncertainty: the two record means (block type A), the bias drift between the two
-    visits (RRW and bias instability from the static record's Allan fit), and the selection
-    excess of a maximum over n noisy differences (JCGM 100 4.3.7: between the two limiting
-    cases, 0 when one temperature's true difference stands clear and c_m·σ when m share
-    the largest; :func:`gonio.specs._rate_family.formulas.selection_excess`): the value is
-    the reading less the midpoint c_m·σ/2, the term rectangular ± c_m·σ/2."""
+    Two readings, both kept: the standard's, the largest |B_up − B_down| itself
+    (``reading_iec_dps`` in the details), and the value stated, that reading less the
+    midpoint of the selection excess of a maximum over n noisy differences (JCGM 100 4.3.7:
+    between 0 when one temperature's true difference stands clear and c_m·σ when m share
+    the largest; :func:`gonio.specs._rate_family.formulas.selection_excess`), the term
+    rectangular ± c_m·σ/2. u_c: that term, the two record means (block type A) and the bias
+    drift between the two visits (:func:`visit_drift_u_dps`). Statement: one interval,
+    [0, the one-sided 95 % upper limit of the largest true difference] from the reading's
+    own distribution (:func:`gonio.specs.iec62047_20.formulas.hysteresis_upper_iec`), no k:
+    a maximum of |·| whose truth may be 0 (a chamber without lag) has no symmetric ± U."""
     t, cl, un = "bias hysteresis", "5.3.3.7", "°/s"
     m = _miss(ctx, "bias_temperature", "bias_hysteresis", t, cl, un)
     if m:
@@ -1467,13 +1491,16 @@ def bias_hysteresis(ctx: Context) -> Item:
     pts = _bias_temperature_points(ctx)
     val, diffs, Tm, u = hysteresis_budget(pts, lambda sep: visit_drift_u_dps(ctx, sep))
     return Item("bias_hysteresis", t, cl, un, val, uncertainty=u, details={
-        "up_minus_down_dps": diffs, "temperature_c": Tm})
+        "up_minus_down_dps": diffs, "temperature_c": Tm,
+        "reading_iec_dps": max(abs(v) for v in diffs.values())})
 
 
 def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
     """5.3.3.7 from the visits ``pts`` ((T °C, B °/s, u(B) °/s, ν, mid-time s) in visit
     order) and ``drift_u`` (separation s → standard uncertainty °/s of the bias drift):
-    (value, {T: B_up − B_down}, the temperature of the largest, its Uncertainty)."""
+    (value, {T: B_up − B_down}, the temperature of the largest, its Uncertainty stated by
+    the interval [0, upper] of :func:`gonio.specs.iec62047_20.formulas.hysteresis_upper_iec`
+    with each difference's σ from its two record means and the drift between them)."""
     T = [p[0] for p in pts]
     val, diffs = ief.hysteresis_iec(T, [p[1] for p in pts])
 
@@ -1495,7 +1522,13 @@ def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
                          source="selection excess of the largest of the noisy differences "
                                 "over the temperatures visited twice (midpoint ± c_m·σ/2 "
                                 "removed)"))
-    return val - excess, diffs, Tm, gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
+    u = gum(lambda a, b, d, mx: abs(a - b + d) + mx, inputs)
+    # stated by one interval from the reading's own distribution (a maximum of |·| whose
+    # truth may be 0): [0, the one-sided 95 % upper limit], no k
+    hi = ief.hysteresis_upper_iec(val, sds, 0.95)
+    v = val - excess
+    return v, diffs, Tm, replace(u, U=hi - v, k=None, coverage_probability=0.95,
+                                 k_source="folded-normal maximum", interval=(0.0, hi))
 
 
 def bias_ratiometric(ctx: Context) -> Item:
