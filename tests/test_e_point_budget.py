@@ -49,6 +49,23 @@ def test_table_line_against_a_monte_carlo_of_the_chain():
     assert old > 2 * float(np.std(_e_chain(30.0, err_at)))
 
 
+
+def test_table_line_counter_clockwise_points_take_their_own_positions():
+    """A counter-clockwise 7.4 point (negative θ) reaches the table position θ mod 360: −60°
+    is 300°, a 7.1 stop's position, whose error then enters twice; −300° is 60°. The chain
+    (the table's error keyed by position) gives the sd that table_line_u gives for the signed
+    angle (2 %); taking |θ| put −60° at 60° (a different sd)."""
+    rng = np.random.default_rng(12)
+    mpe, n = 0.1, 200_000
+    pos = sorted({0.0, *STOPS % 360.0, *(-POINTS) % 360.0})
+    draws = {p: rng.uniform(-mpe, mpe, n) for p in pos}
+    err_at = lambda th: draws[th % 360.0]                                  # noqa: E731
+    for th in (-60.0, -150.0, -300.0):
+        sd = float(np.std(_e_chain(th, err_at)))
+        assert table_line_u(th, STOPS, mpe / math.sqrt(3)) == pytest.approx(sd, rel=0.02), th
+    assert abs(table_line_u(60.0, STOPS, mpe / math.sqrt(3))
+               - float(np.std(_e_chain(-60.0, err_at)))) > 0.01
+
 def test_scale_factor_reading_line_grows_with_the_point():
     """K_r at θ: noise u_k on each 7.1 reading alone moves E_i by −θ δK/K; a Monte Carlo of
     the chain (counts with the readings' noise, K the mean of C_k/θ_k) gives the line at θ,

@@ -555,14 +555,23 @@ def table_error_coefficients(theta_deg: float, stops_deg) -> dict:
     of C_k/θ_k over the stops θ_k (n of them), so K/K_true − 1 ≈ (1/n) Σ (P(θ_k) − P(0))/θ_k
     (7.1), and E_i = C_i/K − θ_i ≈ (P(θ_i) − P(0)) − (θ_i/n) Σ (P(θ_k) − P(0))/θ_k. A position
     the table reaches twice (a stop that is also the point, 360° that is 0°) has one error,
-    so its coefficients add (at 360° the point's own term cancels: P(360°) = P(0)).
+    so its coefficients add (at 360° the point's own term cancels: P(360°) = P(0)). Angles
+    keep their sign (a counter-clockwise point or stop is negative): the table's position is
+    θ mod 360 (−60° is the position 300°), and θ_i/θ_k keeps its sign.
 
     >>> c = table_error_coefficients(360.0, [60.0, 120.0, 180.0, 240.0, 300.0, 360.0])
     >>> [round(float(c[p]), 4) for p in (0.0, 60.0, 300.0)], 360.0 in c
     ([2.2833, -1.0, -0.2], False)
+
+    A counter-clockwise point at −60° with clockwise stops: its position is 300°, a stop's
+    position, so the two coefficients add there (1 − (−60)/(6·300)); 60° is only a stop:
+
+    >>> c = table_error_coefficients(-60.0, [60.0, 120.0, 180.0, 240.0, 300.0, 360.0])
+    >>> [round(float(c[p]), 4) for p in (60.0, 300.0)]
+    [0.1667, 1.0333]
     """
-    theta = abs(float(theta_deg))
-    stops = np.abs(np.asarray(stops_deg, dtype=float))
+    theta = float(theta_deg)
+    stops = np.asarray(stops_deg, dtype=float)
     n = stops.size
     out: dict = {}
 

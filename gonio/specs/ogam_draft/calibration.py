@@ -942,8 +942,8 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     from gonio.specs.ogam_draft.budget_extra import table_line_u
 
     df = readings.data
-    stops = np.abs(df.loc[df["line"].isin(list(results.scale_factor.used_lines)),
-                          "table_deg"].to_numpy(dtype=float)) if from_counts else np.array([])
+    stops = df.loc[df["line"].isin(list(results.scale_factor.used_lines)),
+                   "table_deg"].to_numpy(dtype=float) if from_counts else np.array([])
     table_src = ("table positioning at the point, the common zero and the 7.1 stops, one "
                  "error per position, each MPE/sqrt(3) (A.4.1; through K, 7.1) "
                  "[physical budget: P and K_P as one line]")
