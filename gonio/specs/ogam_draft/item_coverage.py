@@ -343,6 +343,16 @@ def item_coverage(records: list[dict], intrinsic_points=None,
                 if own:      # the physical budget is about the instrument: judged on that
                     item["two_sided"] = dict(two_sided(di, U, u_c, own),
                                              truth="intrinsic")
+            # the statement itself: E = ± max|E_i| with the stated U (the largest point's)
+            # against the truth's max|E_i| (the intrinsic one where E is judged on it)
+            tp = np.array([intrinsic_points if intrinsic_points is not None and own
+                           else r["truth_points"] for r in rs], dtype=float)
+            d_max = np.abs(vals) - np.abs(tp).max(axis=1)
+            u_max = np.array([r["u_c"] for r in rs], dtype=float)
+            item["max_statement"] = dict(two_sided(d_max, np.array([r["U"] for r in rs]),
+                                                   u_max, own),
+                                         truth="intrinsic" if intrinsic_points is not None
+                                         and own else "as mounted")
         elif name == "repeatability":
             s2 = np.array([r["s_points"] for r in rs]) ** 2
             truth = float(np.sqrt(s2.mean(axis=0)).max())
@@ -370,6 +380,9 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             ts = item["two_sided"]
             ts["flags"] = [f for f in ts["flags"] if f != "over-wide"]
             ts["spread_judged"] = False
+            if "max_statement" in item:
+                item["max_statement"]["flags"] = [f for f in item["max_statement"]["flags"]
+                                                  if f != "over-wide"]
         out[name] = item
     return out
 
