@@ -153,3 +153,26 @@ def test_study_draws_table_sizes_and_drift_within_their_bounds():
     for x in (sums, sig):
         assert stats.kstest(x, "uniform").pvalue > 0.01
         assert max(x) <= 1.0 and max(x) > 0.95 and min(x) < 0.05
+
+
+def test_harmonic_table_model_against_a_monte_carlo_of_the_chain():
+    """The table's error one periodic curve a·sin(h·x + φ), a uniform in [0, MPE], φ
+    uniform: the chain's sd of E_i at the model's worst order equals table_harmonic_line_u
+    (2 %) and no order 1 … 11 gives more; at the bound (a = MPE) the largest |E_i| reaches
+    its half-width. Positions are multiples of 30°, so order 12 moves nothing."""
+    from gonio.specs.ogam_draft.budget_extra import table_harmonic_line_u
+
+    rng = np.random.default_rng(13)
+    mpe, n = 0.1, 200_000
+    a, ph = rng.uniform(0.0, mpe, n), rng.uniform(0.0, 2 * math.pi, n)
+    for th in (30.0, 180.0, 360.0):
+        m = table_harmonic_line_u(th, STOPS, mpe)
+        sds = {}
+        for h in range(1, 13):
+            err_at = lambda x, h=h: a * np.sin(h * math.radians(x) + ph)      # noqa: E731
+            sds[h] = float(np.std(_e_chain(th, err_at)))
+        assert sds[m["order"]] == pytest.approx(m["u_arcsec"], rel=0.02), th
+        assert max(sds.values()) <= m["u_arcsec"] * 1.02 and sds[12] < 1e-6
+        at_bound = lambda x: mpe * np.sin(m["order"] * math.radians(x) + ph)  # noqa: E731
+        big = float(np.max(np.abs(_e_chain(th, at_bound))))
+        assert big == pytest.approx(m["half_width_at_bound_arcsec"], rel=0.01)
