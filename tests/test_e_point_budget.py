@@ -176,3 +176,21 @@ def test_harmonic_table_model_against_a_monte_carlo_of_the_chain():
         at_bound = lambda x: mpe * np.sin(m["order"] * math.radians(x) + ph)  # noqa: E731
         big = float(np.max(np.abs(_e_chain(th, at_bound))))
         assert big == pytest.approx(m["half_width_at_bound_arcsec"], rel=0.01)
+
+
+def test_study_checks_the_stated_maximum_against_the_truths_maximum():
+    """The statement E = ± max|E_i| with its U is judged against the truth's max|E_i| (the
+    intrinsic truth for the physical budget): trial 1 states −0.30″ ± 0.15″ where the truth's
+    largest |E_i| is 0.20″ (inside); trial 2 states 0.50″ ± 0.20″ against 0.20″ (outside)."""
+    from gonio.specs.ogam_draft.item_coverage import item_coverage
+
+    def rec(points, value, U):
+        e = {"value": value, "U": U, "u_c": U / 2, "k": 2.0, "interval": None, "truth": None,
+             "points": points, "truth_points": [9.0, 9.0], "U_points": [U, U],
+             "u_c_points": [U / 2, U / 2]}
+        return {"angle_deviation": e}
+
+    recs = [rec([0.1, -0.3], -0.3, 0.15), rec([0.5, 0.0], 0.5, 0.2)]
+    m = item_coverage(recs, intrinsic_points=[0.05, -0.2])["angle_deviation"]["max_statement"]
+    assert (m["hits"], m["n"], m["truth"]) == (1, 2, "intrinsic")
+    assert m["z_mean"] == pytest.approx(((0.3 - 0.2) / 0.075 + (0.5 - 0.2) / 0.1) / 2)
