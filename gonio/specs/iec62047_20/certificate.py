@@ -82,7 +82,8 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"least-squares slope(?: \(parallel\)| \(residual scatter\))?", "最小二乘斜率"),
     (r"noise of the point means / FullScale", "各点平均值的噪声 / FullScale"),
     (r"noise of the rotating means", "转动平均值的噪声"),
-    (r"other noise terms at the floor τ \(five-term fit\): .*", "底值 τ 处的其他噪声项（五项拟合）"),
+    (r"bias of the floor rule, E\*\[B\*\] − B, removed \(other noise terms at the floor τ, "
+     r"minimum over τ\)", "底值规则的偏差 E*[B*] − B，已扣除（底值 τ 处的其他噪声项、对 τ 取最小）"),
     (r"phase/gain noise of the bracketing points", "相邻点的相位/增益噪声"),
     (r"rest output at (\S+) V", "{1} V 时的静止输出"),
     (r"slope from the K_i standard errors", "由 K_i 标准误差得到的斜率"),
@@ -102,7 +103,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"linear interpolation in ln f: h²/8·\|p''\| from the neighbouring point's second "
      r"difference", "ln f 中线性插值：h²/8·|p''|，p'' 由相邻点的二阶差分求得"),
     (r"Welch estimate over the broadband lines", "宽带谱线上的 Welch 谱估计"),
-    (r"χ² interval at the floor", "底值处的 χ² 区间"),
+    (r"spread of the floor rule: central 95 % of (\d+) seeded draws under the five-term fit "
+     r"\(correlated Allan variances\) / 3\.92",
+     "底值规则的分散性：五项拟合模型下 {1} 次定种子抽样（Allan 方差相关）的中间 95 % 范围 / 3.92"),
     (r"bias correction of the −½ line under the fitted model with band-limited flicker "
      r"\(half the correction\)", "带限闪烁噪声拟合模型下 −½ 斜率直线的偏差修正（取修正量的一半）"),
     (r"time outside the band: the count's spread and the reference's error \(noise, bias "
