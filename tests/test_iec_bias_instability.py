@@ -4,8 +4,9 @@
   a brute-force Monte Carlo: the same floor rule applied to records simulated at full rate
   (:func:`gonio.analysis.noise.simulate_noise`) and analysed as the calibration analyses the
   static record (decade:10 τ, ≥ 10 clusters). Mean and standard deviation must agree; drawn
-  independently per τ (no correlation) the spread is ~40 % too small, and from the χ²
-  interval of the floor τ alone (the former budget) ~40 % too large.
+  independently per τ (the covariance's diagonal only) the spread is 28–30 % too small and
+  the mean 10–11 % low on both models, which fails here; the χ² interval of the floor's τ
+  alone (the former budget) was 46 % wider than the floor's scatter on the built-in programme.
 - :func:`floor_reading` on records whose white noise lifts the floor well above 0.664·B:
   the bias-corrected value is centred on the simulated B, the standard's reading is not
   (its u is checked by the coverage study of the built-in programme, README).
