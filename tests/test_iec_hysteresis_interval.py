@@ -57,7 +57,11 @@ def test_hysteresis_interval_holds_the_truth(config):
     assert all(k is None and iv[0] == 0.0 and v <= iv[1] for _, v, _, iv, k in draws)
     lo, hi = clopper_pearson(hits, len(draws))
     assert hi >= 0.95, (hits, len(draws))
-    assert lo < 0.999, (hits, len(draws))       # a bound, not a certainty: not over-wide
+    if max(config.values(), default=0.0) >= 3.0:
+        # the truth 3 sigma clear of zero: the limit is one-sided 95 % (the largest over the
+        # temperatures makes it conservative, 96.75 % here), not a certainty: a limit
+        # widened by a factor (wrong sds, a slip of 2) covers every draw and fails this
+        assert hits / len(draws) <= 0.985, (hits, len(draws))
 
 
 def test_hysteresis_upper_single_difference_closed_form():

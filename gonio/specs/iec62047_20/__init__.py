@@ -48,7 +48,7 @@ READINGS_TAKEN = (
     "departure in output units (Table 4's V) in the details.",
     "5.3.3.7: a visit is 'up' when reached from below, 'down' from above; hysteresis = "
     "max |B_up − B_down| (the reading, in the details); stated as that reading less the "
-    "selection excess of a maximum, with the interval [0, its one-sided 95 % upper limit].",
+    "midpoint of a maximum's selection excess, with the interval [0, its one-sided 95 % upper limit].",
     "5.3.3.8: a = g cos γ with γ = 0 at input axis up (eq (28)'s sin γ counts from the "
     "horizontal); the Earth rate removed at each angle; a whole turn in equal steps.",
     "5.4.5.1 c): broadband = rms over band_hz … broadband_high_hz of the one-sided density; the "

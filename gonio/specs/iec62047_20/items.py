@@ -1604,7 +1604,7 @@ def hysteresis_budget(pts, drift_u) -> tuple[float, dict, float, Uncertainty]:
     # truth may be 0): [0, the one-sided 95 % upper limit], no k
     hi = ief.hysteresis_upper_iec(val, sds, 0.95)
     v = val - excess
-    return v, diffs, Tm, replace(u, U=hi - v, k=None, coverage_probability=0.95,
+    return v, diffs, Tm, replace(u, U=hi - v, k=None, nu_eff=None, coverage_probability=0.95,
                                  k_source="folded-normal maximum", interval=(0.0, hi))
 
 
