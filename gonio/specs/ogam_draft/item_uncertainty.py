@@ -5,8 +5,9 @@ measurement uncertainty"; the draft's Annex A budgets only E. This module gives 
 budget to each of the seven items, one documented function each:
 
 ==============================  ======  ===================================================
-:func:`scale_factor_budget`     K       Type A scatter of K_i, table angle error at the stops,
-                                        count quantisation (7.1)
+:func:`scale_factor_budget`     K       Type A scatter of K_i, table angle error at the stops
+                                        (the larger of :func:`scale_factor_table_line`'s two
+                                        readings), count quantisation (7.1)
 :func:`nonlinearity_corrected_budget`  K_l  the range corrected for its bias by noise and tilt
                                         (JCGM 101 Monte Carlo of the K_i's errors; stated)
 :func:`nonlinearity_budget`     K_l     the draft's range as measured: u of the largest and
@@ -49,7 +50,7 @@ from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                random_walk_stdev_dof, stdev_u)
 
-__all__ = ["Component", "ItemUncertainty", "ChamberLine", "chamber_temperature_line",
+__all__ = ["Component", "ItemUncertainty", "ScaleFactorTableLine", "scale_factor_table_line", "ChamberLine", "chamber_temperature_line",
            "scale_factor_budget", "nonlinearity_budget",
            "nonlinearity_corrected_budget", "round_noise", "RoundNoise",
            "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
@@ -301,6 +302,64 @@ def _single_round_u(k_i: np.ndarray, theta_deg: np.ndarray, table_mpe_arcsec: fl
     return u_tab, u_q
 
 
+@dataclass(frozen=True)
+class ScaleFactorTableLine:
+    """K's table line at the 7.1 stops, relative to K, in its two readings
+    (:func:`scale_factor_table_line`): the standard's (independent stops) and the one
+    periodic error at the worst order beside it, and which one is certified."""
+
+    u_rel_standard: float            # A.4.1 read per stop: MPE/√3 each, independent
+    u_rel_harmonic: float            # one periodic error at the bound, worst order (arcsine)
+    half_width_rel_harmonic: float   # its half-width: MPE·|Σ (e^{ihθ_k} − 1)/θ_k|/n
+    order: int                       # that worst order h
+    certified: str                   # "harmonic" or "standard": the larger u
+
+    @property
+    def u_rel(self) -> float:
+        return max(self.u_rel_standard, self.u_rel_harmonic)
+
+
+def scale_factor_table_line(theta_deg, table_mpe_arcsec: float,
+                            max_order: int = 360) -> ScaleFactorTableLine:
+    """u(K)/K from the table's angle errors at the 7.1 stops, two readings side by side.
+
+    K = mean C_k/θ_k (7.1); the table turns from its zero to θ_k with error P(θ_k) − P(0)
+    (A.4.1), so δK/K = (1/n) Σ (P(θ_k) − P(0))/θ_k (θ in arcseconds, signed).
+
+    - The standard's reading (A.4.1 applied to 7.1): each stop's error independent,
+      rectangular ±MPE: u = (MPE/√3)·√(Σ 1/θ_k²)/n (P(0) taken as part of each stop's error).
+    - Beside it, the physical model: the table's error is one periodic curve, so the stops'
+      errors are correlated and a low order does not average out. One periodic error
+      P(x) = a·sin(h·x + φ) at the A.4.1 bound (a = MPE) of unknown order h (1 …
+      ``max_order``), phase φ uniform: δK/K = a·Im(e^{iφ} Σ (e^{ihθ_k} − 1)/θ_k)/n, arcsine
+      with half-width A = MPE·|Σ (e^{ihθ_k} − 1)/θ_k|/n at the worst order h, u = A/√2
+      (JCGM 101 6.4.6). A curve Σ a_h sin(h x + φ_h) with Σ|a_h| ≤ MPE moves K by at most
+      that A, so the line holds whatever the table's shape within its MPE.
+
+    The certified line is the larger u of the two (``certified``). With the draft's stops
+    60°…360° and MPE 0.1″ the worst order is 3 and the harmonic reading is 3.1 times the
+    standard's (the 360° stop carries no table error, P(360°) = P(0)):
+
+    >>> t = scale_factor_table_line([60, 120, 180, 240, 300, 360], 0.1)
+    >>> t.order, t.certified, round(t.u_rel_harmonic / t.u_rel_standard, 2)
+    (3, 'harmonic', 3.08)
+    >>> round(t.half_width_rel_harmonic / PPM, 4)     # 0.1″·(0.05111/3600)/6
+    0.2366
+    """
+    th = np.asarray(theta_deg, dtype=float) * ARCSEC_PER_DEG
+    n = th.size
+    mpe = float(table_mpe_arcsec)
+    u_std = (mpe / math.sqrt(3.0)) * float(np.sqrt(np.sum(1.0 / th ** 2))) / n
+    h = np.arange(1, int(max_order) + 1)
+    pos = np.radians(th / ARCSEC_PER_DEG)
+    g = np.abs((np.exp(1j * np.outer(h, pos)) - 1.0) @ (1.0 / th))
+    j = int(np.argmax(g >= g.max() * (1.0 - 1e-9)))      # the lowest of equal orders
+    hw = mpe * float(g[j]) / n
+    u_h = hw / math.sqrt(2.0)
+    return ScaleFactorTableLine(u_std, u_h, hw, int(h[j]),
+                                "harmonic" if u_h > u_std else "standard")
+
+
 def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
     """The 7.1 rounds as K_l's budgets take them (draft 7.2): (K_i, θ_k, n, mean K_i, u_tab,
     u_q) with the single rounds' table and count-quantum u (:func:`_single_round_u`);
@@ -393,8 +452,11 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
-    table's angle error at each stop, rectangular with the table MPE (A.4.1),
-    independent between stops: u = (1/n)√Σ(K_i u(θ)/θ_i)²; the count quantisation,
+    table's angle error at the stops ``P_K`` (A.4.1 applied to 7.1), the larger of two
+    readings (:func:`scale_factor_table_line`): the standard's, each stop independent and
+    rectangular with the table MPE, u = (1/n)√Σ(K_i u(θ)/θ_i)², and the physical one, the
+    table's one periodic error at the MPE bound and the worst order (arcsine; the stops'
+    errors correlated), both stated in the line's source; the count quantisation,
     triangular ±1 count (two floored counter readings): u = (1/n)√Σ(u_C/θ_i)². The
     Type A scatter also holds the random part of the other two (conservative).
 
@@ -422,13 +484,15 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     --------
     The draft's six rounds 60°…360° with K_i = 3600.1, 3600.3, 3600.2, 3600.2, 3600.1,
     3600.3 counts/°, table MPE 0.1″ (A.4.1): s(K_i) = 0.0894, s/√6 = 0.0365;
-    table: 3600.2·(0.1/√3)/1296000 · √(Σ(360/θ_i)²)/6 = 1.604e-4·√53.69/6 = 1.96e-4;
+    table, the standard's reading: 3600.2·(0.1/√3)/1296000 · √(Σ(360/θ_i)²)/6 =
+    1.604e-4·√53.69/6 = 1.96e-4; the one periodic error at the bound (worst order 3,
+    :func:`scale_factor_table_line`): 3600.2·0.2366 ppm/√2 = 6.02e-4, the larger, certified;
     quantisation (1/√6)/6·√Σ1/θ_i² = 0.0680·0.02034 = 0.00138 counts/°.
 
     >>> b = scale_factor_budget([3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3],
     ...                         [60, 120, 180, 240, 300, 360], 0.1)
     >>> [round(c.u, 5) for c in b.components]
-    [0.03651, 0.0002, 0.00138]
+    [0.03651, 0.0006, 0.00138]
     >>> round(b.u_c, 4), b.nu_eff > 4, b.k_source
     (0.0365, True, 'welch-satterthwaite')
     """
@@ -442,15 +506,28 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
         lines.append(_Line(from_u("s_K", 0.0, s / math.sqrt(n), dof=n - 1, type="A",
                                   source=f"scatter of the {n} rounds' K_i, s/√n"),
                            "scatter of K_i", False, "7.1"))
-    lines.append(_Line(from_u("P_K", 0.0, float(np.sqrt(np.sum(u_tab ** 2))) / n, type="B",
-                              source=f"table angle error at the stops, MPE ±{table_mpe_arcsec:g}″ "
-                                     "rectangular, independent stops"),
-                       "table angle", True, "A.4.1 applied to 7.1"))
+    tl = scale_factor_table_line(th, table_mpe_arcsec)
+    u_std = float(np.sqrt(np.sum(u_tab ** 2))) / n
+    kbar = abs(float(np.mean(k_i)))
+    both = (f"the standard's reading (independent stops, rectangular) u = "
+            f"{tl.u_rel_standard / PPM:.3g} ppm; one periodic error at the bound, worst order "
+            f"{tl.order}, arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm; the larger certified")
+    if tl.certified == "harmonic":
+        lines.append(_Line(type_b("P_K", 0.0, kbar * tl.half_width_rel_harmonic, "arcsine",
+                                  source=f"table angle error at the stops, MPE "
+                                         f"±{table_mpe_arcsec:g}″, one periodic error: {both}"),
+                           "table angle (one periodic error, worst order)", True,
+                           "A.4.1 applied to 7.1"))
+    else:
+        lines.append(_Line(_as_dist(from_u("P_K", 0.0, u_std, type="B",
+                                           source=f"table angle error at the stops, MPE "
+                                                  f"±{table_mpe_arcsec:g}″ rectangular, "
+                                                  f"independent stops: {both}"), "rectangular"),
+                           "table angle", True, "A.4.1 applied to 7.1"))
     lines.append(_Line(from_u("q_K", 0.0, float(np.sqrt(np.sum(u_q ** 2))) / n, type="B",
                               source="count quantisation, ±1 count triangular per C_i"),
                        "count quantisation", True, "7.1 (pulse count)"))
-    # from_u marks distribution "normal"; the table and quantisation lines are not normal
-    lines[-2] = _Line(_as_dist(lines[-2].q, "rectangular"), *_rest(lines[-2]))
+    # from_u marks distribution "normal"; the quantisation line is not normal
     lines[-1] = _Line(_as_dist(lines[-1].q, "triangular"), *_rest(lines[-1]))
     value = float(np.mean(k_i))
     if tilt_correction is not None:
