@@ -29,7 +29,8 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from gonio.errors import GonioError
-from gonio.report.figures import minus_signs, mpl_style, plain_log_ticks
+from gonio.report.figures import (first_family, font_fallback, minus_signs, mpl_style,
+                                  plain_log_ticks)
 from gonio.report.i18n import cjk_font, labels, minus_sign
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import Num
@@ -658,7 +659,7 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
     from matplotlib.figure import Figure
 
     buf = io.BytesIO()
-    with mpl_style(fonts):
+    with mpl_style(fonts), first_family(fonts):
         pages = layout_pages(content, L)
         n = len(pages)
         with PdfPages(buf, metadata={"CreationDate": None, "ModDate": None,
@@ -670,6 +671,7 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
                 _page_frame(fig, content, L, p, n)
                 for y, op in ops:
                     op(fig, y)
+                font_fallback(fig, fonts)
                 pdf.savefig(fig)
     return buf.getvalue()
 
