@@ -697,6 +697,47 @@ def round_noise(e_arcsec, position, time_s, quantum_u_arcsec: float,
                       float(static_s) if static_s else None, int(nu[ok].sum()))
 
 
+@dataclass(frozen=True)
+class RangeTableOrder:
+    """The table's worst order for K_l's range (:func:`nonlinearity_table_order`)."""
+
+    order: int                   # the worst order h
+    half_range_rel: float        # the largest range one periodic error at the bound adds, /2
+
+
+def nonlinearity_table_order(theta_deg, table_mpe_arcsec: float,
+                             max_order: int = 360) -> RangeTableOrder:
+    """The order of one periodic table error at the A.4.1 bound that spreads the 7.1 rounds'
+    K_i most (draft 7.2: K_l is the range of the K_i).
+
+    Round k's K_i = C_k/θ_k carries the table's error (P(θ_k) − P(0))/θ_k (A.4.1 applied to
+    7.1), relative. For one periodic error P(x) = a·sin(h·x + φ), a = MPE, that is
+    a·Im(e^{iφ} v_k), v_k = (e^{ihθ_k} − 1)/θ_k (θ in arcseconds): all rounds from the same
+    curve, correlated. The range it adds between rounds k and j is a·Im(e^{iφ}(v_k − v_j)),
+    at most a·|v_k − v_j| over the phase, so the worst order is the one with the largest
+    diameter max_{k,j} |v_k − v_j| of the v_k (not K's order, which maximises |Σ v_k|). A
+    curve Σ a_h sin(h x + φ_h) with Σ|a_h| ≤ MPE adds at most MPE times that diameter
+    (triangle inequality), so the order bounds every table shape within its MPE.
+
+    The draft's stops 60°…360°, MPE 0.1″: order 3 puts the 60° stop at −2a/θ and the 360°
+    stop at 0: half-range 0.1/216000 = 0.463 ppm.
+
+    >>> t = nonlinearity_table_order([60, 120, 180, 240, 300, 360], 0.1)
+    >>> t.order, round(t.half_range_rel / PPM, 3)
+    (3, 0.463)
+    """
+    th = np.asarray(theta_deg, dtype=float) * ARCSEC_PER_DEG
+    h = np.arange(1, int(max_order) + 1)
+    v = (np.exp(1j * np.outer(h, np.radians(th / ARCSEC_PER_DEG))) - 1.0) / th
+    diam = np.abs(v[:, :, None] - v[:, None, :]).max(axis=(1, 2))
+    j = int(np.argmax(diam >= diam.max() * (1.0 - 1e-9)))     # the lowest of equal orders
+    return RangeTableOrder(int(h[j]), 0.5 * float(table_mpe_arcsec) * float(diam[j]))
+
+
+#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the standard's (independent
+#: stops), the physical one (one periodic error at the bound), or the larger of the two.
+TABLE_READINGS = ("standard", "periodic", "larger")
+
 #: Draws of the JCGM 101 Monte Carlo of K_l's range (:func:`nonlinearity_corrected_budget`)
 #: and its fixed seed (the same 7.1 data give the same K_l and u).
 RANGE_DRAWS = 4000
@@ -707,7 +748,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   k: float | None = None, tilt_round_coupling=None,
                                   noise: RoundNoise | None = None, time_s=None,
                                   draws: int = RANGE_DRAWS,
-                                  tilt_measured=None) -> ItemUncertainty:
+                                  tilt_measured=None,
+                                  table_reading: str = "larger") -> ItemUncertainty:
     """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
 
     The draft's K_l = (max K_i − min K_i)/K · 100 % is a range of measured values, and a
@@ -730,7 +772,17 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     replaces ``tilt_round_coupling``: each K_i is corrected for its own coupling at the
     measured tilt, K_i/(1 + e_k(ψ, γ)) (JCGM 100 3.2.4), and the draws carry the correction's
     error e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance
-    (JCGM 101 6.4.8). K_l is the
+    (JCGM 101 6.4.8).
+
+    The table's angle errors enter in two readings, both computed with the same draws of
+    everything else (``table_reading`` picks one; the default certifies the larger u):
+    ``standard``, A.4.1 read per stop — each round's error independent, rectangular ±MPE;
+    ``periodic``, the physical model — the table's error is one curve, P(θ_k) − P(0) for
+    every round from one periodic error at the A.4.1 bound (amplitude = MPE) of the order
+    that spreads the K_i most (:func:`nonlinearity_table_order`), its phase unknown (drawn
+    uniform per draw), so the rounds' table errors are correlated. The worst order bounds
+    the range any table shape within its MPE adds; the larger u of the two readings is
+    certified (``larger``), the line's source states both. K_l is the
     range whose expected measured range equals the one measured; u is the spread of the
     measured range there (one line, ``K_rng``, normal). The value is negative when the
     measured range is smaller than the errors alone would give (it is then stated by its
@@ -749,7 +801,15 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
     >>> b.value, round(b.u_c * 1e4, 2), b.nonnegative
-    (0.0, 1.08, True)
+    (0.0, 1.12, True)
+
+    The certified u is the periodic reading's (order 3 moves the 60° round by up to
+    0.1/216000 = 0.46 ppm, the six rounds together); the standard's, independent stops, is
+    smaller:
+
+    >>> s = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="standard")
+    >>> round(s.u_c * 1e4, 2)
+    1.08
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), measured - 2.4e-4 < b.value < measured
@@ -757,24 +817,36 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     """
     from uncertainty.stdev import corrected_range
 
+    if table_reading not in TABLE_READINGS:
+        raise ValueError(f"table_reading must be one of {', '.join(TABLE_READINGS)}")
     k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     to_pct = 100.0 / kbar
     rng = np.random.default_rng(RANGE_SEED)
-    err = (rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
-           + rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))) * to_pct
-    src = "table angle at the stops (rectangular ±MPE), count quantisation (triangular ±1 count)"
+    tab = rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
+    quant = rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))
+    # the physical reading: one periodic error at the bound, worst order, phase per draw
+    # (its own generator, so that the standard reading's draws stay as they were)
+    worst = nonlinearity_table_order(th, table_mpe_arcsec)
+    th_arcsec = th * ARCSEC_PER_DEG
+    phi = np.random.default_rng(RANGE_SEED + 1).uniform(0.0, 2.0 * math.pi, (draws, 1))
+    x = np.radians(th)
+    tab_periodic = (float(table_mpe_arcsec) * (np.sin(worst.order * x + phi) - np.sin(phi))
+                    / th_arcsec * k_i)
+    errs = {"standard": (tab + quant) * to_pct, "periodic": (tab_periodic + quant) * to_pct}
+    src = "count quantisation (triangular ±1 count)"
     if tilt_measured is not None:
         tm = tilt_measured
         k_i = k_i / (1.0 + tm.rel_error())
         d = rng.multivariate_normal([tm.psi_rad, tm.gamma_rad], tm.cov_rad2, draws)
-        err = err + (tm.rel_error(d[:, :1], d[:, 1:]) - tm.rel_error()) * 100.0
+        add = (tm.rel_error(d[:, :1], d[:, 1:]) - tm.rel_error()) * 100.0
+        errs = {r: e + add for r, e in errs.items()}
         src += (f", corrected for the tilt x Earth-rate coupling of each round at the measured "
                 f"tilt psi = {math.degrees(tm.psi_rad):.3g} deg (the correction's error from "
                 f"the estimate's covariance, nu = {tm.dof})")
     elif tilt_round_coupling is not None:
         a, b = (np.asarray(v, dtype=float) * 100.0 / ARCSEC_PER_DEG for v in tilt_round_coupling)
         alpha = rng.uniform(0.0, 2.0 * math.pi, (draws, 1))
-        err = err + a * np.cos(alpha) - b * np.sin(alpha)
+        errs = {r: e + a * np.cos(alpha) - b * np.sin(alpha) for r, e in errs.items()}
         src += ", tilt x Earth-rate coupling at the A.1 bound (azimuth uniform)"
     if noise is not None and time_s is not None and noise.n2_arcsec2_per_s > 0:
         t = np.asarray(time_s, dtype=float)
@@ -785,8 +857,16 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
         if noise.static_s:
             ang = ang + rng.standard_normal((draws, 1)) * (n_arw / math.sqrt(noise.static_s)) * t
             src += f" and the compensation's rate error over its {noise.static_s:g} s static phase"
-        err = err + ang / (th * ARCSEC_PER_DEG) * 100.0
-    c = corrected_range(k_i * to_pct, err)
+        errs = {r: e + ang / (th * ARCSEC_PER_DEG) * 100.0 for r, e in errs.items()}
+    cs = {r: corrected_range(k_i * to_pct, e) for r, e in errs.items()}
+    pick = table_reading if table_reading != "larger" else \
+        ("periodic" if cs["periodic"].u > cs["standard"].u else "standard")
+    c = cs[pick]
+    src = (f"table angle at the stops, {pick} reading certified (the standard's, A.4.1 per "
+           f"stop, independent rectangular ±MPE: corrected {cs['standard'].value:.4g} %, u "
+           f"{cs['standard'].u:.3g} %; one periodic error at the bound, order {worst.order}, "
+           f"phase drawn, rounds correlated: corrected {cs['periodic'].value:.4g} %, u "
+           f"{cs['periodic'].u:.3g} %), " + src)
     kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
     value = c.value if c.value + kk * c.u > 0 else 0.0
     line = _Line(from_u("K_rng", 0.0, c.u, type="B",
