@@ -744,12 +744,29 @@ RANGE_DRAWS = 4000
 RANGE_SEED = 20261129
 
 
+def _range_table_errors(k_i, th, table_mpe_arcsec: float, u_tab, rng, draws: int):
+    """Draws of the rounds' table errors of K_i (counts/°) in K_l's two readings
+    (:func:`nonlinearity_corrected_budget`, A.4.1 applied to 7.1): the standard's,
+    independent rectangular ±MPE per stop (from ``rng``), and one periodic error at the bound
+    of the worst order (:func:`nonlinearity_table_order`), K_i·MPE·(sin(hθ_i + φ) − sin φ)/θ_i
+    with φ uniform per draw (its own generator, so that the standard's draws from ``rng`` stay
+    as they were); and that order."""
+    n = k_i.size
+    tab = rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
+    worst = nonlinearity_table_order(th, table_mpe_arcsec)
+    phi = np.random.default_rng(RANGE_SEED + 1).uniform(0.0, 2.0 * math.pi, (draws, 1))
+    x = np.radians(th)
+    periodic = (float(table_mpe_arcsec) * (np.sin(worst.order * x + phi) - np.sin(phi))
+                / (th * ARCSEC_PER_DEG) * k_i)
+    return tab, periodic, worst
+
+
 def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   k: float | None = None, tilt_round_coupling=None,
                                   noise: RoundNoise | None = None, time_s=None,
                                   draws: int = RANGE_DRAWS,
                                   tilt_measured=None,
-                                  table_reading: str = "larger") -> ItemUncertainty:
+                                  table_reading: str = "standard") -> ItemUncertainty:
     """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
 
     The draft's K_l = (max K_i − min K_i)/K · 100 % is a range of measured values, and a
@@ -774,15 +791,12 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     error e_k(ψ', γ') − e_k(ψ, γ), (ψ', γ') normal about the estimate with its covariance
     (JCGM 101 6.4.8).
 
-    The table's angle errors enter in two readings, both computed with the same draws of
-    everything else (``table_reading`` picks one; the default certifies the larger u):
-    ``standard``, A.4.1 read per stop — each round's error independent, rectangular ±MPE;
-    ``periodic``, the physical model — the table's error is one curve, P(θ_k) − P(0) for
-    every round from one periodic error at the A.4.1 bound (amplitude = MPE) of the order
-    that spreads the K_i most (:func:`nonlinearity_table_order`), its phase unknown (drawn
-    uniform per draw), so the rounds' table errors are correlated. The worst order bounds
-    the range any table shape within its MPE adds; the larger u of the two readings is
-    certified (``larger``), the line's source states both. K_l is the
+    The table's errors in two readings, with the same draws of the rest (A.4.1, 7.2;
+    :func:`_range_table_errors`): ``standard`` (stated), each stop independent, rectangular
+    ±MPE; ``periodic`` (beside, in the line's source), one curve at the bound of the order
+    that spreads the K_i most (:func:`nonlinearity_table_order`), phase drawn, the rounds
+    correlated; ``larger``, the larger u (not stated: it corrects a good table's range by the
+    bound's errors, docs/draft-readings.md 7.2). K_l is the
     range whose expected measured range equals the one measured; u is the spread of the
     measured range there (one line, ``K_rng``, normal). The value is negative when the
     measured range is smaller than the errors alone would give (it is then stated by its
@@ -801,15 +815,14 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
     >>> b.value, round(b.u_c * 1e4, 2), b.nonnegative
-    (0.0, 1.12, True)
+    (0.0, 1.08, True)
 
-    The certified u is the periodic reading's (order 3 moves the 60° round by up to
-    0.1/216000 = 0.46 ppm, the six rounds together); the standard's, independent stops, is
-    smaller:
+    The periodic reading beside it (order 3 moves the 60° round by up to 0.1/216000 =
+    0.46 ppm, and the 180° and 300° rounds with it) spreads the rounds more:
 
-    >>> s = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="standard")
-    >>> round(s.u_c * 1e4, 2)
-    1.08
+    >>> p = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="periodic")
+    >>> round(p.u_c * 1e4, 2)
+    1.12
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), measured - 2.4e-4 < b.value < measured
@@ -822,16 +835,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     k_i, th, n, kbar, u_tab, u_q = _rounds(k_i, theta_deg, table_mpe_arcsec)
     to_pct = 100.0 / kbar
     rng = np.random.default_rng(RANGE_SEED)
-    tab = rng.uniform(-1.0, 1.0, (draws, n)) * (u_tab * math.sqrt(3.0))
+    tab, tab_periodic, worst = _range_table_errors(k_i, th, table_mpe_arcsec, u_tab, rng, draws)
     quant = rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))
-    # the physical reading: one periodic error at the bound, worst order, phase per draw
-    # (its own generator, so that the standard reading's draws stay as they were)
-    worst = nonlinearity_table_order(th, table_mpe_arcsec)
-    th_arcsec = th * ARCSEC_PER_DEG
-    phi = np.random.default_rng(RANGE_SEED + 1).uniform(0.0, 2.0 * math.pi, (draws, 1))
-    x = np.radians(th)
-    tab_periodic = (float(table_mpe_arcsec) * (np.sin(worst.order * x + phi) - np.sin(phi))
-                    / th_arcsec * k_i)
     errs = {"standard": (tab + quant) * to_pct, "periodic": (tab_periodic + quant) * to_pct}
     src = "count quantisation (triangular ±1 count)"
     if tilt_measured is not None:
@@ -862,7 +867,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     pick = table_reading if table_reading != "larger" else \
         ("periodic" if cs["periodic"].u > cs["standard"].u else "standard")
     c = cs[pick]
-    src = (f"table angle at the stops, {pick} reading certified (the standard's, A.4.1 per "
+    src = (f"table angle at the stops, {pick} reading stated (the standard's, A.4.1 per "
            f"stop, independent rectangular ±MPE: corrected {cs['standard'].value:.4g} %, u "
            f"{cs['standard'].u:.3g} %; one periodic error at the bound, order {worst.order}, "
            f"phase drawn, rounds correlated: corrected {cs['periodic'].value:.4g} %, u "
