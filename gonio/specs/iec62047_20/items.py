@@ -876,9 +876,14 @@ def bias_instability(ctx: Context) -> Item:
     overstates its spread. Both are taken from the rule's own distribution
     (:func:`floor_rule_draws`) under the five-term model fitted to the record, its B varied
     (a parametric bootstrap; Efron & Tibshirani 1993, ch. 10): the value is the B whose
-    rule has the reading as its mean, u the draws' central 95 % range / (2·1.96)
-    (:func:`floor_reading`; ν = 50: the model's figures come from the record, as for 5.4.5.2). The standard's reading is kept in the details
-    (``floor_reading_dph``) beside the value.
+    rule has the reading as its mean (:func:`floor_reading`). The item is stated by one
+    coverage interval from that distribution, p = 95 %, no k and no ν (GUM Suppl. 1 =
+    JCGM 101 7.7, the probabilistically symmetric interval): B̂ − B is distributed as the
+    draws about their mean, so [B̂ − (q₉₇.₅ − m), B̂ + (m − q₂.₅)] (the pivot, "basic"
+    bootstrap interval, Davison & Hinkley 1997 eq 5.6), its lower end at least 0; the draws'
+    quantiles shifted to B̂ would put the long side where the estimate's tail is, not the
+    truth's. u_c is the draws' standard deviation (JCGM 101 7.6; z, budget line). The
+    standard's reading is kept in the details (``floor_reading_dph``) beside the value.
     A value below 0 (a reading that is all other terms) is stated as 0, the bound."""
     t, cl, un = "bias instability", "5.4.5.3", "°/h"
     m = _miss(ctx, "static", "bias_instability", t, cl, un) or _quiet(ctx, "bias_instability", t, cl, un)
@@ -886,35 +891,43 @@ def bias_instability(ctx: Context) -> Item:
         return m
     allan = _static(ctx)[0]
     fit = _noise_fit(ctx)
-    val, i, value, u_b, slope, n_draws = floor_reading(allan, fit)
+    val, i, value, u_b, slope, n_draws, (lo, hi) = floor_reading(allan, fit)
     u = gum(lambda r, e: r - e,
-            [from_u("floor", val, u_b, dof=50,
-                    source=f"spread of the floor rule: central 95 % of {n_draws} seeded draws "
-                           "under the five-term fit (correlated Allan variances) / 3.92"),
+            [from_u("floor", val, u_b, source=f"spread of the floor rule: standard deviation "
+                    f"of {n_draws} seeded draws under the five-term fit (correlated Allan "
+                    "variances)"),
              from_u("rule_bias", val - value, 0.0,
                     source="bias of the floor rule, E*[B*] − B, removed (other noise terms "
                            "at the floor τ, minimum over τ)")])
+    # one statement: the interval of the rule's own distribution (JCGM 101 7.7), no k, no ν
+    u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
+                k_source="floor rule's distribution (pivot)", interval=(lo, hi))
     return Item("bias_instability", t, cl, un, value, uncertainty=u, details={
         "tau_floor_s": float(allan.tau_s[i]), "fit": fit.to_dict(),
         "floor_reading_dph": val, "floor_rule_bias_dph": val - value,
-        "floor_rule_slope": slope,
+        "floor_rule_slope": slope, "interval_dph": [lo, hi],
         "allan": {"tau_s": allan.tau_s, "adev_dph": allan.adev, "ci_low": allan.ci_low,
                   "ci_high": allan.ci_high}})
 
 
-def floor_reading(allan, fit) -> tuple[float, int, float, float, float, int]:
+def floor_reading(allan, fit) -> tuple[float, int, float, float, float, int,
+                                       tuple[float, float]]:
     """5.4.5.3 c) from an Allan deviation and the five-term fit of the same record: (the
     standard's reading R = floor/0.664, index of the floor τ, the value B̂, u(B̂), the slope
-    g' = dE*[B*]/dB, draws per evaluation) (:func:`bias_instability`).
+    g' = dE*[B*]/dB, draws per evaluation, the 95 % interval (lo, hi)) (:func:`bias_instability`).
 
     B̂ solves E*[B* | B] = R, E* the mean of :func:`floor_rule_draws` under the fit with its B
     replaced: a first step B₁ = R − (E*[B* | R] − R), then one secant step through (R, B₁)
-    with the same seeded draws (the mean is smooth in B); B̂ ≥ 0. u(B̂) = (central 95 % of the
-    draws at B₁)/3.92, the reading's own spread. Not divided by g' (< 1: other noise terms
-    make the floor move less than B), the delta method with the other terms held: they are
-    fitted to the same record and follow the floor's fluctuation, and B̂ scattered as the
-    reading does (ADXRS610 bench noise, 40 records of 2 h: sd of B̂ 2.67 °/h, of the reading
-    3.04 °/h, g' 0.80; divided by g', u was 4.08 °/h and z sd 0.69)."""
+    with the same seeded draws (the mean is smooth in B); B̂ ≥ 0. u(B̂) = the standard
+    deviation of the draws at B₁, the reading's own spread (JCGM 101 7.6). The interval is
+    the pivot of the same draws (m their mean, q their 2.5 % and 97.5 % quantiles):
+    B̂ − B ~ B* − m, so B ∈ [B̂ − (q₉₇.₅ − m), B̂ + (m − q₂.₅)] with 95 %, 2.5 % each side
+    (JCGM 101 7.7 probabilistically symmetric), the lower end at least 0. Neither u nor the
+    ends are divided by g' (< 1: other noise terms make the floor move less than B), the
+    delta method with the other terms held: they are fitted to the same record and follow the
+    floor's fluctuation, and B̂ scattered as the reading does (ADXRS610 bench noise, 40 records
+    of 2 h: sd of B̂ 2.67 °/h, of the reading 3.04 °/h, g' 0.80; divided by g', u was
+    4.08 °/h and z sd 0.69)."""
     val, i = ief.bias_instability_floor(allan.adev, n_clusters=allan.n_samples / allan.m)
     coef = np.nan_to_num([fit.Q, fit.N, val, fit.K, fit.R])
 
@@ -926,18 +939,18 @@ def floor_reading(allan, fit) -> tuple[float, int, float, float, float, int]:
     b1 = max(2.0 * val - g0, 0.0)
     d1 = draws_at(b1)
     lo, hi = np.quantile(d1, [0.025, 0.975])
-    u_f = float(hi - lo) / (2.0 * BIAS_INSTABILITY_Z95)
+    u_f = float(d1.std(ddof=1))
     g1 = float(d1.mean())
     slope = (g1 - g0) / (b1 - val) if abs(b1 - val) > 0.01 * u_f else 1.0
     slope = min(max(slope, BIAS_INSTABILITY_SLOPE_MIN), 1.0)
     b2 = max(b1 + (val - g1) / slope, 0.0)
-    return val, i, b2, u_f, slope, int(d1.size)
+    interval = (max(b2 - (float(hi) - g1), 0.0), b2 + (g1 - float(lo)))
+    return val, i, b2, u_f, slope, int(d1.size), interval
 
 
 BIAS_INSTABILITY_DRAWS = 4000
 BIAS_INSTABILITY_SEED = 6204720553      # fixed: the same records give the same value
 BIAS_INSTABILITY_CONTENDER = 1.5        # τ whose model deviation is ≤ 1.5× the least contend
-BIAS_INSTABILITY_Z95 = 1.959963984540054
 BIAS_INSTABILITY_SLOPE_MIN = 0.2        # g' floor: a reading almost all other terms
 
 
