@@ -40,7 +40,8 @@ READINGS_TAKEN = (
     "5.4.5.2: slope −½ line fitted where the local slope is −½ ± 0.1, read at 1 h.",
     "5.4.5.3: floor over τ with ≥ 10 clusters, divided by √(2 ln 2/π) (the standard's reading, "
     "in the details); the value is that reading less the rule's bias under the record's fitted "
-    "noise model (other noise terms at the floor τ, minimum over τ).",
+    "noise model (other noise terms at the floor τ, minimum over τ), stated by the 95 % "
+    "interval of that rule's distribution (2.5 % each side; no k).",
     "5.5: band = the lower of the −3 dB and the 90° lag frequencies, both reported.",
     "5.1.4.1 e) eq (18): a ratiometric gyro's outputs are referred to each run's own set "
     "voltage, y = y_RAW·V_set/V_actual, when the readings record the set voltage.",

@@ -54,7 +54,8 @@ READINGS_ZH = {
     "5.3.3.6:": "5.3.3.6：对 基准 → 最高 → 基准 → 最低 → 基准 的每次到达作最小二乘斜率。",
     "5.4.5.2:": "5.4.5.2：在局部斜率为 −½ ± 0.1 处拟合斜率 −½ 的直线，在 1 h 处读数。",
     "5.4.5.3:": "5.4.5.3：在不少于 10 个分组的 τ 上取底值，除以 √(2 ln 2/π)（标准的读数，见详细数据）；所给值为"
-                "该读数减去本记录拟合噪声模型下该规则的偏差（底值 τ 处的其他噪声项、对 τ 取最小）。",
+                "该读数减去本记录拟合噪声模型下该规则的偏差（底值 τ 处的其他噪声项、对 τ 取最小），"
+                "以该规则分布给出的 95 % 区间表述（两侧各 2.5 %；无 k）。",
     "5.5:": "5.5：频带取 −3 dB 频率与相位滞后 90° 频率中较低者，两者均给出。",
     "5.1.4.1 e)": "5.1.4.1 e) 式（18）：记录了设定电压时，比例式陀螺的输出按各次运行自身的设定电压折算，"
                   "y = y_RAW·V_set/V_actual。",
@@ -104,9 +105,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"linear interpolation in ln f: h²/8·\|p''\| from the neighbouring point's second "
      r"difference", "ln f 中线性插值：h²/8·|p''|，p'' 由相邻点的二阶差分求得"),
     (r"Welch estimate over the broadband lines", "宽带谱线上的 Welch 谱估计"),
-    (r"spread of the floor rule: central 95 % of (\d+) seeded draws under the five-term fit "
-     r"\(correlated Allan variances\) / 3\.92",
-     "底值规则的分散性：五项拟合模型下 {1} 次定种子抽样（Allan 方差相关）的中间 95 % 范围 / 3.92"),
+    (r"spread of the floor rule: standard deviation of (\d+) seeded draws under the five-term "
+     r"fit \(correlated Allan variances\)",
+     "底值规则的分散性：五项拟合模型下 {1} 次定种子抽样（Allan 方差相关）的标准偏差"),
     (r"bias correction of the −½ line under the fitted model with band-limited flicker "
      r"\(half the correction\)", "带限闪烁噪声拟合模型下 −½ 斜率直线的偏差修正（取修正量的一半）"),
     (r"time outside the band: the count's spread and the reference's error \(noise, bias "

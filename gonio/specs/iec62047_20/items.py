@@ -938,14 +938,21 @@ def floor_reading(allan, fit) -> tuple[float, int, float, float, float, int,
     g0 = float(draws_at(val).mean())
     b1 = max(2.0 * val - g0, 0.0)
     d1 = draws_at(b1)
-    lo, hi = np.quantile(d1, [0.025, 0.975])
     u_f = float(d1.std(ddof=1))
     g1 = float(d1.mean())
     slope = (g1 - g0) / (b1 - val) if abs(b1 - val) > 0.01 * u_f else 1.0
     slope = min(max(slope, BIAS_INSTABILITY_SLOPE_MIN), 1.0)
     b2 = max(b1 + (val - g1) / slope, 0.0)
-    interval = (max(b2 - (float(hi) - g1), 0.0), b2 + (g1 - float(lo)))
-    return val, i, b2, u_f, slope, int(d1.size), interval
+    return val, i, b2, u_f, slope, int(d1.size), floor_interval(b2, d1)
+
+
+def floor_interval(value: float, draws: np.ndarray, p: float = 0.95) -> tuple[float, float]:
+    """The probabilistically symmetric ``p`` interval (JCGM 101 7.7) of the 5.4.5.3 value
+    from the floor rule's draws about their mean m (the pivot: value − B ~ B* − m):
+    [value − (q_(1+p)/2 − m), value + (m − q_(1−p)/2)], the lower end at least 0 (B ≥ 0)."""
+    m = float(draws.mean())
+    q_lo, q_hi = (float(q) for q in np.quantile(draws, [(1.0 - p) / 2.0, (1.0 + p) / 2.0]))
+    return max(value - (q_hi - m), 0.0), value + (m - q_lo)
 
 
 BIAS_INSTABILITY_DRAWS = 4000
