@@ -44,18 +44,22 @@ def _record(coef, rng):
     return allan_deviation(y, TAU0_S, "rate", "decade:10", alpha=0, unit="deg/h")
 
 
+def _floors_and_draws(coef, rng, n):
+    """The standard's floor reading on ``n`` full-rate records of the model ``coef`` (brute
+    force, outside the estimator) and the item's floor-rule draws for that record length."""
+    floors = []
+    for _ in range(n):
+        a = _record(coef, rng)
+        floors.append(ief.bias_instability_floor(a.adev, n_clusters=a.n_samples / a.m)[0])
+    ok = np.flatnonzero(a.n_samples / a.m >= 10)
+    i_model = int(ok[np.argmin(I.model_deviation(a.tau_s[ok], *coef))])
+    return np.array(floors), I.floor_rule_draws(a, coef, i_model)
+
+
 @pytest.mark.parametrize("model", sorted(MODELS))
 def test_floor_rule_draws_match_full_rate_monte_carlo(model):
     coef = MODELS[model]
-    rng = np.random.default_rng(2026 + len(model))
-    floors = []
-    for _ in range(160):
-        a = _record(coef, rng)
-        floors.append(ief.bias_instability_floor(a.adev, n_clusters=a.n_samples / a.m)[0])
-    floors = np.array(floors)
-    ok = np.flatnonzero(a.n_samples / a.m >= 10)
-    i_model = int(ok[np.argmin(I.model_deviation(a.tau_s[ok], *coef))])
-    d = I.floor_rule_draws(a, coef, i_model)
+    floors, d = _floors_and_draws(coef, np.random.default_rng(2026 + len(model)), 160)
     se = floors.std(ddof=1) / math.sqrt(floors.size)
     assert abs(d.mean() - floors.mean()) <= 3.5 * se + 0.01 * floors.mean(), \
         (d.mean(), floors.mean(), se)
@@ -98,16 +102,8 @@ def _symmetric(value, d, p=0.95):            # mutation: ±t_50·u, u the draws'
 def test_floor_interval_holds_the_truth_on_each_side_and_is_not_over_wide():
     coef = MODELS["bench"]
     B = coef[2]
-    rng = np.random.default_rng(4)
     n = 1000
-    floors = []
-    for _ in range(n):
-        a = _record(coef, rng)
-        floors.append(ief.bias_instability_floor(a.adev, n_clusters=a.n_samples / a.m)[0])
-    floors = np.array(floors)
-    ok = np.flatnonzero(a.n_samples / a.m >= 10)
-    i_model = int(ok[np.argmin(I.model_deviation(a.tau_s[ok], *coef))])
-    d = I.floor_rule_draws(a, coef, i_model)
+    floors, d = _floors_and_draws(coef, np.random.default_rng(4), n)
     # each record's value under the true model: its reading less the rule's bias E*[B*] − B
     values = floors - (d.mean() - B)
     # the brute-force readings' own central 95 % range (outside the estimator)
