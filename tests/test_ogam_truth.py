@@ -54,20 +54,24 @@ def test_u_of_k_covers_k_as_mounted_on_the_built_in_7_1():
     assert inst.tilt_deg > 0
     truth = k_as_mounted_truth(inst, proto.scale_factor.rate_dps)
     own = truth / math.cos(math.radians(inst.tilt_deg))
-    z, hits, hits_own = [], [], []
+    z, z_own, hits = [], [], []
     for seed in range(24_100, 24_140):
         r = run_session(proto, bench, seed=seed)
         sf = scale_factor(r.readings.assign(line=np.arange(len(r.readings)) + 2))
         b = scale_factor_budget(sf.table["K_i_counts_per_deg"], sf.table["table_deg"],
                                 proto.annex_a.table_mpe_arcsec)
         z.append((sf.value - truth) / b.u_c)
+        z_own.append((sf.value - own) / b.u_c)
         hits.append(abs(sf.value - truth) <= b.U)
-        hits_own.append(abs(sf.value - own) <= b.U)
     v = coverage_verdict(hits, z)
     assert v["coverage"] >= 0.90, v
     assert v["sd_z"] >= 0.3, v                      # not over-wide
-    # the instrument's own K is what U does not cover (the reason K is stated as mounted)
-    assert np.mean(hits_own) < 0.5
+    # the instrument's own K is what the value is not centred on (the reason K is stated as
+    # mounted): the value sits about two standard uncertainties below it (z −2.0 on seeds
+    # 24100–24139), centred on K as mounted (z +0.08).
+    # (A coverage count of the own K depends on U's table line, which holds the table at its
+    # MPE bound and so is wide on this bench's good table: the own K fell inside U in 20 of 40.)
+    assert np.mean(z_own) < -1.0 and abs(np.mean(z)) < 0.5, (np.mean(z_own), np.mean(z))
 
 
 def test_certificate_states_k_as_mounted(tmp_path):
