@@ -35,6 +35,13 @@ def test_every_item_has_a_budget_and_monte_carlo_agrees(report):
         mc, _ = monte_carlo_check(b, 200_000, seed=1)
         half = (mc.high - mc.low) / 2
         U = b.k * b.u_c     # the GUM's U (B_s, R are stated by their χ² interval instead)
+        if name == "scale_factor":
+            # K's table line holds the table at its MPE bound (one periodic error, arcsine:
+            # item_uncertainty.scale_factor_table_line) and dominates u_c; k = 1.96 on such a
+            # u_c overstates the 95 % half-width JCGM 101 finds (an arcsine alone: 0.997 A
+            # against 1.96·A/√2 = 1.386 A). The stated U is conservative, not more than that.
+            assert 1.0 <= U / half <= 1.39, (name, half, U)
+            continue
         assert half / U == pytest.approx(1.0, abs=0.12), (name, half, U)
         assert mc.value == pytest.approx(b.value, abs=0.05 * U)
 
