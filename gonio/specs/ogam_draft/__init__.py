@@ -14,7 +14,8 @@ virtual bench served as those instruments (``SPEC.serve``, ``gonio bench serve``
 What only this draft uses lives here too: :mod:`.protocol` (its protocol model and loader,
 ``SPEC.load_protocol``), :mod:`.readings` (its readings file), :mod:`.bench` (the goniometer
 on a precision rotary table), :mod:`.reduce` and :mod:`.override` (stream → readings),
-:mod:`.tilt`, :mod:`.coupling` and :mod:`.compensation` (its physics), :mod:`.budget_extra`,
+:mod:`.tilt`, :mod:`.coupling` and :mod:`.compensation` (its physics), :mod:`.table_periodic`
+(one periodic table error's worst order, for the budgets' table lines), :mod:`.budget_extra`,
 :mod:`.equal_division`, :mod:`.tilt_estimate` and :mod:`.zero_stability_noise`. The
 clause-by-clause reading is ``docs/draft-readings.md``.
 """

@@ -32,6 +32,7 @@ from gonio.specs.ogam_draft.coupling import coupling_terms
 from gonio.physics.earth import earth_rate_split
 from gonio.physics.kinematics import Timeline
 from gonio.specs.ogam_draft.protocol import Protocol
+from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
 from gonio.units import ARCSEC_PER_DEG, dps_to_arcsec_s
 
 __all__ = ["ExtraComponent", "compensation_component", "SessionCoupling", "session_coupling",
@@ -615,7 +616,8 @@ def table_harmonic_line_u(theta_deg: float, stops_deg, mpe_arcsec: float,
     :func:`table_error_coefficients`, E_i's table error is a·Im(e^{iφ} Σ c_p e^{ihp}), so
     u² = (MPE²/3)·|Σ c_p e^{ihp}|²/2 at the worst order h (the largest). Returned:
     ``u_arcsec``, ``order`` (that h) and ``half_width_at_bound_arcsec`` (a = MPE: the
-    error is arcsine with that half-width, MPE·|Σ c_p e^{ihp}|).
+    error is arcsine with that half-width, MPE·|Σ c_p e^{ihp}|). The search over orders is
+    :mod:`gonio.specs.ogam_draft.table_periodic`'s (shared with K and K_l).
 
     At 360° with the built-in 7.1 stops the worst order is 3 (u 0.125″ for MPE 0.1″, the
     standard's reading 0.149″); at 30° it is 6 (0.082″ against 0.075″): the harmonic
@@ -627,13 +629,12 @@ def table_harmonic_line_u(theta_deg: float, stops_deg, mpe_arcsec: float,
     [(0.0816, 6), (0.1252, 3)]
     """
     c = table_error_coefficients(theta_deg, stops_deg)
-    pos = np.radians(np.array(list(c.keys()), dtype=float))
+    pos_deg = np.array(list(c.keys()), dtype=float)
     cv = np.array(list(c.values()), dtype=float)
-    h = np.arange(1, int(max_order) + 1)
-    g = np.abs(np.exp(1j * np.outer(h, pos)) @ cv)          # |Σ c_p e^{ihp}| per order
-    j = int(np.argmax(g >= g.max() * (1.0 - 1e-9)))      # the lowest of equal orders
-    return {"u_arcsec": float(mpe_arcsec * g[j] / math.sqrt(6.0)), "order": int(h[j]),
-            "half_width_at_bound_arcsec": float(mpe_arcsec * g[j])}
+    g = np.abs(periodic_response(pos_deg, max_order) @ cv)   # |Σ c_p e^{ihp}| per order
+    order = worst_order(g)
+    return {"u_arcsec": float(mpe_arcsec * g[order - 1] / math.sqrt(6.0)), "order": order,
+            "half_width_at_bound_arcsec": float(mpe_arcsec * g[order - 1])}
 
 
 def budget_extra_components(readings: pd.DataFrame, protocol: Protocol, latitude_deg: float,

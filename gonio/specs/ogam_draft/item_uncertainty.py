@@ -43,6 +43,7 @@ from typing import Sequence
 import numpy as np
 
 from gonio.result.statement import coverage_k, signed_text
+from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
 from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, from_u, monte_carlo,
                          propagate, type_b, validate_gum)
@@ -50,12 +51,14 @@ from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                random_walk_stdev_dof, stdev_u)
 
-__all__ = ["Component", "ItemUncertainty", "ScaleFactorTableLine", "scale_factor_table_line", "ChamberLine", "chamber_temperature_line",
-           "scale_factor_budget", "nonlinearity_budget",
-           "nonlinearity_corrected_budget", "round_noise", "RoundNoise",
-           "zero_stability_budget", "zero_stability_model_budget", "angle_deviation_budget", "repeatability_budget",
-           "consistency_budget", "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo", "COVERAGE_PROBABILITY",
-           "COUNT_QUANTUM_U"]
+__all__ = [
+    "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U",
+    "ScaleFactorTableLine", "scale_factor_table_line", "ChamberLine", "chamber_temperature_line",
+    "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
+    "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
+    "angle_deviation_budget", "repeatability_budget", "consistency_budget",
+    "selection_corrected_budget", "monte_carlo_check", "monte_carlo_item", "ItemMonteCarlo",
+]
 
 #: Coverage probability of every stated U (JCGM 100 6.2.2, 95 %).
 COVERAGE_PROBABILITY = 0.95
@@ -334,7 +337,8 @@ def scale_factor_table_line(theta_deg, table_mpe_arcsec: float,
       ``max_order``), phase φ uniform: δK/K = a·Im(e^{iφ} Σ (e^{ihθ_k} − 1)/θ_k)/n, arcsine
       with half-width A = MPE·|Σ (e^{ihθ_k} − 1)/θ_k|/n at the worst order h, u = A/√2
       (JCGM 101 6.4.6). A curve Σ a_h sin(h x + φ_h) with Σ|a_h| ≤ MPE moves K by at most
-      that A, so the line holds whatever the table's shape within its MPE.
+      that A, so the line holds whatever the table's shape within its MPE. The search over
+      orders is :mod:`gonio.specs.ogam_draft.table_periodic`'s (shared with K_l and E).
 
     The certified line is the larger u of the two (``certified``). With the draft's stops
     60°…360° and MPE 0.1″ the worst order is 3 and the harmonic reading is 3.1 times the
@@ -350,13 +354,11 @@ def scale_factor_table_line(theta_deg, table_mpe_arcsec: float,
     n = th.size
     mpe = float(table_mpe_arcsec)
     u_std = (mpe / math.sqrt(3.0)) * float(np.sqrt(np.sum(1.0 / th ** 2))) / n
-    h = np.arange(1, int(max_order) + 1)
-    pos = np.radians(th / ARCSEC_PER_DEG)
-    g = np.abs((np.exp(1j * np.outer(h, pos)) - 1.0) @ (1.0 / th))
-    j = int(np.argmax(g >= g.max() * (1.0 - 1e-9)))      # the lowest of equal orders
-    hw = mpe * float(g[j]) / n
+    g = np.abs((periodic_response(th / ARCSEC_PER_DEG, max_order) - 1.0) @ (1.0 / th))
+    order = worst_order(g)
+    hw = mpe * float(g[order - 1]) / n
     u_h = hw / math.sqrt(2.0)
-    return ScaleFactorTableLine(u_std, u_h, hw, int(h[j]),
+    return ScaleFactorTableLine(u_std, u_h, hw, order,
                                 "harmonic" if u_h > u_std else "standard")
 
 
@@ -507,7 +509,6 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   source=f"scatter of the {n} rounds' K_i, s/√n"),
                            "scatter of K_i", False, "7.1"))
     tl = scale_factor_table_line(th, table_mpe_arcsec)
-    u_std = float(np.sqrt(np.sum(u_tab ** 2))) / n
     kbar = abs(float(np.mean(k_i)))
     both = (f"the standard's reading (independent stops, rectangular) u = "
             f"{tl.u_rel_standard / PPM:.3g} ppm; one periodic error at the bound, worst order "
@@ -519,6 +520,8 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                            "table angle (one periodic error, worst order)", True,
                            "A.4.1 applied to 7.1"))
     else:
+        # the standard's reading with each round's own K_i: (1/n)√Σ(K_i u(θ)/θ_i)²
+        u_std = float(np.sqrt(np.sum(u_tab ** 2))) / n
         lines.append(_Line(_as_dist(from_u("P_K", 0.0, u_std, type="B",
                                            source=f"table angle error at the stops, MPE "
                                                   f"±{table_mpe_arcsec:g}″ rectangular, "
@@ -717,7 +720,8 @@ def nonlinearity_table_order(theta_deg, table_mpe_arcsec: float,
     at most a·|v_k − v_j| over the phase, so the worst order is the one with the largest
     diameter max_{k,j} |v_k − v_j| of the v_k (not K's order, which maximises |Σ v_k|). A
     curve Σ a_h sin(h x + φ_h) with Σ|a_h| ≤ MPE adds at most MPE times that diameter
-    (triangle inequality), so the order bounds every table shape within its MPE.
+    (triangle inequality), so the order bounds every table shape within its MPE. The search
+    over orders is :mod:`gonio.specs.ogam_draft.table_periodic`'s (shared with K and E).
 
     The draft's stops 60°…360°, MPE 0.1″: order 3 puts the 60° stop at −2a/θ and the 360°
     stop at 0: half-range 0.1/216000 = 0.463 ppm.
@@ -727,11 +731,10 @@ def nonlinearity_table_order(theta_deg, table_mpe_arcsec: float,
     (3, 0.463)
     """
     th = np.asarray(theta_deg, dtype=float) * ARCSEC_PER_DEG
-    h = np.arange(1, int(max_order) + 1)
-    v = (np.exp(1j * np.outer(h, np.radians(th / ARCSEC_PER_DEG))) - 1.0) / th
+    v = (periodic_response(th / ARCSEC_PER_DEG, max_order) - 1.0) / th
     diam = np.abs(v[:, :, None] - v[:, None, :]).max(axis=(1, 2))
-    j = int(np.argmax(diam >= diam.max() * (1.0 - 1e-9)))     # the lowest of equal orders
-    return RangeTableOrder(int(h[j]), 0.5 * float(table_mpe_arcsec) * float(diam[j]))
+    order = worst_order(diam)
+    return RangeTableOrder(order, 0.5 * float(table_mpe_arcsec) * float(diam[order - 1]))
 
 
 #: K_l's table readings (:func:`nonlinearity_corrected_budget`): the standard's (independent
