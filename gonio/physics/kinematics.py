@@ -174,27 +174,49 @@ class Timeline:
         t, i, tau = self._locate(t)
         if i is None:
             return np.full_like(t, self.start_angle_deg)
-        _, th0, sg, dist, vpk, acc, tacc, dur = self._arr()
-        a, ta, T, v, D = acc[i], tacc[i], dur[i], vpk[i], dist[i]
-        up = 0.5 * a * tau * tau
-        cruise = 0.5 * a * ta * ta + v * (tau - ta)
-        down = D - 0.5 * a * (T - tau) ** 2
-        s = np.where(tau < ta, up, np.where(tau <= T - ta, cruise, down))
-        s = np.where(D == 0.0, 0.0, s)
-        before = t < self._arr()[0][0]
-        s = np.where(before, 0.0, s)
-        return th0[i] + sg[i] * s
+        return self._angle(self._segment(t, i, tau), tau)
 
     def rate_dps(self, t) -> np.ndarray:
         """Table rate at times ``t`` (s), °/s (closed form)."""
         t, i, tau = self._locate(t)
         if i is None:
             return np.zeros_like(t)
-        _, th0, sg, dist, vpk, acc, tacc, dur = self._arr()
-        a, ta, T, v, D = acc[i], tacc[i], dur[i], vpk[i], dist[i]
-        r = np.where(tau < ta, a * tau, np.where(tau <= T - ta, v, a * (T - tau)))
-        r = np.where((D == 0.0) | (t < self._arr()[0][0]) | (t > self.end_s), 0.0, r)
-        return sg[i] * r
+        return self._rate(self._segment(t, i, tau), tau)
+
+    def angle_rate(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """``(angle_deg(t), rate_dps(t))``: the same values, each time's segment and
+        phase (accelerating, cruising, braking) found once for both."""
+        t, i, tau = self._locate(t)
+        if i is None:
+            return np.full_like(t, self.start_angle_deg), np.zeros_like(t)
+        seg = self._segment(t, i, tau)
+        return self._angle(seg, tau), self._rate(seg, tau)
+
+    def _segment(self, t, i, tau) -> dict:
+        """The segment of each time (its start angle, sign, acceleration a, acceleration
+        time ta, duration T, peak rate v, distance D) and the phase masks."""
+        t0, th0, sg, dist, vpk, acc, tacc, dur = self._arr()
+        a, ta, T = acc[i], tacc[i], dur[i]
+        D = dist[i]
+        return {"th0": th0[i], "sg": sg[i], "a": a, "ta": ta, "T": T, "v": vpk[i], "D": D,
+                "nil": D == 0.0, "up": tau < ta, "cruise": tau <= T - ta,
+                "before": t < t0[0], "t": t}
+
+    def _angle(self, g: dict, tau) -> np.ndarray:
+        a, ta, T, v, D = g["a"], g["ta"], g["T"], g["v"], g["D"]
+        up = 0.5 * a * tau * tau
+        cruise = 0.5 * a * ta * ta + v * (tau - ta)
+        down = D - 0.5 * a * (T - tau) ** 2
+        s = np.where(g["up"], up, np.where(g["cruise"], cruise, down))
+        s = np.where(g["nil"], 0.0, s)
+        s = np.where(g["before"], 0.0, s)
+        return g["th0"] + g["sg"] * s
+
+    def _rate(self, g: dict, tau) -> np.ndarray:
+        a, T, v = g["a"], g["T"], g["v"]
+        r = np.where(g["up"], a * tau, np.where(g["cruise"], v, a * (T - tau)))
+        r = np.where(g["nil"] | g["before"] | (g["t"] > self.end_s), 0.0, r)
+        return g["sg"] * r
 
 
 def sensing_axis_basis(axis_enu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

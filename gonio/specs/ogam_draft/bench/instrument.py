@@ -242,17 +242,30 @@ class Integrator:
         earth = geom.earth_dps(theta_u)
         sensed = rate_u * geom.cos_psi + earth
         eps = rate_nonlinearity(sensed, inst)
-        t_on = t + self.warm_up_s
-        bias = dph_to_dps(inst.bias_dph + inst.warmup_drift_dph * np.exp(-t_on / inst.warmup_tau_s))
+        # bias + drift·exp(−t_on/τ), in place on one array: t_on/(−τ) is (−t_on)/τ bit for bit
+        # (IEEE division is symmetric in sign), and each step is the same operation on the
+        # same operands as the expression, so the values are those of the expression
+        x = t + self.warm_up_s
+        x /= -inst.warmup_tau_s
+        np.exp(x, out=x)
+        x *= inst.warmup_drift_dph
+        x += inst.bias_dph
+        bias = dph_to_dps(x)
         if self.integration == "rectangle":
-            det = np.repeat(sensed * (1.0 + eps), rep) + bias
+            det = np.repeat(sensed * (1.0 + eps), rep)
         else:
-            det = np.repeat(earth + sensed * eps, rep) + bias
+            det = np.repeat(earth + sensed * eps, rep)
+        det += bias
         return DeterministicRates(self.integration, det, deterministic_signature(inst), geom.cos_psi)
 
-    def integrate(self, det: "DeterministicRates", theta_deg: np.ndarray) -> np.ndarray:
+    def integrate(self, det: "DeterministicRates", theta_deg: np.ndarray,
+                  at: np.ndarray | None = None) -> np.ndarray:
         """Instrument angle from :meth:`rates` (same instrument but for its random terms)
-        and the table angle on every sample; adds this instrument's noise."""
+        and the table angle on every sample; adds this instrument's noise.
+
+        ``at``: indices into the chunk; only the angles there are returned (the state, the
+        noise drawn and the values are those of the whole chunk's angle at those indices,
+        bit for bit: the running sum is taken over every sample either way)."""
         if det.signature != deterministic_signature(self.inst):
             raise ValueError("rates() of another instrument")
         n = theta_deg.size
@@ -266,7 +279,7 @@ class Integrator:
             self.angle = float(ang[-1])
             self.prev = (0.0, float(theta_deg[-1]), float(r[-1]))
             self.new_block = False
-            return ang
+            return ang if at is None else ang[at]
         # RLG: exact θ cos ψ, trapezoid for the smooth rest; white noise enters as
         # angle increments (the exact integral of white rate over a sample).
         smooth = det.values
@@ -277,14 +290,31 @@ class Integrator:
             th_prev = theta_deg[0] if self.new_block else self.prev[1]
         key = (float(sm_prev), self.dt)
         if det.trapezoid is None or det.trapezoid[0] != key:
-            sm_all = np.concatenate(([sm_prev], smooth))
-            trap = 0.5 * (sm_all[1:] + sm_all[:-1]) * self.dt
+            # 0.5·(s_k + s_{k−1})·dt with s_{−1} the previous chunk's last value
+            trap = np.empty_like(smooth)
+            trap[0] = smooth[0] + sm_prev
+            np.add(smooth[1:], smooth[:-1], out=trap[1:])
+            trap *= 0.5
+            trap *= self.dt
             det.trapezoid = (key, trap)      # shared with instruments that differ in noise only
-        inc = det.trapezoid[1].copy() if noise is None else det.trapezoid[1] + noise * self.dt
+        if noise is None:
+            inc = det.trapezoid[1] if self.prev is not None else det.trapezoid[1].copy()
+        else:
+            inc = noise                       # the noise drawn for this chunk alone
+            inc *= self.dt
+            inc += det.trapezoid[1]
         if self.prev is None:
             inc[0] = 0.0
-        ang = self.angle + det.cos_psi * (theta_deg - th_prev) + np.cumsum(inc)
-        self.angle = float(ang[-1])
+        run = np.cumsum(inc)
+        if at is None:
+            ang = self.angle + det.cos_psi * (theta_deg - th_prev) + run
+            self.angle = float(ang[-1])
+        else:
+            # the same expression at the indices asked and the last sample only
+            ix = np.append(np.asarray(at, dtype=np.int64), theta_deg.size - 1)
+            ang = self.angle + det.cos_psi * (theta_deg[ix] - th_prev) + run[ix]
+            self.angle = float(ang[-1])
+            ang = ang[:-1]
         self.prev = (0.0, float(theta_deg[-1]), float(smooth[-1]))
         self.new_block = False
         return ang

@@ -271,7 +271,7 @@ def _motion(blk: Block, t: np.ndarray):
     idx = np.flatnonzero(start)
     rep = np.diff(np.append(idx, n))
     te = t[idx]
-    return blk.timeline.angle_deg(te), blk.timeline.rate_dps(te), rep
+    return (*blk.timeline.angle_rate(te), rep)
 
 
 @dataclass
@@ -376,9 +376,11 @@ def _simulate_many(blocks: list[Block], protocol: Protocol, variants: list[_Vari
                 sig = deterministic_signature(v.bench.instrument)
                 if sig not in dets:
                     dets[sig] = integ.rates(t, theta_u, rate_u, rep, geom)
-                phi = integ.integrate(dets[sig], theta)
+                # every sample's angle only where a record or stream takes them all
+                whole = v.stream is not None or blk.label in v.capture
+                phi = integ.integrate(dets[sig], theta, at=None if whole else sel - a)
                 inst = v.bench.instrument
-                for kk, ph in zip(sel.tolist(), phi[sel - a].tolist()):
+                for kk, ph in zip(sel.tolist(), (phi[sel - a] if whole else phi).tolist()):
                     phi_at[m][kk] = ph
                 if blk.k_static and a <= blk.k_static[1] < b and measured:
                     k0, k1 = blk.k_static
