@@ -43,3 +43,33 @@ def test_one_pass_over_two_instruments_equals_two_separate_passes():
             np.testing.assert_array_equal(x.true_deg, y.true_deg)
             assert x.comp_counts_s == y.comp_counts_s
         assert not np.array_equal(both[0].counts, both[1].counts)   # the noise is there
+
+
+def test_readings_from_the_needed_samples_equal_those_from_every_sample():
+    # Without a stream the integrator gives the angle only at the samples the readings need;
+    # a stream makes it build every sample's angle (the whole-chunk expression). The readings,
+    # the compensation and the captured record must be the same bit for bit (RLG and FOG).
+    # Unquantised counts (K·φ as floats), so that any change of an angle shows.
+    p = validation_protocol()
+    for name in ("rlg", "fog"):
+        b = replace(load_bench(name), sample_rate_hz=20.0)
+        b = replace(b, instrument=replace(b.instrument, quantisation=False))
+        blocks = plan_session(p, b, np.random.default_rng(2))
+        seen = []
+        every = _simulate_many(blocks, p, [_Variant(b, np.random.default_rng(4), dither_key=3,
+                                                    stream=lambda t, c, tab: seen.append(t.size))])[0]
+        needed = _simulate_many(blocks, p, [_Variant(b, np.random.default_rng(4), dither_key=3)])[0]
+        assert sum(seen) == sum(blk.k_end - blk.k_start for blk in blocks)
+        np.testing.assert_array_equal(every.counts, needed.counts)
+        np.testing.assert_array_equal(every.true_deg, needed.true_deg)
+        assert every.comp_counts_s == needed.comp_counts_s
+
+
+def test_timeline_angle_rate_equals_angle_and_rate():
+    p = validation_protocol()
+    b = replace(load_bench("rlg"), sample_rate_hz=50.0)
+    for blk in plan_session(p, b, np.random.default_rng(5)):
+        t = np.arange(blk.k_start - 3, blk.k_end + 3) / b.sample_rate_hz   # edges included
+        th, r = blk.timeline.angle_rate(t)
+        np.testing.assert_array_equal(th, blk.timeline.angle_deg(t))
+        np.testing.assert_array_equal(r, blk.timeline.rate_dps(t))
