@@ -1,11 +1,13 @@
 """The optical DCC states K's tilt correction where the certificate and summary.txt do: a
 protocol with [tilt_estimate] gives the scale factor's dcc:quantity a description with the
 measured ψ and α (their U95), the 7.1 mean uncorrected and the K_te line; the document stays
-valid against the DCC 3.3.0 schema; without [tilt_estimate] K has no such description."""
+valid against the DCC 3.3.0 schema; without [tilt_estimate] K has no such description (only,
+where K's k comes from its budget's combined distribution, the sentence that says so)."""
 
 from __future__ import annotations
 
 import html
+import json
 import re
 from pathlib import Path
 
@@ -59,7 +61,13 @@ def test_the_dcc_states_the_tilt_correction(tmp_path, dcc_schema):
     assert "measured in situ at 8 rest positions" in page
 
 
-def test_without_tilt_estimate_k_has_no_description(tmp_path):
+def test_without_tilt_estimate_k_has_no_tilt_description(tmp_path):
     cal = _run(tmp_path, tilt=False)
-    assert _k_description(cal) == []
+    descs = _k_description(cal)
+    assert not any("measured tilt" in d or "K_te" in d for d in descs), descs
+    # the one description K may carry says where its k comes from, as results.json does
+    src = json.loads((cal / "results.json").read_text("utf-8"))[
+        "items"]["scale_factor"]["uncertainty"]["k_source"]
+    assert len(descs) == (src == "jcgm101-convolution")
+    assert all("JCGM 101" in d for d in descs)
     assert "measured in situ" not in (cal / "certificate.html").read_text("utf-8")

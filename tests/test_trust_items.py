@@ -29,19 +29,15 @@ def test_every_item_has_a_budget_and_monte_carlo_agrees(report):
     assert set(iu) == {"scale_factor", "scale_factor_nonlinearity", "zero_stability",
                        "angle_deviation", "repeatability", "rate_consistency",
                        "pointing_consistency"}
+    assert iu["scale_factor"].k_source == "jcgm101-convolution"
     for name, b in iu.items():
         if b.model is None:           # E: the Annex A budget's own JCGM 101 check (--monte-carlo)
             continue
         mc, _ = monte_carlo_check(b, 200_000, seed=1)
         half = (mc.high - mc.low) / 2
-        U = b.k * b.u_c     # the GUM's U (B_s, R are stated by their χ² interval instead)
-        if name == "scale_factor":
-            # K's table line holds the table at its MPE bound (one periodic error, arcsine:
-            # item_uncertainty.scale_factor_table_line) and dominates u_c; k = 1.96 on such a
-            # u_c overstates the 95 % half-width JCGM 101 finds (an arcsine alone: 0.997 A
-            # against 1.96·A/√2 = 1.386 A). The stated U is conservative, not more than that.
-            assert 1.0 <= U / half <= 1.39, (name, half, U)
-            continue
+        # the budget's U (B_s, R are stated by their χ² interval instead); K's, whose arcsine
+        # table line at the MPE bound dominates u_c, has k from its combined distribution
+        U = b.k * b.u_c
         assert half / U == pytest.approx(1.0, abs=0.12), (name, half, U)
         assert mc.value == pytest.approx(b.value, abs=0.05 * U)
 

@@ -26,6 +26,13 @@ Monte Carlo (:mod:`uncertainty.montecarlo`)
     :func:`numerical_tolerance`       δ from ndig digits (JCGM 101 7.9.2)
     :func:`validate_gum`              GUM vs MC, d_low, d_high ≤ δ (JCGM 101 8)
 
+Coverage factor from the combined distribution (:mod:`uncertainty.combined`)
+    :func:`needs_combined_k`          the rule: non-normal lines carry > 1/4 of u_c²
+                                      (JCGM 101 5.7, JCGM 100 G.2.3)
+    :func:`combined_coverage_factor`  k_p = U_p/u_c of an additive model's JCGM 101
+                                      distribution (the convolution of its lines)
+    :func:`non_normal_share`          the share of u_c² of the lines not normal or t
+
 Budget tables (:mod:`uncertainty.table`)
     :func:`budget_table`              DataFrame: symbol … contribution, dof
     :func:`render_text`, :func:`render_markdown`, :func:`render_html`
@@ -39,6 +46,8 @@ This package never imports ``gonio``.
 (3.0, 0.5)
 """
 
+from uncertainty.combined import (combined_coverage_factor, needs_combined_k,
+                                  non_normal_share)
 from uncertainty.distributions import DISTRIBUTIONS, distribution
 from uncertainty.montecarlo import (MonteCarloResult, ValidationResult, adaptive_monte_carlo,
                                     coverage_interval, monte_carlo, numerical_tolerance,
@@ -56,5 +65,6 @@ __all__ = [
     "welch_satterthwaite", "coverage_factor", "compile_model",
     "MonteCarloResult", "ValidationResult", "monte_carlo", "adaptive_monte_carlo",
     "coverage_interval", "numerical_tolerance", "validate_gum", "sample_inputs",
+    "combined_coverage_factor", "needs_combined_k", "non_normal_share",
     "COLUMNS", "budget_table", "render_text", "render_markdown", "render_html",
 ]

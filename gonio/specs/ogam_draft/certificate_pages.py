@@ -42,10 +42,10 @@ from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
 from gonio.result.statement import signed_text
-from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, conformity_for,
-                                           detail, e_budget, followed, interval_cell, item_names,
-                                           item_path, k_tilt_note, method_rows, reading_note,
-                                           segments,
+from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
+                                           conformity_for, detail, e_budget, followed,
+                                           interval_cell, item_names, item_path, k_tilt_note,
+                                           method_rows, reading_note, segments,
                                            specification_text, stated_item, u_cell)
 
 
@@ -139,6 +139,9 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         add("p", [L["no_E_U"]], "U")
     if any(stated_item(res, n)["interval"] is not None for n in item_names(res)):
         add("p", [L["k_chi_square"]])          # B_s, R: stated by their χ² interval alone
+    kc = combined_k_note(res, L)               # K: k of its budget's combined distribution
+    if kc:
+        add("p", [kc])
     screening_notes(res, L, add)
     if detail(res, "scale_factor", "measurand"):
         sf = res["items"]["scale_factor"]["details"]

@@ -26,8 +26,8 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               list_quantity, measurement_result, new_document,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.phrases import LABELS
-from gonio.specs.ogam_draft.stated import (conformity_for, e_budget, followed, item_names,
-                                           item_path, item_uncertainty, k_tilt_note,
+from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_budget, followed,
+                                           item_names, item_path, item_uncertainty, k_tilt_note,
                                            method_rows, reading_note, specification_text,
                                            stated_item)
 
@@ -141,8 +141,11 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, L[name], s["value"], item["unit"],
                      description=LABELS["below_zero"]["en"], **kw)
         else:
+            desc = [_k_tilt_text(res, L) if name == "scale_factor" else None]
+            if "k" in kw:   # a k of the item's combined distribution (JCGM 101): say so
+                desc.append(combined_k_note(res, L, only=name))
             quantity(data, L[name], s["value"], item["unit"],
-                     description=_k_tilt_text(res, L) if name == "scale_factor" else None, **kw)
+                     description="; ".join(d for d in desc if d) or None, **kw)
         _detail_lists(data, res, name)
     return root
 

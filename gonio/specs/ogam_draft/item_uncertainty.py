@@ -26,7 +26,10 @@ budget to each of the seven items, one documented function each:
 
 Every budget is a GUM evaluation (JCGM 100 5, :func:`uncertainty.propagate`) of an
 additive or linear model; the coverage factor is t_95 of the Welch–Satterthwaite ν_eff
-(JCGM 100 G.4) unless the laboratory fixes k (``k=``). :meth:`ItemUncertainty.to_dict`
+(JCGM 100 G.4), or — where lines that are not normal carry more than 1/4 of u_c² (K's
+arcsine table line at the MPE bound) — the 95 % half-width of the budget's combined
+distribution over u_c (JCGM 101; ``k_source`` "jcgm101-convolution"), unless the
+laboratory fixes k (``k=``): one rule, :func:`budget_k`. :meth:`ItemUncertainty.to_dict`
 is the ``results.json`` form ``<item>.uncertainty``. The JCGM 101 Monte Carlo check is
 :func:`monte_carlo_check`.
 
@@ -45,14 +48,15 @@ import numpy as np
 from gonio.result.statement import coverage_k, signed_text
 from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
 from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
-from uncertainty import (GumResult, MonteCarloResult, from_u, monte_carlo,
-                         propagate, type_b, validate_gum)
+from uncertainty import (GumResult, MonteCarloResult, combined_coverage_factor, from_u,
+                         monte_carlo, needs_combined_k, propagate, type_b, validate_gum)
 from uncertainty.propagation import LinearModel
 from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
                                random_walk_stdev_dof, stdev_u)
 
 __all__ = [
-    "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U",
+    "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U", "budget_k",
+    "K_SOURCE_COMBINED", "COMBINED_SEED",
     "ScaleFactorTableLine", "scale_factor_table_line", "ChamberLine", "chamber_temperature_line",
     "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
     "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
@@ -62,6 +66,10 @@ __all__ = [
 
 #: Coverage probability of every stated U (JCGM 100 6.2.2, 95 %).
 COVERAGE_PROBABILITY = 0.95
+#: ``k_source`` of a k from the budget's combined distribution (:func:`budget_k`).
+K_SOURCE_COMBINED = "jcgm101-convolution"
+#: Seed of that distribution's Monte Carlo (fixed: the same budget gives the same k).
+COMBINED_SEED = 20261129
 #: u of a pulse count C = floor(N(t_r)) − floor(N(t_z)): two floored readings, triangular
 #: of half-width 1 count (JCGM 100 4.3.9), u = 1/√6 counts.
 COUNT_QUANTUM_U = 1.0 / math.sqrt(6.0)
@@ -140,7 +148,9 @@ class ItemUncertainty:
         d = {"components": [c.to_dict() for c in self.components],
              "u_c": float(self.u_c), "U": float(self.U),
              "k": None if by_iv else float(self.k),
-             "nu_eff": None if not math.isfinite(self.nu_eff) else float(self.nu_eff),
+             # ν_eff only where k is its t-factor (a k of the combined distribution has none)
+             "nu_eff": None if (not math.isfinite(self.nu_eff)
+                                or self.k_source == K_SOURCE_COMBINED) else float(self.nu_eff),
              "coverage_probability": COVERAGE_PROBABILITY, "unit": self.unit,
              "k_source": "chi-square" if by_iv else self.k_source}
         if self.interval is not None:
@@ -160,10 +170,36 @@ class _Line:
     clause: str = ""
 
 
-def _k(nu_eff: float, k: float | None) -> tuple[float, str]:
+def budget_k(nu_eff: float, k: float | None, inputs: Sequence = (), coeffs: Sequence = (),
+             correlation=None) -> tuple[float, str]:
+    """The coverage factor of an additive item budget and where it comes from (its
+    ``k_source``), one rule for every item:
+
+    - ``k`` given: fixed by the laboratory (``"fixed by laboratory"``);
+    - the budget's lines that are not normal (rectangular, triangular, arcsine, products)
+      carry more than 1/4 of u_c² (:func:`uncertainty.needs_combined_k`, JCGM 101 5.7,
+      JCGM 100 G.2.3): k = U_p/u_c of the budget's combined distribution — the convolution
+      of its lines, each in its own distribution, the Type A lines as scaled-and-shifted t
+      with their ν — by a JCGM 101 Monte Carlo of fixed M and seed
+      (:func:`uncertainty.combined_coverage_factor`; ``"jcgm101-convolution"``). K's table
+      line at the MPE bound is such a line (arcsine, :func:`scale_factor_table_line`);
+    - otherwise t_95 of the Welch–Satterthwaite ν_eff as stated (JCGM 100 G.4: its integer
+      part, ∞ above 1000; NaN, WS not valid: the normal's; ``"welch-satterthwaite"``).
+
+    >>> from uncertainty import type_b, from_u
+    >>> k, src = budget_k(5.0, None, [from_u("s", 0.0, 1.0, dof=5)], [1.0])
+    >>> round(k, 3), src
+    (2.571, 'welch-satterthwaite')
+    >>> k, src = budget_k(math.inf, None, [type_b("P", 0.0, 1.0, "arcsine")], [1.0])
+    >>> round(k, 2), src
+    (1.41, 'jcgm101-convolution')
+    """
     if k is not None:
         return float(k), "fixed by laboratory"
-    # k of the ν_eff as stated (integer part, ∞ above 1000; NaN: WS not valid → normal)
+    if inputs and needs_combined_k(inputs, coeffs, correlation):
+        return (combined_coverage_factor(inputs, coeffs, p=COVERAGE_PROBABILITY,
+                                         seed=COMBINED_SEED, correlation=correlation),
+                K_SOURCE_COMBINED)
     return coverage_k(nu_eff, COVERAGE_PROBABILITY), "welch-satterthwaite"
 
 
@@ -177,7 +213,7 @@ def _budget(item: str, unit: str, value: float, lines: Sequence[_Line], *,
     model = LinearModel(float(value), tuple(float(c) for c in cs),
                         tuple(ln.q.symbol for ln in lines))
     gum = propagate(model, [ln.q for ln in lines], correlation=correlation, k=2.0)
-    kk, src = _k(gum.dof, k)
+    kk, src = budget_k(gum.dof, k, [ln.q for ln in lines], cs, correlation)
     comps = tuple(Component(name=ln.name, symbol=ln.q.symbol, u=float(c.contribution),
                             unit=unit, type=ln.q.type, distribution=ln.q.distribution,
                             dof=float(ln.q.dof), source=ln.q.source,

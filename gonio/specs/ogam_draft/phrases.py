@@ -322,6 +322,13 @@ LABELS: dict[str, dict[str, str]] = {
     "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
     "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
                 "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
+    "k_combined": {"en": "{items}: k is the 95 % half-width of the distribution the budget's "
+                         "lines combine to (their convolution, JCGM 101 Monte Carlo) over u_c, "
+                         "not t95(ν_eff): lines that are not normal carry more than a quarter of "
+                         "u_c² (K: the table's error at its MPE bound, arcsine).",
+                   "zh": "{items}：k 为其不确定度各分量合成分布（各分量分布的卷积，JCGM 101 "
+                         "蒙特卡洛法）的 95 % 半宽除以 u_c，不取 t95(ν_eff)：非正态分量占 u_c² "
+                         "的四分之一以上（K：转台误差取最大允许误差限，反正弦分布）。"},
     "U_certified_physical": {
         "en": "Certified: U of this calibration's physical budget (the draft's Annex A lines and "
               "the lines marked \"beyond the draft\", budget below). The draft's reading, its "

@@ -8,6 +8,8 @@ Contents
 :func:`stated_item`          one item as stated: value (E as ± max|E_i|), signed extreme,
                              position, U, k, p, or its one coverage interval
 :func:`interval_cell`        that interval as a table cell ("≤ 0.022 (p ≈ 95 %)")
+:func:`combined_k_note`      the note naming the items whose k is their budget's combined
+                             distribution's (JCGM 101), not t95(ν_eff)
 :func:`conformity_for`       the conformity statements the laboratory's limits call for
 :func:`method_rows`          the method statement (rates, rounds, series, delays, Earth rate,
                              latitude, axes, tilt, temperature, clauses)
@@ -182,6 +184,31 @@ def interval_cell(st: dict, lang: str) -> str:
     return st["interval"]["statement"].interval_text(lang, short=True).replace("≤ ", "≤\u00a0")
 
 
+#: ``k_source`` of an item whose k is its budget's combined distribution's
+#: (:data:`gonio.specs.ogam_draft.item_uncertainty.K_SOURCE_COMBINED`).
+K_SOURCE_COMBINED = "jcgm101-convolution"
+
+
+def combined_k_note(res: dict, L: dict, only: str | None = None) -> str | None:
+    """The note naming the items stated with a k (:func:`stated_item`: not those stated by
+    an interval alone) that comes from their budget's combined distribution (``k_source``
+    "jcgm101-convolution", :func:`gonio.specs.ogam_draft.item_uncertainty.budget_k`), in
+    ``L``'s language — item ``only`` alone when given; None when there is none.
+
+    >>> res = {"items": {"scale_factor": {"measured": True, "clause": "7.1", "value": 3600.2,
+    ...     "unit": "counts/deg", "uncertainty": {"U": 0.02, "k": 1.55, "u_c": 0.013,
+    ...     "coverage_probability": 0.95, "k_source": "jcgm101-convolution"}}}}
+    >>> combined_k_note(res, {"scale_factor": "K", "k_combined": "{items}: k of JCGM 101"})
+    'K: k of JCGM 101'
+    """
+    names = [L[n] for n in item_names(res) if (only is None or n == only)
+             and (res["items"][n].get("uncertainty") or {}).get("k_source") == K_SOURCE_COMBINED
+             and stated_item(res, n)["k"] is not None]
+    if not names:
+        return None
+    return L["k_combined"].format(items=L.get("list_sep", ", ").join(names))
+
+
 def k_tilt_note(res: dict, L: dict) -> list:
     """K's note when the in-situ tilt estimate corrected it, as :func:`segments`: ψ and α with
     their U95 and the 7.1 mean uncorrected (results.json ``details.tilt_correction``,
@@ -348,6 +375,9 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
     lines = [fmt(head), "  ".join("-" * w for w in widths)] + [fmt(r) for r in rows]
     if notes:
         lines += ["", "not measured:"] + ["  " + n for n in notes]
+    kc = combined_k_note(res, L)
+    if kc:
+        lines += ["", kc]
     u = e_budget(res)
     if u.get("U_arcsec") is None:
         lines += ["", L["no_E_U"]]

@@ -1,0 +1,108 @@
+"""The coverage factor of a budget whose non-normal lines dominate comes from the budget's
+combined distribution (JCGM 101), checked against a second algorithm: the exact probability
+of the sum of a normal and an arcsine line by quadrature over the arcsine's phase, and
+closed forms of single lines. K's budget, whose table line at the MPE bound is arcsine and
+dominates u_c, states k from it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, optimize, stats
+
+from gonio.specs.ogam_draft.item_uncertainty import (K_SOURCE_COMBINED, budget_k,
+                                                     monte_carlo_check, scale_factor_budget)
+from uncertainty import combined_coverage_factor, from_u, needs_combined_k, type_b
+
+
+def _quadrature_k(share: float, p: float = 0.95) -> float:
+    """k of Y = N(0, σ²) + A·sin φ (φ uniform), u_c = 1, the arcsine's share of u_c² =
+    ``share``: P(|Y| ≤ U) = (1/π)∫₀^π [Φ((U − A cos φ)/σ) − Φ((−U − A cos φ)/σ)] dφ = p."""
+    a = math.sqrt(2.0 * share)
+    sigma = math.sqrt(1.0 - share)
+
+    def prob(u):
+        if sigma == 0.0:
+            return 2.0 / math.pi * math.asin(min(u / a, 1.0))
+        f = lambda phi: (stats.norm.cdf((u - a * math.cos(phi)) / sigma)
+                         - stats.norm.cdf((-u - a * math.cos(phi)) / sigma))
+        return integrate.quad(f, 0.0, math.pi, epsabs=1e-12, limit=200)[0] / math.pi
+
+    return optimize.brentq(lambda u: prob(u) - p, 1e-6, 5.0, xtol=1e-10)
+
+
+def _lines(share: float):
+    return [type_b("A", 0.0, math.sqrt(2.0 * share), "arcsine"),
+            from_u("n", 0.0, math.sqrt(1.0 - share), type="B")]
+
+
+@pytest.mark.parametrize("share", [0.3, 0.6, 0.9, 0.97, 1.0])
+def test_combined_k_is_the_exact_k_of_normal_plus_arcsine(share):
+    lines = _lines(share)[:1] if share == 1.0 else _lines(share)
+    k = combined_coverage_factor(lines, [1.0] * len(lines))
+    assert k == pytest.approx(_quadrature_k(share), abs=0.004), (share, k)
+
+
+def test_rule_switches_where_the_gum_k_is_still_within_a_percent():
+    """Below 1/4 of u_c² in non-normal lines the GUM's t-factor stays; just above it the
+    combined k differs from 1.96 by under 1 % (exact), so the switch is no jump."""
+    assert not needs_combined_k(_lines(0.24), [1.0, 1.0])
+    assert needs_combined_k(_lines(0.26), [1.0, 1.0])
+    k, src = budget_k(math.inf, None, _lines(0.24), [1.0, 1.0])
+    assert src == "welch-satterthwaite" and k == pytest.approx(1.959964, abs=1e-5)
+    k, src = budget_k(math.inf, None, _lines(0.26), [1.0, 1.0])
+    assert src == K_SOURCE_COMBINED
+    assert abs(_quadrature_k(0.26) / 1.959964 - 1.0) < 0.01
+    assert k == pytest.approx(_quadrature_k(0.26), abs=0.006)
+    # the laboratory's k wins over both
+    assert budget_k(math.inf, 2.0, _lines(0.9), [1.0, 1.0]) == (2.0, "fixed by laboratory")
+
+
+def test_combined_k_is_deterministic():
+    q = _lines(0.8) + [from_u("s", 0.0, 0.3, dof=4), type_b("r", 0.0, 0.2, "rectangular")]
+    a = combined_coverage_factor(q, [1.0, -1.0, 1.0, 1.0], seed=5)
+    assert a == combined_coverage_factor(q, [1.0, -1.0, 1.0, 1.0], seed=5)
+
+
+def _k_at_its_bound():
+    """The draft's six rounds of a fine counter (3.6×10⁶ counts/°) with K_i nearly equal:
+    the table line (arcsine, worst order 3 at the MPE bound, 0.6 counts/°) carries most of
+    u_c²."""
+    k_i = 3.6e6 + np.array([0.0, 0.4, -0.3, 0.2, 0.0, -0.3])
+    return scale_factor_budget(k_i, [60, 120, 180, 240, 300, 360], 0.1)
+
+
+def test_k_states_its_combined_distributions_k_and_the_jcgm101_check_agrees():
+    b = _k_at_its_bound()
+    share = sum(c.u ** 2 for c in b.components if c.distribution == "arcsine") / b.u_c ** 2
+    assert share > 0.25
+    assert b.k_source == K_SOURCE_COMBINED and b.k < 1.9
+    d = b.to_dict()
+    assert d["k_source"] == K_SOURCE_COMBINED and d["nu_eff"] is None
+    assert d["U"] == pytest.approx(b.k * b.u_c, rel=1e-12)
+    # a second, independent JCGM 101 propagation (the model as an expression, its own seed,
+    # the probabilistically symmetric interval of JCGM 101 7.7): its half-width is U
+    mc, _ = monte_carlo_check(b, 400_000, seed=3)
+    assert (mc.high - mc.low) / 2 == pytest.approx(b.U, rel=0.01)
+    # the GUM's t-factor would overstate it
+    assert 1.96 * b.u_c > 1.1 * b.U
+
+
+def test_the_outputs_name_the_same_k_source():
+    """The rendering side (stated.py, a pure function of results.json) names the k_source
+    the budgets write; the note appears for a stated k of that source only."""
+    from gonio.kit.render import labels
+    from gonio.specs.ogam_draft import stated
+    from gonio.specs.ogam_draft.phrases import LABELS
+
+    assert stated.K_SOURCE_COMBINED == K_SOURCE_COMBINED
+    b = _k_at_its_bound()
+    res = {"items": {"scale_factor": {"measured": True, "clause": "7.1", "value": b.value,
+                                      "unit": "counts/deg", "uncertainty": b.to_dict()}}}
+    for lang in ("en", "zh"):
+        note = stated.combined_k_note(res, labels(lang, LABELS))
+        assert note and "JCGM 101" in note and "t95(ν_eff)" in note
+    res["items"]["scale_factor"]["uncertainty"]["k_source"] = "welch-satterthwaite"
+    assert stated.combined_k_note(res, labels("en", LABELS)) is None
