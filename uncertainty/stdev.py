@@ -150,7 +150,7 @@ class RangeCorrection:
     """A range of noisy values corrected for its bias (:func:`corrected_range`)."""
 
     value: float              # the corrected range (negative: below what the errors alone give)
-    u: float                  # its standard uncertainty: sd of the measured range there
+    u: float                  # its standard uncertainty: sd of the estimator there
     measured: float           # the range as measured, max − min
     noise_range: float        # E[range] of the errors alone (equal true values)
     shrink: float             # λ: the true values taken as mean + λ(x − mean)
@@ -172,9 +172,17 @@ def corrected_range(x, errors) -> RangeCorrection:
     corrected range is λ·(max x − min x). Where the measured range is below E[range(e)] (the
     errors alone would spread equal values more), λ = 0 and the corrected value is the
     measured range minus that expectation — negative, the unbiased estimate for equal true
-    values. u is the standard deviation of the measured range at t(λ) (the corrected value
-    moves one for one with the measured range where λ is small, and where the excess has
-    vanished the range is the true one plus the errors of its two extremes).
+    values.
+
+    u is the standard deviation of the estimator itself at the corrected value (a parametric
+    bootstrap along the measured pattern, JCGM 101 5.9 applied to the estimator): the measured
+    ranges r_j = range(t(λ) + e_j) of the draws are each mapped through the estimator —
+    R̂(r) = f⁻¹(r), f(R) = E[range(m + (R/r)(x − m) + e)] tabulated on the same draws, and
+    R̂(r) = r − E[range(e)] below E[range(e)] — and u = sd of the R̂(r_j). The spread of the
+    measured range alone is not u: the estimate moves by dR̂/dr = 1/f'(R) per unit of the
+    measured range, and f' = d E[measured]/d true lies in [0, 1] (0 at equal true values for
+    symmetric errors, → 1 once the excess has vanished), so sd(r_j) understates u by that
+    slope (u ≈ sd(r_j)/f'(R) where the slope is nearly constant over the spread).
 
     Two values, independent normal errors of σ: the measured range is |d + ε|, ε ~ N(0, 2σ²),
     whose mean is the folded normal's, s√(2/π) exp(−d²/2s²) + d(1 − 2Φ(−d/s)), s = σ√2; the
@@ -215,7 +223,27 @@ def corrected_range(x, errors) -> RangeCorrection:
             lo, hi = (mid, hi) if ranges(mid).mean() < r else (lo, mid)
         lam = 0.5 * (lo + hi)
         value = lam * r
-    return RangeCorrection(float(value), float(ranges(lam).std(ddof=1)), r, e0, float(lam))
+    return RangeCorrection(float(value), _estimator_sd(ranges(lam), r, e0, ranges), r, e0,
+                           float(lam))
+
+
+#: Points of the table of E[measured range] against the true range (:func:`corrected_range`'s u).
+_RANGE_GRID = 65
+
+
+def _estimator_sd(r_j: np.ndarray, r: float, e0: float, ranges) -> float:
+    """sd of :func:`corrected_range`'s estimate over measured ranges ``r_j`` (the estimator
+    along the measured pattern of range ``r``; ``ranges(λ)`` the draws' ranges at t(λ))."""
+    est = r_j - e0                                     # below E[range(e)]: slope 1
+    above = r_j > e0
+    if r > 0 and above.any():
+        # R ≤ f(R) = E[range(t(R/r) + e)] ≤ R + e0, so f⁻¹ of the r_j above e0 lies in
+        # [max(0, min r_j − e0), max r_j]: f tabulated there (monotone, convex)
+        hi = float(r_j.max())
+        true = np.linspace(max(0.0, float(r_j[above].min()) - e0), hi, _RANGE_GRID)
+        f = np.maximum.accumulate([float(ranges(v / r).mean()) for v in true])
+        est[above] = np.interp(r_j[above], f, true)
+    return float(est.std(ddof=1))
 
 
 def random_walk_stdev_dof(n: int) -> float:

@@ -9,7 +9,9 @@ budget to each of the seven items, one documented function each:
                                         (the larger of :func:`scale_factor_table_line`'s two
                                         readings), count quantisation (7.1)
 :func:`nonlinearity_corrected_budget`  K_l  the range corrected for its bias by noise and tilt
-                                        (JCGM 101 Monte Carlo of the K_i's errors; stated)
+                                        (JCGM 101 Monte Carlo of the K_i's errors; stated:
+                                        the standard's value, u the larger of its table
+                                        readings' errors about it)
 :func:`nonlinearity_budget`     K_l     the draft's range as measured: u of the largest and
                                         smallest K_i, and the spread noise alone gives n values
                                         (7.2; kept beside the stated value)
@@ -773,9 +775,10 @@ def nonlinearity_table_order(theta_deg, table_mpe_arcsec: float,
     return RangeTableOrder(order, 0.5 * float(table_mpe_arcsec) * float(diam[order - 1]))
 
 
-#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the standard's (independent
-#: stops), the physical one (one periodic error at the bound), or the larger of the two.
-TABLE_READINGS = ("standard", "periodic", "larger")
+#: K_l's table readings (:func:`nonlinearity_corrected_budget`): the stated one (the standard's
+#: value, u from both readings), the standard's alone (independent stops) and the physical one
+#: alone (one periodic error at the bound).
+TABLE_READINGS = ("stated", "standard", "periodic")
 
 #: Draws of the JCGM 101 Monte Carlo of K_l's range (:func:`nonlinearity_corrected_budget`)
 #: and its fixed seed (the same 7.1 data give the same K_l and u).
@@ -805,7 +808,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   noise: RoundNoise | None = None, time_s=None,
                                   draws: int = RANGE_DRAWS,
                                   tilt_measured=None,
-                                  table_reading: str = "standard") -> ItemUncertainty:
+                                  table_reading: str = "stated") -> ItemUncertainty:
     """K_l (draft 7.2) corrected for the range's bias, and its u, in %: the stated K_l.
 
     The draft's K_l = (max K_i − min K_i)/K · 100 % is a range of measured values, and a
@@ -831,13 +834,23 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     (JCGM 101 6.4.8).
 
     The table's errors in two readings, with the same draws of the rest (A.4.1, 7.2;
-    :func:`_range_table_errors`): ``standard`` (stated), each stop independent, rectangular
-    ±MPE; ``periodic`` (beside, in the line's source), one curve at the bound of the order
-    that spreads the K_i most (:func:`nonlinearity_table_order`), phase drawn, the rounds
-    correlated; ``larger``, the larger u (not stated: it corrects a good table's range by the
-    bound's errors, docs/draft-readings.md 7.2). K_l is the
-    range whose expected measured range equals the one measured; u is the spread of the
-    measured range there (one line, ``K_rng``, normal). The value is negative when the
+    :func:`_range_table_errors`): the standard's reading, each stop independent, rectangular
+    ±MPE, and beside it the physical model, one curve at the bound of the order that spreads
+    the K_i most (:func:`nonlinearity_table_order`), phase drawn, the rounds correlated. In
+    each, K_l is the range whose expected measured range equals the one measured
+    (:func:`uncertainty.stdev.corrected_range`), u the estimator's spread there.
+
+    ``stated`` (the certificate's): the value is the standard's corrected range v_s (in the
+    ordinary case, a table inside its MPE, the periodic correction at the bound would
+    over-correct it); its u is the larger root-mean-square error of v_s about K_l in the two
+    readings: in the standard's u_s; with the table at its bound (a condition the procedure
+    allows), the periodic reading's estimate v_p of K_l has u_p, so v_s errs by
+    (v_s − v_p) + (v_p − K_l), mean square u_p² + (v_s − v_p)² (an uncorrected bias combined
+    in quadrature, JCGM 100 F.2.4.5; Phillips, Eberhardt & Parry, J. Res. NIST 102 (1997)).
+    u_c² = max(u_s², u_p² + (v_s − v_p)²) is stated as two lines: ``K_rng`` (u_s, the
+    standard's reading) and ``K_tab`` (√(max(0, u_p² + (v_s − v_p)² − u_s²)), the table at
+    its bound, beyond the draft). ``standard`` and ``periodic`` give each reading alone (its
+    own value and u; kept for the comparison, docs/draft-readings.md 7.2). The value is negative when the
     measured range is smaller than the errors alone would give (it is then stated by its
     interval [0, K_l + U], the rule of every non-negative item); when even K_l + U ≤ 0 the
     value is taken as 0, the least a range can be, so the statement is [0, U].
@@ -854,14 +867,16 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
     >>> b.value, round(b.u_c * 1e4, 2), b.nonnegative
-    (0.0, 1.08, True)
+    (0.0, 1.12, True)
 
-    The periodic reading beside it (order 3 moves the 60° round by up to 0.1/216000 =
-    0.46 ppm, and the 180° and 300° rounds with it) spreads the rounds more:
+    The periodic reading (order 3 moves the 60° round by up to 0.1/216000 = 0.46 ppm, and the
+    180° and 300° rounds with it) spreads the rounds more than the standard's; the stated u
+    is the larger of u_s and √(u_p² + (v_s − v_p)²), here the latter (the ``K_tab`` line):
 
+    >>> s = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="standard")
     >>> p = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="periodic")
-    >>> round(p.u_c * 1e4, 2)
-    1.12
+    >>> round(s.u_c * 1e4, 2), round(p.u_c * 1e4, 2), [c.symbol for c in b.components]
+    (1.08, 1.12, ['K_rng', 'K_tab'])
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), measured - 2.4e-4 < b.value < measured
@@ -903,22 +918,33 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
             src += f" and the compensation's rate error over its {noise.static_s:g} s static phase"
         errs = {r: e + ang / (th * ARCSEC_PER_DEG) * 100.0 for r, e in errs.items()}
     cs = {r: corrected_range(k_i * to_pct, e) for r, e in errs.items()}
-    pick = table_reading if table_reading != "larger" else \
-        ("periodic" if cs["periodic"].u > cs["standard"].u else "standard")
-    c = cs[pick]
-    src = (f"table angle at the stops, {pick} reading stated (the standard's, A.4.1 per "
-           f"stop, independent rectangular ±MPE: corrected {cs['standard'].value:.4g} %, u "
-           f"{cs['standard'].u:.3g} %; one periodic error at the bound, order {worst.order}, "
-           f"phase drawn, rounds correlated: corrected {cs['periodic'].value:.4g} %, u "
-           f"{cs['periodic'].u:.3g} %), " + src)
+    std, per = cs["standard"], cs["periodic"]
+    c = per if table_reading == "periodic" else std
+    u_bound = math.sqrt(max(0.0, per.u ** 2 + (std.value - per.value) ** 2 - std.u ** 2))
+    src = (f"table angle at the stops (the standard's reading, A.4.1 per stop, independent "
+           f"rectangular ±MPE: corrected {std.value:.4g} %, u {std.u:.3g} %; the physical "
+           f"model, one periodic error at the bound, order {worst.order}, phase drawn, rounds "
+           f"correlated: corrected {per.value:.4g} %, u {per.u:.3g} %), " + src)
+    lines = [_Line(from_u("K_rng", 0.0, c.u, type="B",
+                          source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
+                                 f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
+                                 f"alone {c.noise_range:.4g} %, corrected {c.value:.4g} % "
+                                 f"({'periodic' if c is per else 'standard'} reading)"),
+                   "range of the K_i, bias corrected", True, "7.2 (A.4.1, A.1 applied to 7.1)")]
+    if table_reading == "stated" and u_bound > 0:
+        lines.append(_Line(from_u("K_tab", 0.0, u_bound, type="B",
+                                  source=f"the table at its A.4.1 bound, one periodic error of "
+                                         f"order {worst.order}: u² = max(0, u_p² + (v_s − v_p)² "
+                                         f"− u_s²), the periodic reading's spread u_p "
+                                         f"{per.u:.3g} % and its correction's difference v_s − "
+                                         f"v_p {std.value - per.value:.3g} % from the stated "
+                                         f"value, beyond the standard's u_s {std.u:.3g} %"),
+                           "table at its MPE bound (periodic)", True,
+                           "A.4.1 applied to 7.2"))
+    u_c = math.sqrt(sum(ln.q.u ** 2 for ln in lines))
     kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
-    value = c.value if c.value + kk * c.u > 0 else 0.0
-    line = _Line(from_u("K_rng", 0.0, c.u, type="B",
-                        source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
-                               f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
-                               f"alone {c.noise_range:.4g} %, corrected {c.value:.4g} %"),
-                 "range of the K_i, bias corrected", True, "7.2 (A.4.1, A.1 applied to 7.1)")
-    return replace(_budget("scale_factor_nonlinearity", "%", value, [line], k=k),
+    value = c.value if c.value + kk * u_c > 0 else 0.0
+    return replace(_budget("scale_factor_nonlinearity", "%", value, lines, k=k),
                    nonnegative=True)
 
 
