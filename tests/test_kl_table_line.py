@@ -6,10 +6,12 @@ counts the angle turned, floored counter readings; K_i = C_k/θ_k), not from the
 formulas; the truth is the range of the gyro's own K_i (draft 7.2), known from the bench's
 parameters.
 
-The stated reading (``standard``, each stop independent) under-covers a table at its bound of
-the worst order; the physical reading beside it (``periodic``; ``larger`` takes the larger u)
-covers there at every order, but corrects a good table's range by the bound's errors (z mean
-near −1 on an error-free table), so it is not stated."""
+The standard's reading alone (``standard``, each stop independent) under-covers a table at its
+bound of the worst order; the physical reading alone (``periodic``, one curve at the bound)
+covers there but corrects a good table's range by the bound's errors. The stated K_l
+(``stated``) keeps the standard's value and takes u as the larger of the two readings' errors
+about it, u_c² = max(u_s², u_p² + (v_s − v_p)²): it covers at every order, and is the
+standard's value on every table."""
 
 from __future__ import annotations
 
@@ -89,13 +91,23 @@ def test_worst_order_of_the_range_is_the_largest_spread_of_the_rounds():
     assert spread[w.order] == pytest.approx(2.0 * w.half_range_rel, rel=1e-4)
 
 
-def test_stated_reading_fails_at_the_worst_order_and_the_periodic_one_holds():
+def _rms(z):
+    return float(np.sqrt(np.mean(np.square(z))))
+
+
+def test_stated_covers_at_the_worst_order_and_the_standards_reading_alone_does_not():
+    """200 sessions at the worst order. The stated K_l covers (Clopper–Pearson reaching 95 %).
+    Its z's sd falls below 0.7 (0.6–0.7 here) by construction: part of u_c is the standard's
+    value's bias at the bound (v_s − v_p, about constant over the sessions), which moves z's
+    mean (+0.4) and not its spread; z's root mean square, which counts both, is asserted within
+    0.7–1.3. The standard's reading alone (its own u) does not cover there."""
     w = nonlinearity_table_order(STOPS, MPE)
     n = 200
-    hits, z = _z(w.order, n, 20261130, "larger")
-    assert _cp_upper(hits, n) >= 0.95 and 0.7 <= np.std(z) <= 1.3, (hits, np.std(z))
+    hits, z = _z(w.order, n, 20261130, "stated")
+    assert _cp_upper(hits, n) >= 0.95 and 0.7 <= _rms(z) <= 1.3, (hits, z.mean(), np.std(z))
+    assert 0.5 <= np.std(z) <= 1.3, np.std(z)
     hits_s, z_s = _z(w.order, n, 20261130, "standard")
-    assert _cp_upper(hits_s, n) < 0.95 or np.std(z_s) > 1.3, (hits_s, np.std(z_s))
+    assert _cp_upper(hits_s, n) < 0.95, (hits_s, np.std(z_s))
 
 
 def _same_at_the_stops(h, g):
@@ -105,28 +117,32 @@ def _same_at_the_stops(h, g):
 
 
 @pytest.mark.parametrize("orders", [range(1, 13), range(13, 25), range(25, 37)])
-def test_periodic_reading_covers_a_table_at_its_bound_at_every_order(orders):
-    """Coverage at every order; z's spread at most 1.3 at each order that is not the worst
-    (the periodic line is wider than those need: sd may fall below 0.7 there, a bound's
-    price); the orders that repeat the worst order's errors at the stops are judged together
-    (their 40 sessions each are draws of one distribution)."""
+def test_stated_covers_a_table_at_its_bound_at_every_order(orders):
+    """Coverage of the stated K_l at every order 1–36 (40 sessions each, Clopper–Pearson
+    reaching 95 %); z's spread at most 1.3 at every order (the table-at-the-bound line is wider
+    than the orders that are not the worst need: sd falls below 0.7 there, a bound's price);
+    the orders that repeat the worst order's errors at the stops are judged together (their
+    sessions are draws of one distribution) by z's root mean square within 0.7–1.3."""
     w = nonlinearity_table_order(STOPS, MPE)
     n, worst_z = 40, []
     for h in orders:
-        hits, z = _z(h, n, 20261200 + h, "larger")
+        hits, z = _z(h, n, 20261200 + h, "stated")
         assert _cp_upper(hits, n) >= 0.95, (h, hits)
+        assert np.std(z) <= 1.3, (h, np.std(z))
         if _same_at_the_stops(h, w.order):
             worst_z.append(z)
-        else:
-            assert np.std(z) <= 1.3, (h, np.std(z))
     if worst_z:
-        assert 0.7 <= np.std(np.concatenate(worst_z)) <= 1.3
+        assert 0.7 <= _rms(np.concatenate(worst_z)) <= 1.3
 
 
-def test_periodic_reading_over_corrects_a_good_table():
-    """An error-free table: the stated reading is centred, the periodic one subtracts the
-    bound's range from the measured one and lands about one u_c low (why it is not stated)."""
+def test_stated_value_is_the_standards_and_the_periodic_one_over_corrects_a_good_table():
+    """An error-free table: the stated value is the standard's reading's, centred (|z mean| <
+    0.5); the periodic reading's value subtracts the bound's range from the measured one and
+    lands low (z mean < −0.4: why its value is not stated). The stated u is wide here (z sd
+    about 0.4): it holds a table at its bound, which this one is not."""
     _, z_std = _z(3, 150, 5, "standard", amplitude_arcsec=0.0)
+    _, z_st = _z(3, 150, 5, "stated", amplitude_arcsec=0.0)
     _, z_per = _z(3, 150, 5, "periodic", amplitude_arcsec=0.0)
-    assert abs(z_std.mean()) < 0.5 and 0.7 <= np.std(z_std) <= 1.3, (z_std.mean(), np.std(z_std))
-    assert z_per.mean() < -0.6, z_per.mean()
+    assert abs(z_st.mean()) < 0.5 and abs(z_std.mean()) < 0.5, (z_st.mean(), z_std.mean())
+    assert np.std(z_st) <= 1.3
+    assert z_per.mean() < -0.4, z_per.mean()
