@@ -803,6 +803,39 @@ def _range_table_errors(k_i, th, table_mpe_arcsec: float, u_tab, rng, draws: int
     return tab, periodic, worst
 
 
+def _round_errors(k_i, th, errs, rng, draws: int, tilt_measured, tilt_round_coupling, noise,
+                  time_s):
+    """The rounds' errors beyond the table's, added to each reading's draws ``errs`` (%) in
+    :func:`nonlinearity_corrected_budget`: the tilt coupling (at the measured tilt, K_i then
+    corrected, or at the A.1 bound) and the gyro's noise over each round; (K_i, errs, source)."""
+    src = "count quantisation (triangular ±1 count)"
+    if tilt_measured is not None:
+        tm = tilt_measured
+        k_i = k_i / (1.0 + tm.rel_error())
+        d = rng.multivariate_normal([tm.psi_rad, tm.gamma_rad], tm.cov_rad2, draws)
+        add = (tm.rel_error(d[:, :1], d[:, 1:]) - tm.rel_error()) * 100.0
+        errs = {r: e + add for r, e in errs.items()}
+        src += (f", corrected for the tilt x Earth-rate coupling of each round at the measured "
+                f"tilt psi = {math.degrees(tm.psi_rad):.3g} deg (the correction's error from "
+                f"the estimate's covariance, nu = {tm.dof})")
+    elif tilt_round_coupling is not None:
+        a, b = (np.asarray(v, dtype=float) * 100.0 / ARCSEC_PER_DEG for v in tilt_round_coupling)
+        alpha = rng.uniform(0.0, 2.0 * math.pi, (draws, 1))
+        errs = {r: e + a * np.cos(alpha) - b * np.sin(alpha) for r, e in errs.items()}
+        src += ", tilt x Earth-rate coupling at the A.1 bound (azimuth uniform)"
+    if noise is not None and time_s is not None and noise.n2_arcsec2_per_s > 0:
+        t = np.asarray(time_s, dtype=float)
+        n_arw = math.sqrt(noise.n2_arcsec2_per_s)
+        ang = rng.standard_normal((draws, t.size)) * (n_arw * np.sqrt(t))
+        src += (f", the gyro's angle random walk over each round (N = {n_arw:.3g}″/√s from the "
+                f"7.4 series, ν = {noise.dof})")
+        if noise.static_s:
+            ang = ang + rng.standard_normal((draws, 1)) * (n_arw / math.sqrt(noise.static_s)) * t
+            src += f" and the compensation's rate error over its {noise.static_s:g} s static phase"
+        errs = {r: e + ang / (th * ARCSEC_PER_DEG) * 100.0 for r, e in errs.items()}
+    return k_i, errs, src
+
+
 def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                   k: float | None = None, tilt_round_coupling=None,
                                   noise: RoundNoise | None = None, time_s=None,
@@ -892,31 +925,8 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     tab, tab_periodic, worst = _range_table_errors(k_i, th, table_mpe_arcsec, u_tab, rng, draws)
     quant = rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))
     errs = {"standard": (tab + quant) * to_pct, "periodic": (tab_periodic + quant) * to_pct}
-    src = "count quantisation (triangular ±1 count)"
-    if tilt_measured is not None:
-        tm = tilt_measured
-        k_i = k_i / (1.0 + tm.rel_error())
-        d = rng.multivariate_normal([tm.psi_rad, tm.gamma_rad], tm.cov_rad2, draws)
-        add = (tm.rel_error(d[:, :1], d[:, 1:]) - tm.rel_error()) * 100.0
-        errs = {r: e + add for r, e in errs.items()}
-        src += (f", corrected for the tilt x Earth-rate coupling of each round at the measured "
-                f"tilt psi = {math.degrees(tm.psi_rad):.3g} deg (the correction's error from "
-                f"the estimate's covariance, nu = {tm.dof})")
-    elif tilt_round_coupling is not None:
-        a, b = (np.asarray(v, dtype=float) * 100.0 / ARCSEC_PER_DEG for v in tilt_round_coupling)
-        alpha = rng.uniform(0.0, 2.0 * math.pi, (draws, 1))
-        errs = {r: e + a * np.cos(alpha) - b * np.sin(alpha) for r, e in errs.items()}
-        src += ", tilt x Earth-rate coupling at the A.1 bound (azimuth uniform)"
-    if noise is not None and time_s is not None and noise.n2_arcsec2_per_s > 0:
-        t = np.asarray(time_s, dtype=float)
-        n_arw = math.sqrt(noise.n2_arcsec2_per_s)
-        ang = rng.standard_normal((draws, t.size)) * (n_arw * np.sqrt(t))
-        src += (f", the gyro's angle random walk over each round (N = {n_arw:.3g}″/√s from the "
-                f"7.4 series, ν = {noise.dof})")
-        if noise.static_s:
-            ang = ang + rng.standard_normal((draws, 1)) * (n_arw / math.sqrt(noise.static_s)) * t
-            src += f" and the compensation's rate error over its {noise.static_s:g} s static phase"
-        errs = {r: e + ang / (th * ARCSEC_PER_DEG) * 100.0 for r, e in errs.items()}
+    k_i, errs, src = _round_errors(k_i, th, errs, rng, draws, tilt_measured,
+                                   tilt_round_coupling, noise, time_s)
     cs = {r: corrected_range(k_i * to_pct, e) for r, e in errs.items()}
     std, per = cs["standard"], cs["periodic"]
     c = per if table_reading == "periodic" else std
