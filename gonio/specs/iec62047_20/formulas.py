@@ -24,8 +24,8 @@ Contents
 :func:`half_range_upper`        IEC 5.3.3.4: one-sided upper limit of the expected half range
 :func:`max_abs_normal_mean`     c_n = E[max |Z_i|] (5.3.3.7's selection excess; shared, re-exported)
 :func:`hysteresis_upper_iec`    IEC 5.3.3.7: one-sided upper limit of the largest true |B_up − B_down|
-:func:`walk_coefficient_bound`  IEC 5.3.3.6, 5.3.3.7: the largest K² the static record allows
-:func:`walk_k2_iec`             IEC 5.3.3.6, 5.3.3.7: E[K²] of the drift between visits
+:func:`walk_coefficient_bound`  IEC 5.1.3, 5.3.3: the largest K² the static record allows
+:func:`walk_k2_iec`             IEC 5.1.3, 5.3.3: E[K²] of every item's bias drift (reading)
 ==============================  ==================================================
 """
 
@@ -339,7 +339,7 @@ def hysteresis_upper_iec(reading: float, sds, p: float = 0.95) -> float:
 
 
 def walk_coefficient_bound(tau_s, adev, edf, p: float = 0.95) -> float:
-    """IEC 62047-20 5.3.3.6 and 5.3.3.7, the drift between visits: the largest rate random
+    """IEC 62047-20 5.1.3 and 5.3.3, the bias drift of every item's budget: the largest rate random
     walk K² (adev's unit squared per s) the static record (5.4) allows: the walk's Allan
     variance K²τ/3 cannot exceed the whole σ(τ)² (IEEE 952 C.1), so K² ≤ min over τ of
     σ_hi(τ)²·3/τ, σ_hi(τ)² = σ̂(τ)²·ν/χ²_(1−p)(ν) the one-sided ``p`` upper limit at each τ
@@ -370,9 +370,10 @@ def walk_coefficient_bound(tau_s, adev, edf, p: float = 0.95) -> float:
 
 
 def walk_k2_iec(K: float, u_K: float, bound_k2: float) -> float:
-    """IEC 62047-20 5.3.3.6 and 5.3.3.7, the drift between visits: E[K²] of the rate random
-    walk for the budgets, from the static record's five-term Allan fit K ± u_K (IEEE 952
-    Annex C) and the largest K² the record allows, ``bound_k2``
+    """IEC 62047-20 5.1.3 and 5.3.3, reading taken (the standard states no drift term): E[K²]
+    of the rate random walk for the bias drift of every item's budget (scale-factor slope
+    and linearity, 5.3.3.3, 5.3.3.6–5.3.3.9; one rule on one certificate), from the static
+    record's five-term Allan fit K ± u_K (IEEE 952 Annex C) and the largest K² the record allows, ``bound_k2``
     (:func:`walk_coefficient_bound`, 95 %): a walk the fit resolves (K > u_K) as K², at most
     the bound (E[K̂²] = K² + u_K² already, so K² + u_K² would count u_K² twice); one it does
     not (K = 0, or u_K ≥ K: the record cannot tell the walk from 0) as K rectangular on

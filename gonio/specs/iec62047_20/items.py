@@ -1449,15 +1449,9 @@ def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: f
 
 
 # --------------------------------------------------------------------------- added items
-def drift_u_dps(ctx: Context, separation_s: float) -> float:
-    """Standard uncertainty (°/s) of a bias difference between two records ``separation_s``
-    apart from the calibration's own static record (5.4): the five-term Allan fit's rate
-    random walk K√Δt and bias instability (√2·0.664·B), with the fit's uncertainties and an
-    unresolved RRW bounded by the longest τ (:func:`gonio.specs._rate_family.formulas.bias_drift_u`);
-    without a static record of at least 100 samples the term is not known, never 0: a
-    GonioError, so the item is "not measured" with the reason. A record that does not vary
-    comes only from a noise-free bench (``noise: off``; the reader refuses it otherwise):
-    its drift term is 0."""
+def _drift_varies(ctx: Context) -> bool:
+    """Whether the static record (5.4) the drift terms come from varies; a GonioError naming
+    what is missing when there is none of at least 100 samples or no a_BASE to convert it."""
     why = ("the budget's bias-drift term needs the static noise record (5.4) of at least "
            "100 samples")
     if not ctx.has("static"):
@@ -1467,80 +1461,98 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
     size, varies = _static_extent(ctx)
     if size < 100:
         raise GonioError(f"{why}; it has {size} samples")
-    if not varies:
-        return 0.0              # a noise-free bench (the reader refuses a stuck record)
-    fit = _noise_fit(ctx)
-    allan = _static(ctx)[0]
-    return rg.bias_drift_u(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high,
-                           separation_s) / S_PER_H
+    return bool(varies)
+
+
+def drift_u_dps(ctx: Context, separation_s: float) -> float:
+    """Standard uncertainty (°/s) of a bias difference between two records ``separation_s``
+    apart from the calibration's own static record (5.4): the rate random walk √(E[K²]·Δt)
+    and the bias instability's flicker at the adjacent records' floor, √2·0.664·√E[B²]
+    (IEEE 952 C.1: the walk's Allan variance K²τ/3, the flicker's (2 ln 2/π)B²), with E[K²]
+    and E[B²] of :func:`drift_coef_dps` — the one rule for the walk of every IEC item.
+    Without a static record of at least 100 samples the term is not known, never 0: a
+    GonioError, so the item is "not measured" with the reason. A record that does not vary
+    comes only from a noise-free bench (``noise: off``; the reader refuses it otherwise):
+    its drift term is 0."""
+    k2, b2 = drift_coef_dps(ctx)
+    return math.sqrt(k2 * abs(float(separation_s)) + 2.0 * rg.FLICKER_FLOOR_EXACT ** 2 * b2)
 
 
 def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
     """Standard uncertainty (°/s) of the difference of two bias_temperature visits' means
     ``separation_s`` apart (mid-time to mid-time), each of the protocol's ``bias_samples``:
-    the rate random walk and the flicker of the static record's Allan fit
-    (:func:`visit_drift_coef_dps`) through the five-term model's generalised covariance
+    the rate random walk and the flicker of :func:`drift_coef_dps` through the five-term
+    model's generalised covariance
     (:func:`gonio.specs._rate_family.formulas.record_difference_u_coef`): the flicker part
     grows as ln of the separation (IEEE 952 C.1), where :func:`drift_u_dps` holds it at the
     adjacent records' floor — hours apart, about twice too small."""
-    if drift_u_dps(ctx, 1.0) == 0.0:
+    if not _drift_varies(ctx):
         return 0.0
     d = ctx.protocol["temperature"]["bias_samples"] * ctx.protocol["protocol"]["sample_interval_s"]
-    k2, b2 = visit_drift_coef_dps(ctx)
+    k2, b2 = drift_coef_dps(ctx)
     sep = abs(float(separation_s))
     return rg.record_difference_u_coef(k2, b2, (0.0, d), (sep, d))
 
 
-def visit_drift_coef_dps(ctx: Context) -> tuple[float, float]:
-    """(E[K²] (°/s)²/s, E[B²] (°/s)²) of the drift between the 5.3.3.6/5.3.3.7 visits, hours
-    apart: the rate random walk by :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec`
-    with the largest K² the static record allows at 95 %
-    (:func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound`: a 2-h record resolves
-    the walk in about a third of the study's trials, and the 68 % limit :func:`drift_coef_dps`
-    bounds it by lay below the bench's K² in 5 of 40), the flicker as B² + u_B². The same
-    refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
-    if drift_u_dps(ctx, 1.0) == 0.0:
-        return 0.0, 0.0
-    key = ("visit_drift_coef", ctx.a_base, ctx.null_output)
+def walk_k2_bound_dps(ctx: Context) -> float:
+    """The largest rate random walk K² ((°/s)²/s) the static record (5.4) allows, by
+    :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound` (min over τ of the 95 %
+    one-sided χ² limits σ̂(τ)²·ν/χ²_0.05(ν)·3/τ) — the one bound of every IEC item: the end
+    of K's rectangle in :func:`drift_coef_dps` and the cap of the fitted K̂² in
+    :func:`drift_coef_fitted_dps`. Not finite when no τ bounds it."""
+    key = ("walk_k2_bound", ctx.a_base, ctx.null_output)
     if key not in ctx.cache:
-        fit, allan = _noise_fit(ctx), _static(ctx)[0]
-        bound = ief.walk_coefficient_bound(allan.tau_s, allan.adev, allan.edf)
+        allan = _static(ctx)[0]
+        ctx.cache[key] = ief.walk_coefficient_bound(allan.tau_s, allan.adev, allan.edf) \
+            / S_PER_H ** 2
+    return ctx.cache[key]
+
+
+def drift_coef_dps(ctx: Context) -> tuple[float, float]:
+    """(E[K²] (°/s)²/s, E[B²] (°/s)²) of the bias drift, the ONE rule of every IEC 62047-20
+    item whose budget carries the drift as a standard uncertainty (5.1.3 slope and
+    linearity, 5.3.3.3, 5.3.3.6, 5.3.3.7, 5.3.3.8, 5.3.3.9): the rate random walk by
+    :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec` — reading taken: a walk the
+    static record's five-term fit resolves (K̂ > u_K) as K̂², at most the bound; one it
+    does not as K rectangular on [0, √bound], bound/3 (JCGM 100 4.3.7) — with the bound of
+    :func:`walk_k2_bound_dps` (95 % per τ); the flicker as B̂² + u_B². The standard itself
+    states no drift term (5.3.3 reads each item from its own records), so the rule is
+    gonio's reading, documented in docs/iec62047-20-readings.md. 5.3.3.5's bootstrap draws
+    its replicates at the fitted values instead (:func:`drift_coef_fitted_dps`, the same
+    bound). The same refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
+    if not _drift_varies(ctx):
+        return 0.0, 0.0         # a noise-free bench (the reader refuses a stuck record)
+    key = ("drift_coef", ctx.a_base, ctx.null_output)
+    if key not in ctx.cache:
+        fit = _noise_fit(ctx)
         b = float(fit.B) if math.isfinite(float(fit.B)) else 0.0
         ub = float(fit.u_B) if math.isfinite(float(fit.u_B)) else 0.0
+        bound = walk_k2_bound_dps(ctx) * S_PER_H ** 2                       # (°/h)²/s
         ctx.cache[key] = (ief.walk_k2_iec(fit.K, fit.u_K, bound) / S_PER_H ** 2,
                           (b * b + ub * ub) / S_PER_H ** 2)
     return ctx.cache[key]
 
 
-def drift_coef_dps(ctx: Context) -> tuple[float, float]:
-    """(E[K²] (°/s)²/s, E[B²] (°/s)²) of the static record's Allan fit by the rules of
-    :func:`drift_u_dps` (the same refusals; a record that does not vary: (0, 0))."""
-    if drift_u_dps(ctx, 1.0) == 0.0:
-        return 0.0, 0.0
-    fit, allan = _noise_fit(ctx), _static(ctx)[0]
-    k2, b2 = rg.drift_coefficients(fit.K, fit.u_K, fit.B, fit.u_B, allan.tau_s, allan.ci_high)
-    return k2 / S_PER_H ** 2, b2 / S_PER_H ** 2
-
-
 def drift_coef_fitted_dps(ctx: Context) -> tuple[float, float]:
     """(K̂² (°/s)²/s, B̂² (°/s)²): the static record's Allan fit (IEEE 952 Annex C) at its
     fitted values, the point the parametric bootstrap of 5.3.3.5 (JCGM 101 style, a plug-in
-    of the fitted model) draws its replicates from. Not E[K²] = K̂² + u_K² nor the
-    unresolved walk's bound²/3 (:func:`drift_coef_dps`, the rules of a drift term stated as
-    a standard uncertainty): the replicates' spread is u itself, so a coefficient inflated
-    by its own uncertainty widens u twice (z sd 0.55 on 40 built-in seeds). K̂ is held to
-    the longest τ's bound min σ_hi(τ)²·3/τ; an unresolved K̂ (K̂ ≤ u_K) is drawn as fitted.
+    of the fitted model) draws its replicates from. Not E[K²] of :func:`drift_coef_dps`
+    (the rule of a drift term stated as a standard uncertainty): the replicates' spread is
+    u itself, so a coefficient inflated by its own uncertainty widens u twice (K̂² + u_K²:
+    z sd 0.55 on 40 built-in seeds). K̂² is held to the same bound as every other item's
+    walk (:func:`walk_k2_bound_dps`); an unresolved K̂ (K̂ ≤ u_K) is drawn as fitted.
     The same refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
-    if drift_u_dps(ctx, 1.0) == 0.0:
+    if not _drift_varies(ctx):
         return 0.0, 0.0
-    fit, allan = _noise_fit(ctx), _static(ctx)[0]
+    fit = _noise_fit(ctx)
 
     def ok(x):
         return abs(float(x)) if math.isfinite(float(x)) else 0.0
-    bound2 = float(np.min(np.asarray(allan.ci_high, float) ** 2 * 3.0
-                          / np.asarray(allan.tau_s, float)))
-    k2 = min(ok(fit.K) ** 2, bound2)
-    return k2 / S_PER_H ** 2, ok(fit.B) ** 2 / S_PER_H ** 2
+    k2 = ok(fit.K) ** 2 / S_PER_H ** 2
+    bound = walk_k2_bound_dps(ctx)
+    if math.isfinite(bound):
+        k2 = min(k2, bound)
+    return k2, ok(fit.B) ** 2 / S_PER_H ** 2
 
 
 def _bias_temperature_points(ctx: Context):

@@ -1,0 +1,95 @@
+"""IEC 62047-20: one rule for the rate random walk's E[K²] on one certificate.
+
+Every item whose budget carries the bias drift between its records (the scale-factor slope
+and everything computed with it, linearity, 5.1.3.5, 5.1.3.8, 5.3.3.3, 5.3.3.6–5.3.3.9)
+takes E[K²] from ``formulas.walk_k2_iec`` with the bound of ``formulas.walk_coefficient_bound``
+(``items.drift_coef_dps``); 5.3.3.5's bootstrap draws at the fitted K̂, capped by the same
+bound (``items.drift_coef_fitted_dps``). The test replaces the rule and the bound by others
+and requires each such item's U to move, and the shared rate-family rule (JJF 1535's,
+``drift_coefficients`` with the 68 % limits and K̂² + u_K²) to be called by no IEC item:
+an item that kept its own rule, or went back to the shared one, fails here.
+
+One virtual calibration of the pinned small programme (tests/data/pins, seed 7).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gonio.specs._rate_family import formulas as rg
+from gonio.specs.iec62047_20 import calibrate
+from gonio.specs.iec62047_20 import formulas as ief
+
+ROOT = Path(__file__).resolve().parents[1]
+PROTOCOL = ROOT / "tests" / "data" / "pins" / "iec62047-20-small.toml"
+
+#: The items whose budgets carry the bias drift as a standard uncertainty.
+DRIFT_ITEMS = ("scale_factor", "initial_sf_variation", "sf_temperature_coefficient",
+               "ratiometric_error", "linearity", "symmetry", "bias_ratiometric_error",
+               "bias_temperature_coefficient", "bias_hysteresis", "g_sensitivity",
+               "startup_time")
+
+
+def _numbers(result) -> dict:
+    items = result.items.items() if isinstance(result.items, dict) else \
+        [(i.key, i) for i in result.items]
+    return {k: (it.value, None if it.uncertainty is None else it.uncertainty.U)
+            for k, it in items}
+
+
+@pytest.fixture(scope="module")
+def readings(tmp_path_factory):
+    out = tmp_path_factory.mktemp("iec-walk")
+    r = subprocess.run([sys.executable, "-m", "gonio", "simulate", "--spec", "iec62047-20",
+                        "--protocol", str(PROTOCOL), "--seed", "7", "--out", str(out / "sim")],
+                       cwd=out, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return out / "sim" / "readings.csv"
+
+
+@pytest.fixture(scope="module")
+def plain(readings):
+    return _numbers(calibrate(readings, PROTOCOL))
+
+
+def test_no_item_uses_the_shared_rule(readings, plain, monkeypatch):
+    def refused(*a, **k):
+        raise AssertionError("an IEC item used the shared rate-family drift rule")
+    for name in ("drift_coefficients", "bias_drift_u", "record_difference_u"):
+        monkeypatch.setattr(rg, name, refused)
+    assert _numbers(calibrate(readings, PROTOCOL)) == plain
+
+
+def test_every_drift_item_takes_the_one_rule(readings, plain, monkeypatch):
+    rule = ief.walk_k2_iec
+    calls = []
+
+    def other(K, u_K, bound):                   # another rule: 4× the E[K²]
+        calls.append(bound)
+        return 4.0 * rule(K, u_K, bound) + 1e-3
+    monkeypatch.setattr(ief, "walk_k2_iec", other)
+    now = _numbers(calibrate(readings, PROTOCOL))
+    assert calls
+    kept = [k for k in DRIFT_ITEMS if now[k][1] == plain[k][1]]
+    assert not kept, f"U unchanged by the walk rule: {kept}"
+    untouched = {"arw", "bias_instability", "inband_noise", "broadband_noise", "frequency_band",
+                 "bias", "bias_drift_after_power_on"}
+    assert all(now[k] == plain[k] for k in untouched)
+
+
+def test_the_bound_is_the_95_percent_one_everywhere(readings, plain, monkeypatch):
+    bound = ief.walk_coefficient_bound
+    ps = []
+
+    def spy(tau_s, adev, edf, p=0.95):
+        ps.append(p)
+        return 0.25 * bound(tau_s, adev, edf, p)
+    monkeypatch.setattr(ief, "walk_coefficient_bound", spy)
+    now = _numbers(calibrate(readings, PROTOCOL))
+    assert ps and set(ps) == {0.95}
+    moved = [k for k in DRIFT_ITEMS if now[k][1] != plain[k][1]]
+    assert set(moved) == set(DRIFT_ITEMS)
