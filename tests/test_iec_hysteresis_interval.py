@@ -6,10 +6,10 @@ outside gonio's formulas.
   truth set here in ≥ 95 % of the draws (Clopper–Pearson upper end) at every configuration —
   no hysteresis, one temperature's at 1–3 σ, all three equal — with the visits' drift a
   random walk shared by the differences (correlated), and must not be a bound of 100 %.
-- The end of the rate random walk's rectangle, min over τ of the static record's 95 % limits
-  (the level the drift term used before ``formulas.WALK_BOUND_P`` became 0.90), must hold
-  the generator's K² on 2-h records (numpy white noise + a cumulated walk) far more often
-  than the 68 % limits used before that (83–86 % of the records against 56–65 %); with those, the built-in trial 2460005 (K held at 0, bound²
+- The rate random walk K² the drift term uses: the end of K's rectangle, min over τ of the
+  static record's 95 % limits, must hold the generator's K² on 2-h records (numpy white
+  noise + a cumulated walk) far more often than the 68 % limits used before (83–86 % of the
+  records against 56–65 %); with those, the built-in trial 2460005 (K held at 0, bound²
   0.309 against the bench's 0.374 (°/h)²/s) read z +5.24.
 """
 
@@ -89,7 +89,7 @@ def test_walk_bound_holds_the_generators_walk():
     trials = 60
     for _ in range(trials):
         a = allan_deviation(_rrw_record(K, N, n, dt, rng), dt, "rate", "decade:10", unit="deg/h")
-        new += ief.walk_coefficient_bound(a.tau_s, a.adev, a.edf, 0.95) >= K * K
+        new += ief.walk_coefficient_bound(a.tau_s, a.adev, a.edf) >= K * K
         old += float(np.min(np.asarray(a.ci_high) ** 2 * 3.0 / a.tau_s)) >= K * K
     assert new >= 0.75 * trials, (new, trials)      # 83–86 % (the minimum over τ: below 95 %)
     assert new >= old + 0.1 * trials, (new, old)    # the 68 % limits: 56–65 %

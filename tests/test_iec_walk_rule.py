@@ -3,7 +3,6 @@
 Every item whose budget carries the bias drift between its records (the scale-factor slope
 and everything computed with it, linearity, 5.1.3.5, 5.1.3.8, 5.3.3.3, 5.3.3.6–5.3.3.9)
 takes E[K²] from ``formulas.walk_k2_iec`` with the bound of ``formulas.walk_coefficient_bound``
-at ``formulas.WALK_BOUND_P``
 (``items.drift_coef_dps``); 5.3.3.5's bootstrap draws at the fitted K̂, capped by the same
 bound (``items.drift_coef_fitted_dps``). The test replaces the rule and the bound by others
 and requires each such item's U to move, and the shared rate-family rule (JJF 1535's,
@@ -82,15 +81,15 @@ def test_every_drift_item_takes_the_one_rule(readings, plain, monkeypatch):
     assert all(now[k] == plain[k] for k in untouched)
 
 
-def test_the_bound_is_the_one_level_everywhere(readings, plain, monkeypatch):
+def test_the_bound_is_the_95_percent_one_everywhere(readings, plain, monkeypatch):
     bound = ief.walk_coefficient_bound
     ps = []
 
-    def spy(tau_s, adev, edf, p=None):
+    def spy(tau_s, adev, edf, p=0.95):
         ps.append(p)
         return 0.25 * bound(tau_s, adev, edf, p)
     monkeypatch.setattr(ief, "walk_coefficient_bound", spy)
     now = _numbers(calibrate(readings, PROTOCOL))
-    assert ps and set(ps) == {ief.WALK_BOUND_P}
+    assert ps and set(ps) == {0.95}
     moved = [k for k in DRIFT_ITEMS if now[k][1] != plain[k][1]]
     assert set(moved) == set(DRIFT_ITEMS)

@@ -1496,15 +1496,15 @@ def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
 
 def walk_k2_bound_dps(ctx: Context) -> float:
     """The largest rate random walk K² ((°/s)²/s) the static record (5.4) allows, by
-    :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound` (min over τ of the
-    one-sided χ² limits σ̂(τ)²·ν/χ²_(1−p)(ν)·3/τ, p = ``WALK_BOUND_P`` = 0.90) — the one
-    bound of every IEC item: the end of K's rectangle in :func:`drift_coef_dps` and the cap
-    of the fitted K̂² in :func:`drift_coef_fitted_dps`. Not finite when no τ bounds it."""
+    :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound` (min over τ of the 95 %
+    one-sided χ² limits σ̂(τ)²·ν/χ²_0.05(ν)·3/τ) — the one bound of every IEC item: the end
+    of K's rectangle in :func:`drift_coef_dps` and the cap of the fitted K̂² in
+    :func:`drift_coef_fitted_dps`. Not finite when no τ bounds it."""
     key = ("walk_k2_bound", ctx.a_base, ctx.null_output)
     if key not in ctx.cache:
         allan = _static(ctx)[0]
-        ctx.cache[key] = ief.walk_coefficient_bound(allan.tau_s, allan.adev, allan.edf,
-                                                    ief.WALK_BOUND_P) / S_PER_H ** 2
+        ctx.cache[key] = ief.walk_coefficient_bound(allan.tau_s, allan.adev, allan.edf) \
+            / S_PER_H ** 2
     return ctx.cache[key]
 
 
@@ -1515,7 +1515,7 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
     :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec` — reading taken: a walk the
     static record's five-term fit resolves (K̂ > u_K) as K̂², at most the bound; one it
     does not as K rectangular on [0, √bound], bound/3 (JCGM 100 4.3.7) — with the bound of
-    :func:`walk_k2_bound_dps` (90 % per τ); the flicker as B̂² + u_B². The standard itself
+    :func:`walk_k2_bound_dps` (95 % per τ); the flicker as B̂² + u_B². The standard itself
     states no drift term (5.3.3 reads each item from its own records), so the rule is
     gonio's reading, documented in docs/iec62047-20-readings.md. 5.3.3.5's bootstrap draws
     its replicates at the fitted values instead (:func:`drift_coef_fitted_dps`, the same
