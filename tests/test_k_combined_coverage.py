@@ -60,6 +60,50 @@ def test_rule_switches_where_the_gum_k_is_still_within_a_percent():
     assert budget_k(math.inf, 2.0, _lines(0.9), [1.0, 1.0]) == (2.0, "fixed by laboratory")
 
 
+def test_with_a_type_a_line_of_few_dof_the_switch_moves_k_to_the_t_draws():
+    """A Type A line of ν = 2 at 11 % of u_c²: the GUM folds it into ν_eff (k ≈ 1.97),
+    JCGM 101 draws a scaled-and-shifted t₂ (6.4.9). Above the share k is the t draws', the
+    same on both sides of the switch (the lines' distributions, not the rule, decide it),
+    and checked against the exact probability of the sum by quadrature over the t₂."""
+    def lines(share):
+        return [type_b("R", 0.0, math.sqrt(3.0 * share), "rectangular"),
+                from_u("s", 0.0, math.sqrt(0.11), dof=2),
+                from_u("n", 0.0, math.sqrt(1.0 - share - 0.11), type="B")]
+
+    k_ws, src = budget_k(165.0, None, lines(0.24), [1.0] * 3)
+    assert src == "welch-satterthwaite" and k_ws == pytest.approx(1.974, abs=0.002)
+    k_mc, src = budget_k(math.inf, None, lines(0.26), [1.0] * 3)
+    assert src == K_SOURCE_COMBINED
+
+    def prob(u, share=0.26):
+        # Y = R + s·T₂ + N: P(|Y| ≤ u) = E_T[P(|R + N| ≤ u − s·t ...)] by quadrature over
+        # t (t₂ density) and the rectangular's x, the normal in closed form
+        a, s, sig = math.sqrt(3.0 * share), math.sqrt(0.11), math.sqrt(1.0 - share - 0.11)
+
+        def inner(t):
+            g = lambda x: (stats.norm.cdf((u - x - s * t) / sig)
+                           - stats.norm.cdf((-u - x - s * t) / sig))
+            return integrate.quad(g, -a, a, epsabs=1e-10)[0] / (2.0 * a)
+
+        return integrate.quad(lambda t: inner(t) * stats.t.pdf(t, 2), -np.inf, np.inf,
+                              epsabs=1e-9, limit=200)[0]
+
+    exact = optimize.brentq(lambda u: prob(u) - 0.95, 1.0, 4.0, xtol=1e-6)
+    assert exact > 2.2                       # the t₂ line, not the share, makes k large
+    assert k_mc == pytest.approx(exact, rel=0.01)
+
+
+def test_correlated_lines_that_cancel_carry_no_share_and_keep_the_gum_k():
+    r = [[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    q = [type_b("a", 0.0, 1.0, "rectangular"), type_b("b", 0.0, 1.0, "rectangular"),
+         from_u("s", 0.0, 0.2)]
+    from uncertainty.combined import non_normal_share
+    assert non_normal_share(q, [1.0, -1.0, 1.0], r) == pytest.approx(0.0, abs=1e-12)
+    assert budget_k(math.inf, None, q, [1.0, -1.0, 1.0], r)[1] == "welch-satterthwaite"
+    # correlated, not cancelling: the MC could only draw them normal, so the GUM's k stands
+    assert not needs_combined_k(q, [1.0, 1.0, 1.0], r)
+
+
 def test_combined_k_is_deterministic():
     q = _lines(0.8) + [from_u("s", 0.0, 0.3, dof=4), type_b("r", 0.0, 0.2, "rectangular")]
     a = combined_coverage_factor(q, [1.0, -1.0, 1.0, 1.0], seed=5)

@@ -19,10 +19,15 @@ carries much of u_c², the distribution of Y is their convolution with the rest,
   Monte Carlo of fixed M and seed (JCGM 101 7.2), so the same budget gives the same k.
 
 Why 1/4: at a share of 1/4 the combined distribution's k of a normal plus one arcsine (or
-one rectangular) line is 1.948 (1.952) against 1.960 — within 0.7 %, so the rule changes k
-by less than that where it switches; at a share of 1/2 the GUM's k overstates by 3 % (1.90),
-at 0.97 (an arcsine table line at its bound) by 26 % (1.55). Below the share the GUM's k is
-kept, so a budget of near-normal lines keeps its t_p(ν_eff) and its ν_eff.
+one rectangular) line is 1.950 (1.953) against 1.960, within 0.5 %; at a share of 1/2 the
+GUM's k overstates by 3 % (1.90), at 0.97 (an arcsine table line at its bound) by 29 %
+(1.52). Below the share the GUM's k is kept, so a budget of near-normal lines keeps its
+t_p(ν_eff) and its ν_eff. Where every Type A line has many degrees of freedom the rule
+therefore moves k by less than 0.5 % where it switches. A Type A line of few degrees of
+freedom is another matter: the GUM folds it into ν_eff (Welch–Satterthwaite), JCGM 101
+draws it as a scaled-and-shifted t (6.4.9), and the two differ whatever the share (a t₂
+line at 11 % of u_c² beside a normal rest: WS k 1.97, the t draws 2.31); at the switch k
+then moves by that difference, towards JCGM 101's, the better model (JCGM 101 5.7, 6.4.9).
 
 This module never imports ``gonio``.
 """
@@ -55,22 +60,49 @@ def _contributions(inputs: Sequence[InputQuantity], coeffs: Sequence[float]) -> 
     return np.array([float(c) * q.u for q, c in zip(inputs, coeffs)], dtype=float)
 
 
+def _non_normal(inputs: Sequence[InputQuantity]) -> np.ndarray:
+    return np.array([q.distribution not in NORMAL_LIKE for q in inputs], dtype=bool)
+
+
+def _correlated(n: int, correlation) -> np.ndarray:
+    """Which of ``n`` lines have a non-zero correlation with another line."""
+    if correlation is None:
+        return np.zeros(n, dtype=bool)
+    r = np.asarray(correlation, dtype=float)
+    return ((r != 0) & ~np.eye(n, dtype=bool)).any(axis=0)
+
+
 def non_normal_share(inputs: Sequence[InputQuantity], coeffs: Sequence[float],
                      correlation=None) -> float:
     """The fraction of u_c² (JCGM 100 5.1.2, 5.2.2) carried by the lines whose distribution
-    is not in :data:`NORMAL_LIKE` (their own c_i²u_i²; 0 when u_c is 0).
+    is not in :data:`NORMAL_LIKE`: c_Nᵀ V_NN c_N / cᵀ V c over those lines N, with their
+    correlations (two correlated lines that cancel carry little); 0 when u_c is 0.
 
     >>> from uncertainty.quantities import type_b, from_u
     >>> q = [type_b("A", 0.0, math.sqrt(2.0), "arcsine"), from_u("s", 0.0, 1.0, dof=5)]
     >>> round(non_normal_share(q, [1.0, 1.0]), 12)
     0.5
+
+    Two rectangular lines entering with +1 and −1 and fully correlated cancel:
+
+    >>> r = [[1, 1, 0], [1, 1, 0], [0, 0, 1]]
+    >>> q = [type_b("a", 0.0, 1.0, "rectangular"), type_b("b", 0.0, 1.0, "rectangular"),
+    ...      from_u("s", 0.0, 0.1)]
+    >>> non_normal_share(q, [1.0, -1.0, 1.0], r)
+    0.0
     """
-    ci = _contributions(inputs, coeffs)
-    uc = combined_uncertainty(list(coeffs), [q.u for q in inputs], correlation=correlation)
+    cs = [float(c) for c in coeffs]
+    uc = combined_uncertainty(cs, [q.u for q in inputs], correlation=correlation)
     if not uc > 0:
         return 0.0
-    non = sum(float(x) ** 2 for q, x in zip(inputs, ci) if q.distribution not in NORMAL_LIKE)
-    return non / uc ** 2
+    nn = _non_normal(inputs)
+    ci = _contributions(inputs, cs)[nn]
+    if correlation is None:
+        non = float(np.sum(ci * ci))
+    else:
+        r = np.asarray(correlation, dtype=float)[np.ix_(nn, nn)]
+        non = float(ci @ r @ ci)
+    return max(non, 0.0) / uc ** 2
 
 
 def needs_combined_k(inputs: Sequence[InputQuantity], coeffs: Sequence[float],
@@ -82,12 +114,22 @@ def needs_combined_k(inputs: Sequence[InputQuantity], coeffs: Sequence[float],
     adequately approximated by a normal or scaled-shifted t distribution: a dominant
     non-normal line breaks that (JCGM 100 G.2.3).
 
+    A line that is not normal and correlated with another cannot be drawn in its own
+    distribution (JCGM 101 6.4.8 gives correlated inputs jointly as a multivariate normal
+    only): where such a line is in the budget the convolution would not be the budget's, so
+    the GUM's k stands.
+
     >>> from uncertainty.quantities import type_b, from_u
     >>> needs_combined_k([type_b("P", 0.0, 1.0, "arcsine"), from_u("s", 0.0, 0.1)], [1, 1])
     True
     >>> needs_combined_k([type_b("P", 0.0, 0.1, "rectangular"), from_u("s", 0.0, 1.0)], [1, 1])
     False
+    >>> needs_combined_k([type_b("P", 0.0, 1.0, "arcsine"), from_u("s", 0.0, 0.1)], [1, 1],
+    ...                  [[1.0, 0.5], [0.5, 1.0]])
+    False
     """
+    if (_non_normal(inputs) & _correlated(len(inputs), correlation)).any():
+        return False
     return non_normal_share(inputs, coeffs, correlation) > share
 
 

@@ -325,10 +325,17 @@ LABELS: dict[str, dict[str, str]] = {
     "k_combined": {"en": "{items}: k is the 95 % half-width of the distribution the budget's "
                          "lines combine to (their convolution, JCGM 101 Monte Carlo) over u_c, "
                          "not t95(ν_eff): lines that are not normal carry more than a quarter of "
-                         "u_c² (K: the table's error at its MPE bound, arcsine).",
+                         "u_c² (in brackets: the largest of them).",
                    "zh": "{items}：k 为其不确定度各分量合成分布（各分量分布的卷积，JCGM 101 "
                          "蒙特卡洛法）的 95 % 半宽除以 u_c，不取 t95(ν_eff)：非正态分量占 u_c² "
-                         "的四分之一以上（K：转台误差取最大允许误差限，反正弦分布）。"},
+                         "的四分之一以上（括号内为其中最大者）。"},
+    "dist_arcsine": {"en": "arcsine", "zh": "反正弦分布"},
+    "dist_rectangular": {"en": "rectangular", "zh": "均匀分布"},
+    "dist_triangular": {"en": "triangular", "zh": "三角分布"},
+    "dist_trapezoidal": {"en": "trapezoidal", "zh": "梯形分布"},
+    "dist_rectangular-product": {"en": "product of two rectangulars", "zh": "两均匀分布之积"},
+    "dist_rectangular-shifted-product": {"en": "product of two rectangulars",
+                                         "zh": "两均匀分布之积"},
     "U_certified_physical": {
         "en": "Certified: U of this calibration's physical budget (the draft's Annex A lines and "
               "the lines marked \"beyond the draft\", budget below). The draft's reading, its "

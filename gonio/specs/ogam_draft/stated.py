@@ -190,23 +190,42 @@ K_SOURCE_COMBINED = "jcgm101-convolution"
 
 
 def combined_k_note(res: dict, L: dict, only: str | None = None) -> str | None:
-    """The note naming the items stated with a k (:func:`stated_item`: not those stated by
-    an interval alone) that comes from their budget's combined distribution (``k_source``
-    "jcgm101-convolution", :func:`gonio.specs.ogam_draft.item_uncertainty.budget_k`), in
-    ``L``'s language — item ``only`` alone when given; None when there is none.
+    """The note naming the items whose k comes from their budget's combined distribution
+    (``k_source`` "jcgm101-convolution",
+    :func:`gonio.specs.ogam_draft.item_uncertainty.budget_k`) — stated by U or by an upper
+    bound value + U — each with the largest of its lines that are not normal (its symbol
+    and distribution, from results.json's components), in ``L``'s language; item ``only``
+    alone when given; None when there is none.
 
     >>> res = {"items": {"scale_factor": {"measured": True, "clause": "7.1", "value": 3600.2,
     ...     "unit": "counts/deg", "uncertainty": {"U": 0.02, "k": 1.55, "u_c": 0.013,
-    ...     "coverage_probability": 0.95, "k_source": "jcgm101-convolution"}}}}
-    >>> combined_k_note(res, {"scale_factor": "K", "k_combined": "{items}: k of JCGM 101"})
-    'K: k of JCGM 101'
+    ...     "coverage_probability": 0.95, "k_source": "jcgm101-convolution", "components": [
+    ...     {"symbol": "s_K", "u": 0.003, "distribution": "normal"},
+    ...     {"symbol": "K_tilt", "u": 0.012, "distribution": "arcsine"},
+    ...     {"symbol": "P_K", "u": 0.005, "distribution": "arcsine"}]}}}}
+    >>> combined_k_note(res, {"scale_factor": "K", "k_combined": "{items}: k of JCGM 101",
+    ...                       "dist_arcsine": "arcsine"})
+    'K (K_tilt, arcsine): k of JCGM 101'
     """
-    names = [L[n] for n in item_names(res) if (only is None or n == only)
-             and (res["items"][n].get("uncertainty") or {}).get("k_source") == K_SOURCE_COMBINED
-             and stated_item(res, n)["k"] is not None]
+    names = []
+    for n in item_names(res):
+        unc = res["items"][n].get("uncertainty") or {}
+        if (only is None or n == only) and unc.get("k_source") == K_SOURCE_COMBINED:
+            names.append(L[n] + _largest_non_normal(unc.get("components") or (), L))
     if not names:
         return None
     return L["k_combined"].format(items=L.get("list_sep", ", ").join(names))
+
+
+def _largest_non_normal(components, L: dict) -> str:
+    """" (symbol, distribution)" of the line with the largest u among those that are not
+    normal (the lines that made the budget's k its combined distribution's), or ""."""
+    non = [c for c in components if c.get("distribution") not in ("normal", "gaussian", "t")]
+    if not non:
+        return ""
+    c = max(non, key=lambda c: abs(float(c.get("u") or 0.0)))
+    d = c.get("distribution") or ""
+    return f" ({c.get('symbol', '')}, {L.get('dist_' + d, d)})"
 
 
 def k_tilt_note(res: dict, L: dict) -> list:
