@@ -329,6 +329,7 @@ LABELS: dict[str, dict[str, str]] = {
                    "zh": "{items}：k 为其不确定度各分量合成分布（各分量分布的卷积，JCGM 101 "
                          "蒙特卡洛法）的 95 % 半宽除以 u_c，不取 t95(ν_eff)：非正态分量占 u_c² "
                          "的四分之一以上（括号内为其中最大者）。"},
+    "largest_line": {"en": " ({symbol}, {dist})", "zh": "（{symbol}，{dist}）"},
     "dist_arcsine": {"en": "arcsine", "zh": "反正弦分布"},
     "dist_rectangular": {"en": "rectangular", "zh": "均匀分布"},
     "dist_triangular": {"en": "triangular", "zh": "三角分布"},

@@ -225,7 +225,8 @@ def _largest_non_normal(components, L: dict) -> str:
         return ""
     c = max(non, key=lambda c: abs(float(c.get("u") or 0.0)))
     d = c.get("distribution") or ""
-    return f" ({c.get('symbol', '')}, {L.get('dist_' + d, d)})"
+    return L.get("largest_line", " ({symbol}, {dist})").format(symbol=c.get("symbol", ""),
+                                                               dist=L.get("dist_" + d, d))
 
 
 def k_tilt_note(res: dict, L: dict) -> list:
