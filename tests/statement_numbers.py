@@ -54,11 +54,48 @@ def check_k(key: str, it: dict) -> None:
     assert p is not None, f"{key}: no coverage probability in results.json"
     if u["k"] is None or u.get("k_source") == "fixed":
         return
+    if u.get("k_source") == "jcgm101-convolution":
+        assert u["nu_eff"] is None, f"{key}: a k of the combined distribution states no ν"
+        want = combined_k_of_components(u["components"], u["u_c"], p)
+        assert u["k"] == pytest.approx(want, rel=0.01), (key, u["k"], want)
+        assert u["U"] == pytest.approx(u["k"] * u["u_c"], rel=1e-9), key
+        return
     nu = stated_nu(u["nu_eff"])
     q = 0.5 + p / 2
     want = norm.ppf(q) if nu is None or math.isinf(nu) else t.ppf(q, nu)
     assert u["k"] == pytest.approx(want, rel=1e-9), (key, u["k"], u["nu_eff"], want)
     assert u["U"] == pytest.approx(u["k"] * u["u_c"], rel=1e-9), key
+
+
+def combined_k_of_components(components, u_c: float, p: float, m: int = 400_000,
+                             seed: int = 11) -> float:
+    """k = U_p/u_c of the sum of results.json's budget lines, each drawn here in its stated
+    distribution with its stated u (the lines uncorrelated, as every budget whose k is its
+    combined distribution's): a second Monte Carlo, written apart from gonio's sampler, with
+    its own seed (JCGM 101 6.4: normal; t with ν as scaled and shifted t, 6.4.9; arcsine
+    A sin φ, u = A/√2; rectangular, u = a/√3; triangular, u = a/√6; the product of two zero-mean
+    rectangulars, u = ab/3)."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    y = np.zeros(m)
+    for c in components:
+        u, d = abs(float(c["u"])), c["distribution"]
+        if d in ("normal", "gaussian") or (d == "t" and c.get("dof") is None):
+            y += rng.normal(0.0, u, m)
+        elif d == "t":
+            y += u * rng.standard_t(float(c["dof"]), m)
+        elif d in ("arcsine", "u-shaped"):
+            y += u * math.sqrt(2.0) * np.sin(rng.uniform(0.0, 2.0 * math.pi, m))
+        elif d in ("rectangular", "uniform"):
+            y += rng.uniform(-1.0, 1.0, m) * u * math.sqrt(3.0)
+        elif d == "triangular":
+            y += rng.triangular(-1.0, 0.0, 1.0, m) * u * math.sqrt(6.0)
+        elif d == "rectangular-product":
+            y += rng.uniform(-1.0, 1.0, m) * rng.uniform(-1.0, 1.0, m) * 3.0 * u
+        else:
+            raise AssertionError(f"no test sampler for distribution {d!r}")
+    return float(np.quantile(np.abs(y), p)) / float(u_c)
 
 
 _CELL_FIELDS = {"U": r" ± (\S+)", "k": r"\bk = ([^,)\s]+)", "nu_eff": r"ν_eff = ([^,)\s]+)",
