@@ -73,3 +73,18 @@ def test_timeline_angle_rate_equals_angle_and_rate():
         th, r = blk.timeline.angle_rate(t)
         np.testing.assert_array_equal(th, blk.timeline.angle_deg(t))
         np.testing.assert_array_equal(r, blk.timeline.rate_dps(t))
+
+
+def test_timeline_angle_is_the_integral_of_its_rate():
+    """A check apart from the shared segment code: the table's angle between any two instants
+    is the integral of its rate (cumulative trapezoid on a grid 100× finer than the samples),
+    so a change of the angle's or the rate's formula that breaks kinematics fails here."""
+    from scipy.integrate import cumulative_trapezoid
+
+    p = validation_protocol()
+    b = replace(load_bench("rlg"), sample_rate_hz=50.0)
+    for blk in plan_session(p, b, np.random.default_rng(5)):
+        t = np.arange(blk.k_start * 100, blk.k_end * 100 + 1) / (100.0 * b.sample_rate_hz)
+        th, r = blk.timeline.angle_rate(t)
+        integral = cumulative_trapezoid(r, t, initial=0.0)
+        np.testing.assert_allclose(th - th[0], integral, atol=1e-5, rtol=0.0)
