@@ -25,7 +25,7 @@ Contents
 :func:`max_abs_normal_mean`     c_n = E[max |Z_i|] (5.3.3.7's selection excess; shared, re-exported)
 :func:`hysteresis_upper_iec`    IEC 5.3.3.7: one-sided upper limit of the largest true |B_up − B_down|
 :func:`walk_coefficient_bound`  IEC 5.1.3, 5.3.3: the largest K² the static record allows
-:func:`walk_k2_iec`             IEC 5.1.3, 5.3.3: E[K²] of every item's bias drift (reading)
+:func:`walk_k2_iec`             IEC 5.1.3, 5.3.3: E[K²] of every item's bias drift (posterior mean)
 ==============================  ==================================================
 """
 
@@ -369,24 +369,71 @@ def walk_coefficient_bound(tau_s, adev, edf, p: float = 0.95) -> float:
     return float(np.min(v))
 
 
-def walk_k2_iec(K: float, u_K: float, bound_k2: float) -> float:
+def walk_k2_iec(avar, edf, other_avar, k_column, *, k2_fit: float = 0.0, cov=None,
+                p_cap: float = 0.9999) -> float:
     """IEC 62047-20 5.1.3 and 5.3.3, reading taken (the standard states no drift term): E[K²]
     of the rate random walk for the bias drift of every item's budget (scale-factor slope
-    and linearity, 5.3.3.3, 5.3.3.6–5.3.3.9; one rule on one certificate), from the static
-    record's five-term Allan fit K ± u_K (IEEE 952 Annex C) and the largest K² the record allows, ``bound_k2``
-    (:func:`walk_coefficient_bound`, 95 %): a walk the fit resolves (K > u_K) as K², at most
-    the bound (E[K̂²] = K² + u_K² already, so K² + u_K² would count u_K² twice); one it does
-    not (K = 0, or u_K ≥ K: the record cannot tell the walk from 0) as K rectangular on
-    [0, √bound], bound/3 (JCGM 100 4.3.7) — never a fitted K near 0, which would state the
-    drift of visits hours apart by the record's luck. A bound that is not finite (no τ to
-    bound it) leaves K².
+    and linearity, 5.3.3.3, 5.3.3.6–5.3.3.9; one rule on one certificate) — the POSTERIOR
+    MEAN of K² given the static record's (5.4) Allan variances, K uniform on [0, √cap].
 
-    >>> walk_k2_iec(0.0, 0.0, 0.9), walk_k2_iec(2.0, 1.0, 9.0), walk_k2_iec(2.0, 1.0, 3.0)
-    (0.3, 4.0, 3.0)
-    >>> walk_k2_iec(1.0, 1.5, 0.9)                    # not resolved: the bound's rectangle
-    0.3
+    Likelihood (IEEE 952 C.1, NIST SP 1065 §5.3): at each τ_i the estimate ``avar``_i is
+    σ_i²(K²)·χ²(ν_i)/ν_i with σ_i²(K²) = ``other_avar``_i + ``k_column``_i·K² — the other
+    terms of the five-term fit (quantisation, white noise, bias instability, ramp) held at
+    their fitted values, ``k_column`` the walk's response (τ/3 for AVAR) and ν_i = ``edf``
+    (the caller gives the edf of the walk's own noise type, α = −2, the smallest at long τ).
+    The τ's share most of their data, so the product of the per-τ likelihoods overstates
+    the information: it is raised to the power s = min(1, H/J) (magnitude-adjusted
+    composite likelihood, Chandler & Bate 2007, Biometrika 94(1)), H = Σ ν_i c_i²/(2σ_i⁴)
+    its Fisher information for K² and J = gᵀ Σ g the variance of its score, g_i = ν_i
+    c_i/(2σ_i⁴), Σ = ``cov`` the covariance of the Allan variance estimates across τ under
+    the fitted model (σ_i² at ``k2_fit``); ``cov`` None: independent τ, s = 1. The prior is
+    flat in K up to ``cap``, the smallest per-τ one-sided ``p_cap`` χ² limit of avar_i/c_i
+    (a K no τ of the record allows); the mean is the integral over a grid of K.
+
+    What it is for: about the walk's K² on average where the record resolves it, and large
+    where the record cannot exclude a large K (the likelihood is flat there: the mean takes
+    its width, never a fitted K̂ = 0). Entries with a non-finite or non-positive value, edf
+    or response are left out; none left: NaN.
+
+    One τ, no other term, independent (s = 1): the posterior of X = K² is inverse gamma,
+    shape (ν − 1)/2, scale ν·avar/2 (c = 1), truncated at the cap; ν = 12, avar = 2:
+
+    >>> from scipy.stats import invgamma
+    >>> cap = 2 * 12 / __import__("scipy").stats.chi2.ppf(1e-4, 12)
+    >>> a, b = 5.5, 12.0
+    >>> exact = b / (a - 1) * invgamma.cdf(cap, a - 1, scale=b) / invgamma.cdf(cap, a, scale=b)
+    >>> got = walk_k2_iec([2.0], [12.0], [0.0], [1.0])
+    >>> round(got, 3), round(float(exact), 3)
+    (2.661, 2.661)
     """
-    k, u = abs(float(K)) if math.isfinite(K) else 0.0, float(u_K) if math.isfinite(u_K) else 0.0
-    if not math.isfinite(bound_k2):
-        return k * k
-    return min(k * k, bound_k2) if k > u else bound_k2 / 3.0
+    from scipy.stats import chi2
+
+    y, nu = as_array(avar, "avar"), as_array(edf, "edf")
+    a, c = as_array(other_avar, "other_avar"), as_array(k_column, "k_column")
+    if not (y.shape == nu.shape == a.shape == c.shape and 0.0 < p_cap < 1.0):
+        raise GonioError(f"walk_k2_iec: {y.size} variances, {nu.size} edf, {a.size} other "
+                         f"terms, {c.size} responses at p_cap = {p_cap!r}")
+    ok = np.isfinite(y) & np.isfinite(nu) & np.isfinite(a) & np.isfinite(c) \
+        & (y > 0) & (nu > 0) & (c > 0) & (a >= 0)
+    if not ok.any():
+        return math.nan
+    k2f = float(k2_fit) if math.isfinite(k2_fit) and k2_fit > 0 else 0.0
+    v_fit = np.maximum(a + c * k2f, np.finfo(float).tiny)
+    s = 1.0
+    if cov is not None:
+        sig = np.asarray(cov, dtype=np.float64)
+        if sig.shape != (y.size, y.size):
+            raise GonioError(f"walk_k2_iec: covariance {sig.shape} for {y.size} variances")
+        g = np.where(ok, nu * c / (2.0 * v_fit ** 2), 0.0)
+        h = float(np.sum(g * c))
+        j = float(g @ np.where(np.isfinite(sig), sig, 0.0) @ g)
+        if h > 0 and j > 0:
+            s = min(1.0, h / j)
+    y, nu, a, c = y[ok], nu[ok], a[ok], c[ok]
+    cap = float(np.min(y * nu / chi2.ppf(1.0 - p_cap, nu) / c))
+    k = np.concatenate([[0.0], np.geomspace(math.sqrt(cap) * 1e-6, math.sqrt(cap), 4000)])
+    v = np.maximum(a[None, :] + c[None, :] * (k * k)[:, None], np.finfo(float).tiny)
+    with np.errstate(over="ignore"):        # K = 0 with no other term: likelihood 0
+        ll = -0.5 * s * np.sum(nu[None, :] * (y[None, :] / v + np.log(v)), axis=1)
+    w = np.exp(ll - np.max(ll))
+    return float(np.trapezoid(w * k * k, k) / np.trapezoid(w, k))

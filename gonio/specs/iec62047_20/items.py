@@ -1497,9 +1497,8 @@ def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
 def walk_k2_bound_dps(ctx: Context) -> float:
     """The largest rate random walk K² ((°/s)²/s) the static record (5.4) allows, by
     :func:`gonio.specs.iec62047_20.formulas.walk_coefficient_bound` (min over τ of the 95 %
-    one-sided χ² limits σ̂(τ)²·ν/χ²_0.05(ν)·3/τ) — the one bound of every IEC item: the end
-    of K's rectangle in :func:`drift_coef_dps` and the cap of the fitted K̂² in
-    :func:`drift_coef_fitted_dps`. Not finite when no τ bounds it."""
+    one-sided χ² limits σ̂(τ)²·ν/χ²_0.05(ν)·3/τ) — the cap of the fitted K̂² in
+    :func:`drift_coef_fitted_dps` (5.3.3.5's bootstrap). Not finite when no τ bounds it."""
     key = ("walk_k2_bound", ctx.a_base, ctx.null_output)
     if key not in ctx.cache:
         allan = _static(ctx)[0]
@@ -1508,18 +1507,49 @@ def walk_k2_bound_dps(ctx: Context) -> float:
     return ctx.cache[key]
 
 
+def walk_likelihood_inputs(ctx: Context) -> dict:
+    """:func:`walk_likelihood_inputs_of` the static record (5.4) and its five-term fit."""
+    return walk_likelihood_inputs_of(_static(ctx)[0], _noise_fit(ctx))
+
+
+def walk_likelihood_inputs_of(allan, fit) -> dict:
+    """The arguments of :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec` from an Allan
+    result and its five-term fit, in the record's rate unit squared (and per s): the Allan
+    variances, the edf of the walk's own noise type at each τ (Greenhall, α = −2), the five-term fit's other terms (quantisation,
+    white noise, bias instability, ramp) at each τ, the walk's response τ/3 (IEEE 952 C.1),
+    the fitted K̂², and the covariance of the variance estimates across τ under the fitted
+    model (:func:`gonio.analysis.noise.covariance.variance_covariance`)."""
+    from gonio.analysis.noise.fit import design_matrix, edf_memo
+
+    ok = np.isfinite(allan.adev) & (allan.adev > 0)
+    tau, m = np.asarray(allan.tau_s[ok], float), np.asarray(allan.m[ok], np.int64)
+    kind = allan.kind
+    a_full = design_matrix(tau, kind, allan.tau0_s)
+    coef = np.array([0.0 if not math.isfinite(float(x)) else float(x) ** 2
+                     for x in (fit.Q, fit.N, fit.B, fit.K, fit.R)])
+    n_phase = allan.n_phase or (allan.n_samples + (0 if allan.input_type == "angle" else 1))
+    nu = np.asarray(edf_memo(kind, n_phase, m, np.full(m.size, -2, dtype=np.int64)), float)
+    cov = variance_covariance("hdev" if kind == "hdev" else "adev", m,
+                              np.asarray(allan.n_pairs[ok], np.int64), allan.tau0_s, coef)
+    return {"avar": np.asarray(allan.adev[ok], float) ** 2, "edf": nu,
+            "other_avar": a_full @ np.r_[coef[:3], 0.0, coef[4]], "k_column": a_full[:, 3],
+            "k2_fit": float(coef[3]), "cov": cov}
+
+
 def drift_coef_dps(ctx: Context) -> tuple[float, float]:
     """(E[K²] (°/s)²/s, E[B²] (°/s)²) of the bias drift, the ONE rule of every IEC 62047-20
     item whose budget carries the drift as a standard uncertainty (5.1.3 slope and
     linearity, 5.3.3.3, 5.3.3.6, 5.3.3.7, 5.3.3.8, 5.3.3.9): the rate random walk by
-    :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec` — reading taken: a walk the
-    static record's five-term fit resolves (K̂ > u_K) as K̂², at most the bound; one it
-    does not as K rectangular on [0, √bound], bound/3 (JCGM 100 4.3.7) — with the bound of
-    :func:`walk_k2_bound_dps` (95 % per τ); the flicker as B̂² + u_B². The standard itself
-    states no drift term (5.3.3 reads each item from its own records), so the rule is
-    gonio's reading, documented in docs/iec62047-20-readings.md. 5.3.3.5's bootstrap draws
-    its replicates at the fitted values instead (:func:`drift_coef_fitted_dps`, the same
-    bound). The same refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
+    :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec` — reading taken: the posterior
+    mean of K² given the static record's Allan variances with their χ² distributions and
+    the walk's edf, the other terms as fitted, the τ's correlation by the magnitude-adjusted
+    composite likelihood (:func:`walk_likelihood_inputs`), K uniform up to the record's
+    99.99 % limit; the flicker as B̂² + u_B². The standard itself states no drift term
+    (5.3.3 reads each item from its own records), so the rule is gonio's reading,
+    documented in docs/iec62047-20-readings.md. 5.3.3.5's bootstrap draws its replicates
+    at the fitted values instead (:func:`drift_coef_fitted_dps`, capped by
+    :func:`walk_k2_bound_dps`). The same refusals as :func:`drift_u_dps`; a record that
+    does not vary: (0, 0)."""
     if not _drift_varies(ctx):
         return 0.0, 0.0         # a noise-free bench (the reader refuses a stuck record)
     key = ("drift_coef", ctx.a_base, ctx.null_output)
@@ -1527,8 +1557,8 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
         fit = _noise_fit(ctx)
         b = float(fit.B) if math.isfinite(float(fit.B)) else 0.0
         ub = float(fit.u_B) if math.isfinite(float(fit.u_B)) else 0.0
-        bound = walk_k2_bound_dps(ctx) * S_PER_H ** 2                       # (°/h)²/s
-        ctx.cache[key] = (ief.walk_k2_iec(fit.K, fit.u_K, bound) / S_PER_H ** 2,
+        k2 = ief.walk_k2_iec(**walk_likelihood_inputs(ctx))                # (°/h)²/s
+        ctx.cache[key] = ((k2 if math.isfinite(k2) else 0.0) / S_PER_H ** 2,
                           (b * b + ub * ub) / S_PER_H ** 2)
     return ctx.cache[key]
 
