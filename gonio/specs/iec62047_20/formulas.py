@@ -339,17 +339,15 @@ def hysteresis_upper_iec(reading: float, sds, p: float = 0.95) -> float:
 
 
 def walk_coefficient_bound(tau_s, adev, edf, p: float = 0.95) -> float:
-    """IEC 62047-20 5.1.3 and 5.3.3, the bias drift of every item's budget: the largest rate random
+    """IEC 62047-20 5.3.3.5, the cap of the bootstrap's fitted walk: the largest rate random
     walk K² (adev's unit squared per s) the static record (5.4) allows: the walk's Allan
     variance K²τ/3 cannot exceed the whole σ(τ)² (IEEE 952 C.1), so K² ≤ min over τ of
     σ_hi(τ)²·3/τ, σ_hi(τ)² = σ̂(τ)²·ν/χ²_(1−p)(ν) the one-sided ``p`` upper limit at each τ
     (ν the edf there). The minimum picks the luckiest of several τ, so it holds K² less
     often than p: on 2-h records of white noise and a walk (the bench's K), in 83–86 % of
     80 records at p = 0.95, where the 68 % limits used before held it in 56–65 %
-    (tests/test_iec_hysteresis_interval.py). It is the end of K's rectangle
-    (:func:`walk_k2_iec`), not a stated 95 % bound: limits at 99 % per τ (97 % of the
-    records) left the built-in programme's 5.3.3.7 and 5.3.3.6 over-wide (z sd 0.42 and
-    0.67 on 40 trials). τ with a non-finite value or edf are left out; none left: NaN.
+    (tests/test_iec_hysteresis_interval.py). Not a stated 95 % bound; the drift
+    terms' E[K²] is :func:`walk_k2_iec` (a posterior mean, no level). τ with a non-finite value or edf are left out; none left: NaN.
 
     >>> from scipy.stats import chi2
     >>> b = walk_coefficient_bound([100.0, 1000.0], [1.0, 1.0], [10.0, 4.0])

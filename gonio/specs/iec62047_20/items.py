@@ -1569,8 +1569,8 @@ def drift_coef_fitted_dps(ctx: Context) -> tuple[float, float]:
     of the fitted model) draws its replicates from. Not E[K²] of :func:`drift_coef_dps`
     (the rule of a drift term stated as a standard uncertainty): the replicates' spread is
     u itself, so a coefficient inflated by its own uncertainty widens u twice (K̂² + u_K²:
-    z sd 0.55 on 40 built-in seeds). K̂² is held to the same bound as every other item's
-    walk (:func:`walk_k2_bound_dps`); an unresolved K̂ (K̂ ≤ u_K) is drawn as fitted.
+    z sd 0.55 on 40 built-in seeds). K̂² is held to the record's 95 % bound
+    (:func:`walk_k2_bound_dps`); an unresolved K̂ (K̂ ≤ u_K) is drawn as fitted.
     The same refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
     if not _drift_varies(ctx):
         return 0.0, 0.0
