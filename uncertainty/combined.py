@@ -169,7 +169,11 @@ def combined_coverage_factor(inputs: Sequence[InputQuantity], coeffs: Sequence[f
     dy = np.zeros(m)
     for c, q, x in zip(cs, inputs, xs):
         if c:
-            dy += c * (x - q.value)
+            # c·(x − x_i) in place on the line's own draws: the same operations on the same
+            # operands as the expression, so the same bits, without two temporaries of M
+            x -= q.value
+            x *= c
+            dy += x
     pm = p * m                                 # q = pM, or ⌊pM + 1/2⌋ (JCGM 101 7.7.1)
     q_p = int(round(pm)) if abs(pm - round(pm)) < 1e-9 else int(math.floor(pm + 0.5))
     a = np.abs(dy)

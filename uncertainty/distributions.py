@@ -92,7 +92,9 @@ class Triangular:
     def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
         """Zero-mean samples (JCGM 101 6.4.5.4: sum of two rectangulars of half-width a/2)."""
         h = 0.5 * half_width
-        return rng.uniform(-h, h, size) + rng.uniform(-h, h, size)
+        x = rng.uniform(-h, h, size)
+        x += rng.uniform(-h, h, size)          # in place: the same bits as the sum
+        return x
 
 
 @dataclass(frozen=True)
@@ -111,7 +113,11 @@ class Arcsine:
 
     def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
         """Zero-mean samples X = a·sin(2πU) (JCGM 101 6.4.6.4)."""
-        return half_width * np.sin(2.0 * np.pi * rng.random(size))
+        x = rng.random(size)                   # in place: the same bits as the expression
+        x *= 2.0 * np.pi
+        np.sin(x, out=x)
+        x *= half_width
+        return x
 
 
 @dataclass(frozen=True)
@@ -164,7 +170,10 @@ class RectangularProduct:
 
     def sample(self, rng: np.random.Generator, half_width: float, size: int) -> np.ndarray:
         """Zero-mean samples a·U₁U₂, U₁ and U₂ independent and uniform on [−1, 1]."""
-        return half_width * rng.uniform(-1.0, 1.0, size) * rng.uniform(-1.0, 1.0, size)
+        x = rng.uniform(-1.0, 1.0, size)       # in place: the same bits as the expression
+        x *= half_width
+        x *= rng.uniform(-1.0, 1.0, size)
+        return x
 
 
 @dataclass(frozen=True)

@@ -69,11 +69,16 @@ class InputQuantity:
         >>> bool(abs(x.std() - 0.0577) < 0.001)
         True
         """
+        # x + u·z computed in place on the draws z (the same bits as the expression: IEEE
+        # addition and multiplication commute), without a temporary per operation
         if self._dist is not None and self.half_width is not None:
-            return self.value + self._dist.sample(rng, self.half_width, size)
-        if math.isfinite(self.dof):
-            return self.value + self.u * rng.standard_t(self.dof, size)
-        return self.value + self.u * rng.standard_normal(size)
+            z = self._dist.sample(rng, self.half_width, size)
+        else:
+            z = (rng.standard_t(self.dof, size) if math.isfinite(self.dof)
+                 else rng.standard_normal(size))
+            z *= self.u
+        z += self.value
+        return z
 
 
 def type_b(symbol: str, value: float, half_width: float, distribution_name: str = "rectangular",

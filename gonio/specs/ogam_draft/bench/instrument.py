@@ -212,7 +212,7 @@ class Integrator:
             steps = rng.standard_normal(n)
             steps *= dph_to_dps(inst.rrw_dphsh) / math.sqrt(S_PER_H)
             steps *= math.sqrt(dt)
-            r = np.cumsum(steps)
+            r = np.cumsum(steps, out=steps)    # in place: the same running sum
             r += self.rrw
             self.rrw = float(r[-1])
             if out is None:
