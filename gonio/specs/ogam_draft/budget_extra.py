@@ -20,6 +20,7 @@ The physics is in :mod:`gonio.specs.ogam_draft.coupling` and
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -213,14 +214,28 @@ def tilt_coupling_coefficients(theta_deg, time_s, rate_dps: float, read_delay_s:
     c = np.empty(len(pairs))
     s = np.empty(len(pairs))
     for i, (theta, t_read) in enumerate(pairs.tolist()):
-        tl = Timeline()
-        arrive = tl.move(theta, rate_dps, accel_dps2)
-        tl.dwell(max(t_read - arrive, 0.0))
-        terms = coupling_terms(tl, 0.0, t_read, 0.0, 0.0, compensation="measured",
-                               theta_comp_deg=0.0)
-        c[i], s[i] = terms.p_s, terms.q_s
+        # keyed by the exact bits (hex): −0.0 and 0.0 are kept apart
+        c[i], s[i] = _move_coupling(float(theta).hex(), float(t_read).hex(),
+                                    float(rate_dps).hex(), float(accel_dps2).hex())
     inverse = inverse.reshape(-1)
     return c[inverse].reshape(th.shape), s[inverse].reshape(th.shape)
+
+
+@functools.lru_cache(maxsize=1024)
+def _move_coupling(theta_deg: str, t_read_s: str, rate_dps: str,
+                   accel_dps2: str) -> tuple[float, float]:
+    """(C, S) of :func:`tilt_coupling_coefficients` for one move from 0 to θ and a rest to
+    the reading, the four numbers given as ``float.hex`` strings: a pure function of them,
+    kept for the budgets that ask for the same few moves again (the K, E, C and
+    nonlinearity budgets)."""
+    theta_deg, t_read_s, rate_dps, accel_dps2 = (
+        float.fromhex(v) for v in (theta_deg, t_read_s, rate_dps, accel_dps2))
+    tl = Timeline()
+    arrive = tl.move(theta_deg, rate_dps, accel_dps2)
+    tl.dwell(max(t_read_s - arrive, 0.0))
+    terms = coupling_terms(tl, 0.0, t_read_s, 0.0, 0.0, compensation="measured",
+                           theta_comp_deg=0.0)
+    return float(terms.p_s), float(terms.q_s)
 
 
 def scale_factor_tilt_bias(scale_factor_rows: pd.DataFrame, protocol: Protocol,
