@@ -182,7 +182,8 @@ def budget_k(nu_eff: float, k: float | None, inputs: Sequence = (), coeffs: Sequ
       carry more than 1/4 of u_c² (:func:`uncertainty.needs_combined_k`, JCGM 101 5.7,
       JCGM 100 G.2.3): k = U_p/u_c of the budget's combined distribution — the convolution
       of its lines, each in its own distribution, the Type A lines as scaled-and-shifted t
-      with their ν — by a JCGM 101 Monte Carlo of fixed M and seed
+      with their ν — computed numerically (JCGM 101 5.4), or by a JCGM 101 Monte Carlo of
+      fixed M and seed where a line has no closed-form distribution function
       (:func:`uncertainty.combined_coverage_factor`; ``"jcgm101-convolution"``). K's table
       line at the MPE bound is such a line (arcsine, :func:`scale_factor_table_line`);
     - otherwise t_95 of the Welch–Satterthwaite ν_eff as stated (JCGM 100 G.4: its integer

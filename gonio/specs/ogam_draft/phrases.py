@@ -323,11 +323,11 @@ LABELS: dict[str, dict[str, str]] = {
     "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
                 "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
     "k_combined": {"en": "{items}: k is the 95 % half-width of the distribution the budget's "
-                         "lines combine to (their convolution, JCGM 101 Monte Carlo) over u_c, "
+                         "lines combine to (their convolution, computed numerically, JCGM 101 5.4) over u_c, "
                          "not t95(ν_eff): lines that are not normal carry more than a quarter of "
                          "u_c² (in brackets: the largest of them).",
-                   "zh": "{items}：k 为其不确定度各分量合成分布（各分量分布的卷积，JCGM 101 "
-                         "蒙特卡洛法）的 95 % 半宽除以 u_c，不取 t95(ν_eff)：非正态分量占 u_c² "
+                   "zh": "{items}：k 为其不确定度各分量合成分布（各分量分布的卷积，按 JCGM 101 "
+                         "5.4 数值计算）的 95 % 半宽除以 u_c，不取 t95(ν_eff)：非正态分量占 u_c² "
                          "的四分之一以上（括号内为其中最大者）。"},
     "largest_line": {"en": " ({symbol}, {dist})", "zh": "（{symbol}，{dist}）"},
     "dist_arcsine": {"en": "arcsine", "zh": "反正弦分布"},
