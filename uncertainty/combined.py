@@ -233,10 +233,7 @@ def _convolution_lines(inputs, coeffs, correlation):
     for i, (q, c) in enumerate(zip(inputs, cs)):
         if c == 0 or q.u == 0:
             continue
-        dist = q.distribution if q._dist is not None and q.half_width is not None else (
-            "t" if math.isfinite(q.dof) else "normal")
-        if dist == "normal" and math.isfinite(q.dof):
-            dist = "t"              # a normal Type B given a finite ν is drawn as its t
+        dist = q.drawn_as                   # as the Monte Carlo draws it
         if corr[i]:
             if dist != "normal":
                 return None
@@ -244,15 +241,15 @@ def _convolution_lines(inputs, coeffs, correlation):
             continue
         if dist == "t" and q.dof < 2:
             return None
-        d = q._dist
+        beta = q.shape_beta
         if dist == "trapezoidal":       # the sum of two rectangulars (JCGM 101 6.4.4.4)
             h = abs(c) * q.half_width
-            for w in (0.5 * h * (1.0 + d.beta), 0.5 * h * (1.0 - d.beta)):
+            for w in (0.5 * h * (1.0 + beta), 0.5 * h * (1.0 - beta)):
                 if w > 0:
                     out.append(("rectangular", w / math.sqrt(3.0), w, math.inf, None))
             continue
         out.append((dist, abs(c) * q.u, abs(c) * q.half_width if q.half_width else None,
-                    q.dof, getattr(d, "beta", None)))
+                    q.dof, beta))
     if joint:
         cj = np.array([cs[i] * inputs[i].u for i in joint])
         r = np.asarray(correlation, dtype=float)[np.ix_(joint, joint)]

@@ -57,6 +57,21 @@ class InputQuantity:
     source: str = ""
     _dist: object = field(default=None, repr=False, compare=False)
 
+    @property
+    def drawn_as(self) -> str:
+        """The distribution the Monte Carlo draws (:meth:`sample`): the Type B line's own
+        when it has one and a half-width, else ``"t"`` for a finite ν (JCGM 101 6.4.9) or
+        ``"normal"``."""
+        if self._dist is not None and self.half_width is not None:
+            return self.distribution
+        return "t" if math.isfinite(self.dof) else "normal"
+
+    @property
+    def shape_beta(self) -> float | None:
+        """The shape parameter β of a trapezoidal or rectangular-shifted-product line (the
+        top/base ratio, or m/(c + m)); None for the others."""
+        return getattr(self._dist, "beta", None)
+
     def sample(self, rng: np.random.Generator, size: int) -> np.ndarray:
         """Draw ``size`` Monte Carlo samples of X_i (JCGM 101 6.4).
 
