@@ -22,7 +22,10 @@
   deviation σ alone spreads n values, d₂(n)·σ.
 - :func:`corrected_range` — a range of noisy values corrected for its upward bias
   (the expected excess over the true range, by Monte Carlo of the values' errors,
-  JCGM 101), with its standard uncertainty: the estimate instead of a widening.
+  JCGM 101), with its standard uncertainty: the estimate instead of a widening, and
+  its 95 % confidence interval from the measured range's own distribution (a Neyman
+  belt, :func:`range_belt_interval`): skewed and bounded at 0 where the true range is a
+  few σ of the errors, so value ± k·u is not a 95 % interval there.
 
 This module never imports ``gonio``.
 """
@@ -154,6 +157,9 @@ class RangeCorrection:
     measured: float           # the range as measured, max − min
     noise_range: float        # E[range] of the errors alone (equal true values)
     shrink: float             # λ: the true values taken as mean + λ(x − mean)
+    #: The 95 % confidence interval of the true range (the Neyman belt inverted at the
+    #: measured range, :func:`range_belt_interval`): [lo, hi], 0 ≤ lo ≤ max(value, 0) ≤ hi.
+    interval: tuple[float, float] = (math.nan, math.nan)
 
 
 def corrected_range(x, errors) -> RangeCorrection:
@@ -224,7 +230,86 @@ def corrected_range(x, errors) -> RangeCorrection:
         lam = 0.5 * (lo + hi)
         value = lam * r
     return RangeCorrection(float(value), _estimator_sd(ranges(lam), r, e0, ranges), r, e0,
-                           float(lam))
+                           float(lam), range_belt_interval(x, e))
+
+
+#: Tail probabilities of the belt's band (central 95 %).
+_BELT_TAILS = (0.025, 0.975)
+
+
+def range_belt_interval(x, errors, p: float = 0.95) -> tuple[float, float]:
+    """The confidence interval of the true range R of values measured as ``x`` with errors
+    drawn as ``errors`` ((M, n), as :func:`corrected_range`): the Neyman confidence belt
+    inverted at the measured range (Neyman 1937; the construction of Feldman & Cousins,
+    Phys. Rev. D 57 (1998) 3873, with the central ordering).
+
+    For each candidate true range R the true values are taken along the measured pattern,
+    t(R) = m + (R/r)(x − m) (as :func:`corrected_range`), and the measured range's
+    distribution there is that of range(t(R) + e_j) over the draws; its (1−p)/2 and
+    (1+p)/2 quantiles q_lo(R) ≤ q_hi(R) bound the band. The interval is the set of R ≥ 0
+    whose band holds the measured range r: [R_lo, R_hi] with q_hi(R_lo) = r (R_lo = 0
+    where q_hi(0) ≥ r already) and q_lo(R_hi) = r. The central band alone is empty for the
+    smallest measured ranges (q_lo(0) > 0: every R is then rejected in the lower tail) and
+    gives a vanishing interval just above q_lo(0); so the band of every R whose q_lo lies
+    below the errors' own mean range e0 = E[range(e)] reaches down to 0 (a band only
+    widened: coverage stays ≥ p), i.e. R_hi is never below R_c, q_lo(R_c) = e0. Whatever the
+    true R, its band holds the measured range with probability ≥ p, so the interval holds R
+    with probability ≥ p (at R = 0, (1+p)/2). The same draws serve every R (common random
+    numbers: q_lo, q_hi smooth and increasing in R), solved by bisection. n values all
+    equal (r = 0, no pattern): the pattern taken is one value apart from the rest.
+
+    Two values, σ = 1: r = |d + ε|, ε ~ N(0, 2), P(r ≤ q | R) = Φ((q − R)/√2) −
+    Φ((−q − R)/√2). A measured range of 4: R_lo solves P(r ≤ 4 | R) = 0.975, R_hi solves
+    P(r ≤ 4 | R) = 0.025 (closed form, brentq: 1.2255 and 6.7718):
+
+    >>> rng = np.random.default_rng(1)
+    >>> lo, hi = range_belt_interval([0.0, 4.0], rng.normal(0.0, 1.0, (100_000, 2)))
+    >>> round(lo, 1), round(hi, 1)
+    (1.2, 6.8)
+    """
+    x = np.asarray(x, dtype=float)
+    e = np.asarray(errors, dtype=float)
+    if x.ndim != 1 or x.size < 2 or e.ndim != 2 or e.shape[1] != x.size or e.shape[0] < 2:
+        raise ValueError("range_belt_interval needs n >= 2 values and an (M, n) array of "
+                         "error draws")
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"p must lie in (0, 1), got {p}")
+    m = float(x.mean())
+    r = float(x.max() - x.min())
+    if r > 0:
+        unit = (x - m) / r                       # the measured pattern, range 1
+    else:
+        unit = np.zeros(x.size)
+        unit[-1] = 1.0
+        unit -= unit.mean()
+    q_lo_p, q_hi_p = 0.5 * (1.0 - p), 0.5 * (1.0 + p)
+
+    def quantile(big_r: float, q: float) -> float:
+        v = big_r * unit + e
+        return float(np.quantile(v.max(axis=1) - v.min(axis=1), q))
+
+    def solve(q: float, target: float, lo: float, hi: float) -> float:
+        """R in [lo, hi] where the q-quantile crosses ``target`` (below at lo, not at hi)."""
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if quantile(mid, q) < target else (lo, mid)
+        return 0.5 * (lo + hi)
+
+    def reaching(q: float, target: float) -> float:
+        """R where the q-quantile first reaches ``target`` (0 where it already does)."""
+        if quantile(0.0, q) >= target:
+            return 0.0
+        step = max(target, 1e-300)
+        for _ in range(200):
+            if quantile(step, q) >= target:
+                return solve(q, target, 0.0, step)
+            step *= 2.0
+        raise ValueError("range_belt_interval: the quantile does not reach the measured range")
+
+    e0 = float(np.mean(e.max(axis=1) - e.min(axis=1)))
+    lo_end = reaching(q_hi_p, r)
+    hi_end = max(reaching(q_lo_p, r), reaching(q_lo_p, e0), lo_end)
+    return float(lo_end), float(hi_end)
 
 
 #: Points of the table of E[measured range] against the true range (:func:`corrected_range`'s u).

@@ -70,6 +70,9 @@ __all__ = [
 COVERAGE_PROBABILITY = 0.95
 #: ``k_source`` of a k from the budget's combined distribution (:func:`budget_k`).
 K_SOURCE_COMBINED = "jcgm101-convolution"
+#: ``k_source`` of a range stated by its confidence belt's interval alone
+#: (:func:`uncertainty.stdev.range_belt_interval`; K_l, C_v, C_g): no coverage factor.
+K_SOURCE_BELT = "neyman-belt"
 #: Seed of that distribution's Monte Carlo (fixed: the same budget gives the same k).
 COMBINED_SEED = 20261129
 #: u of a pulse count C = floor(N(t_r)) − floor(N(t_z)): two floored readings, triangular
@@ -154,7 +157,8 @@ class ItemUncertainty:
              "nu_eff": None if (not math.isfinite(self.nu_eff)
                                 or self.k_source == K_SOURCE_COMBINED) else float(self.nu_eff),
              "coverage_probability": COVERAGE_PROBABILITY, "unit": self.unit,
-             "k_source": "chi-square" if by_iv else self.k_source}
+             "k_source": (self.k_source if self.k_source == K_SOURCE_BELT else "chi-square")
+             if by_iv else self.k_source}
         if self.interval is not None:
             d["interval"] = [float(self.interval[0]), float(self.interval[1])]
         if self.nonnegative:
@@ -884,10 +888,19 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     u_c² = max(u_s², u_p² + (v_s − v_p)²) is stated as two lines: ``K_rng`` (u_s, the
     standard's reading) and ``K_tab`` (√(max(0, u_p² + (v_s − v_p)² − u_s²)), the table at
     its bound, beyond the draft). ``standard`` and ``periodic`` give each reading alone (its
-    own value and u; kept for the comparison, docs/draft-readings.md 7.2). The value is negative when the
-    measured range is smaller than the errors alone would give (it is then stated by its
-    interval [0, K_l + U], the rule of every non-negative item); when even K_l + U ≤ 0 the
-    value is taken as 0, the least a range can be, so the statement is [0, U].
+    own value and u; kept for the comparison, docs/draft-readings.md 7.2).
+
+    The statement is one 95 % interval, not value ± k·u: where the true range is a few σ of
+    the errors the estimator's distribution is skewed and bounded (below E[range(e)] its
+    slope d E[measured]/d true lies between 0 and 1), and a symmetric ±k·u covers about
+    87 % at a true range of 2.5σ (two values, folded normal). The interval is the measured
+    range's confidence belt inverted at the measured range
+    (:func:`uncertainty.stdev.range_belt_interval`: for each candidate true range its
+    2.5/97.5 % quantiles on the same draws), ≥ 95 % at every true range; stated, the union
+    of the two readings' intervals. u_c stays the estimator's sd (the budgets that take it,
+    JCGM 101's validation). A corrected range below 0 (the measured range smaller than the
+    errors alone would give) is stated as 0, the least a range can be, with its interval
+    [0, upper end].
     Beyond the draft (its own reading, the range as measured, is kept beside it).
 
     Examples
@@ -915,6 +928,13 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), measured - 2.4e-4 < b.value < measured
     (0.01389, 0.01377, True)
+
+    The statement is the 95 % confidence interval of the range (the belt of both readings,
+    :func:`uncertainty.stdev.range_belt_interval`), asymmetric about the value; u_c stays the
+    estimator's sd for the budgets that take it:
+
+    >>> [round(x * 1e4, 2) for x in b.interval], b.k_source, b.to_dict()["k"]
+    ([135.03, 139.13], 'neyman-belt', None)
     """
     from uncertainty.stdev import corrected_range
 
@@ -952,11 +972,15 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                          f"value, beyond the standard's u_s {std.u:.3g} %"),
                            "table at its MPE bound (periodic)", True,
                            "A.4.1 applied to 7.2"))
-    u_c = math.sqrt(sum(ln.q.u ** 2 for ln in lines))
-    kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
-    value = c.value if c.value + kk * u_c > 0 else 0.0
-    return replace(_budget("scale_factor_nonlinearity", "%", value, lines, k=k),
-                   nonnegative=True)
+    # the statement: the 95 % confidence interval of the range (the belt inverted at the
+    # measured range, uncertainty.stdev.range_belt_interval), in the standard's reading or,
+    # stated, the union of both readings' (it holds K_l whichever describes the table)
+    lo, hi = c.interval
+    if table_reading == "stated":
+        lo, hi = min(std.interval[0], per.interval[0]), max(std.interval[1], per.interval[1])
+    value = min(max(c.value, 0.0), hi)      # a range is never below 0
+    b = _budget("scale_factor_nonlinearity", "%", value, lines, k=k, interval=(lo, hi))
+    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5
@@ -1372,30 +1396,31 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     the measured range there (line ``C_rng``, normal), with the choice of each condition's
     extreme (``C_sel``) beside it as in :func:`consistency_budget`; with ``curves`` the
     choice's expected-value shift (:func:`extreme_selection`'s ``bias``, JCGM 101 7.2 through
-    the draft's functional) is subtracted too. The value is negative when
-    the measured range is smaller than the errors alone would give (stated by its interval
-    [0, C + U]); when even C + U ≤ 0 it is taken as 0, as
-    :func:`nonlinearity_corrected_budget`. Beyond the draft (its own reading, the range as
-    measured, is kept beside it).
+    the draft's functional) is subtracted too. The statement is one 95 % interval, as
+    :func:`nonlinearity_corrected_budget`'s: the range's confidence belt inverted at the
+    measured range (:func:`uncertainty.stdev.range_belt_interval`), shifted by the choice's
+    bias, with the choice's own k·u_sel added to each of its sides in quadrature; a value
+    below 0 is stated as 0 with its interval [0, upper end]. Beyond the draft (its own
+    reading, the range as measured, is kept beside it).
 
     Examples
     --------
     Three rates with equal E_v (one series each, u = 0.096″) at one position: the measured
-    range 0 is below what the errors alone give (means and drifts, the table cancels), so C is
-    negative, their expected range with the opposite sign; with two rates 1″ apart C keeps
-    nearly the measured 0.7716 ppm:
+    range 0 is below what the errors alone give (means and drifts, the table cancels), so the
+    corrected range is negative and C is stated 0 with its interval [0, 0.353] ppm; with two
+    rates 1″ apart C keeps nearly the measured 0.7716 ppm, the interval asymmetric about it:
 
     >>> cs = [ConditionDeviation(f"{v}", 0.0, 360.0, 0.096, 1) for v in (10, 30, 60)]
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
     ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
-    >>> round(b.value, 3), b.nonnegative
-    (-0.169, True)
+    >>> round(b.value, 3), [round(x, 3) for x in b.interval], b.nonnegative, b.k_source
+    (0.0, [0.0, 0.353], True, 'neyman-belt')
     >>> cs = [ConditionDeviation("60", 0.5, 360.0, 0.096, 1),
     ...       ConditionDeviation("10", -0.5, 360.0, 0.096, 1)]
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
     ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
-    >>> 0.70 < b.value < 0.7716
-    True
+    >>> 0.70 < b.value < 0.7716, [round(x, 2) for x in b.interval]
+    (True, [0.49, 1.04])
     """
     from uncertainty.stdev import corrected_range
 
@@ -1429,15 +1454,21 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
                                  f"{c.noise_range:.4g} {unit}, corrected {c.value:.4g} {unit}"),
                    "range of the E_v, bias corrected", True,
                    clause + " (A.4.1, A.4.3, A.4.4, 7.1)")]
-    value = c.value
+    value, (lo, hi) = c.value, c.interval
     if curves is not None:
         u_sel, bias = extreme_selection(curves, list(u_mean), table_mpe_arcsec,
                                         drift_half_width_arcsec, scale_factor_u_rel)
         lines.append(_selection_line(u_sel * f, bias * f, unit, clause))
         value -= bias * f
-    u_c = math.hypot(*(ln.q.u for ln in lines))
-    value = value if value + kk * u_c > 0 else 0.0
-    return replace(_budget(item, unit, value, lines, k=k), nonnegative=True)
+        # the belt shifted by the bias, the choice's own spread (normal, k·u_sel) added to
+        # each of its sides in quadrature
+        w = kk * u_sel * f
+        below, above = max(c.value - lo, 0.0), max(hi - c.value, 0.0)
+        lo = max(max(value, lo - bias * f) - math.hypot(below, w), 0.0)
+        hi = value + math.hypot(above, w)
+    value = min(max(value, lo, 0.0), hi)    # a range is never below 0
+    b = _budget(item, unit, value, lines, k=k, interval=(lo, hi))
+    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
 
 
 def _selection_line(u_sel: float, bias: float, unit: str, clause: str) -> _Line:
