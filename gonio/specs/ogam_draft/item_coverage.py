@@ -36,7 +36,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from gonio.analysis.coverage import chi_square_z, two_sided, within
+from gonio.analysis.coverage import chi_square_z, clopper_pearson, two_sided, within
 from gonio.units import ARCSEC_PER_DEG
 from gonio.specs.ogam_draft.items import RECORD_KEYS
 
@@ -237,7 +237,8 @@ def item_record(report, truth: dict) -> dict:
             d = report.item_uncertainty["scale_factor_nonlinearity"].beside
             if d is not None:       # the draft's range as measured, kept beside the stated one
                 out["scale_factor_nonlinearity_draft"] = dict(
-                    kl, value=float(d.value), U=float(d.U), k=float(d.k), u_c=float(d.u_c))
+                    kl, value=float(d.value), U=float(d.U), k=float(d.k), u_c=float(d.u_c),
+                    interval=None)
             kl["value"] = float(report.item_uncertainty["scale_factor_nonlinearity"].value)
     if "angle_deviation" in out:
         e = res.angle_deviation.table
@@ -255,7 +256,7 @@ def item_record(report, truth: dict) -> dict:
             d = report.item_uncertainty[name].beside
             if d is not None:       # the draft's range as measured, kept beside the stated one
                 out[name + "_draft"] = dict(out[name], value=float(d.value), U=float(d.U),
-                                            k=float(d.k), u_c=float(d.u_c))
+                                            k=float(d.k), u_c=float(d.u_c), interval=None)
                 out[name]["value"] = float(report.item_uncertainty[name].value)
     return out
 
@@ -366,6 +367,16 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             t = np.array([r["truth"] for r in rs])
             item["within_U"] = within(np.abs(vals - t) <= U)
             item["two_sided"] = two_sided(vals - t, U, u_c, own)
+            if (not name.startswith("zero_stability") and rs
+                    and all(r.get("interval") is not None for r in rs)):
+                # a range stated by its confidence interval (K_l, C_v, C_g): the interval
+                # holding the truth is its coverage, with its Clopper–Pearson interval
+                iv = np.array([r["interval"] for r in rs])
+                hold = (iv[:, 0] <= t) & (t <= iv[:, 1])
+                item["interval_holds_truth"] = dict(
+                    within(hold), clopper_pearson=list(clopper_pearson(int(hold.sum()),
+                                                                       int(hold.size))),
+                    mean_width=float(np.mean(iv[:, 1] - iv[:, 0])))
             if name.startswith("zero_stability"):
                 item["population_truth"] = float(np.mean(t))
                 item["k_mean"] = float(np.mean([r.get("k", math.nan) for r in rs]))

@@ -703,7 +703,12 @@ def item_coverage_lines(cases) -> list[str]:
             txt = (f"{c.name:<10}{name:<28}{it['trials']:>5} trials  within U "
                    f"{100 * w['fraction']:5.1f} ± {100 * w['u_binomial']:4.1f}%")
             if "interval_holds_truth" in it:
-                txt += f"   interval {100 * it['interval_holds_truth']['fraction']:5.1f}%"
+                ih = it["interval_holds_truth"]
+                txt += f"   interval {100 * ih['fraction']:5.1f}%"
+                if "clopper_pearson" in ih:
+                    txt += (f" (CP {100 * ih['clopper_pearson'][0]:.1f}-"
+                            f"{100 * ih['clopper_pearson'][1]:.1f}%, "
+                            f"mean width {ih['mean_width']:.3g})")
             if "z_chi2" in it:
                 txt += (f"   chi2 z mean {it['z_chi2']['mean']:+.2f} "
                         f"sd {it['z_chi2']['sd']:.2f}")
