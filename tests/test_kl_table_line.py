@@ -59,14 +59,15 @@ def _chain_k_i(h, phase, rng, amplitude_arcsec=MPE):
 
 
 def _z(h, trials, seed, reading, amplitude_arcsec=MPE):
-    """Hits of K_l ± U over the truth and the z = (K_l − truth)/u_c of ``trials`` sessions."""
+    """Hits of K_l's stated 95 % interval (the range's confidence belt; before, K_l ± U) over
+    the truth and the z = (K_l − truth)/u_c of ``trials`` sessions."""
     rng = np.random.default_rng(seed)
     z, hits = [], 0
     for _ in range(trials):
         k_i = _chain_k_i(h, rng.uniform(0.0, 2.0 * math.pi), rng, amplitude_arcsec)
         b = nonlinearity_corrected_budget(k_i, STOPS, MPE, k=2.0, noise=NOISE, time_s=TIMES_S,
                                           draws=DRAWS, table_reading=reading)
-        hits += abs(b.value - KL_TRUE) <= b.U
+        hits += b.interval[0] <= KL_TRUE <= b.interval[1]
         z.append((b.value - KL_TRUE) / b.u_c)
     return hits, np.array(z)
 
