@@ -934,7 +934,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     estimator's sd for the budgets that take it:
 
     >>> [round(x * 1e4, 2) for x in b.interval], b.k_source, b.to_dict()["k"]
-    ([135.03, 139.13], 'neyman-belt', None)
+    ([134.88, 139.18], 'neyman-belt', None)
     """
     from uncertainty.stdev import corrected_range
 
@@ -1407,20 +1407,20 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     --------
     Three rates with equal E_v (one series each, u = 0.096″) at one position: the measured
     range 0 is below what the errors alone give (means and drifts, the table cancels), so the
-    corrected range is negative and C is stated 0 with its interval [0, 0.353] ppm; with two
+    corrected range is negative and C is stated 0 with its interval [0, 0.366] ppm; with two
     rates 1″ apart C keeps nearly the measured 0.7716 ppm, the interval asymmetric about it:
 
     >>> cs = [ConditionDeviation(f"{v}", 0.0, 360.0, 0.096, 1) for v in (10, 30, 60)]
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
     ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
     >>> round(b.value, 3), [round(x, 3) for x in b.interval], b.nonnegative, b.k_source
-    (0.0, [0.0, 0.353], True, 'neyman-belt')
+    (0.0, [0.0, 0.366], True, 'neyman-belt')
     >>> cs = [ConditionDeviation("60", 0.5, 360.0, 0.096, 1),
     ...       ConditionDeviation("10", -0.5, 360.0, 0.096, 1)]
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
     ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
     >>> 0.70 < b.value < 0.7716, [round(x, 2) for x in b.interval]
-    (True, [0.49, 1.04])
+    (True, [0.48, 1.05])
     """
     from uncertainty.stdev import corrected_range
 
