@@ -522,7 +522,8 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     upper bound (``upper``).
 
     Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
-    holding the value, of zero width, or reaching below zero for a non-negative quantity:
+    holding the value (except a non-negative quantity's estimate below an interval from 0:
+    stated by its upper bound alone, :func:`below_zero_bound`), of zero width, or reaching below zero for a non-negative quantity:
     no coverage interval is like that. The one point interval stated is a dispersion of
     exactly zero ([0, 0] of 0, a non-negative quantity: readings that did not differ at all,
     as a noise-free bench gives): it is stated as the value alone, "0", with no interval.
@@ -534,6 +535,8 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     ('1.0 °/h; upper bound: ≤ 4.5 °/h (interval [0, 4.5], p ≈ 95 %)', None, None, '4.5')
     >>> state_interval(0.0, (0.0, 0.0), nonnegative=True, unit="s").text()
     '0 s'
+    >>> state_interval(-0.5, (0.0, 2.04), nonnegative=True).text()   # a corrected range < 0
+    'upper bound: ≤ 2.1 (interval [0, 2.1]); the estimate fell below zero'
     >>> state_interval(-5.0, (-6.0, -4.0), nonnegative=True)
     Traceback (most recent call last):
     gonio.errors.GonioError: interval [-6, -4] of -5: a non-negative quantity's interval reaches below zero; not stated
@@ -543,7 +546,9 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
     where = f"interval [{lo:g}, {hi:g}] of {value:g}"
     if nonnegative and value == lo == hi == 0.0:
         return state(0.0, None, nu_eff=nu_eff, unit=unit)     # no dispersion in the readings
-    if not all(math.isfinite(x) for x in (value, lo, hi)) or not lo <= value <= hi or lo == hi:
+    below = nonnegative and lo == 0.0 and value < 0.0   # stated by its upper bound alone
+    if not all(math.isfinite(x) for x in (value, lo, hi)) or not (lo <= value or below) \
+            or not value <= hi or lo == hi:
         raise GonioError(f"{where}: a coverage interval must be finite, of positive width "
                          "and hold the value; not stated")
     if nonnegative and lo < 0:

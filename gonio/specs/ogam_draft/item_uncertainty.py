@@ -885,56 +885,39 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     allows), the periodic reading's estimate v_p of K_l has u_p, so v_s errs by
     (v_s − v_p) + (v_p − K_l), mean square u_p² + (v_s − v_p)² (an uncorrected bias combined
     in quadrature, JCGM 100 F.2.4.5; Phillips, Eberhardt & Parry, J. Res. NIST 102 (1997)).
-    u_c² = max(u_s², u_p² + (v_s − v_p)²) is stated as two lines: ``K_rng`` (u_s, the
-    standard's reading) and ``K_tab`` (√(max(0, u_p² + (v_s − v_p)² − u_s²)), the table at
-    its bound, beyond the draft). ``standard`` and ``periodic`` give each reading alone (its
-    own value and u; kept for the comparison, docs/draft-readings.md 7.2).
+    u_c² = max(u_s², u_p² + (v_s − v_p)²) is stated as lines ``K_rng`` (u_s) and ``K_tab``
+    (√(max(0, u_p² + (v_s − v_p)² − u_s²)), the table at its bound, beyond the draft).
+    ``standard``/``periodic``: each reading alone (docs/draft-readings.md 7.2).
 
-    The statement is one 95 % interval, not value ± k·u: where the true range is a few σ of
-    the errors the estimator's distribution is skewed and bounded (below E[range(e)] its
-    slope d E[measured]/d true lies between 0 and 1), and a symmetric ±k·u covers about
-    87 % at a true range of 2.5σ (two values, folded normal). The interval is the measured
-    range's confidence belt inverted at the measured range
-    (:func:`uncertainty.stdev.range_belt_interval`: for each candidate true range its
-    2.5/97.5 % quantiles on the same draws), ≥ 95 % at every true range; stated, the union
-    of the two readings' intervals. u_c stays the estimator's sd (the budgets that take it,
-    JCGM 101's validation). A corrected range below 0 (the measured range smaller than the
-    errors alone would give) is stated as 0, the least a range can be, with its interval
-    [0, upper end].
-    Beyond the draft (its own reading, the range as measured, is kept beside it).
+    The statement is one 95 % interval, not value ± k·u (skewed and bounded where the true
+    range is a few σ of the errors): the range's confidence belt inverted at the measured
+    range (:func:`uncertainty.stdev.range_belt_interval`), stated the union of both readings';
+    u_c stays the estimator's sd; a value below 0 is stated by the upper end. Beyond the draft.
 
     Examples
     --------
-    Six rounds with equal K_i (3600 counts/°), table MPE 0.1″, no tilt: the measured range is 0,
-    the errors alone (±1 count over 60° dominates) spread six values by 2.38·10⁻⁴ % on average,
-    so the corrected range −2.38·10⁻⁴ % lies more than U = 2u below 0 and K_l is taken as 0;
-    one round 0.5 counts/° above five equal ones keeps nearly its measured range, less the
-    excess by which the lowest of the five equal ones falls below their true value:
+    Six equal K_i (3600 counts/°), MPE 0.1″, no tilt: measured range 0, the errors alone (±1
+    count over 60°) give 2.38·10⁻⁴ % on average, so K_l = −2.38·10⁻⁴ %, stated by [0, upper]:
 
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> b = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0)
-    >>> b.value, round(b.u_c * 1e4, 2), b.nonnegative
-    (0.0, 1.12, True)
+    >>> round(b.value * 1e4, 2), [round(x * 1e4, 2) for x in b.interval], round(b.u_c * 1e4, 2)
+    (-2.38, [0.0, 2.67], 1.12)
 
-    The periodic reading (order 3 moves the 60° round by up to 0.1/216000 = 0.46 ppm, and the
-    180° and 300° rounds with it) spreads the rounds more than the standard's; the stated u
-    is the larger of u_s and √(u_p² + (v_s − v_p)²), here the latter (the ``K_tab`` line):
+    The periodic reading (order 3: the 60°, 180°, 300° rounds by up to 0.46 ppm) spreads the
+    rounds more; the stated u is then √(u_p² + (v_s − v_p)²) (the ``K_tab`` line):
 
     >>> s = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="standard")
     >>> p = nonlinearity_corrected_budget([3600.0] * 6, th, 0.1, k=2.0, table_reading="periodic")
     >>> round(s.u_c * 1e4, 2), round(p.u_c * 1e4, 2), [c.symbol for c in b.components]
     (1.08, 1.12, ['K_rng', 'K_tab'])
+
+    One round 0.5 counts/° above five equal ones: nearly the measured range, asymmetric interval:
+
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
-    >>> round(measured, 5), round(b.value, 5), measured - 2.4e-4 < b.value < measured
-    (0.01389, 0.01377, True)
-
-    The statement is the 95 % confidence interval of the range (the belt of both readings,
-    :func:`uncertainty.stdev.range_belt_interval`), asymmetric about the value; u_c stays the
-    estimator's sd for the budgets that take it:
-
-    >>> [round(x * 1e4, 2) for x in b.interval], b.k_source, b.to_dict()["k"]
-    ([134.88, 139.18], 'neyman-belt', None)
+    >>> round(measured, 5), round(b.value, 5), [round(x * 1e4, 2) for x in b.interval]
+    (0.01389, 0.01377, [134.88, 139.18])
     """
     from uncertainty.stdev import corrected_range
 
@@ -972,14 +955,11 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                                          f"value, beyond the standard's u_s {std.u:.3g} %"),
                            "table at its MPE bound (periodic)", True,
                            "A.4.1 applied to 7.2"))
-    # the statement: the 95 % confidence interval of the range (the belt inverted at the
-    # measured range, uncertainty.stdev.range_belt_interval), in the standard's reading or,
-    # stated, the union of both readings' (it holds K_l whichever describes the table)
-    lo, hi = c.interval
-    if table_reading == "stated":
-        lo, hi = min(std.interval[0], per.interval[0]), max(std.interval[1], per.interval[1])
-    value = min(max(c.value, 0.0), hi)      # a range is never below 0
-    b = _budget("scale_factor_nonlinearity", "%", value, lines, k=k, interval=(lo, hi))
+    # the belt's 95 % interval; stated: both readings' union (holds K_l in either)
+    lo, hi = ((min(std.interval[0], per.interval[0]), max(std.interval[1], per.interval[1]))
+              if table_reading == "stated" else c.interval)
+    b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
+                interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
 
 
@@ -1400,21 +1380,21 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     :func:`nonlinearity_corrected_budget`'s: the range's confidence belt inverted at the
     measured range (:func:`uncertainty.stdev.range_belt_interval`), shifted by the choice's
     bias, with the choice's own k·u_sel added to each of its sides in quadrature; a value
-    below 0 is stated as 0 with its interval [0, upper end]. Beyond the draft (its own
+    below 0 is stated by the interval's upper end alone (results.json keeps it signed). Beyond the draft (its own
     reading, the range as measured, is kept beside it).
 
     Examples
     --------
     Three rates with equal E_v (one series each, u = 0.096″) at one position: the measured
     range 0 is below what the errors alone give (means and drifts, the table cancels), so the
-    corrected range is negative and C is stated 0 with its interval [0, 0.366] ppm; with two
+    corrected range is negative (stated by the upper end of its interval [0, 0.366] ppm); with two
     rates 1″ apart C keeps nearly the measured 0.7716 ppm, the interval asymmetric about it:
 
     >>> cs = [ConditionDeviation(f"{v}", 0.0, 360.0, 0.096, 1) for v in (10, 30, 60)]
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
     ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
     >>> round(b.value, 3), [round(x, 3) for x in b.interval], b.nonnegative, b.k_source
-    (0.0, [0.0, 0.366], True, 'neyman-belt')
+    (-0.169, [0.0, 0.366], True, 'neyman-belt')
     >>> cs = [ConditionDeviation("60", 0.5, 360.0, 0.096, 1),
     ...       ConditionDeviation("10", -0.5, 360.0, 0.096, 1)]
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
@@ -1466,9 +1446,15 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
         below, above = max(c.value - lo, 0.0), max(hi - c.value, 0.0)
         lo = max(max(value, lo - bias * f) - math.hypot(below, w), 0.0)
         hi = value + math.hypot(above, w)
-    value = min(max(value, lo, 0.0), hi)    # a range is never below 0
-    b = _budget(item, unit, value, lines, k=k, interval=(lo, hi))
+    b = _budget(item, unit, _in_belt(value, lo, hi), lines, k=k, interval=(lo, hi))
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
+
+
+def _in_belt(value: float, lo: float, hi: float) -> float:
+    """The stated value of a range with its belt interval [lo, hi]: the corrected range,
+    signed where it fell below 0 (lo is then 0; stated by the upper end alone), else held
+    inside [lo, hi] (against the belt's own Monte Carlo)."""
+    return min(value, hi) if value < 0.0 and lo == 0.0 else min(max(value, lo), hi)
 
 
 def _selection_line(u_sel: float, bias: float, unit: str, clause: str) -> _Line:
