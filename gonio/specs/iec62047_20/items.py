@@ -1424,11 +1424,15 @@ def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: f
     N(L) the number of d_j > L: the estimate is P·N(band). Near the crossing the deviation
     falls with slope s, so each value is beyond the band with probability Φ((t* − t_j)s/σ_b)
     and var N = Σ p(1 − p) = σ_b/(sP)·∫Φ(1 − Φ) = σ_b/(sP√π). The reference's error e (its
-    own noise u_ref, and the bias drift u_drift over the time from the crossing to the last
-    fifth's middle) moves the crossing by e/s. 1/s is read from the data as the time
-    between the crossings of band ± h, Δt = P·(N(band − h) − N(band + h)) ≈ 2h/s, with
-    h = 2√(σ_b² + u_ref² + u_drift²) (the deviation's whole spread, so that Δt spans
-    several steps). u² = P·σ_b/(s√π) + (u_ref² + u_drift²)/s²."""
+    own noise u_ref, and the bias drift u_drift between the crossing and the last fifth)
+    moves the crossing by e/s. u_drift is ``drift_u`` at the separation Δ + L/3 (Δ from the
+    crossing to the start of the last fifth, L its duration): a rate random walk's point
+    minus its mean over [Δ, Δ + L] has variance K²(Δ + L/3). 1/s is read from the data as
+    the time between the crossings of band ± h, Δt = P·(N(band − h) − N(band + h)) ≈ 2h/s,
+    with h = 2√(σ_b² + u_ref²) (the smoothed values' own spread, so that Δt spans several
+    steps yet stays local: an h that also held u_drift reaches, for u_drift near band/2,
+    down to the settled output, and Δt then measures most of the transient, not its slope
+    at the crossing). u² = P·σ_b/(s√π) + (u_ref² + u_drift²)/s²."""
     n5 = max(y.size // 5, 1)
     ref = float(y[-n5:].mean())
     d = np.abs(ys - ref)
@@ -1438,8 +1442,9 @@ def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: f
     t_c = step * float(np.count_nonzero(d > band))
     tail = ys[-max(ys.size // 5, 1):]
     u_ref = s_b / math.sqrt(tail.size)
-    u_dr = drift_u(max(float(tt[-tail.size:].mean() - tt[0]) - t_c, 0.0))
-    h = 2 * math.sqrt(s_b ** 2 + u_ref ** 2 + u_dr ** 2)
+    span = tail.size * step                           # the last fifth's duration
+    u_dr = drift_u(max(float(tt[-1] - tt[0]) + step - span - t_c, 0.0) + span / 3)
+    h = 2 * math.sqrt(s_b ** 2 + u_ref ** 2) or 2 * u_dr     # 2·u_dr: no noise to read
     if h == 0:
         return t_c, t_lit, 0.0
     dt_c = step * float(np.count_nonzero(d > band - h) - np.count_nonzero(d > band + h))
