@@ -14,7 +14,8 @@ outside gonio's formulas.
 - E[K²] of every drift term, the posterior mean of ``formulas.walk_k2_iec``: a closed form
   (one τ: a truncated inverse gamma), a quadrature of the same posterior, correlated
   duplicates counted once, and on records of the bench's own noise about the generator's
-  K² (the 95 % bound's rectangle it replaced read 2.1× on average and fails that check).
+  K² (the 95 % bound's rectangle it replaced read 1.99× on average, median 2.20, and fails
+  that check).
 """
 
 from __future__ import annotations
@@ -152,7 +153,7 @@ def test_walk_k2_is_about_the_benchs_walk():
     parameters: E[K²] must be about the generator's K² over the records (median within
     0.6–1.4 of it, mean below 1.7×) and never far below it where the fit holds K̂ at 0 (at
     least 0.3 K²: the record cannot exclude the walk). The 95 % bound's rule it replaces
-    overstates K² (mean 2.1×, median 1.6×) and fails here."""
+    overstates K² (mean 1.99×, median 2.20×) and fails here."""
     from gonio.analysis.noise import allan_deviation, fit_noise_model
     from gonio.analysis.noise.fit import simulate_noise
 
@@ -180,7 +181,9 @@ def test_builtin_trial_2460005_hysteresis():
     """The built-in programme's trial 2460005 (the README's study seeds): K held at 0 by the
     fit and a 0.093 °/s difference between the 22.5 °C visits 6 h apart read z +5.24 with the
     68 % bound's E[K²] = 0.103 (°/h)²/s; the truth (the bench's, from the session's true
-    biases) must lie in the stated interval and |z| on u_c stay below 4."""
+    biases) must lie in the stated interval (the item is judged by it), and |z| on u_c stay
+    below 4.5: the 68 % bound's 5.24 fails, the 95 % bound's 3.97 and the posterior mean's
+    3.99 pass (a guard against the walk's E[K²] collapsing again, not a coverage claim)."""
     import sys
     from pathlib import Path
 
@@ -189,6 +192,6 @@ def test_builtin_trial_2460005_hysteresis():
     from gonio.pipeline.coverage import trial_records
 
     r = trial_records("iec62047-20", bench_for("iec62047-20"), "iec62047-20", 2460005)["bias_hysteresis"]
-    assert abs(r["value"] - r["truth"]) / r["u_c"] < 4.0
+    assert abs(r["value"] - r["truth"]) / r["u_c"] < 4.5
     lo, hi = r["interval"]
     assert lo == 0.0 and lo <= r["truth"] <= hi

@@ -92,3 +92,15 @@ def test_no_drift_item_takes_the_95_percent_bound(readings, plain, monkeypatch):
     monkeypatch.setattr(ief, "walk_coefficient_bound", spy)
     now = _numbers(calibrate(readings, PROTOCOL))
     assert all(now[k] == plain[k] for k in DRIFT_ITEMS)
+
+
+def test_no_posterior_falls_back_to_the_bound_not_to_zero(readings, plain, monkeypatch):
+    """A record whose likelihood gives no finite posterior mean (no usable τ) must not drop
+    the walk from the drift terms (E[K²] = 0 would understate every drift item's U): the
+    record's 95 % bound stands in, so each drift item's U is at least as large as with the
+    posterior mean on this record (whose bound is above it)."""
+    monkeypatch.setattr(ief, "walk_k2_iec", lambda *a, **k: float("nan"))
+    now = _numbers(calibrate(readings, PROTOCOL))
+    smaller = [k for k in DRIFT_ITEMS if now[k][1] is not None and plain[k][1] is not None
+               and now[k][1] < plain[k][1] * (1 - 1e-9)]
+    assert not smaller, f"U fell below the posterior mean's without a walk term: {smaller}"

@@ -100,11 +100,13 @@ def _symmetric_coverage(d, k=1.959963984540054):
 
 @pytest.mark.parametrize("d", [0.0, 1.0, 2.5, 4.0, 10.0])
 def test_stated_interval_covers_95_percent_at_every_true_range(d):
-    """The belt's interval holds the true range with probability ≥ 95 % (the draws' Monte
-    Carlo moves the ends by about 1 %: 0.94 allowed) and not far over (≤ 0.985; at d = 0 the
-    bound at 0 gives 97.5 % by construction). value ± 1.96u covered about 87 % at 2.5σ."""
+    """The belt's interval holds the true range with probability ≥ 95 % (exact over r for
+    the fixed draws: 95.5–97.8 %; the band's tails taken from the draws' quantiles without
+    their Monte Carlo allowance gave 94.3 % at d ≥ 4σ and fail here) and not far over
+    (≤ 0.985; at d = 0 the bound at 0 gives 97.5 % by construction). value ± 1.96u covers
+    80.9 % at 2.5σ."""
     cov, r_a, r_b = _stated_coverage(d)
-    assert 0.94 <= cov <= 0.985, (d, cov, r_a, r_b)
+    assert 0.95 <= cov <= 0.985, (d, cov, r_a, r_b)
 
 
 def test_symmetric_statement_under_covers_at_two_and_a_half_sigma():

@@ -233,9 +233,6 @@ def corrected_range(x, errors) -> RangeCorrection:
                            float(lam), range_belt_interval(x, e))
 
 
-#: Tail probabilities of the belt's band (central 95 %).
-_BELT_TAILS = (0.025, 0.975)
-
 
 def range_belt_interval(x, errors, p: float = 0.95) -> tuple[float, float]:
     """The confidence interval of the true range R of values measured as ``x`` with errors
@@ -257,7 +254,9 @@ def range_belt_interval(x, errors, p: float = 0.95) -> tuple[float, float]:
     widened: coverage stays ≥ p), i.e. R_hi is never below R_c, q_lo(R_c) = e0. Whatever the
     true R, its band holds the measured range with probability ≥ p, so the interval holds R
     with probability ≥ p (at R = 0, (1+p)/2). The same draws serve every R (common random
-    numbers: q_lo, q_hi smooth and increasing in R), solved by bisection. n values all
+    numbers: q_lo, q_hi smooth and, for two values, increasing in R; for more values each
+    draw's range is convex, not monotone, in R, and the quantiles may dip by a few 10⁻³σ),
+    solved by bisection, which finds a crossing where there are two close together. n values all
     equal (r = 0, no pattern): the pattern taken is one value apart from the rest.
 
     Two values, σ = 1: r = |d + ε|, ε ~ N(0, 2), P(r ≤ q | R) = Φ((q − R)/√2) −

@@ -1553,8 +1553,9 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
     (5.3.3 reads each item from its own records), so the rule is gonio's reading,
     documented in docs/iec62047-20-readings.md. 5.3.3.5's bootstrap draws its replicates
     at the fitted values instead (:func:`drift_coef_fitted_dps`, capped by
-    :func:`walk_k2_bound_dps`). The same refusals as :func:`drift_u_dps`; a record that
-    does not vary: (0, 0)."""
+    :func:`walk_k2_bound_dps`). Where the posterior has no finite mean (no usable τ), the
+    record's 95 % bound, else the fitted K̂², else refused (never 0 by default). The same
+    refusals as :func:`drift_u_dps`; a record that does not vary: (0, 0)."""
     if not _drift_varies(ctx):
         return 0.0, 0.0         # a noise-free bench (the reader refuses a stuck record)
     key = ("drift_coef", ctx.a_base, ctx.null_output)
@@ -1562,9 +1563,15 @@ def drift_coef_dps(ctx: Context) -> tuple[float, float]:
         fit = _noise_fit(ctx)
         b = float(fit.B) if math.isfinite(float(fit.B)) else 0.0
         ub = float(fit.u_B) if math.isfinite(float(fit.u_B)) else 0.0
-        k2 = ief.walk_k2_iec(**walk_likelihood_inputs(ctx))                # (°/h)²/s
-        ctx.cache[key] = ((k2 if math.isfinite(k2) else 0.0) / S_PER_H ** 2,
-                          (b * b + ub * ub) / S_PER_H ** 2)
+        k2 = ief.walk_k2_iec(**walk_likelihood_inputs(ctx)) / S_PER_H ** 2  # (°/s)²/s
+        if not math.isfinite(k2):   # no posterior (no τ usable): the record's 95 % bound,
+            k2 = walk_k2_bound_dps(ctx)       # else the fit's K̂² — never 0 by default
+        if not math.isfinite(k2):
+            k2 = float(fit.K) ** 2 / S_PER_H ** 2 if math.isfinite(float(fit.K)) else math.nan
+        if not math.isfinite(k2):
+            raise GonioError("the static record (5.4) bounds no rate random walk: no τ of "
+                             "its Allan deviation is usable, so the drift term has no E[K²]")
+        ctx.cache[key] = (k2, (b * b + ub * ub) / S_PER_H ** 2)
     return ctx.cache[key]
 
 
