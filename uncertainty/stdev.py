@@ -233,7 +233,6 @@ def corrected_range(x, errors) -> RangeCorrection:
                            float(lam), range_belt_interval(x, e))
 
 
-
 def range_belt_interval(x, errors, p: float = 0.95) -> tuple[float, float]:
     """The confidence interval of the true range R of values measured as ``x`` with errors
     drawn as ``errors`` ((M, n), as :func:`corrected_range`): the Neyman confidence belt
@@ -246,8 +245,8 @@ def range_belt_interval(x, errors, p: float = 0.95) -> tuple[float, float]:
     (1+p)/2 quantiles q_lo(R) ≤ q_hi(R) bound the band. The interval is the set of R ≥ 0
     whose band holds the measured range r (the tails narrowed by twice the Monte Carlo
     uncertainty of a tail fraction from M draws, √(α(1 − α)/M), JCGM 101 7.9, so that the
-    draws' own quantile error does not narrow the band): [R_lo, R_hi] with q_hi(R_lo) = r (R_lo = 0
-    where q_hi(0) ≥ r already) and q_lo(R_hi) = r. The central band alone is empty for the
+    draws' own quantile error does not narrow the band): [R_lo, R_hi] with q_hi(R_lo) = r
+    (R_lo = 0 where q_hi(0) ≥ r already) and q_lo(R_hi) = r. The central band alone is empty for the
     smallest measured ranges (q_lo(0) > 0: every R is then rejected in the lower tail) and
     gives a vanishing interval just above q_lo(0); so the band of every R whose q_lo lies
     below the errors' own mean range e0 = E[range(e)] reaches down to 0 (a band only
@@ -256,8 +255,8 @@ def range_belt_interval(x, errors, p: float = 0.95) -> tuple[float, float]:
     with probability ≥ p (at R = 0, (1+p)/2). The same draws serve every R (common random
     numbers: q_lo, q_hi smooth and, for two values, increasing in R; for more values each
     draw's range is convex, not monotone, in R, and the quantiles may dip by a few 10⁻³σ),
-    solved by bisection, which finds a crossing where there are two close together. n values all
-    equal (r = 0, no pattern): the pattern taken is one value apart from the rest.
+    solved by bisection, which finds a crossing where there are two close together. n values
+    all equal (r = 0, no pattern): the pattern taken is one value apart from the rest.
 
     Two values, σ = 1: r = |d + ε|, ε ~ N(0, 2), P(r ≤ q | R) = Φ((q − R)/√2) −
     Φ((−q − R)/√2). A measured range of 4: R_lo solves P(r ≤ 4 | R) = 0.975, R_hi solves

@@ -523,7 +523,8 @@ def state_interval(value: float, interval: tuple[float, float], *, nu_eff: float
 
     Refused (:class:`~gonio.errors.GonioError`): an interval not finite, reversed, not
     holding the value (except a non-negative quantity's estimate below an interval from 0:
-    stated by its upper bound alone, :func:`below_zero_bound`), of zero width, or reaching below zero for a non-negative quantity:
+    stated by its upper bound alone, :func:`below_zero_bound`), of zero width, or reaching
+    below zero for a non-negative quantity:
     no coverage interval is like that. The one point interval stated is a dispersion of
     exactly zero ([0, 0] of 0, a non-negative quantity: readings that did not differ at all,
     as a noise-free bench gives): it is stated as the value alone, "0", with no interval.

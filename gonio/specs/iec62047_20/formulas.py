@@ -346,8 +346,9 @@ def walk_coefficient_bound(tau_s, adev, edf, p: float = 0.95) -> float:
     (ν the edf there). The minimum picks the luckiest of several τ, so it holds K² less
     often than p: on 2-h records of white noise and a walk (the bench's K), in 83–86 % of
     80 records at p = 0.95, where the 68 % limits used before held it in 56–65 %
-    (tests/test_iec_hysteresis_interval.py). Not a stated 95 % bound; the drift
-    terms' E[K²] is :func:`walk_k2_iec` (a posterior mean, no level). τ with a non-finite value or edf are left out; none left: NaN.
+    (tests/test_iec_hysteresis_interval.py). Not a stated 95 % bound; the drift terms'
+    E[K²] is :func:`walk_k2_iec` (a posterior mean, no level). τ with a non-finite value or
+    edf are left out; none left: NaN.
 
     >>> from scipy.stats import chi2
     >>> b = walk_coefficient_bound([100.0, 1000.0], [1.0, 1.0], [10.0, 4.0])

@@ -1520,8 +1520,8 @@ def walk_likelihood_inputs(ctx: Context) -> dict:
 def walk_likelihood_inputs_of(allan, fit) -> dict:
     """The arguments of :func:`gonio.specs.iec62047_20.formulas.walk_k2_iec` from an Allan
     result and its five-term fit, in the record's rate unit squared (and per s): the Allan
-    variances, the edf of the walk's own noise type at each τ (Greenhall, α = −2), the five-term fit's other terms (quantisation,
-    white noise, bias instability, ramp) at each τ, the walk's response τ/3 (IEEE 952 C.1),
+    variances, the edf of the walk's own noise type at each τ (Greenhall, α = −2), the
+    five-term fit's other terms (quantisation, white noise, bias instability, ramp) at each τ, the walk's response τ/3 (IEEE 952 C.1),
     the fitted K̂², and the covariance of the variance estimates across τ under the fitted
     model (:func:`gonio.analysis.noise.covariance.variance_covariance`)."""
     from gonio.analysis.noise.fit import design_matrix, edf_memo
