@@ -160,3 +160,37 @@ def test_a_second_limit_for_one_item_is_an_error_not_an_override(tmp_path):
         load_lab(lab)
     assert exc.value.key.endswith("].item") and "angle_deviation" in str(exc.value)
     assert "lab.toml" in str(exc.value)
+
+
+def test_an_item_stated_by_an_asymmetric_interval_is_guarded_by_its_own_reach():
+    """An item stated by its interval alone (k None, U = distance to the upper end): the
+    guard band at each limit is the interval's reach on that side, so with r = 1 "pass"
+    is exactly "the stated interval lies inside the tolerance" at a lower limit too (the
+    band at the lower limit was U, the upper reach, before)."""
+    from gonio.analysis.conformity import decide_items
+    from gonio.result.model import Item, Result, Uncertainty
+
+    def res(value, lo, hi):
+        unc = Uncertainty([], (hi - lo) / 4, hi - value, None, None, interval=(lo, hi),
+                          k_source="neyman-belt")
+        return Result("s", "S", {"C": Item("C", "range", "7.6", "ppm", value,
+                                           uncertainty=unc)}, {}, {})
+    rule = {"rule": "guarded", "guard_band_factor": 1.0}
+    # interval [2.9, 6.0] about 3.0: lower limit 2.5 → lies inside, pass (w_L = 0.1);
+    # with the upper reach 3.0 as the band the acceptance limit would be 5.5: fail
+    (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "lower": 2.5}], rule)
+    assert c.outcome == "pass" and c.acceptance_lower == pytest.approx(2.6)
+    (c,) = decide_items(res(3.0, 2.4, 6.0), [{"item": "C", "lower": 2.5}], rule)
+    assert c.outcome == "fail"
+    # the upper side keeps U: [2.9, 6.0] against ≤ 6.5 passes, against ≤ 5.9 does not
+    (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "upper": 6.5}], rule)
+    assert c.outcome == "pass" and c.acceptance_upper == pytest.approx(3.5)
+    (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "upper": 5.9}], rule)
+    assert c.outcome == "fail"
+    # non-binary: outside the lower limit by less than the lower reach → conditional fail
+    (c,) = decide_items(res(2.45, 2.4, 6.0), [{"item": "C", "lower": 2.5}],
+                        {"rule": "non-binary"})
+    assert c.outcome == "conditional fail"
+    (c,) = decide_items(res(2.3, 2.25, 6.0), [{"item": "C", "lower": 2.5}],
+                        {"rule": "non-binary"})
+    assert c.outcome == "fail"

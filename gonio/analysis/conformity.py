@@ -161,16 +161,23 @@ def conformance_probability_chi2(s: float, nu: float, lower: float | None,
     return max(0.0, below(upper, 1.0) - below(lower, 0.0))
 
 
-def acceptance_interval(limits: Limits, w: float) -> tuple[float | None, float | None]:
-    """[T_L + w, T_U − w]: the acceptance interval of a guard band w (JCGM 106 8.3.2).
+def acceptance_interval(limits: Limits, w: float,
+                        w_lower: float | None = None) -> tuple[float | None, float | None]:
+    """[T_L + w_L, T_U − w]: the acceptance interval of a guard band w (JCGM 106 8.3.2);
+    ``w_lower`` (default ``w``) is the band at the lower limit, for an item stated by an
+    interval that is not symmetric about its value (the band at each limit is the
+    interval's reach on that side).
 
     An open tolerance end stays open. A guard band that closes the interval
-    (T_U − T_L ≤ 2w) leaves an empty acceptance interval: nothing can pass.
+    (T_U − T_L ≤ w + w_L) leaves an empty acceptance interval: nothing can pass.
 
     >>> acceptance_interval(Limits(-0.5, 0.5), 0.2)
     (-0.3, 0.3)
+    >>> acceptance_interval(Limits(-0.5, 0.5), 0.2, 0.1)
+    (-0.4, 0.3)
     """
-    lo = None if limits.lower is None else limits.lower + w
+    w_lower = w if w_lower is None else w_lower
+    lo = None if limits.lower is None else limits.lower + w_lower
     hi = None if limits.upper is None else limits.upper - w
     return lo, hi
 
@@ -182,7 +189,7 @@ def _inside(y: float, lo: float | None, hi: float | None) -> bool:
 
 def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
            rule: DecisionRule, *, chi2_nu: float | None = None,
-           u: float | None = None) -> Conformity:
+           u: float | None = None, U_lower: float | None = None) -> Conformity:
     """The statement of conformity for one item (ILAC-G8:09/2019 4.2; JCGM 106 8–9).
 
     Parameters
@@ -202,6 +209,10 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
         applies (an item stated by another interval, e.g. a half range: its guard band is
         U, the distance to the interval's upper end; the probabilities are the normal
         approximation with u).
+    U_lower : for an item stated by an interval, the distance from the value down to the
+        interval's lower end (default ``U``): the guard band at a lower limit is
+        r·U_lower, so that with r = 1 "pass" is "the stated interval lies inside the
+        tolerance" on either side, as at the upper limit.
 
     A value exactly on a limit of the acceptance interval is accepted (the limits
     are part of the interval, JCGM 106 3.3.9).
@@ -221,7 +232,8 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
         p_c = conformance_probability(y, u, limits.lower, limits.upper)
         model = "normal"
     w = rule.guard_band(U)
-    a_lo, a_hi = acceptance_interval(limits, w)
+    w_lo = w if U_lower is None else rule.guard_band(max(float(U_lower), 0.0))
+    a_lo, a_hi = acceptance_interval(limits, w, w_lo)
     in_tol = _inside(y, limits.lower, limits.upper)
     in_acc = _inside(y, a_lo, a_hi)
     if rule.kind == "non-binary":
@@ -230,9 +242,10 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
         elif in_tol:
             outcome = "conditional pass"
         else:
-            beyond = max((limits.lower - y) if limits.lower is not None else -math.inf,
-                         (y - limits.upper) if limits.upper is not None else -math.inf)
-            outcome = "conditional fail" if beyond <= w else "fail"
+            below = (limits.lower - y) if limits.lower is not None else -math.inf
+            above = (y - limits.upper) if limits.upper is not None else -math.inf
+            outcome = ("conditional fail" if (below <= w_lo if below >= above else above <= w)
+                       else "fail")
     else:
         outcome = "pass" if in_acc else "fail"
     accepted = outcome in ("pass", "conditional pass")
@@ -327,10 +340,15 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
                                                 or u_normal is not None):
             c = _undecided(key, bounds, rule, origin, "no interval model to decide with")
         elif c is None:
+            # an item stated by its interval alone: the band at a lower limit is the
+            # interval's reach below the value (its upper reach is U)
+            U_lower = (float(it.value) - float(unc.interval[0])
+                       if unc.k is None and unc.interval is not None
+                       and math.isfinite(float(unc.interval[0])) else None)
             c = replace(decide(key, float(it.value), float(unc.U),
                                None if unc.k is None else float(unc.k), bounds, rule,
                                chi2_nu=chi2_nu if chi2_nu is not None and it.value > 0
-                               else None, u=u_normal), limits_from=origin)
+                               else None, u=u_normal, U_lower=U_lower), limits_from=origin)
         it.conformity = c
         out.append(c)
     return out
