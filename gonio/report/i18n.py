@@ -173,14 +173,20 @@ LABELS: dict[str, dict[str, str]] = {
                            "deviation of a few repeats (a repeatability, a stability) or a half "
                            "range by its one-sided 95 % upper limit (σ's χ² distribution, "
                            "JCGM 100 E.4.3; the range of normal values for a half range), on "
-                           "which any conformity decision is made; a quantity that cannot be "
+                           "which any conformity decision is made; a range corrected for its "
+                           "bias (a nonlinearity, a consistency) by the 95 % interval of its "
+                           "confidence belt (the measured range's distribution under the "
+                           "budget's errors, JCGM 101), an extreme or a rule's outcome by the "
+                           "95 % interval of its own Monte Carlo distribution; a quantity that cannot be "
                            "negative whose U exceeds its value by its upper bound, value + U "
                            "(the interval value ± U without its impossible negative part, "
                            "JCGM 100 4.3.9).",
                      "zh": "以区间表述的项目只有这一个表述，在结果栏中连同包含概率给出，无 U，无 k："
                            "少数重复测量的标准偏差（重复性、稳定性）或半极差给出其单侧 95 % 上限"
                            "（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），对上限的判定"
-                           "亦以此为据；不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U "
+                           "亦以此为据；修正偏差后的极差（非线性度、一致性）给出其置信带的 95 % 区间"
+                           "（在不确定度分量误差下测得极差的分布，JCGM 101），极值或判定规则的结果给出"
+                           "其蒙特卡洛分布的 95 % 区间；不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U "
                            "去掉不可能的负值部分，JCGM 100 4.3.9）。"},
     "u_c_word": {"en": "combined standard uncertainty", "zh": "合成标准不确定度"},
     "src_own_A": {"en": "scatter of the item's own readings (Type A)",
