@@ -1247,10 +1247,49 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
 
 # --------------------------------------------------------------------------- items
 
+def round_positions(table: pd.DataFrame, protocol: Protocol, test: str
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(stop, zeroing position) of each reading row of a rotation item, degrees, from the
+    protocol's rounds (the zeroing position is the round's start, or the series' first
+    start where the item does not re-zero; as the bench and the reduction plan them).
+    The reading's own angle turned is checked against them."""
+    item = next(it for it in protocol.items() if it.test == test)
+    rnd = table["round"].to_numpy(dtype=int)
+    stop = np.array([item.rounds[r - 1].stop_deg for r in rnd], dtype=float)
+    zero = np.array([(item.rounds[r - 1].start_deg if item.rezero else item.rounds[0].start_deg)
+                     for r in rnd], dtype=float)
+    th = table["table_deg"].to_numpy(dtype=float)
+    bad = np.abs(stop - zero - th) > 1e-6
+    if bad.any():
+        raise GonioError(f"{test} round {int(rnd[np.argmax(bad)])}: table angle "
+                         f"{th[np.argmax(bad)]:g} deg is not the protocol's stop − start; the "
+                         "table calibration needs the positions",
+                         line=int(table["line"].to_numpy()[np.argmax(bad)]), column="table_deg")
+    return stop, zero
+
+
+def _scale_factor_table(t: pd.DataFrame, protocol: Protocol, table_calibration):
+    """K's table correction from a calibrated table, or (None, the note why not)."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    if table_calibration is None:
+        return None, ""
+    stop, zero = round_positions(t, protocol, "scale_factor")
+    corr, missing = iu.scale_factor_table_correction(
+        t["K_i_counts_per_deg"], t["table_deg"], stop, zero, table_calibration)
+    if corr is None:
+        return None, (f"the {table_calibration.source} does not cover "
+                      f"{', '.join(f'{x:g}' for x in missing)} deg: the MPE line kept")
+    return corr, ""
+
+
 def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protocol: Protocol,
-                       settings: dict, readings: Readings, gyro_type: str | None = None) -> dict:
+                       settings: dict, readings: Readings, gyro_type: str | None = None,
+                       table_calibration=None) -> dict:
     """The uncertainty of every measured item (clause 8), by
-    :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none."""
+    :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none.
+    ``table_calibration``: a :class:`~gonio.specs.ogam_draft.table_calibration.TableCalibration`
+    (K corrected by it, its table line the calibration's; beyond the draft), or None."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
     k_fixed = protocol.annex_a.coverage_factor
@@ -1261,8 +1300,10 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     tc = None               # K's correction by the measured tilt (the in-situ estimate)
     if sf.measured:
         t = sf.table
+        t_corr, t_note = _scale_factor_table(t, protocol, table_calibration)
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
-                  chamber=chamber_temperature(readings, protocol, gyro_type)[0])
+                  chamber=chamber_temperature(readings, protocol, gyro_type)[0],
+                  table_correction=t_corr, table_note=t_note)
         out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
                                                      mpe, **kw)
         tc, _ = tilt_correction(results, readings, protocol)
@@ -1543,7 +1584,8 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
             *, monte_carlo_trials: int = 0, seed: int = 0,
             static_record: StaticRecord | None = None, budget: str = "physical",
             tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-            findings: list | None = None, gyro_type: str | None = None) -> Analysis:
+            findings: list | None = None, gyro_type: str | None = None,
+            table_calibration=None) -> Analysis:
     """Compute the seven characteristics and their uncertainties from a readings file or stream.
 
     ``protocol``: explicit (the command line's ``--protocol``), else the file's
@@ -1562,8 +1604,14 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     pipeline's first step), applied as given; None: screened here. ``gyro_type``: the
     instrument's type as the laboratory file states it (``[instrument] gyro_type``, passed by
     the pipeline), taken for K's temperature-coefficient bound when the readings state none
-    (:func:`temperature_coeff_bound`).
+    (:func:`temperature_coeff_bound`). ``table_calibration``: the rotary table's calibrated
+    errors (:mod:`gonio.specs.ogam_draft.table_calibration`: a CSV path, or a
+    ``TableCalibration`` such as ``from_equal_division(eda)``); K's 7.1 rounds are corrected
+    by it and its table line is the calibration's (beyond the draft); None: the MPE lines.
     """
+    if isinstance(table_calibration, (str, Path)):
+        from gonio.specs.ogam_draft.table_calibration import read_table_calibration
+        table_calibration = read_table_calibration(table_calibration)
     if isinstance(readings, Readings):
         proto, conflicts = resolve_protocol(readings.path, readings.metadata.get("protocol"),
                                             protocol)
@@ -1591,13 +1639,19 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                             monte_carlo_trials=monte_carlo_trials, seed=seed,
                                             tilt_measured=e_tilt)
     noise, noise_src = analyse_zero_stability(static_record)
-    items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type)
+    items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type,
+                               table_calibration=table_calibration)
     if proto.tilt_estimate is not None and "scale_factor" in items:
         tc = items["scale_factor"].correction
         notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
             f"K corrected by the measured tilt psi = {tc.tilt_deg:.3g} deg (U95 "
             f"{tc.k95 * tc.u_tilt_deg:.2g} deg), azimuth {tc.azimuth_deg:.1f} deg (U95 "
             f"{tc.k95 * tc.u_azimuth_deg:.2g} deg) [beyond the draft]"))
+    if table_calibration is not None and "scale_factor" in items:
+        used = any(c.symbol == "P_Kc" for c in items["scale_factor"].components)
+        notes.append(f"K corrected by the {table_calibration.describe()} [beyond the draft]"
+                     if used else f"the {table_calibration.source} does not cover K's "
+                     "positions: K keeps the MPE line [beyond the draft]")
     zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)

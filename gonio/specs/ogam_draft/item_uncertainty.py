@@ -59,7 +59,8 @@ from uncertainty.stdev import (correlated_stdev_dof, expected_range_factor,
 __all__ = [
     "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U", "budget_k",
     "K_SOURCE_COMBINED", "COMBINED_SEED",
-    "ScaleFactorTableLine", "scale_factor_table_line", "ChamberLine", "chamber_temperature_line",
+    "ScaleFactorTableLine", "scale_factor_table_line", "TableCorrection",
+    "scale_factor_table_correction", "ChamberLine", "chamber_temperature_line",
     "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
     "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
     "angle_deviation_budget", "repeatability_budget", "consistency_budget",
@@ -489,11 +490,80 @@ def chamber_temperature_line(coeff_bound_ppm_per_c: float, tolerance_c: float,
     return ChamberLine(hw, "rectangular-product", hw / 3.0, "tolerance", None)
 
 
+@dataclass(frozen=True)
+class TableCorrection:
+    """K's 7.1 rounds corrected by a calibrated table (:func:`scale_factor_table_correction`):
+    the corrected K_i (counts/°), u(K) of the calibration's uncertainty through the
+    correction (counts/°), its ν, and the line's source."""
+
+    k_i: np.ndarray
+    u: float
+    dof: float
+    source: str
+
+
+def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibration
+                                  ) -> tuple[TableCorrection | None, list[float]]:
+    """K's rounds corrected by the table's calibrated error e = indicated − true, arcsec
+    (:class:`gonio.specs.ogam_draft.table_calibration.TableCalibration`; beyond the draft).
+
+    Round i turns the table from its zeroing position z_i to the stop s_i; the table reads
+    θ_i but turned θ_i − (e(s_i) − e(z_i))/3600 (A.4.1's error, now known), so
+    K_i = C_i/θ_i becomes K_i θ_i/(θ_i − Δe_i/3600) (7.1). K = mean K_i; its sensitivity to
+    e(x_p) is c_p = (1/n) Σ_i K_i/(3600 θ_i − Δe_i) · ([s_i = x_p] − [z_i = x_p]) (K_i the
+    corrected ones), u(K)² = cᵀ V c with V the calibration's covariance (diagonal u² where
+    none is given, JCGM 100 5.1.2; 5.2.2 with it), ν by Welch–Satterthwaite over the
+    positions (∞ where the calibration states none). Positions are taken modulo 360°. Returns
+    (None, missing positions) where the calibration does not cover a stop or zero.
+
+    Six rounds 0 → 60°…360° at K = 3600 counts/°, e(60°) = 0.1″, the rest 0: round 1 turned
+    60° − 0.1″, K_1 = 3600·60/(60 − 0.1/3600) = 3600.00167; u 0.02″ at every position,
+    independent: c(θ) ≈ 1/(6θ) at the stops 60°…300°, c(0°) = −Σ of those (the zeroing
+    position of rounds 1–5; round 6 stops at 360° = 0° and carries no table error), so
+    u = 0.02·√(Σ c_p² + (Σ c_p)²) counts/°:
+
+    >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
+    >>> cal = TableCalibration([0, 60, 120, 180, 240, 300], [0, 0.1, 0, 0, 0, 0], [0.02] * 6, "t")
+    >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
+    >>> c, _ = scale_factor_table_correction([3600.0] * 6, th, th, [0.0] * 6, cal)
+    >>> round(float(c.k_i[0]), 5), [float(x) for x in c.k_i[1:]] == [3600.0] * 5
+    (3600.00167, True)
+    >>> g = np.array([1/60, 1/120, 1/180, 1/240, 1/300])    # c_p·6 at 60°…300°, per K/3600
+    >>> round(c.u, 8) == round(0.02 * 3600 / 3600 / 6 * math.sqrt(np.sum(g ** 2) + np.sum(g) ** 2), 8)
+    True
+    >>> scale_factor_table_correction([3600.0], [45.0], [45.0], [0.0], cal)
+    (None, [45.0])
+    """
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    i_s, miss_s = calibration.lookup(stop_deg)
+    i_z, miss_z = calibration.lookup(zero_deg)
+    if i_s is None or i_z is None:
+        return None, sorted(set(miss_s) | set(miss_z))
+    e = calibration.error_arcsec
+    d_e = e[i_s] - e[i_z]                                    # arcsec, per round
+    th_true = th - d_e / ARCSEC_PER_DEG
+    k_c = k_i * th / th_true
+    n = k_i.size
+    sens = k_c / (ARCSEC_PER_DEG * th_true) / n              # ∂K/∂Δe_i, counts/° per arcsec
+    c = np.zeros(calibration.table_deg.size)
+    np.add.at(c, i_s, sens)
+    np.add.at(c, i_z, -sens)
+    u2 = float(c @ calibration.covariance() @ c)
+    dof = math.inf
+    if calibration.dof is not None and u2 > 0:
+        den = float(np.sum((c * calibration.u_arcsec) ** 4 / calibration.dof))
+        dof = u2 ** 2 / den if den > 0 else math.inf
+    return TableCorrection(k_c, math.sqrt(max(u2, 0.0)), dof, calibration.describe()), []
+
+
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
                         tilt_bias_arcsec_per_deg: float = 0.0,
                         chamber: ChamberLine | None = None,
-                        tilt_correction=None) -> ItemUncertainty:
+                        tilt_correction=None,
+                        table_correction: TableCorrection | None = None,
+                        table_note: str = "") -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
@@ -519,6 +589,12 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     of two rectangulars where ΔT is known only by the tolerance). Not in the draft's budget;
     absent where its half-width is zero (a logged ΔT of 0).
 
+    ``table_correction`` (a :class:`TableCorrection` of :func:`scale_factor_table_correction`,
+    a calibrated table): K is the mean of the corrected K_i and the ``P_K`` line at the MPE
+    is replaced by the calibration's, ``P_Kc``, normal with its propagated u (beyond the
+    draft). ``table_note``: why a calibration given is not used (positions it does not
+    cover), appended to the MPE line's source.
+
     ``tilt_correction`` (a :class:`gonio.specs.ogam_draft.budget_extra.TiltCorrection`: the
     coupling's relative bias δ at the tilt ψ and azimuth α the in-situ tilt estimate
     measured, and u(δ)): K is corrected, K = mean K_i/(1 + δ), and the ``K_tilt`` line at
@@ -543,6 +619,8 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     """
     k_i = np.asarray(k_i, dtype=float)
     th = np.asarray(theta_deg, dtype=float)
+    if table_correction is not None:
+        k_i = np.asarray(table_correction.k_i, dtype=float)
     n = k_i.size
     u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
     lines = []
@@ -556,7 +634,17 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     both = (f"the standard's reading (independent stops, rectangular) u = "
             f"{tl.u_rel_standard / PPM:.3g} ppm; one periodic error at the bound, worst order "
             f"{tl.order}, arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm; the larger certified")
-    if tl.certified == "harmonic":
+    if table_note:
+        both += f"; {table_note}"
+    if table_correction is not None:
+        tc_ = table_correction
+        lines.append(_Line(from_u("P_Kc", 0.0, tc_.u, dof=tc_.dof, type="B",
+                                  source=f"table angle error at the stops corrected by the "
+                                         f"{tc_.source}; u of the correction propagated "
+                                         f"(stops − zeroing positions)"),
+                           "table angle (calibrated table)", True,
+                           "A.4.1 applied to 7.1, calibrated table"))
+    elif tl.certified == "harmonic":
         lines.append(_Line(type_b("P_K", 0.0, kbar * tl.half_width_rel_harmonic, "arcsine",
                                   source=f"table angle error at the stops, MPE "
                                          f"±{table_mpe_arcsec:g}″, one periodic error: {both}"),

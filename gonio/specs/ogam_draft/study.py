@@ -82,7 +82,8 @@ __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench"
            "ValidationReport", "trial_seeds", "trial_seed", "TrialJob", "trial_bench",
            "pack_trials", "unpack_trials", "EXTRA_SYMBOLS", "draw_type_b", "worst_azimuth",
            "worst_condition",
-           "coupling_bias", "tilted", "TABLE_RATE_ERROR_BOUND"]
+           "coupling_bias", "tilted", "TABLE_RATE_ERROR_BOUND", "TABLE_CALIBRATION_U_ARCSEC",
+           "table_positions_deg", "drawn_table_calibration"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -114,7 +115,16 @@ CASES = {
                   "the bound (amplitudes' sum = the MPE less the scatter's 3 sigma; the "
                   "bench's error shape, phases drawn), every other Type B effect drawn per "
                   "trial as in typeb",
+    "tablecal": "the draws of typeb with a calibrated table: per trial a table calibration "
+                "(table_calibration.py) drawn from the trial bench's true periodic table "
+                "error at every position the protocol uses plus normal noise of "
+                "u = TABLE_CALIBRATION_U_ARCSEC, as a laboratory's table certificate states "
+                "it; K is corrected by it and its table line is the calibration's",
 }
+
+#: The standard uncertainty of the table calibration the ``tablecal`` case draws, arcsec
+#: (a good table certificate, or an equal-division comparison, IEC 62047-20 A.3).
+TABLE_CALIBRATION_U_ARCSEC = 0.02
 
 #: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
 #: (a Type B line is one fixed offset there; :func:`item_coverage`'s ``judge_spread``).
@@ -206,7 +216,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         b = ideal_bench(bench)
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
-    if case in ("mounted", "typeb", "worsttable"):
+    if case in ("mounted", "typeb", "worsttable", "tablecal"):
         return bench                      # drawn per trial (:func:`trial_bench`)
     if case == "worst":                   # the other Type B effects drawn per trial
         psi = float(protocol.annex_a.tilt_bound_deg)
@@ -407,7 +417,7 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     >>> t.chamber_deviation_c == draw_type_b(b, p, 3).chamber_deviation_c
     True
     """
-    if case == "typeb":
+    if case in ("typeb", "tablecal"):
         return draw_type_b(bench, protocol, seed)
     if case == "worsttable":
         d = draw_type_b(bench, protocol, seed)
@@ -422,6 +432,50 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     psi = float(protocol.annex_a.tilt_bound_deg) * math.sqrt(float(rng.uniform()))
     return replace(bench, instrument=replace(bench.instrument, tilt_deg=psi,
                                              tilt_azimuth_deg=float(rng.uniform(0.0, 360.0))))
+
+
+def table_positions_deg(protocol: Protocol) -> np.ndarray:
+    """Every table position the protocol's session uses (stops and zeroing positions of the
+    rotation items, the tilt estimate's rests), modulo 360°, sorted.
+
+    >>> table_positions_deg(validation_protocol()).tolist()[:4]
+    [0.0, 30.0, 60.0, 90.0]
+    """
+    pos = []
+    for item in protocol.items():
+        x0 = item.rounds[0].start_deg
+        for r in item.rounds:
+            pos += [r.stop_deg, r.start_deg if item.rezero else x0]
+    te = protocol.tilt_estimate
+    if te is not None:
+        pos += [360.0 * i / te.positions for i in range(te.positions)]
+    w = np.mod(np.round(np.asarray(pos, dtype=float), 9), 360.0)
+    return np.unique(w)
+
+
+def drawn_table_calibration(bench: Bench, protocol: Protocol, seed: int,
+                            u_arcsec: float = TABLE_CALIBRATION_U_ARCSEC):
+    """A laboratory's table calibration for one trial: at every position the protocol uses
+    (:func:`table_positions_deg`), the trial bench's TRUE periodic positioning error
+    (indicated − true, the bench's harmonics; the per-visit scatter is no property a
+    calibration can state) plus normal noise of standard deviation ``u_arcsec``, stated with
+    u = ``u_arcsec``. The truth comes from the bench's parameters, never from an estimator.
+
+    >>> b = draw_type_b(load_bench("rlg"), validation_protocol(), 3)
+    >>> c = drawn_table_calibration(b, validation_protocol(), 3)
+    >>> c.table_deg.size == table_positions_deg(validation_protocol()).size, float(c.u_arcsec[0])
+    (True, 0.02)
+    """
+    from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+    from gonio.specs.ogam_draft.table_calibration import TableCalibration
+
+    x = table_positions_deg(protocol)
+    true = np.asarray(harmonic_sum_arcsec(x, bench.table.positioning_harmonics), dtype=float) \
+        + 0.0 * x
+    rng = np.random.default_rng([int(seed), 0x7ab1ec])
+    return TableCalibration(x, true + u_arcsec * rng.standard_normal(x.size),
+                            np.full(x.size, float(u_arcsec)),
+                            f"drawn table calibration (u {u_arcsec:g}″)")
 
 
 @dataclass
@@ -461,20 +515,21 @@ def _matrix(df, col: str) -> np.ndarray:
 
 
 def run_trial(protocol: Protocol, bench: Bench, seed: int, u_scale: float = 1.0,
-              truth: str = "systematic", extras_used: Sequence[str] = EXTRA_SYMBOLS
-              ) -> TrialResult:
+              truth: str = "systematic", extras_used: Sequence[str] = EXTRA_SYMBOLS,
+              table_calibration=None) -> TrialResult:
     """One virtual calibration on ``bench``: session, calibration, Annex A U, truth.
 
     U is the calibration's own Annex A U (k = 2, u(r) from its 7.5 data), times
     ``u_scale`` (1 except to test the validation's power); ``U_extended_arcsec``
     adds the :func:`budget_extra_components` named in ``extras_used``.
+    ``table_calibration``: the laboratory's table calibration (``tablecal``), or None.
     """
     res = run_session(protocol, bench, seed=seed)
     df = res.readings.copy()
     df["line"] = np.arange(2, len(df) + 2)
     # the continuous record of the 7.3 rest, as a stream calibration has it (B_s's model)
     rep = analyse(Readings(df, dict(res.metadata)), protocol, budget="draft",
-                  static_record=res.static_record)
+                  static_record=res.static_record, table_calibration=table_calibration)
     ad = rep.results.angle_deviation.tables["readings"]
     e = _matrix(ad, "E_arcsec")
     pos = ad.groupby("round")["table_deg"].mean().sort_index().to_numpy(dtype=float)
@@ -545,8 +600,13 @@ class TrialJob:
         engine (:func:`gonio.pipeline.validate.run_batch`) calls it in a worker."""
         idx = range(start, stop)
         seeds = [trial_seed(self.seed, self.case, i) for i in idx]
-        res = [run_trial(self.protocol, trial_bench(self.case, self.bench, self.protocol, sd),
-                         sd, self.u_scale, self.truth, self.extras_used) for sd in seeds]
+        res = []
+        for sd in seeds:
+            b = trial_bench(self.case, self.bench, self.protocol, sd)
+            cal = drawn_table_calibration(b, self.protocol, sd) if self.case == "tablecal" \
+                else None
+            res.append(run_trial(self.protocol, b, sd, self.u_scale, self.truth,
+                                 self.extras_used, table_calibration=cal))
         return pack_trials(self.case, list(idx), res)
 
 

@@ -1,0 +1,175 @@
+"""A calibrated rotary table: its positioning error at stated angles, with uncertainty.
+
+The draft knows the table only by its maximum permissible error (Table 1, ±0.1″; A.4.1), so
+K's table line holds the table's error anywhere within that bound — honest for a table at
+its bound, over-wide for a good one (docs/draft-readings.md, "A calibrated table"). A
+laboratory that has calibrated its table (the table's own certificate, or the equal-division
+comparison of IEC 62047-20 A.3, :mod:`gonio.specs.ogam_draft.equal_division`) knows the
+error e(x) = indicated − true at each position x, with a standard uncertainty. With it the
+7.1 reduction is corrected (the angle turned from the zeroing position z to the stop s is
+θ − (e(s) − e(z))/3600) and the table line becomes the calibration's uncertainty propagated
+through the same sensitivity (beyond the draft; JCGM 100 5.1.2, 5.2.2 with the covariance).
+
+The file (docs/formats.md, "Table calibration"): CSV, ``#`` comment lines, a header with
+``table_deg``, ``error_arcsec`` (indicated − true) and ``u_arcsec`` (standard uncertainty,
+k = 1), optionally ``dof`` (the degrees of freedom of u; ∞ when absent). Angles are taken
+modulo 360° (360° is the table's 0°). A position the session uses that the calibration does
+not list is not interpolated: the item falls back to its MPE line, and says so in the line's
+source (:meth:`TableCalibration.lookup`).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gonio.errors import GonioError
+
+__all__ = ["TableCalibration", "read_table_calibration", "from_equal_division",
+           "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG"]
+
+REQUIRED_COLUMNS = ("table_deg", "error_arcsec", "u_arcsec")
+#: A session's position matches a calibrated one within this (degrees, modulo 360°).
+POSITION_TOLERANCE_DEG = 1e-6
+
+
+def _wrap_deg(x_deg):
+    """Angles modulo 360° in [0, 360), 360° − ε folded to 0.
+
+    >>> _wrap_deg(np.array([360.0, -60.0, 359.9999999999])).tolist()
+    [0.0, 300.0, 0.0]
+    """
+    w = np.mod(np.asarray(x_deg, dtype=float), 360.0)
+    return np.where(360.0 - w < POSITION_TOLERANCE_DEG, 0.0, w)
+
+
+@dataclass(frozen=True)
+class TableCalibration:
+    """The table's error e = indicated − true at positions, arcsec, its standard uncertainty
+    and (optionally) covariance; ``source``: where it came from (printed in the lines)."""
+
+    table_deg: np.ndarray
+    error_arcsec: np.ndarray
+    u_arcsec: np.ndarray
+    source: str
+    cov_arcsec2: np.ndarray | None = None
+    dof: np.ndarray | None = None
+
+    def __post_init__(self):
+        pos = _wrap_deg(self.table_deg)
+        object.__setattr__(self, "table_deg", pos)
+        for name in ("error_arcsec", "u_arcsec"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+        if self.dof is not None:
+            object.__setattr__(self, "dof", np.asarray(self.dof, dtype=float))
+        srt = np.sort(pos)
+        if srt.size > 1 and np.min(np.diff(srt)) < POSITION_TOLERANCE_DEG:
+            raise GonioError("table calibration lists one position twice (modulo 360 deg)",
+                             file=self.source, column="table_deg")
+
+    def covariance(self) -> np.ndarray:
+        """The errors' covariance, arcsec²: the given one, else independent positions."""
+        if self.cov_arcsec2 is not None:
+            return np.asarray(self.cov_arcsec2, dtype=float)
+        return np.diag(self.u_arcsec ** 2)
+
+    def lookup(self, positions_deg) -> tuple[np.ndarray | None, list[float]]:
+        """Indices of ``positions_deg`` in the calibration, or (None, the positions it does
+        not cover): the caller then keeps its MPE line and names the missing positions.
+
+        >>> c = TableCalibration([0, 60, 120], [0.01, -0.02, 0.03], [0.02] * 3, "t.csv")
+        >>> c.lookup([360.0, 120.0])[0].tolist(), c.lookup([60.0, 90.0])
+        ([0, 2], (None, [90.0]))
+        """
+        x = _wrap_deg(positions_deg)
+        d = np.abs(x[:, None] - self.table_deg[None, :])
+        d = np.minimum(d, 360.0 - d)
+        ok = d <= POSITION_TOLERANCE_DEG
+        missing = sorted({float(v) for v, hit in zip(x, ok.any(axis=1)) if not hit})
+        if missing:
+            return None, missing
+        return np.argmax(ok, axis=1), []
+
+    def describe(self) -> str:
+        """One line for a budget line's source."""
+        u = self.u_arcsec
+        lo, hi = float(np.min(u)), float(np.max(u))
+        us = f"{lo:.3g}″" if math.isclose(lo, hi) else f"{lo:.3g}–{hi:.3g}″"
+        cov = "covariance given" if self.cov_arcsec2 is not None else "positions independent"
+        return f"table calibration, {self.source}, u {us} (k = 1), {cov}"
+
+
+def _float(text: str, path, line: int, column: str) -> float:
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        raise GonioError(f"expected a number, got {text!r}", file=path, line=line,
+                         column=column) from None
+    if not math.isfinite(v):
+        raise GonioError(f"expected a finite number, got {text!r}", file=path, line=line,
+                         column=column)
+    return v
+
+
+def read_table_calibration(path: str | Path) -> TableCalibration:
+    """Read a table-calibration CSV (module docstring; docs/formats.md). Every fault is a
+    :class:`GonioError` naming the file, line and column."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as e:
+        raise GonioError(f"cannot read table calibration: {e.strerror}", file=p) from None
+    except UnicodeDecodeError:
+        raise GonioError("table calibration is not UTF-8 text", file=p) from None
+    rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), 1)
+            if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise GonioError("table calibration holds no header", file=p)
+    n_head, head = rows[0]
+    head = [h.strip() for h in head]
+    for c in REQUIRED_COLUMNS:
+        if c not in head:
+            raise GonioError(f"header lacks column {c} (needs {', '.join(REQUIRED_COLUMNS)})",
+                             file=p, line=n_head)
+    known = set(REQUIRED_COLUMNS) | {"dof"}
+    for c in head:
+        if c not in known:
+            raise GonioError(f"unknown column (known: {', '.join(sorted(known))})", file=p,
+                             line=n_head, column=c)
+    if len(rows) < 2:
+        raise GonioError("table calibration holds no rows", file=p, line=n_head)
+    cols = {c: [] for c in head}
+    seen: dict[float, int] = {}
+    for n, r in rows[1:]:
+        if len(r) != len(head):
+            raise GonioError(f"{len(r)} fields, the header has {len(head)}", file=p, line=n)
+        for c, v in zip(head, r):
+            x = _float(v.strip(), p, n, c)
+            if c == "u_arcsec" and not x > 0.0:
+                raise GonioError("u_arcsec must be > 0", file=p, line=n, column=c)
+            if c == "dof" and not x >= 1.0:
+                raise GonioError("dof must be >= 1", file=p, line=n, column=c)
+            cols[c].append(x)
+        w = float(_wrap_deg(cols["table_deg"][-1]))
+        if w in seen:
+            raise GonioError(f"position {w:g} deg (modulo 360) listed again (first on line "
+                             f"{seen[w]})", file=p, line=n, column="table_deg")
+        seen[w] = n
+    return TableCalibration(np.array(cols["table_deg"]), np.array(cols["error_arcsec"]),
+                            np.array(cols["u_arcsec"]), p.name,
+                            dof=np.array(cols["dof"]) if "dof" in cols else None)
+
+
+def from_equal_division(eda, source: str = "equal-division comparison (IEC 62047-20 A.3)"
+                        ) -> TableCalibration:
+    """The table errors of an :class:`~gonio.specs.ogam_draft.equal_division.EdaResult` with
+    their covariance (its gauge's constant cancels in e(stop) − e(zero)), ν its residual dof."""
+    pos = np.asarray(eda.table_position_deg, dtype=float)
+    dof = np.full(pos.size, float(eda.dof)) if getattr(eda, "dof", 0) else None
+    return TableCalibration(pos, np.asarray(eda.table_error_arcsec, dtype=float),
+                            np.asarray(eda.table_u_arcsec, dtype=float), source,
+                            cov_arcsec2=np.asarray(eda.table_cov_arcsec2, dtype=float), dof=dof)

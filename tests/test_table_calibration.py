@@ -1,0 +1,206 @@
+"""A calibrated rotary table (gonio/specs/ogam_draft/table_calibration.py): K's 7.1 rounds
+corrected by the table's calibrated errors and K's table line the calibration's.
+
+Checked against truths outside the estimator: on a noise-free bench with a periodic table
+error and an exact calibration the corrected K equals the instrument's truth from the bench
+file (and the uncorrected K does not); the propagated line against a Monte Carlo of the
+correction itself (K recomputed from counts with the calibration's errors drawn); coverage
+over trials with every Type B effect drawn (``typeb`` draws, ``tablecal``) and at the worst
+tilt, with a calibration drawn from the trial bench's true table error; bad files."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gonio.analysis.coverage import clopper_pearson
+from gonio.errors import GonioError
+from gonio.formats.toml import read_toml
+from gonio.resources import resolve
+from gonio.specs.ogam_draft.bench import TableConfig, load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import Harmonic
+from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+from gonio.specs.ogam_draft.calibration import analyse
+from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
+from gonio.specs.ogam_draft.item_uncertainty import scale_factor_table_correction
+from gonio.specs.ogam_draft.protocol import parse_protocol
+from gonio.specs.ogam_draft.readings import Readings
+from gonio.specs.ogam_draft.study import (case_bench, drawn_table_calibration,
+                                          table_positions_deg, trial_bench)
+from gonio.specs.ogam_draft.table_calibration import (TableCalibration, from_equal_division,
+                                                      read_table_calibration)
+
+TRIALS = 40
+HARMONICS = (Harmonic(1, 0.04, 30.0), Harmonic(3, 0.05, 70.0))
+
+
+def _protocol():
+    raw = read_toml(resolve("ogam-draft", "protocol"))
+    for key in ("zero_stability", "rate_consistency", "pointing_consistency"):
+        raw.pop(key, None)
+    raw["annex_a"]["coverage_factor"] = 2.0
+    return parse_protocol(raw, resolve("ogam-draft", "protocol"))
+
+
+@pytest.fixture(scope="module")
+def proto():
+    return _protocol()
+
+
+@pytest.fixture(scope="module")
+def base():
+    return replace(load_bench("rlg"), sample_rate_hz=5.0)
+
+
+def _analyse(proto, bench, seed, cal=None):
+    res = run_session(proto, bench, seed=seed)
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    return res, analyse(Readings(df, dict(res.metadata)), proto, table_calibration=cal)
+
+
+def test_noise_free_exact_calibration(proto, base):
+    """No noise, no tilt, the table's error two harmonics (Σ|a| = 0.09″): the uncorrected K
+    is off the bench file's truth by the table's error at the stops (> 0.05 ppm), the
+    corrected K equals it to 0.005 ppm; its line is P_Kc in place of P_K."""
+    clean = replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS))
+    x = table_positions_deg(proto)
+    cal = TableCalibration(x, harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "exact")
+    res, raw = _analyse(proto, clean, 0)
+    _, rep = _analyse(proto, clean, 0, cal)
+    k_true = scale_factor_truth(res.truth)[0]
+    b_raw, b = raw.item_uncertainty["scale_factor"], rep.item_uncertainty["scale_factor"]
+    assert abs(b_raw.value / k_true - 1.0) > 0.05e-6
+    assert abs(b.value / k_true - 1.0) < 0.005e-6
+    syms = [c.symbol for c in b.components]
+    assert "P_Kc" in syms and "P_K" not in syms
+    assert "P_K" in [c.symbol for c in b_raw.components]
+    src = next(c for c in b.components if c.symbol == "P_Kc").source
+    assert "table calibration, exact, u 0.02″" in src
+    # the correction is the table's, not a fit: a calibration with the errors' sign flipped
+    # doubles the miss
+    flip = TableCalibration(x, -harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "f")
+    _, rep_f = _analyse(proto, clean, 0, flip)
+    miss_raw = b_raw.value - k_true
+    assert rep_f.item_uncertainty["scale_factor"].value - k_true == pytest.approx(2 * miss_raw,
+                                                                                   rel=0.02)
+
+
+def test_line_against_monte_carlo():
+    """u(K) of the correction by propagation (cᵀVc, a given covariance) against the scatter
+    of K recomputed from the counts with the calibration's errors drawn from N(e, V)."""
+    th = np.array([60.0, 120.0, 180.0, 240.0, 300.0, 360.0])
+    k0 = 76434.87
+    x = np.array([0.0, 60.0, 120.0, 180.0, 240.0, 300.0])
+    e = np.array([0.01, -0.03, 0.02, 0.04, -0.01, 0.0])
+    u = np.array([0.02, 0.03, 0.02, 0.025, 0.02, 0.03])
+    r = 0.4 ** np.abs(np.subtract.outer(np.arange(6), np.arange(6)))    # correlated positions
+    v = r * np.outer(u, u)
+    cal = TableCalibration(x, e, u, "cov", cov_arcsec2=v)
+    counts = k0 * th
+    corr, _ = scale_factor_table_correction(counts / th, th, th, np.zeros(6), cal)
+    rng = np.random.default_rng(11)
+    draws = rng.multivariate_normal(e, v, 100_000)
+    idx_s = np.array([1, 2, 3, 4, 5, 0])
+    k = np.mean(counts / (th - (draws[:, idx_s] - draws[:, [0]]) / 3600.0), axis=1)
+    assert np.std(k) == pytest.approx(corr.u, rel=0.02)
+    assert abs(np.mean(k) - float(np.mean(corr.k_i))) < 5 * corr.u / math.sqrt(k.size)
+    indep = TableCalibration(x, e, u, "ind")
+    assert scale_factor_table_correction(counts / th, th, th, np.zeros(6), indep)[0].u != \
+        pytest.approx(corr.u, rel=0.05)
+
+
+def _coverage(proto, case_b, case, seeds, worst=False):
+    z, hit = [], 0
+    for s in seeds:
+        b = trial_bench(case, case_b, proto, s)
+        cal = drawn_table_calibration(b, proto, s)
+        res, rep = _analyse(proto, b, s, cal)
+        bk = rep.item_uncertainty["scale_factor"]
+        assert "P_Kc" in [c.symbol for c in bk.components]
+        k_true = scale_factor_truth(res.truth)[0]
+        z.append((bk.value - k_true) / bk.u_c)
+        hit += abs(bk.value - k_true) <= bk.U
+    return hit, np.array(z)
+
+
+def test_coverage_typeb_calibrated(proto, base):
+    """40 trials of the ``tablecal`` case at 5 Hz (every Type B effect drawn as ``typeb``,
+    a calibration of u 0.02″ drawn from the trial bench's true table error): U(K) covers
+    (Clopper–Pearson reaching 95 %) and z's sd is within 0.7–1.3 (sharp, not over-wide)."""
+    hit, z = _coverage(proto, base, "tablecal", range(900, 900 + TRIALS))
+    print(f"K tablecal: {hit}/{TRIALS}, z mean {z.mean():+.2f} sd {z.std(ddof=1):.2f}")
+    assert clopper_pearson(hit, TRIALS)[1] >= 0.95
+    assert 0.7 <= np.std(z, ddof=1) <= 1.3
+
+
+def test_coverage_worst_tilt_calibrated(proto, base):
+    """40 trials at the worst condition (tilt at the A.1 bound, worst azimuth; the other
+    Type B effects drawn) with a calibrated table: covers, z's sd within 0.7–1.3."""
+    worst = case_bench("worst", base, proto)
+    hit, z = _coverage(proto, worst, "worst", range(700, 700 + TRIALS))
+    print(f"K worst tilt, calibrated table: {hit}/{TRIALS}, z mean {z.mean():+.2f} "
+          f"sd {z.std(ddof=1):.2f}")
+    assert clopper_pearson(hit, TRIALS)[1] >= 0.95
+    assert 0.7 <= np.std(z, ddof=1) <= 1.3
+
+
+GOOD = "# table certificate TC-1\ntable_deg,error_arcsec,u_arcsec\n0,0.01,0.02\n60,-0.02,0.02\n"
+
+
+@pytest.mark.parametrize("text, where", [
+    ("table_deg,error_arcsec\n0,0.01\n", "t.csv:1: "),                          # no u column
+    ("table_deg,error_arcsec,u_arcsec,colour\n0,0,0.02,red\n", "column colour"),
+    ("table_deg,error_arcsec,u_arcsec\n0,0.01,0.02\n60,x,0.02\n", "t.csv:3: column error_arcsec"),
+    ("table_deg,error_arcsec,u_arcsec\n0,0.01,0\n", "t.csv:2: column u_arcsec"),
+    ("table_deg,error_arcsec,u_arcsec\n0,0.01,0.02\n360,0.0,0.02\n", "t.csv:3: column table_deg"),
+    ("table_deg,error_arcsec,u_arcsec\n0,0.01\n", "t.csv:2: "),
+    ("table_deg,error_arcsec,u_arcsec\n", "no rows"),
+    ("table_deg,error_arcsec,u_arcsec,dof\n0,0.01,0.02,0.5\n", "column dof"),
+    ("table_deg,error_arcsec,u_arcsec\n0,nan,0.02\n", "column error_arcsec"),
+])
+def test_bad_files(tmp_path, text, where):
+    """Every fault: one GonioError naming the file, the line and the column."""
+    f = tmp_path / "t.csv"
+    f.write_text(text, encoding="utf-8")
+    with pytest.raises(GonioError) as e:
+        read_table_calibration(f)
+    assert where in str(e.value) and "\n" not in str(e.value)
+
+
+def test_good_file_and_uncovered_positions(tmp_path, proto, base):
+    """A good file reads (comments skipped, 360° = 0°); a calibration that does not cover K's
+    stops leaves K with its MPE line and says so in the line's source and the notes."""
+    f = tmp_path / "t.csv"
+    f.write_text(GOOD, encoding="utf-8")
+    c = read_table_calibration(f)
+    assert c.table_deg.tolist() == [0.0, 60.0] and c.source == "t.csv"
+    assert c.lookup([360.0, 60.0])[0].tolist() == [0, 1]
+    _, rep = _analyse(proto, replace(base.random_off(), table=TableConfig()), 0, str(f))
+    b = rep.item_uncertainty["scale_factor"]
+    line = next(x for x in b.components if x.symbol == "P_K")
+    assert "t.csv does not cover 120, 180, 240, 300 deg: the MPE line kept" in line.source
+    assert any("t.csv does not cover" in n for n in rep.budget_notes)
+
+
+def test_from_equal_division():
+    """An EdaResult's table errors and covariance taken as they are (its gauge's constant
+    cancels in e(stop) − e(zero))."""
+    class Eda:     # the attributes equal_division.EdaResult documents
+        table_position_deg = np.array([0.0, 90.0, 180.0, 270.0])
+        table_error_arcsec = np.array([0.0, 0.02, -0.01, 0.03])
+        table_u_arcsec = np.array([0.0, 0.01, 0.01, 0.01])
+        table_cov_arcsec2 = np.diag([0.0, 1e-4, 1e-4, 1e-4]) + 0.5e-4 * (1 - np.eye(4)) * \
+            np.outer([0, 1, 1, 1], [0, 1, 1, 1])
+        dof = 30
+    c = from_equal_division(Eda())
+    th = np.array([90.0, 180.0, 270.0, 360.0])
+    corr, _ = scale_factor_table_correction([1000.0] * 4, th, th, np.zeros(4), c)
+    # closed form: c_p = K/(3600 θ_true·n) at 90, 180, 270 (360 = 0 cancels), e(0) has u 0
+    g = np.array([1 / 90, 1 / 180, 1 / 270]) * 1000.0 / 3600.0 / 4
+    assert corr.u == pytest.approx(math.sqrt(g @ Eda.table_cov_arcsec2[1:, 1:] @ g), rel=1e-4)
+    assert corr.k_i[0] == pytest.approx(1000.0 * 90 / (90 - 0.02 / 3600), rel=1e-14)
