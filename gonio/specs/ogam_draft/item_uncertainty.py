@@ -557,6 +557,40 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     return TableCorrection(k_c, math.sqrt(max(u2, 0.0)), dof, calibration.describe()), []
 
 
+def _scale_factor_table_line_of(k_i, th, table_mpe_arcsec: float, u_tab, table_correction,
+                                table_note: str) -> _Line:
+    """K's table line (:func:`scale_factor_budget`): the calibration's where the table is
+    calibrated, else the larger of the MPE's two readings (:func:`scale_factor_table_line`)."""
+    n = k_i.size
+    tl = scale_factor_table_line(th, table_mpe_arcsec)
+    kbar = abs(float(np.mean(k_i)))
+    both = (f"the standard's reading (independent stops, rectangular) u = "
+            f"{tl.u_rel_standard / PPM:.3g} ppm; one periodic error at the bound, worst order "
+            f"{tl.order}, arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm; the larger certified")
+    if table_note:
+        both += f"; {table_note}"
+    if table_correction is not None:
+        tc_ = table_correction
+        return _Line(from_u("P_Kc", 0.0, tc_.u, dof=tc_.dof, type="B",
+                            source=f"table angle error at the stops corrected by the "
+                                   f"{tc_.source}; u of the correction propagated "
+                                   f"(stops − zeroing positions)"),
+                     "table angle (calibrated table)", True,
+                     "A.4.1 applied to 7.1, calibrated table")
+    if tl.certified == "harmonic":
+        return _Line(type_b("P_K", 0.0, kbar * tl.half_width_rel_harmonic, "arcsine",
+                            source=f"table angle error at the stops, MPE "
+                                   f"±{table_mpe_arcsec:g}″, one periodic error: {both}"),
+                     "table angle (one periodic error, worst order)", True,
+                     "A.4.1 applied to 7.1")
+    # the standard's reading with each round's own K_i: (1/n)√Σ(K_i u(θ)/θ_i)²
+    u_std = float(np.sqrt(np.sum(u_tab ** 2))) / n
+    return _Line(_as_dist(from_u("P_K", 0.0, u_std, type="B",
+                                 source=f"table angle error at the stops, MPE "
+                                        f"±{table_mpe_arcsec:g}″ rectangular, "
+                                        f"independent stops: {both}"), "rectangular"),
+                 "table angle", True, "A.4.1 applied to 7.1")
+
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
                         tilt_bias_arcsec_per_deg: float = 0.0,
@@ -629,35 +663,8 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
         lines.append(_Line(from_u("s_K", 0.0, s / math.sqrt(n), dof=n - 1, type="A",
                                   source=f"scatter of the {n} rounds' K_i, s/√n"),
                            "scatter of K_i", False, "7.1"))
-    tl = scale_factor_table_line(th, table_mpe_arcsec)
-    kbar = abs(float(np.mean(k_i)))
-    both = (f"the standard's reading (independent stops, rectangular) u = "
-            f"{tl.u_rel_standard / PPM:.3g} ppm; one periodic error at the bound, worst order "
-            f"{tl.order}, arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm; the larger certified")
-    if table_note:
-        both += f"; {table_note}"
-    if table_correction is not None:
-        tc_ = table_correction
-        lines.append(_Line(from_u("P_Kc", 0.0, tc_.u, dof=tc_.dof, type="B",
-                                  source=f"table angle error at the stops corrected by the "
-                                         f"{tc_.source}; u of the correction propagated "
-                                         f"(stops − zeroing positions)"),
-                           "table angle (calibrated table)", True,
-                           "A.4.1 applied to 7.1, calibrated table"))
-    elif tl.certified == "harmonic":
-        lines.append(_Line(type_b("P_K", 0.0, kbar * tl.half_width_rel_harmonic, "arcsine",
-                                  source=f"table angle error at the stops, MPE "
-                                         f"±{table_mpe_arcsec:g}″, one periodic error: {both}"),
-                           "table angle (one periodic error, worst order)", True,
-                           "A.4.1 applied to 7.1"))
-    else:
-        # the standard's reading with each round's own K_i: (1/n)√Σ(K_i u(θ)/θ_i)²
-        u_std = float(np.sqrt(np.sum(u_tab ** 2))) / n
-        lines.append(_Line(_as_dist(from_u("P_K", 0.0, u_std, type="B",
-                                           source=f"table angle error at the stops, MPE "
-                                                  f"±{table_mpe_arcsec:g}″ rectangular, "
-                                                  f"independent stops: {both}"), "rectangular"),
-                           "table angle", True, "A.4.1 applied to 7.1"))
+    lines.append(_scale_factor_table_line_of(k_i, th, table_mpe_arcsec, u_tab,
+                                             table_correction, table_note))
     lines.append(_Line(from_u("q_K", 0.0, float(np.sqrt(np.sum(u_q ** 2))) / n, type="B",
                               source="count quantisation, ±1 count triangular per C_i"),
                        "count quantisation", True, "7.1 (pulse count)"))
