@@ -13,7 +13,15 @@
 - :func:`max_stdev_interval` — the same for the largest of m sample standard
   deviations (each with ν) as an estimate of the largest σ_i: the quantiles are
   those of the maximum of m independent χ² variables (Šidák: probability
-  p^(1/m) per member), since picking the largest s biases it upwards.
+  p^(1/m) per member), since picking the largest s biases it upwards. Exact only
+  when the σ_i are equal; below max σ_i where one σ_i dominates.
+- :func:`max_stdev_cdf` — the exact distribution of the largest of m independent
+  sample standard deviations, P(max s_i ≤ x) = Π_i F_χ²(ν x²/σ_i²; ν).
+- :func:`max_stdev_belt_interval` — the Neyman confidence belt of max σ_i along a
+  given pattern of the σ_i (σ_i = θ·π_i), inverted at the measured maximum.
+- :func:`max_stdev_union_interval` — the union of those belts over every pattern
+  (the interval valid whatever the σ_i): the upper end from one σ_i alone, the lower
+  end from m equal σ_i, both closed form.
 - :func:`random_walk_stdev_dof` — the effective degrees of freedom of the sample
   variance of n equally spaced samples of a random walk (correlated samples carry
   far less information than n independent ones).
@@ -39,7 +47,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate, special, stats
 
-__all__ = ["stdev_interval", "stdev_upper", "stdev_u", "max_stdev_interval", "expected_range_factor",
+__all__ = ["stdev_interval", "stdev_upper", "stdev_u", "max_stdev_interval", "max_stdev_cdf",
+           "max_stdev_belt_interval", "max_stdev_union_interval", "expected_range_factor",
            "random_walk_stdev_dof", "correlated_stdev_dof", "corrected_range", "RangeCorrection"]
 
 
@@ -102,8 +111,11 @@ def max_stdev_interval(s_max: float, dof: float, m: int, p: float = 0.95) -> tup
 
     When every σ_i equals σ, P(max s_i ≤ x) = F(x)^m with F the distribution of one
     s; the interval is the set of σ for which s_max lies between the (1−p)/2 and
-    (1+p)/2 quantiles of that maximum. With unequal σ_i the largest dominates and
-    the interval is conservative. m = 1 gives :func:`stdev_interval`.
+    (1+p)/2 quantiles of that maximum. It is exact only for equal σ_i: where one σ_i
+    dominates, s_max is about one s and this interval lies too low (its upper end is
+    below s_max itself for m = 12, ν = 9), covering max σ_i far less than p; the interval
+    valid for every pattern is :func:`max_stdev_union_interval`. m = 1 gives
+    :func:`stdev_interval`.
 
     >>> lo, hi = max_stdev_interval(1.0, 9, 1)
     >>> round(lo, 3), round(hi, 3)
@@ -124,6 +136,146 @@ def max_stdev_interval(s_max: float, dof: float, m: int, p: float = 0.95) -> tup
     q_lo = a ** (1.0 / m)                # F(x)^m = a
     return (s_max * math.sqrt(dof / stats.chi2.ppf(q_hi, dof)),
             s_max * math.sqrt(dof / stats.chi2.ppf(q_lo, dof)))
+
+
+def max_stdev_cdf(x: float, sigma, dof: float) -> float:
+    """P(max_i s_i ≤ x) of m independent sample standard deviations s_i of normal
+    populations with standard deviations σ_i, each with ν degrees of freedom:
+    ν s_i²/σ_i² ~ χ²(ν) (JCGM 100 E.4.3) and, the s_i being independent,
+
+        P(max s_i ≤ x) = Π_i F_χ²(ν x²/σ_i²; ν).
+
+    A σ_i of 0 contributes a factor 1 (its s_i is 0). Decreasing in every σ_i.
+
+    Examples
+    --------
+    One σ = 1, ν = 9: P(s ≤ √(3.325/9)) = F_χ²(3.325; 9) = 0.05; twelve equal σ = 1:
+    0.05¹² ≈ 2.4·10⁻¹⁶:
+
+    >>> x = math.sqrt(stats.chi2.ppf(0.05, 9) / 9)
+    >>> round(max_stdev_cdf(x, [1.0], 9), 6), max_stdev_cdf(x, [1.0] * 12, 9) < 1e-15
+    (0.05, True)
+    """
+    sig = np.asarray(sigma, dtype=float).ravel()
+    if sig.size < 1 or not np.all(np.isfinite(sig)) or np.any(sig < 0):
+        raise ValueError("max_stdev_cdf needs at least one finite sigma >= 0")
+    if not (dof >= 1):
+        raise ValueError(f"degrees of freedom must be >= 1, got {dof}")
+    if x <= 0:
+        return 0.0 if np.any(sig > 0) else 1.0
+    pos = sig[sig > 0]
+    return float(np.prod(stats.chi2.cdf(dof * x * x / pos ** 2, dof)))
+
+
+def _max_quantile(pattern: np.ndarray, dof: float, q: float) -> float:
+    """x with max_stdev_cdf(x, pattern, ν) = q (max pattern = 1): the q-quantile of max s_i
+    at θ = 1, bracketed between the single σ's and m equal σ's quantiles (the cdf is
+    bounded by F and F^m, F of one s at σ = 1)."""
+    m = pattern.size
+    lo = math.sqrt(stats.chi2.ppf(q, dof) / dof)
+    hi = math.sqrt(stats.chi2.ppf(q ** (1.0 / m), dof) / dof)
+    if hi - lo <= 1e-15 * hi:
+        return lo
+    from scipy.optimize import brentq
+
+    def f(x: float) -> float:
+        return max_stdev_cdf(x, pattern, dof) - q
+
+    f_lo, f_hi = f(lo), f(hi)
+    if f_lo >= 0.0:          # at an end within rounding (m equal, or one σ alone)
+        return lo
+    if f_hi <= 0.0:
+        return hi
+    return float(brentq(f, lo, hi, xtol=1e-14, rtol=1e-13))
+
+
+def max_stdev_belt_interval(s, dof: float, pattern=None, p: float = 0.95,
+                            lower: bool = False) -> tuple[float, float]:
+    """The confidence interval of θ = max σ_i from the measured s_i (each with ν): the
+    Neyman belt (Neyman 1937) of T = max s_i with the σ_i taken along ``pattern``,
+    σ_i = θ·π_i (π scaled to max 1; default the measured pattern π_i = s_i/T, as
+    :func:`range_belt_interval` takes its values), inverted at the measured T.
+
+    P(T ≤ x | θ) = G_π(x/θ), G_π = :func:`max_stdev_cdf` at σ = π: the belt is
+    scale-invariant, so its ends are closed form, T/b and T/a with G_π(a) = 1 − p and
+    G_π(b) = p one-sided (``lower=False``: [0, T/a], an upper limit), or G_π(a) = (1 − p)/2,
+    G_π(b) = (1 + p)/2 central (``lower=True``: [T/b, T/a]). Exact when the σ_i are in
+    the pattern's proportions. The pattern is not known: along the measured pattern the
+    belt under-covers where one σ_i dominates (the s_i of the others scatter up to it and
+    the pattern looks flatter than it is); :func:`max_stdev_union_interval` is the union
+    over every pattern.
+
+    Examples
+    --------
+    One value (m = 1) is the χ² interval of one s (:func:`stdev_upper`,
+    :func:`stdev_interval`); twelve equal σ_i are the equal-σ maximum
+    (:func:`max_stdev_interval`):
+
+    >>> round(max_stdev_belt_interval([1.0], 9)[1], 3)
+    1.645
+    >>> [round(v, 3) for v in max_stdev_belt_interval([1.0], 9, lower=True)]
+    [0.688, 1.826]
+    >>> [round(v, 3) for v in max_stdev_belt_interval([1.0] * 12, 9, lower=True)]
+    [0.589, 0.898]
+    """
+    s = np.asarray(s, dtype=float).ravel()
+    if s.size < 1:
+        raise ValueError("max_stdev_belt_interval needs at least one standard deviation")
+    for v in s:
+        _check(float(v), dof)
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"p must lie in (0, 1), got {p}")
+    t = float(s.max())
+    pat = s if pattern is None else np.asarray(pattern, dtype=float).ravel()
+    if pat.size < 1 or not np.all(np.isfinite(pat)) or np.any(pat < 0) or pat.max() <= 0:
+        raise ValueError("max_stdev_belt_interval: the pattern needs a finite positive "
+                         "largest value and no negative one")
+    pat = pat / pat.max()
+    a_lo, a_hi = ((1.0 - p) / 2.0, (1.0 + p) / 2.0) if lower else (1.0 - p, None)
+    hi = t / _max_quantile(pat, dof, a_lo)
+    lo = t / _max_quantile(pat, dof, a_hi) if lower else 0.0
+    return float(lo), float(hi)
+
+
+def max_stdev_union_interval(s_max: float, dof: float, m: int, p: float = 0.95,
+                             lower: bool = False) -> tuple[float, float]:
+    """The confidence interval of θ = max σ_i from T = the largest of m sample standard
+    deviations (each with ν) that holds θ with at least p whatever the σ_i: the union of
+    the belts of :func:`max_stdev_belt_interval` over every pattern of m σ_i.
+
+    P(T ≤ x | σ) = Π_i F_χ²(ν x²/σ_i²; ν) decreases in every σ_i, so among the patterns
+    with max σ_i = θ it is largest with the other σ_i → 0 (one s alone: F(ν x²/θ²)) and
+    smallest with all σ_i = θ (F(ν x²/θ²)^m). The belt's lower edge (the upper limit)
+    is therefore lowest at the first, its upper edge (the lower limit) highest at the
+    second, and the union of the acceptance regions is [q_F(1 − p), q_{F^m}(p)]: upper
+    limit T·√(ν/χ²_{1−p}(ν)) (one-sided; central: χ²_{(1−p)/2}), lower limit 0 (one-sided)
+    or T·√(ν/χ²_{((1+p)/2)^{1/m}}(ν)) (central). Each tail is exact at its own extreme
+    pattern (one σ_i for the upper limit, m equal for the lower) and conservative
+    elsewhere; no interval valid for every pattern has a lower upper limit (at one σ_i
+    with the others far below, T is one s and the single χ² limit is exact). Where the σ_i
+    are alike the upper limit holds θ with nearly 1, the price of not knowing the
+    pattern.
+
+    Examples
+    --------
+    Twelve points, ten series (ν = 9), T = 1: upper limit √(9/3.325) = 1.645 (one-sided);
+    central: [√(9/25.92), √(9/2.700)] = [0.589, 1.826]:
+
+    >>> [round(v, 3) for v in max_stdev_union_interval(1.0, 9, 12)]
+    [0.0, 1.645]
+    >>> [round(v, 3) for v in max_stdev_union_interval(1.0, 9, 12, lower=True)]
+    [0.589, 1.826]
+    """
+    _check(s_max, dof)
+    if int(m) != m or m < 1:
+        raise ValueError(f"m must be an integer >= 1, got {m}")
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"p must lie in (0, 1), got {p}")
+    if not lower:
+        return 0.0, stdev_upper(s_max, dof, p)
+    a = (1.0 - p) / 2.0
+    return (s_max * math.sqrt(dof / stats.chi2.ppf((1.0 - a) ** (1.0 / m), dof)),
+            s_max * math.sqrt(dof / stats.chi2.ppf(a, dof)))
 
 
 @functools.lru_cache(maxsize=64)

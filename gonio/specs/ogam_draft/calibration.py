@@ -1345,9 +1345,12 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
             k_source="fixed by laboratory" if k_fixed is not None else "welch-satterthwaite")
     rp = results.repeatability
     if rp.measured:
-        n_pts = int((rp.table["n_series"] >= 2).sum())
-        out["repeatability"] = iu.repeatability_budget(float(rp.value),
-                                                       int(rp.details["n_series"]), n_pts,
+        used = rp.table["n_series"] >= 2
+        n_pts = int(used.sum())
+        # a point with fewer series (fewer ν) may hold the largest σ_i: its ν bounds R's
+        # interval valid for every point (repeatability_budget)
+        n_ser = min(int(rp.details["n_series"]), int(rp.table.loc[used, "n_series"].min()))
+        out["repeatability"] = iu.repeatability_budget(float(rp.value), n_ser, n_pts,
                                                        k=k_fixed)
     u_r = float(budget.parameters["repeatability_arcsec"])
     drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3

@@ -20,8 +20,9 @@ budget to each of the seven items, one documented function each:
 :func:`zero_stability_model_budget`  B_s  the expected B_s of the fitted noise model of the 7.3
                                         record (the physically founded estimate)
 :func:`angle_deviation_budget`  E       the Annex A budget (draft, or physical) as an item budget
-:func:`repeatability_budget`    R       the one-sided χ² interval of the largest of m standard
-                                        deviations (7.5; stated alone, no k)
+:func:`repeatability_budget`    R       the largest of m standard deviations stated by its belt
+                                        united over every pattern of the σ_i: one-sided,
+                                        the χ² limit of one s (7.5; stated alone, no k)
 :func:`consistency_budget`      C_v/C_g the two extreme conditions' deviations with their
                                         correlations (7.6, 7.7)
 ==============================  ======  ===================================================
@@ -1224,17 +1225,27 @@ def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
                          k: float | None = None) -> ItemUncertainty:
     """u(R) of R = max_i s_i over m points, s_i from n series (draft 7.5), ″.
 
-    Type A, u = R/√(2ν), ν = n − 1. R is stated by its one-sided χ² interval
-    [0, R·√(ν/χ²_0.05,ν)] alone (:func:`chi_square_statement`; a fixed k of the
-    laboratory is not applied). It holds max σ_i with at least 95 % whatever the σ_i: R is
-    at least the s of the point with the largest σ_i, whose own limit holds that σ_i with
-    95 %. R's distribution, P(R ≤ r) = Π_i F_χ²(ν r²/σ_i²; ν), depends on the unknown pattern
-    of the σ_i: this interval is exact at the least favourable one (one σ_i at the maximum,
-    the others far below) and the only one valid for every pattern; where the σ_i are alike
-    picking the largest of m biases R upwards and the interval is wider than needed. The
-    interval of the maximum of m equal ones (:func:`uncertainty.stdev.max_stdev_interval`)
-    or of the measured pattern would be narrower there, but covers about 20 % (73 %) of the
-    time with one position poorer than the rest (tests/test_repeatability_interval.py).
+    Type A, u = R/√(2ν), ν = n − 1. The measurand is max σ_i, the largest of the m
+    points' population standard deviations over the series (7.5's R_i estimates σ_i; the
+    study's truth is the same, item_coverage). R is stated by one 95 % interval alone (a
+    fixed k of the laboratory is not applied): the confidence belt of the largest s
+    (R's own distribution, P(R ≤ r) = Π_i F_χ²(ν r²/σ_i²; ν)) united over every pattern
+    of the σ_i, :func:`uncertainty.stdev.max_stdev_union_interval`, one-sided because
+    7.5's tolerance is an upper limit: [0, R·√(ν/χ²_0.05,ν)], the same limit as
+    :func:`chi_square_statement` (whose conformity model the decision uses). Beyond the
+    draft, which states no interval.
+
+    The pattern is unknown and the union is needed: the belt along the measured pattern
+    (:func:`uncertainty.stdev.max_stdev_belt_interval`) or the equal-σ maximum's
+    (:func:`uncertainty.stdev.max_stdev_interval`) is exact where the σ_i are alike but
+    covers about 73 % (20 %) with one position poorer than the rest (σ 1 against eleven
+    at 0.6), because the other points' s_i scatter up to the largest and the pattern
+    looks flat. The union's upper limit is exact at one dominant σ_i and no interval
+    valid for every pattern can be lower there; where the σ_i are alike it holds
+    max σ_i with nearly 1 and R, the largest of m, lies above max σ_i (the draft's
+    value, stated as measured, not corrected for the choice of the largest: no
+    correction is unbiased for every pattern) (tests/test_repeatability_interval.py,
+    tests/test_repeatability_belt.py).
 
     Examples
     --------
@@ -1250,8 +1261,11 @@ def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
                           source=f"largest of {n_points} standard deviations of {n_series} "
                                  f"series, chi-square with nu = {nu}"),
                    "sampling of s_i", True, "7.5")]
+    from uncertainty.stdev import max_stdev_union_interval
+
     b = _budget("repeatability", "arcsec", r_arcsec, lines, k=k,
-                interval=chi_square_statement(r_arcsec, nu))
+                interval=max_stdev_union_interval(r_arcsec, nu, int(n_points),
+                                                  COVERAGE_PROBABILITY))
     return replace(b, nonnegative=True, stated_by_interval=True)
 
 
