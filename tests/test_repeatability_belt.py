@@ -148,3 +148,20 @@ def test_bad_input_is_refused():
         max_stdev_cdf(1.0, [-1.0], NU)
     assert max_stdev_cdf(0.0, [1.0], NU) == 0.0
     assert max_stdev_cdf(1.0, [0.0, 1.0], NU) == pytest.approx(stats.chi2.cdf(NU, NU))
+
+
+@pytest.mark.parametrize("name", ["equal", "one poor position", "growing with time"])
+def test_study_prediction_of_the_chi_square_z_against_brute_force(name):
+    """The study prints, beside R's χ² z, what R's exact distribution gives at the ensemble
+    σ_i (item_coverage.repeatability_prediction); brute force: the z of drawn maxima."""
+    from gonio.analysis.coverage import chi_square_z
+    from gonio.specs.ogam_draft.item_coverage import repeatability_prediction
+
+    sigma = PATTERNS[name]
+    t = _draws(sigma, np.random.default_rng(41)).max(axis=1)
+    z = chi_square_z(t, sigma.max(), NU)
+    pr = repeatability_prediction(sigma, NU)
+    assert pr["z_chi2_mean"] == pytest.approx(z.mean(), abs=4 * z.std() / math.sqrt(DRAWS))
+    assert pr["z_chi2_sd"] == pytest.approx(z.std(), rel=0.05)
+    hold = np.mean(t * max_stdev_union_interval(1.0, NU, M)[1] >= sigma.max())
+    assert pr["interval_coverage"] == pytest.approx(hold, abs=3 * SE + 1e-3)

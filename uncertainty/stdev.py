@@ -17,6 +17,7 @@
   when the σ_i are equal; below max σ_i where one σ_i dominates.
 - :func:`max_stdev_cdf` — the exact distribution of the largest of m independent
   sample standard deviations, P(max s_i ≤ x) = Π_i F_χ²(ν x²/σ_i²; ν).
+- :func:`max_stdev_quantile` — its quantiles.
 - :func:`max_stdev_belt_interval` — the Neyman confidence belt of max σ_i along a
   given pattern of the σ_i (σ_i = θ·π_i), inverted at the measured maximum.
 - :func:`max_stdev_union_interval` — the union of those belts over every pattern
@@ -48,7 +49,8 @@ import numpy as np
 from scipy import integrate, special, stats
 
 __all__ = ["stdev_interval", "stdev_upper", "stdev_u", "max_stdev_interval", "max_stdev_cdf",
-           "max_stdev_belt_interval", "max_stdev_union_interval", "expected_range_factor",
+           "max_stdev_quantile", "max_stdev_belt_interval", "max_stdev_union_interval",
+           "expected_range_factor",
            "random_walk_stdev_dof", "correlated_stdev_dof", "corrected_range", "RangeCorrection"]
 
 
@@ -187,6 +189,24 @@ def _max_quantile(pattern: np.ndarray, dof: float, q: float) -> float:
     if f_hi <= 0.0:
         return hi
     return float(brentq(f, lo, hi, xtol=1e-14, rtol=1e-13))
+
+
+def max_stdev_quantile(q: float, sigma, dof: float) -> float:
+    """The q-quantile of max_i s_i (:func:`max_stdev_cdf`): x with P(max s_i ≤ x) = q.
+
+    >>> round(max_stdev_quantile(0.05, [2.0], 9), 4)        # 2·√(3.325/9)
+    1.2157
+    >>> round(max_stdev_quantile(0.05 ** 12, [1.0] * 12, 9), 4)     # the same: F¹² = 0.05¹²
+    0.6078
+    """
+    sig = np.asarray(sigma, dtype=float).ravel()
+    if sig.size < 1 or not np.all(np.isfinite(sig)) or np.any(sig < 0) or sig.max() <= 0:
+        raise ValueError("max_stdev_quantile needs finite sigma >= 0, the largest > 0")
+    if not 0.0 < q < 1.0:
+        raise ValueError(f"q must lie in (0, 1), got {q}")
+    if not (dof >= 1):
+        raise ValueError(f"degrees of freedom must be >= 1, got {dof}")
+    return float(sig.max() * _max_quantile(sig / sig.max(), dof, q))
 
 
 def max_stdev_belt_interval(s, dof: float, pattern=None, p: float = 0.95,

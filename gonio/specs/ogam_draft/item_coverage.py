@@ -42,7 +42,7 @@ from gonio.specs.ogam_draft.items import RECORD_KEYS
 
 __all__ = ["item_record", "trial_items", "item_coverage", "ITEM_TRUTHS", "scale_factor_truth",
            "chi_square_z",
-           "disc_model_u",
+           "disc_model_u", "repeatability_prediction",
            "zero_stability_truth", "item_monte_carlo", "PRESCRIBED"]
 
 #: Items whose U is a standard's prescribed annex budget (stated as prescribed: not flagged
@@ -361,8 +361,15 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             item["within_U"] = within(np.abs(vals - truth) <= U)
             item["two_sided"] = two_sided(vals - truth, U, u_c, own)
             iv = np.array([r["interval"] for r in rs])
-            item["interval_holds_truth"] = within((iv[:, 0] <= truth) & (truth <= iv[:, 1]))
+            hold = (iv[:, 0] <= truth) & (truth <= iv[:, 1])
+            item["interval_holds_truth"] = dict(
+                within(hold), clopper_pearson=list(clopper_pearson(int(hold.sum()),
+                                                                   int(hold.size))),
+                mean_width=float(np.mean(iv[:, 1] - iv[:, 0])))
             _chi_square_spread(item, rs, vals, truth)
+            if rs and all(r.get("nu") for r in rs):
+                item["predicted"] = repeatability_prediction(np.sqrt(s2.mean(axis=0)),
+                                                             min(r["nu"] for r in rs))
         else:
             t = np.array([r["truth"] for r in rs])
             item["within_U"] = within(np.abs(vals - t) <= U)
@@ -396,6 +403,36 @@ def item_coverage(records: list[dict], intrinsic_points=None,
                                                   if f != "over-wide"]
         out[name] = item
     return out
+
+
+def repeatability_prediction(sigma, nu: float, n: int = 400) -> dict:
+    """What R's exact distribution (draft 7.5's R = max_i s_i; P(R ≤ x) = Π_i F_χ²(ν x²/σ_i²;
+    ν), :func:`uncertainty.stdev.max_stdev_cdf`) gives at the points' σ_i ``sigma`` (the
+    study's ensemble values), independently of the trials' own z: the mean and sd of the
+    χ² z, Φ⁻¹(F_χ²(ν R²/θ²; ν)) with θ = max σ_i (midpoint quadrature over n quantiles of
+    R), and the probability that the stated interval (its one-sided limit,
+    :func:`uncertainty.stdev.max_stdev_union_interval`) holds θ.
+
+    Twelve equal σ_i: z = Φ⁻¹(U^{1/12}), U uniform, mean +1.63, sd 0.57; the interval
+    fails only when all twelve s_i fall below θ/1.645: 1 − 0.05¹²:
+
+    >>> p = repeatability_prediction([1.0] * 12, 9)
+    >>> round(p["z_chi2_mean"], 2), round(p["z_chi2_sd"], 2), p["interval_coverage"] > 0.9999
+    (1.63, 0.57, True)
+    """
+    from scipy.stats import chi2, norm
+
+    from uncertainty.stdev import max_stdev_cdf, max_stdev_quantile, max_stdev_union_interval
+
+    sig = np.asarray(sigma, dtype=float)
+    theta = float(sig.max())
+    r = np.array([max_stdev_quantile((k + 0.5) / n, sig, nu) for k in range(n)])
+    z = norm.isf(chi2.sf(nu * (r / theta) ** 2, nu))
+    factor = max_stdev_union_interval(1.0, nu, sig.size)[1]
+    return {"z_chi2_mean": float(z.mean()), "z_chi2_sd": float(z.std()),
+            "interval_coverage": float(1.0 - max_stdev_cdf(theta / factor, sig, nu)),
+            "nu": float(nu), "points": int(sig.size),
+            "source": "R's exact distribution at the study's ensemble sigma_i"}
 
 
 def _chi_square_spread(item: dict, rs: list, vals, truth) -> None:

@@ -772,6 +772,11 @@ def item_coverage_lines(cases) -> list[str]:
             if "z_chi2" in it:
                 txt += (f"   chi2 z mean {it['z_chi2']['mean']:+.2f} "
                         f"sd {it['z_chi2']['sd']:.2f}")
+                if "predicted" in it:     # R: its exact distribution at the σ_i found
+                    pr = it["predicted"]
+                    txt += (f" (exact at the ensemble sigma_i: {pr['z_chi2_mean']:+.2f} sd "
+                            f"{pr['z_chi2_sd']:.2f}, interval "
+                            f"{100 * pr['interval_coverage']:.1f}%)")
             if "within_U_intrinsic" in it:
                 txt += (f"   vs intrinsic truth "
                         f"{100 * it['within_U_intrinsic']['fraction']:5.1f}%")
