@@ -97,6 +97,12 @@ def test_every_item_covers_its_truth(records, intrinsic):
     zb, zr = cov["zero_stability"]["z_chi2"], cov["repeatability"]["z_chi2"]
     assert abs(zb["mean"]) < 0.6 and 0.6 <= zb["sd"] <= 1.4, zb
     assert zr["mean"] > 0.5, zr
+    # ... and by as much as R's exact distribution at the ensemble σ_i says (the largest of
+    # twelve alike s_i: z mean ≈ +1.3, sd ≈ 0.6; a second computation, closed form)
+    pr = cov["repeatability"]["predicted"]
+    assert abs(zr["mean"] - pr["z_chi2_mean"]) < 3.0 * pr["z_chi2_sd"] / SEEDS ** 0.5 + 0.1, \
+        (zr, pr)
+    assert cov["repeatability"]["interval_holds_truth"]["clopper_pearson"][1] >= 0.95
 
 
 @pytest.mark.slow
