@@ -29,7 +29,7 @@ from gonio.specs.ogam_draft.item_uncertainty import scale_factor_table_correctio
 from gonio.specs.ogam_draft.protocol import parse_protocol
 from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.study import (case_bench, drawn_table_calibration,
-                                          table_positions_deg, trial_bench)
+                                          table_positions_deg, tilted, trial_bench)
 from gonio.specs.ogam_draft.table_calibration import (TableCalibration, from_equal_division,
                                                       read_table_calibration)
 
@@ -204,3 +204,35 @@ def test_from_equal_division():
     g = np.array([1 / 90, 1 / 180, 1 / 270]) * 1000.0 / 3600.0 / 4
     assert corr.u == pytest.approx(math.sqrt(g @ Eda.table_cov_arcsec2[1:, 1:] @ g), rel=1e-4)
     assert corr.k_i[0] == pytest.approx(1000.0 * 90 / (90 - 0.02 / 3600), rel=1e-14)
+
+
+def test_result_states_the_corrected_k(proto, base):
+    """The sealed Result states the corrected K (also without the tilt estimate), names the
+    calibration in details and in the certificate's K cell (en, zh), with the 7.1 mean
+    uncorrected beside; the draft's reading (estimates.draft) keeps the MPE line."""
+    from gonio.kit.render import labels
+    from gonio.specs.ogam_draft.phrases import LABELS
+    from gonio.specs.ogam_draft.stated import k_table_note
+
+    raw = read_toml(resolve("ogam-draft", "protocol"))
+    for key in ("zero_stability", "rate_consistency", "pointing_consistency", "tilt_estimate"):
+        raw.pop(key, None)
+    p = parse_protocol(raw, resolve("ogam-draft", "protocol"))
+    clean = tilted(replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS)),
+        0.0, 0.0)                     # no tilt estimate here: no tilt to correct
+    x = table_positions_deg(p)
+    cal = TableCalibration(x, harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "tc.csv")
+    res, rep = _analyse(p, clean, 0, cal)
+    d = rep.result().to_json()
+    k = d["items"]["scale_factor"]
+    k_true = scale_factor_truth(res.truth)[0]
+    assert abs(float(k["value"]) / k_true - 1.0) < 0.005e-6
+    tk = k["details"]["table_calibration"]
+    assert tk["source"] == "tc.csv" and k["details"]["stated"] == "table_corrected"
+    assert abs(tk["uncorrected_value"] / k_true - 1.0) > 0.05e-6
+    assert "P_Kc" in [c["symbol"] for c in k["uncertainty"]["components"]]
+    for lang in ("en", "zh"):
+        text = "".join(s if isinstance(s, str) else s.text
+                       for s in k_table_note(d, labels(lang, LABELS)))
+        assert "tc.csv" in text and ("uncorrected" in text if lang == "en" else "未修正" in text)

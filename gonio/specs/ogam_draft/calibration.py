@@ -147,6 +147,14 @@ def readings_taken(repeatability_source: str) -> list[str]:
 
 #: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
 #: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
+#: results.json ``scale_factor.details.table_calibration.label``.
+TABLE_CALIBRATED_NOTE = (
+    "beyond the draft: the table's angle error at K's 7.1 stops and zeroing positions "
+    "corrected by the laboratory's table calibration (K_i = C_i/(theta_i - (e(stop) - "
+    "e(zero))/3600)); U(K) carries the calibration's uncertainty propagated through the same "
+    "sensitivity (line P_Kc) instead of the MPE line (P_K). Only K is corrected: E, K_l, C_v "
+    "and C_g keep their MPE lines")
+
 TILT_CORRECTED = {
     "note": "beyond the draft: K is corrected for the tilt x Earth-rate coupling of the 7.1 "
             "rounds at the tilt psi and azimuth alpha measured by the in-situ tilt estimate "
@@ -217,6 +225,7 @@ class Analysis:
     zero_stability_readings: dict = field(default_factory=dict)   # zero_stability_readings()
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
     gyro_type: str | None = None         # the laboratory file's [instrument] gyro_type
+    table_calibration: object = None     # table_calibration.TableCalibration, or None
 
     @property
     def e_measured(self) -> bool:
@@ -261,7 +270,7 @@ class Analysis:
             iu = self.item_uncertainty.get(c.name)
             tc = None if iu is None else iu.correction
             d.update(scale_factor_as_mounted(
-                float(c.value if tc is None else iu.value),
+                float(c.value if tc is None and not table_corrected(iu) else iu.value),
                 session_settings(self.readings, self.protocol)[0]["tilt_bound_deg"], tc))
             d["temperature_coeff_bound"] = chamber_temperature(self.readings, self.protocol,
                                                                self.gyro_type)[1]
@@ -273,6 +282,15 @@ class Analysis:
                               "uncertainty": beside_uncertainty(iu.beside.to_dict())},
                     "corrected": {"label": TILT_CORRECTED["corrected"],
                                   "value": float(iu.value)}}
+            if table_corrected(iu):
+                line = next(x for x in iu.components if x.symbol == "P_Kc")
+                d.setdefault("stated", "table_corrected")
+                d["table_calibration"] = {
+                    "label": TABLE_CALIBRATED_NOTE,
+                    "source": getattr(self.table_calibration, "source", ""),
+                    "line": line.source, "u_counts_per_deg": float(line.u),
+                    "u_rel_ppm": float(line.u / abs(iu.value) / PPM),
+                    "uncorrected_value": _plain_value(c)}
         if c.name in RANGE_READINGS and c.measured:
             iu = self.item_uncertainty.get(c.name)
             sf_iu = self.item_uncertainty.get("scale_factor")
@@ -317,8 +335,9 @@ class Analysis:
             value = float(iu.value)               # the stated reading of B_s
         if c.name in RANGE_READINGS and iu is not None and iu.beside is not None:
             value = float(iu.value)               # the bias-corrected range
-        if c.name == "scale_factor" and iu is not None and iu.correction is not None:
-            value = float(iu.value)               # K corrected by the measured tilt
+        if c.name == "scale_factor" and iu is not None and (
+                iu.correction is not None or table_corrected(iu)):
+            value = float(iu.value)               # K corrected by the measured tilt, the table
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
                     None if unc is None else Uncertainty(
@@ -1298,20 +1317,26 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     sf = results.scale_factor
     k_tilt = _scale_factor_tilt(results, readings, protocol, budget)   # A_K at the A.1 bound
     tc = None               # K's correction by the measured tilt (the in-situ estimate)
+    k_u_rel_e = None        # u(K)/K of the uncorrected K where K's table was corrected
     if sf.measured:
         t = sf.table
         t_corr, t_note = _scale_factor_table(t, protocol, table_calibration)
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
                   chamber=chamber_temperature(readings, protocol, gyro_type)[0],
                   table_correction=t_corr, table_note=t_note)
-        out["scale_factor"] = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"],
-                                                     mpe, **kw)
+        # the draft's reading: the 7.1 mean as measured, the MPE's table line
+        draft_k = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
+                                         **dict(kw, table_correction=None))
+        out["scale_factor"] = draft_k if t_corr is None else \
+            iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe, **kw)
+        if t_corr is not None:   # E, K_l, C_v, C_g read with the uncorrected 7.1 K: its MPE u
+            k_u_rel_e = iu.without_tilt_u_rel(draft_k)
         tc, _ = tilt_correction(results, readings, protocol)
-        if tc is not None:       # stated corrected by the measured tilt, the bound's K beside
+        if tc is not None:       # stated corrected by the measured tilt, the draft's K beside
             out["scale_factor"] = dataclasses.replace(
                 iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
                                        tilt_correction=tc, **kw),
-                beside=out["scale_factor"], correction=tc)
+                beside=draft_k, correction=tc)
         if results.scale_factor_nonlinearity.measured:
             draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
@@ -1357,6 +1382,8 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     df = readings.data
     # the tilt bias of K enters the consistencies by their own K_tilt line, not through u(K)
     k_u_rel = iu.without_tilt_u_rel(out["scale_factor"]) if "scale_factor" in out else 0.0
+    if k_u_rel_e is not None:
+        k_u_rel = k_u_rel_e
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
         c = getattr(results, name)
         if not c.measured:
@@ -1572,7 +1599,8 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
               *, monte_carlo_trials: int = 0, seed: int = 0,
               static_record: StaticRecord | None = None, budget: str = "physical",
               tilt=None, zero_stability: str = ZERO_STABILITY_STATED,
-              findings: list | None = None, gyro_type: str | None = None) -> Result:
+              findings: list | None = None, gyro_type: str | None = None,
+              table_calibration=None) -> Result:
     """``SPEC.calibrate``: the seven characteristics and their uncertainties from a readings
     file or stream, as the one sealed :class:`~gonio.result.model.Result` (:func:`analyse`,
     then :meth:`Analysis.result`; the arguments are :func:`analyse`'s). Conformity is not
@@ -1580,7 +1608,7 @@ def calibrate(readings: str | Path | Readings, protocol: str | Path | Protocol |
     return analyse(readings, protocol, monte_carlo_trials=monte_carlo_trials, seed=seed,
                    static_record=static_record, budget=budget, tilt=tilt,
                    zero_stability=zero_stability, findings=findings,
-                   gyro_type=gyro_type).result()
+                   gyro_type=gyro_type, table_calibration=table_calibration).result()
 
 
 def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | None = None,
@@ -1661,7 +1689,13 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     return Analysis(res, e_budget, rd, proto, sha, src, noise, noise_src, eda,
                     item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                     budget_notes=notes, excluded=excluded,
-                    zero_stability_readings=zs_readings, findings=findings, gyro_type=gyro_type)
+                    zero_stability_readings=zs_readings, findings=findings, gyro_type=gyro_type,
+                    table_calibration=table_calibration)
+
+
+def table_corrected(iu) -> bool:
+    """Whether an item budget's K was corrected by a calibrated table (its ``P_Kc`` line)."""
+    return iu is not None and any(x.symbol == "P_Kc" for x in iu.components)
 
 
 def beside_uncertainty(unc: dict) -> dict:

@@ -44,7 +44,8 @@ from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, 
 from gonio.result.statement import signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
                                            conformity_for, detail, e_budget, followed,
-                                           interval_cell, item_names, item_path, k_tilt_note,
+                                           interval_cell, item_names, item_path, k_table_note,
+                                           k_tilt_note,
                                            method_rows, reading_note, segments,
                                            specification_text, stated_item, u_cell)
 
@@ -246,8 +247,12 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
                     (detail(res, name, "estimates") or {}).get("model"):
                 cell += [L["semi"], *segments(L["note_zero_model"], v=_num(
                     res, item_path(name, "estimates.model.value"), "sig3", U))]
-        elif name == "scale_factor" and detail(res, name, "tilt_correction"):
-            cell += [L["semi"], *k_tilt_note(res, L)]
+        elif name == "scale_factor" and (detail(res, name, "tilt_correction")
+                                         or detail(res, name, "table_calibration")):
+            if detail(res, name, "tilt_correction"):
+                cell += [L["semi"], *k_tilt_note(res, L)]
+            if detail(res, name, "table_calibration"):
+                cell += [L["semi"], *k_table_note(res, L)]
         elif name == "scale_factor_nonlinearity" and detail(res, name, "estimates"):
             cell += [L["semi"], *segments(L["note_kl_draft"], v=_num(
                 res, item_path(name, "estimates.draft.value"), "sig3", U))]

@@ -33,8 +33,8 @@ from gonio.units import ARCSEC_PER_DEG
 # --------------------------------------------------------------------------- gonio calibrate
 
 def add_calibrate_options(group) -> None:
-    """The draft's own ``gonio calibrate`` options (``SPEC.arguments["calibrate"]``): E's budget
-    and a measured tilt bound."""
+    """The draft's own ``gonio calibrate`` options (``SPEC.arguments["calibrate"]``): E's budget,
+    a measured tilt bound and a calibrated table."""
     group.add_argument("--budget", choices=("physical", "draft"), default=None,
                        help="E's budget: physical (default: Annex A plus the lines beyond the "
                             "draft the validation showed to matter) or draft (the annex's four "
@@ -42,6 +42,10 @@ def add_calibrate_options(group) -> None:
     group.add_argument("--tilt", default=None, metavar="FILE",
                        help="a 'gonio tilt-estimate --json' result: bounds the tilt by psi + "
                             "U95 instead of the protocol's tilt bound")
+    group.add_argument("--table-calibration", default=None, metavar="FILE",
+                       help="the rotary table's calibration (CSV table_deg,error_arcsec,"
+                            "u_arcsec[,dof]; docs/formats.md): K's 7.1 rounds corrected by it, "
+                            "its table line the calibration's u instead of the MPE's")
 
 
 # --------------------------------------------------------------------------- gonio simulate

@@ -73,6 +73,12 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
                      f"by the measured tilt psi = {tc['tilt_deg']:.2g} deg (U95 "
                      f"{tc['U95_tilt_deg']:.2g} deg) at azimuth {tc['azimuth_deg']:.1f} deg (U95 "
                      f"{tc['U95_azimuth_deg']:.2g} deg), beyond the draft")
+    tk = kd.get("table_calibration")
+    if tk:
+        lines.append(f"note: the stated K is corrected by the table calibration {tk['source']} "
+                     f"(u(K) of it {tk['u_rel_ppm']:.2g} ppm, line P_Kc; the 7.1 mean uncorrected "
+                     f"{tk['uncorrected_value']:.10g} counts/deg), beyond the draft; E, K_l, C_v "
+                     "and C_g keep the table's MPE lines")
     tb = kd.get("temperature_coeff_bound")
     if tb and tb.get("basis") == "logged":   # K's chamber line at the logged temperature
         lines.append(f"note: U(K) holds for the chamber temperature the readings log, "

@@ -268,6 +268,15 @@ LABELS: dict[str, dict[str, str]] = {
                           "(U = {ua}°), beyond the draft; the 7.1 mean uncorrected: {v}",
                     "zh": "已按实测倾斜修正（草案以外）：ψ = {p}°（U = {up}°），方位角 {a}°"
                           "（U = {ua}°）；未修正的 7.1 平均值：{v}"},
+    "note_k_table": {"en": "table error at the 7.1 positions corrected by the table "
+                           "calibration {f} (its u(K) {u} ppm), beyond the draft",
+                     "zh": "7.1 各位置的转台误差已按转台校准 {f} 修正（草案以外，其 u(K) 为 "
+                           "{u} ppm）"},
+    "note_k_table_v": {"en": "table error at the 7.1 positions corrected by the table "
+                             "calibration {f} (its u(K) {u} ppm), beyond the draft; the 7.1 "
+                             "mean uncorrected: {v}",
+                       "zh": "7.1 各位置的转台误差已按转台校准 {f} 修正（草案以外，其 u(K) 为 "
+                             "{u} ppm）；未修正的 7.1 平均值：{v}"},
     "note_e_tilt": {"en": "every E_ij corrected for the tilt × Earth-rate coupling at the "
                           "measured tilt, beyond the draft; the draft's reading as measured "
                           "(Annex A, beside, not stated): {v}″",

@@ -242,6 +242,21 @@ def k_tilt_note(res: dict, L: dict) -> list:
                           res["items"]["scale_factor"]["uncertainty"]["U"]))
 
 
+def k_table_note(res: dict, L: dict) -> list:
+    """K's note when a calibrated table corrected it, as :func:`segments`: the calibration,
+    u(K) of it, and (where the tilt note does not already give it) the 7.1 mean uncorrected
+    (results.json ``details.table_calibration``)."""
+    def tb(field: str, rule: str):
+        return num(res, item_path("scale_factor", f"table_calibration.{field}"), rule, None)
+
+    d = res["items"]["scale_factor"]["details"]["table_calibration"]
+    if (res["items"]["scale_factor"].get("details") or {}).get("tilt_correction"):
+        return segments(L["note_k_table"], f=str(d.get("source") or ""), u=tb("u_rel_ppm", "sig2"))
+    return segments(L["note_k_table_v"], f=str(d.get("source") or ""), u=tb("u_rel_ppm", "sig2"),
+                    v=num(res, item_path("scale_factor", "table_calibration.uncorrected_value"),
+                          "atU", res["items"]["scale_factor"]["uncertainty"]["U"]))
+
+
 def segments(template: str, **nums) -> list:
     """Split a label template "... {x} ..." into text and Num segments.
 
