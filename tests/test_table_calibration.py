@@ -176,7 +176,7 @@ def test_good_file_and_uncovered_positions(tmp_path, proto, base):
     """A good file reads (comments skipped, 360° = 0°); a calibration that does not cover K's
     stops leaves K with its MPE line and says so in the line's source and the notes."""
     f = tmp_path / "t.csv"
-    f.write_text(GOOD, encoding="utf-8")
+    f.write_text("\ufeff" + GOOD, encoding="utf-8")       # as a spreadsheet saves it
     c = read_table_calibration(f)
     assert c.table_deg.tolist() == [0.0, 60.0] and c.source == "t.csv"
     assert c.lookup([360.0, 60.0])[0].tolist() == [0, 1]

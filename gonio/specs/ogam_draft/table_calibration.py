@@ -120,7 +120,7 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
     :class:`GonioError` naming the file, line and column."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")     # a spreadsheet's BOM is no column
     except OSError as e:
         raise GonioError(f"cannot read table calibration: {e.strerror}", file=p) from None
     except UnicodeDecodeError:
