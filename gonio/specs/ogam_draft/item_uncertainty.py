@@ -1008,12 +1008,15 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> round(s.u_c * 1e4, 2), round(p.u_c * 1e4, 2), [c.symbol for c in b.components]
     (1.08, 1.12, ['K_rng', 'K_tab'])
 
-    One round 0.5 counts/° above five equal ones: nearly the measured range, asymmetric interval:
+    One round 0.5 counts/° above five equal ones: nearly the measured range; the interval holds
+    K_l whatever the rounds' true pattern, so it reaches further above (a truth with one round
+    at each extreme and the others between would measure less, the more so at the two rounds
+    whose errors the table spreads most):
 
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
     >>> round(measured, 5), round(b.value, 5), [round(x * 1e4, 2) for x in b.interval]
-    (0.01389, 0.01377, [134.88, 139.18])
+    (0.01389, 0.01377, [134.09, 143.33])
     """
     from uncertainty.stdev import corrected_range
 
@@ -1509,7 +1512,7 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     >>> b = consistency_corrected_budget("rate_consistency", cs, 1296000.0, 1e6,
     ...                                  table_mpe_arcsec=0.1, drift_half_width_arcsec=0.15, k=2.0)
     >>> 0.70 < b.value < 0.7716, [round(x, 2) for x in b.interval]
-    (True, [0.48, 1.05])
+    (True, [0.48, 1.06])
     """
     from uncertainty.stdev import corrected_range
 
