@@ -454,10 +454,9 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
       bound draw by draw of the range of every pattern with its extremes at a and b (the
       other values can only widen it).
 
-    ``patterns="measured"``: the band along the measured pattern alone, t(R) = m + (R/r)(x −
-    m) (as :func:`corrected_range`'s value); it holds where the truth has that pattern and
-    under-covers where several true values tie at the extremes (six values three high, three
-    low: 86.5 % at 4σ), kept for comparison.
+    ``patterns="measured"``: along the measured pattern alone, t(R) = m + (R/r)(x − m) (as
+    :func:`corrected_range`'s value), kept for comparison: it under-covers where several true
+    values tie at the extremes (three high, three low: 86.5 % at 4σ).
 
     The band's tails are narrowed by twice the Monte Carlo uncertainty of a tail fraction
     from M draws, √(α(1 − α)/M) (JCGM 101 7.9, so that the draws' own quantile error does not
@@ -470,8 +469,7 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
     measured range with probability ≥ p, so the interval holds R with probability ≥ p. The
     same draws serve every R (common random numbers; the quantiles are smooth and nearly
     monotone in R, each draw's range being convex, not monotone, in R), solved by bisection.
-    n values all equal (r = 0, no pattern): the measured pattern taken is one value apart
-    from the rest.
+    n values all equal (r = 0): the measured pattern taken is one value apart from the rest.
 
     Two values have one pattern: r = |d + ε|, ε ~ N(0, 2σ²), P(r ≤ q | R) = Φ((q − R)/√2) −
     Φ((−q − R)/√2) for σ = 1. A measured range of 4: R_lo solves P(r ≤ 4 | R) = 0.975, R_hi
@@ -537,21 +535,12 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
         e_hi = float(np.quantile(e_range, q_hi_p)) if n > _SPLIT_MAX_N else -math.inf
 
         def crossing(q: float, target: float) -> float:
-            def quantiles(big_r: float, idx: np.ndarray) -> np.ndarray:
-                rest = idx[idx > 0] - 1
-                split, pair = rest[rest < n_splits], rest[rest >= n_splits]
-                out = [np.quantile(_split_ranges(big_r, fam, split), q, axis=1)]
-                if pair.size:
-                    out.append(np.quantile(_pair_ranges(big_r, fam, pair), q, axis=1))
-                if idx[0] == 0:                  # the measured pattern (and the bound)
-                    head = own(big_r, q) if q < 0.5 else max(own(big_r, q), big_r + e_hi)
-                    out.insert(0, [head])
-                return np.concatenate(out)
-
-            # the upper quantile: the measured pattern and the splits (a middle value only
-            # narrows the range); the lower: every pattern
+            # the upper quantile: the measured pattern and the splits (a middle value spreads
+            # the range less than one at either extreme); the lower: every pattern
             count = 1 + (fam[0].shape[0] if q < 0.5 else n_splits)
-            return _first_crossing(quantiles, count, target, q < 0.5)
+            return _first_crossing(
+                lambda big_r, idx: _pattern_quantiles(big_r, idx, q, own, fam, n_splits, e_hi),
+                count, target, q < 0.5)
 
     # the floor R_c along the measured pattern (a widening that depends on the data only
     # widens: coverage stays that of the band)
@@ -559,6 +548,22 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
     lo_end = crossing(q_hi_p, r)
     hi_end = max(crossing(q_lo_p, r), floor, lo_end)
     return float(lo_end), float(hi_end)
+
+
+def _pattern_quantiles(big_r: float, idx: np.ndarray, q: float, own, fam, n_splits: int,
+                       e_hi: float) -> np.ndarray:
+    """The q-quantiles at R of the patterns ``idx`` of :func:`range_belt_interval`: 0 the
+    measured one (``own``; for the upper quantile at least the bound R + ``e_hi``), then the
+    rows of ``fam`` (:func:`_three_level_patterns`: ``n_splits`` splits, then the pairs)."""
+    rest = idx[idx > 0] - 1
+    split, pair = rest[rest < n_splits], rest[rest >= n_splits]
+    out = [np.quantile(_split_ranges(big_r, fam, split), q, axis=1)]
+    if pair.size:
+        out.append(np.quantile(_pair_ranges(big_r, fam, pair), q, axis=1))
+    if idx[0] == 0:
+        head = own(big_r, q) if q < 0.5 else max(own(big_r, q), big_r + e_hi)
+        out.insert(0, [head])
+    return np.concatenate(out)
 
 
 def _three_level_patterns(e: np.ndarray, outliers_only: bool) -> tuple[np.ndarray, ...]:

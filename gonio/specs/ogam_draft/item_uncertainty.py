@@ -1008,10 +1008,7 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     >>> round(s.u_c * 1e4, 2), round(p.u_c * 1e4, 2), [c.symbol for c in b.components]
     (1.08, 1.12, ['K_rng', 'K_tab'])
 
-    One round 0.5 counts/° above five equal ones: nearly the measured range; the interval holds
-    K_l whatever the rounds' true pattern, so it reaches further above (a truth with one round
-    at each extreme and the others between would measure less, the more so at the two rounds
-    whose errors the table spreads most):
+    One round 0.5 counts/° above five equal ones: nearly the measured range, wider above:
 
     >>> b = nonlinearity_corrected_budget([3600.0] * 5 + [3600.5], th, 0.1, k=2.0)
     >>> measured = 0.5 / 3600.0833 * 100
