@@ -361,7 +361,7 @@ def corrected_range(x, errors) -> RangeCorrection:
     (six values three high, three low, as a third-order table error gives) the errors add
     more to the range than along the measured pattern (one value at each extreme, the
     others spread by the noise), so the value reads high there: mean (value − R)/u +0.85 at
-    R = 4σ, +0.68 at 2.5σ, about 0 for evenly spaced values
+    R = 4σ, +0.68 at 2.5σ, −0.25 … +0.36 for evenly spaced values
     (``scripts/range_belt_coverage.py``, docs/draft-readings.md 7.2). The stated interval
     (:func:`range_belt_interval`) holds whatever the pattern; the value is not corrected for
     an unknown one.
