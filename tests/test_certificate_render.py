@@ -213,9 +213,10 @@ def test_bad_lab_file_names_the_key(tmp_path):
 
 def test_failure_leaves_no_half_written_certificate(run, tmp_path, monkeypatch):
     def boom(*a, **k):
-        raise RuntimeError("PDF renderer failed")
+        raise RuntimeError("PDF write failed")
 
-    monkeypatch.setattr(cert, "render_pdf", boom)
+    # the PDF's write fails after the HTML was written into the staged folder
+    monkeypatch.setattr(cert, "write_bytes", boom)
     with pytest.raises(RuntimeError):
         cert.write_certificate(run["results"], tmp_path / "out")
     assert not list((tmp_path / "out").glob("certificate.*"))

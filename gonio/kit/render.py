@@ -10,7 +10,7 @@ builder set (docs/kit.md#the-rendering-kit).
 
 ==============================  ==========================================================
 Layout (HTML and A4 PDF)        :class:`Block`, :func:`render_html`, :func:`render_pdf`,
-                                :func:`font_families`
+                                :func:`render_pdf_figures`, :func:`font_families`
 The content every certificate   :func:`certificate_id`, :func:`opening_blocks`,
 shares (ISO/IEC 17025 7.8)      :func:`decision_rule_blocks`, :func:`signature_blocks`,
                                 :func:`conformity_section`, :func:`meta_text`,
@@ -54,7 +54,8 @@ from gonio.report.i18n import (clause_text, coverage_text, display, display_numb
                                display_uncertainty, finding_text, labels, parse_display,
                                reason_text, rule_at_U)
 from gonio.report.provenance import is_virtual
-from gonio.report.render import Block, font_families, render_html, render_pdf
+from gonio.report.render import (Block, font_families, render_html, render_pdf,
+                                 render_pdf_figures)
 from gonio.report.stated import NoBreakText, Num, conformity_texts, item_nums, lookup, num
 from gonio.report.text import clean_tree
 
@@ -68,6 +69,6 @@ __all__ = [
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",
     "measurement_result", "meta_text", "mpl_style", "new_document", "not_measured_quantity",
     "num", "opening_blocks", "parse_display", "plain_axes", "plain_log_ticks", "quantity",
-    "reason_text", "render_html", "render_pdf", "rule_at_U", "signature_blocks", "text_element",
-    "tree_bytes",
+    "reason_text", "render_html", "render_pdf", "render_pdf_figures", "rule_at_U",
+    "signature_blocks", "text_element", "tree_bytes",
 ]

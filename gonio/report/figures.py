@@ -168,9 +168,10 @@ def plain_log_ticks(fig) -> None:
 
 
 def minus_signs(fig) -> None:
-    """Every text a specification drew on ``fig`` (legend entries, labels, notes) with the
-    minus sign of its negative numbers (:func:`gonio.report.i18n.minus_sign`), as the
-    certificate's text; tick labels get it from ``axes.unicode_minus`` (:func:`mpl_style`)."""
+    """Every text a specification drew on ``fig`` (a Figure, or one of its Axes: legend
+    entries, labels, notes) with the minus sign of its negative numbers
+    (:func:`gonio.report.i18n.minus_sign`), as the certificate's text; tick labels get it
+    from ``axes.unicode_minus`` (:func:`mpl_style`)."""
     from matplotlib.text import Text
 
     from gonio.report.i18n import minus_sign

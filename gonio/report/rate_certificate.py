@@ -24,7 +24,7 @@ from gonio.report.header import (certificate_id, is_draft, conformity_section, o
                                  signature_blocks)
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
 from gonio.report.provenance import is_virtual
-from gonio.report.render import Block, font_families, render_html, render_pdf
+from gonio.report.render import Block, font_families, render_html, render_pdf_figures
 from gonio.report.stated import NoBreakText, Num, item_nums
 from gonio.result.findings import WHOLE_FILE_CODES
 from gonio.result.statement import unit_text
@@ -309,11 +309,13 @@ def write_spec_certificate(result, out, content_fn, figures, *, truth=None, lab=
     lab_d = load_lab(lab) if isinstance(lab, (str, Path)) else lab
     content = content_fn(result, L, lang, lab=lab_d)
     content["_report"], content["_truth"] = result, truth
-    svgs = {key: figure_svg(draw, result, L, truth, fonts) for key, _, _, draw in figures}
+    pdf, svgs = render_pdf_figures(content, L, fonts)
+    svgs = {key: svgs.get(key) or figure_svg(draw, result, L, truth, fonts)
+            for key, _, _, draw in figures}
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
-        write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
+        write_bytes(stage / "certificate.pdf", pdf)
         if dcc_fn is not None:
             doc = dcc_fn(result, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from gonio.errors import GonioError
-from gonio.report.figures import (first_family, font_fallback, minus_signs, mpl_style,
-                                  plain_log_ticks)
+from gonio.report.figures import (SVG_PAD_IN, first_family, font_fallback, minus_signs,
+                                  mpl_style, plain_log_ticks)
 from gonio.report.i18n import cjk_font, labels, minus_sign
 from gonio.report.stated import NoBreakText as NoBreak
 from gonio.report.stated import Num
@@ -83,7 +83,7 @@ footer{border-top:1px solid #333;margin-top:16px;font-size:12px;color:#333}
  @bottom-left{content:%(cid)s;font-family:%(font)s;font-size:8pt}
  @bottom-right{content:%(pageword)s;font-family:%(font)s;font-size:8pt}%(mark)s}
 @media print{header.page,footer{display:none}body{max-width:none;padding:0;font-size:12px}
- figure svg{width:92%%}}
+ figure svg{width:82%%}}
 """
 
 
@@ -243,6 +243,7 @@ A4_IN: tuple[float, float] = (8.27, 11.69)
 _PT = 1.0 / 72.0 / A4_IN[1]          # one point as a fraction of the page height
 _LEFT, _RIGHT, _TOP, _BOTTOM = 0.08, 0.92, 0.90, 0.08
 _FIG_H = 0.33                        # a figure's height, fraction of the page
+_TWIN_RIGHT = 0.075                  # room for a figure's right-hand y axis, of the width
 
 
 def _width(s: str) -> int:
@@ -628,16 +629,23 @@ def _units(b: Block, lay: _Layout, content: dict, L: dict) -> list[tuple[float, 
         cap_lines = _wrap(figure_captions(content["blocks"], L)[key], lay.cols(1.0))
         h = _FIG_H + ln * len(cap_lines) + 6 * _PT
 
-        def op(fig, y, draw=draw, cap_lines=cap_lines):
+        def op(fig, y, key=key, draw=draw, cap_lines=cap_lines):
             # the legend sits above the axes (figures._legend): leave it room below y
             gs = fig.add_gridspec(1, 1, left=_LEFT + 0.06, right=_RIGHT - 0.01,
                                   top=y - 0.05, bottom=y - _FIG_H + 0.035)
+            before = set(fig.axes)
             draw(fig, gs[0], content["_report"], L, content["_truth"])
+            axes = [ax for ax in fig.axes if ax not in before]
+            if any(ax.yaxis.get_label_position() == "right" and ax.yaxis.label.get_text()
+                   for ax in axes):
+                gs.update(right=_RIGHT - _TWIN_RIGHT)    # room for a right-hand y axis
             plain_log_ticks(fig)
-            minus_signs(fig)
+            for ax in axes:                  # this figure's texts (not the page's again)
+                minus_signs(ax)
             for i, t in enumerate(cap_lines):
                 fig.text(0.5, y - _FIG_H - ln * (0.8 + i), t, ha="center", fontsize=fs,
                          va="baseline")
+            return key, axes, y
         out.append((h, op, "fig"))
     return out
 
@@ -655,10 +663,24 @@ def _rect(fig, y, h):
 
 def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)) -> bytes:
     """The certificate as A4 PDF pages; each page has the identifier and "page x of y"."""
+    return render_pdf_figures(content, L, fonts, svg=False)[0]
+
+
+def render_pdf_figures(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",),
+                       svg: bool = True) -> tuple[bytes, dict[str, str]]:
+    """The certificate as A4 PDF pages (:func:`render_pdf`) and, with ``svg``, each figure
+    of the pages as SVG text (``{figure key: svg}``, for :func:`render_html`).
+
+    A figure is drawn once, into its page: its SVG is that page saved with every artist but
+    the figure's axes hidden, cut to the figure (:func:`_figure_box`) — the same layout as
+    on the PDF page, fixed (no tight-layout pass), the axes, ticks and legends built once for
+    both outputs. The XML prolog and DOCTYPE are dropped so the text can be inlined in
+    HTML."""
     from matplotlib.backends.backend_pdf import PdfPages
     from matplotlib.figure import Figure
 
     buf = io.BytesIO()
+    svgs: dict[str, str] = {}
     with mpl_style(fonts), first_family(fonts):
         pages = layout_pages(content, L)
         n = len(pages)
@@ -667,13 +689,75 @@ def render_pdf(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu Sans",)
                                      "Title": f"{title_of(content, L)} {content['id']}"}
                       ) as pdf:
             for p, ops in enumerate(pages, 1):
-                fig = Figure(figsize=A4_IN)
+                fig = Figure(figsize=A4_IN, dpi=72)     # a PDF's and an SVG's own unit
                 _page_frame(fig, content, L, p, n)
-                for y, op in ops:
-                    op(fig, y)
+                drawn = [op(fig, y) for y, op in ops]
                 font_fallback(fig, fonts)
                 pdf.savefig(fig)
-    return buf.getvalue()
+                if svg:
+                    for key, axes, y in (d for d in drawn if d is not None):
+                        svgs[key] = _figure_cut_svg(fig, axes,
+                                                    _figure_box(fig, axes, y))
+    return buf.getvalue(), svgs
+
+
+def _side_extent(ax, renderer) -> tuple[float, float]:
+    """Left and right edge (display units) of ``ax`` with its axis labels, tick labels and
+    titles as the last drawing placed them (the texts left and right of an axes; a legend
+    above it spans its width)."""
+    bb = ax.bbox
+    texts = [ax.xaxis.label, ax.yaxis.label, ax.title, ax._left_title, ax._right_title]
+    for axis, i in ((ax.xaxis, 0), (ax.yaxis, 1)):
+        lo, hi = (bb.x0, bb.x1) if i == 0 else (bb.y0, bb.y1)
+        for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+            # a tick outside the view keeps a label that is not drawn
+            texts += [t for t in (tick.label1, tick.label2)
+                      if lo - 1.0 <= t.get_transform().transform(t.get_position())[i]
+                      <= hi + 1.0]
+    boxes = [bb] + [t.get_window_extent(renderer) for t in texts
+                    if t.get_visible() and t.get_text()]
+    return min(b.x0 for b in boxes), max(b.x1 for b in boxes)
+
+
+def _svg_measure(fig):
+    """A renderer that measures text as an SVG of ``fig`` draws it (paths of the glyphs,
+    no hinting; a raster renderer's hinted widths differ by several per cent)."""
+    from matplotlib.backends.backend_svg import RendererSVG
+
+    return RendererSVG(fig.bbox.width, fig.bbox.height, io.StringIO(), image_dpi=fig.dpi)
+
+
+def _figure_box(fig, axes: list, y: float):
+    """The part of the page ``fig`` (drawn) an SVG of ``axes`` is cut to, in inches: the
+    figure block whose top is at ``y`` (fraction of the page height) and :data:`SVG_PAD_IN`
+    below it, from the leftmost to the rightmost text of the axes (:func:`_side_extent`) or
+    the page's text margins, whichever is wider, plus :data:`SVG_PAD_IN`."""
+    from matplotlib.transforms import Bbox
+
+    w, h = A4_IN
+    r = _svg_measure(fig)
+    x0, x1 = zip(*(_side_extent(ax, r) for ax in axes))
+    x0 = min(min(x0) / fig.dpi, _LEFT * w) - SVG_PAD_IN
+    x1 = max(max(x1) / fig.dpi, _RIGHT * w) + SVG_PAD_IN
+    # below the block: room for the x label's descenders, which reach just under it
+    return Bbox.from_extents(x0, (y - _FIG_H) * h - SVG_PAD_IN, x1, y * h)
+
+
+def _figure_cut_svg(fig, axes: list, box) -> str:
+    """The page ``fig`` as SVG text with only ``axes`` shown, cut to ``box`` (inches)."""
+    keep = set(axes)
+    hidden = [a for a in fig.get_children()
+              if a is not fig.patch and a not in keep and a.get_visible()]
+    for a in hidden:
+        a.set_visible(False)
+    try:
+        out = io.StringIO()
+        fig.savefig(out, format="svg", bbox_inches=box, metadata={"Date": None})
+    finally:
+        for a in hidden:
+            a.set_visible(True)
+    text = out.getvalue()
+    return text[text.index("<svg"):]
 
 
 def _page_frame(fig, content, L, p, n) -> None:

@@ -37,7 +37,7 @@ from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tre
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
                               label_translator, labels, meta_text, num, opening_blocks,
                               reason_text, render_html,
-                              render_pdf, rule_at_U, signature_blocks)
+                              render_pdf_figures, rule_at_U, signature_blocks)
 from gonio.kit.render import NoBreakText as NoBreak
 from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
@@ -478,11 +478,13 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
     cjk = len(fonts) > 1 or lang == "zh"
     content = certificate_blocks(results, L, lab=lab_d, truth=truth, lang=lang, cjk=cjk)
     content["_report"], content["_truth"] = results, truth     # what the figures draw from
-    svgs = {key: figure_svg(draw, results, L, truth, fonts) for key, _, draw in FIGURES}
+    pdf, svgs = render_pdf_figures(content, L, fonts)
+    svgs = {key: svgs.get(key) or figure_svg(draw, results, L, truth, fonts)
+            for key, _, draw in FIGURES}
     out = Path(out)
     with output_dir(out) as stage:
         write_text(stage / "certificate.html", render_html(content, svgs, L, lang, font))
-        write_bytes(stage / "certificate.pdf", render_pdf(content, L, fonts))
+        write_bytes(stage / "certificate.pdf", pdf)
         if dcc:
             from gonio.kit.render import bilingual
             from gonio.specs.ogam_draft.phrases import DCC_NAMES_ZH, READING_NOTES_ZH
