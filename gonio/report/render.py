@@ -702,11 +702,14 @@ def render_pdf_figures(content: dict, L: dict, fonts: tuple[str, ...] = ("DejaVu
 
 
 def _side_extent(ax, renderer) -> tuple[float, float]:
-    """Left and right edge (display units) of ``ax`` with its axis labels, tick labels and
-    titles as the last drawing placed them (the texts left and right of an axes; a legend
-    above it spans its width)."""
+    """Left and right edge (display units) of ``ax`` with its axis labels, tick labels,
+    titles and texts as the last drawing placed them (the texts left and right of an axes; a
+    legend above it spans its width)."""
+    from matplotlib.text import Text
+
     bb = ax.bbox
-    texts = [ax.xaxis.label, ax.yaxis.label, ax.title, ax._left_title, ax._right_title]
+    texts = [ax.xaxis.label, ax.yaxis.label] + [
+        c for c in ax.get_children() if isinstance(c, Text)]      # titles, ax.text
     for axis, i in ((ax.xaxis, 0), (ax.yaxis, 1)):
         lo, hi = (bb.x0, bb.x1) if i == 0 else (bb.y0, bb.y1)
         for tick in axis.get_major_ticks() + axis.get_minor_ticks():
