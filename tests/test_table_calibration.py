@@ -107,11 +107,12 @@ def test_line_against_monte_carlo():
     draws = rng.multivariate_normal(e, v, 100_000)
     idx_s = np.array([1, 2, 3, 4, 5, 0])
     k = np.mean(counts / (th - (draws[:, idx_s] - draws[:, [0]]) / 3600.0), axis=1)
-    assert np.std(k) == pytest.approx(corr.u, rel=0.02)
-    assert abs(np.mean(k) - float(np.mean(corr.k_i))) < 5 * corr.u / math.sqrt(k.size)
+    assert np.std(k) == pytest.approx(corr.u_counts_per_deg, rel=0.02)
+    assert abs(np.mean(k) - float(np.mean(corr.k_i_counts_per_deg))) < \
+        5 * corr.u_counts_per_deg / math.sqrt(k.size)
     indep = TableCalibration(x, e, u, "ind")
     assert scale_factor_table_correction(counts / th, th, th, np.zeros(6), indep)[0].u != \
-        pytest.approx(corr.u, rel=0.05)
+        pytest.approx(corr.u_counts_per_deg, rel=0.05)
 
 
 def _coverage(proto, case_b, case, seeds, worst=False):
@@ -202,8 +203,9 @@ def test_from_equal_division():
     corr, _ = scale_factor_table_correction([1000.0] * 4, th, th, np.zeros(4), c)
     # closed form: c_p = K/(3600 θ_true·n) at 90, 180, 270 (360 = 0 cancels), e(0) has u 0
     g = np.array([1 / 90, 1 / 180, 1 / 270]) * 1000.0 / 3600.0 / 4
-    assert corr.u == pytest.approx(math.sqrt(g @ Eda.table_cov_arcsec2[1:, 1:] @ g), rel=1e-4)
-    assert corr.k_i[0] == pytest.approx(1000.0 * 90 / (90 - 0.02 / 3600), rel=1e-14)
+    assert corr.u_counts_per_deg == pytest.approx(
+        math.sqrt(g @ Eda.table_cov_arcsec2[1:, 1:] @ g), rel=1e-4)
+    assert corr.k_i_counts_per_deg[0] == pytest.approx(1000.0 * 90 / (90 - 0.02 / 3600), rel=1e-14)
 
 
 def test_result_states_the_corrected_k(proto, base):
@@ -236,3 +238,75 @@ def test_result_states_the_corrected_k(proto, base):
         text = "".join(s if isinstance(s, str) else s.text
                        for s in k_table_note(d, labels(lang, LABELS)))
         assert "tc.csv" in text and ("uncorrected" in text if lang == "en" else "未修正" in text)
+
+
+def _eda_k(n, seed=3):
+    """An equal-division comparison with n starts over m = 12 positions of a table whose true
+    error has orders 1 and 2 (0.03″, 0.08″), and K's six rounds 0 → 60°…360° at 1000 counts/°
+    read on that table: the counts are K_true·θ_true (θ_true = θ − (e(s) − e(0))/3600 with the
+    simulation's true table error), so K_true is the truth outside the estimator."""
+    from gonio.specs.ogam_draft.equal_division import (equal_division_analysis,
+                                                       simulate_eda_matrix)
+    sim = simulate_eda_matrix({1: (0.03, 0.3), 2: (0.08, 1.0)}, {1: 0.5}, n, 12, 3, 0.005,
+                              np.random.default_rng(seed))
+    eda = equal_division_analysis(sim.D_arcsec, sim.start_deg, sim.step_deg)
+    th = np.arange(1, 7) * 60.0
+    e = sim.table_true_arcsec[(np.round(th / 30.0).astype(int)) % 12]
+    k_i = 1000.0 * (th - (e - sim.table_true_arcsec[0]) / 3600.0) / th   # counts / θ indicated
+    return eda, th, k_i
+
+
+def test_equal_division_blind_orders_refused():
+    """Two starts over 12 positions cannot see the table's even orders (IEC 62047-20 A.3):
+    the comparison's errors lack the order-2 harmonic, which K's stops see, so the 'corrected'
+    K would stay off the truth by far more than its u (checked here, independently of the
+    refusal) — the correction is refused, naming the order."""
+    eda, th, k_i = _eda_k(2)
+    assert eda.unobservable_dim == 5
+    c = from_equal_division(eda)
+    assert 2 in c.blind_orders and 1 not in c.blind_orders
+    blind = TableCalibration(c.table_deg, c.error_arcsec, c.u_arcsec, "eda",
+                             cov_arcsec2=c.cov_arcsec2)                  # the blind part ignored
+    corr, _ = scale_factor_table_correction(k_i, th, th, np.zeros(6), blind)
+    k_c = float(np.mean(corr.k_i_counts_per_deg))
+    assert abs(k_c - 1000.0) > 10 * corr.u_counts_per_deg      # what the refusal prevents
+    with pytest.raises(GonioError, match=r"harmonics of order 2\b"):
+        scale_factor_table_correction(k_i, th, th, np.zeros(6), c)
+
+
+@pytest.mark.parametrize("n", [6, 12])
+def test_equal_division_blind_orders_k_does_not_see(n):
+    """Six starts (blind orders 6, 12…: one value at every 60° stop) or a start at every
+    position (none blind): the correction is taken and the corrected K is the truth within
+    4 u (u of the correction and the readings' noise)."""
+    eda, th, k_i = _eda_k(n)
+    c = from_equal_division(eda)
+    assert (c.blind_basis is None) == (n == 12)
+    corr, _ = scale_factor_table_correction(k_i, th, th, np.zeros(6), c)
+    assert abs(float(np.mean(corr.k_i_counts_per_deg)) - 1000.0) < \
+        4 * corr.u_counts_per_deg + 1e-9
+    assert abs(float(np.mean(k_i)) - 1000.0) > 4 * corr.u_counts_per_deg   # the table matters
+
+
+def test_study_record_checks_the_stated_k(proto, base):
+    """Without the tilt estimate, with an exact calibration: the study's record of K is the
+    value the sealed Result states (the table-corrected one), within 0.005 ppm of the bench
+    file's truth, and its disc-model record is about the same K."""
+    from gonio.specs.ogam_draft.item_coverage import item_record
+
+    raw = read_toml(resolve("ogam-draft", "protocol"))
+    for key in ("zero_stability", "rate_consistency", "pointing_consistency", "tilt_estimate"):
+        raw.pop(key, None)
+    p = parse_protocol(raw, resolve("ogam-draft", "protocol"))
+    clean = tilted(replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS)),
+        0.0, 0.0)
+    x = table_positions_deg(p)
+    cal = TableCalibration(x, harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "tc.csv")
+    res, rep = _analyse(p, clean, 0, cal)
+    rec = item_record(rep, res.truth)
+    k_true = scale_factor_truth(res.truth)[0]
+    stated = float(rep.result().to_json()["items"]["scale_factor"]["value"])
+    assert rec["scale_factor"]["value"] == stated
+    assert abs(rec["scale_factor"]["value"] / k_true - 1.0) < 0.005e-6
+    assert abs(rec["scale_factor_disc"]["value"] / k_true - 1.0) < 0.005e-6

@@ -48,6 +48,7 @@ from typing import Sequence
 
 import numpy as np
 
+from gonio.errors import GonioError
 from gonio.result.statement import coverage_k, signed_text
 from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
 from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
@@ -497,10 +498,36 @@ class TableCorrection:
     the corrected K_i (counts/°), u(K) of the calibration's uncertainty through the
     correction (counts/°), its ν, and the line's source."""
 
-    k_i: np.ndarray
-    u: float
+    k_i_counts_per_deg: np.ndarray
+    u_counts_per_deg: float
     dof: float
     source: str
+
+
+def _refuse_blind(calibration, c) -> None:
+    """Refuse a calibration that cannot see table errors K's correction is sensitive to.
+
+    An equal-division comparison with fewer starts n than positions m has the table's
+    harmonics of orders that are multiples of n removed and no uncertainty for them (IEC
+    62047-20 A.3; :func:`gonio.specs.ogam_draft.table_calibration.from_equal_division`): where
+    K's sensitivity c over the positions has a component in that subspace, the corrected K
+    would keep those harmonics' error with no line for it. Raises :class:`GonioError` naming
+    the orders K sees."""
+    basis = getattr(calibration, "blind_basis", None)
+    if basis is None or not np.any(c):
+        return
+    scale = float(np.linalg.norm(c))
+    if float(np.linalg.norm(np.asarray(basis).T @ c)) <= 1e-9 * scale:
+        return
+    x = np.deg2rad(calibration.table_deg)
+    seen = [h for h in calibration.blind_orders
+            if abs(complex(np.exp(1j * h * x) @ c)) > 1e-9 * scale * math.sqrt(x.size)]
+    orders = ", ".join(str(h) for h in (seen or calibration.blind_orders))
+    raise GonioError(f"the {calibration.source} cannot see the table's harmonics of order "
+                     f"{orders} (its starts cover fewer positions than it lists) and K's stops "
+                     f"see them: K cannot be corrected by it (an equal-division comparison "
+                     f"with a start at every position can, or keep the MPE line)",
+                     key="table_calibration")
 
 
 def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibration
@@ -527,10 +554,10 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     >>> cal = TableCalibration([0, 60, 120, 180, 240, 300], [0, 0.1, 0, 0, 0, 0], [0.02] * 6, "t")
     >>> th = [60.0, 120.0, 180.0, 240.0, 300.0, 360.0]
     >>> c, _ = scale_factor_table_correction([3600.0] * 6, th, th, [0.0] * 6, cal)
-    >>> round(float(c.k_i[0]), 5), [float(x) for x in c.k_i[1:]] == [3600.0] * 5
+    >>> round(float(c.k_i_counts_per_deg[0]), 5), [float(x) for x in c.k_i_counts_per_deg[1:]] == [3600.0] * 5
     (3600.00167, True)
     >>> g = np.array([1/60, 1/120, 1/180, 1/240, 1/300])    # c_p·6 at 60°…300°, per K/3600
-    >>> round(c.u, 8) == round(0.02 * 3600 / 3600 / 6 * math.sqrt(np.sum(g ** 2) + np.sum(g) ** 2), 8)
+    >>> round(c.u_counts_per_deg, 8) == round(0.02 * 3600 / 3600 / 6 * math.sqrt(np.sum(g ** 2) + np.sum(g) ** 2), 8)
     True
     >>> scale_factor_table_correction([3600.0], [45.0], [45.0], [0.0], cal)
     (None, [45.0])
@@ -550,6 +577,7 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     c = np.zeros(calibration.table_deg.size)
     np.add.at(c, i_s, sens)
     np.add.at(c, i_z, -sens)
+    _refuse_blind(calibration, c)
     u2 = float(c @ calibration.covariance() @ c)
     dof = math.inf
     if calibration.dof is not None and u2 > 0:
@@ -572,7 +600,7 @@ def _scale_factor_table_line_of(k_i, th, table_mpe_arcsec: float, u_tab, table_c
         both += f"; {table_note}"
     if table_correction is not None:
         tc_ = table_correction
-        return _Line(from_u("P_Kc", 0.0, tc_.u, dof=tc_.dof, type="B",
+        return _Line(from_u("P_Kc", 0.0, tc_.u_counts_per_deg, dof=tc_.dof, type="B",
                             source=f"table angle error at the stops corrected by the "
                                    f"{tc_.source}; u of the correction propagated "
                                    f"(stops − zeroing positions)"),
@@ -655,7 +683,7 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     k_i = np.asarray(k_i, dtype=float)
     th = np.asarray(theta_deg, dtype=float)
     if table_correction is not None:
-        k_i = np.asarray(table_correction.k_i, dtype=float)
+        k_i = np.asarray(table_correction.k_i_counts_per_deg, dtype=float)
     n = k_i.size
     u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
     lines = []

@@ -58,6 +58,11 @@ class TableCalibration:
     source: str
     cov_arcsec2: np.ndarray | None = None
     dof: np.ndarray | None = None
+    #: (positions × d) orthonormal basis of the table errors the calibration cannot see
+    #: (zero-mean; an equal-division comparison's blind harmonics), or None: all seen.
+    blind_basis: np.ndarray | None = None
+    #: The harmonic orders (≤ m/2) of that subspace, for the refusal's message.
+    blind_orders: tuple = ()
 
     def __post_init__(self):
         pos = _wrap_deg(self.table_deg)
@@ -164,12 +169,38 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
                             dof=np.array(cols["dof"]) if "dof" in cols else None)
 
 
+def _eda_blind(eda) -> tuple[np.ndarray | None, tuple]:
+    """The zero-mean table subspace an equal-division comparison cannot see (orthonormal
+    basis over its m positions) and its harmonic orders ≤ m/2, from its starts and step
+    (the fit's own null space, :func:`gonio.specs.ogam_draft.equal_division.harmonic_transfer`;
+    IEC 62047-20 A.3: for n equally spaced starts the orders that are multiples of n)."""
+    if not int(getattr(eda, "unobservable_dim", 0) or 0) > 0:
+        return None, ()
+    from gonio.specs.ogam_draft import equal_division as ed
+
+    m = int(np.asarray(eda.table_position_deg).size)
+    step = float(eda.step_deg)
+    p = ed._grid_indices(np.asarray(eda.start_deg, dtype=float), step)
+    a = ed._design(p, m)
+    b = ed._table_null_basis((a.T @ a).toarray(), m)
+    b = b - b.mean(axis=0, keepdims=True)                    # the constant is the gauge
+    u, s, _ = np.linalg.svd(b, full_matrices=False)
+    basis = u[:, s > 1e-8]
+    h = ed.harmonic_transfer(eda.start_deg, step, m // 2)
+    orders = tuple(int(o) for o, blind in zip(h["order"], h["gonio_absorbs_table"]) if blind)
+    return (basis if basis.shape[1] else None), orders
+
+
 def from_equal_division(eda, source: str = "equal-division comparison (IEC 62047-20 A.3)"
                         ) -> TableCalibration:
     """The table errors of an :class:`~gonio.specs.ogam_draft.equal_division.EdaResult` with
-    their covariance (its gauge's constant cancels in e(stop) − e(zero)), ν its residual dof."""
+    their covariance (its gauge's constant cancels in e(stop) − e(zero)), ν its residual dof,
+    and the subspace it cannot see (its blind harmonics where its n starts are fewer than its
+    m positions: ``blind_basis``, ``blind_orders``)."""
     pos = np.asarray(eda.table_position_deg, dtype=float)
     dof = np.full(pos.size, float(eda.dof)) if getattr(eda, "dof", 0) else None
+    basis, orders = _eda_blind(eda)
     return TableCalibration(pos, np.asarray(eda.table_error_arcsec, dtype=float),
                             np.asarray(eda.table_u_arcsec, dtype=float), source,
-                            cov_arcsec2=np.asarray(eda.table_cov_arcsec2, dtype=float), dof=dof)
+                            cov_arcsec2=np.asarray(eda.table_cov_arcsec2, dtype=float), dof=dof,
+                            blind_basis=basis, blind_orders=orders)
