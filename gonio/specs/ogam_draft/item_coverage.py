@@ -225,12 +225,15 @@ def item_record(report, truth: dict) -> dict:
         b = report.item_uncertainty["scale_factor"]
         bound = b.beside if b.correction is not None else b   # K_tilt at the A.1 bound
         u_disc = disc_model_u(bound)
-        out["scale_factor_disc"] = dict(out["scale_factor"], U=float(bound.k) * u_disc,
-                                        u_c=float(u_disc))
+        # the K each budget is about: the value of the budget whose U it checks
+        out["scale_factor_disc"] = dict(out["scale_factor"], value=float(bound.value),
+                                        U=float(bound.k) * u_disc, u_c=float(u_disc))
         if b.correction is not None:    # stated: K corrected by the measured tilt
-            out["scale_factor_bound"] = dict(out["scale_factor"], U=float(bound.U),
-                                             k=float(bound.k), u_c=float(bound.u_c))
-            out["scale_factor"]["value"] = float(b.value)
+            out["scale_factor_bound"] = dict(out["scale_factor"], value=float(bound.value),
+                                             U=float(bound.U), k=float(bound.k),
+                                             u_c=float(bound.u_c))
+        # the value the sealed Result states (corrected by the measured tilt, a calibrated table)
+        out["scale_factor"]["value"] = float(report.item(res.scale_factor).value)
         if "scale_factor_nonlinearity" in out:
             kl = out["scale_factor_nonlinearity"]
             kl["truth"] = float((k_i.max() - k_i.min()) / k_i.mean() * 100.0)
