@@ -145,8 +145,7 @@ def readings_taken(repeatability_source: str) -> list[str]:
                 f"{repeatability_source}.")
     return list(READINGS_TAKEN[:3]) + [note] + list(READINGS_TAKEN[3:])
 
-#: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
-#: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
+
 #: results.json ``scale_factor.details.table_calibration.label``.
 TABLE_CALIBRATED_NOTE = (
     "beyond the draft: the table's angle error at K's 7.1 stops and zeroing positions "
@@ -155,6 +154,8 @@ TABLE_CALIBRATED_NOTE = (
     "sensitivity (line P_Kc) instead of the MPE line (P_K). Only K is corrected: E, K_l, C_v "
     "and C_g keep their MPE lines")
 
+#: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
+#: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
 TILT_CORRECTED = {
     "note": "beyond the draft: K is corrected for the tilt x Earth-rate coupling of the 7.1 "
             "rounds at the tilt psi and azimuth alpha measured by the in-situ tilt estimate "

@@ -1264,10 +1264,12 @@ def repeatability_budget(r_arcsec: float, n_series: int, n_points: int, *,
     draft, which states no interval.
 
     The pattern is unknown and the union is needed: the belt along the measured pattern
-    (:func:`uncertainty.stdev.max_stdev_belt_interval`) or the equal-σ maximum's
-    (:func:`uncertainty.stdev.max_stdev_interval`) is exact where the σ_i are alike but
-    covers about 73 % (20 %) with one position poorer than the rest (σ 1 against eleven
-    at 0.6), because the other points' s_i scatter up to the largest and the pattern
+    (:func:`uncertainty.stdev.max_stdev_belt_interval`) or the equal-σ maximum's is exact
+    where the σ_i are alike but, with one position poorer than the rest (σ 1 against eleven
+    at 0.6, ν = 9), the belt covers about 73 %, the equal-σ maximum's one-sided (Šidák)
+    limit R·√(ν/χ²_q,ν), q = 0.05^(1/m), 22.2 % and the upper end of its central interval
+    (:func:`uncertainty.stdev.max_stdev_interval`) 26.7 % (closed form of R's distribution),
+    because the other points' s_i scatter up to the largest and the pattern
     looks flat. The union's upper limit is exact at one dominant σ_i and no interval
     valid for every pattern can be lower there; where the σ_i are alike it holds
     max σ_i with nearly 1 and R, the largest of m, lies above max σ_i (the draft's
