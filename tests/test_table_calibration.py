@@ -310,3 +310,43 @@ def test_study_record_checks_the_stated_k(proto, base):
     assert rec["scale_factor"]["value"] == stated
     assert abs(rec["scale_factor"]["value"] / k_true - 1.0) < 0.005e-6
     assert abs(rec["scale_factor_disc"]["value"] / k_true - 1.0) < 0.005e-6
+
+
+def test_calibration_file_recorded(tmp_path, base):
+    """gonio calibrate --table-calibration FILE: results.json records the file's SHA-256 and
+    the rows K's correction used (its stops and zeroing positions), gonio-manifest.json lists
+    the file with its SHA-256 (computed here with hashlib, independently), the DCC's K says it."""
+    import hashlib
+    import json
+
+    from gonio.pipeline.dispatch import calibrate
+    from gonio.specs.ogam_draft.readings import write_readings
+
+    p = parse_protocol(read_toml(resolve("ogam-draft", "protocol")),
+                       resolve("ogam-draft", "protocol"))
+    clean = replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS))
+    res = run_session(p, clean, seed=0)
+    rd = tmp_path / "readings.csv"
+    write_readings(res.readings, rd, dict(res.metadata))
+    x = np.r_[table_positions_deg(p), 15.0]            # one row K does not use
+    f = tmp_path / "tc.csv"
+    f.write_text("table_deg,error_arcsec,u_arcsec\n" + "".join(
+        f"{a:g},{e:.6f},0.02\n" for a, e in zip(x, harmonic_sum_arcsec(x, HARMONICS))),
+        encoding="utf-8")
+    sha = hashlib.sha256(f.read_bytes()).hexdigest()
+    out = tmp_path / "out"
+    calibrate(rd, out, spec_key="ogam-draft", table_calibration=str(f), dcc=True,
+              inputs=[rd, f])
+    d = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    tk = d["items"]["scale_factor"]["details"]["table_calibration"]
+    assert tk["sha256"] == sha and tk["source"] == "tc.csv"
+    used = tk["positions_used"]
+    assert used["table_deg"] == [0.0, 60.0, 120.0, 180.0, 240.0, 300.0]   # 7.1: 0 → 60°…360°
+    assert used["u_arcsec"] == [0.02] * len(used["table_deg"])
+    want = harmonic_sum_arcsec(np.array(used["table_deg"]), HARMONICS)
+    assert np.allclose(used["error_arcsec"], want, atol=1e-6)
+    man = json.loads((out / "gonio-manifest.json").read_text(encoding="utf-8"))
+    assert man["option_files"]["table_calibration"] == {"file": "tc.csv", "sha256": sha}
+    dcc = next(out.glob("*.xml")).read_text(encoding="utf-8")
+    assert "tc.csv" in dcc and sha in dcc

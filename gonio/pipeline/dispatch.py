@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from gonio.atomic import output_set
+from gonio.atomic import output_set, sha256_file
 from gonio.errors import GonioError, check_input_file, read_utf8
 from gonio.formats.metadata import header_lines
 from gonio.formats.provenance import readings_provenance
@@ -193,9 +193,20 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
                        + unread_columns(spec, readings))
     decide_conformity(result, lab_d)
     with output_set(out, inputs=inputs, force=force,
-                    source_sha256=getattr(result, "source_sha256", None)):
+                    source_sha256=getattr(result, "source_sha256", None),
+                    extra=option_files(opts, inputs)):
         paths = renderer.write(result, Path(out), truth=truth, lab=lab_d, lang=lang, dcc=dcc)
     return result, paths
+
+
+def option_files(opts: dict, inputs) -> dict | None:
+    """The manifest's record of the specification options that named an input file the run
+    read (``calibrate --table-calibration FILE``): {"option_files": {option: {"file", "sha256"}}},
+    or None where none did."""
+    named = {str(i) for i in inputs if i is not None}
+    files = {k: {"file": Path(v).name, "sha256": sha256_file(v)} for k, v in sorted(opts.items())
+             if isinstance(v, (str, Path)) and str(v) in named and Path(v).is_file()}
+    return {"option_files": files} if files else None
 
 
 def demo(spec_key: str, out: str | Path, *, bench: str | None = None, seed: int = 0,

@@ -289,6 +289,9 @@ class Analysis:
                 d["table_calibration"] = {
                     "label": TABLE_CALIBRATED_NOTE,
                     "source": getattr(self.table_calibration, "source", ""),
+                    "sha256": getattr(self.table_calibration, "sha256", None),
+                    "positions_used": table_positions_used(c.table, self.protocol,
+                                                           self.table_calibration),
                     "line": line.source, "u_counts_per_deg": float(line.u),
                     "u_rel_ppm": float(line.u / abs(iu.value) / PPM),
                     "uncorrected_value": _plain_value(c)}
@@ -1286,6 +1289,17 @@ def round_positions(table: pd.DataFrame, protocol: Protocol, test: str
                          "table calibration needs the positions",
                          line=int(table["line"].to_numpy()[np.argmax(bad)]), column="table_deg")
     return stop, zero
+
+
+def table_positions_used(t: pd.DataFrame, protocol: Protocol, table_calibration) -> dict:
+    """The calibration's rows K's correction used (its rounds' stops and zeroing positions,
+    modulo 360°): position, error and u as read, for the record (results.json)."""
+    stop, zero = round_positions(t, protocol, "scale_factor")
+    idx, _ = table_calibration.lookup(np.r_[np.asarray(stop, float), np.asarray(zero, float)])
+    used = sorted({int(i) for i in idx}) if idx is not None else []
+    return {"table_deg": [float(table_calibration.table_deg[i]) for i in used],
+            "error_arcsec": [float(table_calibration.error_arcsec[i]) for i in used],
+            "u_arcsec": [float(table_calibration.u_arcsec[i]) for i in used]}
 
 
 def _scale_factor_table(t: pd.DataFrame, protocol: Protocol, table_calibration):

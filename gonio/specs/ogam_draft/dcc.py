@@ -27,7 +27,8 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_budget, followed,
-                                           item_names, item_path, item_uncertainty, k_tilt_note,
+                                           item_names, item_path, item_uncertainty, k_table_note,
+                                           k_tilt_note,
                                            method_rows, reading_note, specification_text,
                                            stated_item)
 
@@ -141,7 +142,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, L[name], s["value"], item["unit"],
                      description=LABELS["below_zero"]["en"], **kw)
         else:
-            desc = [_k_tilt_text(res, L) if name == "scale_factor" else None]
+            desc = ([_k_tilt_text(res, L), _k_table_text(res, L)] if name == "scale_factor"
+                    else [None])
             if "k" in kw:   # a k of the item's combined distribution (JCGM 101): say so
                 desc.append(combined_k_note(res, L, only=name))
             quantity(data, L[name], s["value"], item["unit"],
@@ -162,6 +164,17 @@ def _k_tilt_text(res: dict, L: dict) -> str | None:
             "their correlation) in place of the tilt coupling at the A.1 bound (K_tilt)"
             if "K_te" in lines else "")
     return "K " + "".join(str(x) for x in k_tilt_note(res, L)) + held
+
+
+def _k_table_text(res: dict, L: dict) -> str | None:
+    """K's description when a calibrated rotary table corrected it: the certificate's note
+    (the calibration, u(K) of it, the 7.1 mean uncorrected) and the calibration file's
+    SHA-256, from results.json ``details.table_calibration``; None otherwise."""
+    d = (res["items"]["scale_factor"].get("details") or {}).get("table_calibration")
+    if not d:
+        return None
+    sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
+    return "K " + "".join(str(x) for x in k_table_note(res, L)) + sha
 
 
 def _limit_rule(c) -> str:

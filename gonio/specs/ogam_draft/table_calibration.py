@@ -21,6 +21,7 @@ source (:meth:`TableCalibration.lookup`).
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -63,6 +64,8 @@ class TableCalibration:
     blind_basis: np.ndarray | None = None
     #: The harmonic orders (≤ m/2) of that subspace, for the refusal's message.
     blind_orders: tuple = ()
+    #: SHA-256 of the file it was read from (None: not read from a file).
+    sha256: str | None = None
 
     def __post_init__(self):
         pos = _wrap_deg(self.table_deg)
@@ -125,7 +128,8 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
     :class:`GonioError` naming the file, line and column."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")     # a spreadsheet's BOM is no column
+        raw = p.read_bytes()
+        text = raw.decode("utf-8-sig")               # a spreadsheet's BOM is no column
     except OSError as e:
         raise GonioError(f"cannot read table calibration: {e.strerror}", file=p) from None
     except UnicodeDecodeError:
@@ -166,7 +170,8 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
         seen[w] = n
     return TableCalibration(np.array(cols["table_deg"]), np.array(cols["error_arcsec"]),
                             np.array(cols["u_arcsec"]), p.name,
-                            dof=np.array(cols["dof"]) if "dof" in cols else None)
+                            dof=np.array(cols["dof"]) if "dof" in cols else None,
+                            sha256=hashlib.sha256(raw).hexdigest())
 
 
 def _eda_blind(eda) -> tuple[np.ndarray | None, tuple]:
