@@ -20,6 +20,7 @@ Contents
 ========
 :func:`equal_division_analysis`   the least-squares separation → :class:`EdaResult`
 :func:`harmonic_transfer`         per harmonic order: observable, aliased, unobservable
+:func:`blind_table_basis`         the table errors a set of starts cannot see
 :func:`compare_tables`            two tables, same goniometer as transfer standard
 :func:`simulate_eda_matrix`       a small synthetic generator (tests, examples)
 :func:`eda_matrix_from_readings`  a readings file's ``equal_division`` rows → D
@@ -561,6 +562,26 @@ def harmonic_transfer(start_deg, step_deg: float, max_order: int) -> pd.DataFram
     N = (_design(p, m).T @ _design(p, m)).toarray()
     B = _table_null_basis(N, m)
     return _harmonic_frame(start_deg, p, m, B, int(max_order))
+
+
+def blind_table_basis(start_deg, step_deg: float) -> np.ndarray:
+    """Orthonormal basis (m × d) of the zero-mean table errors at the m grid positions that
+    a comparison with starts ``start_deg`` cannot see (the fit's null space less the gauge
+    constant; IEC 62047-20 A.3: for n equally spaced starts the harmonics whose orders are
+    multiples of n). d = ``EdaResult.unobservable_dim``; d = 0 where the starts cover every
+    position.
+
+    >>> blind_table_basis([0, 180], 30.0).shape, blind_table_basis(np.arange(12) * 30, 30.0).shape
+    ((12, 5), (12, 0))
+    """
+    start_deg = np.atleast_1d(np.asarray(start_deg, dtype=float))
+    m = _check_step(step_deg)
+    p = _grid_indices(start_deg, step_deg)
+    a = _design(p, m)
+    b = _table_null_basis((a.T @ a).toarray(), m)
+    b = b - b.mean(axis=0, keepdims=True)                # the constant is the gauge
+    u, s, _ = np.linalg.svd(b, full_matrices=False)
+    return u[:, s > 1e-8]
 
 
 def _harmonic_frame(start_deg, p, m, B, max_order) -> pd.DataFrame:

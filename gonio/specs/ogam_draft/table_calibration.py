@@ -185,12 +185,7 @@ def _eda_blind(eda) -> tuple[np.ndarray | None, tuple]:
 
     m = int(np.asarray(eda.table_position_deg).size)
     step = float(eda.step_deg)
-    p = ed._grid_indices(np.asarray(eda.start_deg, dtype=float), step)
-    a = ed._design(p, m)
-    b = ed._table_null_basis((a.T @ a).toarray(), m)
-    b = b - b.mean(axis=0, keepdims=True)                    # the constant is the gauge
-    u, s, _ = np.linalg.svd(b, full_matrices=False)
-    basis = u[:, s > 1e-8]
+    basis = ed.blind_table_basis(eda.start_deg, step)
     h = ed.harmonic_transfer(eda.start_deg, step, m // 2)
     orders = tuple(int(o) for o, blind in zip(h["order"], h["gonio_absorbs_table"]) if blind)
     return (basis if basis.shape[1] else None), orders
