@@ -7,8 +7,9 @@ comes from a fixed set of error draws, as the budgets' (their M = 4000 draws, se
 below takes M = 1000 to keep its cost down, the belt's Monte Carlo allowance widening its
 tails to match). Patterns: three values high and three low, alternating (a third-order table
 error), two and one high (one outlier), evenly spaced (one value at each extreme, as the
-measured pattern usually looks), and one value at each extreme with the rest uniform between,
-drawn per repeat.
+measured pattern usually looks), the values between the extremes near them (the lower
+quantile's three-level pattern puts them at R/2; near an extreme they widen the range more),
+and one value at each extreme with the rest uniform between, drawn per repeat.
 
 Monte Carlo error of a coverage: binomial, sd √(p(1 − p)/N) = 2.2 % at p = 0.95 and N = 100
 per case, 0.9 % over the 600 repeats of a pattern; each case must have its Clopper–Pearson 95 %
@@ -27,7 +28,8 @@ from uncertainty.stdev import range_belt_interval
 
 N = 6
 PATTERNS = {"3/3": [1, 0, 1, 0, 1, 0], "2/4": [1, 0, 0, 1, 0, 0], "1/5": [0, 0, 1, 0, 0, 0],
-            "spaced": [0.0, 0.2, 0.4, 0.6, 0.8, 1.0], "random": None}
+            "spaced": [0.0, 0.2, 0.4, 0.6, 0.8, 1.0],
+            "near": [0.0, 0.95, 0.05, 1.0, 0.9, 0.1], "random": None}
 D_SIGMA = (0.0, 1.0, 2.5, 4.0, 6.0, 10.0)
 REPEATS = 100
 
