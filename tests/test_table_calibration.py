@@ -208,14 +208,11 @@ def test_from_equal_division():
     assert corr.k_i_counts_per_deg[0] == pytest.approx(1000.0 * 90 / (90 - 0.02 / 3600), rel=1e-14)
 
 
-def test_result_states_the_corrected_k(proto, base):
-    """The sealed Result states the corrected K (also without the tilt estimate), names the
-    calibration in details and in the certificate's K cell (en, zh), with the 7.1 mean
-    uncorrected beside; the draft's reading (estimates.draft) keeps the MPE line."""
-    from gonio.kit.render import labels
-    from gonio.specs.ogam_draft.phrases import LABELS
-    from gonio.specs.ogam_draft.stated import k_table_note
 
+def _no_tilt_estimate_setup(base):
+    """The built-in protocol without [tilt_estimate] (nor 7.3, 7.6, 7.7), a noise-free
+    untilted bench whose table has the test's harmonics, and an exact calibration of them
+    at every position the protocol uses (u 0.02″)."""
     raw = read_toml(resolve("ogam-draft", "protocol"))
     for key in ("zero_stability", "rate_consistency", "pointing_consistency", "tilt_estimate"):
         raw.pop(key, None)
@@ -225,6 +222,17 @@ def test_result_states_the_corrected_k(proto, base):
         0.0, 0.0)                     # no tilt estimate here: no tilt to correct
     x = table_positions_deg(p)
     cal = TableCalibration(x, harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "tc.csv")
+    return p, clean, cal
+
+def test_result_states_the_corrected_k(proto, base):
+    """The sealed Result states the corrected K (also without the tilt estimate), names the
+    calibration in details and in the certificate's K cell (en, zh), with the 7.1 mean
+    uncorrected beside; the draft's reading (estimates.draft) keeps the MPE line."""
+    from gonio.kit.render import labels
+    from gonio.specs.ogam_draft.phrases import LABELS
+    from gonio.specs.ogam_draft.stated import k_table_note
+
+    p, clean, cal = _no_tilt_estimate_setup(base)
     res, rep = _analyse(p, clean, 0, cal)
     d = rep.result().to_json()
     k = d["items"]["scale_factor"]
@@ -294,15 +302,7 @@ def test_study_record_checks_the_stated_k(proto, base):
     file's truth, and its disc-model record is about the same K."""
     from gonio.specs.ogam_draft.item_coverage import item_record
 
-    raw = read_toml(resolve("ogam-draft", "protocol"))
-    for key in ("zero_stability", "rate_consistency", "pointing_consistency", "tilt_estimate"):
-        raw.pop(key, None)
-    p = parse_protocol(raw, resolve("ogam-draft", "protocol"))
-    clean = tilted(replace(base.random_off(), table=TableConfig(
-        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS)),
-        0.0, 0.0)
-    x = table_positions_deg(p)
-    cal = TableCalibration(x, harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "tc.csv")
+    p, clean, cal = _no_tilt_estimate_setup(base)
     res, rep = _analyse(p, clean, 0, cal)
     rec = item_record(rep, res.truth)
     k_true = scale_factor_truth(res.truth)[0]
