@@ -350,3 +350,114 @@ def test_calibration_file_recorded(tmp_path, base):
     assert man["option_files"]["table_calibration"] == {"file": "tc.csv", "sha256": sha}
     dcc = next(out.glob("*.xml")).read_text(encoding="utf-8")
     assert "tc.csv" in dcc and sha in dcc
+
+
+def _e_truth_71(res):
+    """E's truth per point from the bench file alone, read with the 7.1 K's truth: the
+    noise-free indicated angle minus the true table angle turned (``systematic_deviation``,
+    divided by the K through the mount) rescaled to the K the 7.1 rounds have without noise or
+    table error (:func:`scale_factor_truth`), as E is read with the 7.1 K (7.4)."""
+    import pandas as pd
+
+    tr = pd.DataFrame(res.truth["readings"])
+    ad = tr[(tr["test"] == "angle_deviation") & np.isclose(tr["rate_dps"], 60.0)]
+    k_m = res.truth["scale_factor_through_mount_counts_per_deg"]
+    k_71 = scale_factor_truth(res.truth)[0]
+    e = ad["systematic_deviation_arcsec"] + 3600.0 * ad["true_table_deg"] * (k_m / k_71 - 1.0)
+    return e.groupby(ad["round"]).mean()
+
+
+def test_e_noise_free_exact_calibration(base):
+    """No noise, no tilt, the table's error two harmonics, an exact calibration: the corrected
+    E_i equal the bench's truth read with the 7.1 K to 0.003″ while the uncorrected are off
+    by the table's error (> 0.05″ somewhere); E is read with the stated (corrected) K; each
+    point's table line is the calibration's (P_c source), not the MPE line; the draft's
+    Annex A budget (kind="draft") is unchanged by the calibration."""
+    from gonio.specs.ogam_draft.calibration import deviation_budget, session_settings
+
+    p, clean, cal = _no_tilt_estimate_setup(base)
+    res, raw = _analyse(p, clean, 0)
+    _, rep = _analyse(p, clean, 0, cal)
+    t_i = _e_truth_71(res)
+    e_raw, e = raw.results.angle_deviation, rep.results.angle_deviation
+    truth = t_i.reindex(e.table["round"]).to_numpy()
+    assert np.max(np.abs(e.table["E_arcsec"].to_numpy() - truth)) < 0.003
+    assert np.max(np.abs(e_raw.table["E_arcsec"].to_numpy() - truth)) > 0.05
+    d = e.details["table_calibration"]
+    assert d["scale_factor_counts_per_deg"] == pytest.approx(
+        rep.item(rep.results.scale_factor).value, rel=1e-15)
+    assert d["uncorrected_value"] == pytest.approx(e_raw.value, abs=1e-12)
+    assert e.details["estimates"]["draft"]["value"] == pytest.approx(e_raw.value, abs=1e-12)
+    rows = rep.uncertainty.table()
+    p_src = rows.loc[rows["symbol"] == "P", "source"].iloc[0]
+    assert "table calibration" in p_src and "K_P" not in set(rows["symbol"])
+    assert "table calibration" not in raw.uncertainty.table().loc[
+        lambda t: t["symbol"] == "P", "source"].iloc[0]
+    settings, _ = session_settings(rep.readings, p)
+    d_cal = deviation_budget(rep.results, rep.readings, p, settings, kind="draft")[0]
+    d_raw = deviation_budget(raw.results, raw.readings, p, settings, kind="draft")[0]
+    assert d_cal.U_arcsec == d_raw.U_arcsec
+    j = rep.result().to_json()["items"]["angle_deviation"]
+    assert j["value"] == pytest.approx(e.value) and j["details"]["table_calibration"]["source"] \
+        == "tc.csv"
+
+
+def test_e_line_against_monte_carlo(base):
+    """Each point's calibrated table line against a Monte Carlo of the correction itself: the
+    calibration's errors drawn from N(e, V) (correlated positions), K's rounds and E's
+    readings corrected with each draw (K_c from the counts, E_i = C_i/K_c − θ_true), the
+    scatter of E_i against the propagated u per point."""
+    p, clean, cal0 = _no_tilt_estimate_setup(base)
+    x = cal0.table_deg
+    u = np.full(x.size, 0.02) + 0.01 * (np.arange(x.size) % 3)
+    r = 0.3 ** np.abs(np.subtract.outer(np.arange(x.size), np.arange(x.size)))
+    v = r * np.outer(u, u)
+    cal = TableCalibration(x, cal0.error_arcsec, u, "cov", cov_arcsec2=v)
+    res, rep = _analyse(p, clean, 0, cal)
+    u_pts = np.array(rep.results.angle_deviation.details["table_calibration"]["u_points_arcsec"])
+    df = res.readings
+    k_rows = df[df["test"] == "scale_factor"]
+    e_rows = df[(df["test"] == "angle_deviation") & np.isclose(df["rate_dps"], 60.0)]
+    sf = next(it for it in p.items() if it.test == "scale_factor")
+    ad = next(it for it in p.items() if it.test == "angle_deviation")
+
+    def idx(angles):
+        w = np.mod(np.asarray(angles, float), 360.0)
+        return np.array([int(np.argmin(np.minimum(abs(x - a), 360 - abs(x - a)))) for a in w])
+
+    ks = [sf.rounds[r - 1] for r in k_rows["round"]]
+    k_s, k_z = idx([q.stop_deg for q in ks]), idx([(q.start_deg if sf.rezero else
+                                                    sf.rounds[0].start_deg) for q in ks])
+    es = [ad.rounds[r - 1] for r in e_rows["round"]]
+    e_s, e_z = idx([q.stop_deg for q in es]), idx([(q.start_deg if ad.rezero else
+                                                    ad.rounds[0].start_deg) for q in es])
+    draws = np.random.default_rng(5).multivariate_normal(cal.error_arcsec, v, 20_000)
+    th_k = k_rows["table_deg"].to_numpy(float)
+    c_k = k_rows["gyro_counts"].to_numpy(float)
+    k_c = np.mean(c_k / (th_k - (draws[:, k_s] - draws[:, k_z]) / 3600.0), axis=1)
+    th_e = e_rows["table_deg"].to_numpy(float)
+    e_ij = 3600.0 * (e_rows["gyro_counts"].to_numpy(float) / k_c[:, None]
+                     - (th_e - (draws[:, e_s] - draws[:, e_z]) / 3600.0))
+    rnd = e_rows["round"].to_numpy()
+    order = rep.results.angle_deviation.table["round"].to_numpy()
+    e_i = np.stack([e_ij[:, rnd == q].mean(axis=1) for q in order], axis=1)
+    assert np.std(e_i, axis=0) == pytest.approx(u_pts, rel=0.03)
+
+
+def test_e_position_missing_keeps_mpe_line(base):
+    """A calibration without one of E's points (150° is none of K's): E is not corrected, keeps
+    the MPE line, and the line and the notes name the missing position."""
+    p, clean, cal = _no_tilt_estimate_setup(base)
+    keep = ~np.isclose(cal.table_deg, 150.0)
+    part = TableCalibration(cal.table_deg[keep], cal.error_arcsec[keep], cal.u_arcsec[keep],
+                            "part.csv")
+    _, raw = _analyse(p, clean, 0)
+    _, rep = _analyse(p, clean, 0, part)
+    e = rep.results.angle_deviation
+    assert "table_calibration" not in e.details
+    assert e.value == raw.results.angle_deviation.value
+    rows = rep.uncertainty.table()
+    src = rows.loc[rows["symbol"] == "P", "source"].iloc[0]
+    assert "MPE" in src and "part.csv does not cover 150 deg" in src
+    assert any("part.csv does not cover 150 deg" in n for n in rep.budget_notes)
+    assert rep.uncertainty.U_arcsec == pytest.approx(raw.uncertainty.U_arcsec, rel=1e-12)

@@ -151,8 +151,21 @@ TABLE_CALIBRATED_NOTE = (
     "beyond the draft: the table's angle error at K's 7.1 stops and zeroing positions "
     "corrected by the laboratory's table calibration (K_i = C_i/(theta_i - (e(stop) - "
     "e(zero))/3600)); U(K) carries the calibration's uncertainty propagated through the same "
-    "sensitivity (line P_Kc) instead of the MPE line (P_K). Only K is corrected: E, K_l, C_v "
+    "sensitivity (line P_Kc) instead of the MPE line (P_K). E is corrected with it where the "
+    "calibration covers E's positions (angle_deviation.details.table_calibration); K_l, C_v "
     "and C_g keep their MPE lines")
+
+#: results.json ``angle_deviation.details.table_calibration.label``.
+E_TABLE_CALIBRATED_NOTE = (
+    "beyond the draft: every E_ij's reference angle corrected by the laboratory's table "
+    "calibration, theta_i - (e(theta_i) - e(zero))/3600 (e = indicated - true, zero the 7.4 "
+    "zeroing position), and E_ij read with the table-corrected 7.1 K (the stated K); each "
+    "point's table line (P) is the calibration's uncertainty at the point, its zero and the "
+    "7.1 stops and zeros propagated through E_i = C_i/K - theta_true (JCGM 100 5.1.2, 5.2.2 "
+    "with the covariance; a position shared counted once), in place of the MPE line (P, K_P)")
+#: ``angle_deviation.details.estimates.corrected.label`` where the table corrected E.
+E_TABLE_CORRECTED = ("certified: E corrected by the calibrated table (and read with the "
+                     "table-corrected K), with the physical budget")
 
 #: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
 #: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
@@ -797,8 +810,8 @@ def _load_tilt(tilt) -> tuple[float, str]:
 
 def deviation_budget(results: CalibrationResults, readings: Readings, protocol: Protocol,
                      settings: dict, *, kind: str = "physical", tilt=None,
-                     monte_carlo_trials: int = 0, seed: int = 0, tilt_measured=None
-                     ) -> tuple[AnnexABudget, str, list[str]]:
+                     monte_carlo_trials: int = 0, seed: int = 0, tilt_measured=None,
+                     table_measured=None) -> tuple[AnnexABudget, str, list[str]]:
     """E's budget: the draft's four Annex A lines, plus, for ``kind="physical"``, the lines
     the validation showed to matter:
 
@@ -817,6 +830,9 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     :func:`angle_deviation_at_measured_tilt`): E's readings were corrected at the measured
     tilt, and the physical budget's ``tilt_E`` (the bound's worst case) is replaced by
     ``tilt_Em``, the correction's u (normal; the largest over the readings).
+    ``table_measured`` (:func:`angle_deviation_at_table`'s info): E's readings were corrected
+    by a calibrated table, and each point's table line is the calibration's (or the MPE
+    line with the reason it was kept).
     Returns the budget, the u(r) source sentence and notes.
     """
     from gonio.errors import GonioError
@@ -849,7 +865,7 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
     if kind == "physical" and results.angle_deviation.measured:
         return _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r,
                                        dof, typ, src, dur_min, notes, tilt_measured,
-                                       monte_carlo_trials, seed), src, notes
+                                       monte_carlo_trials, seed, table_measured), src, notes
     budget = annex_a_budget(table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
                             zero_stability_dph=a.zero_stability_dph, duration_min=dur_min,
                             repeatability_arcsec=u_r, k=a.coverage_factor,
@@ -892,8 +908,32 @@ def _refuse_negative_times(readings, lines) -> None:
                          file=readings.path, line=int(row["line"]), column="time_s")
 
 
+def _point_table_line(i: int, theta: float, extras: list, from_counts: bool, stops,
+                      mpe_arcsec: float, table_measured) -> tuple:
+    """(u or None, source, extras) of the table line of 7.4 point ``i``: the calibrated
+    table's (``table_measured`` of :func:`angle_deviation_at_table`: P and K_P replaced),
+    else P and K_P as one line at MPE/√3 where E's angles come from counts through the 7.1 K
+    (:func:`~gonio.specs.ogam_draft.budget_extra.table_line_u`), else Annex A's P."""
+    from gonio.specs.ogam_draft.budget_extra import table_line_u
+
+    why = ""
+    if table_measured is not None and "u_arcsec" in table_measured:
+        return (float(table_measured["u_arcsec"][i]), table_measured["source"],
+                [x for x in extras if x.symbol != "K_P"])
+    if table_measured is not None:
+        why = f"; {table_measured['reason']}"
+    if from_counts and any(x.symbol == "K_P" for x in extras):
+        return (table_line_u(theta, stops, mpe_arcsec / math.sqrt(3.0)),
+                "table positioning at the point, the common zero and the 7.1 stops, one "
+                "error per position, each MPE/sqrt(3) (A.4.1; through K, 7.1) "
+                "[physical budget: P and K_P as one line]" + why,
+                [x for x in extras if x.symbol != "K_P"])
+    return None, "standard table positioning (A.4.1)" + why, extras
+
+
 def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r, dof, typ,
-                            src, dur_min, notes, tilt_measured, monte_carlo_trials, seed):
+                            src, dur_min, notes, tilt_measured, monte_carlo_trials, seed,
+                            table_measured=None):
     """E's physical budget per 7.4 point (beyond the draft; the draft's Annex A reading is
     :func:`deviation_budget` with ``kind="draft"``, one budget for every point). Returned:
     the budget of the point with the largest U (what E = ± max|E_i| is stated with: every
@@ -913,7 +953,9 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     - ``P`` and ``K_P`` as one line where E's angles come from counts through the 7.1 K: the
       table's error at the point, at the common zero and at the 7.1 stops, one error per
       table position (a stop that is also the point, 360° that is 0°), each u(P) = MPE/√3
-      (A.4.1, 7.1; :func:`~gonio.specs.ogam_draft.budget_extra.table_line_u`);
+      (A.4.1, 7.1; :func:`~gonio.specs.ogam_draft.budget_extra.table_line_u`); with a
+      calibrated table covering E's positions (``table_measured``), the calibration's u at
+      the point, its zero and the 7.1 stops instead (:func:`angle_deviation_at_table`);
     - ``K_r`` takes u of each 7.1 reading at its own time from zeroing to reading
       (u_q² + N²(t + t²/T_s), :func:`~gonio.specs.ogam_draft.item_uncertainty.round_noise`
       from the 7.4 series), not 7.4's u(r) at its longer read delay; u(r) where the round
@@ -962,14 +1004,9 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     phi_src = ("sensing plane not parallel to table plane (A.4.2): a scale error the 7.1 K, "
                "measured on the same mount, absorbs (0) [physical budget]") if same_mount \
         else "sensing plane not parallel to table plane (A.4.2)"
-    from gonio.specs.ogam_draft.budget_extra import table_line_u
-
     df = readings.data
     stops = df.loc[df["line"].isin(list(results.scale_factor.used_lines)),
                    "table_deg"].to_numpy(dtype=float) if from_counts else np.array([])
-    table_src = ("table positioning at the point, the common zero and the 7.1 stops, one "
-                 "error per position, each MPE/sqrt(3) (A.4.1; through K, 7.1) "
-                 "[physical budget: P and K_P as one line]")
     a = protocol.annex_a
 
     def point_budget(i: int, theta: float, point_notes: list, mc_trials: int):
@@ -979,10 +1016,8 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
         r_i, r_dof, r_typ, r_src = _point_reading_noise(
             t_i[i], int(n_i[i]), (u_q, nz) if rn else None, u_r, dof, typ, src)
         d_i = t_i[i] / S_PER_MIN if math.isfinite(t_i[i]) else dur_min
-        table_u = None
-        if from_counts and any(x.symbol == "K_P" for x in extras):
-            table_u = table_line_u(theta, stops, settings["table_mpe_arcsec"] / math.sqrt(3.0))
-            extras = [x for x in extras if x.symbol != "K_P"]
+        table_u, t_src, extras = _point_table_line(
+            i, theta, extras, from_counts, stops, settings["table_mpe_arcsec"], table_measured)
         return annex_a_budget(
             table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
             zero_stability_dph=a.zero_stability_dph, duration_min=d_i,
@@ -990,8 +1025,7 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
             monte_carlo_trials=mc_trials, seed=seed,
             repeatability_dof=r_dof, repeatability_type=r_typ, repeatability_source=r_src,
             phi_e_arcsec=phi_e, phi_e_source=phi_src, table_u_arcsec=table_u,
-            table_source=table_src if table_u is not None else
-            "standard table positioning (A.4.1)")
+            table_source=t_src)
 
     sub = [point_budget(i, theta, [], 0) for i, theta in enumerate(pos)]
     # E = ± max|E_i| is stated with the LARGEST of the points' U (its point's budget, notes
@@ -1252,6 +1286,130 @@ def angle_deviation_at_measured_tilt(results: CalibrationResults, readings: Read
                              tables={**e.tables, "readings": long,
                                      "matrix": matrix.reset_index()})
     return dataclasses.replace(results, angle_deviation=e2), atc
+
+
+def _e_table_lookup(results, protocol, calibration, long):
+    """(i_point, i_zero, K's sensitivity c_K, K as read, K corrected, missing positions) of
+    :func:`angle_deviation_at_table` (K's terms None where E's angles are not read with the
+    7.1 K)."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    e = results.angle_deviation
+    stop, zero = round_positions(long, protocol, "angle_deviation")
+    i_p, miss_p = calibration.lookup(stop)
+    i_z, miss_z = calibration.lookup(zero)
+    missing = set(miss_p) | set(miss_z)
+    c_k, k_old, k_new = None, None, None
+    if results.scale_factor_for_angles_source == "7.1" and results.scale_factor.measured and \
+            e.details.get("scale_factor_for_angles_counts_per_deg") is not None:
+        t = results.scale_factor.table
+        k_stop, k_zero = round_positions(t, protocol, "scale_factor")
+        j_s, m_s = calibration.lookup(k_stop)
+        j_z, m_z = calibration.lookup(k_zero)
+        missing |= set(m_s) | set(m_z)
+        if j_s is not None and j_z is not None:
+            k_c, c_k = iu.table_corrected_k_sensitivity(t["K_i_counts_per_deg"], t["table_deg"],
+                                                        j_s, j_z, calibration)
+            k_old = float(e.details["scale_factor_for_angles_counts_per_deg"])
+            k_new = float(np.mean(k_c))
+    return i_p, i_z, c_k, k_old, k_new, sorted(missing)
+
+
+def _e_table_u(calibration, i_p, i_z, c_k, k_new, theta_deg) -> float | None:
+    """u of E_i's table error (arcsec): √(cᵀVc), c = δ(point) − δ(zero) − (3600 θ_i/K_c)·c_K
+    (a position reached twice has one error: its coefficients add); None where c has a part
+    the calibration cannot see (an equal-division comparison's blind harmonics)."""
+    c = np.zeros(calibration.table_deg.size)
+    c[i_p] += 1.0
+    c[i_z] -= 1.0
+    if c_k is not None:
+        c -= ARCSEC_PER_DEG * theta_deg / k_new * c_k
+    basis = getattr(calibration, "blind_basis", None)
+    if basis is not None and np.linalg.norm(np.asarray(basis).T @ c) > 1e-9 * np.linalg.norm(c):
+        return None
+    return math.sqrt(max(float(c @ calibration.covariance() @ c), 0.0))
+
+
+def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
+                             protocol: Protocol, calibration) -> tuple:
+    """(results, info): E's readings corrected by a calibrated table (beyond the draft;
+    :data:`E_TABLE_CALIBRATED_NOTE`), or (``results`` unchanged, info saying why not; None
+    without a calibration or E).
+
+    Reading j at point i turned the table from its 7.4 zeroing position z_i to θ_i with the
+    error e(θ_i) − e(z_i) (A.4.1, now known): the true angle is θ_i − (e(θ_i) − e(z_i))/3600.
+    Where E's angles come from counts through the 7.1 K (7.4) they are read with the
+    table-corrected K (:func:`~gonio.specs.ogam_draft.item_uncertainty.scale_factor_table_correction`,
+    the K the Result states): M_c = M·K/K_c. So E_ij,c = E_ij + 3600·M_ij·(K/K_c − 1) +
+    (e(θ_i) − e(z_i)); E_i, E and the matrix recomputed as 7.4 does. u of E_i's table error:
+    :func:`_e_table_u`. ``info``: ``u_arcsec`` per point (E's table order) and ``source``,
+    or ``reason`` where E keeps the MPE line (a position of 7.4 or 7.1 the calibration does
+    not list, or a harmonic it cannot see)."""
+    from gonio.specs.ogam_draft.items import signed_extreme
+
+    e = results.angle_deviation
+    if calibration is None or not e.measured:
+        return results, None
+    long = e.tables["readings"].copy()
+    i_p, i_z, c_k, k_old, k_new, missing = _e_table_lookup(results, protocol, calibration, long)
+    keep = "E keeps the MPE line (P, K_P) and is not corrected [beyond the draft]"
+    if missing:
+        return results, {"reason": f"the {calibration.source} does not cover "
+                                   f"{', '.join(f'{x:g}' for x in missing)} deg: {keep}"}
+    pts = e.table.copy()
+    first = [int(np.flatnonzero(long["round"].to_numpy() == r)[0]) for r in pts["round"]]
+    u_pts = [_e_table_u(calibration, i_p[j], i_z[j], c_k, k_new, theta)
+             for j, theta in zip(first, pts["position_deg"].to_numpy(dtype=float))]
+    if any(u is None for u in u_pts):
+        return results, {"reason": f"the {calibration.source} cannot see the table's harmonics "
+                                   f"of order {', '.join(map(str, calibration.blind_orders))} "
+                                   f"at E's points: {keep}"}
+    err = calibration.error_arcsec
+    corr = err[i_p] - err[i_z]
+    if k_new is not None:        # rows read through K (no gyro_deg of their own)
+        own = readings.data.set_index("line")["gyro_deg"].reindex(long["line"]).to_numpy(float)
+        corr = corr + np.where(np.isnan(own), ARCSEC_PER_DEG * long["M_deg"].to_numpy(float)
+                               * (k_old / k_new - 1.0), 0.0)
+    if "E_draft_arcsec" not in long:
+        long["E_draft_arcsec"] = long["E_arcsec"]
+    long["table_correction_arcsec"] = corr
+    long["E_arcsec"] = long["E_arcsec"] + corr
+    g = long.groupby("round", sort=True)
+    if "E_draft_arcsec" not in pts:
+        pts["E_draft_arcsec"] = pts["E_arcsec"]
+    pts["E_arcsec"] = g["E_arcsec"].mean().reindex(pts["round"]).to_numpy()
+    pts["s_arcsec"] = g["E_arcsec"].std(ddof=1).reindex(pts["round"]).to_numpy()
+    pts["u_table_arcsec"] = u_pts
+    value = signed_extreme(pts["E_arcsec"])
+    at = int(np.argmax(np.abs(pts["E_arcsec"].to_numpy()) == abs(value)))
+    matrix = long.pivot(index="round", columns="series", values="E_arcsec")
+    matrix.columns = [f"series_{c}" for c in matrix.columns]
+    matrix.insert(0, "position_deg", pts.set_index("round")["position_deg"])
+    details = dict(e.details, max_abs_arcsec=abs(value),
+                   position_deg=float(pts["position_deg"][at]))
+    details.setdefault("stated", "table_corrected")
+    est = dict(details.get("estimates") or {})
+    est.setdefault("draft", {"label": E_TILT_CORRECTED["draft"], "value": float(e.value),
+                             "max_abs_arcsec": float(e.details["max_abs_arcsec"]),
+                             "position_deg": float(e.details["position_deg"])})
+    est["corrected"] = {"label": E_TABLE_CORRECTED, "value": float(value)}
+    details["estimates"] = est
+    used = sorted({int(x) for x in np.r_[i_p, i_z]})
+    details["table_calibration"] = {
+        "label": E_TABLE_CALIBRATED_NOTE, "source": calibration.source,
+        "sha256": calibration.sha256, "scale_factor_counts_per_deg": k_new,
+        "positions_used": {"table_deg": [float(calibration.table_deg[i]) for i in used],
+                           "error_arcsec": [float(err[i]) for i in used],
+                           "u_arcsec": [float(calibration.u_arcsec[i]) for i in used]},
+        "u_points_arcsec": [float(x) for x in u_pts], "uncorrected_value": float(e.value)}
+    e2 = dataclasses.replace(e, value=float(value), details=details, table=pts,
+                             tables={**e.tables, "readings": long,
+                                     "matrix": matrix.reset_index()})
+    src = (f"table calibration at the point, its zero and the 7.1 stops and zeros "
+           f"({calibration.describe()}), through E_i = C_i/K_c - theta_true "
+           "[beyond the draft: in place of P and K_P at the MPE]")
+    return dataclasses.replace(results, angle_deviation=e2), {"u_arcsec": np.array(u_pts),
+                                                               "source": src}
 
 
 def pd_concat(*frames):
@@ -1681,9 +1839,15 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     e_tilt = None       # E corrected at the measured tilt: the physical reading only
     if budget == "physical" and tilt is None:
         res, e_tilt = angle_deviation_at_measured_tilt(res, kept, proto)
+    e_table = None      # E corrected by a calibrated table: the physical reading only
+    if budget == "physical":
+        res, e_table = angle_deviation_at_table(res, kept, proto, table_calibration)
     e_budget, src, notes = deviation_budget(res, kept, proto, settings, kind=budget, tilt=tilt,
                                             monte_carlo_trials=monte_carlo_trials, seed=seed,
-                                            tilt_measured=e_tilt)
+                                            tilt_measured=e_tilt, table_measured=e_table)
+    if e_table is not None:
+        notes.append(e_table.get("reason") or f"E corrected by the "
+                     f"{table_calibration.describe()} [beyond the draft]")
     noise, noise_src = analyse_zero_stability(static_record)
     items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type,
                                table_calibration=table_calibration)

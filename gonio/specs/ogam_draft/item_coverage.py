@@ -272,6 +272,7 @@ def trial_items(report, truth: dict) -> dict:
     from the same results (:func:`gonio.calibrate.deviation_budget`).
     """
     from gonio.specs.ogam_draft.calibration import (angle_deviation_at_measured_tilt,
+                                                    angle_deviation_at_table,
                                                     deviation_budget, session_settings)
 
     rec = item_record(report, truth)
@@ -279,11 +280,13 @@ def trial_items(report, truth: dict) -> dict:
         return rec
     settings, _ = session_settings(report.readings, report.protocol)
     other = "physical" if report.budget_kind == "draft" else "draft"
-    res, e_tilt = report.results, None
-    if other == "physical":     # the physical E: corrected where the tilt was measured
+    res, e_tilt, e_table = report.results, None, None
+    if other == "physical":     # the physical E: corrected where the tilt was measured, and
         res, e_tilt = angle_deviation_at_measured_tilt(res, report.readings, report.protocol)
+        res, e_table = angle_deviation_at_table(        # by a calibrated table
+            res, report.readings, report.protocol, getattr(report, "table_calibration", None))
     b, _, _ = deviation_budget(res, report.readings, report.protocol, settings,
-                               kind=other, tilt_measured=e_tilt)
+                               kind=other, tilt_measured=e_tilt, table_measured=e_table)
     mine = dict(rec["angle_deviation"])
     alt = {**mine, "U": float(b.U_arcsec), "u_c": float(b.u_c_arcsec), "k": float(b.k)}
     if b.points:        # the physical budget per point: each E_i judged on its own U

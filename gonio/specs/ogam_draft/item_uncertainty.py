@@ -62,7 +62,8 @@ __all__ = [
     "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U", "budget_k",
     "K_SOURCE_COMBINED", "COMBINED_SEED",
     "ScaleFactorTableLine", "scale_factor_table_line", "TableCorrection",
-    "scale_factor_table_correction", "ChamberLine", "chamber_temperature_line",
+    "scale_factor_table_correction", "table_corrected_k_sensitivity", "ChamberLine",
+    "chamber_temperature_line",
     "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
     "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
     "angle_deviation_budget", "repeatability_budget", "consistency_budget",
@@ -530,6 +531,23 @@ def _refuse_blind(calibration, c) -> None:
                      key="table_calibration")
 
 
+def table_corrected_k_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
+                                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(the corrected K_i, counts/°; K's sensitivity to the calibration's error at each of its
+    positions, counts/° per arcsec) for rounds from the calibration's positions ``i_zero`` to
+    ``i_stop`` (indices; :func:`scale_factor_table_correction`, 7.1)."""
+    k_i = np.asarray(k_i, dtype=float)
+    th = np.asarray(theta_deg, dtype=float)
+    e = calibration.error_arcsec
+    th_true = th - (e[i_stop] - e[i_zero]) / ARCSEC_PER_DEG
+    k_c = k_i * th / th_true
+    sens = k_c / (ARCSEC_PER_DEG * th_true) / k_i.size       # ∂K/∂Δe_i, counts/° per arcsec
+    c = np.zeros(calibration.table_deg.size)
+    np.add.at(c, i_stop, sens)
+    np.add.at(c, i_zero, -sens)
+    return k_c, c
+
+
 def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibration
                                   ) -> tuple[TableCorrection | None, list[float]]:
     """K's rounds corrected by the table's calibrated error e = indicated − true, arcsec
@@ -568,15 +586,7 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     i_z, miss_z = calibration.lookup(zero_deg)
     if i_s is None or i_z is None:
         return None, sorted(set(miss_s) | set(miss_z))
-    e = calibration.error_arcsec
-    d_e = e[i_s] - e[i_z]                                    # arcsec, per round
-    th_true = th - d_e / ARCSEC_PER_DEG
-    k_c = k_i * th / th_true
-    n = k_i.size
-    sens = k_c / (ARCSEC_PER_DEG * th_true) / n              # ∂K/∂Δe_i, counts/° per arcsec
-    c = np.zeros(calibration.table_deg.size)
-    np.add.at(c, i_s, sens)
-    np.add.at(c, i_z, -sens)
+    k_c, c = table_corrected_k_sensitivity(k_i, th, i_s, i_z, calibration)
     _refuse_blind(calibration, c)
     u2 = float(c @ calibration.covariance() @ c)
     dof = math.inf
