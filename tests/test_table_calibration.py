@@ -461,3 +461,20 @@ def test_e_position_missing_keeps_mpe_line(base):
     assert "MPE" in src and "part.csv does not cover 150 deg" in src
     assert any("part.csv does not cover 150 deg" in n for n in rep.budget_notes)
     assert rep.uncertainty.U_arcsec == pytest.approx(raw.uncertainty.U_arcsec, rel=1e-12)
+
+
+def test_result_states_the_corrected_e(base):
+    """The certificate's E cell (en, zh) and the DCC name the table calibration and give the
+    draft's E as measured beside; without a calibration no such note."""
+    from gonio.kit.render import labels
+    from gonio.specs.ogam_draft.phrases import LABELS
+    from gonio.specs.ogam_draft.stated import e_table_note
+
+    p, clean, cal = _no_tilt_estimate_setup(base)
+    _, rep = _analyse(p, clean, 0, cal)
+    d = rep.result().to_json()
+    assert d["items"]["angle_deviation"]["details"]["stated"] == "table_corrected"
+    for lang, word in (("en", "table calibration tc.csv"), ("zh", "转台校准 tc.csv")):
+        text = "".join(s if isinstance(s, str) else s.text
+                       for s in e_table_note(d, labels(lang, LABELS)))
+        assert word in text and ("as measured" in text if lang == "en" else "测得值" in text)

@@ -1392,7 +1392,8 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     est.setdefault("draft", {"label": E_TILT_CORRECTED["draft"], "value": float(e.value),
                              "max_abs_arcsec": float(e.details["max_abs_arcsec"]),
                              "position_deg": float(e.details["position_deg"])})
-    est["corrected"] = {"label": E_TABLE_CORRECTED, "value": float(value)}
+    est["corrected"] = {"label": (est["corrected"]["label"] + "; and " if "corrected" in est
+                                  else "") + E_TABLE_CORRECTED, "value": float(value)}
     details["estimates"] = est
     used = sorted({int(x) for x in np.r_[i_p, i_z]})
     details["table_calibration"] = {

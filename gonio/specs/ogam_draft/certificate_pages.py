@@ -45,7 +45,7 @@ from gonio.result.statement import signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
                                            conformity_for, detail, e_budget, followed,
                                            interval_cell, item_names, item_path, k_table_note,
-                                           k_tilt_note,
+                                           e_table_note, k_tilt_note,
                                            method_rows, reading_note, segments,
                                            specification_text, stated_item, u_cell)
 
@@ -237,9 +237,11 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         cell: list = [st["value"]]
         if st["signed"] is not None:
             cell += [L["semi"], *segments(L["E_note"], s=st["signed"], p=st["position"] or "—")]
-            if name == "angle_deviation" and detail(res, name, "estimates"):
+            if name == "angle_deviation" and detail(res, name, "tilt_correction"):
                 cell += [L["semi"], *segments(L["note_e_tilt"], v=_num(
                     res, item_path(name, "estimates.draft.value"), "atU", U))]
+            if name == "angle_deviation" and detail(res, name, "table_calibration"):
+                cell += [L["semi"], *e_table_note(res, L)]
         elif name == "zero_stability" and detail(res, name, "range_deg_per_h") is not None:
             cell += [L["semi"], *segments(L["note_zero_range"],
                                      v=_num(res, item_path(name, "range_deg_per_h"), "sig3", U))]

@@ -28,7 +28,7 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
 from gonio.specs.ogam_draft.phrases import LABELS
 from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_budget, followed,
                                            item_names, item_path, item_uncertainty, k_table_note,
-                                           k_tilt_note,
+                                           e_table_note, k_tilt_note,
                                            method_rows, reading_note, specification_text,
                                            stated_item)
 
@@ -134,7 +134,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             kw = {"interval": s["interval"]["interval"]["ends"],
                   "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
         if name == "angle_deviation" and s["signed"] is not None:
-            quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"], **kw)
+            quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"],
+                     description=_e_table_text(res, L), **kw)
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
@@ -175,6 +176,16 @@ def _k_table_text(res: dict, L: dict) -> str | None:
         return None
     sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
     return "K " + "".join(str(x) for x in k_table_note(res, L)) + sha
+
+
+def _e_table_text(res: dict, L: dict) -> str | None:
+    """E's description when a calibrated table corrected it: the certificate's note and the
+    calibration file's SHA-256 (results.json ``details.table_calibration``); None otherwise."""
+    d = (res["items"]["angle_deviation"].get("details") or {}).get("table_calibration")
+    if not d:
+        return None
+    sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
+    return "E " + "".join(str(x) for x in e_table_note(res, L)) + sha
 
 
 def _limit_rule(c) -> str:

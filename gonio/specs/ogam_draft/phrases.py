@@ -282,6 +282,17 @@ LABELS: dict[str, dict[str, str]] = {
                           "(Annex A, beside, not stated): {v}″",
                     "zh": "各 E_ij 已按实测倾斜修正倾斜与地球自转角速度的耦合（草案以外）；"
                           "按草案（附录 A）的测得值（并列给出，不作结果）：{v}″"},
+    "note_e_table": {"en": "every E_ij's reference angle corrected by the table calibration "
+                           "{f} and E_ij read with the table-corrected K, beyond the draft",
+                     "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
+                           "换算（草案以外）"},
+    "note_e_table_v": {"en": "every E_ij's reference angle corrected by the table calibration "
+                             "{f} and E_ij read with the table-corrected K, beyond the draft; "
+                             "the draft's reading as measured (Annex A, beside, not stated): "
+                             "{v}″",
+                       "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
+                             "换算（草案以外）；按草案（附录 A）的测得值（并列给出，不作结果）："
+                             "{v}″"},
     "note_cv_draft": {"en": "the draft's range as measured (beside, not stated): {v} ppm",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} ppm"},
     "note_cg_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",

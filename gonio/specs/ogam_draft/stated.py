@@ -257,6 +257,19 @@ def k_table_note(res: dict, L: dict) -> list:
                           "atU", res["items"]["scale_factor"]["uncertainty"]["U"]))
 
 
+def e_table_note(res: dict, L: dict) -> list:
+    """E's note when a calibrated table corrected it, as :func:`segments`: the calibration
+    and (where the tilt note does not already give it) the draft's E as measured
+    (results.json ``angle_deviation.details.table_calibration``)."""
+    item = res["items"]["angle_deviation"]
+    d = (item.get("details") or {}).get("table_calibration") or {}
+    if (item.get("details") or {}).get("tilt_correction"):
+        return segments(L["note_e_table"], f=str(d.get("source") or ""))
+    return segments(L["note_e_table_v"], f=str(d.get("source") or ""),
+                    v=num(res, item_path("angle_deviation", "estimates.draft.value"), "atU",
+                          item["uncertainty"]["U"]))
+
+
 def segments(template: str, **nums) -> list:
     """Split a label template "... {x} ..." into text and Num segments.
 
