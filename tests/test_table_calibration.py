@@ -478,3 +478,40 @@ def test_result_states_the_corrected_e(base):
         text = "".join(s if isinstance(s, str) else s.text
                        for s in e_table_note(d, labels(lang, LABELS)))
         assert word in text and ("as measured" in text if lang == "en" else "测得值" in text)
+
+
+def test_e_calibration_recorded(tmp_path, base):
+    """gonio calibrate --table-calibration FILE with a file covering E's points too: results.json
+    E's details name the file and its SHA-256 (hashlib, here), summary.txt says E is corrected
+    (not that E keeps the MPE lines), the DCC's E description names the file."""
+    import hashlib
+    import json
+
+    from gonio.pipeline.dispatch import calibrate
+    from gonio.specs.ogam_draft.readings import write_readings
+
+    p = parse_protocol(read_toml(resolve("ogam-draft", "protocol")),
+                       resolve("ogam-draft", "protocol"))
+    clean = replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS))
+    res = run_session(p, clean, seed=0)
+    rd = tmp_path / "readings.csv"
+    write_readings(res.readings, rd, dict(res.metadata))
+    x = table_positions_deg(p)
+    f = tmp_path / "tc.csv"
+    f.write_text("table_deg,error_arcsec,u_arcsec\n" + "".join(
+        f"{a:g},{e:.6f},0.02\n" for a, e in zip(x, harmonic_sum_arcsec(x, HARMONICS))),
+        encoding="utf-8")
+    sha = hashlib.sha256(f.read_bytes()).hexdigest()
+    out = tmp_path / "out"
+    calibrate(rd, out, spec_key="ogam-draft", table_calibration=str(f), dcc=True,
+              inputs=[rd, f])
+    d = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    te = d["items"]["angle_deviation"]["details"]["table_calibration"]
+    assert te["sha256"] == sha and te["source"] == "tc.csv"
+    assert 30.0 in te["positions_used"]["table_deg"]            # E's first point, not K's
+    summary = (out / "summary.txt").read_text(encoding="utf-8")
+    assert "E's reference angles are corrected by the table calibration tc.csv" in summary
+    assert "E, K_l, C_v and C_g keep" not in summary
+    dcc = next(out.glob("*.xml")).read_text(encoding="utf-8")
+    assert "E every E_ij's reference angle corrected by the table calibration tc.csv" in dcc

@@ -74,11 +74,20 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
                      f"{tc['U95_tilt_deg']:.2g} deg) at azimuth {tc['azimuth_deg']:.1f} deg (U95 "
                      f"{tc['U95_azimuth_deg']:.2g} deg), beyond the draft")
     tk = kd.get("table_calibration")
+    e_table = ((d["items"].get("angle_deviation") or {}).get("details") or {}).get(
+        "table_calibration")
     if tk:
         lines.append(f"note: the stated K is corrected by the table calibration {tk['source']} "
                      f"(u(K) of it {tk['u_rel_ppm']:.2g} ppm, line P_Kc; the 7.1 mean uncorrected "
-                     f"{tk['uncorrected_value']:.10g} counts/deg), beyond the draft; E, K_l, C_v "
-                     "and C_g keep the table's MPE lines")
+                     f"{tk['uncorrected_value']:.10g} counts/deg), beyond the draft; "
+                     + ("E is corrected by it too (its table line the calibration's); K_l, C_v "
+                        "and C_g keep" if e_table else "E, K_l, C_v and C_g keep")
+                     + " the table's MPE lines")
+    if e_table:
+        lines.append(f"note: E's reference angles are corrected by the table calibration "
+                     f"{e_table['source']} and E read with the table-corrected K, beyond the "
+                     f"draft (E without the table correction: "
+                     f"{e_table['uncorrected_value']:.3g} arcsec)")
     tb = kd.get("temperature_coeff_bound")
     if tb and tb.get("basis") == "logged":   # K's chamber line at the logged temperature
         lines.append(f"note: U(K) holds for the chamber temperature the readings log, "
