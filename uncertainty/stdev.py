@@ -449,13 +449,10 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
       [0, R]ⁿ it is largest at such a vertex). Above ``_SPLIT_MAX_N`` values, the draw-by-draw
       bound R + range(e) (the largest range any pattern of range R can give with the draw e),
       valid for every pattern and wider.
-    - Q_lo(R), the (1−p)/2 quantile: the smallest over the measured pattern, the splits
-      and, for every ordered pair of positions (a at R, b at 0), the three-level pattern with
-      the other values at R/2 (between the extremes as far from both as they can lie, so
-      that they widen the measured range the least; not a bound draw by draw — that would be
-      R + e_a − e_b, wider than needed — but the least favourable placement of the middle
-      values for symmetric errors, checked by simulation with the middle values near an
-      extreme, evenly spaced and random: tests/test_range_belt_patterns.py).
+    - Q_lo(R), the (1−p)/2 quantile: the smallest over the measured pattern, the splits and,
+      for every ordered pair (a at R, b at 0), the others at R/2, where they widen the range
+      the least (the least favourable placement for symmetric errors, not a draw-by-draw
+      bound; checked by simulation: tests/test_range_belt_patterns.py).
 
     ``patterns="measured"``: along the measured pattern alone, t(R) = m + (R/r)(x − m) (as
     :func:`corrected_range`'s value), kept for comparison: it under-covers where several true
