@@ -20,7 +20,7 @@ from gonio.specs import Specification
 ROOT = Path(__file__).resolve().parents[1]
 
 #: The options the built-in specifications add, by command and key.
-OWN = {"calibrate": {"ogam-draft": {"--budget", "--tilt"},
+OWN = {"calibrate": {"ogam-draft": {"--budget", "--tilt", "--table-calibration"},
                      "triad-alignment": {"--thermal", "--robust"}},
        "simulate": {"ogam-draft": {"--table", "--stream", "--stream-format"}},
        "budget": {"ogam-draft": {"--table-mpe-arcsec", "--tilt-deg", "--zero-stability-dph",
@@ -66,8 +66,10 @@ def test_each_specification_adds_its_own_group(argv):
               for g in p._action_groups}
     for key, flags in OWN["calibrate"].items():
         assert groups[f"options of --spec {key}"] == flags
-    assert p.get_default("spec_options") == ("budget", "tilt", "thermal", "robust")
-    assert set(p.get_default("spec_inputs")) == {"tilt", "thermal"}    # metavar FILE
+    assert p.get_default("spec_options") == ("budget", "tilt", "table_calibration", "thermal",
+                                              "robust")
+    assert set(p.get_default("spec_inputs")) == {"tilt", "table_calibration",
+                                                 "thermal"}          # metavar FILE
 
 
 @pytest.mark.parametrize("command", ["simulate", "budget", "validate"])
