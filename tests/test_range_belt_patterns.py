@@ -125,3 +125,36 @@ def test_two_values_unchanged():
 def test_bad_pattern_option():
     with pytest.raises(ValueError, match="patterns must be one of"):
         range_belt_interval([0.0, 1.0], np.zeros((10, 2)), patterns="mean")
+
+
+@pytest.mark.parametrize("name", ["tied", "spaced"])
+def test_many_values_take_the_draw_by_draw_bound_and_hold(name):
+    """Above ``_PAIR_MAX_N`` values (a protocol with many rounds) the band takes R ± range(e),
+    which every pattern obeys draw by draw: 30 values, half tied high and half low or evenly
+    spaced, d = 0, 4σ, 10σ; each case's Clopper–Pearson interval reaches 95 %."""
+    from uncertainty.stdev import _PAIR_MAX_N
+    n = 30
+    assert n > _PAIR_MAX_N
+    unit = (np.arange(n) % 2).astype(float) if name == "tied" else np.linspace(0.0, 1.0, n)
+    draws = np.random.default_rng(7).normal(0.0, 1.0, (1000, n))
+    rng = np.random.default_rng(3)
+    for d in (0.0, 4.0, 10.0):
+        hit = 0
+        for _ in range(60):
+            lo, hi = range_belt_interval(d * unit + rng.normal(0.0, 1.0, n), draws)
+            hit += lo <= d <= hi
+        assert _cp_upper(hit, 60) >= 0.95, (name, d, hit)
+
+
+def test_many_values_stay_in_bounded_memory():
+    """500 values (a file of many 7.1 rounds) with the budgets' 4000 draws: the interval comes
+    in a few tens of MB (the pairs' patterns would take 500·499·4000 doubles, 8 GB each)."""
+    import tracemalloc
+    n = 500
+    draws = np.random.default_rng(7).normal(0.0, 1.0, (4000, n))
+    x = np.random.default_rng(1).normal(0.0, 1.0, n)
+    tracemalloc.start()
+    lo, hi = range_belt_interval(x, draws)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert 0.0 <= lo <= hi and peak < 200e6, peak

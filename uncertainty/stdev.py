@@ -423,6 +423,10 @@ def corrected_range(x, errors) -> RangeCorrection:
 #: 2ⁿ − 2 of them) :func:`range_belt_interval` enumerates; above it the upper quantile is taken
 #: from the bound every pattern obeys draw by draw, R + range(e) (wider).
 _SPLIT_MAX_N = 8
+#: Above this many values the band's lower end takes the draw-by-draw bound R − range(e) in
+#: place of every ordered pair's three-level pattern (n(n − 1) patterns of M draws each:
+#: 10⁵ pairs of 4000 draws would take gigabytes), see :func:`_bounded_crossing`.
+_PAIR_MAX_N = 24
 
 #: The patterns :func:`range_belt_interval` may take the true values along.
 BELT_PATTERNS = ("robust", "measured")
@@ -449,10 +453,9 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
       [0, R]ⁿ it is largest at such a vertex). Above ``_SPLIT_MAX_N`` values, the draw-by-draw
       bound R + range(e) (the largest range any pattern of range R can give with the draw e),
       valid for every pattern and wider.
-    - Q_lo(R), the (1−p)/2 quantile: the smallest over the measured pattern, the splits and,
-      for every ordered pair (a at R, b at 0), the others at R/2, where they widen the range
-      the least (the least favourable placement for symmetric errors, not a draw-by-draw
-      bound; checked by simulation: tests/test_range_belt_patterns.py).
+    - Q_lo(R), the (1−p)/2 quantile: the smallest over the measured pattern, the splits and
+      every ordered pair (a at R, b at 0) with the others at R/2, where they widen the range
+      least (tests/test_range_belt_patterns.py); above ``_PAIR_MAX_N``, R − range(e).
 
     ``patterns="measured"``: along the measured pattern alone, t(R) = m + (R/r)(x − m) (as
     :func:`corrected_range`'s value), kept for comparison: it under-covers where several true
@@ -530,6 +533,8 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
         def crossing(q: float, target: float) -> float:
             return _first_crossing(lambda big_r, idx: np.array([own(big_r, q)]), 1,
                                    target, False)
+    elif n > _PAIR_MAX_N:                   # many values: R ± range(e) draw by draw
+        crossing = _bounded_crossing(own, float(np.quantile(e_range, q_hi_p)))
     else:
         *fam, n_splits = _three_level_patterns(e, n > _SPLIT_MAX_N)
         e_hi = float(np.quantile(e_range, q_hi_p)) if n > _SPLIT_MAX_N else -math.inf
@@ -542,12 +547,28 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
                 lambda big_r, idx: _pattern_quantiles(big_r, idx, q, own, fam, n_splits, e_hi),
                 count, target, q < 0.5)
 
-    # the floor R_c along the measured pattern (a widening that depends on the data only
-    # widens: coverage stays that of the band)
+    # the floor R_c along the measured pattern (a data-dependent widening: coverage holds)
     floor = _first_crossing(lambda big_r, idx: np.array([own(big_r, q_lo_p)]), 1, e0, True)
     lo_end = crossing(q_hi_p, r)
     hi_end = max(crossing(q_lo_p, r), floor, lo_end)
     return float(lo_end), float(hi_end)
+
+
+def _bounded_crossing(own, e_hi: float):
+    """``crossing(q, target)`` of :func:`range_belt_interval` for more than ``_PAIR_MAX_N``
+    values: every pattern of true range R gives, draw by draw, a measured range within R ±
+    range(e) (its extreme positions' t_a + e_a and t_b + e_b lie inside it), so each end of
+    the band is taken at least as wide as that bound (``e_hi`` the band's upper-tail quantile
+    of range(e)) beside the measured pattern's; memory O(M·n) where the pairs' three-level
+    patterns would take n(n − 1)·M."""
+    def crossing(q: float, target: float) -> float:
+        if q < 0.5:
+            return _first_crossing(
+                lambda big_r, idx: np.array([own(big_r, q), big_r - e_hi])[idx], 2, target, True)
+        return _first_crossing(
+            lambda big_r, idx: np.array([max(own(big_r, q), big_r + e_hi)])[idx], 1, target,
+            False)
+    return crossing
 
 
 def _pattern_quantiles(big_r: float, idx: np.ndarray, q: float, own, fam, n_splits: int,
