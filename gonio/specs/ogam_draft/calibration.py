@@ -1237,7 +1237,6 @@ def angle_deviation_at_measured_tilt(results: CalibrationResults, readings: Read
     measured) is kept in ``details.estimates.draft`` and the per-point column
     ``E_draft_arcsec``."""
     from gonio.specs.ogam_draft.budget_extra import angle_tilt_correction
-    from gonio.specs.ogam_draft.items import signed_extreme
 
     e = results.angle_deviation
     if protocol.tilt_estimate is None or not e.measured or \
@@ -1260,16 +1259,9 @@ def angle_deviation_at_measured_tilt(results: CalibrationResults, readings: Read
     long["E_draft_arcsec"] = long["E_arcsec"]
     long["tilt_error_arcsec"] = atc.error_arcsec
     long["E_arcsec"] = long["E_draft_arcsec"] - atc.error_arcsec
-    g = long.groupby("round", sort=True)
     points = e.table.copy()
     points["E_draft_arcsec"] = points["E_arcsec"]
-    points["E_arcsec"] = g["E_arcsec"].mean().reindex(points["round"]).to_numpy()
-    points["s_arcsec"] = g["E_arcsec"].std(ddof=1).reindex(points["round"]).to_numpy()
-    value = signed_extreme(points["E_arcsec"])
-    at = int(np.argmax(np.abs(points["E_arcsec"].to_numpy()) == abs(value)))
-    matrix = long.pivot(index="round", columns="series", values="E_arcsec")
-    matrix.columns = [f"series_{c}" for c in matrix.columns]
-    matrix.insert(0, "position_deg", points.set_index("round")["position_deg"])
+    value, at, matrix = _e_points_from_readings(points, long)
     details = dict(e.details, max_abs_arcsec=abs(value),
                    position_deg=float(points["position_deg"][at]), stated="tilt_corrected")
     details["estimates"] = {
@@ -1286,6 +1278,23 @@ def angle_deviation_at_measured_tilt(results: CalibrationResults, readings: Read
                              tables={**e.tables, "readings": long,
                                      "matrix": matrix.reset_index()})
     return dataclasses.replace(results, angle_deviation=e2), atc
+
+
+def _e_points_from_readings(points: pd.DataFrame, long: pd.DataFrame):
+    """E_i (the mean over the series, 7.4) and s_i of each 7.4 point from the corrected
+    readings ``long`` (``round``, ``series``, ``E_arcsec``), set in ``points`` (the caller's
+    copy); returns the signed extreme E (7.4), the row it is at, and the series matrix."""
+    from gonio.specs.ogam_draft.items import signed_extreme
+
+    g = long.groupby("round", sort=True)
+    points["E_arcsec"] = g["E_arcsec"].mean().reindex(points["round"]).to_numpy()
+    points["s_arcsec"] = g["E_arcsec"].std(ddof=1).reindex(points["round"]).to_numpy()
+    value = signed_extreme(points["E_arcsec"])
+    at = int(np.argmax(np.abs(points["E_arcsec"].to_numpy()) == abs(value)))
+    matrix = long.pivot(index="round", columns="series", values="E_arcsec")
+    matrix.columns = [f"series_{c}" for c in matrix.columns]
+    matrix.insert(0, "position_deg", points.set_index("round")["position_deg"])
+    return value, at, matrix
 
 
 def _e_table_lookup(results, protocol, calibration, long):
@@ -1345,7 +1354,6 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     :func:`_e_table_u`. ``info``: ``u_arcsec`` per point (E's table order) and ``source``,
     or ``reason`` where E keeps the MPE line (a position of 7.4 or 7.1 the calibration does
     not list, or a harmonic it cannot see)."""
-    from gonio.specs.ogam_draft.items import signed_extreme
 
     e = results.angle_deviation
     if calibration is None or not e.measured:
@@ -1374,17 +1382,10 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
         long["E_draft_arcsec"] = long["E_arcsec"]
     long["table_correction_arcsec"] = corr
     long["E_arcsec"] = long["E_arcsec"] + corr
-    g = long.groupby("round", sort=True)
     if "E_draft_arcsec" not in pts:
         pts["E_draft_arcsec"] = pts["E_arcsec"]
-    pts["E_arcsec"] = g["E_arcsec"].mean().reindex(pts["round"]).to_numpy()
-    pts["s_arcsec"] = g["E_arcsec"].std(ddof=1).reindex(pts["round"]).to_numpy()
+    value, at, matrix = _e_points_from_readings(pts, long)
     pts["u_table_arcsec"] = u_pts
-    value = signed_extreme(pts["E_arcsec"])
-    at = int(np.argmax(np.abs(pts["E_arcsec"].to_numpy()) == abs(value)))
-    matrix = long.pivot(index="round", columns="series", values="E_arcsec")
-    matrix.columns = [f"series_{c}" for c in matrix.columns]
-    matrix.insert(0, "position_deg", pts.set_index("round")["position_deg"])
     details = dict(e.details, max_abs_arcsec=abs(value),
                    position_deg=float(pts["position_deg"][at]))
     details.setdefault("stated", "table_corrected")
