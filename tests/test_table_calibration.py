@@ -312,10 +312,11 @@ def test_study_record_checks_the_stated_k(proto, base):
     assert abs(rec["scale_factor_disc"]["value"] / k_true - 1.0) < 0.005e-6
 
 
-def test_calibration_file_recorded(tmp_path, base):
-    """gonio calibrate --table-calibration FILE: results.json records the file's SHA-256 and
-    the rows K's correction used (its stops and zeroing positions), gonio-manifest.json lists
-    the file with its SHA-256 (computed here with hashlib, independently), the DCC's K says it."""
+def _calibrate_with_table(tmp_path, base, extra_deg=()):
+    """``gonio calibrate --table-calibration`` (the pipeline's calibrate, DCC on) of a
+    noise-free built-in session whose table has the test's harmonics, with an exact
+    calibration file at every position the protocol uses (plus ``extra_deg``): (the output
+    folder, the file's SHA-256 by hashlib, results.json)."""
     import hashlib
     import json
 
@@ -329,7 +330,7 @@ def test_calibration_file_recorded(tmp_path, base):
     res = run_session(p, clean, seed=0)
     rd = tmp_path / "readings.csv"
     write_readings(res.readings, rd, dict(res.metadata))
-    x = np.r_[table_positions_deg(p), 15.0]            # one row K does not use
+    x = np.r_[table_positions_deg(p), np.asarray(extra_deg, dtype=float)]
     f = tmp_path / "tc.csv"
     f.write_text("table_deg,error_arcsec,u_arcsec\n" + "".join(
         f"{a:g},{e:.6f},0.02\n" for a, e in zip(x, harmonic_sum_arcsec(x, HARMONICS))),
@@ -339,6 +340,16 @@ def test_calibration_file_recorded(tmp_path, base):
     calibrate(rd, out, spec_key="ogam-draft", table_calibration=str(f), dcc=True,
               inputs=[rd, f])
     d = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    return out, sha, d
+
+def test_calibration_file_recorded(tmp_path, base):
+    """gonio calibrate --table-calibration FILE: results.json records the file's SHA-256 and
+    the rows K's correction used (its stops and zeroing positions), gonio-manifest.json lists
+    the file with its SHA-256 (computed here with hashlib, independently), the DCC's K says it."""
+    import json
+
+    # one row K does not use (15°)
+    out, sha, d = _calibrate_with_table(tmp_path, base, extra_deg=[15.0])
     tk = d["items"]["scale_factor"]["details"]["table_calibration"]
     assert tk["sha256"] == sha and tk["source"] == "tc.csv"
     used = tk["positions_used"]
@@ -484,29 +495,7 @@ def test_e_calibration_recorded(tmp_path, base):
     """gonio calibrate --table-calibration FILE with a file covering E's points too: results.json
     E's details name the file and its SHA-256 (hashlib, here), summary.txt says E is corrected
     (not that E keeps the MPE lines), the DCC's E description names the file."""
-    import hashlib
-    import json
-
-    from gonio.pipeline.dispatch import calibrate
-    from gonio.specs.ogam_draft.readings import write_readings
-
-    p = parse_protocol(read_toml(resolve("ogam-draft", "protocol")),
-                       resolve("ogam-draft", "protocol"))
-    clean = replace(base.random_off(), table=TableConfig(
-        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS))
-    res = run_session(p, clean, seed=0)
-    rd = tmp_path / "readings.csv"
-    write_readings(res.readings, rd, dict(res.metadata))
-    x = table_positions_deg(p)
-    f = tmp_path / "tc.csv"
-    f.write_text("table_deg,error_arcsec,u_arcsec\n" + "".join(
-        f"{a:g},{e:.6f},0.02\n" for a, e in zip(x, harmonic_sum_arcsec(x, HARMONICS))),
-        encoding="utf-8")
-    sha = hashlib.sha256(f.read_bytes()).hexdigest()
-    out = tmp_path / "out"
-    calibrate(rd, out, spec_key="ogam-draft", table_calibration=str(f), dcc=True,
-              inputs=[rd, f])
-    d = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    out, sha, d = _calibrate_with_table(tmp_path, base)
     te = d["items"]["angle_deviation"]["details"]["table_calibration"]
     assert te["sha256"] == sha and te["source"] == "tc.csv"
     assert 30.0 in te["positions_used"]["table_deg"]            # E's first point, not K's
