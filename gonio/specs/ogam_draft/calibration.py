@@ -152,8 +152,15 @@ TABLE_CALIBRATED_NOTE = (
     "corrected by the laboratory's table calibration (K_i = C_i/(theta_i - (e(stop) - "
     "e(zero))/3600)); U(K) carries the calibration's uncertainty propagated through the same "
     "sensitivity (line P_Kc) instead of the MPE line (P_K). E is corrected with it where the "
-    "calibration covers E's positions (angle_deviation.details.table_calibration); K_l, C_v "
-    "and C_g keep their MPE lines")
+    "calibration covers E's positions (angle_deviation.details.table_calibration), and K_l, "
+    "C_v and C_g where it covers theirs (their details.table_calibration; an item whose "
+    "positions it does not cover keeps its MPE line and says so in "
+    "details.table_calibration_not_used)")
+
+#: Appended to the stated label of K_l, C_v, C_g (``details.estimates.corrected``) where a
+#: calibrated table corrected them (:data:`RANGE_TABLE_CALIBRATED_NOTE`).
+RANGE_TABLE_CORRECTED = ("; the readings corrected by the calibrated table (and read with the "
+                         "table-corrected K), its errors drawn in place of the table's MPE")
 
 #: results.json ``angle_deviation.details.table_calibration.label``.
 E_TABLE_CALIBRATED_NOTE = (
@@ -240,6 +247,8 @@ class Analysis:
     findings: list = field(default_factory=list)   # gonio.result.Finding of the screening
     gyro_type: str | None = None         # the laboratory file's [instrument] gyro_type
     table_calibration: object = None     # table_calibration.TableCalibration, or None
+    #: K_l, C_v, C_g with a table calibration: the rows used, or why the MPE line is kept
+    table_record: dict = field(default_factory=dict)
 
     @property
     def e_measured(self) -> bool:
@@ -312,6 +321,7 @@ class Analysis:
             iu = self.item_uncertainty.get(c.name)
             sf_iu = self.item_uncertainty.get("scale_factor")
             tilt = sf_iu is not None and sf_iu.correction is not None
+            rec = self.table_record.get(c.name) or {}
             if iu is not None and iu.beside is not None:
                 d["stated"] = "corrected"
                 d["estimates"] = {
@@ -320,8 +330,21 @@ class Analysis:
                     "corrected": {"label": (TILT_CORRECTED["pointing_consistency"]
                                             if tilt and c.name == "pointing_consistency"
                                             else RANGE_READINGS[c.name]["corrected"])
-                                  + (TILT_CORRECTED["ranges"] if tilt else ""),
+                                  + (TILT_CORRECTED["ranges"] if tilt else "")
+                                  + (RANGE_TABLE_CORRECTED if "positions_used" in rec else ""),
                                   "value": float(iu.value)}}
+            if iu is not None and "positions_used" in rec:
+                d["stated"] = "table_corrected"
+                d["table_calibration"] = {
+                    "label": RANGE_TABLE_CALIBRATED_NOTE[c.name],
+                    "source": getattr(self.table_calibration, "source", ""),
+                    "sha256": getattr(self.table_calibration, "sha256", None),
+                    "positions_used": rec["positions_used"],
+                    "line": iu.components[0].source, "u_c": float(iu.u_c),
+                    "measured_value": rec["measured_value"],
+                    "uncorrected_value": _plain_value(c)}
+            elif rec.get("reason"):
+                d["table_calibration_not_used"] = rec["reason"]
         if c.name != "zero_stability":
             return d
         zr = self.zero_stability_readings
@@ -1430,13 +1453,15 @@ def annex_a_for(results: CalibrationResults, readings: Readings, protocol: Proto
 
 # --------------------------------------------------------------------------- items
 
-def round_positions(table: pd.DataFrame, protocol: Protocol, test: str
+def round_positions(table: pd.DataFrame, protocol: Protocol, test: str, item=None
                     ) -> tuple[np.ndarray, np.ndarray]:
     """(stop, zeroing position) of each reading row of a rotation item, degrees, from the
     protocol's rounds (the zeroing position is the round's start, or the series' first
     start where the item does not re-zero; as the bench and the reduction plan them).
-    The reading's own angle turned is checked against them."""
-    item = next(it for it in protocol.items() if it.test == test)
+    The reading's own angle turned is checked against them. ``item``: the protocol's
+    :class:`RotationItem` the rows belong to (one condition of 7.6/7.7), else the first of
+    ``test``."""
+    item = item or next(it for it in protocol.items() if it.test == test)
     rnd = table["round"].to_numpy(dtype=int)
     stop = np.array([item.rounds[r - 1].stop_deg for r in rnd], dtype=float)
     zero = np.array([(item.rounds[r - 1].start_deg if item.rezero else item.rounds[0].start_deg)
@@ -1477,15 +1502,179 @@ def _scale_factor_table(t: pd.DataFrame, protocol: Protocol, table_calibration):
     return corr, ""
 
 
+#: results.json ``details.table_calibration.label`` of K_l, C_v and C_g where a calibrated
+#: table corrected them (beyond the draft; docs/draft-readings.md 7.1 "A calibrated table").
+RANGE_TABLE_CALIBRATED_NOTE = {
+    "scale_factor_nonlinearity": (
+        "beyond the draft: the 7.1 rounds corrected by the laboratory's table calibration as K "
+        "is (K_i = C_i/(theta_i - (e(stop) - e(zero))/3600)); the stated K_l is the range of the "
+        "corrected K_i, bias corrected, its Monte Carlo and belt drawn with the calibration's "
+        "errors (their covariance; a position shared by rounds one draw) in place of the "
+        "table's MPE (A.4.1); the draft's reading (the range as measured, MPE) is kept beside"),
+    "rate_consistency": (
+        "beyond the draft: every 7.6 reading's reference angle corrected by the laboratory's "
+        "table calibration, theta - (e(theta) - e(zero))/3600, and read with the "
+        "table-corrected 7.1 K; the stated C_v is the range of the corrected E_v, bias "
+        "corrected, its Monte Carlo drawing the calibration's errors (their covariance, with "
+        "K's; a position shared one draw) in place of the table's MPE (A.4.1); the draft's "
+        "reading (the range as measured, MPE) is kept beside"),
+    "pointing_consistency": (
+        "beyond the draft: every 7.7 reading's reference angle corrected by the laboratory's "
+        "table calibration, theta - (e(theta) - e(zero))/3600, and read with the "
+        "table-corrected 7.1 K; the stated C_g is the range of the corrected E_g, bias "
+        "corrected (range and choice of each extreme), its Monte Carlo drawing the "
+        "calibration's errors (their covariance, with K's; a position shared one draw) in "
+        "place of the table's MPE (A.4.1); the draft's reading (the range as measured, MPE) "
+        "is kept beside"),
+}
+
+
+def _positions_record(calibration, idx) -> dict:
+    """The calibration's rows an item's correction used (indices ``idx``), for results.json."""
+    used = sorted({int(i) for i in idx})
+    return {"table_deg": [float(calibration.table_deg[i]) for i in used],
+            "error_arcsec": [float(calibration.error_arcsec[i]) for i in used],
+            "u_arcsec": [float(calibration.u_arcsec[i]) for i in used]}
+
+
+def _k_rounds_at_table(results, protocol, calibration):
+    """(K_i corrected, the rounds' sensitivity matrix, the calibration's indices used) of the
+    7.1 rounds, K's own correction (:func:`~gonio.specs.ogam_draft.item_uncertainty.table_round_sensitivity`);
+    None where the calibration does not list a stop or zero."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    t = results.scale_factor.table
+    stop, zero = round_positions(t, protocol, "scale_factor")
+    i_s, i_z = calibration.lookup(stop)[0], calibration.lookup(zero)[0]
+    if i_s is None or i_z is None:
+        return None
+    k_c, s = iu.table_round_sensitivity(t["K_i_counts_per_deg"], t["table_deg"], i_s, i_z,
+                                        calibration)
+    return k_c, s, np.r_[i_s, i_z]
+
+
+def nonlinearity_at_table(results, readings, protocol, budget, calibration, tc, k):
+    """(K_l's stated budget from the 7.1 rounds corrected by a calibrated table, the rows
+    used, the draft's range of the corrected K_i) (:func:`~gonio.specs.ogam_draft.item_uncertainty.nonlinearity_calibrated_budget`;
+    beyond the draft), or None where the calibration does not cover K's positions."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    got = _k_rounds_at_table(results, protocol, calibration)
+    if got is None:
+        return None
+    k_c, sens, idx = got
+    measured = float((k_c.max() - k_c.min()) / np.mean(k_c) * 100.0)     # 7.2 on them
+    b = iu.nonlinearity_calibrated_budget(
+        k_c, results.scale_factor.table["table_deg"], sens, calibration, k=k,
+        tilt_round_coupling=_round_coupling(results, readings, protocol, budget),
+        tilt_measured=_measured_round_tilt(results, readings, protocol, tc),
+        **_round_noise(results, readings, protocol))
+    return b, _positions_record(calibration, idx), measured
+
+
+def _condition_item(protocol: Protocol, test: str, rate_dps: float, orientation: str):
+    """The protocol's rotation item of one 7.6/7.7 condition (or 7.4's for its reference)."""
+    its = [it for it in protocol.items() if it.test == test]
+    return next((it for it in its if math.isclose(it.rate_dps, float(rate_dps))
+                 and it.orientation == orientation), its[0] if its else None)
+
+
+def _consistency_row_positions(rows: pd.DataFrame, protocol: Protocol):
+    """(stop, zeroing position) of each row of a consistency (its conditions' own rounds)."""
+    stop = pd.Series(np.nan, index=rows.index)
+    zero = pd.Series(np.nan, index=rows.index)
+    for (test, rate, orient), g in rows.groupby(["test", "rate_dps", "orientation"], sort=False):
+        s_, z_ = round_positions(g, protocol, test, _condition_item(protocol, test, rate, orient))
+        stop[g.index], zero[g.index] = s_, z_
+    return stop.to_numpy(dtype=float), zero.to_numpy(dtype=float)
+
+
+def consistency_at_table(results, readings, protocol, name: str, calibration):
+    """C_v (7.6) or C_g (7.7) from readings corrected by a calibrated table (beyond the draft;
+    :data:`RANGE_TABLE_CALIBRATED_NOTE`): ((the Characteristic recomputed, its
+    :class:`~gonio.specs.ogam_draft.item_uncertainty.CalibratedTable`, {condition: zeroing
+    position}, the rows used), "") or (None, why the MPE line is kept).
+
+    Each reading turned the table from its round's zeroing position z to θ with the error
+    e(θ) − e(z) (A.4.1, now known): its reference angle becomes θ − (e(θ) − e(z))/3600, and
+    where its angle is read through the 7.1 K (7.4) it is read with K's own table-corrected
+    value (:func:`_k_rounds_at_table`), so E_ij,c = E_ij + (e(θ) − e(z)) + 3600·M(K/K_c − 1) as
+    E's (:func:`angle_deviation_at_table`); E_v, the spread and the ratio are then 7.6/7.7's
+    own (:func:`~gonio.specs.ogam_draft.items.rate_consistency`)."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+    from gonio.specs.ogam_draft import items as its
+
+    c = getattr(results, name)
+    label = "C_v" if name == "rate_consistency" else "C_g"
+    keep = f"{label} keeps the MPE line and is not corrected [beyond the draft]"
+    rows = readings.data[readings.data["line"].isin(list(c.used_lines))]
+    stop, zero = _consistency_row_positions(rows, protocol)
+    i_s, m_s = calibration.lookup(stop)
+    i_z, m_z = calibration.lookup(zero)
+    k_got = _k_rounds_at_table(results, protocol, calibration)
+    through_k = results.scale_factor_for_angles_source == "7.1" and \
+        c.details.get("scale_factor_for_angles_counts_per_deg") is not None
+    if through_k and k_got is None:
+        m_s = sorted(set(m_s) | set(calibration.lookup(round_positions(
+            results.scale_factor.table, protocol, "scale_factor")[0])[1]) | set(
+            calibration.lookup(round_positions(results.scale_factor.table, protocol,
+                                               "scale_factor")[1])[1]))
+    missing = sorted(set(m_s) | set(m_z))
+    if missing or i_s is None or i_z is None:
+        return None, (f"the {calibration.source} does not cover "
+                      f"{', '.join(f'{x:g}' for x in missing)} deg: {keep}")
+    col = "rate_dps" if name == "rate_consistency" else "orientation"
+    zeros = {}
+    for v, z in pd.Series(zero, index=rows.index).groupby(rows[col].to_numpy()):
+        if np.ptp(z.to_numpy()) > 1e-6:
+            return None, f"a {label} condition's rounds are zeroed at different positions: {keep}"
+        zeros[v] = float(z.iloc[0])
+    k_c = c_k = None
+    if through_k:
+        k_c = float(np.mean(k_got[0]))
+        c_k = k_got[1].mean(axis=0)
+    cal = iu.CalibratedTable(calibration, c_k, k_c)
+    # M + (e(θ) − e(z))/3600 against θ is M against the true angle θ − (e(θ) − e(z))/3600:
+    # the reading's own angle shifted, or its counts read through K_c shifted by K_c times it
+    d_deg = (calibration.error_arcsec[i_s] - calibration.error_arcsec[i_z]) / ARCSEC_PER_DEG
+    k_use = k_c if through_k else results.scale_factor_for_angles_counts_per_deg
+    fixed = readings.data.copy()
+    for col_ in ("gyro_deg", "gyro_counts"):
+        if col_ in fixed:
+            fixed[col_] = fixed[col_].astype(float)
+    own = rows["gyro_deg"].notna().to_numpy() if "gyro_deg" in rows else np.zeros(len(rows), bool)
+    at = rows.index.to_numpy()
+    if own.any():
+        fixed.loc[at[own], "gyro_deg"] = rows["gyro_deg"].to_numpy(float)[own] + d_deg[own]
+    if (~own).any():
+        fixed.loc[at[~own], "gyro_counts"] = (rows["gyro_counts"].to_numpy(float)[~own]
+                                              + float(k_use) * d_deg[~own])
+    func = its.rate_consistency if name == "rate_consistency" else its.pointing_consistency
+    c2 = func(fixed, k_use, reference_rate_dps=protocol.rate_reference_dps,
+              reference_orientation=protocol.pointing_reference)
+    pts = c2.tables["points"]
+    for v in c2.table[col]:
+        p = pts.loc[pts[col] == v, "position_deg"].to_numpy(dtype=float)
+        if cal.blind(cal.coefficients(p, zeros[v])):
+            return None, (f"the {calibration.source} cannot see the table's harmonics of order "
+                          f"{', '.join(map(str, calibration.blind_orders))} at {label}'s "
+                          f"points: {keep}")
+    idx = np.r_[i_s, i_z, k_got[2]] if through_k else np.r_[i_s, i_z]
+    return (c2, cal, zeros, _positions_record(calibration, idx)), ""
+
+
 def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protocol: Protocol,
                        settings: dict, readings: Readings, gyro_type: str | None = None,
-                       table_calibration=None) -> dict:
+                       table_calibration=None, table_record: dict | None = None) -> dict:
     """The uncertainty of every measured item (clause 8), by
     :mod:`gonio.specs.ogam_draft.item_uncertainty`; items not measured get none.
     ``table_calibration``: a :class:`~gonio.specs.ogam_draft.table_calibration.TableCalibration`
-    (K corrected by it, its table line the calibration's; beyond the draft), or None."""
+    (K, K_l, C_v and C_g corrected by it, their table lines the calibration's; beyond the
+    draft), or None. ``table_record``: filled per item K_l, C_v, C_g with the calibration's
+    rows used (``positions_used``) or why the MPE line is kept (``reason``)."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
+    table_record = {} if table_record is None else table_record
     k_fixed = protocol.annex_a.coverage_factor
     mpe = settings["table_mpe_arcsec"]
     out = {}
@@ -1516,8 +1705,16 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
             draft = iu.nonlinearity_budget(
                 t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
                 tilt_bias_arcsec_per_deg=_nonlinearity_tilt(results, readings, protocol, budget))
+            at_table = None if t_corr is None else nonlinearity_at_table(
+                results, readings, protocol, budget, table_calibration, tc, k_fixed)
+            if at_table is not None:
+                table_record["scale_factor_nonlinearity"] = {
+                    "positions_used": at_table[1], "measured_value": at_table[2]}
+            elif table_calibration is not None:
+                table_record["scale_factor_nonlinearity"] = {"reason": t_note.replace(
+                    "the MPE line kept", "K_l keeps the MPE line and is not corrected")}
             out["scale_factor_nonlinearity"] = dataclasses.replace(
-                iu.nonlinearity_corrected_budget(
+                at_table[0] if at_table is not None else iu.nonlinearity_corrected_budget(
                     t["K_i_counts_per_deg"], t["table_deg"], mpe, k=k_fixed,
                     tilt_round_coupling=_round_coupling(results, readings, protocol, budget),
                     tilt_measured=_measured_round_tilt(results, readings, protocol, tc),
@@ -1552,40 +1749,82 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
         n_ser = min(int(rp.details["n_series"]), int(rp.table.loc[used, "n_series"].min()))
         out["repeatability"] = iu.repeatability_budget(float(rp.value), n_ser, n_pts,
                                                        k=k_fixed)
-    u_r = float(budget.parameters["repeatability_arcsec"])
-    drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
-    df = readings.data
     # the tilt bias of K enters the consistencies by their own K_tilt line, not through u(K)
     k_u_rel = iu.without_tilt_u_rel(out["scale_factor"]) if "scale_factor" in out else 0.0
     if k_u_rel_e is not None:
         k_u_rel = k_u_rel_e
     for name, scale in (("rate_consistency", 1e6), ("pointing_consistency", 100.0)):
-        c = getattr(results, name)
-        if not c.measured:
-            continue
-        conds, curves = _consistency_conditions(c, name, u_r)
-        t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
-        t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
-        ref = float(c.details["reference_angle_arcsec"])
-        kw = dict(table_mpe_arcsec=mpe, drift_half_width_arcsec=drift * t_min,
-                  scale_factor_u_rel=k_u_rel, scale_factor_tilt=k_tilt, curves=curves, k=k_fixed)
-        draft = iu.consistency_budget(name, conds, ref, scale, **kw)   # as measured, A.1 bound
-        if tc is not None:        # the E_v corrected for K's tilt bias at the measured tilt
-            conds, curves = _consistency_conditions(c, name, u_r, tc.delta_rel)
-            kw.update(curves=curves, tilt_te=(tc.u_delta_rel, tc.dof))
-        if name == "rate_consistency" or tc is not None:
-            # stated corrected for the range's bias and the choice of each extreme, the
-            # draft's range beside (C_g too where the tilt was measured: its draft's linear
-            # u, with no tilt error left to fill it, is over-wide)
-            out[name] = dataclasses.replace(
-                iu.consistency_corrected_budget(name, conds, ref, scale, **kw), beside=draft)
-        else:                 # C_g: stated corrected for the choice of its extremes
-            out[name] = dataclasses.replace(iu.selection_corrected_budget(
-                draft, curves, [x.u_single_arcsec / math.sqrt(max(x.n_series, 1)) for x in conds],
-                reference_angle_arcsec=ref, scale=scale, table_mpe_arcsec=mpe,
-                drift_half_width_arcsec=kw["drift_half_width_arcsec"],
-                scale_factor_u_rel=k_u_rel, k=k_fixed), beside=draft)
+        if getattr(results, name).measured:
+            out[name] = _consistency_item(
+                results, budget, protocol, readings, name, scale, k_u_rel=k_u_rel,
+                k_tilt=k_tilt, tc=tc, mpe=mpe, k_fixed=k_fixed, sf_budget=out.get("scale_factor"),
+                table_calibration=table_calibration, table_record=table_record)
     return out
+
+
+def _k_u_rel_without_table(sf_budget) -> float:
+    """u(K)/K less the tilt, chamber and calibrated-table lines (``P_Kc``): the part of K's u an
+    item drawing the calibration's errors jointly with K's (:class:`~gonio.specs.ogam_draft.
+    item_uncertainty.CalibratedTable`) takes as independent normal."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    k = abs(float(sf_budget.value))
+    p_kc = sum(c.u ** 2 for c in sf_budget.components if c.symbol == "P_Kc")
+    return math.sqrt(max((iu.without_tilt_u_rel(sf_budget) * k) ** 2 - p_kc, 0.0)) / k
+
+
+def _consistency_item(results, budget, protocol, readings, name: str, scale: float, *, k_u_rel,
+                      k_tilt, tc, mpe, k_fixed, sf_budget, table_calibration, table_record):
+    """The stated budget of C_v (7.6) or C_g (7.7), the draft's reading beside it: corrected
+    for the range's bias (C_g: for the choice of its extremes; both ranges where the tilt was
+    measured), and by a calibrated table where one is given and covers the positions
+    (:func:`consistency_at_table`; beyond the draft)."""
+    from gonio.specs.ogam_draft import item_uncertainty as iu
+
+    c = getattr(results, name)
+    u_r = float(budget.parameters["repeatability_arcsec"])
+    drift = float(budget.parameters["zero_stability_dph"]) * ARCSEC_PER_MIN_PER_DPH  # A.4.3
+    df = readings.data
+    conds, curves = _consistency_conditions(c, name, u_r)
+    t = df.loc[df["line"].isin(list(c.used_lines)), "time_s"].to_numpy(dtype=float)
+    t_min = float(np.nanmax(t)) / S_PER_MIN if t.size else protocol.annex_a.duration_min
+    ref = float(c.details["reference_angle_arcsec"])
+    kw = dict(table_mpe_arcsec=mpe, drift_half_width_arcsec=drift * t_min,
+              scale_factor_u_rel=k_u_rel, scale_factor_tilt=k_tilt, curves=curves, k=k_fixed)
+    draft = iu.consistency_budget(name, conds, ref, scale, **kw)   # as measured, A.1 bound
+    delta = None if tc is None else tc.delta_rel
+    if tc is not None:        # the E_v corrected for K's tilt bias at the measured tilt
+        kw["tilt_te"] = (tc.u_delta_rel, tc.dof)
+    if table_calibration is not None:
+        got, why = consistency_at_table(results, readings, protocol, name, table_calibration)
+        table_record[name] = {"reason": why} if got is None else {
+            "positions_used": got[3], "measured_value": float(got[0].value)}
+        if got is not None:     # the E_v of the corrected readings; the table's draws the
+            c2, cal, zeros, _ = got                                  # calibration's
+            col = "rate_dps" if name == "rate_consistency" else "orientation"
+            conds, curves = _consistency_conditions(c2, name, u_r, delta)
+            conds = [dataclasses.replace(x, zero_deg=zeros[v]) for x, v in zip(conds, c2.table[col])]
+            if cal.c_k is not None and sf_budget is not None:
+                kw["scale_factor_u_rel"] = _k_u_rel_without_table(sf_budget)
+            kw.update(curves=curves, table_cal=cal)
+            return dataclasses.replace(iu.consistency_corrected_budget(
+                name, conds, float(c2.details["reference_angle_arcsec"]), scale, **kw),
+                beside=draft)
+    if tc is not None:
+        conds, curves = _consistency_conditions(c, name, u_r, delta)
+        kw.update(curves=curves)
+    if name == "rate_consistency" or tc is not None:
+        # stated corrected for the range's bias and the choice of each extreme, the
+        # draft's range beside (C_g too where the tilt was measured: its draft's linear
+        # u, with no tilt error left to fill it, is over-wide)
+        return dataclasses.replace(
+            iu.consistency_corrected_budget(name, conds, ref, scale, **kw), beside=draft)
+    # C_g: stated corrected for the choice of its extremes
+    return dataclasses.replace(iu.selection_corrected_budget(
+        draft, curves, [x.u_single_arcsec / math.sqrt(max(x.n_series, 1)) for x in conds],
+        reference_angle_arcsec=ref, scale=scale, table_mpe_arcsec=mpe,
+        drift_half_width_arcsec=kw["drift_half_width_arcsec"],
+        scale_factor_u_rel=k_u_rel, k=k_fixed), beside=draft)
 
 
 def _consistency_conditions(c, name: str, u_r: float, delta_rel: float | None = None):
@@ -1851,8 +2090,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
         notes.append(e_table.get("reason") or f"E corrected by the "
                      f"{table_calibration.describe()} [beyond the draft]")
     noise, noise_src = analyse_zero_stability(static_record)
+    table_record: dict = {}
     items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type,
-                               table_calibration=table_calibration)
+                               table_calibration=table_calibration, table_record=table_record)
     if proto.tilt_estimate is not None and "scale_factor" in items:
         tc = items["scale_factor"].correction
         notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
@@ -1864,6 +2104,12 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
         notes.append(f"K corrected by the {table_calibration.describe()} [beyond the draft]"
                      if used else f"the {table_calibration.source} does not cover K's "
                      "positions: K keeps the MPE line [beyond the draft]")
+    for name, sym in (("scale_factor_nonlinearity", "K_l"), ("rate_consistency", "C_v"),
+                      ("pointing_consistency", "C_g")):
+        rec = table_record.get(name)
+        if rec:
+            notes.append(rec.get("reason") or f"{sym} corrected by the "
+                         f"{table_calibration.describe()} [beyond the draft]")
     zs_readings = zero_stability_readings(res, items, noise, proto, zero_stability)
     eda, unused = equal_division_for(res.unused_readings, kept, proto)
     res = dataclasses.replace(res, unused_readings=unused)
@@ -1871,7 +2117,7 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                     item_uncertainty=items, budget_kind=budget, conflicts=conflicts,
                     budget_notes=notes, excluded=excluded,
                     zero_stability_readings=zs_readings, findings=findings, gyro_type=gyro_type,
-                    table_calibration=table_calibration)
+                    table_calibration=table_calibration, table_record=table_record)
 
 
 def table_corrected(iu) -> bool:

@@ -47,7 +47,8 @@ from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, comb
                                            interval_cell, item_names, item_path, k_table_note,
                                            e_table_note, k_tilt_note,
                                            method_rows, reading_note, segments,
-                                           specification_text, stated_item, u_cell)
+                                           specification_text, stated_item, u_cell,
+                                           range_table_note)
 
 
 # --------------------------------------------------------------------------- content blocks
@@ -258,6 +259,8 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
         elif name == "scale_factor_nonlinearity" and detail(res, name, "estimates"):
             cell += [L["semi"], *segments(L["note_kl_draft"], v=_num(
                 res, item_path(name, "estimates.draft.value"), "sig3", U))]
+            if range_table_note(res, name, L):
+                cell += [L["semi"], *range_table_note(res, name, L)]
         elif name in ("rate_consistency", "pointing_consistency"):
             cell += [L["semi"], *segments(L["note_spread"],
                                      v=_num(res, item_path(name, "spread_arcsec"), "atU", U))]
@@ -265,6 +268,8 @@ def _result_rows(res: dict, L: dict, U: float | None, lang: str = "en") -> list:
                 note = "note_cv_draft" if name == "rate_consistency" else "note_cg_draft"
                 cell += [L["semi"], *segments(L[note], v=_num(
                     res, item_path(name, "estimates.draft.value"), "sig3", U))]
+            if range_table_note(res, name, L):
+                cell += [L["semi"], *range_table_note(res, name, L)]
         elif name == "repeatability" and detail(res, name, "position_deg") is not None:
             opening, _, closing = L["paren"].partition("{x}")
             cell += [opening, *segments(L["note_at"],

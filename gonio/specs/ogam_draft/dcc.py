@@ -30,7 +30,7 @@ from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_bu
                                            item_names, item_path, item_uncertainty, k_table_note,
                                            e_table_note, k_tilt_note,
                                            method_rows, reading_note, specification_text,
-                                           stated_item)
+                                           stated_item, range_table_note)
 
 
 def method_text(res: dict, lab: dict | None, lang: str = "en") -> str:
@@ -141,10 +141,12 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                 quantity(data, "position of the extreme", s["position"], "deg")
         elif s["below_zero"]:     # the signed estimate as results.json has it, and why
             quantity(data, L[name], s["value"], item["unit"],
-                     description=LABELS["below_zero"]["en"], **kw)
+                     description="; ".join(d for d in (LABELS["below_zero"]["en"],
+                                                       _range_table_text(res, name, L)) if d),
+                     **kw)
         else:
             desc = ([_k_tilt_text(res, L), _k_table_text(res, L)] if name == "scale_factor"
-                    else [None])
+                    else [_range_table_text(res, name, L)])
             if "k" in kw:   # a k of the item's combined distribution (JCGM 101): say so
                 desc.append(combined_k_note(res, L, only=name))
             quantity(data, L[name], s["value"], item["unit"],
@@ -186,6 +188,20 @@ def _e_table_text(res: dict, L: dict) -> str | None:
         return None
     sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
     return "E " + "".join(str(x) for x in e_table_note(res, L)) + sha
+
+
+def _range_table_text(res: dict, name: str, L: dict) -> str | None:
+    """K_l's, C_v's or C_g's description when a calibrated table corrected its readings: the
+    certificate's note and the calibration file's SHA-256 (results.json
+    ``details.table_calibration``); None otherwise."""
+    note = range_table_note(res, name, L)
+    if not note:
+        return None
+    d = res["items"][name]["details"]["table_calibration"]
+    sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
+    sym = {"scale_factor_nonlinearity": "K_l", "rate_consistency": "C_v",
+           "pointing_consistency": "C_g"}[name]
+    return f"{sym} " + "".join(str(x) for x in note) + sha
 
 
 def _limit_rule(c) -> str:

@@ -63,6 +63,8 @@ __all__ = [
     "K_SOURCE_COMBINED", "COMBINED_SEED",
     "ScaleFactorTableLine", "scale_factor_table_line", "TableCorrection",
     "scale_factor_table_correction", "table_corrected_k_sensitivity", "ChamberLine",
+    "table_round_sensitivity", "calibration_error_draws", "CalibratedTable",
+    "nonlinearity_calibrated_budget", "consistency_corrected_budget",
     "chamber_temperature_line",
     "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
     "round_noise", "RoundNoise", "zero_stability_budget", "zero_stability_model_budget",
@@ -531,21 +533,89 @@ def _refuse_blind(calibration, c) -> None:
                      key="table_calibration")
 
 
-def table_corrected_k_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
-                                  ) -> tuple[np.ndarray, np.ndarray]:
-    """(the corrected K_i, counts/°; K's sensitivity to the calibration's error at each of its
-    positions, counts/° per arcsec) for rounds from the calibration's positions ``i_zero`` to
-    ``i_stop`` (indices; :func:`scale_factor_table_correction`, 7.1)."""
+def table_round_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """(the corrected K_i, counts/°; each round's sensitivity to the calibration's error at
+    each of its positions, an (n rounds × positions) matrix, counts/° per arcsec) for rounds
+    from the calibration's positions ``i_zero`` to ``i_stop`` (indices; 7.1 with A.4.1's
+    error known): K_i,c = K_i θ_i/(θ_i − (e(s_i) − e(z_i))/3600), ∂K_i,c/∂e(s_i) =
+    −∂K_i,c/∂e(z_i) = K_i,c/(3600 θ_i − Δe_i) (a round from a position to itself: none)."""
     k_i = np.asarray(k_i, dtype=float)
     th = np.asarray(theta_deg, dtype=float)
     e = calibration.error_arcsec
     th_true = th - (e[i_stop] - e[i_zero]) / ARCSEC_PER_DEG
     k_c = k_i * th / th_true
-    sens = k_c / (ARCSEC_PER_DEG * th_true) / k_i.size       # ∂K/∂Δe_i, counts/° per arcsec
-    c = np.zeros(calibration.table_deg.size)
-    np.add.at(c, i_stop, sens)
-    np.add.at(c, i_zero, -sens)
-    return k_c, c
+    sens = k_c / (ARCSEC_PER_DEG * th_true)                  # ∂K_i/∂Δe_i, counts/° per arcsec
+    s = np.zeros((k_i.size, calibration.table_deg.size))
+    rows = np.arange(k_i.size)
+    np.add.at(s, (rows, np.asarray(i_stop)), sens)
+    np.add.at(s, (rows, np.asarray(i_zero)), -sens)
+    return k_c, s
+
+
+def table_corrected_k_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
+                                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(the corrected K_i, counts/°; K's sensitivity to the calibration's error at each of its
+    positions, counts/° per arcsec) for rounds from the calibration's positions ``i_zero`` to
+    ``i_stop`` (indices; :func:`scale_factor_table_correction`, 7.1): K = mean K_i, so its
+    sensitivity is the mean of the rounds' (:func:`table_round_sensitivity`)."""
+    k_c, s = table_round_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration)
+    return k_c, s.mean(axis=0)
+
+
+def calibration_error_draws(calibration, rng, draws: int) -> np.ndarray:
+    """Draws of the calibration's errors about its stated values, (draws × positions), arcsec:
+    normal with its covariance V (JCGM 101 6.4.8; V = Q Λ Qᵀ, δe = Q √Λ z, so a singular V,
+    an equal-division comparison's gauge, draws within its range)."""
+    lam, q = np.linalg.eigh(calibration.covariance())
+    root = q * np.sqrt(np.clip(lam, 0.0, None))
+    return rng.standard_normal((draws, lam.size)) @ root.T
+
+
+@dataclass(frozen=True)
+class CalibratedTable:
+    """A calibrated table as it enters angles turned from a zeroing position and read with the
+    table-corrected 7.1 K (7.6, 7.7 with A.4.1's error known; beyond the draft): an angle
+    turned from z to p carries the calibration's error δe(p) − δe(z), and one read through
+    K_c the K's, −3600·p·(c_K·δe)/K_c (c_K of :func:`table_corrected_k_sensitivity`; None:
+    angles not read through the 7.1 K). ``source``: the calibration's one-line description."""
+
+    calibration: object
+    c_k: np.ndarray | None = None
+    k_c: float | None = None
+
+    @property
+    def source(self) -> str:
+        return self.calibration.describe()
+
+    def coefficients(self, positions_deg, zero_deg) -> np.ndarray:
+        """(positions × calibration positions): each angle's sensitivity to the calibration's
+        errors (a position reached twice has one error: coefficients add). ValueError where
+        the calibration does not list a position."""
+        cal = self.calibration
+        pos = np.atleast_1d(np.asarray(positions_deg, dtype=float))
+        i_p, miss = cal.lookup(pos)
+        i_z, miss_z = cal.lookup(np.broadcast_to(np.asarray(zero_deg, dtype=float), pos.shape))
+        if i_p is None or i_z is None:
+            raise ValueError(f"not calibrated: {sorted(set(miss) | set(miss_z))}")
+        a = np.zeros((pos.size, cal.table_deg.size))
+        rows = np.arange(pos.size)
+        np.add.at(a, (rows, i_p), 1.0)
+        np.add.at(a, (rows, i_z), -1.0)
+        if self.c_k is not None:
+            a -= np.outer(ARCSEC_PER_DEG * pos / self.k_c, self.c_k)
+        return a
+
+    def blind(self, a: np.ndarray) -> bool:
+        """Whether coefficients ``a`` see a part of the table the calibration cannot (an
+        equal-division comparison's blind harmonics)."""
+        basis = getattr(self.calibration, "blind_basis", None)
+        return basis is not None and bool(np.linalg.norm(a @ np.asarray(basis)) >
+                                          1e-9 * max(float(np.linalg.norm(a)), 1e-300))
+
+    def draws(self, rng, draws: int) -> np.ndarray:
+        """:func:`calibration_error_draws` of its calibration."""
+        return calibration_error_draws(self.calibration, rng, draws)
 
 
 def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibration
@@ -1097,6 +1167,67 @@ def nonlinearity_corrected_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
 
 
+def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibration, *,
+                                   k: float | None = None, tilt_round_coupling=None,
+                                   noise: RoundNoise | None = None, time_s=None,
+                                   draws: int = RANGE_DRAWS,
+                                   tilt_measured=None) -> ItemUncertainty:
+    """K_l (draft 7.2) of the 7.1 rounds corrected by a calibrated table, bias corrected, in %
+    (beyond the draft; its reading at the MPE is :func:`nonlinearity_budget`).
+
+    ``k_i``: the rounds' K_i corrected by the calibration (K's own correction,
+    :func:`table_round_sensitivity`, whose matrix ``round_sensitivity`` gives each round's
+    sensitivity to the calibration's errors). As :func:`nonlinearity_corrected_budget` with
+    the table's errors at the MPE (A.4.1; the standard's and the periodic reading) replaced by
+    the calibration's: per draw its errors δe normal with its covariance
+    (:func:`calibration_error_draws`; a position shared by rounds is one draw), each round
+    moved by its sensitivity times δe (the same draws, so the rounds are correlated where
+    they share a zeroing position); the count quantum, the tilt coupling (or its correction
+    at the measured tilt) and the gyro's noise as there. K_l is the range whose expected
+    measured range equals the one measured (:func:`uncertainty.stdev.corrected_range`), the
+    statement its belt's 95 % interval (:func:`uncertainty.stdev.range_belt_interval`): one
+    line, ``K_rng``.
+
+    A calibration of a table without error, known exactly (u → 0): the draws hold only the
+    count quantum, as the MPE reading at a vanishing MPE (other draws: equal within their
+    Monte Carlo scatter, 1 %):
+
+    >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
+    >>> th = np.array([60.0, 120.0, 180.0, 240.0, 300.0, 360.0])
+    >>> cal = TableCalibration([0, 60, 120, 180, 240, 300], [0.0] * 6, [1e-9] * 6, "t")
+    >>> i_s, _ = cal.lookup(th)
+    >>> _, s = table_round_sensitivity([3600.0] * 6, th, i_s, np.zeros(6, int), cal)
+    >>> b = nonlinearity_calibrated_budget([3600.0] * 6, th, s, cal, k=2.0)
+    >>> q = nonlinearity_corrected_budget([3600.0] * 6, th, 1e-12, k=2.0, table_reading="standard")
+    >>> abs(b.value / q.value - 1.0) < 0.01, [c.symbol for c in b.components]
+    (True, ['K_rng'])
+    """
+    from uncertainty.stdev import corrected_range
+
+    k_i, th, n, kbar, _, u_q = _rounds(k_i, theta_deg, 0.0)
+    to_pct = 100.0 / kbar
+    rng = np.random.default_rng(RANGE_SEED)
+    tab = calibration_error_draws(calibration, rng, draws) @ np.asarray(round_sensitivity).T
+    quant = rng.triangular(-1.0, 0.0, 1.0, (draws, n)) * (u_q * math.sqrt(6.0))
+    k_i, errs, src = _round_errors(k_i, th, {"calibrated": (tab + quant) * to_pct}, rng, draws,
+                                   tilt_measured, tilt_round_coupling, noise, time_s)
+    c = corrected_range(k_i * to_pct, errs["calibrated"])
+    u_tab = float(np.mean(np.std(tab, axis=0))) * to_pct
+    src = (f"table angle at the stops and zeroing positions corrected by the "
+           f"{calibration.describe()}, its errors drawn with their covariance (mean u of a "
+           f"round {u_tab:.3g} %), " + src)
+    lines = [_Line(from_u("K_rng", 0.0, c.u, type="B",
+                          source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
+                                 f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
+                                 f"alone {c.noise_range:.4g} %, corrected {c.value:.4g} %"),
+                   "range of the K_i (calibrated table), bias corrected", True,
+                   "7.2 (A.4.1 calibrated table, A.1 applied to 7.1)")]
+    lo, hi = c.interval
+    b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
+                interval=(lo, hi))
+    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
+
+
 # --------------------------------------------------------------------------- 7.3, 7.5
 
 def reading_resolution_deg(angles_deg=None, counts_per_deg: float | None = None) -> float:
@@ -1367,6 +1498,7 @@ class ConditionDeviation:
     position_deg: float      # where it was found
     u_single_arcsec: float   # standard deviation of one series' reading there
     n_series: int
+    zero_deg: float = 0.0    # the table position its rounds were zeroed at
 
 
 def _mean_u(c: ConditionDeviation) -> float:
@@ -1505,7 +1637,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
                                  table_mpe_arcsec: float, drift_half_width_arcsec: float,
                                  scale_factor_u_rel: float = 0.0, scale_factor_tilt: float = 0.0,
                                  curves=None, k: float | None = None,
-                                 draws: int = RANGE_DRAWS, tilt_te=None) -> ItemUncertainty:
+                                 draws: int = RANGE_DRAWS, tilt_te=None,
+                                 table_cal: CalibratedTable | None = None) -> ItemUncertainty:
     """C (draft 7.6: ppm, 7.7: %) corrected for the range's bias, and its u: the stated C.
 
     The draft's C = (max E_v − min E_v)/reference is a range of measured values, biased
@@ -1521,6 +1654,12 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     — or, where the caller corrected the E_v for K's bias δ at the tilt the in-situ estimate
     measured (E_v + δ·θ_v, JCGM 100 3.2.4; ``tilt_te`` = (u(δ), ν of the estimate's fit)),
     the correction's error, normal u(δ)·θ_v, the same for all (beyond the draft).
+    ``table_cal`` (a :class:`CalibratedTable`: the E_v corrected by a calibrated table and read
+    with the table-corrected K): the table's draws at the MPE are replaced by the
+    calibration's, δe normal with its covariance, each E_v moved by its coefficients
+    (δe(θ_v) − δe(z_v) and K's part, :meth:`CalibratedTable.coefficients`; a position shared
+    by conditions, and by K's rounds, is one draw), and ``scale_factor_u_rel`` is then K's u
+    without its calibrated table line (beyond the draft).
     C is the range whose expected measured range equals the one measured; u is the spread of
     the measured range there (line ``C_rng``, normal), with the choice of each condition's
     extreme (``C_sel``) beside it as in :func:`consistency_budget`; with ``curves`` the
@@ -1565,7 +1704,12 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     u_mean = np.array([c.u_single_arcsec / math.sqrt(max(c.n_series, 1)) for c in cs])
     rng = np.random.default_rng(RANGE_SEED)
     _, at = np.unique(np.round(pos, 6), return_inverse=True)
-    table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec, (draws, int(at.max()) + 1))[:, at]
+    if table_cal is not None:      # the calibration's errors, one draw per position
+        table = table_cal.draws(rng, draws) @ np.concatenate(
+            [table_cal.coefficients([c.position_deg], c.zero_deg) for c in cs]).T
+    else:
+        table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec,
+                            (draws, int(at.max()) + 1))[:, at]
     ramp = np.clip(pos / 360.0, 0.0, 1.0)          # drift since the zeroing at 0°
     err = (rng.normal(0.0, 1.0, (draws, n)) * u_mean + table
            + rng.uniform(-drift_half_width_arcsec, drift_half_width_arcsec, (draws, n)) * ramp
@@ -1577,7 +1721,10 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     kk = float(k) if k is not None else coverage_k(math.inf, COVERAGE_PROBABILITY)
     lines = [_Line(from_u("C_rng", 0.0, c.u, type="B",
                           source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the "
-                                 f"{n} E_v: means, table, zero drift, K and its tilt "
+                                 f"{n} E_v: means, table"
+                                 + (f" (corrected by the {table_cal.source}, its errors "
+                                    f"drawn with their covariance)" if table_cal else "")
+                                 + f", zero drift, K and its tilt "
                                  f"{'correction' if tilt_te is not None else 'bias'}; "
                                  f"measured range {c.measured:.4g} {unit}, of the errors alone "
                                  f"{c.noise_range:.4g} {unit}, corrected {c.value:.4g} {unit}"),
@@ -1586,7 +1733,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     value, (lo, hi) = c.value, c.interval
     if curves is not None:
         u_sel, bias = extreme_selection(curves, list(u_mean), table_mpe_arcsec,
-                                        drift_half_width_arcsec, scale_factor_u_rel)
+                                        drift_half_width_arcsec, scale_factor_u_rel,
+                                        table_cal=table_cal, zeros=[c.zero_deg for c in cs])
         lines.append(_selection_line(u_sel * f, bias * f, unit, clause))
         value -= bias * f
         # the belt shifted by the bias, the choice's own spread (normal, k·u_sel) added to
@@ -1678,7 +1826,8 @@ def extreme_selection_u(curves, u_mean_arcsec, table_mpe_arcsec: float,
 
 def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
                       drift_half_width_arcsec: float, scale_factor_u_rel: float = 0.0,
-                      draws: int = 4000) -> tuple[float, float]:
+                      draws: int = 4000, table_cal: CalibratedTable | None = None,
+                      zeros=None) -> tuple[float, float]:
     """(u, bias), arcsec, of the spread max E_v − min E_v from the *choice* of each E_v
     (7.6, 7.7).
 
@@ -1705,6 +1854,8 @@ def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
     beside them. At curves where noise has already flipped the choice the plug-in corrects
     the other way (a discontinuous functional's bootstrap bias), which the choice's spread in
     u (``C_sel``) allows for. Fixed seed: the same curves give the same (u, bias).
+    ``table_cal`` (a :class:`CalibratedTable`) with each curve's zeroing position ``zeros``:
+    the table's draws are the calibration's (:func:`consistency_corrected_budget`).
 
     >>> far = [([30.0, 60.0], [0.9, 0.1]), ([30.0, 60.0], [-0.8, 0.0])]
     >>> extreme_selection(far, [0.05, 0.05], 0.1, 0.0)
@@ -1716,19 +1867,24 @@ def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
     """
     rng = np.random.default_rng(20240607)
     pos_all = np.unique(np.concatenate([np.asarray(p, dtype=float) for p, _ in curves]))
-    table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec, (draws, pos_all.size))
+    if table_cal is not None:
+        de = table_cal.draws(rng, draws)
+    else:
+        table = rng.uniform(-table_mpe_arcsec, table_mpe_arcsec, (draws, pos_all.size))
     dk = rng.normal(0.0, scale_factor_u_rel, draws) if scale_factor_u_rel > 0 \
         else np.zeros(draws)
     free, held, free_n, held_n = [], [], [], []
     rows = np.arange(draws)
-    for (pos, e), u in zip(curves, u_mean_arcsec):
+    for v, ((pos, e), u) in enumerate(zip(curves, u_mean_arcsec)):
         pos = np.asarray(pos, dtype=float)
         e = np.asarray(e, dtype=float)
         ok = ~np.isnan(e)
         pos, e = pos[ok], e[ok]
         ramp = np.arange(1, e.size + 1) / e.size
         noisy = e + rng.normal(0.0, u, (draws, e.size))
-        sim = (noisy + table[:, np.searchsorted(pos_all, pos)]
+        tab = (de @ table_cal.coefficients(pos, (zeros or [0.0] * len(curves))[v]).T
+               if table_cal is not None else table[:, np.searchsorted(pos_all, pos)])
+        sim = (noisy + tab
                + dk[:, None] * pos * ARCSEC_PER_DEG
                + rng.uniform(-drift_half_width_arcsec, drift_half_width_arcsec,
                              draws)[:, None] * ramp)

@@ -27,6 +27,11 @@ from gonio.result.text import virtual_line
 from gonio.specs.ogam_draft.calibration import calibrate
 
 
+def _and(names: list) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
 def results_json(result: Result, lab: dict | None = None) -> dict:
     """The ``results.json`` content."""
     return result.to_json()
@@ -76,13 +81,29 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
     tk = kd.get("table_calibration")
     e_table = ((d["items"].get("angle_deviation") or {}).get("details") or {}).get(
         "table_calibration")
+    ranges = {n: ((d["items"].get(n) or {}).get("details") or {})
+              for n in ("scale_factor_nonlinearity", "rate_consistency", "pointing_consistency")}
+    fixed = [s for n, s in (("scale_factor_nonlinearity", "K_l"), ("rate_consistency", "C_v"),
+                            ("pointing_consistency", "C_g"))
+             if (ranges[n].get("table_calibration") or {}).get("positions_used")]
+    kept = [s for n, s in (("angle_deviation", "E"), ("scale_factor_nonlinearity", "K_l"),
+                           ("rate_consistency", "C_v"), ("pointing_consistency", "C_g"))
+            if (n != "angle_deviation" or not e_table) and s not in fixed
+            and (d["items"].get(n) or {}).get("measured")]
     if tk:
         lines.append(f"note: the stated K is corrected by the table calibration {tk['source']} "
                      f"(u(K) of it {tk['u_rel_ppm']:.2g} ppm, line P_Kc; the 7.1 mean uncorrected "
-                     f"{tk['uncorrected_value']:.10g} counts/deg), beyond the draft; "
-                     + ("E is corrected by it too (its table line the calibration's); K_l, C_v "
-                        "and C_g keep" if e_table else "E, K_l, C_v and C_g keep")
-                     + " the table's MPE lines")
+                     f"{tk['uncorrected_value']:.10g} counts/deg), beyond the draft"
+                     + ("; E is corrected by it too (its table line the calibration's)"
+                        if e_table else "")
+                     + (f"; {_and(fixed)} too (the range of the corrected readings, the table's "
+                        "draws the calibration's)" if fixed else "")
+                     + (f"; {_and(kept)} {'keeps' if len(kept) == 1 else 'keep'} the table's "
+                        "MPE lines" if kept else ""))
+    for n, sym in (("scale_factor_nonlinearity", "K_l"), ("rate_consistency", "C_v"),
+                   ("pointing_consistency", "C_g")):
+        if ranges[n].get("table_calibration_not_used"):
+            lines.append(f"note: {ranges[n]['table_calibration_not_used']}")
     if e_table:
         lines.append(f"note: E's reference angles are corrected by the table calibration "
                      f"{e_table['source']} and E read with the table-corrected K, beyond the "

@@ -293,6 +293,11 @@ LABELS: dict[str, dict[str, str]] = {
                        "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
                              "换算（草案以外）；按草案（附录 A）的测得值（并列给出，不作结果）："
                              "{v}″"},
+    "note_range_table": {"en": "readings corrected by the table calibration {f} (and read with "
+                               "the table-corrected K), its uncertainty in place of the table's "
+                               "MPE, beyond the draft",
+                         "zh": "读数已按转台校准 {f} 修正（并以转台误差修正后的 K 换算），以其"
+                               "不确定度代替转台最大允许误差（草案以外）"},
     "note_cv_draft": {"en": "the draft's range as measured (beside, not stated): {v} ppm",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} ppm"},
     "note_cg_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",

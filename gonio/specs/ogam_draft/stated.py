@@ -270,6 +270,15 @@ def e_table_note(res: dict, L: dict) -> list:
                           item["uncertainty"]["U"]))
 
 
+def range_table_note(res: dict, name: str, L: dict) -> list:
+    """The note of K_l, C_v or C_g when a calibrated table corrected its readings, as
+    :func:`segments` (results.json ``details.table_calibration``); [] otherwise."""
+    d = (res["items"][name].get("details") or {}).get("table_calibration") or {}
+    if not d.get("positions_used"):
+        return []
+    return segments(L["note_range_table"], f=str(d.get("source") or ""))
+
+
 def segments(template: str, **nums) -> list:
     """Split a label template "... {x} ..." into text and Num segments.
 

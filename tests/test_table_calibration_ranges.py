@@ -1,0 +1,219 @@
+"""A calibrated rotary table for K_l (7.2), C_v (7.6) and C_g (7.7): their readings corrected by
+the same per-round correction as K (e(stop) − e(zero) at each round's positions, angles read
+with the table-corrected K) and their table draws the calibration's in place of the MPE.
+
+Checked against truths outside the estimator: on a noise-free, untilted bench whose table has
+a periodic error, with an exact calibration, the draft's functionals of the corrected readings
+equal the items' truths computed from the bench's physical parameters (the instrument's own
+K_i, :func:`scale_factor_truth`; the noise-free deviations of the bench's rerun read with the
+7.1 K's truth), while the uncorrected are off by the table's error; a calibration with its
+errors' sign flipped moves them further off; a calibration that lacks one position C_v and C_g
+use keeps their MPE lines (and says so) while K_l is corrected. The propagated table draws are
+checked against a Monte Carlo of the correction itself."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gonio.formats.toml import read_toml
+from gonio.resources import resolve
+from gonio.specs.ogam_draft.bench import TableConfig, load_bench, run_session
+from gonio.specs.ogam_draft.bench.config import Harmonic
+from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+from gonio.specs.ogam_draft.calibration import analyse
+from gonio.specs.ogam_draft.item_coverage import scale_factor_truth
+from gonio.specs.ogam_draft.protocol import parse_protocol
+from gonio.specs.ogam_draft.readings import Readings
+from gonio.specs.ogam_draft.study import table_positions_deg, tilted
+from gonio.specs.ogam_draft.table_calibration import TableCalibration
+
+HARMONICS = (Harmonic(1, 0.04, 30.0), Harmonic(3, 0.05, 70.0))
+RANGES = (("scale_factor_nonlinearity", None, None), ("rate_consistency", "rate_dps", 1e6),
+          ("pointing_consistency", "orientation", 100.0))
+#: |corrected − truth| allowed, and the least |uncorrected − truth| (the table's error shows),
+#: per item in its unit (%, ppm, %): K_l 1 ppb of K (the table moves it 0.3 ppm); C_v 0.002 ppm
+#: (2.6 mas over 360°; the table moves it 0.04 ppm); C_g 1e-9 % (0.013 mas; the table moves it
+#: 1.1e-8 %, the orientations differing only by the Earth rate's axis component).
+TIGHT = {"scale_factor_nonlinearity": 1e-7, "rate_consistency": 0.002,
+         "pointing_consistency": 1e-9}
+OFF = {"scale_factor_nonlinearity": 1e-5, "rate_consistency": 0.02,
+       "pointing_consistency": 5e-9}
+
+
+def _protocol():
+    raw = read_toml(resolve("ogam-draft", "protocol"))
+    for key in ("zero_stability", "tilt_estimate"):
+        raw.pop(key, None)
+    return parse_protocol(raw, resolve("ogam-draft", "protocol"))
+
+
+@pytest.fixture(scope="module")
+def setup():
+    """The protocol (7.1, 7.2, 7.4–7.7), a noise-free untilted bench whose table has the
+    test's harmonics, its session, and an exact calibration (u 0.02″) at every position."""
+    p = _protocol()
+    base = replace(load_bench("rlg"), sample_rate_hz=5.0)
+    clean = tilted(replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS)),
+        0.0, 0.0)
+    res = run_session(p, clean, seed=0)
+    x = table_positions_deg(p)
+    cal = TableCalibration(x, harmonic_sum_arcsec(x, HARMONICS), np.full(x.size, 0.02), "tc.csv")
+    return p, res, cal
+
+
+def _analyse(p, res, cal=None):
+    df = res.readings.copy()
+    df["line"] = np.arange(2, len(df) + 2)
+    return analyse(Readings(df, dict(res.metadata)), p, table_calibration=cal)
+
+
+@pytest.fixture(scope="module")
+def runs(setup):
+    p, res, cal = setup
+    x = cal.table_deg
+    flip = TableCalibration(x, -cal.error_arcsec, cal.u_arcsec, "flip.csv")
+    return {"raw": _analyse(p, res), "cal": _analyse(p, res, cal),
+            "flip": _analyse(p, res, flip)}
+
+
+def _truths(res, rep) -> dict:
+    """Each item's truth from the bench's parameters: K_l of the instrument's own K_i
+    (:func:`scale_factor_truth`); C_v, C_g the spread of the noise-free per-condition extremes
+    at the result's points, each deviation read with the 7.1 K's truth (as the items read
+    their angles with the 7.1 K), over the reference angle."""
+    tr = pd.DataFrame(res.truth["readings"])
+    k_m = res.truth["scale_factor_through_mount_counts_per_deg"]
+    k71, k_i = scale_factor_truth(res.truth)
+    out = {"scale_factor_nonlinearity": float((k_i.max() - k_i.min()) / k_i.mean() * 100.0)}
+    for name, col, scale in RANGES[1:]:
+        c = getattr(rep.results, name)
+        pts, e = c.tables["points"], []
+        for row in c.table.itertuples(index=False):
+            v, src = getattr(row, col), row.source_test
+            rows = tr[(tr["test"] == src) & tr["round"].isin(pts.loc[pts[col] == v, "round"])]
+            rows = rows[np.isclose(rows["rate_dps"], float(v))] if col == "rate_dps" else \
+                rows[(rows["orientation"] == v) & np.isclose(rows["rate_dps"], 60.0)]
+            dev = rows["systematic_deviation_arcsec"] + 3600.0 * rows["true_table_deg"] * (
+                k_m / k71 - 1.0)
+            m = dev.groupby(rows["round"]).mean().to_numpy()
+            e.append(m[np.argmax(np.abs(m))])
+        out[name] = float((max(e) - min(e)) / c.details["reference_angle_arcsec"] * scale)
+    return out
+
+
+def _measured(rep, name) -> float:
+    """The draft's functional of the readings the stated value is built from: the corrected
+    readings' (results.json ``details.table_calibration.measured_value``) where corrected."""
+    d = rep.result().to_json()["items"][name]["details"]
+    tc = d.get("table_calibration")
+    return float(tc["measured_value"]) if tc else float(d["estimates"]["draft"]["value"])
+
+
+def test_ranges_noise_free_exact_calibration(setup, runs):
+    """The corrected K_l, C_v, C_g (the draft's functional of the corrected readings) equal the
+    bench's truths within TIGHT, the uncorrected are off by more than OFF; the stated budget's
+    lines are the calibration's (no K_tab, no MPE), and the draft's reading at the MPE is kept
+    beside, unchanged by the calibration."""
+    _, res, _ = setup
+    raw, rep = runs["raw"], runs["cal"]
+    truth = _truths(res, rep)
+    for name, _, _ in RANGES:
+        got, before = _measured(rep, name), _measured(raw, name)
+        assert abs(got - truth[name]) < TIGHT[name], (name, got, truth[name])
+        assert abs(before - truth[name]) > OFF[name], (name, before, truth[name])
+        b, b_raw = rep.item_uncertainty[name], raw.item_uncertainty[name]
+        # the stated value is built from that range (its line's Monte Carlo names it, 4 digits)
+        stated_from = float(re.search(r"measured range (\S+) ", b.components[0].source)[1])
+        assert stated_from == pytest.approx(got, rel=1e-3, abs=1e-12)
+        assert [c.symbol for c in b.components][0] in ("K_rng", "C_rng")
+        assert "K_tab" not in [c.symbol for c in b.components]
+        assert "table calibration, tc.csv" in b.components[0].source
+        assert "table calibration" not in " ".join(c.source for c in b_raw.components)
+        assert b.beside.value == b_raw.beside.value and b.beside.U == b_raw.beside.U
+        d = rep.result().to_json()["items"][name]["details"]
+        assert d["stated"] == "table_corrected" and d["table_calibration"]["source"] == "tc.csv"
+        assert d["table_calibration"]["uncorrected_value"] == pytest.approx(
+            raw.result().to_json()["items"][name]["details"]["estimates"]["draft"]["value"])
+    assert any(n.startswith("C_g corrected by the table calibration") for n in rep.budget_notes)
+
+
+def test_ranges_sign_flipped_calibration_worse(setup, runs):
+    """A calibration with its errors' sign flipped applies the table's error twice: each item
+    is off its truth by at least as much as uncorrected (a range: the doubled error may move
+    an extreme, so by at least 0.9 of it), far beyond the exact calibration's miss; K_l by
+    1.5 times the uncorrected miss (nearly twice: its extreme rounds keep their places)."""
+    _, res, _ = setup
+    truth = _truths(res, runs["cal"])
+    for name, _, _ in RANGES:
+        miss_raw = abs(_measured(runs["raw"], name) - truth[name])
+        miss_flip = abs(_measured(runs["flip"], name) - truth[name])
+        assert miss_flip > max(OFF[name], 0.9 * miss_raw), (name, miss_flip, miss_raw)
+        assert miss_flip > 20 * abs(_measured(runs["cal"], name) - truth[name])
+    kl = "scale_factor_nonlinearity"
+    assert _measured(runs["flip"], kl) - truth[kl] > 1.5 * (_measured(runs["raw"], kl) - truth[kl])
+
+
+def test_ranges_position_missing_keeps_mpe(setup, runs):
+    """A calibration without 330° (a 7.6/7.7 point, none of K's): K and K_l are corrected, C_v
+    and C_g keep their MPE readings exactly (as without a calibration) and say so in the
+    notes, results.json and summary.txt."""
+    from gonio.specs.ogam_draft.outputs import summary
+
+    p, res, cal = setup
+    keep = ~np.isclose(cal.table_deg, 330.0)
+    part = TableCalibration(cal.table_deg[keep], cal.error_arcsec[keep], cal.u_arcsec[keep],
+                            "part.csv")
+    rep, raw = _analyse(p, res, part), runs["raw"]
+    d = rep.result().to_json()
+    assert d["items"]["scale_factor_nonlinearity"]["details"]["stated"] == "table_corrected"
+    for name in ("rate_consistency", "pointing_consistency"):
+        b, b_raw = rep.item_uncertainty[name], raw.item_uncertainty[name]
+        assert b.value == b_raw.value and b.U == b_raw.U and b.interval == b_raw.interval
+        det = d["items"][name]["details"]
+        assert "table_calibration" not in det
+        assert "part.csv does not cover 330 deg" in det["table_calibration_not_used"]
+        sym = "C_v" if name == "rate_consistency" else "C_g"
+        assert any("part.csv does not cover 330 deg" in n and f"{sym} keeps the MPE line" in n
+                   for n in rep.budget_notes)
+    text = summary(rep.result())
+    assert "K_l too" in text and "C_v and C_g keep the table's MPE lines" in text
+
+
+def test_calibrated_table_draws_against_monte_carlo(setup, runs):
+    """The stated C_v's table draws (:class:`CalibratedTable`: δe(θ) − δe(z) and K's part) for
+    correlated calibration errors against the correction itself redone per draw: K_c from
+    the 7.1 counts and E at a 7.6 point from its counts, each with drawn calibration errors;
+    the sd of E's shift per position agrees with the coefficients' cᵀVc."""
+    from gonio.specs.ogam_draft.item_uncertainty import CalibratedTable, table_corrected_k_sensitivity
+
+    p, res, cal0 = setup
+    x = cal0.table_deg
+    u = np.full(x.size, 0.02) + 0.01 * (np.arange(x.size) % 3)
+    v = 0.3 ** np.abs(np.subtract.outer(np.arange(x.size), np.arange(x.size))) * np.outer(u, u)
+    cal = TableCalibration(x, cal0.error_arcsec, u, "cov", cov_arcsec2=v)
+    df = res.readings
+    k_rows = df[df["test"] == "scale_factor"]
+    th_k = k_rows["table_deg"].to_numpy(float)
+    i_s = cal.lookup(th_k)[0]
+    i_z = cal.lookup(np.zeros(th_k.size))[0]
+    k_c, c_k = table_corrected_k_sensitivity(k_rows["gyro_counts"] / th_k, th_k, i_s, i_z, cal)
+    ct = CalibratedTable(cal, c_k, float(np.mean(k_c)))
+    pos = np.array([30.0, 150.0, 330.0, 360.0])
+    a = ct.coefficients(pos, 0.0)
+    u_lin = np.sqrt(np.einsum("ij,jk,ik->i", a, v, a))
+    draws = np.random.default_rng(7).multivariate_normal(cal.error_arcsec, v, 40_000)
+    jz = int(cal.lookup([0.0])[0][0])
+    kd = np.mean(k_rows["gyro_counts"].to_numpy(float)
+                 / (th_k - (draws[:, i_s] - draws[:, [jz]]) / 3600.0), axis=1)
+    counts = pos * float(np.mean(k_c))         # the counts of an exact turn read with K_c
+    jp = cal.lookup(pos)[0]
+    e = 3600.0 * (counts / kd[:, None] - (pos - (draws[:, jp] - draws[:, [jz]]) / 3600.0))
+    assert np.std(e, axis=0) == pytest.approx(u_lin, rel=0.03)
+    got = ct.draws(np.random.default_rng(8), 40_000) @ a.T
+    assert np.std(got, axis=0) == pytest.approx(u_lin, rel=0.03)
