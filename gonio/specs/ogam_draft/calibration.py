@@ -1539,8 +1539,8 @@ def _positions_record(calibration, idx) -> dict:
 
 def _k_rounds_at_table(results, protocol, calibration):
     """(K_i corrected, the rounds' sensitivity matrix, the calibration's indices used) of the
-    7.1 rounds, K's own correction (:func:`~gonio.specs.ogam_draft.item_uncertainty.table_round_sensitivity`);
-    None where the calibration does not list a stop or zero."""
+    7.1 rounds, K's own correction (``item_uncertainty.table_round_sensitivity``); None where
+    the calibration does not list a stop or zero."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
     t = results.scale_factor.table
@@ -1555,8 +1555,9 @@ def _k_rounds_at_table(results, protocol, calibration):
 
 def nonlinearity_at_table(results, readings, protocol, budget, calibration, tc, k):
     """(K_l's stated budget from the 7.1 rounds corrected by a calibrated table, the rows
-    used, the draft's range of the corrected K_i) (:func:`~gonio.specs.ogam_draft.item_uncertainty.nonlinearity_calibrated_budget`;
-    beyond the draft), or None where the calibration does not cover K's positions."""
+    used, the draft's range of the corrected K_i) (beyond the draft;
+    ``item_uncertainty.nonlinearity_calibrated_budget``), or None where the calibration does
+    not cover K's positions."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
     got = _k_rounds_at_table(results, protocol, calibration)
@@ -1614,11 +1615,10 @@ def consistency_at_table(results, readings, protocol, name: str, calibration):
     k_got = _k_rounds_at_table(results, protocol, calibration)
     through_k = results.scale_factor_for_angles_source == "7.1" and \
         c.details.get("scale_factor_for_angles_counts_per_deg") is not None
-    if through_k and k_got is None:
-        m_s = sorted(set(m_s) | set(calibration.lookup(round_positions(
-            results.scale_factor.table, protocol, "scale_factor")[0])[1]) | set(
-            calibration.lookup(round_positions(results.scale_factor.table, protocol,
-                                               "scale_factor")[1])[1]))
+    if through_k and k_got is None:          # K's stops and zeros the file does not list
+        k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
+        m_s = sorted(set(m_s) | set(calibration.lookup(k_stop)[1])
+                     | set(calibration.lookup(k_zero)[1]))
     missing = sorted(set(m_s) | set(m_z))
     if missing or i_s is None or i_z is None:
         return None, (f"the {calibration.source} does not cover "
@@ -1803,7 +1803,8 @@ def _consistency_item(results, budget, protocol, readings, name: str, scale: flo
             c2, cal, zeros, _ = got                                  # calibration's
             col = "rate_dps" if name == "rate_consistency" else "orientation"
             conds, curves = _consistency_conditions(c2, name, u_r, delta)
-            conds = [dataclasses.replace(x, zero_deg=zeros[v]) for x, v in zip(conds, c2.table[col])]
+            conds = [dataclasses.replace(x, zero_deg=zeros[v])
+                     for x, v in zip(conds, c2.table[col])]
             if cal.c_k is not None and sf_budget is not None:
                 kw["scale_factor_u_rel"] = _k_u_rel_without_table(sf_budget)
             kw.update(curves=curves, table_cal=cal)
