@@ -9,51 +9,122 @@ cores. Not part of the test run.
 shared virtual machine the same seed's CPU time varies by ±15 % between runs at the same
 load (the host's other guests), so one run is not a figure.
 
-    python benchmarks/bench_demo.py [--repeat 3] [--runs 1]
+The children run gonio as ``pip install .`` leaves it: its modules compiled once before
+the timed runs (``compileall`` into a temporary ``PYTHONPYCACHEPREFIX``), so that no run
+pays the ≈ 0.4–1 s of compiling gonio's own modules that a checkout run with
+``PYTHONDONTWRITEBYTECODE=1`` (this development environment) pays every time.
+``--compile-each-run`` measures that case instead. The line printed says which.
+
+``--peer DIR`` runs the same seeds with ``PYTHONPATH=DIR`` (another checkout of gonio, such
+as main before a change), alternated run by run with this tree, and checks that both write
+the same bytes (results.json, summary.txt, certificate.dcc.xml, certificate.pdf): a speed
+change must not change an output.
+
+    python benchmarks/bench_demo.py [--repeat 3] [--runs 1] [--peer DIR] [--compile-each-run]
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: The outputs whose bytes the alternated trees must agree on (same seed, same bytes).
+COMPARED = ("results.json", "summary.txt", "certificate.dcc.xml", "certificate.pdf",
+            "certificate.html", "readings.csv", "truth.json")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=3, help="seeds 0 … repeat − 1")
     ap.add_argument("--runs", type=int, default=1, help="runs of each seed")
+    ap.add_argument("--peer", default=None, help="another gonio checkout, run alternated")
+    ap.add_argument("--compile-each-run", action="store_true",
+                    help="PYTHONDONTWRITEBYTECODE=1: every run compiles gonio's modules")
     args = ap.parse_args()
-    for i in range(args.repeat):
-        cpus, walls, rss, load0 = [], [], 0.0, os.getloadavg()[0]
-        for _ in range(max(1, args.runs)):
-            cpu, wall, peak = _one(i)
-            cpus.append(cpu)
-            walls.append(wall)
-            rss = max(rss, peak)
-        runs = "" if len(cpus) == 1 else (
-            f" (median of {len(cpus)} runs: " + ", ".join(f"{c:.1f}" for c in cpus) + " s)")
-        print(f"gonio demo --seed {i} (1 kHz, whole draft protocol): CPU "
-              f"{statistics.median(cpus):.1f} s{runs}, wall {statistics.median(walls):.1f} s, "
-              f"peak RSS {rss:.0f} MB, load {load0:.1f} to {os.getloadavg()[0]:.1f} "
-              f"on {os.cpu_count()} cores (targets: < 10 s CPU, < 1024 MB)", flush=True)
+    trees = [("this tree", ROOT)] + ([("peer", Path(args.peer).resolve())] if args.peer else [])
+    with tempfile.TemporaryDirectory(prefix="bench-demo-") as work:
+        env = {name: _env(tree, work, args.compile_each_run) for name, tree in trees}
+        if not args.compile_each_run:
+            for name, tree in trees:
+                for pkg in ("gonio", "uncertainty"):
+                    subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / pkg)],
+                                   check=True, env=env[name], stdout=subprocess.DEVNULL)
+        mode = ("modules compiled each run" if args.compile_each_run
+                else "modules compiled once before the runs, as installed")
+        print(f"python {sys.version.split()[0]}, {os.cpu_count()} cores, {mode}", flush=True)
+        for i in range(args.repeat):
+            res = {name: ([], [], 0.0) for name, _ in trees}
+            load0 = os.getloadavg()[0]
+            digests = {}
+            for _ in range(max(1, args.runs)):
+                for name, _tree in trees:
+                    cpu, wall, peak, dig = _one(i, env[name], work)
+                    cpus, walls, rss = res[name]
+                    cpus.append(cpu)
+                    walls.append(wall)
+                    res[name] = (cpus, walls, max(rss, peak))
+                    digests.setdefault(name, dig)
+                    if dig != digests[name]:
+                        raise SystemExit(f"{name}: seed {i} wrote other bytes in a second run")
+            if args.peer and digests["this tree"] != digests["peer"]:
+                raise SystemExit(f"seed {i}: this tree and the peer wrote different bytes: "
+                                 + ", ".join(f for f in COMPARED
+                                             if digests["this tree"].get(f)
+                                             != digests["peer"].get(f)))
+            for name, _tree in trees:
+                cpus, walls, rss = res[name]
+                runs = "" if len(cpus) == 1 else (
+                    f" (median of {len(cpus)} runs: " + ", ".join(f"{c:.1f}" for c in cpus)
+                    + " s)")
+                who = f"[{name}] " if args.peer else ""
+                print(f"{who}gonio demo --seed {i} (1 kHz, whole draft protocol): CPU "
+                      f"{statistics.median(cpus):.1f} s{runs}, wall "
+                      f"{statistics.median(walls):.1f} s, peak RSS {rss:.0f} MB, load "
+                      f"{load0:.1f} to {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores "
+                      "(targets: < 10 s CPU, < 1024 MB)", flush=True)
+            if args.peer:
+                print(f"seed {i}: this tree and the peer wrote the same bytes "
+                      f"({', '.join(COMPARED)})", flush=True)
 
 
-def _one(seed: int) -> tuple[float, float, float]:
-    """(CPU s, wall s, peak RSS MB) of one ``gonio demo --seed SEED`` child process."""
-    with tempfile.TemporaryDirectory() as d:
+def _env(tree: Path, work: str, compile_each_run: bool) -> dict:
+    """The children's environment: ``tree`` first on the path; bytecode written once into
+    a folder of ``work`` (or never, with ``compile_each_run``)."""
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env.pop("PYTHONPYCACHEPREFIX", None)
+    if compile_each_run:
+        env["PYTHONDONTWRITEBYTECODE"] = "1"
+    else:
+        env["PYTHONPYCACHEPREFIX"] = str(Path(work) / "pycache")
+    return env
+
+
+def _one(seed: int, env: dict, work: str) -> tuple[float, float, float, dict]:
+    """(CPU s, wall s, peak RSS MB, {output: sha256}) of one ``gonio demo --seed SEED``
+    child process, run in a folder that is not a gonio checkout (PYTHONPATH decides)."""
+    with tempfile.TemporaryDirectory(dir=work) as d:
+        out = Path(d) / "out"
         t0 = time.perf_counter()
-        p = subprocess.Popen([sys.executable, "-m", "gonio", "demo", "--out", d,
-                              "--seed", str(seed)], stdout=subprocess.DEVNULL)
+        p = subprocess.Popen([sys.executable, "-m", "gonio", "demo", "--out", str(out),
+                              "--seed", str(seed)], stdout=subprocess.DEVNULL, env=env, cwd=d)
         _, status, ru = os.wait4(p.pid, 0)
         wall = time.perf_counter() - t0
         if os.waitstatus_to_exitcode(status):
             raise SystemExit(f"gonio demo --seed {seed} failed")
-    return ru.ru_utime + ru.ru_stime, wall, ru.ru_maxrss / 1024.0
+        dig = {f: hashlib.sha256((out / f).read_bytes()).hexdigest() for f in COMPARED
+               if (out / f).is_file()}
+    return ru.ru_utime + ru.ru_stime, wall, ru.ru_maxrss / 1024.0, dig
+
 
 if __name__ == "__main__":
     main()
