@@ -9,18 +9,20 @@ cores. Not part of the test run.
 shared virtual machine the same seed's CPU time varies by ±15 % between runs at the same
 load (the host's other guests), so one run is not a figure.
 
-The children run gonio as ``pip install .`` leaves it: its modules compiled once before
-the timed runs (``compileall`` into a temporary ``PYTHONPYCACHEPREFIX``), so that no run
-pays the ≈ 0.4–1 s of compiling gonio's own modules that a checkout run with
-``PYTHONDONTWRITEBYTECODE=1`` (this development environment) pays every time.
-``--compile-each-run`` measures that case instead. The line printed says which.
+The children run gonio as ``pip install .`` leaves it: its modules byte-compiled before
+the timed runs (``compileall`` into the tree's own ``__pycache__`` folders, which git
+ignores), so that no run pays the ≈ 0.4–1 s of compiling gonio's modules that a checkout
+run with ``PYTHONDONTWRITEBYTECODE=1`` (this development environment) and no cached
+bytecode pays every time. (A ``PYTHONPYCACHEPREFIX`` would not do: Python then ignores the
+libraries' installed bytecode too, and the first run compiles NumPy, SciPy, pandas and
+Matplotlib.)
 
 ``--peer DIR`` runs the same seeds with ``PYTHONPATH=DIR`` (another checkout of gonio, such
-as main before a change), alternated run by run with this tree, and checks that both write
-the same bytes (results.json, summary.txt, certificate.dcc.xml, certificate.pdf): a speed
-change must not change an output.
+as main before a change; its modules are byte-compiled in place too), alternated run by run
+with this tree, and checks that both write the same bytes (every file of :data:`COMPARED`):
+a speed change must not change an output.
 
-    python benchmarks/bench_demo.py [--repeat 3] [--runs 1] [--peer DIR] [--compile-each-run]
+    python benchmarks/bench_demo.py [--repeat 3] [--runs 1] [--peer DIR]
 """
 
 from __future__ import annotations
@@ -47,20 +49,17 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="seeds 0 … repeat − 1")
     ap.add_argument("--runs", type=int, default=1, help="runs of each seed")
     ap.add_argument("--peer", default=None, help="another gonio checkout, run alternated")
-    ap.add_argument("--compile-each-run", action="store_true",
-                    help="PYTHONDONTWRITEBYTECODE=1: every run compiles gonio's modules")
     args = ap.parse_args()
     trees = [("this tree", ROOT)] + ([("peer", Path(args.peer).resolve())] if args.peer else [])
     with tempfile.TemporaryDirectory(prefix="bench-demo-") as work:
-        env = {name: _env(tree, work, args.compile_each_run) for name, tree in trees}
-        if not args.compile_each_run:
-            for name, tree in trees:
-                for pkg in ("gonio", "uncertainty"):
-                    subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / pkg)],
-                                   check=True, env=env[name], stdout=subprocess.DEVNULL)
-        mode = ("modules compiled each run" if args.compile_each_run
-                else "modules compiled once before the runs, as installed")
-        print(f"python {sys.version.split()[0]}, {os.cpu_count()} cores, {mode}", flush=True)
+        env = {name: dict(os.environ, PYTHONPATH=str(tree)) for name, tree in trees}
+        for name, tree in trees:
+            for pkg in ("gonio", "uncertainty"):
+                subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree / pkg)],
+                               check=True, stdout=subprocess.DEVNULL)
+        print(f"python {sys.version.split()[0]}, {os.cpu_count()} cores, gonio's modules "
+              "byte-compiled before the runs (compileall), as an installed gonio's are",
+              flush=True)
         for i in range(args.repeat):
             res = {name: ([], [], 0.0) for name, _ in trees}
             load0 = os.getloadavg()[0]
@@ -94,19 +93,6 @@ def main() -> None:
             if args.peer:
                 print(f"seed {i}: this tree and the peer wrote the same bytes "
                       f"({', '.join(COMPARED)})", flush=True)
-
-
-def _env(tree: Path, work: str, compile_each_run: bool) -> dict:
-    """The children's environment: ``tree`` first on the path; bytecode written once into
-    a folder of ``work`` (or never, with ``compile_each_run``)."""
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    env.pop("PYTHONPYCACHEPREFIX", None)
-    if compile_each_run:
-        env["PYTHONDONTWRITEBYTECODE"] = "1"
-    else:
-        env["PYTHONPYCACHEPREFIX"] = str(Path(work) / "pycache")
-    return env
 
 
 def _one(seed: int, env: dict, work: str) -> tuple[float, float, float, dict]:
