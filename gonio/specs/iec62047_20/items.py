@@ -1380,8 +1380,9 @@ def startup_time(ctx: Context) -> Item:
     uncertainty the literal reading is the one to look at.
 
     Uncertainty: per record (:func:`startup_time_by_count`) the count's binomial spread and
-    the reference's error (its noise and the bias drift between the crossing and the
-    last fifth, from the static record's Allan fit) through the local slope; independent
+    the reference's error (its noise and the bias drift between the crossing's neighbourhood
+    and the last fifth, from the static record's Allan fit through the five-term model's
+    generalised covariance, :func:`window_drift_u_dps`) through the local slope; independent
     between records (u = rms/√N); the smoothing step (rectangular ± step/2). The spread
     of the records' times evaluates the same noise and is kept in the details
     (``spread_s``)."""
@@ -1392,7 +1393,8 @@ def startup_time(ctx: Context) -> Item:
     band = ctx.protocol["power_on"]["startup_band_dps"]
     times, lit, us = [], [], []
     for run, tt, ys, y in _power_on_records(ctx):
-        t_c, t_l, u_r = startup_time_by_count(tt, ys, y, band, lambda sep: drift_u_dps(ctx, sep))
+        t_c, t_l, u_r = startup_time_by_count(tt, ys, y, band,
+                                              lambda a, b: window_drift_u_dps(ctx, a, b))
         times.append(t_c)
         lit.append(t_l)
         us.append(u_r)
@@ -1416,23 +1418,22 @@ def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: f
                           drift_u) -> tuple[float, float, float]:
     """One power-on record's start-up time (5.3.3.9): (time outside the band s, the literal
     last-exceedance reading s, standard uncertainty of the first s) from the smoothed values
-    ``ys`` at times ``tt``, the raw samples ``y`` (°/s) and ``drift_u`` (separation s →
-    standard uncertainty of a bias difference °/s).
+    ``ys`` at times ``tt``, the raw samples ``y`` (°/s) and ``drift_u`` ((start s, duration
+    s), (start s, duration s) from the record's start → standard uncertainty °/s of the
+    difference of the bias drift's means over the two windows).
 
     With d_j = |ys_j − ref| (ref the mean of the last fifth), P the step, σ_b the noise of one
     smoothed value (√(var Δ²ys/6): a transient smooth on the step does not enter it) and
     N(L) the number of d_j > L: the estimate is P·N(band). Near the crossing the deviation
     falls with slope s, so each value is beyond the band with probability Φ((t* − t_j)s/σ_b)
     and var N = Σ p(1 − p) = σ_b/(sP)·∫Φ(1 − Φ) = σ_b/(sP√π). The reference's error e (its
-    own noise u_ref, and the bias drift u_drift between the crossing and the last fifth)
-    moves the crossing by e/s. u_drift is ``drift_u`` at the separation Δ + L/3 (Δ from the
-    crossing to the start of the last fifth, L its duration): a rate random walk's point
-    minus its mean over [Δ, Δ + L] has variance K²(Δ + L/3). 1/s is read from the data as
-    the time between the crossings of band ± h, Δt = P·(N(band − h) − N(band + h)) ≈ 2h/s,
-    with h = 2√(σ_b² + u_ref²) (the smoothed values' own spread, so that Δt spans several
-    steps yet stays local: an h that also held u_drift reaches, for u_drift near band/2,
-    down to the settled output, and Δt then measures most of the transient, not its slope
-    at the crossing). u² = P·σ_b/(s√π) + (u_ref² + u_drift²)/s²."""
+    own noise u_ref, and the bias drift u_drift) moves the crossing by e/s; 1/s is
+    :func:`crossing_slope_s_per_dps`, the time between the crossings of band ± h near the
+    crossing, h = 2√(σ_b² + u_ref²). u_drift is ``drift_u`` of the window of that width
+    centred on the crossing (the part of the drift the crossing's values share; faster
+    parts are in σ_b) against the last fifth: for a rate random walk K²(Δ + (w + L)/3), and
+    the flicker's difference, which grows as ln of the separation (IEEE 952 C.1), not its
+    adjacent-record floor. u² = P·σ_b/(s√π) + (u_ref² + u_drift²)/s²."""
     n5 = max(y.size // 5, 1)
     ref = float(y[-n5:].mean())
     d = np.abs(ys - ref)
@@ -1443,14 +1444,40 @@ def startup_time_by_count(tt: np.ndarray, ys: np.ndarray, y: np.ndarray, band: f
     tail = ys[-max(ys.size // 5, 1):]
     u_ref = s_b / math.sqrt(tail.size)
     span = tail.size * step                           # the last fifth's duration
-    u_dr = drift_u(max(float(tt[-1] - tt[0]) + step - span - t_c, 0.0) + span / 3)
-    h = 2 * math.sqrt(s_b ** 2 + u_ref ** 2) or 2 * u_dr     # 2·u_dr: no noise to read
-    if h == 0:
+    end = float(tt[-1] - tt[0]) + step                # the record's duration
+    if step == 0:                                     # one smoothed value: nothing to read
         return t_c, t_lit, 0.0
-    dt_c = step * float(np.count_nonzero(d > band - h) - np.count_nonzero(d > band + h))
-    slope_t = dt_c / (2 * h)                          # s per °/s: 1/slope near the crossing
+    h = 2 * math.sqrt(s_b ** 2 + u_ref ** 2) or \
+        2 * drift_u((max(min(t_c, end - span - step), 0.0), step), (end - span, span))
+    if h == 0:                                        # no noise and no drift: no spread
+        return t_c, t_lit, 0.0
+    slope_t = crossing_slope_s_per_dps(tt - tt[0], d, band, h, s_b, step)
+    w = max(2 * h * slope_t, step)                    # the crossing's neighbourhood, s
+    a = max(min(t_c - w / 2, end - span - w), 0.0)
+    u_dr = drift_u((a, w), (end - span, span))
     return t_c, t_lit, math.sqrt(step * s_b * slope_t / math.sqrt(math.pi)
                                  + slope_t ** 2 * (u_ref ** 2 + u_dr ** 2))
+
+
+def crossing_slope_s_per_dps(x: np.ndarray, d: np.ndarray, band: float, h: float, s_b: float,
+                             step: float) -> float:
+    """1/s (s per °/s) of the deviation ``d`` (°/s, at times ``x`` s from the record's start,
+    ``step`` apart) where it crosses ``band``: the time between its crossings of band ± h,
+    read by counts as the start-up time is, P·(N(band − h) − N(band + h))/(2h), counting only
+    the values up to t_c + 2Δ₊ + 3(σ_b/h)Δ₊ — t_c = P·N(band), Δ₊ = P·(N(band) −
+    N(band + h)) ≥ P the upper half's time (≈ h/s; values that far above the band are not
+    reached by the settled output's noise), so the window holds the lower crossing at twice
+    the upper half's time (a transient that flattens, e.g. 1.26× for e^(−t/τ) at h = 0.39
+    band) and three standard deviations of its jitter, σ_b/s. Counting over the whole record
+    took in the settled part's excursions beyond band − h (the noise and the bias drift
+    relative to the reference reach it: on the study bench 5 values a record on average,
+    +50 % on 1/s and on every term it propagates)."""
+    n_up = np.count_nonzero(d > band + h)
+    dp = max(step * float(np.count_nonzero(d > band) - n_up), step)
+    t_c = step * float(np.count_nonzero(d > band))
+    keep = x < t_c + 2 * dp + 3 * (s_b / h) * dp
+    return step * float(np.count_nonzero((d > band - h) & keep)
+                        - np.count_nonzero((d > band + h) & keep)) / (2 * h)
 
 
 # --------------------------------------------------------------------------- added items
@@ -1481,6 +1508,20 @@ def drift_u_dps(ctx: Context, separation_s: float) -> float:
     its drift term is 0."""
     k2, b2 = drift_coef_dps(ctx)
     return math.sqrt(k2 * abs(float(separation_s)) + 2.0 * rg.FLICKER_FLOOR_EXACT ** 2 * b2)
+
+
+def window_drift_u_dps(ctx: Context, first: tuple[float, float],
+                       second: tuple[float, float]) -> float:
+    """Standard uncertainty (°/s) of the difference of the bias drift's means over two windows
+    of one record, ``first`` and ``second`` = (start s, duration s): the rate random walk and
+    the flicker of :func:`drift_coef_dps` through the five-term model's generalised
+    covariance (:func:`gonio.specs._rate_family.formulas.record_difference_u_coef`; IEEE 952
+    C.1: the flicker's difference grows as ln of the separation). The same refusals as
+    :func:`drift_u_dps`; a record that does not vary: 0."""
+    if not _drift_varies(ctx):
+        return 0.0
+    k2, b2 = drift_coef_dps(ctx)
+    return rg.record_difference_u_coef(k2, b2, first, second)
 
 
 def visit_drift_u_dps(ctx: Context, separation_s: float) -> float:
