@@ -99,7 +99,7 @@ def run(args) -> int:
         result, _ = calibrate(args.readings, args.out, spec_key=spec.key, protocol=args.protocol,
                               lab=lab_d, lang=args.lang, dcc=args.dcc,
                               monte_carlo_trials=args.monte_carlo, inputs=inputs,
-                              force=args.force,
+                              force=args.force, lab_file=args.lab,
                               record={"gyro_type": registered} if registered else None, **given)
     status("")
     show(spec, result, args.json, lab_d, args.lang)

@@ -112,6 +112,14 @@ LAB_SCHEMA: dict[str, Field] = {
         "interval_months": Field("int", check=positive, expect="> 0"),
         "agreed": Field("str", check=lambda s: s.strip() != "",
                         expect="how and when it was agreed with the customer")}),
+    # the rotary table's own calibration (equipment knowledge; a specification that takes a
+    # table calibration reads it: gonio.pipeline.equipment), the file relative to this file
+    "table_calibration": Field("table", default=None, schema={
+        "file": Field("str", check=lambda s: s.strip() != "", expect="a file name"),
+        "sha256": Field("str", check=_is_sha256,
+                        expect="64 lower-case hexadecimal digits (SHA-256)"),
+        "id": _S, "calibrated_on": _DATE,
+        "due_on": Field("str", check=_iso_date, expect="a date YYYY-MM-DD")}),
     # how the certificate stands in the laboratory's records (written by ``gonio serve``'s
     # records for every certificate they render): a draft for review, or the issue of a
     # sealed result with the people it required and, for an amendment (ISO/IEC 17025 7.8.8),

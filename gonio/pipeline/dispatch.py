@@ -167,13 +167,16 @@ def mark_provenance(result, readings) -> None:
 def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = None,
               protocol: str | None = None, lab=None, lang: str = "en", truth: dict | None = None,
               dcc: bool = False, monte_carlo_trials: int = 0, inputs=(), force: bool = False,
-              record: dict | None = None, **options):
+              record: dict | None = None, lab_file: str | Path | None = None, **options):
     """Calibrate a readings file with its specification (``spec_key`` or the file's
     ``# spec:``): results.json, summary.txt, tables and the certificate (HTML, PDF; with
     ``dcc`` the DCC XML) in ``out``, written as one set. ``record``: the records' registered
     instrument's texts the readings and the laboratory file must not contradict
     (``calibrate --record``; :func:`gonio.pipeline.identity.record_contradictions`).
-    Returns (result, paths)."""
+    ``lab_file``: the laboratory file's path where ``lab`` is its dict (the folder its
+    ``[table_calibration] file`` is named from: a specification that takes a table calibration
+    gets the file :func:`gonio.pipeline.equipment.lab_table_calibration` checked, before the
+    work). Returns (result, paths)."""
     spec = spec_of(spec_key, readings)
     opts = refuse_options(spec, {"protocol": protocol, "dcc": dcc, **options},
                           spec.calibrate_options, "calibrate")
@@ -183,6 +186,14 @@ def calibrate(readings: str | Path, out: str | Path, *, spec_key: str | None = N
     proto = opts.pop("protocol", None)         # None: the file's, else the specification's
     identity = check_identity(readings, lab_d, lab_file=lab if isinstance(lab, (str, Path))
                               else None, record=record)     # refused here, before the work
+    if "table_calibration" in spec.calibrate_options and (lab_d or {}).get("table_calibration"):
+        from gonio.formats.provenance import readings_metadata
+        from gonio.pipeline.equipment import lab_table_calibration
+        opts["table_calibration"] = lab_table_calibration(   # checked before the work
+            lab_d, lab if isinstance(lab, (str, Path)) else lab_file,
+            readings_metadata(readings),
+            opts.get("table_calibration"))
+        inputs = [*inputs, opts["table_calibration"]]          # recorded in the manifest
     gyro = ((lab_d or {}).get("instrument") or {}).get("gyro_type")
     if gyro and "gyro_type" in spec.calibrate_options:
         opts.setdefault("gyro_type", gyro)     # the instrument's type (the records' registered)
