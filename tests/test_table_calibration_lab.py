@@ -189,3 +189,38 @@ def test_bad_section_refused(tmp_path, line, words):
         f"{k} = {v}\n" for k, v in body.items())
     with pytest.raises(GonioError, match=words.replace(".", r"\.")):
         load_lab(_lab(tmp_path, text))
+
+
+def test_dcc_zh_table_notes_valid(bench_files, tmp_path, capsys, dcc_schema):
+    """A zh DCC of a calibration with the laboratory's table calibration: schema-valid (the
+    carried DCC 3.3.0 XSD), and K's and E's descriptions each have a lang="zh" content written
+    in Chinese (no English words of the English note left in it) that names the file and its
+    SHA-256 (hashlib), beside the English one."""
+    import re
+
+    from lxml import etree
+
+    d, rd, f, sha = bench_files
+    (tmp_path / "tc.csv").write_bytes(f.read_bytes())
+    lab = _lab(tmp_path, LAB.format(day="2026-11-16") + table_section("tc.csv", sha))
+    out = tmp_path / "o"
+    assert main(["calibrate", str(rd), "--lab", str(lab), "--out", str(out), "--dcc",
+                 "--lang", "zh"]) == 0
+    capsys.readouterr()
+    doc = (out / "certificate.dcc.xml").read_bytes()
+    errors = list(dcc_schema.iter_errors(doc.decode("utf-8")))
+    assert not errors, errors[:3]
+    ns = "{https://ptb.de/dcc}"
+    found = {}
+    for desc in etree.fromstring(doc).iter(f"{ns}description"):
+        texts = {c.get("lang"): c.text for c in desc.iter(f"{ns}content")}
+        en = texts.get("en") or ""
+        if "table calibration tc.csv" in en:
+            found[en[:2]] = texts
+    assert set(found) == {"K ", "E "}, list(found)
+    for texts in found.values():
+        zh = texts["zh"]
+        assert sha in texts["en"] and sha in zh and "tc.csv" in zh and "转台校准" in zh
+        words = set(re.findall(r"[A-Za-z]{4,}", zh)) - {"SHA"}
+        assert not words & {"corrected", "table", "calibration", "beyond", "draft", "read",
+                            "carries", "uncertainty", "place"}, words

@@ -495,13 +495,14 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
         if dcc:
             from gonio.kit.render import bilingual
             from gonio.specs.ogam_draft.phrases import DCC_NAMES_ZH, READING_NOTES_ZH
-            from gonio.specs.ogam_draft.dcc import dcc_bytes, method_text
+            from gonio.specs.ogam_draft.dcc import dcc_bytes, description_zh, method_text
 
             doc = dcc_bytes(results, lab=lab_d, cert_id=content["id"])
             if lang == "zh":                   # Chinese beside English
                 extra = {**READING_NOTES_ZH, **BENCH_NAMES_ZH, **DCC_NAMES_ZH,
                          **{k: L[k] for k in item_names(results) if k in L},
-                         method_text(results, lab_d, "en"): method_text(results, lab_d, "zh")}
+                         method_text(results, lab_d, "en"): method_text(results, lab_d, "zh"),
+                         **description_zh(results)}
                 doc = bilingual(doc, label_translator(extra, REASONS_ZH, LABELS))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])

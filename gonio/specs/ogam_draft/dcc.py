@@ -155,53 +155,99 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
     return root
 
 
+#: The DCC's own words around the certificate's K and E notes, in Chinese (a zh DCC writes
+#: these descriptions in both languages: :func:`description_zh`).
+_HELD = {"en": "; U(K) carries the correction's uncertainty (budget line K_te: u(ψ), u(α) and "
+               "their correlation) in place of the tilt coupling at the A.1 bound (K_tilt)",
+         "zh": "；U(K) 含该修正的不确定度（预算分量 K_te：u(ψ)、u(α) 及其相关），"
+               "代替 A.1 倾斜上限处的倾斜耦合分量（K_tilt）"}
+_SHA = {"en": " (SHA-256 {sha})", "zh": "（校准文件 SHA-256：{sha}）"}
+_SEP = {"en": "; ", "zh": "；"}
+
+
+def _lang(L: dict) -> str:
+    return "zh" if L.get("scale_factor") == labels("zh", LABELS)["scale_factor"] else "en"
+
+
 def _k_tilt_text(res: dict, L: dict) -> str | None:
     """K's description when the in-situ tilt estimate ([tilt_estimate]) corrected it: the
     certificate's note (ψ, α with their U95, the 7.1 mean uncorrected) and how U(K) holds the
-    correction (line K_te in place of K_tilt), from results.json; None otherwise."""
+    correction (line K_te in place of K_tilt), from results.json, in ``L``'s language; None
+    otherwise."""
     if not (res["items"]["scale_factor"].get("details") or {}).get("tilt_correction"):
         return None
     lines = {c.get("symbol") for c in res["items"]["scale_factor"]["uncertainty"].get(
         "components") or []}
-    held = ("; U(K) carries the correction's uncertainty (budget line K_te: u(ψ), u(α) and "
-            "their correlation) in place of the tilt coupling at the A.1 bound (K_tilt)"
-            if "K_te" in lines else "")
+    held = _HELD[_lang(L)] if "K_te" in lines else ""
     return "K " + "".join(str(x) for x in k_tilt_note(res, L)) + held
 
 
 def _k_table_text(res: dict, L: dict) -> str | None:
     """K's description when a calibrated rotary table corrected it: the certificate's note
     (the calibration, u(K) of it, the 7.1 mean uncorrected) and the calibration file's
-    SHA-256, from results.json ``details.table_calibration``; None otherwise."""
+    SHA-256, from results.json ``details.table_calibration``, in ``L``'s language; None
+    otherwise."""
     d = (res["items"]["scale_factor"].get("details") or {}).get("table_calibration")
     if not d:
         return None
-    sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
+    sha = _SHA[_lang(L)].format(sha=d["sha256"]) if d.get("sha256") else ""
     return "K " + "".join(str(x) for x in k_table_note(res, L)) + sha
 
 
 def _e_table_text(res: dict, L: dict) -> str | None:
     """E's description when a calibrated table corrected it: the certificate's note and the
-    calibration file's SHA-256 (results.json ``details.table_calibration``); None otherwise."""
+    calibration file's SHA-256 (results.json ``details.table_calibration``), in ``L``'s
+    language; None otherwise."""
     d = (res["items"]["angle_deviation"].get("details") or {}).get("table_calibration")
     if not d:
         return None
-    sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
+    sha = _SHA[_lang(L)].format(sha=d["sha256"]) if d.get("sha256") else ""
     return "E " + "".join(str(x) for x in e_table_note(res, L)) + sha
 
 
 def _range_table_text(res: dict, name: str, L: dict) -> str | None:
     """K_l's, C_v's or C_g's description when a calibrated table corrected its readings: the
     certificate's note and the calibration file's SHA-256 (results.json
-    ``details.table_calibration``); None otherwise."""
+    ``details.table_calibration``), in ``L``'s language; None otherwise."""
     note = range_table_note(res, name, L)
     if not note:
         return None
     d = res["items"][name]["details"]["table_calibration"]
-    sha = f" (SHA-256 {d['sha256']})" if d.get("sha256") else ""
+    sha = _SHA[_lang(L)].format(sha=d["sha256"]) if d.get("sha256") else ""
     sym = {"scale_factor_nonlinearity": "K_l", "rate_consistency": "C_v",
            "pointing_consistency": "C_g"}[name]
     return f"{sym} " + "".join(str(x) for x in note) + sha
+
+
+def description_zh(res: dict) -> dict[str, str]:
+    """The DCC descriptions of K, E, K_l, C_v and C_g that state a table-calibration (or
+    tilt) correction, of results.json ``res`` — each as :func:`dcc_tree` joins it (with and
+    without the JCGM 101 k note, and after the below-zero note) — English → Chinese, for the zh
+    DCC's ``dcc:content lang="zh"`` beside the English (:func:`gonio.report.dcc.bilingual`'s
+    ``extra``): each written whole in Chinese from the labels' zh, not pieced together."""
+    out: dict[str, str] = {}
+    L = {"en": labels("en", LABELS), "zh": labels("zh", LABELS)}
+    own = {lg: {"scale_factor": [_k_tilt_text(res, L[lg]), _k_table_text(res, L[lg])]}
+           for lg in L}
+    for name in ("scale_factor_nonlinearity", "rate_consistency", "pointing_consistency"):
+        if name in res.get("items", {}):
+            for lg in L:
+                own[lg][name] = [_range_table_text(res, name, L[lg])]
+    for name in own["en"]:
+        if not any(own["en"][name]):
+            continue
+        for lead in (False, True):                 # after the below-zero note
+            for with_k in (False, True):           # with the JCGM 101 k note
+                parts = {}
+                for lg in L:
+                    head = [LABELS["below_zero"][lg]] if lead else []
+                    tail = [combined_k_note(res, L[lg], only=name)] if with_k else []
+                    parts[lg] = [t for t in head + own[lg][name] + tail if t]
+                out[_SEP["en"].join(parts["en"])] = _SEP["zh"].join(parts["zh"])
+    e_en, e_zh = _e_table_text(res, L["en"]), _e_table_text(res, L["zh"])
+    if e_en:
+        out[e_en] = e_zh
+    return out
 
 
 def _limit_rule(c) -> str:
