@@ -18,7 +18,7 @@ from pathlib import Path
 
 from gonio.errors import GonioError
 
-__all__ = ["lab_table_calibration", "calibration_dates"]
+__all__ = ["lab_table_calibration", "calibration_dates", "check_validity"]
 
 KEY = "table_calibration"
 
@@ -55,6 +55,37 @@ def calibration_dates(lab_d: dict | None, metadata: dict) -> list[tuple[_dt.date
     return out
 
 
+def check_validity(tc: dict, days: list[tuple[_dt.date, str]], lab_file=None) -> None:
+    """The laboratory file's ``[table_calibration]`` ``tc`` valid on every date of ``days``
+    (``[(date, where it came from)]``, at least one): calibrated on or before it (where
+    ``calibrated_on`` is given) and due on or after it; else a one-line GonioError naming
+    ``lab_file`` and the key.
+
+    >>> import datetime as dt
+    >>> check_validity({"id": "T", "due_on": "2027-01-01"}, [(dt.date(2027, 1, 2), "d")])
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key table_calibration.due_on: the table calibration T was due on 2027-01-01: expired on the calibration's date 2027-01-02 (d)
+    """
+    ident = f" {tc['id']}" if tc.get("id") else ""
+    if not days:
+        raise GonioError(f"the table calibration{ident}'s due date {tc['due_on']} cannot be "
+                         "checked: the readings state no # date: and [certificate] "
+                         "date_of_calibration is empty (give the calibration's date)",
+                         file=lab_file, key=f"{KEY}.due_on")
+    due = _dt.date.fromisoformat(tc["due_on"])
+    done = _dt.date.fromisoformat(tc["calibrated_on"]) if tc.get("calibrated_on") else None
+    for day, where in days:
+        if day > due:
+            raise GonioError(f"the table calibration{ident} was due on {due}: expired on the "
+                             f"calibration's date {day} ({where})", file=lab_file,
+                             key=f"{KEY}.due_on")
+        if done is not None and day < done:
+            raise GonioError(f"the table calibration{ident} was made on {done}, after the "
+                             f"calibration's date {day} ({where})", file=lab_file,
+                             key=f"{KEY}.calibrated_on")
+
+
 def lab_table_calibration(lab_d: dict | None, lab_file, metadata: dict,
                           given: str | Path | None = None) -> str | None:
     """The table calibration file to use: the laboratory file's ``[table_calibration]``
@@ -76,24 +107,7 @@ def lab_table_calibration(lab_d: dict | None, lab_file, metadata: dict,
                          "stated: the file changed since the laboratory recorded it (record "
                          "the new calibration's SHA-256 and dates, or restore the file)",
                          file=lab_file, key=f"{KEY}.sha256")
-    ident = f" {tc['id']}" if tc.get("id") else ""
-    days = calibration_dates(lab_d, metadata)
-    if not days:
-        raise GonioError(f"the table calibration{ident}'s due date {tc['due_on']} cannot be "
-                         "checked: the readings state no # date: and [certificate] "
-                         "date_of_calibration is empty (give the calibration's date)",
-                         file=lab_file, key=f"{KEY}.due_on")
-    due = _dt.date.fromisoformat(tc["due_on"])
-    done = _dt.date.fromisoformat(tc["calibrated_on"]) if tc.get("calibrated_on") else None
-    for day, where in days:
-        if day > due:
-            raise GonioError(f"the table calibration{ident} was due on {due}: expired on the "
-                             f"calibration's date {day} ({where})", file=lab_file,
-                             key=f"{KEY}.due_on")
-        if done is not None and day < done:
-            raise GonioError(f"the table calibration{ident} was made on {done}, after the "
-                             f"calibration's date {day} ({where})", file=lab_file,
-                             key=f"{KEY}.calibrated_on")
+    check_validity(tc, calibration_dates(lab_d, metadata), lab_file)
     if given is not None:
         other = _sha256(Path(given), None, "--table-calibration")
         if other != sha:

@@ -85,19 +85,23 @@ def write_lab_toml(lab: dict, path: str | Path) -> Path:
 
 
 def calibrate_folder(readings: str | Path, out: str | Path, *, spec_key: str,
-                     protocol: str | None = None, lab: str | Path | None = None) -> list[str]:
+                     protocol: str | None = None, lab: str | Path | None = None,
+                     table_calibration: str | Path | None = None) -> list[str]:
     """Calibrate ``readings`` per ``spec_key`` into ``out`` with the certificate (and the DCC
     where the specification writes one), through the one dispatch
-    (:func:`gonio.pipeline.dispatch.calibrate`); returns the file names written."""
+    (:func:`gonio.pipeline.dispatch.calibrate`); ``table_calibration``: the calibration's
+    stored table calibration file (its ``table_calibration`` option); returns the file names
+    written."""
     from gonio.pipeline.dispatch import calibrate
     from gonio.specs import get
 
     spec = get(spec_key)                      # an unknown key: GonioError listing the known
     out = Path(out)
     takes = spec.calibrate_options
+    extra = {"table_calibration": str(table_calibration)} if table_calibration else {}
     calibrate(readings, out, spec_key=spec.key, lab=lab, dcc="dcc" in takes,
               protocol=protocol if "protocol" in takes else None,
-              inputs=[readings, protocol, lab])
+              inputs=[readings, protocol, lab, table_calibration], **extra)
     return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
 
 

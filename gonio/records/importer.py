@@ -19,7 +19,8 @@ from sqlalchemy import select
 
 from gonio.errors import GonioError
 from gonio.records import blobs, services
-from gonio.records.models import Blob, Calibration, Customer, Instrument, Standard, User
+from gonio.records.models import (Blob, Calibration, CalibrationFile, Customer, Instrument,
+                                  Standard, User)
 from gonio.records.results import result_items
 
 #: readings file names looked for in a folder when none is given
@@ -127,6 +128,34 @@ def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int, dict, list]:
     return (*blobs.put_file(store.blob_root, Path(lab)), env, stds)
 
 
+def _table_calibration(store, lab, spec_key: str, rd: Path, results: dict,
+                       res_path: Path) -> tuple[str | None, int]:
+    """(sha256, size) of the laboratory file's ``[table_calibration]`` file stored, checked as
+    the command line checks it (:func:`gonio.pipeline.equipment.lab_table_calibration`: its
+    SHA-256, its validity on the readings' and the certificate's dates) and against the
+    folder's results.json (it must record that SHA-256: the run used it); (None, 0) where the
+    laboratory file names none or the specification takes none."""
+    if lab is None:
+        return None, 0
+    from gonio.formats.lab import load_lab
+    from gonio.formats.provenance import readings_metadata
+    from gonio.pipeline.equipment import lab_table_calibration
+    from gonio.specs import get
+    lab_d = load_lab(lab)
+    if not lab_d.get("table_calibration") or \
+            "table_calibration" not in get(spec_key).calibrate_options:
+        return None, 0
+    path = Path(lab_table_calibration(lab_d, lab, readings_metadata(rd)))
+    sha = lab_d["table_calibration"]["sha256"]
+    used = services.recorded_table_calibrations(results)
+    if used != {sha}:
+        raise GonioError(f"the laboratory file's table calibration {path.name} (SHA-256 "
+                         f"{sha[:16]}…) is not the one results.json was computed with "
+                         f"({', '.join(sorted(u[:16] + '…' for u in used)) or 'none'})",
+                         file=res_path, key="table_calibration")
+    return blobs.put_file(store.blob_root, path)
+
+
 def lab_standard_ids(s, standards: list, day: _dt.date, lab) -> list[int]:
     """The registered standards a laboratory file's ``[[standards]]`` name, matched by
     ``identifier``, each valid on the calibration date ``day``
@@ -214,7 +243,9 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     stated as from the laboratory file (:func:`lab_environment`), its place with the
     place's DCC category (``[certificate] place``, ``location``), and its ``[[standards]]``
     as the standards used (:func:`lab_standard_ids`: each registered and valid on the
-    calibration date, else a GonioError and nothing is recorded)."""
+    calibration date, else a GonioError and nothing is recorded); its ``[table_calibration]``
+    file, where it names one, as the calibration's table calibration
+    (:func:`_table_calibration`: the one results.json records, else refused)."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:
@@ -256,9 +287,11 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
+    tsha, tsize = _table_calibration(store, lab, key, rd, results, res_path)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
-        for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize)):
+        for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize),
+                          (tsha, tsize)):
             if sha and s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
                 s.flush()
@@ -288,6 +321,11 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         services.audit(s, actor, "import", "calibration", cal.id, None,
                        dict(services.state(cal), folder=str(folder),
                             standards=services.standard_names(s, cal.id)))
+        if tsha is not None:        # the laboratory's table calibration the run used, kept
+            s.add(CalibrationFile(calibration_id=cal.id, name=services.TABLE_CALIBRATION,
+                                  sha256=tsha))
+            services.audit(s, actor, "table-calibration", "calibration", cal.id, None,
+                           {"sha256": tsha, "name": Path(lab).name + " [table_calibration]"})
         s.commit()
         cal_id = cal.id
     try:

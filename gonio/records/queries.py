@@ -103,7 +103,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
     ``attachable`` (standards and environment may still be attached; ``all_standards`` to
     choose from)."""
     from gonio.errors import GonioError
-    from gonio.records.services import calibration, seal, settings
+    from gonio.records.services import TABLE_CALIBRATION, calibration, seal, settings
     from gonio.report.i18n import minus_sign
 
     try:
@@ -113,8 +113,10 @@ def calibration_page(store, cal_id: int) -> dict | None:
     with store.session() as s:
         items = s.scalars(select(ResultItem).where(ResultItem.calibration_id == cal_id)
                           .order_by(ResultItem.id)).all()
-        files = [f.name for f in s.scalars(select(CalibrationFile).where(
-            CalibrationFile.calibration_id == cal_id).order_by(CalibrationFile.name))]
+        rows = s.scalars(select(CalibrationFile).where(
+            CalibrationFile.calibration_id == cal_id).order_by(CalibrationFile.name)).all()
+        files = [f.name for f in rows]
+        table_sha = next((f.sha256 for f in rows if f.name == TABLE_CALIBRATION), None)
         stds = s.execute(select(Standard, CalibrationStandard.due_on_at_use)
                          .join(CalibrationStandard,
                                CalibrationStandard.standard_id == Standard.id)
@@ -138,6 +140,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
             "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
             "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
+            "table_calibration": table_calibration_used(table_sha, doc),
             "identity": identity_findings(store, cal.results_sha256, doc=doc) if sealed else []}
 
 
@@ -247,6 +250,26 @@ def certificate(store, cert_id: int):
         newer = s.scalar(select(Certificate).where(Certificate.replaces_id == cert_id)) \
             if cert else None
     return cert, newer
+
+
+def table_calibration_used(sha256: str | None, doc: dict | None) -> dict | None:
+    """The calibration's stored table calibration as its page shows it: ``{"sha256",
+    "items": [(item key, its title)…]}`` — the items whose results.json ``details`` record
+    this file's SHA-256 (corrected by it; [] before the run or where none was) — or None.
+
+    >>> table_calibration_used("ab", {"items": {"K": {"title": "Scale factor", "details":
+    ...     {"table_calibration": {"sha256": "ab"}}}, "R": {"details": {}}}})
+    {'sha256': 'ab', 'items': [('K', 'Scale factor')]}
+    """
+    if sha256 is None:
+        return None
+    raw = (doc or {}).get("items") or {}
+    pairs = raw.items() if isinstance(raw, dict) else (
+        (it.get("key"), it) for it in raw if isinstance(it, dict))
+    items = [(k, it.get("title") or k) for k, it in pairs
+             if isinstance(it, dict) and ((it.get("details") or {}).get("table_calibration")
+                                          or {}).get("sha256") == sha256]
+    return {"sha256": sha256, "items": items}
 
 
 def standards(store):

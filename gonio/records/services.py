@@ -488,9 +488,9 @@ def store_file(store, stream, *, limit_bytes: float = MAX_UPLOAD) -> tuple[str, 
     return digest, size
 
 
-#: what a calibration form may carry beside its readings file: a protocol and a laboratory
-#: file (1 MiB each) and the form's fields
-FORM_OVERHEAD_BYTES = 3 * 2**20
+#: what a calibration form may carry beside its readings file: a protocol, a laboratory
+#: file and a table calibration (1 MiB each) and the form's fields
+FORM_OVERHEAD_BYTES = 4 * 2**20
 
 
 def check_upload_size(declared_bytes, limit_bytes: float = MAX_UPLOAD) -> None:
@@ -547,11 +547,15 @@ def lab_file(store, sha256: str, name: str, spec_key: str) -> dict:
         except GonioError as exc:
             raise GonioError(exc.message.replace(str(path), shown), file=shown, line=exc.line,
                              column=exc.column, key=exc.key) from None
-    if not lab.get("specification_limits"):
+    if not lab.get("specification_limits") and not lab.get("table_calibration"):
         raise GonioError("no [[specification_limits]]: the records take a laboratory file for "
-                         "its decision rule and limits only", file=shown)
-    return {"decision_rule": lab["decision_rule"],
-            "specification_limits": lab["specification_limits"]}
+                         "its decision rule and limits (and its [table_calibration]) only",
+                         file=shown)
+    out = {"decision_rule": lab["decision_rule"],
+           "specification_limits": lab["specification_limits"]}
+    if lab.get("table_calibration"):      # checked against the upload (:func:`table_calibration_of`)
+        out["table_calibration"] = lab["table_calibration"]
+    return out
 
 
 def submission_fields(performed_on, received_on, standard_ids, temperature_c, humidity_pct):
@@ -632,6 +636,52 @@ def check_readings_unused(s: Session, sha256: str, *, other_than: int | None = N
     return before
 
 
+#: The name a calibration's table calibration file is kept under among its files (an input,
+#: stored at creation; sealed with the run's files).
+TABLE_CALIBRATION = "table_calibration.csv"
+
+
+def table_calibration_of(spec, lab: dict, lab_name: str, sha256: str | None,
+                         day: _dt.date) -> None:
+    """The table calibration upload ``sha256`` checked for a calibration per ``spec`` on
+    ``day``: only a specification that takes one (``"table_calibration"`` in its
+    ``calibrate_options``); where the laboratory file ``lab`` (:func:`lab_file`) names one
+    (``[table_calibration]``), the upload is required, its SHA-256 must be the one stated and
+    the calibration's date within its validity
+    (:func:`gonio.pipeline.equipment.check_validity`). Each refusal one GonioError line."""
+    from gonio.pipeline.equipment import check_validity
+
+    tc = (lab or {}).get("table_calibration")
+    if sha256 is None and tc is None:
+        return
+    if "table_calibration" not in spec.calibrate_options:
+        raise GonioError(f"{spec.key} takes no table calibration", key="table_calibration")
+    shown = lab_name or "laboratory file"
+    if tc is None:
+        return
+    if sha256 is None:
+        raise GonioError(f"the laboratory file names the table calibration {tc['file']} "
+                         f"(SHA-256 {tc['sha256'][:16]}…): upload it as the table calibration "
+                         "file", file=shown, key="table_calibration")
+    if sha256 != tc["sha256"]:
+        raise GonioError(f"the table calibration uploaded has SHA-256 {sha256}, not the "
+                         f"{tc['sha256']} the laboratory file states for {tc['file']}",
+                         file=shown, key="table_calibration.sha256")
+    check_validity(tc, [(day, "date of calibration")], shown)
+
+
+def table_calibration_file(store, cal_id: int, work: Path) -> Path | None:
+    """The calibration's stored table calibration (:data:`TABLE_CALIBRATION`, checked against
+    its digest) written into the work folder ``work`` for its run, or None where it has none."""
+    with store.session() as s:
+        f = s.get(CalibrationFile, (int(cal_id), TABLE_CALIBRATION))
+    if f is None:
+        return None
+    path = Path(work) / TABLE_CALIBRATION
+    path.write_bytes(file_bytes(store, f.sha256))
+    return path
+
+
 def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
                        readings_name: str = "", spec_key: str | None = None,
                        protocol: str | None = None, protocol_sha256: str | None = None,
@@ -640,7 +690,9 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        humidity_pct=None, performed_on=None, received_on=None,
                        place: str = "", location: str | None = None,
                        reuse_note: dict | None = None,
-                       check_reuse: bool = True) -> Calibration:
+                       check_reuse: bool = True,
+                       table_calibration_sha256: str | None = None,
+                       table_calibration_name: str = "") -> Calibration:
     """A new calibration, queued for the worker (technician), after the submission checks
     of its fields (:func:`submission_fields`: plausible dates, at least one standard, the
     environment); standards past their due date on the day of the calibration are refused
@@ -652,7 +704,11 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     (:func:`check_readings_unused`) unless ``reuse_note`` (the form's record of readings used
     again: why, used by which calibrations) gives the reason, audited with the creation.
     ``check_reuse`` False: only for a bench's request, which stands in for readings still
-    to be taken (they are checked when taken, :func:`gonio.records.bench.store_acquisition`)."""
+    to be taken (they are checked when taken, :func:`gonio.records.bench.store_acquisition`).
+    ``table_calibration_sha256``: a stored table calibration file (the rotary table's own
+    calibration, for a specification that takes one), kept as the calibration's file
+    :data:`TABLE_CALIBRATION` and used by its run (:func:`table_calibration_of` checks it
+    against the laboratory file's ``[table_calibration]``)."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -668,11 +724,11 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                              key="instrument")
         key = text(spec_key, "spec", max_len=64) or inst.spec_key
         get(key)
-        for sha in (readings_sha256, protocol_sha256, lab_sha256):
+        for sha in (readings_sha256, protocol_sha256, lab_sha256, table_calibration_sha256):
             if sha is not None and s.get(Blob, sha) is None:
                 raise GonioError("no such stored file", key="sha256")
-        if lab_sha256 is not None:
-            lab_file(store, lab_sha256, lab_name, key)
+        lab_d = lab_file(store, lab_sha256, lab_name, key) if lab_sha256 is not None else {}
+        table_calibration_of(get(key), lab_d, lab_name, table_calibration_sha256, day)
         if check_reuse:
             check_readings_unused(s, readings_sha256,
                                   reason=(reuse_note or {}).get("reason", ""))
@@ -692,6 +748,13 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
         s.flush()
         use_standards(s, cal, ids)
         audit(s, actor, "create", "calibration", cal.id, None, state(cal))
+        if table_calibration_sha256 is not None:     # an input kept and sealed with the run
+            s.add(CalibrationFile(calibration_id=cal.id, name=TABLE_CALIBRATION,
+                                  sha256=table_calibration_sha256))
+            audit(s, actor, "table-calibration", "calibration", cal.id, None,
+                  {"sha256": table_calibration_sha256,
+                   "name": text(table_calibration_name, "table calibration file name",
+                                max_len=255)})
         if reuse_note:
             audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
         s.commit()
@@ -1072,7 +1135,9 @@ def seal(store, cal_id: int) -> str:
         if not blobs.verify(store.blob_root, sha):
             raise GonioError(f"the stored {name} is missing or does not match its SHA-256",
                              key=f"calibration {cal_id}")
-    expect = result_rows(cal.id, json.loads(file_bytes(store, cal.results_sha256)))
+    doc = json.loads(file_bytes(store, cal.results_sha256))
+    _same_table_calibration(doc, files.get(TABLE_CALIBRATION), cal_id)
+    expect = result_rows(cal.id, doc)
     if len(expect) != len(kept):
         raise GonioError(f"{len(kept)} stored result rows, results.json has {len(expect)}",
                          key=f"calibration {cal_id}")
@@ -1086,6 +1151,36 @@ def seal(store, cal_id: int) -> str:
     doc = json.dumps({"files": files, "items": rows}, sort_keys=True, separators=(",", ":"),
                      allow_nan=False)
     return hashlib.sha256(doc.encode("utf-8")).hexdigest()
+
+
+def recorded_table_calibrations(results: dict) -> set[str]:
+    """The SHA-256 digests of the table calibrations a results.json records (any item's
+    ``details.table_calibration.sha256``; items as a mapping or a list).
+
+    >>> sorted(recorded_table_calibrations({"items": {"K": {"details": {
+    ...     "table_calibration": {"sha256": "ab"}}}, "R": {"details": None}}}))
+    ['ab']
+    """
+    items = (results or {}).get("items") or {}
+    items = items.values() if isinstance(items, dict) else items
+    return {str(d["sha256"]) for it in items if isinstance(it, dict)
+            for d in [((it.get("details") or {}).get("table_calibration") or {})]
+            if isinstance(d, dict) and d.get("sha256")}
+
+
+def _same_table_calibration(results: dict, stored: str | None, cal_id) -> None:
+    """The table calibration a stored results.json was computed with (the SHA-256 any item's
+    ``details.table_calibration`` records) is the calibration's stored
+    :data:`TABLE_CALIBRATION` (``stored``, its digest): a GonioError naming both otherwise
+    (the file kept with the calibration is not the one its result used)."""
+    used = sorted(recorded_table_calibrations(results))
+    if stored is None or not used:
+        return
+    if used != [stored]:
+        raise GonioError(f"the stored {TABLE_CALIBRATION} (SHA-256 {stored[:16]}…) is not the "
+                         f"table calibration the stored results.json was computed with "
+                         f"({', '.join(u[:16] + '…' for u in used)})",
+                         key=f"calibration {cal_id}")
 
 
 def _reserve_number(s: Session, year: int) -> str:
@@ -1359,8 +1454,11 @@ def lab_details(store, cal_id: int, *, final: bool, redraft: bool = False) -> di
             import tomllib
             basis = tomllib.loads(file_bytes(store, drafted.sha256).decode("utf-8"))
             lab.update({k: basis[k] for k in DECISION_BASIS if k in basis})
-        elif cal.lab_sha256:           # the calibration's own laboratory file
-            lab.update(lab_file(store, cal.lab_sha256, cal.lab_name, cal.spec_key))
+        elif cal.lab_sha256 and (own := lab_file(store, cal.lab_sha256, cal.lab_name,
+                                                 cal.spec_key)).get("specification_limits"):
+            # the calibration's own laboratory file (one naming only its table calibration
+            # leaves the instrument's limits in force)
+            lab.update({k: own[k] for k in DECISION_BASIS})
         elif limits:
             lab["decision_rule"] = {"rule": cfg["decision_rule"],
                                     "guard_band_factor": float(cfg["guard_band_factor"]),

@@ -10,6 +10,9 @@ every path: the web form, a bench, the Python API):
 * at least one registered reference standard is named (ISO/IEC 17025 6.5: the result's
   traceability; a certificate naming none states nothing it is traceable to);
 * the environment is entered: room temperature and relative humidity (17025 7.8.4.1 a);
+* a table calibration only for a specification that takes one, and where the laboratory
+  file names one (``[table_calibration]``) the upload of that file (its SHA-256), valid on the
+  date of calibration (:func:`gonio.records.services.table_calibration_of`);
 * the readings file is readings: a Parquet stream, or UTF-8 text whose first line after
   the ``# key: value`` metadata is a CSV header (a JSON file, a spreadsheet or an image is
   refused naming what it looks like) — :func:`readings_facts`;
@@ -158,7 +161,8 @@ def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        lab_name: str = "", reuse_reason: str = "", **details):
     """A new calibration after the submission checks (module docstring), queued for the
     worker (technician): the form's fields first (dates, standards, environment), then the
-    laboratory file, then the readings. ``details``: the other arguments of
+    laboratory file and the table calibration
+    (:func:`gonio.records.services.table_calibration_of`), then the readings. ``details``: the other arguments of
     :func:`gonio.records.services.create_calibration`. ``reuse_reason``: why readings
     already used by another calibration are used again (empty: such readings are refused)."""
     services.require(actor, "technician")
@@ -170,8 +174,10 @@ def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             raise GonioError("no such instrument", key="instrument")
         s.expunge(inst)
     key = services.text(spec_key, "spec", max_len=64) or inst.spec_key
-    if lab_sha256 is not None:
-        services.lab_file(store, lab_sha256, lab_name, key)
+    lab_d = services.lab_file(store, lab_sha256, lab_name, key) if lab_sha256 is not None else {}
+    from gonio.specs import get
+    services.table_calibration_of(get(key), lab_d, lab_name,   # before the readings' checks
+                                  details.get("table_calibration_sha256"), day)
     check_readings(readings_facts(store, readings_sha256), inst, key, temp, hum)
     reason = services.text(reuse_reason, "reuse_reason", max_len=services.MAX_TEXT,
                            multiline=True)

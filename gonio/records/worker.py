@@ -72,9 +72,17 @@ def _compute(store, cal, work) -> None:
     if request is not None:              # started from a connected bench: acquire first
         readings = bench.acquire_for(store, cal, request, work, protocol)
     lab = write_lab_toml(services.lab_details(store, cal.id, final=False), work / "lab.toml")
+    table = services.table_calibration_file(store, cal.id, work)
     services.set_progress(store, cal.id, "computing the items and their uncertainties, "
                                          "rendering the draft certificate")
-    calibrate_folder(readings, work / "out", spec_key=cal.spec_key, protocol=protocol, lab=lab)
+    try:
+        calibrate_folder(readings, work / "out", spec_key=cal.spec_key, protocol=protocol,
+                         lab=lab, **({"table_calibration": table} if table else {}))
+    except GonioError as exc:          # the stored table calibration named as the records do
+        if table is None or exc.file != str(table):
+            raise
+        raise GonioError(exc.message, file=services.TABLE_CALIBRATION, line=exc.line,
+                         column=exc.column, key=exc.key) from None
     # the details the result was decided with, sealed with it: the decision basis
     shutil.copyfile(lab, work / "out" / "lab.toml")
     services.set_progress(store, cal.id, "storing the files")

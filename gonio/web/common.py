@@ -19,7 +19,7 @@ PAGE = 50
 FILE_TYPES = {"certificate.pdf": "application/pdf", "certificate.html": "text/html",
               "certificate.dcc.xml": "application/xml", "results.json": "application/json",
               "summary.txt": "text/plain", "io.log": "text/plain", "lab.toml": "text/plain",
-              "bench-request.json": "application/json"}
+              "bench-request.json": "application/json", "table_calibration.csv": "text/csv"}
 
 
 class Redirect(Exception):

@@ -362,7 +362,7 @@ NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperatur
               "supply", "metadata")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
-             ("lab_file", services.MAX_LAB_BYTES))
+             ("lab_file", services.MAX_LAB_BYTES), ("table_calibration_file", 2**20))
 
 
 def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None,
@@ -456,6 +456,8 @@ async def calibration_create(request: Request, session: Session, inst_id: int):
             spec_key=data.get("spec_key") or None, protocol=data.get("protocol") or None,
             protocol_sha256=files["protocol_file"][0], lab_sha256=files["lab_file"][0],
             lab_name=files["lab_file"][1],
+            table_calibration_sha256=files["table_calibration_file"][0],
+            table_calibration_name=files["table_calibration_file"][1],
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),

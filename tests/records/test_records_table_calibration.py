@@ -1,0 +1,272 @@
+"""The rotary table's calibration in the records and ``gonio serve`` (docs/records.md#table-calibration):
+uploaded with the calibration form, kept as the calibration's file ``table_calibration.csv``
+(an input, sealed with the run), used by the worker's real pipeline run, shown on the
+calibration page; a changed stored file is detected by the seal; a backup restores it and the
+certificate renders again to the same bytes; a laboratory file's ``[table_calibration]`` is
+checked against the upload (SHA-256, due date) on the form.
+
+Truths from outside the records: the file's SHA-256 by hashlib; the K the run states against
+the 7.1 mean recomputed here from the readings with the file's errors (the draft's K_i =
+N_i/θ_i with θ_i corrected by the table's error, e(stop) − e(zero), in arcsec/3600)."""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from sqlalchemy import update
+
+from gonio.errors import GonioError
+from gonio.records import blobs, services, worker
+from gonio.records.models import CalibrationFile
+
+from .test_web_lab_file import HEAD, alert, instrument, n_calibrations
+from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
+
+REPO = Path(__file__).resolve().parents[2]
+SMALL_PROTOCOL = REPO / "tests" / "data" / "small-protocol.toml"
+#: the small protocol's positions (K: 0 → 120, 240, 360; E: 90 … 360) and a table error
+POSITIONS = (0.0, 90.0, 120.0, 180.0, 240.0, 270.0)
+
+
+def error_arcsec(a_deg):
+    return 0.04 * np.cos(np.radians(a_deg)) + 0.02 * np.sin(np.radians(3 * a_deg))
+
+
+TABLE = ("# table certificate TC-9\ntable_deg,error_arcsec,u_arcsec\n" + "".join(
+    f"{a:g},{error_arcsec(a):.6f},0.02\n" for a in POSITIONS)).encode()
+SHA = hashlib.sha256(TABLE).hexdigest()
+
+
+def post(client, inst, readings: bytes, table: bytes | None, lab: str | None = None,
+         performed_on: str | None = None):
+    files = {"readings": ("readings.csv", io.BytesIO(readings)),
+             "protocol_file": ("protocol.toml", io.BytesIO(SMALL_PROTOCOL.read_bytes()))}
+    if table is not None:
+        files["table_calibration_file"] = ("RT-07 cal.csv", io.BytesIO(table))
+    if lab is not None:
+        files["lab_file"] = ("my-lab.toml", io.BytesIO(lab.encode()))
+    return client.post(f"/instruments/{inst.id}/calibrate", files=files,
+                       data={"csrf": csrf_of(client),
+                             "performed_on": performed_on or str(dt.date.today()),
+                             "standards": ["1"], "temperature_c": "20.1",
+                             "humidity_pct": "45"})
+
+
+def k_corrected_here(readings: Path) -> float:
+    """The 7.1 K from the readings with the table file's errors (arcsec → degrees by
+    /3600): mean of N_i/(θ_i − (e(stop) − e(zero))/3600), the stops read from the file."""
+    df = pd.read_csv(readings, comment="#")
+    k = df[df["test"] == "scale_factor"]
+    stop = k["table_deg"].to_numpy(float)
+    theta = stop - (error_arcsec(np.mod(stop, 360.0)) - error_arcsec(0.0)) / 3600.0
+    return float(np.mean(k["gyro_counts"].to_numpy(float) / theta))
+
+
+@pytest.fixture
+def computed(app, sqlite_store, bench_readings):  # noqa: F811
+    """A calibration made through the web form with the table calibration uploaded, computed
+    by the worker's real pipeline: (the technician's client, calibration id)."""
+    tech = login(app, "tech")
+    inst = instrument(sqlite_store)
+    r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE)
+    assert r.status_code == 303, alert(r.text)
+    cal_id = int(r.headers["location"].rsplit("/", 1)[1])
+    assert services.claim_next(sqlite_store).id == cal_id
+    assert worker.execute(sqlite_store, cal_id), services.calibration(sqlite_store, cal_id).error
+    return tech, cal_id
+
+
+def results_of(store, cal_id) -> dict:
+    return json.loads(services.file_bytes(store, services.calibration(store, cal_id)
+                                          .results_sha256))
+
+
+def test_uploaded_table_calibration_used_kept_and_shown(computed, sqlite_store,
+                                                         bench_readings):
+    """The upload is the calibration's table_calibration.csv (hashlib digest), the run's K is
+    the 7.1 mean corrected by the file's errors as recomputed here (and not the uncorrected
+    mean), results.json records the digest, and the page shows the file with its digest and
+    the items it corrected; the stored bytes are the upload's."""
+    tech, cal_id = computed
+    with sqlite_store.session() as s:
+        assert s.get(CalibrationFile, (cal_id, "table_calibration.csv")).sha256 == SHA
+    assert services.file_bytes(sqlite_store, SHA) == TABLE
+    res = results_of(sqlite_store, cal_id)
+    k = res["items"]["scale_factor"]
+    assert k["details"]["table_calibration"]["sha256"] == SHA
+    want = k_corrected_here(Path(bench_readings[0]))
+    assert abs(k["value"] / want - 1.0) < 1e-9, (k["value"], want)
+    assert abs(k["details"]["table_calibration"]["uncorrected_value"] / want - 1.0) > 1e-8
+    page = tech.get(f"/calibrations/{cal_id}").text
+    assert 'id="table-calibration"' in page and SHA in page
+    assert "the result was computed with it" in page
+    got = tech.get(f"/calibrations/{cal_id}/files/table_calibration.csv")
+    assert got.status_code == 200 and got.content == TABLE
+
+
+def test_changed_stored_file_breaks_the_seal(computed, sqlite_store):
+    """The stored file's bytes changed on disk, or the calibration's file pointed at another
+    stored file: the seal (what review, approval and issue check) refuses, naming it."""
+    _, cal_id = computed
+    sealed = services.seal(sqlite_store, cal_id)
+    other = TABLE.replace(b"0.02\n", b"0.03\n", 1)
+    sha2, _ = services.store_file(sqlite_store, io.BytesIO(other))
+    with sqlite_store.writing() as s:
+        s.execute(update(CalibrationFile).where(
+            CalibrationFile.calibration_id == cal_id,
+            CalibrationFile.name == "table_calibration.csv").values(sha256=sha2))
+        s.commit()
+    with pytest.raises(GonioError, match="not the table calibration the stored results.json "
+                                         "was computed with"):
+        services.seal(sqlite_store, cal_id)
+    with sqlite_store.writing() as s:
+        s.execute(update(CalibrationFile).where(
+            CalibrationFile.calibration_id == cal_id,
+            CalibrationFile.name == "table_calibration.csv").values(sha256=SHA))
+        s.commit()
+    assert services.seal(sqlite_store, cal_id) == sealed
+    path = blobs.blob_path(sqlite_store.blob_root, SHA)
+    path.chmod(0o644)
+    path.write_bytes(TABLE + b"\n")
+    with pytest.raises(GonioError, match="stored table_calibration.csv is missing or does not "
+                                         "match its SHA-256"):
+        services.seal(sqlite_store, cal_id)
+
+
+def test_backup_restore_renders_the_same_bytes(computed, sqlite_store, tmp_path):
+    """A backup restored into empty records holds the calibration's table calibration (same
+    bytes, same digest), the same seal, and its draft certificate rendered again from the
+    stored result is byte-identical to the one rendered from the original records."""
+    from gonio.records.backup import backup, restore
+    from gonio.records.compute import render_folder, write_lab_toml
+    from gonio.records.db import open_store
+
+    _, cal_id = computed
+    archive = tmp_path / "b.zip"
+    backup(sqlite_store, archive)
+    target = open_store(None, tmp_path / "target")
+    try:
+        restore(target, archive)
+        with target.session() as s:
+            assert s.get(CalibrationFile, (cal_id, "table_calibration.csv")).sha256 == SHA
+        assert services.file_bytes(target, SHA) == TABLE
+        assert services.seal(target, cal_id) == services.seal(sqlite_store, cal_id)
+        outs = []
+        for i, store in enumerate((sqlite_store, target)):
+            lab = write_lab_toml(services.lab_details(store, cal_id, final=False, redraft=True),
+                                 tmp_path / f"lab{i}.toml")
+            out = tmp_path / f"render{i}"
+            render_folder(services.file_bytes(store, services.calibration(store, cal_id)
+                                              .results_sha256), out, spec_key="ogam-draft",
+                          lab=lab)
+            outs.append({n: (out / n).read_bytes() for n in ("certificate.html",
+                                                             "certificate.dcc.xml",
+                                                             "certificate.pdf")})
+        assert outs[0] == outs[1]
+        assert SHA.encode() in outs[0]["certificate.dcc.xml"]
+    finally:
+        target.close()
+
+
+def lab_with_table(sha: str, due: str = "2099-01-01") -> str:
+    return (HEAD + f'\n[table_calibration]\nfile = "RT-07 cal.csv"\nsha256 = "{sha}"\n'
+            f'id = "TC-9"\ndue_on = "{due}"\n')
+
+
+@pytest.mark.parametrize("table, lab, spec_key, expect", [
+    (None, lab_with_table(SHA), "ogam-draft",
+     "my-lab.toml: key table_calibration: the laboratory file names the table calibration"),
+    (TABLE + b"15,0.0,0.02\n", lab_with_table(SHA), "ogam-draft",
+     "my-lab.toml: key table_calibration.sha256: the table calibration uploaded has SHA-256"),
+    (TABLE, lab_with_table(SHA, "2020-01-01"), "ogam-draft",
+     "my-lab.toml: key table_calibration.due_on: the table calibration TC-9 was due on "
+     "2020-01-01: expired"),
+    (TABLE, None, "jjf1535-2015", "key table_calibration: jjf1535-2015 takes no table "
+                                  "calibration"),
+], ids=["lab-names-one-none-uploaded", "another-content", "expired", "spec-takes-none"])
+def test_refused_on_the_form(app, sqlite_store, bench_readings, table, lab,  # noqa: F811
+                             spec_key, expect):
+    """The form comes back (400) with one line; nothing is queued."""
+    tech = login(app, "tech")
+    inst = instrument(sqlite_store, spec_key)
+    readings = (Path(bench_readings[0]).read_bytes() if spec_key == "ogam-draft"
+                else f"# spec: {spec_key}\n".encode())
+    r = post(tech, inst, readings, table, lab)
+    assert r.status_code == 400
+    msg = alert(r.text)
+    assert msg.startswith(expect) and "\n" not in msg, msg
+    assert n_calibrations(sqlite_store) == 0
+
+
+def test_lab_file_naming_the_upload_accepted(app, sqlite_store, bench_readings):  # noqa: F811
+    """A laboratory file naming only its table calibration (no limits) with the matching
+    upload is accepted; the instrument's own limits stay in force."""
+    tech = login(app, "tech")
+    inst = instrument(sqlite_store)
+    r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, lab_with_table(SHA))
+    assert r.status_code == 303, alert(r.text)
+    cal_id = int(r.headers["location"].rsplit("/", 1)[1])
+    d = services.lab_details(sqlite_store, cal_id, final=False)
+    assert [(x["item"], x["mpe"]) for x in d["specification_limits"]] == [("repeatability", 9.0)]
+    assert "table_calibration" not in d
+
+
+IMPORT_LAB = """[laboratory]
+name = "L"
+address = "A"
+
+[certificate]
+number = "C-1"
+date_of_calibration = "2026-11-16"
+
+[customer]
+name = "K"
+
+[signatory]
+approved_by = "P"
+
+[table_calibration]
+file = "tc.csv"
+sha256 = "{sha}"
+due_on = "2099-01-01"
+"""
+
+
+def test_import_keeps_the_laboratory_table_calibration(sqlite_store, bench_readings, tmp_path,
+                                                        capsys):
+    """``gonio db import FOLDER --lab FILE`` of a command-line run made with the laboratory
+    file's [table_calibration]: the calibration keeps that file (hashlib digest) and its seal
+    holds; a laboratory file naming another calibration than the run used is refused."""
+    from gonio.cli import main
+    from gonio.records.importer import import_output_folder
+
+    (tmp_path / "tc.csv").write_bytes(TABLE)
+    lab = tmp_path / "lab.toml"
+    lab.write_text(IMPORT_LAB.format(sha=SHA), encoding="utf-8")
+    out = tmp_path / "run"
+    assert main(["calibrate", str(bench_readings[0]), "--protocol", str(SMALL_PROTOCOL),
+                 "--lab", str(lab), "--out", str(out)]) == 0
+    capsys.readouterr()
+    # another table calibration named by a laboratory file: not the one the run used
+    other = TABLE.replace(b"0.02\n", b"0.03\n", 1)
+    (tmp_path / "o").mkdir()
+    (tmp_path / "o" / "tc.csv").write_bytes(other)
+    lab2 = tmp_path / "o" / "lab.toml"
+    lab2.write_text(IMPORT_LAB.format(sha=hashlib.sha256(other).hexdigest()), encoding="utf-8")
+    with pytest.raises(GonioError, match="is not the one results.json was computed with"):
+        import_output_folder(sqlite_store, out, lab=lab2, readings=bench_readings[0],
+                             protocol=SMALL_PROTOCOL)
+    assert n_calibrations(sqlite_store) == 0
+    cal_id = import_output_folder(sqlite_store, out, lab=lab, readings=bench_readings[0],
+                                  protocol=SMALL_PROTOCOL)
+    with sqlite_store.session() as s:
+        assert s.get(CalibrationFile, (cal_id, "table_calibration.csv")).sha256 == SHA
+    assert services.file_bytes(sqlite_store, SHA) == TABLE
+    assert services.seal(sqlite_store, cal_id)
