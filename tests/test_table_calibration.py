@@ -455,23 +455,134 @@ def test_e_line_against_monte_carlo(base):
     assert np.std(e_i, axis=0) == pytest.approx(u_pts, rel=0.03)
 
 
-def test_e_position_missing_keeps_mpe_line(base):
-    """A calibration without one of E's points (150° is none of K's): E is not corrected, keeps
-    the MPE line, and the line and the notes name the missing position."""
+def _k_part(theta, stops=(60.0, 120.0, 180.0, 240.0, 300.0)):
+    """By hand (7.1, 7.4): E_i = C_i/K − θ_i moves by −θ_i·δK/K, K = mean C_k/θ_k over the
+    six 7.1 stops 60°…360° from 0°, so E_i's coefficients on the table errors through K are
+    −θ_i/(6θ_k) at each stop (360° is 0°: its two terms cancel) and +Σ θ_i/(6θ_k) at 0°."""
+    c = np.array([-theta / (6.0 * t) for t in stops])
+    return c, -float(np.sum(c))
+
+
+def test_e_position_missing_corrects_the_others(base):
+    """A calibration without one of E's points (150°, none of K's stops): every other point is
+    corrected (E_i equal the bench's truth to 0.003″); the point at 150° keeps its own table
+    error, which the bench's harmonics give: E_150 − truth = −(e(150°) − e(0°)) (> 0.01″
+    here), and its line is the own part at the MPE (MPE/√3 at 150° and 0°) with K's part from
+    the calibration (u 0.02″ per position, coefficients by hand); the 150° point is named in
+    the details, the notes and the certificate's note (en, zh)."""
+    from gonio.kit.render import labels
+    from gonio.specs.ogam_draft.phrases import LABELS
+    from gonio.specs.ogam_draft.stated import e_table_note
+
     p, clean, cal = _no_tilt_estimate_setup(base)
     keep = ~np.isclose(cal.table_deg, 150.0)
     part = TableCalibration(cal.table_deg[keep], cal.error_arcsec[keep], cal.u_arcsec[keep],
                             "part.csv")
-    _, raw = _analyse(p, clean, 0)
+    res, rep = _analyse(p, clean, 0, part)
+    e = rep.results.angle_deviation
+    d = e.details["table_calibration"]
+    assert d["points_uncorrected_deg"] == [150.0] and d["scale_factor_corrected"] is True
+    th = e.table["position_deg"].to_numpy(float)
+    truth = _e_truth_71(res).reindex(e.table["round"]).to_numpy()
+    diff = e.table["E_arcsec"].to_numpy() - truth
+    at = np.isclose(th, 150.0)
+    assert np.max(np.abs(diff[~at])) < 0.003
+    own = float(harmonic_sum_arcsec(np.array([150.0]), HARMONICS)[0]
+                - harmonic_sum_arcsec(np.array([0.0]), HARMONICS)[0])
+    assert abs(own) > 0.01 and diff[at][0] == pytest.approx(-own, abs=0.003)
+    c, c0 = _k_part(150.0)
+    u_k2 = 0.02 ** 2 * (np.sum(c ** 2) + c0 ** 2)
+    u_150 = math.sqrt(2.0 * 0.1 ** 2 / 3.0 + u_k2)
+    assert d["u_points_arcsec"][int(np.flatnonzero(at)[0])] == pytest.approx(u_150, rel=1e-3)
+    c, c0 = _k_part(30.0)               # a corrected point: the calibration's alone
+    u_30 = 0.02 * math.sqrt(1.0 + (1.0 - c0) ** 2 + np.sum(c ** 2))
+    assert d["u_points_arcsec"][0] == pytest.approx(u_30, rel=1e-3)
+    assert any("E at 150 deg keeps the MPE line" in n for n in rep.budget_notes)
+    j = rep.result().to_json()
+    for lang, word in (("en", "150"), ("zh", "150")):
+        text = "".join(x if isinstance(x, str) else x.text
+                       for x in e_table_note(j, labels(lang, LABELS)))
+        assert word in text
+
+
+def test_e_k_stop_missing_keeps_k_part(base):
+    """A calibration without 60° (a 7.1 stop and one of E's points): K is not corrected (the
+    Result's K is the 7.1 mean as measured), E is read with it: every other point's own table
+    error is corrected, so E_i = truth_i + 3600·θ_i·(K_truth/K − 1) (K_truth from the bench
+    file) to 0.003″; each corrected point's line is the calibration's at the point and zero
+    plus K's part at the MPE (by hand: the 7.1 stops' coefficients at MPE/√3)."""
+    p, clean, cal = _no_tilt_estimate_setup(base)
+    keep = ~np.isclose(cal.table_deg, 60.0)
+    part = TableCalibration(cal.table_deg[keep], cal.error_arcsec[keep], cal.u_arcsec[keep],
+                            "part.csv")
+    res, raw = _analyse(p, clean, 0)
     _, rep = _analyse(p, clean, 0, part)
     e = rep.results.angle_deviation
-    assert "table_calibration" not in e.details
-    assert e.value == raw.results.angle_deviation.value
-    rows = rep.uncertainty.table()
-    src = rows.loc[rows["symbol"] == "P", "source"].iloc[0]
-    assert "MPE" in src and "part.csv does not cover 150 deg" in src
-    assert any("part.csv does not cover 150 deg" in n for n in rep.budget_notes)
-    assert rep.uncertainty.U_arcsec == pytest.approx(raw.uncertainty.U_arcsec, rel=1e-12)
+    d = e.details["table_calibration"]
+    assert d["scale_factor_corrected"] is False and d["points_uncorrected_deg"] == [60.0]
+    k_as_read = rep.item(rep.results.scale_factor).value
+    assert k_as_read == raw.item(raw.results.scale_factor).value
+    k_true = scale_factor_truth(res.truth)[0]
+    th = e.table["position_deg"].to_numpy(float)
+    truth = _e_truth_71(res).reindex(e.table["round"]).to_numpy()
+    want = truth + 3600.0 * th * (k_true / k_as_read - 1.0)
+    ok = ~np.isclose(th, 60.0)
+    assert np.max(np.abs(e.table["E_arcsec"].to_numpy()[ok] - want[ok])) < 0.003
+    c, c0 = _k_part(30.0)
+    u_30 = math.sqrt(2 * 0.02 ** 2 + 0.1 ** 2 / 3.0 * (np.sum(c ** 2) + c0 ** 2))
+    assert d["u_points_arcsec"][0] == pytest.approx(u_30, rel=1e-9)
+    assert any("K is not corrected" in n for n in rep.budget_notes)
+
+
+def test_e_and_k_dof_from_the_calibration(base):
+    """The calibration's ν reaches each E_i's table line and K's P_Kc: ν against GTC
+    (a peer library, test only) for the same linear combination of the positions' errors —
+    independent positions (Welch–Satterthwaite) and a joint estimate (GTC's ensemble with
+    its correlation: ν the fit's); the points' k then exceed those without ν."""
+    GTC = pytest.importorskip("GTC")
+    p, clean, cal = _no_tilt_estimate_setup(base)
+    x = cal.table_deg
+    dof = 3.0 + (np.arange(x.size) % 4)
+    ind = TableCalibration(x, cal.error_arcsec, cal.u_arcsec, "dof.csv", dof=dof)
+    _, rep = _analyse(p, clean, 0, ind)
+    d = rep.results.angle_deviation.details["table_calibration"]
+    j30 = int(np.argmin(np.abs(x - 30.0)))
+    j0 = int(np.argmin(np.abs(x - 0.0)))
+    stops = [int(np.argmin(np.abs(x - t))) for t in (60.0, 120.0, 180.0, 240.0, 300.0)]
+    c, c0 = _k_part(30.0)
+    q = {i: GTC.ureal(0.0, float(ind.u_arcsec[i]), float(dof[i])) for i in [j30, j0] + stops}
+    y = q[j30] - q[j0] * (1.0 - c0) + sum(ci * q[i] for ci, i in zip(c, stops))
+    assert d["dof_points"][0] == pytest.approx(GTC.dof(y), rel=2e-3)
+    assert d["u_points_arcsec"][0] == pytest.approx(GTC.uncertainty(y), rel=1e-3)
+    # a calibration whose u dominates E's budget (0.3″, ν 3): the points' k follow its ν
+    big = TableCalibration(x, cal.error_arcsec, np.full(x.size, 0.3), "big.csv",
+                           dof=np.full(x.size, 3.0))
+    _, rep_big = _analyse(p, clean, 0, big)
+    _, plain = _analyse(p, clean, 0, replace(big, dof=None))
+    k_dof = [b["k"] for b in rep_big.uncertainty.points]
+    k_inf = [b["k"] for b in plain.uncertainty.points]
+    assert all(a >= b for a, b in zip(k_dof, k_inf)) and max(np.subtract(k_dof, k_inf)) > 0.3
+    # a joint estimate: one s² of ν = 7 for all, correlated positions
+    r = 0.5 ** np.abs(np.subtract.outer(np.arange(x.size), np.arange(x.size)))
+    v = r * np.outer(cal.u_arcsec, cal.u_arcsec)
+    joint = TableCalibration(x, cal.error_arcsec, cal.u_arcsec, "eda", cov_arcsec2=v,
+                             dof=np.full(x.size, 7.0))
+    e = GTC.multiple_ureal([0.0] * x.size, list(cal.u_arcsec), 7)
+    for i in range(x.size):
+        for k in range(i + 1, x.size):
+            GTC.set_correlation(float(r[i, k]), e[i], e[k])
+    cvec = np.zeros(x.size)
+    cvec[[j30, j0]] = (1.0, -(1.0 - c0))
+    cvec[stops] += c
+    u, nu = joint.combine(cvec)
+    y = sum(float(ci) * e[i] for i, ci in enumerate(cvec) if ci)
+    assert (u, nu) == (pytest.approx(GTC.uncertainty(y), rel=1e-9), pytest.approx(GTC.dof(y)))
+    # Welch–Satterthwaite over the positions (for independent inputs) would be off here
+    nu_ws = float(cvec @ v @ cvec) ** 2 / float(np.sum((cvec * cal.u_arcsec) ** 4 / 7.0))
+    assert abs(nu_ws - 7.0) > 1.0
+    _, kr = _analyse(p, clean, 0, joint)
+    pk = next(ln for ln in kr.item_uncertainty["scale_factor"].components if ln.symbol == "P_Kc")
+    assert pk.dof == pytest.approx(7.0)
 
 
 def test_result_states_the_corrected_e(base):

@@ -231,6 +231,7 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                    repeatability_type: str = "A",
                    repeatability_source: str = "repeatability (A.4.4)",
                    table_u_arcsec: float | None = None, table_source: str = _P_SOURCE,
+                   table_dof: float = math.inf,
                    phi_e_arcsec: float | None = None, phi_e_source: str = _PHI_SOURCE
                    ) -> AnnexABudget:
     """The draft's Annex A budget (A.2–A.7), optionally checked by JCGM 101 Monte Carlo.
@@ -260,6 +261,8 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
         value (e.g. the protocol's); the source sentence shown in the budget.
     table_u_arcsec, phi_e_arcsec, table_source, phi_e_source : float or None, str
         Physical budget's P (normal u), φ_e; None: the draft's A.4.1 and A.4.2 lines.
+    table_dof : float
+        ν of ``table_u_arcsec`` (a calibrated table's, JCGM 100 G.4.1); ∞ by default.
 
     Examples
     --------
@@ -306,7 +309,9 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     drift_arcsec = zero_stability_dph * ARCSEC_PER_MIN_PER_DPH * duration_min
     inputs = [
         type_b("P", 0.0, table_mpe_arcsec if table_u_arcsec is None else table_u_arcsec,
-               "rectangular" if table_u_arcsec is None else "normal", source=table_source),
+               "rectangular" if table_u_arcsec is None else "normal", source=table_source)
+        if table_u_arcsec is None or math.isinf(table_dof) else
+        from_u("P", 0.0, table_u_arcsec, dof=table_dof, type="B", source=table_source),
         type_b("phi_e", 0.0, elliptic_extreme(tilt_deg).extreme_arcsec if phi_e_arcsec is None
                else phi_e_arcsec, "rectangular", source=phi_e_source),
         type_b("B_E", 0.0, drift_arcsec, "rectangular", source="zero drift (A.4.3)"),

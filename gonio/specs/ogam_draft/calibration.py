@@ -933,25 +933,27 @@ def _refuse_negative_times(readings, lines) -> None:
 
 def _point_table_line(i: int, theta: float, extras: list, from_counts: bool, stops,
                       mpe_arcsec: float, table_measured) -> tuple:
-    """(u or None, source, extras) of the table line of 7.4 point ``i``: the calibrated
-    table's (``table_measured`` of :func:`angle_deviation_at_table`: P and K_P replaced),
+    """(u or None, source, extras, ν) of the table line of 7.4 point ``i``: the calibrated
+    table's (``table_measured`` of :func:`angle_deviation_at_table`: P and K_P replaced, ν
+    propagated from the calibration's),
     else P and K_P as one line at MPE/√3 where E's angles come from counts through the 7.1 K
     (:func:`~gonio.specs.ogam_draft.budget_extra.table_line_u`), else Annex A's P."""
     from gonio.specs.ogam_draft.budget_extra import table_line_u
 
     why = ""
-    if table_measured is not None and "u_arcsec" in table_measured:
-        return (float(table_measured["u_arcsec"][i]), table_measured["source"],
-                [x for x in extras if x.symbol != "K_P"])
-    if table_measured is not None:
+    if table_measured is not None and "u_arcsec" in table_measured and \
+            table_measured["u_arcsec"][i] is not None:
+        return (float(table_measured["u_arcsec"][i]), table_measured["sources"][i],
+                [x for x in extras if x.symbol != "K_P"], float(table_measured["dof"][i]))
+    if table_measured is not None and table_measured.get("reason"):
         why = f"; {table_measured['reason']}"
     if from_counts and any(x.symbol == "K_P" for x in extras):
         return (table_line_u(theta, stops, mpe_arcsec / math.sqrt(3.0)),
                 "table positioning at the point, the common zero and the 7.1 stops, one "
                 "error per position, each MPE/sqrt(3) (A.4.1; through K, 7.1) "
                 "[physical budget: P and K_P as one line]" + why,
-                [x for x in extras if x.symbol != "K_P"])
-    return None, "standard table positioning (A.4.1)" + why, extras
+                [x for x in extras if x.symbol != "K_P"], math.inf)
+    return None, "standard table positioning (A.4.1)" + why, extras, math.inf
 
 
 def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r, dof, typ,
@@ -1039,7 +1041,7 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
         r_i, r_dof, r_typ, r_src = _point_reading_noise(
             t_i[i], int(n_i[i]), (u_q, nz) if rn else None, u_r, dof, typ, src)
         d_i = t_i[i] / S_PER_MIN if math.isfinite(t_i[i]) else dur_min
-        table_u, t_src, extras = _point_table_line(
+        table_u, t_src, extras, t_dof = _point_table_line(
             i, theta, extras, from_counts, stops, settings["table_mpe_arcsec"], table_measured)
         return annex_a_budget(
             table_mpe_arcsec=settings["table_mpe_arcsec"], tilt_deg=tilt_deg,
@@ -1048,7 +1050,7 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
             monte_carlo_trials=mc_trials, seed=seed,
             repeatability_dof=r_dof, repeatability_type=r_typ, repeatability_source=r_src,
             phi_e_arcsec=phi_e, phi_e_source=phi_src, table_u_arcsec=table_u,
-            table_source=t_src)
+            table_source=t_src, table_dof=t_dof)
 
     sub = [point_budget(i, theta, [], 0) for i, theta in enumerate(pos)]
     # E = ± max|E_i| is stated with the LARGEST of the points' U (its point's budget, notes
@@ -1320,83 +1322,186 @@ def _e_points_from_readings(points: pd.DataFrame, long: pd.DataFrame):
     return value, at, matrix
 
 
-def _e_table_lookup(results, protocol, calibration, long):
-    """(i_point, i_zero, K's sensitivity c_K, K as read, K corrected, missing positions) of
-    :func:`angle_deviation_at_table` (K's terms None where E's angles are not read with the
-    7.1 K)."""
+def e_table_rule(point_listed: bool, sees_point: bool, through_k: bool,
+                 k_corrected: bool) -> dict:
+    """Which of E_i's table terms a laboratory's table calibration corrects (beyond the
+    draft; the one rule of :func:`angle_deviation_at_table`). E_ij = C_ij/K − θ_i (7.4)
+    carries the table's errors in two parts: its own, e(θ_i) − e(z_i) (A.4.1: the point and
+    its 7.4 zeroing position), and, where E's angles come from counts through the 7.1 K
+    (7.4), −θ_i·δK/K from the errors at K's 7.1 stops and zeros (7.1).
+
+    - own part: corrected where the calibration lists the point and its zero
+      (``point_listed``) and sees the part (``sees_point``: no blind harmonic of an
+      equal-division comparison in it); else kept, with the MPE line (A.4.1), at this
+      point only;
+    - K's part: E is read with the K the Result states (7.4). That K is corrected exactly
+      when the calibration lists every 7.1 stop and zero (``k_corrected``; K's own rule);
+      then E_ij is read with it and K's part is the calibration's. A 7.1 stop or zero the
+      calibration does not list leaves K as measured with its MPE line (P_K), so K's part of
+      every E_i stays at the MPE (u MPE/√3 per position, A.4.1), also at a point whose own
+      part is corrected. Without counts (``through_k`` False) there is no K part.
+
+    Returns ``{"own": bool, "k": "corrected" | "mpe" | None}``.
+
+    >>> e_table_rule(True, True, True, False)
+    {'own': True, 'k': 'mpe'}
+    >>> e_table_rule(False, True, True, True)
+    {'own': False, 'k': 'corrected'}
+    """
+    return {"own": bool(point_listed and sees_point),
+            "k": None if not through_k else ("corrected" if k_corrected else "mpe")}
+
+
+def _position_key(x_deg: float) -> float:
+    """A table position, ° modulo 360 rounded to 1e-6° (360° is 0°), as
+    :func:`~gonio.specs.ogam_draft.budget_extra.table_error_coefficients` keys it."""
+    key = round(float(x_deg) % 360.0, 6)
+    return 0.0 if key == 360.0 else key
+
+
+def _e_k_part_coefficients(theta_deg: float, stops_deg) -> dict:
+    """E_i's sensitivities to the table's errors at the 7.1 stops and common zero through
+    K alone ({position: c}): :func:`~gonio.specs.ogam_draft.budget_extra.table_error_coefficients`
+    less E_i's own +1 at θ_i and −1 at 0 (7.1, 7.4)."""
+    from gonio.specs.ogam_draft.budget_extra import table_error_coefficients
+
+    c = dict(table_error_coefficients(theta_deg, stops_deg))
+    for pos, own in ((theta_deg, 1.0), (0.0, -1.0)):
+        k = _position_key(pos)
+        c[k] = c.get(k, 0.0) - own
+    return {p: v for p, v in c.items() if abs(v) > 1e-15}
+
+
+def _e_scale_factor_terms(results, protocol, calibration):
+    """(through_k, K's sensitivity c_K to the calibration's errors, K as read, K corrected,
+    7.1 stops as read) for :func:`angle_deviation_at_table`: c_K and K corrected None where
+    the calibration does not list every 7.1 stop and zero (K then keeps its MPE line)."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
     e = results.angle_deviation
-    stop, zero = round_positions(long, protocol, "angle_deviation")
-    i_p, miss_p = calibration.lookup(stop)
-    i_z, miss_z = calibration.lookup(zero)
-    missing = set(miss_p) | set(miss_z)
-    c_k, k_old, k_new = None, None, None
-    if results.scale_factor_for_angles_source == "7.1" and results.scale_factor.measured and \
-            e.details.get("scale_factor_for_angles_counts_per_deg") is not None:
-        t = results.scale_factor.table
-        k_stop, k_zero = round_positions(t, protocol, "scale_factor")
-        j_s, m_s = calibration.lookup(k_stop)
-        j_z, m_z = calibration.lookup(k_zero)
-        missing |= set(m_s) | set(m_z)
-        if j_s is not None and j_z is not None:
-            k_c, c_k = iu.table_corrected_k_sensitivity(t["K_i_counts_per_deg"], t["table_deg"],
-                                                        j_s, j_z, calibration)
-            k_old = float(e.details["scale_factor_for_angles_counts_per_deg"])
-            k_new = float(np.mean(k_c))
-    return i_p, i_z, c_k, k_old, k_new, sorted(missing)
+    through_k = (results.scale_factor_for_angles_source == "7.1" and
+                 results.scale_factor.measured and
+                 e.details.get("scale_factor_for_angles_counts_per_deg") is not None)
+    if not through_k:
+        return False, None, None, None, np.array([])
+    t = results.scale_factor.table
+    k_stop, k_zero = round_positions(t, protocol, "scale_factor")
+    j_s, _ = calibration.lookup(k_stop)
+    j_z, _ = calibration.lookup(k_zero)
+    k_old = float(e.details["scale_factor_for_angles_counts_per_deg"])
+    stops = t["table_deg"].to_numpy(dtype=float)
+    if j_s is None or j_z is None:
+        return True, None, k_old, None, stops
+    k_c, c_k = iu.table_corrected_k_sensitivity(t["K_i_counts_per_deg"], t["table_deg"],
+                                                j_s, j_z, calibration)
+    return True, c_k, k_old, float(np.mean(k_c)), stops
 
 
-def _e_table_u(calibration, i_p, i_z, c_k, k_new, theta_deg) -> float | None:
-    """u of E_i's table error (arcsec): √(cᵀVc), c = δ(point) − δ(zero) − (3600 θ_i/K_c)·c_K
-    (a position reached twice has one error: its coefficients add); None where c has a part
-    the calibration cannot see (an equal-division comparison's blind harmonics)."""
-    c = np.zeros(calibration.table_deg.size)
-    c[i_p] += 1.0
-    c[i_z] -= 1.0
-    if c_k is not None:
-        c -= ARCSEC_PER_DEG * theta_deg / k_new * c_k
+def _e_point_table(calibration, p_deg, z_deg, theta_deg, through_k, c_k, k_new, stops,
+                   u_mpe_arcsec) -> dict:
+    """One 7.4 point's table terms under :func:`e_table_rule`: ``own`` (its own part
+    corrected), ``i_p``/``i_z`` (the calibration's indices, None where not listed), and the
+    point's table line: u² = cᵀVc over the corrected terms (c = δ(point) − δ(zero) for the
+    own part, −(3600 θ_i/K_c)·c_K for K's, a position reached twice counted once; JCGM 100
+    5.1.2, 5.2.2) + (MPE/√3)² Σ c_p² over the kept ones (A.4.1: each position independent);
+    ν by Welch–Satterthwaite of the calibration's ν (:meth:`TableCalibration.combine`)
+    against the MPE part's ∞ (JCGM 100 G.4.1). ``u_arcsec`` None where nothing is corrected
+    (the caller keeps the MPE line as it was)."""
+    n = calibration.table_deg.size
+    i_p, _ = calibration.lookup([p_deg])
+    i_z, _ = calibration.lookup([z_deg])
+    listed = i_p is not None and i_z is not None
+    c_own = np.zeros(n)
+    if listed:
+        c_own[int(i_p[0])] += 1.0
+        c_own[int(i_z[0])] -= 1.0
     basis = getattr(calibration, "blind_basis", None)
-    if basis is not None and np.linalg.norm(np.asarray(basis).T @ c) > 1e-9 * np.linalg.norm(c):
-        return None
-    return math.sqrt(max(float(c @ calibration.covariance() @ c), 0.0))
+    sees = not (listed and basis is not None and np.linalg.norm(np.asarray(basis).T @ c_own)
+                > 1e-9 * max(np.linalg.norm(c_own), 1e-300))
+    rule = e_table_rule(listed, sees, through_k, k_new is not None)
+    c_cal = c_own if rule["own"] else np.zeros(n)
+    kept: dict = {}
+    if not rule["own"]:
+        for pos, c in ((p_deg, 1.0), (z_deg, -1.0)):
+            kept[_position_key(pos)] = kept.get(_position_key(pos), 0.0) + c
+    if rule["k"] == "corrected":
+        c_cal = c_cal - ARCSEC_PER_DEG * theta_deg / k_new * c_k
+    elif rule["k"] == "mpe":
+        for pos, c in _e_k_part_coefficients(theta_deg, stops).items():
+            kept[pos] = kept.get(pos, 0.0) + c
+    out = {"rule": rule, "own": rule["own"], "i_p": int(i_p[0]) if listed else None,
+           "i_z": int(i_z[0]) if listed else None, "listed": listed, "sees": sees}
+    if not rule["own"] and rule["k"] != "corrected":
+        return dict(out, u_arcsec=None, dof=math.inf)
+    u_c, nu_c = calibration.combine(c_cal)
+    u_m2 = u_mpe_arcsec ** 2 * sum(c * c for c in kept.values())
+    u2 = u_c * u_c + u_m2
+    nu = u2 * u2 / (u_c ** 4 / nu_c) if u_c > 0 and math.isfinite(nu_c) else math.inf
+    return dict(out, u_arcsec=math.sqrt(u2), dof=nu, u_calibration_arcsec=u_c,
+                dof_calibration=nu_c, u_mpe_arcsec=math.sqrt(u_m2))
 
 
 def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
                              protocol: Protocol, calibration) -> tuple:
-    """(results, info): E's readings corrected by a calibrated table (beyond the draft;
-    :data:`E_TABLE_CALIBRATED_NOTE`), or (``results`` unchanged, info saying why not; None
-    without a calibration or E).
+    """(results, info): E's readings corrected by a calibrated table per point (beyond the
+    draft; :data:`E_TABLE_CALIBRATED_NOTE`), or (``results`` unchanged, info saying why not;
+    None without a calibration or E).
 
     Reading j at point i turned the table from its 7.4 zeroing position z_i to θ_i with the
     error e(θ_i) − e(z_i) (A.4.1, now known): the true angle is θ_i − (e(θ_i) − e(z_i))/3600.
     Where E's angles come from counts through the 7.1 K (7.4) they are read with the
     table-corrected K (:func:`~gonio.specs.ogam_draft.item_uncertainty.scale_factor_table_correction`,
     the K the Result states): M_c = M·K/K_c. So E_ij,c = E_ij + 3600·M_ij·(K/K_c − 1) +
-    (e(θ_i) − e(z_i)); E_i, E and the matrix recomputed as 7.4 does. u of E_i's table error:
-    :func:`_e_table_u`. ``info``: ``u_arcsec`` per point (E's table order) and ``source``,
-    or ``reason`` where E keeps the MPE line (a position of 7.4 or 7.1 the calibration does
-    not list, or a harmonic it cannot see)."""
+    (e(θ_i) − e(z_i)); E_i, E and the matrix recomputed as 7.4 does. Which terms each point
+    gets: :func:`e_table_rule` (a point the calibration does not list keeps its own part and
+    the MPE line; a 7.1 stop it does not list keeps K's part at the MPE for every point).
+    u and ν of each point's table line: :func:`_e_point_table`. ``info``: ``u_arcsec`` and
+    ``dof`` per point (E's table order; None: the MPE line as without a calibration),
+    ``sources`` per point, ``uncovered_deg`` and ``reason`` (what was not corrected, or
+    why nothing was)."""
 
     e = results.angle_deviation
     if calibration is None or not e.measured:
         return results, None
+    settings, _ = session_settings(readings, protocol)
+    u_pos = settings["table_mpe_arcsec"] / math.sqrt(3.0)
     long = e.tables["readings"].copy()
-    i_p, i_z, c_k, k_old, k_new, missing = _e_table_lookup(results, protocol, calibration, long)
-    keep = "E keeps the MPE line (P, K_P) and is not corrected [beyond the draft]"
-    if missing:
-        return results, {"reason": f"the {calibration.source} does not cover "
-                                   f"{', '.join(f'{x:g}' for x in missing)} deg: {keep}"}
+    stop, zero = round_positions(long, protocol, "angle_deviation")
+    through_k, c_k, k_old, k_new, stops = _e_scale_factor_terms(results, protocol, calibration)
     pts = e.table.copy()
-    first = [int(np.flatnonzero(long["round"].to_numpy() == r)[0]) for r in pts["round"]]
-    u_pts = [_e_table_u(calibration, i_p[j], i_z[j], c_k, k_new, theta)
-             for j, theta in zip(first, pts["position_deg"].to_numpy(dtype=float))]
-    if any(u is None for u in u_pts):
-        return results, {"reason": f"the {calibration.source} cannot see the table's harmonics "
-                                   f"of order {', '.join(map(str, calibration.blind_orders))} "
-                                   f"at E's points: {keep}"}
+    theta = pts["position_deg"].to_numpy(dtype=float)
+    rows = [np.flatnonzero(long["round"].to_numpy() == r) for r in pts["round"]]
+    terms = [_e_point_table(calibration, stop[r[0]], zero[r[0]], th, through_k, c_k, k_new,
+                            stops, u_pos) for r, th in zip(rows, theta)]
+    keep = "keeps the MPE line (P, K_P) and is not corrected [beyond the draft]"
+    not_listed = [float(th) for th, t in zip(theta, terms) if not t["listed"]]
+    blind = [float(th) for th, t in zip(theta, terms) if t["listed"] and not t["sees"]]
+    k_missing = []
+    if through_k and k_new is None:
+        k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
+        k_missing = calibration.lookup(np.r_[k_stop, k_zero])[1]
+    why = []
+    if not_listed:
+        gone = calibration.lookup([x for r in rows for x in (stop[r[0]], zero[r[0]])])[1]
+        why.append(f"the {calibration.source} does not cover {', '.join(f'{x:g}' for x in gone)}"
+                   f" deg: E at {', '.join(f'{x:g}' for x in not_listed)} deg {keep}")
+    if blind:
+        why.append(f"the {calibration.source} cannot see the table's harmonics of order "
+                   f"{', '.join(map(str, calibration.blind_orders))} at E's points "
+                   f"{', '.join(f'{x:g}' for x in blind)} deg: E there {keep}")
+    if k_missing:
+        why.append(f"the {calibration.source} does not cover K's 7.1 positions "
+                   f"{', '.join(f'{x:g}' for x in k_missing)} deg: K is not corrected, E is "
+                   "read with K as measured and K's part of every E_i keeps the MPE line "
+                   "[beyond the draft]")
+    reason = "; ".join(why)
+    if not any(t["u_arcsec"] is not None for t in terms):
+        return results, {"reason": reason}
     err = calibration.error_arcsec
-    corr = err[i_p] - err[i_z]
+    corr = np.zeros(len(long))
+    for r, t in zip(rows, terms):
+        if t["own"]:
+            corr[r] = err[t["i_p"]] - err[t["i_z"]]
     if k_new is not None:        # rows read through K (no gyro_deg of their own)
         own = readings.data.set_index("line")["gyro_deg"].reindex(long["line"]).to_numpy(float)
         corr = corr + np.where(np.isnan(own), ARCSEC_PER_DEG * long["M_deg"].to_numpy(float)
@@ -1408,7 +1513,9 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     if "E_draft_arcsec" not in pts:
         pts["E_draft_arcsec"] = pts["E_arcsec"]
     value, at, matrix = _e_points_from_readings(pts, long)
-    pts["u_table_arcsec"] = u_pts
+    u_pts = [t["u_arcsec"] for t in terms]
+    pts["u_table_arcsec"] = [math.nan if u is None else u for u in u_pts]
+    pts["table_corrected"] = [t["own"] for t in terms]
     details = dict(e.details, max_abs_arcsec=abs(value),
                    position_deg=float(pts["position_deg"][at]))
     details.setdefault("stated", "table_corrected")
@@ -1419,22 +1526,43 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     est["corrected"] = {"label": (est["corrected"]["label"] + "; and " if "corrected" in est
                                   else "") + E_TABLE_CORRECTED, "value": float(value)}
     details["estimates"] = est
-    used = sorted({int(x) for x in np.r_[i_p, i_z]})
+    used = sorted({i for t in terms if t["own"] for i in (t["i_p"], t["i_z"])})
     details["table_calibration"] = {
         "label": E_TABLE_CALIBRATED_NOTE, "source": calibration.source,
         "sha256": calibration.sha256, "scale_factor_counts_per_deg": k_new,
         "positions_used": {"table_deg": [float(calibration.table_deg[i]) for i in used],
                            "error_arcsec": [float(err[i]) for i in used],
                            "u_arcsec": [float(calibration.u_arcsec[i]) for i in used]},
-        "u_points_arcsec": [float(x) for x in u_pts], "uncorrected_value": float(e.value)}
+        "u_points_arcsec": [None if u is None else float(u) for u in u_pts],
+        "dof_points": [None if t["u_arcsec"] is None or math.isinf(t["dof"])
+                       else float(t["dof"]) for t in terms],
+        "points_corrected_deg": [float(th) for th, t in zip(theta, terms) if t["own"]],
+        "points_uncorrected_deg": [float(th) for th, t in zip(theta, terms) if not t["own"]],
+        "scale_factor_corrected": None if not through_k else k_new is not None,
+        "not_corrected": reason or None, "uncorrected_value": float(e.value)}
     e2 = dataclasses.replace(e, value=float(value), details=details, table=pts,
                              tables={**e.tables, "readings": long,
                                      "matrix": matrix.reset_index()})
-    src = (f"table calibration at the point, its zero and the 7.1 stops and zeros "
-           f"({calibration.describe()}), through E_i = C_i/K_c - theta_true "
-           "[beyond the draft: in place of P and K_P at the MPE]")
-    return dataclasses.replace(results, angle_deviation=e2), {"u_arcsec": np.array(u_pts),
-                                                               "source": src}
+    sources = []
+    for th, t in zip(theta, terms):
+        if t["u_arcsec"] is None:
+            sources.append(None)
+            continue
+        part = [("the point and its zero" if t["own"] else None),
+                ("the 7.1 stops and zeros" if t["rule"]["k"] == "corrected" else None)]
+        kept = [("the point and its zero (not in the calibration)" if not t["own"] else None),
+                ("the 7.1 stops (K not corrected)" if t["rule"]["k"] == "mpe" else None)]
+        txt = (f"table calibration at {' and '.join(x for x in part if x)} "
+               f"({calibration.describe()}), through E_i = C_i/K_c - theta_true")
+        if any(kept):
+            txt += (f"; MPE/sqrt(3) per position (A.4.1) at {' and '.join(x for x in kept if x)}")
+        if math.isfinite(t["dof"]):
+            txt += f"; nu = {t['dof']:.3g} (Welch-Satterthwaite, JCGM 100 G.4.1)"
+        sources.append(txt + " [beyond the draft: in place of P and K_P at the MPE]")
+    return dataclasses.replace(results, angle_deviation=e2), {
+        "u_arcsec": u_pts, "dof": [t["dof"] for t in terms], "sources": sources,
+        "uncovered_deg": [float(th) for th, t in zip(theta, terms) if not t["own"]],
+        "reason": reason}
 
 
 def pd_concat(*frames):
@@ -2088,8 +2216,9 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                                             monte_carlo_trials=monte_carlo_trials, seed=seed,
                                             tilt_measured=e_tilt, table_measured=e_table)
     if e_table is not None:
-        notes.append(e_table.get("reason") or f"E corrected by the "
-                     f"{table_calibration.describe()} [beyond the draft]")
+        notes.append("; ".join(x for x in (
+            f"E corrected by the {table_calibration.describe()} [beyond the draft]"
+            if "u_arcsec" in e_table else "", e_table.get("reason")) if x))
     noise, noise_src = analyse_zero_stability(static_record)
     table_record: dict = {}
     items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type,

@@ -628,8 +628,10 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     K_i = C_i/θ_i becomes K_i θ_i/(θ_i − Δe_i/3600) (7.1). K = mean K_i; its sensitivity to
     e(x_p) is c_p = (1/n) Σ_i K_i/(3600 θ_i − Δe_i) · ([s_i = x_p] − [z_i = x_p]) (K_i the
     corrected ones), u(K)² = cᵀ V c with V the calibration's covariance (diagonal u² where
-    none is given, JCGM 100 5.1.2; 5.2.2 with it), ν by Welch–Satterthwaite over the
-    positions (∞ where the calibration states none). Positions are taken modulo 360°. Returns
+    none is given, JCGM 100 5.1.2; 5.2.2 with it), ν of that combination
+    (:meth:`~gonio.specs.ogam_draft.table_calibration.TableCalibration.combine`: Welch–
+    Satterthwaite over independent positions, a joint estimate's own ν, ∞ where the
+    calibration states none). Positions are taken modulo 360°. Returns
     (None, missing positions) where the calibration does not cover a stop or zero.
 
     Six rounds 0 → 60°…360° at K = 3600 counts/°, e(60°) = 0.1″, the rest 0: round 1 turned
@@ -658,12 +660,8 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
         return None, sorted(set(miss_s) | set(miss_z))
     k_c, c = table_corrected_k_sensitivity(k_i, th, i_s, i_z, calibration)
     _refuse_blind(calibration, c)
-    u2 = float(c @ calibration.covariance() @ c)
-    dof = math.inf
-    if calibration.dof is not None and u2 > 0:
-        den = float(np.sum((c * calibration.u_arcsec) ** 4 / calibration.dof))
-        dof = u2 ** 2 / den if den > 0 else math.inf
-    return TableCorrection(k_c, math.sqrt(max(u2, 0.0)), dof, calibration.describe()), []
+    u, dof = calibration.combine(c)
+    return TableCorrection(k_c, u, dof, calibration.describe()), []
 
 
 def _scale_factor_table_line_of(k_i, th, table_mpe_arcsec: float, u_tab, table_correction,

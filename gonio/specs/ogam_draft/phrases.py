@@ -298,6 +298,13 @@ LABELS: dict[str, dict[str, str]] = {
                                "MPE, beyond the draft",
                          "zh": "读数已按转台校准 {f} 修正（并以转台误差修正后的 K 换算），以其"
                                "不确定度代替转台最大允许误差（草案以外）"},
+    "note_e_table_part": {"en": "; not corrected (kept with the table's MPE line): E at {p}°",
+                          "zh": "；未修正（保留转台最大允许误差分量）：E 在 {p}°"},
+    "note_e_table_k_mpe": {"en": "; K not corrected by the table calibration (a 7.1 position "
+                                 "not in it): E read with K as measured, K's part of the table "
+                                 "error at the MPE",
+                           "zh": "；K 未经转台校准修正（7.1 有位置不在校准中）：E 以测得的 K "
+                                 "换算，K 引入的转台误差按最大允许误差计"},
     "note_cv_draft": {"en": "the draft's range as measured (beside, not stated): {v} ppm",
                       "zh": "按草案公式的测得极差（并列给出，不作结果）：{v} ppm"},
     "note_cg_draft": {"en": "the draft's range as measured (beside, not stated): {v} %",

@@ -264,10 +264,17 @@ def e_table_note(res: dict, L: dict) -> list:
     item = res["items"]["angle_deviation"]
     d = (item.get("details") or {}).get("table_calibration") or {}
     if (item.get("details") or {}).get("tilt_correction"):
-        return segments(L["note_e_table"], f=str(d.get("source") or ""))
-    return segments(L["note_e_table_v"], f=str(d.get("source") or ""),
-                    v=num(res, item_path("angle_deviation", "estimates.draft.value"), "atU",
-                          item["uncertainty"]["U"]))
+        out = segments(L["note_e_table"], f=str(d.get("source") or ""))
+    else:
+        out = segments(L["note_e_table_v"], f=str(d.get("source") or ""),
+                       v=num(res, item_path("angle_deviation", "estimates.draft.value"), "atU",
+                             item["uncertainty"]["U"]))
+    if d.get("points_uncorrected_deg"):     # the points the calibration does not cover
+        out.append(L["note_e_table_part"].format(
+            p=", ".join(f"{x:g}" for x in d["points_uncorrected_deg"])))
+    if d.get("scale_factor_corrected") is False:
+        out.append(L["note_e_table_k_mpe"])
+    return out
 
 
 def range_table_note(res: dict, name: str, L: dict) -> list:

@@ -85,6 +85,33 @@ class TableCalibration:
             return np.asarray(self.cov_arcsec2, dtype=float)
         return np.diag(self.u_arcsec ** 2)
 
+    def combine(self, c) -> tuple[float, float]:
+        """(u, ν) of the linear combination Σ c_p e_p of the calibration's errors (arcsec):
+        u² = cᵀVc (JCGM 100 5.1.2; 5.2.2 with the covariance). ν (JCGM 100 G.4.1): ∞
+        without ``dof``; positions independent (no covariance given, each position its own
+        ν_p): Welch–Satterthwaite, u⁴ / Σ (c_p u_p)⁴/ν_p; a covariance given is one joint
+        estimate (an equal-division comparison's least squares: V = s²·M with one s² of ν
+        degrees of freedom, so cᵀVc/cᵀ(σ²M)c is χ²_ν/ν whatever c), ν of the positions c
+        uses (the smallest where they differ: conservative; Welch–Satterthwaite is for
+        independent inputs and overstates ν for correlated ones).
+
+        Two independent positions, u 0.02″ (ν 4) and 0.03″ (ν 9), c = (1, −1):
+        ν = (0.02² + 0.03²)²/(0.02⁴/4 + 0.03⁴/9) = 13.0:
+
+        >>> c = TableCalibration([0, 60], [0.0, 0.0], [0.02, 0.03], "t", dof=[4, 9])
+        >>> [round(x, 4) for x in c.combine([1.0, -1.0])]
+        [0.0361, 13.0]
+        """
+        c = np.asarray(c, dtype=float)
+        u2 = max(float(c @ self.covariance() @ c), 0.0)
+        used = np.abs(c) > 0
+        if self.dof is None or u2 <= 0.0 or not used.any():
+            return math.sqrt(u2), math.inf
+        if self.cov_arcsec2 is not None:
+            return math.sqrt(u2), float(np.min(self.dof[used]))
+        den = float(np.sum((c[used] * self.u_arcsec[used]) ** 4 / self.dof[used]))
+        return math.sqrt(u2), (u2 * u2 / den if den > 0 else math.inf)
+
     def lookup(self, positions_deg) -> tuple[np.ndarray | None, list[float]]:
         """Indices of ``positions_deg`` in the calibration, or (None, the positions it does
         not cover): the caller then keeps its MPE line and names the missing positions.
