@@ -133,6 +133,11 @@ class AnnexABudget:
     #: k); this budget itself is the one of the point with the largest U. Empty for the
     #: draft's reading (one budget for every point, Annex A).
     points: tuple = ()
+    #: The 95 % interval of max|E_i|'s truth, max_i |E_i,true|, from the points' E_i, u_c and
+    #: ν_eff (:func:`uncertainty.extreme.max_abs_interval`; valid for every pattern of the
+    #: true E_i), as a dict (``lower_arcsec``, ``upper_arcsec``, ``p``, factors, ``basis``);
+    #: None for the draft's reading.
+    max_interval: dict | None = None
 
     @property
     def u_c_arcsec(self) -> float:
@@ -178,6 +183,7 @@ class AnnexABudget:
             "annex_rounded": self.annex_rounded,
             "monte_carlo": mc,
             **({"points": [dict(p) for p in self.points]} if self.points else {}),
+            **({"max_abs_interval": dict(self.max_interval)} if self.max_interval else {}),
         }
 
     def _summary(self) -> list[str]:
@@ -223,16 +229,25 @@ _P_SOURCE = "standard table positioning (A.4.1)"
 _PHI_SOURCE = "sensing plane not parallel to table plane (A.4.2)"
 
 
+def _table_input(mpe_arcsec: float, u_arcsec: float | None, dof: float, source: str):
+    """E's P line: the draft's rectangular ±MPE (A.4.1), or a physical budget's normal u
+    with its ν (a calibrated table's, JCGM 100 G.4.1)."""
+    if u_arcsec is None:
+        return type_b("P", 0.0, mpe_arcsec, "rectangular", source=source)
+    if math.isinf(dof):
+        return type_b("P", 0.0, u_arcsec, "normal", source=source)
+    return from_u("P", 0.0, u_arcsec, dof=dof, type="B", source=source)
+
+
 def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
                    zero_stability_dph: float = 0.005, duration_min: float = 0.5,
                    repeatability_arcsec: float = 0.096, k: float | None = 2.0,
                    extra_components: Sequence = (), monte_carlo_trials: int = 0,
                    seed: int = 0, repeatability_dof: float = math.inf,
-                   repeatability_type: str = "A",
-                   repeatability_source: str = "repeatability (A.4.4)",
+                   repeatability_type: str = "A", repeatability_source: str = "repeatability (A.4.4)",
                    table_u_arcsec: float | None = None, table_source: str = _P_SOURCE,
-                   table_dof: float = math.inf,
-                   phi_e_arcsec: float | None = None, phi_e_source: str = _PHI_SOURCE
+                   table_dof: float = math.inf, phi_e_arcsec: float | None = None,
+                   phi_e_source: str = _PHI_SOURCE
                    ) -> AnnexABudget:
     """The draft's Annex A budget (A.2–A.7), optionally checked by JCGM 101 Monte Carlo.
 
@@ -259,10 +274,9 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
     repeatability_type, repeatability_source : str
         "A" when u(r) comes from the calibration's own series, "B" when it is a stated
         value (e.g. the protocol's); the source sentence shown in the budget.
-    table_u_arcsec, phi_e_arcsec, table_source, phi_e_source : float or None, str
-        Physical budget's P (normal u), φ_e; None: the draft's A.4.1 and A.4.2 lines.
-    table_dof : float
-        ν of ``table_u_arcsec`` (a calibrated table's, JCGM 100 G.4.1); ∞ by default.
+    table_u_arcsec, table_dof, phi_e_arcsec, table_source, phi_e_source : float or None, str
+        Physical budget's P (normal u, ν ``table_dof``: ∞ or a calibrated table's, JCGM 100
+        G.4.1), φ_e; None: the draft's A.4.1 and A.4.2 lines.
 
     Examples
     --------
@@ -308,10 +322,7 @@ def annex_a_budget(table_mpe_arcsec: float = 0.1, tilt_deg: float = 0.1,
 
     drift_arcsec = zero_stability_dph * ARCSEC_PER_MIN_PER_DPH * duration_min
     inputs = [
-        type_b("P", 0.0, table_mpe_arcsec if table_u_arcsec is None else table_u_arcsec,
-               "rectangular" if table_u_arcsec is None else "normal", source=table_source)
-        if table_u_arcsec is None or math.isinf(table_dof) else
-        from_u("P", 0.0, table_u_arcsec, dof=table_dof, type="B", source=table_source),
+        _table_input(table_mpe_arcsec, table_u_arcsec, table_dof, table_source),
         type_b("phi_e", 0.0, elliptic_extreme(tilt_deg).extreme_arcsec if phi_e_arcsec is None
                else phi_e_arcsec, "rectangular", source=phi_e_source),
         type_b("B_E", 0.0, drift_arcsec, "rectangular", source="zero drift (A.4.3)"),

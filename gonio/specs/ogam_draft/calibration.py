@@ -1063,11 +1063,34 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     notes.append(f"physical budget per 7.4 point; E's U is the largest of the points' U, at "
                  f"{pos[at]:g} deg [beyond the draft]")
     points = tuple({"position_deg": float(p), "u_c_arcsec": float(b.u_c_arcsec),
-                    "U_arcsec": float(b.U_arcsec), "k": float(b.k)} for p, b in zip(pos, sub))
+                    "U_arcsec": float(b.U_arcsec), "k": float(b.k),
+                    "nu_eff": None if math.isinf(b.gum.dof) else float(b.gum.dof)}
+                   for p, b in zip(pos, sub))
     # the parameters other items take from E's budget (C_v, C_g: one reading's u(r), A.4.4;
     # the longest time to reading) stay those of Annex A's reading, not this point's
     params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
-    return dataclasses.replace(sub[at], points=points, parameters=params)
+    return dataclasses.replace(sub[at], points=points, parameters=params,
+                               max_interval=e_max_interval(pts["E_arcsec"], sub))
+
+
+def e_max_interval(e_arcsec, budgets) -> dict:
+    """The 95 % interval of E's extreme, max_i |E_i,true| (7.4's E = ± max|E_i|), from the
+    points' E_i and their physical budgets' u_c and ν_eff: [max(0, max_i(|E_i| − c_L u_i)),
+    max_i(|E_i| + c_H u_i)] (:func:`uncertainty.extreme.max_abs_interval`; beyond the draft).
+    It holds the truth with probability ≥ 95 % for every pattern of the true E_i and any
+    correlation between the points (the shared K and zero), and its factors are the
+    smallest of that form that do (the upper one's worst case: one point far out; the
+    lower one's: every E_i zero)."""
+    from uncertainty.extreme import max_abs_interval
+
+    r = max_abs_interval(np.asarray(e_arcsec, dtype=float), [b.u_c_arcsec for b in budgets],
+                         [b.gum.dof for b in budgets])
+    return {"lower_arcsec": r.lower, "upper_arcsec": r.upper, "max_abs_arcsec": r.estimate,
+            "p": r.p, "c_lower": r.c_lower, "c_upper": r.c_upper, "points": r.m,
+            "basis": "max_i(|E_i| + c_H u_i) above, max(0, max_i(|E_i| - c_L u_i)) below, "
+                     "per point u_c and nu_eff (Student t at finite nu); >= 95 % for every "
+                     "pattern of the true E_i (Sidak below, the extreme point above) "
+                     "[beyond the draft]"}
 
 
 def _scale_factor_tilt(results, readings, protocol, budget) -> float:
@@ -1441,6 +1464,56 @@ def _e_point_table(calibration, p_deg, z_deg, theta_deg, through_k, c_k, k_new, 
                 dof_calibration=nu_c, u_mpe_arcsec=math.sqrt(u_m2))
 
 
+def _e_table_reasons(results, protocol, calibration, theta, terms, rows, stop, zero,
+                     k_not_corrected: bool) -> str:
+    """What :func:`angle_deviation_at_table` leaves uncorrected, and why (one sentence per
+    cause; "" where every term is corrected)."""
+    keep = ("keeps the MPE line for the point and its zero and is not corrected "
+            "[beyond the draft]")
+    not_listed = [float(th) for th, t in zip(theta, terms) if not t["listed"]]
+    blind = [float(th) for th, t in zip(theta, terms) if t["listed"] and not t["sees"]]
+    k_missing = []
+    if k_not_corrected:
+        k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
+        k_missing = calibration.lookup(np.r_[k_stop, k_zero])[1]
+    why = []
+    if not_listed:
+        gone = calibration.lookup([x for r in rows for x in (stop[r[0]], zero[r[0]])])[1]
+        why.append(f"the {calibration.source} does not cover {', '.join(f'{x:g}' for x in gone)}"
+                   f" deg: E at {', '.join(f'{x:g}' for x in not_listed)} deg {keep}")
+    if blind:
+        why.append(f"the {calibration.source} cannot see the table's harmonics of order "
+                   f"{', '.join(map(str, calibration.blind_orders))} at E's points "
+                   f"{', '.join(f'{x:g}' for x in blind)} deg: E there {keep}")
+    if k_missing:
+        why.append(f"the {calibration.source} does not cover K's 7.1 positions "
+                   f"{', '.join(f'{x:g}' for x in k_missing)} deg: K is not corrected, E is "
+                   "read with K as measured and K's part of every E_i keeps the MPE line "
+                   "[beyond the draft]")
+    return "; ".join(why)
+
+
+def _e_table_sources(calibration, terms) -> list:
+    """Each point's table-line source (None where it keeps the MPE line as it was)."""
+    sources = []
+    for t in terms:
+        if t["u_arcsec"] is None:
+            sources.append(None)
+            continue
+        part = [("the point and its zero" if t["own"] else None),
+                ("the 7.1 stops and zeros" if t["rule"]["k"] == "corrected" else None)]
+        kept = [("the point and its zero (not in the calibration)" if not t["own"] else None),
+                ("the 7.1 stops (K not corrected)" if t["rule"]["k"] == "mpe" else None)]
+        txt = (f"table calibration at {' and '.join(x for x in part if x)} "
+               f"({calibration.describe()}), through E_i = C_i/K_c - theta_true")
+        if any(kept):
+            txt += (f"; MPE/sqrt(3) per position (A.4.1) at {' and '.join(x for x in kept if x)}")
+        if math.isfinite(t["dof"]):
+            txt += f"; nu = {t['dof']:.3g} (Welch-Satterthwaite, JCGM 100 G.4.1)"
+        sources.append(txt + " [beyond the draft: in place of P and K_P at the MPE]")
+    return sources
+
+
 def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
                              protocol: Protocol, calibration) -> tuple:
     """(results, info): E's readings corrected by a calibrated table per point (beyond the
@@ -1473,28 +1546,8 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     rows = [np.flatnonzero(long["round"].to_numpy() == r) for r in pts["round"]]
     terms = [_e_point_table(calibration, stop[r[0]], zero[r[0]], th, through_k, c_k, k_new,
                             stops, u_pos) for r, th in zip(rows, theta)]
-    keep = "keeps the MPE line (P, K_P) and is not corrected [beyond the draft]"
-    not_listed = [float(th) for th, t in zip(theta, terms) if not t["listed"]]
-    blind = [float(th) for th, t in zip(theta, terms) if t["listed"] and not t["sees"]]
-    k_missing = []
-    if through_k and k_new is None:
-        k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
-        k_missing = calibration.lookup(np.r_[k_stop, k_zero])[1]
-    why = []
-    if not_listed:
-        gone = calibration.lookup([x for r in rows for x in (stop[r[0]], zero[r[0]])])[1]
-        why.append(f"the {calibration.source} does not cover {', '.join(f'{x:g}' for x in gone)}"
-                   f" deg: E at {', '.join(f'{x:g}' for x in not_listed)} deg {keep}")
-    if blind:
-        why.append(f"the {calibration.source} cannot see the table's harmonics of order "
-                   f"{', '.join(map(str, calibration.blind_orders))} at E's points "
-                   f"{', '.join(f'{x:g}' for x in blind)} deg: E there {keep}")
-    if k_missing:
-        why.append(f"the {calibration.source} does not cover K's 7.1 positions "
-                   f"{', '.join(f'{x:g}' for x in k_missing)} deg: K is not corrected, E is "
-                   "read with K as measured and K's part of every E_i keeps the MPE line "
-                   "[beyond the draft]")
-    reason = "; ".join(why)
+    reason = _e_table_reasons(results, protocol, calibration, theta, terms, rows, stop, zero,
+                              through_k and k_new is None)
     if not any(t["u_arcsec"] is not None for t in terms):
         return results, {"reason": reason}
     err = calibration.error_arcsec
@@ -1543,22 +1596,7 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     e2 = dataclasses.replace(e, value=float(value), details=details, table=pts,
                              tables={**e.tables, "readings": long,
                                      "matrix": matrix.reset_index()})
-    sources = []
-    for th, t in zip(theta, terms):
-        if t["u_arcsec"] is None:
-            sources.append(None)
-            continue
-        part = [("the point and its zero" if t["own"] else None),
-                ("the 7.1 stops and zeros" if t["rule"]["k"] == "corrected" else None)]
-        kept = [("the point and its zero (not in the calibration)" if not t["own"] else None),
-                ("the 7.1 stops (K not corrected)" if t["rule"]["k"] == "mpe" else None)]
-        txt = (f"table calibration at {' and '.join(x for x in part if x)} "
-               f"({calibration.describe()}), through E_i = C_i/K_c - theta_true")
-        if any(kept):
-            txt += (f"; MPE/sqrt(3) per position (A.4.1) at {' and '.join(x for x in kept if x)}")
-        if math.isfinite(t["dof"]):
-            txt += f"; nu = {t['dof']:.3g} (Welch-Satterthwaite, JCGM 100 G.4.1)"
-        sources.append(txt + " [beyond the draft: in place of P and K_P at the MPE]")
+    sources = _e_table_sources(calibration, terms)
     return dataclasses.replace(results, angle_deviation=e2), {
         "u_arcsec": u_pts, "dof": [t["dof"] for t in terms], "sources": sources,
         "uncovered_deg": [float(th) for th, t in zip(theta, terms) if not t["own"]],

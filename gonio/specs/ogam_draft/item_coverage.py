@@ -36,7 +36,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from gonio.analysis.coverage import chi_square_z, clopper_pearson, two_sided, within
+from gonio.analysis.coverage import (chi_square_z, clopper_pearson, coverage_flags, two_sided,
+                                     within)
 from gonio.units import ARCSEC_PER_DEG
 from gonio.specs.ogam_draft.items import RECORD_KEYS
 
@@ -292,6 +293,9 @@ def trial_items(report, truth: dict) -> dict:
     if b.points:        # the physical budget per point: each E_i judged on its own U
         alt["U_points"] = [float(p["U_arcsec"]) for p in b.points]
         alt["u_c_points"] = [float(p["u_c_arcsec"]) for p in b.points]
+    if b.max_interval:  # the interval of max|E_i|'s truth (every pattern)
+        alt["max_interval"] = [float(b.max_interval["lower_arcsec"]),
+                               float(b.max_interval["upper_arcsec"])]
     e = res.angle_deviation
     if "E_draft_arcsec" in e.table:    # E corrected at the measured tilt: the draft's as measured
         pts = e.table["E_arcsec" if other == "physical" else "E_draft_arcsec"]
@@ -360,6 +364,10 @@ def item_coverage(records: list[dict], intrinsic_points=None,
                                                    u_max, own),
                                          truth="intrinsic" if intrinsic_points is not None
                                          and own else "as mounted")
+            if rs and all(r.get("max_interval") for r in rs):
+                item["max_interval"] = max_interval_coverage(
+                    np.abs(vals), np.array([r["max_interval"] for r in rs], dtype=float),
+                    np.abs(tp).max(axis=1), own)
         elif name == "repeatability":
             s2 = np.array([r["s_points"] for r in rs]) ** 2
             truth = float(np.sqrt(s2.mean(axis=0)).max())
@@ -404,10 +412,36 @@ def item_coverage(records: list[dict], intrinsic_points=None,
             ts = item["two_sided"]
             ts["flags"] = [f for f in ts["flags"] if f != "over-wide"]
             ts["spread_judged"] = False
-            if "max_statement" in item:
-                item["max_statement"]["flags"] = [f for f in item["max_statement"]["flags"]
-                                                  if f != "over-wide"]
+            for key in ("max_statement", "max_interval"):
+                if key in item:
+                    item[key]["flags"] = [f for f in item[key]["flags"] if f != "over-wide"]
         out[name] = item
+    return out
+
+
+def max_interval_coverage(m, iv, theta, own: bool = True) -> dict:
+    """Coverage of E's extreme by its interval (:func:`uncertainty.extreme.max_abs_interval`)
+    over the trials: ``m`` = max|E_i|, ``iv`` the [lower, upper] per trial, ``theta`` the
+    truth's max|E_i|. The interval holding θ is the coverage (with its Clopper–Pearson
+    interval); z scales each side to a standard normal one, z = (m − θ)/((upper − m)/1.96)
+    where θ lies above m, (m − θ)/((m − lower)/1.96) below (an interval exact at its
+    worst pattern has z sd ≈ 1 there; an every-pattern interval is wider elsewhere).
+
+    >>> r = max_interval_coverage([1.0, 1.0], [[0.5, 1.4], [0.8, 1.2]], [1.1, 0.7])
+    >>> r["hits"], round(r["z_mean"], 3)
+    (1, 1.225)
+    """
+    m, iv, theta = (np.asarray(m, dtype=float), np.asarray(iv, dtype=float),
+                    np.asarray(theta, dtype=float))
+    hold = (iv[:, 0] <= theta) & (theta <= iv[:, 1])
+    half = np.where(theta >= m, iv[:, 1] - m, m - iv[:, 0]) / 1.959963984540054
+    z = np.where(half > 0, (m - theta) / np.where(half > 0, half, 1.0), np.nan)
+    ok = np.isfinite(z)
+    out = two_sided(np.where(hold, 0.0, np.inf), np.ones(m.size), np.ones(m.size), own)
+    z_sd = float(np.std(z[ok], ddof=1)) if ok.sum() > 1 else None
+    out.update(z_mean=float(np.mean(z[ok])) if ok.any() else None, z_sd=z_sd,
+               flags=coverage_flags(out["coverage"], z_sd, own),
+               mean_width=float(np.mean(iv[:, 1] - iv[:, 0])))
     return out
 
 

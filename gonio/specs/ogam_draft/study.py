@@ -785,6 +785,10 @@ def item_coverage_lines(cases) -> list[str]:
             if "max_statement" in it:
                 txt += "   max|E_i| +- U vs the truth's max|E_i|: " + two_sided_text(
                     it["max_statement"])
+            if "max_interval" in it:
+                txt += ("   max|E_i|'s 95 % interval (every pattern) holds the truth's: "
+                        + two_sided_text(it["max_interval"])
+                        + f", mean width {it['max_interval']['mean_width']:.3g}")
             out.append(txt)
     return out
 
