@@ -169,7 +169,11 @@ E_TABLE_CALIBRATED_NOTE = (
     "zeroing position), and E_ij read with the table-corrected 7.1 K (the stated K); each "
     "point's table line (P) is the calibration's uncertainty at the point, its zero and the "
     "7.1 stops and zeros propagated through E_i = C_i/K - theta_true (JCGM 100 5.1.2, 5.2.2 "
-    "with the covariance; a position shared counted once), in place of the MPE line (P, K_P)")
+    "with the covariance; a position shared counted once; nu by Welch-Satterthwaite, JCGM 100 "
+    "G.4.1), in place of the MPE line (P, K_P); per point: a point or zero the calibration "
+    "does not list keeps its own table error and the MPE line for it, a 7.1 stop it does not "
+    "list leaves K, and K's share of every E_i, as measured (points_uncorrected_deg, "
+    "scale_factor_corrected)")
 #: ``angle_deviation.details.estimates.corrected.label`` where the table corrected E.
 E_TABLE_CORRECTED = ("certified: E corrected by the calibrated table (and read with the "
                      "table-corrected K), with the physical budget")
