@@ -45,7 +45,9 @@ def add_calibrate_options(group) -> None:
     group.add_argument("--table-calibration", default=None, metavar="FILE",
                        help="the rotary table's calibration (CSV table_deg,error_arcsec,"
                             "u_arcsec[,dof]; docs/formats.md): K's 7.1 rounds corrected by it, "
-                            "its table line the calibration's u instead of the MPE's")
+                            "its table line the calibration's u instead of the MPE's; with "
+                            "a --lab file naming [table_calibration] it must be that file's "
+                            "content (SHA-256), else refused")
 
 
 # --------------------------------------------------------------------------- gonio simulate
