@@ -266,3 +266,50 @@ def test_ranges_calibration_recorded(tmp_path):
             assert word in text
     summary = (out / "summary.txt").read_text(encoding="utf-8")
     assert "K_l, C_v and C_g too" in summary and "keep the table's MPE" not in summary
+
+
+def test_calibrated_table_draws_at_absolute_stops():
+    """Rounds zeroed at 90° (7.4's rounds moved, start_deg ≠ 0): a condition's extreme 30°
+    turned was read with the table at 120°, 150° turned at 240°. With the calibration poor at
+    120° and 240° (u 0.3″) and good elsewhere (0.01″) the stated C_v's ``C_rng`` u is the
+    spread of the range redone per draw with the correction at the absolute stops,
+    E_v + δe(z + θ_v) − δe(z) (closed form √(0.3² + 0.3²)″ for E_v far apart); the table's
+    errors at 30° and 150° (0.01″), where a lookup by the angle turned reads, would give 0.014″.
+    The K part (c_K) takes the angle turned: against the per-draw correction of K_c too."""
+    from gonio.specs.ogam_draft.item_uncertainty import (CalibratedTable, ConditionDeviation,
+                                                         consistency_corrected_budget)
+
+    x = np.arange(0.0, 360.0, 30.0)
+    u = np.where(np.isin(x, (120.0, 240.0)), 0.3, 0.01)
+    cal = TableCalibration(x, np.zeros(x.size), u, "tc.csv")
+    conds = [ConditionDeviation("10 deg/s", 2.0, 30.0, 1e-6, 1, zero_deg=90.0),
+             ConditionDeviation("60 deg/s", 0.1, 60.0, 1e-6, 1, zero_deg=90.0),
+             ConditionDeviation("100 deg/s", -2.0, 150.0, 1e-6, 1, zero_deg=90.0)]
+    ref = 1296000.0
+    b = consistency_corrected_budget("rate_consistency", conds, ref, 1e6, table_mpe_arcsec=0.1,
+                                     drift_half_width_arcsec=0.0, table_cal=CalibratedTable(cal))
+    d = np.random.default_rng(11).normal(0.0, u, (40_000, x.size))
+    at = {a: int(np.flatnonzero(x == a)[0]) for a in x}
+    e = np.array([c.e_arcsec + d[:, at[(c.zero_deg + c.position_deg) % 360.0]]
+                  - d[:, at[c.zero_deg]] for c in conds])
+    mc = float(np.std(e.max(axis=0) - e.min(axis=0))) * 1e6 / ref
+    got = next(c.u for c in b.components if c.symbol == "C_rng")
+    assert got == pytest.approx(mc, rel=0.05)
+    assert mc == pytest.approx(np.hypot(0.3, 0.3) * 1e6 / ref, rel=0.05)
+
+    # K's part: rounds 0 → θ for K (zero 0), a 7.4 angle θ turned from 90° read through K_c
+    th_k = np.arange(30.0, 390.0, 30.0)
+    k_true = 3600.0
+    counts_k = k_true * th_k
+    from gonio.specs.ogam_draft.item_uncertainty import table_corrected_k_sensitivity
+    i_s, i_z = cal.lookup(th_k)[0], cal.lookup(np.zeros(th_k.size))[0]
+    k_c, c_k = table_corrected_k_sensitivity(counts_k / th_k, th_k, i_s, i_z, cal)
+    ct = CalibratedTable(cal, c_k, float(np.mean(k_c)))
+    theta = np.array([30.0, 150.0, 270.0])
+    a = ct.coefficients(theta, 90.0)
+    kd = np.mean(counts_k / (th_k - (d[:, i_s] - d[:, i_z]) / 3600.0), axis=1)
+    stop = [at[(90.0 + t) % 360.0] for t in theta]
+    e = 3600.0 * (theta * float(np.mean(k_c)) / kd[:, None]
+                  - (theta - (d[:, stop] - d[:, [at[90.0]]]) / 3600.0))
+    np.testing.assert_allclose(np.std(e, axis=0),
+                               np.sqrt(np.einsum("ij,j,ij->i", a, u ** 2, a)), rtol=0.03)

@@ -575,9 +575,9 @@ def calibration_error_draws(calibration, rng, draws: int) -> np.ndarray:
 @dataclass(frozen=True)
 class CalibratedTable:
     """A calibrated table as it enters angles turned from a zeroing position and read with the
-    table-corrected 7.1 K (7.6, 7.7 with A.4.1's error known; beyond the draft): an angle
-    turned from z to p carries the calibration's error δe(p) − δe(z), and one read through
-    K_c the K's, −3600·p·(c_K·δe)/K_c (c_K of :func:`table_corrected_k_sensitivity`; None:
+    table-corrected 7.1 K (7.6, 7.7 with A.4.1's error known; beyond the draft): an angle θ
+    turned from z (the table stopping at z + θ) carries the calibration's error
+    δe(z + θ) − δe(z), and one read through K_c the K's, −3600·θ·(c_K·δe)/K_c (c_K of :func:`table_corrected_k_sensitivity`; None:
     angles not read through the 7.1 K). ``source``: the calibration's one-line description."""
 
     calibration: object
@@ -588,14 +588,25 @@ class CalibratedTable:
     def source(self) -> str:
         return self.calibration.describe()
 
-    def coefficients(self, positions_deg, zero_deg) -> np.ndarray:
-        """(positions × calibration positions): each angle's sensitivity to the calibration's
-        errors (a position reached twice has one error: coefficients add). ValueError where
-        the calibration does not list a position."""
+    def coefficients(self, turned_deg, zero_deg) -> np.ndarray:
+        """(angles × calibration positions): the sensitivity to the calibration's errors of
+        each angle θ turned from the zeroing position z (a reading's ``table_deg``, 7.4): the
+        table stops at z + θ (modulo 360°), so δe(z + θ) − δe(z), and θ's K part (a position
+        reached twice has one error: coefficients add). ValueError where the calibration does
+        not list a position.
+
+        Zeroed at 90°, 30° turned reads the error at 120°, not at 30°:
+
+        >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
+        >>> ct = CalibratedTable(TableCalibration([0, 30, 90, 120], [0.0] * 4, [0.1] * 4, "t"))
+        >>> ct.coefficients([30.0, 270.0], 90.0).tolist()
+        [[0.0, 0.0, -1.0, 1.0], [1.0, 0.0, -1.0, 0.0]]
+        """
         cal = self.calibration
-        pos = np.atleast_1d(np.asarray(positions_deg, dtype=float))
-        i_p, miss = cal.lookup(pos)
-        i_z, miss_z = cal.lookup(np.broadcast_to(np.asarray(zero_deg, dtype=float), pos.shape))
+        pos = np.atleast_1d(np.asarray(turned_deg, dtype=float))
+        z = np.broadcast_to(np.asarray(zero_deg, dtype=float), pos.shape)
+        i_p, miss = cal.lookup(z + pos)
+        i_z, miss_z = cal.lookup(z)
         if i_p is None or i_z is None:
             raise ValueError(f"not calibrated: {sorted(set(miss) | set(miss_z))}")
         a = np.zeros((pos.size, cal.table_deg.size))
@@ -1655,7 +1666,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     ``table_cal`` (a :class:`CalibratedTable`: the E_v corrected by a calibrated table and read
     with the table-corrected K): the table's draws at the MPE are replaced by the
     calibration's, δe normal with its covariance, each E_v moved by its coefficients
-    (δe(θ_v) − δe(z_v) and K's part, :meth:`CalibratedTable.coefficients`; a position shared
+    (δe(z_v + θ_v) − δe(z_v), the table stopping at z_v + θ_v, and K's part θ_v's,
+    :meth:`CalibratedTable.coefficients`; a position shared
     by conditions, and by K's rounds, is one draw), and ``scale_factor_u_rel`` is then K's u
     without its calibrated table line (beyond the draft).
     C is the range whose expected measured range equals the one measured; u is the spread of
