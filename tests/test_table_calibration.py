@@ -505,6 +505,32 @@ def test_e_position_missing_corrects_the_others(base):
         assert word in text
 
 
+def test_e_blind_harmonic_per_point(base):
+    """A calibration that cannot see order 6 over 12 positions (an equal-division comparison's
+    blind order; basis cos 6x): K's 60° stops do not see it (K corrected), E's points at odd
+    multiples of 30° do (e(θ) − e(0) holds cos 6θ − 1 = −2): those six keep their own table
+    error, E − truth = −(e(θ) − e(0)) from the bench's harmonics; the other six are corrected
+    to the truth within 0.003″."""
+    p, clean, cal = _no_tilt_estimate_setup(base)
+    x = cal.table_deg
+    basis = (np.cos(np.radians(6.0 * x)) / math.sqrt(x.size))[:, None]
+    blind = TableCalibration(x, cal.error_arcsec, cal.u_arcsec, "eda6.csv", blind_basis=basis,
+                             blind_orders=(6,))
+    res, rep = _analyse(p, clean, 0, blind)
+    e = rep.results.angle_deviation
+    d = e.details["table_calibration"]
+    odd = [30.0, 90.0, 150.0, 210.0, 270.0, 330.0]
+    assert d["points_uncorrected_deg"] == odd and d["scale_factor_corrected"] is True
+    th = e.table["position_deg"].to_numpy(float)
+    diff = e.table["E_arcsec"].to_numpy() - _e_truth_71(res).reindex(e.table["round"]).to_numpy()
+    own = harmonic_sum_arcsec(np.mod(th, 360.0), HARMONICS) - \
+        harmonic_sum_arcsec(np.zeros(th.size), HARMONICS)
+    kept = np.isin(th, odd)
+    assert np.max(np.abs(diff[~kept])) < 0.003
+    assert np.max(np.abs(diff[kept] + own[kept])) < 0.003 and np.max(np.abs(own[kept])) > 0.01
+    assert any("order 6" in n for n in rep.budget_notes)
+
+
 def test_e_k_stop_missing_keeps_k_part(base):
     """A calibration without 60° (a 7.1 stop and one of E's points): K is not corrected (the
     Result's K is the 7.1 mean as measured), E is read with it: every other point's own table
