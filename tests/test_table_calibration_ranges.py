@@ -313,3 +313,44 @@ def test_calibrated_table_draws_at_absolute_stops():
                   - (theta - (d[:, stop] - d[:, [at[90.0]]]) / 3600.0))
     np.testing.assert_allclose(np.std(e, axis=0),
                                np.sqrt(np.einsum("ij,j,ij->i", a, u ** 2, a)), rtol=0.03)
+
+
+def test_table_calibration_without_scale_factor_rounds(tmp_path):
+    """No 7.1 rounds (K from the file's nominal_scale_factor_counts_per_deg) with
+    ``--table-calibration``: ``gonio calibrate`` exits 0 and C_v, C_g are corrected with the
+    angles read through the nominal K (none of K's rounds used). A noise-free, untilted bench
+    whose table has the test's harmonics, with an exact calibration, gives the C_v and C_g
+    (the draft's functional of the corrected readings) of the same bench with a perfect
+    table; uncorrected they differ by the table's error."""
+    import json
+
+    from gonio.cli import main
+    from gonio.specs.ogam_draft.readings import write_readings
+
+    p = _protocol()
+    base = replace(load_bench("rlg"), sample_rate_hz=5.0)
+    clean, bent = (tilted(replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=h)), 0.0, 0.0)
+        for h in ((), HARMONICS))
+    out = {}
+    x = table_positions_deg(p)
+    f = tmp_path / "tc.csv"
+    f.write_text("table_deg,error_arcsec,u_arcsec\n" + "".join(
+        f"{a:g},{e:.9f},0.02\n" for a, e in zip(x, harmonic_sum_arcsec(x, HARMONICS))),
+        encoding="utf-8")
+    for key, bench in (("perfect", clean), ("bent", bent)):
+        res = run_session(p, bench, seed=0)
+        df = res.readings[res.readings["test"] != "scale_factor"]
+        rd = tmp_path / f"{key}.csv"
+        write_readings(df, rd, dict(res.metadata))
+        o = tmp_path / key
+        assert main(["calibrate", str(rd), "--table-calibration", str(f), "--out", str(o)]) == 0
+        out[key] = json.loads((o / "results.json").read_text(encoding="utf-8"))["items"]
+    assert not out["bent"]["scale_factor"]["measured"]
+    for name in ("rate_consistency", "pointing_consistency"):
+        tc = out["bent"][name]["details"]["table_calibration"]
+        truth = out["perfect"][name]["details"]["table_calibration"]["uncorrected_value"]
+        miss = abs(tc["measured_value"] - truth)
+        assert miss < TIGHT[name], (name, tc["measured_value"], truth)
+        # the table moves C_v by 0.015 ppm here (its 7.4 points only), C_g by 5.6e-7 %
+        assert abs(tc["uncorrected_value"] - truth) > max(OFF[name] / 4, 100 * miss)

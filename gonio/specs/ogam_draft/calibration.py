@@ -1782,9 +1782,11 @@ def consistency_at_table(results, readings, protocol, name: str, calibration):
     stop, zero = _consistency_row_positions(rows, protocol)
     i_s, m_s = calibration.lookup(stop)
     i_z, m_z = calibration.lookup(zero)
-    k_got = _k_rounds_at_table(results, protocol, calibration)
+    # angles read through the 7.1 K: only then are its rounds (and their positions) used
     through_k = results.scale_factor_for_angles_source == "7.1" and \
+        results.scale_factor.measured and \
         c.details.get("scale_factor_for_angles_counts_per_deg") is not None
+    k_got = _k_rounds_at_table(results, protocol, calibration) if through_k else None
     if through_k and k_got is None:          # K's stops and zeros the file does not list
         k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
         m_s = sorted(set(m_s) | set(calibration.lookup(k_stop)[1])
