@@ -53,6 +53,12 @@ def register(sub) -> None:
     q.add_argument("--readings", default=None, metavar="FILE",
                    help="the readings file results.json was computed from, when it is not "
                         "in the folder (gonio calibrate's output holds none); one folder only")
+    q.add_argument("--table-calibration", default=None, metavar="FILE",
+                   help="the rotary table's calibration file the folder was computed with "
+                        "(gonio calibrate --table-calibration FILE): kept with the "
+                        "calibration, its SHA-256 checked against results.json's; one folder "
+                        "only. A folder whose results.json records a table calibration is "
+                        "refused without it (or the --lab file naming it)")
     q.add_argument("--user", default=None, metavar="NAME",
                    help="the records user importing (recorded as the calibrations' creator, "
                         "who may then neither review nor approve them; default $GONIO_USER). "
@@ -125,6 +131,8 @@ def hook_calibrate(sub) -> None:
                                            spec_key=args.spec,
                                            protocol=getattr(args, "protocol", None),
                                            lab=getattr(args, "lab", None),
+                                           table_calibration=getattr(
+                                               args, "table_calibration", None),
                                            actor=importing_user(store, args.record_user),
                                            **attach_of(args))
                 line = attach_line(store, services.calibration(store, cid))
@@ -317,10 +325,15 @@ def run_import(args) -> int:
         actor = importing_user(store, args.user)
         if args.readings and len(args.folders) > 1:
             raise GonioError("give --readings with one folder only", key="--readings")
+        if args.table_calibration and len(args.folders) > 1:
+            raise GonioError("give --table-calibration with one folder only",
+                             key="--table-calibration")
         for folder in args.folders:
             cid = record_output_folder(store, folder, customer=args.customer,
                                        protocol=args.protocol, lab=args.lab, actor=actor,
-                                       readings=args.readings, **attach_of(args))
+                                       readings=args.readings,
+                                       table_calibration=args.table_calibration,
+                                       **attach_of(args))
             print(f"{folder}: {attach_line(store, services.calibration(store, cid))}")
     finally:
         store.close()

@@ -128,32 +128,94 @@ def _lab_file(store, lab, spec_key: str) -> tuple[str | None, int, dict, list]:
     return (*blobs.put_file(store.blob_root, Path(lab)), env, stds)
 
 
-def _table_calibration(store, lab, spec_key: str, rd: Path, results: dict,
-                       res_path: Path) -> tuple[str | None, int]:
-    """(sha256, size) of the laboratory file's ``[table_calibration]`` file stored, checked as
-    the command line checks it (:func:`gonio.pipeline.equipment.lab_table_calibration`: its
-    SHA-256, its validity on the readings' and the certificate's dates) and against the
-    folder's results.json (it must record that SHA-256: the run used it); (None, 0) where the
-    laboratory file names none or the specification takes none."""
-    if lab is None:
-        return None, 0
+def _table_calibration(store, lab, spec_key: str, rd: Path, results: dict, res_path: Path,
+                       given: str | Path | None = None) -> tuple[str | None, int, str]:
+    """(sha256, size, file name) of the table calibration the folder's run used, stored; (None,
+    0, "") where results.json records none (then none may be given). The file is the laboratory
+    file's ``[table_calibration]``, checked as the command line checks it
+    (:func:`gonio.pipeline.equipment.lab_table_calibration`: its SHA-256, its validity on the
+    readings' and the certificate's dates; ``given`` must then be the same content), else
+    ``given`` (``gonio db import --table-calibration FILE``), else a copy in the folder under the
+    name the run recorded (the manifest's ``option_files``, results.json's ``source``). Its
+    SHA-256 must be the one results.json records (``details.table_calibration.sha256``: the run
+    used it); a result whose table calibration is not supplied is refused (one line): the
+    records never hold a result without the table calibration it was computed with."""
     from gonio.formats.lab import load_lab
     from gonio.formats.provenance import readings_metadata
     from gonio.pipeline.equipment import lab_table_calibration
     from gonio.specs import get
-    lab_d = load_lab(lab)
-    if not lab_d.get("table_calibration") or \
-            "table_calibration" not in get(spec_key).calibrate_options:
-        return None, 0
-    path = Path(lab_table_calibration(lab_d, lab, readings_metadata(rd)))
-    sha = lab_d["table_calibration"]["sha256"]
     used = services.recorded_table_calibrations(results)
-    if used != {sha}:
-        raise GonioError(f"the laboratory file's table calibration {path.name} (SHA-256 "
-                         f"{sha[:16]}…) is not the one results.json was computed with "
-                         f"({', '.join(sorted(u[:16] + '…' for u in used)) or 'none'})",
+    takes = "table_calibration" in get(spec_key).calibrate_options
+    lab_d = load_lab(lab) if lab is not None else {}
+    if given is not None and not takes:
+        raise GonioError(f"{spec_key} takes no table calibration", file=given,
+                         key="table_calibration")
+    if takes and lab_d.get("table_calibration"):
+        path = Path(lab_table_calibration(lab_d, lab, readings_metadata(rd), given))
+        sha = lab_d["table_calibration"]["sha256"]
+        if used != {sha}:
+            raise GonioError(f"the laboratory file's table calibration {path.name} (SHA-256 "
+                             f"{sha[:16]}…) is not the one results.json was computed with "
+                             f"({', '.join(sorted(u[:16] + '…' for u in used)) or 'none'})",
+                             file=res_path, key="table_calibration")
+        return (*blobs.put_file(store.blob_root, path), path.name)
+    if not used:
+        if given is not None:
+            raise GonioError(f"--table-calibration {Path(given).name}: results.json records no "
+                             "table calibration (the run used none); leave the option out",
+                             file=res_path, key="table_calibration")
+        return None, 0, ""
+    if len(used) > 1:
+        raise GonioError("results.json records more than one table calibration ("
+                         + ", ".join(u[:16] + "…" for u in sorted(used)) + ")",
                          file=res_path, key="table_calibration")
-    return blobs.put_file(store.blob_root, path)
+    (want,) = used
+    names = _recorded_table_names(results, res_path.parent)
+    if given is not None:
+        path = Path(given)
+        if not path.is_file():
+            raise GonioError("no such table calibration file", file=path,
+                             key="table_calibration")
+        got = blobs_sha(path)
+        if got != want:
+            raise GonioError(f"the table calibration {path.name} has SHA-256 {got[:16]}…, not "
+                             f"the {want[:16]}… results.json was computed with"
+                             + (f" ({names[0]})" if names else ""), file=path,
+                             key="table_calibration.sha256")
+    else:
+        here = [res_path.parent / n for n in names]
+        path = next((p for p in here if p.is_file() and blobs_sha(p) == want), None)
+        if path is None:
+            raise GonioError(f"results.json was computed with the table calibration "
+                             f"{names[0] if names else '(unnamed)'} (SHA-256 {want[:16]}…), "
+                             "which is not in the folder: give it with --table-calibration "
+                             "FILE (or the --lab file naming it)", file=res_path,
+                             key="table_calibration")
+    return (*blobs.put_file(store.blob_root, path), path.name)
+
+
+def _recorded_table_names(results: dict, folder: Path) -> list[str]:
+    """The file names the run recorded for its table calibration: the manifest's
+    ``option_files.table_calibration.file`` (``gonio calibrate --table-calibration FILE``),
+    then each item's ``details.table_calibration.source``; plain names only, in that order."""
+    from gonio.atomic import MANIFEST
+    names = []
+    try:
+        man = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        names.append(str(((man.get("option_files") or {}).get("table_calibration") or {})
+                         .get("file") or ""))
+    except (OSError, ValueError, RecursionError, AttributeError):
+        pass
+    items = (results or {}).get("items") or {}
+    for it in (items.values() if isinstance(items, dict) else items):
+        d = ((it.get("details") or {}).get("table_calibration") or {}) \
+            if isinstance(it, dict) else {}
+        names.append(str(d.get("source") or "") if isinstance(d, dict) else "")
+    out = []
+    for n in names:
+        if n and n == Path(n).name and n not in (".", "..") and n not in out:
+            out.append(n)
+    return out
 
 
 def lab_standard_ids(s, standards: list, day: _dt.date, lab) -> list[int]:
@@ -229,7 +291,8 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                          spec_key: str | None = None, customer: str = "(imported)",
                          actor: User | None = None,
                          protocol: str | Path | None = None,
-                         lab: str | Path | None = None) -> int:
+                         lab: str | Path | None = None,
+                         table_calibration: str | Path | None = None) -> int:
     """Import one output folder as a computed calibration; returns its id.
 
     The protocol is stored with the readings (its file, as a blob), so that the issue's
@@ -244,8 +307,12 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     place's DCC category (``[certificate] place``, ``location``), and its ``[[standards]]``
     as the standards used (:func:`lab_standard_ids`: each registered and valid on the
     calibration date, else a GonioError and nothing is recorded); its ``[table_calibration]``
-    file, where it names one, as the calibration's table calibration
-    (:func:`_table_calibration`: the one results.json records, else refused)."""
+    file, where it names one, as the calibration's table calibration. The table calibration a
+    run used (results.json records its SHA-256) is stored with the calibration: the laboratory
+    file's, else ``table_calibration`` (``--table-calibration FILE``), else a copy in the folder
+    under the name the run recorded; its SHA-256 must be the recorded one, and a result whose
+    table calibration is not supplied is refused, nothing recorded
+    (:func:`_table_calibration`)."""
     folder = Path(folder)
     res_path = folder / "results.json"
     try:
@@ -287,7 +354,8 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     if proto is not None:
         psha, psize = blobs.put_file(store.blob_root, proto)
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
-    tsha, tsize = _table_calibration(store, lab, key, rd, results, res_path)
+    tsha, tsize, tname = _table_calibration(store, lab, key, rd, results, res_path,
+                                            table_calibration)
     who = actor.username if actor else f"command line ({getpass.getuser()})"
     with store.writing() as s:
         for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize),
@@ -321,11 +389,12 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         services.audit(s, actor, "import", "calibration", cal.id, None,
                        dict(services.state(cal), folder=str(folder),
                             standards=services.standard_names(s, cal.id)))
-        if tsha is not None:        # the laboratory's table calibration the run used, kept
+        if tsha is not None:        # the table calibration the run used, kept
             s.add(CalibrationFile(calibration_id=cal.id, name=services.TABLE_CALIBRATION,
                                   sha256=tsha))
             services.audit(s, actor, "table-calibration", "calibration", cal.id, None,
-                           {"sha256": tsha, "name": Path(lab).name + " [table_calibration]"})
+                           {"sha256": tsha, "name": services.text(tname, "table calibration "
+                                                                  "file name", max_len=255)})
         s.commit()
         cal_id = cal.id
     try:
@@ -345,7 +414,8 @@ def record_output_folder(store, folder: str | Path, *, actor: User | None = None
     calibrate --record``, ``gonio db import``); returns the calibration's id.
 
     The folder is imported (:func:`import_output_folder` with ``import_options``: readings,
-    spec_key, customer, protocol, lab; the laboratory file's ``[environment]`` carried, its
+    spec_key, customer, protocol, lab, table_calibration; the laboratory file's
+    ``[environment]`` carried, its
     source stated, and its ``[[standards]]`` matched by identifier to registered standards
     valid on the calibration date, :func:`lab_standard_ids` — one that is not refuses the
     whole import); then the registered standards named by their identifiers (besides the

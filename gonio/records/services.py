@@ -1172,10 +1172,17 @@ def _same_table_calibration(results: dict, stored: str | None, cal_id) -> None:
     """The table calibration a stored results.json was computed with (the SHA-256 any item's
     ``details.table_calibration`` records) is the calibration's stored
     :data:`TABLE_CALIBRATION` (``stored``, its digest): a GonioError naming both otherwise
-    (the file kept with the calibration is not the one its result used)."""
+    (the file kept with the calibration is not the one its result used); a results.json that
+    records one where the calibration keeps none is a GonioError too: a result is never sealed
+    without the table calibration it was computed with."""
     used = sorted(recorded_table_calibrations(results))
-    if stored is None or not used:
+    if not used:
         return
+    if stored is None:
+        raise GonioError(f"calibration {cal_id}: its results.json was computed with the table "
+                         f"calibration {', '.join(u[:16] + '…' for u in used)} and no stored "
+                         f"{TABLE_CALIBRATION} keeps it: not sealed",
+                         key=f"calibration {cal_id}")
     if used != [stored]:
         raise GonioError(f"the stored {TABLE_CALIBRATION} (SHA-256 {stored[:16]}…) is not the "
                          f"table calibration the stored results.json was computed with "
