@@ -259,11 +259,21 @@ def test_ranges_calibration_recorded(tmp_path):
         assert 0.0 in tc["positions_used"]["table_deg"]
         if name != "scale_factor_nonlinearity":
             assert 330.0 in tc["positions_used"]["table_deg"]      # a 7.6/7.7 point
-        assert f"{sym} readings corrected by the table calibration tc.csv" in dcc
-        for lang, word in (("en", "table calibration tc.csv"), ("zh", "转台校准 tc.csv")):
+        # K_l's K_i are counts over the corrected angle (nothing read with K); C_v's and C_g's
+        # angles are read through the 7.1 K here (counts), with its table-corrected value
+        what = "the 7.1 rounds" if sym == "K_l" else "readings"
+        assert f"{sym} {what} corrected by the table calibration tc.csv" in dcc
+        assert tc.get("read_with_table_corrected_k", False) is (sym != "K_l")
+        for lang, word, k_word in (("en", "table calibration tc.csv", "table-corrected 7.1 K"),
+                                   ("zh", "转台校准 tc.csv", "转台误差修正后的 7.1 K")):
             text = "".join(s if isinstance(s, str) else s.text
                            for s in range_table_note(d, name, labels(lang, LABELS)))
             assert word in text
+            assert (k_word in text) is (sym != "K_l"), (lang, sym, text)
+            assert "修正后的 K" not in text and "table-corrected K" not in text
+        label = tc["label"] + d["items"][name]["details"]["estimates"]["corrected"]["label"]
+        assert ("table-corrected 7.1 K" in label) is (sym != "K_l")
+        assert "(and read with the table-corrected K)" not in label
     summary = (out / "summary.txt").read_text(encoding="utf-8")
     assert "K_l, C_v and C_g too" in summary and "keep the table's MPE" not in summary
 
@@ -347,8 +357,19 @@ def test_table_calibration_without_scale_factor_rounds(tmp_path):
         assert main(["calibrate", str(rd), "--table-calibration", str(f), "--out", str(o)]) == 0
         out[key] = json.loads((o / "results.json").read_text(encoding="utf-8"))["items"]
     assert not out["bent"]["scale_factor"]["measured"]
+    from gonio.kit.render import labels
+    from gonio.specs.ogam_draft.phrases import LABELS
+    from gonio.specs.ogam_draft.stated import range_table_note
     for name in ("rate_consistency", "pointing_consistency"):
         tc = out["bent"][name]["details"]["table_calibration"]
+        # the angles are read through the nominal K: no claim of a table-corrected 7.1 K
+        assert tc["read_with_table_corrected_k"] is False
+        d = out["bent"][name]["details"]
+        assert "7.1 K" not in tc["label"] + d["estimates"]["corrected"]["label"]
+        for lang in ("en", "zh"):
+            text = "".join(s if isinstance(s, str) else s.text for s in range_table_note(
+                {"items": out["bent"]}, name, labels(lang, LABELS)))
+            assert "tc.csv" in text and " K" not in text, (lang, text)
         truth = out["perfect"][name]["details"]["table_calibration"]["uncorrected_value"]
         miss = abs(tc["measured_value"] - truth)
         assert miss < TIGHT[name], (name, tc["measured_value"], truth)

@@ -158,9 +158,26 @@ TABLE_CALIBRATED_NOTE = (
     "details.table_calibration_not_used)")
 
 #: Appended to the stated label of K_l, C_v, C_g (``details.estimates.corrected``) where a
-#: calibrated table corrected them (:data:`RANGE_TABLE_CALIBRATED_NOTE`).
-RANGE_TABLE_CORRECTED = ("; the readings corrected by the calibrated table (and read with the "
-                         "table-corrected K), its errors drawn in place of the table's MPE")
+#: calibrated table corrected them (:data:`RANGE_TABLE_CALIBRATED_NOTE`): K_l's 7.1 rounds
+#: (K_i = counts over the corrected angle, nothing read with K), C_v's and C_g's readings, read
+#: with the table-corrected 7.1 K only where their angles are read through the 7.1 K
+#: (:data:`RANGE_TABLE_K`).
+RANGE_TABLE_CORRECTED = {
+    "scale_factor_nonlinearity": "; the 7.1 rounds corrected by the calibrated table, its "
+                                 "errors drawn in place of the table's MPE",
+    "rate_consistency": "; the readings corrected by the calibrated table{k}, its errors drawn "
+                        "in place of the table's MPE",
+    "pointing_consistency": "; the readings corrected by the calibrated table{k}, its errors "
+                            "drawn in place of the table's MPE"}
+#: C_v's, C_g's angles read through the 7.1 K (7.4) with a calibrated table: read with its
+#: table-corrected value.
+RANGE_TABLE_K = " and read with the table-corrected 7.1 K"
+
+
+def range_table_text(template: str, through_k: bool) -> str:
+    """A K_l/C_v/C_g table-calibration label with the K reading claimed only where the
+    item's angles are read through the 7.1 K (``through_k``)."""
+    return template.replace("{k}", RANGE_TABLE_K if through_k else "")
 
 #: results.json ``angle_deviation.details.table_calibration.label``.
 E_TABLE_CALIBRATED_NOTE = (
@@ -335,18 +352,24 @@ class Analysis:
                                             if tilt and c.name == "pointing_consistency"
                                             else RANGE_READINGS[c.name]["corrected"])
                                   + (TILT_CORRECTED["ranges"] if tilt else "")
-                                  + (RANGE_TABLE_CORRECTED if "positions_used" in rec else ""),
+                                  + (range_table_text(RANGE_TABLE_CORRECTED[c.name],
+                                                      rec.get("through_k", False))
+                                     if "positions_used" in rec else ""),
                                   "value": float(iu.value)}}
             if iu is not None and "positions_used" in rec:
                 d["stated"] = "table_corrected"
                 d["table_calibration"] = {
-                    "label": RANGE_TABLE_CALIBRATED_NOTE[c.name],
+                    "label": range_table_text(RANGE_TABLE_CALIBRATED_NOTE[c.name],
+                                              rec.get("through_k", False)),
                     "source": getattr(self.table_calibration, "source", ""),
                     "sha256": getattr(self.table_calibration, "sha256", None),
                     "positions_used": rec["positions_used"],
                     "line": iu.components[0].source, "u_c": float(iu.u_c),
                     "measured_value": rec["measured_value"],
                     "uncorrected_value": _plain_value(c)}
+                if c.name != "scale_factor_nonlinearity":
+                    d["table_calibration"]["read_with_table_corrected_k"] = bool(
+                        rec.get("through_k", False))
             elif rec.get("reason"):
                 d["table_calibration_not_used"] = rec["reason"]
         if c.name != "zero_stability":
@@ -1683,15 +1706,15 @@ RANGE_TABLE_CALIBRATED_NOTE = {
         "table's MPE (A.4.1); the draft's reading (the range as measured, MPE) is kept beside"),
     "rate_consistency": (
         "beyond the draft: every 7.6 reading's reference angle corrected by the laboratory's "
-        "table calibration, theta - (e(theta) - e(zero))/3600, and read with the "
-        "table-corrected 7.1 K; the stated C_v is the range of the corrected E_v, bias "
+        "table calibration, theta - (e(zero + theta) - e(zero))/3600 (theta the angle turned "
+        "from the zeroing position zero){k}; the stated C_v is the range of the corrected E_v, bias "
         "corrected, its Monte Carlo drawing the calibration's errors (their covariance, with "
         "K's; a position shared one draw) in place of the table's MPE (A.4.1); the draft's "
         "reading (the range as measured, MPE) is kept beside"),
     "pointing_consistency": (
         "beyond the draft: every 7.7 reading's reference angle corrected by the laboratory's "
-        "table calibration, theta - (e(theta) - e(zero))/3600, and read with the "
-        "table-corrected 7.1 K; the stated C_g is the range of the corrected E_g, bias "
+        "table calibration, theta - (e(zero + theta) - e(zero))/3600 (theta the angle turned "
+        "from the zeroing position zero){k}; the stated C_g is the range of the corrected E_g, bias "
         "corrected (range and choice of each extreme), its Monte Carlo drawing the "
         "calibration's errors (their covariance, with K's; a position shared one draw) in "
         "place of the table's MPE (A.4.1); the draft's reading (the range as measured, MPE) "
@@ -1970,7 +1993,8 @@ def _consistency_item(results, budget, protocol, readings, name: str, scale: flo
     if table_calibration is not None:
         got, why = consistency_at_table(results, readings, protocol, name, table_calibration)
         table_record[name] = {"reason": why} if got is None else {
-            "positions_used": got[3], "measured_value": float(got[0].value)}
+            "positions_used": got[3], "measured_value": float(got[0].value),
+            "through_k": got[1].c_k is not None}
         if got is not None:     # the E_v of the corrected readings; the table's draws the
             c2, cal, zeros, _ = got                                  # calibration's
             col = "rate_dps" if name == "rate_consistency" else "orientation"

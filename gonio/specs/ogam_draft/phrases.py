@@ -293,11 +293,19 @@ LABELS: dict[str, dict[str, str]] = {
                        "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
                              "换算（草案以外）；按草案（附录 A）的测得值（并列给出，不作结果）："
                              "{v}″"},
-    "note_range_table": {"en": "readings corrected by the table calibration {f} (and read with "
-                               "the table-corrected K), its uncertainty in place of the table's "
-                               "MPE, beyond the draft",
-                         "zh": "读数已按转台校准 {f} 修正（并以转台误差修正后的 K 换算），以其"
-                               "不确定度代替转台最大允许误差（草案以外）"},
+    "note_range_table": {"en": "readings corrected by the table calibration {f}, its "
+                               "uncertainty in place of the table's MPE, beyond the draft",
+                         "zh": "读数已按转台校准 {f} 修正，以其不确定度代替转台最大允许误差"
+                               "（草案以外）"},
+    "note_range_table_k": {"en": "readings corrected by the table calibration {f} and read with "
+                                 "the table-corrected 7.1 K, its uncertainty in place of the "
+                                 "table's MPE, beyond the draft",
+                           "zh": "读数已按转台校准 {f} 修正，并以转台误差修正后的 7.1 K 换算，"
+                                 "以其不确定度代替转台最大允许误差（草案以外）"},
+    "note_range_table_kl": {"en": "the 7.1 rounds corrected by the table calibration {f}, its "
+                                  "uncertainty in place of the table's MPE, beyond the draft",
+                            "zh": "7.1 各测回已按转台校准 {f} 修正，以其不确定度代替转台最大允许"
+                                  "误差（草案以外）"},
     "note_e_table_part": {"en": "; not corrected (kept with the table's MPE line): E at {p}°",
                           "zh": "；未修正（保留转台最大允许误差分量）：E 在 {p}°"},
     "note_e_table_k_mpe": {"en": "; K not corrected by the table calibration (a 7.1 position "

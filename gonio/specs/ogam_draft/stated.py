@@ -283,7 +283,9 @@ def range_table_note(res: dict, name: str, L: dict) -> list:
     d = (res["items"][name].get("details") or {}).get("table_calibration") or {}
     if not d.get("positions_used"):
         return []
-    return segments(L["note_range_table"], f=str(d.get("source") or ""))
+    key = ("note_range_table_kl" if name == "scale_factor_nonlinearity" else
+           "note_range_table_k" if d.get("read_with_table_corrected_k") else "note_range_table")
+    return segments(L[key], f=str(d.get("source") or ""))
 
 
 def segments(template: str, **nums) -> list:
