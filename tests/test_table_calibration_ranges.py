@@ -375,3 +375,87 @@ def test_table_calibration_without_scale_factor_rounds(tmp_path):
         assert miss < TIGHT[name], (name, tc["measured_value"], truth)
         # the table moves C_v by 0.015 ppm here (its 7.4 points only), C_g by 5.6e-7 %
         assert abs(tc["uncorrected_value"] - truth) > max(OFF[name] / 4, 100 * miss)
+
+
+def _truth_e_v(res, rep, name, col) -> dict:
+    """The noise-free E_v per condition from the bench's parameters (as :func:`_truths`)."""
+    tr = pd.DataFrame(res.truth["readings"])
+    k_m = res.truth["scale_factor_through_mount_counts_per_deg"]
+    k71, _ = scale_factor_truth(res.truth)
+    c = getattr(rep.results, name)
+    pts, out = c.tables["points"], {}
+    for row in c.table.itertuples(index=False):
+        v, src = getattr(row, col), row.source_test
+        rows = tr[(tr["test"] == src) & tr["round"].isin(pts.loc[pts[col] == v, "round"])]
+        rows = rows[np.isclose(rows["rate_dps"], float(v))] if col == "rate_dps" else \
+            rows[(rows["orientation"] == v) & np.isclose(rows["rate_dps"], 60.0)]
+        dev = rows["systematic_deviation_arcsec"] + 3600.0 * rows["true_table_deg"] * (
+            k_m / k71 - 1.0)
+        m = dev.groupby(rows["round"]).mean().to_numpy()
+        out[v] = float(m[np.argmax(np.abs(m))])
+    return out
+
+
+def test_ranges_publish_corrected_tables(setup, runs):
+    """With a calibration that corrected C_v and C_g, the published E_v per condition
+    (results.json ``details.table``, the tables' CSV), the points and the spread are the
+    corrected readings': equal to the bench's noise-free E_v within 3 mas, where the
+    uncorrected (published without a calibration) miss by the table's error; the uncorrected
+    are kept beside, labelled (``table_uncorrected``, ``points_uncorrected``,
+    ``spread_uncorrected_arcsec``) and equal to the run without a calibration. The
+    certificate's spread is ``details.spread_arcsec``."""
+    _, res, _ = setup
+    for name, col, _ in RANGES[1:]:
+        d = runs["cal"].result().to_json()["items"][name]["details"]
+        d0 = runs["raw"].result().to_json()["items"][name]["details"]
+        truth = _truth_e_v(res, runs["cal"], name, col)
+        got = {r[col]: r["E_arcsec"] for r in d["table"]}
+        raw = {r[col]: r["E_arcsec"] for r in d0["table"]}
+        assert max(abs(got[v] - truth[v]) for v in truth) < 0.003, (name, got, truth)
+        assert max(abs(raw[v] - truth[v]) for v in truth) > 0.01, (name, raw, truth)
+        assert d["spread_arcsec"] == pytest.approx(max(got.values()) - min(got.values()))
+        assert d["spread_uncorrected_arcsec"] == d0["spread_arcsec"] != d["spread_arcsec"]
+        assert d["table_uncorrected"] == d0["table"] and d["points_uncorrected"] == d0["points"]
+        tables = runs["cal"].result().tables
+        pts = tables[f"{name}_points.csv"]
+        assert np.allclose(pts["E_arcsec"], [p["E_arcsec"] for p in d["points"]])
+        assert f"{name}_points_uncorrected.csv" in tables
+        assert d["points"] != d0["points"]
+
+
+def test_ranges_measured_value_is_the_stated_ones_input(setup):
+    """With the in-situ tilt estimate (a tilted bench, 0.1° at azimuth 120°) and a calibration,
+    results.json's ``details.table_calibration.measured_value`` of K_l, C_v, C_g is the range
+    the stated value is built from (the range line's "measured range", table- and
+    tilt-corrected), recomputed here from the table-corrected readings by the tilt correction
+    (K_i/(1 + δ_i) for K_l; E + δ·θ for C_v, C_g, δ the measured tilt's relative K bias); the
+    table-only range is kept beside as ``measured_value_without_tilt_correction``."""
+    p0, res0, cal = setup
+    p = parse_protocol(read_toml(resolve("ogam-draft", "protocol")),
+                       resolve("ogam-draft", "protocol"))
+    base = replace(load_bench("rlg"), sample_rate_hz=5.0)
+    bench = tilted(replace(base.random_off(), table=TableConfig(
+        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS)),
+        0.1, 120.0)
+    res = run_session(p, bench, seed=0)
+    rep = _analyse(p, res, cal)
+    tc = rep.item_uncertainty["scale_factor"].correction
+    assert tc is not None
+    d = rep.result().to_json()["items"]
+    for name, col, scale in RANGES:
+        t = d[name]["details"]["table_calibration"]
+        b = rep.item_uncertainty[name]
+        line = float(re.search(r"measured range (\S+) ", b.components[0].source)[1])
+        assert t["measured_value"] == pytest.approx(line, rel=1e-3, abs=1e-12)
+        assert "measured_value_without_tilt_correction" in t
+        if name == "scale_factor_nonlinearity":
+            continue
+        # independent: E_v of the corrected points (published) shifted by δ·θ
+        pts = pd.DataFrame(d[name]["details"]["points"])
+        e = pts["E_arcsec"] + tc.delta_rel * pts["position_deg"] * 3600.0
+        e_v = [g.to_numpy()[np.argmax(np.abs(g.to_numpy()))] for _, g in e.groupby(pts[col])]
+        want = (max(e_v) - min(e_v)) / d[name]["details"]["reference_angle_arcsec"] * scale
+        assert t["measured_value"] == pytest.approx(want, rel=1e-6, abs=1e-12)
+        assert t["measured_value_without_tilt_correction"] == pytest.approx(
+            d[name]["details"]["spread_arcsec"] / d[name]["details"]["reference_angle_arcsec"]
+            * scale, rel=1e-9)

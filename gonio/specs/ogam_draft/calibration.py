@@ -367,6 +367,9 @@ class Analysis:
                     "line": iu.components[0].source, "u_c": float(iu.u_c),
                     "measured_value": rec["measured_value"],
                     "uncorrected_value": _plain_value(c)}
+                if "measured_value_without_tilt_correction" in rec:
+                    d["table_calibration"]["measured_value_without_tilt_correction"] = \
+                        rec["measured_value_without_tilt_correction"]
                 if c.name != "scale_factor_nonlinearity":
                     d["table_calibration"]["read_with_table_corrected_k"] = bool(
                         rec.get("through_k", False))
@@ -1905,6 +1908,7 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
             if at_table is not None:
                 table_record["scale_factor_nonlinearity"] = {
                     "positions_used": at_table[1], "measured_value": at_table[2]}
+                _record_measured(table_record["scale_factor_nonlinearity"], at_table[0], tc)
             elif table_calibration is not None:
                 table_record["scale_factor_nonlinearity"] = {"reason": t_note.replace(
                     "the MPE line kept", "K_l keeps the MPE line and is not corrected")}
@@ -1957,6 +1961,18 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     return out
 
 
+def _record_measured(rec: dict, b, tc) -> None:
+    """K_l's, C_v's or C_g's table record: ``measured_value`` the range the stated value is
+    built from (``b.measured``: the table-corrected readings, and corrected at the measured
+    tilt where ``tc``), the table-corrected range without the tilt correction beside it
+    (``measured_value_without_tilt_correction``) where the tilt corrected them."""
+    without = rec["measured_value"]
+    if b.measured is not None:
+        rec["measured_value"] = float(b.measured)
+    if tc is not None:
+        rec["measured_value_without_tilt_correction"] = float(without)
+
+
 def _k_u_rel_without_table(sf_budget) -> float:
     """u(K)/K less the tilt, chamber and calibrated-table lines (``P_Kc``): the part of K's u an
     item drawing the calibration's errors jointly with K's (:class:`~gonio.specs.ogam_draft.
@@ -1994,7 +2010,7 @@ def _consistency_item(results, budget, protocol, readings, name: str, scale: flo
         got, why = consistency_at_table(results, readings, protocol, name, table_calibration)
         table_record[name] = {"reason": why} if got is None else {
             "positions_used": got[3], "measured_value": float(got[0].value),
-            "through_k": got[1].c_k is not None}
+            "through_k": got[1].c_k is not None, "corrected": got[0]}
         if got is not None:     # the E_v of the corrected readings; the table's draws the
             c2, cal, zeros, _ = got                                  # calibration's
             col = "rate_dps" if name == "rate_consistency" else "orientation"
@@ -2004,9 +2020,10 @@ def _consistency_item(results, budget, protocol, readings, name: str, scale: flo
             if cal.c_k is not None and sf_budget is not None:
                 kw["scale_factor_u_rel"] = _k_u_rel_without_table(sf_budget)
             kw.update(curves=curves, table_cal=cal)
-            return dataclasses.replace(iu.consistency_corrected_budget(
-                name, conds, float(c2.details["reference_angle_arcsec"]), scale, **kw),
-                beside=draft)
+            b = iu.consistency_corrected_budget(
+                name, conds, float(c2.details["reference_angle_arcsec"]), scale, **kw)
+            _record_measured(table_record[name], b, tc)
+            return dataclasses.replace(b, beside=draft)
     if tc is not None:
         conds, curves = _consistency_conditions(c, name, u_r, delta)
         kw.update(curves=curves)
@@ -2291,6 +2308,11 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
     table_record: dict = {}
     items = item_uncertainties(res, e_budget, proto, settings, kept, gyro_type,
                                table_calibration=table_calibration, table_record=table_record)
+    for name in ("rate_consistency", "pointing_consistency"):
+        c2 = (table_record.get(name) or {}).pop("corrected", None)
+        if c2 is not None:          # the published tables: the corrected readings'
+            res = dataclasses.replace(res, **{name: with_corrected_tables(getattr(res, name),
+                                                                          c2)})
     if proto.tilt_estimate is not None and "scale_factor" in items:
         tc = items["scale_factor"].correction
         notes.append(tilt_correction(res, kept, proto)[1] if tc is None else (
@@ -2316,6 +2338,27 @@ def analyse(readings: str | Path | Readings, protocol: str | Path | Protocol | N
                     budget_notes=notes, excluded=excluded,
                     zero_stability_readings=zs_readings, findings=findings, gyro_type=gyro_type,
                     table_calibration=table_calibration, table_record=table_record)
+
+
+#: Details of C_v/C_g (7.6, 7.7) taken from the table-corrected readings where a calibrated
+#: table corrected them (:func:`with_corrected_tables`).
+CORRECTED_DETAILS = ("spread_arcsec", "reference_angle_arcsec", "reference_position_deg",
+                     "scale_factor_for_angles_counts_per_deg")
+
+
+def with_corrected_tables(c, c2):
+    """C_v or C_g ``c`` (the draft's functional of the readings as measured) publishing the
+    tables of ``c2``, the same functional of the readings a calibrated table corrected
+    (:func:`consistency_at_table`; beyond the draft): E_v per condition (``table``), the
+    points, the spread and the reference angle are the corrected readings', as the stated
+    value is; the readings as measured are kept beside, labelled: ``table_uncorrected``,
+    ``points_uncorrected``, ``spread_uncorrected_arcsec``. ``c.value`` (the draft's range as
+    measured, given beside the stated one) is unchanged."""
+    details = {**c.details, **{k: c2.details[k] for k in CORRECTED_DETAILS if k in c2.details},
+               "spread_uncorrected_arcsec": c.details["spread_arcsec"]}
+    tables = {**c.tables, "points": c2.tables["points"], "table_uncorrected": c.table,
+              "points_uncorrected": c.tables["points"]}
+    return dataclasses.replace(c, details=details, table=c2.table, tables=tables)
 
 
 def table_corrected(iu) -> bool:

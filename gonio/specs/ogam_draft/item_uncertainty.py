@@ -146,6 +146,10 @@ class ItemUncertainty:
     #: The measured correction the value carries (K: the tilt estimate's
     #: :class:`gonio.specs.ogam_draft.budget_extra.TiltCorrection`), or None.
     correction: object = field(default=None, repr=False, compare=False)
+    #: A range's measured value in the item's unit, the input its bias-corrected value is
+    #: built from (K_l, C_v, C_g: the range of the readings as corrected for the stated
+    #: reading — table and measured tilt where they apply), or None.
+    measured: float | None = field(default=None, repr=False, compare=False)
 
     @property
     def U(self) -> float:
@@ -1234,7 +1238,8 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     lo, hi = c.interval
     b = _budget("scale_factor_nonlinearity", "%", _in_belt(c.value, lo, hi), lines, k=k,
                 interval=(lo, hi))
-    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
+    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
+                   measured=float(c.measured))
 
 
 # --------------------------------------------------------------------------- 7.3, 7.5
@@ -1754,7 +1759,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
         lo = max(max(value, lo - bias * f) - math.hypot(below, w), 0.0)
         hi = value + math.hypot(above, w)
     b = _budget(item, unit, _in_belt(value, lo, hi), lines, k=k, interval=(lo, hi))
-    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT)
+    return replace(b, nonnegative=True, stated_by_interval=True, k_source=K_SOURCE_BELT,
+                   measured=float(c.measured))
 
 
 def _in_belt(value: float, lo: float, hi: float) -> float:
