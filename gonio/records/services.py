@@ -670,14 +670,40 @@ def table_calibration_of(spec, lab: dict, lab_name: str, sha256: str | None,
     check_validity(tc, [(day, "date of calibration")], shown)
 
 
+def table_calibration_name(s: Session, cal_id: int) -> str:
+    """The file name a calibration's table calibration was given (the name uploaded, or the
+    one the imported run read it under): its ``table-calibration`` audit event's ``name``
+    where that is a plain file name, else :data:`TABLE_CALIBRATION` (the name the records
+    keep the bytes under). Older imports recorded the laboratory file's name followed by
+    ``[table_calibration]``, not the file's: those fall back too."""
+    row = s.scalar(select(AuditEvent.after_json).where(
+        AuditEvent.action == "table-calibration", AuditEvent.entity == "calibration",
+        AuditEvent.entity_id == str(int(cal_id))).order_by(AuditEvent.id.desc()).limit(1))
+    try:
+        name = str((json.loads(row) if row else {}).get("name") or "")
+    except (ValueError, AttributeError):
+        name = ""
+    plain = (name == Path(name).name and name not in ("", ".", "..") and "\\" not in name
+             and name == name.strip() and len(name) <= 255
+             and not any(ord(c) < 32 or ord(c) == 127 for c in name)
+             and not name.endswith("[table_calibration]"))
+    return name if plain else TABLE_CALIBRATION
+
+
 def table_calibration_file(store, cal_id: int, work: Path) -> Path | None:
     """The calibration's stored table calibration (:data:`TABLE_CALIBRATION`, checked against
-    its digest) written into the work folder ``work`` for its run, or None where it has none."""
+    its digest) written into the work folder ``work`` for its run, under the name it was given
+    (:func:`table_calibration_name`, in its own subfolder: the run's certificate names the
+    file the laboratory gave, as ``gonio calibrate --table-calibration FILE`` does), or None
+    where it has none."""
     with store.session() as s:
         f = s.get(CalibrationFile, (int(cal_id), TABLE_CALIBRATION))
+        name = table_calibration_name(s, cal_id) if f is not None else ""
     if f is None:
         return None
-    path = Path(work) / TABLE_CALIBRATION
+    folder = Path(work) / "table-calibration"
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / name
     path.write_bytes(file_bytes(store, f.sha256))
     return path
 

@@ -270,3 +270,33 @@ def test_import_keeps_the_laboratory_table_calibration(sqlite_store, bench_readi
         assert s.get(CalibrationFile, (cal_id, "table_calibration.csv")).sha256 == SHA
     assert services.file_bytes(sqlite_store, SHA) == TABLE
     assert services.seal(sqlite_store, cal_id)
+
+
+def test_the_run_names_the_uploaded_file(computed, sqlite_store, tmp_path):
+    """The worker's run reads the upload under the name it was uploaded by ("RT-07 cal.csv",
+    given by this test's form): results.json's table calibration source, the summary and the
+    draft certificate name it, as ``gonio calibrate --table-calibration "RT-07 cal.csv"``
+    would, and not the name the records keep the bytes under; the certificate rendered again
+    from the stored result names it too, byte-identical to a second rendering."""
+    from sqlalchemy import select
+
+    from gonio.records.compute import render_folder, write_lab_toml
+
+    _, cal_id = computed
+    res = results_of(sqlite_store, cal_id)
+    assert res["items"]["scale_factor"]["details"]["table_calibration"]["source"] == \
+        "RT-07 cal.csv"
+    with sqlite_store.session() as s:
+        files = dict(s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
+            CalibrationFile.calibration_id == cal_id)).all())
+    for name in ("summary.txt", "certificate.html"):
+        text = services.file_bytes(sqlite_store, files[name]).decode("utf-8")
+        assert "RT-07 cal.csv" in text and "table_calibration.csv" not in text, name
+    lab = write_lab_toml(services.lab_details(sqlite_store, cal_id, final=False, redraft=True),
+                         tmp_path / "lab.toml")
+    outs = []
+    for i in range(2):
+        render_folder(services.file_bytes(sqlite_store, files["results.json"]),
+                      tmp_path / f"r{i}", spec_key="ogam-draft", lab=lab)
+        outs.append((tmp_path / f"r{i}" / "certificate.html").read_bytes())
+    assert outs[0] == outs[1] and b"RT-07 cal.csv" in outs[0]

@@ -105,9 +105,12 @@ def test_import_with_another_file_refused(cli_run, tmp_path, capsys):
 
 def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
     """--table-calibration FILE (the run's bytes): exit 0, the calibration keeps the file
-    (hashlib digest, the same bytes), the audit names the user's file name, the seal holds;
+    (hashlib digest, the same bytes) under the user's file name, which the certificate
+    rendered from the record names as the run's did; the seal holds;
     the seal then refuses once the kept file is taken away, one line naming the calibration
     and the missing file."""
+    from gonio.records.compute import render_folder, write_lab_toml
+
     out, readings, tc = cli_run
     data = tmp_path / "data"
     assert _import(data, out, readings, "--table-calibration", str(tc)) == 0
@@ -119,6 +122,23 @@ def test_import_with_the_file_keeps_it_and_seals(cli_run, tmp_path, capsys):
             assert s.get(CalibrationFile, (cal.id, "table_calibration.csv")).sha256 == SHA
         assert services.file_bytes(st, SHA) == TABLE
         assert services.seal(st, cal.id)
+        # the name kept is the file's own, and a record's certificate names it as the run did
+        with st.session() as s:
+            assert services.table_calibration_name(s, cal.id) == NAME
+        lab = write_lab_toml(services.lab_details(st, cal.id, final=False, redraft=True),
+                             tmp_path / "lab.toml")
+        render_folder(services.file_bytes(st, cal.results_sha256), tmp_path / "r",
+                      spec_key="ogam-draft", lab=lab)
+        html = (tmp_path / "r" / "certificate.html").read_text(encoding="utf-8")
+        assert NAME in html and "table_calibration.csv" not in html
+        # a recorded name that is not a plain file name is never used as one
+        for bad in ("../evil.csv", "lab.toml [table_calibration]", "a\nb.csv", ""):
+            with st.writing() as s:
+                services.audit(s, None, "table-calibration", "calibration", cal.id, None,
+                               {"sha256": SHA, "name": bad})
+                s.commit()
+            with st.session() as s:
+                assert services.table_calibration_name(s, cal.id) == "table_calibration.csv"
         with st.writing() as s:
             s.execute(delete(CalibrationFile).where(
                 CalibrationFile.calibration_id == cal.id,
