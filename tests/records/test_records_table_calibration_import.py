@@ -195,3 +195,25 @@ def test_table_calibration_for_a_run_that_used_none_refused(cli_run, bench_readi
         assert n_calibrations(st) == 0
     finally:
         st.close()
+
+
+def test_calibrate_record_keeps_the_file(bench_readings, tmp_path, monkeypatch):
+    """``gonio calibrate --table-calibration FILE --record``: the calibration recorded keeps
+    the file the run used (hashlib digest) and seals."""
+    from gonio.cli import main
+
+    monkeypatch.delenv("GONIO_USER", raising=False)
+    tc = tmp_path / NAME
+    tc.write_bytes(TABLE)
+    data = tmp_path / "data"
+    assert main(["calibrate", str(bench_readings[1]), "--protocol", str(SMALL_PROTOCOL),
+                 "--table-calibration", str(tc), "--out", str(tmp_path / "run"), "--record",
+                 "--data", str(data)]) == 0
+    st = open_store(None, data)
+    try:
+        with st.session() as s:
+            assert s.get(CalibrationFile, (1, "table_calibration.csv")).sha256 == SHA
+            assert services.table_calibration_name(s, 1) == NAME
+        assert services.seal(st, 1)
+    finally:
+        st.close()
