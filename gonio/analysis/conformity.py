@@ -53,7 +53,7 @@ from dataclasses import dataclass, replace
 from gonio.errors import GonioError
 from gonio.formats.lab import DECISION_RULES, check_interval, check_one_limit_per_item
 from gonio.result.model import Conformity
-from gonio.result.statement import stated_nu
+from gonio.result.statement import K_SOURCE_MAX_ABS, stated_nu
 
 __all__ = ["RULES", "OUTCOMES", "DecisionRule", "Limits", "Conformity", "normal_cdf",
            "conformance_probability", "acceptance_interval", "decide", "limits_of",
@@ -195,9 +195,10 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
     Parameters
     ----------
     item : name of the item (as in ``results.json``).
-    y : measured value; for the draft's E (7.4) the signed extreme, compared with
-        [−MPE, +MPE]: |E_i| ≤ MPE at every position is the same as the signed
-        extreme lying inside that interval.
+    y : measured value; for the draft's E (7.4) max|E_i|, compared with [−MPE, +MPE]
+        with U the reach of its interval above it (:func:`decide_items`, ``k_source``
+        :data:`~gonio.result.statement.K_SOURCE_MAX_ABS`): |E_i| ≤ MPE at every position
+        is max|E_i| ≤ MPE, and "pass" is the interval's upper end within +MPE.
     U, k : expanded uncertainty and its coverage factor (u = U/k, normal model); for an
         item stated by its χ² interval k is None and U the distance to the interval's upper
         end (the guard band then makes the guarded upper limit the interval's upper end).
@@ -341,11 +342,16 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
             c = _undecided(key, bounds, rule, origin, "no interval model to decide with")
         elif c is None:
             # an item stated by its interval alone: the band at a lower limit is the
-            # interval's reach below the value (its upper reach is U)
-            U_lower = (float(it.value) - float(unc.interval[0])
+            # interval's reach below the value (its upper reach is U). An interval of the
+            # extreme of magnitudes max_i |x_i| (E, 7.4) is decided at that extreme
+            # (interval[1] - U): "pass" only where the whole interval lies inside the limits
+            y = (float(unc.interval[1]) - float(unc.U)
+                 if unc.k is None and unc.interval is not None
+                 and unc.k_source == K_SOURCE_MAX_ABS else float(it.value))
+            U_lower = (y - float(unc.interval[0])
                        if unc.k is None and unc.interval is not None
                        and math.isfinite(float(unc.interval[0])) else None)
-            c = replace(decide(key, float(it.value), float(unc.U),
+            c = replace(decide(key, y, float(unc.U),
                                None if unc.k is None else float(unc.k), bounds, rule,
                                chi2_nu=chi2_nu if chi2_nu is not None and it.value > 0
                                else None, u=u_normal, U_lower=U_lower), limits_from=origin)

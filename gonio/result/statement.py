@@ -654,6 +654,13 @@ def _get(obj, key: str, default=None):
     return getattr(obj, key, default)
 
 
+#: ``k_source`` of an item whose value is signed but whose statement is the coverage interval
+#: of the extreme of magnitudes max_i |x_i| (the optical draft's E = ± max|E_i|, 7.4): its
+#: ``U`` is the distance from that extreme to the interval's upper end, so the extreme is
+#: ``interval[1] - U``; the statement and the conformity decision take that extreme.
+K_SOURCE_MAX_ABS = "max-abs-interval"
+
+
 def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> Statement:
     """The statement of one item, from a results.json item (dict) or a model ``Item``: its
     ``value``, ``unit`` and ``uncertainty`` (``U``, ``k``, ``nu_eff``, ``coverage_probability``
@@ -679,6 +686,12 @@ def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> State
     iv = _get(unc, "interval")
     if measured and iv is not None and _get(unc, "k") is None and _get(item, "value") is not None:
         # stated by its interval (no coverage factor exists for it): one statement
+        if _get(unc, "k_source") == K_SOURCE_MAX_ABS:
+            # the interval of an extreme of magnitudes, max_i |x_i|, beside a signed value:
+            # the value stated is that extreme (the interval's upper end less U), >= 0
+            return state_interval(float(iv[1]) - float(U), (iv[0], iv[1]),
+                                  nu_eff=_get(unc, "nu_eff"), p=p, unit=_get(item, "unit", ""),
+                                  nonnegative=True)
         return state_interval(_get(item, "value"), (iv[0], iv[1]), nu_eff=_get(unc, "nu_eff"),
                               p=p, unit=_get(item, "unit", ""), nonnegative=nonnegative)
     return state(_get(item, "value") if measured else None, U if ok else None,

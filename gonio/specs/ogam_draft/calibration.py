@@ -408,6 +408,8 @@ class Analysis:
         if c.name == "scale_factor" and iu is not None and (
                 iu.correction is not None or table_corrected(iu)):
             value = float(iu.value)               # K corrected by the measured tilt, the table
+        if c.name == "angle_deviation" and unc is not None and self.e_measured:
+            unc = e_stated_uncertainty(unc, getattr(self.uncertainty, "max_interval", None))
         return Item(c.name, c.title, c.clause, c.unit, _plain_value(c, value), bool(c.measured),
                     c.reason or "",
                     None if unc is None else Uncertainty(
@@ -1101,6 +1103,31 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
     return dataclasses.replace(sub[at], points=points, parameters=params,
                                max_interval=e_max_interval(pts["E_arcsec"], sub))
+
+
+def e_stated_uncertainty(unc: dict, max_interval: dict | None) -> dict:
+    """E's stated uncertainty (results.json ``items.angle_deviation.uncertainty``): with the
+    physical budget's per-point figures, the 95 % interval of max|E_i| (:func:`e_max_interval`)
+    is E's one statement — ``interval`` [lower, upper], ``k`` None, ``U`` = upper − max|E_i|
+    (the guard band of a decision against +MPE), ``k_source``
+    :data:`gonio.result.statement.K_SOURCE_MAX_ABS` — and the draft's max|E_i| ± U (7.4,
+    Annex A) is given beside (``extra.uncertainty.draft_reading``). Without per-point figures
+    (the draft's budget) ``unc`` as it is: max|E_i| ± U.
+
+    >>> u = e_stated_uncertainty({"u_c": 0.1, "U": 0.2, "k": 2.0, "nu_eff": 50.0,
+    ...     "k_source": "welch-satterthwaite"}, {"lower_arcsec": 0.0, "upper_arcsec": 0.5,
+    ...     "max_abs_arcsec": 0.25, "p": 0.95})
+    >>> u["interval"], u["U"], u["k"], u["k_source"], u["nu_eff"]
+    ([0.0, 0.5], 0.25, None, 'max-abs-interval', None)
+    """
+    from gonio.result.statement import K_SOURCE_MAX_ABS
+
+    if not max_interval:
+        return unc
+    lo, hi = float(max_interval["lower_arcsec"]), float(max_interval["upper_arcsec"])
+    return {**unc, "U": hi - float(max_interval["max_abs_arcsec"]), "k": None, "nu_eff": None,
+            "coverage_probability": float(max_interval["p"]), "k_source": K_SOURCE_MAX_ABS,
+            "interval": [lo, hi]}
 
 
 def e_max_interval(e_arcsec, budgets) -> dict:

@@ -43,7 +43,8 @@ from gonio.specs.ogam_draft.figures import FIGURES
 from gonio.specs.ogam_draft.phrases import BENCH_NAMES_ZH, FINDINGS_ZH, LABELS, REASONS_ZH
 from gonio.result.statement import signed_text
 from gonio.specs.ogam_draft.stated import (ANNEX_A_COVERAGE, budget_source, combined_k_note,
-                                           conformity_for, detail, e_budget, followed,
+                                           conformity_for, detail, e_budget, e_by_interval,
+                                           e_interval_segments, followed,
                                            interval_cell, item_names, item_path, k_table_note,
                                            e_table_note, k_tilt_note,
                                            method_rows, reading_note, segments,
@@ -124,11 +125,15 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
     add("table", ([L["no"], L["item"], L["clause"], L["result"], L["U_col"], L["unit"]], rrows),
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
-        add("p", segments(L["U_line_p"], U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
+        by_iv = e_by_interval(res)
+        add("p", segments(L["U_line_points" if by_iv else "U_line_p"],
+                          U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
                           k=_num(res, "extra.uncertainty.k", "k", U),
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
         add("p", segments(L["u_c_line"], u=_num(res, "extra.uncertainty.u_c_arcsec", "U", U)))
         dr = unc.get("draft_reading")
+        if by_iv:        # E's one statement, its interval, and the draft's reading beside
+            add("p", e_interval_segments(res, L))
         if unc.get("budget_kind") == "physical" and dr:      # which budget is certified
             add("p", [L["U_certified_physical"].format(U=display("U", dr["U_arcsec"]),
                                                        k=display("k", dr["k"]))])

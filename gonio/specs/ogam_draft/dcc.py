@@ -26,7 +26,8 @@ from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               list_quantity, measurement_result, new_document,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.phrases import LABELS
-from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_budget, followed,
+from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_budget,
+                                           e_interval_segments, followed,
                                            item_names, item_path, item_uncertainty, k_table_note,
                                            e_table_note, k_tilt_note,
                                            method_rows, reading_note, specification_text,
@@ -134,8 +135,12 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             kw = {"interval": s["interval"]["interval"]["ends"],
                   "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
         if name == "angle_deviation" and s["signed"] is not None:
+            desc = _e_table_text(res, L)
+            if "interval" in kw:     # the interval of max|E_i|, the draft's reading beside
+                desc = "; ".join(d for d in (desc, "".join(
+                    str(x) for x in e_interval_segments(res, labels("en", LABELS)))) if d)
             quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"],
-                     description=_e_table_text(res, L), **kw)
+                     description=desc, **kw)
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")

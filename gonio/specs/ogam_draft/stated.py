@@ -115,6 +115,16 @@ def item_uncertainty(res: dict, name: str) -> dict | None:
     return None
 
 
+def e_by_interval(res: dict) -> bool:
+    """Whether E (7.4) is stated by the 95 % interval of max|E_i| (results.json
+    ``items.angle_deviation.uncertainty.interval`` with ``k_source``
+    :data:`~gonio.result.statement.K_SOURCE_MAX_ABS`), the draft's max|E_i| ± U beside."""
+    from gonio.result.statement import K_SOURCE_MAX_ABS
+
+    u = (res["items"].get("angle_deviation") or {}).get("uncertainty") or {}
+    return u.get("k_source") == K_SOURCE_MAX_ABS and u.get("interval") is not None
+
+
 def stated_item(res: dict, name: str) -> dict:
     """Item ``name`` as every output states it.
 
@@ -141,7 +151,17 @@ def stated_item(res: dict, name: str) -> dict:
     sig = ITEM_SIG_DIGITS.get(name, 3)
     own = None                      # the item stated by its own U (item_nums)
     max_abs = detail(res, name, "max_abs_arcsec")
-    if name == "angle_deviation" and max_abs is not None:
+    if name == "angle_deviation" and max_abs is not None and e_by_interval(res):
+        # E stated by the 95 % interval of max|E_i| (7.4 beyond the draft): max|E_i| and its
+        # interval by the one statement rule, the signed extreme at the same decimal place
+        own = item_nums(item, f"items.{name}", sig=sig)
+        rule = own["value"].rule
+        out["value"] = num(res, item_path(name, "max_abs_arcsec"), rule)
+        out["signed"] = num(res, item_path(name, "value"),
+                            "s" + rule if rule.startswith("dec") else rule)
+        if detail(res, name, "position_deg") is not None:
+            out["position"] = num(res, item_path(name, "position_deg"), "pos")
+    elif name == "angle_deviation" and max_abs is not None:
         out["value"] = num(res, item_path(name, "max_abs_arcsec"),
                            rule_at_U(U, sig, max_abs, "pmdec"))
         out["signed"] = num(res, item_path(name, "value"),
@@ -173,6 +193,33 @@ def stated_item(res: dict, name: str) -> dict:
         out["U"] = own["U"] if own and own["U"] is not None else num(res, unc["src_U"], "U")
         out["k"] = num(res, unc["src_k"], "k") if unc["k"] is not None else None
     return out
+
+
+def e_interval_segments(res: dict, L: dict) -> list:
+    """The paragraph under the results saying how E is stated (:func:`e_by_interval`): the
+    interval of max|E_i| as the statement gives its ends, and the draft's reading
+    max|E_i| ± U (7.4, Annex A: ``extra.uncertainty.draft_reading``) beside, not certified;
+    as :func:`segments` in ``L``'s language. [] when E is not stated by that interval."""
+    if not e_by_interval(res):
+        return []
+    st = stated_item(res, "angle_deviation")
+    lo, hi = st["interval"]["statement"].interval_ends
+    if st["interval"]["statement"].upper is not None:     # one-sided: from 0, as stated
+        lo = "0"
+    dr = e_budget(res).get("draft_reading") or {}
+    if dr.get("U_arcsec") is None:      # no draft reading beside: the interval's sentence alone
+        return [L["E_by_interval"].format(lo=lo, hi=hi, E="—", U="—", k="—")
+                .partition(" The draft's")[0].partition("按规范草案")[0]]
+    src = ("extra.uncertainty.draft_reading.E_arcsec" if dr.get("E_arcsec") is not None
+           else item_path("angle_deviation", "max_abs_arcsec"))
+    e = dr.get("E_arcsec") if dr.get("E_arcsec") is not None else detail(
+        res, "angle_deviation", "max_abs_arcsec")
+    return segments(L["E_by_interval"].replace("{lo}", lo).replace("{hi}", hi),
+                    E=num(res, src, rule_at_U(float(dr["U_arcsec"]),
+                                              ITEM_SIG_DIGITS.get("angle_deviation", 3),
+                                              float(e), "pmdec")),
+                    U=num(res, "extra.uncertainty.draft_reading.U_arcsec", "U"),
+                    k=num(res, "extra.uncertainty.draft_reading.k", "k"))
 
 
 def interval_cell(st: dict, lang: str) -> str:
@@ -429,10 +476,10 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         val = str(st["value"])
         if st["below_zero"]:                # its upper bound alone, and why
             val = interval_cell(st, "en").replace("\u00a0", " ") + "; " + L["below_zero"]
-        elif st["signed"] is not None:
-            val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
-        if st["interval"] is not None and not st["below_zero"]:    # stated by its interval
+        elif st["interval"] is not None:    # stated by its interval
             val += "; " + interval_cell(st, "en").replace("\u00a0", " ")
+        if st["signed"] is not None:
+            val += " (" + L["E_note"].format(s=st["signed"], p=st["position"] or "—") + ")"
         U = "—" if st["U"] is None else f"{st['U']} (k = {st['k'] or '—'}, " \
                                          f"p ≈ {st['p'] or '—'} %)"
         rows.append([str(i), title, st["clause"], val, U, st["unit"]])
@@ -449,11 +496,15 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         lines += ["", L["no_E_U"]]
     else:
         kind = f"{u['budget_kind']} budget" if u.get("budget_kind") else "Annex A"
-        lines += ["", f"Uncertainty of the angle-position deviation ({kind}): "
+        what = ("each point's E_i (the largest of the points')" if e_by_interval(res)
+                else "the angle-position deviation")
+        lines += ["", f"Uncertainty of {what} ({kind}): "
                       f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
                       f"U = {num(res, 'extra.uncertainty.U_arcsec', 'U')}″ "
                       f"(k = {num(res, 'extra.uncertainty.k', 'k')}, coverage probability "
                       f"{coverage_text(ANNEX_A_COVERAGE, lang)})"]
+        if e_by_interval(res):
+            lines.append("".join(str(x) for x in e_interval_segments(res, L)))
     for e in conformity_for(res, lab):
         c = e["conformity"]
         if c is None:
