@@ -141,11 +141,17 @@ def test_every_number_equals_results_json(run):
         x = parse_display(_as_display(text))
         vv = abs(v) if rule.startswith("pmdec") else v
         assert abs(x - vv) <= 0.5 * last_digit_unit(_as_display(text)) + 1e-9 * abs(vv), src
-    # the expanded uncertainty of E with k and p
+    # E's one statement: the 95 % coverage interval of max|E_i| (no U, no k), its ends
+    # results.json's interval rounded outwards
     root = etree.fromstring(run["docs"]["lab"])
-    mu = root.find(".//dcc:result[@id='result-angle_deviation']//si:expandedMU", NS)
-    assert float(mu.find("si:valueExpandedMU", NS).text) == pytest.approx(U, abs=0.005 * 1.0001)
-    assert mu.find("si:coverageFactor", NS).text == display("k", res["extra"]["uncertainty"]["k"])
+    e = root.find(".//dcc:result[@id='result-angle_deviation']", NS)
+    assert e.find(".//si:expandedMU", NS) is None
+    mu = e.find(".//si:coverageIntervalMU", NS)
+    lo, hi = res["items"]["angle_deviation"]["uncertainty"]["interval"]
+    shown_lo = float(mu.find("si:intervalMin", NS).text)
+    shown_hi = float(mu.find("si:intervalMax", NS).text)
+    assert shown_lo <= lo <= shown_lo + 0.01 and hi <= shown_hi <= hi + 0.01
+    assert shown_lo <= res["items"]["angle_deviation"]["details"]["max_abs_arcsec"] <= shown_hi
     assert float(mu.find("si:coverageProbability", NS).text) == 0.95
 
 
