@@ -120,23 +120,38 @@ def visible_text(page: str) -> str:
 
 # --------------------------------------------------------------------------- content
 
-def test_E_in_plus_minus_form_identical_in_every_output(run):
+def test_E_interval_form_identical_in_every_output(run):
+    """E = ± max|E_i| stated by the 95 % interval of max|E_i| (results.json's), rounded here
+    by hand: the decimal place of the interval's nearer reach (two significant digits; its
+    upper reach for an interval from 0), the ends outwards, max|E_i| and the signed extreme
+    half up; the same in the certificate, summary.txt and the DCC, and no ± U."""
+    from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
+
     res = run["results"]
     E = [r["E_arcsec"] for r in res["items"]["angle_deviation"]["details"]["table"]]
     j = int(np.argmax(np.abs(E)))
-    dec = u_decimals(res["extra"]["uncertainty"]["U_arcsec"])
-    pm = "±" + half_up(abs(E[j]), dec)
+    m = abs(E[j])
+    lo, hi = res["items"]["angle_deviation"]["uncertainty"]["interval"]
+    assert lo <= m <= hi
+    dec = u_decimals(hi - m if lo == 0 else min(hi - m, m - lo))
+    q = Decimal(1).scaleb(-dec)
+    hi_t = str(Decimal(repr(hi)).quantize(q, rounding=ROUND_CEILING))
+    lo_t = str(Decimal(repr(lo)).quantize(q, rounding=ROUND_FLOOR))
+    iv = f"≤ {hi_t} (p ≈ 95 %)" if lo == 0 else f"[{lo_t}, {hi_t}] (p ≈ 95 %)"
+    mt = half_up(m, dec)
     signed = half_up(E[j], dec)
     signed = signed if signed.startswith("-") else "+" + signed
     pos = f"{res['items']['angle_deviation']['details']['table'][j]['position_deg']:g}"
     # the certificate prints the minus sign U+2212; summary.txt and the DCC the hyphen-minus
-    expect = f"{pm}; signed extreme {signed.replace('-', chr(0x2212))}″ at {pos}°"
+    expect = f"{mt}; {iv}; signed extreme {signed.replace('-', chr(0x2212))}″ at {pos}°"
     page = visible_text((run["dir"] / "en" / "certificate.html").read_text())
     assert re.sub(r"\s+", " ", expect) in re.sub(r"\s+", " ", page)
     summary = summary_text(res)
-    assert f"{pm} (signed extreme {signed}″ at {pos}°)" in summary
+    assert f"{mt}; {iv} (signed extreme {signed}″ at {pos}°)" in summary
+    assert "±" + mt not in summary.split("Uncertainty of")[0]       # no ± U for E
     dcc = (run["dir"] / "en" / "certificate.dcc.xml").read_text()
-    assert f"<si:value>{pm[1:]}</si:value>" in dcc and f"<si:value>{signed.lstrip('+')}</si:value>" in dcc
+    assert f"<si:value>{mt}</si:value>" in dcc and f"<si:value>{signed.lstrip('+')}</si:value>" in dcc
+    assert f"<si:intervalMax>{hi_t}</si:intervalMax>" in dcc
 
 
 def test_summary_and_certificate_use_the_same_numbers(run):
