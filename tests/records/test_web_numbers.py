@@ -95,7 +95,7 @@ def test_web_states_every_item_as_the_certificate(recorded):
     """One row per measured item; its numbers are results.json's by the statement rule and
     the certificate's."""
     from gonio.report.i18n import minus_sign
-    from gonio.result.statement import item_statement
+    from gonio.result.statement import K_SOURCE_MAX_ABS, item_statement
 
     r = recorded["web"].get(f"/calibrations/{recorded['id']}")
     assert r.status_code == 200
@@ -109,7 +109,12 @@ def test_web_states_every_item_as_the_certificate(recorded):
         got, want = cell_numbers(rows[key][0]), expected_cell(it)
         assert got == want, (key, rows[key][0])
         st = item_statement(it)
-        for field, text in (("value", minus_sign(st.value_text)), ("uncertainty.U", st.U_text),
+        value = minus_sign(st.value_text)
+        if (it.get("uncertainty") or {}).get("k_source") == K_SOURCE_MAX_ABS:
+            # E (7.4): the statement's value is max|E_i|; the span of items.KEY.value is the
+            # signed extreme beside it, the same magnitude at the same decimal place
+            value = minus_sign(("-" if it["value"] < 0 else "") + st.value_text)
+        for field, text in (("value", value), ("uncertainty.U", st.U_text),
                             ("uncertainty.k", st.k), ("uncertainty.nu_eff", st.nu_eff)):
             if text is not None and (key, field) in spans and not st.below_zero:
                 assert spans[(key, field)] == {text}, (key, field, spans[(key, field)])
