@@ -375,6 +375,18 @@ def test_table_calibration_without_scale_factor_rounds(tmp_path):
         assert miss < TIGHT[name], (name, tc["measured_value"], truth)
         # the table moves C_v by 0.015 ppm here (its 7.4 points only), C_g by 5.6e-7 %
         assert abs(tc["uncorrected_value"] - truth) > max(OFF[name] / 4, 100 * miss)
+    # E too: read through the nominal K, so nothing says it was read with a corrected K
+    from gonio.specs.ogam_draft.stated import e_table_note
+    e = out["bent"]["angle_deviation"]["details"]
+    assert e["table_calibration"]["scale_factor_corrected"] is not True
+    assert "table-corrected K" not in e["estimates"]["corrected"]["label"]
+    for lang in ("en", "zh"):
+        text = "".join(s if isinstance(s, str) else s.text for s in e_table_note(
+            {"items": out["bent"]}, labels(lang, LABELS)))
+        assert "tc.csv" in text and " K" not in text, (lang, text)
+    summary = (tmp_path / "bent" / "summary.txt").read_text(encoding="utf-8")
+    assert "E's reference angles are corrected by the table calibration" in summary
+    assert "E read with the table-corrected K" not in summary
 
 
 def _truth_e_v(res, rep, name, col) -> dict:

@@ -183,7 +183,8 @@ def range_table_text(template: str, through_k: bool) -> str:
 E_TABLE_CALIBRATED_NOTE = (
     "beyond the draft: every E_ij's reference angle corrected by the laboratory's table "
     "calibration, theta_i - (e(theta_i) - e(zero))/3600 (e = indicated - true, zero the 7.4 "
-    "zeroing position), and E_ij read with the table-corrected 7.1 K (the stated K); each "
+    "zeroing position), and E_ij read from counts with the table-corrected 7.1 K where K is "
+    "corrected (scale_factor_corrected); each "
     "point's table line (P) is the calibration's uncertainty at the point, its zero and the "
     "7.1 stops and zeros propagated through E_i = C_i/K - theta_true (JCGM 100 5.1.2, 5.2.2 "
     "with the covariance; a position shared counted once; nu by Welch-Satterthwaite, JCGM 100 "
@@ -194,6 +195,9 @@ E_TABLE_CALIBRATED_NOTE = (
 #: ``angle_deviation.details.estimates.corrected.label`` where the table corrected E.
 E_TABLE_CORRECTED = ("certified: E corrected by the calibrated table (and read with the "
                      "table-corrected K), with the physical budget")
+#: The same where E is not read with a table-corrected K (``scale_factor_corrected`` not true:
+#: the readings' own gyro_deg, a nominal K, or a 7.1 stop the calibration does not list).
+E_TABLE_CORRECTED_NOK = "certified: E corrected by the calibrated table, with the physical budget"
 
 #: K's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
 #: "tilt_corrected", ``details.estimates``, ``details.tilt_correction``).
@@ -1634,7 +1638,8 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
                              "max_abs_arcsec": float(e.details["max_abs_arcsec"]),
                              "position_deg": float(e.details["position_deg"])})
     est["corrected"] = {"label": (est["corrected"]["label"] + "; and " if "corrected" in est
-                                  else "") + E_TABLE_CORRECTED, "value": float(value)}
+                                  else "") + (E_TABLE_CORRECTED if k_new is not None
+                                              else E_TABLE_CORRECTED_NOK), "value": float(value)}
     details["estimates"] = est
     used = sorted({i for t in terms if t["own"] for i in (t["i_p"], t["i_z"])})
     details["table_calibration"] = {

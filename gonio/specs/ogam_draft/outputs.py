@@ -106,7 +106,10 @@ def summary(result: Result | dict, lab: dict | None = None) -> str:
             lines.append(f"note: {ranges[n]['table_calibration_not_used']}")
     if e_table:
         lines.append(f"note: E's reference angles are corrected by the table calibration "
-                     f"{e_table['source']} and E read with the table-corrected K, beyond the "
+                     f"{e_table['source']}"
+                     + (" and E read with the table-corrected K"
+                        if e_table.get("scale_factor_corrected") is True else "")
+                     + ", beyond the "
                      f"draft (E without the table correction: "
                      f"{e_table['uncorrected_value']:.3g} arcsec)")
     tb = kd.get("temperature_coeff_bound")

@@ -286,6 +286,9 @@ LABELS: dict[str, dict[str, str]] = {
                            "{f} and E_ij read with the table-corrected K, beyond the draft",
                      "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
                            "换算（草案以外）"},
+    "note_e_table_nok": {"en": "every E_ij's reference angle corrected by the table calibration "
+                               "{f}, beyond the draft",
+                         "zh": "各 E_ij 的参考角已按转台校准 {f} 修正（草案以外）"},
     "note_e_table_v": {"en": "every E_ij's reference angle corrected by the table calibration "
                              "{f} and E_ij read with the table-corrected K, beyond the draft; "
                              "the draft's reading as measured (Annex A, beside, not stated): "
@@ -293,6 +296,11 @@ LABELS: dict[str, dict[str, str]] = {
                        "zh": "各 E_ij 的参考角已按转台校准 {f} 修正，并以转台误差修正后的 K "
                              "换算（草案以外）；按草案（附录 A）的测得值（并列给出，不作结果）："
                              "{v}″"},
+    "note_e_table_v_nok": {"en": "every E_ij's reference angle corrected by the table calibration "
+                                 "{f}, beyond the draft; the draft's reading as measured (Annex "
+                                 "A, beside, not stated): {v}″",
+                           "zh": "各 E_ij 的参考角已按转台校准 {f} 修正（草案以外）；按草案（附录 A）"
+                                 "的测得值（并列给出，不作结果）：{v}″"},
     "note_range_table": {"en": "readings corrected by the table calibration {f}, its "
                                "uncertainty in place of the table's MPE, beyond the draft",
                          "zh": "读数已按转台校准 {f} 修正，以其不确定度代替转台最大允许误差"

@@ -310,10 +310,11 @@ def e_table_note(res: dict, L: dict) -> list:
     (results.json ``angle_deviation.details.table_calibration``)."""
     item = res["items"]["angle_deviation"]
     d = (item.get("details") or {}).get("table_calibration") or {}
+    k = "" if d.get("scale_factor_corrected") is True else "_nok"   # read with the corrected K
     if (item.get("details") or {}).get("tilt_correction"):
-        out = segments(L["note_e_table"], f=str(d.get("source") or ""))
+        out = segments(L["note_e_table" + k], f=str(d.get("source") or ""))
     else:
-        out = segments(L["note_e_table_v"], f=str(d.get("source") or ""),
+        out = segments(L["note_e_table_v" + k], f=str(d.get("source") or ""),
                        v=num(res, item_path("angle_deviation", "estimates.draft.value"), "atU",
                              item["uncertainty"]["U"]))
     if d.get("points_uncorrected_deg"):     # the points the calibration does not cover
