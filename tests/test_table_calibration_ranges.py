@@ -87,23 +87,12 @@ def _truths(res, rep) -> dict:
     (:func:`scale_factor_truth`); C_v, C_g the spread of the noise-free per-condition extremes
     at the result's points, each deviation read with the 7.1 K's truth (as the items read
     their angles with the 7.1 K), over the reference angle."""
-    tr = pd.DataFrame(res.truth["readings"])
-    k_m = res.truth["scale_factor_through_mount_counts_per_deg"]
-    k71, k_i = scale_factor_truth(res.truth)
+    _, k_i = scale_factor_truth(res.truth)
     out = {"scale_factor_nonlinearity": float((k_i.max() - k_i.min()) / k_i.mean() * 100.0)}
     for name, col, scale in RANGES[1:]:
-        c = getattr(rep.results, name)
-        pts, e = c.tables["points"], []
-        for row in c.table.itertuples(index=False):
-            v, src = getattr(row, col), row.source_test
-            rows = tr[(tr["test"] == src) & tr["round"].isin(pts.loc[pts[col] == v, "round"])]
-            rows = rows[np.isclose(rows["rate_dps"], float(v))] if col == "rate_dps" else \
-                rows[(rows["orientation"] == v) & np.isclose(rows["rate_dps"], 60.0)]
-            dev = rows["systematic_deviation_arcsec"] + 3600.0 * rows["true_table_deg"] * (
-                k_m / k71 - 1.0)
-            m = dev.groupby(rows["round"]).mean().to_numpy()
-            e.append(m[np.argmax(np.abs(m))])
-        out[name] = float((max(e) - min(e)) / c.details["reference_angle_arcsec"] * scale)
+        e = list(_truth_e_v(res, rep, name, col).values())
+        ref = getattr(rep.results, name).details["reference_angle_arcsec"]
+        out[name] = float((max(e) - min(e)) / ref * scale)
     return out
 
 
