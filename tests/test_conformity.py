@@ -187,10 +187,36 @@ def test_an_item_stated_by_an_asymmetric_interval_is_guarded_by_its_own_reach():
     assert c.outcome == "pass" and c.acceptance_upper == pytest.approx(3.5)
     (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "upper": 5.9}], rule)
     assert c.outcome == "fail"
-    # non-binary: outside the lower limit by less than the lower reach → conditional fail
+    # non-binary: below the lower limit, "conditional fail" where the interval reaches back
+    # above it (its upper reach), "fail" where the whole interval lies below it
     (c,) = decide_items(res(2.45, 2.4, 6.0), [{"item": "C", "lower": 2.5}],
                         {"rule": "non-binary"})
     assert c.outcome == "conditional fail"
     (c,) = decide_items(res(2.3, 2.25, 6.0), [{"item": "C", "lower": 2.5}],
                         {"rule": "non-binary"})
+    assert c.outcome == "conditional fail"
+    (c,) = decide_items(res(2.3, 2.0, 2.45), [{"item": "C", "lower": 2.5}],
+                        {"rule": "non-binary"})
     assert c.outcome == "fail"
+
+
+def test_non_binary_conditional_fail_reaches_back_from_the_right_side():
+    """Outside the tolerance the outcome is "conditional fail" where the stated interval
+    reaches back inside: above the upper limit by its reach below the value (U_lower),
+    below the lower limit by its reach above it (U). Asymmetric intervals tell the two
+    apart (before, the reaches were swapped)."""
+    rule = DecisionRule("non-binary")
+    lim = Limits(-1.0, 1.0)
+    # above +1 by 0.2: the interval [0.914, 1.367] reaches back in below (0.286 ≥ 0.2)
+    d = decide("E", 1.2, 0.1667, None, lim, rule, u=0.1, U_lower=0.2858)
+    assert d.outcome == "conditional fail"
+    # below −1 by 0.2: the interval [−1.3, −0.9] reaches back in above (0.3 ≥ 0.2)
+    d = decide("x", -1.2, 0.3, None, lim, rule, u=0.1, U_lower=0.1)
+    assert d.outcome == "conditional fail"
+    d = decide("x", -1.2, 0.1, None, lim, rule, u=0.1, U_lower=0.3)   # [−1.5, −1.1]
+    assert d.outcome == "fail"
+    # a standard deviation 0.124 with its χ² interval [0.0853, 0.2264] (ν = 9) against an
+    # upper limit 0.08: the whole interval lies above it
+    d = decide("s", 0.124, 0.2264 - 0.124, None, Limits(None, 0.08), rule, chi2_nu=9,
+               U_lower=0.124 - 0.0853)
+    assert d.outcome == "fail"

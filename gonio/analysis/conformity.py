@@ -187,6 +187,15 @@ def _inside(y: float, lo: float | None, hi: float | None) -> bool:
         (lo is None or hi is None or lo <= hi)
 
 
+
+#: ``probability_model`` of an item stated by the interval of an extreme of magnitudes
+#: (max_i |x_i|, E 7.4): no single normal model N(max|x_i|, u) describes it (the extreme of
+#: several points), so no probability of conformance is given; the outcome is decided on the
+#: interval (its upper end against the limit).
+MAX_ABS_PROBABILITY_MODEL = ("not given: the extreme of several points; the outcome is "
+                             "decided on its 95 % interval")
+
+
 def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
            rule: DecisionRule, *, chi2_nu: float | None = None,
            u: float | None = None, U_lower: float | None = None) -> Conformity:
@@ -245,7 +254,10 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
         else:
             below = (limits.lower - y) if limits.lower is not None else -math.inf
             above = (y - limits.upper) if limits.upper is not None else -math.inf
-            outcome = ("conditional fail" if (below <= w_lo if below >= above else above <= w)
+            # outside the tolerance, "conditional" where the interval reaches back in: below
+            # the lower limit by its reach above the value (w), above the upper limit by its
+            # reach below it (w_lo)
+            outcome = ("conditional fail" if (below <= w if below >= above else above <= w_lo)
                        else "fail")
     else:
         outcome = "pass" if in_acc else "fail"
@@ -355,6 +367,10 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
                                None if unc.k is None else float(unc.k), bounds, rule,
                                chi2_nu=chi2_nu if chi2_nu is not None and it.value > 0
                                else None, u=u_normal, U_lower=U_lower), limits_from=origin)
+            if unc.k is None and unc.k_source == K_SOURCE_MAX_ABS:
+                c = replace(c, conformance_probability=None, false_accept_probability=None,
+                            false_reject_probability=None,
+                            probability_model=MAX_ABS_PROBABILITY_MODEL)
         it.conformity = c
         out.append(c)
     return out
