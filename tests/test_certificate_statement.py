@@ -241,7 +241,10 @@ def test_conformity_only_with_limits_and_outcome_from_closed_form(run, tmp_path)
     row = cells[cells.index("Angle-position deviation E"):][:5]
     assert row[1] == "[\u22120.5, 0.5] ″", row      # the limits as given, with the minus sign
     assert row[3].startswith(outcome), (row, outcome)
-    if outcome in ("pass", "conditional pass"):
+    if res["items"]["angle_deviation"]["uncertainty"].get("k_source") == "max-abs-interval":
+        # E stated by the interval of max|E_i|: no normal model, no probability stated
+        assert row[4] == "—", row
+    elif outcome in ("pass", "conditional pass"):
         assert float(row[4].rstrip(" %")) == pytest.approx(100 * (1 - p_c), rel=0.05, abs=0.051)
     # a lab file with limits but no rule is refused, naming the key
     text = LAB.read_text().replace('[decision_rule]\nrule = "non-binary"\nguard_band_factor = 1.0\n'

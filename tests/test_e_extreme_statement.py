@@ -163,6 +163,12 @@ def test_decision_with_all_true_e_zero_never_passes_over_the_limit():
             c = decide_items(res, [{"item": "angle_deviation", "mpe": mpe}],
                              {"rule": rule, "guard_band_factor": 1.0})[0]
             assert c.value == pytest.approx(r.estimate)     # max|E_i|, not the signed extreme
+            # no single normal model describes the extreme of twelve points: no probability
+            assert c.conformance_probability is None and c.false_accept_probability is None
+            assert c.probability_model.startswith("not given")
+            if rule == "non-binary" and c.outcome in ("fail", "conditional fail"):
+                # outside the limit: conditional where the interval reaches back in
+                assert (c.outcome == "conditional fail") == (r.lower <= mpe)
             if c.outcome == "pass":
                 passes += 1
                 assert r.upper <= mpe + 1e-12

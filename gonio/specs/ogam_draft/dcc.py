@@ -91,9 +91,10 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             if c.false_accept_probability is not None:
                 quantity(data, "specific false-accept probability",
                           display("sig2", c.false_accept_probability), "one")
-            else:
+            elif c.false_reject_probability is not None:
                 quantity(data, "specific false-reject probability",
                           display("sig2", c.false_reject_probability), "one")
+            # neither: no probability model (an extreme of several points), none stated
 
     stds = lab_.get("standards") or [{"name": str(md.get("table") or "rotary table"),
                                       "identifier": "", "accuracy": (
