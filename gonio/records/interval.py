@@ -182,7 +182,10 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
     findings: dict[float, bool] = {}
     spans = []
     for key, rows in history.items():
-        rows = [r for r in rows if r[1] is not None and r[2] and r[3]]
+        # judged against the limits: every row with a value and U (an item stated by its
+        # interval has no k: U is the reach to the interval's upper end); the drift is
+        # extrapolated from rows with U and k only (value ± U, u = U/k)
+        rows = [r for r in rows if r[1] is not None and r[2]]
         if not rows:
             continue
         lower, upper = rows[-1][4], rows[-1][5]
@@ -192,9 +195,10 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
             findings[r[0]] = findings.get(r[0], True) and _within(r[1], r[2], r[4], r[5])
         span = max(r[0] for r in rows) - min(r[0] for r in rows)
         spans.append(span)
-        if len(rows) >= MIN_POINTS and \
+        drift_rows = [r for r in rows if r[3]]
+        if len(drift_rows) >= MIN_POINTS and len(drift_rows) == len(rows) and \
                 span >= MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH:
-            days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in rows]),
+            days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in drift_rows]),
                                      lower, upper)
             per_item[key] = days / DAYS_PER_MONTH
     if per_item:

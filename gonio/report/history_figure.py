@@ -90,9 +90,18 @@ def bar_ends(r: dict) -> tuple[float, float]:
     return r["value"] - u, r["value"] + u
 
 
+def drawn_value(r: dict) -> float:
+    """Where a point is drawn: its value; for an item stated by the interval of an extreme
+    of magnitudes (E, 7.4: the interval of max_i |E_i|, its lower end ≥ 0, while the row's
+    value is the signed extreme), the value's magnitude, which its bar belongs to."""
+    iv = r.get("interval")
+    v = float(r["value"])
+    return -v if iv is not None and float(iv[0]) >= 0.0 > v else v
+
+
 def _ranges(pts: list[dict], lo_hi) -> tuple[float, float, dt.date, dt.date]:
     """(y low, y high, first date, last date) of a panel, with margins (x: 15 %)."""
-    ys = [v for r in pts for v in bar_ends(r)] + [r["value"] for r in pts]
+    ys = [v for r in pts for v in bar_ends(r)] + [drawn_value(r) for r in pts]
     ys += [v for v in lo_hi if v is not None]
     y0, y1 = min(ys), max(ys)
     pad = (y1 - y0) * 0.05 or max(abs(y0) * 0.01, 1e-12)
@@ -137,7 +146,7 @@ def _panel(key: str, pts: list[dict], lo_hi, ox: float, oy: float) -> list[str]:
                        'stroke-dasharray="5 3"/>')
     for r in pts:
         drawn = drawn_as(r)
-        x, y = x_of(r["date"]), y_of(r["value"])
+        x, y = x_of(r["date"]), y_of(drawn_value(r))
         low, high = bar_ends(r)
         top, bot = y_of(high), y_of(low)
         colour = OTHER if drawn == "other" else ISSUED

@@ -131,3 +131,30 @@ def test_no_history_with_limits_is_not_called_no_limits():
     assert p.months == 12 and "no specification limits" not in p.detail
     assert "angle_deviation" in p.detail
     assert "no specification limits" in propose({}, 12).detail
+
+
+def test_an_item_stated_by_its_interval_is_judged_not_dropped():
+    """E stated by the interval of max|E_i| has U (the reach to the interval's upper end)
+    and no k: its calibrations count against the limits (the staircase, as with k), and no
+    drift is extrapolated from them (no u = U/k). Before, every such row was dropped and the
+    proposal fell back to the specification default."""
+    out = [(0, -1.3, 0.4, None, -1.0, 1.0), (365, -1.35, 0.4, None, -1.0, 1.0)]
+    with_k = [(t, v, U, 2.0, lo, hi) for t, v, U, _, lo, hi in out]
+    p, q = propose({"angle_deviation": out}, 12), propose({"angle_deviation": with_k}, 12)
+    assert p.method.startswith("simple response") and p.months == q.months == 3
+    three = [(0, 0.10, 0.2, None, -0.5, 0.5), (365, 0.20, 0.2, None, -0.5, 0.5),
+             (730, 0.30, 0.2, None, -0.5, 0.5)]
+    p = propose({"angle_deviation": three}, 12)
+    assert p.method.startswith("simple response") and p.per_item == {}
+
+
+def test_history_figure_draws_the_extreme_at_its_magnitude():
+    """A row stated by the interval of max|E_i| (lower end ≥ 0) whose value is the signed
+    extreme is drawn at |value|, inside its own bar; other rows at their value."""
+    from gonio.report.history_figure import bar_ends, drawn_value
+
+    e = {"value": -0.83, "U": 0.17, "interval": (0.54, 1.0)}
+    lo, hi = bar_ends(e)
+    assert drawn_value(e) == 0.83 and lo <= drawn_value(e) <= hi
+    assert drawn_value({"value": -0.2, "U": 0.1, "interval": None}) == -0.2
+    assert drawn_value({"value": 0.12, "U": 0.1, "interval": (0.08, 0.22)}) == 0.12
