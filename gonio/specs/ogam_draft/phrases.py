@@ -375,12 +375,13 @@ LABELS: dict[str, dict[str, str]] = {
         "en": "E = ± max|E_i| is stated by the 95 % coverage interval of the largest true |E_i|, "
               "[{lo}, {hi}]″: [max(0, max_i(|E_i| − c_L u_i)), max_i(|E_i| + c_H u_i)] from each "
               "point's E_i and u_i, which holds for every pattern of the true E_i (beyond the "
-              "draft). The draft's reading max|E_i| ± U (7.4, Annex A): {E} ± {U}″ (k = {k}), "
-              "given beside and not certified.",
+              "draft). The draft's reading as measured (none of the corrections beyond the draft), "
+              "max|E_i| ± U (7.4, Annex A): {E} ± {U}″ (k = {k}), given beside and not "
+              "certified.",
         "zh": "E = ± max|E_i| 以最大真值 |E_i| 的 95 % 包含区间 [{lo}, {hi}]″ 表述："
               "[max(0, max(|E_i| − c_L u_i)), max(|E_i| + c_H u_i)]（对各点取最大），由各点 E_i 与 u_i 求得，"
-              "对真值 E_i 的任何分布形态均成立（草案以外）。按规范草案的理解 max|E_i| ± U"
-              "（7.4，附录A）：{E} ± {U}″（k = {k}），仅供参考，不作为校准结果。"},
+              "对真值 E_i 的任何分布形态均成立（草案以外）。按规范草案的理解（测得值，未作草案以外的"
+              "修正）max|E_i| ± U（7.4，附录A）：{E} ± {U}″（k = {k}），仅供参考，不作为校准结果。"},
     "k_fixed": {"en": "k: fixed by laboratory", "zh": "k：由实验室规定"},
     "k_welch": {"en": "k: t-factor of the effective degrees of freedom (Welch–Satterthwaite)",
                 "zh": "k：按有效自由度（韦尔奇–萨特思韦特公式）取 t 分布因子"},
