@@ -21,6 +21,23 @@ def by_interval(it: dict) -> bool:
     return bool(it.get("nonnegative")) and u["U"] > it["value"]
 
 
+#: k_source of an item stated by the interval of an extreme of magnitudes (E, 7.4): its
+#: interval belongs to max|E_i| (``details.max_abs_arcsec``), its value is the signed extreme.
+MAX_ABS = "max-abs-interval"
+
+
+def value_field(it: dict) -> str:
+    """The results.json field (under the item) the item's statement belongs to: ``value``,
+    or ``details.max_abs_arcsec`` for the interval of an extreme of magnitudes."""
+    return "details.max_abs_arcsec" if it["uncertainty"].get("k_source") == MAX_ABS \
+        else "value"
+
+
+def stated_value(it: dict) -> float:
+    """The number the item's statement belongs to (:func:`value_field`)."""
+    return it["details"]["max_abs_arcsec"] if value_field(it) != "value" else it["value"]
+
+
 def measured(res: dict) -> dict:
     """The items of results.json ``res`` measured with a value and a U."""
     return {k: it for k, it in res["items"].items()
@@ -29,7 +46,8 @@ def measured(res: dict) -> dict:
 
 
 _NUM_SPAN = re.compile(r'<span class="num" data-src="items\.([A-Za-z0-9_]+)\.'
-                       r'(value|uncertainty\.U|uncertainty\.k|uncertainty\.nu_eff)"'
+                       r'(value|details\.max_abs_arcsec|uncertainty\.U|uncertainty\.k|'
+                       r'uncertainty\.nu_eff)"'
                        r' data-rule="[^"]+">([^<]*)</span>')
 
 

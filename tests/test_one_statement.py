@@ -27,7 +27,8 @@ from lxml import etree
 
 from gonio.cli import main
 from gonio.report.dcc import DCC_NS, SI_NS
-from tests.statement_numbers import by_interval, certificate_spans, check_k, measured
+from tests.statement_numbers import (by_interval, certificate_spans, check_k, measured,
+                                     stated_value, value_field)
 
 NS = {"dcc": DCC_NS, "si": SI_NS}
 SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
@@ -50,9 +51,10 @@ def test_results_json_holds_one_statement_per_item(demo):
     for key, it in items.items():
         u = it["uncertainty"]
         if u["k"] is None:           # the interval is the statement; U reaches its upper end
-            lo, hi = u["interval"]
-            assert lo == 0.0 or lo <= it["value"], key
-            assert it["value"] + u["U"] == pytest.approx(hi, rel=1e-9), key
+            lo, hi = u["interval"]   # (of max|E_i| for E, 7.4: its value is the signed extreme)
+            v = stated_value(it)
+            assert lo == 0.0 or lo <= v, key
+            assert v + u["U"] == pytest.approx(hi, rel=1e-9), key
         if by_interval(it):
             assert it.get("upper_bound") is None or it["upper_bound"] >= it["value"] + u["U"] \
                 - 1e-12 * abs(it["value"] + u["U"]), key
@@ -122,12 +124,13 @@ def _real_uncertainties(root) -> dict:
         prev = real.getprevious()
         if not isinstance(prev, etree._Comment):
             continue
-        m = re.search(r"src=items\.([A-Za-z0-9_]+)\.value\b", prev.text or "")
+        m = re.search(r"src=items\.([A-Za-z0-9_]+)\.(value|details\.max_abs_arcsec)\b",
+                      prev.text or "")
         if not m:
             continue
         mu = real.find("si:measurementUncertaintyUnivariate", NS)
         kinds = [] if mu is None else [etree.QName(c).localname for c in mu]
-        out.setdefault(m.group(1), []).append((kinds, real))
+        out.setdefault(m.group(1), []).append((kinds, real, m.group(2)))
     return out
 
 
@@ -138,14 +141,17 @@ def test_dcc_states_each_item_once(demo):
     for key, it in measured(demo["res"]).items():
         if key not in reals:
             continue                 # an item the DCC writes in a matrix of its own form
-        for kinds, real in reals[key]:
+        for kinds, real, field in reals[key]:
             assert len(kinds) <= 1, (key, kinds)
+            if field != value_field(it):     # E's signed extreme beside its statement
+                assert kinds == [], (key, field, kinds)
+                continue
             if by_interval(it):
                 assert kinds == ["coverageIntervalMU"], (key, kinds)
                 ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
                 hi_text = ci.find("si:intervalMax", NS).text
                 hi = float(hi_text)
-                want = it["value"] + it["uncertainty"]["U"]
+                want = stated_value(it) + it["uncertainty"]["U"]
                 # rounded up, by less than one unit of its last decimal (the statement's
                 # decimals are U's, so a bound below U can move by more than a few per cent)
                 ulp = 10.0 ** -len(hi_text.partition(".")[2]) if "." in hi_text else 1.0
@@ -153,7 +159,7 @@ def test_dcc_states_each_item_once(demo):
                 lo = float(ci.find("si:intervalMin", NS).text)
                 # a non-negative item's interval starts at 0 even where its estimate is below
                 # (K_l corrected for its range's bias can be negative)
-                assert lo <= it["value"] or (it.get("nonnegative") and lo == 0.0), key
+                assert lo <= stated_value(it) or (it.get("nonnegative") and lo == 0.0), key
             elif kinds:
                 assert kinds == ["expandedMU"], (key, kinds)
 
@@ -179,14 +185,14 @@ def test_numbers_agree_across_outputs(demo):
         assert st.p == p_text(p), key
         # the certificate (a negative number printed with U+2212, as the pages print it)
         shown = minus_sign(st.value_text)
-        assert spans.get((key, "value"), {shown}) == {shown}, key
+        assert spans.get((key, value_field(it)), {shown}) == {shown}, key
         if st.U is not None:
             assert spans.get((key, "uncertainty.U"), {st.U_text}) == {st.U_text}, key
         if st.k is not None:
             assert spans.get((key, "uncertainty.k"), {st.k}) == {st.k}, key
         if st.nu_eff is not None:
             assert spans.get((key, "uncertainty.nu_eff"), {st.nu_eff}) == {st.nu_eff}, key
-        if st.interval is not None and (key, "value") in spans:
+        if st.interval is not None and (key, value_field(it)) in spans:
             assert (f"≤ {st.interval_ends[1]}" if st.upper is not None else
                     f"[{st.interval_ends[0]}, {st.interval_ends[1]}]") in html, key
         # summary.txt: one line holds the value with its U and k, or with its interval
@@ -202,7 +208,9 @@ def test_numbers_agree_across_outputs(demo):
                 for m in re.finditer(r"p ≈ (\S+) %", ln):
                     assert m.group(1) == st.p, (key, ln)
         # the DCC (a per-g item is written per m s⁻² there: tests/test_rate_dcc.py)
-        for kinds, real in ([] if it["unit"].endswith("/g") else reals.get(key, [])):
+        for kinds, real, field in ([] if it["unit"].endswith("/g") else reals.get(key, [])):
+            if field != value_field(it):     # E's signed extreme: its own number
+                continue
             assert real.find("si:value", NS).text == dsi_decimal(st.value_text), key
             mu = real.find("si:measurementUncertaintyUnivariate/*", NS)
             if mu is None:
