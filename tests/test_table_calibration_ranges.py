@@ -213,33 +213,12 @@ def test_ranges_calibration_recorded(tmp_path):
     built-in session with an exact calibration file: results.json's K_l, C_v, C_g details
     name the file, its SHA-256 (hashlib, here) and the rows used; summary.txt says they are
     corrected; the DCC describes each with the file; the certificate cells (en, zh) name it."""
-    import hashlib
-    import json
-
     from gonio.kit.render import labels
-    from gonio.pipeline.dispatch import calibrate
     from gonio.specs.ogam_draft.phrases import LABELS
-    from gonio.specs.ogam_draft.readings import write_readings
     from gonio.specs.ogam_draft.stated import range_table_note
+    from tests.test_table_calibration import _calibrate_with_table
 
-    p = parse_protocol(read_toml(resolve("ogam-draft", "protocol")),
-                       resolve("ogam-draft", "protocol"))
-    base = replace(load_bench("rlg"), sample_rate_hz=5.0)
-    clean = replace(base.random_off(), table=TableConfig(
-        accel_dps2=base.table.accel_dps2, mpe_arcsec=0.1, positioning_harmonics=HARMONICS))
-    res = run_session(p, clean, seed=0)
-    rd = tmp_path / "readings.csv"
-    write_readings(res.readings, rd, dict(res.metadata))
-    x = table_positions_deg(p)
-    f = tmp_path / "tc.csv"
-    f.write_text("table_deg,error_arcsec,u_arcsec\n" + "".join(
-        f"{a:g},{e:.6f},0.02\n" for a, e in zip(x, harmonic_sum_arcsec(x, HARMONICS))),
-        encoding="utf-8")
-    sha = hashlib.sha256(f.read_bytes()).hexdigest()
-    out = tmp_path / "out"
-    calibrate(rd, out, spec_key="ogam-draft", table_calibration=str(f), dcc=True,
-              inputs=[rd, f])
-    d = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    out, sha, d = _calibrate_with_table(tmp_path, replace(load_bench("rlg"), sample_rate_hz=5.0))
     dcc = next(out.glob("*.xml")).read_text(encoding="utf-8")
     for name, sym in (("scale_factor_nonlinearity", "K_l"), ("rate_consistency", "C_v"),
                       ("pointing_consistency", "C_g")):
