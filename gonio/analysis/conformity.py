@@ -187,7 +187,6 @@ def _inside(y: float, lo: float | None, hi: float | None) -> bool:
         (lo is None or hi is None or lo <= hi)
 
 
-
 #: ``probability_model`` of an item stated by the interval of an extreme of magnitudes
 #: (max_i |x_i|, E 7.4): no single normal model N(max|x_i|, u) describes it (the extreme of
 #: several points), so no probability of conformance is given; the outcome is decided on the

@@ -195,10 +195,9 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
             findings[r[0]] = findings.get(r[0], True) and _within(r[1], r[2], r[4], r[5])
         span = max(r[0] for r in rows) - min(r[0] for r in rows)
         spans.append(span)
-        drift_rows = [r for r in rows if r[3]]
-        if len(drift_rows) >= MIN_POINTS and len(drift_rows) == len(rows) and \
+        if len(rows) >= MIN_POINTS and all(r[3] for r in rows) and \
                 span >= MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH:
-            days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in drift_rows]),
+            days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in rows]),
                                      lower, upper)
             per_item[key] = days / DAYS_PER_MONTH
     if per_item:
