@@ -103,7 +103,8 @@ def calibration_page(store, cal_id: int) -> dict | None:
     ``attachable`` (standards and environment may still be attached; ``all_standards`` to
     choose from)."""
     from gonio.errors import GonioError
-    from gonio.records.services import TABLE_CALIBRATION, calibration, seal, settings
+    from gonio.records.services import (TABLE_CALIBRATION, calibration, seal, settings,
+                                        table_calibration_name)
     from gonio.report.i18n import minus_sign
 
     try:
@@ -117,6 +118,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
             CalibrationFile.calibration_id == cal_id).order_by(CalibrationFile.name)).all()
         files = [f.name for f in rows]
         table_sha = next((f.sha256 for f in rows if f.name == TABLE_CALIBRATION), None)
+        table_name = table_calibration_name(s, cal_id) if table_sha else ""
         stds = s.execute(select(Standard, CalibrationStandard.due_on_at_use)
                          .join(CalibrationStandard,
                                CalibrationStandard.standard_id == Standard.id)
@@ -140,7 +142,8 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "all_standards": standards(store) if cal.status in ATTACHABLE else [],
             "stated": stated, "shown": {k: minus_sign(st.text()) for k, st in stated.items()},
             "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
-            "table_calibration": table_calibration_used(table_sha, doc),
+            "table_calibration": table_calibration_used(table_sha, doc, table_name),
+            "file_names": {TABLE_CALIBRATION: table_name} if table_sha else {},
             "identity": identity_findings(store, cal.results_sha256, doc=doc) if sealed else []}
 
 
@@ -252,14 +255,17 @@ def certificate(store, cert_id: int):
     return cert, newer
 
 
-def table_calibration_used(sha256: str | None, doc: dict | None) -> dict | None:
-    """The calibration's stored table calibration as its page shows it: ``{"sha256",
-    "items": [(item key, its title)…]}`` — the items whose results.json ``details`` record
-    this file's SHA-256 (corrected by it; [] before the run or where none was) — or None.
+def table_calibration_used(sha256: str | None, doc: dict | None,
+                           name: str = "") -> dict | None:
+    """The calibration's stored table calibration as its page shows it: ``{"sha256", "name",
+    "items": [(item key, its title)…]}`` — ``name`` the file's own name as it was uploaded
+    (:func:`gonio.records.services.table_calibration_name`; the records keep the bytes as
+    ``table_calibration.csv``), the items whose results.json ``details`` record this file's
+    SHA-256 (corrected by it; [] before the run or where none was) — or None.
 
     >>> table_calibration_used("ab", {"items": {"K": {"title": "Scale factor", "details":
-    ...     {"table_calibration": {"sha256": "ab"}}}, "R": {"details": {}}}})
-    {'sha256': 'ab', 'items': [('K', 'Scale factor')]}
+    ...     {"table_calibration": {"sha256": "ab"}}}, "R": {"details": {}}}}, "RT-07.csv")
+    {'sha256': 'ab', 'name': 'RT-07.csv', 'items': [('K', 'Scale factor')]}
     """
     if sha256 is None:
         return None
@@ -269,7 +275,7 @@ def table_calibration_used(sha256: str | None, doc: dict | None) -> dict | None:
     items = [(k, it.get("title") or k) for k, it in pairs
              if isinstance(it, dict) and ((it.get("details") or {}).get("table_calibration")
                                           or {}).get("sha256") == sha256]
-    return {"sha256": sha256, "items": items}
+    return {"sha256": sha256, "name": name or "table_calibration.csv", "items": items}
 
 
 def standards(store):

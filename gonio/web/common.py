@@ -73,15 +73,23 @@ def wake(request: Request) -> None:
 
 
 def file_response(store, sha: str, name: str, disposition: str = "inline",
-                  number: str = "") -> Response:
+                  number: str = "", own_name: str = "") -> Response:
     """A stored file; its download name carries the certificate ``number`` (``GC-2026-0001.pdf``,
-    ``GC-2026-0001.dcc.xml``, ``GC-2026-0001-results.json``) when one is given."""
+    ``GC-2026-0001.dcc.xml``, ``GC-2026-0001-results.json``) when one is given. ``own_name``:
+    the name the file was uploaded under (a table calibration's), offered as the download
+    name too, percent-encoded (RFC 6266 ``filename*``), so no character of it reaches the
+    header as it is."""
+    from urllib.parse import quote
+
     media = FILE_TYPES.get(name, "application/octet-stream")
     shown = name
     if number and re.fullmatch(r"[A-Za-z0-9-]+", number):
         shown = number + (name[len("certificate"):] if name.startswith("certificate.")
                           else "-" + name)
-    headers = {"Content-Disposition": f'{disposition}; filename="{shown}"'}
+    disp = f'{disposition}; filename="{shown}"'
+    if own_name and own_name != name:
+        disp += f"; filename*=UTF-8''{quote(own_name, safe='')}"
+    headers = {"Content-Disposition": disp}
     if media == "text/html":
         headers["Content-Security-Policy"] = "sandbox; default-src 'none'; img-src data:; " \
                                              "style-src 'unsafe-inline'"

@@ -574,7 +574,8 @@ def calibration_file(request: Request, session: Session, cal_id: int, name: str)
     from gonio.records.models import CalibrationFile
     with _store(request).session() as s:
         sha = s.get(CalibrationFile, (cal_id, name)).sha256
-    return file_response(_store(request), sha, name, number=f"DRAFT-{cal_id}")
+    return file_response(_store(request), sha, name, number=f"DRAFT-{cal_id}",
+                         own_name=d["file_names"].get(name, ""))
 
 
 # --------------------------------------------------------------------------- certificates

@@ -45,11 +45,11 @@ SHA = hashlib.sha256(TABLE).hexdigest()
 
 
 def post(client, inst, readings: bytes, table: bytes | None, lab: str | None = None,
-         performed_on: str | None = None):
+         performed_on: str | None = None, table_name: str = "RT-07 cal.csv"):
     files = {"readings": ("readings.csv", io.BytesIO(readings)),
              "protocol_file": ("protocol.toml", io.BytesIO(SMALL_PROTOCOL.read_bytes()))}
     if table is not None:
-        files["table_calibration_file"] = ("RT-07 cal.csv", io.BytesIO(table))
+        files["table_calibration_file"] = (table_name, io.BytesIO(table))
     if lab is not None:
         files["lab_file"] = ("my-lab.toml", io.BytesIO(lab.encode()))
     return client.post(f"/instruments/{inst.id}/calibrate", files=files,
@@ -300,3 +300,41 @@ def test_the_run_names_the_uploaded_file(computed, sqlite_store, tmp_path):
                       tmp_path / f"r{i}", spec_key="ogam-draft", lab=lab)
         outs.append((tmp_path / f"r{i}" / "certificate.html").read_bytes())
     assert outs[0] == outs[1] and b"RT-07 cal.csv" in outs[0]
+
+
+#: a file name a browser may send: markup, a quote and an ampersand (no path separator; the
+#: test client percent-encodes a double quote in a multipart file name)
+HOSTILE = "<img src=x onerror=alert(1)>&'RT-07.csv"
+
+
+def test_page_shows_the_uploaded_name_escaped(app, sqlite_store, bench_readings):  # noqa: F811
+    """The calibration page names the table calibration by the name it was uploaded under
+    (services.table_calibration_name), HTML-escaped — a hostile name appears only escaped,
+    never as markup — in its facts and in its list of files; the link serves the stored bytes
+    (hashlib digest), offering the uploaded name only percent-encoded in the header."""
+    import html as html_module
+    from urllib.parse import quote
+
+    tech = login(app, "tech")
+    inst = instrument(sqlite_store)
+    r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, table_name=HOSTILE)
+    assert r.status_code == 303, alert(r.text)
+    cal_id = int(r.headers["location"].rsplit("/", 1)[1])
+    with sqlite_store.session() as s:
+        assert services.table_calibration_name(s, cal_id) == HOSTILE
+    page = tech.get(f"/calibrations/{cal_id}").text
+    assert "<img src=x" not in page
+    fact = page[page.index('id="table-calibration"'):]
+    fact = fact[:fact.index("</dd>")]
+    assert "/files/table_calibration.csv" in fact
+    shown = fact[fact.index('id="table-calibration-file">') + 28:fact.index("</a>")]
+    assert html_module.unescape(shown) == HOSTILE and "<" not in shown, shown
+    assert ">table_calibration.csv<" not in page          # not the storage name, anywhere
+    listed = page[page.index("<h2>Files of the run</h2>"):]
+    listed = listed[:listed.index("</p>")]
+    assert "&lt;img src=x onerror=alert(1)&gt;&amp;" in listed and "RT-07.csv" in listed
+    got = tech.get(f"/calibrations/{cal_id}/files/table_calibration.csv")
+    assert got.status_code == 200 and hashlib.sha256(got.content).hexdigest() == SHA
+    disp = got.headers["content-disposition"]
+    assert "filename*=UTF-8''" + quote(HOSTILE, safe="") in disp
+    assert "<" not in disp and "\n" not in disp
