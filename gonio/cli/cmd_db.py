@@ -360,7 +360,8 @@ def run_verify(args) -> int:
     try:
         if args.certificate:
             try:
-                data = open(args.certificate, "rb").read()
+                with open(args.certificate, "rb") as fh:
+                    data = fh.read()
             except OSError as exc:
                 raise GonioError(f"cannot read: {exc.strerror}", file=args.certificate) from None
             found = services.verify_certificate(store, data)

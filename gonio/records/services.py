@@ -1072,21 +1072,24 @@ def min_people(s: Session) -> int:
 def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None:
     """ISO/IEC 17025 6.2 / 7.8.1.1 on every path: the creator of a calibration never
     reviews, approves or amends it (a calibration whose creator is not recorded cannot be
-    reviewed); with ``min_people`` 3 the approver is neither the reviewer nor, for an
-    amendment, the person who asked for it."""
+    reviewed); the approver of an amendment is never the person who asked for it, whatever
+    ``min_people`` (the amendment is a change to an issued certificate: another person
+    approves it); with ``min_people`` 3 the approver is not the reviewer either."""
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
     if cal.created_by_id == actor.id:
         raise GonioError(f"the person who created a calibration may not {action} it "
                          "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
-    if action == "approve" and min_people(s) >= 3:
-        other = cal.amend_requested_by_id if cal.status == "amending" else cal.reviewed_by_id
-        if other == actor.id:
-            raise GonioError("the person who " + ("asked for the amendment" if
-                             cal.status == "amending" else "reviewed the calibration")
-                             + " may not approve it (the laboratory requires three "
-                             "different people)", key="role")
+    if action != "approve":
+        return
+    if cal.status == "amending":
+        if cal.amend_requested_by_id == actor.id:
+            raise GonioError("the person who asked for the amendment may not approve it "
+                             "(another person approves an amendment)", key="role")
+    elif min_people(s) >= 3 and cal.reviewed_by_id == actor.id:
+        raise GonioError("the person who reviewed the calibration may not approve it (the "
+                         "laboratory requires three different people)", key="role")
 
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],

@@ -96,3 +96,30 @@ def test_calibrate_record_keeps_the_lab_file_for_the_issue(tmp_path, bench_readi
         assert decided == {"angle_deviation": (-0.5, 0.5), "repeatability": (None, 0.3)}
     finally:
         st.close()
+
+
+def test_verify_certificate_closes_the_file_it_reads(tmp_path):
+    """``gonio db verify --certificate FILE`` reads the file and closes it (before: left to
+    the garbage collector, a ResourceWarning). Its action is called directly: the command
+    line's entry point records the warnings of a refused command and drops them."""
+    import argparse
+    import gc
+    import warnings
+
+    import pytest
+
+    from gonio.cli.cmd_db import run_verify
+    from gonio.errors import GonioError
+
+    data = tmp_path / "data"
+    assert main(["db", "init", "--data", str(data)]) == 0
+    cert = tmp_path / "c.pdf"
+    cert.write_bytes(b"%PDF-1.4 not one of ours")
+    args = argparse.Namespace(database=None, data=str(data), certificate=str(cert))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        with pytest.raises(GonioError, match="no certificate issued in these records"):
+            run_verify(args)
+        gc.collect()
+    assert not [w for w in seen if issubclass(w.category, ResourceWarning)], \
+        [str(w.message) for w in seen]

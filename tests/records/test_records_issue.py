@@ -133,6 +133,29 @@ def test_two_people_stated_where_the_laboratory_needs_two(store, people, compute
     assert (kv_row(page, "Checked by"), kv_row(page, "Approved by")) == ("rev", "rev")
 
 
+def test_two_people_amendment_approved_by_another_than_its_asker(store, people,
+                                                                  computed_folder,
+                                                                  bench_readings, monkeypatch):
+    """With ``min_people = 2`` the reviewer may approve what they reviewed, but an amendment
+    is still approved by another person than the one who asked for it (before: the asker
+    asked, attached and approved alone)."""
+    services.set_settings(store, people["admin"], min_people="2")
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    services.review(store, people["rev"], cal.id, accept=True)
+    services.approve(store, people["rev"], cal.id)
+    first = run_issue(store, monkeypatch)
+    services.amend(store, people["rev"], first.id, "typo in the environment")
+    services.attach_conditions(store, people["rev"], cal.id, temperature_c=20.6,
+                               humidity_pct=60)
+    assert services.calibration(store, cal.id).status == "amending"
+    with pytest.raises(GonioError, match="asked for the amendment may not approve"):
+        services.approve(store, people["rev"], cal.id)
+    assert services.calibration(store, cal.id).status == "amending"
+    services.approve(store, people["rev2"], cal.id)
+    second = run_issue(store, monkeypatch)
+    assert second.replaces_id == first.id and second.issued_by_id == people["rev2"].id
+
+
 def test_amendment_states_what_it_replaces_and_why(store, people, computed_folder,
                                                    bench_readings, monkeypatch, dcc_schema,
                                                    tmp_path):
