@@ -12,8 +12,10 @@ Two of ILAC-G24's methods, both documented with their formulas in docs/records.m
   its limits and shortened by :data:`REDUCE` otherwise.
 
 :func:`propose` combines them with the specification's clause-9 default: the drift method
-where an item has at least :data:`MIN_POINTS` calibrations and a limit, else the staircase,
-else the default; never longer than :data:`MAX_FACTOR` times the default, never shorter than
+for each item with at least :data:`MIN_POINTS` calibrations and a limit, the staircase over
+the findings of the other limited items, the shorter of the two where both apply (an item
+found outside its limits shortens the interval whatever another item's drift says), else the
+default; never longer than :data:`MAX_FACTOR` times the default, never shorter than
 :data:`MIN_MONTHS` (a method that gives less is stated, with why, in the proposal's detail).
 Each method's conditions are checked: the drift method needs its history to span
 :data:`MIN_SPAN_FRACTION` of the default interval, and the staircase counts a recalibration
@@ -191,8 +193,6 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
         lower, upper = rows[-1][4], rows[-1][5]
         if lower is None and upper is None:
             continue
-        for r in rows:
-            findings[r[0]] = findings.get(r[0], True) and _within(r[1], r[2], r[4], r[5])
         span = max(r[0] for r in rows) - min(r[0] for r in rows)
         spans.append(span)
         if len(rows) >= MIN_POINTS and all(r[3] for r in rows) and \
@@ -200,23 +200,18 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
             days, _ = drift_to_limit(*zip(*[(r[0], r[1], r[2], r[3]) for r in rows]),
                                      lower, upper)
             per_item[key] = days / DAYS_PER_MONTH
-    if per_item:
-        return _drift_proposal(per_item, cap, default_months)
-    if findings:
-        months, counted, skipped = staircase_history(
-            default_months, sorted(findings.items()), max_months=cap)
-        detail = f"{len(findings)} calibration(s) against the limits, {counted} counted"
-        if skipped:
-            detail += (f"; {skipped} found within the limits less than "
-                       f"{MIN_GAP_FRACTION:g} of the interval after the one before: not "
-                       "counted")
-        if max(spans, default=0) < MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH \
-                and any(n >= MIN_POINTS for n in (
-                    counts.values() if counts is not None else map(len, history.values()))):
-            detail += (f"; drift not extrapolated: the history spans less than "
-                       f"{MIN_SPAN_FRACTION * default_months:g} months")
-        return Proposal(int(math.floor(months)), "simple response / staircase (ILAC-G24 "
-                        "method 1)", detail, default_months, per_item)
+            continue
+        for r in rows:        # an item without a drift fit: its findings, the staircase
+            findings[r[0]] = findings.get(r[0], True) and _within(r[1], r[2], r[4], r[5])
+    drift = _drift_proposal(per_item, cap, default_months) if per_item else None
+    stair = _staircase_proposal(findings, spans, cap, default_months, per_item,
+                                counts if counts is not None
+                                else {k: len(v) for k, v in history.items()}) \
+        if findings else None
+    if drift is not None and stair is not None:
+        return _shorter(drift, stair)
+    if drift is not None or stair is not None:
+        return drift or stair
     if limited_items:
         why = ("no issued calibration with a measured value and U of a limited item ("
                + ", ".join(sorted(limited_items)) + ") yet")
@@ -224,6 +219,38 @@ def propose(history: dict, default_months: int = DEFAULT_MONTHS,
         why = "no specification limits: the history cannot be judged against a limit"
     return Proposal(default_months, "specification default (clause 9)", why,
                     default_months, per_item)
+
+
+def _staircase_proposal(findings: dict, spans: list, cap: float, default_months: int,
+                        per_item: dict, counts: dict) -> Proposal:
+    """The staircase's proposal (ILAC-G24 method 1) from ``findings`` (t_days → every item
+    without a drift fit found within its limits), with what it counted and why no drift was
+    extrapolated where the history is too short."""
+    months, counted, skipped = staircase_history(
+        default_months, sorted(findings.items()), max_months=cap)
+    detail = f"{len(findings)} calibration(s) against the limits, {counted} counted"
+    if skipped:
+        detail += (f"; {skipped} found within the limits less than "
+                   f"{MIN_GAP_FRACTION:g} of the interval after the one before: not "
+                   "counted")
+    if max(spans, default=0) < MIN_SPAN_FRACTION * default_months * DAYS_PER_MONTH \
+            and any(n >= MIN_POINTS for n in counts.values()):
+        detail += (f"; drift not extrapolated: the history spans less than "
+                   f"{MIN_SPAN_FRACTION * default_months:g} months")
+    return Proposal(int(math.floor(months)), "simple response / staircase (ILAC-G24 "
+                    "method 1)", detail, default_months, per_item)
+
+
+def _shorter(drift: Proposal, stair: Proposal) -> Proposal:
+    """The proposal where some items have a drift fit and others are judged by the
+    staircase: the shorter of the two (each item's rule bounds the interval; ILAC-G24,
+    OIML D 10: an item found outside its limits shortens the interval whatever another
+    item's drift says), the other stated beside it."""
+    first, other = (stair, drift) if stair.months < drift.months else (drift, stair)
+    return Proposal(first.months, first.method,
+                    f"{first.detail}; shorter than the {other.method.split(' (')[0]}'s "
+                    f"{other.months} month(s) ({other.detail})", drift.default_months,
+                    drift.per_item)
 
 
 def _drift_proposal(per_item: dict, cap: float, default_months: int) -> Proposal:

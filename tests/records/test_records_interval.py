@@ -158,3 +158,28 @@ def test_history_figure_draws_the_extreme_at_its_magnitude():
     assert drawn_value(e) == 0.83 and lo <= drawn_value(e) <= hi
     assert drawn_value({"value": -0.2, "U": 0.1, "interval": None}) == -0.2
     assert drawn_value({"value": 0.12, "U": 0.1, "interval": (0.08, 0.22)}) == 0.12
+
+
+@pytest.mark.parametrize("order", ["K first", "E first"])
+def test_an_item_out_of_tolerance_caps_another_items_drift(order):
+    """One item with a drift fit far from its limit, another (stated by its interval: no k,
+    no drift) found outside its limits: the proposal is the shorter of the items' rules —
+    the staircase's reduction, as E alone gives (before: the drift's 24 months, "no item
+    reaches its limit", whatever E's finding)."""
+    K = [(t, 1.0, 1e-4, 2.0, 0.9, 1.1) for t in (0, 267, 534, 801)]
+    E = [(0, 0.2, 0.1, None, -0.5, 0.5), (400, 0.3, 0.1, None, -0.5, 0.5),
+         (801, 0.9, 0.1, None, -0.5, 0.5)]
+    alone = propose({"E": E}, 12)
+    # E alone, by the staircase's own rule: in force 12, lengthened once, shortened once
+    assert alone.months == math.floor(staircase(12, [True, False], max_months=24)) == 7
+    assert propose({"K": K}, 12).months == 24           # the drift alone: the cap
+    history = {"K": K, "E": E} if order == "K first" else {"E": E, "K": K}
+    p = propose(history, 12)
+    assert p.months == alone.months and p.method.startswith("simple response")
+    assert "24 month(s)" in p.detail and math.isinf(p.per_item["K"])
+    # E in tolerance and K drifting towards its limit: the drift is the shorter
+    near = [(t, 1.0 + 0.03 * i, 0.004, 2.0, 0.9, 1.1) for i, t in enumerate((0, 267, 534, 801))]
+    ok = [(t, 0.1, 0.1, None, -0.5, 0.5) for t in (0, 400, 801)]
+    q = propose({"K": near, "E": ok} if order == "K first" else {"E": ok, "K": near}, 12)
+    assert q.method.startswith("drift") and q.months == propose({"K": near}, 12).months
+    assert q.months < propose({"E": ok}, 12).months
