@@ -65,14 +65,23 @@ def test_readings_from_the_needed_samples_equal_those_from_every_sample():
         assert every.comp_counts_s == needed.comp_counts_s
 
 
-def test_timeline_angle_rate_equals_angle_and_rate():
+def test_timeline_angle_rate_equals_angle_and_rate(monkeypatch):
+    # Bit for bit (signed zeros included) on the run-by-run path and the element-wise one,
+    # on sorted times (edges, before the first and after the last segment, included) and on
+    # shuffled ones (a segment's times not in one run).
+    from gonio.physics import kinematics
+
     p = validation_protocol()
     b = replace(load_bench("rlg"), sample_rate_hz=50.0)
-    for blk in plan_session(p, b, np.random.default_rng(5)):
-        t = np.arange(blk.k_start - 3, blk.k_end + 3) / b.sample_rate_hz   # edges included
-        th, r = blk.timeline.angle_rate(t)
-        np.testing.assert_array_equal(th, blk.timeline.angle_deg(t))
-        np.testing.assert_array_equal(r, blk.timeline.rate_dps(t))
+    shuffle = np.random.default_rng(6)
+    for run_min in (1, 10**12):
+        monkeypatch.setattr(kinematics, "_RUN_MIN", run_min)
+        for blk in plan_session(p, b, np.random.default_rng(5)):
+            t = np.arange(blk.k_start - 3, blk.k_end + 3) / b.sample_rate_hz  # edges included
+            for times in (t, shuffle.permutation(t)):
+                th, r = blk.timeline.angle_rate(times)
+                assert th.tobytes() == blk.timeline.angle_deg(times).tobytes()
+                assert r.tobytes() == blk.timeline.rate_dps(times).tobytes()
 
 
 def test_timeline_angle_is_the_integral_of_its_rate():

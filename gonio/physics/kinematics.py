@@ -63,6 +63,11 @@ class Segment:
     duration_s: float
 
 
+#: Fewest times per run of one segment (on average) for :meth:`Timeline.angle_rate` to
+#: evaluate run by run rather than element-wise.
+_RUN_MIN = 256
+
+
 @dataclass
 class Timeline:
     """Piecewise closed-form motion of a table (angles in degrees, times in s).
@@ -185,12 +190,59 @@ class Timeline:
 
     def angle_rate(self, t) -> tuple[np.ndarray, np.ndarray]:
         """``(angle_deg(t), rate_dps(t))``: the same values, each time's segment and
-        phase (accelerating, cruising, braking) found once for both."""
+        phase (accelerating, cruising, braking) found once for both.
+
+        Times that fall in one segment in a row (sorted times: each segment's times) are
+        evaluated together with that segment's parameters as scalars, each phase's formula
+        on its own times only (:meth:`_angle_rate_runs`); times that change segment at
+        nearly every step take the element-wise form. Both give the values of
+        :meth:`angle_deg` and :meth:`rate_dps`, bit for bit (the same operations on the
+        same operands)."""
         t, i, tau = self._locate(t)
         if i is None:
             return np.full_like(t, self.start_angle_deg), np.zeros_like(t)
-        seg = self._segment(t, i, tau)
-        return self._angle(seg, tau), self._rate(seg, tau)
+        cut = np.flatnonzero(i[1:] != i[:-1]) + 1
+        if (cut.size + 1) * _RUN_MIN > t.size:
+            seg = self._segment(t, i, tau)
+            return self._angle(seg, tau), self._rate(seg, tau)
+        return self._angle_rate_runs(t, i, tau, cut)
+
+    def _angle_rate_runs(self, t, i, tau, cut) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`angle_rate` run by run: ``cut`` the indices where the segment ``i``
+        changes. Per run, the formulas of :meth:`_angle` and :meth:`_rate` on the times of
+        each phase, with the segment's values as Python floats (IEEE doubles, as the
+        array elements they were read from: the same products and sums)."""
+        t0, th0, sg, dist, vpk, acc, tacc, dur = (x.tolist() for x in self._arr())
+        first, end_s = t0[0], self.end_s
+        n = t.size
+        ang, rate = np.empty(n), np.empty(n)
+        starts = [0] + cut.tolist()
+        for p, q, j in zip(starts, starts[1:] + [n], i[starts].tolist()):
+            s, r = np.zeros(q - p), np.zeros(q - p)
+            d = dist[j]
+            if d != 0.0:                       # a move (a dwell's angle and rate are nil)
+                a, ta, T, v = acc[j], tacc[j], dur[j], vpk[j]
+                tj = tau[p:q]
+                up = tj < ta
+                cruise = ~up & (tj <= T - ta)
+                down = ~(up | cruise)
+                x = tj[up]
+                s[up] = 0.5 * a * x * x
+                r[up] = a * x
+                s[cruise] = 0.5 * a * ta * ta + v * (tj[cruise] - ta)
+                r[cruise] = v
+                x = T - tj[down]
+                s[down] = d - 0.5 * a * x ** 2
+                r[down] = a * x
+                ts = t[p:q]
+                if j == 0:                     # before the first segment: at rest
+                    before = ts < first
+                    s[before] = 0.0
+                    r[before] = 0.0
+                r[ts > end_s] = 0.0            # after the last: at rest at its end
+            ang[p:q] = th0[j] + sg[j] * s
+            rate[p:q] = sg[j] * r
+        return ang, rate
 
     def _segment(self, t, i, tau) -> dict:
         """The segment of each time (its start angle, sign, acceleration a, acceleration
