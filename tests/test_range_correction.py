@@ -114,3 +114,17 @@ def test_symmetric_statement_under_covers_at_two_and_a_half_sigma():
     d = 2.5σ with probability well under 95 % (closed form over r); the interval above does
     not."""
     assert _symmetric_coverage(2.5) < 0.91
+
+
+def test_row_ranges_are_the_rows_max_minus_min_bit_for_bit():
+    # the column-wise running extremes give each row's max − min of offset + e exactly as
+    # numpy's reduction over the row (signed zeros included), for the sizes the belts use
+    from uncertainty.stdev import _columns, _row_ranges
+
+    rng = np.random.default_rng(11)
+    for n in (2, 3, 6, 8, 13):
+        e = rng.normal(0.0, 1.0, (500, n))
+        for offset in (None, rng.normal(0.0, 3.0, n), np.zeros(n)):
+            v = e if offset is None else offset + e
+            want = v.max(axis=1) - v.min(axis=1)
+            assert _row_ranges(_columns(e), offset).tobytes() == want.tobytes()

@@ -400,10 +400,10 @@ def corrected_range(x, errors) -> RangeCorrection:
     m = float(x.mean())
     d = x - m
     r = float(x.max() - x.min())
+    cols = _columns(e)
 
     def ranges(lam: float) -> np.ndarray:
-        v = m + lam * d + e
-        return v.max(axis=1) - v.min(axis=1)
+        return _row_ranges(cols, m + lam * d)        # the ranges of m + λd + e
 
     e0 = float(ranges(0.0).mean())
     if r <= e0:
@@ -522,12 +522,12 @@ def range_belt_interval(x, errors, p: float = 0.95, *,
     tail = 0.5 * (1.0 - p)
     tail = max(tail - 2.0 * math.sqrt(tail * (1.0 - tail) / draws), 0.5 / draws)
     q_lo_p, q_hi_p = tail, 1.0 - tail
-    e_range = e.max(axis=1) - e.min(axis=1)
+    cols = _columns(e)
+    e_range = _row_ranges(cols)
     e0 = float(np.mean(e_range))
 
     def own(big_r: float, q: float) -> float:
-        v = big_r * unit + e
-        return float(np.quantile(v.max(axis=1) - v.min(axis=1), q))
+        return float(np.quantile(_row_ranges(cols, big_r * unit), q))   # of R·unit + e
 
     if patterns == "measured":
         def crossing(q: float, target: float) -> float:
@@ -596,6 +596,7 @@ def _three_level_patterns(e: np.ndarray, outliers_only: bool) -> tuple[np.ndarra
     min, middle max, middle min, low max, low min), each (patterns, M); an empty group
     ±inf, and the number of splits (the first rows)."""
     draws, n = e.shape
+    cols = _columns(e)
     if outliers_only:
         hi_max = hi_min = e.T                                        # {a} high
         lo_max = np.vstack([_max_without(e, [a]) for a in range(n)])
@@ -612,8 +613,8 @@ def _three_level_patterns(e: np.ndarray, outliers_only: bool) -> tuple[np.ndarra
         t_max[0], t_min[0] = -np.inf, np.inf
         for mask in range(1, full + 1):
             low = (mask & -mask).bit_length() - 1
-            t_max[mask] = np.maximum(t_max[mask & (mask - 1)], e[:, low])
-            t_min[mask] = np.minimum(t_min[mask & (mask - 1)], e[:, low])
+            t_max[mask] = np.maximum(t_max[mask & (mask - 1)], cols[low])
+            t_min[mask] = np.minimum(t_min[mask & (mask - 1)], cols[low])
         sub = np.arange(1, full)
         s_hi_max, s_hi_min = t_max[sub], t_min[sub]
         s_lo_max, s_lo_min = t_max[full ^ sub], t_min[full ^ sub]
@@ -624,10 +625,10 @@ def _three_level_patterns(e: np.ndarray, outliers_only: bool) -> tuple[np.ndarra
     else:
         rest = full ^ (1 << a_idx) ^ (1 << b_idx)
         mid_max, mid_min = t_max[rest], t_min[rest]
-    return (np.concatenate([s_hi_max, e.T[a_idx]]), np.concatenate([s_hi_min, e.T[a_idx]]),
+    return (np.concatenate([s_hi_max, cols[a_idx]]), np.concatenate([s_hi_min, cols[a_idx]]),
             np.concatenate([np.full_like(s_hi_max, -np.inf), mid_max]),
             np.concatenate([np.full_like(s_hi_max, np.inf), mid_min]),
-            np.concatenate([s_lo_max, e.T[b_idx]]), np.concatenate([s_lo_min, e.T[b_idx]]),
+            np.concatenate([s_lo_max, cols[b_idx]]), np.concatenate([s_lo_min, cols[b_idx]]),
             s_hi_max.shape[0])
 
 
@@ -645,6 +646,28 @@ def _pair_ranges(big_r: float, fam, rows: np.ndarray) -> np.ndarray:
     top, mid_max, mid_min, bot = fam[0][rows], fam[2][rows], fam[3][rows], fam[4][rows]
     return (np.maximum(np.maximum(big_r + top, 0.5 * big_r + mid_max), bot)
             - np.minimum(np.minimum(big_r + top, 0.5 * big_r + mid_min), bot))
+
+
+def _columns(e: np.ndarray) -> np.ndarray:
+    """The columns of the (M, n) draws ``e`` as the rows of a C-ordered (n, M) copy: each
+    position's M draws contiguous, for :func:`_row_ranges` and the subsets' extremes."""
+    return np.ascontiguousarray(e.T)
+
+
+def _row_ranges(cols: np.ndarray, offset=None) -> np.ndarray:
+    """Per draw i, max_j v_ij − min_j v_ij of v_ij = offset_j + e_ij (v = e without
+    ``offset``), ``cols`` the columns of e (:func:`_columns`): the running maximum and
+    minimum over the n columns, element-wise on M draws at a time, where ``v.max(axis=1)``
+    loops over n values per row. The same values: each v_ij is the same sum (the offset's
+    element plus the draw), and the largest and smallest of a row's values involve no
+    rounding, whichever order they are compared in."""
+    first = cols[0] if offset is None else offset[0] + cols[0]
+    hi, lo = first.copy(), first
+    for j in range(1, cols.shape[0]):
+        v = cols[j] if offset is None else offset[j] + cols[j]
+        np.maximum(hi, v, out=hi)
+        lo = np.minimum(lo, v)
+    return hi - lo
 
 
 def _max_without(e: np.ndarray, drop: list[int]) -> np.ndarray:
