@@ -47,7 +47,10 @@ def _json(v):
 
 def backup(store, path: str | os.PathLike) -> dict:
     """Write the archive to ``path`` (atomically: a temporary file renamed into place);
-    returns the counts of rows per table and of files."""
+    returns the counts of rows per table and of files. The written archive is checked as
+    :func:`restore` checks it (:func:`check_archive`: every row, reference and file) before
+    it is moved into place: an archive restore would refuse (a row SQLite kept with a value
+    its column's type does not take) is a GonioError naming the row, and nothing is left."""
     from gonio import __version__
 
     path = Path(path)
@@ -75,6 +78,11 @@ def backup(store, path: str | os.PathLike) -> dict:
             zf.writestr("records.json", json.dumps(doc, ensure_ascii=False))
             for sha in shas:
                 zf.write(blobs.blob_path(store.blob_root, sha), f"blobs/{sha}")
+        try:
+            check_archive(tmp)
+        except GonioError as exc:
+            raise GonioError(f"the archive would not restore ({exc.message}): nothing "
+                             "written (gonio db verify checks the records)", file=path) from None
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

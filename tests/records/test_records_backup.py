@@ -276,3 +276,23 @@ def test_a_restore_keeps_the_newest_replaced_files(records, tmp_path, monkeypatc
                 expect_sha256=archive_sha256(archive))
     left = sorted(p.name for p in folder.glob("records.sqlite3.replaced-2*"))
     assert len(left) == 3 and "records.sqlite3.replaced-20250101T000000" not in left
+
+
+def test_backup_refuses_rows_restore_would_refuse(records, tmp_path, capsys):
+    """A row SQLite kept with a value its column's type does not take (U = 'abc'): the backup
+    is refused with one line naming the row, and no archive or temporary file is left
+    (before: exit 0, an archive that restore then refused). SQLite only: PostgreSQL never
+    stores such a row."""
+    with records.writing() as s:
+        rid = s.execute(text("SELECT id FROM result_items ORDER BY id LIMIT 1 OFFSET 1")).scalar()
+        s.execute(text("UPDATE result_items SET U = 'abc' WHERE id = :i"), {"i": rid})
+        s.commit()
+    archive = tmp_path / "b.zip"
+    out = cli(["db", "backup", archive, "--data", records.data], capsys, 2)
+    assert "result_items row 2: U is not a number" in out.err and "nothing written" in out.err
+    assert not archive.exists() and not list(tmp_path.glob(".backup-*"))
+    with records.writing() as s:            # the row mended, the backup restores
+        s.execute(text("UPDATE result_items SET U = 0.5 WHERE id = :i"), {"i": rid})
+        s.commit()
+    cli(["db", "backup", archive, "--data", records.data], capsys, 0)
+    cli(["db", "restore", archive, "--data", tmp_path / "other"], capsys, 0)
