@@ -202,7 +202,10 @@ def test_defect3_five_series_k_from_welch_satterthwaite(tmp_path, capsys):
     assert u["nu_eff"] == pytest.approx(nu, rel=1e-9)
     assert u["k"] == pytest.approx(stats.t.ppf(0.975, math.floor(nu)), rel=1e-9) and u["k"] > 2.05
     assert u["k_source"] == "welch-satterthwaite"
-    assert res["items"]["angle_deviation"]["uncertainty"]["k"] == pytest.approx(u["k"])
+    # E itself is stated by the interval of max|E_i| (no k); the draft's max|E_i| ± U beside
+    # carries this k
+    assert res["items"]["angle_deviation"]["uncertainty"]["k"] is None
+    assert u["draft_reading"]["k"] == pytest.approx(u["k"])
 
 
 def test_defect3_laboratory_fixes_k(tmp_path, capsys):

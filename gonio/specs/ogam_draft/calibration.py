@@ -109,6 +109,15 @@ DRAFT_E_READING = ("the draft's reading: U of Annex A's four lines alone (A.4.1-
                    "(the tilt x Earth-rate coupling, the errors of the 7.1 K), which the "
                    "conditions the draft allows contain (docs/draft-readings.md)")
 
+#: What E's max|E_i| ± U is when the draft's own Annex A budget (``--budget draft``) is used:
+#: E is stated by the interval of max|E_i| from that budget at every point.
+DRAFT_E_READING_ONE_POINT = (
+    "the draft's reading (7.4, Annex A): max|E_i| +- U, U of Annex A's one budget, a statement "
+    "about one point; given beside and not certified: for the extreme of the points it covers "
+    "the largest true |E_i| only about 0.95^m of the time where every true E_i is 0 (m points, "
+    "54 % at 12); E is stated by the 95 % interval of max|E_i| from the same budget at every "
+    "point (docs/draft-readings.md)")
+
 
 #: E's readings when the in-situ tilt estimate corrects it (results.json ``details.stated``
 #: "tilt_corrected", ``details.estimates``, ``details.tilt_correction`` of angle_deviation).
@@ -308,6 +317,12 @@ class Analysis:
             est = (self.results.angle_deviation.details.get("estimates") or {}).get("draft")
             if est:              # E itself corrected at the measured tilt: the draft's E beside
                 unc["draft_reading"]["E_arcsec"] = est["value"]
+        elif self.budget_kind == "draft" and self.uncertainty.max_interval:
+            # the draft's own budget: E stated by the interval from it at every point, the
+            # draft's max|E_i| ± U (a statement about one point) beside, not certified
+            unc["draft_reading"] = {"label": DRAFT_E_READING_ONE_POINT,
+                                    "U_arcsec": unc["U_arcsec"], "k": unc["k"],
+                                    "u_c_arcsec": unc["u_c_arcsec"]}
         return unc
 
     def item_details(self, c) -> dict:
@@ -931,6 +946,12 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
                             extra_components=extras, monte_carlo_trials=monte_carlo_trials,
                             seed=seed, repeatability_dof=dof, repeatability_type=typ,
                             repeatability_source=f"repeatability (A.4.4): {src}")
+    e = results.angle_deviation
+    if e.measured and e.value is not None and len(e.table):
+        # E = ± max|E_i| stated by the interval of the extreme (beyond the draft) from this
+        # one budget at every point; the draft's max|E_i| ± U is given beside (Annex A)
+        budget = dataclasses.replace(budget, max_interval=e_max_interval(
+            e.table["E_arcsec"], [budget] * len(e.table), one_budget=True))
     return budget, src, notes
 
 
@@ -1110,13 +1131,14 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
 
 
 def e_stated_uncertainty(unc: dict, max_interval: dict | None) -> dict:
-    """E's stated uncertainty (results.json ``items.angle_deviation.uncertainty``): with the
-    physical budget's per-point figures, the 95 % interval of max|E_i| (:func:`e_max_interval`)
-    is E's one statement — ``interval`` [lower, upper], ``k`` None, ``U`` = upper − max|E_i|
-    (the guard band of a decision against +MPE), ``k_source``
+    """E's stated uncertainty (results.json ``items.angle_deviation.uncertainty``): the 95 %
+    interval of max|E_i| (:func:`e_max_interval`; from the physical budget's per-point figures,
+    or from the draft's one Annex A budget at every point under ``--budget draft``) is E's one
+    statement — ``interval`` [lower, upper], ``k`` None, ``U`` = upper − max|E_i| (the guard
+    band of a decision against +MPE), ``k_source``
     :data:`gonio.result.statement.K_SOURCE_MAX_ABS` — and the draft's max|E_i| ± U (7.4,
-    Annex A) is given beside (``extra.uncertainty.draft_reading``). Without per-point figures
-    (the draft's budget) ``unc`` as it is: max|E_i| ± U.
+    Annex A) is given beside (``extra.uncertainty.draft_reading``), not certified. Without
+    an interval (E not measured) ``unc`` as it is.
 
     >>> u = e_stated_uncertainty({"u_c": 0.1, "U": 0.2, "k": 2.0, "nu_eff": 50.0,
     ...     "k_source": "welch-satterthwaite"}, {"lower_arcsec": 0.0, "upper_arcsec": 0.5,
@@ -1134,24 +1156,37 @@ def e_stated_uncertainty(unc: dict, max_interval: dict | None) -> dict:
             "interval": [lo, hi]}
 
 
-def e_max_interval(e_arcsec, budgets) -> dict:
+def e_max_interval(e_arcsec, budgets, one_budget: bool = False) -> dict:
     """The 95 % interval of E's extreme, max_i |E_i,true| (7.4's E = ± max|E_i|), from the
     points' E_i and their physical budgets' u_c and ν_eff: [max(0, max_i(|E_i| − c_L u_i)),
     max_i(|E_i| + c_H u_i)] (:func:`uncertainty.extreme.max_abs_interval`; beyond the draft).
     It holds the truth with probability ≥ 95 % for every pattern of the true E_i and any
     correlation between the points (the shared K and zero), and its factors are the
     smallest of that form that do (the upper one's worst case: one point far out; the
-    lower one's: every E_i zero)."""
+    lower one's: every E_i zero).
+
+    ``one_budget``: ``budgets`` is the draft's one Annex A budget repeated at every point
+    (``--budget draft``): every u_i is its u_c, every ν_i its ν_eff, which the dict then
+    records (``u_c_arcsec``, ``nu_eff``: None for ∞) so the interval is recomputed from
+    results.json alone. The draft's U is a statement about one point: max|E_i| ± U covers
+    max|E_i,true| only about 0.95^12 ≈ 54 % of the time where every true E_i is 0.
+    """
     from uncertainty.extreme import max_abs_interval
 
     r = max_abs_interval(np.asarray(e_arcsec, dtype=float), [b.u_c_arcsec for b in budgets],
                          [b.gum.dof for b in budgets])
-    return {"lower_arcsec": r.lower, "upper_arcsec": r.upper, "max_abs_arcsec": r.estimate,
-            "p": r.p, "c_lower": r.c_lower, "c_upper": r.c_upper, "points": r.m,
-            "basis": "max_i(|E_i| + c_H u_i) above, max(0, max_i(|E_i| - c_L u_i)) below, "
-                     "per point u_c and nu_eff (Student t at finite nu); >= 95 % for every "
-                     "pattern of the true E_i (Sidak below, the extreme point above) "
-                     "[beyond the draft]"}
+    out = {"lower_arcsec": r.lower, "upper_arcsec": r.upper, "max_abs_arcsec": r.estimate,
+           "p": r.p, "c_lower": r.c_lower, "c_upper": r.c_upper, "points": r.m,
+           "basis": "max_i(|E_i| + c_H u_i) above, max(0, max_i(|E_i| - c_L u_i)) below, "
+                    + ("u_c and nu_eff of the draft's one Annex A budget at every point"
+                       if one_budget else "per point u_c and nu_eff")
+                    + " (Student t at finite nu); >= 95 % for every pattern of the true E_i "
+                      "(Sidak below, the extreme point above) [beyond the draft]"}
+    if one_budget:
+        b = budgets[0]
+        out["u_c_arcsec"] = float(b.u_c_arcsec)
+        out["nu_eff"] = None if math.isinf(b.gum.dof) else float(b.gum.dof)
+    return out
 
 
 def _scale_factor_tilt(results, readings, protocol, budget) -> float:

@@ -126,7 +126,9 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
         {"widths": (0.07, 0.20, 0.075, 0.325, 0.24, 0.09), "id": "results"})
     if U is not None:
         by_iv = e_by_interval(res)
-        add("p", segments(L["U_line_points" if by_iv else "U_line_p"],
+        one = unc.get("budget_kind") == "draft"      # the draft's one budget at every point
+        add("p", segments(L[("U_line_one_budget" if one else "U_line_points") if by_iv
+                            else "U_line_p"],
                           U=_num(res, "extra.uncertainty.U_arcsec", "U", U),
                           k=_num(res, "extra.uncertainty.k", "k", U),
                           p=coverage_text(ANNEX_A_COVERAGE, lang)), "U")
@@ -138,7 +140,7 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["U_certified_physical"].format(U=display("U", dr["U_arcsec"]),
                                                        k=display("k", dr["k"]))])
         elif unc.get("budget_kind") == "draft":
-            add("p", [L["U_certified_draft"]])
+            add("p", [L["U_certified_draft_interval" if by_iv else "U_certified_draft"]])
         ks = unc.get("k_source")                 # say where k comes from
         if ks:
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])

@@ -136,12 +136,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             kw = {"interval": s["interval"]["interval"]["ends"],
                   "u_std": s["interval"]["interval"]["u"], "p": float(unc["p"])}
         if name == "angle_deviation" and s["signed"] is not None:
-            desc = _e_table_text(res, L)
-            if "interval" in kw:     # the interval of max|E_i|, the draft's reading beside
-                desc = "; ".join(d for d in (desc, "".join(
-                    str(x) for x in e_interval_segments(res, labels("en", LABELS)))) if d)
             quantity(data, "E = ± max|E_i| (draft 7.4)", s["value"], item["unit"],
-                     description=desc, **kw)
+                     description=_e_description(res, L, "interval" in kw), **kw)
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
@@ -211,6 +207,22 @@ def _e_table_text(res: dict, L: dict) -> str | None:
     return "E " + "".join(str(x) for x in e_table_note(res, L)) + sha
 
 
+def _e_description(res: dict, L: dict, by_interval: bool) -> str | None:
+    """E's dcc:description in ``L``'s language: the table-calibration note (when a calibrated
+    table corrected E) and, when E is stated by the interval of max|E_i| (``by_interval``),
+    the certificate's paragraph on it (the draft's max|E_i| ± U beside, not certified) and
+    what the interval's si:valueStandardMU is (:data:`~gonio.specs.ogam_draft.phrases.LABELS`
+    ``E_dcc_standard_mu``: the u_c of the certificate's u_c line, the standard uncertainty of
+    one E_i, not of max|E_i|)."""
+    parts = [_e_table_text(res, L)]
+    if by_interval:             # two paragraphs of sentences, one after the other
+        parts.append(("" if _lang(L) == "zh" else " ").join((
+            "".join(str(x) for x in e_interval_segments(res, L)),
+            L["E_dcc_standard_mu_draft" if e_budget(res).get("budget_kind") == "draft"
+              else "E_dcc_standard_mu"])))
+    return _SEP[_lang(L)].join(p for p in parts if p) or None
+
+
 def _range_table_text(res: dict, name: str, L: dict) -> str | None:
     """K_l's, C_v's or C_g's description when a calibrated table corrected its readings: the
     certificate's note and the calibration file's SHA-256 (results.json
@@ -226,9 +238,10 @@ def _range_table_text(res: dict, name: str, L: dict) -> str | None:
 
 
 def description_zh(res: dict) -> dict[str, str]:
-    """The DCC descriptions of K, E, K_l, C_v and C_g that state a table-calibration (or
-    tilt) correction, of results.json ``res`` — each as :func:`dcc_tree` joins it (with and
-    without the JCGM 101 k note, and after the below-zero note) — English → Chinese, for the zh
+    """The DCC descriptions of K, K_l, C_v and C_g that state a table-calibration (or
+    tilt) correction, and E's (:func:`_e_description`), of results.json ``res`` — each as
+    :func:`dcc_tree` joins it (with and without the JCGM 101 k note, and after the below-zero
+    note) — English → Chinese, for the zh
     DCC's ``dcc:content lang="zh"`` beside the English (:func:`gonio.report.dcc.bilingual`'s
     ``extra``): each written whole in Chinese from the labels' zh, not pieced together."""
     out: dict[str, str] = {}
@@ -250,9 +263,10 @@ def description_zh(res: dict) -> dict[str, str]:
                     tail = [combined_k_note(res, L[lg], only=name)] if with_k else []
                     parts[lg] = [t for t in head + own[lg][name] + tail if t]
                 out[_SEP["en"].join(parts["en"])] = _SEP["zh"].join(parts["zh"])
-    e_en, e_zh = _e_table_text(res, L["en"]), _e_table_text(res, L["zh"])
-    if e_en:
-        out[e_en] = e_zh
+    for by_interval in (False, True):              # E's whole description, each form
+        e_en = _e_description(res, L["en"], by_interval)
+        if e_en:
+            out[e_en] = _e_description(res, L["zh"], by_interval)
     return out
 
 

@@ -289,6 +289,9 @@ def trial_items(report, truth: dict) -> dict:
     b, _, _ = deviation_budget(res, report.readings, report.protocol, settings,
                                kind=other, tilt_measured=e_tilt, table_measured=e_table)
     mine = dict(rec["angle_deviation"])
+    own = getattr(report.uncertainty, "max_interval", None)
+    if own:             # the interval of max|E_i| this analysis states (either budget)
+        mine["max_interval"] = [float(own["lower_arcsec"]), float(own["upper_arcsec"])]
     alt = {**mine, "U": float(b.U_arcsec), "u_c": float(b.u_c_arcsec), "k": float(b.k)}
     if b.points:        # the physical budget per point: each E_i judged on its own U
         alt["U_points"] = [float(p["U_arcsec"]) for p in b.points]
@@ -354,8 +357,9 @@ def item_coverage(records: list[dict], intrinsic_points=None,
                 if own:      # the physical budget is about the instrument: judged on that
                     item["two_sided"] = dict(two_sided(di, U, u_c, own),
                                              truth="intrinsic")
-            # the statement itself: E = ± max|E_i| with the stated U (the largest point's)
-            # against the truth's max|E_i| (the intrinsic one where E is judged on it)
+            # the draft's Annex A form, E = ± max|E_i| with the budget's U (the largest
+            # point's), against the truth's max|E_i| (the intrinsic one where E is judged on
+            # it): not the statement — E is certified by its interval (max_interval below)
             tp = np.array([intrinsic_points if intrinsic_points is not None and own
                            else r["truth_points"] for r in rs], dtype=float)
             d_max = np.abs(vals) - np.abs(tp).max(axis=1)

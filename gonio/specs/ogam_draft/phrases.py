@@ -371,6 +371,11 @@ LABELS: dict[str, dict[str, str]] = {
                             "U = {U}″, k = {k}, coverage probability {p}",
                       "zh": "各测量点 E_i 的测量不确定度（取各点中最大者）：U = {U}″，k = {k}，"
                             "包含概率{p}"},
+    "U_line_one_budget": {"en": "Uncertainty of each point's E_i (the draft's one Annex A budget, "
+                                "the same at every point): U = {U}″, k = {k}, coverage "
+                                "probability {p}",
+                          "zh": "各测量点 E_i 的测量不确定度（按规范草案附录A的同一评定，各点相同）："
+                                "U = {U}″，k = {k}，包含概率{p}"},
     "E_by_interval": {
         "en": "E = ± max|E_i| is stated by the 95 % coverage interval of the largest true |E_i|, "
               "[{lo}, {hi}]″: [max(0, max_i(|E_i| − c_L u_i)), max_i(|E_i| + c_H u_i)] from each "
@@ -413,6 +418,35 @@ LABELS: dict[str, dict[str, str]] = {
         "en": "Certified: U of the draft's Annex A budget as the draft states it (the draft's "
               "reading); the lines beyond the draft are not applied.",
         "zh": "所给 U 按规范草案附录A评定（草案的理解），未计入超出草案的分量。"},
+    "E_dcc_standard_mu": {
+        "en": "The interval's si:valueStandardMU is u_c of one point's E_i, at the point whose U "
+              "is the largest (the u_c stated on the certificate); the interval is computed from "
+              "it and the other points' u_i. It is not a standard uncertainty of max|E_i|: the "
+              "extreme of the points has none that holds for every pattern of the true E_i, so "
+              "the interval is the statement, not ± k·u.",
+        "zh": "该区间所附的标准不确定度为单个测量点 E_i 的合成标准不确定度 u_c，取 U 最大的测量点"
+              "（即证书所列 u_c）；区间由它与其余各点的 u_i 求得。它不是 max|E_i| 的标准不确定度："
+              "各点的极值不存在对真值 E_i 任何分布形态均成立的标准不确定度，故以区间为校准结果，"
+              "不以 ± k·u 表述。"},
+    "E_dcc_standard_mu_draft": {
+        "en": "The interval's si:valueStandardMU is u_c of the draft's one Annex A budget, the "
+              "standard uncertainty of each point's E_i (the u_c stated on the certificate); the "
+              "interval is computed from it at every point. It is not a standard uncertainty of "
+              "max|E_i|: the extreme of the points has none that holds for every pattern of the "
+              "true E_i, so the interval is the statement, not ± k·u.",
+        "zh": "该区间所附的标准不确定度为规范草案附录A同一评定的合成标准不确定度 u_c，即各测量点 E_i "
+              "的标准不确定度（证书所列 u_c）；区间由它对各点求得。它不是 max|E_i| 的标准不确定度："
+              "各点的极值不存在对真值 E_i 任何分布形态均成立的标准不确定度，故以区间为校准结果，"
+              "不以 ± k·u 表述。"},
+    "U_certified_draft_interval": {
+        "en": "Budget: the draft's Annex A budget as the draft states it, one for every point; "
+              "the lines beyond the draft are not applied. Certified for E: the interval above, "
+              "from this budget's u_c and ν_eff at every point. The draft's max|E_i| ± U takes "
+              "U, a statement about one point, for the extreme of the points; it is given "
+              "beside and not certified.",
+        "zh": "不确定度按规范草案附录A评定，各点采用同一评定，未计入超出草案的分量。E 的校准结果为上述"
+              "区间，由该评定的 u_c 与 ν_eff 对各点求得。草案的 max|E_i| ± U 将针对单点的 U 用于"
+              "各点的极值，仅供参考，不作为校准结果。"},
     "budget_kind_draft": {"en": "Budget as the draft's Annex A states it.",
                           "zh": "按规范草案附录A的不确定度评定。"},
     "budget_kind_physical": {"en": "Budget of this calibration's physical model; lines marked "

@@ -497,8 +497,10 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         lines += ["", L["no_E_U"]]
     else:
         kind = f"{u['budget_kind']} budget" if u.get("budget_kind") else "Annex A"
-        what = ("each point's E_i (the largest of the points')" if e_by_interval(res)
-                else "the angle-position deviation")
+        what = ("the angle-position deviation" if not e_by_interval(res) else
+                "each point's E_i (the same at every point)"
+                if u.get("budget_kind") == "draft" else
+                "each point's E_i (the largest of the points')")
         lines += ["", f"Uncertainty of {what} ({kind}): "
                       f"u_c = {num(res, 'extra.uncertainty.u_c_arcsec', 'U')}″, "
                       f"U = {num(res, 'extra.uncertainty.U_arcsec', 'U')}″ "
