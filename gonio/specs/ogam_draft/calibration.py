@@ -1772,22 +1772,25 @@ RANGE_TABLE_CALIBRATED_NOTE = {
         "beyond the draft: the 7.1 rounds corrected by the laboratory's table calibration as K "
         "is (K_i = C_i/(theta_i - (e(stop) - e(zero))/3600)); the stated K_l is the range of the "
         "corrected K_i, bias corrected, its Monte Carlo and belt drawn with the calibration's "
-        "errors (their covariance; a position shared by rounds one draw) in place of the "
-        "table's MPE (A.4.1); the draft's reading (the range as measured, MPE) is kept beside"),
+        "errors (their covariance, as t with its dof where it states them; a position shared "
+        "by rounds one draw) in place of the table's MPE (A.4.1); the draft's reading (the "
+        "range as measured, MPE) is kept beside"),
     "rate_consistency": (
         "beyond the draft: every 7.6 reading's reference angle corrected by the laboratory's "
         "table calibration, theta - (e(zero + theta) - e(zero))/3600 (theta the angle turned "
         "from the zeroing position zero){k}; the stated C_v is the range of the corrected E_v, bias "
-        "corrected, its Monte Carlo drawing the calibration's errors (their covariance, with "
-        "K's; a position shared one draw) in place of the table's MPE (A.4.1); the draft's "
+        "corrected, its Monte Carlo drawing the calibration's errors (their covariance, as t "
+        "with its dof where it states them, with K's; a position shared one draw) in place of "
+        "the table's MPE (A.4.1); the draft's "
         "reading (the range as measured, MPE) is kept beside"),
     "pointing_consistency": (
         "beyond the draft: every 7.7 reading's reference angle corrected by the laboratory's "
         "table calibration, theta - (e(zero + theta) - e(zero))/3600 (theta the angle turned "
         "from the zeroing position zero){k}; the stated C_g is the range of the corrected E_g, bias "
         "corrected (range and choice of each extreme), its Monte Carlo drawing the "
-        "calibration's errors (their covariance, with K's; a position shared one draw) in "
-        "place of the table's MPE (A.4.1); the draft's reading (the range as measured, MPE) "
+        "calibration's errors (their covariance, as t with its dof where it states them, with "
+        "K's; a position shared one draw) in place of the table's MPE (A.4.1); the draft's "
+        "reading (the range as measured, MPE) "
         "is kept beside"),
 }
 

@@ -63,7 +63,9 @@ __all__ = [
     "K_SOURCE_COMBINED", "COMBINED_SEED",
     "ScaleFactorTableLine", "scale_factor_table_line", "TableCorrection",
     "scale_factor_table_correction", "table_corrected_k_sensitivity", "ChamberLine",
-    "table_round_sensitivity", "calibration_error_draws", "CalibratedTable",
+    "table_round_sensitivity", "calibration_error_draws", "calibration_draw_dof",
+    "calibration_draws_text",
+    "CalibratedTable",
     "nonlinearity_calibrated_budget", "consistency_corrected_budget",
     "chamber_temperature_line",
     "scale_factor_budget", "nonlinearity_budget", "nonlinearity_corrected_budget",
@@ -569,11 +571,80 @@ def table_corrected_k_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
 
 def calibration_error_draws(calibration, rng, draws: int) -> np.ndarray:
     """Draws of the calibration's errors about its stated values, (draws × positions), arcsec:
-    normal with its covariance V (JCGM 101 6.4.8; V = Q Λ Qᵀ, δe = Q √Λ z, so a singular V,
-    an equal-division comparison's gauge, draws within its range)."""
+    the one distribution every Monte Carlo of a calibrated table draws from (K_l's, C_v's and
+    C_g's range and the choice of C_v's and C_g's extremes). It honours the calibration's
+    degrees of freedom as the GUM lines of K and E do (:meth:`TableCalibration.combine`):
+
+    - no ``dof`` (ν = ∞): normal with the covariance V (JCGM 101 6.4.8; V = Q Λ Qᵀ,
+      δe = Q √Λ z, so a singular V, an equal-division comparison's gauge, draws within its
+      range);
+    - a covariance given (one joint estimate, V = s²·M with one s² of ν degrees of freedom,
+      :func:`~gonio.specs.ogam_draft.table_calibration.from_equal_division`): the
+      multivariate t of that V and ν, δe = Q √Λ z · √(ν/w), one w ~ χ²_ν per draw shared by
+      every position (JCGM 101 6.4.9 for a vector: the joint scale s²/σ² is one χ²_ν/ν;
+      JCGM 102's multivariate t). Positions with different ν under one covariance: the
+      smallest (conservative, as ``combine``);
+    - positions independent (no covariance), position p with its own ν_p: each drawn as its
+      own scaled-and-shifted t, u_p · z_p · √(ν_p/w_p), w_p ~ χ²_{ν_p} (JCGM 101 6.4.9).
+
+    The scale is u (the Type A standard uncertainty), so the draws' variance is
+    ν/(ν − 2)·u² (ν > 2; none for ν ≤ 2: the t's heavy tails, which the range belt's
+    quantiles take as they are). Without ``dof`` the generator is used exactly as for the
+    normal draws (same seed, same draws). The draws are centred: δe about e.
+
+    Two independent positions, u = 0.02″ with ν = 4 and u = 0.03″ with ν = ∞: the first's
+    sd is 0.02·√2 (ν/(ν − 2) = 2), the second's 0.03:
+
+    >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
+    >>> cal = TableCalibration([0, 60], [0.0, 0.0], [0.02, 0.03], "t", dof=[4, math.inf])
+    >>> d = calibration_error_draws(cal, np.random.default_rng(1), 400_000)
+    >>> [round(float(x), 3) for x in np.std(d, axis=0)]
+    [0.028, 0.03]
+    """
+    nu = calibration_draw_dof(calibration)
+    if nu is not None and np.ndim(nu) == 1:   # independent positions, each its own ν
+        u = np.asarray(calibration.u_arcsec, dtype=float)
+        fin = np.isfinite(nu)
+        z = rng.standard_normal((draws, u.size))
+        scale = np.ones((draws, u.size))
+        scale[:, fin] = np.sqrt(nu[fin] / rng.chisquare(nu[fin], (draws, int(fin.sum()))))
+        return z * scale * u
     lam, q = np.linalg.eigh(calibration.covariance())
     root = q * np.sqrt(np.clip(lam, 0.0, None))
-    return rng.standard_normal((draws, lam.size)) @ root.T
+    d = rng.standard_normal((draws, lam.size)) @ root.T
+    if nu is None:
+        return d
+    return d * np.sqrt(nu / rng.chisquare(nu, (draws, 1)))   # one joint estimate: one χ²
+
+
+def calibration_draw_dof(calibration):
+    """The ν :func:`calibration_error_draws` draws with: None (no ``dof``, or none finite:
+    normal), one number (a covariance given: one joint estimate, the smallest of its
+    positions' ν), or one ν per position (independent positions; ∞ where a position states
+    none: normal there)."""
+    dof = getattr(calibration, "dof", None)
+    if dof is None or not np.any(np.isfinite(np.asarray(dof, dtype=float))):
+        return None
+    dof = np.asarray(dof, dtype=float)
+    if getattr(calibration, "cov_arcsec2", None) is not None:
+        return float(np.min(dof))
+    return dof
+
+
+def calibration_draws_text(calibration) -> str:
+    """How :func:`calibration_error_draws` drew a calibration's errors, for a Monte Carlo
+    line's source: "drawn with their covariance" (normal), and the t's ν where it has one."""
+    nu = calibration_draw_dof(calibration)
+    if nu is None:
+        return "drawn with their covariance (normal)"
+    if np.ndim(nu) == 0:
+        return (f"drawn with their covariance as a multivariate t with the calibration's "
+                f"nu = {float(nu):.3g} (JCGM 101 6.4.9)")
+    fin = np.asarray(nu)[np.isfinite(nu)]
+    lo, hi = float(np.min(fin)), float(np.max(fin))
+    nus = f"{lo:.3g}" if math.isclose(lo, hi) else f"{lo:.3g}-{hi:.3g}"
+    return (f"drawn per position as t with the calibration's nu = {nus} "
+            f"(JCGM 101 6.4.9)")
 
 
 @dataclass(frozen=True)
@@ -1192,7 +1263,7 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     :func:`table_round_sensitivity`, whose matrix ``round_sensitivity`` gives each round's
     sensitivity to the calibration's errors). As :func:`nonlinearity_corrected_budget` with
     the table's errors at the MPE (A.4.1; the standard's and the periodic reading) replaced by
-    the calibration's: per draw its errors δe normal with its covariance
+    the calibration's: per draw its errors δe with its covariance, as t with its ν
     (:func:`calibration_error_draws`; a position shared by rounds is one draw), each round
     moved by its sensitivity times δe (the same draws, so the rounds are correlated where
     they share a zeroing position); the count quantum, the tilt coupling (or its correction
@@ -1227,8 +1298,8 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     c = corrected_range(k_i * to_pct, errs["calibrated"])
     u_tab = float(np.mean(np.std(tab, axis=0))) * to_pct
     src = (f"table angle at the stops and zeroing positions corrected by the "
-           f"{calibration.describe()}, its errors drawn with their covariance (mean u of a "
-           f"round {u_tab:.3g} %), " + src)
+           f"{calibration.describe()}, its errors {calibration_draws_text(calibration)} "
+           f"(mean sd of a round {u_tab:.3g} %), " + src)
     lines = [_Line(from_u("K_rng", 0.0, c.u, type="B",
                           source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
                                  f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
@@ -1670,7 +1741,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
     the correction's error, normal u(δ)·θ_v, the same for all (beyond the draft).
     ``table_cal`` (a :class:`CalibratedTable`: the E_v corrected by a calibrated table and read
     with the table-corrected K): the table's draws at the MPE are replaced by the
-    calibration's, δe normal with its covariance, each E_v moved by its coefficients
+    calibration's, δe with its covariance and ν (:func:`calibration_error_draws`: normal, or t
+    with the calibration's ν), each E_v moved by its coefficients
     (δe(z_v + θ_v) − δe(z_v), the table stopping at z_v + θ_v, and K's part θ_v's,
     :meth:`CalibratedTable.coefficients`; a position shared
     by conditions, and by K's rounds, is one draw), and ``scale_factor_u_rel`` is then K's u
@@ -1738,7 +1810,8 @@ def consistency_corrected_budget(item: str, conditions: Sequence[ConditionDeviat
                           source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the "
                                  f"{n} E_v: means, table"
                                  + (f" (corrected by the {table_cal.source}, its errors "
-                                    f"drawn with their covariance)" if table_cal else "")
+                                    f"{calibration_draws_text(table_cal.calibration)})"
+                                    if table_cal else "")
                                  + f", zero drift, K and its tilt "
                                  f"{'correction' if tilt_te is not None else 'bias'}; "
                                  f"measured range {c.measured:.4g} {unit}, of the errors alone "
