@@ -439,3 +439,43 @@ def test_ranges_measured_value_is_the_stated_ones_input(setup):
         assert t["measured_value_without_tilt_correction"] == pytest.approx(
             d[name]["details"]["spread_arcsec"] / d[name]["details"]["reference_angle_arcsec"]
             * scale, rel=1e-9)
+
+
+def test_one_turned_error_for_e_and_consistencies(setup, runs, monkeypatch):
+    """E (7.4) and C_v, C_g (7.6, 7.7) take each reading's table correction e(stop) − e(zero)
+    from the one function :func:`~gonio.specs.ogam_draft.table_calibration.turned_error_arcsec`:
+    with the exact calibration E per point and C_v meet their truths from the bench's
+    parameters; with that function alone mutated (Δ's sign flipped, the calibration file
+    unchanged) both leave them (E by more than 0.05″ at some point, C_v by more than OFF),
+    so a fault in it is noticed on both items; K_l, corrected through K's own rounds, does
+    not move."""
+    from gonio.specs.ogam_draft import table_calibration as tcal
+    from tests.test_table_calibration import _e_truth_71
+
+    p, res, cal = setup
+    ok = runs["cal"]
+    t_i = _e_truth_71(res)
+
+    def e_miss(rep) -> float:
+        e = rep.results.angle_deviation
+        return float(np.max(np.abs(e.table["E_arcsec"].to_numpy()
+                                   - t_i.reindex(e.table["round"]).to_numpy())))
+
+    cv = "rate_consistency"
+    truth = _truths(res, ok)
+    assert e_miss(ok) < 0.003
+    assert abs(_measured(ok, cv) - truth[cv]) < TIGHT[cv]
+    real, calls = tcal.turned_error_arcsec, []
+
+    def flipped(calibration, stop_deg, zero_deg):
+        calls.append(len(np.atleast_1d(stop_deg)))
+        d, i_s, i_z, miss = real(calibration, stop_deg, zero_deg)
+        return -d, i_s, i_z, miss
+
+    monkeypatch.setattr(tcal, "turned_error_arcsec", flipped)
+    bad = _analyse(p, res, cal)
+    assert len(calls) >= 3                          # E, C_v and C_g each called it
+    assert e_miss(bad) > 0.05
+    assert abs(_measured(bad, cv) - truth[cv]) > OFF[cv]
+    kl = "scale_factor_nonlinearity"
+    assert _measured(bad, kl) == _measured(ok, kl)

@@ -39,6 +39,7 @@ from gonio.specs.ogam_draft.protocol import Protocol, load_protocol
 from gonio.result.model import Item, Result, Uncertainty
 from gonio.specs.ogam_draft.chamber import logged_chamber_temperature
 from gonio.specs.ogam_draft.item_uncertainty import EXTRA_CLAUSES, chamber_temperature_line
+from gonio.specs.ogam_draft import table_calibration as tcal
 
 #: The readings taken of the draft's ambiguities (shown in results and certificate). The
 #: u(r) sentence is not here: it follows the source actually used (:func:`readings_taken`).
@@ -1647,10 +1648,11 @@ def angle_deviation_at_table(results: CalibrationResults, readings: Readings,
     if not any(t["u_arcsec"] is not None for t in terms):
         return results, {"reason": reason}
     err = calibration.error_arcsec
-    corr = np.zeros(len(long))
+    own_rows = np.zeros(len(long), dtype=bool)
     for r, t in zip(rows, terms):
-        if t["own"]:
-            corr[r] = err[t["i_p"]] - err[t["i_z"]]
+        own_rows[r] = t["own"]
+    # e(stop) − e(zero) of each reading (the one per-reading correction, also C_v's and C_g's)
+    corr = np.where(own_rows, tcal.turned_error_arcsec(calibration, stop, zero)[0], 0.0)
     if k_new is not None:        # rows read through K (no gyro_deg of their own)
         own = readings.data.set_index("line")["gyro_deg"].reindex(long["line"]).to_numpy(float)
         corr = corr + np.where(np.isnan(own), ARCSEC_PER_DEG * long["M_deg"].to_numpy(float)
@@ -1876,8 +1878,8 @@ def consistency_at_table(results, readings, protocol, name: str, calibration):
     keep = f"{label} keeps the MPE line and is not corrected [beyond the draft]"
     rows = readings.data[readings.data["line"].isin(list(c.used_lines))]
     stop, zero = _consistency_row_positions(rows, protocol)
-    i_s, m_s = calibration.lookup(stop)
-    i_z, m_z = calibration.lookup(zero)
+    # e(stop) − e(zero) of each reading (the one per-reading correction, also E's)
+    delta_arcsec, i_s, i_z, m_s = tcal.turned_error_arcsec(calibration, stop, zero)
     # angles read through the 7.1 K: only then are its rounds (and their positions) used
     through_k = results.scale_factor_for_angles_source == "7.1" and \
         results.scale_factor.measured and \
@@ -1887,8 +1889,8 @@ def consistency_at_table(results, readings, protocol, name: str, calibration):
         k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
         m_s = sorted(set(m_s) | set(calibration.lookup(k_stop)[1])
                      | set(calibration.lookup(k_zero)[1]))
-    missing = sorted(set(m_s) | set(m_z))
-    if missing or i_s is None or i_z is None:
+    missing = sorted(set(m_s))
+    if missing:
         return None, (f"the {calibration.source} does not cover "
                       f"{', '.join(f'{x:g}' for x in missing)} deg: {keep}")
     col = "rate_dps" if name == "rate_consistency" else "orientation"
@@ -1904,7 +1906,7 @@ def consistency_at_table(results, readings, protocol, name: str, calibration):
     cal = iu.CalibratedTable(calibration, c_k, k_c)
     # M + (e(θ) − e(z))/3600 against θ is M against the true angle θ − (e(θ) − e(z))/3600:
     # the reading's own angle shifted, or its counts read through K_c shifted by K_c times it
-    d_deg = (calibration.error_arcsec[i_s] - calibration.error_arcsec[i_z]) / ARCSEC_PER_DEG
+    d_deg = delta_arcsec / ARCSEC_PER_DEG
     k_use = k_c if through_k else results.scale_factor_for_angles_counts_per_deg
     fixed = readings.data.copy()
     for col_ in ("gyro_deg", "gyro_counts"):

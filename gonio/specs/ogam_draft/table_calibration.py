@@ -31,7 +31,7 @@ import numpy as np
 from gonio.errors import GonioError
 
 __all__ = ["TableCalibration", "read_table_calibration", "from_equal_division",
-           "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG"]
+           "turned_error_arcsec", "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG"]
 
 REQUIRED_COLUMNS = ("table_deg", "error_arcsec", "u_arcsec")
 #: A session's position matches a calibrated one within this (degrees, modulo 360°).
@@ -136,6 +136,47 @@ class TableCalibration:
         us = f"{lo:.3g}″" if math.isclose(lo, hi) else f"{lo:.3g}–{hi:.3g}″"
         cov = "covariance given" if self.cov_arcsec2 is not None else "positions independent"
         return f"table calibration, {self.source}, u {us} (k = 1), {cov}"
+
+
+def turned_error_arcsec(calibration: TableCalibration, stop_deg, zero_deg
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
+    """The per-reading table correction, written once (beyond the draft; A.4.1 with the
+    table's error known): a reading whose round zeroed the table at ``zero_deg`` and stopped
+    it at ``stop_deg`` (both absolute table positions, as the protocol's rounds give them)
+    turned θ = stop − zero as the table reads it, truly θ − Δ/3600 with
+    Δ = e(stop) − e(zero), arcsec (e = indicated − true). Every item whose reference angle a
+    calibrated table corrects takes Δ from here: E per point (7.4,
+    :func:`gonio.specs.ogam_draft.calibration.angle_deviation_at_table`) and C_v, C_g per
+    reading (7.6, 7.7, :func:`gonio.specs.ogam_draft.calibration.consistency_at_table`).
+
+    Stops are looked up by their absolute position, modulo 360° (:meth:`TableCalibration.lookup`):
+    a round zeroed at 90° that turned 30° reads e(120°) − e(90°), not e(30°) − e(0°). Returns
+    (Δ per reading, the calibration's index of each stop and of each zero, the positions the
+    calibration does not list, sorted): Δ NaN and the index −1 where a reading's stop or zero
+    is not listed (nothing is interpolated).
+
+    >>> c = TableCalibration([0, 30, 90, 120], [0.01, 0.02, -0.03, 0.05], [0.02] * 4, "t")
+    >>> d, i_s, i_z, miss = turned_error_arcsec(c, [120.0, 30.0, 390.0, 45.0], [90.0, 0.0, 0.0, 0.0])
+    >>> [round(float(x), 3) for x in d], i_s.tolist(), miss
+    ([0.08, 0.01, 0.01, nan], [3, 1, 1, -1], [45.0])
+    """
+    stop = np.atleast_1d(np.asarray(stop_deg, dtype=float))
+    zero = np.broadcast_to(np.asarray(zero_deg, dtype=float), stop.shape)
+
+    def index(x):
+        out = np.full(x.shape, -1, dtype=int)
+        for v in np.unique(x):
+            i, _ = calibration.lookup([v])
+            if i is not None:
+                out[x == v] = int(i[0])
+        return out
+
+    i_s, i_z = index(stop), index(zero)
+    ok = (i_s >= 0) & (i_z >= 0)
+    e = calibration.error_arcsec
+    delta = np.where(ok, e[np.where(ok, i_s, 0)] - e[np.where(ok, i_z, 0)], np.nan)
+    missing = sorted({float(v) for v in _wrap_deg(np.r_[stop[i_s < 0], zero[i_z < 0]])})
+    return delta, i_s, i_z, missing
 
 
 def _float(text: str, path, line: int, column: str) -> float:
