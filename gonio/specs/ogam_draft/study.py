@@ -83,7 +83,7 @@ __all__ = ["CASES", "TRUTHS", "validation_protocol", "case_bench", "ideal_bench"
            "pack_trials", "unpack_trials", "EXTRA_SYMBOLS", "draw_type_b", "worst_azimuth",
            "worst_condition",
            "coupling_bias", "tilted", "TABLE_RATE_ERROR_BOUND", "TABLE_CALIBRATION_U_ARCSEC",
-           "table_positions_deg", "drawn_table_calibration"]
+           "table_positions_deg", "drawn_table_calibration", "case_table_calibration"]
 
 #: Stress cases: name → what is changed (see :func:`case_bench`).
 CASES = {
@@ -120,11 +120,23 @@ CASES = {
                 "error at every position the protocol uses plus normal noise of "
                 "u = TABLE_CALIBRATION_U_ARCSEC, as a laboratory's table certificate states "
                 "it; K is corrected by it and its table line is the calibration's",
+    "tablecalpart": "the draws of typeb with a partial calibration of few degrees of freedom: "
+                    "per trial a table calibration drawn as tablecal's at every position the "
+                    "protocol uses but TABLE_CALIBRATION_PART_OMIT_DEG (so E keeps its MPE "
+                    "line there and C_v, C_g keep theirs), its u a Type A estimate of "
+                    "TABLE_CALIBRATION_PART_DOF degrees of freedom (per position u = "
+                    "sigma*sqrt(chi2_nu/nu), stated with dof = nu, the error's noise of "
+                    "sd sigma = TABLE_CALIBRATION_U_ARCSEC)",
 }
 
 #: The standard uncertainty of the table calibration the ``tablecal`` case draws, arcsec
 #: (a good table certificate, or an equal-division comparison, IEC 62047-20 A.3).
 TABLE_CALIBRATION_U_ARCSEC = 0.02
+#: The ``tablecalpart`` case's calibration: the position it leaves out (a 7.4/7.6/7.7 point,
+#: none of K's 7.1 stops or zeros) and the degrees of freedom of its u (a table certificate
+#: from four repeats per position).
+TABLE_CALIBRATION_PART_OMIT_DEG = (330.0,)
+TABLE_CALIBRATION_PART_DOF = 3.0
 
 #: Cases at one fixed condition chosen as the worst: coverage is their test, not z's spread
 #: (a Type B line is one fixed offset there; :func:`item_coverage`'s ``judge_spread``).
@@ -216,7 +228,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         b = ideal_bench(bench)
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
-    if case in ("mounted", "typeb", "worsttable", "tablecal"):
+    if case in ("mounted", "typeb", "worsttable", "tablecal", "tablecalpart"):
         return bench                      # drawn per trial (:func:`trial_bench`)
     if case == "worst":                   # the other Type B effects drawn per trial
         psi = float(protocol.annex_a.tilt_bound_deg)
@@ -417,7 +429,7 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     >>> t.chamber_deviation_c == draw_type_b(b, p, 3).chamber_deviation_c
     True
     """
-    if case in ("typeb", "tablecal"):
+    if case in ("typeb", "tablecal", "tablecalpart"):
         return draw_type_b(bench, protocol, seed)
     if case == "worsttable":
         d = draw_type_b(bench, protocol, seed)
@@ -454,17 +466,28 @@ def table_positions_deg(protocol: Protocol) -> np.ndarray:
 
 
 def drawn_table_calibration(bench: Bench, protocol: Protocol, seed: int,
-                            u_arcsec: float = TABLE_CALIBRATION_U_ARCSEC):
+                            u_arcsec: float = TABLE_CALIBRATION_U_ARCSEC, *,
+                            dof: float | None = None, omit_deg=()):
     """A laboratory's table calibration for one trial: at every position the protocol uses
-    (:func:`table_positions_deg`), the trial bench's TRUE periodic positioning error
-    (indicated − true, the bench's harmonics; the per-visit scatter is no property a
-    calibration can state) plus normal noise of standard deviation ``u_arcsec``, stated with
-    u = ``u_arcsec``. The truth comes from the bench's parameters, never from an estimator.
+    (:func:`table_positions_deg`) but ``omit_deg``, the trial bench's TRUE periodic
+    positioning error (indicated − true, the bench's harmonics; the per-visit scatter is no
+    property a calibration can state) plus normal noise of standard deviation ``u_arcsec``.
+    Stated with u = ``u_arcsec`` (``dof`` None: known, ν = ∞), or, with ``dof`` = ν, as a
+    Type A estimate of ν degrees of freedom would state it: per position u_p =
+    u_arcsec·√(χ²_ν/ν), independent of the error's noise (a normal sample's mean and
+    variance), with ``dof`` ν — so (stated − true)/u_p is Student's t_ν, as the laboratory's
+    certificate and JCGM 101 6.4.9 take it. The truth comes from the bench's parameters,
+    never from an estimator; the same seed gives the same errors with or without ``dof``.
 
     >>> b = draw_type_b(load_bench("rlg"), validation_protocol(), 3)
     >>> c = drawn_table_calibration(b, validation_protocol(), 3)
     >>> c.table_deg.size == table_positions_deg(validation_protocol()).size, float(c.u_arcsec[0])
     (True, 0.02)
+    >>> f = drawn_table_calibration(b, validation_protocol(), 3, dof=3.0, omit_deg=(330.0,))
+    >>> 330.0 in f.table_deg, f.table_deg.size, set(f.dof.tolist()), len(set(f.u_arcsec.tolist()))
+    (False, 11, {3.0}, 11)
+    >>> bool(np.all(f.error_arcsec == c.error_arcsec[:11]))
+    True
     """
     from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
     from gonio.specs.ogam_draft.table_calibration import TableCalibration
@@ -473,9 +496,29 @@ def drawn_table_calibration(bench: Bench, protocol: Protocol, seed: int,
     true = np.asarray(harmonic_sum_arcsec(x, bench.table.positioning_harmonics), dtype=float) \
         + 0.0 * x
     rng = np.random.default_rng([int(seed), 0x7ab1ec])
-    return TableCalibration(x, true + u_arcsec * rng.standard_normal(x.size),
-                            np.full(x.size, float(u_arcsec)),
-                            f"drawn table calibration (u {u_arcsec:g}″)")
+    err = true + u_arcsec * rng.standard_normal(x.size)
+    u = np.full(x.size, float(u_arcsec))
+    if dof is not None:
+        u = u * np.sqrt(rng.chisquare(float(dof), x.size) / float(dof))
+    keep = np.ones(x.size, dtype=bool)
+    for o in omit_deg:
+        keep &= ~np.isclose(x, float(o) % 360.0, atol=1e-9)
+    what = f"u {u_arcsec:g}″" + (f", nu {dof:g}" if dof is not None else "") \
+        + (f", without {', '.join(f'{o:g}' for o in omit_deg)} deg" if omit_deg else "")
+    return TableCalibration(x[keep], err[keep], u[keep], f"drawn table calibration ({what})",
+                            dof=None if dof is None else np.full(int(keep.sum()), float(dof)))
+
+
+def case_table_calibration(case: str, bench: Bench, protocol: Protocol, seed: int):
+    """The laboratory's table calibration of one trial of ``case``: ``tablecal``'s (every
+    position, u known), ``tablecalpart``'s (without TABLE_CALIBRATION_PART_OMIT_DEG, u of
+    TABLE_CALIBRATION_PART_DOF degrees of freedom), None for the other cases."""
+    if case == "tablecal":
+        return drawn_table_calibration(bench, protocol, seed)
+    if case == "tablecalpart":
+        return drawn_table_calibration(bench, protocol, seed, dof=TABLE_CALIBRATION_PART_DOF,
+                                       omit_deg=TABLE_CALIBRATION_PART_OMIT_DEG)
+    return None
 
 
 @dataclass
@@ -603,8 +646,7 @@ class TrialJob:
         res = []
         for sd in seeds:
             b = trial_bench(self.case, self.bench, self.protocol, sd)
-            cal = drawn_table_calibration(b, self.protocol, sd) if self.case == "tablecal" \
-                else None
+            cal = case_table_calibration(self.case, b, self.protocol, sd)
             res.append(run_trial(self.protocol, b, sd, self.u_scale, self.truth,
                                  self.extras_used, table_calibration=cal))
         return pack_trials(self.case, list(idx), res)
