@@ -145,3 +145,31 @@ def test_every_range_draw_goes_through_the_one_function(monkeypatch):
                         lambda cal, rng, draws: 10.0 * real(cal, rng, draws))
     b1 = _consistency(None)
     assert b1.interval[1] > 3.0 * b0.interval[1]
+
+
+def test_study_case_calibration_is_student_t():
+    """The ``tablecalpart`` coverage case's calibration (gonio validate --cases tablecalpart)
+    is what it claims against the bench's parameters: it lacks 330°, states dof ν = 3, and
+    its standardised errors (stated − the bench's true harmonic error)/u over many trials
+    have Student's t₃ quantile (3.18 at 97.5 %; the normal's 1.96 would under-cover it), so
+    a budget taking u as known would be too narrow and one taking ν covers."""
+    from gonio.specs.ogam_draft.bench import load_bench
+    from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+    from gonio.specs.ogam_draft.study import (TABLE_CALIBRATION_PART_DOF,
+                                              case_table_calibration, draw_type_b,
+                                              validation_protocol)
+
+    p = validation_protocol(all_items=True)
+    base = load_bench("rlg")
+    z = []
+    for seed in range(400):
+        b = draw_type_b(base, p, seed)
+        cal = case_table_calibration("tablecalpart", b, p, seed)
+        assert 330.0 not in cal.table_deg and cal.table_deg.size == 11
+        assert set(cal.dof.tolist()) == {TABLE_CALIBRATION_PART_DOF}
+        true = np.asarray(harmonic_sum_arcsec(cal.table_deg, b.table.positioning_harmonics))
+        z.append((cal.error_arcsec - true) / cal.u_arcsec)
+    z = np.abs(np.concatenate(z))
+    assert np.quantile(z, 0.95) == pytest.approx(stats.t.ppf(0.975, 3.0), rel=0.06)
+    assert case_table_calibration("tablecal", b, p, 1).dof is None
+    assert case_table_calibration("typeb", b, p, 1) is None
