@@ -305,7 +305,9 @@ class Integrator:
             inc += det.trapezoid[1]
         if self.prev is None:
             inc[0] = 0.0
-        run = np.cumsum(inc)
+        # the noise's own array (drawn for this chunk) takes its running sum in place; the
+        # shared trapezoid increments are summed into a new one
+        run = np.cumsum(inc, out=inc if noise is not None else None)
         if at is None:
             ang = self.angle + det.cos_psi * (theta_deg - th_prev) + run
             self.angle = float(ang[-1])
