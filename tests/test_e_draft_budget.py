@@ -72,7 +72,8 @@ def welch_nu(components) -> float:
 
 def hand_draft_interval(res: dict) -> tuple[float, float, float]:
     """(lower, upper, max|E_i|) by hand: the per-point E_i of results.json, u_i = the one
-    budget's u_c (recomputed from its lines) and ν_i its ν_eff at every point."""
+    budget's u_c (recomputed from its lines) and ν_i its ν_eff at every point, as stated
+    (the integer part, as its k; ∞ above 1000)."""
     e = res["extra"]["uncertainty"]
     comps = e["components"]
     u = math.sqrt(sum((c["c"] * c["u_arcsec"]) ** 2 for c in comps))
@@ -82,8 +83,8 @@ def hand_draft_interval(res: dict) -> tuple[float, float, float]:
                   ["table"]])
     c_hi, c_lo = _factors(len(x))
 
-    def f(c):
-        return c if math.isinf(nu) else float(student.ppf(norm.cdf(c), nu))
+    def f(c):       # ν as stated (GUM G.6.4): its integer part, the normal above 1000
+        return c if nu > 1000 else float(student.ppf(norm.cdf(c), max(1, math.floor(nu))))
     return max(0.0, float(np.max(x)) - f(c_lo) * u), float(np.max(x)) + f(c_hi) * u, \
         float(np.max(x))
 

@@ -50,7 +50,8 @@ def _factors(m: int) -> tuple[float, float]:
 
 
 def hand_interval(res: dict) -> tuple[float, float, float]:
-    """(lower, upper, max|E_i|) by hand from results.json's per-point E_i, u_i and ν_i."""
+    """(lower, upper, max|E_i|) by hand from results.json's per-point E_i, u_i and ν_i (as
+    stated: the integer part, ∞ above 1000)."""
     table = res["items"]["angle_deviation"]["details"]["table"]
     points = {round(p["position_deg"], 9): p for p in res["extra"]["uncertainty"]["points"]}
     x = np.array([abs(r["E_arcsec"]) for r in table])
@@ -58,8 +59,9 @@ def hand_interval(res: dict) -> tuple[float, float, float]:
     nu = [points[round(r["position_deg"], 9)]["nu_eff"] for r in table]
     c_hi, c_lo = _factors(len(x))
 
-    def f(c):
-        return np.array([c if n is None else float(student.ppf(norm.cdf(c), n)) for n in nu])
+    def f(c):       # each ν as stated (GUM G.6.4): its integer part, the normal above 1000
+        return np.array([c if n is None or n > 1000 else
+                         float(student.ppf(norm.cdf(c), max(1, math.floor(n)))) for n in nu])
     return max(0.0, float(np.max(x - f(c_lo) * u))), float(np.max(x + f(c_hi) * u)), \
         float(np.max(x))
 

@@ -1164,7 +1164,8 @@ def e_max_interval(e_arcsec, budgets, one_budget: bool = False) -> dict:
     It holds the truth with probability ≥ 95 % for every pattern of the true E_i and any
     correlation between the points (the shared K and zero), and its factors are the
     smallest of that form that do (the upper one's worst case: one point far out; the
-    lower one's: every E_i zero).
+    lower one's: every E_i zero). Each point's ν is taken as stated
+    (:func:`gonio.result.statement.stated_nu`: the integer part, ∞ above 1000), as its k.
 
     ``one_budget``: ``budgets`` is the draft's one Annex A budget repeated at every point
     (``--budget draft``): every u_i is its u_c, every ν_i its ν_eff, which the dict then
@@ -1172,16 +1173,20 @@ def e_max_interval(e_arcsec, budgets, one_budget: bool = False) -> dict:
     results.json alone. The draft's U is a statement about one point: max|E_i| ± U covers
     max|E_i,true| only about 0.95^12 ≈ 54 % of the time where every true E_i is 0.
     """
+    from gonio.result.statement import stated_nu
     from uncertainty.extreme import max_abs_interval
 
+    # each point's ν as stated and as its k is computed (the integer part, ∞ above 1000;
+    # GUM G.6.4): the interval is never narrower than one recomputed from the printed ν
     r = max_abs_interval(np.asarray(e_arcsec, dtype=float), [b.u_c_arcsec for b in budgets],
-                         [b.gum.dof for b in budgets])
+                         [stated_nu(b.gum.dof) for b in budgets])
     out = {"lower_arcsec": r.lower, "upper_arcsec": r.upper, "max_abs_arcsec": r.estimate,
            "p": r.p, "c_lower": r.c_lower, "c_upper": r.c_upper, "points": r.m,
            "basis": "max_i(|E_i| + c_H u_i) above, max(0, max_i(|E_i| - c_L u_i)) below, "
                     + ("u_c and nu_eff of the draft's one Annex A budget at every point"
                        if one_budget else "per point u_c and nu_eff")
-                    + " (Student t at finite nu); >= 95 % for every pattern of the true E_i "
+                    + " (Student t at nu as stated: its integer part, normal above 1000); "
+                      ">= 95 % for every pattern of the true E_i "
                       "(Sidak below, the extreme point above) [beyond the draft]"}
     if one_budget:
         b = budgets[0]
