@@ -74,6 +74,27 @@ def register(sub) -> None:
                         "$GONIO_USER)")
     add_attach_options(q)
     q.set_defaults(func=run_attach)
+    q = dsub.add_parser("register-table-calibration",
+                        help="put a rotary table's calibration file into the laboratory's "
+                             "register (technician)")
+    add_store_options(q)
+    q.add_argument("file", help="the table calibration file (CSV as gonio calibrate "
+                                "--table-calibration)")
+    q.add_argument("--table", required=True, metavar="IDENTIFIER",
+                   help="the rotary table, registered as a standard (its identifier)")
+    q.add_argument("--valid-from", required=True, metavar="YYYY-MM-DD",
+                   help="the table's calibration date: valid from then")
+    q.add_argument("--due-on", required=True, metavar="YYYY-MM-DD")
+    q.add_argument("--certificate", default="", help="the table certificate's identifier")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user registering it (technician; default $GONIO_USER)")
+    q.set_defaults(func=run_register_table_calibration)
+    q = dsub.add_parser("table-calibrations",
+                        help="list the register of the rotary tables' calibrations")
+    add_store_options(q)
+    q.add_argument("--date", default=None, metavar="YYYY-MM-DD",
+                   help="say which is in force on this date (default today)")
+    q.set_defaults(func=run_table_calibrations)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database (or, "
                                        "with --replace, over the live records)")):
@@ -206,6 +227,42 @@ def attach_of(args) -> dict:
     if args.environment_from_readings:
         out["environment_from_readings"] = True
     return out
+
+
+def run_register_table_calibration(args) -> int:
+    from gonio.records import services
+
+    store = _store(args)
+    try:
+        actor = importing_user(store, args.user)
+        if actor is None:
+            raise GonioError("give the records user registering it (--user or $GONIO_USER)",
+                             key="--user")
+        tc = services.register_table_calibration_file(
+            store, actor, args.file, table=args.table, valid_from=args.valid_from,
+            due_on=args.due_on, certificate=args.certificate)
+        print(f"table calibration {tc.id}: {args.table} {tc.certificate} {tc.name} "
+              f"(SHA-256 {tc.sha256}), valid from {tc.valid_from}, due on {tc.due_on}")
+    finally:
+        store.close()
+    return 0
+
+
+def run_table_calibrations(args) -> int:
+    from gonio.records import services
+
+    store = _store(args)
+    try:
+        day = services.date_value(args.date, "--date")
+        for r in services.table_calibrations(store, day):
+            e = r["entry"]
+            print(f"{e.id}\t{e.standard.identifier}\t{e.certificate}\t{e.name}\t{e.sha256}\t"
+                  f"{e.valid_from}\t{e.due_on}\t{r['state'] or 'in force'}\t"
+                  f"used by {r['used']}\t"
+                  f"{e.registered_by.username if e.registered_by else ''}")
+    finally:
+        store.close()
+    return 0
 
 
 def run_attach(args) -> int:

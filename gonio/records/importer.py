@@ -19,8 +19,8 @@ from sqlalchemy import select
 
 from gonio.errors import GonioError
 from gonio.records import blobs, services
-from gonio.records.models import (Blob, Calibration, CalibrationFile, Customer, Instrument,
-                                  Standard, User)
+from gonio.records.models import (Blob, Calibration, CalibrationFile, CalibrationStandard,
+                                  Customer, Instrument, Standard, User)
 from gonio.records.results import result_items
 
 #: readings file names looked for in a folder when none is given
@@ -287,6 +287,31 @@ def _check_identity(rd: Path, lab, spec_key: str, results: dict, record: dict | 
                          "calibrate the readings again with it", file=res_path, key="identity")
 
 
+def _keep_table_calibration(s, cal: Calibration, actor, sha: str, name: str,
+                            res_path: Path) -> None:
+    """The table calibration ``sha`` an imported run used, kept as the calibration's
+    :data:`~gonio.records.services.TABLE_CALIBRATION` with its audit event; where the
+    laboratory's register holds that file for a table among the calibration's standards, that
+    entry is recorded as the one used, and must be in force on the calibration's date
+    (:func:`gonio.records.services.table_calibration_for`: else a one-line GonioError naming
+    results.json, and nothing is recorded)."""
+    from gonio.specs import get
+
+    tables = s.scalars(select(CalibrationStandard.standard_id).where(
+        CalibrationStandard.calibration_id == cal.id)).all()
+    try:
+        _, entry = services.table_calibration_for(s, get(cal.spec_key), tables,
+                                                  cal.performed_on, sha)
+    except GonioError as exc:
+        raise GonioError(exc.message, file=res_path, key=exc.key) from None
+    cal.table_calibration_id = entry.id if entry is not None else None
+    s.add(CalibrationFile(calibration_id=cal.id, name=services.TABLE_CALIBRATION, sha256=sha))
+    services.audit(s, actor, "table-calibration", "calibration", cal.id, None,
+                   {"sha256": sha, "name": services.text(name, "table calibration file name",
+                                                         max_len=255)}
+                   | ({"register_id": entry.id} if entry is not None else {}))
+
+
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
                          spec_key: str | None = None, customer: str = "(imported)",
                          actor: User | None = None,
@@ -390,11 +415,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                        dict(services.state(cal), folder=str(folder),
                             standards=services.standard_names(s, cal.id)))
         if tsha is not None:        # the table calibration the run used, kept
-            s.add(CalibrationFile(calibration_id=cal.id, name=services.TABLE_CALIBRATION,
-                                  sha256=tsha))
-            services.audit(s, actor, "table-calibration", "calibration", cal.id, None,
-                           {"sha256": tsha, "name": services.text(tname, "table calibration "
-                                                                  "file name", max_len=255)})
+            _keep_table_calibration(s, cal, actor, tsha, tname, res_path)
         s.commit()
         cal_id = cal.id
     try:

@@ -10,7 +10,9 @@ triggers (the migrations create them, for SQLite and PostgreSQL alike):
 * ``audit_events``  append-only: no UPDATE, no DELETE;
 * ``certificates``  an issued certificate is frozen: no UPDATE, no DELETE;
 * ``blobs``         a stored file's record is never changed (the bytes live in the
-                    content-addressed store, named by their SHA-256).
+                    content-addressed store, named by their SHA-256);
+* ``table_calibrations``  a registered table calibration is never changed or removed
+                    (migration 0009): a correction is a new registration.
 
 Times are naive UTC ``datetime`` values; dates (due dates, calibration dates) are
 ``date`` values.
@@ -142,6 +144,31 @@ class Standard(Base):
     retired_on: Mapped[_dt.date | None] = mapped_column(Date, nullable=True)
 
 
+class TableCalibration(Base):
+    """The laboratory's register of its rotary tables' calibrations (ISO/IEC 17025 6.4.13:
+    equipment records): one table calibration file, kept once by its SHA-256, of the table
+    it belongs to (a registered standard), valid from ``valid_from`` (the table's calibration
+    date) until ``due_on``; a later one of the same table supersedes it from its own
+    ``valid_from`` (:func:`gonio.records.services.table_calibration_state`)."""
+    __tablename__ = "table_calibrations"
+    __table_args__ = (UniqueConstraint("standard_id", "valid_from"),
+                      UniqueConstraint("standard_id", "sha256"))
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    #: the rotary table, registered as a standard (bench equipment)
+    standard_id: Mapped[int] = mapped_column(ForeignKey("standards.id"), index=True)
+    sha256: Mapped[str] = mapped_column(ForeignKey("blobs.sha256"))
+    #: the file's own name as it was registered (display and the run's file name only)
+    name: Mapped[str] = mapped_column(String(255), default="")
+    #: the table certificate's identifier (named in the refusals and on the pages)
+    certificate: Mapped[str] = mapped_column(String(200), default="")
+    valid_from: Mapped[_dt.date] = mapped_column(Date)
+    due_on: Mapped[_dt.date] = mapped_column(Date)
+    registered_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    registered_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    standard: Mapped[Standard] = relationship()
+    registered_by: Mapped[User | None] = relationship()
+
+
 class Calibration(Base):
     """One calibration of one instrument: inputs, state, result, people."""
     __tablename__ = "calibrations"
@@ -196,6 +223,11 @@ class Calibration(Base):
     #: who asked for the amendment being issued (it is approved by another person)
     amend_requested_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"),
                                                               nullable=True)
+    #: the register's table calibration this calibration used (its file is the calibration's
+    #: ``table_calibration.csv``, sealed with the result); None: none, or an upload kept
+    #: with this calibration only
+    table_calibration_id: Mapped[int | None] = mapped_column(
+        ForeignKey("table_calibrations.id"), nullable=True)
     instrument: Mapped[Instrument] = relationship()
     created_by: Mapped[User | None] = relationship(foreign_keys=[created_by_id])
     reviewed_by: Mapped[User | None] = relationship(foreign_keys=[reviewed_by_id])

@@ -10,7 +10,8 @@ from sqlalchemy import func, or_, select
 from sqlalchemy.orm import joinedload, selectinload
 
 from gonio.records.models import (AuditEvent, Calibration, CalibrationFile, CalibrationStandard,
-                                  Certificate, Customer, Instrument, ResultItem, Standard, User)
+                                  Certificate, Customer, Instrument, ResultItem, Standard,
+                                  TableCalibration, User)
 from gonio.records.results import statements_of, stored_result
 
 
@@ -119,6 +120,10 @@ def calibration_page(store, cal_id: int) -> dict | None:
         files = [f.name for f in rows]
         table_sha = next((f.sha256 for f in rows if f.name == TABLE_CALIBRATION), None)
         table_name = table_calibration_name(s, cal_id) if table_sha else ""
+        entry = s.scalar(select(TableCalibration).options(
+            selectinload(TableCalibration.standard)).where(
+            TableCalibration.id == cal.table_calibration_id)) \
+            if cal.table_calibration_id is not None else None
         stds = s.execute(select(Standard, CalibrationStandard.due_on_at_use)
                          .join(CalibrationStandard,
                                CalibrationStandard.standard_id == Standard.id)
@@ -144,6 +149,7 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "virtual": virtual_mark(store, cal.results_sha256, cal.readings_sha256, doc=doc),
             "table_calibration": table_calibration_used(table_sha, doc, table_name),
             "file_names": {TABLE_CALIBRATION: table_name} if table_sha else {},
+            "register_entry": entry,
             "identity": identity_findings(store, cal.results_sha256, doc=doc) if sealed else []}
 
 

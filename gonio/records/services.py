@@ -43,7 +43,8 @@ from gonio.records import blobs
 from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
                                   CalibrationStandard, Certificate, CertificateCounter, Customer,
-                                  Instrument, ResultItem, Setting, Standard, User, utcnow)
+                                  Instrument, ResultItem, Setting, Standard, TableCalibration,
+                                  User, utcnow)
 from gonio.records.results import NOT_STATED, result_rows
 
 #: The certificate numbering scheme: prefix, year, four-digit sequence per year.
@@ -708,6 +709,238 @@ def table_calibration_file(store, cal_id: int, work: Path) -> Path | None:
     return path
 
 
+# --------------------------------------------------------------------------- the register of
+#                                                                            table calibrations
+
+
+def register_table_calibration(store, actor: User, *, standard_id: int, sha256: str,
+                               name: str = "", valid_from=None, due_on=None,
+                               certificate: str = "") -> TableCalibration:
+    """Put a rotary table's calibration into the laboratory's register (technician, who
+    registers equipment: ISO/IEC 17025 6.4.13): the stored file ``sha256`` (kept once by its
+    SHA-256; ``name`` its own file name, for display and the run's file name), the table it
+    belongs to (``standard_id``: the table registered as a standard, not retired), valid from
+    ``valid_from`` (the table's calibration date) until ``due_on`` (after it), and the table
+    certificate's identifier ``certificate``; audited as ``register`` of a
+    ``table-calibration``. The same file twice for one table, or two of one table valid from
+    the same day (which would be in force?), are refused with one line. A later one of the
+    same table supersedes the earlier from its own ``valid_from``
+    (:func:`table_calibration_state`); nothing registered is changed or removed."""
+    require(actor, "technician")
+    start = date_value(valid_from, "valid_from", required=True)
+    due = date_value(due_on, "due_on", required=True)
+    if due < start:
+        raise GonioError(f"due_on {due} is before valid_from {start}", key="due_on")
+    shown = text(name, "table calibration file name", max_len=255)
+    cert = text(certificate, "certificate")
+    with store.writing() as s:
+        st = s.get(Standard, int(standard_id))
+        if st is None:
+            raise GonioError("no such standard (register the rotary table as a standard "
+                             "first)", key="standard")
+        if st.retired_on is not None:
+            raise GonioError(f"standard {st.identifier} was retired on {st.retired_on}",
+                             key="standard")
+        if s.get(Blob, sha256) is None:
+            raise GonioError("no such stored file", key="sha256")
+        for other in s.scalars(select(TableCalibration).where(
+                TableCalibration.standard_id == st.id)).all():
+            if other.sha256 == sha256:
+                raise GonioError(f"this file (SHA-256 {sha256[:16]}…) is registered for "
+                                 f"{st.identifier} already: table calibration {other.id}",
+                                 key="sha256")
+            if other.valid_from == start:
+                raise GonioError(f"table calibration {other.id} of {st.identifier} is valid "
+                                 f"from {start} already: one a day", key="valid_from")
+        tc = TableCalibration(standard_id=st.id, sha256=sha256, name=shown, certificate=cert,
+                              valid_from=start, due_on=due, registered_by_id=actor.id)
+        s.add(tc)
+        s.flush()
+        audit(s, actor, "register", "table-calibration", tc.id, None,
+              dict(state(tc), table=st.identifier))
+        s.commit()
+        s.refresh(tc)
+        s.expunge(tc)
+    return tc
+
+
+def register_table_calibration_file(store, actor: User, path, *, table: str, valid_from=None,
+                                    due_on=None, certificate: str = "") -> TableCalibration:
+    """:func:`register_table_calibration` of the file at ``path`` (stored in the records under
+    its SHA-256, its own name kept) for the table registered as the standard whose
+    identifier is ``table`` (``gonio db register-table-calibration``)."""
+    require(actor, "technician")
+    path = Path(path)
+    with store.session() as s:
+        sid = s.scalar(select(Standard.id).where(Standard.identifier == text(table, "table")))
+    if sid is None:
+        raise GonioError(f"{table!r} is not a registered standard (register the rotary table "
+                         "as a standard first)", key="--table")
+    try:
+        with path.open("rb") as f:
+            sha, _ = store_file(store, f, limit_bytes=2**20)
+    except OSError as exc:
+        raise GonioError(f"cannot read the table calibration: {exc.strerror}",
+                         file=path) from None
+    return register_table_calibration(store, actor, standard_id=sid, sha256=sha,
+                                      name=path.name, valid_from=valid_from, due_on=due_on,
+                                      certificate=certificate)
+
+
+def table_calibration_state(tc: TableCalibration, others: Iterable[TableCalibration],
+                            day: _dt.date) -> str:
+    """Whether the register's table calibration ``tc`` may be used by a calibration dated
+    ``day`` (``others``: the register's calibrations of the same table): ``""`` in force —
+    valid from on or before ``day``, due on or after it, and no later calibration of that
+    table valid from on or before ``day`` —, else why not, in words: ``"not yet valid …"``,
+    ``"expired …"``, ``"superseded …"``. The newest valid is the one in force: a
+    table calibration is replaced, not merely added to (ISO/IEC 17025 6.4.11, correction
+    factors updated).
+
+    >>> import datetime as dt
+    >>> a = TableCalibration(id=1, certificate="TC-1", valid_from=dt.date(2026, 1, 1),
+    ...                      due_on=dt.date(2027, 1, 1))
+    >>> b = TableCalibration(id=2, certificate="TC-2", valid_from=dt.date(2026, 6, 1),
+    ...                      due_on=dt.date(2027, 6, 1))
+    >>> table_calibration_state(a, [a, b], dt.date(2026, 5, 31))
+    ''
+    >>> table_calibration_state(a, [a, b], dt.date(2026, 6, 1))
+    'superseded by table calibration 2 (TC-2) valid from 2026-06-01'
+    >>> table_calibration_state(b, [a, b], dt.date(2027, 6, 2))
+    'expired: it was due on 2027-06-01'
+    """
+    if day < tc.valid_from:
+        return f"not yet valid: valid from {tc.valid_from}"
+    if day > tc.due_on:
+        return f"expired: it was due on {tc.due_on}"
+    newer = [o for o in others if o.id != tc.id and tc.valid_from < o.valid_from <= day]
+    if newer:
+        o = max(newer, key=lambda x: x.valid_from)
+        return (f"superseded by table calibration {o.id}"
+                + (f" ({o.certificate})" if o.certificate else "") + f" valid from {o.valid_from}")
+    return ""
+
+
+def _table_label(tc: TableCalibration, st: Standard | None) -> str:
+    return (f"table calibration {tc.id}" + (f" ({tc.certificate})" if tc.certificate else "")
+            + (f" of {st.identifier}" if st is not None else ""))
+
+
+def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _dt.date,
+                          upload_sha256: str | None = None,
+                          register_id=None) -> tuple[str | None, TableCalibration | None]:
+    """Which table calibration a calibration per ``spec`` dated ``day`` with the standards
+    ``standard_ids`` uses: ``(sha256, register entry)``.
+
+    * ``register_id`` (the user's pick): that entry of the register, which must be in force
+      on ``day`` (:func:`table_calibration_state`: an expired, superseded or not yet valid one
+      is refused with one line) and of a table among the calibration's standards; an upload
+      beside it must be its file.
+    * an upload only: the register's entry of a ticked table with that file where there is
+      one (the same checks), else, where the register holds no calibration of a ticked table,
+      the upload kept with this calibration only (``(sha256, None)``); an upload of another
+      file while the register holds one of a ticked table is refused (pick it, or register
+      the new file).
+    * neither: the register's entry in force on ``day`` of the ticked table; several ticked
+      tables each with one are refused (pick one); a ticked table whose register holds
+      calibrations none of which is in force on ``day`` is refused (register its current
+      calibration); no calibration of a ticked table registered: ``(None, None)``.
+
+    A specification that takes no table calibration (``"table_calibration"`` not in its
+    ``calibrate_options``) uses none: ``(None, None)``, unless one was given (refused
+    by :func:`table_calibration_of`)."""
+    ids = sorted({int(i) for i in standard_ids})
+    takes = "table_calibration" in spec.calibrate_options
+    if register_id in (None, ""):
+        register_id = None
+    if register_id is None and (not takes or not ids):
+        return upload_sha256, None
+    if register_id is not None and not takes:
+        raise GonioError(f"{spec.key} takes no table calibration", key="table_calibration")
+    entries = s.scalars(select(TableCalibration).where(
+        TableCalibration.standard_id.in_(ids)).order_by(TableCalibration.valid_from)).all() \
+        if ids else []
+    by_table: dict[int, list] = {}
+    for e in entries:
+        by_table.setdefault(e.standard_id, []).append(e)
+
+    def checked(tc: TableCalibration) -> TableCalibration:
+        st = s.get(Standard, tc.standard_id)
+        if tc.standard_id not in ids:
+            raise GonioError(f"{_table_label(tc, st)} is of a table the calibration does not "
+                             "name among its standards: tick the table", key="table_calibration")
+        why = table_calibration_state(tc, by_table.get(tc.standard_id, []), day)
+        if why:
+            raise GonioError(f"{_table_label(tc, st)} cannot be used on {day}: {why}",
+                             key="table_calibration")
+        if upload_sha256 is not None and upload_sha256 != tc.sha256:
+            raise GonioError(f"the table calibration uploaded (SHA-256 {upload_sha256[:16]}…) "
+                             f"is not {_table_label(tc, st)} (SHA-256 {tc.sha256[:16]}…): "
+                             "give one of them", key="table_calibration")
+        return tc
+
+    if register_id is not None:
+        try:
+            tc = s.get(TableCalibration, int(register_id))
+        except (TypeError, ValueError):
+            tc = None
+        if tc is None:
+            raise GonioError("no such table calibration in the register",
+                             key="table_calibration")
+        return tc.sha256, checked(tc)
+    if upload_sha256 is not None:
+        same = [e for e in entries if e.sha256 == upload_sha256]
+        if same:
+            return upload_sha256, checked(same[0])
+        if entries:
+            st = s.get(Standard, entries[0].standard_id)
+            raise GonioError(f"the register holds the calibrations of the table "
+                             f"{st.identifier}, and the file uploaded (SHA-256 "
+                             f"{upload_sha256[:16]}…) is none of them: choose the register's "
+                             "or register the new file first", key="table_calibration")
+        return upload_sha256, None
+    in_force = []
+    for sid, group in by_table.items():
+        now = [e for e in group if not table_calibration_state(e, group, day)]
+        if not now:
+            st = s.get(Standard, sid)
+            newest = group[-1]
+            raise GonioError(f"no calibration of the table {st.identifier} in the register is "
+                             f"in force on {day} (the newest, {_table_label(newest, None)}: "
+                             f"{table_calibration_state(newest, group, day)}): register its "
+                             "current calibration", key="table_calibration")
+        in_force.extend(now)
+    if len(in_force) > 1:
+        raise GonioError("the register holds a calibration in force of each of the tables "
+                         + ", ".join(s.get(Standard, e.standard_id).identifier for e in in_force)
+                         + ": choose the one used", key="table_calibration")
+    if in_force:
+        return in_force[0].sha256, in_force[0]
+    return None, None
+
+
+def table_calibrations(store, day: _dt.date | None = None) -> list[dict]:
+    """The laboratory's register of table calibrations, newest first per table: each
+    ``{"entry": TableCalibration (with its standard and who registered it), "state": ""
+    in force on ``day`` (today) or why not (:func:`table_calibration_state`), "used": how
+    many calibrations used it}``."""
+    from sqlalchemy.orm import selectinload
+
+    day = day or _dt.date.today()
+    with store.session() as s:
+        rows = s.scalars(select(TableCalibration).options(
+            selectinload(TableCalibration.standard), selectinload(TableCalibration.registered_by))
+            .order_by(TableCalibration.standard_id, TableCalibration.valid_from.desc())).all()
+        used = dict(s.execute(select(Calibration.table_calibration_id, func.count())
+                              .where(Calibration.table_calibration_id.is_not(None))
+                              .group_by(Calibration.table_calibration_id)).all())
+    groups: dict[int, list] = {}
+    for r in rows:
+        groups.setdefault(r.standard_id, []).append(r)
+    return [{"entry": r, "state": table_calibration_state(r, groups[r.standard_id], day),
+             "used": used.get(r.id, 0)} for r in rows]
+
+
 def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,
                        readings_name: str = "", spec_key: str | None = None,
                        protocol: str | None = None, protocol_sha256: str | None = None,
@@ -718,7 +951,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                        reuse_note: dict | None = None,
                        check_reuse: bool = True,
                        table_calibration_sha256: str | None = None,
-                       table_calibration_name: str = "") -> Calibration:
+                       table_calibration_name: str = "",
+                       table_calibration_id=None) -> Calibration:
     """A new calibration, queued for the worker (technician), after the submission checks
     of its fields (:func:`submission_fields`: plausible dates, at least one standard, the
     environment); standards past their due date on the day of the calibration are refused
@@ -734,7 +968,10 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     ``table_calibration_sha256``: a stored table calibration file (the rotary table's own
     calibration, for a specification that takes one), kept as the calibration's file
     :data:`TABLE_CALIBRATION` and used by its run (:func:`table_calibration_of` checks it
-    against the laboratory file's ``[table_calibration]``)."""
+    against the laboratory file's ``[table_calibration]``). ``table_calibration_id``: the
+    register's table calibration to use; without it the one in force on the calibration's
+    date of a table among its standards is used (:func:`table_calibration_for`), and the
+    calibration records which (``table_calibration_id``)."""
     from gonio.specs import get
 
     require(actor, "technician")
@@ -754,6 +991,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             if sha is not None and s.get(Blob, sha) is None:
                 raise GonioError("no such stored file", key="sha256")
         lab_d = lab_file(store, lab_sha256, lab_name, key) if lab_sha256 is not None else {}
+        table_calibration_sha256, entry = table_calibration_for(
+            s, get(key), ids, day, table_calibration_sha256, table_calibration_id)
         table_calibration_of(get(key), lab_d, lab_name, table_calibration_sha256, day)
         if check_reuse:
             check_readings_unused(s, readings_sha256,
@@ -769,7 +1008,8 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                           place=text(place, "place"), location=location_value(location),
                           performed_on=day,
                           received_on=received, status="queued", progress="waiting for a worker",
-                          created_by_id=actor.id)
+                          created_by_id=actor.id,
+                          table_calibration_id=entry.id if entry is not None else None)
         s.add(cal)
         s.flush()
         use_standards(s, cal, ids)
@@ -779,8 +1019,12 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
                                   sha256=table_calibration_sha256))
             audit(s, actor, "table-calibration", "calibration", cal.id, None,
                   {"sha256": table_calibration_sha256,
-                   "name": text(table_calibration_name, "table calibration file name",
-                                max_len=255)})
+                   "name": entry.name if entry is not None else
+                   text(table_calibration_name, "table calibration file name", max_len=255)}
+                  | ({"register_id": entry.id, "valid_from": str(entry.valid_from),
+                      "due_on": str(entry.due_on),
+                      "picked": "chosen" if table_calibration_id not in (None, "")
+                      else f"in force on {day}"} if entry is not None else {}))
         if reuse_note:
             audit(s, actor, "reuse-readings", "calibration", cal.id, None, reuse_note)
         s.commit()
@@ -1158,6 +1402,8 @@ def seal(store, cal_id: int) -> str:
         files = dict(s.execute(select(CalibrationFile.name, CalibrationFile.sha256).where(
             CalibrationFile.calibration_id == cal.id)).all())
         files["results.json"] = cal.results_sha256
+        entry = s.get(TableCalibration, cal.table_calibration_id) \
+            if cal.table_calibration_id is not None else None
         kept = s.scalars(select(ResultItem).where(
             ResultItem.calibration_id == cal.id).order_by(ResultItem.id)).all()
     for name, sha in sorted(files.items()):
@@ -1166,6 +1412,10 @@ def seal(store, cal_id: int) -> str:
                              key=f"calibration {cal_id}")
     doc = json.loads(file_bytes(store, cal.results_sha256))
     _same_table_calibration(doc, files.get(TABLE_CALIBRATION), cal_id)
+    if entry is not None and files.get(TABLE_CALIBRATION) != entry.sha256:
+        raise GonioError(f"the stored {TABLE_CALIBRATION} is not the file of the register's "
+                         f"table calibration {entry.id} the calibration used (SHA-256 "
+                         f"{entry.sha256[:16]}…)", key=f"calibration {cal_id}")
     expect = result_rows(cal.id, doc)
     if len(expect) != len(kept):
         raise GonioError(f"{len(kept)} stored result rows, results.json has {len(expect)}",

@@ -10,9 +10,12 @@ every path: the web form, a bench, the Python API):
 * at least one registered reference standard is named (ISO/IEC 17025 6.5: the result's
   traceability; a certificate naming none states nothing it is traceable to);
 * the environment is entered: room temperature and relative humidity (17025 7.8.4.1 a);
-* a table calibration only for a specification that takes one, and where the laboratory
-  file names one (``[table_calibration]``) the upload of that file (its SHA-256), valid on the
-  date of calibration (:func:`gonio.records.services.table_calibration_of`);
+* the table calibration: the laboratory register's entry chosen, or the one in force on the
+  date of calibration of the table among the standards, or an upload — an expired, superseded
+  or unregistered one refused (:func:`gonio.records.services.table_calibration_for`); only for
+  a specification that takes one, and where the laboratory file names one
+  (``[table_calibration]``) that file (its SHA-256), valid on the date of calibration
+  (:func:`gonio.records.services.table_calibration_of`);
 * the readings file is readings: a Parquet stream, or UTF-8 text whose first line after
   the ``# key: value`` metadata is a CSV header (a JSON file, a spreadsheet or an image is
   refused naming what it looks like) — :func:`readings_facts`;
@@ -176,8 +179,11 @@ def submit_calibration(store, actor: User, *, instrument_id: int, readings_sha25
     key = services.text(spec_key, "spec", max_len=64) or inst.spec_key
     lab_d = services.lab_file(store, lab_sha256, lab_name, key) if lab_sha256 is not None else {}
     from gonio.specs import get
-    services.table_calibration_of(get(key), lab_d, lab_name,   # before the readings' checks
-                                  details.get("table_calibration_sha256"), day)
+    with store.session() as s:   # before the readings' checks: the register's, or the upload
+        table_sha, _ = services.table_calibration_for(
+            s, get(key), ids, day, details.get("table_calibration_sha256"),
+            details.get("table_calibration_id"))
+    services.table_calibration_of(get(key), lab_d, lab_name, table_sha, day)
     check_readings(readings_facts(store, readings_sha256), inst, key, temp, hum)
     reason = services.text(reuse_reason, "reuse_reason", max_len=services.MAX_TEXT,
                            multiline=True)

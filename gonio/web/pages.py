@@ -342,6 +342,60 @@ async def standards_add(request: Request, session: Session):
     return _back("/standards")
 
 
+# --------------------------------------------------------------------------- table calibrations
+
+
+def _register_page(request, user, csrf, status_code=200, error=""):
+    """The register with each entry's state on ``?date=`` (default today)."""
+    store = _store(request)
+    try:
+        day = services.date_value(request.query_params.get("date", "")[:20], "date")
+    except GonioError as exc:
+        day, error = None, error or str(exc)
+    day = day or _dt.date.today()
+    return render(request, "table_calibrations.html", user, csrf, status_code=status_code,
+                  error=error, rows=services.table_calibrations(store, day),
+                  standards=[s for s in queries.standards(store) if not s.retired_on],
+                  today=_dt.date.today(), day=day)
+
+
+@router.get("/table-calibrations")
+def table_calibrations_page(request: Request, session: Session):
+    """The laboratory's register of its rotary tables' calibrations, and its form."""
+    user, csrf = session
+    return _register_page(request, user, csrf)
+
+
+@router.post("/table-calibrations")
+async def table_calibrations_add(request: Request, session: Session):
+    user, csrf = session
+    data = await form(request, csrf)
+    store = _store(request)
+    try:
+        services.require(user, "technician")
+        sha, name = _upload(store, data, "file", 2**20)
+        if sha is None:
+            raise GonioError("choose the table calibration file", key="file")
+        services.register_table_calibration(
+            store, user, standard_id=_int(data.get("standard_id"), "standard"), sha256=sha,
+            name=name, valid_from=data.get("valid_from"), due_on=data.get("due_on"),
+            certificate=data.get("certificate"))
+    except GonioError as exc:
+        return _register_page(request, user, csrf, 400, str(exc))
+    return _back("/table-calibrations")
+
+
+@router.get("/table-calibrations/{tc_id}/file")
+def table_calibration_download(request: Request, session: Session, tc_id: int):
+    from gonio.records.models import TableCalibration
+    with _store(request).session() as s:
+        tc = s.get(TableCalibration, tc_id)
+    if tc is None:
+        return Response("no such table calibration", status_code=404)
+    return file_response(_store(request), tc.sha256, services.TABLE_CALIBRATION,
+                         own_name=tc.name)
+
+
 # --------------------------------------------------------------------------- calibrations
 
 
@@ -359,7 +413,7 @@ def calibrations_page(request: Request, session: Session):
 #: the calibration form's text fields, kept when the form comes back with an error
 NEW_FIELDS = ("spec_key", "protocol", "performed_on", "received_on", "temperature_c",
               "humidity_pct", "place", "location", "reuse_reason", "table", "gyro", "chamber",
-              "supply", "metadata")
+              "supply", "metadata", "table_calibration_id")
 #: the calibration form's files: field, largest size (bytes)
 NEW_FILES = (("readings", services.MAX_UPLOAD), ("protocol_file", 2**20),
              ("lab_file", services.MAX_LAB_BYTES), ("table_calibration_file", 2**20))
@@ -380,6 +434,7 @@ def _new_form(request, user, csrf, inst_id, status_code=200, error="", data=None
     ticked = {str(v) for v in data.getlist("standards")} if data else set()
     return render(request, "calibration_new.html", user, csrf, status_code=status_code,
                   error=error, inst=inst, standards=[s for s in queries.standards(store)],
+                  register=services.table_calibrations(store),
                   specs=list(available()), today=_dt.date.today(), v=entered, ticked=ticked,
                   kept=kept or {}, reuse=reuse or bool(entered.get("reuse_reason")),
                   limit=blobs.size_text(services.MAX_UPLOAD))
@@ -458,6 +513,7 @@ async def calibration_create(request: Request, session: Session, inst_id: int):
             lab_name=files["lab_file"][1],
             table_calibration_sha256=files["table_calibration_file"][0],
             table_calibration_name=files["table_calibration_file"][1],
+            table_calibration_id=data.get("table_calibration_id") or None,
             standard_ids=[_int(v, "standards") for v in data.getlist("standards")],
             temperature_c=data.get("temperature_c"), humidity_pct=data.get("humidity_pct"),
             performed_on=data.get("performed_on"), received_on=data.get("received_on"),
