@@ -1,5 +1,6 @@
-"""The laboratory's register of its rotary tables' calibrations (docs/records.md#the-register-of-
-table-calibrations), on SQLite and on the throwaway PostgreSQL: registered once by a
+"""The laboratory's register of its rotary tables' calibrations
+(docs/records.md#the-register-of-table-calibrations), on SQLite and on the throwaway
+PostgreSQL: registered once by a
 technician (file by SHA-256, table, valid from / due on, who, audit event), frozen by the
 database; a calibration picks the one in force on its date of the table among its standards, or
 the one chosen; an expired, superseded or not yet valid one is refused in one line; the
