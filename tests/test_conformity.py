@@ -178,13 +178,14 @@ def test_an_item_stated_by_an_asymmetric_interval_is_guarded_by_its_own_reach():
     rule = {"rule": "guarded", "guard_band_factor": 1.0}
     # interval [2.9, 6.0] about 3.0: lower limit 2.5 → lies inside, pass (w_L = 0.1);
     # with the upper reach 3.0 as the band the acceptance limit would be 5.5: fail
+    # (the acceptance interval bounds the stated interval's ends: at r = 1 the tolerance)
     (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "lower": 2.5}], rule)
-    assert c.outcome == "pass" and c.acceptance_lower == pytest.approx(2.6)
+    assert c.outcome == "pass" and c.acceptance_lower == 2.5 and c.acceptance_of == "interval"
     (c,) = decide_items(res(3.0, 2.4, 6.0), [{"item": "C", "lower": 2.5}], rule)
     assert c.outcome == "fail"
     # the upper side keeps U: [2.9, 6.0] against ≤ 6.5 passes, against ≤ 5.9 does not
     (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "upper": 6.5}], rule)
-    assert c.outcome == "pass" and c.acceptance_upper == pytest.approx(3.5)
+    assert c.outcome == "pass" and c.acceptance_upper == 6.5
     (c,) = decide_items(res(3.0, 2.9, 6.0), [{"item": "C", "upper": 5.9}], rule)
     assert c.outcome == "fail"
     # non-binary: below the lower limit, "conditional fail" where the interval reaches back

@@ -197,7 +197,8 @@ MAX_ABS_PROBABILITY_MODEL = ("not given: the extreme of several points; the outc
 
 def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
            rule: DecisionRule, *, chi2_nu: float | None = None,
-           u: float | None = None, U_lower: float | None = None) -> Conformity:
+           u: float | None = None, U_lower: float | None = None,
+           no_probability: str | None = None) -> Conformity:
     """The statement of conformity for one item (ILAC-G8:09/2019 4.2; JCGM 106 8–9).
 
     Parameters
@@ -222,6 +223,10 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
         interval's lower end (default ``U``): the guard band at a lower limit is
         r·U_lower, so that with r = 1 "pass" is "the stated interval lies inside the
         tolerance" on either side, as at the upper limit.
+    no_probability : where the item's distribution is not one whose probabilities gonio
+        can give (neither N(y, u²) nor the χ² model), the reason: no probability of
+        conformance, false accept or false reject is stated (None), ``probability_model``
+        says why; the outcome is decided on the acceptance interval alone.
 
     A value exactly on a limit of the acceptance interval is accepted (the limits
     are part of the interval, JCGM 106 3.3.9).
@@ -230,11 +235,14 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
     >>> d.outcome, round(d.false_accept_probability, 4)
     ('conditional pass', 0.1587)
     """
-    if not (U > 0 and math.isfinite(U)) or (chi2_nu is None and u is None and not (
+    if not (U > 0 and math.isfinite(U)) or (chi2_nu is None and u is None
+                                             and no_probability is None and not (
             k is not None and k > 0 and math.isfinite(k))):
         raise ValueError(f"{item}: U and k must be finite and > 0 (U={U!r}, k={k!r})")
     u = U / k if k else u
-    if chi2_nu is not None and y > 0:
+    if no_probability is not None:
+        p_c, model = None, no_probability
+    elif chi2_nu is not None and y > 0:
         p_c = conformance_probability_chi2(y, chi2_nu, limits.lower, limits.upper)
         model = f"chi-square, nu = {chi2_nu:g}"
     else:
@@ -266,7 +274,8 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
                       upper=limits.upper, rule=rule.kind, guard_band=float(w),
                       acceptance_lower=a_lo, acceptance_upper=a_hi, outcome=outcome,
                       accepted=accepted, conformance_probability=p_c,
-                      false_accept_probability=(1.0 - p_c) if accepted else None,
+                      false_accept_probability=(1.0 - p_c) if accepted and p_c is not None
+                      else None,
                       false_reject_probability=p_c if not accepted else None,
                       source=limits.source, guard_factor=float(rule.guard_factor),
                       probability_model=model)
@@ -300,6 +309,109 @@ def _undecided(key: str, lim: Limits, rule: DecisionRule, origin: str,
                       guard_factor=float(rule.guard_factor), limits_from=origin, reason=reason)
 
 
+#: ``probability_model`` of an item stated by a 95 % interval that is neither a normal one
+#: (U with its k) nor the χ² interval of a standard deviation (a Neyman belt of a range, a
+#: half range, the maximum of a folded normal, a pivot, an outcome distribution, an extreme of
+#: magnitudes): N(y, u_c²) is not its distribution (the belt's y is bias-corrected and may lie
+#: below zero while its interval starts at 0), so a normal probability would contradict the
+#: interval stated beside it; none is given, the outcome is decided on the interval.
+NOT_NORMAL_PROBABILITY_MODEL = ("not given: its 95 % interval ({source}) is not that of a "
+                                "normal or chi-square distribution; the outcome is decided on "
+                                "its 95 % interval")
+
+
+def extreme_of_magnitudes(it) -> bool:
+    """Whether item ``it`` is an extreme of magnitudes max_i |x_i| (the optical draft's E,
+    7.4: E = ± max|E_i|): stated by the 95 % interval of max|E_i| (``k_source``
+    :data:`~gonio.result.statement.K_SOURCE_MAX_ABS`), or by the draft's max|E_i| ± U (its
+    details give ``max_abs_arcsec``). Such a value is compared with a symmetric limit only:
+    max|E_i| ≤ MPE is |E_i| ≤ MPE at every point, while against [T_L, T_U] with T_L ≠ −T_U
+    neither the magnitude nor the signed extreme tells whether some E_i of the other sign lies
+    below T_L (E_i = −0.45″ beside max|E_i| = 0.45″ "passes" [−0.4, 0.6] on the magnitude).
+
+    >>> from gonio.result.model import Item
+    >>> extreme_of_magnitudes(Item("E", "E", "7.4", "″", 0.4, details={"max_abs_arcsec": 0.4}))
+    True
+    """
+    unc = it.uncertainty
+    return bool((unc is not None and unc.k_source == K_SOURCE_MAX_ABS)
+                or (isinstance(it.details, dict) and it.details.get("max_abs_arcsec") is not None))
+
+
+def check_symmetric_limit(key: str, bounds: Limits, where: str) -> None:
+    """An extreme of magnitudes (:func:`extreme_of_magnitudes`) takes a symmetric limit
+    only (``mpe``, or ``lower`` = −``upper``): any other is a GonioError naming the entry
+    ``where`` (the laboratory file's key), never a decision on one side.
+
+    >>> check_symmetric_limit("E", Limits(-0.4, 0.6), "specification_limits[0]")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[0]: E is an extreme of magnitudes (max |E_i|): its limit must be symmetric (mpe = M, or lower = -M with upper = M); got lower -0.4, upper 0.6
+    """
+    if bounds.lower is None or bounds.upper is None or bounds.lower != -bounds.upper:
+        raise GonioError(
+            f"{key} is an extreme of magnitudes (max |E_i|): its limit must be symmetric "
+            f"(mpe = M, or lower = -M with upper = M); got lower {bounds.lower}, upper "
+            f"{bounds.upper}", key=where)
+
+
+def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str) -> Conformity:
+    """The decision of a measured item with U (:func:`decide_items`)."""
+    unc = it.uncertainty
+    by_interval = unc.k is None and unc.interval is not None
+    # ν as stated (integer part, gonio.result.statement.stated_nu): the ν the χ² interval of
+    # the statement was computed from, so interval and decision agree
+    chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None
+               and unc.nu_eff is not None and math.isfinite(unc.nu_eff) and unc.nu_eff > 0
+               and (unc.k is not None or unc.k_source == "chi-square") else None)
+    chi2_nu = chi2_nu if chi2_nu is not None and it.value > 0 else None
+    u_normal = float(unc.u_c) if unc.k is None and unc.u_c is not None and unc.u_c > 0 \
+        else None
+    no_p = None
+    if by_interval and chi2_nu is None:
+        no_p = (MAX_ABS_PROBABILITY_MODEL if unc.k_source == K_SOURCE_MAX_ABS
+                else NOT_NORMAL_PROBABILITY_MODEL.format(source=unc.k_source or "its own"))
+    # an item stated by its interval alone: the band at a lower limit is the interval's reach
+    # below the value (its upper reach is U). An interval of the extreme of magnitudes
+    # max_i |x_i| (E, 7.4) is decided at that extreme (interval[1] - U): "pass" only where
+    # the whole interval lies inside the limits
+    y = (float(unc.interval[1]) - float(unc.U)
+         if by_interval and unc.k_source == K_SOURCE_MAX_ABS else float(it.value))
+    U_lower = (y - float(unc.interval[0])
+               if by_interval and math.isfinite(float(unc.interval[0])) else None)
+    c = replace(decide(key, y, float(unc.U), None if unc.k is None else float(unc.k), bounds,
+                       rule, chi2_nu=chi2_nu, u=u_normal, U_lower=U_lower,
+                       no_probability=no_p), limits_from=origin)
+    if by_interval and rule.kind != "simple":
+        c = _on_interval(c, bounds, rule, float(unc.U),
+                         float(unc.U) if U_lower is None else max(U_lower, 0.0))
+    lo, hi = c.acceptance_lower, c.acceptance_upper
+    return replace(c, acceptance_empty=bool(
+        (lo is not None and hi is not None and lo > hi)
+        or (it.nonnegative and hi is not None and hi < 0)))
+
+
+def _on_interval(c: Conformity, bounds: Limits, rule: DecisionRule, U: float,
+                 U_lower: float) -> Conformity:
+    """The acceptance interval of an item stated by its 95 % interval [y − U_L, y + U] and
+    decided under a guard band (w = r·U above, r·U_L below), restated on the interval's ends:
+    y ≤ T_U − r·U is "the interval's upper end ≤ T_U − (r − 1)·U" (T_U itself at r = 1,
+    ILAC-G8 4.2.2: the interval lies inside the tolerance), y ≥ T_L + r·U_L is "its lower end
+    ≥ T_L + (r − 1)·U_L". The same decision, stated on the quantity the certificate prints:
+    never "value ≤ T_U − U", a negative limit where U exceeds T_U for a non-negative item.
+
+    >>> c = decide("K_l", 5.0e-5, 1.2e-4, None, Limits(None, 1e-4), DecisionRule("guarded"),
+    ...            u=8e-5, U_lower=5e-5)
+    >>> c.acceptance_upper < 0, _on_interval(c, Limits(None, 1e-4), DecisionRule("guarded"),
+    ...                                      1.2e-4, 5e-5).acceptance_upper
+    (True, 0.0001)
+    """
+    r = rule.guard_factor
+    lo = None if bounds.lower is None else bounds.lower + (r - 1.0) * U_lower
+    hi = None if bounds.upper is None else bounds.upper - (r - 1.0) * U
+    return replace(c, acceptance_lower=lo, acceptance_upper=hi, acceptance_of="interval")
+
+
 def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,
                  origin: str = "lab file", where: str = "specification_limits") -> list:
     """Decide every item of ``result`` (a :class:`gonio.result.model.Result`) that a limit
@@ -310,7 +422,12 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
     (``origin`` says which; a lab file's limit replaces a default for the same item). A
     limit naming an item the specification does not have is a GonioError naming that
     specification's items; an item not measured, or without U, gets a Conformity with no
-    outcome and the ``reason``. Returns the decisions in the order of ``limits``.
+    outcome and the ``reason``. An extreme of magnitudes (:func:`extreme_of_magnitudes`)
+    takes a symmetric limit only (:func:`check_symmetric_limit`). An item stated by its
+    95 % interval alone is decided on that interval; its acceptance interval bounds the
+    interval's ends under a guard band (:func:`_on_interval`), and a probability is given only
+    where the interval is the χ² one of a standard deviation
+    (:data:`NOT_NORMAL_PROBABILITY_MODEL`). Returns the decisions in the order of ``limits``.
 
     >>> from gonio.result.model import Item, Result, Uncertainty
     >>> r = Result("s", "S", {"bias": Item("bias", "bias", "7.2.8", "°/h", 0.4,
@@ -332,48 +449,19 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
                              f"{', '.join(result.items)})", key=f"{where}[{i}].item")
         it = result.items[key]
         bounds = limits_of(lim)
+        if extreme_of_magnitudes(it):
+            check_symmetric_limit(key, bounds, f"{where}[{i}]")
         unc = it.uncertainty
-        c = chi2_nu = None
         if not it.measured or it.value is None:
             c = _undecided(key, bounds, rule, origin, "not measured: " + (it.reason or ""))
         elif (unc is None or unc.U is None or not unc.U > 0 or not math.isfinite(unc.U)
               or (unc.k is None and unc.interval is None)):
             c = _undecided(key, bounds, rule, origin, "no expanded uncertainty to decide with")
         else:
-            # ν as stated (integer part, gonio.result.statement.stated_nu): the ν the χ²
-            # interval of the statement was computed from, so interval and decision agree
-            chi2_nu = (stated_nu(unc.nu_eff) if unc.interval is not None
-                       and unc.nu_eff is not None and math.isfinite(unc.nu_eff)
-                       and unc.nu_eff > 0
-                       and (unc.k is not None or unc.k_source == "chi-square") else None)
-        u_normal = (float(unc.u_c) if c is None and unc.k is None and unc.u_c is not None
-                    and unc.u_c > 0 else None)
-        if c is None and unc.k is None and not ((chi2_nu is not None and it.value > 0)
-                                                or u_normal is not None):
-            c = _undecided(key, bounds, rule, origin, "no interval model to decide with")
-        elif c is None:
-            # an item stated by its interval alone: the band at a lower limit is the
-            # interval's reach below the value (its upper reach is U). An interval of the
-            # extreme of magnitudes max_i |x_i| (E, 7.4) is decided at that extreme
-            # (interval[1] - U): "pass" only where the whole interval lies inside the limits
-            y = (float(unc.interval[1]) - float(unc.U)
-                 if unc.k is None and unc.interval is not None
-                 and unc.k_source == K_SOURCE_MAX_ABS else float(it.value))
-            U_lower = (y - float(unc.interval[0])
-                       if unc.k is None and unc.interval is not None
-                       and math.isfinite(float(unc.interval[0])) else None)
-            c = replace(decide(key, y, float(unc.U),
-                               None if unc.k is None else float(unc.k), bounds, rule,
-                               chi2_nu=chi2_nu if chi2_nu is not None and it.value > 0
-                               else None, u=u_normal, U_lower=U_lower), limits_from=origin)
-            if unc.k is None and unc.k_source == K_SOURCE_MAX_ABS:
-                c = replace(c, conformance_probability=None, false_accept_probability=None,
-                            false_reject_probability=None,
-                            probability_model=MAX_ABS_PROBABILITY_MODEL)
+            c = _decided(key, it, bounds, rule, origin)
         it.conformity = c
         out.append(c)
     return out
-
 
 
 def decide_result(result, lab: dict | None, defaults: list[dict] | None = None,

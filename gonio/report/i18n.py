@@ -244,6 +244,17 @@ LABELS: dict[str, dict[str, str]] = {
     "c_pc": {"en": "Probability of conformance", "zh": "符合概率"},
     "c_acc_empty": {"en": "none (guard bands wider than the tolerance)",
                     "zh": "无（保护带宽于允差区间）"},
+    "c_acc_iv_upper": {"en": "interval's upper end ≤ {hi}", "zh": "区间上端 ≤ {hi}"},
+    "c_acc_iv_lower": {"en": "interval's lower end ≥ {lo}", "zh": "区间下端 ≥ {lo}"},
+    "c_acc_iv_both": {"en": "interval within [{lo}, {hi}]", "zh": "区间 ⊆ [{lo}, {hi}]"},
+    "c_no_p_note": {"en": "“—”: no probability is stated for {items}: the 95 % interval each "
+                          "is stated by is not that of a normal or chi-square distribution, "
+                          "and a normal N(y, u) would contradict it (JCGM 106:2012 7.3 takes "
+                          "the measurand's own distribution); the outcome is decided on that "
+                          "interval.",
+                    "zh": "“—”：{items} 不给出概率：其 95 % 区间不是正态分布或 χ² 分布的区间，"
+                          "正态模型 N(y, u) 与之矛盾（JCGM 106:2012 7.3 取被测量自身的分布）；"
+                          "判定依据该区间作出。"},
     "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
     "pass": {"en": "pass", "zh": "合格"},
     "fail": {"en": "fail", "zh": "不合格"},

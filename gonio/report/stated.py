@@ -96,36 +96,68 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
     """Limits (as given), acceptance interval (at U's decimal place), outcome and
     probabilities of one statement as text. ``c`` is a
     :class:`~gonio.analysis.conformity.Conformity` or its results.json dict. An empty
-    acceptance interval (guard bands wider than the tolerance) is said in words; so is the
-    acceptance interval of a non-negative quantity (``nonnegative``, else the item's own flag
-    in ``res``) whose upper end lies below zero: [0, -40] is empty, never "≤ -40 s".
+    acceptance interval (guard bands wider than the tolerance, the decision's
+    ``acceptance_empty``) is said in words; so is the acceptance interval of a non-negative
+    quantity (``nonnegative``, else the item's own flag in ``res``) whose upper end lies below
+    zero: [0, -40] is empty, never "≤ -40 s". An acceptance interval that bounds the ends of
+    the item's stated interval (``acceptance_of`` "interval") says so ("interval's upper end
+    ≤ 0.5"); an end equal to the limit is the limit as given. ``no_p``: the reason no
+    probability is given (the decision's ``probability_model`` where it gives none), or "".
 
     >>> L = {"c_acc_empty": "none", "accept": "conforms"}
     >>> c = {"U": 100.0, "upper": 60.0, "acceptance_upper": -40.0, "outcome": "accept"}
     >>> conformity_texts(c, None, L)["acceptance"], conformity_texts(c, None, L, True)["acceptance"]
     ('≤ -40', 'none')
+    >>> c = {"U": 1.2e-4, "upper": 3.95e-5, "acceptance_upper": 3.95e-5, "outcome": "accept",
+    ...      "acceptance_of": "interval"}
+    >>> conformity_texts(c, None, L)["acceptance"]
+    "interval's upper end ≤ 3.95×10⁻⁵"
     """
     g = (lambda k: c.get(k)) if isinstance(c, dict) else (lambda k: getattr(c, k, None))  # noqa: E731
     if nonnegative is None and res is not None:
-        it = res.get(g("item")) if g("item") else None
+        items = res.get("items") if isinstance(res.get("items"), dict) else res
+        it = items.get(g("item")) if g("item") else None
         it = it if isinstance(it, dict) else {}
         nonnegative = bool(it.get("nonnegative") or (it.get("uncertainty") or {}).get(
             "nonnegative"))
     U = g("U")
     dec = decimals_for_sig(float(U), 2) if U else None
-    f = (lambda v: round_half_up(v, dec)) if dec is not None \
-        else given_text  # noqa: E731
+    lims = {x for x in (g("lower"), g("upper")) if x is not None}
+    f = (lambda v: given_text(v) if v in lims else round_half_up(v, dec)) \
+        if dec is not None else given_text  # noqa: E731
     al, au = g("acceptance_lower"), g("acceptance_upper")
-    if (al is not None and au is not None and al > au) or (nonnegative and au is not None
-                                                           and au < 0):
+    if g("acceptance_empty") or (al is not None and au is not None and al > au) or (
+            nonnegative and au is not None and au < 0):
         acc = L["c_acc_empty"]
+    elif g("acceptance_of") == "interval" and (al is not None or au is not None):
+        en = {"c_acc_iv_upper": "interval's upper end ≤ {hi}",
+              "c_acc_iv_lower": "interval's lower end ≥ {lo}",
+              "c_acc_iv_both": "interval within [{lo}, {hi}]"}
+        which = ("c_acc_iv_both" if al is not None and au is not None
+                 else "c_acc_iv_upper" if au is not None else "c_acc_iv_lower")
+        acc = L.get(which, en[which]).format(lo=None if al is None else f(al),
+                                              hi=None if au is None else f(au))
     else:
         acc = interval_text(al, au, f)
     pfa, pfr = g("false_accept_probability"), g("false_reject_probability")
+    model = g("probability_model") or ""
     return {"limits": interval_text(g("lower"), g("upper"), given_text),
             "acceptance": acc, "outcome": L[g("outcome")] if g("outcome") else "—",
             "pfa": display("sig2", 100.0 * pfa) + " %" if pfa is not None else "—",
-            "pfr": L["c_pfr"].format(v=display("sig2", 100.0 * pfr)) if pfr is not None else ""}
+            "pfr": L["c_pfr"].format(v=display("sig2", 100.0 * pfr)) if pfr is not None else "",
+            "no_p": model if g("outcome") and g("conformance_probability") is None
+            and model.startswith("not given") else ""}
+
+
+def no_probability_note(decided, L: dict, name_of) -> str:
+    """The note under a conformity table naming the items for which no probability is given
+    (:func:`conformity_texts`'s ``no_p``), or "". ``decided``: (key, conformity) pairs."""
+    keys = [k for k, c in decided if c and conformity_texts(c, None, L)["no_p"]]
+    if not keys:
+        return ""
+    sep = "、" if "c_no_p_note" in L and L["c_no_p_note"].startswith("“—”：") else ", "
+    return L.get("c_no_p_note", "“—”: no probability is stated for {items}.").format(
+        items=sep.join(name_of(k) for k in keys))
 
 
 def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
@@ -160,6 +192,9 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
     out.append(block("table", ([L["item"], L["c_limits"], L["c_accept"], L["c_outcome"],
                                 L["c_pc"], L["c_pfa"]], rows),
                      {"widths": (0.22, 0.16, 0.16, 0.16, 0.14, 0.16), "id": "conformity"}))
+    note = no_probability_note(decided, L, name_of)
+    if note:
+        out.append(block("p", [note], None))
     sources = list(dict.fromkeys(c.get("source") or "—" for _, c in decided
                                  if c.get("limits_from") == DEFAULT_LIMITS_ORIGIN))
     if sources:

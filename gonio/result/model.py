@@ -168,6 +168,14 @@ class Conformity:
     limits_from: str = ""
     reason: str = ""
     probability_model: str = "normal"
+    #: what the acceptance interval bounds: "value" (the measured value, JCGM 106 8.3.2) or
+    #: "interval" (the ends of the item's stated 95 % interval: an item stated by its
+    #: interval alone, decided under a guard band; its upper end must not exceed
+    #: ``acceptance_upper``, its lower end not fall below ``acceptance_lower``)
+    acceptance_of: str = "value"
+    #: no value can pass: the guard bands close the tolerance, or leave only values below
+    #: zero for a non-negative quantity (stated "none", never as a negative limit)
+    acceptance_empty: bool = False
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))

@@ -43,6 +43,8 @@ def conformity_text(c) -> str:
         return f"{c.item}: limits [{lo}, {hi}] ({c.rule}): no decision: {c.reason}"
     pc = "" if c.conformance_probability is None else \
         f", probability of conformance {100 * c.conformance_probability:.3g} %"
+    if c.conformance_probability is None and (c.probability_model or "").startswith("not given"):
+        pc = f", probability {c.probability_model}"
     gb = "" if not c.guard_band else f", guard band {c.guard_band:.2g}"
     return f"{c.item}: limits [{lo}, {hi}] ({c.rule}{gb}): {c.outcome}{pc}"
 

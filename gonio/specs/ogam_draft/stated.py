@@ -516,7 +516,7 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
         t = conformity_texts(c, res, L)
         lines.append(f"conformity {e['item']}: {t['outcome']} (limits {t['limits']}, "
                      f"rule {c.rule}, acceptance {t['acceptance']}, specific false-accept "
-                     f"probability {t['pfa']})")
+                     f"probability {t['pfa']}" + (f"; {t['no_p']}" if t["no_p"] else "") + ")")
     return "\n".join(lines) + "\n"
 
 

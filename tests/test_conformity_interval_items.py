@@ -1,0 +1,285 @@
+"""Conformity of the items stated by a 95 % interval alone (k None), checked against hand
+calculations of ILAC-G8:09/2019 4.2 and JCGM 106:2012 7.3 / 8.3:
+
+* an extreme of magnitudes (the optical draft's E = ± max|E_i|, 7.4) takes a symmetric limit
+  only: against [−0.4, 0.6] an E_i = −0.45″ beside max|E_i| = 0.45″ "passed" every rule;
+* the acceptance interval of an item stated by its interval under a guard band bounds the
+  interval's ends (at r = 1 the tolerance itself), never "value ≤ T_U − U", a negative
+  limit of a non-negative quantity;
+* a probability of conformance is given only where the interval's distribution is one gonio
+  has (the χ² model of a standard deviation); a Neyman belt, a half range, a folded-normal
+  maximum, a pivot or an outcome distribution gets none: N(y, u_c) with the belt's
+  bias-corrected y contradicted the stated interval (C_g: 0.26 % false accept at a limit
+  above the interval's upper end, K_l 6.1 %).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from scipy.special import gammaincc
+
+from gonio.analysis.conformity import decide_items
+from gonio.errors import GonioError
+from gonio.formats.lab import naming_lab_file
+from gonio.result.model import Item, Result, Uncertainty
+from gonio.result.statement import K_SOURCE_MAX_ABS
+
+RULES = ("simple", "guarded", "non-binary")
+
+
+def e_result(signed: float, lo: float, hi: float, magnitude: float) -> Result:
+    """E stated by the 95 % interval [lo, hi] of max|E_i| = ``magnitude`` (U = hi − max|E_i|),
+    its value the signed extreme."""
+    unc = Uncertainty([], 0.05, hi - magnitude, None, None, None, 0.95, K_SOURCE_MAX_ABS,
+                      (lo, hi))
+    return Result("ogam-draft", "draft", {"angle_deviation": Item(
+        "angle_deviation", "E", "7.4", "arcsec", signed, uncertainty=unc,
+        details={"max_abs_arcsec": magnitude})}, {}, {})
+
+
+@pytest.mark.parametrize("rule", RULES)
+@pytest.mark.parametrize("limit", [{"lower": -0.4, "upper": 0.6}, {"upper": 0.6},
+                                   {"lower": -0.4}, {"lower": -0.05, "upper": 0.5}])
+def test_an_extreme_of_magnitudes_refuses_an_asymmetric_limit(rule, limit):
+    """E_i = −0.45″ is the extreme; max|E_i| = 0.45, interval [0.30, 0.55]: against
+    [−0.4, 0.6] the instrument violates the lower limit, which neither max|E_i| nor its
+    interval can show. Refused, naming the laboratory file's entry (exit 2 on the CLI)."""
+    res = e_result(-0.45, 0.30, 0.55, 0.45)
+    with pytest.raises(GonioError) as exc, naming_lab_file("lab.toml"):
+        decide_items(res, [{"item": "angle_deviation", **limit}], {"rule": rule})
+    assert str(exc.value).startswith("lab.toml: key specification_limits[0]: ")
+    assert "symmetric" in str(exc.value) and "\n" not in str(exc.value)
+    # the draft's own statement max|E_i| ± U (k given) is an extreme of magnitudes too
+    draft = Result("ogam-draft", "draft", {"angle_deviation": Item(
+        "angle_deviation", "E", "7.4", "arcsec", 0.45,
+        uncertainty=Uncertainty([], 0.05, 0.1, 2.0, None),
+        details={"max_abs_arcsec": 0.45})}, {}, {})
+    with pytest.raises(GonioError, match="symmetric"):
+        decide_items(draft, [{"item": "angle_deviation", **limit}], {"rule": rule})
+
+
+@pytest.mark.parametrize("mpe, expected", [
+    # hand: simple decides max|E_i| = 0.45 against ±MPE (ILAC-G8 4.2.1); guarded (r = 1)
+    # passes where the interval's upper end 0.55 ≤ MPE (4.2.2); non-binary (4.2.3): inside
+    # the tolerance but within w → conditional pass, outside with the interval reaching back
+    # in (lower end 0.30 ≤ MPE) → conditional fail
+    (0.4, {"simple": "fail", "guarded": "fail", "non-binary": "conditional fail"}),
+    (0.5, {"simple": "pass", "guarded": "fail", "non-binary": "conditional pass"}),
+    (0.6, {"simple": "pass", "guarded": "pass", "non-binary": "pass"}),
+    (0.25, {"simple": "fail", "guarded": "fail", "non-binary": "fail"}),
+])
+def test_an_extreme_of_magnitudes_against_a_symmetric_limit(mpe, expected):
+    for rule in RULES:
+        for lim in ({"mpe": mpe}, {"lower": -mpe, "upper": mpe}):
+            res = e_result(-0.45, 0.30, 0.55, 0.45)
+            (c,) = decide_items(res, [{"item": "angle_deviation", **lim}], {"rule": rule})
+            assert c.outcome == expected[rule], (mpe, rule, lim)
+            assert c.value == pytest.approx(0.45)            # max|E_i|, not the signed −0.45
+            assert c.conformance_probability is None and c.false_accept_probability is None
+            if rule != "simple":                            # the interval within ±MPE
+                assert (c.acceptance_of, c.acceptance_lower, c.acceptance_upper) == \
+                    ("interval", -mpe, mpe)
+
+
+def belt_result(value: float, lo: float, hi: float, k_source: str = "neyman-belt",
+                nu: float | None = None, nonnegative: bool = True) -> Result:
+    unc = Uncertainty([], (hi - lo) / 4, hi - value, None, nu, None, 0.95, k_source, (lo, hi))
+    return Result("s", "S", {"C": Item("C", "range", "7.7", "%", value, uncertainty=unc,
+                                       nonnegative=nonnegative)}, {}, {})
+
+
+@pytest.mark.parametrize("value, hi, T_U, r, outcome", [
+    # the review's C_g: y = −1.58e−5 (bias-corrected, below zero), interval [0, 3.90e−5]
+    (-1.5776e-5, 3.9004e-5, 3.95e-5, 1.0, "pass"),
+    # K_l: y = 5.05e−5, interval [0, 1.73e−4]; limit 1e−4 (below the upper end): fail
+    (5.0456e-5, 1.7323e-4, 1.0e-4, 1.0, "fail"),
+    (5.0456e-5, 1.7323e-4, 1.75e-4, 1.0, "pass"),
+    # r = 2: the upper end must lie at T_U − (r − 1)·U = 1.75e−4 − 1.2277e−4 = 5.2e−5: fail
+    (5.0456e-5, 1.7323e-4, 1.75e-4, 2.0, "fail"),
+    (5.0456e-5, 1.7323e-4, 3.0e-4, 2.0, "pass"),
+])
+def test_the_acceptance_of_an_interval_item_bounds_the_interval(value, hi, T_U, r, outcome):
+    """Guarded, w = r·U with U = hi − y: y ≤ T_U − r·U is hi ≤ T_U − (r − 1)·U (JCGM 106
+    8.3.2 rewritten on the interval's upper end): at r = 1 the tolerance limit itself, never
+    the negative T_U − U (−2.3e−5 for K_l, −1.5e−5 for C_g) that the certificate printed."""
+    U = hi - value
+    (c,) = decide_items(belt_result(value, 0.0, hi), [{"item": "C", "upper": T_U}],
+                        {"rule": "guarded", "guard_band_factor": r})
+    assert c.outcome == outcome
+    assert c.acceptance_of == "interval"
+    assert c.acceptance_upper == pytest.approx(T_U - (r - 1.0) * U, rel=1e-12, abs=1e-18)
+    assert (c.outcome == "pass") == (hi <= c.acceptance_upper)
+    if r == 1.0:
+        assert c.acceptance_upper == T_U                   # exactly the limit as given
+    # simple acceptance decides the value itself against the tolerance
+    (s,) = decide_items(belt_result(value, 0.0, hi), [{"item": "C", "upper": T_U}],
+                        {"rule": "simple"})
+    assert s.acceptance_of == "value" and s.acceptance_upper == T_U
+    assert s.outcome == ("pass" if value <= T_U else "fail")
+
+
+def test_a_guard_band_that_empties_the_acceptance_interval_is_said_in_words():
+    """r = 3 with U = 1.2277e−4 > T_U/2: T_U − 2U < 0 ≤ the interval's upper end, nothing can
+    pass: "none", never a negative limit of a non-negative quantity."""
+    from gonio.report.i18n import labels
+    from gonio.report.stated import conformity_texts
+
+    (c,) = decide_items(belt_result(5.0456e-5, 0.0, 1.7323e-4), [{"item": "C",
+                                                                     "upper": 1.75e-4}],
+                        {"rule": "guarded", "guard_band_factor": 3.0})
+    assert c.acceptance_empty and c.outcome == "fail"
+    for lang in ("en", "zh"):
+        L = labels(lang)
+        assert conformity_texts(c, None, L)["acceptance"] == L["c_acc_empty"]
+    (c,) = decide_items(belt_result(5.0456e-5, 0.0, 1.7323e-4), [{"item": "C",
+                                                                     "upper": 1.75e-4}],
+                        {"rule": "guarded"})
+    t = conformity_texts(c, None, labels("en"))
+    assert t["acceptance"] == "interval's upper end ≤ 0.000175" and not c.acceptance_empty
+    assert labels("zh")["c_acc_iv_upper"].format(hi="x") == "区间上端 ≤ x"
+
+
+#: The interval-stated items (k None) of the four specifications' seed-0 demos, each with
+#: its k_source, as results.json holds them: (spec, item, value, interval, k_source, ν). The
+#: triad states none by an interval alone (its bound conditions carry a k).
+INTERVAL_ITEMS = [
+    ("ogam-draft", "scale_factor_nonlinearity", 5.0456e-05, (0.0, 1.7323e-04), "neyman-belt",
+     None),
+    ("ogam-draft", "rate_consistency", 0.36938, (0.0, 4.7471), "neyman-belt", None),
+    ("ogam-draft", "pointing_consistency", -1.5776e-05, (0.0, 3.9004e-05), "neyman-belt",
+     None),
+    ("ogam-draft", "zero_stability", 2.8333e-04, (0.0, 4.5183e-03), "chi-square", 1.02079),
+    ("ogam-draft", "repeatability", 0.11278, (0.0, 0.18554), "chi-square", 9.0),
+    ("jjf1535-2015", "sf_repeatability", 1.5250e-04, (0.0, 6.7333e-04), "chi-square", 2.0),
+    ("jjf1535-2015", "bias_stability", 51.412, (0.0, 58.125), "chi-square", 103.03),
+    ("jjf1535-2015", "threshold", 0.01, (0.01, 0.1), "outcome distribution", None),
+    ("jjf1535-2015", "resolution", 0.05, (0.03, 0.1), "outcome distribution", None),
+    ("iec62047-20", "bias_repeatability", 2.9527e-03, (0.0, 1.1585e-02), "normal range", 2.0),
+    ("iec62047-20", "bias_hysteresis", 0.0, (0.0, 0.12229), "folded-normal maximum", None),
+    ("iec62047-20", "bias_instability", 23.648, (18.264, 31.015),
+     "floor rule's distribution (pivot)", None),
+    ("iec62047-20", "resolution", 0.012234, (0.002, 0.05), "outcome distribution", None),
+]
+
+
+@pytest.mark.parametrize("spec, key, value, interval, source, nu", INTERVAL_ITEMS,
+                         ids=[f"{s}:{k}" for s, k, *_ in INTERVAL_ITEMS])
+def test_a_probability_only_from_the_interval_s_own_distribution(spec, key, value, interval,
+                                                                 source, nu):
+    """χ² items: p_c = P(σ ≤ T_U) with σ = s·√(ν/χ²_ν) (JCGM 106 7.3), by hand through the
+    regularised incomplete gamma function Q(ν/2, ν s²/(2 T²)); at T_U = the interval's upper
+    end it is the interval's own 95 %. Every other interval: no probability, the reason in
+    ``probability_model``, the outcome from the interval alone."""
+    lo, hi = interval
+    unc = Uncertainty([], (hi - lo) / 4, hi - value, None, nu, None, 0.95, source, interval)
+    for T_U in (hi * 1.01, hi * 0.8):
+        for rule in RULES:
+            res = Result(spec, spec, {key: Item(key, key, "-", "u", value, uncertainty=unc,
+                                                nonnegative=True)}, {}, {})
+            (c,) = decide_items(res, [{"item": key, "upper": T_U}], {"rule": rule})
+            if rule == "guarded":
+                assert c.outcome == ("pass" if hi <= T_U else "fail")
+            if source == "chi-square" and value > 0:
+                nu_stated = float(int(nu))                  # ν as stated (integer part)
+                p = gammaincc(nu_stated / 2.0, nu_stated * value ** 2 / (2.0 * T_U ** 2))
+                assert c.conformance_probability == pytest.approx(p, rel=1e-9)
+                assert c.probability_model.startswith("chi-square")
+            else:
+                assert c.conformance_probability is None
+                assert c.false_accept_probability is None
+                assert c.false_reject_probability is None
+                assert c.probability_model.startswith("not given") and source in \
+                    c.probability_model
+
+
+def test_the_chi_square_probability_at_the_interval_s_end_is_its_coverage():
+    """R, s = 0.11278″, ν = 9, χ² interval [0, 0.18554]: P(σ ≤ 0.18554) = 95 % (the interval
+    is the one-sided 95 % bound s·√(ν/χ²_{0.05,ν}))."""
+    res = belt_result(0.11278, 0.0, 0.18554, "chi-square", 9.0)
+    (c,) = decide_items(res, [{"item": "C", "upper": 0.11278 * (9 / 3.3251128)
+                               ** 0.5}], {"rule": "simple"})
+    assert c.conformance_probability == pytest.approx(0.95, abs=1e-5)
+
+
+# ------------------------------------------------------- the optical draft, end to end
+
+SMALL = tomllib.loads((Path(__file__).parent / "data" / "small-protocol.toml")
+                      .read_text(encoding="utf-8"))
+
+
+@pytest.fixture(scope="module")
+def optical(tmp_path_factory):
+    """A short optical-draft session (20 Hz), calibrated: K_l and C_v stated by a Neyman belt
+    with their bias-corrected estimates below zero, B_s and R by χ², E by max|E_i|."""
+    from gonio.specs.ogam_draft.bench import load_bench, run_session, write_session
+    from gonio.specs.ogam_draft.calibration import calibrate
+    from gonio.specs.ogam_draft.protocol import parse_protocol
+
+    d = tmp_path_factory.mktemp("conf_iv")
+    proto = parse_protocol(SMALL)
+    session = run_session(proto, replace(load_bench("rlg"), sample_rate_hz=20.0), seed=7)
+    write_session(session, d)
+    return d, calibrate(d / "readings.csv", proto, static_record=session.static_record)
+
+
+def _lab(limits: list[dict], rule: str = "guarded") -> dict:
+    from gonio.formats.lab import load_lab
+    from gonio.resources import protocols_dir
+
+    lab = load_lab(protocols_dir() / "lab-example.toml")
+    return {**lab, "decision_rule": {"rule": rule, "guard_band_factor": 1.0, "agreed": "t"},
+            "specification_limits": [{"source": "test", "lower": None, "upper": None,
+                                      "mpe": None, **lim} for lim in limits]}
+
+
+def test_optical_certificate_states_no_negative_acceptance_limit(optical, tmp_path):
+    """The review's case on real items: guarded, r = 1, limits below the belt's reach. The
+    certificate, summary.txt and results.json give "interval's upper end ≤ T_U", the
+    outcome "pass" exactly where the stated interval's upper end is ≤ T_U, no probability
+    for the belt items (the note says why) and the χ² one for R."""
+    from gonio.pipeline.dispatch import decide_conformity
+    from gonio.specs.ogam_draft.outputs import write
+
+    _, result = optical
+    items = result.items
+    lims = {"scale_factor_nonlinearity": 1.0e-4, "rate_consistency": 0.5,
+            "zero_stability": 0.02, "repeatability": 0.4}
+    for key, T in lims.items():        # the old acceptance T_U − U lay below zero
+        assert T - items[key].uncertainty.U < 0
+    lab = _lab([{"item": k, "upper": T} for k, T in lims.items()]
+               + [{"item": "angle_deviation", "mpe": 1.0}])
+    decide_conformity(result, lab)
+    write(result, tmp_path / "out", lab=lab, dcc=True)
+    res = json.loads((tmp_path / "out" / "results.json").read_text(encoding="utf-8"))
+    for key, T in lims.items():
+        c = res["items"][key]["conformity"]
+        hi = res["items"][key]["uncertainty"]["interval"][1]
+        assert c["acceptance_of"] == "interval" and c["acceptance_upper"] == T
+        assert c["outcome"] == ("pass" if hi <= T else "fail"), key
+        chi2 = res["items"][key]["uncertainty"]["k_source"] == "chi-square"
+        assert (c["conformance_probability"] is not None) == chi2, key
+    html = (tmp_path / "out" / "certificate.html").read_text(encoding="utf-8")
+    table = html[html.index('id="conformity"'):]
+    table = table[:table.index("</table>")]
+    assert not re.search(r"≤\s*[−-]", table)
+    assert table.count("interval&#x27;s upper end ≤") + table.count("interval's upper end ≤") \
+        == 4
+    assert "no probability is stated for" in html
+    summary = (tmp_path / "out" / "summary.txt").read_text(encoding="utf-8")
+    assert "acceptance ≤ -" not in summary and "acceptance ≤ −" not in summary
+    assert "interval's upper end ≤ 0.0001" in summary
+
+
+def test_optical_asymmetric_e_limit_is_refused(optical):
+    from gonio.pipeline.dispatch import decide_conformity
+
+    _, result = optical
+    with pytest.raises(GonioError, match=r"key specification_limits\[0\]: angle_deviation"):
+        decide_conformity(result, _lab([{"item": "angle_deviation", "lower": -0.05,
+                                         "upper": 0.5}]))
