@@ -197,3 +197,36 @@ def stated_intervals(store, results_sha256: str) -> dict:
 
 
 _INTERVALS: dict[tuple[str, str], dict] = {}
+
+
+def max_abs_keys(store, results_sha256: str) -> frozenset:
+    """The keys of the items the stored result states by the interval of an extreme of
+    magnitudes max_i |x_i| (``uncertainty.k_source``
+    :data:`gonio.result.statement.K_SOURCE_MAX_ABS`: the optical draft's E, whose value is
+    the signed extreme beside an interval of its magnitude), read once per stored result (a
+    stored file never changes); none where the result cannot be read."""
+    from gonio.result.statement import K_SOURCE_MAX_ABS
+
+    at = (str(store.blob_root), results_sha256)
+    got = _MAX_ABS.get(at)
+    if got is None:
+        import json
+
+        from gonio.records.blobs import get_bytes
+        try:
+            doc = json.loads(get_bytes(store.blob_root, results_sha256))
+        except (GonioError, ValueError, RecursionError):
+            doc = None
+        items = doc.get("items") if isinstance(doc, dict) else None
+        if isinstance(items, list):
+            items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
+        got = _MAX_ABS[at] = frozenset(
+            key for key, it in (items if isinstance(items, dict) else {}).items()
+            if isinstance(it, dict) and isinstance(it.get("uncertainty"), dict)
+            and it["uncertainty"].get("k_source") == K_SOURCE_MAX_ABS)
+        while len(_MAX_ABS) > 1024:
+            _MAX_ABS.pop(next(iter(_MAX_ABS)))
+    return got
+
+
+_MAX_ABS: dict[tuple[str, str], frozenset] = {}

@@ -1970,7 +1970,8 @@ _HISTORY_DONE = ("computed", DRAFTING, "reviewed", "approved", "issuing", "issue
 
 def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
     """An instrument's item history: key → list of dicts (calibration id, date, value, U,
-    k, ``interval`` (the (low, high) of an item stated by one coverage interval, as its
+    k, ``max_abs`` (:func:`_max_abs`: the row's value is the signed extreme beside the
+    interval of max|E_i|), ``interval`` (the (low, high) of an item stated by one coverage interval, as its
     certificate states it: the row's kept statement, written with the row from the stored
     result; None for the other items, and for every item with ``intervals=False``), unit,
     title, status, certificate number, issued, amended), oldest first; failed,
@@ -1999,13 +2000,28 @@ def history(store, instrument_id: int, *, intervals: bool = True) -> dict:
     out: dict[str, list] = {}
     for key, value, U, k, unit, title, clause, *stated, day, status, cid, rsha in rows:
         number, n = certs.get(cid, ("", 0))
+        iv = _interval(store, key, stated, rsha) if intervals else None
         out.setdefault(key, []).append(
             {"calibration_id": cid, "date": day, "value": value, "U": U, "k": k,
-             "interval": _interval(store, key, stated, rsha) if intervals else None,
+             "interval": iv, "max_abs": _max_abs(store, key, value, iv, rsha),
              "unit": unit, "title": title, "clause": clause, "status": status,
              "certificate": number, "issued": n > 0,
              "amended": n > 1 or (n > 0 and status != "issued")})
     return out
+
+
+def _max_abs(store, key: str, value, interval, results_sha256: str | None) -> bool:
+    """Whether a history row is stated by the interval of an extreme of magnitudes (the
+    optical E: its value the signed extreme, its interval that of max|E_i|), where it
+    matters: a value below zero beside an interval starting at or above zero; the stored
+    result's ``k_source`` says (:func:`gonio.records.results.max_abs_keys`), never the
+    numbers' signs alone (a range's bias-corrected estimate below zero, C_g, is not one)."""
+    if interval is None or value is None or results_sha256 is None \
+            or not float(value) < 0.0 <= float(interval[0]):
+        return False
+    from gonio.records.results import max_abs_keys
+
+    return key in max_abs_keys(store, results_sha256)
 
 
 def _interval(store, key: str, stated: list, results_sha256: str | None):

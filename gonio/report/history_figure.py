@@ -91,12 +91,13 @@ def bar_ends(r: dict) -> tuple[float, float]:
 
 
 def drawn_value(r: dict) -> float:
-    """Where a point is drawn: its value; for an item stated by the interval of an extreme
-    of magnitudes (E, 7.4: the interval of max_i |E_i|, its lower end ≥ 0, while the row's
-    value is the signed extreme), the value's magnitude, which its bar belongs to."""
-    iv = r.get("interval")
+    """Where a point is drawn: its value; for a row stated by the interval of an extreme of
+    magnitudes (``max_abs``, from its result's ``k_source``: E, 7.4, the interval of
+    max_i |E_i| beside the signed extreme) the value's magnitude, which its bar belongs to.
+    Any other value is drawn as it is, a non-negative item's bias-corrected estimate below
+    zero too (C_g −1.58×10⁻⁵ below its bar [0, 3.9×10⁻⁵]), never mirrored into its bar."""
     v = float(r["value"])
-    return -v if iv is not None and float(iv[0]) >= 0.0 > v else v
+    return abs(v) if r.get("max_abs") and r.get("interval") is not None else v
 
 
 def _ranges(pts: list[dict], lo_hi) -> tuple[float, float, dt.date, dt.date]:

@@ -149,15 +149,20 @@ def test_an_item_stated_by_its_interval_is_judged_not_dropped():
 
 
 def test_history_figure_draws_the_extreme_at_its_magnitude():
-    """A row stated by the interval of max|E_i| (lower end ≥ 0) whose value is the signed
-    extreme is drawn at |value|, inside its own bar; other rows at their value."""
+    """A row stated by the interval of max|E_i| (``max_abs``, from its result's k_source)
+    whose value is the signed extreme is drawn at |value|, inside its own bar; every other row
+    at its value, a non-negative range's bias-corrected estimate below zero beside its
+    interval [0, …] too (C_g: −1.58×10⁻⁵, not mirrored to +1.58×10⁻⁵ inside its bar)."""
     from gonio.report.history_figure import bar_ends, drawn_value
 
-    e = {"value": -0.83, "U": 0.17, "interval": (0.54, 1.0)}
+    e = {"value": -0.83, "U": 0.17, "interval": (0.54, 1.0), "max_abs": True}
     lo, hi = bar_ends(e)
     assert drawn_value(e) == 0.83 and lo <= drawn_value(e) <= hi
     assert drawn_value({"value": -0.2, "U": 0.1, "interval": None}) == -0.2
     assert drawn_value({"value": 0.12, "U": 0.1, "interval": (0.08, 0.22)}) == 0.12
+    c_g = {"value": -1.5776e-05, "U": 5.478e-05, "interval": (0.0, 3.9e-05), "max_abs": False}
+    assert drawn_value(c_g) == -1.5776e-05
+    assert drawn_value({**c_g, "max_abs": None}) == -1.5776e-05      # a row without the key
 
 
 @pytest.mark.parametrize("order", ["K first", "E first"])
@@ -183,3 +188,27 @@ def test_an_item_out_of_tolerance_caps_another_items_drift(order):
     q = propose({"K": near, "E": ok} if order == "K first" else {"E": ok, "K": near}, 12)
     assert q.method.startswith("drift") and q.months == propose({"K": near}, 12).months
     assert q.months < propose({"E": ok}, 12).months
+
+
+def test_history_rows_know_the_extreme_of_magnitudes_from_the_stored_result(tmp_path):
+    """``max_abs`` comes from the stored result's k_source, read only where it matters (a
+    value below zero beside an interval starting at or above zero): E (max-abs-interval)
+    yes, C_g (neyman-belt) with the same signs no."""
+    import json
+    from types import SimpleNamespace
+
+    from gonio.records import services
+    from gonio.records.blobs import put_bytes
+    from gonio.result.statement import K_SOURCE_MAX_ABS
+
+    doc = {"items": {
+        "angle_deviation": {"value": -0.45, "uncertainty": {"k_source": K_SOURCE_MAX_ABS}},
+        "pointing_consistency": {"value": -1.58e-05,
+                                 "uncertainty": {"k_source": "neyman-belt"}}}}
+    store = SimpleNamespace(blob_root=tmp_path)
+    sha = put_bytes(tmp_path, json.dumps(doc).encode())
+    assert services._max_abs(store, "angle_deviation", -0.45, (0.30, 0.55), sha)
+    assert not services._max_abs(store, "pointing_consistency", -1.58e-05, (0.0, 3.9e-05), sha)
+    assert not services._max_abs(store, "angle_deviation", 0.45, (0.30, 0.55), sha)
+    assert not services._max_abs(store, "angle_deviation", -0.45, None, sha)
+    assert not services._max_abs(store, "angle_deviation", -0.45, (0.30, 0.55), "0" * 64)
