@@ -68,7 +68,7 @@ def test_readings_from_the_needed_samples_equal_those_from_every_sample():
 def test_timeline_angle_rate_equals_angle_and_rate(monkeypatch):
     # Bit for bit (signed zeros included) on the run-by-run path and the element-wise one,
     # on sorted times (edges, before the first and after the last segment, included) and on
-    # shuffled ones (a segment's times not in one run).
+    # shuffled ones (a segment's times not in one run), on a scalar time and a 2-D grid.
     from gonio.physics import kinematics
 
     p = validation_protocol()
@@ -79,6 +79,10 @@ def test_timeline_angle_rate_equals_angle_and_rate(monkeypatch):
         for blk in plan_session(p, b, np.random.default_rng(5)):
             t = np.arange(blk.k_start - 3, blk.k_end + 3) / b.sample_rate_hz  # edges included
             for times in (t, shuffle.permutation(t)):
+                th, r = blk.timeline.angle_rate(times)
+                assert th.tobytes() == blk.timeline.angle_deg(times).tobytes()
+                assert r.tobytes() == blk.timeline.rate_dps(times).tobytes()
+            for times in (t[len(t) // 2], t.reshape(1, -1)):   # a scalar, a grid
                 th, r = blk.timeline.angle_rate(times)
                 assert th.tobytes() == blk.timeline.angle_deg(times).tobytes()
                 assert r.tobytes() == blk.timeline.rate_dps(times).tobytes()

@@ -195,12 +195,15 @@ class Timeline:
         Times that fall in one segment in a row (sorted times: each segment's times) are
         evaluated together with that segment's parameters as scalars, each phase's formula
         on its own times only (:meth:`_angle_rate_runs`); times that change segment at
-        nearly every step take the element-wise form. Both give the values of
+        nearly every step, a scalar and a grid of times take the element-wise form. Both give the values of
         :meth:`angle_deg` and :meth:`rate_dps`, bit for bit (the same operations on the
         same operands)."""
         t, i, tau = self._locate(t)
         if i is None:
             return np.full_like(t, self.start_angle_deg), np.zeros_like(t)
+        if t.ndim != 1:                        # a scalar or a grid: element-wise
+            seg = self._segment(t, i, tau)
+            return self._angle(seg, tau), self._rate(seg, tau)
         cut = np.flatnonzero(i[1:] != i[:-1]) + 1
         if (cut.size + 1) * _RUN_MIN > t.size:
             seg = self._segment(t, i, tau)
