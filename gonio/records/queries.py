@@ -461,6 +461,16 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
                  "overdue"],
                 [[r["customer"], r["instrument_id"], r["model"], r["serial"], r["last"],
                   r["due"], "yes" if r["overdue"] else "no"] for r in rows])
+    if name == "table_calibrations":
+        from gonio.records.services import table_calibrations
+
+        rows = table_calibrations(store)
+        return (["id", "table", "certificate", "file", "sha256", "valid_from", "due_on",
+                 "state_today", "used_by", "registered_by", "registered_at"],
+                [[e.id, e.standard.identifier, e.certificate, e.name, e.sha256, e.valid_from,
+                  e.due_on, r["state"] or "in force", r["used"],
+                  e.registered_by.username if e.registered_by else "", e.registered_at]
+                 for r in rows for e in [r["entry"]]])
     if name == "audit":
         rows, _ = audit_events(store, 1, big, params.get("entity", ""),
                                params.get("entity_id", ""), params.get("username", ""))

@@ -316,8 +316,10 @@ def standard_page(request: Request, session: Session, std_id: int):
     d = queries.standard_history(_store(request), std_id, page, PAGE)
     if d is None:
         return Response("no such standard", status_code=404)
+    tables = [r for r in services.table_calibrations(_store(request))
+              if r["entry"].standard_id == std_id]
     return render(request, "standard.html", user, csrf, **d, page=page, size=PAGE,
-                  today=_dt.date.today())
+                  today=_dt.date.today(), table_calibrations=tables)
 
 
 @router.get("/standards")

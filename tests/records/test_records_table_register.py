@@ -403,6 +403,16 @@ def test_web_register_page_and_form(tmp_path, bench_readings):
         page = tech.get("/table-calibrations?date=2025-07-01").text
         assert "superseded by table calibration 2 (TC-2) valid from 2025-06-01" in page
         assert "<td>in force</td>" in page
+        exported = tech.get("/export/table_calibrations.csv")
+        assert exported.status_code == 200
+        import csv
+        rows = list(csv.DictReader(io.StringIO(exported.text)))
+        assert [(r["certificate"], r["sha256"], r["valid_from"], r["file"]) for r in rows] == \
+            [("TC-2", SHA["TC-2"], "2025-06-01", "TC-2.csv"),
+             ("TC-1", SHA["TC-1"], "2025-01-01", hostile)]
+        std_page = tech.get(f"/standards/{table_id}").text
+        assert 'id="table-calibrations"' in std_page and SHA["TC-2"] in std_page
+        assert "<img src=x" not in std_page
         got = tech.get("/table-calibrations/1/file")
         assert got.status_code == 200 and hashlib.sha256(got.content).hexdigest() == SHA["TC-1"]
         assert tech.get("/table-calibrations/99/file").status_code == 404
