@@ -283,3 +283,32 @@ def test_optical_asymmetric_e_limit_is_refused(optical):
     with pytest.raises(GonioError, match=r"key specification_limits\[0\]: angle_deviation"):
         decide_conformity(result, _lab([{"item": "angle_deviation", "lower": -0.05,
                                          "upper": 0.5}]))
+
+
+def test_rate_certificates_table_notes_the_items_without_a_probability():
+    """The shared conformity table (JJF, IEC, the triad): "—" for an item whose interval is
+    not normal or χ² (IEC bias instability's pivot), the note naming it; a χ² item (JJF bias
+    stability) keeps its probability and is not named."""
+    from gonio.report.i18n import labels
+    from gonio.report.stated import conformity_blocks
+
+    res = {}
+    for spec, key, value, interval, source, nu in INTERVAL_ITEMS:
+        if key not in ("bias_instability", "bias_stability"):
+            continue
+        lo, hi = interval
+        unc = Uncertainty([], (hi - lo) / 4, hi - value, None, nu, None, 0.95, source, interval)
+        r = Result(spec, spec, {key: Item(key, key, "-", "°/h", value, uncertainty=unc,
+                                          nonnegative=True)}, {}, {})
+        (c,) = decide_items(r, [{"item": key, "upper": hi * 1.1}], {"rule": "guarded"})
+        res[key] = {"conformity": c.to_dict(), "nonnegative": True}
+    for lang in ("en", "zh"):
+        L = labels(lang)
+        blocks = conformity_blocks(res, L, lambda k: f"<{k}>", lambda k: "°/h",
+                                   lambda kind, data, extra: (kind, data, extra))
+        rows = next(d for kind, d, _ in blocks if kind == "table")[1]
+        pfa = {row[0]: row[-1] for row in rows}
+        assert pfa["<bias_instability>"] == "—" and pfa["<bias_stability>"].endswith("%")
+        notes = [d[0] for kind, d, _ in blocks if kind == "p" and "<bias_instability>" in d[0]]
+        assert len(notes) == 1 and "<bias_stability>" not in notes[0]
+        assert all(not re.search(r"≤\s*[−-]", str(row[2])) for row in rows)
