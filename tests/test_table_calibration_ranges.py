@@ -189,9 +189,9 @@ def test_calibrated_table_draws_against_monte_carlo(setup, runs):
     df = res.readings
     k_rows = df[df["test"] == "scale_factor"]
     th_k = k_rows["table_deg"].to_numpy(float)
-    i_s = cal.lookup(th_k)[0]
-    i_z = cal.lookup(np.zeros(th_k.size))[0]
-    k_c, c_k = table_corrected_k_sensitivity(k_rows["gyro_counts"] / th_k, th_k, i_s, i_z, cal)
+    k_c, c_k, _ = table_corrected_k_sensitivity(k_rows["gyro_counts"] / th_k, th_k, th_k,
+                                                np.zeros(th_k.size), cal)
+    i_s = cal.lookup(th_k)[0]                       # the Monte Carlo's own look-up
     ct = CalibratedTable(cal, c_k, float(np.mean(k_c)))
     pos = np.array([30.0, 150.0, 330.0, 360.0])
     a = ct.coefficients(pos, 0.0)
@@ -281,7 +281,8 @@ def test_calibrated_table_draws_at_absolute_stops():
     counts_k = k_true * th_k
     from gonio.specs.ogam_draft.item_uncertainty import table_corrected_k_sensitivity
     i_s, i_z = cal.lookup(th_k)[0], cal.lookup(np.zeros(th_k.size))[0]
-    k_c, c_k = table_corrected_k_sensitivity(counts_k / th_k, th_k, i_s, i_z, cal)
+    k_c, c_k, _ = table_corrected_k_sensitivity(counts_k / th_k, th_k, th_k, np.zeros(th_k.size),
+                                                cal)
     ct = CalibratedTable(cal, c_k, float(np.mean(k_c)))
     theta = np.array([30.0, 150.0, 270.0])
     a = ct.coefficients(theta, 90.0)
@@ -441,14 +442,15 @@ def test_ranges_measured_value_is_the_stated_ones_input(setup):
             * scale, rel=1e-9)
 
 
-def test_one_turned_error_for_e_and_consistencies(setup, runs, monkeypatch):
-    """E (7.4) and C_v, C_g (7.6, 7.7) take each reading's table correction e(stop) − e(zero)
-    from the one function :func:`~gonio.specs.ogam_draft.table_calibration.turned_error_arcsec`:
-    with the exact calibration E per point and C_v meet their truths from the bench's
-    parameters; with that function alone mutated (Δ's sign flipped, the calibration file
-    unchanged) both leave them (E by more than 0.05″ at some point, C_v by more than OFF),
-    so a fault in it is noticed on both items; K_l, corrected through K's own rounds, does
-    not move."""
+def test_one_turned_error_for_every_item(setup, runs, monkeypatch):
+    """K (7.1), K_l (7.2), E (7.4) and C_v, C_g (7.6, 7.7) take each reading's (each round's)
+    table correction e(stop) − e(zero) from the one function
+    :func:`~gonio.specs.ogam_draft.table_calibration.turned_error_arcsec`: with the exact
+    calibration K, K_l, E per point and C_v meet their truths from the bench's parameters
+    (:func:`scale_factor_truth`: the instrument's own K and K_i); with that function alone
+    mutated (Δ's sign flipped, the calibration file unchanged) every one leaves them (K by
+    more than 0.05 ppm, K_l and C_v by more than OFF, E by more than 0.05″ at some point), so
+    a fault in it is noticed on each item."""
     from gonio.specs.ogam_draft import table_calibration as tcal
     from tests.test_table_calibration import _e_truth_71
 
@@ -461,10 +463,17 @@ def test_one_turned_error_for_e_and_consistencies(setup, runs, monkeypatch):
         return float(np.max(np.abs(e.table["E_arcsec"].to_numpy()
                                    - t_i.reindex(e.table["round"]).to_numpy())))
 
-    cv = "rate_consistency"
+    cv, kl = "rate_consistency", "scale_factor_nonlinearity"
     truth = _truths(res, ok)
+    k_true = scale_factor_truth(res.truth)[0]
+
+    def k_miss(rep) -> float:
+        return abs(rep.item_uncertainty["scale_factor"].value / k_true - 1.0)
+
+    assert k_miss(ok) < 0.005e-6
     assert e_miss(ok) < 0.003
-    assert abs(_measured(ok, cv) - truth[cv]) < TIGHT[cv]
+    for name in (cv, kl):
+        assert abs(_measured(ok, name) - truth[name]) < TIGHT[name]
     real, calls = tcal.turned_error_arcsec, []
 
     def flipped(calibration, stop_deg, zero_deg):
@@ -474,8 +483,8 @@ def test_one_turned_error_for_e_and_consistencies(setup, runs, monkeypatch):
 
     monkeypatch.setattr(tcal, "turned_error_arcsec", flipped)
     bad = _analyse(p, res, cal)
-    assert len(calls) >= 3                          # E, C_v and C_g each called it
+    assert len(calls) >= 4                          # K's rounds, E, C_v and C_g each called it
+    assert k_miss(bad) > 0.05e-6
     assert e_miss(bad) > 0.05
-    assert abs(_measured(bad, cv) - truth[cv]) > OFF[cv]
-    kl = "scale_factor_nonlinearity"
-    assert _measured(bad, kl) == _measured(ok, kl)
+    for name in (cv, kl):
+        assert abs(_measured(bad, name) - truth[name]) > OFF[name], name

@@ -1509,17 +1509,12 @@ def _e_scale_factor_terms(results, protocol, calibration):
                  e.details.get("scale_factor_for_angles_counts_per_deg") is not None)
     if not through_k:
         return False, None, None, None, np.array([])
-    t = results.scale_factor.table
-    k_stop, k_zero = round_positions(t, protocol, "scale_factor")
-    j_s, _ = calibration.lookup(k_stop)
-    j_z, _ = calibration.lookup(k_zero)
     k_old = float(e.details["scale_factor_for_angles_counts_per_deg"])
-    stops = t["table_deg"].to_numpy(dtype=float)
-    if j_s is None or j_z is None:
+    stops = results.scale_factor.table["table_deg"].to_numpy(dtype=float)
+    k_c, s, _, _ = _k_rounds_at_table(results, protocol, calibration)
+    if k_c is None:
         return True, None, k_old, None, stops
-    k_c, c_k = iu.table_corrected_k_sensitivity(t["K_i_counts_per_deg"], t["table_deg"],
-                                                j_s, j_z, calibration)
-    return True, c_k, k_old, float(np.mean(k_c)), stops
+    return True, s.mean(axis=0), k_old, float(np.mean(k_c)), stops
 
 
 def _e_point_table(calibration, p_deg, z_deg, theta_deg, through_k, c_k, k_new, stops,
@@ -1576,8 +1571,7 @@ def _e_table_reasons(results, protocol, calibration, theta, terms, rows, stop, z
     blind = [float(th) for th, t in zip(theta, terms) if t["listed"] and not t["sees"]]
     k_missing = []
     if k_not_corrected:
-        k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
-        k_missing = calibration.lookup(np.r_[k_stop, k_zero])[1]
+        k_missing = _k_rounds_at_table(results, protocol, calibration)[3]
     why = []
     if not_listed:
         gone = calibration.lookup([x for r in rows for x in (stop[r[0]], zero[r[0]])])[1]
@@ -1751,10 +1745,7 @@ def table_positions_used(t: pd.DataFrame, protocol: Protocol, table_calibration)
     modulo 360°): position, error and u as read, for the record (results.json)."""
     stop, zero = round_positions(t, protocol, "scale_factor")
     idx, _ = table_calibration.lookup(np.r_[np.asarray(stop, float), np.asarray(zero, float)])
-    used = sorted({int(i) for i in idx}) if idx is not None else []
-    return {"table_deg": [float(table_calibration.table_deg[i]) for i in used],
-            "error_arcsec": [float(table_calibration.error_arcsec[i]) for i in used],
-            "u_arcsec": [float(table_calibration.u_arcsec[i]) for i in used]}
+    return _positions_record(table_calibration, idx if idx is not None else [])
 
 
 def _scale_factor_table(t: pd.DataFrame, protocol: Protocol, table_calibration):
@@ -1811,19 +1802,17 @@ def _positions_record(calibration, idx) -> dict:
 
 
 def _k_rounds_at_table(results, protocol, calibration):
-    """(K_i corrected, the rounds' sensitivity matrix, the calibration's indices used) of the
-    7.1 rounds, K's own correction (``item_uncertainty.table_round_sensitivity``); None where
-    the calibration does not list a stop or zero."""
+    """(K_i corrected, the rounds' sensitivity matrix, the calibration's indices of their
+    stops and zeros, the positions it does not list) of the 7.1 rounds, corrected by the one
+    per-reading rule e(stop) − e(zero) (``item_uncertainty.table_round_sensitivity``, through
+    ``table_calibration.turned_error_arcsec``); the first two None where the calibration does
+    not list a stop or zero."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
     t = results.scale_factor.table
     stop, zero = round_positions(t, protocol, "scale_factor")
-    i_s, i_z = calibration.lookup(stop)[0], calibration.lookup(zero)[0]
-    if i_s is None or i_z is None:
-        return None
-    k_c, s = iu.table_round_sensitivity(t["K_i_counts_per_deg"], t["table_deg"], i_s, i_z,
-                                        calibration)
-    return k_c, s, np.r_[i_s, i_z]
+    return iu.table_round_sensitivity(t["K_i_counts_per_deg"], t["table_deg"], stop, zero,
+                                      calibration)
 
 
 def nonlinearity_at_table(results, readings, protocol, budget, calibration, tc, k):
@@ -1833,10 +1822,9 @@ def nonlinearity_at_table(results, readings, protocol, budget, calibration, tc, 
     not cover K's positions."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
 
-    got = _k_rounds_at_table(results, protocol, calibration)
-    if got is None:
+    k_c, sens, idx, _ = _k_rounds_at_table(results, protocol, calibration)
+    if k_c is None:
         return None
-    k_c, sens, idx = got
     measured = float((k_c.max() - k_c.min()) / np.mean(k_c) * 100.0)     # 7.2 on them
     b = iu.nonlinearity_calibrated_budget(
         k_c, results.scale_factor.table["table_deg"], sens, calibration, k=k,
@@ -1890,11 +1878,7 @@ def consistency_at_table(results, readings, protocol, name: str, calibration):
         results.scale_factor.measured and \
         c.details.get("scale_factor_for_angles_counts_per_deg") is not None
     k_got = _k_rounds_at_table(results, protocol, calibration) if through_k else None
-    if through_k and k_got is None:          # K's stops and zeros the file does not list
-        k_stop, k_zero = round_positions(results.scale_factor.table, protocol, "scale_factor")
-        m_s = sorted(set(m_s) | set(calibration.lookup(k_stop)[1])
-                     | set(calibration.lookup(k_zero)[1]))
-    missing = sorted(set(m_s))
+    missing = sorted(set(m_s) | set(k_got[3] if through_k else ()))   # with K's stops, zeros
     if missing:
         return None, (f"the {calibration.source} does not cover "
                       f"{', '.join(f'{x:g}' for x in missing)} deg: {keep}")

@@ -50,6 +50,7 @@ import numpy as np
 
 from gonio.errors import GonioError
 from gonio.result.statement import coverage_k, signed_text
+from gonio.specs.ogam_draft import table_calibration as tcal
 from gonio.specs.ogam_draft.table_periodic import periodic_response, worst_order
 from gonio.units import ARCSEC_PER_DEG, PPM, S_PER_H
 from uncertainty import (GumResult, MonteCarloResult, combined_coverage_factor, from_u,
@@ -539,34 +540,62 @@ def _refuse_blind(calibration, c) -> None:
                      key="table_calibration")
 
 
-def table_round_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
-                            ) -> tuple[np.ndarray, np.ndarray]:
-    """(the corrected K_i, counts/°; each round's sensitivity to the calibration's error at
-    each of its positions, an (n rounds × positions) matrix, counts/° per arcsec) for rounds
-    from the calibration's positions ``i_zero`` to ``i_stop`` (indices; 7.1 with A.4.1's
-    error known): K_i,c = K_i θ_i/(θ_i − (e(s_i) − e(z_i))/3600), ∂K_i,c/∂e(s_i) =
-    −∂K_i,c/∂e(z_i) = K_i,c/(3600 θ_i − Δe_i) (a round from a position to itself: none)."""
+def table_round_sensitivity(k_i, theta_deg, stop_deg, zero_deg, calibration
+                            ) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray,
+                                       list[float]]:
+    """K's 7.1 rounds corrected by a calibrated table (7.1 with A.4.1's error known; beyond
+    the draft): (the corrected K_i, counts/°; each round's sensitivity to the calibration's
+    error at each of its positions, an (n rounds × positions) matrix, counts/° per arcsec; the
+    calibration's indices of the rounds' stops and zeroing positions; the positions it does not
+    list, sorted). The first two are None where a stop or zero is not listed.
+
+    Round i zeroed the table at ``zero_deg`` and stopped it at ``stop_deg`` (absolute
+    positions, as :func:`gonio.specs.ogam_draft.calibration.round_positions` gives them) and
+    the table read θ_i (``theta_deg``). Its correction Δe_i = e(s_i) − e(z_i) is the one every
+    item takes (:func:`gonio.specs.ogam_draft.table_calibration.turned_error_arcsec`, with E's
+    and C_v's, C_g's): K's rule is not different: its zero is the round's start as theirs is
+    (the series' first start where the item does not re-zero), stops are looked up by absolute
+    position modulo 360°, and a full round 0° → 360° reads e(0°) − e(0°) = 0, as a round from
+    a position to itself does. What is K's own is only what follows from Δe_i:
+    K_i,c = K_i θ_i/(θ_i − Δe_i/3600) and ∂K_i,c/∂e(s_i) = −∂K_i,c/∂e(z_i) =
+    K_i,c/(3600 θ_i − Δe_i) (none where s_i and z_i are one position).
+
+    >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
+    >>> cal = TableCalibration([0, 60, 120], [0.0, 0.36, -0.18], [0.02] * 3, "t")
+    >>> k_c, s, idx, miss = table_round_sensitivity([3600.0] * 2, [60.0, 360.0], [60.0, 360.0],
+    ...                                             [0.0, 0.0], cal)
+    >>> [round(float(x), 6) for x in k_c], idx.tolist(), miss     # 3600·60/(60 − 0.0001)
+    ([3600.006, 3600.0], [1, 0, 0, 0], [])
+    >>> s[1].tolist(), table_round_sensitivity([3600.0], [45.0], [45.0], [0.0], cal)[::3]
+    ([0.0, 0.0, 0.0], (None, [45.0]))
+    """
     k_i = np.asarray(k_i, dtype=float)
     th = np.asarray(theta_deg, dtype=float)
-    e = calibration.error_arcsec
-    th_true = th - (e[i_stop] - e[i_zero]) / ARCSEC_PER_DEG
+    delta, i_s, i_z, missing = tcal.turned_error_arcsec(calibration, stop_deg, zero_deg)
+    idx = np.r_[i_s, i_z]
+    if missing:
+        return None, None, idx, missing
+    th_true = th - delta / ARCSEC_PER_DEG
     k_c = k_i * th / th_true
     sens = k_c / (ARCSEC_PER_DEG * th_true)                  # ∂K_i/∂Δe_i, counts/° per arcsec
     s = np.zeros((k_i.size, calibration.table_deg.size))
     rows = np.arange(k_i.size)
-    np.add.at(s, (rows, np.asarray(i_stop)), sens)
-    np.add.at(s, (rows, np.asarray(i_zero)), -sens)
-    return k_c, s
+    np.add.at(s, (rows, i_s), sens)
+    np.add.at(s, (rows, i_z), -sens)
+    return k_c, s, idx, []
 
 
-def table_corrected_k_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration
-                                  ) -> tuple[np.ndarray, np.ndarray]:
+def table_corrected_k_sensitivity(k_i, theta_deg, stop_deg, zero_deg, calibration
+                                  ) -> tuple[np.ndarray | None, np.ndarray | None, list[float]]:
     """(the corrected K_i, counts/°; K's sensitivity to the calibration's error at each of its
-    positions, counts/° per arcsec) for rounds from the calibration's positions ``i_zero`` to
-    ``i_stop`` (indices; :func:`scale_factor_table_correction`, 7.1): K = mean K_i, so its
-    sensitivity is the mean of the rounds' (:func:`table_round_sensitivity`)."""
-    k_c, s = table_round_sensitivity(k_i, theta_deg, i_stop, i_zero, calibration)
-    return k_c, s.mean(axis=0)
+    positions, counts/° per arcsec; the positions the calibration does not list) for the 7.1
+    rounds zeroed at ``zero_deg`` and stopped at ``stop_deg`` (absolute positions;
+    :func:`scale_factor_table_correction`, 7.1): K = mean K_i, so its sensitivity is the mean
+    of the rounds' (:func:`table_round_sensitivity`); None, None where a position is not
+    listed."""
+    k_c, s, _, missing = table_round_sensitivity(k_i, theta_deg, stop_deg, zero_deg,
+                                                 calibration)
+    return k_c, (None if s is None else s.mean(axis=0)), missing
 
 
 def calibration_error_draws(calibration, rng, draws: int) -> np.ndarray:
@@ -680,10 +709,9 @@ class CalibratedTable:
         cal = self.calibration
         pos = np.atleast_1d(np.asarray(turned_deg, dtype=float))
         z = np.broadcast_to(np.asarray(zero_deg, dtype=float), pos.shape)
-        i_p, miss = cal.lookup(z + pos)
-        i_z, miss_z = cal.lookup(z)
-        if i_p is None or i_z is None:
-            raise ValueError(f"not calibrated: {sorted(set(miss) | set(miss_z))}")
+        _, i_p, i_z, miss = tcal.turned_error_arcsec(cal, z + pos, z)   # stops looked up as Δ's
+        if miss:
+            raise ValueError(f"not calibrated: {miss}")
         a = np.zeros((pos.size, cal.table_deg.size))
         rows = np.arange(pos.size)
         np.add.at(a, (rows, i_p), 1.0)
@@ -738,13 +766,10 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     >>> scale_factor_table_correction([3600.0], [45.0], [45.0], [0.0], cal)
     (None, [45.0])
     """
-    k_i = np.asarray(k_i, dtype=float)
-    th = np.asarray(theta_deg, dtype=float)
-    i_s, miss_s = calibration.lookup(stop_deg)
-    i_z, miss_z = calibration.lookup(zero_deg)
-    if i_s is None or i_z is None:
-        return None, sorted(set(miss_s) | set(miss_z))
-    k_c, c = table_corrected_k_sensitivity(k_i, th, i_s, i_z, calibration)
+    k_c, c, missing = table_corrected_k_sensitivity(k_i, theta_deg, stop_deg, zero_deg,
+                                                    calibration)
+    if k_c is None:
+        return None, missing
     _refuse_blind(calibration, c)
     u, dof = calibration.combine(c)
     return TableCorrection(k_c, u, dof, calibration.describe()), []
@@ -1279,8 +1304,7 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
     >>> th = np.array([60.0, 120.0, 180.0, 240.0, 300.0, 360.0])
     >>> cal = TableCalibration([0, 60, 120, 180, 240, 300], [0.0] * 6, [1e-9] * 6, "t")
-    >>> i_s, _ = cal.lookup(th)
-    >>> _, s = table_round_sensitivity([3600.0] * 6, th, i_s, np.zeros(6, int), cal)
+    >>> _, s, _, _ = table_round_sensitivity([3600.0] * 6, th, th, np.zeros(6), cal)
     >>> b = nonlinearity_calibrated_budget([3600.0] * 6, th, s, cal, k=2.0)
     >>> q = nonlinearity_corrected_budget([3600.0] * 6, th, 1e-12, k=2.0, table_reading="standard")
     >>> abs(b.value / q.value - 1.0) < 0.01, [c.symbol for c in b.components]
