@@ -50,6 +50,15 @@ READINGS_TAKEN = (
     "5.3.3.7: a visit is 'up' when reached from below, 'down' from above; hysteresis = "
     "max |B_up − B_down| (the reading, in the details); stated as that reading less the "
     "midpoint of a maximum's selection excess, with the interval [0, its one-sided 95 % upper limit].",
+    "5.1.3.7: the standard's reading is max δ_i, the largest population spread at the "
+    "constant rates (in the details); the value is the estimate of the largest true spread "
+    "max σ_i: that reading less the bias of a maximum (the midpoint between Jensen's alone and "
+    "the contending rates' full selection excess, scaled χ), stated by its 95 % interval (the "
+    "χ² interval of the largest spread united over that excess; no k).",
+    "5.3.3.9: the reference output is the mean of the record's last fifth; the standard's "
+    "reading (the last excursion beyond the band) is in the details; the value is the time "
+    "outside the band (smoothed values beyond it × their step) less its late bias where the "
+    "transient flattens, t''·var/2 (first-order transient).",
     "5.3.3.8: a = g cos γ with γ = 0 at input axis up (eq (28)'s sin γ counts from the "
     "horizontal); the Earth rate removed at each angle; a whole turn in equal steps.",
     "5.4.5.1 c): broadband = rms over band_hz … broadband_high_hz of the one-sided density; the "

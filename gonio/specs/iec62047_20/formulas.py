@@ -26,6 +26,8 @@ Contents
 :func:`hysteresis_upper_iec`    IEC 5.3.3.7: one-sided upper limit of the largest true |B_up − B_down|
 :func:`walk_coefficient_bound`  IEC 5.1.3, 5.3.3: the largest K² the static record allows
 :func:`walk_k2_iec`             IEC 5.1.3, 5.3.3: E[K²] of every item's bias drift (posterior mean)
+:func:`max_spread_moments`      IEC 5.1.3.7: E and sd of max δ_i, δ_i independent scaled χ
+:func:`max_spread_estimate`     IEC 5.1.3.7: max σ_i from max δ_i, the maximum's bias removed
 ==============================  ==================================================
 """
 
@@ -436,3 +438,113 @@ def walk_k2_iec(avar, edf, other_avar, k_column, *, k2_fit: float = 0.0, cov=Non
         ll = -0.5 * s * np.sum(nu[None, :] * (y[None, :] / v + np.log(v)), axis=1)
     w = np.exp(ll - np.max(ll))
     return float(np.trapezoid(w * k * k, k) / np.trapezoid(w, k))
+
+
+def _max_spread_grid(spreads, dofs, n_grid: int = 4001):
+    """The grid x and the CDF G(x) = Π_i F_χ²(ν_i x²/σ_i²; ν_i) of max_i δ_i for independent
+    δ_i = σ_i·√(χ²_ν_i/ν_i) (the population standard deviation of a constant-rate record
+    whose E[δ_i²] is σ_i²)."""
+    from scipy import stats
+
+    s, nu = as_array(spreads, "spreads"), as_array(dofs, "dofs")
+    if s.shape != nu.shape or s.size == 0 or np.any(~(s >= 0)) or np.any(~(nu >= 1)):
+        raise GonioError(f"max spread: {s.size} spreads ≥ 0 and {nu.size} dofs ≥ 1 expected")
+    top = float(s.max())
+    w = 12.0 / math.sqrt(2.0 * float(nu[int(np.argmax(s))]))   # G ≈ 0 below the top's tail
+    hi = top * (1.0 + 12.0 / math.sqrt(2.0 * float(nu.min()))) if top > 0 else 1.0
+    x = np.linspace(max(top * (1.0 - w), 0.0), hi, n_grid)
+    G = np.ones_like(x)
+    for si, ni in zip(s, nu):
+        G *= stats.chi2.cdf(ni * (x / si) ** 2, ni) if si > 0 else 1.0
+    return x, G
+
+
+def max_spread_moments(spreads, dofs) -> tuple[float, float]:
+    """(E, sd) of max_i δ_i, the δ_i independent σ_i·√(χ²_ν_i/ν_i) (``spreads`` σ_i,
+    ``dofs`` ν_i): E = ∫₀^∞ (1 − G) dx, E[max²] = ∫₀^∞ 2x(1 − G) dx with G the product of
+    the χ CDFs (the expectation of a non-negative variable from its CDF, JCGM 101 as a
+    closed form: no draws; G is 0 to double precision below 12 standard deviations under
+    the largest σ_i, where the grid starts). IEC 62047-20 5.1.3.7's reading max δ_i has
+    this distribution.
+
+    >>> e, sd = max_spread_moments([1.0], [1e6])        # one spread of many samples: σ
+    >>> round(e, 4), round(sd * math.sqrt(2e6), 3)
+    (1.0, 1.0)
+    """
+    x, G = _max_spread_grid(spreads, dofs)
+    tail = 1.0 - G
+    e = float(x[0]) + float(np.trapezoid(tail, x))
+    e2 = float(x[0]) ** 2 + float(np.trapezoid(2.0 * x * tail, x))
+    return e, math.sqrt(max(e2 - e * e, 0.0))
+
+
+def max_spread_estimate(spreads, dofs, p: float = 0.95, noise: bool = True) -> dict:
+    """IEC 62047-20 5.1.3.7, the physically right estimate beside the reading: the largest
+    true spread max_i σ_i from the measured population spreads δ_i (``spreads``, each of a
+    record of ν_i + 1 samples, ``dofs`` ν_i), with the bias of the maximum removed.
+
+    The reading max δ_i reads high: the largest of several noisy spreads is more often one
+    that noise raised (E[max δ_i] ≥ max σ_i; +2.3 % on the built-in programme's two rates),
+    and each δ_i reads low by Jensen's E[δ] < σ. The bias B = E[max δ_i] − max σ_i, with
+    δ_i = σ_i·√(χ²_ν_i/ν_i) (:func:`max_spread_moments`, the expectation of the maximum of
+    scaled χ variables as a closed form, JCGM 101's propagation of the δ_i's distributions
+    without draws), depends on which true spreads share the largest, which is not known: it
+    lies between B_min = E[δ_top] − σ_top (one rate's spread stands clear: Jensen only) and
+    B_max = E[max of the m contenders] − σ_top (the m spreads within 2√2 of their standard
+    deviation σ_j/√(2ν_j) of the largest share it: the full selection excess), both at
+    σ_top = max δ_i. As for every maximum of IEC 62047-20 (JCGM 100 4.3.7, the rule of
+    :func:`gonio.specs._rate_family.formulas.selection_excess`), the estimate is the reading
+    less the midpoint of [B_min, B_max] and the correction's own uncertainty is that range,
+    rectangular: u_B = (B_max − B_min)/√12. (The plug-in bootstrap bias E_δ̂[max δ*] − max δ̂
+    removes only about 40 % of the excess when the true spreads are equal — the measured
+    gap makes the excess look smaller —, the midpoint half; where one spread stands clear
+    the plug-in over-corrects and the midpoint does not.)
+
+    Returns ``value`` = max δ_i − B_mid; ``u_c`` = √(sd(δ_top)² + u_B²) (sd of the largest
+    spread's own scaled χ: where the true spreads differ, the maximum's distribution at the
+    measured spreads, narrower where they look alike, would understate); the 95 %
+    ``interval`` of max σ_i: δ_top − S = σ_top·√(χ²_ν/ν) for a selection excess S (beyond
+    Jensen's) in [0, S_max], S_max = B_max − B_min, so the exact χ² interval of σ_top
+    (JCGM 101 7.7 for a scaled χ; the one of :func:`gonio.result.gum.std_dev_uncertainty`,
+    two-sided here) of every δ_top − S, united: [(δ_top − S_max)·√(ν/χ²_{ν,(1+p)/2}),
+    δ_top·√(ν/χ²_{ν,(1−p)/2})] (coverage at least p when S lies in its range: 0.955–0.98
+    on 1500 Monte Carlo records each of σ (1, 1), (1, 0.8), (1, 0.95), (1, 1, 1) at
+    ν 49 and 299, where a pivot about the corrected value covered 0.89 at (1, 0.8), ν 49);
+    ``reading`` (max δ_i, the standard's), ``bias`` B_mid, ``bias_bounds``, ``contenders``
+    and ``sd_max``. ``noise`` False (a bench without noise: the spreads are exact): no
+    correction.
+
+    >>> r = max_spread_estimate([1.0, 1.0], [299, 299])
+    >>> r["contenders"], round(r["bias_bounds"][1] / (1 / math.sqrt(2 * 299 * math.pi)), 1)
+    (2, 1.0)
+    >>> r["interval"][0] < r["value"] < r["reading"] < r["interval"][1]
+    True
+    >>> max_spread_estimate([1.0, 0.5], [299, 299])["contenders"]
+    1
+    """
+    s, nu = as_array(spreads, "spreads"), as_array(dofs, "dofs")
+    if s.shape != nu.shape or s.size == 0:
+        raise GonioError(f"max spread: {s.size} spreads and {nu.size} dofs")
+    i = int(np.argmax(s))
+    top = float(s[i])
+    m = int(np.sum(s >= top - 2.0 * math.sqrt(2.0) * s / np.sqrt(2.0 * nu)))
+    if noise and top > 0:
+        b_lo = max_spread_moments([top], [nu[i]])[0] - top
+        b_hi = max_spread_moments(np.full(m, top), np.full(m, nu[i]))[0] - top
+    else:
+        b_lo = b_hi = 0.0
+    b_mid = 0.5 * (b_lo + b_hi)
+    half = 0.5 * (b_hi - b_lo)
+    value = top - b_mid
+    u_b = half / math.sqrt(3.0)
+    # the interval: δ_top − S = σ_top·√(χ²_ν/ν) for a selection excess S (beyond Jensen's)
+    # in [0, S_max], S_max = B_max − B_min; the χ² interval of σ_top (exact for a scaled χ)
+    # of every δ_top − S, united: [(δ_top − S_max)·√(ν/χ²_(1+p)/2), δ_top·√(ν/χ²_(1−p)/2)]
+    from scipy import stats
+
+    e, sd = max_spread_moments([top], [nu[i]])
+    lo = (top - (b_hi - b_lo)) * math.sqrt(nu[i] / stats.chi2.ppf((1 + p) / 2, nu[i]))
+    hi = top * math.sqrt(nu[i] / stats.chi2.ppf((1 - p) / 2, nu[i]))
+    return {"value": value, "u_c": math.sqrt(sd * sd + u_b * u_b), "sd_max": sd, "u_bias": u_b,
+            "interval": (max(lo, 0.0), hi), "reading": top, "bias": b_mid,
+            "bias_bounds": (b_lo, b_hi), "contenders": m}
