@@ -63,10 +63,10 @@ READINGS_ZH = {
     "5.3.3.7:": "5.3.3.7：自下方到达为“升”，自上方到达为“降”；迟滞 = max |B_up − B_down|（读数见详细数据）；"
                 "给出值为该读数减去最大值选择偏差的中点，区间为 [0, 单侧 95 % 上限]。",
     "5.1.3.7:": "5.1.3.7：标准的读数为各恒定角速率下总体标准偏差的最大值 max δ_i（见详细数据）；所给值为最大真值 "
-                "max σ_i 的估计：该读数减去取最大值的偏差（仅 Jensen 偏差与竞争速率全部选择超出量之间的中点，"
+                "max σ_i 的估计：该读数减去取最大值的偏差（单值凸性偏差与竞争速率全部选择超出量之间的中点，"
                 "按比例的 χ 分布），以 95 % 区间表述（最大分散值的 χ² 区间在选择超出量范围上的并集；无 k）。",
     "5.3.3.9:": "5.3.3.9：参考输出为记录最后五分之一的平均值；标准的读数（最后一次超出带宽的时间）见详细数据；所给值为"
-                "带外时间（超出带宽的平滑值个数 × 步长）减去瞬态趋于平缓处的滞后偏差 t''·var/2（一阶瞬态）。",
+                "带外时间（超出带宽的平滑值个数 × 步长）减去瞬态趋于平缓处的滞后偏差 t''·方差/2（一阶瞬态）。",
     "5.3.3.8:": "5.3.3.8：a = g cos γ，输入轴向上时 γ = 0（式（28）的 sin γ 自水平起算）；各角度扣除地球自转"
                 "角速度；等步长转一整周。",
     "5.4.5.1 c)": "5.4.5.1 c)：宽带噪声 = 单边谱密度在 band_hz … broadband_high_hz 上的均方根；20 dB/dec 的 "
@@ -150,9 +150,9 @@ PHRASES_ZH = COMMON_PHRASES_ZH + (
     (r"sampling of the largest standard deviation \(scaled χ\)", "最大标准偏差的抽样（按比例的 χ 分布）"),
     (r"bias of the largest spread, E\[max δ_i\] − max σ_i, removed \(midpoint of Jensen's alone "
      r"… the contenders' full selection excess\)",
-     "最大分散值的偏差 E[max δ_i] − max σ_i，已扣除（取仅有 Jensen 偏差与竞争者全部选择超出量之间的中点）"),
+     "最大分散值的偏差 E[max δ_i] − max σ_i，已扣除（取仅有单值凸性偏差与竞争者全部选择超出量之间的中点）"),
     (r"late bias of the count where the transient flattens, t''·var\(level\)/2, removed "
-     r"\(shape factor 0 … 2\)", "瞬态趋于平缓处计数的滞后偏差 t''·var(电平)/2，已扣除（形状因子 0 … 2）"),
+     r"\(shape factor 0 … 2\)", "瞬态趋于平缓处计数的滞后偏差 t''·方差(电平)/2，已扣除（形状因子 0 … 2）"),
 )
 
 #: The forward/reverse figure (gonio.report.rate_figures.draw_cw_ccw): 5.1.3.8's symmetry
