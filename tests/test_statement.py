@@ -36,7 +36,7 @@ def test_factors_and_text():
     s = state(5.99906, 0.00316, k=1.97414, nu_eff=58.99, p=0.95, unit="mV/(°/s)")
     assert s.text() == "5.9991 ± 0.0032 mV/(°/s) (k = 1.97, ν_eff = 58, p ≈ 95 %)"
     assert (k_text(2.0), k_text(2.2622), nu_text(math.inf), nu_text(9.9), p_text(0.9545)) == \
-        ("2", "2.26", "∞", "9", "95")
+        ("2", "2.26", "∞", "9", "95.45")
 
 
 def test_upper_bound_of_non_negative_quantity():
@@ -115,9 +115,9 @@ def test_p_text_never_says_certainty_below_one():
     """A stated interval's probability below 1 is never printed as 100 %: it keeps the
     decimals that show it below 100 (rounded down at the last), and 1.0 is 100."""
     import math as _m
-    for p in (0.9967, 0.99949, 0.99995, 0.99998, 0.9999999, 1 - 1e-12):
+    for p in (0.99671, 0.99949, 0.99995, 0.99998, 0.9999999, 1 - 1e-12, 0.9999):
         t = p_text(p)
         assert float(t) < 100.0, (p, t)
         assert float(t) <= 100.0 * p + 0.05 and abs(float(t) - 100.0 * p) < 0.06, (p, t)
     assert p_text(1.0) == "100" and p_text(0.95) == "95"
-    assert _m.isclose(float(p_text(0.9967)), 99.7)
+    assert _m.isclose(float(p_text(0.99671)), 99.7)

@@ -142,7 +142,33 @@ def test_hand_cases_with_U(value, U, text):
 
 
 def test_p_is_stated_the_same_everywhere():
-    """95.45 % (k = 2 of the normal) is stated "95 %" like every other p."""
-    assert p_text(0.9545) == "95"
-    assert coverage_text(0.9545) == "approximately 95 %"
-    assert math.isclose(float(p_text(0.95)), 95.0)
+    """A p the procedure chose is stated as chosen, so the text says what results.json and
+    the DCC's si:coverageProbability carry: 0.9545 (the triad's, k = t for 95.45 %,
+    EA-4/02 Annex E) is "95.45", never "95" beside a k computed for 95.45 %; a p computed
+    from a distribution keeps two significant digits."""
+    from decimal import Decimal
+    assert p_text(0.9545) == "95.45" and Decimal(p_text(0.9545)) / 100 == Decimal("0.9545")
+    assert coverage_text(0.9545) == "approximately 95.45 %"
+    assert coverage_text(0.9545, "zh") == "约 95.45 %"
+    assert p_text(0.95) == "95" and p_text(0.99) == "99" and p_text(0.9973) == "99.73"
+    assert p_text(0.9946477675623514) == "99" and p_text(0.981526203417951) == "98"
+
+
+@pytest.mark.parametrize("k, text", [
+    (2.0, "2"), (2.5, "2.5"), (1.96, "1.96"),
+    (1.9954689314298435, "2.00"),      # t_95(68), the IEC ARW's k: never "2"
+    (1.9989715170333788, "2.00"),      # t_95(62), the JJF B_t's k
+    (2.0000024438996027, "2.00"),      # t_0.9545(∞)-like factor of the triad
+    (1.959963984540054, "1.96"), (2.0452, "2.05"), (12.706, "12.7"),
+])
+def test_k_is_never_stated_as_a_chosen_whole_number(k, text):
+    """A t-factor is stated to 3 significant digits; "2" (a chosen k) only for k = 2
+    exactly: the stated k, read back, is k to within half a unit of its last digit, and
+    a stated whole number means k is that number."""
+    from decimal import Decimal
+    t = k_text(k)
+    assert t == text
+    last = Decimal(1).scaleb(Decimal(t).as_tuple().exponent)
+    assert abs(Decimal(t) - Decimal(repr(k))) <= last / 2
+    if "." not in t:
+        assert float(t) == k

@@ -321,8 +321,9 @@ def test_environment_states_the_chamber_profile(run):
 
 def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
     """The matrix table's b cell states b's own k (the row's k column is M's); S and L in ‰
-    carry their k; the coverage probability 0.9545 is stated "approximately 95 %" as in
-    summary.txt ("p ≈ 95 %"), never "95.45 %"."""
+    carry their k; one p everywhere: the k are t for the p results.json carries (0.9545),
+    and the certificate (en, zh notes), summary.txt and the DCC state that same p
+    ("95.45 %", si:coverageProbability 0.9545), never "approximately 95 %" beside it."""
     res, page = run["res"], run["html"]
     spans = [(src, text) for src, rule, text in SPANS.findall(page)]
     srcs = [s for s, _ in spans]
@@ -332,10 +333,22 @@ def test_every_column_has_its_own_k_and_p_is_stated_alike(run):
         assert float(k_b) == pytest.approx(res["items"][f"b_{a}"]["uncertainty"]["k"], rel=5e-3)
     for p in ("xy", "xz", "yx", "yz", "zx", "zy"):
         assert f"items.S_{p}.uncertainty.k" in srcs and f"items.L_{p}.uncertainty.k" in srcs
+    ps = {it["uncertainty"]["coverage_probability"] for it in res["items"].values()
+          if it.get("uncertainty") and it["uncertainty"].get("U") is not None}
+    assert ps == {0.9545}, ps                       # the p the k were computed for
+    stated = "95.45"
     text = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<svg.*?</svg>", " ", page, flags=re.S)))
-    assert "95.45 %" not in text and "approximately 95 %" in text
+    assert f"approximately {stated} %" in text
+    assert not re.search(r"(approximately|≈|约) 95 %", text)
     summary = (run["dir"] / "cal" / "summary.txt").read_text(encoding="utf-8")
-    assert "95.45" not in summary and "p ≈ 95 %" in summary
+    assert f"p ≈ {stated} %" in summary and not re.search(r"≈ 95 %", summary)
+    dcc = run["dir"] / "cal" / "certificate.dcc.xml"
+    if dcc.exists():
+        got = set(re.findall(r"<si:coverageProbability>([^<]*)<", dcc.read_text(encoding="utf-8")))
+        assert got and {float(x) for x in got} == {float(stated) / 100}, got
+    from gonio.specs.triad_alignment.certificate import READINGS_TAKEN_ZH, TEXT
+    zh = " ".join(READINGS_TAKEN_ZH) + " ".join(v[1] for v in TEXT.values())
+    assert f"约 {stated} %" in zh and not re.search(r"约 ?95 %", zh)
 
 
 def test_bias_monte_carlo_is_of_the_same_long_term_quantity_as_the_gum(run):

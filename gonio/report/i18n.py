@@ -452,7 +452,7 @@ def display(rule: str, value: float | None, U: float | None = None) -> str:
     Rules: ``"U"`` (2 significant digits, :func:`display_uncertainty`),
     ``"dec<N>"`` (N decimal places; see :func:`rule_at_U`), ``"pmdec<N>"`` (± and the
     magnitude at N decimals: the draft's E = ± max|E_i|), ``"sdec<N>"`` (with its sign),
-    ``"k"`` (a coverage factor: 3 significant digits, trailing zeros dropped), ``"nu"``
+    ``"k"`` (a coverage factor: 3 significant digits, :func:`k_text`), ``"nu"``
     (ν_eff: its integer part, GUM G.6.4), ``"sci<E>.<N>"`` (the mantissa at N decimals ×
     10^E: a statement's common power of ten),
     ``"atU"`` (the decimal place of U), ``"sig<N>"`` (N significant digits),
@@ -518,10 +518,12 @@ def rule_at_U(U: float | None, fallback_sig: int = 3, value: float | None = None
 
 
 def coverage_text(p: float | None, lang: str = "en") -> str:
-    """"approximately 95 %" for a coverage probability 0.95 (JCGM 100 6.2.2).
+    """"approximately 95 %" for a coverage probability 0.95 (JCGM 100 6.2.2), p as
+    :func:`~gonio.result.statement.p_text` states it (0.9545: "95.45", as results.json and
+    the DCC carry it).
 
     >>> coverage_text(0.95), coverage_text(0.9545, "zh"), coverage_text(None)
-    ('approximately 95 %', '约 95 %', '—')
+    ('approximately 95 %', '约 95.45 %', '—')
     """
     if p is None:
         return "—"

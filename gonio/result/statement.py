@@ -16,7 +16,7 @@ Contents
                            its upper bound alone, with a note (the estimate stays in results.json)
 :class:`Statement`         the rounded texts every output prints (certificate, summary.txt,
                            CLI, DCC, figure labels)
-:func:`k_text`             a coverage factor as stated (3 significant digits)
+:func:`k_text`             a coverage factor as stated (3 significant digits; "2" only for k = 2)
 :func:`nu_text`            effective degrees of freedom as stated (integer part, or ∞)
 :func:`stated_nu`          ν_eff as stated and as k is computed from (integer part; ∞ above
                            :data:`NU_INFINITE`)
@@ -34,10 +34,13 @@ The rule (JCGM 100:2008 (GUM) 7.2.6, 7.2.2; JCGM 101 and EA-4/02 the same):
 * the value is stated to **the same decimal place** as U, half up (5.99906 → 5.9991 beside
   0.0032, 786.5 → 790 beside 160: digits left of the point are rounded away when U is that
   large);
-* beside U: the coverage factor k (3 significant digits, trailing zeros dropped: 1.97414 →
-  1.97, 2.000 → 2), the effective degrees of freedom ν_eff (the integer part, GUM G.6.4:
+* beside U: the coverage factor k (3 significant digits: 1.97414 → 1.97; trailing zeros
+  dropped only where k is exactly that number, 2.0 → 2, while a computed t-factor keeps
+  them, 1.9955 → 2.00), the effective degrees of freedom ν_eff (the integer part, GUM G.6.4:
   "truncate to the next lower integer"; ∞ where the budget has infinite degrees of
-  freedom or more than :data:`NU_INFINITE`) and the coverage probability p in per cent (2 significant digits: 0.9545 → 95);
+  freedom or more than :data:`NU_INFINITE`) and the coverage probability p in per cent
+  (:func:`p_text`: a p chosen by the procedure as chosen, 0.95 → 95, 0.9545 → 95.45; a p
+  computed from a distribution to 2 significant digits, 0.99465 → 99);
 * a quantity without an uncertainty keeps the specification's number of significant
   digits (``sig``, 3 unless the specification says otherwise);
 * U stated to more than six decimal places (or a value of 10¹⁵ or more) is written with a
@@ -193,15 +196,22 @@ def rounded(x: float, sig: int = 2) -> float:
 
 
 def k_text(k: float | None) -> str | None:
-    """A coverage factor as stated: 3 significant digits, trailing zeros dropped.
+    """A coverage factor as stated: 3 significant digits. Trailing zeros are dropped only
+    where the rounded text is k exactly (a chosen k = 2 is "2"); a computed factor that
+    rounds to a whole number keeps its three digits (t_95(68) = 1.9955 is "2.00", never
+    "2", which would present a t-factor as the chosen k = 2).
 
     >>> k_text(1.97414), k_text(2.0), k_text(2.0452), k_text(None)
     ('1.97', '2', '2.05', None)
+    >>> k_text(1.9954689), k_text(1.999), k_text(2.0000024), k_text(1.96), k_text(2.5)
+    ('2.00', '2.00', '2.00', '1.96', '2.5')
     """
     if k is None or not math.isfinite(float(k)):
         return None
     s = round_half_up(float(k), max(decimals_for_sig(float(k), 3), 0))
-    return s.rstrip("0").rstrip(".") if "." in s else s
+    if "." in s and Decimal(s) == Decimal(repr(float(k))):
+        return s.rstrip("0").rstrip(".")
+    return s
 
 
 #: Above this many effective degrees of freedom ν_eff is stated "∞" and k is the normal
@@ -272,18 +282,31 @@ P_TEXT_MAX_DECIMALS: int = 3
 
 
 def p_text(p: float | None) -> str | None:
-    """A coverage probability (a fraction) in per cent, 2 significant digits; a probability
-    below 1 is never shown as 100 (an interval's stated probability is not certainty, JCGM
-    100 6.2.2): it takes the decimals that keep it below 100, up to
-    :data:`P_TEXT_MAX_DECIMALS`, and is rounded down at that many.
+    """A coverage probability (a fraction) in per cent, as every output states it.
 
-    >>> p_text(0.95), p_text(0.9545), p_text(0.99), p_text(None)
-    ('95', '95', '99', None)
-    >>> p_text(0.9967), p_text(0.99998), p_text(0.9999999), p_text(1.0)
-    ('99.7', '99.998', '99.999', '100')
+    A probability chosen by the procedure (one written with at most two decimals in per
+    cent: 0.95, 0.9545 — the t-factors of EA-4/02 Annex E — 0.99, 0.9973) is stated as
+    chosen, "95", "95.45", so that the certificate, summary.txt, results.json (0.9545) and
+    the DCC (``si:coverageProbability`` 0.9545) state one p. A probability computed from a
+    distribution (the coverage an interval of whole grid steps reaches: 0.99465…) is stated
+    to 2 significant digits; a probability below 1 is never shown as 100 (an interval's
+    stated probability is not certainty, JCGM 100 6.2.2): it takes the decimals that keep it
+    below 100, up to :data:`P_TEXT_MAX_DECIMALS`, and is rounded down at that many.
+
+    >>> p_text(0.95), p_text(0.9545), p_text(0.99), p_text(0.9973), p_text(None)
+    ('95', '95.45', '99', '99.73', None)
+    >>> p_text(0.99465), p_text(0.981526), p_text(0.99671), p_text(0.99998), p_text(0.9999999)
+    ('99', '98', '99.7', '99.998', '99.999')
+    >>> p_text(1.0)
+    '100'
     """
     if p is None or not math.isfinite(float(p)):
         return None
+    with _wide():
+        chosen = Decimal(repr(float(p))).scaleb(2)
+    if 0 < chosen < 100 and chosen.as_tuple().exponent >= -2:
+        s = f"{chosen:f}"
+        return s.rstrip("0").rstrip(".") if "." in s else s
     v = 100.0 * float(p)
     d = max(decimals_for_sig(v, 2), 0)
     s = round_half_up(v, d)

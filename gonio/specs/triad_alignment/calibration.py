@@ -43,7 +43,7 @@ from gonio.specs.triad_alignment.analysis import (BIAS_HORIZON_S, COVERAGE, OFFD
 from gonio.errors import GonioError
 from gonio.specs.triad_alignment.readings import OUT, TriadReadings, read_triad_readings
 from gonio.physics.alignment import ARTICLE_WORKED_EXAMPLE, MisalignmentBudget, misalignment_budget
-from gonio.result.statement import coverage_k
+from gonio.result.statement import coverage_k, p_text
 from gonio.specs.triad_alignment.figure_data import figure_series
 from gonio.specs.triad_alignment.keys import ALIGNMENT_KEYS, AXES, THERMAL_POINT_KEYS
 
@@ -64,7 +64,7 @@ READINGS_TAKEN = (
     "axis and the static positions), the Earth rate of every orientation averaged over the "
     "swept table angle; for one ± pair it reduces to the article's difference formula.",
     "Uncertainties: Type A from the fit residuals, k = t(ν), coverage probability "
-    "approximately 95 %; the Monte Carlo "
+    "approximately " + p_text(COVERAGE) + " %; the Monte Carlo "
     "(JCGM 101) standard uncertainty is given beside it when trials were run.",
     "Residual leakage after alignment: M̂⁻¹M − I is zero for the estimate itself; its "
     "uncertainty is what the alignment leaves.",

@@ -5,7 +5,7 @@ These are the pages the certificate would carry for the ``triad-alignment``
 specification; the optical draft's certificate renderer (its own package) is built around
 the draft's items, so the pages are written as their own document (``--report FILE`` of
 ``gonio align`` and ``gonio thermal-model``). Every value is shown with its expanded
-uncertainty U (coverage probability 0.9545, stated ≈ 95 % as on the certificate, k stated), U to two significant digits and the
+uncertainty U (coverage probability 0.9545, stated 95.45 % as on the certificate, k stated), U to two significant digits and the
 value to the same decimal place (JCGM 100 7.2.6, via :mod:`gonio.report.i18n`).
 """
 
@@ -19,12 +19,13 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from gonio.specs.triad_alignment.thermal_model import Compensation, ThermalModelResult
-from gonio.specs.triad_alignment.analysis import OFFDIAG, AlignmentResult, cross_axis_table
+from gonio.specs.triad_alignment.analysis import COVERAGE, OFFDIAG, AlignmentResult, cross_axis_table
 from gonio.specs.triad_alignment.calibration import alignment_items, total_coverage_factor
 from gonio.atomic import write_text
 from gonio.report.figure_files import figure_bytes
 from gonio.report.i18n import decimals_for_sig, display, display_uncertainty, round_half_up
 from gonio.report.stated import item_nums
+from gonio.result.statement import p_text
 
 _CSS = ("body{font-family:'DejaVu Sans',sans-serif;font-size:10pt;margin:2em}"
         "table{border-collapse:collapse;margin:0.5em 0 1em}"
@@ -127,7 +128,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
         k = total_coverage_factor(u, u_b, nu_min)
         return with_k(value * factor, k * u * factor, k)
 
-    out = ["<h2>Alignment matrix (U for p ≈ 95 % (0.9545), every cell with the k of its own "
+    out = [f"<h2>Alignment matrix (U for p ≈ {p_text(COVERAGE)} %, every cell with the k of its own "
            "budget, t(ν_eff): the fit and the rate table)</h2>",
            f"<p>System matrix M ({html.escape(unit)} per °/s) and bias b ({html.escape(unit)}), "
            f"G = M ω + b, from {res.n_dwells} dwells"
@@ -167,7 +168,7 @@ def alignment_page(res: AlignmentResult, figure: Figure | None = None,
     out.append("<p>Bound-condition statement beside the GUM's (the rate table's errors at "
                "their bounds — rate error at its certificate's expanded uncertainty, every "
                "axis component at the fixture's bound — in their worst combination, a, plus "
-               "k·u of the fit: U = a + k·u; at least the same p ≈ 95 % at every table error "
+               f"k·u of the fit: U = a + k·u; at least the same p ≈ {p_text(COVERAGE)} % at every table error "
                "within the bounds, where the GUM's U holds over their distribution). Which of the two a "
                "certificate certifies is the protocol's <code>[alignment] "
                "uncertainty_statement</code> (default gum); this page: "
@@ -208,7 +209,7 @@ def thermal_page(res: ThermalModelResult, compensation: dict | None = None,
         for name, f in (("K", m.scale), ("b (°/s)", m.bias), ("ARW (°/√h)", m.arw)):
             if f is None:
                 continue
-            kf = stats.t.ppf(0.5 + 0.9545 / 2, f.dof)
+            kf = stats.t.ppf(0.5 + COVERAGE / 2, f.dof)
             c = f.coefficients()
             for key in c:
                 if key.startswith("u_"):
@@ -216,8 +217,8 @@ def thermal_page(res: ThermalModelResult, compensation: dict | None = None,
                 rows.append([name, f"{f.n_t}/{f.n_u}", key, with_k(c[key], kf * c['u_' + key], kf)])
         out.append(_table(["model", "order ϑ/U", "term", "coefficient ± U"], rows))
         g = m.prediction_grid(6)
-        kb = stats.t.ppf(0.5 + 0.9545 / 2, m.bias.dof)
-        ks = stats.t.ppf(0.5 + 0.9545 / 2, m.scale.dof)
+        kb = stats.t.ppf(0.5 + COVERAGE / 2, m.bias.dof)
+        ks = stats.t.ppf(0.5 + COVERAGE / 2, m.scale.dof)
         out.append(_table(["ϑ (°C)", "U (V)", "K ± U", "b (°/s) ± U"],
                           [[f"{r.theta_c:.1f}", f"{r.u_v:+.2f}", with_k(r.scale, ks * r.u_scale, ks),
                             with_k(r.bias_dps, kb * r.u_bias_dps, kb)]
