@@ -39,7 +39,7 @@ def test_startup_nu_2_gives_k_4_30():
     assert 2.0 < u.nu_eff < 3.0
     assert nu_text(u.nu_eff) == "2"
     assert u.k == pytest.approx(stats.t.ppf(0.975, 2), rel=1e-12)
-    assert state(0.0, u.U, k=u.k, nu_eff=u.nu_eff).k == "4.3"
+    assert state(0.0, u.U, k=u.k, nu_eff=u.nu_eff).k == "4.30"     # 3 significant digits
     assert u.U == pytest.approx(u.k * u.u_c, rel=1e-15)
 
 

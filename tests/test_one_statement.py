@@ -38,7 +38,7 @@ SPECS = ("ogam-draft", "jjf1535-2015", "iec62047-20", "triad-alignment")
 def demo(request, tmp_path_factory):
     d = tmp_path_factory.mktemp(request.param) / "demo"
     assert main(["demo", "--spec", request.param, "--seed", "3", "--out", str(d)]) == 0
-    return {"spec": request.param,
+    return {"spec": request.param, "dir": d,
             "res": json.loads((d / "results.json").read_text(encoding="utf-8")),
             "summary": (d / "summary.txt").read_text(encoding="utf-8"),
             "html": (d / "certificate.html").read_text(encoding="utf-8"),
@@ -211,14 +211,58 @@ def test_numbers_agree_across_outputs(demo):
         for kinds, real, field in ([] if it["unit"].endswith("/g") else reals.get(key, [])):
             if field != value_field(it):     # E's signed extreme: its own number
                 continue
-            assert real.find("si:value", NS).text == dsi_decimal(st.value_text), key
+            # an item stated by its bound alone (its estimate fell below zero): the DCC's
+            # value is the interval's lower end, never the estimate outside the interval
+            want_v = st.interval_ends[0] if st.below_zero else st.value_text
+            assert real.find("si:value", NS).text == dsi_decimal(want_v), key
             mu = real.find("si:measurementUncertaintyUnivariate/*", NS)
             if mu is None:
                 continue
             assert float(mu.find("si:coverageProbability", NS).text) == p, key
             if kinds == ["expandedMU"]:
                 assert mu.find("si:valueExpandedMU", NS).text == dsi_decimal(st.U_text), key
-                assert k_text(float(mu.find("si:coverageFactor", NS).text)) == st.k, key
+                # the stated k, digits and all ("2.00" for a t-factor 1.9955, never "2")
+                kt = mu.find("si:coverageFactor", NS).text
+                assert kt == dsi_decimal(st.k) and k_text(float(kt)) in (st.k, kt.rstrip(
+                    "0").rstrip(".")), key
             elif kinds == ["coverageIntervalMU"]:
                 assert (mu.find("si:intervalMin", NS).text, mu.find("si:intervalMax", NS).text) \
                     == tuple(dsi_decimal(x) for x in st.interval_ends), key
+
+
+def test_items_csv_states_the_certificates_numbers(demo):
+    """tables/items.csv carries each item's one statement: value ± U with k and the ν k was
+    computed from (k = t_p(ν) checked with scipy; ν empty where k came from elsewhere, a JCGM
+    101 convolution's k), or the interval's ends with U and k empty (no reach that reads as
+    value ± U beside the interval); worked out here from results.json's numbers."""
+    import pandas as pd
+    from scipy import stats
+
+    rows = pd.read_csv(demo["dir"] / "tables" / "items.csv", keep_default_na=False,
+                       na_values=[""]).set_index("item")
+    assert {"interval_low", "interval_high"} <= set(rows.columns)
+    for key, it in measured(demo["res"]).items():
+        row, u = rows.loc[key], it["uncertainty"]
+        p = u["coverage_probability"]
+        if by_interval(it):
+            assert pd.isna(row["U"]) and pd.isna(row["k"]), key
+            lo, hi = u["interval"] if u.get("interval") is not None else \
+                (0.0, it["value"] + u["U"])
+            assert (row["interval_low"], row["interval_high"]) == pytest.approx((lo, hi)), key
+            assert row["value"] == pytest.approx(stated_value(it)) or (
+                pd.isna(row["value"]) and it["value"] < 0), key
+            nu = u["nu_eff"]
+            assert (pd.isna(row["nu"]) if nu is None else
+                    row["nu"] == (math.inf if nu > 1000 else max(1, math.floor(nu)))), key
+            continue
+        assert pd.isna(row["interval_low"]) and pd.isna(row["interval_high"]), key
+        assert row["U"] == pytest.approx(u["U"]) and row["k"] == pytest.approx(u["k"]), key
+        if pd.isna(row["nu"]):      # k did not come from a ν: no t-factor of any ν
+            nu = u["nu_eff"]
+            nu_s = math.inf if nu is None or nu > 1000 else max(1, math.floor(nu))
+            assert not math.isclose(u["k"], stats.t.ppf(0.5 + p / 2, nu_s), rel_tol=1e-6), key
+        else:                       # ν as stated, and k = t_p(ν) of it
+            assert u["k"] == pytest.approx(stats.t.ppf(0.5 + p / 2, row["nu"]), rel=1e-6), key
+            nu = u["nu_eff"]
+            assert row["nu"] == (math.inf if nu is None or nu > 1000
+                                 else max(1, math.floor(nu))), key

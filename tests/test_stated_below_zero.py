@@ -115,7 +115,15 @@ def test_below_zero_estimate_is_stated_by_its_upper_bound(cal):
     r = root.find(".//dcc:result[@id='result-scale_factor_nonlinearity']", NS)
     desc = " ".join(t.text for t in r.iterfind(".//dcc:description/dcc:content", NS))
     assert "bias-corrected estimate below zero" in desc
-    assert float(r.find(".//si:value", NS).text) < 0      # machine-readable: the estimate
+    # the DCC states the certificate's statement: no point value outside its interval (the
+    # signed estimate stays in results.json); si:value is the interval's lower end, 0
+    for key in below:
+        r = root.find(f".//dcc:result[@id='result-{key}']", NS)
+        v = r.find(".//si:real/si:value", NS).text
+        ci = r.find(".//si:coverageIntervalMU", NS)
+        lo, hi = (float(ci.find(f"si:{e}", NS).text) for e in ("intervalMin", "intervalMax"))
+        assert lo == 0.0 and float(v) == lo and lo <= float(v) <= hi, (key, v, lo, hi)
+        assert hi == pytest.approx(res["items"][key]["upper_bound"]), key
 
 
 def test_minus_sign_on_the_certificate_only(cal):

@@ -133,13 +133,18 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
     the path in results.json is recorded in an XML comment before the si:real (for the number checks),
     with ``note`` (e.g. ``factor=…`` of a unit conversion) appended. An item stated by its
     coverage interval (``interval`` the stated ends, ``u_std`` its standard uncertainty,
-    ``p``) is written as si:coverageIntervalMU instead of an expanded uncertainty."""
+    ``p``) is written as si:coverageIntervalMU instead of an expanded uncertainty; its
+    si:value is never a point outside that interval (:func:`value_in_interval`)."""
+    shown = dsi_decimal(str(value))
+    if interval is not None:
+        shown, moved = value_in_interval(shown, interval)
+        note += " value=intervalMin (the estimate fell below the interval)" if moved else ""
     if isinstance(value, Num):
         parent.append(etree.Comment(f" src={value.src} rule={value.rule}{note} "))
     r = element(parent, "si:real")
     if label:
         element(r, "si:label", label)
-    element(r, "si:value", dsi_decimal(str(value)))
+    element(r, "si:value", shown)
     element(r, "si:unit", dsi or unit_dsi(unit))
     if U is not None and k is not None and p is not None:
         mu = element(element(r, "si:measurementUncertaintyUnivariate"), "si:expandedMU")
@@ -153,6 +158,26 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
         element(ci, "si:intervalMax", dsi_decimal(interval[1]))
         element(ci, "si:coverageProbability", repr(float(p)))
     return r
+
+
+def value_in_interval(value: str, interval: tuple[str, str]) -> tuple[str, bool]:
+    """The si:value of an item stated by its coverage interval alone, and whether it was
+    moved: the value as stated where it lies in the interval, else the interval's lower end
+    (a non-negative quantity whose estimate fell below zero is stated by its upper bound
+    alone, "≤ upper (interval [0, upper])": the certificate states no value outside the
+    interval, so the DCC carries none either; the interval's lower end 0, the nearest
+    possible value, is the value of that statement, and results.json keeps the signed
+    estimate).
+
+    >>> value_in_interval("-0.000016", ("0.000000", "0.000040"))
+    ('0.000000', True)
+    >>> value_in_interval("0.112", ("0.066", "0.204"))
+    ('0.112', False)
+    """
+    lo = dsi_decimal(interval[0])
+    if float(value) < float(lo):
+        return lo, True
+    return value, False
 
 
 def quantity(parent, name: str, value, unit: str, *, ref_type: str | None = None,

@@ -118,8 +118,10 @@ def item_dcc_tree(result, *, lab: dict | None = None, cert_id: str, data=None,
         elif n["interval"] is not None and n["interval"]["u"] and p is not None:
             kw = {"interval": n["interval"]["ends"], "u_std": n["interval"]["u"],
                   "p": float(p)}                       # stated by its coverage interval
+        st = n.get("statement")
         quantity(d, name, n["value"], "", dsi=compose_dsi(it["unit"], spec.dcc_units),
-                 ref_type="basic_measuredValue", **kw)
+                 ref_type="basic_measuredValue",
+                 description=st.text() if st is not None and st.below_zero else None, **kw)
     for mname, keys in content_field(data, "MATRICES"):
         flat = [k for row in keys for k in row]
         if not all(k in items and items[k]["measured"] for k in flat):

@@ -209,12 +209,21 @@ def rate_dcc_tree(result, *, lab: dict | None = None, cert_id: str) -> "etree.El
                      ref_type=f"basic_measuredValue {clause_ref_type(spec.key, it['clause'])}",
                      description=(f"{item_nums(it, f'items.{key}')['statement'].text()} in "
                                   f"results.json, written per m s⁻² (g_n = "
-                                  f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv else None, **kw)
+                                  f"{STANDARD_GRAVITY_M_S2} m s⁻²)") if conv
+                     else _below_zero_text(n), **kw)
     conformity_statements(sts, items, lambda k: items[k]["title"],
                           lambda k: dsi_unit(items[k]["unit"], out_unit, src["file"],
                                            spec.dcc_units),
                           labels("en"))
     return root
+
+
+def _below_zero_text(n: dict) -> str | None:
+    """The certificate's statement of a non-negative item whose estimate fell below zero
+    (its upper bound alone and the note), the description beside the DCC's value, which
+    is then the interval's lower end (:func:`gonio.report.dcc.value_in_interval`)."""
+    st = n.get("statement")
+    return st.text() if st is not None and st.below_zero else None
 
 
 def item_p(it: dict) -> float | None:

@@ -1,9 +1,11 @@
 """The one writer of a result: ``results.json``, ``summary.txt`` and ``tables/*.csv``.
 
-``items.csv`` lists every item (key, clause, value, unit, u, U, k, ν_eff, p, measured,
-conformity outcome); a result's own tables (``Result.tables``: name → DataFrame, e.g. the
-optical draft's per-item tables or a triad's thermal prediction band) follow under their
-names. Written in a fixed order with ``\\n`` line ends (byte-identical on every platform).
+``items.csv`` lists every item (key, clause, value, unit, u, U, k, ν, p, the coverage
+interval's ends, measured, conformity outcome) with the numbers of the item's one 95 %
+statement (:func:`item_row`); a result's own tables (``Result.tables``: name → DataFrame,
+e.g. the optical draft's per-item tables or a triad's thermal prediction band) follow under
+their names. Written in a fixed order with ``\\n`` line ends (byte-identical on every
+platform).
 """
 
 from __future__ import annotations
@@ -15,28 +17,81 @@ from pathlib import Path
 import pandas as pd
 
 from gonio.atomic import output_dir, write_text
+from gonio.errors import GonioError
+from gonio.result.statement import (K_SOURCE_MAX_ABS, coverage_k, item_statement,
+                                    stated_nu)
 
-ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "measured",
-                "conformity"]
+ITEM_COLUMNS = ["item", "clause", "value", "unit", "u", "U", "k", "nu", "p", "interval_low",
+                "interval_high", "measured", "conformity"]
+
+
+def _k_from_nu(unc) -> bool:
+    """Whether ``unc``'s k is the t-factor of its ν_eff as stated (ν_eff None or ∞: the
+    normal quantile) — not a k of a convolution, a Monte Carlo or a laboratory's choice."""
+    k, p = unc.k, unc.coverage_probability
+    if k is None or p is None or not math.isfinite(float(k)):
+        return False
+    return math.isclose(float(k), coverage_k(unc.nu_eff, float(p)), rel_tol=1e-6)
+
+
+def item_row(key: str, it) -> dict:
+    """The ``items.csv`` row of item ``it``: the numbers of its one statement
+    (:func:`~gonio.result.statement.item_statement`), unrounded.
+
+    * stated as value ± U: ``U`` and ``k``; ``nu`` the ν_eff as stated and as k was
+      computed from (:func:`~gonio.result.statement.stated_nu`: its integer part, ∞ above
+      the threshold or where ν_eff is infinite), empty where k did not come from ν (a JCGM
+      101 convolution's k, a fixed k): a ν beside such a k would read as its source;
+    * stated by an interval (a dispersion's χ² interval, an extreme's Monte Carlo or
+      max|x| interval, a non-negative quantity's [0, value + U]): ``interval_low`` and
+      ``interval_high``, ``U`` and ``k`` empty (a reach beside an empty k reads as value ±
+      U, a second statement); ``nu`` the interval's ν where the statement states one; for an
+      extreme of magnitudes (:data:`~gonio.result.statement.K_SOURCE_MAX_ABS`) ``value`` is
+      the extreme max|x_i| the interval is of (the signed one stays in results.json); a
+      non-negative quantity whose estimate fell below zero, stated by its upper bound
+      alone, has ``value`` empty, as the certificate states no value (the signed estimate
+      stays in results.json).
+    A not-measured item has empty numbers."""
+    row = {"item": key, "clause": it.clause, "value": None, "unit": it.unit, "u": None,
+           "U": None, "k": None, "nu": None, "p": None, "interval_low": None,
+           "interval_high": None, "measured": bool(it.measured),
+           "conformity": None if it.conformity is None else it.conformity.outcome}
+    if not it.measured:
+        return row
+    row["value"] = it.value
+    unc = it.uncertainty
+    if unc is None:
+        return row
+    try:
+        st = item_statement(it)
+    except GonioError:          # unstateable items are reported not measured (run_items)
+        st = None
+    row.update(u=unc.u_c, p=unc.coverage_probability)
+    if st is not None and st.interval is not None:
+        if unc.interval is not None:
+            lo, hi = float(unc.interval[0]), float(unc.interval[1])
+        else:                   # a non-negative quantity's [0, value + U] (state())
+            lo, hi = 0.0, float(it.value) + float(unc.U)
+        if unc.k is None and unc.k_source == K_SOURCE_MAX_ABS:
+            row["value"] = hi - float(unc.U)
+        elif st.below_zero:     # stated by its bound alone: no estimate outside [0, upper]
+            row["value"] = None
+        row.update(interval_low=lo, interval_high=hi,
+                   nu=stated_nu(unc.nu_eff) if st.nu_eff is not None else None)
+        return row
+    if st is not None and st.U is None:      # stated without an uncertainty
+        return row
+    row.update(U=unc.U, k=unc.k)
+    if _k_from_nu(unc):
+        nu = stated_nu(unc.nu_eff)
+        row["nu"] = math.inf if nu is None else nu
+    return row
 
 
 def items_table(result) -> pd.DataFrame:
-    """One row per item (not-measured items with empty numbers)."""
-    rows = []
-    for key, it in result.items.items():
-        unc = it.uncertainty if it.measured else None
-        rows.append({"item": key, "clause": it.clause,
-                     "value": it.value if it.measured else None, "unit": it.unit,
-                     "u": None if unc is None else unc.u_c, "U": None if unc is None else unc.U,
-                     "k": None if unc is None else unc.k,
-                     # ν_eff None and inf are both infinite (Uncertainty): one form, "inf",
-                     # as results.json (null) read back gives the same table
-                     "nu": None if unc is None else (math.inf if unc.nu_eff is None
-                                                     else unc.nu_eff),
-                     "p": None if unc is None else unc.coverage_probability,
-                     "measured": bool(it.measured),
-                     "conformity": None if it.conformity is None else it.conformity.outcome})
-    return pd.DataFrame(rows, columns=ITEM_COLUMNS)
+    """One row per item (:func:`item_row`; not-measured items with empty numbers)."""
+    return pd.DataFrame([item_row(key, it) for key, it in result.items.items()],
+                        columns=ITEM_COLUMNS)
 
 
 def result_tables(result) -> dict[str, pd.DataFrame]:

@@ -141,7 +141,7 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
             quantity(data, "signed extreme of E_i", s["signed"], item["unit"])
             if isinstance(s["position"], Num):
                 quantity(data, "position of the extreme", s["position"], "deg")
-        elif s["below_zero"]:     # the signed estimate as results.json has it, and why
+        elif s["below_zero"]:     # its bound alone (si:value the interval's lower end), and why
             quantity(data, L[name], s["value"], item["unit"],
                      description="; ".join(d for d in (LABELS["below_zero"]["en"],
                                                        _range_table_text(res, name, L)) if d),

@@ -1,0 +1,65 @@
+"""An item stated only by its coverage interval carries no point value outside it in the
+DCC: a non-negative quantity whose estimate fell below zero (stated on the certificate by
+its upper bound alone, "≤ upper (interval [0, upper])") is written with si:value the
+interval's lower end, 0 — the certificate states no value, and results.json keeps the
+signed estimate. Checked through the writers every DCC uses (the rate and per-item DCCs'
+:func:`gonio.report.stated.item_nums` → :func:`gonio.report.dcc.quantity`), on numbers
+written here, with the interval's ends worked out independently of the statement rule."""
+
+from __future__ import annotations
+
+import math
+from decimal import ROUND_CEILING, Decimal
+
+import pytest
+from lxml import etree
+
+from gonio.report.dcc import DCC_NS, SI_NS, element, quantity
+from gonio.report.stated import item_nums
+
+NS = {"dcc": DCC_NS, "si": SI_NS}
+
+
+def _item(value, U, interval=None):
+    unc = {"U": U, "u_c": U / 2, "k": None if interval else 2.0, "nu_eff": None,
+           "coverage_probability": 0.95, "k_source": "neyman-belt" if interval else "x"}
+    if interval:
+        unc["interval"] = list(interval)
+    return {"value": value, "unit": "%", "measured": True, "nonnegative": True,
+            "clause": "7.7", "uncertainty": unc}
+
+
+@pytest.mark.parametrize("value, U, interval", [
+    (-1.5776118482164668e-05, 5.477989761853442e-05, (0.0, 3.900377913636975e-05)),  # C_g
+    (-0.5, 2.54, (0.0, 2.04)),
+    (-3.0, 4.0, None),          # a ± U item below zero: [0, value + U] by the rule
+])
+def test_dcc_value_lies_in_the_stated_interval(value, U, interval):
+    it = _item(value, U, interval)
+    n = item_nums(it, "items.x")
+    st = n["statement"]
+    assert st.below_zero and n["interval"] is not None
+    root = element(etree.Element("root", nsmap={"dcc": DCC_NS, "si": SI_NS}), "dcc:data")
+    quantity(root, "x", n["value"], "%", interval=n["interval"]["ends"],
+             u_std=n["interval"]["u"], p=0.95, description=st.text())
+    v = float(root.find(".//si:real/si:value", NS).text)
+    lo = float(root.find(".//si:intervalMin", NS).text)
+    hi = float(root.find(".//si:intervalMax", NS).text)
+    # the interval as the certificate states it: [0, upper], upper = the interval's end
+    # rounded up at two significant digits of its distance from 0
+    end = interval[1] if interval else value + U
+    q = Decimal(1).scaleb(-(2 - 1 - Decimal(repr(end)).adjusted()))
+    assert lo == 0.0 and hi == float(Decimal(repr(end)).quantize(q, rounding=ROUND_CEILING))
+    assert lo <= v <= hi and v == 0.0                     # never the estimate below zero
+    assert not math.isclose(v, value)
+    assert "below zero" in root.find(".//dcc:description/dcc:content", NS).text
+
+
+def test_a_value_inside_its_interval_is_written_as_stated():
+    it = _item(0.112, 0.092, (0.066, 0.204))
+    it["nonnegative"] = False
+    n = item_nums(it, "items.x")
+    root = element(etree.Element("root", nsmap={"dcc": DCC_NS, "si": SI_NS}), "dcc:data")
+    quantity(root, "x", n["value"], "%", interval=n["interval"]["ends"],
+             u_std=n["interval"]["u"], p=0.95)
+    assert root.find(".//si:real/si:value", NS).text == "0.112"
