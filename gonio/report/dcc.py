@@ -135,12 +135,16 @@ def real(parent, value: Num | str, unit: str, *, U: Num | None = None, k: Num | 
     coverage interval (``interval`` the stated ends, ``u_std`` its standard uncertainty,
     ``p``) is written as si:coverageIntervalMU instead of an expanded uncertainty; its
     si:value is never a point outside that interval (:func:`value_in_interval`)."""
-    shown = dsi_decimal(str(value))
+    shown, moved = dsi_decimal(str(value)), False
     if interval is not None:
         shown, moved = value_in_interval(shown, interval)
-        note += " value=intervalMin (the estimate fell below the interval)" if moved else ""
     if isinstance(value, Num):
-        parent.append(etree.Comment(f" src={value.src} rule={value.rule}{note} "))
+        # a value moved to the interval's lower end names that number as its source
+        src = (value.src.rsplit(".value", 1)[0] + ".uncertainty.interval.0" if moved
+               else value.src)
+        note += " (the estimate fell below the interval: si:value its lower end)" if moved \
+            else ""
+        parent.append(etree.Comment(f" src={src} rule={value.rule}{note} "))
     r = element(parent, "si:real")
     if label:
         element(r, "si:label", label)
