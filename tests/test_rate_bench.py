@@ -143,12 +143,14 @@ def test_jjf_results_json_shape(jjf_noise_off):
         assert set(it) >= {"value", "unit", "clause", "measured", "reason", "uncertainty"}
         assert it["clause"].startswith("7.2.")
         if it["measured"]:
-            # K_r and B_r state their χ² interval beside U (issue 24)
+            # K_r, B_r and B_s are stated by their χ² interval, the magnitudes K_t, B_g and
+            # B_t (a largest |x_i|) by the interval of the extreme of magnitudes
             assert set(it["uncertainty"]) - {"interval"} == {
                 "components", "u_c", "U", "k", "nu_eff", "coverage_probability", "k_source"}
-            assert ("interval" in it["uncertainty"]) == (key in ("sf_repeatability",
-                                                                 "bias_repeatability",
-                                                                 "bias_stability")), key
+            assert ("interval" in it["uncertainty"]) == (key in (
+                "sf_repeatability", "bias_repeatability", "bias_stability",
+                "sf_temperature_sensitivity", "g_sensitivity",
+                "bias_temperature_sensitivity")), key
             assert it["uncertainty"]["coverage_probability"] == 0.95
     json.dumps(js, allow_nan=False)
     lit = js["items"]["g_sensitivity"]["details"]["literal_per_axis_dph_per_g"]["z"]

@@ -1,7 +1,8 @@
 """An item's uncertainty from its budget: the GUM propagation of a budget into the one
 :class:`~gonio.result.model.Uncertainty` an item states (JCGM 100, with k from ν_eff), its
 JCGM 101 Monte Carlo validation when a calibration asks for it, and the uncertainty of a
-standard deviation (a repeatability, a noise level) stated by its one-sided χ² interval.
+standard deviation (a repeatability, a noise level) stated by its one-sided χ² interval, and
+the interval of a magnitude max_i |x_i| (:func:`max_magnitude_statement`).
 
 The kit re-exports :func:`gum`, :func:`monte_carlo_validation` and
 :func:`std_dev_uncertainty` (``gonio.kit``; docs/kit.md#uncertainty-the-gum-model-contract);
@@ -13,6 +14,9 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
+from dataclasses import replace
+
+import numpy as np
 
 from gonio.result.model import Uncertainty
 from gonio.result.statement import stated_gum
@@ -107,3 +111,42 @@ def std_dev_uncertainty(s: float, nu: int, what: str) -> Uncertainty:
            "type": "A", "u": u_c, "c": 1.0, "contribution": u_c, "dof": float(nu)}
     return Uncertainty([row], u_c, U, None, float(nu), None, 0.95,
                        "chi-square", interval=(0.0, s + U))
+
+
+#: ``k_source`` of a magnitude max_i |x_i| stated by the interval of the extreme of
+#: magnitudes (:func:`max_magnitude_statement`).
+K_SOURCE_MAX_MAGNITUDE = "interval of max|x_i| (uncertainty.extreme.max_abs_interval)"
+
+
+def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
+                            value: float) -> tuple[float, Uncertainty, dict]:
+    """The one statement of a characteristic that is the largest magnitude max_i |x_i| of
+    signed points (IEC 62047-20 5.1.3.5 and 5.3.3.3: the largest |R_Vi|; 5.2, 5.3.3.8; JJF
+    1535 7.2.12's B_g = max |B_g,axis|), and its stated value.
+
+    GUM's linearisation of |x| at the largest point states value ± U, an interval reaching
+    below zero for a magnitude and holding θ = max_i |μ_i| with less than 95 % where the
+    points are near zero or compete (|x| is not linear there). Stated instead, as the
+    optical draft's E (7.4), by the 95 % interval of the extreme of magnitudes,
+    [max(0, max_i(|x_i| − c_L u_i)), max_i(|x_i| + c_H u_i)]
+    (:func:`uncertainty.extreme.max_abs_interval`: ≥ 95 % for every pattern of the true
+    values and any correlation; the points' own u_i and ν_i from ``points``, their signed
+    GUM results). No k and no ν: the interval is the statement, and U is the reach from the
+    value to its upper end (the decision rule's guard band). ``u``: the budget of the value
+    (its components and u_c are kept, for the budget table); ``value``: the estimate (a
+    reading less its selection midpoint), never taken below the interval's lower end (a
+    point measured with a smaller u shows that the extreme is at least that). The third
+    element: the interval's figures and its points (x_i, u_i, ν_i) for the item's details."""
+    from uncertainty.extreme import max_abs_interval
+
+    nu = [math.inf if q.nu_eff is None or not math.isfinite(q.nu_eff) else max(1.0, q.nu_eff)
+          for q in points]
+    r = max_abs_interval(np.asarray(x, dtype=float), [q.u_c for q in points], nu)
+    if not r.upper > r.lower:       # no uncertainty at all (a noise-free bench): no interval
+        return float(value), u, {}
+    value = min(max(float(value), r.lower), r.upper)
+    figures = {"max_abs_interval": {**r.to_dict(), "x": [float(v) for v in x],
+                                    "u": [float(q.u_c) for q in points], "nu": nu}}
+    return value, replace(u, U=r.upper - value, k=None, nu_eff=None,
+                          coverage_probability=r.p, k_source=K_SOURCE_MAX_MAGNITUDE,
+                          interval=(r.lower, r.upper)), figures

@@ -23,7 +23,7 @@ from gonio.analysis.noise.psd import welch_band_rms_u_rel, welch_psd
 from gonio.analysis.noise.stream import value_range
 from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
-from gonio.result.gum import gum, std_dev_uncertainty
+from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.specs._rate_family.rate_records import (RateContext, static_output, static_rate_dph,
                                                    segment_means, segment_samples)
@@ -573,19 +573,27 @@ def ratiometric(ctx: Context) -> Item:
     a = np.array([c["a"] for c in runs])
     ib = int(np.argmin(np.abs(V - ctx.v_base)))
     R = np.array([ief.ratiometric_error_iec(a[i], a[ib], V[i], V[ib]) for i in range(V.size)])
-    i = int(np.argmax(np.abs(R)))
-    u_fl = 0.0 if i == ib else fluctuation_ratio_u_rel(
-        runs[i]["x"], runs[i]["t"], runs[ib]["x"], runs[ib]["t"],
-        sf_tc_rel(ctx) * ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s)
-    u = gum(lambda ai, ab, f: 100 * abs(ief.ratiometric_error_iec(ai * (1 + f), ab, V[i], V[ib])),
-            [from_u("a_Vi", a[i], runs[i]["u_a"], dof=runs[i]["nu_a"]),
-             from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"]),
-             from_u("fluct", 0.0, u_fl, type="B",
-                    source="chamber fluctuation (± amplitude, period) × T_c,SF between the "
-                           "supply runs")])
-    return Item("ratiometric_error", t, cl, un, 100 * abs(float(R[i])), uncertainty=u,
+    def point(j):       # the signed R_Vj in % with its budget
+        u_fl = 0.0 if j == ib else fluctuation_ratio_u_rel(
+            runs[j]["x"], runs[j]["t"], runs[ib]["x"], runs[ib]["t"],
+            sf_tc_rel(ctx) * ctx.chamber_fluctuation_c, ctx.chamber_fluctuation_period_s)
+        return gum(lambda ai, ab, f: 100 * ief.ratiometric_error_iec(ai * (1 + f), ab, V[j],
+                                                                     V[ib]),
+                   [from_u("a_Vi", a[j], runs[j]["u_a"], dof=runs[j]["nu_a"]),
+                    from_u("a_Vb", a[ib], runs[ib]["u_a"], dof=runs[ib]["nu_a"]),
+                    from_u("fluct", 0.0, u_fl, type="B",
+                           source="chamber fluctuation (± amplitude, period) × T_c,SF between "
+                                  "the supply runs")])
+
+    # the base supply's R is 0 by definition (no point of the extreme)
+    others = [j for j in range(V.size) if j != ib] or [ib]
+    pts = [point(j) for j in others]
+    i = int(np.argmax(np.abs(R[others])))
+    value, u, iv = max_magnitude_statement(pts[i], 100 * R[others], pts,
+                                           100 * abs(float(R[others[i]])))
+    return Item("ratiometric_error", t, cl, un, value, uncertainty=u,
                 details={"V": V, "a_V": a, "R_pct": 100 * R,
-                         "supply_sensitivity_pct": 100 * (a - a[ib]) / a[ib]})
+                         "supply_sensitivity_pct": 100 * (a - a[ib]) / a[ib], **iv})
 
 
 def cross_axis(ctx: Context) -> Item:
@@ -617,14 +625,24 @@ def cross_axis(ctx: Context) -> Item:
         return not_measured("cross_axis", t, cl, un, "no rotation about X or Y")
     ax = max(per, key=lambda k: abs(per[k]["plus_minus"]))
     align = math.sin(math.radians(ctx.axis_alignment_deg))
-    u = gum(lambda k, al: 100 * abs(k + al),
-            [from_u("K_" + ax, per[ax]["plus_minus"], us[ax], dof=50,
-                    source="noise of the rotating means"),
-             type_b("align", 0.0, align, "rectangular",
-                    source="alignment of the input axis to the plane perpendicular to the rotation axis "
-                           "(table axis and fixture): sin(half-width)")])
-    return Item("cross_axis", t, cl, un, 100 * abs(per[ax]["plus_minus"]), uncertainty=u,
-                details={"per_axis": per, "axis": ax})
+
+    def point(name):        # the signed K of one axis in % with its budget
+        return gum(lambda k, al: 100 * (k + al),
+                   [from_u("K_" + name, per[name]["plus_minus"], us[name], dof=50,
+                           source="noise of the rotating means"),
+                    type_b("align", 0.0, align, "rectangular",
+                           source="alignment of the input axis to the plane perpendicular to "
+                                  "the rotation axis (table axis and fixture): "
+                                  "sin(half-width)")])
+
+    names = list(per)
+    pts = [point(n) for n in names]
+    # a magnitude, the larger |K| of X and Y: the interval of the extreme of magnitudes
+    value, u, iv = max_magnitude_statement(pts[names.index(ax)],
+                                           [100 * per[n]["plus_minus"] for n in names], pts,
+                                           100 * abs(per[ax]["plus_minus"]))
+    return Item("cross_axis", t, cl, un, value, uncertainty=u,
+                details={"per_axis": per, "axis": ax, **iv})
 
 
 def bias(ctx: Context) -> Item:
@@ -1853,7 +1871,8 @@ def bias_ratiometric(ctx: Context) -> Item:
         return lambda ai, ab, d: 100 * ief.ratiometric_error_iec(ai + d, ab, V[i], V[ib])
 
     others = [j for j in range(V.size) if j != ib] or [ib]
-    sds = [gum(model(j), inputs(j)).u_c for j in others]
+    pts = [gum(model(j), inputs(j)) for j in others]
+    sds = [q.u_c for q in pts]
     pct = np.abs(100 * R[others])
     i = others[int(np.argmax(pct))]
     excess, m_sel = rg.selection_excess(pct, np.array(sds))
@@ -1861,11 +1880,14 @@ def bias_ratiometric(ctx: Context) -> Item:
             inputs(i) + [type_b("noise_max", -excess, excess, "rectangular",
                                 source="selection excess of the largest |R| over the supplies "
                                        "(midpoint ± c_m·σ/2 removed)")])
-    return Item("bias_ratiometric_error", t, cl, un, 100 * abs(float(R[i])) - excess,
+    # one statement: the interval of the extreme of magnitudes (never value ± U of |·|)
+    value, u, iv = max_magnitude_statement(u, 100 * R[others], pts,
+                                           100 * abs(float(R[i])) - excess)
+    return Item("bias_ratiometric_error", t, cl, un, value,
                 uncertainty=u,
                 details={"V": V, "rest_output": a, "R_pct": 100 * R, "reading_pct": float(pct.max()),
                          "contending_values": m_sel,
-                         "departure_output_units": a - a[ib] * V / V[ib]})
+                         "departure_output_units": a - a[ib] * V / V[ib], **iv})
 
 
 def g_sensitivity(ctx: Context) -> Item:
@@ -1917,13 +1939,23 @@ def g_sensitivity(ctx: Context) -> Item:
         return not_measured("g_sensitivity", t, cl, un, "no tilting-stand set-up with ≥ 4 angles")
     key = max(res, key=lambda k: abs(res[k][0]))
     v, se, dof, u_dr = res[key]
-    u = gum(lambda s, d, e: abs(s + d) * (1 + e),
-            [from_u("slope", v, se, dof=dof, source=f"least-squares slope ({key})"),
-             from_u("drift", 0.0, u_dr, dof=50,
-                    source="bias drift over the turn projected on the regressor, "
-                           "u_drift(duration)·√(2/n)"),
-             from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B", source="scale factor, relative")])
-    return Item("g_sensitivity", t, cl, un, abs(v), uncertainty=u, details={
+
+    def point(name):        # the signed slope of one set-up with its budget
+        s_, se_, dof_, u_dr_ = res[name]
+        return gum(lambda s, d, e: (s + d) * (1 + e),
+                   [from_u("slope", s_, se_, dof=dof_, source=f"least-squares slope ({name})"),
+                    from_u("drift", 0.0, u_dr_, dof=50,
+                           source="bias drift over the turn projected on the regressor, "
+                                  "u_drift(duration)·√(2/n)"),
+                    from_u("e_K", 0.0, ctx.rate_table_u_rel, type="B",
+                           source="scale factor, relative")])
+
+    names = list(res)
+    pts = [point(n) for n in names]
+    # a magnitude, max(|Out,gp|, |Out,gv|): the interval of the extreme of magnitudes
+    value, u, iv = max_magnitude_statement(pts[names.index(key)], [res[n][0] for n in names],
+                                           pts, abs(v))
+    return Item("g_sensitivity", t, cl, un, value, uncertainty=u, details={**iv,
         "out_gp_dps_per_g": res.get("parallel", (math.nan,))[0],
         "out_gv_dps_per_g": res.get("perpendicular", (math.nan,))[0], "set_up": key})
 
@@ -2172,4 +2204,4 @@ NEEDS = {row[0]: ("scale_factor",) for row in ITEMS if row[0] != "scale_factor"}
 #: Items that are non-negative by their definition (a maximum of absolute values, a standard
 #: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
 #: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
-NONNEGATIVE = frozenset({"linearity", "sf_stability", "bias_repeatability", "bias_drift_after_power_on", "bias_hysteresis", "arw", "bias_instability", "inband_noise", "frequency_band", "startup_time", "broadband_noise", "resolution"})
+NONNEGATIVE = frozenset({"ratiometric_error", "bias_ratiometric_error", "cross_axis", "g_sensitivity", "linearity", "sf_stability", "bias_repeatability", "bias_drift_after_power_on", "bias_hysteresis", "arw", "bias_instability", "inband_noise", "frequency_band", "startup_time", "broadband_noise", "resolution"})

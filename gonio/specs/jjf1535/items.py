@@ -26,7 +26,7 @@ from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.analysis.noise import allan_deviation, fit_markov_model, fit_noise_model
 from gonio.analysis.noise.stream import value_range
-from gonio.result.gum import gum, std_dev_uncertainty
+from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
 from gonio.specs._rate_family.rate_records import (RateContext, static_rate_dph, segment_means,
                                                    segment_samples, sf_calibration_means)
@@ -395,22 +395,29 @@ def sf_temperature_sensitivity(ctx: Context) -> Item:
     rt = int(np.argmin(np.abs(np.array(Ts) - ctx.room_temperature_c)))
     value, slopes = jf.temperature_sensitivity(Ks, Ts, rt, relative=True)
     i = int(np.nanargmax(np.abs(slopes)))
-    c_i, c_rt = cals[i], cals[rt]
     def se(c):                                   # the points' noise; residuals without means
         v = c["se_K_noise"]
         return (v, sum(int(n) - 1 for n in c["n_means"])) if math.isfinite(v) else \
             (c["se_K"], len(c["rates"]) - 2)
-    (u_i, nu_i), (u_rt, nu_rt) = se(c_i), se(c_rt)
-    inputs = [from_u("K_i", c_i["fit"].K, u_i, dof=nu_i,
-                     source=f"K at {Ts[i]:g} °C (noise of its rate points' means)"),
-              from_u("K_rt", c_rt["fit"].K, u_rt, dof=nu_rt,
-                     source=f"K at room temperature {Ts[rt]:g} °C"),
-              type_b("dT", Ts[i] - Ts[rt], ctx.chamber_deviation_c, "rectangular",
-                     source="chamber temperature deviation (Table 2)")]
-    u = gum(lambda a, b, d: abs((a - b) / (b * d)), inputs)
+
+    def point(j):           # the signed slope at temperature j with its budget
+        (u_j, nu_j), (u_rt, nu_rt) = se(cals[j]), se(cals[rt])
+        return gum(lambda a, b, d: (a - b) / (b * d), [
+            from_u("K_i", cals[j]["fit"].K, u_j, dof=nu_j,
+                   source=f"K at {Ts[j]:g} °C (noise of its rate points' means)"),
+            from_u("K_rt", cals[rt]["fit"].K, u_rt, dof=nu_rt,
+                   source=f"K at room temperature {Ts[rt]:g} °C"),
+            type_b("dT", Ts[j] - Ts[rt], ctx.chamber_deviation_c, "rectangular",
+                   source="chamber temperature deviation (Table 2)")])
+
+    # a magnitude, the largest |slope|: the interval of the extreme of magnitudes
+    others = [j for j in range(len(Ts)) if j != rt]
+    pts = [point(j) for j in others]
+    value, u, iv = max_magnitude_statement(pts[others.index(i)], [slopes[j] for j in others],
+                                           pts, value)
     return Item("sf_temperature_sensitivity", title, clause, unit, value, uncertainty=u, details={
         "temperatures_c": Ts, "K_i": Ks, "slopes_per_c": slopes, "room_index": rt,
-        "se_K_residual": [c["se_K"] for c in cals]})
+        "se_K_residual": [c["se_K"] for c in cals], **iv})
 
 
 # --------------------------------------------------------------------------- 7.2.6, 7.2.7
@@ -754,21 +761,32 @@ def g_sensitivity(ctx: Context) -> Item:
         return not_measured("g_sensitivity", title, clause, unit,
                             "no pair of opposite positions (+axis up, −axis up)")
     ax = max(res, key=lambda a: abs(res[a]))
-    p, n = us[ax]
     xbound = ctx.cross_axis_bound * rg.OMEGA_E_DPS * S_PER_H
-    inputs = [from_u("w_p", p["w"] * S_PER_H, p["u"] * S_PER_H, dof=p["nu"], source="+axis up mean"),
-              from_u("w_n", n["w"] * S_PER_H, n["u"] * S_PER_H, dof=n["nu"], source="−axis up mean"),
-              from_u("E_p", p["earth"] * S_PER_H, 0.0, type="B"),
-              from_u("E_n", n["earth"] * S_PER_H, 0.0, type="B"),
-              type_b("x_E", 0.0, xbound, "rectangular",
-                     source="cross-axis coupling of the Earth rate (bound)"),
-              from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B", source="scale factor, relative"),
-              from_u("drift", 0.0, drift_u_dph(ctx, n["span"], p["span"]), dof=50,
-                     source="bias drift between the two positions (Allan fit: RRW, BI)")]
-    u = gum(lambda a, b, c, d, x, e, dr: abs(((a - c) - (b - d) + dr) / 2.0 + x) * (1 + e),
-            inputs)
-    return Item("g_sensitivity", title, clause, unit, abs(res[ax]), uncertainty=u, details={
-        "per_axis_dph_per_g": res, "literal_per_axis_dph_per_g": lit, "axis": ax})
+
+    def point(a_):          # the signed B_g of one axis with its budget
+        p, n = us[a_]
+        inputs = [from_u("w_p", p["w"] * S_PER_H, p["u"] * S_PER_H, dof=p["nu"],
+                         source="+axis up mean"),
+                  from_u("w_n", n["w"] * S_PER_H, n["u"] * S_PER_H, dof=n["nu"],
+                         source="−axis up mean"),
+                  from_u("E_p", p["earth"] * S_PER_H, 0.0, type="B"),
+                  from_u("E_n", n["earth"] * S_PER_H, 0.0, type="B"),
+                  type_b("x_E", 0.0, xbound, "rectangular",
+                         source="cross-axis coupling of the Earth rate (bound)"),
+                  from_u("e_K", 0.0, ctx.u_K_rel or 0.0, type="B",
+                         source="scale factor, relative"),
+                  from_u("drift", 0.0, drift_u_dph(ctx, n["span"], p["span"]), dof=50,
+                         source="bias drift between the two positions (Allan fit: RRW, BI)")]
+        return gum(lambda a, b, c, d, x, e, dr: (((a - c) - (b - d) + dr) / 2.0 + x) * (1 + e),
+                   inputs)
+
+    axes = list(res)
+    pts = [point(a_) for a_ in axes]
+    # a magnitude, max |B_g,axis|: stated by the interval of the extreme of magnitudes
+    value, u, iv = max_magnitude_statement(pts[axes.index(ax)], [res[a_] for a_ in axes],
+                                           pts, abs(res[ax]))
+    return Item("g_sensitivity", title, clause, unit, value, uncertainty=u, details={
+        "per_axis_dph_per_g": res, "literal_per_axis_dph_per_g": lit, "axis": ax, **iv})
 
 
 def angle_random_walk(ctx: Context) -> Item:
@@ -861,15 +879,24 @@ def bias_temperature_sensitivity(ctx: Context) -> Item:
     rt = int(np.argmin(np.abs(np.array(T) - ctx.room_temperature_c)))
     value, slopes = jf.temperature_sensitivity(B, T, rt, relative=False)
     i = int(np.nanargmax(np.abs(slopes)))
-    inputs = [from_u("B_i", B[i], U[i][0], dof=U[i][1], source=f"bias at {T[i]:g} °C"),
-              from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),
-              type_b("dT", T[i] - T[rt], ctx.chamber_deviation_c, "rectangular",
-                     source="chamber temperature deviation (Table 2)"),
-              from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[i]), dof=50,
-                     source="bias drift between the two records (Allan fit: RRW, BI)")]
-    u = gum(lambda a, b, d, dr: abs((a - b + dr) / d), inputs)
+
+    def point(j):           # the signed slope at temperature j with its budget
+        return gum(lambda a, b, d, dr: (a - b + dr) / d, [
+            from_u("B_i", B[j], U[j][0], dof=U[j][1], source=f"bias at {T[j]:g} °C"),
+            from_u("B_rt", B[rt], U[rt][0], dof=U[rt][1], source=f"bias at {T[rt]:g} °C"),
+            type_b("dT", T[j] - T[rt], ctx.chamber_deviation_c, "rectangular",
+                   source="chamber temperature deviation (Table 2)"),
+            from_u("drift", 0.0, drift_u_dph(ctx, tm[rt], tm[j]), dof=50,
+                   source="bias drift between the two records (Allan fit: RRW, BI)")])
+
+    # a magnitude, the largest |slope|: the interval of the extreme of magnitudes
+    others = [j for j in range(len(T)) if j != rt]
+    pts = [point(j) for j in others]
+    value, u, iv = max_magnitude_statement(pts[others.index(i)], [slopes[j] for j in others],
+                                           pts, value)
     return Item("bias_temperature_sensitivity", title, clause, unit, value, uncertainty=u,
-                details={"temperatures_c": T, "bias_dph": B, "slopes": slopes, "room_index": rt})
+                details={"temperatures_c": T, "bias_dph": B, "slopes": slopes, "room_index": rt,
+                         **iv})
 
 
 # --------------------------------------------------------------------------- 7.2.15
@@ -982,4 +1009,4 @@ ITEMS = tuple((key, title, clause, globals()[key]) for key, title, clause in ITE
 #: Items that are non-negative by their definition (a maximum of absolute values, a standard
 #: deviation, a noise coefficient, a time, a threshold): where U exceeds the value the
 #: statement rule adds the upper bound (GUM 7.2.6 / ISO 80000; gonio.result.statement).
-NONNEGATIVE = frozenset({"nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold", "resolution", "bias_stability", "bias_repeatability", "warmup_time", "angle_random_walk", "bias_temperature_sensitivity", "bandwidth"})
+NONNEGATIVE = frozenset({"g_sensitivity", "nonlinearity", "asymmetry", "sf_repeatability", "sf_temperature_sensitivity", "threshold", "resolution", "bias_stability", "bias_repeatability", "warmup_time", "angle_random_walk", "bias_temperature_sensitivity", "bandwidth"})
