@@ -63,3 +63,16 @@ def test_a_value_inside_its_interval_is_written_as_stated():
     quantity(root, "x", n["value"], "%", interval=n["interval"]["ends"],
              u_std=n["interval"]["u"], p=0.95)
     assert root.find(".//si:real/si:value", NS).text == "0.112"
+
+
+@pytest.mark.parametrize("value, U, interval", [
+    (0.0607, None, (0.0496, 0.0692)), (0.01, 0.088, None), (-3.0, 4.0, None),
+])
+def test_a_zh_dcc_states_an_interval_statement_in_chinese(value, U, interval):
+    """A DCC description that carries an item's interval statement (a per-g item's, a
+    below-zero item's) reads in a zh DCC as the zh certificate states it."""
+    from gonio.report.i18n import translator
+    from gonio.result.statement import state, state_interval
+    st = (state_interval(value, interval, p=0.95, unit="(°/s)/g") if interval else
+          state(value, U, k=2.0, p=0.95, unit="s", nonnegative=True))
+    assert translator()(st.text()) == st.text("zh")

@@ -630,6 +630,14 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
     (r"rate U_rel = (\S+) \(k = 2\)", "速率相对扩展不确定度 U_rel = {1}（k = 2）"),
     (r"(.+) in results\.json, written per m s⁻² \(g_n = (\S+) m s⁻²\)",
      "results.json 中为 {1}，此处按每 m s⁻² 给出（g_n = {2} m s⁻²）"),
+    # an item's statement by its interval (gonio.result.statement.Statement.text's forms)
+    (r"upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\], p ≈ (\S+) %\); the estimate fell "
+     r"below zero", "上限：≤ {1}（区间 [0, {2}]，p ≈ {3} %）；估计值低于零"),
+    (r"upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\]\); the estimate fell below zero",
+     "上限：≤ {1}（区间 [0, {2}]）；估计值低于零"),
+    (r"(.+); upper bound: ≤ (.+?) \(interval \[0, ([^\]]+)\], p ≈ (\S+) %\)",
+     "{1}；上限：≤ {2}（区间 [0, {3}]，p ≈ {4} %）"),
+    (r"(.+); interval \[([^\]]+)\](.*?) \(p ≈ (\S+) %\)", "{1}；区间 [{2}]{3}（p ≈ {4} %）"),
     (r"Produced by gonio from a virtual bench \(simulated readings\)\. It demonstrates the "
      r"layout and the computations only; it certifies nothing about any instrument\. "
      r"Performance dates are the placeholder (\S+)\.",
