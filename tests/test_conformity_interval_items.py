@@ -312,3 +312,34 @@ def test_rate_certificates_table_notes_the_items_without_a_probability():
         notes = [d[0] for kind, d, _ in blocks if kind == "p" and "<bias_instability>" in d[0]]
         assert len(notes) == 1 and "<bias_stability>" not in notes[0]
         assert all(not re.search(r"≤\s*[−-]", str(row[2])) for row in rows)
+
+
+@pytest.mark.parametrize("rule,r", [("guarded", 0.0), ("guarded", 0.5), ("guarded", 1.0),
+                                    ("guarded", 1.2), ("guarded", 2.0),
+                                    ("non-binary", 1.0), ("non-binary", 2.0)])
+def test_a_value_below_its_own_interval_is_decided_on_the_interval(rule, r):
+    """C_g non-negative, its bias-corrected y = −1.58e-5 below its 95 % interval [0, 1.4e-5],
+    mpe 1.5e-5 (U = 1.4e-5 − y = 2.98e-5, U_L = 0 clipped). ILAC-G8 4.2.2 on the interval's
+    ends, by hand: upper end 1.4e-5 ≤ 1.5e-5 − (r − 1)·2.98e-5 ⇔ r ≤ 1 + 0.1e-5/2.98e-5
+    (≈ 1.034); lower end 0 ≥ −1.5e-5 always. The decision is the printed acceptance: the
+    value −1.58e-5, outside the tolerance, decided "fail" at r = 1 before."""
+    y, lo, hi, mpe = -1.58e-5, 0.0, 1.4e-5, 1.5e-5
+    U = hi - y
+    unc = Uncertainty([], U / 2, U, None, None, None, 0.95, "belt", (lo, hi))
+    res = Result("s", "S", {"C_g": Item("C_g", "C_g", "x", "", y, uncertainty=unc,
+                                        nonnegative=True)}, {}, {})
+    c = decide_items(res, [{"item": "C_g", "mpe": mpe}],
+                     {"rule": rule, "guard_band_factor": r})[0]
+    hand_pass = hi <= mpe - (r - 1.0) * U + 1e-20 and lo >= -mpe
+    assert c.acceptance_of == "interval"
+    assert c.acceptance_upper == pytest.approx(mpe - (r - 1.0) * U)
+    assert c.acceptance_lower == pytest.approx(-mpe)
+    printed_met = lo >= c.acceptance_lower and hi <= c.acceptance_upper
+    assert printed_met == hand_pass
+    if hand_pass:
+        assert c.outcome == "pass" and c.accepted
+    else:
+        # the interval reaches inside the tolerance, the value does not: never "pass"
+        assert not c.accepted
+        assert c.outcome == ("fail" if rule == "guarded" else "conditional fail")
+    assert c.false_accept_probability is None and c.conformance_probability is None

@@ -385,10 +385,49 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str) -> C
     if by_interval and rule.kind != "simple":
         c = _on_interval(c, bounds, rule, float(unc.U),
                          float(unc.U) if U_lower is None else max(U_lower, 0.0))
+        # decided on the interval's ends, the quantity the acceptance is stated on (one rule
+        # for decision and print, ILAC-G8 4.2.2): a value outside its own interval (a
+        # bias-corrected y below a non-negative item's interval) is not decided on y
+        lo_end = (float(unc.interval[0]) if U_lower is not None
+                  else y - float(unc.U))
+        c = _decided_on_ends(c, lo_end, y + float(unc.U), y, bounds)
     lo, hi = c.acceptance_lower, c.acceptance_upper
     return replace(c, acceptance_empty=bool(
         (lo is not None and hi is not None and lo > hi)
         or (it.nonnegative and hi is not None and hi < 0)))
+
+
+def _decided_on_ends(c: Conformity, lo_end: float, hi_end: float, y: float,
+                     bounds: Limits) -> Conformity:
+    """The outcome of an item stated by its interval [lo_end, hi_end] alone, on the
+    acceptance interval :func:`_on_interval` states for those ends: "pass" where both ends
+    lie inside it. Otherwise the outcome of :func:`decide` stands (non-binary: "conditional"
+    by the value against the tolerance), except that a "pass" of the value whose interval's
+    ends are not accepted is "conditional pass" (non-binary, value inside the tolerance) or
+    "fail".
+
+    >>> c = decide("C_g", -1.58e-5, 2.98e-5, None, Limits(-1.5e-5, 1.5e-5),
+    ...            DecisionRule("guarded"), U_lower=0.0, no_probability="n/a")
+    >>> c = _on_interval(c, Limits(-1.5e-5, 1.5e-5), DecisionRule("guarded"), 2.98e-5, 0.0)
+    >>> c.outcome, _decided_on_ends(c, 0.0, 1.4e-5, -1.58e-5, Limits(-1.5e-5, 1.5e-5)).outcome
+    ('fail', 'pass')
+    """
+    lo, hi = c.acceptance_lower, c.acceptance_upper
+    if (lo is None or lo_end >= lo) and (hi is None or hi_end <= hi):
+        outcome = "pass"
+    elif c.outcome == "pass":
+        outcome = ("conditional pass" if c.rule == "non-binary"
+                   and _inside(y, bounds.lower, bounds.upper) else "fail")
+    else:
+        outcome = c.outcome
+    if outcome == c.outcome:
+        return c
+    accepted = outcome in ("pass", "conditional pass")
+    p_c = c.conformance_probability
+    return replace(c, outcome=outcome, accepted=accepted,
+                   false_accept_probability=(1.0 - p_c) if accepted and p_c is not None
+                   else None,
+                   false_reject_probability=p_c if not accepted else None)
 
 
 def _on_interval(c: Conformity, bounds: Limits, rule: DecisionRule, U: float,
