@@ -614,12 +614,18 @@ def calibration_error_draws(calibration, rng, draws: int) -> np.ndarray:
       JCGM 102's multivariate t). Positions with different ν under one covariance: the
       smallest (conservative, as ``combine``);
     - positions independent (no covariance), position p with its own ν_p: each drawn as its
-      own scaled-and-shifted t, u_p · z_p · √(ν_p/w_p), w_p ~ χ²_{ν_p} (JCGM 101 6.4.9).
+      own scaled-and-shifted t, u_p · t_p (JCGM 101 6.4.9), t_p ~ t_{ν_p} drawn from the
+      same z_p as the normal draws by its quantile (:func:`_t_of_normal`), so every position's
+      |δe| rises draw by draw as ν falls: independent positions, each its own χ² in effect
+      (a certificate's one pooled s is not modelled apart: docs/formats.md, "Table
+      calibration").
 
     The scale is u (the Type A standard uncertainty), so the draws' variance is
-    ν/(ν − 2)·u² (ν > 2; none for ν ≤ 2: the t's heavy tails, which the range belt's
-    quantiles take as they are). Without ``dof`` the generator is used exactly as for the
-    normal draws (same seed, same draws). The draws are centred: δe about e.
+    ν/(ν − 2)·u². ν ≥ 3 only (:func:`~gonio.specs.ogam_draft.table_calibration.
+    draw_dof_refusal`: ν ≤ 2 has no variance, and the Monte Carlos' means and spreads would be
+    noise). The z are drawn from ``rng`` exactly as for the normal draws (same seed, same
+    draws) and a covariance's one χ² from a child stream (:func:`_chi2_stream`), so ``rng``
+    continues the same whatever ν (common random numbers). The draws are centred: δe about e.
 
     Two independent positions, u = 0.02″ with ν = 4 and u = 0.03″ with ν = ∞: the first's
     sd is 0.02·√2 (ν/(ν − 2) = 2), the second's 0.03:
@@ -635,15 +641,40 @@ def calibration_error_draws(calibration, rng, draws: int) -> np.ndarray:
         u = np.asarray(calibration.u_arcsec, dtype=float)
         fin = np.isfinite(nu)
         z = rng.standard_normal((draws, u.size))
-        scale = np.ones((draws, u.size))
-        scale[:, fin] = np.sqrt(nu[fin] / rng.chisquare(nu[fin], (draws, int(fin.sum()))))
-        return z * scale * u
+        t = z.copy()
+        t[:, fin] = _t_of_normal(z[:, fin], nu[fin])
+        return t * u
     lam, q = np.linalg.eigh(calibration.covariance())
     root = q * np.sqrt(np.clip(lam, 0.0, None))
     d = rng.standard_normal((draws, lam.size)) @ root.T
     if nu is None:
         return d
-    return d * np.sqrt(nu / rng.chisquare(nu, (draws, 1)))   # one joint estimate: one χ²
+    # one joint estimate: one χ²
+    return d * np.sqrt(nu / _chi2_stream(rng).chisquare(nu, (draws, 1)))
+
+
+def _t_of_normal(z: np.ndarray, nu) -> np.ndarray:
+    """Student's t_ν draws of standard normal draws ``z`` by their quantile, T_ν⁻¹(Φ(z))
+    (the inversion method, JCGM 101 C.2; the tail taken from the near side, so no precision
+    is lost at |z| large): the same z give the normal draws at ν = ∞, and |T_ν⁻¹(Φ(z))| ≥ |z|,
+    rising as ν falls (t_ν's quantiles above 1/2 decrease with ν), draw by draw.
+
+    >>> z = np.array([-3.0, -0.5, 1.0, 6.0])
+    >>> _t_of_normal(z, 3.0).round(3).tolist()
+    [-9.219, -0.556, 1.197, 1037.77]
+    """
+    from scipy import stats
+
+    return -np.sign(z) * stats.t.ppf(stats.norm.cdf(-np.abs(z)), nu)
+
+
+def _chi2_stream(rng):
+    """The generator of the t draws' χ² scales: a child stream of ``rng`` (its seed sequence
+    spawned; ``rng`` itself does not advance), so a Monte Carlo draws every other quantity
+    identically whatever the calibration's ν (common random numbers: its result moves with
+    ν only by the t's tails, not by the other draws' reshuffling, and ν → ∞ meets the normal
+    draws)."""
+    return rng.spawn(1)[0]
 
 
 def calibration_draw_dof(calibration):
@@ -655,9 +686,36 @@ def calibration_draw_dof(calibration):
     if dof is None or not np.any(np.isfinite(np.asarray(dof, dtype=float))):
         return None
     dof = np.asarray(dof, dtype=float)
+    from gonio.specs.ogam_draft.table_calibration import draw_dof_refusal
+
+    why = draw_dof_refusal(dof)
+    if why:
+        raise GonioError(f"{why} ({calibration.source})")
     if getattr(calibration, "cov_arcsec2", None) is not None:
         return float(np.min(dof))
     return dof
+
+
+def calibration_draw_cov(calibration) -> np.ndarray:
+    """The covariance of :func:`calibration_error_draws`, arcsec² (closed form, not the
+    draws'): V with each ν's t factor ν/(ν − 2) (JCGM 101 6.4.9; ν ≥ 3, so it exists),
+    per position for independent positions, one for a covariance given.
+
+    >>> from gonio.specs.ogam_draft.table_calibration import TableCalibration
+    >>> cal = TableCalibration([0, 60], [0.0, 0.0], [0.02, 0.03], "t", dof=[4, math.inf])
+    >>> np.sqrt(np.diag(calibration_draw_cov(cal))).round(4).tolist()   # 0.02·√2, 0.03
+    [0.0283, 0.03]
+    """
+    cov = np.asarray(calibration.covariance(), dtype=float)
+    nu = calibration_draw_dof(calibration)
+    if nu is None:
+        return cov
+    nu = np.asarray(nu, dtype=float)
+    f = np.where(np.isfinite(nu), nu / (np.where(np.isfinite(nu), nu, 3.0) - 2.0), 1.0)
+    if f.ndim == 0:
+        return cov * float(f)
+    r = np.sqrt(f)
+    return cov * np.outer(r, r)
 
 
 def calibration_draws_text(calibration) -> str:
@@ -1320,10 +1378,12 @@ def nonlinearity_calibrated_budget(k_i, theta_deg, round_sensitivity, calibratio
     k_i, errs, src = _round_errors(k_i, th, {"calibrated": (tab + quant) * to_pct}, rng, draws,
                                    tilt_measured, tilt_round_coupling, noise, time_s)
     c = corrected_range(k_i * to_pct, errs["calibrated"])
-    u_tab = float(np.mean(np.std(tab, axis=0))) * to_pct
+    sens = np.asarray(round_sensitivity, dtype=float)
+    u_tab = float(np.mean(np.sqrt(np.einsum("ij,jk,ik->i", sens,
+                                            calibration_draw_cov(calibration), sens)))) * to_pct
     src = (f"table angle at the stops and zeroing positions corrected by the "
            f"{calibration.describe()}, its errors {calibration_draws_text(calibration)} "
-           f"(mean sd of a round {u_tab:.3g} %), " + src)
+           f"(a round's sd from them {u_tab:.3g} %, the mean over rounds), " + src)
     lines = [_Line(from_u("K_rng", 0.0, c.u, type="B",
                           source=f"Monte Carlo ({draws} draws, JCGM 101) of the range of the {n} "
                                  f"K_i: {src}; measured range {c.measured:.4g} %, of the errors "
@@ -1967,6 +2027,10 @@ def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
     beside them. At curves where noise has already flipped the choice the plug-in corrects
     the other way (a discontinuous functional's bootstrap bias), which the choice's spread in
     u (``C_sel``) allows for. Fixed seed: the same curves give the same (u, bias).
+    A calibration with ν (t draws, ν ≥ 3): u is the larger of its value at the t draws and at
+    normal draws of the same u (the same z, the χ² apart: common random numbers), since a
+    difference of two sample variances of heavy-tailed draws is not monotone in ν at a
+    Monte Carlo's size and a less well known table must not narrow the interval.
     ``table_cal`` (a :class:`CalibratedTable`) with each curve's zeroing position ``zeros``:
     the table's draws are the calibration's (:func:`consistency_corrected_budget`).
 
@@ -1978,6 +2042,23 @@ def extreme_selection(curves, u_mean_arcsec, table_mpe_arcsec: float,
     >>> 0.3 < u < 0.5, bias < -0.1
     (True, True)
     """
+    nu = calibration_draw_dof(table_cal.calibration) if table_cal is not None else None
+    args = (curves, u_mean_arcsec, table_mpe_arcsec, drift_half_width_arcsec,
+            scale_factor_u_rel, draws, zeros)
+    u_sel, bias = _extreme_selection_draws(*args, table_cal)
+    if nu is None:
+        return u_sel, bias
+    # a calibration with ν: the choice's spread at the normal draws of the same u too, the
+    # larger taken (the t's tails may only widen it; the bias is the noise's alone)
+    normal = replace(table_cal, calibration=replace(table_cal.calibration, dof=None))
+    return max(u_sel, _extreme_selection_draws(*args, normal)[0]), bias
+
+
+def _extreme_selection_draws(curves, u_mean_arcsec, table_mpe_arcsec: float,
+                             drift_half_width_arcsec: float, scale_factor_u_rel: float,
+                             draws: int, zeros, table_cal) -> tuple[float, float]:
+    """:func:`extreme_selection`'s (u, bias) from one set of draws (seed fixed; the table's
+    draws of ``table_cal``, or at its MPE)."""
     rng = np.random.default_rng(20240607)
     pos_all = np.unique(np.concatenate([np.asarray(p, dtype=float) for p, _ in curves]))
     if table_cal is not None:

@@ -127,6 +127,10 @@ CASES = {
                     "TABLE_CALIBRATION_PART_DOF degrees of freedom (per position u = "
                     "sigma*sqrt(chi2_nu/nu), stated with dof = nu, the error's noise of "
                     "sd sigma = TABLE_CALIBRATION_U_ARCSEC)",
+    "tablecaldof": "the draws of typeb with a full calibration of few degrees of freedom: "
+                   "per trial tablecalpart's calibration at every position the protocol uses "
+                   "(so K_l, C_v and C_g all draw its errors as t of "
+                   "TABLE_CALIBRATION_PART_DOF degrees of freedom)",
 }
 
 #: The standard uncertainty of the table calibration the ``tablecal`` case draws, arcsec
@@ -228,7 +232,7 @@ def case_bench(case: str, bench: Bench, protocol: Protocol) -> Bench:
         b = ideal_bench(bench)
         return replace(b, instrument=replace(b.instrument, position_harmonics=()),
                        earth_rate=True)
-    if case in ("mounted", "typeb", "worsttable", "tablecal", "tablecalpart"):
+    if case in ("mounted", "typeb", "worsttable", "tablecal", "tablecalpart", "tablecaldof"):
         return bench                      # drawn per trial (:func:`trial_bench`)
     if case == "worst":                   # the other Type B effects drawn per trial
         psi = float(protocol.annex_a.tilt_bound_deg)
@@ -429,7 +433,7 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     >>> t.chamber_deviation_c == draw_type_b(b, p, 3).chamber_deviation_c
     True
     """
-    if case in ("typeb", "tablecal", "tablecalpart"):
+    if case in ("typeb", "tablecal", "tablecalpart", "tablecaldof"):
         return draw_type_b(bench, protocol, seed)
     if case == "worsttable":
         d = draw_type_b(bench, protocol, seed)
@@ -512,12 +516,15 @@ def drawn_table_calibration(bench: Bench, protocol: Protocol, seed: int,
 def case_table_calibration(case: str, bench: Bench, protocol: Protocol, seed: int):
     """The laboratory's table calibration of one trial of ``case``: ``tablecal``'s (every
     position, u known), ``tablecalpart``'s (without TABLE_CALIBRATION_PART_OMIT_DEG, u of
-    TABLE_CALIBRATION_PART_DOF degrees of freedom), None for the other cases."""
+    TABLE_CALIBRATION_PART_DOF degrees of freedom), ``tablecaldof``'s (every position, ν as
+    tablecalpart's), None for the other cases."""
     if case == "tablecal":
         return drawn_table_calibration(bench, protocol, seed)
     if case == "tablecalpart":
         return drawn_table_calibration(bench, protocol, seed, dof=TABLE_CALIBRATION_PART_DOF,
                                        omit_deg=TABLE_CALIBRATION_PART_OMIT_DEG)
+    if case == "tablecaldof":
+        return drawn_table_calibration(bench, protocol, seed, dof=TABLE_CALIBRATION_PART_DOF)
     return None
 
 

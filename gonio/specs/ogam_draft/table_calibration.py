@@ -31,7 +31,8 @@ import numpy as np
 from gonio.errors import GonioError
 
 __all__ = ["TableCalibration", "read_table_calibration", "from_equal_division",
-           "turned_error_arcsec", "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG"]
+           "turned_error_arcsec", "REQUIRED_COLUMNS", "POSITION_TOLERANCE_DEG",
+           "MIN_DRAW_DOF", "draw_dof_refusal"]
 
 REQUIRED_COLUMNS = ("table_deg", "error_arcsec", "u_arcsec")
 #: A session's position matches a calibrated one within this (degrees, modulo 360°).
@@ -228,8 +229,8 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
             x = _float(v.strip(), p, n, c)
             if c == "u_arcsec" and not x > 0.0:
                 raise GonioError("u_arcsec must be > 0", file=p, line=n, column=c)
-            if c == "dof" and not x >= 1.0:
-                raise GonioError("dof must be >= 1", file=p, line=n, column=c)
+            if c == "dof" and (why := draw_dof_refusal(x)):
+                raise GonioError(why, file=p, line=n, column=c)
             cols[c].append(x)
         w = float(_wrap_deg(cols["table_deg"][-1]))
         if w in seen:
@@ -240,6 +241,42 @@ def read_table_calibration(path: str | Path) -> TableCalibration:
                             np.array(cols["u_arcsec"]), p.name,
                             dof=np.array(cols["dof"]) if "dof" in cols else None,
                             sha256=hashlib.sha256(raw).hexdigest())
+
+
+#: The smallest degrees of freedom a calibration's u may state (:func:`draw_dof_refusal`).
+MIN_DRAW_DOF = 3.0
+
+
+def draw_dof_refusal(dof) -> str | None:
+    """Why a calibration's degrees of freedom cannot enter, or None: every ν must be ≥ 3
+    (or ∞). The one rule for how a calibration of few degrees of freedom enters (beyond the
+    draft).
+
+    Its errors enter the range items' Monte Carlo as scaled-and-shifted t_ν
+    (JCGM 101 6.4.9, :func:`gonio.specs.ogam_draft.item_uncertainty.calibration_error_draws`),
+    whose variance ν/(ν − 2)·u² exists only for ν > 2 (no mean either for ν ≤ 1). That
+    Monte Carlo is summarised by moments as JCGM 101 7.5/7.6 summarise one (the corrected
+    range's bias as a mean range, its u and the choice of the extreme's u as standard
+    deviations): for ν ≤ 2 these are sample noise, and the certified interval came out
+    narrower, not wider, as the table became less well known (C_g's width halved at ν = 2 on
+    ``gonio simulate --seed 3``). Such a calibration is refused rather than floored (a floor
+    at 3 would state a better-known table than the certificate does) or summarised by
+    quantiles (a second, unvalidated estimator); ν = 3, the smallest integer with a variance,
+    is the floor. A certificate with ν ≤ 2 is stated with k from t_ν; enter it without
+    ``dof`` only if its u is first expanded to a normal one (u·k_ν/k_∞), which is the
+    laboratory's decision, not gonio's.
+
+    >>> draw_dof_refusal(3), draw_dof_refusal(math.inf), draw_dof_refusal([30.0, 4.0])
+    (None, None, None)
+    >>> draw_dof_refusal(2.0)
+    'dof must be >= 3 (a t of 2 degrees of freedom has no variance: the Monte Carlo of K_l, C_v and C_g cannot summarise it)'
+    """
+    nu = np.asarray(dof, dtype=float)
+    bad = nu[~(nu >= MIN_DRAW_DOF)]
+    if bad.size == 0:
+        return None
+    return (f"dof must be >= {MIN_DRAW_DOF:g} (a t of {float(bad.min()):g} degrees of freedom "
+            f"has no variance: the Monte Carlo of K_l, C_v and C_g cannot summarise it)")
 
 
 def _eda_blind(eda) -> tuple[np.ndarray | None, tuple]:
