@@ -98,6 +98,37 @@ def text(value, name: str, *, max_len: int = MAX_LINE, multiline: bool = False,
     return value
 
 
+#: The Unicode categories no shown file name may hold: controls (C0 and C1), format
+#: characters (bidirectional overrides and isolates U+202A–U+202E, U+2066–U+2069, the marks
+#: U+200E/U+200F, zero-width characters: they make a displayed name look like another, e.g.
+#: "calib\u202evsc.exe" shown as "calibexe.csv"), line and paragraph separators, surrogates.
+UNSHOWABLE = ("Cc", "Cf", "Zl", "Zp", "Cs")
+
+
+def file_name(value, name: str) -> str:
+    """A file name to be shown (:func:`text`, at most 255 characters) holding no character of
+    :data:`UNSHOWABLE`; else a GonioError naming the field and the first such code point.
+
+    >>> file_name(" RT-07 cal.csv", "name")
+    'RT-07 cal.csv'
+    >>> hex(ord(unshowable("calib\u202evsc.exe")))
+    '0x202e'
+    """
+    bad = unshowable(str(value or ""))
+    if bad:
+        raise GonioError(f"the name holds U+{ord(bad):04X} (an invisible or direction-changing "
+                         "character that can make it look like another name): rename the "
+                         "file", key=name)
+    return text(value, name, max_len=255)
+
+
+def unshowable(name: str) -> str:
+    """The first character of ``name`` in a category of :data:`UNSHOWABLE`, or ''."""
+    import unicodedata
+
+    return next((c for c in name if unicodedata.category(c) in UNSHOWABLE), "")
+
+
 def date_value(value, name: str, *, required: bool = False) -> _dt.date | None:
     """An ISO date (``YYYY-MM-DD``) or a date; None when empty and not required."""
     if isinstance(value, _dt.date):
@@ -686,7 +717,7 @@ def table_calibration_name(s: Session, cal_id: int) -> str:
         name = ""
     plain = (name == Path(name).name and name not in ("", ".", "..") and "\\" not in name
              and name == name.strip() and len(name) <= 255
-             and not any(ord(c) < 32 or ord(c) == 127 for c in name)
+             and not unshowable(name)
              and not name.endswith("[table_calibration]"))
     return name if plain else TABLE_CALIBRATION
 
@@ -731,7 +762,7 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
     due = date_value(due_on, "due_on", required=True)
     if due < start:
         raise GonioError(f"due_on {due} is before valid_from {start}", key="due_on")
-    shown = text(name, "table calibration file name", max_len=255)
+    shown = file_name(name, "table calibration file name")
     cert = text(certificate, "certificate")
     with store.writing() as s:
         st = s.get(Standard, int(standard_id))
@@ -1020,7 +1051,7 @@ def create_calibration(store, actor: User, *, instrument_id: int, readings_sha25
             audit(s, actor, "table-calibration", "calibration", cal.id, None,
                   {"sha256": table_calibration_sha256,
                    "name": entry.name if entry is not None else
-                   text(table_calibration_name, "table calibration file name", max_len=255)}
+                   file_name(table_calibration_name, "table calibration file name")}
                   | ({"register_id": entry.id, "valid_from": str(entry.valid_from),
                       "due_on": str(entry.due_on),
                       "picked": "chosen" if table_calibration_id not in (None, "")
@@ -1314,26 +1345,47 @@ def min_people(s: Session) -> int:
 
 
 def check_duties(s: Session, cal: Calibration, actor: User, action: str) -> None:
-    """ISO/IEC 17025 6.2 / 7.8.1.1 on every path: the creator of a calibration never
-    reviews, approves or amends it (a calibration whose creator is not recorded cannot be
-    reviewed); the approver of an amendment is never the person who asked for it, whatever
-    ``min_people`` (the amendment is a change to an issued certificate: another person
-    approves it); with ``min_people`` 3 the approver is not the reviewer either."""
+    """ISO/IEC 17025 6.2 / 7.8.1.1 / 7.8.8 on every path: the creator of a calibration never
+    reviews it, approves its first issue or asks for its amendment (a calibration whose
+    creator is not recorded cannot be reviewed); with ``min_people`` 3 the approver is not
+    the reviewer either. An amendment (a change to an issued certificate) is approved by a
+    person who neither asked for it nor changed anything of it (:func:`amendment_changers`:
+    one changes, another approves), whatever ``min_people``; with ``min_people`` 2 that
+    person may be the calibration's creator (the two-person laboratory: the reviewer asks
+    and changes, the creator approves), with 3 never."""
     if cal.created_by_id is None:
         raise GonioError(f"cannot {action} a calibration whose creator is not recorded "
                          "(import it again with --user)", key="role")
-    if cal.created_by_id == actor.id:
-        raise GonioError(f"the person who created a calibration may not {action} it "
-                         "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
-    if action != "approve":
-        return
-    if cal.status == "amending":
+    amending = action == "approve" and cal.status == "amending"
+    if amending:
         if cal.amend_requested_by_id == actor.id:
             raise GonioError("the person who asked for the amendment may not approve it "
                              "(another person approves an amendment)", key="role")
-    elif min_people(s) >= 3 and cal.reviewed_by_id == actor.id:
+        if actor.id in amendment_changers(s, cal.id):
+            raise GonioError("the person who changed the calibration during its amendment "
+                             "may not approve the amendment (ISO/IEC 17025 7.8.8: one "
+                             "changes, another approves)", key="role")
+    if cal.created_by_id == actor.id and not (amending and min_people(s) == 2):
+        raise GonioError(f"the person who created a calibration may not {action} it "
+                         "(ISO/IEC 17025 7.8.1.1: a second person)", key="role")
+    if action == "approve" and not amending and min_people(s) >= 3 \
+            and cal.reviewed_by_id == actor.id:
         raise GonioError("the person who reviewed the calibration may not approve it (the "
                          "laboratory requires three different people)", key="role")
+
+
+def amendment_changers(s: Session, cal_id: int) -> set[int]:
+    """The users who changed a calibration (its ``attach`` audit events: standards,
+    environment) since its latest amendment was asked for (its latest ``amend`` event)."""
+    asked = s.scalar(select(func.max(AuditEvent.id)).where(
+        AuditEvent.action == "amend", AuditEvent.entity == "calibration",
+        AuditEvent.entity_id == str(int(cal_id))))
+    if asked is None:
+        return set()
+    return set(s.scalars(select(AuditEvent.user_id).where(
+        AuditEvent.action == "attach", AuditEvent.entity == "calibration",
+        AuditEvent.entity_id == str(int(cal_id)), AuditEvent.id > asked,
+        AuditEvent.user_id.is_not(None))))
 
 
 def _transition(store, actor: User, cal_id: int, action: str, allowed: tuple[str, ...],
@@ -1486,7 +1538,8 @@ def _reserve_number(s: Session, year: int) -> str:
 
 def approve(store, actor: User, cal_id: int, shown_seal: str | None = None) -> Calibration:
     """Approve a reviewed calibration, or an amendment asked for (reviewer; not its creator,
-    and with ``min_people`` 3 not its reviewer nor the amendment's asker) and start issuing:
+    with ``min_people`` 3 not its reviewer; an amendment: not its asker nor who changed it,
+    and with ``min_people`` 2 its creator may: :func:`check_duties`) and start issuing:
     the certificate number is reserved and the worker renders the final certificate. The
     approver signs the same :func:`seal` the reviewer signed (an amendment: the one its
     calibration was approved with); a result changed since is refused."""

@@ -51,7 +51,7 @@ import re
 
 from lxml import etree
 
-from gonio.report.header import is_draft, record_of
+from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels
 from gonio.report.stated import Num, conformity_texts
@@ -437,7 +437,7 @@ def record_statements(sts, lab: dict | None, L: dict) -> None:
                      f"SHA-256 seal {rec['seal_sha256']}; the laboratory's record of it is "
                      "verified against this value."))
     if rec.get("min_people"):
-        made.append(("record-people", L["people_required"], L[f"people_{rec['min_people']}"]
+        made.append(("record-people", L["people_required"], L[people_key(rec)]
                      + "."))
     for ident, name, text in made:
         st = element(sts, "dcc:statement", id=ident)

@@ -268,6 +268,14 @@ def record_rows(rec: dict, L: dict) -> list[tuple]:
     if rec.get("seal_sha256"):
         rows.append((L["seal"], L["seal_value"].format(short=rec["seal_sha256"][:16])))
     if rec.get("min_people"):
-        rows.append((L["people_required"], L[f"people_{rec['min_people']}"]))
+        rows.append((L["people_required"], L[people_key(rec)]))
     return rows
+
+
+def people_key(rec: dict) -> str:
+    """The label of the duties an issued record was issued under: ``people_3``, ``people_2``,
+    or ``people_2_amendment`` for an amendment (``replaces``) under 2, whose approver may be
+    the calibration's creator (the records' duties: one changes, another approves)."""
+    n = int(rec["min_people"])
+    return f"people_{n}" + ("_amendment" if n == 2 and rec.get("replaces") else "")
 

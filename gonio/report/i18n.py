@@ -115,6 +115,11 @@ LABELS: dict[str, dict[str, str]] = {
                  "zh": "3 人：校准、核验、批准各由不同人员完成"},
     "people_2": {"en": "2: the calibration by one person, its review and approval by another",
                  "zh": "2 人：校准由一人完成，核验与批准由另一人完成"},
+    "people_2_amendment": {"en": "2: the calibration by one person, its review by another; "
+                                 "this amendment asked for and made by one person, approved "
+                                 "by another",
+                           "zh": "2 人：校准由一人完成，核验由另一人完成；本修订由一人提出并完成，"
+                                 "由另一人批准"},
     "amendment": {"en": "This certificate amends and replaces certificate {old}, which is "
                         "withdrawn. Reason for the amendment: {reason}",
                   "zh": "本证书修订并取代证书 {old}，原证书作废。修订原因：{reason}"},

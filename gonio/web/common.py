@@ -78,17 +78,24 @@ def file_response(store, sha: str, name: str, disposition: str = "inline",
     ``GC-2026-0001.dcc.xml``, ``GC-2026-0001-results.json``) when one is given. ``own_name``:
     the name the file was uploaded under (a table calibration's), offered as the download
     name too, percent-encoded (RFC 6266 ``filename*``), so no character of it reaches the
-    header as it is."""
+    header as it is. Both names carry the ``number``: ``filename=`` the name with every
+    character outside ASCII letters, digits and ``._-()+, `` as ``_``, ``filename*=`` the
+    same name whole (``DRAFT-7-RT-07 cal.csv``); a name holding an invisible or
+    direction-changing character (:func:`gonio.records.services.unshowable`) is not offered."""
     from urllib.parse import quote
 
     media = FILE_TYPES.get(name, "application/octet-stream")
-    shown = name
+    own = own_name if own_name and own_name != name \
+        and not services.unshowable(own_name) else ""
+    base = own or name
+    shown = base
     if number and re.fullmatch(r"[A-Za-z0-9-]+", number):
-        shown = number + (name[len("certificate"):] if name.startswith("certificate.")
-                          else "-" + name)
-    disp = f'{disposition}; filename="{shown}"'
-    if own_name and own_name != name:
-        disp += f"; filename*=UTF-8''{quote(own_name, safe='')}"
+        shown = number + (base[len("certificate"):] if base.startswith("certificate.")
+                          else "-" + base)
+    plain = re.sub(r"[^A-Za-z0-9._()+, -]", "_", shown)
+    disp = f'{disposition}; filename="{plain}"'
+    if own:
+        disp += f"; filename*=UTF-8''{quote(shown, safe='')}"
     headers = {"Content-Disposition": disp}
     if media == "text/html":
         headers["Content-Security-Policy"] = "sandbox; default-src 'none'; img-src data:; " \

@@ -156,6 +156,70 @@ def test_two_people_amendment_approved_by_another_than_its_asker(store, people,
     assert second.replaces_id == first.id and second.issued_by_id == people["rev2"].id
 
 
+def test_two_person_laboratory_amends_end_to_end(store, people, computed_folder,
+                                                 bench_readings, monkeypatch):
+    """A laboratory of two (``min_people = 2``: T created, R reviewed and approved): R asks
+    for an amendment and makes the change, T — who neither asked nor changed — approves it,
+    and it is issued (before: the creator was refused and nobody was left to approve)."""
+    services.set_settings(store, people["admin"], min_people="2")
+    t = services.update_user(store, None, "tech", roles="technician reviewer")
+    r = people["rev"]
+    cal = computed(store, people, computed_folder, bench_readings, monkeypatch)
+    with pytest.raises(GonioError, match="created a calibration may not review"):
+        services.review(store, t, cal.id, accept=True)
+    services.review(store, r, cal.id, accept=True)
+    with pytest.raises(GonioError, match="created a calibration may not approve"):
+        services.approve(store, t, cal.id)                 # its first issue: never the creator
+    services.approve(store, r, cal.id)
+    first = run_issue(store, monkeypatch)
+    with pytest.raises(GonioError, match="created a calibration may not amend"):
+        services.amend(store, t, first.id, "typo")
+    services.amend(store, r, first.id, "environment corrected")                  # ask
+    services.attach_conditions(store, r, cal.id, temperature_c=20.6, humidity_pct=60)  # change
+    with pytest.raises(GonioError, match="asked for the amendment may not approve"):
+        services.approve(store, r, cal.id)
+    assert services.approve(store, t, cal.id).status == "issuing"               # approve
+    second = run_issue(store, monkeypatch)                                      # issue
+    assert (second.replaces_id, second.issued_by_id, second.reviewed_by_id,
+            second.min_people) == (first.id, t.id, r.id, 2)
+    assert services.calibration(store, cal.id).temperature_c == 20.6
+    page = services.file_bytes(store, second.html_sha256).decode("utf-8")
+    assert (kv_row(page, "Checked by"), kv_row(page, "Approved by")) == ("rev", "tech")
+    assert kv_row(page, "People required") == (
+        "2: the calibration by one person, its review by another; this amendment asked for "
+        "and made by one person, approved by another")
+    root = etree.fromstring(services.file_bytes(store, second.dcc_sha256))
+    assert "this amendment asked for and made by one person" in "".join(
+        root.find(".//dcc:statement[@id='record-people']", NS).itertext())
+
+
+def test_one_person_alone_cannot_amend_and_approve(store, people, computed_folder,
+                                                   bench_readings, monkeypatch):
+    """Whoever changed an amendment does not approve it, the creator included (one changes,
+    another approves); with ``min_people = 3`` the creator never approves an amendment."""
+    t = services.update_user(store, None, "tech", roles="technician reviewer")
+    cal = approved(store, people, computed_folder, bench_readings, monkeypatch)
+    first = run_issue(store, monkeypatch)
+    services.amend(store, people["rev"], first.id, "environment corrected")
+    with pytest.raises(GonioError, match="created a calibration may not approve"):
+        services.approve(store, t, cal.id)               # three people: never the creator
+    services.set_settings(store, people["admin"], min_people="2")
+    services.attach_conditions(store, t, cal.id, temperature_c=20.6, humidity_pct=60)
+    with pytest.raises(GonioError, match="changed the calibration during its amendment"):
+        services.approve(store, t, cal.id)               # the creator changed it: not T
+    services.attach_conditions(store, people["rev2"], cal.id, temperature_c=20.7,
+                               humidity_pct=60)
+    with pytest.raises(GonioError, match="changed the calibration during its amendment"):
+        services.approve(store, people["rev2"], cal.id)
+    assert services.calibration(store, cal.id).status == "amending"
+    services.approve(store, people["admin"], cal.id)
+    second = run_issue(store, monkeypatch)
+    assert second.replaces_id == first.id and second.issued_by_id == people["admin"].id
+    # a later amendment looks only at its own changes: rev2 changed the first one, not this
+    services.amend(store, people["rev"], second.id, "address")
+    assert services.approve(store, people["rev2"], cal.id).status == "issuing"
+
+
 def test_amendment_states_what_it_replaces_and_why(store, people, computed_folder,
                                                    bench_readings, monkeypatch, dcc_schema,
                                                    tmp_path):

@@ -336,5 +336,47 @@ def test_page_shows_the_uploaded_name_escaped(app, sqlite_store, bench_readings)
     got = tech.get(f"/calibrations/{cal_id}/files/table_calibration.csv")
     assert got.status_code == 200 and hashlib.sha256(got.content).hexdigest() == SHA
     disp = got.headers["content-disposition"]
-    assert "filename*=UTF-8''" + quote(HOSTILE, safe="") in disp
+    assert f"filename*=UTF-8''DRAFT-{cal_id}-" + quote(HOSTILE, safe="") in disp
     assert "<" not in disp and "\n" not in disp
+
+
+#: names that look like another when shown: a right-to-left override ("calib‮vsc.exe" is shown
+#: as "calibexe.csv"), an isolate, a mark, a zero-width space, a C1 control
+LOOKALIKE = ["calib\u202evsc.exe", "RT\u206607.csv", "RT-07\u200f.csv", "RT\u200b-07.csv",
+             "RT-07\x85.csv"]
+
+
+@pytest.mark.parametrize("name", LOOKALIKE, ids=["rlo", "isolate", "rlm", "zwsp", "c1"])
+def test_lookalike_upload_name_refused(app, sqlite_store, bench_readings, name):  # noqa: F811
+    """An uploaded table calibration named with an invisible or direction-changing character
+    comes back (400) with one line naming the code point; nothing is queued."""
+    tech = login(app, "tech")
+    inst = instrument(sqlite_store)
+    r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, table_name=name)
+    assert r.status_code == 400
+    msg = alert(r.text)
+    bad = next(c for c in name if not (c.isascii() and c.isprintable()))
+    assert f"U+{ord(bad):04X}" in msg and "\n" not in msg, msg
+    assert n_calibrations(sqlite_store) == 0
+
+
+@pytest.mark.parametrize("name", ["RT-07 cal.csv", "转台-07.csv"])
+def test_download_names_agree(app, sqlite_store, bench_readings, name):  # noqa: F811
+    """The draft's table calibration downloads as DRAFT-n-<uploaded name> in both
+    ``filename=`` (outside ASCII letters, digits and ._-()+, and space: '_') and
+    ``filename*=`` (the name whole, percent-encoded): the two agree."""
+    from urllib.parse import quote, unquote
+
+    tech = login(app, "tech")
+    inst = instrument(sqlite_store)
+    r = post(tech, inst, Path(bench_readings[0]).read_bytes(), TABLE, table_name=name)
+    assert r.status_code == 303, alert(r.text)
+    cal_id = int(r.headers["location"].rsplit("/", 1)[1])
+    disp = tech.get(f"/calibrations/{cal_id}/files/table_calibration.csv") \
+        .headers["content-disposition"]
+    plain = disp.split('filename="')[1].split('"')[0]
+    whole = unquote(disp.split("filename*=UTF-8''")[1])
+    assert whole == f"DRAFT-{cal_id}-{name}"
+    assert plain == "".join(c if c.isascii() and (c.isalnum() or c in "._-()+, ") else "_"
+                            for c in whole)
+    assert disp.endswith(quote(whole, safe=""))

@@ -499,3 +499,29 @@ def test_import_records_the_register_entry(tmp_path, bench_readings, capsys):
             day = cal.performed_on
         finally:
             st.close()
+
+
+def test_lookalike_names_refused_and_not_shown(store):
+    """A table calibration's name with an invisible or direction-changing character (Unicode
+    Cf, a C1 control) is refused in one line naming the code point, at registration and at a
+    calibration's upload; one recorded before (its audit event) is shown as the storage
+    name."""
+    people, inst_id, table_id, other_id = setup_lab(store)
+    for bad in ("\u202e", "\u2069", "\u200e", "\ufeff", "\x9b"):
+        with pytest.raises(GonioError, match=f"U\\+{ord(bad):04X}") as e:
+            register(store, people["tech"], table_id, "TC-1", name=f"calib{bad}vsc.exe")
+        assert "\n" not in str(e.value)
+    sha, _ = services.store_file(store, io.BytesIO(FILES["TC-3"]))
+    with pytest.raises(GonioError, match="U\\+202E"):
+        create(store, people["tech"], inst_id, "2025-02-01", [table_id, other_id],
+               table_calibration_sha256=sha, table_calibration_name="calib\u202evsc.exe")
+    cal = create(store, people["tech"], inst_id, "2025-02-01", [table_id, other_id],
+                 table_calibration_sha256=sha, table_calibration_name="RT-07.csv")
+    with store.session() as s:
+        assert services.table_calibration_name(s, cal.id) == "RT-07.csv"
+    with store.writing() as s:      # as an older release recorded it
+        services.audit(s, people["tech"], "table-calibration", "calibration", cal.id, None,
+                       {"sha256": sha, "name": "calib\u202evsc.exe"})
+        s.commit()
+    with store.session() as s:
+        assert services.table_calibration_name(s, cal.id) == services.TABLE_CALIBRATION
