@@ -29,6 +29,8 @@ from gonio.errors import GonioError
 from gonio.formats.lab import naming_lab_file
 from gonio.result.model import Item, Result, Uncertainty
 from gonio.result.statement import K_SOURCE_MAX_ABS
+from gonio.resources import protocols_dir
+from gonio.specs import get
 
 RULES = ("simple", "guarded", "non-binary")
 
@@ -55,13 +57,72 @@ def test_an_extreme_of_magnitudes_refuses_an_asymmetric_limit(rule, limit):
         decide_items(res, [{"item": "angle_deviation", **limit}], {"rule": rule})
     assert str(exc.value).startswith("lab.toml: key specification_limits[0]: ")
     assert "symmetric" in str(exc.value) and "\n" not in str(exc.value)
-    # the draft's own statement max|E_i| ± U (k given) is an extreme of magnitudes too
+    # the draft's own statement max|E_i| ± U (k given) carries no marker: the
+    # specification's declaration (SPEC.magnitude_extremes) makes it an extreme of magnitudes,
+    # never a detail key of the optical draft's output
     draft = Result("ogam-draft", "draft", {"angle_deviation": Item(
         "angle_deviation", "E", "7.4", "arcsec", 0.45,
         uncertainty=Uncertainty([], 0.05, 0.1, 2.0, None),
         details={"max_abs_arcsec": 0.45})}, {}, {})
     with pytest.raises(GonioError, match="symmetric"):
-        decide_items(draft, [{"item": "angle_deviation", **limit}], {"rule": rule})
+        decide_items(draft, [{"item": "angle_deviation", **limit}], {"rule": rule},
+                     magnitude_extremes=get("ogam-draft").magnitude_extremes)
+    # undeclared and unmarked, the detail key alone decides nothing about the limit's shape
+    decide_items(draft, [{"item": "angle_deviation", **limit}], {"rule": rule})
+
+
+@pytest.mark.parametrize("limit", [{"lower": -0.4, "upper": 0.6}, {"upper": 0.6},
+                                   {"lower": -0.4}])
+def test_an_asymmetric_limit_of_a_declared_extreme_is_refused_before_any_work(
+        tmp_path, monkeypatch, limit):
+    """The laboratory file's check (load_lab_file with the specification) refuses it in one
+    line naming the file and the entry, before the calibration runs: the calibration hook
+    is replaced by one that fails the test if called."""
+    from gonio.pipeline.dispatch import load_lab_file
+
+    ends = "\n".join(f"{k} = {v}" for k, v in limit.items())
+    example = (protocols_dir() / "lab-example.toml").read_text(encoding="utf-8")
+    given = 'item = "angle_deviation"\nmpe = 0.5\n'
+    assert given in example
+    lab = tmp_path / "lab.toml"
+    lab.write_text(example.replace(given, f'item = "angle_deviation"\n{ends}\n'),
+                   encoding="utf-8")
+    with pytest.raises(GonioError) as exc:
+        load_lab_file(lab, get("ogam-draft"))
+    msg = str(exc.value)
+    assert msg.startswith(f"{lab}: key specification_limits[0]: angle_deviation is an extreme")
+    assert "symmetric" in msg and "\n" not in msg
+    lab.write_text(example, encoding="utf-8")
+    assert load_lab_file(lab, get("ogam-draft"))["specification_limits"][0]["mpe"] == 0.5
+    lab.write_text(example.replace(given, given.replace("mpe = 0.5", "lower = -0.5\nupper = 0.5")),
+                   encoding="utf-8")
+    load_lab_file(lab, get("ogam-draft"))
+    # a specification that declares nothing takes the same file's shape of limit as it is
+    assert get("jjf1535-2015").magnitude_extremes == ()
+
+
+def test_the_cli_refuses_before_calibrating(tmp_path, monkeypatch, capsys):
+    """`gonio calibrate --lab` with an asymmetric E limit: exit 2, one line naming the file
+    and the key, the calibration never called."""
+    import gonio.pipeline.dispatch as dispatch
+    from gonio.cli import main
+
+    def never(*args, **kwargs):
+        raise AssertionError("calibrated before the lab file's check")
+    monkeypatch.setattr(dispatch, "calibrate", never)
+    example = (protocols_dir() / "lab-example.toml").read_text(encoding="utf-8")
+    lab = tmp_path / "lab.toml"
+    lab.write_text(example.replace('item = "angle_deviation"\nmpe = 0.5\n',
+                                   'item = "angle_deviation"\nlower = -0.4\nupper = 0.6\n'),
+                   encoding="utf-8")
+    readings = tmp_path / "readings.csv"
+    readings.write_text("# spec: ogam-draft\n", encoding="utf-8")
+    rc = main(["calibrate", str(readings), "--spec", "ogam-draft", "--lab", str(lab),
+               "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2, err
+    assert len(err.splitlines()) == 1 and "specification_limits[0]" in err \
+        and str(lab) in err and "symmetric" in err
 
 
 @pytest.mark.parametrize("mpe, expected", [

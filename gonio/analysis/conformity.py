@@ -51,7 +51,8 @@ import math
 from dataclasses import dataclass, replace
 
 from gonio.errors import GonioError
-from gonio.formats.lab import DECISION_RULES, check_interval, check_one_limit_per_item
+from gonio.formats.lab import (DECISION_RULES, check_interval, check_one_limit_per_item,
+                              check_symmetric)
 from gonio.result.model import Conformity
 from gonio.result.statement import K_SOURCE_MAX_ABS, stated_nu
 
@@ -320,39 +321,36 @@ NOT_NORMAL_PROBABILITY_MODEL = ("not given: its 95 % interval ({source}) is not 
                                 "its 95 % interval")
 
 
-def extreme_of_magnitudes(it) -> bool:
-    """Whether item ``it`` is an extreme of magnitudes max_i |x_i| (the optical draft's E,
-    7.4: E = ± max|E_i|): stated by the 95 % interval of max|E_i| (``k_source``
-    :data:`~gonio.result.statement.K_SOURCE_MAX_ABS`), or by the draft's max|E_i| ± U (its
-    details give ``max_abs_arcsec``). Such a value is compared with a symmetric limit only:
-    max|E_i| ≤ MPE is |E_i| ≤ MPE at every point, while against [T_L, T_U] with T_L ≠ −T_U
-    neither the magnitude nor the signed extreme tells whether some E_i of the other sign lies
-    below T_L (E_i = −0.45″ beside max|E_i| = 0.45″ "passes" [−0.4, 0.6] on the magnitude).
+def extreme_of_magnitudes(key: str, it, declared=()) -> bool:
+    """Whether item ``it`` (key ``key``) is an extreme of magnitudes max_i |x_i| (the optical
+    draft's E, 7.4: E = ± max|E_i|): its specification declares it so (``declared``: its
+    ``Specification.magnitude_extremes``), or it is stated by the 95 % interval of such an
+    extreme (``k_source`` :data:`~gonio.result.statement.K_SOURCE_MAX_ABS`). Such a value is
+    compared with a symmetric limit only (:func:`gonio.formats.lab.check_symmetric`): the
+    declaration also covers the draft's own max|E_i| ± U (k given), which carries no marker.
 
     >>> from gonio.result.model import Item
-    >>> extreme_of_magnitudes(Item("E", "E", "7.4", "″", 0.4, details={"max_abs_arcsec": 0.4}))
-    True
+    >>> it = Item("E", "E", "7.4", "″", 0.4)
+    >>> extreme_of_magnitudes("E", it, ("E",)), extreme_of_magnitudes("E", it)
+    (True, False)
     """
     unc = it.uncertainty
-    return bool((unc is not None and unc.k_source == K_SOURCE_MAX_ABS)
-                or (isinstance(it.details, dict) and it.details.get("max_abs_arcsec") is not None))
+    return bool(key in declared or (unc is not None and unc.k_source == K_SOURCE_MAX_ABS))
 
 
 def check_symmetric_limit(key: str, bounds: Limits, where: str) -> None:
     """An extreme of magnitudes (:func:`extreme_of_magnitudes`) takes a symmetric limit
     only (``mpe``, or ``lower`` = −``upper``): any other is a GonioError naming the entry
-    ``where`` (the laboratory file's key), never a decision on one side.
+    ``where`` (the laboratory file's key), never a decision on one side
+    (:func:`gonio.formats.lab.check_symmetric`, which the laboratory file's check runs
+    before any work; here it guards a limit that did not come through that check).
 
     >>> check_symmetric_limit("E", Limits(-0.4, 0.6), "specification_limits[0]")
     Traceback (most recent call last):
     ...
-    gonio.errors.GonioError: key specification_limits[0]: E is an extreme of magnitudes (max |E_i|): its limit must be symmetric (mpe = M, or lower = -M with upper = M); got lower -0.4, upper 0.6
+    gonio.errors.GonioError: key specification_limits[0]: E is an extreme of magnitudes (max_i |x_i|): its limit must be symmetric (mpe = M, or lower = -M with upper = M); got lower -0.4, upper 0.6
     """
-    if bounds.lower is None or bounds.upper is None or bounds.lower != -bounds.upper:
-        raise GonioError(
-            f"{key} is an extreme of magnitudes (max |E_i|): its limit must be symmetric "
-            f"(mpe = M, or lower = -M with upper = M); got lower {bounds.lower}, upper "
-            f"{bounds.upper}", key=where)
+    check_symmetric(key, bounds.lower, bounds.upper, key=where)
 
 
 def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str) -> Conformity:
@@ -452,7 +450,8 @@ def _on_interval(c: Conformity, bounds: Limits, rule: DecisionRule, U: float,
 
 
 def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *,
-                 origin: str = "lab file", where: str = "specification_limits") -> list:
+                 origin: str = "lab file", where: str = "specification_limits",
+                 magnitude_extremes=()) -> list:
     """Decide every item of ``result`` (a :class:`gonio.result.model.Result`) that a limit
     names, and store the :class:`Conformity` in the item (``Item.conformity``).
 
@@ -461,8 +460,9 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
     (``origin`` says which; a lab file's limit replaces a default for the same item). A
     limit naming an item the specification does not have is a GonioError naming that
     specification's items; an item not measured, or without U, gets a Conformity with no
-    outcome and the ``reason``. An extreme of magnitudes (:func:`extreme_of_magnitudes`)
-    takes a symmetric limit only (:func:`check_symmetric_limit`). An item stated by its
+    outcome and the ``reason``. An extreme of magnitudes (:func:`extreme_of_magnitudes`:
+    ``magnitude_extremes``, the keys its specification declares so, or the marker of its
+    statement) takes a symmetric limit only (:func:`check_symmetric_limit`). An item stated by its
     95 % interval alone is decided on that interval; its acceptance interval bounds the
     interval's ends under a guard band (:func:`_on_interval`), and a probability is given only
     where the interval is the χ² one of a standard deviation
@@ -488,7 +488,7 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
                              f"{', '.join(result.items)})", key=f"{where}[{i}].item")
         it = result.items[key]
         bounds = limits_of(lim)
-        if extreme_of_magnitudes(it):
+        if extreme_of_magnitudes(key, it, magnitude_extremes):
             check_symmetric_limit(key, bounds, f"{where}[{i}]")
         unc = it.uncertainty
         if not it.measured or it.value is None:
@@ -504,7 +504,8 @@ def decide_items(result, limits: list[dict], rule: DecisionRule | dict | None, *
 
 
 def decide_result(result, lab: dict | None, defaults: list[dict] | None = None,
-                  defaults_origin: str = "specification's tolerance") -> list:
+                  defaults_origin: str = "specification's tolerance", *,
+                  magnitude_extremes=()) -> list:
     """Conformity of every item that has limits, stored in the result's items (the pipeline
     calls this for every specification; the report only renders ``Item.conformity``).
 
@@ -512,12 +513,16 @@ def decide_result(result, lab: dict | None, defaults: list[dict] | None = None,
     ``[decision_rule]``) and, for items the lab file does not limit, ``defaults`` (a
     specification's or protocol's tolerances, same entries; decided under the lab file's
     rule, else simple acceptance). No limits: no decision, every ``conformity`` stays None.
+    ``magnitude_extremes``: the items the specification declares extremes of magnitudes
+    (symmetric limits only, :func:`decide_items`).
     """
     lab = lab or {}
     lab_limits = list(lab.get("specification_limits") or [])
     named = {lim.get("item") for lim in lab_limits}
     rule = rule_of(lab.get("decision_rule"))
     out = decide_items(result, [d for d in defaults or [] if d.get("item") not in named], rule,
-                       origin=defaults_origin, where="tolerances")
-    out += decide_items(result, lab_limits, rule, origin="lab file")
+                       origin=defaults_origin, where="tolerances",
+                       magnitude_extremes=magnitude_extremes)
+    out += decide_items(result, lab_limits, rule, origin="lab file",
+                        magnitude_extremes=magnitude_extremes)
     return out

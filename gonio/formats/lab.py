@@ -11,6 +11,8 @@ Contents
 :func:`naming_lab_file`          errors about its limits found later name the file
 :func:`check_one_limit_per_item` one limit per item, never a silent override
 :func:`check_interval`           a limit's lower end below its upper end, one end at least
+:func:`check_symmetric`          an extreme of magnitudes takes a symmetric limit only
+:func:`check_magnitude_extremes` every limit of such an item symmetric, before any work
 ===============================  ==========================================================
 
 The certificate renders what this file holds (ISO/IEC 17025 7.8.2.1, 7.8.4, 7.8.6); the
@@ -28,7 +30,8 @@ from gonio.formats.toml import (Field, check_text_fields, non_negative, positive
                                 validate_table)
 
 __all__ = ["LAB_SCHEMA", "DECISION_RULES", "RECORD_STATUSES", "LOCATIONS", "load_lab",
-           "naming_lab_file", "check_one_limit_per_item", "check_interval"]
+           "naming_lab_file", "check_one_limit_per_item", "check_interval", "check_symmetric",
+           "check_magnitude_extremes"]
 
 #: Decision rules a laboratory file may name (``[decision_rule] rule = ...``; ILAC-G8:09/2019
 #: clause 4, :mod:`gonio.analysis.conformity`).
@@ -177,6 +180,48 @@ def check_one_limit_per_item(limits, where: str = "specification_limits", *,
                              f"limit per item", file=file, key=f"{where}[{i}].item")
         first[key] = i
 
+
+
+def check_symmetric(item: str, lower: float | None, upper: float | None, *, file=None,
+                    key: str | None = None) -> None:
+    """An extreme of magnitudes max_i |x_i| (an item a specification declares so:
+    ``Specification.magnitude_extremes``) takes a symmetric limit only (``mpe = M``, or
+    ``lower = -M`` with ``upper = M``): max_i |x_i| ≤ M is |x_i| ≤ M at every point, while
+    against [T_L, T_U] with T_L ≠ −T_U neither the magnitude nor the signed extreme tells
+    whether some x_i of the other sign lies below T_L. Any other limit is a GonioError naming
+    ``file`` and ``key``, never a decision on one side.
+
+    >>> check_symmetric("E", -0.4, 0.6, key="specification_limits[0]")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: key specification_limits[0]: E is an extreme of magnitudes (max_i |x_i|): its limit must be symmetric (mpe = M, or lower = -M with upper = M); got lower -0.4, upper 0.6
+    >>> check_symmetric("E", -0.5, 0.5)
+    """
+    if lower is None or upper is None or lower != -upper:
+        raise GonioError(
+            f"{item} is an extreme of magnitudes (max_i |x_i|): its limit must be symmetric "
+            f"(mpe = M, or lower = -M with upper = M); got lower {lower}, upper {upper}",
+            file=file, key=key)
+
+
+def check_magnitude_extremes(limits, extremes, *, file=None,
+                             where: str = "specification_limits") -> None:
+    """Every ``[[specification_limits]]`` entry (``limits``) of an item in ``extremes`` (the
+    keys a specification declares extremes of magnitudes) symmetric (:func:`check_symmetric`),
+    checked on the file before anything is computed; the error names ``file`` and
+    ``where[i]``.
+
+    >>> check_magnitude_extremes([{"item": "E", "mpe": 0.5}, {"item": "R", "upper": 0.3}],
+    ...                          ("E",))
+    >>> check_magnitude_extremes([{"item": "E", "upper": 0.5}], ("E",), file="lab.toml")
+    Traceback (most recent call last):
+    ...
+    gonio.errors.GonioError: lab.toml: key specification_limits[0]: E is an extreme of magnitudes (max_i |x_i|): its limit must be symmetric (mpe = M, or lower = -M with upper = M); got lower None, upper 0.5
+    """
+    for i, lim in enumerate(limits or []):
+        if lim.get("item") in extremes and lim.get("mpe") is None:
+            check_symmetric(lim["item"], lim.get("lower"), lim.get("upper"), file=file,
+                            key=f"{where}[{i}]")
 
 def load_lab(path: str | Path) -> dict:
     """Read and validate a laboratory details file (see ``protocols/lab-example.toml``).

@@ -108,7 +108,9 @@ def load_lab_file(lab, spec: Specification | None = None):
     ``spec``, a ``[[specification_limits]]`` entry naming an item the specification does not
     have (``spec.item_keys``, when it knows them before the data) is a GonioError naming the
     file, the entry and the item: refused before anything is computed, not after
-    (:meth:`gonio.specs.Specification.knows_item`: exact keys or patterns)."""
+    (:meth:`gonio.specs.Specification.knows_item`: exact keys or patterns); so is a limit
+    that is not symmetric for an item the specification declares an extreme of magnitudes
+    (``spec.magnitude_extremes``, :func:`gonio.formats.lab.check_magnitude_extremes`)."""
     path = lab if isinstance(lab, (str, Path)) else None
     if path is not None:
         from gonio.formats.lab import load_lab
@@ -119,6 +121,10 @@ def load_lab_file(lab, spec: Specification | None = None):
                 raise GonioError(f"{spec.key} has no item {lim.get('item')!r} (its items: "
                                  f"{', '.join(spec.item_keys)})", file=path,
                                  key=f"specification_limits[{i}].item")
+    if spec is not None and spec.magnitude_extremes and lab:
+        from gonio.formats.lab import check_magnitude_extremes
+        check_magnitude_extremes(lab.get("specification_limits"), spec.magnitude_extremes,
+                                 file=path)
     return lab
 
 

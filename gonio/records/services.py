@@ -332,11 +332,14 @@ def _create(store, actor: User | None, obj, entity: str, same, message: str, key
     return obj
 
 
-def check_limits(limits) -> list[dict]:
+def check_limits(limits, spec_key: str | None = None) -> list[dict]:
     """Specification limits [{item, lower, upper, mpe, source}] checked as the certificate
-    checks them (``LAB_SCHEMA['specification_limits']``)."""
+    checks them (``LAB_SCHEMA['specification_limits']``); with ``spec_key``, a limit that is
+    not symmetric for an item that specification declares an extreme of magnitudes
+    (``SPEC.magnitude_extremes``) is refused as the laboratory file's check refuses it."""
     from gonio.formats.toml import validate_table
-    from gonio.formats.lab import LAB_SCHEMA
+    from gonio.formats.lab import LAB_SCHEMA, check_magnitude_extremes
+    from gonio.specs import magnitude_extremes
 
     if isinstance(limits, str):
         try:
@@ -357,6 +360,8 @@ def check_limits(limits) -> list[dict]:
             raise GonioError("give mpe or lower/upper, not both", key=f"limits[{i}]")
         d["source"] = text(d["source"], f"limits[{i}].source")
         out.append(d)
+    if spec_key:
+        check_magnitude_extremes(out, magnitude_extremes(spec_key), where="limits")
     return out
 
 
@@ -378,7 +383,7 @@ def register_instrument(store, actor: User, *, customer_id: int, serial: str, sp
                       model=text(model, "model"),
                       interval_months=None if months is None else int(months),
                       limits_json=json.dumps(check_limits(list(limits) if not isinstance(
-                          limits, str) else limits)))
+                          limits, str) else limits, spec_key.strip())))
     with store.writing() as s:
         cust = s.get(Customer, inst.customer_id)
         if cust is None:
@@ -479,7 +484,10 @@ def update_instrument(store, actor: User, instrument_id: int, *, customer_id=Non
         months = number_value(interval_months, "interval_months", 1, 120)
         values["interval_months"] = None if months is None else int(months)
     if limits is not None:
-        values["limits_json"] = json.dumps(check_limits(limits))
+        with store.session() as s:
+            inst = s.get(Instrument, int(instrument_id))
+            spec_key = inst.spec_key if inst is not None else None
+        values["limits_json"] = json.dumps(check_limits(limits, spec_key))
     return _update(store, actor, Instrument, instrument_id, "instrument", values, retire,
                    lambda o: select(Instrument).where(
                        Instrument.manufacturer == o.manufacturer, Instrument.model == o.model,

@@ -278,6 +278,14 @@ class Specification:
         (a model order chosen by a criterion); such an item absent from a result is still
         refused once calibrated (:func:`gonio.analysis.conformity.decide_items`). Empty: the
         items are checked once calibrated only.
+    magnitude_extremes : tuple of str
+        The keys of its items that are an extreme of magnitudes max_i |x_i| (the optical
+        draft's E, 7.4): such an item takes a symmetric limit only, and a laboratory file's
+        or an instrument record's other limit for it is refused before any work
+        (:func:`gonio.formats.lab.check_magnitude_extremes`, called by
+        :func:`gonio.pipeline.dispatch.load_lab_file` and the records' limits); conformity
+        decides it as one (:func:`gonio.analysis.conformity.decide_items`). Each is one of
+        :attr:`item_keys` where those are given. Empty: none.
     commands : tuple of (str, str)
         The ``gonio`` sub-commands the specification adds: ``(name, "module:function")``
         pairs; ``function(subparsers)`` adds the parser ``name`` (argparse) and sets its
@@ -329,6 +337,7 @@ class Specification:
     commands: tuple[tuple[str, str], ...] = ()
     arguments: dict[str, str] = field(default_factory=dict)
     item_keys: tuple[str, ...] = ()
+    magnitude_extremes: tuple[str, ...] = ()
     dcc_units: dict[str, str] = field(default_factory=dict)
     recalibration_interval_months: int | None = None
 
@@ -358,8 +367,12 @@ class Specification:
         for name in ("simulate_options", "calibrate_options", "budget_options",
                      "serve_options"):
             _set_strings(self, where, name, frozenset)
-        for name in ("clauses", "item_keys"):
+        for name in ("clauses", "item_keys", "magnitude_extremes"):
             _set_strings(self, where, name, tuple)
+        unknown = [k for k in self.magnitude_extremes if not self.knows_item(k)]
+        if unknown:
+            raise _field_error(where, "magnitude_extremes", "keys of its items (item_keys)",
+                               unknown)
         self._check_tables(where)
 
     def _check_tables(self, where: str) -> None:
@@ -623,8 +636,22 @@ def decide_conformity(result, lab: dict | None):
     calls it as the pipeline would. Returns ``result``."""
     from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN, decide_result
 
-    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN)
+    decide_result(result, lab, default_limits(result.spec_key), DEFAULT_LIMITS_ORIGIN,
+                  magnitude_extremes=magnitude_extremes(result.spec_key))
     return result
+
+
+def magnitude_extremes(key: str) -> tuple[str, ...]:
+    """The items the specification ``key`` declares extremes of magnitudes
+    (``SPEC.magnitude_extremes``); none for a key no longer registered.
+
+    >>> magnitude_extremes("ogam-draft")
+    ('angle_deviation',)
+    """
+    try:
+        return get(key).magnitude_extremes
+    except GonioError:
+        return ()
 
 
 def _entry_points() -> dict[str, str]:

@@ -17,7 +17,7 @@ from sqlalchemy import func, select, text
 from gonio.errors import GonioError
 from gonio.records import services, worker
 from gonio.records.models import (AuditEvent, Base, Calibration, Certificate, ResultItem,
-                                  CertificateCounter)
+                                  CertificateCounter, Instrument)
 
 SMALL_PROTOCOL = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / \
     "small-protocol.toml"
@@ -486,3 +486,26 @@ def test_instrument_page_proposal_looks_certificates_up_by_index(sqlite_store):
             assert not [d for d in plan if d.startswith("SCAN certificates")], plan
             assert any(d.startswith("SEARCH certificates USING")
                        and "ix_certificates_calibration_id" in d for d in plan), plan
+
+
+@pytest.mark.parametrize("limit", [{"lower": -0.4, "upper": 0.6}, {"upper": 0.5}])
+def test_stored_limits_of_an_extreme_of_magnitudes_are_symmetric(store, people, limit):
+    """An instrument's stored limits refuse an asymmetric limit for an item its specification
+    declares an extreme of magnitudes (the optical E, SPEC.magnitude_extremes), at
+    registration and at an edit, in one line naming the entry; a symmetric one is stored."""
+    inst, _ = setup_instrument(store, people, limits=[{"item": "angle_deviation", "mpe": 0.5}])
+    with pytest.raises(GonioError) as exc:
+        services.register_instrument(store, people["tech"], customer_id=inst.customer_id,
+                                     serial="RLG-0002", spec_key="ogam-draft",
+                                     limits=[{"item": "angle_deviation", **limit}])
+    assert str(exc.value).startswith("key limits[0]: angle_deviation is an extreme")
+    assert "symmetric" in str(exc.value) and "\n" not in str(exc.value)
+    with pytest.raises(GonioError, match=r"key limits\[1\]: angle_deviation .* symmetric"):
+        services.update_instrument(store, people["tech"], inst.id, limits=[
+            {"item": "repeatability", "upper": 0.3}, {"item": "angle_deviation", **limit}])
+    services.update_instrument(store, people["tech"], inst.id, limits=[
+        {"item": "repeatability", "upper": 0.3},
+        {"item": "angle_deviation", "lower": -0.5, "upper": 0.5}])
+    with store.session() as s:
+        stored = json.loads(s.get(Instrument, inst.id).limits_json)
+    assert stored[1]["lower"] == -0.5 and stored[1]["upper"] == 0.5
