@@ -370,7 +370,8 @@ def test_rate_certificates_table_notes_the_items_without_a_probability():
         rows = next(d for kind, d, _ in blocks if kind == "table")[1]
         pfa = {row[0]: row[-1] for row in rows}
         assert pfa["<bias_instability>"] == "—" and pfa["<bias_stability>"].endswith("%")
-        notes = [d[0] for kind, d, _ in blocks if kind == "p" and "<bias_instability>" in d[0]]
+        notes = [d[0] for kind, d, _ in blocks if kind == "p" and "<bias_instability>" in d[0]
+                 and d[0].startswith("“—”")]
         assert len(notes) == 1 and "<bias_stability>" not in notes[0]
         assert all(not re.search(r"≤\s*[−-]", str(row[2])) for row in rows)
 
@@ -404,3 +405,29 @@ def test_a_value_below_its_own_interval_is_decided_on_the_interval(rule, r):
         assert not c.accepted
         assert c.outcome == ("fail" if rule == "guarded" else "conditional fail")
     assert c.false_accept_probability is None and c.conformance_probability is None
+
+
+@pytest.mark.parametrize("r", [1.0, 2.0])
+def test_the_guard_band_of_e_is_stated_with_the_intervals_reach(r):
+    """Under a guard band, the U of w = r·U for E is the interval's upper end − max|E_i|
+    (0.55 − 0.45 = 0.10), printed beside the decision rule in en and zh: never the draft's
+    Annex A U (here 0.38, k = 2.13) that the certificate states beside E, and never the
+    signed extreme (−0.45)."""
+    from gonio.report.i18n import labels
+    from gonio.report.stated import interval_band_note
+
+    res = e_result(-0.45, 0.30, 0.55, 0.45)
+    (c,) = decide_items(res, [{"item": "angle_deviation", "mpe": 0.8}],
+                        {"rule": "guarded", "guard_band_factor": r},
+                        magnitude_extremes=("angle_deviation",))
+    assert c.acceptance_upper == pytest.approx(0.8 - (r - 1) * (0.55 - 0.45))
+    for lang in ("en", "zh"):
+        note = interval_band_note([("angle_deviation", c.to_dict())], labels(lang),
+                                  lambda k: "E", lambda k: "″")
+        assert "E: U = 0.10 ″ = 0.55 ″ − 0.45 ″" in note.replace("E：", "E: "), note
+        assert "0.38" not in note and "−0.45" not in note.replace("− 0.45", "")
+    # simple acceptance has no guard band: no note
+    (c,) = decide_items(e_result(-0.45, 0.30, 0.55, 0.45), [{"item": "angle_deviation",
+                                                               "mpe": 0.8}], {"rule": "simple"})
+    assert interval_band_note([("angle_deviation", c.to_dict())], labels("en"),
+                              lambda k: "E", lambda k: "″") == ""

@@ -22,7 +22,8 @@ Labels and numbers              :func:`labels`, :func:`display`, :func:`display_
                                 :func:`parse_display`,
                                 :class:`Num`, :class:`NoBreakText`, :func:`num`,
                                 :func:`lookup`, :func:`item_nums`,
-                                :func:`conformity_texts`, :func:`no_probability_note`
+                                :func:`conformity_texts`, :func:`no_probability_note`,
+                                :func:`interval_band_note`
 Figures                         :func:`figure_svg`, :func:`mpl_style`,
                                 :func:`legend_above`, :func:`plain_axes`,
                                 :func:`empty_panel`, :func:`plain_log_ticks`,
@@ -57,7 +58,7 @@ from gonio.report.provenance import is_virtual
 from gonio.report.render import (Block, font_families, render_html, render_pdf,
                                  render_pdf_figures)
 from gonio.report.stated import (NoBreakText, Num, conformity_texts, item_nums, lookup,
-                                 no_probability_note, num)
+                                 interval_band_note, no_probability_note, num)
 from gonio.report.text import clean_tree
 
 __all__ = [
@@ -65,7 +66,7 @@ __all__ = [
     "bilingual", "certificate_id", "clause_text", "clean_tree",
     "conformity_section", "conformity_texts", "coverage_text", "decision_rule_blocks",
     "display", "display_number", "display_uncertainty", "element", "empty_panel",
-    "no_probability_note",
+    "no_probability_note", "interval_band_note",
     "figure_svg", "finding_text", "font_families", "influence_conditions", "is_draft",
     "is_virtual",
     "item_nums", "label_translator", "labels", "legend_above", "list_quantity", "lookup",

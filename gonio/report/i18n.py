@@ -260,6 +260,16 @@ LABELS: dict[str, dict[str, str]] = {
                     "zh": "“—”：{items} 不给出概率：其 95 % 区间不是正态分布或 χ² 分布的区间，"
                           "正态模型 N(y, u) 与之矛盾（JCGM 106:2012 7.3 取被测量自身的分布）；"
                           "判定依据该区间作出。"},
+    "c_interval_band_note": {
+        "en": "Guard band of an item stated by its 95 % interval alone ({items}): U in w = r·U "
+              "is that interval's own reach above the value (its upper end − the value; below "
+              "it, the value − its lower end), not an uncertainty stated beside it, and w is "
+              "applied to the interval's ends (at r = 1 the interval lies within the limits).",
+        "zh": "以 95 % 区间单独表述的项目（{items}）的保护带：w = r·U 中的 U 为该区间自身在值之上的"
+              "伸展（上端 − 值；值之下为 值 − 下端），不是其旁给出的不确定度；w 施加于区间的端点"
+              "（r = 1 时区间位于规定限之内）。"},
+    "c_interval_band_item": {"en": "{name}: U = {U} {unit} = {hi} {unit} − {y} {unit}",
+                             "zh": "{name}：U = {U} {unit} = {hi} {unit} − {y} {unit}"},
     "c_no_statement": {"en": "no statement: {r}", "zh": "不作声明：{r}"},
     "pass": {"en": "pass", "zh": "合格"},
     "fail": {"en": "fail", "zh": "不合格"},

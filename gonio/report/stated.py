@@ -160,6 +160,29 @@ def no_probability_note(decided, L: dict, name_of) -> str:
         items=sep.join(name_of(k) for k in keys))
 
 
+def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
+    """The note under a decision rule with a guard band naming, for each item decided on its
+    95 % interval alone (``acceptance_of`` "interval", rule guarded or non-binary), the U of
+    its guard band w = r·U: the interval's reach above the decided value (conformity ``U``,
+    its upper end ``value + U``, :func:`gonio.analysis.conformity.decide_items`), so that no
+    reader takes another U printed beside the item (the optical draft's max|E_i| ± U) for
+    it; "" when there is none. ``decided``: (key, conformity dict) pairs; ``unit_of(key)``
+    the unit as printed."""
+    rows = []
+    for key, c in decided:
+        if not c or c.get("acceptance_of") != "interval" or c.get("rule") == "simple" \
+                or not c.get("outcome") or c.get("U") is None or c.get("value") is None:
+            continue
+        y, U = float(c["value"]), float(c["U"])
+        rows.append(L.get("c_interval_band_item", "{name}: U = {U} {unit}").format(
+            name=name_of(key), unit=unit_of(key), U=display("sig2", U),
+            hi=display("sig2", y + U), y=display("sig2", y)).replace("  ", " "))
+    if not rows or "c_interval_band_note" not in L:
+        return ""
+    sep = "；" if L["c_interval_band_note"].startswith("以") else "; "
+    return L["c_interval_band_note"].format(items=sep.join(rows))
+
+
 def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
     """The statement-of-conformity section of every item the pipeline decided (results.json
     ``items.<key>.conformity``; none: no section): the decision rule, one row per item
@@ -173,6 +196,9 @@ def conformity_blocks(items: dict, L: dict, name_of, unit_of, block) -> list:
         r = next(c for _, c in decided if (c.get("rule") or "simple") == rule)
         out.append(block("p", [L.get(f"rule_{rule}", rule).format(
             r=display("k", r.get("guard_factor") or 0.0))], None))
+    band = interval_band_note(decided, L, name_of, unit_of)
+    if band:
+        out.append(block("p", [band], None))
     rows = []
     for key, c in decided:
         if not c.get("outcome"):
