@@ -190,7 +190,9 @@ def test_conformity_decided_on_the_interval(draft):
     c = res["items"]["angle_deviation"]["conformity"]
     assert c["value"] == pytest.approx(m)
     assert c["rule"] == "non-binary" and c["upper"] == 0.5
-    assert c["acceptance_upper"] == pytest.approx(0.5 - (hi - m), rel=1e-9)
+    # stated on the interval's ends: at r = 1 its upper end within +MPE itself, the same
+    # decision as max|E_i| ≤ 0.5 − (hi − m)
+    assert c["acceptance_of"] == "interval" and c["acceptance_upper"] == 0.5
     assert (c["outcome"] == "pass") == (hi <= 0.5)
     dr = res["extra"]["uncertainty"]["draft_reading"]
     # the seed's case separates the two: the interval passes where max|E_i| ± U would not
