@@ -54,7 +54,7 @@ from lxml import etree
 from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels
-from gonio.report.stated import Num, conformity_texts, interval_band_note
+from gonio.report.stated import Num, conformity_texts
 from gonio.result.statement import DSI_UNITS
 
 DCC_NS = "https://ptb.de/dcc"
@@ -209,11 +209,8 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
         text_element(st, "dcc:name", "Decision rule")
         element(st, "dcc:norm", "ILAC-G8:09/2019")
         element(st, "dcc:norm", "JCGM 106:2012")
-        band = interval_band_note([(k, c) for k, c in decided
-                                   if (c.get("rule") or "simple") == rule], L, name_of,
-                                  lambda k: items[k].get("unit") or "")
         text_element(st, "dcc:declaration", L.get(f"rule_{rule}", rule).format(
-            r=display("k", r.get("guard_factor") or 0.0)) + (f" {band}" if band else ""))
+            r=display("k", r.get("guard_factor") or 0.0)))
     for key, c in decided:
         st = element(sts, "dcc:statement", id=f"conformity-{key}", refId=f"result-{key}")
         text_element(st, "dcc:name", f"Statement of conformity: {name_of(key)}")

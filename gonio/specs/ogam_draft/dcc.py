@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from gonio.atomic import write_bytes
-from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data, interval_band_note,
+from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
                               conformity_texts, display, element, influence_conditions, labels,
                               list_quantity, measurement_result, new_document,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
@@ -66,13 +66,8 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         element(st, "dcc:norm", "ILAC-G8:09/2019")
         element(st, "dcc:norm", "JCGM 106:2012")
         agreed = (lab_.get("decision_rule") or {}).get("agreed")
-        band = interval_band_note(
-            [(e["item"], res["items"][e["item"]]["conformity"]) for e in conf], L,
-            lambda k: L[k], lambda k: L.get("u_" + res["items"][k]["unit"],
-                                            res["items"][k]["unit"]))
         text_element(st, "dcc:declaration", L[f"rule_{rule.kind}"].format(
-            r=display("k", rule.guard_factor)) + (f" {band}" if band else "")
-            + (f" Agreed: {agreed}." if agreed else ""))
+            r=display("k", rule.guard_factor)) + (f" Agreed: {agreed}." if agreed else ""))
         for e in conf:
             c = e["conformity"]
             st = element(sts, "dcc:statement", id=f"conformity-{e['item']}",
