@@ -61,7 +61,8 @@ def register(sub) -> None:
                         "refused without it (or the --lab file naming it)")
     q.add_argument("--user", default=None, metavar="NAME",
                    help="the records user importing (recorded as the calibrations' creator, "
-                        "who may then neither review nor approve them; default $GONIO_USER). "
+                        "who may then neither review nor approve them; default $GONIO_USER), "
+                        "with their password in $GONIO_PASSWORD or asked on the terminal. "
                         "A calibration imported without one cannot be reviewed")
     add_attach_options(q)
     q.set_defaults(func=run_import)
@@ -71,7 +72,7 @@ def register(sub) -> None:
     q.add_argument("calibration", type=int, help="the calibration's number (its id)")
     q.add_argument("--user", default=None, metavar="NAME",
                    help="the records user attaching them (technician or reviewer; default "
-                        "$GONIO_USER)")
+                        "$GONIO_USER), with their password in $GONIO_PASSWORD or asked")
     add_attach_options(q)
     q.set_defaults(func=run_attach)
     q = dsub.add_parser("register-table-calibration",
@@ -129,7 +130,8 @@ def hook_calibrate(sub) -> None:
                             "and awaiting review (see gonio serve)")
         p.add_argument("--record-user", default=None, metavar="NAME",
                        help="with --record: the records user recording it (its creator; "
-                            "default $GONIO_USER)")
+                            "default $GONIO_USER), with their password in $GONIO_PASSWORD "
+                            "or asked on the terminal")
         add_store_options(p)
         add_attach_options(p, prefix="with --record: ")
     except argparse.ArgumentError:           # calibrate has grown its own --record
@@ -140,8 +142,15 @@ def hook_calibrate(sub) -> None:
         if attach_of(args) and not args.record:
             raise GonioError("--standard, --temperature, --humidity and "
                              "--environment-from-readings go with --record", key="--record")
+        actor = None
         if args.record:              # the registered instrument's type, for K's bound
             args.registered_gyro_type = registered_gyro_type(args)
+            if args.record_user or os.environ.get("GONIO_USER"):   # logged in before the run
+                store = _store(args)
+                try:
+                    actor = importing_user(store, args.record_user, "calibrate --record")
+                finally:
+                    store.close()
         rc = inner(args)
         if rc == 0 and args.record:
             from gonio.records import services
@@ -154,7 +163,7 @@ def hook_calibrate(sub) -> None:
                                            lab=getattr(args, "lab", None),
                                            table_calibration=getattr(
                                                args, "table_calibration", None),
-                                           actor=importing_user(store, args.record_user),
+                                           actor=actor,
                                            **attach_of(args))
                 line = attach_line(store, services.calibration(store, cid))
             finally:
@@ -270,10 +279,11 @@ def run_attach(args) -> int:
 
     store = _store(args)
     try:
-        actor = services.user(store, args.user or os.environ.get("GONIO_USER") or "")
-        if actor is None or not actor.active:
+        name = args.user or os.environ.get("GONIO_USER") or ""
+        if not name:
             raise GonioError("give the active records user attaching them (--user or "
                              "$GONIO_USER)", key="--user")
+        actor = logged_in(store, name, "db attach")
         services.attach_by_identifiers(store, actor, args.calibration, **attach_of(args))
         from gonio.records.worker import run_now
         run_now(store, args.calibration)        # its draft rendered with them, at once
@@ -299,18 +309,52 @@ def attach_line(store, cal) -> str:
                         if missing else ""))
 
 
-def importing_user(store, name: str | None):
-    """The records user named by ``--user`` (else ``$GONIO_USER``), active and a technician;
-    None when neither names one."""
+def importing_user(store, name: str | None, command: str = "db import"):
+    """The records user named by ``--user`` (else ``$GONIO_USER``), logged in with their
+    password (:func:`logged_in`), active and a technician; None when neither names one."""
     from gonio.records import services
 
     name = name or os.environ.get("GONIO_USER") or None
     if name is None:
         return None
-    u = services.user(store, name)
-    if u is None or not u.active:
-        raise GonioError(f"no active records user {name!r}", key="--user")
-    return services.require(u, "technician")
+    return services.require(logged_in(store, name, command), "technician")
+
+
+def os_user() -> str:
+    """The operating-system account running this command ("(unknown)" where none is
+    found)."""
+    try:
+        return getpass.getuser()
+    except (KeyError, OSError):           # no name for the uid (a container's bare uid)
+        return f"(uid {os.getuid()})" if hasattr(os, "getuid") else "(unknown)"
+
+
+def logged_in(store, name: str, command: str):
+    """The records user ``name`` acting on the command line, proven as ``gonio serve``'s login
+    proves it: their password (from ``$GONIO_PASSWORD``, else asked on the terminal; never an
+    option, which other users could read in the process list) checked against the stored
+    Argon2id hash (:func:`gonio.records.auth.authenticate`: the same message for an unknown
+    name and a wrong password, failures counted and throttled as the browser's). The login is
+    an audit event naming the operating-system account that ran ``command``. A GonioError
+    (one line) otherwise."""
+    from gonio.records import auth, services
+
+    who = os_user()
+    password = os.environ.get("GONIO_PASSWORD")
+    if password is None:
+        if not sys.stdin.isatty():
+            raise GonioError(f"give the password of records user {name[:64]!r} in "
+                             "$GONIO_PASSWORD (no terminal to ask on)", key="--user")
+        password = getpass.getpass(f"password of records user {name}: ")
+    try:
+        u = auth.authenticate(store, name, password, address=f"command line ({who})"[:64])
+    except GonioError as exc:
+        raise GonioError(f"--user {name[:64]!r}: {exc.message}", key="--user") from None
+    with store.writing() as s:
+        services.audit(s, u, "command-line login", "user", u.id, None,
+                       {"command": command, "os_user": who})
+        s.commit()
+    return u
 
 
 def _store(args):
@@ -447,7 +491,7 @@ def add_replace_options(q) -> None:
                         "--sha256 DIGEST")
     q.add_argument("--user", default=None, metavar="NAME",
                    help="with --replace: the active administrator restoring (default "
-                        "$GONIO_USER)")
+                        "$GONIO_USER), with their password in $GONIO_PASSWORD or asked")
     q.add_argument("--sha256", default=None, metavar="DIGEST",
                    help="with --replace: the archive's SHA-256, confirming the archive that "
                         "replaces the records (without it the refusal names the digest)")
@@ -458,12 +502,10 @@ def _replacing_admin(store, args):
     from gonio.records import services
 
     name = args.user or os.environ.get("GONIO_USER") or ""
-    u = services.user(store, name) if name else None
-    if u is None or not u.active:
+    if not name:
         raise GonioError("--replace needs the active administrator restoring (--user NAME or "
-                         "$GONIO_USER)" + (f": no active records user {name!r}" if name
-                                           else ""), key="--user")
-    return services.require(u, "admin")
+                         "$GONIO_USER)", key="--user")
+    return services.require(logged_in(store, name, "db restore --replace"), "admin")
 
 
 def run_restore(args) -> int:

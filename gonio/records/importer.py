@@ -4,6 +4,8 @@ ready for review, of the instrument its readings name.
 
 The readings file must be the one results.json was computed from (its SHA-256 is checked
 against ``source.sha256``): the records never hold a result without its readings. The
+folder's files must match its ``gonio-manifest.json`` (:func:`check_manifest`): a
+results.json edited after gonio wrote it is refused, nothing recorded. The
 instrument is found by (manufacturer, model, serial) from the readings' metadata, else
 registered under the customer given (default ``(imported)``). The folder is only read.
 """
@@ -312,6 +314,36 @@ def _keep_table_calibration(s, cal: Calibration, actor, sha: str, name: str,
                    | ({"register_id": entry.id} if entry is not None else {}))
 
 
+def check_manifest(folder: Path) -> None:
+    """The folder's files against its ``gonio-manifest.json`` (the SHA-256 of each file gonio
+    wrote): a listed file missing or changed since, or a results.json the manifest does not
+    list, is a GonioError naming it. A folder without a manifest is not checked; a manifest
+    that cannot be read is refused."""
+    from gonio.atomic import MANIFEST
+    path = folder / MANIFEST
+    if not path.exists():
+        return
+    try:
+        man = json.loads(path.read_text(encoding="utf-8"))
+        files = man["files"]
+        if not isinstance(files, dict):
+            raise TypeError
+    except (OSError, ValueError, RecursionError, KeyError, TypeError):
+        raise GonioError("unreadable manifest (no JSON object with its files)",
+                         file=path) from None
+    if "results.json" not in files:
+        raise GonioError("the manifest does not list results.json: not one gonio output set",
+                         file=path)
+    for name, sha in sorted(files.items()):
+        p = folder / str(name)
+        if not p.is_file():
+            raise GonioError(f"{str(name)[:80]} is listed in the manifest but missing",
+                             file=path)
+        if blobs_sha(p) != sha:
+            raise GonioError(f"{str(name)[:80]} was changed after gonio wrote it (its SHA-256 "
+                             "is not the manifest's)", file=folder / str(name))
+
+
 def import_output_folder(store, folder: str | Path, *, readings: str | Path | None = None,
                          spec_key: str | None = None, customer: str = "(imported)",
                          actor: User | None = None,
@@ -320,8 +352,13 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
                          table_calibration: str | Path | None = None) -> int:
     """Import one output folder as a computed calibration; returns its id.
 
-    The protocol is stored with the readings (its file, as a blob), so that the issue's
-    recomputation uses the very protocol the result was computed with: ``protocol`` (a file
+    The folder's files are checked against its manifest (:func:`check_manifest`): a file
+    changed since gonio wrote it is refused, nothing recorded. The result is not computed
+    again here (docs/records.md: a folder whose manifest was rewritten too is not caught).
+
+    The protocol is stored with the readings (its file, as a blob), so that a later
+    computation of the calibration uses the very protocol the result was computed with
+    (the issue computes nothing: it renders the sealed result): ``protocol`` (a file
     or built-in name), else the one results.json names; a protocol that cannot be found, or
     whose SHA-256 differs from results.json's, is an error. ``lab``: the laboratory file the
     folder was computed with (``--lab``), validated as on the command line; when it gives
@@ -381,9 +418,24 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
     lsha, lsize, env, lab_stds = _lab_file(store, lab, key)
     tsha, tsize, tname = _table_calibration(store, lab, key, rd, results, res_path,
                                             table_calibration)
-    who = actor.username if actor else f"command line ({getpass.getuser()})"
+    check_manifest(folder)          # the folder as gonio wrote it, then what it says checked
+    return _record_import(store, folder, actor, meta, key, customer, day, rd,
+                          rsha, rsize, proto, psha, psize if psha else 0, lab, lsha, lsize,
+                          env, lab_stds, tsha, tsize, tname, res_path)
+
+
+def _record_import(store, folder, actor, meta, key, customer, day, rd, rsha, rsize,
+                   proto, psha, psize, lab, lsha, lsize, env, lab_stds, tsha, tsize, tname,
+                   res_path) -> int:
+    """The checked import recorded: the calibration, its standards, files and audit events in
+    one transaction, then its result (the folder's results.json and summary.txt) stored."""
+    try:
+        os_user = getpass.getuser()
+    except (KeyError, OSError):            # no name for the uid
+        os_user = "(unknown)"
+    who = actor.username if actor else f"command line ({os_user})"
     with store.writing() as s:
-        for sha, size in ((rsha, rsize), (psha, psize if psha else 0), (lsha, lsize),
+        for sha, size in ((rsha, rsize), (psha, psize), (lsha, lsize),
                           (tsha, tsize)):
             if sha and s.get(Blob, sha) is None:
                 s.add(Blob(sha256=sha, size=size))
@@ -412,7 +464,7 @@ def import_output_folder(store, folder: str | Path, *, readings: str | Path | No
         except GonioError as exc:
             raise GonioError(exc.message, file=rd, key=exc.key) from None
         services.audit(s, actor, "import", "calibration", cal.id, None,
-                       dict(services.state(cal), folder=str(folder),
+                       dict(services.state(cal), folder=str(folder), os_user=os_user,
                             standards=services.standard_names(s, cal.id)))
         if tsha is not None:        # the table calibration the run used, kept
             _keep_table_calibration(s, cal, actor, tsha, tname, res_path)

@@ -19,7 +19,7 @@ from gonio.records.backup import backup, restore
 from gonio.records.db import open_store
 from gonio.records.models import AuditEvent, Certificate, User
 
-from .conftest import make_people
+from .conftest import PASSWORD, make_people
 from .test_records_services import new_calibration, run_worker, setup_instrument
 
 
@@ -174,7 +174,7 @@ def test_restore_refuses_a_hostile_archive_with_one_line(records, tmp_path, caps
 
 
 
-def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys):
+def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys, monkeypatch):
     """``gonio db restore --replace`` replaces a populated SQLite database with the archive's
     records through the browser's function (an active admin named, the archive confirmed by
     its SHA-256, the replaced file kept); without the confirmation, by a non-admin, or with an
@@ -191,6 +191,7 @@ def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys):
     live = summary(records)["rows"]
     records.engine.dispose()          # the command line opens the database itself
     data = ["--data", records.data]
+    monkeypatch.setenv("GONIO_PASSWORD", PASSWORD)     # the named user's, as at the login
 
     err = cli(["db", "restore", archive, "--replace", "--user", "admin", *data], capsys, 2).err
     assert f"--sha256 {digest}" in err and "nothing restored" in err
@@ -205,8 +206,12 @@ def test_db_restore_replace_on_the_command_line(records, tmp_path, capsys):
     err = cli(["db", "restore", part, "--replace", "--user", "admin", "--sha256",
                hashlib.sha256(part.read_bytes()).hexdigest(), *data], capsys, 2).err
     assert "incomplete: 1 stored file" in err
-    now = summary(records)["rows"]    # the admin's two refusals audited, nothing else
-    assert now.pop("audit_events") == live["audit_events"] + 2
+    now = summary(records)["rows"]    # the admin's two refusals audited, and each login
+    with records.session() as s:      # of a named user (admin three times, tech once)
+        logins = s.scalar(select(func.count()).select_from(AuditEvent).where(
+            AuditEvent.action == "command-line login"))
+    assert logins == 4
+    assert now.pop("audit_events") == live["audit_events"] + 2 + logins
     assert now == {k: v for k, v in live.items() if k != "audit_events"}
     assert not list(records.data.glob("records.sqlite3.replaced-*"))
     records.engine.dispose()

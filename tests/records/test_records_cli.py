@@ -123,3 +123,45 @@ def test_verify_certificate_closes_the_file_it_reads(tmp_path):
         gc.collect()
     assert not [w for w in seen if issubclass(w.category, ResourceWarning)], \
         [str(w.message) for w in seen]
+
+
+def test_a_named_user_proves_it_with_their_password(tmp_path, capsys, monkeypatch):
+    """``--user NAME`` on the command line is the login's: the named user's password from
+    $GONIO_PASSWORD (no terminal here to ask on), checked against its stored hash; without it,
+    or wrong, one line and exit 2 before anything is done; with it the login is an audit
+    event naming the operating-system account (before: the name was taken on trust, so anyone
+    with a shell acted as "alice")."""
+    import getpass
+    import json
+
+    from gonio.records.models import AuditEvent
+
+    data = tmp_path / "data"
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(["db", "create-user", "alice", "--roles", "technician", "--data",
+                 str(data)]) == 0
+    capsys.readouterr()
+    attach = ["db", "attach", "1", "--user", "alice", "--temperature", "20", "--humidity",
+              "40", "--data", str(data)]
+    for password, said in ((None, "give the password of records user 'alice' in "
+                                  "$GONIO_PASSWORD"),
+                           ("not alice's password", "wrong user name or password")):
+        if password is None:
+            monkeypatch.delenv("GONIO_PASSWORD")
+        else:
+            monkeypatch.setenv("GONIO_PASSWORD", password)
+        assert main(attach) == 2
+        err = capsys.readouterr().err
+        assert said in err and err.count("\n") == 1, err
+    monkeypatch.setenv("GONIO_PASSWORD", "long enough password")
+    assert main(attach) == 2                 # logged in: refused for what it names, not who
+    err = capsys.readouterr().err
+    assert "password" not in err and err.count("\n") == 1, err
+    st = open_store(None, data)
+    try:
+        with st.session() as s:
+            logins = [json.loads(e.after_json) for e in s.query(AuditEvent).filter_by(
+                action="command-line login", username="alice")]
+    finally:
+        st.close()
+    assert logins == [{"command": "db attach", "os_user": getpass.getuser()}]

@@ -369,6 +369,42 @@ def test_import_output_folder(store, people, computed_folder, bench_readings, tm
         json.loads((computed_folder / "results.json").read_text())["items"]["scale_factor"]["value"]
 
 
+def test_import_refuses_a_results_file_changed_after_gonio_wrote_it(store, people,
+                                                                    computed_folder,
+                                                                    bench_readings, tmp_path):
+    """A results.json edited after gonio wrote it (K changed by 2 ppm): refused, its SHA-256
+    not the manifest's, nothing recorded; the untouched folder imports with K as computed.
+    Before, any K typed into results.json was imported, reviewed and issued."""
+    folder = tmp_path / "run"
+    shutil.copytree(computed_folder, folder)
+    res = folder / "results.json"
+    original = res.read_bytes()
+    doc = json.loads(original)
+    k_true = doc["items"]["scale_factor"]["value"]
+    doc["items"]["scale_factor"]["value"] = k_true * (1 + 2e-6)
+    res.write_text(json.dumps(doc, indent=2), encoding="utf-8")
+    with pytest.raises(GonioError, match="results.json was changed after gonio wrote it"):
+        import_output_folder_of(store, folder, bench_readings, people)
+    (folder / "gonio-manifest.json").unlink()
+    (folder / "gonio-manifest.json").write_text("[]", encoding="utf-8")
+    with pytest.raises(GonioError, match="unreadable manifest"):
+        import_output_folder_of(store, folder, bench_readings, people)
+    with store.session() as s:
+        assert s.query(Calibration).count() == 0
+    shutil.rmtree(folder)
+    shutil.copytree(computed_folder, folder)
+    cid = import_output_folder_of(store, folder, bench_readings, people)
+    stored = json.loads(services.file_bytes(store, services.calibration(store, cid)
+                                            .results_sha256))
+    assert stored["items"]["scale_factor"]["value"] == k_true and stored == json.loads(original)
+
+
+def import_output_folder_of(store, folder, bench_readings, people):
+    from gonio.records.importer import import_output_folder
+    return import_output_folder(store, folder, readings=bench_readings[0],
+                                protocol=SMALL_PROTOCOL, actor=people["tech"])
+
+
 def test_blob_store_checks_digest(sqlite_store):
     from gonio.records import blobs
 

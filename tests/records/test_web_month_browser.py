@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import datetime as dt
 import io
+import os
 import shutil
 import time
 
@@ -180,8 +181,12 @@ def test_a_month_of_the_laboratory_in_chromium(month, browser, bench_readings,  
     shutil.copytree(computed_folder, folder)
     shutil.copy(bench_readings[0], folder / "readings.csv")
     db = ["--data", str(data)] + (["--database", url] if url else [])
-    assert main(["db", "import", str(folder), "--protocol", str(PROTOCOL), "--user", "tech",
-                 *db]) == 0
+    os.environ["GONIO_PASSWORD"] = PASSWORD        # tech's, checked as the login checks it
+    try:
+        assert main(["db", "import", str(folder), "--protocol", str(PROTOCOL), "--user",
+                     "tech", *db]) == 0
+    finally:
+        del os.environ["GONIO_PASSWORD"]
     log_in(page, base, "rev")
     page.goto(base + "/calibrations?status=computed")
     with page.expect_navigation():
