@@ -323,11 +323,15 @@ def test_migration_0009_over_0008(tmp_path, pg_server):
             st.close()
 
 
-def test_command_line_registers_and_lists(store, tmp_path, capsys):
+def test_command_line_registers_and_lists(store, tmp_path, capsys, monkeypatch):
     """``gonio db register-table-calibration`` (technician; a reviewer is refused, exit 2,
     one line) and ``gonio db table-calibrations`` (which is in force on --date) — on the
-    back end of ``store``."""
+    back end of ``store``; ``--user`` logs in with the password in $GONIO_PASSWORD."""
     from gonio.cli import main
+
+    from .conftest import PASSWORD
+
+    monkeypatch.setenv("GONIO_PASSWORD", PASSWORD)
 
     people, _, table_id, _ = setup_lab(store)
     where = ["--database", store.url] if not store.url.startswith("sqlite") else \
