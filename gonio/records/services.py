@@ -875,8 +875,9 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
       on ``day`` (:func:`table_calibration_state`: an expired, superseded or not yet valid one
       is refused with one line) and of a table among the calibration's standards; an upload
       beside it must be its file.
-    * an upload only: the register's entry of a ticked table with that file where there is
-      one (the same checks), else, where the register holds no calibration of a ticked table,
+    * an upload only: where the register holds that file (of any table) its entry, which
+      must be of a table among the calibration's standards and in force on ``day`` (the
+      same checks: a registered file is never used as a bare upload), else, where the register holds no calibration of a ticked table,
       the upload kept with this calibration only (``(sha256, None)``); an upload of another
       file while the register holds one of a ticked table is refused (pick it, or register
       the new file).
@@ -892,7 +893,7 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
     takes = "table_calibration" in spec.calibrate_options
     if register_id in (None, ""):
         register_id = None
-    if register_id is None and (not takes or not ids):
+    if register_id is None and not takes:
         return upload_sha256, None
     if register_id is not None and not takes:
         raise GonioError(f"{spec.key} takes no table calibration", key="table_calibration")
@@ -918,6 +919,14 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
                              "give one of them", key="table_calibration")
         return tc
 
+    if register_id is None and upload_sha256 is not None:
+        # the upload's file looked up in the whole register: a registered file is used
+        # only as its entry (its table ticked, in force on ``day``), never as a bare upload
+        known = s.scalars(select(TableCalibration).where(
+            TableCalibration.sha256 == upload_sha256).order_by(TableCalibration.id)).all()
+        if known:
+            ticked = [e for e in known if e.standard_id in ids]
+            return upload_sha256, checked((ticked or known)[0])
     if register_id is not None:
         try:
             tc = s.get(TableCalibration, int(register_id))

@@ -529,3 +529,27 @@ def test_lookalike_names_refused_and_not_shown(store):
         s.commit()
     with store.session() as s:
         assert services.table_calibration_name(s, cal.id) == services.TABLE_CALIBRATION
+
+
+@pytest.mark.parametrize("standards, day, expect", [
+    ("other", "2026-02-01", "table calibration 1 (TC-1) of RT-07 is of a table the calibration "
+                            "does not name among its standards: tick the table"),
+    ("both", "2026-02-01", "table calibration 1 (TC-1) of RT-07 cannot be used on 2026-02-01: "
+                           "expired: it was due on 2026-01-01"),
+    ("other", "2025-03-01", "table calibration 1 (TC-1) of RT-07 is of a table the calibration "
+                            "does not name among its standards"),
+], ids=["expired-table-not-ticked", "expired-table-ticked", "in-force-table-not-ticked"])
+def test_registered_upload_looked_up_in_the_whole_register(store, standards, day, expect):
+    """An upload of a registered file is that entry, whichever standards are ticked: its table
+    must be among them and the entry in force (an expired TC-1 uploaded with only the
+    autocollimator ticked is not used as a bare upload): one line, nothing created."""
+    people, inst_id, table_id, other_id = setup_lab(store)
+    register(store, people["tech"], table_id, "TC-1")
+    sha = services.store_file(store, io.BytesIO(FILES["TC-1"]))[0]
+    ids = [other_id] if standards == "other" else [table_id, other_id]
+    with pytest.raises(GonioError) as e:
+        create(store, people["tech"], inst_id, day, ids, table_calibration_sha256=sha)
+    msg = str(e.value)
+    assert expect in msg and "\n" not in msg, msg
+    with store.session() as s:
+        assert s.scalar(select(Calibration.id)) is None
