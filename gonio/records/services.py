@@ -1453,7 +1453,10 @@ def seal(store, cal_id: int) -> str:
     """The content hash of a calibration's stored result, which the reviewer and the
     approver sign and the issue checks: SHA-256 of the canonical JSON of the stored files'
     digests (results.json, summary, draft certificate) and every result row (key, title,
-    clause, unit, measured, value, U, k). Every stored file is checked against its digest
+    clause, unit, measured, value, U, k), and where the calibration used an entry of the
+    register of table calibrations that entry (id, standard, SHA-256, valid from, due on:
+    ``table_calibration_id`` changed after signing breaks the seal; a calibration without
+    an entry is sealed as before). Every stored file is checked against its digest
     and every row against the stored results.json first, its kept statement too (stated,
     interval ends: :func:`gonio.records.results.result_rows`; a row that keeps none, None,
     is drawn from the stored result itself): a GonioError names what no longer matches (a
@@ -1496,8 +1499,12 @@ def seal(store, cal_id: int) -> str:
         if any(getattr(r, name) != want[name] for name in names):
             raise GonioError(f"the stored result row {r.key} differs from the stored "
                              "results.json (changed in the database)", key=f"calibration {cal_id}")
-    doc = json.dumps({"files": files, "items": rows}, sort_keys=True, separators=(",", ":"),
-                     allow_nan=False)
+    sealed: dict = {"files": files, "items": rows}
+    if entry is not None:   # which register entry was used; a seal without one stays as it was
+        sealed["table_calibration_entry"] = {
+            "id": entry.id, "standard_id": entry.standard_id, "sha256": entry.sha256,
+            "valid_from": entry.valid_from.isoformat(), "due_on": entry.due_on.isoformat()}
+    doc = json.dumps(sealed, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(doc.encode("utf-8")).hexdigest()
 
 

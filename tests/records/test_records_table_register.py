@@ -553,3 +553,30 @@ def test_registered_upload_looked_up_in_the_whole_register(store, standards, day
     assert expect in msg and "\n" not in msg, msg
     with store.session() as s:
         assert s.scalar(select(Calibration.id)) is None
+
+
+def test_seal_binds_the_register_entry(store, computed_folder):
+    """The calibration's table_calibration_id emptied, or pointed at another table's entry
+    holding the same file, after signing: the seal no longer matches; put back, it does."""
+    people, inst_id, table_id, _ = setup_lab(store)
+    tech = people["tech"]
+    tc = register(store, tech, table_id, "TC-1")
+    rt8 = services.add_standard(store, tech, name="rotary table", identifier="RT-08",
+                                due_on="2099-01-01")
+    twin = register(store, tech, rt8.id, "TC-1")
+    assert twin.sha256 == tc.sha256 and twin.id != tc.id
+    cal = create(store, tech, inst_id, "2025-03-01", [table_id])
+    assert cal.table_calibration_id == tc.id
+    services.store_run(store, cal.id, computed_folder)
+    sealed = services.seal(store, cal.id)
+    for tampered in (None, twin.id):
+        with store.writing() as s:
+            s.execute(update(Calibration).where(Calibration.id == cal.id)
+                      .values(table_calibration_id=tampered))
+            s.commit()
+        assert services.seal(store, cal.id) != sealed, tampered
+    with store.writing() as s:
+        s.execute(update(Calibration).where(Calibration.id == cal.id)
+                  .values(table_calibration_id=tc.id))
+        s.commit()
+    assert services.seal(store, cal.id) == sealed
