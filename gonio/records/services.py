@@ -752,6 +752,28 @@ def table_calibration_file(store, cal_id: int, work: Path) -> Path | None:
 #                                                                            table calibrations
 
 
+def _readable_table_calibration(store, sha256: str, shown: str) -> None:
+    """The stored file ``sha256`` read as a table calibration by the reader of every
+    specification that reads one (``Specification.read_table_calibration``): a file no
+    reader takes (not UTF-8, a NUL byte, a formula in a number's place, a missing column) is
+    refused in one line naming the file by ``shown``, its line and column, before it is
+    registered."""
+    from gonio import specs
+
+    readers = [sp.read_table_calibration for sp in specs.available().values()
+               if sp.read_table_calibration is not None]
+    if not readers:
+        raise GonioError("no specification reads a table calibration", key="sha256")
+    path = blobs.blob_path(store.blob_root, sha256)
+    for read in readers:
+        try:
+            read(path)
+        except GonioError as exc:
+            raise GonioError(f"not a table calibration: {exc.message}",
+                             file=shown or TABLE_CALIBRATION, line=exc.line,
+                             column=exc.column) from None
+
+
 def register_table_calibration(store, actor: User, *, standard_id: int, sha256: str,
                                name: str = "", valid_from=None, due_on=None,
                                certificate: str = "") -> TableCalibration:
@@ -764,7 +786,8 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
     ``table-calibration``. The same file twice for one table, or two of one table valid from
     the same day (which would be in force?), are refused with one line. A later one of the
     same table supersedes the earlier from its own ``valid_from``
-    (:func:`table_calibration_state`); nothing registered is changed or removed."""
+    (:func:`table_calibration_state`); nothing registered is changed or removed. The file
+    must read as a table calibration (:func:`_readable_table_calibration`)."""
     require(actor, "technician")
     start = date_value(valid_from, "valid_from", required=True)
     due = date_value(due_on, "due_on", required=True)
@@ -782,6 +805,7 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
                              key="standard")
         if s.get(Blob, sha256) is None:
             raise GonioError("no such stored file", key="sha256")
+        _readable_table_calibration(store, sha256, shown)
         for other in s.scalars(select(TableCalibration).where(
                 TableCalibration.standard_id == st.id)).all():
             if other.sha256 == sha256:

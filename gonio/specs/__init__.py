@@ -70,7 +70,8 @@ _DSI = re.compile(r"(\\[a-z]+(\{-?[0-9]+(\.[0-9]+)?\})?)+")
 _STRING_FIELDS = ("title_en", "title_zh", "clause_doc", "default_protocol", "default_bench",
                   "outputs", "readings_format", "certificate_content")
 _HOOKS = ("load_protocol", "screen", "simulate", "truth", "run_trial", "budget",
-          "named_inputs", "acquisition", "acquire", "serve", "readings_columns")
+          "named_inputs", "acquisition", "acquire", "serve", "readings_columns",
+          "read_table_calibration")
 #: The functions an ``outputs`` module defines (``write(result, out, *, truth, lab, lang,
 #: dcc)``, ``results_json(result, lab)``, ``summary(result, lab)``) and those it may define
 #: (``demo(out, *, bench, seed, lab, lang, dcc, force, inputs, on_stage)``,
@@ -266,6 +267,10 @@ class Specification:
     named_inputs : callable or None
         (readings path) → the other files the readings name as part of their data (inputs
         no output may replace).
+    read_table_calibration : callable or None
+        (path) → the rotary table's calibration read from a table-calibration file, every
+        fault a GonioError in one line; what the records check a file with before they
+        register it as a table's calibration. None: it reads none.
     certificate_content : str
         The module holding its certificate's content as data (its headings, groups, Chinese
         titles, ``NORM``, what its figures differ in); the shared renderers read it through
@@ -332,6 +337,7 @@ class Specification:
     readings_format: str = ""
     readings_columns: Callable[[], tuple] | None = None
     named_inputs: Callable[..., list] | None = None
+    read_table_calibration: Callable[..., Any] | None = None
     default_limits: tuple = ()
     certificate_content: str = ""
     commands: tuple[tuple[str, str], ...] = ()

@@ -580,3 +580,25 @@ def test_seal_binds_the_register_entry(store, computed_folder):
                   .values(table_calibration_id=tc.id))
         s.commit()
     assert services.seal(store, cal.id) == sealed
+
+
+@pytest.mark.parametrize("data, expect", [
+    (b"table_deg,error_arcsec,u_arcsec\n0,0.0,0.02\n120,0.01\x00,0.02\n",
+     "bad.csv:3: column error_arcsec: not a table calibration: expected a number"),
+    (b"table_deg,error_arcsec,u_arcsec\n0,0.0,0.02\n120,=1+1,0.02\n",
+     "bad.csv:3: column error_arcsec: not a table calibration: expected a number, got '=1+1'"),
+    (b"\x00\x01\x02\xff binary", "bad.csv"),
+], ids=["nul", "formula", "binary"])
+def test_register_reads_the_file_first(store, data, expect):
+    """A file the table calibration reader does not take (a NUL byte, a spreadsheet
+    formula, binary bytes) is refused in one line naming it, and nothing is registered."""
+    people, _, table_id, _ = setup_lab(store)
+    sha, _ = services.store_file(store, io.BytesIO(data))
+    with pytest.raises(GonioError) as e:
+        services.register_table_calibration(store, people["tech"], standard_id=table_id,
+                                            sha256=sha, name="bad.csv", valid_from="2025-01-01",
+                                            due_on="2026-01-01")
+    msg = str(e.value)
+    assert expect in msg and "not a table calibration" in msg and "\n" not in msg, msg
+    with store.session() as s:
+        assert s.scalar(select(TableCalibration.id)) is None

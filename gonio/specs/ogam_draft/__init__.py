@@ -49,6 +49,8 @@ SPEC = Specification(
                       options=frozenset({"cases", "truth", "extra_components", "u_scale",
                                          "sample_rate_hz", "all_items", "resume",
                                          "monte_carlo"})),
+    read_table_calibration=lazy("gonio.specs.ogam_draft.table_calibration:"
+                                "read_table_calibration"),
     outputs="gonio.specs.ogam_draft.outputs",
     simulate_options=frozenset({"table", "stream", "stream_format"}),
     calibrate_options=frozenset({"protocol", "dcc", "budget", "tilt", "gyro_type",
