@@ -431,3 +431,29 @@ def test_the_guard_band_of_e_is_stated_with_the_intervals_reach(r):
                                                                "mpe": 0.8}], {"rule": "simple"})
     assert interval_band_note([("angle_deviation", c.to_dict())], labels("en"),
                               lambda k: "E", lambda k: "″") == ""
+
+
+@pytest.mark.parametrize("hi", [0.4558, 0.4551, 0.4559, 0.46])
+def test_printed_acceptance_limits_are_rounded_inward(hi):
+    """E = 0.4114, interval [0.35, hi], mpe 0.5, guarded r = 2: the decided acceptance is
+    the interval's ends within [−0.5 + U_L, 0.5 − U] (by hand, U = hi − 0.4114,
+    U_L = 0.4114 − 0.35). Printed to U's places (2 significant digits), the upper limit
+    rounded down and the lower up: never wider than the decided interval (half-up printed
+    0.4556 as 0.456, beside the interval end 0.4558, also 0.456, and a "fail")."""
+    from dataclasses import asdict
+
+    from gonio.report import i18n
+    from gonio.report.stated import conformity_texts
+    c = decide_items(e_result(0.4114, 0.35, hi, 0.4114), [
+        {"item": "angle_deviation", "mpe": 0.5}], {"rule": "guarded",
+                                                    "guard_band_factor": 2.0})[0]
+    U, UL = hi - 0.4114, 0.4114 - 0.35
+    assert c.acceptance_upper == pytest.approx(0.5 - U)
+    assert c.acceptance_lower == pytest.approx(-0.5 + UL)
+    assert c.outcome == ("pass" if hi <= 0.5 - U else "fail")
+    text = conformity_texts(asdict(c), None, i18n.labels("en"))["acceptance"]
+    lo_p, hi_p = (float(x.replace("−", "-")) for x in
+                  re.search(r"\[(\S+), (\S+)\]", text).groups())
+    assert hi_p <= 0.5 - U + 1e-12 and lo_p >= -0.5 + UL - 1e-12
+    step = 10.0 ** -3          # U ≈ 0.044 (2 significant digits: 3 places)
+    assert 0.5 - U - hi_p < step and lo_p - (-0.5 + UL) < step

@@ -188,9 +188,12 @@ def stated_intervals(store, results_sha256: str) -> dict:
     at = (str(store.blob_root), results_sha256)
     got = _INTERVALS.get(at)
     if got is None:
-        cols = stored_columns(store.blob_root, results_sha256) or {}
-        got = _INTERVALS[at] = {key: (c["interval_low"], c["interval_high"])
-                                for key, c in cols.items() if c["stated"] == "interval"}
+        cols = stored_columns(store.blob_root, results_sha256)
+        got = {key: (c["interval_low"], c["interval_high"])
+               for key, c in (cols or {}).items() if c["stated"] == "interval"}
+        if cols is None:           # not read (absent, unreadable): not kept, read again
+            return got
+        _INTERVALS[at] = got
         while len(_INTERVALS) > 1024:
             _INTERVALS.pop(next(iter(_INTERVALS)))
     return got
@@ -204,7 +207,8 @@ def max_abs_keys(store, results_sha256: str) -> frozenset:
     magnitudes max_i |x_i| (``uncertainty.k_source``
     :data:`gonio.result.statement.K_SOURCE_MAX_ABS`: the optical draft's E, whose value is
     the signed extreme beside an interval of its magnitude), read once per stored result (a
-    stored file never changes); none where the result cannot be read."""
+    stored file never changes); none where the result cannot be read, and that is not
+    kept: the next call reads again."""
     from gonio.result.statement import K_SOURCE_MAX_ABS
 
     at = (str(store.blob_root), results_sha256)
@@ -220,10 +224,13 @@ def max_abs_keys(store, results_sha256: str) -> frozenset:
         items = doc.get("items") if isinstance(doc, dict) else None
         if isinstance(items, list):
             items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
-        got = _MAX_ABS[at] = frozenset(
+        got = frozenset(
             key for key, it in (items if isinstance(items, dict) else {}).items()
             if isinstance(it, dict) and isinstance(it.get("uncertainty"), dict)
             and it["uncertainty"].get("k_source") == K_SOURCE_MAX_ABS)
+        if doc is None:            # not read (absent, unreadable): not kept, read again
+            return got
+        _MAX_ABS[at] = got
         while len(_MAX_ABS) > 1024:
             _MAX_ABS.pop(next(iter(_MAX_ABS)))
     return got

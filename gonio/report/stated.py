@@ -21,6 +21,7 @@ to the same decimal place). Nothing is computed here beyond rounding.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from decimal import ROUND_CEILING, ROUND_FLOOR
 from typing import Any
 
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
@@ -123,9 +124,16 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
     U = g("U")
     dec = decimals_for_sig(float(U), 2) if U else None
     lims = {x for x in (g("lower"), g("upper")) if x is not None}
-    f = (lambda v: given_text(v) if v in lims else round_half_up(v, dec)) \
-        if dec is not None else given_text  # noqa: E731
     al, au = g("acceptance_lower"), g("acceptance_upper")
+
+    def f(v):
+        # an acceptance limit rounded inward (upper down, lower up) to U's places: the printed
+        # acceptance interval is never wider than the decided one, so a printed end that
+        # meets the printed limit was accepted (a half-up 0.4556 printed 0.456 beside an
+        # interval end 0.4558 printed 0.456 and a "fail")
+        if dec is None or v in lims:
+            return given_text(v)
+        return round_half_up(v, dec, ROUND_FLOOR if v is au else ROUND_CEILING)
     if g("acceptance_empty") or (al is not None and au is not None and al > au) or (
             nonnegative and au is not None and au < 0):
         acc = L["c_acc_empty"]

@@ -212,3 +212,26 @@ def test_history_rows_know_the_extreme_of_magnitudes_from_the_stored_result(tmp_
     assert not services._max_abs(store, "angle_deviation", 0.45, (0.30, 0.55), sha)
     assert not services._max_abs(store, "angle_deviation", -0.45, None, sha)
     assert not services._max_abs(store, "angle_deviation", -0.45, (0.30, 0.55), "0" * 64)
+
+
+def test_an_unreadable_stored_result_is_read_again(tmp_path):
+    """A stored result that cannot be read (here: not yet stored) gives no keys and no
+    intervals, and that answer is not kept for the process: once readable, E is known as
+    the extreme of magnitudes and its interval is found (was cached empty until restart,
+    the history figure drawing E at its signed value)."""
+    import hashlib
+    import json
+    from types import SimpleNamespace
+
+    from gonio.records.blobs import put_bytes
+    from gonio.records.results import max_abs_keys, stated_intervals
+    from gonio.result.statement import K_SOURCE_MAX_ABS
+
+    data = json.dumps({"items": {"angle_deviation": {
+        "value": -0.45, "uncertainty": {"k_source": K_SOURCE_MAX_ABS}}}}).encode()
+    sha = hashlib.sha256(data).hexdigest()
+    store = SimpleNamespace(blob_root=tmp_path)
+    assert max_abs_keys(store, sha) == frozenset()
+    assert stated_intervals(store, sha) == {}
+    assert put_bytes(tmp_path, data) == sha
+    assert max_abs_keys(store, sha) == frozenset({"angle_deviation"})
