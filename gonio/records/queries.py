@@ -469,7 +469,8 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
                  "state_today", "used_by", "registered_by", "registered_at"],
                 [[e.id, e.standard.identifier, e.certificate, e.name, e.sha256, e.valid_from,
                   e.due_on, r["state"] or "in force", r["used"],
-                  e.registered_by.username if e.registered_by else "", e.registered_at]
+                  e.registered_by.username if e.registered_by else "",
+                  e.registered_at.isoformat(timespec="seconds") + "Z"]   # stored naive UTC
                  for r in rows for e in [r["entry"]]])
     if name == "audit":
         rows, _ = audit_events(store, 1, big, params.get("entity", ""),

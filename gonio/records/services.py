@@ -995,10 +995,10 @@ def table_calibrations(store, day: _dt.date | None = None) -> list[dict]:
     """The laboratory's register of table calibrations, newest first per table: each
     ``{"entry": TableCalibration (with its standard and who registered it), "state": ""
     in force on ``day`` (today) or why not (:func:`table_calibration_state`), "used": how
-    many calibrations used it}``."""
+    many calibrations used it}``; today is the UTC date (the records keep UTC)."""
     from sqlalchemy.orm import selectinload
 
-    day = day or _dt.date.today()
+    day = day or utcnow().date()
     with store.session() as s:
         rows = s.scalars(select(TableCalibration).options(
             selectinload(TableCalibration.standard), selectinload(TableCalibration.registered_by))

@@ -354,11 +354,12 @@ def _register_page(request, user, csrf, status_code=200, error=""):
         day = services.date_value(request.query_params.get("date", "")[:20], "date")
     except GonioError as exc:
         day, error = None, error or str(exc)
-    day = day or _dt.date.today()
+    today = services.utcnow().date()                 # the records' dates are UTC
+    day = day or today
     return render(request, "table_calibrations.html", user, csrf, status_code=status_code,
                   error=error, rows=services.table_calibrations(store, day),
                   standards=[s for s in queries.standards(store) if not s.retired_on],
-                  today=_dt.date.today(), day=day)
+                  today=today, day=day)
 
 
 @router.get("/table-calibrations")

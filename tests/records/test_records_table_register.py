@@ -414,6 +414,10 @@ def test_web_register_page_and_form(tmp_path, bench_readings):
         assert [(r["certificate"], r["sha256"], r["valid_from"], r["file"]) for r in rows] == \
             [("TC-2", SHA["TC-2"], "2025-06-01", "TC-2.csv"),
              ("TC-1", SHA["TC-1"], "2025-01-01", hostile)]
+        now = dt.datetime.now(dt.timezone.utc)
+        for r in rows:      # UTC, marked: within a few minutes of the clock's UTC now
+            at = dt.datetime.fromisoformat(r["registered_at"].replace("Z", "+00:00"))
+            assert r["registered_at"].endswith("Z") and abs(now - at) < dt.timedelta(minutes=10)
         std_page = tech.get(f"/standards/{table_id}").text
         assert 'id="table-calibrations"' in std_page and SHA["TC-2"] in std_page
         assert "<img src=x" not in std_page
@@ -602,3 +606,14 @@ def test_register_reads_the_file_first(store, data, expect):
     assert expect in msg and "not a table calibration" in msg and "\n" not in msg, msg
     with store.session() as s:
         assert s.scalar(select(TableCalibration.id)) is None
+
+
+def test_register_today_is_the_utc_date(store, monkeypatch):
+    """The register's state "today" is the UTC date: TC-1 (due 2026-01-01) at 23:30 UTC on
+    its due date is in force, at 00:30 UTC the next day expired, whatever the local zone."""
+    people, _, table_id, _ = setup_lab(store)
+    register(store, people["tech"], table_id, "TC-1")
+    for at, want in ((dt.datetime(2026, 1, 1, 23, 30), ""),
+                     (dt.datetime(2026, 1, 2, 0, 30), "expired: it was due on 2026-01-01")):
+        monkeypatch.setattr(services, "utcnow", lambda at=at: at)
+        assert [r["state"] for r in services.table_calibrations(store)] == [want], at
