@@ -143,9 +143,9 @@ def test_an_extreme_of_magnitudes_against_a_symmetric_limit(mpe, expected):
             assert c.outcome == expected[rule], (mpe, rule, lim)
             assert c.value == pytest.approx(0.45)            # max|E_i|, not the signed −0.45
             assert c.conformance_probability is None and c.false_accept_probability is None
-            if rule != "simple":                            # the interval within ±MPE
+            if rule != "simple":        # the interval's upper end ≤ MPE (a magnitude's
                 assert (c.acceptance_of, c.acceptance_lower, c.acceptance_upper) == \
-                    ("interval", -mpe, mpe)
+                    ("interval", None, mpe)   # interval lies above 0: no lower end stated)
 
 
 def belt_result(value: float, lo: float, hi: float, k_source: str = "neyman-belt",
@@ -330,7 +330,7 @@ def test_optical_certificate_states_no_negative_acceptance_limit(optical, tmp_pa
     table = table[:table.index("</table>")]
     assert not re.search(r"≤\s*[−-]", table)
     assert table.count("interval&#x27;s upper end ≤") + table.count("interval's upper end ≤") \
-        == 4
+        == 5            # the four above and E (an extreme of magnitudes: its upper end only)
     assert "no probability is stated for" in html
     summary = (tmp_path / "out" / "summary.txt").read_text(encoding="utf-8")
     assert "acceptance ≤ -" not in summary and "acceptance ≤ −" not in summary
@@ -436,10 +436,11 @@ def test_the_guard_band_of_e_is_stated_with_the_intervals_reach(r):
 @pytest.mark.parametrize("hi", [0.4558, 0.4551, 0.4559, 0.46])
 def test_printed_acceptance_limits_are_rounded_inward(hi):
     """E = 0.4114, interval [0.35, hi], mpe 0.5, guarded r = 2: the decided acceptance is
-    the interval's ends within [−0.5 + U_L, 0.5 − U] (by hand, U = hi − 0.4114,
-    U_L = 0.4114 − 0.35). Printed to U's places (2 significant digits), the upper limit
-    rounded down and the lower up: never wider than the decided interval (half-up printed
-    0.4556 as 0.456, beside the interval end 0.4558, also 0.456, and a "fail")."""
+    the interval's upper end ≤ 0.5 − U (by hand, U = hi − 0.4114; an extreme of magnitudes
+    states no lower end). Printed to U's places (2 significant digits), the upper limit
+    rounded down: never wider than the decided one (half-up printed 0.4556 as 0.456, beside
+    the interval end 0.4558, also 0.456, and a "fail"). The same rule on a lower limit: a
+    signed item's [−0.5 + U_L, 0.5 − U] printed with its lower end rounded up."""
     from dataclasses import asdict
 
     from gonio.report import i18n
@@ -448,12 +449,16 @@ def test_printed_acceptance_limits_are_rounded_inward(hi):
         {"item": "angle_deviation", "mpe": 0.5}], {"rule": "guarded",
                                                     "guard_band_factor": 2.0})[0]
     U, UL = hi - 0.4114, 0.4114 - 0.35
-    assert c.acceptance_upper == pytest.approx(0.5 - U)
-    assert c.acceptance_lower == pytest.approx(-0.5 + UL)
+    assert c.acceptance_upper == pytest.approx(0.5 - U) and c.acceptance_lower is None
     assert c.outcome == ("pass" if hi <= 0.5 - U else "fail")
+    step = 10.0 ** -3          # U ≈ 0.044 (2 significant digits: 3 places)
     text = conformity_texts(asdict(c), None, i18n.labels("en"))["acceptance"]
+    hi_p = float(re.search(r"≤ (\S+)", text).group(1).replace("−", "-"))
+    assert hi_p <= 0.5 - U + 1e-12 and 0.5 - U - hi_p < step
+    # a signed item stated by an interval: both ends, the lower rounded up
+    c2 = replace(c, acceptance_lower=-0.5 + UL)
+    text = conformity_texts(asdict(c2), None, i18n.labels("en"))["acceptance"]
     lo_p, hi_p = (float(x.replace("−", "-")) for x in
                   re.search(r"\[(\S+), (\S+)\]", text).groups())
     assert hi_p <= 0.5 - U + 1e-12 and lo_p >= -0.5 + UL - 1e-12
-    step = 10.0 ** -3          # U ≈ 0.044 (2 significant digits: 3 places)
     assert 0.5 - U - hi_p < step and lo_p - (-0.5 + UL) < step

@@ -383,6 +383,10 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str) -> C
     if by_interval and rule.kind != "simple":
         c = _on_interval(c, bounds, rule, float(unc.U),
                          float(unc.U) if U_lower is None else max(U_lower, 0.0))
+        if unc.k_source == K_SOURCE_MAX_ABS:
+            # the interval of max_i |x_i| lies at or above 0, inside any −M of its symmetric
+            # limit: only its upper end is accepted or not (no lower acceptance end printed)
+            c = replace(c, acceptance_lower=None)
         # decided on the interval's ends, the quantity the acceptance is stated on (one rule
         # for decision and print, ILAC-G8 4.2.2): a value outside its own interval (a
         # bias-corrected y below a non-negative item's interval) is not decided on y
