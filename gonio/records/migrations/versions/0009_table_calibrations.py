@@ -77,6 +77,11 @@ def downgrade() -> None:
     if op.get_bind().dialect.name != 'sqlite':
         op.drop_constraint('calibrations_table_calibration_id_fkey', 'calibrations',
                            type_='foreignkey')
+    # SQLite drops the referencing column by rebuilding the table (copy, DROP TABLE, rename):
+    # as SQLite's procedure for such a change says (lang_altertable.html, "other kinds of
+    # table schema changes"), the caller runs it with foreign keys off (PRAGMA
+    # foreign_keys=OFF outside the transaction; the rows other tables reference are dropped
+    # and copied back) and checks them after (PRAGMA foreign_key_check)
     with op.batch_alter_table('calibrations', schema=None) as batch_op:
         batch_op.drop_column('table_calibration_id')
     op.drop_index('ix_table_calibrations_standard_id', table_name='table_calibrations')
