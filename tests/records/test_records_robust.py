@@ -190,6 +190,7 @@ def test_a_form_with_an_error_keeps_what_was_entered(app, sqlite_store):  # noqa
 
 def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, computed_folder,
                                                         bench_readings):
+    import hashlib
     import json
     import shutil
 
@@ -198,6 +199,12 @@ def test_import_of_a_result_dated_in_the_future_refused(tmp_path, capsys, comput
     res = json.loads((folder / "results.json").read_text())
     res.setdefault("metadata", {})["date"] = "9999-12-31"
     (folder / "results.json").write_text(json.dumps(res))
+    # written so by gonio (a workstation whose clock is wrong): its manifest lists these bytes
+    # (an edited results.json beside an untouched manifest is refused before the date)
+    man = json.loads((folder / "gonio-manifest.json").read_text())
+    man["files"]["results.json"] = hashlib.sha256((folder / "results.json").read_bytes()
+                                                  ).hexdigest()
+    (folder / "gonio-manifest.json").write_text(json.dumps(man))
     err = cli(["db", "import", folder, "--data", tmp_path / "data", "--protocol",
                SMALL_PROTOCOL, "--readings", bench_readings[0]], capsys)
     assert "key metadata.date: 9999-12-31 is in the future" in err
