@@ -185,17 +185,26 @@ def stated_intervals(store, results_sha256: str) -> dict:
     """Item key → (low, high) of each item the stored result states by one coverage interval
     (:func:`stated_columns`), for the history figure's bars of a row that does not keep its
     statement (``stated`` None); read once per stored result (a stored file never changes)."""
-    at = (str(store.blob_root), results_sha256)
-    got = _INTERVALS.get(at)
-    if got is None:
+    def read():
         cols = stored_columns(store.blob_root, results_sha256)
-        got = {key: (c["interval_low"], c["interval_high"])
-               for key, c in (cols or {}).items() if c["stated"] == "interval"}
-        if cols is None:           # not read (absent, unreadable): not kept, read again
-            return got
-        _INTERVALS[at] = got
-        while len(_INTERVALS) > 1024:
-            _INTERVALS.pop(next(iter(_INTERVALS)))
+        return ({key: (c["interval_low"], c["interval_high"])
+                 for key, c in (cols or {}).items() if c["stated"] == "interval"},
+                cols is not None)
+
+    return _read_once(_INTERVALS, (str(store.blob_root), results_sha256), read)
+
+
+def _read_once(cache: dict, at: tuple, read):
+    """``cache[at]``, else ``read()`` → (value, read_ok): a value read from a stored file is
+    kept (a stored file never changes; the 1024 newest kept), one not read (absent,
+    unreadable) is returned and not kept, so the next call reads again."""
+    got = cache.get(at)
+    if got is None:
+        got, ok = read()
+        if ok:
+            cache[at] = got
+            while len(cache) > 1024:
+                cache.pop(next(iter(cache)))
     return got
 
 
@@ -211,9 +220,7 @@ def max_abs_keys(store, results_sha256: str) -> frozenset:
     kept: the next call reads again."""
     from gonio.result.statement import K_SOURCE_MAX_ABS
 
-    at = (str(store.blob_root), results_sha256)
-    got = _MAX_ABS.get(at)
-    if got is None:
+    def read():
         import json
 
         from gonio.records.blobs import get_bytes
@@ -224,16 +231,12 @@ def max_abs_keys(store, results_sha256: str) -> frozenset:
         items = doc.get("items") if isinstance(doc, dict) else None
         if isinstance(items, list):
             items = {str(it.get("key")): it for it in items if isinstance(it, dict)}
-        got = frozenset(
+        return frozenset(
             key for key, it in (items if isinstance(items, dict) else {}).items()
             if isinstance(it, dict) and isinstance(it.get("uncertainty"), dict)
-            and it["uncertainty"].get("k_source") == K_SOURCE_MAX_ABS)
-        if doc is None:            # not read (absent, unreadable): not kept, read again
-            return got
-        _MAX_ABS[at] = got
-        while len(_MAX_ABS) > 1024:
-            _MAX_ABS.pop(next(iter(_MAX_ABS)))
-    return got
+            and it["uncertainty"].get("k_source") == K_SOURCE_MAX_ABS), doc is not None
+
+    return _read_once(_MAX_ABS, (str(store.blob_root), results_sha256), read)
 
 
 _MAX_ABS: dict[tuple[str, str], frozenset] = {}
