@@ -36,7 +36,12 @@ def served_bench():
         yield dict(proc.stdout.readline().strip().split(": ", 1) for _ in range(2))
     finally:
         proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=10)
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:   # never left running (a SIGINT lost under load)
+            proc.kill()
+            proc.wait(timeout=30)
+            raise
 
 
 def _file(store, cal_id: int, name: str) -> bytes:
