@@ -45,7 +45,8 @@ def item_row(key: str, it) -> dict:
     * stated by an interval (a dispersion's χ² interval, an extreme's Monte Carlo or
       max|x| interval, a non-negative quantity's [0, value + U]): ``interval_low`` and
       ``interval_high``, ``U`` and ``k`` empty (a reach beside an empty k reads as value ±
-      U, a second statement); ``nu`` the interval's ν where the statement states one; for an
+      U, a second statement); ``nu`` the interval's ν where the statement states a finite
+      one (an infinite ν, stored as None, leaves it empty); for an
       extreme of magnitudes (:data:`~gonio.result.statement.K_SOURCE_MAX_ABS`) ``value`` is
       the extreme max|x_i| the interval is of (the signed one stays in results.json); a
       non-negative quantity whose estimate fell below zero, stated by its upper bound
@@ -76,8 +77,12 @@ def item_row(key: str, it) -> dict:
             row["value"] = hi - float(unc.U)
         elif st.below_zero:     # stated by its bound alone: no estimate outside [0, upper]
             row["value"] = None
+        # the interval's ν where it states a finite one (an infinite ν is stored as None in
+        # results.json: the same row from the stored result)
+        finite = (st.nu_eff is not None and unc.nu_eff is not None
+                  and math.isfinite(float(unc.nu_eff)))
         row.update(interval_low=lo, interval_high=hi,
-                   nu=stated_nu(unc.nu_eff) if st.nu_eff is not None else None)
+                   nu=stated_nu(unc.nu_eff) if finite else None)
         return row
     if st is not None and st.U is None:      # stated without an uncertainty
         return row
