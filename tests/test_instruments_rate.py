@@ -34,6 +34,7 @@ from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.served_rate import ServedRateBench, rate_instruments, serve_rate_bench
 from gonio.protocol.programme import Segment
 from gonio.specs.jjf1535.acquisition import programme
+from tests.served import stop_served
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = 3
@@ -166,13 +167,7 @@ def test_sigint_keeps_the_records_and_resume_completes(bench, proto, simulated, 
         with contextlib.redirect_stdout(io.StringIO()):
             assert main(_cli_acquire(res, out, proto, bench, "--resume")) == 0
     finally:
-        srv.send_signal(signal.SIGINT)
-        try:
-            srv.wait(timeout=30)
-        except subprocess.TimeoutExpired:   # never left running (a SIGINT lost under load)
-            srv.kill()
-            srv.wait(timeout=30)
-            raise
+        stop_served(srv)
     assert _keys(out / "readings.csv") == _keys(simulated[0])        # every record once
     _agree_within_u(_calibrate(out / "readings.csv", proto, tmp_path / "cal"), simulated[1])
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 import datetime as dt
 import html as html_module
 import re
-import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +18,7 @@ from sqlalchemy import select
 from gonio.errors import GonioError
 from gonio.records import bench, services, worker
 from gonio.records.models import AuditEvent, CalibrationFile, ResultItem
+from tests.served import stop_served
 
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 
@@ -35,13 +35,7 @@ def served_bench():
     try:
         yield dict(proc.stdout.readline().strip().split(": ", 1) for _ in range(2))
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:   # never left running (a SIGINT lost under load)
-            proc.kill()
-            proc.wait(timeout=30)
-            raise
+        stop_served(proc)
 
 
 def _file(store, cal_id: int, name: str) -> bytes:
