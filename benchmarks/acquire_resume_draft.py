@@ -1,27 +1,41 @@
 """The optical draft's whole programme taken through the instruments, interrupted and resumed.
 
 ``gonio bench serve --bench rlg`` and ``gonio acquire --protocol ogam-draft`` run as
-processes; ``gonio acquire`` is sent SIGINT once it has written ``--stop-after`` readings,
-then continued with ``--resume``; the readings calibrate (``gonio calibrate``) to items that
-are compared with an uninterrupted ``gonio simulate`` of the same bench and seed, each
-within the two results' U (root sum of squares), and the in-situ tilt estimates of the two
-files within theirs. Prints the timings and the tables.
+processes; the served bench holds its clock once it has answered ``--stop-after`` readings
+(``--fault hold:N``: the acquisition cannot go on, let alone finish, before it is
+interrupted, whatever the machine's load), ``gonio acquire`` is then sent SIGINT and
+continued with ``--resume`` (whose connection lets the bench's clock run on); the readings
+calibrate (``gonio calibrate``) to items that are compared with an uninterrupted
+``gonio simulate`` of the same bench and seed, each within the two results' U (root sum of
+squares), and the in-situ tilt estimates of the two files within theirs. Prints the timings
+and the tables.
 
-    python benchmarks/acquire_resume_draft.py [--speed 200] [--seed 1] [--stop-after 120]
+    python benchmarks/acquire_resume_draft.py [--speed 200] [--seed 1] [--stop-after 140]
 
-The draft's programme (with the built-in tilt estimate's rests) is about 8.5 h of bench
-time: at ``--speed 200`` some 2–3 min per pass on a loaded 2-core machine, at ``--speed 1000``
-about 15 s. The speed is bounded by the host's latency: a reply that takes 30 ms of real time
-is 30 s of bench time at ``--speed 1000``, the whole of Annex A.1's 0.5 min. tests/test_instruments_whole_draft.py runs this script at
-``--speed 250``; tests/test_instruments.py runs the same path on the small programme.
+``--stop-after`` counts the readings the module answers, the static phases' among them (the
+rows kept are fewer: 140 answered readings are 129 rows where none was taken again). The draft's programme (with
+the built-in tilt estimate's rests) is about 8.5 h of bench time: at ``--speed 200`` some
+2–3 min per pass on a loaded 2-core machine, at ``--speed 1000`` about 15 s. The speed is
+bounded by the host's latency: a reply that takes 30 ms of real time is 30 s of bench time at
+``--speed 1000``, the whole of Annex A.1's 0.5 min. tests/test_instruments_whole_draft.py
+runs this script at ``--speed 250``; tests/test_instruments.py runs the same path on the
+small programme.
+
+Every ``gonio`` process it starts dies with it: each is asked (Linux ``prctl``
+``PR_SET_PDEATHSIG``) to be sent SIGTERM when this script ends, however it ends (a test's
+timeout kills it with SIGKILL), and on an ordinary exit, SIGINT or SIGTERM the script stops
+them itself (SIGINT, then SIGKILL after 30 s).
 """
 
 from __future__ import annotations
 
 import argparse
+import atexit
+import ctypes
 import json
 import math
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -31,18 +45,85 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PROTOCOL = ROOT / "protocols" / "ogam-draft.toml"
+#: prctl(2)'s option: the signal a process gets when its parent ends
+PR_SET_PDEATHSIG = 1
+#: the gonio processes started and not yet waited for
+CHILDREN: list[subprocess.Popen] = []
+
+
+def _die_with_parent(parent: int):
+    """The ``preexec_fn`` of a child (no threads in this script, so it is safe): SIGTERM to
+    the child when ``parent`` ends (Linux; elsewhere nothing: the ``atexit`` stop remains)."""
+    def preexec() -> None:
+        if not sys.platform.startswith("linux"):
+            return
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+        except (OSError, AttributeError):
+            return
+        if os.getppid() != parent:       # the parent ended before the request took
+            os.kill(os.getpid(), signal.SIGTERM)
+    return preexec
+
+
+def stop(p: subprocess.Popen, timeout_s: float = 30.0) -> None:
+    """SIGINT (a gonio command's clean stop), then SIGKILL after ``timeout_s``."""
+    if p.poll() is None:
+        p.send_signal(signal.SIGINT)
+        try:
+            p.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+    if p in CHILDREN:
+        CHILDREN.remove(p)
+
+
+def _stop_children() -> None:
+    for p in list(CHILDREN):
+        stop(p)
+
+
+def _terminated(signum, frame):
+    raise SystemExit(128 + signum)       # the finally blocks and atexit run
 
 
 def gonio(*args: str, **kw) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    return subprocess.Popen([sys.executable, "-m", "gonio", *args], env=env, **kw)
+    p = subprocess.Popen([sys.executable, "-m", "gonio", *args], env=env,
+                         preexec_fn=_die_with_parent(os.getpid()), **kw)
+    CHILDREN.append(p)
+    return p
 
 
 def run(*args: str) -> None:
     p = gonio(*args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     _, err = p.communicate()
+    CHILDREN.remove(p)
     if p.returncode:
         sys.exit(f"gonio {' '.join(args[:1])} failed ({p.returncode}): {err.strip()}")
+
+
+class Lines:
+    """Lines of a child's unbuffered binary stdout, read without a thread (``select``)."""
+
+    def __init__(self, stream):
+        self.fd, self.buf = stream.fileno(), b""
+
+    def next(self, wait_s: float) -> str | None:
+        """The next line, or None when none came within ``wait_s`` (or the stream ended)."""
+        end = time.monotonic() + wait_s
+        while b"\n" not in self.buf:
+            left = end - time.monotonic()
+            if left <= 0 or not select.select([self.fd], [], [], left)[0]:
+                return None
+            chunk = os.read(self.fd, 4096)
+            if not chunk:
+                return None
+            self.buf += chunk
+        line, self.buf = self.buf.split(b"\n", 1)
+        return line.decode().strip()
 
 
 def rows(path: Path) -> int:
@@ -87,24 +168,36 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speed", type=float, default=200.0)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--stop-after", type=int, default=120)
+    ap.add_argument("--stop-after", type=int, default=140)
     ap.add_argument("--latitude", default="40.2")
     ap.add_argument("--dir", type=Path, default=None,
                     help="folder for the files (default: a new temporary folder)")
     a = ap.parse_args()
     d = a.dir if a.dir is not None else Path(tempfile.mkdtemp(prefix="acq-draft-"))
+    atexit.register(_stop_children)
+    signal.signal(signal.SIGTERM, _terminated)
     srv = gonio("bench", "serve", "--bench", "rlg", "--table-port", "0", "--gyro-port", "0",
-                "--speed", str(a.speed), "--seed", str(a.seed), stdout=subprocess.PIPE, text=True)
+                "--speed", str(a.speed), "--seed", str(a.seed), "--fault", f"hold:{a.stop_after}",
+                stdout=subprocess.PIPE, bufsize=0)
+    out = Lines(srv.stdout)
     try:
-        res = dict(srv.stdout.readline().strip().split(": ", 1) for _ in range(2))
+        said = [out.next(120.0) for _ in range(2)]
+        if None in said:
+            sys.exit(f"gonio bench serve did not start: {said}")
+        res = dict(ln.split(": ", 1) for ln in said)
         args = ["acquire", "--protocol", str(PROTOCOL), "--table", res["table"], "--gyro",
                 res["gyro"], "--out", str(d / "acq"), "--meta", f"latitude_deg={a.latitude}"]
         t0 = time.monotonic()
         p = gonio(*args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        while rows(d / "acq" / "readings.csv") < a.stop_after and p.poll() is None:
-            time.sleep(0.2)
+        held = None
+        while held is None and p.poll() is None:
+            held = out.next(0.2)
+        if held != f"held: {a.stop_after}":
+            print(f"the bench did not hold at reading {a.stop_after} (it said {held!r}; "
+                  f"acquire exit {p.poll()})")
         p.send_signal(signal.SIGINT)
         _, err = p.communicate(timeout=60)
+        CHILDREN.remove(p)
         t1 = time.monotonic()
         head = (d / "acq" / "readings.csv").read_text(encoding="utf-8").splitlines()[0]
         kept = rows(d / "acq" / "readings.csv")
@@ -117,8 +210,7 @@ def main() -> int:
         print(f"resume: {t2 - t1:.1f} s, {rows(d / 'acq' / 'readings.csv')} readings in all, "
               f"header '{(d / 'acq' / 'readings.csv').read_text().splitlines()[0]}'")
     finally:
-        srv.send_signal(signal.SIGINT)
-        srv.wait(timeout=10)
+        stop(srv)
     run("simulate", "--protocol", str(PROTOCOL), "--bench", "rlg", "--seed", str(a.seed),
         "--out", str(d / "sim"))
     print(f"simulated: {rows(d / 'sim' / 'readings.csv')} readings")

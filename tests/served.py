@@ -1,11 +1,31 @@
-"""Stopping a ``gonio bench serve`` process a test started: SIGINT (its clean stop), waited
-for 30 s; a server that has not stopped by then is killed, never left running, and the test
-errs (a SIGINT lost under load is a fault to see, not to hide)."""
+"""A ``gonio bench serve`` process a test started: waiting for its ``held: N`` line
+(``--fault hold:N``, :func:`wait_held`), and stopping it (:func:`stop_served`): SIGINT (its
+clean stop), waited for 30 s; a server that has not stopped by then is killed, never left
+running, and the test errs (a SIGINT lost under load is a fault to see, not to hide)."""
 
 from __future__ import annotations
 
+import queue
 import signal
 import subprocess
+import threading
+
+
+def wait_held(srv: subprocess.Popen, proc: subprocess.Popen, n: int) -> None:
+    """Wait for the served bench ``srv`` (text stdout) to say ``held: n``; fail, without
+    waiting on, where the acquisition ``proc`` ends first."""
+    lines: queue.Queue = queue.Queue()
+    threading.Thread(target=lambda: lines.put(srv.stdout.readline().strip()),
+                     daemon=True).start()
+    while True:
+        try:
+            line = lines.get(timeout=0.1)
+            break
+        except queue.Empty:
+            if proc.poll() is not None:
+                raise AssertionError(f"the acquisition ended ({proc.returncode}) before the "
+                                     f"bench held: {proc.stderr.read()!r}") from None
+    assert line == f"held: {n}", line
 
 
 def stop_served(proc: subprocess.Popen, timeout_s: float = 30.0) -> None:

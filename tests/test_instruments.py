@@ -231,60 +231,68 @@ def test_operator_prompt_and_host_timed_reads(served, tmp_path):
 
 
 # ------------------------------------------------------------------ safety
-def _wait_rows(path: Path, n: int, timeout_s: float = 40.0) -> None:
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout_s:
-        if path.exists() and sum(1 for ln in path.read_text().splitlines()
-                                 if ln and not ln.startswith("#")) > n:
-            return
-        time.sleep(0.05)
-    raise AssertionError(f"{path}: fewer than {n} readings after {timeout_s} s")
+#: Readings the bench answers before its clock stops (``hold:N``) in the interruption tests:
+#: 34 readings in all on the small programme (27 rows, 7 static phases); the 17th is the
+#: 13th row, the 6th the 5th (fewer where a late reading was taken again).
+HOLD_SIGINT, HOLD_SIGTERM = 17, 6
 
 
-def _interrupted_acquire(served, out: Path, rows: int, sig) -> tuple[int, bytes]:
-    """``gonio acquire`` of the small programme in a subprocess, sent ``sig`` once it has
-    written ``rows`` readings; its exit code and stderr."""
+def _interrupted_acquire(rlg, out: Path, hold_at: int, sig):
+    """``gonio acquire`` of the small programme in a subprocess, on a served bench whose clock
+    stops once its ``hold_at``-th reading is answered (``hold:N``: the acquisition cannot go on,
+    let alone finish, before the signal, whatever the machine's load), sent ``sig`` once the
+    bench is held; its exit code and stderr, and the bench (serving on: ``close`` it). The
+    resume's new connection lets the clock run on."""
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    s = serve_bench(rlg, speed=SPEED, seed=SEED, faults=Faults.parse([f"hold:{hold_at}"]))
     cmd = [sys.executable, "-m", "gonio", "acquire", "--protocol", str(SMALL), "--table",
-           served.table_resource, "--gyro", served.gyro_resource, "--out", str(out),
+           s.table_resource, "--gyro", s.gyro_resource, "--out", str(out),
            "--meta", "latitude_deg=40.2"]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        _wait_rows(out / "readings.csv", rows)
+        while not s.bench.faults.held.wait(0.1):
+            if proc.poll() is not None:         # ended before the hold: a fault of the run
+                s.close()
+                raise AssertionError(f"acquire ended ({proc.returncode}) before reading "
+                                     f"{hold_at}: {proc.stderr.read()!r}")
         proc.send_signal(sig)
-        _, err = proc.communicate(timeout=30)
+        _, err = proc.communicate(timeout=60)
     finally:
         proc.kill()
-    return proc.returncode, err
+        proc.wait()
+    return proc.returncode, err, s
 
 
-def test_sigint_keeps_the_readings_and_resume_completes(served, simulated, calibrate,
-                                                          tmp_path):
+def test_sigint_keeps_the_readings_and_resume_completes(rlg, simulated, calibrate, tmp_path):
     out = tmp_path / "acq"
-    rc, err = _interrupted_acquire(served, out, 10, signal.SIGINT)
-    assert rc == 130, err
-    assert b"continue with --resume" in err
-    kept = read_readings(out / "readings.csv")
-    assert kept.metadata["acquisition"] == "incomplete"
-    assert "SIGINT" in kept.metadata["acquisition_stopped"]
-    n_kept = len(kept.data)
-    assert 10 <= n_kept < 27
-    log = (out / "io.log").read_text(encoding="utf-8").splitlines()
-    assert log[-1].endswith("table > STOP")
-    assert served.bench.state() == "IDLE"
-    res = acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource, out,
-                  resume=True, metadata=META)
+    rc, err, served = _interrupted_acquire(rlg, out, HOLD_SIGINT, signal.SIGINT)
+    try:
+        assert rc == 130, err
+        assert b"continue with --resume" in err
+        kept = read_readings(out / "readings.csv")
+        assert kept.metadata["acquisition"] == "incomplete"
+        assert "SIGINT" in kept.metadata["acquisition_stopped"]
+        n_kept = len(kept.data)
+        assert 10 <= n_kept < 27
+        log = (out / "io.log").read_text(encoding="utf-8").splitlines()
+        assert log[-1].endswith("table > STOP")
+        assert served.bench.state() == "IDLE"
+        res = acquire(load_protocol(SMALL), served.table_resource, served.gyro_resource, out,
+                      resume=True, metadata=META)
+    finally:
+        served.close()
     assert res.complete and res.taken <= 27 - n_kept + 4     # at most 7.3's block again
     assert _keys(out / "readings.csv") == _keys(simulated[0])   # every reading once
     _agree_within_u(calibrate(out / "readings.csv", tmp_path / "cal"), simulated[1])
 
 
-def test_sigterm_stops_the_table_and_keeps_the_readings(served, tmp_path):
+def test_sigterm_stops_the_table_and_keeps_the_readings(rlg, tmp_path):
     out = tmp_path / "acq"
-    rc, err = _interrupted_acquire(served, out, 3, signal.SIGTERM)
+    rc, err, served = _interrupted_acquire(rlg, out, HOLD_SIGTERM, signal.SIGTERM)
+    served.close()
     assert rc == 143, err
     kept = read_readings(out / "readings.csv")
-    assert kept.metadata["acquisition"] == "incomplete" and len(kept.data) >= 3
+    assert kept.metadata["acquisition"] == "incomplete" and 3 <= len(kept.data) < 27
     assert "SIGTERM" in kept.metadata["acquisition_stopped"]
     log = (out / "io.log").read_text(encoding="utf-8").splitlines()
     assert log[-1].endswith("table > STOP")

@@ -34,7 +34,7 @@ from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.served_rate import ServedRateBench, rate_instruments, serve_rate_bench
 from gonio.protocol.programme import Segment
 from gonio.specs.jjf1535.acquisition import programme
-from tests.served import stop_served
+from tests.served import stop_served, wait_held
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = 3
@@ -131,14 +131,23 @@ def test_jjf_programme_through_the_instruments_calibrates_like_simulate(bench, p
     assert log.rstrip().splitlines()[-3].endswith("table > STOP")
 
 
+#: The reader's answers before the served bench's clock stops (``hold:N``) in the SIGINT
+#: test: the 6th ``ACQ:DATA?`` of 238 is a warm-up record's, after the bias records.
+HOLD_AT = 6
+
+
 def test_sigint_keeps_the_records_and_resume_completes(bench, proto, simulated, tmp_path):
     """``gonio bench serve`` and ``gonio acquire`` as processes: SIGINT mid-programme keeps
     the records (incomplete); ``--resume`` runs again from the power cycle cut short and
-    the file calibrates like the uninterrupted simulation."""
+    the file calibrates like the uninterrupted simulation. The bench holds its clock once its
+    :data:`HOLD_AT`-th reading is answered (``--fault hold:N``, it says ``held: N``), so the
+    SIGINT comes mid-programme whatever the machine's load; the resume's connection lets
+    the clock run on."""
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
     srv = subprocess.Popen([sys.executable, "-m", "gonio", "bench", "serve", "--bench", BENCH,
                             "--table-port", "0", "--gyro-port", "0", "--speed", str(SPEED),
-                            "--seed", str(SEED)], env=env, stdout=subprocess.PIPE, text=True)
+                            "--seed", str(SEED), "--fault", f"hold:{HOLD_AT}"],
+                           env=env, stdout=subprocess.PIPE, text=True)
     try:
         res = dict(srv.stdout.readline().strip().split(": ", 1) for _ in range(4))
         out = tmp_path / "acq"
@@ -146,20 +155,17 @@ def test_sigint_keeps_the_records_and_resume_completes(bench, proto, simulated, 
                                  *_cli_acquire(res, out, proto, bench)],
                                 env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:
-            t0 = time.monotonic()
-            while time.monotonic() - t0 < 60 and not (
-                    (out / "readings.csv").exists()
-                    and "\nwarmup," in (out / "readings.csv").read_text(encoding="utf-8")):
-                time.sleep(0.05)
+            wait_held(srv, proc, HOLD_AT)
             proc.send_signal(signal.SIGINT)
-            _, err = proc.communicate(timeout=30)
+            _, err = proc.communicate(timeout=60)
         finally:
             proc.kill()
+            proc.wait()
         assert proc.returncode == 130, err
         kept = read_rate_readings(out / "readings.csv")
         assert kept.metadata["acquisition"] == "incomplete"
         assert "SIGINT" in kept.metadata["acquisition_stopped"]
-        assert set(kept.data["test"]) >= {"bias"} and len(kept.data) < len(
+        assert set(kept.data["test"]) >= {"bias", "warmup"} and len(kept.data) < len(
             read_rate_readings(simulated[0]).data)
         log = (out / "io.log").read_text(encoding="utf-8").splitlines()
         assert [ln.split(" ", 1)[1] for ln in log[-3:]] == [

@@ -19,14 +19,17 @@ SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "acquire_resume_dr
 def test_whole_draft_programme_interrupted_and_resumed(tmp_path):
     # --speed 250: the host may take 120 ms between zeroing and a reading before it misses
     # Annex A.1's 0.5 min (at --speed 500 a loaded machine did: docs/instruments.md)
-    p = subprocess.run([sys.executable, str(SCRIPT), "--speed", "250", "--stop-after", "120",
+    # --stop-after 140: the bench holds its clock once it has answered 140 readings (129 rows
+    # where none is taken again), so the SIGINT comes mid-programme whatever the load; the
+    # script's gonio processes die with it (a timeout here kills it)
+    p = subprocess.run([sys.executable, str(SCRIPT), "--speed", "250", "--stop-after", "140",
                         "--dir", str(tmp_path)], capture_output=True, text=True, timeout=900)
     out = p.stdout
     assert p.returncode == 0, out + p.stderr
     first = re.search(r"first pass: exit (\d+) after [\d.]+ s, (\d+) readings kept, "
                       r"header '([^']*)'", out)
     assert first and first.group(1) == "130", out          # stopped by the SIGINT, not a fault
-    assert 120 <= int(first.group(2)) < 261 and "incomplete" in first.group(3), out
+    assert 110 <= int(first.group(2)) <= 129 and "incomplete" in first.group(3), out
     # 249 readings of 7.1–7.7 and the built-in programme's 12 tilt-estimate rests (beyond the
     # draft), acquired as the simulation takes them
     assert re.search(r"resume: [\d.]+ s, 261 readings in all, header '# acquisition: complete'",

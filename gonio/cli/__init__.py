@@ -13,7 +13,10 @@ Every way a run can end is one line on stderr, never a traceback:
   output place), ``MemoryError`` or ``RecursionError``: ``gonio: error: ...``,
   exit code 2;
 * SIGINT or SIGTERM: ``gonio: interrupted`` (exit 130 / 143) after the staging
-  folders are removed — the previous output set stays as it was;
+  folders are removed — the previous output set stays as it was. The commands whose stop is
+  a signal (:data:`STOPPED_BY_SIGNAL`: ``gonio acquire``, ``gonio bench serve``) take
+  SIGINT and SIGTERM even where the process was started with them ignored (a shell's
+  background job, ``cmd &`` in a script, ignores SIGINT);
 * anything else is a bug: ``gonio: internal error: ...``, exit 1 (the traceback
   with ``GONIO_DEBUG=1``).
 
@@ -68,6 +71,30 @@ class Terminated(BaseException):
 
 def _on_sigterm(signum, frame):
     raise Terminated()
+
+
+#: The commands (by their words) whose stop is SIGINT or SIGTERM: an acquisition stopped by
+#: its operator, a served bench that runs until it is stopped. They take both signals even
+#: where the process inherited them ignored: a non-interactive shell starts ``gonio bench
+#: serve &`` with SIGINT ignored, and ``kill -INT`` (or a test's ``send_signal``) would be
+#: lost, the server left running.
+STOPPED_BY_SIGNAL = (("acquire",), ("bench", "serve"))
+
+
+def _install_stop_handlers(argv: list[str], own_process: bool) -> None:
+    """SIGTERM raises :class:`Terminated` where its handler is the default (every command);
+    for a command of :data:`STOPPED_BY_SIGNAL` run as its own process, SIGINT raises
+    ``KeyboardInterrupt`` and SIGTERM :class:`Terminated` whatever the process inherited
+    (called from Python, the caller's handlers are left as they are)."""
+    stopped = own_process and any(tuple(argv[:len(words)]) == words
+                                  for words in STOPPED_BY_SIGNAL)
+    try:
+        if stopped or signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
+            signal.signal(signal.SIGTERM, _on_sigterm)
+        if stopped and signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+    except ValueError:        # not the main thread (called from a test runner's thread)
+        pass
 
 
 def _short(text: str, limit: int = 400) -> str:
@@ -172,11 +199,7 @@ def main(argv: list[str] | None = None) -> int:
     ``argv`` (its own process) it sets :data:`GC_THRESHOLDS`."""
     if argv is None:
         gc.set_threshold(*GC_THRESHOLDS)
-    try:
-        if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
-            signal.signal(signal.SIGTERM, _on_sigterm)
-    except ValueError:        # not the main thread (called from a test runner's thread)
-        pass
+    _install_stop_handlers(sys.argv[1:] if argv is None else list(argv), argv is None)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")

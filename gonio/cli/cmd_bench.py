@@ -1,7 +1,8 @@
 """``gonio bench serve``: a virtual bench served as instruments on 127.0.0.1: a rate bench by
 :func:`gonio.instruments.served_rate.serve_rate_bench`, any other by the ``serve`` hook of
 the specification ``--spec`` names (by default :data:`gonio.specs.DEFAULT_KEY`'s: the
-goniometer's table and acquisition module)."""
+goniometer's table and acquisition module). It serves until SIGINT or SIGTERM, which stop it
+at any point (exit 130 / 143; :data:`gonio.cli.STOPPED_BY_SIGNAL`)."""
 
 from __future__ import annotations
 
@@ -45,7 +46,9 @@ def register(sub) -> None:
     s.add_argument("--fault", action="append", default=[],
                    help="inject a fault for testing: table-error:N (the N-th move fails with an "
                         "axis fault; a rate bench: its N-th ROT or OSC), gyro-drop:N (the module "
-                        "drops its link at its N-th READ? or FETC?; a rate bench: ACQ:DATA?)")
+                        "drops its link at its N-th READ? or FETC?; a rate bench: ACQ:DATA?), "
+                        "hold:N (the bench's clock stops once its N-th reading is answered, "
+                        "until the next connection to the module or reader; prints 'held: N')")
     s.set_defaults(func=run)
     no_spec_options(s)          # the specifications' own: arguments["bench serve"]
 
@@ -58,18 +61,27 @@ def is_rate_bench(name: str) -> bool:
     return "gyro" in read_toml(resolve(name, kind="bench"))
 
 
-def _serve_rate(args):
+def _serve_rate(args, faults):
     from gonio.bench.rate_gyro import load_rate_bench
-    from gonio.instruments.scpi import Faults
     from gonio.instruments.served_rate import serve_rate_bench
 
-    served = serve_rate_bench(load_rate_bench(args.bench),
-                              {"table": args.table_port, "gyro": args.gyro_port,
-                               "chamber": args.chamber_port, "supply": args.supply_port},
-                              speed=args.speed, seed=args.seed, faults=Faults.parse(args.fault))
-    for name, res in served.resources.items():
-        print(f"{name}: {res}", flush=True)
-    return served
+    return serve_rate_bench(load_rate_bench(args.bench),
+                            {"table": args.table_port, "gyro": args.gyro_port,
+                             "chamber": args.chamber_port, "supply": args.supply_port},
+                            speed=args.speed, seed=args.seed, faults=faults)
+
+
+def _said_held(n: int) -> None:
+    """``--fault hold:N``: the line a test waits for (``held: N``) once the clock stops."""
+    try:
+        print(f"held: {n}", flush=True)
+    except (OSError, ValueError):      # the reader of stdout went away: nothing to tell
+        pass
+
+
+#: Wall seconds between the main thread's looks at a stop signal while serving (a signal
+#: taken by another thread is acted on within this).
+WAKE_S = 0.25
 
 
 def run(args) -> int:
@@ -80,24 +92,25 @@ def run(args) -> int:
     spec = get(args.spec or DEFAULT_KEY)
     if args.bench is None:
         args.bench = spec.default_bench
+    faults = Faults.parse(args.fault)
+    faults.on_hold = _said_held
     if is_rate_bench(args.bench):
         extra = [args.spec_flags[d] for d, v in given(args).items() if v not in (None, False)]
         if extra:
             raise GonioError(f"gonio bench serve: {', '.join(extra)} does not apply to a rate "
                              f"bench ({args.bench})")
-        served = _serve_rate(args)
+        served = _serve_rate(args, faults)
     elif spec.serve is None:
         raise GonioError(f"gonio bench serve: {spec.key} serves no virtual bench as "
                          "instruments (the specification has no serve hook)")
     else:
         opts = refuse(spec, "bench serve", given(args), args)
         served = spec.serve(args.bench, {"table": args.table_port, "gyro": args.gyro_port},
-                            speed=args.speed, seed=args.seed, faults=Faults.parse(args.fault),
-                            **opts)
+                            speed=args.speed, seed=args.seed, faults=faults, **opts)
+    try:
         for name, res in served.resources.items():
             print(f"{name}: {res}", flush=True)
-    try:
         while True:
-            time.sleep(60.0)
+            time.sleep(WAKE_S)
     finally:
         served.close()

@@ -98,10 +98,12 @@ class ServedRateBench:
     lock: threading.RLock = field(default_factory=threading.RLock)
     #: injected faults: ``table-error:N`` (the N-th ``ROT`` or ``OSC`` answers an axis fault,
     #: −310, and is not made), ``gyro-drop:N`` (the reader closes its link at its N-th
-    #: ``ACQ:DATA?``)
+    #: ``ACQ:DATA?``), ``hold:N`` (the clock stops once the N-th ``ACQ:DATA?`` is answered,
+    #: until the next connection to the reader)
     faults: Faults = field(default_factory=Faults)
 
     def __post_init__(self):
+        self.clock = self.faults.clock(self.clock)
         if not (self.speed > 0 and math.isfinite(self.speed)):
             raise GonioError(f"--speed must be a positive number, got {self.speed}")
         self.session = RateSession(self.bench, self.seed, room_temperature_c=self.room_c)
@@ -304,7 +306,9 @@ def _gyro(sb: ServedRateBench) -> Instrument:
         sb.faults.reads += 1
         if sb.faults.gyro_drop_at_read == sb.faults.reads:
             raise DropLink()
-        return sb.data(*_ints(arg, 2))
+        answer = sb.data(*_ints(arg, 2))
+        sb.faults.reading_answered(sb.clock)
+        return answer
 
     def configure(arg):
         parts = arg.split(",")
@@ -328,6 +332,7 @@ def _gyro(sb: ServedRateBench) -> Instrument:
         ("CONFigure:SCALe?", lambda a: repr(g.scale_factor)),
         ("CONFigure:NULL?", lambda a: repr(g.null_output)),
     ]
+    gyro.on_connect = lambda: Faults.connected(sb.clock)
     return gyro
 
 
@@ -431,7 +436,7 @@ def serve_rate_bench(bench, ports: dict[str, int] | None = None, *, speed: float
                 s.server_close()
             raise GonioError(f"cannot serve the {inst.name} on 127.0.0.1:{port}: "
                              f"{exc.strerror or exc}") from None
-        th = threading.Thread(target=srv.serve_forever, name=f"serve-{inst.name}", daemon=True)
+        th = threading.Thread(target=srv.serve, name=f"serve-{inst.name}", daemon=True)
         th.start()
         servers[inst.name] = srv
         threads.append(th)

@@ -91,7 +91,8 @@ class ServedBench:
             raise GonioError(f"--speed must be a positive number, got {speed}")
         bench = bench.at_chamber_temperature()        # the instrument in the chamber
         self.bench, self.speed, self.warm_up_s, self.range_deg = bench, speed, warm_up_s, range_deg
-        self.clock, self.faults = clock, faults or Faults()
+        self.faults = faults or Faults()
+        self.clock = self.faults.clock(clock)
         ss = np.random.SeedSequence(seed)
         self.rng_table, rng_inst = (np.random.default_rng(s) for s in ss.spawn(2))
         self.dither_key = int(ss.generate_state(1, np.uint64)[0])
@@ -402,6 +403,7 @@ def gyro_instrument(sb: ServedBench) -> Instrument:
         count_read()
         with sb.lock:
             c, t = sb.read()
+            sb.faults.reading_answered(sb.clock)
         return f"{c:.0f},{t!r}" if inst_cfg.quantisation else f"{c!r},{t!r}"
 
     def read_angle(_):
@@ -425,6 +427,8 @@ def gyro_instrument(sb: ServedBench) -> Instrument:
         got = sb.fetch(FETCH_WAIT_S)
         if got is None:
             raise ScpiError(-230, "Data stale; trigger pending")
+        with sb.lock:
+            sb.faults.reading_answered(sb.clock)
         c, t = got
         return f"{c:.0f},{t!r}" if inst_cfg.quantisation else f"{c!r},{t!r}"
 
@@ -451,6 +455,7 @@ def gyro_instrument(sb: ServedBench) -> Instrument:
         ("TRIGger:SOURce", locked(trig)), ("TRIGger:DELay", locked(delay)),
         ("INITiate", locked(lambda a: sb.arm())), ("FETCh?", fetch),
     ]
+    inst.on_connect = lambda: Faults.connected(sb.clock)
     return inst
 
 
@@ -507,7 +512,7 @@ def serve_bench(bench: Bench, table_port: int = 0, gyro_port: int = 0, *, speed:
                 s.server_close()
             raise GonioError(f"cannot serve the {inst.name} on 127.0.0.1:{port}: "
                              f"{exc.strerror or exc}") from None
-        th = threading.Thread(target=srv.serve_forever, name=f"serve-{inst.name}", daemon=True)
+        th = threading.Thread(target=srv.serve, name=f"serve-{inst.name}", daemon=True)
         th.start()
         servers.append(srv)
         threads.append(th)
