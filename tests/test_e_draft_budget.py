@@ -164,8 +164,12 @@ def test_dcc_states_the_interval_and_says_what_its_standard_u_is(draft):
         # valueStandardMU: the one budget's u_c, the certificate's u_c line, two digits
         u = two_digits(res["extra"]["uncertainty"]["u_c_arcsec"])
         assert f"<si:valueStandardMU>{u}</si:valueStandardMU>" in block
-        assert "valueStandardMU is u_c of the draft's one Annex A budget" in block
-        assert "not a standard uncertainty of max|E_i|" in block
+        # the standard uncertainty of max|E_i| (law of propagation at the estimates): the one
+        # budget's u_c, the same at every point, so at the largest |E_i| too
+        assert "valueStandardMU is the standard uncertainty of max|E_i|" in block
+        assert "u_c of the draft's one Annex A budget, the same at every point" in block
+        assert f"{res['extra']['uncertainty']['max_abs_interval']['position_at_max']:g}°" \
+            in block
     html = (draft["en"] / "certificate.html").read_text(encoding="utf-8")
     assert re.search(rf"u_c = <span[^>]*>{re.escape(u)}</span>", html)
     # the zh DCC: E's description in Chinese beside the English, no English words left
@@ -177,7 +181,7 @@ def test_dcc_states_the_interval_and_says_what_its_standard_u_is(draft):
     desc = next(e.iter(f"{{{DCC_NS}}}description"))
     texts = {c.get("lang"): c.text for c in desc.iter(f"{{{DCC_NS}}}content")}
     assert set(texts) == {"en", "zh"}
-    assert "标准不确定度" in texts["zh"] and "不作为校准结果" in texts["zh"]
+    assert "max|E_i| 在估计值处按传播律" in texts["zh"] and "才是校准结果" in texts["zh"]
     assert not {w for w in WORD.findall(texts["zh"]) if w not in WHITELIST}, texts["zh"]
 
 

@@ -273,6 +273,8 @@ def decide(item: str, y: float, U: float, k: float | None, limits: Limits,
     return Conformity(item=item, value=float(y), U=float(U), k=None if k is None else float(k),
                       lower=limits.lower,
                       upper=limits.upper, rule=rule.kind, guard_band=float(w),
+                      guard_band_lower=(float(w_lo) if limits.lower is not None
+                                        and w_lo != w else None),
                       acceptance_lower=a_lo, acceptance_upper=a_hi, outcome=outcome,
                       accepted=accepted, conformance_probability=p_c,
                       false_accept_probability=(1.0 - p_c) if accepted and p_c is not None
@@ -386,7 +388,7 @@ def _decided(key: str, it, bounds: Limits, rule: DecisionRule, origin: str) -> C
         if unc.k_source == K_SOURCE_MAX_ABS:
             # the interval of max_i |x_i| lies at or above 0, inside any −M of its symmetric
             # limit: only its upper end is accepted or not (no lower acceptance end printed)
-            c = replace(c, acceptance_lower=None)
+            c = replace(c, acceptance_lower=None, guard_band_lower=None)
         # decided on the interval's ends, the quantity the acceptance is stated on (one rule
         # for decision and print, ILAC-G8 4.2.2): a value outside its own interval (a
         # bias-corrected y below a non-negative item's interval) is not decided on y

@@ -54,7 +54,7 @@ from lxml import etree
 from gonio.report.header import is_draft, people_key, record_of
 from gonio.report.provenance import is_virtual, virtual_lines
 from gonio.report.i18n import display, labels
-from gonio.report.stated import Num, conformity_texts
+from gonio.report.stated import Num, conformity_texts, declaration_parts, interval_band_note
 from gonio.result.statement import DSI_UNITS
 
 DCC_NS = "https://ptb.de/dcc"
@@ -211,6 +211,12 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
         element(st, "dcc:norm", "JCGM 106:2012")
         text_element(st, "dcc:declaration", L.get(f"rule_{rule}", rule).format(
             r=display("k", r.get("guard_factor") or 0.0)))
+    # the U of w = r·U of each item decided on its 95 % interval alone, as on the certificate
+    band = interval_band_note(decided, L, name_of, lambda k: band_unit(items[k]))
+    if band:
+        st = element(sts, "dcc:statement", id="guard-band-interval-items")
+        text_element(st, "dcc:name", "Guard band of the items stated by an interval")
+        text_element(st, "dcc:declaration", band)
     for key, c in decided:
         st = element(sts, "dcc:statement", id=f"conformity-{key}", refId=f"result-{key}")
         text_element(st, "dcc:name", f"Statement of conformity: {name_of(key)}")
@@ -218,9 +224,10 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
             text_element(st, "dcc:declaration", f"no statement: {c.get('reason') or '—'}")
             continue
         t = conformity_texts(c, None, L)
+        acc, pfa = declaration_parts(c, t)
         text_element(st, "dcc:declaration",
-                     f"{t['outcome']}; rule {c.get('rule')}; limits {t['limits']}; acceptance "
-                     f"interval {t['acceptance']}; specific false-accept probability {t['pfa']}"
+                     f"{t['outcome']}; rule {c.get('rule')}; limits {t['limits']}; {acc}; "
+                     f"specific false-accept probability {pfa}"
                      + (f"; {t['pfr']}" if t["pfr"] else "")
                      + f"; limits from: {c.get('source') or c.get('limits_from') or '—'}")
         element(st, "dcc:conformity", DCC_CONFORMITY[c["outcome"]])
@@ -235,6 +242,12 @@ def conformity_statements(sts, items: dict, name_of, dsi_of, L: dict) -> None:
                       ("specific false-reject probability", c.get("false_reject_probability"))):
             if v is not None:
                 quantity(data, nm, display("sig3", v), "one")
+
+
+def band_unit(item: dict) -> str:
+    """An item's unit as the DCC's guard-band note prints it ("" for the unit one)."""
+    u = item.get("unit") or ""
+    return "" if u == "1" else u
 
 
 def bilingual(doc: bytes, translate) -> bytes:

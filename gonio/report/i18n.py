@@ -173,26 +173,46 @@ LABELS: dict[str, dict[str, str]] = {
                           "degrees of freedom (shown per item in the budgets below); {clause}.",
                     "zh": "U：扩展不确定度，k = t95(ν_eff)，按各项的有效自由度取值（见下方各项"
                           "不确定度分量）；{clause}。"},
-    "k_chi_square": {"en": "An item stated by an interval has that one statement, shown in the "
-                           "result with its probability, and no U and no k: a standard "
-                           "deviation of a few repeats (a repeatability, a stability) or a half "
-                           "range by its one-sided 95 % upper limit (σ's χ² distribution, "
-                           "JCGM 100 E.4.3; the range of normal values for a half range), on "
-                           "which any conformity decision is made; a range corrected for its "
-                           "bias (a nonlinearity, a consistency) by the 95 % interval of its "
-                           "confidence belt (the measured range's distribution under the "
-                           "budget's errors, JCGM 101), an extreme or a rule's outcome by the "
-                           "95 % interval of its own Monte Carlo distribution; a quantity that cannot be "
-                           "negative whose U exceeds its value by its upper bound, value + U "
-                           "(the interval value ± U without its impossible negative part, "
-                           "JCGM 100 4.3.9).",
-                     "zh": "以区间表述的项目只有这一个表述，在结果栏中连同包含概率给出，无 U，无 k："
-                           "少数重复测量的标准偏差（重复性、稳定性）或半极差给出其单侧 95 % 上限"
-                           "（标准偏差按 χ² 分布，JCGM 100 E.4.3；半极差按正态极差分布），对上限的判定"
-                           "亦以此为据；修正偏差后的极差（非线性度、一致性）给出其置信带的 95 % 区间"
-                           "（在不确定度分量误差下测得极差的分布，JCGM 101），极值或判定规则的结果给出"
-                           "其蒙特卡洛分布的 95 % 区间；不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U "
-                           "去掉不可能的负值部分，JCGM 100 4.3.9）。"},
+    # the legend of the items stated by an interval: one part per kind of interval present
+    # (gonio.report.stated.interval_legend)
+    "k_iv_head": {"en": "An item stated by an interval has that one statement, shown in the "
+                        "result with its probability, and no U and no k: {kinds}.",
+                  "zh": "以区间表述的项目只有这一个表述，在结果栏中连同包含概率给出，无 U，无 k：{kinds}。"},
+    "k_iv_chi2": {"en": "a standard deviation of a few repeats (a repeatability, a stability) by "
+                        "its one-sided 95 % upper limit (σ's χ² distribution, JCGM 100 E.4.3), "
+                        "on which any conformity decision is made",
+                  "zh": "少数重复测量的标准偏差（重复性、稳定性）给出其单侧 95 % 上限（标准偏差按 χ² "
+                        "分布，JCGM 100 E.4.3），对上限的判定亦以此为据"},
+    "k_iv_range": {"en": "a half range by its one-sided 95 % upper limit (the range of normal "
+                         "values)",
+                   "zh": "半极差给出其单侧 95 % 上限（按正态极差分布）"},
+    "k_iv_belt": {"en": "a range corrected for its bias (a nonlinearity, a consistency) by the "
+                        "95 % interval of its confidence belt (the measured range's distribution "
+                        "under the budget's errors, JCGM 101)",
+                  "zh": "修正偏差后的极差（非线性度、一致性）给出其置信带的 95 % 区间（在不确定度分量"
+                        "误差下测得极差的分布，JCGM 101）"},
+    "k_iv_max_abs": {"en": "the largest magnitude of several points, max_i |x_i|, by the 95 % "
+                           "interval of that extreme, [max(0, max_i(|x_i| − c_L·u_i)), "
+                           "max_i(|x_i| + c_H·u_i)] from each point's x_i and u_i, which holds "
+                           "for every pattern of the points' true values (not max|x_i| ± k·u of "
+                           "one point)",
+                     "zh": "多个点的最大绝对值 max|x_i| 给出该极值的 95 % 区间 [max(0, max(|x_i| − "
+                           "c_L·u_i)), max(|x_i| + c_H·u_i)]（对各点取最大，由各点的 x_i 与 u_i "
+                           "求得），对各点真值的任何分布形态均成立（而非单点的 max|x_i| ± k·u）"},
+    "k_iv_sel_max": {"en": "the largest of several standard deviations by its χ² interval with "
+                           "the selection bias of the maximum removed (the midpoint of its "
+                           "bounds) and the interval widened by those bounds",
+                     "zh": "若干标准偏差中的最大者给出其 χ² 区间：扣除取最大值的选择偏差（取其界限的"
+                           "中点），区间按该界限加宽"},
+    "k_iv_own": {"en": "an extreme or a rule's outcome by the 95 % interval of its own "
+                       "distribution (Monte Carlo, a folded normal, a pivot)",
+                 "zh": "极值或判定规则的结果给出其自身分布（蒙特卡洛、折叠正态、枢轴量）的 95 % 区间"},
+    "k_iv_upper": {"en": "a quantity that cannot be negative whose U exceeds its value by its "
+                         "upper bound, value + U (the interval value ± U without its impossible "
+                         "negative part, JCGM 100 4.3.9)",
+                   "zh": "不能为负且 U 大于其值的量给出其上限 值 + U（区间 值 ± U 去掉不可能的负值部分，"
+                         "JCGM 100 4.3.9）"},
+    "k_iv_clauses": {"en": " ({c})", "zh": "（{c}）"},
     "u_c_word": {"en": "combined standard uncertainty", "zh": "合成标准不确定度"},
     "src_own_A": {"en": "scatter of the item's own readings (Type A)",
                   "zh": "本项目读数的分散性（A类）"},
@@ -588,6 +608,16 @@ def reason_text(reason: str, L: dict, table=(), extra: dict | None = None,
 #: written beside the English in a zh DCC (:func:`gonio.report.dcc.bilingual`).
 DCC_ZH: dict[str, str] = {
     "serial number": "出厂编号",
+    # the kinds of 95 % interval (results.json k_source) a "not given" probability names
+    "interval of max|x_i| (uncertainty.extreme.max_abs_interval)": "多个点最大绝对值的区间",
+    "χ² interval of the largest spread over its selection excess":
+        "扣除选择偏差后最大标准偏差的 χ² 区间",
+    "neyman-belt": "置信带",
+    "normal range": "正态极差",
+    "folded-normal maximum": "折叠正态最大值",
+    "floor rule's distribution (pivot)": "下限规则的分布（枢轴量）",
+    "outcome distribution": "结果分布",
+    "its own": "其自身",
     "Reading taken of the specification's text": "对规范条文的理解",
     "Reading taken of the sources": "对参考文献的理解",
     "Uncertainty of measurement": "测量不确定度",
@@ -629,9 +659,20 @@ DCC_PHRASES_ZH: tuple[tuple[str, str], ...] = (
     (r"The calibration follows the specification's clauses (.+)\.", "校准按规范的以下条款进行：{1}。"),
     (r"Statement of conformity: (.+)", "符合性声明：{1}"),
     (r"(pass|fail|conditional pass|conditional fail)(; rule \S+)?; limits (.+?); acceptance "
-     r"interval (.+?); specific false-accept probability ([^;]+)(; false-reject probability "
+     r"interval (.+?); specific false-accept probability (.+?)(; false-reject probability "
      r"[^;]+)?; limits from: (.*)",
      "{1}{2}；规定限 {3}；接受区间 {4}；特定误接受概率 {5}{6}；规定限来源：{7}"),
+    (r"(pass|fail|conditional pass|conditional fail)(; rule \S+)?; limits (.+?); acceptance: "
+     r"(.+?); specific false-accept probability (.+?)(; false-reject probability "
+     r"[^;]+)?; limits from: (.*)",
+     "{1}{2}；规定限 {3}；接受条件：{4}；特定误接受概率 {5}{6}；规定限来源：{7}"),
+    # no probability, with its reason (gonio.analysis.conformity's probability models)
+    (r"— \(not given: the extreme of several points; the outcome is decided on its 95 % "
+     r"interval\)", "—（不给出：多个点的极值；判定依据其 95 % 区间作出）"),
+    (r"— \(not given: its 95 % interval \((.+)\) is not that of a normal or chi-square "
+     r"distribution; the outcome is decided on its 95 % interval\)",
+     "—（不给出：其 95 % 区间（{1}）不是正态分布或 χ² 分布的区间；判定依据其 95 % 区间作出）"),
+    (r"Guard band of the items stated by an interval", "以区间表述的项目的保护带"),
     (r"; rule (\S+)", "；判定规则 {1}"),
     (r"; (.+)", "；{1}"),
     (r"(Decision rule: .+) Agreed: (.+)\.", "{1}约定：{2}。"),

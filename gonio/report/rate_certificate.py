@@ -25,7 +25,7 @@ from gonio.report.header import (certificate_id, is_draft, conformity_section, o
 from gonio.report.i18n import display, finding_text, labels, reason_text, source_text
 from gonio.report.provenance import is_virtual
 from gonio.report.render import Block, font_families, render_html, render_pdf_figures
-from gonio.report.stated import NoBreakText, Num, item_nums
+from gonio.report.stated import NoBreakText, Num, interval_legend, item_nums
 from gonio.result.findings import WHOLE_FILE_CODES
 from gonio.result.statement import unit_text
 from gonio.report.rate_content import rate_standards, spec_content
@@ -274,10 +274,9 @@ def rate_certificate_blocks(result, L: dict, lang: str, *, lab: dict | None) -> 
             add("p", [tmpl.format(**it["details"])])
     u_clause = content_field(data, "U_CLAUSE")   # the spec's own
     add("p", [L["k_each_item"].format(clause=u_clause[1 if lang == "zh" else 0])])
-    if any(it.get("measured") and it.get("value") is not None
-           and item_nums(it, f"items.{k}")["statement"].interval is not None
-           for k, it in res["items"].items()):       # stated by an interval: say what it is
-        add("p", [L["k_chi_square"]])
+    legend = interval_legend(res["items"], L)    # stated by an interval: say what each is
+    if legend:
+        add("p", [legend])
     blocks += screening_blocks(res, L, content_field(data, "PHRASES_ZH"))
     blocks += conformity_section(
         res["items"], L, lambda k: (data.TITLES_ZH.get(k, res["items"][k]["title"])
@@ -348,6 +347,17 @@ def dcc_translator(result, content_fn):
     norm = content_field(data, "NORM")
     if norm:
         extra[norm[0]] = norm[1]
+    # the guard-band note of the items decided on their interval (conformity_statements)
+    from gonio.report.dcc import band_unit
+    from gonio.report.stated import interval_band_note
+
+    decided = [(k, it["conformity"]) for k, it in res.get("items", {}).items()
+               if it.get("conformity")]
+    band = {lg: interval_band_note(decided, labels(lg), lambda k: (
+        titles.get(k, res["items"][k]["title"]) if lg == "zh" else res["items"][k]["title"]),
+        lambda k: band_unit(res["items"][k])) for lg in ("en", "zh")}
+    if band["en"]:
+        extra[band["en"]] = band["zh"]
     # "<spec key> <clause>" (an item's quantity name): the clause alone, translated
     own = ((re.escape(spec.key) + r" (.+)", "{1}"),)
     return label_translator(extra, own + tuple(content_field(data, "PHRASES_ZH")))

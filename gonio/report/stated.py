@@ -26,7 +26,8 @@ from typing import Any
 
 from gonio.analysis.conformity import DEFAULT_LIMITS_ORIGIN
 from gonio.report.i18n import display, display_uncertainty
-from gonio.result.statement import decimals_for_sig, round_half_up
+from gonio.result.statement import (K_SOURCE_MAX_ABS, K_SOURCE_SELECTED_MAX, decimals_for_sig,
+                                    round_half_up)
 
 
 class NoBreakText(str):
@@ -157,6 +158,77 @@ def conformity_texts(c, res: dict | None, L: dict, nonnegative: bool | None = No
             and model.startswith("not given") else ""}
 
 
+#: the kinds of interval an item can be stated by, in the legend's order
+INTERVAL_KINDS = ("chi2", "range", "belt", "max_abs", "sel_max", "own", "upper")
+
+
+def interval_kind(item: dict) -> str | None:
+    """Which kind of 95 % interval states a results.json item (:data:`INTERVAL_KINDS`), from
+    its own ``uncertainty.k_source`` (decided once, in the result): "chi2" (a standard
+    deviation's χ²), "range" (a half range's normal range), "belt" (a bias-corrected range's
+    confidence belt), "max_abs" (the extreme of magnitudes max_i |x_i|), "sel_max" (the
+    largest σ_i less its selection bias), "own" (its own distribution: Monte Carlo, folded
+    normal, pivot, outcome distribution), "upper" (a non-negative item's upper bound), or
+    None (value ± U, or not measured).
+
+    >>> interval_kind({"measured": True, "value": 1.0, "uncertainty": {"k": None,
+    ...     "interval": [0, 2], "k_source": "max-abs-interval"}})
+    'max_abs'
+    >>> interval_kind({"measured": True, "value": 1.0, "upper_bound": 3.0,
+    ...     "uncertainty": {"k": 2.0, "k_source": "welch-satterthwaite"}})
+    'upper'
+    """
+    from gonio.result.gum import K_SOURCE_MAX_MAGNITUDE
+
+    unc = item.get("uncertainty") or {}
+    if not item.get("measured", True) or item.get("value") is None:
+        return None
+    if unc.get("k") is None and unc.get("interval") is not None:
+        ks = unc.get("k_source") or ""
+        return {"chi-square": "chi2", "normal range": "range", "neyman-belt": "belt",
+                K_SOURCE_MAX_ABS: "max_abs", K_SOURCE_MAX_MAGNITUDE: "max_abs",
+                K_SOURCE_SELECTED_MAX: "sel_max"}.get(ks, "own")
+    return "upper" if item.get("upper_bound") is not None else None
+
+
+def interval_legend(items: dict, L: dict) -> str:
+    """The legend under a results table saying how each item stated by an interval is stated:
+    one part per kind present (:func:`interval_kind`), each with the clauses of its items;
+    "" where no item is stated by an interval. A pure function of the stored items."""
+    kinds: dict[str, list[str]] = {}
+    for it in items.values():
+        kind = interval_kind(it) if isinstance(it, dict) else None
+        if kind:
+            kinds.setdefault(kind, []).append(str(it.get("clause") or ""))
+    if not kinds:
+        return ""
+    sep = "；" if L["k_iv_head"].startswith("以") else "; "
+    parts = [L[f"k_iv_{k}"] + (L["k_iv_clauses"].format(c=", ".join(c for c in kinds[k] if c))
+                               if any(kinds[k]) else "")
+             for k in INTERVAL_KINDS if k in kinds]
+    return L["k_iv_head"].format(kinds=sep.join(parts))
+
+
+def declaration_parts(c, t: dict) -> tuple[str, str]:
+    """The acceptance and the specific false-accept probability of a DCC declaration (and
+    summary line), from :func:`conformity_texts`'s ``t``: "acceptance interval [a, b]" for an
+    acceptance on the value, "acceptance: interval's upper end ≤ 0.5" for one on the stated
+    interval's ends (never "acceptance interval interval's …"), and "—" with its reason where
+    no probability is given ("— (not given: …)"), never a bare "—".
+
+    >>> declaration_parts({"acceptance_of": "interval"}, {"acceptance":
+    ...     "interval's upper end ≤ 0.5", "pfa": "—", "no_p": "not given: why"})
+    ("acceptance: interval's upper end ≤ 0.5", '— (not given: why)')
+    >>> declaration_parts({}, {"acceptance": "[-0.27, 0.27]", "pfa": "0.15 %", "no_p": ""})
+    ('acceptance interval [-0.27, 0.27]', '0.15 %')
+    """
+    of = c.get("acceptance_of") if isinstance(c, dict) else getattr(c, "acceptance_of", None)
+    acc = (f"acceptance: {t['acceptance']}" if of == "interval"
+           and t["acceptance"].startswith("interval") else f"acceptance interval {t['acceptance']}")
+    pfa = f"— ({t['no_p']})" if t["pfa"] == "—" and t.get("no_p") else t["pfa"]
+    return acc, pfa
+
+
 def no_probability_note(decided, L: dict, name_of) -> str:
     """The note under a conformity table naming the items for which no probability is given
     (:func:`conformity_texts`'s ``no_p``), or "". ``decided``: (key, conformity) pairs."""
@@ -182,9 +254,11 @@ def interval_band_note(decided, L: dict, name_of, unit_of) -> str:
                 or not c.get("outcome") or c.get("U") is None or c.get("value") is None:
             continue
         y, U = float(c["value"]), float(c["U"])
+        # a value below zero (a bias-corrected range) in brackets: "3.9 − (−1.6)"
+        yt = display("sig2", y) if y >= 0 else f"({display('sig2', y)})"
         rows.append(L.get("c_interval_band_item", "{name}: U = {U} {unit}").format(
             name=name_of(key), unit=unit_of(key), U=display("sig2", U),
-            hi=display("sig2", y + U), y=display("sig2", y)).replace("  ", " "))
+            hi=display("sig2", y + U), y=yt).replace("  ", " "))
     if not rows or "c_interval_band_note" not in L:
         return ""
     sep = "；" if L["c_interval_band_note"].startswith("以") else "; "

@@ -87,6 +87,13 @@ def normalise_row(row: dict) -> dict:
                       clause=r.pop("clause", "") or "", beyond_standard=bool(beyond), **r)
 
 
+#: results.json ``uncertainty.u_c_of`` of an item stated by its 95 % interval alone whose u_c
+#: is its value's own budget: U there is the interval's upper end − the value (the decision
+#: rule's guard band), so U/u_c is no coverage factor.
+U_C_OF_INTERVAL = ("the stated value, from its own budget; the 95 % interval is the statement "
+                   "and U is its upper end minus the value, not k·u_c")
+
+
 @dataclass
 class Uncertainty:
     """An item's uncertainty (JCGM 100): the budget rows (``components``, see
@@ -106,6 +113,10 @@ class Uncertainty:
     coverage_probability: float | None = None
     k_source: str = ""
     interval: tuple[float, float] | None = None
+    #: what ``u_c`` is the standard uncertainty of, for an item stated by its interval alone
+    #: (``k`` None): there U is the interval's reach above the value and u_c is not U/k
+    #: (None: :data:`U_C_OF_INTERVAL`, the stated value's own budget)
+    u_c_of: str | None = None
 
     @property
     def p(self) -> float | None:
@@ -124,6 +135,8 @@ class Uncertainty:
                "components": [normalise_row(c) for c in self.components]}
         if self.interval is not None:
             out["interval"] = [_f(self.interval[0]), _f(self.interval[1])]
+            if self.k is None:      # stated by the interval: say what U and u_c are
+                out["u_c_of"] = self.u_c_of or U_C_OF_INTERVAL
         if self.monte_carlo is not None:
             out["monte_carlo"] = json_safe(self.monte_carlo)
         return out
@@ -135,7 +148,8 @@ class Uncertainty:
         iv = d.get("interval")
         return cls(list(d.get("components") or []), d.get("u_c"), d.get("U"), d.get("k"),
                    d.get("nu_eff"), d.get("monte_carlo"), d.get("coverage_probability"),
-                   d.get("k_source") or "", None if iv is None else (iv[0], iv[1]))
+                   d.get("k_source") or "", None if iv is None else (iv[0], iv[1]),
+                   d.get("u_c_of") if d.get("u_c_of") != U_C_OF_INTERVAL else None)
 
 
 @dataclass(frozen=True)
@@ -176,6 +190,10 @@ class Conformity:
     #: no value can pass: the guard bands close the tolerance, or leave only values below
     #: zero for a non-negative quantity (stated "none", never as a negative limit)
     acceptance_empty: bool = False
+    #: the guard band at the lower limit where it differs from ``guard_band`` (the upper one):
+    #: an item stated by an interval that is not symmetric about its value is guarded by its
+    #: own reach below the value there (r·U_L); None where the two bands are one
+    guard_band_lower: float | None = None
 
     def to_dict(self) -> dict:
         return {f.name: (_f(getattr(self, f.name))

@@ -683,6 +683,11 @@ def _get(obj, key: str, default=None):
 #: ``interval[1] - U``; the statement and the conformity decision take that extreme.
 K_SOURCE_MAX_ABS = "max-abs-interval"
 
+#: ``k_source`` of the largest of several standard deviations stated with the selection bias
+#: of its maximum removed: its χ² interval, widened by that bias's bounds (IEC 62047-20
+#: 5.1.3.7's max σ_i).
+K_SOURCE_SELECTED_MAX = "χ² interval of the largest spread over its selection excess"
+
 
 def item_statement(item, sig: int = 3, nonnegative: bool | None = None) -> Statement:
     """The statement of one item, from a results.json item (dict) or a model ``Item``: its

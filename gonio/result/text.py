@@ -46,6 +46,10 @@ def conformity_text(c) -> str:
     if c.conformance_probability is None and (c.probability_model or "").startswith("not given"):
         pc = f", probability {c.probability_model}"
     gb = "" if not c.guard_band else f", guard band {c.guard_band:.2g}"
+    if c.guard_band and getattr(c, "guard_band_lower", None) is not None:
+        # an interval not symmetric about its value: its own reach on each side
+        gb = f", guard bands {c.guard_band_lower:.2g} at the lower limit, " \
+             f"{c.guard_band:.2g} at the upper"
     return f"{c.item}: limits [{lo}, {hi}] ({c.rule}{gb}): {c.outcome}{pc}"
 
 

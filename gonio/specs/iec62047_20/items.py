@@ -25,6 +25,7 @@ from gonio.errors import GonioError
 from gonio.physics.alignment import input_axis_enu
 from gonio.result.gum import gum, max_magnitude_statement, std_dev_uncertainty
 from gonio.result.model import Item, Uncertainty, not_measured
+from gonio.result.statement import K_SOURCE_SELECTED_MAX
 from gonio.specs._rate_family.rate_records import (RateContext, static_output, static_rate_dph,
                                                    segment_means, segment_samples)
 from gonio.units import S_PER_H
@@ -517,7 +518,7 @@ def sf_stability(ctx: Context) -> Item:
                            "excess)")])
     # one statement: the interval of the estimate's distribution (JCGM 101 7.7), no k, no ν
     u = replace(u, U=hi - est["value"], k=None, nu_eff=None, coverage_probability=0.95,
-                k_source="χ² interval of the largest spread over its selection excess",
+                k_source=K_SOURCE_SELECTED_MAX,
                 interval=(lo, hi))
     return Item("sf_stability", t, cl, un, est["value"], uncertainty=u,
                 details={"delta_by_rate": deltas, "full_scale": fs,

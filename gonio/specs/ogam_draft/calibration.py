@@ -435,7 +435,7 @@ class Analysis:
                     None if unc is None else Uncertainty(
                         unc["components"], unc["u_c"], unc["U"], unc["k"], unc["nu_eff"],
                         unc.get("monte_carlo"), unc.get("coverage_probability"),
-                        unc.get("k_source") or "", unc.get("interval")),
+                        unc.get("k_source") or "", unc.get("interval"), unc.get("u_c_of")),
                     json_safe(self.item_details(c)), nonnegative=bool((unc or {}).get("nonnegative")))
 
     def result(self) -> Result:
@@ -952,7 +952,8 @@ def deviation_budget(results: CalibrationResults, readings: Readings, protocol: 
         # E = ± max|E_i| stated by the interval of the extreme (beyond the draft) from this
         # one budget at every point; the draft's max|E_i| ± U is given beside (Annex A)
         budget = dataclasses.replace(budget, max_interval=e_max_interval(
-            e.table["E_arcsec"], [budget] * len(e.table), one_budget=True))
+            e.table["E_arcsec"], [budget] * len(e.table), one_budget=True,
+            positions=e.table["position_deg"]))
     return budget, src, notes
 
 
@@ -1128,7 +1129,8 @@ def _physical_point_budgets(results, readings, protocol, settings, tilt_deg, u_r
     # the longest time to reading) stay those of Annex A's reading, not this point's
     params = dict(sub[at].parameters, repeatability_arcsec=u_r, duration_min=dur_min)
     return dataclasses.replace(sub[at], points=points, parameters=params,
-                               max_interval=e_max_interval(pts["E_arcsec"], sub))
+                               max_interval=e_max_interval(pts["E_arcsec"], sub,
+                                                           positions=pos))
 
 
 def e_stated_uncertainty(unc: dict, max_interval: dict | None) -> dict:
@@ -1152,12 +1154,26 @@ def e_stated_uncertainty(unc: dict, max_interval: dict | None) -> dict:
     if not max_interval:
         return unc
     lo, hi = float(max_interval["lower_arcsec"]), float(max_interval["upper_arcsec"])
-    return {**unc, "U": hi - float(max_interval["max_abs_arcsec"]), "k": None, "nu_eff": None,
-            "coverage_probability": float(max_interval["p"]), "k_source": K_SOURCE_MAX_ABS,
-            "interval": [lo, hi]}
+    out = {**unc, "U": hi - float(max_interval["max_abs_arcsec"]), "k": None, "nu_eff": None,
+           "coverage_probability": float(max_interval["p"]), "k_source": K_SOURCE_MAX_ABS,
+           "interval": [lo, hi]}
+    if max_interval.get("u_at_max_arcsec") is not None:
+        # u_c: the standard uncertainty of max|E_i| by the law of propagation at the
+        # estimates (JCGM 100 5.1.2: ∂max|E_i|/∂E_j = ±1 at the point j where |E_i| is
+        # largest, 0 elsewhere), not one point's largest u_c
+        out["u_c"] = float(max_interval["u_at_max_arcsec"])
+        at = max_interval.get("position_at_max")
+        out["u_c_of"] = E_U_C_OF.format(p="—" if at is None else f"{at:g}")
+    return out
 
 
-def e_max_interval(e_arcsec, budgets, one_budget: bool = False) -> dict:
+#: results.json ``items.angle_deviation.uncertainty.u_c_of`` (the position as ``{p}``)
+E_U_C_OF = ("max|E_i|: the law of propagation at the estimates (JCGM 100 5.1.2), u_c of E_i at "
+            "{p}°, the point where |E_i| is largest; the 95 % interval is the statement and U is "
+            "its upper end minus max|E_i|, not k·u_c")
+
+
+def e_max_interval(e_arcsec, budgets, one_budget: bool = False, positions=None) -> dict:
     """The 95 % interval of E's extreme, max_i |E_i,true| (7.4's E = ± max|E_i|), from the
     points' E_i and their physical budgets' u_c and ν_eff: [max(0, max_i(|E_i| − c_L u_i)),
     max_i(|E_i| + c_H u_i)] (:func:`uncertainty.extreme.max_abs_interval`; beyond the draft).
@@ -1170,7 +1186,10 @@ def e_max_interval(e_arcsec, budgets, one_budget: bool = False) -> dict:
     ``one_budget``: ``budgets`` is the draft's one Annex A budget repeated at every point
     (``--budget draft``): every u_i is its u_c, every ν_i its ν_eff, which the dict then
     records (``u_c_arcsec``, ``nu_eff``: None for ∞) so the interval is recomputed from
-    results.json alone. The draft's U is a statement about one point: max|E_i| ± U covers
+    results.json alone. ``u_at_max_arcsec``/``position_at_max``: u_c of the point where |E_i|
+    is largest and its position (``positions``, the points' table positions in degrees),
+    the standard uncertainty of max|E_i| by the law of propagation at the estimates. The
+    draft's U is a statement about one point: max|E_i| ± U covers
     max|E_i,true| only about 0.95^12 ≈ 54 % of the time where every true E_i is 0.
     """
     from gonio.result.statement import stated_nu
@@ -1180,7 +1199,12 @@ def e_max_interval(e_arcsec, budgets, one_budget: bool = False) -> dict:
     # GUM G.6.4): the interval is never narrower than one recomputed from the printed ν
     r = max_abs_interval(np.asarray(e_arcsec, dtype=float), [b.u_c_arcsec for b in budgets],
                          [stated_nu(b.gum.dof) for b in budgets])
-    out = {"lower_arcsec": r.lower, "upper_arcsec": r.upper, "max_abs_arcsec": r.estimate,
+    e = np.abs(np.asarray(e_arcsec, dtype=float))
+    at = int(np.argmax(e))                   # the first of equal largest |E_i|
+    out = {"u_at_max_arcsec": float(budgets[at].u_c_arcsec),
+           "position_at_max": (None if positions is None
+                               else float(np.asarray(positions, dtype=float)[at])),
+           "lower_arcsec": r.lower, "upper_arcsec": r.upper, "max_abs_arcsec": r.estimate,
            "p": r.p, "c_lower": r.c_lower, "c_upper": r.c_upper, "points": r.m,
            "basis": "max_i(|E_i| + c_H u_i) above, max(0, max_i(|E_i| - c_L u_i)) below, "
                     + ("u_c and nu_eff of the draft's one Annex A budget at every point"

@@ -33,7 +33,7 @@ from pathlib import Path
 from gonio.atomic import output_dir, write_bytes, write_text
 from gonio.formats.lab import load_lab
 from gonio.kit.render import (Block, Num, certificate_id, clause_text, clean_tree,
-                              interval_band_note,
+                              interval_band_note, interval_legend,
                               conformity_texts, coverage_text, decision_rule_blocks, display,
                               figure_svg, finding_text, font_families, is_draft, is_virtual,
                               label_translator, labels, meta_text, no_probability_note, num,
@@ -148,8 +148,9 @@ def certificate_blocks(results: dict, L: dict, *, lab: dict | None, truth: dict 
             add("p", [L["k_fixed"] if ks == "fixed by laboratory" else L["k_welch"]])
     else:
         add("p", [L["no_E_U"]], "U")
-    if any(stated_item(res, n)["interval"] is not None for n in item_names(res)):
-        add("p", [L["k_chi_square"]])          # B_s, R: stated by their χ² interval alone
+    legend = interval_legend(res["items"], L)  # what each item's interval is
+    if legend:
+        add("p", [legend])
     kc = combined_k_note(res, L)               # K: k of its budget's combined distribution
     if kc:
         add("p", [kc])
@@ -519,7 +520,7 @@ def write_certificate(results: dict, out: str | Path, *, truth: dict | None = No
                 extra = {**READING_NOTES_ZH, **BENCH_NAMES_ZH, **DCC_NAMES_ZH,
                          **{k: L[k] for k in item_names(results) if k in L},
                          method_text(results, lab_d, "en"): method_text(results, lab_d, "zh"),
-                         **description_zh(results)}
+                         **description_zh(results, lab_d)}
                 doc = bilingual(doc, label_translator(extra, REASONS_ZH, LABELS))
             write_bytes(stage / "certificate.dcc.xml", doc)
     names = ["certificate.html", "certificate.pdf"] + (["certificate.dcc.xml"] if dcc else [])

@@ -22,11 +22,12 @@ from typing import Any
 
 from gonio.atomic import write_bytes
 from gonio.kit.render import (DCC_CONFORMITY, Num, administrative_data,
-                              conformity_texts, display, element, influence_conditions, labels,
-                              list_quantity, measurement_result, new_document,
+                              conformity_texts, declaration_parts, display, element,
+                              influence_conditions, labels, list_quantity,
+                              measurement_result, new_document,
                               not_measured_quantity, num, quantity, text_element, tree_bytes)
 from gonio.specs.ogam_draft.phrases import LABELS
-from gonio.specs.ogam_draft.stated import (combined_k_note, conformity_for, e_budget,
+from gonio.specs.ogam_draft.stated import (band_note, combined_k_note, conformity_for, e_budget,
                                            e_interval_segments, followed,
                                            item_names, item_path, item_uncertainty, k_table_note,
                                            e_table_note, k_tilt_note,
@@ -68,6 +69,11 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
         agreed = (lab_.get("decision_rule") or {}).get("agreed")
         text_element(st, "dcc:declaration", L[f"rule_{rule.kind}"].format(
             r=display("k", rule.guard_factor)) + (f" Agreed: {agreed}." if agreed else ""))
+        band = band_note(res, conf, L)
+        if band:        # the U of w = r·U of each item decided on its interval, as printed
+            st = element(sts, "dcc:statement", id="guard-band-interval-items")
+            text_element(st, "dcc:name", "Guard band of the items stated by an interval")
+            text_element(st, "dcc:declaration", band)
         for e in conf:
             c = e["conformity"]
             st = element(sts, "dcc:statement", id=f"conformity-{e['item']}",
@@ -77,9 +83,10 @@ def dcc_tree(res: dict, *, lab: dict | None = None, cert_id: str) -> Any:
                 text_element(st, "dcc:declaration", L[e["reason"]])
                 continue
             t = conformity_texts(c, res, L)
+            acc, pfa = declaration_parts(c, t)
             text_element(st, "dcc:declaration",
-                  f"{t['outcome']}; limits {t['limits']}; acceptance interval {t['acceptance']}; "
-                  f"specific false-accept probability {t['pfa']}"
+                  f"{t['outcome']}; limits {t['limits']}; {acc}; "
+                  f"specific false-accept probability {pfa}"
                   + (f"; {t['pfr']}" if t["pfr"] else "") + f"; limits from: {c.source or '—'}")
             element(st, "dcc:conformity", DCC_CONFORMITY[c.outcome])
             data = element(st, "dcc:data")
@@ -212,15 +219,24 @@ def _e_description(res: dict, L: dict, by_interval: bool) -> str | None:
     table corrected E) and, when E is stated by the interval of max|E_i| (``by_interval``),
     the certificate's paragraph on it (the draft's max|E_i| ± U beside, not certified) and
     what the interval's si:valueStandardMU is (:data:`~gonio.specs.ogam_draft.phrases.LABELS`
-    ``E_dcc_standard_mu``: the u_c of the certificate's u_c line, the standard uncertainty of
-    one E_i, not of max|E_i|)."""
+    ``E_dcc_standard_mu``: u_c of E_i at the point where |E_i| is largest, the standard
+    uncertainty of max|E_i| by the law of propagation at the estimates, results.json
+    ``uncertainty.u_c``)."""
     parts = [_e_table_text(res, L)]
     if by_interval:             # two paragraphs of sentences, one after the other
         parts.append(("" if _lang(L) == "zh" else " ").join((
             "".join(str(x) for x in e_interval_segments(res, L)),
             L["E_dcc_standard_mu_draft" if e_budget(res).get("budget_kind") == "draft"
-              else "E_dcc_standard_mu"])))
+              else "E_dcc_standard_mu"].format(p=_e_max_position(res)))))
     return _SEP[_lang(L)].join(p for p in parts if p) or None
+
+
+def _e_max_position(res: dict) -> str:
+    """The position (°, as text) of the point where |E_i| is largest, whose u_c is E's stated
+    standard uncertainty (results.json ``extra.uncertainty.max_abs_interval``), or "—"."""
+    at = ((res.get("extra", {}).get("uncertainty") or {}).get("max_abs_interval")
+          or {}).get("position_at_max")
+    return "—" if at is None else f"{at:g}"
 
 
 def _range_table_text(res: dict, name: str, L: dict) -> str | None:
@@ -237,7 +253,7 @@ def _range_table_text(res: dict, name: str, L: dict) -> str | None:
     return f"{sym} " + "".join(str(x) for x in note) + sha
 
 
-def description_zh(res: dict) -> dict[str, str]:
+def description_zh(res: dict, lab: dict | None = None) -> dict[str, str]:
     """The DCC descriptions of K, K_l, C_v and C_g that state a table-calibration (or
     tilt) correction, and E's (:func:`_e_description`), of results.json ``res`` — each as
     :func:`dcc_tree` joins it (with and without the JCGM 101 k note, and after the below-zero
@@ -263,6 +279,9 @@ def description_zh(res: dict) -> dict[str, str]:
                     tail = [combined_k_note(res, L[lg], only=name)] if with_k else []
                     parts[lg] = [t for t in head + own[lg][name] + tail if t]
                 out[_SEP["en"].join(parts["en"])] = _SEP["zh"].join(parts["zh"])
+    conf = conformity_for(res, lab) if lab else []
+    if conf and band_note(res, conf, L["en"]):
+        out[band_note(res, conf, L["en"])] = band_note(res, conf, L["zh"])
     for by_interval in (False, True):              # E's whole description, each form
         e_en = _e_description(res, L["en"], by_interval)
         if e_en:

@@ -419,25 +419,27 @@ LABELS: dict[str, dict[str, str]] = {
               "reading); the lines beyond the draft are not applied.",
         "zh": "所给 U 按规范草案附录A评定（草案的理解），未计入超出草案的分量。"},
     "E_dcc_standard_mu": {
-        "en": "The interval's si:valueStandardMU is u_c of one point's E_i, at the point whose U "
-              "is the largest (the u_c stated on the certificate); the interval is computed from "
-              "it and the other points' u_i. It is not a standard uncertainty of max|E_i|: the "
-              "extreme of the points has none that holds for every pattern of the true E_i, so "
-              "the interval is the statement, not ± k·u.",
-        "zh": "该区间所附的标准不确定度为单个测量点 E_i 的合成标准不确定度 u_c，取 U 最大的测量点"
-              "（即证书所列 u_c）；区间由它与其余各点的 u_i 求得。它不是 max|E_i| 的标准不确定度："
-              "各点的极值不存在对真值 E_i 任何分布形态均成立的标准不确定度，故以区间为校准结果，"
+        "en": "The interval's si:valueStandardMU is the standard uncertainty of max|E_i| by the "
+              "law of propagation at the estimates (JCGM 100 5.1.2): u_c of E_i at {p}°, the "
+              "point where |E_i| is largest (results.json uncertainty.u_c, u_c_of). It holds to "
+              "first order only, where that point's |E_i| stands clear of the others; the "
+              "interval, which holds for every pattern of the true E_i, is the statement, not "
+              "± k·u.",
+        "zh": "该区间所附的标准不确定度为 max|E_i| 在估计值处按传播律（JCGM 100 5.1.2）求得的标准"
+              "不确定度，即 |E_i| 最大的测量点（{p}°）的 E_i 的合成标准不确定度 u_c。它仅在该点的 "
+              "|E_i| 明显大于其余各点时一阶成立；对真值 E_i 任何分布形态均成立的区间才是校准结果，"
               "不以 ± k·u 表述。"},
     "E_dcc_standard_mu_draft": {
-        "en": "The interval's si:valueStandardMU is u_c of the draft's one Annex A budget, the "
-              "standard uncertainty of each point's E_i (the u_c stated on the certificate); the "
-              "interval is computed from it at every point. It is not a standard uncertainty of "
-              "max|E_i|: the extreme of the points has none that holds for every pattern of the "
-              "true E_i, so the interval is the statement, not ± k·u.",
-        "zh": "该区间所附的标准不确定度为规范草案附录A同一评定的合成标准不确定度 u_c，即各测量点 E_i "
-              "的标准不确定度（证书所列 u_c）；区间由它对各点求得。它不是 max|E_i| 的标准不确定度："
-              "各点的极值不存在对真值 E_i 任何分布形态均成立的标准不确定度，故以区间为校准结果，"
-              "不以 ± k·u 表述。"},
+        "en": "The interval's si:valueStandardMU is the standard uncertainty of max|E_i| by the "
+              "law of propagation at the estimates (JCGM 100 5.1.2): u_c of the draft's one "
+              "Annex A budget, the same at every point, so also at {p}°, where |E_i| is largest "
+              "(results.json uncertainty.u_c, u_c_of). It holds to first order only, where that "
+              "point's |E_i| stands clear of the others; the interval, which holds for every "
+              "pattern of the true E_i, is the statement, not ± k·u.",
+        "zh": "该区间所附的标准不确定度为 max|E_i| 在估计值处按传播律（JCGM 100 5.1.2）求得的标准"
+              "不确定度，即规范草案附录A同一评定的合成标准不确定度 u_c（各点相同，|E_i| 最大的测量点 "
+              "{p}° 亦然）。它仅在该点的 |E_i| 明显大于其余各点时一阶成立；对真值 E_i 任何分布形态"
+              "均成立的区间才是校准结果，不以 ± k·u 表述。"},
     "U_certified_draft_interval": {
         "en": "Budget: the draft's Annex A budget as the draft states it, one for every point; "
               "the lines beyond the draft are not applied. Certified for E: the interval above, "

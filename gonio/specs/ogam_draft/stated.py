@@ -40,8 +40,9 @@ from typing import Any
 from gonio.analysis.conformity import Conformity, Limits, limits_of, rule_of
 import math
 
-from gonio.kit.render import (Num, conformity_texts, coverage_text, display, display_number,
-                              item_nums, labels, num, parse_display, rule_at_U)
+from gonio.kit.render import (Num, conformity_texts, coverage_text, declaration_parts, display,
+                              display_number, interval_band_note, item_nums, labels, num,
+                              parse_display, rule_at_U)
 from gonio.result.statement import decimals_for_sig, p_text, round_half_up
 from gonio.specs.ogam_draft.phrases import (BUDGET_SOURCES_PHYSICAL_ZH, BUDGET_SOURCES_ZH,
                                             ITEM_SIG_DIGITS, ITEMS_AT_U_PLACE,
@@ -363,6 +364,14 @@ def u_cell(st: dict, L: dict) -> list | str:
     return segments(L["U_cell"], U=st["U"], k=st["k"] or "—", p=st["p"] or "—")
 
 
+def band_note(res: dict, conf: list, L: dict) -> str:
+    """The certificate's guard-band note (:func:`gonio.kit.render.interval_band_note`) of the
+    decisions ``conf`` (:func:`conformity_for`) in the labels ``L``' language, "" if none."""
+    stored = [(e["item"], res["items"][e["item"]]["conformity"]) for e in conf]
+    return interval_band_note(stored, L, lambda k: L[k], lambda k: L.get(
+        "u_" + res["items"][k]["unit"], res["items"][k]["unit"]))
+
+
 def conformity_for(res: dict, lab: dict | None) -> list[dict]:
     """The conformity statements the pipeline decided, as the certificate, the DCC and
     summary.txt list them (none without limits); the report decides nothing.
@@ -514,9 +523,12 @@ def summary_text(res: dict, lang: str = "en", lab: dict | None = None) -> str:
             lines.append(f"conformity {e['item']}: {L[e['reason']]}")
             continue
         t = conformity_texts(c, res, L)
+        acc, pfa = declaration_parts(c, t)
         lines.append(f"conformity {e['item']}: {t['outcome']} (limits {t['limits']}, "
-                     f"rule {c.rule}, acceptance {t['acceptance']}, specific false-accept "
-                     f"probability {t['pfa']}" + (f"; {t['no_p']}" if t["no_p"] else "") + ")")
+                     f"rule {c.rule}, {acc}, specific false-accept probability {pfa})")
+    band = band_note(res, conformity_for(res, lab), L) if lab else ""
+    if band:
+        lines.append(band)
     return "\n".join(lines) + "\n"
 
 

@@ -1,0 +1,315 @@
+"""Every item's numbers agree across the five outputs of a calibration issued with a
+laboratory file (limits under a non-binary rule with a guard band): results.json, summary.txt,
+tables/items.csv, the DCC XML and the certificate's HTML, for each specification's demo.
+
+- items.csv holds results.json's own floats (value, u_c, U, k, the interval's ends);
+- the certificate, summary.txt and the DCC print the value and U/k, or the interval, as the
+  statement rule rounds them from results.json (the Result decides, every output prints);
+- an item stated by its interval alone (k null) says what its u_c is (``u_c_of``), and the
+  DCC's si:valueStandardMU is that u_c; for the optical E it is u_c of the point where |E_i|
+  is largest, found here from the per-point table (not from the value gonio stored);
+- the conformity decisions: the DCC declaration states the acceptance as the certificate does
+  (never "acceptance interval interval …"), a "—" probability with its reason, and the
+  guard band's U of each interval item (= upper end − value, recomputed here) in the DCC and
+  on the certificate; summary.txt gives both guard bands where the interval is not symmetric;
+- the certificate's legend names the clauses of every interval-stated item under its kind
+  (the extreme of magnitudes, the corrected maximum, …), in English and in Chinese.
+"""
+
+from __future__ import annotations
+
+import csv
+import html as html_lib
+import io
+import json
+import re
+
+import pytest
+from lxml import etree
+
+from gonio.cli import main
+from gonio.report.dcc import DCC_NS, SI_NS
+from gonio.resources import protocols_dir
+from tests.statement_numbers import measured, stated_value
+
+NS = {"dcc": DCC_NS, "si": SI_NS}
+
+#: (specification, instrument table of the readings' identity, limits) — limits on items of
+#: every kind of statement: ± U, χ², belt, extreme of magnitudes, corrected maximum, half
+#: range, folded normal, pivot, outcome distribution
+CASES = {
+    "ogam-draft": (None, [("angle_deviation", "mpe = 0.5"), ("repeatability", "upper = 0.3"),
+                          ("scale_factor_nonlinearity", "upper = 0.0005"),
+                          ("zero_stability", "upper = 0.01"),
+                          ("pointing_consistency", "upper = 0.0001"),
+                          ("rate_consistency", "upper = 10.0")]),
+    "jjf1535-2015": ('model = "ADXRS610-class"\nserial = "MEMS-0610-001"\n',
+                     [("bias_stability", "upper = 60.0"), ("g_sensitivity", "upper = 250.0"),
+                      ("sf_repeatability", "upper = 0.001"), ("threshold", "upper = 0.2"),
+                      ("scale_factor", "lower = 5.99\nupper = 6.01"),
+                      ("sf_temperature_sensitivity", "mpe = 0.0002"),
+                      ("bias_temperature_sensitivity", "mpe = 25.0")]),
+    "iec62047-20": ('model = "ADXRS610-class"\nserial = "MEMS-0610-001"\n',
+                    [("sf_stability", "upper = 0.0001"), ("cross_axis", "mpe = 1.2"),
+                     ("bias_hysteresis", "upper = 0.2"), ("bias_instability", "upper = 40.0"),
+                     ("bias_repeatability", "upper = 0.02"), ("ratiometric_error", "mpe = 0.06"),
+                     ("bias", "mpe = 0.3"), ("g_sensitivity", "mpe = 0.1"),
+                     ("bias_ratiometric_error", "mpe = 0.02")]),
+    "triad-alignment": ('serial = "TRIAD-0001"\n', [("M_xx", "lower = 49.9\nupper = 50.1"),
+                                                     ("b_z", "mpe = 5.0")]),
+}
+
+
+def lab_text(spec: str) -> str:
+    """The example laboratory file with the instrument of the spec's virtual readings and the
+    case's limits in place of its own."""
+    base = (protocols_dir() / "lab-example.toml").read_text(encoding="utf-8")
+    base = base[:base.index("\n[[specification_limits]]")]
+    ident, limits = CASES[spec]
+    if ident is not None:
+        a, b = base.index("[instrument]"), base.index("[[standards]]")
+        base = base[:a] + "[instrument]\ndescription = \"gyro\"\n" + ident + \
+            'manufacturer = "gonio virtual bench"\n\n' + base[b:]
+    return base + "\n" + "".join(f'\n[[specification_limits]]\nitem = "{k}"\n{v}\n'
+                                 f'source = "limit of {k}"\n' for k, v in limits)
+
+
+@pytest.fixture(scope="module", params=list(CASES))
+def issued(request, tmp_path_factory):
+    spec = request.param
+    root = tmp_path_factory.mktemp(spec)
+    lab = root / "lab.toml"
+    lab.write_text(lab_text(spec), encoding="utf-8")
+    out = {}
+    for lang in ("en", "zh"):
+        d = root / lang
+        assert main(["demo", "--spec", spec, "--lab", str(lab), "--lang", lang,
+                     "--out", str(d)]) == 0
+        out[lang] = {
+            "html": (d / "certificate.html").read_text(encoding="utf-8").replace("\xa0", " "),
+            "dcc": etree.parse(str(d / "certificate.dcc.xml")).getroot()}
+    d = root / "en"
+    res = json.loads((d / "results.json").read_text(encoding="utf-8"))
+    rows = {r["item"]: r for r in csv.DictReader(io.StringIO(
+        (d / "tables" / "items.csv").read_text(encoding="utf-8")))}
+    return {"spec": spec, "res": res, "rows": rows, "out": out,
+            "summary": (d / "summary.txt").read_text(encoding="utf-8")}
+
+
+def _ulp(text: str) -> float:
+    """One unit of the last printed decimal of a plain decimal text."""
+    frac = text.partition(".")[2]
+    if frac:
+        return 10.0 ** -len(frac)
+    digits = text.lstrip("-")        # "790": rounded to tens
+    return 10.0 ** (len(digits) - len(digits.rstrip("0"))) if digits.strip("0") else 1.0
+
+
+def _close(text: str, x: float) -> bool:
+    """``text`` is ``x`` rounded to the places it prints (half up, or outward: one unit)."""
+    return abs(float(text) - x) <= _ulp(text) * (1 + 1e-9) + 1e-15 * abs(x)
+
+
+def _interval_items(res: dict) -> dict:
+    return {k: it for k, it in measured(res).items() if it["uncertainty"]["k"] is None
+            and it["uncertainty"].get("interval") is not None}
+
+
+def test_items_csv_holds_the_results_json_numbers(issued):
+    """items.csv is results.json's floats, item by item (nothing rounded or recomputed)."""
+    res, rows = issued["res"], issued["rows"]
+    for key, it in measured(res).items():
+        row, u = rows[key], it["uncertainty"]
+        assert float(row["u"]) == pytest.approx(u["u_c"], rel=1e-12), key
+        if row["value"]:
+            assert float(row["value"]) == pytest.approx(it["value"], rel=1e-12), key
+        else:                 # a bias-corrected range below zero: its bound alone is stated
+            assert it["value"] < 0, key
+        if u["k"] is None:
+            assert row["U"] == "" and row["k"] == "", key
+            lo, hi = u["interval"]
+            assert (float(row["interval_low"]), float(row["interval_high"])) == \
+                pytest.approx((lo, hi), rel=1e-12), key
+        else:
+            assert float(row["U"]) == pytest.approx(u["U"], rel=1e-12), key
+            assert float(row["k"]) == pytest.approx(u["k"], rel=1e-12), key
+
+
+def test_an_interval_item_says_what_its_standard_uncertainty_is(issued):
+    """k null: U is the interval's reach above the stated value and u_c is labelled, so no
+    reader takes U/u_c for a coverage factor; E's u_c is that of the point where |E_i| is
+    largest (the law of propagation of max|E_i| at the estimates), found here from the
+    per-point table and the points' budgets."""
+    res = issued["res"]
+    for key, it in _interval_items(res).items():
+        u = it["uncertainty"]
+        assert u.get("u_c_of"), key
+        assert stated_value(it) + u["U"] == pytest.approx(u["interval"][1], rel=1e-9), key
+    if issued["spec"] == "ogam-draft":
+        e = res["items"]["angle_deviation"]
+        table = e["details"]["table"]
+        at = max(table, key=lambda r: abs(r["E_arcsec"]))
+        pts = {p["position_deg"]: p["u_c_arcsec"]
+               for p in res["extra"]["uncertainty"]["points"]}
+        assert e["uncertainty"]["u_c"] == pytest.approx(pts[at["position_deg"]], rel=1e-12)
+        assert f"at {at['position_deg']:g}°" in e["uncertainty"]["u_c_of"]
+        assert "max|E_i|" in e["uncertainty"]["u_c_of"]
+
+
+def _dcc_reals(root) -> dict:
+    """(item key, results.json field) → si:real of the DCC quantity stating it."""
+    out = {}
+    for real in root.iter(f"{{{SI_NS}}}real"):
+        prev = real.getprevious()
+        if isinstance(prev, etree._Comment):
+            m = re.search(r"src=items\.([A-Za-z0-9_]+)\.(value|details\.max_abs_arcsec)\b",
+                          prev.text or "")
+            if m and "factor=" not in (prev.text or ""):   # not a unit-converted quantity
+                out[(m.group(1), m.group(2))] = real
+    return out
+
+
+def test_dcc_states_the_numbers_of_results_json(issued):
+    """The DCC's value, U and k, or its coverage interval with u_c as si:valueStandardMU,
+    are results.json's, rounded (interval ends outward by at most one printed unit)."""
+    res = issued["res"]
+    reals = _dcc_reals(issued["out"]["en"]["dcc"])
+    seen = 0
+    for key, it in measured(res).items():
+        u = it["uncertainty"]
+        field = "details.max_abs_arcsec" if u.get("k_source") == "max-abs-interval" \
+            else "value"
+        real = reals.get((key, field))
+        if real is None:
+            continue
+        seen += 1
+        assert _close(real.find("si:value", NS).text, stated_value(it)), key
+        if u["k"] is None:
+            ci = real.find("si:measurementUncertaintyUnivariate/si:coverageIntervalMU", NS)
+            assert ci is not None, key
+            assert _close(ci.find("si:valueStandardMU", NS).text, u["u_c"]), key
+            lo, hi = (ci.find(f"si:{t}", NS).text for t in ("intervalMin", "intervalMax"))
+            assert float(lo) <= u["interval"][0] * (1 + 1e-12) + 1e-300 and \
+                u["interval"][0] - float(lo) <= _ulp(lo) * (1 + 1e-9), key
+            assert float(hi) >= u["interval"][1] * (1 - 1e-12) and \
+                float(hi) - u["interval"][1] <= _ulp(hi) * (1 + 1e-9), key
+            assert real.find(".//si:expandedMU", NS) is None, key
+        else:
+            ex = real.find("si:measurementUncertaintyUnivariate/si:expandedMU", NS)
+            assert ex is not None, key
+            assert _close(ex.find("si:valueExpandedMU", NS).text, u["U"]), key
+            assert _close(ex.find("si:coverageFactor", NS).text, u["k"]), key
+    assert seen >= 2
+
+
+def test_certificate_and_summary_print_the_statement(issued):
+    """The certificate's value span and the interval's ends (or U and k), and summary.txt's
+    line of the item, are the statement rule's texts of results.json's numbers."""
+    from gonio.report.i18n import minus_sign
+    from gonio.result.statement import item_statement
+
+    res, html, summary = issued["res"], issued["out"]["en"]["html"], issued["summary"]
+    text = re.sub(r"<[^>]+>", "", html)
+    for key, it in measured(res).items():
+        st = item_statement(it)
+        field = "details.max_abs_arcsec" if it["uncertainty"].get("k_source") == \
+            "max-abs-interval" else "value"
+        spans = set(re.findall(r'data-src="items\.' + re.escape(key) + r'\.'
+                               + re.escape(field) + r'" data-rule="[^"]+">([^<]*)<', html))
+        if not st.below_zero:
+            assert spans <= {minus_sign(st.value_text)}, (key, spans)
+        if st.interval is not None:
+            ends = [minus_sign(x) for x in st.interval_ends]
+            assert (f"≤ {ends[1]}" if st.upper is not None or st.below_zero
+                    else f"[{ends[0]}, {ends[1]}]") in text, key
+            assert any(st.interval_ends[1] in ln and (st.below_zero or st.value_text in ln)
+                       for ln in summary.splitlines()), key
+        elif st.U is not None:
+            assert any(st.U_text in ln and st.value_text in ln
+                       for ln in summary.splitlines()), key
+
+
+def _declarations(root) -> dict:
+    out = {}
+    for st in root.iter(f"{{{DCC_NS}}}statement"):
+        out[st.get("id")] = [c.text for c in st.findall("dcc:declaration/dcc:content", NS)]
+    return out
+
+
+def test_conformity_is_declared_as_decided(issued):
+    """Each decision's DCC declaration: the acceptance as the certificate states it, no
+    doubled "interval", no bare "—" probability; the guard band's U of every item decided on
+    its interval (upper end − value, sig. 2) in the DCC's own statement and on the
+    certificate, en and zh; summary.txt (rate family) both guard bands where two."""
+    from gonio.report.i18n import display
+
+    res = issued["res"]
+    decided = {k: it["conformity"] for k, it in res["items"].items()
+               if it.get("conformity") and it["conformity"].get("outcome")}
+    assert decided
+    for lang in ("en", "zh"):
+        decl = _declarations(issued["out"][lang]["dcc"])
+        html = issued["out"][lang]["html"]
+        band = [t for t in decl.get("guard-band-interval-items", [])]
+        for key, c in decided.items():
+            texts = decl[f"conformity-{key}"]
+            en = texts[0]
+            assert "acceptance interval interval" not in en, en
+            assert "probability —;" not in en and not en.rstrip().endswith("—"), en
+            if c["conformance_probability"] is None:
+                assert "— (not given" in en, en
+            if lang == "zh":
+                assert len(texts) == 2 and "接受" in texts[1], texts
+            if c.get("acceptance_of") == "interval" and c["rule"] != "simple":
+                y, U = c["value"], c["U"]
+                it = res["items"][key]
+                assert y + U == pytest.approx(it["uncertainty"]["interval"][1], rel=1e-9)
+                want = f"U = {display('sig2', U)}"
+                assert band and all(want in b for b in band), (key, want, band)
+                assert want in re.sub(r"<[^>]+>", "", html), (key, want)
+    if issued["spec"] in ("jjf1535-2015", "iec62047-20", "triad-alignment"):
+        for key, c in decided.items():
+            line = next(ln for ln in issued["summary"].splitlines()
+                        if ln.strip().startswith(f"{key}: limits"))
+            lo = c.get("guard_band_lower")
+            if lo is not None:
+                it = res["items"][key]
+                r = c["guard_factor"]
+                assert lo == pytest.approx(r * (c["value"] - it["uncertainty"]["interval"][0]),
+                                           rel=1e-9)
+                assert f"guard bands {lo:.2g} at the lower limit, " \
+                       f"{c['guard_band']:.2g} at the upper" in line, line
+            elif c.get("guard_band"):
+                assert f"guard band {c['guard_band']:.2g})" in line, line
+
+
+def test_the_legend_names_each_interval_and_its_clauses(issued):
+    """The legend under the results states each kind of interval present with the clauses
+    of its items: the extreme of magnitudes (E; IEC 5.1.3.5, 5.2, 5.3.3.3, 5.3.3.8; JJF K_t,
+    B_g, B_t) and IEC 5.1.3.7's corrected maximum among them, en and zh."""
+    res = issued["res"]
+    kinds = {"max-abs-interval": ("max_i |x_i|", "最大绝对值"),
+             "interval of max|x_i| (uncertainty.extreme.max_abs_interval)":
+                 ("max_i |x_i|", "最大绝对值"),
+             "χ² interval of the largest spread over its selection excess":
+                 ("selection bias of the maximum", "选择偏差"),
+             "chi-square": ("σ's χ² distribution", "χ² 分布"),
+             "neyman-belt": ("confidence belt", "置信带")}
+    items = _interval_items(res)
+    if not items:
+        return
+    for n, lang in enumerate(("en", "zh")):
+        html = issued["out"][lang]["html"]
+        head = ("An item stated by an interval has that one statement" if lang == "en"
+                else "以区间表述的项目只有这一个表述")
+        at = html.index(head)
+        legend = html_lib.unescape(re.sub(r"<[^>]+>", "", html[at:html.index("</p>", at)]))
+        for key, it in items.items():
+            assert it["clause"] in legend, (lang, key, it["clause"])
+            phrase = kinds.get(it["uncertainty"]["k_source"])
+            if phrase:
+                assert phrase[n] in legend, (lang, key, phrase[n])
+                # the item's clause stands in the bracket after its kind's phrase
+                part = legend[legend.index(phrase[n]):]
+                bracket = re.search(r"[（(]([0-9., ()]+?)[)）](?:[;；.。]|$)", part)
+                assert bracket and it["clause"] in bracket.group(1), (lang, key, part[:300])
