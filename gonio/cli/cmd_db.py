@@ -96,6 +96,22 @@ def register(sub) -> None:
     q.add_argument("--date", default=None, metavar="YYYY-MM-DD",
                    help="say which is in force on this date (default today)")
     q.set_defaults(func=run_table_calibrations)
+    q = dsub.add_parser("withdraw-table-calibration",
+                        help="ask for a register entry to be withdrawn (technician or "
+                             "reviewer, --reason), or approve (another reviewer) or decline "
+                             "the withdrawal asked for")
+    add_store_options(q)
+    q.add_argument("entry", help="the register entry's number (gonio db table-calibrations)")
+    how = q.add_mutually_exclusive_group(required=True)
+    how.add_argument("--reason", default=None, help="ask for its withdrawal, saying why")
+    how.add_argument("--approve", action="store_true",
+                     help="approve the withdrawal asked for (not by its asker)")
+    how.add_argument("--decline", action="store_true",
+                     help="decline the withdrawal asked for")
+    q.add_argument("--user", default=None, metavar="NAME",
+                   help="the records user (default $GONIO_USER), with their password in "
+                        "$GONIO_PASSWORD or asked")
+    q.set_defaults(func=run_withdraw_table_calibration)
     for name, helptext in (("backup", "write every record and stored file to a ZIP archive"),
                            ("restore", "restore an archive into an empty database (or, "
                                        "with --replace, over the live records)")):
@@ -264,11 +280,49 @@ def run_table_calibrations(args) -> int:
     try:
         day = services.date_value(args.date, "--date")
         for r in services.table_calibrations(store, day):
-            e = r["entry"]
+            e, w = r["entry"], r["withdrawal"]
+            note = ""
+            if w is not None:
+                note = (f"\twithdrawn by {_who(w.withdrawn_by)} (asked by {_who(w.asked_by)}): "
+                        f"{' '.join(w.reason.split())}; affected: "
+                        + (", ".join(f"calibration {i}" for i in r["affected"]) or "none"))
+            elif r["asked"] is not None:
+                note = f"\twithdrawal asked for by {r['asked']['asked_by']}"
             print(f"{e.id}\t{e.standard.identifier}\t{e.certificate}\t{e.name}\t{e.sha256}\t"
                   f"{e.valid_from}\t{e.due_on}\t{r['state'] or 'in force'}\t"
                   f"used by {r['used']}\t"
-                  f"{e.registered_by.username if e.registered_by else ''}")
+                  f"{e.registered_by.username if e.registered_by else ''}{note}")
+    finally:
+        store.close()
+    return 0
+
+
+def _who(user) -> str:
+    return user.username if user is not None else "(unknown)"
+
+
+def run_withdraw_table_calibration(args) -> int:
+    from gonio.records import services
+
+    store = _store(args)
+    try:
+        name = args.user or os.environ.get("GONIO_USER") or ""
+        if not name:
+            raise GonioError("give the records user (--user or $GONIO_USER)", key="--user")
+        actor = logged_in(store, name, "db withdraw-table-calibration")
+        if not args.entry.isdigit():
+            raise GonioError("the register entry's number (a whole number)", key="entry")
+        if args.approve:
+            w = services.approve_withdrawal(store, actor, int(args.entry))
+            print(f"table calibration {args.entry} withdrawn at "
+                  f"{w.withdrawn_at:%Y-%m-%d %H:%M:%S}Z")
+        elif args.decline:
+            services.decline_withdrawal(store, actor, int(args.entry))
+            print(f"table calibration {args.entry}: withdrawal declined")
+        else:
+            services.ask_withdrawal(store, actor, int(args.entry), args.reason)
+            print(f"table calibration {args.entry}: withdrawal asked for; another person "
+                  "approves it")
     finally:
         store.close()
     return 0

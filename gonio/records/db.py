@@ -102,10 +102,29 @@ def migrate(engine: Engine, revision: str = "head", blob_root: Path | None = Non
 
     cfg = Config()
     cfg.set_main_option("script_location", str(MIGRATIONS))
-    with engine.begin() as conn:
-        cfg.attributes["connection"] = conn
-        cfg.attributes["blob_root"] = blob_root
-        command.upgrade(cfg, revision)
+    sqlite = engine.dialect.name == "sqlite"
+    with engine.connect() as conn:
+        # SQLite changes a table's constraints by making the table again (0010): with
+        # foreign keys off, set outside the transaction (the driver runs without one until
+        # the first statement), checked before the commit, and on again after — SQLite's
+        # own procedure (lang_altertable.html, "other kinds of table schema changes")
+        raw = conn.connection.dbapi_connection
+        if sqlite:
+            raw.execute("PRAGMA foreign_keys=OFF")
+        try:
+            with conn.begin():
+                cfg.attributes["connection"] = conn
+                cfg.attributes["blob_root"] = blob_root
+                command.upgrade(cfg, revision)
+                if sqlite:
+                    bad = conn.exec_driver_sql("PRAGMA foreign_key_check").fetchall()
+                    if bad:
+                        raise GonioError(f"the migration left {len(bad)} row(s) whose "
+                                         f"reference is missing (first: {tuple(bad[0])}): "
+                                         "nothing changed", key="database")
+        finally:
+            if sqlite:
+                raw.execute("PRAGMA foreign_keys=ON")
 
 
 def head_revision() -> str | None:

@@ -12,7 +12,9 @@ triggers (the migrations create them, for SQLite and PostgreSQL alike):
 * ``blobs``         a stored file's record is never changed (the bytes live in the
                     content-addressed store, named by their SHA-256);
 * ``table_calibrations``  a registered table calibration is never changed or removed
-                    (migration 0009): a correction is a new registration.
+                    (migration 0009): a correction is a new registration;
+* ``table_calibration_withdrawals``  a table calibration's withdrawal (migration 0010):
+                    no UPDATE, no DELETE.
 
 Times are naive UTC ``datetime`` values; dates (due dates, calibration dates) are
 ``date`` values.
@@ -151,8 +153,9 @@ class TableCalibration(Base):
     date) until ``due_on``; a later one of the same table supersedes it from its own
     ``valid_from`` (:func:`gonio.records.services.table_calibration_state`)."""
     __tablename__ = "table_calibrations"
-    __table_args__ = (UniqueConstraint("standard_id", "valid_from"),
-                      UniqueConstraint("standard_id", "sha256"))
+    # one file per table and one start per day hold among the entries not withdrawn
+    # (:func:`gonio.records.services.register_table_calibration`; migration 0010 dropped the
+    # database's constraints, so a withdrawn entry's file or day can be registered again)
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     #: the rotary table, registered as a standard (bench equipment)
     standard_id: Mapped[int] = mapped_column(ForeignKey("standards.id"), index=True)
@@ -167,6 +170,27 @@ class TableCalibration(Base):
     registered_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
     standard: Mapped[Standard] = relationship()
     registered_by: Mapped[User | None] = relationship()
+
+
+class TableCalibrationWithdrawal(Base):
+    """A register entry withdrawn (migration 0010; frozen by triggers): why, who asked and
+    when, who approved it — another person — and when it took effect. From then on the entry
+    is in force on no day (:func:`gonio.records.services.table_calibration_state`); the
+    calibrations already made with it keep it (their seal names it) and are listed as
+    affected (:func:`gonio.records.services.withdrawal_affected`)."""
+    __tablename__ = "table_calibration_withdrawals"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    table_calibration_id: Mapped[int] = mapped_column(ForeignKey("table_calibrations.id"),
+                                                      unique=True)
+    reason: Mapped[str] = mapped_column(Text)
+    asked_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"), nullable=True)
+    asked_at: Mapped[_dt.datetime] = mapped_column(DateTime)
+    withdrawn_by_id: Mapped[int | None] = mapped_column(ForeignKey("users.id"),
+                                                        nullable=True)
+    withdrawn_at: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    entry: Mapped[TableCalibration] = relationship()
+    asked_by: Mapped[User | None] = relationship(foreign_keys=[asked_by_id])
+    withdrawn_by: Mapped[User | None] = relationship(foreign_keys=[withdrawn_by_id])
 
 
 class Calibration(Base):

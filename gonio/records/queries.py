@@ -124,6 +124,8 @@ def calibration_page(store, cal_id: int) -> dict | None:
             selectinload(TableCalibration.standard)).where(
             TableCalibration.id == cal.table_calibration_id)) \
             if cal.table_calibration_id is not None else None
+        from gonio.records.services import withdrawals
+        withdrawn = withdrawals(s, [entry.id]).get(entry.id) if entry is not None else None
         stds = s.execute(select(Standard, CalibrationStandard.due_on_at_use)
                          .join(CalibrationStandard,
                                CalibrationStandard.standard_id == Standard.id)
@@ -150,6 +152,9 @@ def calibration_page(store, cal_id: int) -> dict | None:
             "table_calibration": table_calibration_used(table_sha, doc, table_name),
             "file_names": {TABLE_CALIBRATION: table_name} if table_sha else {},
             "register_entry": entry,
+            # the entry withdrawn after this calibration was made with it: kept (sealed),
+            # flagged as affected (docs/records.md, the register)
+            "register_withdrawal": withdrawn,
             "identity": identity_findings(store, cal.results_sha256, doc=doc) if sealed else []}
 
 
@@ -465,13 +470,22 @@ def export_rows(store, name: str, params: dict) -> tuple[list[str], list[list]] 
         from gonio.records.services import table_calibrations
 
         rows = table_calibrations(store)
+
+        def utc(at):                                                     # stored naive UTC
+            return at.isoformat(timespec="seconds") + "Z" if at is not None else ""
+
+        def name(u):
+            return u.username if u is not None else ""
+
         return (["id", "table", "certificate", "file", "sha256", "valid_from", "due_on",
-                 "state_today", "used_by", "registered_by", "registered_at"],
+                 "state_today", "used_by", "registered_by", "registered_at", "withdrawn_at",
+                 "withdrawn_by", "withdrawal_asked_by", "withdrawal_reason", "affected"],
                 [[e.id, e.standard.identifier, e.certificate, e.name, e.sha256, e.valid_from,
-                  e.due_on, r["state"] or "in force", r["used"],
-                  e.registered_by.username if e.registered_by else "",
-                  e.registered_at.isoformat(timespec="seconds") + "Z"]   # stored naive UTC
-                 for r in rows for e in [r["entry"]]])
+                  e.due_on, r["state"] or "in force", r["used"], name(e.registered_by),
+                  utc(e.registered_at), utc(w.withdrawn_at) if w else "",
+                  name(w.withdrawn_by) if w else "", name(w.asked_by) if w else "",
+                  w.reason if w else "", " ".join(str(i) for i in r["affected"])]
+                 for r in rows for e, w in [(r["entry"], r["withdrawal"])]])
     if name == "audit":
         rows, _ = audit_events(store, 1, big, params.get("entity", ""),
                                params.get("entity_id", ""), params.get("username", ""))

@@ -44,7 +44,7 @@ from gonio.records.auth import check_roles, hash_password
 from gonio.records.models import (AuditEvent, Blob, Calibration, CalibrationFile,
                                   CalibrationStandard, Certificate, CertificateCounter, Customer,
                                   Instrument, ResultItem, Setting, Standard, TableCalibration,
-                                  User, utcnow)
+                                  TableCalibrationWithdrawal, User, utcnow)
 from gonio.records.results import NOT_STATED, result_rows
 
 #: The certificate numbering scheme: prefix, year, four-digit sequence per year.
@@ -60,7 +60,13 @@ _CONTROL_LINE = re.compile(r"[\x00-\x1f\x7f\u2028\u2029\ufeff]")
 #: Laboratory settings and their defaults.
 SETTINGS = {"lab_name": "Calibration laboratory", "lab_address": "(address not set)",
             "lab_accreditation": "", "lab_contact": "", "lab_place": "",
-            "decision_rule": "non-binary", "guard_band_factor": "1.0", "min_people": "3"}
+            "decision_rule": "non-binary", "guard_band_factor": "1.0", "min_people": "3",
+            "table_calibration_max_months": "24"}
+
+#: The longest a rotary table's calibration may be registered for (months from its valid
+#: from to its due date; the setting ``table_calibration_max_months`` is the laboratory's
+#: own, 1 … this).
+MAX_TABLE_INTERVAL_MONTHS = 120
 
 #: What ``min_people`` may be: 3 (creator, reviewer and approver three different people) or
 #: 2 for a small laboratory (the reviewer may approve; the creator never reviews or approves).
@@ -234,6 +240,10 @@ def check_setting(key: str, value) -> str:
     check_text_fields({key: value}, None)
     if key == "min_people" and value not in MIN_PEOPLE:
         raise GonioError("2 or 3 (distinct people: creator, reviewer, approver)", key=key)
+    if key == "table_calibration_max_months" and not (
+            re.fullmatch(r"[0-9]{1,3}", value)
+            and 1 <= int(value) <= MAX_TABLE_INTERVAL_MONTHS):
+        raise GonioError(f"a whole number of months, 1 … {MAX_TABLE_INTERVAL_MONTHS}", key=key)
     if key == "guard_band_factor":
         number_value(value, key, 0, 1e6)
         if not value:
@@ -774,6 +784,96 @@ def _readable_table_calibration(store, sha256: str, shown: str) -> None:
                              column=exc.column) from None
 
 
+def add_months(day: _dt.date, months: int) -> _dt.date:
+    """``day`` plus ``months`` calendar months, the day of the month kept where the month
+    has it, else its last day (2025-01-31 + 1 → 2025-02-28).
+
+    >>> add_months(_dt.date(2025, 1, 31), 1), add_months(_dt.date(2024, 2, 29), 12)
+    (datetime.date(2025, 2, 28), datetime.date(2025, 2, 28))
+    """
+    import calendar
+
+    y, m = divmod(day.month - 1 + months, 12)
+    year, month = day.year + y, m + 1
+    return day.replace(year=year, month=month,
+                       day=min(day.day, calendar.monthrange(year, month)[1]))
+
+
+def table_interval_months(s: Session) -> int:
+    """The laboratory's longest interval of a table calibration (setting
+    ``table_calibration_max_months``, default 24)."""
+    row = s.get(Setting, "table_calibration_max_months")
+    try:
+        return int(check_setting("table_calibration_max_months", row.value)) \
+            if row is not None else int(SETTINGS["table_calibration_max_months"])
+    except GonioError:
+        return int(SETTINGS["table_calibration_max_months"])
+
+
+def check_table_dates(start: _dt.date, due: _dt.date, months: int, today: _dt.date) -> None:
+    """The register's dates (docs/records.md, the register): valid from (the table's
+    calibration date) not after ``today`` (UTC: a calibration is registered once it has been
+    made), the due date after it and at most ``months`` calendar months after it (the
+    laboratory's maximum interval, :func:`add_months`). One-line GonioError otherwise.
+
+    >>> check_table_dates(_dt.date(2025, 1, 1), _dt.date(2027, 1, 1), 24, _dt.date(2026, 1, 1))
+    >>> check_table_dates(_dt.date(2025, 1, 1), _dt.date(2027, 1, 2), 24, _dt.date(2026, 1, 1))
+    Traceback (most recent call last):
+    gonio.errors.GonioError: key due_on: due_on 2027-01-02 is more than 24 months after valid_from 2025-01-01 (the laboratory's longest table calibration interval, setting table_calibration_max_months: due on 2027-01-01 at the latest)
+    """
+    if start > today:
+        raise GonioError(f"valid_from {start} is in the future (today is {today}, UTC): "
+                         "register a table calibration once it has been made",
+                         key="valid_from")
+    if due <= start:
+        raise GonioError(f"due_on {due} is not after valid_from {start}", key="due_on")
+    latest = add_months(start, months)
+    if due > latest:
+        raise GonioError(f"due_on {due} is more than {months} months after valid_from {start} "
+                         "(the laboratory's longest table calibration interval, setting "
+                         f"table_calibration_max_months: due on {latest} at the latest)",
+                         key="due_on")
+
+
+def withdrawals(s: Session, ids: Iterable[int] | None = None) -> dict:
+    """The register's withdrawn entries: entry id → :class:`TableCalibrationWithdrawal`
+    (of the entries ``ids``, or all), with who asked and who approved loaded."""
+    from sqlalchemy.orm import selectinload
+
+    q = select(TableCalibrationWithdrawal).options(
+        selectinload(TableCalibrationWithdrawal.asked_by),
+        selectinload(TableCalibrationWithdrawal.withdrawn_by))
+    if ids is not None:
+        q = q.where(TableCalibrationWithdrawal.table_calibration_id.in_(list(ids)))
+    return {w.table_calibration_id: w for w in s.scalars(q)}
+
+
+def _governed(s: Session, st: Standard, start: _dt.date, sha256: str,
+              withdrawn: dict) -> Calibration | None:
+    """The first calibration recorded with the table ``st`` (among its standards, or made
+    with one of its register entries) dated on or after ``start`` that an entry valid from
+    ``start`` would govern behind its back: one made with another entry not withdrawn, with
+    an upload of another file, or with none. Void and rejected calibrations, those made with
+    a withdrawn entry (listed as affected by it) and those made with these very bytes do not
+    count."""
+    tables = select(TableCalibration.id).where(TableCalibration.standard_id == st.id)
+    named = select(CalibrationStandard.calibration_id).where(
+        CalibrationStandard.standard_id == st.id)
+    cals = s.scalars(select(Calibration).where(
+        Calibration.performed_on >= start,
+        Calibration.status.not_in(("void", "rejected")),
+        Calibration.id.in_(named) | Calibration.table_calibration_id.in_(tables))
+        .order_by(Calibration.performed_on, Calibration.id)).all()
+    for cal in cals:
+        if cal.table_calibration_id is not None and cal.table_calibration_id in withdrawn:
+            continue
+        kept = s.get(CalibrationFile, (cal.id, TABLE_CALIBRATION))
+        if kept is not None and kept.sha256 == sha256:
+            continue
+        return cal
+    return None
+
+
 def register_table_calibration(store, actor: User, *, standard_id: int, sha256: str,
                                name: str = "", valid_from=None, due_on=None,
                                certificate: str = "") -> TableCalibration:
@@ -781,22 +881,26 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
     registers equipment: ISO/IEC 17025 6.4.13): the stored file ``sha256`` (kept once by its
     SHA-256; ``name`` its own file name, for display and the run's file name), the table it
     belongs to (``standard_id``: the table registered as a standard, not retired), valid from
-    ``valid_from`` (the table's calibration date) until ``due_on`` (after it), and the table
-    certificate's identifier ``certificate``; audited as ``register`` of a
-    ``table-calibration``. The same file twice for one table, or two of one table valid from
-    the same day (which would be in force?), are refused with one line. A later one of the
-    same table supersedes the earlier from its own ``valid_from``
-    (:func:`table_calibration_state`); nothing registered is changed or removed. The file
-    must read as a table calibration (:func:`_readable_table_calibration`)."""
+    ``valid_from`` (the table's calibration date) until ``due_on``
+    (:func:`check_table_dates`: not in the future, due after it, within the laboratory's
+    longest interval), and the table certificate's identifier ``certificate``; audited as
+    ``register`` of a ``table-calibration``. Among the table's entries not withdrawn, the
+    same file twice or two valid from the same day (which would be in force?) are refused
+    with one line. A later one of the same table supersedes the earlier from its own
+    ``valid_from`` (:func:`table_calibration_state`), so an entry is refused where a
+    calibration already recorded on or after that day was made otherwise (:func:`_governed`:
+    it would be in force on a day whose calibration used another entry). Nothing
+    registered is changed or removed; a wrong entry is withdrawn
+    (:func:`ask_withdrawal`). The file must read as a table calibration
+    (:func:`_readable_table_calibration`)."""
     require(actor, "technician")
     start = date_value(valid_from, "valid_from", required=True)
     due = date_value(due_on, "due_on", required=True)
-    if due < start:
-        raise GonioError(f"due_on {due} is before valid_from {start}", key="due_on")
     shown = file_name(name, "table calibration file name")
     cert = text(certificate, "certificate")
     with store.writing() as s:
-        st = s.get(Standard, int(standard_id))
+        check_table_dates(start, due, table_interval_months(s), utcnow().date())
+        st = s.get(Standard, int(standard_id), with_for_update=True)
         if st is None:
             raise GonioError("no such standard (register the rotary table as a standard "
                              "first)", key="standard")
@@ -806,8 +910,12 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
         if s.get(Blob, sha256) is None:
             raise GonioError("no such stored file", key="sha256")
         _readable_table_calibration(store, sha256, shown)
-        for other in s.scalars(select(TableCalibration).where(
-                TableCalibration.standard_id == st.id)).all():
+        others = s.scalars(select(TableCalibration).where(
+            TableCalibration.standard_id == st.id)).all()
+        withdrawn = withdrawals(s, [o.id for o in others])
+        for other in others:
+            if other.id in withdrawn:
+                continue
             if other.sha256 == sha256:
                 raise GonioError(f"this file (SHA-256 {sha256[:16]}…) is registered for "
                                  f"{st.identifier} already: table calibration {other.id}",
@@ -815,6 +923,17 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
             if other.valid_from == start:
                 raise GonioError(f"table calibration {other.id} of {st.identifier} is valid "
                                  f"from {start} already: one a day", key="valid_from")
+        cal = _governed(s, st, start, sha256, withdrawn)
+        if cal is not None:
+            used = (f"table calibration {cal.table_calibration_id}"
+                    if cal.table_calibration_id is not None else "another file"
+                    if s.get(CalibrationFile, (cal.id, TABLE_CALIBRATION)) else "none")
+            raise GonioError(f"calibration {cal.id} of {cal.performed_on} was made with {used} "
+                             f"of {st.identifier}: an entry valid from {start} would be in "
+                             "force on its day behind its back (register it valid from "
+                             f"{cal.performed_on + _dt.timedelta(days=1)} or later, or "
+                             "withdraw the entry that calibration used first)",
+                             key="valid_from")
         tc = TableCalibration(standard_id=st.id, sha256=sha256, name=shown, certificate=cert,
                               valid_from=start, due_on=due, registered_by_id=actor.id)
         s.add(tc)
@@ -825,6 +944,120 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
         s.refresh(tc)
         s.expunge(tc)
     return tc
+
+
+def withdrawal_affected(s: Session, tc_id: int) -> list[Calibration]:
+    """The calibrations made with the register's entry ``tc_id`` (their seal names it): those
+    a withdrawal of it leaves as they are and lists as affected — the laboratory's review
+    (docs/records.md, the register: a flag, no state of its own)."""
+    return list(s.scalars(select(Calibration).where(
+        Calibration.table_calibration_id == int(tc_id)).order_by(Calibration.id)))
+
+
+def pending_withdrawal(s: Session, tc_id: int) -> dict | None:
+    """The withdrawal asked for of the entry ``tc_id`` and not yet approved or declined
+    (its ``ask-withdrawal`` audit event, newer than any ``withdraw`` or
+    ``decline-withdrawal`` of it): ``{"reason", "asked_by_id", "asked_by", "asked_at"}``."""
+    events = s.scalars(select(AuditEvent).where(
+        AuditEvent.entity == "table-calibration", AuditEvent.entity_id == str(int(tc_id)),
+        AuditEvent.action.in_(("ask-withdrawal", "withdraw", "decline-withdrawal")))
+        .order_by(AuditEvent.id.desc()).limit(1)).all()
+    if not events or events[0].action != "ask-withdrawal":
+        return None
+    ev = events[0]
+    return {"reason": json.loads(ev.after_json).get("reason", ""), "asked_by_id": ev.user_id,
+            "asked_by": ev.username, "asked_at": ev.at}
+
+
+def _entry_for_withdrawal(s: Session, tc_id) -> TableCalibration:
+    try:
+        tc = s.get(TableCalibration, int(tc_id), with_for_update=True)
+    except (TypeError, ValueError):
+        tc = None
+    if tc is None:
+        raise GonioError("no such table calibration in the register", key="table_calibration")
+    w = s.scalar(select(TableCalibrationWithdrawal).where(
+        TableCalibrationWithdrawal.table_calibration_id == tc.id))
+    if w is not None:
+        raise GonioError(f"table calibration {tc.id} was withdrawn on "
+                         f"{w.withdrawn_at:%Y-%m-%d %H:%M} UTC already",
+                         key="table_calibration")
+    return tc
+
+
+def ask_withdrawal(store, actor: User, tc_id: int, reason: str) -> None:
+    """Ask for the register's entry ``tc_id`` to be withdrawn (technician or reviewer), with
+    the reason; it takes effect when another person approves it (:func:`approve_withdrawal`:
+    the two-person rule of an amendment, whatever ``min_people``). Audited as
+    ``ask-withdrawal``; one request at a time."""
+    if not (actor is not None and actor.active and (actor.has("technician")
+                                                   or actor.has("reviewer"))):
+        raise GonioError("this needs the technician or reviewer role", key="role")
+    reason = text(reason, "reason", max_len=MAX_TEXT, multiline=True, required=True)
+    with store.writing() as s:
+        tc = _entry_for_withdrawal(s, tc_id)
+        if pending_withdrawal(s, tc.id) is not None:
+            raise GonioError(f"a withdrawal of table calibration {tc.id} is asked for already: "
+                             "another person approves or declines it", key="table_calibration")
+        audit(s, actor, "ask-withdrawal", "table-calibration", tc.id, None,
+              {"reason": reason, "affected": [c.id for c in withdrawal_affected(s, tc.id)]})
+        s.commit()
+
+
+def approve_withdrawal(store, actor: User, tc_id: int) -> TableCalibrationWithdrawal:
+    """Approve the withdrawal asked for of the entry ``tc_id`` (reviewer, not the person who
+    asked: one asks, another approves, as for an amendment): its immutable row
+    (:class:`TableCalibrationWithdrawal`: reason, who asked and when, who approved and when)
+    is written and the entry is in force on no day from then on; the calibrations made
+    with it keep it and are listed as affected (:func:`withdrawal_affected`, in the
+    ``withdraw`` audit event)."""
+    require(actor, "reviewer")
+    with store.writing() as s:
+        tc = _entry_for_withdrawal(s, tc_id)
+        asked = pending_withdrawal(s, tc.id)
+        if asked is None:
+            raise GonioError(f"no withdrawal of table calibration {tc.id} is asked for",
+                             key="table_calibration")
+        if asked["asked_by_id"] == actor.id:
+            raise GonioError("the person who asked for the withdrawal may not approve it "
+                             "(another person approves a withdrawal)", key="role")
+        w = TableCalibrationWithdrawal(table_calibration_id=tc.id, reason=asked["reason"],
+                                       asked_by_id=asked["asked_by_id"],
+                                       asked_at=asked["asked_at"], withdrawn_by_id=actor.id,
+                                       withdrawn_at=utcnow())
+        s.add(w)
+        s.flush()
+        affected = [c.id for c in withdrawal_affected(s, tc.id)]
+        audit(s, actor, "withdraw", "table-calibration", tc.id, None,
+              dict(state(w), affected=affected))
+        for cal_id in affected:      # the flag, on each calibration's own trail too
+            audit(s, actor, "table-calibration-withdrawn", "calibration", cal_id, None,
+                  {"register_id": tc.id, "reason": asked["reason"]})
+        s.commit()
+        s.refresh(w)
+        s.expunge(w)
+    return w
+
+
+def decline_withdrawal(store, actor: User, tc_id: int, reason: str = "") -> None:
+    """Decline the withdrawal asked for of the entry ``tc_id`` (a reviewer, or the person
+    who asked, taking it back); audited as ``decline-withdrawal``, the entry stays."""
+    if not (actor is not None and actor.active and (actor.has("technician")
+                                                   or actor.has("reviewer"))):
+        raise GonioError("this needs the technician or reviewer role", key="role")
+    reason = text(reason, "reason", max_len=MAX_TEXT, multiline=True)
+    with store.writing() as s:
+        tc = _entry_for_withdrawal(s, tc_id)
+        asked = pending_withdrawal(s, tc.id)
+        if asked is None:
+            raise GonioError(f"no withdrawal of table calibration {tc.id} is asked for",
+                             key="table_calibration")
+        if asked["asked_by_id"] != actor.id and not actor.has("reviewer"):
+            raise GonioError("this needs the reviewer role (or the person who asked)",
+                             key="role")
+        audit(s, actor, "decline-withdrawal", "table-calibration", tc.id, None,
+              {"reason": reason})
+        s.commit()
 
 
 def register_table_calibration_file(store, actor: User, path, *, table: str, valid_from=None,
@@ -851,14 +1084,16 @@ def register_table_calibration_file(store, actor: User, path, *, table: str, val
 
 
 def table_calibration_state(tc: TableCalibration, others: Iterable[TableCalibration],
-                            day: _dt.date) -> str:
+                            day: _dt.date, withdrawn: dict | None = None) -> str:
     """Whether the register's table calibration ``tc`` may be used by a calibration dated
-    ``day`` (``others``: the register's calibrations of the same table): ``""`` in force —
-    valid from on or before ``day``, due on or after it, and no later calibration of that
-    table valid from on or before ``day`` —, else why not, in words: ``"not yet valid …"``,
-    ``"expired …"``, ``"superseded …"``. The newest valid is the one in force: a
-    table calibration is replaced, not merely added to (ISO/IEC 17025 6.4.11, correction
-    factors updated).
+    ``day`` (``others``: the register's calibrations of the same table; ``withdrawn``: entry
+    id → its withdrawal, :func:`withdrawals`): ``""`` in force — not withdrawn, valid from on
+    or before ``day``, due on or after it, and no later calibration of that table not
+    withdrawn valid from on or before ``day`` —, else why not, in words: ``"withdrawn …"``,
+    ``"not yet valid …"``, ``"expired …"``, ``"superseded …"``. The newest valid is the one
+    in force: a table calibration is replaced, not merely added to (ISO/IEC 17025 6.4.11,
+    correction factors updated). A withdrawn entry is in force on no day and supersedes
+    nothing: the one it had superseded is in force again on the days it was.
 
     >>> import datetime as dt
     >>> a = TableCalibration(id=1, certificate="TC-1", valid_from=dt.date(2026, 1, 1),
@@ -871,7 +1106,16 @@ def table_calibration_state(tc: TableCalibration, others: Iterable[TableCalibrat
     'superseded by table calibration 2 (TC-2) valid from 2026-06-01'
     >>> table_calibration_state(b, [a, b], dt.date(2027, 6, 2))
     'expired: it was due on 2027-06-01'
+    >>> w = TableCalibrationWithdrawal(withdrawn_at=dt.datetime(2026, 7, 1, 9, 30))
+    >>> table_calibration_state(a, [a, b], dt.date(2026, 6, 1), {2: w})
+    ''
+    >>> table_calibration_state(b, [a, b], dt.date(2026, 6, 1), {2: w})
+    'withdrawn on 2026-07-01 09:30 UTC'
     """
+    withdrawn = withdrawn or {}
+    if tc.id in withdrawn:
+        return f"withdrawn on {withdrawn[tc.id].withdrawn_at:%Y-%m-%d %H:%M} UTC"
+    others = [o for o in others if o.id not in withdrawn]
     if day < tc.valid_from:
         return f"not yet valid: valid from {tc.valid_from}"
     if day > tc.due_on:
@@ -921,9 +1165,13 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
         return upload_sha256, None
     if register_id is not None and not takes:
         raise GonioError(f"{spec.key} takes no table calibration", key="table_calibration")
+    if ids:     # a registration of these tables waits (PostgreSQL: FOR SHARE against its
+        s.execute(select(Standard.id).where(Standard.id.in_(ids))   # FOR UPDATE)
+                  .with_for_update(read=True))
     entries = s.scalars(select(TableCalibration).where(
         TableCalibration.standard_id.in_(ids)).order_by(TableCalibration.valid_from)).all() \
         if ids else []
+    withdrawn = withdrawals(s)
     by_table: dict[int, list] = {}
     for e in entries:
         by_table.setdefault(e.standard_id, []).append(e)
@@ -933,7 +1181,7 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
         if tc.standard_id not in ids:
             raise GonioError(f"{_table_label(tc, st)} is of a table the calibration does not "
                              "name among its standards: tick the table", key="table_calibration")
-        why = table_calibration_state(tc, by_table.get(tc.standard_id, []), day)
+        why = table_calibration_state(tc, by_table.get(tc.standard_id, []), day, withdrawn)
         if why:
             raise GonioError(f"{_table_label(tc, st)} cannot be used on {day}: {why}",
                              key="table_calibration")
@@ -948,7 +1196,8 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
         # only as its entry (its table ticked, in force on ``day``), never as a bare upload
         known = s.scalars(select(TableCalibration).where(
             TableCalibration.sha256 == upload_sha256).order_by(TableCalibration.id)).all()
-        if known:
+        if known:       # a withdrawn entry's bytes registered again: that entry first
+            known = sorted(known, key=lambda e: (e.id in withdrawn, e.id))
             ticked = [e for e in known if e.standard_id in ids]
             return upload_sha256, checked((ticked or known)[0])
     if register_id is not None:
@@ -961,7 +1210,8 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
                              key="table_calibration")
         return tc.sha256, checked(tc)
     if upload_sha256 is not None:
-        same = [e for e in entries if e.sha256 == upload_sha256]
+        same = sorted((e for e in entries if e.sha256 == upload_sha256),
+                      key=lambda e: (e.id in withdrawn, e.id))
         if same:
             return upload_sha256, checked(same[0])
         if entries:
@@ -973,14 +1223,14 @@ def table_calibration_for(s: Session, spec, standard_ids: Iterable[int], day: _d
         return upload_sha256, None
     in_force = []
     for sid, group in by_table.items():
-        now = [e for e in group if not table_calibration_state(e, group, day)]
+        now = [e for e in group if not table_calibration_state(e, group, day, withdrawn)]
         if not now:
             st = s.get(Standard, sid)
             newest = group[-1]
             raise GonioError(f"no calibration of the table {st.identifier} in the register is "
                              f"in force on {day} (the newest, {_table_label(newest, None)}: "
-                             f"{table_calibration_state(newest, group, day)}): register its "
-                             "current calibration", key="table_calibration")
+                             f"{table_calibration_state(newest, group, day, withdrawn)}): "
+                             "register its current calibration", key="table_calibration")
         in_force.extend(now)
     if len(in_force) > 1:
         raise GonioError("the register holds a calibration in force of each of the tables "
@@ -995,7 +1245,10 @@ def table_calibrations(store, day: _dt.date | None = None) -> list[dict]:
     """The laboratory's register of table calibrations, newest first per table: each
     ``{"entry": TableCalibration (with its standard and who registered it), "state": ""
     in force on ``day`` (today) or why not (:func:`table_calibration_state`), "used": how
-    many calibrations used it}``; today is the UTC date (the records keep UTC)."""
+    many calibrations used it, "withdrawal": its :class:`TableCalibrationWithdrawal` or None,
+    "affected": the ids of the calibrations made with a withdrawn entry
+    (:func:`withdrawal_affected`), "asked": a withdrawal asked for and not yet decided
+    (:func:`pending_withdrawal`) or None}``; today is the UTC date (the records keep UTC)."""
     from sqlalchemy.orm import selectinload
 
     day = day or utcnow().date()
@@ -1006,11 +1259,16 @@ def table_calibrations(store, day: _dt.date | None = None) -> list[dict]:
         used = dict(s.execute(select(Calibration.table_calibration_id, func.count())
                               .where(Calibration.table_calibration_id.is_not(None))
                               .group_by(Calibration.table_calibration_id)).all())
+        withdrawn = withdrawals(s)
+        affected = {i: [c.id for c in withdrawal_affected(s, i)] for i in withdrawn}
+        asked = {r.id: pending_withdrawal(s, r.id) for r in rows if r.id not in withdrawn}
     groups: dict[int, list] = {}
     for r in rows:
         groups.setdefault(r.standard_id, []).append(r)
-    return [{"entry": r, "state": table_calibration_state(r, groups[r.standard_id], day),
-             "used": used.get(r.id, 0)} for r in rows]
+    return [{"entry": r,
+             "state": table_calibration_state(r, groups[r.standard_id], day, withdrawn),
+             "used": used.get(r.id, 0), "withdrawal": withdrawn.get(r.id),
+             "affected": affected.get(r.id, []), "asked": asked.get(r.id)} for r in rows]
 
 
 def create_calibration(store, actor: User, *, instrument_id: int, readings_sha256: str,

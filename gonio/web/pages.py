@@ -359,7 +359,8 @@ def _register_page(request, user, csrf, status_code=200, error=""):
     return render(request, "table_calibrations.html", user, csrf, status_code=status_code,
                   error=error, rows=services.table_calibrations(store, day),
                   standards=[s for s in queries.standards(store) if not s.retired_on],
-                  today=today, day=day)
+                  today=today, day=day,
+                  max_months=services.settings(store)["table_calibration_max_months"])
 
 
 @router.get("/table-calibrations")
@@ -383,6 +384,29 @@ async def table_calibrations_add(request: Request, session: Session):
             store, user, standard_id=_int(data.get("standard_id"), "standard"), sha256=sha,
             name=name, valid_from=data.get("valid_from"), due_on=data.get("due_on"),
             certificate=data.get("certificate"))
+    except GonioError as exc:
+        return _register_page(request, user, csrf, 400, str(exc))
+    return _back("/table-calibrations")
+
+
+@router.post("/table-calibrations/{tc_id}/withdraw")
+async def table_calibration_withdraw(request: Request, session: Session, tc_id: int):
+    """Ask for a register entry's withdrawal (technician or reviewer, with the reason), or
+    approve (``decision=approve``: a reviewer who did not ask) or decline
+    (``decision=decline``) the withdrawal asked for."""
+    user, csrf = session
+    data = await form(request, csrf)
+    store = _store(request)
+    decision = str(data.get("decision") or "ask")
+    try:
+        if decision == "approve":
+            services.approve_withdrawal(store, user, tc_id)
+        elif decision == "decline":
+            services.decline_withdrawal(store, user, tc_id, data.get("reason"))
+        elif decision == "ask":
+            services.ask_withdrawal(store, user, tc_id, data.get("reason"))
+        else:
+            raise GonioError("ask, approve or decline", key="decision")
     except GonioError as exc:
         return _register_page(request, user, csrf, 400, str(exc))
     return _back("/table-calibrations")

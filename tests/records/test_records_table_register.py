@@ -99,7 +99,7 @@ def test_register_once_audited_and_frozen(store):
             ({"key": "TC-1"}, "is registered for RT-07 already"),
             ({"key": "TC-2", "valid_from": "2025-01-01"}, "is valid from 2025-01-01 already"),
             ({"key": "TC-3", "valid_from": "2025-05-01", "due_on": "2025-04-30"},
-             "due_on 2025-04-30 is before valid_from 2025-05-01")):
+             "due_on 2025-04-30 is not after valid_from 2025-05-01")):
         sha, _ = services.store_file(store, io.BytesIO(FILES[kw["key"]]))
         with pytest.raises(GonioError, match=expect) as e:
             services.register_table_calibration(
@@ -484,12 +484,12 @@ def test_import_records_the_register_entry(tmp_path, bench_readings, capsys):
             sha, _ = services.store_file(st, io.BytesIO(TABLE))
             entry = services.register_table_calibration(
                 st, people["tech"], standard_id=table_id, sha256=sha, name="tc.csv",
-                valid_from="2000-01-01", due_on="2099-01-01", certificate="TC-9")
+                valid_from="2025-12-01", due_on="2027-12-01", certificate="TC-9")
             if supersede:
                 other = services.store_file(st, io.BytesIO(FILES["TC-3"]))[0]
                 services.register_table_calibration(
                     st, people["tech"], standard_id=table_id, sha256=other, valid_from=day,
-                    due_on="2099-01-01", certificate="TC-10")
+                    due_on=services.add_months(day, 12), certificate="TC-10")
                 with pytest.raises(GonioError, match=f"cannot be used on {day}: superseded by "
                                                      "table calibration 2 \\(TC-10\\)"):
                     import_output_folder(st, out, lab=lab, readings=bench_readings[0],

@@ -4,6 +4,7 @@ every field (HTML, SQL, path traversal, 10 MB strings, control characters)."""
 
 from __future__ import annotations
 
+import datetime as dt
 import io
 import re
 
@@ -145,8 +146,14 @@ def test_roles_enforced_on_the_server(app, sqlite_store):
     assert services.calibration(sqlite_store, cal_id).status == "computed"
 
 
-def _fields_posts(inst_id, cust_id):
-    """Every form of the application with its text fields."""
+#: a table calibration file the register takes (docs/formats.md, "Table calibration")
+TABLE_FILE = b"table_deg,error_arcsec,u_arcsec\n0,0.0,0.02\n120,0.01,0.02\n"
+
+
+def _fields_posts(inst_id, cust_id, table_id, entry_id):
+    """Every form of the application with its text fields (the register of table
+    calibrations' form: ``table_id`` a rotary table registered as a standard; the withdrawal
+    form of its entry ``entry_id``)."""
     return [
         ("/customers", ["name", "address"], {}),
         ("/instruments", ["kind", "manufacturer", "model", "serial", "limit_item_0",
@@ -158,7 +165,11 @@ def _fields_posts(inst_id, cust_id):
                                                "temperature_c"], {}),
         ("/users", ["username", "full_name"], {"username": "u-ok", "password": "password123",
                                                "roles": "technician"}),
-        ("/settings", ["lab_name", "lab_address"], {}),
+        ("/settings", ["lab_name", "lab_address", "table_calibration_max_months"], {}),
+        ("/table-calibrations", ["certificate", "valid_from", "due_on", "standard_id"],
+         {"standard_id": str(table_id), "valid_from": "2025-02-01", "due_on": "2026-02-01"}),
+        (f"/table-calibrations/{entry_id}/withdraw", ["reason", "decision"],
+         {"decision": "ask"}),
     ]
 
 
@@ -169,12 +180,20 @@ def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind
     cust = services.add_customer(sqlite_store, actor, "Base customer")
     inst = services.register_instrument(sqlite_store, actor, customer_id=cust.id,
                                         serial="BASE", spec_key="ogam-draft")
+    table = services.add_standard(sqlite_store, actor, name="rotary table", identifier="RT-1",
+                                  due_on="2099-01-01")
+    sha, _ = services.store_file(sqlite_store, io.BytesIO(TABLE_FILE + b"240,0.0,0.02\n"))
+    entry = services.register_table_calibration(sqlite_store, actor, standard_id=table.id,
+                                                sha256=sha, name="tc.csv",
+                                                valid_from="2025-01-01", due_on="2026-01-01")
     value = HOSTILE[kind]
-    for url, fields, base in _fields_posts(inst.id, cust.id):
+    for url, fields, base in _fields_posts(inst.id, cust.id, table.id, entry.id):
         for field in fields:
             data = dict(base, csrf=csrf_of(admin))
             data[field] = value
-            files = {"readings": ("r.csv", b"a\n")} if "calibrate" in url else None
+            files = {"readings": ("r.csv", b"a\n")} if "calibrate" in url else \
+                {"file": ("tc.csv", io.BytesIO(TABLE_FILE))} if url == "/table-calibrations" \
+                else None
             r = admin.post(url, data=data, files=files)
             assert r.status_code in (303, 400, 413), (url, field, r.status_code)
             if kind in ("control", "huge"):
@@ -183,7 +202,8 @@ def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind
                 assert "Traceback" not in r.text
     # stored hostile text comes back escaped on every page, and the tables are intact
     pages = ["/", "/customers", "/instruments", "/standards", "/calibrations", "/users",
-             "/audit", f"/instruments/{inst.id}"]
+             "/audit", f"/instruments/{inst.id}", "/table-calibrations",
+             f"/standards/{table.id}"]
     with sqlite_store.session() as s:
         pages += [f"/calibrations/{c}" for c in s.scalars(select(Calibration.id))]
         pages += [f"/instruments/{i}" for i in s.scalars(select(Instrument.id))]
@@ -194,6 +214,14 @@ def test_hostile_input_in_every_field_refused_or_escaped(app, sqlite_store, kind
         assert "<script>alert" not in r.text and "<img src=x" not in r.text, page
     if kind == "html":
         assert "&lt;script&gt;alert(" in admin.get("/customers").text
+        register = admin.get("/table-calibrations").text      # the certificate and reason
+        assert register.count("&lt;script&gt;alert(") >= 2, register
+    exported = admin.get("/export/table_calibrations.csv")    # text, not a page
+    assert exported.status_code == 200 and exported.headers["content-type"].startswith(
+        "text/csv")
+    for r in services.table_calibrations(sqlite_store):   # only plain text was registered
+        assert r["entry"].certificate in ("", value), r["entry"].certificate[:40]
+        assert r["entry"].valid_from == dt.date(2025, 2, 1) or r["entry"].id == entry.id
 
 
 def test_uploaded_file_name_never_becomes_a_path(app, sqlite_store):

@@ -1,0 +1,387 @@
+"""The register of table calibrations fit for accredited work
+(docs/records.md#the-register-of-table-calibrations), on SQLite and on the throwaway PostgreSQL:
+due dates bounded by the laboratory's longest interval; no entry valid from the future or
+registered late behind a calibration already made; a wrong entry withdrawn — its own frozen row
+(migration 0010), asked by one person and approved by another — in force on no day from then
+on, the calibrations made with it kept as sealed and listed as affected; the web page, the CSV
+export, the calibration page and ``gonio db withdraw-table-calibration``.
+
+Truths from outside the code under test: month ends written out by hand (2024-02-29 + 24
+months is 2026-02-28), which entry is in force on a day by the second rule of
+test_records_table_register (the newest valid from on or before the day among the entries not
+withdrawn, in force when not past its due date) over every day of two years, digests by
+hashlib."""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import io
+import json
+
+import pytest
+from sqlalchemy import select, text, update
+from sqlalchemy.exc import DBAPIError, IntegrityError
+
+from gonio.errors import GonioError
+from gonio.records import services
+from gonio.records.models import (AuditEvent, Calibration, TableCalibration,
+                                  TableCalibrationWithdrawal)
+
+from .conftest import PASSWORD
+from .test_records_table_register import (FILES, SHA, VALID, create, in_force_here, register,
+                                          setup_lab)
+
+
+def reg(store, actor, table_id, key, start, due, name=None):
+    sha, _ = services.store_file(store, io.BytesIO(FILES[key]))
+    return services.register_table_calibration(store, actor, standard_id=table_id, sha256=sha,
+                                               name=name or f"{key}.csv", valid_from=start,
+                                               due_on=due, certificate=key)
+
+
+def one_line(exc_info) -> str:
+    msg = str(exc_info.value)
+    assert "\n" not in msg, msg
+    return msg
+
+
+def test_due_date_bounded_and_start_not_in_the_future(store):
+    """The due date after valid from and at most the laboratory's longest interval after it
+    (default 24 months, calendar months with the month's end kept: 2024-02-29 → 2026-02-28);
+    a due date 50 years ahead, one on the start day and a start tomorrow (UTC) are refused in
+    one line, nothing registered; the setting takes 1 … 120 whole months and binds from
+    then on."""
+    people, _, table_id, _ = setup_lab(store)
+    tech = people["tech"]
+    today = services.utcnow().date()
+    for start, due, expect in (
+            ("2024-02-29", "2074-02-28", "is more than 24 months after valid_from 2024-02-29 "
+                                         "(the laboratory's longest table calibration "
+                                         "interval, setting table_calibration_max_months: due "
+                                         "on 2026-02-28 at the latest)"),
+            ("2024-02-29", "2026-03-01", "due on 2026-02-28 at the latest"),
+            ("2024-02-29", "2024-02-29", "due_on 2024-02-29 is not after valid_from 2024-02-29"),
+            (str(today + dt.timedelta(days=1)), str(today + dt.timedelta(days=300)),
+             f"is in the future (today is {today}, UTC)")):
+        with pytest.raises(GonioError) as e:
+            reg(store, tech, table_id, "TC-1", start, due)
+        assert expect in one_line(e), (start, due, str(e.value))
+    assert services.table_calibrations(store) == []
+    assert reg(store, tech, table_id, "TC-1", "2024-02-29", "2026-02-28").due_on == \
+        dt.date(2026, 2, 28)
+    assert reg(store, tech, table_id, "TC-2", str(today), str(today + dt.timedelta(days=30)))
+    for bad in ("0", "121", "1.5", "twelve", ""):
+        with pytest.raises(GonioError, match="a whole number of months, 1 … 120"):
+            services.set_settings(store, people["admin"], table_calibration_max_months=bad)
+    services.set_settings(store, people["admin"], table_calibration_max_months="12")
+    with pytest.raises(GonioError, match="more than 12 months after valid_from 2025-01-31 .* "
+                                         "due on 2026-01-31 at the latest"):
+        reg(store, tech, table_id, "TC-3", "2025-01-31", "2026-02-01")
+    assert reg(store, tech, table_id, "TC-3", "2025-01-31", "2026-01-31")
+
+
+def test_due_date_refused_on_the_command_line(store, tmp_path, capsys, monkeypatch):
+    """``gonio db register-table-calibration`` with a due date 50 years ahead: exit 2, one
+    line, nothing registered."""
+    from gonio.cli import main
+
+    monkeypatch.setenv("GONIO_PASSWORD", PASSWORD)
+    setup_lab(store)
+    where = ["--database", store.url] if not store.url.startswith("sqlite") else \
+        ["--data", str(store.blob_root.parent)]
+    (tmp_path / "tc.csv").write_bytes(FILES["TC-1"])
+    assert main(["db", "register-table-calibration", str(tmp_path / "tc.csv"), "--table",
+                 "RT-07", "--valid-from", "2025-01-01", "--due-on", "2075-01-01", "--user",
+                 "tech", *where]) == 2
+    err = capsys.readouterr().err
+    assert "due_on 2075-01-01 is more than 24 months after valid_from 2025-01-01" in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert services.table_calibrations(store) == []
+
+
+def test_late_registration_refused_and_never_changes_a_sealed_entry(store, computed_folder):
+    """A calibration made with TC-1 on 2025-07-01 (result stored, seal signed): TC-2 valid from
+    2025-06-01 registered after it would be in force on its day — refused in one line naming
+    the calibration; valid from 2025-07-02 it is registered, and the calibration still names
+    TC-1, its seal unchanged, and the review signs that seal. A voided calibration and one
+    made with these very bytes (an upload) do not block a registration."""
+    people, inst_id, table_id, _ = setup_lab(store)
+    tech = people["tech"]
+    tc1 = register(store, tech, table_id, "TC-1")
+    cal = create(store, tech, inst_id, "2025-07-01", [table_id])
+    assert cal.table_calibration_id == tc1.id
+    services.store_run(store, cal.id, computed_folder)
+    signed = services.seal(store, cal.id)
+    with pytest.raises(GonioError) as e:
+        reg(store, tech, table_id, "TC-2", "2025-06-01", "2026-03-01")
+    msg = one_line(e)
+    assert (f"calibration {cal.id} of 2025-07-01 was made with table calibration {tc1.id} of "
+            "RT-07: an entry valid from 2025-06-01 would be in force on its day") in msg, msg
+    assert "valid from 2025-07-02 or later" in msg
+    tc2 = reg(store, tech, table_id, "TC-2", "2025-07-02", "2026-03-01")
+    assert services.calibration(store, cal.id).table_calibration_id == tc1.id
+    assert services.seal(store, cal.id) == signed
+    reviewed = services.review(store, people["rev"], cal.id, accept=True, shown_seal=signed)
+    assert reviewed.reviewed_seal == signed and reviewed.table_calibration_id == tc1.id
+    # a later calibration takes TC-2 from its own date; the first one stays with TC-1
+    assert create(store, tech, inst_id, "2025-07-02", [table_id]).table_calibration_id == tc2.id
+    # only calibrations made otherwise block: void ones and the same bytes do not
+    people2, inst2, table2, _ = setup_lab_more(store)
+    up = services.store_file(store, io.BytesIO(FILES["TC-3"]))[0]
+    same = create(store, tech, inst2, "2025-08-01", [table2], table_calibration_sha256=up,
+                  table_calibration_name="TC-3.csv")
+    assert same.table_calibration_id is None
+    other = create(store, tech, inst2, "2025-09-01", [table2])
+    with store.writing() as s:
+        s.get(Calibration, other.id).status = "void"
+        s.commit()
+    assert reg(store, tech, table2, "TC-3", "2025-08-01", "2026-08-01").id
+
+
+def setup_lab_more(store):
+    """A second table RT-08 and instrument in the same records."""
+    tech = services.user(store, "tech")
+    cust = services.add_customer(store, tech, "C2")
+    inst = services.register_instrument(store, tech, customer_id=cust.id, serial="RLG-2",
+                                        spec_key="ogam-draft")
+    table = services.add_standard(store, tech, name="rotary table 2", identifier="RT-08",
+                                  due_on="2099-01-01")
+    return None, inst.id, table.id, None
+
+
+def test_withdrawal_two_people_frozen_and_in_force_again(store, computed_folder):
+    """TC-2 (superseding TC-1 from 2025-06-01) used by a calibration, then withdrawn: asked by
+    a reviewer with the reason, approved by another reviewer (the asker and a technician are
+    refused); its row is frozen by the database; from then on TC-2 is in force on no day and
+    TC-1 is in force where the second rule without TC-2 says, every day of two years; a
+    calibration made with TC-2 keeps it, its seal unchanged, and is listed as affected (the
+    register, the audit trail); TC-2's file and day can be registered again rightly; a
+    request declined leaves the entry in force."""
+    people, inst_id, table_id, _ = setup_lab(store)
+    tech, rev, rev2 = people["tech"], people["rev"], people["rev2"]
+    ids = {k: register(store, tech, table_id, k).id for k in VALID}
+    used = create(store, tech, inst_id, "2025-07-01", [table_id])
+    assert used.table_calibration_id == ids["TC-2"]
+    services.store_run(store, used.id, computed_folder)
+    signed = services.seal(store, used.id)
+    with pytest.raises(GonioError, match="no withdrawal of table calibration 2 is asked for"):
+        services.approve_withdrawal(store, rev2, ids["TC-2"])
+    only_admin = services.create_user(store, people["admin"], "boss", PASSWORD, "admin")
+    with pytest.raises(GonioError, match="technician or reviewer role"):
+        services.ask_withdrawal(store, only_admin, ids["TC-2"], "r")
+    services.ask_withdrawal(store, rev, ids["TC-2"], "due date mistyped\n(2026-03-01, not "
+                                                     "2026-01-03)")
+    with pytest.raises(GonioError, match="is asked for already"):
+        services.ask_withdrawal(store, tech, ids["TC-2"], "again")
+    with pytest.raises(GonioError, match="the person who asked for the withdrawal may not "
+                                         "approve it"):
+        services.approve_withdrawal(store, rev, ids["TC-2"])
+    with pytest.raises(GonioError, match="reviewer role"):
+        services.approve_withdrawal(store, tech, ids["TC-2"])
+    assert not services.table_calibration_state(
+        next(r["entry"] for r in services.table_calibrations(store)
+             if r["entry"].id == ids["TC-2"]), [], dt.date(2025, 7, 1))   # still in force
+    w = services.approve_withdrawal(store, rev2, ids["TC-2"])
+    assert (w.asked_by_id, w.withdrawn_by_id, w.reason) == \
+        (rev.id, rev2.id, "due date mistyped\n(2026-03-01, not 2026-01-03)")
+    with pytest.raises(GonioError, match="was withdrawn on .* already"):
+        services.ask_withdrawal(store, tech, ids["TC-2"], "twice")
+    for stmt in (update(TableCalibrationWithdrawal).values(reason="nothing"),
+                 TableCalibrationWithdrawal.__table__.delete()):
+        with store.writing() as s:
+            with pytest.raises((DBAPIError, IntegrityError), match="never changed or removed"):
+                s.execute(stmt)
+            s.rollback()
+    # in force: the second rule over the entries not withdrawn, every day of two years
+    rows = services.table_calibrations(store)
+    with store.session() as s:
+        withdrawn = services.withdrawals(s)
+    entries = [r["entry"] for r in rows]
+    day = dt.date(2024, 12, 1)
+    while day < dt.date(2026, 12, 1):
+        got = [e.certificate for e in entries
+               if not services.table_calibration_state(e, entries, day, withdrawn)]
+        want = in_force_here([("TC-1", *VALID["TC-1"])], day)
+        assert got == ([want] if want else []), day
+        day += dt.timedelta(days=1)
+    by_cert = {r["entry"].certificate: r for r in rows}
+    assert by_cert["TC-2"]["state"].startswith("withdrawn on ")
+    assert by_cert["TC-2"]["affected"] == [used.id] and by_cert["TC-1"]["affected"] == []
+    # the calibration made with it keeps it, sealed as signed
+    assert services.calibration(store, used.id).table_calibration_id == ids["TC-2"]
+    assert services.seal(store, used.id) == signed
+    with store.session() as s:
+        ev = s.scalar(select(AuditEvent).where(AuditEvent.action == "withdraw"))
+        assert (ev.username, ev.entity, ev.entity_id) == ("rev2", "table-calibration",
+                                                          str(ids["TC-2"]))
+        assert json.loads(ev.after_json)["affected"] == [used.id]
+        flag = s.scalar(select(AuditEvent).where(
+            AuditEvent.action == "table-calibration-withdrawn"))
+        assert (flag.entity, flag.entity_id) == ("calibration", str(used.id))
+    # from then on: chosen or uploaded, TC-2 is refused; without a choice TC-1 is taken
+    for kw in ({"table_calibration_id": ids["TC-2"]},
+               {"table_calibration_sha256": SHA["TC-2"]}):
+        with pytest.raises(GonioError, match=r"table calibration 2 \(TC-2\) of RT-07 cannot "
+                                             r"be used on 2025-07-01: withdrawn on "):
+            create(store, tech, inst_id, "2025-07-01", [table_id], **kw)
+    # the right one registered in its place: same file, same day, the due date corrected
+    # (the calibration made with TC-2 is affected, so it does not block)
+    again = reg(store, tech, table_id, "TC-2", "2025-06-01", "2026-03-01")
+    assert again.id not in (ids["TC-1"], ids["TC-2"])
+    cal = create(store, tech, inst_id, "2025-07-01", [table_id],
+                 table_calibration_sha256=SHA["TC-2"])
+    assert cal.table_calibration_id == again.id
+    # declined: the entry stays in force
+    services.ask_withdrawal(store, tech, ids["TC-1"], "checking")
+    with pytest.raises(GonioError, match="reviewer role \\(or the person who asked\\)"):
+        services.decline_withdrawal(store, services.create_user(
+            store, people["admin"], "tech2", PASSWORD, "technician"), ids["TC-1"])
+    services.decline_withdrawal(store, rev, ids["TC-1"], "it was right")
+    assert next(r for r in services.table_calibrations(store, dt.date(2025, 3, 1))
+                if r["entry"].id == ids["TC-1"])["state"] == ""
+    with store.session() as s:
+        assert services.pending_withdrawal(s, ids["TC-1"]) is None
+
+
+def test_withdrawal_on_the_web_and_in_the_export(store, tmp_path, computed_folder):
+    """The register's page: a technician asks (the reason escaped), the asker sees no approve
+    button and is refused on the server, another reviewer approves; the page, the CSV
+    export and the calibration page show the entry withdrawn, who asked and approved, and
+    the affected calibration."""
+    from gonio.web.app import create_app
+
+    from .test_web_lab_file import alert
+    from .test_web_security import csrf_of, login
+
+    people, inst_id, table_id, _ = setup_lab(store)
+    ids = {k: register(store, people["tech"], table_id, k).id for k in VALID}
+    used = create(store, people["tech"], inst_id, "2025-07-01", [table_id])
+    services.store_run(store, used.id, computed_folder)
+    app = create_app(store)
+    tech, rev, rev2 = (login(app, n) for n in ("tech", "rev", "rev2"))
+    reason = "<script>alert(1)</script> wrong file"
+
+    def post(c, **data):
+        return c.post(f"/table-calibrations/{ids['TC-2']}/withdraw",
+                      data={"csrf": csrf_of(c), **data})
+
+    assert post(tech, decision="ask", reason="").status_code == 400
+    assert post(tech, decision="ask", reason=reason).status_code == 303
+    page = tech.get("/table-calibrations").text
+    assert "<script>alert(1)" not in page and "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+    assert 'value="approve"' not in page.split('id="entry-2"')[1].split("</tr>")[0]
+    assert 'value="approve"' in rev.get("/table-calibrations").text.split(
+        'id="entry-2"')[1].split("</tr>")[0]
+    r = post(tech, decision="approve")
+    assert r.status_code == 400 and "reviewer role" in alert(r.text)
+    assert post(rev, decision="approve").status_code == 303
+    page = rev2.get("/table-calibrations").text
+    row = page.split('id="entry-2"')[1].split("</tr>")[0]
+    assert "withdrawn on " in row and "asked by tech" in row and "approved by rev" in row
+    assert f'href="/calibrations/{used.id}"' in row
+    rows = list(csv.DictReader(io.StringIO(tech.get("/export/table_calibrations.csv").text)))
+    two = next(r for r in rows if r["id"] == str(ids["TC-2"]))
+    assert two["state_today"].startswith("withdrawn on ") and two["withdrawn_at"].endswith("Z")
+    assert (two["withdrawn_by"], two["withdrawal_asked_by"], two["withdrawal_reason"],
+            two["affected"]) == ("rev", "tech", reason, str(used.id))
+    one = next(r for r in rows if r["id"] == str(ids["TC-1"]))
+    assert (one["withdrawn_at"], one["affected"]) == ("", "")
+    cal_page = tech.get(f"/calibrations/{used.id}").text
+    assert 'id="table-calibration-withdrawn"' in cal_page and "<script>alert(1)" not in cal_page
+    other = create(store, people["tech"], inst_id, "2025-07-01", [table_id])
+    assert 'id="table-calibration-withdrawn"' not in tech.get(f"/calibrations/{other.id}").text
+
+
+def test_withdrawal_on_the_command_line(store, capsys, monkeypatch):
+    """``gonio db withdraw-table-calibration N --reason R`` asks, ``--approve`` by the asker is
+    refused (exit 2, one line), by another reviewer withdraws; ``gonio db table-calibrations``
+    then says withdrawn, by whom and the affected calibrations."""
+    from gonio.cli import main
+
+    monkeypatch.setenv("GONIO_PASSWORD", PASSWORD)
+    people, inst_id, table_id, _ = setup_lab(store)
+    tc = register(store, people["tech"], table_id, "TC-1")
+    used = create(store, people["tech"], inst_id, "2025-03-01", [table_id])
+    where = ["--database", store.url] if not store.url.startswith("sqlite") else \
+        ["--data", str(store.blob_root.parent)]
+    base = ["db", "withdraw-table-calibration", str(tc.id), *where]
+    assert main(base + ["--reason", "wrong table", "--user", "rev"]) == 0
+    capsys.readouterr()
+    assert main(base + ["--approve", "--user", "rev"]) == 2
+    err = capsys.readouterr().err
+    assert "may not approve it" in err and err.count("\n") == 1
+    assert main(base + ["--approve", "--user", "rev2"]) == 0
+    capsys.readouterr()
+    assert main(["db", "table-calibrations", *where]) == 0
+    line = capsys.readouterr().out.strip().split("\t")
+    assert line[7].startswith("withdrawn on ")
+    assert line[10] == (f"withdrawn by rev2 (asked by rev): wrong table; affected: "
+                        f"calibration {used.id}")
+
+
+def test_migration_0010_over_0009(tmp_path, pg_server):
+    """Records at 0009 with a register entry a calibration used, upgraded to 0010: the rows
+    kept, the register still frozen, its reference from calibrations still enforced, a
+    withdrawn entry's file and day registrable again; back down to 0009 the database's rules
+    return, and a register holding such a pair is refused by the down-migration in words —
+    on SQLite and PostgreSQL."""
+    from gonio.records.db import migrate, open_store
+
+    from .conftest import new_pg_database
+    from .test_result_statement import _downgrade
+
+    for url in (None, new_pg_database(pg_server)):
+        data = tmp_path / ("pg" if url else "sqlite")
+        st = open_store(url, data, upgrade=False)
+        migrate(st.engine, "0009")
+        people, inst_id, table_id, _ = setup_lab(st)
+        shas = {k: services.store_file(st, io.BytesIO(FILES[k]))[0] for k in VALID}
+        with st.engine.begin() as c:        # the 0009 services' rows, written as 0009 has them
+            for key, (start, due) in VALID.items():
+                sha = shas[key]
+                c.execute(text("INSERT INTO table_calibrations (standard_id, sha256, name, "
+                               "certificate, valid_from, due_on, registered_by_id, "
+                               "registered_at) VALUES (:t, :s, :n, :n, :a, :b, NULL, "
+                               "'2025-01-01 00:00:00')"),
+                          {"t": table_id, "s": sha, "n": key, "a": start, "b": due})
+        st.close()
+        st = open_store(url, data)
+        try:
+            got = [(r["entry"].certificate, str(r["entry"].valid_from))
+                   for r in services.table_calibrations(st)]
+            assert sorted(got) == [("TC-1", "2025-01-01"), ("TC-2", "2025-06-01")]
+            cal = create(st, people["tech"], inst_id, "2025-07-01", [table_id])
+            assert cal.table_calibration_id == 2
+            with st.writing() as s:
+                with pytest.raises((DBAPIError, IntegrityError), match="never changed"):
+                    s.execute(update(TableCalibration).values(due_on=dt.date(2099, 1, 1)))
+                s.rollback()
+            with st.writing() as s:
+                with pytest.raises(IntegrityError):
+                    s.execute(update(Calibration).where(Calibration.id == cal.id)
+                              .values(table_calibration_id=99))
+                s.rollback()
+            _downgrade(st.engine, "0009")     # no pair yet: the rules come back
+            with st.engine.connect() as c:
+                with pytest.raises(IntegrityError):
+                    c.execute(text(
+                        "INSERT INTO table_calibrations (standard_id, sha256, name, "
+                        "certificate, valid_from, due_on, registered_at) VALUES (:t, :s, "
+                        "'x', 'x', '2025-01-01', '2025-02-01', '2025-01-01 00:00:00')"),
+                        {"t": table_id, "s": SHA["TC-1"]})
+                c.rollback()
+        finally:
+            st.close()
+        st = open_store(url, data)          # up again, and a withdrawn entry registered anew
+        try:
+            assert services.calibration(st, cal.id).table_calibration_id == 2
+            services.ask_withdrawal(st, people["rev"], 2, "wrong")
+            services.approve_withdrawal(st, people["rev2"], 2)
+            reg(st, people["tech"], table_id, "TC-2", "2025-06-01", "2026-03-01")
+            with pytest.raises(RuntimeError, match="cannot downgrade below 0010: the register "
+                                                   "holds 1 pair"):
+                _downgrade(st.engine, "0009")
+            assert len(services.table_calibrations(st)) == 3
+        finally:
+            st.close()
