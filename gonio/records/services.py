@@ -926,8 +926,9 @@ def register_table_calibration(store, actor: User, *, standard_id: int, sha256: 
         cal = _governed(s, st, start, sha256, withdrawn)
         if cal is not None:
             used = (f"table calibration {cal.table_calibration_id}"
-                    if cal.table_calibration_id is not None else "another file"
-                    if s.get(CalibrationFile, (cal.id, TABLE_CALIBRATION)) else "none")
+                    if cal.table_calibration_id is not None else "an uploaded file"
+                    if s.get(CalibrationFile, (cal.id, TABLE_CALIBRATION))
+                    else "no table calibration")
             raise GonioError(f"calibration {cal.id} of {cal.performed_on} was made with {used} "
                              f"of {st.identifier}: an entry valid from {start} would be in "
                              "force on its day behind its back (register it valid from "

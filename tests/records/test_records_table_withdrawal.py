@@ -385,3 +385,30 @@ def test_migration_0010_over_0009(tmp_path, pg_server):
             assert len(services.table_calibrations(st)) == 3
         finally:
             st.close()
+
+
+def test_backup_restore_keeps_the_withdrawal(store, tmp_path):
+    """A backup restored into empty records holds the withdrawal row (who, why, when) and
+    the entry's state: withdrawn, in force on no day; the affected calibration listed."""
+    from gonio.records.backup import backup, restore
+    from gonio.records.db import open_store
+
+    people, inst_id, table_id, _ = setup_lab(store)
+    ids = {k: register(store, people["tech"], table_id, k).id for k in VALID}
+    used = create(store, people["tech"], inst_id, "2025-07-01", [table_id])
+    services.ask_withdrawal(store, people["tech"], ids["TC-2"], "wrong file")
+    w = services.approve_withdrawal(store, people["rev"], ids["TC-2"])
+    backup(store, tmp_path / "b.zip")
+    target = open_store(None, tmp_path / "target")
+    try:
+        restore(target, tmp_path / "b.zip")
+        with target.session() as s:
+            got = services.withdrawals(s)[ids["TC-2"]]
+            assert (got.reason, got.asked_by.username, got.withdrawn_by.username,
+                    got.withdrawn_at) == ("wrong file", "tech", "rev", w.withdrawn_at)
+        rows = {r["entry"].id: r for r in services.table_calibrations(target,
+                                                                      dt.date(2025, 7, 1))}
+        assert rows[ids["TC-2"]]["state"].startswith("withdrawn on ")
+        assert rows[ids["TC-2"]]["affected"] == [used.id] and rows[ids["TC-1"]]["state"] == ""
+    finally:
+        target.close()
