@@ -1772,6 +1772,17 @@ def table_positions_used(t: pd.DataFrame, protocol: Protocol, table_calibration)
     return _positions_record(table_calibration, idx if idx is not None else [])
 
 
+def _scale_factor_positions(t: pd.DataFrame, protocol: Protocol):
+    """(stop, zeroing position) of the 7.1 rounds for K's table lines at the MPE
+    (:func:`round_positions`); (None, None) — every round zeroed at 0° and stopped at its
+    angle, the draft's 7.1 — where the readings' angles are not the protocol's stop − start
+    (K's table lines then take the draft's positions, as they did before positions were read)."""
+    try:
+        return round_positions(t, protocol, "scale_factor")
+    except (GonioError, StopIteration, IndexError, KeyError):
+        return None, None
+
+
 def _scale_factor_table(t: pd.DataFrame, protocol: Protocol, table_calibration):
     """K's table correction from a calibrated table, or (None, the note why not)."""
     from gonio.specs.ogam_draft import item_uncertainty as iu
@@ -1968,9 +1979,10 @@ def item_uncertainties(results: CalibrationResults, budget: AnnexABudget, protoc
     if sf.measured:
         t = sf.table
         t_corr, t_note = _scale_factor_table(t, protocol, table_calibration)
+        stop, zero = _scale_factor_positions(t, protocol)
         kw = dict(k=k_fixed, tilt_bias_arcsec_per_deg=k_tilt,
                   chamber=chamber_temperature(readings, protocol, gyro_type)[0],
-                  table_correction=t_corr, table_note=t_note)
+                  table_correction=t_corr, table_note=t_note, stop_deg=stop, zero_deg=zero)
         # the draft's reading: the 7.1 mean as measured, the MPE's table line
         draft_k = iu.scale_factor_budget(t["K_i_counts_per_deg"], t["table_deg"], mpe,
                                          **dict(kw, table_correction=None))

@@ -63,6 +63,7 @@ __all__ = [
     "Component", "ItemUncertainty", "COVERAGE_PROBABILITY", "COUNT_QUANTUM_U", "budget_k",
     "K_SOURCE_COMBINED", "COMBINED_SEED",
     "ScaleFactorTableLine", "scale_factor_table_line", "TableCorrection",
+    "scale_factor_table_coefficients", "scale_factor_table_u_rel",
     "scale_factor_table_correction", "table_corrected_k_sensitivity", "ChamberLine",
     "table_round_sensitivity", "calibration_error_draws", "calibration_draw_dof",
     "calibration_draws_text",
@@ -416,6 +417,60 @@ def scale_factor_table_line(theta_deg, table_mpe_arcsec: float,
     u_h = hw / math.sqrt(2.0)
     return ScaleFactorTableLine(u_std, u_h, hw, order,
                                 "harmonic" if u_h > u_std else "standard")
+
+
+def scale_factor_table_coefficients(theta_deg, stop_deg=None, zero_deg=None) -> dict:
+    """K's relative sensitivity to the table's positioning error at each distinct position
+    the 7.1 rounds reach (° mod 360, rounded to 1e-6°): {position: c}, δK/K = Σ c_p e(p),
+    e in arcseconds (A.4.1 applied to 7.1).
+
+    Round i is zeroed at z_i and stopped at s_i = z_i + θ_i (``stop_deg``, ``zero_deg``;
+    None: every round zeroed at 0° and stopped at θ_i, the draft's 7.1); the table turns
+    θ_i with the error e(s_i) − e(z_i), so K_i moves by (e(s_i) − e(z_i))/θ_i (θ in
+    arcseconds, signed) relative and K = mean K_i by (1/n) Σ_i of that (7.1). A position
+    reached by several rounds has one error, so its coefficients add: the common zero
+    carries −(1/n) Σ 1/θ_i, and the 360° stop is the zero itself (e(360°) = e(0°): its two
+    terms cancel). The same positions and rule as E's
+    (:func:`gonio.specs.ogam_draft.budget_extra.table_error_coefficients`, whose K part is
+    −θ times these) and as a calibrated table's correction (:func:`table_round_sensitivity`).
+
+    >>> c = scale_factor_table_coefficients([60, 120, 180, 240, 300, 360])
+    >>> sorted(c), round(c[0.0] * 6 * 216000, 4), round(c[60.0] * 6 * 216000, 4)
+    ([0.0, 60.0, 120.0, 180.0, 240.0, 300.0], -2.2833, 1.0)
+    """
+    th = np.asarray(theta_deg, dtype=float)
+    stop = th if stop_deg is None else np.asarray(stop_deg, dtype=float)
+    zero = np.zeros_like(th) if zero_deg is None else np.asarray(zero_deg, dtype=float)
+    n = th.size
+    out: dict = {}
+
+    def add(pos: float, c: float) -> None:
+        key = round(float(pos) % 360.0, 6)
+        key = 0.0 if key == 360.0 else key
+        out[key] = out.get(key, 0.0) + c
+
+    for t, s, z in zip(th, stop, zero):
+        c = 1.0 / (n * float(t) * ARCSEC_PER_DEG)
+        add(float(s), c)
+        add(float(z), -c)
+    return {p: c for p, c in sorted(out.items()) if abs(c) > 1e-18}
+
+
+def scale_factor_table_u_rel(theta_deg, table_mpe_arcsec: float, stop_deg=None,
+                             zero_deg=None) -> float:
+    """u(K)/K from the table's positioning errors at the 7.1 positions known only by the
+    MPE (A.4.1): each position's error rectangular ±MPE (JCGM 100 4.3.7), independent of
+    the other positions', the common zero's shared by every round
+    (:func:`scale_factor_table_coefficients`): u = (MPE/√3)·√(Σ c_p²) (JCGM 100 5.1.2).
+
+    The draft's stops, MPE 0.1″: (0.1/√3)·√(Σ 1/θ_k² + (Σ 1/θ_k)²)/6 over θ_k = 60°…300°
+    (the 360° stop is the zero), 0.05774·√(1.4636 + 5.2136)/(6·216000) = 0.1151 ppm:
+
+    >>> round(scale_factor_table_u_rel([60, 120, 180, 240, 300, 360], 0.1) / PPM, 4)
+    0.1151
+    """
+    c = np.array(list(scale_factor_table_coefficients(theta_deg, stop_deg, zero_deg).values()))
+    return float(table_mpe_arcsec) / math.sqrt(3.0) * float(np.sqrt(np.sum(c * c)))
 
 
 def _rounds(k_i, theta_deg, table_mpe_arcsec: float):
@@ -833,39 +888,42 @@ def scale_factor_table_correction(k_i, theta_deg, stop_deg, zero_deg, calibratio
     return TableCorrection(k_c, u, dof, calibration.describe()), []
 
 
-def _scale_factor_table_line_of(k_i, th, table_mpe_arcsec: float, u_tab, table_correction,
-                                table_note: str) -> _Line:
-    """K's table line (:func:`scale_factor_budget`): the calibration's where the table is
-    calibrated, else the larger of the MPE's two readings (:func:`scale_factor_table_line`)."""
-    n = k_i.size
-    tl = scale_factor_table_line(th, table_mpe_arcsec)
-    kbar = abs(float(np.mean(k_i)))
-    both = (f"the standard's reading (independent stops, rectangular) u = "
-            f"{tl.u_rel_standard / PPM:.3g} ppm; one periodic error at the bound, worst order "
-            f"{tl.order}, arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm; the larger certified")
-    if table_note:
-        both += f"; {table_note}"
+def _scale_factor_table_lines_of(k_i, th, table_mpe_arcsec: float, table_correction,
+                                 table_note: str, stop_deg=None, zero_deg=None) -> list:
+    """K's table lines (:func:`scale_factor_budget`): the calibration's where the table is
+    calibrated, else one line per position the 7.1 rounds reach, its error rectangular ±MPE
+    (A.4.1; JCGM 100 4.3.7), the positions independent and the common zero's error shared
+    by every round (:func:`scale_factor_table_coefficients`): ``P_K<position>``."""
     if table_correction is not None:
         tc_ = table_correction
-        return _Line(from_u("P_Kc", 0.0, tc_.u_counts_per_deg, dof=tc_.dof, type="B",
-                            source=f"table angle error at the stops corrected by the "
-                                   f"{tc_.source}; u of the correction propagated "
-                                   f"(stops − zeroing positions)"),
-                     "table angle (calibrated table)", True,
-                     "A.4.1 applied to 7.1, calibrated table")
-    if tl.certified == "harmonic":
-        return _Line(type_b("P_K", 0.0, kbar * tl.half_width_rel_harmonic, "arcsine",
-                            source=f"table angle error at the stops, MPE "
-                                   f"±{table_mpe_arcsec:g}″, one periodic error: {both}"),
-                     "table angle (one periodic error, worst order)", True,
-                     "A.4.1 applied to 7.1")
-    # the standard's reading with each round's own K_i: (1/n)√Σ(K_i u(θ)/θ_i)²
-    u_std = float(np.sqrt(np.sum(u_tab ** 2))) / n
-    return _Line(_as_dist(from_u("P_K", 0.0, u_std, type="B",
-                                 source=f"table angle error at the stops, MPE "
-                                        f"±{table_mpe_arcsec:g}″ rectangular, "
-                                        f"independent stops: {both}"), "rectangular"),
-                 "table angle", True, "A.4.1 applied to 7.1")
+        return [_Line(from_u("P_Kc", 0.0, tc_.u_counts_per_deg, dof=tc_.dof, type="B",
+                             source=f"table angle error at the stops corrected by the "
+                                    f"{tc_.source}; u of the correction propagated "
+                                    f"(stops − zeroing positions)"),
+                      "table angle (calibrated table)", True,
+                      "A.4.1 applied to 7.1, calibrated table")]
+    kbar = abs(float(np.mean(k_i)))
+    tl = scale_factor_table_line(th, table_mpe_arcsec)
+    beside = (f"beside, not stated: one periodic error at the bound, worst order {tl.order}, "
+              f"arcsine u = {tl.u_rel_harmonic / PPM:.3g} ppm (a bound for curves with "
+              f"sum |a_h| <= MPE)")
+    if table_note:
+        beside += f"; {table_note}"
+    coeffs = scale_factor_table_coefficients(th, stop_deg, zero_deg)
+    u_rel = scale_factor_table_u_rel(th, table_mpe_arcsec, stop_deg, zero_deg)
+    out = []
+    for pos, c in coeffs.items():
+        role = "the rounds' common zero" if c < 0 else "a stop"
+        out.append(_Line(type_b(f"P_K{pos:g}", 0.0, kbar * abs(c) * table_mpe_arcsec,
+                                "rectangular",
+                                source=f"table angle error at {pos:g} deg ({role}), MPE "
+                                       f"±{table_mpe_arcsec:g}″ rectangular, positions "
+                                       f"independent, the zero shared by every round; the "
+                                       f"table's lines together u = {u_rel / PPM:.3g} ppm; "
+                                       + beside),
+                         f"table angle at {pos:g}°", True, "A.4.1 applied to 7.1"))
+    return out
+
 
 def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         k: float | None = None,
@@ -873,17 +931,21 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
                         chamber: ChamberLine | None = None,
                         tilt_correction=None,
                         table_correction: TableCorrection | None = None,
-                        table_note: str = "") -> ItemUncertainty:
+                        table_note: str = "", stop_deg=None,
+                        zero_deg=None) -> ItemUncertainty:
     """u(K) of K = mean K_i, K_i = C_i/θ_i (draft 7.1), counts/°.
 
     Components: the scatter of the n rounds (Type A, s(K_i)/√n, ν = n − 1, 7.1); the
-    table's angle error at the stops ``P_K`` (A.4.1 applied to 7.1), the larger of two
-    readings (:func:`scale_factor_table_line`): the standard's, each stop independent and
-    rectangular with the table MPE, u = (1/n)√Σ(K_i u(θ)/θ_i)², and the physical one, the
-    table's one periodic error at the MPE bound and the worst order (arcsine; the stops'
-    errors correlated), both stated in the line's source; the count quantisation,
-    triangular ±1 count (two floored counter readings): u = (1/n)√Σ(u_C/θ_i)². The
-    Type A scatter also holds the random part of the other two (conservative).
+    table's angle errors at the positions the rounds reach, one line ``P_K<position>`` each
+    (A.4.1 applied to 7.1, :func:`scale_factor_table_coefficients`): round i turns the
+    table from its zero z_i to its stop s_i with the error e(s_i) − e(z_i), each position's
+    error is known only by the MPE, so rectangular ±MPE (JCGM 100 4.3.7) and independent of
+    the other positions', and the common zero's error is one quantity shared by every
+    round (its coefficient −(1/n)Σ 1/θ_i; the 360° stop is the zero, e(360°) = e(0°));
+    ``stop_deg``/``zero_deg``: the rounds' positions (None: zeroed at 0°, stopped at θ_i).
+    The periodic reading (:func:`scale_factor_table_line`) is named in the lines' source. The
+    count quantisation, triangular ±1 count: u = (1/n)√Σ(u_C/θ_i)². The Type A scatter also
+    holds the table's per-visit scatter (conservative).
 
     ``tilt_bias_arcsec_per_deg`` (A_K of :func:`gonio.specs.ogam_draft.budget_extra.scale_factor_tilt_bias`,
     at the tilt bound of A.1): the sensing plane tilted by ψ against the table couples the
@@ -915,15 +977,19 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     --------
     The draft's six rounds 60°…360° with K_i = 3600.1, 3600.3, 3600.2, 3600.2, 3600.1,
     3600.3 counts/°, table MPE 0.1″ (A.4.1): s(K_i) = 0.0894, s/√6 = 0.0365;
-    table, the standard's reading: 3600.2·(0.1/√3)/1296000 · √(Σ(360/θ_i)²)/6 =
-    1.604e-4·√53.69/6 = 1.96e-4; the one periodic error at the bound (worst order 3,
-    :func:`scale_factor_table_line`): 3600.2·0.2366 ppm/√2 = 6.02e-4, the larger, certified;
-    quantisation (1/√6)/6·√Σ1/θ_i² = 0.0680·0.02034 = 0.00138 counts/°.
+    the table at the zero: 3600.2·(0.1/√3)·(Σ_{60°…300°} 1/θ_k)/6 = 3600.2·0.05774·
+    2.2833/1296000 = 3.66e-4, at 60°: 3600.2·0.05774/1296000 = 1.60e-4, at 120° half that,
+    …; together 3600.2·0.1151 ppm = 4.14e-4 counts/°; quantisation (1/√6)/6·√Σ1/θ_i² =
+    0.0680·0.02034 = 0.00138 counts/°.
 
     >>> b = scale_factor_budget([3600.1, 3600.3, 3600.2, 3600.2, 3600.1, 3600.3],
     ...                         [60, 120, 180, 240, 300, 360], 0.1)
-    >>> [round(c.u, 5) for c in b.components]
-    [0.03651, 0.0006, 0.00138]
+    >>> [(c.symbol, round(c.u, 5)) for c in b.components][:3]
+    [('s_K', 0.03651), ('P_K0', 0.00037), ('P_K60', 0.00016)]
+    >>> len(b.components), round(b.components[-1].u, 5)
+    (8, 0.00138)
+    >>> round(math.sqrt(sum(c.u ** 2 for c in b.components[1:7])), 6)
+    0.000414
     >>> round(b.u_c, 4), b.nu_eff > 4, b.k_source
     (0.0365, True, 'welch-satterthwaite')
     """
@@ -932,15 +998,15 @@ def scale_factor_budget(k_i, theta_deg, table_mpe_arcsec: float, *,
     if table_correction is not None:
         k_i = np.asarray(table_correction.k_i_counts_per_deg, dtype=float)
     n = k_i.size
-    u_tab, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
+    _, u_q = _single_round_u(k_i, th, table_mpe_arcsec)
     lines = []
     if n >= 2:
         s = float(np.std(k_i, ddof=1))
         lines.append(_Line(from_u("s_K", 0.0, s / math.sqrt(n), dof=n - 1, type="A",
                                   source=f"scatter of the {n} rounds' K_i, s/√n"),
                            "scatter of K_i", False, "7.1"))
-    lines.append(_scale_factor_table_line_of(k_i, th, table_mpe_arcsec, u_tab,
-                                             table_correction, table_note))
+    lines.extend(_scale_factor_table_lines_of(k_i, th, table_mpe_arcsec, table_correction,
+                                              table_note, stop_deg, zero_deg))
     lines.append(_Line(from_u("q_K", 0.0, float(np.sqrt(np.sum(u_q ** 2))) / n, type="B",
                               source="count quantisation, ±1 count triangular per C_i"),
                        "count quantisation", True, "7.1 (pulse count)"))

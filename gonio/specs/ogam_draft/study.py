@@ -98,9 +98,9 @@ CASES = {
                "(azimuth uniform): a tilt the laboratory bounds but does not know, so the "
                "budget's tilt terms are exercised, not held at one value",
     "typeb": "every Type B effect of the set-up drawn per trial from what the laboratory "
-             "knows of it: the tilt over the A.1 disc (azimuth uniform), the table's periodic "
-             "positioning errors at uniform phases with their sizes drawn (the amplitudes' "
-             "sum uniform within the MPE less the scatter's 3 sigma, A.4.1), its wobble "
+             "knows of it: the tilt over the A.1 disc (azimuth uniform), the table's "
+             "positioning error at every 30 deg position uniform within the MPE less the "
+             "scatter's 3 sigma, independent from position to position (A.4.1), its wobble "
              "phase and axis set-up azimuth uniform, its rate error "
              "uniform within Table 1's 1e-5, the chamber's deviation from the reference "
              "temperature uniform within Table 2's tolerance, the gyro's scale-factor "
@@ -296,12 +296,17 @@ def k_tilt_trial(bench: Bench, protocol: Protocol, seed: int,
     return float(iu.value) - kt, float(iu.u_c), float(iu.k * iu.u_c)   # K as stated
 
 
-def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
+def draw_type_b(bench: Bench, protocol: Protocol, seed: int, table_errors: str = "positions"
+                ) -> Bench:
     """``bench`` with its set-up's Type B effects drawn from the trial's seed, each from what
     a laboratory knows of it (a bound, not the value): the tilt uniform over the disc ψ ≤
-    the A.1 bound (ψ = bound·√u, azimuth uniform); the table's periodic positioning errors
-    with the bench's amplitudes (their sum and 3σ of the scatter within the MPE, A.4.1) at
-    uniform phases; the wobble's phase and the axis set-up error's azimuth uniform; the
+    the A.1 bound (ψ = bound·√u, azimuth uniform); the table's positioning error at each
+    position the programme visits (every :data:`TABLE_GRID_DEG`) uniform within what the MPE
+    leaves beside the scatter's 3σ, independent from position to position
+    (:func:`drawn_position_errors`, ``table_errors="positions"``: what a laboratory that
+    knows its table by the MPE knows, the distribution K's and E's table lines take, A.4.1,
+    JCGM 100 4.3.7), or (``table_errors="shape"``) the bench's periodic errors at uniform
+    phases with their sizes drawn as below; the wobble's phase and the axis set-up error's azimuth uniform; the
     table's relative rate error uniform within Table 1's ±1e-5
     (:data:`TABLE_RATE_ERROR_BOUND`); the chamber's deviation from the reference temperature
     uniform within Table 2's tolerance (``conditions.temperature_tolerance_c``, ±1 °C), which
@@ -330,8 +335,13 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     True
     >>> abs(d.instrument.sf_temperature_coeff_ppm_per_c) <= 0.1      # the RLG's bound
     True
-    >>> sum(abs(h.amplitude_arcsec) for h in d.table.positioning_harmonics) <= 0.1 - 3 * 0.01
-    True
+    >>> from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+    >>> e = harmonic_sum_arcsec(np.arange(0.0, 360.0, 30.0), d.table.positioning_harmonics)
+    >>> bool(np.ptp(e) <= 2 * (0.1 - 3 * 0.01)), len(d.table.positioning_harmonics)
+    (True, 6)
+    >>> s = draw_type_b(b, p, 4, table_errors="shape").table.positioning_harmonics
+    >>> sum(abs(h.amplitude_arcsec) for h in s) <= 0.1 - 3 * 0.01, len(s)
+    (True, 5)
     >>> 0.0 <= d.instrument.bias_instability_dph <= 0.005 / math.sqrt(2)
     True
     """
@@ -355,7 +365,49 @@ def draw_type_b(bench: Bench, protocol: Protocol, seed: int) -> Bench:
     table = replace(table, positioning_harmonics=_harmonic_sizes(table, float(rng.uniform())))
     sigma_dph = float(rng.uniform()) * float(protocol.annex_a.zero_stability_dph) / math.sqrt(2.0)
     inst = replace(inst, bias_instability_dph=sigma_dph)
+    if table_errors == "positions":      # its own stream: every draw above keeps its value
+        table = replace(table, positioning_harmonics=drawn_position_errors(table, seed))
+    elif table_errors != "shape":
+        raise ValueError(f"table_errors must be 'positions' or 'shape', not {table_errors!r}")
     return replace(out, instrument=inst, table=table, chamber_deviation_c=dev_c)
+
+
+#: The step of the table positions the study draws errors at: the built-in programme's
+#: positions (7.1's stops, 7.4's points, the tilt estimate's rests) are all multiples of 30°.
+TABLE_GRID_DEG = 30.0
+
+
+def drawn_position_errors(table, seed: int) -> tuple:
+    """The table's positioning error at every multiple of :data:`TABLE_GRID_DEG` drawn
+    uniform within ± what the MPE leaves beside the scatter's 3σ (A.4.1: |error| ≤ MPE),
+    each position independent of the others — the state of knowledge of a laboratory that
+    knows its table by the MPE alone (JCGM 100 4.3.7), the distribution K's table lines
+    (one per position, the zero shared) and E's (``budget_extra.table_line_u``) take —
+    given as the harmonics (orders 1 … N/2, N positions) of the trigonometric polynomial
+    through the drawn values less their mean (a constant error cancels in every angle
+    turned, e(stop) − e(zero)). Between the grid's positions the table's error is that
+    polynomial (no item of the built-in programme stops there).
+
+    >>> from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
+    >>> t = load_bench("rlg").table
+    >>> hs = drawn_position_errors(t, 3)
+    >>> x = np.arange(0.0, 360.0, 30.0)
+    >>> v = np.random.default_rng([3, 0x7AB1E]).uniform(-0.07, 0.07, 12)
+    >>> bool(np.allclose(harmonic_sum_arcsec(x, hs), v - v.mean(), atol=1e-15))
+    True
+    >>> [h.order for h in hs], drawn_position_errors(t, 3) == hs
+    ([1, 2, 3, 4, 5, 6], True)
+    """
+    room = max(float(table.mpe_arcsec) - 3.0 * float(table.positioning_random_arcsec), 0.0)
+    n = int(round(360.0 / TABLE_GRID_DEG))
+    v = np.random.default_rng([int(seed), 0x7AB1E]).uniform(-room, room, n)
+    spec = np.fft.rfft(v)
+    out = []
+    for k in range(1, n // 2 + 1):
+        amp = abs(spec[k]) * (1.0 if 2 * k == n else 2.0) / n
+        # a_k cos(kx + φ) = a_k sin(kx + φ + 90°)
+        out.append(Harmonic(k, float(amp), float((math.degrees(np.angle(spec[k])) + 90.0) % 360.0)))
+    return tuple(out)
 
 
 def _harmonic_sizes(table, u: float) -> tuple:
@@ -436,7 +488,7 @@ def trial_bench(case: str, bench: Bench, protocol: Protocol, seed: int) -> Bench
     if case in ("typeb", "tablecal", "tablecalpart", "tablecaldof"):
         return draw_type_b(bench, protocol, seed)
     if case == "worsttable":
-        d = draw_type_b(bench, protocol, seed)
+        d = draw_type_b(bench, protocol, seed, table_errors="shape")
         return replace(d, table=replace(d.table,
                                         positioning_harmonics=_harmonic_sizes(d.table, 1.0)))
     if case == "worst":
