@@ -132,7 +132,8 @@ def test_certified_u_is_the_largest_points_u(tilt_only):
 
 
 def test_study_draws_table_sizes_and_drift_within_their_bounds():
-    """typeb draws the harmonics' sum uniform in [0, MPE − 3σ] (shape kept) and the bias
+    """The bench-shape draws (``table_errors="shape"``, worsttable's before its sizes are put at
+    the bound) take the harmonics' sum uniform in [0, MPE − 3σ] (shape kept) and the bias
     instability uniform in [0, 0.005/√2] °/h: a Kolmogorov–Smirnov test against the
     uniform, and both reach near their bounds."""
     from scipy import stats
@@ -144,7 +145,7 @@ def test_study_draws_table_sizes_and_drift_within_their_bounds():
              for h in t.positioning_harmonics]
     sums, sig = [], []
     for s in range(300):
-        d = draw_type_b(b, p, s)
+        d = draw_type_b(b, p, s, table_errors="shape")    # worsttable's draws (typeb: per position)
         hs = d.table.positioning_harmonics
         assert [h.amplitude_arcsec / hs[0].amplitude_arcsec for h in hs] == \
             pytest.approx(ratio)

@@ -16,6 +16,7 @@ import pytest
 
 from gonio.analysis.coverage import clopper_pearson
 from gonio.specs.ogam_draft.bench import load_bench, run_session
+from gonio.specs.ogam_draft.bench.instrument import harmonic_sum_arcsec
 from gonio.specs.ogam_draft.readings import Readings
 from gonio.specs.ogam_draft.calibration import analyse
 from gonio.specs.ogam_draft.item_coverage import disc_model_u, item_record, scale_factor_truth
@@ -222,9 +223,21 @@ def test_type_b_draws_follow_their_stated_distributions(proto):
                  [x.table.axis_setup_azimuth_deg for x in d]):
         a = np.radians(vals)
         assert abs(np.mean(np.cos(a))) < 0.05 and abs(np.mean(np.sin(a))) < 0.05
-    # the harmonics' sizes drawn within what the MPE leaves beside the scatter's 3σ (A.4.1)
-    assert all(x.table.error_bound_arcsec() <= b.table.mpe_arcsec + 1e-12 for x in d[:50])
-    assert len({round(x.table.error_bound_arcsec(), 9) for x in d[:50]}) == 50
+    # the table's error at every 30° position drawn uniform within what the MPE leaves
+    # beside the scatter's 3σ (A.4.1), independent from position to position (the drawn
+    # values less their mean: a constant cancels in every angle turned)
+    room = b.table.mpe_arcsec - 3 * b.table.positioning_random_arcsec
+    x = np.arange(0.0, 360.0, 30.0)
+    e = np.array([harmonic_sum_arcsec(x, t.table.positioning_harmonics) for t in d[:1000]])
+    assert np.ptp(e, axis=1).max() <= 2 * room
+    n = x.size                       # var of a uniform less the mean of n: (1 − 1/n)·room²/3
+    assert np.var(e) == pytest.approx((1 - 1 / n) * room ** 2 / 3, rel=0.05)
+    r = np.corrcoef(e[:, 1], e[:, 2])[0, 1]               # neighbours: −1/(n − 1) after the mean
+    assert abs(r + 1 / (n - 1)) < 0.08
+    # the bench's shape at its sizes (worsttable's draws): within the MPE, every size its own
+    s = [draw_type_b(b, proto, k, table_errors="shape") for k in range(50)]
+    assert all(t.table.error_bound_arcsec() <= b.table.mpe_arcsec + 1e-12 for t in s)
+    assert len({round(t.table.error_bound_arcsec(), 9) for t in s}) == 50
     r = np.array([x.table.rate_error_rel for x in d])
     assert np.abs(r).max() <= TABLE_RATE_ERROR_BOUND
     assert np.var(r) == pytest.approx(TABLE_RATE_ERROR_BOUND ** 2 / 3, rel=0.08)
