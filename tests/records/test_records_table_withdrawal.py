@@ -208,9 +208,14 @@ def test_withdrawal_two_people_frozen_and_in_force_again(store, computed_folder)
     by_cert = {r["entry"].certificate: r for r in rows}
     assert by_cert["TC-2"]["state"].startswith("withdrawn on ")
     assert by_cert["TC-2"]["affected"] == [used.id] and by_cert["TC-1"]["affected"] == []
-    # the calibration made with it keeps it, sealed as signed
+    # the calibration made with it keeps it, sealed as signed: reviewed and approved (its
+    # certificate number reserved, issuing) with that entry, nothing chosen again
     assert services.calibration(store, used.id).table_calibration_id == ids["TC-2"]
     assert services.seal(store, used.id) == signed
+    services.review(store, rev, used.id, accept=True, shown_seal=signed)
+    approved = services.approve(store, rev2, used.id, shown_seal=signed)
+    assert (approved.status, approved.approved_seal, approved.table_calibration_id) == \
+        ("issuing", signed, ids["TC-2"])
     with store.session() as s:
         ev = s.scalar(select(AuditEvent).where(AuditEvent.action == "withdraw"))
         assert (ev.username, ev.entity, ev.entity_id) == ("rev2", "table-calibration",
