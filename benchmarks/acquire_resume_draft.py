@@ -22,16 +22,16 @@ runs this script at ``--speed 250``; tests/test_instruments.py runs the same pat
 small programme.
 
 Every ``gonio`` process it starts dies with it: each is asked (Linux ``prctl``
-``PR_SET_PDEATHSIG``) to be sent SIGTERM when this script ends, however it ends (a test's
-timeout kills it with SIGKILL), and on an ordinary exit, SIGINT or SIGTERM the script stops
-them itself (SIGINT, then SIGKILL after 30 s).
+``PR_SET_PDEATHSIG``, :func:`gonio.instruments.child.dies_with_parent`) to be sent SIGTERM
+when this script ends, however it ends (a test's timeout kills it with SIGKILL), and on an
+ordinary exit, SIGINT or SIGTERM the script stops them itself (SIGINT, then SIGKILL after
+30 s).
 """
 
 from __future__ import annotations
 
 import argparse
 import atexit
-import ctypes
 import json
 import math
 import os
@@ -44,27 +44,12 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+from gonio.instruments.child import dies_with_parent  # noqa: E402
+
 PROTOCOL = ROOT / "protocols" / "ogam-draft.toml"
-#: prctl(2)'s option: the signal a process gets when its parent ends
-PR_SET_PDEATHSIG = 1
 #: the gonio processes started and not yet waited for
 CHILDREN: list[subprocess.Popen] = []
-
-
-def _die_with_parent(parent: int):
-    """The ``preexec_fn`` of a child (no threads in this script, so it is safe): SIGTERM to
-    the child when ``parent`` ends (Linux; elsewhere nothing: the ``atexit`` stop remains)."""
-    def preexec() -> None:
-        if not sys.platform.startswith("linux"):
-            return
-        try:
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
-        except (OSError, AttributeError):
-            return
-        if os.getppid() != parent:       # the parent ended before the request took
-            os.kill(os.getpid(), signal.SIGTERM)
-    return preexec
 
 
 def stop(p: subprocess.Popen, timeout_s: float = 30.0) -> None:
@@ -92,7 +77,7 @@ def _terminated(signum, frame):
 def gonio(*args: str, **kw) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
     p = subprocess.Popen([sys.executable, "-m", "gonio", *args], env=env,
-                         preexec_fn=_die_with_parent(os.getpid()), **kw)
+                         preexec_fn=dies_with_parent(), **kw)    # no thread here: safe
     CHILDREN.append(p)
     return p
 
@@ -142,7 +127,6 @@ def tilt_lines(d: Path) -> int:
     """Print the in-situ tilt estimate of both files (ψ, α with U95 = k95·u, ν = N − 3) and
     how K was stated; 1 when the two ψ or α differ by more than k95·√(u_a² + u_s²) or a
     calibration did not correct K by the measured tilt, else 0."""
-    sys.path.insert(0, str(ROOT))
     from gonio.specs.ogam_draft.readings import read_readings
     from gonio.specs.ogam_draft.tilt_estimate import tilt_estimate_from_readings
 

@@ -32,6 +32,7 @@ from gonio.specs.ogam_draft.acquisition import (Block, Step, acquire, plan_progr
                                                 read_previous, resume_plan)
 from gonio.specs.ogam_draft.served import ServedBench, gyro_instrument, serve_bench, table_instrument
 from gonio.units import deg_to_arcsec
+from tests.served import start_served
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "small-protocol.toml"
@@ -369,10 +370,8 @@ def test_resume_keeps_complete_rounds_and_retakes_shared_zeroings(tmp_path):
 
 
 def test_bench_serve_command_serves_on_loopback(tmp_path):
-    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    proc = subprocess.Popen([sys.executable, "-m", "gonio", "bench", "serve", "--bench", "fog",
-                             "--table-port", "0", "--gyro-port", "0", "--speed", "50"],
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = start_served("--bench", "fog", "--table-port", "0", "--gyro-port", "0", "--speed", "50",
+                        stderr=subprocess.PIPE)
     try:
         lines = [proc.stdout.readline().strip() for _ in range(2)]
         assert lines[0].startswith("table: TCPIP0::127.0.0.1::") and lines[0].endswith("::SOCKET")

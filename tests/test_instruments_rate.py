@@ -34,7 +34,7 @@ from gonio.instruments.scpi import Faults, scpi_match
 from gonio.instruments.served_rate import ServedRateBench, rate_instruments, serve_rate_bench
 from gonio.protocol.programme import Segment
 from gonio.specs.jjf1535.acquisition import programme
-from tests.served import stop_served, wait_held
+from tests.served import start_served, stop_served, wait_held
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = 3
@@ -144,10 +144,8 @@ def test_sigint_keeps_the_records_and_resume_completes(bench, proto, simulated, 
     SIGINT comes mid-programme whatever the machine's load; the resume's connection lets
     the clock run on."""
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    srv = subprocess.Popen([sys.executable, "-m", "gonio", "bench", "serve", "--bench", BENCH,
-                            "--table-port", "0", "--gyro-port", "0", "--speed", str(SPEED),
-                            "--seed", str(SEED), "--fault", f"hold:{HOLD_AT}"],
-                           env=env, stdout=subprocess.PIPE, text=True)
+    srv = start_served("--bench", BENCH, "--table-port", "0", "--gyro-port", "0", "--speed",
+                       str(SPEED), "--seed", str(SEED), "--fault", f"hold:{HOLD_AT}")
     try:
         res = dict(srv.stdout.readline().strip().split(": ", 1) for _ in range(4))
         out = tmp_path / "acq"

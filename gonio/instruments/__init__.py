@@ -5,6 +5,7 @@
 ``acquisition``  the goniometer's angle/rate acquisition module and its driver
 ``served``       the virtual bench served as those instruments (``gonio bench serve``)
 ``acquire``      a protocol's programme run on the instruments (``gonio acquire``)
+``child``        a served bench or an acquisition started by a script, ended with it
 
 docs/instruments.md says how a laboratory connects its own controller and module.
 """

@@ -8,8 +8,6 @@ from __future__ import annotations
 import datetime as dt
 import html as html_module
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -18,7 +16,7 @@ from sqlalchemy import select
 from gonio.errors import GonioError
 from gonio.records import bench, services, worker
 from gonio.records.models import AuditEvent, CalibrationFile, ResultItem
-from tests.served import stop_served
+from tests.served import start_served, stop_served
 
 from .test_web_security import app, csrf_of, login  # noqa: F401  (the app fixture)
 
@@ -29,9 +27,8 @@ SMALL_PROTOCOL = REPO / "tests" / "data" / "small-protocol.toml"
 @pytest.fixture
 def served_bench():
     """``gonio bench serve --bench rlg`` as a process: its two VISA resource strings."""
-    proc = subprocess.Popen([sys.executable, "-m", "gonio", "bench", "serve", "--bench", "rlg",
-                             "--table-port", "0", "--gyro-port", "0", "--speed", "200",
-                             "--seed", "3"], stdout=subprocess.PIPE, text=True)
+    proc = start_served("--bench", "rlg", "--table-port", "0", "--gyro-port", "0", "--speed",
+                        "200", "--seed", "3")
     try:
         yield dict(proc.stdout.readline().strip().split(": ", 1) for _ in range(2))
     finally:
