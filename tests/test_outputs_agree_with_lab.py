@@ -305,11 +305,13 @@ def test_the_legend_names_each_interval_and_its_clauses(issued):
         at = html.index(head)
         legend = html_lib.unescape(re.sub(r"<[^>]+>", "", html[at:html.index("</p>", at)]))
         for key, it in items.items():
-            assert it["clause"] in legend, (lang, key, it["clause"])
+            clause = it["clause"] if lang == "en" else \
+                it["clause"].replace(" (", "（").replace(")", "）")
+            assert clause in legend, (lang, key, clause)
             phrase = kinds.get(it["uncertainty"]["k_source"])
             if phrase:
                 assert phrase[n] in legend, (lang, key, phrase[n])
                 # the item's clause stands in the bracket after its kind's phrase
                 part = legend[legend.index(phrase[n]):]
-                bracket = re.search(r"[（(]([0-9., ()]+?)[)）](?:[;；.。]|$)", part)
-                assert bracket and it["clause"] in bracket.group(1), (lang, key, part[:300])
+                bracket = re.search(r"[（(]([0-9., ()（）]+?)[)）](?:[;；.。]|$)", part)
+                assert bracket and clause in bracket.group(1), (lang, key, part[:300])

@@ -202,7 +202,11 @@ def interval_legend(items: dict, L: dict) -> str:
             kinds.setdefault(kind, []).append(str(it.get("clause") or ""))
     if not kinds:
         return ""
-    sep = "；" if L["k_iv_head"].startswith("以") else "; "
+    zh = L["k_iv_head"].startswith("以")
+    sep = "；" if zh else "; "
+    if zh:                  # "7.3 (3.3)" in Chinese text: full-width brackets
+        kinds = {k: [c.replace(" (", "（").replace("(", "（").replace(")", "）") for c in v]
+                 for k, v in kinds.items()}
     parts = [L[f"k_iv_{k}"] + (L["k_iv_clauses"].format(c=", ".join(c for c in kinds[k] if c))
                                if any(kinds[k]) else "")
              for k in INTERVAL_KINDS if k in kinds]
