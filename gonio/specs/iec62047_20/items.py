@@ -261,7 +261,19 @@ def initial_sf_variation(ctx: Context) -> Item:
 
 def linearity(ctx: Context) -> Item:
     """IEC 62047-20 5.1.3.6 eqs (8), (9): L_i = [y_i − (a x_i + b)]/FullScale per point,
-    FullScale = y(CW max) − y(CCW max) measured; the characteristic max |L_i|, in %."""
+    FullScale = y(CW max) − y(CCW max) measured; the characteristic max |L_i|, in %.
+
+    A magnitude, stated by one interval: that of the extreme of magnitudes over the signed
+    points L_i (:func:`gonio.result.gum.max_magnitude_statement`, ≥ 95 % for every pattern
+    of the true L_i and any correlation between them), each point with its own budget — the
+    pooled noise of the point means through the line's residual / FullScale
+    (:func:`linearity_noise_sd`), the bias drift between the points (:func:`linearity_drift_sd`,
+    from the static record's noise fit) and the chamber's fluctuation × T_c,SF
+    (:func:`linearity_fluctuation_sd`). The value is the reading less the selection
+    midpoint (the largest of noisy |L_i| is raised by noise), within the interval; the
+    standard's reading max |L_i| is kept in the details (``max_abs_L_i_pct``), and the
+    GUM budget of the value at the largest point (its linearisation, value ± U, reached
+    below zero for a linear gyro) stays in the budget table only."""
     t, cl, un = "linearity (max |L_i|)", "5.1.3.6", "%"
     m = _miss(ctx, "scale_factor", "linearity", t, cl, un)
     if m:
@@ -272,33 +284,43 @@ def linearity(ctx: Context) -> Item:
     sd = 100 * linearity_noise_sd(c["x"], L, fs, u_pool)
     i = int(np.argmax(np.abs(L)))
     excess, m_sel = rg.selection_excess(100 * np.abs(L), sd)
-    terms = [from_u("L", 100 * abs(L[i]), 0.0),
-             from_u("noise", 0.0, float(sd[i]), dof=50,
-                    source="pooled noise of the point means through the line's residual / FullScale"),
-             type_b("noise_max", -excess, excess, "rectangular",
-                    source="selection excess of the largest |L_i| (midpoint ± c_m·σ/2 removed)")]
-    extra = {}
+    extra, u_dr, u_fl = {}, None, None
     try:        # the bias's drift between the points, from the static record's noise fit
-        u_dr = 100 * float(linearity_drift_sd(
-            c["x"], c["t"], fs, lambda dt: drift_u_dps(ctx, dt) * abs(ctx.a_base))[i])
-        terms.append(from_u("drift", 0.0, u_dr, type="B",
-                            source="bias drift between the points through the line's residual "
-                                   "/ FullScale (static record's noise fit)"))
-        extra["u_drift_pct"] = u_dr
+        u_dr = 100 * linearity_drift_sd(
+            c["x"], c["t"], fs, lambda dt: drift_u_dps(ctx, dt) * abs(ctx.a_base))
+        extra["u_drift_pct"] = float(u_dr[i])
     except (GonioError, IndexError, KeyError):
         pass                            # no static record: the drift is not known
     if ctx.has("sf_temperature"):      # T_c,SF known: the chamber's fluctuation moves K
-        u_fl = 100 * float(linearity_fluctuation_sd(
+        u_fl = 100 * linearity_fluctuation_sd(
             c["x"], c["t"], fs, ctx.a_base, sf_tc_rel(ctx) * ctx.chamber_fluctuation_c,
-            ctx.chamber_fluctuation_period_s)[i])
-        terms.append(from_u("fluct", 0.0, u_fl, type="B",
-                            source="chamber fluctuation (± amplitude, period) × T_c,SF "
-                                   "through the line's residual / FullScale"))
-        extra["u_fluctuation_pct"] = u_fl
-    u = gum(lambda v, *e: v + sum(e), terms)
-    return Item("linearity", t, cl, un, 100 * abs(float(L[i])) - excess, uncertainty=u, details={
+            ctx.chamber_fluctuation_period_s)
+        extra["u_fluctuation_pct"] = float(u_fl[i])
+
+    def terms(j, v0):       # the budget of point j's L_j (in %) about v0
+        out = [from_u("L", v0, 0.0),
+               from_u("noise", 0.0, float(sd[j]), dof=50,
+                      source="pooled noise of the point means through the line's residual / "
+                             "FullScale")]
+        if u_dr is not None:
+            out.append(from_u("drift", 0.0, float(u_dr[j]), type="B",
+                              source="bias drift between the points through the line's "
+                                     "residual / FullScale (static record's noise fit)"))
+        if u_fl is not None:
+            out.append(from_u("fluct", 0.0, float(u_fl[j]), type="B",
+                              source="chamber fluctuation (± amplitude, period) × T_c,SF "
+                                     "through the line's residual / FullScale"))
+        return out
+
+    u = gum(lambda v, *e: v + sum(e), terms(i, 100 * abs(L[i])) + [
+        type_b("noise_max", -excess, excess, "rectangular",
+               source="selection excess of the largest |L_i| (midpoint ± c_m·σ/2 removed)")])
+    pts = [gum(lambda v, *e: v + sum(e), terms(j, 100 * float(L[j]))) for j in range(L.size)]
+    value, u, iv = max_magnitude_statement(u, 100 * L, pts, 100 * abs(float(L[i])) - excess)
+    return Item("linearity", t, cl, un, value, uncertainty=u, details={
         "L_i_pct": 100 * L, "x_dps": c["x"], "full_scale": fs, "at_dps": float(c["x"][i]),
-        "selection_contenders": m_sel, "max_abs_L_i_pct": 100 * abs(float(L[i])), **extra})
+        "selection_contenders": m_sel, "max_abs_L_i_pct": 100 * abs(float(L[i])),
+        "selection_midpoint_pct": excess, **extra, **iv})
 
 
 def _residual_maker(x: np.ndarray) -> np.ndarray:
@@ -1175,7 +1197,10 @@ def bias_drift_after_power_on(ctx: Context) -> Item:
     power-on; the drift is max_t |Out(t) − Out,ave| over the record, Out(t) averaged over
     ``smoothing_samples`` (the literal max|Out| − Out,ave misbehaves for negative outputs);
     the largest over the records, °/s, less the noise's selection excess
-    (:func:`power_on_drift_budget`)."""
+    (:func:`power_on_drift_budget`). A magnitude (a largest absolute difference), stated by
+    one interval, that of its replicates' distribution (:func:`power_on_interval`): no k,
+    no ν; u_c the replicates' standard deviation. The standard's reading (the largest
+    difference itself) is kept in the details (``reading_dps``)."""
     t, cl, un = "bias drift after power on", "5.3.3.5", "°/s"
     m = _miss(ctx, "warmup", "bias_drift_after_power_on", t, cl, un)
     if m:
@@ -1240,6 +1265,8 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
     counts the bias drift the fit absorbs twice (in R* and in R̂*): u over-wide where the
     drift dominates. A value below 0 (records
     without a transient, whose reading is all excess) is stated as 0, the measurand's bound.
+    The statement is the 95 % interval of the same replicates (:func:`power_on_interval`),
+    not value ± U: a drift is non-negative, and V's distribution is skewed near 0.
     The truth this estimates is the transient's drift (the noise-free records); the bias
     drift is noise to it. The contenders (details) are the smoothed values within 2√2·σ of
     the largest (σ of one smoothed value less the reference)."""
@@ -1296,7 +1323,37 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
                            "removed"),
              from_u("fit_bias", resid, 0.0,
                     source="residual bias of the corrected reading, E*[V*] − R̂, removed")])
-    return max(vals[i] - excess - resid, 0.0), vals, u, m_sel
+    raw = vals[i] - excess - resid
+    lo, hi = power_on_interval(raw, v_star - v_star.mean())
+    value = max(raw, 0.0)
+    # one statement: the interval of the replicates' own distribution (JCGM 101 7.7), no k
+    u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
+                k_source=K_SOURCE_POWER_ON, interval=(lo, hi))
+    return value, vals, u, m_sel
+
+
+#: ``k_source`` of 5.3.3.5, stated by the interval of its replicates (:func:`power_on_interval`).
+K_SOURCE_POWER_ON = "replicates' distribution (pivot, 2.5 % each side)"
+
+
+def power_on_interval(raw: float, d: np.ndarray, p: float = 0.95) -> tuple[float, float]:
+    """The 95 % interval of 5.3.3.5's drift θ ≥ 0 from the corrected estimate ``raw`` (the
+    reading less the selection excess and the fit's residual bias; below 0 where the
+    reading is all excess) and ``d``, the replicates of the estimate's error (V* less its
+    mean): the pivot [raw − q_{1−α/2}(d), raw − q_{α/2}(d)], α = 1 − p, 2.5 % each side
+    (JCGM 101 7.7, as 5.4.5.3's floor rule), with raw taken at 0 where it is below
+    (θ ≥ 0: raising the estimate to the measurand's bound only raises the upper end) and
+    the lower end at 0 where it falls below (θ ≥ 0: no probability is lost).
+
+    >>> d = np.linspace(-1.0, 1.0, 401)
+    >>> [round(x, 3) for x in power_on_interval(2.0, d)]
+    [1.05, 2.95]
+    >>> [round(x, 3) for x in power_on_interval(-0.5, d)]
+    [0.0, 0.95]
+    """
+    q_lo, q_hi = np.quantile(np.asarray(d, float), [(1.0 - p) / 2.0, (1.0 + p) / 2.0])
+    est = max(float(raw), 0.0)
+    return max(est - float(q_hi), 0.0), est - float(q_lo)
 
 
 POWER_ON_MC_TRIALS = 400

@@ -220,7 +220,12 @@ def nonlinearity(ctx: Context) -> Item:
     see :func:`asymmetry`). Without the ripple term the study, its phase drawn per trial,
     covered 0.930 (z sd 1.07). The spread of the Q values K_n,m (ν = Q − 1) evaluates the
     same noise and is kept in the details only: with both in the budget the study's z had
-    sd 0.58."""
+    sd 0.58.
+
+    A magnitude, stated by one interval: that of the extreme of magnitudes over the signed
+    residuals (:func:`nonlinearity_points`, :func:`gonio.result.gum.max_magnitude_statement`),
+    not value ± U (the budget above, the value's, stays in the budget table); the value
+    within that interval."""
     title, clause, unit = "scale-factor nonlinearity K_n", "7.2.2", "1"
     miss = _need(ctx, "scale_factor", "nonlinearity", title, clause, unit)
     if miss:
@@ -247,11 +252,47 @@ def nonlinearity(ctx: Context) -> Item:
                      source=f"rate-table ripple ≤ {ctx.rate_table_ripple_rel:.2g}·|Ω| "
                             "(once per revolution, unknown phase) in the largest residual")]
     u = gum(lambda a, b, c, d: a + b + c + d, inputs)
+    # a magnitude (the largest |residual|): the interval of the extreme of magnitudes
+    x, pts = nonlinearity_points(ctx, cals, span, scale, nu)
+    value, u, iv = max_magnitude_statement(u, x, pts, value)
     return Item("nonlinearity", title, clause, unit, value, uncertainty=u,
-                details={"K_n_m": kn, "span_m": span, "reading": float(kn.mean()),
+                details={**iv, "K_n_m": kn, "span_m": span, "reading": float(kn.mean()),
                          "selection_excess": half, "contending_residuals_m": [m for _, m, _ in sel],
                          "spread_of_K_n_m": float(kn.std(ddof=1)) if kn.size > 1 else None,
                          "noise_from_means": u_model, "noise_scale": scale})
+
+
+def nonlinearity_points(ctx: Context, cals: list, span, scale: float, nu: float
+                        ) -> tuple[np.ndarray, list[Uncertainty]]:
+    """JJF 1535 7.2.2: the signed points whose largest magnitude K_n is, with their budgets,
+    for its interval (:func:`gonio.result.gum.max_magnitude_statement`): where the Q
+    calibrations share their rates, each rate's residual v_j,m/span_m averaged over m (the
+    nonlinearity's shape at that rate), u_j its noise σ_j,m·f (:func:`residual_noise_sd`,
+    f the spread's scale of :func:`nonlinearity_noise`, root mean square over m, over √Q,
+    ν as that noise term) and the rate table's ripple in that residual (root mean square
+    over m, not over √Q: every calibration meets it at the same phases); where the rates
+    differ (reading taken), every calibration's residuals as points, each with its own
+    noise and ripple — the interval then holds the largest over every calibration's rates."""
+    rows = []
+    for c, sp in zip(cals, span):
+        rip = jf.ripple_residual_sd(c["rates"], c["spans_s"], ctx.rate_table_ripple_rel,
+                                    c["fit"].K) / sp
+        rows.append((c["fit"].residuals / sp, scale * residual_noise_sd(c) / sp, rip))
+    if len({c["rates"].tobytes() for c in cals}) == 1:
+        v, sd, rip = (np.array([r[k] for r in rows]) for k in range(3))
+        Q = len(cals)
+        rows = [(v.mean(0), np.sqrt(np.mean(sd ** 2, 0)) / math.sqrt(Q),
+                 np.sqrt(np.mean(rip ** 2, 0)))]
+    x, pts = [], []
+    for v, sd, rip in rows:
+        for j in range(v.size):
+            x.append(float(v[j]))
+            pts.append(gum(lambda a, b, c: a + b + c, [
+                from_u("v_j", float(v[j]), 0.0, source="residual / span"),
+                from_u("noise", 0.0, float(sd[j]), dof=nu, source="noise of the residual"),
+                from_u("ripple", 0.0, float(rip[j]), type="B",
+                       source="rate-table ripple in the residual")]))
+    return np.array(x), pts
 
 
 def nonlinearity_noise(cals: list, span) -> tuple[float, float, float, float]:
@@ -326,7 +367,13 @@ def asymmetry(ctx: Context) -> Item:
     errors miss the slow noise, a drift along the ascending rates that tilts K+ and K− in
     opposite senses (the study's errors spread 1.1–1.2× the noise term). The two-direction
     fit's standard error is kept in the details: its residuals are mostly the
-    nonlinearity's shape, and with it the study's z had sd 0.43."""
+    nonlinearity's shape, and with it the study's z had sd 0.43.
+
+    A magnitude, stated by one interval: that of |μ| from the mean of the signed K_a,m with
+    the same budget (the spread that of the signed values;
+    :func:`gonio.result.gum.max_magnitude_statement`, one point: the two-sided interval
+    folded at 0), not value ± U, which reached below zero for a symmetric gyro. The value
+    is eq (9)'s mean of |K_a,m| (``reading`` in the details) within that interval."""
     title, clause, unit = "scale-factor asymmetry K_a", "7.2.3", "1"
     miss = _need(ctx, "scale_factor", "asymmetry", title, clause, unit)
     if miss:
@@ -349,8 +396,17 @@ def asymmetry(ctx: Context) -> Item:
         inputs.append(from_u("s_Ka", 0.0, float(ka.std(ddof=1) / math.sqrt(Q)), dof=Q - 1,
                              source="spread of K_a,m"))
     u = gum(lambda a, *d: a + sum(d), inputs)
+    # a magnitude |K+ − K−|/K̄: the interval of |μ| from the signed mean (one point) with
+    # the same budget, the spread that of the signed K_a,m
+    signed = np.array([c["asym"].signed for c in cals])
+    pt = gum(lambda a, *d: a + sum(d), [from_u("K_a,signed", float(signed.mean()), 0.0)]
+             + inputs[1:3] + ([from_u("s_Ka", 0.0, float(signed.std(ddof=1) / math.sqrt(Q)),
+                                      dof=Q - 1, source="spread of the signed K_a,m")]
+                              if Q > 1 else []))
+    value, u, iv = max_magnitude_statement(u, [float(signed.mean())], [pt], float(ka.mean()))
     se = float(np.mean([c["se_K"] for c in cals])) * 2.0 / abs(ctx.K) / math.sqrt(Q)
-    return Item("asymmetry", title, clause, unit, float(ka.mean()), uncertainty=u, details={
+    return Item("asymmetry", title, clause, unit, value, uncertainty=u, details={
+        **iv, "reading": float(ka.mean()), "signed_mean": float(signed.mean()),
         "K_a_m": ka, "signed_m": [c["asym"].signed for c in cals],
         "K_pos_m": [c["asym"].K_pos for c in cals], "K_neg_m": [c["asym"].K_neg for c in cals],
         "fit_standard_error": se})
