@@ -8,7 +8,9 @@ The reading is a maximum over 2 × 90 smoothed values, so noise raises it. The m
 contend (a transient that has died away): at the study bench's signal-to-noise ratio the
 value read +0.55…+1.1 u_c high with z sd 0.35–0.45. The excess is now the parametric
 bootstrap of the fitted records (c + A·e^(−t/τ) plus the record's noise), and u the
-corrected estimate's spread in the same replicates.
+corrected estimate's spread in the same replicates. The statement is the 95 % interval of
+the same replicates (a pivot, 2.5 % each side, its lower end at or above 0), and a hit is
+the truth inside it.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from gonio.specs.iec62047_20 import items as I
 
 def _study(a_dps: float, tau_s: float, trials: int, seed: int, sigma_dps: float = 0.01,
            rrw_dps_sqrt_s: float = 0.0):
-    """z = (value − truth)/u_c and the U hits of :func:`power_on_drift_budget` over two
+    """z = (value − truth)/u_c and the interval's hits of :func:`power_on_drift_budget` over two
     power-ons of 900 samples at 0.1 s, smoothing 10, reference 60 samples; white noise
     ``sigma_dps`` per sample and a rate random walk of ``rrw_dps_sqrt_s`` (given to the
     budget as its E[K²])."""
@@ -43,13 +45,18 @@ def _study(a_dps: float, tau_s: float, trials: int, seed: int, sigma_dps: float 
         val, vals, u, m = I.power_on_drift_budget(recs, nr, lambda sep: 0.0, coef)
         assert max(vals) >= val >= 0.0 and 1 <= m <= 180
         z.append((val - truth) / u.u_c)
-        hits += abs(val - truth) <= u.U
+        lo, hi = u.interval              # the statement: the replicates' 95 % interval
+        assert u.k is None and 0.0 <= lo <= val <= hi
+        hits += lo <= truth <= hi
     return np.array(z), hits
 
 
 @pytest.mark.parametrize("a_dps,tau_s", [(1.0, 300.0), (1.0, 30.0)])
 def test_power_on_drift_budget_with_transient(a_dps, tau_s):
-    z, hits = _study(a_dps, tau_s, 100, seed=int(tau_s))
+    """400 trials: the first 100 of seed 300 hold the truth in 88 intervals (value ± 1.96 u_c:
+    91; the earlier ± t₉₅(50)·u_c passed them), a run of high values (z sd 1.18 there); the
+    400 give 380 for both (0.950, z +0.15, sd 1.00), fresh seeds 1 and 2: 384 and 382."""
+    z, hits = _study(a_dps, tau_s, 400, seed=int(tau_s))
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert abs(z.mean()) < 0.3, z.mean()
     assert 0.7 <= z.std() <= 1.3, z.std()
