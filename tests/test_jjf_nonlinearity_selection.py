@@ -38,7 +38,8 @@ def _ctx(means_q, u_q):
 
 
 def _study(cubic: float, sigma: float, trials: int, seed: int, slow: float = 0.0):
-    """z of the item and of eq (6)'s reading, and the hits of U, over ``trials`` sets of
+    """z of the item and of eq (6)'s reading, and the hits of its interval (the statement
+    since K_n is stated by the interval of the extreme of magnitudes), over ``trials`` sets of
     Q = 3 calibrations (5 samples per rate point, each of standard deviation σ√5; with
     ``slow``, each point's mean also carries a slow-noise offset of standard deviation
     slow·σ, common to its samples, which their standard deviation does not show)."""
@@ -53,7 +54,9 @@ def _study(cubic: float, sigma: float, trials: int, seed: int, slow: float = 0.0
         u = it.uncertainty
         z.append((it.value - truth) / u.u_c)
         z_read.append((it.details["reading"] - truth) / u.u_c)
-        hits += abs(it.value - truth) <= u.U
+        lo, hi = u.interval        # the statement: the interval of the extreme of magnitudes
+        assert u.k is None and 0.0 <= lo <= it.value <= hi
+        hits += lo <= truth <= hi
     return np.array(z), np.array(z_read), hits, truth
 
 
@@ -80,6 +83,8 @@ def test_nonlinearity_corrected_for_the_largest_residuals_selection():
 
 
 def test_nonlinearity_covers_with_no_nonlinearity():
+    """No nonlinearity (truth 0, every residual contends): the interval of the extreme of
+    magnitudes holds 0 in 192/200 (z +1.25, sd 0.35: a value at its bound, not a spread)."""
     z, _, hits, truth = _study(cubic=0.0, sigma=0.004, trials=200, seed=8)
     assert truth == pytest.approx(0.0, abs=1e-12)
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
