@@ -1324,7 +1324,7 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
              from_u("fit_bias", resid, 0.0,
                     source="residual bias of the corrected reading, E*[V*] − R̂, removed")])
     raw = vals[i] - excess - resid
-    lo, hi = power_on_interval(raw, v_star - v_star.mean())
+    lo, hi = power_on_interval(raw, v_star - v_star.mean(), u.U)
     value = max(raw, 0.0)
     # one statement: the interval of the replicates' own distribution (JCGM 101 7.7), no k
     u = replace(u, U=hi - value, k=None, nu_eff=None, coverage_probability=0.95,
@@ -1333,27 +1333,36 @@ def power_on_drift_budget(recs, nr: int, drift_u, drift_coef=None
 
 
 #: ``k_source`` of 5.3.3.5, stated by the interval of its replicates (:func:`power_on_interval`).
-K_SOURCE_POWER_ON = "replicates' distribution (pivot, 2.5 % each side)"
+K_SOURCE_POWER_ON = ("replicates' distribution (pivot, 2.5 % each side, each side at least "
+                     "t95·u_c)")
 
 
-def power_on_interval(raw: float, d: np.ndarray, p: float = 0.95) -> tuple[float, float]:
+def power_on_interval(raw: float, d: np.ndarray, reach: float = 0.0,
+                      p: float = 0.95) -> tuple[float, float]:
     """The 95 % interval of 5.3.3.5's drift θ ≥ 0 from the corrected estimate ``raw`` (the
     reading less the selection excess and the fit's residual bias; below 0 where the
     reading is all excess) and ``d``, the replicates of the estimate's error (V* less its
     mean): the pivot [raw − q_{1−α/2}(d), raw − q_{α/2}(d)], α = 1 − p, 2.5 % each side
-    (JCGM 101 7.7, as 5.4.5.3's floor rule), with raw taken at 0 where it is below
+    (JCGM 101 7.7, as 5.4.5.3's floor rule), each side reaching at least ``reach`` (the
+    GUM's t₉₅(ν)·u_c of the same replicates' spread: the union of the two intervals, so
+    that neither the replicates' skew — a 2.5 % tail of 400 draws — nor the fitted
+    model's noise, which on the study bench is narrower than the estimate's spread, makes
+    it shorter on one side than the symmetric one), with raw taken at 0 where it is below
     (θ ≥ 0: raising the estimate to the measurand's bound only raises the upper end) and
     the lower end at 0 where it falls below (θ ≥ 0: no probability is lost).
 
     >>> d = np.linspace(-1.0, 1.0, 401)
     >>> [round(x, 3) for x in power_on_interval(2.0, d)]
     [1.05, 2.95]
+    >>> [round(x, 3) for x in power_on_interval(2.0, d, 1.0)]
+    [1.0, 3.0]
     >>> [round(x, 3) for x in power_on_interval(-0.5, d)]
     [0.0, 0.95]
     """
     q_lo, q_hi = np.quantile(np.asarray(d, float), [(1.0 - p) / 2.0, (1.0 + p) / 2.0])
     est = max(float(raw), 0.0)
-    return max(est - float(q_hi), 0.0), est - float(q_lo)
+    return (max(est - max(float(q_hi), reach), 0.0),
+            est + max(-float(q_lo), reach))
 
 
 POWER_ON_MC_TRIALS = 400
