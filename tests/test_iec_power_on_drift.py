@@ -53,9 +53,9 @@ def _study(a_dps: float, tau_s: float, trials: int, seed: int, sigma_dps: float 
 
 @pytest.mark.parametrize("a_dps,tau_s", [(1.0, 300.0), (1.0, 30.0)])
 def test_power_on_drift_budget_with_transient(a_dps, tau_s):
-    """400 trials: the first 100 of seed 300 hold the truth in 88 intervals (value ± 1.96 u_c:
-    91; the earlier ± t₉₅(50)·u_c passed them), a run of high values (z sd 1.18 there); the
-    400 give 380 for both (0.950, z +0.15, sd 1.00), fresh seeds 1 and 2: 384 and 382."""
+    """400 trials: the first 100 of seed 300 hold the truth in 91 intervals (the pivot alone:
+    88; value ± 1.96 u_c: 91), a run of high values (z sd 1.18 there); the 400 held 380 in
+    the pivot alone (0.950, z +0.15, sd 1.00), fresh seeds 1 and 2: 384 and 382."""
     z, hits = _study(a_dps, tau_s, 400, seed=int(tau_s))
     assert clopper_pearson(hits, z.size)[1] >= 0.95, hits
     assert abs(z.mean()) < 0.3, z.mean()
