@@ -121,8 +121,9 @@ K_SOURCE_MAX_MAGNITUDE = "interval of max|x_i| (uncertainty.extreme.max_abs_inte
 def max_magnitude_statement(u: Uncertainty, x, points: list[Uncertainty],
                             value: float) -> tuple[float, Uncertainty, dict]:
     """The one statement of a characteristic that is the largest magnitude max_i |x_i| of
-    signed points (IEC 62047-20 5.1.3.5 and 5.3.3.3: the largest |R_Vi|; 5.2, 5.3.3.8; JJF
-    1535 7.2.12's B_g = max |B_g,axis|), and its stated value.
+    signed points (IEC 62047-20 5.1.3.5 and 5.3.3.3: the largest |R_Vi|; 5.1.3.6, 5.2,
+    5.3.3.8; JJF 1535 7.2.12's B_g = max |B_g,axis|, 7.2.2, 7.2.3, 7.2.5, 7.2.14), and its
+    stated value.
 
     GUM's linearisation of |x| at the largest point states value ± U, an interval reaching
     below zero for a magnitude and holding θ = max_i |μ_i| with less than 95 % where the
